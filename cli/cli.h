@@ -1,0 +1,86 @@
+/* Shared CLI helpers: number parsing, file I/O, atomic output, images
+ * through OpenImageIO (cli/imageio.cpp), progress bar, error reporting.
+ * Every function that fails prints exactly one line on stderr,
+ * "roadsplat: <file>: <problem>", and returns non-zero / NULL. */
+#ifndef RS_CLI_H
+#define RS_CLI_H
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include "roadsplat.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* "roadsplat: " + message + newline on stderr. */
+void cli_error(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
+/* Strict number parsing of a whole option value: end-pointer checked, no
+ * trailing junk, finite, locale-independent. Return 0 on success; on
+ * failure print "roadsplat: OPTION: 'VALUE' is not a ..." and return 1. */
+int cli_parse_double(const char *option, const char *s, double *out);
+int cli_parse_u32(const char *option, const char *s, uint32_t *out);
+/* "X,Y" or "X,Y,Z" (n = 2 or 3) and "WxH". */
+int cli_parse_vec(const char *option, const char *s, double *out, int n);
+int cli_parse_size(const char *option, const char *s, uint32_t *w, uint32_t *h);
+
+/* Read a whole file (max `limit` bytes, 0 = no limit). *data is malloc'd
+ * and NUL-terminated (size excludes the NUL). */
+int cli_read_file(const char *path, size_t limit, char **data, size_t *size);
+
+/* Load a DEM: PGM (P2/P5) through the library, anything else through
+ * OpenImageIO (PNG 8/16-bit, TIFF incl. float32; single channel, or the
+ * first channel of a grey+alpha image). Prints the error and returns NULL. */
+rs_dem *cli_load_dem(rs_ctx *ctx, const char *path);
+
+/* Atomic output: write into a temporary file in the same folder, then
+ * rename over `path` on commit. Abort (or a failed commit) removes the
+ * temporary file and leaves any existing `path` untouched. */
+typedef struct cli_out {
+    FILE *f;
+    char *path;
+    char *tmp;
+} cli_out;
+int cli_out_open(cli_out *o, const char *path);     /* opens o->f for binary writing */
+int cli_out_commit(cli_out *o);                       /* fflush+fsync+fclose+rename */
+void cli_out_abort(cli_out *o);
+
+/* Images through OpenImageIO. Data is malloc'd, row-major, top row first. */
+int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data);
+int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data);
+/* Write a PNG atomically (temp file in the same folder + rename).
+ * channels 1..4, bits 8 or 16 (16-bit data as native uint16). */
+int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
+                        const void *data);
+
+/* Progress bar on stderr: silent when quiet or stderr is not a TTY, and
+ * only drawn once the work has run for more than a second. Use
+ * cli_progress_cb as an rs_progress_fn with the cli_progress as user. */
+typedef struct cli_progress {
+    const char *label;
+    int enabled;
+    double start;
+    int shown;
+    int last_permille;
+} cli_progress;
+void cli_progress_init(cli_progress *p, const char *label, int quiet);
+int cli_progress_cb(void *user, uint64_t done, uint64_t total);
+void cli_progress_done(cli_progress *p);
+
+/* Monotonic wall clock in milliseconds. */
+double cli_now_ms(void);
+
+/* Subcommands, each `int f(int argc, char **argv)` with argv[0] the
+ * subcommand name; return the process exit code (0 ok, 1 error). */
+int cli_mesh_main(int argc, char **argv);   /* cli/mesh.c   (roadsplat mesh)   */
+int cli_render_main(int argc, char **argv); /* cli/render.c (roadsplat render) */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,300 @@
+/* roadsplat: the command-line tool. `roadsplat [options] DEM ROADS OUT.png`
+ * splats roads into a terrain texture; `roadsplat mesh ...` meshes a DEM. */
+#include "cli.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const char usage_text[] =
+    "Usage: roadsplat [options] DEM ROADS OUT.png\n"
+    "       roadsplat mesh [options] DEM OUT.obj|OUT.ply   (see roadsplat mesh --help)\n"
+    "\n"
+    "Burns the roads of ROADS (text, docs/road-format.md) into a terrain texture\n"
+    "of the height map DEM (PGM, PNG or TIFF) and writes it to OUT.png: (W-1)*T x\n"
+    "(H-1)*T pixels for a W x H DEM and T texels per cell.\n"
+    "\n"
+    "Options:\n"
+    "  --cell-size M         DEM cell size in metres (default 1)\n"
+    "  --z-scale S           metres per DEM unit (default 1)\n"
+    "  --texels N            output texels per DEM cell side (default 8)\n"
+    "  --buffer MODE         road cells by 'distance' (default) or 'dilate' (the paper)\n"
+    "  --road-cell M         road-grid cell size in metres (default: automatic)\n"
+    "  --alpha-res N         alpha-map resolution (default 32)\n"
+    "  --transition PX       transition band in alpha-map pixels (default 2, 0 = hard)\n"
+    "  --jitter SEED         irregular road edges: seeded jitter in the band\n"
+    "  --terrain-texture IMG tile IMG over the terrain (default: tint + hillshade)\n"
+    "  --road-texture IMG    tile IMG over the roads (default: procedural asphalt)\n"
+    "  --texture-scale M     metres per texture repeat (default 10)\n"
+    "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
+    "  --stats FILE.json     write timings and counts as JSON\n"
+    "  --quiet               no progress bar\n"
+    "  --help                show this help and exit\n"
+    "  --version             show the version and exit\n";
+
+typedef struct args {
+    rs_splat_options o;
+    const char *dem, *roads, *out;
+    const char *terrain_tex, *road_tex, *weight_out, *stats;
+    int quiet;
+} args;
+
+static int need_value(int argc, char **argv, int *i, const char *name, const char *inline_val, const char **val)
+{
+    if (inline_val) { *val = inline_val; return 0; }
+    if (*i + 1 >= argc) {
+        cli_error("option %s needs a value (see roadsplat --help)", name);
+        return 1;
+    }
+    *val = argv[++*i];
+    return 0;
+}
+
+/* Returns 0 to run, 1 on a usage error, 2 when --help/--version was handled. */
+static int parse_args(int argc, char **argv, args *a)
+{
+    const char *pos[3];
+    int npos = 0, only_pos = 0;
+    memset(a, 0, sizeof *a);
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        if (only_pos || arg[0] != '-' || arg[1] == '\0') {
+            if (npos == 3) {
+                cli_error("unexpected argument '%s' (see roadsplat --help)", arg);
+                return 1;
+            }
+            pos[npos++] = arg;
+            continue;
+        }
+        if (!strcmp(arg, "--")) { only_pos = 1; continue; }
+        char name[64];
+        const char *eq = strchr(arg, '='), *inl = NULL;
+        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+        if (len >= sizeof name) len = sizeof name - 1;
+        memcpy(name, arg, len);
+        name[len] = '\0';
+        if (eq) inl = eq + 1;
+        const char *v = NULL;
+        uint32_t u;
+        if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
+            fputs(usage_text, stdout);
+            return 2;
+        } else if (!strcmp(name, "--version")) {
+            printf("roadsplat %s\n", rs_version_string());
+            return 2;
+        } else if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) {
+            a->quiet = 1;
+        } else if (!strcmp(name, "--cell-size")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.cell_size)) return 1;
+            if (!(a->o.cell_size > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--z-scale")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.z_scale)) return 1;
+            if (a->o.z_scale == 0) { cli_error("%s: '%s' must not be 0", name, v); return 1; }
+        } else if (!strcmp(name, "--texels")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &a->o.texels)) return 1;
+            if (a->o.texels < 1 || a->o.texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
+        } else if (!strcmp(name, "--buffer")) {
+            if (need_value(argc, argv, &i, name, inl, &v)) return 1;
+            if (!strcmp(v, "distance")) a->o.buffer = RS_BUFFER_DISTANCE;
+            else if (!strcmp(v, "dilate")) a->o.buffer = RS_BUFFER_DILATE;
+            else { cli_error("%s: '%s' is not 'distance' or 'dilate'", name, v); return 1; }
+        } else if (!strcmp(name, "--road-cell")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.road_cell)) return 1;
+            if (!(a->o.road_cell > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--alpha-res")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &a->o.alpha_res)) return 1;
+            if (a->o.alpha_res < 2 || a->o.alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
+        } else if (!strcmp(name, "--transition")) {
+            double t;
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &t)) return 1;
+            if (t < 0) { cli_error("%s: '%s' must be >= 0", name, v); return 1; }
+            a->o.transition = t == 0 ? -1 : t; /* the library's 0 means "default" */
+        } else if (!strcmp(name, "--jitter")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &u)) return 1;
+            if (u == 0) { cli_error("%s: the seed must be > 0", name); return 1; }
+            a->o.jitter = u;
+        } else if (!strcmp(name, "--terrain-texture")) {
+            if (need_value(argc, argv, &i, name, inl, &a->terrain_tex)) return 1;
+        } else if (!strcmp(name, "--road-texture")) {
+            if (need_value(argc, argv, &i, name, inl, &a->road_tex)) return 1;
+        } else if (!strcmp(name, "--texture-scale")) {
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.texture_scale)) return 1;
+            if (!(a->o.texture_scale > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--weight-out")) {
+            if (need_value(argc, argv, &i, name, inl, &a->weight_out)) return 1;
+        } else if (!strcmp(name, "--stats")) {
+            if (need_value(argc, argv, &i, name, inl, &a->stats)) return 1;
+        } else {
+            cli_error("unknown option '%s' (see roadsplat --help)", arg);
+            return 1;
+        }
+    }
+    if (npos != 3) {
+        cli_error("expected DEM ROADS OUT.png, got %d argument%s (see roadsplat --help)", npos, npos == 1 ? "" : "s");
+        return 1;
+    }
+    a->dem = pos[0];
+    a->roads = pos[1];
+    a->out = pos[2];
+    return 0;
+}
+
+static int write_weight_pgm(const char *path, uint32_t w, uint32_t h, const uint16_t *wt)
+{
+    cli_out o;
+    if (cli_out_open(&o, path)) return 1;
+    int ok = fprintf(o.f, "P5\n%u %u\n65535\n", w, h) > 0;
+    uint8_t *row = malloc((size_t)w * 2);
+    if (!row) ok = 0;
+    for (uint32_t y = 0; ok && y < h; y++) {
+        for (uint32_t x = 0; x < w; x++) {
+            uint16_t v = wt[(size_t)y * w + x];
+            row[2 * x] = (uint8_t)(v >> 8);
+            row[2 * x + 1] = (uint8_t)(v & 0xFF);
+        }
+        ok = fwrite(row, 1, (size_t)w * 2, o.f) == (size_t)w * 2;
+    }
+    free(row);
+    if (!ok) {
+        cli_error("%s: write failed", path);
+        cli_out_abort(&o);
+        return 1;
+    }
+    return cli_out_commit(&o);
+}
+
+static int write_stats(const char *path, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w,
+                       uint32_t h, const char *mode)
+{
+    cli_out o;
+    if (cli_out_open(&o, path)) return 1;
+    int ok = fprintf(o.f,
+                     "{\n  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
+                     "\"total\": %.3f},\n"
+                     "  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
+                     "  \"width\": %u,\n  \"height\": %u,\n  \"pixels\": %llu,\n"
+                     "  \"road_cells\": %llu,\n  \"interior_cells\": %llu,\n  \"boundary_cells\": %llu,\n"
+                     "  \"boundary_by_type\": {\"edge\": %llu, \"inner_corner\": %llu, \"outer_corner\": %llu, "
+                     "\"saddle\": %llu, \"too_thin\": %llu},\n"
+                     "  \"grid_tiles\": %llu,\n  \"grid_bytes\": %llu\n}\n",
+                     t[0], t[1], t[2], t[3], t[4], mode, gs->k, gs->road_cell, T, w, h,
+                     (unsigned long long)w * h, (unsigned long long)gs->road_cells,
+                     (unsigned long long)gs->interior_cells, (unsigned long long)gs->boundary_cells,
+                     (unsigned long long)gs->by_type[RS_TILE_EDGE], (unsigned long long)gs->by_type[RS_TILE_INNER],
+                     (unsigned long long)gs->by_type[RS_TILE_OUTER], (unsigned long long)gs->by_type[RS_TILE_SADDLE],
+                     (unsigned long long)gs->by_type[RS_TILE_TERRAIN], (unsigned long long)gs->tiles_allocated,
+                     (unsigned long long)gs->bytes) > 0;
+    if (!ok) {
+        cli_error("%s: write failed", path);
+        cli_out_abort(&o);
+        return 1;
+    }
+    return cli_out_commit(&o);
+}
+
+static int load_texture(const char *path, rs_image *img, uint8_t **data)
+{
+    if (!path) return 0;
+    if (cli_image_read_rgba8(path, &img->width, &img->height, data)) return 1;
+    img->rgba = *data;
+    return 0;
+}
+
+static int splat_main(int argc, char **argv)
+{
+    args a;
+    int pr = parse_args(argc, argv, &a);
+    if (pr) return pr == 2 ? 0 : 1;
+
+    double t_start = cli_now_ms(), t[5] = { 0, 0, 0, 0, 0 };
+    int rc = 1;
+    rs_ctx *ctx = NULL;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_road_grid *grid = NULL;
+    char *text = NULL;
+    uint8_t *rgba = NULL, *tex_t = NULL, *tex_r = NULL;
+    uint16_t *wt = NULL;
+    rs_image img_t, img_r;
+    size_t text_size = 0;
+    rs_result r = rs_ctx_create(NULL, NULL, &ctx);
+    if (r) { cli_error("%s", rs_strerror(r)); return 1; }
+    rs_limits lim;
+    rs_ctx_limits(ctx, &lim);
+
+    if (!(dem = cli_load_dem(ctx, a.dem))) goto done;
+    if (cli_read_file(a.roads, (size_t)lim.max_points * 64 + (1u << 20), &text, &text_size)) goto done;
+    if ((r = rs_roads_parse(ctx, text, text_size, &roads))) {
+        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    if (load_texture(a.terrain_tex, &img_t, &tex_t) || load_texture(a.road_tex, &img_r, &tex_r)) goto done;
+    if (tex_t) a.o.terrain_texture = &img_t;
+    if (tex_r) a.o.road_texture = &img_r;
+    t[0] = cli_now_ms() - t_start;
+
+    uint32_t w, h;
+    if ((r = rs_splat_size(ctx, dem, &a.o, &w, &h))) {
+        cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
+        goto done;
+    }
+    cli_progress prog;
+    double t1 = cli_now_ms();
+    cli_progress_init(&prog, "roads", a.quiet);
+    a.o.progress = cli_progress_cb;
+    a.o.progress_user = &prog;
+    r = rs_road_grid_build(ctx, dem, roads, &a.o, &grid);
+    cli_progress_done(&prog);
+    if (r) {
+        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    t[1] = cli_now_ms() - t1;
+
+    t1 = cli_now_ms();
+    size_t npx = (size_t)w * h;
+    rgba = malloc(npx * 4);
+    if (a.weight_out) wt = malloc(npx * sizeof *wt);
+    if (!rgba || (a.weight_out && !wt)) {
+        cli_error("%s: out of memory for a %u x %u image", a.out, w, h);
+        goto done;
+    }
+    cli_progress_init(&prog, "splat", a.quiet);
+    r = rs_splat(ctx, dem, grid, &a.o, rgba, npx * 4, wt, wt ? npx : 0);
+    cli_progress_done(&prog);
+    if (r) {
+        cli_error("%s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    t[2] = cli_now_ms() - t1;
+
+    t1 = cli_now_ms();
+    if (cli_image_write_png(a.out, w, h, 4, 8, rgba)) goto done;
+    if (wt && write_weight_pgm(a.weight_out, w, h, wt)) goto done;
+    t[3] = cli_now_ms() - t1;
+    t[4] = cli_now_ms() - t_start;
+    if (a.stats) {
+        rs_grid_stats gs;
+        rs_road_grid_stats(grid, &gs);
+        if (write_stats(a.stats, t, &gs, a.o.texels ? a.o.texels : 8, w, h,
+                        a.o.buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
+            goto done;
+    }
+    rc = 0;
+done:
+    free(rgba);
+    free(wt);
+    free(text);
+    free(tex_t);
+    free(tex_r);
+    rs_road_grid_free(ctx, grid);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc > 1 && !strcmp(argv[1], "mesh")) return cli_mesh_main(argc - 1, argv + 1);
+    return splat_main(argc, argv);
+}

@@ -1,0 +1,366 @@
+/*
+ * roadsplat - burn roads into terrain textures, mesh terrain with ROAM.
+ *
+ * One public header. Everything is prefixed rs_. The library never prints,
+ * exits or aborts: every fallible call returns an rs_result, and
+ * rs_ctx_message() gives a human-readable detail (file line, value) for the
+ * last failure on that context.
+ *
+ * Threads: there is no global mutable state. A context and the objects made
+ * with it must be used by one thread at a time; two contexts in two threads
+ * are independent. Read-only objects (rs_dem, rs_roads after parsing) may be
+ * shared between threads if nobody modifies them.
+ *
+ * Ownership: objects returned through an `**out` parameter belong to the
+ * caller and are released with the matching *_free() function, passing the
+ * same context that created them. Output pixel/vertex buffers are always
+ * caller-provided; the *_bound() and *_size() functions say how large they must be.
+ *
+ * Coordinates (see docs/design.md and SPEC): DEM sample (row i, column j)
+ * is at world (x, y) = (j*cs, i*cs) metres; x grows right, y grows down.
+ */
+#ifndef ROADSPLAT_H
+#define ROADSPLAT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_WIN32) && defined(RS_BUILDING_SHARED)
+#define RS_API __declspec(dllexport)
+#elif defined(__GNUC__) && __GNUC__ >= 4
+#define RS_API __attribute__((visibility("default")))
+#else
+#define RS_API
+#endif
+
+#define RS_VERSION_MAJOR 0
+#define RS_VERSION_MINOR 1
+#define RS_VERSION_PATCH 0
+#define RS_VERSION ((RS_VERSION_MAJOR << 16) | (RS_VERSION_MINOR << 8) | RS_VERSION_PATCH)
+
+/* "MAJOR.MINOR.PATCH" of the library actually linked. Static storage. */
+RS_API const char *rs_version_string(void);
+
+/* ---------------------------------------------------------------------------
+ * Results
+ * ------------------------------------------------------------------------- */
+typedef enum rs_result {
+    RS_OK = 0,
+    RS_ERR_INVALID_ARG = 1,  /* NULL pointer, option out of range, bad size */
+    RS_ERR_NOMEM = 2,        /* an allocation failed; nothing leaked */
+    RS_ERR_PARSE = 3,        /* malformed input (PGM, road file) */
+    RS_ERR_LIMIT = 4,        /* input exceeds an rs_limits bound */
+    RS_ERR_BUFFER_TOO_SMALL = 5, /* caller buffer smaller than *_bound() */
+    RS_ERR_POOL_EXHAUSTED = 6,   /* ROAM node pool ran out (mesh still valid) */
+    RS_ERR_UNSUPPORTED = 7,  /* feature not compiled in / not implemented */
+    RS_ERR_CANCELLED = 8     /* the progress callback asked to stop */
+} rs_result;
+
+/* Static English description of a result code; never NULL. */
+RS_API const char *rs_strerror(rs_result r);
+
+/* ---------------------------------------------------------------------------
+ * Context, allocator, limits
+ * ------------------------------------------------------------------------- */
+
+/* Allocator hook. All three functions are required when one is given.
+ * realloc_fn(user, NULL, n) must behave as malloc; free_fn(user, NULL) is
+ * never called. Allocation failure is reported by returning NULL. */
+typedef struct rs_allocator {
+    void *(*malloc_fn)(void *user, size_t size);
+    void *(*realloc_fn)(void *user, void *ptr, size_t size);
+    void (*free_fn)(void *user, void *ptr);
+    void *user;
+} rs_allocator;
+
+/* Input limits, checked before anything is allocated. A zero field means
+ * the default shown. Callers may tighten them (or loosen, at their risk). */
+typedef struct rs_limits {
+    uint32_t max_dem_side;     /* 16384: max DEM width or height (samples)  */
+    uint64_t max_pixels;       /* 2^28: max output pixels (splat texture)   */
+    uint64_t max_points;       /* 10^7: max road points over all roads      */
+    uint32_t max_line_length;  /* 65536: max bytes in one road-file line    */
+    uint64_t max_road_cells;   /* 2^32: max road-grid cells (W*K x H*K)     */
+    uint32_t max_pool_nodes;   /* 2^26: max ROAM node pool size             */
+} rs_limits;
+
+typedef struct rs_ctx rs_ctx;
+
+/* Create a context. `alloc` and `limits` may be NULL (malloc, defaults);
+ * both are copied. On success *out owns a context; free with rs_ctx_free. */
+RS_API rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out);
+RS_API void rs_ctx_free(rs_ctx *ctx);
+
+/* Effective limits (defaults filled in). */
+RS_API void rs_ctx_limits(const rs_ctx *ctx, rs_limits *out);
+
+/* Detail of the last failure on this context ("line 12: width must be > 0"),
+ * or "" after success. Owned by ctx; valid until the next call on ctx. */
+RS_API const char *rs_ctx_message(const rs_ctx *ctx);
+
+/* Progress callback: `done` of `total` work units. Return non-zero to cancel
+ * (the call then returns RS_ERR_CANCELLED). Called from the calling thread. */
+typedef int (*rs_progress_fn)(void *user, uint64_t done, uint64_t total);
+
+/* ---------------------------------------------------------------------------
+ * DEM: W x H height samples at grid vertices, row-major, stored as float in
+ * file units (metres = value * z_scale). NaN marks nodata.
+ * ------------------------------------------------------------------------- */
+typedef struct rs_dem rs_dem;
+
+/* Parse a PGM (P2 ASCII or P5 binary, maxval 1..65535, 16-bit samples big
+ * endian, '#' comments wherever whitespace is allowed) from memory.
+ * `data` is not retained. Width and height must be >= 2. */
+RS_API rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **out);
+
+/* Make a DEM from `width*height` floats (row-major, copied). NaN = nodata;
+ * infinities are rejected. */
+RS_API rs_result rs_dem_create(rs_ctx *ctx, uint32_t width, uint32_t height,
+                               const float *samples, rs_dem **out);
+RS_API void rs_dem_free(rs_ctx *ctx, rs_dem *dem);
+RS_API uint32_t rs_dem_width(const rs_dem *dem);
+RS_API uint32_t rs_dem_height(const rs_dem *dem);
+/* Pointer to width*height samples, owned by dem. */
+RS_API const float *rs_dem_samples(const rs_dem *dem);
+
+/* ---------------------------------------------------------------------------
+ * Roads: named centreline polylines with a width, in metres, in the DEM
+ * frame. Text format: docs/road-format.md.
+ * ------------------------------------------------------------------------- */
+typedef struct rs_roads rs_roads;
+
+/* Parse the road text format from memory (need not be NUL-terminated).
+ * On RS_ERR_PARSE, rs_ctx_message() names the line and the problem. */
+RS_API rs_result rs_roads_parse(rs_ctx *ctx, const char *text, size_t size, rs_roads **out);
+/* Empty road set, to fill with rs_roads_add(). */
+RS_API rs_result rs_roads_create(rs_ctx *ctx, rs_roads **out);
+/* Append a road: `name` (copied, may be NULL), width > 0 metres, `n` >= 2
+ * points as x0,y0,x1,y1,... (copied). Points must be finite. */
+RS_API rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, double width,
+                              const double *xy, size_t n);
+RS_API void rs_roads_free(rs_ctx *ctx, rs_roads *roads);
+RS_API size_t rs_roads_count(const rs_roads *roads);
+/* Road i: name (never NULL), width, points (owned by roads), point count. */
+RS_API rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name, double *width,
+                              const double **xy, size_t *n);
+
+/* ---------------------------------------------------------------------------
+ * Splatting
+ * ------------------------------------------------------------------------- */
+typedef enum rs_buffer_mode {
+    RS_BUFFER_DISTANCE = 0, /* cell centre within half-width (+ half a cell) of the centreline */
+    RS_BUFFER_DILATE = 1    /* paper: 8-connected centreline raster + 8-connected dilation */
+} rs_buffer_mode;
+
+/* An RGBA8 image, rows tightly packed (stride = 4*width). Not owned. */
+typedef struct rs_image {
+    uint32_t width, height;
+    const uint8_t *rgba;
+} rs_image;
+
+/* All-zero means defaults. */
+typedef struct rs_splat_options {
+    double cell_size;        /* metres per DEM cell; 0 -> 1 */
+    double z_scale;          /* metres per DEM unit; 0 -> 1 */
+    uint32_t texels;         /* output texels per DEM cell side; 0 -> 8 */
+    rs_buffer_mode buffer;   /* road cell marking */
+    uint32_t alpha_res;      /* alpha-map resolution (intervals per side); 0 -> 32 */
+    double transition;       /* transition band width, alpha-map pixels; 0 -> 2; <0 -> hard edge */
+    double road_cell;        /* road-grid cell size, metres; 0 -> automatic */
+    uint32_t jitter;         /* 0 off; else seed of the band jitter (paper section 3) */
+    double jitter_amount;    /* jitter amplitude in [0,1]; 0 -> 0.5 when jitter is on */
+    const rs_image *terrain_texture; /* NULL -> hypsometric tint + hillshade */
+    const rs_image *road_texture;    /* NULL -> procedural asphalt */
+    double texture_scale;    /* metres per texture repeat; 0 -> 10 */
+    rs_progress_fn progress; /* may be NULL */
+    void *progress_user;
+} rs_splat_options;
+
+/* The road grid: road cells (DEM cells split K x K), classified by their
+ * 8-neighbour mask. Built once, splatted any number of times. */
+typedef struct rs_road_grid rs_road_grid;
+
+typedef struct rs_grid_stats {
+    uint32_t k;                 /* road cells per DEM cell side */
+    double road_cell;           /* road cell size, metres */
+    uint64_t road_cells;        /* all road cells */
+    uint64_t interior_cells;    /* road cells with all 8 neighbours road */
+    uint64_t boundary_cells;    /* road cells with a terrain neighbour */
+    uint64_t by_type[6];        /* boundary cells by tile type (RS_TILE_*) */
+    uint64_t tiles_allocated;   /* sparse storage blocks in use */
+    uint64_t bytes;             /* memory held by the grid */
+} rs_grid_stats;
+
+/* Rasterize and classify `roads` over `dem`. `opts` may be NULL. Only
+ * cell_size, buffer, road_cell, texels and progress are used here. */
+RS_API rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                    const rs_splat_options *opts, rs_road_grid **out);
+RS_API void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid);
+RS_API void rs_road_grid_stats(const rs_road_grid *grid, rs_grid_stats *out);
+
+/* Output size for `dem` and `opts`: (W-1)*T x (H-1)*T. Fails with
+ * RS_ERR_LIMIT when it exceeds the context's max_pixels. */
+RS_API rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts,
+                               uint32_t *width, uint32_t *height);
+
+/* Splat: write width*height*4 bytes of RGBA8 into `rgba` (rgba_size bytes
+ * available, see rs_splat_size) and, when `weight` is not NULL, the road
+ * weight R = 1 - alpha as width*height uint16 (0..65535). `grid` must come
+ * from rs_road_grid_build with the same dem and options. */
+RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid,
+                          const rs_splat_options *opts, uint8_t *rgba, size_t rgba_size,
+                          uint16_t *weight, size_t weight_count);
+
+/* ---------------------------------------------------------------------------
+ * The classification table (exposed for tests and for renderers that want
+ * to do their own blending with the same alpha-maps).
+ * ------------------------------------------------------------------------- */
+typedef enum rs_tile_type {
+    RS_TILE_INTERIOR = 0, /* all road (alpha 0) */
+    RS_TILE_EDGE = 1,     /* paper type 1: terrain along one side */
+    RS_TILE_INNER = 2,    /* paper type 2: inner corner, one corner terrain */
+    RS_TILE_OUTER = 3,    /* paper type 3: outer corner, road towards one corner */
+    RS_TILE_SADDLE = 4,   /* two opposite inner corners (type 2 at rot r and r+2) */
+    RS_TILE_TERRAIN = 5   /* road cell too thin to show: all terrain (alpha 1) */
+} rs_tile_type;
+
+/* Mask bit order (SPEC): bit0 N, bit1 NE, bit2 E, bit3 SE, bit4 S, bit5 SW,
+ * bit6 W, bit7 NW; set = road. Returns the tile type and its rotation in
+ * 90-degree clockwise turns of the canonical tile (0..3). */
+RS_API void rs_mask_classify(uint8_t mask, rs_tile_type *type, int *rotation);
+
+/* Alpha (terrain weight, 0..1) of the tile for `mask` at cell-local point
+ * (u, v) in [0,1]^2, u right, v down, for transition width `transition`
+ * (fraction of a cell; 0 = hard edge). Exact, not sampled from a raster. */
+RS_API double rs_tile_alpha(uint8_t mask, double u, double v, double transition);
+
+/* Alpha-map rasters: (res+1) x (res+1) vertex-centred samples of the
+ * canonical tile of `type` (EDGE, INNER or OUTER), as bytes 0..255, with the
+ * transition of `transition_px` alpha-map pixels (<0: hard) and optional
+ * jitter. `out` holds (res+1)^2 bytes. */
+RS_API rs_result rs_alpha_map(rs_tile_type type, uint32_t res, double transition_px,
+                              uint32_t jitter_seed, double jitter_amount,
+                              uint8_t *out, size_t out_size);
+
+/* == ROAM mesher (lib/roam.c) ============================================ */
+/*
+ * A Landscape of square patches (two root triangles each) covers any W x H
+ * DEM; bintree nodes come from a fixed pool sized by the caller and are
+ * linked by 32-bit indices (left/right child, base/left/right neighbour).
+ * Each node's error is a true bound (in DEM units, float) on the vertical
+ * error of every DEM sample under its triangle, so a requested max error is
+ * never exceeded. Splits force-split as in ROAM and reserve the worst case
+ * first: running out of pool stops refining with a valid, crack-free mesh.
+ * Design notes: docs/roam.md. Frame: x = column * cell_size, y = row *
+ * cell_size (metres, y grows down the map), z = height in metres (up).
+ */
+typedef struct rs_roam rs_roam;
+
+/* All-zero means defaults. */
+typedef struct rs_roam_options {
+    double cell_size;     /* metres between samples; 0 -> 1 */
+    double z_scale;       /* metres per DEM unit; 0 -> 1 */
+    uint32_t pool_nodes;  /* node pool size; 0 -> pool_bytes, else automatic */
+    uint64_t pool_bytes;  /* pool size in bytes (used when pool_nodes is 0) */
+    uint32_t patch_size;  /* patch side in cells, a power of two; 0 -> automatic */
+} rs_roam_options;
+
+/* Bytes of one pool node (for sizing pool_bytes). */
+RS_API size_t rs_roam_node_bytes(void);
+
+/* Build the landscape: error bounds for every bintree node (about 2 floats
+ * per padded DEM cell), the patch roots and the node pool. The automatic
+ * pool holds the finest mesh, capped at 2^21 nodes and at the context's
+ * max_pool_nodes (RS_ERR_LIMIT if a requested pool exceeds that). `dem` is
+ * copied where it holds nodata, otherwise referenced: it must outlive *out.
+ * Nodata (NaN) samples get the lowest valid 8-neighbour height, spreading
+ * inwards (all-nodata -> 0); they never produce NaN vertices. */
+RS_API rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts,
+                                rs_roam **out);
+RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
+
+/* Error-bounded mode. Reset to the base mesh, then split (breadth first,
+ * in a fixed order) every triangle whose error bound exceeds `max_error`
+ * metres: the result is the coarsest crack-free bintree mesh whose max
+ * vertical error over all DEM samples is <= max_error. Returns
+ * RS_ERR_POOL_EXHAUSTED when the pool ran out: the mesh is then still valid,
+ * crack-free and complete, only coarser (and a larger pool never gives a
+ * coarser mesh). */
+RS_API rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *roam, double max_error);
+
+/* The finest mesh of the error-bounded family with at most `max_triangles`
+ * triangles (binary search on the error; stats.threshold tells the error
+ * reached). If even the base mesh has more, the base mesh is kept and
+ * RS_ERR_LIMIT returned. */
+RS_API rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *roam, uint32_t max_triangles);
+
+/* View-dependent mode: one frame. All-zero fields take the default shown. */
+typedef struct rs_roam_view {
+    double eye[3];        /* camera position, metres (x, y map frame, z up) */
+    double dir[3];        /* view direction (need not be unit); must not be 0 */
+    double fov_y;         /* vertical field of view, degrees; 0 -> 60 */
+    uint32_t width, height; /* viewport pixels; 0 -> 1280 x 720 */
+    double pixel_error;   /* tolerance in pixels (start value with a target); 0 -> 1 */
+    uint32_t target_triangles; /* 0: fixed pixel_error; else feedback on the
+                                  tolerance (gFrameVariance) holds the count near it */
+    double far_dist;      /* far plane, metres; 0 -> none */
+} rs_roam_view;
+
+/* Per-frame reset and split-only re-tessellation (no frame-to-frame merge
+ * queue; see docs/roam.md). A triangle splits when its error bound,
+ * projected at its nearest distance to the eye, exceeds the tolerance;
+ * triangles outside the view frustum are not refined. With
+ * target_triangles, the tolerance is carried from frame to frame and
+ * corrected within the frame (a few re-tessellations at most) so the count
+ * lands within +-5 % whenever the target is reachable. */
+RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view);
+
+typedef struct rs_roam_stats {
+    uint32_t width, height;     /* DEM samples */
+    uint32_t patch_size;        /* cells per patch side */
+    uint32_t patches_x, patches_y;
+    uint32_t base_nodes;        /* roots + splits forced by the map border */
+    uint32_t pool_nodes;        /* pool capacity (nodes) */
+    uint32_t pool_used;         /* pool nodes in use by the current mesh */
+    int pool_exhausted;         /* the last refinement stopped for lack of nodes */
+    uint32_t triangles;         /* triangles of the current mesh (inside the map) */
+    double threshold;           /* error (metres) or tolerance (pixels) last used */
+    double max_error_bound;     /* largest node error bound of the mesh, metres */
+    uint32_t frame_passes;      /* tessellation passes of the last frame */
+    uint32_t patches_culled;    /* patches outside the frustum in the last frame */
+    uint64_t bytes;             /* memory held by the landscape */
+} rs_roam_stats;
+RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
+
+/* Mesh extraction. All-zero means: no normals, no skirts. */
+typedef struct rs_roam_mesh_options {
+    int normals;          /* non-zero: write unit normals (central differences) */
+    double skirt_depth;   /* > 0: add a skirt this many metres deep on the map border */
+} rs_roam_mesh_options;
+
+/* Upper bounds on the vertex and index counts of rs_roam_extract for the
+ * current mesh and `opts` (may be NULL). */
+RS_API void rs_roam_mesh_bound(const rs_roam *roam, const rs_roam_mesh_options *opts,
+                               size_t *max_vertices, size_t *max_indices);
+
+/* Write the current mesh. `vertices` holds 5 floats per vertex (x, y, z
+ * metres, u = x / map width, v = y / map height), `normals` 3 floats per
+ * vertex (only when opts->normals; else may be NULL), `indices` 3 per
+ * triangle, counter-clockwise seen from above (z up). A vertex at sample
+ * (i, j) has exactly (j*cs, i*cs, z[i][j]*z_scale). Capacities are counted
+ * in vertices and indices; RS_ERR_BUFFER_TOO_SMALL if they are below what
+ * is needed. Output is deterministic (same order every run). */
+RS_API rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *roam, const rs_roam_mesh_options *opts,
+                                 float *vertices, float *normals, size_t vertex_capacity,
+                                 uint32_t *indices, size_t index_capacity,
+                                 size_t *vertex_count, size_t *index_count);
+/* == end ROAM mesher ===================================================== */
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* ROADSPLAT_H */

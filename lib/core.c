@@ -1,0 +1,139 @@
+/* Context, allocator, limits, errors and version. */
+#include "internal.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RS__STR2(x) #x
+#define RS__STR(x) RS__STR2(x)
+
+const char *rs_version_string(void)
+{
+    return RS__STR(RS_VERSION_MAJOR) "." RS__STR(RS_VERSION_MINOR) "." RS__STR(RS_VERSION_PATCH);
+}
+
+const char *rs_strerror(rs_result r)
+{
+    switch (r) {
+    case RS_OK: return "success";
+    case RS_ERR_INVALID_ARG: return "invalid argument";
+    case RS_ERR_NOMEM: return "out of memory";
+    case RS_ERR_PARSE: return "malformed input";
+    case RS_ERR_LIMIT: return "input exceeds a configured limit";
+    case RS_ERR_BUFFER_TOO_SMALL: return "output buffer too small";
+    case RS_ERR_POOL_EXHAUSTED: return "ROAM node pool exhausted";
+    case RS_ERR_UNSUPPORTED: return "unsupported";
+    case RS_ERR_CANCELLED: return "cancelled";
+    }
+    return "unknown error";
+}
+
+static void *default_malloc(void *user, size_t size) { (void)user; return malloc(size); }
+static void *default_realloc(void *user, void *p, size_t size) { (void)user; return realloc(p, size); }
+static void default_free(void *user, void *p) { (void)user; free(p); }
+
+static void fill_limits(rs_limits *l)
+{
+    if (!l->max_dem_side) l->max_dem_side = 16384;
+    if (!l->max_pixels) l->max_pixels = (uint64_t)1 << 28;
+    if (!l->max_points) l->max_points = 10000000u;
+    if (!l->max_line_length) l->max_line_length = 65536;
+    if (!l->max_road_cells) l->max_road_cells = (uint64_t)1 << 32;
+    if (!l->max_pool_nodes) l->max_pool_nodes = (uint32_t)1 << 26;
+}
+
+rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out)
+{
+    if (!out) return RS_ERR_INVALID_ARG;
+    *out = NULL;
+    rs_allocator a = { default_malloc, default_realloc, default_free, NULL };
+    if (alloc) {
+        if (!alloc->malloc_fn || !alloc->realloc_fn || !alloc->free_fn) return RS_ERR_INVALID_ARG;
+        a = *alloc;
+    }
+    rs_ctx *ctx = a.malloc_fn(a.user, sizeof *ctx);
+    if (!ctx) return RS_ERR_NOMEM;
+    memset(ctx, 0, sizeof *ctx);
+    ctx->alloc = a;
+    if (limits) ctx->limits = *limits;
+    fill_limits(&ctx->limits);
+    *out = ctx;
+    return RS_OK;
+}
+
+void rs_ctx_free(rs_ctx *ctx)
+{
+    if (ctx) ctx->alloc.free_fn(ctx->alloc.user, ctx);
+}
+
+void rs_ctx_limits(const rs_ctx *ctx, rs_limits *out)
+{
+    if (ctx && out) *out = ctx->limits;
+}
+
+const char *rs_ctx_message(const rs_ctx *ctx)
+{
+    return ctx ? ctx->message : "";
+}
+
+void *rs__malloc(rs_ctx *ctx, size_t size)
+{
+    return ctx->alloc.malloc_fn(ctx->alloc.user, size ? size : 1);
+}
+
+void *rs__alloc_array(rs_ctx *ctx, size_t count, size_t size)
+{
+    size_t total;
+    if (!rs__mul_size(count, size, &total)) return NULL;
+    return rs__malloc(ctx, total);
+}
+
+void *rs__calloc(rs_ctx *ctx, size_t count, size_t size)
+{
+    size_t total;
+    if (!rs__mul_size(count, size, &total)) return NULL;
+    void *p = rs__malloc(ctx, total);
+    if (p) memset(p, 0, total);
+    return p;
+}
+
+void *rs__realloc(rs_ctx *ctx, void *ptr, size_t size)
+{
+    return ctx->alloc.realloc_fn(ctx->alloc.user, ptr, size ? size : 1);
+}
+
+void rs__free(rs_ctx *ctx, void *ptr)
+{
+    if (ptr) ctx->alloc.free_fn(ctx->alloc.user, ptr);
+}
+
+rs_result rs__fail(rs_ctx *ctx, rs_result code, const char *fmt, ...)
+{
+    if (ctx) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(ctx->message, sizeof ctx->message, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+void rs__ok(rs_ctx *ctx)
+{
+    if (ctx) ctx->message[0] = '\0';
+}
+
+int rs__mul_size(size_t a, size_t b, size_t *out)
+{
+    if (a && b > SIZE_MAX / a) return 0;
+    *out = a * b;
+    return 1;
+}
+
+int rs__mul_u64(uint64_t a, uint64_t b, uint64_t *out)
+{
+    if (a && b > UINT64_MAX / a) return 0;
+    *out = a * b;
+    return 1;
+}

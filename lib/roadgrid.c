@@ -1,0 +1,342 @@
+/* Road grid: which road cells are road, and their 8-neighbour class.
+ *
+ * Both marking modes aim the drawn road edge (which runs through the
+ * centres of the outermost road cells, seed 000 section 2.2) at the road's
+ * true half-width; docs/design.md derives the offsets used here. */
+#include "roadgrid.h"
+#include "mask.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef struct marker {
+    rs_ctx *ctx;
+    rs_road_grid *g;
+} marker;
+
+static rs_result mark_span(marker *m, int64_t gy, int64_t x0, int64_t x1)
+{
+    rs_road_grid *g = m->g;
+    if (gy < 0 || gy >= (int64_t)g->gh) return RS_OK;
+    if (x0 < 0) x0 = 0;
+    if (x1 >= (int64_t)g->gw) x1 = (int64_t)g->gw - 1;
+    uint32_t ty = (uint32_t)gy >> RS__TILE_SHIFT, ry = (uint32_t)gy & (RS__TILE - 1);
+    while (x0 <= x1) {
+        uint32_t tx = (uint32_t)x0 >> RS__TILE_SHIFT;
+        uint32_t rx0 = (uint32_t)x0 & (RS__TILE - 1);
+        int64_t tile_end = ((int64_t)tx + 1) * RS__TILE - 1;
+        int64_t e = x1 < tile_end ? x1 : tile_end;
+        uint8_t **slot = &g->tiles[(size_t)ty * g->tw + tx];
+        if (!*slot) {
+            *slot = rs__calloc(m->ctx, RS__TILE * RS__TILE, 1);
+            if (!*slot) return rs__fail(m->ctx, RS_ERR_NOMEM, "out of memory for road grid tiles");
+            g->stats.tiles_allocated++;
+        }
+        memset(*slot + (size_t)ry * RS__TILE + rx0, RS__CELL_ROAD, (size_t)(e - x0 + 1));
+        x0 = e + 1;
+    }
+    return RS_OK;
+}
+
+/* Intersect [*lo,*hi] with {x : lo_v <= a*x + b <= hi_v}. */
+static void clip_linear(double a, double b, double lo_v, double hi_v, double *lo, double *hi)
+{
+    if (a == 0) {
+        if (b < lo_v || b > hi_v) { *lo = 1; *hi = 0; }
+        return;
+    }
+    double x0 = (lo_v - b) / a, x1 = (hi_v - b) / a;
+    if (a < 0) { double t = x0; x0 = x1; x1 = t; }
+    if (x0 > *lo) *lo = x0;
+    if (x1 < *hi) *hi = x1;
+}
+
+/* Mark cells whose centre x (cell units, centre at j + 0.5) lies in [lo,hi]. */
+static rs_result mark_interval(marker *m, int64_t gy, double lo, double hi)
+{
+    if (!(lo <= hi)) return RS_OK;
+    double j0 = ceil(lo - 0.5), j1 = floor(hi - 0.5);
+    if (j1 < 0 || j0 >= (double)m->g->gw || j0 > j1) return RS_OK;
+    if (j0 < 0) j0 = 0;
+    if (j1 > (double)m->g->gw - 1) j1 = (double)m->g->gw - 1;
+    return mark_span(m, gy, (int64_t)j0, (int64_t)j1);
+}
+
+/* Rows whose centre lies in [y0,y1] (cell units), clamped to the grid. */
+static void row_range(const rs_road_grid *g, double y0, double y1, int64_t *i0, int64_t *i1)
+{
+    double a = ceil(y0 - 0.5), b = floor(y1 - 0.5);
+    if (a < 0) a = 0;
+    if (b > (double)g->gh - 1) b = (double)g->gh - 1;
+    *i0 = (int64_t)a;
+    *i1 = (int64_t)b;
+}
+
+/* Round end or join of the distance mode: the cell centre at offset d from
+ * the point is road when |d| <= h + (|dx| + |dy|) / (2|d|), the radial form
+ * of the band offset (cell units). */
+static rs_result mark_cap(marker *m, double px, double py, double h)
+{
+    double rmax = h + 0.7072;
+    int64_t i0, i1;
+    row_range(m->g, py - rmax, py + rmax, &i0, &i1);
+    for (int64_t i = i0; i <= i1; i++) {
+        double dy = (double)i + 0.5 - py;
+        int64_t j0 = (int64_t)floor(px - rmax), j1 = (int64_t)ceil(px + rmax);
+        if (j0 < 0) j0 = 0;
+        if (j1 > (int64_t)m->g->gw - 1) j1 = (int64_t)m->g->gw - 1;
+        int64_t run = -1;
+        for (int64_t j = j0; j <= j1 + 1; j++) {
+            int in = 0;
+            if (j <= j1) {
+                double dx = (double)j + 0.5 - px, d = sqrt(dx * dx + dy * dy);
+                in = d == 0 || d <= h + (fabs(dx) + fabs(dy)) / (2 * d);
+            }
+            if (in && run < 0) run = j;
+            if (!in && run >= 0) {
+                rs_result r = mark_span(m, i, run, j - 1);
+                if (r) return r;
+                run = -1;
+            }
+        }
+    }
+    return RS_OK;
+}
+
+/* Distance mode, one segment (cell units): the band of cell centres within
+ * h + (|nx|+|ny|)/2 of the segment, n its unit normal. */
+static rs_result mark_segment_distance(marker *m, double ax, double ay, double bx, double by, double h)
+{
+    double dx = bx - ax, dy = by - ay, len = sqrt(dx * dx + dy * dy);
+    if (!(len > 0)) return RS_OK;
+    double tx = dx / len, ty = dy / len;
+    double r = h + 0.5 * (fabs(tx) + fabs(ty));
+    int64_t i0, i1;
+    row_range(m->g, fmin(ay, by) - r, fmax(ay, by) + r, &i0, &i1);
+    for (int64_t i = i0; i <= i1; i++) {
+        double yc = (double)i + 0.5 - ay;
+        double lo = -1e300, hi = 1e300;
+        /* along: 0 <= (x-ax)*tx + yc*ty <= len; across: |-(x-ax)*ty + yc*tx| <= r */
+        clip_linear(tx, -ax * tx + yc * ty, 0, len, &lo, &hi);
+        clip_linear(-ty, ax * ty + yc * tx, -r, r, &lo, &hi);
+        rs_result res = mark_interval(m, i, lo, hi);
+        if (res) return res;
+    }
+    return RS_OK;
+}
+
+/* Dilate mode, one segment: 8-connected centreline raster (Bresenham between
+ * the cells holding the end points), each cell dilated by a k x k square. */
+static rs_result mark_segment_dilate(marker *m, double ax, double ay, double bx, double by, double h)
+{
+    double dx = bx - ax, dy = by - ay, len = sqrt(dx * dx + dy * dy);
+    double nx = len > 0 ? fabs(dy / len) : 0, ny = len > 0 ? fabs(dx / len) : 1;
+    /* The dilated band's edge lands at k(|nx|+|ny|) - min(|nx|,|ny|)/2 cells. */
+    double kf = (h + 0.5 * fmin(nx, ny)) / (nx + ny);
+    int64_t k = (int64_t)floor(kf + 0.5);
+    if (k < 0) k = 0;
+    int64_t x0 = (int64_t)floor(ax), y0 = (int64_t)floor(ay), x1 = (int64_t)floor(bx), y1 = (int64_t)floor(by);
+    int64_t sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+    int64_t ddx = x1 > x0 ? x1 - x0 : x0 - x1, ddy = y1 > y0 ? y1 - y0 : y0 - y1;
+    int64_t err = ddx - ddy;
+    for (;;) {
+        if (x0 + k >= 0 && x0 - k < (int64_t)m->g->gw)
+            for (int64_t yy = y0 - k; yy <= y0 + k; yy++) {
+                rs_result r = mark_span(m, yy, x0 - k, x0 + k);
+                if (r) return r;
+            }
+        if (x0 == x1 && y0 == y1) break;
+        int64_t e2 = 2 * err;
+        if (e2 > -ddy) { err -= ddy; x0 += sx; }
+        if (e2 < ddx) { err += ddx; y0 += sy; }
+    }
+    return RS_OK;
+}
+
+static int inside_box(const rs_road_grid *g, double x0, double y0, double x1, double y1, double pad)
+{
+    return !(fmax(x0, x1) + pad < 0 || fmin(x0, x1) - pad > (double)g->gw ||
+             fmax(y0, y1) + pad < 0 || fmin(y0, y1) - pad > (double)g->gh);
+}
+
+static rs_result mark_road(marker *m, const double *xy, size_t n, double width, rs_buffer_mode mode)
+{
+    const rs_road_grid *g = m->g;
+    double inv = 1.0 / g->c, h = 0.5 * width * inv;
+    double pad = h + 2.0;
+    for (size_t i = 0; i < n; i++) {
+        double ax = xy[2 * i] * inv, ay = xy[2 * i + 1] * inv;
+        rs_result r = RS_OK;
+        if (mode == RS_BUFFER_DISTANCE) {
+            if (inside_box(g, ax, ay, ax, ay, pad)) r = mark_cap(m, ax, ay, h);
+            if (!r && i + 1 < n) {
+                double bx = xy[2 * i + 2] * inv, by = xy[2 * i + 3] * inv;
+                if (inside_box(g, ax, ay, bx, by, pad)) r = mark_segment_distance(m, ax, ay, bx, by, h);
+            }
+        } else if (i + 1 < n || n == 1) {
+            double bx = i + 1 < n ? xy[2 * i + 2] * inv : ax, by = i + 1 < n ? xy[2 * i + 3] * inv : ay;
+            if (inside_box(g, ax, ay, bx, by, pad)) r = mark_segment_dilate(m, ax, ay, bx, by, h);
+        }
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
+/* Road bit of cell (x, y), clamped to the grid: outside, a neighbour copies
+ * the nearest inside cell, so roads leaving the map get no border there. */
+static unsigned road_at(const rs_road_grid *g, int64_t x, int64_t y)
+{
+    if (x < 0) x = 0;
+    if (y < 0) y = 0;
+    if (x >= (int64_t)g->gw) x = (int64_t)g->gw - 1;
+    if (y >= (int64_t)g->gh) y = (int64_t)g->gh - 1;
+    const uint8_t *t = rs__grid_tile(g, (uint32_t)x >> RS__TILE_SHIFT, (uint32_t)y >> RS__TILE_SHIFT);
+    if (!t) return 0;
+    return t[((uint32_t)y & (RS__TILE - 1)) * RS__TILE + ((uint32_t)x & (RS__TILE - 1))] & RS__CELL_ROAD;
+}
+
+static void classify_tile(rs_road_grid *g, uint32_t tx, uint32_t ty)
+{
+    /* Road bits of the tile plus a one-cell border from the neighbours. */
+    uint8_t win[(RS__TILE + 2) * (RS__TILE + 2)];
+    uint8_t *t = g->tiles[(size_t)ty * g->tw + tx];
+    int64_t bx = (int64_t)tx * RS__TILE, by = (int64_t)ty * RS__TILE;
+    const uint32_t W = RS__TILE + 2;
+    for (uint32_t y = 0; y < W; y++)
+        for (uint32_t x = 0; x < W; x++) {
+            int inner = x > 0 && y > 0 && x <= RS__TILE && y <= RS__TILE;
+            int64_t gx = bx + x - 1, gy = by + y - 1;
+            int ingrid = gx >= 0 && gy >= 0 && gx < (int64_t)g->gw && gy < (int64_t)g->gh;
+            win[y * W + x] = (uint8_t)((inner && ingrid) ? (t[(y - 1) * RS__TILE + (x - 1)] & RS__CELL_ROAD)
+                                                         : road_at(g, gx, gy));
+        }
+    static const int ox[8] = { 0, 1, 1, 1, 0, -1, -1, -1 }, oy[8] = { -1, -1, 0, 1, 1, 1, 0, -1 };
+    for (uint32_t y = 0; y < RS__TILE; y++) {
+        if (by + y >= (int64_t)g->gh) break;
+        for (uint32_t x = 0; x < RS__TILE; x++) {
+            uint8_t *cell = &t[y * RS__TILE + x];
+            if (!(*cell & RS__CELL_ROAD)) continue;
+            if (bx + x >= (int64_t)g->gw) { *cell = 0; continue; }
+            unsigned mask = 0;
+            for (int b = 0; b < 8; b++)
+                if (win[(y + 1 + oy[b]) * W + (x + 1 + ox[b])]) mask |= 1u << b;
+            unsigned p = rs__mask_corners(mask);
+            *cell = (uint8_t)(RS__CELL_ROAD | p);
+            g->stats.road_cells++;
+            if (mask == 0xFF) {
+                g->stats.interior_cells++;
+            } else {
+                rs_tile_type type;
+                int rot;
+                rs__pattern_classify(p, &type, &rot);
+                g->stats.boundary_cells++;
+                g->stats.by_type[type]++;
+            }
+        }
+    }
+}
+
+/* Road cells per DEM cell side. Automatic: the narrowest road spans at least
+ * 4 road cells and a road cell is at most half a texel, so the drawn edge is
+ * finer than the output; capped at 64 and by the road-cell limit. */
+static rs_result choose_k(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, double cs, uint32_t texels,
+                          double road_cell, uint32_t *k_out)
+{
+    uint64_t cw = dem->width - 1, ch = dem->height - 1, cells;
+    uint64_t k;
+    if (road_cell > 0) {
+        double kf = floor(cs / road_cell + 0.5);
+        if (kf < 1) kf = 1;
+        if (kf > 65536) return rs__fail(ctx, RS_ERR_LIMIT, "road cell %g m is too small for cell size %g m", road_cell, cs);
+        k = (uint64_t)kf;
+        if (!rs__mul_u64(cw * k, ch * k, &cells) || cells > ctx->limits.max_road_cells || cw * k > UINT32_MAX ||
+            ch * k > UINT32_MAX)
+            return rs__fail(ctx, RS_ERR_LIMIT, "road cell %g m gives more than %llu road cells", road_cell,
+                            (unsigned long long)ctx->limits.max_road_cells);
+        *k_out = (uint32_t)k;
+        return RS_OK;
+    }
+    double wmin = INFINITY;
+    for (size_t i = 0; i < rs_roads_count(roads); i++) {
+        double w;
+        if (rs_roads_get(roads, i, NULL, &w, NULL, NULL) == RS_OK && w < wmin) wmin = w;
+    }
+    double target = 0.5 * cs / texels;
+    if (wmin / 4 < target) target = wmin / 4;
+    double kf = ceil(cs / target - 1e-9);
+    k = kf < 1 ? 1 : (kf > 64 ? 64 : (uint64_t)kf);
+    while (k > 1 && (!rs__mul_u64(cw * k, ch * k, &cells) || cells > ctx->limits.max_road_cells)) k--;
+    *k_out = (uint32_t)k;
+    return RS_OK;
+}
+
+void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
+{
+    if (!ctx || !grid) return;
+    if (grid->tiles) {
+        for (size_t i = 0; i < (size_t)grid->tw * grid->th; i++) rs__free(ctx, grid->tiles[i]);
+        rs__free(ctx, grid->tiles);
+    }
+    rs__free(ctx, grid);
+}
+
+void rs_road_grid_stats(const rs_road_grid *grid, rs_grid_stats *out)
+{
+    if (grid && out) *out = grid->stats;
+}
+
+rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                             rs_road_grid **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_build");
+    *out = NULL;
+    rs_splat_options o;
+    rs_result r = rs__splat_defaults(ctx, opts, &o);
+    if (r) return r;
+    uint32_t k = 1;
+    r = choose_k(ctx, dem, roads, o.cell_size, o.texels, o.road_cell, &k);
+    if (r) return r;
+
+    rs_road_grid *g = rs__calloc(ctx, 1, sizeof *g);
+    if (!g) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the road grid");
+    g->dem_w = dem->width;
+    g->dem_h = dem->height;
+    g->k = k;
+    g->cell_size = o.cell_size;
+    g->c = o.cell_size / k;
+    g->gw = (dem->width - 1) * k;
+    g->gh = (dem->height - 1) * k;
+    g->tw = (g->gw + RS__TILE - 1) / RS__TILE;
+    g->th = (g->gh + RS__TILE - 1) / RS__TILE;
+    g->stats.k = k;
+    g->stats.road_cell = g->c;
+    g->tiles = rs__calloc(ctx, (size_t)g->tw * g->th, sizeof *g->tiles);
+    if (!g->tiles) {
+        rs__free(ctx, g);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the road grid directory");
+    }
+    marker m = { ctx, g };
+    size_t n = rs_roads_count(roads);
+    for (size_t i = 0; i < n && !r; i++) {
+        const double *xy;
+        size_t np;
+        double w;
+        rs_roads_get(roads, i, NULL, &w, &xy, &np);
+        r = mark_road(&m, xy, np, w, o.buffer);
+        if (!r && o.progress && o.progress(o.progress_user, i + 1, n)) r = rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
+    }
+    if (!r)
+        for (uint32_t ty = 0; ty < g->th; ty++)
+            for (uint32_t tx = 0; tx < g->tw; tx++)
+                if (g->tiles[(size_t)ty * g->tw + tx]) classify_tile(g, tx, ty);
+    if (r) {
+        rs_road_grid_free(ctx, g);
+        return r;
+    }
+    g->stats.bytes = sizeof *g + (uint64_t)g->tw * g->th * sizeof *g->tiles +
+                     g->stats.tiles_allocated * RS__TILE * RS__TILE;
+    *out = g;
+    rs__ok(ctx);
+    return RS_OK;
+}

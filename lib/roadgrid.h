@@ -1,0 +1,28 @@
+/* Private: the sparse road grid shared by lib/roadgrid.c and lib/splat.c. */
+#ifndef RS_ROADGRID_H
+#define RS_ROADGRID_H
+#include "internal.h"
+
+/* Cells are bytes in square blocks of RS__TILE x RS__TILE, allocated only
+ * where a road touches, so memory follows road area, not map area. */
+#define RS__TILE_SHIFT 6
+#define RS__TILE (1u << RS__TILE_SHIFT)
+#define RS__CELL_ROAD 0x80u    /* the cell is road */
+#define RS__CELL_PATTERN 0x0Fu /* corner pattern (lib/mask.c) once classified */
+
+struct rs_road_grid {
+    uint32_t dem_w, dem_h;   /* DEM the grid was built for */
+    uint32_t k;              /* road cells per DEM cell side */
+    double cell_size;        /* DEM cell, metres */
+    double c;                /* road cell, metres (cell_size / k) */
+    uint32_t gw, gh;         /* grid size in road cells */
+    uint32_t tw, th;         /* grid size in tiles */
+    uint8_t **tiles;         /* tw*th, NULL where there is no road */
+    rs_grid_stats stats;
+};
+
+static inline const uint8_t *rs__grid_tile(const rs_road_grid *g, uint32_t tx, uint32_t ty)
+{
+    return g->tiles[(size_t)ty * g->tw + tx];
+}
+#endif

@@ -1,0 +1,1027 @@
+/* ROAM terrain mesher: a Landscape of patches, each two bintree roots, with
+ * nodes from a fixed pool linked by 32-bit indices (the seed's five links).
+ * Design notes and the reasons behind the choices: docs/roam.md. */
+#include "internal.h"
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#define NIL 0xFFFFFFFFu
+#define MAX_PATCH_LOG 14          /* patch side <= 16384 cells: heap index < 2^30 */
+#define MAX_SIDE 32768u           /* node coordinates are uint16 */
+#define AUTO_POOL_CAP (1u << 21)
+#define ERR_OUTSIDE (-1.0f)       /* node entirely off the map: never split for error */
+#define FRAME_MAX_PASSES 12
+
+typedef struct roam_node {
+    uint32_t lc, rc;                /* children (NIL for a leaf) */
+    uint32_t base, left, right;     /* neighbours across base / left leg / right leg */
+    uint32_t h;                     /* heap index inside the patch: roots are 2 and 3 */
+    uint32_t patch;
+    uint16_t ax, ay, bx, by;        /* apex and left base corner; the right corner
+                                       is apex + rot90(left - apex) */
+} roam_node;
+
+struct rs_roam {
+    uint32_t w, hgt, cw, ch;        /* samples and cells */
+    double cs, zs;
+    const float *z;                 /* heights in DEM units, nodata filled */
+    float *zown;                    /* owned copy when the DEM had nodata */
+    uint32_t plog, P, npx, npy;
+    size_t epp;                     /* error entries per patch (2 P^2) */
+    float *err;                     /* per patch, indexed by heap index */
+    float *pzmin, *pzmax;           /* per patch height range (DEM units) */
+    roam_node *nodes, *base_copy;
+    uint32_t base_count, cap, used; /* cap = base_count + pool */
+    uint32_t base_tris, tris;
+    int exhausted;
+    uint32_t *vmap;                 /* w*h: output vertex of a sample, NIL when unused */
+    uint32_t *smap;                 /* 2(w+h): skirt vertex of a border sample */
+    double threshold, max_bound;
+    double tol;                     /* view mode: tolerance carried between frames */
+    uint32_t frame_passes, culled;
+    uint64_t bytes;
+};
+
+size_t rs_roam_node_bytes(void) { return sizeof(roam_node); }
+
+/* ---- geometry helpers -------------------------------------------------- */
+
+static void node_corner(const roam_node *n, int *cx, int *cy)
+{
+    *cx = (int)n->ax - ((int)n->by - (int)n->ay);
+    *cy = (int)n->ay + ((int)n->bx - (int)n->ax);
+}
+
+static int inside_xy(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
+{
+    int mx = ax > bx ? ax : bx, my = ay > by ? ay : by;
+    if (cx > mx) mx = cx;
+    if (cy > my) my = cy;
+    return mx <= (int)L->cw && my <= (int)L->ch;
+}
+
+static int node_inside(const rs_roam *L, const roam_node *n)
+{
+    int cx, cy;
+    node_corner(n, &cx, &cy);
+    return inside_xy(L, n->ax, n->ay, n->bx, n->by, cx, cy);
+}
+
+/* Error bound of a node in DEM units; leaves of the finest level have none. */
+static float node_err(const rs_roam *L, const roam_node *n)
+{
+    if (n->h >= L->epp) return 0.0f;
+    return L->err[(size_t)n->patch * L->epp + n->h];
+}
+
+/* ---- error bounds -------------------------------------------------------- */
+
+static int64_t floor_div(int64_t a, int64_t b)
+{
+    int64_t q = a / b;
+    if ((a % b != 0) && ((a < 0) != (b < 0))) q--;
+    return q;
+}
+
+static int64_t ceil_div(int64_t a, int64_t b) { return -floor_div(-a, b); }
+
+/* Max |z - plane| over the samples inside (or on) the triangle, exactly: the
+ * plane through the three corner heights, every lattice point tested. */
+static double tri_max_error(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
+{
+    const float *z = L->z;
+    const size_t W = L->w;
+    double za = z[(size_t)ay * W + (size_t)ax];
+    double zb = z[(size_t)by * W + (size_t)bx];
+    double zc = z[(size_t)cy * W + (size_t)cx];
+    double dx1 = bx - ax, dy1 = by - ay, dx2 = cx - ax, dy2 = cy - ay;
+    double det = dx1 * dy2 - dx2 * dy1;
+    double gx = ((zb - za) * dy2 - (zc - za) * dy1) / det;
+    double gy = ((zc - za) * dx1 - (zb - za) * dx2) / det;
+    /* Edge functions e(x,y) = A x + B y + C >= 0 inside (orientation fixed by det). */
+    int px[3] = { ax, bx, cx }, py[3] = { ay, by, cy };
+    int64_t A[3], B[3], C[3];
+    for (int k = 0; k < 3; k++) {
+        int p = k, q = (k + 1) % 3;
+        int64_t ex = px[q] - px[p], ey = py[q] - py[p];
+        /* cross(e, (x,y) - p) */
+        A[k] = -ey; B[k] = ex; C[k] = ey * px[p] - ex * py[p];
+        if (det < 0) { A[k] = -A[k]; B[k] = -B[k]; C[k] = -C[k]; }
+    }
+    int y0 = ay < by ? ay : by, y1 = ay > by ? ay : by;
+    if (cy < y0) y0 = cy;
+    if (cy > y1) y1 = cy;
+    int xmin = ax < bx ? ax : bx, xmax = ax > bx ? ax : bx;
+    if (cx < xmin) xmin = cx;
+    if (cx > xmax) xmax = cx;
+    double mx = 0.0;
+    for (int y = y0; y <= y1; y++) {
+        int64_t lo = xmin, hi = xmax;
+        for (int k = 0; k < 3; k++) {
+            int64_t rest = B[k] * y + C[k]; /* A x + rest >= 0 */
+            if (A[k] > 0) { int64_t v = ceil_div(-rest, A[k]); if (v > lo) lo = v; }
+            else if (A[k] < 0) { int64_t v = floor_div(rest, -A[k]); if (v < hi) hi = v; }
+            else if (rest < 0) { lo = 1; hi = 0; }
+        }
+        if (lo > hi) continue;
+        const float *row = z + (size_t)y * W;
+        double b0 = za + gy * (double)(y - ay) - gx * (double)ax;
+        double m0 = 0.0, m1 = 0.0;
+        int64_t x = lo;
+        for (; x + 1 <= hi; x += 2) {
+            double d0 = fabs((double)row[x] - (b0 + gx * (double)x));
+            double d1 = fabs((double)row[x + 1] - (b0 + gx * (double)(x + 1)));
+            m0 = d0 > m0 ? d0 : m0;
+            m1 = d1 > m1 ? d1 : m1;
+        }
+        if (x <= hi) {
+            double d0 = fabs((double)row[x] - (b0 + gx * (double)x));
+            m0 = d0 > m0 ? d0 : m0;
+        }
+        if (m1 > m0) m0 = m1;
+        if (m0 > mx) mx = m0;
+    }
+    return mx;
+}
+
+/* Round up to float so the stored bound is never below the double one. */
+static float round_up_float(double v)
+{
+    float f = (float)v;
+    if ((double)f < v) f = nextafterf(f, FLT_MAX);
+    return f;
+}
+
+static void err_build(rs_roam *L, float *E, uint32_t h, int level, int ax, int ay, int bx,
+                      int by)
+{
+    int maxlev = 2 * (int)L->plog - 1;
+    if (level > maxlev) return;
+    int cx = ax - (by - ay), cy = ay + (bx - ax);
+    int minx = ax < bx ? ax : bx, miny = ay < by ? ay : by;
+    if (cx < minx) minx = cx;
+    if (cy < miny) miny = cy;
+    float e;
+    if (minx >= (int)L->cw || miny >= (int)L->ch) e = ERR_OUTSIDE;
+    else if (!inside_xy(L, ax, ay, bx, by, cx, cy)) e = INFINITY; /* straddles the border */
+    else if (level == maxlev) {
+        /* legs sqrt(2): the only non-corner sample is the base midpoint */
+        int mx = (bx + cx) / 2, my = (by + cy) / 2;
+        const float *z = L->z;
+        size_t W = L->w;
+        double d = (double)z[(size_t)my * W + (size_t)mx]
+                   - 0.5 * ((double)z[(size_t)by * W + (size_t)bx] + (double)z[(size_t)cy * W + (size_t)cx]);
+        e = round_up_float(fabs(d));
+    } else e = round_up_float(tri_max_error(L, ax, ay, bx, by, cx, cy));
+    E[h] = e;
+    int mx = (bx + cx) / 2, my = (by + cy) / 2;
+    err_build(L, E, 2 * h, level + 1, mx, my, ax, ay);
+    err_build(L, E, 2 * h + 1, level + 1, mx, my, cx, cy);
+}
+
+/* ---- nodata ---------------------------------------------------------------- */
+
+/* Fill NaN samples layer by layer from the valid ones: each takes the lowest
+ * 8-neighbour filled in an earlier layer. */
+static rs_result fill_nodata(rs_ctx *ctx, rs_roam *L, const float *src)
+{
+    size_t n = (size_t)L->w * L->hgt;
+    float *z = rs__alloc_array(ctx, n, sizeof *z);
+    uint32_t *q = rs__alloc_array(ctx, n, sizeof *q);
+    uint32_t *layer = rs__alloc_array(ctx, n, sizeof *layer);
+    if (!z || !q || !layer) {
+        rs__free(ctx, z); rs__free(ctx, q); rs__free(ctx, layer);
+        return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory filling nodata (%zu samples)", n);
+    }
+    size_t qn = 0, valid = 0;
+    for (size_t i = 0; i < n; i++) {
+        z[i] = isfinite(src[i]) ? src[i] : NAN;
+        layer[i] = isnan(z[i]) ? NIL : 0;
+        if (!isnan(z[i])) valid++;
+    }
+    if (valid == 0) {
+        for (size_t i = 0; i < n; i++) z[i] = 0.0f;
+    } else {
+        int W = (int)L->w, H = (int)L->hgt;
+        /* seed layer 1: nodata cells touching valid ones */
+        for (int i = 0; i < H; i++)
+            for (int j = 0; j < W; j++) {
+                size_t id = (size_t)i * W + j;
+                if (layer[id] != NIL) continue;
+                int touch = 0;
+                for (int di = -1; di <= 1 && !touch; di++)
+                    for (int dj = -1; dj <= 1; dj++) {
+                        int ii = i + di, jj = j + dj;
+                        if (ii < 0 || jj < 0 || ii >= H || jj >= W) continue;
+                        if (layer[(size_t)ii * W + jj] == 0) { touch = 1; break; }
+                    }
+                if (touch) { layer[id] = 1; q[qn++] = (uint32_t)id; }
+            }
+        size_t head = 0;
+        while (head < qn) {
+            uint32_t cur = layer[q[head]];
+            size_t end = qn;
+            for (size_t k = head; k < end; k++) { /* values of this layer */
+                size_t id = q[k];
+                int i = (int)(id / (size_t)W), j = (int)(id % (size_t)W);
+                float best = INFINITY;
+                for (int di = -1; di <= 1; di++)
+                    for (int dj = -1; dj <= 1; dj++) {
+                        int ii = i + di, jj = j + dj;
+                        if (ii < 0 || jj < 0 || ii >= H || jj >= W) continue;
+                        size_t nb = (size_t)ii * W + jj;
+                        if (layer[nb] < cur && z[nb] < best) best = z[nb];
+                    }
+                z[id] = best;
+            }
+            for (size_t k = head; k < end; k++) { /* next layer */
+                size_t id = q[k];
+                int i = (int)(id / (size_t)W), j = (int)(id % (size_t)W);
+                for (int di = -1; di <= 1; di++)
+                    for (int dj = -1; dj <= 1; dj++) {
+                        int ii = i + di, jj = j + dj;
+                        if (ii < 0 || jj < 0 || ii >= H || jj >= W) continue;
+                        size_t nb = (size_t)ii * W + jj;
+                        if (layer[nb] == NIL) { layer[nb] = cur + 1; q[qn++] = (uint32_t)nb; }
+                    }
+            }
+            head = end;
+        }
+    }
+    rs__free(ctx, q);
+    rs__free(ctx, layer);
+    L->zown = z;
+    L->z = z;
+    return RS_OK;
+}
+
+/* ---- bintree --------------------------------------------------------------- */
+
+static void relink(roam_node *n, uint32_t nb, uint32_t old, uint32_t now)
+{
+    if (n[nb].base == old) n[nb].base = now;
+    else if (n[nb].left == old) n[nb].left = now;
+    else if (n[nb].right == old) n[nb].right = now;
+}
+
+/* Nodes a split of leaf t needs, force-splits included (worst case). */
+static uint32_t split_need(const rs_roam *L, uint32_t t)
+{
+    const roam_node *n = L->nodes;
+    uint32_t need = 0, cur = t;
+    for (;;) {
+        uint32_t b = n[cur].base;
+        if (b == NIL) return need + 2;
+        if (n[b].base == cur) return need + 4;
+        need += 4;
+        cur = b;
+    }
+}
+
+/* Split leaf t, force-splitting its base neighbour first when they do not
+ * form a diamond. The caller reserved split_need(t) nodes. */
+static void split(rs_roam *L, uint32_t t)
+{
+    roam_node *n = L->nodes;
+    if (n[t].lc != NIL) return;
+    if (n[t].base != NIL && n[n[t].base].base != t) split(L, n[t].base);
+    uint32_t lc = L->used++, rc = L->used++;
+    roam_node *T = &n[t];
+    int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
+    node_corner(T, &cx, &cy);
+    uint16_t mx = (uint16_t)((bx + cx) / 2), my = (uint16_t)((by + cy) / 2);
+    roam_node *Lc = &n[lc], *Rc = &n[rc];
+    Lc->lc = Lc->rc = NIL; Rc->lc = Rc->rc = NIL;
+    Lc->base = T->left; Lc->left = rc; Lc->right = NIL;
+    Rc->base = T->right; Rc->left = NIL; Rc->right = lc;
+    Lc->h = 2 * T->h; Rc->h = 2 * T->h + 1;
+    Lc->patch = Rc->patch = T->patch;
+    Lc->ax = mx; Lc->ay = my; Lc->bx = T->ax; Lc->by = T->ay;
+    Rc->ax = mx; Rc->ay = my; Rc->bx = (uint16_t)cx; Rc->by = (uint16_t)cy;
+    T->lc = lc; T->rc = rc;
+    if (T->left != NIL) relink(n, T->left, t, lc);
+    if (T->right != NIL) relink(n, T->right, t, rc);
+    L->tris += (uint32_t)(inside_xy(L, mx, my, ax, ay, bx, by) + inside_xy(L, mx, my, cx, cy, ax, ay))
+               - (uint32_t)inside_xy(L, ax, ay, bx, by, cx, cy);
+    uint32_t b = T->base;
+    if (b != NIL) {
+        if (n[b].lc != NIL) {
+            n[n[b].lc].right = rc; n[n[b].rc].left = lc;
+            n[lc].right = n[b].rc; n[rc].left = n[b].lc;
+        } else split(L, b);
+    }
+}
+
+static void reset_mesh(rs_roam *L)
+{
+    memcpy(L->nodes, L->base_copy, (size_t)L->base_count * sizeof(roam_node));
+    L->used = L->base_count;
+    L->tris = L->base_tris;
+    L->exhausted = 0;
+}
+
+/* ---- refinement ------------------------------------------------------------ */
+
+typedef struct view_params {
+    double eye[3], f[3], planes[5][4]; /* inward unit normals + offset */
+    int nplanes;
+    double k;    /* pixels per metre at distance 1 */
+    double tol;  /* pixels */
+    double zmid_scale;
+} view_params;
+
+typedef struct refine_params {
+    double max_error;          /* metres (error mode) */
+    const view_params *view;   /* NULL: error mode */
+    uint32_t stop_above;       /* abandon when tris exceeds this (0: never) */
+} refine_params;
+
+static int sphere_visible(const view_params *v, const double c[3], double r)
+{
+    for (int p = 0; p < v->nplanes; p++) {
+        const double *pl = v->planes[p];
+        if (pl[0] * c[0] + pl[1] * c[1] + pl[2] * c[2] + pl[3] < -r) return 0;
+    }
+    return 1;
+}
+
+static int wants_split(const rs_roam *L, const roam_node *nd, const refine_params *rp)
+{
+    float e = node_err(L, nd);
+    if (e == INFINITY) return 1;
+    if (!(e > 0.0f)) return 0; /* flat, finest level, or off the map */
+    double em = (double)e * L->zs;
+    if (!rp->view) return em > rp->max_error;
+    const view_params *v = rp->view;
+    int cx, cy;
+    node_corner(nd, &cx, &cy);
+    double cs = L->cs;
+    double gx = (nd->ax + nd->bx + cx) / 3.0, gy = (nd->ay + nd->by + cy) / 3.0;
+    double r2 = 0.0, d;
+    d = (nd->ax - gx) * (nd->ax - gx) + (nd->ay - gy) * (nd->ay - gy); if (d > r2) r2 = d;
+    d = (nd->bx - gx) * (nd->bx - gx) + (nd->by - gy) * (nd->by - gy); if (d > r2) r2 = d;
+    d = (cx - gx) * (cx - gx) + (cy - gy) * (cy - gy); if (d > r2) r2 = d;
+    double zlo = (double)L->pzmin[nd->patch] * L->zs, zhi = (double)L->pzmax[nd->patch] * L->zs;
+    double hz = 0.5 * (zhi - zlo);
+    double c[3] = { gx * cs, gy * cs, 0.5 * (zlo + zhi) };
+    double r = sqrt(r2 * cs * cs + hz * hz);
+    if (!sphere_visible(v, c, r)) return 0;
+    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+    double dist = sqrt(dx * dx + dy * dy + dz * dz) - r;
+    double floor_d = 1e-3 * cs;
+    if (dist < floor_d) dist = floor_d;
+    return em * v->k / dist > v->tol;
+}
+
+/* Breadth-first refinement: nodes are visited in allocation order, and the
+ * children of every split (forced ones too) are appended, so each leaf is
+ * tested once. Stops at the first split the pool cannot hold, which makes
+ * the mesh of a larger pool a refinement of a smaller pool's. Returns 1 when
+ * abandoned for stop_above. */
+static int refine(rs_roam *L, const refine_params *rp)
+{
+    roam_node *n = L->nodes;
+    for (uint32_t i = 0; i < L->used; i++) {
+        if (n[i].lc != NIL) continue;
+        if (!wants_split(L, &n[i], rp)) continue;
+        uint32_t need = split_need(L, i);
+        if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
+        split(L, i);
+        if (rp->stop_above && L->tris > rp->stop_above) return 1;
+    }
+    return 0;
+}
+
+static void finish_stats(rs_roam *L)
+{
+    double mb = 0.0;
+    for (uint32_t i = 0; i < L->used; i++) {
+        const roam_node *nd = &L->nodes[i];
+        if (nd->lc != NIL || !node_inside(L, nd)) continue;
+        double e = (double)node_err(L, nd);
+        if (e > mb) mb = e;
+    }
+    L->max_bound = mb * L->zs;
+}
+
+/* ---- creation --------------------------------------------------------------- */
+
+static uint32_t choose_patch_log(uint32_t cw, uint32_t ch)
+{
+    /* Cost: two roots per patch plus the border splits when the map edge cuts
+     * through patches (about four triangles per cell of edge). */
+    uint32_t best = 0;
+    double best_cost = -1.0;
+    uint32_t big = cw > ch ? cw : ch;
+    for (uint32_t lg = 0; lg <= MAX_PATCH_LOG; lg++) {
+        uint32_t P = 1u << lg;
+        if (lg > 0 && (P >> 1) >= big) break;
+        double nx = (double)((cw + P - 1) / P), ny = (double)((ch + P - 1) / P);
+        double cost = 2.0 * nx * ny + ((cw % P) ? 4.0 * ch : 0.0) + ((ch % P) ? 4.0 * cw : 0.0);
+        if (best_cost < 0 || cost <= best_cost) { best_cost = cost; best = lg; }
+    }
+    return best;
+}
+
+static void init_roots(rs_roam *L)
+{
+    roam_node *n = L->nodes;
+    uint32_t P = L->P;
+    for (uint32_t py = 0; py < L->npy; py++)
+        for (uint32_t px = 0; px < L->npx; px++) {
+            uint32_t p = py * L->npx + px, r0 = 2 * p, r1 = 2 * p + 1;
+            uint32_t x0 = px * P, y0 = py * P;
+            roam_node *a = &n[r0], *b = &n[r1];
+            a->lc = a->rc = b->lc = b->rc = NIL;
+            a->h = 2; b->h = 3;
+            a->patch = b->patch = p;
+            /* root 0: apex top-left, left corner top-right; root 1 mirrors it */
+            a->ax = (uint16_t)x0; a->ay = (uint16_t)y0; a->bx = (uint16_t)(x0 + P); a->by = (uint16_t)y0;
+            b->ax = (uint16_t)(x0 + P); b->ay = (uint16_t)(y0 + P); b->bx = (uint16_t)x0; b->by = (uint16_t)(y0 + P);
+            a->base = r1; b->base = r0;
+            a->left = py > 0 ? 2 * (p - L->npx) + 1 : NIL;          /* top edge */
+            a->right = px > 0 ? 2 * (p - 1) + 1 : NIL;              /* left edge */
+            b->left = py + 1 < L->npy ? 2 * (p + L->npx) : NIL;     /* bottom edge */
+            b->right = px + 1 < L->npx ? 2 * (p + 1) : NIL;         /* right edge */
+        }
+    L->used = 2 * L->npx * L->npy;
+    L->tris = 0;
+    for (uint32_t i = 0; i < L->used; i++) L->tris += (uint32_t)node_inside(L, &n[i]);
+}
+
+void rs_roam_free(rs_ctx *ctx, rs_roam *L)
+{
+    if (!ctx || !L) return;
+    rs__free(ctx, L->zown);
+    rs__free(ctx, L->err);
+    rs__free(ctx, L->pzmin);
+    rs__free(ctx, L->pzmax);
+    rs__free(ctx, L->nodes);
+    rs__free(ctx, L->base_copy);
+    rs__free(ctx, L->vmap);
+    rs__free(ctx, L->smap);
+    rs__free(ctx, L);
+}
+
+rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts, rs_roam **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_create: dem and out must not be NULL");
+    *out = NULL;
+    rs_roam_options o;
+    if (opts) o = *opts; else memset(&o, 0, sizeof o);
+    double cs = o.cell_size == 0.0 ? 1.0 : o.cell_size, zs = o.z_scale == 0.0 ? 1.0 : o.z_scale;
+    if (!(cs > 0.0) || !isfinite(cs))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: cell_size %g must be a finite number > 0", o.cell_size);
+    if (!(zs > 0.0) || !isfinite(zs))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: z_scale %g must be a finite number > 0", o.z_scale);
+    uint32_t W = dem->width, H = dem->height;
+    if (W < 2 || H < 2)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: DEM is %ux%u, need at least 2x2 samples", W, H);
+    uint32_t side_lim = ctx->limits.max_dem_side < MAX_SIDE ? ctx->limits.max_dem_side : MAX_SIDE;
+    if (W > side_lim || H > side_lim)
+        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: DEM %ux%u exceeds the side limit %u", W, H, side_lim);
+    uint32_t plog;
+    if (o.patch_size) {
+        if (o.patch_size & (o.patch_size - 1) || o.patch_size > (1u << MAX_PATCH_LOG))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: patch_size %u must be a power of two <= %u",
+                            o.patch_size, 1u << MAX_PATCH_LOG);
+        for (plog = 0; (1u << plog) < o.patch_size; plog++) {}
+    } else plog = choose_patch_log(W - 1, H - 1);
+    uint32_t P = 1u << plog;
+    uint32_t npx = (W - 1 + P - 1) / P, npy = (H - 1 + P - 1) / P;
+    if ((uint64_t)npx * P > 65535u || (uint64_t)npy * P > 65535u)
+        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: patch size %u too large for a %ux%u DEM", P, W, H);
+    uint64_t npatch = (uint64_t)npx * npy;
+    uint64_t epp = 2ull * P * P;
+    uint64_t nerr;
+    if (!rs__mul_u64(npatch, epp, &nerr) || nerr > ((uint64_t)1 << 32) || 2 * npatch > 0x7FFFFFFFull)
+        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: %llu patches of %u cells need too many error entries",
+                        (unsigned long long)npatch, P);
+    /* Full refinement: every patch tree down to cell halves. */
+    uint64_t full_nodes = npatch * (4ull * P * P - 2);
+    uint64_t pool;
+    if (o.pool_nodes) pool = o.pool_nodes;
+    else if (o.pool_bytes) pool = o.pool_bytes / sizeof(roam_node);
+    else {
+        pool = full_nodes;
+        if (pool > AUTO_POOL_CAP) pool = AUTO_POOL_CAP;
+        if (pool > ctx->limits.max_pool_nodes) pool = ctx->limits.max_pool_nodes;
+    }
+    if (pool > ctx->limits.max_pool_nodes)
+        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: pool of %llu nodes exceeds max_pool_nodes %u",
+                        (unsigned long long)pool, ctx->limits.max_pool_nodes);
+
+    rs_roam *L = rs__calloc(ctx, 1, sizeof *L);
+    if (!L) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory");
+    L->w = W; L->hgt = H; L->cw = W - 1; L->ch = H - 1;
+    L->cs = cs; L->zs = zs;
+    L->plog = plog; L->P = P; L->npx = npx; L->npy = npy; L->epp = (size_t)epp;
+    rs_result r = RS_OK;
+    size_t nsamp = (size_t)W * H;
+    int has_nodata = 0;
+    for (size_t i = 0; i < nsamp; i++)
+        if (!isfinite(dem->z[i])) { has_nodata = 1; break; }
+    if (has_nodata) {
+        if ((r = fill_nodata(ctx, L, dem->z)) != RS_OK) goto fail;
+    } else L->z = dem->z;
+    {
+        double zmax = 0.0;
+        for (size_t i = 0; i < nsamp; i++) {
+            double a = fabs((double)L->z[i]);
+            if (a > zmax) zmax = a;
+        }
+        if (!isfinite(zmax * zs * 4.0) || !isfinite(zmax * 4.0)) {
+            r = rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: heights up to %g times z_scale %g overflow", zmax, zs);
+            goto fail;
+        }
+    }
+    L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
+    L->pzmin = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
+    L->pzmax = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
+    L->vmap = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
+    L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
+    if (!L->err || !L->pzmin || !L->pzmax || !L->vmap || !L->smap) {
+        r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
+                     (unsigned long long)nerr);
+        goto fail;
+    }
+    memset(L->vmap, 0xFF, nsamp * sizeof(uint32_t));
+    memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
+    for (uint32_t py = 0; py < npy; py++)
+        for (uint32_t px = 0; px < npx; px++) {
+            uint32_t p = py * npx + px;
+            float *E = L->err + (size_t)p * L->epp;
+            int x0 = (int)(px * P), y0 = (int)(py * P);
+            if (plog > 0) {
+                err_build(L, E, 2, 0, x0, y0, x0 + (int)P, y0);
+                err_build(L, E, 3, 0, x0 + (int)P, y0 + (int)P, x0, y0 + (int)P);
+            }
+            float lo = INFINITY, hi = -INFINITY;
+            uint32_t xe = x0 + P < L->cw ? x0 + P : L->cw, ye = y0 + P < L->ch ? y0 + P : L->ch;
+            for (uint32_t y = (uint32_t)y0; y <= ye; y++)
+                for (uint32_t x = (uint32_t)x0; x <= xe; x++) {
+                    float v = L->z[(size_t)y * W + x];
+                    if (v < lo) lo = v;
+                    if (v > hi) hi = v;
+                }
+            L->pzmin[p] = lo; L->pzmax[p] = hi;
+        }
+    /* Base mesh: roots plus the splits that stop triangles straddling the map
+     * edge. Sized by trial, doubling, before the pool exists. */
+    {
+        uint64_t roots = 2 * npatch;
+        uint64_t bcap = roots + 64;
+        refine_params rp = { FLT_MAX, NULL, 0 };
+        rp.max_error = INFINITY;
+        for (;;) {
+            if (bcap + pool > 0xFFFFFFF0ull) {
+                r = rs__fail(ctx, RS_ERR_LIMIT, "ROAM: base mesh plus pool exceed 2^32 nodes");
+                goto fail;
+            }
+            roam_node *nn = rs__realloc(ctx, L->nodes, (size_t)bcap * sizeof(roam_node));
+            if (!nn) { r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %llu base nodes",
+                                    (unsigned long long)bcap); goto fail; }
+            L->nodes = nn;
+            L->cap = (uint32_t)bcap;
+            init_roots(L);
+            L->exhausted = 0;
+            refine(L, &rp);
+            if (!L->exhausted) break;
+            bcap *= 2;
+        }
+        L->base_count = L->used;
+        L->base_tris = L->tris;
+        size_t total;
+        if (!rs__mul_size((size_t)L->base_count + (size_t)pool, sizeof(roam_node), &total)) {
+            r = rs__fail(ctx, RS_ERR_LIMIT, "ROAM: pool too large");
+            goto fail;
+        }
+        roam_node *nn = rs__realloc(ctx, L->nodes, total);
+        L->base_copy = rs__alloc_array(ctx, L->base_count, sizeof(roam_node));
+        if (nn) L->nodes = nn;
+        if (!nn || !L->base_copy) {
+            r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for a pool of %llu nodes",
+                         (unsigned long long)pool);
+            goto fail;
+        }
+        memcpy(L->base_copy, L->nodes, (size_t)L->base_count * sizeof(roam_node));
+        L->cap = L->base_count + (uint32_t)pool;
+    }
+    L->bytes = sizeof *L + nerr * sizeof(float) + (uint64_t)npatch * 2 * sizeof(float)
+               + (uint64_t)nsamp * sizeof(uint32_t) * (has_nodata ? 2 : 1)
+               + 2 * ((uint64_t)W + H) * sizeof(uint32_t)
+               + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node);
+    L->threshold = INFINITY;
+    finish_stats(L);
+    rs__ok(ctx);
+    *out = L;
+    return RS_OK;
+fail:
+    rs_roam_free(ctx, L);
+    return r;
+}
+
+/* ---- modes --------------------------------------------------------------------- */
+
+rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *L, double max_error)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_refine_error: roam is NULL");
+    if (!(max_error >= 0.0))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: max_error %g must be >= 0", max_error);
+    reset_mesh(L);
+    refine_params rp = { max_error, NULL, 0 };
+    refine(L, &rp);
+    L->threshold = max_error;
+    finish_stats(L);
+    if (L->exhausted)
+        return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out at max error %g m "
+                        "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, max_error, L->tris);
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+static float max_node_error(const rs_roam *L)
+{
+    float m = 0.0f;
+    size_t n = (size_t)L->npx * L->npy * L->epp;
+    for (size_t i = 0; i < n; i++)
+        if (L->err[i] > m && L->err[i] != INFINITY) m = L->err[i];
+    return m;
+}
+
+static uint32_t float_bits(float f) { uint32_t u; memcpy(&u, &f, 4); return u; }
+static float bits_float(uint32_t u) { float f; memcpy(&f, &u, 4); return f; }
+
+rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *L, uint32_t max_triangles)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_refine_count: roam is NULL");
+    if (L->base_tris > max_triangles) {
+        reset_mesh(L);
+        finish_stats(L);
+        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: the base mesh already has %u triangles > %u",
+                        L->base_tris, max_triangles);
+    }
+    /* Smallest error threshold (over float bit patterns, which order like
+     * the values for non-negative floats) whose mesh fits the budget. */
+    uint32_t lo = 0, hi = float_bits(max_node_error(L));
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        reset_mesh(L);
+        refine_params rp = { (double)bits_float(mid) * L->zs, NULL, max_triangles };
+        int over = refine(L, &rp);
+        if (!over && L->tris <= max_triangles) hi = mid; else lo = mid + 1;
+    }
+    return rs_roam_refine_error(ctx, L, (double)bits_float(lo) * L->zs);
+}
+
+static rs_result make_view(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw, view_params *v)
+{
+    memset(v, 0, sizeof *v);
+    double fov = vw->fov_y == 0.0 ? 60.0 : vw->fov_y;
+    double wpx = vw->width ? vw->width : 1280, hpx = vw->height ? vw->height : 720;
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(vw->eye[i]) || !isfinite(vw->dir[i]))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: eye and dir must be finite");
+    if (!(fov > 0.0 && fov < 179.0))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: fov_y %g must be in (0, 179) degrees", fov);
+    if (!(vw->pixel_error >= 0.0) || !isfinite(vw->pixel_error) || !(vw->far_dist >= 0.0))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: pixel_error and far_dist must be >= 0");
+    double fl = sqrt(vw->dir[0] * vw->dir[0] + vw->dir[1] * vw->dir[1] + vw->dir[2] * vw->dir[2]);
+    if (!(fl > 0.0)) return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: dir must not be zero");
+    double f[3] = { vw->dir[0] / fl, vw->dir[1] / fl, vw->dir[2] / fl };
+    /* right = f x up(z); looking straight down, take the map's x axis */
+    double rt[3] = { f[1], -f[0], 0.0 };
+    double rl = sqrt(rt[0] * rt[0] + rt[1] * rt[1]);
+    if (rl < 1e-9) { rt[0] = 1; rt[1] = 0; rl = 1; }
+    rt[0] /= rl; rt[1] /= rl;
+    double up[3] = { rt[1] * f[2] - rt[2] * f[1], rt[2] * f[0] - rt[0] * f[2], rt[0] * f[1] - rt[1] * f[0] };
+    double ty = tan(fov * 0.5 * 3.14159265358979323846 / 180.0), tx = ty * wpx / hpx;
+    memcpy(v->eye, vw->eye, sizeof v->eye);
+    memcpy(v->f, f, sizeof f);
+    double sx = sqrt(1 + tx * tx), sy = sqrt(1 + ty * ty);
+    double nrm[5][3];
+    for (int i = 0; i < 3; i++) {
+        nrm[0][i] = (f[i] * tx - rt[i]) / sx;
+        nrm[1][i] = (f[i] * tx + rt[i]) / sx;
+        nrm[2][i] = (f[i] * ty - up[i]) / sy;
+        nrm[3][i] = (f[i] * ty + up[i]) / sy;
+        nrm[4][i] = f[i];
+    }
+    for (int p = 0; p < 5; p++) {
+        v->planes[p][0] = nrm[p][0]; v->planes[p][1] = nrm[p][1]; v->planes[p][2] = nrm[p][2];
+        v->planes[p][3] = -(nrm[p][0] * vw->eye[0] + nrm[p][1] * vw->eye[1] + nrm[p][2] * vw->eye[2]);
+    }
+    v->nplanes = 5; /* the far limit is applied per patch */
+    v->k = hpx / (2.0 * ty);
+    (void)L;
+    return RS_OK;
+}
+
+static int patch_visible(const rs_roam *L, const view_params *v, uint32_t p, double far_dist)
+{
+    uint32_t px = p % L->npx, py = p / L->npx;
+    double P = L->P, cs = L->cs;
+    double x0 = px * P, y0 = py * P;
+    double x1 = x0 + P < L->cw ? x0 + P : L->cw, y1 = y0 + P < L->ch ? y0 + P : L->ch;
+    double zlo = L->pzmin[p] * L->zs, zhi = L->pzmax[p] * L->zs;
+    double c[3] = { 0.5 * (x0 + x1) * cs, 0.5 * (y0 + y1) * cs, 0.5 * (zlo + zhi) };
+    double hx = 0.5 * (x1 - x0) * cs, hy = 0.5 * (y1 - y0) * cs, hz = 0.5 * (zhi - zlo);
+    double r = sqrt(hx * hx + hy * hy + hz * hz);
+    if (!sphere_visible(v, c, r)) return 0;
+    if (far_dist > 0.0) {
+        double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+        if (sqrt(dx * dx + dy * dy + dz * dz) - r > far_dist) return 0;
+    }
+    return 1;
+}
+
+/* One tessellation at tolerance tol; patches outside the frustum keep their
+ * roots (only forced splits reach them). */
+static void frame_pass(rs_roam *L, const view_params *v0, double tol, const unsigned char *vis)
+{
+    view_params v = *v0;
+    v.tol = tol;
+    reset_mesh(L);
+    refine_params rp = { 0.0, &v, 0 };
+    roam_node *n = L->nodes;
+    for (uint32_t i = 0; i < L->used; i++) {
+        if (n[i].lc != NIL) continue;
+        if (!vis[n[i].patch]) {
+            if (node_err(L, &n[i]) != INFINITY) continue;
+        } else if (!wants_split(L, &n[i], &rp)) continue;
+        uint32_t need = split_need(L, i);
+        if (need > L->cap - L->used) { L->exhausted = 1; break; }
+        split(L, i);
+    }
+}
+
+rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_frame: roam and view must not be NULL");
+    view_params v;
+    rs_result r = make_view(ctx, L, vw, &v);
+    if (r != RS_OK) return r;
+    uint32_t np = L->npx * L->npy;
+    /* visibility per patch, kept in the smap scratch when it is large enough */
+    unsigned char visbuf[256];
+    unsigned char *vis = visbuf;
+    int own = 0;
+    if (np > sizeof visbuf) {
+        vis = rs__malloc(ctx, np);
+        if (!vis) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %u patch flags", np);
+        own = 1;
+    }
+    L->culled = 0;
+    for (uint32_t p = 0; p < np; p++) {
+        vis[p] = (unsigned char)patch_visible(L, &v, p, vw->far_dist);
+        if (!vis[p]) L->culled++;
+    }
+    double tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
+    if (vw->target_triangles && L->tol > 0.0 && isfinite(L->tol)) tol = L->tol; /* gFrameVariance */
+    uint32_t passes = 0;
+    if (!vw->target_triangles) {
+        frame_pass(L, &v, tol, vis);
+        passes = 1;
+    } else {
+        double target = vw->target_triangles;
+        double lo_t = 0.0, hi_t = INFINITY;   /* tol giving too many / too few */
+        double lo_c = 0.0, hi_c = 0.0;
+        double best_tol = tol;
+        double best_dev = INFINITY;
+        for (passes = 1; passes <= FRAME_MAX_PASSES; passes++) {
+            frame_pass(L, &v, tol, vis);
+            double c = L->tris, dev = fabs(c - target) / target;
+            if (dev < best_dev) { best_dev = dev; best_tol = tol; }
+            if (dev <= 0.03) break;
+            if (c > target) { lo_t = tol; lo_c = c; } else { hi_t = tol; hi_c = c; }
+            if (c < target && L->exhausted) break; /* cannot reach: pool too small */
+            double nt;
+            if (lo_t > 0.0 && isfinite(hi_t)) {
+                /* secant in log-log between the bracket ends, kept inside it */
+                double a = log(lo_c) - log(hi_c > 0 ? hi_c : 1), b = log(hi_t) - log(lo_t);
+                double s = b > 0 && a > 0 ? (log(lo_c) - log(target)) / a : 0.5;
+                if (!(s > 0.05 && s < 0.95)) s = 0.5;
+                nt = exp(log(lo_t) + s * b);
+            } else {
+                /* count grows roughly like tol^-1.5 */
+                double ratio = c > 0 ? c / target : 0.01;
+                nt = tol * pow(ratio, 1.0 / 1.5);
+                if (nt > tol * 16) nt = tol * 16;
+                if (nt < tol / 16) nt = tol / 16;
+            }
+            if (!(nt > 0.0) || !isfinite(nt)) break;
+            tol = nt;
+        }
+        if (passes > FRAME_MAX_PASSES) {
+            passes = FRAME_MAX_PASSES + 1;
+            frame_pass(L, &v, best_tol, vis);
+            tol = best_tol;
+        }
+        L->tol = tol;
+    }
+    if (own) rs__free(ctx, vis);
+    L->frame_passes = passes;
+    L->threshold = tol;
+    finish_stats(L);
+    if (L->exhausted)
+        return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out in a frame "
+                        "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, L->tris);
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+void rs_roam_get_stats(const rs_roam *L, rs_roam_stats *o)
+{
+    if (!o) return;
+    memset(o, 0, sizeof *o);
+    if (!L) return;
+    o->width = L->w; o->height = L->hgt;
+    o->patch_size = L->P; o->patches_x = L->npx; o->patches_y = L->npy;
+    o->base_nodes = L->base_count;
+    o->pool_nodes = L->cap - L->base_count;
+    o->pool_used = L->used - L->base_count;
+    o->pool_exhausted = L->exhausted;
+    o->triangles = L->tris;
+    o->threshold = L->threshold;
+    o->max_error_bound = L->max_bound;
+    o->frame_passes = L->frame_passes;
+    o->patches_culled = L->culled;
+    o->bytes = L->bytes;
+}
+
+/* ---- extraction ------------------------------------------------------------------ */
+
+void rs_roam_mesh_bound(const rs_roam *L, const rs_roam_mesh_options *opts, size_t *max_vertices,
+                        size_t *max_indices)
+{
+    size_t v = 0, i = 0;
+    if (L) {
+        size_t t = L->tris;
+        v = t + 2;
+        if (v > (size_t)L->w * L->hgt) v = (size_t)L->w * L->hgt;
+        i = 3 * t;
+        if (opts && opts->skirt_depth > 0.0) {
+            size_t border = 2 * ((size_t)L->cw + L->ch);
+            v += border;
+            i += 6 * border;
+        }
+    }
+    if (max_vertices) *max_vertices = v;
+    if (max_indices) *max_indices = i;
+}
+
+static float zf(const rs_roam *L, int x, int y) { return L->z[(size_t)y * L->w + (size_t)x]; }
+
+static void vertex_normal(const rs_roam *L, int x, int y, float *out)
+{
+    int x0 = x > 0 ? x - 1 : x, x1 = x < (int)L->cw ? x + 1 : x;
+    int y0 = y > 0 ? y - 1 : y, y1 = y < (int)L->ch ? y + 1 : y;
+    double dzx = ((double)zf(L, x1, y) - zf(L, x0, y)) * L->zs / ((x1 - x0) * L->cs);
+    double dzy = ((double)zf(L, x, y1) - zf(L, x, y0)) * L->zs / ((y1 - y0) * L->cs);
+    double nx = -dzx, ny = -dzy, nz = 1.0, l = sqrt(nx * nx + ny * ny + nz * nz);
+    out[0] = (float)(nx / l); out[1] = (float)(ny / l); out[2] = (float)(nz / l);
+}
+
+typedef struct extract_state {
+    rs_roam *L;
+    float *vtx, *nrm;
+    int normals;
+    size_t vcap, icap, nv, ni;
+    uint32_t *idx;
+    int overflow;
+} extract_state;
+
+static uint32_t emit_vertex(extract_state *s, int x, int y)
+{
+    rs_roam *L = s->L;
+    size_t id = (size_t)y * L->w + (size_t)x;
+    if (L->vmap[id] != NIL) return L->vmap[id];
+    if (s->nv >= s->vcap) { s->overflow = 1; return 0; }
+    float *v = s->vtx + 5 * s->nv;
+    v[0] = (float)(x * L->cs);
+    v[1] = (float)(y * L->cs);
+    v[2] = (float)((double)zf(L, x, y) * L->zs);
+    v[3] = (float)((double)x / L->cw);
+    v[4] = (float)((double)y / L->ch);
+    if (s->normals) vertex_normal(L, x, y, s->nrm + 3 * s->nv);
+    L->vmap[id] = (uint32_t)s->nv;
+    return (uint32_t)s->nv++;
+}
+
+static void emit_leaves(extract_state *s, uint32_t t, int clear)
+{
+    rs_roam *L = s->L;
+    const roam_node *nd = &L->nodes[t];
+    while (nd->lc != NIL) {
+        emit_leaves(s, nd->lc, clear);
+        t = nd->rc;
+        nd = &L->nodes[t];
+    }
+    if (!node_inside(L, nd)) return;
+    int cx, cy;
+    node_corner(nd, &cx, &cy);
+    if (clear) {
+        L->vmap[(size_t)nd->ay * L->w + nd->ax] = NIL;
+        L->vmap[(size_t)nd->by * L->w + nd->bx] = NIL;
+        L->vmap[(size_t)cy * L->w + (size_t)cx] = NIL;
+        return;
+    }
+    if (s->overflow) return;
+    /* apex, right corner, left corner: counter-clockwise seen from above */
+    uint32_t a = emit_vertex(s, nd->ax, nd->ay);
+    uint32_t c = emit_vertex(s, cx, cy);
+    uint32_t b = emit_vertex(s, nd->bx, nd->by);
+    if (s->overflow) return;
+    if (s->ni + 3 > s->icap) { s->overflow = 1; return; }
+    s->idx[s->ni++] = a; s->idx[s->ni++] = c; s->idx[s->ni++] = b;
+}
+
+/* Border sample -> slot in smap: top row, bottom row, left column, right column. */
+static size_t border_slot(const rs_roam *L, int x, int y)
+{
+    if (y == 0) return (size_t)x;
+    if (y == (int)L->ch) return L->w + (size_t)x;
+    if (x == 0) return 2 * (size_t)L->w + (size_t)y;
+    return 2 * (size_t)L->w + L->hgt + (size_t)y;
+}
+
+static int on_same_border(const rs_roam *L, const float *p, const float *q, int *px, int *py, int *qx, int *qy)
+{
+    *px = (int)lround(p[0] / L->cs); *py = (int)lround(p[1] / L->cs);
+    *qx = (int)lround(q[0] / L->cs); *qy = (int)lround(q[1] / L->cs);
+    if (*px == *qx && (*px == 0 || *px == (int)L->cw)) return 1;
+    if (*py == *qy && (*py == 0 || *py == (int)L->ch)) return 1;
+    return 0;
+}
+
+static uint32_t skirt_vertex(extract_state *s, uint32_t top, int x, int y, double depth)
+{
+    rs_roam *L = s->L;
+    size_t slot = border_slot(L, x, y);
+    if (L->smap[slot] != NIL) return L->smap[slot];
+    if (s->nv >= s->vcap) { s->overflow = 1; return 0; }
+    float *v = s->vtx + 5 * s->nv;
+    memcpy(v, s->vtx + 5 * (size_t)top, 5 * sizeof(float));
+    v[2] = (float)((double)v[2] - depth);
+    if (s->normals) memcpy(s->nrm + 3 * s->nv, s->nrm + 3 * (size_t)top, 3 * sizeof(float));
+    L->smap[slot] = (uint32_t)s->nv;
+    return (uint32_t)s->nv++;
+}
+
+rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *opts, float *vertices,
+                          float *normals, size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
+                          size_t *vertex_count, size_t *index_count)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (vertex_count) *vertex_count = 0;
+    if (index_count) *index_count = 0;
+    if (!L || (!vertices && vertex_capacity) || (!indices && index_capacity))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: roam and buffers must not be NULL");
+    rs_roam_mesh_options o;
+    if (opts) o = *opts; else memset(&o, 0, sizeof o);
+    if (o.normals && !normals)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: normals requested but buffer is NULL");
+    if (!(o.skirt_depth >= 0.0) || !isfinite(o.skirt_depth))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: skirt_depth %g must be >= 0", o.skirt_depth);
+    extract_state s;
+    memset(&s, 0, sizeof s);
+    s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
+    s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
+    uint32_t nroots = 2 * L->npx * L->npy;
+    for (uint32_t rt = 0; rt < nroots; rt++) emit_leaves(&s, rt, 0);
+    size_t top_indices = s.ni;
+    if (!s.overflow && o.skirt_depth > 0.0) {
+        for (size_t t = 0; t < top_indices && !s.overflow; t += 3)
+            for (int e = 0; e < 3 && !s.overflow; e++) {
+                uint32_t p = indices[t + (size_t)e], q = indices[t + (size_t)(e + 1) % 3];
+                int px, py, qx, qy;
+                if (!on_same_border(L, vertices + 5 * (size_t)p, vertices + 5 * (size_t)q, &px, &py, &qx, &qy))
+                    continue;
+                uint32_t ps = skirt_vertex(&s, p, px, py, o.skirt_depth);
+                uint32_t qs = skirt_vertex(&s, q, qx, qy, o.skirt_depth);
+                if (s.overflow) break;
+                if (s.ni + 6 > s.icap) { s.overflow = 1; break; }
+                indices[s.ni++] = p; indices[s.ni++] = ps; indices[s.ni++] = q;
+                indices[s.ni++] = q; indices[s.ni++] = ps; indices[s.ni++] = qs;
+            }
+        memset(L->smap, 0xFF, 2 * ((size_t)L->w + L->hgt) * sizeof(uint32_t));
+    }
+    for (uint32_t rt = 0; rt < nroots; rt++) emit_leaves(&s, rt, 1);
+    if (s.overflow) {
+        size_t mv, mi;
+        rs_roam_mesh_bound(L, &o, &mv, &mi);
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL,
+                        "rs_roam_extract: buffers of %zu vertices / %zu indices too small (bound %zu / %zu)",
+                        vertex_capacity, index_capacity, mv, mi);
+    }
+    if (vertex_count) *vertex_count = s.nv;
+    if (index_count) *index_count = s.ni;
+    rs__ok(ctx);
+    return RS_OK;
+}

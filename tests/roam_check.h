@@ -1,0 +1,199 @@
+/* Independent checker for terrain meshes over a W x H grid (used by
+ * tests/test_roam.c and tests/bench/roam.c, for roadsplat's meshes and for
+ * martini's alike). Vertices are given as grid coordinates plus a height;
+ * everything is recomputed here in double, nothing is taken from the mesher. */
+#ifndef RS_ROAM_CHECK_H
+#define RS_ROAM_CHECK_H
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct rc_result {
+    int ok_grid;        /* every vertex on a grid sample, height finite */
+    int ok_heights;     /* vertex height == DEM height (valid samples) */
+    int ok_winding;     /* every triangle non-degenerate and counter-clockwise seen from above */
+    int ok_area;        /* triangle areas add up to the map area */
+    int ok_edges;       /* each directed edge once; interior edges paired; others on the border */
+    int ok_tjunction;   /* no vertex strictly inside any triangle edge */
+    int ok_coverage;    /* every DEM sample lies in some triangle */
+    double max_err, rms_err; /* over valid DEM samples, in height units of z * zs */
+    size_t samples;
+} rc_result;
+
+static inline int rc_cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* gx, gy: grid column and row per vertex; vz: height per vertex (metres);
+ * z: DEM (DEM units, NaN = nodata), heights in metres = z * zs;
+ * tri: 3 indices per triangle, `nt` triangles. Returns 0 if out of memory. */
+static inline int rc_check(uint32_t W, uint32_t H, const float *z, double zs, const int32_t *gx,
+                    const int32_t *gy, const double *vz, size_t nv, const uint32_t *tri, size_t nt,
+                    rc_result *r)
+{
+    memset(r, 0, sizeof *r);
+    r->ok_grid = r->ok_heights = r->ok_winding = r->ok_area = r->ok_edges = 1;
+    r->ok_tjunction = r->ok_coverage = 1;
+    size_t n = (size_t)W * H;
+    unsigned char *isv = calloc(n, 1);
+    double *err = malloc(n * sizeof *err);
+    uint64_t *edges = malloc((nt * 3 + 1) * sizeof *edges);
+    if (!isv || !err || !edges) { free(isv); free(err); free(edges); return 0; }
+    for (size_t i = 0; i < n; i++) err[i] = -1.0;
+    for (size_t v = 0; v < nv; v++) {
+        if (gx[v] < 0 || gy[v] < 0 || gx[v] >= (int32_t)W || gy[v] >= (int32_t)H || !isfinite(vz[v])) {
+            r->ok_grid = 0;
+            continue;
+        }
+        size_t id = (size_t)gy[v] * W + (size_t)gx[v];
+        isv[id] = 1;
+        if (!isnan(z[id]) && vz[v] != (double)z[id] * zs) r->ok_heights = 0;
+    }
+    if (!r->ok_grid) { free(isv); free(err); free(edges); return 1; }
+    double area2 = 0.0;
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t k[3] = { tri[3 * t], tri[3 * t + 1], tri[3 * t + 2] };
+        if (k[0] >= nv || k[1] >= nv || k[2] >= nv) { r->ok_grid = 0; continue; }
+        int64_t x[3], y[3];
+        for (int c = 0; c < 3; c++) { x[c] = gx[k[c]]; y[c] = gy[k[c]]; }
+        int64_t cr = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+        /* x right, y down the map, z up: counter-clockwise from above is a
+         * negative cross product in (column, row) coordinates */
+        if (cr >= 0) r->ok_winding = 0;
+        area2 += (double)(cr < 0 ? -cr : cr);
+        for (int c = 0; c < 3; c++) {
+            int d = (c + 1) % 3;
+            uint64_t a = (uint64_t)((size_t)y[c] * W + (size_t)x[c]), b = (uint64_t)((size_t)y[d] * W + (size_t)x[d]);
+            edges[3 * t + (size_t)c] = (a << 32) | b;
+            /* T-junction: lattice points strictly inside the edge */
+            int64_t ex = x[d] - x[c], ey = y[d] - y[c];
+            int64_t g = ex < 0 ? -ex : ex, gg = ey < 0 ? -ey : ey;
+            while (gg) { int64_t tmp = g % gg; g = gg; gg = tmp; }
+            for (int64_t s = 1; s < g; s++) {
+                int64_t px = x[c] + ex / g * s, py = y[c] + ey / g * s;
+                if (isv[(size_t)py * W + (size_t)px]) r->ok_tjunction = 0;
+            }
+        }
+        /* rasterize the samples of the triangle */
+        int64_t x0 = x[0], x1 = x[0], y0 = y[0], y1 = y[0];
+        for (int c = 1; c < 3; c++) {
+            if (x[c] < x0) x0 = x[c];
+            if (x[c] > x1) x1 = x[c];
+            if (y[c] < y0) y0 = y[c];
+            if (y[c] > y1) y1 = y[c];
+        }
+        if (cr == 0) continue;
+        for (int64_t py = y0; py <= y1; py++)
+            for (int64_t px = x0; px <= x1; px++) {
+                int64_t w0 = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
+                int64_t w1 = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
+                int64_t w2 = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
+                if (cr < 0) { w0 = -w0; w1 = -w1; w2 = -w2; }
+                if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+                double den = (double)(w0 + w1 + w2);
+                double zi = (w0 * vz[k[0]] + w1 * vz[k[1]] + w2 * vz[k[2]]) / den;
+                size_t id = (size_t)py * W + (size_t)px;
+                double e = isnan(z[id]) ? 0.0 : fabs(zi - (double)z[id] * zs);
+                if (e > err[id]) err[id] = e;
+            }
+    }
+    if (fabs(area2 - 2.0 * (double)(W - 1) * (double)(H - 1)) > 0.5) r->ok_area = 0;
+    qsort(edges, nt * 3, sizeof *edges, rc_cmp_u64);
+    for (size_t i = 0; i < nt * 3; i++) {
+        if (i + 1 < nt * 3 && edges[i] == edges[i + 1]) r->ok_edges = 0;
+        uint64_t rev = (edges[i] << 32) | (edges[i] >> 32);
+        if (!bsearch(&rev, edges, nt * 3, sizeof *edges, rc_cmp_u64)) {
+            /* unpaired: must lie on the map border */
+            size_t a = (size_t)(edges[i] >> 32), b = (size_t)(edges[i] & 0xFFFFFFFFu);
+            size_t ax = a % W, ay = a / W, bx = b % W, by = b / W;
+            int border = (ax == bx && (ax == 0 || ax == W - 1)) || (ay == by && (ay == 0 || ay == H - 1));
+            if (!border) r->ok_edges = 0;
+        }
+    }
+    double sum2 = 0.0;
+    size_t cnt = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (err[i] < 0) { r->ok_coverage = 0; continue; }
+        if (isnan(z[i])) continue;
+        if (err[i] > r->max_err) r->max_err = err[i];
+        sum2 += err[i] * err[i];
+        cnt++;
+    }
+    r->samples = cnt;
+    r->rms_err = cnt ? sqrt(sum2 / (double)cnt) : 0.0;
+    free(isv); free(err); free(edges);
+    return 1;
+}
+
+static inline int rc_all_ok(const rc_result *r)
+{
+    return r->ok_grid && r->ok_heights && r->ok_winding && r->ok_area && r->ok_edges && r->ok_tjunction
+           && r->ok_coverage;
+}
+
+/* ---- deterministic synthetic DEMs (any size) ---- */
+static inline uint64_t rc_hash(uint64_t x)
+{
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+/* lattice value in [-1, 1) */
+static inline double rc_lattice(uint64_t seed, int64_t i, int64_t j)
+{
+    uint64_t h = rc_hash(seed ^ rc_hash((uint64_t)i * 0x1000193ull ^ rc_hash((uint64_t)j)));
+    return (double)(h >> 11) / 4503599627370496.0 - 1.0;
+}
+
+static inline double rc_value_noise(uint64_t seed, double x, double y)
+{
+    double fx = floor(x), fy = floor(y);
+    int64_t i = (int64_t)fx, j = (int64_t)fy;
+    double u = x - fx, v = y - fy;
+    u = u * u * (3 - 2 * u);
+    v = v * v * (3 - 2 * v);
+    double a = rc_lattice(seed, i, j), b = rc_lattice(seed, i + 1, j);
+    double c = rc_lattice(seed, i, j + 1), d = rc_lattice(seed, i + 1, j + 1);
+    return (a * (1 - u) + b * u) * (1 - v) + (c * (1 - u) + d * u) * v;
+}
+
+/* fBm: octaves from `period` samples down to 2, amplitude * gain^k. */
+static inline void rc_dem_fractal(float *z, uint32_t W, uint32_t H, uint64_t seed, double period,
+                                  double amplitude, double gain)
+{
+    for (size_t i = 0; i < (size_t)W * H; i++) z[i] = 0.0f;
+    double amp = amplitude;
+    int oct = 0;
+    for (double p = period; p >= 2.0; p *= 0.5, amp *= gain, oct++)
+        for (uint32_t y = 0; y < H; y++)
+            for (uint32_t x = 0; x < W; x++)
+                z[(size_t)y * W + x] += (float)(amp * rc_value_noise(seed + (uint64_t)oct, x / p, y / p));
+}
+
+/* Real-looking: ridged mountains, a valley floor, a flat lake, quantised to
+ * 0.1 units like an integer DEM. */
+static inline void rc_dem_realistic(float *z, uint32_t W, uint32_t H, uint64_t seed)
+{
+    for (uint32_t y = 0; y < H; y++)
+        for (uint32_t x = 0; x < W; x++) {
+            double h = 0.0, amp = 1.0, wgt = 1.0;
+            int oct = 0;
+            for (double p = 256.0; p >= 2.0; p *= 0.5, amp *= 0.5, oct++) {
+                double n = 1.0 - fabs(rc_value_noise(seed + (uint64_t)oct, x / p, y / p));
+                n = n * n * wgt;
+                wgt = n * 2 > 1 ? 1 : n * 2;
+                h += n * amp;
+            }
+            double valley = fabs(rc_value_noise(seed + 99, x / 400.0, y / 400.0));
+            h = 900.0 * h * (0.25 + valley) + 300.0;
+            if (h < 420.0) h = 420.0 - (420.0 - h) * 0.05; /* broad valley floor */
+            if (h < 415.0) h = 415.0;                       /* the lake */
+            z[(size_t)y * W + x] = (float)(floor(h * 10.0 + 0.5) / 10.0);
+        }
+}
+#endif

@@ -1,0 +1,29 @@
+#!/bin/sh
+# Runs every test binary, the CLI tests and the fuzz-corpus replays, then
+# prints one closing "N passed, N failed" line over all of them.
+B=${BUILD:-build}
+total_p=0; total_f=0; log=$(mktemp); trap 'rm -f "$log"' EXIT
+count() { # name, command...
+    name=$1; shift
+    "$@" >"$log" 2>&1; rc=$?
+    line=$(grep -E '[0-9]+ passed, [0-9]+ failed' "$log" | tail -n 1)
+    p=$(echo "$line" | sed -n 's/.* \{0,1\}\([0-9][0-9]*\) passed.*/\1/p'); f=$(echo "$line" | sed -n 's/.*passed, \([0-9][0-9]*\) failed.*/\1/p')
+    [ -n "$p" ] || p=0; [ -n "$f" ] || f=0
+    if [ $rc -ne 0 ] && [ "$f" = 0 ]; then f=1; fi
+    if [ "$f" != 0 ]; then cat "$log"; echo "FAILED: $name (exit $rc)"; else echo "ok   $name: $p passed"; fi
+    total_p=$((total_p + p)); total_f=$((total_f + f))
+}
+for t in "$B"/tests/test_*; do
+    [ -x "$t" ] || continue
+    count "$(basename "$t")" "$t"
+done
+for r in "$B"/fuzz/*-replay; do
+    [ -x "$r" ] || continue
+    tgt=$(basename "$r" -replay)
+    count "fuzz replay $tgt" "$r" fuzz/"$tgt"/corpus tests/crashers/"$tgt"
+done
+if [ -f tests/cli_test.sh ]; then
+    count "cli tests" sh tests/cli_test.sh "$B/roadsplat"
+fi
+echo "$total_p passed, $total_f failed"
+[ "$total_f" = 0 ]

@@ -1,0 +1,449 @@
+/* End to end through the library: road grid + splat on synthetic scenes. */
+#include "harness.h"
+#include "roadsplat.h"
+#include "roadgrid.h"
+#include "mask.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+static rs_ctx *ctx;
+
+static rs_dem *flat_dem(uint32_t w, uint32_t h)
+{
+    float *z = malloc(sizeof(float) * w * h);
+    for (uint32_t i = 0; i < w * h; i++) z[i] = (float)((i * 7919u) % 50);
+    rs_dem *d = NULL;
+    CHECK(rs_dem_create(ctx, w, h, z, &d) == RS_OK);
+    free(z);
+    return d;
+}
+
+typedef struct image {
+    uint32_t w, h;
+    uint8_t *rgba;
+    uint16_t *wt;
+} image;
+
+static rs_result splat(rs_ctx *c, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, image *im)
+{
+    rs_road_grid *g = NULL;
+    memset(im, 0, sizeof *im);
+    rs_result r = rs_splat_size(c, dem, o, &im->w, &im->h);
+    if (r) return r;
+    r = rs_road_grid_build(c, dem, roads, o, &g);
+    if (r) return r;
+    size_t n = (size_t)im->w * im->h;
+    im->rgba = malloc(n * 4);
+    im->wt = malloc(n * 2);
+    r = rs_splat(c, dem, g, o, im->rgba, n * 4, im->wt, n);
+    rs_road_grid_free(c, g);
+    return r;
+}
+
+static void image_free(image *im)
+{
+    free(im->rgba);
+    free(im->wt);
+}
+
+/* Drawn width (true width times drawn area over exact area) and edge error
+ * of a straight road through (cx, cy) at angle th, inside the window
+ * [m0, m1]^2 (metres) away from the map edge. Exact coverage by 16x16
+ * supersampling on pixels near the edges. */
+static void straight_error(const image *im, double px_m, double cx, double cy, double th, double width, double m0,
+                           double m1, double *drawn_width, double *edge_err)
+{
+    double nx = -sin(th), ny = cos(th), area_r = 0, area_g = 0, err = 0;
+    uint32_t p0 = (uint32_t)(m0 / px_m), p1 = (uint32_t)(m1 / px_m);
+    for (uint32_t py = p0; py < p1; py++)
+        for (uint32_t px = p0; px < p1; px++) {
+            double dc = fabs(((px + 0.5) * px_m - cx) * nx + ((py + 0.5) * px_m - cy) * ny), g = 0;
+            if (dc < width / 2 - 0.75 * px_m) g = 1;
+            else if (dc <= width / 2 + 0.75 * px_m)
+                for (int sy = 0; sy < 16; sy++)
+                    for (int sx = 0; sx < 16; sx++) {
+                        double x = (px + (sx + 0.5) / 16) * px_m, y = (py + (sy + 0.5) / 16) * px_m;
+                        if (fabs((x - cx) * nx + (y - cy) * ny) <= width / 2) g += 1.0 / 256;
+                    }
+            double r = im->wt[(size_t)py * im->w + px] / 65535.0;
+            area_r += r;
+            area_g += g;
+            err += fabs(r - g) * px_m * px_m;
+        }
+    /* outline length inside the window = twice the centreline length there */
+    *drawn_width = width * area_r / area_g;
+    *edge_err = err / (2 * area_g * px_m * px_m / width);
+}
+
+static rs_roads *one_road(double x0, double y0, double x1, double y1, double width)
+{
+    rs_roads *r = NULL;
+    CHECK(rs_roads_create(ctx, &r) == RS_OK);
+    double xy[4] = { x0, y0, x1, y1 };
+    CHECK(rs_roads_add(ctx, r, "r", width, xy, 2) == RS_OK);
+    return r;
+}
+
+/* Straight roads at many angles and lattice offsets: the drawn edge is
+ * unbiased (mean drawn width = true width) and close (edge error). A road at
+ * 45 degrees meets the lattice at one phase along its whole length, so the
+ * bias is checked on the mean over offsets and the error on each. */
+static void test_straight_roads(void)
+{
+    rs_dem *dem = flat_dem(41, 41);
+    const double angles[] = { 0, 10, 22.5, 30, 45, 60, 77, 90, 135 };
+    const double c = 0.25; /* road cell */
+    for (int mode = 0; mode < 2; mode++)
+        for (size_t a = 0; a < sizeof angles / sizeof angles[0]; a++) {
+            double th = angles[a] * 3.14159265358979 / 180, width = 6, sum_w = 0, worst_e = 0;
+            const int offsets = 8;
+            /* shift along the normal over one period of the lattice phase */
+            double l1 = fabs(cos(th)) + fabs(sin(th)), period = fabs(l1 - sqrt(2.0)) < 1e-9 ? c / sqrt(2.0) : c;
+            for (int k = 0; k < offsets; k++) {
+                double sh = period * (k + 0.5) / offsets, cx = 20.0 - sin(th) * sh, cy = 20.0 + cos(th) * sh;
+                rs_roads *roads = one_road(cx - 60 * cos(th), cy - 60 * sin(th), cx + 60 * cos(th), cy + 60 * sin(th), width);
+                rs_splat_options o;
+                memset(&o, 0, sizeof o);
+                o.texels = 4;
+                o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+                o.road_cell = c;
+                image im;
+                CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+                double dw, ee;
+                straight_error(&im, 0.25, cx, cy, th, width, 8, 32, &dw, &ee);
+                sum_w += dw;
+                if (ee > worst_e) worst_e = ee;
+                image_free(&im);
+                rs_roads_free(ctx, roads);
+            }
+            /* distance: unbiased, each edge within c/2 of the truth (the
+             * axis-aligned worst case). dilate: the band is a whole number k of
+             * cells, so each side may be off by half a step, (|nx|+|ny|) c / 2. */
+            double step = (fabs(cos(th)) + fabs(sin(th))) * c;
+            double tol_w = mode ? step + 0.03 : 0.03, tol_e = mode ? 0.5 * step + 0.5 * c : 0.51 * c;
+            CHECKF(fabs(sum_w / offsets - width) <= tol_w, "%s %.1f deg: mean drawn width %.4f m, true %.1f",
+                   mode ? "dilate" : "distance", angles[a], sum_w / offsets, width);
+            CHECKF(worst_e <= tol_e, "%s %.1f deg: edge error %.4f m", mode ? "dilate" : "distance", angles[a], worst_e);
+        }
+    rs_dem_free(ctx, dem);
+}
+
+static void test_determinism_and_sparsity(void)
+{
+    rs_dem *dem = flat_dem(33, 25);
+    rs_roads *roads = NULL, *none = NULL;
+    const char text[] =
+        "road a width 5\n2 3\n20 14\n31 9\nend\n"
+        "road b width 3.5\n-5 20\n12 20.3\n12 2\nend\n"
+        "road loop width 2.5\n25 18\n29 18\n29 22\n25 22\n25 18\nend\n";
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    CHECK(rs_roads_create(ctx, &none) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 6;
+    image a, b, c;
+    CHECK(splat(ctx, dem, roads, &o, &a) == RS_OK);
+    CHECK(splat(ctx, dem, roads, &o, &b) == RS_OK);
+    CHECK(splat(ctx, dem, none, &o, &c) == RS_OK);
+    size_t n = (size_t)a.w * a.h;
+    CHECK(a.w == 32 * 6 && a.h == 24 * 6);
+    CHECK(memcmp(a.rgba, b.rgba, n * 4) == 0);
+    CHECK(memcmp(a.wt, b.wt, n * 2) == 0);
+    /* Where the weight is 0 the pixel is exactly the road-free terrain; no
+     * pixel of the road-free splat carries road weight. */
+    size_t differ = 0, full = 0, partial = 0, empty_w = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (a.wt[i] == 0 && memcmp(a.rgba + 4 * i, c.rgba + 4 * i, 4)) differ++;
+        if (a.wt[i] == 65535) full++;
+        else if (a.wt[i]) partial++;
+        if (c.wt[i]) empty_w++;
+    }
+    CHECK_EQ_INT(differ, 0);
+    CHECK_EQ_INT(empty_w, 0);
+    CHECK(full > 1000 && partial > 100);
+    /* Fully covered pixels carry no terrain: they equal the asphalt whatever
+     * the terrain beneath (a different DEM gives the same road pixels). */
+    rs_dem *dem2 = NULL;
+    float *z = malloc(sizeof(float) * 33 * 25);
+    for (int i = 0; i < 33 * 25; i++) z[i] = (float)(1000 - i);
+    CHECK(rs_dem_create(ctx, 33, 25, z, &dem2) == RS_OK);
+    free(z);
+    image d;
+    CHECK(splat(ctx, dem2, roads, &o, &d) == RS_OK);
+    size_t road_differ = 0;
+    for (size_t i = 0; i < n; i++)
+        if (a.wt[i] == 65535 && memcmp(a.rgba + 4 * i, d.rgba + 4 * i, 4)) road_differ++;
+    CHECK_EQ_INT(road_differ, 0);
+    image_free(&a);
+    image_free(&b);
+    image_free(&c);
+    image_free(&d);
+    rs_dem_free(ctx, dem2);
+    rs_roads_free(ctx, roads);
+    rs_roads_free(ctx, none);
+    rs_dem_free(ctx, dem);
+}
+
+/* A road leaving the map: no border at the map edge, full weight there. */
+static void test_road_leaving_map(void)
+{
+    rs_dem *dem = flat_dem(21, 21);
+    rs_roads *roads = one_road(5, 10.3, 40, 10.3, 6);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    image im;
+    CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+    /* right-most column: rows well inside the road are full road */
+    int bad = 0;
+    for (uint32_t py = (uint32_t)(8.0 * 4); py < (uint32_t)(12.5 * 4); py++)
+        if (im.wt[(size_t)py * im.w + im.w - 1] != 65535) bad++;
+    CHECK_EQ_INT(bad, 0);
+    image_free(&im);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+/* Seam error over every pair of adjacent road cells of a real scene: the
+ * alpha-map samples along each shared edge, read from both cells. */
+static double scene_seam_error(const rs_road_grid *g, uint32_t res)
+{
+    uint8_t maps[3][(64 + 1) * (64 + 1)];
+    rs_tile_type ts[3] = { RS_TILE_EDGE, RS_TILE_INNER, RS_TILE_OUTER };
+    for (int i = 0; i < 3; i++) rs_alpha_map(ts[i], res, 2, 0, 0, maps[i], sizeof maps[i]);
+    int worst = 0;
+    for (uint32_t y = 0; y < g->gh; y++)
+        for (uint32_t x = 0; x < g->gw; x++) {
+            const uint8_t *t = rs__grid_tile(g, x >> RS__TILE_SHIFT, y >> RS__TILE_SHIFT);
+            unsigned ca = t ? t[(y & (RS__TILE - 1)) * RS__TILE + (x & (RS__TILE - 1))] : 0;
+            for (int dir = 0; dir < 2; dir++) {
+                uint32_t x2 = x + (dir == 0), y2 = y + (dir == 1);
+                if (x2 >= g->gw || y2 >= g->gh) continue;
+                const uint8_t *t2 = rs__grid_tile(g, x2 >> RS__TILE_SHIFT, y2 >> RS__TILE_SHIFT);
+                unsigned cb = t2 ? t2[(y2 & (RS__TILE - 1)) * RS__TILE + (x2 & (RS__TILE - 1))] : 0;
+                if (!(ca & RS__CELL_ROAD) && !(cb & RS__CELL_ROAD)) continue;
+                for (uint32_t k = 0; k <= res; k++) {
+                    int va = 255, vb = 255;
+                    unsigned cells[2] = { ca, cb };
+                    int *vals[2] = { &va, &vb };
+                    for (int s = 0; s < 2; s++) {
+                        if (!(cells[s] & RS__CELL_ROAD)) continue;
+                        rs_tile_type ty;
+                        int rot;
+                        rs__pattern_classify(cells[s] & RS__CELL_PATTERN, &ty, &rot);
+                        /* point on the shared edge, in this cell's local frame */
+                        double u = dir == 0 ? (s == 0 ? 1.0 : 0.0) : (double)k / res;
+                        double v = dir == 0 ? (double)k / res : (s == 0 ? 1.0 : 0.0);
+                        int reps = ty == RS_TILE_SADDLE ? 2 : 1, acc = 0;
+                        for (int q = 0; q < reps; q++) {
+                            int r = rot + 2 * q;
+                            double cu = u, cv = v;
+                            for (int z = 0; z < (r & 3); z++) { double nu = cv, nv = 1 - cu; cu = nu; cv = nv; }
+                            int i = (int)(cv * res + 0.5), j = (int)(cu * res + 0.5);
+                            int a;
+                            if (ty == RS_TILE_INTERIOR) a = 0;
+                            else if (ty == RS_TILE_TERRAIN) a = 255;
+                            else a = maps[ty == RS_TILE_EDGE ? 0 : (ty == RS_TILE_OUTER ? 2 : 1)][i * (res + 1) + j];
+                            acc += a;
+                        }
+                        *vals[s] = acc > 255 ? 255 : acc;
+                    }
+                    if (abs(va - vb) > worst) worst = abs(va - vb);
+                }
+            }
+        }
+    return worst / 255.0;
+}
+
+static void test_scene_seams(void)
+{
+    rs_dem *dem = flat_dem(30, 30);
+    rs_roads *roads = NULL;
+    const char text[] =
+        "road a width 4\n1 1\n28 27\nend\nroad b width 2.2\n3 25\n26 4\n20 20\nend\n"
+        "road c width 7\n0 15\n29 14\nend\nroad d width 0.9\n10 2\n11 28\nend\n";
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    for (int mode = 0; mode < 2; mode++) {
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = 2;
+        o.road_cell = 0.5;
+        o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        rs_road_grid *g = NULL;
+        CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
+        rs_grid_stats st;
+        rs_road_grid_stats(g, &st);
+        CHECK(st.k == 2 && st.boundary_cells > 100 && st.by_type[RS_TILE_OUTER] > 0 && st.by_type[RS_TILE_INNER] > 0);
+        CHECK_EQ_INT(st.road_cells, st.interior_cells + st.boundary_cells);
+        double seam = scene_seam_error(g, 32);
+        CHECKF(seam <= 1.0 / 255, "scene seam error %g", seam);
+        rs_road_grid_free(ctx, g);
+    }
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+/* --- two contexts in two threads ----------------------------------------------- */
+typedef struct job {
+    const char *text;
+    image im;
+    rs_result r;
+} job;
+
+static void *worker(void *arg)
+{
+    job *j = arg;
+    rs_ctx *c = NULL;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    float z[17 * 13];
+    for (int i = 0; i < 17 * 13; i++) z[i] = (float)(i % 17);
+    j->r = rs_ctx_create(NULL, NULL, &c);
+    if (!j->r) j->r = rs_dem_create(c, 17, 13, z, &dem);
+    if (!j->r) j->r = rs_roads_parse(c, j->text, strlen(j->text), &roads);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    if (!j->r) j->r = splat(c, dem, roads, &o, &j->im);
+    rs_roads_free(c, roads);
+    rs_dem_free(c, dem);
+    rs_ctx_free(c);
+    return NULL;
+}
+
+static void test_threads(void)
+{
+    const char *text = "road a width 3\n0 0\n16 12\nend\nroad b width 2\n0 12\n16 0\nend\n";
+    job jobs[3] = { { text, { 0, 0, 0, 0 }, RS_OK }, { text, { 0, 0, 0, 0 }, RS_OK }, { text, { 0, 0, 0, 0 }, RS_OK } };
+    pthread_t th[2];
+    worker(&jobs[2]); /* serial reference */
+    for (int i = 0; i < 2; i++) pthread_create(&th[i], NULL, worker, &jobs[i]);
+    for (int i = 0; i < 2; i++) pthread_join(th[i], NULL);
+    size_t n = (size_t)jobs[2].im.w * jobs[2].im.h * 4;
+    for (int i = 0; i < 2; i++) {
+        CHECK(jobs[i].r == RS_OK);
+        CHECK(jobs[i].im.rgba && memcmp(jobs[i].im.rgba, jobs[2].im.rgba, n) == 0);
+    }
+    for (int i = 0; i < 3; i++) image_free(&jobs[i].im);
+}
+
+/* --- allocation failures ----------------------------------------------------------- */
+typedef struct fail_alloc {
+    long countdown; /* fail when it reaches 0; <0 never */
+    long live;
+} fail_alloc;
+
+static void *fa_malloc(void *u, size_t n)
+{
+    fail_alloc *f = u;
+    if (f->countdown == 0) return NULL;
+    if (f->countdown > 0) f->countdown--;
+    void *p = malloc(n);
+    if (p) f->live++;
+    return p;
+}
+static void *fa_realloc(void *u, void *p, size_t n)
+{
+    fail_alloc *f = u;
+    if (f->countdown == 0) return NULL;
+    if (f->countdown > 0) f->countdown--;
+    void *q = realloc(p, n);
+    if (q && !p) f->live++;
+    return q;
+}
+static void fa_free(void *u, void *p)
+{
+    fail_alloc *f = u;
+    f->live--;
+    free(p);
+}
+
+static void test_alloc_failures(void)
+{
+    const char text[] = "road a width 3\n0 0\n16 12\nend\nroad b width 2\n0 12\n16 0\n3 3\nend\n";
+    float z[17 * 13];
+    for (int i = 0; i < 17 * 13; i++) z[i] = (float)(i % 5);
+    int succeeded = 0, wrong_code = 0, leaks = 0;
+    long n;
+    for (n = 0; n < 10000 && !succeeded; n++) {
+        fail_alloc fa = { -1, 0 };
+        rs_allocator al = { fa_malloc, fa_realloc, fa_free, &fa };
+        rs_ctx *c = NULL;
+        if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong_code++; break; }
+        fa.countdown = n;
+        rs_dem *dem = NULL;
+        rs_roads *roads = NULL;
+        rs_result r = rs_dem_create(c, 17, 13, z, &dem);
+        if (!r) r = rs_roads_parse(c, text, sizeof text - 1, &roads);
+        image im = { 0, 0, NULL, NULL };
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        if (!r) r = splat(c, dem, roads, &o, &im);
+        if (r == RS_OK) succeeded = 1;
+        else if (r != RS_ERR_NOMEM) wrong_code++;
+        image_free(&im);
+        rs_roads_free(c, roads);
+        rs_dem_free(c, dem);
+        rs_ctx_free(c);
+        if (fa.live != 0) leaks++;
+    }
+    CHECK(succeeded);
+    CHECK(n > 5);
+    CHECK_EQ_INT(wrong_code, 0);
+    CHECK_EQ_INT(leaks, 0);
+}
+
+static void test_bad_options(void)
+{
+    rs_dem *dem = flat_dem(9, 9);
+    rs_roads *roads = one_road(0, 0, 8, 8, 2);
+    rs_splat_options o;
+    uint32_t w, h;
+    memset(&o, 0, sizeof o);
+    o.cell_size = -1;
+    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
+    CHECK(strstr(rs_ctx_message(ctx), "cell size") != NULL);
+    o.cell_size = NAN;
+    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
+    memset(&o, 0, sizeof o);
+    o.transition = 100;
+    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
+    memset(&o, 0, sizeof o);
+    o.alpha_res = 1;
+    rs_road_grid *g = NULL;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_ERR_INVALID_ARG && g == NULL);
+    memset(&o, 0, sizeof o);
+    o.road_cell = 1e-9;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_ERR_LIMIT && g == NULL);
+    /* output limit */
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_pixels = 1000;
+    rs_ctx *c2 = NULL;
+    CHECK(rs_ctx_create(NULL, &lim, &c2) == RS_OK);
+    memset(&o, 0, sizeof o);
+    CHECK(rs_splat_size(c2, dem, &o, &w, &h) == RS_ERR_LIMIT);
+    rs_ctx_free(c2);
+    /* buffer too small */
+    CHECK(rs_road_grid_build(ctx, dem, roads, NULL, &g) == RS_OK);
+    uint8_t small[16];
+    CHECK(rs_splat(ctx, dem, g, NULL, small, sizeof small, NULL, 0) == RS_ERR_BUFFER_TOO_SMALL);
+    rs_road_grid_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+int main(void)
+{
+    CHECK(rs_ctx_create(NULL, NULL, &ctx) == RS_OK);
+    test_straight_roads();
+    test_determinism_and_sparsity();
+    test_road_leaving_map();
+    test_scene_seams();
+    test_threads();
+    test_alloc_failures();
+    test_bad_options();
+    rs_ctx_free(ctx);
+    return th_finish("test_splat");
+}
