@@ -154,7 +154,7 @@ test: deps
 # --- demo ---------------------------------------------------------------------
 demo: deps
 	@$(MAKE) --no-print-directory all
-	$(CLI) --stats $(BUILD)/demo-stats.json docs/examples/dem.pgm docs/examples/roads.txt out.png
+	$(CLI) --cell-size 5 --z-scale 0.01 --stats $(BUILD)/demo-stats.json docs/examples/dem.pgm docs/examples/roads.txt out.png
 	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json)"
 
 # --- benchmarks ---------------------------------------------------------------

@@ -38,7 +38,7 @@ double cli_now_ms(void)
  * does the conversion, but only after the characters are checked, and on a
  * copy whose '.' is replaced by the current locale's decimal point, so a
  * host locale can neither break nor widen what is accepted. */
-static int strict_double(const char *s, size_t n, double *out)
+static int strict_double(const char *s, size_t n, double *out) /* 1 ok, 0 bad, -1 out of range */
 {
     char buf[128];
     int digits = 0;
@@ -60,15 +60,20 @@ static int strict_double(const char *s, size_t n, double *out)
     char *end;
     errno = 0;
     double v = strtod(buf, &end);
-    if (end != buf + o || !isfinite(v)) return 0;
-    if (errno == ERANGE && fabs(v) > 1.0) return 0;
+    if (end != buf + o) return 0;
+    if (!isfinite(v) || (errno == ERANGE && fabs(v) > 1.0)) return -1;
     *out = v;
     return 1;
 }
 
 int cli_parse_double(const char *option, const char *s, double *out)
 {
-    if (!s || !strict_double(s, strlen(s), out)) {
+    int k = s ? strict_double(s, strlen(s), out) : 0;
+    if (k < 0) {
+        cli_error("%s: '%s' is out of range", option, s);
+        return 1;
+    }
+    if (k == 0) {
         cli_error("%s: '%s' is not a number%s", option, s ? s : "",
                   s && strchr(s, ',') ? " (use '.' as the decimal point)" : "");
         return 1;
@@ -106,7 +111,7 @@ int cli_parse_vec(const char *option, const char *s, double *out, int n)
         for (; i < n; i++) {
             const char *c = strchr(p, ',');
             size_t len = c ? (size_t)(c - p) : strlen(p);
-            if (!strict_double(p, len, &out[i])) break;
+            if (strict_double(p, len, &out[i]) != 1) break;
             if (i == n - 1) { if (c) break; }
             else if (!c) break;
             p = c ? c + 1 : p + len;

@@ -72,6 +72,18 @@ void rs__pattern_classify(unsigned p, rs_tile_type *type, int *rotation)
     *rotation = 0;
 }
 
+void rs__mask_table_build(rs__mask_table *t)
+{
+    for (unsigned m = 0; m < 256; m++) t->corners[m] = (uint8_t)rs__mask_corners(m);
+    for (unsigned p = 0; p < 16; p++) {
+        rs_tile_type ty;
+        int r;
+        rs__pattern_classify(p, &ty, &r);
+        t->type[p] = (uint8_t)ty;
+        t->rot[p] = (uint8_t)r;
+    }
+}
+
 void rs_mask_classify(uint8_t mask, rs_tile_type *type, int *rotation)
 {
     rs_tile_type t;

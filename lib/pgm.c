@@ -16,6 +16,7 @@
 #include "internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 typedef struct pgm_reader {
@@ -95,7 +96,8 @@ static rs_result pgm_header_field(rs_ctx *ctx, pgm_reader *r, const char *name, 
     int k = pgm_number(r, out);
     if (k == 0) {
         if (r->p >= r->end)
-            return rs__fail(ctx, RS_ERR_PARSE, "PGM header truncated: %s missing", name);
+            return rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: header truncated: %s missing",
+                            (unsigned long long)r->line, name);
         return rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: %s must be a decimal number, got %s",
                         (unsigned long long)r->line, name, pgm_what(r, what, sizeof what));
     }
@@ -161,7 +163,9 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
     if (maxval < 1 || maxval > 65535)
         return rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: maxval %llu is outside 1..65535",
                         (unsigned long long)r.line, (unsigned long long)maxval);
-    if ((rc = dem_check_size(ctx, w, h, "PGM header")) != RS_OK) return rc;
+    char where[48];
+    snprintf(where, sizeof where, "PGM line %llu", (unsigned long long)r.line);
+    if ((rc = dem_check_size(ctx, w, h, where)) != RS_OK) return rc;
     uint64_t count = w * h; /* both <= 2^32 - 1 after the limit check: no overflow */
     size_t n;
     if (count > SIZE_MAX || !rs__mul_size((size_t)w, (size_t)h, &n))
@@ -226,7 +230,8 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
         int k = pgm_number(&r, &v);
         if (k == 0) {
             if (r.p >= r.end)
-                rc = rs__fail(ctx, RS_ERR_PARSE, "PGM truncated: %zu of %zu samples present", i, n);
+                rc = rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: truncated: %zu of %zu samples present",
+                              (unsigned long long)r.line, i, n);
             else
                 rc = rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: sample %zu: expected a number, got %s",
                               (unsigned long long)r.line, i, pgm_what(&r, what, sizeof what));

@@ -195,43 +195,50 @@ static unsigned road_at(const rs_road_grid *g, int64_t x, int64_t y)
     return t[((uint32_t)y & (RS__TILE - 1)) * RS__TILE + ((uint32_t)x & (RS__TILE - 1))] & RS__CELL_ROAD;
 }
 
-static void classify_tile(rs_road_grid *g, uint32_t tx, uint32_t ty)
+static void classify_tile(rs_road_grid *g, const rs__mask_table *mt, uint32_t tx, uint32_t ty)
 {
-    /* Road bits of the tile plus a one-cell border from the neighbours. */
-    uint8_t win[(RS__TILE + 2) * (RS__TILE + 2)];
+    /* Road bits (0/1) of the tile plus a one-cell ring from its neighbours. */
+    enum { W = RS__TILE + 2 };
+    uint8_t win[W * W], h3[W * W];
     uint8_t *t = g->tiles[(size_t)ty * g->tw + tx];
     int64_t bx = (int64_t)tx * RS__TILE, by = (int64_t)ty * RS__TILE;
-    const uint32_t W = RS__TILE + 2;
+    for (uint32_t y = 0; y < RS__TILE; y++)
+        for (uint32_t x = 0; x < RS__TILE; x++) win[(y + 1) * W + x + 1] = t[y * RS__TILE + x] >> 7;
+    for (uint32_t k = 0; k < W; k++) {
+        win[k] = (uint8_t)(road_at(g, bx + k - 1, by - 1) >> 7);
+        win[(W - 1) * W + k] = (uint8_t)(road_at(g, bx + k - 1, by + RS__TILE) >> 7);
+        win[k * W] = (uint8_t)(road_at(g, bx - 1, by + k - 1) >> 7);
+        win[k * W + W - 1] = (uint8_t)(road_at(g, bx + RS__TILE, by + k - 1) >> 7);
+    }
+    /* Cells past the grid's right/bottom edge copy the nearest inside cell. */
+    uint32_t xe = g->gw - (uint32_t)bx < RS__TILE ? g->gw - (uint32_t)bx : RS__TILE;
+    uint32_t ye = g->gh - (uint32_t)by < RS__TILE ? g->gh - (uint32_t)by : RS__TILE;
     for (uint32_t y = 0; y < W; y++)
-        for (uint32_t x = 0; x < W; x++) {
-            int inner = x > 0 && y > 0 && x <= RS__TILE && y <= RS__TILE;
-            int64_t gx = bx + x - 1, gy = by + y - 1;
-            int ingrid = gx >= 0 && gy >= 0 && gx < (int64_t)g->gw && gy < (int64_t)g->gh;
-            win[y * W + x] = (uint8_t)((inner && ingrid) ? (t[(y - 1) * RS__TILE + (x - 1)] & RS__CELL_ROAD)
-                                                         : road_at(g, gx, gy));
-        }
+        for (uint32_t x = xe + 1; x < W; x++) win[y * W + x] = win[y * W + xe];
+    for (uint32_t y = ye + 1; y < W; y++) memcpy(win + y * W, win + ye * W, W);
+    /* h3 = AND of three horizontal neighbours: interior iff three rows agree. */
+    for (uint32_t y = 0; y < W; y++)
+        for (uint32_t x = 1; x + 1 < W; x++)
+            h3[y * W + x] = win[y * W + x - 1] & win[y * W + x] & win[y * W + x + 1];
     static const int ox[8] = { 0, 1, 1, 1, 0, -1, -1, -1 }, oy[8] = { -1, -1, 0, 1, 1, 1, 0, -1 };
-    for (uint32_t y = 0; y < RS__TILE; y++) {
-        if (by + y >= (int64_t)g->gh) break;
-        for (uint32_t x = 0; x < RS__TILE; x++) {
+    for (uint32_t y = 0; y < ye; y++) {
+        for (uint32_t x = 0; x < xe; x++) {
             uint8_t *cell = &t[y * RS__TILE + x];
             if (!(*cell & RS__CELL_ROAD)) continue;
-            if (bx + x >= (int64_t)g->gw) { *cell = 0; continue; }
+            size_t c = (size_t)(y + 1) * W + x + 1;
+            g->stats.road_cells++;
+            if (h3[c - W] & h3[c] & h3[c + W]) {
+                *cell = RS__CELL_ROAD; /* pattern 0: interior */
+                g->stats.interior_cells++;
+                continue;
+            }
             unsigned mask = 0;
             for (int b = 0; b < 8; b++)
-                if (win[(y + 1 + oy[b]) * W + (x + 1 + ox[b])]) mask |= 1u << b;
-            unsigned p = rs__mask_corners(mask);
+                if (win[c + oy[b] * W + ox[b]]) mask |= 1u << b;
+            unsigned p = mt->corners[mask];
             *cell = (uint8_t)(RS__CELL_ROAD | p);
-            g->stats.road_cells++;
-            if (mask == 0xFF) {
-                g->stats.interior_cells++;
-            } else {
-                rs_tile_type type;
-                int rot;
-                rs__pattern_classify(p, &type, &rot);
-                g->stats.boundary_cells++;
-                g->stats.by_type[type]++;
-            }
+            g->stats.boundary_cells++;
+            g->stats.by_type[mt->type[p]]++;
         }
     }
 }
@@ -326,10 +333,12 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         r = mark_road(&m, xy, np, w, o.buffer);
         if (!r && o.progress && o.progress(o.progress_user, i + 1, n)) r = rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
     }
+    rs__mask_table mt;
+    rs__mask_table_build(&mt);
     if (!r)
         for (uint32_t ty = 0; ty < g->th; ty++)
             for (uint32_t tx = 0; tx < g->tw; tx++)
-                if (g->tiles[(size_t)ty * g->tw + tx]) classify_tile(g, tx, ty);
+                if (g->tiles[(size_t)ty * g->tw + tx]) classify_tile(g, &mt, tx, ty);
     if (r) {
         rs_road_grid_free(ctx, g);
         return r;

@@ -146,6 +146,7 @@ static const char *quote(char *buf, size_t cap, const char *s, size_t n)
     const size_t max = 40;
     size_t k = n > max ? max : n;
     if (k + 6 > cap) k = cap - 6;
+    while (k > 0 && k < n && ((unsigned char)s[k] & 0xC0) == 0x80) k--; /* whole UTF-8 characters */
     buf[0] = '\'';
     memcpy(buf + 1, s, k);
     size_t o = 1 + k;
@@ -267,7 +268,9 @@ static rs_result road_line(road_parser *P, const token *t, size_t nt)
         return RS_OK;
     }
     char c = t[0].s[0];
-    if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.') {
+    /* A point line: starts like a number, or is two tokens inside a road
+     * (so "nan 5" is reported as a bad number, not as a keyword). */
+    if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.' || (P->in_road && nt == 2)) {
         if (!P->in_road)
             return rs__fail(ctx, RS_ERR_PARSE, "line %llu: point %s outside a road block (add 'road NAME width W' first)",
                             P->line, quote(q, sizeof q, t[0].s, t[0].n));

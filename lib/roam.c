@@ -914,32 +914,34 @@ static uint32_t emit_vertex(extract_state *s, int x, int y)
     return (uint32_t)s->nv++;
 }
 
-static void emit_leaves(extract_state *s, uint32_t t, int clear)
+/* Leaves in allocation order: one linear pass over the node array (cache
+ * friendly; the order is deterministic). */
+static void emit_leaves(extract_state *s, int clear)
 {
     rs_roam *L = s->L;
-    const roam_node *nd = &L->nodes[t];
-    while (nd->lc != NIL) {
-        emit_leaves(s, nd->lc, clear);
-        t = nd->rc;
-        nd = &L->nodes[t];
+    const roam_node *nodes = L->nodes;
+    uint32_t *vmap = L->vmap;
+    const size_t W = L->w;
+    for (uint32_t t = 0; t < L->used; t++) {
+        const roam_node *nd = &nodes[t];
+        if (nd->lc != NIL) continue;
+        int cx, cy;
+        node_corner(nd, &cx, &cy);
+        if (!inside_xy(L, nd->ax, nd->ay, nd->bx, nd->by, cx, cy)) continue;
+        if (clear) {
+            vmap[(size_t)nd->ay * W + nd->ax] = NIL;
+            vmap[(size_t)nd->by * W + nd->bx] = NIL;
+            vmap[(size_t)cy * W + (size_t)cx] = NIL;
+            continue;
+        }
+        /* apex, right corner, left corner: counter-clockwise seen from above */
+        uint32_t a = emit_vertex(s, nd->ax, nd->ay);
+        uint32_t c = emit_vertex(s, cx, cy);
+        uint32_t b = emit_vertex(s, nd->bx, nd->by);
+        if (s->overflow) return;
+        if (s->ni + 3 > s->icap) { s->overflow = 1; return; }
+        s->idx[s->ni++] = a; s->idx[s->ni++] = c; s->idx[s->ni++] = b;
     }
-    if (!node_inside(L, nd)) return;
-    int cx, cy;
-    node_corner(nd, &cx, &cy);
-    if (clear) {
-        L->vmap[(size_t)nd->ay * L->w + nd->ax] = NIL;
-        L->vmap[(size_t)nd->by * L->w + nd->bx] = NIL;
-        L->vmap[(size_t)cy * L->w + (size_t)cx] = NIL;
-        return;
-    }
-    if (s->overflow) return;
-    /* apex, right corner, left corner: counter-clockwise seen from above */
-    uint32_t a = emit_vertex(s, nd->ax, nd->ay);
-    uint32_t c = emit_vertex(s, cx, cy);
-    uint32_t b = emit_vertex(s, nd->bx, nd->by);
-    if (s->overflow) return;
-    if (s->ni + 3 > s->icap) { s->overflow = 1; return; }
-    s->idx[s->ni++] = a; s->idx[s->ni++] = c; s->idx[s->ni++] = b;
 }
 
 /* Border sample -> slot in smap: top row, bottom row, left column, right column. */
@@ -993,8 +995,7 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
     memset(&s, 0, sizeof s);
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
-    uint32_t nroots = 2 * L->npx * L->npy;
-    for (uint32_t rt = 0; rt < nroots; rt++) emit_leaves(&s, rt, 0);
+    emit_leaves(&s, 0);
     size_t top_indices = s.ni;
     if (!s.overflow && o.skirt_depth > 0.0) {
         for (size_t t = 0; t < top_indices && !s.overflow; t += 3)
@@ -1012,7 +1013,7 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
             }
         memset(L->smap, 0xFF, 2 * ((size_t)L->w + L->hgt) * sizeof(uint32_t));
     }
-    for (uint32_t rt = 0; rt < nroots; rt++) emit_leaves(&s, rt, 1);
+    emit_leaves(&s, 1);
     if (s.overflow) {
         size_t mv, mi;
         rs_roam_mesh_bound(L, &o, &mv, &mi);

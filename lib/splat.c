@@ -161,6 +161,7 @@ typedef struct splat_state {
     const rs_splat_options *o;
     double zmin, zrange;
     double sun_zen, sun_az; /* radians; az in the math convention */
+    double cos_zen, sin_zen;
 } splat_state;
 
 static double sample_m(const splat_state *s, int64_t i, int64_t j, double fallback)
@@ -195,9 +196,9 @@ static void terrain_row(const splat_state *s, uint32_t i, float *rgb)
             if (aspect < 0) aspect += 2 * RS__PI;
         } else if (dzdy > 0) aspect = RS__PI / 2;
         else if (dzdy < 0) aspect = 1.5 * RS__PI;
-        double hs = cos(s->sun_zen) * cos(slope) + sin(s->sun_zen) * sin(slope) * cos(s->sun_az - aspect);
+        double hs = s->cos_zen * cos(slope) + s->sin_zen * sin(slope) * cos(s->sun_az - aspect);
         if (!(hs > 0)) hs = 0;
-        double shade = 0.3 + 0.7 * hs / cos(s->sun_zen);
+        double shade = 0.3 + 0.7 * hs / s->cos_zen;
         double t = s->zrange > 0 ? (zc / s->o->z_scale - s->zmin) / s->zrange : 0.5;
         float tint[3];
         hypsometric(t, tint);
@@ -266,17 +267,13 @@ static void free_buffers(rs_ctx *ctx, splat_buffers *b)
     rs__free(ctx, b->rows[1]);
 }
 
-/* Add the road weight of one boundary/interior cell to the band. */
-static void add_cell(const splat_buffers *b, double *band, uint32_t out_w, uint32_t T, uint32_t K, uint32_t gx,
-                     uint32_t ly, uint8_t cell)
+/* Add the road weight of a run of cells [gx, gx_end) of one row to the band:
+ * one boundary cell of `type`, or a run of interior cells (all road, so only
+ * overlap areas). Coordinates are integers in units of 1/(K*T) DEM cell. */
+static void add_cells(const splat_buffers *b, double *band, uint32_t out_w, uint32_t T, uint32_t K, uint32_t gx,
+                      uint32_t gx_end, uint32_t ly, rs_tile_type type, int rot)
 {
-    unsigned p = cell & RS__CELL_PATTERN;
-    rs_tile_type type;
-    int rot;
-    rs__pattern_classify(p, &type, &rot);
-    if (type == RS_TILE_TERRAIN) return;
-    /* Integer coordinates in units of 1/(K*T) of a DEM cell. */
-    uint64_t cx0 = (uint64_t)gx * T, cx1 = cx0 + T, cy0 = (uint64_t)ly * T, cy1 = cy0 + T;
+    uint64_t cx0 = (uint64_t)gx * T, cx1 = (uint64_t)gx_end * T, cy0 = (uint64_t)ly * T, cy1 = cy0 + T;
     uint32_t px0 = (uint32_t)(cx0 / K), px1 = (uint32_t)((cx1 - 1) / K);
     uint32_t py0 = (uint32_t)(cy0 / K), py1 = (uint32_t)((cy1 - 1) / K);
     double inv_t = 1.0 / T, scale = (double)T * T / ((double)K * K);
@@ -290,6 +287,10 @@ static void add_cell(const splat_buffers *b, double *band, uint32_t out_w, uint3
             uint64_t ox0 = tx0 > cx0 ? tx0 : cx0, ox1 = tx1 < cx1 ? tx1 : cx1;
             double u0 = (double)(ox0 - cx0) * inv_t, u1 = (double)(ox1 - cx0) * inv_t;
             double area = (u1 - u0) * (v1 - v0), alpha = 0;
+            if (type == RS_TILE_INTERIOR) {
+                row[px] += (double)(ox1 - ox0) * (double)(oy1 - oy0) / ((double)K * K);
+                continue;
+            }
             switch (type) {
             case RS_TILE_EDGE: alpha = table_rect_rot(&b->tab[0], rot, u0, v0, u1, v1); break;
             case RS_TILE_INNER: alpha = table_rect_rot(&b->tab[1], rot, u0, v0, u1, v1); break;
@@ -325,6 +326,8 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
         return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight buffer of %zu values, need %zu", weight_count, npx);
 
     const uint32_t T = o.texels, K = grid->k, R = o.alpha_res;
+    rs__mask_table mt;
+    rs__mask_table_build(&mt);
     splat_buffers b;
     memset(&b, 0, sizeof b);
     size_t n = (size_t)(R + 1) * (R + 1);
@@ -371,6 +374,8 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
     st.zrange = zmax - st.zmin;
     st.sun_zen = (90.0 - 45.0) * RS__PI / 180.0;
     st.sun_az = fmod(360.0 - 315.0 + 90.0, 360.0) * RS__PI / 180.0;
+    st.cos_zen = cos(st.sun_zen);
+    st.sin_zen = sin(st.sun_zen);
 
     const double texel_m = o.cell_size / T;
     for (uint32_t crow = 0; crow + 1 < dem->height; crow++) {
@@ -384,9 +389,18 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
                 const uint8_t *tile = rs__grid_tile(grid, tx, ty);
                 if (!tile) continue;
                 trow_base = tile + (size_t)(gy & (RS__TILE - 1)) * RS__TILE;
-                uint32_t gx0 = tx * RS__TILE;
-                for (uint32_t x = 0; x < RS__TILE && gx0 + x < grid->gw; x++)
-                    if (trow_base[x] & RS__CELL_ROAD) add_cell(&b, b.band, out_w, T, K, gx0 + x, ly, trow_base[x]);
+                uint32_t gx0 = tx * RS__TILE, xe = grid->gw - gx0 < RS__TILE ? grid->gw - gx0 : RS__TILE;
+                for (uint32_t x = 0; x < xe;) {
+                    uint8_t cell = trow_base[x];
+                    if (!(cell & RS__CELL_ROAD)) { x++; continue; }
+                    unsigned p = cell & RS__CELL_PATTERN;
+                    rs_tile_type type = (rs_tile_type)mt.type[p];
+                    uint32_t x1 = x + 1;
+                    if (type == RS_TILE_INTERIOR)
+                        while (x1 < xe && trow_base[x1] == cell) x1++;
+                    if (type != RS_TILE_TERRAIN) add_cells(&b, b.band, out_w, T, K, gx0 + x, gx0 + x1, ly, type, mt.rot[p]);
+                    x = x1;
+                }
             }
         }
         /* Terrain colours of the two sample rows bounding the band. */

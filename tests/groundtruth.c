@@ -300,15 +300,87 @@ static int gt_cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Where two capsule outlines cross, the row cover has a kink: those y are
+ * breakpoints too. Sides are segments p + t u, t in [0, len]. */
+static void gt_side(const gt_seg *s, int side, double *px, double *py)
+{
+    *px = s->ax - side * s->uy * s->r;
+    *py = s->ay + side * s->ux * s->r;
+}
+
+static void gt_push_xy(double *ys, size_t *n, double x, double y, double x0, double y0, double x1, double y1)
+{
+    if (x >= x0 && x <= x1) gt_push_y(ys, n, y, y0, y1);
+}
+
+static void gt_line_circle(double px, double py, double ux, double uy, double len, double cx, double cy, double r,
+                           double *ys, size_t *n, double x0, double y0, double x1, double y1)
+{
+    double dx = px - cx, dy = py - cy, b = ux * dx + uy * dy, c = dx * dx + dy * dy - r * r, disc = b * b - c, q;
+    int k;
+    if (disc < 0) return;
+    q = sqrt(disc);
+    for (k = -1; k <= 1; k += 2) {
+        double t = -b + k * q;
+        if (t >= 0 && t <= len) gt_push_xy(ys, n, px + t * ux, py + t * uy, x0, y0, x1, y1);
+    }
+}
+
+static void gt_pair_crossings(const gt_seg *a, const gt_seg *b, double *ys, size_t *n, double x0, double y0,
+                              double x1, double y1)
+{
+    int sa, sb, ka, kb;
+    double ra = a->r, rb = b->r;
+    /* side x side */
+    if (a->len > 0 && b->len > 0)
+        for (sa = -1; sa <= 1; sa += 2)
+            for (sb = -1; sb <= 1; sb += 2) {
+                double px, py, qx, qy, den, wx, wy, t, u;
+                gt_side(a, sa, &px, &py);
+                gt_side(b, sb, &qx, &qy);
+                den = a->ux * b->uy - a->uy * b->ux;
+                if (fabs(den) < 1e-12) continue;
+                wx = qx - px;
+                wy = qy - py;
+                t = (wx * b->uy - wy * b->ux) / den;
+                u = (wx * a->uy - wy * a->ux) / den;
+                if (t >= 0 && t <= a->len && u >= 0 && u <= b->len)
+                    gt_push_xy(ys, n, px + t * a->ux, py + t * a->uy, x0, y0, x1, y1);
+            }
+    /* side x end circle, both ways */
+    for (ka = 0; ka < 2; ka++) {
+        const gt_seg *s = ka ? b : a, *o = ka ? a : b;
+        if (s->len <= 0) continue;
+        for (sa = -1; sa <= 1; sa += 2) {
+            double px, py;
+            gt_side(s, sa, &px, &py);
+            gt_line_circle(px, py, s->ux, s->uy, s->len, o->ax, o->ay, o->r, ys, n, x0, y0, x1, y1);
+            gt_line_circle(px, py, s->ux, s->uy, s->len, o->bx, o->by, o->r, ys, n, x0, y0, x1, y1);
+        }
+    }
+    /* circle x circle */
+    for (ka = 0; ka < 2; ka++)
+        for (kb = 0; kb < 2; kb++) {
+            double cx = ka ? a->bx : a->ax, cy = ka ? a->by : a->ay, ex = kb ? b->bx : b->ax, ey = kb ? b->by : b->ay;
+            double dx = ex - cx, dy = ey - cy, d = sqrt(dx * dx + dy * dy), l, hh;
+            if (d <= 0 || d > ra + rb || d < fabs(ra - rb)) continue;
+            l = (ra * ra - rb * rb + d * d) / (2 * d);
+            hh = ra * ra - l * l;
+            hh = hh > 0 ? sqrt(hh) : 0;
+            gt_push_xy(ys, n, cx + l * dx / d - hh * dy / d, cy + l * dy / d + hh * dx / d, x0, y0, x1, y1);
+            gt_push_xy(ys, n, cx + l * dx / d + hh * dy / d, cy + l * dy / d - hh * dx / d, x0, y0, x1, y1);
+        }
+}
+
 /* 8-point Gauss-Legendre on [-1, 1]. */
 static const double gt_gl_x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
 static const double gt_gl_w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
 
 /* Area of (union of capsules) ∩ [x0,x1]x[y0,y1]. The row cover f(y) is
  * smooth between the y where a disc starts or ends, a rectangle corner sits,
- * or a capsule outline crosses x = x0 or x = x1; integrate each such piece
- * with Gauss-Legendre. Only crossings of two capsules' outlines remain as
- * kinks inside a piece. ys needs 2 + 20n doubles, buf 2n. */
+ * a capsule outline crosses x = x0 or x = x1, or two capsule outlines cross;
+ * integrate each such piece with Gauss-Legendre. ys needs
+ * 2 + 20n + 28 n(n-1)/2 doubles, buf 2n. */
 static double gt_pixel_area(const gt_seg *const *rel, size_t n, double x0, double y0, double x1, double y1,
                             double *ys, double *buf)
 {
@@ -346,6 +418,8 @@ static double gt_pixel_area(const gt_seg *const *rel, size_t n, double x0, doubl
                 }
         }
     }
+    for (i = 0; i < n; i++)
+        for (k = i + 1; k < n; k++) gt_pair_crossings(rel[i], rel[k], ys, &m, x0, y0, x1, y1);
     ys[m++] = y1;
     qsort(ys + 1, m - 2, sizeof *ys, gt_cmp_double);
     for (k = 0; k + 1 < m; k++) {
@@ -383,7 +457,7 @@ static int gt_raster(const sc_scene *s, unsigned T, float *out, int mode)
     ix = gt_index_new(s, hd * 1.000001);
     if (!ix) return -1;
     rel = malloc((ix->maxlist + 1) * sizeof *rel);
-    ys = malloc((2 + 20 * (ix->maxlist + 1)) * sizeof *ys);
+    ys = malloc((2 + 20 * (ix->maxlist + 1) + 14 * (ix->maxlist + 1) * ix->maxlist) * sizeof *ys);
     buf = malloc(2 * (ix->maxlist + 1) * sizeof *buf);
     if (!rel || !ys || !buf) {
         free(rel); free(ys); free(buf);
@@ -432,12 +506,16 @@ int gt_cell_buffer(const sc_scene *s, unsigned T, float *R)
     size_t pw, ph, r, c, i, j;
     gt_index *ix;
     if (gt_image_size(s, T, &pw, &ph)) return -1;
-    ix = gt_index_new(s, s->cell_size);
+    ix = gt_index_new(s, 0);
     if (!ix) return -1;
     for (r = 0; r + 1 < s->h; r++)
         for (c = 0; c + 1 < s->w; c++) {
-            double sd = gt_signed_distance(ix, (c + 0.5) * s->cell_size, (r + 0.5) * s->cell_size);
-            float v = sd <= 0 ? 1.0f : 0.0f;
+            double x = (c + 0.5) * s->cell_size, y = (r + 0.5) * s->cell_size, best = HUGE_VAL;
+            uint32_t gx, gy;
+            float v;
+            /* inside some capsule <=> listed in the point's own grid cell with d <= 0 */
+            if (gt_cell_of(ix, x, y, &gx, &gy)) best = gt_scan_cell(ix, gx, gy, x, y, best);
+            v = best <= 0 ? 1.0f : 0.0f;
             for (i = 0; i < T; i++)
                 for (j = 0; j < T; j++) R[(r * T + i) * pw + c * T + j] = v;
         }

@@ -22,8 +22,9 @@ for r in "$B"/fuzz/*-replay; do
     tgt=$(basename "$r" -replay)
     count "fuzz replay $tgt" "$r" fuzz/"$tgt"/corpus tests/crashers/"$tgt"
 done
-if [ -f tests/cli_test.sh ]; then
-    count "cli tests" sh tests/cli_test.sh "$B/roadsplat"
-fi
+for s in tests/cli*_test.sh; do
+    [ -f "$s" ] || continue
+    count "$(basename "$s" .sh)" sh "$s" "$B/roadsplat"
+done
 echo "$total_p passed, $total_f failed"
 [ "$total_f" = 0 ]

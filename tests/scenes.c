@@ -386,9 +386,10 @@ static int sc_emit_street(sc_scene *s, const sc_district *d, int fam, long i0, l
     return rc;
 }
 
-/* A winding polyline from (x, y) with heading `a`: used for arterials and
- * lanes. Stops after `len` metres or, when stop_outside, once it has been
- * inside the map and is `beyond` metres outside. */
+/* A winding polyline from (x, y) with heading `a`, a point every `step`
+ * metres: used for arterials and lanes. Stops after `len` metres or, when
+ * `leave` (arterials: steered back towards target_a), once it has been
+ * inside the map and is 30 m outside again. */
 static int sc_wander(sc_scene *s, sc_rng *g, double x, double y, double a, double step, double len,
                      double wander, double width, int leave, double target_a)
 {
@@ -463,7 +464,7 @@ int sc_city(sc_scene *s, uint32_t w, uint32_t h, double cs, size_t target_roads,
     }
 
     /* 2. districts: Voronoi cells around jittered seeds, each its own grid.
-     * Spacing so that streets make about 2/3 of the target count. */
+     * Spacing so that streets make about 3/4 of the target count. */
     dsize = 480;
     ndx = (size_t)ceil(ex / dsize);
     ndy = (size_t)ceil(ey / dsize);
@@ -472,7 +473,7 @@ int sc_city(sc_scene *s, uint32_t w, uint32_t h, double cs, size_t target_roads,
     nd = ndx * ndy;
     ds = calloc(nd, sizeof *ds);
     if (!ds) goto fail;
-    spacing = sqrt(area / (0.62 * (double)(target_roads ? target_roads : 1)));
+    spacing = sqrt(area / (0.55 * (double)(target_roads ? target_roads : 1)));
     for (k = 0; k < nd; k++) {
         sc_district *d = &ds[k];
         d->sx = (k % ndx + sc_rng_range(&g, 0.2, 0.8)) * ex / ndx;
@@ -506,8 +507,8 @@ int sc_city(sc_scene *s, uint32_t w, uint32_t h, double cs, size_t target_roads,
                         sc_district_point(d, (double)(i0 + (fam == 0)), (double)(j0 + (fam == 1)), &x1, &y1);
                         mx = 0.5 * (x0 + x1);
                         my = 0.5 * (y0 + y1);
-                        ok = sc_nearest_district(ds, nd, x0, y0) == k && sc_nearest_district(ds, nd, x1, y1) == k &&
-                             mx > -20 && my > -20 && mx < ex + 20 && my < ey + 20 &&
+                        ok = mx > -20 && my > -20 && mx < ex + 20 && my < ey + 20 &&
+                             sc_nearest_district(ds, nd, mx, my) == k && /* edges cross district borders a little */
                              sc_river_dist(&tp, x0, y0) > 35 && sc_river_dist(&tp, x1, y1) > 35 &&
                              sc_rng_unit(&g) > 0.08; /* dropped edges make T junctions */
                     }

@@ -56,7 +56,7 @@ void sc_dem_ridge(float *z, uint32_t w, uint32_t h, double angle, double halfwid
 /* Fractal noise (sum of value-noise octaves, gain `roughness`, e.g. 0.5),
  * any size, normalised to exactly 0..65535. */
 void sc_dem_fractal(float *z, uint32_t w, uint32_t h, uint64_t seed, double roughness);
-/* Real-looking terrain in centimetres (use z-scale 0.01): about 40..160 m,
+/* Real-looking terrain in centimetres (use z-scale 0.01): roughly 50..140 m,
  * fractal detail + smooth hills and valleys + a river valley running roughly
  * west to east. cs = cell size in metres (the features are sized in metres). */
 void sc_dem_terrain(float *z, uint32_t w, uint32_t h, double cs, uint64_t seed);
@@ -76,7 +76,8 @@ int sc_road_arc(sc_scene *s, double cx, double cy, double radius, double a0, dou
  * one road spanning between the margins, so they cross in X junctions. */
 int sc_road_grid(sc_scene *s, unsigned nx, unsigned ny, double width, double margin);
 /* A road from the map centre leaving through the map edge at angle theta,
- * ending `beyond` metres outside the map, with a bend halfway. */
+ * continuing `beyond` metres along the road past the map edge; it bends
+ * 20 degrees halfway. */
 int sc_road_leaving(sc_scene *s, double theta, double width, double beyond);
 
 /* Realistic city: sc_dem_terrain DEM plus an OSM-like network of about

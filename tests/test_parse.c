@@ -227,6 +227,8 @@ static void test_pgm(void)
     pgm_bad_s(ctx, "P2 2 2 0\n0 0 0 0\n", RS_ERR_PARSE, "maxval 0", NULL);
     pgm_bad_s(ctx, "P2 2 2 65536\n0 0 0 0\n", RS_ERR_PARSE, "maxval 65536", NULL);
     pgm_bad_s(ctx, "P2 1 5 9\n0 0 0 0 0\n", RS_ERR_PARSE, "1x5", ">= 2");
+    pgm_bad_s(ctx, "P2\n2\n2\n0\n0 0 0 0\n", RS_ERR_PARSE, "line 4", "maxval 0");
+    pgm_bad_s(ctx, "P2\n# c\n1 5 9\n0 0 0 0 0\n", RS_ERR_PARSE, "line 3", "1x5");
     pgm_bad_s(ctx, "P2 0 0 9\n", RS_ERR_PARSE, ">= 2", NULL);
     pgm_bad_s(ctx, "P2 99999999999999999999999 2 9\n", RS_ERR_PARSE, "width", "too large");
     pgm_bad_s(ctx, "P5 4294967296 4294967296 255\n", RS_ERR_LIMIT, "limit", NULL);
@@ -401,6 +403,11 @@ static void test_roads(void)
     roads_bad(ctx, "road a width 2\n0 0\nend\n", RS_ERR_PARSE, "line 3", "'a' (line 1) has 1 point;");
     roads_bad(ctx, "road a width 2\nend\n", RS_ERR_PARSE, "'a'", "0 points");
     roads_bad(ctx, "road a width 2\n0 abc\nend\n", RS_ERR_PARSE, "line 2", "'abc'");
+    roads_bad(ctx, "road a width 2\n0 0\nnan 5\nend\n", RS_ERR_PARSE, "line 3", "x 'nan' is not a number");
+    roads_bad(ctx, "road a width 2\n0 0\n1 inf\nend\n", RS_ERR_PARSE, "line 3", "y 'inf' is not a number");
+    roads_bad(ctx, "road a\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9"
+                   "\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9\xC3\xA9x width 2\n0 0\n",
+              RS_ERR_PARSE, "\xC3\xA9\xC3\xA9...'", "no 'end'");
     roads_bad(ctx, "road a width 2\n0\nend\n", RS_ERR_PARSE, "line 2", "'X Y'");
     roads_bad(ctx, "road a width 2\n1 2 3\nend\n", RS_ERR_PARSE, "line 2", "extra token '3'");
     roads_bad(ctx, "road a width 2\n1,5 2\nend\n", RS_ERR_PARSE, "'1,5'", "decimal point");

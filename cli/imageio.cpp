@@ -1,0 +1,263 @@
+// Image files through OpenImageIO, behind the C interface of cli.h.
+// Nothing thrown inside escapes an extern "C" function: every failure
+// prints one line "roadsplat: FILE: problem" and returns non-zero.
+#include "cli.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <string>
+#include <cerrno>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+namespace {
+
+struct free_deleter {
+    void operator()(void *p) const { std::free(p); }
+};
+template <class T> using malloc_ptr = std::unique_ptr<T, free_deleter>;
+
+// OIIO messages can span lines; keep the first, trimmed.
+std::string one_line(std::string s)
+{
+    size_t nl = s.find_first_of("\r\n");
+    if (nl != std::string::npos) s.resize(nl);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.pop_back();
+    return s.empty() ? std::string("unknown OpenImageIO error") : s;
+}
+
+// Open for reading with alpha left unassociated: textures and DEMs with an
+// alpha channel must keep their stored values, not premultiplied ones.
+std::unique_ptr<ImageInput> open_input(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        cli_error("%s: %s", path, std::strerror(errno));
+        return nullptr;
+    }
+    ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = ImageInput::open(path, &config);
+    if (!in) {
+        cli_error("%s: cannot read image: %s", path, one_line(OIIO::geterror()).c_str());
+        return nullptr;
+    }
+    return in;
+}
+
+// Dimensions a caller can allocate: 2D, positive, w*h*4*4 bytes fit.
+bool check_size(const char *path, const ImageSpec &spec, uint32_t *w, uint32_t *h)
+{
+    if (spec.width <= 0 || spec.height <= 0 || spec.depth > 1 || spec.nchannels <= 0) {
+        cli_error("%s: unsupported image layout (%dx%dx%d, %d channels)", path, spec.width, spec.height,
+                  spec.depth, spec.nchannels);
+        return false;
+    }
+    uint64_t px = (uint64_t)spec.width * (uint64_t)spec.height;
+    if (px > ((uint64_t)1 << 31) || px * 16 > (uint64_t)SIZE_MAX) {
+        cli_error("%s: image too large (%dx%d)", path, spec.width, spec.height);
+        return false;
+    }
+    *w = (uint32_t)spec.width;
+    *h = (uint32_t)spec.height;
+    return true;
+}
+
+// OIIO converts integer pixels to float normalised to [0,1] (or [-1,1]);
+// the DEM wants the stored integer, i.e. "file units".
+double integer_scale(TypeDesc t)
+{
+    switch (t.basetype) {
+    case TypeDesc::UINT8: return 255.0;
+    case TypeDesc::INT8: return 127.0;
+    case TypeDesc::UINT16: return 65535.0;
+    case TypeDesc::INT16: return 32767.0;
+    case TypeDesc::UINT32: return 4294967295.0;
+    case TypeDesc::INT32: return 2147483647.0;
+    default: return 0.0; // half, float, double: as stored
+    }
+}
+
+int read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
+{
+    auto in = open_input(path);
+    if (!in) return 1;
+    const ImageSpec spec = in->spec();
+    if (!check_size(path, spec, w, h)) return 1;
+    size_t n = (size_t)*w * *h;
+    malloc_ptr<float> buf((float *)std::malloc(n * sizeof(float)));
+    if (!buf) {
+        cli_error("%s: out of memory for %ux%u samples", path, *w, *h);
+        return 1;
+    }
+    if (!in->read_image(0, 0, 0, 1, TypeDesc::FLOAT, buf.get())) {
+        cli_error("%s: cannot read pixels: %s", path, one_line(in->geterror()).c_str());
+        return 1;
+    }
+    in->close();
+    double s = integer_scale(spec.channelformat(0));
+    if (s > 0.0) {
+        float *z = buf.get();
+        for (size_t i = 0; i < n; i++) z[i] = (float)std::nearbyint((double)z[i] * s);
+    }
+    *data = buf.release();
+    return 0;
+}
+
+int read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
+{
+    auto in = open_input(path);
+    if (!in) return 1;
+    const ImageSpec spec = in->spec();
+    if (!check_size(path, spec, w, h)) return 1;
+    int nc = spec.nchannels > 4 ? 4 : spec.nchannels;
+    size_t n = (size_t)*w * *h;
+    malloc_ptr<uint8_t> srcp((uint8_t *)std::malloc(n * (size_t)nc));
+    malloc_ptr<uint8_t> outp((uint8_t *)std::malloc(n * 4));
+    if (!srcp || !outp) {
+        cli_error("%s: out of memory for %ux%u pixels", path, *w, *h);
+        return 1;
+    }
+    if (!in->read_image(0, 0, 0, nc, TypeDesc::UINT8, srcp.get())) {
+        cli_error("%s: cannot read pixels: %s", path, one_line(in->geterror()).c_str());
+        return 1;
+    }
+    in->close();
+    const uint8_t *src = srcp.get();
+    uint8_t *out = outp.get();
+    for (size_t i = 0; i < n; i++) {
+        const uint8_t *s = src + i * (size_t)nc;
+        uint8_t *d = out + 4 * i;
+        switch (nc) {
+        case 1: d[0] = d[1] = d[2] = s[0]; d[3] = 255; break;
+        case 2: d[0] = d[1] = d[2] = s[0]; d[3] = s[1]; break;
+        case 3: d[0] = s[0]; d[1] = s[1]; d[2] = s[2]; d[3] = 255; break;
+        default: std::memcpy(d, s, 4); break;
+        }
+    }
+    *data = outp.release();
+    return 0;
+}
+
+int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, const void *data)
+{
+    if (channels < 1 || channels > 4 || (bits != 8 && bits != 16) || !w || !h || !data ||
+        w > 0x7fffffffu || h > 0x7fffffffu) {
+        cli_error("%s: cannot write a %ux%u PNG with %d channels of %d bits", path, w, h, channels, bits);
+        return 1;
+    }
+    // Temporary sibling file, so the final rename is atomic.
+    std::string p(path);
+    size_t slash = p.rfind('/');
+    std::string dir = slash == std::string::npos ? std::string() : p.substr(0, slash + 1);
+    std::string base = slash == std::string::npos ? p : p.substr(slash + 1);
+    std::string tmpl = dir + "." + base + ".XXXXXX";
+    std::unique_ptr<char[]> tmp(new char[tmpl.size() + 1]);
+    std::memcpy(tmp.get(), tmpl.c_str(), tmpl.size() + 1);
+    int fd = mkstemp(tmp.get());
+    if (fd < 0) {
+        cli_error("%s: cannot create a temporary file next to it: %s", path, std::strerror(errno));
+        return 1;
+    }
+    close(fd);
+    mode_t mask = umask(0);
+    umask(mask);
+    (void)chmod(tmp.get(), 0666 & ~mask);
+
+    bool ok = false;
+    std::string err;
+    try {
+        // The format is named explicitly: the temporary name has no .png.
+        auto out = ImageOutput::create("png");
+        if (!out) {
+            err = one_line(OIIO::geterror());
+        } else {
+            ImageSpec spec((int)w, (int)h, channels, bits == 16 ? TypeDesc::UINT16 : TypeDesc::UINT8);
+            spec.attribute("oiio:UnassociatedAlpha", 1); // store RGBA as given
+            if (!out->open(tmp.get(), spec)) err = one_line(out->geterror());
+            else if (!out->write_image(bits == 16 ? TypeDesc::UINT16 : TypeDesc::UINT8, data)) {
+                err = one_line(out->geterror());
+                out->close();
+            } else if (!out->close()) err = one_line(out->geterror());
+            else ok = true;
+        }
+    } catch (const std::exception &e) {
+        err = e.what();
+    } catch (...) {
+        err = "unknown error";
+    }
+    if (ok) {
+        int f = open(tmp.get(), O_RDONLY);
+        if (f >= 0) {
+            if (fsync(f) != 0) { /* best effort */ }
+            close(f);
+        }
+        if (std::rename(tmp.get(), path) != 0) {
+            err = std::strerror(errno);
+            ok = false;
+        }
+    }
+    if (!ok) {
+        unlink(tmp.get());
+        cli_error("%s: cannot write PNG: %s", path, err.c_str());
+        return 1;
+    }
+    return 0;
+}
+
+} // namespace
+
+extern "C" int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
+{
+    *data = nullptr;
+    try {
+        return read_gray_float(path, w, h, data);
+    } catch (const std::exception &e) {
+        cli_error("%s: %s", path, e.what());
+    } catch (...) {
+        cli_error("%s: unknown error while reading", path);
+    }
+    std::free(*data);
+    *data = nullptr;
+    return 1;
+}
+
+extern "C" int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
+{
+    *data = nullptr;
+    try {
+        return read_rgba8(path, w, h, data);
+    } catch (const std::exception &e) {
+        cli_error("%s: %s", path, e.what());
+    } catch (...) {
+        cli_error("%s: unknown error while reading", path);
+    }
+    std::free(*data);
+    *data = nullptr;
+    return 1;
+}
+
+extern "C" int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
+                                   const void *data)
+{
+    try {
+        return write_png(path, w, h, channels, bits, data);
+    } catch (const std::exception &e) {
+        cli_error("%s: %s", path, e.what());
+    } catch (...) {
+        cli_error("%s: unknown error while writing", path);
+    }
+    return 1;
+}

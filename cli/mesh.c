@@ -1,0 +1,241 @@
+/* `roadsplat mesh`: ROAM-mesh a DEM to OBJ or PLY (atomic write), with an
+ * optional stats JSON. OBJ/PLY axes: y up; sample (row i, column j) is
+ * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
+#include "cli.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *mesh_usage =
+    "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
+    "                      [--pool N] [--normals] [--skirt DEPTH] [--stats FILE.json]\n"
+    "                      DEM OUT.obj|OUT.ply\n"
+    "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
+    "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
+    "  --pool N        ROAM node pool size (default: what the finest mesh needs, <= 2^26)\n";
+
+static int ends_with(const char *s, const char *suf)
+{
+    size_t a = strlen(s), b = strlen(suf);
+    if (a < b) return 0;
+    for (size_t k = 0; k < b; k++) {
+        char c = s[a - b + k];
+        if (c >= 'A' && c <= 'Z') c = (char)(c - 'A' + 'a');
+        if (c != suf[k]) return 0;
+    }
+    return 1;
+}
+
+/* Exact DEM height (metres) of a vertex; nodata samples keep the mesher's filled value. */
+static double vertex_height(const float *z, uint32_t W, double cs, double zs, const float *v)
+{
+    long j = lround(v[0] / cs), i = lround(v[1] / cs);
+    float s = z[(size_t)i * W + (size_t)j];
+    return isnan(s) ? (double)v[2] : (double)s * zs;
+}
+
+/* Max |mesh - DEM| over every valid sample, rasterizing each triangle. */
+static double measure_error(const float *z, uint32_t W, double cs, double zs, const float *v, const uint32_t *idx,
+                            size_t ntri)
+{
+    double mx = 0.0;
+    for (size_t t = 0; t < ntri; t++) {
+        long x[3], y[3];
+        double h[3];
+        for (int c = 0; c < 3; c++) {
+            const float *p = v + 5 * (size_t)idx[3 * t + (size_t)c];
+            x[c] = lround(p[0] / cs); y[c] = lround(p[1] / cs);
+            h[c] = vertex_height(z, W, cs, zs, p);
+        }
+        long cr = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+        if (cr == 0) continue;
+        long x0 = x[0], x1 = x[0], y0 = y[0], y1 = y[0];
+        for (int c = 1; c < 3; c++) {
+            if (x[c] < x0) x0 = x[c];
+            if (x[c] > x1) x1 = x[c];
+            if (y[c] < y0) y0 = y[c];
+            if (y[c] > y1) y1 = y[c];
+        }
+        for (long py = y0; py <= y1; py++)
+            for (long px = x0; px <= x1; px++) {
+                long w0 = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
+                long w1 = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
+                long w2 = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
+                if (cr < 0) { w0 = -w0; w1 = -w1; w2 = -w2; }
+                if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+                float s = z[(size_t)py * W + (size_t)px];
+                if (isnan(s)) continue;
+                double zi = (w0 * h[0] + w1 * h[1] + w2 * h[2]) / (double)(w0 + w1 + w2);
+                double e = fabs(zi - (double)s * zs);
+                if (e > mx) mx = e;
+            }
+    }
+    return mx;
+}
+
+static void put_f32(unsigned char *b, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    b[0] = (unsigned char)u; b[1] = (unsigned char)(u >> 8); b[2] = (unsigned char)(u >> 16); b[3] = (unsigned char)(u >> 24);
+}
+
+static void put_u32(unsigned char *b, uint32_t u)
+{
+    b[0] = (unsigned char)u; b[1] = (unsigned char)(u >> 8); b[2] = (unsigned char)(u >> 16); b[3] = (unsigned char)(u >> 24);
+}
+
+static int write_mesh(FILE *f, int ply, const float *z, uint32_t W, double cs, double zs, const float *v,
+                      const float *n, size_t nv, const uint32_t *idx, size_t ni, size_t ntop)
+{
+    if (!ply) {
+        fprintf(f, "# roadsplat mesh: y up, v = (column*cs, height, row*cs) metres\n");
+        for (size_t k = 0; k < nv; k++) {
+            const float *p = v + 5 * k;
+            double h = k < ntop ? vertex_height(z, W, cs, zs, p) : (double)p[2];
+            fprintf(f, "v %.9g %.10g %.9g\n", (double)p[0], h, (double)p[1]);
+        }
+        for (size_t k = 0; k < nv; k++) fprintf(f, "vt %.9g %.9g\n", (double)v[5 * k + 3], 1.0 - (double)v[5 * k + 4]);
+        if (n)
+            for (size_t k = 0; k < nv; k++)
+                fprintf(f, "vn %.7g %.7g %.7g\n", (double)n[3 * k], (double)n[3 * k + 2], (double)n[3 * k + 1]);
+        for (size_t t = 0; t < ni; t += 3) {
+            unsigned long a = idx[t] + 1ul, b = idx[t + 1] + 1ul, c = idx[t + 2] + 1ul;
+            if (n) fprintf(f, "f %lu/%lu/%lu %lu/%lu/%lu %lu/%lu/%lu\n", a, a, a, b, b, b, c, c, c);
+            else fprintf(f, "f %lu/%lu %lu/%lu %lu/%lu\n", a, a, b, b, c, c);
+        }
+    } else {
+        fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment roadsplat mesh: y up, (column*cs, height, row*cs) metres\n"
+                   "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
+                   "property float s\nproperty float t\n", nv);
+        if (n) fprintf(f, "property float nx\nproperty float ny\nproperty float nz\n");
+        fprintf(f, "element face %zu\nproperty list uchar uint vertex_indices\nend_header\n", ni / 3);
+        unsigned char b[32];
+        for (size_t k = 0; k < nv; k++) {
+            const float *p = v + 5 * k;
+            double h = k < ntop ? vertex_height(z, W, cs, zs, p) : (double)p[2];
+            put_f32(b, p[0]); put_f32(b + 4, (float)h); put_f32(b + 8, p[1]);
+            put_f32(b + 12, p[3]); put_f32(b + 16, 1.0f - p[4]);
+            size_t len = 20;
+            if (n) { put_f32(b + 20, n[3 * k]); put_f32(b + 24, n[3 * k + 2]); put_f32(b + 28, n[3 * k + 1]); len = 32; }
+            if (fwrite(b, 1, len, f) != len) return -1;
+        }
+        for (size_t t = 0; t < ni; t += 3) {
+            b[0] = 3;
+            put_u32(b + 1, idx[t]); put_u32(b + 5, idx[t + 1]); put_u32(b + 9, idx[t + 2]);
+            if (fwrite(b, 1, 13, f) != 13) return -1;
+        }
+    }
+    return ferror(f) ? -1 : 0;
+}
+
+int cli_mesh_main(int argc, char **argv)
+{
+    double t_start = cli_now_ms();
+    double cs = 1.0, zs = 1.0, max_error = 1.0, skirt = 0.0;
+    uint32_t tris = 0, pool = 0;
+    int have_err = 0, normals = 0;
+    const char *stats_path = NULL, *in = NULL, *outp = NULL;
+    for (int a = 1; a < argc; a++) {
+        const char *s = argv[a];
+        int more = a + 1 < argc;
+        if (!strcmp(s, "--help") || !strcmp(s, "-h")) { fputs(mesh_usage, stdout); return 0; }
+        else if (!strcmp(s, "--normals")) normals = 1;
+        else if (s[0] == '-' && s[1] == '-' && !more) { cli_error("%s needs a value", s); return 1; }
+        else if (!strcmp(s, "--cell-size")) { if (cli_parse_double(s, argv[++a], &cs)) return 1; }
+        else if (!strcmp(s, "--z-scale")) { if (cli_parse_double(s, argv[++a], &zs)) return 1; }
+        else if (!strcmp(s, "--max-error")) { if (cli_parse_double(s, argv[++a], &max_error)) return 1; have_err = 1; }
+        else if (!strcmp(s, "--triangles")) { if (cli_parse_u32(s, argv[++a], &tris)) return 1; }
+        else if (!strcmp(s, "--pool")) { if (cli_parse_u32(s, argv[++a], &pool)) return 1; }
+        else if (!strcmp(s, "--skirt")) { if (cli_parse_double(s, argv[++a], &skirt)) return 1; }
+        else if (!strcmp(s, "--stats")) stats_path = argv[++a];
+        else if (s[0] == '-' && s[1] != '\0') { cli_error("mesh: unknown option '%s'\n%s", s, mesh_usage); return 1; }
+        else if (!in) in = s;
+        else if (!outp) outp = s;
+        else { cli_error("mesh: unexpected argument '%s'", s); return 1; }
+    }
+    if (!in || !outp) { cli_error("mesh: need DEM and OUT.obj|OUT.ply\n%s", mesh_usage); return 1; }
+    if (have_err && tris) { cli_error("mesh: --max-error and --triangles are exclusive"); return 1; }
+    if (!(cs > 0)) { cli_error("--cell-size: '%g' must be > 0", cs); return 1; }
+    if (!(zs > 0)) { cli_error("--z-scale: '%g' must be > 0", zs); return 1; }
+    if (!(max_error >= 0)) { cli_error("--max-error: '%g' must be >= 0", max_error); return 1; }
+    if (!(skirt >= 0)) { cli_error("--skirt: '%g' must be >= 0", skirt); return 1; }
+    if (have_err == 0 && tris == 0) have_err = 1;
+    int ply = ends_with(outp, ".ply");
+    if (!ply && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj or .ply", outp); return 1; }
+
+    rs_ctx *ctx = NULL;
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { cli_error("out of memory"); return 1; }
+    int rc = 1;
+    rs_roam *L = NULL;
+    float *v = NULL, *nrm = NULL;
+    uint32_t *idx = NULL;
+    rs_dem *dem = cli_load_dem(ctx, in);
+    if (!dem) goto done;
+    double t_mesh = cli_now_ms();
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = cs; o.z_scale = zs;
+    if (pool) o.pool_nodes = pool;
+    else {
+        /* the CLI defaults to a pool that holds the finest mesh (within the limit) */
+        uint64_t full = 4ull * rs_dem_width(dem) * rs_dem_height(dem) + 64;
+        o.pool_nodes = (uint32_t)(full < (1u << 26) ? full : (1u << 26));
+    }
+    rs_result r = rs_roam_create(ctx, dem, &o, &L);
+    if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
+    r = tris ? rs_roam_refine_count(ctx, L, tris) : rs_roam_refine_error(ctx, L, max_error);
+    if (r == RS_ERR_POOL_EXHAUSTED) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
+    else if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
+    rs_roam_mesh_options mo = { normals, skirt };
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(L, &mo, &mv, &mi);
+    v = malloc((mv ? mv : 1) * 5 * sizeof *v);
+    nrm = normals ? malloc((mv ? mv : 1) * 3 * sizeof *nrm) : NULL;
+    idx = malloc((mi ? mi : 1) * sizeof *idx);
+    if (!v || !idx || (normals && !nrm)) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
+    if (rs_roam_extract(ctx, L, &mo, v, nrm, mv, idx, mi, &nv, &ni) != RS_OK) {
+        cli_error("%s: %s", in, rs_ctx_message(ctx));
+        goto done;
+    }
+    double mesh_ms = cli_now_ms() - t_mesh;
+    rs_roam_stats st;
+    rs_roam_get_stats(L, &st);
+    size_t ntop = 0;
+    for (size_t k = 0; k < 3 * (size_t)st.triangles; k++) if (idx[k] + (size_t)1 > ntop) ntop = idx[k] + (size_t)1;
+    cli_out out;
+    if (cli_out_open(&out, outp)) goto done;
+    if (write_mesh(out.f, ply, rs_dem_samples(dem), rs_dem_width(dem), cs, zs, v, nrm, nv, idx, ni, ntop) != 0) {
+        cli_error("%s: write failed", outp);
+        cli_out_abort(&out);
+        goto done;
+    }
+    if (cli_out_commit(&out)) goto done;
+    if (stats_path) {
+        double measured = measure_error(rs_dem_samples(dem), rs_dem_width(dem), cs, zs, v, idx, st.triangles);
+        cli_out so;
+        if (cli_out_open(&so, stats_path)) goto done;
+        fprintf(so.f, "{\n  \"command\": \"mesh\",\n  \"dem\": {\"width\": %u, \"height\": %u, \"cell_size\": %.9g, \"z_scale\": %.9g},\n",
+                st.width, st.height, cs, zs);
+        fprintf(so.f, "  \"mode\": \"%s\",\n", tris ? "triangles" : "max_error");
+        if (tris) fprintf(so.f, "  \"triangle_budget\": %u,\n", tris);
+        fprintf(so.f, "  \"max_error_requested\": %.9g,\n  \"max_error_measured\": %.9g,\n  \"max_error_bound\": %.9g,\n",
+                tris ? st.threshold : max_error, measured, st.max_error_bound);
+        fprintf(so.f, "  \"triangles\": %u,\n  \"vertices\": %zu,\n  \"indices\": %zu,\n", st.triangles, nv, ni);
+        fprintf(so.f, "  \"patch_size\": %u,\n  \"pool\": {\"nodes\": %u, \"used\": %u, \"base_nodes\": %u, \"exhausted\": %s, \"bytes\": %llu},\n",
+                st.patch_size, st.pool_nodes, st.pool_used, st.base_nodes, st.pool_exhausted ? "true" : "false",
+                (unsigned long long)st.bytes);
+        fprintf(so.f, "  \"timings_ms\": {\"mesh\": %.3f, \"total\": %.3f}\n}\n", mesh_ms, cli_now_ms() - t_start);
+        if (ferror(so.f)) { cli_error("%s: write failed", stats_path); cli_out_abort(&so); goto done; }
+        if (cli_out_commit(&so)) goto done;
+    }
+    rc = 0;
+done:
+    free(v); free(nrm); free(idx);
+    rs_roam_free(ctx, L);
+    if (dem) rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+    return rc;
+}

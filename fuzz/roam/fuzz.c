@@ -1,0 +1,82 @@
+/* Fuzz target for the ROAM mesher. Input: byte 0 = width-2, byte 1 =
+ * height-2 (each taken mod 48), then one byte per sample (255 = nodata,
+ * samples repeat when the input is short); the last 4 bytes choose the pool
+ * size (2 bytes), the error threshold and the mode. Checks invariants and
+ * traps on a violation (no NaN vertex, indices in range, count == stats). */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include "roadsplat.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+#define REQUIRE(c) do { if (!(c)) __builtin_trap(); } while (0)
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (size < 7) return 0;
+    uint32_t W = 2 + data[0] % 48, H = 2 + data[1] % 48;
+    const uint8_t *tail = data + size - 4;
+    uint32_t pool = (uint32_t)tail[0] | (uint32_t)tail[1] << 8;
+    double E = tail[2] / 8.0;
+    int mode = tail[3] % 4;
+    size_t nbody = size - 6;
+    float *z = malloc((size_t)W * H * sizeof *z);
+    if (!z) return 0;
+    for (size_t k = 0; k < (size_t)W * H; k++) {
+        uint8_t b = data[2 + k % nbody];
+        z[k] = b == 255 ? NAN : (float)b * (tail[3] & 4 ? 257.0f : 1.0f);
+    }
+    rs_ctx *ctx = NULL;
+    rs_dem *dem = NULL;
+    rs_roam *r = NULL;
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { free(z); return 0; }
+    if (rs_dem_create(ctx, W, H, z, &dem) != RS_OK) goto out;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.pool_nodes = pool;
+    o.cell_size = 1.0 + (tail[3] >> 4);
+    if (rs_roam_create(ctx, dem, &o, &r) != RS_OK) goto out;
+    rs_result rr;
+    if (mode == 0) rr = rs_roam_refine_error(ctx, r, E);
+    else if (mode == 1) rr = rs_roam_refine_count(ctx, r, 2 + tail[2] * 4u);
+    else {
+        rs_roam_view v;
+        memset(&v, 0, sizeof v);
+        v.eye[0] = (double)tail[0] - 20; v.eye[1] = (double)tail[1] - 20; v.eye[2] = 30 + tail[2];
+        v.dir[0] = W / 2.0 - v.eye[0]; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -10;
+        v.pixel_error = 0.5 + tail[2] / 16.0;
+        v.target_triangles = mode == 3 ? 20u + tail[2] : 0u;
+        rr = rs_roam_frame(ctx, r, &v);
+    }
+    REQUIRE(rr == RS_OK || rr == RS_ERR_POOL_EXHAUSTED || rr == RS_ERR_LIMIT);
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    REQUIRE(st.pool_used <= st.pool_nodes);
+    rs_roam_mesh_options mo = { tail[2] & 1, (tail[2] & 2) ? 3.0 : 0.0 };
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(r, &mo, &mv, &mi);
+    float *v = malloc((mv + 1) * 5 * sizeof *v), *n = malloc((mv + 1) * 3 * sizeof *n);
+    uint32_t *idx = malloc((mi + 1) * sizeof *idx);
+    if (v && n && idx) {
+        REQUIRE(rs_roam_extract(ctx, r, &mo, v, n, mv, idx, mi, &nv, &ni) == RS_OK);
+        REQUIRE(ni >= 3 * (size_t)st.triangles);
+        for (size_t k = 0; k < nv * 5; k++) REQUIRE(isfinite(v[k]));
+        for (size_t k = 0; k < ni; k++) REQUIRE(idx[k] < nv);
+        double area = 0;
+        for (size_t t = 0; t < 3 * (size_t)st.triangles; t += 3) {
+            const float *a = v + 5 * idx[t], *b = v + 5 * idx[t + 1], *c = v + 5 * idx[t + 2];
+            area += -((double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1])) / 2;
+        }
+        double want = (W - 1) * (H - 1) * o.cell_size * o.cell_size;
+        REQUIRE(fabs(area - want) <= 1e-6 * want);
+    }
+    free(v); free(n); free(idx);
+out:
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+    free(z);
+    return 0;
+}

@@ -1,0 +1,124 @@
+#!/bin/sh
+# CLI tests for `roadsplat DEM ROADS OUT.png`: usage, bad input (exit 1, one
+# clear line naming the file, no output left behind), atomic replacement,
+# determinism, the OpenImageIO DEM path. Usage: cli_test.sh path/to/roadsplat
+RS=${1:-build/roadsplat}
+T=$(mktemp -d)
+trap 'chmod -R u+w "$T" 2>/dev/null; rm -rf "$T"' EXIT
+pass=0; fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# expect_fail NAME PATTERN ARGS... : exit 1, stderr one line matching PATTERN, no $T/out.png
+expect_fail() {
+    name=$1; pat=$2; shift 2
+    rm -f "$T/out.png"
+    "$RS" "$@" >"$T/stdout" 2>"$T/stderr"; rc=$?
+    lines=$(wc -l <"$T/stderr")
+    if [ $rc -ne 1 ]; then bad "$name: exit $rc, expected 1"; return; fi
+    if [ "$lines" -ne 1 ]; then bad "$name: $lines stderr lines: $(cat "$T/stderr")"; return; fi
+    if ! grep -q -- "$pat" "$T/stderr"; then bad "$name: stderr '$(cat "$T/stderr")' lacks '$pat'"; return; fi
+    if [ -e "$T/out.png" ]; then bad "$name: left out.png behind"; return; fi
+    if ls "$T" | grep -q '\.tmp'; then bad "$name: left a temporary file"; return; fi
+    ok
+}
+
+E=docs/examples
+cat >"$T/roads.txt" <<'R'
+# two roads
+road main width 6
+2 2
+28 20
+end
+road side width 3
+0 15
+30 15
+end
+R
+printf 'P2\n31 21\n255\n' >"$T/dem.pgm"
+i=0; while [ $i -lt 651 ]; do printf '%d ' $((i % 97)); i=$((i + 1)); done >>"$T/dem.pgm"
+
+# --- usage ---
+"$RS" --help >"$T/o" 2>"$T/e" && grep -q "Usage: roadsplat" "$T/o" && [ ! -s "$T/e" ] && ok || bad "--help"
+"$RS" --version >"$T/o" 2>&1 && grep -Eq "^roadsplat [0-9]+\.[0-9]+\.[0-9]+$" "$T/o" && ok || bad "--version"
+expect_fail "no arguments" "expected DEM ROADS OUT.png"
+expect_fail "unknown option" "unknown option '--frobnicate'" --frobnicate "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "missing value" "option --texels needs a value" "$T/dem.pgm" "$T/roads.txt" "$T/out.png" --texels
+expect_fail "texels junk" "--texels" --texels 4x "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "decimal comma" "--cell-size" --cell-size 2,5 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "nan cell size" "--cell-size" --cell-size nan "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "huge number" "--z-scale" --z-scale 1e999 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "negative cell" "--cell-size" --cell-size -5 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "bad buffer" "'distance' or 'dilate'" --buffer blur "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "too many args" "unexpected argument" "$T/dem.pgm" "$T/roads.txt" "$T/out.png" extra
+
+# --- bad input files ---
+expect_fail "missing DEM" "$T/nope.pgm" "$T/nope.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "missing roads" "$T/nope.txt" "$T/dem.pgm" "$T/nope.txt" "$T/out.png"
+printf 'P5\n4 4\n255\n\001\002' >"$T/trunc.pgm"
+expect_fail "truncated PGM" "trunc.pgm" "$T/trunc.pgm" "$T/roads.txt" "$T/out.png"
+printf 'P2\n3 3\n0\n0 0 0 0 0 0 0 0 0\n' >"$T/maxval0.pgm"
+expect_fail "maxval 0" "maxval0.pgm" "$T/maxval0.pgm" "$T/roads.txt" "$T/out.png"
+: >"$T/empty.pgm"
+expect_fail "empty DEM" "empty.pgm" "$T/empty.pgm" "$T/roads.txt" "$T/out.png"
+printf 'road a width 4\n1 1\nbogus 2 2\nend\n' >"$T/kw.txt"
+expect_fail "unknown keyword" "kw.txt: line 3" "$T/dem.pgm" "$T/kw.txt" "$T/out.png"
+printf 'road a width 4\n1 1\n2 2\n' >"$T/noend.txt"
+expect_fail "missing end" "noend.txt" "$T/dem.pgm" "$T/noend.txt" "$T/out.png"
+printf 'road a width 0\n1 1\n2 2\nend\n' >"$T/w0.txt"
+expect_fail "zero width" "w0.txt: line 1" "$T/dem.pgm" "$T/w0.txt" "$T/out.png"
+printf 'road a width 4\n1,5 1\n2 2\nend\n' >"$T/comma.txt"
+expect_fail "decimal comma in roads" "comma.txt: line 2" "$T/dem.pgm" "$T/comma.txt" "$T/out.png"
+expect_fail "output too large" "exceeds the limit" --texels 1024 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "unreadable texture" "nope.png" --road-texture "$T/nope.png" "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+
+# --- a good run, atomic output, determinism ---
+"$RS" --quiet --weight-out "$T/w.pgm" --stats "$T/s.json" "$T/dem.pgm" "$T/roads.txt" "$T/a.png" 2>"$T/e"
+[ $? -eq 0 ] && [ ! -s "$T/e" ] && ok || bad "good run: $(cat "$T/e")"
+head -c 8 "$T/a.png" | od -An -c | grep -q "P   N   G" && ok || bad "output is not a PNG"
+head -c 16 "$T/w.pgm" | grep -q "P5" && head -3 "$T/w.pgm" | grep -q "^240 160$" && ok || bad "weight PGM header"
+for k in '"read"' '"roads"' '"splat"' '"write"' '"total"' '"road_cells"' '"boundary_by_type"' '"k"'; do
+    grep -q "$k" "$T/s.json" && ok || bad "stats lacks $k"
+done
+"$RS" --quiet "$T/dem.pgm" "$T/roads.txt" "$T/b.png" && cmp -s "$T/a.png" "$T/b.png" && ok || bad "not deterministic"
+cp "$T/a.png" "$T/out.png"
+before=$(cksum <"$T/out.png")
+printf 'road a width 4\n1 1\n' >"$T/cut.txt"
+"$RS" --quiet "$T/dem.pgm" "$T/cut.txt" "$T/out.png" 2>/dev/null
+[ $? -eq 1 ] && [ "$(cksum <"$T/out.png")" = "$before" ] && ok || bad "failed run changed the existing OUT"
+mkdir "$T/ro" && chmod 555 "$T/ro"
+if [ "$(id -u)" != 0 ]; then
+    "$RS" --quiet "$T/dem.pgm" "$T/roads.txt" "$T/ro/x.png" 2>"$T/e"
+    [ $? -eq 1 ] && grep -q "ro/x.png" "$T/e" && [ ! -e "$T/ro/x.png" ] && ok || bad "unwritable folder"
+fi
+"$RS" --quiet "$T/dem.pgm" "$T/roads.txt" "$T/nodir/x.png" 2>"$T/e"
+[ $? -eq 1 ] && grep -q "nodir" "$T/e" && ok || bad "missing folder: $(cat "$T/e")"
+# empty road file is valid: terrain only
+: >"$T/none.txt"
+"$RS" --quiet "$T/dem.pgm" "$T/none.txt" "$T/n.png" && ok || bad "empty road file"
+
+# --- the same DEM as an 8-bit PNG through OpenImageIO gives the same image ---
+python3 - "$T/dem.pgm" "$T/dem.png" <<'PY' && ok || bad "could not make a PNG DEM"
+import sys, zlib, struct
+toks = open(sys.argv[1]).read().split()
+w, h = int(toks[1]), int(toks[2]); v = [int(t) for t in toks[4:4 + w * h]]
+raw = b''.join(b'\0' + bytes(v[y * w:(y + 1) * w]) for y in range(h))
+def chunk(t, d): return struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d) & 0xffffffff)
+open(sys.argv[2], 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 0, 0, 0, 0))
+    + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
+PY
+"$RS" --quiet "$T/dem.png" "$T/roads.txt" "$T/c.png" && cmp -s "$T/a.png" "$T/c.png" && ok || bad "PNG DEM differs from PGM DEM"
+
+# --- the bundled example renders ---
+"$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 "$E/dem.pgm" "$E/roads.txt" "$T/ex.png" && ok || bad "example"
+
+# --- the README's C example compiles against the header and runs ---
+B=$(dirname "$RS")
+sed -n '/^```c$/,/^```$/p' README.md | sed '1d;$d' >"$T/example.c"
+if ${CC:-cc} -std=c99 -Wall -Werror -Iinclude "$T/example.c" "$B/libroadsplat.a" -lm -o "$T/example" 2>"$T/e"; then
+    "$T/example" && ok || bad "README example failed to run"
+else
+    bad "README example does not compile: $(head -3 "$T/e")"
+fi
+
+echo "cli: $pass passed, $fail failed"
+[ $fail -eq 0 ]

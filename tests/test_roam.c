@@ -1,0 +1,570 @@
+/* ROAM mesher: crack-freedom and coverage for every pool size, the error
+ * bound, height scaling, determinism, budgets, view-dependent feedback,
+ * nodata, extraction options and error paths. Meshes are checked by the
+ * independent checker in roam_check.h. */
+#include "harness.h"
+#include "roadsplat.h"
+#include "roam_check.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct mesh {
+    float *v, *n;
+    uint32_t *i;
+    size_t nv, ni;
+} mesh;
+
+static void mesh_free(mesh *m)
+{
+    free(m->v); free(m->n); free(m->i);
+    memset(m, 0, sizeof *m);
+}
+
+static rs_result extract(rs_ctx *ctx, rs_roam *r, const rs_roam_mesh_options *o, mesh *m)
+{
+    size_t mv, mi;
+    memset(m, 0, sizeof *m);
+    rs_roam_mesh_bound(r, o, &mv, &mi);
+    m->v = malloc((mv ? mv : 1) * 5 * sizeof(float));
+    m->n = malloc((mv ? mv : 1) * 3 * sizeof(float));
+    m->i = malloc((mi ? mi : 1) * sizeof(uint32_t));
+    if (!m->v || !m->n || !m->i) return RS_ERR_NOMEM;
+    return rs_roam_extract(ctx, r, o, m->v, (o && o->normals) ? m->n : NULL, mv, m->i, mi, &m->nv, &m->ni);
+}
+
+/* Check the top surface (the first `ntri` triangles) with the checker. */
+static int check(const float *z, uint32_t W, uint32_t H, double cs, double zs, const mesh *m, size_t ntri,
+                 rc_result *res)
+{
+    int32_t *gx = malloc((m->nv + 1) * sizeof *gx), *gy = malloc((m->nv + 1) * sizeof *gy);
+    double *vz = malloc((m->nv + 1) * sizeof *vz);
+    int ok = gx && gy && vz;
+    for (size_t k = 0; ok && k < m->nv; k++) {
+        gx[k] = (int32_t)lround(m->v[5 * k] / cs);
+        gy[k] = (int32_t)lround(m->v[5 * k + 1] / cs);
+        vz[k] = m->v[5 * k + 2];
+        if (fabs(gx[k] * cs - m->v[5 * k]) > 1e-3 * cs) gx[k] = -1;
+    }
+    /* vertex heights are floats: compare the DEM at float precision too */
+    float *zf = malloc((size_t)W * H * sizeof *zf);
+    ok = ok && zf;
+    for (size_t k = 0; ok && k < (size_t)W * H; k++) zf[k] = isnan(z[k]) ? z[k] : (float)((double)z[k] * zs);
+    size_t nv = 0; /* skirt vertices follow the top surface's */
+    for (size_t k = 0; k < 3 * ntri; k++) if (m->i[k] + (size_t)1 > nv) nv = m->i[k] + (size_t)1;
+    ok = ok && rc_check(W, H, zf, 1.0, gx, gy, vz, nv, m->i, ntri, res);
+    free(gx); free(gy); free(vz); free(zf);
+    return ok;
+}
+
+static rs_roam *make(rs_ctx *ctx, const float *z, uint32_t W, uint32_t H, const rs_roam_options *o,
+                     rs_dem **dem)
+{
+    rs_roam *r = NULL;
+    if (rs_dem_create(ctx, W, H, z, dem) != RS_OK) return NULL;
+    if (rs_roam_create(ctx, *dem, o, &r) != RS_OK) { rs_dem_free(ctx, *dem); *dem = NULL; return NULL; }
+    return r;
+}
+
+enum { DEM_CONST, DEM_SPIKE, DEM_CHECKER, DEM_RIDGE, DEM_FRACTAL, DEM_NODATA, DEM_COUNT };
+static const char *dem_name[DEM_COUNT] = { "constant", "spike", "checkerboard", "ridge", "fractal", "nodata" };
+
+static float *gen(int kind, uint32_t W, uint32_t H)
+{
+    float *z = malloc((size_t)W * H * sizeof *z);
+    if (!z) return NULL;
+    for (uint32_t y = 0; y < H; y++)
+        for (uint32_t x = 0; x < W; x++) {
+            float v = 0;
+            switch (kind) {
+            case DEM_CONST: v = 123.5f; break;
+            case DEM_SPIKE: v = (x == W / 3 && y == H / 2) ? 900.0f : 10.0f; break;
+            case DEM_CHECKER: v = ((x + y) & 1) ? 65535.0f : 0.0f; break;
+            case DEM_RIDGE: v = (float)(200.0 - 7.0 * fabs((double)x - 0.6 * y - 3.0)); break;
+            default: break;
+            }
+            z[(size_t)y * W + x] = v;
+        }
+    if (kind == DEM_FRACTAL || kind == DEM_NODATA) rc_dem_fractal(z, W, H, 7, 16.0, 50.0, 0.55);
+    if (kind == DEM_NODATA)
+        for (uint32_t y = 0; y < H; y++)
+            for (uint32_t x = 0; x < W; x++)
+                if ((x > W / 4 && x < W / 2 && y > 1 && y < H - 3) || (x == W - 1 && y == 0)) z[(size_t)y * W + x] = NAN;
+    return z;
+}
+
+/* Vertex set of a mesh as a W*H bitmap. */
+static unsigned char *vertex_set(const mesh *m, uint32_t W, uint32_t H, double cs)
+{
+    unsigned char *s = calloc((size_t)W * H, 1);
+    if (!s) return NULL;
+    for (size_t k = 0; k < m->nv; k++) {
+        long x = lround(m->v[5 * k] / cs), y = lround(m->v[5 * k + 1] / cs);
+        if (x >= 0 && y >= 0 && x < (long)W && y < (long)H) s[(size_t)y * W + (size_t)x] = 1;
+    }
+    return s;
+}
+
+/* Every pool size from 1 node to what the finest mesh needs: always a valid
+ * complete mesh, never coarser than with a smaller pool. */
+static void test_pool_sweep(rs_ctx *ctx, int kind, uint32_t W, uint32_t H)
+{
+    float *z = gen(kind, W, H);
+    rs_dem *dem = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    rs_roam *full = make(ctx, z, W, H, &o, &dem);
+    CHECK(full != NULL);
+    if (!full) { free(z); return; }
+    CHECK_EQ_INT(rs_roam_refine_error(ctx, full, 0.0), RS_OK);
+    rs_roam_stats st;
+    rs_roam_get_stats(full, &st);
+    uint32_t need = st.pool_used, full_tris = st.triangles;
+    rs_roam_free(ctx, full);
+    int all_valid = 1, monotone = 1, exhausted_flag_ok = 1, status_ok = 1;
+    unsigned char *prev = NULL;
+    uint32_t prev_tris = 0;
+    for (uint32_t pool = 1; pool <= need + 2; pool++) {
+        o.pool_nodes = pool;
+        rs_roam *r = NULL;
+        if (rs_roam_create(ctx, dem, &o, &r) != RS_OK) { all_valid = 0; break; }
+        rs_result rr = rs_roam_refine_error(ctx, r, 0.0);
+        rs_roam_get_stats(r, &st);
+        if ((rr == RS_ERR_POOL_EXHAUSTED) != (st.pool_exhausted != 0)) exhausted_flag_ok = 0;
+        if (pool >= need && rr != RS_OK) status_ok = 0;
+        if (pool < need && rr != RS_ERR_POOL_EXHAUSTED) status_ok = 0;
+        if (st.pool_used > pool) all_valid = 0;
+        mesh m;
+        rc_result res;
+        if (extract(ctx, r, NULL, &m) != RS_OK || !check(z, W, H, 1.0, 1.0, &m, m.ni / 3, &res) || !rc_all_ok(&res)) {
+            if (all_valid) fprintf(stderr, "    %s %ux%u pool %u: invalid mesh\n", dem_name[kind], W, H, pool);
+            all_valid = 0;
+        }
+        unsigned char *cur = vertex_set(&m, W, H, 1.0);
+        if (prev && cur) {
+            for (size_t k = 0; k < (size_t)W * H; k++)
+                if (prev[k] && !cur[k]) monotone = 0;
+            if (st.triangles < prev_tris) monotone = 0;
+        }
+        free(prev);
+        prev = cur;
+        prev_tris = st.triangles;
+        mesh_free(&m);
+        rs_roam_free(ctx, r);
+    }
+    free(prev);
+    CHECKF(all_valid, "%s %ux%u: every pool size gives a crack-free complete mesh", dem_name[kind], W, H);
+    CHECKF(monotone, "%s %ux%u: a larger pool never gives a coarser mesh", dem_name[kind], W, H);
+    CHECKF(exhausted_flag_ok && status_ok, "%s %ux%u: exhaustion reported exactly when the pool is short (need %u)",
+           dem_name[kind], W, H, need);
+    CHECKF(prev_tris == full_tris, "%s %ux%u: the largest pool reaches the finest mesh", dem_name[kind], W, H);
+    rs_dem_free(ctx, dem);
+    free(z);
+}
+
+/* Measured max error <= E over a sweep; coarser with larger E; and the mesh
+ * is minimal: merging any split diamond would break the bound is not
+ * checked here, but no triangle exceeds E while the count falls with E. */
+static void test_error_sweep(rs_ctx *ctx, int kind, uint32_t W, uint32_t H, double cs, double zs)
+{
+    float *z = gen(kind, W, H);
+    rs_dem *dem = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = cs; o.z_scale = zs;
+    rs_roam *r = make(ctx, z, W, H, &o, &dem);
+    CHECK(r != NULL);
+    if (!r) { free(z); return; }
+    static const double Es[] = { 0.0, 0.01, 0.1, 0.5, 1.0, 2.5, 5.0, 10.0, 40.0, 1e9 };
+    int bound_ok = 1, valid = 1, mono = 1;
+    uint32_t prev = UINT32_MAX;
+    double worst = 0;
+    for (size_t e = 0; e < sizeof Es / sizeof Es[0]; e++) {
+        if (rs_roam_refine_error(ctx, r, Es[e]) != RS_OK) { valid = 0; continue; }
+        mesh m;
+        rc_result res;
+        if (extract(ctx, r, NULL, &m) != RS_OK || !check(z, W, H, cs, zs, &m, m.ni / 3, &res) || !rc_all_ok(&res))
+            valid = 0;
+        /* float vertex heights: allow their rounding, nothing more */
+        if (res.max_err > Es[e] + 1e-6 * 70000.0 * zs) { bound_ok = 0; worst = res.max_err; }
+        rs_roam_stats st;
+        rs_roam_get_stats(r, &st);
+        if (st.triangles > prev) mono = 0;
+        if (st.max_error_bound > Es[e]) bound_ok = 0;
+        prev = st.triangles;
+        mesh_free(&m);
+    }
+    CHECKF(valid, "%s %ux%u: meshes over the E sweep are crack-free and complete", dem_name[kind], W, H);
+    CHECKF(bound_ok, "%s %ux%u: measured max error <= E (worst %g)", dem_name[kind], W, H, worst);
+    CHECKF(mono, "%s %ux%u: triangle count never rises with E", dem_name[kind], W, H);
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, dem);
+    free(z);
+}
+
+static int same_indices(const mesh *a, const mesh *b)
+{
+    return a->ni == b->ni && a->nv == b->nv && memcmp(a->i, b->i, a->ni * sizeof(uint32_t)) == 0;
+}
+
+static void test_scaling_and_determinism(rs_ctx *ctx)
+{
+    const uint32_t W = 97, H = 65;
+    float *z = gen(DEM_FRACTAL, W, H), *zk = malloc((size_t)W * H * sizeof(float));
+    for (size_t k = 0; k < (size_t)W * H; k++) zk[k] = z[k] * 4.0f;
+    rs_dem *d1 = NULL, *d2 = NULL;
+    rs_roam *r1 = make(ctx, z, W, H, NULL, &d1), *r2 = make(ctx, zk, W, H, NULL, &d2);
+    rs_roam_options o3;
+    memset(&o3, 0, sizeof o3);
+    o3.z_scale = 3.0;
+    rs_roam *r3 = NULL;
+    CHECK(r1 && r2 && d1 && rs_roam_create(ctx, d1, &o3, &r3) == RS_OK);
+    int same = 1, same3 = 1;
+    static const double Es[] = { 0.05, 0.3, 1.0, 3.0, 9.0 };
+    for (size_t e = 0; r1 && r2 && r3 && e < 5; e++) {
+        mesh a, b, c;
+        rs_roam_refine_error(ctx, r1, Es[e]);
+        rs_roam_refine_error(ctx, r2, 4.0 * Es[e]);
+        rs_roam_refine_error(ctx, r3, 3.0 * Es[e]);
+        extract(ctx, r1, NULL, &a); extract(ctx, r2, NULL, &b); extract(ctx, r3, NULL, &c);
+        if (!same_indices(&a, &b)) same = 0;
+        if (!same_indices(&a, &c)) same3 = 0;
+        mesh_free(&a); mesh_free(&b); mesh_free(&c);
+    }
+    CHECK(same);   /* heights x4 at 4E: same mesh */
+    CHECK(same3);  /* z_scale 3 at 3E: same mesh */
+    rs_roam_free(ctx, r3);
+    /* determinism: a second context, a second build, identical bytes */
+    rs_ctx *ctx2 = NULL;
+    rs_ctx_create(NULL, NULL, &ctx2);
+    rs_dem *d3 = NULL;
+    rs_roam *r4 = ctx2 ? make(ctx2, z, W, H, NULL, &d3) : NULL;
+    CHECK(r4 != NULL);
+    if (r4 && r1) {
+        rs_roam_mesh_options mo = { 1, 5.0 };
+        mesh a, b;
+        rs_roam_refine_error(ctx, r1, 0.7);
+        rs_roam_refine_error(ctx2, r4, 0.7);
+        extract(ctx, r1, &mo, &a);
+        extract(ctx2, r4, &mo, &b);
+        CHECK(same_indices(&a, &b) && memcmp(a.v, b.v, a.nv * 5 * sizeof(float)) == 0
+              && memcmp(a.n, b.n, a.nv * 3 * sizeof(float)) == 0);
+        /* extracting twice gives the same bytes too (scratch maps are restored) */
+        mesh c;
+        extract(ctx, r1, &mo, &c);
+        CHECK(same_indices(&a, &c) && memcmp(a.v, c.v, a.nv * 5 * sizeof(float)) == 0);
+        mesh_free(&a); mesh_free(&b); mesh_free(&c);
+    }
+    rs_roam_free(ctx2, r4);
+    rs_dem_free(ctx2, d3);
+    rs_ctx_free(ctx2);
+    rs_roam_free(ctx, r1); rs_roam_free(ctx, r2);
+    rs_dem_free(ctx, d1); rs_dem_free(ctx, d2);
+    free(z); free(zk);
+}
+
+static void test_budget(rs_ctx *ctx)
+{
+    const uint32_t W = 129, H = 129;
+    float *z = gen(DEM_FRACTAL, W, H);
+    rs_dem *d = NULL;
+    rs_roam *r = make(ctx, z, W, H, NULL, &d);
+    CHECK(r != NULL);
+    static const uint32_t Ns[] = { 2, 50, 1000, 5000 };
+    for (size_t k = 0; r && k < 4; k++) {
+        CHECK_EQ_INT(rs_roam_refine_count(ctx, r, Ns[k]), RS_OK);
+        rs_roam_stats st;
+        rs_roam_get_stats(r, &st);
+        CHECKF(st.triangles <= Ns[k], "budget %u: got %u", Ns[k], st.triangles);
+        /* finest: the next smaller error (one float step down) would not fit */
+        if (st.threshold > 0) {
+            float t = nextafterf((float)st.threshold, 0.0f);
+            rs_roam_refine_error(ctx, r, t);
+            rs_roam_stats s2;
+            rs_roam_get_stats(r, &s2);
+            CHECKF(s2.triangles > Ns[k] || s2.triangles == st.triangles, "budget %u: finer mesh %u also fits",
+                   Ns[k], s2.triangles);
+        }
+        mesh m;
+        rc_result res;
+        rs_roam_refine_count(ctx, r, Ns[k]);
+        CHECK(extract(ctx, r, NULL, &m) == RS_OK && check(z, W, H, 1, 1, &m, m.ni / 3, &res) && rc_all_ok(&res)
+              && res.max_err <= st.threshold + 1e-3);
+        mesh_free(&m);
+    }
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
+static void test_view(rs_ctx *ctx)
+{
+    const uint32_t W = 257, H = 257;
+    float *z = malloc((size_t)W * H * sizeof *z);
+    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    rs_dem *d = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = 10.0;
+    o.patch_size = 64;
+    rs_roam *r = make(ctx, z, W, H, &o, &d);
+    CHECK(r != NULL);
+    if (!r) { free(z); return; }
+    rs_roam_view v;
+    memset(&v, 0, sizeof v);
+    v.target_triangles = 6000;
+    v.fov_y = 60;
+    v.width = 1024; v.height = 768;
+    int within = 1, valid = 1;
+    uint32_t maxpasses = 0;
+    for (int f = 0; f < 40; f++) {
+        double t = f / 40.0 * 6.2831853;
+        /* fly a circle, looking towards the centre and down a little, then out */
+        double rad = f < 30 ? 900.0 : 900.0 + (f - 30) * 300.0;
+        v.eye[0] = 1280 + rad * cos(t); v.eye[1] = 1280 + rad * sin(t); v.eye[2] = 250 + 10 * f;
+        v.dir[0] = 1280 - v.eye[0]; v.dir[1] = 1280 - v.eye[1]; v.dir[2] = -300;
+        rs_result rr = rs_roam_frame(ctx, r, &v);
+        rs_roam_stats st;
+        rs_roam_get_stats(r, &st);
+        double dev = fabs((double)st.triangles - v.target_triangles) / v.target_triangles;
+        if (rr != RS_OK || dev > 0.05) {
+            within = 0;
+            fprintf(stderr, "    frame %d: %u triangles (%.1f%% off), %u passes, rc %d\n", f, st.triangles,
+                    100 * dev, st.frame_passes, rr);
+        }
+        if (st.frame_passes > maxpasses) maxpasses = st.frame_passes;
+        if (f % 10 == 3) {
+            mesh m;
+            rc_result res;
+            if (extract(ctx, r, NULL, &m) != RS_OK || !check(z, W, H, 10.0, 1.0, &m, m.ni / 3, &res) || !rc_all_ok(&res))
+                valid = 0;
+            mesh_free(&m);
+        }
+    }
+    CHECKF(within, "view-dependent count within +-5%% of the target on every frame");
+    CHECK(valid);
+    printf("view: at most %u tessellation passes per frame\n", maxpasses);
+    /* frustum culling: looking away from the map leaves it at the base mesh */
+    memset(&v, 0, sizeof v);
+    v.eye[0] = -100; v.eye[1] = 1280; v.eye[2] = 300;
+    v.dir[0] = -1; v.dir[1] = 0; v.dir[2] = 0;
+    v.pixel_error = 3.0;
+    CHECK_EQ_INT(rs_roam_frame(ctx, r, &v), RS_OK);
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    CHECK_EQ_INT(st.patches_culled, 16);
+    CHECK_EQ_INT(st.triangles, 32);
+    /* looking at it: closer parts finer than far ones */
+    v.dir[0] = 1; v.dir[2] = -0.3;
+    CHECK_EQ_INT(rs_roam_frame(ctx, r, &v), RS_OK);
+    rs_roam_get_stats(r, &st);
+    CHECK(st.triangles > 32 && st.patches_culled < 16);
+    mesh m;
+    rc_result res;
+    CHECK(extract(ctx, r, NULL, &m) == RS_OK && check(z, W, H, 10.0, 1.0, &m, m.ni / 3, &res) && rc_all_ok(&res));
+    size_t nearv = 0, farv = 0;
+    for (size_t k = 0; k < m.nv; k++) {
+        if (m.v[5 * k] < 640) nearv++;
+        else if (m.v[5 * k] > 1920) farv++;
+    }
+    CHECKF(nearv > 2 * farv, "near quarter %zu vertices, far quarter %zu", nearv, farv);
+    mesh_free(&m);
+    /* bad views */
+    v.dir[0] = v.dir[1] = v.dir[2] = 0;
+    CHECK_EQ_INT(rs_roam_frame(ctx, r, &v), RS_ERR_INVALID_ARG);
+    v.dir[0] = 1; v.fov_y = 200;
+    CHECK_EQ_INT(rs_roam_frame(ctx, r, &v), RS_ERR_INVALID_ARG);
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
+static void test_extract_options(rs_ctx *ctx)
+{
+    const uint32_t W = 45, H = 30; /* not 2^n+1: border splits */
+    float *z = gen(DEM_NODATA, W, H);
+    rs_dem *d = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = 2.0; o.z_scale = 0.5;
+    rs_roam *r = make(ctx, z, W, H, &o, &d);
+    CHECK(r != NULL);
+    if (!r) { free(z); return; }
+    CHECK_EQ_INT(rs_roam_refine_error(ctx, r, 0.5), RS_OK);
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    rs_roam_mesh_options mo = { 1, 7.5 };
+    mesh m;
+    CHECK_EQ_INT(extract(ctx, r, &mo, &m), RS_OK);
+    int finite = 1, unit = 1, uv = 1;
+    for (size_t k = 0; k < m.nv; k++) {
+        for (int c = 0; c < 5; c++) if (!isfinite(m.v[5 * k + c])) finite = 0;
+        double l = sqrt(m.n[3 * k] * m.n[3 * k] + m.n[3 * k + 1] * m.n[3 * k + 1] + m.n[3 * k + 2] * m.n[3 * k + 2]);
+        if (fabs(l - 1) > 1e-5 || !(m.n[3 * k + 2] > 0)) unit = 0;
+        if (fabs(m.v[5 * k + 3] - m.v[5 * k] / (2.0 * (W - 1))) > 1e-6 || fabs(m.v[5 * k + 4] - m.v[5 * k + 1] / (2.0 * (H - 1))) > 1e-6)
+            uv = 0;
+    }
+    CHECK(finite);  /* nodata never yields a NaN vertex */
+    CHECK(unit);
+    CHECK(uv);
+    size_t top = (size_t)st.triangles * 3;
+    CHECK(m.ni > top);
+    rc_result res;
+    CHECKF(check(z, W, H, 2.0, 0.5, &m, st.triangles, &res) && rc_all_ok(&res), "grid %d h %d wind %d area %d edges %d tj %d cov %d",
+           res.ok_grid, res.ok_heights, res.ok_winding, res.ok_area, res.ok_edges, res.ok_tjunction, res.ok_coverage);
+    CHECKF(res.max_err <= 0.5 + 1e-4, "nodata DEM: max error %g over valid samples", res.max_err);
+    /* skirt: walls hang below their top vertices, facing outwards */
+    int skirt_ok = 1;
+    for (size_t t = top; t < m.ni; t += 3) {
+        const float *a = m.v + 5 * m.i[t], *b = m.v + 5 * m.i[t + 1], *c = m.v + 5 * m.i[t + 2];
+        /* wall normal (library frame) must point away from the map centre */
+        double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
+        double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+        double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz;
+        /* the library frame is left-handed (y down): flip to get the outward side */
+        double cx = (a[0] + b[0] + c[0]) / 3 - (W - 1), cy = (a[1] + b[1] + c[1]) / 3 - (H - 1);
+        if (-(nx * cx + ny * cy) <= 0) skirt_ok = 0;
+        if (fabs(a[2] - b[2]) < 1e-6 && fabs(a[2] - c[2]) < 1e-6) skirt_ok = 0;
+    }
+    CHECK(skirt_ok);
+    size_t border = 0;
+    for (size_t t = 0; t < top; t += 3)
+        for (int e = 0; e < 3; e++) {
+            const float *p = m.v + 5 * m.i[t + (size_t)e], *q = m.v + 5 * m.i[t + (size_t)(e + 1) % 3];
+            if ((p[0] == q[0] && (p[0] == 0 || p[0] == 2.0f * (W - 1))) || (p[1] == q[1] && (p[1] == 0 || p[1] == 2.0f * (H - 1))))
+                border++;
+        }
+    CHECK_EQ_INT(m.ni - top, 6 * border);
+    /* buffers one short fail cleanly */
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(r, &mo, &mv, &mi);
+    CHECK(m.nv <= mv && m.ni <= mi);
+    CHECK_EQ_INT(rs_roam_extract(ctx, r, &mo, m.v, m.n, m.nv - 1, m.i, mi, &nv, &ni), RS_ERR_BUFFER_TOO_SMALL);
+    CHECK_EQ_INT(rs_roam_extract(ctx, r, &mo, m.v, m.n, mv, m.i, m.ni - 1, &nv, &ni), RS_ERR_BUFFER_TOO_SMALL);
+    CHECK(strlen(rs_ctx_message(ctx)) > 0);
+    CHECK_EQ_INT(rs_roam_extract(ctx, r, &mo, m.v, NULL, mv, m.i, mi, &nv, &ni), RS_ERR_INVALID_ARG);
+    /* and still work afterwards, identically */
+    mesh m2;
+    CHECK_EQ_INT(extract(ctx, r, &mo, &m2), RS_OK);
+    CHECK(same_indices(&m, &m2));
+    mesh_free(&m2);
+    mesh_free(&m);
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+    /* all nodata: a flat mesh at 0 */
+    for (size_t k = 0; k < (size_t)W * H; k++) z[k] = NAN;
+    r = make(ctx, z, W, H, NULL, &d);
+    CHECK(r != NULL);
+    if (r) {
+        CHECK_EQ_INT(rs_roam_refine_error(ctx, r, 0.0), RS_OK);
+        CHECK_EQ_INT(extract(ctx, r, NULL, &m), RS_OK);
+        int zero = 1;
+        for (size_t k = 0; k < m.nv; k++) if (m.v[5 * k + 2] != 0.0f) zero = 0;
+        CHECK(zero);
+        mesh_free(&m);
+        rs_roam_free(ctx, r);
+        rs_dem_free(ctx, d);
+    }
+    free(z);
+}
+
+typedef struct fail_alloc { int left; int live; } fail_alloc;
+static void *fa_malloc(void *u, size_t n)
+{
+    fail_alloc *f = u;
+    if (f->left-- <= 0) return NULL;
+    f->live++;
+    return malloc(n);
+}
+static void *fa_realloc(void *u, void *p, size_t n)
+{
+    fail_alloc *f = u;
+    if (f->left-- <= 0) return NULL;
+    if (!p) f->live++;
+    return realloc(p, n);
+}
+static void fa_free(void *u, void *p) { fail_alloc *f = u; f->live--; free(p); }
+
+static void test_errors(rs_ctx *ctx)
+{
+    float z[12] = { 0 };
+    rs_dem *d = NULL, *thin = NULL;
+    rs_roam *r = NULL;
+    CHECK_EQ_INT(rs_dem_create(ctx, 4, 3, z, &d), RS_OK);
+    CHECK_EQ_INT(rs_roam_create(ctx, NULL, NULL, &r), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roam_create(ctx, d, NULL, NULL), RS_ERR_INVALID_ARG);
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = -1;
+    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_INVALID_ARG);
+    CHECK(strstr(rs_ctx_message(ctx), "cell_size") != NULL);
+    o.cell_size = 1; o.z_scale = NAN;
+    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_INVALID_ARG);
+    o.z_scale = 1; o.patch_size = 3;
+    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_INVALID_ARG);
+    o.patch_size = 0; o.pool_nodes = 0xFFFFFFFFu;
+    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_LIMIT);
+    o.pool_nodes = 0;
+    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_OK);
+    CHECK_EQ_INT(rs_roam_refine_error(ctx, r, NAN), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roam_refine_error(ctx, r, -1), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roam_refine_count(ctx, r, 0), RS_ERR_LIMIT);
+    CHECK_EQ_INT(rs_roam_refine_error(ctx, NULL, 1), RS_ERR_INVALID_ARG);
+    rs_roam_free(ctx, r);
+    rs_roam_free(ctx, NULL);
+    float z2[2] = { 1, 2 };
+    if (rs_dem_create(ctx, 2, 1, z2, &thin) == RS_OK) {
+        CHECK_EQ_INT(rs_roam_create(ctx, thin, NULL, &r), RS_ERR_INVALID_ARG);
+        rs_dem_free(ctx, thin);
+    }
+    rs_dem_free(ctx, d);
+    /* every allocation failing in turn: clean failure, nothing leaked */
+    const uint32_t W = 37, H = 21;
+    float *zz = gen(DEM_NODATA, W, H);
+    int clean = 1, reached_ok = 0;
+    for (int k = 0; k < 40 && !reached_ok; k++) {
+        fail_alloc fa = { 1000, 0 };
+        rs_allocator al = { fa_malloc, fa_realloc, fa_free, &fa };
+        rs_ctx *c2 = NULL;
+        if (rs_ctx_create(&al, NULL, &c2) != RS_OK) { clean = 0; break; }
+        rs_dem *dd = NULL;
+        if (rs_dem_create(c2, W, H, zz, &dd) != RS_OK) { clean = 0; rs_ctx_free(c2); break; }
+        int live0 = fa.live;
+        fa.left = k;
+        rs_roam *rr = NULL;
+        rs_result res = rs_roam_create(c2, dd, NULL, &rr);
+        fa.left = 1000;
+        if (res == RS_OK) { reached_ok = 1; rs_roam_free(c2, rr); }
+        else if (res != RS_ERR_NOMEM || rr != NULL) clean = 0;
+        if (fa.live != live0) clean = 0;
+        rs_dem_free(c2, dd);
+        rs_ctx_free(c2);
+    }
+    CHECK(clean);
+    CHECK(reached_ok);
+    free(zz);
+}
+
+int main(void)
+{
+    rs_ctx *ctx = NULL;
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    for (int k = 0; k < DEM_COUNT; k++) {
+        test_pool_sweep(ctx, k, 17, 17);
+        test_pool_sweep(ctx, k, 13, 10);
+    }
+    test_pool_sweep(ctx, DEM_FRACTAL, 2, 2);
+    test_pool_sweep(ctx, DEM_FRACTAL, 33, 5);
+    for (int k = 0; k < DEM_COUNT; k++) {
+        test_error_sweep(ctx, k, 65, 65, 1.0, 1.0);
+        test_error_sweep(ctx, k, 50, 37, 2.5, 0.1);
+    }
+    test_scaling_and_determinism(ctx);
+    test_budget(ctx);
+    test_view(ctx);
+    test_extract_options(ctx);
+    test_errors(ctx);
+    rs_ctx_free(ctx);
+    return th_finish("test_roam");
+}
