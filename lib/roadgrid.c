@@ -213,9 +213,11 @@ static void classify_tile(rs_road_grid *g, const rs__mask_table *mt, uint32_t tx
     /* Cells past the grid's right/bottom edge copy the nearest inside cell. */
     uint32_t xe = g->gw - (uint32_t)bx < RS__TILE ? g->gw - (uint32_t)bx : RS__TILE;
     uint32_t ye = g->gh - (uint32_t)by < RS__TILE ? g->gh - (uint32_t)by : RS__TILE;
-    for (uint32_t y = 0; y < W; y++)
-        for (uint32_t x = xe + 1; x < W; x++) win[y * W + x] = win[y * W + xe];
-    for (uint32_t y = ye + 1; y < W; y++) memcpy(win + y * W, win + ye * W, W);
+    if (xe < RS__TILE)
+        for (uint32_t y = 0; y < W; y++)
+            for (uint32_t x = xe + 1; x < W; x++) win[y * W + x] = win[y * W + xe];
+    if (ye < RS__TILE)
+        for (uint32_t y = ye + 1; y < W; y++) memcpy(win + y * W, win + ye * W, W);
     /* h3 = AND of three horizontal neighbours: interior iff three rows agree. */
     for (uint32_t y = 0; y < W; y++)
         for (uint32_t x = 1; x + 1 < W; x++)

@@ -78,15 +78,6 @@ static float node_err(const rs_roam *L, const roam_node *n)
 
 /* ---- error bounds -------------------------------------------------------- */
 
-static int64_t floor_div(int64_t a, int64_t b)
-{
-    int64_t q = a / b;
-    if ((a % b != 0) && ((a < 0) != (b < 0))) q--;
-    return q;
-}
-
-static int64_t ceil_div(int64_t a, int64_t b) { return -floor_div(-a, b); }
-
 /* Max |z - plane| over the samples inside (or on) the triangle, exactly: the
  * plane through the three corner heights, every lattice point tested. */
 static double tri_max_error(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
@@ -116,14 +107,20 @@ static double tri_max_error(const rs_roam *L, int ax, int ay, int bx, int by, in
     int xmin = ax < bx ? ax : bx, xmax = ax > bx ? ax : bx;
     if (cx < xmin) xmin = cx;
     if (cx > xmax) xmax = cx;
+    /* Bintree edges are axis-aligned or diagonal, so each bound on x is an
+     * exact integer line x = s*y + o (s in {-1, 0, 1}): no division per row. */
+    int64_t es[3], eo[3];
+    for (int k = 0; k < 3; k++) {
+        if (A[k] != 0) { es[k] = -B[k] / A[k]; eo[k] = -C[k] / A[k]; }
+        else { es[k] = 0; eo[k] = 0; }
+    }
     double mx = 0.0;
     for (int y = y0; y <= y1; y++) {
         int64_t lo = xmin, hi = xmax;
         for (int k = 0; k < 3; k++) {
-            int64_t rest = B[k] * y + C[k]; /* A x + rest >= 0 */
-            if (A[k] > 0) { int64_t v = ceil_div(-rest, A[k]); if (v > lo) lo = v; }
-            else if (A[k] < 0) { int64_t v = floor_div(rest, -A[k]); if (v < hi) hi = v; }
-            else if (rest < 0) { lo = 1; hi = 0; }
+            if (A[k] > 0) { int64_t v = es[k] * y + eo[k]; if (v > lo) lo = v; }
+            else if (A[k] < 0) { int64_t v = es[k] * y + eo[k]; if (v < hi) hi = v; }
+            else if (B[k] * y + C[k] < 0) { lo = 1; hi = 0; }
         }
         if (lo > hi) continue;
         const float *row = z + (size_t)y * W;

@@ -3,6 +3,9 @@
 #include "roadsplat.h"
 #include "roadgrid.h"
 #include "mask.h"
+#include "seams.h"
+#include "scenes.h"
+#include "groundtruth.h"
 
 #include <pthread.h>
 #include <stdlib.h>
@@ -206,57 +209,6 @@ static void test_road_leaving_map(void)
     rs_dem_free(ctx, dem);
 }
 
-/* Seam error over every pair of adjacent road cells of a real scene: the
- * alpha-map samples along each shared edge, read from both cells. */
-static double scene_seam_error(const rs_road_grid *g, uint32_t res)
-{
-    uint8_t maps[3][(64 + 1) * (64 + 1)];
-    rs_tile_type ts[3] = { RS_TILE_EDGE, RS_TILE_INNER, RS_TILE_OUTER };
-    for (int i = 0; i < 3; i++) rs_alpha_map(ts[i], res, 2, 0, 0, maps[i], sizeof maps[i]);
-    int worst = 0;
-    for (uint32_t y = 0; y < g->gh; y++)
-        for (uint32_t x = 0; x < g->gw; x++) {
-            const uint8_t *t = rs__grid_tile(g, x >> RS__TILE_SHIFT, y >> RS__TILE_SHIFT);
-            unsigned ca = t ? t[(y & (RS__TILE - 1)) * RS__TILE + (x & (RS__TILE - 1))] : 0;
-            for (int dir = 0; dir < 2; dir++) {
-                uint32_t x2 = x + (dir == 0), y2 = y + (dir == 1);
-                if (x2 >= g->gw || y2 >= g->gh) continue;
-                const uint8_t *t2 = rs__grid_tile(g, x2 >> RS__TILE_SHIFT, y2 >> RS__TILE_SHIFT);
-                unsigned cb = t2 ? t2[(y2 & (RS__TILE - 1)) * RS__TILE + (x2 & (RS__TILE - 1))] : 0;
-                if (!(ca & RS__CELL_ROAD) && !(cb & RS__CELL_ROAD)) continue;
-                for (uint32_t k = 0; k <= res; k++) {
-                    int va = 255, vb = 255;
-                    unsigned cells[2] = { ca, cb };
-                    int *vals[2] = { &va, &vb };
-                    for (int s = 0; s < 2; s++) {
-                        if (!(cells[s] & RS__CELL_ROAD)) continue;
-                        rs_tile_type ty;
-                        int rot;
-                        rs__pattern_classify(cells[s] & RS__CELL_PATTERN, &ty, &rot);
-                        /* point on the shared edge, in this cell's local frame */
-                        double u = dir == 0 ? (s == 0 ? 1.0 : 0.0) : (double)k / res;
-                        double v = dir == 0 ? (double)k / res : (s == 0 ? 1.0 : 0.0);
-                        int reps = ty == RS_TILE_SADDLE ? 2 : 1, acc = 0;
-                        for (int q = 0; q < reps; q++) {
-                            int r = rot + 2 * q;
-                            double cu = u, cv = v;
-                            for (int z = 0; z < (r & 3); z++) { double nu = cv, nv = 1 - cu; cu = nu; cv = nv; }
-                            int i = (int)(cv * res + 0.5), j = (int)(cu * res + 0.5);
-                            int a;
-                            if (ty == RS_TILE_INTERIOR) a = 0;
-                            else if (ty == RS_TILE_TERRAIN) a = 255;
-                            else a = maps[ty == RS_TILE_EDGE ? 0 : (ty == RS_TILE_OUTER ? 2 : 1)][i * (res + 1) + j];
-                            acc += a;
-                        }
-                        *vals[s] = acc > 255 ? 255 : acc;
-                    }
-                    if (abs(va - vb) > worst) worst = abs(va - vb);
-                }
-            }
-        }
-    return worst / 255.0;
-}
-
 static void test_scene_seams(void)
 {
     rs_dem *dem = flat_dem(30, 30);
@@ -277,10 +229,119 @@ static void test_scene_seams(void)
         rs_road_grid_stats(g, &st);
         CHECK(st.k == 2 && st.boundary_cells > 100 && st.by_type[RS_TILE_OUTER] > 0 && st.by_type[RS_TILE_INNER] > 0);
         CHECK_EQ_INT(st.road_cells, st.interior_cells + st.boundary_cells);
-        double seam = scene_seam_error(g, 32);
+        double seam = rs_test_seam_error(g, 32);
         CHECKF(seam <= 1.0 / 255, "scene seam error %g", seam);
         rs_road_grid_free(ctx, g);
     }
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+/* Synthetic scenes from tests/scenes.c measured with the exact ruler
+ * (tests/groundtruth.c): arcs, a junction grid, a road leaving the map, and a
+ * straight road. Edges within half a road cell, seams exact, and on curved
+ * and oblique roads at most half the error of a perfect hard raster. */
+static void scene_vs_truth(const char *name, sc_scene *sc, unsigned T, double max_ratio)
+{
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    CHECK(rs_dem_create(ctx, sc->w, sc->h, sc->z, &dem) == RS_OK);
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    for (size_t i = 0; i < sc->nroads; i++)
+        CHECK(rs_roads_add(ctx, roads, NULL, sc->roads[i].width, sc->roads[i].xy, sc->roads[i].n) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = sc->cell_size;
+    o.texels = T;
+    image im;
+    CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+    size_t n = (size_t)im.w * im.h;
+    float *R = malloc(n * sizeof *R), *H = malloc(n * sizeof *H);
+    for (size_t i = 0; i < n; i++) R[i] = im.wt[i] / 65535.0f;
+    gt_result ours, hard;
+    CHECK(gt_edge_error(sc, T, R, &ours) == 0);
+    CHECK(gt_hard_raster(sc, T, H) == 0);
+    CHECK(gt_edge_error(sc, T, H, &hard) == 0);
+    if (max_ratio > 0)
+        CHECKF(ours.edge_error <= max_ratio * hard.edge_error, "%s: edge error %.4f m vs hard raster %.4f m", name,
+               ours.edge_error, hard.edge_error);
+    rs_road_grid *g = NULL;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
+    rs_grid_stats st;
+    rs_road_grid_stats(g, &st);
+    /* every drawn edge lies within half a road cell of the true one */
+    CHECKF(ours.edge_error <= 0.5 * st.road_cell, "%s: edge error %.4f m, road cell %.4f m", name, ours.edge_error,
+           st.road_cell);
+    double seam = rs_test_seam_error(g, 32);
+    CHECKF(seam <= 1.0 / 255, "%s: seam error %g", name, seam);
+    rs_road_grid_free(ctx, g);
+    free(R);
+    free(H);
+    image_free(&im);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+static void test_scenes(void)
+{
+    sc_scene sc;
+    CHECK(sc_scene_init(&sc, 61, 51, 2.0) == 0);
+    sc_dem_fractal(sc.z, sc.w, sc.h, 3, 0.5);
+    CHECK(sc_road_arc(&sc, 60, 50, 30, 0.2, 4.0, 5.0, 96) == 0);
+    CHECK(sc_road_arc(&sc, 50, 45, 12, 0, 6.2831853, 3.0, 128) == 0);
+    scene_vs_truth("arcs", &sc, 4, 0.5);
+    sc_scene_free(&sc);
+
+    CHECK(sc_scene_init(&sc, 61, 51, 2.0) == 0);
+    CHECK(sc_road_grid(&sc, 4, 3, 6.0, 10) == 0);
+    CHECK(sc_road_leaving(&sc, 0.7, 5.0, 30) == 0);
+    /* axis-aligned streets: a hard raster's best case, so no ratio here */
+    scene_vs_truth("junction grid", &sc, 4, 0);
+    sc_scene_free(&sc);
+
+    CHECK(sc_scene_init(&sc, 41, 41, 1.0) == 0);
+    CHECK(sc_road_straight(&sc, 0.3, 200, 4.0) == 0);
+    scene_vs_truth("straight", &sc, 8, 0.5);
+    sc_scene_free(&sc);
+}
+
+/* User textures: a solid terrain texture gives exactly its colour where no
+ * road is; a two-colour road texture tiles with the texture scale. */
+static void test_textures(void)
+{
+    rs_dem *dem = flat_dem(17, 17);
+    rs_roads *roads = one_road(-5, 8.2, 30, 8.2, 6);
+    uint8_t solid[4 * 4 * 4];
+    for (int i = 0; i < 16; i++) { solid[4 * i] = 10; solid[4 * i + 1] = 200; solid[4 * i + 2] = 30; solid[4 * i + 3] = 255; }
+    uint8_t stripes[2 * 1 * 4] = { 255, 0, 0, 255, 0, 0, 255, 255 };
+    rs_image ti = { 4, 4, solid }, ri = { 2, 1, stripes };
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    o.terrain_texture = &ti;
+    o.road_texture = &ri;
+    o.texture_scale = 4;
+    image im;
+    CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+    size_t n = (size_t)im.w * im.h, terrain_ok = 1, road_px = 0, red = 0, blue = 0;
+    for (size_t i = 0; i < n; i++) {
+        const uint8_t *p = im.rgba + 4 * i;
+        if (im.wt[i] == 0 && !(p[0] == 10 && p[1] == 200 && p[2] == 30 && p[3] == 255)) terrain_ok = 0;
+        if (im.wt[i] == 65535) {
+            road_px++;
+            if (p[0] > 200 && p[2] < 60) red++;
+            if (p[2] > 200 && p[0] < 60) blue++;
+        }
+    }
+    CHECK(terrain_ok);
+    CHECK(road_px > 100);
+    /* wrap-around bilinear stripes, 2 m each: both colours present in bulk */
+    CHECK(red > road_px / 5 && blue > road_px / 5);
+    image_free(&im);
+    rs_image empty = { 0, 0, NULL };
+    o.road_texture = &empty;
+    uint32_t w, h;
+    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
 }
@@ -441,6 +502,8 @@ int main(void)
     test_determinism_and_sparsity();
     test_road_leaving_map();
     test_scene_seams();
+    test_scenes();
+    test_textures();
     test_threads();
     test_alloc_failures();
     test_bad_options();
