@@ -26,23 +26,22 @@ struct rs_roads {
     size_t names_len, names_cap;
 };
 
-/* Make room for `need` elements of `elem` bytes: capacity doubles (at
- * least 16), every product checked. Returns 0 on overflow or no memory. */
-static int grow(rs_ctx *ctx, void **buf, size_t *cap, size_t need, size_t elem)
+/* Make room for `need` (>= 1) elements of `elem` bytes: capacity doubles
+ * (at least 16), every product checked. Returns the (possibly moved)
+ * buffer, or NULL on overflow or no memory with `buf` still valid. */
+static void *grow(rs_ctx *ctx, void *buf, size_t *cap, size_t need, size_t elem)
 {
-    if (need <= *cap) return 1;
+    if (need <= *cap) return buf;
     size_t nc = *cap < 16 ? 16 : *cap;
     while (nc < need) {
         if (nc > SIZE_MAX / 2) { nc = need; break; }
         nc *= 2;
     }
     size_t bytes;
-    if (!rs__mul_size(nc, elem, &bytes)) return 0;
-    void *p = rs__realloc(ctx, *buf, bytes);
-    if (!p) return 0;
-    *buf = p;
-    *cap = nc;
-    return 1;
+    if (!rs__mul_size(nc, elem, &bytes)) return NULL;
+    void *p = rs__realloc(ctx, buf, bytes);
+    if (p) *cap = nc;
+    return p;
 }
 
 rs_result rs_roads_create(rs_ctx *ctx, rs_roads **out)
@@ -80,14 +79,29 @@ rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name, doubl
     return RS_OK;
 }
 
+/* Element offset of p inside [base, base + count) of `elem`-byte
+ * elements, or SIZE_MAX: callers may pass pointers from rs_roads_get(),
+ * which a realloc would invalidate. */
+static size_t inside(const void *base, size_t count, const void *p, size_t elem)
+{
+    uintptr_t b = (uintptr_t)base, q = (uintptr_t)p;
+    if (!base || !p || q < b || q >= b + count * elem) return SIZE_MAX;
+    return (size_t)(q - b) / elem;
+}
+
 /* Record a road whose points are already the last `n` of roads->xy. */
 static int commit_road(rs_ctx *ctx, rs_roads *roads, const char *name, size_t name_len, double width, size_t n)
 {
-    size_t need_names;
+    size_t need_names, name_off = inside(roads->names, roads->names_len, name, 1);
     if (name_len > SIZE_MAX - 1 - roads->names_len) return 0;
     need_names = roads->names_len + name_len + 1;
-    if (!grow(ctx, (void **)&roads->names, &roads->names_cap, need_names, 1)) return 0;
-    if (!grow(ctx, (void **)&roads->roads, &roads->cap, roads->count + 1, sizeof(rs_road_rec))) return 0;
+    char *names = grow(ctx, roads->names, &roads->names_cap, need_names, 1);
+    if (!names) return 0;
+    roads->names = names;
+    if (name_off != SIZE_MAX) name = names + name_off; /* the name came from this pool */
+    rs_road_rec *recs = grow(ctx, roads->roads, &roads->cap, roads->count + 1, sizeof(rs_road_rec));
+    if (!recs) return 0;
+    roads->roads = recs;
     if (name_len) memcpy(roads->names + roads->names_len, name, name_len);
     roads->names[roads->names_len + name_len] = '\0';
     rs_road_rec *rec = &roads->roads[roads->count++];
@@ -116,9 +130,12 @@ rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, double wi
         return rs__fail(ctx, RS_ERR_LIMIT, "rs_roads_add: more than %llu road points in total",
                         (unsigned long long)ctx->limits.max_points);
     size_t name_len = name ? strlen(name) : 0;
-    if (roads->points > SIZE_MAX - n ||
-        !grow(ctx, (void **)&roads->xy, &roads->points_cap, roads->points + n, 2 * sizeof(double)))
-        return rs__fail(ctx, RS_ERR_NOMEM, "rs_roads_add: out of memory for %zu points", n);
+    size_t xy_off = inside(roads->xy, 2 * roads->points, xy, sizeof(double));
+    double *pts = roads->points > SIZE_MAX - n ? NULL
+                  : grow(ctx, roads->xy, &roads->points_cap, roads->points + n, 2 * sizeof(double));
+    if (!pts) return rs__fail(ctx, RS_ERR_NOMEM, "rs_roads_add: out of memory for %zu points", n);
+    roads->xy = pts;
+    if (xy_off != SIZE_MAX) xy = pts + xy_off; /* copying one of our own roads */
     memcpy(roads->xy + 2 * roads->points, xy, n * 2 * sizeof(double));
     roads->points += n;
     if (!commit_road(ctx, roads, name, name_len, width, n)) {
@@ -288,8 +305,9 @@ static rs_result road_line(road_parser *P, const token *t, size_t nt)
         if (R->points >= ctx->limits.max_points)
             return rs__fail(ctx, RS_ERR_LIMIT, "line %llu: more than %llu road points in total", P->line,
                             (unsigned long long)ctx->limits.max_points);
-        if (!grow(ctx, (void **)&R->xy, &R->points_cap, R->points + 1, 2 * sizeof(double)))
-            return rs__fail(ctx, RS_ERR_NOMEM, "line %llu: out of memory for road points", P->line);
+        double *pts = grow(ctx, R->xy, &R->points_cap, R->points + 1, 2 * sizeof(double));
+        if (!pts) return rs__fail(ctx, RS_ERR_NOMEM, "line %llu: out of memory for road points", P->line);
+        R->xy = pts;
         R->xy[2 * R->points] = x;
         R->xy[2 * R->points + 1] = y;
         R->points++;

@@ -164,15 +164,27 @@ typedef struct splat_state {
     double cos_zen, sin_zen;
 } splat_state;
 
-static double sample_m(const splat_state *s, int64_t i, int64_t j, double fallback)
+static double sample_raw(const splat_state *s, int64_t i, int64_t j, double fallback)
 {
     const rs_dem *d = s->dem;
-    if (i < 0) i = 0;
-    if (j < 0) j = 0;
-    if (i >= d->height) i = d->height - 1;
-    if (j >= d->width) j = d->width - 1;
     double z = d->z[(size_t)i * d->width + (size_t)j];
     return z == z ? z * s->o->z_scale : fallback;
+}
+
+/* Height in metres at (i, j); outside the map the surface is extended
+ * linearly from the two nearest samples, so a plane shades the same up to
+ * its edges. NaN (nodata) reads as `fallback`. */
+static double sample_m(const splat_state *s, int64_t i, int64_t j, double fallback)
+{
+    const int64_t H = s->dem->height, W = s->dem->width;
+    int64_t i0 = i < 0 ? 0 : (i >= H ? H - 1 : i), j0 = j < 0 ? 0 : (j >= W ? W - 1 : j);
+    int64_t i1 = i < 0 ? 1 : (i >= H ? H - 2 : i0), j1 = j < 0 ? 1 : (j >= W ? W - 2 : j0);
+    double z00 = sample_raw(s, i0, j0, fallback);
+    if (i0 == i && j0 == j) return z00;
+    /* z(i,j) ~ z00 + (z00 - z(i1,j0)) + (z00 - z(i0,j1)) for one step out */
+    double zi = i1 != i0 ? z00 - sample_raw(s, i1, j0, z00) : 0;
+    double zj = j1 != j0 ? z00 - sample_raw(s, i0, j1, z00) : 0;
+    return z00 + zi + zj;
 }
 
 /* Terrain colour of DEM sample row i: hypsometric tint times a hillshade by
@@ -184,9 +196,10 @@ static void terrain_row(const splat_state *s, uint32_t i, float *rgb)
     double cs = s->o->cell_size;
     for (uint32_t j = 0; j < d->width; j++) {
         double zc = sample_m(s, i, j, s->zmin * s->o->z_scale);
-        double a = sample_m(s, i - 1, (int64_t)j - 1, zc), b = sample_m(s, i - 1, j, zc), c = sample_m(s, i - 1, j + 1, zc);
-        double dd = sample_m(s, i, (int64_t)j - 1, zc), f = sample_m(s, i, j + 1, zc);
-        double g = sample_m(s, i + 1, (int64_t)j - 1, zc), hh = sample_m(s, i + 1, j, zc), k = sample_m(s, i + 1, j + 1, zc);
+        int64_t r = i, q = j; /* signed: the window reaches row/column -1 */
+        double a = sample_m(s, r - 1, q - 1, zc), b = sample_m(s, r - 1, q, zc), c = sample_m(s, r - 1, q + 1, zc);
+        double dd = sample_m(s, r, q - 1, zc), f = sample_m(s, r, q + 1, zc);
+        double g = sample_m(s, r + 1, q - 1, zc), hh = sample_m(s, r + 1, q, zc), k = sample_m(s, r + 1, q + 1, zc);
         double dzdx = ((c + 2 * f + k) - (a + 2 * dd + g)) / (8 * cs);
         double dzdy = ((g + 2 * hh + k) - (a + 2 * b + c)) / (8 * cs);
         double slope = atan(sqrt(dzdx * dzdx + dzdy * dzdy));

@@ -459,6 +459,21 @@ static void test_roads(void)
         CHECK(strcmp(name, "") == 0 && w == 2 && n == 2 && xy[2] == 5);
         rs_roads_get(r, 0, &name, &w, &xy, &n);
         CHECK(strcmp(name, "x") == 0 && n == 3 && xy[5] == 0);
+        /* copying a road out of the same set: its pointers must survive growth */
+        for (int k = 0; k < 40; k++) {
+            rs_roads_get(r, rs_roads_count(r) - 1, &name, &w, &xy, &n);
+            if (rs_roads_add(ctx, r, name, w, xy, n) != RS_OK) break;
+        }
+        CHECK_EQ_INT(rs_roads_count(r), 42);
+        rs_roads_get(r, 41, &name, &w, &xy, &n);
+        CHECK(strcmp(name, "") == 0 && n == 2 && xy[0] == 0 && xy[2] == 5 && xy[3] == 5);
+        rs_roads_get(r, 0, &name, &w, &xy, &n);
+        for (int k = 0; k < 40; k++) {
+            rs_roads_add(ctx, r, name, w, xy, n);
+            rs_roads_get(r, rs_roads_count(r) - 1, &name, &w, &xy, &n);
+        }
+        rs_roads_get(r, rs_roads_count(r) - 1, &name, &w, &xy, &n);
+        CHECK(strcmp(name, "x") == 0 && w == 3 && n == 3 && xy[2] == 5 && xy[4] == 10);
     }
     rs_roads_free(ctx, r);
 

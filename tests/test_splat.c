@@ -346,6 +346,39 @@ static void test_textures(void)
     rs_dem_free(ctx, dem);
 }
 
+/* A tilted plane shades the same everywhere, map edges included: two cells
+ * with the same corner heights get the same colour (regression: the first
+ * row once read the last row as its northern neighbour). */
+static void test_plane_shading(void)
+{
+    float z[12 * 9];
+    for (int r = 0; r < 9; r++)
+        for (int c = 0; c < 12; c++) z[r * 12 + c] = (float)(3 * c + 2 * r);
+    rs_dem *dem = NULL;
+    rs_roads *none = NULL;
+    CHECK(rs_dem_create(ctx, 12, 9, z, &dem) == RS_OK);
+    CHECK(rs_roads_create(ctx, &none) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 1;
+    image im;
+    CHECK(splat(ctx, dem, none, &o, &im) == RS_OK);
+    /* cell (row r, col c) has corner heights 3c+2r + {0,3,2,5}: equal for
+     * (r, c) and (r - 3k, c + 2k) */
+    int differ = 0, pairs = 0;
+    for (int r = 0; r < 8; r++)
+        for (int c = 0; c < 11; c++)
+            for (int k = 1; r - 3 * k >= 0 && c + 2 * k < 11; k++) {
+                pairs++;
+                if (memcmp(im.rgba + 4 * (r * 11 + c), im.rgba + 4 * ((r - 3 * k) * 11 + c + 2 * k), 3)) differ++;
+            }
+    CHECK(pairs > 20);
+    CHECKF(differ == 0, "%d of %d equal-height cell pairs differ in colour", differ, pairs);
+    image_free(&im);
+    rs_roads_free(ctx, none);
+    rs_dem_free(ctx, dem);
+}
+
 /* --- two contexts in two threads ----------------------------------------------- */
 typedef struct job {
     const char *text;
@@ -503,6 +536,7 @@ int main(void)
     test_road_leaving_map();
     test_scene_seams();
     test_scenes();
+    test_plane_shading();
     test_textures();
     test_threads();
     test_alloc_failures();
