@@ -82,9 +82,11 @@ static rs_result mark_cap(marker *m, double px, double py, double h)
     row_range(m->g, py - rmax, py + rmax, &i0, &i1);
     for (int64_t i = i0; i <= i1; i++) {
         double dy = (double)i + 0.5 - py;
-        int64_t j0 = (int64_t)floor(px - rmax), j1 = (int64_t)ceil(px + rmax);
-        if (j0 < 0) j0 = 0;
-        if (j1 > (int64_t)m->g->gw - 1) j1 = (int64_t)m->g->gw - 1;
+        double jlo = floor(px - rmax), jhi = ceil(px + rmax);
+        if (jlo < 0) jlo = 0;
+        if (jhi > (double)m->g->gw - 1) jhi = (double)m->g->gw - 1;
+        if (jlo > jhi) continue;
+        int64_t j0 = (int64_t)jlo, j1 = (int64_t)jhi;
         int64_t run = -1;
         for (int64_t j = j0; j <= j1 + 1; j++) {
             int in = 0;
@@ -107,7 +109,7 @@ static rs_result mark_cap(marker *m, double px, double py, double h)
  * h + (|nx|+|ny|)/2 of the segment, n its unit normal. */
 static rs_result mark_segment_distance(marker *m, double ax, double ay, double bx, double by, double h)
 {
-    double dx = bx - ax, dy = by - ay, len = sqrt(dx * dx + dy * dy);
+    double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
     if (!(len > 0)) return RS_OK;
     double tx = dx / len, ty = dy / len;
     double r = h + 0.5 * (fabs(tx) + fabs(ty));
@@ -125,16 +127,51 @@ static rs_result mark_segment_distance(marker *m, double ax, double ay, double b
     return RS_OK;
 }
 
+/* Clip segment A-B to a disc around the grid grown by `pad` cells, so that
+ * far-away or huge coordinates never reach an integer conversion and lose
+ * no precision across the line. Segments already inside are left exactly as
+ * they are. Returns 0 when nothing is left. */
+static int clip_segment(const rs_road_grid *g, double pad, double *ax, double *ay, double *bx, double *by)
+{
+    double lo_x = -pad, lo_y = -pad, hi_x = (double)g->gw + pad, hi_y = (double)g->gh + pad;
+    if (*ax >= lo_x && *ax <= hi_x && *bx >= lo_x && *bx <= hi_x && *ay >= lo_y && *ay <= hi_y && *by >= lo_y &&
+        *by <= hi_y)
+        return 1;
+    double dx = *bx - *ax, dy = *by - *ay, len = hypot(dx, dy);
+    if (!(len > 0) || !isfinite(len)) return 0;
+    double tx = dx / len, ty = dy / len, cx = 0.5 * g->gw, cy = 0.5 * g->gh;
+    double rad = 0.5 * hypot((double)g->gw, (double)g->gh) + pad;
+    double ex = cx - *ax, ey = cy - *ay;
+    double dist = -ty * ex + tx * ey; /* signed distance of the centre from the line */
+    if (fabs(dist) > rad) return 0;   /* the line misses the disc */
+    /* Foot of the perpendicular from the centre: built from the centre, so it
+     * keeps full precision however far away A and B are. */
+    double px = cx + ty * dist, py = cy - tx * dist;
+    double sc = ex * tx + ey * ty, s0 = -sc, s1 = len - sc;
+    if (s0 < -rad) s0 = -rad;
+    if (s1 > rad) s1 = rad;
+    if (s0 > s1) return 0;
+    *ax = px + s0 * tx;
+    *ay = py + s0 * ty;
+    *bx = px + s1 * tx;
+    *by = py + s1 * ty;
+    return 1;
+}
+
 /* Dilate mode, one segment: 8-connected centreline raster (Bresenham between
  * the cells holding the end points), each cell dilated by a k x k square. */
 static rs_result mark_segment_dilate(marker *m, double ax, double ay, double bx, double by, double h)
 {
-    double dx = bx - ax, dy = by - ay, len = sqrt(dx * dx + dy * dy);
+    double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
     double nx = len > 0 ? fabs(dy / len) : 0, ny = len > 0 ? fabs(dx / len) : 1;
     /* The dilated band's edge lands at k(|nx|+|ny|) - min(|nx|,|ny|)/2 cells. */
     double kf = (h + 0.5 * fmin(nx, ny)) / (nx + ny);
+    /* A band wider than the grid covers it all; keeps the casts defined. */
+    double kmax = (double)m->g->gw + (double)m->g->gh + 2;
+    if (!(kf <= kmax)) kf = kmax;
     int64_t k = (int64_t)floor(kf + 0.5);
     if (k < 0) k = 0;
+    if (!clip_segment(m->g, (double)k + 2, &ax, &ay, &bx, &by)) return RS_OK;
     int64_t x0 = (int64_t)floor(ax), y0 = (int64_t)floor(ay), x1 = (int64_t)floor(bx), y1 = (int64_t)floor(by);
     int64_t sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
     int64_t ddx = x1 > x0 ? x1 - x0 : x0 - x1, ddy = y1 > y0 ? y1 - y0 : y0 - y1;
@@ -163,6 +200,8 @@ static rs_result mark_road(marker *m, const double *xy, size_t n, double width, 
 {
     const rs_road_grid *g = m->g;
     double inv = 1.0 / g->c, h = 0.5 * width * inv;
+    double hmax = (double)g->gw + (double)g->gh + 2; /* wider covers the whole grid anyway */
+    if (h > hmax) h = hmax;
     double pad = h + 2.0;
     for (size_t i = 0; i < n; i++) {
         double ax = xy[2 * i] * inv, ay = xy[2 * i + 1] * inv;
@@ -170,8 +209,10 @@ static rs_result mark_road(marker *m, const double *xy, size_t n, double width, 
         if (mode == RS_BUFFER_DISTANCE) {
             if (inside_box(g, ax, ay, ax, ay, pad)) r = mark_cap(m, ax, ay, h);
             if (!r && i + 1 < n) {
-                double bx = xy[2 * i + 2] * inv, by = xy[2 * i + 3] * inv;
-                if (inside_box(g, ax, ay, bx, by, pad)) r = mark_segment_distance(m, ax, ay, bx, by, h);
+                double bx = xy[2 * i + 2] * inv, by = xy[2 * i + 3] * inv, cx = ax, cy = ay;
+                /* clip first: the band's direction is kept, far parts can't matter */
+                if (inside_box(g, ax, ay, bx, by, pad) && clip_segment(g, pad, &cx, &cy, &bx, &by))
+                    r = mark_segment_distance(m, cx, cy, bx, by, h);
             }
         } else if (i + 1 < n || n == 1) {
             double bx = i + 1 < n ? xy[2 * i + 2] * inv : ax, by = i + 1 < n ? xy[2 * i + 3] * inv : ay;

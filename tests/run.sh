@@ -7,7 +7,7 @@ count() { # name, command...
     name=$1; shift
     "$@" >"$log" 2>&1; rc=$?
     line=$(grep -E '[0-9]+ passed, [0-9]+ failed' "$log" | tail -n 1)
-    p=$(echo "$line" | sed -n 's/.* \{0,1\}\([0-9][0-9]*\) passed.*/\1/p'); f=$(echo "$line" | sed -n 's/.*passed, \([0-9][0-9]*\) failed.*/\1/p')
+    p=$(echo "$line" | sed -n 's/^\(.*[^0-9]\)\{0,1\}\([0-9][0-9]*\) passed.*/\2/p'); f=$(echo "$line" | sed -n 's/.*passed, \([0-9][0-9]*\) failed.*/\1/p')
     [ -n "$p" ] || p=0; [ -n "$f" ] || f=0
     if [ $rc -ne 0 ] && [ "$f" = 0 ]; then f=1; fi
     if [ "$f" != 0 ]; then cat "$log"; echo "FAILED: $name (exit $rc)"; else echo "ok   $name: $p passed"; fi

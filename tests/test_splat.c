@@ -488,6 +488,42 @@ static void test_alloc_failures(void)
     CHECK_EQ_INT(leaks, 0);
 }
 
+/* Absurd but finite input: far-away points, a huge width, a road that is
+ * one repeated point. No crash, no undefined behaviour (the sanitizer suite
+ * runs this), and sensible results. */
+static void test_extreme_roads(void)
+{
+    rs_dem *dem = flat_dem(9, 9);
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    double far[4] = { -1e300, 4.1, 1e300, 4.1 }, wide[4] = { 1, 1, 2, 2 }, dot[4] = { 3, 3, 3, 3 };
+    CHECK(rs_roads_add(ctx, roads, "far", 2, far, 2) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, "dot", 1, dot, 2) == RS_OK);
+    for (int mode = 0; mode < 2; mode++) {
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = 2;
+        o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        image im;
+        CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+        /* the far road still crosses the map at y = 4.1 */
+        CHECK(im.wt[(size_t)8 * im.w + 8] == 65535);
+        image_free(&im);
+    }
+    CHECK(rs_roads_add(ctx, roads, "wide", 1e300, wide, 2) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    image im;
+    CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+    size_t full = 0;
+    for (size_t i = 0; i < (size_t)im.w * im.h; i++) full += im.wt[i] == 65535;
+    CHECK_EQ_INT(full, (size_t)im.w * im.h); /* covers everything */
+    image_free(&im);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
 static void test_bad_options(void)
 {
     rs_dem *dem = flat_dem(9, 9);
@@ -540,6 +576,7 @@ int main(void)
     test_textures();
     test_threads();
     test_alloc_failures();
+    test_extreme_roads();
     test_bad_options();
     rs_ctx_free(ctx);
     return th_finish("test_splat");
