@@ -58,6 +58,8 @@ DEPS_PKGS := libopenimageio-dev pkg-config clang libosmesa6-dev gnuplot-nox libc
 
 .PHONY: all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install uninstall help clean check-deps
 .DEFAULT_GOAL := all
+# keep objects of pattern rules (tests, fuzz replays) between runs
+.SECONDARY:
 
 all: lib cli
 
@@ -149,7 +151,7 @@ $(BUILD)/fuzz/%-replay: $(BUILD)/fuzz/%/fuzz.o $(BUILD)/fuzz/replay_main.o $(STA
 
 test: deps
 	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY)
-	@BUILD=$(BUILD) sh tests/run.sh
+	@BUILD=$(BUILD) SAN="$(SAN)" sh tests/run.sh
 
 # --- demo ---------------------------------------------------------------------
 demo: deps

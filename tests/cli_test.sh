@@ -114,7 +114,7 @@ PY
 # --- the README's C example compiles against the header and runs ---
 B=$(dirname "$RS")
 sed -n '/^```c$/,/^```$/p' README.md | sed '1d;$d' >"$T/example.c"
-if ${CC:-cc} -std=c99 -Wall -Werror -Iinclude "$T/example.c" "$B/libroadsplat.a" -lm -o "$T/example" 2>"$T/e"; then
+if ${CC:-cc} -std=c99 -Wall -Werror $SAN -Iinclude "$T/example.c" "$B/libroadsplat.a" -lm -o "$T/example" 2>"$T/e"; then
     "$T/example" && ok || bad "README example failed to run"
 else
     bad "README example does not compile: $(head -3 "$T/e")"
