@@ -219,11 +219,15 @@ int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, 
 
 } // namespace
 
-extern "C" int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
+namespace {
+// Exceptions never cross the C boundary: report them as one line naming the
+// file, free any partial result, and fail.
+template <typename T, typename Read>
+int guarded_read(const char *path, T **data, Read read)
 {
     *data = nullptr;
     try {
-        return read_gray_float(path, w, h, data);
+        return read();
     } catch (const std::exception &e) {
         cli_error("%s: %s", path, e.what());
     } catch (...) {
@@ -233,20 +237,16 @@ extern "C" int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t
     *data = nullptr;
     return 1;
 }
+} // namespace
+
+extern "C" int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
+{
+    return guarded_read(path, data, [&] { return read_gray_float(path, w, h, data); });
+}
 
 extern "C" int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
 {
-    *data = nullptr;
-    try {
-        return read_rgba8(path, w, h, data);
-    } catch (const std::exception &e) {
-        cli_error("%s: %s", path, e.what());
-    } catch (...) {
-        cli_error("%s: unknown error while reading", path);
-    }
-    std::free(*data);
-    *data = nullptr;
-    return 1;
+    return guarded_read(path, data, [&] { return read_rgba8(path, w, h, data); });
 }
 
 extern "C" int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,

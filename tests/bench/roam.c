@@ -7,6 +7,8 @@
 #include "roadsplat.h"
 #include "../roam_check.h"
 
+#include "timing.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,25 +16,6 @@
 #include <time.h>
 
 #define RUNS 5
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_d);
-    return v[n / 2];
-}
 
 typedef struct run_result {
     uint32_t tris;
@@ -50,13 +33,13 @@ static int run_roam(rs_ctx *ctx, const rs_dem *dem, const float *z, uint32_t W, 
     size_t nv = 0, ni = 0;
     memset(out, 0, sizeof *out);
     for (int r = 0; r < RUNS; r++) {
-        double t0 = now_ms();
+        double t0 = tm_now_ms();
         rs_roam *L = NULL;
         rs_roam_options o;
         memset(&o, 0, sizeof o);
         o.pool_nodes = 1u << 22;
         if (rs_roam_create(ctx, dem, &o, &L) != RS_OK) return -1;
-        double t1 = now_ms();
+        double t1 = tm_now_ms();
         rs_result rr = rs_roam_refine_error(ctx, L, E);
         if (rr != RS_OK) { fprintf(stderr, "roam bench: %s\n", rs_ctx_message(ctx)); rs_roam_free(ctx, L); return -1; }
         size_t mv, mi;
@@ -67,16 +50,16 @@ static int run_roam(rs_ctx *ctx, const rs_dem *dem, const float *z, uint32_t W, 
         if (!v || !idx || rs_roam_extract(ctx, L, NULL, v, NULL, mv, idx, mi, &nv, &ni) != RS_OK) {
             rs_roam_free(ctx, L); free(v); free(idx); return -1;
         }
-        double t2 = now_ms();
+        double t2 = tm_now_ms();
         tb[r] = t1 - t0; tr[r] = t2 - t1; tt[r] = t2 - t0;
         rs_roam_stats st;
         rs_roam_get_stats(L, &st);
         out->tris = st.triangles;
         rs_roam_free(ctx, L);
     }
-    out->build_ms = median(tb, RUNS);
-    out->refine_ms = median(tr, RUNS);
-    out->total_ms = median(tt, RUNS);
+    out->build_ms = tm_median(tb, RUNS);
+    out->refine_ms = tm_median(tr, RUNS);
+    out->total_ms = tm_median(tt, RUNS);
     if (check) {
         int32_t *gx = malloc(nv * sizeof *gx), *gy = malloc(nv * sizeof *gy);
         double *vz = malloc(nv * sizeof *vz);

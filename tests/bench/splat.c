@@ -7,31 +7,14 @@
 #include "scenes.h"
 #include "seams.h"
 
+#include "timing.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #define RUNS 3
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
-
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_d);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 typedef struct bench {
     rs_ctx *ctx;
@@ -52,6 +35,17 @@ typedef struct row {
     uint32_t k;
 } row;
 
+/* Image buffers for b->w x b->h pixels and the exact coverage G. */
+static int bench_images(bench *b)
+{
+    size_t n = (size_t)b->w * b->h;
+    b->G = malloc(n * sizeof *b->G);
+    b->R = malloc(n * sizeof *b->R);
+    b->rgba = malloc(n * 4);
+    b->wt = malloc(n * 2);
+    return !b->G || !b->R || !b->rgba || !b->wt || gt_coverage(&b->sc, b->T, b->G);
+}
+
 /* Grid build + splat, median of RUNS; weight converted to float for the ruler. */
 static int run(bench *b, const rs_splat_options *o, row *out)
 {
@@ -59,14 +53,14 @@ static int run(bench *b, const rs_splat_options *o, row *out)
     rs_grid_stats st;
     for (int i = 0; i < RUNS; i++) {
         rs_road_grid *g = NULL;
-        double t0 = now_ms();
+        double t0 = tm_now_ms();
         if (rs_road_grid_build(b->ctx, b->dem, b->roads, o, &g)) return -1;
         if (rs_splat(b->ctx, b->dem, g, o, b->rgba, (size_t)b->w * b->h * 4, b->wt, (size_t)b->w * b->h)) return -1;
-        t[i] = now_ms() - t0;
+        t[i] = tm_now_ms() - t0;
         rs_road_grid_stats(g, &st);
         rs_road_grid_free(b->ctx, g);
     }
-    out->ms = median(t, RUNS);
+    out->ms = tm_median(t, RUNS);
     out->k = st.k;
     for (size_t i = 0; i < (size_t)b->w * b->h; i++) b->R[i] = b->wt[i] / 65535.0f;
     gt_result gr;
@@ -111,11 +105,7 @@ int main(int argc, char **argv)
     o.texels = b.T;
     if (rs_splat_size(b.ctx, b.dem, &o, &b.w, &b.h)) return 1;
     size_t n = (size_t)b.w * b.h;
-    b.G = malloc(n * sizeof *b.G);
-    b.R = malloc(n * sizeof *b.R);
-    b.rgba = malloc(n * 4);
-    b.wt = malloc(n * 2);
-    if (!b.G || !b.R || !b.rgba || !b.wt || gt_coverage(&b.sc, b.T, b.G)) return 1;
+    if (bench_images(&b)) return 1;
     b.L = gt_outline_length(&b.sc, b.T);
     snprintf(path, sizeof path, "%s/splat.csv", dir);
     b.csv = fopen(path, "w");
@@ -176,12 +166,7 @@ int main(int argc, char **argv)
         rs_splat_options q = o;
         q.texels = texels[i];
         rs_splat_size(b.ctx, b.dem, &q, &b2.w, &b2.h);
-        size_t n2 = (size_t)b2.w * b2.h;
-        b2.G = malloc(n2 * sizeof *b2.G);
-        b2.R = malloc(n2 * sizeof *b2.R);
-        b2.rgba = malloc(n2 * 4);
-        b2.wt = malloc(n2 * 2);
-        if (!b2.G || !b2.R || !b2.rgba || !b2.wt || gt_coverage(&b.sc, b2.T, b2.G)) return 1;
+        if (bench_images(&b2)) return 1;
         if (run(&b2, &q, &r)) return 1;
         snprintf(label, sizeof label, "texels %u (%.3g m pixels)", texels[i], b.sc.cell_size / texels[i]);
         emit(&b2, "texels", label, &r, def.ms);
@@ -194,19 +179,19 @@ int main(int argc, char **argv)
     if (rs_road_grid_build(b.ctx, b.dem, b.roads, &o, &g)) return 1;
     volatile uint8_t sink = 0;
     for (int i = 0; i < RUNS; i++) {
-        double t0 = now_ms();
+        double t0 = tm_now_ms();
         uint32_t px = 0x11223344u + (uint32_t)i;
         uint32_t *p32 = (uint32_t *)(void *)b.rgba;
         for (size_t k = 0; k < n; k++) p32[k] = px;
-        tf[i] = now_ms() - t0;
+        tf[i] = tm_now_ms() - t0;
         sink ^= b.rgba[n / 2];
-        t0 = now_ms();
+        t0 = tm_now_ms();
         rs_splat(b.ctx, b.dem, g, &o, b.rgba, n * 4, NULL, 0);
-        ts[i] = now_ms() - t0;
+        ts[i] = tm_now_ms() - t0;
     }
     double seam = rs_test_seam_error(g, 32);
     rs_road_grid_free(b.ctx, g);
-    double mf = median(tf, RUNS), ms = median(ts, RUNS);
+    double mf = tm_median(tf, RUNS), ms = tm_median(ts, RUNS);
     fprintf(b.md, "\n### Splat throughput\n\n| what | Mpixel/s | ratio to fill |\n|---|---|---|\n"
                   "| plain RGBA fill (memory bound) | %.0f | 1 |\n| rs_splat, default settings | %.0f | %.3f |\n\n",
             n / (mf * 1e3), n / (ms * 1e3), mf / ms);
