@@ -144,7 +144,9 @@ RS_API rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, do
                               const double *xy, size_t n);
 RS_API void rs_roads_free(rs_ctx *ctx, rs_roads *roads);
 RS_API size_t rs_roads_count(const rs_roads *roads);
-/* Road i: name (never NULL), width, points (owned by roads), point count. */
+/* Road i: name (never NULL), width, points (owned by roads), point count.
+ * Any output pointer may be NULL. The name and points stay valid until the
+ * next rs_roads_add() on this set or rs_roads_free(). */
 RS_API rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name, double *width,
                               const double **xy, size_t *n);
 
