@@ -180,6 +180,8 @@ typedef struct rs_splat_options {
     double texture_scale;    /* metres per texture repeat; 0 -> 10 */
     rs_progress_fn progress; /* may be NULL */
     void *progress_user;
+    double origin_x;         /* world coordinates of DEM sample (0,0); road */
+    double origin_y;         /* points are in the same world frame; 0 -> 0 */
 } rs_splat_options;
 
 /* The road grid: road cells (DEM cells split K x K), classified by their

@@ -196,9 +196,26 @@ static int inside_box(const rs_road_grid *g, double x0, double y0, double x1, do
              fmax(y0, y1) + pad < 0 || fmin(y0, y1) - pad > (double)g->gh);
 }
 
-static rs_result mark_road(marker *m, const double *xy, size_t n, double width, rs_buffer_mode mode)
+/* A world coordinate relative to the origin, rounded to 1 micrometre: the
+ * subtraction is exact for nearby values, and the rounding removes the last
+ * bits lost when large world coordinates were read, so a scene translated by
+ * up to ~10^7 m gives the same local coordinates, hence the same bytes. */
+static double local_coord(double world, double origin)
+{
+    double d = world - origin;
+    if (!(fabs(d) < 1e12)) return d; /* far away: precision is moot, keep it finite */
+    return floor(d * 1e6 + 0.5) / 1e6;
+}
+
+static rs_result mark_road(marker *m, const double *pts, size_t n, double width, rs_buffer_mode mode,
+                           double ox, double oy, double *scratch)
 {
     const rs_road_grid *g = m->g;
+    for (size_t i = 0; i < n; i++) {
+        scratch[2 * i] = local_coord(pts[2 * i], ox);
+        scratch[2 * i + 1] = local_coord(pts[2 * i + 1], oy);
+    }
+    const double *xy = scratch;
     double inv = 1.0 / g->c, h = 0.5 * width * inv;
     double hmax = (double)g->gw + (double)g->gh + 2; /* wider covers the whole grid anyway */
     if (h > hmax) h = hmax;
@@ -367,15 +384,26 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the road grid directory");
     }
     marker m = { ctx, g };
-    size_t n = rs_roads_count(roads);
+    size_t n = rs_roads_count(roads), most = 0;
+    for (size_t i = 0; i < n; i++) {
+        size_t np;
+        rs_roads_get(roads, i, NULL, NULL, NULL, &np);
+        if (np > most) most = np;
+    }
+    double *scratch = rs__alloc_array(ctx, most ? 2 * most : 2, sizeof *scratch);
+    if (!scratch) {
+        rs_road_grid_free(ctx, g);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road points");
+    }
     for (size_t i = 0; i < n && !r; i++) {
         const double *xy;
         size_t np;
         double w;
         rs_roads_get(roads, i, NULL, &w, &xy, &np);
-        r = mark_road(&m, xy, np, w, o.buffer);
+        r = mark_road(&m, xy, np, w, o.buffer, o.origin_x, o.origin_y, scratch);
         if (!r && o.progress && o.progress(o.progress_user, i + 1, n)) r = rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
     }
+    rs__free(ctx, scratch);
     rs__mask_table mt;
     rs__mask_table_build(&mt);
     if (!r)

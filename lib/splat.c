@@ -37,6 +37,8 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
     if (o.transition != o.transition || o.transition > o.alpha_res / 2.0)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "transition %g px must be at most half the alpha-map (%u px)",
                         o.transition, o.alpha_res / 2);
+    if (!isfinite(o.origin_x) || !isfinite(o.origin_y))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "origin (%g, %g) must be finite", o.origin_x, o.origin_y);
     if (!(o.road_cell >= 0) || !isfinite(o.road_cell))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "road cell %g must be a finite number >= 0", o.road_cell);
     if (!(o.jitter_amount >= 0 && o.jitter_amount <= 1))

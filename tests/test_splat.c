@@ -379,6 +379,61 @@ static void test_plane_shading(void)
     rs_dem_free(ctx, dem);
 }
 
+/* A scene translated to UTM-like coordinates (and to 10^7 m), written and
+ * parsed as text like a user's file, with the origin set to match, gives
+ * byte-identical output to the untranslated scene. */
+static void test_translation(void)
+{
+    rs_dem *dem = flat_dem(33, 25);
+    const double shifts[3][2] = { { 0, 0 }, { 500000, 5000000 }, { 1e7, 1e7 } };
+    image ref;
+    memset(&ref, 0, sizeof ref);
+    for (int k = 0; k < 3; k++) {
+        char text[4096];
+        size_t len = 0;
+        const double pts[] = { 1.125, 2.375, 13.001, 11.777, 31.9, 7.25, 3.3, 22.05, 29.123, 20.987 };
+        len += (size_t)snprintf(text + len, sizeof text - len, "road a width 4.5\n");
+        for (int i = 0; i < 3; i++)
+            len += (size_t)snprintf(text + len, sizeof text - len, "%.3f %.3f\n", shifts[k][0] + pts[2 * i],
+                                    shifts[k][1] + pts[2 * i + 1]);
+        len += (size_t)snprintf(text + len, sizeof text - len, "end\nroad b width 2.75\n");
+        for (int i = 3; i < 5; i++)
+            len += (size_t)snprintf(text + len, sizeof text - len, "%.3f %.3f\n", shifts[k][0] + pts[2 * i],
+                                    shifts[k][1] + pts[2 * i + 1]);
+        len += (size_t)snprintf(text + len, sizeof text - len, "end\n");
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_parse(ctx, text, len, &roads) == RS_OK);
+        for (int mode = 0; mode < 2; mode++) {
+            rs_splat_options o;
+            memset(&o, 0, sizeof o);
+            o.texels = 4;
+            o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+            o.origin_x = shifts[k][0];
+            o.origin_y = shifts[k][1];
+            image im;
+            CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
+            if (k == 0 && mode == 0) {
+                ref = im;
+                continue;
+            }
+            if (mode == 0) {
+                size_t n = (size_t)im.w * im.h;
+                CHECKF(memcmp(im.rgba, ref.rgba, n * 4) == 0 && memcmp(im.wt, ref.wt, n * 2) == 0,
+                       "translation by (%g, %g) changed the output", shifts[k][0], shifts[k][1]);
+            }
+            image_free(&im);
+        }
+        rs_roads_free(ctx, roads);
+    }
+    image_free(&ref);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.origin_x = NAN;
+    uint32_t w, h;
+    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
+    rs_dem_free(ctx, dem);
+}
+
 /* --- two contexts in two threads ----------------------------------------------- */
 typedef struct job {
     const char *text;
@@ -577,6 +632,7 @@ int main(void)
     test_threads();
     test_alloc_failures();
     test_extreme_roads();
+    test_translation();
     test_bad_options();
     rs_ctx_free(ctx);
     return th_finish("test_splat");
