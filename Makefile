@@ -33,6 +33,10 @@ OIIO_LIBS   = $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null)
 
 # Optional OSMesa renderer: auto-detected, or forced with WITH_OSMESA=1/0.
 WITH_OSMESA ?= $(shell $(PKG_CONFIG) --exists osmesa 2>/dev/null && echo 1 || echo 0)
+ifeq ($(WITH_OSMESA),1)
+OSMESA_CFLAGS = -DRS_WITH_OSMESA $(shell $(PKG_CONFIG) --cflags osmesa 2>/dev/null)
+OSMESA_LIBS   = $(or $(shell $(PKG_CONFIG) --libs osmesa 2>/dev/null),-lOSMesa)
+endif
 
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
@@ -125,14 +129,14 @@ $(PCFILE): Makefile
 # --- CLI (C + a small C++ shim around OpenImageIO) -----------------------------
 $(BUILD)/cli/%.o: cli/%.c include/roadsplat.h $(wildcard cli/*.h)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) -c $< -o $@
 
 $(BUILD)/cli/%.o: cli/%.cpp $(wildcard cli/*.h)
 	@mkdir -p $(dir $@)
 	$(CXX) -std=c++17 $(OPT) $(SAN) -Wall -Wextra -Iinclude $(OIIO_CFLAGS) -c $< -o $@
 
 $(CLI): $(CLI_OBJ) $(STATIC_LIB)
-	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(STATIC_LIB) $(OIIO_LIBS) $(LDLIBS_CORE)
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(STATIC_LIB) $(OIIO_LIBS) $(OSMESA_LIBS) $(LDLIBS_CORE)
 
 # --- tests --------------------------------------------------------------------
 $(BUILD)/tests/%.o: tests/%.c include/roadsplat.h $(wildcard tests/*.h)

@@ -8,6 +8,7 @@
 static const char usage_text[] =
     "Usage: roadsplat [options] DEM ROADS OUT.png\n"
     "       roadsplat mesh [options] DEM OUT.obj|OUT.ply   (see roadsplat mesh --help)\n"
+    "       roadsplat render [options] DEM ROADS OUT.png  (see roadsplat render --help; needs OSMesa)\n"
     "\n"
     "Burns the roads of ROADS (text, docs/road-format.md) into a terrain texture\n"
     "of the height map DEM (PGM, PNG or TIFF) and writes it to OUT.png: (W-1)*T x\n"
@@ -296,5 +297,6 @@ done:
 int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "mesh")) return cli_mesh_main(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "render")) return cli_render_main(argc - 1, argv + 1);
     return splat_main(argc, argv);
 }

@@ -1,0 +1,502 @@
+/* `roadsplat render`: splat the roads on the CPU, mesh the terrain with the
+ * view-dependent ROAM mesher and draw both offscreen with OSMesa to a PNG
+ * (cli/render_gl.c holds the GL). Without OSMesa this is a stub that says so.
+ * Design notes: docs/render.md. */
+#include "cli.h"
+
+#ifndef RS_WITH_OSMESA
+
+int cli_render_main(int argc, char **argv)
+{
+    (void)argc;
+    (void)argv;
+    cli_error("render: this build has no OSMesa support (install libosmesa6-dev and rebuild)");
+    return 1;
+}
+
+#else
+#include "render_gl.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RENDER_PI 3.14159265358979323846
+
+static const char render_usage[] =
+    "Usage: roadsplat render [splat options] [render options] DEM ROADS OUT.png\n"
+    "\n"
+    "Splats ROADS into the terrain texture of DEM (as `roadsplat` does), meshes the\n"
+    "terrain with view-dependent ROAM and renders it offscreen (OSMesa) to OUT.png.\n"
+    "Positions are in the road file's frame: X, Y map metres (Y grows down the\n"
+    "map), Z height in metres.\n"
+    "\n"
+    "Splat options (see roadsplat --help): --cell-size M, --z-scale S, --texels N,\n"
+    "  --buffer distance|dilate, --road-cell M, --alpha-res N, --transition PX,\n"
+    "  --jitter SEED, --terrain-texture IMG, --road-texture IMG, --texture-scale M\n"
+    "Render options:\n"
+    "  --size WxH          image size (default 1280x960; with --ortho: the splat's size)\n"
+    "  --camera X,Y,Z      eye position (default: oblique view of the whole map from the south)\n"
+    "  --look-at X,Y,Z     point looked at (default: the map centre)\n"
+    "  --fov DEG           vertical field of view (default 45)\n"
+    "  --pixel-error P     ROAM screen-space tolerance in pixels (default 1)\n"
+    "  --triangles N       hold the ROAM mesh near N triangles instead\n"
+    "  --sun AZ,ALT        sun azimuth (compass, degrees) and altitude (default 315,45)\n"
+    "  --lighting on|off   shade the texture by the sun (default on)\n"
+    "  --fog               linear distance fog towards the horizon colour\n"
+    "  --ortho             top-down orthographic view of the whole map\n"
+    "  --frames N          render the view N times, for timing (default 1; 10 with --stats)\n"
+    "  --tile-size N       split the texture into tiles of at most N texels per side\n"
+    "                      (default: only when it exceeds GL_MAX_TEXTURE_SIZE)\n"
+    "  --stats FILE.json   fps, triangle count and timings as JSON\n"
+    "  --quiet             no progress bar\n";
+
+typedef struct render_args {
+    rs_splat_options o;
+    const char *dem, *roads, *out, *stats, *terrain_tex, *road_tex;
+    uint32_t width, height, triangles, frames, tile_size;
+    int have_size, have_camera, have_look, have_pixel_error;
+    double camera[3], look[3], fov, pixel_error, sun_az, sun_alt;
+    int lighting, fog, ortho, quiet;
+} render_args;
+
+static int take(int argc, char **argv, int *i, const char *name, const char *inl, const char **val)
+{
+    if (inl) { *val = inl; return 0; }
+    if (*i + 1 >= argc) {
+        cli_error("render: option %s needs a value (see roadsplat render --help)", name);
+        return 1;
+    }
+    *val = argv[++*i];
+    return 0;
+}
+
+/* 0 run, 1 usage error, 2 --help handled. */
+static int parse_render_args(int argc, char **argv, render_args *a)
+{
+    const char *pos[3];
+    int npos = 0, only_pos = 0;
+    memset(a, 0, sizeof *a);
+    a->width = 1280; a->height = 960;
+    a->fov = 45; a->pixel_error = 1; a->sun_az = 315; a->sun_alt = 45; a->lighting = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i], *v = NULL;
+        if (only_pos || arg[0] != '-' || arg[1] == '\0') {
+            if (npos == 3) { cli_error("render: unexpected argument '%s'", arg); return 1; }
+            pos[npos++] = arg;
+            continue;
+        }
+        if (!strcmp(arg, "--")) { only_pos = 1; continue; }
+        char name[64];
+        const char *eq = strchr(arg, '='), *inl = eq ? eq + 1 : NULL;
+        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+        if (len >= sizeof name) len = sizeof name - 1;
+        memcpy(name, arg, len);
+        name[len] = '\0';
+        uint32_t u;
+        double d[3];
+        if (!strcmp(name, "--help") || !strcmp(name, "-h")) { fputs(render_usage, stdout); return 2; }
+        else if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) a->quiet = 1;
+        else if (!strcmp(name, "--fog")) a->fog = 1;
+        else if (!strcmp(name, "--ortho")) a->ortho = 1;
+        else if (take(argc, argv, &i, name, inl, &v)) return 1;
+        /* every option below takes a value v */
+        else if (!strcmp(name, "--cell-size")) {
+            if (cli_parse_double(name, v, &a->o.cell_size)) return 1;
+            if (!(a->o.cell_size > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--z-scale")) {
+            if (cli_parse_double(name, v, &a->o.z_scale)) return 1;
+            if (!(a->o.z_scale > 0)) { cli_error("%s: '%s' must be > 0 for rendering", name, v); return 1; }
+        } else if (!strcmp(name, "--texels")) {
+            if (cli_parse_u32(name, v, &a->o.texels)) return 1;
+            if (a->o.texels < 1 || a->o.texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
+        } else if (!strcmp(name, "--buffer")) {
+            if (!strcmp(v, "distance")) a->o.buffer = RS_BUFFER_DISTANCE;
+            else if (!strcmp(v, "dilate")) a->o.buffer = RS_BUFFER_DILATE;
+            else { cli_error("%s: '%s' is not 'distance' or 'dilate'", name, v); return 1; }
+        } else if (!strcmp(name, "--road-cell")) {
+            if (cli_parse_double(name, v, &a->o.road_cell)) return 1;
+            if (!(a->o.road_cell > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--alpha-res")) {
+            if (cli_parse_u32(name, v, &a->o.alpha_res)) return 1;
+            if (a->o.alpha_res < 2 || a->o.alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
+        } else if (!strcmp(name, "--transition")) {
+            if (cli_parse_double(name, v, &d[0])) return 1;
+            if (d[0] < 0) { cli_error("%s: '%s' must be >= 0", name, v); return 1; }
+            a->o.transition = d[0] == 0 ? -1 : d[0]; /* the library's 0 means "default" */
+        } else if (!strcmp(name, "--jitter")) {
+            if (cli_parse_u32(name, v, &u)) return 1;
+            if (u == 0) { cli_error("%s: the seed must be > 0", name); return 1; }
+            a->o.jitter = u;
+        } else if (!strcmp(name, "--terrain-texture")) a->terrain_tex = v;
+        else if (!strcmp(name, "--road-texture")) a->road_tex = v;
+        else if (!strcmp(name, "--texture-scale")) {
+            if (cli_parse_double(name, v, &a->o.texture_scale)) return 1;
+            if (!(a->o.texture_scale > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--size")) {
+            if (cli_parse_size(name, v, &a->width, &a->height)) return 1;
+            if (a->width < 1 || a->height < 1 || a->width > 16384 || a->height > 16384) {
+                cli_error("%s: '%s' must be 1..16384 on each side", name, v);
+                return 1;
+            }
+            a->have_size = 1;
+        } else if (!strcmp(name, "--camera")) {
+            if (cli_parse_vec(name, v, a->camera, 3)) return 1;
+            a->have_camera = 1;
+        } else if (!strcmp(name, "--look-at")) {
+            if (cli_parse_vec(name, v, a->look, 3)) return 1;
+            a->have_look = 1;
+        } else if (!strcmp(name, "--fov")) {
+            if (cli_parse_double(name, v, &a->fov)) return 1;
+            if (!(a->fov >= 1 && a->fov <= 170)) { cli_error("%s: '%s' must be 1..170 degrees", name, v); return 1; }
+        } else if (!strcmp(name, "--pixel-error")) {
+            if (cli_parse_double(name, v, &a->pixel_error)) return 1;
+            if (!(a->pixel_error > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+            a->have_pixel_error = 1;
+        } else if (!strcmp(name, "--triangles")) {
+            if (cli_parse_u32(name, v, &a->triangles)) return 1;
+            if (a->triangles < 2) { cli_error("%s: '%s' must be >= 2", name, v); return 1; }
+        } else if (!strcmp(name, "--sun")) {
+            if (cli_parse_vec(name, v, d, 2)) return 1;
+            if (!(d[1] >= -90 && d[1] <= 90)) { cli_error("%s: altitude '%g' must be -90..90", name, d[1]); return 1; }
+            a->sun_az = d[0];
+            a->sun_alt = d[1];
+        } else if (!strcmp(name, "--lighting")) {
+            if (!strcmp(v, "on")) a->lighting = 1;
+            else if (!strcmp(v, "off")) a->lighting = 0;
+            else { cli_error("%s: '%s' is not 'on' or 'off'", name, v); return 1; }
+        } else if (!strcmp(name, "--frames")) {
+            if (cli_parse_u32(name, v, &a->frames)) return 1;
+            if (a->frames < 1 || a->frames > 100000) { cli_error("%s: '%s' must be 1..100000", name, v); return 1; }
+        } else if (!strcmp(name, "--tile-size")) {
+            if (cli_parse_u32(name, v, &a->tile_size)) return 1;
+            if (a->tile_size < 16) { cli_error("%s: '%s' must be >= 16", name, v); return 1; }
+        } else if (!strcmp(name, "--stats")) a->stats = v;
+        else { cli_error("render: unknown option '%s' (see roadsplat render --help)", arg); return 1; }
+    }
+    if (npos != 3) {
+        cli_error("render: expected DEM ROADS OUT.png, got %d argument%s (see roadsplat render --help)", npos,
+                  npos == 1 ? "" : "s");
+        return 1;
+    }
+    if (a->have_pixel_error && a->triangles) {
+        cli_error("render: --pixel-error and --triangles are exclusive");
+        return 1;
+    }
+    if (a->have_camera && a->have_look && a->camera[0] == a->look[0] && a->camera[1] == a->look[1] &&
+        a->camera[2] == a->look[2]) {
+        cli_error("render: --camera and --look-at must differ");
+        return 1;
+    }
+    if (!a->frames) a->frames = a->stats ? 10 : 1;
+    a->dem = pos[0];
+    a->roads = pos[1];
+    a->out = pos[2];
+    return 0;
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return a < b ? -1 : a > b;
+}
+
+static double median(double *v, size_t n)
+{
+    qsort(v, n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static int load_tex(const char *path, rs_image *img, uint8_t **data)
+{
+    if (!path) return 0;
+    if (cli_image_read_rgba8(path, &img->width, &img->height, data)) return 1;
+    img->rgba = *data;
+    return 0;
+}
+
+/* Default camera: from the south, 20 degrees above the horizon, far enough
+ * that the map's bounding sphere fits the narrower field of view. */
+static void default_camera(const render_args *a, const rg_view *v, double *eye, double *look)
+{
+    double c[3] = { v->map_w / 2, v->map_h / 2, (v->zmin + v->zmax) / 2 };
+    if (!a->have_look) memcpy(look, c, sizeof c);
+    if (a->have_camera) return;
+    double R = 0.5 * sqrt(v->map_w * v->map_w + v->map_h * v->map_h + (v->zmax - v->zmin) * (v->zmax - v->zmin));
+    double fy = a->fov * RENDER_PI / 180, fx = 2 * atan(tan(fy / 2) * a->width / a->height);
+    double d = 0.8 * R / sin(0.5 * (fx < fy ? fx : fy)), pitch = 20 * RENDER_PI / 180;
+    eye[0] = look[0];
+    eye[1] = look[1] + d * cos(pitch);
+    eye[2] = look[2] + d * sin(pitch);
+}
+
+/* Near/far from the map's bounding box; near keeps depth precision when the
+ * eye is outside it. */
+static void clip_range(rg_view *v)
+{
+    double far2 = 0, dx, dy, dz;
+    for (int k = 0; k < 8; k++) {
+        dx = (k & 1 ? v->map_w : 0) - v->eye[0];
+        dy = (k & 2 ? v->map_h : 0) - v->eye[1];
+        dz = (k & 4 ? v->zmax : v->zmin) - v->eye[2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 > far2) far2 = d2;
+    }
+    dx = v->eye[0] < 0 ? -v->eye[0] : v->eye[0] > v->map_w ? v->eye[0] - v->map_w : 0;
+    dy = v->eye[1] < 0 ? -v->eye[1] : v->eye[1] > v->map_h ? v->eye[1] - v->map_h : 0;
+    dz = v->eye[2] < v->zmin ? v->zmin - v->eye[2] : v->eye[2] > v->zmax ? v->eye[2] - v->zmax : 0;
+    double dbox = sqrt(dx * dx + dy * dy + dz * dz);
+    v->zfar = sqrt(far2) * 1.01 + 1.0;
+    v->znear = fmax(v->zfar * 1e-4, 0.5 * dbox);
+    double dl = sqrt((v->look[0] - v->eye[0]) * (v->look[0] - v->eye[0]) +
+                     (v->look[1] - v->eye[1]) * (v->look[1] - v->eye[1]) +
+                     (v->look[2] - v->eye[2]) * (v->look[2] - v->eye[2]));
+    v->fog_start = 0.6 * dl;
+    v->fog_end = fmax(v->zfar * 1.3, v->fog_start + 1.0);
+}
+
+int cli_render_main(int argc, char **argv)
+{
+    render_args a;
+    int pr = parse_render_args(argc, argv, &a);
+    if (pr) return pr == 2 ? 0 : 1;
+
+    double t_start = cli_now_ms();
+    double t_read = 0, t_grid = 0, t_splat = 0, t_roam = 0, t_ctx = 0, t_upload = 0, t_readback = 0, t_write = 0;
+    int rc = 1;
+    rs_ctx *ctx = NULL;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_road_grid *grid = NULL;
+    rs_roam *roam = NULL;
+    rg_renderer *gl = NULL;
+    char *text = NULL, err[256];
+    uint8_t *tex = NULL, *tex_t = NULL, *tex_r = NULL, *frame = NULL;
+    float *vtx = NULL, *nrm = NULL;
+    uint32_t *idx = NULL;
+    double *frame_ms = NULL, *mesh_ms = NULL, *draw_ms = NULL;
+    size_t cap_v = 0, cap_i = 0, nv = 0, ni = 0, text_size = 0;
+    rs_image img_t, img_r;
+    rs_roam_stats rst;
+    rg_tex_stats tst;
+    int warned = 0;
+    rs_result r = rs_ctx_create(NULL, NULL, &ctx);
+    if (r) { cli_error("%s", rs_strerror(r)); return 1; }
+    rs_limits lim;
+    rs_ctx_limits(ctx, &lim);
+    double cs = a.o.cell_size > 0 ? a.o.cell_size : 1, zs = a.o.z_scale > 0 ? a.o.z_scale : 1;
+
+    if (!(dem = cli_load_dem(ctx, a.dem))) goto done;
+    if (cli_read_file(a.roads, (size_t)lim.max_points * 64 + (1u << 20), &text, &text_size)) goto done;
+    if ((r = rs_roads_parse(ctx, text, text_size, &roads))) {
+        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    if (load_tex(a.terrain_tex, &img_t, &tex_t) || load_tex(a.road_tex, &img_r, &tex_r)) goto done;
+    if (tex_t) a.o.terrain_texture = &img_t;
+    if (tex_r) a.o.road_texture = &img_r;
+    t_read = cli_now_ms() - t_start;
+
+    /* the texture: the CPU splat */
+    uint32_t tw, th;
+    if ((r = rs_splat_size(ctx, dem, &a.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
+    cli_progress prog;
+    double t1 = cli_now_ms();
+    cli_progress_init(&prog, "roads", a.quiet);
+    a.o.progress = cli_progress_cb;
+    a.o.progress_user = &prog;
+    r = rs_road_grid_build(ctx, dem, roads, &a.o, &grid);
+    cli_progress_done(&prog);
+    if (r) {
+        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    t_grid = cli_now_ms() - t1;
+    t1 = cli_now_ms();
+    tex = malloc((size_t)tw * th * 4);
+    if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
+    cli_progress_init(&prog, "splat", a.quiet);
+    r = rs_splat(ctx, dem, grid, &a.o, tex, (size_t)tw * th * 4, NULL, 0);
+    cli_progress_done(&prog);
+    if (r) { cli_error("%s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r)); goto done; }
+    t_splat = cli_now_ms() - t1;
+
+    /* the mesh */
+    t1 = cli_now_ms();
+    rs_roam_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.cell_size = cs;
+    ro.z_scale = zs;
+    if ((r = rs_roam_create(ctx, dem, &ro, &roam))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
+    t_roam = cli_now_ms() - t1;
+
+    /* the view */
+    rg_view view;
+    memset(&view, 0, sizeof view);
+    uint32_t W = rs_dem_width(dem), H = rs_dem_height(dem);
+    view.map_w = (W - 1) * cs;
+    view.map_h = (H - 1) * cs;
+    {
+        const float *z = rs_dem_samples(dem);
+        double lo = INFINITY, hi = -INFINITY;
+        for (size_t k = 0; k < (size_t)W * H; k++)
+            if (!isnan(z[k])) { lo = fmin(lo, z[k] * zs); hi = fmax(hi, z[k] * zs); }
+        if (!(lo <= hi)) lo = hi = 0;
+        view.zmin = lo;
+        view.zmax = hi;
+    }
+    if (a.ortho && !a.have_size) { a.width = tw; a.height = th; }
+    if (a.width > 16384 || a.height > 16384) {
+        cli_error("render: the splat is %u x %u; give --size (at most 16384 a side)", tw, th);
+        goto done;
+    }
+    view.ortho = a.ortho;
+    view.fov_y = a.fov;
+    view.lighting = a.lighting;
+    view.fog = a.fog;
+    double az = a.sun_az * RENDER_PI / 180, alt = a.sun_alt * RENDER_PI / 180;
+    view.sun[0] = sin(az) * cos(alt);
+    view.sun[1] = -cos(az) * cos(alt); /* north is -y */
+    view.sun[2] = sin(alt);
+    memcpy(view.eye, a.camera, sizeof view.eye);
+    memcpy(view.look, a.look, sizeof view.look);
+    default_camera(&a, &view, view.eye, view.look);
+    if (a.have_camera && !a.have_look && view.eye[0] == view.look[0] && view.eye[1] == view.look[1] &&
+        view.eye[2] == view.look[2])
+        view.look[2] -= 1.0;
+    clip_range(&view);
+
+    t1 = cli_now_ms();
+    if (!(gl = rg_create(a.width, a.height, err, sizeof err))) { cli_error("render: %s", err); goto done; }
+    t_ctx = cli_now_ms() - t1;
+    t1 = cli_now_ms();
+    if (rg_upload_texture(gl, tex, tw, th, a.tile_size, &view, &tst, err, sizeof err)) {
+        cli_error("render: %s", err);
+        goto done;
+    }
+    t_upload = cli_now_ms() - t1;
+    free(tex);
+    tex = NULL;
+
+    frame_ms = malloc(a.frames * sizeof *frame_ms);
+    mesh_ms = malloc(a.frames * sizeof *mesh_ms);
+    draw_ms = malloc(a.frames * sizeof *draw_ms);
+    if (!frame_ms || !mesh_ms || !draw_ms) { cli_error("out of memory"); goto done; }
+    rs_roam_view rv;
+    memset(&rv, 0, sizeof rv);
+    for (int k = 0; k < 3; k++) {
+        rv.eye[k] = view.eye[k];
+        rv.dir[k] = view.look[k] - view.eye[k];
+    }
+    rv.fov_y = a.fov;
+    rv.width = a.width;
+    rv.height = a.height;
+    rv.pixel_error = a.pixel_error;
+    rv.target_triangles = a.triangles;
+    rv.far_dist = view.zfar;
+    double ppm = fmin(a.width / view.map_w, a.height / view.map_h);
+    for (uint32_t f = 0; f < a.frames; f++) {
+        double f0 = cli_now_ms();
+        if (a.ortho) /* heights do not move pixels top-down: the tolerance is in map metres */
+            r = a.triangles ? rs_roam_refine_count(ctx, roam, a.triangles)
+                            : rs_roam_refine_error(ctx, roam, a.pixel_error / ppm);
+        else
+            r = rs_roam_frame(ctx, roam, &rv);
+        if (r == RS_ERR_POOL_EXHAUSTED || (a.ortho && r == RS_ERR_LIMIT)) {
+            if (!warned) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
+            warned = 1;
+        } else if (r) {
+            cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
+            goto done;
+        }
+        rs_roam_mesh_options mo = { 1, 0.0 };
+        size_t mv, mi;
+        rs_roam_mesh_bound(roam, &mo, &mv, &mi);
+        if (mv > cap_v) {
+            free(vtx); free(nrm);
+            vtx = malloc(mv * 5 * sizeof *vtx);
+            nrm = malloc(mv * 3 * sizeof *nrm);
+            cap_v = mv;
+            if (!vtx || !nrm) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
+        }
+        if (mi > cap_i) {
+            free(idx);
+            idx = malloc(mi * sizeof *idx);
+            cap_i = mi;
+            if (!idx) { cli_error("out of memory for a mesh of %zu indices", mi); goto done; }
+        }
+        if ((r = rs_roam_extract(ctx, roam, &mo, vtx, nrm, cap_v, idx, cap_i, &nv, &ni))) {
+            cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
+            goto done;
+        }
+        double f1 = cli_now_ms();
+        if (rg_draw(gl, &view, vtx, nrm, nv, idx, ni, err, sizeof err)) { cli_error("render: %s", err); goto done; }
+        double f2 = cli_now_ms();
+        mesh_ms[f] = f1 - f0;
+        draw_ms[f] = f2 - f1;
+        frame_ms[f] = f2 - f0;
+    }
+    rs_roam_get_stats(roam, &rst);
+
+    t1 = cli_now_ms();
+    frame = malloc((size_t)a.width * a.height * 4);
+    if (!frame) { cli_error("out of memory for a %u x %u image", a.width, a.height); goto done; }
+    rg_read_rgba(gl, frame);
+    for (size_t k = 0; k < (size_t)a.width * a.height; k++) /* RGBA -> RGB in place */
+        memmove(frame + 3 * k, frame + 4 * k, 3);
+    t_readback = cli_now_ms() - t1;
+    t1 = cli_now_ms();
+    if (cli_image_write_png(a.out, a.width, a.height, 3, 8, frame)) goto done;
+    t_write = cli_now_ms() - t1;
+
+    if (a.stats) {
+        double fmin_ms = frame_ms[0], fmax_ms = frame_ms[0];
+        for (uint32_t f = 1; f < a.frames; f++) {
+            fmin_ms = fmin(fmin_ms, frame_ms[f]);
+            fmax_ms = fmax(fmax_ms, frame_ms[f]);
+        }
+        double fm = median(frame_ms, a.frames), mm = median(mesh_ms, a.frames), dm = median(draw_ms, a.frames);
+        cli_out so;
+        if (cli_out_open(&so, a.stats)) goto done;
+        char desc[256];
+        rg_describe(gl, desc, sizeof desc);
+        fprintf(so.f, "{\n  \"command\": \"render\",\n  \"gl\": \"%s\",\n", desc);
+        fprintf(so.f, "  \"width\": %u,\n  \"height\": %u,\n  \"mode\": \"%s\",\n", a.width, a.height, a.ortho ? "ortho" : "perspective");
+        fprintf(so.f, "  \"camera\": [%.9g, %.9g, %.9g],\n  \"look_at\": [%.9g, %.9g, %.9g],\n  \"fov\": %.9g,\n",
+                view.eye[0], view.eye[1], view.eye[2], view.look[0], view.look[1], view.look[2], a.fov);
+        fprintf(so.f, "  \"lighting\": %s,\n  \"fog\": %s,\n", a.lighting ? "true" : "false", a.fog ? "true" : "false");
+        if (a.triangles) fprintf(so.f, "  \"triangle_budget\": %u,\n", a.triangles);
+        else fprintf(so.f, "  \"pixel_error\": %.9g,\n", a.pixel_error);
+        fprintf(so.f, "  \"triangles\": %u,\n  \"vertices\": %zu,\n  \"roam_threshold\": %.9g,\n"
+                      "  \"roam_frame_passes\": %u,\n  \"patches_culled\": %u,\n",
+                rst.triangles, nv, rst.threshold, rst.frame_passes, rst.patches_culled);
+        fprintf(so.f, "  \"texture\": {\"width\": %u, \"height\": %u, \"max_texture_size\": %u, \"tiles_x\": %u, "
+                      "\"tiles_y\": %u, \"tile_core\": %u, \"base_level_min\": %u, \"base_level_max\": %u, "
+                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu},\n",
+                tw, th, tst.max_texture_size, tst.tiles_x, tst.tiles_y, tst.tile_core, tst.finest_level,
+                tst.coarsest_base, (unsigned long long)tst.texels_uploaded, (unsigned long long)tst.texels_full);
+        fprintf(so.f, "  \"frames\": %u,\n  \"fps\": %.3f,\n  \"fps_draw\": %.3f,\n", a.frames, 1000.0 / fm,
+                1000.0 / dm);
+        fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"roam_create\": %.3f, "
+                      "\"context\": %.3f, \"upload\": %.3f, \"frame_median\": %.3f, \"frame_min\": %.3f, "
+                      "\"frame_max\": %.3f, \"mesh_median\": %.3f, \"draw_median\": %.3f, \"readback\": %.3f, "
+                      "\"write\": %.3f, \"total\": %.3f}\n}\n",
+                t_read, t_grid, t_splat, t_roam, t_ctx, t_upload, fm, fmin_ms, fmax_ms, mm, dm, t_readback, t_write,
+                cli_now_ms() - t_start);
+        if (ferror(so.f)) { cli_error("%s: write failed", a.stats); cli_out_abort(&so); goto done; }
+        if (cli_out_commit(&so)) goto done;
+    }
+    rc = 0;
+done:
+    rg_destroy(gl);
+    free(frame); free(tex); free(tex_t); free(tex_r); free(text);
+    free(vtx); free(nrm); free(idx);
+    free(frame_ms); free(mesh_ms); free(draw_ms);
+    rs_roam_free(ctx, roam);
+    rs_road_grid_free(ctx, grid);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+    return rc;
+}
+#endif

@@ -1,0 +1,135 @@
+#!/bin/sh
+# CLI tests for `roadsplat render` (OSMesa). Usage: sh tests/cli_render_test.sh PATH/TO/roadsplat
+# Prints "N passed, N failed"; exits non-zero on any failure. Skips (0 passed,
+# 0 failed) when the binary was built without OSMesa.
+BIN=${1:?usage: cli_render_test.sh ROADSPLAT}
+T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
+pass=0; fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+check() { # description, command...
+    d=$1; shift
+    if "$@"; then ok; else bad "$d"; fi
+}
+
+if "$BIN" render --help 2>&1 | grep -q "no OSMesa support"; then
+    echo "cli_render: skipped: $BIN was built without OSMesa (WITH_OSMESA=0)"
+    echo "cli_render: 0 passed, 0 failed"
+    exit 0
+fi
+if ! command -v python3 >/dev/null 2>&1; then
+    echo "cli_render: skipped: python3 is needed to read the PNGs"
+    echo "cli_render: 0 passed, 0 failed"
+    exit 0
+fi
+
+# Minimal PNG reader (8-bit grey/RGB/RGBA, non-interlaced) and image checks.
+cat > "$T/png.py" <<'PY'
+import struct, sys, zlib
+def read(path):
+    d = open(path, 'rb').read()
+    assert d[:8] == b'\x89PNG\r\n\x1a\n', 'not a PNG'
+    pos, idat = 8, b''
+    while pos < len(d):
+        n, typ = struct.unpack('>I4s', d[pos:pos + 8]); body = d[pos + 8:pos + 8 + n]; pos += 12 + n
+        if typ == b'IHDR': w, h, bits, ct, _, _, il = struct.unpack('>IIBBBBB', body)
+        elif typ == b'IDAT': idat += body
+    assert bits == 8 and il == 0 and ct in (0, 2, 6), 'unsupported PNG'
+    ch = {0: 1, 2: 3, 6: 4}[ct]; stride = w * ch; raw = zlib.decompress(idat)
+    out, prev = bytearray(), bytearray(stride)
+    for y in range(h):
+        f = raw[y * (stride + 1)]; line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - ch] if i >= ch else 0; b = prev[i]; c = prev[i - ch] if i >= ch else 0
+            if f == 1: line[i] = (line[i] + a) & 255
+            elif f == 2: line[i] = (line[i] + b) & 255
+            elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        out += line; prev = line
+    rgb = [tuple(out[(y * w + x) * ch:(y * w + x) * ch + 3]) if ch >= 3 else (out[y * w + x],) * 3
+           for y in range(h) for x in range(w)]
+    return w, h, rgb
+def px(img, x, y): return img[2][y * img[0] + x]
+def lum(c): return 0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2]
+cmd = sys.argv[1]
+if cmd == 'size':  # file W H
+    w, h, _ = read(sys.argv[2]); sys.exit(0 if (w, h) == (int(sys.argv[3]), int(sys.argv[4])) else 1)
+if cmd == 'mad':  # a b limit: mean absolute RGB difference <= limit/255
+    A, B = read(sys.argv[2]), read(sys.argv[3])
+    if A[:2] != B[:2]: print('sizes differ', A[:2], B[:2]); sys.exit(1)
+    s = sum(abs(p - q) for a, b in zip(A[2], B[2]) for p, q in zip(a, b)) / (3.0 * len(A[2]))
+    print('mean abs diff %.4f / 255' % s); sys.exit(0 if s <= float(sys.argv[4]) else 1)
+if cmd == 'sky':  # the top rows are sky blue; the bottom centre (or row fraction argv[3]) is terrain
+    img = read(sys.argv[2]); w, h = img[:2]
+    top = [px(img, x, y) for y in range(3) for x in range(0, w, 7)]
+    sky = all(c[2] > c[0] + 20 and c[2] >= c[1] for c in top)
+    b = px(img, w // 2, int(float(sys.argv[3]) * (h - 1)) if len(sys.argv) > 3 else h - 2)  # a terrain probe
+    print('top', top[0], 'bottom', b)
+    haze = sum(abs(p - q) for p, q in zip(b, (158, 168, 178))) > 40  # not the below-horizon haze
+    sys.exit(0 if sky and haze and not (b[2] > b[0] + 20 and b[2] >= b[1]) else 1)
+if cmd == 'road':  # straight-down view of an east-west road through the centre row
+    img = read(sys.argv[2]); w, h = img[:2]; r = int(sys.argv[3])
+    def row(y): return sum(lum(px(img, x, y)) for x in range(w // 4, 3 * w // 4)) / (w // 2)
+    road = max(row(h // 2 + d) for d in range(-r, r + 1))
+    land = min(row(h // 2 - 3 * r), row(h // 2 + 3 * r))
+    edge = row(h // 2 - 2 * r), row(h // 2 + 2 * r)
+    print('road row lum <= %.1f, terrain rows >= %.1f, +-2r rows %.1f %.1f' % (road, land, edge[0], edge[1]))
+    sys.exit(0 if road < 90 and land > road + 40 and min(edge) > road + 30 else 1)
+if cmd == 'differ':  # two images differ somewhere by more than 8 levels
+    A, B = read(sys.argv[2]), read(sys.argv[3])
+    sys.exit(0 if any(abs(p - q) > 8 for a, b in zip(A[2], B[2]) for p, q in zip(a, b)) else 1)
+PY
+py() { python3 "$T/png.py" "$@"; }
+
+# Scene: 65x49 samples, 2 m cells (128 m x 96 m), a gentle slope with a bump,
+# one 12 m wide straight road east-west along y = 48 (the centre row).
+awk 'BEGIN { W = 65; H = 49; print "P2"; print W, H; print 1000;
+  for (i = 0; i < H; i++) { line = "";
+    for (j = 0; j < W; j++) { v = 300 + 2 * j + 150 * exp(-((j - 50) ^ 2 + (i - 10) ^ 2) / 60); line = line " " int(v) }
+    print line } }' > "$T/dem.pgm"
+printf 'road main width 12\n-10 48\n140 48\nend\n' > "$T/roads.txt"
+S="--cell-size 2 --z-scale 0.05 --texels 4"
+
+# ortho cross-check: GL at the splat's resolution reproduces the CPU splat
+check "CPU splat exits 0" "$BIN" $S --quiet "$T/dem.pgm" "$T/roads.txt" "$T/splat.png"
+check "render --ortho --lighting off exits 0" "$BIN" render $S --quiet --ortho --lighting off "$T/dem.pgm" "$T/roads.txt" "$T/ortho.png"
+check "ortho defaults to the splat's size (256x192)" py size "$T/ortho.png" 256 192
+check "ortho reproduces the CPU splat (MAD <= 2/255)" py mad "$T/ortho.png" "$T/splat.png" 2
+# the same through 64-texel tiles (forced tiling, clipped geometry, bordered tiles)
+check "tiled upload renders" "$BIN" render $S --quiet --ortho --lighting off --tile-size 64 --stats "$T/tile.json" "$T/dem.pgm" "$T/roads.txt" "$T/tiled.png"
+check "tiled stats report 5x4 tiles" sh -c "grep -q '\"tiles_x\": 5, \"tiles_y\": 4' '$T/tile.json'"
+check "tiled render matches the CPU splat (MAD <= 2/255)" py mad "$T/tiled.png" "$T/splat.png" 2
+check "tiled render matches the untiled one (MAD <= 1/255)" py mad "$T/tiled.png" "$T/ortho.png" 1
+
+# perspective: sky at the top, terrain below
+check "oblique render exits 0" "$BIN" render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 "$T/dem.pgm" "$T/roads.txt" "$T/obl.png"
+check "output is 320x240" py size "$T/obl.png" 320 240
+check "sky at the top rows, terrain at the bottom" py sky "$T/obl.png"
+check "default camera shows sky and terrain" sh -c "'$BIN' render $S --quiet --size 320x240 '$T/dem.pgm' '$T/roads.txt' '$T/def.png' && python3 '$T/png.py' sky '$T/def.png' 0.6 >/dev/null"
+# straight down over the road: 12 m at 100 m with a 60 deg fov on 240 rows -> ~25 rows
+check "top-down render exits 0" "$BIN" render $S --quiet --size 320x240 --fov 60 --camera 64,48,115 --look-at 64,48,0 --lighting off "$T/dem.pgm" "$T/roads.txt" "$T/down.png"
+check "the road is dark where it projects, terrain around it" py road "$T/down.png" 8
+check "deterministic output (same bytes twice)" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 '$T/dem.pgm' '$T/roads.txt' '$T/obl2.png' && cmp -s '$T/obl.png' '$T/obl2.png'"
+check "lighting changes the picture" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 --lighting off '$T/dem.pgm' '$T/roads.txt' '$T/unlit.png' && python3 '$T/png.py' differ '$T/obl.png' '$T/unlit.png'"
+check "fog changes the picture" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 --fog '$T/dem.pgm' '$T/roads.txt' '$T/fog.png' && python3 '$T/png.py' differ '$T/obl.png' '$T/fog.png'"
+
+# stats and budgets
+check "stats run exits 0" "$BIN" render $S --quiet --size 320x240 --frames 4 --triangles 400 --stats "$T/s.json" "$T/dem.pgm" "$T/roads.txt" "$T/b.png"
+check "stats JSON has fps, triangles, timings" sh -c "grep -q '\"fps\"' '$T/s.json' && grep -q '\"triangles\"' '$T/s.json' && grep -q '\"timings_ms\"' '$T/s.json' && grep -q '\"frames\": 4' '$T/s.json'"
+check "fps is positive" awk -F'[:,]' '/"fps"/ { f = $2 } END { exit !(f > 0) }' "$T/s.json"
+check "triangle budget held (<= 105 %)" awk -F'[:,]' '/"triangles"/ { t = $2 } END { exit !(t > 0 && t <= 420) }' "$T/s.json"
+check "finer pixel error gives more triangles" sh -c "'$BIN' render $S --quiet --size 320x240 --pixel-error 8 --stats '$T/p8.json' '$T/dem.pgm' '$T/roads.txt' '$T/p8.png' && '$BIN' render $S --quiet --size 320x240 --pixel-error 0.25 --stats '$T/p1.json' '$T/dem.pgm' '$T/roads.txt' '$T/p1.png' && test \$(sed -n 's/.*\"triangles\": \([0-9]*\).*/\1/p' '$T/p1.json') -gt \$(sed -n 's/.*\"triangles\": \([0-9]*\).*/\1/p' '$T/p8.json')"
+
+# errors: exit 1, nothing written
+check "bad --size rejected" sh -c "! '$BIN' render --size 0x10 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
+check "bad --camera rejected" sh -c "! '$BIN' render --camera 1,2 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
+check "--pixel-error with --triangles rejected" sh -c "! '$BIN' render --pixel-error 1 --triangles 100 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
+check "unknown option rejected" sh -c "! '$BIN' render --bogus 1 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
+check "missing DEM rejected" sh -c "! '$BIN' render '$T/nope.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
+check "failed run leaves an existing output untouched" sh -c "cp '$T/obl.png' '$T/keep.png' && ! '$BIN' render --lighting maybe '$T/dem.pgm' '$T/roads.txt' '$T/keep.png' 2>/dev/null && cmp -s '$T/obl.png' '$T/keep.png'"
+check "render --help exits 0" sh -c "'$BIN' render --help | grep -q -- --ortho"
+
+echo "cli_render: $pass passed, $fail failed"
+[ "$fail" = 0 ]
