@@ -26,6 +26,8 @@ static const char usage_text[] =
     "  --terrain-texture IMG tile IMG over the terrain (default: tint + hillshade)\n"
     "  --road-texture IMG    tile IMG over the roads (default: procedural asphalt)\n"
     "  --texture-scale M     metres per texture repeat (default 10)\n"
+    "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
+    "                        in that world frame (e.g. UTM metres; default 0,0)\n"
     "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
     "  --quiet               no progress bar\n"
@@ -120,6 +122,11 @@ static int parse_args(int argc, char **argv, args *a)
         } else if (!strcmp(name, "--texture-scale")) {
             if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.texture_scale)) return 1;
             if (!(a->o.texture_scale > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
+        } else if (!strcmp(name, "--origin")) {
+            double xy[2];
+            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_vec(name, v, xy, 2)) return 1;
+            a->o.origin_x = xy[0];
+            a->o.origin_y = xy[1];
         } else if (!strcmp(name, "--weight-out")) {
             if (need_value(argc, argv, &i, name, inl, &a->weight_out)) return 1;
         } else if (!strcmp(name, "--stats")) {

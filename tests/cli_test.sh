@@ -96,6 +96,13 @@ fi
 : >"$T/none.txt"
 "$RS" --quiet "$T/dem.pgm" "$T/none.txt" "$T/n.png" && ok || bad "empty road file"
 
+# --- --origin: the same roads in UTM-like world coordinates give the same image ---
+awk '/^road|^end|^#/ {print; next} NF == 2 {printf "%.3f %.3f\n", $1 + 500000, $2 + 5000000; next} {print}' \
+    "$T/roads.txt" >"$T/utm.txt"
+"$RS" --quiet --origin 500000,5000000 "$T/dem.pgm" "$T/utm.txt" "$T/u.png" && cmp -s "$T/a.png" "$T/u.png" && ok \
+    || bad "--origin: translated scene differs"
+expect_fail "bad origin" "--origin" --origin 5,x "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+
 # --- the same DEM as an 8-bit PNG through OpenImageIO gives the same image ---
 python3 - "$T/dem.pgm" "$T/dem.png" <<'PY' && ok || bad "could not make a PNG DEM"
 import sys, zlib, struct
