@@ -183,7 +183,7 @@ fuzz:
 	done; echo "fuzz: binaries in $(BUILD)/fuzz-bin/ (run e.g. $(BUILD)/fuzz-bin/pgm fuzz/pgm/corpus)"
 
 sanitize-test:
-	@$(MAKE) --no-print-directory test BUILD=build/asan OPT="-O1 -g" \
+	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp $(MAKE) --no-print-directory test BUILD=build/asan OPT="-O1 -g" \
 	  SAN="-fsanitize=address,undefined,float-cast-overflow,float-divide-by-zero -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # --- install --------------------------------------------------------------------

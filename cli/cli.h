@@ -75,6 +75,30 @@ void cli_progress_done(cli_progress *p);
 /* Monotonic wall clock in milliseconds. */
 double cli_now_ms(void);
 
+/* Splat options and inputs shared by `roadsplat` and `roadsplat render`
+ * (cli/splat_args.c). */
+typedef struct cli_splat_args {
+    rs_splat_options o;
+    const char *terrain_tex, *road_tex;
+} cli_splat_args;
+/* Value of option `name`: inline ("--x=v", inl) or the next argument. */
+int cli_option_value(int argc, char **argv, int *i, const char *name, const char *inl, const char **val);
+/* When `name` is a splat option, read and apply its value: 0, or 1 on a bad
+ * value (error printed). -1 when `name` is not a splat option. */
+int cli_splat_option(int argc, char **argv, int *i, const char *name, const char *inl, cli_splat_args *s);
+/* The DEM, the parsed roads and the textures named in s; sets s->o's
+ * texture pointers into `in`. Errors printed; free with cli_splat_input_free
+ * (also after a failed load). */
+typedef struct cli_splat_input {
+    rs_dem *dem;
+    rs_roads *roads;
+    rs_image terrain, road;
+    uint8_t *terrain_px, *road_px;
+} cli_splat_input;
+int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
+                         cli_splat_input *in);
+void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in);
+
 /* Subcommands, each `int f(int argc, char **argv)` with argv[0] the
  * subcommand name; return the process exit code (0 ok, 1 error). */
 int cli_mesh_main(int argc, char **argv);   /* cli/mesh.c   (roadsplat mesh)   */

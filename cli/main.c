@@ -35,22 +35,11 @@ static const char usage_text[] =
     "  --version             show the version and exit\n";
 
 typedef struct args {
-    rs_splat_options o;
+    cli_splat_args s;
     const char *dem, *roads, *out;
-    const char *terrain_tex, *road_tex, *weight_out, *stats;
+    const char *weight_out, *stats;
     int quiet;
 } args;
-
-static int need_value(int argc, char **argv, int *i, const char *name, const char *inline_val, const char **val)
-{
-    if (inline_val) { *val = inline_val; return 0; }
-    if (*i + 1 >= argc) {
-        cli_error("option %s needs a value (see roadsplat --help)", name);
-        return 1;
-    }
-    *val = argv[++*i];
-    return 0;
-}
 
 /* Returns 0 to run, 1 on a usage error, 2 when --help/--version was handled. */
 static int parse_args(int argc, char **argv, args *a)
@@ -76,8 +65,6 @@ static int parse_args(int argc, char **argv, args *a)
         memcpy(name, arg, len);
         name[len] = '\0';
         if (eq) inl = eq + 1;
-        const char *v = NULL;
-        uint32_t u;
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
             fputs(usage_text, stdout);
             return 2;
@@ -86,51 +73,15 @@ static int parse_args(int argc, char **argv, args *a)
             return 2;
         } else if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) {
             a->quiet = 1;
-        } else if (!strcmp(name, "--cell-size")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.cell_size)) return 1;
-            if (!(a->o.cell_size > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
-        } else if (!strcmp(name, "--z-scale")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.z_scale)) return 1;
-            if (a->o.z_scale == 0) { cli_error("%s: '%s' must not be 0", name, v); return 1; }
-        } else if (!strcmp(name, "--texels")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &a->o.texels)) return 1;
-            if (a->o.texels < 1 || a->o.texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
-        } else if (!strcmp(name, "--buffer")) {
-            if (need_value(argc, argv, &i, name, inl, &v)) return 1;
-            if (!strcmp(v, "distance")) a->o.buffer = RS_BUFFER_DISTANCE;
-            else if (!strcmp(v, "dilate")) a->o.buffer = RS_BUFFER_DILATE;
-            else { cli_error("%s: '%s' is not 'distance' or 'dilate'", name, v); return 1; }
-        } else if (!strcmp(name, "--road-cell")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.road_cell)) return 1;
-            if (!(a->o.road_cell > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
-        } else if (!strcmp(name, "--alpha-res")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &a->o.alpha_res)) return 1;
-            if (a->o.alpha_res < 2 || a->o.alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
-        } else if (!strcmp(name, "--transition")) {
-            double t;
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &t)) return 1;
-            if (t < 0) { cli_error("%s: '%s' must be >= 0", name, v); return 1; }
-            a->o.transition = t == 0 ? -1 : t; /* the library's 0 means "default" */
-        } else if (!strcmp(name, "--jitter")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &u)) return 1;
-            if (u == 0) { cli_error("%s: the seed must be > 0", name); return 1; }
-            a->o.jitter = u;
-        } else if (!strcmp(name, "--terrain-texture")) {
-            if (need_value(argc, argv, &i, name, inl, &a->terrain_tex)) return 1;
-        } else if (!strcmp(name, "--road-texture")) {
-            if (need_value(argc, argv, &i, name, inl, &a->road_tex)) return 1;
-        } else if (!strcmp(name, "--texture-scale")) {
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->o.texture_scale)) return 1;
-            if (!(a->o.texture_scale > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
-        } else if (!strcmp(name, "--origin")) {
-            double xy[2];
-            if (need_value(argc, argv, &i, name, inl, &v) || cli_parse_vec(name, v, xy, 2)) return 1;
-            a->o.origin_x = xy[0];
-            a->o.origin_y = xy[1];
-        } else if (!strcmp(name, "--weight-out")) {
-            if (need_value(argc, argv, &i, name, inl, &a->weight_out)) return 1;
+            continue;
+        }
+        int sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
+        if (sr > 0) return 1;
+        if (sr == 0) continue;
+        if (!strcmp(name, "--weight-out")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &a->weight_out)) return 1;
         } else if (!strcmp(name, "--stats")) {
-            if (need_value(argc, argv, &i, name, inl, &a->stats)) return 1;
+            if (cli_option_value(argc, argv, &i, name, inl, &a->stats)) return 1;
         } else {
             cli_error("unknown option '%s' (see roadsplat --help)", arg);
             return 1;
@@ -199,14 +150,6 @@ static int write_stats(const char *path, const double t[5], const rs_grid_stats 
     return cli_out_commit(&o);
 }
 
-static int load_texture(const char *path, rs_image *img, uint8_t **data)
-{
-    if (!path) return 0;
-    if (cli_image_read_rgba8(path, &img->width, &img->height, data)) return 1;
-    img->rgba = *data;
-    return 0;
-}
-
 static int splat_main(int argc, char **argv)
 {
     args a;
@@ -216,41 +159,29 @@ static int splat_main(int argc, char **argv)
     double t_start = cli_now_ms(), t[5] = { 0, 0, 0, 0, 0 };
     int rc = 1;
     rs_ctx *ctx = NULL;
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
+    cli_splat_input in;
     rs_road_grid *grid = NULL;
-    char *text = NULL;
-    uint8_t *rgba = NULL, *tex_t = NULL, *tex_r = NULL;
+    uint8_t *rgba = NULL;
     uint16_t *wt = NULL;
-    rs_image img_t, img_r;
-    size_t text_size = 0;
+    rs_splat_options *o = &a.s.o;
+    memset(&in, 0, sizeof in);
     rs_result r = rs_ctx_create(NULL, NULL, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
-    rs_limits lim;
-    rs_ctx_limits(ctx, &lim);
-
-    if (!(dem = cli_load_dem(ctx, a.dem))) goto done;
-    if (cli_read_file(a.roads, (size_t)lim.max_points * 64 + (1u << 20), &text, &text_size)) goto done;
-    if ((r = rs_roads_parse(ctx, text, text_size, &roads))) {
-        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
-        goto done;
-    }
-    if (load_texture(a.terrain_tex, &img_t, &tex_t) || load_texture(a.road_tex, &img_r, &tex_r)) goto done;
-    if (tex_t) a.o.terrain_texture = &img_t;
-    if (tex_r) a.o.road_texture = &img_r;
+    if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    const rs_dem *dem = in.dem;
     t[0] = cli_now_ms() - t_start;
 
     uint32_t w, h;
-    if ((r = rs_splat_size(ctx, dem, &a.o, &w, &h))) {
+    if ((r = rs_splat_size(ctx, dem, o, &w, &h))) {
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
         goto done;
     }
     cli_progress prog;
     double t1 = cli_now_ms();
     cli_progress_init(&prog, "roads", a.quiet);
-    a.o.progress = cli_progress_cb;
-    a.o.progress_user = &prog;
-    r = rs_road_grid_build(ctx, dem, roads, &a.o, &grid);
+    o->progress = cli_progress_cb;
+    o->progress_user = &prog;
+    r = rs_road_grid_build(ctx, dem, in.roads, o, &grid);
     cli_progress_done(&prog);
     if (r) {
         cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
@@ -267,7 +198,7 @@ static int splat_main(int argc, char **argv)
         goto done;
     }
     cli_progress_init(&prog, "splat", a.quiet);
-    r = rs_splat(ctx, dem, grid, &a.o, rgba, npx * 4, wt, wt ? npx : 0);
+    r = rs_splat(ctx, dem, grid, o, rgba, npx * 4, wt, wt ? npx : 0);
     cli_progress_done(&prog);
     if (r) {
         cli_error("%s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
@@ -283,20 +214,16 @@ static int splat_main(int argc, char **argv)
     if (a.stats) {
         rs_grid_stats gs;
         rs_road_grid_stats(grid, &gs);
-        if (write_stats(a.stats, t, &gs, a.o.texels ? a.o.texels : 8, w, h,
-                        a.o.buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
+        if (write_stats(a.stats, t, &gs, o->texels ? o->texels : 8, w, h,
+                        o->buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
             goto done;
     }
     rc = 0;
 done:
     free(rgba);
     free(wt);
-    free(text);
-    free(tex_t);
-    free(tex_r);
     rs_road_grid_free(ctx, grid);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
+    cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     return rc;
 }

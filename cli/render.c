@@ -52,24 +52,13 @@ static const char render_usage[] =
     "  --quiet             no progress bar\n";
 
 typedef struct render_args {
-    rs_splat_options o;
-    const char *dem, *roads, *out, *stats, *terrain_tex, *road_tex;
+    cli_splat_args s;
+    const char *dem, *roads, *out, *stats;
     uint32_t width, height, triangles, frames, tile_size;
     int have_size, have_camera, have_look, have_pixel_error;
     double camera[3], look[3], fov, pixel_error, sun_az, sun_alt;
     int lighting, fog, ortho, quiet;
 } render_args;
-
-static int take(int argc, char **argv, int *i, const char *name, const char *inl, const char **val)
-{
-    if (inl) { *val = inl; return 0; }
-    if (*i + 1 >= argc) {
-        cli_error("render: option %s needs a value (see roadsplat render --help)", name);
-        return 1;
-    }
-    *val = argv[++*i];
-    return 0;
-}
 
 /* 0 run, 1 usage error, 2 --help handled. */
 static int parse_render_args(int argc, char **argv, render_args *a)
@@ -93,47 +82,17 @@ static int parse_render_args(int argc, char **argv, render_args *a)
         if (len >= sizeof name) len = sizeof name - 1;
         memcpy(name, arg, len);
         name[len] = '\0';
-        uint32_t u;
         double d[3];
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) { fputs(render_usage, stdout); return 2; }
-        else if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) a->quiet = 1;
-        else if (!strcmp(name, "--fog")) a->fog = 1;
-        else if (!strcmp(name, "--ortho")) a->ortho = 1;
-        else if (take(argc, argv, &i, name, inl, &v)) return 1;
+        if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) { a->quiet = 1; continue; }
+        if (!strcmp(name, "--fog")) { a->fog = 1; continue; }
+        if (!strcmp(name, "--ortho")) { a->ortho = 1; continue; }
+        int sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
+        if (sr > 0) return 1;
+        if (sr == 0) continue;
+        if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
         /* every option below takes a value v */
-        else if (!strcmp(name, "--cell-size")) {
-            if (cli_parse_double(name, v, &a->o.cell_size)) return 1;
-            if (!(a->o.cell_size > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
-        } else if (!strcmp(name, "--z-scale")) {
-            if (cli_parse_double(name, v, &a->o.z_scale)) return 1;
-            if (!(a->o.z_scale > 0)) { cli_error("%s: '%s' must be > 0 for rendering", name, v); return 1; }
-        } else if (!strcmp(name, "--texels")) {
-            if (cli_parse_u32(name, v, &a->o.texels)) return 1;
-            if (a->o.texels < 1 || a->o.texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
-        } else if (!strcmp(name, "--buffer")) {
-            if (!strcmp(v, "distance")) a->o.buffer = RS_BUFFER_DISTANCE;
-            else if (!strcmp(v, "dilate")) a->o.buffer = RS_BUFFER_DILATE;
-            else { cli_error("%s: '%s' is not 'distance' or 'dilate'", name, v); return 1; }
-        } else if (!strcmp(name, "--road-cell")) {
-            if (cli_parse_double(name, v, &a->o.road_cell)) return 1;
-            if (!(a->o.road_cell > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
-        } else if (!strcmp(name, "--alpha-res")) {
-            if (cli_parse_u32(name, v, &a->o.alpha_res)) return 1;
-            if (a->o.alpha_res < 2 || a->o.alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
-        } else if (!strcmp(name, "--transition")) {
-            if (cli_parse_double(name, v, &d[0])) return 1;
-            if (d[0] < 0) { cli_error("%s: '%s' must be >= 0", name, v); return 1; }
-            a->o.transition = d[0] == 0 ? -1 : d[0]; /* the library's 0 means "default" */
-        } else if (!strcmp(name, "--jitter")) {
-            if (cli_parse_u32(name, v, &u)) return 1;
-            if (u == 0) { cli_error("%s: the seed must be > 0", name); return 1; }
-            a->o.jitter = u;
-        } else if (!strcmp(name, "--terrain-texture")) a->terrain_tex = v;
-        else if (!strcmp(name, "--road-texture")) a->road_tex = v;
-        else if (!strcmp(name, "--texture-scale")) {
-            if (cli_parse_double(name, v, &a->o.texture_scale)) return 1;
-            if (!(a->o.texture_scale > 0)) { cli_error("%s: '%s' must be > 0", name, v); return 1; }
-        } else if (!strcmp(name, "--size")) {
+        if (!strcmp(name, "--size")) {
             if (cli_parse_size(name, v, &a->width, &a->height)) return 1;
             if (a->width < 1 || a->height < 1 || a->width > 16384 || a->height > 16384) {
                 cli_error("%s: '%s' must be 1..16384 on each side", name, v);
@@ -179,6 +138,10 @@ static int parse_render_args(int argc, char **argv, render_args *a)
                   npos == 1 ? "" : "s");
         return 1;
     }
+    if (a->s.o.z_scale < 0) {
+        cli_error("render: --z-scale must be > 0 for rendering");
+        return 1;
+    }
     if (a->have_pixel_error && a->triangles) {
         cli_error("render: --pixel-error and --triangles are exclusive");
         return 1;
@@ -205,14 +168,6 @@ static double median(double *v, size_t n)
 {
     qsort(v, n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-static int load_tex(const char *path, rs_image *img, uint8_t **data)
-{
-    if (!path) return 0;
-    if (cli_image_read_rgba8(path, &img->width, &img->height, data)) return 1;
-    img->rgba = *data;
-    return 0;
 }
 
 /* Default camera: from the south, 20 degrees above the horizon, far enough
@@ -265,47 +220,38 @@ int cli_render_main(int argc, char **argv)
     double t_read = 0, t_grid = 0, t_splat = 0, t_roam = 0, t_ctx = 0, t_upload = 0, t_readback = 0, t_write = 0;
     int rc = 1;
     rs_ctx *ctx = NULL;
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
+    cli_splat_input in;
     rs_road_grid *grid = NULL;
     rs_roam *roam = NULL;
     rg_renderer *gl = NULL;
-    char *text = NULL, err[256];
-    uint8_t *tex = NULL, *tex_t = NULL, *tex_r = NULL, *frame = NULL;
+    char err[256];
+    uint8_t *tex = NULL, *frame = NULL;
     float *vtx = NULL, *nrm = NULL;
     uint32_t *idx = NULL;
     double *frame_ms = NULL, *mesh_ms = NULL, *draw_ms = NULL;
-    size_t cap_v = 0, cap_i = 0, nv = 0, ni = 0, text_size = 0;
-    rs_image img_t, img_r;
+    size_t cap_v = 0, cap_i = 0, nv = 0, ni = 0;
     rs_roam_stats rst;
     rg_tex_stats tst;
     int warned = 0;
+    memset(&in, 0, sizeof in);
     rs_result r = rs_ctx_create(NULL, NULL, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
-    rs_limits lim;
-    rs_ctx_limits(ctx, &lim);
-    double cs = a.o.cell_size > 0 ? a.o.cell_size : 1, zs = a.o.z_scale > 0 ? a.o.z_scale : 1;
+    double cs = a.s.o.cell_size > 0 ? a.s.o.cell_size : 1, zs = a.s.o.z_scale > 0 ? a.s.o.z_scale : 1;
 
-    if (!(dem = cli_load_dem(ctx, a.dem))) goto done;
-    if (cli_read_file(a.roads, (size_t)lim.max_points * 64 + (1u << 20), &text, &text_size)) goto done;
-    if ((r = rs_roads_parse(ctx, text, text_size, &roads))) {
-        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
-        goto done;
-    }
-    if (load_tex(a.terrain_tex, &img_t, &tex_t) || load_tex(a.road_tex, &img_r, &tex_r)) goto done;
-    if (tex_t) a.o.terrain_texture = &img_t;
-    if (tex_r) a.o.road_texture = &img_r;
+    if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    const rs_dem *dem = in.dem;
+    const rs_roads *roads = in.roads;
     t_read = cli_now_ms() - t_start;
 
     /* the texture: the CPU splat */
     uint32_t tw, th;
-    if ((r = rs_splat_size(ctx, dem, &a.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
+    if ((r = rs_splat_size(ctx, dem, &a.s.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
     cli_progress prog;
     double t1 = cli_now_ms();
     cli_progress_init(&prog, "roads", a.quiet);
-    a.o.progress = cli_progress_cb;
-    a.o.progress_user = &prog;
-    r = rs_road_grid_build(ctx, dem, roads, &a.o, &grid);
+    a.s.o.progress = cli_progress_cb;
+    a.s.o.progress_user = &prog;
+    r = rs_road_grid_build(ctx, dem, roads, &a.s.o, &grid);
     cli_progress_done(&prog);
     if (r) {
         cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
@@ -316,7 +262,7 @@ int cli_render_main(int argc, char **argv)
     tex = malloc((size_t)tw * th * 4);
     if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
     cli_progress_init(&prog, "splat", a.quiet);
-    r = rs_splat(ctx, dem, grid, &a.o, tex, (size_t)tw * th * 4, NULL, 0);
+    r = rs_splat(ctx, dem, grid, &a.s.o, tex, (size_t)tw * th * 4, NULL, 0);
     cli_progress_done(&prog);
     if (r) { cli_error("%s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r)); goto done; }
     t_splat = cli_now_ms() - t1;
@@ -489,13 +435,12 @@ int cli_render_main(int argc, char **argv)
     rc = 0;
 done:
     rg_destroy(gl);
-    free(frame); free(tex); free(tex_t); free(tex_r); free(text);
+    free(frame); free(tex);
     free(vtx); free(nrm); free(idx);
     free(frame_ms); free(mesh_ms); free(draw_ms);
     rs_roam_free(ctx, roam);
     rs_road_grid_free(ctx, grid);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
+    cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     return rc;
 }

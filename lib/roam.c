@@ -13,12 +13,13 @@
 #define AUTO_POOL_CAP (1u << 21)
 #define ERR_OUTSIDE (-1.0f)       /* node entirely off the map: never split for error */
 #define FRAME_MAX_PASSES 12
+#define EXTRACT_AHEAD 24          /* leaves whose vertex-map slots are prefetched */
 
 typedef struct roam_node {
     uint32_t lc, rc;                /* children (NIL for a leaf) */
     uint32_t base, left, right;     /* neighbours across base / left leg / right leg */
-    uint32_t h;                     /* heap index inside the patch: roots are 2 and 3 */
-    uint32_t patch;
+    uint32_t e;                     /* error slot: patch * epp + heap index (roots are
+                                       2 and 3); NIL for cell halves, the finest level */
     uint16_t ax, ay, bx, by;        /* apex and left base corner; the right corner
                                        is apex + rot90(left - apex) */
 } roam_node;
@@ -30,15 +31,20 @@ struct rs_roam {
     float *zown;                    /* owned copy when the DEM had nodata */
     uint32_t plog, P, npx, npy;
     size_t epp;                     /* error entries per patch (2 P^2) */
-    float *err;                     /* per patch, indexed by heap index */
+    uint32_t elog;                  /* log2(epp) */
+    float *err;                     /* per patch, by heap index; NaN = not computed yet */
     float *pzmin, *pzmax;           /* per patch height range (DEM units) */
     roam_node *nodes, *base_copy;
+    uint32_t *stack, sp;            /* refinement stack (cap entries: each node is
+                                       pushed at most once per pass) */
     uint32_t base_count, cap, used; /* cap = base_count + pool */
     uint32_t base_tris, tris;
     int exhausted;
     uint32_t *vmap;                 /* w*h: output vertex of a sample, NIL when unused */
+    uint32_t *vrev;                 /* w*h: sample of an output vertex (to clear vmap) */
     uint32_t *smap;                 /* 2(w+h): skirt vertex of a border sample */
-    double threshold, max_bound;
+    double threshold;
+    float *ucol, *vrow;             /* texture u of each column, v of each row */
     double tol;                     /* view mode: tolerance carried between frames */
     uint32_t frame_passes, culled;
     uint64_t bytes;
@@ -69,17 +75,52 @@ static int node_inside(const rs_roam *L, const roam_node *n)
     return inside_xy(L, n->ax, n->ay, n->bx, n->by, cx, cy);
 }
 
-/* Error bound of a node in DEM units; leaves of the finest level have none. */
-static float node_err(const rs_roam *L, const roam_node *n)
+/* Where a node lies against the map: wholly off it, straddling its edge, or on it. */
+enum { NODE_ON = 0, NODE_OUTSIDE = 1, NODE_STRADDLES = 2 };
+
+static int node_class(const rs_roam *L, const roam_node *n)
 {
-    if (n->h >= L->epp) return 0.0f;
-    return L->err[(size_t)n->patch * L->epp + n->h];
+    int cx, cy;
+    node_corner(n, &cx, &cy);
+    int minx = n->ax < n->bx ? n->ax : n->bx, miny = n->ay < n->by ? n->ay : n->by;
+    if (cx < minx) minx = cx;
+    if (cy < miny) miny = cy;
+    if (minx >= (int)L->cw || miny >= (int)L->ch) return NODE_OUTSIDE;
+    return inside_xy(L, n->ax, n->ay, n->bx, n->by, cx, cy) ? NODE_ON : NODE_STRADDLES;
 }
 
 /* ---- error bounds -------------------------------------------------------- */
 
-/* Max |z - plane| over the samples inside (or on) the triangle, exactly: the
- * plane through the three corner heights, every lattice point tested. */
+/* max over t in [0, n) of |r[t] - (p0 + g t)|: four independent lanes so the
+ * compiler can keep them in vector registers; t is exact in double. */
+static double row_max(const float *r, int n, double p0, double g)
+{
+    double m0 = 0.0, m1 = 0.0, m2 = 0.0, m3 = 0.0, t = 0.0;
+    int i = 0;
+    for (; i + 4 <= n; i += 4, t += 4.0) {
+        double d0 = fabs((double)r[i] - (p0 + g * t));
+        double d1 = fabs((double)r[i + 1] - (p0 + g * (t + 1.0)));
+        double d2 = fabs((double)r[i + 2] - (p0 + g * (t + 2.0)));
+        double d3 = fabs((double)r[i + 3] - (p0 + g * (t + 3.0)));
+        m0 = d0 > m0 ? d0 : m0;
+        m1 = d1 > m1 ? d1 : m1;
+        m2 = d2 > m2 ? d2 : m2;
+        m3 = d3 > m3 ? d3 : m3;
+    }
+    for (; i < n; i++, t += 1.0) {
+        double d0 = fabs((double)r[i] - (p0 + g * t));
+        m0 = d0 > m0 ? d0 : m0;
+    }
+    if (m1 > m0) m0 = m1;
+    if (m3 > m2) m2 = m3;
+    return m0 > m2 ? m0 : m2;
+}
+
+/* Max |z - plane| over every sample inside (or on) the triangle, the plane
+ * through the three corner heights, in double. Bintree legs are either both
+ * on the axes (even levels) or both diagonal (odd levels), so every row of
+ * the triangle is one run of samples whose ends are exact integers: the
+ * triangle is scanned row by row without divisions or edge tests. */
 static double tri_max_error(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
 {
     const float *z = L->z;
@@ -87,60 +128,47 @@ static double tri_max_error(const rs_roam *L, int ax, int ay, int bx, int by, in
     double za = z[(size_t)ay * W + (size_t)ax];
     double zb = z[(size_t)by * W + (size_t)bx];
     double zc = z[(size_t)cy * W + (size_t)cx];
-    double dx1 = bx - ax, dy1 = by - ay, dx2 = cx - ax, dy2 = cy - ay;
-    double det = dx1 * dy2 - dx2 * dy1;
-    double gx = ((zb - za) * dy2 - (zc - za) * dy1) / det;
-    double gy = ((zc - za) * dx1 - (zb - za) * dx2) / det;
-    /* Edge functions e(x,y) = A x + B y + C >= 0 inside (orientation fixed by det). */
-    int px[3] = { ax, bx, cx }, py[3] = { ay, by, cy };
-    int64_t A[3], B[3], C[3];
-    for (int k = 0; k < 3; k++) {
-        int p = k, q = (k + 1) % 3;
-        int64_t ex = px[q] - px[p], ey = py[q] - py[p];
-        /* cross(e, (x,y) - p) */
-        A[k] = -ey; B[k] = ex; C[k] = ey * px[p] - ex * py[p];
-        if (det < 0) { A[k] = -A[k]; B[k] = -B[k]; C[k] = -C[k]; }
-    }
-    int y0 = ay < by ? ay : by, y1 = ay > by ? ay : by;
-    if (cy < y0) y0 = cy;
-    if (cy > y1) y1 = cy;
-    int xmin = ax < bx ? ax : bx, xmax = ax > bx ? ax : bx;
-    if (cx < xmin) xmin = cx;
-    if (cx > xmax) xmax = cx;
-    /* Bintree edges are axis-aligned or diagonal, so each bound on x is an
-     * exact integer line x = s*y + o (s in {-1, 0, 1}): no division per row. */
-    int64_t es[3], eo[3];
-    for (int k = 0; k < 3; k++) {
-        if (A[k] != 0) { es[k] = -B[k] / A[k]; eo[k] = -C[k] / A[k]; }
-        else { es[k] = 0; eo[k] = 0; }
-    }
-    double mx = 0.0;
-    for (int y = y0; y <= y1; y++) {
-        int64_t lo = xmin, hi = xmax;
-        for (int k = 0; k < 3; k++) {
-            if (A[k] > 0) { int64_t v = es[k] * y + eo[k]; if (v > lo) lo = v; }
-            else if (A[k] < 0) { int64_t v = es[k] * y + eo[k]; if (v < hi) hi = v; }
-            else if (B[k] * y + C[k] < 0) { lo = 1; hi = 0; }
+    int p = bx - ax, q = by - ay; /* left leg; the right leg is (-q, p) */
+    /* plane gradient; |leg|^2 is a power of two, so inv is exact */
+    double inv = 1.0 / (double)(p * p + q * q);
+    double db = zb - za, dc = zc - za;
+    double gx = (db * p - dc * q) * inv, gy = (db * q + dc * p) * inv;
+    double m = 0.0, d;
+    if (p == 0 || q == 0) {
+        /* right angle at the apex, legs on the axes: row k from the apex
+         * runs from the apex column s - k samples along the horizontal leg */
+        int hx = q == 0 ? p : -q, vy = q == 0 ? p : q;
+        int s = hx > 0 ? hx : -hx, sy = vy > 0 ? 1 : -1;
+        for (int k = 0; k <= s; k++) {
+            int y = ay + sy * k, n = s - k + 1;
+            int lo = hx > 0 ? ax : ax - (s - k);
+            double p0 = za + gx * (double)(lo - ax) + gy * (double)(y - ay);
+            d = row_max(z + (size_t)y * W + (size_t)lo, n, p0, gx);
+            if (d > m) m = d;
         }
-        if (lo > hi) continue;
-        const float *row = z + (size_t)y * W;
-        double b0 = za + gy * (double)(y - ay) - gx * (double)ax;
-        double m0 = 0.0, m1 = 0.0;
-        int64_t x = lo;
-        for (; x + 1 <= hi; x += 2) {
-            double d0 = fabs((double)row[x] - (b0 + gx * (double)x));
-            double d1 = fabs((double)row[x + 1] - (b0 + gx * (double)(x + 1)));
-            m0 = d0 > m0 ? d0 : m0;
-            m1 = d1 > m1 ? d1 : m1;
+    } else if (p == q) {
+        /* hypotenuse b-c horizontal; rows from it towards the apex shrink by one at each end */
+        int h = p > 0 ? p : -p, sy = q > 0 ? -1 : 1, yh = ay + q;
+        int x0 = bx < cx ? bx : cx;
+        for (int k = 0; k <= h; k++) {
+            int y = yh + sy * k, lo = x0 + k, n = 2 * (h - k) + 1;
+            double p0 = za + gx * (double)(lo - ax) + gy * (double)(y - ay);
+            d = row_max(z + (size_t)y * W + (size_t)lo, n, p0, gx);
+            if (d > m) m = d;
         }
-        if (x <= hi) {
-            double d0 = fabs((double)row[x] - (b0 + gx * (double)x));
-            m0 = d0 > m0 ? d0 : m0;
+    } else {
+        /* hypotenuse vertical at x = ax + p; row y spans h - |y - ay| samples
+         * from it towards the apex */
+        int h = p > 0 ? p : -p, xh = ax + p;
+        for (int y = ay - h; y <= ay + h; y++) {
+            int dy = y > ay ? y - ay : ay - y, len = h - dy;
+            int lo = p > 0 ? xh - len : xh;
+            double p0 = za + gx * (double)(lo - ax) + gy * (double)(y - ay);
+            d = row_max(z + (size_t)y * W + (size_t)lo, len + 1, p0, gx);
+            if (d > m) m = d;
         }
-        if (m1 > m0) m0 = m1;
-        if (m0 > mx) mx = m0;
     }
-    return mx;
+    return m;
 }
 
 /* Round up to float so the stored bound is never below the double one. */
@@ -151,31 +179,52 @@ static float round_up_float(double v)
     return f;
 }
 
-static void err_build(rs_roam *L, float *E, uint32_t h, int level, int ax, int ay, int bx,
-                      int by)
+/* Error bound of a node on the map (DEM units). */
+static float compute_err(const rs_roam *L, const roam_node *n)
 {
-    int maxlev = 2 * (int)L->plog - 1;
-    if (level > maxlev) return;
-    int cx = ax - (by - ay), cy = ay + (bx - ax);
-    int minx = ax < bx ? ax : bx, miny = ay < by ? ay : by;
-    if (cx < minx) minx = cx;
-    if (cy < miny) miny = cy;
-    float e;
-    if (minx >= (int)L->cw || miny >= (int)L->ch) e = ERR_OUTSIDE;
-    else if (!inside_xy(L, ax, ay, bx, by, cx, cy)) e = INFINITY; /* straddles the border */
-    else if (level == maxlev) {
+    int c = node_class(L, n);
+    if (c == NODE_OUTSIDE) return ERR_OUTSIDE;
+    if (c == NODE_STRADDLES) return INFINITY;
+    int cx, cy;
+    node_corner(n, &cx, &cy);
+    int p = (int)n->bx - (int)n->ax, q = (int)n->by - (int)n->ay;
+    if ((p == 1 || p == -1) && (q == 1 || q == -1)) {
         /* legs sqrt(2): the only non-corner sample is the base midpoint */
-        int mx = (bx + cx) / 2, my = (by + cy) / 2;
         const float *z = L->z;
         size_t W = L->w;
+        int mx = (n->bx + cx) / 2, my = (n->by + cy) / 2;
         double d = (double)z[(size_t)my * W + (size_t)mx]
-                   - 0.5 * ((double)z[(size_t)by * W + (size_t)bx] + (double)z[(size_t)cy * W + (size_t)cx]);
-        e = round_up_float(fabs(d));
-    } else e = round_up_float(tri_max_error(L, ax, ay, bx, by, cx, cy));
-    E[h] = e;
-    int mx = (bx + cx) / 2, my = (by + cy) / 2;
-    err_build(L, E, 2 * h, level + 1, mx, my, ax, ay);
-    err_build(L, E, 2 * h + 1, level + 1, mx, my, cx, cy);
+                   - 0.5 * ((double)z[(size_t)n->by * W + n->bx] + (double)z[(size_t)cy * W + (size_t)cx]);
+        return round_up_float(fabs(d));
+    }
+    if (p * p + q * q == 4) {
+        /* legs 2 on the axes: the only non-corner samples are the three edge midpoints */
+        const float *z = L->z;
+        size_t W = L->w;
+        int ax = n->ax, ay = n->ay, bx = n->bx, by = n->by;
+        double za = z[(size_t)ay * W + (size_t)ax], zb = z[(size_t)by * W + (size_t)bx];
+        double zc = z[(size_t)cy * W + (size_t)cx];
+        double d1 = fabs((double)z[(size_t)((ay + by) / 2) * W + (size_t)((ax + bx) / 2)] - 0.5 * (za + zb));
+        double d2 = fabs((double)z[(size_t)((ay + cy) / 2) * W + (size_t)((ax + cx) / 2)] - 0.5 * (za + zc));
+        double d3 = fabs((double)z[(size_t)((by + cy) / 2) * W + (size_t)((bx + cx) / 2)] - 0.5 * (zb + zc));
+        if (d2 > d1) d1 = d2;
+        if (d3 > d1) d1 = d3;
+        return round_up_float(d1);
+    }
+    return round_up_float(tri_max_error(L, n->ax, n->ay, n->bx, n->by, cx, cy));
+}
+
+/* Error bound of a node in DEM units, computed on first use (most deep
+ * nodes are never asked for at a large threshold); cell halves have none. */
+static float node_err(rs_roam *L, const roam_node *n)
+{
+    if (n->e == NIL) return 0.0f;
+    float v = L->err[n->e];
+    if (v != v) {
+        v = compute_err(L, n);
+        L->err[n->e] = v;
+    }
+    return v;
 }
 
 /* ---- nodata ---------------------------------------------------------------- */
@@ -293,11 +342,17 @@ static void split(rs_roam *L, uint32_t t)
     Lc->lc = Lc->rc = NIL; Rc->lc = Rc->rc = NIL;
     Lc->base = T->left; Lc->left = rc; Lc->right = NIL;
     Rc->base = T->right; Rc->left = NIL; Rc->right = lc;
-    Lc->h = 2 * T->h; Rc->h = 2 * T->h + 1;
-    Lc->patch = Rc->patch = T->patch;
+    /* heap index h -> 2h, 2h + 1 inside the patch; below the last error
+     * level come the cell halves */
+    if (T->e != NIL && (T->e & (uint32_t)(L->epp - 1)) < (uint32_t)(L->epp / 2)) {
+        uint32_t hh = T->e & (uint32_t)(L->epp - 1);
+        Lc->e = T->e + hh; Rc->e = T->e + hh + 1;
+    } else Lc->e = Rc->e = NIL;
     Lc->ax = mx; Lc->ay = my; Lc->bx = T->ax; Lc->by = T->ay;
     Rc->ax = mx; Rc->ay = my; Rc->bx = (uint16_t)cx; Rc->by = (uint16_t)cy;
     T->lc = lc; T->rc = rc;
+    L->stack[L->sp++] = rc;
+    L->stack[L->sp++] = lc;
     if (T->left != NIL) relink(n, T->left, t, lc);
     if (T->right != NIL) relink(n, T->right, t, rc);
     L->tris += (uint32_t)(inside_xy(L, mx, my, ax, ay, bx, by) + inside_xy(L, mx, my, cx, cy, ax, ay))
@@ -331,7 +386,9 @@ typedef struct view_params {
 
 typedef struct refine_params {
     double max_error;          /* metres (error mode) */
+    int border_only;           /* split only triangles straddling the map edge */
     const view_params *view;   /* NULL: error mode */
+    const unsigned char *vis;  /* view mode: per patch, 0 = culled (only border splits) */
     uint32_t stop_above;       /* abandon when tris exceeds this (0: never) */
 } refine_params;
 
@@ -344,14 +401,19 @@ static int sphere_visible(const view_params *v, const double c[3], double r)
     return 1;
 }
 
-static int wants_split(const rs_roam *L, const roam_node *nd, const refine_params *rp)
+static int wants_split(rs_roam *L, const roam_node *nd, const refine_params *rp)
 {
-    float e = node_err(L, nd);
-    if (e == INFINITY) return 1;
-    if (!(e > 0.0f)) return 0; /* flat, finest level, or off the map */
-    double em = (double)e * L->zs;
-    if (!rp->view) return em > rp->max_error;
+    if (rp->border_only) return nd->e != NIL && node_class(L, nd) == NODE_STRADDLES;
+    if (!rp->view) {
+        float e = node_err(L, nd);
+        return e == INFINITY || (e > 0.0f && (double)e * L->zs > rp->max_error);
+    }
+    if (nd->e == NIL) return 0;
+    int cls = node_class(L, nd);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
     const view_params *v = rp->view;
+    uint32_t patch = nd->e >> L->elog;
+    if (rp->vis && !rp->vis[patch]) return 0;
     int cx, cy;
     node_corner(nd, &cx, &cy);
     double cs = L->cs;
@@ -360,7 +422,7 @@ static int wants_split(const rs_roam *L, const roam_node *nd, const refine_param
     d = (nd->ax - gx) * (nd->ax - gx) + (nd->ay - gy) * (nd->ay - gy); if (d > r2) r2 = d;
     d = (nd->bx - gx) * (nd->bx - gx) + (nd->by - gy) * (nd->by - gy); if (d > r2) r2 = d;
     d = (cx - gx) * (cx - gx) + (cy - gy) * (cy - gy); if (d > r2) r2 = d;
-    double zlo = (double)L->pzmin[nd->patch] * L->zs, zhi = (double)L->pzmax[nd->patch] * L->zs;
+    double zlo = (double)L->pzmin[patch] * L->zs, zhi = (double)L->pzmax[patch] * L->zs;
     double hz = 0.5 * (zhi - zlo);
     double c[3] = { gx * cs, gy * cs, 0.5 * (zlo + zhi) };
     double r = sqrt(r2 * cs * cs + hz * hz);
@@ -369,19 +431,30 @@ static int wants_split(const rs_roam *L, const roam_node *nd, const refine_param
     double dist = sqrt(dx * dx + dy * dy + dz * dz) - r;
     double floor_d = 1e-3 * cs;
     if (dist < floor_d) dist = floor_d;
-    return em * v->k / dist > v->tol;
+    /* the error is computed last: culled nodes never need it */
+    float e = node_err(L, nd);
+    if (!(e > 0.0f)) return 0; /* flat */
+    return (double)e * L->zs * v->k / dist > v->tol;
 }
 
-/* Breadth-first refinement: nodes are visited in allocation order, and the
- * children of every split (forced ones too) are appended, so each leaf is
- * tested once. Stops at the first split the pool cannot hold, which makes
- * the mesh of a larger pool a refinement of a smaller pool's. Returns 1 when
- * abandoned for stop_above. */
+/* Depth-first refinement with an explicit stack: every node is pushed when
+ * it is created (children of forced splits too), so each leaf is tested
+ * once, and neighbouring triangles are handled close together in time (the
+ * DEM rows, error slots and neighbour nodes they touch stay in cache). The
+ * split sequence depends only on the DEM and the decision rule, never on the
+ * pool size; refinement stops at the first split the pool cannot hold, so
+ * the mesh of a larger pool is a refinement of a smaller pool's. Returns 1
+ * when abandoned for stop_above. */
 static int refine(rs_roam *L, const refine_params *rp)
 {
     roam_node *n = L->nodes;
-    for (uint32_t i = 0; i < L->used; i++) {
-        if (n[i].lc != NIL) continue;
+    uint32_t *st = L->stack;
+    L->sp = 0;
+    for (uint32_t i = L->used; i-- > 0;)
+        if (n[i].lc == NIL) st[L->sp++] = i; /* node 0 on top */
+    while (L->sp) {
+        uint32_t i = st[--L->sp];
+        if (n[i].lc != NIL) continue; /* force-split after it was pushed */
         if (!wants_split(L, &n[i], rp)) continue;
         uint32_t need = split_need(L, i);
         if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
@@ -391,16 +464,20 @@ static int refine(rs_roam *L, const refine_params *rp)
     return 0;
 }
 
-static void finish_stats(rs_roam *L)
+/* Largest error bound over the leaves on the map (metres). Computed when
+ * the stats are asked for, not after every refinement: it is a scan of
+ * every node, and meshing does not need it. */
+static double leaves_max_bound(const rs_roam *L)
 {
     double mb = 0.0;
     for (uint32_t i = 0; i < L->used; i++) {
         const roam_node *nd = &L->nodes[i];
-        if (nd->lc != NIL || !node_inside(L, nd)) continue;
-        double e = (double)node_err(L, nd);
-        if (e > mb) mb = e;
+        if (nd->lc != NIL || nd->e == NIL || !node_inside(L, nd)) continue;
+        float e = L->err[nd->e];
+        if (e != e) e = compute_err(L, nd); /* never tested (pool ran out first) */
+        if ((double)e > mb) mb = e;
     }
-    L->max_bound = mb * L->zs;
+    return mb * L->zs;
 }
 
 /* ---- creation --------------------------------------------------------------- */
@@ -432,8 +509,9 @@ static void init_roots(rs_roam *L)
             uint32_t x0 = px * P, y0 = py * P;
             roam_node *a = &n[r0], *b = &n[r1];
             a->lc = a->rc = b->lc = b->rc = NIL;
-            a->h = 2; b->h = 3;
-            a->patch = b->patch = p;
+            /* P = 1: the roots are already cell halves */
+            a->e = L->plog ? (uint32_t)(p * L->epp + 2) : NIL;
+            b->e = L->plog ? (uint32_t)(p * L->epp + 3) : NIL;
             /* root 0: apex top-left, left corner top-right; root 1 mirrors it */
             a->ax = (uint16_t)x0; a->ay = (uint16_t)y0; a->bx = (uint16_t)(x0 + P); a->by = (uint16_t)y0;
             b->ax = (uint16_t)(x0 + P); b->ay = (uint16_t)(y0 + P); b->bx = (uint16_t)x0; b->by = (uint16_t)(y0 + P);
@@ -457,6 +535,10 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->pzmax);
     rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
+    rs__free(ctx, L->stack);
+    rs__free(ctx, L->vrev);
+    rs__free(ctx, L->ucol);
+    rs__free(ctx, L->vrow);
     rs__free(ctx, L->vmap);
     rs__free(ctx, L->smap);
     rs__free(ctx, L);
@@ -494,7 +576,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     uint64_t npatch = (uint64_t)npx * npy;
     uint64_t epp = 2ull * P * P;
     uint64_t nerr;
-    if (!rs__mul_u64(npatch, epp, &nerr) || nerr > ((uint64_t)1 << 32) || 2 * npatch > 0x7FFFFFFFull)
+    if (!rs__mul_u64(npatch, epp, &nerr) || nerr >= ((uint64_t)1 << 32) || 2 * npatch > 0x7FFFFFFFull)
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: %llu patches of %u cells need too many error entries",
                         (unsigned long long)npatch, P);
     /* Full refinement: every patch tree down to cell halves. */
@@ -516,6 +598,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->w = W; L->hgt = H; L->cw = W - 1; L->ch = H - 1;
     L->cs = cs; L->zs = zs;
     L->plog = plog; L->P = P; L->npx = npx; L->npy = npy; L->epp = (size_t)epp;
+    L->elog = 2 * plog + 1;
     rs_result r = RS_OK;
     size_t nsamp = (size_t)W * H;
     int has_nodata = 0;
@@ -539,23 +622,24 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->pzmin = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
     L->vmap = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
+    L->vrev = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
+    L->ucol = rs__alloc_array(ctx, W, sizeof(float));
+    L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->pzmin || !L->pzmax || !L->vmap || !L->smap) {
+    if (!L->err || !L->pzmin || !L->pzmax || !L->vmap || !L->vrev || !L->smap || !L->ucol || !L->vrow) {
         r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                      (unsigned long long)nerr);
         goto fail;
     }
     memset(L->vmap, 0xFF, nsamp * sizeof(uint32_t));
+    for (uint32_t x = 0; x < W; x++) L->ucol[x] = (float)((double)x / L->cw);
+    for (uint32_t y = 0; y < H; y++) L->vrow[y] = (float)((double)y / L->ch);
+    memset(L->err, 0xFF, (size_t)nerr * sizeof(float)); /* all NaN: computed on first use */
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
     for (uint32_t py = 0; py < npy; py++)
         for (uint32_t px = 0; px < npx; px++) {
             uint32_t p = py * npx + px;
-            float *E = L->err + (size_t)p * L->epp;
             int x0 = (int)(px * P), y0 = (int)(py * P);
-            if (plog > 0) {
-                err_build(L, E, 2, 0, x0, y0, x0 + (int)P, y0);
-                err_build(L, E, 3, 0, x0 + (int)P, y0 + (int)P, x0, y0 + (int)P);
-            }
             float lo = INFINITY, hi = -INFINITY;
             uint32_t xe = x0 + P < L->cw ? x0 + P : L->cw, ye = y0 + P < L->ch ? y0 + P : L->ch;
             for (uint32_t y = (uint32_t)y0; y <= ye; y++)
@@ -571,8 +655,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     {
         uint64_t roots = 2 * npatch;
         uint64_t bcap = roots + 64;
-        refine_params rp = { FLT_MAX, NULL, 0 };
-        rp.max_error = INFINITY;
+        refine_params rp = { INFINITY, 1, NULL, NULL, 0 };
         for (;;) {
             if (bcap + pool > 0xFFFFFFF0ull) {
                 r = rs__fail(ctx, RS_ERR_LIMIT, "ROAM: base mesh plus pool exceed 2^32 nodes");
@@ -582,6 +665,10 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
             if (!nn) { r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %llu base nodes",
                                     (unsigned long long)bcap); goto fail; }
             L->nodes = nn;
+            uint32_t *ns = rs__realloc(ctx, L->stack, (size_t)bcap * sizeof(uint32_t));
+            if (!ns) { r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %llu base nodes",
+                                    (unsigned long long)bcap); goto fail; }
+            L->stack = ns;
             L->cap = (uint32_t)bcap;
             init_roots(L);
             L->exhausted = 0;
@@ -597,9 +684,11 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
             goto fail;
         }
         roam_node *nn = rs__realloc(ctx, L->nodes, total);
-        L->base_copy = rs__alloc_array(ctx, L->base_count, sizeof(roam_node));
         if (nn) L->nodes = nn;
-        if (!nn || !L->base_copy) {
+        uint32_t *ns = nn ? rs__realloc(ctx, L->stack, total / sizeof(roam_node) * sizeof(uint32_t)) : NULL;
+        if (ns) L->stack = ns;
+        L->base_copy = rs__alloc_array(ctx, L->base_count, sizeof(roam_node));
+        if (!nn || !ns || !L->base_copy) {
             r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for a pool of %llu nodes",
                          (unsigned long long)pool);
             goto fail;
@@ -608,11 +697,11 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
         L->cap = L->base_count + (uint32_t)pool;
     }
     L->bytes = sizeof *L + nerr * sizeof(float) + (uint64_t)npatch * 2 * sizeof(float)
-               + (uint64_t)nsamp * sizeof(uint32_t) * (has_nodata ? 2 : 1)
+               + (uint64_t)nsamp * sizeof(uint32_t) * (has_nodata ? 3 : 2)
                + 2 * ((uint64_t)W + H) * sizeof(uint32_t)
-               + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node);
+               + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node)
+               + (uint64_t)L->cap * sizeof(uint32_t) + ((uint64_t)W + H) * sizeof(float);
     L->threshold = INFINITY;
-    finish_stats(L);
     rs__ok(ctx);
     *out = L;
     return RS_OK;
@@ -630,10 +719,9 @@ rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *L, double max_error)
     if (!(max_error >= 0.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: max_error %g must be >= 0", max_error);
     reset_mesh(L);
-    refine_params rp = { max_error, NULL, 0 };
+    refine_params rp = { max_error, 0, NULL, NULL, 0 };
     refine(L, &rp);
     L->threshold = max_error;
-    finish_stats(L);
     if (L->exhausted)
         return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out at max error %g m "
                         "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, max_error, L->tris);
@@ -641,12 +729,16 @@ rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *L, double max_error)
     return RS_OK;
 }
 
-static float max_node_error(const rs_roam *L)
+/* Largest error of a base-mesh leaf: at that threshold nothing splits. */
+static float base_max_error(rs_roam *L)
 {
     float m = 0.0f;
-    size_t n = (size_t)L->npx * L->npy * L->epp;
-    for (size_t i = 0; i < n; i++)
-        if (L->err[i] > m && L->err[i] != INFINITY) m = L->err[i];
+    for (uint32_t i = 0; i < L->base_count; i++) {
+        const roam_node *nd = &L->base_copy[i];
+        if (nd->lc != NIL) continue;
+        float e = node_err(L, nd);
+        if (e > m && e != INFINITY) m = e;
+    }
     return m;
 }
 
@@ -659,17 +751,19 @@ rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *L, uint32_t max_triangles)
     if (!L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_refine_count: roam is NULL");
     if (L->base_tris > max_triangles) {
         reset_mesh(L);
-        finish_stats(L);
-        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: the base mesh already has %u triangles > %u",
+            return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: the base mesh already has %u triangles > %u",
                         L->base_tris, max_triangles);
     }
     /* Smallest error threshold (over float bit patterns, which order like
      * the values for non-negative floats) whose mesh fits the budget. */
-    uint32_t lo = 0, hi = float_bits(max_node_error(L));
+    /* The count is monotone in the threshold and the base mesh (<= budget)
+     * is what any threshold >= hi gives, so the search finds the smallest
+     * threshold that fits. */
+    uint32_t lo = 0, hi = float_bits(base_max_error(L));
     while (lo < hi) {
         uint32_t mid = lo + (hi - lo) / 2;
         reset_mesh(L);
-        refine_params rp = { (double)bits_float(mid) * L->zs, NULL, max_triangles };
+        refine_params rp = { (double)bits_float(mid) * L->zs, 0, NULL, NULL, max_triangles };
         int over = refine(L, &rp);
         if (!over && L->tris <= max_triangles) hi = mid; else lo = mid + 1;
     }
@@ -744,17 +838,8 @@ static void frame_pass(rs_roam *L, const view_params *v0, double tol, const unsi
     view_params v = *v0;
     v.tol = tol;
     reset_mesh(L);
-    refine_params rp = { 0.0, &v, 0 };
-    roam_node *n = L->nodes;
-    for (uint32_t i = 0; i < L->used; i++) {
-        if (n[i].lc != NIL) continue;
-        if (!vis[n[i].patch]) {
-            if (node_err(L, &n[i]) != INFINITY) continue;
-        } else if (!wants_split(L, &n[i], &rp)) continue;
-        uint32_t need = split_need(L, i);
-        if (need > L->cap - L->used) { L->exhausted = 1; break; }
-        split(L, i);
-    }
+    refine_params rp = { 0.0, 0, &v, vis, 0 };
+    refine(L, &rp);
 }
 
 rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
@@ -825,7 +910,6 @@ rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
     if (own) rs__free(ctx, vis);
     L->frame_passes = passes;
     L->threshold = tol;
-    finish_stats(L);
     if (L->exhausted)
         return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out in a frame "
                         "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, L->tris);
@@ -846,7 +930,7 @@ void rs_roam_get_stats(const rs_roam *L, rs_roam_stats *o)
     o->pool_exhausted = L->exhausted;
     o->triangles = L->tris;
     o->threshold = L->threshold;
-    o->max_error_bound = L->max_bound;
+    o->max_error_bound = leaves_max_bound(L);
     o->frame_passes = L->frame_passes;
     o->patches_culled = L->culled;
     o->bytes = L->bytes;
@@ -904,33 +988,44 @@ static uint32_t emit_vertex(extract_state *s, int x, int y)
     v[0] = (float)(x * L->cs);
     v[1] = (float)(y * L->cs);
     v[2] = (float)((double)zf(L, x, y) * L->zs);
-    v[3] = (float)((double)x / L->cw);
-    v[4] = (float)((double)y / L->ch);
+    v[3] = L->ucol[x];
+    v[4] = L->vrow[y];
     if (s->normals) vertex_normal(L, x, y, s->nrm + 3 * s->nv);
     L->vmap[id] = (uint32_t)s->nv;
+    L->vrev[s->nv] = (uint32_t)id;
     return (uint32_t)s->nv++;
 }
 
 /* Leaves in allocation order: one linear pass over the node array (cache
  * friendly; the order is deterministic). */
-static void emit_leaves(extract_state *s, int clear)
+static void emit_leaves(extract_state *s)
 {
     rs_roam *L = s->L;
     const roam_node *nodes = L->nodes;
-    uint32_t *vmap = L->vmap;
     const size_t W = L->w;
     for (uint32_t t = 0; t < L->used; t++) {
         const roam_node *nd = &nodes[t];
+#if defined(__GNUC__)
+        /* the vertex map is read at random: fetch a few leaves ahead */
+        if (t + EXTRACT_AHEAD < L->used) {
+            const roam_node *f = &nodes[t + EXTRACT_AHEAD];
+            int fx, fy;
+            node_corner(f, &fx, &fy);
+            if (fx >= 0 && fy >= 0 && fx <= (int)L->cw && fy <= (int)L->ch) {
+                __builtin_prefetch(&L->vmap[(size_t)fy * W + (size_t)fx]);
+                __builtin_prefetch(&L->z[(size_t)fy * W + (size_t)fx]);
+            }
+            if (f->ax <= L->cw && f->ay <= L->ch) {
+                __builtin_prefetch(&L->vmap[(size_t)f->ay * W + f->ax]);
+                __builtin_prefetch(&L->z[(size_t)f->ay * W + f->ax]);
+            }
+            if (f->bx <= L->cw && f->by <= L->ch) __builtin_prefetch(&L->vmap[(size_t)f->by * W + f->bx]);
+        }
+#endif
         if (nd->lc != NIL) continue;
         int cx, cy;
         node_corner(nd, &cx, &cy);
         if (!inside_xy(L, nd->ax, nd->ay, nd->bx, nd->by, cx, cy)) continue;
-        if (clear) {
-            vmap[(size_t)nd->ay * W + nd->ax] = NIL;
-            vmap[(size_t)nd->by * W + nd->bx] = NIL;
-            vmap[(size_t)cy * W + (size_t)cx] = NIL;
-            continue;
-        }
         /* apex, right corner, left corner: counter-clockwise seen from above */
         uint32_t a = emit_vertex(s, nd->ax, nd->ay);
         uint32_t c = emit_vertex(s, cx, cy);
@@ -992,8 +1087,8 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
     memset(&s, 0, sizeof s);
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
-    emit_leaves(&s, 0);
-    size_t top_indices = s.ni;
+    emit_leaves(&s);
+    size_t top_indices = s.ni, nsurf = s.nv;
     if (!s.overflow && o.skirt_depth > 0.0) {
         for (size_t t = 0; t < top_indices && !s.overflow; t += 3)
             for (int e = 0; e < 3 && !s.overflow; e++) {
@@ -1010,7 +1105,7 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
             }
         memset(L->smap, 0xFF, 2 * ((size_t)L->w + L->hgt) * sizeof(uint32_t));
     }
-    emit_leaves(&s, 1);
+    for (size_t k = 0; k < s.nv && k < nsurf; k++) L->vmap[L->vrev[k]] = NIL; /* ready for the next call */
     if (s.overflow) {
         size_t mv, mi;
         rs_roam_mesh_bound(L, &o, &mv, &mi);

@@ -161,7 +161,8 @@ int main(int argc, char **argv)
     fprintf(md, "## ROAM mesher vs @mapbox/martini (tests/bench/roam.c)\n\n");
     fprintf(md, "Same grid, same run. Errors are the true vertical errors over every DEM sample, measured by\n"
                 "`tests/roam_check.h` for both meshers (heights in DEM units = metres here). roadsplat time =\n"
-                "`rs_roam_create` (full-depth error bounds) + `rs_roam_refine_error` + `rs_roam_extract`;\n"
+                "`rs_roam_create` + `rs_roam_refine_error` + `rs_roam_extract` (the exact error bounds\n"
+                "are computed during refinement, for the nodes it tests);\n"
                 "martini time = `createTile` + `getMesh`, warm (after a JIT warm-up run). Medians of %d runs.\n"
                 "\"roadsplat @ martini's true error\" asks roadsplat for martini's measured max error.\n\n", RUNS);
     const uint32_t S = 1025;

@@ -1,0 +1,116 @@
+/* Splat options and inputs shared by `roadsplat` and `roadsplat render`. */
+#include "cli.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int cli_option_value(int argc, char **argv, int *i, const char *name, const char *inl, const char **val)
+{
+    if (inl) { *val = inl; return 0; }
+    if (*i + 1 >= argc) {
+        cli_error("option %s needs a value (see --help)", name);
+        return 1;
+    }
+    *val = argv[++*i];
+    return 0;
+}
+
+static int positive(const char *name, const char *v, double x)
+{
+    if (x > 0) return 0;
+    cli_error("%s: '%s' must be > 0", name, v);
+    return 1;
+}
+
+int cli_splat_option(int argc, char **argv, int *i, const char *name, const char *inl, cli_splat_args *s)
+{
+    static const char *const known[] = { "--cell-size", "--z-scale", "--texels", "--buffer", "--road-cell",
+                                         "--alpha-res", "--transition", "--jitter", "--terrain-texture",
+                                         "--road-texture", "--texture-scale", "--origin" };
+    size_t k, n = sizeof known / sizeof known[0];
+    for (k = 0; k < n && strcmp(name, known[k]); k++) {}
+    if (k == n) return -1;
+    const char *v;
+    if (cli_option_value(argc, argv, i, name, inl, &v)) return 1;
+    rs_splat_options *o = &s->o;
+    double d, xy[2];
+    uint32_t u;
+    if (!strcmp(name, "--cell-size")) {
+        if (cli_parse_double(name, v, &o->cell_size) || positive(name, v, o->cell_size)) return 1;
+    } else if (!strcmp(name, "--z-scale")) {
+        if (cli_parse_double(name, v, &o->z_scale)) return 1;
+        if (o->z_scale == 0) { cli_error("%s: '%s' must not be 0", name, v); return 1; }
+    } else if (!strcmp(name, "--texels")) {
+        if (cli_parse_u32(name, v, &o->texels)) return 1;
+        if (o->texels < 1 || o->texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
+    } else if (!strcmp(name, "--buffer")) {
+        if (!strcmp(v, "distance")) o->buffer = RS_BUFFER_DISTANCE;
+        else if (!strcmp(v, "dilate")) o->buffer = RS_BUFFER_DILATE;
+        else { cli_error("%s: '%s' is not 'distance' or 'dilate'", name, v); return 1; }
+    } else if (!strcmp(name, "--road-cell")) {
+        if (cli_parse_double(name, v, &o->road_cell) || positive(name, v, o->road_cell)) return 1;
+    } else if (!strcmp(name, "--alpha-res")) {
+        if (cli_parse_u32(name, v, &o->alpha_res)) return 1;
+        if (o->alpha_res < 2 || o->alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
+    } else if (!strcmp(name, "--transition")) {
+        if (cli_parse_double(name, v, &d)) return 1;
+        if (d < 0) { cli_error("%s: '%s' must be >= 0", name, v); return 1; }
+        o->transition = d == 0 ? -1 : d; /* the library's 0 means "default" */
+    } else if (!strcmp(name, "--jitter")) {
+        if (cli_parse_u32(name, v, &u)) return 1;
+        if (u == 0) { cli_error("%s: the seed must be > 0", name); return 1; }
+        o->jitter = u;
+    } else if (!strcmp(name, "--terrain-texture")) {
+        s->terrain_tex = v;
+    } else if (!strcmp(name, "--road-texture")) {
+        s->road_tex = v;
+    } else if (!strcmp(name, "--texture-scale")) {
+        if (cli_parse_double(name, v, &o->texture_scale) || positive(name, v, o->texture_scale)) return 1;
+    } else { /* --origin */
+        if (cli_parse_vec(name, v, xy, 2)) return 1;
+        o->origin_x = xy[0];
+        o->origin_y = xy[1];
+    }
+    return 0;
+}
+
+static int load_texture(const char *path, rs_image *img, uint8_t **data)
+{
+    if (!path) return 0;
+    if (cli_image_read_rgba8(path, &img->width, &img->height, data)) return 1;
+    img->rgba = *data;
+    return 0;
+}
+
+int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
+                         cli_splat_input *in)
+{
+    char *text = NULL;
+    size_t size = 0;
+    rs_limits lim;
+    memset(in, 0, sizeof *in);
+    rs_ctx_limits(ctx, &lim);
+    if (!(in->dem = cli_load_dem(ctx, dem_path))) return 1;
+    if (cli_read_file(roads_path, (size_t)lim.max_points * 64 + (1u << 20), &text, &size)) return 1;
+    rs_result r = rs_roads_parse(ctx, text, size, &in->roads);
+    free(text);
+    if (r) {
+        cli_error("%s: %s", roads_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        return 1;
+    }
+    if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
+        load_texture(s->road_tex, &in->road, &in->road_px))
+        return 1;
+    if (in->terrain_px) s->o.terrain_texture = &in->terrain;
+    if (in->road_px) s->o.road_texture = &in->road;
+    return 0;
+}
+
+void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in)
+{
+    rs_roads_free(ctx, in->roads);
+    rs_dem_free(ctx, in->dem);
+    free(in->terrain_px);
+    free(in->road_px);
+    memset(in, 0, sizeof *in);
+}
