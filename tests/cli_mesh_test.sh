@@ -2,14 +2,7 @@
 # CLI tests for `roadsplat mesh`. Usage: sh tests/cli_mesh_test.sh PATH/TO/roadsplat
 # Prints "N passed, N failed"; exits non-zero on any failure.
 BIN=${1:?usage: cli_mesh_test.sh ROADSPLAT}
-T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
-pass=0; fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
-check() { # description, command...
-    d=$1; shift
-    if "$@"; then ok; else bad "$d"; fi
-}
+. "$(dirname "$0")/cli_lib.sh"
 # A 33x17 P2 PGM: a ridge plus a bump (not 2^n+1 in height).
 awk 'BEGIN { W = 33; H = 17; print "P2"; print W, H; print 1000;
   for (i = 0; i < H; i++) { line = "";

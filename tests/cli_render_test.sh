@@ -3,14 +3,7 @@
 # Prints "N passed, N failed"; exits non-zero on any failure. Skips (0 passed,
 # 0 failed) when the binary was built without OSMesa.
 BIN=${1:?usage: cli_render_test.sh ROADSPLAT}
-T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
-pass=0; fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
-check() { # description, command...
-    d=$1; shift
-    if "$@"; then ok; else bad "$d"; fi
-}
+. "$(dirname "$0")/cli_lib.sh"
 
 if "$BIN" render --help 2>&1 | grep -q "no OSMesa support"; then
     echo "cli_render: skipped: $BIN was built without OSMesa (WITH_OSMESA=0)"
