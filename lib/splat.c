@@ -53,6 +53,19 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
     return RS_OK;
 }
 
+/* Output size for options already checked by rs__splat_defaults. */
+static rs_result output_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *o, uint32_t *width,
+                             uint32_t *height)
+{
+    uint64_t w = (uint64_t)(dem->width - 1) * o->texels, h = (uint64_t)(dem->height - 1) * o->texels, px;
+    if (!rs__mul_u64(w, h, &px) || px > ctx->limits.max_pixels || w > UINT32_MAX || h > UINT32_MAX)
+        return rs__fail(ctx, RS_ERR_LIMIT, "output of %llu x %llu pixels exceeds the limit of %llu pixels",
+                        (unsigned long long)w, (unsigned long long)h, (unsigned long long)ctx->limits.max_pixels);
+    *width = (uint32_t)w;
+    *height = (uint32_t)h;
+    return RS_OK;
+}
+
 rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, uint32_t *width,
                         uint32_t *height)
 {
@@ -60,15 +73,9 @@ rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *
     if (!dem || !width || !height) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_size");
     rs_splat_options o;
     rs_result r = rs__splat_defaults(ctx, opts, &o);
-    if (r) return r;
-    uint64_t w = (uint64_t)(dem->width - 1) * o.texels, h = (uint64_t)(dem->height - 1) * o.texels, px;
-    if (!rs__mul_u64(w, h, &px) || px > ctx->limits.max_pixels || w > UINT32_MAX || h > UINT32_MAX)
-        return rs__fail(ctx, RS_ERR_LIMIT, "output of %llu x %llu pixels exceeds the limit of %llu pixels",
-                        (unsigned long long)w, (unsigned long long)h, (unsigned long long)ctx->limits.max_pixels);
-    *width = (uint32_t)w;
-    *height = (uint32_t)h;
-    rs__ok(ctx);
-    return RS_OK;
+    if (!r) r = output_size(ctx, dem, &o, width, height);
+    if (!r) rs__ok(ctx);
+    return r;
 }
 
 /* --- integral tables of one alpha-map --------------------------------------- */
@@ -330,7 +337,7 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
     rs_result r = rs__splat_defaults(ctx, opts, &o);
     if (r) return r;
     uint32_t out_w, out_h;
-    r = rs_splat_size(ctx, dem, &o, &out_w, &out_h);
+    r = output_size(ctx, dem, &o, &out_w, &out_h);
     if (r) return r;
     if (grid->dem_w != dem->width || grid->dem_h != dem->height || grid->cell_size != o.cell_size)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "road grid was built for another DEM or cell size");
@@ -399,11 +406,10 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
         for (uint32_t ly = 0; ly < K; ly++) {
             uint32_t gy = crow * K + ly;
             uint32_t ty = gy >> RS__TILE_SHIFT;
-            const uint8_t *trow_base = NULL;
             for (uint32_t tx = 0; tx < grid->tw; tx++) {
                 const uint8_t *tile = rs__grid_tile(grid, tx, ty);
                 if (!tile) continue;
-                trow_base = tile + (size_t)(gy & (RS__TILE - 1)) * RS__TILE;
+                const uint8_t *trow_base = tile + (size_t)(gy & (RS__TILE - 1)) * RS__TILE;
                 uint32_t gx0 = tx * RS__TILE, xe = grid->gw - gx0 < RS__TILE ? grid->gw - gx0 : RS__TILE;
                 for (uint32_t x = 0; x < xe;) {
                     uint8_t cell = trow_base[x];
