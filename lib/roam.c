@@ -14,12 +14,18 @@
 #define ERR_OUTSIDE (-1.0f)       /* node entirely off the map: never split for error */
 #define FRAME_MAX_PASSES 12
 #define EXTRACT_AHEAD 24          /* leaves whose vertex-map slots are prefetched */
+/* The two finest levels are implicit: a split node with legs 2 on the axes
+ * ("R level") gets lc = IMPL and keeps the split bits of its two children
+ * (legs sqrt 2) in rc; those children and their cell halves are never
+ * nodes. See docs/roam.md. */
+#define IMPL 0xFFFFFFFEu
+#define TAG 0x80000000u           /* stack entry: test the implicit children of a node */
 
 typedef struct roam_node {
     uint32_t lc, rc;                /* children (NIL for a leaf) */
     uint32_t base, left, right;     /* neighbours across base / left leg / right leg */
     uint32_t e;                     /* error slot: patch * epp + heap index (roots are
-                                       2 and 3); NIL for cell halves, the finest level */
+                                       2 and 3); NIL for cell halves (patches of 1 cell) */
     uint16_t ax, ay, bx, by;        /* apex and left base corner; the right corner
                                        is apex + rot90(left - apex) */
 } roam_node;
@@ -30,13 +36,15 @@ struct rs_roam {
     const float *z;                 /* heights in DEM units, nodata filled */
     float *zown;                    /* owned copy when the DEM had nodata */
     uint32_t plog, P, npx, npy;
-    size_t epp;                     /* error entries per patch (2 P^2) */
+    size_t epp;                     /* error entries per patch (P^2) */
     uint32_t elog;                  /* log2(epp) */
     float *err;                     /* per patch, by heap index; NaN = not computed yet */
     float *pzmin, *pzmax;           /* per patch height range (DEM units) */
+    unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
     roam_node *nodes, *base_copy;
-    uint32_t *stack, sp;            /* refinement stack (cap entries: each node is
-                                       pushed at most once per pass) */
+    uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
+                                       pushed at most once per pass as a leaf and once
+                                       tagged, for its implicit children) */
     uint32_t base_count, cap, used; /* cap = base_count + pool */
     uint32_t base_tris, tris;
     int exhausted;
@@ -60,6 +68,34 @@ static void node_corner(const roam_node *n, int *cx, int *cy)
     *cy = (int)n->ay + ((int)n->bx - (int)n->ax);
 }
 
+/* A triangle by its corners: apex a, left b, right c = a + rot90(b - a);
+ * `on` = its patch lies wholly on the map (no edge tests needed). */
+typedef struct tri { int ax, ay, bx, by, cx, cy, on; } tri;
+
+static void node_tri(const rs_roam *L, const roam_node *n, tri *t)
+{
+    t->ax = n->ax; t->ay = n->ay; t->bx = n->bx; t->by = n->by;
+    node_corner(n, &t->cx, &t->cy);
+    t->on = n->e != NIL && L->pin[n->e >> L->elog];
+}
+
+/* Child k of t as split() makes it: k = 0 (apex m, left a, right b), k = 1
+ * (apex m, left c, right a), m the midpoint of the hypotenuse b-c. */
+static void child_tri(const tri *t, int k, tri *o)
+{
+    int mx = (t->bx + t->cx) / 2, my = (t->by + t->cy) / 2;
+    o->ax = mx; o->ay = my; o->on = t->on;
+    if (k == 0) { o->bx = t->ax; o->by = t->ay; o->cx = t->bx; o->cy = t->by; }
+    else { o->bx = t->cx; o->by = t->cy; o->cx = t->ax; o->cy = t->ay; }
+}
+
+/* Legs 2 on the axes: the finest node level; its children are implicit. */
+static int is_r_level(const roam_node *n)
+{
+    int p = (int)n->bx - (int)n->ax, q = (int)n->by - (int)n->ay;
+    return p * p + q * q == 4;
+}
+
 static int inside_xy(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
 {
     int mx = ax > bx ? ax : bx, my = ay > by ? ay : by;
@@ -78,15 +114,20 @@ static int node_inside(const rs_roam *L, const roam_node *n)
 /* Where a node lies against the map: wholly off it, straddling its edge, or on it. */
 enum { NODE_ON = 0, NODE_OUTSIDE = 1, NODE_STRADDLES = 2 };
 
-static int node_class(const rs_roam *L, const roam_node *n)
+static int tri_class(const rs_roam *L, const tri *t)
 {
-    int cx, cy;
-    node_corner(n, &cx, &cy);
-    int minx = n->ax < n->bx ? n->ax : n->bx, miny = n->ay < n->by ? n->ay : n->by;
-    if (cx < minx) minx = cx;
-    if (cy < miny) miny = cy;
+    if (t->on) return NODE_ON;
+    int minx = t->ax < t->bx ? t->ax : t->bx, miny = t->ay < t->by ? t->ay : t->by;
+    if (t->cx < minx) minx = t->cx;
+    if (t->cy < miny) miny = t->cy;
     if (minx >= (int)L->cw || miny >= (int)L->ch) return NODE_OUTSIDE;
-    return inside_xy(L, n->ax, n->ay, n->bx, n->by, cx, cy) ? NODE_ON : NODE_STRADDLES;
+    return inside_xy(L, t->ax, t->ay, t->bx, t->by, t->cx, t->cy) ? NODE_ON : NODE_STRADDLES;
+}
+
+static int tri_inside(const rs_roam *L, const tri *t)
+{
+    if (t->on) return 1;
+    return inside_xy(L, t->ax, t->ay, t->bx, t->by, t->cx, t->cy);
 }
 
 /* ---- error bounds -------------------------------------------------------- */
@@ -171,37 +212,43 @@ static double tri_max_error(const rs_roam *L, int ax, int ay, int bx, int by, in
     return m;
 }
 
-/* Round up to float so the stored bound is never below the double one. */
+/* Round up to float so the stored bound is never below the double one
+ * (v >= 0: the next float up is the next bit pattern). */
 static float round_up_float(double v)
 {
     float f = (float)v;
-    if ((double)f < v) f = nextafterf(f, FLT_MAX);
+    if ((double)f < v && f < FLT_MAX) {
+        uint32_t u;
+        memcpy(&u, &f, sizeof u);
+        u++;
+        memcpy(&f, &u, sizeof f);
+    }
     return f;
 }
 
-/* Error bound of a node on the map (DEM units). */
-static float compute_err(const rs_roam *L, const roam_node *n)
+/* Error bound of a triangle (DEM units): ERR_OUTSIDE off the map, +inf
+ * when it straddles the map edge. */
+static float compute_err(const rs_roam *L, const tri *t)
 {
-    int c = node_class(L, n);
+    int c = tri_class(L, t);
     if (c == NODE_OUTSIDE) return ERR_OUTSIDE;
     if (c == NODE_STRADDLES) return INFINITY;
-    int cx, cy;
-    node_corner(n, &cx, &cy);
-    int p = (int)n->bx - (int)n->ax, q = (int)n->by - (int)n->ay;
+    int cx = t->cx, cy = t->cy;
+    int p = t->bx - t->ax, q = t->by - t->ay;
     if ((p == 1 || p == -1) && (q == 1 || q == -1)) {
         /* legs sqrt(2): the only non-corner sample is the base midpoint */
         const float *z = L->z;
         size_t W = L->w;
-        int mx = (n->bx + cx) / 2, my = (n->by + cy) / 2;
+        int mx = (t->bx + cx) / 2, my = (t->by + cy) / 2;
         double d = (double)z[(size_t)my * W + (size_t)mx]
-                   - 0.5 * ((double)z[(size_t)n->by * W + n->bx] + (double)z[(size_t)cy * W + (size_t)cx]);
+                   - 0.5 * ((double)z[(size_t)t->by * W + (size_t)t->bx] + (double)z[(size_t)cy * W + (size_t)cx]);
         return round_up_float(fabs(d));
     }
     if (p * p + q * q == 4) {
         /* legs 2 on the axes: the only non-corner samples are the three edge midpoints */
         const float *z = L->z;
         size_t W = L->w;
-        int ax = n->ax, ay = n->ay, bx = n->bx, by = n->by;
+        int ax = t->ax, ay = t->ay, bx = t->bx, by = t->by;
         double za = z[(size_t)ay * W + (size_t)ax], zb = z[(size_t)by * W + (size_t)bx];
         double zc = z[(size_t)cy * W + (size_t)cx];
         double d1 = fabs((double)z[(size_t)((ay + by) / 2) * W + (size_t)((ax + bx) / 2)] - 0.5 * (za + zb));
@@ -211,18 +258,32 @@ static float compute_err(const rs_roam *L, const roam_node *n)
         if (d3 > d1) d1 = d3;
         return round_up_float(d1);
     }
-    return round_up_float(tri_max_error(L, n->ax, n->ay, n->bx, n->by, cx, cy));
+    return round_up_float(tri_max_error(L, t->ax, t->ay, t->bx, t->by, cx, cy));
+}
+
+/* Cache slot of a node above the R level: heap indices below epp / 2. The
+ * R level (three samples besides the corners) is cheaper to recompute than
+ * to cache; NIL for those and for cell halves. */
+static uint32_t err_slot(const rs_roam *L, const roam_node *n)
+{
+    if (n->e == NIL) return NIL;
+    uint32_t hh = n->e & (uint32_t)(L->epp - 1), half = (uint32_t)(L->epp / 2);
+    if (hh >= half) return NIL;
+    return (n->e >> L->elog) * half + hh;
 }
 
 /* Error bound of a node in DEM units, computed on first use (most deep
- * nodes are never asked for at a large threshold); cell halves have none. */
-static float node_err(rs_roam *L, const roam_node *n)
+ * nodes are never asked for at a large threshold) and cached above the R
+ * level; cell halves have none. */
+static float node_err(rs_roam *L, const roam_node *n, const tri *t)
 {
     if (n->e == NIL) return 0.0f;
-    float v = L->err[n->e];
+    uint32_t slot = err_slot(L, n);
+    if (slot == NIL) return compute_err(L, t);
+    float v = L->err[slot];
     if (v != v) {
-        v = compute_err(L, n);
-        L->err[n->e] = v;
+        v = compute_err(L, t);
+        L->err[slot] = v;
     }
     return v;
 }
@@ -312,18 +373,29 @@ static void relink(roam_node *n, uint32_t nb, uint32_t old, uint32_t now)
     else if (n[nb].right == old) n[nb].right = now;
 }
 
-/* Nodes a split of leaf t needs, force-splits included (worst case). */
+/* Nodes a split of leaf t needs, force-splits included (worst case): two
+ * per split, none for R-level nodes (their children are implicit). */
 static uint32_t split_need(const rs_roam *L, uint32_t t)
 {
     const roam_node *n = L->nodes;
     uint32_t need = 0, cur = t;
     for (;;) {
+        uint32_t c = is_r_level(&n[cur]) ? 0u : 2u;
         uint32_t b = n[cur].base;
-        if (b == NIL) return need + 2;
-        if (n[b].base == cur) return need + 4;
-        need += 4;
+        if (b == NIL) return need + c;
+        if (n[b].base == cur) return need + 2 * c; /* diamond: b is on cur's level */
+        need += 2 * c; /* cur and its partner, once b is split */
         cur = b;
     }
+}
+
+static int tris_delta(const rs_roam *L, const tri *t)
+{
+    if (t->on) return 1;
+    tri c0, c1;
+    child_tri(t, 0, &c0);
+    child_tri(t, 1, &c1);
+    return tri_inside(L, &c0) + tri_inside(L, &c1) - tri_inside(L, t);
 }
 
 /* Split leaf t, force-splitting its base neighbour first when they do not
@@ -333,6 +405,18 @@ static void split(rs_roam *L, uint32_t t)
     roam_node *n = L->nodes;
     if (n[t].lc != NIL) return;
     if (n[t].base != NIL && n[n[t].base].base != t) split(L, n[t].base);
+    if (is_r_level(&n[t])) {
+        /* children implicit: no nodes, no relinks (neighbours keep pointing
+         * at this node); its base partner is on the same level */
+        tri tt;
+        node_tri(L, &n[t], &tt);
+        n[t].lc = IMPL; n[t].rc = 0;
+        L->tris += (uint32_t)tris_delta(L, &tt);
+        L->stack[L->sp++] = t | TAG;
+        uint32_t b = n[t].base;
+        if (b != NIL && n[b].lc == NIL) split(L, b);
+        return;
+    }
     uint32_t lc = L->used++, rc = L->used++;
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
@@ -355,8 +439,9 @@ static void split(rs_roam *L, uint32_t t)
     L->stack[L->sp++] = lc;
     if (T->left != NIL) relink(n, T->left, t, lc);
     if (T->right != NIL) relink(n, T->right, t, rc);
-    L->tris += (uint32_t)(inside_xy(L, mx, my, ax, ay, bx, by) + inside_xy(L, mx, my, cx, cy, ax, ay))
-               - (uint32_t)inside_xy(L, ax, ay, bx, by, cx, cy);
+    if (T->e != NIL && L->pin[T->e >> L->elog]) L->tris++;
+    else L->tris += (uint32_t)(inside_xy(L, mx, my, ax, ay, bx, by) + inside_xy(L, mx, my, cx, cy, ax, ay))
+                    - (uint32_t)inside_xy(L, ax, ay, bx, by, cx, cy);
     uint32_t b = T->base;
     if (b != NIL) {
         if (n[b].lc != NIL) {
@@ -364,6 +449,32 @@ static void split(rs_roam *L, uint32_t t)
             n[lc].right = n[b].rc; n[rc].left = n[b].lc;
         } else split(L, b);
     }
+}
+
+/* Mark implicit child k of R-level node r split (into its cell halves). */
+static void mark_q(rs_roam *L, uint32_t r, int k)
+{
+    roam_node *nd = &L->nodes[r];
+    if (nd->rc & (1u << k)) return;
+    nd->rc |= 1u << k;
+    tri t, q;
+    node_tri(L, nd, &t);
+    child_tri(&t, k, &q);
+    L->tris += (uint32_t)tris_delta(L, &q);
+}
+
+/* Split implicit child k of R-level node r. Its hypotenuse is r's leg k, so
+ * its diamond partner is a child of the R-level node across that leg (the
+ * leg links of R-level nodes always name a node on their own level, as the
+ * finer one is implicit), force-split first when it is not yet split. The
+ * caller reserved split_need of that neighbour. */
+static void split_q(rs_roam *L, uint32_t r, int k)
+{
+    roam_node *n = L->nodes;
+    uint32_t nb = k ? n[r].right : n[r].left;
+    if (nb != NIL && n[nb].lc == NIL) split(L, nb);
+    mark_q(L, r, k);
+    if (nb != NIL) mark_q(L, nb, n[nb].left == r ? 0 : 1);
 }
 
 static void reset_mesh(rs_roam *L)
@@ -401,26 +512,26 @@ static int sphere_visible(const view_params *v, const double c[3], double r)
     return 1;
 }
 
-static int wants_split(rs_roam *L, const roam_node *nd, const refine_params *rp)
+/* Decision for a leaf: node nd with triangle t, or (nd NULL) the implicit
+ * child t of a node in patch `patch`. */
+static int wants_split(rs_roam *L, const roam_node *nd, const tri *t, uint32_t patch, const refine_params *rp)
 {
-    if (rp->border_only) return nd->e != NIL && node_class(L, nd) == NODE_STRADDLES;
+    if (nd && nd->e == NIL) return 0; /* cell halves */
+    if (rp->border_only) return tri_class(L, t) == NODE_STRADDLES;
     if (!rp->view) {
-        float e = node_err(L, nd);
+        float e = nd ? node_err(L, nd, t) : compute_err(L, t);
         return e == INFINITY || (e > 0.0f && (double)e * L->zs > rp->max_error);
     }
-    if (nd->e == NIL) return 0;
-    int cls = node_class(L, nd);
+    int cls = tri_class(L, t);
     if (cls != NODE_ON) return cls == NODE_STRADDLES;
     const view_params *v = rp->view;
-    uint32_t patch = nd->e >> L->elog;
     if (rp->vis && !rp->vis[patch]) return 0;
-    int cx, cy;
-    node_corner(nd, &cx, &cy);
+    int cx = t->cx, cy = t->cy;
     double cs = L->cs;
-    double gx = (nd->ax + nd->bx + cx) / 3.0, gy = (nd->ay + nd->by + cy) / 3.0;
+    double gx = (t->ax + t->bx + cx) / 3.0, gy = (t->ay + t->by + cy) / 3.0;
     double r2 = 0.0, d;
-    d = (nd->ax - gx) * (nd->ax - gx) + (nd->ay - gy) * (nd->ay - gy); if (d > r2) r2 = d;
-    d = (nd->bx - gx) * (nd->bx - gx) + (nd->by - gy) * (nd->by - gy); if (d > r2) r2 = d;
+    d = (t->ax - gx) * (t->ax - gx) + (t->ay - gy) * (t->ay - gy); if (d > r2) r2 = d;
+    d = (t->bx - gx) * (t->bx - gx) + (t->by - gy) * (t->by - gy); if (d > r2) r2 = d;
     d = (cx - gx) * (cx - gx) + (cy - gy) * (cy - gy); if (d > r2) r2 = d;
     double zlo = (double)L->pzmin[patch] * L->zs, zhi = (double)L->pzmax[patch] * L->zs;
     double hz = 0.5 * (zhi - zlo);
@@ -432,7 +543,7 @@ static int wants_split(rs_roam *L, const roam_node *nd, const refine_params *rp)
     double floor_d = 1e-3 * cs;
     if (dist < floor_d) dist = floor_d;
     /* the error is computed last: culled nodes never need it */
-    float e = node_err(L, nd);
+    float e = nd ? node_err(L, nd, t) : compute_err(L, t);
     if (!(e > 0.0f)) return 0; /* flat */
     return (double)e * L->zs * v->k / dist > v->tol;
 }
@@ -450,12 +561,33 @@ static int refine(rs_roam *L, const refine_params *rp)
     roam_node *n = L->nodes;
     uint32_t *st = L->stack;
     L->sp = 0;
-    for (uint32_t i = L->used; i-- > 0;)
-        if (n[i].lc == NIL) st[L->sp++] = i; /* node 0 on top */
+    for (uint32_t i = L->used; i-- > 0;) { /* node 0 on top */
+        if (n[i].lc == NIL) st[L->sp++] = i;
+        else if (n[i].lc == IMPL) st[L->sp++] = i | TAG;
+    }
     while (L->sp) {
         uint32_t i = st[--L->sp];
+        tri t;
+        if (i & TAG) { /* the implicit children of an R-level node */
+            i &= ~TAG;
+            node_tri(L, &n[i], &t);
+            uint32_t patch = n[i].e >> L->elog;
+            for (int k = 0; k < 2; k++) {
+                if (n[i].rc & (1u << k)) continue; /* force-split already */
+                tri q;
+                child_tri(&t, k, &q);
+                if (!wants_split(L, NULL, &q, patch, rp)) continue;
+                uint32_t nb = k ? n[i].right : n[i].left;
+                uint32_t need = nb != NIL && n[nb].lc == NIL ? split_need(L, nb) : 0;
+                if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
+                split_q(L, i, k);
+                if (rp->stop_above && L->tris > rp->stop_above) return 1;
+            }
+            continue;
+        }
         if (n[i].lc != NIL) continue; /* force-split after it was pushed */
-        if (!wants_split(L, &n[i], rp)) continue;
+        node_tri(L, &n[i], &t);
+        if (!wants_split(L, &n[i], &t, n[i].e >> L->elog, rp)) continue;
         uint32_t need = split_need(L, i);
         if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
         split(L, i);
@@ -472,9 +604,22 @@ static double leaves_max_bound(const rs_roam *L)
     double mb = 0.0;
     for (uint32_t i = 0; i < L->used; i++) {
         const roam_node *nd = &L->nodes[i];
-        if (nd->lc != NIL || nd->e == NIL || !node_inside(L, nd)) continue;
-        float e = L->err[nd->e];
-        if (e != e) e = compute_err(L, nd); /* never tested (pool ran out first) */
+        tri t;
+        node_tri(L, nd, &t);
+        if (nd->lc == IMPL) { /* unsplit implicit children */
+            for (int k = 0; k < 2; k++) {
+                tri q;
+                child_tri(&t, k, &q);
+                if (nd->rc & (1u << k) || !tri_inside(L, &q)) continue;
+                float e = compute_err(L, &q);
+                if ((double)e > mb) mb = e;
+            }
+            continue;
+        }
+        if (nd->lc != NIL || nd->e == NIL || !tri_inside(L, &t)) continue;
+        uint32_t slot = err_slot(L, nd);
+        float e = slot == NIL ? NAN : L->err[slot];
+        if (e != e) e = compute_err(L, &t); /* R level, or never tested (pool ran out first) */
         if ((double)e > mb) mb = e;
     }
     return mb * L->zs;
@@ -533,6 +678,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->err);
     rs__free(ctx, L->pzmin);
     rs__free(ctx, L->pzmax);
+    rs__free(ctx, L->pin);
     rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
     rs__free(ctx, L->stack);
@@ -574,13 +720,14 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     if ((uint64_t)npx * P > 65535u || (uint64_t)npy * P > 65535u)
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: patch size %u too large for a %ux%u DEM", P, W, H);
     uint64_t npatch = (uint64_t)npx * npy;
-    uint64_t epp = 2ull * P * P;
+    uint64_t epp = (uint64_t)P * P; /* heap indices down to the R level: < P^2 */
     uint64_t nerr;
     if (!rs__mul_u64(npatch, epp, &nerr) || nerr >= ((uint64_t)1 << 32) || 2 * npatch > 0x7FFFFFFFull)
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: %llu patches of %u cells need too many error entries",
                         (unsigned long long)npatch, P);
-    /* Full refinement: every patch tree down to cell halves. */
-    uint64_t full_nodes = npatch * (4ull * P * P - 2);
+    /* Full refinement: every patch tree down to the R level (the two finer
+     * levels are implicit). */
+    uint64_t full_nodes = npatch * (P >= 2 ? (uint64_t)P * P - 2 : 2u);
     uint64_t pool;
     if (o.pool_nodes) pool = o.pool_nodes;
     else if (o.pool_bytes) pool = o.pool_bytes / sizeof(roam_node);
@@ -598,7 +745,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->w = W; L->hgt = H; L->cw = W - 1; L->ch = H - 1;
     L->cs = cs; L->zs = zs;
     L->plog = plog; L->P = P; L->npx = npx; L->npy = npy; L->epp = (size_t)epp;
-    L->elog = 2 * plog + 1;
+    L->elog = 2 * plog;
     rs_result r = RS_OK;
     size_t nsamp = (size_t)W * H;
     int has_nodata = 0;
@@ -618,15 +765,17 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
             goto fail;
         }
     }
+    nerr = (nerr + 1) / 2; /* cached above the R level only (err_slot) */
     L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
     L->pzmin = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
+    L->pin = rs__alloc_array(ctx, (size_t)npatch, 1);
     L->vmap = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
     L->vrev = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->pzmin || !L->pzmax || !L->vmap || !L->vrev || !L->smap || !L->ucol || !L->vrow) {
+    if (!L->err || !L->pzmin || !L->pzmax || !L->pin || !L->vmap || !L->vrev || !L->smap || !L->ucol || !L->vrow) {
         r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                      (unsigned long long)nerr);
         goto fail;
@@ -649,6 +798,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
                     if (v > hi) hi = v;
                 }
             L->pzmin[p] = lo; L->pzmax[p] = hi;
+            L->pin[p] = (unsigned char)(x0 + P <= L->cw && y0 + P <= L->ch);
         }
     /* Base mesh: roots plus the splits that stop triangles straddling the map
      * edge. Sized by trial, doubling, before the pool exists. */
@@ -657,7 +807,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
         uint64_t bcap = roots + 64;
         refine_params rp = { INFINITY, 1, NULL, NULL, 0 };
         for (;;) {
-            if (bcap + pool > 0xFFFFFFF0ull) {
+            if (bcap + pool > 0x7FFFFFF0ull) { /* node indices below TAG */
                 r = rs__fail(ctx, RS_ERR_LIMIT, "ROAM: base mesh plus pool exceed 2^32 nodes");
                 goto fail;
             }
@@ -665,7 +815,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
             if (!nn) { r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %llu base nodes",
                                     (unsigned long long)bcap); goto fail; }
             L->nodes = nn;
-            uint32_t *ns = rs__realloc(ctx, L->stack, (size_t)bcap * sizeof(uint32_t));
+            uint32_t *ns = rs__realloc(ctx, L->stack, 2 * (size_t)bcap * sizeof(uint32_t));
             if (!ns) { r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %llu base nodes",
                                     (unsigned long long)bcap); goto fail; }
             L->stack = ns;
@@ -685,7 +835,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
         }
         roam_node *nn = rs__realloc(ctx, L->nodes, total);
         if (nn) L->nodes = nn;
-        uint32_t *ns = nn ? rs__realloc(ctx, L->stack, total / sizeof(roam_node) * sizeof(uint32_t)) : NULL;
+        uint32_t *ns = nn ? rs__realloc(ctx, L->stack, 2 * (total / sizeof(roam_node)) * sizeof(uint32_t)) : NULL;
         if (ns) L->stack = ns;
         L->base_copy = rs__alloc_array(ctx, L->base_count, sizeof(roam_node));
         if (!nn || !ns || !L->base_copy) {
@@ -696,11 +846,11 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
         memcpy(L->base_copy, L->nodes, (size_t)L->base_count * sizeof(roam_node));
         L->cap = L->base_count + (uint32_t)pool;
     }
-    L->bytes = sizeof *L + nerr * sizeof(float) + (uint64_t)npatch * 2 * sizeof(float)
+    L->bytes = sizeof *L + nerr * sizeof(float) + (uint64_t)npatch * (2 * sizeof(float) + 1)
                + (uint64_t)nsamp * sizeof(uint32_t) * (has_nodata ? 3 : 2)
                + 2 * ((uint64_t)W + H) * sizeof(uint32_t)
                + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node)
-               + (uint64_t)L->cap * sizeof(uint32_t) + ((uint64_t)W + H) * sizeof(float);
+               + 2 * (uint64_t)L->cap * sizeof(uint32_t) + ((uint64_t)W + H) * sizeof(float);
     L->threshold = INFINITY;
     rs__ok(ctx);
     *out = L;
@@ -735,8 +885,20 @@ static float base_max_error(rs_roam *L)
     float m = 0.0f;
     for (uint32_t i = 0; i < L->base_count; i++) {
         const roam_node *nd = &L->base_copy[i];
+        tri t;
+        node_tri(L, nd, &t);
+        if (nd->lc == IMPL) {
+            for (int k = 0; k < 2; k++) {
+                tri q;
+                child_tri(&t, k, &q);
+                if (nd->rc & (1u << k)) continue;
+                float e = compute_err(L, &q);
+                if (e > m && e != INFINITY) m = e;
+            }
+            continue;
+        }
         if (nd->lc != NIL) continue;
-        float e = node_err(L, nd);
+        float e = node_err(L, nd, &t);
         if (e > m && e != INFINITY) m = e;
     }
     return m;
@@ -996,8 +1158,23 @@ static uint32_t emit_vertex(extract_state *s, int x, int y)
     return (uint32_t)s->nv++;
 }
 
-/* Leaves in allocation order: one linear pass over the node array (cache
- * friendly; the order is deterministic). */
+/* One leaf triangle, when it lies on the map; 1 on overflow. */
+static int emit_tri(extract_state *s, const tri *t)
+{
+    if (!tri_inside(s->L, t)) return 0;
+    /* apex, right corner, left corner: counter-clockwise seen from above */
+    uint32_t a = emit_vertex(s, t->ax, t->ay);
+    uint32_t c = emit_vertex(s, t->cx, t->cy);
+    uint32_t b = emit_vertex(s, t->bx, t->by);
+    if (s->overflow) return 1;
+    if (s->ni + 3 > s->icap) { s->overflow = 1; return 1; }
+    s->idx[s->ni++] = a; s->idx[s->ni++] = c; s->idx[s->ni++] = b;
+    return 0;
+}
+
+/* Leaves in allocation order (the implicit ones with their R-level node):
+ * one linear pass over the node array (cache friendly; the order is
+ * deterministic). */
 static void emit_leaves(extract_state *s)
 {
     rs_roam *L = s->L;
@@ -1022,17 +1199,25 @@ static void emit_leaves(extract_state *s)
             if (f->bx <= L->cw && f->by <= L->ch) __builtin_prefetch(&L->vmap[(size_t)f->by * W + f->bx]);
         }
 #endif
-        if (nd->lc != NIL) continue;
-        int cx, cy;
-        node_corner(nd, &cx, &cy);
-        if (!inside_xy(L, nd->ax, nd->ay, nd->bx, nd->by, cx, cy)) continue;
-        /* apex, right corner, left corner: counter-clockwise seen from above */
-        uint32_t a = emit_vertex(s, nd->ax, nd->ay);
-        uint32_t c = emit_vertex(s, cx, cy);
-        uint32_t b = emit_vertex(s, nd->bx, nd->by);
-        if (s->overflow) return;
-        if (s->ni + 3 > s->icap) { s->overflow = 1; return; }
-        s->idx[s->ni++] = a; s->idx[s->ni++] = c; s->idx[s->ni++] = b;
+        if (nd->lc == NIL) {
+            tri leaf;
+            node_tri(L, nd, &leaf);
+            if (emit_tri(s, &leaf)) return;
+        } else if (nd->lc == IMPL) {
+            tri r, q, h;
+            node_tri(L, nd, &r);
+            for (int k = 0; k < 2; k++) {
+                child_tri(&r, k, &q);
+                if (!(nd->rc & (1u << k))) {
+                    if (emit_tri(s, &q)) return;
+                    continue;
+                }
+                for (int j = 0; j < 2; j++) {
+                    child_tri(&q, j, &h);
+                    if (emit_tri(s, &h)) return;
+                }
+            }
+        }
     }
 }
 
