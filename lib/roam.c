@@ -572,11 +572,24 @@ static int refine(rs_roam *L, const refine_params *rp)
             i &= ~TAG;
             node_tri(L, &n[i], &t);
             uint32_t patch = n[i].e >> L->elog;
+            int fast = t.on && !rp->view && !rp->border_only;
             for (int k = 0; k < 2; k++) {
                 if (n[i].rc & (1u << k)) continue; /* force-split already */
-                tri q;
-                child_tri(&t, k, &q);
-                if (!wants_split(L, NULL, &q, patch, rp)) continue;
+                if (fast) {
+                    /* error mode on the map: child k's only non-corner sample
+                     * is the midpoint of its hypotenuse, leg a-b or leg a-c */
+                    int ex = k ? t.cx : t.bx, ey = k ? t.cy : t.by;
+                    const float *z = L->z;
+                    size_t W = L->w;
+                    double d = (double)z[(size_t)((t.ay + ey) / 2) * W + (size_t)((t.ax + ex) / 2)]
+                               - 0.5 * ((double)z[(size_t)t.ay * W + (size_t)t.ax] + (double)z[(size_t)ey * W + (size_t)ex]);
+                    float e = round_up_float(fabs(d));
+                    if (!(e > 0.0f && (double)e * L->zs > rp->max_error)) continue;
+                } else {
+                    tri q;
+                    child_tri(&t, k, &q);
+                    if (!wants_split(L, NULL, &q, patch, rp)) continue;
+                }
                 uint32_t nb = k ? n[i].right : n[i].left;
                 uint32_t need = nb != NIL && n[nb].lc == NIL ? split_need(L, nb) : 0;
                 if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
@@ -1182,16 +1195,12 @@ static void emit_leaves(extract_state *s)
     const size_t W = L->w;
     for (uint32_t t = 0; t < L->used; t++) {
         const roam_node *nd = &nodes[t];
+        uint32_t lc = nd->lc;
+        if (lc != NIL && lc != IMPL) continue; /* inner node */
 #if defined(__GNUC__)
-        /* the vertex map is read at random: fetch a few leaves ahead */
+        /* the vertex map is read at random: fetch a few nodes ahead */
         if (t + EXTRACT_AHEAD < L->used) {
             const roam_node *f = &nodes[t + EXTRACT_AHEAD];
-            int fx, fy;
-            node_corner(f, &fx, &fy);
-            if (fx >= 0 && fy >= 0 && fx <= (int)L->cw && fy <= (int)L->ch) {
-                __builtin_prefetch(&L->vmap[(size_t)fy * W + (size_t)fx]);
-                __builtin_prefetch(&L->z[(size_t)fy * W + (size_t)fx]);
-            }
             if (f->ax <= L->cw && f->ay <= L->ch) {
                 __builtin_prefetch(&L->vmap[(size_t)f->ay * W + f->ax]);
                 __builtin_prefetch(&L->z[(size_t)f->ay * W + f->ax]);
@@ -1199,13 +1208,34 @@ static void emit_leaves(extract_state *s)
             if (f->bx <= L->cw && f->by <= L->ch) __builtin_prefetch(&L->vmap[(size_t)f->by * W + f->bx]);
         }
 #endif
-        if (nd->lc == NIL) {
-            tri leaf;
-            node_tri(L, nd, &leaf);
-            if (emit_tri(s, &leaf)) return;
-        } else if (nd->lc == IMPL) {
-            tri r, q, h;
-            node_tri(L, nd, &r);
+        tri r;
+        node_tri(L, nd, &r);
+        if (lc == NIL) {
+            if (emit_tri(s, &r)) return;
+        } else if (r.on) {
+            /* an R node on the map: its corners a, b, c and hypotenuse
+             * midpoint m once, the leg midpoints m0, m1 when split */
+            uint32_t bits = nd->rc;
+            int mx = (r.bx + r.cx) / 2, my = (r.by + r.cy) / 2;
+            uint32_t A = emit_vertex(s, r.ax, r.ay), B = emit_vertex(s, r.bx, r.by);
+            uint32_t C = emit_vertex(s, r.cx, r.cy), M = emit_vertex(s, mx, my);
+            uint32_t M0 = bits & 1u ? emit_vertex(s, (r.ax + r.bx) / 2, (r.ay + r.by) / 2) : 0;
+            uint32_t M1 = bits & 2u ? emit_vertex(s, (r.ax + r.cx) / 2, (r.ay + r.cy) / 2) : 0;
+            if (s->overflow) return;
+            if (s->ni + 3u * (2u + (bits & 1u) + (bits >> 1)) > s->icap) {
+                s->overflow = 1;
+                return;
+            }
+            uint32_t *o = s->idx + s->ni;
+            /* (apex, right, left) of (m, a, b) or of its halves (m0, m, a), (m0, b, m) */
+            if (!(bits & 1u)) { o[0] = M; o[1] = B; o[2] = A; o += 3; }
+            else { o[0] = M0; o[1] = A; o[2] = M; o[3] = M0; o[4] = M; o[5] = B; o += 6; }
+            /* (m, c, a) or its halves (m1, m, c), (m1, a, m) */
+            if (!(bits & 2u)) { o[0] = M; o[1] = A; o[2] = C; o += 3; }
+            else { o[0] = M1; o[1] = C; o[2] = M; o[3] = M1; o[4] = M; o[5] = A; o += 6; }
+            s->ni = (size_t)(o - s->idx);
+        } else {
+            tri q, h;
             for (int k = 0; k < 2; k++) {
                 child_tri(&r, k, &q);
                 if (!(nd->rc & (1u << k))) {
