@@ -158,8 +158,23 @@ static int clip_segment(const rs_road_grid *g, double pad, double *ax, double *a
     return 1;
 }
 
-/* Dilate mode, one segment: 8-connected centreline raster (Bresenham between
- * the cells holding the end points), each cell dilated by a k x k square. */
+/* Dilate mode: the k x k square around centreline cell (x, y). */
+static rs_result mark_square(marker *m, int64_t x, int64_t y, int64_t k)
+{
+    if (x + k < 0 || x - k >= (int64_t)m->g->gw) return RS_OK;
+    for (int64_t yy = y - k; yy <= y + k; yy++) {
+        rs_result r = mark_span(m, yy, x - k, x + k);
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
+/* Dilate mode, one segment: 8-connected centreline raster between the cells
+ * holding the end points, each cell dilated by a k x k square. One cell per
+ * step along the major axis, the minor coordinate rounded to nearest; where
+ * the line passes exactly between two cells both are taken, so the raster
+ * is the same whichever end it starts from and under every 90-degree turn or
+ * mirroring (plain Bresenham breaks such ties towards its start point). */
 static rs_result mark_segment_dilate(marker *m, double ax, double ay, double bx, double by, double h)
 {
     double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
@@ -173,19 +188,22 @@ static rs_result mark_segment_dilate(marker *m, double ax, double ay, double bx,
     if (k < 0) k = 0;
     if (!clip_segment(m->g, (double)k + 2, &ax, &ay, &bx, &by)) return RS_OK;
     int64_t x0 = (int64_t)floor(ax), y0 = (int64_t)floor(ay), x1 = (int64_t)floor(bx), y1 = (int64_t)floor(by);
-    int64_t sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
     int64_t ddx = x1 > x0 ? x1 - x0 : x0 - x1, ddy = y1 > y0 ? y1 - y0 : y0 - y1;
-    int64_t err = ddx - ddy;
-    for (;;) {
-        if (x0 + k >= 0 && x0 - k < (int64_t)m->g->gw)
-            for (int64_t yy = y0 - k; yy <= y0 + k; yy++) {
-                rs_result r = mark_span(m, yy, x0 - k, x0 + k);
-                if (r) return r;
-            }
-        if (x0 == x1 && y0 == y1) break;
-        int64_t e2 = 2 * err;
-        if (e2 > -ddy) { err -= ddy; x0 += sx; }
-        if (e2 < ddx) { err += ddx; y0 += sy; }
+    int xmajor = ddx >= ddy;
+    /* major/minor start, step and length; minor offset at step s is
+     * s*dmin/dmaj = q + rem/(2*dmaj) with rem in [0, 2*dmaj) */
+    int64_t p0 = xmajor ? x0 : y0, q0 = xmajor ? y0 : x0;
+    int64_t sp = (xmajor ? x1 > x0 : y1 > y0) ? 1 : -1, sq = (xmajor ? y1 > y0 : x1 > x0) ? 1 : -1;
+    int64_t dmaj = xmajor ? ddx : ddy, dmin = xmajor ? ddy : ddx, q = 0, rem = 0;
+    for (int64_t s = 0; s <= dmaj; s++) {
+        int64_t lo = rem > dmaj ? q + 1 : q, hi = rem >= dmaj && dmaj > 0 ? q + 1 : q;
+        for (int64_t t = lo; t <= hi; t++) {
+            int64_t p = p0 + sp * s, c = q0 + sq * t;
+            rs_result r = xmajor ? mark_square(m, p, c, k) : mark_square(m, c, p, k);
+            if (r) return r;
+        }
+        rem += 2 * dmin;
+        if (rem >= 2 * dmaj && dmaj > 0) { rem -= 2 * dmaj; q++; }
     }
     return RS_OK;
 }
@@ -196,30 +214,38 @@ static int inside_box(const rs_road_grid *g, double x0, double y0, double x1, do
              fmax(y0, y1) + pad < 0 || fmin(y0, y1) - pad > (double)g->gh);
 }
 
-/* A world coordinate relative to the origin, rounded to 1 micrometre: the
- * subtraction is exact for nearby values, and the rounding removes the last
- * bits lost when large world coordinates were read, so a scene translated by
- * up to ~10^7 m gives the same local coordinates, hence the same bytes. */
-static double local_coord(double world, double origin)
+/* A world coordinate relative to the origin, rounded to 1 micrometre (to a
+ * millionth of a power of ten at or below the cell size when cells are
+ * smaller than 1 m): the subtraction is exact for nearby values, and the
+ * rounding removes the last bits lost when large world coordinates were
+ * read, so a scene translated by up to ~10^7 m gives the same local
+ * coordinates, hence the same bytes. Scaling cell size and roads by a power
+ * of ten scales the quantum with them (docs/stability.md). */
+static double local_coord(double world, double origin, double per_unit)
 {
     double d = world - origin;
-    if (!(fabs(d) < 1e12)) return d; /* far away: precision is moot, keep it finite */
-    return floor(d * 1e6 + 0.5) / 1e6;
+    if (!(fabs(d) * per_unit < 1e18)) return d; /* far away: precision is moot, keep it finite */
+    return floor(d * per_unit + 0.5) / per_unit;
 }
 
 static rs_result mark_road(marker *m, const double *pts, size_t n, double width, rs_buffer_mode mode,
                            double ox, double oy, double *scratch)
 {
     const rs_road_grid *g = m->g;
+    double per_unit = 1e6; /* rounding steps per metre */
+    if (g->cell_size < 1) per_unit = pow(10.0, 6.0 - floor(log10(g->cell_size)));
     for (size_t i = 0; i < n; i++) {
-        scratch[2 * i] = local_coord(pts[2 * i], ox);
-        scratch[2 * i + 1] = local_coord(pts[2 * i + 1], oy);
+        scratch[2 * i] = local_coord(pts[2 * i], ox, per_unit);
+        scratch[2 * i + 1] = local_coord(pts[2 * i + 1], oy, per_unit);
     }
     const double *xy = scratch;
     double inv = 1.0 / g->c, h = 0.5 * width * inv;
     double hmax = (double)g->gw + (double)g->gh + 2; /* wider covers the whole grid anyway */
     if (h > hmax) h = hmax;
     double pad = h + 2.0;
+    int moving = 0; /* some segment has non-zero length */
+    for (size_t i = 0; i + 1 < n && !moving; i++)
+        moving = xy[2 * i] != xy[2 * i + 2] || xy[2 * i + 1] != xy[2 * i + 3];
     for (size_t i = 0; i < n; i++) {
         double ax = xy[2 * i] * inv, ay = xy[2 * i + 1] * inv;
         rs_result r = RS_OK;
@@ -233,7 +259,12 @@ static rs_result mark_road(marker *m, const double *pts, size_t n, double width,
             }
         } else if (i + 1 < n || n == 1) {
             double bx = i + 1 < n ? xy[2 * i + 2] * inv : ax, by = i + 1 < n ? xy[2 * i + 3] * inv : ay;
-            if (inside_box(g, ax, ay, bx, by, pad)) r = mark_segment_dilate(m, ax, ay, bx, by, h);
+            /* A repeated point is no segment: it would get the square of an
+             * axis-aligned road, wider than a diagonal road's band. Only a
+             * road that is one point throughout is drawn as that square. */
+            int dot = bx == ax && by == ay;
+            if ((!dot || (!moving && i == 0)) && inside_box(g, ax, ay, bx, by, pad))
+                r = mark_segment_dilate(m, ax, ay, bx, by, h);
         }
         if (r) return r;
     }

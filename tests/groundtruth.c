@@ -523,6 +523,42 @@ int gt_cell_buffer(const sc_scene *s, unsigned T, float *R)
     return 0;
 }
 
+int gt_cell_buffer_bilinear(const sc_scene *s, unsigned T, float *R)
+{
+    size_t pw, ph, cw, ch, px, py;
+    float *m;
+    if (gt_image_size(s, T, &pw, &ph) || gt_cell_buffer(s, T, R)) return -1;
+    cw = s->w - 1;
+    ch = s->h - 1;
+    m = malloc(cw * ch * sizeof *m);
+    if (!m) return -1;
+    for (py = 0; py < ch; py++)
+        for (px = 0; px < cw; px++) m[py * cw + px] = R[py * T * pw + px * T];
+    for (py = 0; py < ph; py++) {
+        /* pixel centre in cell-centre units: cell c's centre is at c */
+        double fy = (py + 0.5) / T - 0.5, ty;
+        size_t y0, y1;
+        if (fy < 0) fy = 0;
+        if (fy > (double)(ch - 1)) fy = (double)(ch - 1);
+        y0 = (size_t)fy;
+        y1 = y0 + 1 < ch ? y0 + 1 : y0;
+        ty = fy - (double)y0;
+        for (px = 0; px < pw; px++) {
+            double fx = (px + 0.5) / T - 0.5, tx;
+            size_t x0, x1;
+            if (fx < 0) fx = 0;
+            if (fx > (double)(cw - 1)) fx = (double)(cw - 1);
+            x0 = (size_t)fx;
+            x1 = x0 + 1 < cw ? x0 + 1 : x0;
+            tx = fx - (double)x0;
+            R[py * pw + px] = (float)((1 - ty) * ((1 - tx) * m[y0 * cw + x0] + tx * m[y0 * cw + x1]) +
+                                      ty * ((1 - tx) * m[y1 * cw + x0] + tx * m[y1 * cw + x1]));
+        }
+    }
+    free(m);
+    return 0;
+}
+
 /* --- outline length ---------------------------------------------------------------- */
 typedef struct gt_outline_ctx {
     const gt_index *ix;

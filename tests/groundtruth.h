@@ -42,6 +42,10 @@ int gt_hard_raster(const sc_scene *s, unsigned T, float *R);
 /* "Traditional road buffer": a whole DEM cell is road (all its T x T pixels
  * 1) iff the cell's centre is within a road. */
 int gt_cell_buffer(const sc_scene *s, unsigned T, float *R);
+/* The same per-cell mask, bilinearly interpolated between DEM cell centres
+ * to the pixel centres (clamped at the map border): the "blurred buffer"
+ * of multi-texture blending. */
+int gt_cell_buffer_bilinear(const sc_scene *s, unsigned T, float *R);
 
 /* Signed distance to the union outline as the SPEC ruler defines it:
  * min over roads of (distance to centreline - width/2). Exact outside the

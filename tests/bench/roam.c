@@ -164,7 +164,8 @@ int main(int argc, char **argv)
                 "`rs_roam_create` + `rs_roam_refine_error` + `rs_roam_extract` (the exact error bounds\n"
                 "are computed during refinement, for the nodes it tests);\n"
                 "martini time = `createTile` + `getMesh`, warm (after a JIT warm-up run). Medians of %d runs.\n"
-                "\"roadsplat @ martini's true error\" asks roadsplat for martini's measured max error.\n\n", RUNS);
+                "\"roadsplat @ martini's true error\" asks roadsplat for martini's measured max error.\n\n"
+                "![ROAM vs martini: time and triangles against error](bench/roam.png)\n\n", RUNS);
     const uint32_t S = 1025;
     float *z = malloc((size_t)S * S * sizeof *z);
     static const double Es[] = { 0.5, 1, 2, 5, 10, 20 };

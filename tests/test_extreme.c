@@ -1,0 +1,457 @@
+/* Extreme DEMs (constant, spike, 0/65535 checkerboard, nodata, 2x2,
+ * 8193x8193) and a seeded stress run of random scenes. Invariants: the
+ * splat's weights are in range and zero away from roads, output is
+ * deterministic, seams are exact (<= 1/255), ROAM meshes are valid, finite
+ * and within their error bound; library memory stays within a stated bound
+ * of the output size (counted through the allocator hook). */
+#include "harness.h"
+#include "roadsplat.h"
+#include "roadgrid.h"
+#include "roam_check.h"
+#include "scenes.h"
+#include "seams.h"
+#include "timing.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* --- counting allocator: live and peak bytes through the ctx hook ---------------- */
+typedef struct counter {
+    size_t live, peak;
+} counter;
+
+#define HDR 16 /* keeps malloc's alignment */
+static void *cnt_malloc(void *u, size_t n)
+{
+    counter *c = u;
+    if (n > SIZE_MAX - HDR) return NULL;
+    unsigned char *p = malloc(n + HDR);
+    if (!p) return NULL;
+    memcpy(p, &n, sizeof n);
+    c->live += n;
+    if (c->live > c->peak) c->peak = c->live;
+    return p + HDR;
+}
+static void *cnt_realloc(void *u, void *q, size_t n)
+{
+    counter *c = u;
+    if (!q) return cnt_malloc(u, n);
+    if (n > SIZE_MAX - HDR) return NULL;
+    unsigned char *p = (unsigned char *)q - HDR;
+    size_t old;
+    memcpy(&old, p, sizeof old);
+    unsigned char *r = realloc(p, n + HDR);
+    if (!r) return NULL;
+    memcpy(r, &n, sizeof n);
+    c->live = c->live - old + n;
+    if (c->live > c->peak) c->peak = c->live;
+    return r + HDR;
+}
+static void cnt_free(void *u, void *q)
+{
+    counter *c = u;
+    unsigned char *p = (unsigned char *)q - HDR;
+    size_t old;
+    memcpy(&old, p, sizeof old);
+    c->live -= old;
+    free(p);
+}
+
+static counter mem;
+static rs_ctx *ctx;
+
+/* --- helpers ------------------------------------------------------------------ */
+
+static rs_roads *make_roads(const sc_scene *s)
+{
+    rs_roads *roads = NULL;
+    if (rs_roads_create(ctx, &roads) != RS_OK) return NULL;
+    for (size_t i = 0; i < s->nroads; i++)
+        if (rs_roads_add(ctx, roads, NULL, s->roads[i].width, s->roads[i].xy, s->roads[i].n) != RS_OK) {
+            rs_roads_free(ctx, roads);
+            return NULL;
+        }
+    return roads;
+}
+
+/* Distance from (x, y) to the road's centreline polyline. */
+static double centreline_dist(const sc_road *r, double x, double y)
+{
+    double best = INFINITY;
+    for (size_t q = 0; q < r->n; q++) {
+        double ax = r->xy[2 * q], ay = r->xy[2 * q + 1];
+        double bx = q + 1 < r->n ? r->xy[2 * q + 2] : ax, by = q + 1 < r->n ? r->xy[2 * q + 3] : ay;
+        double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
+        double t = l2 > 0 ? ((x - ax) * dx + (y - ay) * dy) / l2 : 0;
+        t = t < 0 ? 0 : (t > 1 ? 1 : t);
+        double d = hypot(x - ax - t * dx, y - ay - t * dy);
+        if (d < best) best = d;
+    }
+    return best;
+}
+
+typedef struct splat_out {
+    uint32_t w, h;
+    uint8_t *rgba;
+    uint16_t *wt;
+    double seam;
+} splat_out;
+
+static void splat_out_free(splat_out *o)
+{
+    free(o->rgba);
+    free(o->wt);
+    memset(o, 0, sizeof *o);
+}
+
+/* Splat scene s; with `seam`, also the seam error of the grid. */
+static rs_result splat_scene(const sc_scene *s, const rs_splat_options *opts, int seam, splat_out *out)
+{
+    memset(out, 0, sizeof *out);
+    rs_splat_options o = *opts;
+    o.cell_size = s->cell_size;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_road_grid *g = NULL;
+    rs_result r = rs_dem_create(ctx, s->w, s->h, s->z, &dem);
+    if (!r) r = (roads = make_roads(s)) ? RS_OK : RS_ERR_NOMEM;
+    if (!r) r = rs_splat_size(ctx, dem, &o, &out->w, &out->h);
+    if (!r) r = rs_road_grid_build(ctx, dem, roads, &o, &g);
+    if (!r && seam) out->seam = rs_test_seam_error(g, 32);
+    if (!r) {
+        size_t n = (size_t)out->w * out->h;
+        out->rgba = malloc(n * 4);
+        out->wt = malloc(n * 2);
+        r = out->rgba && out->wt ? rs_splat(ctx, dem, g, &o, out->rgba, n * 4, out->wt, n) : RS_ERR_NOMEM;
+    }
+    rs_road_grid_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    if (r) splat_out_free(out);
+    return r;
+}
+
+/* Weights: opaque output, and zero wherever the texel is clearly away from
+ * every road (farther than half the width plus a DEM cell plus a texel
+ * diagonal: the road grid and transition band never reach that far). Also
+ * some full-road weight when a road is wide enough to have an interior. */
+static int check_weights(const sc_scene *s, const splat_out *o, uint32_t T, int dilate, size_t *stray)
+{
+    double px = s->cell_size / T;
+    int ok = 1;
+    *stray = 0;
+    for (uint32_t y = 0; y < o->h; y++)
+        for (uint32_t x = 0; x < o->w; x++) {
+            size_t i = (size_t)y * o->w + x;
+            if (o->rgba[4 * i + 3] != 255) ok = 0;
+            if (!o->wt[i]) continue;
+            double cx = (x + 0.5) * px, cy = (y + 0.5) * px, margin = s->cell_size + px;
+            int near = 0;
+            for (size_t k = 0; k < s->nroads && !near; k++) {
+                /* dilate mode (the paper's square dilation) ends roads with
+                 * square caps: their corners reach (sqrt 2 - 1) w/2 further */
+                double cap = dilate ? (1.4142135623730951 - 1) * 0.5 * s->roads[k].width : 0;
+                near = centreline_dist(&s->roads[k], cx, cy) <= 0.5 * s->roads[k].width + cap + margin;
+            }
+            if (!near) (*stray)++;
+        }
+    return ok && *stray == 0;
+}
+
+typedef struct mesh_check {
+    int ok;            /* valid mesh (roam_check.h) with finite vertices */
+    double tol;        /* float rounding of heights in metres: 2^-21 of the largest */
+    double max_err;    /* measured */
+    size_t triangles;
+} mesh_check;
+
+/* ROAM at `err` metres: build, extract, check against the DEM (nodata as
+ * the library's fill, which the checker ignores). */
+static rs_result roam_scene(const float *z, uint32_t W, uint32_t H, double cs, double zs, double err,
+                            mesh_check *mc)
+{
+    memset(mc, 0, sizeof *mc);
+    rs_dem *dem = NULL;
+    rs_roam *roam = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.cell_size = cs;
+    o.z_scale = zs;
+    float *v = NULL;
+    uint32_t *idx = NULL;
+    rs_result r = rs_dem_create(ctx, W, H, z, &dem);
+    if (!r) r = rs_roam_create(ctx, dem, &o, &roam);
+    if (!r) r = rs_roam_refine_error(ctx, roam, err);
+    size_t nv = 0, ni = 0;
+    if (!r) {
+        size_t mv, mi;
+        rs_roam_mesh_bound(roam, NULL, &mv, &mi);
+        v = malloc((mv + 1) * 5 * sizeof *v);
+        idx = malloc((mi + 1) * sizeof *idx);
+        r = v && idx ? rs_roam_extract(ctx, roam, NULL, v, NULL, mv, idx, mi, &nv, &ni) : RS_ERR_NOMEM;
+    }
+    if (!r) {
+        int32_t *gx = malloc((nv + 1) * sizeof *gx), *gy = malloc((nv + 1) * sizeof *gy);
+        double *vz = malloc((nv + 1) * sizeof *vz);
+        float *zf = malloc((size_t)W * H * sizeof *zf);
+        int finite = 1;
+        if (gx && gy && vz && zf) {
+            for (size_t k = 0; k < nv; k++) {
+                for (int c = 0; c < 5; c++) finite &= isfinite(v[5 * k + c]) != 0;
+                gx[k] = (int32_t)lround(v[5 * k] / cs);
+                gy[k] = (int32_t)lround(v[5 * k + 1] / cs);
+                vz[k] = v[5 * k + 2];
+            }
+            double zmax = 0;
+            for (size_t k = 0; k < (size_t)W * H; k++) {
+                zf[k] = isnan(z[k]) ? z[k] : (float)((double)z[k] * zs);
+                if (fabs(zf[k]) > zmax) zmax = fabs(zf[k]);
+            }
+            /* vertex and DEM heights in metres are floats: a plane of them is
+             * planar only to float precision, so a bound of 0 is met to that */
+            mc->tol = zmax / 2097152.0;
+            rc_result res;
+            memset(&res, 0, sizeof res);
+            mc->ok = finite && rc_check(W, H, zf, 1.0, gx, gy, vz, nv, idx, ni / 3, &res) && rc_all_ok(&res);
+            mc->max_err = res.max_err;
+            mc->triangles = ni / 3;
+        } else r = RS_ERR_NOMEM;
+        free(gx); free(gy); free(vz); free(zf);
+    }
+    free(v);
+    free(idx);
+    rs_roam_free(ctx, roam);
+    rs_dem_free(ctx, dem);
+    return r;
+}
+
+/* --- extreme DEMs ------------------------------------------------------------------ */
+
+enum { X_CONST, X_SPIKE, X_CHECKER, X_NODATA, X_ALLNODATA, X_TINY, X_COUNT };
+static const char *x_name[X_COUNT] = { "constant", "spike", "checkerboard", "nodata", "all nodata", "2x2" };
+
+static void test_extreme_dems(void)
+{
+    for (int kind = 0; kind < X_COUNT; kind++) {
+        uint32_t W = kind == X_TINY ? 2 : 41, H = kind == X_TINY ? 2 : 33;
+        sc_scene s;
+        CHECK(sc_scene_init(&s, W, H, 1.0) == 0);
+        switch (kind) {
+        case X_CONST: sc_dem_constant(s.z, W, H, 65535.0f); break;
+        case X_SPIKE: sc_dem_spike(s.z, W, H, 0.0f, 65535.0f, H / 2, W / 3); break;
+        case X_CHECKER: sc_dem_checker(s.z, W, H, 1); break;
+        case X_NODATA:
+            sc_dem_fractal(s.z, W, H, 3, 0.5);
+            for (uint32_t i = 0; i < H; i++)
+                for (uint32_t j = 0; j < W; j++)
+                    if ((i + 2 * j) % 7 == 0 || (j > 10 && j < 20)) s.z[(size_t)i * W + j] = NAN;
+            break;
+        case X_ALLNODATA: sc_dem_constant(s.z, W, H, NAN); break;
+        default: s.z[0] = 0; s.z[1] = 65535; s.z[2] = 1; s.z[3] = 0.5f; break;
+        }
+        double X = sc_extent_x(&s), Y = sc_extent_y(&s);
+        double a[4] = { -0.2 * X, 0.3 * Y, 1.1 * X, 0.7 * Y }, b[6] = { 0.5 * X, -1, 0.45 * X, 0.5 * Y, 0.9 * X, 1.2 * Y };
+        CHECK(sc_add_road(&s, kind == X_TINY ? 0.3 : 3.0, a, 2) == 0);
+        CHECK(sc_add_road(&s, kind == X_TINY ? 0.2 : 1.5, b, 3) == 0);
+        for (int mode = 0; mode < 2; mode++) {
+            rs_splat_options o;
+            memset(&o, 0, sizeof o);
+            o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+            o.texels = 4;
+            splat_out r1, r2;
+            CHECK(splat_scene(&s, &o, 1, &r1) == RS_OK);
+            CHECK(splat_scene(&s, &o, 0, &r2) == RS_OK);
+            if (!r1.wt || !r2.wt) { splat_out_free(&r1); splat_out_free(&r2); continue; }
+            size_t n = (size_t)r1.w * r1.h, stray;
+            CHECKF(check_weights(&s, &r1, o.texels, mode, &stray), "%s: %zu stray weights", x_name[kind], stray);
+            CHECKF(r1.seam <= 1.0 / 255, "%s: seam %g", x_name[kind], r1.seam);
+            CHECK(memcmp(r1.rgba, r2.rgba, n * 4) == 0 && memcmp(r1.wt, r2.wt, n * 2) == 0);
+            uint16_t wmax = 0;
+            for (size_t i = 0; i < n; i++) if (r1.wt[i] > wmax) wmax = r1.wt[i];
+            CHECKF(wmax > 0, "%s: no road drawn", x_name[kind]);
+            splat_out_free(&r1);
+            splat_out_free(&r2);
+        }
+        const double errs[3] = { 0.0, 1.0, 1000.0 };
+        for (int e = 0; e < 3; e++) {
+            mesh_check mc;
+            CHECK(roam_scene(s.z, W, H, 1.0, 1.0, errs[e], &mc) == RS_OK);
+            CHECKF(mc.ok && mc.max_err <= errs[e] + mc.tol, "%s ROAM at %g: valid %d, error %g", x_name[kind], errs[e], mc.ok,
+                   mc.max_err);
+        }
+        sc_scene_free(&s);
+    }
+}
+
+/* 8193 x 8193 samples at 1 texel per cell (8192^2 output pixels), two roads.
+ * Library memory (allocator hook) beyond the DEM copy must stay a small
+ * fraction of the caller's RGBA buffer: the road grid is sparse and the
+ * splat works one cell row at a time. */
+#if defined(__SANITIZE_ADDRESS__)
+#define HUGE_SIDE 2049u /* ~20 s at 8193 under ASan: same test, a quarter the side */
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define HUGE_SIDE 2049u
+#endif
+#endif
+#ifndef HUGE_SIDE
+#define HUGE_SIDE 8193u
+#endif
+
+static void test_huge_dem(void)
+{
+    const uint32_t N = HUGE_SIDE;
+    sc_scene s;
+    if (sc_scene_init(&s, N, N, 1.0)) { CHECK(0); return; }
+    for (uint32_t i = 0; i < N; i++)
+        for (uint32_t j = 0; j < N; j++) s.z[(size_t)i * N + j] = (float)((i * 3u + j * 5u) % 4096u);
+    const double f = (N - 1) / 8192.0;
+    double a[4] = { 10 * f, 20 * f, 8100 * f, 8000 * f }, b[4] = { 4000 * f, -50 * f, 4100 * f, 8300 * f };
+    CHECK(sc_add_road(&s, 6, a, 2) == 0 && sc_add_road(&s, 12, b, 2) == 0);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 1;
+    /* 1x1 textures: no hillshade work, the test is about size and memory */
+    static const uint8_t green[4] = { 90, 140, 70, 255 }, grey[4] = { 70, 70, 72, 255 };
+    rs_image tt = { 1, 1, green }, rt = { 1, 1, grey };
+    o.terrain_texture = &tt;
+    o.road_texture = &rt;
+    double t0 = (tm_now_ms() / 1000.0);
+    size_t base = mem.live;
+    mem.peak = mem.live;
+    splat_out r;
+    CHECK(splat_scene(&s, &o, 0, &r) == RS_OK);
+    double secs = (tm_now_ms() / 1000.0) - t0;
+    size_t dem_bytes = (size_t)N * N * sizeof(float), out_bytes = (size_t)(N - 1) * (N - 1) * 4;
+    size_t extra = mem.peak - base - dem_bytes;
+    printf("%u^2 splat:", N);
+    printf(" %.2f s, library peak %.1f MB = DEM copy %.1f MB + %.2f MB (%.3f %% of the %.0f MB RGBA output)\n",
+           secs, (mem.peak - base) / 1e6, dem_bytes / 1e6, extra / 1e6, 100.0 * extra / out_bytes, out_bytes / 1e6);
+    CHECKF(extra <= out_bytes / 50, "library memory beyond the DEM: %zu bytes", extra);
+    CHECK(mem.live == base);
+    if (r.wt) {
+        size_t stray;
+        CHECK(check_weights(&s, &r, 1, 0, &stray));
+        CHECK(r.wt[(size_t)(4000 * f) * r.w + (size_t)(4050 * f)] == 65535); /* on road b's centreline */
+    }
+    splat_out_free(&r);
+    /* ROAM: a 8193 x 5 strip of it always; the whole DEM (about 6 s and
+     * 1.4 GB) only with RS_TEST_HUGE_ROAM=1. */
+    int full = getenv("RS_TEST_HUGE_ROAM") && atoi(getenv("RS_TEST_HUGE_ROAM"));
+    t0 = (tm_now_ms() / 1000.0);
+    mem.peak = mem.live;
+    mesh_check mc;
+    CHECK(roam_scene(s.z, N, full ? N : 5, 1.0, 1.0, 2000.0, &mc) == RS_OK);
+    printf("%ux%u ROAM at 2000:", N, full ? N : 5);
+    printf(" %.2f s, %zu triangles, error %g, library peak %.1f MB\n", (tm_now_ms() / 1000.0) - t0,
+           mc.triangles, mc.max_err, (mem.peak - base) / 1e6);
+    CHECK(mc.ok && mc.max_err <= 2000.0);
+    sc_scene_free(&s);
+}
+
+/* --- stress: random scenes ---------------------------------------------------------- */
+
+static void random_roads(sc_scene *s, sc_rng *r)
+{
+    double X = sc_extent_x(s), Y = sc_extent_y(s), cs = s->cell_size;
+    int nr = 1 + (int)(sc_rng_u64(r) % 7);
+    for (int k = 0; k < nr; k++) {
+        double w = sc_rng_range(r, 0.3, 12.0) * cs * (sc_rng_u64(r) % 4 == 0 ? 0.2 : 1.0);
+        switch (sc_rng_u64(r) % 4) {
+        case 0: sc_road_straight(s, sc_rng_range(r, 0, 2 * RS__PI), sc_rng_range(r, 0.1, 1.5) * (X + Y), w); break;
+        case 1:
+            sc_road_arc(s, sc_rng_range(r, 0, X), sc_rng_range(r, 0, Y), sc_rng_range(r, 1, 0.6 * (X + Y)),
+                        sc_rng_range(r, 0, 6.3), sc_rng_range(r, 0, 6.3), w, 2 + (size_t)(sc_rng_u64(r) % 40));
+            break;
+        case 2: sc_road_leaving(s, sc_rng_range(r, 0, 2 * RS__PI), w, sc_rng_range(r, 0, 50) * cs); break;
+        default: {
+            double p[16];
+            size_t n = 2 + (size_t)(sc_rng_u64(r) % 7);
+            for (size_t q = 0; q < n; q++) {
+                p[2 * q] = sc_rng_range(r, -0.2 * X, 1.2 * X);
+                p[2 * q + 1] = sc_rng_range(r, -0.2 * Y, 1.2 * Y);
+                if (q && sc_rng_u64(r) % 5 == 0) { p[2 * q] = p[2 * q - 2]; p[2 * q + 1] = p[2 * q - 1]; }
+            }
+            sc_add_road(s, w, p, n);
+        }
+        }
+    }
+}
+
+static void test_stress(void)
+{
+    const int SCENES = 50;
+    int bad_weights = 0, bad_seams = 0, nondet = 0, bad_mesh = 0;
+    double worst_seam = 0, worst_mesh_ratio = 0;
+    double t0 = (tm_now_ms() / 1000.0);
+    for (int it = 0; it < SCENES; it++) {
+        sc_rng r;
+        sc_rng_seed(&r, 0x5EED0000u + (uint64_t)it);
+        uint32_t W = 2 + (uint32_t)(sc_rng_u64(&r) % 70), H = 2 + (uint32_t)(sc_rng_u64(&r) % 70);
+        static const double css[4] = { 0.25, 1, 2.5, 30 };
+        sc_scene s;
+        if (sc_scene_init(&s, W, H, css[sc_rng_u64(&r) % 4])) { CHECK(0); return; }
+        switch (sc_rng_u64(&r) % 4) {
+        case 0: sc_dem_fractal(s.z, W, H, (uint64_t)it, sc_rng_range(&r, 0.2, 0.9)); break;
+        case 1: sc_dem_checker(s.z, W, H, 1 + (uint32_t)(sc_rng_u64(&r) % 3)); break;
+        case 2: sc_dem_ridge(s.z, W, H, sc_rng_range(&r, 0, 3.2), sc_rng_range(&r, 0.5, 10), 65535.0f); break;
+        default: sc_dem_terrain(s.z, W, H, s.cell_size, (uint64_t)it); break;
+        }
+        if (sc_rng_u64(&r) % 3 == 0) /* nodata holes */
+            for (size_t i = 0; i < (size_t)W * H; i++) if (sc_rng_u64(&r) % 9 == 0) s.z[i] = NAN;
+        random_roads(&s, &r);
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.buffer = sc_rng_u64(&r) % 2 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        o.texels = 1 + (uint32_t)(sc_rng_u64(&r) % 8);
+        o.z_scale = sc_rng_u64(&r) % 2 ? 0.01 : 1;
+        if (sc_rng_u64(&r) % 3 == 0) o.road_cell = s.cell_size / (1 + (double)(sc_rng_u64(&r) % 6));
+        splat_out a, b;
+        CHECK(splat_scene(&s, &o, 1, &a) == RS_OK);
+        CHECK(splat_scene(&s, &o, 0, &b) == RS_OK);
+        if (a.wt && b.wt) {
+            size_t n = (size_t)a.w * a.h, stray;
+            if (!check_weights(&s, &a, o.texels, o.buffer == RS_BUFFER_DILATE, &stray)) bad_weights++;
+            if (a.seam > 1.0 / 255) bad_seams++;
+            if (a.seam > worst_seam) worst_seam = a.seam;
+            if (memcmp(a.rgba, b.rgba, n * 4) || memcmp(a.wt, b.wt, n * 2)) nondet++;
+            CHECKF(stray == 0, "stress scene %d: %zu stray weights (%s, T=%u, cs %g, road cell %g, W %u H %u)", it, stray,
+                   o.buffer ? "dilate" : "distance", o.texels, s.cell_size, o.road_cell, W, H);
+            if (stray && getenv("RS_DEBUG"))
+                for (size_t k = 0; k < s.nroads; k++) {
+                    fprintf(stderr, "  road w=%g:", s.roads[k].width);
+                    for (size_t q = 0; q < s.roads[k].n; q++) fprintf(stderr, " (%g,%g)", s.roads[k].xy[2*q], s.roads[k].xy[2*q+1]);
+                    fprintf(stderr, "\n");
+                }
+        }
+        splat_out_free(&a);
+        splat_out_free(&b);
+        double err = (sc_rng_u64(&r) % 4 == 0) ? 0 : sc_rng_range(&r, 0, 5000) * o.z_scale;
+        mesh_check mc;
+        CHECK(roam_scene(s.z, W, H, s.cell_size, o.z_scale, err, &mc) == RS_OK);
+        if (!mc.ok || mc.max_err > err + mc.tol) bad_mesh++;
+        if (err > 0 && mc.max_err / err > worst_mesh_ratio) worst_mesh_ratio = mc.max_err / err;
+        CHECKF(mc.ok && mc.max_err <= err + mc.tol, "stress scene %d: mesh valid %d, error %g > %g", it, mc.ok, mc.max_err, err);
+        sc_scene_free(&s);
+    }
+    CHECK_EQ_INT(bad_weights, 0);
+    CHECK_EQ_INT(bad_seams, 0);
+    CHECK_EQ_INT(nondet, 0);
+    CHECK_EQ_INT(bad_mesh, 0);
+    printf("stress: %d scenes in %.2f s; worst seam %.4g, worst mesh error / bound %.3f\n", SCENES,
+           (tm_now_ms() / 1000.0) - t0, worst_seam, worst_mesh_ratio);
+}
+
+int main(void)
+{
+    rs_allocator al = { cnt_malloc, cnt_realloc, cnt_free, &mem };
+    if (rs_ctx_create(&al, NULL, &ctx) != RS_OK) return 1;
+    test_extreme_dems();
+    test_stress();
+    if (!getenv("RS_DEBUG")) test_huge_dem();
+    CHECK(mem.live > 0); /* the context itself */
+    rs_ctx_free(ctx);
+    CHECK_EQ_INT(mem.live, 0);
+    return th_finish("test_extreme");
+}
