@@ -276,8 +276,10 @@ typedef struct rs_roam_options {
 /* Bytes of one pool node (for sizing pool_bytes). */
 RS_API size_t rs_roam_node_bytes(void);
 
-/* Build the landscape: error bounds for every bintree node (about 2 floats
- * per padded DEM cell), the patch roots and the node pool. The automatic
+/* Build the landscape: the patch roots, the base mesh, the node pool and a
+ * cache for the error bounds (half a float per padded DEM cell; each bound
+ * is computed the first time refinement needs it). The finest mesh needs
+ * about one pool node per DEM cell. The automatic
  * pool holds the finest mesh, capped at 2^21 nodes and at the context's
  * max_pool_nodes (RS_ERR_LIMIT if a requested pool exceeds that). `dem` is
  * copied where it holds nodata, otherwise referenced: it must outlive *out.
@@ -287,7 +289,16 @@ RS_API rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_op
                                 rs_roam **out);
 RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
 
-/* Error-bounded mode. Reset to the base mesh, then split (breadth first,
+/* Re-target a landscape at another DEM of the same size (the next terrain
+ * tile of a simulator, a new elevation model), keeping its node pool,
+ * caches and options: no allocation unless the new DEM holds nodata. The
+ * cached error bounds are dropped and the mesh is reset to the base mesh.
+ * `dem` must outlive the landscape's use of it, as for rs_roam_create. On
+ * failure (size mismatch RS_ERR_INVALID_ARG, RS_ERR_NOMEM) the landscape
+ * keeps its previous DEM. */
+RS_API rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *roam, const rs_dem *dem);
+
+/* Error-bounded mode. Reset to the base mesh, then split (depth first,
  * in a fixed order) every triangle whose error bound exceeds `max_error`
  * metres: the result is the coarsest crack-free bintree mesh whose max
  * vertical error over all DEM samples is <= max_error. Returns

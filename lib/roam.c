@@ -38,6 +38,7 @@ struct rs_roam {
     uint32_t plog, P, npx, npy;
     size_t epp;                     /* error entries per patch (P^2) */
     uint32_t elog;                  /* log2(epp) */
+    size_t nerr;                    /* entries of err */
     float *err;                     /* per patch, by heap index; NaN = not computed yet */
     float *pzmin, *pzmax;           /* per patch height range (DEM units) */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
@@ -638,6 +639,80 @@ static double leaves_max_bound(const rs_roam *L)
     return mb * L->zs;
 }
 
+/* ---- heights -------------------------------------------------------------------- */
+
+/* Heights must stay finite through the error arithmetic (checked over the
+ * valid samples: filled nodata copies one of them). */
+static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem)
+{
+    size_t n = (size_t)L->w * L->hgt;
+    double zmax = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double a = fabs((double)dem->z[i]);
+        if (a > zmax && isfinite(a)) zmax = a;
+    }
+    if (!isfinite(zmax * L->zs * 4.0) || !isfinite(zmax * 4.0))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: heights up to %g times z_scale %g overflow", zmax, L->zs);
+    return RS_OK;
+}
+
+/* Point the landscape at dem's heights (nodata filled into an owned copy),
+ * forget every cached error bound and recompute the per-patch height
+ * ranges. On failure the landscape keeps its previous heights. */
+static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
+{
+    size_t n = (size_t)L->w * L->hgt;
+    int has_nodata = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(dem->z[i])) { has_nodata = 1; break; }
+    float *old = L->zown;
+    if (has_nodata) {
+        L->zown = NULL;
+        rs_result r = fill_nodata(ctx, L, dem->z);
+        if (r != RS_OK) { L->zown = old; return r; }
+    } else {
+        L->zown = NULL;
+        L->z = dem->z;
+    }
+    rs__free(ctx, old);
+    memset(L->err, 0xFF, L->nerr * sizeof(float)); /* all NaN: computed on first use */
+    size_t W = L->w;
+    uint32_t P = L->P;
+    for (uint32_t py = 0; py < L->npy; py++)
+        for (uint32_t px = 0; px < L->npx; px++) {
+            uint32_t p = py * L->npx + px, x0 = px * P, y0 = py * P;
+            float lo = INFINITY, hi = -INFINITY;
+            uint32_t xe = x0 + P < L->cw ? x0 + P : L->cw, ye = y0 + P < L->ch ? y0 + P : L->ch;
+            for (uint32_t y = y0; y <= ye; y++)
+                for (uint32_t x = x0; x <= xe; x++) {
+                    float v = L->z[(size_t)y * W + x];
+                    if (v < lo) lo = v;
+                    if (v > hi) hi = v;
+                }
+            L->pzmin[p] = lo; L->pzmax[p] = hi;
+        }
+    return RS_OK;
+}
+
+rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!L || !dem) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_set_dem: roam and dem must not be NULL");
+    if (dem->width != L->w || dem->height != L->hgt)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_set_dem: DEM is %ux%u, the landscape %ux%u",
+                        dem->width, dem->height, L->w, L->hgt);
+    rs_result r = check_heights(ctx, L, dem);
+    if (r == RS_OK) r = load_heights(ctx, L, dem);
+    if (r != RS_OK) return r;
+    reset_mesh(L);
+    L->threshold = INFINITY;
+    L->tol = 0.0;
+    L->frame_passes = 0;
+    L->culled = 0;
+    rs__ok(ctx);
+    return RS_OK;
+}
+
 /* ---- creation --------------------------------------------------------------- */
 
 static uint32_t choose_patch_log(uint32_t cw, uint32_t ch)
@@ -761,24 +836,9 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->elog = 2 * plog;
     rs_result r = RS_OK;
     size_t nsamp = (size_t)W * H;
-    int has_nodata = 0;
-    for (size_t i = 0; i < nsamp; i++)
-        if (!isfinite(dem->z[i])) { has_nodata = 1; break; }
-    if (has_nodata) {
-        if ((r = fill_nodata(ctx, L, dem->z)) != RS_OK) goto fail;
-    } else L->z = dem->z;
-    {
-        double zmax = 0.0;
-        for (size_t i = 0; i < nsamp; i++) {
-            double a = fabs((double)L->z[i]);
-            if (a > zmax) zmax = a;
-        }
-        if (!isfinite(zmax * zs * 4.0) || !isfinite(zmax * 4.0)) {
-            r = rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: heights up to %g times z_scale %g overflow", zmax, zs);
-            goto fail;
-        }
-    }
+    if ((r = check_heights(ctx, L, dem)) != RS_OK) goto fail;
     nerr = (nerr + 1) / 2; /* cached above the R level only (err_slot) */
+    L->nerr = (size_t)nerr;
     L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
     L->pzmin = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
@@ -796,23 +856,11 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     memset(L->vmap, 0xFF, nsamp * sizeof(uint32_t));
     for (uint32_t x = 0; x < W; x++) L->ucol[x] = (float)((double)x / L->cw);
     for (uint32_t y = 0; y < H; y++) L->vrow[y] = (float)((double)y / L->ch);
-    memset(L->err, 0xFF, (size_t)nerr * sizeof(float)); /* all NaN: computed on first use */
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
+    if ((r = load_heights(ctx, L, dem)) != RS_OK) goto fail;
     for (uint32_t py = 0; py < npy; py++)
-        for (uint32_t px = 0; px < npx; px++) {
-            uint32_t p = py * npx + px;
-            int x0 = (int)(px * P), y0 = (int)(py * P);
-            float lo = INFINITY, hi = -INFINITY;
-            uint32_t xe = x0 + P < L->cw ? x0 + P : L->cw, ye = y0 + P < L->ch ? y0 + P : L->ch;
-            for (uint32_t y = (uint32_t)y0; y <= ye; y++)
-                for (uint32_t x = (uint32_t)x0; x <= xe; x++) {
-                    float v = L->z[(size_t)y * W + x];
-                    if (v < lo) lo = v;
-                    if (v > hi) hi = v;
-                }
-            L->pzmin[p] = lo; L->pzmax[p] = hi;
-            L->pin[p] = (unsigned char)(x0 + P <= L->cw && y0 + P <= L->ch);
-        }
+        for (uint32_t px = 0; px < npx; px++)
+            L->pin[py * npx + px] = (unsigned char)(px * P + P <= L->cw && py * P + P <= L->ch);
     /* Base mesh: roots plus the splits that stop triangles straddling the map
      * edge. Sized by trial, doubling, before the pool exists. */
     {
@@ -860,7 +908,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
         L->cap = L->base_count + (uint32_t)pool;
     }
     L->bytes = sizeof *L + nerr * sizeof(float) + (uint64_t)npatch * (2 * sizeof(float) + 1)
-               + (uint64_t)nsamp * sizeof(uint32_t) * (has_nodata ? 3 : 2)
+               + (uint64_t)nsamp * sizeof(uint32_t) * (L->zown ? 3 : 2)
                + 2 * ((uint64_t)W + H) * sizeof(uint32_t)
                + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node)
                + 2 * (uint64_t)L->cap * sizeof(uint32_t) + ((uint64_t)W + H) * sizeof(float);

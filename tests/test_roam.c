@@ -555,6 +555,125 @@ static void test_errors(rs_ctx *ctx)
     free(zz);
 }
 
+static int same_mesh(const mesh *a, const mesh *b)
+{
+    return same_indices(a, b) && memcmp(a->v, b->v, a->nv * 5 * sizeof(float)) == 0;
+}
+
+/* rs_roam_set_dem: a landscape moved through several DEMs of one size gives
+ * byte-identical meshes to fresh landscapes on each, in every mode; a size
+ * mismatch or an allocation failure leaves it on its previous DEM. */
+static void test_set_dem(rs_ctx *ctx)
+{
+    const uint32_t W = 45, H = 29;
+    const int kinds[] = { DEM_FRACTAL, DEM_NODATA, DEM_SPIKE, DEM_NODATA, DEM_CHECKER, DEM_FRACTAL };
+    rs_dem *d0 = NULL;
+    float *z0 = gen(DEM_RIDGE, W, H);
+    rs_roam *moved = make(ctx, z0, W, H, NULL, &d0);
+    CHECK(moved != NULL);
+    if (!moved) { free(z0); return; }
+    int same_err = 1, same_count = 0, same_view = 1;
+    for (size_t t = 0; t < sizeof kinds / sizeof kinds[0]; t++) {
+        float *z = gen(kinds[t], W, H);
+        rs_dem *d = NULL, *df = NULL;
+        if (rs_dem_create(ctx, W, H, z, &d) != RS_OK) { free(z); same_err = 0; continue; }
+        rs_roam *fresh = make(ctx, z, W, H, NULL, &df);
+        CHECK_EQ_INT(rs_roam_set_dem(ctx, moved, d), RS_OK);
+        mesh a, b;
+        double Es[] = { 0.0, 0.5, 40.0 };
+        for (int e = 0; e < 3 && fresh; e++) {
+            rs_roam_refine_error(ctx, moved, Es[e]);
+            rs_roam_refine_error(ctx, fresh, Es[e]);
+            extract(ctx, moved, NULL, &a);
+            extract(ctx, fresh, NULL, &b);
+            if (!same_mesh(&a, &b)) same_err = 0;
+            mesh_free(&a); mesh_free(&b);
+        }
+        if (fresh) {
+            rs_roam_refine_count(ctx, moved, 300);
+            rs_roam_refine_count(ctx, fresh, 300);
+            extract(ctx, moved, NULL, &a);
+            extract(ctx, fresh, NULL, &b);
+            same_count += same_mesh(&a, &b);
+            mesh_free(&a); mesh_free(&b);
+            rs_roam_view v;
+            memset(&v, 0, sizeof v);
+            v.eye[0] = 10; v.eye[1] = -15; v.eye[2] = 50000;
+            v.dir[0] = 0.3; v.dir[1] = 1; v.dir[2] = -0.4;
+            v.pixel_error = 2; v.target_triangles = 400;
+            rs_roam_frame(ctx, moved, &v);
+            rs_roam_frame(ctx, fresh, &v);
+            extract(ctx, moved, NULL, &a);
+            extract(ctx, fresh, NULL, &b);
+            if (!same_mesh(&a, &b)) same_view = 0;
+            mesh_free(&a); mesh_free(&b);
+        } else same_err = 0;
+        rs_roam_free(ctx, fresh);
+        rs_dem_free(ctx, df);
+        /* keep d alive: the landscape references it */
+        rs_dem_free(ctx, d0);
+        d0 = d;
+        free(z);
+    }
+    CHECKF(same_err, "set_dem: error-bounded meshes identical to fresh landscapes (%zu DEMs)",
+           sizeof kinds / sizeof kinds[0]);
+    CHECK_EQ_INT(same_count, (int)(sizeof kinds / sizeof kinds[0]));
+    CHECKF(same_view, "set_dem: view-dependent meshes identical to fresh landscapes");
+
+    /* wrong size: refused, the landscape still meshes its current DEM */
+    mesh before, after;
+    rs_roam_refine_error(ctx, moved, 1.0);
+    extract(ctx, moved, NULL, &before);
+    float zs[6] = { 0, 1, 2, 3, 4, 5 };
+    rs_dem *small = NULL;
+    if (rs_dem_create(ctx, 3, 2, zs, &small) == RS_OK) {
+        CHECK_EQ_INT(rs_roam_set_dem(ctx, moved, small), RS_ERR_INVALID_ARG);
+        CHECK(strstr(rs_ctx_message(ctx), "3x2") != NULL);
+        rs_dem_free(ctx, small);
+    }
+    CHECK_EQ_INT(rs_roam_set_dem(ctx, moved, NULL), RS_ERR_INVALID_ARG);
+    rs_roam_refine_error(ctx, moved, 1.0);
+    extract(ctx, moved, NULL, &after);
+    CHECK(same_mesh(&before, &after));
+    mesh_free(&before); mesh_free(&after);
+    rs_roam_free(ctx, moved);
+    rs_dem_free(ctx, d0);
+    free(z0);
+
+    /* out of memory while filling a nodata DEM: RS_ERR_NOMEM, previous DEM kept, no leak */
+    float *za = gen(DEM_FRACTAL, W, H), *zb = gen(DEM_NODATA, W, H);
+    fail_alloc fa = { 1000, 0 };
+    rs_allocator al = { fa_malloc, fa_realloc, fa_free, &fa };
+    rs_ctx *c2 = NULL;
+    int nomem_ok = 0, kept = 0, leak_free = 0;
+    if (rs_ctx_create(&al, NULL, &c2) == RS_OK) {
+        rs_dem *da = NULL, *db = NULL;
+        rs_roam *r = make(c2, za, W, H, NULL, &da);
+        if (r && rs_dem_create(c2, W, H, zb, &db) == RS_OK) {
+            rs_roam_refine_error(c2, r, 0.5);
+            extract(c2, r, NULL, &before);
+            int live0 = fa.live;
+            fa.left = 0;
+            nomem_ok = rs_roam_set_dem(c2, r, db) == RS_ERR_NOMEM;
+            fa.left = 1000;
+            leak_free = fa.live == live0;
+            rs_roam_refine_error(c2, r, 0.5);
+            extract(c2, r, NULL, &after);
+            kept = same_mesh(&before, &after);
+            mesh_free(&before); mesh_free(&after);
+            rs_dem_free(c2, db);
+        }
+        rs_roam_free(c2, r);
+        rs_dem_free(c2, da);
+        rs_ctx_free(c2);
+        leak_free = leak_free && fa.live == 0;
+    }
+    CHECK(nomem_ok);
+    CHECK(kept);
+    CHECK(leak_free);
+    free(za); free(zb);
+}
+
 int main(void)
 {
     rs_ctx *ctx = NULL;
@@ -574,6 +693,7 @@ int main(void)
     test_view(ctx);
     test_extract_options(ctx);
     test_errors(ctx);
+    test_set_dem(ctx);
     rs_ctx_free(ctx);
     return th_finish("test_roam");
 }

@@ -18,6 +18,8 @@ set xlabel "requested max error E, m"
 set ylabel "build + mesh time, ms"
 plot src("fractal", "roadsplat") using 3:9 with linespoints pt 7 lc rgb "#1f77b4" title "roadsplat, fractal", \
      src("realistic", "roadsplat") using 3:9 with linespoints pt 5 lc rgb "#1f77b4" dt 2 title "roadsplat, realistic", \
+     src("fractal", "roadsplat_reused") using 3:9 with linespoints pt 7 lc rgb "#2ca02c" title "roadsplat reused (set\\_dem), fractal", \
+     src("realistic", "roadsplat_reused") using 3:9 with linespoints pt 5 lc rgb "#2ca02c" dt 2 title "roadsplat reused (set\\_dem), realistic", \
      src("fractal", "martini") using 3:9 with linespoints pt 6 lc rgb "#d62728" title "martini, fractal", \
      src("realistic", "martini") using 3:9 with linespoints pt 4 lc rgb "#d62728" dt 2 title "martini, realistic"
 set title "triangles against measured max error"
