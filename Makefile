@@ -80,10 +80,11 @@ help:
 	@echo "  make bench         run the benchmarks, write docs/BENCHMARKS.md"
 	@echo "  make fuzz          build libFuzzer targets with clang + ASan/UBSan"
 	@echo "  make sanitize-test run the test suite under ASan + UBSan"
+	@echo "  make fuzz-smoke    build and run every fuzz target FUZZ_SECONDS (30) each; fails on a finding"
 	@echo "  make install       install to DESTDIR/PREFIX (PREFIX=$(PREFIX))"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CFLAGS PREFIX DESTDIR BUILD WITH_OSMESA=0|1"
+	@echo "Variables: CC CXX OPT CFLAGS PREFIX DESTDIR BUILD WITH_OSMESA=0|1 FUZZ_SECONDS"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
@@ -153,6 +154,12 @@ $(BUILD)/fuzz/%.o: fuzz/%.c include/roadsplat.h
 $(BUILD)/fuzz/%-replay: $(BUILD)/fuzz/%/fuzz.o $(BUILD)/fuzz/replay_main.o $(STATIC_LIB)
 	$(CC) $(SAN) -o $@ $^ $(LDLIBS_CORE)
 
+# The demimage target drives the CLI's DEM loader: it also needs the CLI
+# objects that hold it and OpenImageIO, linked as C++.
+FUZZ_CLI_OBJ := $(BUILD)/cli/util.o $(BUILD)/cli/imageio.o
+$(BUILD)/fuzz/demimage-replay: $(BUILD)/fuzz/demimage/fuzz.o $(BUILD)/fuzz/replay_main.o $(FUZZ_CLI_OBJ) $(STATIC_LIB)
+	$(CXX) $(SAN) -o $@ $^ $(OIIO_LIBS) $(LDLIBS_CORE)
+
 test: deps
 	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY)
 	@BUILD=$(BUILD) SAN="$(SAN)" sh tests/run.sh
@@ -173,14 +180,33 @@ bench: deps
 	@BUILD=$(BUILD) sh tests/bench/run.sh
 
 # --- fuzzing and sanitizers -------------------------------------------------------
+# `make fuzz` builds $(BUILD)/fuzz-bin/<target> for every fuzz/<target>/fuzz.c;
+# fuzz/run.sh runs one (dictionary, working corpus in $(BUILD)/fuzz-corpus,
+# log); `make fuzz-smoke` runs each for FUZZ_SECONDS and fails on a finding.
 FUZZ_CC     ?= clang
+FUZZ_CXX    ?= clang++
 FUZZ_FLAGS  := -g -O1 -fsanitize=fuzzer,address,undefined,float-cast-overflow,float-divide-by-zero -fno-sanitize-recover=all
+FUZZ_SECONDS ?= 30
+FUZZ_OBJ    := $(BUILD)/fuzz-obj
 fuzz:
-	@mkdir -p $(BUILD)/fuzz-bin
-	@for t in $(FUZZ_TARGETS); do \
+	@mkdir -p $(BUILD)/fuzz-bin $(FUZZ_OBJ)
+	@for t in $(filter-out demimage,$(FUZZ_TARGETS)); do \
 	  echo "fuzz: $$t"; \
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -Iinclude fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
-	done; echo "fuzz: binaries in $(BUILD)/fuzz-bin/ (run e.g. $(BUILD)/fuzz-bin/pgm fuzz/pgm/corpus)"
+	done
+	@echo "fuzz: demimage (CLI DEM loader + OpenImageIO)"; \
+	for f in $(LIB_SRC) cli/util.c fuzz/demimage/fuzz.c; do \
+	  o=$(FUZZ_OBJ)/$$(echo $$f | tr / _).o; \
+	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -D_POSIX_C_SOURCE=200809L -Iinclude -c $$f -o $$o || exit 1; \
+	done; \
+	$(FUZZ_CXX) -std=c++17 $(FUZZ_FLAGS) -Iinclude $(OIIO_CFLAGS) -c cli/imageio.cpp -o $(FUZZ_OBJ)/cli_imageio.cpp.o || exit 1; \
+	$(FUZZ_CXX) $(FUZZ_FLAGS) -o $(BUILD)/fuzz-bin/demimage $(FUZZ_OBJ)/*.o $(OIIO_LIBS) -lm || exit 1
+	@echo "fuzz: binaries in $(BUILD)/fuzz-bin/ (run e.g. fuzz/run.sh pgm 60, with BUILD=$(BUILD))"
+
+fuzz-smoke: fuzz
+	@fail=0; for t in $(FUZZ_TARGETS); do \
+	  BUILD=$(BUILD) FUZZ_LOG=$(BUILD)/fuzz-runs/smoke-$$t.log sh fuzz/run.sh $$t $(FUZZ_SECONDS) || fail=1; \
+	done; [ $$fail = 0 ] || { echo "fuzz-smoke: FINDINGS (see $(BUILD)/fuzz-artifacts/)"; exit 1; }
 
 sanitize-test:
 	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp $(MAKE) --no-print-directory test BUILD=build/asan OPT="-O1 -g" \

@@ -50,11 +50,17 @@ int cli_out_open(cli_out *o, const char *path);     /* opens o->f for binary wri
 int cli_out_commit(cli_out *o);                       /* fflush+fsync+fclose+rename */
 void cli_out_abort(cli_out *o);
 
+/* 1 when the file at `path` is a whole PNG (signature, chunk lengths that
+ * chain to an IEND at the end of the file, every CRC right). */
+int cli_png_file_complete(const char *path);
+
 /* Images through OpenImageIO. Data is malloc'd, row-major, top row first. */
 int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data);
 int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data);
-/* Write a PNG atomically (temp file in the same folder + rename).
- * channels 1..4, bits 8 or 16 (16-bit data as native uint16). */
+/* Write a PNG atomically (temp file in the same folder + rename), only
+ * after checking the temporary is a whole PNG (OpenImageIO 2.4 does not
+ * report failed writes); refuses a target that exists and is not a regular
+ * file. channels 1..4, bits 8 or 16 (16-bit data as native uint16). */
 int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
                         const void *data);
 

@@ -96,6 +96,19 @@ int read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
     if (!in) return 1;
     const ImageSpec spec = in->spec();
     if (!check_size(path, spec, w, h)) return 1;
+    // Refuse what rs_dem_create would refuse before allocating w*h floats
+    // for it (a PNG header alone can ask for 46000 x 46000).
+    rs_limits lim;
+    std::memset(&lim, 0, sizeof lim);
+    rs_ctx *probe = nullptr;
+    if (rs_ctx_create(nullptr, nullptr, &probe) == RS_OK) {
+        rs_ctx_limits(probe, &lim);
+        rs_ctx_free(probe);
+    }
+    if (lim.max_dem_side && (*w > lim.max_dem_side || *h > lim.max_dem_side)) {
+        cli_error("%s: %ux%u is too large for a DEM (at most %u samples per side)", path, *w, *h, lim.max_dem_side);
+        return 1;
+    }
     size_t n = (size_t)*w * *h;
     malloc_ptr<float> buf((float *)std::malloc(n * sizeof(float)));
     if (!buf) {
@@ -158,6 +171,14 @@ int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, 
         cli_error("%s: cannot write a %ux%u PNG with %d channels of %d bits", path, w, h, channels, bits);
         return 1;
     }
+    // rename() would replace a device, FIFO or folder entry (as root even
+    // /dev/full) instead of writing to it: only regular files are outputs.
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        cli_error("%s: %s; the output must be a regular file", path,
+                  S_ISDIR(st.st_mode) ? "is a directory" : "exists and is not a regular file");
+        return 1;
+    }
     // Temporary sibling file, so the final rename is atomic.
     std::string p(path);
     size_t slash = p.rfind('/');
@@ -197,6 +218,10 @@ int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, 
         err = e.what();
     } catch (...) {
         err = "unknown error";
+    }
+    if (ok && !cli_png_file_complete(tmp.get())) {
+        err = "the PNG did not reach the disk whole (disk full or file too large?)";
+        ok = false;
     }
     if (ok) {
         int f = open(tmp.get(), O_RDONLY);

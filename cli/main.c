@@ -2,8 +2,10 @@
  * splats roads into a terrain texture; `roadsplat mesh ...` meshes a DEM. */
 #include "cli.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const char usage_text[] =
     "Usage: roadsplat [options] DEM ROADS OUT.png\n"
@@ -97,11 +99,34 @@ static int parse_args(int argc, char **argv, args *a)
     return 0;
 }
 
-static int write_weight_pgm(const char *path, uint32_t w, uint32_t h, const uint16_t *wt)
+/* Outputs of one run (OUT, --weight-out, --stats): each is written into a
+ * temporary sibling (cli_out_open, which also refuses a non-regular target)
+ * opened before the work starts, and all are renamed over their targets
+ * only once every one is complete. A failing side output therefore leaves
+ * every old file untouched, and an unwritable target fails in milliseconds. */
+
+/* Flush, check and close a temporary without renaming it. */
+static int out_finish(cli_out *o)
 {
-    cli_out o;
-    if (cli_out_open(&o, path)) return 1;
-    int ok = fprintf(o.f, "P5\n%u %u\n65535\n", w, h) > 0;
+    int bad = 0, e = 0;
+    if (fflush(o->f) != 0 || ferror(o->f)) { bad = 1; e = errno; }
+    if (!bad && fsync(fileno(o->f)) != 0 && errno != EINVAL) { bad = 1; e = errno; }
+    if (fclose(o->f) != 0 && !bad) { bad = 1; e = errno; }
+    o->f = NULL;
+    if (bad) cli_error("%s: write failed: %s", o->path, strerror(e ? e : EIO));
+    return bad;
+}
+
+/* The PNG goes through OpenImageIO into o->tmp and is checked whole. */
+static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba)
+{
+    if (o->f) { fclose(o->f); o->f = NULL; }
+    return cli_image_write_png(o->tmp, w, h, 4, 8, rgba); /* checks the file is whole */
+}
+
+static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t *wt)
+{
+    int ok = fprintf(o->f, "P5\n%u %u\n65535\n", w, h) > 0;
     uint8_t *row = malloc((size_t)w * 2);
     if (!row) ok = 0;
     for (uint32_t y = 0; ok && y < h; y++) {
@@ -110,23 +135,21 @@ static int write_weight_pgm(const char *path, uint32_t w, uint32_t h, const uint
             row[2 * x] = (uint8_t)(v >> 8);
             row[2 * x + 1] = (uint8_t)(v & 0xFF);
         }
-        ok = fwrite(row, 1, (size_t)w * 2, o.f) == (size_t)w * 2;
+        ok = fwrite(row, 1, (size_t)w * 2, o->f) == (size_t)w * 2;
     }
+    int e = errno;
     free(row);
     if (!ok) {
-        cli_error("%s: write failed", path);
-        cli_out_abort(&o);
+        cli_error("%s: write failed: %s", o->path, strerror(e ? e : EIO));
         return 1;
     }
-    return cli_out_commit(&o);
+    return out_finish(o);
 }
 
-static int write_stats(const char *path, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w,
-                       uint32_t h, const char *mode)
+static int stats_to_temp(cli_out *o, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w, uint32_t h,
+                         const char *mode)
 {
-    cli_out o;
-    if (cli_out_open(&o, path)) return 1;
-    int ok = fprintf(o.f,
+    int ok = fprintf(o->f,
                      "{\n  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
                      "\"total\": %.3f},\n"
                      "  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
@@ -143,11 +166,23 @@ static int write_stats(const char *path, const double t[5], const rs_grid_stats 
                      (unsigned long long)gs->by_type[RS_TILE_TERRAIN], (unsigned long long)gs->tiles_allocated,
                      (unsigned long long)gs->bytes) > 0;
     if (!ok) {
-        cli_error("%s: write failed", path);
-        cli_out_abort(&o);
+        cli_error("%s: write failed: %s", o->path, strerror(errno ? errno : EIO));
         return 1;
     }
-    return cli_out_commit(&o);
+    return out_finish(o);
+}
+
+/* Rename a finished temporary over its target. */
+static int out_rename(cli_out *o)
+{
+    if (rename(o->tmp, o->path) != 0) {
+        cli_error("%s: write failed: %s", o->path, strerror(errno));
+        return 1;
+    }
+    free(o->path);
+    free(o->tmp);
+    o->path = o->tmp = NULL;
+    return 0;
 }
 
 static int splat_main(int argc, char **argv)
@@ -164,7 +199,11 @@ static int splat_main(int argc, char **argv)
     uint8_t *rgba = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
+    cli_out out_png, out_wt, out_stats;
     memset(&in, 0, sizeof in);
+    memset(&out_png, 0, sizeof out_png);
+    memset(&out_wt, 0, sizeof out_wt);
+    memset(&out_stats, 0, sizeof out_stats);
     rs_result r = rs_ctx_create(NULL, NULL, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
@@ -176,6 +215,9 @@ static int splat_main(int argc, char **argv)
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
         goto done;
     }
+    if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
+        (a.stats && cli_out_open(&out_stats, a.stats)))
+        goto done;
     cli_progress prog;
     double t1 = cli_now_ms();
     cli_progress_init(&prog, "roads", a.quiet);
@@ -207,19 +249,24 @@ static int splat_main(int argc, char **argv)
     t[2] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
-    if (cli_image_write_png(a.out, w, h, 4, 8, rgba)) goto done;
-    if (wt && write_weight_pgm(a.weight_out, w, h, wt)) goto done;
+    if (png_to_temp(&out_png, w, h, rgba)) goto done;
+    if (wt && weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
     t[3] = cli_now_ms() - t1;
     t[4] = cli_now_ms() - t_start;
     if (a.stats) {
         rs_grid_stats gs;
         rs_road_grid_stats(grid, &gs);
-        if (write_stats(a.stats, t, &gs, o->texels ? o->texels : 8, w, h,
-                        o->buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
+        if (stats_to_temp(&out_stats, t, &gs, o->texels ? o->texels : 8, w, h,
+                          o->buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
             goto done;
     }
+    if (out_rename(&out_png) || (a.weight_out && out_rename(&out_wt)) || (a.stats && out_rename(&out_stats)))
+        goto done;
     rc = 0;
 done:
+    cli_out_abort(&out_png); /* no-ops once renamed */
+    cli_out_abort(&out_wt);
+    cli_out_abort(&out_stats);
     free(rgba);
     free(wt);
     rs_road_grid_free(ctx, grid);

@@ -3,6 +3,7 @@
  * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
 #include "cli.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -172,8 +173,15 @@ int cli_mesh_main(int argc, char **argv)
     rs_roam *L = NULL;
     float *v = NULL, *nrm = NULL;
     uint32_t *idx = NULL;
+    /* OUT and the stats go to temporaries opened before the work (an
+     * unwritable target fails at once) and are renamed only when both are
+     * written, so a failing stats file leaves the old OUT alone too. */
+    cli_out out, so;
+    memset(&out, 0, sizeof out);
+    memset(&so, 0, sizeof so);
     rs_dem *dem = cli_load_dem(ctx, in);
     if (!dem) goto done;
+    if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path))) goto done;
     double t_mesh = cli_now_ms();
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -205,18 +213,12 @@ int cli_mesh_main(int argc, char **argv)
     rs_roam_get_stats(L, &st);
     size_t ntop = 0;
     for (size_t k = 0; k < 3 * (size_t)st.triangles; k++) if (idx[k] + (size_t)1 > ntop) ntop = idx[k] + (size_t)1;
-    cli_out out;
-    if (cli_out_open(&out, outp)) goto done;
     if (write_mesh(out.f, ply, rs_dem_samples(dem), rs_dem_width(dem), cs, zs, v, nrm, nv, idx, ni, ntop) != 0) {
-        cli_error("%s: write failed", outp);
-        cli_out_abort(&out);
+        cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
-    if (cli_out_commit(&out)) goto done;
     if (stats_path) {
         double measured = measure_error(rs_dem_samples(dem), rs_dem_width(dem), cs, zs, v, idx, st.triangles);
-        cli_out so;
-        if (cli_out_open(&so, stats_path)) goto done;
         fprintf(so.f, "{\n  \"command\": \"mesh\",\n  \"dem\": {\"width\": %u, \"height\": %u, \"cell_size\": %.9g, \"z_scale\": %.9g},\n",
                 st.width, st.height, cs, zs);
         fprintf(so.f, "  \"mode\": \"%s\",\n", tris ? "triangles" : "max_error");
@@ -228,11 +230,20 @@ int cli_mesh_main(int argc, char **argv)
                 st.patch_size, st.pool_nodes, st.pool_used, st.base_nodes, st.pool_exhausted ? "true" : "false",
                 (unsigned long long)st.bytes);
         fprintf(so.f, "  \"timings_ms\": {\"mesh\": %.3f, \"total\": %.3f}\n}\n", mesh_ms, cli_now_ms() - t_start);
-        if (ferror(so.f)) { cli_error("%s: write failed", stats_path); cli_out_abort(&so); goto done; }
-        if (cli_out_commit(&so)) goto done;
+        if (fflush(so.f) != 0 || ferror(so.f)) {
+            cli_error("%s: write failed: %s", stats_path, strerror(errno ? errno : EIO));
+            goto done;
+        }
     }
+    if (fflush(out.f) != 0 || ferror(out.f)) {
+        cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
+        goto done;
+    }
+    if (cli_out_commit(&out) || (stats_path && cli_out_commit(&so))) goto done;
     rc = 0;
 done:
+    cli_out_abort(&out); /* no-ops once committed */
+    cli_out_abort(&so);
     free(v); free(nrm); free(idx);
     rs_roam_free(ctx, L);
     if (dem) rs_dem_free(ctx, dem);

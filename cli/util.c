@@ -150,6 +150,11 @@ int cli_read_file(const char *path, size_t limit, char **data, size_t *size)
         cli_error("%s: is a directory", path);
         return 1;
     }
+    if (limit && S_ISREG(st.st_mode) && (uint64_t)st.st_size > (uint64_t)limit) { /* before allocating */
+        fclose(f);
+        cli_error("%s: file is larger than the %zu-byte limit", path, limit);
+        return 1;
+    }
     size_t cap = 1 << 16, n = 0;
     if (S_ISREG(st.st_mode) && st.st_size > 0 && (uint64_t)st.st_size < SIZE_MAX - 1) cap = (size_t)st.st_size + 1;
     if (limit && cap > limit + 1) cap = limit + 1;
@@ -195,6 +200,14 @@ static char *dup_str(const char *s)
 int cli_out_open(cli_out *o, const char *path)
 {
     memset(o, 0, sizeof *o);
+    /* rename() would replace a device, FIFO or folder entry instead of
+     * writing to it (as root even /dev/full): only regular files are OUT. */
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        cli_error("%s: %s; the output must be a regular file", path,
+                  S_ISDIR(st.st_mode) ? "is a directory" : "exists and is not a regular file");
+        return 1;
+    }
     const char *slash = strrchr(path, '/');
     size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
     size_t n = strlen(path) + 16;
@@ -275,6 +288,39 @@ int cli_out_commit(cli_out *o)
 
 /* ---- DEM ------------------------------------------------------------------ */
 
+/* OpenImageIO 2.4 leaves libpng's default error handler in place, which
+ * prints "libpng error: ..." on stderr before OpenImageIO reports the same
+ * problem. Run the read with stderr sent to an unlinked temporary file and
+ * pass on only our own "roadsplat: " lines, so a bad DEM still costs exactly
+ * one line. Without a temporary file the read runs unfiltered. */
+static int read_image_quietly(const char *path, uint32_t *w, uint32_t *h, float **z)
+{
+    fflush(stderr);
+    FILE *cap = tmpfile();
+    int saved = cap ? dup(2) : -1;
+    if (saved < 0 || dup2(fileno(cap), 2) < 0) {
+        if (saved >= 0) close(saved);
+        if (cap) fclose(cap);
+        return cli_image_read_gray_float(path, w, h, z);
+    }
+    int rc = cli_image_read_gray_float(path, w, h, z);
+    fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    rewind(cap);
+    char buf[512];
+    int at_start = 1, keep = 0, printed = 0;
+    while (fgets(buf, sizeof buf, cap)) {
+        if (at_start) keep = strncmp(buf, "roadsplat: ", 11) == 0;
+        if (keep) { fputs(buf, stderr); printed = 1; }
+        at_start = strchr(buf, '\n') != NULL;
+    }
+    fclose(cap);
+    if (keep && !at_start) fputc('\n', stderr);
+    if (rc && !printed) cli_error("%s: cannot read image", path);
+    return rc;
+}
+
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
 {
     char magic[2] = { 0, 0 };
@@ -283,7 +329,11 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     size_t got = fread(magic, 1, 2, f);
     fclose(f);
     rs_dem *dem = NULL;
-    if (got == 2 && magic[0] == 'P' && (magic[1] == '2' || magic[1] == '5')) {
+    /* A .pgm name goes to our reader even with a wrong magic, for its message. */
+    size_t pl = strlen(path);
+    int pgm_name = pl >= 4 && path[pl - 4] == '.' && (path[pl - 3] | 0x20) == 'p' && (path[pl - 2] | 0x20) == 'g' &&
+                   (path[pl - 1] | 0x20) == 'm';
+    if (pgm_name || (got == 2 && magic[0] == 'P' && (magic[1] == '2' || magic[1] == '5'))) {
         /* Large enough for any DEM within the default limits, even as P2. */
         size_t limit = SIZE_MAX > 0xFFFFFFFFu ? (size_t)1 << 33 : (size_t)1 << 30;
         char *data;
@@ -299,7 +349,7 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     }
     uint32_t w, h;
     float *z;
-    if (cli_image_read_gray_float(path, &w, &h, &z)) return NULL;
+    if (read_image_quietly(path, &w, &h, &z)) return NULL;
     rs_result rc = rs_dem_create(ctx, w, h, z, &dem);
     free(z);
     if (rc != RS_OK) {
@@ -307,4 +357,44 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
         return NULL;
     }
     return dem;
+}
+
+/* 1 when the file at `path` is a whole PNG: the signature, then chunks
+ * whose lengths chain exactly to an IEND at the end of the file, every CRC
+ * right. OpenImageIO 2.4 does not report failed writes (a full disk leaves a
+ * truncated file and a success), so OUT is only replaced after this check. */
+int cli_png_file_complete(const char *path)
+{
+    static const unsigned char sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
+    uint32_t crc_table[256];
+    for (uint32_t n = 0; n < 256; n++) {
+        uint32_t c = n;
+        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        crc_table[n] = c;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    unsigned char hdr[8], buf[8192];
+    int ok = fread(hdr, 1, 8, f) == 8 && memcmp(hdr, sig, 8) == 0, seen_iend = 0, first = 1;
+    while (ok && !seen_iend) {
+        if (fread(hdr, 1, 8, f) != 8) { ok = 0; break; }
+        uint32_t len = (uint32_t)hdr[0] << 24 | (uint32_t)hdr[1] << 16 | (uint32_t)hdr[2] << 8 | hdr[3];
+        if (len > 0x7FFFFFFFu || (first && memcmp(hdr + 4, "IHDR", 4) != 0)) { ok = 0; break; }
+        first = 0;
+        seen_iend = memcmp(hdr + 4, "IEND", 4) == 0;
+        uint32_t c = 0xFFFFFFFFu;
+        for (int k = 4; k < 8; k++) c = crc_table[(c ^ hdr[k]) & 0xFF] ^ (c >> 8);
+        for (uint32_t left = len; left > 0;) {
+            size_t want = left < sizeof buf ? left : sizeof buf;
+            if (fread(buf, 1, want, f) != want) { ok = 0; break; }
+            for (size_t k = 0; k < want; k++) c = crc_table[(c ^ buf[k]) & 0xFF] ^ (c >> 8);
+            left -= (uint32_t)want;
+        }
+        if (!ok || fread(hdr, 1, 4, f) != 4) { ok = 0; break; }
+        uint32_t stored = (uint32_t)hdr[0] << 24 | (uint32_t)hdr[1] << 16 | (uint32_t)hdr[2] << 8 | hdr[3];
+        ok = stored == (c ^ 0xFFFFFFFFu);
+    }
+    ok = ok && seen_iend && fgetc(f) == EOF && !ferror(f);
+    fclose(f);
+    return ok;
 }

@@ -237,11 +237,15 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
                               (unsigned long long)r.line, i, pgm_what(&r, what, sizeof what));
             goto fail;
         }
-        if (k < 0 || v > maxval) {
-            rc = rs__fail(ctx, RS_ERR_PARSE,
-                          "PGM line %llu: sample %zu (row %zu, column %zu) is %s%llu, above maxval %llu",
-                          (unsigned long long)r.line, i, i / (size_t)w, i % (size_t)w, k < 0 ? ">" : "",
-                          (unsigned long long)v, (unsigned long long)maxval);
+        if (k < 0) { /* more digits than 64 bits hold: don't print a saturated value */
+            rc = rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: sample %zu (row %zu, column %zu) is too large, above maxval %llu",
+                          (unsigned long long)r.line, i, i / (size_t)w, i % (size_t)w, (unsigned long long)maxval);
+            goto fail;
+        }
+        if (v > maxval) {
+            rc = rs__fail(ctx, RS_ERR_PARSE, "PGM line %llu: sample %zu (row %zu, column %zu) is %llu, above maxval %llu",
+                          (unsigned long long)r.line, i, i / (size_t)w, i % (size_t)w, (unsigned long long)v,
+                          (unsigned long long)maxval);
             goto fail;
         }
         if (r.p < r.end && !pgm_space(*r.p) && *r.p != '#') {

@@ -122,6 +122,14 @@ check "--pixel-error with --triangles rejected" sh -c "! '$BIN' render --pixel-e
 check "unknown option rejected" sh -c "! '$BIN' render --bogus 1 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
 check "missing DEM rejected" sh -c "! '$BIN' render '$T/nope.pgm' '$T/roads.txt' '$T/e.png' 2>/dev/null && test ! -e '$T/e.png'"
 check "failed run leaves an existing output untouched" sh -c "cp '$T/obl.png' '$T/keep.png' && ! '$BIN' render --lighting maybe '$T/dem.pgm' '$T/roads.txt' '$T/keep.png' 2>/dev/null && cmp -s '$T/obl.png' '$T/keep.png'"
+# write errors: a full disk (file-size limit; OpenImageIO itself reports
+# success there) and a FIFO as OUT must fail and leave no trace
+if command -v prlimit >/dev/null 2>&1; then
+    check "full disk: exit 1, old output untouched, no temp file" sh -c "cp '$T/obl.png' '$T/full.png' && ! sh -c 'trap \"\" XFSZ; exec prlimit --fsize=1000 \"\$0\" \"\$@\"' '$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 '$T/dem.pgm' '$T/roads.txt' '$T/full.png' 2>'$T/full.err' && cmp -s '$T/obl.png' '$T/full.png' && grep -q 'full.png' '$T/full.err' && test -z \"\$(ls -a '$T' | grep '^\.full\.png\.')\""
+fi
+if mkfifo "$T/fifo.png" 2>/dev/null; then
+    check "a FIFO as OUT is refused and kept" sh -c "! '$BIN' render $S --quiet --size 64x48 '$T/dem.pgm' '$T/roads.txt' '$T/fifo.png' 2>'$T/fifo.err' && test -p '$T/fifo.png' && grep -q 'not a regular file' '$T/fifo.err'"
+fi
 check "render --help exits 0" sh -c "'$BIN' render --help | grep -q -- --ortho"
 
 echo "cli_render: $pass passed, $fail failed"
