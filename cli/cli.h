@@ -63,6 +63,9 @@ int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **d
  * file. channels 1..4, bits 8 or 16 (16-bit data as native uint16). */
 int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
                         const void *data);
+/* The same, naming `shown` in its messages (path is then a temporary). */
+int cli_image_write_png_as(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                           const void *data);
 
 /* Progress bar on stderr: silent when quiet or stderr is not a TTY, and
  * only drawn once the work has run for more than a second. Use

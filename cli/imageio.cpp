@@ -164,18 +164,19 @@ int read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
     return 0;
 }
 
-int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, const void *data)
+// `shown` is the name errors give (the user's OUT when path is a temporary).
+int write_png(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits, const void *data)
 {
     if (channels < 1 || channels > 4 || (bits != 8 && bits != 16) || !w || !h || !data ||
         w > 0x7fffffffu || h > 0x7fffffffu) {
-        cli_error("%s: cannot write a %ux%u PNG with %d channels of %d bits", path, w, h, channels, bits);
+        cli_error("%s: cannot write a %ux%u PNG with %d channels of %d bits", shown, w, h, channels, bits);
         return 1;
     }
     // rename() would replace a device, FIFO or folder entry (as root even
     // /dev/full) instead of writing to it: only regular files are outputs.
     struct stat st;
     if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-        cli_error("%s: %s; the output must be a regular file", path,
+        cli_error("%s: %s; the output must be a regular file", shown,
                   S_ISDIR(st.st_mode) ? "is a directory" : "exists and is not a regular file");
         return 1;
     }
@@ -189,7 +190,7 @@ int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, 
     std::memcpy(tmp.get(), tmpl.c_str(), tmpl.size() + 1);
     int fd = mkstemp(tmp.get());
     if (fd < 0) {
-        cli_error("%s: cannot create a temporary file next to it: %s", path, std::strerror(errno));
+        cli_error("%s: cannot create a temporary file next to it: %s", shown, std::strerror(errno));
         return 1;
     }
     close(fd);
@@ -236,7 +237,7 @@ int write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits, 
     }
     if (!ok) {
         unlink(tmp.get());
-        cli_error("%s: cannot write PNG: %s", path, err.c_str());
+        cli_error("%s: write failed: %s", shown, err.c_str());
         return 1;
     }
     return 0;
@@ -277,8 +278,14 @@ extern "C" int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, 
 extern "C" int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
                                    const void *data)
 {
+    return cli_image_write_png_as(path, path, w, h, channels, bits, data);
+}
+
+extern "C" int cli_image_write_png_as(const char *path, const char *shown, uint32_t w, uint32_t h, int channels,
+                                      int bits, const void *data)
+{
     try {
-        return write_png(path, w, h, channels, bits, data);
+        return write_png(path, shown, w, h, channels, bits, data);
     } catch (const std::exception &e) {
         cli_error("%s: %s", path, e.what());
     } catch (...) {

@@ -121,7 +121,7 @@ static int out_finish(cli_out *o)
 static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba)
 {
     if (o->f) { fclose(o->f); o->f = NULL; }
-    return cli_image_write_png(o->tmp, w, h, 4, 8, rgba); /* checks the file is whole */
+    return cli_image_write_png_as(o->tmp, o->path, w, h, 4, 8, rgba); /* checks the file is whole */
 }
 
 static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t *wt)
