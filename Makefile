@@ -209,7 +209,7 @@ fuzz-smoke: fuzz
 	done; [ $$fail = 0 ] || { echo "fuzz-smoke: FINDINGS (see $(BUILD)/fuzz-artifacts/)"; exit 1; }
 
 sanitize-test:
-	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp $(MAKE) --no-print-directory test BUILD=build/asan OPT="-O1 -g" \
+	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 $(MAKE) --no-print-directory test BUILD=build/asan OPT="-O1 -g" \
 	  SAN="-fsanitize=address,undefined,float-cast-overflow,float-divide-by-zero -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # --- install --------------------------------------------------------------------

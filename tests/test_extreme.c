@@ -328,7 +328,9 @@ static void test_huge_dem(void)
     printf("%u^2 splat:", N);
     printf(" %.2f s, library peak %.1f MB = DEM copy %.1f MB + %.2f MB (%.3f %% of the %.0f MB RGBA output)\n",
            secs, (mem.peak - base) / 1e6, dem_bytes / 1e6, extra / 1e6, 100.0 * extra / out_bytes, out_bytes / 1e6);
-    CHECKF(extra <= out_bytes / 50, "library memory beyond the DEM: %zu bytes", extra);
+    /* per-row buffers grow with the width; the alpha-map tables (~1 MB) are
+     * fixed, which matters for the smaller size used under ASan */
+    CHECKF(extra <= out_bytes / 50 + ((size_t)2 << 20), "library memory beyond the DEM: %zu bytes", extra);
     CHECK(mem.live == base);
     if (r.wt) {
         size_t stray;
