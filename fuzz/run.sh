@@ -32,6 +32,11 @@ echo "# fuzz/run.sh $t $len start=$start" >"$log"
 rc=$?
 end=$(date +%s)
 echo "# wall_seconds=$((end - start)) exit=$rc" >>"$log"
+if [ $rc -eq 72 ] && grep -q 'libFuzzer: run interrupted' "$log"; then
+    # libFuzzer's exit code for SIGINT/SIGTERM: stopped by hand, not a finding
+    echo "fuzz $t: interrupted after $(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$') runs in $((end - start)) s" >&2
+    exit 3
+fi
 if [ $rc -ne 0 ]; then
     echo "fuzz $t: FINDING (exit $rc), see $log and $art" >&2
     grep -E '^(==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' "$log" | head -n 5 >&2
