@@ -227,6 +227,17 @@ static float round_up_float(double v)
     return f;
 }
 
+/* Bound of a triangle whose only non-corner sample is the midpoint of its
+ * hypotenuse (x0, y0)-(x1, y1): the legs-sqrt(2) level. */
+static float midpoint_err(const rs_roam *L, int x0, int y0, int x1, int y1)
+{
+    const float *z = L->z;
+    size_t W = L->w;
+    double d = (double)z[(size_t)((y0 + y1) / 2) * W + (size_t)((x0 + x1) / 2)]
+               - 0.5 * ((double)z[(size_t)y0 * W + (size_t)x0] + (double)z[(size_t)y1 * W + (size_t)x1]);
+    return round_up_float(fabs(d));
+}
+
 /* Error bound of a triangle (DEM units): ERR_OUTSIDE off the map, +inf
  * when it straddles the map edge. */
 static float compute_err(const rs_roam *L, const tri *t)
@@ -238,12 +249,7 @@ static float compute_err(const rs_roam *L, const tri *t)
     int p = t->bx - t->ax, q = t->by - t->ay;
     if ((p == 1 || p == -1) && (q == 1 || q == -1)) {
         /* legs sqrt(2): the only non-corner sample is the base midpoint */
-        const float *z = L->z;
-        size_t W = L->w;
-        int mx = (t->bx + cx) / 2, my = (t->by + cy) / 2;
-        double d = (double)z[(size_t)my * W + (size_t)mx]
-                   - 0.5 * ((double)z[(size_t)t->by * W + (size_t)t->bx] + (double)z[(size_t)cy * W + (size_t)cx]);
-        return round_up_float(fabs(d));
+        return midpoint_err(L, t->bx, t->by, cx, cy);
     }
     if (p * p + q * q == 4) {
         /* legs 2 on the axes: the only non-corner samples are the three edge midpoints */
@@ -577,14 +583,9 @@ static int refine(rs_roam *L, const refine_params *rp)
             for (int k = 0; k < 2; k++) {
                 if (n[i].rc & (1u << k)) continue; /* force-split already */
                 if (fast) {
-                    /* error mode on the map: child k's only non-corner sample
-                     * is the midpoint of its hypotenuse, leg a-b or leg a-c */
-                    int ex = k ? t.cx : t.bx, ey = k ? t.cy : t.by;
-                    const float *z = L->z;
-                    size_t W = L->w;
-                    double d = (double)z[(size_t)((t.ay + ey) / 2) * W + (size_t)((t.ax + ex) / 2)]
-                               - 0.5 * ((double)z[(size_t)t.ay * W + (size_t)t.ax] + (double)z[(size_t)ey * W + (size_t)ex]);
-                    float e = round_up_float(fabs(d));
+                    /* error mode on the map: child k's hypotenuse is leg a-b
+                     * or leg a-c, with no edge tests */
+                    float e = k ? midpoint_err(L, t.ax, t.ay, t.cx, t.cy) : midpoint_err(L, t.ax, t.ay, t.bx, t.by);
                     if (!(e > 0.0f && (double)e * L->zs > rp->max_error)) continue;
                 } else {
                     tri q;
