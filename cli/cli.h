@@ -55,7 +55,9 @@ void cli_out_abort(cli_out *o);
 int cli_png_file_complete(const char *path);
 
 /* Images through OpenImageIO. Data is malloc'd, row-major, top row first. */
-int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data);
+/* A grey image larger than max_side (0: no limit) on either side is refused
+ * before its samples are allocated. */
+int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data);
 int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data);
 /* Write a PNG atomically (temp file in the same folder + rename), only
  * after checking the temporary is a whole PNG (OpenImageIO 2.4 does not

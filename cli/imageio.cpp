@@ -90,7 +90,7 @@ double integer_scale(TypeDesc t)
     }
 }
 
-int read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
+int read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data)
 {
     auto in = open_input(path);
     if (!in) return 1;
@@ -98,15 +98,8 @@ int read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
     if (!check_size(path, spec, w, h)) return 1;
     // Refuse what rs_dem_create would refuse before allocating w*h floats
     // for it (a PNG header alone can ask for 46000 x 46000).
-    rs_limits lim;
-    std::memset(&lim, 0, sizeof lim);
-    rs_ctx *probe = nullptr;
-    if (rs_ctx_create(nullptr, nullptr, &probe) == RS_OK) {
-        rs_ctx_limits(probe, &lim);
-        rs_ctx_free(probe);
-    }
-    if (lim.max_dem_side && (*w > lim.max_dem_side || *h > lim.max_dem_side)) {
-        cli_error("%s: %ux%u is too large for a DEM (at most %u samples per side)", path, *w, *h, lim.max_dem_side);
+    if (max_side && (*w > max_side || *h > max_side)) {
+        cli_error("%s: %ux%u is too large for a DEM (at most %u samples per side)", path, *w, *h, max_side);
         return 1;
     }
     size_t n = (size_t)*w * *h;
@@ -265,9 +258,10 @@ int guarded_read(const char *path, T **data, Read read)
 }
 } // namespace
 
-extern "C" int cli_image_read_gray_float(const char *path, uint32_t *w, uint32_t *h, float **data)
+extern "C" int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h,
+                                         float **data)
 {
-    return guarded_read(path, data, [&] { return read_gray_float(path, w, h, data); });
+    return guarded_read(path, data, [&] { return read_gray_float(path, max_side, w, h, data); });
 }
 
 extern "C" int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)

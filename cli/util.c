@@ -293,7 +293,7 @@ int cli_out_commit(cli_out *o)
  * problem. Run the read with stderr sent to an unlinked temporary file and
  * pass on only our own "roadsplat: " lines, so a bad DEM still costs exactly
  * one line. Without a temporary file the read runs unfiltered. */
-static int read_image_quietly(const char *path, uint32_t *w, uint32_t *h, float **z)
+static int read_image_quietly(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z)
 {
     fflush(stderr);
     FILE *cap = tmpfile();
@@ -301,9 +301,9 @@ static int read_image_quietly(const char *path, uint32_t *w, uint32_t *h, float 
     if (saved < 0 || dup2(fileno(cap), 2) < 0) {
         if (saved >= 0) close(saved);
         if (cap) fclose(cap);
-        return cli_image_read_gray_float(path, w, h, z);
+        return cli_image_read_gray_float(path, max_side, w, h, z);
     }
-    int rc = cli_image_read_gray_float(path, w, h, z);
+    int rc = cli_image_read_gray_float(path, max_side, w, h, z);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
@@ -349,7 +349,9 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     }
     uint32_t w, h;
     float *z;
-    if (read_image_quietly(path, &w, &h, &z)) return NULL;
+    rs_limits lim;
+    rs_ctx_limits(ctx, &lim);
+    if (read_image_quietly(path, lim.max_dem_side, &w, &h, &z)) return NULL;
     rs_result rc = rs_dem_create(ctx, w, h, z, &dem);
     free(z);
     if (rc != RS_OK) {
