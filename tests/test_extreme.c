@@ -8,8 +8,8 @@
 #include "roadsplat.h"
 #include "roadgrid.h"
 #include "roam_check.h"
+#include "scene_splat.h"
 #include "scenes.h"
-#include "seams.h"
 #include "timing.h"
 
 #include <stdint.h>
@@ -63,18 +63,6 @@ static rs_ctx *ctx;
 
 /* --- helpers ------------------------------------------------------------------ */
 
-static rs_roads *make_roads(const sc_scene *s)
-{
-    rs_roads *roads = NULL;
-    if (rs_roads_create(ctx, &roads) != RS_OK) return NULL;
-    for (size_t i = 0; i < s->nroads; i++)
-        if (rs_roads_add(ctx, roads, NULL, s->roads[i].width, s->roads[i].xy, s->roads[i].n) != RS_OK) {
-            rs_roads_free(ctx, roads);
-            return NULL;
-        }
-    return roads;
-}
-
 /* Distance from (x, y) to the road's centreline polyline. */
 static double centreline_dist(const sc_road *r, double x, double y)
 {
@@ -91,52 +79,11 @@ static double centreline_dist(const sc_road *r, double x, double y)
     return best;
 }
 
-typedef struct splat_out {
-    uint32_t w, h;
-    uint8_t *rgba;
-    uint16_t *wt;
-    double seam;
-} splat_out;
-
-static void splat_out_free(splat_out *o)
-{
-    free(o->rgba);
-    free(o->wt);
-    memset(o, 0, sizeof *o);
-}
-
-/* Splat scene s; with `seam`, also the seam error of the grid. */
-static rs_result splat_scene(const sc_scene *s, const rs_splat_options *opts, int seam, splat_out *out)
-{
-    memset(out, 0, sizeof *out);
-    rs_splat_options o = *opts;
-    o.cell_size = s->cell_size;
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
-    rs_road_grid *g = NULL;
-    rs_result r = rs_dem_create(ctx, s->w, s->h, s->z, &dem);
-    if (!r) r = (roads = make_roads(s)) ? RS_OK : RS_ERR_NOMEM;
-    if (!r) r = rs_splat_size(ctx, dem, &o, &out->w, &out->h);
-    if (!r) r = rs_road_grid_build(ctx, dem, roads, &o, &g);
-    if (!r && seam) out->seam = rs_test_seam_error(g, 32);
-    if (!r) {
-        size_t n = (size_t)out->w * out->h;
-        out->rgba = malloc(n * 4);
-        out->wt = malloc(n * 2);
-        r = out->rgba && out->wt ? rs_splat(ctx, dem, g, &o, out->rgba, n * 4, out->wt, n) : RS_ERR_NOMEM;
-    }
-    rs_road_grid_free(ctx, g);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
-    if (r) splat_out_free(out);
-    return r;
-}
-
 /* Weights: opaque output, and zero wherever the texel is clearly away from
  * every road (farther than half the width plus a DEM cell plus a texel
  * diagonal: the road grid and transition band never reach that far). Also
  * some full-road weight when a road is wide enough to have an interior. */
-static int check_weights(const sc_scene *s, const splat_out *o, uint32_t T, int dilate, size_t *stray)
+static int check_weights(const sc_scene *s, const ss_image *o, uint32_t T, int dilate, size_t *stray)
 {
     double px = s->cell_size / T;
     int ok = 1;
@@ -259,10 +206,10 @@ static void test_extreme_dems(void)
             memset(&o, 0, sizeof o);
             o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
             o.texels = 4;
-            splat_out r1, r2;
-            CHECK(splat_scene(&s, &o, 1, &r1) == RS_OK);
-            CHECK(splat_scene(&s, &o, 0, &r2) == RS_OK);
-            if (!r1.wt || !r2.wt) { splat_out_free(&r1); splat_out_free(&r2); continue; }
+            ss_image r1, r2;
+            CHECK(ss_splat(ctx, &s, &o, 1, &r1) == RS_OK);
+            CHECK(ss_splat(ctx, &s, &o, 0, &r2) == RS_OK);
+            if (!r1.wt || !r2.wt) { ss_image_free(&r1); ss_image_free(&r2); continue; }
             size_t n = (size_t)r1.w * r1.h, stray;
             CHECKF(check_weights(&s, &r1, o.texels, mode, &stray), "%s: %zu stray weights", x_name[kind], stray);
             CHECKF(r1.seam <= 1.0 / 255, "%s: seam %g", x_name[kind], r1.seam);
@@ -270,8 +217,8 @@ static void test_extreme_dems(void)
             uint16_t wmax = 0;
             for (size_t i = 0; i < n; i++) if (r1.wt[i] > wmax) wmax = r1.wt[i];
             CHECKF(wmax > 0, "%s: no road drawn", x_name[kind]);
-            splat_out_free(&r1);
-            splat_out_free(&r2);
+            ss_image_free(&r1);
+            ss_image_free(&r2);
         }
         const double errs[3] = { 0.0, 1.0, 1000.0 };
         for (int e = 0; e < 3; e++) {
@@ -320,8 +267,8 @@ static void test_huge_dem(void)
     double t0 = (tm_now_ms() / 1000.0);
     size_t base = mem.live;
     mem.peak = mem.live;
-    splat_out r;
-    CHECK(splat_scene(&s, &o, 0, &r) == RS_OK);
+    ss_image r;
+    CHECK(ss_splat(ctx, &s, &o, 0, &r) == RS_OK);
     double secs = (tm_now_ms() / 1000.0) - t0;
     size_t dem_bytes = (size_t)N * N * sizeof(float), out_bytes = (size_t)(N - 1) * (N - 1) * 4;
     size_t extra = mem.peak - base - dem_bytes;
@@ -337,7 +284,7 @@ static void test_huge_dem(void)
         CHECK(check_weights(&s, &r, 1, 0, &stray));
         CHECK(r.wt[(size_t)(4000 * f) * r.w + (size_t)(4050 * f)] == 65535); /* on road b's centreline */
     }
-    splat_out_free(&r);
+    ss_image_free(&r);
     /* ROAM: a 8193 x 5 strip of it always; the whole DEM (about 6 s and
      * 1.4 GB) only with RS_TEST_HUGE_ROAM=1. */
     int full = getenv("RS_TEST_HUGE_ROAM") && atoi(getenv("RS_TEST_HUGE_ROAM"));
@@ -409,9 +356,9 @@ static void test_stress(void)
         o.texels = 1 + (uint32_t)(sc_rng_u64(&r) % 8);
         o.z_scale = sc_rng_u64(&r) % 2 ? 0.01 : 1;
         if (sc_rng_u64(&r) % 3 == 0) o.road_cell = s.cell_size / (1 + (double)(sc_rng_u64(&r) % 6));
-        splat_out a, b;
-        CHECK(splat_scene(&s, &o, 1, &a) == RS_OK);
-        CHECK(splat_scene(&s, &o, 0, &b) == RS_OK);
+        ss_image a, b;
+        CHECK(ss_splat(ctx, &s, &o, 1, &a) == RS_OK);
+        CHECK(ss_splat(ctx, &s, &o, 0, &b) == RS_OK);
         if (a.wt && b.wt) {
             size_t n = (size_t)a.w * a.h, stray;
             if (!check_weights(&s, &a, o.texels, o.buffer == RS_BUFFER_DILATE, &stray)) bad_weights++;
@@ -427,8 +374,8 @@ static void test_stress(void)
                     fprintf(stderr, "\n");
                 }
         }
-        splat_out_free(&a);
-        splat_out_free(&b);
+        ss_image_free(&a);
+        ss_image_free(&b);
         double err = (sc_rng_u64(&r) % 4 == 0) ? 0 : sc_rng_range(&r, 0, 5000) * o.z_scale;
         mesh_check mc;
         CHECK(roam_scene(s.z, W, H, s.cell_size, o.z_scale, err, &mc) == RS_OK);

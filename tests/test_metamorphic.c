@@ -7,6 +7,7 @@
 #include "harness.h"
 #include "roadsplat.h"
 #include "roam_check.h"
+#include "scene_splat.h"
 #include "scenes.h"
 
 #include <stdint.h>
@@ -15,60 +16,8 @@
 
 static rs_ctx *ctx;
 
-/* --- scene -> weight image ---------------------------------------------------- */
+/* --- weight images ------------------------------------------------------------ */
 
-typedef struct wimg {
-    uint32_t w, h;
-    uint16_t *wt;
-    uint8_t *rgba;
-} wimg;
-
-static void wimg_free(wimg *im)
-{
-    free(im->wt);
-    free(im->rgba);
-    memset(im, 0, sizeof *im);
-}
-
-static rs_roads *scene_roads(const sc_scene *s)
-{
-    rs_roads *roads = NULL;
-    if (rs_roads_create(ctx, &roads) != RS_OK) return NULL;
-    for (size_t i = 0; i < s->nroads; i++)
-        if (rs_roads_add(ctx, roads, NULL, s->roads[i].width, s->roads[i].xy, s->roads[i].n) != RS_OK) {
-            rs_roads_free(ctx, roads);
-            return NULL;
-        }
-    return roads;
-}
-
-/* Splat scene `s` with options `o` (cell_size taken from the scene). */
-static rs_result splat_scene(const sc_scene *s, const rs_splat_options *opts, wimg *im)
-{
-    memset(im, 0, sizeof *im);
-    rs_splat_options o = *opts;
-    o.cell_size = s->cell_size;
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
-    rs_road_grid *g = NULL;
-    rs_result r = rs_dem_create(ctx, s->w, s->h, s->z, &dem);
-    if (!r) r = (roads = scene_roads(s)) ? RS_OK : RS_ERR_NOMEM;
-    if (!r) r = rs_splat_size(ctx, dem, &o, &im->w, &im->h);
-    if (!r) r = rs_road_grid_build(ctx, dem, roads, &o, &g);
-    if (!r) {
-        size_t n = (size_t)im->w * im->h;
-        im->wt = malloc(n * sizeof *im->wt);
-        im->rgba = malloc(n * 4);
-        r = im->wt && im->rgba ? rs_splat(ctx, dem, g, &o, im->rgba, n * 4, im->wt, n) : RS_ERR_NOMEM;
-    }
-    rs_road_grid_free(ctx, g);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
-    if (r) wimg_free(im);
-    return r;
-}
-
-/* Pixels that differ and the largest difference (uint16 units). */
 static size_t wdiff(const uint16_t *a, const uint16_t *b, size_t n, int *maxd)
 {
     size_t c = 0;
@@ -183,15 +132,15 @@ static void test_d4(void)
                 memset(&o, 0, sizeof o);
                 o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = ti ? 3 : 4;
-                wimg ref;
-                CHECK(splat_scene(&s, &o, &ref) == RS_OK);
+                ss_image ref;
+                CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
                 if (!ref.wt) continue;
                 size_t n = (size_t)ref.w * ref.h;
                 for (int g = 1; g < 8; g++) {
                     sc_scene t;
-                    wimg im;
+                    ss_image im;
                     CHECK(xf_scene(&s, g, &t) == 0);
-                    CHECK(splat_scene(&t, &o, &im) == RS_OK);
+                    CHECK(ss_splat(ctx, &t, &o, 0, &im) == RS_OK);
                     uint16_t *want = xf_image(ref.wt, ref.w, ref.h, g);
                     if (im.wt && want) {
                         int md;
@@ -202,10 +151,10 @@ static void test_d4(void)
                         worst_px += c;
                     }
                     free(want);
-                    wimg_free(&im);
+                    ss_image_free(&im);
                     sc_scene_free(&t);
                 }
-                wimg_free(&ref);
+                ss_image_free(&ref);
             }
         sc_scene_free(&s);
     }
@@ -287,10 +236,10 @@ static void test_edits(void)
                 memset(&o, 0, sizeof o);
                 o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = 4;
-                wimg a, b;
-                CHECK(splat_scene(&s, &o, &a) == RS_OK);
-                CHECK(splat_scene(&t, &o, &b) == RS_OK);
-                if (!a.wt || !b.wt) { wimg_free(&a); wimg_free(&b); continue; }
+                ss_image a, b;
+                CHECK(ss_splat(ctx, &s, &o, 0, &a) == RS_OK);
+                CHECK(ss_splat(ctx, &t, &o, 0, &b) == RS_OK);
+                if (!a.wt || !b.wt) { ss_image_free(&a); ss_image_free(&b); continue; }
                 int md;
                 size_t n = (size_t)a.w * a.h, c = wdiff(a.wt, b.wt, n, &md);
                 if (edit == EDIT_SPLIT_NEW && mode == 1) {
@@ -311,8 +260,8 @@ static void test_edits(void)
                 }
                 total += c;
                 if (md > worst) worst = md;
-                wimg_free(&a);
-                wimg_free(&b);
+                ss_image_free(&a);
+                ss_image_free(&b);
             }
             sc_scene_free(&s);
             sc_scene_free(&t);
@@ -334,28 +283,28 @@ static void test_height_scale_splat(void)
         rs_splat_options o;
         memset(&o, 0, sizeof o);
         o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
-        wimg ref;
-        CHECK(splat_scene(&s, &o, &ref) == RS_OK);
+        ss_image ref;
+        CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
         for (int i = 0; i < 3 && ref.wt; i++) {
             sc_scene t;
             CHECK(sc_scene_init(&t, s.w, s.h, s.cell_size) == 0);
             for (size_t q = 0; q < (size_t)s.w * s.h; q++) t.z[q] = (float)(s.z[q] * ks[i]);
             for (size_t q = 0; q < s.nroads; q++) CHECK(sc_add_road(&t, s.roads[q].width, s.roads[q].xy, s.roads[q].n) == 0);
-            wimg a, b;
+            ss_image a, b;
             rs_splat_options oz = o;
             oz.z_scale = ks[i];
-            CHECK(splat_scene(&t, &o, &a) == RS_OK); /* samples times k */
-            CHECK(splat_scene(&s, &oz, &b) == RS_OK); /* z-scale k */
+            CHECK(ss_splat(ctx, &t, &o, 0, &a) == RS_OK); /* samples times k */
+            CHECK(ss_splat(ctx, &s, &oz, 0, &b) == RS_OK); /* z-scale k */
             if (a.wt && b.wt) {
                 size_t n = (size_t)a.w * a.h;
                 CHECKF(memcmp(a.wt, ref.wt, n * 2) == 0, "heights x%g changed the weight", ks[i]);
                 CHECKF(memcmp(b.wt, ref.wt, n * 2) == 0, "z-scale %g changed the weight", ks[i]);
             }
-            wimg_free(&a);
-            wimg_free(&b);
+            ss_image_free(&a);
+            ss_image_free(&b);
             sc_scene_free(&t);
         }
-        wimg_free(&ref);
+        ss_image_free(&ref);
     }
     sc_scene_free(&s);
 }
@@ -374,8 +323,8 @@ static void test_cell_scale(void)
                 memset(&o, 0, sizeof o);
                 o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = 4;
-                wimg ref;
-                CHECK(splat_scene(&s, &o, &ref) == RS_OK);
+                ss_image ref;
+                CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
                 for (int i = 0; i < 2 && ref.wt; i++) {
                     sc_scene t;
                     CHECK(sc_scene_init(&t, s.w, s.h, scales[i]) == 0);
@@ -385,8 +334,8 @@ static void test_cell_scale(void)
                         for (size_t c = 0; c < 2 * s.roads[q].n; c++) p[c] = s.roads[q].xy[c] * scales[i];
                         CHECK(sc_add_road(&t, s.roads[q].width * scales[i], p, s.roads[q].n) == 0);
                     }
-                    wimg im;
-                    CHECK(splat_scene(&t, &o, &im) == RS_OK);
+                    ss_image im;
+                    CHECK(ss_splat(ctx, &t, &o, 0, &im) == RS_OK);
                     if (im.wt) {
                         int md;
                         size_t c = wdiff(im.wt, ref.wt, (size_t)im.w * im.h, &md);
@@ -394,10 +343,10 @@ static void test_cell_scale(void)
                                scales[i], dy ? "dyadic" : "mm", (unsigned long long)seed, mode ? "dilate" : "distance",
                                c, md);
                     }
-                    wimg_free(&im);
+                    ss_image_free(&im);
                     sc_scene_free(&t);
                 }
-                wimg_free(&ref);
+                ss_image_free(&ref);
             }
             sc_scene_free(&s);
         }

@@ -4,6 +4,7 @@
  * benchmarks need no image library.  Usage: pictures OUTDIR [IMAGEDIR] */
 #include "groundtruth.h"
 #include "roadsplat.h"
+#include "scene_splat.h"
 #include "scenes.h"
 
 #include <stdio.h>
@@ -134,9 +135,8 @@ static int compare_picture(const char *path)
     if (sc_city_default(&sc, 1) || rs_ctx_create(NULL, NULL, &ctx)) return -1;
     rs_dem *dem;
     rs_roads *roads, *none;
-    if (rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || rs_roads_create(ctx, &roads) || rs_roads_create(ctx, &none))
+    if (rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || !(roads = ss_roads(ctx, &sc)) || rs_roads_create(ctx, &none))
         return -1;
-    for (size_t i = 0; i < sc.nroads; i++) rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.cell_size = sc.cell_size;

@@ -4,6 +4,7 @@
  * Usage: scaling OUTDIR -> OUTDIR/scaling.md, scaling.csv and scaling_fit.gp
  * (the fitted lines, loaded by tests/bench/scaling.gp for the plot). */
 #include "roadsplat.h"
+#include "scene_splat.h"
 #include "scenes.h"
 #include "timing.h"
 
@@ -76,18 +77,6 @@ static rs_dem *fractal_dem(rs_ctx *ctx, uint32_t W)
     return dem;
 }
 
-static rs_roads *roads_of(rs_ctx *ctx, const sc_scene *sc)
-{
-    rs_roads *r = NULL;
-    if (rs_roads_create(ctx, &r)) return NULL;
-    for (size_t i = 0; i < sc->nroads; i++)
-        if (rs_roads_add(ctx, r, NULL, sc->roads[i].width, sc->roads[i].xy, sc->roads[i].n)) {
-            rs_roads_free(ctx, r);
-            return NULL;
-        }
-    return r;
-}
-
 /* One 6 m road of total length `len` metres, meandering in 400 m rows 20 m
  * apart inside a 512 m map, so any length fits without touching the border. */
 static rs_roads *meander(rs_ctx *ctx, double len)
@@ -156,7 +145,7 @@ int main(int argc, char **argv)
         size_t target = (size_t)(1000.0 * (sides[i] - 1) * (sides[i] - 1) / (399.0 * 349.0) + 0.5);
         if (sc_city(&sc, sides[i], sides[i], 5.0, target, 1)) return 1;
         rs_dem *dem = NULL;
-        rs_roads *r = roads_of(ctx, &sc);
+        rs_roads *r = ss_roads(ctx, &sc);
         rs_splat_options q = o;
         q.cell_size = 5;
         sample *s = &S[0].s[S[0].n++];
@@ -190,7 +179,7 @@ int main(int argc, char **argv)
     {
         sc_scene sc;
         if (sc_city_default(&sc, 1)) return 1;
-        rs_roads *r = roads_of(ctx, &sc);
+        rs_roads *r = ss_roads(ctx, &sc);
         if (!r || rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem)) return 1;
         const unsigned ts[] = { 1, 2, 4, 8 };
         for (int i = 0; i < 4; i++) {

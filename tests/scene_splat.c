@@ -1,0 +1,50 @@
+#include "scene_splat.h"
+#include "seams.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s)
+{
+    rs_roads *roads = NULL;
+    if (rs_roads_create(ctx, &roads) != RS_OK) return NULL;
+    for (size_t i = 0; i < s->nroads; i++)
+        if (rs_roads_add(ctx, roads, NULL, s->roads[i].width, s->roads[i].xy, s->roads[i].n) != RS_OK) {
+            rs_roads_free(ctx, roads);
+            return NULL;
+        }
+    return roads;
+}
+
+void ss_image_free(ss_image *im)
+{
+    free(im->rgba);
+    free(im->wt);
+    memset(im, 0, sizeof *im);
+}
+
+rs_result ss_splat(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, int seam, ss_image *out)
+{
+    memset(out, 0, sizeof *out);
+    rs_splat_options o = *opts;
+    o.cell_size = s->cell_size;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_road_grid *g = NULL;
+    rs_result r = rs_dem_create(ctx, s->w, s->h, s->z, &dem);
+    if (!r) r = (roads = ss_roads(ctx, s)) ? RS_OK : RS_ERR_NOMEM;
+    if (!r) r = rs_splat_size(ctx, dem, &o, &out->w, &out->h);
+    if (!r) r = rs_road_grid_build(ctx, dem, roads, &o, &g);
+    if (!r && seam) out->seam = rs_test_seam_error(g, 32);
+    if (!r) {
+        size_t n = (size_t)out->w * out->h;
+        out->rgba = malloc(n * 4);
+        out->wt = malloc(n * sizeof *out->wt);
+        r = out->rgba && out->wt ? rs_splat(ctx, dem, g, &o, out->rgba, n * 4, out->wt, n) : RS_ERR_NOMEM;
+    }
+    rs_road_grid_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    if (r) ss_image_free(out);
+    return r;
+}

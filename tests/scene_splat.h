@@ -1,0 +1,23 @@
+/* A tests/scenes.h scene run through the library: its roads as rs_roads, and
+ * the whole splat (DEM, road grid, RGBA and weights). Kept apart from
+ * scenes.c, which must not depend on the library it is used to measure. */
+#ifndef RS_TESTS_SCENE_SPLAT_H
+#define RS_TESTS_SCENE_SPLAT_H
+#include "roadsplat.h"
+#include "scenes.h"
+
+/* The scene's roads (unnamed), or NULL when the library refuses one. */
+rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s);
+
+typedef struct ss_image {
+    uint32_t w, h;
+    uint8_t *rgba;  /* w*h*4, malloc'd */
+    uint16_t *wt;   /* w*h road weights, malloc'd */
+    double seam;    /* seam error of the road grid (when asked for) */
+} ss_image;
+
+/* Splat scene `s` with `opts` (cell_size taken from the scene); with `seam`,
+ * also measure the grid's seam error. On failure *out is zeroed. */
+rs_result ss_splat(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, int seam, ss_image *out);
+void ss_image_free(ss_image *im);
+#endif
