@@ -23,18 +23,7 @@ mkdir "$D"
 
 # --- inputs -------------------------------------------------------------------
 # Reference scene: a 31x21 DEM and two roads (as in cli_test.sh).
-printf 'P2\n31 21\n255\n' >"$D/dem.pgm"
-awk 'BEGIN { for (i = 0; i < 651; i++) printf "%d%s", i % 97, (i % 31 == 30) ? "\n" : " " }' >>"$D/dem.pgm"
-cat >"$D/roads.txt" <<'R'
-road main width 6
-2 2
-28 20
-end
-road side width 3
-0 15
-30 15
-end
-R
+ref_scene "$D"
 printf 'P2\n3 3\n9\n0 0 0 0 0 0 0 0 0\n' >"$D/flat.pgm"
 : >"$D/none.txt"
 "$RS" --quiet "$D/dem.pgm" "$D/roads.txt" "$T/ref.png" || bad "reference run failed"

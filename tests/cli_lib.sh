@@ -8,3 +8,20 @@ check() { # description, command...
     d=$1; shift
     if "$@"; then ok; else bad "$d"; fi
 }
+# The small reference scene: DIR/dem.pgm (31x21 P2, sample i = i mod 97) and
+# DIR/roads.txt (two roads).
+ref_scene() {
+    printf 'P2\n31 21\n255\n' >"$1/dem.pgm"
+    awk 'BEGIN { for (i = 0; i < 651; i++) printf "%d%s", i % 97, (i % 31 == 30) ? "\n" : " " }' >>"$1/dem.pgm"
+    cat >"$1/roads.txt" <<'R'
+# two roads
+road main width 6
+2 2
+28 20
+end
+road side width 3
+0 15
+30 15
+end
+R
+}

@@ -3,11 +3,9 @@
 # clear line naming the file, no output left behind), atomic replacement,
 # determinism, the OpenImageIO DEM path. Usage: cli_test.sh path/to/roadsplat
 RS=${1:-build/roadsplat}
-T=$(mktemp -d)
+. "$(dirname "$0")/cli_lib.sh"
+# the read-only folder test leaves a folder rm cannot empty without u+w
 trap 'chmod -R u+w "$T" 2>/dev/null; rm -rf "$T"' EXIT
-pass=0; fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
 # expect_fail NAME PATTERN ARGS... : exit 1, stderr one line matching PATTERN, no $T/out.png
 expect_fail() {
     name=$1; pat=$2; shift 2
@@ -23,19 +21,7 @@ expect_fail() {
 }
 
 E=docs/examples
-cat >"$T/roads.txt" <<'R'
-# two roads
-road main width 6
-2 2
-28 20
-end
-road side width 3
-0 15
-30 15
-end
-R
-printf 'P2\n31 21\n255\n' >"$T/dem.pgm"
-i=0; while [ $i -lt 651 ]; do printf '%d ' $((i % 97)); i=$((i + 1)); done >>"$T/dem.pgm"
+ref_scene "$T"
 
 # --- usage ---
 "$RS" --help >"$T/o" 2>"$T/e" && grep -q "Usage: roadsplat" "$T/o" && [ ! -s "$T/e" ] && ok || bad "--help"
