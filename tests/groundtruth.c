@@ -523,6 +523,18 @@ int gt_cell_buffer(const sc_scene *s, unsigned T, float *R)
     return 0;
 }
 
+/* Pixel p's centre in cell-centre units (cell c's centre at c), clamped to
+ * [0, n-1]: the two cells to blend and the weight of the second. */
+static void gt_bilinear_span(size_t p, unsigned T, size_t n, size_t *a, size_t *b, double *t)
+{
+    double f = (p + 0.5) / T - 0.5;
+    if (f < 0) f = 0;
+    if (f > (double)(n - 1)) f = (double)(n - 1);
+    *a = (size_t)f;
+    *b = *a + 1 < n ? *a + 1 : *a;
+    *t = f - (double)*a;
+}
+
 int gt_cell_buffer_bilinear(const sc_scene *s, unsigned T, float *R)
 {
     size_t pw, ph, cw, ch, px, py;
@@ -535,22 +547,13 @@ int gt_cell_buffer_bilinear(const sc_scene *s, unsigned T, float *R)
     for (py = 0; py < ch; py++)
         for (px = 0; px < cw; px++) m[py * cw + px] = R[py * T * pw + px * T];
     for (py = 0; py < ph; py++) {
-        /* pixel centre in cell-centre units: cell c's centre is at c */
-        double fy = (py + 0.5) / T - 0.5, ty;
+        double ty;
         size_t y0, y1;
-        if (fy < 0) fy = 0;
-        if (fy > (double)(ch - 1)) fy = (double)(ch - 1);
-        y0 = (size_t)fy;
-        y1 = y0 + 1 < ch ? y0 + 1 : y0;
-        ty = fy - (double)y0;
+        gt_bilinear_span(py, T, ch, &y0, &y1, &ty);
         for (px = 0; px < pw; px++) {
-            double fx = (px + 0.5) / T - 0.5, tx;
+            double tx;
             size_t x0, x1;
-            if (fx < 0) fx = 0;
-            if (fx > (double)(cw - 1)) fx = (double)(cw - 1);
-            x0 = (size_t)fx;
-            x1 = x0 + 1 < cw ? x0 + 1 : x0;
-            tx = fx - (double)x0;
+            gt_bilinear_span(px, T, cw, &x0, &x1, &tx);
             R[py * pw + px] = (float)((1 - ty) * ((1 - tx) * m[y0 * cw + x0] + tx * m[y0 * cw + x1]) +
                                       ty * ((1 - tx) * m[y1 * cw + x0] + tx * m[y1 * cw + x1]));
         }
