@@ -1,14 +1,18 @@
 /* libFuzzer target: the CLI's DEM loader (cli_load_dem in cli/util.c, which
  * sends non-PGM files through OpenImageIO in cli/imageio.cpp) on arbitrary
- * file contents. cli_load_dem takes a path, so each input is written to one
- * temporary file per process (under $TMPDIR, /dev/shm when present) and
- * loaded from there: that is the exact code path of `roadsplat DEM ...`.
+ * file contents. cli_load_dem takes a path, so each input is written to a
+ * file in one temporary folder per process (under $TMPDIR, /dev/shm when
+ * present) and loaded from there: the exact code path of `roadsplat DEM ...`.
  * OpenImageIO itself is not instrumented; our code around it is.
+ *
+ * Input: byte 0 picks the file name's extension (mod 4: none, .png, .tif,
+ * .pgm), the rest is the file. The extension decides which reader
+ * OpenImageIO tries first, and .pgm sends any content to our own reader.
  *
  * Findings (abort): a DEM with a side < 2 or a non-finite, non-NaN sample;
  * a failure that does not print exactly one "roadsplat: PATH: ..." line;
  * success that prints a "roadsplat: " line. File descriptor 2 is sent to a
- * second temporary file during the load (as cli/util.c itself does around
+ * temporary file during the load (as cli/util.c itself does around
  * OpenImageIO) for that check; set RS_FUZZ_STDERR=1 to leave stderr alone
  * and skip the message checks, e.g. to see a sanitizer report on replay. */
 #define _POSIX_C_SOURCE 200809L
@@ -19,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -44,27 +49,43 @@ static char msg[8192]; /* what the load printed */
 /* Show what was printed, then abort: the finding is in the message. */
 #define REQUIRE(c) do { if (!(c)) { fprintf(stderr, "demimage: %s fails; stderr was:\n%s\n", #c, msg); abort(); } } while (0)
 
-static char path[256], err_path[256];
-static int fd = -1, err_fd = -1;
+static const char *const exts[4] = { "", ".png", ".tif", ".pgm" };
+static char dir[256], err_path[300];
+static int err_fd = -1;
 
 static void remove_temp(void)
 {
-    if (fd >= 0) { close(fd); unlink(path); }
+    char p[300];
+    for (int i = 0; i < 4; i++) {
+        snprintf(p, sizeof p, "%s/dem%s", dir, exts[i]);
+        unlink(p);
+    }
     if (err_fd >= 0) { close(err_fd); unlink(err_path); }
+    rmdir(dir);
 }
 
 static int open_temp(void)
 {
-    const char *dir = getenv("TMPDIR");
-    if (!dir || !*dir) dir = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp";
-    /* No extension: OpenImageIO picks the reader from the contents. */
-    snprintf(path, sizeof path, "%s/roadsplat-fuzz-dem-XXXXXX", dir);
-    snprintf(err_path, sizeof err_path, "%s/roadsplat-fuzz-err-XXXXXX", dir);
-    fd = mkstemp(path);
-    if (fd < 0) return -1;
-    err_fd = mkstemp(err_path);
+    const char *tmp = getenv("TMPDIR");
+    if (!tmp || !*tmp) tmp = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp";
+    snprintf(dir, sizeof dir, "%s/roadsplat-fuzz-XXXXXX", tmp);
+    if (!mkdtemp(dir)) return -1;
+    snprintf(err_path, sizeof err_path, "%s/stderr", dir);
+    err_fd = open(err_path, O_RDWR | O_CREAT | O_TRUNC, 0600);
     atexit(remove_temp);
     return err_fd < 0 ? -1 : 0;
+}
+
+static int write_file(const char *path, const uint8_t *data, size_t size)
+{
+    int f = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    if (f < 0) return -1;
+    for (size_t off = 0; off < size; ) {
+        ssize_t k = write(f, data + off, size - off);
+        if (k <= 0) { close(f); return -1; }
+        off += (size_t)k;
+    }
+    return close(f);
 }
 
 static size_t count_lines(const char *s, const char *prefix, size_t plen)
@@ -86,23 +107,22 @@ static size_t count_lines(const char *s, const char *prefix, size_t plen)
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc; (void)argv;
-    static const uint8_t warm[][8] = { { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n' }, { 'I', 'I', '*', 0 }, { 0 } };
+    static const uint8_t warm[][9] = { { 1, 0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n' },
+                                       { 2, 'I', 'I', '*', 0 }, { 0, 0 }, { 1, 0 }, { 2, 0 } };
     for (size_t i = 0; i < sizeof warm / sizeof warm[0]; i++) {
-        LLVMFuzzerTestOneInput(warm[i], 8);
-        LLVMFuzzerTestOneInput(warm[i], 4);
+        LLVMFuzzerTestOneInput(warm[i], 9);
+        LLVMFuzzerTestOneInput(warm[i], 5);
     }
     return 0;
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (fd < 0 && open_temp() != 0) return 0;
-    if (ftruncate(fd, 0) != 0) return 0;
-    for (size_t off = 0; off < size; ) {
-        ssize_t k = pwrite(fd, data + off, size - off, (off_t)off);
-        if (k <= 0) return 0;
-        off += (size_t)k;
-    }
+    if (size < 1) return 0;
+    if (err_fd < 0 && open_temp() != 0) return 0;
+    char path[300];
+    snprintf(path, sizeof path, "%s/dem%s", dir, exts[data[0] % 4]);
+    if (write_file(path, data + 1, size - 1) != 0) return 0;
 
     rs_limits lim;
     memset(&lim, 0, sizeof lim);

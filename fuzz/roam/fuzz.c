@@ -1,5 +1,5 @@
 /* Fuzz target for the ROAM mesher. Input: byte 0 = width-2, byte 1 =
- * height-2 (each taken mod 48), then one byte per sample (255 = nodata,
+ * height-2 (each taken mod 33), then one byte per sample (255 = nodata,
  * samples repeat when the input is short); the last 4 bytes choose the pool
  * size (2 bytes), the error threshold and the mode. Checks invariants and
  * traps on a violation (no NaN vertex, indices in range, count == stats). */
@@ -16,7 +16,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 7) return 0;
-    uint32_t W = 2 + data[0] % 48, H = 2 + data[1] % 48;
+    uint32_t W = 2 + data[0] % 33, H = 2 + data[1] % 33;
     const uint8_t *tail = data + size - 4;
     uint32_t pool = (uint32_t)tail[0] | (uint32_t)tail[1] << 8;
     double E = tail[2] / 8.0;
