@@ -12,6 +12,7 @@
 #include <exception>
 #include <memory>
 #include <string>
+#include <vector>
 #include <cerrno>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -23,6 +24,10 @@ using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
 namespace {
+
+// Largest native scanline or tile buffer an image may make OpenImageIO
+// allocate (4096 x 4096 float RGBA is 256 MiB).
+const uint64_t MAX_BUFFER_BYTES = (uint64_t)256 << 20;
 
 struct free_deleter {
     void operator()(void *p) const { std::free(p); }
@@ -70,6 +75,23 @@ bool check_size(const char *path, const ImageSpec &spec, uint32_t *w, uint32_t *
         cli_error("%s: image too large (%dx%d)", path, spec.width, spec.height);
         return false;
     }
+    // OpenImageIO buffers whole native scanlines and whole tiles (every
+    // channel): bound them, since a tiny header can declare either huge.
+    uint64_t row = (uint64_t)spec.width * spec.pixel_bytes(true);
+    if (spec.pixel_bytes(true) == 0 || row > MAX_BUFFER_BYTES) {
+        cli_error("%s: unsupported image layout (%d channels of %d pixels per row)", path, spec.nchannels,
+                  spec.width);
+        return false;
+    }
+    if (spec.tile_width > 0) {
+        uint64_t tile = (uint64_t)spec.tile_width * (uint64_t)(spec.tile_height > 0 ? spec.tile_height : 1) *
+                        (uint64_t)(spec.tile_depth > 0 ? spec.tile_depth : 1) * spec.pixel_bytes(true);
+        if (tile > MAX_BUFFER_BYTES) {
+            cli_error("%s: tiles of %dx%d pixels are too large (at most %d MiB each)", path, spec.tile_width,
+                      spec.tile_height, (int)(MAX_BUFFER_BYTES >> 20));
+            return false;
+        }
+    }
     *w = (uint32_t)spec.width;
     *h = (uint32_t)spec.height;
     return true;
@@ -90,6 +112,27 @@ double integer_scale(TypeDesc t)
     }
 }
 
+// Channels [0, nc) of the whole image as `type`, packed. OpenImageIO 2.4
+// reads strip TIFFs in chunks of whole strips and sizes its buffer by
+// RowsPerStrip even when that exceeds the image: a 161-byte TIFF asked for
+// 24.7 GB. Such files are read one scanline at a time instead (every
+// channel, then packed); all others in one read_image call.
+bool read_pixels(ImageInput *in, const ImageSpec &spec, int nc, TypeDesc type, uint8_t *out)
+{
+    unsigned rps = (unsigned)spec.get_int_attribute("tiff:RowsPerStrip", 0);
+    if (spec.tile_width > 0 || rps <= (unsigned)spec.height)
+        return in->read_image(0, 0, 0, nc, type, out);
+    const size_t w = (size_t)spec.width, ts = type.size(), all = (size_t)spec.nchannels;
+    std::vector<uint8_t> row(w * all * ts);
+    for (int y = 0; y < spec.height; y++) {
+        if (!in->read_scanline(spec.y + y, spec.z, type, row.data())) return false;
+        uint8_t *dst = out + (size_t)y * w * (size_t)nc * ts;
+        for (size_t x = 0; x < w; x++)
+            std::memcpy(dst + x * (size_t)nc * ts, row.data() + x * all * ts, (size_t)nc * ts);
+    }
+    return true;
+}
+
 int read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data)
 {
     auto in = open_input(path);
@@ -108,7 +151,7 @@ int read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *
         cli_error("%s: out of memory for %ux%u samples", path, *w, *h);
         return 1;
     }
-    if (!in->read_image(0, 0, 0, 1, TypeDesc::FLOAT, buf.get())) {
+    if (!read_pixels(in.get(), spec, 1, TypeDesc::FLOAT, (uint8_t *)buf.get())) {
         cli_error("%s: cannot read pixels: %s", path, one_line(in->geterror()).c_str());
         return 1;
     }
@@ -136,7 +179,7 @@ int read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
         cli_error("%s: out of memory for %ux%u pixels", path, *w, *h);
         return 1;
     }
-    if (!in->read_image(0, 0, 0, nc, TypeDesc::UINT8, srcp.get())) {
+    if (!read_pixels(in.get(), spec, nc, TypeDesc::UINT8, srcp.get())) {
         cli_error("%s: cannot read pixels: %s", path, one_line(in->geterror()).c_str());
         return 1;
     }

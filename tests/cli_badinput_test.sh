@@ -167,6 +167,36 @@ mode=old refuse "mesh DEM garbage.png" "^roadsplat: $D/garbage.png: cannot read 
 "$RS" --quiet "$D/good.png" "$D/roads.txt" "$T/good.png" && cmp -s "$T/good.png" "$T/ref.png" && ok \
     || bad "the PNG twin of the reference DEM gives another image"
 
+# --- TIFF layouts that make OpenImageIO 2.4 allocate far beyond the image ---------
+# Its strip reader sizes a buffer by RowsPerStrip even past the image height
+# (a 161-byte fuzz input asked for 24.7 GB); tiles and rows are buffered whole.
+python3 - "$D" <<'PY' || bad "could not write the TIFF inputs"
+import struct, sys, zlib
+d = sys.argv[1]
+def tiff(name, w, h, spp, bits, fmt, extra, data):
+    e = [(256, 4, w), (257, 4, h), (258, 3, bits), (259, 3, 8), (262, 3, 1), (277, 3, spp),
+         (284, 3, 1), (339, 3, fmt)] + extra
+    off = 8 + 2 + 12 * len(e) + 4
+    out = b'II*\0' + struct.pack('<IH', 8, len(e))
+    for tag, typ, val in sorted(e):
+        val = off if val == 'DATA' else len(data) if val == 'SIZE' else val
+        out += struct.pack('<HHIHH' if typ == 3 else '<HHII', tag, typ, 1, *((val, 0) if typ == 3 else (val,)))
+    open(d + '/' + name, 'wb').write(out + struct.pack('<I', 0) + data)
+dem = bytes((y * 31 + x) % 97 for y in range(21) for x in range(31))  # the reference DEM
+strips = [(273, 4, 'DATA'), (279, 4, 'SIZE')]
+tiff('rows-per-strip-385M.tif', 31, 21, 1, 8, 1, strips + [(278, 4, 385875970)], zlib.compress(dem))
+tiff('tile-32768.tif', 31, 21, 1, 8, 1, [(322, 4, 32768), (323, 4, 32768), (324, 4, 'DATA'), (325, 4, 'SIZE')],
+     zlib.compress(dem))
+tiff('channels-1000.tif', 300000, 2, 1000, 8, 1, strips + [(278, 4, 1)], zlib.compress(b'\0' * 64))
+PY
+# the valid one must load without the huge buffer: under a 4 GB address-space
+# limit when the binary runs under one (sanitizer builds reserve more)
+if (ulimit -v 4000000 && "$RS" --version) >/dev/null 2>&1; then lim="ulimit -v 4000000"; else lim=:; fi
+(eval "$lim"; "$RS" --quiet "$D/rows-per-strip-385M.tif" "$D/roads.txt" "$T/rps.png") && cmp -s "$T/rps.png" "$T/ref.png" \
+    && ok || bad "a TIFF with RowsPerStrip above its height (the reference DEM) fails or differs"
+bad_dem tile-32768.tif 'tiles of 32768x32768 pixels are too large \(at most 256 MiB each\)'
+bad_dem channels-1000.tif 'unsupported image layout \(1000 channels of 300000 pixels per row\)'
+
 # --- bad road files ---------------------------------------------------------------
 printf 'road a width 4\n1 1\n2' >"$D/trunc-point.txt"; bad_roads trunc-point.txt "line 3: point needs 'X Y', got only '2'"
 printf 'road a wid' >"$D/trunc-keyword.txt"; bad_roads trunc-keyword.txt "line 1: road 'a': expected 'width', got 'wid'"
