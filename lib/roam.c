@@ -13,7 +13,6 @@
 #define AUTO_POOL_CAP (1u << 21)
 #define ERR_OUTSIDE (-1.0f)       /* node entirely off the map: never split for error */
 #define FRAME_MAX_PASSES 12
-#define EXTRACT_AHEAD 24          /* leaves whose vertex-map slots are prefetched */
 /* The two finest levels are implicit: a split node with legs 2 on the axes
  * ("R level") gets lc = IMPL and keeps the split bits of its two children
  * (legs sqrt 2) in rc; those children and their cell halves are never
@@ -49,8 +48,13 @@ struct rs_roam {
     uint32_t base_count, cap, used; /* cap = base_count + pool */
     uint32_t base_tris, tris;
     int exhausted;
-    uint32_t *vmap;                 /* w*h: output vertex of a sample, NIL when unused */
-    uint32_t *vrev;                 /* w*h: sample of an output vertex (to clear vmap) */
+    /* Extraction's vertex set: one bit per sample, rows padded to whole
+     * 64-bit words (wpr words per row); a summary bit per word that has a
+     * bit set; the set bits before each word (vertex numbering by rank). */
+    uint64_t *vbits, *vsum;
+    uint32_t *vrank;
+    uint32_t wpr;
+    size_t nwords, nsum;
     uint32_t *smap;                 /* 2(w+h): skirt vertex of a border sample */
     double threshold;
     float *ucol, *vrow;             /* texture u of each column, v of each row */
@@ -771,10 +775,11 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
     rs__free(ctx, L->stack);
-    rs__free(ctx, L->vrev);
+    rs__free(ctx, L->vrank);
     rs__free(ctx, L->ucol);
     rs__free(ctx, L->vrow);
-    rs__free(ctx, L->vmap);
+    rs__free(ctx, L->vbits);
+    rs__free(ctx, L->vsum);
     rs__free(ctx, L->smap);
     rs__free(ctx, L);
 }
@@ -844,17 +849,22 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->pzmin = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, (size_t)npatch, sizeof(float));
     L->pin = rs__alloc_array(ctx, (size_t)npatch, 1);
-    L->vmap = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
-    L->vrev = rs__alloc_array(ctx, nsamp, sizeof(uint32_t));
+    L->wpr = (W + 63) / 64;
+    L->nwords = (size_t)L->wpr * H;
+    L->nsum = (L->nwords + 63) / 64;
+    L->vbits = rs__alloc_array(ctx, L->nwords, sizeof(uint64_t));
+    L->vsum = rs__alloc_array(ctx, L->nsum, sizeof(uint64_t));
+    L->vrank = rs__alloc_array(ctx, L->nwords, sizeof(uint32_t));
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->pzmin || !L->pzmax || !L->pin || !L->vmap || !L->vrev || !L->smap || !L->ucol || !L->vrow) {
+    if (!L->err || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow) {
         r = rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                      (unsigned long long)nerr);
         goto fail;
     }
-    memset(L->vmap, 0xFF, nsamp * sizeof(uint32_t));
+    memset(L->vbits, 0, L->nwords * sizeof(uint64_t));
+    memset(L->vsum, 0, L->nsum * sizeof(uint64_t));
     for (uint32_t x = 0; x < W; x++) L->ucol[x] = (float)((double)x / L->cw);
     for (uint32_t y = 0; y < H; y++) L->vrow[y] = (float)((double)y / L->ch);
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
@@ -909,7 +919,8 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
         L->cap = L->base_count + (uint32_t)pool;
     }
     L->bytes = sizeof *L + nerr * sizeof(float) + (uint64_t)npatch * (2 * sizeof(float) + 1)
-               + (uint64_t)nsamp * sizeof(uint32_t) * (L->zown ? 3 : 2)
+               + (uint64_t)nsamp * sizeof(float) * (L->zown ? 1 : 0)
+               + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
                + 2 * ((uint64_t)W + H) * sizeof(uint32_t)
                + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node)
                + 2 * (uint64_t)L->cap * sizeof(uint32_t) + ((uint64_t)W + H) * sizeof(float);
@@ -1202,35 +1213,27 @@ typedef struct extract_state {
     int overflow;
 } extract_state;
 
-static uint32_t emit_vertex(extract_state *s, int x, int y)
+/* Pass 1 of extraction: a corner by its padded sample index (row * 64 wpr +
+ * column), recorded in the vertex set. Indices are written as these keys
+ * and renumbered once the set is complete (number_indices). */
+static uint32_t mark(const extract_state *s, int x, int y)
 {
     rs_roam *L = s->L;
-    size_t id = (size_t)y * L->w + (size_t)x;
-    if (L->vmap[id] != NIL) return L->vmap[id];
-    if (s->nv >= s->vcap) { s->overflow = 1; return 0; }
-    float *v = s->vtx + 5 * s->nv;
-    v[0] = (float)(x * L->cs);
-    v[1] = (float)(y * L->cs);
-    v[2] = (float)((double)zf(L, x, y) * L->zs);
-    v[3] = L->ucol[x];
-    v[4] = L->vrow[y];
-    if (s->normals) vertex_normal(L, x, y, s->nrm + 3 * s->nv);
-    L->vmap[id] = (uint32_t)s->nv;
-    L->vrev[s->nv] = (uint32_t)id;
-    return (uint32_t)s->nv++;
+    uint32_t p = (uint32_t)y * (L->wpr * 64u) + (uint32_t)x;
+    L->vbits[p >> 6] |= (uint64_t)1 << (p & 63u);
+    L->vsum[p >> 12] |= (uint64_t)1 << ((p >> 6) & 63u);
+    return p;
 }
 
 /* One leaf triangle, when it lies on the map; 1 on overflow. */
 static int emit_tri(extract_state *s, const tri *t)
 {
     if (!tri_inside(s->L, t)) return 0;
-    /* apex, right corner, left corner: counter-clockwise seen from above */
-    uint32_t a = emit_vertex(s, t->ax, t->ay);
-    uint32_t c = emit_vertex(s, t->cx, t->cy);
-    uint32_t b = emit_vertex(s, t->bx, t->by);
-    if (s->overflow) return 1;
     if (s->ni + 3 > s->icap) { s->overflow = 1; return 1; }
-    s->idx[s->ni++] = a; s->idx[s->ni++] = c; s->idx[s->ni++] = b;
+    /* apex, right corner, left corner: counter-clockwise seen from above */
+    s->idx[s->ni++] = mark(s, t->ax, t->ay);
+    s->idx[s->ni++] = mark(s, t->cx, t->cy);
+    s->idx[s->ni++] = mark(s, t->bx, t->by);
     return 0;
 }
 
@@ -1241,47 +1244,38 @@ static void emit_leaves(extract_state *s)
 {
     rs_roam *L = s->L;
     const roam_node *nodes = L->nodes;
-    const size_t W = L->w;
     for (uint32_t t = 0; t < L->used; t++) {
         const roam_node *nd = &nodes[t];
         uint32_t lc = nd->lc;
         if (lc != NIL && lc != IMPL) continue; /* inner node */
-#if defined(__GNUC__)
-        /* the vertex map is read at random: fetch a few nodes ahead */
-        if (t + EXTRACT_AHEAD < L->used) {
-            const roam_node *f = &nodes[t + EXTRACT_AHEAD];
-            if (f->ax <= L->cw && f->ay <= L->ch) {
-                __builtin_prefetch(&L->vmap[(size_t)f->ay * W + f->ax]);
-                __builtin_prefetch(&L->z[(size_t)f->ay * W + f->ax]);
-            }
-            if (f->bx <= L->cw && f->by <= L->ch) __builtin_prefetch(&L->vmap[(size_t)f->by * W + f->bx]);
-        }
-#endif
         tri r;
         node_tri(L, nd, &r);
         if (lc == NIL) {
             if (emit_tri(s, &r)) return;
         } else if (r.on) {
             /* an R node on the map: its corners a, b, c and hypotenuse
-             * midpoint m once, the leg midpoints m0, m1 when split */
+             * midpoint m, the leg midpoints m0, m1 when split */
             uint32_t bits = nd->rc;
-            int mx = (r.bx + r.cx) / 2, my = (r.by + r.cy) / 2;
-            uint32_t A = emit_vertex(s, r.ax, r.ay), B = emit_vertex(s, r.bx, r.by);
-            uint32_t C = emit_vertex(s, r.cx, r.cy), M = emit_vertex(s, mx, my);
-            uint32_t M0 = bits & 1u ? emit_vertex(s, (r.ax + r.bx) / 2, (r.ay + r.by) / 2) : 0;
-            uint32_t M1 = bits & 2u ? emit_vertex(s, (r.ax + r.cx) / 2, (r.ay + r.cy) / 2) : 0;
-            if (s->overflow) return;
             if (s->ni + 3u * (2u + (bits & 1u) + (bits >> 1)) > s->icap) {
                 s->overflow = 1;
                 return;
             }
+            int mx = (r.bx + r.cx) / 2, my = (r.by + r.cy) / 2;
+            uint32_t A = mark(s, r.ax, r.ay), B = mark(s, r.bx, r.by);
+            uint32_t C = mark(s, r.cx, r.cy), M = mark(s, mx, my);
             uint32_t *o = s->idx + s->ni;
             /* (apex, right, left) of (m, a, b) or of its halves (m0, m, a), (m0, b, m) */
             if (!(bits & 1u)) { o[0] = M; o[1] = B; o[2] = A; o += 3; }
-            else { o[0] = M0; o[1] = A; o[2] = M; o[3] = M0; o[4] = M; o[5] = B; o += 6; }
+            else {
+                uint32_t M0 = mark(s, (r.ax + r.bx) / 2, (r.ay + r.by) / 2);
+                o[0] = M0; o[1] = A; o[2] = M; o[3] = M0; o[4] = M; o[5] = B; o += 6;
+            }
             /* (m, c, a) or its halves (m1, m, c), (m1, a, m) */
             if (!(bits & 2u)) { o[0] = M; o[1] = A; o[2] = C; o += 3; }
-            else { o[0] = M1; o[1] = C; o[2] = M; o[3] = M1; o[4] = M; o[5] = A; o += 6; }
+            else {
+                uint32_t M1 = mark(s, (r.ax + r.cx) / 2, (r.ay + r.cy) / 2);
+                o[0] = M1; o[1] = C; o[2] = M; o[3] = M1; o[4] = M; o[5] = A; o += 6;
+            }
             s->ni = (size_t)(o - s->idx);
         } else {
             tri q, h;
@@ -1297,6 +1291,84 @@ static void emit_leaves(extract_state *s)
                 }
             }
         }
+    }
+}
+
+/* Bits set in v. Bit arithmetic, not __builtin_popcountll: without a
+ * popcnt target flag that builtin is a table-driven library call. */
+static unsigned popcount64(uint64_t v)
+{
+    v = v - ((v >> 1) & 0x5555555555555555ull);
+    v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);
+    v = (v + (v >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    return (unsigned)((v * 0x0101010101010101ull) >> 56);
+}
+
+static unsigned lowest_bit(uint64_t v) /* v != 0 */
+{
+#if defined(__GNUC__)
+    return (unsigned)__builtin_ctzll(v);
+#else
+    unsigned n = 0;
+    while (!(v & 1u)) { v >>= 1; n++; }
+    return n;
+#endif
+}
+
+/* Pass 2: number the vertex set in row-major order (the rank of each word)
+ * and write the vertices, reading the DEM in order. Only words flagged in
+ * the summary are visited, so a sparse mesh on a huge map stays cheap.
+ * Returns the vertex count; writes nothing when it exceeds vcap. */
+static size_t emit_vertices(extract_state *s)
+{
+    rs_roam *L = s->L;
+    size_t n = 0;
+    for (size_t g = 0; g < L->nsum; g++)
+        for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) {
+            size_t k = g * 64 + lowest_bit(sm);
+            L->vrank[k] = (uint32_t)n;
+            n += popcount64(L->vbits[k]);
+        }
+    if (n > s->vcap) return n;
+    size_t v = 0;
+    for (size_t g = 0; g < L->nsum; g++)
+        for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) {
+            size_t k = g * 64 + lowest_bit(sm);
+            int y = (int)(k / L->wpr), x0 = (int)(k % L->wpr) * 64;
+            const float *zr = L->z + (size_t)y * L->w;
+            const double py = y * L->cs;
+            for (uint64_t b = L->vbits[k]; b; b &= b - 1, v++) {
+                int x = x0 + (int)lowest_bit(b);
+                float *o = s->vtx + 5 * v;
+                o[0] = (float)(x * L->cs);
+                o[1] = (float)py;
+                o[2] = (float)((double)zr[x] * L->zs);
+                o[3] = L->ucol[x];
+                o[4] = L->vrow[y];
+                if (s->normals) vertex_normal(L, x, y, s->nrm + 3 * v);
+            }
+        }
+    return n;
+}
+
+/* Pass 3: sample keys in the index buffer -> vertex numbers. */
+static void number_indices(const extract_state *s)
+{
+    const rs_roam *L = s->L;
+    uint32_t *ix = s->idx;
+    for (size_t i = 0; i < s->ni; i++) {
+        uint32_t p = ix[i];
+        uint64_t below = ((uint64_t)1 << (p & 63u)) - 1u;
+        ix[i] = L->vrank[p >> 6] + popcount64(L->vbits[p >> 6] & below);
+    }
+}
+
+/* Empty the vertex set for the next extraction: only the flagged words. */
+static void clear_vertex_set(rs_roam *L)
+{
+    for (size_t g = 0; g < L->nsum; g++) {
+        for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) L->vbits[g * 64 + lowest_bit(sm)] = 0;
+        L->vsum[g] = 0;
     }
 }
 
@@ -1352,7 +1424,13 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
     emit_leaves(&s);
-    size_t top_indices = s.ni, nsurf = s.nv;
+    if (!s.overflow) {
+        s.nv = emit_vertices(&s);
+        if (s.nv > s.vcap) s.overflow = 1;
+        else number_indices(&s);
+    }
+    clear_vertex_set(L);
+    size_t top_indices = s.ni;
     if (!s.overflow && o.skirt_depth > 0.0) {
         for (size_t t = 0; t < top_indices && !s.overflow; t += 3)
             for (int e = 0; e < 3 && !s.overflow; e++) {
@@ -1369,7 +1447,6 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
             }
         memset(L->smap, 0xFF, 2 * ((size_t)L->w + L->hgt) * sizeof(uint32_t));
     }
-    for (size_t k = 0; k < s.nv && k < nsurf; k++) L->vmap[L->vrev[k]] = NIL; /* ready for the next call */
     if (s.overflow) {
         size_t mv, mi;
         rs_roam_mesh_bound(L, &o, &mv, &mi);
