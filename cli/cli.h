@@ -37,6 +37,9 @@ int cli_read_file(const char *path, size_t limit, char **data, size_t *size);
  * OpenImageIO (PNG 8/16-bit, TIFF incl. float32; single channel, or the
  * first channel of a grey+alpha image). Prints the error and returns NULL. */
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path);
+/* A texture image as RGBA8 (malloc'd, the caller frees *rgba); OpenImageIO's
+ * own stderr output is filtered as for DEMs. 0 or 1 after a message. */
+int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba);
 
 /* Atomic output: write into a temporary file in the same folder, then
  * rename over `path` on commit. Abort (or a failed commit) removes the

@@ -77,7 +77,7 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
 static int load_texture(const char *path, rs_image *img, uint8_t **data)
 {
     if (!path) return 0;
-    if (cli_image_read_rgba8(path, &img->width, &img->height, data)) return 1;
+    if (cli_load_texture(path, &img->width, &img->height, data)) return 1;
     img->rgba = *data;
     return 0;
 }

@@ -288,12 +288,26 @@ int cli_out_commit(cli_out *o)
 
 /* ---- DEM ------------------------------------------------------------------ */
 
+/* An image read through OpenImageIO: a DEM (gray float) or a texture (RGBA8). */
+typedef struct image_read {
+    const char *path;
+    uint32_t max_side, *w, *h;
+    float **z;
+    uint8_t **rgba;
+} image_read;
+
+static int run_read(const image_read *r)
+{
+    if (r->z) return cli_image_read_gray_float(r->path, r->max_side, r->w, r->h, r->z);
+    return cli_image_read_rgba8(r->path, r->w, r->h, r->rgba);
+}
+
 /* OpenImageIO 2.4 leaves libpng's default error handler in place, which
  * prints "libpng error: ..." on stderr before OpenImageIO reports the same
  * problem. Run the read with stderr sent to an unlinked temporary file and
- * pass on only our own "roadsplat: " lines, so a bad DEM still costs exactly
- * one line. Without a temporary file the read runs unfiltered. */
-static int read_image_quietly(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z)
+ * pass on only our own "roadsplat: " lines, so a bad image still costs
+ * exactly one line. Without a temporary file the read runs unfiltered. */
+static int read_image_quietly(const image_read *r)
 {
     fflush(stderr);
     FILE *cap = tmpfile();
@@ -301,9 +315,9 @@ static int read_image_quietly(const char *path, uint32_t max_side, uint32_t *w, 
     if (saved < 0 || dup2(fileno(cap), 2) < 0) {
         if (saved >= 0) close(saved);
         if (cap) fclose(cap);
-        return cli_image_read_gray_float(path, max_side, w, h, z);
+        return run_read(r);
     }
-    int rc = cli_image_read_gray_float(path, max_side, w, h, z);
+    int rc = run_read(r);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
@@ -317,8 +331,14 @@ static int read_image_quietly(const char *path, uint32_t max_side, uint32_t *w, 
     }
     fclose(cap);
     if (keep && !at_start) fputc('\n', stderr);
-    if (rc && !printed) cli_error("%s: cannot read image", path);
+    if (rc && !printed) cli_error("%s: cannot read image", r->path);
     return rc;
+}
+
+int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba)
+{
+    image_read r = { path, 0, w, h, NULL, rgba };
+    return read_image_quietly(&r);
 }
 
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
@@ -351,7 +371,8 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     float *z;
     rs_limits lim;
     rs_ctx_limits(ctx, &lim);
-    if (read_image_quietly(path, lim.max_dem_side, &w, &h, &z)) return NULL;
+    image_read r = { path, lim.max_dem_side, &w, &h, &z, NULL };
+    if (read_image_quietly(&r)) return NULL;
     rs_result rc = rs_dem_create(ctx, w, h, z, &dem);
     free(z);
     if (rc != RS_OK) {

@@ -166,6 +166,11 @@ mode=old refuse "mesh DEM garbage.png" "^roadsplat: $D/garbage.png: cannot read 
     mesh "$D/garbage.png" "$O/m.obj"
 "$RS" --quiet "$D/good.png" "$D/roads.txt" "$T/good.png" && cmp -s "$T/good.png" "$T/ref.png" && ok \
     || bad "the PNG twin of the reference DEM gives another image"
+# a broken texture costs one line too (libpng's own "libpng error: ..." is filtered)
+mode=both refuse "terrain texture trunc-idat.png" "^roadsplat: $D/trunc-idat.png: cannot read pixels: .*" o.png \
+    --quiet --terrain-texture "$D/trunc-idat.png" "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+mode=fresh refuse "road texture bad-crc.png" "^roadsplat: $D/bad-crc.png: cannot read (image|pixels): .*" o.png \
+    --quiet --road-texture "$D/bad-crc.png" "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
 
 # --- TIFF layouts that make OpenImageIO 2.4 allocate far beyond the image ---------
 # Its strip reader sizes a buffer by RowsPerStrip even past the image height
