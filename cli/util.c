@@ -341,19 +341,41 @@ int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba)
     return read_image_quietly(&r);
 }
 
+/* The first line that is not blank or a '#' comment starts with the
+ * keyword "road" (docs/road-format.md), within the first n bytes. */
+static int looks_like_roads(const char *p, size_t n)
+{
+    size_t i = 0;
+    while (i < n) {
+        while (i < n && (p[i] == ' ' || p[i] == '\t' || p[i] == '\r' || p[i] == '\n')) i++;
+        if (i < n && p[i] == '#') {
+            while (i < n && p[i] != '\n') i++;
+            continue;
+        }
+        return n - i >= 5 && memcmp(p + i, "road", 4) == 0 && (p[i + 4] == ' ' || p[i + 4] == '\t');
+    }
+    return 0;
+}
+
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
 {
-    char magic[2] = { 0, 0 };
+    char head[4096];
     FILE *f = fopen(path, "rb");
     if (!f) { cli_error("%s: %s", path, strerror(errno)); return NULL; }
-    size_t got = fread(magic, 1, 2, f);
+    size_t got = fread(head, 1, sizeof head, f);
     fclose(f);
     rs_dem *dem = NULL;
+    /* DEM and ROADS swapped on the command line: say so, rather than pass a
+     * text file to OpenImageIO ("could not find a format reader"). */
+    if (looks_like_roads(head, got)) {
+        cli_error("%s: this is a road file, not a DEM (arguments in the wrong order?)", path);
+        return NULL;
+    }
     /* A .pgm name goes to our reader even with a wrong magic, for its message. */
     size_t pl = strlen(path);
     int pgm_name = pl >= 4 && path[pl - 4] == '.' && (path[pl - 3] | 0x20) == 'p' && (path[pl - 2] | 0x20) == 'g' &&
                    (path[pl - 1] | 0x20) == 'm';
-    if (pgm_name || (got == 2 && magic[0] == 'P' && (magic[1] == '2' || magic[1] == '5'))) {
+    if (pgm_name || (got >= 2 && head[0] == 'P' && (head[1] == '2' || head[1] == '5'))) {
         /* Large enough for any DEM within the default limits, even as P2. */
         size_t limit = SIZE_MAX > 0xFFFFFFFFu ? (size_t)1 << 33 : (size_t)1 << 30;
         char *data;

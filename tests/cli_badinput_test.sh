@@ -166,6 +166,9 @@ mode=old refuse "mesh DEM garbage.png" "^roadsplat: $D/garbage.png: cannot read 
     mesh "$D/garbage.png" "$O/m.obj"
 "$RS" --quiet "$D/good.png" "$D/roads.txt" "$T/good.png" && cmp -s "$T/good.png" "$T/ref.png" && ok \
     || bad "the PNG twin of the reference DEM gives another image"
+# DEM and ROADS swapped (the road file starts with comments)
+{ printf '# roads\n\n'; cat "$D/roads.txt"; } >"$D/commented-roads.txt"
+bad_dem commented-roads.txt 'this is a road file, not a DEM \(arguments in the wrong order\?\)'
 # a broken texture costs one line too (libpng's own "libpng error: ..." is filtered)
 mode=both refuse "terrain texture trunc-idat.png" "^roadsplat: $D/trunc-idat.png: cannot read pixels: .*" o.png \
     --quiet --terrain-texture "$D/trunc-idat.png" "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
