@@ -26,6 +26,8 @@ for log in "$@"; do
         state="running"
     elif [ "$rc" = 0 ]; then
         state="0"
+    elif [ "$rc" = 72 ] && ! grep -aqE '^==[0-9]+== ?ERROR|deadly signal|Test unit written' "$log"; then
+        state="0 (stopped by hand)"
     else
         state="**$(grep -acE '^==[0-9]+== ?ERROR|deadly signal|Test unit written' "$log") (exit $rc)**"
     fi

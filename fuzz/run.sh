@@ -50,9 +50,13 @@ if [ $rc -eq 0 ] && [ -n "$fast" ]; then
 fi
 end=$(date +%s)
 echo "# wall_seconds=$((end - start)) exit=$rc" >>"$log"
-if [ $rc -eq 72 ] && grep -q 'libFuzzer: run interrupted' "$log"; then
-    # libFuzzer's exit code for SIGINT/SIGTERM: stopped by hand, not a finding
-    echo "fuzz $t: interrupted after $(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$') runs in $((end - start)) s" >&2
+if [ $rc -eq 72 ]; then
+    # libFuzzer's exit code for SIGINT/SIGTERM (-interrupted_exitcode):
+    # stopped by hand, not a finding. Its own message and final stats can
+    # land in demimage's captured stderr, so count from the last status line.
+    n=$(grep -ao 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$')
+    [ -n "$n" ] || n=$(grep -aE '^#[0-9]+[[:space:]]' "$log" | tail -n 1 | sed 's/^#\([0-9]*\).*/\1/')
+    echo "fuzz $t: interrupted after $n runs in $((end - start)) s" >&2
     exit 3
 fi
 if [ $rc -ne 0 ]; then
