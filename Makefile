@@ -191,21 +191,23 @@ FUZZ_FLAGS  := -g -O1 -fsanitize=fuzzer,address,undefined,float-cast-overflow,fl
 # OpenImageIO's (not instrumented) and lib/pgm.c, which the pgm target fuzzes
 # with compare tracing. These three skip it; pgm and roads keep it.
 FUZZ_NOCMP  := roam splat demimage
+NOCMP_FLAG  := -fno-sanitize-coverage=trace-cmp
+fuzz_cmp     = $(if $(filter $(1),$(FUZZ_NOCMP)),$(NOCMP_FLAG))
 FUZZ_SECONDS ?= 30
 FUZZ_OBJ    := $(BUILD)/fuzz-obj
 fuzz:
 	@mkdir -p $(BUILD)/fuzz-bin $(FUZZ_OBJ)
 	@for t in $(filter-out demimage,$(FUZZ_TARGETS)); do \
 	  echo "fuzz: $$t"; \
-	  case " $(FUZZ_NOCMP) " in *" $$t "*) nocmp=-fno-sanitize-coverage=trace-cmp ;; *) nocmp= ;; esac; \
+	  case " $(FUZZ_NOCMP) " in *" $$t "*) nocmp="$(NOCMP_FLAG)" ;; *) nocmp= ;; esac; \
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $$nocmp -Iinclude fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
 	done
 	@echo "fuzz: demimage (CLI DEM loader + OpenImageIO)"; \
 	for f in $(LIB_SRC) cli/util.c fuzz/demimage/fuzz.c; do \
 	  o=$(FUZZ_OBJ)/$$(echo $$f | tr / _).o; \
-	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -fno-sanitize-coverage=trace-cmp -D_POSIX_C_SOURCE=200809L -Iinclude -c $$f -o $$o || exit 1; \
+	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -D_POSIX_C_SOURCE=200809L -Iinclude -c $$f -o $$o || exit 1; \
 	done; \
-	$(FUZZ_CXX) -std=c++17 $(FUZZ_FLAGS) -fno-sanitize-coverage=trace-cmp -Iinclude $(OIIO_CFLAGS) -c cli/imageio.cpp -o $(FUZZ_OBJ)/cli_imageio.cpp.o || exit 1; \
+	$(FUZZ_CXX) -std=c++17 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -Iinclude $(OIIO_CFLAGS) -c cli/imageio.cpp -o $(FUZZ_OBJ)/cli_imageio.cpp.o || exit 1; \
 	$(FUZZ_CXX) $(FUZZ_FLAGS) -o $(BUILD)/fuzz-bin/demimage $(FUZZ_OBJ)/*.o $(OIIO_LIBS) -lm || exit 1
 	@echo "fuzz: binaries in $(BUILD)/fuzz-bin/ (run e.g. fuzz/run.sh pgm 60, with BUILD=$(BUILD))"
 

@@ -77,15 +77,15 @@ bool check_size(const char *path, const ImageSpec &spec, uint32_t *w, uint32_t *
     }
     // OpenImageIO buffers whole native scanlines and whole tiles (every
     // channel): bound them, since a tiny header can declare either huge.
-    uint64_t row = (uint64_t)spec.width * spec.pixel_bytes(true);
-    if (spec.pixel_bytes(true) == 0 || row > MAX_BUFFER_BYTES) {
+    const uint64_t px_bytes = spec.pixel_bytes(true);
+    if (px_bytes == 0 || (uint64_t)spec.width * px_bytes > MAX_BUFFER_BYTES) {
         cli_error("%s: unsupported image layout (%d channels of %d pixels per row)", path, spec.nchannels,
                   spec.width);
         return false;
     }
     if (spec.tile_width > 0) {
         uint64_t tile = (uint64_t)spec.tile_width * (uint64_t)(spec.tile_height > 0 ? spec.tile_height : 1) *
-                        (uint64_t)(spec.tile_depth > 0 ? spec.tile_depth : 1) * spec.pixel_bytes(true);
+                        (uint64_t)(spec.tile_depth > 0 ? spec.tile_depth : 1) * px_bytes;
         if (tile > MAX_BUFFER_BYTES) {
             cli_error("%s: tiles of %dx%d pixels are too large (at most %d MiB each)", path, spec.tile_width,
                       spec.tile_height, (int)(MAX_BUFFER_BYTES >> 20));

@@ -26,10 +26,11 @@ for log in "$@"; do
         state="running"
     elif [ "$rc" = 0 ]; then
         state="0"
-    elif [ "$rc" = 72 ] && ! grep -aqE '^==[0-9]+== ?ERROR|deadly signal|Test unit written' "$log"; then
-        state="0 (stopped by hand)"
     else
-        state="**$(grep -acE '^==[0-9]+== ?ERROR|deadly signal|Test unit written' "$log") (exit $rc)**"
+        found=$(grep -acE '^==[0-9]+== ?ERROR|deadly signal|Test unit written' "$log")
+        # exit 72 = interrupted (-interrupted_exitcode)
+        if [ "$rc" = 72 ] && [ "$found" = 0 ]; then state="0 (stopped by hand)"
+        else state="**$found (exit $rc)**"; fi
     fi
     rate=-
     [ -n "$execs" ] && [ "${wall:-0}" -gt 0 ] && rate=$((execs / wall))

@@ -50,12 +50,13 @@ if [ $rc -eq 0 ] && [ -n "$fast" ]; then
 fi
 end=$(date +%s)
 echo "# wall_seconds=$((end - start)) exit=$rc" >>"$log"
+# Executions: libFuzzer's final stats; when those are missing (they can land
+# in demimage's captured stderr on an interrupt), its last status line.
+n=$(grep -ao 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$')
+[ -n "$n" ] || n=$(grep -aE '^#[0-9]+[[:space:]]' "$log" | tail -n 1 | sed 's/^#\([0-9]*\).*/\1/')
 if [ $rc -eq 72 ]; then
     # libFuzzer's exit code for SIGINT/SIGTERM (-interrupted_exitcode):
-    # stopped by hand, not a finding. Its own message and final stats can
-    # land in demimage's captured stderr, so count from the last status line.
-    n=$(grep -ao 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$')
-    [ -n "$n" ] || n=$(grep -aE '^#[0-9]+[[:space:]]' "$log" | tail -n 1 | sed 's/^#\([0-9]*\).*/\1/')
+    # stopped by hand, not a finding
     echo "fuzz $t: interrupted after $n runs in $((end - start)) s" >&2
     exit 3
 fi
@@ -64,4 +65,4 @@ if [ $rc -ne 0 ]; then
     grep -E '^(==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' "$log" | head -n 5 >&2
     exit 1
 fi
-echo "fuzz $t: ok, $(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$') runs in $((end - start)) s"
+echo "fuzz $t: ok, $n runs in $((end - start)) s"
