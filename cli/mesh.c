@@ -188,8 +188,9 @@ int cli_mesh_main(int argc, char **argv)
     o.cell_size = cs; o.z_scale = zs;
     if (pool) o.pool_nodes = pool;
     else {
-        /* the CLI defaults to a pool that holds the finest mesh (within the limit) */
-        uint64_t full = 4ull * rs_dem_width(dem) * rs_dem_height(dem) + 64;
+        /* the CLI defaults to a pool that holds the finest mesh (within the
+         * limit): about one node per four cells, doubled for patch padding */
+        uint64_t full = (uint64_t)rs_dem_width(dem) * rs_dem_height(dem) / 2 + 64;
         o.pool_nodes = (uint32_t)(full < (1u << 26) ? full : (1u << 26));
     }
     rs_result r = rs_roam_create(ctx, dem, &o, &L);

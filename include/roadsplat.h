@@ -279,7 +279,8 @@ RS_API size_t rs_roam_node_bytes(void);
 /* Build the landscape: the patch roots, the base mesh, the node pool and a
  * cache for the error bounds (half a float per padded DEM cell; each bound
  * is computed the first time refinement needs it). The finest mesh needs
- * about one pool node per DEM cell. The automatic
+ * about one pool node per four DEM cells (the four finest bintree levels
+ * are kept as bits in their parent node, docs/roam.md). The automatic
  * pool holds the finest mesh, capped at 2^21 nodes and at the context's
  * max_pool_nodes (RS_ERR_LIMIT if a requested pool exceeds that). `dem` is
  * copied where it holds nodata, otherwise referenced: it must outlive *out.

@@ -13,12 +13,22 @@
 #define AUTO_POOL_CAP (1u << 21)
 #define ERR_OUTSIDE (-1.0f)       /* node entirely off the map: never split for error */
 #define FRAME_MAX_PASSES 12
-/* The two finest levels are implicit: a split node with legs 2 on the axes
- * ("R level") gets lc = IMPL and keeps the split bits of its two children
- * (legs sqrt 2) in rc; those children and their cell halves are never
- * nodes. See docs/roam.md. */
+/* The finest levels are implicit: a split node at the "block level" (legs^2
+ * = 2^dq, dq = min(IMPL_DEPTH, 2 log2 P)) gets lc = IMPL and keeps in rc the
+ * state of its subtree of dq levels, by heap position inside the block (the
+ * block is position 1, the children of position p are 2p and 2p + 1;
+ * positions >= 2^dq are cell halves, never split): a split bit and a tested
+ * bit per position 2 .. 2^dq - 1, and QUEUED while a stack entry asks for
+ * its untested leaves. See docs/roam.md. */
 #define IMPL 0xFFFFFFFEu
-#define TAG 0x80000000u           /* stack entry: test the implicit children of a node */
+#define IMPL_DEPTH 4
+#if IMPL_DEPTH > 4
+#error "the split and tested bits of positions 2..15 fill rc (see TESTED_BIT)"
+#endif
+#define SPLIT_BIT(pos) (1u << ((pos) - 2u))
+#define TESTED_BIT(pos) (1u << ((pos) + 12u))   /* positions 2..15 -> bits 14..27 */
+#define QUEUED 0x80000000u
+#define TAG 0x80000000u           /* stack entry: a block with untested implicit leaves */
 
 typedef struct roam_node {
     uint32_t lc, rc;                /* children (NIL for a leaf) */
@@ -35,6 +45,18 @@ struct rs_roam {
     const float *z;                 /* heights in DEM units, nodata filled */
     float *zown;                    /* owned copy when the DEM had nodata */
     uint32_t plog, P, npx, npy;
+    uint32_t dq, ncut;              /* implicit levels below a block node; 2^dq */
+    unsigned char pwhere[1 << IMPL_DEPTH], ppos[2][1 << IMPL_DEPTH]; /* build_partner_table */
+    uint32_t below[1 << IMPL_DEPTH]; /* SPLIT_BITs of the positions under each position */
+    /* Corners (apex, left, right) and hypotenuse midpoint of every position
+     * down to the cell halves, in units of block leg / 2^(dq/2) along the
+     * block's legs (even dq): a sample's key is then an affine function of
+     * these (emit_block_on). */
+    unsigned char pgeo[2 << IMPL_DEPTH][8];
+    int blk2;                       /* squared leg length of block nodes: 2^dq */
+    uint32_t scan, scan_pos;        /* block whose implicit leaves refine() is testing
+                                       (NIL: none), and the position it splits */
+    int scan_dirty;                 /* a forced split gave it new leaves behind the scan */
     size_t epp;                     /* error entries per patch (P^2) */
     uint32_t elog;                  /* log2(epp) */
     size_t nerr;                    /* entries of err */
@@ -65,6 +87,27 @@ struct rs_roam {
 
 size_t rs_roam_node_bytes(void) { return sizeof(roam_node); }
 
+/* Bits set in v. Bit arithmetic, not __builtin_popcountll: without a
+ * popcnt target flag that builtin is a table-driven library call. */
+static unsigned popcount64(uint64_t v)
+{
+    v = v - ((v >> 1) & 0x5555555555555555ull);
+    v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);
+    v = (v + (v >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    return (unsigned)((v * 0x0101010101010101ull) >> 56);
+}
+
+static unsigned lowest_bit(uint64_t v) /* v != 0 */
+{
+#if defined(__GNUC__)
+    return (unsigned)__builtin_ctzll(v);
+#else
+    unsigned n = 0;
+    while (!(v & 1u)) { v >>= 1; n++; }
+    return n;
+#endif
+}
+
 /* ---- geometry helpers -------------------------------------------------- */
 
 static void node_corner(const roam_node *n, int *cx, int *cy)
@@ -94,11 +137,22 @@ static void child_tri(const tri *t, int k, tri *o)
     else { o->bx = t->cx; o->by = t->cy; o->cx = t->ax; o->cy = t->ay; }
 }
 
-/* Legs 2 on the axes: the finest node level; its children are implicit. */
-static int is_r_level(const roam_node *n)
+/* The finest explicit level: its subtree is implicit (IMPL). */
+static int is_block(const rs_roam *L, const roam_node *n)
 {
     int p = (int)n->bx - (int)n->ax, q = (int)n->by - (int)n->ay;
-    return p * p + q * q == 4;
+    return p * p + q * q == L->blk2;
+}
+
+static uint32_t pos_depth(uint32_t pos) /* pos >= 1 */
+{
+#if defined(__GNUC__)
+    return 31u - (uint32_t)__builtin_clz(pos);
+#else
+    uint32_t d = 0;
+    while (pos >> (d + 1)) d++;
+    return d;
+#endif
 }
 
 static int inside_xy(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
@@ -242,6 +296,36 @@ static float midpoint_err(const rs_roam *L, int x0, int y0, int x1, int y1)
     return round_up_float(fabs(d));
 }
 
+/* Error bound of a triangle wholly on the map (DEM units). The three
+ * finest levels with samples inside have closed forms: legs sqrt 2 (the
+ * base midpoint), legs 2 on the axes (three edge midpoints), legs 2 sqrt 2
+ * (two leg midpoints, three hypotenuse points, and the midpoint of apex and
+ * base midpoint). Cell halves have no sample inside. */
+static float on_map_err(const rs_roam *L, const tri *t)
+{
+    const float *z = L->z;
+    const size_t W = L->w;
+    int ax = t->ax, ay = t->ay, bx = t->bx, by = t->by, cx = t->cx, cy = t->cy;
+    int p = bx - ax, q = by - ay, l2 = p * p + q * q;
+#define Z(x, y) ((double)z[(size_t)(y) * W + (size_t)(x)])
+    if (l2 == 1) return 0.0f;
+    if (l2 == 2) return midpoint_err(L, bx, by, cx, cy);
+    if (l2 > 8) return round_up_float(tri_max_error(L, ax, ay, bx, by, cx, cy));
+    double za = Z(ax, ay), zb = Z(bx, by), zc = Z(cx, cy), d, m;
+    m = fabs(Z((ax + bx) / 2, (ay + by) / 2) - 0.5 * (za + zb));
+    d = fabs(Z((ax + cx) / 2, (ay + cy) / 2) - 0.5 * (za + zc)); if (d > m) m = d;
+    int mx = (bx + cx) / 2, my = (by + cy) / 2;
+    d = fabs(Z(mx, my) - 0.5 * (zb + zc)); if (d > m) m = d;
+    if (l2 == 8) {
+        int ux = (cx - bx) / 4, uy = (cy - by) / 4;
+        d = fabs(Z(bx + ux, by + uy) - (0.75 * zb + 0.25 * zc)); if (d > m) m = d;
+        d = fabs(Z(cx - ux, cy - uy) - (0.25 * zb + 0.75 * zc)); if (d > m) m = d;
+        d = fabs(Z((ax + mx) / 2, (ay + my) / 2) - 0.5 * (za + 0.5 * (zb + zc))); if (d > m) m = d;
+    }
+#undef Z
+    return round_up_float(m);
+}
+
 /* Error bound of a triangle (DEM units): ERR_OUTSIDE off the map, +inf
  * when it straddles the map edge. */
 static float compute_err(const rs_roam *L, const tri *t)
@@ -249,47 +333,39 @@ static float compute_err(const rs_roam *L, const tri *t)
     int c = tri_class(L, t);
     if (c == NODE_OUTSIDE) return ERR_OUTSIDE;
     if (c == NODE_STRADDLES) return INFINITY;
-    int cx = t->cx, cy = t->cy;
-    int p = t->bx - t->ax, q = t->by - t->ay;
-    if ((p == 1 || p == -1) && (q == 1 || q == -1)) {
-        /* legs sqrt(2): the only non-corner sample is the base midpoint */
-        return midpoint_err(L, t->bx, t->by, cx, cy);
-    }
-    if (p * p + q * q == 4) {
-        /* legs 2 on the axes: the only non-corner samples are the three edge midpoints */
-        const float *z = L->z;
-        size_t W = L->w;
-        int ax = t->ax, ay = t->ay, bx = t->bx, by = t->by;
-        double za = z[(size_t)ay * W + (size_t)ax], zb = z[(size_t)by * W + (size_t)bx];
-        double zc = z[(size_t)cy * W + (size_t)cx];
-        double d1 = fabs((double)z[(size_t)((ay + by) / 2) * W + (size_t)((ax + bx) / 2)] - 0.5 * (za + zb));
-        double d2 = fabs((double)z[(size_t)((ay + cy) / 2) * W + (size_t)((ax + cx) / 2)] - 0.5 * (za + zc));
-        double d3 = fabs((double)z[(size_t)((by + cy) / 2) * W + (size_t)((bx + cx) / 2)] - 0.5 * (zb + zc));
-        if (d2 > d1) d1 = d2;
-        if (d3 > d1) d1 = d3;
-        return round_up_float(d1);
-    }
-    return round_up_float(tri_max_error(L, t->ax, t->ay, t->bx, t->by, cx, cy));
+    return on_map_err(L, t);
 }
 
-/* Cache slot of a node above the R level: heap indices below epp / 2. The
- * R level (three samples besides the corners) is cheaper to recompute than
- * to cache; NIL for those and for cell halves. */
+/* Cache slot of heap index hh in patch `patch`: indices below epp / 2, the
+ * levels above the R level (legs 2 on the axes). The R level (three samples
+ * besides the corners) and the level below it (one) are cheaper to
+ * recompute than to cache. */
+static uint32_t slot_of(const rs_roam *L, uint32_t patch, uint32_t hh)
+{
+    uint32_t half = (uint32_t)(L->epp / 2);
+    return hh < half ? patch * half + hh : NIL;
+}
+
 static uint32_t err_slot(const rs_roam *L, const roam_node *n)
 {
     if (n->e == NIL) return NIL;
-    uint32_t hh = n->e & (uint32_t)(L->epp - 1), half = (uint32_t)(L->epp / 2);
-    if (hh >= half) return NIL;
-    return (n->e >> L->elog) * half + hh;
+    return slot_of(L, n->e >> L->elog, n->e & (uint32_t)(L->epp - 1));
 }
 
-/* Error bound of a node in DEM units, computed on first use (most deep
- * nodes are never asked for at a large threshold) and cached above the R
- * level; cell halves have none. */
-static float node_err(rs_roam *L, const roam_node *n, const tri *t)
+/* Slot of implicit position pos of block node n: the heap index continues
+ * below the block's (h -> 2h, 2h + 1). */
+static uint32_t imp_slot(const rs_roam *L, const roam_node *n, uint32_t pos)
 {
-    if (n->e == NIL) return 0.0f;
-    uint32_t slot = err_slot(L, n);
+    uint32_t d = pos_depth(pos);
+    uint32_t hh = ((n->e & (uint32_t)(L->epp - 1)) << d) + pos - (1u << d);
+    return slot_of(L, n->e >> L->elog, hh);
+}
+
+/* Error bound (DEM units) of triangle t with cache slot `slot` (NIL: not
+ * cached), computed on first use: most deep nodes are never asked for at a
+ * large threshold. */
+static float slot_err(rs_roam *L, uint32_t slot, const tri *t)
+{
     if (slot == NIL) return compute_err(L, t);
     float v = L->err[slot];
     if (v != v) {
@@ -297,6 +373,13 @@ static float node_err(rs_roam *L, const roam_node *n, const tri *t)
         L->err[slot] = v;
     }
     return v;
+}
+
+/* Error bound of an explicit node; cell halves have none. */
+static float node_err(rs_roam *L, const roam_node *n, const tri *t)
+{
+    if (n->e == NIL) return 0.0f;
+    return slot_err(L, err_slot(L, n), t);
 }
 
 /* ---- nodata ---------------------------------------------------------------- */
@@ -385,13 +468,13 @@ static void relink(roam_node *n, uint32_t nb, uint32_t old, uint32_t now)
 }
 
 /* Nodes a split of leaf t needs, force-splits included (worst case): two
- * per split, none for R-level nodes (their children are implicit). */
+ * per split, none for block nodes (their subtrees are implicit). */
 static uint32_t split_need(const rs_roam *L, uint32_t t)
 {
     const roam_node *n = L->nodes;
     uint32_t need = 0, cur = t;
     for (;;) {
-        uint32_t c = is_r_level(&n[cur]) ? 0u : 2u;
+        uint32_t c = is_block(L, &n[cur]) ? 0u : 2u;
         uint32_t b = n[cur].base;
         if (b == NIL) return need + c;
         if (n[b].base == cur) return need + 2 * c; /* diamond: b is on cur's level */
@@ -409,6 +492,15 @@ static int tris_delta(const rs_roam *L, const tri *t)
     return tri_inside(L, &c0) + tri_inside(L, &c1) - tri_inside(L, t);
 }
 
+/* Ask refine() to test the untested implicit leaves of block r. */
+static void queue_block(rs_roam *L, uint32_t r)
+{
+    roam_node *nd = &L->nodes[r];
+    if (nd->rc & QUEUED) return;
+    nd->rc |= QUEUED;
+    L->stack[L->sp++] = r | TAG;
+}
+
 /* Split leaf t, force-splitting its base neighbour first when they do not
  * form a diamond. The caller reserved split_need(t) nodes. */
 static void split(rs_roam *L, uint32_t t)
@@ -416,14 +508,14 @@ static void split(rs_roam *L, uint32_t t)
     roam_node *n = L->nodes;
     if (n[t].lc != NIL) return;
     if (n[t].base != NIL && n[n[t].base].base != t) split(L, n[t].base);
-    if (is_r_level(&n[t])) {
-        /* children implicit: no nodes, no relinks (neighbours keep pointing
+    if (is_block(L, &n[t])) {
+        /* subtree implicit: no nodes, no relinks (neighbours keep pointing
          * at this node); its base partner is on the same level */
         tri tt;
         node_tri(L, &n[t], &tt);
         n[t].lc = IMPL; n[t].rc = 0;
         L->tris += (uint32_t)tris_delta(L, &tt);
-        L->stack[L->sp++] = t | TAG;
+        if (L->dq > 1) queue_block(L, t);
         uint32_t b = n[t].base;
         if (b != NIL && n[b].lc == NIL) split(L, b);
         return;
@@ -462,30 +554,230 @@ static void split(rs_roam *L, uint32_t t)
     }
 }
 
-/* Mark implicit child k of R-level node r split (into its cell halves). */
-static void mark_q(rs_roam *L, uint32_t r, int k)
+/* ---- implicit levels ---------------------------------------------------------- */
+
+/* t (a block's triangle) -> the triangle of its implicit position pos. */
+static void descend_to(tri *t, uint32_t pos)
 {
-    roam_node *nd = &L->nodes[r];
-    if (nd->rc & (1u << k)) return;
-    nd->rc |= 1u << k;
-    tri t, q;
-    node_tri(L, nd, &t);
-    child_tri(&t, k, &q);
-    L->tris += (uint32_t)tris_delta(L, &q);
+    for (uint32_t d = pos_depth(pos); d-- > 0;) {
+        tri c;
+        child_tri(t, (int)((pos >> d) & 1u), &c);
+        *t = c;
+    }
 }
 
-/* Split implicit child k of R-level node r. Its hypotenuse is r's leg k, so
- * its diamond partner is a child of the R-level node across that leg (the
- * leg links of R-level nodes always name a node on their own level, as the
- * finer one is implicit), force-split first when it is not yet split. The
- * caller reserved split_need of that neighbour. */
-static void split_q(rs_roam *L, uint32_t r, int k)
+/* Triangle of implicit position pos of block node r (pos 1: the block). */
+static void imp_tri(const rs_roam *L, uint32_t r, uint32_t pos, tri *t)
+{
+    node_tri(L, &L->nodes[r], t);
+    descend_to(t, pos);
+}
+
+static int collinear(int x0, int y0, int x1, int y1, int px, int py)
+{
+    return (x1 - x0) * (py - y0) == (y1 - y0) * (px - x0);
+}
+
+static int on_edge(int x0, int y0, int x1, int y1, const tri *t)
+{
+    return collinear(x0, y0, x1, y1, t->bx, t->by) && collinear(x0, y0, x1, y1, t->cx, t->cy);
+}
+
+/* Child of triangle u (0 or 1) on whose side the point q2 / 2 lies. */
+static int child_toward(const tri *u, int qx2, int qy2)
+{
+    int mx2 = u->bx + u->cx, my2 = u->by + u->cy;
+    int dx = 2 * u->ax - mx2, dy = 2 * u->ay - my2;
+    long sb = (long)dx * (2 * u->by - my2) - (long)dy * (2 * u->bx - mx2);
+    long sq = (long)dx * (qy2 - my2) - (long)dy * (qx2 - mx2);
+    return (sb > 0) == (sq > 0) ? 0 : 1;
+}
+
+static void ref_tri(int ax, int ay, int bx, int by, tri *t)
+{
+    t->ax = ax; t->ay = ay; t->bx = bx; t->by = by;
+    t->cx = ax - (by - ay); t->cy = ay + (bx - ax);
+    t->on = 1;
+}
+
+/* Where the diamond partner of each implicit position lies. Every block's
+ * subtree is the same figure up to an isometry and a scale (the right
+ * corner is always apex + rot90(left - apex)), so this is worked out once
+ * on a reference block B: the partner of position pos is a position of
+ * the block across edge pwhere[pos] of B (PW_SELF when the hypotenuse is
+ * inside B). The block across an edge is B's image under the point
+ * reflection about the edge's midpoint when the edge has the same role
+ * (left leg, right leg, hypotenuse) in both blocks, as for diamond
+ * partners and leg neighbours in two patches; else (leg neighbours inside
+ * a patch) under the reflection across the edge's line, which swaps the
+ * roles of the legs. ppos[1][pos] is the partner's position in the first
+ * case, ppos[0][pos] in the second (and for PW_SELF, PW_BASE). */
+enum { PW_SELF = 0, PW_LEFT = 1, PW_RIGHT = 2, PW_BASE = 3 };
+
+static uint32_t descend_toward(tri N, const tri *t, uint32_t d)
+{
+    /* a point inside the partner, doubled: its apex 2m - a plus m */
+    int qx2 = 3 * ((t->bx + t->cx) / 2) - t->ax, qy2 = 3 * ((t->by + t->cy) / 2) - t->ay;
+    uint32_t pp = 1;
+    for (uint32_t j = 0; j < d; j++) {
+        tri c;
+        int k = child_toward(&N, qx2, qy2);
+        child_tri(&N, k, &c);
+        N = c;
+        pp = 2 * pp + (uint32_t)k;
+    }
+    return pp;
+}
+
+static void build_partner_table(rs_roam *L)
+{
+    int h = 1 << (L->dq / 2);
+    tri B, M, S;
+    if (L->dq % 2 == 0) ref_tri(0, 0, h, 0, &B); else ref_tri(0, 0, h, h, &B);
+    for (uint32_t pos = 2; pos < L->ncut; pos++) {
+        tri t = B;
+        uint32_t d = pos_depth(pos);
+        descend_to(&t, pos);
+        /* M: the mirror image across the edge, S: the point reflection */
+        if (on_edge(B.ax, B.ay, B.bx, B.by, &t)) {
+            L->pwhere[pos] = PW_LEFT;
+            ref_tri(B.ax, B.ay, 2 * B.ax - B.cx, 2 * B.ay - B.cy, &M);
+            ref_tri(B.bx, B.by, B.ax, B.ay, &S);
+        } else if (on_edge(B.ax, B.ay, B.cx, B.cy, &t)) {
+            L->pwhere[pos] = PW_RIGHT;
+            ref_tri(B.ax, B.ay, B.cx, B.cy, &M);
+            ref_tri(B.cx, B.cy, B.ax + B.cx - B.bx, B.ay + B.cy - B.by, &S);
+        } else if (on_edge(B.bx, B.by, B.cx, B.cy, &t)) {
+            L->pwhere[pos] = PW_BASE;
+            ref_tri(B.bx + B.cx - B.ax, B.by + B.cy - B.ay, B.cx, B.cy, &S);
+            M = S;
+        } else {
+            L->pwhere[pos] = PW_SELF;
+            M = S = B;
+        }
+        L->ppos[0][pos] = (unsigned char)descend_toward(M, &t, d);
+        L->ppos[1][pos] = (unsigned char)descend_toward(S, &t, d);
+    }
+    if (L->dq % 2 == 0) {
+        tri R;
+        ref_tri(0, 0, h, 0, &R); /* a = 0, b - a and c - a the unit axes times h */
+        for (uint32_t pos = 1; pos < 2 * L->ncut; pos++) {
+            tri t = R;
+            descend_to(&t, pos);
+            unsigned char *g = L->pgeo[pos];
+            g[0] = (unsigned char)t.ax; g[1] = (unsigned char)t.ay; g[2] = (unsigned char)t.bx;
+            g[3] = (unsigned char)t.by; g[4] = (unsigned char)t.cx; g[5] = (unsigned char)t.cy;
+            g[6] = (unsigned char)((t.bx + t.cx) / 2); g[7] = (unsigned char)((t.by + t.cy) / 2);
+        }
+    }
+    for (uint32_t pos = 1; pos < L->ncut; pos++) {
+        uint32_t m = 0;
+        for (uint32_t c = 2; c < L->ncut; c++) {
+            uint32_t a = c;
+            while (a > pos) a >>= 1;
+            if (a == pos && c != pos) m |= SPLIT_BIT(c);
+        }
+        L->below[pos] = m;
+    }
+}
+
+/* The implicit leaves of a block waiting for a test (SPLIT_BIT space):
+ * positions above the cell halves whose parent is split (the block's
+ * children always) and that are neither split nor tested. */
+static uint32_t untested(const rs_roam *L, uint32_t rc)
+{
+    uint32_t split = rc & (SPLIT_BIT(L->ncut) - 1u);
+    /* children of positions 2.. (bit i = position i + 2): bits 2i + 2, 2i + 3 */
+    uint32_t x = split & ((1u << (L->ncut / 2 - 2)) - 1u) & 0xFFFFu;
+    x = (x | (x << 8)) & 0x00FF00FFu;
+    x = (x | (x << 4)) & 0x0F0F0F0Fu;
+    x = (x | (x << 2)) & 0x33333333u;
+    x = (x | (x << 1)) & 0x55555555u;
+    uint32_t kids = (x * 3u) << 2 | 3u;
+    return kids & ~split & ~((rc >> 14) & 0x3FFFu) & (SPLIT_BIT(L->ncut) - 1u);
+}
+
+/* Block holding the partner of implicit position pos of block r (NIL at
+ * the landscape's border), and the partner's position there. */
+static uint32_t partner_node(const rs_roam *L, uint32_t r, uint32_t pos, uint32_t *pp)
+{
+    const roam_node *n = L->nodes;
+    uint32_t N;
+    int same_role = 0;
+    switch (L->pwhere[pos]) {
+    case PW_LEFT: N = n[r].left; same_role = N != NIL && n[N].left == r; break;
+    case PW_RIGHT: N = n[r].right; same_role = N != NIL && n[N].right == r; break;
+    case PW_BASE: N = n[r].base; break;
+    default: N = r; break;
+    }
+    *pp = L->ppos[same_role][pos];
+    return N;
+}
+
+/* Does position a come before position b in the depth-first order of
+ * scan_block (a not inside b's subtree)? Compared at the deeper depth. */
+static int pre_before(uint32_t a, uint32_t b)
+{
+    uint32_t da = pos_depth(a), db = pos_depth(b);
+    return da < db ? (a << (db - da)) <= b : a < (b << (da - db));
+}
+
+/* Record implicit position pos of block r split: its children are new
+ * leaves to test when they are above the cell halves. */
+static void imp_mark(rs_roam *L, uint32_t r, uint32_t pos, const tri *t)
+{
+    L->nodes[r].rc |= SPLIT_BIT(pos);
+    L->tris += (uint32_t)tris_delta(L, t);
+    if (2 * pos >= L->ncut) return;
+    if (r != L->scan) queue_block(L, r);
+    else if (pre_before(pos, L->scan_pos)) L->scan_dirty = 1; /* the scan has passed it */
+}
+
+/* Split implicit leaf pos (triangle t) of block r with its diamond
+ * partner, force-splitting first what the partner needs: an unsplit
+ * neighbour block by split(), an unsplit parent of the partner by
+ * imp_split() (a leaf's base neighbour is at most one level coarser, so
+ * nothing above the parent can be unsplit). The caller reserved
+ * imp_need(r, pos) nodes. */
+static void imp_split(rs_roam *L, uint32_t r, uint32_t pos, const tri *t)
 {
     roam_node *n = L->nodes;
-    uint32_t nb = k ? n[r].right : n[r].left;
-    if (nb != NIL && n[nb].lc == NIL) split(L, nb);
-    mark_q(L, r, k);
-    if (nb != NIL) mark_q(L, nb, n[nb].left == r ? 0 : 1);
+    if (n[r].rc & SPLIT_BIT(pos)) return;
+    uint32_t pp, N = partner_node(L, r, pos, &pp);
+    if (N != NIL) {
+        if (n[N].lc == NIL) split(L, N);
+        uint32_t par = pp >> 1;
+        if (par > 1 && !(n[N].rc & SPLIT_BIT(par))) {
+            tri u;
+            imp_tri(L, N, par, &u);
+            imp_split(L, N, par, &u);
+        }
+    }
+    imp_mark(L, r, pos, t);
+    if (N != NIL) {
+        /* the partner: t turned half a turn about its hypotenuse midpoint */
+        tri u;
+        u.ax = t->bx + t->cx - t->ax; u.ay = t->by + t->cy - t->ay;
+        u.bx = t->cx; u.by = t->cy; u.cx = t->bx; u.cy = t->by;
+        u.on = N == r ? t->on : (n[N].e != NIL && L->pin[n[N].e >> L->elog]);
+        imp_mark(L, N, pp, &u);
+    }
+}
+
+/* Nodes imp_split(r, pos) may take (worst case): the implicit force chain
+ * is free until it reaches an unsplit block, then split_need of that. */
+static uint32_t imp_need(const rs_roam *L, uint32_t r, uint32_t pos)
+{
+    const roam_node *n = L->nodes;
+    for (;;) {
+        uint32_t pp, N = partner_node(L, r, pos, &pp);
+        if (N == NIL) return 0;
+        if (n[N].lc == NIL) return split_need(L, N);
+        uint32_t par = pp >> 1;
+        if (par <= 1 || (n[N].rc & SPLIT_BIT(par))) return 0;
+        r = N;
+        pos = par;
+    }
 }
 
 static void reset_mesh(rs_roam *L)
@@ -523,14 +815,13 @@ static int sphere_visible(const view_params *v, const double c[3], double r)
     return 1;
 }
 
-/* Decision for a leaf: node nd with triangle t, or (nd NULL) the implicit
- * child t of a node in patch `patch`. */
-static int wants_split(rs_roam *L, const roam_node *nd, const tri *t, uint32_t patch, const refine_params *rp)
+/* Decision for a leaf: triangle t in patch `patch`, its error bound cached
+ * in `slot` (NIL: not cached). Cell halves never come here. */
+static int wants_split(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch, const refine_params *rp)
 {
-    if (nd && nd->e == NIL) return 0; /* cell halves */
     if (rp->border_only) return tri_class(L, t) == NODE_STRADDLES;
     if (!rp->view) {
-        float e = nd ? node_err(L, nd, t) : compute_err(L, t);
+        float e = slot_err(L, slot, t);
         return e == INFINITY || (e > 0.0f && (double)e * L->zs > rp->max_error);
     }
     int cls = tri_class(L, t);
@@ -554,65 +845,187 @@ static int wants_split(rs_roam *L, const roam_node *nd, const tri *t, uint32_t p
     double floor_d = 1e-3 * cs;
     if (dist < floor_d) dist = floor_d;
     /* the error is computed last: culled nodes never need it */
-    float e = nd ? node_err(L, nd, t) : compute_err(L, t);
+    float e = slot_err(L, slot, t);
     if (!(e > 0.0f)) return 0; /* flat */
     return (double)e * L->zs * v->k / dist > v->tol;
 }
 
-/* Depth-first refinement with an explicit stack: every node is pushed when
- * it is created (children of forced splits too), so each leaf is tested
- * once, and neighbouring triangles are handled close together in time (the
- * DEM rows, error slots and neighbour nodes they touch stay in cache). The
- * split sequence depends only on the DEM and the decision rule, never on the
- * pool size; refinement stops at the first split the pool cannot hold, so
- * the mesh of a larger pool is a refinement of a smaller pool's. Returns 1
- * when abandoned for stop_above. */
+/* The error terms of a legs-2-sqrt-2 triangle S = (a, b, c) and of its
+ * whole implicit subtree, from its nine samples read once: the children
+ * R0 = (m, a, b), R1 = (m, c, a) share S's leg-midpoint terms and the
+ * sample i halfway from a to m, and each grandchild's only term is one of
+ * its parent's (the plane through a triangle's hypotenuse ends gives its
+ * midpoint's error whatever the apex). */
+typedef struct s_terms {
+    int have;
+    tri S;
+    float s, r[2], q[2][2];
+} s_terms;
+
+static void load_s_terms(const rs_roam *L, s_terms *o)
+{
+    const float *z = L->z;
+    const size_t W = L->w;
+    const tri *t = &o->S;
+#define Z(x, y) ((double)z[(size_t)(y) * W + (size_t)(x)])
+    int mx = (t->bx + t->cx) / 2, my = (t->by + t->cy) / 2;
+    int ux = (t->cx - t->bx) / 4, uy = (t->cy - t->by) / 4;
+    double za = Z(t->ax, t->ay), zb = Z(t->bx, t->by), zc = Z(t->cx, t->cy), zm = Z(mx, my);
+    double zla = Z((t->ax + t->bx) / 2, (t->ay + t->by) / 2), zlc = Z((t->ax + t->cx) / 2, (t->ay + t->cy) / 2);
+    double zh1 = Z(t->bx + ux, t->by + uy), zh3 = Z(t->cx - ux, t->cy - uy);
+    double zi = Z((t->ax + mx) / 2, (t->ay + my) / 2);
+#undef Z
+    double la = fabs(zla - 0.5 * (za + zb)), lc = fabs(zlc - 0.5 * (za + zc));
+    double sm = fabs(zm - 0.5 * (zb + zc));
+    double sh1 = fabs(zh1 - (0.75 * zb + 0.25 * zc)), sh3 = fabs(zh3 - (0.25 * zb + 0.75 * zc));
+    double si = fabs(zi - 0.5 * (za + 0.5 * (zb + zc)));
+    double i = fabs(zi - 0.5 * (zm + za)), h1 = fabs(zh1 - 0.5 * (zm + zb)), h3 = fabs(zh3 - 0.5 * (zm + zc));
+    double e = la;
+    if (lc > e) e = lc;
+    if (sm > e) e = sm;
+    if (sh1 > e) e = sh1;
+    if (sh3 > e) e = sh3;
+    if (si > e) e = si;
+    o->s = round_up_float(e);
+    o->q[0][0] = round_up_float(i); o->q[0][1] = round_up_float(h1);
+    o->q[1][0] = round_up_float(h3); o->q[1][1] = o->q[0][0];
+    o->r[0] = round_up_float(la > h1 ? (la > i ? la : i) : (h1 > i ? h1 : i));
+    o->r[1] = round_up_float(lc > h3 ? (lc > i ? lc : i) : (h3 > i ? h3 : i));
+    o->have = 1;
+}
+
+/* Test the untested implicit leaves of block r below position pos
+ * (triangle t, squared legs 2^lv; st: the terms of the legs-2-sqrt-2
+ * triangle above it, if any), in depth-first order; `prune`: skip subtrees
+ * without untested leaves (worth it once some were tested). Returns 0 to
+ * go on, 1 when abandoned for stop_above, -1 when the pool ran out. */
+static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32_t lv, s_terms *st, int prune,
+                      const refine_params *rp)
+{
+    roam_node *n = L->nodes;
+    /* error mode on the map: the implicit levels have closed forms */
+    int fast = t->on && !rp->view && !rp->border_only;
+    for (int k = 0; k < 2; k++) {
+        uint32_t c = 2 * pos + (uint32_t)k;
+        if (c >= L->ncut) return 0; /* cell halves */
+        tri u;
+        child_tri(t, k, &u);
+        s_terms cs, *sub = st;
+        if (lv == 4) { cs.have = 0; cs.S = u; sub = &cs; }
+        if (!(n[r].rc & (SPLIT_BIT(c) | TESTED_BIT(c)))) {
+            n[r].rc |= TESTED_BIT(c);
+            int want;
+            if (fast) {
+                float e;
+                if (lv > 4) e = slot_err(L, imp_slot(L, &n[r], c), &u);
+                else if (!sub) e = on_map_err(L, &u);
+                else {
+                    if (!sub->have) load_s_terms(L, sub);
+                    e = lv == 4 ? sub->s : lv == 3 ? sub->r[k] : sub->q[pos & 1u][k];
+                }
+                want = e > 0.0f && (double)e * L->zs > rp->max_error;
+            } else want = wants_split(L, imp_slot(L, &n[r], c), &u, n[r].e >> L->elog, rp);
+            if (want) {
+                /* the common case, partner's parent split: no force-split, no nodes */
+                uint32_t pp, N = partner_node(L, r, c, &pp);
+                if (N != NIL && (n[N].lc == NIL || ((pp >> 1) > 1 && !(n[N].rc & SPLIT_BIT(pp >> 1))))
+                    && imp_need(L, r, c) > L->cap - L->used) {
+                    L->exhausted = 1;
+                    return -1;
+                }
+                L->scan_pos = c;
+                imp_split(L, r, c, &u);
+                if (rp->stop_above && L->tris > rp->stop_above) return 1;
+            }
+        }
+        if ((n[r].rc & SPLIT_BIT(c)) && (!prune || (untested(L, n[r].rc) & L->below[c]))) {
+            int res = scan_block(L, r, c, &u, lv - 1, sub, prune, rp);
+            if (res) return res;
+        }
+    }
+    return 0;
+}
+
+/* Depth-first refinement with an explicit stack: every explicit node is
+ * pushed when it is created (children of forced splits too), and a block
+ * whose implicit subtree got untested leaves is pushed once (QUEUED), so
+ * each leaf is tested once, and neighbouring triangles are handled close
+ * together in time (the DEM rows, error slots and neighbour nodes they
+ * touch stay in cache). The split sequence depends only on the DEM and the
+ * decision rule, never on the pool size; refinement stops at the first
+ * split the pool cannot hold, so the mesh of a larger pool is a refinement
+ * of a smaller pool's. Returns 1 when abandoned for stop_above. */
 static int refine(rs_roam *L, const refine_params *rp)
 {
     roam_node *n = L->nodes;
     uint32_t *st = L->stack;
     L->sp = 0;
+    L->scan = NIL;
     for (uint32_t i = L->used; i-- > 0;) { /* node 0 on top */
         if (n[i].lc == NIL) st[L->sp++] = i;
-        else if (n[i].lc == IMPL) st[L->sp++] = i | TAG;
+        else if (n[i].lc == IMPL && L->dq > 1) { n[i].rc |= QUEUED; st[L->sp++] = i | TAG; }
     }
     while (L->sp) {
         uint32_t i = st[--L->sp];
         tri t;
-        if (i & TAG) { /* the implicit children of an R-level node */
+        if (i & TAG) {
             i &= ~TAG;
+            n[i].rc &= ~QUEUED;
             node_tri(L, &n[i], &t);
-            uint32_t patch = n[i].e >> L->elog;
-            int fast = t.on && !rp->view && !rp->border_only;
-            for (int k = 0; k < 2; k++) {
-                if (n[i].rc & (1u << k)) continue; /* force-split already */
-                if (fast) {
-                    /* error mode on the map: child k's hypotenuse is leg a-b
-                     * or leg a-c, with no edge tests */
-                    float e = k ? midpoint_err(L, t.ax, t.ay, t.cx, t.cy) : midpoint_err(L, t.ax, t.ay, t.bx, t.by);
-                    if (!(e > 0.0f && (double)e * L->zs > rp->max_error)) continue;
-                } else {
-                    tri q;
-                    child_tri(&t, k, &q);
-                    if (!wants_split(L, NULL, &q, patch, rp)) continue;
-                }
-                uint32_t nb = k ? n[i].right : n[i].left;
-                uint32_t need = nb != NIL && n[nb].lc == NIL ? split_need(L, nb) : 0;
-                if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
-                split_q(L, i, k);
-                if (rp->stop_above && L->tris > rp->stop_above) return 1;
+            L->scan = i;
+            int res = 0;
+            while (!res && untested(L, n[i].rc)) {
+                L->scan_dirty = 0;
+                res = scan_block(L, i, 1, &t, L->dq, NULL, (n[i].rc & (TESTED_BIT(L->ncut) - TESTED_BIT(2))) != 0, rp);
+                if (!L->scan_dirty) break;
             }
+            L->scan = NIL;
+            if (res < 0) return 0;
+            if (res > 0) return 1;
             continue;
         }
         if (n[i].lc != NIL) continue; /* force-split after it was pushed */
+        if (n[i].e == NIL) continue;  /* cell halves (patches of one cell) */
         node_tri(L, &n[i], &t);
-        if (!wants_split(L, &n[i], &t, n[i].e >> L->elog, rp)) continue;
+        if (!wants_split(L, err_slot(L, &n[i]), &t, n[i].e >> L->elog, rp)) continue;
         uint32_t need = split_need(L, i);
         if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
         split(L, i);
         if (rp->stop_above && L->tris > rp->stop_above) return 1;
     }
     return 0;
+}
+
+/* Error bound of triangle t from the cache when it is there, else computed
+ * (and not stored: the landscape is const here). */
+static float peek_err(const rs_roam *L, uint32_t slot, const tri *t)
+{
+    float e = slot == NIL ? NAN : L->err[slot];
+    return e == e ? e : compute_err(L, t);
+}
+
+/* Largest bound over the unsplit implicit leaves of block nd below
+ * position pos (triangle t); cell halves have none. `inside_only`: leaves
+ * on the map only; `skip_inf`: leave out +inf (straddling the map edge). */
+static float imp_leaves_max(const rs_roam *L, const roam_node *nd, uint32_t pos, const tri *t, int inside_only,
+                            int skip_inf)
+{
+    float m = 0.0f;
+    for (int k = 0; k < 2; k++) {
+        uint32_t c = 2 * pos + (uint32_t)k;
+        if (c >= L->ncut) return m;
+        tri u;
+        child_tri(t, k, &u);
+        float e;
+        if (nd->rc & SPLIT_BIT(c)) e = imp_leaves_max(L, nd, c, &u, inside_only, skip_inf);
+        else {
+            if (inside_only && !tri_inside(L, &u)) continue;
+            e = peek_err(L, imp_slot(L, nd, c), &u);
+            if (skip_inf && e == INFINITY) continue;
+        }
+        if (e > m) m = e;
+    }
+    return m;
 }
 
 /* Largest error bound over the leaves on the map (metres). Computed when
@@ -625,20 +1038,10 @@ static double leaves_max_bound(const rs_roam *L)
         const roam_node *nd = &L->nodes[i];
         tri t;
         node_tri(L, nd, &t);
-        if (nd->lc == IMPL) { /* unsplit implicit children */
-            for (int k = 0; k < 2; k++) {
-                tri q;
-                child_tri(&t, k, &q);
-                if (nd->rc & (1u << k) || !tri_inside(L, &q)) continue;
-                float e = compute_err(L, &q);
-                if ((double)e > mb) mb = e;
-            }
-            continue;
-        }
-        if (nd->lc != NIL || nd->e == NIL || !tri_inside(L, &t)) continue;
-        uint32_t slot = err_slot(L, nd);
-        float e = slot == NIL ? NAN : L->err[slot];
-        if (e != e) e = compute_err(L, &t); /* R level, or never tested (pool ran out first) */
+        float e;
+        if (nd->lc == IMPL) e = imp_leaves_max(L, nd, 1, &t, 1, 0);
+        else if (nd->lc != NIL || nd->e == NIL || !tri_inside(L, &t)) continue;
+        else e = peek_err(L, err_slot(L, nd), &t); /* never tested when the pool ran out first */
         if ((double)e > mb) mb = e;
     }
     return mb * L->zs;
@@ -647,16 +1050,20 @@ static double leaves_max_bound(const rs_roam *L)
 /* ---- heights -------------------------------------------------------------------- */
 
 /* Heights must stay finite through the error arithmetic (checked over the
- * valid samples: filled nodata copies one of them). */
-static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem)
+ * valid samples: filled nodata copies one of them). One pass, which also
+ * tells whether there is nodata to fill. */
+static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem, int *has_nodata)
 {
     size_t n = (size_t)L->w * L->hgt;
-    double zmax = 0.0;
+    float zmax = 0.0f;
+    int bad = 0;
     for (size_t i = 0; i < n; i++) {
-        double a = fabs((double)dem->z[i]);
-        if (a > zmax && isfinite(a)) zmax = a;
+        float a = fabsf(dem->z[i]);
+        if (!(a <= FLT_MAX)) bad = 1; /* NaN or inf */
+        else if (a > zmax) zmax = a;
     }
-    if (!isfinite(zmax * L->zs * 4.0) || !isfinite(zmax * 4.0))
+    *has_nodata = bad;
+    if (!isfinite((double)zmax * L->zs * 4.0) || !isfinite((double)zmax * 4.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: heights up to %g times z_scale %g overflow", zmax, L->zs);
     return RS_OK;
 }
@@ -664,12 +1071,8 @@ static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem)
 /* Point the landscape at dem's heights (nodata filled into an owned copy),
  * forget every cached error bound and recompute the per-patch height
  * ranges. On failure the landscape keeps its previous heights. */
-static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
+static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int has_nodata)
 {
-    size_t n = (size_t)L->w * L->hgt;
-    int has_nodata = 0;
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(dem->z[i])) { has_nodata = 1; break; }
     float *old = L->zown;
     if (has_nodata) {
         L->zown = NULL;
@@ -706,8 +1109,9 @@ rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
     if (dem->width != L->w || dem->height != L->hgt)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_set_dem: DEM is %ux%u, the landscape %ux%u",
                         dem->width, dem->height, L->w, L->hgt);
-    rs_result r = check_heights(ctx, L, dem);
-    if (r == RS_OK) r = load_heights(ctx, L, dem);
+    int has_nodata;
+    rs_result r = check_heights(ctx, L, dem, &has_nodata);
+    if (r == RS_OK) r = load_heights(ctx, L, dem, has_nodata);
     if (r != RS_OK) return r;
     reset_mesh(L);
     L->threshold = INFINITY;
@@ -819,9 +1223,10 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     if (!rs__mul_u64(npatch, epp, &nerr) || nerr >= ((uint64_t)1 << 32) || 2 * npatch > 0x7FFFFFFFull)
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: %llu patches of %u cells need too many error entries",
                         (unsigned long long)npatch, P);
-    /* Full refinement: every patch tree down to the R level (the two finer
-     * levels are implicit). */
-    uint64_t full_nodes = npatch * (P >= 2 ? (uint64_t)P * P - 2 : 2u);
+    /* Full refinement: every patch tree down to the block level (the dq
+     * finer levels are implicit): 2 + 4 + ... + 2^(2 plog - dq + 1) nodes. */
+    uint32_t dq = 2 * plog < IMPL_DEPTH ? 2 * plog : IMPL_DEPTH;
+    uint64_t full_nodes = npatch * (((uint64_t)1 << (2 * plog - dq + 2)) - 2);
     uint64_t pool;
     if (o.pool_nodes) pool = o.pool_nodes;
     else if (o.pool_bytes) pool = o.pool_bytes / sizeof(roam_node);
@@ -840,9 +1245,13 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->cs = cs; L->zs = zs;
     L->plog = plog; L->P = P; L->npx = npx; L->npy = npy; L->epp = (size_t)epp;
     L->elog = 2 * plog;
+    L->dq = dq; L->ncut = 1u << dq; L->blk2 = 1 << dq;
+    L->scan = NIL;
+    build_partner_table(L);
     rs_result r = RS_OK;
     size_t nsamp = (size_t)W * H;
-    if ((r = check_heights(ctx, L, dem)) != RS_OK) goto fail;
+    int has_nodata;
+    if ((r = check_heights(ctx, L, dem, &has_nodata)) != RS_OK) goto fail;
     nerr = (nerr + 1) / 2; /* cached above the R level only (err_slot) */
     L->nerr = (size_t)nerr;
     L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
@@ -868,7 +1277,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     for (uint32_t x = 0; x < W; x++) L->ucol[x] = (float)((double)x / L->cw);
     for (uint32_t y = 0; y < H; y++) L->vrow[y] = (float)((double)y / L->ch);
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
-    if ((r = load_heights(ctx, L, dem)) != RS_OK) goto fail;
+    if ((r = load_heights(ctx, L, dem, has_nodata)) != RS_OK) goto fail;
     for (uint32_t py = 0; py < npy; py++)
         for (uint32_t px = 0; px < npx; px++)
             L->pin[py * npx + px] = (unsigned char)(px * P + P <= L->cw && py * P + P <= L->ch);
@@ -915,6 +1324,8 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
                          (unsigned long long)pool);
             goto fail;
         }
+        for (uint32_t i = 0; i < L->base_count; i++) /* keep the split bits only */
+            if (L->nodes[i].lc == IMPL) L->nodes[i].rc &= SPLIT_BIT(L->ncut) - 1u;
         memcpy(L->base_copy, L->nodes, (size_t)L->base_count * sizeof(roam_node));
         L->cap = L->base_count + (uint32_t)pool;
     }
@@ -960,18 +1371,10 @@ static float base_max_error(rs_roam *L)
         const roam_node *nd = &L->base_copy[i];
         tri t;
         node_tri(L, nd, &t);
-        if (nd->lc == IMPL) {
-            for (int k = 0; k < 2; k++) {
-                tri q;
-                child_tri(&t, k, &q);
-                if (nd->rc & (1u << k)) continue;
-                float e = compute_err(L, &q);
-                if (e > m && e != INFINITY) m = e;
-            }
-            continue;
-        }
-        if (nd->lc != NIL) continue;
-        float e = node_err(L, nd, &t);
+        float e;
+        if (nd->lc == IMPL) e = imp_leaves_max(L, nd, 1, &t, 0, 1);
+        else if (nd->lc != NIL) continue;
+        else e = node_err(L, nd, &t);
         if (e > m && e != INFINITY) m = e;
     }
     return m;
@@ -1216,13 +1619,17 @@ typedef struct extract_state {
 /* Pass 1 of extraction: a corner by its padded sample index (row * 64 wpr +
  * column), recorded in the vertex set. Indices are written as these keys
  * and renumbered once the set is complete (number_indices). */
-static uint32_t mark(const extract_state *s, int x, int y)
+static uint32_t mark_key(const extract_state *s, uint32_t p)
 {
     rs_roam *L = s->L;
-    uint32_t p = (uint32_t)y * (L->wpr * 64u) + (uint32_t)x;
     L->vbits[p >> 6] |= (uint64_t)1 << (p & 63u);
     L->vsum[p >> 12] |= (uint64_t)1 << ((p >> 6) & 63u);
     return p;
+}
+
+static uint32_t mark(const extract_state *s, int x, int y)
+{
+    return mark_key(s, (uint32_t)y * (s->L->wpr * 64u) + (uint32_t)x);
 }
 
 /* One leaf triangle, when it lies on the map; 1 on overflow. */
@@ -1237,7 +1644,61 @@ static int emit_tri(extract_state *s, const tri *t)
     return 0;
 }
 
-/* Leaves in allocation order (the implicit ones with their R-level node):
+/* The leaves of block nd's implicit subtree below position pos (triangle t). */
+static int emit_imp(extract_state *s, const roam_node *nd, uint32_t pos, const tri *t)
+{
+    for (int k = 0; k < 2; k++) {
+        uint32_t c = 2 * pos + (uint32_t)k;
+        tri u;
+        child_tri(t, k, &u);
+        if (c < s->L->ncut && (nd->rc & SPLIT_BIT(c))) {
+            if (emit_imp(s, nd, c, &u)) return 1;
+        } else if (emit_tri(s, &u)) return 1;
+    }
+    return 0;
+}
+
+/* The same for a block on the map (even dq): every corner of a leaf is a
+ * corner of the block or the hypotenuse midpoint of a split position, so
+ * those are marked once each, and the leaves write their sample keys,
+ * affine in the reference geometry pgeo, in the order of emit_imp. */
+static int emit_block_on(extract_state *s, const roam_node *nd, const tri *t)
+{
+    const rs_roam *L = s->L;
+    const uint32_t row = L->wpr * 64u;
+    const int unit = 1 << (L->dq / 2);
+    const uint32_t k0 = (uint32_t)t->ay * row + (uint32_t)t->ax;
+    /* key steps along the legs' unit vectors (wrapping arithmetic) */
+    const uint32_t kb = (uint32_t)((t->by - t->ay) / unit) * row + (uint32_t)((t->bx - t->ax) / unit);
+    const uint32_t kc = (uint32_t)((t->cy - t->ay) / unit) * row + (uint32_t)((t->cx - t->ax) / unit);
+#define KEY(u, v) (k0 + (uint32_t)(u) * kb + (uint32_t)(v) * kc)
+    const uint32_t split = nd->rc & (SPLIT_BIT(L->ncut) - 1u);
+    (void)mark_key(s, KEY(L->pgeo[1][0], L->pgeo[1][1]));
+    (void)mark_key(s, KEY(L->pgeo[1][2], L->pgeo[1][3]));
+    (void)mark_key(s, KEY(L->pgeo[1][4], L->pgeo[1][5]));
+    (void)mark_key(s, KEY(L->pgeo[1][6], L->pgeo[1][7]));
+    for (uint32_t m = split; m; m &= m - 1u) {
+        const unsigned char *g = L->pgeo[lowest_bit(m) + 2u];
+        (void)mark_key(s, KEY(g[6], g[7]));
+    }
+    uint32_t pos = 2;
+    for (;;) {
+        if (pos < L->ncut && (split & SPLIT_BIT(pos))) { pos *= 2; continue; }
+        if (s->ni + 3 > s->icap) { s->overflow = 1; return 1; }
+        const unsigned char *g = L->pgeo[pos];
+        uint32_t *o = s->idx + s->ni;
+        /* apex, right corner, left corner: counter-clockwise seen from above */
+        o[0] = KEY(g[0], g[1]); o[1] = KEY(g[4], g[5]); o[2] = KEY(g[2], g[3]);
+        s->ni += 3;
+        while ((pos & 1u) && pos > 1) pos >>= 1;
+        if (pos == 1) break;
+        pos++;
+    }
+#undef KEY
+    return 0;
+}
+
+/* Leaves in allocation order (the implicit ones with their block node):
  * one linear pass over the node array (cache friendly; the order is
  * deterministic). */
 static void emit_leaves(extract_state *s)
@@ -1250,69 +1711,12 @@ static void emit_leaves(extract_state *s)
         if (lc != NIL && lc != IMPL) continue; /* inner node */
         tri r;
         node_tri(L, nd, &r);
-        if (lc == NIL) {
-            if (emit_tri(s, &r)) return;
-        } else if (r.on) {
-            /* an R node on the map: its corners a, b, c and hypotenuse
-             * midpoint m, the leg midpoints m0, m1 when split */
-            uint32_t bits = nd->rc;
-            if (s->ni + 3u * (2u + (bits & 1u) + (bits >> 1)) > s->icap) {
-                s->overflow = 1;
-                return;
-            }
-            int mx = (r.bx + r.cx) / 2, my = (r.by + r.cy) / 2;
-            uint32_t A = mark(s, r.ax, r.ay), B = mark(s, r.bx, r.by);
-            uint32_t C = mark(s, r.cx, r.cy), M = mark(s, mx, my);
-            uint32_t *o = s->idx + s->ni;
-            /* (apex, right, left) of (m, a, b) or of its halves (m0, m, a), (m0, b, m) */
-            if (!(bits & 1u)) { o[0] = M; o[1] = B; o[2] = A; o += 3; }
-            else {
-                uint32_t M0 = mark(s, (r.ax + r.bx) / 2, (r.ay + r.by) / 2);
-                o[0] = M0; o[1] = A; o[2] = M; o[3] = M0; o[4] = M; o[5] = B; o += 6;
-            }
-            /* (m, c, a) or its halves (m1, m, c), (m1, a, m) */
-            if (!(bits & 2u)) { o[0] = M; o[1] = A; o[2] = C; o += 3; }
-            else {
-                uint32_t M1 = mark(s, (r.ax + r.cx) / 2, (r.ay + r.cy) / 2);
-                o[0] = M1; o[1] = C; o[2] = M; o[3] = M1; o[4] = M; o[5] = A; o += 6;
-            }
-            s->ni = (size_t)(o - s->idx);
-        } else {
-            tri q, h;
-            for (int k = 0; k < 2; k++) {
-                child_tri(&r, k, &q);
-                if (!(nd->rc & (1u << k))) {
-                    if (emit_tri(s, &q)) return;
-                    continue;
-                }
-                for (int j = 0; j < 2; j++) {
-                    child_tri(&q, j, &h);
-                    if (emit_tri(s, &h)) return;
-                }
-            }
-        }
+        int stop;
+        if (lc == NIL) stop = emit_tri(s, &r);
+        else if (r.on && L->dq % 2 == 0) stop = emit_block_on(s, nd, &r);
+        else stop = emit_imp(s, nd, 1, &r);
+        if (stop) return;
     }
-}
-
-/* Bits set in v. Bit arithmetic, not __builtin_popcountll: without a
- * popcnt target flag that builtin is a table-driven library call. */
-static unsigned popcount64(uint64_t v)
-{
-    v = v - ((v >> 1) & 0x5555555555555555ull);
-    v = (v & 0x3333333333333333ull) + ((v >> 2) & 0x3333333333333333ull);
-    v = (v + (v >> 4)) & 0x0F0F0F0F0F0F0F0Full;
-    return (unsigned)((v * 0x0101010101010101ull) >> 56);
-}
-
-static unsigned lowest_bit(uint64_t v) /* v != 0 */
-{
-#if defined(__GNUC__)
-    return (unsigned)__builtin_ctzll(v);
-#else
-    unsigned n = 0;
-    while (!(v & 1u)) { v >>= 1; n++; }
-    return n;
-#endif
 }
 
 /* Pass 2: number the vertex set in row-major order (the rank of each word)

@@ -674,6 +674,185 @@ static void test_set_dem(rs_ctx *ctx)
     free(za); free(zb);
 }
 
+/* ---- an all-explicit reference ----------------------------------------- */
+/* The mesher keeps its finest levels implicit, finds diamond partners from
+ * tables and computes bounds from closed forms. This reference has none of
+ * that: every triangle is a node, force-splits follow the links as in the
+ * seed, and a bound is the maximum over the lattice points of the triangle,
+ * found by brute force. In error mode both must give the same unique
+ * coarsest conforming mesh. DEMs are quantised to quarters, so every plane
+ * value is exact in double and no bound can differ by rounding. */
+typedef struct ref_node { int ax, ay, bx, by, cx, cy; int32_t lc, base, left, right; } ref_node;
+
+static double ref_err(const float *z, uint32_t W, const ref_node *t)
+{
+    int px = t->bx - t->ax, py = t->by - t->ay, qx = t->cx - t->ax, qy = t->cy - t->ay;
+    double l2 = (double)(px * px + py * py), za = z[(size_t)t->ay * W + (size_t)t->ax];
+    double db = z[(size_t)t->by * W + (size_t)t->bx] - za, dc = z[(size_t)t->cy * W + (size_t)t->cx] - za;
+    int x0 = t->ax < t->bx ? t->ax : t->bx, x1 = t->ax > t->bx ? t->ax : t->bx;
+    int y0 = t->ay < t->by ? t->ay : t->by, y1 = t->ay > t->by ? t->ay : t->by;
+    x0 = t->cx < x0 ? t->cx : x0;
+    x1 = t->cx > x1 ? t->cx : x1;
+    y0 = t->cy < y0 ? t->cy : y0;
+    y1 = t->cy > y1 ? t->cy : y1;
+    double m = 0.0;
+    for (int y = y0; y <= y1; y++)
+        for (int x = x0; x <= x1; x++) {
+            int dx = x - t->ax, dy = y - t->ay;
+            int s = dx * px + dy * py, u = dx * qx + dy * qy; /* along the legs, times l2 */
+            if (s < 0 || u < 0 || s + u > (int)l2) continue;
+            double d = fabs(z[(size_t)y * W + (size_t)x] - (za + s / l2 * db + u / l2 * dc));
+            if (d > m) m = d;
+        }
+    return m;
+}
+
+static void ref_relink(ref_node *n, int32_t nb, int32_t old, int32_t now)
+{
+    if (nb < 0) return;
+    if (n[nb].base == old) n[nb].base = now;
+    else if (n[nb].left == old) n[nb].left = now;
+    else if (n[nb].right == old) n[nb].right = now;
+}
+
+static void ref_split(ref_node *n, size_t *count, int32_t t)
+{
+    if (n[t].lc >= 0) return;
+    if (n[t].base >= 0 && n[n[t].base].base != t) ref_split(n, count, n[t].base);
+    int32_t lc = (int32_t)(*count)++, rc = (int32_t)(*count)++;
+    ref_node T = n[t];
+    int mx = (T.bx + T.cx) / 2, my = (T.by + T.cy) / 2;
+    ref_node a = { mx, my, T.ax, T.ay, T.bx, T.by, -1, T.left, rc, -1 };
+    ref_node b = { mx, my, T.cx, T.cy, T.ax, T.ay, -1, T.right, -1, lc };
+    n[lc] = a; n[rc] = b;
+    n[t].lc = lc;
+    ref_relink(n, T.left, t, lc);
+    ref_relink(n, T.right, t, rc);
+    if (T.base >= 0) {
+        if (n[T.base].lc >= 0) {
+            int32_t blc = n[T.base].lc, brc = blc + 1;
+            n[blc].right = rc; n[brc].left = lc;
+            n[lc].right = brc; n[rc].left = blc;
+        } else ref_split(n, count, T.base);
+    }
+}
+
+/* Leaves of the reference for max error E, as canonical triangles (apex,
+ * right, left like the mesher, rotated to start at the smallest key). */
+static size_t ref_mesh(const float *z, uint32_t W, uint32_t H, uint32_t P, double E, uint64_t **out)
+{
+    uint32_t npx = (W - 1) / P, npy = (H - 1) / P;
+    size_t cap = 8 * (size_t)W * H + 16, count = 0;
+    ref_node *n = malloc(cap * sizeof *n);
+    if (!n) return 0;
+    for (uint32_t py = 0; py < npy; py++)
+        for (uint32_t px = 0; px < npx; px++) {
+            int32_t p = (int32_t)(py * npx + px);
+            int x0 = (int)(px * P), y0 = (int)(py * P), s = (int)P;
+            ref_node r0 = { x0, y0, x0 + s, y0, x0, y0 + s, -1, 2 * p + 1,
+                            py > 0 ? 2 * (p - (int32_t)npx) + 1 : -1, px > 0 ? 2 * (p - 1) + 1 : -1 };
+            ref_node r1 = { x0 + s, y0 + s, x0, y0 + s, x0 + s, y0, -1, 2 * p,
+                            py + 1 < npy ? 2 * (p + (int32_t)npx) : -1, px + 1 < npx ? 2 * (p + 1) : -1 };
+            n[count++] = r0; n[count++] = r1;
+        }
+    for (int changed = 1; changed;) {
+        changed = 0;
+        for (size_t i = 0; i < count; i++)
+            if (n[i].lc < 0 && ref_err(z, W, &n[i]) > E) { ref_split(n, &count, (int32_t)i); changed = 1; }
+    }
+    uint64_t *t = malloc((count + 1) * sizeof *t * 3);
+    size_t nt = 0;
+    for (size_t i = 0; t && i < count; i++) {
+        if (n[i].lc >= 0) continue;
+        uint64_t k[3] = { (uint64_t)n[i].ay * W + (uint64_t)n[i].ax, (uint64_t)n[i].cy * W + (uint64_t)n[i].cx,
+                          (uint64_t)n[i].by * W + (uint64_t)n[i].bx };
+        int m = k[1] < k[0] ? (k[2] < k[1] ? 2 : 1) : (k[2] < k[0] ? 2 : 0);
+        t[3 * nt] = k[m]; t[3 * nt + 1] = k[(m + 1) % 3]; t[3 * nt + 2] = k[(m + 2) % 3];
+        nt++;
+    }
+    free(n);
+    *out = t;
+    return t ? nt : 0;
+}
+
+static int cmp_tri3(const void *a, const void *b)
+{
+    const uint64_t *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+/* The mesher's triangles in the same canonical form. */
+static size_t lib_tris(const mesh *m, uint32_t W, uint64_t **out)
+{
+    size_t nt = m->ni / 3;
+    uint64_t *t = malloc((nt + 1) * 3 * sizeof *t);
+    for (size_t i = 0; t && i < nt; i++) {
+        uint64_t k[3];
+        for (int c = 0; c < 3; c++) {
+            const float *v = m->v + 5 * m->i[3 * i + (size_t)c];
+            k[c] = (uint64_t)lround(v[1]) * W + (uint64_t)lround(v[0]);
+        }
+        int j = k[1] < k[0] ? (k[2] < k[1] ? 2 : 1) : (k[2] < k[0] ? 2 : 0);
+        t[3 * i] = k[j]; t[3 * i + 1] = k[(j + 1) % 3]; t[3 * i + 2] = k[(j + 2) % 3];
+    }
+    *out = t;
+    return t ? nt : 0;
+}
+
+static void test_reference(rs_ctx *ctx)
+{
+    static const uint32_t cfg[][3] = { { 33, 33, 8 }, { 33, 17, 16 }, { 17, 17, 4 }, { 17, 33, 2 },
+                                       { 65, 65, 64 }, { 65, 33, 16 }, { 9, 9, 1 } };
+    static const double errs[] = { 0.3, 1.1, 3.7, 20.3 };
+    static const int kinds[] = { DEM_SPIKE, DEM_CHECKER, DEM_RIDGE, DEM_FRACTAL, DEM_COUNT /* noise */ };
+    int same = 1, cases = 0;
+    for (size_t c = 0; c < sizeof cfg / sizeof cfg[0]; c++)
+        for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+            uint32_t W = cfg[c][0], H = cfg[c][1];
+            float *z = gen(kinds[k] == DEM_COUNT ? DEM_CONST : kinds[k], W, H);
+            if (!z) { same = 0; continue; }
+            for (size_t i = 0; i < (size_t)W * H; i++) {
+                /* white noise: every sample of every closed form can be the maximum */
+                if (kinds[k] == DEM_COUNT) z[i] = (float)(rc_hash(i * 7919u + W) % 97u) * 0.5f;
+                z[i] = roundf(z[i] * 4.0f) / 4.0f;
+            }
+            rs_dem *dem = NULL;
+            rs_roam_options o;
+            memset(&o, 0, sizeof o);
+            o.patch_size = cfg[c][2];
+            rs_roam *r = make(ctx, z, W, H, &o, &dem);
+            for (size_t e = 0; r && e < sizeof errs / sizeof errs[0]; e++) {
+                mesh m;
+                uint64_t *a = NULL, *b = NULL;
+                size_t na = 0, nb = ref_mesh(z, W, H, cfg[c][2], errs[e], &b);
+                if (rs_roam_refine_error(ctx, r, errs[e]) == RS_OK && extract(ctx, r, NULL, &m) == RS_OK)
+                    na = lib_tris(&m, W, &a);
+                else memset(&m, 0, sizeof m);
+                int ok = a && b && na == nb && na > 0;
+                if (ok) {
+                    qsort(a, na, 3 * sizeof *a, cmp_tri3);
+                    qsort(b, nb, 3 * sizeof *b, cmp_tri3);
+                    ok = memcmp(a, b, na * 3 * sizeof *a) == 0;
+                }
+                if (!ok && same)
+                    fprintf(stderr, "    reference: %s %ux%u patch %u E %g: %zu vs %zu triangles\n",
+                            kinds[k] == DEM_COUNT ? "noise" : dem_name[kinds[k]],
+                            W, H, cfg[c][2], errs[e], na, nb);
+                same = same && ok;
+                cases++;
+                free(a); free(b);
+                mesh_free(&m);
+            }
+            if (!r) same = 0;
+            rs_roam_free(ctx, r);
+            rs_dem_free(ctx, dem);
+            free(z);
+        }
+    CHECKF(same, "error mode equals an all-explicit reference ROAM with brute-force bounds (%d cases)", cases);
+}
+
 int main(void)
 {
     rs_ctx *ctx = NULL;
@@ -694,6 +873,7 @@ int main(void)
     test_extract_options(ctx);
     test_errors(ctx);
     test_set_dem(ctx);
+    test_reference(ctx);
     rs_ctx_free(ctx);
     return th_finish("test_roam");
 }

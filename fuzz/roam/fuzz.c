@@ -2,7 +2,8 @@
  * height-2 (each taken mod 33), then one byte per sample (255 = nodata,
  * samples repeat when the input is short); the last 4 bytes choose the pool
  * size (2 bytes), the error threshold and the mode. Checks invariants and
- * traps on a violation (no NaN vertex, indices in range, count == stats). */
+ * traps on a violation (no NaN vertex, indices in range, count == stats,
+ * the triangles tile the map, no T-junction). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -71,6 +72,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         double want = (W - 1) * (H - 1) * o.cell_size * o.cell_size;
         REQUIRE(fabs(area - want) <= 1e-6 * want);
+        /* conforming: no vertex strictly inside a triangle edge (a crack) */
+        unsigned char *isv = calloc((size_t)W * H, 1);
+        if (isv) {
+            for (size_t k = 0; k < nv; k++) {
+                long gx = lround(v[5 * k] / o.cell_size), gy = lround(v[5 * k + 1] / o.cell_size);
+                REQUIRE(gx >= 0 && gy >= 0 && gx < (long)W && gy < (long)H);
+                isv[(size_t)gy * W + (size_t)gx] = 1;
+            }
+            for (size_t t = 0; t < 3 * (size_t)st.triangles; t++) {
+                const float *a = v + 5 * idx[t], *b = v + 5 * idx[t % 3 == 2 ? t - 2 : t + 1];
+                long ax = lround(a[0] / o.cell_size), ay = lround(a[1] / o.cell_size);
+                long ex = lround(b[0] / o.cell_size) - ax, ey = lround(b[1] / o.cell_size) - ay;
+                long g = labs(ex) > labs(ey) ? labs(ex) : labs(ey); /* bintree edges: axis or diagonal */
+                for (long s = 1; s < g; s++) REQUIRE(!isv[(size_t)(ay + ey / g * s) * W + (size_t)(ax + ex / g * s)]);
+            }
+            free(isv);
+        }
     }
     free(v); free(n); free(idx);
 out:
