@@ -50,10 +50,9 @@ struct rs_roam {
     uint32_t below[1 << IMPL_DEPTH]; /* SPLIT_BITs of the positions under each position */
     /* Corners (apex, left, right) and hypotenuse midpoint of every position
      * down to the cell halves, in units of block leg / 2^(dq/2) along the
-     * block's legs (even dq): a sample's key is then an affine function of
+     * block's legs: a sample's key is then an affine function of
      * these (emit_block_on). */
     unsigned char pgeo[2 << IMPL_DEPTH][8];
-    int blk2;                       /* squared leg length of block nodes: 2^dq */
     uint32_t scan, scan_pos;        /* block whose implicit leaves refine() is testing
                                        (NIL: none), and the position it splits */
     int scan_dirty;                 /* a forced split gave it new leaves behind the scan */
@@ -141,7 +140,7 @@ static void child_tri(const tri *t, int k, tri *o)
 static int is_block(const rs_roam *L, const roam_node *n)
 {
     int p = (int)n->bx - (int)n->ax, q = (int)n->by - (int)n->ay;
-    return p * p + q * q == L->blk2;
+    return p * p + q * q == (int)L->ncut; /* legs^2 = 2^dq */
 }
 
 static uint32_t pos_depth(uint32_t pos) /* pos >= 1 */
@@ -296,6 +295,50 @@ static float midpoint_err(const rs_roam *L, int x0, int y0, int x1, int y1)
     return round_up_float(fabs(d));
 }
 
+/* The error terms of a legs-2-sqrt-2 triangle S = (a, b, c) and of its
+ * whole implicit subtree, from its nine samples read once: the children
+ * R0 = (m, a, b), R1 = (m, c, a) share S's leg-midpoint terms and the
+ * sample i halfway from a to m, and each grandchild's only term is one of
+ * its parent's (the plane through a triangle's hypotenuse ends gives its
+ * midpoint's error whatever the apex). */
+typedef struct s_terms {
+    int have;
+    tri S;
+    float s, r[2], q[2][2];
+} s_terms;
+
+static void load_s_terms(const rs_roam *L, s_terms *o)
+{
+    const float *z = L->z;
+    const size_t W = L->w;
+    const tri *t = &o->S;
+#define Z(x, y) ((double)z[(size_t)(y) * W + (size_t)(x)])
+    int mx = (t->bx + t->cx) / 2, my = (t->by + t->cy) / 2;
+    int ux = (t->cx - t->bx) / 4, uy = (t->cy - t->by) / 4;
+    double za = Z(t->ax, t->ay), zb = Z(t->bx, t->by), zc = Z(t->cx, t->cy), zm = Z(mx, my);
+    double zla = Z((t->ax + t->bx) / 2, (t->ay + t->by) / 2), zlc = Z((t->ax + t->cx) / 2, (t->ay + t->cy) / 2);
+    double zh1 = Z(t->bx + ux, t->by + uy), zh3 = Z(t->cx - ux, t->cy - uy);
+    double zi = Z((t->ax + mx) / 2, (t->ay + my) / 2);
+#undef Z
+    double la = fabs(zla - 0.5 * (za + zb)), lc = fabs(zlc - 0.5 * (za + zc));
+    double sm = fabs(zm - 0.5 * (zb + zc));
+    double sh1 = fabs(zh1 - (0.75 * zb + 0.25 * zc)), sh3 = fabs(zh3 - (0.25 * zb + 0.75 * zc));
+    double si = fabs(zi - 0.5 * (za + 0.5 * (zb + zc)));
+    double i = fabs(zi - 0.5 * (zm + za)), h1 = fabs(zh1 - 0.5 * (zm + zb)), h3 = fabs(zh3 - 0.5 * (zm + zc));
+    double e = la;
+    if (lc > e) e = lc;
+    if (sm > e) e = sm;
+    if (sh1 > e) e = sh1;
+    if (sh3 > e) e = sh3;
+    if (si > e) e = si;
+    o->s = round_up_float(e);
+    o->q[0][0] = round_up_float(i); o->q[0][1] = round_up_float(h1);
+    o->q[1][0] = round_up_float(h3); o->q[1][1] = o->q[0][0];
+    o->r[0] = round_up_float(la > h1 ? (la > i ? la : i) : (h1 > i ? h1 : i));
+    o->r[1] = round_up_float(lc > h3 ? (lc > i ? lc : i) : (h3 > i ? h3 : i));
+    o->have = 1;
+}
+
 /* Error bound of a triangle wholly on the map (DEM units). The three
  * finest levels with samples inside have closed forms: legs sqrt 2 (the
  * base midpoint), legs 2 on the axes (three edge midpoints), legs 2 sqrt 2
@@ -311,17 +354,16 @@ static float on_map_err(const rs_roam *L, const tri *t)
     if (l2 == 1) return 0.0f;
     if (l2 == 2) return midpoint_err(L, bx, by, cx, cy);
     if (l2 > 8) return round_up_float(tri_max_error(L, ax, ay, bx, by, cx, cy));
+    if (l2 == 8) {
+        s_terms st;
+        st.S = *t;
+        load_s_terms(L, &st);
+        return st.s;
+    }
     double za = Z(ax, ay), zb = Z(bx, by), zc = Z(cx, cy), d, m;
     m = fabs(Z((ax + bx) / 2, (ay + by) / 2) - 0.5 * (za + zb));
     d = fabs(Z((ax + cx) / 2, (ay + cy) / 2) - 0.5 * (za + zc)); if (d > m) m = d;
-    int mx = (bx + cx) / 2, my = (by + cy) / 2;
-    d = fabs(Z(mx, my) - 0.5 * (zb + zc)); if (d > m) m = d;
-    if (l2 == 8) {
-        int ux = (cx - bx) / 4, uy = (cy - by) / 4;
-        d = fabs(Z(bx + ux, by + uy) - (0.75 * zb + 0.25 * zc)); if (d > m) m = d;
-        d = fabs(Z(cx - ux, cy - uy) - (0.25 * zb + 0.75 * zc)); if (d > m) m = d;
-        d = fabs(Z((ax + mx) / 2, (ay + my) / 2) - 0.5 * (za + 0.5 * (zb + zc))); if (d > m) m = d;
-    }
+    d = fabs(Z((bx + cx) / 2, (by + cy) / 2) - 0.5 * (zb + zc)); if (d > m) m = d;
 #undef Z
     return round_up_float(m);
 }
@@ -631,9 +673,9 @@ static uint32_t descend_toward(tri N, const tri *t, uint32_t d)
 
 static void build_partner_table(rs_roam *L)
 {
-    int h = 1 << (L->dq / 2);
+    /* dq is even (min(IMPL_DEPTH, 2 log2 P)): block legs 2^(dq/2) on the axes */
     tri B, M, S;
-    if (L->dq % 2 == 0) ref_tri(0, 0, h, 0, &B); else ref_tri(0, 0, h, h, &B);
+    ref_tri(0, 0, 1 << (L->dq / 2), 0, &B);
     for (uint32_t pos = 2; pos < L->ncut; pos++) {
         tri t = B;
         uint32_t d = pos_depth(pos);
@@ -658,17 +700,15 @@ static void build_partner_table(rs_roam *L)
         L->ppos[0][pos] = (unsigned char)descend_toward(M, &t, d);
         L->ppos[1][pos] = (unsigned char)descend_toward(S, &t, d);
     }
-    if (L->dq % 2 == 0) {
-        tri R;
-        ref_tri(0, 0, h, 0, &R); /* a = 0, b - a and c - a the unit axes times h */
-        for (uint32_t pos = 1; pos < 2 * L->ncut; pos++) {
-            tri t = R;
-            descend_to(&t, pos);
-            unsigned char *g = L->pgeo[pos];
-            g[0] = (unsigned char)t.ax; g[1] = (unsigned char)t.ay; g[2] = (unsigned char)t.bx;
-            g[3] = (unsigned char)t.by; g[4] = (unsigned char)t.cx; g[5] = (unsigned char)t.cy;
-            g[6] = (unsigned char)((t.bx + t.cx) / 2); g[7] = (unsigned char)((t.by + t.cy) / 2);
-        }
+    /* B's apex is 0 and its legs the axes: its positions' coordinates are
+     * already in units of the block's legs / 2^(dq/2) */
+    for (uint32_t pos = 1; pos < 2 * L->ncut; pos++) {
+        tri t = B;
+        descend_to(&t, pos);
+        unsigned char *g = L->pgeo[pos];
+        g[0] = (unsigned char)t.ax; g[1] = (unsigned char)t.ay; g[2] = (unsigned char)t.bx;
+        g[3] = (unsigned char)t.by; g[4] = (unsigned char)t.cx; g[5] = (unsigned char)t.cy;
+        g[6] = (unsigned char)((t.bx + t.cx) / 2); g[7] = (unsigned char)((t.by + t.cy) / 2);
     }
     for (uint32_t pos = 1; pos < L->ncut; pos++) {
         uint32_t m = 0;
@@ -850,56 +890,12 @@ static int wants_split(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch, 
     return (double)e * L->zs * v->k / dist > v->tol;
 }
 
-/* The error terms of a legs-2-sqrt-2 triangle S = (a, b, c) and of its
- * whole implicit subtree, from its nine samples read once: the children
- * R0 = (m, a, b), R1 = (m, c, a) share S's leg-midpoint terms and the
- * sample i halfway from a to m, and each grandchild's only term is one of
- * its parent's (the plane through a triangle's hypotenuse ends gives its
- * midpoint's error whatever the apex). */
-typedef struct s_terms {
-    int have;
-    tri S;
-    float s, r[2], q[2][2];
-} s_terms;
-
-static void load_s_terms(const rs_roam *L, s_terms *o)
-{
-    const float *z = L->z;
-    const size_t W = L->w;
-    const tri *t = &o->S;
-#define Z(x, y) ((double)z[(size_t)(y) * W + (size_t)(x)])
-    int mx = (t->bx + t->cx) / 2, my = (t->by + t->cy) / 2;
-    int ux = (t->cx - t->bx) / 4, uy = (t->cy - t->by) / 4;
-    double za = Z(t->ax, t->ay), zb = Z(t->bx, t->by), zc = Z(t->cx, t->cy), zm = Z(mx, my);
-    double zla = Z((t->ax + t->bx) / 2, (t->ay + t->by) / 2), zlc = Z((t->ax + t->cx) / 2, (t->ay + t->cy) / 2);
-    double zh1 = Z(t->bx + ux, t->by + uy), zh3 = Z(t->cx - ux, t->cy - uy);
-    double zi = Z((t->ax + mx) / 2, (t->ay + my) / 2);
-#undef Z
-    double la = fabs(zla - 0.5 * (za + zb)), lc = fabs(zlc - 0.5 * (za + zc));
-    double sm = fabs(zm - 0.5 * (zb + zc));
-    double sh1 = fabs(zh1 - (0.75 * zb + 0.25 * zc)), sh3 = fabs(zh3 - (0.25 * zb + 0.75 * zc));
-    double si = fabs(zi - 0.5 * (za + 0.5 * (zb + zc)));
-    double i = fabs(zi - 0.5 * (zm + za)), h1 = fabs(zh1 - 0.5 * (zm + zb)), h3 = fabs(zh3 - 0.5 * (zm + zc));
-    double e = la;
-    if (lc > e) e = lc;
-    if (sm > e) e = sm;
-    if (sh1 > e) e = sh1;
-    if (sh3 > e) e = sh3;
-    if (si > e) e = si;
-    o->s = round_up_float(e);
-    o->q[0][0] = round_up_float(i); o->q[0][1] = round_up_float(h1);
-    o->q[1][0] = round_up_float(h3); o->q[1][1] = o->q[0][0];
-    o->r[0] = round_up_float(la > h1 ? (la > i ? la : i) : (h1 > i ? h1 : i));
-    o->r[1] = round_up_float(lc > h3 ? (lc > i ? lc : i) : (h3 > i ? h3 : i));
-    o->have = 1;
-}
-
 /* Test the untested implicit leaves of block r below position pos
  * (triangle t, squared legs 2^lv; st: the terms of the legs-2-sqrt-2
- * triangle above it, if any), in depth-first order; `prune`: skip subtrees
- * without untested leaves (worth it once some were tested). Returns 0 to
+ * triangle above it, if any), in depth-first order, skipping subtrees
+ * without untested leaves (a block scanned again). Returns 0 to
  * go on, 1 when abandoned for stop_above, -1 when the pool ran out. */
-static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32_t lv, s_terms *st, int prune,
+static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32_t lv, s_terms *st,
                       const refine_params *rp)
 {
     roam_node *n = L->nodes;
@@ -916,9 +912,8 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
             n[r].rc |= TESTED_BIT(c);
             int want;
             if (fast) {
-                float e;
-                if (lv > 4) e = slot_err(L, imp_slot(L, &n[r], c), &u);
-                else if (!sub) e = on_map_err(L, &u);
+                float e; /* lv <= dq <= 4: every implicit level has a closed form */
+                if (!sub) e = on_map_err(L, &u);
                 else {
                     if (!sub->have) load_s_terms(L, sub);
                     e = lv == 4 ? sub->s : lv == 3 ? sub->r[k] : sub->q[pos & 1u][k];
@@ -926,20 +921,14 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
                 want = e > 0.0f && (double)e * L->zs > rp->max_error;
             } else want = wants_split(L, imp_slot(L, &n[r], c), &u, n[r].e >> L->elog, rp);
             if (want) {
-                /* the common case, partner's parent split: no force-split, no nodes */
-                uint32_t pp, N = partner_node(L, r, c, &pp);
-                if (N != NIL && (n[N].lc == NIL || ((pp >> 1) > 1 && !(n[N].rc & SPLIT_BIT(pp >> 1))))
-                    && imp_need(L, r, c) > L->cap - L->used) {
-                    L->exhausted = 1;
-                    return -1;
-                }
+                if (imp_need(L, r, c) > L->cap - L->used) { L->exhausted = 1; return -1; }
                 L->scan_pos = c;
                 imp_split(L, r, c, &u);
                 if (rp->stop_above && L->tris > rp->stop_above) return 1;
             }
         }
-        if ((n[r].rc & SPLIT_BIT(c)) && (!prune || (untested(L, n[r].rc) & L->below[c]))) {
-            int res = scan_block(L, r, c, &u, lv - 1, sub, prune, rp);
+        if ((n[r].rc & SPLIT_BIT(c)) && (untested(L, n[r].rc) & L->below[c])) {
+            int res = scan_block(L, r, c, &u, lv - 1, sub, rp);
             if (res) return res;
         }
     }
@@ -976,7 +965,7 @@ static int refine(rs_roam *L, const refine_params *rp)
             int res = 0;
             while (!res && untested(L, n[i].rc)) {
                 L->scan_dirty = 0;
-                res = scan_block(L, i, 1, &t, L->dq, NULL, (n[i].rc & (TESTED_BIT(L->ncut) - TESTED_BIT(2))) != 0, rp);
+                res = scan_block(L, i, 1, &t, L->dq, NULL, rp);
                 if (!L->scan_dirty) break;
             }
             L->scan = NIL;
@@ -1245,7 +1234,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     L->cs = cs; L->zs = zs;
     L->plog = plog; L->P = P; L->npx = npx; L->npy = npy; L->epp = (size_t)epp;
     L->elog = 2 * plog;
-    L->dq = dq; L->ncut = 1u << dq; L->blk2 = 1 << dq;
+    L->dq = dq; L->ncut = 1u << dq;
     L->scan = NIL;
     build_partner_table(L);
     rs_result r = RS_OK;
@@ -1658,7 +1647,7 @@ static int emit_imp(extract_state *s, const roam_node *nd, uint32_t pos, const t
     return 0;
 }
 
-/* The same for a block on the map (even dq): every corner of a leaf is a
+/* The same for a block on the map: every corner of a leaf is a
  * corner of the block or the hypotenuse midpoint of a split position, so
  * those are marked once each, and the leaves write their sample keys,
  * affine in the reference geometry pgeo, in the order of emit_imp. */
@@ -1713,7 +1702,7 @@ static void emit_leaves(extract_state *s)
         node_tri(L, nd, &r);
         int stop;
         if (lc == NIL) stop = emit_tri(s, &r);
-        else if (r.on && L->dq % 2 == 0) stop = emit_block_on(s, nd, &r);
+        else if (r.on) stop = emit_block_on(s, nd, &r);
         else stop = emit_imp(s, nd, 1, &r);
         if (stop) return;
     }

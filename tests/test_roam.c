@@ -707,6 +707,14 @@ static double ref_err(const float *z, uint32_t W, const ref_node *t)
     return m;
 }
 
+/* A triangle's sample keys (apex, right, left) rotated to start at the
+ * smallest, the orientation kept: the same triangle gives the same triple. */
+static void canon_tri(const uint64_t k[3], uint64_t *out)
+{
+    int m = k[1] < k[0] ? (k[2] < k[1] ? 2 : 1) : (k[2] < k[0] ? 2 : 0);
+    out[0] = k[m]; out[1] = k[(m + 1) % 3]; out[2] = k[(m + 2) % 3];
+}
+
 static void ref_relink(ref_node *n, int32_t nb, int32_t old, int32_t now)
 {
     if (nb < 0) return;
@@ -737,8 +745,7 @@ static void ref_split(ref_node *n, size_t *count, int32_t t)
     }
 }
 
-/* Leaves of the reference for max error E, as canonical triangles (apex,
- * right, left like the mesher, rotated to start at the smallest key). */
+/* Leaves of the reference for max error E, as canonical triangles. */
 static size_t ref_mesh(const float *z, uint32_t W, uint32_t H, uint32_t P, double E, uint64_t **out)
 {
     uint32_t npx = (W - 1) / P, npy = (H - 1) / P;
@@ -766,9 +773,7 @@ static size_t ref_mesh(const float *z, uint32_t W, uint32_t H, uint32_t P, doubl
         if (n[i].lc >= 0) continue;
         uint64_t k[3] = { (uint64_t)n[i].ay * W + (uint64_t)n[i].ax, (uint64_t)n[i].cy * W + (uint64_t)n[i].cx,
                           (uint64_t)n[i].by * W + (uint64_t)n[i].bx };
-        int m = k[1] < k[0] ? (k[2] < k[1] ? 2 : 1) : (k[2] < k[0] ? 2 : 0);
-        t[3 * nt] = k[m]; t[3 * nt + 1] = k[(m + 1) % 3]; t[3 * nt + 2] = k[(m + 2) % 3];
-        nt++;
+        canon_tri(k, t + 3 * nt++);
     }
     free(n);
     *out = t;
@@ -783,7 +788,7 @@ static int cmp_tri3(const void *a, const void *b)
     return 0;
 }
 
-/* The mesher's triangles in the same canonical form. */
+/* The mesher's triangles, canonical too. */
 static size_t lib_tris(const mesh *m, uint32_t W, uint64_t **out)
 {
     size_t nt = m->ni / 3;
@@ -794,8 +799,7 @@ static size_t lib_tris(const mesh *m, uint32_t W, uint64_t **out)
             const float *v = m->v + 5 * m->i[3 * i + (size_t)c];
             k[c] = (uint64_t)lround(v[1]) * W + (uint64_t)lround(v[0]);
         }
-        int j = k[1] < k[0] ? (k[2] < k[1] ? 2 : 1) : (k[2] < k[0] ? 2 : 0);
-        t[3 * i] = k[j]; t[3 * i + 1] = k[(j + 1) % 3]; t[3 * i + 2] = k[(j + 2) % 3];
+        canon_tri(k, t + 3 * i);
     }
     *out = t;
     return t ? nt : 0;
