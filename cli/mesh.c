@@ -148,7 +148,10 @@ int cli_mesh_main(int argc, char **argv)
         else if (!strcmp(s, "--cell-size")) { if (cli_parse_double(s, argv[++a], &cs)) return 1; }
         else if (!strcmp(s, "--z-scale")) { if (cli_parse_double(s, argv[++a], &zs)) return 1; }
         else if (!strcmp(s, "--max-error")) { if (cli_parse_double(s, argv[++a], &max_error)) return 1; have_err = 1; }
-        else if (!strcmp(s, "--triangles")) { if (cli_parse_u32(s, argv[++a], &tris)) return 1; }
+        else if (!strcmp(s, "--triangles")) {
+            if (cli_parse_u32(s, argv[++a], &tris)) return 1;
+            if (tris == 0) { cli_error("--triangles: '%s' must be >= 1", argv[a]); return 1; }
+        }
         else if (!strcmp(s, "--pool")) { if (cli_parse_u32(s, argv[++a], &pool)) return 1; }
         else if (!strcmp(s, "--skirt")) { if (cli_parse_double(s, argv[++a], &skirt)) return 1; }
         else if (!strcmp(s, "--stats")) stats_path = argv[++a];

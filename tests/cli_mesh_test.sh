@@ -39,6 +39,7 @@ check "skirt adds faces" sh -c "'$BIN' mesh --max-error 1 --cell-size 2 --z-scal
 # errors: exit 1, one message, nothing written
 check "bad number rejected" sh -c "! '$BIN' mesh --max-error abc '$T/dem.pgm' '$T/e.obj' 2>/dev/null && test ! -e '$T/e.obj'"
 check "exclusive options rejected" sh -c "! '$BIN' mesh --max-error 1 --triangles 5 '$T/dem.pgm' '$T/e.obj' 2>/dev/null && test ! -e '$T/e.obj'"
+check "triangles 0 rejected, not read as unset" sh -c "! '$BIN' mesh --triangles 0 '$T/dem.pgm' '$T/e.obj' 2>'$T/e.err' && grep -q \"^roadsplat: --triangles: '0' must be >= 1\$\" '$T/e.err' && test ! -e '$T/e.obj'"
 check "bad extension rejected" sh -c "! '$BIN' mesh '$T/dem.pgm' '$T/e.stl' 2>/dev/null"
 check "missing DEM rejected" sh -c "! '$BIN' mesh '$T/nope.pgm' '$T/e.obj' 2>/dev/null && test ! -e '$T/e.obj'"
 echo "garbage" > "$T/bad.pgm"
