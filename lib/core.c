@@ -1,6 +1,8 @@
 /* Context, allocator, limits, errors and version. */
 #include "internal.h"
 
+#include <math.h>
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -136,4 +138,19 @@ int rs__mul_u64(uint64_t a, uint64_t b, uint64_t *out)
     if (a && b > UINT64_MAX / a) return 0;
     *out = a * b;
     return 1;
+}
+
+/* The rounding removes the last bits lost when large world coordinates were
+ * read; scaling cell size and roads by a power of ten scales the quantum
+ * with them. */
+double rs__local_quantum(double cell_size)
+{
+    return cell_size < 1 ? pow(10.0, 6.0 - floor(log10(cell_size))) : 1e6;
+}
+
+double rs__local_coord(double world, double origin, double per_unit)
+{
+    double d = world - origin;
+    if (!(fabs(d) * per_unit < 1e18)) return d; /* far away: precision is moot, keep it finite */
+    return floor(d * per_unit + 0.5) / per_unit;
 }

@@ -46,6 +46,16 @@ int rs__mul_u64(uint64_t a, uint64_t b, uint64_t *out);
  * consumed. Returns 0 when no number was read or it overflowed (|x| huge). */
 int rs__parse_double(const char *s, const char *end, double *out, const char **stop);
 
+/* World coordinates to the local frame (lib/core.c). rs__local_coord gives
+ * world - origin rounded to 1/per_unit metres, so a scene translated by up
+ * to ~10^7 m gives the same local coordinates, hence the same bytes;
+ * rs__local_quantum(cell_size) is that per_unit: 10^6 per metre, or a
+ * millionth of the power of ten at or below the cell size when cells are
+ * smaller than 1 m (docs/stability.md). Every part that turns road points
+ * into local coordinates must use these two. */
+double rs__local_quantum(double cell_size);
+double rs__local_coord(double world, double origin, double per_unit);
+
 #define RS__PI 3.14159265358979323846
 
 /* Validate splat options and fill in defaults (lib/splat.c). */

@@ -214,29 +214,14 @@ static int inside_box(const rs_road_grid *g, double x0, double y0, double x1, do
              fmax(y0, y1) + pad < 0 || fmin(y0, y1) - pad > (double)g->gh);
 }
 
-/* A world coordinate relative to the origin, rounded to 1 micrometre (to a
- * millionth of a power of ten at or below the cell size when cells are
- * smaller than 1 m): the subtraction is exact for nearby values, and the
- * rounding removes the last bits lost when large world coordinates were
- * read, so a scene translated by up to ~10^7 m gives the same local
- * coordinates, hence the same bytes. Scaling cell size and roads by a power
- * of ten scales the quantum with them (docs/stability.md). */
-static double local_coord(double world, double origin, double per_unit)
-{
-    double d = world - origin;
-    if (!(fabs(d) * per_unit < 1e18)) return d; /* far away: precision is moot, keep it finite */
-    return floor(d * per_unit + 0.5) / per_unit;
-}
-
 static rs_result mark_road(marker *m, const double *pts, size_t n, double width, rs_buffer_mode mode,
                            double ox, double oy, double *scratch)
 {
     const rs_road_grid *g = m->g;
-    double per_unit = 1e6; /* rounding steps per metre */
-    if (g->cell_size < 1) per_unit = pow(10.0, 6.0 - floor(log10(g->cell_size)));
+    double per_unit = rs__local_quantum(g->cell_size);
     for (size_t i = 0; i < n; i++) {
-        scratch[2 * i] = local_coord(pts[2 * i], ox, per_unit);
-        scratch[2 * i + 1] = local_coord(pts[2 * i + 1], oy, per_unit);
+        scratch[2 * i] = rs__local_coord(pts[2 * i], ox, per_unit);
+        scratch[2 * i + 1] = rs__local_coord(pts[2 * i + 1], oy, per_unit);
     }
     const double *xy = scratch;
     double inv = 1.0 / g->c, h = 0.5 * width * inv;
