@@ -137,7 +137,7 @@ $(BUILD)/cli/%.o: cli/%.cpp $(wildcard cli/*.h)
 	$(CXX) -std=c++17 $(OPT) $(SAN) -Wall -Wextra -Iinclude $(OIIO_CFLAGS) -c $< -o $@
 
 $(CLI): $(CLI_OBJ) $(STATIC_LIB)
-	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(STATIC_LIB) $(OIIO_LIBS) $(OSMESA_LIBS) $(LDLIBS_CORE)
+	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(STATIC_LIB) $(OIIO_LIBS) $(OSMESA_LIBS) $(LDLIBS_CORE) -lpthread
 
 # --- tests --------------------------------------------------------------------
 $(BUILD)/tests/%.o: tests/%.c include/roadsplat.h $(wildcard tests/*.h)

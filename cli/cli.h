@@ -93,6 +93,8 @@ double cli_now_ms(void);
  * (cli/splat_args.c). */
 typedef struct cli_splat_args {
     rs_splat_options o;
+    rs_dem_frame frame; /* --cell-size, --z-scale, --origin: set on the DEM */
+    unsigned threads;   /* --threads; 0 = all cores */
     const char *terrain_tex, *road_tex;
 } cli_splat_args;
 /* Value of option `name`: inline ("--x=v", inl) or the next argument. */
@@ -112,6 +114,23 @@ typedef struct cli_splat_input {
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in);
 void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in);
+
+/* The threaded splat of a window (cli/splat_run.c). Set s, the window,
+ * texels (for the band height), threads (>= 1), the output buffers (w*h,
+ * tightly packed; weight may be NULL) and prog (may be NULL; its callback is
+ * called under a lock). profile and threads_used come back summed over the
+ * threads. Prints the error and returns 1 on failure. */
+typedef struct cli_splat_job {
+    const rs_splatter *s;
+    uint32_t x0, y0, w, h, texels;
+    unsigned threads, threads_used;
+    uint8_t *rgba;
+    uint16_t *weight;
+    cli_progress *prog;
+    rs_splat_profile profile;
+} cli_splat_job;
+int cli_splat_run(cli_splat_job *job);
+unsigned cli_default_threads(void);
 
 /* Subcommands, each `int f(int argc, char **argv)` with argv[0] the
  * subcommand name; return the process exit code (0 ok, 1 error). */

@@ -23,6 +23,8 @@ static const char usage_text[] =
     "  --buffer MODE         road cells by 'distance' (default) or 'dilate' (the paper)\n"
     "  --road-cell M         road-grid cell size in metres (default: automatic)\n"
     "  --alpha-res N         alpha-map resolution (default 32)\n"
+    "  --edges MODE          road edges from the 'alphamap' table (default, seed 000)\n"
+    "                        or 'analytic' (exact area inside the road buffers)\n"
     "  --transition PX       transition band in alpha-map pixels (default 2, 0 = hard)\n"
     "  --jitter SEED         irregular road edges: seeded jitter in the band\n"
     "  --terrain-texture IMG tile IMG over the terrain (default: tint + hillshade)\n"
@@ -30,6 +32,8 @@ static const char usage_text[] =
     "  --texture-scale M     metres per texture repeat (default 10)\n"
     "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
     "                        in that world frame (e.g. UTM metres; default 0,0)\n"
+    "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
+    "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
     "  --quiet               no progress bar\n"
@@ -40,8 +44,35 @@ typedef struct args {
     cli_splat_args s;
     const char *dem, *roads, *out;
     const char *weight_out, *stats;
-    int quiet;
+    int quiet, have_window;
+    uint32_t window[4];
 } args;
+
+/* "X,Y,W,H": whole numbers, W and H >= 1, all below 2^32. */
+static int parse_window(const char *name, const char *v, double d[4])
+{
+    const char *p = v;
+    for (int k = 0; k < 4; k++) {
+        const char *e = strchr(p, ',');
+        size_t len = k < 3 ? (e ? (size_t)(e - p) : 0) : strlen(p);
+        char buf[64];
+        if ((k < 3 && !e) || len == 0 || len >= sizeof buf) {
+            cli_error("%s: '%s' is not X,Y,W,H", name, v);
+            return 1;
+        }
+        memcpy(buf, p, len);
+        buf[len] = '\0';
+        uint32_t u;
+        if (cli_parse_u32(name, buf, &u)) return 1;
+        d[k] = u;
+        p = e ? e + 1 : p + len;
+    }
+    if (d[2] < 1 || d[3] < 1) {
+        cli_error("%s: '%s': width and height must be >= 1", name, v);
+        return 1;
+    }
+    return 0;
+}
 
 /* Returns 0 to run, 1 on a usage error, 2 when --help/--version was handled. */
 static int parse_args(int argc, char **argv, args *a)
@@ -84,6 +115,12 @@ static int parse_args(int argc, char **argv, args *a)
             if (cli_option_value(argc, argv, &i, name, inl, &a->weight_out)) return 1;
         } else if (!strcmp(name, "--stats")) {
             if (cli_option_value(argc, argv, &i, name, inl, &a->stats)) return 1;
+        } else if (!strcmp(name, "--window")) {
+            const char *v;
+            double d[4];
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || parse_window(name, v, d)) return 1;
+            for (int k = 0; k < 4; k++) a->window[k] = (uint32_t)d[k];
+            a->have_window = 1;
         } else {
             cli_error("unknown option '%s' (see roadsplat --help)", arg);
             return 1;
@@ -146,20 +183,39 @@ static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t
     return out_finish(o);
 }
 
-static int stats_to_temp(cli_out *o, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w, uint32_t h,
-                         const char *mode)
+typedef struct run_stats {
+    double t[5];                 /* read, roads, splat (wall), write, total */
+    const rs_road_grid_stats *gs;
+    const rs_splat_options *o;
+    uint32_t w, h, x0, y0, full_w, full_h;
+    const cli_splat_job *job;
+} run_stats;
+
+static int stats_to_temp(cli_out *o, const run_stats *rs)
 {
+    const double *t = rs->t;
+    const rs_road_grid_stats *gs = rs->gs;
+    const rs_splat_profile *pf = &rs->job->profile;
     int ok = fprintf(o->f,
                      "{\n  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
                      "\"total\": %.3f},\n"
-                     "  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
-                     "  \"width\": %u,\n  \"height\": %u,\n  \"pixels\": %llu,\n"
+                     "  \"stages_ms\": {\"coverage\": %.3f, \"surface\": %.3f, \"overlays\": %.3f, "
+                     "\"composite\": %.3f},\n  \"threads\": %u,\n"
+                     "  \"edges\": \"%s\",\n  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
+                     "  \"window\": {\"x\": %u, \"y\": %u, \"width\": %u, \"height\": %u},\n"
+                     "  \"image\": {\"width\": %u, \"height\": %u},\n"
+                     "  \"width\": %u,\n  \"height\": %u,\n  \"pixels\": %llu,\n  \"road_pixels\": %llu,\n"
+                     "  \"segments\": %llu,\n"
                      "  \"road_cells\": %llu,\n  \"interior_cells\": %llu,\n  \"boundary_cells\": %llu,\n"
                      "  \"boundary_by_type\": {\"edge\": %llu, \"inner_corner\": %llu, \"outer_corner\": %llu, "
                      "\"saddle\": %llu, \"too_thin\": %llu},\n"
                      "  \"grid_tiles\": %llu,\n  \"grid_bytes\": %llu\n}\n",
-                     t[0], t[1], t[2], t[3], t[4], mode, gs->k, gs->road_cell, T, w, h,
-                     (unsigned long long)w * h, (unsigned long long)gs->road_cells,
+                     t[0], t[1], t[2], t[3], t[4], pf->coverage_ms, pf->surface_ms, pf->overlays_ms, pf->composite_ms,
+                     rs->job->threads_used, rs->o->coverage.edges == RS_EDGES_ANALYTIC ? "analytic" : "alphamap",
+                     rs->o->grid.buffer == RS_BUFFER_DILATE ? "dilate" : "distance", gs->k, gs->road_cell,
+                     rs->o->texels ? rs->o->texels : 8, rs->x0, rs->y0, rs->w, rs->h, rs->full_w, rs->full_h, rs->w,
+                     rs->h, (unsigned long long)rs->w * rs->h, (unsigned long long)pf->road_pixels,
+                     (unsigned long long)gs->segments, (unsigned long long)gs->road_cells,
                      (unsigned long long)gs->interior_cells, (unsigned long long)gs->boundary_cells,
                      (unsigned long long)gs->by_type[RS_TILE_EDGE], (unsigned long long)gs->by_type[RS_TILE_INNER],
                      (unsigned long long)gs->by_type[RS_TILE_OUTER], (unsigned long long)gs->by_type[RS_TILE_SADDLE],
@@ -191,15 +247,19 @@ static int splat_main(int argc, char **argv)
     int pr = parse_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
 
-    double t_start = cli_now_ms(), t[5] = { 0, 0, 0, 0, 0 };
+    double t_start = cli_now_ms();
     int rc = 1;
     rs_ctx *ctx = NULL;
     cli_splat_input in;
-    rs_road_grid *grid = NULL;
+    rs_splatter *sp = NULL;
     uint8_t *rgba = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
     cli_out out_png, out_wt, out_stats;
+    run_stats st;
+    cli_splat_job job;
+    memset(&st, 0, sizeof st);
+    memset(&job, 0, sizeof job);
     memset(&in, 0, sizeof in);
     memset(&out_png, 0, sizeof out_png);
     memset(&out_wt, 0, sizeof out_wt);
@@ -208,12 +268,20 @@ static int splat_main(int argc, char **argv)
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     const rs_dem *dem = in.dem;
-    t[0] = cli_now_ms() - t_start;
+    st.t[0] = cli_now_ms() - t_start;
 
-    uint32_t w, h;
-    if ((r = rs_splat_size(ctx, dem, o, &w, &h))) {
+    uint32_t fw, fh;
+    if ((r = rs_splat_size(ctx, dem, o, &fw, &fh))) {
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
         goto done;
+    }
+    uint32_t x0 = 0, y0 = 0, w = fw, h = fh;
+    if (a.have_window) {
+        x0 = a.window[0], y0 = a.window[1], w = a.window[2], h = a.window[3];
+        if (x0 >= fw || y0 >= fh || w > fw - x0 || h > fh - y0) {
+            cli_error("--window: %u,%u,%u,%u is not inside the %u x %u output", x0, y0, w, h, fw, fh);
+            goto done;
+        }
     }
     if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
         (a.stats && cli_out_open(&out_stats, a.stats)))
@@ -223,13 +291,14 @@ static int splat_main(int argc, char **argv)
     cli_progress_init(&prog, "roads", a.quiet);
     o->progress = cli_progress_cb;
     o->progress_user = &prog;
-    r = rs_road_grid_build(ctx, dem, in.roads, o, &grid);
+    r = rs_splatter_create(ctx, dem, in.roads, NULL, o, &sp);
     cli_progress_done(&prog);
+    o->progress = NULL;
     if (r) {
         cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
         goto done;
     }
-    t[1] = cli_now_ms() - t1;
+    st.t[1] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
     size_t npx = (size_t)w * h;
@@ -240,25 +309,31 @@ static int splat_main(int argc, char **argv)
         goto done;
     }
     cli_progress_init(&prog, "splat", a.quiet);
-    r = rs_splat(ctx, dem, grid, o, rgba, npx * 4, wt, wt ? npx : 0);
+    job.s = sp;
+    job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
+    job.texels = o->texels ? o->texels : 8;
+    job.threads = a.s.threads ? a.s.threads : cli_default_threads();
+    job.rgba = rgba;
+    job.weight = wt;
+    job.prog = &prog;
+    int bad = cli_splat_run(&job);
     cli_progress_done(&prog);
-    if (r) {
-        cli_error("%s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
-        goto done;
-    }
-    t[2] = cli_now_ms() - t1;
+    if (bad) goto done;
+    st.t[2] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
     if (png_to_temp(&out_png, w, h, rgba)) goto done;
     if (wt && weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
-    t[3] = cli_now_ms() - t1;
-    t[4] = cli_now_ms() - t_start;
+    st.t[3] = cli_now_ms() - t1;
+    st.t[4] = cli_now_ms() - t_start;
     if (a.stats) {
-        rs_grid_stats gs;
-        rs_road_grid_stats(grid, &gs);
-        if (stats_to_temp(&out_stats, t, &gs, o->texels ? o->texels : 8, w, h,
-                          o->buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
-            goto done;
+        rs_road_grid_stats gs;
+        rs_road_grid_get_stats(rs_splatter_grid(sp), &gs);
+        st.gs = &gs;
+        st.o = o;
+        st.w = w, st.h = h, st.x0 = x0, st.y0 = y0, st.full_w = fw, st.full_h = fh;
+        st.job = &job;
+        if (stats_to_temp(&out_stats, &st)) goto done;
     }
     if (out_rename(&out_png) || (a.weight_out && out_rename(&out_wt)) || (a.stats && out_rename(&out_stats)))
         goto done;
@@ -269,7 +344,7 @@ done:
     cli_out_abort(&out_stats);
     free(rgba);
     free(wt);
-    rs_road_grid_free(ctx, grid);
+    rs_splatter_free(ctx, sp);
     cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     return rc;

@@ -184,11 +184,18 @@ int cli_mesh_main(int argc, char **argv)
     memset(&so, 0, sizeof so);
     rs_dem *dem = cli_load_dem(ctx, in);
     if (!dem) goto done;
+    rs_dem_frame frame;
+    memset(&frame, 0, sizeof frame);
+    frame.cell_size = cs;
+    frame.z_scale = zs;
+    if (rs_dem_set_frame(ctx, dem, &frame) != RS_OK) {
+        cli_error("%s: %s", in, rs_ctx_message(ctx));
+        goto done;
+    }
     if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path))) goto done;
     double t_mesh = cli_now_ms();
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = cs; o.z_scale = zs;
     if (pool) o.pool_nodes = pool;
     else {
         /* the CLI defaults to a pool that holds the finest mesh (within the

@@ -138,7 +138,7 @@ static int parse_render_args(int argc, char **argv, render_args *a)
                   npos == 1 ? "" : "s");
         return 1;
     }
-    if (a->s.o.z_scale < 0) {
+    if (a->s.frame.z_scale < 0) {
         cli_error("render: --z-scale must be > 0 for rendering");
         return 1;
     }
@@ -221,7 +221,7 @@ int cli_render_main(int argc, char **argv)
     int rc = 1;
     rs_ctx *ctx = NULL;
     cli_splat_input in;
-    rs_road_grid *grid = NULL;
+    rs_splatter *sp = NULL;
     rs_roam *roam = NULL;
     rg_renderer *gl = NULL;
     char err[256];
@@ -236,7 +236,7 @@ int cli_render_main(int argc, char **argv)
     memset(&in, 0, sizeof in);
     rs_result r = rs_ctx_create(NULL, NULL, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
-    double cs = a.s.o.cell_size > 0 ? a.s.o.cell_size : 1, zs = a.s.o.z_scale > 0 ? a.s.o.z_scale : 1;
+    double cs = a.s.frame.cell_size > 0 ? a.s.frame.cell_size : 1, zs = a.s.frame.z_scale > 0 ? a.s.frame.z_scale : 1;
 
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     const rs_dem *dem = in.dem;
@@ -251,8 +251,9 @@ int cli_render_main(int argc, char **argv)
     cli_progress_init(&prog, "roads", a.quiet);
     a.s.o.progress = cli_progress_cb;
     a.s.o.progress_user = &prog;
-    r = rs_road_grid_build(ctx, dem, roads, &a.s.o, &grid);
+    r = rs_splatter_create(ctx, dem, roads, NULL, &a.s.o, &sp);
     cli_progress_done(&prog);
+    a.s.o.progress = NULL;
     if (r) {
         cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
         goto done;
@@ -262,17 +263,25 @@ int cli_render_main(int argc, char **argv)
     tex = malloc((size_t)tw * th * 4);
     if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
     cli_progress_init(&prog, "splat", a.quiet);
-    r = rs_splat(ctx, dem, grid, &a.s.o, tex, (size_t)tw * th * 4, NULL, 0);
-    cli_progress_done(&prog);
-    if (r) { cli_error("%s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r)); goto done; }
+    {
+        cli_splat_job job;
+        memset(&job, 0, sizeof job);
+        job.s = sp;
+        job.w = tw, job.h = th;
+        job.texels = a.s.o.texels ? a.s.o.texels : 8;
+        job.threads = a.s.threads ? a.s.threads : cli_default_threads();
+        job.rgba = tex;
+        job.prog = &prog;
+        int bad = cli_splat_run(&job);
+        cli_progress_done(&prog);
+        if (bad) goto done;
+    }
     t_splat = cli_now_ms() - t1;
 
     /* the mesh */
     t1 = cli_now_ms();
     rs_roam_options ro;
     memset(&ro, 0, sizeof ro);
-    ro.cell_size = cs;
-    ro.z_scale = zs;
     if ((r = rs_roam_create(ctx, dem, &ro, &roam))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
     t_roam = cli_now_ms() - t1;
 
@@ -283,13 +292,10 @@ int cli_render_main(int argc, char **argv)
     view.map_w = (W - 1) * cs;
     view.map_h = (H - 1) * cs;
     {
-        const float *z = rs_dem_samples(dem);
-        double lo = INFINITY, hi = -INFINITY;
-        for (size_t k = 0; k < (size_t)W * H; k++)
-            if (!isnan(z[k])) { lo = fmin(lo, z[k] * zs); hi = fmax(hi, z[k] * zs); }
-        if (!(lo <= hi)) lo = hi = 0;
-        view.zmin = lo;
-        view.zmax = hi;
+        double lo, hi;
+        rs_dem_height_range(dem, &lo, &hi, NULL);
+        view.zmin = lo * zs;
+        view.zmax = hi * zs;
     }
     if (a.ortho && !a.have_size) { a.width = tw; a.height = th; }
     if (a.width > 16384 || a.height > 16384) {
@@ -439,7 +445,7 @@ done:
     free(vtx); free(nrm); free(idx);
     free(frame_ms); free(mesh_ms); free(draw_ms);
     rs_roam_free(ctx, roam);
-    rs_road_grid_free(ctx, grid);
+    rs_splatter_free(ctx, sp);
     cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     return rc;

@@ -1,6 +1,7 @@
 /* Splat options and inputs shared by `roadsplat` and `roadsplat render`. */
 #include "cli.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -26,50 +27,76 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
 {
     static const char *const known[] = { "--cell-size", "--z-scale", "--texels", "--buffer", "--road-cell",
                                          "--alpha-res", "--transition", "--jitter", "--terrain-texture",
-                                         "--road-texture", "--texture-scale", "--origin" };
+                                         "--road-texture", "--texture-scale", "--origin", "--edges", "--threads" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
     const char *v;
     if (cli_option_value(argc, argv, i, name, inl, &v)) return 1;
     rs_splat_options *o = &s->o;
+    rs_dem_frame *fr = &s->frame;
     double d, xy[2];
     uint32_t u;
     if (!strcmp(name, "--cell-size")) {
-        if (cli_parse_double(name, v, &o->cell_size) || positive(name, v, o->cell_size)) return 1;
+        if (cli_parse_double(name, v, &fr->cell_size) || positive(name, v, fr->cell_size)) return 1;
+        if (!(fr->cell_size >= 1e-9 && fr->cell_size <= 1e9)) {
+            cli_error("%s: '%s' must be in [1e-9, 1e9] metres", name, v);
+            return 1;
+        }
     } else if (!strcmp(name, "--z-scale")) {
-        if (cli_parse_double(name, v, &o->z_scale)) return 1;
-        if (o->z_scale == 0) { cli_error("%s: '%s' must not be 0", name, v); return 1; }
+        if (cli_parse_double(name, v, &fr->z_scale)) return 1;
+        if (!(fabs(fr->z_scale) >= 1e-12 && fabs(fr->z_scale) <= 1e12)) {
+            cli_error("%s: '%s' must be in [1e-12, 1e12] in magnitude", name, v);
+            return 1;
+        }
+    } else if (!strcmp(name, "--threads")) {
+        if (cli_parse_u32(name, v, &u)) return 1;
+        if (u < 1 || u > 256) { cli_error("%s: '%s' must be 1..256", name, v); return 1; }
+        s->threads = u;
+    } else if (!strcmp(name, "--edges")) {
+        if (!strcmp(v, "alphamap")) o->coverage.edges = RS_EDGES_ALPHAMAP;
+        else if (!strcmp(v, "analytic")) o->coverage.edges = RS_EDGES_ANALYTIC;
+        else { cli_error("%s: '%s' is not 'alphamap' or 'analytic'", name, v); return 1; }
     } else if (!strcmp(name, "--texels")) {
         if (cli_parse_u32(name, v, &o->texels)) return 1;
         if (o->texels < 1 || o->texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
     } else if (!strcmp(name, "--buffer")) {
-        if (!strcmp(v, "distance")) o->buffer = RS_BUFFER_DISTANCE;
-        else if (!strcmp(v, "dilate")) o->buffer = RS_BUFFER_DILATE;
+        if (!strcmp(v, "distance")) o->grid.buffer = RS_BUFFER_DISTANCE;
+        else if (!strcmp(v, "dilate")) o->grid.buffer = RS_BUFFER_DILATE;
         else { cli_error("%s: '%s' is not 'distance' or 'dilate'", name, v); return 1; }
     } else if (!strcmp(name, "--road-cell")) {
-        if (cli_parse_double(name, v, &o->road_cell) || positive(name, v, o->road_cell)) return 1;
+        if (cli_parse_double(name, v, &o->grid.road_cell) || positive(name, v, o->grid.road_cell)) return 1;
+        if (o->grid.road_cell > 1e9) { cli_error("%s: '%s' must be at most 1e9 metres", name, v); return 1; }
     } else if (!strcmp(name, "--alpha-res")) {
-        if (cli_parse_u32(name, v, &o->alpha_res)) return 1;
-        if (o->alpha_res < 2 || o->alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
+        if (cli_parse_u32(name, v, &o->coverage.alpha_res)) return 1;
+        if (o->coverage.alpha_res < 2 || o->coverage.alpha_res > 1024) { cli_error("%s: '%s' must be 2..1024", name, v); return 1; }
     } else if (!strcmp(name, "--transition")) {
         if (cli_parse_double(name, v, &d)) return 1;
-        if (d < 0) { cli_error("%s: '%s' must be >= 0", name, v); return 1; }
-        o->transition = d == 0 ? -1 : d; /* the library's 0 means "default" */
+        if (!(d >= 0 && d <= 512)) { cli_error("%s: '%s' must be in [0, 512]", name, v); return 1; }
+        if (d == 0) o->coverage.hard_edge = 1;
+        else o->coverage.transition_px = d;
     } else if (!strcmp(name, "--jitter")) {
         if (cli_parse_u32(name, v, &u)) return 1;
-        if (u == 0) { cli_error("%s: the seed must be > 0", name); return 1; }
-        o->jitter = u;
+        o->coverage.jitter = 1;
+        o->coverage.jitter_seed = u;
     } else if (!strcmp(name, "--terrain-texture")) {
         s->terrain_tex = v;
     } else if (!strcmp(name, "--road-texture")) {
         s->road_tex = v;
     } else if (!strcmp(name, "--texture-scale")) {
-        if (cli_parse_double(name, v, &o->texture_scale) || positive(name, v, o->texture_scale)) return 1;
+        if (cli_parse_double(name, v, &o->surface.texture_scale) || positive(name, v, o->surface.texture_scale)) return 1;
+        if (!(o->surface.texture_scale >= 1e-6 && o->surface.texture_scale <= 1e9)) {
+            cli_error("%s: '%s' must be in [1e-6, 1e9] metres", name, v);
+            return 1;
+        }
     } else { /* --origin */
         if (cli_parse_vec(name, v, xy, 2)) return 1;
-        o->origin_x = xy[0];
-        o->origin_y = xy[1];
+        if (!(fabs(xy[0]) <= 1e12 && fabs(xy[1]) <= 1e12)) {
+            cli_error("%s: '%s' must be within 1e12 metres", name, v);
+            return 1;
+        }
+        fr->origin_x = xy[0];
+        fr->origin_y = xy[1];
     }
     return 0;
 }
@@ -91,6 +118,10 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     memset(in, 0, sizeof *in);
     rs_ctx_limits(ctx, &lim);
     if (!(in->dem = cli_load_dem(ctx, dem_path))) return 1;
+    if (rs_dem_set_frame(ctx, in->dem, &s->frame) != RS_OK) {
+        cli_error("%s: %s", dem_path, rs_ctx_message(ctx));
+        return 1;
+    }
     if (cli_read_file(roads_path, (size_t)lim.max_points * 64 + (1u << 20), &text, &size)) return 1;
     rs_result r = rs_roads_parse(ctx, text, size, &in->roads);
     free(text);
@@ -101,8 +132,8 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
         load_texture(s->road_tex, &in->road, &in->road_px))
         return 1;
-    if (in->terrain_px) s->o.terrain_texture = &in->terrain;
-    if (in->road_px) s->o.road_texture = &in->road;
+    if (in->terrain_px) s->o.surface.terrain_texture = &in->terrain;
+    if (in->road_px) s->o.surface.road_texture = &in->road;
     return 0;
 }
 

@@ -107,18 +107,26 @@ RS_API const char *rs_ctx_message(const rs_ctx *ctx);
 typedef int (*rs_progress_fn)(void *user, uint64_t done, uint64_t total);
 
 /* ---------------------------------------------------------------------------
- * DEM: W x H height samples at grid vertices, row-major, stored as float in
- * file units (metres = value * z_scale). NaN marks nodata.
+ * DEM (lib/dem.c): W x H height samples at grid vertices, row-major, stored
+ * as float in file units (metres = value * z_scale). NaN marks nodata. The
+ * DEM carries its frame - cell size, z-scale and world origin - which the
+ * splatter, the road grid and the mesher all read from it.
+ *
+ * Nodata policy (one for splat, mesh and render): a nodata sample takes the
+ * lowest valid 8-neighbour height, spreading inwards layer by layer (an
+ * all-nodata DEM reads as 0 everywhere). Its colour in a splat and its
+ * vertex in a mesh come from that filled height.
  * ------------------------------------------------------------------------- */
 typedef struct rs_dem rs_dem;
 
 /* Parse a PGM (P2 ASCII or P5 binary, maxval 1..65535, 16-bit samples big
  * endian, '#' comments wherever whitespace is allowed) from memory.
- * `data` is not retained. Width and height must be >= 2. */
+ * `data` is not retained. Width and height must be >= 2. The frame is the
+ * default one (cell size 1, z-scale 1, origin 0,0). */
 RS_API rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **out);
 
 /* Make a DEM from `width*height` floats (row-major, copied). NaN = nodata;
- * infinities are rejected. */
+ * infinities are rejected. Default frame. */
 RS_API rs_result rs_dem_create(rs_ctx *ctx, uint32_t width, uint32_t height,
                                const float *samples, rs_dem **out);
 RS_API void rs_dem_free(rs_ctx *ctx, rs_dem *dem);
@@ -126,6 +134,25 @@ RS_API uint32_t rs_dem_width(const rs_dem *dem);
 RS_API uint32_t rs_dem_height(const rs_dem *dem);
 /* Pointer to width*height samples, owned by dem. */
 RS_API const float *rs_dem_samples(const rs_dem *dem);
+
+/* The DEM's frame. All-zero means defaults. */
+typedef struct rs_dem_frame {
+    double cell_size; /* metres between samples; 0 -> 1; else 1e-9..1e9 */
+    double z_scale;   /* metres per DEM unit; 0 -> 1; else 1e-12 <= |z_scale| <= 1e12 */
+    double origin_x;  /* world coordinates of sample (0,0): road points are */
+    double origin_y;  /* given in that world frame (e.g. UTM); |origin| <= 1e12 */
+} rs_dem_frame;
+
+/* Set the frame (copied; defaults filled in). Out-of-range values give
+ * RS_ERR_INVALID_ARG naming the field, and leave the DEM unchanged. The map
+ * extent (W-1)*cell_size and every height times z_scale must fit a float.
+ * Set the frame before sharing the DEM between threads. */
+RS_API rs_result rs_dem_set_frame(rs_ctx *ctx, rs_dem *dem, const rs_dem_frame *frame);
+/* The frame in use, defaults filled in. */
+RS_API void rs_dem_get_frame(const rs_dem *dem, rs_dem_frame *out);
+/* Lowest and highest valid sample (DEM units; both 0 when every sample is
+ * nodata) and whether any sample is nodata. Computed once at creation. */
+RS_API void rs_dem_height_range(const rs_dem *dem, double *zmin, double *zmax, int *has_nodata);
 
 /* ---------------------------------------------------------------------------
  * Roads: named centreline polylines with a width, in metres, in the DEM
@@ -151,12 +178,26 @@ RS_API rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name
                               const double **xy, size_t *n);
 
 /* ---------------------------------------------------------------------------
- * Splatting
+ * Splatting (docs/design.md): a prepared, immutable splatter renders any
+ * window of the output texture in four stages per window - coverage (how
+ * much road is in each pixel), surface (terrain and road colours), overlays
+ * (line symbols, markings: empty for now) and composite (C = a*T + (1-a)*S,
+ * SPEC). Any tiling of the image into windows gives the same bytes as the
+ * whole image.
+ *
+ * The output covers the DEM's cells: (W-1)*T x (H-1)*T pixels for T texels
+ * per cell; pixel (px, py) covers [px*cs/T, (px+1)*cs/T) x [py*cs/T, ...).
  * ------------------------------------------------------------------------- */
 typedef enum rs_buffer_mode {
     RS_BUFFER_DISTANCE = 0, /* cell centre within half-width (+ half a cell) of the centreline */
     RS_BUFFER_DILATE = 1    /* paper: 8-connected centreline raster + 8-connected dilation */
 } rs_buffer_mode;
+
+typedef enum rs_edge_mode {
+    RS_EDGES_ALPHAMAP = 0, /* seed 000: road grid + 256-mask alpha-map table */
+    RS_EDGES_ANALYTIC = 1  /* exact area of the pixel inside the union of the
+                              road buffers (round caps and joins), box-filtered */
+} rs_edge_mode;
 
 /* An RGBA8 image, rows tightly packed (stride = 4*width). Not owned. */
 typedef struct rs_image {
@@ -164,60 +205,136 @@ typedef struct rs_image {
     const uint8_t *rgba;
 } rs_image;
 
-/* All-zero means defaults. */
-typedef struct rs_splat_options {
-    double cell_size;        /* metres per DEM cell; 0 -> 1 */
-    double z_scale;          /* metres per DEM unit; 0 -> 1 */
-    uint32_t texels;         /* output texels per DEM cell side; 0 -> 8 */
-    rs_buffer_mode buffer;   /* road cell marking */
-    uint32_t alpha_res;      /* alpha-map resolution (intervals per side); 0 -> 32 */
-    double transition;       /* transition band width, alpha-map pixels; 0 -> 2; <0 -> hard edge */
-    double road_cell;        /* road-grid cell size, metres; 0 -> automatic */
-    uint32_t jitter;         /* 0 off; else seed of the band jitter (paper section 3) */
-    double jitter_amount;    /* jitter amplitude in [0,1]; 0 -> 0.5 when jitter is on */
+/* Road grid (alpha-map edges only). All-zero means defaults. */
+typedef struct rs_grid_options {
+    rs_buffer_mode buffer; /* how road cells are chosen */
+    double road_cell;      /* road-grid cell size, metres; 0 -> automatic
+                              (narrowest road >= 4 cells, cell <= half a texel) */
+} rs_grid_options;
+
+/* Coverage stage. All-zero means defaults. */
+typedef struct rs_coverage_options {
+    rs_edge_mode edges;    /* alpha-map (default) or analytic */
+    uint32_t alpha_res;    /* alpha-map resolution (intervals per side); 0 -> 32, else 2..1024 */
+    int hard_edge;         /* non-zero: no transition band (alpha-map tiles are 0/1) */
+    double transition_px;  /* transition band, alpha-map pixels; 0 -> 2; at most alpha_res/2 */
+    int jitter;            /* non-zero: seeded jitter in the band (seed 000 section 3) */
+    uint32_t jitter_seed;  /* any value, 0 included */
+    double jitter_amount;  /* amplitude in (0,1]; 0 -> 0.5 */
+} rs_coverage_options;
+
+/* Surface stage. All-zero means defaults. */
+typedef struct rs_surface_options {
     const rs_image *terrain_texture; /* NULL -> hypsometric tint + hillshade */
     const rs_image *road_texture;    /* NULL -> procedural asphalt */
-    double texture_scale;    /* metres per texture repeat; 0 -> 10 */
-    rs_progress_fn progress; /* may be NULL */
+    double texture_scale;            /* metres per texture repeat; 0 -> 10; else 1e-6..1e9 */
+} rs_surface_options;
+
+/* All-zero means defaults. The frame (cell size, z-scale, origin) is the DEM's. */
+typedef struct rs_splat_options {
+    uint32_t texels;                /* output texels per DEM cell side; 0 -> 8, else 1..1024 */
+    rs_grid_options grid;
+    rs_coverage_options coverage;
+    rs_surface_options surface;
+    rs_progress_fn progress;        /* may be NULL; see rs_splat_window */
     void *progress_user;
-    double origin_x;         /* world coordinates of DEM sample (0,0); road */
-    double origin_y;         /* points are in the same world frame; 0 -> 0 */
 } rs_splat_options;
 
-/* The road grid: road cells (DEM cells split K x K), classified by their
- * 8-neighbour mask. Built once, splatted any number of times. */
+/* The road grid: the roads prepared for one DEM and one set of options -
+ * road cells (DEM cells split K x K) classified by their 8-neighbour mask
+ * for alpha-map edges, the road field (per-pixel road coordinates, index
+ * grid over the segments) for analytic edges. Built once, splatted any
+ * number of times, read-only afterwards. */
 typedef struct rs_road_grid rs_road_grid;
 
-typedef struct rs_grid_stats {
-    uint32_t k;                 /* road cells per DEM cell side */
+typedef struct rs_road_grid_stats {
+    uint32_t k;                 /* road cells per DEM cell side (0: no cell grid) */
     double road_cell;           /* road cell size, metres */
     uint64_t road_cells;        /* all road cells */
     uint64_t interior_cells;    /* road cells with all 8 neighbours road */
     uint64_t boundary_cells;    /* road cells with a terrain neighbour */
     uint64_t by_type[6];        /* boundary cells by tile type (RS_TILE_*) */
     uint64_t tiles_allocated;   /* sparse storage blocks in use */
+    uint64_t segments;          /* road segments in the road field (0: none built) */
     uint64_t bytes;             /* memory held by the grid */
-} rs_grid_stats;
+} rs_road_grid_stats;
 
-/* Rasterize and classify `roads` over `dem`. `opts` may be NULL. Only
- * cell_size, buffer, road_cell, texels and progress are used here. */
+/* Prepare `roads` over `dem` (its frame included). `opts` may be NULL. Reads
+ * texels, grid, coverage.edges and progress. The grid keeps no pointer to
+ * dem or roads. */
 RS_API rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                     const rs_splat_options *opts, rs_road_grid **out);
 RS_API void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid);
-RS_API void rs_road_grid_stats(const rs_road_grid *grid, rs_grid_stats *out);
+RS_API void rs_road_grid_get_stats(const rs_road_grid *grid, rs_road_grid_stats *out);
 
 /* Output size for `dem` and `opts`: (W-1)*T x (H-1)*T. Fails with
  * RS_ERR_LIMIT when it exceeds the context's max_pixels. */
 RS_API rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts,
                                uint32_t *width, uint32_t *height);
 
-/* Splat: write width*height*4 bytes of RGBA8 into `rgba` (rgba_size bytes
- * available, see rs_splat_size) and, when `weight` is not NULL, the road
- * weight R = 1 - alpha as width*height uint16 (0..65535). `grid` must come
- * from rs_road_grid_build with the same dem and options. */
+typedef struct rs_splatter rs_splatter;
+
+/* Prepare a splatter: validate once, build the alpha-map integral tables,
+ * the DEM's nodata-filled heights, height range and light vector once.
+ * Give exactly one of `roads` (the splatter builds and owns its grid) and
+ * `grid` (from rs_road_grid_build with the same dem and options; borrowed:
+ * it must outlive the splatter). `dem` and the option textures are
+ * borrowed too. The splatter is immutable: rs_splat_window may be called on
+ * it from several threads at once, each with its own context. */
+RS_API rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                    const rs_road_grid *grid, const rs_splat_options *opts,
+                                    rs_splatter **out);
+RS_API void rs_splatter_free(rs_ctx *ctx, rs_splatter *s);
+/* Size of the whole output image in pixels. */
+RS_API void rs_splatter_size(const rs_splatter *s, uint32_t *width, uint32_t *height);
+/* The grid in use (owned by the splatter or borrowed). */
+RS_API const rs_road_grid *rs_splatter_grid(const rs_splatter *s);
+
+/* Optional per-call profile: stage times from the caller's clock (the
+ * library itself reads no clock) and counts, ADDED to the fields. */
+typedef struct rs_splat_profile {
+    double (*clock_ms)(void *user); /* NULL: no timings */
+    void *clock_user;
+    double coverage_ms, surface_ms, overlays_ms, composite_ms;
+    uint64_t pixels;       /* pixels rendered */
+    uint64_t road_pixels;  /* pixels with some road (weight > 0) */
+} rs_splat_profile;
+
+/* Render the window [x0, x0+w) x [y0, y0+h) of the output image: RGBA8 into
+ * `rgba` (row r of the window at rgba + r*rgba_stride bytes; rgba_stride >=
+ * 4*w) and, when `weight` is not NULL, the road weight R = 1 - alpha as
+ * uint16 0..65535 (row r at weight + r*weight_stride values). The window
+ * must lie inside the image (RS_ERR_INVALID_ARG). Scratch memory (a few
+ * rows of the window) comes from ctx's allocator. Progress: the splatter's
+ * progress callback gets (rows done, h) from this thread; with several
+ * threads it must be thread-safe. `profile` may be NULL. */
+RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0,
+                                 uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
+                                 uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
+
+/* Whole-image convenience: a splatter on `grid` (built with the same dem
+ * and opts), one window covering the image, tightly packed buffers:
+ * width*height*4 bytes of RGBA (rgba_size available) and, when `weight` is
+ * not NULL, width*height uint16. */
 RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid,
                           const rs_splat_options *opts, uint8_t *rgba, size_t rgba_size,
                           uint16_t *weight, size_t weight_count);
+
+/* Road field query (needs a grid built with analytic edges, or any grid
+ * from rs_splatter_create when the splatter needed the field): the nearest
+ * road centreline to local point (x, y) metres within `reach` metres of a
+ * road's edge. Returns 1 and fills the fields, 0 when no road is that near
+ * (or the grid has no road field). s = arc length from the road's first
+ * point (metres), t = signed lateral offset, + to the left of the direction
+ * of travel (SPEC "Road field"). */
+typedef struct rs_road_point {
+    uint32_t road;     /* index in the rs_roads the grid was built from */
+    uint32_t segment;  /* segment (points segment, segment+1) */
+    double s, t;       /* metres */
+    double distance;   /* |t| away from the segment ends; to the nearest point */
+} rs_road_point;
+RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reach,
+                              rs_road_point *out);
 
 /* ---------------------------------------------------------------------------
  * The classification table (exposed for tests and for renderers that want
@@ -238,14 +355,16 @@ typedef enum rs_tile_type {
 RS_API void rs_mask_classify(uint8_t mask, rs_tile_type *type, int *rotation);
 
 /* Alpha (terrain weight, 0..1) of the tile for `mask` at cell-local point
- * (u, v) in [0,1]^2, u right, v down, for transition width `transition`
- * (fraction of a cell; 0 = hard edge). Exact, not sampled from a raster. */
-RS_API double rs_tile_alpha(uint8_t mask, double u, double v, double transition);
+ * (u, v) in [0,1]^2, u right, v down, for a transition band
+ * `transition_cells` wide (a fraction of the cell, not alpha-map pixels;
+ * 0 = hard edge). Exact, not sampled from a raster. */
+RS_API double rs_tile_alpha(uint8_t mask, double u, double v, double transition_cells);
 
 /* Alpha-map rasters: (res+1) x (res+1) vertex-centred samples of the
- * canonical tile of `type` (EDGE, INNER or OUTER), as bytes 0..255, with the
- * transition of `transition_px` alpha-map pixels (<0: hard) and optional
- * jitter. `out` holds (res+1)^2 bytes. */
+ * canonical tile of `type` (EDGE, INNER or OUTER), as bytes 0..255, with a
+ * transition band `transition_px` alpha-map pixels wide (0 = hard edge; at
+ * most res/2) and, when jitter_amount > 0 (at most 1), jitter seeded by
+ * jitter_seed (any value). `out` holds (res+1)^2 bytes. */
 RS_API rs_result rs_alpha_map(rs_tile_type type, uint32_t res, double transition_px,
                               uint32_t jitter_seed, double jitter_amount,
                               uint8_t *out, size_t out_size);
@@ -264,10 +383,9 @@ RS_API rs_result rs_alpha_map(rs_tile_type type, uint32_t res, double transition
  */
 typedef struct rs_roam rs_roam;
 
-/* All-zero means defaults. */
+/* All-zero means defaults. Cell size and z-scale are the DEM's frame
+ * (rs_dem_set_frame); the mesher needs z_scale > 0. */
 typedef struct rs_roam_options {
-    double cell_size;     /* metres between samples; 0 -> 1 */
-    double z_scale;       /* metres per DEM unit; 0 -> 1 */
     uint32_t pool_nodes;  /* node pool size; 0 -> pool_bytes, else automatic */
     uint64_t pool_bytes;  /* pool size in bytes (used when pool_nodes is 0) */
     uint32_t patch_size;  /* patch side in cells, a power of two; 0 -> automatic */
@@ -295,8 +413,9 @@ RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
  * caches and options: no allocation unless the new DEM holds nodata. The
  * cached error bounds are dropped and the mesh is reset to the base mesh.
  * `dem` must outlive the landscape's use of it, as for rs_roam_create. On
- * failure (size mismatch RS_ERR_INVALID_ARG, RS_ERR_NOMEM) the landscape
- * keeps its previous DEM. */
+ * failure (size or frame mismatch: the cell size and z-scale must be the
+ * landscape's, RS_ERR_INVALID_ARG; RS_ERR_NOMEM) the landscape keeps its
+ * previous DEM. */
 RS_API rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *roam, const rs_dem *dem);
 
 /* Error-bounded mode. Reset to the base mesh, then split (depth first,
@@ -354,7 +473,7 @@ RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
 
 /* Mesh extraction. All-zero means: no normals, no skirts. */
 typedef struct rs_roam_mesh_options {
-    int normals;          /* non-zero: write unit normals (central differences) */
+    int normals;          /* non-zero: write unit normals (Horn's gradient, as the hillshade) */
     double skirt_depth;   /* > 0: add a skirt this many metres deep on the map border */
 } rs_roam_mesh_options;
 

@@ -20,7 +20,8 @@ struct rs_ctx {
 
 struct rs_dem {
     uint32_t width, height;
-    float *z; /* width*height, row-major, NaN = nodata */
+    float *z;           /* width*height, row-major, NaN = nodata */
+    rs_dem_frame frame; /* defaults filled in (lib/dem.c) */
 };
 
 /* Allocation through the context's allocator. rs__alloc_array checks
@@ -58,6 +59,6 @@ double rs__local_coord(double world, double origin, double per_unit);
 
 #define RS__PI 3.14159265358979323846
 
-/* Validate splat options and fill in defaults (lib/splat.c). */
+/* Validate splat options and fill in defaults (lib/options.c). */
 rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out);
 #endif

@@ -200,7 +200,7 @@ static unsigned alpha_sample(rs_tile_type type, uint32_t res, double w, uint32_t
     double u = (double)j / res, v = (double)i / res;
     double a = rs__phi_to_alpha(rs__pattern_phi(canon_pattern[type], u, v), w);
     int border = (i == 0 || j == 0 || i == res || j == res);
-    if (seed && !border && a > 0 && a < 1) {
+    if (amount > 0 && !border && a > 0 && a < 1) {
         uint32_t ri = i, rj = j;
         mirror_rep(type, res, &ri, &rj);
         a += amount * lattice_noise(seed, (uint32_t)type, rj, ri, 4.0) * 4.0 * a * (1.0 - a);

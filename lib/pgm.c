@@ -13,7 +13,7 @@
  *
  * Sizes are checked against ctx->limits and for overflow, and the data is
  * checked to be long enough for width*height samples, before allocating. */
-#include "internal.h"
+#include "dem.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -110,24 +110,6 @@ static rs_result pgm_header_field(rs_ctx *ctx, pgm_reader *r, const char *name, 
     return RS_OK;
 }
 
-static rs_result dem_alloc(rs_ctx *ctx, uint32_t w, uint32_t h, rs_dem **out)
-{
-    size_t n, bytes;
-    if (!rs__mul_size(w, h, &n) || !rs__mul_size(n, sizeof(float), &bytes))
-        return rs__fail(ctx, RS_ERR_LIMIT, "DEM %ux%u is too large for this machine", w, h);
-    rs_dem *dem = rs__malloc(ctx, sizeof *dem);
-    if (!dem) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a %ux%u DEM", w, h);
-    dem->width = w;
-    dem->height = h;
-    dem->z = rs__malloc(ctx, bytes);
-    if (!dem->z) {
-        rs__free(ctx, dem);
-        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a %ux%u DEM", w, h);
-    }
-    *out = dem;
-    return RS_OK;
-}
-
 static rs_result dem_check_size(rs_ctx *ctx, uint64_t w, uint64_t h, const char *what)
 {
     if (w < 2 || h < 2)
@@ -207,7 +189,7 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
                                 "PGM: %zu unexpected bytes after the last sample (offset %zu); width/height wrong?",
                                 (size_t)(r.end - (s + need)), (size_t)(t - r.start));
         rs_dem *dem;
-        if ((rc = dem_alloc(ctx, (uint32_t)w, (uint32_t)h, &dem)) != RS_OK) return rc;
+        if ((rc = rs__dem_alloc(ctx, (uint32_t)w, (uint32_t)h, &dem)) != RS_OK) return rc;
         for (size_t i = 0; i < n; i++)
             dem->z[i] = (float)(bps == 2 ? ((unsigned)s[2 * i] << 8) | s[2 * i + 1] : s[i]);
         *out = dem;
@@ -222,7 +204,7 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
                         "PGM truncated: %llux%llu samples cannot fit in the %zu bytes after the header",
                         (unsigned long long)w, (unsigned long long)h, have);
     rs_dem *dem;
-    if ((rc = dem_alloc(ctx, (uint32_t)w, (uint32_t)h, &dem)) != RS_OK) return rc;
+    if ((rc = rs__dem_alloc(ctx, (uint32_t)w, (uint32_t)h, &dem)) != RS_OK) return rc;
     char what[16];
     for (size_t i = 0; i < n; i++) {
         pgm_skip(&r);
@@ -268,37 +250,3 @@ fail:
     rs_dem_free(ctx, dem);
     return rc;
 }
-
-rs_result rs_dem_create(rs_ctx *ctx, uint32_t width, uint32_t height, const float *samples, rs_dem **out)
-{
-    if (!out) return ctx ? rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_create: out is NULL") : RS_ERR_INVALID_ARG;
-    *out = NULL;
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!samples) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_create: samples is NULL");
-    rs_result rc = dem_check_size(ctx, width, height, "rs_dem_create");
-    if (rc != RS_OK) return rc == RS_ERR_PARSE ? (rs_result)RS_ERR_INVALID_ARG : rc;
-    size_t n;
-    if (!rs__mul_size(width, height, &n))
-        return rs__fail(ctx, RS_ERR_LIMIT, "rs_dem_create: %ux%u is too large", width, height);
-    for (size_t i = 0; i < n; i++)
-        if (isinf(samples[i]))
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_create: sample %zu (row %zu, column %zu) is infinite",
-                            i, i / width, i % width);
-    rs_dem *dem;
-    if ((rc = dem_alloc(ctx, width, height, &dem)) != RS_OK) return rc;
-    memcpy(dem->z, samples, n * sizeof(float));
-    *out = dem;
-    rs__ok(ctx);
-    return RS_OK;
-}
-
-void rs_dem_free(rs_ctx *ctx, rs_dem *dem)
-{
-    if (!ctx || !dem) return;
-    rs__free(ctx, dem->z);
-    rs__free(ctx, dem);
-}
-
-uint32_t rs_dem_width(const rs_dem *dem) { return dem ? dem->width : 0; }
-uint32_t rs_dem_height(const rs_dem *dem) { return dem ? dem->height : 0; }
-const float *rs_dem_samples(const rs_dem *dem) { return dem ? dem->z : NULL; }

@@ -5,6 +5,7 @@
  * true half-width; docs/design.md derives the offsets used here. */
 #include "roadgrid.h"
 #include "mask.h"
+#include "roadfield.h"
 
 #include <math.h>
 #include <string.h>
@@ -356,6 +357,7 @@ static rs_result choose_k(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
 void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
 {
     if (!ctx || !grid) return;
+    rs__roadfield_free(ctx, grid->field);
     if (grid->tiles) {
         for (size_t i = 0; i < (size_t)grid->tw * grid->th; i++) rs__free(ctx, grid->tiles[i]);
         rs__free(ctx, grid->tiles);
@@ -363,31 +365,84 @@ void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
     rs__free(ctx, grid);
 }
 
-void rs_road_grid_stats(const rs_road_grid *grid, rs_grid_stats *out)
+void rs_road_grid_get_stats(const rs_road_grid *grid, rs_road_grid_stats *out)
 {
     if (grid && out) *out = grid->stats;
+}
+
+int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reach, rs_road_point *out)
+{
+    rs__road_point p;
+    if (!grid || !grid->field || !out || !(reach >= 0) || !rs__roadfield_nearest(grid->field, x, y, reach, &p))
+        return 0;
+    out->road = p.road;
+    out->segment = p.seg;
+    out->s = p.s;
+    out->t = p.t;
+    out->distance = p.dist;
+    return 1;
+}
+
+/* Analytic edges: the road field over the map. */
+static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, rs_road_grid *g)
+{
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.origin_x = dem->frame.origin_x;
+    p.origin_y = dem->frame.origin_y;
+    p.cell_size = dem->frame.cell_size;
+    p.width_m = (double)(dem->width - 1) * dem->frame.cell_size;
+    p.height_m = (double)(dem->height - 1) * dem->frame.cell_size;
+    rs_result r = rs__roadfield_build(ctx, roads, &p, &g->field);
+    if (r == RS_OK) {
+        for (size_t i = 0; i < rs_roads_count(roads); i++) {
+            size_t np = 0;
+            rs_roads_get(roads, i, NULL, NULL, NULL, &np);
+            g->stats.segments += np > 1 ? np - 1 : 1;
+        }
+        g->stats.bytes += rs__roadfield_bytes(g->field);
+    }
+    return r;
 }
 
 rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
                              rs_road_grid **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_build");
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_build");
     *out = NULL;
+    if (!dem || !roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_build");
     rs_splat_options o;
     rs_result r = rs__splat_defaults(ctx, opts, &o);
     if (r) return r;
-    uint32_t k = 1;
-    r = choose_k(ctx, dem, roads, o.cell_size, o.texels, o.road_cell, &k);
-    if (r) return r;
-
     rs_road_grid *g = rs__calloc(ctx, 1, sizeof *g);
     if (!g) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the road grid");
     g->dem_w = dem->width;
     g->dem_h = dem->height;
+    g->frame = dem->frame;
+    g->texels = o.texels;
+    g->opts = o.grid;
+    g->edges = o.coverage.edges;
+    g->cell_size = dem->frame.cell_size;
+    g->stats.bytes = sizeof *g;
+    if (o.coverage.edges == RS_EDGES_ANALYTIC) {
+        r = build_field(ctx, dem, roads, g);
+        if (r) {
+            rs_road_grid_free(ctx, g);
+            return r;
+        }
+        *out = g;
+        rs__ok(ctx);
+        return RS_OK;
+    }
+    uint32_t k = 1;
+    r = choose_k(ctx, dem, roads, dem->frame.cell_size, o.texels, o.grid.road_cell, &k);
+    if (r) {
+        rs__free(ctx, g);
+        return r;
+    }
     g->k = k;
-    g->cell_size = o.cell_size;
-    g->c = o.cell_size / k;
+    g->c = g->cell_size / k;
     g->gw = (dem->width - 1) * k;
     g->gh = (dem->height - 1) * k;
     g->tw = (g->gw + RS__TILE - 1) / RS__TILE;
@@ -416,7 +471,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         size_t np;
         double w;
         rs_roads_get(roads, i, NULL, &w, &xy, &np);
-        r = mark_road(&m, xy, np, w, o.buffer, o.origin_x, o.origin_y, scratch);
+        r = mark_road(&m, xy, np, w, o.grid.buffer, dem->frame.origin_x, dem->frame.origin_y, scratch);
         if (!r && o.progress && o.progress(o.progress_user, i + 1, n)) r = rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
     }
     rs__free(ctx, scratch);

@@ -1,4 +1,5 @@
-/* Private: the sparse road grid shared by lib/roadgrid.c and lib/splat.c. */
+/* Private: the road grid (lib/roadgrid.c), read by the coverage stages
+ * and the splatter. */
 #ifndef RS_ROADGRID_H
 #define RS_ROADGRID_H
 #include "internal.h"
@@ -11,14 +12,22 @@
 #define RS__CELL_PATTERN 0x0Fu /* corner pattern (lib/mask.c) once classified */
 
 struct rs_road_grid {
-    uint32_t dem_w, dem_h;   /* DEM the grid was built for */
+    /* What it was built for: a splatter checks these against its own. */
+    uint32_t dem_w, dem_h;   /* DEM size */
+    rs_dem_frame frame;      /* DEM frame */
+    uint32_t texels;
+    rs_grid_options opts;    /* as given (road_cell 0 = automatic) */
+    rs_edge_mode edges;
+    /* Alpha-map edges: the cell grid (tiles NULL otherwise). */
     uint32_t k;              /* road cells per DEM cell side */
     double cell_size;        /* DEM cell, metres */
     double c;                /* road cell, metres (cell_size / k) */
     uint32_t gw, gh;         /* grid size in road cells */
     uint32_t tw, th;         /* grid size in tiles */
     uint8_t **tiles;         /* tw*th, NULL where there is no road */
-    rs_grid_stats stats;
+    /* Analytic edges (or overlays): the road field, else NULL. */
+    struct rs__roadfield *field;
+    rs_road_grid_stats stats;
 };
 
 static inline const uint8_t *rs__grid_tile(const rs_road_grid *g, uint32_t tx, uint32_t ty)

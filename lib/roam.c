@@ -1,7 +1,7 @@
 /* ROAM terrain mesher: a Landscape of patches, each two bintree roots, with
  * nodes from a fixed pool linked by 32-bit indices (the seed's five links).
  * Design notes and the reasons behind the choices: docs/roam.md. */
-#include "internal.h"
+#include "dem.h"
 
 #include <float.h>
 #include <math.h>
@@ -426,75 +426,12 @@ static float node_err(rs_roam *L, const roam_node *n, const tri *t)
 
 /* ---- nodata ---------------------------------------------------------------- */
 
-/* Fill NaN samples layer by layer from the valid ones: each takes the lowest
- * 8-neighbour filled in an earlier layer. */
-static rs_result fill_nodata(rs_ctx *ctx, rs_roam *L, const float *src)
+/* The DEM module's nodata policy (lib/dem.c), into an owned copy. */
+static rs_result fill_nodata(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
 {
-    size_t n = (size_t)L->w * L->hgt;
-    float *z = rs__alloc_array(ctx, n, sizeof *z);
-    uint32_t *q = rs__alloc_array(ctx, n, sizeof *q);
-    uint32_t *layer = rs__alloc_array(ctx, n, sizeof *layer);
-    if (!z || !q || !layer) {
-        rs__free(ctx, z); rs__free(ctx, q); rs__free(ctx, layer);
-        return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory filling nodata (%zu samples)", n);
-    }
-    size_t qn = 0, valid = 0;
-    for (size_t i = 0; i < n; i++) {
-        z[i] = isfinite(src[i]) ? src[i] : NAN;
-        layer[i] = isnan(z[i]) ? NIL : 0;
-        if (!isnan(z[i])) valid++;
-    }
-    if (valid == 0) {
-        for (size_t i = 0; i < n; i++) z[i] = 0.0f;
-    } else {
-        int W = (int)L->w, H = (int)L->hgt;
-        /* seed layer 1: nodata cells touching valid ones */
-        for (int i = 0; i < H; i++)
-            for (int j = 0; j < W; j++) {
-                size_t id = (size_t)i * W + j;
-                if (layer[id] != NIL) continue;
-                int touch = 0;
-                for (int di = -1; di <= 1 && !touch; di++)
-                    for (int dj = -1; dj <= 1; dj++) {
-                        int ii = i + di, jj = j + dj;
-                        if (ii < 0 || jj < 0 || ii >= H || jj >= W) continue;
-                        if (layer[(size_t)ii * W + jj] == 0) { touch = 1; break; }
-                    }
-                if (touch) { layer[id] = 1; q[qn++] = (uint32_t)id; }
-            }
-        size_t head = 0;
-        while (head < qn) {
-            uint32_t cur = layer[q[head]];
-            size_t end = qn;
-            for (size_t k = head; k < end; k++) { /* values of this layer */
-                size_t id = q[k];
-                int i = (int)(id / (size_t)W), j = (int)(id % (size_t)W);
-                float best = INFINITY;
-                for (int di = -1; di <= 1; di++)
-                    for (int dj = -1; dj <= 1; dj++) {
-                        int ii = i + di, jj = j + dj;
-                        if (ii < 0 || jj < 0 || ii >= H || jj >= W) continue;
-                        size_t nb = (size_t)ii * W + jj;
-                        if (layer[nb] < cur && z[nb] < best) best = z[nb];
-                    }
-                z[id] = best;
-            }
-            for (size_t k = head; k < end; k++) { /* next layer */
-                size_t id = q[k];
-                int i = (int)(id / (size_t)W), j = (int)(id % (size_t)W);
-                for (int di = -1; di <= 1; di++)
-                    for (int dj = -1; dj <= 1; dj++) {
-                        int ii = i + di, jj = j + dj;
-                        if (ii < 0 || jj < 0 || ii >= H || jj >= W) continue;
-                        size_t nb = (size_t)ii * W + jj;
-                        if (layer[nb] == NIL) { layer[nb] = cur + 1; q[qn++] = (uint32_t)nb; }
-                    }
-            }
-            head = end;
-        }
-    }
-    rs__free(ctx, q);
-    rs__free(ctx, layer);
+    float *z;
+    rs_result r = rs__dem_fill_nodata(ctx, dem, &z);
+    if (r != RS_OK) return r;
     L->zown = z;
     L->z = z;
     return RS_OK;
@@ -1065,7 +1002,7 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
     float *old = L->zown;
     if (has_nodata) {
         L->zown = NULL;
-        rs_result r = fill_nodata(ctx, L, dem->z);
+        rs_result r = fill_nodata(ctx, L, dem);
         if (r != RS_OK) { L->zown = old; return r; }
     } else {
         L->zown = NULL;
@@ -1098,6 +1035,10 @@ rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
     if (dem->width != L->w || dem->height != L->hgt)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_set_dem: DEM is %ux%u, the landscape %ux%u",
                         dem->width, dem->height, L->w, L->hgt);
+    if (dem->frame.cell_size != L->cs || dem->frame.z_scale != L->zs)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_roam_set_dem: DEM frame (cell size %g, z-scale %g) differs from the landscape's (%g, %g)",
+                        dem->frame.cell_size, dem->frame.z_scale, L->cs, L->zs);
     int has_nodata;
     rs_result r = check_heights(ctx, L, dem, &has_nodata);
     if (r == RS_OK) r = load_heights(ctx, L, dem, has_nodata);
@@ -1184,11 +1125,9 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     *out = NULL;
     rs_roam_options o;
     if (opts) o = *opts; else memset(&o, 0, sizeof o);
-    double cs = o.cell_size == 0.0 ? 1.0 : o.cell_size, zs = o.z_scale == 0.0 ? 1.0 : o.z_scale;
-    if (!(cs > 0.0) || !isfinite(cs))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: cell_size %g must be a finite number > 0", o.cell_size);
-    if (!(zs > 0.0) || !isfinite(zs))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: z_scale %g must be a finite number > 0", o.z_scale);
+    double cs = dem->frame.cell_size, zs = dem->frame.z_scale;
+    if (!(zs > 0.0))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: the DEM's z-scale %g must be > 0 (z is up)", zs);
     uint32_t W = dem->width, H = dem->height;
     if (W < 2 || H < 2)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: DEM is %ux%u, need at least 2x2 samples", W, H);
@@ -1584,14 +1523,11 @@ void rs_roam_mesh_bound(const rs_roam *L, const rs_roam_mesh_options *opts, size
     if (max_indices) *max_indices = i;
 }
 
-static float zf(const rs_roam *L, int x, int y) { return L->z[(size_t)y * L->w + (size_t)x]; }
-
+/* Horn's gradient, the same the splat's hillshade uses (lib/dem.c). */
 static void vertex_normal(const rs_roam *L, int x, int y, float *out)
 {
-    int x0 = x > 0 ? x - 1 : x, x1 = x < (int)L->cw ? x + 1 : x;
-    int y0 = y > 0 ? y - 1 : y, y1 = y < (int)L->ch ? y + 1 : y;
-    double dzx = ((double)zf(L, x1, y) - zf(L, x0, y)) * L->zs / ((x1 - x0) * L->cs);
-    double dzy = ((double)zf(L, x, y1) - zf(L, x, y0)) * L->zs / ((y1 - y0) * L->cs);
+    double dzx, dzy;
+    rs__dem_horn(L->z, L->w, L->hgt, L->cs, L->zs, (uint32_t)y, (uint32_t)x, &dzx, &dzy);
     double nx = -dzx, ny = -dzy, nz = 1.0, l = sqrt(nx * nx + ny * ny + nz * nz);
     out[0] = (float)(nx / l); out[1] = (float)(ny / l); out[2] = (float)(nz / l);
 }

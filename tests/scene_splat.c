@@ -25,13 +25,20 @@ void ss_image_free(ss_image *im)
 
 rs_result ss_splat(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, int seam, ss_image *out)
 {
+    return ss_splat_z(ctx, s, opts, 0, seam, out);
+}
+
+rs_result ss_splat_z(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, double z_scale, int seam,
+                     ss_image *out)
+{
     memset(out, 0, sizeof *out);
     rs_splat_options o = *opts;
-    o.cell_size = s->cell_size;
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
     rs_road_grid *g = NULL;
+    rs_dem_frame fr = { s->cell_size, z_scale, 0, 0 };
     rs_result r = rs_dem_create(ctx, s->w, s->h, s->z, &dem);
+    if (!r) r = rs_dem_set_frame(ctx, dem, &fr);
     if (!r) r = (roads = ss_roads(ctx, s)) ? RS_OK : RS_ERR_NOMEM;
     if (!r) r = rs_splat_size(ctx, dem, &o, &out->w, &out->h);
     if (!r) r = rs_road_grid_build(ctx, dem, roads, &o, &g);

@@ -19,5 +19,8 @@ typedef struct ss_image {
 /* Splat scene `s` with `opts` (cell_size taken from the scene); with `seam`,
  * also measure the grid's seam error. On failure *out is zeroed. */
 rs_result ss_splat(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, int seam, ss_image *out);
+/* The same with the DEM's z-scale (0 = 1). */
+rs_result ss_splat_z(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, double z_scale, int seam,
+                     ss_image *out);
 void ss_image_free(ss_image *im);
 #endif

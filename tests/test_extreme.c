@@ -123,11 +123,11 @@ static rs_result roam_scene(const float *z, uint32_t W, uint32_t H, double cs, d
     rs_roam *roam = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = cs;
-    o.z_scale = zs;
+    rs_dem_frame fr = { cs, zs, 0, 0 };
     float *v = NULL;
     uint32_t *idx = NULL;
     rs_result r = rs_dem_create(ctx, W, H, z, &dem);
+    if (!r) r = rs_dem_set_frame(ctx, dem, &fr);
     if (!r) r = rs_roam_create(ctx, dem, &o, &roam);
     if (!r) r = rs_roam_refine_error(ctx, roam, err);
     size_t nv = 0, ni = 0;
@@ -204,7 +204,7 @@ static void test_extreme_dems(void)
         for (int mode = 0; mode < 2; mode++) {
             rs_splat_options o;
             memset(&o, 0, sizeof o);
-            o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+            o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
             o.texels = 4;
             ss_image r1, r2;
             CHECK(ss_splat(ctx, &s, &o, 1, &r1) == RS_OK);
@@ -262,8 +262,8 @@ static void test_huge_dem(void)
     /* 1x1 textures: no hillshade work, the test is about size and memory */
     static const uint8_t green[4] = { 90, 140, 70, 255 }, grey[4] = { 70, 70, 72, 255 };
     rs_image tt = { 1, 1, green }, rt = { 1, 1, grey };
-    o.terrain_texture = &tt;
-    o.road_texture = &rt;
+    o.surface.terrain_texture = &tt;
+    o.surface.road_texture = &rt;
     double t0 = (tm_now_ms() / 1000.0);
     size_t base = mem.live;
     mem.peak = mem.live;
@@ -352,21 +352,21 @@ static void test_stress(void)
         random_roads(&s, &r);
         rs_splat_options o;
         memset(&o, 0, sizeof o);
-        o.buffer = sc_rng_u64(&r) % 2 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        o.grid.buffer = sc_rng_u64(&r) % 2 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         o.texels = 1 + (uint32_t)(sc_rng_u64(&r) % 8);
-        o.z_scale = sc_rng_u64(&r) % 2 ? 0.01 : 1;
-        if (sc_rng_u64(&r) % 3 == 0) o.road_cell = s.cell_size / (1 + (double)(sc_rng_u64(&r) % 6));
+        double zs = sc_rng_u64(&r) % 2 ? 0.01 : 1;
+        if (sc_rng_u64(&r) % 3 == 0) o.grid.road_cell = s.cell_size / (1 + (double)(sc_rng_u64(&r) % 6));
         ss_image a, b;
-        CHECK(ss_splat(ctx, &s, &o, 1, &a) == RS_OK);
-        CHECK(ss_splat(ctx, &s, &o, 0, &b) == RS_OK);
+        CHECK(ss_splat_z(ctx, &s, &o, zs, 1, &a) == RS_OK);
+        CHECK(ss_splat_z(ctx, &s, &o, zs, 0, &b) == RS_OK);
         if (a.wt && b.wt) {
             size_t n = (size_t)a.w * a.h, stray;
-            if (!check_weights(&s, &a, o.texels, o.buffer == RS_BUFFER_DILATE, &stray)) bad_weights++;
+            if (!check_weights(&s, &a, o.texels, o.grid.buffer == RS_BUFFER_DILATE, &stray)) bad_weights++;
             if (a.seam > 1.0 / 255) bad_seams++;
             if (a.seam > worst_seam) worst_seam = a.seam;
             if (memcmp(a.rgba, b.rgba, n * 4) || memcmp(a.wt, b.wt, n * 2)) nondet++;
             CHECKF(stray == 0, "stress scene %d: %zu stray weights (%s, T=%u, cs %g, road cell %g, W %u H %u)", it, stray,
-                   o.buffer ? "dilate" : "distance", o.texels, s.cell_size, o.road_cell, W, H);
+                   o.grid.buffer ? "dilate" : "distance", o.texels, s.cell_size, o.grid.road_cell, W, H);
             if (stray && getenv("RS_DEBUG"))
                 for (size_t k = 0; k < s.nroads; k++) {
                     fprintf(stderr, "  road w=%g:", s.roads[k].width);
@@ -376,9 +376,9 @@ static void test_stress(void)
         }
         ss_image_free(&a);
         ss_image_free(&b);
-        double err = (sc_rng_u64(&r) % 4 == 0) ? 0 : sc_rng_range(&r, 0, 5000) * o.z_scale;
+        double err = (sc_rng_u64(&r) % 4 == 0) ? 0 : sc_rng_range(&r, 0, 5000) * zs;
         mesh_check mc;
-        CHECK(roam_scene(s.z, W, H, s.cell_size, o.z_scale, err, &mc) == RS_OK);
+        CHECK(roam_scene(s.z, W, H, s.cell_size, zs, err, &mc) == RS_OK);
         if (!mc.ok || mc.max_err > err + mc.tol) bad_mesh++;
         if (err > 0 && mc.max_err / err > worst_mesh_ratio) worst_mesh_ratio = mc.max_err / err;
         CHECKF(mc.ok && mc.max_err <= err + mc.tol, "stress scene %d: mesh valid %d, error %g > %g", it, mc.ok, mc.max_err, err);

@@ -130,7 +130,7 @@ static void test_d4(void)
             for (int ti = 0; ti < 2; ti++) {
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
-                o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+                o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = ti ? 3 : 4;
                 ss_image ref;
                 CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
@@ -234,7 +234,7 @@ static void test_edits(void)
             for (int mode = 0; mode < 2; mode++) {
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
-                o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+                o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = 4;
                 ss_image a, b;
                 CHECK(ss_splat(ctx, &s, &o, 0, &a) == RS_OK);
@@ -282,7 +282,7 @@ static void test_height_scale_splat(void)
     for (int mode = 0; mode < 2; mode++) {
         rs_splat_options o;
         memset(&o, 0, sizeof o);
-        o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         ss_image ref;
         CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
         for (int i = 0; i < 3 && ref.wt; i++) {
@@ -291,10 +291,8 @@ static void test_height_scale_splat(void)
             for (size_t q = 0; q < (size_t)s.w * s.h; q++) t.z[q] = (float)(s.z[q] * ks[i]);
             for (size_t q = 0; q < s.nroads; q++) CHECK(sc_add_road(&t, s.roads[q].width, s.roads[q].xy, s.roads[q].n) == 0);
             ss_image a, b;
-            rs_splat_options oz = o;
-            oz.z_scale = ks[i];
             CHECK(ss_splat(ctx, &t, &o, 0, &a) == RS_OK); /* samples times k */
-            CHECK(ss_splat(ctx, &s, &oz, 0, &b) == RS_OK); /* z-scale k */
+            CHECK(ss_splat_z(ctx, &s, &o, ks[i], 0, &b) == RS_OK); /* z-scale k */
             if (a.wt && b.wt) {
                 size_t n = (size_t)a.w * a.h;
                 CHECKF(memcmp(a.wt, ref.wt, n * 2) == 0, "heights x%g changed the weight", ks[i]);
@@ -321,7 +319,7 @@ static void test_cell_scale(void)
             for (int mode = 0; mode < 2; mode++) {
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
-                o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+                o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = 4;
                 ss_image ref;
                 CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
@@ -367,8 +365,9 @@ static rs_result mesh_at(const float *z, uint32_t W, uint32_t H, double zs, doub
     rs_roam *roam = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.z_scale = zs;
+    rs_dem_frame fr = { 0, zs, 0, 0 };
     rs_result r = rs_dem_create(ctx, W, H, z, &dem);
+    if (!r) r = rs_dem_set_frame(ctx, dem, &fr);
     if (!r) r = rs_roam_create(ctx, dem, &o, &roam);
     if (!r) r = rs_roam_refine_error(ctx, roam, err);
     if (!r) {

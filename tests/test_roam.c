@@ -58,13 +58,22 @@ static int check(const float *z, uint32_t W, uint32_t H, double cs, double zs, c
     return ok;
 }
 
+/* A landscape on a new DEM with cell size cs and z-scale zs (0: 1). */
+static rs_roam *make_f(rs_ctx *ctx, const float *z, uint32_t W, uint32_t H, double cs, double zs,
+                       const rs_roam_options *o, rs_dem **dem)
+{
+    rs_roam *r = NULL;
+    rs_dem_frame fr = { cs, zs, 0, 0 };
+    if (rs_dem_create(ctx, W, H, z, dem) != RS_OK) return NULL;
+    if (rs_dem_set_frame(ctx, *dem, &fr) != RS_OK) { rs_dem_free(ctx, *dem); *dem = NULL; return NULL; }
+    if (rs_roam_create(ctx, *dem, o, &r) != RS_OK) { rs_dem_free(ctx, *dem); *dem = NULL; return NULL; }
+    return r;
+}
+
 static rs_roam *make(rs_ctx *ctx, const float *z, uint32_t W, uint32_t H, const rs_roam_options *o,
                      rs_dem **dem)
 {
-    rs_roam *r = NULL;
-    if (rs_dem_create(ctx, W, H, z, dem) != RS_OK) return NULL;
-    if (rs_roam_create(ctx, *dem, o, &r) != RS_OK) { rs_dem_free(ctx, *dem); *dem = NULL; return NULL; }
-    return r;
+    return make_f(ctx, z, W, H, 0, 0, o, dem);
 }
 
 enum { DEM_CONST, DEM_SPIKE, DEM_CHECKER, DEM_RIDGE, DEM_FRACTAL, DEM_NODATA, DEM_COUNT };
@@ -172,8 +181,7 @@ static void test_error_sweep(rs_ctx *ctx, int kind, uint32_t W, uint32_t H, doub
     rs_dem *dem = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = cs; o.z_scale = zs;
-    rs_roam *r = make(ctx, z, W, H, &o, &dem);
+    rs_roam *r = make_f(ctx, z, W, H, cs, zs, &o, &dem);
     CHECK(r != NULL);
     if (!r) { free(z); return; }
     static const double Es[] = { 0.0, 0.01, 0.1, 0.5, 1.0, 2.5, 5.0, 10.0, 40.0, 1e9 };
@@ -224,11 +232,9 @@ static void test_scaling_and_determinism(rs_ctx *ctx)
     for (size_t k = 0; k < (size_t)W * H; k++) zk[k] = z[k] * 4.0f;
     rs_dem *d1 = NULL, *d2 = NULL;
     rs_roam *r1 = make(ctx, z, W, H, NULL, &d1), *r2 = make(ctx, zk, W, H, NULL, &d2);
-    rs_roam_options o3;
-    memset(&o3, 0, sizeof o3);
-    o3.z_scale = 3.0;
-    rs_roam *r3 = NULL;
-    CHECK(r1 && r2 && d1 && rs_roam_create(ctx, d1, &o3, &r3) == RS_OK);
+    rs_dem *dz3 = NULL;
+    rs_roam *r3 = make_f(ctx, z, W, H, 0, 3.0, NULL, &dz3);
+    CHECK(r1 && r2 && d1 && r3);
     int same = 1, same3 = 1;
     static const double Es[] = { 0.05, 0.3, 1.0, 3.0, 9.0 };
     for (size_t e = 0; r1 && r2 && r3 && e < 5; e++) {
@@ -244,6 +250,7 @@ static void test_scaling_and_determinism(rs_ctx *ctx)
     CHECK(same);   /* heights x4 at 4E: same mesh */
     CHECK(same3);  /* z_scale 3 at 3E: same mesh */
     rs_roam_free(ctx, r3);
+    rs_dem_free(ctx, dz3);
     /* determinism: a second context, a second build, identical bytes */
     rs_ctx *ctx2 = NULL;
     rs_ctx_create(NULL, NULL, &ctx2);
@@ -315,9 +322,8 @@ static void test_view(rs_ctx *ctx)
     rs_dem *d = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = 10.0;
     o.patch_size = 64;
-    rs_roam *r = make(ctx, z, W, H, &o, &d);
+    rs_roam *r = make_f(ctx, z, W, H, 10.0, 0, &o, &d);
     CHECK(r != NULL);
     if (!r) { free(z); return; }
     rs_roam_view v;
@@ -396,8 +402,7 @@ static void test_extract_options(rs_ctx *ctx)
     rs_dem *d = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = 2.0; o.z_scale = 0.5;
-    rs_roam *r = make(ctx, z, W, H, &o, &d);
+    rs_roam *r = make_f(ctx, z, W, H, 2.0, 0.5, &o, &d);
     CHECK(r != NULL);
     if (!r) { free(z); return; }
     CHECK_EQ_INT(rs_roam_refine_error(ctx, r, 0.5), RS_OK);
@@ -505,12 +510,18 @@ static void test_errors(rs_ctx *ctx)
     CHECK_EQ_INT(rs_roam_create(ctx, d, NULL, NULL), RS_ERR_INVALID_ARG);
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = -1;
+    rs_dem_frame fr = { -1, 0, 0, 0 };
+    CHECK_EQ_INT(rs_dem_set_frame(ctx, d, &fr), RS_ERR_INVALID_ARG);
+    CHECK(strstr(rs_ctx_message(ctx), "cell size") != NULL);
+    fr.cell_size = 1; fr.z_scale = NAN;
+    CHECK_EQ_INT(rs_dem_set_frame(ctx, d, &fr), RS_ERR_INVALID_ARG);
+    fr.z_scale = -2;
+    CHECK_EQ_INT(rs_dem_set_frame(ctx, d, &fr), RS_OK);
     CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_INVALID_ARG);
-    CHECK(strstr(rs_ctx_message(ctx), "cell_size") != NULL);
-    o.cell_size = 1; o.z_scale = NAN;
-    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_INVALID_ARG);
-    o.z_scale = 1; o.patch_size = 3;
+    CHECK(strstr(rs_ctx_message(ctx), "z-scale") != NULL);
+    fr.z_scale = 1;
+    CHECK_EQ_INT(rs_dem_set_frame(ctx, d, &fr), RS_OK);
+    o.patch_size = 3;
     CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_INVALID_ARG);
     o.patch_size = 0; o.pool_nodes = 0xFFFFFFFFu;
     CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &r), RS_ERR_LIMIT);

@@ -110,8 +110,8 @@ static void test_straight_roads(void)
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
                 o.texels = 4;
-                o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
-                o.road_cell = c;
+                o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+                o.grid.road_cell = c;
                 image im;
                 CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
                 double dw, ee;
@@ -221,12 +221,12 @@ static void test_scene_seams(void)
         rs_splat_options o;
         memset(&o, 0, sizeof o);
         o.texels = 2;
-        o.road_cell = 0.5;
-        o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        o.grid.road_cell = 0.5;
+        o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         rs_road_grid *g = NULL;
         CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
-        rs_grid_stats st;
-        rs_road_grid_stats(g, &st);
+        rs_road_grid_stats st;
+        rs_road_grid_get_stats(g, &st);
         CHECK(st.k == 2 && st.boundary_cells > 100 && st.by_type[RS_TILE_OUTER] > 0 && st.by_type[RS_TILE_INNER] > 0);
         CHECK_EQ_INT(st.road_cells, st.interior_cells + st.boundary_cells);
         double seam = rs_test_seam_error(g, 32);
@@ -246,12 +246,13 @@ static void scene_vs_truth(const char *name, sc_scene *sc, unsigned T, double ma
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
     CHECK(rs_dem_create(ctx, sc->w, sc->h, sc->z, &dem) == RS_OK);
+    rs_dem_frame fr = { sc->cell_size, 0, 0, 0 };
+    CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
     CHECK(rs_roads_create(ctx, &roads) == RS_OK);
     for (size_t i = 0; i < sc->nroads; i++)
         CHECK(rs_roads_add(ctx, roads, NULL, sc->roads[i].width, sc->roads[i].xy, sc->roads[i].n) == RS_OK);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = sc->cell_size;
     o.texels = T;
     image im;
     CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
@@ -267,8 +268,8 @@ static void scene_vs_truth(const char *name, sc_scene *sc, unsigned T, double ma
                ours.edge_error, hard.edge_error);
     rs_road_grid *g = NULL;
     CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
-    rs_grid_stats st;
-    rs_road_grid_stats(g, &st);
+    rs_road_grid_stats st;
+    rs_road_grid_get_stats(g, &st);
     /* every drawn edge lies within half a road cell of the true one */
     CHECKF(ours.edge_error <= 0.5 * st.road_cell, "%s: edge error %.4f m, road cell %.4f m", name, ours.edge_error,
            st.road_cell);
@@ -318,9 +319,9 @@ static void test_textures(void)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
-    o.terrain_texture = &ti;
-    o.road_texture = &ri;
-    o.texture_scale = 4;
+    o.surface.terrain_texture = &ti;
+    o.surface.road_texture = &ri;
+    o.surface.texture_scale = 4;
     image im;
     CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
     size_t n = (size_t)im.w * im.h, terrain_ok = 1, road_px = 0, red = 0, blue = 0;
@@ -339,7 +340,7 @@ static void test_textures(void)
     CHECK(red > road_px / 5 && blue > road_px / 5);
     image_free(&im);
     rs_image empty = { 0, 0, NULL };
-    o.road_texture = &empty;
+    o.surface.road_texture = &empty;
     uint32_t w, h;
     CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
     rs_roads_free(ctx, roads);
@@ -407,9 +408,9 @@ static void test_translation(void)
             rs_splat_options o;
             memset(&o, 0, sizeof o);
             o.texels = 4;
-            o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
-            o.origin_x = shifts[k][0];
-            o.origin_y = shifts[k][1];
+            o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+            rs_dem_frame fr = { 0, 0, shifts[k][0], shifts[k][1] };
+            CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
             image im;
             CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
             if (k == 0 && mode == 0) {
@@ -426,11 +427,9 @@ static void test_translation(void)
         rs_roads_free(ctx, roads);
     }
     image_free(&ref);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.origin_x = NAN;
-    uint32_t w, h;
-    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
+    rs_dem_frame bad = { 0, 0, NAN, 0 };
+    CHECK(rs_dem_set_frame(ctx, dem, &bad) == RS_ERR_INVALID_ARG);
+    CHECK(strstr(rs_ctx_message(ctx), "origin") != NULL);
     rs_dem_free(ctx, dem);
 }
 
@@ -558,7 +557,7 @@ static void test_extreme_roads(void)
         rs_splat_options o;
         memset(&o, 0, sizeof o);
         o.texels = 2;
-        o.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+        o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         image im;
         CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
         /* the far road still crosses the map at y = 4.1 */
@@ -586,20 +585,37 @@ static void test_bad_options(void)
     rs_splat_options o;
     uint32_t w, h;
     memset(&o, 0, sizeof o);
-    o.cell_size = -1;
+    rs_dem_frame fr;
+    memset(&fr, 0, sizeof fr);
+    const double bad_cs[] = { -1, NAN, 1e-310, 5e-324, 1e308, INFINITY };
+    for (size_t i = 0; i < sizeof bad_cs / sizeof bad_cs[0]; i++) {
+        fr.cell_size = bad_cs[i];
+        CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_ERR_INVALID_ARG);
+        CHECK(strstr(rs_ctx_message(ctx), "cell size") != NULL);
+    }
+    fr.cell_size = 0;
+    fr.z_scale = 1e300;
+    CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_ERR_INVALID_ARG);
+    CHECK(strstr(rs_ctx_message(ctx), "z-scale") != NULL);
+    memset(&o, 0, sizeof o);
+    o.surface.texture_scale = 1e-308;
     CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
-    CHECK(strstr(rs_ctx_message(ctx), "cell size") != NULL);
-    o.cell_size = NAN;
+    CHECK(strstr(rs_ctx_message(ctx), "texture scale") != NULL);
+    memset(&o, 0, sizeof o);
+    o.coverage.transition_px = -1;
     CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
     memset(&o, 0, sizeof o);
-    o.transition = 100;
+    o.coverage.edges = (rs_edge_mode)7;
     CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
     memset(&o, 0, sizeof o);
-    o.alpha_res = 1;
+    o.coverage.transition_px = 100;
+    CHECK(rs_splat_size(ctx, dem, &o, &w, &h) == RS_ERR_INVALID_ARG);
+    memset(&o, 0, sizeof o);
+    o.coverage.alpha_res = 1;
     rs_road_grid *g = NULL;
     CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_ERR_INVALID_ARG && g == NULL);
     memset(&o, 0, sizeof o);
-    o.road_cell = 1e-9;
+    o.grid.road_cell = 1e-9;
     CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_ERR_LIMIT && g == NULL);
     /* output limit */
     rs_limits lim;

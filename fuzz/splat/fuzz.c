@@ -83,14 +83,14 @@ static int corrupt(rs_splat_options *o, uint8_t which)
     case 1: o->cell_size = -1; break;
     case 2: o->z_scale = INFINITY; break;
     case 3: o->texels = 2000; break;
-    case 4: o->buffer = (rs_buffer_mode)7; break;
-    case 5: o->alpha_res = 1; break;
-    case 6: o->alpha_res = 5000; break;
+    case 4: o->grid.buffer = (rs_buffer_mode)7; break;
+    case 5: o->coverage.alpha_res = 1; break;
+    case 6: o->coverage.alpha_res = 5000; break;
     case 7: o->origin_x = NAN; break;
-    case 8: o->road_cell = -1; break;
-    case 9: o->jitter = 1; o->jitter_amount = 2; break;
+    case 8: o->grid.road_cell = -1; break;
+    case 9: o->jitter = 1; o->coverage.jitter_amount = 2; break;
     case 10: o->transition = INFINITY; break;
-    default: o->texture_scale = NAN; break;
+    default: o->surface.texture_scale = NAN; break;
     }
     return 1;
 }
@@ -103,23 +103,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 1 + (flags & 3);
-    o.buffer = flags & 4 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+    o.grid.buffer = flags & 4 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
     o.cell_size = next(&rd) / 16.0;
     uint8_t zb = next(&rd);
     o.z_scale = zb ? (zb - 128) / 16.0 : 0;
-    o.alpha_res = next(&rd) % 16;
+    o.coverage.alpha_res = next(&rd) % 16;
     o.transition = (int8_t)next(&rd) / 8.0;
     uint8_t rc_b = next(&rd);
     const double cs = o.cell_size > 0 ? o.cell_size : 1;
-    o.road_cell = rc_b == 0 ? 0 : rc_b >= 240 ? cs * 1e-6 * (rc_b - 239) : cs / (rc_b % 16 + 1);
+    o.grid.road_cell = rc_b == 0 ? 0 : rc_b >= 240 ? cs * 1e-6 * (rc_b - 239) : cs / (rc_b % 16 + 1);
     uint8_t jb = next(&rd);
-    if (flags & 8) { o.jitter = 1u + jb; o.jitter_amount = jb / 255.0; }
+    if (flags & 8) { o.jitter = 1u + jb; o.coverage.jitter_amount = jb / 255.0; }
     o.origin_x = (int8_t)next(&rd) * 8.0;
     o.origin_y = (int8_t)next(&rd) * 8.0;
     const uint8_t probe = next(&rd);
     /* Invalid by construction: alpha_res 1, a transition wider than half the
      * alpha-map (defaults: 32 and 2), or a corrupted field (below). */
-    int invalid = o.alpha_res == 1 || (o.transition ? o.transition : 2) > (o.alpha_res ? o.alpha_res : 32) / 2.0;
+    int invalid = o.coverage.alpha_res == 1 || (o.transition ? o.transition : 2) > (o.coverage.alpha_res ? o.coverage.alpha_res : 32) / 2.0;
 
     float *z = malloc((size_t)W * H * sizeof *z);
     if (!z) return 0;
@@ -148,9 +148,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         tex_px[0] = make_texture(&rd, &tex[0]);
         tex_px[1] = make_texture(&rd, &tex[1]);
         if (!tex_px[0] || !tex_px[1]) goto out;
-        o.terrain_texture = &tex[0];
-        o.road_texture = &tex[1];
-        o.texture_scale = 0.5 + (tex_px[0][0] & 15);
+        o.surface.terrain_texture = &tex[0];
+        o.surface.road_texture = &tex[1];
+        o.surface.texture_scale = 0.5 + (tex_px[0][0] & 15);
     }
 
     const double extent = (W > H ? W : H) * cs;
@@ -181,8 +181,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     REQUIRE(r == RS_OK || r == RS_ERR_INVALID_ARG || r == RS_ERR_LIMIT || r == RS_ERR_NOMEM ||
             r == RS_ERR_CANCELLED);
     if (r != RS_OK) { REQUIRE(grid == NULL); goto out; }
-    rs_grid_stats gs;
-    rs_road_grid_stats(grid, &gs);
+    rs_road_grid_stats gs;
+    rs_road_grid_get_stats(grid, &gs);
     REQUIRE(gs.interior_cells + gs.boundary_cells == gs.road_cells);
     if (nroads == 0) REQUIRE(gs.road_cells == 0);
 

@@ -39,8 +39,8 @@ static int measure(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const 
         tb[i] = tm_now_ms() - t0;
         if (splat && rs_splat(ctx, dem, g, o, rgba, n * 4, NULL, 0)) return -1;
         t[i] = tm_now_ms() - t0;
-        rs_grid_stats st;
-        rs_road_grid_stats(g, &st);
+        rs_road_grid_stats st;
+        rs_road_grid_get_stats(g, &st);
         *bytes = st.bytes;
         rs_road_grid_free(ctx, g);
     }
@@ -135,8 +135,8 @@ int main(int argc, char **argv)
                                           "RGBA, terrain texture given", "RGBA, road texture given",
                                           "RGBA, both textures given" };
             rs_splat_options q = o;
-            if (v == 2 || v == 4) q.terrain_texture = &img;
-            if (v == 3 || v == 4) q.road_texture = &img;
+            if (v == 2 || v == 4) q.surface.terrain_texture = &img;
+            if (v == 3 || v == 4) q.surface.road_texture = &img;
             double t[RUNS];
             for (int i = 0; i < RUNS; i++) {
                 double t0 = tm_now_ms();

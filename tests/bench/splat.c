@@ -88,7 +88,7 @@ static int measure_error(bench *b, point *p)
 static int run(bench *b, const rs_splat_options *o, point *p)
 {
     double t[RUNS];
-    rs_grid_stats st;
+    rs_road_grid_stats st;
     if (!p) return -1;
     for (int i = 0; i < RUNS; i++) {
         rs_road_grid *g = NULL;
@@ -99,7 +99,7 @@ static int run(bench *b, const rs_splat_options *o, point *p)
             return -1;
         }
         t[i] = tm_now_ms() - t0;
-        rs_road_grid_stats(g, &st);
+        rs_road_grid_get_stats(g, &st);
         rs_road_grid_free(b->ctx, g);
     }
     p->ms = tm_median(t, RUNS);
@@ -175,8 +175,8 @@ int main(int argc, char **argv)
         const double cells[] = { 1.25, 0.625, 0.3125, 0.15625 };
         for (size_t i = 0; i < sizeof cells / sizeof cells[0]; i++) {
             rs_splat_options q = o;
-            q.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
-            q.road_cell = cells[i];
+            q.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
+            q.grid.road_cell = cells[i];
             snprintf(label, sizeof label, "road cell %.4g m", cells[i]);
             snprintf(tag, sizeof tag, "K%u", (unsigned)(b.sc.cell_size / cells[i] + 0.5));
             if (run(&b, &q, add_point(&ps, mode ? "dilate" : "distance", tag, label))) return 1;
@@ -185,7 +185,7 @@ int main(int argc, char **argv)
     const unsigned res[] = { 8, 16, 32, 64 };
     for (size_t i = 0; i < sizeof res / sizeof res[0]; i++) {
         rs_splat_options q = o;
-        q.alpha_res = res[i];
+        q.coverage.alpha_res = res[i];
         snprintf(label, sizeof label, "alpha-res %u (transition 2 px)", res[i]);
         snprintf(tag, sizeof tag, "r%u", res[i]);
         if (run(&b, &q, add_point(&ps, "alpha-res", tag, label))) return 1;

@@ -1,0 +1,45 @@
+/* Splat options: validation and defaults, shared by the road grid and the
+ * splatter (one meaning per field; see include/roadsplat.h). */
+#include "internal.h"
+#include "mask.h"
+
+#include <math.h>
+#include <string.h>
+
+rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out)
+{
+    rs_splat_options o;
+    if (in) o = *in;
+    else memset(&o, 0, sizeof o);
+    rs_coverage_options *c = &o.coverage;
+    rs_surface_options *f = &o.surface;
+    if (o.texels == 0) o.texels = 8;
+    if (c->alpha_res == 0) c->alpha_res = 32;
+    if (c->transition_px == 0) c->transition_px = 2;
+    if (c->jitter_amount == 0) c->jitter_amount = 0.5;
+    if (f->texture_scale == 0) f->texture_scale = 10;
+    if (o.texels > 1024) return rs__fail(ctx, RS_ERR_INVALID_ARG, "texels %u must be 1..1024", o.texels);
+    if (o.grid.buffer != RS_BUFFER_DISTANCE && o.grid.buffer != RS_BUFFER_DILATE)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown buffer mode %d", (int)o.grid.buffer);
+    if (!(o.grid.road_cell >= 0 && o.grid.road_cell <= 1e9))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "road cell %g must be in [0, 1e9] metres (0 = automatic)",
+                        o.grid.road_cell);
+    if (c->edges != RS_EDGES_ALPHAMAP && c->edges != RS_EDGES_ANALYTIC)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown edge mode %d", (int)c->edges);
+    if (c->alpha_res < 2 || c->alpha_res > RS__MAX_ALPHA_RES)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "alpha-map resolution %u must be 2..%u", c->alpha_res,
+                        RS__MAX_ALPHA_RES);
+    if (!(c->transition_px > 0 && c->transition_px <= c->alpha_res / 2.0))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "transition %g px must be > 0 and at most half the alpha-map (%u px)",
+                        c->transition_px, c->alpha_res / 2);
+    if (!(c->jitter_amount > 0 && c->jitter_amount <= 1))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "jitter amount %g must be in (0,1]", c->jitter_amount);
+    if (!(f->texture_scale >= 1e-6 && f->texture_scale <= 1e9))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "texture scale %g must be in [1e-6, 1e9] metres", f->texture_scale);
+    const rs_image *tex[2] = { f->terrain_texture, f->road_texture };
+    for (int i = 0; i < 2; i++)
+        if (tex[i] && (!tex[i]->rgba || tex[i]->width == 0 || tex[i]->height == 0))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s texture is empty", i ? "road" : "terrain");
+    *out = o;
+    return RS_OK;
+}

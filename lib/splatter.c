@@ -1,0 +1,241 @@
+/* The splatter: validation and the per-splatter tables once, then any
+ * window of the output in pieces, each through the four stages
+ * (lib/splatter.h; docs/design.md "Stages"). */
+#include "splatter.h"
+#include "dem.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Output size for options already checked by rs__splat_defaults. */
+static rs_result output_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *o, uint32_t *width,
+                             uint32_t *height)
+{
+    uint64_t w = (uint64_t)(dem->width - 1) * o->texels, h = (uint64_t)(dem->height - 1) * o->texels, px;
+    if (!rs__mul_u64(w, h, &px) || px > ctx->limits.max_pixels || w > UINT32_MAX || h > UINT32_MAX)
+        return rs__fail(ctx, RS_ERR_LIMIT, "output of %llu x %llu pixels exceeds the limit of %llu pixels",
+                        (unsigned long long)w, (unsigned long long)h, (unsigned long long)ctx->limits.max_pixels);
+    *width = (uint32_t)w;
+    *height = (uint32_t)h;
+    return RS_OK;
+}
+
+rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, uint32_t *width,
+                        uint32_t *height)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !width || !height) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_size");
+    rs_splat_options o;
+    rs_result r = rs__splat_defaults(ctx, opts, &o);
+    if (!r) r = output_size(ctx, dem, &o, width, height);
+    if (!r) rs__ok(ctx);
+    return r;
+}
+
+/* A grid is only valid for the DEM, frame and options it was built with. */
+static rs_result check_grid(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *g, const rs_splat_options *o)
+{
+    const char *what = NULL;
+    if (g->dem_w != dem->width || g->dem_h != dem->height) what = "another DEM size";
+    else if (g->frame.cell_size != dem->frame.cell_size) what = "another cell size";
+    else if (g->frame.origin_x != dem->frame.origin_x || g->frame.origin_y != dem->frame.origin_y)
+        what = "another origin";
+    else if (g->edges != o->coverage.edges) what = "another edge mode";
+    else if (g->edges == RS_EDGES_ALPHAMAP &&
+             (g->texels != o->texels || g->opts.buffer != o->grid.buffer || g->opts.road_cell != o->grid.road_cell))
+        what = "other texels or grid options";
+    if (what) return rs__fail(ctx, RS_ERR_INVALID_ARG, "road grid was built for %s", what);
+    return RS_OK;
+}
+
+void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
+{
+    if (!ctx || !s) return;
+    rs__alphamap_tables_free(ctx, s);
+    rs__free(ctx, s->z_own);
+    rs_road_grid_free(ctx, s->grid_own);
+    rs__free(ctx, s);
+}
+
+rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
+                             const rs_splat_options *opts, rs_splatter **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splatter_create: out is NULL");
+    *out = NULL;
+    if (!dem || (!roads) == (!grid))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splatter_create: needs a DEM and exactly one of roads and grid");
+    rs_splat_options o;
+    rs_result r = rs__splat_defaults(ctx, opts, &o);
+    uint32_t w = 0, h = 0;
+    if (!r) r = output_size(ctx, dem, &o, &w, &h);
+    if (!r && grid) r = check_grid(ctx, dem, grid, &o);
+    if (r) return r;
+    rs_splatter *s = rs__calloc(ctx, 1, sizeof *s);
+    if (!s) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the splatter");
+    s->dem = dem;
+    s->o = o;
+    s->out_w = w;
+    s->out_h = h;
+    s->texel_m = dem->frame.cell_size / o.texels;
+    if (roads) {
+        /* the grid's progress is the caller's: it is the slow part */
+        r = rs_road_grid_build(ctx, dem, roads, &o, &s->grid_own);
+        s->grid = s->grid_own;
+    } else s->grid = grid;
+    rs__mask_table_build(&s->mt);
+    if (!r && o.coverage.edges == RS_EDGES_ALPHAMAP) r = rs__alphamap_tables_build(ctx, s);
+    int nodata = 0;
+    rs_dem_height_range(dem, &s->zmin, &s->zrange, &nodata);
+    s->zrange -= s->zmin;
+    s->z = dem->z;
+    if (!r && nodata) {
+        r = rs__dem_fill_nodata(ctx, dem, &s->z_own);
+        s->z = s->z_own;
+    }
+    if (r) {
+        rs_splatter_free(ctx, s);
+        return r;
+    }
+    double zen = (90.0 - 45.0) * RS__PI / 180.0;
+    s->sun_az = fmod(360.0 - 315.0 + 90.0, 360.0) * RS__PI / 180.0;
+    s->cos_zen = cos(zen);
+    s->sin_zen = sin(zen);
+    *out = s;
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+void rs_splatter_size(const rs_splatter *s, uint32_t *width, uint32_t *height)
+{
+    if (width) *width = s ? s->out_w : 0;
+    if (height) *height = s ? s->out_h : 0;
+}
+
+const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid : NULL; }
+
+/* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window. */
+#define PIECE_COLS 2048u
+#define PIECE_PIXELS (1u << 18)
+
+typedef struct scratch {
+    double *cov;
+    uint16_t *q;
+    float *tc, *sc, *trow0, *trow1;
+} scratch;
+
+static void scratch_free(rs_ctx *ctx, scratch *b)
+{
+    rs__free(ctx, b->cov);
+    rs__free(ctx, b->q);
+    rs__free(ctx, b->tc);
+    rs__free(ctx, b->sc);
+    rs__free(ctx, b->trow0);
+    rs__free(ctx, b->trow1);
+}
+
+static double now(const rs_splat_profile *pf)
+{
+    return pf && pf->clock_ms ? pf->clock_ms(pf->clock_user) : 0;
+}
+
+rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                          uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
+                          rs_splat_profile *profile)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!s || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_window");
+    if (w == 0 || h == 0 || x0 >= s->out_w || y0 >= s->out_h || w > s->out_w - x0 || h > s->out_h - y0)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "window %u,%u %ux%u is empty or outside the %ux%u image", x0, y0, w,
+                        h, s->out_w, s->out_h);
+    if (rgba_stride / 4 < w)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA row stride %zu bytes, need %zu", rgba_stride,
+                        (size_t)w * 4);
+    if (weight && weight_stride < w)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight row stride %zu values, need %u", weight_stride, w);
+    const uint32_t T = s->o.texels;
+    uint32_t cols = w < PIECE_COLS ? w : PIECE_COLS;
+    uint32_t max_rows = PIECE_PIXELS / cols;
+    if (max_rows > T) max_rows = T;
+    if (max_rows > h) max_rows = h;
+    size_t npx = (size_t)cols * max_rows, ncol = (size_t)cols / T + 3;
+    scratch b;
+    b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
+    b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
+    b.tc = rs__alloc_array(ctx, npx * 3, sizeof *b.tc);
+    b.sc = rs__alloc_array(ctx, npx * 3, sizeof *b.sc);
+    b.trow0 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow0);
+    b.trow1 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow1);
+    if (!b.cov || !b.q || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
+        scratch_free(ctx, &b);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", npx);
+    }
+    rs__piece p;
+    memset(&p, 0, sizeof p);
+    p.cov = b.cov;
+    p.q = b.q;
+    p.tc = b.tc;
+    p.sc = b.sc;
+    p.trow[0] = b.trow0;
+    p.trow[1] = b.trow1;
+    const int analytic = s->o.coverage.edges == RS_EDGES_ANALYTIC;
+    for (uint32_t y = y0; y < y0 + h;) {
+        p.crow = y / T;
+        uint32_t row_end = (p.crow + 1) * T;
+        if (row_end > y0 + h) row_end = y0 + h;
+        p.y0 = y;
+        p.rows = row_end - y < max_rows ? row_end - y : max_rows;
+        for (uint32_t x = x0; x < x0 + w; x += cols) {
+            p.x0 = x;
+            p.w = x0 + w - x < cols ? x0 + w - x : cols;
+            double t0 = now(profile);
+            if (analytic) rs__coverage_analytic(s, &p);
+            else rs__coverage_alphamap(s, &p);
+            rs__coverage_quantise(&p);
+            double t1 = now(profile);
+            rs__surface(s, &p);
+            double t2 = now(profile);
+            rs__overlays(s, &p);
+            double t3 = now(profile);
+            rs__composite(&p, rgba + (size_t)(p.y0 - y0) * rgba_stride + (size_t)(p.x0 - x0) * 4, rgba_stride,
+                          weight ? weight + (size_t)(p.y0 - y0) * weight_stride + (p.x0 - x0) : NULL,
+                          weight_stride);
+            if (profile) {
+                double t4 = now(profile);
+                profile->coverage_ms += t1 - t0;
+                profile->surface_ms += t2 - t1;
+                profile->overlays_ms += t3 - t2;
+                profile->composite_ms += t4 - t3;
+                profile->pixels += (uint64_t)p.rows * p.w;
+                profile->road_pixels += p.road_pixels;
+            }
+        }
+        y += p.rows;
+        if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h)) {
+            scratch_free(ctx, &b);
+            return rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
+        }
+    }
+    scratch_free(ctx, &b);
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,
+                   uint8_t *rgba, size_t rgba_size, uint16_t *weight, size_t weight_count)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !grid || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat");
+    rs_splatter *s;
+    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, opts, &s);
+    if (r) return r;
+    size_t npx = (size_t)s->out_w * s->out_h;
+    if (rgba_size / 4 < npx)
+        r = rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA buffer of %zu bytes, need %zu", rgba_size, npx * 4);
+    else if (weight && weight_count < npx)
+        r = rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight buffer of %zu values, need %zu", weight_count, npx);
+    else
+        r = rs_splat_window(ctx, s, 0, 0, s->out_w, s->out_h, rgba, (size_t)s->out_w * 4, weight, s->out_w, NULL);
+    rs_splatter_free(ctx, s);
+    return r;
+}

@@ -1,0 +1,60 @@
+/* Private: the splatter and its stages (docs/design.md, "Stages").
+ *
+ * rs_splat_window (lib/splatter.c) cuts its window into pieces of at most a
+ * few hundred thousand pixels, each inside one DEM-cell row, and runs the
+ * four stages on each piece in order. A stage reads what the earlier ones
+ * wrote into the piece and never recomputes it. A pixel's value depends
+ * only on its own coordinates, so any cut gives the same bytes. */
+#ifndef RS_SPLATTER_H
+#define RS_SPLATTER_H
+#include "internal.h"
+#include "mask.h"
+#include "roadgrid.h"
+
+/* Integral tables of one alpha-map (lib/coverage_alphamap.c). */
+typedef struct rs__alpha_table {
+    uint32_t n;    /* res + 1 samples per side */
+    double h2;     /* area of one alpha-map pixel in cell units */
+    float *f;      /* samples */
+    double *s;     /* S[i][j]: integral over [0,j]x[0,i] (pixel units) */
+    double *col;   /* integral of f(j, .) over [0,i] */
+    double *row;   /* integral of f(., i) over [0,j] */
+} rs__alpha_table;
+
+struct rs_splatter {
+    const rs_dem *dem;
+    rs_splat_options o;        /* validated, defaults filled */
+    uint32_t out_w, out_h;
+    const rs_road_grid *grid;  /* in use */
+    rs_road_grid *grid_own;    /* when built here */
+    rs__mask_table mt;
+    rs__alpha_table tab[3];    /* EDGE, INNER, OUTER (alpha-map edges) */
+    const float *z;            /* heights, nodata filled (lib/dem.c policy) */
+    float *z_own;
+    double zmin, zrange;       /* DEM units, valid samples */
+    double cos_zen, sin_zen, sun_az; /* light: azimuth 315, altitude 45 */
+    double texel_m;            /* cell_size / texels */
+};
+
+/* One piece of a window: columns [x0, x0+w), image rows [y0, y0+rows), all
+ * inside DEM-cell row crow. Buffers are rows x w, row-major. */
+typedef struct rs__piece {
+    uint32_t x0, w, y0, rows, crow;
+    double *cov;      /* coverage: road weight R in [0,1] */
+    uint16_t *q;      /* coverage: R quantised to 0..65535 (the weight output) */
+    float *tc, *sc;   /* surface: terrain and road colour, 3 per pixel */
+    float *trow[2];   /* surface: terrain colour of sample rows crow, crow+1, columns c0.. */
+    uint32_t c0;
+    uint64_t road_pixels;
+} rs__piece;
+
+/* Stages. */
+rs_result rs__alphamap_tables_build(rs_ctx *ctx, rs_splatter *s);
+void rs__alphamap_tables_free(rs_ctx *ctx, rs_splatter *s);
+void rs__coverage_alphamap(const rs_splatter *s, rs__piece *p);
+void rs__coverage_analytic(const rs_splatter *s, rs__piece *p);
+void rs__coverage_quantise(rs__piece *p);
+void rs__surface(const rs_splatter *s, rs__piece *p);
+void rs__overlays(const rs_splatter *s, rs__piece *p);
+void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride);
+#endif
