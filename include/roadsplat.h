@@ -145,8 +145,8 @@ typedef struct rs_dem_frame {
 
 /* Set the frame (copied; defaults filled in). Out-of-range values give
  * RS_ERR_INVALID_ARG naming the field, and leave the DEM unchanged. The map
- * extent (W-1)*cell_size and every height times z_scale must fit a float.
- * Set the frame before sharing the DEM between threads. */
+ * extent (W-1)*cell_size must be at most 1e12 m. Set the frame before
+ * sharing the DEM between threads. */
 RS_API rs_result rs_dem_set_frame(rs_ctx *ctx, rs_dem *dem, const rs_dem_frame *frame);
 /* The frame in use, defaults filled in. */
 RS_API void rs_dem_get_frame(const rs_dem *dem, rs_dem_frame *out);

@@ -90,13 +90,6 @@ rs_result rs_dem_set_frame(rs_ctx *ctx, rs_dem *dem, const rs_dem_frame *frame)
     if (!(extent <= 1e12))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "cell size %g m makes the map %g m wide (limit 1e12 m)",
                         f.cell_size, extent);
-    double zmin, zmax;
-    int nd;
-    rs_dem_height_range(dem, &zmin, &zmax, &nd);
-    double zabs = fmax(fabs(zmin), fabs(zmax)) * fabs(f.z_scale);
-    if (!(zabs <= 1e30))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "z-scale %g makes heights up to %g m (limit 1e30 m)", f.z_scale,
-                        zabs);
     dem->frame = f;
     rs__ok(ctx);
     return RS_OK;

@@ -34,10 +34,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_roam *r = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { free(z); return 0; }
     if (rs_dem_create(ctx, W, H, z, &dem) != RS_OK) goto out;
+    const double cs = 1.0 + (tail[3] >> 4);
+    rs_dem_frame fr = { cs, 0, 0, 0 };
+    REQUIRE(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
     rs_roam_options o;
     memset(&o, 0, sizeof o);
     o.pool_nodes = pool;
-    o.cell_size = 1.0 + (tail[3] >> 4);
     if (rs_roam_create(ctx, dem, &o, &r) != RS_OK) goto out;
     rs_result rr;
     if (mode == 0) rr = rs_roam_refine_error(ctx, r, E);
@@ -70,20 +72,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             const float *a = v + 5 * idx[t], *b = v + 5 * idx[t + 1], *c = v + 5 * idx[t + 2];
             area += -((double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1])) / 2;
         }
-        double want = (W - 1) * (H - 1) * o.cell_size * o.cell_size;
+        double want = (W - 1) * (H - 1) * cs * cs;
         REQUIRE(fabs(area - want) <= 1e-6 * want);
         /* conforming: no vertex strictly inside a triangle edge (a crack) */
         unsigned char *isv = calloc((size_t)W * H, 1);
         if (isv) {
             for (size_t k = 0; k < nv; k++) {
-                long gx = lround(v[5 * k] / o.cell_size), gy = lround(v[5 * k + 1] / o.cell_size);
+                long gx = lround(v[5 * k] / cs), gy = lround(v[5 * k + 1] / cs);
                 REQUIRE(gx >= 0 && gy >= 0 && gx < (long)W && gy < (long)H);
                 isv[(size_t)gy * W + (size_t)gx] = 1;
             }
             for (size_t t = 0; t < 3 * (size_t)st.triangles; t++) {
                 const float *a = v + 5 * idx[t], *b = v + 5 * idx[t % 3 == 2 ? t - 2 : t + 1];
-                long ax = lround(a[0] / o.cell_size), ay = lround(a[1] / o.cell_size);
-                long ex = lround(b[0] / o.cell_size) - ax, ey = lround(b[1] / o.cell_size) - ay;
+                long ax = lround(a[0] / cs), ay = lround(a[1] / cs);
+                long ex = lround(b[0] / cs) - ax, ey = lround(b[1] / cs) - ay;
                 long g = labs(ex) > labs(ey) ? labs(ex) : labs(ey); /* bintree edges: axis or diagonal */
                 for (long s = 1; s < g; s++) REQUIRE(!isv[(size_t)(ay + ey / g * s) * W + (size_t)(ax + ex / g * s)]);
             }

@@ -1,4 +1,6 @@
-/* libFuzzer target: the whole splat pipeline on a small random scene.
+/* libFuzzer target: the whole splat pipeline on a small random scene, and
+ * the windowed splatter: a random window must equal the crop of the whole
+ * image (alpha-map or analytic edges, the latter through the road field).
  *
  * Input layout (short input reads as zero bytes):
  *   0,1   DEM width/height - 2, mod 23 (so 2..24 samples per side)
@@ -11,10 +13,13 @@
  *   7     road cell: 0 auto, else cell size / (b%16+1), tiny when b >= 240
  *   8     jitter amount b/255 and seed      9,10  origin (int8)*8 metres
  *   11    corrupted option (mod 12) / cancel point (mod 8); bit 4 short-buffer
- *         probe, bit 5 determinism check (second splat)
+ *         probe, bit 5 determinism check (second splat), bit 6 analytic
+ *         edges, bit 7 window check (window from the 4 bytes after the roads)
  *   then  W*H height bytes (255 NaN, 254 +3e38, 253 -3e38), then roads:
  *         [points-1 mod 8][width/8][coordinate mode] then 2 bytes per point.
+ * Cell size, z-scale and origin are the DEM's frame (rs_dem_set_frame).
  * Findings (abort): an unknown result code, success after an invalid option,
+ * a window that differs from the crop of the whole image,
  * a write outside the buffers sized by rs_splat_size, non-zero weight with no
  * roads, a non-deterministic second splat, an object returned on failure. */
 #include "roadsplat.h"
@@ -76,23 +81,58 @@ static double coord(uint8_t a, uint8_t b, int mode, double extent)
     }
 }
 
-static int corrupt(rs_splat_options *o, uint8_t which)
+/* Returns 1 when an option was corrupted, 2 when the frame was. */
+static int corrupt(rs_splat_options *o, rs_dem_frame *f, uint8_t which)
 {
     switch (which % 12) {
-    case 0: o->cell_size = NAN; break;
-    case 1: o->cell_size = -1; break;
-    case 2: o->z_scale = INFINITY; break;
+    case 0: f->cell_size = NAN; return 2;
+    case 1: f->cell_size = -1; return 2;
+    case 2: f->z_scale = INFINITY; return 2;
     case 3: o->texels = 2000; break;
     case 4: o->grid.buffer = (rs_buffer_mode)7; break;
     case 5: o->coverage.alpha_res = 1; break;
     case 6: o->coverage.alpha_res = 5000; break;
-    case 7: o->origin_x = NAN; break;
+    case 7: f->origin_x = NAN; return 2;
     case 8: o->grid.road_cell = -1; break;
-    case 9: o->jitter = 1; o->coverage.jitter_amount = 2; break;
-    case 10: o->transition = INFINITY; break;
+    case 9: o->coverage.jitter = 1; o->coverage.jitter_amount = 2; break;
+    case 10: o->coverage.transition_px = INFINITY; break;
     default: o->surface.texture_scale = NAN; break;
     }
     return 1;
+}
+
+/* Window [x0,x0+w) x [y0,y0+h) rendered alone equals the crop of the whole. */
+static void check_window(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *o,
+                         reader *rd, const uint8_t *whole, const uint16_t *wwhole, uint32_t ow, uint32_t oh)
+{
+    rs_splatter *sp = NULL;
+    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, o, &sp);
+    REQUIRE(r == RS_OK || r == RS_ERR_NOMEM);
+    if (r) { REQUIRE(sp == NULL); return; }
+    uint32_t x0 = next(rd) % ow, y0 = next(rd) % oh;
+    uint32_t w = 1 + next(rd) % (ow - x0), h = 1 + next(rd) % (oh - y0);
+    size_t stride = (size_t)w * 4 + 12; /* a padded stride must work too */
+    uint8_t *px = malloc(stride * h);
+    uint16_t *wt = malloc(((size_t)w + 3) * h * sizeof *wt);
+    if (px && wt) {
+        memset(px, CANARY, stride * h);
+        r = rs_splat_window(ctx, sp, x0, y0, w, h, px, stride, wt, (size_t)w + 3, NULL);
+        REQUIRE(r == RS_OK || r == RS_ERR_NOMEM);
+        if (r == RS_OK)
+            for (uint32_t y = 0; y < h; y++) {
+                REQUIRE(memcmp(px + y * stride, whole + ((size_t)(y0 + y) * ow + x0) * 4, (size_t)w * 4) == 0);
+                for (size_t k = (size_t)w * 4; k < stride; k++) REQUIRE(px[y * stride + k] == CANARY);
+                if (wwhole)
+                    REQUIRE(memcmp(wt + (size_t)y * (w + 3), wwhole + (size_t)(y0 + y) * ow + x0,
+                                   (size_t)w * sizeof *wt) == 0);
+            }
+        /* outside the image, empty: refused */
+        REQUIRE(rs_splat_window(ctx, sp, x0, y0, w + (ow - x0), h, px, stride, NULL, 0, NULL) == RS_ERR_INVALID_ARG);
+        REQUIRE(rs_splat_window(ctx, sp, x0, y0, 0, h, px, stride, NULL, 0, NULL) == RS_ERR_INVALID_ARG);
+    }
+    free(px);
+    free(wt);
+    rs_splatter_free(ctx, sp);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -101,25 +141,35 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     const uint32_t W = 2 + next(&rd) % 23, H = 2 + next(&rd) % 23;
     const uint8_t flags = next(&rd);
     rs_splat_options o;
+    rs_dem_frame fr;
     memset(&o, 0, sizeof o);
+    memset(&fr, 0, sizeof fr);
     o.texels = 1 + (flags & 3);
     o.grid.buffer = flags & 4 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
-    o.cell_size = next(&rd) / 16.0;
+    fr.cell_size = next(&rd) / 16.0;
     uint8_t zb = next(&rd);
-    o.z_scale = zb ? (zb - 128) / 16.0 : 0;
+    fr.z_scale = zb ? (zb - 128) / 16.0 : 0;
     o.coverage.alpha_res = next(&rd) % 16;
-    o.transition = (int8_t)next(&rd) / 8.0;
+    double tr = (int8_t)next(&rd) / 8.0;
+    if (tr < 0) o.coverage.hard_edge = 1;
+    else o.coverage.transition_px = tr;
     uint8_t rc_b = next(&rd);
-    const double cs = o.cell_size > 0 ? o.cell_size : 1;
+    const double cs = fr.cell_size > 0 ? fr.cell_size : 1;
     o.grid.road_cell = rc_b == 0 ? 0 : rc_b >= 240 ? cs * 1e-6 * (rc_b - 239) : cs / (rc_b % 16 + 1);
     uint8_t jb = next(&rd);
-    if (flags & 8) { o.jitter = 1u + jb; o.coverage.jitter_amount = jb / 255.0; }
-    o.origin_x = (int8_t)next(&rd) * 8.0;
-    o.origin_y = (int8_t)next(&rd) * 8.0;
+    if (flags & 8) {
+        o.coverage.jitter = 1;
+        o.coverage.jitter_seed = 1u + jb;
+        o.coverage.jitter_amount = jb / 255.0;
+    }
+    fr.origin_x = (int8_t)next(&rd) * 8.0;
+    fr.origin_y = (int8_t)next(&rd) * 8.0;
     const uint8_t probe = next(&rd);
+    if (probe & 0x40) o.coverage.edges = RS_EDGES_ANALYTIC;
     /* Invalid by construction: alpha_res 1, a transition wider than half the
      * alpha-map (defaults: 32 and 2), or a corrupted field (below). */
-    int invalid = o.coverage.alpha_res == 1 || (o.transition ? o.transition : 2) > (o.coverage.alpha_res ? o.coverage.alpha_res : 32) / 2.0;
+    int invalid = o.coverage.alpha_res == 1 ||
+                  (tr > 0 ? tr : 2) > (o.coverage.alpha_res ? o.coverage.alpha_res : 32) / 2.0;
 
     float *z = malloc((size_t)W * H * sizeof *z);
     if (!z) return 0;
@@ -143,6 +193,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (rs_ctx_create(NULL, &lim, &ctx) != RS_OK) { free(z); return 0; }
     REQUIRE(rs_dem_create(ctx, W, H, z, &dem) == RS_OK); /* finite or NaN: valid */
     REQUIRE(rs_roads_create(ctx, &roads) == RS_OK);
+    int bad_frame = (flags & 0x80) && corrupt(&o, &fr, probe) == 2;
+    {
+        rs_result fr_r = rs_dem_set_frame(ctx, dem, &fr);
+        REQUIRE(bad_frame ? fr_r == RS_ERR_INVALID_ARG : fr_r == RS_OK);
+        if (bad_frame) goto out;
+    }
 
     if (flags & 0x20) {
         tex_px[0] = make_texture(&rd, &tex[0]);
@@ -161,7 +217,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         double xy[16];
         for (size_t k = 0; k < 2 * n; k++) {
             uint8_t a = next(&rd), b = next(&rd);
-            xy[k] = coord(a, b, mode, extent) + (k & 1 ? o.origin_y : o.origin_x);
+            xy[k] = coord(a, b, mode, extent) + (k & 1 ? fr.origin_y : fr.origin_x);
         }
         if (mode & 4) xy[2 * n - 1] = mode & 8 ? NAN : INFINITY;
         int bad = n < 2 || !(width > 0) || (mode & 4);
@@ -172,7 +228,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     const size_t nroads = rs_roads_count(roads);
 
-    if (flags & 0x80) invalid |= corrupt(&o, probe);
+    if (flags & 0x80) invalid = 1; /* an option was corrupted above */
     cancel_state cancel = { 0, 1u + probe % 8 };
     if (flags & 0x40) { o.progress = cancel_cb; o.progress_user = &cancel; }
 
@@ -185,6 +241,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_road_grid_get_stats(grid, &gs);
     REQUIRE(gs.interior_cells + gs.boundary_cells == gs.road_cells);
     if (nroads == 0) REQUIRE(gs.road_cells == 0);
+    /* the road field answers with a road it holds, or nothing */
+    if (o.coverage.edges == RS_EDGES_ANALYTIC) {
+        rs_road_point rp;
+        if (rs_road_grid_query(grid, W * cs / 2, H * cs / 2, 1e3, &rp)) REQUIRE(rp.road < nroads && rp.distance >= 0);
+    }
 
     uint32_t ow = 0, oh = 0;
     r = rs_splat_size(ctx, dem, &o, &ow, &oh);
@@ -228,6 +289,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (r != RS_OK) goto out;
     if (wout && nroads == 0)
         for (size_t k = 0; k < npx; k++) REQUIRE(weight[k] == 0);
+
+    if (probe & 0x80) check_window(ctx, dem, grid, &o, &rd, rgba, wout, ow, oh);
 
     /* Same inputs, same bytes. */
     if ((probe & 0x20) && !(flags & 0x40)) {

@@ -139,9 +139,9 @@ static int compare_picture(const char *path)
         return -1;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = sc.cell_size;
-    o.z_scale = 0.01;
     o.texels = 8;
+    rs_dem_frame fr = { sc.cell_size, 0.01, 0, 0 };
+    if (rs_dem_set_frame(ctx, dem, &fr)) return -1;
     uint32_t W, H;
     rs_splat_size(ctx, dem, &o, &W, &H);
     size_t n = (size_t)W * H;

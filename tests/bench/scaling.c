@@ -127,8 +127,8 @@ int main(int argc, char **argv)
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
-    o.z_scale = 0.01;
     o.texels = 4;
+    const rs_dem_frame fr5 = { 5, 0.01, 0, 0 }, fr1 = { 1, 0.01, 0, 0 };
     static series S[4];
     const char *names[4][3] = {
         { "map", "DEM side (samples)", "city scene, 5 m cells, ~1000 roads per 400 x 350 cells, T = 4" },
@@ -147,17 +147,18 @@ int main(int argc, char **argv)
         rs_dem *dem = NULL;
         rs_roads *r = ss_roads(ctx, &sc);
         rs_splat_options q = o;
-        q.cell_size = 5;
         sample *s = &S[0].s[S[0].n++];
         s->x = sides[i];
-        if (!r || rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || measure(ctx, dem, r, &q, s)) return 1;
+        if (!r || rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || rs_dem_set_frame(ctx, dem, &fr5) ||
+            measure(ctx, dem, r, &q, s))
+            return 1;
         rs_roads_free(ctx, r);
         rs_dem_free(ctx, dem);
         sc_scene_free(&sc);
     }
     /* 2 and 3. road length and road count on one map */
     rs_dem *dem = fractal_dem(ctx, 513);
-    if (!dem) return 1;
+    if (!dem || rs_dem_set_frame(ctx, dem, &fr1)) return 1;
     const double lens[] = { 100, 200, 400, 800, 1600, 3200 };
     for (int i = 0; i < 6; i++) {
         rs_roads *r = meander(ctx, lens[i]);
@@ -180,11 +181,10 @@ int main(int argc, char **argv)
         sc_scene sc;
         if (sc_city_default(&sc, 1)) return 1;
         rs_roads *r = ss_roads(ctx, &sc);
-        if (!r || rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem)) return 1;
+        if (!r || rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || rs_dem_set_frame(ctx, dem, &fr5)) return 1;
         const unsigned ts[] = { 1, 2, 4, 8 };
         for (int i = 0; i < 4; i++) {
             rs_splat_options q = o;
-            q.cell_size = 5;
             q.texels = ts[i];
             sample *s = &S[3].s[S[3].n++];
             s->x = ts[i];

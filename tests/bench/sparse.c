@@ -65,7 +65,8 @@ int main(int argc, char **argv)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
-    o.z_scale = 0.01;
+    rs_dem_frame fr = { 0, 0.01, 0, 0 };
+    if (rs_dem_set_frame(ctx, dem, &fr)) return 1;
     uint32_t w, h;
     if (rs_splat_size(ctx, dem, &o, &w, &h)) return 1;
     size_t n = (size_t)w * h;

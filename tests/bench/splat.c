@@ -154,9 +154,9 @@ int main(int argc, char **argv)
         if (rs_roads_add(b.ctx, b.roads, NULL, b.sc.roads[i].width, b.sc.roads[i].xy, b.sc.roads[i].n)) return 1;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
-    o.cell_size = b.sc.cell_size;
-    o.z_scale = 0.01;
     o.texels = b.T;
+    rs_dem_frame fr = { b.sc.cell_size, 0.01, 0, 0 };
+    if (rs_dem_set_frame(b.ctx, b.dem, &fr)) return 1;
     if (rs_splat_size(b.ctx, b.dem, &o, &b.w, &b.h)) return 1;
     size_t n = (size_t)b.w * b.h;
     if (bench_images(&b)) return 1;
@@ -193,7 +193,8 @@ int main(int argc, char **argv)
     const double tr[] = { -1, 1, 4, 8, 16 };
     for (size_t i = 0; i < sizeof tr / sizeof tr[0]; i++) {
         rs_splat_options q = o;
-        q.transition = tr[i];
+        if (tr[i] < 0) q.coverage.hard_edge = 1;
+        else q.coverage.transition_px = tr[i];
         snprintf(label, sizeof label, tr[i] < 0 ? "hard edge" : "transition %g px of 32", tr[i]);
         snprintf(tag, sizeof tag, tr[i] < 0 ? "hard" : "t%g", tr[i]);
         if (run(&b, &q, add_point(&ps, "transition", tag, label))) return 1;
