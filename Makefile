@@ -173,7 +173,7 @@ demo: deps
 # --- benchmarks ---------------------------------------------------------------
 $(BUILD)/bench/%: tests/bench/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests -o $@ $^ $(LDLIBS_CORE)
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests -o $@ $^ $(LDLIBS_CORE) -lpthread
 
 bench: deps
 	@$(MAKE) --no-print-directory all $(BENCH_BIN)

@@ -370,6 +370,22 @@ void rs_road_grid_get_stats(const rs_road_grid *grid, rs_road_grid_stats *out)
     if (grid && out) *out = grid->stats;
 }
 
+void rs__grid_size(const rs_road_grid *g, uint32_t *gw, uint32_t *gh)
+{
+    *gw = g->tiles ? g->gw : 0;
+    *gh = g->tiles ? g->gh : 0;
+}
+
+int rs__grid_cell(const rs_road_grid *g, uint32_t x, uint32_t y, unsigned *pattern)
+{
+    if (!g->tiles || x >= g->gw || y >= g->gh) return 0;
+    const uint8_t *t = rs__grid_tile(g, x >> RS__TILE_SHIFT, y >> RS__TILE_SHIFT);
+    unsigned c = t ? t[(y & (RS__TILE - 1)) * RS__TILE + (x & (RS__TILE - 1))] : 0;
+    if (!(c & RS__CELL_ROAD)) return 0;
+    *pattern = c & RS__CELL_PATTERN;
+    return 1;
+}
+
 int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reach, rs_road_point *out)
 {
     rs__road_point p;

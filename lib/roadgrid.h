@@ -34,4 +34,9 @@ static inline const uint8_t *rs__grid_tile(const rs_road_grid *g, uint32_t tx, u
 {
     return g->tiles[(size_t)ty * g->tw + tx];
 }
+/* For tests and tools, so they never read the storage: the grid's size in
+ * road cells (0 x 0 without a cell grid), and cell (x, y) of it: 0 for a
+ * terrain cell, else 1 with its corner pattern (lib/mask.h). */
+void rs__grid_size(const rs_road_grid *g, uint32_t *gw, uint32_t *gh);
+int rs__grid_cell(const rs_road_grid *g, uint32_t x, uint32_t y, unsigned *pattern);
 #endif

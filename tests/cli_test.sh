@@ -101,6 +101,45 @@ open(sys.argv[2], 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack(
 PY
 "$RS" --quiet "$T/dem.png" "$T/roads.txt" "$T/c.png" && cmp -s "$T/a.png" "$T/c.png" && ok || bad "PNG DEM differs from PGM DEM"
 
+# --- threads and windows: the same bytes whatever the cut ---
+for n in 1 2 3 7; do
+    "$RS" --quiet --threads $n --weight-out "$T/wt$n.pgm" "$T/dem.pgm" "$T/roads.txt" "$T/t$n.png" &&
+        cmp -s "$T/a.png" "$T/t$n.png" && cmp -s "$T/w.pgm" "$T/wt$n.pgm" && ok || bad "--threads $n differs"
+done
+# crop_pgm IN X Y W H OUT: the rows of a 16-bit P5 window, 240 samples a row
+crop_pgm() {
+    hdr=$(head -3 "$1" | wc -c)
+    y=0; : >"$7"
+    while [ $y -lt "$5" ]; do
+        tail -c +$((hdr + 1 + ( ($3 + y) * 240 + $2) * 2)) "$1" | head -c $(($4 * 2)) >>"$7"
+        y=$((y + 1))
+    done
+}
+for win in "0,0,240,160" "17,5,33,41" "239,159,1,1" "101,0,7,160"; do
+    set -- $(echo "$win" | tr , ' ')
+    "$RS" --quiet --threads 2 --window "$win" --weight-out "$T/ww.pgm" "$T/dem.pgm" "$T/roads.txt" "$T/win.png" 2>"$T/e" ||
+        { bad "--window $win: $(cat "$T/e")"; continue; }
+    head -3 "$T/ww.pgm" | grep -q "^$3 $4\$" && ok || bad "--window $win: size"
+    hdr=$(head -3 "$T/ww.pgm" | wc -c)
+    tail -c +$((hdr + 1)) "$T/ww.pgm" >"$T/ww.raw"
+    crop_pgm "$T/w.pgm" "$@" "$T/crop.raw"
+    cmp -s "$T/ww.raw" "$T/crop.raw" && ok || bad "--window $win is not the crop of the whole image"
+done
+"$RS" --quiet --window 10,20,30,40 --stats "$T/ws.json" "$T/dem.pgm" "$T/roads.txt" "$T/win.png" &&
+    grep -q '"window": {"x": 10, "y": 20, "width": 30, "height": 40}' "$T/ws.json" && ok || bad "--window stats"
+for k in '"stages_ms"' '"coverage"' '"surface"' '"overlays"' '"composite"' '"threads"' '"edges"'; do
+    grep -q "$k" "$T/ws.json" && ok || bad "stats lacks $k"
+done
+expect_fail "window outside" "not inside the 240 x 160 output" --window 200,0,41,5 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "window empty" "width and height must be >= 1" --window 0,0,0,5 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "window junk" "--window" --window 1,2,3 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "window negative" "--window" --window -1,2,3,4 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "threads 0" "--threads" --threads 0 "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "bad edges" "'alphamap' or 'analytic'" --edges smooth "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+"$RS" --quiet --edges analytic --threads 1 "$T/dem.pgm" "$T/roads.txt" "$T/an1.png" &&
+    "$RS" --quiet --edges analytic --threads 2 "$T/dem.pgm" "$T/roads.txt" "$T/an2.png" &&
+    cmp -s "$T/an1.png" "$T/an2.png" && ok || bad "--edges analytic: threads differ or failed"
+
 # --- the bundled example renders ---
 "$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 "$E/dem.pgm" "$E/roads.txt" "$T/ex.png" && ok || bad "example"
 

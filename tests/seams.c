@@ -14,25 +14,27 @@ double rs_test_seam_error(const rs_road_grid *g, uint32_t res)
     rs_tile_type ts[3] = { RS_TILE_EDGE, RS_TILE_INNER, RS_TILE_OUTER };
     for (int i = 0; i < 3; i++) rs_alpha_map(ts[i], res, 2, 0, 0, maps[i], sizeof maps[i]);
     int worst = 0;
-    for (uint32_t y = 0; y < g->gh; y++)
-        for (uint32_t x = 0; x < g->gw; x++) {
-            const uint8_t *t = rs__grid_tile(g, x >> RS__TILE_SHIFT, y >> RS__TILE_SHIFT);
-            unsigned ca = t ? t[(y & (RS__TILE - 1)) * RS__TILE + (x & (RS__TILE - 1))] : 0;
+    uint32_t gw, gh;
+    rs__grid_size(g, &gw, &gh);
+    for (uint32_t y = 0; y < gh; y++)
+        for (uint32_t x = 0; x < gw; x++) {
+            unsigned pa = 0, pb = 0;
+            int ra = rs__grid_cell(g, x, y, &pa);
             for (int dir = 0; dir < 2; dir++) {
                 uint32_t x2 = x + (dir == 0), y2 = y + (dir == 1);
-                if (x2 >= g->gw || y2 >= g->gh) continue;
-                const uint8_t *t2 = rs__grid_tile(g, x2 >> RS__TILE_SHIFT, y2 >> RS__TILE_SHIFT);
-                unsigned cb = t2 ? t2[(y2 & (RS__TILE - 1)) * RS__TILE + (x2 & (RS__TILE - 1))] : 0;
-                if (!(ca & RS__CELL_ROAD) && !(cb & RS__CELL_ROAD)) continue;
+                if (x2 >= gw || y2 >= gh) continue;
+                int rb = rs__grid_cell(g, x2, y2, &pb);
+                if (!ra && !rb) continue;
                 for (uint32_t k = 0; k <= res; k++) {
                     int va = 255, vb = 255;
-                    unsigned cells[2] = { ca, cb };
+                    int road[2] = { ra, rb };
+                    unsigned pats[2] = { pa, pb };
                     int *vals[2] = { &va, &vb };
                     for (int s = 0; s < 2; s++) {
-                        if (!(cells[s] & RS__CELL_ROAD)) continue;
+                        if (!road[s]) continue;
                         rs_tile_type ty;
                         int rot;
-                        rs__pattern_classify(cells[s] & RS__CELL_PATTERN, &ty, &rot);
+                        rs__pattern_classify(pats[s], &ty, &rot);
                         /* point on the shared edge, in this cell's local frame */
                         double u = dir == 0 ? (s == 0 ? 1.0 : 0.0) : (double)k / res;
                         double v = dir == 0 ? (double)k / res : (s == 0 ? 1.0 : 0.0);

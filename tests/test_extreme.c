@@ -6,7 +6,7 @@
  * of the output size (counted through the allocator hook). */
 #include "harness.h"
 #include "roadsplat.h"
-#include "roadgrid.h"
+#include "internal.h"
 #include "roam_check.h"
 #include "scene_splat.h"
 #include "scenes.h"

@@ -1,7 +1,6 @@
 /* End to end through the library: road grid + splat on synthetic scenes. */
 #include "harness.h"
 #include "roadsplat.h"
-#include "roadgrid.h"
 #include "mask.h"
 #include "seams.h"
 #include "scenes.h"
