@@ -15,7 +15,7 @@
 #define HALF_SQRT2 0.70710678118654752440
 /* Sub-squares per pixel side where a pixel's coverage is not one straight
  * edge (caps, joins, crossings); docs/roadfield.md has the measurements. */
-#define SUBDIV 4
+#define SUBDIV 3
 /* Distinct segments near one pixel's boundary kept on the stack; more
  * falls back to using every candidate (same result, slower). */
 #define NEAR_MAX 32
@@ -414,8 +414,9 @@ static double capsule_cover(const rf_seg *s, double x, double y, double side, do
     double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, qx, qy;
     double hp = 0.5 * side * (fabs(s->ux) + fabs(s->uy));
     if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-        double t = wx * s->uy - wy * s->ux;
-        if (t - s->r >= e || -t - s->r >= e) return 0;
+        double t = wx * s->uy - wy * s->ux, at = fabs(t);
+        if (at - s->r >= e) return 0;
+        if (at + e <= s->r) return 1;
         return halfplane(s->uy, -s->ux, side, s->r - t) - halfplane(s->uy, -s->ux, side, -s->r - t);
     }
     if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
