@@ -1,23 +1,576 @@
-/* Placeholder until the road-field branch lands. */
+/* Road field: index grid, nearest-centreline queries and analytic pixel
+ * coverage (docs/roadfield.md).
+ *
+ * Every road is cut into segments ("capsules": the points within the half
+ * width of a segment). A uniform grid over the map (plus one cell on every
+ * side) lists per cell, in CSR form, the segments whose capsule grown by
+ * `reach` (reach_extra + half a pixel diagonal) touches the cell, in
+ * ascending segment order. A query at a point then needs exactly one cell's
+ * list: an empty list answers "no road" in O(1). */
 #include "roadfield.h"
 
-rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p, rs__roadfield **out)
+#include <math.h>
+#include <string.h>
+
+#define HALF_SQRT2 0.70710678118654752440
+/* Sub-squares per pixel side where a pixel's coverage is not one straight
+ * edge (caps, joins, crossings); docs/roadfield.md has the measurements. */
+#define SUBDIV 3
+/* Distinct segments near one pixel's boundary kept on the stack; more
+ * falls back to using every candidate (same result, slower). */
+#define NEAR_MAX 32
+/* cos of the largest turn joint_cover handles without sub-squares */
+#define JOINT_COS 0.94
+/* Cell counts: the automatic cell grows until the grid has at most AUTO
+ * cells; an explicit cell is grown (never shrunk) to at most MAX cells. */
+#define GRID_AUTO_CELLS ((double)(1u << 22))
+#define GRID_MAX_CELLS ((double)(1u << 24))
+
+typedef struct rf_seg {
+    double ax, ay, bx, by; /* end points, local metres */
+    double ux, uy, len;    /* unit direction ((0,0) for a zero-length segment), length */
+    double r;              /* half width */
+    double s0;             /* arc length of the road at (ax, ay) */
+    uint32_t road, seg;
+} rf_seg;
+
+struct rs__roadfield {
+    double c, inv_c;   /* index cell (metres) and its inverse */
+    uint32_t gw, gh;   /* cells; cell (i, j) spans [(i-1)c, ic) x [(j-1)c, jc) */
+    double pixel;      /* largest pixel the one-cell paths are valid for */
+    double margin;     /* pixel * sqrt(2)/2 */
+    double reach;      /* reach_extra + margin: list reach beyond a half width */
+    uint32_t *start;   /* gw*gh + 1 offsets into ids */
+    uint32_t *ids;     /* segment indices, ascending per cell */
+    uint8_t *full;     /* 1: every pixel whose centre is in the cell is fully road */
+    rf_seg *seg;
+    size_t nseg, nent, bytes;
+    size_t nonempty, nfull, maxlist;
+};
+
+/* floor(v) clamped to [0, n-1]; NaN gives 0. Keeps every cast defined. */
+static uint32_t clamp_index(double v, uint32_t n)
 {
-    (void)roads; (void)p;
-    *out = NULL;
-    return rs__fail(ctx, RS_ERR_UNSUPPORTED, "analytic edges are not built yet");
+    if (!(v >= 0)) return 0;
+    if (v >= (double)n) return n - 1;
+    return (uint32_t)v;
 }
-void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f) { (void)ctx; (void)f; }
-size_t rs__roadfield_bytes(const rs__roadfield *f) { (void)f; return 0; }
+
+/* Grid column/row of a coordinate, or -1 outside the grid. */
+static int64_t cell_of(const rs__roadfield *f, double v, uint32_t n)
+{
+    double k = floor(v * f->inv_c) + 1.0;
+    if (!(k >= 0 && k < (double)n)) return -1;
+    return (int64_t)k;
+}
+
+static double len2(double dx, double dy)
+{
+    double d2 = dx * dx + dy * dy;
+    /* huge coordinates: the square overflows, hypot does not */
+    return d2 < 1e300 ? sqrt(d2) : hypot(dx, dy);
+}
+
+/* Distance from (x, y) to the segment; *pr = clamped projection (arc length
+ * from a), *side = signed offset from the segment's line along its left
+ * normal (uy, -ux) (SPEC: + = left of travel). */
+static double seg_point(const rf_seg *s, double x, double y, double *pr, double *side)
+{
+    double wx = x - s->ax, wy = y - s->ay, p = wx * s->ux + wy * s->uy, qx, qy;
+    *side = wx * s->uy - wy * s->ux;
+    if (!(p > 0)) { p = 0; qx = s->ax; qy = s->ay; }
+    else if (p >= s->len) { p = s->len; qx = s->bx; qy = s->by; }
+    else { qx = s->ax + p * s->ux; qy = s->ay + p * s->uy; }
+    *pr = p;
+    return len2(x - qx, y - qy);
+}
+
+static double seg_dist(const rf_seg *s, double x, double y)
+{
+    double pr, side;
+    return seg_point(s, x, y, &pr, &side);
+}
+
+/* ------------------------------------------------------------------------
+ * Build
+ * ---------------------------------------------------------------------- */
+
+/* Does the rectangle [x0,x1] x [y0,y1] come within R of the segment? */
+static int seg_touches_rect(const rf_seg *s, double x0, double y0, double x1, double y1, double R)
+{
+    if (fmin(s->ax, s->bx) - R > x1 || fmax(s->ax, s->bx) + R < x0 || fmin(s->ay, s->by) - R > y1 ||
+        fmax(s->ay, s->by) + R < y0)
+        return 0;
+    /* Intersection by separating axes: x and y passed above with R = 0
+     * when the bounding boxes overlap; the last axis is the segment normal. */
+    int boxes = !(fmin(s->ax, s->bx) > x1 || fmax(s->ax, s->bx) < x0 || fmin(s->ay, s->by) > y1 ||
+                  fmax(s->ay, s->by) < y0);
+    if (boxes) {
+        double c[4] = { (x0 - s->ax) * s->uy - (y0 - s->ay) * s->ux, (x1 - s->ax) * s->uy - (y0 - s->ay) * s->ux,
+                        (x0 - s->ax) * s->uy - (y1 - s->ay) * s->ux, (x1 - s->ax) * s->uy - (y1 - s->ay) * s->ux };
+        int pos = c[0] > 0 && c[1] > 0 && c[2] > 0 && c[3] > 0, neg = c[0] < 0 && c[1] < 0 && c[2] < 0 && c[3] < 0;
+        if (!pos && !neg) return 1;
+    }
+    /* Disjoint convex sets: the closest pair has a vertex of one of them. */
+    const double px[2] = { s->ax, s->bx }, py[2] = { s->ay, s->by };
+    for (int k = 0; k < 2; k++) {
+        double dx = fmax(fmax(x0 - px[k], px[k] - x1), 0), dy = fmax(fmax(y0 - py[k], py[k] - y1), 0);
+        if (len2(dx, dy) <= R) return 1;
+    }
+    return seg_dist(s, x0, y0) <= R || seg_dist(s, x1, y0) <= R || seg_dist(s, x0, y1) <= R ||
+           seg_dist(s, x1, y1) <= R;
+}
+
+typedef struct rf_builder {
+    rs__roadfield *f;
+    uint32_t *cnt;   /* per cell: count (pass 1), then end cursor (pass 2) */
+    uint64_t total;  /* entries so far */
+    uint64_t limit;
+} rf_builder;
+
+/* Visit every cell whose rectangle comes within s->r + f->reach of the
+ * segment. fill = 0: count (and flag full cells); fill = 1: write `id` into
+ * the lists (cursors count down). Returns the cells visited, or -1 when the
+ * entry limit is passed. */
+static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
+{
+    rs__roadfield *f = b->f;
+    double c = f->c, eps = 1e-6 * c;
+    double R = s->r + f->reach + eps;      /* may be huge or inf: only compared */
+    double rin = s->r - f->margin - eps;   /* corners within rin: the cell is full */
+    double hd = c * HALF_SQRT2 * (1 + 1e-9); /* half the cell diagonal */
+    double gy1 = ((double)f->gh - 1) * c, gx1 = ((double)f->gw - 1) * c;
+    double ylo = fmax(fmin(s->ay, s->by) - R, -c), yhi = fmin(fmax(s->ay, s->by) + R, gy1);
+    double xlo = fmax(fmin(s->ax, s->bx) - R, -c), xhi = fmin(fmax(s->ax, s->bx) + R, gx1);
+    if (!(ylo <= yhi && xlo <= xhi)) return 0;
+    uint32_t j0 = clamp_index(ylo * f->inv_c + 1, f->gh), j1 = clamp_index(yhi * f->inv_c + 1, f->gh);
+    int64_t visited = 0;
+    for (uint32_t j = j0; j <= j1; j++) {
+        double y0 = ((double)j - 1) * c, y1 = (double)j * c;
+        /* x extent of the segment within the strip grown by R, then grown by R */
+        double sylo = y0 - R, syhi = y1 + R, plo = 0, phi = s->len;
+        if (s->uy != 0) {
+            double p0 = (sylo - s->ay) / s->uy, p1 = (syhi - s->ay) / s->uy;
+            if (p0 > p1) { double tmp = p0; p0 = p1; p1 = tmp; }
+            plo = fmax(plo, p0);
+            phi = fmin(phi, p1);
+            if (!(plo <= phi)) continue;
+        } else if (!(s->ay >= sylo && s->ay <= syhi)) continue;
+        double xa = s->ax + plo * s->ux, xb = plo == phi ? xa : phi >= s->len ? s->bx : s->ax + phi * s->ux;
+        double sxlo = fmax(fmin(xa, xb) - R, -c), sxhi = fmin(fmax(xa, xb) + R, gx1);
+        if (!(sxlo <= sxhi)) continue;
+        uint32_t i0 = clamp_index(sxlo * f->inv_c + 1, f->gw), i1 = clamp_index(sxhi * f->inv_c + 1, f->gw);
+        for (uint32_t i = i0; i <= i1; i++) {
+            double x0 = ((double)i - 1) * c, x1 = (double)i * c;
+            /* the centre's distance settles most cells without the exact test */
+            double dc = seg_dist(s, x0 + 0.5 * c, y0 + 0.5 * c);
+            if (dc > R + hd || (dc > R && !seg_touches_rect(s, x0, y0, x1, y1, R))) continue;
+            size_t cell = (size_t)j * f->gw + i;
+            visited++;
+            if (fill) {
+                f->ids[--b->cnt[cell]] = id;
+            } else {
+                if (++b->total > b->limit) return -1;
+                b->cnt[cell]++;
+                if (rin > 0 && !f->full[cell] &&
+                    (dc + hd <= rin || (dc <= rin && seg_dist(s, x0, y0) <= rin && seg_dist(s, x1, y0) <= rin &&
+                                        seg_dist(s, x0, y1) <= rin && seg_dist(s, x1, y1) <= rin)))
+                    f->full[cell] = 1;
+            }
+        }
+    }
+    return visited;
+}
+
+static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, double r, double s0, uint32_t road,
+                    uint32_t seg)
+{
+    /* halves: the difference of two finite coordinates cannot overflow */
+    double dxh = 0.5 * bx - 0.5 * ax, dyh = 0.5 * by - 0.5 * ay, lh = hypot(dxh, dyh);
+    s->ax = ax; s->ay = ay; s->bx = bx; s->by = by;
+    s->ux = lh > 0 ? dxh / lh : 0;
+    s->uy = lh > 0 ? dyh / lh : 0;
+    s->len = 2 * lh;
+    s->r = r;
+    s->s0 = s0;
+    s->road = road;
+    s->seg = seg;
+}
+
+void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
+{
+    if (!ctx || !f) return;
+    rs__free(ctx, f->start);
+    rs__free(ctx, f->ids);
+    rs__free(ctx, f->full);
+    rs__free(ctx, f->seg);
+    rs__free(ctx, f);
+}
+
+static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
+
+rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
+                              rs__roadfield **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out || !roads || !p) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
+    *out = NULL;
+    if (!isfinite(p->origin_x) || !isfinite(p->origin_y) || !(p->cell_size > 0) || !isfinite(p->cell_size) ||
+        !finite_nonneg(p->width_m) || !finite_nonneg(p->height_m) || !finite_nonneg(p->reach_extra) ||
+        !finite_nonneg(p->index_cell) || !finite_nonneg(p->pixel))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: bad parameters");
+    size_t nroads = rs_roads_count(roads);
+    if (nroads > UINT32_MAX) return rs__fail(ctx, RS_ERR_LIMIT, "roadfield: too many roads");
+
+    /* Index cell: the DEM cell, or half the mean road width when roads are
+     * wider (fewer cells per segment), doubled until the grid is small. */
+    double c = p->index_cell, cap = GRID_MAX_CELLS;
+    if (c == 0) {
+        double wsum = 0;
+        for (size_t i = 0; i < nroads; i++) {
+            double w = 0;
+            rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+            wsum += fmin(w, 1e12) / (double)nroads;
+        }
+        c = fmax(p->cell_size, 0.5 * wsum);
+        cap = GRID_AUTO_CELLS;
+    }
+    while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
+
+    rs__roadfield *f = rs__calloc(ctx, 1, sizeof *f);
+    if (!f) return rs__fail(ctx, RS_ERR_NOMEM, "roadfield: out of memory");
+    f->c = c;
+    f->inv_c = 1.0 / c;
+    f->gw = (uint32_t)(ceil(p->width_m / c) + 2);
+    f->gh = (uint32_t)(ceil(p->height_m / c) + 2);
+    f->pixel = p->pixel > 0 ? p->pixel : p->cell_size;
+    f->margin = f->pixel * HALF_SQRT2;
+    f->reach = p->reach_extra + f->margin;
+    size_t ncell = (size_t)f->gw * f->gh;
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u };
+    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
+    f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
+    f->full = rs__calloc(ctx, ncell, 1);
+    rs_result res = RS_OK;
+    size_t cap_seg = 0;
+    if (!f->start || !f->full) { res = RS_ERR_NOMEM; goto fail; }
+    memset(f->start, 0, (ncell + 1) * sizeof *f->start);
+    b.cnt = f->start;
+
+    /* Pass 1: local coordinates, arc lengths, counts; keep the segments
+     * that reach the grid. */
+    double per_unit = rs__local_quantum(p->cell_size);
+    for (size_t ri = 0; ri < nroads; ri++) {
+        double w = 0;
+        const double *xy = NULL;
+        size_t n = 0;
+        rs_roads_get(roads, ri, NULL, &w, &xy, &n);
+        if (n == 0) continue;
+        if (n - 1 > UINT32_MAX) { res = RS_ERR_LIMIT; goto fail; }
+        double ax = rs__local_coord(xy[0], p->origin_x, per_unit), ay = rs__local_coord(xy[1], p->origin_y, per_unit);
+        double s = 0;
+        size_t nseg = n > 1 ? n - 1 : 1; /* a single point is one zero-length segment */
+        for (size_t k = 0; k < nseg; k++) {
+            double bx = ax, by = ay;
+            if (n > 1) {
+                bx = rs__local_coord(xy[2 * k + 2], p->origin_x, per_unit);
+                by = rs__local_coord(xy[2 * k + 3], p->origin_y, per_unit);
+            }
+            rf_seg sg;
+            seg_set(&sg, ax, ay, bx, by, 0.5 * w, s, (uint32_t)ri, (uint32_t)k);
+            s += sg.len;
+            ax = bx;
+            ay = by;
+            int64_t v = seg_cells(&b, &sg, 0, 0);
+            if (v < 0) { res = RS_ERR_LIMIT; goto fail; }
+            if (v == 0) continue;
+            if (f->nseg == cap_seg) {
+                size_t nc = cap_seg ? 2 * cap_seg : 64, bytes;
+                if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(rf_seg), &bytes)) { res = RS_ERR_LIMIT; goto fail; }
+                rf_seg *ns = rs__realloc(ctx, f->seg, bytes);
+                if (!ns) { res = RS_ERR_NOMEM; goto fail; }
+                f->seg = ns;
+                cap_seg = nc;
+            }
+            f->seg[f->nseg++] = sg;
+        }
+    }
+    /* Counts to end offsets; pass 2 fills each list from its end, visiting
+     * segments last to first, so every list comes out ascending. */
+    uint64_t run = 0;
+    for (size_t i = 0; i < ncell; i++) {
+        if (f->start[i]) f->nonempty++;
+        if (f->start[i] > f->maxlist) f->maxlist = f->start[i];
+        if (f->full[i]) f->nfull++;
+        run += f->start[i];
+        f->start[i] = (uint32_t)run;
+    }
+    f->start[ncell] = (uint32_t)run;
+    f->nent = (size_t)run;
+    f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
+    if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
+    for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
+    f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
+               cap_seg * sizeof(rf_seg);
+    *out = f;
+    rs__ok(ctx);
+    return RS_OK;
+fail:
+    rs__roadfield_free(ctx, f);
+    if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
+    return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
+                    (unsigned long long)b.limit);
+}
+
+size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
+
+void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out)
+{
+    if (!out) return;
+    memset(out, 0, sizeof *out);
+    if (!f) return;
+    out->index_cell = f->c;
+    out->gw = f->gw;
+    out->gh = f->gh;
+    out->segments = f->nseg;
+    out->entries = f->nent;
+    out->nonempty_cells = f->nonempty;
+    out->full_cells = f->nfull;
+    out->max_list = f->maxlist;
+}
+
+/* ------------------------------------------------------------------------
+ * Queries. A query point's candidates are the lists of a rectangle of
+ * cells [i0,i1] x [j0,j1]: one cell when the wanted reach is within the
+ * lists' reach, else every cell the reach can touch (a segment may then be
+ * seen twice: harmless for a minimum and a maximum).
+ * ---------------------------------------------------------------------- */
+typedef struct rf_cells { uint32_t i0, i1, j0, j1; } rf_cells;
+
+/* Cells overlapping [x-d, x+d] x [y-d, y+d]; 0 when none. */
+static int cells_around(const rs__roadfield *f, double x, double y, double d, rf_cells *cr)
+{
+    double c = f->c, lo_x = x - d, hi_x = x + d, lo_y = y - d, hi_y = y + d;
+    double gx1 = ((double)f->gw - 1) * c, gy1 = ((double)f->gh - 1) * c;
+    if (!(hi_x >= -c && lo_x <= gx1 && hi_y >= -c && lo_y <= gy1)) return 0;
+    cr->i0 = clamp_index(floor(lo_x * f->inv_c) + 1, f->gw);
+    cr->i1 = clamp_index(floor(hi_x * f->inv_c) + 1, f->gw);
+    cr->j0 = clamp_index(floor(lo_y * f->inv_c) + 1, f->gh);
+    cr->j1 = clamp_index(floor(hi_y * f->inv_c) + 1, f->gh);
+    return 1;
+}
+
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out)
 {
-    (void)f; (void)x; (void)y; (void)reach; (void)out;
-    return 0;
+    if (!f || !out || !(reach >= 0)) return 0;
+    int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
+    if (ci < 0 || cj < 0) return 0;
+    rf_cells cr = { (uint32_t)ci, (uint32_t)ci, (uint32_t)cj, (uint32_t)cj };
+    if (reach > f->reach && !cells_around(f, x, y, reach - f->reach + 1e-6 * f->c, &cr)) return 0;
+    const rf_seg *best = NULL;
+    double bd = 0, bpr = 0, bside = 0;
+    for (uint32_t j = cr.j0; j <= cr.j1; j++)
+        for (uint32_t i = cr.i0; i <= cr.i1; i++) {
+            size_t cell = (size_t)j * f->gw + i;
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                const rf_seg *s = &f->seg[f->ids[k]];
+                double pr, side, d = seg_point(s, x, y, &pr, &side);
+                if (!(d - s->r <= reach)) continue;
+                /* segments are numbered in (road, seg) order */
+                if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
+            }
+        }
+    if (!best) return 0;
+    out->road = best->road;
+    out->seg = best->seg;
+    out->s = best->s0 + bpr;
+    out->t = bside >= 0 ? bd : -bd;
+    out->dist = bd;
+    out->half_width = best->r;
+    return 1;
 }
-void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, double pix,
-                            double *out, size_t stride)
+
+/* Fraction of a square of side `side` centred at the origin where
+ * x*gx + y*gy <= h, for a unit (gx, gy): the CDF of the sum of two uniform
+ * variables on [-a, a] and [-b, b] (a trapezoid), a >= b. */
+static double halfplane(double gx, double gy, double side, double h)
 {
-    (void)f; (void)px0; (void)py0; (void)pix;
-    for (uint32_t y = 0; y < h; y++)
-        for (uint32_t x = 0; x < w; x++) out[(size_t)y * stride + x] = 0;
+    double a = 0.5 * side * fabs(gx), b = 0.5 * side * fabs(gy);
+    if (a < b) { double tmp = a; a = b; b = tmp; }
+    double x = fabs(h), lo; /* lo = fraction where u <= -|h| */
+    if (x >= a + b) lo = 0;
+    else if (x >= a - b) { double w = a + b - x; lo = w * w / (8 * a * b); }
+    else lo = 0.5 * (a - x) / a;
+    return h < 0 ? lo : 1 - lo;
+}
+
+/* Coverage of the square centred (x, y), side `side`, half diagonal e, by
+ * one capsule: exact when the square lies within the segment's slab (the
+ * band |t| <= r cut by straight lines), otherwise the half-plane of the
+ * distance field linearised at the centre (caps and vertices, where the
+ * edge is an arc). */
+static double capsule_cover(const rf_seg *s, double x, double y, double side, double e)
+{
+    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, qx, qy;
+    double hp = 0.5 * side * (fabs(s->ux) + fabs(s->uy));
+    if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+        double t = wx * s->uy - wy * s->ux, at = fabs(t);
+        if (at - s->r >= e) return 0;
+        if (at + e <= s->r) return 1;
+        return halfplane(s->uy, -s->ux, side, s->r - t) - halfplane(s->uy, -s->ux, side, -s->r - t);
+    }
+    if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
+    else if (pr >= s->len) { qx = s->bx; qy = s->by; }
+    else { qx = s->ax + pr * s->ux; qy = s->ay + pr * s->uy; }
+    double dx = x - qx, dy = y - qy, d = len2(dx, dy), D = d - s->r;
+    if (D >= e) return 0;
+    if (D <= -e) return 1;
+    if (!(d > 0)) return 1; /* centre on the centreline, so D = -r > -e: a tiny road; rare */
+    return halfplane(dx / d, dy / d, side, -D);
+}
+
+/* A pixel near only two consecutive segments of one road with a gentle
+ * turn (the common case on curves): the road edge in the pixel is two
+ * nearly collinear lines joined by a short arc. On the inner side the road
+ * is the union of the two straight edges (max of their exact covers); on
+ * the outer side the edge is the tangent at the nearest boundary point. The
+ * error is second order in the turn angle (docs/roadfield.md). Returns 0
+ * when the case does not apply. */
+static int joint_cover(const rs__roadfield *f, uint32_t ia, uint32_t ib, double cx, double cy, double pix, double e,
+                       double *v)
+{
+    const rf_seg *a = &f->seg[ia < ib ? ia : ib], *b = &f->seg[ia < ib ? ib : ia];
+    if (a->road != b->road || b->seg != a->seg + 1 || !(a->len > 0) || !(b->len > 0)) return 0;
+    if (a->ux * b->ux + a->uy * b->uy < JOINT_COS || a->r < 2 * e || b->r < 2 * e) return 0;
+    double ca = capsule_cover(a, cx, cy, pix, e), cb = capsule_cover(b, cx, cy, pix, e);
+    double side = (cx - a->bx) * a->uy - (cy - a->by) * a->ux, turn = b->ux * a->uy - b->uy * a->ux;
+    if (side * turn > 0) *v = ca > cb ? ca : cb;
+    else *v = seg_dist(a, cx, cy) - a->r <= seg_dist(b, cx, cy) - b->r ? ca : cb;
+    return 1;
+}
+
+typedef struct rf_near {
+    uint32_t id[NEAR_MAX];
+    int n, many;
+} rf_near;
+
+/* Coverage of pixel centred (cx, cy) of side pix by the union of the
+ * capsules listed in the cells `cr`. */
+static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx, double cy, double pix)
+{
+    double e = pix * HALF_SQRT2;
+    rf_near nr;
+    nr.n = nr.many = 0;
+    for (uint32_t j = cr->j0; j <= cr->j1; j++)
+        for (uint32_t i = cr->i0; i <= cr->i1; i++) {
+            size_t cell = (size_t)j * f->gw + i;
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                uint32_t id = f->ids[k];
+                const rf_seg *s = &f->seg[id];
+                /* squared distances: no square root for the far and deep pixels */
+                double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy;
+                if (!(pr > 0)) {
+                } else if (pr >= s->len) {
+                    wx = cx - s->bx;
+                    wy = cy - s->by;
+                } else {
+                    wx -= pr * s->ux;
+                    wy -= pr * s->uy;
+                }
+                double d2 = wx * wx + wy * wy, ri = s->r - e, ro = s->r + e;
+                if (d2 < 1e300) {
+                    if (ri > 0 && d2 <= ri * ri) return 1;
+                    if (!(d2 < ro * ro)) continue;
+                } else {
+                    double D = hypot(wx, wy) - s->r;
+                    if (D <= -e) return 1;
+                    if (!(D < e)) continue;
+                }
+                int seen = 0;
+                for (int m = 0; m < nr.n && !seen; m++) seen = nr.id[m] == id;
+                if (seen) continue;
+                if (nr.n < NEAR_MAX) nr.id[nr.n++] = id;
+                else nr.many = 1;
+            }
+        }
+    if (nr.n == 0) return 0;
+    if (nr.n == 1) {
+        /* one boundary: exact if straight within the pixel */
+        const rf_seg *s = &f->seg[nr.id[0]];
+        double pr = (cx - s->ax) * s->ux + (cy - s->ay) * s->uy, hp = 0.5 * pix * (fabs(s->ux) + fabs(s->uy));
+        if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) return capsule_cover(s, cx, cy, pix, e);
+    }
+    if (nr.n == 2 && !nr.many) {
+        double v;
+        if (joint_cover(f, nr.id[0], nr.id[1], cx, cy, pix, e, &v)) return v;
+    }
+    /* Corners, arcs, crossings: sub-squares, each covered by its best capsule. */
+    double ps = pix / SUBDIV, es = ps * HALF_SQRT2, acc = 0;
+    for (int sy = 0; sy < SUBDIV; sy++)
+        for (int sx = 0; sx < SUBDIV; sx++) {
+            double x = cx + ((double)sx - 0.5 * (SUBDIV - 1)) * ps, y = cy + ((double)sy - 0.5 * (SUBDIV - 1)) * ps;
+            double best = 0;
+            if (!nr.many) {
+                for (int m = 0; m < nr.n && best < 1; m++) {
+                    double v = capsule_cover(&f->seg[nr.id[m]], x, y, ps, es);
+                    if (v > best) best = v;
+                }
+            } else {
+                for (uint32_t j = cr->j0; j <= cr->j1; j++)
+                    for (uint32_t i = cr->i0; i <= cr->i1; i++) {
+                        size_t cell = (size_t)j * f->gw + i;
+                        for (uint32_t k = f->start[cell]; k < f->start[cell + 1] && best < 1; k++) {
+                            double v = capsule_cover(&f->seg[f->ids[k]], x, y, ps, es);
+                            if (v > best) best = v;
+                        }
+                    }
+            }
+            acc += best;
+        }
+    return acc / (SUBDIV * SUBDIV);
+}
+
+void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
+                            double pix, double *out, size_t stride)
+{
+    enum { CHUNK = 256 };
+    int64_t col[CHUNK];
+    if (!f || !out || !w || !h) return;
+    if (!(pix > 0) || !isfinite(pix)) {
+        for (uint32_t y = 0; y < h; y++) memset(out + (size_t)y * stride, 0, w * sizeof *out);
+        return;
+    }
+    /* One cell's list suffices when half the pixel diagonal is within the
+     * lists' margin; then empty cells are 0 and full cells 1 at once. */
+    int one_cell = pix <= f->pixel;
+    for (uint32_t x0 = 0; x0 < w; x0 += CHUNK) {
+        uint32_t n = w - x0 < CHUNK ? w - x0 : CHUNK;
+        for (uint32_t k = 0; k < n; k++)
+            col[k] = cell_of(f, ((double)px0 + (double)(x0 + k) + 0.5) * pix, f->gw);
+        for (uint32_t y = 0; y < h; y++) {
+            double cy = ((double)py0 + (double)y + 0.5) * pix;
+            double *o = out + (size_t)y * stride + x0;
+            int64_t row = cell_of(f, cy, f->gh);
+            if (one_cell) {
+                if (row < 0) { memset(o, 0, n * sizeof *o); continue; }
+                size_t base = (size_t)row * f->gw;
+                for (uint32_t k = 0; k < n; k++) {
+                    if (col[k] < 0) { o[k] = 0; continue; }
+                    size_t cell = base + (size_t)col[k];
+                    if (f->start[cell] == f->start[cell + 1]) o[k] = 0;
+                    else if (f->full[cell]) o[k] = 1;
+                    else {
+                        rf_cells cr = { (uint32_t)col[k], (uint32_t)col[k], (uint32_t)row, (uint32_t)row };
+                        o[k] = pixel_cover(f, &cr, ((double)px0 + (double)(x0 + k) + 0.5) * pix, cy, pix);
+                    }
+                }
+            } else {
+                for (uint32_t k = 0; k < n; k++) {
+                    double cx = ((double)px0 + (double)(x0 + k) + 0.5) * pix;
+                    rf_cells cr;
+                    o[k] = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr) ? pixel_cover(f, &cr, cx, cy, pix) : 0;
+                }
+            }
+        }
+    }
 }

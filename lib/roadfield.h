@@ -1,31 +1,59 @@
-/* Private: the road field (lib/roadfield.c). Placeholder interface until the
- * road-field branch lands. */
+/* Road field (SPEC "Road field", seed 003): an index grid over the map that
+ * lists, per cell, the road segments whose capsule reaches the cell; nearest
+ * centreline queries (road, segment, s, t) and exact-where-it-matters box
+ * coverage of output pixels. Private to the library; docs/roadfield.md. */
 #ifndef RS_ROADFIELD_H
 #define RS_ROADFIELD_H
 #include "internal.h"
-typedef struct rs__roadfield rs__roadfield;
+
+typedef struct rs__roadfield rs__roadfield; /* immutable after build; safe to query from many threads */
 
 typedef struct rs__roadfield_params {
-    double origin_x, origin_y;
-    double cell_size;
-    double width_m, height_m;
-    double reach_extra;
-    double index_cell;
+    double origin_x, origin_y; /* world coords of DEM sample (0,0) */
+    double cell_size;          /* DEM cell, metres (for rs__local_quantum) */
+    double width_m, height_m;  /* map extent in local metres: [0,width_m] x [0,height_m] */
+    double reach_extra;        /* metres beyond each road's half width that queries must still find; >= 0 */
+    double index_cell;         /* index grid cell size in metres; 0 -> automatic (docs/roadfield.md) */
+    double pixel;              /* largest output pixel the coverage will be asked for, metres;
+                                  0 -> cell_size. Larger pixels still work, only slower. */
 } rs__roadfield_params;
 
-rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p, rs__roadfield **out);
+rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
+                              rs__roadfield **out);
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);
 size_t rs__roadfield_bytes(const rs__roadfield *f);
 
 typedef struct rs__road_point {
-    uint32_t road;
-    uint32_t seg;
-    double s;
-    double t;
-    double dist;
+    uint32_t road;     /* index in rs_roads */
+    uint32_t seg;      /* segment index within that road (points seg..seg+1) */
+    double s;          /* arc length from the road's first point to the nearest point q, metres */
+    double t;          /* signed lateral offset, + = left of travel; |t| = dist */
+    double dist;       /* |p - q| */
     double half_width;
 } rs__road_point;
+
+/* Nearest road centreline to local point (x, y) among segments with
+ * dist - half_width <= reach. Returns 1 and fills *out, or 0 when none or
+ * (x, y) is more than one index cell outside the map. O(1) for an empty
+ * cell; reach <= reach_extra + pixel*sqrt(2)/2 needs one cell's list, larger
+ * reach scans the cells around. Ties: lowest road, then lowest segment. */
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out);
-void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, double pix,
-                            double *out, size_t stride);
+
+/* Coverage of pixels [px0, px0+w) x [py0, py0+h), pixel side `pix` metres:
+ * out[(py-py0)*stride + (px-px0)] = area fraction of the pixel inside the
+ * union of the roads (round caps and joins). A pixel's value depends only on
+ * (px, py, pix) and the field, never on the block. */
+void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
+                            double pix, double *out, size_t stride);
+
+/* Index statistics (tests, benchmarks, docs). */
+typedef struct rs__roadfield_stats {
+    double index_cell;     /* cell size actually used, metres */
+    uint32_t gw, gh;       /* grid cells (the map plus one cell on every side) */
+    size_t segments;       /* segments that reach the grid */
+    size_t entries;        /* (cell, segment) pairs */
+    size_t nonempty_cells, full_cells;
+    size_t max_list;       /* longest cell list */
+} rs__roadfield_stats;
+void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out);
 #endif

@@ -1,0 +1,151 @@
+/* Road field benchmark: analytic coverage (lib/roadfield.c) of the city
+ * scene at T = 4 against the exact ground truth: edge error (SPEC), max
+ * pixel error, build and whole-image coverage time; optionally Cairo
+ * (python3-cairo) filling the same stroked roads, timed in the same run.
+ * Usage: roadfield OUTDIR   (writes OUTDIR/roadfield.md, and
+ * OUTDIR/roadfield_roads.txt for tests/bench/roadfield_cairo.py) */
+#include "groundtruth.h"
+#include "roadfield.h"
+#include "roadsplat.h"
+#include "scenes.h"
+#include "timing.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RUNS 7
+
+/* Scene roads as "W n x0 y0 x1 y1 ..." lines for the Cairo script. */
+static int write_plain(const char *path, const sc_scene *s)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return -1;
+    fprintf(f, "%u %u %.17g\n", s->w, s->h, s->cell_size);
+    for (size_t i = 0; i < s->nroads; i++) {
+        fprintf(f, "%.17g %zu", s->roads[i].width, s->roads[i].n);
+        for (size_t k = 0; k < 2 * s->roads[i].n; k++) fprintf(f, " %.17g", s->roads[i].xy[k]);
+        fputc('\n', f);
+    }
+    return fclose(f) ? -1 : 0;
+}
+
+/* Median ms of Cairo's fill (the script prints it), or < 0 when unavailable. */
+static double cairo_ms(const char *roads_path)
+{
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "python3 tests/bench/roadfield_cairo.py '%s' 4 2>/dev/null", roads_path);
+    FILE *p = popen(cmd, "r");
+    if (!p) return -1;
+    double ms = -1;
+    if (fscanf(p, "%lf", &ms) != 1) ms = -1;
+    if (pclose(p) != 0) ms = -1;
+    return ms;
+}
+
+typedef struct run_result {
+    double build_ms, cover_ms, edge, maxd, maxpix;
+    size_t bytes;
+    rs__roadfield_stats st;
+} run_result;
+
+static int measure(rs_ctx *ctx, const rs_roads *roads, const sc_scene *sc, unsigned T, double index_cell,
+                   const float *G, double L, double *cov, float *R, run_result *rr)
+{
+    uint32_t w = (sc->w - 1) * T, h = (sc->h - 1) * T;
+    double pix = sc->cell_size / T, tb[RUNS], tc[RUNS];
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.cell_size = sc->cell_size;
+    p.width_m = sc_extent_x(sc);
+    p.height_m = sc_extent_y(sc);
+    p.index_cell = index_cell;
+    p.pixel = pix;
+    rs__roadfield *f = NULL;
+    for (int i = 0; i < RUNS; i++) {
+        double t0 = tm_now_ms();
+        if (rs__roadfield_build(ctx, roads, &p, &f)) return -1;
+        tb[i] = tm_now_ms() - t0;
+        t0 = tm_now_ms();
+        rs__roadfield_coverage(f, 0, 0, w, h, pix, cov, w);
+        tc[i] = tm_now_ms() - t0;
+        if (i + 1 < RUNS) rs__roadfield_free(ctx, f);
+    }
+    rr->build_ms = tm_median(tb, RUNS);
+    rr->cover_ms = tm_median(tc, RUNS);
+    rr->bytes = rs__roadfield_bytes(f);
+    rs__roadfield_get_stats(f, &rr->st);
+    rs__roadfield_free(ctx, f);
+    rr->maxpix = 0;
+    for (size_t i = 0; i < (size_t)w * h; i++) {
+        R[i] = (float)cov[i];
+        double d = fabs(cov[i] - G[i]);
+        if (d > rr->maxpix) rr->maxpix = d;
+    }
+    gt_result gr;
+    if (gt_edge_error_g(sc, T, G, L, R, &gr)) return -1;
+    rr->edge = gr.edge_error;
+    rr->maxd = gr.max_disp;
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    const char *dir = argc > 1 ? argv[1] : "build/bench";
+    char path[1024];
+    sc_scene sc;
+    rs_ctx *ctx = NULL;
+    rs_roads *roads = NULL;
+    const unsigned T = 4;
+    if (rs_ctx_create(NULL, NULL, &ctx) || sc_city_default(&sc, 1) || rs_roads_create(ctx, &roads)) return 1;
+    for (size_t i = 0; i < sc.nroads; i++)
+        if (rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n)) return 1;
+    uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
+    size_t n = (size_t)w * h;
+    float *G = malloc(n * sizeof *G), *R = malloc(n * sizeof *R);
+    double *cov = malloc(n * sizeof *cov);
+    if (!G || !R || !cov || gt_coverage(&sc, T, G)) return 1;
+    double L = gt_outline_length(&sc, T);
+    double cells[] = { 0, 2.5, 10 };
+    run_result rr[3];
+    for (int i = 0; i < 3; i++)
+        if (measure(ctx, roads, &sc, T, cells[i], G, L, cov, R, &rr[i])) return 1;
+    snprintf(path, sizeof path, "%s/roadfield_roads.txt", dir);
+    double cairo = write_plain(path, &sc) ? -1 : cairo_ms(path);
+
+    snprintf(path, sizeof path, "%s/roadfield.md", dir);
+    FILE *md = fopen(path, "w");
+    if (!md) return 1;
+    fprintf(md, "## Road field: analytic coverage (tests/bench/roadfield.c)\n\n");
+    fprintf(md, "City scene (`sc_city_default(1)`: %zu roads, %ux%u samples, %g m cells) at T = %u: %ux%u pixels of "
+                "%g m. Coverage = area fraction of each pixel inside the union of the roads "
+                "(lib/roadfield.c, one thread); error against the exact ground truth (tests/groundtruth.c). "
+                "Times are medians of %d runs.\n\n",
+            sc.nroads, sc.w, sc.h, sc.cell_size, T, w, h, sc.cell_size / T, RUNS);
+    fprintf(md, "| index cell (m) | cells | entries | full cells | max list | bytes | build ms | coverage ms | "
+                "edge error (m) | max edge disp (m) | max pixel error |\n");
+    fprintf(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    for (int i = 0; i < 3; i++)
+        fprintf(md, "| %g%s | %ux%u | %zu | %zu | %zu | %zu | %.2f | %.2f | %.5f | %.4f | %.4f |\n", rr[i].st.index_cell,
+                cells[i] == 0 ? " (auto)" : "", rr[i].st.gw, rr[i].st.gh, rr[i].st.entries, rr[i].st.full_cells,
+                rr[i].st.max_list, rr[i].bytes, rr[i].build_ms, rr[i].cover_ms, rr[i].edge, rr[i].maxd, rr[i].maxpix);
+    if (cairo >= 0)
+        fprintf(md, "\nCairo (python3-cairo, tests/bench/roadfield_cairo.py) filling the same roads stroked with "
+                    "round caps and joins into an A8 surface of the same size, antialias default: %.2f ms "
+                    "(median, fill only). Coverage (auto cell) / Cairo = %.2f.\n",
+                cairo, rr[0].cover_ms / cairo);
+    else
+        fprintf(md, "\nCairo comparison skipped (python3-cairo not available).\n");
+    fclose(md);
+    printf("roadfield: auto cell %.3g m: build %.2f ms, coverage %.2f ms, edge %.5f m, max pixel err %.4f; cairo %.2f ms\n",
+           rr[0].st.index_cell, rr[0].build_ms, rr[0].cover_ms, rr[0].edge, rr[0].maxpix, cairo);
+    for (int i = 1; i < 3; i++)
+        printf("  cell %g: build %.2f ms, coverage %.2f ms, edge %.5f\n", rr[i].st.index_cell, rr[i].build_ms,
+               rr[i].cover_ms, rr[i].edge);
+    free(G); free(R); free(cov);
+    rs_roads_free(ctx, roads);
+    rs_ctx_free(ctx);
+    sc_scene_free(&sc);
+    return 0;
+}

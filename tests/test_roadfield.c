@@ -1,0 +1,473 @@
+/* Road field (lib/roadfield.c): nearest-centreline queries against a brute
+ * force over every segment, coverage against the exact ground truth
+ * (tests/groundtruth.c), translation and tiling invariance, extreme input,
+ * allocation failures. */
+#include "harness.h"
+#include "groundtruth.h"
+#include "roadfield.h"
+#include "scenes.h"
+
+#include <stdlib.h>
+
+static rs_ctx *ctx;
+
+/* --- brute force (independent of lib/roadfield.c) ---------------------------- */
+typedef struct bf_hit {
+    int found;
+    size_t road, seg;
+    double s, t, dist;
+} bf_hit;
+
+/* Local coordinates exactly as the library must make them (rs__local_coord). */
+static bf_hit brute_nearest(const rs_roads *roads, double ox, double oy, double cs, double x, double y, double reach)
+{
+    bf_hit best;
+    memset(&best, 0, sizeof best);
+    double q = rs__local_quantum(cs);
+    for (size_t r = 0; r < rs_roads_count(roads); r++) {
+        const double *xy;
+        size_t n;
+        double w;
+        rs_roads_get(roads, r, NULL, &w, &xy, &n);
+        double s0 = 0;
+        for (size_t k = 0; k + 1 < n; k++) {
+            double ax = rs__local_coord(xy[2 * k], ox, q), ay = rs__local_coord(xy[2 * k + 1], oy, q);
+            double bx = rs__local_coord(xy[2 * k + 2], ox, q), by = rs__local_coord(xy[2 * k + 3], oy, q);
+            double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy, len = sqrt(l2);
+            double u = l2 > 0 ? ((x - ax) * dx + (y - ay) * dy) / l2 : 0, qx, qy;
+            if (u <= 0) { u = 0; qx = ax; qy = ay; }
+            else if (u >= 1) { u = 1; qx = bx; qy = by; }
+            else { qx = ax + u * dx; qy = ay + u * dy; }
+            double d = hypot(x - qx, y - qy);
+            if (d - 0.5 * w <= reach && (!best.found || d < best.dist)) {
+                double cross = len > 0 ? ((x - ax) * dy - (y - ay) * dx) / len : 0;
+                best.found = 1; best.road = r; best.seg = k; best.dist = d;
+                best.s = s0 + u * len;
+                best.t = cross >= 0 ? d : -d;
+            }
+            s0 += len;
+        }
+    }
+    return best;
+}
+
+/* --- random scenes --------------------------------------------------------------- */
+/* Roads inside and around a W x H map: ordinary polylines, sharp bends
+ * (170 degrees), repeated points, and a few roads 1e6 m long. Points are
+ * whole millimetres (like the city scene), shifted by (ox, oy). */
+static rs_roads *random_roads(sc_rng *g, double W, double H, int nroads, double ox, double oy, sc_scene *sc)
+{
+    rs_roads *roads = NULL;
+    if (rs_roads_create(ctx, &roads)) return NULL;
+    double xy[2 * 16], loc[2 * 16];
+    for (int r = 0; r < nroads; r++) {
+        int kind = (int)(sc_rng_unit(g) * 10);
+        size_t n = 2 + (size_t)(sc_rng_unit(g) * 9);
+        double width = 0.5 * floor(sc_rng_range(g, 2, 20));
+        double x = sc_rng_range(g, -10, W + 10), y = sc_rng_range(g, -10, H + 10);
+        double ang = sc_rng_range(g, 0, 2 * RS__PI), step = sc_rng_range(g, 2, 40);
+        for (size_t k = 0; k < n; k++) {
+            loc[2 * k] = floor(x * 1000 + 0.5) / 1000;
+            loc[2 * k + 1] = floor(y * 1000 + 0.5) / 1000;
+            if (kind == 0 && k % 3 == 1) continue; /* repeated point: zero-length segment */
+            double turn = kind == 1 ? (k % 2 ? 1 : -1) * 170 * RS__PI / 180 : sc_rng_range(g, -1, 1);
+            ang += turn;
+            double len = kind == 2 ? 1e6 : step;
+            x += len * cos(ang);
+            y += len * sin(ang);
+        }
+        if (kind == 2) { /* long road through the map: centre it */
+            double mx = 0.5 * (loc[0] + loc[2 * n - 2]) - 0.5 * W, my = 0.5 * (loc[1] + loc[2 * n - 1]) - 0.5 * H;
+            for (size_t k = 0; k < n; k++) {
+                loc[2 * k] = floor((loc[2 * k] - mx) * 1000 + 0.5) / 1000;
+                loc[2 * k + 1] = floor((loc[2 * k + 1] - my) * 1000 + 0.5) / 1000;
+            }
+        }
+        for (size_t k = 0; k < n; k++) { xy[2 * k] = loc[2 * k] + ox; xy[2 * k + 1] = loc[2 * k + 1] + oy; }
+        if (rs_roads_add(ctx, roads, NULL, width, xy, n)) { rs_roads_free(ctx, roads); return NULL; }
+        if (sc && sc_add_road(sc, width, loc, n)) { rs_roads_free(ctx, roads); return NULL; }
+    }
+    return roads;
+}
+
+static rs__roadfield_params params(double ox, double oy, double cs, double W, double H, double reach, double pix)
+{
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.origin_x = ox; p.origin_y = oy; p.cell_size = cs; p.width_m = W; p.height_m = H;
+    p.reach_extra = reach; p.pixel = pix;
+    return p;
+}
+
+static void test_nearest_brute(void)
+{
+    sc_rng g;
+    sc_rng_seed(&g, 7);
+    int queries = 0, bad_found = 0, bad_road = 0, bad_val = 0, found = 0;
+    for (int scene = 0; scene < 12; scene++) {
+        double W = 120, H = 90, cs = 2, ox = scene % 3 == 2 ? 5e6 : 0, oy = scene % 3 == 2 ? -3e6 : 0;
+        rs_roads *roads = random_roads(&g, W, H, 12, ox, oy, NULL);
+        CHECK(roads != NULL);
+        if (!roads) return;
+        rs__roadfield_params p = params(ox, oy, cs, W, H, scene % 2 ? 3 : 0, 0.5);
+        p.index_cell = scene % 4 == 3 ? 1.5 : 0;
+        rs__roadfield *f = NULL;
+        CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+        for (int i = 0; f && i < 3000; i++) {
+            double x = sc_rng_range(&g, 0, W), y = sc_rng_range(&g, 0, H);
+            /* mostly within the lists' reach; every 5th needs neighbour cells,
+             * as far as the map (plus the list reach) extends: roads beyond
+             * it are not indexed */
+            double border = fmin(fmin(x, W - x), fmin(y, H - y));
+            double reach = i % 5 ? sc_rng_range(&g, 0, p.reach_extra + 0.35)
+                                 : sc_rng_range(&g, 0, fmin(25, border + p.reach_extra));
+            bf_hit b = brute_nearest(roads, ox, oy, cs, x, y, reach);
+            rs__road_point rp;
+            int got = rs__roadfield_nearest(f, x, y, reach, &rp);
+            queries++;
+            if (got != b.found) { bad_found++; continue; }
+            if (!got) continue;
+            found++;
+            if (rp.road != b.road) { bad_road++; continue; }
+            double stol = 1e-6 + 1e-9 * fabs(b.s);
+            if (fabs(rp.dist - b.dist) > 1e-6 || fabs(rp.s - b.s) > stol || fabs(rp.t - b.t) > 1e-6) {
+                if (bad_val++ < 5)
+                    fprintf(stderr, "    (%g,%g) road %u seg %u/%zu: s %.9g/%.9g t %.9g/%.9g d %.9g/%.9g\n", x, y,
+                            rp.road, rp.seg, b.seg, rp.s, b.s, rp.t, b.t, rp.dist, b.dist);
+            }
+        }
+        rs__roadfield_free(ctx, f);
+        rs_roads_free(ctx, roads);
+    }
+    printf("nearest: %d queries, %d found a road\n", queries, found);
+    CHECK(found > queries / 10);
+    CHECK_EQ_INT(bad_found, 0);
+    CHECK_EQ_INT(bad_road, 0);
+    CHECK_EQ_INT(bad_val, 0);
+}
+
+/* Tie-break and the s/t conventions on a hand-made bend. */
+static void test_nearest_conventions(void)
+{
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    /* east 20 m, then south (y down) 20 m: a right turn seen on the map */
+    double xy[6] = { 10, 10, 30, 10, 30, 30 };
+    CHECK(rs_roads_add(ctx, roads, NULL, 4, xy, 3) == RS_OK);
+    rs__roadfield_params p = params(0, 0, 1, 50, 50, 0, 1);
+    rs__roadfield *f = NULL;
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+    rs__road_point rp;
+    /* travelling east, left is north (smaller y): t > 0 */
+    CHECK(rs__roadfield_nearest(f, 15, 9, 0, &rp) == 1);
+    CHECK_EQ_INT(rp.seg, 0);
+    CHECK_NEAR(rp.s, 5, 1e-12);
+    CHECK_NEAR(rp.t, 1, 1e-12);
+    /* outside of the bend (north-east of the vertex): s = 20, |t| = distance to the vertex */
+    CHECK(rs__roadfield_nearest(f, 31, 9, 0, &rp) == 1);
+    CHECK_NEAR(rp.s, 20, 1e-12);
+    CHECK_NEAR(rp.t, sqrt(2), 1e-12);
+    CHECK_EQ_INT(rp.seg, 0); /* exact tie between both segments: the lower one */
+    /* inside of the bend, either side of the bisector: t continuous, s jumps by 2|t|tan(45) */
+    CHECK(rs__roadfield_nearest(f, 28.9, 11.1 - 1e-9, 0, &rp) == 1);
+    double s1 = rp.s, t1 = rp.t;
+    CHECK(rs__roadfield_nearest(f, 28.9 + 2e-9, 11.1, 0, &rp) == 1);
+    CHECK_NEAR(rp.t, t1, 1e-6);
+    CHECK_NEAR(rp.s - s1, 2 * fabs(t1), 1e-6);
+    CHECK(t1 < 0);
+    /* beyond the reach: none; far outside the map: none */
+    CHECK(rs__roadfield_nearest(f, 15, 3, 0.5, &rp) == 0);
+    CHECK(rs__roadfield_nearest(f, 15, 3, 6, &rp) == 1);
+    CHECK(rs__roadfield_nearest(f, -100, 10, 0, &rp) == 0);
+    CHECK(rs__roadfield_nearest(f, NAN, 10, 0, &rp) == 0);
+    CHECK(rs__roadfield_nearest(f, 15, 10, NAN, &rp) == 0);
+    rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, roads);
+}
+
+/* --- coverage ---------------------------------------------------------------- */
+static double *coverage_image(const rs__roadfield *f, uint32_t w, uint32_t h, double pix)
+{
+    double *c = malloc((size_t)w * h * sizeof *c);
+    if (c) rs__roadfield_coverage(f, 0, 0, w, h, pix, c, w);
+    return c;
+}
+
+/* Max |R - G| and the SPEC edge error of the coverage of scene `sc`. */
+static int compare_gt(const sc_scene *sc, unsigned T, const double *cov, double *maxerr, double *edge)
+{
+    uint32_t w = (sc->w - 1) * T, h = (sc->h - 1) * T;
+    size_t n = (size_t)w * h;
+    float *G = malloc(n * sizeof *G), *R = malloc(n * sizeof *R);
+    gt_result gr;
+    int rc = -1;
+    if (G && R && !gt_coverage(sc, T, G)) {
+        *maxerr = 0;
+        for (size_t i = 0; i < n; i++) {
+            R[i] = (float)cov[i];
+            if (fabs(cov[i] - G[i]) > *maxerr) *maxerr = fabs(cov[i] - G[i]);
+        }
+        if (!gt_edge_error_g(sc, T, G, -1, R, &gr)) { *edge = gr.edge_error; rc = 0; }
+    }
+    free(G);
+    free(R);
+    return rc;
+}
+
+static void test_coverage_random(void)
+{
+    sc_rng g;
+    sc_rng_seed(&g, 11);
+    double worst_max = 0, worst_edge = 0;
+    for (int scene = 0; scene < 6; scene++) {
+        sc_scene sc;
+        unsigned T = scene % 2 ? 4 : 2;
+        CHECK(sc_scene_init(&sc, 61, 46, 2.0) == 0);
+        double W = sc_extent_x(&sc), H = sc_extent_y(&sc);
+        rs_roads *roads = random_roads(&g, W, H, 10, 0, 0, &sc);
+        CHECK(roads != NULL);
+        rs__roadfield_params p = params(0, 0, 2.0, W, H, 0, 2.0 / T);
+        rs__roadfield *f = NULL;
+        CHECK(roads && rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+        double *cov = f ? coverage_image(f, (sc.w - 1) * T, (sc.h - 1) * T, 2.0 / T) : NULL;
+        double mx = 1, edge = 1;
+        CHECK(cov && compare_gt(&sc, T, cov, &mx, &edge) == 0);
+        if (mx > worst_max) worst_max = mx;
+        if (edge > worst_edge) worst_edge = edge;
+        free(cov);
+        rs__roadfield_free(ctx, f);
+        rs_roads_free(ctx, roads);
+        sc_scene_free(&sc);
+    }
+    printf("coverage, random scenes: max pixel error %.4f, worst edge error %.5f m\n", worst_max, worst_edge);
+    /* Sub-squares at corners and crossings: a few percent of a pixel at
+     * most (docs/roadfield.md); the straight edges are exact. */
+    CHECK(worst_max < 0.2);
+    CHECK(worst_edge < 0.003);
+}
+
+static void test_coverage_city(void)
+{
+    sc_scene sc;
+    const unsigned T = 4;
+    CHECK(sc_city_default(&sc, 1) == 0);
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    for (size_t i = 0; i < sc.nroads; i++)
+        CHECK(rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n) == RS_OK);
+    double pix = sc.cell_size / T;
+    rs__roadfield_params p = params(0, 0, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), 0, pix);
+    rs__roadfield *f = NULL;
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+    uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
+    double *cov = f ? coverage_image(f, w, h, pix) : NULL;
+    double mx = 1, edge = 1;
+    CHECK(cov && compare_gt(&sc, T, cov, &mx, &edge) == 0);
+    printf("coverage, city T=4: max pixel error %.4f, edge error %.5f m\n", mx, edge);
+    CHECK(edge < 0.002); /* the splatter needs <= 0.025 m */
+    CHECK(mx < 0.2);
+    /* tiling: odd blocks at odd offsets give the same doubles */
+    if (cov) {
+        double *tile = malloc((size_t)w * h * sizeof *tile);
+        CHECK(tile != NULL);
+        const uint32_t bw = 37, bh = 23;
+        for (uint32_t y = 0; tile && y < h; y += bh)
+            for (uint32_t x = 0; x < w; x += bw) {
+                uint32_t tw = w - x < bw ? w - x : bw, th = h - y < bh ? h - y : bh;
+                rs__roadfield_coverage(f, x, y, tw, th, pix, tile + (size_t)y * w + x, w);
+            }
+        CHECK(tile && memcmp(tile, cov, (size_t)w * h * sizeof *cov) == 0);
+        free(tile);
+    }
+    /* The many-cell path (pixels larger than the build's pixel hint) gives
+     * the same values. */
+    rs__roadfield *f2 = NULL;
+    p.pixel = 0.3;
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f2) == RS_OK);
+    if (f2 && cov) {
+        uint32_t x0 = 600, y0 = 500, bw = 211, bh = 97;
+        double *blk = malloc((size_t)bw * bh * sizeof *blk), md = 0;
+        CHECK(blk != NULL);
+        if (blk) {
+            rs__roadfield_coverage(f2, x0, y0, bw, bh, pix, blk, bw);
+            for (uint32_t y = 0; y < bh; y++)
+                for (uint32_t x = 0; x < bw; x++)
+                    md = fmax(md, fabs(blk[y * bw + x] - cov[(size_t)(y0 + y) * w + x0 + x]));
+        }
+        CHECK(md == 0);
+        free(blk);
+    }
+    rs__roadfield_free(ctx, f2);
+    free(cov);
+    rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, roads);
+    sc_scene_free(&sc);
+}
+
+/* A scene and its copy moved by 5e6 m (origin moved alike) give the same bytes. */
+static void test_translation(void)
+{
+    sc_rng g1, g2;
+    sc_rng_seed(&g1, 99);
+    sc_rng_seed(&g2, 99);
+    double W = 100, H = 80, cs = 1, pix = 0.5;
+    rs_roads *a = random_roads(&g1, W, H, 15, 0, 0, NULL), *b = random_roads(&g2, W, H, 15, 5e6, 5e6, NULL);
+    rs__roadfield_params pa = params(0, 0, cs, W, H, 1, pix), pb = params(5e6, 5e6, cs, W, H, 1, pix);
+    rs__roadfield *fa = NULL, *fb = NULL;
+    CHECK(a && b && rs__roadfield_build(ctx, a, &pa, &fa) == RS_OK && rs__roadfield_build(ctx, b, &pb, &fb) == RS_OK);
+    if (fa && fb) {
+        uint32_t w = 200, h = 160;
+        double *ca = coverage_image(fa, w, h, pix), *cb = coverage_image(fb, w, h, pix);
+        CHECK(ca && cb && memcmp(ca, cb, (size_t)w * h * sizeof *ca) == 0);
+        free(ca);
+        free(cb);
+        int same = 1;
+        for (int i = 0; i < 2000; i++) {
+            double x = sc_rng_range(&g1, 0, W), y = sc_rng_range(&g1, 0, H);
+            rs__road_point ra, rb;
+            memset(&ra, 0, sizeof ra);
+            memset(&rb, 0, sizeof rb);
+            int ga = rs__roadfield_nearest(fa, x, y, 1, &ra), gb = rs__roadfield_nearest(fb, x, y, 1, &rb);
+            if (ga != gb || memcmp(&ra, &rb, sizeof ra) != 0) same = 0;
+        }
+        CHECK(same);
+    }
+    rs__roadfield_free(ctx, fa);
+    rs__roadfield_free(ctx, fb);
+    rs_roads_free(ctx, a);
+    rs_roads_free(ctx, b);
+}
+
+/* Absurd but finite input: no crash, no undefined behaviour (the sanitizer
+ * build runs this), bounded work. */
+static void test_extreme(void)
+{
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    double far[4] = { -1e300, 4.1, 1e300, 4.1 }, dot[4] = { 3, 3, 3, 3 }, huge[4] = { 1e308, -1e308, -1e308, 1e308 };
+    double wide[4] = { 1, 1, 2, 2 };
+    CHECK(rs_roads_add(ctx, roads, NULL, 2, far, 2) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, NULL, 1, dot, 2) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, NULL, 1e9, wide, 2) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, NULL, 1e300, huge, 2) == RS_OK);
+    rs__roadfield_params p = params(0, 0, 1, 64, 64, 1e300, 0);
+    rs__roadfield *f = NULL;
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+    rs__roadfield_stats st;
+    rs__roadfield_get_stats(f, &st);
+    CHECK(st.entries <= (size_t)st.gw * st.gh * 4);
+    double c[16 * 16];
+    rs__roadfield_coverage(f, 0, 0, 16, 16, 4, c, 16);
+    int ones = 1;
+    for (int i = 0; i < 256; i++) ones &= c[i] == 1;
+    CHECK(ones);
+    rs__road_point rp;
+    CHECK(rs__roadfield_nearest(f, 3, 3, 0, &rp) == 1);
+    CHECK(rs__roadfield_nearest(f, 3, 3, 1e308, &rp) == 1);
+    rs__roadfield_coverage(f, 0, 0, 16, 16, 0, c, 16);
+    CHECK(c[0] == 0);
+    rs__roadfield_coverage(f, 0xFFFFFFF0u, 0xFFFFFFF0u, 16, 16, 1e300, c, 16);
+    rs__roadfield_free(ctx, f);
+    /* bad parameters */
+    p.width_m = NAN;
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_ERR_INVALID_ARG);
+    p = params(0, 0, 0, 10, 10, 0, 0);
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_ERR_INVALID_ARG);
+    /* a huge map with a tiny explicit cell: the cell grows, memory stays bounded */
+    p = params(0, 0, 0.01, 1e6, 1e6, 0, 0);
+    p.index_cell = 0.01;
+    rs_roads *one = NULL;
+    double pts[4] = { 10, 10, 20, 10 };
+    CHECK(rs_roads_create(ctx, &one) == RS_OK && rs_roads_add(ctx, one, NULL, 3, pts, 2) == RS_OK);
+    CHECK(rs__roadfield_build(ctx, one, &p, &f) == RS_OK);
+    CHECK(rs__roadfield_bytes(f) < ((size_t)1 << 28));
+    CHECK(rs__roadfield_nearest(f, 15, 11, 0, &rp) == 1 && rp.seg == 0 && fabs(rp.t + 1) < 1e-9);
+    rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, one);
+    /* no roads */
+    rs_roads *none = NULL;
+    CHECK(rs_roads_create(ctx, &none) == RS_OK);
+    p = params(0, 0, 1, 10, 10, 0, 0);
+    CHECK(rs__roadfield_build(ctx, none, &p, &f) == RS_OK);
+    rs__roadfield_coverage(f, 0, 0, 16, 16, 1, c, 16);
+    CHECK(c[0] == 0 && c[255] == 0);
+    CHECK(rs__roadfield_nearest(f, 5, 5, 100, &rp) == 0);
+    rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, none);
+    rs_roads_free(ctx, roads);
+}
+
+/* --- allocation failures ----------------------------------------------------------- */
+typedef struct fail_alloc {
+    long countdown; /* fail when it reaches 0; <0 never */
+    long live;
+} fail_alloc;
+
+static void *fa_malloc(void *u, size_t n)
+{
+    fail_alloc *f = u;
+    if (f->countdown == 0) return NULL;
+    if (f->countdown > 0) f->countdown--;
+    void *p = malloc(n);
+    if (p) f->live++;
+    return p;
+}
+static void *fa_realloc(void *u, void *p, size_t n)
+{
+    fail_alloc *f = u;
+    if (f->countdown == 0) return NULL;
+    if (f->countdown > 0) f->countdown--;
+    void *q = realloc(p, n);
+    if (q && !p) f->live++;
+    return q;
+}
+static void fa_free(void *u, void *p)
+{
+    fail_alloc *f = u;
+    f->live--;
+    free(p);
+}
+
+static void test_alloc_failures(void)
+{
+    sc_rng g;
+    sc_rng_seed(&g, 5);
+    rs_roads *roads = random_roads(&g, 60, 60, 40, 0, 0, NULL); /* > 64 segments: the array grows */
+    CHECK(roads != NULL);
+    int succeeded = 0, wrong = 0, leaks = 0;
+    long n;
+    for (n = 0; n < 1000 && !succeeded && roads; n++) {
+        fail_alloc fa = { -1, 0 };
+        rs_allocator al = { fa_malloc, fa_realloc, fa_free, &fa };
+        rs_ctx *c = NULL;
+        if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong++; break; }
+        fa.countdown = n;
+        rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
+        rs__roadfield *f = NULL;
+        rs_result r = rs__roadfield_build(c, roads, &p, &f);
+        if (r == RS_OK) succeeded = 1;
+        else if (r != RS_ERR_NOMEM || f != NULL) wrong++;
+        rs__roadfield_free(c, f);
+        rs_ctx_free(c);
+        if (fa.live != 0) leaks++;
+    }
+    CHECK(succeeded);
+    CHECK(n > 4);
+    CHECK_EQ_INT(wrong, 0);
+    CHECK_EQ_INT(leaks, 0);
+    rs_roads_free(ctx, roads);
+}
+
+int main(void)
+{
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_nearest_conventions();
+    test_nearest_brute();
+    test_translation();
+    test_coverage_random();
+    test_coverage_city();
+    test_extreme();
+    test_alloc_failures();
+    rs_ctx_free(ctx);
+    return th_finish("test_roadfield");
+}
