@@ -400,7 +400,8 @@ int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reac
 }
 
 /* Analytic edges: the road field over the map. */
-static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, rs_road_grid *g)
+static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, uint32_t texels,
+                             rs_road_grid *g)
 {
     rs__roadfield_params p;
     memset(&p, 0, sizeof p);
@@ -409,6 +410,7 @@ static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     p.cell_size = dem->frame.cell_size;
     p.width_m = (double)(dem->width - 1) * dem->frame.cell_size;
     p.height_m = (double)(dem->height - 1) * dem->frame.cell_size;
+    p.pixel = dem->frame.cell_size / texels;
     rs_result r = rs__roadfield_build(ctx, roads, &p, &g->field);
     if (r == RS_OK) {
         for (size_t i = 0; i < rs_roads_count(roads); i++) {
@@ -442,7 +444,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->cell_size = dem->frame.cell_size;
     g->stats.bytes = sizeof *g;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
-        r = build_field(ctx, dem, roads, g);
+        r = build_field(ctx, dem, roads, o.texels, g);
         if (r) {
             rs_road_grid_free(ctx, g);
             return r;
