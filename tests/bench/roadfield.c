@@ -34,14 +34,18 @@ static int write_plain(const char *path, const sc_scene *s)
 /* Median ms of Cairo's fill (the script prints it), or < 0 when unavailable. */
 static double cairo_ms(const char *roads_path)
 {
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd, "python3 tests/bench/roadfield_cairo.py '%s' 4 2>/dev/null", roads_path);
-    FILE *p = popen(cmd, "r");
-    if (!p) return -1;
-    double ms = -1;
-    if (fscanf(p, "%lf", &ms) != 1) ms = -1;
-    if (pclose(p) != 0) ms = -1;
-    return ms;
+    /* the first python3 on PATH may lack cairo (pyenv): try the system one too */
+    const char *py[2] = { "python3", "/usr/bin/python3" };
+    for (int i = 0; i < 2; i++) {
+        char cmd[2048];
+        snprintf(cmd, sizeof cmd, "%s tests/bench/roadfield_cairo.py '%s' 4 2>/dev/null", py[i], roads_path);
+        FILE *p = popen(cmd, "r");
+        if (!p) continue;
+        double ms = -1;
+        if (fscanf(p, "%lf", &ms) != 1) ms = -1;
+        if (pclose(p) == 0 && ms >= 0) return ms;
+    }
+    return -1;
 }
 
 typedef struct run_result {
