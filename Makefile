@@ -58,7 +58,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales
+DEPS_PKGS := libopenimageio-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo
 
 .PHONY: all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install uninstall help clean check-deps
 .DEFAULT_GOAL := all
