@@ -109,9 +109,9 @@ done
 # crop_pgm IN X Y W H OUT: the rows of a 16-bit P5 window, 240 samples a row
 crop_pgm() {
     hdr=$(head -3 "$1" | wc -c)
-    y=0; : >"$7"
+    y=0; : >"$6"
     while [ $y -lt "$5" ]; do
-        tail -c +$((hdr + 1 + ( ($3 + y) * 240 + $2) * 2)) "$1" | head -c $(($4 * 2)) >>"$7"
+        tail -c +$((hdr + 1 + ( ($3 + y) * 240 + $2) * 2)) "$1" | head -c $(($4 * 2)) >>"$6"
         y=$((y + 1))
     done
 }
