@@ -193,7 +193,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (rs_ctx_create(NULL, &lim, &ctx) != RS_OK) { free(z); return 0; }
     REQUIRE(rs_dem_create(ctx, W, H, z, &dem) == RS_OK); /* finite or NaN: valid */
     REQUIRE(rs_roads_create(ctx, &roads) == RS_OK);
-    int bad_frame = (flags & 0x80) && corrupt(&o, &fr, probe) == 2;
+    /* frame fields are corrupted here, option fields after the textures */
+    rs_splat_options o_corrupt = o;
+    int bad_frame = (flags & 0x80) && corrupt(&o_corrupt, &fr, probe) == 2;
     {
         rs_result fr_r = rs_dem_set_frame(ctx, dem, &fr);
         REQUIRE(bad_frame ? fr_r == RS_ERR_INVALID_ARG : fr_r == RS_OK);
@@ -228,7 +230,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     const size_t nroads = rs_roads_count(roads);
 
-    if (flags & 0x80) invalid = 1; /* an option was corrupted above */
+    if (flags & 0x80) invalid |= corrupt(&o, &fr, probe);
     cancel_state cancel = { 0, 1u + probe % 8 };
     if (flags & 0x40) { o.progress = cancel_cb; o.progress_user = &cancel; }
 
