@@ -476,6 +476,9 @@ static double capsule_cover(const rf_seg *s, double x, double y, double side, do
         double t = wx * s->uy - wy * s->ux, at = fabs(t);
         if (at - s->r >= e) return 0;
         if (at + e <= s->r) return 1;
+        /* the far edge misses the square (halfplane's a + b, same rounding): its term is exactly 0 or 1 */
+        if (at + s->r >= 0.5 * side * fabs(s->uy) + 0.5 * side * fabs(s->ux)) return t >= 0 ? halfplane(s->uy, -s->ux, side, s->r - t)
+                                          : 1 - halfplane(s->uy, -s->ux, side, -s->r - t);
         return halfplane(s->uy, -s->ux, side, s->r - t) - halfplane(s->uy, -s->ux, side, -s->r - t);
     }
     if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
@@ -699,12 +702,12 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
     double e = pix * HALF_SQRT2;
     size_t base = (size_t)row * f->gw;
     uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0;
+    memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
     for (uint32_t m = 0; m < rb->nrun; m++) {
         uint32_t kb = rb->rk[m], ke = rb->rk[m + 1];
         size_t cell = base + rb->rc[m];
-        if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1])
-            for (uint32_t k = kb; k < ke; k++) o[k] = 0;
-        else if (f->full[cell])
+        if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
+        if (f->full[cell])
             for (uint32_t k = kb; k < ke; k++) o[k] = 1;
         else {
             rb->todo[ntodo++] = m;
@@ -745,7 +748,7 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) {
             if (rb->deep[k]) { o[k] = 1; continue; }
             uint8_t c = rb->cnt[k];
-            if (c == 0) { o[k] = 0; continue; }
+            if (c == 0) continue; /* already 0 */
             double cx = (a + (double)k) * pix;
             rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
             if (c > SPAN_CAND) { o[k] = pixel_cover(f, &cr, cx, cy, pix); continue; }
