@@ -31,6 +31,8 @@ typedef struct rf_seg {
     double ux, uy, len;    /* unit direction ((0,0) for a zero-length segment), length */
     double r;              /* half width */
     double s0;             /* arc length of the road at (ax, ay) */
+    double xmin, xmax, ymin, ymax; /* bounding box of the centreline */
+    double tol;            /* distance slack of the row spans (coverage), metres */
     uint32_t road, seg;
 } rf_seg;
 
@@ -43,6 +45,9 @@ struct rs__roadfield {
     uint32_t *start;   /* gw*gh + 1 offsets into ids */
     uint32_t *ids;     /* segment indices, ascending per cell */
     uint8_t *full;     /* 1: every pixel whose centre is in the cell is fully road */
+    uint32_t *rstart;  /* gh + 1 offsets into rids */
+    uint32_t *rids;    /* per grid row: every segment listed in a cell of the row, once */
+    uint8_t *rspan;    /* per grid row: 1 when the row spans are valid (every segment of moderate size) */
     rf_seg *seg;
     size_t nseg, nent, bytes;
     size_t nonempty, nfull, maxlist;
@@ -188,6 +193,8 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     /* halves: the difference of two finite coordinates cannot overflow */
     double dxh = 0.5 * bx - 0.5 * ax, dyh = 0.5 * by - 0.5 * ay, lh = hypot(dxh, dyh);
     s->ax = ax; s->ay = ay; s->bx = bx; s->by = by;
+    s->xmin = fmin(ax, bx); s->xmax = fmax(ax, bx);
+    s->ymin = fmin(ay, by); s->ymax = fmax(ay, by);
     s->ux = lh > 0 ? dxh / lh : 0;
     s->uy = lh > 0 ? dyh / lh : 0;
     s->len = 2 * lh;
@@ -203,11 +210,61 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
     rs__free(ctx, f->start);
     rs__free(ctx, f->ids);
     rs__free(ctx, f->full);
+    rs__free(ctx, f->rstart);
+    rs__free(ctx, f->rids);
+    rs__free(ctx, f->rspan);
     rs__free(ctx, f->seg);
     rs__free(ctx, f);
 }
 
 static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
+
+/* Row lists for the coverage: per grid row, every segment of the row's cell
+ * lists (each once, in the order first met), and whether the row's spans may be used: every segment
+ * has coordinates, length and half width within 1e8 cells, so the spans'
+ * rounding errors stay far below the slack `tol` (docs/roadfield.md). */
+static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
+{
+    uint32_t *stamp = rs__calloc(ctx, f->nseg ? f->nseg : 1, sizeof *stamp);
+    f->rstart = rs__alloc_array(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
+    f->rspan = rs__calloc(ctx, f->gh, 1);
+    if (!stamp || !f->rstart || !f->rspan) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
+    double ext = fmax((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
+    for (size_t k = 0; k < f->nseg; k++) {
+        rf_seg *s = &f->seg[k];
+        double m = fmax(fmax(fmax(fabs(s->ax), fabs(s->ay)), fmax(fabs(s->bx), fabs(s->by))),
+                        fmax(fmax(s->len, s->r), ext));
+        s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
+    }
+    uint64_t run = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+            f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
+            if (!f->rids) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
+            memset(stamp, 0, (f->nseg ? f->nseg : 1) * sizeof *stamp);
+            run = 0;
+        }
+        for (uint32_t j = 0; j < f->gh; j++) {
+            int ok = 1;
+            if (pass == 0) f->rstart[j] = (uint32_t)run;
+            for (size_t cell = (size_t)j * f->gw; cell < (size_t)(j + 1) * f->gw; cell++)
+                for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                    uint32_t id = f->ids[k];
+                    if (stamp[id] == j + 1) continue;
+                    stamp[id] = j + 1;
+                    if (pass == 1) {
+                        f->rids[run] = id;
+                        ok &= f->seg[id].tol > 0;
+                    }
+                    run++;
+                }
+            if (pass == 1) f->rspan[j] = (uint8_t)ok;
+        }
+        if (pass == 0) f->rstart[f->gh] = (uint32_t)run;
+    }
+    rs__free(ctx, stamp);
+    return RS_OK;
+}
 
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out)
@@ -310,8 +367,10 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
     if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
+    if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
-               cap_seg * sizeof(rf_seg);
+               cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
+               (size_t)f->rstart[f->gh] * sizeof *f->rids;
     *out = f;
     rs__ok(ctx);
     return RS_OK;
@@ -417,6 +476,9 @@ static double capsule_cover(const rf_seg *s, double x, double y, double side, do
         double t = wx * s->uy - wy * s->ux, at = fabs(t);
         if (at - s->r >= e) return 0;
         if (at + e <= s->r) return 1;
+        /* the far edge misses the square (halfplane's a + b, same rounding): its term is exactly 0 or 1 */
+        if (at + s->r >= 0.5 * side * fabs(s->uy) + 0.5 * side * fabs(s->ux)) return t >= 0 ? halfplane(s->uy, -s->ux, side, s->r - t)
+                                          : 1 - halfplane(s->uy, -s->ux, side, -s->r - t);
         return halfplane(s->uy, -s->ux, side, s->r - t) - halfplane(s->uy, -s->ux, side, -s->r - t);
     }
     if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
@@ -454,55 +516,55 @@ typedef struct rf_near {
     int n, many;
 } rf_near;
 
-/* Coverage of pixel centred (cx, cy) of side pix by the union of the
- * capsules listed in the cells `cr`. */
-static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx, double cy, double pix)
+/* One capsule against the pixel centred (cx, cy) with half diagonal e:
+ * 2 = the centre is deep inside (d <= r - e, coverage 1), 1 = near (the
+ * boundary may cross the pixel: d < r + e), 0 = clear. Squared distances:
+ * no square root for the far and deep pixels. */
+static int seg_class(const rf_seg *s, double cx, double cy, double e)
 {
-    double e = pix * HALF_SQRT2;
-    rf_near nr;
-    nr.n = nr.many = 0;
-    for (uint32_t j = cr->j0; j <= cr->j1; j++)
-        for (uint32_t i = cr->i0; i <= cr->i1; i++) {
-            size_t cell = (size_t)j * f->gw + i;
-            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
-                uint32_t id = f->ids[k];
-                const rf_seg *s = &f->seg[id];
-                /* squared distances: no square root for the far and deep pixels */
-                double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy;
-                if (!(pr > 0)) {
-                } else if (pr >= s->len) {
-                    wx = cx - s->bx;
-                    wy = cy - s->by;
-                } else {
-                    wx -= pr * s->ux;
-                    wy -= pr * s->uy;
-                }
-                double d2 = wx * wx + wy * wy, ri = s->r - e, ro = s->r + e;
-                if (d2 < 1e300) {
-                    if (ri > 0 && d2 <= ri * ri) return 1;
-                    if (!(d2 < ro * ro)) continue;
-                } else {
-                    double D = hypot(wx, wy) - s->r;
-                    if (D <= -e) return 1;
-                    if (!(D < e)) continue;
-                }
-                int seen = 0;
-                for (int m = 0; m < nr.n && !seen; m++) seen = nr.id[m] == id;
-                if (seen) continue;
-                if (nr.n < NEAR_MAX) nr.id[nr.n++] = id;
-                else nr.many = 1;
-            }
-        }
-    if (nr.n == 0) return 0;
-    if (nr.n == 1) {
+    double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy;
+    if (!(pr > 0)) {
+    } else if (pr >= s->len) {
+        wx = cx - s->bx;
+        wy = cy - s->by;
+    } else {
+        wx -= pr * s->ux;
+        wy -= pr * s->uy;
+    }
+    double d2 = wx * wx + wy * wy, ri = s->r - e, ro = s->r + e;
+    if (d2 < 1e300) {
+        if (ri > 0 && d2 <= ri * ri) return 2;
+        return d2 < ro * ro;
+    }
+    double D = hypot(wx, wy) - s->r;
+    if (D <= -e) return 2;
+    return D < e;
+}
+
+/* Adds a near capsule (each once). */
+static void near_add(rf_near *nr, uint32_t id)
+{
+    for (int m = 0; m < nr->n; m++)
+        if (nr->id[m] == id) return;
+    if (nr->n < NEAR_MAX) nr->id[nr->n++] = id;
+    else nr->many = 1;
+}
+
+/* Coverage of the pixel from its near capsules `nr` (none deep); `cr`: the
+ * cells whose lists hold every candidate (used when nr->many). */
+static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
+                         double pix, double e)
+{
+    if (nr->n == 0) return 0;
+    if (nr->n == 1) {
         /* one boundary: exact if straight within the pixel */
-        const rf_seg *s = &f->seg[nr.id[0]];
+        const rf_seg *s = &f->seg[nr->id[0]];
         double pr = (cx - s->ax) * s->ux + (cy - s->ay) * s->uy, hp = 0.5 * pix * (fabs(s->ux) + fabs(s->uy));
         if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) return capsule_cover(s, cx, cy, pix, e);
     }
-    if (nr.n == 2 && !nr.many) {
+    if (nr->n == 2 && !nr->many) {
         double v;
-        if (joint_cover(f, nr.id[0], nr.id[1], cx, cy, pix, e, &v)) return v;
+        if (joint_cover(f, nr->id[0], nr->id[1], cx, cy, pix, e, &v)) return v;
     }
     /* Corners, arcs, crossings: sub-squares, each covered by its best capsule. */
     double ps = pix / SUBDIV, es = ps * HALF_SQRT2, acc = 0;
@@ -510,9 +572,9 @@ static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx,
         for (int sx = 0; sx < SUBDIV; sx++) {
             double x = cx + ((double)sx - 0.5 * (SUBDIV - 1)) * ps, y = cy + ((double)sy - 0.5 * (SUBDIV - 1)) * ps;
             double best = 0;
-            if (!nr.many) {
-                for (int m = 0; m < nr.n && best < 1; m++) {
-                    double v = capsule_cover(&f->seg[nr.id[m]], x, y, ps, es);
+            if (!nr->many) {
+                for (int m = 0; m < nr->n && best < 1; m++) {
+                    double v = capsule_cover(&f->seg[nr->id[m]], x, y, ps, es);
                     if (v > best) best = v;
                 }
             } else {
@@ -530,11 +592,182 @@ static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx,
     return acc / (SUBDIV * SUBDIV);
 }
 
+/* Coverage of pixel centred (cx, cy) of side pix by the union of the
+ * capsules listed in the cells `cr`. */
+static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx, double cy, double pix)
+{
+    double e = pix * HALF_SQRT2;
+    rf_near nr;
+    nr.n = nr.many = 0;
+    for (uint32_t j = cr->j0; j <= cr->j1; j++)
+        for (uint32_t i = cr->i0; i <= cr->i1; i++) {
+            size_t cell = (size_t)j * f->gw + i;
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                int c = seg_class(&f->seg[f->ids[k]], cx, cy, e);
+                if (c == 2) return 1;
+                if (c) near_add(&nr, f->ids[k]);
+            }
+        }
+    return near_cover(f, &nr, cr, cx, cy, pix, e);
+}
+
+#define RF_MIN(a, b) ((a) < (b) ? (a) : (b))
+#define RF_MAX(a, b) ((a) > (b) ? (a) : (b))
+
+/* The x intervals where the horizontal line y = cy meets the capsule of
+ * segment s grown to radius ro (*olo, *ohi) and shrunk to radius ri
+ * (*ilo, *ihi): each the hull of the line's pieces in the two end discs
+ * and in the band |t| <= rho between the end normals (a capsule is
+ * convex). Bit 0 of the result: the outer interval is not empty; bit 1:
+ * the inner one. ri <= ro. */
+static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, double *olo, double *ohi, double *ilo,
+                         double *ihi)
+{
+    double ol = HUGE_VAL, oh = -HUGE_VAL, il = HUGE_VAL, ih = -HUGE_VAL;
+    double dy = cy - s->ay, dyb = cy - s->by, ady = fabs(dy), adyb = fabs(dyb), q;
+    if (ady <= ro) {
+        q = sqrt(ro * ro - dy * dy); ol = s->ax - q; oh = s->ax + q;
+        if (ady <= ri) { q = sqrt(ri * ri - dy * dy); il = s->ax - q; ih = s->ax + q; }
+    }
+    if (adyb <= ro) {
+        q = sqrt(ro * ro - dyb * dyb); ol = RF_MIN(ol, s->bx - q); oh = RF_MAX(oh, s->bx + q);
+        if (adyb <= ri) { q = sqrt(ri * ri - dyb * dyb); il = RF_MIN(il, s->bx - q); ih = RF_MAX(ih, s->bx + q); }
+    }
+    if (s->len > 0) {
+        /* u = x - ax: p = u ux + dy uy in [0, len], t = u uy - dy ux in [-rho, rho] */
+        double pl = -HUGE_VAL, ph = HUGE_VAL, t0 = dy * s->ux, p0 = dy * s->uy;
+        if (s->ux != 0) {
+            double u1 = -p0 / s->ux, u2 = (s->len - p0) / s->ux;
+            pl = RF_MIN(u1, u2);
+            ph = RF_MAX(u1, u2);
+        } else if (p0 < 0 || p0 > s->len) pl = HUGE_VAL;
+        if (pl <= ph) {
+            if (s->uy != 0) {
+                double iy = 1 / s->uy, u1 = (t0 - ro) * iy, u2 = (t0 + ro) * iy;
+                double ul = RF_MAX(pl, RF_MIN(u1, u2)), uh = RF_MIN(ph, RF_MAX(u1, u2));
+                if (ul <= uh) { ol = RF_MIN(ol, s->ax + ul); oh = RF_MAX(oh, s->ax + uh); }
+                u1 = (t0 - ri) * iy;
+                u2 = (t0 + ri) * iy;
+                ul = RF_MAX(pl, RF_MIN(u1, u2));
+                uh = RF_MIN(ph, RF_MAX(u1, u2));
+                if (ri >= 0 && ul <= uh) { il = RF_MIN(il, s->ax + ul); ih = RF_MAX(ih, s->ax + uh); }
+            } else {
+                double at = fabs(t0);
+                if (at <= ro) { ol = RF_MIN(ol, s->ax + pl); oh = RF_MAX(oh, s->ax + ph); }
+                if (at <= ri) { il = RF_MIN(il, s->ax + pl); ih = RF_MAX(ih, s->ax + ph); }
+            }
+        }
+    }
+    *olo = ol; *ohi = oh; *ilo = il; *ihi = ih;
+    return (ol <= oh) | (il <= ih) << 1;
+}
+
+/* Pixels [k0, k1] of a row whose centres lie in [lo, hi]: centre of pixel k
+ * is (a + k) pix. Returns 0 when none. */
+static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0, uint32_t k1, uint32_t *kl,
+                       uint32_t *kh)
+{
+    double xl = ceil(lo * ipix - a), xh = floor(hi * ipix - a);
+    if (!(xl <= (double)k1 && xh >= (double)k0 && xl <= xh)) return 0;
+    *kl = xl <= (double)k0 ? k0 : (uint32_t)xl;
+    *kh = xh >= (double)k1 ? k1 : (uint32_t)xh;
+    return 1;
+}
+
+/* Candidates kept per pixel by the row spans; more falls back to the cell scan. */
+#define SPAN_CAND 4
+enum { CHUNK = 1024 };
+
+typedef struct rf_rowbuf {
+    uint8_t deep[CHUNK], cnt[CHUNK];
+    uint32_t cand[CHUNK][SPAN_CAND];
+    /* runs of pixels with the same cell column: run m is pixels
+     * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
+    uint32_t rc[CHUNK], rk[CHUNK + 1], nrun;
+    uint32_t todo[CHUNK]; /* runs needing per-pixel work in the current row */
+} rf_rowbuf;
+
+/* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
+ * full cells 1. For the rest, every segment of the grid row gives two
+ * spans along the row: where the pixel centre is certainly deep inside
+ * (radius r - e - tol) and where it may be near (radius r + e + tol). A
+ * deep pixel is 1, a pixel in no near span is 0, and the others classify
+ * only their few candidates exactly (seg_class, as the cell scan does).
+ * tol is far above the rounding of the spans, so this equals the scan of
+ * the pixel's cell list (docs/roadfield.md): a pixel's value never depends
+ * on the block. */
+static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t row, double cy, double pix,
+                      double *o)
+{
+    double e = pix * HALF_SQRT2;
+    size_t base = (size_t)row * f->gw;
+    uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0;
+    memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
+    for (uint32_t m = 0; m < rb->nrun; m++) {
+        uint32_t kb = rb->rk[m], ke = rb->rk[m + 1];
+        size_t cell = base + rb->rc[m];
+        if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
+        if (f->full[cell])
+            for (uint32_t k = kb; k < ke; k++) o[k] = 1;
+        else {
+            rb->todo[ntodo++] = m;
+            if (kb < k0) k0 = kb;
+            k1 = ke - 1;
+        }
+    }
+    if (!ntodo) return;
+    if (!f->rspan[row]) {
+        for (uint32_t t = 0; t < ntodo; t++) {
+            uint32_t m = rb->todo[t];
+            rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
+            for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) o[k] = pixel_cover(f, &cr, (a + (double)k) * pix, cy, pix);
+        }
+        return;
+    }
+    memset(rb->deep + k0, 0, k1 - k0 + 1);
+    memset(rb->cnt + k0, 0, k1 - k0 + 1);
+    double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
+    for (uint32_t m = f->rstart[row]; m < f->rstart[row + 1]; m++) {
+        uint32_t id = f->rids[m];
+        const rf_seg *s = &f->seg[id];
+        double ro = s->r + e + s->tol, ri = s->r - e - s->tol, olo, ohi, ilo, ihi;
+        uint32_t kl, kh;
+        if (cy < s->ymin - ro || cy > s->ymax + ro || xhi < s->xmin - ro || xlo > s->xmax + ro) continue;
+        int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
+        if (!(got & 1) || !span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) continue;
+        for (uint32_t k = kl; k <= kh; k++) {
+            uint8_t c = rb->cnt[k];
+            if (c < SPAN_CAND) rb->cand[k][c] = id;
+            rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
+        }
+        if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &kl, &kh))
+            memset(rb->deep + kl, 1, kh - kl + 1);
+    }
+    for (uint32_t t = 0; t < ntodo; t++) {
+        uint32_t m = rb->todo[t];
+        for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) {
+            if (rb->deep[k]) { o[k] = 1; continue; }
+            uint8_t c = rb->cnt[k];
+            if (c == 0) continue; /* already 0 */
+            double cx = (a + (double)k) * pix;
+            rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
+            if (c > SPAN_CAND) { o[k] = pixel_cover(f, &cr, cx, cy, pix); continue; }
+            rf_near nr;
+            nr.n = nr.many = 0;
+            int deep = 0;
+            for (uint8_t j = 0; j < c && !deep; j++) {
+                int cl = seg_class(&f->seg[rb->cand[k][j]], cx, cy, e);
+                if (cl == 2) deep = 1;
+                else if (cl) near_add(&nr, rb->cand[k][j]);
+            }
+            o[k] = deep ? 1 : near_cover(f, &nr, &cr, cx, cy, pix, e);
+        }
+    }
+}
+
 void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
                             double pix, double *out, size_t stride)
 {
-    enum { CHUNK = 256 };
-    int64_t col[CHUNK];
     if (!f || !out || !w || !h) return;
     if (!(pix > 0) || !isfinite(pix)) {
         for (uint32_t y = 0; y < h; y++) memset(out + (size_t)y * stride, 0, w * sizeof *out);
@@ -542,35 +775,38 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
     }
     /* One cell's list suffices when half the pixel diagonal is within the
      * lists' margin; then empty cells are 0 and full cells 1 at once. */
-    int one_cell = pix <= f->pixel;
-    for (uint32_t x0 = 0; x0 < w; x0 += CHUNK) {
-        uint32_t n = w - x0 < CHUNK ? w - x0 : CHUNK;
-        for (uint32_t k = 0; k < n; k++)
-            col[k] = cell_of(f, ((double)px0 + (double)(x0 + k) + 0.5) * pix, f->gw);
-        for (uint32_t y = 0; y < h; y++) {
-            double cy = ((double)py0 + (double)y + 0.5) * pix;
-            double *o = out + (size_t)y * stride + x0;
-            int64_t row = cell_of(f, cy, f->gh);
-            if (one_cell) {
-                if (row < 0) { memset(o, 0, n * sizeof *o); continue; }
-                size_t base = (size_t)row * f->gw;
-                for (uint32_t k = 0; k < n; k++) {
-                    if (col[k] < 0) { o[k] = 0; continue; }
-                    size_t cell = base + (size_t)col[k];
-                    if (f->start[cell] == f->start[cell + 1]) o[k] = 0;
-                    else if (f->full[cell]) o[k] = 1;
-                    else {
-                        rf_cells cr = { (uint32_t)col[k], (uint32_t)col[k], (uint32_t)row, (uint32_t)row };
-                        o[k] = pixel_cover(f, &cr, ((double)px0 + (double)(x0 + k) + 0.5) * pix, cy, pix);
-                    }
-                }
-            } else {
-                for (uint32_t k = 0; k < n; k++) {
-                    double cx = ((double)px0 + (double)(x0 + k) + 0.5) * pix;
-                    rf_cells cr;
-                    o[k] = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr) ? pixel_cover(f, &cr, cx, cy, pix) : 0;
+    if (pix <= f->pixel) {
+        rf_rowbuf rb;
+        for (uint32_t x0 = 0; x0 < w; x0 += CHUNK) {
+            uint32_t n = w - x0 < CHUNK ? w - x0 : CHUNK;
+            /* centre of pixel k of the chunk: (a + k) pix */
+            double a = (double)px0 + (double)x0 + 0.5;
+            rb.nrun = 0;
+            for (uint32_t k = 0; k < n; k++) {
+                int64_t c = cell_of(f, ((double)px0 + (double)(x0 + k) + 0.5) * pix, f->gw);
+                uint32_t cc = c < 0 ? UINT32_MAX : (uint32_t)c;
+                if (k == 0 || cc != rb.rc[rb.nrun - 1]) {
+                    rb.rc[rb.nrun] = cc;
+                    rb.rk[rb.nrun++] = k;
                 }
             }
+            rb.rk[rb.nrun] = n;
+            for (uint32_t y = 0; y < h; y++) {
+                double cy = ((double)py0 + (double)y + 0.5) * pix;
+                double *o = out + (size_t)y * stride + x0;
+                int64_t row = cell_of(f, cy, f->gh);
+                if (row < 0) memset(o, 0, n * sizeof *o);
+                else cover_row(f, &rb, a, (uint32_t)row, cy, pix, o);
+            }
+        }
+        return;
+    }
+    for (uint32_t y = 0; y < h; y++) {
+        double cy = ((double)py0 + (double)y + 0.5) * pix, *o = out + (size_t)y * stride;
+        for (uint32_t k = 0; k < w; k++) {
+            double cx = ((double)px0 + (double)k + 0.5) * pix;
+            rf_cells cr;
+            o[k] = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr) ? pixel_cover(f, &cr, cx, cy, pix) : 0;
         }
     }
 }

@@ -1,6 +1,8 @@
 /* Road field benchmark: analytic coverage (lib/roadfield.c) of the city
  * scene at T = 4 against the exact ground truth: edge error (SPEC), max
- * pixel error, build and whole-image coverage time; optionally Cairo
+ * pixel error, build time, coverage time as one whole-image call and as
+ * the splatter calls it (pieces of one DEM row: T rows x the full width,
+ * which must give the same doubles); optionally Cairo
  * (python3-cairo) filling the same stroked roads, timed in the same run.
  * Usage: roadfield OUTDIR   (writes OUTDIR/roadfield.md, and
  * OUTDIR/roadfield_roads.txt for tests/bench/roadfield_cairo.py) */
@@ -49,16 +51,16 @@ static double cairo_ms(const char *roads_path)
 }
 
 typedef struct run_result {
-    double build_ms, cover_ms, edge, maxd, maxpix;
+    double build_ms, cover_ms, rows_ms, edge, maxd, maxpix;
     size_t bytes;
     rs__roadfield_stats st;
 } run_result;
 
 static int measure(rs_ctx *ctx, const rs_roads *roads, const sc_scene *sc, unsigned T, double index_cell,
-                   const float *G, double L, double *cov, float *R, run_result *rr)
+                   const float *G, double L, double *cov, double *rowcov, float *R, run_result *rr)
 {
     uint32_t w = (sc->w - 1) * T, h = (sc->h - 1) * T;
-    double pix = sc->cell_size / T, tb[RUNS], tc[RUNS];
+    double pix = sc->cell_size / T, tb[RUNS], tc[RUNS], tr[RUNS];
     rs__roadfield_params p;
     memset(&p, 0, sizeof p);
     p.cell_size = sc->cell_size;
@@ -74,10 +76,20 @@ static int measure(rs_ctx *ctx, const rs_roads *roads, const sc_scene *sc, unsig
         t0 = tm_now_ms();
         rs__roadfield_coverage(f, 0, 0, w, h, pix, cov, w);
         tc[i] = tm_now_ms() - t0;
+        /* the splatter's pieces: one DEM row (T pixel rows) at a time */
+        t0 = tm_now_ms();
+        for (uint32_t y = 0; y < h; y += T)
+            rs__roadfield_coverage(f, 0, y, w, h - y < T ? h - y : T, pix, rowcov + (size_t)y * w, w);
+        tr[i] = tm_now_ms() - t0;
+        if (memcmp(rowcov, cov, (size_t)w * h * sizeof *cov) != 0) {
+            fprintf(stderr, "roadfield bench: row pieces differ from the whole-image call\n");
+            return -1;
+        }
         if (i + 1 < RUNS) rs__roadfield_free(ctx, f);
     }
     rr->build_ms = tm_median(tb, RUNS);
     rr->cover_ms = tm_median(tc, RUNS);
+    rr->rows_ms = tm_median(tr, RUNS);
     rr->bytes = rs__roadfield_bytes(f);
     rs__roadfield_get_stats(f, &rr->st);
     rs__roadfield_free(ctx, f);
@@ -108,13 +120,13 @@ int main(int argc, char **argv)
     uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
     size_t n = (size_t)w * h;
     float *G = malloc(n * sizeof *G), *R = malloc(n * sizeof *R);
-    double *cov = malloc(n * sizeof *cov);
-    if (!G || !R || !cov || gt_coverage(&sc, T, G)) return 1;
+    double *cov = malloc(n * sizeof *cov), *rowcov = malloc(n * sizeof *rowcov);
+    if (!G || !R || !cov || !rowcov || gt_coverage(&sc, T, G)) return 1;
     double L = gt_outline_length(&sc, T);
     double cells[] = { 0, 2.5, 10 };
     run_result rr[3];
     for (int i = 0; i < 3; i++)
-        if (measure(ctx, roads, &sc, T, cells[i], G, L, cov, R, &rr[i])) return 1;
+        if (measure(ctx, roads, &sc, T, cells[i], G, L, cov, rowcov, R, &rr[i])) return 1;
     snprintf(path, sizeof path, "%s/roadfield_roads.txt", dir);
     double cairo = write_plain(path, &sc) ? -1 : cairo_ms(path);
 
@@ -125,29 +137,34 @@ int main(int argc, char **argv)
     fprintf(md, "City scene (`sc_city_default(1)`: %zu roads, %ux%u samples, %g m cells) at T = %u: %ux%u pixels of "
                 "%g m. Coverage = area fraction of each pixel inside the union of the roads "
                 "(lib/roadfield.c, one thread); error against the exact ground truth (tests/groundtruth.c). "
-                "Times are medians of %d runs.\n\n",
-            sc.nroads, sc.w, sc.h, sc.cell_size, T, w, h, sc.cell_size / T, RUNS);
+                "Coverage is timed as one whole-image call and as the splatter calls it: pieces of one "
+                "DEM row (%u pixel rows x the full width; same doubles). Times are medians of %d runs.\n\n",
+            sc.nroads, sc.w, sc.h, sc.cell_size, T, w, h, sc.cell_size / T, T, RUNS);
     fprintf(md, "| index cell (m) | cells | entries | full cells | max list | bytes | build ms | coverage ms | "
-                "edge error (m) | max edge disp (m) | max pixel error |\n");
-    fprintf(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+                "row pieces ms | edge error (m) | max edge disp (m) | max pixel error |\n");
+    fprintf(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
     for (int i = 0; i < 3; i++)
-        fprintf(md, "| %g%s | %ux%u | %zu | %zu | %zu | %zu | %.2f | %.2f | %.5f | %.4f | %.4f |\n", rr[i].st.index_cell,
-                cells[i] == 0 ? " (auto)" : "", rr[i].st.gw, rr[i].st.gh, rr[i].st.entries, rr[i].st.full_cells,
-                rr[i].st.max_list, rr[i].bytes, rr[i].build_ms, rr[i].cover_ms, rr[i].edge, rr[i].maxd, rr[i].maxpix);
+        fprintf(md, "| %g%s | %ux%u | %zu | %zu | %zu | %zu | %.2f | %.2f | %.2f | %.5f | %.4f | %.4f |\n",
+                rr[i].st.index_cell, cells[i] == 0 ? " (auto)" : "", rr[i].st.gw, rr[i].st.gh, rr[i].st.entries,
+                rr[i].st.full_cells, rr[i].st.max_list, rr[i].bytes, rr[i].build_ms, rr[i].cover_ms, rr[i].rows_ms,
+                rr[i].edge, rr[i].maxd, rr[i].maxpix);
     if (cairo >= 0)
         fprintf(md, "\nCairo (python3-cairo, tests/bench/roadfield_cairo.py) filling the same roads stroked with "
                     "round caps and joins into an A8 surface of the same size, antialias default: %.2f ms "
-                    "(median, fill only). Coverage (auto cell) / Cairo = %.2f.\n",
-                cairo, rr[0].cover_ms / cairo);
+                    "(median, fill only). Coverage (auto cell) / Cairo: whole image %.2f, row pieces %.2f.\n",
+                cairo, rr[0].cover_ms / cairo, rr[0].rows_ms / cairo);
     else
         fprintf(md, "\nCairo comparison skipped (python3-cairo not available).\n");
     fclose(md);
-    printf("roadfield: auto cell %.3g m: build %.2f ms, coverage %.2f ms, edge %.5f m, max pixel err %.4f; cairo %.2f ms\n",
-           rr[0].st.index_cell, rr[0].build_ms, rr[0].cover_ms, rr[0].edge, rr[0].maxpix, cairo);
+    printf("roadfield: auto cell %.3g m: build %.2f ms, coverage %.2f ms (row pieces %.2f ms), edge %.5f m, "
+           "max pixel err %.4f; cairo %.2f ms",
+           rr[0].st.index_cell, rr[0].build_ms, rr[0].cover_ms, rr[0].rows_ms, rr[0].edge, rr[0].maxpix, cairo);
+    if (cairo > 0) printf(" (ratio whole %.2f, rows %.2f)", rr[0].cover_ms / cairo, rr[0].rows_ms / cairo);
+    printf("\n");
     for (int i = 1; i < 3; i++)
-        printf("  cell %g: build %.2f ms, coverage %.2f ms, edge %.5f\n", rr[i].st.index_cell, rr[i].build_ms,
-               rr[i].cover_ms, rr[i].edge);
-    free(G); free(R); free(cov);
+        printf("  cell %g: build %.2f ms, coverage %.2f ms (row pieces %.2f ms), edge %.5f\n", rr[i].st.index_cell,
+               rr[i].build_ms, rr[i].cover_ms, rr[i].rows_ms, rr[i].edge);
+    free(G); free(R); free(cov); free(rowcov);
     rs_roads_free(ctx, roads);
     rs_ctx_free(ctx);
     sc_scene_free(&sc);
