@@ -31,6 +31,8 @@ static const char usage_text[] =
     "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
     "                        in that world frame (e.g. UTM metres; default 0,0)\n"
     "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
+    "  --png-level N         PNG compression, 0 (none, fastest) .. 12 (smallest,\n"
+    "                        slowest); default 1, about 10 % larger than level 6\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
     "  --quiet               no progress bar\n"
     "  --help                show this help and exit\n"
@@ -117,11 +119,16 @@ static int out_finish(cli_out *o)
     return bad;
 }
 
-/* The PNG goes through OpenImageIO into o->tmp and is checked whole. */
-static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba)
+/* The PNG (cli/png.c) goes into o->tmp, which is then checked whole. */
+static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba, const cli_png_options *po)
 {
-    if (o->f) { fclose(o->f); o->f = NULL; }
-    return cli_image_write_png_as(o->tmp, o->path, w, h, 4, 8, rgba); /* checks the file is whole */
+    cli_png_image img = { w, h, 4, 8, rgba };
+    if (cli_png_encode(o->f, o->path, &img, po) || out_finish(o)) return 1;
+    if (!cli_png_file_complete(o->tmp)) {
+        cli_error("%s: write failed: the PNG did not reach the disk whole", o->path);
+        return 1;
+    }
+    return 0;
 }
 
 static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t *wt)
@@ -146,11 +153,11 @@ static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t
     return out_finish(o);
 }
 
-static int stats_to_temp(cli_out *o, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w, uint32_t h,
+static int stats_to_temp(cli_out *o, double startup, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w, uint32_t h,
                          const char *mode)
 {
     int ok = fprintf(o->f,
-                     "{\n  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
+                     "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
                      "\"total\": %.3f},\n"
                      "  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
                      "  \"width\": %u,\n  \"height\": %u,\n  \"pixels\": %llu,\n"
@@ -158,7 +165,7 @@ static int stats_to_temp(cli_out *o, const double t[5], const rs_grid_stats *gs,
                      "  \"boundary_by_type\": {\"edge\": %llu, \"inner_corner\": %llu, \"outer_corner\": %llu, "
                      "\"saddle\": %llu, \"too_thin\": %llu},\n"
                      "  \"grid_tiles\": %llu,\n  \"grid_bytes\": %llu\n}\n",
-                     t[0], t[1], t[2], t[3], t[4], mode, gs->k, gs->road_cell, T, w, h,
+                     startup, t[0], t[1], t[2], t[3], t[4], mode, gs->k, gs->road_cell, T, w, h,
                      (unsigned long long)w * h, (unsigned long long)gs->road_cells,
                      (unsigned long long)gs->interior_cells, (unsigned long long)gs->boundary_cells,
                      (unsigned long long)gs->by_type[RS_TILE_EDGE], (unsigned long long)gs->by_type[RS_TILE_INNER],
@@ -191,7 +198,7 @@ static int splat_main(int argc, char **argv)
     int pr = parse_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
 
-    double t_start = cli_now_ms(), t[5] = { 0, 0, 0, 0, 0 };
+    double t_start = cli_now_ms(), t[5] = { 0, 0, 0, 0, 0 }, startup = cli_startup_ms();
     int rc = 1;
     rs_ctx *ctx = NULL;
     cli_splat_input in;
@@ -249,14 +256,18 @@ static int splat_main(int argc, char **argv)
     t[2] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
-    if (png_to_temp(&out_png, w, h, rgba)) goto done;
+    cli_progress_init(&prog, "write", a.quiet);
+    cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, cli_progress_cb, &prog };
+    r = png_to_temp(&out_png, w, h, rgba, &po);
+    cli_progress_done(&prog);
+    if (r) goto done;
     if (wt && weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
     t[3] = cli_now_ms() - t1;
     t[4] = cli_now_ms() - t_start;
     if (a.stats) {
         rs_grid_stats gs;
         rs_road_grid_stats(grid, &gs);
-        if (stats_to_temp(&out_stats, t, &gs, o->texels ? o->texels : 8, w, h,
+        if (stats_to_temp(&out_stats, startup, t, &gs, o->texels ? o->texels : 8, w, h,
                           o->buffer == RS_BUFFER_DILATE ? "dilate" : "distance"))
             goto done;
     }

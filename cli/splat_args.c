@@ -26,7 +26,7 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
 {
     static const char *const known[] = { "--cell-size", "--z-scale", "--texels", "--buffer", "--road-cell",
                                          "--alpha-res", "--transition", "--jitter", "--terrain-texture",
-                                         "--road-texture", "--texture-scale", "--origin" };
+                                         "--road-texture", "--texture-scale", "--origin", "--png-level" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
@@ -66,6 +66,9 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
         s->road_tex = v;
     } else if (!strcmp(name, "--texture-scale")) {
         if (cli_parse_double(name, v, &o->texture_scale) || positive(name, v, o->texture_scale)) return 1;
+    } else if (!strcmp(name, "--png-level")) {
+        if (cli_parse_png_level(name, v, &s->png_level)) return 1;
+        s->png_level_given = 1;
     } else { /* --origin */
         if (cli_parse_vec(name, v, xy, 2)) return 1;
         o->origin_x = xy[0];
