@@ -188,12 +188,11 @@ static bool read_rgba8(const char *path, std::vector<uint8_t> &px, uint32_t &w, 
 
 static int time_writer(int argc, char **argv)
 {
-    if (argc != 6) return 2;
     bool oiio = !std::strcmp(argv[1], "--time-oiio");
+    if (oiio ? argc != 5 : (argc != 6 || std::strcmp(argv[1], "--time-level"))) return 2;
     int level = oiio ? -1 : std::atoi(argv[2]);
     const char *in = argv[oiio ? 2 : 3], *out = argv[oiio ? 3 : 4];
     int runs = std::atoi(argv[oiio ? 4 : 5]);
-    if (oiio && argc != 5) return 2;
     std::vector<uint8_t> px;
     uint32_t w, h;
     if (!read_rgba8(in, px, w, h)) { std::fprintf(stderr, "test_png: cannot read %s as RGBA8\n", in); return 1; }
