@@ -79,6 +79,15 @@ check "without the module: one line naming roadsplat-image.so" sh -c \
 check "without the module: a PGM still works" "$R" --quiet --texels 1 "$T/dem.pgm" "$T/roads.txt" "$T/d.png"
 mv "$P/lib/roadsplat.off" "$P/lib/roadsplat"
 
+# install-lib needs neither OpenImageIO nor libdeflate (pkg-config finds nothing here).
+L=$T/libonly
+if $MAKE --no-print-directory install-lib BUILD="$B" PREFIX="$L" DESTDIR= PKG_CONFIG=false SAN="$SAN" \
+    ${OPT:+OPT="$OPT"} >"$T/il.log" 2>&1; then
+    check "install-lib: header, libraries, .pc" sh -c "[ -f '$L/include/roadsplat.h' ] && [ -f '$L/lib/libroadsplat.a' ] &&
+        [ -f '$L/lib/libroadsplat.so' ] && grep -qx 'prefix=$L' '$L/lib/pkgconfig/roadsplat.pc'"
+    check "install-lib: no CLI" [ ! -e "$L/bin/roadsplat" ]
+else cat "$T/il.log"; bad "make install-lib without OpenImageIO"; fi
+
 if $MAKE --no-print-directory uninstall BUILD="$B" PREFIX="$P" DESTDIR= >"$T/un.log" 2>&1; then
     left=$(find "$P" -type f | wc -l)
     check "make uninstall leaves no files ($left left)" [ "$left" = 0 ]
