@@ -72,7 +72,8 @@ loaded() { rm -f "$T"/ld.*; LD_DEBUG=libs LD_DEBUG_OUTPUT="$T/ld" "$@" >/dev/nul
 if loaded "$RS" --version | grep -q .; then
     n=$(loaded "$RS" --version | grep -Ec 'OpenImageIO|OSMesa|LLVM')
     check "--version loads neither OpenImageIO nor OSMesa ($n)" [ "$n" = 0 ]
-    n=$(loaded "$RS" mesh --quiet "$D" "$T/m.obj" | grep -Ec 'OpenImageIO|OSMesa|LLVM')
+    check "mesh of a PGM runs" sh -c "'$RS' mesh '$D' '$T/m.obj' >/dev/null"
+    n=$(loaded "$RS" mesh "$D" "$T/m.obj" | grep -Ec 'OpenImageIO|OSMesa|LLVM')
     check "mesh of a PGM loads neither OpenImageIO nor OSMesa ($n)" [ "$n" = 0 ]
     n=$(loaded "$RS" --quiet "$T/l1.png" "$R" "$T/p.png" | grep -c 'roadsplat-image.so')
     check "a PNG DEM loads the image module" [ "$n" = 1 ]

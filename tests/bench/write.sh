@@ -69,9 +69,9 @@ ldlog() { rm -f "$T"/ld.*; LD_DEBUG=libs LD_DEBUG_OUTPUT="$T/ld" "$@" >/dev/null
 libs() { ldlog "$@" | grep -c 'calling init:' || true; }
 has() { ldlog "$@" | grep 'calling init:' | grep -c "$LIB" || true; }
 lib_ver=$(libs "$BIN" --version)
-lib_mesh=$(libs "$BIN" mesh --quiet docs/examples/dem.pgm "$T/m.obj")
-LIB=OpenImageIO; oiio_mesh=$(has "$BIN" mesh --quiet docs/examples/dem.pgm "$T/m.obj")
-LIB=OSMesa; osm_mesh=$(has "$BIN" mesh --quiet docs/examples/dem.pgm "$T/m.obj")
+lib_mesh=$(libs "$BIN" mesh docs/examples/dem.pgm "$T/m.obj")
+LIB=OpenImageIO; oiio_mesh=$(has "$BIN" mesh docs/examples/dem.pgm "$T/m.obj")
+LIB=OSMesa; osm_mesh=$(has "$BIN" mesh docs/examples/dem.pgm "$T/m.obj")
 "$BIN" --quiet --texels 1 docs/examples/dem.pgm docs/examples/roads.txt "$T/small.png"
 lib_png=$(libs "$BIN" --quiet --texels 1 "$T/small.png" docs/examples/roads.txt "$T/small2.png")
 
