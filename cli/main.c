@@ -153,12 +153,12 @@ static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t
     return out_finish(o);
 }
 
-static int stats_to_temp(cli_out *o, double startup, const double t[5], const rs_grid_stats *gs, uint32_t T, uint32_t w, uint32_t h,
-                         const char *mode)
+static int stats_to_temp(cli_out *o, double startup, const double t[5], const rs_grid_stats *gs, uint32_t T,
+                         uint32_t w, uint32_t h, const char *mode)
 {
     int ok = fprintf(o->f,
-                     "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
-                     "\"total\": %.3f},\n"
+                     "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
+                     "\"write\": %.3f, \"total\": %.3f},\n"
                      "  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
                      "  \"width\": %u,\n  \"height\": %u,\n  \"pixels\": %llu,\n"
                      "  \"road_cells\": %llu,\n  \"interior_cells\": %llu,\n  \"boundary_cells\": %llu,\n"
