@@ -6,7 +6,8 @@
 #   (and the C one against the static library too) and print the version;
 # - the installed CLI runs, and finds its modules in $(LIBDIR)/roadsplat (a PNG
 #   DEM needs the image module); without the module it names the module;
-# - make uninstall removes everything it installed.
+# - make uninstall removes everything it installed; then `make all` puts the
+#   build folder back to its own prefix.
 # Usage: sh tests/install_test.sh BUILD   (SAN and OPT as for the build)
 B=${1:?usage: install_test.sh BUILD}
 . "$(dirname "$0")/cli_lib.sh"
@@ -93,5 +94,8 @@ if $MAKE --no-print-directory uninstall BUILD="$B" PREFIX="$P" DESTDIR= >"$T/un.
     check "make uninstall leaves no files ($left left)" [ "$left" = 0 ]
 else cat "$T/un.log"; bad "make uninstall"; fi
 
+# Back to the build's own configuration (PREFIX as given to the outer make, if any),
+# so BUILD/roadsplat.pc does not keep naming the temporary prefix.
+$MAKE --no-print-directory all BUILD="$B" SAN="$SAN" ${OPT:+OPT="$OPT"} >"$T/back.log" 2>&1 || { cat "$T/back.log"; bad "make all after the test"; }
 echo "install: $pass passed, $fail failed"
 [ "$fail" = 0 ]
