@@ -3,9 +3,11 @@
 # Build outputs go to $(BUILD) (default build/). Sanitizer builds use their own
 # folders (build/asan), so they never mix objects with the normal build.
 
-VERSION_MAJOR := 0
-VERSION_MINOR := 1
-VERSION_PATCH := 0
+# One version source: the RS_VERSION_* macros of include/roadsplat.h.
+rs_version    = $(shell sed -n 's/^\#define RS_VERSION_$(1) *\([0-9][0-9]*\).*/\1/p' include/roadsplat.h)
+VERSION_MAJOR := $(call rs_version,MAJOR)
+VERSION_MINOR := $(call rs_version,MINOR)
+VERSION_PATCH := $(call rs_version,PATCH)
 VERSION       := $(VERSION_MAJOR).$(VERSION_MINOR).$(VERSION_PATCH)
 
 PREFIX  ?= /usr/local
@@ -15,6 +17,9 @@ LIBDIR  ?= $(PREFIX)/lib
 INCDIR  ?= $(PREFIX)/include
 MANDIR  ?= $(PREFIX)/share/man
 PKGCONFIGDIR ?= $(LIBDIR)/pkgconfig
+# Optional CLI modules (roadsplat-image.so, roadsplat-render.so); the CLI
+# looks next to itself first, then here (cli/module.c).
+MODULEDIR ?= $(LIBDIR)/roadsplat
 
 BUILD   ?= build
 CC      ?= cc
@@ -22,14 +27,24 @@ CXX     ?= c++
 OPT     ?= -O2 -g
 # No -ffast-math anywhere: it removes the NaN checks the library relies on.
 WARN    := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wvla
+# CPPFLAGS, CFLAGS, CXXFLAGS and LDFLAGS from the environment or the command
+# line come last, so they can override ours.
 CFLAGS  ?=
+CXXFLAGS ?=
+CPPFLAGS ?=
+LDFLAGS ?=
 SAN     ?=
-ALL_CFLAGS := -std=c99 $(OPT) $(WARN) $(SAN) -Iinclude -fvisibility=hidden -fPIC $(CFLAGS)
+DEPFLAGS := -MMD -MP
+ALL_CFLAGS := -std=c99 $(OPT) $(WARN) $(SAN) -Iinclude -fvisibility=hidden -fPIC $(DEPFLAGS) $(CPPFLAGS) $(CFLAGS)
+ALL_CXXFLAGS := -std=c++17 $(OPT) $(SAN) -Wall -Wextra -Iinclude -fPIC $(DEPFLAGS) $(CPPFLAGS) $(CXXFLAGS)
 LDLIBS_CORE := -lm
 
 PKG_CONFIG ?= pkg-config
 OIIO_CFLAGS = $(shell $(PKG_CONFIG) --cflags OpenImageIO 2>/dev/null)
 OIIO_LIBS   = $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null)
+# PNG output (cli/png.c): libdeflate.
+DEFLATE_CFLAGS = $(shell $(PKG_CONFIG) --cflags libdeflate 2>/dev/null)
+DEFLATE_LIBS   = $(or $(shell $(PKG_CONFIG) --libs libdeflate 2>/dev/null),-ldeflate)
 
 # Optional OSMesa renderer: auto-detected, or forced with WITH_OSMESA=1/0.
 WITH_OSMESA ?= $(shell $(PKG_CONFIG) --exists osmesa 2>/dev/null && echo 1 || echo 0)
@@ -40,9 +55,17 @@ endif
 
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
-CLI_CSRC  := $(sort $(wildcard cli/*.c))
-CLI_XSRC  := $(sort $(wildcard cli/*.cpp))
-CLI_OBJ   := $(CLI_CSRC:%.c=$(BUILD)/%.o) $(CLI_XSRC:%.cpp=$(BUILD)/%.o)
+# The executable links only libc, libm, libdl and libdeflate; OpenImageIO
+# (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
+# first use (docs/packaging.md).
+RENDER_SRC := cli/render.c cli/render_gl.c
+CLI_CSRC  := $(filter-out $(RENDER_SRC),$(sort $(wildcard cli/*.c)))
+CLI_OBJ   := $(CLI_CSRC:%.c=$(BUILD)/%.o)
+RENDER_OBJ := $(RENDER_SRC:%.c=$(BUILD)/%.o)
+IMAGE_OBJ := $(BUILD)/cli/imageio.o
+IMAGE_MOD := $(BUILD)/roadsplat-image.so
+RENDER_MOD := $(BUILD)/roadsplat-render.so
+MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TESTLIB_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
@@ -58,9 +81,15 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo
+DEPS_PKGS := libopenimageio-dev libdeflate-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo
 
-.PHONY: all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install uninstall help clean check-deps
+# Settings baked into generated files ($(PCFILE), the module folder in
+# cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
+# `make install PREFIX=/opt/x` after `make`, so those files follow.
+CONFIG      := $(BUILD)/config.txt
+CONFIG_TEXT := prefix=$(PREFIX) libdir=$(LIBDIR) includedir=$(INCDIR) moduledir=$(MODULEDIR) version=$(VERSION)
+
+.PHONY: all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install install-lib uninstall help clean check-deps FORCE
 .DEFAULT_GOAL := all
 # keep objects of pattern rules (tests, fuzz replays) between runs
 .SECONDARY:
@@ -69,7 +98,7 @@ all: lib cli
 
 lib: $(STATIC_LIB) $(SHARED_LIB) $(BUILD)/libroadsplat.so $(PCFILE)
 
-cli: check-deps $(CLI)
+cli: check-deps $(CLI) $(MODULES)
 
 help:
 	@echo "roadsplat $(VERSION) - targets:"
@@ -82,9 +111,10 @@ help:
 	@echo "  make sanitize-test run the test suite under ASan + UBSan"
 	@echo "  make fuzz-smoke    build and run every fuzz target FUZZ_SECONDS (30) each; fails on a finding"
 	@echo "  make install       install to DESTDIR/PREFIX (PREFIX=$(PREFIX))"
+	@echo "  make install-lib   install only the library, header and roadsplat.pc (no OpenImageIO needed)"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CFLAGS PREFIX DESTDIR BUILD WITH_OSMESA=0|1 FUZZ_SECONDS"
+	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 FUZZ_SECONDS"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
@@ -104,9 +134,15 @@ deps:
 check-deps:
 	@$(PKG_CONFIG) --exists OpenImageIO 2>/dev/null || { \
 	  echo "roadsplat CLI needs OpenImageIO: run 'make deps' (or: apt-get install -y libopenimageio-dev pkg-config)"; exit 1; }
+	@$(PKG_CONFIG) --exists libdeflate 2>/dev/null || [ -f /usr/include/libdeflate.h ] || { \
+	  echo "roadsplat CLI needs libdeflate: run 'make deps' (or: apt-get install -y libdeflate-dev)"; exit 1; }
+
+$(CONFIG): FORCE
+	@mkdir -p $(dir $@)
+	@[ "$$(cat $@ 2>/dev/null)" = '$(CONFIG_TEXT)' ] || echo '$(CONFIG_TEXT)' > $@
 
 # --- library ----------------------------------------------------------------
-$(BUILD)/lib/%.o: lib/%.c include/roadsplat.h $(wildcard lib/*.h)
+$(BUILD)/lib/%.o: lib/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -c $< -o $@
 
@@ -116,53 +152,81 @@ $(STATIC_LIB): $(LIB_OBJ)
 	$(AR) rcs $@ $^
 
 $(SHARED_LIB): $(LIB_OBJ)
-	$(CC) -shared -Wl,-soname,$(SONAME) $(SAN) -o $@ $^ $(LDLIBS_CORE)
+	$(CC) -shared -Wl,-soname,$(SONAME) $(SAN) $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
 
 $(BUILD)/libroadsplat.so: $(SHARED_LIB)
 	ln -sf libroadsplat.so.$(VERSION) $(BUILD)/$(SONAME)
 	ln -sf libroadsplat.so.$(VERSION) $@
 
-$(PCFILE): Makefile
+$(PCFILE): $(CONFIG)
 	@mkdir -p $(dir $@)
 	@printf 'prefix=%s\nlibdir=%s\nincludedir=%s\n\nName: roadsplat\nDescription: Burn roads into terrain textures; ROAM terrain meshing\nVersion: %s\nLibs: -L$${libdir} -lroadsplat\nLibs.private: -lm\nCflags: -I$${includedir}\n' \
 	  '$(PREFIX)' '$(LIBDIR)' '$(INCDIR)' '$(VERSION)' > $@
 
-# --- CLI (C + a small C++ shim around OpenImageIO) -----------------------------
-$(BUILD)/cli/%.o: cli/%.c include/roadsplat.h $(wildcard cli/*.h)
+# --- CLI: C executable + modules (C++ shim around OpenImageIO; OSMesa) --------
+# CLI symbols keep default visibility: the executable exports them
+# (--export-dynamic) to the modules, which call back into it. The whole
+# library is linked in, since the render module uses parts the rest does not.
+CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS)
+$(BUILD)/cli/%.o: cli/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) -c $< -o $@
+	$(CC) $(CLI_CFLAGS) -c $< -o $@
 
-$(BUILD)/cli/%.o: cli/%.cpp $(wildcard cli/*.h)
+$(BUILD)/cli/module.o: cli/module.c $(CONFIG)
 	@mkdir -p $(dir $@)
-	$(CXX) -std=c++17 $(OPT) $(SAN) -Wall -Wextra -Iinclude $(OIIO_CFLAGS) -c $< -o $@
+	$(CC) $(CLI_CFLAGS) -DRS_MODULEDIR='"$(MODULEDIR)"' -c $< -o $@
+
+$(BUILD)/cli/%.o: cli/%.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) -c $< -o $@
 
 $(CLI): $(CLI_OBJ) $(STATIC_LIB)
-	$(CXX) $(SAN) -o $@ $(CLI_OBJ) $(STATIC_LIB) $(OIIO_LIBS) $(OSMESA_LIBS) $(LDLIBS_CORE) -lpthread
+	$(CC) $(SAN) $(LDFLAGS) -Wl,--export-dynamic -o $@ $(CLI_OBJ) -Wl,--whole-archive $(STATIC_LIB) -Wl,--no-whole-archive \
+	  $(DEFLATE_LIBS) -ldl $(LDLIBS_CORE) -lpthread
+
+$(IMAGE_MOD): $(IMAGE_OBJ)
+	$(CXX) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(OIIO_LIBS)
+
+$(RENDER_MOD): $(RENDER_OBJ)
+	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(OSMESA_LIBS) $(LDLIBS_CORE)
 
 # --- tests --------------------------------------------------------------------
-$(BUILD)/tests/%.o: tests/%.c include/roadsplat.h $(wildcard tests/*.h)
+$(BUILD)/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -c $< -o $@
 
 $(BUILD)/tests/test_%: $(BUILD)/tests/test_%.o $(TESTLIB_OBJ) $(STATIC_LIB)
-	$(CC) $(SAN) -o $@ $^ $(LDLIBS_CORE) -lpthread
+	$(CC) $(SAN) $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 
-$(BUILD)/fuzz/%.o: fuzz/%.c include/roadsplat.h
+$(BUILD)/fuzz/%.o: fuzz/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -c $< -o $@
 
 $(BUILD)/fuzz/%-replay: $(BUILD)/fuzz/%/fuzz.o $(BUILD)/fuzz/replay_main.o $(STATIC_LIB)
-	$(CC) $(SAN) -o $@ $^ $(LDLIBS_CORE)
+	$(CC) $(SAN) $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
 
 # The demimage target drives the CLI's DEM loader: it also needs the CLI
 # objects that hold it and OpenImageIO, linked as C++.
 FUZZ_CLI_OBJ := $(BUILD)/cli/util.o $(BUILD)/cli/imageio.o
 $(BUILD)/fuzz/demimage-replay: $(BUILD)/fuzz/demimage/fuzz.o $(BUILD)/fuzz/replay_main.o $(FUZZ_CLI_OBJ) $(STATIC_LIB)
-	$(CXX) $(SAN) -o $@ $^ $(OIIO_LIBS) $(LDLIBS_CORE)
+	$(CXX) $(SAN) $(LDFLAGS) -o $@ $^ $(OIIO_LIBS) $(LDLIBS_CORE)
+
+# PNG writer test (C++: reads back through OpenImageIO, and libpng directly).
+# It doubles as the benchmark's OpenImageIO/libpng writer (tests/bench/write.sh).
+TEST_PNG_OBJ := $(BUILD)/cli/png.o $(BUILD)/cli/util.o $(BUILD)/cli/imageio.o
+$(BUILD)/tests/test_png: tests/png/test_png.cpp $(TEST_PNG_OBJ) $(STATIC_LIB)
+	@mkdir -p $(dir $@)
+	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) -o $@ $< $(TEST_PNG_OBJ) $(LDFLAGS) $(STATIC_LIB) $(OIIO_LIBS) -lpng \
+	  $(DEFLATE_LIBS) $(LDLIBS_CORE)
+
+# Helper programs of the tests and benchmarks (not run by themselves).
+$(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
 
 test: deps
-	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY)
-	@BUILD=$(BUILD) SAN="$(SAN)" sh tests/run.sh
+	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png
+	@BUILD=$(BUILD) SAN="$(SAN)" OPT="$(OPT)" sh tests/run.sh
 
 # --- demo ---------------------------------------------------------------------
 demo: deps
@@ -173,10 +237,10 @@ demo: deps
 # --- benchmarks ---------------------------------------------------------------
 $(BUILD)/bench/%: tests/bench/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests -o $@ $^ $(LDLIBS_CORE) -lpthread
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 
 bench: deps
-	@$(MAKE) --no-print-directory all $(BENCH_BIN)
+	@$(MAKE) --no-print-directory all $(BENCH_BIN) $(BUILD)/tests/test_png $(BUILD)/tools/demgen
 	@BUILD=$(BUILD) sh tests/bench/run.sh
 
 # --- fuzzing and sanitizers -------------------------------------------------------
@@ -221,22 +285,34 @@ sanitize-test:
 	  SAN="-fsanitize=address,undefined,float-cast-overflow,float-divide-by-zero -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # --- install --------------------------------------------------------------------
-install: all
-	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PKGCONFIGDIR) $(DESTDIR)$(MANDIR)/man1
+# install-lib: library, header and roadsplat.pc only (needs neither
+# OpenImageIO nor libdeflate); install: that plus the CLI, its modules and
+# the man page. Both regenerate what names PREFIX first ($(CONFIG)).
+install-lib: lib
+	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PKGCONFIGDIR)
 	install -m 644 include/roadsplat.h $(DESTDIR)$(INCDIR)/roadsplat.h
 	install -m 644 $(STATIC_LIB) $(DESTDIR)$(LIBDIR)/libroadsplat.a
 	install -m 755 $(SHARED_LIB) $(DESTDIR)$(LIBDIR)/libroadsplat.so.$(VERSION)
 	ln -sf libroadsplat.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME)
 	ln -sf libroadsplat.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libroadsplat.so
 	install -m 644 $(PCFILE) $(DESTDIR)$(PKGCONFIGDIR)/roadsplat.pc
+
+install: install-lib cli
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(MODULEDIR) $(DESTDIR)$(MANDIR)/man1
 	install -m 755 $(CLI) $(DESTDIR)$(BINDIR)/roadsplat
+	install -m 755 $(MODULES) $(DESTDIR)$(MODULEDIR)/
 	install -m 644 docs/roadsplat.1 $(DESTDIR)$(MANDIR)/man1/roadsplat.1
 
 uninstall:
 	rm -f $(DESTDIR)$(INCDIR)/roadsplat.h $(DESTDIR)$(LIBDIR)/libroadsplat.a \
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME) \
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so $(DESTDIR)$(PKGCONFIGDIR)/roadsplat.pc \
-	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1
+	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1 \
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-image.so $(DESTDIR)$(MODULEDIR)/roadsplat-render.so
+	-rmdir $(DESTDIR)$(MODULEDIR) 2>/dev/null
 
 clean:
 	rm -rf $(BUILD)
+
+# Header dependencies written by the compiler (-MMD -MP).
+-include $(wildcard $(BUILD)/lib/*.d $(BUILD)/cli/*.d $(BUILD)/tests/*.d $(BUILD)/tests/*/*.d $(BUILD)/fuzz/*.d $(BUILD)/fuzz/*/*.d)

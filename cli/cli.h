@@ -57,20 +57,56 @@ void cli_out_abort(cli_out *o);
  * chain to an IEND at the end of the file, every CRC right). */
 int cli_png_file_complete(const char *path);
 
-/* Images through OpenImageIO. Data is malloc'd, row-major, top row first. */
+/* Images through OpenImageIO (the image module). Data is malloc'd,
+ * row-major, top row first. */
 /* A grey image larger than max_side (0: no limit) on either side is refused
  * before its samples are allocated. */
 int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data);
 int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data);
+
+/* PNG output (cli/png.c: own container, libdeflate for the stream). An
+ * image: channels 1..4 (grey, grey+alpha, RGB, RGBA), bits 8 or 16 (16-bit
+ * data as native uint16), rows top first, no padding. */
+typedef struct cli_png_image {
+    uint32_t width, height;
+    int channels, bits;
+    const void *data;
+} cli_png_image;
+/* --png-level: libdeflate's 0 (stored) .. 12; the default 1 is the fastest
+ * compressing level (docs/packaging.md: why). */
+#define CLI_PNG_LEVEL_DEFAULT 1
+#define CLI_PNG_LEVEL_MAX 12
+typedef struct cli_png_options {
+    int level;                 /* -1: CLI_PNG_LEVEL_DEFAULT */
+    rs_progress_fn progress;   /* may be NULL; called with total 1000 */
+    void *progress_user;
+} cli_png_options;
+/* Encode the PNG into an open file (flushed, not closed). opt may be NULL. */
+int cli_png_encode(FILE *f, const char *shown, const cli_png_image *img, const cli_png_options *opt);
 /* Write a PNG atomically (temp file in the same folder + rename), only
- * after checking the temporary is a whole PNG (OpenImageIO 2.4 does not
- * report failed writes); refuses a target that exists and is not a regular
- * file. channels 1..4, bits 8 or 16 (16-bit data as native uint16). */
+ * after checking the temporary is a whole PNG; refuses a target that exists
+ * and is not a regular file. Messages name `shown` (NULL: path). */
+int cli_png_write(const char *path, const char *shown, const cli_png_image *img, const cli_png_options *opt);
+/* cli_png_write at the default level. */
 int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
                         const void *data);
 /* The same, naming `shown` in its messages (path is then a temporary). */
 int cli_image_write_png_as(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
                            const void *data);
+/* Parse a --png-level value (0..CLI_PNG_LEVEL_MAX): 0, or 1 after a message. */
+int cli_parse_png_level(const char *option, const char *s, int *level);
+
+/* Optional modules (cli/module.c), loaded on first use from the folder of
+ * the executable, then $(LIBDIR)/roadsplat: "image" (roadsplat-image.so,
+ * OpenImageIO) and "render" (roadsplat-render.so, OSMesa). Returns the
+ * symbol, or NULL after printing "roadsplat: WHAT: ..." naming the module
+ * and the reason (not found, or the library it could not load). */
+void *cli_module_symbol(const char *module, const char *symbol, const char *what);
+
+/* Start-up time in ms at the moment of the call: CPU time the process used
+ * before main() (exec, dynamic loading; Linux records the wall-clock start
+ * only to 10 ms) plus the wall time since main() was entered. */
+double cli_startup_ms(void);
 
 /* Progress bar on stderr: silent when quiet or stderr is not a TTY, and
  * only drawn once the work has run for more than a second. Use
@@ -96,6 +132,7 @@ typedef struct cli_splat_args {
     rs_dem_frame frame; /* --cell-size, --z-scale, --origin: set on the DEM */
     unsigned threads;   /* --threads; 0 = all cores */
     const char *terrain_tex, *road_tex;
+    int png_level_given, png_level; /* --png-level (OUT.png), also read here */
 } cli_splat_args;
 /* Value of option `name`: inline ("--x=v", inl) or the next argument. */
 int cli_option_value(int argc, char **argv, int *i, const char *name, const char *inl, const char **val);

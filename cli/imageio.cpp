@@ -1,4 +1,8 @@
-// Image files through OpenImageIO, behind the C interface of cli.h.
+// Image files through OpenImageIO, behind the C interface of cli.h: the
+// readers cli_image_read_gray_float and cli_image_read_rgba8. This file is
+// the image module (roadsplat-image.so, loaded by cli/module.c on first use,
+// so runs without PNG/TIFF inputs never load OpenImageIO); the demimage fuzz
+// target links it directly. PNG output is cli/png.c.
 // Nothing thrown inside escapes an extern "C" function: every failure
 // prints one line "roadsplat: FILE: problem" and returns non-zero.
 #include "cli.h"
@@ -19,7 +23,6 @@
 #include <unistd.h>
 
 using OIIO::ImageInput;
-using OIIO::ImageOutput;
 using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
@@ -200,85 +203,6 @@ int read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
     return 0;
 }
 
-// `shown` is the name errors give (the user's OUT when path is a temporary).
-int write_png(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits, const void *data)
-{
-    if (channels < 1 || channels > 4 || (bits != 8 && bits != 16) || !w || !h || !data ||
-        w > 0x7fffffffu || h > 0x7fffffffu) {
-        cli_error("%s: cannot write a %ux%u PNG with %d channels of %d bits", shown, w, h, channels, bits);
-        return 1;
-    }
-    // rename() would replace a device, FIFO or folder entry (as root even
-    // /dev/full) instead of writing to it: only regular files are outputs.
-    struct stat st;
-    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-        cli_error("%s: %s; the output must be a regular file", shown,
-                  S_ISDIR(st.st_mode) ? "is a directory" : "exists and is not a regular file");
-        return 1;
-    }
-    // Temporary sibling file, so the final rename is atomic.
-    std::string p(path);
-    size_t slash = p.rfind('/');
-    std::string dir = slash == std::string::npos ? std::string() : p.substr(0, slash + 1);
-    std::string base = slash == std::string::npos ? p : p.substr(slash + 1);
-    std::string tmpl = dir + "." + base + ".XXXXXX";
-    std::unique_ptr<char[]> tmp(new char[tmpl.size() + 1]);
-    std::memcpy(tmp.get(), tmpl.c_str(), tmpl.size() + 1);
-    int fd = mkstemp(tmp.get());
-    if (fd < 0) {
-        cli_error("%s: cannot create a temporary file next to it: %s", shown, std::strerror(errno));
-        return 1;
-    }
-    close(fd);
-    mode_t mask = umask(0);
-    umask(mask);
-    (void)chmod(tmp.get(), 0666 & ~mask);
-
-    bool ok = false;
-    std::string err;
-    try {
-        // The format is named explicitly: the temporary name has no .png.
-        auto out = ImageOutput::create("png");
-        if (!out) {
-            err = one_line(OIIO::geterror());
-        } else {
-            ImageSpec spec((int)w, (int)h, channels, bits == 16 ? TypeDesc::UINT16 : TypeDesc::UINT8);
-            spec.attribute("oiio:UnassociatedAlpha", 1); // store RGBA as given
-            if (!out->open(tmp.get(), spec)) err = one_line(out->geterror());
-            else if (!out->write_image(bits == 16 ? TypeDesc::UINT16 : TypeDesc::UINT8, data)) {
-                err = one_line(out->geterror());
-                out->close();
-            } else if (!out->close()) err = one_line(out->geterror());
-            else ok = true;
-        }
-    } catch (const std::exception &e) {
-        err = e.what();
-    } catch (...) {
-        err = "unknown error";
-    }
-    if (ok && !cli_png_file_complete(tmp.get())) {
-        err = "the PNG did not reach the disk whole (disk full or file too large?)";
-        ok = false;
-    }
-    if (ok) {
-        int f = open(tmp.get(), O_RDONLY);
-        if (f >= 0) {
-            if (fsync(f) != 0) { /* best effort */ }
-            close(f);
-        }
-        if (std::rename(tmp.get(), path) != 0) {
-            err = std::strerror(errno);
-            ok = false;
-        }
-    }
-    if (!ok) {
-        unlink(tmp.get());
-        cli_error("%s: write failed: %s", shown, err.c_str());
-        return 1;
-    }
-    return 0;
-}
-
 } // namespace
 
 namespace {
@@ -310,23 +234,4 @@ extern "C" int cli_image_read_gray_float(const char *path, uint32_t max_side, ui
 extern "C" int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
 {
     return guarded_read(path, data, [&] { return read_rgba8(path, w, h, data); });
-}
-
-extern "C" int cli_image_write_png(const char *path, uint32_t w, uint32_t h, int channels, int bits,
-                                   const void *data)
-{
-    return cli_image_write_png_as(path, path, w, h, channels, bits, data);
-}
-
-extern "C" int cli_image_write_png_as(const char *path, const char *shown, uint32_t w, uint32_t h, int channels,
-                                      int bits, const void *data)
-{
-    try {
-        return write_png(path, shown, w, h, channels, bits, data);
-    } catch (const std::exception &e) {
-        cli_error("%s: %s", path, e.what());
-    } catch (...) {
-        cli_error("%s: unknown error while writing", path);
-    }
-    return 1;
 }

@@ -35,6 +35,8 @@ static const char usage_text[] =
     "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
+    "  --png-level N         PNG compression, 0 (none, fastest) .. 12 (smallest,\n"
+    "                        slowest); default 1, about 10 % larger than level 6\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
     "  --quiet               no progress bar\n"
     "  --help                show this help and exit\n"
@@ -154,11 +156,16 @@ static int out_finish(cli_out *o)
     return bad;
 }
 
-/* The PNG goes through OpenImageIO into o->tmp and is checked whole. */
-static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba)
+/* The PNG (cli/png.c) goes into o->tmp, which is then checked whole. */
+static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba, const cli_png_options *po)
 {
-    if (o->f) { fclose(o->f); o->f = NULL; }
-    return cli_image_write_png_as(o->tmp, o->path, w, h, 4, 8, rgba); /* checks the file is whole */
+    cli_png_image img = { w, h, 4, 8, rgba };
+    if (cli_png_encode(o->f, o->path, &img, po) || out_finish(o)) return 1;
+    if (!cli_png_file_complete(o->tmp)) {
+        cli_error("%s: write failed: the PNG did not reach the disk whole", o->path);
+        return 1;
+    }
+    return 0;
 }
 
 static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t *wt)
@@ -184,6 +191,7 @@ static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t
 }
 
 typedef struct run_stats {
+    double startup;              /* before the work began (cli_startup_ms) */
     double t[5];                 /* read, roads, splat (wall), write, total */
     const rs_road_grid_stats *gs;
     const rs_splat_options *o;
@@ -197,8 +205,8 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
     const rs_road_grid_stats *gs = rs->gs;
     const rs_splat_profile *pf = &rs->job->profile;
     int ok = fprintf(o->f,
-                     "{\n  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"write\": %.3f, "
-                     "\"total\": %.3f},\n"
+                     "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
+                     "\"write\": %.3f, \"total\": %.3f},\n"
                      "  \"stages_ms\": {\"coverage\": %.3f, \"surface\": %.3f, \"overlays\": %.3f, "
                      "\"composite\": %.3f},\n  \"threads\": %u,\n"
                      "  \"edges\": \"%s\",\n  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
@@ -210,7 +218,7 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      "  \"boundary_by_type\": {\"edge\": %llu, \"inner_corner\": %llu, \"outer_corner\": %llu, "
                      "\"saddle\": %llu, \"too_thin\": %llu},\n"
                      "  \"grid_tiles\": %llu,\n  \"grid_bytes\": %llu\n}\n",
-                     t[0], t[1], t[2], t[3], t[4], pf->coverage_ms, pf->surface_ms, pf->overlays_ms, pf->composite_ms,
+                     rs->startup, t[0], t[1], t[2], t[3], t[4], pf->coverage_ms, pf->surface_ms, pf->overlays_ms, pf->composite_ms,
                      rs->job->threads_used, rs->o->coverage.edges == RS_EDGES_ANALYTIC ? "analytic" : "alphamap",
                      rs->o->grid.buffer == RS_BUFFER_DILATE ? "dilate" : "distance", gs->k, gs->road_cell,
                      rs->o->texels ? rs->o->texels : 8, rs->x0, rs->y0, rs->w, rs->h, rs->full_w, rs->full_h, rs->w,
@@ -247,7 +255,7 @@ static int splat_main(int argc, char **argv)
     int pr = parse_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
 
-    double t_start = cli_now_ms();
+    double t_start = cli_now_ms(), startup = cli_startup_ms();
     int rc = 1;
     rs_ctx *ctx = NULL;
     cli_splat_input in;
@@ -322,13 +330,18 @@ static int splat_main(int argc, char **argv)
     st.t[2] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
-    if (png_to_temp(&out_png, w, h, rgba)) goto done;
+    cli_progress_init(&prog, "write", a.quiet);
+    cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, cli_progress_cb, &prog };
+    r = png_to_temp(&out_png, w, h, rgba, &po);
+    cli_progress_done(&prog);
+    if (r) goto done;
     if (wt && weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
     st.t[3] = cli_now_ms() - t1;
     st.t[4] = cli_now_ms() - t_start;
     if (a.stats) {
         rs_road_grid_stats gs;
         rs_road_grid_get_stats(rs_splatter_grid(sp), &gs);
+        st.startup = startup;
         st.gs = &gs;
         st.o = o;
         st.w = w, st.h = h, st.x0 = x0, st.y0 = y0, st.full_w = fw, st.full_h = fh;

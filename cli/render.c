@@ -33,7 +33,8 @@ static const char render_usage[] =
     "\n"
     "Splat options (see roadsplat --help): --cell-size M, --z-scale S, --texels N,\n"
     "  --buffer distance|dilate, --road-cell M, --alpha-res N, --transition PX,\n"
-    "  --jitter SEED, --terrain-texture IMG, --road-texture IMG, --texture-scale M\n"
+    "  --jitter SEED, --terrain-texture IMG, --road-texture IMG, --texture-scale M,\n"
+    "  --png-level N (OUT.png compression 0..12, default 1)\n"
     "Render options:\n"
     "  --size WxH          image size (default 1280x960; with --ortho: the splat's size)\n"
     "  --camera X,Y,Z      eye position (default: oblique view of the whole map from the south)\n"
@@ -398,7 +399,9 @@ int cli_render_main(int argc, char **argv)
         memmove(frame + 3 * k, frame + 4 * k, 3);
     t_readback = cli_now_ms() - t1;
     t1 = cli_now_ms();
-    if (cli_image_write_png(a.out, a.width, a.height, 3, 8, frame)) goto done;
+    cli_png_image img = { a.width, a.height, 3, 8, frame };
+    cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL };
+    if (cli_png_write(a.out, NULL, &img, &po)) goto done;
     t_write = cli_now_ms() - t1;
 
     if (a.stats) {

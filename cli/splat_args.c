@@ -27,7 +27,8 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
 {
     static const char *const known[] = { "--cell-size", "--z-scale", "--texels", "--buffer", "--road-cell",
                                          "--alpha-res", "--transition", "--jitter", "--terrain-texture",
-                                         "--road-texture", "--texture-scale", "--origin", "--edges", "--threads" };
+                                         "--road-texture", "--texture-scale", "--origin", "--edges", "--threads",
+                                         "--png-level" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
@@ -89,6 +90,9 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
             cli_error("%s: '%s' must be in [1e-6, 1e9] metres", name, v);
             return 1;
         }
+    } else if (!strcmp(name, "--png-level")) {
+        if (cli_parse_png_level(name, v, &s->png_level)) return 1;
+        s->png_level_given = 1;
     } else { /* --origin */
         if (cli_parse_vec(name, v, xy, 2)) return 1;
         if (!(fabs(xy[0]) <= 1e12 && fabs(xy[1]) <= 1e12)) {

@@ -28,14 +28,23 @@ for t in "$B"/tests/test_*; do
     [ -x "$t" ] || continue
     count "$(basename "$t")" "$t"
 done
+# Large crasher inputs are generated (tests/gen_crashers.sh), not stored.
+gen=$B/crashers-gen
+sh tests/gen_crashers.sh "$gen" || echo "FAILED: tests/gen_crashers.sh"
 for r in "$B"/fuzz/*-replay; do
     [ -x "$r" ] || continue
     tgt=$(basename "$r" -replay)
-    count "fuzz replay $tgt" "$r" fuzz/"$tgt"/corpus tests/crashers/"$tgt"
+    extra=; [ -d "$gen/$tgt" ] && extra="$gen/$tgt"
+    count "fuzz replay $tgt" "$r" fuzz/"$tgt"/corpus tests/crashers/"$tgt" $extra
 done
 for s in tests/cli*_test.sh; do
     [ -f "$s" ] || continue
     count "$(basename "$s" .sh)" sh "$s" "$B/roadsplat"
+done
+# make install into a temporary prefix, consumers built through pkg-config.
+for s in tests/install*_test.sh; do
+    [ -f "$s" ] || continue
+    count "$(basename "$s" .sh)" sh "$s" "$B"
 done
 echo "$total_p passed, $total_f failed"
 [ "$total_f" = 0 ]

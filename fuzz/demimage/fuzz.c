@@ -151,7 +151,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         msg[got > 0 ? got : 0] = 0;
     }
 
-    char prefix[300];
+    char prefix[sizeof path + 16];
     int plen = snprintf(prefix, sizeof prefix, "roadsplat: %s: ", path);
     if (dem) {
         uint32_t w = rs_dem_width(dem), h = rs_dem_height(dem);

@@ -1,0 +1,153 @@
+/* Optional modules, loaded on first use (dlopen), so that the executable
+ * itself links only libc, libm and libdeflate: `roadsplat --version` or a
+ * mesh of a PGM start in about a millisecond, and never map OpenImageIO
+ * (and its ~100 libraries) or OSMesa (which pulls in LLVM).
+ *
+ * - roadsplat-image.so: cli/imageio.cpp (OpenImageIO readers);
+ * - roadsplat-render.so: cli/render.c + cli/render_gl.c (`roadsplat render`).
+ *
+ * Search order: the folder of the running executable (/proc/self/exe: the
+ * build folder, or a relocated install), then RS_MODULEDIR, the
+ * $(LIBDIR)/roadsplat chosen at build time. The modules call back into the
+ * executable (cli_* helpers, the library), which is linked with
+ * --export-dynamic for that. Also here: the stand-ins of the module entry
+ * points, and the start-up clock. */
+#include "cli.h"
+
+#include <dlfcn.h>
+#include <errno.h>
+#include <limits.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#ifndef RS_MODULEDIR
+#define RS_MODULEDIR "/usr/local/lib/roadsplat"
+#endif
+
+typedef struct module {
+    const char *name; /* "image" */
+    const char *needs; /* what it wraps, for messages */
+    void *handle;
+    int failed;       /* tried and failed: do not retry (or repeat messages) */
+    char why[800];
+} module;
+
+static module modules[] = {
+    { "image", "OpenImageIO", NULL, 0, { 0 } },
+    { "render", "OSMesa", NULL, 0, { 0 } },
+};
+
+/* Folder of the executable, with a trailing '/'; "" when unknown. */
+static void exe_dir(char *out, size_t n)
+{
+    char buf[PATH_MAX];
+    ssize_t k = readlink("/proc/self/exe", buf, sizeof buf - 1);
+    out[0] = '\0';
+    if (k <= 0) return;
+    buf[k] = '\0';
+    char *slash = strrchr(buf, '/');
+    if (!slash) return;
+    slash[1] = '\0';
+    if (strlen(buf) < n) memcpy(out, buf, strlen(buf) + 1);
+}
+
+static void module_open(module *m)
+{
+    char dir[PATH_MAX], path[PATH_MAX + 64];
+    const char *dirs[2];
+    exe_dir(dir, sizeof dir);
+    dirs[0] = dir;
+    dirs[1] = RS_MODULEDIR "/";
+    for (int i = 0; i < 2; i++) {
+        if (!dirs[i][0]) continue;
+        snprintf(path, sizeof path, "%sroadsplat-%s.so", dirs[i], m->name);
+        if (access(path, F_OK) != 0) continue;
+        m->handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+        if (m->handle) return;
+        const char *e = dlerror();
+        /* dlerror names the missing library ("libOpenImageIO.so.2.4: cannot open ...") */
+        snprintf(m->why, sizeof m->why, "cannot load the %s module: %.480s", m->needs, e ? e : path);
+        m->failed = 1;
+        return;
+    }
+    snprintf(m->why, sizeof m->why, "the %s module roadsplat-%s.so is in neither %.256s nor %.256s/ (not built or not installed)",
+             m->needs, m->name, dir[0] ? dir : "the executable's folder", RS_MODULEDIR);
+    m->failed = 1;
+}
+
+void *cli_module_symbol(const char *name, const char *symbol, const char *what)
+{
+    module *m = NULL;
+    for (size_t i = 0; i < sizeof modules / sizeof modules[0]; i++)
+        if (!strcmp(modules[i].name, name)) m = &modules[i];
+    if (!m) return NULL;
+    if (!m->handle && !m->failed) module_open(m);
+    void *sym = m->handle ? dlsym(m->handle, symbol) : NULL;
+    if (m->handle && !sym) {
+        snprintf(m->why, sizeof m->why, "roadsplat-%s.so has no %s (a module of another version?)", name, symbol);
+        m->failed = 1;
+    }
+    if (!sym) cli_error("%s: %s", what, m->why);
+    return sym;
+}
+
+/* ---- stand-ins for the module entry points -------------------------------- */
+
+typedef int (*read_gray_fn)(const char *, uint32_t, uint32_t *, uint32_t *, float **);
+typedef int (*read_rgba_fn)(const char *, uint32_t *, uint32_t *, uint8_t **);
+typedef int (*main_fn)(int, char **);
+
+int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data)
+{
+    void *s = cli_module_symbol("image", "cli_image_read_gray_float", path);
+    read_gray_fn f;
+    *data = NULL;
+    if (!s) return 1;
+    memcpy(&f, &s, sizeof f); /* object to function pointer, as POSIX dlsym allows */
+    return f(path, max_side, w, h, data);
+}
+
+int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
+{
+    void *s = cli_module_symbol("image", "cli_image_read_rgba8", path);
+    read_rgba_fn f;
+    *data = NULL;
+    if (!s) return 1;
+    memcpy(&f, &s, sizeof f);
+    return f(path, w, h, data);
+}
+
+int cli_render_main(int argc, char **argv)
+{
+#ifndef RS_WITH_OSMESA
+    (void)argc; (void)argv;
+    cli_error("render: this build has no OSMesa support (install libosmesa6-dev and rebuild)");
+    return 1;
+#else
+    void *s = cli_module_symbol("render", "cli_render_main", "render");
+    main_fn f;
+    if (!s) return 1;
+    memcpy(&f, &s, sizeof f);
+    return f(argc, argv);
+#endif
+}
+
+/* ---- start-up clock ----------------------------------------------------------- */
+
+static double cpu_before_main_ms, main_wall_ms;
+
+/* Runs after the dynamic loader, just before main(). */
+__attribute__((constructor)) static void startup_mark(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) == 0)
+        cpu_before_main_ms = (double)ts.tv_sec * 1000.0 + (double)ts.tv_nsec / 1e6;
+    main_wall_ms = cli_now_ms();
+}
+
+double cli_startup_ms(void)
+{
+    return cpu_before_main_ms + (cli_now_ms() - main_wall_ms);
+}

@@ -1,0 +1,96 @@
+#!/bin/sh
+# CLI tests of the PNG output and the modules (issue 18): --png-level (levels
+# give the same pixels, bad values refused), the default level, --stats'
+# startup, what `mesh` and `--version` load, and a missing image module.
+# Usage: sh tests/cli_png_test.sh path/to/roadsplat
+RS=${1:-build/roadsplat}
+. "$(dirname "$0")/cli_lib.sh"
+ref_scene "$T"
+D="$T/dem.pgm"; R="$T/roads.txt"
+
+expect_fail() { # name pattern args...: exit 1, one stderr line matching pattern
+    name=$1; pat=$2; shift 2
+    "$RS" "$@" >/dev/null 2>"$T/err"; rc=$?
+    if [ $rc -ne 1 ]; then bad "$name: exit $rc"; return; fi
+    if [ "$(wc -l <"$T/err")" -ne 1 ] || ! grep -q -- "$pat" "$T/err"; then bad "$name: $(cat "$T/err")"; return; fi
+    ok
+}
+expect_fail "--png-level 13" "--png-level: '13' must be 0..12" --png-level 13 "$D" "$R" "$T/x.png"
+expect_fail "--png-level abc" "--png-level" --png-level abc "$D" "$R" "$T/x.png"
+expect_fail "--png-level -1" "--png-level" --png-level=-1 "$D" "$R" "$T/x.png"
+[ ! -e "$T/x.png" ] && ok || bad "a refused run left OUT"
+
+for L in 0 1 6 12; do
+    check "--png-level $L" "$RS" --quiet --png-level "$L" --texels 4 "$D" "$R" "$T/l$L.png"
+done
+check "default level is 1" "$RS" --quiet --texels 4 "$D" "$R" "$T/def.png"
+check "default = --png-level 1, byte for byte" cmp -s "$T/def.png" "$T/l1.png"
+s0=$(wc -c <"$T/l0.png"); s1=$(wc -c <"$T/l1.png"); s12=$(wc -c <"$T/l12.png")
+check "sizes shrink with the level ($s0 > $s1 >= $s12)" [ "$s0" -gt "$s1" -a "$s1" -ge "$s12" ]
+
+if command -v python3 >/dev/null 2>&1; then
+    # Decode (all five PNG filters) and compare the pixels of every level.
+    cat > "$T/png.py" <<'PY'
+import struct, sys, zlib
+def pixels(path):
+    d = open(path, 'rb').read()
+    assert d[:8] == b'\x89PNG\r\n\x1a\n'
+    pos, idat = 8, b''
+    while pos < len(d):
+        n, t = struct.unpack('>I4s', d[pos:pos + 8]); body = d[pos + 8:pos + 8 + n]
+        assert zlib.crc32(t + body) == struct.unpack('>I', d[pos + 8 + n:pos + 12 + n])[0], 'CRC'
+        pos += 12 + n
+        if t == b'IHDR': w, h, bits, ct, _, _, il = struct.unpack('>IIBBBBB', body)
+        elif t == b'IDAT': idat += body
+    assert t == b'IEND' and bits == 8 and ct == 6 and il == 0
+    raw, bpp, rb = zlib.decompress(idat), 4, w * 4
+    out, prev = bytearray(), bytearray(rb)
+    for y in range(h):
+        f, row = raw[y * (rb + 1)], bytearray(raw[y * (rb + 1) + 1:(y + 1) * (rb + 1)])
+        for i in range(rb):
+            a = row[i - bpp] if i >= bpp else 0; b = prev[i]; c = prev[i - bpp] if i >= bpp else 0
+            if f == 1: row[i] = (row[i] + a) & 255
+            elif f == 2: row[i] = (row[i] + b) & 255
+            elif f == 3: row[i] = (row[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                row[i] = (row[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        out += row; prev = row
+    return (w, h, bytes(out))
+ref = pixels(sys.argv[1])
+for p in sys.argv[2:]:
+    assert pixels(p) == ref, p
+print('same')
+PY
+    check "every level decodes to the same pixels" sh -c "python3 '$T/png.py' '$T/l0.png' '$T/l1.png' '$T/l6.png' '$T/l12.png' | grep -q same"
+fi
+
+check "stats: timings_ms.startup" sh -c "'$RS' --quiet --stats '$T/s.json' '$D' '$R' '$T/s.png' && grep -Eq '\"startup\": [0-9]+\\.[0-9]+' '$T/s.json'"
+
+# What gets loaded: LD_DEBUG_OUTPUT, since the CLI redirects fd 2 while OpenImageIO reads.
+loaded() { rm -f "$T"/ld.*; LD_DEBUG=libs LD_DEBUG_OUTPUT="$T/ld" "$@" >/dev/null 2>&1; cat "$T"/ld.* 2>/dev/null | grep 'calling init:'; }
+if loaded "$RS" --version | grep -q .; then
+    n=$(loaded "$RS" --version | grep -Ec 'OpenImageIO|OSMesa|LLVM')
+    check "--version loads neither OpenImageIO nor OSMesa ($n)" [ "$n" = 0 ]
+    check "mesh of a PGM runs" sh -c "'$RS' mesh '$D' '$T/m.obj' >/dev/null"
+    n=$(loaded "$RS" mesh "$D" "$T/m.obj" | grep -Ec 'OpenImageIO|OSMesa|LLVM')
+    check "mesh of a PGM loads neither OpenImageIO nor OSMesa ($n)" [ "$n" = 0 ]
+    n=$(loaded "$RS" --quiet "$T/l1.png" "$R" "$T/p.png" | grep -c 'roadsplat-image.so')
+    check "a PNG DEM loads the image module" [ "$n" = 1 ]
+else
+    echo "SKIP: LD_DEBUG output unavailable"
+fi
+
+# The executable alone, without its modules beside it.
+mkdir "$T/alone" && cp "$RS" "$T/alone/roadsplat"
+check "alone: --version" sh -c "'$T/alone/roadsplat' --version >/dev/null"
+check "alone: a PGM DEM" "$T/alone/roadsplat" --quiet "$D" "$R" "$T/a.png"
+"$T/alone/roadsplat" --quiet "$T/l1.png" "$R" "$T/b.png" 2>"$T/err"; rc=$?
+if [ $rc = 0 ]; then
+    echo "SKIP: an installed roadsplat-image.so was found; the missing-module message is not tested"
+else
+    check "alone: a PNG DEM fails with one line naming the module" sh -c \
+        "[ $rc = 1 ] && [ \$(wc -l < '$T/err') = 1 ] && grep -q 'l1.png: .*roadsplat-image.so' '$T/err'"
+fi
+echo "cli_png: $pass passed, $fail failed"
+[ "$fail" = 0 ]

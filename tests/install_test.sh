@@ -1,0 +1,101 @@
+#!/bin/sh
+# Packaging test (tests/run.sh runs it): `make install PREFIX=<tmp>` after the
+# normal build, then
+# - roadsplat.pc names that prefix (it used to keep /usr/local);
+# - a C and a C++ program build through pkg-config, against the shared library
+#   (and the C one against the static library too) and print the version;
+# - the installed CLI runs, and finds its modules in $(LIBDIR)/roadsplat (a PNG
+#   DEM needs the image module); without the module it names the module;
+# - make uninstall removes everything it installed; then `make all` puts the
+#   build folder back to its own prefix.
+# Usage: sh tests/install_test.sh BUILD   (SAN and OPT as for the build)
+B=${1:?usage: install_test.sh BUILD}
+. "$(dirname "$0")/cli_lib.sh"
+P=$T/prefix
+MAKE=${MAKE:-make}
+CC=${CC:-cc}
+CXX=${CXX:-c++}
+export LSAN_OPTIONS="${LSAN_OPTIONS:-}"
+
+if ! $MAKE --no-print-directory install BUILD="$B" PREFIX="$P" DESTDIR= SAN="$SAN" ${OPT:+OPT="$OPT"} >"$T/make.log" 2>&1; then
+    cat "$T/make.log"
+    bad "make install PREFIX=$P"
+    echo "install: $pass passed, $fail failed"
+    exit 1
+fi
+ok
+PC=$P/lib/pkgconfig/roadsplat.pc
+check "roadsplat.pc names the install prefix" grep -qx "prefix=$P" "$PC"
+check "roadsplat.pc libdir" grep -qx "libdir=$P/lib" "$PC"
+ver=$(sed -n 's/^#define RS_VERSION_\(MAJOR\|MINOR\|PATCH\) *\([0-9]*\).*/\2/p' include/roadsplat.h | paste -sd.)
+export PKG_CONFIG_PATH=$P/lib/pkgconfig
+check "pkg-config --modversion is the header's version ($ver)" [ "$(pkg-config --modversion roadsplat)" = "$ver" ]
+
+cat > "$T/app.c" <<'C'
+#include <roadsplat.h>
+#include <stdio.h>
+int main(void)
+{
+    rs_ctx *ctx;
+    rs_dem *dem;
+    float z[4 * 3] = { 0 };
+    if (rs_ctx_create(NULL, NULL, &ctx) || rs_dem_create(ctx, 4, 3, z, &dem)) return 1;
+    printf("%s %u\n", rs_version_string(), rs_dem_width(dem));
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+    return 0;
+}
+C
+cp "$T/app.c" "$T/app.cpp"
+# shellcheck disable=SC2046
+if $CC $SAN -std=c99 -Wall -Werror -o "$T/app_c" "$T/app.c" $(pkg-config --cflags --libs roadsplat) -Wl,-rpath,"$P/lib" \
+    2>"$T/cc.log"; then
+    check "C consumer (shared) runs" [ "$("$T/app_c")" = "$ver 4" ]
+    check "C consumer uses the installed shared library" sh -c "ldd '$T/app_c' | grep -q '$P/lib/libroadsplat.so'"
+else cat "$T/cc.log"; bad "C consumer builds through pkg-config"; fi
+if $CXX $SAN -Wall -Werror -o "$T/app_cxx" "$T/app.cpp" $(pkg-config --cflags --libs roadsplat) -Wl,-rpath,"$P/lib" \
+    2>"$T/cxx.log"; then
+    check "C++ consumer (shared) runs" [ "$("$T/app_cxx")" = "$ver 4" ]
+else cat "$T/cxx.log"; bad "C++ consumer builds through pkg-config"; fi
+if $CC $SAN -std=c99 -o "$T/app_static" "$T/app.c" $(pkg-config --cflags roadsplat) \
+    "$(pkg-config --variable=libdir roadsplat)/libroadsplat.a" $(pkg-config --static --libs-only-l roadsplat | sed 's/-lroadsplat//') \
+    2>"$T/st.log"; then
+    check "C consumer (static) runs" [ "$("$T/app_static")" = "$ver 4" ]
+else cat "$T/st.log"; bad "C consumer builds against libroadsplat.a"; fi
+
+# The installed CLI and its modules.
+R=$P/bin/roadsplat
+check "installed roadsplat --version" sh -c "'$R' --version | grep -q '$ver'"
+check "image module installed" [ -f "$P/lib/roadsplat/roadsplat-image.so" ]
+printf 'P2\n5 4\n255\n1 2 3 4 5\n2 3 4 5 6\n3 4 5 6 7\n4 5 6 7 8\n' > "$T/dem.pgm"
+printf 'road a width 1\n0.5 0.5\n3.5 2.5\nend\n' > "$T/roads.txt"
+check "installed CLI writes a PNG" "$R" --quiet --texels 2 "$T/dem.pgm" "$T/roads.txt" "$T/a.png"
+check "installed CLI reads a PNG DEM (image module from $P/lib/roadsplat)" \
+    "$R" --quiet --texels 1 "$T/a.png" "$T/roads.txt" "$T/b.png"
+mv "$P/lib/roadsplat" "$P/lib/roadsplat.off"
+"$R" --quiet --texels 1 "$T/a.png" "$T/roads.txt" "$T/c.png" 2>"$T/err.txt"; rc=$?
+check "without the module: exit 1" [ "$rc" = 1 ]
+check "without the module: one line naming roadsplat-image.so" sh -c \
+    "[ \$(wc -l < '$T/err.txt') = 1 ] && grep -q 'roadsplat-image.so' '$T/err.txt'"
+check "without the module: a PGM still works" "$R" --quiet --texels 1 "$T/dem.pgm" "$T/roads.txt" "$T/d.png"
+mv "$P/lib/roadsplat.off" "$P/lib/roadsplat"
+
+# install-lib needs neither OpenImageIO nor libdeflate (pkg-config finds nothing here).
+L=$T/libonly
+if $MAKE --no-print-directory install-lib BUILD="$B" PREFIX="$L" DESTDIR= PKG_CONFIG=false SAN="$SAN" \
+    ${OPT:+OPT="$OPT"} >"$T/il.log" 2>&1; then
+    check "install-lib: header, libraries, .pc" sh -c "[ -f '$L/include/roadsplat.h' ] && [ -f '$L/lib/libroadsplat.a' ] &&
+        [ -f '$L/lib/libroadsplat.so' ] && grep -qx 'prefix=$L' '$L/lib/pkgconfig/roadsplat.pc'"
+    check "install-lib: no CLI" [ ! -e "$L/bin/roadsplat" ]
+else cat "$T/il.log"; bad "make install-lib without OpenImageIO"; fi
+
+if $MAKE --no-print-directory uninstall BUILD="$B" PREFIX="$P" DESTDIR= >"$T/un.log" 2>&1; then
+    left=$(find "$P" -type f | wc -l)
+    check "make uninstall leaves no files ($left left)" [ "$left" = 0 ]
+else cat "$T/un.log"; bad "make uninstall"; fi
+
+# Back to the build's own configuration (PREFIX as given to the outer make, if any),
+# so BUILD/roadsplat.pc does not keep naming the temporary prefix.
+$MAKE --no-print-directory all BUILD="$B" SAN="$SAN" ${OPT:+OPT="$OPT"} >"$T/back.log" 2>&1 || { cat "$T/back.log"; bad "make all after the test"; }
+echo "install: $pass passed, $fail failed"
+[ "$fail" = 0 ]

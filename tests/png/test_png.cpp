@@ -1,0 +1,301 @@
+// The CLI's PNG writer (cli/png.c): images written at several levels, sizes
+// and layouts are read back through OpenImageIO and through libpng directly
+// and compared pixel for pixel; atomic replacement, refused targets, the
+// completeness check and the progress callback.
+//
+// Also the writers' timing tool of tests/bench/write.sh:
+//   test_png --time-oiio IN.png OUT.png RUNS     OpenImageIO 2.4 defaults (libpng)
+//   test_png --time-level L IN.png OUT.png RUNS  cli/png.c at level L
+// read IN (RGBA8), write OUT RUNS times, print "median_ms bytes".
+#include "../../cli/cli.h"
+
+#include <OpenImageIO/imageio.h>
+#include <png.h>
+
+#include <algorithm>
+#include <csetjmp>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <dirent.h>
+#include <string>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <vector>
+
+static int passed, failed;
+#define CHECK(c, ...)                                                                                                 \
+    do {                                                                                                              \
+        if (c) passed++;                                                                                              \
+        else {                                                                                                        \
+            failed++;                                                                                                 \
+            std::printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #c);                                                  \
+            std::printf(__VA_ARGS__);                                                                                 \
+            std::printf("\n");                                                                                        \
+        }                                                                                                             \
+    } while (0)
+
+static std::string dir;
+
+struct image {
+    uint32_t w, h;
+    int channels, bits;
+    std::vector<uint8_t> b8;
+    std::vector<uint16_t> b16;
+    const void *data() const { return bits == 8 ? (const void *)b8.data() : (const void *)b16.data(); }
+    size_t samples() const { return (size_t)w * h * (size_t)channels; }
+};
+
+// Smooth gradients with some noise (kind 0) or pure noise (kind 1).
+static image make_image(uint32_t w, uint32_t h, int channels, int bits, int kind, uint32_t seed)
+{
+    image im{ w, h, channels, bits, {}, {} };
+    uint32_t s = seed * 2654435761u + 1;
+    size_t n = im.samples();
+    if (bits == 8) im.b8.resize(n);
+    else im.b16.resize(n);
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++)
+            for (int c = 0; c < channels; c++) {
+                s = s * 1103515245u + 12345u;
+                uint32_t noise = s >> 8;
+                uint32_t v = kind ? noise : (x * 7 + y * 3 + (uint32_t)c * 50) * (bits == 8 ? 1u : 131u) + (noise & 7);
+                size_t i = ((size_t)y * w + x) * (size_t)channels + (size_t)c;
+                if (bits == 8) im.b8[i] = (uint8_t)v;
+                else im.b16[i] = (uint16_t)v;
+            }
+    return im;
+}
+
+// Through OpenImageIO, in the image's own type.
+static bool read_oiio(const std::string &path, const image &want, std::string &why)
+{
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1); // stored values, not premultiplied
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) { why = OIIO::geterror(); return false; }
+    const OIIO::ImageSpec &sp = in->spec();
+    if ((uint32_t)sp.width != want.w || (uint32_t)sp.height != want.h || sp.nchannels != want.channels) {
+        why = "size or channels differ";
+        return false;
+    }
+    OIIO::TypeDesc t = want.bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
+    if (sp.format != t) { why = "sample type differs"; return false; }
+    std::vector<uint8_t> buf(want.samples() * (size_t)(want.bits / 8));
+    if (!in->read_image(0, 0, 0, want.channels, t, buf.data())) { why = in->geterror(); return false; }
+    in->close();
+    if (std::memcmp(buf.data(), want.data(), buf.size()) != 0) { why = "pixels differ"; return false; }
+    return true;
+}
+
+// Through libpng's own reader, 16-bit samples swapped to native order.
+static bool read_libpng(const std::string &path, const image &want, std::string &why)
+{
+    FILE *f = std::fopen(path.c_str(), "rb");
+    if (!f) { why = "cannot open"; return false; }
+    png_structp p = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = p ? png_create_info_struct(p) : nullptr;
+    if (!info) { std::fclose(f); why = "libpng init"; return false; }
+    std::vector<uint8_t> buf(want.samples() * (size_t)(want.bits / 8));
+    std::vector<png_bytep> rows(want.h);
+    bool ok = false;
+    if (setjmp(png_jmpbuf(p)) == 0) {
+        png_init_io(p, f);
+        png_read_info(p, info);
+        if (png_get_image_width(p, info) == want.w && png_get_image_height(p, info) == want.h &&
+            png_get_channels(p, info) == want.channels && png_get_bit_depth(p, info) == want.bits &&
+            png_get_interlace_type(p, info) == PNG_INTERLACE_NONE) {
+            if (want.bits == 16) {
+                uint16_t one = 1;
+                uint8_t first;
+                std::memcpy(&first, &one, 1);
+                if (first) png_set_swap(p);
+            }
+            png_read_update_info(p, info);
+            size_t stride = (size_t)want.w * (size_t)want.channels * (size_t)(want.bits / 8);
+            for (uint32_t y = 0; y < want.h; y++) rows[y] = buf.data() + (size_t)y * stride;
+            png_read_image(p, rows.data());
+            png_read_end(p, nullptr);
+            ok = std::memcmp(buf.data(), want.data(), buf.size()) == 0;
+            if (!ok) why = "pixels differ";
+        } else why = "header differs";
+    } else why = "libpng error";
+    png_destroy_read_struct(&p, &info, nullptr);
+    std::fclose(f);
+    return ok;
+}
+
+static long file_size(const std::string &path)
+{
+    struct stat st;
+    return stat(path.c_str(), &st) == 0 ? (long)st.st_size : -1;
+}
+
+static int entries(const std::string &d)
+{
+    int n = 0;
+    DIR *dp = opendir(d.c_str());
+    if (!dp) return -1;
+    while (struct dirent *e = readdir(dp))
+        if (std::strcmp(e->d_name, ".") && std::strcmp(e->d_name, "..")) n++;
+    closedir(dp);
+    return n;
+}
+
+struct progress_log {
+    std::vector<uint64_t> done;
+    bool bad_total = false;
+};
+static int log_progress(void *user, uint64_t done, uint64_t total)
+{
+    auto *l = (progress_log *)user;
+    l->done.push_back(done);
+    if (total != 1000) l->bad_total = true;
+    return 0;
+}
+
+static void round_trip(uint32_t w, uint32_t h, int channels, int bits, int kind, int level)
+{
+    image im = make_image(w, h, channels, bits, kind, w * 31 + h + (uint32_t)level);
+    std::string path = dir + "/rt.png", why;
+    cli_png_image img = { w, h, channels, bits, im.data() };
+    progress_log pl;
+    cli_png_options opt = { level, log_progress, &pl };
+    char name[128];
+    std::snprintf(name, sizeof name, "%ux%u, %d channels, %d bits, kind %d, level %d", w, h, channels, bits, kind,
+                  level);
+    CHECK(cli_png_write(path.c_str(), nullptr, &img, &opt) == 0, "%s: write", name);
+    CHECK(cli_png_file_complete(path.c_str()), "%s: not complete", name);
+    CHECK(read_oiio(path, im, why), "%s: OpenImageIO: %s", name, why.c_str());
+    why.clear();
+    CHECK(read_libpng(path, im, why), "%s: libpng: %s", name, why.c_str());
+    bool mono = std::is_sorted(pl.done.begin(), pl.done.end());
+    CHECK(!pl.done.empty() && pl.done.back() == 1000 && mono && !pl.bad_total, "%s: progress", name);
+}
+
+static bool read_rgba8(const char *path, std::vector<uint8_t> &px, uint32_t &w, uint32_t &h)
+{
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) return false;
+    w = (uint32_t)in->spec().width;
+    h = (uint32_t)in->spec().height;
+    if (in->spec().nchannels != 4) return false;
+    px.resize((size_t)w * h * 4);
+    return in->read_image(0, 0, 0, 4, OIIO::TypeDesc::UINT8, px.data());
+}
+
+static int time_writer(int argc, char **argv)
+{
+    bool oiio = !std::strcmp(argv[1], "--time-oiio");
+    if (oiio ? argc != 5 : (argc != 6 || std::strcmp(argv[1], "--time-level"))) return 2;
+    int level = oiio ? -1 : std::atoi(argv[2]);
+    const char *in = argv[oiio ? 2 : 3], *out = argv[oiio ? 3 : 4];
+    int runs = std::atoi(argv[oiio ? 4 : 5]);
+    std::vector<uint8_t> px;
+    uint32_t w, h;
+    if (!read_rgba8(in, px, w, h)) { std::fprintf(stderr, "test_png: cannot read %s as RGBA8\n", in); return 1; }
+    std::vector<double> ms;
+    for (int r = 0; r < (runs > 0 ? runs : 1); r++) {
+        double t0 = cli_now_ms();
+        if (oiio) { // what cli/imageio.cpp did before cli/png.c (minus the temporary + rename)
+            auto o = OIIO::ImageOutput::create("png");
+            OIIO::ImageSpec spec((int)w, (int)h, 4, OIIO::TypeDesc::UINT8);
+            spec.attribute("oiio:UnassociatedAlpha", 1);
+            if (!o || !o->open(out, spec) || !o->write_image(OIIO::TypeDesc::UINT8, px.data()) || !o->close()) {
+                std::fprintf(stderr, "test_png: OpenImageIO write failed\n");
+                return 1;
+            }
+        } else {
+            cli_png_image img = { w, h, 4, 8, px.data() };
+            cli_png_options opt = { level, nullptr, nullptr };
+            if (cli_png_write(out, nullptr, &img, &opt)) return 1;
+        }
+        ms.push_back(cli_now_ms() - t0);
+    }
+    std::sort(ms.begin(), ms.end());
+    std::printf("%.1f %ld\n", ms[ms.size() / 2], file_size(out));
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc > 1) {
+        int rc = time_writer(argc, argv);
+        if (rc == 2) std::fprintf(stderr, "usage: test_png [--time-oiio IN OUT RUNS | --time-level L IN OUT RUNS]\n");
+        return rc;
+    }
+    char tmpl[] = "/tmp/test_png.XXXXXX";
+    if (!mkdtemp(tmpl)) return 1;
+    dir = tmpl;
+
+    // The layouts the CLI writes: RGBA8 (splat), RGB8 (render), grey16; and the rest.
+    const uint32_t sizes[][2] = { { 1, 1 }, { 7, 3 }, { 1, 9 }, { 300, 200 } };
+    for (auto &s : sizes)
+        for (int level : { 0, 1, 6, 12 }) {
+            round_trip(s[0], s[1], 4, 8, 0, level);
+            round_trip(s[0], s[1], 1, 16, 0, level);
+        }
+    for (int ch = 1; ch <= 4; ch++)
+        for (int bits : { 8, 16 }) round_trip(33, 17, ch, bits, 0, 3);
+    round_trip(640, 480, 3, 8, 0, 1);
+    // Noise: several 1 MiB IDAT chunks, and a stream that does not compress.
+    round_trip(800, 400, 4, 8, 1, 1);
+    round_trip(700, 300, 1, 16, 1, 9);
+    round_trip(1024, 300, 4, 8, 1, 0);
+
+    // Atomic replacement: an old file is replaced whole, no temporary left.
+    std::string sub = dir + "/atomic";
+    mkdir(sub.c_str(), 0755);
+    std::string target = sub + "/out.png";
+    FILE *f = std::fopen(target.c_str(), "wb");
+    std::fputs("old", f);
+    std::fclose(f);
+    image im = make_image(50, 40, 4, 8, 0, 7);
+    cli_png_image img = { 50, 40, 4, 8, im.data() };
+    std::string why;
+    CHECK(cli_png_write(target.c_str(), nullptr, &img, nullptr) == 0 && read_oiio(target, im, why), "replace");
+    CHECK(entries(sub) == 1, "temporary left behind (%d entries)", entries(sub));
+
+    // Refused: bad layouts and levels, a folder as target (old file kept).
+    std::fprintf(stderr, "(the next lines are expected refusals)\n");
+    cli_png_image bad = { 50, 40, 5, 8, im.data() };
+    CHECK(cli_png_write(target.c_str(), nullptr, &bad, nullptr) != 0, "5 channels");
+    bad = { 50, 40, 4, 12, im.data() };
+    CHECK(cli_png_write(target.c_str(), nullptr, &bad, nullptr) != 0, "12 bits");
+    cli_png_options lv = { 13, nullptr, nullptr };
+    CHECK(cli_png_write(target.c_str(), nullptr, &img, &lv) != 0, "level 13");
+    CHECK(read_oiio(target, im, why) && entries(sub) == 1, "old file kept after refusals");
+    CHECK(cli_png_write(sub.c_str(), nullptr, &img, nullptr) != 0, "folder as target");
+    CHECK(cli_png_write((sub + "/missing/x.png").c_str(), nullptr, &img, nullptr) != 0, "missing folder");
+    int lvl = -5;
+    CHECK(cli_parse_png_level("--png-level", "12", &lvl) == 0 && lvl == 12, "parse 12");
+    CHECK(cli_parse_png_level("--png-level", "0", &lvl) == 0 && lvl == 0, "parse 0");
+    CHECK(cli_parse_png_level("--png-level", "13", &lvl) != 0, "parse 13");
+    CHECK(cli_parse_png_level("--png-level", "-1", &lvl) != 0, "parse -1");
+    CHECK(cli_parse_png_level("--png-level", "x", &lvl) != 0, "parse x");
+
+    // The completeness check: truncation and a flipped byte are caught.
+    std::vector<uint8_t> bytes;
+    f = std::fopen(target.c_str(), "rb");
+    for (int c; (c = std::fgetc(f)) != EOF;) bytes.push_back((uint8_t)c);
+    std::fclose(f);
+    std::string cut = dir + "/cut.png";
+    for (size_t keep : { bytes.size() - 1, bytes.size() - 12, (size_t)40, (size_t)8 }) {
+        f = std::fopen(cut.c_str(), "wb");
+        std::fwrite(bytes.data(), 1, keep, f);
+        std::fclose(f);
+        CHECK(!cli_png_file_complete(cut.c_str()), "truncated to %zu bytes passes", keep);
+    }
+    bytes[bytes.size() / 2] ^= 1;
+    f = std::fopen(cut.c_str(), "wb");
+    std::fwrite(bytes.data(), 1, bytes.size(), f);
+    std::fclose(f);
+    CHECK(!cli_png_file_complete(cut.c_str()), "flipped byte passes");
+
+    std::string cmd = "rm -rf '" + dir + "'";
+    if (std::system(cmd.c_str()) != 0) std::printf("note: could not remove %s\n", dir.c_str());
+    std::printf("test_png: %d passed, %d failed\n", passed, failed);
+    return failed != 0;
+}
