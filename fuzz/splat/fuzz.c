@@ -106,7 +106,9 @@ static void check_window(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gri
                          reader *rd, const uint8_t *whole, const uint16_t *wwhole, uint32_t ow, uint32_t oh)
 {
     rs_splatter *sp = NULL;
-    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, o, &sp);
+    rs_splat_options wo = *o;
+    wo.progress = NULL; /* the whole image may have been cancelled on purpose; the window is not */
+    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, &wo, &sp);
     REQUIRE(r == RS_OK || r == RS_ERR_NOMEM);
     if (r) { REQUIRE(sp == NULL); return; }
     uint32_t x0 = next(rd) % ow, y0 = next(rd) % oh;
