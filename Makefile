@@ -254,7 +254,7 @@ FUZZ_FLAGS  := -g -O1 -fsanitize=fuzzer,address,undefined,float-cast-overflow,fl
 # modulo ranges (no magic values or keywords to find); demimage's parsers are
 # OpenImageIO's (not instrumented) and lib/pgm.c, which the pgm target fuzzes
 # with compare tracing. These three skip it; pgm and roads keep it.
-FUZZ_NOCMP  := roam splat demimage
+FUZZ_NOCMP  := roam splat demimage options
 NOCMP_FLAG  := -fno-sanitize-coverage=trace-cmp
 fuzz_cmp     = $(if $(filter $(1),$(FUZZ_NOCMP)),$(NOCMP_FLAG))
 FUZZ_SECONDS ?= 30
