@@ -113,7 +113,8 @@ static int cap_in(double px, double dy, double h, int64_t j)
 }
 
 /* Cells of a cap on row i: up to two intervals appended to out. The test
- * as a function of |dx| rises, then falls (docs/design.md): on rows with
+ * as a function of |dx| rises while |dx| < |dy|, then falls (its derivative
+ * is |dy|(|dy|-|dx|)/(2 d^3) - |dx|/d, one sign change): on rows with
  * |dy| <= h + 1/2 the cells in are one run around the point, found by
  * binary search; on the outermost rows (|dy| near or past h + 1/2, where
  * the run can split in two) the O(sqrt(h)) candidates are tested one by one. */
