@@ -52,6 +52,35 @@ typedef struct cli_out {
 int cli_out_open(cli_out *o, const char *path);     /* opens o->f for binary writing */
 int cli_out_commit(cli_out *o);                       /* fflush+fsync+fclose+rename */
 void cli_out_abort(cli_out *o);
+/* fflush+fsync+fclose of o->f (when open), without renaming: 0 or 1 after a
+ * "write failed" message. */
+int cli_out_finish(cli_out *o);
+/* Commit a run's outputs together: finish each (NULL entries and outputs
+ * without a temporary are skipped), then rename them all with SIGINT,
+ * SIGTERM and SIGHUP held. A failure leaves the temporaries for
+ * cli_out_abort. */
+int cli_out_commit_all(cli_out *const *outs, size_t n);
+
+/* Temporaries: "DIR/.rs-XXXXXX" next to `path` (a fixed-length name, so any
+ * OUT name the file system accepts works), mode 0666 & ~umask, registered
+ * so that a signal removes it. Returns the descriptor, or -1 with errno. */
+int cli_temp_create(const char *path, char **tmp);
+void cli_temp_remove(const char *tmp); /* unlink + forget */
+void cli_temp_forget(const char *tmp); /* after a rename */
+/* SIGINT, SIGTERM, SIGHUP: remove every registered temporary and exit with
+ * status 128 + signal. Call once at start-up. */
+void cli_signals_install(void);
+
+/* One file of a run and its role in messages ("OUT", "--stats", "DEM"). */
+typedef struct cli_file_role {
+    const char *path; /* NULL: not given */
+    const char *role;
+} cli_file_role;
+/* Before any work: every output name is non-empty and not a folder name,
+ * names no input (same device and inode) and no other output (same inode,
+ * or the same folder and name when not created yet). 0, or 1 after one
+ * error line. */
+int cli_check_outputs(const cli_file_role *outs, size_t nout, const cli_file_role *ins, size_t nin);
 
 /* 1 when the file at `path` is a whole PNG (signature, chunk lengths that
  * chain to an IEND at the end of the file, every CRC right). */
@@ -61,8 +90,15 @@ int cli_png_file_complete(const char *path);
  * row-major, top row first. */
 /* A grey image larger than max_side (0: no limit) on either side is refused
  * before its samples are allocated. */
-int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data);
-int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data);
+/* `shown` is the name messages give (path may be a /dev/fd/N copy of a pipe).
+ * A DEM must have one channel (or grey + alpha); images of fewer than 8 bits
+ * per sample give their stored values (a 1-bit PNG: 0 and 1). */
+int cli_image_read_gray_float(const char *path, const char *shown, uint32_t max_side, uint32_t *w, uint32_t *h,
+                              float **data);
+/* A texture of more than max_pixels (0: no limit) is refused from its
+ * header, before anything is decoded. */
+int cli_image_read_rgba8(const char *path, const char *shown, uint64_t max_pixels, uint32_t *w, uint32_t *h,
+                         uint8_t **data);
 
 /* PNG output (cli/png.c: own container, libdeflate for the stream). An
  * image: channels 1..4 (grey, grey+alpha, RGB, RGBA), bits 8 or 16 (16-bit
@@ -107,6 +143,11 @@ void *cli_module_symbol(const char *module, const char *symbol, const char *what
  * before main() (exec, dynamic loading; Linux records the wall-clock start
  * only to 10 ms) plus the wall time since main() was entered. */
 double cli_startup_ms(void);
+/* Write a PNG straight into `path` (an existing temporary of the caller's,
+ * truncated), with no temporary or rename of its own; checks it is whole.
+ * Messages name `shown`. */
+int cli_image_write_png_file(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                             const void *data);
 
 /* Progress bar on stderr: silent when quiet or stderr is not a TTY, and
  * only drawn once the work has run for more than a second. Use

@@ -48,18 +48,18 @@ std::string one_line(std::string s)
 
 // Open for reading with alpha left unassociated: textures and DEMs with an
 // alpha channel must keep their stored values, not premultiplied ones.
-std::unique_ptr<ImageInput> open_input(const char *path)
+std::unique_ptr<ImageInput> open_input(const char *path, const char *shown)
 {
     struct stat st;
     if (stat(path, &st) != 0) {
-        cli_error("%s: %s", path, std::strerror(errno));
+        cli_error("%s: %s", shown, std::strerror(errno));
         return nullptr;
     }
     ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     auto in = ImageInput::open(path, &config);
     if (!in) {
-        cli_error("%s: cannot read image: %s", path, one_line(OIIO::geterror()).c_str());
+        cli_error("%s: cannot read image: %s", shown, one_line(OIIO::geterror()).c_str());
         return nullptr;
     }
     return in;
@@ -136,12 +136,34 @@ bool read_pixels(ImageInput *in, const ImageSpec &spec, int nc, TypeDesc type, u
     return true;
 }
 
-int read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data)
+// The bit depth of a grey PNG stored with 1, 2 or 4 bits per sample (read
+// from its IHDR: OpenImageIO 2.4 expands such samples to 8 bits and does not
+// say so), else 0.
+int low_bit_depth(const char *path)
 {
-    auto in = open_input(path);
+    unsigned char b[26];
+    FILE *f = std::fopen(path, "rb");
+    if (!f) return 0;
+    size_t got = std::fread(b, 1, sizeof b, f);
+    std::fclose(f);
+    static const unsigned char sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
+    if (got < sizeof b || std::memcmp(b, sig, 8) != 0 || std::memcmp(b + 12, "IHDR", 4) != 0) return 0;
+    int depth = b[24], colour = b[25];
+    return colour == 0 && (depth == 1 || depth == 2 || depth == 4) ? depth : 0;
+}
+
+int read_gray_float(const char *path_in, const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data)
+{
+    auto in = open_input(path_in, path);
     if (!in) return 1;
     const ImageSpec spec = in->spec();
     if (!check_size(path, spec, w, h)) return 1;
+    // A height map has one channel (grey + alpha keeps the grey): an RGB
+    // image is a picture, not heights.
+    if (spec.nchannels > 2) {
+        cli_error("%s: a DEM must have one channel (or grey + alpha), this image has %d", path, spec.nchannels);
+        return 1;
+    }
     // Refuse what rs_dem_create would refuse before allocating w*h floats
     // for it (a PNG header alone can ask for 46000 x 46000).
     if (max_side && (*w > max_side || *h > max_side)) {
@@ -160,6 +182,10 @@ int read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *
     }
     in->close();
     double s = integer_scale(spec.channelformat(0));
+    // 1-, 2- and 4-bit samples come normalised from their own range, not
+    // from the 8-bit type they are delivered in: 0..2^bits-1 is the height.
+    int bps = low_bit_depth(path_in);
+    if (s > 0.0 && bps > 0 && spec.channelformat(0).basetype == TypeDesc::UINT8) s = (double)((1u << bps) - 1u);
     if (s > 0.0) {
         float *z = buf.get();
         for (size_t i = 0; i < n; i++) z[i] = (float)std::nearbyint((double)z[i] * s);
@@ -168,12 +194,20 @@ int read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *
     return 0;
 }
 
-int read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
+int read_rgba8(const char *path_in, const char *path, uint64_t max_pixels, uint32_t *w, uint32_t *h,
+               uint8_t **data)
 {
-    auto in = open_input(path);
+    auto in = open_input(path_in, path);
     if (!in) return 1;
     const ImageSpec spec = in->spec();
     if (!check_size(path, spec, w, h)) return 1;
+    // The declared size against the limit, before a pixel is decoded (an
+    // 875 KB PNG can declare 30000 x 30000).
+    if (max_pixels && (uint64_t)*w * *h > max_pixels) {
+        cli_error("%s: %ux%u is too large for a texture (at most %llu pixels)", path, *w, *h,
+                  (unsigned long long)max_pixels);
+        return 1;
+    }
     int nc = spec.nchannels > 4 ? 4 : spec.nchannels;
     size_t n = (size_t)*w * *h;
     malloc_ptr<uint8_t> srcp((uint8_t *)std::malloc(n * (size_t)nc));
@@ -225,13 +259,14 @@ int guarded_read(const char *path, T **data, Read read)
 }
 } // namespace
 
-extern "C" int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h,
-                                         float **data)
+extern "C" int cli_image_read_gray_float(const char *path, const char *shown, uint32_t max_side, uint32_t *w,
+                                         uint32_t *h, float **data)
 {
-    return guarded_read(path, data, [&] { return read_gray_float(path, max_side, w, h, data); });
+    return guarded_read(shown, data, [&] { return read_gray_float(path, shown, max_side, w, h, data); });
 }
 
-extern "C" int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
+extern "C" int cli_image_read_rgba8(const char *path, const char *shown, uint64_t max_pixels, uint32_t *w,
+                                    uint32_t *h, uint8_t **data)
 {
-    return guarded_read(path, data, [&] { return read_rgba8(path, w, h, data); });
+    return guarded_read(shown, data, [&] { return read_rgba8(path, shown, max_pixels, w, h, data); });
 }

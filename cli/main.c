@@ -145,16 +145,7 @@ static int parse_args(int argc, char **argv, args *a)
  * every old file untouched, and an unwritable target fails in milliseconds. */
 
 /* Flush, check and close a temporary without renaming it. */
-static int out_finish(cli_out *o)
-{
-    int bad = 0, e = 0;
-    if (fflush(o->f) != 0 || ferror(o->f)) { bad = 1; e = errno; }
-    if (!bad && fsync(fileno(o->f)) != 0 && errno != EINVAL) { bad = 1; e = errno; }
-    if (fclose(o->f) != 0 && !bad) { bad = 1; e = errno; }
-    o->f = NULL;
-    if (bad) cli_error("%s: write failed: %s", o->path, strerror(e ? e : EIO));
-    return bad;
-}
+static int out_finish(cli_out *o) { return cli_out_finish(o); }
 
 /* The PNG (cli/png.c) goes into o->tmp, which is then checked whole. */
 static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba, const cli_png_options *po)
@@ -236,19 +227,6 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
     return out_finish(o);
 }
 
-/* Rename a finished temporary over its target. */
-static int out_rename(cli_out *o)
-{
-    if (rename(o->tmp, o->path) != 0) {
-        cli_error("%s: write failed: %s", o->path, strerror(errno));
-        return 1;
-    }
-    free(o->path);
-    free(o->tmp);
-    o->path = o->tmp = NULL;
-    return 0;
-}
-
 static int splat_main(int argc, char **argv)
 {
     args a;
@@ -272,8 +250,16 @@ static int splat_main(int argc, char **argv)
     memset(&out_png, 0, sizeof out_png);
     memset(&out_wt, 0, sizeof out_wt);
     memset(&out_stats, 0, sizeof out_stats);
+    /* Every output is checked and opened before any work. */
+    const cli_file_role outs[3] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" } };
+    const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
+                                   { a.s.road_tex, "--road-texture" } };
+    if (cli_check_outputs(outs, 3, ins, 4)) return 1;
     rs_result r = rs_ctx_create(NULL, NULL, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
+    if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
+        (a.stats && cli_out_open(&out_stats, a.stats)))
+        goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     const rs_dem *dem = in.dem;
     st.t[0] = cli_now_ms() - t_start;
@@ -291,9 +277,6 @@ static int splat_main(int argc, char **argv)
             goto done;
         }
     }
-    if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
-        (a.stats && cli_out_open(&out_stats, a.stats)))
-        goto done;
     cli_progress prog;
     double t1 = cli_now_ms();
     cli_progress_init(&prog, "roads", a.quiet);
@@ -348,8 +331,8 @@ static int splat_main(int argc, char **argv)
         st.job = &job;
         if (stats_to_temp(&out_stats, &st)) goto done;
     }
-    if (out_rename(&out_png) || (a.weight_out && out_rename(&out_wt)) || (a.stats && out_rename(&out_stats)))
-        goto done;
+    cli_out *const all[3] = { &out_png, &out_wt, &out_stats };
+    if (cli_out_commit_all(all, 3)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out_png); /* no-ops once renamed */
@@ -365,6 +348,7 @@ done:
 
 int main(int argc, char **argv)
 {
+    cli_signals_install();
     if (argc > 1 && !strcmp(argv[1], "mesh")) return cli_mesh_main(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "render")) return cli_render_main(argc - 1, argv + 1);
     return splat_main(argc, argv);

@@ -4,6 +4,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,26 +30,27 @@ static int ends_with(const char *s, const char *suf)
     return 1;
 }
 
-/* Exact DEM height (metres) of a vertex; nodata samples keep the mesher's filled value. */
-static double vertex_height(const float *z, uint32_t W, double cs, double zs, const float *v)
+/* Exact DEM height (metres) of vertex k; nodata samples keep the mesher's
+ * filled value. The sample comes from the library's per-vertex sample
+ * index, never from the float position. */
+static double vertex_height(const float *z, double zs, const float *v, const uint32_t *smp, size_t k)
 {
-    long j = lround(v[0] / cs), i = lround(v[1] / cs);
-    float s = z[(size_t)i * W + (size_t)j];
-    return isnan(s) ? (double)v[2] : (double)s * zs;
+    float s = z[smp[k]];
+    return isnan(s) ? (double)v[5 * k + 2] : (double)s * zs;
 }
 
 /* Max |mesh - DEM| over every valid sample, rasterizing each triangle. */
-static double measure_error(const float *z, uint32_t W, double cs, double zs, const float *v, const uint32_t *idx,
-                            size_t ntri)
+static double measure_error(const float *z, uint32_t W, double zs, const float *v, const uint32_t *smp,
+                            const uint32_t *idx, size_t ntri)
 {
     double mx = 0.0;
     for (size_t t = 0; t < ntri; t++) {
         long x[3], y[3];
         double h[3];
         for (int c = 0; c < 3; c++) {
-            const float *p = v + 5 * (size_t)idx[3 * t + (size_t)c];
-            x[c] = lround(p[0] / cs); y[c] = lround(p[1] / cs);
-            h[c] = vertex_height(z, W, cs, zs, p);
+            size_t k = idx[3 * t + (size_t)c];
+            x[c] = (long)(smp[k] % W); y[c] = (long)(smp[k] / W);
+            h[c] = vertex_height(z, zs, v, smp, k);
         }
         long cr = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
         if (cr == 0) continue;
@@ -88,14 +90,14 @@ static void put_u32(unsigned char *b, uint32_t u)
     b[0] = (unsigned char)u; b[1] = (unsigned char)(u >> 8); b[2] = (unsigned char)(u >> 16); b[3] = (unsigned char)(u >> 24);
 }
 
-static int write_mesh(FILE *f, int ply, const float *z, uint32_t W, double cs, double zs, const float *v,
+static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *v, const uint32_t *smp,
                       const float *n, size_t nv, const uint32_t *idx, size_t ni, size_t ntop)
 {
     if (!ply) {
         fprintf(f, "# roadsplat mesh: y up, v = (column*cs, height, row*cs) metres\n");
         for (size_t k = 0; k < nv; k++) {
             const float *p = v + 5 * k;
-            double h = k < ntop ? vertex_height(z, W, cs, zs, p) : (double)p[2];
+            double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
             fprintf(f, "v %.9g %.10g %.9g\n", (double)p[0], h, (double)p[1]);
         }
         for (size_t k = 0; k < nv; k++) fprintf(f, "vt %.9g %.9g\n", (double)v[5 * k + 3], 1.0 - (double)v[5 * k + 4]);
@@ -116,7 +118,7 @@ static int write_mesh(FILE *f, int ply, const float *z, uint32_t W, double cs, d
         unsigned char b[32];
         for (size_t k = 0; k < nv; k++) {
             const float *p = v + 5 * k;
-            double h = k < ntop ? vertex_height(z, W, cs, zs, p) : (double)p[2];
+            double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
             put_f32(b, p[0]); put_f32(b + 4, (float)h); put_f32(b + 8, p[1]);
             put_f32(b + 12, p[3]); put_f32(b + 16, 1.0f - p[4]);
             size_t len = 20;
@@ -161,9 +163,16 @@ int cli_mesh_main(int argc, char **argv)
         else { cli_error("mesh: unexpected argument '%s'", s); return 1; }
     }
     if (!in || !outp) { cli_error("mesh: need DEM and OUT.obj|OUT.ply\n%s", mesh_usage); return 1; }
+    const cli_file_role outs[2] = { { outp, "OUT" }, { stats_path, "--stats" } }, ins[1] = { { in, "DEM" } };
+    if (cli_check_outputs(outs, 2, ins, 1)) return 1;
     if (have_err && tris) { cli_error("mesh: --max-error and --triangles are exclusive"); return 1; }
     if (!(cs > 0)) { cli_error("--cell-size: '%g' must be > 0", cs); return 1; }
     if (!(zs > 0)) { cli_error("--z-scale: '%g' must be > 0", zs); return 1; }
+    /* Vertices are floats: a cell size below the smallest normal float
+     * would collapse them (and their sample positions with them). */
+    if (cs < FLT_MIN) { cli_error("--cell-size: '%g' is below %g, the smallest cell size a float vertex holds", cs, (double)FLT_MIN); return 1; }
+    if (cs > FLT_MAX) { cli_error("--cell-size: '%g' is beyond the float range of the output (%g)", cs, (double)FLT_MAX); return 1; }
+    if (skirt > FLT_MAX) { cli_error("--skirt: '%g' is beyond the float range of the output (%g)", skirt, (double)FLT_MAX); return 1; }
     if (!(max_error >= 0)) { cli_error("--max-error: '%g' must be >= 0", max_error); return 1; }
     if (!(skirt >= 0)) { cli_error("--skirt: '%g' must be >= 0", skirt); return 1; }
     if (have_err == 0 && tris == 0) have_err = 1;
@@ -182,17 +191,45 @@ int cli_mesh_main(int argc, char **argv)
     cli_out out, so;
     memset(&out, 0, sizeof out);
     memset(&so, 0, sizeof so);
-    rs_dem *dem = cli_load_dem(ctx, in);
-    if (!dem) goto done;
-    rs_dem_frame frame;
-    memset(&frame, 0, sizeof frame);
-    frame.cell_size = cs;
-    frame.z_scale = zs;
-    if (rs_dem_set_frame(ctx, dem, &frame) != RS_OK) {
-        cli_error("%s: %s", in, rs_ctx_message(ctx));
-        goto done;
-    }
+    uint32_t *smp = NULL;
+    rs_dem *dem = NULL;
     if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path))) goto done;
+    dem = cli_load_dem(ctx, in);
+    if (!dem) goto done;
+    /* Every value that reaches the float output must fit, checked before
+     * the work with the option that decides it named. */
+    {
+        uint32_t W = rs_dem_width(dem), H = rs_dem_height(dem);
+        double side = (double)(W > H ? W : H) - 1.0, zabs = 0;
+        const float *z = rs_dem_samples(dem);
+        for (size_t k = 0; k < (size_t)W * H; k++)
+            if (fabs((double)z[k]) > zabs) zabs = fabs((double)z[k]); /* NaN (nodata) compares false */
+        if (side * cs > FLT_MAX) {
+            cli_error("--cell-size: '%g' puts the map edge at %g m, beyond the float range of the output (%g)", cs,
+                      side * cs, (double)FLT_MAX);
+            goto done;
+        }
+        if (zabs * zs > FLT_MAX || zabs > FLT_MAX / 4) {
+            cli_error("--z-scale: '%g' makes heights of %g m, beyond the float range of the output (%g)", zs,
+                      zabs * zs, (double)FLT_MAX);
+            goto done;
+        }
+        if (zabs * zs + skirt > FLT_MAX) {
+            cli_error("--skirt: '%g' below heights down to %g m is beyond the float range of the output (%g)", skirt,
+                      -zabs * zs, (double)FLT_MAX);
+            goto done;
+        }
+    }
+    {
+        rs_dem_frame frame;
+        memset(&frame, 0, sizeof frame);
+        frame.cell_size = cs;
+        frame.z_scale = zs;
+        if (rs_dem_set_frame(ctx, dem, &frame) != RS_OK) {
+            cli_error("%s: %s", cs < 1e-9 || cs > 1e9 ? "--cell-size" : "--z-scale", rs_ctx_message(ctx));
+            goto done;
+        }
+    }
     double t_mesh = cli_now_ms();
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -208,13 +245,18 @@ int cli_mesh_main(int argc, char **argv)
     r = tris ? rs_roam_refine_count(ctx, L, tris) : rs_roam_refine_error(ctx, L, max_error);
     if (r == RS_ERR_POOL_EXHAUSTED) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
     else if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
-    rs_roam_mesh_options mo = { normals, skirt };
+    rs_roam_mesh_options mo;
+    memset(&mo, 0, sizeof mo);
+    mo.normals = normals;
+    mo.skirt_depth = skirt;
     size_t mv, mi, nv, ni;
     rs_roam_mesh_bound(L, &mo, &mv, &mi);
     v = malloc((mv ? mv : 1) * 5 * sizeof *v);
     nrm = normals ? malloc((mv ? mv : 1) * 3 * sizeof *nrm) : NULL;
     idx = malloc((mi ? mi : 1) * sizeof *idx);
-    if (!v || !idx || (normals && !nrm)) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
+    smp = malloc((mv ? mv : 1) * sizeof *smp);
+    mo.samples = smp;
+    if (!v || !idx || !smp || (normals && !nrm)) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
     if (rs_roam_extract(ctx, L, &mo, v, nrm, mv, idx, mi, &nv, &ni) != RS_OK) {
         cli_error("%s: %s", in, rs_ctx_message(ctx));
         goto done;
@@ -224,12 +266,12 @@ int cli_mesh_main(int argc, char **argv)
     rs_roam_get_stats(L, &st);
     size_t ntop = 0;
     for (size_t k = 0; k < 3 * (size_t)st.triangles; k++) if (idx[k] + (size_t)1 > ntop) ntop = idx[k] + (size_t)1;
-    if (write_mesh(out.f, ply, rs_dem_samples(dem), rs_dem_width(dem), cs, zs, v, nrm, nv, idx, ni, ntop) != 0) {
+    if (write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop) != 0) {
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
     if (stats_path) {
-        double measured = measure_error(rs_dem_samples(dem), rs_dem_width(dem), cs, zs, v, idx, st.triangles);
+        double measured = measure_error(rs_dem_samples(dem), rs_dem_width(dem), zs, v, smp, idx, st.triangles);
         fprintf(so.f, "{\n  \"command\": \"mesh\",\n  \"dem\": {\"width\": %u, \"height\": %u, \"cell_size\": %.9g, \"z_scale\": %.9g},\n",
                 st.width, st.height, cs, zs);
         fprintf(so.f, "  \"mode\": \"%s\",\n", tris ? "triangles" : "max_error");
@@ -250,12 +292,13 @@ int cli_mesh_main(int argc, char **argv)
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
-    if (cli_out_commit(&out) || (stats_path && cli_out_commit(&so))) goto done;
+    cli_out *const all[2] = { &out, &so };
+    if (cli_out_commit_all(all, 2)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out); /* no-ops once committed */
     cli_out_abort(&so);
-    free(v); free(nrm); free(idx);
+    free(v); free(nrm); free(idx); free(smp);
     rs_roam_free(ctx, L);
     if (dem) rs_dem_free(ctx, dem);
     rs_ctx_free(ctx);

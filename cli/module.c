@@ -95,28 +95,30 @@ void *cli_module_symbol(const char *name, const char *symbol, const char *what)
 
 /* ---- stand-ins for the module entry points -------------------------------- */
 
-typedef int (*read_gray_fn)(const char *, uint32_t, uint32_t *, uint32_t *, float **);
-typedef int (*read_rgba_fn)(const char *, uint32_t *, uint32_t *, uint8_t **);
+typedef int (*read_gray_fn)(const char *, const char *, uint32_t, uint32_t *, uint32_t *, float **);
+typedef int (*read_rgba_fn)(const char *, const char *, uint64_t, uint32_t *, uint32_t *, uint8_t **);
 typedef int (*main_fn)(int, char **);
 
-int cli_image_read_gray_float(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **data)
+int cli_image_read_gray_float(const char *path, const char *shown, uint32_t max_side, uint32_t *w, uint32_t *h,
+                              float **data)
 {
-    void *s = cli_module_symbol("image", "cli_image_read_gray_float", path);
+    void *s = cli_module_symbol("image", "cli_image_read_gray_float", shown);
     read_gray_fn f;
     *data = NULL;
     if (!s) return 1;
     memcpy(&f, &s, sizeof f); /* object to function pointer, as POSIX dlsym allows */
-    return f(path, max_side, w, h, data);
+    return f(path, shown, max_side, w, h, data);
 }
 
-int cli_image_read_rgba8(const char *path, uint32_t *w, uint32_t *h, uint8_t **data)
+int cli_image_read_rgba8(const char *path, const char *shown, uint64_t max_pixels, uint32_t *w, uint32_t *h,
+                         uint8_t **data)
 {
-    void *s = cli_module_symbol("image", "cli_image_read_rgba8", path);
+    void *s = cli_module_symbol("image", "cli_image_read_rgba8", shown);
     read_rgba_fn f;
     *data = NULL;
     if (!s) return 1;
     memcpy(&f, &s, sizeof f);
-    return f(path, w, h, data);
+    return f(path, shown, max_pixels, w, h, data);
 }
 
 int cli_render_main(int argc, char **argv)

@@ -221,6 +221,7 @@ int cli_png_write(const char *path, const char *shown, const cli_png_image *img,
         cli_out_abort(&o);
         return 1;
     }
+    cli_temp_forget(o.tmp); /* renamed: no longer ours to remove on a signal */
     free(o.path);
     free(o.tmp);
     return 0;
@@ -280,5 +281,32 @@ int cli_parse_png_level(const char *option, const char *s, int *level)
         return 1;
     }
     *level = (int)u;
+    return 0;
+}
+
+/* Into an existing temporary of the caller's (truncated), no rename. */
+int cli_image_write_png_file(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                             const void *data)
+{
+    cli_png_image img = { w, h, channels, bits, data };
+    FILE *f = fopen(path, "wb");
+    if (!f) {
+        cli_error("%s: write failed: %s", shown, strerror(errno));
+        return 1;
+    }
+    int bad = cli_png_encode(f, shown, &img, NULL), e = 0;
+    if (!bad) {
+        if (fflush(f) != 0 || ferror(f)) { bad = 1; e = errno; }
+        if (!bad && fsync(fileno(f)) != 0 && errno != EINVAL) { bad = 1; e = errno; }
+    }
+    if (fclose(f) != 0 && !bad) { bad = 1; e = errno; }
+    if (bad) {
+        if (e) cli_error("%s: write failed: %s", shown, strerror(e));
+        return 1;
+    }
+    if (!cli_png_file_complete(path)) {
+        cli_error("%s: write failed: the PNG did not reach the disk whole", shown);
+        return 1;
+    }
     return 0;
 }

@@ -22,6 +22,7 @@ int cli_render_main(int argc, char **argv)
 #include <string.h>
 
 #define RENDER_PI 3.14159265358979323846
+#define RENDER_MAX_COORD 1e9 /* metres: --camera / --look-at */
 
 static const char render_usage[] =
     "Usage: roadsplat render [splat options] [render options] DEM ROADS OUT.png\n"
@@ -100,12 +101,17 @@ static int parse_render_args(int argc, char **argv, render_args *a)
                 return 1;
             }
             a->have_size = 1;
-        } else if (!strcmp(name, "--camera")) {
-            if (cli_parse_vec(name, v, a->camera, 3)) return 1;
-            a->have_camera = 1;
-        } else if (!strcmp(name, "--look-at")) {
-            if (cli_parse_vec(name, v, a->look, 3)) return 1;
-            a->have_look = 1;
+        } else if (!strcmp(name, "--camera") || !strcmp(name, "--look-at")) {
+            double *p = !strcmp(name, "--camera") ? a->camera : a->look;
+            if (cli_parse_vec(name, v, p, 3)) return 1;
+            /* distances, squares and clip planes must stay finite */
+            for (int k = 0; k < 3; k++)
+                if (!(fabs(p[k]) <= RENDER_MAX_COORD)) {
+                    cli_error("%s: '%s' must lie within +-%g m on each axis", name, v, RENDER_MAX_COORD);
+                    return 1;
+                }
+            if (p == a->camera) a->have_camera = 1;
+            else a->have_look = 1;
         } else if (!strcmp(name, "--fov")) {
             if (cli_parse_double(name, v, &a->fov)) return 1;
             if (!(a->fov >= 1 && a->fov <= 170)) { cli_error("%s: '%s' must be 1..170 degrees", name, v); return 1; }
@@ -235,9 +241,19 @@ int cli_render_main(int argc, char **argv)
     rg_tex_stats tst;
     int warned = 0;
     memset(&in, 0, sizeof in);
+    /* Outputs: checked and opened (as temporaries) before any work, renamed
+     * together at the end. */
+    cli_out out, so;
+    memset(&out, 0, sizeof out);
+    memset(&so, 0, sizeof so);
+    const cli_file_role outs[2] = { { a.out, "OUT" }, { a.stats, "--stats" } };
+    const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
+                                   { a.s.road_tex, "--road-texture" } };
+    if (cli_check_outputs(outs, 2, ins, 4)) return 1;
     rs_result r = rs_ctx_create(NULL, NULL, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
     double cs = a.s.frame.cell_size > 0 ? a.s.frame.cell_size : 1, zs = a.s.frame.z_scale > 0 ? a.s.frame.z_scale : 1;
+    if (cli_out_open(&out, a.out) || (a.stats && cli_out_open(&so, a.stats))) goto done;
 
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     const rs_dem *dem = in.dem;
@@ -362,7 +378,9 @@ int cli_render_main(int argc, char **argv)
             cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
             goto done;
         }
-        rs_roam_mesh_options mo = { 1, 0.0 };
+        rs_roam_mesh_options mo;
+        memset(&mo, 0, sizeof mo);
+        mo.normals = 1;
         size_t mv, mi;
         rs_roam_mesh_bound(roam, &mo, &mv, &mi);
         if (mv > cap_v) {
@@ -399,9 +417,16 @@ int cli_render_main(int argc, char **argv)
         memmove(frame + 3 * k, frame + 4 * k, 3);
     t_readback = cli_now_ms() - t1;
     t1 = cli_now_ms();
-    cli_png_image img = { a.width, a.height, 3, 8, frame };
-    cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL };
-    if (cli_png_write(a.out, NULL, &img, &po)) goto done;
+    {
+        /* into OUT's temporary, opened before the work; renamed with --stats */
+        cli_png_image img = { a.width, a.height, 3, 8, frame };
+        cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL };
+        if (cli_png_encode(out.f, out.path, &img, &po) || cli_out_finish(&out)) goto done;
+        if (!cli_png_file_complete(out.tmp)) {
+            cli_error("%s: write failed: the PNG did not reach the disk whole", out.path);
+            goto done;
+        }
+    }
     t_write = cli_now_ms() - t1;
 
     if (a.stats) {
@@ -411,8 +436,6 @@ int cli_render_main(int argc, char **argv)
             fmax_ms = fmax(fmax_ms, frame_ms[f]);
         }
         double fm = median(frame_ms, a.frames), mm = median(mesh_ms, a.frames), dm = median(draw_ms, a.frames);
-        cli_out so;
-        if (cli_out_open(&so, a.stats)) goto done;
         char desc[256];
         rg_describe(gl, desc, sizeof desc);
         fprintf(so.f, "{\n  \"command\": \"render\",\n  \"gl\": \"%s\",\n", desc);
@@ -438,11 +461,14 @@ int cli_render_main(int argc, char **argv)
                       "\"write\": %.3f, \"total\": %.3f}\n}\n",
                 t_read, t_grid, t_splat, t_roam, t_ctx, t_upload, fm, fmin_ms, fmax_ms, mm, dm, t_readback, t_write,
                 cli_now_ms() - t_start);
-        if (ferror(so.f)) { cli_error("%s: write failed", a.stats); cli_out_abort(&so); goto done; }
-        if (cli_out_commit(&so)) goto done;
+        if (ferror(so.f)) { cli_error("%s: write failed", a.stats); goto done; }
     }
+    cli_out *const all[2] = { &out, &so };
+    if (cli_out_commit_all(all, 2)) goto done;
     rc = 0;
 done:
+    cli_out_abort(&out); /* no-ops once committed */
+    cli_out_abort(&so);
     rg_destroy(gl);
     free(frame); free(tex);
     free(vtx); free(nrm); free(idx);

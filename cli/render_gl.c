@@ -141,6 +141,7 @@ static uint32_t tile_base_level(const rg_renderer *r, const rg_view *v, double x
         s = 2.0 * texel_m * focal / d;
     }
     if (!(s < 1.0)) return 0;
+    if (!(s > 0.0)) return nlevels - 1; /* eye (far) away: the coarsest level; no division by 0 */
     double l = floor(log2(1.0 / s));
     if (l > nlevels - 1) l = nlevels - 1;
     return l > 0 ? (uint32_t)l : 0;

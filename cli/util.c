@@ -1,12 +1,18 @@
 /* CLI helpers: error lines, strict option parsing, whole-file reads,
  * atomic output files, the monotonic clock and DEM loading. */
+/* realpath() is XSI */
+#ifndef _XOPEN_SOURCE
+#define _XOPEN_SOURCE 700
+#endif
 #include "cli.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <float.h>
 #include <locale.h>
+#include <limits.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -150,6 +156,11 @@ int cli_read_file(const char *path, size_t limit, char **data, size_t *size)
         cli_error("%s: is a directory", path);
         return 1;
     }
+    if (!S_ISREG(st.st_mode) && !S_ISFIFO(st.st_mode) && !S_ISSOCK(st.st_mode)) { /* /dev/zero never ends */
+        fclose(f);
+        cli_error("%s: is a device; inputs must be regular files or pipes", path);
+        return 1;
+    }
     if (limit && S_ISREG(st.st_mode) && (uint64_t)st.st_size > (uint64_t)limit) { /* before allocating */
         fclose(f);
         cli_error("%s: file is larger than the %zu-byte limit", path, limit);
@@ -197,9 +208,118 @@ static char *dup_str(const char *s)
     return d;
 }
 
-int cli_out_open(cli_out *o, const char *path)
+/* ---- temporaries and signals ------------------------------------------------ */
+
+/* Every temporary file the CLI creates is registered here until it is
+ * renamed or removed, so that SIGINT, SIGTERM and SIGHUP can remove them
+ * all (unlink is async-signal-safe) before exiting with 128 + signal. The
+ * paths live in static storage: the handler reads nothing malloc'd. */
+#define CLI_MAX_TEMPS 8
+#define CLI_TEMP_PATH 4112
+static char temp_paths[CLI_MAX_TEMPS][CLI_TEMP_PATH];
+static volatile sig_atomic_t temp_used[CLI_MAX_TEMPS];
+
+static void on_signal(int sig)
 {
-    memset(o, 0, sizeof *o);
+    for (int i = 0; i < CLI_MAX_TEMPS; i++)
+        if (temp_used[i]) unlink(temp_paths[i]);
+    _exit(128 + sig);
+}
+
+static const int handled_signals[3] = { SIGINT, SIGTERM, SIGHUP };
+
+void cli_signals_install(void)
+{
+    for (int i = 0; i < 3; i++) {
+        struct sigaction sa, old;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigfillset(&sa.sa_mask);
+        /* a signal ignored on entry (nohup) stays ignored */
+        if (sigaction(handled_signals[i], NULL, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+        sigaction(handled_signals[i], &sa, NULL);
+    }
+}
+
+/* Block / unblock the handled signals (around creating and registering a
+ * temporary, and around renaming a run's outputs into place). */
+static void signals_block(int block, sigset_t *saved)
+{
+    sigset_t set;
+    sigemptyset(&set);
+    for (int i = 0; i < 3; i++) sigaddset(&set, handled_signals[i]);
+    if (block) sigprocmask(SIG_BLOCK, &set, saved);
+    else sigprocmask(SIG_SETMASK, saved, NULL);
+}
+
+/* Register a temporary (call with the signals blocked). 0, or 1 when the
+ * table is full or the path too long (the caller then removes it). */
+static int temp_register(const char *path)
+{
+    size_t n = strlen(path);
+    if (n >= CLI_TEMP_PATH) return 1;
+    for (int i = 0; i < CLI_MAX_TEMPS; i++)
+        if (!temp_used[i]) {
+            memcpy(temp_paths[i], path, n + 1);
+            temp_used[i] = 1;
+            return 0;
+        }
+    return 1;
+}
+
+void cli_temp_forget(const char *path)
+{
+    if (!path) return;
+    for (int i = 0; i < CLI_MAX_TEMPS; i++)
+        if (temp_used[i] && !strcmp(temp_paths[i], path)) temp_used[i] = 0;
+}
+
+/* A temporary file "DIR/.rs-XXXXXX" next to `path`: its name has a fixed
+ * length, so any OUT name the file system accepts also works for its
+ * temporary. Registered for removal on a signal. Returns the descriptor
+ * (tmp gets the name) or -1 with errno set. */
+int cli_temp_create(const char *path, char **tmp)
+{
+    const char *slash = strrchr(path, '/');
+    size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
+    *tmp = malloc(dirlen + 16);
+    if (!*tmp) { errno = ENOMEM; return -1; }
+    memcpy(*tmp, path, dirlen);
+    memcpy(*tmp + dirlen, ".rs-XXXXXX", 11);
+    sigset_t saved;
+    signals_block(1, &saved);
+    int fd = mkstemp(*tmp);
+    int e = errno;
+    if (fd >= 0 && temp_register(*tmp)) {
+        close(fd);
+        unlink(*tmp);
+        fd = -1;
+        e = ENAMETOOLONG;
+    }
+    signals_block(0, &saved);
+    if (fd < 0) {
+        free(*tmp);
+        *tmp = NULL;
+        errno = e;
+        return -1;
+    }
+    /* mkstemp makes 0600; give the output the usual 0666 & ~umask. */
+    mode_t mask = umask(0);
+    umask(mask);
+    if (fchmod(fd, 0666 & ~mask) != 0) { /* not fatal */ }
+    return fd;
+}
+
+/* Remove a temporary made by cli_temp_create and forget it. */
+void cli_temp_remove(const char *tmp)
+{
+    if (!tmp) return;
+    unlink(tmp);
+    cli_temp_forget(tmp);
+}
+
+static int refuse_non_regular(const char *path)
+{
     /* rename() would replace a device, FIFO or folder entry instead of
      * writing to it (as root even /dev/full): only regular files are OUT. */
     struct stat st;
@@ -208,33 +328,31 @@ int cli_out_open(cli_out *o, const char *path)
                   S_ISDIR(st.st_mode) ? "is a directory" : "exists and is not a regular file");
         return 1;
     }
-    const char *slash = strrchr(path, '/');
-    size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
-    size_t n = strlen(path) + 16;
+    return 0;
+}
+
+int cli_out_open(cli_out *o, const char *path)
+{
+    memset(o, 0, sizeof *o);
+    if (refuse_non_regular(path)) return 1;
     o->path = dup_str(path);
-    o->tmp = malloc(n);
-    if (!o->path || !o->tmp) {
-        free(o->path); free(o->tmp); o->path = o->tmp = NULL;
+    if (!o->path) {
         cli_error("%s: out of memory", path);
         return 1;
     }
-    /* Hidden sibling "DIR/.NAME.XXXXXX": same file system, so rename is atomic. */
-    snprintf(o->tmp, n, "%.*s.%s.XXXXXX", (int)dirlen, path, path + dirlen);
-    int fd = mkstemp(o->tmp);
+    /* Hidden sibling "DIR/.rs-XXXXXX": same file system, so rename is atomic. */
+    int fd = cli_temp_create(path, &o->tmp);
     if (fd < 0) {
         cli_error("%s: cannot create a temporary file next to it: %s", path, strerror(errno));
-        free(o->path); free(o->tmp); o->path = o->tmp = NULL;
+        free(o->path);
+        o->path = NULL;
         return 1;
     }
-    /* mkstemp makes 0600; give the output the usual 0666 & ~umask. */
-    mode_t mask = umask(0);
-    umask(mask);
-    if (fchmod(fd, 0666 & ~mask) != 0) { /* not fatal */ }
     o->f = fdopen(fd, "wb");
     if (!o->f) {
         int e = errno;
         close(fd);
-        unlink(o->tmp);
+        cli_temp_remove(o->tmp);
         cli_error("%s: %s", path, strerror(e));
         free(o->path); free(o->tmp); o->path = o->tmp = NULL;
         return 1;
@@ -245,61 +363,168 @@ int cli_out_open(cli_out *o, const char *path)
 void cli_out_abort(cli_out *o)
 {
     if (o->f) fclose(o->f);
-    if (o->tmp) unlink(o->tmp);
+    cli_temp_remove(o->tmp);
     free(o->path);
     free(o->tmp);
     o->f = NULL;
     o->path = o->tmp = NULL;
 }
 
-int cli_out_commit(cli_out *o)
+int cli_out_finish(cli_out *o)
 {
-    if (!o->f || !o->tmp) return 1;
+    if (!o->f) return 0;
     int bad = 0, e = 0;
     if (fflush(o->f) != 0 || ferror(o->f)) { bad = 1; e = errno; }
     if (!bad && fsync(fileno(o->f)) != 0 && errno != EINVAL) { bad = 1; e = errno; }
     if (fclose(o->f) != 0 && !bad) { bad = 1; e = errno; }
     o->f = NULL;
-    if (!bad && rename(o->tmp, o->path) != 0) { bad = 1; e = errno; }
-    if (bad) {
-        cli_error("%s: write failed: %s", o->path, strerror(e ? e : EIO));
+    if (bad) cli_error("%s: write failed: %s", o->path, strerror(e ? e : EIO));
+    return bad;
+}
+
+static void sync_parent(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char *dir = dup_str(slash ? path : ".");
+    if (!dir) return;
+    if (slash) dir[slash - path + (slash == path)] = '\0';
+    int fd = open(dir, O_RDONLY);
+    if (fd >= 0) { (void)fsync(fd); close(fd); }
+    free(dir);
+}
+
+int cli_out_commit_all(cli_out *const *outs, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (outs[i] && outs[i]->tmp && cli_out_finish(outs[i])) return 1;
+    /* Every output is complete: rename them all with the signals held, so
+     * an interrupt cannot land between two renames. */
+    sigset_t saved;
+    signals_block(1, &saved);
+    int bad = 0;
+    for (size_t i = 0; i < n && !bad; i++) {
+        cli_out *o = outs[i];
+        if (!o || !o->tmp) continue;
+        if (rename(o->tmp, o->path) != 0) {
+            cli_error("%s: write failed: %s", o->path, strerror(errno));
+            bad = 1;
+            break;
+        }
+        cli_temp_forget(o->tmp);
+        sync_parent(o->path); /* make the rename itself durable; best effort */
+        free(o->path);
+        free(o->tmp);
+        o->path = o->tmp = NULL;
+    }
+    signals_block(0, &saved);
+    return bad;
+}
+
+int cli_out_commit(cli_out *o)
+{
+    if (!o->f || !o->tmp) return 1;
+    cli_out *one[1] = { o };
+    if (cli_out_commit_all(one, 1)) {
         cli_out_abort(o);
         return 1;
     }
-    /* Make the rename itself durable; best effort. */
-    const char *slash = strrchr(o->path, '/');
-    if (slash) {
-        char *dir = dup_str(o->path);
-        if (dir) {
-            dir[slash - o->path + (slash == o->path)] = '\0';
-            int fd = open(dir, O_RDONLY);
-            if (fd >= 0) { (void)fsync(fd); close(fd); }
-            free(dir);
-        }
-    } else {
-        int fd = open(".", O_RDONLY);
-        if (fd >= 0) { (void)fsync(fd); close(fd); }
-    }
-    free(o->path);
-    free(o->tmp);
-    o->path = o->tmp = NULL;
     return 0;
+}
+
+/* ---- output names ----------------------------------------------------------- */
+
+/* "realpath(DIR)/BASE" of a path that need not exist yet; NULL when the
+ * folder does not exist (cli_out_open reports that). */
+static char *canonical_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char *dir = dup_str(slash ? path : ".");
+    if (!dir) return NULL;
+    if (slash) dir[slash - path + (slash == path)] = '\0';
+    char *real = realpath(dir, NULL);
+    free(dir);
+    if (!real) return NULL;
+    size_t a = strlen(real), b = strlen(base);
+    char *out = malloc(a + b + 2);
+    if (out) {
+        memcpy(out, real, a);
+        out[a] = '/';
+        memcpy(out + a + 1, base, b + 1);
+    }
+    free(real);
+    return out;
+}
+
+int cli_check_outputs(const cli_file_role *outs, size_t nout, const cli_file_role *ins, size_t nin)
+{
+    for (size_t i = 0; i < nout; i++) {
+        const char *p = outs[i].path;
+        if (!p) continue;
+        size_t n = strlen(p);
+        if (n == 0) {
+            cli_error("%s: the file name is empty", outs[i].role);
+            return 1;
+        }
+        if (p[n - 1] == '/') {
+            cli_error("%s: names a folder; the output must be a file", p);
+            return 1;
+        }
+    }
+    int rc = 0;
+    char **canon = calloc(nout ? nout : 1, sizeof *canon);
+    if (!canon) { cli_error("out of memory"); return 1; }
+    for (size_t i = 0; i < nout && !rc; i++) {
+        const char *p = outs[i].path;
+        if (!p) continue;
+        struct stat so;
+        int exists = stat(p, &so) == 0;
+        for (size_t j = 0; j < nin && exists && !rc; j++) {
+            struct stat si;
+            if (ins[j].path && stat(ins[j].path, &si) == 0 && si.st_dev == so.st_dev && si.st_ino == so.st_ino) {
+                cli_error("%s: %s is also the %s (%s); refusing to overwrite an input", p, outs[i].role, ins[j].role,
+                          ins[j].path);
+                rc = 1;
+            }
+        }
+        canon[i] = canonical_name(p);
+        for (size_t j = 0; j < i && !rc; j++) {
+            const char *q = outs[j].path;
+            struct stat sq;
+            int same = 0;
+            if (!q) continue;
+            if (exists && stat(q, &sq) == 0) same = sq.st_dev == so.st_dev && sq.st_ino == so.st_ino;
+            if (!same && canon[i] && canon[j]) same = !strcmp(canon[i], canon[j]);
+            if (!same) same = !strcmp(p, q);
+            if (same) {
+                cli_error("%s: given as both %s and %s; each output needs its own file", p, outs[j].role,
+                          outs[i].role);
+                rc = 1;
+            }
+        }
+    }
+    for (size_t i = 0; i < nout; i++) free(canon[i]);
+    free(canon);
+    return rc;
 }
 
 /* ---- DEM ------------------------------------------------------------------ */
 
 /* An image read through OpenImageIO: a DEM (gray float) or a texture (RGBA8). */
 typedef struct image_read {
-    const char *path;
-    uint32_t max_side, *w, *h;
+    const char *path;  /* what OpenImageIO opens */
+    const char *shown; /* the user's name for it, in messages */
+    uint32_t max_side; /* DEM: largest side (0: none) */
+    uint64_t max_pixels; /* texture: most pixels (0: none) */
+    uint32_t *w, *h;
     float **z;
     uint8_t **rgba;
 } image_read;
 
 static int run_read(const image_read *r)
 {
-    if (r->z) return cli_image_read_gray_float(r->path, r->max_side, r->w, r->h, r->z);
-    return cli_image_read_rgba8(r->path, r->w, r->h, r->rgba);
+    if (r->z) return cli_image_read_gray_float(r->path, r->shown, r->max_side, r->w, r->h, r->z);
+    return cli_image_read_rgba8(r->path, r->shown, r->max_pixels, r->w, r->h, r->rgba);
 }
 
 /* OpenImageIO 2.4 leaves libpng's default error handler in place, which
@@ -331,14 +556,8 @@ static int read_image_quietly(const image_read *r)
     }
     fclose(cap);
     if (keep && !at_start) fputc('\n', stderr);
-    if (rc && !printed) cli_error("%s: cannot read image", r->path);
+    if (rc && !printed) cli_error("%s: cannot read image", r->shown);
     return rc;
-}
-
-int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba)
-{
-    image_read r = { path, 0, w, h, NULL, rgba };
-    return read_image_quietly(&r);
 }
 
 /* The first line that is not blank or a '#' comment starts with the
@@ -357,17 +576,150 @@ static int looks_like_roads(const char *p, size_t n)
     return 0;
 }
 
+/* An input opened once: regular files and pipes (a pipe or process
+ * substitution is read once, never reopened); devices are refused (/dev/zero
+ * would never end). */
+typedef struct input {
+    const char *path;
+    int fd;
+    struct stat st;
+    char head[4096];
+    size_t got; /* bytes of head read */
+    int eof;    /* the whole input is in head */
+} input;
+
+static int input_open(input *in, const char *path)
+{
+    memset(in, 0, sizeof *in);
+    in->path = path;
+    in->fd = open(path, O_RDONLY);
+    if (in->fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
+    if (fstat(in->fd, &in->st) != 0) {
+        cli_error("%s: %s", path, strerror(errno));
+        close(in->fd);
+        return 1;
+    }
+    if (S_ISDIR(in->st.st_mode) || (!S_ISREG(in->st.st_mode) && !S_ISFIFO(in->st.st_mode) && !S_ISSOCK(in->st.st_mode))) {
+        cli_error("%s: %s; inputs must be regular files or pipes", path,
+                  S_ISDIR(in->st.st_mode) ? "is a directory" : "is a device");
+        close(in->fd);
+        return 1;
+    }
+    while (in->got < sizeof in->head) {
+        ssize_t k = read(in->fd, in->head + in->got, sizeof in->head - in->got);
+        if (k < 0 && errno == EINTR) continue;
+        if (k < 0) {
+            cli_error("%s: read error: %s", path, strerror(errno));
+            close(in->fd);
+            return 1;
+        }
+        if (k == 0) { in->eof = 1; break; }
+        in->got += (size_t)k;
+    }
+    return 0;
+}
+
+/* The rest of the input after head, appended: *data holds all of it
+ * (malloc'd, NUL-terminated). At most `limit` bytes in total. */
+static int input_read_all(input *in, size_t limit, char **data, size_t *size)
+{
+    *data = NULL;
+    *size = 0;
+    if (S_ISREG(in->st.st_mode) && (uint64_t)in->st.st_size > (uint64_t)limit) { /* before allocating */
+        cli_error("%s: file is larger than the %zu-byte limit", in->path, limit);
+        return 1;
+    }
+    size_t cap = in->got + 1, n = in->got;
+    if (S_ISREG(in->st.st_mode) && (uint64_t)in->st.st_size + 1 > cap) cap = (size_t)in->st.st_size + 1;
+    if (!in->eof && cap < ((size_t)1 << 16)) cap = (size_t)1 << 16;
+    char *buf = malloc(cap);
+    if (!buf) { cli_error("%s: out of memory", in->path); return 1; }
+    memcpy(buf, in->head, in->got);
+    while (!in->eof) {
+        if (n + 1 >= cap) {
+            if (n > limit) break;
+            size_t nc = cap > SIZE_MAX / 2 ? SIZE_MAX : cap * 2;
+            if (nc > limit + 2) nc = limit + 2;
+            char *nb = nc > cap ? realloc(buf, nc) : NULL;
+            if (!nb) { free(buf); cli_error("%s: out of memory", in->path); return 1; }
+            buf = nb;
+            cap = nc;
+        }
+        ssize_t k = read(in->fd, buf + n, cap - 1 - n);
+        if (k < 0 && errno == EINTR) continue;
+        if (k < 0) { free(buf); cli_error("%s: read error: %s", in->path, strerror(errno)); return 1; }
+        if (k == 0) break;
+        n += (size_t)k;
+    }
+    if (n > limit) {
+        free(buf);
+        cli_error("%s: file is larger than the %zu-byte limit", in->path, limit);
+        return 1;
+    }
+    buf[n] = '\0';
+    *data = buf;
+    *size = n;
+    return 0;
+}
+
+/* A name OpenImageIO can open for this input: the path of a regular file;
+ * a pipe's contents are first copied into an unlinked temporary file
+ * (*keep, named through /dev/fd). */
+static const char *input_for_image(input *in, char *name, size_t name_size, FILE **keep)
+{
+    *keep = NULL;
+    if (S_ISREG(in->st.st_mode)) return in->path;
+    char *data;
+    size_t size;
+    if (input_read_all(in, (size_t)1 << 31, &data, &size)) return NULL;
+    FILE *f = tmpfile();
+    int ok = f && fwrite(data, 1, size, f) == size && fflush(f) == 0;
+    free(data);
+    if (!ok) {
+        if (f) fclose(f);
+        cli_error("%s: cannot copy the stream into a temporary file: %s", in->path, strerror(errno ? errno : EIO));
+        return NULL;
+    }
+    *keep = f;
+    snprintf(name, name_size, "/dev/fd/%d", fileno(f));
+    return name;
+}
+
+/* Default library limits (the texture loader has no context). */
+static void default_limits(rs_limits *lim)
+{
+    rs_ctx *c = NULL;
+    memset(lim, 0, sizeof *lim);
+    if (rs_ctx_create(NULL, NULL, &c) == RS_OK) rs_ctx_limits(c, lim);
+    rs_ctx_free(c);
+}
+
+int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba)
+{
+    input in;
+    if (input_open(&in, path)) return 1;
+    char name[64];
+    FILE *keep;
+    const char *p = input_for_image(&in, name, sizeof name, &keep);
+    close(in.fd);
+    if (!p) return 1;
+    rs_limits lim;
+    default_limits(&lim);
+    image_read r = { p, path, 0, lim.max_texture_pixels, w, h, NULL, rgba };
+    int rc = read_image_quietly(&r);
+    if (keep) fclose(keep);
+    return rc;
+}
+
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
 {
-    char head[4096];
-    FILE *f = fopen(path, "rb");
-    if (!f) { cli_error("%s: %s", path, strerror(errno)); return NULL; }
-    size_t got = fread(head, 1, sizeof head, f);
-    fclose(f);
+    input in;
+    if (input_open(&in, path)) return NULL;
     rs_dem *dem = NULL;
     /* DEM and ROADS swapped on the command line: say so, rather than pass a
      * text file to OpenImageIO ("could not find a format reader"). */
-    if (looks_like_roads(head, got)) {
+    if (looks_like_roads(in.head, in.got)) {
+        close(in.fd);
         cli_error("%s: this is a road file, not a DEM (arguments in the wrong order?)", path);
         return NULL;
     }
@@ -375,13 +727,29 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     size_t pl = strlen(path);
     int pgm_name = pl >= 4 && path[pl - 4] == '.' && (path[pl - 3] | 0x20) == 'p' && (path[pl - 2] | 0x20) == 'g' &&
                    (path[pl - 1] | 0x20) == 'm';
-    if (pgm_name || (got >= 2 && head[0] == 'P' && (head[1] == '2' || head[1] == '5'))) {
+    if (pgm_name || (in.got >= 2 && in.head[0] == 'P' && (in.head[1] == '2' || in.head[1] == '5'))) {
+        /* The header first: a DEM over the limits is refused from the first
+         * 4 KiB, before the rest of the file is read. A parse of that prefix
+         * only counts when it is the whole file (or the limit is the error). */
+        rs_result rc = rs_dem_parse_pgm(ctx, in.head, in.got, &dem);
+        if (rc == RS_ERR_LIMIT || in.eof) {
+            close(in.fd);
+            if (rc != RS_OK) {
+                cli_error("%s: %s", path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(rc));
+                return NULL;
+            }
+            return dem;
+        }
+        rs_dem_free(ctx, dem);
+        dem = NULL;
         /* Large enough for any DEM within the default limits, even as P2. */
         size_t limit = SIZE_MAX > 0xFFFFFFFFu ? (size_t)1 << 33 : (size_t)1 << 30;
         char *data;
         size_t size;
-        if (cli_read_file(path, limit, &data, &size)) return NULL;
-        rs_result rc = rs_dem_parse_pgm(ctx, data, size, &dem);
+        int bad = input_read_all(&in, limit, &data, &size);
+        close(in.fd);
+        if (bad) return NULL;
+        rc = rs_dem_parse_pgm(ctx, data, size, &dem);
         free(data);
         if (rc != RS_OK) {
             cli_error("%s: %s", path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(rc));
@@ -389,12 +757,19 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
         }
         return dem;
     }
+    char name[64];
+    FILE *keep;
+    const char *p = input_for_image(&in, name, sizeof name, &keep);
+    close(in.fd);
+    if (!p) return NULL;
     uint32_t w, h;
     float *z;
     rs_limits lim;
     rs_ctx_limits(ctx, &lim);
-    image_read r = { path, lim.max_dem_side, &w, &h, &z, NULL };
-    if (read_image_quietly(&r)) return NULL;
+    image_read r = { p, path, lim.max_dem_side, 0, &w, &h, &z, NULL };
+    int bad = read_image_quietly(&r);
+    if (keep) fclose(keep);
+    if (bad) return NULL;
     rs_result rc = rs_dem_create(ctx, w, h, z, &dem);
     free(z);
     if (rc != RS_OK) {

@@ -86,6 +86,8 @@ typedef struct rs_limits {
     uint32_t max_line_length;  /* 65536: max bytes in one road-file line    */
     uint64_t max_road_cells;   /* 2^32: max road-grid cells (W*K x H*K)     */
     uint32_t max_pool_nodes;   /* 2^26: max ROAM node pool size             */
+    uint64_t max_texture_pixels; /* 2^26: max pixels of a terrain or road
+                                    texture (8192 x 8192; 256 MiB as RGBA8) */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;
@@ -475,6 +477,8 @@ RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
 typedef struct rs_roam_mesh_options {
     int normals;          /* non-zero: write unit normals (Horn's gradient, as the hillshade) */
     double skirt_depth;   /* > 0: add a skirt this many metres deep on the map border */
+    uint32_t *samples;    /* NULL, or vertex_capacity entries: the DEM sample of each vertex,
+                             row * width + column (a skirt vertex: the sample above it) */
 } rs_roam_mesh_options;
 
 /* Upper bounds on the vertex and index counts of rs_roam_extract for the
@@ -488,7 +492,10 @@ RS_API void rs_roam_mesh_bound(const rs_roam *roam, const rs_roam_mesh_options *
  * triangle, counter-clockwise seen from above (z up). A vertex at sample
  * (i, j) has exactly (j*cs, i*cs, z[i][j]*z_scale). Capacities are counted
  * in vertices and indices; RS_ERR_BUFFER_TOO_SMALL if they are below what
- * is needed. Output is deterministic (same order every run). */
+ * is needed. Output is deterministic (same order every run). Every value
+ * written is finite: rs_roam_create refuses a cell_size or heights whose
+ * vertices leave the float range (or whose cell_size is below FLT_MIN), and
+ * this call a skirt_depth that would. */
 RS_API rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *roam, const rs_roam_mesh_options *opts,
                                  float *vertices, float *normals, size_t vertex_capacity,
                                  uint32_t *indices, size_t index_capacity,

@@ -38,8 +38,14 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "texture scale %g must be in [1e-6, 1e9] metres", f->texture_scale);
     const rs_image *tex[2] = { f->terrain_texture, f->road_texture };
     for (int i = 0; i < 2; i++)
-        if (tex[i] && (!tex[i]->rgba || tex[i]->width == 0 || tex[i]->height == 0))
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s texture is empty", i ? "road" : "terrain");
+        if (tex[i]) {
+            if (!tex[i]->rgba || tex[i]->width == 0 || tex[i]->height == 0)
+                return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s texture is empty", i ? "road" : "terrain");
+            if ((uint64_t)tex[i]->width * tex[i]->height > ctx->limits.max_texture_pixels)
+                return rs__fail(ctx, RS_ERR_LIMIT, "%s texture of %u x %u pixels exceeds the limit of %llu pixels",
+                                i ? "road" : "terrain", tex[i]->width, tex[i]->height,
+                                (unsigned long long)ctx->limits.max_texture_pixels);
+        }
     *out = o;
     return RS_OK;
 }

@@ -8,6 +8,7 @@
 #include "roadfield.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct marker {
@@ -52,17 +53,6 @@ static void clip_linear(double a, double b, double lo_v, double hi_v, double *lo
     if (x1 < *hi) *hi = x1;
 }
 
-/* Mark cells whose centre x (cell units, centre at j + 0.5) lies in [lo,hi]. */
-static rs_result mark_interval(marker *m, int64_t gy, double lo, double hi)
-{
-    if (!(lo <= hi)) return RS_OK;
-    double j0 = ceil(lo - 0.5), j1 = floor(hi - 0.5);
-    if (j1 < 0 || j0 >= (double)m->g->gw || j0 > j1) return RS_OK;
-    if (j0 < 0) j0 = 0;
-    if (j1 > (double)m->g->gw - 1) j1 = (double)m->g->gw - 1;
-    return mark_span(m, gy, (int64_t)j0, (int64_t)j1);
-}
-
 /* Rows whose centre lies in [y0,y1] (cell units), clamped to the grid. */
 static void row_range(const rs_road_grid *g, double y0, double y1, int64_t *i0, int64_t *i1)
 {
@@ -73,59 +63,290 @@ static void row_range(const rs_road_grid *g, double y0, double y1, int64_t *i0, 
     *i1 = (int64_t)b;
 }
 
-/* Round end or join of the distance mode: the cell centre at offset d from
- * the point is road when |d| <= h + (|dx| + |dy|) / (2|d|), the radial form
- * of the band offset (cell units). */
-static rs_result mark_cap(marker *m, double px, double py, double h)
+/* ---- marking: spans per row ---------------------------------------------------
+ *
+ * A road is a set of primitives: in distance mode a round cap at every
+ * vertex and a band along every segment, in dilate mode a dilated
+ * centreline raster per segment. Each primitive gives at most two
+ * intervals of cells on each grid row it touches, in O(1) (caps: a binary
+ * search on the exact per-cell test), so the primitives of a road are swept
+ * row by row: the row's intervals are sorted, merged and marked once. Work
+ * is bounded by the rows each primitive spans plus the cells covered, not
+ * by the sum of the primitives' areas (a 1e9 m wide road of 1,000 vertices
+ * used to mark the whole map 2,000 times). Roads with more primitives than
+ * PRIM_BATCH are swept in batches. Every cell marked is one the per-cell
+ * tests of docs/design.md accept, as before (byte-identical grids). */
+
+#define PRIM_BATCH 8192
+#define CANCEL_ROWS 256 /* rows between progress calls within a road */
+
+enum { PRIM_CAP, PRIM_BAND, PRIM_DILATE };
+
+typedef struct prim {
+    int64_t i0, i1;   /* rows touched (clamped to the grid) */
+    int kind;
+    double a, b, c, d; /* cap: px, py; band: clipped A (a, b), B (c, d), cell units */
+    double h;          /* cap: half-width (cell units); band: the band radius r */
+    int64_t x0, y0, x1, y1, k; /* dilate: end cells, square half-size */
+} prim;
+
+typedef struct span { int64_t lo, hi; } span;
+
+typedef struct sweep {
+    marker *m;
+    prim *p;
+    size_t np;
+    size_t *active;
+    span *iv;
+    const rs_splat_options *o; /* progress */
+    uint64_t done, total;      /* progress: roads */
+    uint64_t rows;             /* rows swept since the last progress call */
+} sweep;
+
+/* Exact per-cell test of a round cap (the cell centre at offset d from the
+ * point is road when |d| <= h + (|dx| + |dy|) / (2|d|), the radial form of
+ * the band offset, cell units). */
+static int cap_in(double px, double dy, double h, int64_t j)
 {
-    double rmax = h + 0.7072;
-    int64_t i0, i1;
-    row_range(m->g, py - rmax, py + rmax, &i0, &i1);
-    for (int64_t i = i0; i <= i1; i++) {
-        double dy = (double)i + 0.5 - py;
-        double jlo = floor(px - rmax), jhi = ceil(px + rmax);
-        if (jlo < 0) jlo = 0;
-        if (jhi > (double)m->g->gw - 1) jhi = (double)m->g->gw - 1;
-        if (jlo > jhi) continue;
-        int64_t j0 = (int64_t)jlo, j1 = (int64_t)jhi;
+    double dx = (double)j + 0.5 - px, d = sqrt(dx * dx + dy * dy);
+    return d == 0 || d <= h + (fabs(dx) + fabs(dy)) / (2 * d);
+}
+
+/* Cells of a cap on row i: up to two intervals appended to out. The test
+ * as a function of |dx| rises while |dx| < |dy|, then falls (its derivative
+ * is |dy|(|dy|-|dx|)/(2 d^3) - |dx|/d, one sign change): on rows with
+ * |dy| <= h + 1/2 the cells in are one run around the point, found by
+ * binary search; on the outermost rows (|dy| near or past h + 1/2, where
+ * the run can split in two) the O(sqrt(h)) candidates are tested one by one. */
+static size_t cap_row(const rs_road_grid *g, const prim *p, int64_t i, span *out)
+{
+    double px = p->a, py = p->b, h = p->h, rmax = h + 0.7072;
+    double dy = (double)i + 0.5 - py;
+    double jlo = floor(px - rmax), jhi = ceil(px + rmax);
+    if (jlo < 0) jlo = 0;
+    if (jhi > (double)g->gw - 1) jhi = (double)g->gw - 1;
+    if (jlo > jhi) return 0;
+    int64_t j0 = (int64_t)jlo, j1 = (int64_t)jhi;
+    size_t n = 0;
+    if (fabs(dy) > h + 0.5 - (1e-6 + 1e-12 * h)) {
+        /* every cell in has d <= h + 1/sqrt(2) < rmax: |dx| <= sqrt(rmax^2 - dy^2) */
+        double w = rmax * rmax - dy * dy;
+        w = w > 0 ? sqrt(w) + 1.0 : 1.0;
+        double a = floor(px - w), b = ceil(px + w);
+        if (a > (double)j0) j0 = (int64_t)a;
+        if (b < (double)j1) j1 = (int64_t)b;
         int64_t run = -1;
         for (int64_t j = j0; j <= j1 + 1; j++) {
-            int in = 0;
-            if (j <= j1) {
-                double dx = (double)j + 0.5 - px, d = sqrt(dx * dx + dy * dy);
-                in = d == 0 || d <= h + (fabs(dx) + fabs(dy)) / (2 * d);
-            }
+            int in = j <= j1 && cap_in(px, dy, h, j);
             if (in && run < 0) run = j;
             if (!in && run >= 0) {
-                rs_result r = mark_span(m, i, run, j - 1);
-                if (r) return r;
+                out[n].lo = run;
+                out[n].hi = j - 1;
+                n++;
                 run = -1;
             }
         }
+        return n;
     }
+    /* one run: the cell nearest the point, then both ends */
+    double jn_d = floor(px);
+    int64_t jn = jn_d < (double)j0 ? j0 : jn_d > (double)j1 ? j1 : (int64_t)jn_d;
+    if (!cap_in(px, dy, h, jn)) return 0;
+    int64_t lo = j0, hi = jn; /* smallest j in [j0, jn] that is in */
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (cap_in(px, dy, h, mid)) hi = mid; else lo = mid + 1;
+    }
+    out[0].lo = lo;
+    lo = jn; hi = j1; /* largest j in [jn, j1] that is in */
+    while (lo < hi) {
+        int64_t mid = hi - (hi - lo) / 2;
+        if (cap_in(px, dy, h, mid)) lo = mid; else hi = mid - 1;
+    }
+    out[0].hi = lo;
+    return 1;
+}
+
+/* Cells of a distance-mode band on row i: the centres within r of the
+ * segment's line and between its ends. */
+static size_t band_row(const rs_road_grid *g, const prim *p, int64_t i, span *out)
+{
+    double ax = p->a, ay = p->b, bx = p->c, by = p->d, r = p->h;
+    double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
+    double tx = dx / len, ty = dy / len;
+    double yc = (double)i + 0.5 - ay;
+    double lo = -1e300, hi = 1e300;
+    /* along: 0 <= (x-ax)*tx + yc*ty <= len; across: |-(x-ax)*ty + yc*tx| <= r */
+    clip_linear(tx, -ax * tx + yc * ty, 0, len, &lo, &hi);
+    clip_linear(-ty, ax * ty + yc * tx, -r, r, &lo, &hi);
+    /* cells whose centre x (centre at j + 0.5) lies in [lo, hi] */
+    if (!(lo <= hi)) return 0;
+    double j0 = ceil(lo - 0.5), j1 = floor(hi - 0.5);
+    if (j1 < 0 || j0 >= (double)g->gw || j0 > j1) return 0;
+    if (j0 < 0) j0 = 0;
+    if (j1 > (double)g->gw - 1) j1 = (double)g->gw - 1;
+    out[0].lo = (int64_t)j0;
+    out[0].hi = (int64_t)j1;
+    return 1;
+}
+
+/* Dilate mode: the centreline raster of a segment between the cells
+ * holding its ends. One cell per step along the major axis, the minor
+ * coordinate rounded to nearest; where the line passes exactly between two
+ * cells both are taken (the raster is the same whichever end it starts
+ * from and under every 90-degree turn or mirroring). In closed form, step
+ * s in 0..dmaj takes minor offsets t with |s*dmin/dmaj - t| <= 1/2. */
+typedef struct raster {
+    int xmajor;
+    int64_t p0, q0, sp, sq, dmaj, dmin;
+} raster;
+
+static void raster_init(const prim *p, raster *r)
+{
+    int64_t ddx = p->x1 > p->x0 ? p->x1 - p->x0 : p->x0 - p->x1, ddy = p->y1 > p->y0 ? p->y1 - p->y0 : p->y0 - p->y1;
+    r->xmajor = ddx >= ddy;
+    r->p0 = r->xmajor ? p->x0 : p->y0;
+    r->q0 = r->xmajor ? p->y0 : p->x0;
+    r->sp = (r->xmajor ? p->x1 > p->x0 : p->y1 > p->y0) ? 1 : -1;
+    r->sq = (r->xmajor ? p->y1 > p->y0 : p->x1 > p->x0) ? 1 : -1;
+    r->dmaj = r->xmajor ? ddx : ddy;
+    r->dmin = r->xmajor ? ddy : ddx;
+}
+
+/* Columns of the raster on grid row y (y within the segment's rows): a run. */
+static void raster_row(const raster *r, int64_t y, int64_t *c0, int64_t *c1)
+{
+    if (!r->xmajor) { /* rows are steps: s = (y - p0) * sp */
+        int64_t s = (y - r->p0) * r->sp, lo_t, hi_t;
+        if (r->dmaj == 0) lo_t = hi_t = 0;
+        else {
+            int64_t q = s * r->dmin / r->dmaj, rem = 2 * (s * r->dmin - q * r->dmaj);
+            lo_t = rem > r->dmaj ? q + 1 : q;
+            hi_t = rem >= r->dmaj ? q + 1 : q;
+        }
+        int64_t a = r->q0 + r->sq * lo_t, b = r->q0 + r->sq * hi_t;
+        *c0 = a < b ? a : b;
+        *c1 = a < b ? b : a;
+        return;
+    }
+    /* rows are minor offsets t; steps s with (2t-1) dmaj <= 2 s dmin <= (2t+1) dmaj */
+    int64_t t = (y - r->q0) * r->sq, s0, s1;
+    if (r->dmin == 0) { s0 = 0; s1 = r->dmaj; }
+    else {
+        int64_t lo_n = (2 * t - 1) * r->dmaj, hi_n = (2 * t + 1) * r->dmaj, den = 2 * r->dmin;
+        s0 = lo_n <= 0 ? 0 : (lo_n + den - 1) / den;
+        s1 = hi_n / den;
+        if (s1 > r->dmaj) s1 = r->dmaj;
+    }
+    int64_t a = r->p0 + r->sp * s0, b = r->p0 + r->sp * s1;
+    *c0 = a < b ? a : b;
+    *c1 = a < b ? b : a;
+}
+
+/* Cells of a dilated segment on row i: the raster's cells on rows i-k..i+k
+ * form one run (the raster is monotone and 8-connected), widened by k. */
+static size_t dilate_row(const prim *p, int64_t i, span *out)
+{
+    raster r;
+    raster_init(p, &r);
+    int64_t ylo = p->y0 < p->y1 ? p->y0 : p->y1, yhi = p->y0 < p->y1 ? p->y1 : p->y0;
+    int64_t ya = i - p->k > ylo ? i - p->k : ylo, yb = i + p->k < yhi ? i + p->k : yhi;
+    if (ya > yb) return 0;
+    int64_t a0, a1, b0, b1;
+    raster_row(&r, ya, &a0, &a1);
+    raster_row(&r, yb, &b0, &b1);
+    out[0].lo = (a0 < b0 ? a0 : b0) - p->k;
+    out[0].hi = (a1 > b1 ? a1 : b1) + p->k;
+    return 1;
+}
+
+static int cmp_prim(const void *x, const void *y)
+{
+    const prim *a = x, *b = y;
+    return a->i0 < b->i0 ? -1 : a->i0 > b->i0;
+}
+
+static int cmp_span(const void *x, const void *y)
+{
+    const span *a = x, *b = y;
+    return a->lo < b->lo ? -1 : a->lo > b->lo;
+}
+
+/* Sweep the batch's primitives row by row: each row's intervals merged,
+ * each cell marked once. */
+static rs_result sweep_batch(sweep *sw)
+{
+    if (!sw->np) return RS_OK;
+    marker *m = sw->m;
+    qsort(sw->p, sw->np, sizeof *sw->p, cmp_prim);
+    size_t next = 0, na = 0;
+    int64_t row = sw->p[0].i0;
+    while (next < sw->np || na) {
+        if (!na && row < sw->p[next].i0) row = sw->p[next].i0;
+        while (next < sw->np && sw->p[next].i0 <= row) sw->active[na++] = next++;
+        size_t ni = 0;
+        for (size_t a = 0; a < na; a++) {
+            const prim *p = &sw->p[sw->active[a]];
+            span *o = sw->iv + ni;
+            ni += p->kind == PRIM_CAP ? cap_row(m->g, p, row, o)
+                  : p->kind == PRIM_BAND ? band_row(m->g, p, row, o) : dilate_row(p, row, o);
+        }
+        if (ni > 1) qsort(sw->iv, ni, sizeof *sw->iv, cmp_span);
+        for (size_t a = 0; a < ni;) {
+            int64_t lo = sw->iv[a].lo, hi = sw->iv[a].hi;
+            for (a++; a < ni && sw->iv[a].lo <= hi + 1; a++)
+                if (sw->iv[a].hi > hi) hi = sw->iv[a].hi;
+            rs_result r = mark_span(m, row, lo, hi);
+            if (r) return r;
+        }
+        row++;
+        size_t keep = 0;
+        for (size_t a = 0; a < na; a++)
+            if (sw->p[sw->active[a]].i1 >= row) sw->active[keep++] = sw->active[a];
+        na = keep;
+        /* cancellation within a road, not only between roads */
+        if (++sw->rows >= CANCEL_ROWS) {
+            sw->rows = 0;
+            if (sw->o->progress && sw->o->progress(sw->o->progress_user, sw->done, sw->total))
+                return rs__fail(m->ctx, RS_ERR_CANCELLED, "cancelled");
+        }
+    }
+    sw->np = 0;
     return RS_OK;
+}
+
+static rs_result add_prim(sweep *sw, const prim *p)
+{
+    if (p->i0 > p->i1) return RS_OK;
+    sw->p[sw->np++] = *p;
+    return sw->np == PRIM_BATCH ? sweep_batch(sw) : RS_OK;
 }
 
 /* Distance mode, one segment (cell units): the band of cell centres within
  * h + (|nx|+|ny|)/2 of the segment, n its unit normal. */
-static rs_result mark_segment_distance(marker *m, double ax, double ay, double bx, double by, double h)
+static rs_result add_band(sweep *sw, double ax, double ay, double bx, double by, double h)
 {
     double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
     if (!(len > 0)) return RS_OK;
     double tx = dx / len, ty = dy / len;
-    double r = h + 0.5 * (fabs(tx) + fabs(ty));
-    int64_t i0, i1;
-    row_range(m->g, fmin(ay, by) - r, fmax(ay, by) + r, &i0, &i1);
-    for (int64_t i = i0; i <= i1; i++) {
-        double yc = (double)i + 0.5 - ay;
-        double lo = -1e300, hi = 1e300;
-        /* along: 0 <= (x-ax)*tx + yc*ty <= len; across: |-(x-ax)*ty + yc*tx| <= r */
-        clip_linear(tx, -ax * tx + yc * ty, 0, len, &lo, &hi);
-        clip_linear(-ty, ax * ty + yc * tx, -r, r, &lo, &hi);
-        rs_result res = mark_interval(m, i, lo, hi);
-        if (res) return res;
-    }
-    return RS_OK;
+    prim p;
+    memset(&p, 0, sizeof p);
+    p.kind = PRIM_BAND;
+    p.a = ax; p.b = ay; p.c = bx; p.d = by;
+    p.h = h + 0.5 * (fabs(tx) + fabs(ty));
+    row_range(sw->m->g, fmin(ay, by) - p.h, fmax(ay, by) + p.h, &p.i0, &p.i1);
+    return add_prim(sw, &p);
+}
+
+static rs_result add_cap(sweep *sw, double px, double py, double h)
+{
+    prim p;
+    memset(&p, 0, sizeof p);
+    p.kind = PRIM_CAP;
+    p.a = px; p.b = py; p.h = h;
+    double rmax = h + 0.7072;
+    row_range(sw->m->g, py - rmax, py + rmax, &p.i0, &p.i1);
+    return add_prim(sw, &p);
 }
 
 /* Clip segment A-B to a disc around the grid grown by `pad` cells, so that
@@ -159,25 +380,36 @@ static int clip_segment(const rs_road_grid *g, double pad, double *ax, double *a
     return 1;
 }
 
-/* Dilate mode: the k x k square around centreline cell (x, y). */
-static rs_result mark_square(marker *m, int64_t x, int64_t y, int64_t k)
+/* Dilate mode, the raster walked step by step, each cell dilated by a k x k
+ * square: only for segments too long for the closed form's 64-bit products
+ * (grids beyond the default limits). */
+static rs_result dilate_walk(marker *m, const prim *pr)
 {
-    if (x + k < 0 || x - k >= (int64_t)m->g->gw) return RS_OK;
-    for (int64_t yy = y - k; yy <= y + k; yy++) {
-        rs_result r = mark_span(m, yy, x - k, x + k);
-        if (r) return r;
+    raster r;
+    raster_init(pr, &r);
+    int64_t q = 0, rem = 0, k = pr->k;
+    for (int64_t s = 0; s <= r.dmaj; s++) {
+        int64_t lo = rem > r.dmaj ? q + 1 : q, hi = rem >= r.dmaj && r.dmaj > 0 ? q + 1 : q;
+        for (int64_t t = lo; t <= hi; t++) {
+            int64_t p = r.p0 + r.sp * s, c = r.q0 + r.sq * t;
+            int64_t x = r.xmajor ? p : c, y = r.xmajor ? c : p;
+            if (x + k < 0 || x - k >= (int64_t)m->g->gw) continue;
+            for (int64_t yy = y - k; yy <= y + k; yy++) {
+                rs_result res = mark_span(m, yy, x - k, x + k);
+                if (res) return res;
+            }
+        }
+        rem += 2 * r.dmin;
+        if (rem >= 2 * r.dmaj && r.dmaj > 0) { rem -= 2 * r.dmaj; q++; }
     }
     return RS_OK;
 }
 
-/* Dilate mode, one segment: 8-connected centreline raster between the cells
- * holding the end points, each cell dilated by a k x k square. One cell per
- * step along the major axis, the minor coordinate rounded to nearest; where
- * the line passes exactly between two cells both are taken, so the raster
- * is the same whichever end it starts from and under every 90-degree turn or
- * mirroring (plain Bresenham breaks such ties towards its start point). */
-static rs_result mark_segment_dilate(marker *m, double ax, double ay, double bx, double by, double h)
+/* Dilate mode, one segment: the 8-connected centreline raster between the
+ * cells holding the end points, each cell dilated by a k x k square. */
+static rs_result add_dilate(sweep *sw, double ax, double ay, double bx, double by, double h)
 {
+    marker *m = sw->m;
     double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
     double nx = len > 0 ? fabs(dy / len) : 0, ny = len > 0 ? fabs(dx / len) : 1;
     /* The dilated band's edge lands at k(|nx|+|ny|) - min(|nx|,|ny|)/2 cells. */
@@ -188,25 +420,17 @@ static rs_result mark_segment_dilate(marker *m, double ax, double ay, double bx,
     int64_t k = (int64_t)floor(kf + 0.5);
     if (k < 0) k = 0;
     if (!clip_segment(m->g, (double)k + 2, &ax, &ay, &bx, &by)) return RS_OK;
-    int64_t x0 = (int64_t)floor(ax), y0 = (int64_t)floor(ay), x1 = (int64_t)floor(bx), y1 = (int64_t)floor(by);
-    int64_t ddx = x1 > x0 ? x1 - x0 : x0 - x1, ddy = y1 > y0 ? y1 - y0 : y0 - y1;
-    int xmajor = ddx >= ddy;
-    /* major/minor start, step and length; minor offset at step s is
-     * s*dmin/dmaj = q + rem/(2*dmaj) with rem in [0, 2*dmaj) */
-    int64_t p0 = xmajor ? x0 : y0, q0 = xmajor ? y0 : x0;
-    int64_t sp = (xmajor ? x1 > x0 : y1 > y0) ? 1 : -1, sq = (xmajor ? y1 > y0 : x1 > x0) ? 1 : -1;
-    int64_t dmaj = xmajor ? ddx : ddy, dmin = xmajor ? ddy : ddx, q = 0, rem = 0;
-    for (int64_t s = 0; s <= dmaj; s++) {
-        int64_t lo = rem > dmaj ? q + 1 : q, hi = rem >= dmaj && dmaj > 0 ? q + 1 : q;
-        for (int64_t t = lo; t <= hi; t++) {
-            int64_t p = p0 + sp * s, c = q0 + sq * t;
-            rs_result r = xmajor ? mark_square(m, p, c, k) : mark_square(m, c, p, k);
-            if (r) return r;
-        }
-        rem += 2 * dmin;
-        if (rem >= 2 * dmaj && dmaj > 0) { rem -= 2 * dmaj; q++; }
-    }
-    return RS_OK;
+    prim p;
+    memset(&p, 0, sizeof p);
+    p.kind = PRIM_DILATE;
+    p.x0 = (int64_t)floor(ax); p.y0 = (int64_t)floor(ay); p.x1 = (int64_t)floor(bx); p.y1 = (int64_t)floor(by);
+    p.k = k;
+    int64_t ddx = p.x1 > p.x0 ? p.x1 - p.x0 : p.x0 - p.x1, ddy = p.y1 > p.y0 ? p.y1 - p.y0 : p.y0 - p.y1;
+    if (ddx > ((int64_t)1 << 30) || ddy > ((int64_t)1 << 30)) return dilate_walk(m, &p);
+    int64_t ylo = p.y0 < p.y1 ? p.y0 : p.y1, yhi = p.y0 < p.y1 ? p.y1 : p.y0;
+    p.i0 = ylo - k > 0 ? ylo - k : 0;
+    p.i1 = yhi + k < (int64_t)m->g->gh - 1 ? yhi + k : (int64_t)m->g->gh - 1;
+    return add_prim(sw, &p);
 }
 
 static int inside_box(const rs_road_grid *g, double x0, double y0, double x1, double y1, double pad)
@@ -215,10 +439,10 @@ static int inside_box(const rs_road_grid *g, double x0, double y0, double x1, do
              fmax(y0, y1) + pad < 0 || fmin(y0, y1) - pad > (double)g->gh);
 }
 
-static rs_result mark_road(marker *m, const double *pts, size_t n, double width, rs_buffer_mode mode,
+static rs_result mark_road(sweep *sw, const double *pts, size_t n, double width, rs_buffer_mode mode,
                            double ox, double oy, double *scratch)
 {
-    const rs_road_grid *g = m->g;
+    const rs_road_grid *g = sw->m->g;
     double per_unit = rs__local_quantum(g->cell_size);
     for (size_t i = 0; i < n; i++) {
         scratch[2 * i] = rs__local_coord(pts[2 * i], ox, per_unit);
@@ -232,16 +456,16 @@ static rs_result mark_road(marker *m, const double *pts, size_t n, double width,
     int moving = 0; /* some segment has non-zero length */
     for (size_t i = 0; i + 1 < n && !moving; i++)
         moving = xy[2 * i] != xy[2 * i + 2] || xy[2 * i + 1] != xy[2 * i + 3];
-    for (size_t i = 0; i < n; i++) {
+    rs_result r = RS_OK;
+    for (size_t i = 0; i < n && !r; i++) {
         double ax = xy[2 * i] * inv, ay = xy[2 * i + 1] * inv;
-        rs_result r = RS_OK;
         if (mode == RS_BUFFER_DISTANCE) {
-            if (inside_box(g, ax, ay, ax, ay, pad)) r = mark_cap(m, ax, ay, h);
+            if (inside_box(g, ax, ay, ax, ay, pad)) r = add_cap(sw, ax, ay, h);
             if (!r && i + 1 < n) {
                 double bx = xy[2 * i + 2] * inv, by = xy[2 * i + 3] * inv, cx = ax, cy = ay;
                 /* clip first: the band's direction is kept, far parts can't matter */
                 if (inside_box(g, ax, ay, bx, by, pad) && clip_segment(g, pad, &cx, &cy, &bx, &by))
-                    r = mark_segment_distance(m, cx, cy, bx, by, h);
+                    r = add_band(sw, cx, cy, bx, by, h);
             }
         } else if (i + 1 < n || n == 1) {
             double bx = i + 1 < n ? xy[2 * i + 2] * inv : ax, by = i + 1 < n ? xy[2 * i + 3] * inv : ay;
@@ -250,11 +474,12 @@ static rs_result mark_road(marker *m, const double *pts, size_t n, double width,
              * road that is one point throughout is drawn as that square. */
             int dot = bx == ax && by == ay;
             if ((!dot || (!moving && i == 0)) && inside_box(g, ax, ay, bx, by, pad))
-                r = mark_segment_dilate(m, ax, ay, bx, by, h);
+                r = add_dilate(sw, ax, ay, bx, by, h);
         }
-        if (r) return r;
     }
-    return RS_OK;
+    if (!r) r = sweep_batch(sw);
+    sw->np = 0;
+    return r;
 }
 
 /* Road bit of cell (x, y), clamped to the grid: outside, a neighbour copies
@@ -474,13 +699,25 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     }
     marker m = { ctx, g };
     size_t n = rs_roads_count(roads), most = 0;
+    sweep sw;
+    memset(&sw, 0, sizeof sw);
+    sw.m = &m;
+    sw.o = &o;
+    sw.total = n;
+    sw.p = rs__alloc_array(ctx, PRIM_BATCH, sizeof *sw.p);
+    sw.active = rs__alloc_array(ctx, PRIM_BATCH, sizeof *sw.active);
+    sw.iv = rs__alloc_array(ctx, 2 * PRIM_BATCH, sizeof *sw.iv);
     for (size_t i = 0; i < n; i++) {
         size_t np;
         rs_roads_get(roads, i, NULL, NULL, NULL, &np);
         if (np > most) most = np;
     }
     double *scratch = rs__alloc_array(ctx, most ? 2 * most : 2, sizeof *scratch);
-    if (!scratch) {
+    if (!scratch || !sw.p || !sw.active || !sw.iv) {
+        rs__free(ctx, scratch);
+        rs__free(ctx, sw.p);
+        rs__free(ctx, sw.active);
+        rs__free(ctx, sw.iv);
         rs_road_grid_free(ctx, g);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road points");
     }
@@ -489,10 +726,14 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         size_t np;
         double w;
         rs_roads_get(roads, i, NULL, &w, &xy, &np);
-        r = mark_road(&m, xy, np, w, o.grid.buffer, dem->frame.origin_x, dem->frame.origin_y, scratch);
+        sw.done = i;
+        r = mark_road(&sw, xy, np, w, o.grid.buffer, dem->frame.origin_x, dem->frame.origin_y, scratch);
         if (!r && o.progress && o.progress(o.progress_user, i + 1, n)) r = rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
     }
     rs__free(ctx, scratch);
+    rs__free(ctx, sw.p);
+    rs__free(ctx, sw.active);
+    rs__free(ctx, sw.iv);
     rs__mask_table mt;
     rs__mask_table_build(&mt);
     if (!r)

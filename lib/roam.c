@@ -42,6 +42,7 @@ typedef struct roam_node {
 struct rs_roam {
     uint32_t w, hgt, cw, ch;        /* samples and cells */
     double cs, zs;
+    float zabs;                     /* largest |height| of the valid samples (DEM units) */
     const float *z;                 /* heights in DEM units, nodata filled */
     float *zown;                    /* owned copy when the DEM had nodata */
     uint32_t plog, P, npx, npy;
@@ -978,7 +979,7 @@ static double leaves_max_bound(const rs_roam *L)
 /* Heights must stay finite through the error arithmetic (checked over the
  * valid samples: filled nodata copies one of them). One pass, which also
  * tells whether there is nodata to fill. */
-static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem, int *has_nodata)
+static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem, int *has_nodata, float *zabs)
 {
     size_t n = (size_t)L->w * L->hgt;
     float zmax = 0.0f;
@@ -989,8 +990,14 @@ static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem,
         else if (a > zmax) zmax = a;
     }
     *has_nodata = bad;
-    if (!isfinite((double)zmax * L->zs * 4.0) || !isfinite((double)zmax * 4.0))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: heights up to %g times z_scale %g overflow", zmax, L->zs);
+    *zabs = zmax;
+    /* In float, where they are kept: error bounds (differences of up to
+     * four heights' worth) and the vertices' z = height * z_scale. An
+     * infinite bound would split every triangle at any max error. */
+    if (!(zmax <= FLT_MAX / 4) || !((double)zmax * L->zs <= FLT_MAX))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "ROAM: heights up to %g times z_scale %g leave the float range (at most %g, and %g "
+                        "before scaling)", zmax, L->zs, (double)FLT_MAX, (double)(FLT_MAX / 4));
     return RS_OK;
 }
 
@@ -1040,9 +1047,11 @@ rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
                         "rs_roam_set_dem: DEM frame (cell size %g, z-scale %g) differs from the landscape's (%g, %g)",
                         dem->frame.cell_size, dem->frame.z_scale, L->cs, L->zs);
     int has_nodata;
-    rs_result r = check_heights(ctx, L, dem, &has_nodata);
+    float zabs;
+    rs_result r = check_heights(ctx, L, dem, &has_nodata, &zabs);
     if (r == RS_OK) r = load_heights(ctx, L, dem, has_nodata);
     if (r != RS_OK) return r;
+    L->zabs = zabs;
     reset_mesh(L);
     L->threshold = INFINITY;
     L->tol = 0.0;
@@ -1120,9 +1129,9 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
 
 rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts, rs_roam **out)
 {
+    if (out) *out = NULL;
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!dem || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_create: dem and out must not be NULL");
-    *out = NULL;
     rs_roam_options o;
     if (opts) o = *opts; else memset(&o, 0, sizeof o);
     double cs = dem->frame.cell_size, zs = dem->frame.z_scale;
@@ -1131,6 +1140,13 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     uint32_t W = dem->width, H = dem->height;
     if (W < 2 || H < 2)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: DEM is %ux%u, need at least 2x2 samples", W, H);
+    /* Vertices are floats (j*cs, i*cs): every one a normal float, so they
+     * stay distinct and exact to float precision, and the map fits. */
+    double side = (double)(W > H ? W : H) - 1.0;
+    if (cs < FLT_MIN || side * cs > FLT_MAX)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "ROAM: cell_size %g is outside the float range of the vertices (%g .. %g for a %ux%u DEM)",
+                        cs, (double)FLT_MIN, FLT_MAX / side, W, H);
     uint32_t side_lim = ctx->limits.max_dem_side < MAX_SIDE ? ctx->limits.max_dem_side : MAX_SIDE;
     if (W > side_lim || H > side_lim)
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: DEM %ux%u exceeds the side limit %u", W, H, side_lim);
@@ -1179,7 +1195,7 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     rs_result r = RS_OK;
     size_t nsamp = (size_t)W * H;
     int has_nodata;
-    if ((r = check_heights(ctx, L, dem, &has_nodata)) != RS_OK) goto fail;
+    if ((r = check_heights(ctx, L, dem, &has_nodata, &L->zabs)) != RS_OK) goto fail;
     nerr = (nerr + 1) / 2; /* cached above the R level only (err_slot) */
     L->nerr = (size_t)nerr;
     L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
@@ -1358,6 +1374,8 @@ static rs_result make_view(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw
     rt[0] /= rl; rt[1] /= rl;
     double up[3] = { rt[1] * f[2] - rt[2] * f[1], rt[2] * f[0] - rt[0] * f[2], rt[0] * f[1] - rt[1] * f[0] };
     double ty = tan(fov * 0.5 * 3.14159265358979323846 / 180.0), tx = ty * wpx / hpx;
+    if (!(ty >= 1e-9)) /* a subnormal fov_y: no finite projection */
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: fov_y %g degrees is too small", fov);
     memcpy(v->eye, vw->eye, sizeof v->eye);
     memcpy(v->f, f, sizeof f);
     double sx = sqrt(1 + tx * tx), sy = sqrt(1 + ty * ty);
@@ -1538,6 +1556,7 @@ typedef struct extract_state {
     int normals;
     size_t vcap, icap, nv, ni;
     uint32_t *idx;
+    uint32_t *samples;  /* optional: sample (row * width + column) of each vertex */
     int overflow;
 } extract_state;
 
@@ -1674,22 +1693,25 @@ static size_t emit_vertices(extract_state *s)
                 o[2] = (float)((double)zr[x] * L->zs);
                 o[3] = L->ucol[x];
                 o[4] = L->vrow[y];
+                if (s->samples) s->samples[v] = (uint32_t)y * L->w + (uint32_t)x;
                 if (s->normals) vertex_normal(L, x, y, s->nrm + 3 * v);
             }
         }
     return n;
 }
 
-/* Pass 3: sample keys in the index buffer -> vertex numbers. */
-static void number_indices(const extract_state *s)
+/* Vertex number of sample key p (the vertex set complete and ranked). */
+static uint32_t key_vertex(const rs_roam *L, uint32_t p)
 {
-    const rs_roam *L = s->L;
+    uint64_t below = ((uint64_t)1 << (p & 63u)) - 1u;
+    return L->vrank[p >> 6] + popcount64(L->vbits[p >> 6] & below);
+}
+
+/* Pass 3: sample keys in the first n entries of the index buffer -> vertex numbers. */
+static void number_indices(const extract_state *s, size_t n)
+{
     uint32_t *ix = s->idx;
-    for (size_t i = 0; i < s->ni; i++) {
-        uint32_t p = ix[i];
-        uint64_t below = ((uint64_t)1 << (p & 63u)) - 1u;
-        ix[i] = L->vrank[p >> 6] + popcount64(L->vbits[p >> 6] & below);
-    }
+    for (size_t i = 0; i < n; i++) ix[i] = key_vertex(s->L, ix[i]);
 }
 
 /* Empty the vertex set for the next extraction: only the flagged words. */
@@ -1710,10 +1732,13 @@ static size_t border_slot(const rs_roam *L, int x, int y)
     return 2 * (size_t)L->w + L->hgt + (size_t)y;
 }
 
-static int on_same_border(const rs_roam *L, const float *p, const float *q, int *px, int *py, int *qx, int *qy)
+/* Both keys on the same map border: their sample positions, from the keys
+ * (never from the float vertices). */
+static int on_same_border(const rs_roam *L, uint32_t kp, uint32_t kq, int *px, int *py, int *qx, int *qy)
 {
-    *px = (int)lround(p[0] / L->cs); *py = (int)lround(p[1] / L->cs);
-    *qx = (int)lround(q[0] / L->cs); *qy = (int)lround(q[1] / L->cs);
+    uint32_t row = L->wpr * 64u;
+    *px = (int)(kp % row); *py = (int)(kp / row);
+    *qx = (int)(kq % row); *qy = (int)(kq / row);
     if (*px == *qx && (*px == 0 || *px == (int)L->cw)) return 1;
     if (*py == *qy && (*py == 0 || *py == (int)L->ch)) return 1;
     return 0;
@@ -1729,6 +1754,7 @@ static uint32_t skirt_vertex(extract_state *s, uint32_t top, int x, int y, doubl
     memcpy(v, s->vtx + 5 * (size_t)top, 5 * sizeof(float));
     v[2] = (float)((double)v[2] - depth);
     if (s->normals) memcpy(s->nrm + 3 * s->nv, s->nrm + 3 * (size_t)top, 3 * sizeof(float));
+    if (s->samples) s->samples[s->nv] = s->samples[top];
     L->smap[slot] = (uint32_t)s->nv;
     return (uint32_t)s->nv++;
 }
@@ -1748,25 +1774,31 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: normals requested but buffer is NULL");
     if (!(o.skirt_depth >= 0.0) || !isfinite(o.skirt_depth))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: skirt_depth %g must be >= 0", o.skirt_depth);
+    if (!((double)L->zabs * L->zs + o.skirt_depth <= FLT_MAX))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_roam_extract: skirt_depth %g below heights down to -%g leaves the float range (%g)",
+                        o.skirt_depth, (double)L->zabs * L->zs, (double)FLT_MAX);
     extract_state s;
     memset(&s, 0, sizeof s);
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
+    s.samples = o.samples;
     emit_leaves(&s);
     if (!s.overflow) {
         s.nv = emit_vertices(&s);
         if (s.nv > s.vcap) s.overflow = 1;
-        else number_indices(&s);
     }
-    clear_vertex_set(L);
     size_t top_indices = s.ni;
+    int top_ok = !s.overflow;
     if (!s.overflow && o.skirt_depth > 0.0) {
+        /* the top indices are still sample keys here: the border test reads
+         * sample positions from them */
         for (size_t t = 0; t < top_indices && !s.overflow; t += 3)
             for (int e = 0; e < 3 && !s.overflow; e++) {
-                uint32_t p = indices[t + (size_t)e], q = indices[t + (size_t)(e + 1) % 3];
+                uint32_t kp = indices[t + (size_t)e], kq = indices[t + (size_t)(e + 1) % 3];
                 int px, py, qx, qy;
-                if (!on_same_border(L, vertices + 5 * (size_t)p, vertices + 5 * (size_t)q, &px, &py, &qx, &qy))
-                    continue;
+                if (!on_same_border(L, kp, kq, &px, &py, &qx, &qy)) continue;
+                uint32_t p = key_vertex(L, kp), q = key_vertex(L, kq);
                 uint32_t ps = skirt_vertex(&s, p, px, py, o.skirt_depth);
                 uint32_t qs = skirt_vertex(&s, q, qx, qy, o.skirt_depth);
                 if (s.overflow) break;
@@ -1776,6 +1808,8 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
             }
         memset(L->smap, 0xFF, 2 * ((size_t)L->w + L->hgt) * sizeof(uint32_t));
     }
+    if (top_ok) number_indices(&s, top_indices); /* as before skirts existed, even when they overflowed */
+    clear_vertex_set(L);
     if (s.overflow) {
         size_t mv, mi;
         rs_roam_mesh_bound(L, &o, &mv, &mi);

@@ -409,5 +409,140 @@ if mkfifo "$O/fifo.png" 2>/dev/null; then
     verdict "mesh OUT is a FIFO" "^roadsplat: $O/fifo.obj: exists and is not a regular file.*" $? && [ -p "$O/fifo.obj" ] && ok
 fi
 
+# --- issue 19: extreme scales, outputs naming inputs, signals, streams, limits -------
+# mesh: every value reaching the float output is checked up front, naming the option
+mode=fresh refuse "mesh --cell-size 1e-46" "^roadsplat: --cell-size: '1e-46' is below .*smallest cell size a float vertex holds\$" \
+    m.obj mesh --cell-size 1e-46 --max-error 0 "$D/dem.pgm" "$O/m.obj"
+mode=fresh refuse "mesh --cell-size 1e39" "^roadsplat: --cell-size: '1e\+39' is beyond the float range.*" \
+    m.obj mesh --cell-size 1e39 "$D/dem.pgm" "$O/m.obj"
+mode=fresh refuse "mesh --cell-size 2e37" "^roadsplat: --cell-size: '2e\+37' puts the map edge at 6e\+38 m, beyond the float range.*" \
+    m.obj mesh --cell-size 2e37 "$D/dem.pgm" "$O/m.obj"
+mode=fresh refuse "mesh --z-scale 1e40" "^roadsplat: --z-scale: '1e\+40' makes heights of .*beyond the float range.*" \
+    m.ply mesh --z-scale 1e40 "$D/dem.pgm" "$O/m.ply"
+mode=both refuse "mesh --skirt 1e39" "^roadsplat: --skirt: '1e\+39' is beyond the float range.*" \
+    m.ply mesh --skirt 1e39 "$D/dem.pgm" "$O/m.ply"
+# an output naming an input or another output: refused before any work, inputs intact
+same() { # NAME PATTERN FILE-THAT-MUST-NOT-CHANGE ARGS...
+    name=$1; pat=$2; keep=$3; shift 3
+    cp "$keep" "$T/keep"
+    timeout 20 "$RS" "$@" >/dev/null 2>"$T/stderr"
+    verdict "$name" "$pat" $? || return
+    cmp -s "$T/keep" "$keep" || { bad "$name: $keep changed"; return; }
+    if ls -A "$O" | grep -q '^\.'; then bad "$name: left a temporary file: $(ls -A "$O")"; return; fi
+    ok
+}
+rm -rf "$O"; mkdir "$O"; cp "$D/dem.pgm" "$D/roads.txt" "$O/"; cp "$T/old" "$O/o.png"
+same "OUT is the DEM" "^roadsplat: $O/dem.pgm: OUT is also the DEM .*refusing to overwrite an input\$" "$O/dem.pgm" \
+    --quiet "$O/dem.pgm" "$O/roads.txt" "$O/dem.pgm"
+same "OUT is the road file" "^roadsplat: $O/roads.txt: OUT is also the ROADS .*" "$O/roads.txt" \
+    --quiet "$O/dem.pgm" "$O/roads.txt" "$O/roads.txt"
+same "--weight-out is OUT" "^roadsplat: $O/o.png: given as both OUT and --weight-out; .*" "$O/o.png" \
+    --quiet --weight-out "$O/o.png" "$O/dem.pgm" "$O/roads.txt" "$O/o.png"
+same "--stats is OUT (not yet created, another spelling)" "^roadsplat: $O/./n.png: given as both OUT and --stats; .*" "$O/o.png" \
+    --quiet --stats "$O/./n.png" "$O/dem.pgm" "$O/roads.txt" "$O/n.png"
+same "--weight-out is the DEM" "^roadsplat: $O/dem.pgm: --weight-out is also the DEM .*" "$O/dem.pgm" \
+    --quiet --weight-out "$O/dem.pgm" "$O/dem.pgm" "$O/roads.txt" "$O/o.png"
+ln "$O/dem.pgm" "$O/hard.png"
+same "OUT is a hard link of the DEM" "^roadsplat: $O/hard.png: OUT is also the DEM .*" "$O/dem.pgm" \
+    --quiet "$O/dem.pgm" "$O/roads.txt" "$O/hard.png"
+same "--terrain-texture is OUT" "^roadsplat: $O/o.png: OUT is also the --terrain-texture .*" "$O/o.png" \
+    --quiet --terrain-texture "$O/o.png" "$O/dem.pgm" "$O/roads.txt" "$O/o.png"
+same "mesh OUT is the DEM" "^roadsplat: $O/dem.pgm: OUT is also the DEM .*" "$O/dem.pgm" mesh "$O/dem.pgm" "$O/dem.pgm"
+same "mesh --stats is OUT" "^roadsplat: $O/m.obj: given as both OUT and --stats; .*" "$O/dem.pgm" \
+    mesh --stats "$O/m.obj" "$O/dem.pgm" "$O/m.obj"
+# an empty side-output name fails before OUT is touched (it used to fail after OUT was replaced)
+mode=both refuse "--weight-out=" "^roadsplat: --weight-out: the file name is empty\$" o.png \
+    --quiet --weight-out= "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+mode=both refuse "--stats ''" "^roadsplat: --stats: the file name is empty\$" o.png \
+    --quiet --stats '' "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+mode=both refuse "mesh --stats ''" "^roadsplat: --stats: the file name is empty\$" m.obj mesh --stats '' "$D/dem.pgm" "$O/m.obj"
+mode=both refuse "OUT ends in /" "^roadsplat: $O/x/: names a folder; the output must be a file\$" x \
+    --quiet "$D/dem.pgm" "$D/roads.txt" "$O/x/"
+# a bad input leaves no temporary behind in an output folder that holds other files
+rm -rf "$O"; mkdir "$O"; cp "$T/old" "$O/o.png"; : >"$O/.hidden"; ls -A "$O" >"$T/before"
+"$RS" --quiet --weight-out "$O/w.pgm" --stats "$O/s.json" "$D/dem.pgm" "$D/trunc-point.txt" "$O/o.png" 2>/dev/null
+[ $? -eq 1 ] && ls -A "$O" | cmp -s - "$T/before" && cmp -s "$T/old" "$O/o.png" && ok \
+    || bad "bad road file: output folder changed: $(ls -A "$O")"
+# signals: SIGTERM / SIGHUP stop the run, remove every temporary, exit 128 + signal
+python3 - "$D/big.pgm" <<'PY' || bad "could not write big.pgm"
+import sys
+w, h = 700, 600
+open(sys.argv[1], 'wb').write(b'P5\n%d %d\n255\n' % (w, h) + bytes((i * 7 + i // w) % 251 for i in range(w * h)))
+PY
+for sig in 15 1; do # SIGTERM, SIGHUP
+    rm -rf "$O"; mkdir "$O"; cp "$T/old" "$O/o.png"
+    "$RS" --quiet --texels 8 --weight-out "$O/w.pgm" --stats "$O/s.json" "$D/big.pgm" "$D/roads.txt" "$O/o.png" 2>/dev/null &
+    pid=$!; n=0
+    while [ "$(ls -A "$O" | grep -c '^\.rs-')" -lt 3 ] && [ $n -lt 200 ]; do sleep 0.05; n=$((n + 1)); done
+    kill -$sig $pid; wait $pid; rc=$?
+    want=$((128 + sig))
+    [ $rc -eq $want ] && [ "$(ls -A "$O")" = o.png ] && cmp -s "$T/old" "$O/o.png" && ok \
+        || bad "SIG$sig: exit $rc (expected $want), left: $(ls -A "$O")"
+done
+rm -f "$D/big.pgm"
+# a texture's declared size is checked against the limit before decoding (875 KB -> 4.5 GB before)
+python3 - "$D" <<'PY' || bad "could not write the images"
+import struct, sys, zlib
+d = sys.argv[1]
+def chunk(t, b): return struct.pack('>I', len(b)) + t + b + struct.pack('>I', zlib.crc32(t + b) & 0xffffffff)
+def png(w, h, depth, colour, raw):
+    return (b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, depth, colour, 0, 0, 0))
+            + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
+open(d + '/tex-30000.png', 'wb').write(png(30000, 30000, 8, 2, b'\0' * 1000))
+open(d + '/rgb.png', 'wb').write(png(31, 21, 8, 2, b''.join(b'\0' + bytes(93) for y in range(21))))
+# 1-bit grey: heights 0/1, and its PGM twin
+rows = [[(x * 3 + y) % 5 == 0 for x in range(16)] for y in range(6)]
+raw = b''.join(b'\0' + bytes(sum(r[8 * k + b] << (7 - b) for b in range(8)) for k in range(2)) for r in rows)
+open(d + '/bit1.png', 'wb').write(png(16, 6, 1, 0, raw))
+open(d + '/bit1.pgm', 'w').write('P2\n16 6\n1\n' + '\n'.join(' '.join(str(int(v)) for v in r) for r in rows) + '\n')
+PY
+mode=fresh refuse "terrain texture declaring 30000x30000" \
+    "^roadsplat: $D/tex-30000.png: 30000x30000 is too large for a texture \(at most 67108864 pixels\)\$" o.png \
+    --quiet --terrain-texture "$D/tex-30000.png" "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+bad_mesh rgb.png 'a DEM must have one channel \(or grey \+ alpha\), this image has 3'
+"$RS" mesh --max-error 0 "$D/bit1.png" "$T/b1.obj" && "$RS" mesh --max-error 0 "$D/bit1.pgm" "$T/b1p.obj" && cmp -s "$T/b1.obj" "$T/b1p.obj" \
+    && ok || bad "a 1-bit PNG does not mesh like its 0/1 PGM twin"
+# a sparse 4 GiB PGM declaring 100000x100000: refused from its header (was 4.4 GB read first)
+printf 'P5\n100000 100000\n255\n' >"$D/sparse4g.pgm"
+if truncate -s 4G "$D/sparse4g.pgm" 2>/dev/null; then
+    mode=fresh refuse "sparse 4 GiB PGM" "^roadsplat: $D/sparse4g.pgm: PGM line 3: DEM is 100000x100000; the limit is 16384 samples per side\$" \
+        m.obj mesh "$D/sparse4g.pgm" "$O/m.obj"
+fi
+rm -f "$D/sparse4g.pgm"
+# DEMs from a pipe are read once (PGM and PNG); a device is refused, not read forever
+if mkfifo "$T/fifo.pgm" "$T/fifo.png" 2>/dev/null; then
+    cat "$D/dem.pgm" >"$T/fifo.pgm" &
+    timeout 20 "$RS" --quiet "$T/fifo.pgm" "$D/roads.txt" "$T/pipe.png" 2>"$T/stderr" && cmp -s "$T/pipe.png" "$T/ref.png" \
+        && ok || bad "PGM DEM from a pipe: $(cat "$T/stderr")"
+    cat "$D/good.png" >"$T/fifo.png" &
+    timeout 20 "$RS" --quiet "$T/fifo.png" "$D/roads.txt" "$T/pipe.png" 2>"$T/stderr" && cmp -s "$T/pipe.png" "$T/ref.png" \
+        && ok || bad "PNG DEM from a pipe: $(cat "$T/stderr")"
+    rm -f "$T/fifo.pgm" "$T/fifo.png"
+fi
+mode=fresh refuse "DEM /dev/zero" "^roadsplat: /dev/zero: is a device; inputs must be regular files or pipes\$" o.png \
+    --quiet /dev/zero "$D/roads.txt" "$O/o.png"
+mode=fresh refuse "ROADS /dev/zero" "^roadsplat: /dev/zero: is a device; inputs must be regular files or pipes\$" o.png \
+    --quiet "$D/dem.pgm" /dev/zero "$O/o.png"
+# the longest names the file system takes work (the temporaries have fixed-length names)
+long=$(printf '%0251d' 0 | tr 0 x)
+rm -rf "$O"; mkdir "$O"
+if : >"$O/$long.png" 2>/dev/null; then
+    rm -f "$O/$long.png"
+    "$RS" --quiet --weight-out "$O/$long.pgm" "$D/dem.pgm" "$D/roads.txt" "$O/$long.png" 2>"$T/stderr" \
+        && cmp -s "$O/$long.png" "$T/ref.png" && [ -s "$O/$long.pgm" ] && [ "$(ls -A "$O" | wc -l)" -eq 2 ] && ok \
+        || bad "255-byte OUT name: $(cat "$T/stderr")"
+    "$RS" mesh --stats "$O/$long.jsn" "$D/dem.pgm" "$O/$long.obj" 2>"$T/stderr" && [ -s "$O/$long.obj" ] && ok \
+        || bad "255-byte mesh OUT name: $(cat "$T/stderr")"
+fi
+# render: OUT and --stats are opened before the work and committed together
+if ! "$RS" render --help 2>&1 | grep -q "no OSMesa support"; then
+    mode=old refuse "render --stats in a missing folder" "^roadsplat: $T/nodir/s.json: cannot create a temporary file.*" o.png \
+        render --quiet --size 64x48 --stats "$T/nodir/s.json" "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+    mode=old refuse "render OUT is the DEM" "^roadsplat: $O/o.png: OUT is also the DEM .*" o.png \
+        render --quiet --size 64x48 "$O/o.png" "$D/roads.txt" "$O/o.png"
+    mode=fresh refuse "render --camera 1e300,1e300,1e300" "^roadsplat: --camera: '1e300,1e300,1e300' must lie within .*" o.png \
+        render --quiet --size 64x48 --camera 1e300,1e300,1e300 "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+fi
+
 echo "cli_badinput: $pass passed, $fail failed"
 [ $fail -eq 0 ]

@@ -70,10 +70,13 @@ check "image module installed" [ -f "$P/lib/roadsplat/roadsplat-image.so" ]
 printf 'P2\n5 4\n255\n1 2 3 4 5\n2 3 4 5 6\n3 4 5 6 7\n4 5 6 7 8\n' > "$T/dem.pgm"
 printf 'road a width 1\n0.5 0.5\n3.5 2.5\nend\n' > "$T/roads.txt"
 check "installed CLI writes a PNG" "$R" --quiet --texels 2 "$T/dem.pgm" "$T/roads.txt" "$T/a.png"
+# a 6 x 5 grey PNG (DEMs have one channel)
+echo 'iVBORw0KGgoAAAANSUhEUgAAAAYAAAAFCAAAAABDM8I6AAAAKElEQVR4nGNg0AioWHCCgcsoqmnVJQYRm5SeLXcY5Nzypu17BpH6AADYJw4R/ZAYHgAAAABJRU5ErkJggg==' |
+    base64 -d >"$T/g.png"
 check "installed CLI reads a PNG DEM (image module from $P/lib/roadsplat)" \
-    "$R" --quiet --texels 1 "$T/a.png" "$T/roads.txt" "$T/b.png"
+    "$R" --quiet --texels 1 "$T/g.png" "$T/roads.txt" "$T/b.png"
 mv "$P/lib/roadsplat" "$P/lib/roadsplat.off"
-"$R" --quiet --texels 1 "$T/a.png" "$T/roads.txt" "$T/c.png" 2>"$T/err.txt"; rc=$?
+"$R" --quiet --texels 1 "$T/g.png" "$T/roads.txt" "$T/c.png" 2>"$T/err.txt"; rc=$?
 check "without the module: exit 1" [ "$rc" = 1 ]
 check "without the module: one line naming roadsplat-image.so" sh -c \
     "[ \$(wc -l < '$T/err.txt') = 1 ] && grep -q 'roadsplat-image.so' '$T/err.txt'"

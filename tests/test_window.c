@@ -290,6 +290,21 @@ static void test_arguments(void)
     CHECK_EQ_INT(pf.pixels, 32);
     rs_splatter_free(ctx, s);
     rs_road_grid_free(ctx, g);
+    /* a texture over the context's max_texture_pixels is refused */
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_texture_pixels = 14;
+    rs_ctx *c2 = NULL;
+    CHECK(rs_ctx_create(NULL, &lim, &c2) == RS_OK);
+    o.surface.terrain_texture = &f.tex[0]; /* 5 x 3 */
+    CHECK(rs_splatter_create(c2, f.dem, f.roads, NULL, &o, &s) == RS_ERR_LIMIT && s == NULL);
+    CHECK(strstr(rs_ctx_message(c2), "texture") != NULL);
+    lim.max_texture_pixels = 15;
+    rs_ctx_free(c2);
+    CHECK(rs_ctx_create(NULL, &lim, &c2) == RS_OK);
+    CHECK(rs_splatter_create(c2, f.dem, f.roads, NULL, &o, &s) == RS_OK);
+    rs_splatter_free(c2, s);
+    rs_ctx_free(c2);
     fixture_free(&f);
 }
 

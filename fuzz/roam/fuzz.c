@@ -57,7 +57,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_roam_stats st;
     rs_roam_get_stats(r, &st);
     REQUIRE(st.pool_used <= st.pool_nodes);
-    rs_roam_mesh_options mo = { tail[2] & 1, (tail[2] & 2) ? 3.0 : 0.0 };
+    rs_roam_mesh_options mo = { tail[2] & 1, (tail[2] & 2) ? 3.0 : 0.0, NULL };
     size_t mv, mi, nv, ni;
     rs_roam_mesh_bound(r, &mo, &mv, &mi);
     float *v = malloc((mv + 1) * 5 * sizeof *v), *n = malloc((mv + 1) * 3 * sizeof *n);
