@@ -55,6 +55,9 @@ struct rs__roadfield {
     float *rbox;       /* per rids entry: x lo, x hi, y lo, y hi of the centreline box grown by
                         * r + tol + margin, rounded outwards (rows with spans only) */
     uint8_t *rspan;    /* per grid row: 1 when the row spans are valid (every segment of moderate size) */
+    uint32_t *colpix;  /* gw + 1 entries or NULL: colpix[i] = first pixel index p >= 0 whose centre
+                        * (p + 0.5) pixel has cell_of column >= i (colpix[gw]: first outside the
+                        * grid), for pixels of exactly `pixel` */
     rf_seg *seg;
     size_t nseg, nent, bytes;
     size_t nonempty, nfull, maxlist;
@@ -229,6 +232,7 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
     rs__free(ctx, f->rstart);
     rs__free(ctx, f->rids);
     rs__free(ctx, f->rbox);
+    rs__free(ctx, f->colpix);
     rs__free(ctx, f->rspan);
     rs__free(ctx, f->seg);
     rs__free(ctx, f);
@@ -306,6 +310,43 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
     }
     rs__free(ctx, stamp);
     return RS_OK;
+}
+
+/* Column of the centre of pixel p (pixels of f->pixel), as the coverage
+ * computes it: -1 outside the grid. */
+static int64_t pixel_col(const rs__roadfield *f, double p)
+{
+    return cell_of(f, (p + 0.5) * f->pixel, f->gw);
+}
+
+/* colpix (optional: left NULL when out of memory or when the pixel indices
+ * would not fit): cell_of of pixel centres is non-decreasing in the pixel
+ * index until it leaves the grid, so each column's first pixel is found by
+ * an estimate and exact checks. */
+static void build_colpix(rs_ctx *ctx, rs__roadfield *f)
+{
+    double last = (double)(f->gw - 1) * f->c / f->pixel + 2;
+    if (!(last < 4e9)) return;
+    uint32_t *cp = rs__alloc_array(ctx, (size_t)f->gw + 1, sizeof *cp);
+    if (!cp) return;
+    cp[0] = cp[1] = 0; /* centres are > 0: column 1 or more */
+    for (uint32_t i = 2; i <= f->gw; i++) {
+        /* first p with pixel_col(p) >= i, or outside (-1) once past the grid */
+        double est = ceil((double)(i - 1) * f->c / f->pixel - 0.5), pl = cp[i - 1];
+        double p = est > pl ? est : pl;
+        while (p > pl) {
+            int64_t c = pixel_col(f, p - 1);
+            if (c >= 0 && c < (int64_t)i) break;
+            p--;
+        }
+        for (;;) {
+            int64_t c = pixel_col(f, p);
+            if (c < 0 || c >= (int64_t)i) break;
+            p++;
+        }
+        cp[i] = (uint32_t)p;
+    }
+    f->colpix = cp;
 }
 
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
@@ -410,9 +451,11 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
     if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
+    build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
                cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
-               (size_t)f->rstart[f->gh] * (sizeof *f->rids + 4 * sizeof *f->rbox);
+               (size_t)f->rstart[f->gh] * (sizeof *f->rids + 4 * sizeof *f->rbox) +
+               (f->colpix ? ((size_t)f->gw + 1) * sizeof *f->colpix : 0);
     *out = f;
     rs__ok(ctx);
     return RS_OK;
@@ -686,6 +729,28 @@ static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cel
     return sub_cover(f, nr, cr, cx, cy, qs);
 }
 
+/* capsule_cover for a segment of positive length, from the square centre's
+ * projection pr on the segment (from a) and offset t from its line: the
+ * nearest centreline point and the distance follow from (pr, t) alone. */
+static double cover_local(const rf_seg *s, const rf_px *q, double pr, double t)
+{
+    double e = q->e, hp = q->hs * s->l1;
+    if (pr - hp >= 0 && pr + hp <= s->len) {
+        double at = fabs(t);
+        if (at - s->r >= e) return 0;
+        if (at + e <= s->r) return 1;
+        return band_cover(s, q, t);
+    }
+    double dp = pr > 0 ? (pr >= s->len ? pr - s->len : 0) : pr, d2 = dp * dp + t * t, ro = s->r + e, ri = s->r - e;
+    if (d2 < 1e300 && (d2 >= ro * ro || (ri > 0 && d2 <= ri * ri))) return d2 >= ro * ro ? 0 : 1;
+    double d = len2(dp, t), D = d - s->r;
+    if (D >= e) return 0;
+    if (D <= -e) return 1;
+    if (!(d > 0)) return 1; /* centre on the centreline, so D = -r > -e: a tiny road; rare */
+    double id = 1 / d;
+    return halfplane((dp * s->ux + t * s->uy) * id, (dp * s->uy - t * s->ux) * id, q->side, -D);
+}
+
 /* Corners, arcs, crossings: sub-squares (size qs), each covered by its best
  * capsule among the near ones `nr` (or every candidate of the cells `cr`
  * when nr->many). */
@@ -693,25 +758,44 @@ static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cell
                         const rf_px *qs)
 {
     double ps = qs->side, acc = 0;
+    if (!nr->many) {
+        /* per capsule: (pr, t) at the pixel centre and their steps per sub-square */
+        double P[NEAR_MAX], T[NEAR_MAX], Px[NEAR_MAX], Py[NEAR_MAX], Tx[NEAR_MAX], Ty[NEAR_MAX];
+        for (int m = 0; m < nr->n; m++) {
+            const rf_seg *s = &f->seg[nr->id[m]];
+            double wx = cx - s->ax, wy = cy - s->ay;
+            P[m] = wx * s->ux + wy * s->uy;
+            T[m] = wx * s->uy - wy * s->ux;
+            Px[m] = ps * s->ux;
+            Py[m] = ps * s->uy;
+            Tx[m] = ps * s->uy;
+            Ty[m] = -ps * s->ux;
+        }
+        for (int sy = 0; sy < SUBDIV; sy++)
+            for (int sx = 0; sx < SUBDIV; sx++) {
+                double ox = (double)sx - 0.5 * (SUBDIV - 1), oy = (double)sy - 0.5 * (SUBDIV - 1), best = 0;
+                for (int m = 0; m < nr->n && best < 1; m++) {
+                    const rf_seg *s = &f->seg[nr->id[m]];
+                    double v = s->len > 0 ? cover_local(s, qs, P[m] + ox * Px[m] + oy * Py[m], T[m] + ox * Tx[m] + oy * Ty[m])
+                                          : capsule_cover(s, cx + ox * ps, cy + oy * ps, qs);
+                    if (v > best) best = v;
+                }
+                acc += best;
+            }
+        return acc / (SUBDIV * SUBDIV);
+    }
     for (int sy = 0; sy < SUBDIV; sy++)
         for (int sx = 0; sx < SUBDIV; sx++) {
             double x = cx + ((double)sx - 0.5 * (SUBDIV - 1)) * ps, y = cy + ((double)sy - 0.5 * (SUBDIV - 1)) * ps;
             double best = 0;
-            if (!nr->many) {
-                for (int m = 0; m < nr->n && best < 1; m++) {
-                    double v = capsule_cover(&f->seg[nr->id[m]], x, y, qs);
-                    if (v > best) best = v;
-                }
-            } else {
-                for (uint32_t j = cr->j0; j <= cr->j1; j++)
-                    for (uint32_t i = cr->i0; i <= cr->i1; i++) {
-                        size_t cell = (size_t)j * f->gw + i;
-                        for (uint32_t k = f->start[cell]; k < f->start[cell + 1] && best < 1; k++) {
-                            double v = capsule_cover(&f->seg[f->ids[k]], x, y, qs);
-                            if (v > best) best = v;
-                        }
+            for (uint32_t j = cr->j0; j <= cr->j1; j++)
+                for (uint32_t i = cr->i0; i <= cr->i1; i++) {
+                    size_t cell = (size_t)j * f->gw + i;
+                    for (uint32_t k = f->start[cell]; k < f->start[cell + 1] && best < 1; k++) {
+                        double v = capsule_cover(&f->seg[f->ids[k]], x, y, qs);
+                        if (v > best) best = v;
                     }
-            }
+                }
             acc += best;
         }
     return acc / (SUBDIV * SUBDIV);
@@ -804,7 +888,7 @@ static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0,
 /* Candidates kept per pixel by the row spans (a power of 2); more falls
  * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024 };
+enum { CHUNK = 1024, ACT_MAX = 1024 };
 
 typedef struct rf_rowbuf {
     uint8_t deep[CHUNK], cnt[CHUNK];
@@ -812,7 +896,12 @@ typedef struct rf_rowbuf {
     /* runs of pixels with the same cell column: run m is pixels
      * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
     uint32_t rc[CHUNK], rk[CHUNK + 1], nrun;
-    uint32_t todo[CHUNK]; /* runs needing per-pixel work in the current row */
+    /* per grid row (cached while consecutive pixel rows share it): runs
+     * needing per-pixel work, full runs, their pixel range [k0, k1], and the
+     * row-list entries whose box meets that range in x (nact = UINT32_MAX:
+     * more than ACT_MAX, check them all) */
+    uint32_t crow, ntodo, nfull, k0, k1, nact;
+    uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX];
 } rf_rowbuf;
 
 /* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
@@ -828,21 +917,39 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
                       const rf_px *qs, double *o)
 {
     double pix = q->side, e = q->e;
-    size_t base = (size_t)row * f->gw;
-    uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0;
-    memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
-    for (uint32_t m = 0; m < rb->nrun; m++) {
-        uint32_t kb = rb->rk[m], ke = rb->rk[m + 1];
-        size_t cell = base + rb->rc[m];
-        if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
-        if (f->full[cell])
-            for (uint32_t k = kb; k < ke; k++) o[k] = 1;
-        else {
-            rb->todo[ntodo++] = m;
-            if (kb < k0) k0 = kb;
-            k1 = ke - 1;
+    if (rb->crow != row) {
+        size_t base = (size_t)row * f->gw;
+        uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0, nfull = 0;
+        for (uint32_t m = 0; m < rb->nrun; m++) {
+            size_t cell = base + rb->rc[m];
+            if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
+            if (f->full[cell]) rb->fullr[nfull++] = m;
+            else {
+                rb->todo[ntodo++] = m;
+                if (rb->rk[m] < k0) k0 = rb->rk[m];
+                k1 = rb->rk[m + 1] - 1;
+            }
+        }
+        rb->crow = row;
+        rb->ntodo = ntodo;
+        rb->nfull = nfull;
+        rb->k0 = k0;
+        rb->k1 = k1;
+        rb->nact = UINT32_MAX;
+        if (ntodo && f->rspan[row] && f->rstart[row + 1] - f->rstart[row] <= ACT_MAX) {
+            double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix;
+            uint32_t n = 0;
+            for (uint32_t m = f->rstart[row]; m < f->rstart[row + 1]; m++) {
+                const float *bx = f->rbox + 4 * (size_t)m;
+                if (!(xhi < bx[0] || xlo > bx[1])) rb->act[n++] = m;
+            }
+            rb->nact = n;
         }
     }
+    uint32_t k0 = rb->k0, k1 = rb->k1, ntodo = rb->ntodo;
+    memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
+    for (uint32_t t = 0; t < rb->nfull; t++)
+        for (uint32_t k = rb->rk[rb->fullr[t]]; k < rb->rk[rb->fullr[t] + 1]; k++) o[k] = 1;
     if (!ntodo) return;
     if (!f->rspan[row]) {
         for (uint32_t t = 0; t < ntodo; t++) {
@@ -855,7 +962,9 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
     memset(rb->deep + k0, 0, k1 - k0 + 1);
     memset(rb->cnt + k0, 0, k1 - k0 + 1);
     double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
-    for (uint32_t m = f->rstart[row]; m < f->rstart[row + 1]; m++) {
+    uint32_t nm = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row];
+    for (uint32_t j = 0; j < nm; j++) {
+        uint32_t m = rb->nact != UINT32_MAX ? rb->act[j] : f->rstart[row] + j;
         /* the box (grown by margin >= e) first: no segment load for most */
         const float *bx = f->rbox + 4 * (size_t)m;
         if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
@@ -924,18 +1033,44 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
      * lists' margin; then empty cells are 0 and full cells 1 at once. */
     if (pix <= f->pixel) {
         rf_rowbuf rb;
+        double ipix = 1 / pix;
         for (uint32_t x0 = 0; x0 < w; x0 += CHUNK) {
             uint32_t n = w - x0 < CHUNK ? w - x0 : CHUNK;
             /* centre of pixel k of the chunk: (a + k) pix */
             double a = (double)px0 + (double)x0 + 0.5;
             rb.nrun = 0;
-            for (uint32_t k = 0; k < n; k++) {
-                int64_t c = cell_of(f, ((double)px0 + (double)(x0 + k) + 0.5) * pix, f->gw);
-                uint32_t cc = c < 0 ? UINT32_MAX : (uint32_t)c;
-                if (k == 0 || cc != rb.rc[rb.nrun - 1]) {
+            rb.crow = UINT32_MAX;
+            /* cell_of of every pixel centre, as runs: it is monotone in k
+             * inside the grid, so a run's end is estimated from the cell's
+             * right edge and then checked with cell_of itself (exact) */
+            uint64_t p0 = (uint64_t)px0 + x0;
+            if (f->colpix && pix == f->pixel && p0 + n <= f->colpix[f->gw]) {
+                /* the field's table: the same cells, no per-pixel cell_of */
+                int64_t c = cell_of(f, (a + 0.0) * pix, f->gw);
+                for (uint32_t k = 0; k < n; c++) {
+                    uint64_t e1 = f->colpix[c + 1];
+                    uint32_t kn = e1 - p0 >= n ? n : (uint32_t)(e1 - p0);
+                    if (kn > k) {
+                        rb.rc[rb.nrun] = (uint32_t)c;
+                        rb.rk[rb.nrun++] = k;
+                        k = kn;
+                    }
+                }
+            } else
+            for (uint32_t k = 0; k < n;) {
+                int64_t c = cell_of(f, (a + (double)k) * pix, f->gw);
+                uint32_t cc = c < 0 ? UINT32_MAX : (uint32_t)c, kn = k + 1;
+                if (c >= 0) {
+                    double est = ceil((double)c * f->c * ipix - a); /* first centre at or past the right edge */
+                    kn = est >= (double)n ? n : est <= (double)(k + 1) ? k + 1 : (uint32_t)est;
+                    while (kn > k + 1 && cell_of(f, (a + (double)(kn - 1)) * pix, f->gw) != c) kn--;
+                    while (kn < n && cell_of(f, (a + (double)kn) * pix, f->gw) == c) kn++;
+                }
+                if (rb.nrun == 0 || cc != rb.rc[rb.nrun - 1]) {
                     rb.rc[rb.nrun] = cc;
                     rb.rk[rb.nrun++] = k;
                 }
+                k = kn;
             }
             rb.rk[rb.nrun] = n;
             for (uint32_t y = 0; y < h; y++) {
