@@ -33,6 +33,11 @@ typedef struct rf_seg {
     double s0;             /* arc length of the road at (ax, ay) */
     double xmin, xmax, ymin, ymax; /* bounding box of the centreline */
     double tol;            /* distance slack of the row spans (coverage), metres */
+    /* coverage constants (docs/roadfield.md): ga >= gb = the larger and the
+     * smaller of |ux|, |uy| (gb = 0 below 1e-100), iga = 1/ga, igab =
+     * 1/(ga gb) (0 when gb = 0), l1 = |ux| + |uy|; iux, iuy = 1/ux, 1/uy
+     * (0 for a component below 1e-100) */
+    double ga, gb, iga, igab, l1, iux, iuy;
     uint32_t road, seg;
 } rf_seg;
 
@@ -47,7 +52,12 @@ struct rs__roadfield {
     uint8_t *full;     /* 1: every pixel whose centre is in the cell is fully road */
     uint32_t *rstart;  /* gh + 1 offsets into rids */
     uint32_t *rids;    /* per grid row: every segment listed in a cell of the row, once */
+    float *rbox;       /* per rids entry: x lo, x hi, y lo, y hi of the centreline box grown by
+                        * r + tol + margin, rounded outwards (rows with spans only) */
     uint8_t *rspan;    /* per grid row: 1 when the row spans are valid (every segment of moderate size) */
+    uint32_t *colpix;  /* gw + 1 entries or NULL: colpix[i] = first pixel index p >= 0 whose centre
+                        * (p + 0.5) pixel has cell_of column >= i (colpix[gw]: first outside the
+                        * grid), for pixels of exactly `pixel` */
     rf_seg *seg;
     size_t nseg, nent, bytes;
     size_t nonempty, nfull, maxlist;
@@ -198,6 +208,15 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     s->ux = lh > 0 ? dxh / lh : 0;
     s->uy = lh > 0 ? dyh / lh : 0;
     s->len = 2 * lh;
+    double aux = fabs(s->ux), auy = fabs(s->uy);
+    s->ga = fmax(aux, auy);
+    s->gb = fmin(aux, auy);
+    if (s->gb < 1e-100) s->gb = 0;
+    s->iga = s->ga > 0 ? 1 / s->ga : 0;
+    s->igab = s->gb > 0 ? 1 / (s->ga * s->gb) : 0;
+    s->l1 = aux + auy;
+    s->iux = aux >= 1e-100 ? 1 / s->ux : 0;
+    s->iuy = auy >= 1e-100 ? 1 / s->uy : 0;
     s->r = r;
     s->s0 = s0;
     s->road = road;
@@ -212,6 +231,8 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
     rs__free(ctx, f->full);
     rs__free(ctx, f->rstart);
     rs__free(ctx, f->rids);
+    rs__free(ctx, f->rbox);
+    rs__free(ctx, f->colpix);
     rs__free(ctx, f->rspan);
     rs__free(ctx, f->seg);
     rs__free(ctx, f);
@@ -223,6 +244,24 @@ static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
  * lists (each once, in the order first met), and whether the row's spans may be used: every segment
  * has coordinates, length and half width within 1e8 cells, so the spans'
  * rounding errors stay far below the slack `tol` (docs/roadfield.md). */
+/* A float <= v (NaN: -inf) and a float >= v (NaN: +inf); conversions
+ * only of values within the float range. */
+static float float_down(double v)
+{
+    if (!(v > -1e38)) return -INFINITY;
+    if (v > 1e38) return 1e38f;
+    float r = (float)v;
+    return (double)r > v ? nextafterf(r, -INFINITY) : r;
+}
+
+static float float_up(double v)
+{
+    if (!(v < 1e38)) return INFINITY;
+    if (v < -1e38) return -1e38f;
+    float r = (float)v;
+    return (double)r < v ? nextafterf(r, INFINITY) : r;
+}
+
 static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
 {
     uint32_t *stamp = rs__calloc(ctx, f->nseg ? f->nseg : 1, sizeof *stamp);
@@ -240,7 +279,8 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
     for (int pass = 0; pass < 2; pass++) {
         if (pass == 1) {
             f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
-            if (!f->rids) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
+            f->rbox = rs__alloc_array(ctx, run ? (size_t)run : 1, 4 * sizeof *f->rbox);
+            if (!f->rids || !f->rbox) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
             memset(stamp, 0, (f->nseg ? f->nseg : 1) * sizeof *stamp);
             run = 0;
         }
@@ -253,8 +293,14 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
                     if (stamp[id] == j + 1) continue;
                     stamp[id] = j + 1;
                     if (pass == 1) {
+                        const rf_seg *s = &f->seg[id];
+                        double g = s->r + s->tol + f->margin;
                         f->rids[run] = id;
-                        ok &= f->seg[id].tol > 0;
+                        f->rbox[4 * run] = float_down(s->xmin - g);
+                        f->rbox[4 * run + 1] = float_up(s->xmax + g);
+                        f->rbox[4 * run + 2] = float_down(s->ymin - g);
+                        f->rbox[4 * run + 3] = float_up(s->ymax + g);
+                        ok &= s->tol > 0;
                     }
                     run++;
                 }
@@ -264,6 +310,43 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
     }
     rs__free(ctx, stamp);
     return RS_OK;
+}
+
+/* Column of the centre of pixel p (pixels of f->pixel), as the coverage
+ * computes it: -1 outside the grid. */
+static int64_t pixel_col(const rs__roadfield *f, double p)
+{
+    return cell_of(f, (p + 0.5) * f->pixel, f->gw);
+}
+
+/* colpix (optional: left NULL when out of memory or when the pixel indices
+ * would not fit): cell_of of pixel centres is non-decreasing in the pixel
+ * index until it leaves the grid, so each column's first pixel is found by
+ * an estimate and exact checks. */
+static void build_colpix(rs_ctx *ctx, rs__roadfield *f)
+{
+    double last = (double)(f->gw - 1) * f->c / f->pixel + 2;
+    if (!(last < 4e9)) return;
+    uint32_t *cp = rs__alloc_array(ctx, (size_t)f->gw + 1, sizeof *cp);
+    if (!cp) return;
+    cp[0] = cp[1] = 0; /* centres are > 0: column 1 or more */
+    for (uint32_t i = 2; i <= f->gw; i++) {
+        /* first p with pixel_col(p) >= i, or outside (-1) once past the grid */
+        double est = ceil((double)(i - 1) * f->c / f->pixel - 0.5), pl = cp[i - 1];
+        double p = est > pl ? est : pl;
+        while (p > pl) {
+            int64_t c = pixel_col(f, p - 1);
+            if (c >= 0 && c < (int64_t)i) break;
+            p--;
+        }
+        for (;;) {
+            int64_t c = pixel_col(f, p);
+            if (c < 0 || c >= (int64_t)i) break;
+            p++;
+        }
+        cp[i] = (uint32_t)p;
+    }
+    f->colpix = cp;
 }
 
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
@@ -368,9 +451,11 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
     if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
+    build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
                cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
-               (size_t)f->rstart[f->gh] * sizeof *f->rids;
+               (size_t)f->rstart[f->gh] * (sizeof *f->rids + 4 * sizeof *f->rbox) +
+               (f->colpix ? ((size_t)f->gw + 1) * sizeof *f->colpix : 0);
     *out = f;
     rs__ok(ctx);
     return RS_OK;
@@ -463,32 +548,120 @@ static double halfplane(double gx, double gy, double side, double h)
     return h < 0 ? lo : 1 - lo;
 }
 
-/* Coverage of the square centred (x, y), side `side`, half diagonal e, by
- * one capsule: exact when the square lies within the segment's slab (the
- * band |t| <= r cut by straight lines), otherwise the half-plane of the
- * distance field linearised at the centre (caps and vertices, where the
- * edge is an arc). */
-static double capsule_cover(const rf_seg *s, double x, double y, double side, double e)
+/* A square size for the coverage: side, half diagonal e, and the
+ * constants of the band cover (hs = side/2, iside = 1/side, c2 =
+ * 1/(2 side^2)); set once per call by px_set, so a pixel's value depends
+ * only on the pixel size. */
+typedef struct rf_px { double side, e, hs, iside, c2; } rf_px;
+
+static void px_set(rf_px *q, double side)
 {
-    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, qx, qy;
-    double hp = 0.5 * side * (fabs(s->ux) + fabs(s->uy));
+    q->side = side;
+    q->e = side * HALF_SQRT2;
+    q->hs = 0.5 * side;
+    q->iside = 1 / side;
+    q->c2 = 1 / (2 * side * side);
+}
+
+/* halfplane() for the segment's own normal, without divisions: a = hs ga,
+ * b = hs gb, apb = a + b (the caller's), x = |h|. Returns lo (the fraction
+ * where u <= -x). w^2/(8ab) = w^2 c2 igab and (a-x)/(2a) = 1/2 - x iside iga. */
+static double band_lo(const rf_seg *s, const rf_px *q, double a, double b, double apb, double x)
+{
+    if (x >= apb) return 0;
+    if (x >= a - b) { double w = apb - x; return w * w * (q->c2 * s->igab); }
+    return 0.5 - x * (q->iside * s->iga);
+}
+
+/* Coverage of the square (side q->side) whose centre is at signed offset t
+ * from the segment's line, inside the segment's slab, by the band |t| <= r:
+ * the fraction between two parallel lines, each the CDF of the sum of two
+ * uniform variables (a trapezoid, closed form). The caller has settled
+ * |t| <= r - e (1) and |t| >= r + e (0). */
+static double band_cover(const rf_seg *s, const rf_px *q, double t)
+{
+    double a = q->hs * s->ga, b = q->hs * s->gb, apb = a + b, at = fabs(t), h = s->r - at;
+    double near = h < 0 ? band_lo(s, q, a, b, apb, -h) : 1 - band_lo(s, q, a, b, apb, h);
+    /* the far edge (offset -r - at, never above 0) misses the square: its term is 0 */
+    if (at + s->r >= apb) return near;
+    return near - band_lo(s, q, a, b, apb, at + s->r);
+}
+
+/* Coverage of the square centred (x, y) of size q by one capsule: exact
+ * when the square lies within the segment's slab (the band |t| <= r cut by
+ * straight lines), otherwise the half-plane of the distance field
+ * linearised at the centre (caps and vertices, where the edge is an arc). */
+static double capsule_cover(const rf_seg *s, double x, double y, const rf_px *q)
+{
+    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, qx, qy, e = q->e;
+    double hp = q->hs * s->l1;
     if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
         double t = wx * s->uy - wy * s->ux, at = fabs(t);
         if (at - s->r >= e) return 0;
         if (at + e <= s->r) return 1;
-        /* the far edge misses the square (halfplane's a + b, same rounding): its term is exactly 0 or 1 */
-        if (at + s->r >= 0.5 * side * fabs(s->uy) + 0.5 * side * fabs(s->ux)) return t >= 0 ? halfplane(s->uy, -s->ux, side, s->r - t)
-                                          : 1 - halfplane(s->uy, -s->ux, side, -s->r - t);
-        return halfplane(s->uy, -s->ux, side, s->r - t) - halfplane(s->uy, -s->ux, side, -s->r - t);
+        return band_cover(s, q, t);
     }
     if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
     else if (pr >= s->len) { qx = s->bx; qy = s->by; }
     else { qx = s->ax + pr * s->ux; qy = s->ay + pr * s->uy; }
-    double dx = x - qx, dy = y - qy, d = len2(dx, dy), D = d - s->r;
+    double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
+    /* squared distances settle most squares without the root */
+    if (d2 < 1e300 && (d2 >= ro * ro || (ri > 0 && d2 <= ri * ri))) return d2 >= ro * ro ? 0 : 1;
+    double d = len2(dx, dy), D = d - s->r;
     if (D >= e) return 0;
     if (D <= -e) return 1;
     if (!(d > 0)) return 1; /* centre on the centreline, so D = -r > -e: a tiny road; rare */
-    return halfplane(dx / d, dy / d, side, -D);
+    return halfplane(dx / d, dy / d, q->side, -D);
+}
+
+/* Classifies the capsule against the pixel centred (x, y) of size q:
+ * 2 = deep (d <= r - e), 0 = clear (d >= r + e), 1 = near. Squared
+ * distances: no root for most. For a near capsule, *slab = 1 when the pixel
+ * lies in the segment's slab (then *u = t, the offset from the line), else
+ * (*u, *v) = the pixel centre minus the nearest centreline point; near_value
+ * turns these into capsule_cover's value. */
+static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, int *slab, double *u, double *v)
+{
+    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, e = q->e, hp = q->hs * s->l1, qx, qy;
+    if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+        double t = wx * s->uy - wy * s->ux, at = fabs(t);
+        if (at - s->r >= e) return 0;
+        if (at + e <= s->r) return 2;
+        *slab = 1;
+        *u = t;
+        return 1;
+    }
+    if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
+    else if (pr >= s->len) { qx = s->bx; qy = s->by; }
+    else { qx = s->ax + pr * s->ux; qy = s->ay + pr * s->uy; }
+    double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
+    if (d2 < 1e300) {
+        if (d2 >= ro * ro) return 0;
+        if (ri > 0 && d2 <= ri * ri) return 2;
+    } else {
+        double D = hypot(dx, dy) - s->r;
+        if (D >= e) return 0;
+        if (D <= -e) return 2;
+    }
+    *slab = 0;
+    *u = dx;
+    *v = dy;
+    return 1;
+}
+
+/* capsule_cover's value for a near capsule from seg_eval's results (the
+ * exact band in the slab, else the linearised distance); *D = d - r. */
+static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, double v, double *D)
+{
+    if (slab) {
+        *D = fabs(u) - s->r;
+        return band_cover(s, q, u);
+    }
+    double d = len2(u, v), Dd = d - s->r;
+    *D = Dd;
+    if (Dd >= q->e) return 0;  /* rounding at the threshold */
+    if (Dd <= -q->e) return 1;
+    return d > 0 ? halfplane(u / d, v / d, q->side, -Dd) : 1; /* d = 0: a tiny road; rare */
 }
 
 /* A pixel near only two consecutive segments of one road with a gentle
@@ -496,97 +669,133 @@ static double capsule_cover(const rf_seg *s, double x, double y, double side, do
  * nearly collinear lines joined by a short arc. On the inner side the road
  * is the union of the two straight edges (max of their exact covers); on
  * the outer side the edge is the tangent at the nearest boundary point. The
- * error is second order in the turn angle (docs/roadfield.md). Returns 0
- * when the case does not apply. */
-static int joint_cover(const rs__roadfield *f, uint32_t ia, uint32_t ib, double cx, double cy, double pix, double e,
-                       double *v)
+ * error is second order in the turn angle (docs/roadfield.md). joint_ok:
+ * does this case apply to a pixel near exactly ia and ib (near_cover
+ * then takes the max, or the cover of the smaller d - r)? */
+static int joint_ok(const rs__roadfield *f, uint32_t ia, uint32_t ib, double e)
 {
     const rf_seg *a = &f->seg[ia < ib ? ia : ib], *b = &f->seg[ia < ib ? ib : ia];
     if (a->road != b->road || b->seg != a->seg + 1 || !(a->len > 0) || !(b->len > 0)) return 0;
-    if (a->ux * b->ux + a->uy * b->uy < JOINT_COS || a->r < 2 * e || b->r < 2 * e) return 0;
-    double ca = capsule_cover(a, cx, cy, pix, e), cb = capsule_cover(b, cx, cy, pix, e);
-    double side = (cx - a->bx) * a->uy - (cy - a->by) * a->ux, turn = b->ux * a->uy - b->uy * a->ux;
-    if (side * turn > 0) *v = ca > cb ? ca : cb;
-    else *v = seg_dist(a, cx, cy) - a->r <= seg_dist(b, cx, cy) - b->r ? ca : cb;
-    return 1;
+    return !(a->ux * b->ux + a->uy * b->uy < JOINT_COS || a->r < 2 * e || b->r < 2 * e);
 }
 
+/* The near capsules of a pixel with seg_eval's results. */
 typedef struct rf_near {
     uint32_t id[NEAR_MAX];
+    double u[NEAR_MAX], v[NEAR_MAX];
+    int slab[NEAR_MAX];
     int n, many;
 } rf_near;
 
-/* One capsule against the pixel centred (cx, cy) with half diagonal e:
- * 2 = the centre is deep inside (d <= r - e, coverage 1), 1 = near (the
- * boundary may cross the pixel: d < r + e), 0 = clear. Squared distances:
- * no square root for the far and deep pixels. */
-static int seg_class(const rf_seg *s, double cx, double cy, double e)
-{
-    double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy;
-    if (!(pr > 0)) {
-    } else if (pr >= s->len) {
-        wx = cx - s->bx;
-        wy = cy - s->by;
-    } else {
-        wx -= pr * s->ux;
-        wy -= pr * s->uy;
-    }
-    double d2 = wx * wx + wy * wy, ri = s->r - e, ro = s->r + e;
-    if (d2 < 1e300) {
-        if (ri > 0 && d2 <= ri * ri) return 2;
-        return d2 < ro * ro;
-    }
-    double D = hypot(wx, wy) - s->r;
-    if (D <= -e) return 2;
-    return D < e;
-}
-
-/* Adds a near capsule (each once). */
-static void near_add(rf_near *nr, uint32_t id)
+/* Evaluates capsule id against the pixel and adds it to nr when near
+ * (each once). Returns 1 when the pixel is deep inside it. */
+static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx, double cy, const rf_px *q)
 {
     for (int m = 0; m < nr->n; m++)
-        if (nr->id[m] == id) return;
-    if (nr->n < NEAR_MAX) nr->id[nr->n++] = id;
-    else nr->many = 1;
+        if (nr->id[m] == id) return 0;
+    int n = nr->n < NEAR_MAX ? nr->n : NEAR_MAX - 1; /* past NEAR_MAX: scratch slot */
+    int c = seg_eval(&f->seg[id], cx, cy, q, &nr->slab[n], &nr->u[n], &nr->v[n]);
+    if (c == 2) return 1;
+    if (c) {
+        if (nr->n < NEAR_MAX) nr->id[nr->n++] = id;
+        else nr->many = 1;
+    }
+    return 0;
 }
+
+static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
+                        const rf_px *qs);
 
 /* Coverage of the pixel from its near capsules `nr` (none deep); `cr`: the
  * cells whose lists hold every candidate (used when nr->many). */
 static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
-                         double pix, double e)
+                         const rf_px *q, const rf_px *qs)
 {
     if (nr->n == 0) return 0;
-    if (nr->n == 1) {
-        /* one boundary: exact if straight within the pixel */
-        const rf_seg *s = &f->seg[nr->id[0]];
-        double pr = (cx - s->ax) * s->ux + (cy - s->ay) * s->uy, hp = 0.5 * pix * (fabs(s->ux) + fabs(s->uy));
-        if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) return capsule_cover(s, cx, cy, pix, e);
+    /* one boundary: exact if straight within the pixel */
+    if (nr->n == 1 && !nr->many && nr->slab[0]) {
+        double D;
+        return near_value(&f->seg[nr->id[0]], q, 1, nr->u[0], 0, &D);
     }
-    if (nr->n == 2 && !nr->many) {
-        double v;
-        if (joint_cover(f, nr->id[0], nr->id[1], cx, cy, pix, e, &v)) return v;
+    if (nr->n == 2 && !nr->many && joint_ok(f, nr->id[0], nr->id[1], q->e)) {
+        int ia = nr->id[0] < nr->id[1] ? 0 : 1, ib = 1 - ia;
+        const rf_seg *a = &f->seg[nr->id[ia]], *b = &f->seg[nr->id[ib]];
+        double Da, Db, ca = near_value(a, q, nr->slab[ia], nr->u[ia], nr->v[ia], &Da),
+                       cb = near_value(b, q, nr->slab[ib], nr->u[ib], nr->v[ib], &Db);
+        double side = (cx - a->bx) * a->uy - (cy - a->by) * a->ux, turn = b->ux * a->uy - b->uy * a->ux;
+        if (side * turn > 0) return ca > cb ? ca : cb;
+        return Da <= Db ? ca : cb;
     }
-    /* Corners, arcs, crossings: sub-squares, each covered by its best capsule. */
-    double ps = pix / SUBDIV, es = ps * HALF_SQRT2, acc = 0;
+    return sub_cover(f, nr, cr, cx, cy, qs);
+}
+
+/* capsule_cover for a segment of positive length, from the square centre's
+ * projection pr on the segment (from a) and offset t from its line: the
+ * nearest centreline point and the distance follow from (pr, t) alone. */
+static double cover_local(const rf_seg *s, const rf_px *q, double pr, double t)
+{
+    double e = q->e, hp = q->hs * s->l1;
+    if (pr - hp >= 0 && pr + hp <= s->len) {
+        double at = fabs(t);
+        if (at - s->r >= e) return 0;
+        if (at + e <= s->r) return 1;
+        return band_cover(s, q, t);
+    }
+    double dp = pr > 0 ? (pr >= s->len ? pr - s->len : 0) : pr, d2 = dp * dp + t * t, ro = s->r + e, ri = s->r - e;
+    if (d2 < 1e300 && (d2 >= ro * ro || (ri > 0 && d2 <= ri * ri))) return d2 >= ro * ro ? 0 : 1;
+    double d = len2(dp, t), D = d - s->r;
+    if (D >= e) return 0;
+    if (D <= -e) return 1;
+    if (!(d > 0)) return 1; /* centre on the centreline, so D = -r > -e: a tiny road; rare */
+    double id = 1 / d;
+    return halfplane((dp * s->ux + t * s->uy) * id, (dp * s->uy - t * s->ux) * id, q->side, -D);
+}
+
+/* Corners, arcs, crossings: sub-squares (size qs), each covered by its best
+ * capsule among the near ones `nr` (or every candidate of the cells `cr`
+ * when nr->many). */
+static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
+                        const rf_px *qs)
+{
+    double ps = qs->side, acc = 0;
+    if (!nr->many) {
+        /* per capsule: (pr, t) at the pixel centre and their steps per sub-square */
+        double P[NEAR_MAX], T[NEAR_MAX], Px[NEAR_MAX], Py[NEAR_MAX], Tx[NEAR_MAX], Ty[NEAR_MAX];
+        for (int m = 0; m < nr->n; m++) {
+            const rf_seg *s = &f->seg[nr->id[m]];
+            double wx = cx - s->ax, wy = cy - s->ay;
+            P[m] = wx * s->ux + wy * s->uy;
+            T[m] = wx * s->uy - wy * s->ux;
+            Px[m] = ps * s->ux;
+            Py[m] = ps * s->uy;
+            Tx[m] = ps * s->uy;
+            Ty[m] = -ps * s->ux;
+        }
+        for (int sy = 0; sy < SUBDIV; sy++)
+            for (int sx = 0; sx < SUBDIV; sx++) {
+                double ox = (double)sx - 0.5 * (SUBDIV - 1), oy = (double)sy - 0.5 * (SUBDIV - 1), best = 0;
+                for (int m = 0; m < nr->n && best < 1; m++) {
+                    const rf_seg *s = &f->seg[nr->id[m]];
+                    double v = s->len > 0 ? cover_local(s, qs, P[m] + ox * Px[m] + oy * Py[m], T[m] + ox * Tx[m] + oy * Ty[m])
+                                          : capsule_cover(s, cx + ox * ps, cy + oy * ps, qs);
+                    if (v > best) best = v;
+                }
+                acc += best;
+            }
+        return acc / (SUBDIV * SUBDIV);
+    }
     for (int sy = 0; sy < SUBDIV; sy++)
         for (int sx = 0; sx < SUBDIV; sx++) {
             double x = cx + ((double)sx - 0.5 * (SUBDIV - 1)) * ps, y = cy + ((double)sy - 0.5 * (SUBDIV - 1)) * ps;
             double best = 0;
-            if (!nr->many) {
-                for (int m = 0; m < nr->n && best < 1; m++) {
-                    double v = capsule_cover(&f->seg[nr->id[m]], x, y, ps, es);
-                    if (v > best) best = v;
-                }
-            } else {
-                for (uint32_t j = cr->j0; j <= cr->j1; j++)
-                    for (uint32_t i = cr->i0; i <= cr->i1; i++) {
-                        size_t cell = (size_t)j * f->gw + i;
-                        for (uint32_t k = f->start[cell]; k < f->start[cell + 1] && best < 1; k++) {
-                            double v = capsule_cover(&f->seg[f->ids[k]], x, y, ps, es);
-                            if (v > best) best = v;
-                        }
+            for (uint32_t j = cr->j0; j <= cr->j1; j++)
+                for (uint32_t i = cr->i0; i <= cr->i1; i++) {
+                    size_t cell = (size_t)j * f->gw + i;
+                    for (uint32_t k = f->start[cell]; k < f->start[cell + 1] && best < 1; k++) {
+                        double v = capsule_cover(&f->seg[f->ids[k]], x, y, qs);
+                        if (v > best) best = v;
                     }
-            }
+                }
             acc += best;
         }
     return acc / (SUBDIV * SUBDIV);
@@ -594,21 +803,18 @@ static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cel
 
 /* Coverage of pixel centred (cx, cy) of side pix by the union of the
  * capsules listed in the cells `cr`. */
-static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx, double cy, double pix)
+static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx, double cy, const rf_px *q,
+                          const rf_px *qs)
 {
-    double e = pix * HALF_SQRT2;
     rf_near nr;
     nr.n = nr.many = 0;
     for (uint32_t j = cr->j0; j <= cr->j1; j++)
         for (uint32_t i = cr->i0; i <= cr->i1; i++) {
             size_t cell = (size_t)j * f->gw + i;
-            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
-                int c = seg_class(&f->seg[f->ids[k]], cx, cy, e);
-                if (c == 2) return 1;
-                if (c) near_add(&nr, f->ids[k]);
-            }
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++)
+                if (near_eval(f, &nr, f->ids[k], cx, cy, q)) return 1;
         }
-    return near_cover(f, &nr, cr, cx, cy, pix, e);
+    return near_cover(f, &nr, cr, cx, cy, q, qs);
 }
 
 #define RF_MIN(a, b) ((a) < (b) ? (a) : (b))
@@ -636,14 +842,14 @@ static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, doubl
     if (s->len > 0) {
         /* u = x - ax: p = u ux + dy uy in [0, len], t = u uy - dy ux in [-rho, rho] */
         double pl = -HUGE_VAL, ph = HUGE_VAL, t0 = dy * s->ux, p0 = dy * s->uy;
-        if (s->ux != 0) {
-            double u1 = -p0 / s->ux, u2 = (s->len - p0) / s->ux;
+        if (s->iux != 0) {
+            double u1 = -p0 * s->iux, u2 = (s->len - p0) * s->iux;
             pl = RF_MIN(u1, u2);
             ph = RF_MAX(u1, u2);
         } else if (p0 < 0 || p0 > s->len) pl = HUGE_VAL;
         if (pl <= ph) {
-            if (s->uy != 0) {
-                double iy = 1 / s->uy, u1 = (t0 - ro) * iy, u2 = (t0 + ro) * iy;
+            if (s->iuy != 0) {
+                double iy = s->iuy, u1 = (t0 - ro) * iy, u2 = (t0 + ro) * iy;
                 double ul = RF_MAX(pl, RF_MIN(u1, u2)), uh = RF_MIN(ph, RF_MAX(u1, u2));
                 if (ul <= uh) { ol = RF_MIN(ol, s->ax + ul); oh = RF_MAX(oh, s->ax + uh); }
                 u1 = (t0 - ri) * iy;
@@ -667,16 +873,22 @@ static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, doubl
 static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0, uint32_t k1, uint32_t *kl,
                        uint32_t *kh)
 {
-    double xl = ceil(lo * ipix - a), xh = floor(hi * ipix - a);
-    if (!(xl <= (double)k1 && xh >= (double)k0 && xl <= xh)) return 0;
-    *kl = xl <= (double)k0 ? k0 : (uint32_t)xl;
-    *kh = xh >= (double)k1 ? k1 : (uint32_t)xh;
+    /* ceil and floor by truncation: the values are clamped into [k0, k1] first */
+    double vl = lo * ipix - a, vh = hi * ipix - a;
+    if (!(vl <= (double)k1 && vh >= (double)k0 && vl <= vh)) return 0;
+    uint32_t il = k0, ih = k1;
+    if (vl > (double)k0) { il = (uint32_t)vl; il += (double)il < vl; }
+    if (vh < (double)k1) ih = (uint32_t)vh;
+    if (il > ih) return 0;
+    *kl = il;
+    *kh = ih;
     return 1;
 }
 
-/* Candidates kept per pixel by the row spans; more falls back to the cell scan. */
+/* Candidates kept per pixel by the row spans (a power of 2); more falls
+ * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024 };
+enum { CHUNK = 1024, ACT_MAX = 1024 };
 
 typedef struct rf_rowbuf {
     uint8_t deep[CHUNK], cnt[CHUNK];
@@ -684,7 +896,12 @@ typedef struct rf_rowbuf {
     /* runs of pixels with the same cell column: run m is pixels
      * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
     uint32_t rc[CHUNK], rk[CHUNK + 1], nrun;
-    uint32_t todo[CHUNK]; /* runs needing per-pixel work in the current row */
+    /* per grid row (cached while consecutive pixel rows share it): runs
+     * needing per-pixel work, full runs, their pixel range [k0, k1], and the
+     * row-list entries whose box meets that range in x (nact = UINT32_MAX:
+     * more than ACT_MAX, check them all) */
+    uint32_t crow, ntodo, nfull, k0, k1, nact;
+    uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX];
 } rf_rowbuf;
 
 /* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
@@ -696,52 +913,81 @@ typedef struct rf_rowbuf {
  * tol is far above the rounding of the spans, so this equals the scan of
  * the pixel's cell list (docs/roadfield.md): a pixel's value never depends
  * on the block. */
-static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t row, double cy, double pix,
-                      double *o)
+static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t row, double cy, const rf_px *q,
+                      const rf_px *qs, double *o)
 {
-    double e = pix * HALF_SQRT2;
-    size_t base = (size_t)row * f->gw;
-    uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0;
-    memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
-    for (uint32_t m = 0; m < rb->nrun; m++) {
-        uint32_t kb = rb->rk[m], ke = rb->rk[m + 1];
-        size_t cell = base + rb->rc[m];
-        if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
-        if (f->full[cell])
-            for (uint32_t k = kb; k < ke; k++) o[k] = 1;
-        else {
-            rb->todo[ntodo++] = m;
-            if (kb < k0) k0 = kb;
-            k1 = ke - 1;
+    double pix = q->side, e = q->e;
+    if (rb->crow != row) {
+        size_t base = (size_t)row * f->gw;
+        uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0, nfull = 0;
+        for (uint32_t m = 0; m < rb->nrun; m++) {
+            size_t cell = base + rb->rc[m];
+            if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
+            if (f->full[cell]) rb->fullr[nfull++] = m;
+            else {
+                rb->todo[ntodo++] = m;
+                if (rb->rk[m] < k0) k0 = rb->rk[m];
+                k1 = rb->rk[m + 1] - 1;
+            }
+        }
+        rb->crow = row;
+        rb->ntodo = ntodo;
+        rb->nfull = nfull;
+        rb->k0 = k0;
+        rb->k1 = k1;
+        rb->nact = UINT32_MAX;
+        if (ntodo && f->rspan[row] && f->rstart[row + 1] - f->rstart[row] <= ACT_MAX) {
+            double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix;
+            uint32_t n = 0;
+            for (uint32_t m = f->rstart[row]; m < f->rstart[row + 1]; m++) {
+                const float *bx = f->rbox + 4 * (size_t)m;
+                if (!(xhi < bx[0] || xlo > bx[1])) rb->act[n++] = m;
+            }
+            rb->nact = n;
         }
     }
+    uint32_t k0 = rb->k0, k1 = rb->k1, ntodo = rb->ntodo;
+    memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
+    for (uint32_t t = 0; t < rb->nfull; t++)
+        for (uint32_t k = rb->rk[rb->fullr[t]]; k < rb->rk[rb->fullr[t] + 1]; k++) o[k] = 1;
     if (!ntodo) return;
     if (!f->rspan[row]) {
         for (uint32_t t = 0; t < ntodo; t++) {
             uint32_t m = rb->todo[t];
             rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
-            for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) o[k] = pixel_cover(f, &cr, (a + (double)k) * pix, cy, pix);
+            for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) o[k] = pixel_cover(f, &cr, (a + (double)k) * pix, cy, q, qs);
         }
         return;
     }
     memset(rb->deep + k0, 0, k1 - k0 + 1);
     memset(rb->cnt + k0, 0, k1 - k0 + 1);
     double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
-    for (uint32_t m = f->rstart[row]; m < f->rstart[row + 1]; m++) {
+    uint32_t nm = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row];
+    for (uint32_t j = 0; j < nm; j++) {
+        uint32_t m = rb->nact != UINT32_MAX ? rb->act[j] : f->rstart[row] + j;
+        /* the box (grown by margin >= e) first: no segment load for most */
+        const float *bx = f->rbox + 4 * (size_t)m;
+        if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
         uint32_t id = f->rids[m];
         const rf_seg *s = &f->seg[id];
         double ro = s->r + e + s->tol, ri = s->r - e - s->tol, olo, ohi, ilo, ihi;
         uint32_t kl, kh;
-        if (cy < s->ymin - ro || cy > s->ymax + ro || xhi < s->xmin - ro || xlo > s->xmax + ro) continue;
         int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
         if (!(got & 1) || !span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) continue;
+        /* deep pixels need no candidate: paint the near span minus the deep one */
+        uint32_t il, ih, p0 = kh + 1, p1 = kl; /* p0 <= p1: the pixels [p0, p1] are skipped */
+        if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
+            memset(rb->deep + il, 1, ih - il + 1);
+            p0 = il;
+            p1 = ih;
+        }
         for (uint32_t k = kl; k <= kh; k++) {
+            if (k == p0) { k = p1; continue; }
+            /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
             uint8_t c = rb->cnt[k];
-            if (c < SPAN_CAND) rb->cand[k][c] = id;
+            rb->cand[k][c & (SPAN_CAND - 1)] = id;
             rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
         }
-        if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &kl, &kh))
-            memset(rb->deep + kl, 1, kh - kl + 1);
     }
     for (uint32_t t = 0; t < ntodo; t++) {
         uint32_t m = rb->todo[t];
@@ -751,16 +997,23 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             if (c == 0) continue; /* already 0 */
             double cx = (a + (double)k) * pix;
             rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
-            if (c > SPAN_CAND) { o[k] = pixel_cover(f, &cr, cx, cy, pix); continue; }
+            if (c > SPAN_CAND) { o[k] = pixel_cover(f, &cr, cx, cy, q, qs); continue; }
+            /* the candidates are distinct segments: no duplicate check */
             rf_near nr;
-            nr.n = nr.many = 0;
-            int deep = 0;
-            for (uint8_t j = 0; j < c && !deep; j++) {
-                int cl = seg_class(&f->seg[rb->cand[k][j]], cx, cy, e);
-                if (cl == 2) deep = 1;
-                else if (cl) near_add(&nr, rb->cand[k][j]);
+            int n = 0, deep = 0;
+            for (uint8_t j = 0; j < c; j++) {
+                uint32_t id = rb->cand[k][j];
+                int cl = seg_eval(&f->seg[id], cx, cy, q, &nr.slab[n], &nr.u[n], &nr.v[n]);
+                if (cl == 2) { deep = 1; break; }
+                if (cl) nr.id[n++] = id;
             }
-            o[k] = deep ? 1 : near_cover(f, &nr, &cr, cx, cy, pix, e);
+            if (deep) o[k] = 1;
+            else if (n == 1 && nr.slab[0]) o[k] = band_cover(&f->seg[nr.id[0]], q, nr.u[0]); /* one straight edge */
+            else if (n) {
+                nr.n = n;
+                nr.many = 0;
+                o[k] = near_cover(f, &nr, &cr, cx, cy, q, qs);
+            }
         }
     }
 }
@@ -773,22 +1026,51 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
         for (uint32_t y = 0; y < h; y++) memset(out + (size_t)y * stride, 0, w * sizeof *out);
         return;
     }
+    rf_px q, qs; /* the pixel and its sub-squares */
+    px_set(&q, pix);
+    px_set(&qs, pix / SUBDIV);
     /* One cell's list suffices when half the pixel diagonal is within the
      * lists' margin; then empty cells are 0 and full cells 1 at once. */
     if (pix <= f->pixel) {
         rf_rowbuf rb;
+        double ipix = 1 / pix;
         for (uint32_t x0 = 0; x0 < w; x0 += CHUNK) {
             uint32_t n = w - x0 < CHUNK ? w - x0 : CHUNK;
             /* centre of pixel k of the chunk: (a + k) pix */
             double a = (double)px0 + (double)x0 + 0.5;
             rb.nrun = 0;
-            for (uint32_t k = 0; k < n; k++) {
-                int64_t c = cell_of(f, ((double)px0 + (double)(x0 + k) + 0.5) * pix, f->gw);
-                uint32_t cc = c < 0 ? UINT32_MAX : (uint32_t)c;
-                if (k == 0 || cc != rb.rc[rb.nrun - 1]) {
+            rb.crow = UINT32_MAX;
+            /* cell_of of every pixel centre, as runs: it is monotone in k
+             * inside the grid, so a run's end is estimated from the cell's
+             * right edge and then checked with cell_of itself (exact) */
+            uint64_t p0 = (uint64_t)px0 + x0;
+            if (f->colpix && pix == f->pixel && p0 + n <= f->colpix[f->gw]) {
+                /* the field's table: the same cells, no per-pixel cell_of */
+                int64_t c = cell_of(f, (a + 0.0) * pix, f->gw);
+                for (uint32_t k = 0; k < n; c++) {
+                    uint64_t e1 = f->colpix[c + 1];
+                    uint32_t kn = e1 - p0 >= n ? n : (uint32_t)(e1 - p0);
+                    if (kn > k) {
+                        rb.rc[rb.nrun] = (uint32_t)c;
+                        rb.rk[rb.nrun++] = k;
+                        k = kn;
+                    }
+                }
+            } else
+            for (uint32_t k = 0; k < n;) {
+                int64_t c = cell_of(f, (a + (double)k) * pix, f->gw);
+                uint32_t cc = c < 0 ? UINT32_MAX : (uint32_t)c, kn = k + 1;
+                if (c >= 0) {
+                    double est = ceil((double)c * f->c * ipix - a); /* first centre at or past the right edge */
+                    kn = est >= (double)n ? n : est <= (double)(k + 1) ? k + 1 : (uint32_t)est;
+                    while (kn > k + 1 && cell_of(f, (a + (double)(kn - 1)) * pix, f->gw) != c) kn--;
+                    while (kn < n && cell_of(f, (a + (double)kn) * pix, f->gw) == c) kn++;
+                }
+                if (rb.nrun == 0 || cc != rb.rc[rb.nrun - 1]) {
                     rb.rc[rb.nrun] = cc;
                     rb.rk[rb.nrun++] = k;
                 }
+                k = kn;
             }
             rb.rk[rb.nrun] = n;
             for (uint32_t y = 0; y < h; y++) {
@@ -796,7 +1078,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
                 double *o = out + (size_t)y * stride + x0;
                 int64_t row = cell_of(f, cy, f->gh);
                 if (row < 0) memset(o, 0, n * sizeof *o);
-                else cover_row(f, &rb, a, (uint32_t)row, cy, pix, o);
+                else cover_row(f, &rb, a, (uint32_t)row, cy, &q, &qs, o);
             }
         }
         return;
@@ -806,7 +1088,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
         for (uint32_t k = 0; k < w; k++) {
             double cx = ((double)px0 + (double)k + 0.5) * pix;
             rf_cells cr;
-            o[k] = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr) ? pixel_cover(f, &cr, cx, cy, pix) : 0;
+            o[k] = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr) ? pixel_cover(f, &cr, cx, cy, &q, &qs) : 0;
         }
     }
 }
