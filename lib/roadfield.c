@@ -349,6 +349,42 @@ static void build_colpix(rs_ctx *ctx, rs__roadfield *f)
     f->colpix = cp;
 }
 
+/* A segment with an end far from the map (1e300 m away, or just 1e7 m for
+ * a map of 1 m cells) would have the coverage work with |p - a| huge and
+ * lose every digit that matters: such a segment is cut to the disc around
+ * the map that its capsule can reach. The cut points are built from the
+ * disc's centre, so they keep full precision however far A and B are (as
+ * lib/roadgrid.c does). *along is how far the new A lies along the segment
+ * from the old one (for the arc length). Returns 0 when nothing is left.
+ * Nearer segments are left exactly as they are. */
+static int clip_far(double *ax, double *ay, double *bx, double *by, double w, double h, double pad, double *along)
+{
+    *along = 0;
+    /* Within a million map sizes the digits lost are below 1e-9 of a pixel:
+     * such segments are kept as given (and the nearest-road ties stay those
+     * of the exact geometry). */
+    double far = 1e6 * (w + h + 2 * pad);
+    if (fmin(*ax, *bx) >= -far && fmax(*ax, *bx) <= w + far && fmin(*ay, *by) >= -far && fmax(*ay, *by) <= h + far)
+        return 1;
+    double dxh = 0.5 * *bx - 0.5 * *ax, dyh = 0.5 * *by - 0.5 * *ay, lh = hypot(dxh, dyh);
+    if (!(lh > 0) || !isfinite(lh)) return fabs(*ax - 0.5 * w) <= 0.5 * w + pad && fabs(*ay - 0.5 * h) <= 0.5 * h + pad;
+    double ux = dxh / lh, uy = dyh / lh, cx = 0.5 * w, cy = 0.5 * h;
+    double rad = 0.5 * hypot(w, h) + pad, ex = cx - *ax, ey = cy - *ay;
+    double dist = -uy * ex + ux * ey; /* signed distance of the centre from the line */
+    if (!(fabs(dist) <= rad)) return 0;
+    double px = cx + uy * dist, py = cy - ux * dist; /* foot of the perpendicular */
+    double sc = ex * ux + ey * uy, t0 = -sc, t1 = 2 * lh - sc;
+    if (t0 < -rad) t0 = -rad;
+    if (t1 > rad) t1 = rad;
+    if (!(t0 <= t1)) return 0;
+    *along = sc + t0;
+    *ax = px + t0 * ux;
+    *ay = py + t0 * uy;
+    *bx = px + t1 * ux;
+    *by = py + t1 * uy;
+    return 1;
+}
+
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out)
 {
@@ -417,10 +453,21 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                 by = rs__local_coord(xy[2 * k + 3], p->origin_y, per_unit);
             }
             rf_seg sg;
-            seg_set(&sg, ax, ay, bx, by, 0.5 * w, s, (uint32_t)ri, (uint32_t)k);
-            s += sg.len;
+            double cax = ax, cay = ay, cbx = bx, cby = by, along = 0;
+            /* the reach of this capsule beyond the map, with room to spare */
+            double pad = 2 * (fmin(0.5 * w, 1e15) + f->reach) + c;
+            int keep = clip_far(&cax, &cay, &cbx, &cby, p->width_m, p->height_m, pad, &along);
+            if (along == 0 && cax == ax && cay == ay && cbx == bx && cby == by) {
+                seg_set(&sg, ax, ay, bx, by, 0.5 * w, s, (uint32_t)ri, (uint32_t)k);
+                s += sg.len;
+            } else {
+                double sfull = 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
+                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, s + along, (uint32_t)ri, (uint32_t)k);
+                s += sfull;
+            }
             ax = bx;
             ay = by;
+            if (!keep) continue;
             int64_t v = seg_cells(&b, &sg, 0, 0);
             if (v < 0) { res = RS_ERR_LIMIT; goto fail; }
             if (v == 0) continue;

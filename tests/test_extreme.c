@@ -204,6 +204,7 @@ static void test_extreme_dems(void)
         for (int mode = 0; mode < 2; mode++) {
             rs_splat_options o;
             memset(&o, 0, sizeof o);
+            o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
             o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
             o.texels = 4;
             ss_image r1, r2;
@@ -258,6 +259,7 @@ static void test_huge_dem(void)
     CHECK(sc_add_road(&s, 6, a, 2) == 0 && sc_add_road(&s, 12, b, 2) == 0);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = 1;
     /* 1x1 textures: no hillshade work, the test is about size and memory */
     static const uint8_t green[4] = { 90, 140, 70, 255 }, grey[4] = { 70, 70, 72, 255 };
@@ -352,6 +354,7 @@ static void test_stress(void)
         random_roads(&s, &r);
         rs_splat_options o;
         memset(&o, 0, sizeof o);
+        o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
         o.grid.buffer = sc_rng_u64(&r) % 2 ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         o.texels = 1 + (uint32_t)(sc_rng_u64(&r) % 8);
         double zs = sc_rng_u64(&r) % 2 ? 0.01 : 1;

@@ -167,6 +167,7 @@ static void test_grid(void)
     rs_roads *roads = wide_road(1001, 1e9);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     rs_road_grid *g = NULL;
     /* subnormal cell sizes: an error, no NaN -> int64 or division by zero */
     const double tiny[3] = { 1e-310, 5e-324, 1e-250 };
@@ -214,6 +215,7 @@ static void test_grid(void)
     const double xy[4] = { 0.1, 0.1, 0.9, 0.8 };
     rs_roads_add(ctx, roads, "a", 0.6, xy, 2);
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP;
     o.grid.buffer = RS_BUFFER_DILATE;
     o.grid.road_cell = 1e-4;
     o.texels = 1;

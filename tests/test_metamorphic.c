@@ -130,6 +130,7 @@ static void test_d4(void)
             for (int ti = 0; ti < 2; ti++) {
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
+                o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
                 o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = ti ? 3 : 4;
                 ss_image ref;
@@ -234,6 +235,7 @@ static void test_edits(void)
             for (int mode = 0; mode < 2; mode++) {
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
+                o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
                 o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = 4;
                 ss_image a, b;
@@ -282,6 +284,7 @@ static void test_height_scale_splat(void)
     for (int mode = 0; mode < 2; mode++) {
         rs_splat_options o;
         memset(&o, 0, sizeof o);
+        o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
         o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         ss_image ref;
         CHECK(ss_splat(ctx, &s, &o, 0, &ref) == RS_OK);
@@ -319,6 +322,7 @@ static void test_cell_scale(void)
             for (int mode = 0; mode < 2; mode++) {
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
+                o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
                 o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.texels = 4;
                 ss_image ref;

@@ -108,6 +108,7 @@ static void test_straight_roads(void)
                 rs_roads *roads = one_road(cx - 60 * cos(th), cy - 60 * sin(th), cx + 60 * cos(th), cy + 60 * sin(th), width);
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
+                o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
                 o.texels = 4;
                 o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
                 o.grid.road_cell = c;
@@ -144,6 +145,7 @@ static void test_determinism_and_sparsity(void)
     CHECK(rs_roads_create(ctx, &none) == RS_OK);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = 6;
     image a, b, c;
     CHECK(splat(ctx, dem, roads, &o, &a) == RS_OK);
@@ -195,6 +197,7 @@ static void test_road_leaving_map(void)
     rs_roads *roads = one_road(5, 10.3, 40, 10.3, 6);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = 4;
     image im;
     CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
@@ -219,6 +222,7 @@ static void test_scene_seams(void)
     for (int mode = 0; mode < 2; mode++) {
         rs_splat_options o;
         memset(&o, 0, sizeof o);
+        o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
         o.texels = 2;
         o.grid.road_cell = 0.5;
         o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
@@ -252,6 +256,7 @@ static void scene_vs_truth(const char *name, sc_scene *sc, unsigned T, double ma
         CHECK(rs_roads_add(ctx, roads, NULL, sc->roads[i].width, sc->roads[i].xy, sc->roads[i].n) == RS_OK);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = T;
     image im;
     CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
@@ -317,6 +322,7 @@ static void test_textures(void)
     rs_image ti = { 4, 4, solid }, ri = { 2, 1, stripes };
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = 4;
     o.surface.terrain_texture = &ti;
     o.surface.road_texture = &ri;
@@ -360,6 +366,7 @@ static void test_plane_shading(void)
     CHECK(rs_roads_create(ctx, &none) == RS_OK);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = 1;
     image im;
     CHECK(splat(ctx, dem, none, &o, &im) == RS_OK);
@@ -406,6 +413,7 @@ static void test_translation(void)
         for (int mode = 0; mode < 2; mode++) {
             rs_splat_options o;
             memset(&o, 0, sizeof o);
+            o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
             o.texels = 4;
             o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
             rs_dem_frame fr = { 0, 0, shifts[k][0], shifts[k][1] };
@@ -452,6 +460,7 @@ static void *worker(void *arg)
     if (!j->r) j->r = rs_roads_parse(c, j->text, strlen(j->text), &roads);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     if (!j->r) j->r = splat(c, dem, roads, &o, &j->im);
     rs_roads_free(c, roads);
     rs_dem_free(c, dem);
@@ -526,6 +535,7 @@ static void test_alloc_failures(void)
         image im = { 0, 0, NULL, NULL };
         rs_splat_options o;
         memset(&o, 0, sizeof o);
+        o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
         if (!r) r = splat(c, dem, roads, &o, &im);
         if (r == RS_OK) succeeded = 1;
         else if (r != RS_ERR_NOMEM) wrong_code++;
@@ -555,6 +565,7 @@ static void test_extreme_roads(void)
     for (int mode = 0; mode < 2; mode++) {
         rs_splat_options o;
         memset(&o, 0, sizeof o);
+        o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
         o.texels = 2;
         o.grid.buffer = mode ? RS_BUFFER_DILATE : RS_BUFFER_DISTANCE;
         image im;
@@ -566,6 +577,7 @@ static void test_extreme_roads(void)
     CHECK(rs_roads_add(ctx, roads, "wide", 1e300, wide, 2) == RS_OK);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
     o.texels = 2;
     image im;
     CHECK(splat(ctx, dem, roads, &o, &im) == RS_OK);
@@ -614,6 +626,7 @@ static void test_bad_options(void)
     rs_road_grid *g = NULL;
     CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_ERR_INVALID_ARG && g == NULL);
     memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP;
     o.grid.road_cell = 1e-9;
     CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_ERR_LIMIT && g == NULL);
     /* output limit */

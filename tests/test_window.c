@@ -104,8 +104,9 @@ static void settings(int i, rs_splat_options *o, fixture *f, const char **name)
 {
     memset(o, 0, sizeof *o);
     o->texels = 3;
+    o->coverage.edges = RS_EDGES_ALPHAMAP;
     switch (i) {
-    case 0: *name = "defaults, 3 texels"; break;
+    case 0: *name = "alpha-map defaults, 3 texels"; break;
     case 1: *name = "dilate, 5 texels"; o->texels = 5; o->grid.buffer = RS_BUFFER_DILATE; break;
     case 2: *name = "hard edge, road cell"; o->coverage.hard_edge = 1; o->grid.road_cell = 0.9; break;
     case 3: *name = "jitter seed 0, alpha-res 8";
@@ -113,7 +114,7 @@ static void settings(int i, rs_splat_options *o, fixture *f, const char **name)
     case 4: *name = "textures"; o->surface.terrain_texture = &f->tex[0]; o->surface.road_texture = &f->tex[1];
         o->surface.texture_scale = 3.7; break;
     case 5: *name = "1 texel"; o->texels = 1; break;
-    case 6: *name = "analytic edges"; o->coverage.edges = RS_EDGES_ANALYTIC; o->texels = 4; break;
+    case 6: *name = "defaults (analytic edges), 4 texels"; memset(o, 0, sizeof *o); o->texels = 4; break;
     default: *name = "analytic, textures, 7 texels"; o->coverage.edges = RS_EDGES_ANALYTIC; o->texels = 7;
         o->surface.terrain_texture = &f->tex[0]; break;
     }
@@ -246,6 +247,7 @@ static void test_arguments(void)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 2;
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* grid options only bind alpha-map grids */
     rs_splatter *s = (rs_splatter *)&o;
     CHECK(rs_splatter_create(ctx, f.dem, NULL, NULL, &o, &s) == RS_ERR_INVALID_ARG && s == NULL);
     rs_road_grid *g = NULL;

@@ -167,7 +167,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fr.origin_x = (int8_t)next(&rd) * 8.0;
     fr.origin_y = (int8_t)next(&rd) * 8.0;
     const uint8_t probe = next(&rd);
-    if (probe & 0x40) o.coverage.edges = RS_EDGES_ANALYTIC;
+    o.coverage.edges = probe & 0x40 ? RS_EDGES_ANALYTIC : RS_EDGES_ALPHAMAP;
     /* Invalid by construction: alpha_res 1, a transition wider than half the
      * alpha-map (defaults: 32 and 2), or a corrupted field (below). */
     int invalid = o.coverage.alpha_res == 1 ||
