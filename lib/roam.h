@@ -1,0 +1,216 @@
+/* Private: the ROAM terrain mesher, shared by lib/roam*.c (which file
+ * holds what: docs/roam.md, "Source files"). A Landscape of patches, each
+ * two bintree roots, with nodes from a fixed pool linked by 32-bit indices
+ * (the seed's five links). Design notes and the reasons behind the
+ * choices: docs/roam.md. */
+#ifndef RS_ROAM_H
+#define RS_ROAM_H
+#include "dem.h"
+
+#define NIL 0xFFFFFFFFu
+/* The finest levels are implicit: a split node at the "block level" (legs^2
+ * = 2^dq, dq = min(IMPL_DEPTH, 2 log2 P)) gets lc = IMPL and keeps in rc the
+ * state of its subtree of dq levels, by heap position inside the block (the
+ * block is position 1, the children of position p are 2p and 2p + 1;
+ * positions >= 2^dq are cell halves, never split): a split bit and a tested
+ * bit per position 2 .. 2^dq - 1, and QUEUED while a stack entry asks for
+ * its untested leaves. See docs/roam.md. */
+#define IMPL 0xFFFFFFFEu
+#define IMPL_DEPTH 4
+#if IMPL_DEPTH > 4
+#error "the split and tested bits of positions 2..15 fill rc (see TESTED_BIT)"
+#endif
+#define SPLIT_BIT(pos) (1u << ((pos) - 2u))
+#define TESTED_BIT(pos) (1u << ((pos) + 12u))   /* positions 2..15 -> bits 14..27 */
+#define QUEUED 0x80000000u
+#define TAG 0x80000000u           /* stack entry: a block with untested implicit leaves */
+
+typedef struct roam_node {
+    uint32_t lc, rc;                /* children (NIL for a leaf) */
+    uint32_t base, left, right;     /* neighbours across base / left leg / right leg */
+    uint32_t e;                     /* error slot: patch * epp + heap index (roots are
+                                       2 and 3); NIL for cell halves (patches of 1 cell) */
+    uint16_t ax, ay, bx, by;        /* apex and left base corner; the right corner
+                                       is apex + rot90(left - apex) */
+} roam_node;
+
+struct rs_roam {
+    uint32_t w, hgt, cw, ch;        /* samples and cells */
+    double cs, zs;
+    float zabs;                     /* largest |height| of the valid samples (DEM units) */
+    const float *z;                 /* heights in DEM units, nodata filled */
+    float *zown;                    /* owned copy when the DEM had nodata */
+    uint32_t plog, P, npx, npy;
+    uint32_t dq, ncut;              /* implicit levels below a block node; 2^dq */
+    unsigned char pwhere[1 << IMPL_DEPTH], ppos[2][1 << IMPL_DEPTH]; /* rs__roam_build_partner_table */
+    uint32_t below[1 << IMPL_DEPTH]; /* SPLIT_BITs of the positions under each position */
+    /* Corners (apex, left, right) and hypotenuse midpoint of every position
+     * down to the cell halves, in units of block leg / 2^(dq/2) along the
+     * block's legs: a sample's key is then an affine function of
+     * these (emit_block_on, lib/roam_extract.c). */
+    unsigned char pgeo[2 << IMPL_DEPTH][8];
+    uint32_t scan, scan_pos;        /* block whose implicit leaves rs__roam_refine() is testing
+                                       (NIL: none), and the position it splits */
+    int scan_dirty;                 /* a forced split gave it new leaves behind the scan */
+    size_t epp;                     /* error entries per patch (P^2) */
+    uint32_t elog;                  /* log2(epp) */
+    size_t nerr;                    /* entries of err */
+    float *err;                     /* per patch, by heap index; NaN = not computed yet */
+    float *pzmin, *pzmax;           /* per patch height range (DEM units) */
+    unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
+    roam_node *nodes, *base_copy;
+    uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
+                                       pushed at most once per pass as a leaf and once
+                                       tagged, for its implicit children) */
+    uint32_t base_count, cap, used; /* cap = base_count + pool */
+    uint32_t base_tris, tris;
+    int exhausted;
+    /* Extraction's vertex set: one bit per sample, rows padded to whole
+     * 64-bit words (wpr words per row); a summary bit per word that has a
+     * bit set; the set bits before each word (vertex numbering by rank). */
+    uint64_t *vbits, *vsum;
+    uint32_t *vrank;
+    uint32_t wpr;
+    size_t nwords, nsum;
+    uint32_t *smap;                 /* 2(w+h): skirt vertex of a border sample */
+    double threshold;
+    float *ucol, *vrow;             /* texture u of each column, v of each row */
+    double tol;                     /* view mode: tolerance carried between frames */
+    uint32_t frame_passes, culled;
+    uint64_t bytes;
+};
+
+/* ---- geometry helpers -------------------------------------------------- */
+
+static inline void node_corner(const roam_node *n, int *cx, int *cy)
+{
+    *cx = (int)n->ax - ((int)n->by - (int)n->ay);
+    *cy = (int)n->ay + ((int)n->bx - (int)n->ax);
+}
+
+/* A triangle by its corners: apex a, left b, right c = a + rot90(b - a);
+ * `on` = its patch lies wholly on the map (no edge tests needed). */
+typedef struct tri { int ax, ay, bx, by, cx, cy, on; } tri;
+
+static inline void node_tri(const rs_roam *L, const roam_node *n, tri *t)
+{
+    t->ax = n->ax; t->ay = n->ay; t->bx = n->bx; t->by = n->by;
+    node_corner(n, &t->cx, &t->cy);
+    t->on = n->e != NIL && L->pin[n->e >> L->elog];
+}
+
+/* Child k of t as split() makes it: k = 0 (apex m, left a, right b), k = 1
+ * (apex m, left c, right a), m the midpoint of the hypotenuse b-c. */
+static inline void child_tri(const tri *t, int k, tri *o)
+{
+    int mx = (t->bx + t->cx) / 2, my = (t->by + t->cy) / 2;
+    o->ax = mx; o->ay = my; o->on = t->on;
+    if (k == 0) { o->bx = t->ax; o->by = t->ay; o->cx = t->bx; o->cy = t->by; }
+    else { o->bx = t->cx; o->by = t->cy; o->cx = t->ax; o->cy = t->ay; }
+}
+
+static inline uint32_t pos_depth(uint32_t pos) /* pos >= 1 */
+{
+#if defined(__GNUC__)
+    return 31u - (uint32_t)__builtin_clz(pos);
+#else
+    uint32_t d = 0;
+    while (pos >> (d + 1)) d++;
+    return d;
+#endif
+}
+
+static inline int inside_xy(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)
+{
+    int mx = ax > bx ? ax : bx, my = ay > by ? ay : by;
+    if (cx > mx) mx = cx;
+    if (cy > my) my = cy;
+    return mx <= (int)L->cw && my <= (int)L->ch;
+}
+
+/* Where a node lies against the map: wholly off it, straddling its edge, or on it. */
+enum { NODE_ON = 0, NODE_OUTSIDE = 1, NODE_STRADDLES = 2 };
+
+static inline int tri_class(const rs_roam *L, const tri *t)
+{
+    if (t->on) return NODE_ON;
+    int minx = t->ax < t->bx ? t->ax : t->bx, miny = t->ay < t->by ? t->ay : t->by;
+    if (t->cx < minx) minx = t->cx;
+    if (t->cy < miny) miny = t->cy;
+    if (minx >= (int)L->cw || miny >= (int)L->ch) return NODE_OUTSIDE;
+    return inside_xy(L, t->ax, t->ay, t->bx, t->by, t->cx, t->cy) ? NODE_ON : NODE_STRADDLES;
+}
+
+static inline int tri_inside(const rs_roam *L, const tri *t)
+{
+    if (t->on) return 1;
+    return inside_xy(L, t->ax, t->ay, t->bx, t->by, t->cx, t->cy);
+}
+
+/* ---- error bounds (lib/roam_bounds.c) ---------------------------------- */
+
+/* The error terms of a legs-2-sqrt-2 triangle S = (a, b, c) and of its
+ * whole implicit subtree, from its nine samples read once: the children
+ * R0 = (m, a, b), R1 = (m, c, a) share S's leg-midpoint terms and the
+ * sample i halfway from a to m, and each grandchild's only term is one of
+ * its parent's (the plane through a triangle's hypotenuse ends gives its
+ * midpoint's error whatever the apex). */
+typedef struct s_terms {
+    int have;
+    tri S;
+    float s, r[2], q[2][2];
+} s_terms;
+
+/* The terms of o->S (o->have set). */
+void rs__roam_load_s_terms(const rs_roam *L, s_terms *o);
+/* Error bound of a triangle wholly on the map (DEM units). */
+float rs__roam_on_map_err(const rs_roam *L, const tri *t);
+/* Error bound of a triangle (DEM units): ERR_OUTSIDE (< 0) off the map,
+ * +inf when it straddles the map edge. */
+float rs__roam_compute_err(const rs_roam *L, const tri *t);
+/* Cache slot of an explicit node, of implicit position pos of block node n
+ * (NIL: not cached). */
+uint32_t rs__roam_err_slot(const rs_roam *L, const roam_node *n);
+uint32_t rs__roam_imp_slot(const rs_roam *L, const roam_node *n, uint32_t pos);
+/* Error bound of triangle t with cache slot `slot`, computed on first use;
+ * of an explicit node (0 for cell halves). */
+float rs__roam_slot_err(rs_roam *L, uint32_t slot, const tri *t);
+float rs__roam_node_err(rs_roam *L, const roam_node *n, const tri *t);
+
+/* ---- bintree, implicit levels, refinement (lib/roam_tree.c) ------------ */
+
+typedef struct view_params {
+    double eye[3], f[3], planes[5][4]; /* inward unit normals + offset */
+    int nplanes;
+    double k;    /* pixels per metre at distance 1 */
+    double tol;  /* pixels */
+    double zmid_scale;
+} view_params;
+
+typedef struct refine_params {
+    double max_error;          /* metres (error mode) */
+    int border_only;           /* split only triangles straddling the map edge */
+    const view_params *view;   /* NULL: error mode */
+    const unsigned char *vis;  /* view mode: per patch, 0 = culled (only border splits) */
+    uint32_t stop_above;       /* abandon when tris exceeds this (0: never) */
+} refine_params;
+
+static inline int sphere_visible(const view_params *v, const double c[3], double r)
+{
+    for (int p = 0; p < v->nplanes; p++) {
+        const double *pl = v->planes[p];
+        if (pl[0] * c[0] + pl[1] * c[1] + pl[2] * c[2] + pl[3] < -r) return 0;
+    }
+    return 1;
+}
+
+/* The implicit levels' tables of L (pwhere, ppos, pgeo, below) from dq. */
+void rs__roam_build_partner_table(rs_roam *L);
+/* Back to the base mesh. */
+void rs__roam_reset_mesh(rs_roam *L);
+/* Refine the current mesh by rp's rule until no leaf wants a split or the
+ * pool runs out (L->exhausted); 1 when abandoned for rp->stop_above. */
+int rs__roam_refine(rs_roam *L, const refine_params *rp);
+/* Largest error bound over the leaves on the map (metres). */
+double rs__roam_leaves_max_bound(const rs_roam *L);
+#endif
