@@ -1079,6 +1079,18 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             o[k] = pixel_cover(f, &cr, cx, cy, q, qs);
             continue;
         }
+        if (c == 1) {
+            /* one candidate with the pixel in its slab (most edge pixels):
+             * seg_eval's slab branch and band_cover, same arithmetic */
+            const rf_seg *s = &f->seg[rb->cand[k][0]];
+            double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
+            if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+                double ts = wx * s->uy - wy * s->ux, at = fabs(ts);
+                if (at - s->r >= e) continue; /* clear: already 0 */
+                o[k] = at + e <= s->r ? 1 : band_cover(s, q, ts);
+                continue;
+            }
+        }
         /* the candidates are distinct segments: no duplicate check */
         rf_near nr;
         int n = 0, deep = 0;
