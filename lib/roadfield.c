@@ -753,6 +753,60 @@ static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx
 static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
                         const rf_px *qs);
 
+/* Crossings of straight roads (two or more near capsules, each with the
+ * pixel in its slab and only its nearer edge crossing the pixel): within
+ * the pixel every road is a half-plane, so the uncovered part is the
+ * intersection of their complements, a convex polygon: the square clipped
+ * by each edge line (Sutherland-Hodgman), area by the shoelace formula.
+ * Exact. Returns -1 when a capsule does not qualify. */
+static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const rf_px *q)
+{
+    double hs = q->hs, px[2][NEAR_MAX + 4], py[2][NEAR_MAX + 4];
+    int ord[NEAR_MAX];
+    for (int m = 0; m < nr->n; m++) {
+        const rf_seg *s = &f->seg[nr->id[m]];
+        if (!nr->slab[m] || fabs(nr->u[m]) + s->r < hs * (s->ga + s->gb)) return -1;
+        /* clip in ascending segment order: the rounding never depends on
+         * the order the candidates were found in */
+        int k = m;
+        for (; k > 0 && nr->id[ord[k - 1]] > nr->id[m]; k--) ord[k] = ord[k - 1];
+        ord[k] = m;
+    }
+    /* the square, counter-clockwise, centred at the pixel centre */
+    int np = 4, cur = 0;
+    px[0][0] = -hs; py[0][0] = -hs;
+    px[0][1] = hs;  py[0][1] = -hs;
+    px[0][2] = hs;  py[0][2] = hs;
+    px[0][3] = -hs; py[0][3] = hs;
+    for (int j = 0; j < nr->n && np > 0; j++) {
+        int m = ord[j];
+        const rf_seg *s = &f->seg[nr->id[m]];
+        /* outside the road: g = sg (t(X, Y)) - r > 0, t = u + X uy - Y ux */
+        double sg = nr->u[m] >= 0 ? 1 : -1, gx = sg * s->uy, gy = -sg * s->ux, g0 = sg * nr->u[m] - s->r;
+        const double *ix = px[cur], *iy = py[cur];
+        double *ox = px[1 - cur], *oy = py[1 - cur];
+        int no = 0;
+        double gp = g0 + gx * ix[np - 1] + gy * iy[np - 1];
+        for (int k = 0, kp = np - 1; k < np; kp = k, k++) {
+            double gk = g0 + gx * ix[k] + gy * iy[k];
+            if ((gk > 0) != (gp > 0)) {
+                double w = gp / (gp - gk); /* gp and gk differ in sign: no division by 0 */
+                ox[no] = ix[kp] + w * (ix[k] - ix[kp]);
+                oy[no++] = iy[kp] + w * (iy[k] - iy[kp]);
+            }
+            if (gk > 0) { ox[no] = ix[k]; oy[no++] = iy[k]; }
+            gp = gk;
+        }
+        np = no;
+        cur = 1 - cur;
+    }
+    double area = 0;
+    for (int k = 0, kp = np - 1; k < np; kp = k, k++)
+        area += px[cur][kp] * py[cur][k] - px[cur][k] * py[cur][kp];
+    double v = 1 - 0.5 * area * (q->iside * q->iside);
+    return v < 0 ? 0 : v > 1 ? 1 : v;
+}
+
 /* Coverage of the pixel from its near capsules `nr` (none deep); `cr`: the
  * cells whose lists hold every candidate (used when nr->many). */
 static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
@@ -772,6 +826,10 @@ static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cel
         double side = (cx - a->bx) * a->uy - (cy - a->by) * a->ux, turn = b->ux * a->uy - b->uy * a->ux;
         if (side * turn > 0) return ca > cb ? ca : cb;
         return Da <= Db ? ca : cb;
+    }
+    if (!nr->many) {
+        double v = halfplanes_cover(f, nr, q);
+        if (v >= 0) return v;
     }
     return sub_cover(f, nr, cr, cx, cy, qs);
 }
@@ -938,7 +996,7 @@ static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0,
 enum { CHUNK = 1024, ACT_MAX = 1024 };
 
 typedef struct rf_rowbuf {
-    uint8_t deep[CHUNK], cnt[CHUNK];
+    uint8_t cnt[CHUNK];
     uint32_t cand[CHUNK][SPAN_CAND];
     /* runs of pixels with the same cell column: run m is pixels
      * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
@@ -949,7 +1007,23 @@ typedef struct rf_rowbuf {
      * more than ACT_MAX, check them all) */
     uint32_t crow, ntodo, nfull, k0, k1, nact;
     uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX];
+    /* pixels of the current row with at least one candidate (cnt > 0), in
+     * the order first painted; cnt is zero again after each row */
+    uint32_t npl;
+    uint16_t pl[CHUNK];
 } rf_rowbuf;
+
+/* Cell column of pixel k of the chunk (the run holding it; k is in a run). */
+static uint32_t run_col(const rf_rowbuf *rb, uint32_t k)
+{
+    uint32_t lo = 0, hi = rb->nrun; /* rk[lo] <= k < rk[hi] */
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (rb->rk[mid] <= k) lo = mid;
+        else hi = mid;
+    }
+    return rb->rc[lo];
+}
 
 /* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
  * full cells 1. For the rest, every segment of the grid row gives two
@@ -1006,10 +1080,8 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         }
         return;
     }
-    memset(rb->deep + k0, 0, k1 - k0 + 1);
-    memset(rb->cnt + k0, 0, k1 - k0 + 1);
     double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
-    uint32_t nm = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row];
+    uint32_t nm = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row], npl = 0;
     for (uint32_t j = 0; j < nm; j++) {
         uint32_t m = rb->nact != UINT32_MAX ? rb->act[j] : f->rstart[row] + j;
         /* the box (grown by margin >= e) first: no segment load for most */
@@ -1021,10 +1093,12 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         uint32_t kl, kh;
         int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
         if (!(got & 1) || !span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) continue;
-        /* deep pixels need no candidate: paint the near span minus the deep one */
+        /* deep pixels are 1 at once (a deep pixel's cell lists the segment,
+         * so it is in a todo or full run) and need no candidate: paint the
+         * near span minus the deep one */
         uint32_t il, ih, p0 = kh + 1, p1 = kl; /* p0 <= p1: the pixels [p0, p1] are skipped */
         if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
-            memset(rb->deep + il, 1, ih - il + 1);
+            for (uint32_t k = il; k <= ih; k++) o[k] = 1;
             p0 = il;
             p1 = ih;
         }
@@ -1032,35 +1106,53 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             if (k == p0) { k = p1; continue; }
             /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
             uint8_t c = rb->cnt[k];
+            rb->pl[npl] = (uint16_t)k; /* kept when first painted (no branch) */
+            npl += c == 0;
             rb->cand[k][c & (SPAN_CAND - 1)] = id;
             rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
         }
     }
-    for (uint32_t t = 0; t < ntodo; t++) {
-        uint32_t m = rb->todo[t];
-        for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) {
-            if (rb->deep[k]) { o[k] = 1; continue; }
-            uint8_t c = rb->cnt[k];
-            if (c == 0) continue; /* already 0 */
-            double cx = (a + (double)k) * pix;
-            rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
-            if (c > SPAN_CAND) { o[k] = pixel_cover(f, &cr, cx, cy, q, qs); continue; }
-            /* the candidates are distinct segments: no duplicate check */
-            rf_near nr;
-            int n = 0, deep = 0;
-            for (uint8_t j = 0; j < c; j++) {
-                uint32_t id = rb->cand[k][j];
-                int cl = seg_eval(&f->seg[id], cx, cy, q, &nr.slab[n], &nr.u[n], &nr.v[n]);
-                if (cl == 2) { deep = 1; break; }
-                if (cl) nr.id[n++] = id;
+    /* the painted pixels: 1 (deep in some capsule, or a full cell), 0 (an
+     * empty cell: no candidate is near) or classified from the candidates */
+    for (uint32_t t = 0; t < npl; t++) {
+        uint32_t k = rb->pl[t];
+        uint8_t c = rb->cnt[k];
+        rb->cnt[k] = 0;
+        if (o[k] == 1) continue;
+        double cx = (a + (double)k) * pix;
+        if (c > SPAN_CAND) {
+            uint32_t col = run_col(rb, k);
+            rf_cells cr = { col, col, row, row };
+            o[k] = pixel_cover(f, &cr, cx, cy, q, qs);
+            continue;
+        }
+        if (c == 1) {
+            /* one candidate with the pixel in its slab (most edge pixels):
+             * seg_eval's slab branch and band_cover, same arithmetic */
+            const rf_seg *s = &f->seg[rb->cand[k][0]];
+            double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
+            if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+                double ts = wx * s->uy - wy * s->ux, at = fabs(ts);
+                if (at - s->r >= e) continue; /* clear: already 0 */
+                o[k] = at + e <= s->r ? 1 : band_cover(s, q, ts);
+                continue;
             }
-            if (deep) o[k] = 1;
-            else if (n == 1 && nr.slab[0]) o[k] = band_cover(&f->seg[nr.id[0]], q, nr.u[0]); /* one straight edge */
-            else if (n) {
-                nr.n = n;
-                nr.many = 0;
-                o[k] = near_cover(f, &nr, &cr, cx, cy, q, qs);
-            }
+        }
+        /* the candidates are distinct segments: no duplicate check */
+        rf_near nr;
+        int n = 0, deep = 0;
+        for (uint8_t j = 0; j < c; j++) {
+            uint32_t id = rb->cand[k][j];
+            int cl = seg_eval(&f->seg[id], cx, cy, q, &nr.slab[n], &nr.u[n], &nr.v[n]);
+            if (cl == 2) { deep = 1; break; }
+            if (cl) nr.id[n++] = id;
+        }
+        if (deep) o[k] = 1;
+        else if (n == 1 && nr.slab[0]) o[k] = band_cover(&f->seg[nr.id[0]], q, nr.u[0]); /* one straight edge */
+        else if (n) {
+            nr.n = n;
+            nr.many = 0;
+            o[k] = near_cover(f, &nr, NULL, cx, cy, q, qs); /* the cells are read only when nr.many */
         }
     }
 }
@@ -1087,6 +1179,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
             double a = (double)px0 + (double)x0 + 0.5;
             rb.nrun = 0;
             rb.crow = UINT32_MAX;
+            memset(rb.cnt, 0, sizeof rb.cnt);
             /* cell_of of every pixel centre, as runs: it is monotone in k
              * inside the grid, so a run's end is estimated from the cell's
              * right edge and then checked with cell_of itself (exact) */

@@ -17,7 +17,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Timing on a shared machine: every time is the minimum (fastest) of its
+ * runs, the least disturbed one (medians swing 2x with load). The auto-cell
+ * coverage and Cairo alternate in ROUNDS rounds (RUNS coverage runs, then
+ * CAIRO_FILLS Cairo fills per round), so both see the same load. */
 #define RUNS 7
+#define ROUNDS 4
+#define CAIRO_FILLS 5
 
 /* Scene roads as "W n x0 y0 x1 y1 ..." lines for the Cairo script. */
 static int write_plain(const char *path, const sc_scene *s)
@@ -33,14 +39,15 @@ static int write_plain(const char *path, const sc_scene *s)
     return fclose(f) ? -1 : 0;
 }
 
-/* Median ms of Cairo's fill (the script prints it), or < 0 when unavailable. */
+/* Fastest ms of CAIRO_FILLS Cairo fills (the script prints it), or < 0 when unavailable. */
 static double cairo_ms(const char *roads_path)
 {
     /* the first python3 on PATH may lack cairo (pyenv): try the system one too */
     const char *py[2] = { "python3", "/usr/bin/python3" };
     for (int i = 0; i < 2; i++) {
         char cmd[2048];
-        snprintf(cmd, sizeof cmd, "%s tests/bench/roadfield_cairo.py '%s' 4 2>/dev/null", py[i], roads_path);
+        snprintf(cmd, sizeof cmd, "%s tests/bench/roadfield_cairo.py '%s' 4 - %d 2>/dev/null", py[i], roads_path,
+                 CAIRO_FILLS);
         FILE *p = popen(cmd, "r");
         if (!p) continue;
         double ms = -1;
@@ -48,6 +55,14 @@ static double cairo_ms(const char *roads_path)
         if (pclose(p) == 0 && ms >= 0) return ms;
     }
     return -1;
+}
+
+static double tm_min(const double *v, int n)
+{
+    double m = v[0];
+    for (int i = 1; i < n; i++)
+        if (v[i] < m) m = v[i];
+    return m;
 }
 
 typedef struct run_result {
@@ -87,9 +102,9 @@ static int measure(rs_ctx *ctx, const rs_roads *roads, const sc_scene *sc, unsig
         }
         if (i + 1 < RUNS) rs__roadfield_free(ctx, f);
     }
-    rr->build_ms = tm_median(tb, RUNS);
-    rr->cover_ms = tm_median(tc, RUNS);
-    rr->rows_ms = tm_median(tr, RUNS);
+    rr->build_ms = tm_min(tb, RUNS);
+    rr->cover_ms = tm_min(tc, RUNS);
+    rr->rows_ms = tm_min(tr, RUNS);
     rr->bytes = rs__roadfield_bytes(f);
     rs__roadfield_get_stats(f, &rr->st);
     rs__roadfield_free(ctx, f);
@@ -125,10 +140,21 @@ int main(int argc, char **argv)
     double L = gt_outline_length(&sc, T);
     double cells[] = { 0, 2.5, 10 };
     run_result rr[3];
-    for (int i = 0; i < 3; i++)
+    for (int i = 1; i < 3; i++)
         if (measure(ctx, roads, &sc, T, cells[i], G, L, cov, rowcov, R, &rr[i])) return 1;
     snprintf(path, sizeof path, "%s/roadfield_roads.txt", dir);
-    double cairo = write_plain(path, &sc) ? -1 : cairo_ms(path);
+    int have_roads = write_plain(path, &sc) == 0;
+    double cairo = -1;
+    for (int round = 0; round < ROUNDS; round++) {
+        run_result r0;
+        if (measure(ctx, roads, &sc, T, cells[0], G, L, cov, rowcov, R, &r0)) return 1;
+        if (round == 0) rr[0] = r0;
+        rr[0].build_ms = fmin(rr[0].build_ms, r0.build_ms);
+        rr[0].cover_ms = fmin(rr[0].cover_ms, r0.cover_ms);
+        rr[0].rows_ms = fmin(rr[0].rows_ms, r0.rows_ms);
+        double c = have_roads ? cairo_ms(path) : -1;
+        if (c >= 0 && (cairo < 0 || c < cairo)) cairo = c;
+    }
 
     snprintf(path, sizeof path, "%s/roadfield.md", dir);
     FILE *md = fopen(path, "w");
@@ -138,8 +164,10 @@ int main(int argc, char **argv)
                 "%g m. Coverage = area fraction of each pixel inside the union of the roads "
                 "(lib/roadfield.c, one thread); error against the exact ground truth (tests/groundtruth.c). "
                 "Coverage is timed as one whole-image call and as the splatter calls it: pieces of one "
-                "DEM row (%u pixel rows x the full width; same doubles). Times are medians of %d runs.\n\n",
-            sc.nroads, sc.w, sc.h, sc.cell_size, T, w, h, sc.cell_size / T, T, RUNS);
+                "DEM row (%u pixel rows x the full width; same doubles). Times are minima (the fastest run) of %d runs "
+                "(auto cell: %d rounds of %d, alternating with Cairo), not medians: on a shared machine the "
+                "fastest run is the least disturbed one, medians swing 2x with load.\n\n",
+            sc.nroads, sc.w, sc.h, sc.cell_size, T, w, h, sc.cell_size / T, T, RUNS, ROUNDS, RUNS);
     fprintf(md, "| index cell (m) | cells | entries | full cells | max list | bytes | build ms | coverage ms | "
                 "row pieces ms | edge error (m) | max edge disp (m) | max pixel error |\n");
     fprintf(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
@@ -151,8 +179,9 @@ int main(int argc, char **argv)
     if (cairo >= 0)
         fprintf(md, "\nCairo (python3-cairo, tests/bench/roadfield_cairo.py) filling the same roads stroked with "
                     "round caps and joins into an A8 surface of the same size, antialias default: %.2f ms "
-                    "(median, fill only). Coverage (auto cell) / Cairo: whole image %.2f, row pieces %.2f.\n",
-                cairo, rr[0].cover_ms / cairo, rr[0].rows_ms / cairo);
+                    "(fastest of %d fills, fill only, %d fills after each round of coverage runs). "
+                    "Coverage (auto cell) / Cairo, fastest against fastest: whole image %.2f, row pieces %.2f.\n",
+                cairo, ROUNDS * CAIRO_FILLS, CAIRO_FILLS, rr[0].cover_ms / cairo, rr[0].rows_ms / cairo);
     else
         fprintf(md, "\nCairo comparison skipped (python3-cairo not available).\n");
     fclose(md);
