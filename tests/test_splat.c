@@ -1,5 +1,6 @@
 /* End to end through the library: road grid + splat on synthetic scenes. */
 #include "harness.h"
+#include "fail_alloc.h"
 #include "roadsplat.h"
 #include "mask.h"
 #include "seams.h"
@@ -485,35 +486,6 @@ static void test_threads(void)
 }
 
 /* --- allocation failures ----------------------------------------------------------- */
-typedef struct fail_alloc {
-    long countdown; /* fail when it reaches 0; <0 never */
-    long live;
-} fail_alloc;
-
-static void *fa_malloc(void *u, size_t n)
-{
-    fail_alloc *f = u;
-    if (f->countdown == 0) return NULL;
-    if (f->countdown > 0) f->countdown--;
-    void *p = malloc(n);
-    if (p) f->live++;
-    return p;
-}
-static void *fa_realloc(void *u, void *p, size_t n)
-{
-    fail_alloc *f = u;
-    if (f->countdown == 0) return NULL;
-    if (f->countdown > 0) f->countdown--;
-    void *q = realloc(p, n);
-    if (q && !p) f->live++;
-    return q;
-}
-static void fa_free(void *u, void *p)
-{
-    fail_alloc *f = u;
-    f->live--;
-    free(p);
-}
 
 static void test_alloc_failures(void)
 {
@@ -524,7 +496,7 @@ static void test_alloc_failures(void)
     long n;
     for (n = 0; n < 10000 && !succeeded; n++) {
         fail_alloc fa = { -1, 0 };
-        rs_allocator al = { fa_malloc, fa_realloc, fa_free, &fa };
+        rs_allocator al = fail_alloc_hook(&fa);
         rs_ctx *c = NULL;
         if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong_code++; break; }
         fa.countdown = n;

@@ -2,6 +2,7 @@
  * any number of threads, gives the bytes of the whole image; argument and
  * grid checks; allocation failure. */
 #include "harness.h"
+#include "fail_alloc.h"
 #include "roadsplat.h"
 #include "scenes.h"
 #include "scene_splat.h"
@@ -311,33 +312,6 @@ static void test_arguments(void)
 }
 
 /* Every allocation of create + window failing in turn: RS_ERR_NOMEM, no leak. */
-typedef struct fail_alloc {
-    long countdown, live;
-} fail_alloc;
-static void *fa_malloc(void *u, size_t n)
-{
-    fail_alloc *f = u;
-    if (f->countdown == 0) return NULL;
-    if (f->countdown > 0) f->countdown--;
-    void *p = malloc(n);
-    if (p) f->live++;
-    return p;
-}
-static void *fa_realloc(void *u, void *p, size_t n)
-{
-    fail_alloc *f = u;
-    if (f->countdown == 0) return NULL;
-    if (f->countdown > 0) f->countdown--;
-    void *q = realloc(p, n);
-    if (q && !p) f->live++;
-    return q;
-}
-static void fa_free(void *u, void *p)
-{
-    fail_alloc *f = u;
-    f->live--;
-    free(p);
-}
 
 static void test_alloc_failures(void)
 {
@@ -348,7 +322,7 @@ static void test_alloc_failures(void)
         long n;
         for (n = 0; n < 5000 && !succeeded; n++) {
             fail_alloc fa = { -1, 0 };
-            rs_allocator al = { fa_malloc, fa_realloc, fa_free, &fa };
+            rs_allocator al = fail_alloc_hook(&fa);
             rs_ctx *c = NULL;
             if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong++; break; }
             fa.countdown = n;
