@@ -572,7 +572,8 @@ static rs_result choose_k(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
     }
     double target = 0.5 * cs / texels;
     if (wmin / 4 < target) target = wmin / 4;
-    double kf = ceil(cs / target - 1e-9);
+    /* a subnormal road width makes target 0: as narrow as it gets, k = 64 */
+    double kf = target > 0 ? ceil(cs / target - 1e-9) : 64;
     k = kf < 1 ? 1 : (kf > 64 ? 64 : (uint64_t)kf);
     while (k > 1 && (!rs__mul_u64(cw * k, ch * k, &cells) || cells > ctx->limits.max_road_cells)) k--;
     *k_out = (uint32_t)k;
