@@ -174,8 +174,9 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     b.tf = rs__alloc_array(ctx, nax * 2, sizeof *b.tf);
     b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
     b.ti = rs__alloc_array(ctx, nax * 2, sizeof *b.ti);
-    b.tc = rs__alloc_array(ctx, npx * 3, sizeof *b.tc);
-    b.sc = rs__alloc_array(ctx, npx * 3, sizeof *b.sc);
+    /* zeroed: the composite reads both colours of every pixel, selecting one */
+    b.tc = rs__calloc(ctx, npx * 3, sizeof *b.tc);
+    b.sc = rs__calloc(ctx, npx * 3, sizeof *b.sc);
     b.trow0 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow0);
     b.trow1 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow1);
     if (!b.cov || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {

@@ -52,9 +52,9 @@ typedef struct rs__piece {
     uint32_t x0, w, y0, rows, crow;
     double *cov;      /* coverage: road weight R in [0,1] */
     uint16_t *q;      /* coverage: R quantised to 0..65535 (the weight output) */
-    float *tc, *sc;   /* surface: terrain and road colour, 3 per pixel */
+    float *tc, *sc;   /* surface: terrain and road colour; each row planar: w R, w G, w B */
     rs__terrain_cache *tcache; /* surface: the window's terrain colour rows */
-    double *hx;       /* surface: 6 per column (two horizontal interpolants) */
+    double *hx;       /* surface: two horizontal interpolants, 6 planes of w */
     uint32_t *ti;     /* surface: texture indices, 2 per column or row */
     double *tf;       /* surface: texture weights (1 - f, f), 2 per column or row */
     uint64_t road_pixels;

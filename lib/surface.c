@@ -5,6 +5,10 @@
 #include "dem.h"
 
 #include <math.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 static uint32_t hash2(uint32_t x, uint32_t y)
 {
@@ -122,6 +126,15 @@ static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i,
     }
 }
 
+#if defined(__SSE2__)
+static int load32(const uint8_t *p)
+{
+    uint32_t v;
+    memcpy(&v, p, 4);
+    return (int)v;
+}
+#endif
+
 /* Texture coordinate tables along one axis: for n pixels starting at pixel
  * p0, the texel pair (i0, i1) and the weights (1 - f, f) of the bilinear
  * sample of an image of `size` texels per repeat. */
@@ -162,15 +175,42 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
             const uint8_t *p00 = ra + 4 * (size_t)cx[2 * k], *p01 = ra + 4 * (size_t)cx[2 * k + 1];
             const uint8_t *p10 = rb + 4 * (size_t)cx[2 * k], *p11 = rb + 4 * (size_t)cx[2 * k + 1];
             const double bu = wx[2 * k], au = wx[2 * k + 1];
+#if defined(__SSE2__)
+            /* all four channels of a texel at once, the scalar arithmetic */
+            const __m128i z = _mm_setzero_si128();
+            __m128d v[2], vbu = _mm_set1_pd(bu), vau = _mm_set1_pd(au), vbv = _mm_set1_pd(bv), vav = _mm_set1_pd(av);
+            __m128i t00 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p00)), z), z);
+            __m128i t01 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p01)), z), z);
+            __m128i t10 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p10)), z), z);
+            __m128i t11 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p11)), z), z);
+            for (int h = 0; h < 2; h++) {
+                __m128d a = _mm_cvtepi32_pd(t00), b = _mm_cvtepi32_pd(t01), c = _mm_cvtepi32_pd(t10),
+                        d = _mm_cvtepi32_pd(t11);
+                v[h] = _mm_add_pd(_mm_mul_pd(_mm_add_pd(_mm_mul_pd(a, vbu), _mm_mul_pd(b, vau)), vbv),
+                                  _mm_mul_pd(_mm_add_pd(_mm_mul_pd(c, vbu), _mm_mul_pd(d, vau)), vav));
+                t00 = _mm_srli_si128(t00, 8);
+                t01 = _mm_srli_si128(t01, 8);
+                t10 = _mm_srli_si128(t10, 8);
+                t11 = _mm_srli_si128(t11, 8);
+            }
+            __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(v[0]), _mm_cvtpd_ps(v[1]));
+            float rgb[4];
+            _mm_storeu_ps(rgb, f);
+            out[k] = rgb[0];
+            out[(size_t)p->w + k] = rgb[1];
+            out[2 * (size_t)p->w + k] = rgb[2];
+#else
             for (int c = 0; c < 3; c++)
-                out[3 * k + c] = (float)((p00[c] * bu + p01[c] * au) * bv + (p10[c] * bu + p11[c] * au) * av);
+                out[c * (size_t)p->w + k] =
+                    (float)((p00[c] * bu + p01[c] * au) * bv + (p10[c] * bu + p11[c] * au) * av);
+#endif
         }
     }
 }
 
 /* Procedural asphalt: dark grey, fine grain per texel plus a soft mottle on
  * a 4-texel lattice; keyed to texel indices, so deterministic. */
-static void asphalt(uint32_t px, uint32_t py, float rgb[3])
+static void asphalt(uint32_t px, uint32_t py, float *rgb, size_t plane)
 {
     double grain = (double)(hash2(px, py) & 0xFFFF) / 65535.0 - 0.5;
     uint32_t lx = px >> 2, ly = py >> 2;
@@ -180,8 +220,8 @@ static void asphalt(uint32_t px, uint32_t py, float rgb[3])
     double mottle = (n00 * (1 - fx) + n01 * fx) * (1 - fy) + (n10 * (1 - fx) + n11 * fx) * fy - 0.5;
     double v = 70 + 18 * grain + 10 * mottle;
     rgb[0] = (float)v;
-    rgb[1] = (float)v;
-    rgb[2] = (float)(v + 3);
+    rgb[plane] = (float)v;
+    rgb[2 * plane] = (float)(v + 3);
 }
 
 void rs__surface(const rs_splatter *s, rs__piece *p)
@@ -200,21 +240,32 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         terrain_rows(s, p->tcache, p->crow, &r0, &r1);
         const uint32_t wc0 = p->tcache->c0;
         double *hx = p->hx;
+        const size_t w = p->w;
         for (uint32_t k = 0; k < p->w; k++) {
             uint32_t px = p->x0 + k, ccol = px / T;
             double fx = ((px - ccol * T) + 0.5) / T;
             const float *a = r0 + 3 * (size_t)(ccol - wc0), *c = r1 + 3 * (size_t)(ccol - wc0);
             for (int ch = 0; ch < 3; ch++) {
-                hx[6 * k + ch] = a[ch] * (1 - fx) + a[ch + 3] * fx;
-                hx[6 * k + 3 + ch] = c[ch] * (1 - fx) + c[ch + 3] * fx;
+                hx[ch * w + k] = a[ch] * (1 - fx) + a[ch + 3] * fx;
+                hx[(3 + ch) * w + k] = c[ch] * (1 - fx) + c[ch + 3] * fx;
             }
         }
         for (uint32_t r = 0; r < p->rows; r++) {
             uint32_t ty = p->y0 + r - p->crow * T;
             double fy = (ty + 0.5) / T, gy = 1 - fy;
-            float *tc = p->tc + (size_t)r * p->w * 3;
-            for (uint32_t k = 0; k < p->w; k++)
-                for (int ch = 0; ch < 3; ch++) tc[3 * k + ch] = (float)(hx[6 * k + ch] * gy + hx[6 * k + 3 + ch] * fy);
+            for (size_t ch = 0; ch < 3; ch++) {
+                const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
+                float *tc = p->tc + (size_t)r * w * 3 + ch * w;
+                size_t k = 0;
+#if defined(__SSE2__)
+                const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
+                for (; k + 2 <= w; k += 2) {
+                    __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + k), vg), _mm_mul_pd(_mm_loadu_pd(h1 + k), vf));
+                    _mm_storel_epi64((__m128i *)(void *)(tc + k), _mm_castps_si128(_mm_cvtpd_ps(v)));
+                }
+#endif
+                for (; k < w; k++) tc[k] = (float)(h0[k] * gy + h1[k] * fy);
+            }
         }
     }
     if (!need_road) return;
@@ -227,6 +278,6 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         const uint16_t *q = p->q + (size_t)r * p->w;
         float *sc = p->sc + (size_t)r * p->w * 3;
         for (uint32_t k = 0; k < p->w; k++)
-            if (q[k] > 0) asphalt(p->x0 + k, py, sc + 3 * k);
+            if (q[k] > 0) asphalt(p->x0 + k, py, sc + k, p->w);
     }
 }
