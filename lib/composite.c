@@ -4,7 +4,8 @@
  * T and S are planar per piece row (lib/splatter.h). With SSE2 four pixels
  * at a time without branches: the blend for every pixel, then the pure
  * colours selected by mask, the same double arithmetic and rounding as the
- * scalar loop (which does the rest of a row and all of it without SSE2). */
+ * scalar loop (which does the rest of a row and all of it without SSE2);
+ * four pure pixels in a row skip the blend. */
 #include "splatter.h"
 
 #include <string.h>
@@ -30,6 +31,23 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
         const __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(),
                       top = _mm_set1_pd(255.0), full = _mm_set1_pd(65535.0);
         for (; k + 4 <= w; k += 4) {
+            uint64_t q4;
+            memcpy(&q4, q + k, sizeof q4);
+            if (q4 == 0 || q4 == UINT64_MAX) {
+                /* four pure terrain or four pure road pixels: one colour */
+                const float *src = q4 ? sc : tc;
+                __m128i px = _mm_set1_epi32((int)0xFF000000u);
+                for (int ch = 0; ch < 3; ch++) {
+                    __m128 f = _mm_loadu_ps(src + ch * w + k);
+                    __m128d v0 = _mm_cvtps_pd(f), v1 = _mm_cvtps_pd(_mm_movehl_ps(f, f));
+                    v0 = _mm_min_pd(_mm_max_pd(_mm_add_pd(v0, half), zero), top);
+                    v1 = _mm_min_pd(_mm_max_pd(_mm_add_pd(v1, half), zero), top);
+                    __m128i c = _mm_unpacklo_epi64(_mm_cvttpd_epi32(v0), _mm_cvttpd_epi32(v1));
+                    px = _mm_or_si128(px, _mm_slli_epi32(c, 8 * ch));
+                }
+                _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), px);
+                continue;
+            }
             __m128d qv[2] = { _mm_set_pd(q[k + 1], q[k]), _mm_set_pd(q[k + 3], q[k + 2]) };
             __m128d rr[2], ir[2], m0[2], m1[2];
             for (int h = 0; h < 2; h++) {
