@@ -119,15 +119,19 @@ const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid 
 #define PIECE_PIXELS (1u << 18)
 
 typedef struct scratch {
-    double *cov;
+    double *cov, *hx, *tf;
     uint16_t *q;
+    uint32_t *ti;
     float *tc, *sc, *trow0, *trow1;
 } scratch;
 
 static void scratch_free(rs_ctx *ctx, scratch *b)
 {
     rs__free(ctx, b->cov);
+    rs__free(ctx, b->hx);
+    rs__free(ctx, b->tf);
     rs__free(ctx, b->q);
+    rs__free(ctx, b->ti);
     rs__free(ctx, b->tc);
     rs__free(ctx, b->sc);
     rs__free(ctx, b->trow0);
@@ -158,15 +162,24 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     uint32_t max_rows = PIECE_PIXELS / cols;
     if (max_rows > T) max_rows = T;
     if (max_rows > h) max_rows = h;
-    size_t npx = (size_t)cols * max_rows, ncol = (size_t)cols / T + 3;
+    /* terrain colour rows: the window's sample columns */
+    rs__terrain_cache tcache;
+    tcache.c0 = x0 / T;
+    tcache.ncol = (x0 + w - 1) / T + 2 - tcache.c0;
+    tcache.row_of[0] = tcache.row_of[1] = UINT32_MAX;
+    size_t npx = (size_t)cols * max_rows, ncol = tcache.ncol, nax = (size_t)cols + max_rows;
     scratch b;
     b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
+    b.hx = rs__alloc_array(ctx, (size_t)cols * 6, sizeof *b.hx);
+    b.tf = rs__alloc_array(ctx, nax * 2, sizeof *b.tf);
     b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
-    b.tc = rs__alloc_array(ctx, npx * 3, sizeof *b.tc);
-    b.sc = rs__alloc_array(ctx, npx * 3, sizeof *b.sc);
+    b.ti = rs__alloc_array(ctx, nax * 2, sizeof *b.ti);
+    /* zeroed: the composite reads both colours of every pixel, selecting one */
+    b.tc = rs__calloc(ctx, npx * 3, sizeof *b.tc);
+    b.sc = rs__calloc(ctx, npx * 3, sizeof *b.sc);
     b.trow0 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow0);
     b.trow1 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow1);
-    if (!b.cov || !b.q || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
+    if (!b.cov || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
         scratch_free(ctx, &b);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", npx);
     }
@@ -176,8 +189,12 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     p.q = b.q;
     p.tc = b.tc;
     p.sc = b.sc;
-    p.trow[0] = b.trow0;
-    p.trow[1] = b.trow1;
+    p.hx = b.hx;
+    p.tf = b.tf;
+    p.ti = b.ti;
+    tcache.rgb[0] = b.trow0;
+    tcache.rgb[1] = b.trow1;
+    p.tcache = &tcache;
     const int analytic = s->o.coverage.edges == RS_EDGES_ANALYTIC;
     for (uint32_t y = y0; y < y0 + h;) {
         p.crow = y / T;

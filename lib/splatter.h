@@ -36,15 +36,27 @@ struct rs_splatter {
     double texel_m;            /* cell_size / texels */
 };
 
+/* Terrain colours (3 floats per sample) of the window's sample columns
+ * [c0, c0 + ncol), for the two DEM sample rows last needed: computed once
+ * per sample row per rs_splat_window call, reused by every piece of the
+ * DEM-cell rows above and below it (lib/surface.c). */
+typedef struct rs__terrain_cache {
+    uint32_t c0, ncol;
+    uint32_t row_of[2]; /* DEM sample row held by rgb[i], UINT32_MAX: none */
+    float *rgb[2];
+} rs__terrain_cache;
+
 /* One piece of a window: columns [x0, x0+w), image rows [y0, y0+rows), all
  * inside DEM-cell row crow. Buffers are rows x w, row-major. */
 typedef struct rs__piece {
     uint32_t x0, w, y0, rows, crow;
     double *cov;      /* coverage: road weight R in [0,1] */
     uint16_t *q;      /* coverage: R quantised to 0..65535 (the weight output) */
-    float *tc, *sc;   /* surface: terrain and road colour, 3 per pixel */
-    float *trow[2];   /* surface: terrain colour of sample rows crow, crow+1, columns c0.. */
-    uint32_t c0;
+    float *tc, *sc;   /* surface: terrain and road colour; each row planar: w R, w G, w B */
+    rs__terrain_cache *tcache; /* surface: the window's terrain colour rows */
+    double *hx;       /* surface: two horizontal interpolants, 6 planes of w */
+    uint32_t *ti;     /* surface: texture indices, 2 per column or row */
+    double *tf;       /* surface: texture weights (1 - f, f), 2 per column or row */
     uint64_t road_pixels;
 } rs__piece;
 

@@ -5,6 +5,10 @@
 #include "dem.h"
 
 #include <math.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 static uint32_t hash2(uint32_t x, uint32_t y)
 {
@@ -29,58 +33,184 @@ static void hypsometric(double t, float rgb[3])
     for (int c = 0; c < 3; c++) rgb[c] = (float)(stops[i][c + 1] + f * (stops[i + 1][c + 1] - stops[i][c + 1]));
 }
 
-/* Terrain colour of DEM sample row i, columns [c0, c1]: tint times a
+/* Hillshade factor by the trigonometric formula (gdaldem's): slope and
+ * aspect angles, then the cosine of the angle to the light. */
+static double shade_trig(const rs_splatter *s, double dzdx, double dzdy)
+{
+    double slope = atan(sqrt(dzdx * dzdx + dzdy * dzdy));
+    double aspect = 0;
+    if (dzdx != 0) {
+        aspect = atan2(dzdy, -dzdx);
+        if (aspect < 0) aspect += 2 * RS__PI;
+    } else if (dzdy > 0) aspect = RS__PI / 2;
+    else if (dzdy < 0) aspect = 1.5 * RS__PI;
+    double hs = s->cos_zen * cos(slope) + s->sin_zen * sin(slope) * cos(s->sun_az - aspect);
+    if (!(hs > 0)) hs = 0;
+    return 0.3 + 0.7 * hs / s->cos_zen;
+}
+
+/* Terrain colour of one sample from its gradient: tint times the shade,
+ * clamped to 255, as float. */
+static void terrain_rgb(const float tint[3], double shade, float *out)
+{
+    for (int ch = 0; ch < 3; ch++) {
+        double v = tint[ch] * shade;
+        out[ch] = (float)(v > 255 ? 255 : v);
+    }
+}
+
+/* Terrain colour of DEM sample row i, columns [c0, c0 + n): tint times a
  * hillshade by Horn's gradient, light from azimuth 315, altitude 45
  * (gdaldem's defaults and formula), normalised so flat ground keeps its
- * tint. */
-static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t c1, float *rgb)
+ * tint.
+ *
+ * Without trigonometry: with g = |grad|, cos(atan g) = 1/sqrt(1+g^2),
+ * sin(atan g) = g/sqrt(1+g^2), and the aspect's unit vector is
+ * (-dzdx, dzdy)/g, so the shade is (cos_zen - sin_zen cos(az) dzdx +
+ * sin_zen sin(az) dzdy) / sqrt(1+g^2). It differs from the trigonometric
+ * value in the last bits only (relative 1e-14); where either float that a
+ * colour channel rounds to could depend on those bits (the value within
+ * 1e-12 of a float rounding boundary), the trigonometric formula decides,
+ * so the colours are the same floats as gdaldem's formula gives
+ * (tests/tools/splat_identity.sh). */
+static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t n, float *rgb)
 {
     const rs_dem *d = s->dem;
-    double zs = d->frame.z_scale;
-    for (uint32_t j = c0; j <= c1; j++) {
+    const double zs = d->frame.z_scale, cs8 = 8 * d->frame.cell_size;
+    const double lx = -s->sin_zen * cos(s->sun_az), ly = s->sin_zen * sin(s->sun_az), cz = s->cos_zen;
+    const uint32_t W = d->width, H = d->height;
+    const float *z = s->z;
+    for (uint32_t j = c0; j < c0 + n; j++) {
         double dzdx, dzdy;
-        rs__dem_horn(s->z, d->width, d->height, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
-        double slope = atan(sqrt(dzdx * dzdx + dzdy * dzdy));
-        double aspect = 0;
-        if (dzdx != 0) {
-            aspect = atan2(dzdy, -dzdx);
-            if (aspect < 0) aspect += 2 * RS__PI;
-        } else if (dzdy > 0) aspect = RS__PI / 2;
-        else if (dzdy < 0) aspect = 1.5 * RS__PI;
-        double hs = s->cos_zen * cos(slope) + s->sin_zen * sin(slope) * cos(s->sun_az - aspect);
-        if (!(hs > 0)) hs = 0;
-        double shade = 0.3 + 0.7 * hs / s->cos_zen;
-        double zc = s->z[(size_t)i * d->width + j] * zs;
+        if (i >= 1 && i + 1 < H && j >= 1 && j + 1 < W) {
+            /* rs__dem_horn inside the map: the same terms in the same order */
+            const float *up = z + (size_t)(i - 1) * W + j, *mid = up + W, *dn = mid + W;
+            double a = up[-1] * zs, b = up[0] * zs, c = up[1] * zs, dd = mid[-1] * zs, f = mid[1] * zs;
+            double g = dn[-1] * zs, h = dn[0] * zs, k = dn[1] * zs;
+            dzdx = ((c + 2 * f + k) - (a + 2 * dd + g)) / cs8;
+            dzdy = ((g + 2 * h + k) - (a + 2 * b + c)) / cs8;
+        } else rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
+        double zc = z[(size_t)i * W + j] * zs;
         double t = s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5;
         float tint[3];
         hypsometric(t, tint);
         float *out = rgb + 3 * (size_t)(j - c0);
+        double g2 = dzdx * dzdx + dzdy * dzdy;
+        double hs = (cz + lx * dzdx + ly * dzdy) / sqrt(1 + g2);
+        if (!(hs > 0)) hs = 0;
+        double shade = 0.3 + 0.7 * hs / cz;
+        int tie = !(g2 < 1e200);
         for (int ch = 0; ch < 3; ch++) {
             double v = tint[ch] * shade;
-            out[ch] = (float)(v > 255 ? 255 : v);
+            v = v > 255 ? 255 : v;
+            tie |= (float)(v * (1 - 1e-12)) != (float)(v * (1 + 1e-12));
+        }
+        terrain_rgb(tint, tie ? shade_trig(s, dzdx, dzdy) : shade, out);
+    }
+}
+
+/* The window's terrain colours of sample rows i and i + 1 (lib/splatter.h). */
+static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i, const float **r0, const float **r1)
+{
+    for (uint32_t k = 0; k < 2; k++) {
+        uint32_t want = i + k;
+        int slot = c->row_of[0] == want ? 0 : (c->row_of[1] == want ? 1 : -1);
+        if (slot < 0) {
+            /* the slot not holding the other row wanted */
+            slot = c->row_of[0] == i + 1 - k ? 1 : 0;
+            terrain_row(s, want, c->c0, c->ncol, c->rgb[slot]);
+            c->row_of[slot] = want;
+        }
+        if (k) *r1 = c->rgb[slot];
+        else *r0 = c->rgb[slot];
+    }
+}
+
+#if defined(__SSE2__)
+static int load32(const uint8_t *p)
+{
+    uint32_t v;
+    memcpy(&v, p, 4);
+    return (int)v;
+}
+#endif
+
+/* Texture coordinate tables along one axis: for n pixels starting at pixel
+ * p0, the texel pair (i0, i1) and the weights (1 - f, f) of the bilinear
+ * sample of an image of `size` texels per repeat. */
+static void texture_axis(uint32_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
+                         double *wt)
+{
+    const int64_t S = size;
+    for (uint32_t k = 0; k < n; k++) {
+        double u = (p0 + k + 0.5) * texel_m / scale;
+        u = (u - floor(u)) * S - 0.5;
+        double fu = floor(u), au = u - fu;
+        int64_t x0 = (int64_t)fu;
+        int64_t a = x0 >= 0 && x0 < S ? x0 : ((x0 % S) + S) % S;
+        idx[2 * k] = (uint32_t)a;
+        idx[2 * k + 1] = (uint32_t)(a + 1 == S ? 0 : a + 1);
+        wt[2 * k] = 1 - au;
+        wt[2 * k + 1] = au;
+    }
+}
+
+/* A tiled texture into dst over the piece's pixels with terrain (road = 0)
+ * or with road (road = 1): coordinates once per column and per row. */
+static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *img, int road, float *dst)
+{
+    uint32_t *cx = p->ti, *ry = p->ti + 2 * (size_t)p->w;
+    double *wx = p->tf, *wy = p->tf + 2 * (size_t)p->w;
+    double scale = s->o.surface.texture_scale;
+    texture_axis(p->x0, p->w, s->texel_m, scale, img->width, cx, wx);
+    texture_axis(p->y0, p->rows, s->texel_m, scale, img->height, ry, wy);
+    const size_t W4 = 4 * (size_t)img->width;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        const uint16_t *q = p->q + (size_t)r * p->w;
+        float *out = dst + (size_t)r * p->w * 3;
+        const uint8_t *ra = img->rgba + ry[2 * r] * W4, *rb = img->rgba + ry[2 * r + 1] * W4;
+        const double bv = wy[2 * r], av = wy[2 * r + 1];
+        for (uint32_t k = 0; k < p->w; k++) {
+            if (road ? q[k] == 0 : q[k] == 65535u) continue;
+            const uint8_t *p00 = ra + 4 * (size_t)cx[2 * k], *p01 = ra + 4 * (size_t)cx[2 * k + 1];
+            const uint8_t *p10 = rb + 4 * (size_t)cx[2 * k], *p11 = rb + 4 * (size_t)cx[2 * k + 1];
+            const double bu = wx[2 * k], au = wx[2 * k + 1];
+#if defined(__SSE2__)
+            /* all four channels of a texel at once, the scalar arithmetic */
+            const __m128i z = _mm_setzero_si128();
+            __m128d v[2], vbu = _mm_set1_pd(bu), vau = _mm_set1_pd(au), vbv = _mm_set1_pd(bv), vav = _mm_set1_pd(av);
+            __m128i t00 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p00)), z), z);
+            __m128i t01 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p01)), z), z);
+            __m128i t10 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p10)), z), z);
+            __m128i t11 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p11)), z), z);
+            for (int h = 0; h < 2; h++) {
+                __m128d a = _mm_cvtepi32_pd(t00), b = _mm_cvtepi32_pd(t01), c = _mm_cvtepi32_pd(t10),
+                        d = _mm_cvtepi32_pd(t11);
+                v[h] = _mm_add_pd(_mm_mul_pd(_mm_add_pd(_mm_mul_pd(a, vbu), _mm_mul_pd(b, vau)), vbv),
+                                  _mm_mul_pd(_mm_add_pd(_mm_mul_pd(c, vbu), _mm_mul_pd(d, vau)), vav));
+                t00 = _mm_srli_si128(t00, 8);
+                t01 = _mm_srli_si128(t01, 8);
+                t10 = _mm_srli_si128(t10, 8);
+                t11 = _mm_srli_si128(t11, 8);
+            }
+            __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(v[0]), _mm_cvtpd_ps(v[1]));
+            float rgb[4];
+            _mm_storeu_ps(rgb, f);
+            out[k] = rgb[0];
+            out[(size_t)p->w + k] = rgb[1];
+            out[2 * (size_t)p->w + k] = rgb[2];
+#else
+            for (int c = 0; c < 3; c++)
+                out[c * (size_t)p->w + k] =
+                    (float)((p00[c] * bu + p01[c] * au) * bv + (p10[c] * bu + p11[c] * au) * av);
+#endif
         }
     }
 }
 
-static void texture_sample(const rs_image *img, double x, double y, double scale, float rgb[3])
-{
-    double u = x / scale, v = y / scale;
-    u = (u - floor(u)) * img->width - 0.5;
-    v = (v - floor(v)) * img->height - 0.5;
-    double fu = floor(u), fv = floor(v);
-    double au = u - fu, av = v - fv;
-    int64_t x0 = (int64_t)fu, y0 = (int64_t)fv;
-    int64_t W = img->width, H = img->height;
-    int64_t xa = ((x0 % W) + W) % W, xb = (xa + 1) % W, ya = ((y0 % H) + H) % H, yb = (ya + 1) % H;
-    const uint8_t *p00 = img->rgba + 4 * ((size_t)ya * W + xa), *p01 = img->rgba + 4 * ((size_t)ya * W + xb);
-    const uint8_t *p10 = img->rgba + 4 * ((size_t)yb * W + xa), *p11 = img->rgba + 4 * ((size_t)yb * W + xb);
-    for (int c = 0; c < 3; c++)
-        rgb[c] = (float)((p00[c] * (1 - au) + p01[c] * au) * (1 - av) + (p10[c] * (1 - au) + p11[c] * au) * av);
-}
-
 /* Procedural asphalt: dark grey, fine grain per texel plus a soft mottle on
  * a 4-texel lattice; keyed to texel indices, so deterministic. */
-static void asphalt(uint32_t px, uint32_t py, float rgb[3])
+static void asphalt(uint32_t px, uint32_t py, float *rgb, size_t plane)
 {
     double grain = (double)(hash2(px, py) & 0xFFFF) / 65535.0 - 0.5;
     uint32_t lx = px >> 2, ly = py >> 2;
@@ -90,8 +220,8 @@ static void asphalt(uint32_t px, uint32_t py, float rgb[3])
     double mottle = (n00 * (1 - fx) + n01 * fx) * (1 - fy) + (n10 * (1 - fx) + n11 * fx) * fy - 0.5;
     double v = 70 + 18 * grain + 10 * mottle;
     rgb[0] = (float)v;
-    rgb[1] = (float)v;
-    rgb[2] = (float)(v + 3);
+    rgb[plane] = (float)v;
+    rgb[2 * plane] = (float)(v + 3);
 }
 
 void rs__surface(const rs_splatter *s, rs__piece *p)
@@ -99,40 +229,55 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     const uint32_t T = s->o.texels;
     const rs_surface_options *f = &s->o.surface;
     const size_t n = (size_t)p->rows * p->w;
-    int need_terrain = 0;
+    int need_terrain = 0, need_road = p->road_pixels != 0;
     for (size_t i = 0; i < n && !need_terrain; i++) need_terrain = p->q[i] < 65535u;
-    /* The two sample rows bounding the DEM row, over the piece's columns. */
-    uint32_t c0 = p->x0 / T, c1 = (p->x0 + p->w - 1) / T + 1;
-    if (need_terrain && !f->terrain_texture) {
-        terrain_row(s, p->crow, c0, c1, p->trow[0]);
-        terrain_row(s, p->crow + 1, c0, c1, p->trow[1]);
-    }
-    for (uint32_t r = 0; r < p->rows; r++) {
-        uint32_t py = p->y0 + r, ty = py - p->crow * T;
-        double fy = (ty + 0.5) / T;
-        const uint16_t *q = p->q + (size_t)r * p->w;
-        float *tc = p->tc + (size_t)r * p->w * 3, *sc = p->sc + (size_t)r * p->w * 3;
+    if (need_terrain && f->terrain_texture) texture_piece(s, p, f->terrain_texture, 0, p->tc);
+    else if (need_terrain) {
+        /* Bilinear between the sample rows crow and crow + 1: the two
+         * horizontal interpolants per column once per piece, then every row
+         * of the piece (all pixels: a plain loop). */
+        const float *r0, *r1;
+        terrain_rows(s, p->tcache, p->crow, &r0, &r1);
+        const uint32_t wc0 = p->tcache->c0;
+        double *hx = p->hx;
+        const size_t w = p->w;
         for (uint32_t k = 0; k < p->w; k++) {
-            uint32_t px = p->x0 + k;
-            if (q[k] < 65535u) {
-                if (f->terrain_texture) {
-                    texture_sample(f->terrain_texture, (px + 0.5) * s->texel_m, (py + 0.5) * s->texel_m,
-                                   f->texture_scale, tc + 3 * k);
-                } else {
-                    uint32_t ccol = px / T;
-                    double fx = ((px - ccol * T) + 0.5) / T;
-                    const float *a = p->trow[0] + 3 * (ccol - c0), *c = p->trow[1] + 3 * (ccol - c0);
-                    for (int ch = 0; ch < 3; ch++)
-                        tc[3 * k + ch] = (float)((a[ch] * (1 - fx) + a[ch + 3] * fx) * (1 - fy) +
-                                                 (c[ch] * (1 - fx) + c[ch + 3] * fx) * fy);
-                }
-            }
-            if (q[k] > 0) {
-                if (f->road_texture)
-                    texture_sample(f->road_texture, (px + 0.5) * s->texel_m, (py + 0.5) * s->texel_m,
-                                   f->texture_scale, sc + 3 * k);
-                else asphalt(px, py, sc + 3 * k);
+            uint32_t px = p->x0 + k, ccol = px / T;
+            double fx = ((px - ccol * T) + 0.5) / T;
+            const float *a = r0 + 3 * (size_t)(ccol - wc0), *c = r1 + 3 * (size_t)(ccol - wc0);
+            for (int ch = 0; ch < 3; ch++) {
+                hx[ch * w + k] = a[ch] * (1 - fx) + a[ch + 3] * fx;
+                hx[(3 + ch) * w + k] = c[ch] * (1 - fx) + c[ch + 3] * fx;
             }
         }
+        for (uint32_t r = 0; r < p->rows; r++) {
+            uint32_t ty = p->y0 + r - p->crow * T;
+            double fy = (ty + 0.5) / T, gy = 1 - fy;
+            for (size_t ch = 0; ch < 3; ch++) {
+                const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
+                float *tc = p->tc + (size_t)r * w * 3 + ch * w;
+                size_t k = 0;
+#if defined(__SSE2__)
+                const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
+                for (; k + 2 <= w; k += 2) {
+                    __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + k), vg), _mm_mul_pd(_mm_loadu_pd(h1 + k), vf));
+                    _mm_storel_epi64((__m128i *)(void *)(tc + k), _mm_castps_si128(_mm_cvtpd_ps(v)));
+                }
+#endif
+                for (; k < w; k++) tc[k] = (float)(h0[k] * gy + h1[k] * fy);
+            }
+        }
+    }
+    if (!need_road) return;
+    if (f->road_texture) {
+        texture_piece(s, p, f->road_texture, 1, p->sc);
+        return;
+    }
+    for (uint32_t r = 0; r < p->rows; r++) {
+        uint32_t py = p->y0 + r;
+        const uint16_t *q = p->q + (size_t)r * p->w;
+        float *sc = p->sc + (size_t)r * p->w * 3;
+        for (uint32_t k = 0; k < p->w; k++)
+            if (q[k] > 0) asphalt(p->x0 + k, py, sc + k, p->w);
     }
 }
