@@ -9,6 +9,7 @@
  * list: an empty list answers "no road" in O(1). */
 #include "roadfield.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -462,9 +463,12 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                 s += sg.len;
             } else {
                 double sfull = 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
-                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, s + along, (uint32_t)ri, (uint32_t)k);
+                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, fmin(s + along, DBL_MAX), (uint32_t)ri, (uint32_t)k);
                 s += sfull;
             }
+            /* A road over 1.8e308 m long (points near +-1e308) has no finite
+             * arc length: s saturates at DBL_MAX instead of becoming inf. */
+            if (!(s <= DBL_MAX)) s = DBL_MAX;
             ax = bx;
             ay = by;
             if (!keep) continue;
@@ -575,6 +579,7 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
     out->road = best->road;
     out->seg = best->seg;
     out->s = best->s0 + bpr;
+    if (!(out->s <= DBL_MAX)) out->s = DBL_MAX; /* arc lengths saturate (see the build) */
     out->t = bside >= 0 ? bd : -bd;
     out->dist = bd;
     out->half_width = best->r;
