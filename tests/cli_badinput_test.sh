@@ -421,6 +421,16 @@ mode=fresh refuse "mesh --z-scale 1e40" "^roadsplat: --z-scale: '1e\+40' makes h
     m.ply mesh --z-scale 1e40 "$D/dem.pgm" "$O/m.ply"
 mode=both refuse "mesh --skirt 1e39" "^roadsplat: --skirt: '1e\+39' is beyond the float range.*" \
     m.ply mesh --skirt 1e39 "$D/dem.pgm" "$O/m.ply"
+# splat: the frame and the texture scale are range-checked up front (item 8: these were a
+# NaN -> int64, a division by zero and texture overflows inside the library)
+for v in 1e308 1e-310 5e-324; do
+    mode=both refuse "splat --cell-size $v" "^roadsplat: --cell-size: '$v' must be in \\[1e-9, 1e9\\] metres\$" \
+        o.png --quiet --cell-size $v "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+done
+mode=both refuse "splat --texture-scale 1e-308" "^roadsplat: --texture-scale: '1e-308' must be in \\[1e-6, 1e9\\] metres\$" \
+    o.png --quiet --texture-scale 1e-308 "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
+mode=both refuse "splat --z-scale 1e40" "^roadsplat: --z-scale: '1e40' must be in \\[1e-12, 1e12\\] in magnitude\$" \
+    o.png --quiet --z-scale 1e40 "$D/dem.pgm" "$D/roads.txt" "$O/o.png"
 # an output naming an input or another output: refused before any work, inputs intact
 same() { # NAME PATTERN FILE-THAT-MUST-NOT-CHANGE ARGS...
     name=$1; pat=$2; keep=$3; shift 3
