@@ -214,8 +214,8 @@ static double sample_ext(const float *z, int64_t W, int64_t H, double zs, int64_
     return z00 + zi + zj;
 }
 
-void rs__dem_horn(const float *z, uint32_t width, uint32_t height, double cell_size, double z_scale, uint32_t i,
-                  uint32_t j, double *dzdx, double *dzdy)
+void rs__dem_horn_border(const float *z, uint32_t width, uint32_t height, double cell_size, double z_scale,
+                         uint32_t i, uint32_t j, double *dzdx, double *dzdy)
 {
     int64_t W = width, H = height, r = i, q = j;
     double zs = z_scale;

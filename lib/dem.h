@@ -14,7 +14,22 @@ rs_result rs__dem_fill_nodata(rs_ctx *ctx, const rs_dem *dem, float **out);
 /* Horn's gradient (gdaldem's, in metres per metre: x right, y down) of the
  * heights z (width x height, no NaN) at sample (i, j). Outside the map the
  * surface continues linearly from the two nearest samples. The hillshade
- * and the mesher's normals both use it. */
-void rs__dem_horn(const float *z, uint32_t width, uint32_t height, double cell_size, double z_scale, uint32_t i,
-                  uint32_t j, double *dzdx, double *dzdy);
+ * and the mesher's normals both use it. Inline: the hillshade calls it per
+ * sample, and inside the map it needs no edge handling. */
+void rs__dem_horn_border(const float *z, uint32_t width, uint32_t height, double cell_size, double z_scale,
+                         uint32_t i, uint32_t j, double *dzdx, double *dzdy);
+static inline void rs__dem_horn(const float *z, uint32_t width, uint32_t height, double cell_size, double z_scale,
+                                uint32_t i, uint32_t j, double *dzdx, double *dzdy)
+{
+    if (i >= 1 && i + 1 < height && j >= 1 && j + 1 < width) {
+        /* the terms and their order of rs__dem_horn_border, which gives the
+         * same doubles here */
+        const float *up = z + (size_t)(i - 1) * width + j, *mid = up + width, *dn = mid + width;
+        double zs = z_scale;
+        double a = up[-1] * zs, b = up[0] * zs, c = up[1] * zs, d = mid[-1] * zs, f = mid[1] * zs;
+        double g = dn[-1] * zs, h = dn[0] * zs, k = dn[1] * zs;
+        *dzdx = ((c + 2 * f + k) - (a + 2 * d + g)) / (8 * cell_size);
+        *dzdy = ((g + 2 * h + k) - (a + 2 * b + c)) / (8 * cell_size);
+    } else rs__dem_horn_border(z, width, height, cell_size, z_scale, i, j, dzdx, dzdy);
+}
 #endif

@@ -76,20 +76,13 @@ static void terrain_rgb(const float tint[3], double shade, float *out)
 static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t n, float *rgb)
 {
     const rs_dem *d = s->dem;
-    const double zs = d->frame.z_scale, cs8 = 8 * d->frame.cell_size;
+    const double zs = d->frame.z_scale;
     const double lx = -s->sin_zen * cos(s->sun_az), ly = s->sin_zen * sin(s->sun_az), cz = s->cos_zen;
     const uint32_t W = d->width, H = d->height;
     const float *z = s->z;
     for (uint32_t j = c0; j < c0 + n; j++) {
         double dzdx, dzdy;
-        if (i >= 1 && i + 1 < H && j >= 1 && j + 1 < W) {
-            /* rs__dem_horn inside the map: the same terms in the same order */
-            const float *up = z + (size_t)(i - 1) * W + j, *mid = up + W, *dn = mid + W;
-            double a = up[-1] * zs, b = up[0] * zs, c = up[1] * zs, dd = mid[-1] * zs, f = mid[1] * zs;
-            double g = dn[-1] * zs, h = dn[0] * zs, k = dn[1] * zs;
-            dzdx = ((c + 2 * f + k) - (a + 2 * dd + g)) / cs8;
-            dzdy = ((g + 2 * h + k) - (a + 2 * b + c)) / cs8;
-        } else rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
+        rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
         double zc = z[(size_t)i * W + j] * zs;
         double t = s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5;
         float tint[3];
