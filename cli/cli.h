@@ -193,22 +193,29 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
                          cli_splat_input *in);
 void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in);
 
-/* The threaded splat of a window (cli/splat_run.c). Set s, the window,
- * texels (for the band height), threads (>= 1), the output buffers (w*h,
- * tightly packed; weight may be NULL) and prog (may be NULL; its callback is
- * called under a lock). profile and threads_used come back summed over the
- * threads. Prints the error and returns 1 on failure. */
+/* The splat of `roadsplat` and `roadsplat render` (cli/splat_run.c).
+ * cli_splatter_prepare: the splatter for the loaded input and s->o, with a
+ * "roads" progress bar; the error is printed naming roads_path. */
+int cli_splatter_prepare(rs_ctx *ctx, const cli_splat_input *in, const char *roads_path, cli_splat_args *s, int quiet,
+                         rs_splatter **out);
+/* A threaded splat of a window: cli_splat_job_init sets the splatter, the
+ * whole image as the window, the texels and the thread count from s
+ * (--threads, else all cores); the caller sets the output buffers (w*h,
+ * tightly packed; weight may be NULL) and may narrow the window.
+ * cli_splat_run draws a "splat" progress bar unless quiet; profile and
+ * threads_used come back summed over the threads. It prints the error and
+ * returns 1 on failure. */
 typedef struct cli_splat_job {
     const rs_splatter *s;
     uint32_t x0, y0, w, h, texels;
     unsigned threads, threads_used;
+    int quiet;
     uint8_t *rgba;
     uint16_t *weight;
-    cli_progress *prog;
     rs_splat_profile profile;
 } cli_splat_job;
+void cli_splat_job_init(cli_splat_job *job, const rs_splatter *sp, const cli_splat_args *s, int quiet);
 int cli_splat_run(cli_splat_job *job);
-unsigned cli_default_threads(void);
 
 /* Subcommands, each `int f(int argc, char **argv)` with argv[0] the
  * subcommand name; return the process exit code (0 ok, 1 error). */

@@ -278,18 +278,8 @@ static int splat_main(int argc, char **argv)
             goto done;
         }
     }
-    cli_progress prog;
     double t1 = cli_now_ms();
-    cli_progress_init(&prog, "roads", a.quiet);
-    o->progress = cli_progress_cb;
-    o->progress_user = &prog;
-    r = rs_splatter_create(ctx, dem, in.roads, NULL, o, &sp);
-    cli_progress_done(&prog);
-    o->progress = NULL;
-    if (r) {
-        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
-        goto done;
-    }
+    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &sp)) goto done;
     st.t[1] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
@@ -300,20 +290,15 @@ static int splat_main(int argc, char **argv)
         cli_error("%s: out of memory for a %u x %u image", a.out, w, h);
         goto done;
     }
-    cli_progress_init(&prog, "splat", a.quiet);
-    job.s = sp;
+    cli_splat_job_init(&job, sp, &a.s, a.quiet);
     job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
-    job.texels = o->texels ? o->texels : 8;
-    job.threads = a.s.threads ? a.s.threads : cli_default_threads();
     job.rgba = rgba;
     job.weight = wt;
-    job.prog = &prog;
-    int bad = cli_splat_run(&job);
-    cli_progress_done(&prog);
-    if (bad) goto done;
+    if (cli_splat_run(&job)) goto done;
     st.t[2] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
+    cli_progress prog;
     cli_progress_init(&prog, "write", a.quiet);
     cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, cli_progress_cb, &prog };
     r = png_to_temp(&out_png, w, h, rgba, &po);

@@ -257,41 +257,22 @@ int cli_render_main(int argc, char **argv)
 
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     const rs_dem *dem = in.dem;
-    const rs_roads *roads = in.roads;
     t_read = cli_now_ms() - t_start;
 
     /* the texture: the CPU splat */
     uint32_t tw, th;
     if ((r = rs_splat_size(ctx, dem, &a.s.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
-    cli_progress prog;
     double t1 = cli_now_ms();
-    cli_progress_init(&prog, "roads", a.quiet);
-    a.s.o.progress = cli_progress_cb;
-    a.s.o.progress_user = &prog;
-    r = rs_splatter_create(ctx, dem, roads, NULL, &a.s.o, &sp);
-    cli_progress_done(&prog);
-    a.s.o.progress = NULL;
-    if (r) {
-        cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
-        goto done;
-    }
+    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &sp)) goto done;
     t_grid = cli_now_ms() - t1;
     t1 = cli_now_ms();
     tex = malloc((size_t)tw * th * 4);
     if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
-    cli_progress_init(&prog, "splat", a.quiet);
     {
         cli_splat_job job;
-        memset(&job, 0, sizeof job);
-        job.s = sp;
-        job.w = tw, job.h = th;
-        job.texels = a.s.o.texels ? a.s.o.texels : 8;
-        job.threads = a.s.threads ? a.s.threads : cli_default_threads();
+        cli_splat_job_init(&job, sp, &a.s, a.quiet);
         job.rgba = tex;
-        job.prog = &prog;
-        int bad = cli_splat_run(&job);
-        cli_progress_done(&prog);
-        if (bad) goto done;
+        if (cli_splat_run(&job)) goto done;
     }
     t_splat = cli_now_ms() - t1;
 

@@ -10,14 +10,39 @@
 #include <string.h>
 #include <unistd.h>
 
-unsigned cli_default_threads(void)
+static unsigned default_threads(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     return n < 1 ? 1 : (n > 256 ? 256 : (unsigned)n);
 }
 
+int cli_splatter_prepare(rs_ctx *ctx, const cli_splat_input *in, const char *roads_path, cli_splat_args *s, int quiet,
+                         rs_splatter **out)
+{
+    cli_progress prog;
+    cli_progress_init(&prog, "roads", quiet);
+    s->o.progress = cli_progress_cb;
+    s->o.progress_user = &prog;
+    rs_result r = rs_splatter_create(ctx, in->dem, in->roads, NULL, &s->o, out);
+    cli_progress_done(&prog);
+    s->o.progress = NULL; /* the bar is gone; the windows report their own */
+    if (r) cli_error("%s: %s", roads_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+    return r != RS_OK;
+}
+
+void cli_splat_job_init(cli_splat_job *job, const rs_splatter *sp, const cli_splat_args *s, int quiet)
+{
+    memset(job, 0, sizeof *job);
+    job->s = sp;
+    rs_splatter_size(sp, &job->w, &job->h);
+    job->texels = s->o.texels ? s->o.texels : 8;
+    job->threads = s->threads ? s->threads : default_threads();
+    job->quiet = quiet;
+}
+
 typedef struct shared {
     cli_splat_job *job;
+    cli_progress *prog;
     uint32_t band_rows, nbands, next, done_rows;
     int stop;
     rs_result err;
@@ -67,7 +92,7 @@ static void *work(void *arg)
         }
         if (!r) {
             sh->done_rows += rows;
-            if (job->prog && cli_progress_cb(job->prog, sh->done_rows, job->h)) {
+            if (cli_progress_cb(sh->prog, sh->done_rows, job->h)) {
                 sh->err = RS_ERR_CANCELLED;
                 snprintf(sh->msg, sizeof sh->msg, "cancelled");
             }
@@ -83,8 +108,11 @@ static void *work(void *arg)
 int cli_splat_run(cli_splat_job *job)
 {
     shared sh;
+    cli_progress prog;
     memset(&sh, 0, sizeof sh);
     sh.job = job;
+    cli_progress_init(&prog, "splat", job->quiet);
+    sh.prog = &prog;
     uint32_t T = job->texels ? job->texels : 1;
     /* whole DEM-cell rows of at least 32 pixel rows: few re-scans of a row's
      * road cells, and enough bands to keep every thread busy */
@@ -121,6 +149,7 @@ int cli_splat_run(cli_splat_job *job)
     free(wk);
     free(tid);
     pthread_mutex_destroy(&sh.mu);
+    cli_progress_done(&prog);
     if (sh.err) {
         cli_error("%s", sh.msg);
         return 1;
