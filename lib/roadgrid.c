@@ -443,7 +443,7 @@ static rs_result mark_road(sweep *sw, const double *pts, size_t n, double width,
                            double ox, double oy, double *scratch)
 {
     const rs_road_grid *g = sw->m->g;
-    double per_unit = rs__local_quantum(g->cell_size);
+    double per_unit = rs__local_quantum(g->frame.cell_size);
     for (size_t i = 0; i < n; i++) {
         scratch[2 * i] = rs__local_coord(pts[2 * i], ox, per_unit);
         scratch[2 * i + 1] = rs__local_coord(pts[2 * i + 1], oy, per_unit);
@@ -667,7 +667,6 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->texels = o.texels;
     g->opts = o.grid;
     g->edges = o.coverage.edges;
-    g->cell_size = dem->frame.cell_size;
     g->stats.bytes = sizeof *g;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
         r = build_field(ctx, dem, roads, o.texels, g);
@@ -686,7 +685,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         return r;
     }
     g->k = k;
-    g->c = g->cell_size / k;
+    g->c = g->frame.cell_size / k;
     g->gw = (dem->width - 1) * k;
     g->gh = (dem->height - 1) * k;
     g->tw = (g->gw + RS__TILE - 1) / RS__TILE;

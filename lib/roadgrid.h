@@ -20,8 +20,7 @@ struct rs_road_grid {
     rs_edge_mode edges;
     /* Alpha-map edges: the cell grid (tiles NULL otherwise). */
     uint32_t k;              /* road cells per DEM cell side */
-    double cell_size;        /* DEM cell, metres */
-    double c;                /* road cell, metres (cell_size / k) */
+    double c;                /* road cell, metres (frame.cell_size / k) */
     uint32_t gw, gh;         /* grid size in road cells */
     uint32_t tw, th;         /* grid size in tiles */
     uint8_t **tiles;         /* tw*th, NULL where there is no road */
