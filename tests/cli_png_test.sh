@@ -28,41 +28,22 @@ check "default = --png-level 1, byte for byte" cmp -s "$T/def.png" "$T/l1.png"
 s0=$(wc -c <"$T/l0.png"); s1=$(wc -c <"$T/l1.png"); s12=$(wc -c <"$T/l12.png")
 check "sizes shrink with the level ($s0 > $s1 >= $s12)" [ "$s0" -gt "$s1" -a "$s1" -ge "$s12" ]
 
+TESTS=$(cd "$(dirname "$0")" && pwd)
 if command -v python3 >/dev/null 2>&1; then
     # Decode (all five PNG filters) and compare the pixels of every level.
     cat > "$T/png.py" <<'PY'
-import struct, sys, zlib
+import sys
+from png_read import read
 def pixels(path):
-    d = open(path, 'rb').read()
-    assert d[:8] == b'\x89PNG\r\n\x1a\n'
-    pos, idat = 8, b''
-    while pos < len(d):
-        n, t = struct.unpack('>I4s', d[pos:pos + 8]); body = d[pos + 8:pos + 8 + n]
-        assert zlib.crc32(t + body) == struct.unpack('>I', d[pos + 8 + n:pos + 12 + n])[0], 'CRC'
-        pos += 12 + n
-        if t == b'IHDR': w, h, bits, ct, _, _, il = struct.unpack('>IIBBBBB', body)
-        elif t == b'IDAT': idat += body
-    assert t == b'IEND' and bits == 8 and ct == 6 and il == 0
-    raw, bpp, rb = zlib.decompress(idat), 4, w * 4
-    out, prev = bytearray(), bytearray(rb)
-    for y in range(h):
-        f, row = raw[y * (rb + 1)], bytearray(raw[y * (rb + 1) + 1:(y + 1) * (rb + 1)])
-        for i in range(rb):
-            a = row[i - bpp] if i >= bpp else 0; b = prev[i]; c = prev[i - bpp] if i >= bpp else 0
-            if f == 1: row[i] = (row[i] + a) & 255
-            elif f == 2: row[i] = (row[i] + b) & 255
-            elif f == 3: row[i] = (row[i] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                row[i] = (row[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        out += row; prev = row
-    return (w, h, bytes(out))
+    w, h, ch, data = read(path)
+    assert ch == 4, 'RGBA expected'
+    return (w, h, data)
 ref = pixels(sys.argv[1])
 for p in sys.argv[2:]:
     assert pixels(p) == ref, p
 print('same')
 PY
-    check "every level decodes to the same pixels" sh -c "python3 '$T/png.py' '$T/l0.png' '$T/l1.png' '$T/l6.png' '$T/l12.png' | grep -q same"
+    check "every level decodes to the same pixels" sh -c "PYTHONPATH='$TESTS' python3 '$T/png.py' '$T/l0.png' '$T/l1.png' '$T/l6.png' '$T/l12.png' | grep -q same"
 fi
 
 check "stats: timings_ms.startup" sh -c "'$RS' --quiet --stats '$T/s.json' '$D' '$R' '$T/s.png' && grep -Eq '\"startup\": [0-9]+\\.[0-9]+' '$T/s.json'"

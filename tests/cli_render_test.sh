@@ -16,31 +16,12 @@ if ! command -v python3 >/dev/null 2>&1; then
     exit 0
 fi
 
-# Minimal PNG reader (8-bit grey/RGB/RGBA, non-interlaced) and image checks.
+# Image checks on tests/png_read.py's decoder.
 cat > "$T/png.py" <<'PY'
-import struct, sys, zlib
+import sys
+from png_read import read as decode
 def read(path):
-    d = open(path, 'rb').read()
-    assert d[:8] == b'\x89PNG\r\n\x1a\n', 'not a PNG'
-    pos, idat = 8, b''
-    while pos < len(d):
-        n, typ = struct.unpack('>I4s', d[pos:pos + 8]); body = d[pos + 8:pos + 8 + n]; pos += 12 + n
-        if typ == b'IHDR': w, h, bits, ct, _, _, il = struct.unpack('>IIBBBBB', body)
-        elif typ == b'IDAT': idat += body
-    assert bits == 8 and il == 0 and ct in (0, 2, 6), 'unsupported PNG'
-    ch = {0: 1, 2: 3, 6: 4}[ct]; stride = w * ch; raw = zlib.decompress(idat)
-    out, prev = bytearray(), bytearray(stride)
-    for y in range(h):
-        f = raw[y * (stride + 1)]; line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for i in range(stride):
-            a = line[i - ch] if i >= ch else 0; b = prev[i]; c = prev[i - ch] if i >= ch else 0
-            if f == 1: line[i] = (line[i] + a) & 255
-            elif f == 2: line[i] = (line[i] + b) & 255
-            elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        out += line; prev = line
+    w, h, ch, out = decode(path)
     rgb = [tuple(out[(y * w + x) * ch:(y * w + x) * ch + 3]) if ch >= 3 else (out[y * w + x],) * 3
            for y in range(h) for x in range(w)]
     return w, h, rgb
@@ -74,6 +55,8 @@ if cmd == 'differ':  # two images differ somewhere by more than 8 levels
     A, B = read(sys.argv[2]), read(sys.argv[3])
     sys.exit(0 if any(abs(p - q) > 8 for a, b in zip(A[2], B[2]) for p, q in zip(a, b)) else 1)
 PY
+TESTS=$(cd "$(dirname "$0")" && pwd)
+export PYTHONPATH="$TESTS"
 py() { python3 "$T/png.py" "$@"; }
 
 # Scene: 65x49 samples, 2 m cells (128 m x 96 m), a gentle slope with a bump,
