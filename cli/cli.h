@@ -194,10 +194,11 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
 void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in);
 
 /* The splat of `roadsplat` and `roadsplat render` (cli/splat_run.c).
- * cli_splatter_prepare: the splatter for the loaded input and s->o, with a
- * "roads" progress bar; the error is printed naming roads_path. */
+ * cli_splatter_prepare: the road grid for the loaded input and s->o (with a
+ * "roads" progress bar) and the splatter on it; the error is printed naming
+ * roads_path. Free the splatter, then the grid (both may be set on failure). */
 int cli_splatter_prepare(rs_ctx *ctx, const cli_splat_input *in, const char *roads_path, cli_splat_args *s, int quiet,
-                         rs_splatter **out);
+                         rs_road_grid **grid, rs_splatter **out);
 /* A threaded splat of a window: cli_splat_job_init sets the splatter, the
  * whole image as the window, the texels and the thread count from s
  * (--threads, else all cores); the caller sets the output buffers (w*h,

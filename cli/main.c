@@ -239,6 +239,7 @@ static int splat_main(int argc, char **argv)
     rs_ctx *ctx = NULL;
     cli_splat_input in;
     rs_splatter *sp = NULL;
+    rs_road_grid *grid = NULL;
     uint8_t *rgba = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
@@ -279,7 +280,7 @@ static int splat_main(int argc, char **argv)
         }
     }
     double t1 = cli_now_ms();
-    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &sp)) goto done;
+    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     st.t[1] = cli_now_ms() - t1;
 
     t1 = cli_now_ms();
@@ -327,6 +328,7 @@ done:
     free(rgba);
     free(wt);
     rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, grid);
     cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     return rc;

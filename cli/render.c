@@ -229,6 +229,7 @@ int cli_render_main(int argc, char **argv)
     rs_ctx *ctx = NULL;
     cli_splat_input in;
     rs_splatter *sp = NULL;
+    rs_road_grid *grid = NULL;
     rs_roam *roam = NULL;
     rg_renderer *gl = NULL;
     char err[256];
@@ -263,7 +264,7 @@ int cli_render_main(int argc, char **argv)
     uint32_t tw, th;
     if ((r = rs_splat_size(ctx, dem, &a.s.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
     double t1 = cli_now_ms();
-    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &sp)) goto done;
+    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     t_grid = cli_now_ms() - t1;
     t1 = cli_now_ms();
     tex = malloc((size_t)tw * th * 4);
@@ -456,6 +457,7 @@ done:
     free(frame_ms); free(mesh_ms); free(draw_ms);
     rs_roam_free(ctx, roam);
     rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, grid);
     cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     return rc;

@@ -17,15 +17,22 @@ static unsigned default_threads(void)
 }
 
 int cli_splatter_prepare(rs_ctx *ctx, const cli_splat_input *in, const char *roads_path, cli_splat_args *s, int quiet,
-                         rs_splatter **out)
+                         rs_road_grid **grid, rs_splatter **out)
 {
+    /* The roads bar follows the grid build only. The splatter is made from
+     * the grid with no callback of its own: its windows would call it from
+     * the worker threads after the bar is gone (cli_splat_run reports the
+     * splat's progress itself, under its lock). */
     cli_progress prog;
+    rs_splat_options o = s->o;
     cli_progress_init(&prog, "roads", quiet);
-    s->o.progress = cli_progress_cb;
-    s->o.progress_user = &prog;
-    rs_result r = rs_splatter_create(ctx, in->dem, in->roads, NULL, &s->o, out);
+    o.progress = cli_progress_cb;
+    o.progress_user = &prog;
+    rs_result r = rs_road_grid_build(ctx, in->dem, in->roads, &o, grid);
     cli_progress_done(&prog);
-    s->o.progress = NULL; /* the bar is gone; the windows report their own */
+    o.progress = NULL;
+    o.progress_user = NULL;
+    if (!r) r = rs_splatter_create(ctx, in->dem, NULL, *grid, &o, out);
     if (r) cli_error("%s: %s", roads_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
     return r != RS_OK;
 }
