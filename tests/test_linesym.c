@@ -1,0 +1,509 @@
+/* Line symbols (lib/linesym.c): band coverage against an independent
+ * supersampled reference built from the SPEC's definition (nearest point of
+ * the centreline, s and t), on straight roads at several angles, bends of
+ * 30-170 degrees and a curve; dashed area along a curve; tiling and
+ * translation invariance; painting; bad input and allocation failures.
+ *
+ * Reference resolution: the issue names a 16x16 supersampled reference, but
+ * at 16x16 the reference is itself off by up to 1/32 where an edge runs
+ * along the sample rows, more than the 2/255 it is asked to check. The
+ * reference here uses REF_N x REF_N samples (off by at most 1/(2 REF_N) =
+ * 1/192 on such an edge), so that a failure is an error of the library, not
+ * of the reference. */
+#include "harness.h"
+#include "fail_alloc.h"
+#include "linesym.h"
+
+#include <stdlib.h>
+
+#define REF_N 96
+
+static rs_ctx *ctx;
+
+/* --- the reference -------------------------------------------------------- */
+typedef struct ref_line {
+    const double *x, *y; /* local points */
+    double s[64];
+    size_t n;
+} ref_line;
+
+static void ref_init(ref_line *L, const double *x, const double *y, size_t n)
+{
+    L->x = x;
+    L->y = y;
+    L->n = n;
+    L->s[0] = 0;
+    for (size_t k = 1; k < n; k++) L->s[k] = L->s[k - 1] + hypot(x[k] - x[k - 1], y[k] - y[k - 1]);
+}
+
+static int ref_dash_on(const rs__band *b, double s)
+{
+    if (!b->ndash) return 1;
+    double per = 0;
+    for (uint32_t j = 0; j < b->ndash; j++) per += b->dash[j];
+    double m = fmod(s - b->phase, per);
+    if (m < 0) m += per;
+    double acc = 0;
+    for (uint32_t j = 0; j < b->ndash; j++) {
+        acc += b->dash[j];
+        if (m < acc) return (j & 1) == 0;
+    }
+    return 0;
+}
+
+/* Is (x, y) in the band? SPEC: q = nearest point of the polyline, s its arc
+ * length, t the signed offset; at a vertex q the offset is the distance,
+ * signed by the side; beyond the first or last point: no band (flat ends). */
+static int ref_in(const ref_line *L, const rs__band *b, double x, double y)
+{
+    double best = INFINITY, bu = 0, blen = 0, bt = 0;
+    size_t bk = 0;
+    for (size_t k = 0; k + 1 < L->n; k++) {
+        double ax = L->x[k], ay = L->y[k], dx = L->x[k + 1] - ax, dy = L->y[k + 1] - ay, len = hypot(dx, dy);
+        double u = ((x - ax) * dx + (y - ay) * dy) / len;
+        if (u < 0) u = 0;
+        if (u > len) u = len;
+        double qx = ax + u * dx / len, qy = ay + u * dy / len, d = hypot(x - qx, y - qy);
+        if (d < best) {
+            best = d;
+            bk = k;
+            bu = u;
+            blen = len;
+            bt = ((x - ax) * dy - (y - ay) * dx) / len;
+        }
+    }
+    double s, t;
+    if (bu > 0 && bu < blen) {
+        s = L->s[bk] + bu;
+        t = bt;
+    } else {
+        size_t j = bu <= 0 ? bk : bk + 1; /* the vertex */
+        if (j == 0 || j == L->n - 1) return 0;
+        double px = L->x[j] - L->x[j - 1], py = L->y[j] - L->y[j - 1], nx = L->x[j + 1] - L->x[j],
+               ny = L->y[j + 1] - L->y[j];
+        double lp = hypot(px, py), ln = hypot(nx, ny);
+        /* left normals (dy, -dx) of both segments, summed */
+        double sx = py / lp + ny / ln, sy = -px / lp - nx / ln;
+        double side = (x - L->x[j]) * sx + (y - L->y[j]) * sy;
+        s = L->s[j];
+        t = side >= 0 ? best : -best;
+    }
+    return t >= b->t - 0.5 * b->w && t <= b->t + 0.5 * b->w && ref_dash_on(b, s);
+}
+
+static double ref_cover(const ref_line *L, const rs__band *b, double pix, uint32_t px, uint32_t py)
+{
+    int in = 0;
+    for (int j = 0; j < REF_N; j++)
+        for (int i = 0; i < REF_N; i++)
+            in += ref_in(L, b, ((double)px + (i + 0.5) / REF_N) * pix, ((double)py + (j + 0.5) / REF_N) * pix);
+    return (double)in / (REF_N * REF_N);
+}
+
+/* Distance from (x, y) to the polyline (to skip pixels far from the band). */
+static double ref_dist(const ref_line *L, double x, double y)
+{
+    double best = INFINITY;
+    for (size_t k = 0; k + 1 < L->n; k++) {
+        double ax = L->x[k], ay = L->y[k], dx = L->x[k + 1] - ax, dy = L->y[k + 1] - ay, l2 = dx * dx + dy * dy;
+        double u = ((x - ax) * dx + (y - ay) * dy) / l2;
+        u = u < 0 ? 0 : (u > 1 ? 1 : u);
+        best = fmin(best, hypot(x - ax - u * dx, y - ay - u * dy));
+    }
+    return best;
+}
+
+/* --- helpers -------------------------------------------------------------- */
+static rs_roads *one_road(const double *x, const double *y, size_t n)
+{
+    rs_roads *r = NULL;
+    if (rs_roads_create(ctx, &r) != RS_OK) return NULL;
+    double xy[128];
+    for (size_t k = 0; k < n; k++) xy[2 * k] = x[k], xy[2 * k + 1] = y[k];
+    if (rs_roads_add(ctx, r, "r", 10, xy, n) != RS_OK) {
+        rs_roads_free(ctx, r);
+        return NULL;
+    }
+    return r;
+}
+
+static rs__linesym_params params(uint32_t w, uint32_t h, double pix, rs__band_aa aa)
+{
+    rs__linesym_params p;
+    memset(&p, 0, sizeof p);
+    p.cell_size = 1;
+    p.out_w = w;
+    p.out_h = h;
+    p.pixel = pix;
+    p.aa = aa;
+    return p;
+}
+
+typedef struct err_stat {
+    double sum_edge, max;
+    size_t n_edge, n_px;
+} err_stat;
+
+/* Compare band `bi` of a one-road scene with the reference on every pixel
+ * within reach of the band; accumulate into st. */
+static void compare_scene(const double *x, const double *y, size_t n, const rs__band *bands, uint32_t nb, uint32_t W,
+                          uint32_t H, double pix, err_stat *st, const char *what)
+{
+    rs_roads *roads = one_road(x, y, n);
+    CHECK(roads != NULL);
+    if (!roads) return;
+    uint32_t bs[2] = { 0, nb };
+    rs__linesym_params p = params(W, H, pix, RS__AA_EXACT);
+    rs__linesym *L = NULL;
+    CHECK_EQ_INT(rs__linesym_build(ctx, roads, &p, bs, bands, &L), RS_OK);
+    ref_line rl;
+    ref_init(&rl, x, y, n);
+    double *cov = malloc(sizeof(double) * W * H);
+    for (uint32_t bi = 0; bi < nb && L && cov; bi++) {
+        rs__linesym_coverage(L, bi, 0, 0, W, H, cov, W);
+        /* the band lies between these distances from the centreline */
+        double reach = fabs(bands[bi].t) + 0.5 * bands[bi].w + pix,
+               inner = fabs(bands[bi].t) - 0.5 * bands[bi].w - pix;
+        err_stat one = { 0, 0, 0, 0 };
+        for (uint32_t py = 0; py < H; py++)
+            for (uint32_t px = 0; px < W; px++) {
+                double c = cov[(size_t)py * W + px];
+                double dc = ref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix);
+                if (dc > reach || dc < inner) {
+                    if (c != 0) one.max = fmax(one.max, fabs(c));
+                    continue;
+                }
+                double g = ref_cover(&rl, &bands[bi], pix, px, py), e = fabs(c - g);
+                one.n_px++;
+                one.max = fmax(one.max, e);
+                if ((c > 0 && c < 1) || (g > 0 && g < 1)) {
+                    one.sum_edge += e;
+                    one.n_edge++;
+                }
+            }
+        CHECKF(one.max <= 2.0 / 255, "%s band %u: max error %.5f (x255: %.2f) over %zu pixels", what, bi, one.max,
+               one.max * 255, one.n_px);
+        /* (a band can lie wholly outside the window: on the inner side
+         * of a sharp bend it ends where the bisector cuts it) */
+        if (one.n_edge)
+            CHECKF(one.sum_edge / one.n_edge <= 1.0 / 255, "%s band %u: mean edge error %.5f over %zu", what, bi,
+                   one.sum_edge / one.n_edge, one.n_edge);
+        st->sum_edge += one.sum_edge;
+        st->n_edge += one.n_edge;
+        st->max = fmax(st->max, one.max);
+        st->n_px += one.n_px;
+    }
+    free(cov);
+    rs__linesym_free(ctx, L);
+    rs_roads_free(ctx, roads);
+}
+
+static const double dash_rms[2] = { 0.9, 1.3 };
+static const double dash_short[4] = { 0.35, 0.2, 0.15, 0.45 };
+
+/* --- straight roads at several angles ------------------------------------- */
+static void test_straight(void)
+{
+    const double angles[] = { 7, 31, 58, 90, 103, 180 + 44 };
+    err_stat st = { 0, 0, 0, 0 };
+    for (size_t k = 0; k < sizeof angles / sizeof *angles; k++) {
+        double a = angles[k] * 3.14159265358979323846 / 180, cx = 1.6, cy = 1.4;
+        double x[2] = { cx - 4 * cos(a), cx + 4 * cos(a) }, y[2] = { cy - 4 * sin(a), cy + 4 * sin(a) };
+        rs__band b[4] = {
+            { 0, 0.15, { 1, 1, 1, 1 }, NULL, 0, 0 },
+            { 0.8, 0.3, { 1, 1, 0, 1 }, NULL, 0, 0 },
+            { -0.7, 0.12, { 1, 1, 1, 1 }, dash_rms, 2, 0.37 },
+            { 0.2, 0.55, { 1, 1, 1, 1 }, dash_short, 4, -0.1 },
+        };
+        char what[64];
+        snprintf(what, sizeof what, "straight %g deg", angles[k]);
+        compare_scene(x, y, 2, b, 4, 32, 28, 0.1, &st, what);
+    }
+    /* coarse pixels: the thin line covers a tenth of a 1.25 m pixel */
+    double x[2] = { -30, 60 }, y[2] = { 3, 21 };
+    rs__band b[2] = { { 0, 0.15, { 1, 1, 1, 1 }, NULL, 0, 0 }, { 1.6, 0.12, { 1, 1, 1, 1 }, dash_rms, 2, 0 } };
+    compare_scene(x, y, 2, b, 2, 24, 20, 1.25, &st, "straight, 1.25 m pixels");
+    CHECKF(st.n_edge > 1500, "straight: only %zu edge pixels compared", st.n_edge);
+    printf("straight: %zu pixels, mean edge error %.5f, max %.5f\n", st.n_px, st.sum_edge / st.n_edge, st.max);
+}
+
+/* --- bends ---------------------------------------------------------------- */
+static void test_bends(void)
+{
+    const double turns[] = { 30, 90, 150, 170, -60, -135 };
+    err_stat st = { 0, 0, 0, 0 };
+    for (size_t k = 0; k < sizeof turns / sizeof *turns; k++) {
+        double h0 = 0.4, h1 = h0 + turns[k] * 3.14159265358979323846 / 180, vx = 1.7, vy = 1.5;
+        double x[3] = { vx - 3 * cos(h0), vx, vx + 3 * cos(h1) }, y[3] = { vy - 3 * sin(h0), vy, vy + 3 * sin(h1) };
+        /* dashes straddle the vertex (s = 3 there) */
+        rs__band b[5] = {
+            { 0.6, 0.3, { 1, 1, 1, 1 }, NULL, 0, 0 },
+            { -0.6, 0.3, { 1, 1, 1, 1 }, NULL, 0, 0 },
+            { 0, 0.2, { 1, 1, 1, 1 }, dash_short, 4, 2.9 },
+            { 0, 1.6, { 1, 1, 1, 1 }, NULL, 0, 0 },
+            { 0.35, 0.25, { 1, 1, 1, 1 }, dash_rms, 2, 2.5 },
+        };
+        char what[64];
+        snprintf(what, sizeof what, "bend %g deg", turns[k]);
+        compare_scene(x, y, 3, b, 5, 34, 30, 0.1, &st, what);
+    }
+    CHECKF(st.n_edge > 2000, "bends: only %zu edge pixels compared", st.n_edge);
+    printf("bends: %zu pixels, mean edge error %.5f, max %.5f\n", st.n_px, st.sum_edge / st.n_edge, st.max);
+}
+
+/* --- a curve: reference errors and the dashed area ------------------------- */
+static void test_curve(void)
+{
+    enum { N = 41 };
+    double x[N], y[N], R = 6;
+    for (int k = 0; k < N; k++) {
+        double a = 0.3 + 1.9 * k / (N - 1);
+        x[k] = 7 + R * cos(a);
+        y[k] = 0.5 + R * sin(a);
+    }
+    err_stat st = { 0, 0, 0, 0 };
+    rs__band b[2] = { { 0.5, 0.3, { 1, 1, 1, 1 }, dash_rms, 2, 0.2 }, { -0.45, 0.2, { 1, 1, 1, 1 }, NULL, 0, 0 } };
+    compare_scene(x, y, N, b, 2, 64, 48, 0.2, &st, "curve");
+    printf("curve: %zu pixels, mean edge error %.5f, max %.5f\n", st.n_px, st.sum_edge / st.n_edge, st.max);
+
+    /* dashed centre line along a curve of many segments: integrated
+     * coverage = length x duty x width (1 %) */
+    enum { M = 200 };
+    double cx[M], cy[M], len = 0, R2 = 40;
+    for (int k = 0; k < M; k++) {
+        double a = 0.1 + 1.4 * k / (M - 1);
+        cx[k] = 2 + R2 * cos(a);
+        cy[k] = 2 + R2 * sin(a);
+        if (k) len += hypot(cx[k] - cx[k - 1], cy[k] - cy[k - 1]);
+    }
+    rs_roads *rr = NULL;
+    CHECK(rs_roads_create(ctx, &rr) == RS_OK);
+    double xy[2 * M];
+    for (int k = 0; k < M; k++) xy[2 * k] = cx[k], xy[2 * k + 1] = cy[k];
+    CHECK(rs_roads_add(ctx, rr, "arc", 8, xy, M) == RS_OK);
+    const double dash[2] = { 3, 6 };
+    rs__band bd = { 0, 0.3, { 1, 1, 1, 1 }, dash, 2, 0.7 };
+    uint32_t bs[2] = { 0, 1 };
+    const double pix = 0.25;
+    uint32_t W = 190, H = 190;
+    rs__linesym_params p = params(W, H, pix, RS__AA_EXACT);
+    rs__linesym *L = NULL;
+    CHECK_EQ_INT(rs__linesym_build(ctx, rr, &p, bs, &bd, &L), RS_OK);
+    double *cov = malloc(sizeof(double) * W * H), sum = 0;
+    if (L && cov) {
+        rs__linesym_coverage(L, 0, 0, 0, W, H, cov, W);
+        for (size_t i = 0; i < (size_t)W * H; i++) sum += cov[i];
+    }
+    /* the dashes on [0, len]: count the on-length exactly */
+    double on = 0;
+    for (double s0 = 0.7 - 9 * ceil(0.7 / 9); s0 < len; s0 += 9) on += fmax(0, fmin(s0 + 3, len) - fmax(s0, 0));
+    double expect = on * 0.3, got = sum * pix * pix;
+    CHECKF(fabs(got - expect) <= 0.01 * expect, "dashed area %.4f m^2, expected %.4f (length %.2f)", got, expect, len);
+    printf("curve dashes: area %.5f m^2 vs on-length x width %.5f (%.3f %%)\n", got, expect,
+           100 * (got - expect) / expect);
+    free(cov);
+    rs__linesym_free(ctx, L);
+    rs_roads_free(ctx, rr);
+}
+
+/* --- tiling, translation, painting ---------------------------------------- */
+static void random_bands(uint32_t *seed, rs__band *b, uint32_t n)
+{
+    static const double d1[2] = { 0.9, 1.3 }, d2[4] = { 0.35, 0.2, 0.15, 0.45 };
+    for (uint32_t k = 0; k < n; k++) {
+        *seed = *seed * 1664525u + 1013904223u;
+        uint32_t r = *seed >> 8;
+        b[k].t = ((double)(r % 21) - 10) * 0.17;
+        b[k].w = 0.1 + (r % 7) * 0.13;
+        b[k].rgba[0] = (float)(r % 5) / 4.0f;
+        b[k].rgba[1] = (float)(r % 3) / 2.0f;
+        b[k].rgba[2] = 0.5f;
+        b[k].rgba[3] = 0.9f;
+        b[k].dash = (r & 1) ? d1 : ((r & 2) ? d2 : NULL);
+        b[k].ndash = (r & 1) ? 2 : ((r & 2) ? 4 : 0);
+        b[k].phase = (r % 13) * 0.31;
+    }
+}
+
+static rs_roads *random_roads(uint32_t *seed, double W, double H, double ox, double oy, int nroads)
+{
+    rs_roads *r = NULL;
+    if (rs_roads_create(ctx, &r) != RS_OK) return NULL;
+    for (int i = 0; i < nroads; i++) {
+        double xy[40];
+        size_t n = 2 + i % 8;
+        for (size_t k = 0; k < n; k++) {
+            *seed = *seed * 1664525u + 1013904223u;
+            xy[2 * k] = ox + floor((double)(*seed >> 8) / (1 << 24) * (W + 20) * 1000) / 1000 - 10;
+            *seed = *seed * 1664525u + 1013904223u;
+            xy[2 * k + 1] = oy + floor((double)(*seed >> 8) / (1 << 24) * (H + 20) * 1000) / 1000 - 10;
+        }
+        if (i == 0) { /* a road 1e6 m long across the map */
+            xy[0] = ox - 5e5, xy[1] = oy + 0.3 * H, xy[2] = ox + 5e5, xy[3] = oy + 0.6 * H;
+            n = 2;
+        }
+        if (rs_roads_add(ctx, r, "r", 6, xy, n) != RS_OK) break;
+    }
+    return r;
+}
+
+static float whole[2][2][150 * 3 * 130];
+
+static void test_tiling_translation(void)
+{
+    uint32_t seed = 12345, W = 150, H = 130;
+    double pix = 0.4;
+    rs__band bands[3 * 12];
+    uint32_t bs[13];
+    for (int i = 0; i <= 12; i++) bs[i] = (uint32_t)(3 * i);
+    random_bands(&seed, bands, 36);
+    for (int aa = 0; aa < 2; aa++)
+        for (int shift = 0; shift < 2; shift++) {
+            uint32_t rs_seed = 99;
+            double ox = shift ? 5e6 : 0, oy = shift ? -5e6 : 0;
+            rs_roads *roads = random_roads(&rs_seed, W * pix, H * pix, ox, oy, 12);
+            rs__linesym_params p = params(W, H, pix, aa ? RS__AA_HERMITE : RS__AA_EXACT);
+            p.origin_x = ox;
+            p.origin_y = oy;
+            rs__linesym *L = NULL;
+            CHECK_EQ_INT(rs__linesym_build(ctx, roads, &p, bs, bands, &L), RS_OK);
+            float *img = whole[aa][shift], *tile = malloc(sizeof(float) * W * 3 * H);
+            double *scratch = malloc(sizeof(double) * W * H);
+            for (size_t i = 0; i < (size_t)W * 3 * H; i++) img[i] = (float)((i * 7) % 11) / 10.0f;
+            rs__linesym_paint(L, 0, 0, W, H, img, (size_t)W * 3, scratch);
+            /* windows of odd sizes and offsets; each window's planar rows hold its own width */
+            int same = 1;
+            for (uint32_t y0 = 0; y0 < H; y0 += 17)
+                for (uint32_t x0 = 0; x0 < W; x0 += 23) {
+                    uint32_t w = x0 + 23 <= W ? 23 : W - x0, h = y0 + 17 <= H ? 17 : H - y0;
+                    for (uint32_t y = 0; y < h; y++)
+                        for (uint32_t c = 0; c < 3; c++)
+                            for (uint32_t x = 0; x < w; x++)
+                                tile[(size_t)y * w * 3 + c * w + x] =
+                                    (float)((((size_t)(y0 + y) * W * 3 + c * W + x0 + x) * 7) % 11) / 10.0f;
+                    rs__linesym_paint(L, x0, y0, w, h, tile, (size_t)w * 3, scratch);
+                    for (uint32_t y = 0; y < h; y++)
+                        for (uint32_t c = 0; c < 3; c++)
+                            if (memcmp(tile + (size_t)y * w * 3 + c * w, img + (size_t)(y0 + y) * W * 3 + c * W + x0,
+                                       w * sizeof(float)))
+                                same = 0;
+                }
+            CHECKF(same, "aa %d shift %d: windows differ from the whole image", aa, shift);
+            /* something was painted */
+            size_t changed = 0;
+            for (size_t i = 0; i < (size_t)W * 3 * H; i++) changed += img[i] != (float)((i * 7) % 11) / 10.0f;
+            CHECKF(changed > 1000, "aa %d: only %zu values painted", aa, changed);
+            free(tile);
+            free(scratch);
+            rs__linesym_free(ctx, L);
+            rs_roads_free(ctx, roads);
+        }
+    /* the same scene 5e6 m away paints the same bytes */
+    for (int aa = 0; aa < 2; aa++) CHECKF(!memcmp(whole[aa][0], whole[aa][1], sizeof whole[aa][0]), "aa %d: translation", aa);
+}
+
+/* c = c (1 - a cov) + colour a cov, band after band */
+static void test_paint_formula(void)
+{
+    double x[2] = { -1, 9 }, y[2] = { 2.2, 3.1 };
+    rs_roads *roads = one_road(x, y, 2);
+    rs__band b[2] = { { 0, 0.5, { 1, 0, 0, 0.8f }, NULL, 0, 0 }, { 0.2, 0.4, { 0, 0, 1, 1 }, NULL, 0, 0 } };
+    uint32_t bs[2] = { 0, 2 }, W = 40, H = 24;
+    rs__linesym_params p = params(W, H, 0.2, RS__AA_EXACT);
+    rs__linesym *L = NULL;
+    CHECK_EQ_INT(rs__linesym_build(ctx, roads, &p, bs, b, &L), RS_OK);
+    float img[40 * 3 * 24];
+    double c0[40 * 24], c1[40 * 24], scratch[40 * 24];
+    for (size_t i = 0; i < sizeof img / sizeof *img; i++) img[i] = 0.5f;
+    rs__linesym_paint(L, 0, 0, W, H, img, W * 3, scratch);
+    rs__linesym_coverage(L, 0, 0, 0, W, H, c0, W);
+    rs__linesym_coverage(L, 1, 0, 0, W, H, c1, W);
+    double maxe = 0;
+    for (uint32_t py = 0; py < H; py++)
+        for (uint32_t px = 0; px < W; px++)
+            for (int k = 0; k < 3; k++) {
+                double v = 0.5, a0 = c0[py * W + px] * 0.8, a1 = c1[py * W + px];
+                v = v * (1 - a0) + b[0].rgba[k] * a0;
+                v = v * (1 - a1) + b[1].rgba[k] * a1;
+                maxe = fmax(maxe, fabs(v - img[(size_t)py * W * 3 + (size_t)k * W + px]));
+            }
+    CHECKF(maxe < 1e-5, "paint vs formula: %g", maxe);
+    rs__linesym_free(ctx, L);
+    rs_roads_free(ctx, roads);
+}
+
+static void test_bad_input(void)
+{
+    double x[2] = { 0, 5 }, y[2] = { 1, 1 };
+    rs_roads *roads = one_road(x, y, 2);
+    uint32_t bs[2] = { 0, 1 };
+    rs__linesym_params p = params(10, 10, 0.5, RS__AA_EXACT);
+    const double zero[2] = { 0, 0 }, tiny[2] = { 1e-4, 1e-4 }, neg[2] = { 1, -1 }, ok[2] = { 1, 1 };
+    const rs__band bad[] = {
+        { 0, 0, { 1, 1, 1, 1 }, NULL, 0, 0 },       /* width 0 */
+        { 0, NAN, { 1, 1, 1, 1 }, NULL, 0, 0 },     /* NaN width */
+        { 2e4, 1, { 1, 1, 1, 1 }, NULL, 0, 0 },     /* offset beyond 10 km */
+        { 0, 1, { 1, 1, 1, 1 }, zero, 2, 0 },       /* period 0 */
+        { 0, 1, { 1, 1, 1, 1 }, tiny, 2, 0 },       /* period below 1 mm */
+        { 0, 1, { 1, 1, 1, 1 }, neg, 2, 0 },        /* negative length */
+        { 0, 1, { 1, 1, 1, 1 }, ok, 1, 0 },         /* odd count */
+        { 0, 1, { 1, 1, 1, 1 }, NULL, 2, 0 },       /* no array */
+        { 0, 1, { 1, 1, 1, 1 }, ok, 2, INFINITY },  /* phase */
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        rs__linesym *L = (rs__linesym *)1;
+        rs_result r = rs__linesym_build(ctx, roads, &p, bs, &bad[k], &L);
+        CHECKF(r == RS_ERR_INVALID_ARG && L == NULL, "bad band %zu: %d", k, (int)r);
+    }
+    rs__linesym_params q = p;
+    q.pixel = 0;
+    rs__linesym *L = NULL;
+    CHECK_EQ_INT(rs__linesym_build(ctx, roads, &q, bs, &bad[0], &L), RS_ERR_INVALID_ARG);
+    rs_roads_free(ctx, roads);
+}
+
+static void test_alloc_failures(void)
+{
+    uint32_t seed = 7;
+    rs_roads *roads = random_roads(&seed, 40, 40, 0, 0, 30);
+    rs__band bands[60];
+    uint32_t bs[31];
+    for (int i = 0; i <= 30; i++) bs[i] = (uint32_t)(2 * i);
+    random_bands(&seed, bands, 60);
+    int succeeded = 0, wrong = 0, leaks = 0;
+    long n;
+    for (n = 0; n < 1000 && !succeeded && roads; n++) {
+        fail_alloc fa = { -1, 0 };
+        rs_allocator al = fail_alloc_hook(&fa);
+        rs_ctx *c = NULL;
+        if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong++; break; }
+        fa.countdown = n;
+        rs__linesym_params p = params(100, 100, 0.4, RS__AA_EXACT);
+        rs__linesym *L = NULL;
+        rs_result r = rs__linesym_build(c, roads, &p, bs, bands, &L);
+        if (r == RS_OK) succeeded = 1;
+        else if (r != RS_ERR_NOMEM || L != NULL) wrong++;
+        rs__linesym_free(c, L);
+        rs_ctx_free(c);
+        if (fa.live != 0) leaks++;
+    }
+    CHECK(succeeded);
+    CHECK(n > 4);
+    CHECK_EQ_INT(wrong, 0);
+    CHECK_EQ_INT(leaks, 0);
+    rs_roads_free(ctx, roads);
+}
+
+int main(void)
+{
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_straight();
+    test_bends();
+    test_curve();
+    test_tiling_translation();
+    test_paint_formula();
+    test_bad_input();
+    test_alloc_failures();
+    rs_ctx_free(ctx);
+    return th_finish("test_linesym");
+}
