@@ -12,7 +12,9 @@
 /* Index cells: CELL_PX x CELL_PX pixels, grown until at most MAX_CELLS. */
 #define CELL_PX 32u
 #define MAX_CELLS ((uint64_t)1 << 22)
-#define POLY_MAX 16
+#define POLY_MAX 24
+/* Half-planes per piece: 6 of its own, 3 per junction cut (two cuts). */
+#define HP_MAX 12
 
 enum { PIECE_SLAB = 0, PIECE_WEDGE = 1 };
 
@@ -23,7 +25,7 @@ enum { PIECE_SLAB = 0, PIECE_WEDGE = 1 };
  * the annulus r0 <= |p-o| <= r1. */
 typedef struct ls_piece {
     double ox, oy, ux, uy;
-    double hp[6][3];
+    double hp[HP_MAX][3];
     uint32_t nhp;
     uint32_t kind;
     uint32_t band;
@@ -240,10 +242,10 @@ static double piece_hermite(const rs__linesym *L, const ls_piece *P, uint32_t px
         double c = hermite(0.5 + (P->r1 - r) / pix) + (P->r0 > 0 ? hermite(0.5 + (r - P->r0) / pix) : 1.0) - 1.0;
         return c > 0 ? c : 0;
     }
-    /* the along-road half-planes (ends, bisectors) by the centre */
+    /* the other half-planes (ends, bisectors, junctions) by the centre */
     for (uint32_t k = 0; k < P->nhp; k++) {
         const double *h = P->hp[k];
-        if (h[1] == 0 && h[2] != 0) continue; /* the v limits: smoothed below */
+        if (k == 2 || k == 3) continue; /* the v limits: smoothed below */
         if (h[0] + h[1] * u + h[2] * v < 0) return 0;
     }
     double c = hermite(0.5 + (v - P->a) / pix) + hermite(0.5 + (P->b - v) / pix) - 1.0;
@@ -319,10 +321,203 @@ static void in_frame(double dx, double dy, double ux, double uy, double *fu, dou
     *fv = dx * uy - dy * ux;
 }
 
+/* Cut the line (ox, oy) + u (ux, uy), u in [0, len], to the map grown by
+ * ext: [*lo, *hi]; 0 when nothing is left. */
+static int cut_to_map(double ox, double oy, double ux, double uy, double len, double ext, double wmap, double hmap,
+                      double *lo, double *hi)
+{
+    const double d[2] = { ux, uy }, o[2] = { ox, oy }, b0[2] = { -ext, -ext }, b1[2] = { wmap + ext, hmap + ext };
+    *lo = 0;
+    *hi = len;
+    for (int k = 0; k < 2; k++) {
+        if (d[k] == 0) {
+            if (o[k] < b0[k] || o[k] > b1[k]) return 0;
+            continue;
+        }
+        double t0 = (b0[k] - o[k]) / d[k], t1 = (b1[k] - o[k]) / d[k];
+        if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+        *lo = fmax(*lo, t0);
+        *hi = fmin(*hi, t1);
+    }
+    return *lo <= *hi;
+}
+
+/* ------------------------------------------------------------------------
+ * Junctions: a road's lines stop at the edge of every other road's surface
+ * (docs/linesym.md "Junctions").
+ * ---------------------------------------------------------------------- */
+
+/* One segment of a road surface: the rectangle u in [-r, len + r],
+ * |v| <= r of its frame (square ends: a superset of the round caps and
+ * joins). */
+typedef struct ls_surf {
+    double ax, ay, ux, uy, len, r;
+    uint32_t road;
+} ls_surf;
+
+/* Road end points and the unit directions pointing away from them along
+ * the road (to tell a road that continues another from one that meets it). */
+typedef struct ls_ends {
+    double x[2], y[2], dx[2], dy[2];
+    int valid;
+} ls_ends;
+
+typedef struct ls_junc {
+    ls_surf *sf;
+    size_t nsf;
+    uint32_t *start, *ids; /* CSR per index cell, like the pieces */
+    uint32_t *stamp;       /* per surface: last query that saw it */
+    uint32_t query;
+    const ls_ends *ends;
+} ls_junc;
+
+/* Roads r and q continue each other: they share an end point and leave it
+ * in opposite directions (within 30 degrees of straight). */
+static int continues(const ls_junc *J, uint32_t r, uint32_t q)
+{
+    const ls_ends *a = &J->ends[r], *b = &J->ends[q];
+    if (!a->valid || !b->valid) return 0;
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2; j++)
+            if (a->x[i] == b->x[j] && a->y[i] == b->y[j] && a->dx[i] * b->dx[j] + a->dy[i] * b->dy[j] < -0.866)
+                return 1;
+    return 0;
+}
+
+/* Polygon of a piece (its box cut by its half-planes), in its frame. */
+static uint32_t piece_poly(const ls_piece *P, double *x, double *y)
+{
+    double bx[POLY_MAX], by[POLY_MAX];
+    const double X[4] = { P->x0, P->x1, P->x1, P->x0 }, Y[4] = { P->y0, P->y0, P->y1, P->y1 };
+    for (int k = 0; k < 4; k++) {
+        double dx = X[k] - P->ox, dy = Y[k] - P->oy;
+        x[k] = dx * P->ux + dy * P->uy;
+        y[k] = dx * P->uy - dy * P->ux;
+    }
+    uint32_t n = 4;
+    for (uint32_t k = 0; k < P->nhp && n; k++) {
+        n = clip_poly(x, y, n, P->hp[k][0], P->hp[k][1], P->hp[k][2], bx, by);
+        memcpy(x, bx, n * sizeof *x);
+        memcpy(y, by, n * sizeof *y);
+    }
+    return n;
+}
+
+/* Does piece P with extra half-planes h[m] keep any area? */
+static int piece_nonempty(const ls_piece *P)
+{
+    double x[POLY_MAX], y[POLY_MAX];
+    uint32_t n = piece_poly(P, x, y);
+    return n >= 3 && poly_area(x, y, n) > 1e-12;
+}
+
+static int add_hp(ls_piece *P, double c0, double cu, double cv)
+{
+    if (P->nhp >= HP_MAX) return 0;
+    P->hp[P->nhp][0] = c0;
+    P->hp[P->nhp][1] = cu;
+    P->hp[P->nhp][2] = cv;
+    P->nhp++;
+    return 1;
+}
+
+/* P minus surface rectangle Q: up to 4 disjoint pieces into out; returns
+ * their count, or -1 when Q misses P (P stays whole) or a piece would need
+ * more half-planes than it holds (P is then kept whole: lines run on). */
+static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
+{
+    double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
+    double nqx = Q->uy, nqy = -Q->ux;      /* Q's left normal */
+    double npx = P->uy, npy = -P->ux;      /* P's left normal */
+    /* v' = cv0 + u fvu + v fvv, u' = cu0 + u fuu + v fuv in P's frame */
+    double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
+    double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
+    double r = Q->r, hi = Q->len + r;
+    double x[POLY_MAX], y[POLY_MAX];
+    uint32_t n = piece_poly(P, x, y);
+    if (n < 3) return -1;
+    int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1;
+    for (uint32_t k = 0; k < n; k++) {
+        double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
+        out_v_hi &= v >= r;
+        out_v_lo &= v <= -r;
+        out_u_lo &= u <= -r;
+        out_u_hi &= u >= hi;
+    }
+    if (out_v_hi || out_v_lo || out_u_lo || out_u_hi) return -1;
+    int m = 0;
+    ls_piece A = *P;
+    if (!add_hp(&A, cv0 - r, fvu, fvv)) return -1;                      /* v' >= r */
+    if (piece_nonempty(&A)) out[m++] = A;
+    A = *P;
+    if (!add_hp(&A, -cv0 - r, -fvu, -fvv)) return -1;                   /* v' <= -r */
+    if (piece_nonempty(&A)) out[m++] = A;
+    for (int side = 0; side < 2; side++) {
+        A = *P;
+        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv)) return -1;
+        int ok = side == 0 ? add_hp(&A, -cu0 - r, -fuu, -fuv)            /* u' <= -r */
+                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= len + r */
+        if (!ok) return -1;
+        if (piece_nonempty(&A)) out[m++] = A;
+    }
+    return m;
+}
+
+static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
+{
+    if (!J || !J->nsf) return push_piece(ctx, L, P);
+    /* candidate surfaces: those listed in the cells of P's box */
+    double cm = (double)L->cpx * L->pixel;
+    double fx0 = floor(P->x0 / cm), fx1 = floor(P->x1 / cm), fy0 = floor(P->y0 / cm), fy1 = floor(P->y1 / cm);
+    enum { QMAX = 16 };
+    ls_piece q[QMAX], tmp[4];
+    uint32_t nq = 1;
+    q[0] = *P;
+    if (!(fx1 < 0 || fy1 < 0 || fx0 >= L->gw || fy0 >= L->gh)) {
+        uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= L->gw ? L->gw - 1 : (uint32_t)fx1;
+        uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= L->gh ? L->gh - 1 : (uint32_t)fy1;
+        J->query++;
+        for (uint32_t j = j0; j <= j1; j++)
+            for (uint32_t i = i0; i <= i1; i++) {
+                size_t c = (size_t)j * L->gw + i;
+                for (uint32_t e = J->start[c]; e < J->start[c + 1]; e++) {
+                    uint32_t k = J->ids[e];
+                    if (J->stamp[k] == J->query) continue;
+                    J->stamp[k] = J->query;
+                    const ls_surf *Q = &J->sf[k];
+                    if (Q->road == road || continues(J, road, Q->road)) continue;
+                    /* cut every piece so far; a piece that cannot be cut stays */
+                    uint32_t nn = 0;
+                    ls_piece next[QMAX];
+                    int full = 0;
+                    for (uint32_t a = 0; a < nq; a++) {
+                        int m = cut_piece(&q[a], Q, tmp);
+                        if (m < 0) {
+                            if (nn < QMAX) next[nn++] = q[a];
+                            else full = 1;
+                            continue;
+                        }
+                        if (nn + (uint32_t)m > QMAX) { full = 1; break; }
+                        for (int b = 0; b < m; b++) next[nn++] = tmp[b];
+                    }
+                    if (full) continue; /* too many pieces: this surface does not cut */
+                    memcpy(q, next, nn * sizeof *q);
+                    nq = nn;
+                }
+            }
+    }
+    for (uint32_t a = 0; a < nq; a++) {
+        rs_result r = push_piece(ctx, L, &q[a]);
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
 /* Pieces of one band along one road. pts: n distinct consecutive local
  * points, s: arc length at each. */
-static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, const ls_vtx *pts, const double *s, size_t n,
-                                  const rs__band *bd, uint32_t band, double wmap, double hmap)
+static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint32_t road, const ls_vtx *pts,
+                                  const double *s, size_t n, const rs__band *bd, uint32_t band, double wmap,
+                                  double hmap)
 {
     double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
@@ -343,23 +538,8 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, const ls_vtx *pts
         P.dashed = B->ndash > 0;
         /* Far segments: cut the centreline to the map grown by the band's
          * reach, so the box and s stay finite and small. */
-        double lo = 0, hi = len;
-        {
-            const double bx0 = -ext, bx1 = wmap + ext, by0 = -ext, by1 = hmap + ext;
-            const double d[2] = { ux, uy }, o[2] = { P.ox, P.oy }, b0[2] = { bx0, by0 }, b1[2] = { bx1, by1 };
-            int out = 0;
-            for (int k = 0; k < 2 && !out; k++) {
-                if (d[k] == 0) {
-                    if (o[k] < b0[k] || o[k] > b1[k]) out = 1;
-                    continue;
-                }
-                double t0 = (b0[k] - o[k]) / d[k], t1 = (b1[k] - o[k]) / d[k];
-                if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
-                lo = fmax(lo, t0);
-                hi = fmin(hi, t1);
-            }
-            if (out || !(lo <= hi)) continue;
-        }
+        double lo, hi;
+        if (!cut_to_map(P.ox, P.oy, ux, uy, len, ext, wmap, hmap, &lo, &hi)) continue;
         P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = 1, P.hp[P.nhp++][2] = 0;          /* u >= 0 */
         P.hp[P.nhp][0] = len, P.hp[P.nhp][1] = -1, P.hp[P.nhp++][2] = 0;       /* u <= len */
         P.hp[P.nhp][0] = -a, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = 1;         /* v >= a */
@@ -394,7 +574,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, const ls_vtx *pts
         }
         P.len = hi - lo;
         piece_box(L, &P, P.len, a, b);
-        rs_result r = push_piece(ctx, L, &P);
+        rs_result r = push_cut(ctx, L, J, &P, road);
         if (r) return r;
     }
     /* Round joins: the outer side of each interior vertex. */
@@ -429,34 +609,35 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, const ls_vtx *pts
         P.hp[1][0] = 0, P.hp[1][1] = -1, P.hp[1][2] = 0;  /* (p - V).u_next <= 0 */
         P.nhp = 2;
         piece_box(L, &P, 0, 0, 0);
-        rs_result r = push_piece(ctx, L, &P);
+        rs_result r = push_cut(ctx, L, J, &P, road);
         if (r) return r;
     }
     return RS_OK;
 }
 
-/* Index cells a piece reaches (its grown box, per cell row the x extent of
- * the grown outline in that row); pass 0 counts, pass 1 fills. */
-static void piece_cells(rs__linesym *L, uint32_t k, int fill)
+/* Index cells reached by the rectangle u in [u0, u1], v in [v0, v1] of the
+ * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
+ * row, the x extent of the rectangle cut to that row); pass 0 counts into
+ * start[], pass 1 fills ids[] from the ends, item k. */
+static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, double uy, double u0, double u1,
+                       double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
+                       uint32_t *ids, uint32_t k, int fill)
 {
-    const ls_piece *P = &L->pc[k];
     double cm = (double)L->cpx * L->pixel;
-    double fy0 = floor(P->y0 / cm), fy1 = floor(P->y1 / cm);
-    if (fy1 < 0 || fy0 >= L->gh) return;
+    double fy0 = floor(y0 / cm), fy1 = floor(y1 / cm);
+    if (!(fy1 >= 0) || !(fy0 < L->gh)) return;
     uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= L->gh ? L->gh - 1 : (uint32_t)fy1;
-    double fx0 = floor(P->x0 / cm), fx1 = floor(P->x1 / cm);
-    if (fx1 < 0 || fx0 >= L->gw) return;
+    double fx0 = floor(x0 / cm), fx1 = floor(x1 / cm);
+    if (!(fx1 >= 0) || !(fx0 < L->gw)) return;
     uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= L->gw ? L->gw - 1 : (uint32_t)fx1;
     for (uint32_t j = j0; j <= j1; j++) {
         uint32_t a = i0, b = i1;
-        if (P->kind == PIECE_SLAB && i1 > i0) {
-            /* tighter x range: the grown slab rectangle cut to this row */
-            double m = L->margin, len = P->len;
-            double U[4] = { -m, len + m, len + m, -m }, V[4] = { P->a - m, P->a - m, P->b + m, P->b + m };
+        if (i1 > i0) {
+            double U[4] = { u0, u1, u1, u0 }, V[4] = { v0, v0, v1, v1 };
             double xs[POLY_MAX], ys[POLY_MAX], tx[POLY_MAX], ty[POLY_MAX];
             for (int q = 0; q < 4; q++) {
-                xs[q] = P->ox + U[q] * P->ux + V[q] * P->uy;
-                ys[q] = P->oy + U[q] * P->uy - V[q] * P->ux;
+                xs[q] = ox + U[q] * ux + V[q] * uy;
+                ys[q] = oy + U[q] * uy - V[q] * ux;
             }
             uint32_t nn = clip_poly(xs, ys, 4, -(double)j * cm, 0, 1, tx, ty);
             nn = clip_poly(tx, ty, nn, (double)(j + 1) * cm, 0, -1, xs, ys);
@@ -473,10 +654,163 @@ static void piece_cells(rs__linesym *L, uint32_t k, int fill)
         }
         for (uint32_t i = a; i <= b; i++) {
             size_t c = (size_t)j * L->gw + i;
-            if (fill) L->ids[--L->start[c]] = k;
-            else L->start[c]++;
+            if (fill) ids[--start[c]] = k;
+            else start[c]++;
         }
     }
+}
+
+static void piece_cells(rs__linesym *L, uint32_t k, int fill)
+{
+    const ls_piece *P = &L->pc[k];
+    double m = L->margin;
+    if (P->kind == PIECE_SLAB)
+        rect_cells(L, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
+                   L->start, L->ids, k, fill);
+    else /* the sector's box, as an axis-aligned rectangle */
+        rect_cells(L, P->ox, P->oy, 1, 0, P->x0 - P->ox, P->x1 - P->ox, P->oy - P->y1, P->oy - P->y0, P->x0, P->y0,
+                   P->x1, P->y1, L->start, L->ids, k, fill);
+}
+
+/* Counts to CSR end offsets (a list is then filled from its end). */
+static int csr_close(uint32_t *start, size_t ncell, uint64_t lim, size_t *total)
+{
+    uint64_t run = 0;
+    for (size_t c = 0; c < ncell; c++) {
+        run += start[c];
+        if (run > lim) return 0;
+        start[c] = (uint32_t)run;
+    }
+    start[ncell] = (uint32_t)run;
+    *total = (size_t)run;
+    return 1;
+}
+
+/* One road in local coordinates: distinct consecutive points and their arc
+ * lengths (summed as lib/roadfield.c sums them). */
+static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
+                            double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+{
+    const double *xy = NULL;
+    size_t n = 0;
+    rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
+    if (n > *cap) {
+        size_t b1, b2;
+        if (!rs__mul_size(n, sizeof **pts, &b1) || !rs__mul_size(n, sizeof **sv, &b2)) return RS_ERR_LIMIT;
+        ls_vtx *np = rs__realloc(ctx, *pts, b1);
+        if (!np) return RS_ERR_NOMEM;
+        *pts = np;
+        double *ns = rs__realloc(ctx, *sv, b2);
+        if (!ns) return RS_ERR_NOMEM;
+        *sv = ns;
+        *cap = n;
+    }
+    size_t m = 0;
+    double s = 0;
+    for (size_t k = 0; k < n; k++) {
+        double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
+        if (m > 0) {
+            if (x == (*pts)[m - 1].x && y == (*pts)[m - 1].y) continue;
+            s += 2 * hypot(0.5 * x - 0.5 * (*pts)[m - 1].x, 0.5 * y - 0.5 * (*pts)[m - 1].y);
+            if (!(s <= DBL_MAX)) s = DBL_MAX;
+        }
+        (*pts)[m].x = x;
+        (*pts)[m].y = y;
+        (*sv)[m] = s;
+        m++;
+    }
+    *m_out = m;
+    return RS_OK;
+}
+
+static void unit_dir(double ax, double ay, double bx, double by, double *dx, double *dy)
+{
+    double hx = 0.5 * bx - 0.5 * ax, hy = 0.5 * by - 0.5 * ay, l = hypot(hx, hy);
+    *dx = hx / l;
+    *dy = hy / l;
+}
+
+static void junc_free(rs_ctx *ctx, ls_junc *J)
+{
+    rs__free(ctx, J->sf);
+    rs__free(ctx, J->start);
+    rs__free(ctx, J->ids);
+    rs__free(ctx, J->stamp);
+    rs__free(ctx, (void *)J->ends);
+    memset(J, 0, sizeof *J);
+}
+
+/* Surfaces of every road with a width, their index, and the road ends. */
+static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
+                            ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
+{
+    size_t nroads = rs_roads_count(roads), ncap = 0;
+    double per_unit = rs__local_quantum(p->cell_size);
+    double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
+    ls_ends *ends = rs__calloc(ctx, nroads ? nroads : 1, sizeof *ends);
+    J->ends = ends;
+    if (!ends) return RS_ERR_NOMEM;
+    for (size_t ri = 0; ri < nroads; ri++) {
+        double w = 0;
+        size_t m = 0;
+        rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
+        rs_result r = road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
+        if (r) return r;
+        if (m < 2) continue;
+        const ls_vtx *v = *pts;
+        ends[ri].valid = 1;
+        ends[ri].x[0] = v[0].x, ends[ri].y[0] = v[0].y;
+        ends[ri].x[1] = v[m - 1].x, ends[ri].y[1] = v[m - 1].y;
+        unit_dir(v[0].x, v[0].y, v[1].x, v[1].y, &ends[ri].dx[0], &ends[ri].dy[0]);
+        unit_dir(v[m - 1].x, v[m - 1].y, v[m - 2].x, v[m - 2].y, &ends[ri].dx[1], &ends[ri].dy[1]);
+        double hw = 0.5 * w;
+        if (!(hw > 0) || !(hw <= BAND_MAX_EXTENT)) continue; /* no surface to stop at */
+        for (size_t i = 0; i + 1 < m; i++) {
+            ls_surf Q;
+            unit_dir(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, &Q.ux, &Q.uy);
+            double len = 2 * hypot(0.5 * v[i + 1].x - 0.5 * v[i].x, 0.5 * v[i + 1].y - 0.5 * v[i].y), lo, hi;
+            if (!cut_to_map(v[i].x, v[i].y, Q.ux, Q.uy, len, 2 * hw + L->margin, wmap, hmap, &lo, &hi)) continue;
+            Q.ax = v[i].x + lo * Q.ux;
+            Q.ay = v[i].y + lo * Q.uy;
+            Q.len = hi - lo;
+            Q.r = hw;
+            Q.road = (uint32_t)ri;
+            if (J->nsf == ncap) {
+                size_t nc = ncap ? 2 * ncap : 256, bytes;
+                if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)) return RS_ERR_LIMIT;
+                ls_surf *ns = rs__realloc(ctx, J->sf, bytes);
+                if (!ns) return RS_ERR_NOMEM;
+                J->sf = ns;
+                ncap = nc;
+            }
+            J->sf[J->nsf++] = Q;
+        }
+    }
+    size_t ncell = (size_t)L->gw * L->gh, total = 0;
+    J->start = rs__calloc(ctx, ncell + 1, sizeof *J->start);
+    J->stamp = rs__calloc(ctx, J->nsf ? J->nsf : 1, sizeof *J->stamp);
+    if (!J->start || !J->stamp) return RS_ERR_NOMEM;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+            uint64_t lim = UINT32_MAX - 1u;
+            if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
+            if (!csr_close(J->start, ncell, lim, &total)) return RS_ERR_LIMIT;
+            J->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *J->ids);
+            if (!J->ids) return RS_ERR_NOMEM;
+        }
+        for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
+            const ls_surf *Q = &J->sf[k];
+            double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
+            const double U[4] = { -Q->r, Q->len + Q->r, Q->len + Q->r, -Q->r }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
+            for (int c = 0; c < 4; c++) {
+                double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
+                x0 = fmin(x0, x), x1 = fmax(x1, x), y0 = fmin(y0, y), y1 = fmax(y1, y);
+            }
+            rect_cells(L, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
+                       J->ids, (uint32_t)k, pass);
+        }
+    }
+    return RS_OK;
 }
 
 void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
@@ -542,6 +876,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->start = rs__calloc(ctx, ncell + 1, sizeof *L->start);
     ls_vtx *pts = NULL;
     double *sv = NULL;
+    ls_junc J;
+    memset(&J, 0, sizeof J);
     if (!L->band || !L->dash || !L->start) { res = RS_ERR_NOMEM; goto fail; }
     L->nband = nband;
     for (uint32_t k = 0, d0 = 0; k < nband; k++) {
@@ -559,59 +895,30 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     }
     double per_unit = rs__local_quantum(p->cell_size);
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
-    size_t cap = 0;
+    size_t cap = 0, total = 0;
+    if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
     for (size_t ri = 0; ri < nroads; ri++) {
         if (band_start[ri + 1] == band_start[ri]) continue;
-        const double *xy = NULL;
-        size_t n = 0;
-        rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
-        if (n > cap) {
-            size_t nc = n, b1, b2;
-            if (!rs__mul_size(nc, sizeof *pts, &b1) || !rs__mul_size(nc, sizeof *sv, &b2)) { res = RS_ERR_LIMIT; goto fail; }
-            ls_vtx *np = rs__realloc(ctx, pts, b1);
-            if (!np) { res = RS_ERR_NOMEM; goto fail; }
-            pts = np;
-            double *ns = rs__realloc(ctx, sv, b2);
-            if (!ns) { res = RS_ERR_NOMEM; goto fail; }
-            sv = ns;
-            cap = nc;
-        }
-        /* distinct consecutive points and their arc lengths (as lib/roadfield.c sums them) */
         size_t m = 0;
-        double s = 0;
-        for (size_t k = 0; k < n; k++) {
-            double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
-            if (m > 0) {
-                if (x == pts[m - 1].x && y == pts[m - 1].y) continue;
-                s += 2 * hypot(0.5 * x - 0.5 * pts[m - 1].x, 0.5 * y - 0.5 * pts[m - 1].y);
-                if (!(s <= DBL_MAX)) s = DBL_MAX;
-            }
-            pts[m].x = x;
-            pts[m].y = y;
-            sv[m] = s;
-            m++;
-        }
+        if ((res = road_local(ctx, roads, ri, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK) goto fail;
         if (m < 2) continue;
         for (uint32_t k = band_start[ri]; k < band_start[ri + 1]; k++)
-            if ((res = road_band_pieces(ctx, L, pts, sv, m, &bands[k], k, wmap, hmap)) != RS_OK) goto fail;
+            if ((res = road_band_pieces(ctx, L, &J, (uint32_t)ri, pts, sv, m, &bands[k], k, wmap, hmap)) != RS_OK)
+                goto fail;
     }
     rs__free(ctx, pts);
     rs__free(ctx, sv);
+    junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
     for (size_t k = 0; k < L->npc; k++) piece_cells(L, (uint32_t)k, 0);
-    uint64_t run = 0, lim = UINT32_MAX - 1u;
+    uint64_t lim = UINT32_MAX - 1u;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
-    for (size_t c = 0; c < ncell; c++) {
-        run += L->start[c];
-        L->start[c] = (uint32_t)(run <= lim ? run : 0);
-    }
-    if (run > lim) { res = RS_ERR_LIMIT; goto fail; }
-    L->start[ncell] = (uint32_t)run;
-    L->ids = rs__alloc_array(ctx, run ? run : 1, sizeof *L->ids);
+    if (!csr_close(L->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; goto fail; }
+    L->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ids);
     if (!L->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = L->npc; k-- > 0;) piece_cells(L, (uint32_t)k, 1);
-    L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + run * sizeof *L->ids + L->cap * sizeof *L->pc +
+    L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ids + L->cap * sizeof *L->pc +
                nband * sizeof *L->band + ndash * sizeof *L->dash;
     *out = L;
     rs__ok(ctx);
@@ -619,6 +926,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
 fail:
     rs__free(ctx, pts);
     rs__free(ctx, sv);
+    junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");
     return rs__fail(ctx, res, "line symbols: too many pieces or index entries");

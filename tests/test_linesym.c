@@ -432,6 +432,96 @@ static void test_paint_formula(void)
     rs_roads_free(ctx, roads);
 }
 
+/* Junctions: lines stop at the other road's surface, taken as its
+ * segments' rectangles with square ends (docs/linesym.md); roads that
+ * continue each other keep their lines. Checked against the reference
+ * with the other road's rectangles cut out. */
+typedef struct jroad {
+    double x[3], y[3];
+    size_t n;
+    double w;
+} jroad;
+
+static int in_surface(const jroad *r, double x, double y)
+{
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], len = hypot(dx, dy), h = 0.5 * r->w;
+        double u = ((x - r->x[k]) * dx + (y - r->y[k]) * dy) / len, v = ((x - r->x[k]) * dy - (y - r->y[k]) * dx) / len;
+        if (u >= -h && u <= len + h && fabs(v) <= h) return 1;
+    }
+    return 0;
+}
+
+static void test_junctions(void)
+{
+    const double pix = 0.1;
+    const uint32_t W = 120, H = 100;
+    /* A: west-east through the middle; B: crosses it at 70 degrees; C ends on A (T-junction);
+     * D continues A straight on from its east end */
+    const jroad R[4] = {
+        { { -2, 12.5, 0 }, { 5.1, 5.4, 0 }, 2, 4 },
+        { { 3, 6.2, 0 }, { 0.5, 9.3, 0 }, 2, 3 },
+        { { 9.3, 9.6, 0 }, { 9.7, 5.33, 0 }, 2, 2.5 },
+        { { 12.5, 16, 0 }, { 5.4, 5.5, 0 }, 2, 4 },
+    };
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    for (int i = 0; i < 4; i++) {
+        double xy[6];
+        for (size_t k = 0; k < R[i].n; k++) xy[2 * k] = R[i].x[k], xy[2 * k + 1] = R[i].y[k];
+        CHECK(rs_roads_add(ctx, roads, "j", R[i].w, xy, R[i].n) == RS_OK);
+    }
+    rs__band b[6] = {
+        { 0, 0.15, { 1, 1, 1, 1 }, NULL, 0, 0 },   { 1.8, 0.15, { 1, 1, 1, 1 }, NULL, 0, 0 },
+        { -1.8, 0.15, { 1, 1, 1, 1 }, NULL, 0, 0 }, { 0, 0.12, { 1, 1, 0, 1 }, dash_rms, 2, 0 },
+        { 0.9, 0.12, { 1, 1, 1, 1 }, NULL, 0, 0 },  { -0.9, 0.12, { 1, 1, 1, 1 }, NULL, 0, 0 },
+    };
+    uint32_t bs[5] = { 0, 3, 4, 6, 6 }; /* A: centre + edges; B: dashed centre; C: two lines; D: none */
+    rs__linesym_params p = params(W, H, pix, RS__AA_EXACT);
+    rs__linesym *L = NULL;
+    CHECK_EQ_INT(rs__linesym_build(ctx, roads, &p, bs, b, &L), RS_OK);
+    double *cov = malloc(sizeof(double) * W * H);
+    double maxe = 0, sum = 0;
+    size_t ne = 0, cut_px = 0;
+    for (int ri = 0; ri < 3 && L && cov; ri++) {
+        ref_line rl;
+        ref_init(&rl, R[ri].x, R[ri].y, R[ri].n);
+        for (uint32_t bi = bs[ri]; bi < bs[ri + 1]; bi++) {
+            rs__linesym_coverage(L, bi, 0, 0, W, H, cov, W);
+            double reach = fabs(b[bi].t) + 0.5 * b[bi].w + pix;
+            for (uint32_t py = 0; py < H; py++)
+                for (uint32_t px = 0; px < W; px++) {
+                    double c = cov[(size_t)py * W + px];
+                    if (ref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix) > reach) continue;
+                    int in = 0, cut = 0;
+                    const int N = 48;
+                    for (int j = 0; j < N; j++)
+                        for (int i = 0; i < N; i++) {
+                            double x = (px + (i + 0.5) / N) * pix, y = (py + (j + 0.5) / N) * pix;
+                            if (!ref_in(&rl, &b[bi], x, y)) continue;
+                            int other = 0;
+                            for (int q = 0; q < 3; q++) /* D continues A: it cuts nothing of A */
+                                if (q != ri && !(ri == 0 && q == 3) && in_surface(&R[q], x, y)) other = 1;
+                            if (other) cut++;
+                            else in++;
+                        }
+                    double g = (double)in / (N * N), e = fabs(c - g);
+                    cut_px += cut > 0;
+                    maxe = fmax(maxe, e);
+                    if ((c > 0 && c < 1) || (g > 0 && g < 1)) sum += e, ne++;
+                }
+        }
+    }
+    /* the reference here has 48x48 samples: off by up to 1/96 on an edge along its rows */
+    CHECKF(maxe <= 1.0 / 96 + 1e-9, "junctions: max error %.5f", maxe);
+    CHECKF(ne > 0 && sum / ne <= 1.0 / 255, "junctions: mean edge error %.5f over %zu", ne ? sum / ne : -1, ne);
+    CHECKF(cut_px > 200, "junctions: only %zu pixels where a line is cut", cut_px);
+    printf("junctions: mean edge error %.5f, max %.5f, %zu pixels with a cut\n", ne ? sum / ne : -1, maxe, cut_px);
+    free(cov);
+    rs__linesym_free(ctx, L);
+    rs_roads_free(ctx, roads);
+}
+
 static void test_bad_input(void)
 {
     double x[2] = { 0, 5 }, y[2] = { 1, 1 };
@@ -502,6 +592,7 @@ int main(void)
     test_curve();
     test_tiling_translation();
     test_paint_formula();
+    test_junctions();
     test_bad_input();
     test_alloc_failures();
     rs_ctx_free(ctx);
