@@ -124,8 +124,8 @@ static int style_ok(const rs_style *s, char *why, size_t cap)
             size_t k = rs__utf8_len((const unsigned char *)s->name + i, n - i);
             if (!k) { snprintf(why, cap, "the name is not valid UTF-8"); return 0; }
             i += k;
-        } else if (c <= 0x20 || c == 0x7F) {
-            snprintf(why, cap, "the name has a blank or control character");
+        } else if (c < 0x20 || c == 0x7F) {
+            snprintf(why, cap, "the name has a control character");
             return 0;
         } else i++;
     }
@@ -330,8 +330,8 @@ rs_result rs__style_begin(rs_ctx *ctx, rs__style_block *b, unsigned long long li
         return rs__fail(ctx, RS_ERR_PARSE, "line %llu: style name %s must be 1..%d bytes", line,
                         rs__quote(q, sizeof q, t.s, t.n), RS_STYLE_NAME_MAX);
     for (size_t i = 0; i < n; i++)
-        if (name[i] == ' ' || name[i] == '\t')
-            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: style name %s has a blank", line,
+        if (name[i] == '\t')
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: style name %s has a tab", line,
                             rs__quote(q, sizeof q, t.s, t.n));
     memcpy(b->st.name, name, n);
     b->st.name[n] = '\0';
@@ -359,7 +359,8 @@ static rs_result style_lineword(rs_ctx *ctx, rs__style_block *b, unsigned long l
     while (k == 1) {
         if (rs__tok_is(&t, "dash") && !have_dash) {
             have_dash = 1;
-            while ((k = rs__lex_next(L, RS__LEX_PLAIN, &t)) == 1 && !rs__tok_is(&t, "phase")) {
+            while ((k = rs__lex_next(L, RS__LEX_PLAIN, &t)) == 1 && !rs__tok_is(&t, "phase") &&
+                   !rs__tok_is(&t, "dash")) {
                 if (ln.dash_count >= RS_STYLE_MAX_DASH)
                     return rs__fail(ctx, RS_ERR_LIMIT, "line %llu: dash pattern has more than %d lengths", line,
                                     RS_STYLE_MAX_DASH);
