@@ -349,8 +349,8 @@ typedef struct rs_style_request {
     rs_oneway oneway;         /* NONE -> the class's default */
     rs_area area;             /* AUTO -> by class */
     rs_profile profile;
-    double width;             /* road width, metres: the lanes are laid out in it
-                                 (scaled to fit); 0 -> rs_style_default_width */
+    double width;             /* road width, metres, 0..2000: the lanes are laid out
+                                 in it (scaled to fit); 0 -> rs_style_default_width */
 } rs_style_request;
 
 /* Built-in default style for `req` (tables and sources in
@@ -363,7 +363,8 @@ RS_API rs_result rs_style_default_width(const rs_style_request *req, double *wid
  * (may be NULL), then among the built-in class names; else, for a road
  * with a class, a style in `styles` named after the class, else the
  * built-in default for its class, lanes, oneway, area and width under
- * `profile`; else the unstyled road (RS_SURFACE_DEFAULT, no lines). A
+ * `profile` (a road wider than 2000 m is laid out as a 2000 m one); else
+ * the unstyled road (RS_SURFACE_DEFAULT, no lines). A
  * `style=` name found nowhere gives RS_ERR_INVALID_ARG naming the road. */
 RS_API rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_styles *styles,
                                rs_profile profile, rs_style *out);

@@ -561,7 +561,7 @@ static int request_ok(const rs_style_request *req)
 {
     return req && (unsigned)req->road_class < RS_CLASS_COUNT && req->lanes <= 16 &&
            (unsigned)req->oneway <= RS_ONEWAY_REVERSE && (unsigned)req->area <= RS_AREA_RURAL &&
-           (unsigned)req->profile <= RS_PROFILE_MUTCD && req->width >= 0 && req->width <= 1e9;
+           (unsigned)req->profile <= RS_PROFILE_MUTCD && req->width >= 0 && req->width <= 2 * MAX_OFFSET;
 }
 
 static uint32_t lanes_of(const rs_style_request *req)
@@ -696,7 +696,9 @@ rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_s
     req.oneway = info.oneway;
     req.area = info.area;
     req.profile = profile;
-    if (req.width > 1e9) req.width = 1e9; /* the lines of a road wider than that stay near its centre */
+    /* line offsets are bounded (MAX_OFFSET): a road wider than 2 km gets
+     * the lines of a 2 km road, about its centre */
+    if (req.width > 2 * MAX_OFFSET) req.width = 2 * MAX_OFFSET;
     const rs_style *s;
     if (info.style) {
         if ((s = rs_styles_find(styles, info.style)) != NULL) {

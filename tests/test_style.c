@@ -573,6 +573,10 @@ static void test_defaults(void)
     CHECK(rs_style_default(&q, &s) == RS_ERR_INVALID_ARG);
     q.width = -1;
     CHECK(rs_style_default(&q, &s) == RS_ERR_INVALID_ARG);
+    q.width = 2001;
+    CHECK(rs_style_default(&q, &s) == RS_ERR_INVALID_ARG);
+    q.width = 2000;
+    CHECK(rs_style_default(&q, &s) == RS_OK);
     q.width = 0;
     q.profile = (rs_profile)2;
     CHECK(rs_style_default(&q, &s) == RS_ERR_INVALID_ARG);
