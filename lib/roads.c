@@ -480,8 +480,30 @@ static size_t scan_quoted(rs__lex *L, size_t q)
     return 0;
 }
 
+/* rs__lex_next in PLAIN mode, inline for the point lines (most of a file). */
+static inline int lex_plain(rs__lex *L, rs__tok *t)
+{
+    const char *s = L->s;
+    size_t i = L->i, n = L->n;
+    while (i < n && (s[i] == ' ' || s[i] == '\t')) i++;
+    if (i == n || s[i] == '#' || L->comment) {
+        if (i < n && !L->comment) L->comment = s + i;
+        L->i = n;
+        return 0;
+    }
+    size_t b = i;
+    while (i < n && s[i] != ' ' && s[i] != '\t' && s[i] != '#') i++;
+    t->s = s + b;
+    t->n = i - b;
+    t->quoted = 0;
+    L->tok_at = s + b;
+    L->i = i;
+    return 1;
+}
+
 int rs__lex_next(rs__lex *L, int mode, rs__tok *t)
 {
+    if (mode == RS__LEX_PLAIN) return lex_plain(L, t);
     size_t i = L->i;
     while (i < L->n && blank(L->s[i])) i++;
     L->i = i;
@@ -852,7 +874,7 @@ static rs_result text_line(text_parser *P, rs__lex *L, const rs__tok *t0)
     rs__tok t[MAX_TOKENS];
     size_t nt = 1;
     t[0] = *t0;
-    while (nt < MAX_TOKENS && rs__lex_next(L, RS__LEX_PLAIN, &t[nt]) == 1) nt++;
+    while (nt < MAX_TOKENS && lex_plain(L, &t[nt]) == 1) nt++;
     return road_line(P, t, nt);
 }
 
@@ -895,8 +917,19 @@ rs_result rs__text_parse(rs_ctx *ctx, const char *text, size_t size, rs_profile 
         L.s = ls;
         L.n = len;
         rs__tok t0;
-        if (rs__lex_next(&L, RS__LEX_PLAIN, &t0) == 0) continue;
-        if ((rc = text_line(&P, &L, &t0)) != RS_OK) goto done;
+        if (lex_plain(&L, &t0) == 0) continue;
+        char c = t0.s[0];
+        if (!P.in_style && ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.')) {
+            /* a point line (or an error road_line names): skip the keyword checks */
+            rs__tok t[MAX_TOKENS];
+            size_t nt = 1;
+            t[0] = t0;
+            while (nt < MAX_TOKENS && lex_plain(&L, &t[nt]) == 1) nt++;
+            rc = road_line(&P, t, nt);
+        } else {
+            rc = text_line(&P, &L, &t0);
+        }
+        if (rc != RS_OK) goto done;
     }
     if (P.in_road) {
         char q[64];
