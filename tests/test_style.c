@@ -595,7 +595,8 @@ static void test_road_style(void)
                        "road c width 8 class=primary\n0 0\n1 0\nend\n"
                        "road d width 8 style=secondary lanes=4\n0 0\n1 0\nend\n"
                        "road e width 3\n0 0\n1 0\nend\n"
-                       "road f width 3 style=nowhere\n0 0\n1 0\nend\n";
+                       "road f width 3 style=nowhere\n0 0\n1 0\nend\n"
+                       "road g width 1e6 class=primary lanes=4\n0 0\n1 0\nend\n";
     rs_styles *S;
     rs_roads *r;
     rs_styles_create(ctx, &S);
@@ -625,7 +626,12 @@ static void test_road_style(void)
     CHECK(rs_road_style(ctx, r, 4, S, RS_PROFILE_RMS, &s) == RS_OK && s.line_count == 0 && s.name[0] == 0);
     CHECK(rs_road_style(ctx, r, 5, S, RS_PROFILE_RMS, &s) == RS_ERR_INVALID_ARG);
     CHECK(contains(rs_ctx_message(ctx), "road 5 ('f'): style 'nowhere' is not defined"));
-    CHECK(rs_road_style(ctx, r, 6, S, RS_PROFILE_RMS, &s) == RS_ERR_INVALID_ARG);
+    /* a road wider than 2 km: the lines of a 2 km road, within the offset bound */
+    q.road_class = RS_CLASS_PRIMARY;
+    q.width = 2000;
+    CHECK(rs_road_style(ctx, r, 6, S, RS_PROFILE_RMS, &s) == RS_OK && rs_style_default(&q, &d) == RS_OK &&
+          memcmp(&s, &d, sizeof s) == 0 && s.line_count == 5 && fabs(s.line[4].offset) <= 1000);
+    CHECK(rs_road_style(ctx, r, 7, S, RS_PROFILE_RMS, &s) == RS_ERR_INVALID_ARG);
     CHECK(rs_road_style(ctx, r, 0, S, (rs_profile)9, &s) == RS_ERR_INVALID_ARG);
     CHECK(rs_road_style(ctx, r, 0, S, RS_PROFILE_RMS, NULL) == RS_ERR_INVALID_ARG);
     CHECK(rs_road_style(NULL, r, 0, S, RS_PROFILE_RMS, &s) == RS_ERR_INVALID_ARG);
