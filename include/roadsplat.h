@@ -180,6 +180,196 @@ RS_API rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name
                               const double **xy, size_t *n);
 
 /* ---------------------------------------------------------------------------
+ * Road attributes (docs/road-format.md): `key=value` words on a road's
+ * header line, `road NAME width W class=residential lanes=2 style=NAME
+ * oneway=yes`. Every attribute is kept as text (unknown keys too); the
+ * known keys below are checked when parsed and also decoded into
+ * rs_road_info. `width` may be left out when `class` or `lanes` is given:
+ * the width then comes from the lane-width table of the parse profile.
+ * ------------------------------------------------------------------------- */
+
+/* OpenStreetMap highway classes with built-in default styles. */
+typedef enum rs_road_class {
+    RS_CLASS_NONE = 0, /* no class given: an unstyled road */
+    RS_CLASS_MOTORWAY,
+    RS_CLASS_TRUNK,
+    RS_CLASS_PRIMARY,
+    RS_CLASS_SECONDARY,
+    RS_CLASS_TERTIARY,
+    RS_CLASS_RESIDENTIAL,
+    RS_CLASS_SERVICE,
+    RS_CLASS_TRACK,
+    RS_CLASS_PATH,
+    RS_CLASS_FOOTWAY,
+    RS_CLASS_CYCLEWAY,
+    RS_CLASS_COUNT
+} rs_road_class;
+
+/* `oneway=`: yes (or 1, true), no (or 0, false), -1 (one way against the
+ * direction of the points). NONE: not given, which is two-way except for
+ * motorways (one carriageway each, as OpenStreetMap maps them). */
+typedef enum rs_oneway {
+    RS_ONEWAY_NONE = 0,
+    RS_ONEWAY_NO = 1,
+    RS_ONEWAY_YES = 2,
+    RS_ONEWAY_REVERSE = 3
+} rs_oneway;
+
+/* `area=urban|rural`: which marking rules apply (German RMS: dashes 3/6 m
+ * in towns, 6/12 m outside). AUTO: decided by the class (docs/road-format.md). */
+typedef enum rs_area {
+    RS_AREA_AUTO = 0,
+    RS_AREA_URBAN = 1,
+    RS_AREA_RURAL = 2
+} rs_area;
+
+/* Marking and lane-width standards. All-zero (RMS) is the default. */
+typedef enum rs_profile {
+    RS_PROFILE_RMS = 0,  /* Germany: RMS markings, RAS-Q/RAA lane widths */
+    RS_PROFILE_MUTCD = 1 /* United States: MUTCD 2009 markings, AASHTO lane widths */
+} rs_profile;
+
+/* The decoded known attributes of one road. */
+typedef struct rs_road_info {
+    rs_road_class road_class; /* class= (RS_CLASS_NONE if absent) */
+    int link;                 /* class= was a *_link value (motorway_link ...) */
+    uint32_t lanes;           /* lanes= (1..16), 0 if absent */
+    rs_oneway oneway;         /* oneway= */
+    rs_area area;             /* area= */
+    const char *style;        /* style= (owned by the road set), NULL if absent */
+    int width_given;          /* 1: `width W` was given; 0: derived from class/lanes */
+} rs_road_info;
+
+/* A set of named styles (below; names unique within a set). */
+typedef struct rs_styles rs_styles;
+
+/* Options of rs_roads_parse_ex. All-zero means defaults. */
+typedef struct rs_road_parse_options {
+    rs_profile profile;  /* lane widths for roads without `width` */
+    rs_styles *styles;   /* non-NULL: the text's style blocks are added to this
+                            set (nothing is added when parsing fails) */
+} rs_road_parse_options;
+
+/* rs_roads_parse with options (`opts` may be NULL). Style blocks in the text
+ * are always checked; they are kept only when opts->styles is given. */
+RS_API rs_result rs_roads_parse_ex(rs_ctx *ctx, const char *text, size_t size,
+                                   const rs_road_parse_options *opts, rs_roads **out);
+/* Road i's known attributes. The style pointer stays valid as the name does
+ * (rs_roads_get). RS_ERR_INVALID_ARG if i is out of range. */
+RS_API rs_result rs_roads_get_info(const rs_roads *roads, size_t i, rs_road_info *out);
+/* Value of attribute `key` of road i (NUL-terminated, owned by roads, valid
+ * as the name is), or NULL if the road has no such attribute. */
+RS_API const char *rs_roads_get_attr(const rs_roads *roads, size_t i, const char *key);
+/* Number of attributes of road i (0 if i is out of range), and the k-th of
+ * them in file order (either output may be NULL). */
+RS_API size_t rs_roads_attr_count(const rs_roads *roads, size_t i);
+RS_API rs_result rs_roads_attr_at(const rs_roads *roads, size_t i, size_t k, const char **key,
+                                  const char **value);
+/* Set (or replace) attribute `key` of road i, with the parser's rules: key
+ * 1..64 characters of A-Z a-z 0-9 _ : . -, value valid UTF-8 without
+ * control characters, known keys checked (class, lanes, oneway, area,
+ * style; `width` is refused). Copied. Does not change the road's width.
+ * Invalidates the pointers from rs_roads_get*, like rs_roads_add. */
+RS_API rs_result rs_roads_set_attr(rs_ctx *ctx, rs_roads *roads, size_t i, const char *key,
+                                   const char *value);
+/* Name of a class as written in road files ("motorway"; "" for NONE), and
+ * the class of a name (RS_CLASS_NONE if unknown; *link set for *_link
+ * names when link is not NULL). Static strings. */
+RS_API const char *rs_road_class_name(rs_road_class c);
+RS_API rs_road_class rs_road_class_from_name(const char *name, int *link);
+
+/* ---------------------------------------------------------------------------
+ * Road styles (docs/road-format.md, seed 003 line symbols): what the
+ * renderer paints on and beside a road as functions of the arc length s and
+ * the signed lateral offset t (+ to the left of the direction of travel).
+ * A style is plain data (no pointers): copy it freely.
+ * ------------------------------------------------------------------------- */
+#define RS_STYLE_NAME_MAX 63 /* bytes of a style name, NUL excluded */
+#define RS_STYLE_MAX_LINES 32
+#define RS_STYLE_MAX_DASH 8  /* on/off lengths of one dash pattern (even count) */
+
+/* Colours are straight (not premultiplied) sRGB bytes with alpha. */
+typedef struct rs_colour {
+    uint8_t r, g, b, a;
+} rs_colour;
+
+typedef enum rs_surface {
+    RS_SURFACE_DEFAULT = 0,  /* the renderer's road surface (procedural asphalt or road texture) */
+    RS_SURFACE_FILL = 1,     /* one colour: fill */
+    RS_SURFACE_GRADIENT = 2  /* colour by |t|: gradient_centre at t = 0 to gradient_edge at the road edge */
+} rs_surface;
+
+/* `line T W #RRGGBB [dash ON OFF ...] [phase P]`: a band W metres wide
+ * centred at lateral offset T, solid or dashed along s. The dash pattern
+ * starts "on" at s = phase and repeats with period sum(dash). */
+typedef struct rs_style_line {
+    double offset;       /* T, metres, + left of the travel direction; |T| <= 1000 */
+    double width;        /* W, metres, 0.001..1000 */
+    rs_colour colour;
+    uint32_t dash_count; /* 0: solid; else even, 2..RS_STYLE_MAX_DASH */
+    double dash[RS_STYLE_MAX_DASH]; /* on, off, on, off ... metres, each 0.001..1e6 */
+    double phase;        /* metres, |phase| <= 1e9; 0 when solid */
+} rs_style_line;
+
+typedef struct rs_style {
+    char name[RS_STYLE_NAME_MAX + 1]; /* NUL-terminated, valid UTF-8 */
+    rs_surface surface;
+    rs_colour fill;                   /* RS_SURFACE_FILL */
+    rs_colour gradient_centre, gradient_edge; /* RS_SURFACE_GRADIENT */
+    double casing_width;              /* 0: no casing; else 0.001..1000 metres outside both road edges */
+    rs_colour casing;
+    uint32_t line_count;              /* 0..RS_STYLE_MAX_LINES, in paint order */
+    rs_style_line line[RS_STYLE_MAX_LINES];
+} rs_style;
+
+RS_API rs_result rs_styles_create(rs_ctx *ctx, rs_styles **out);
+/* Parse the style blocks of a text (a road file or a styles-only file; road
+ * blocks in it are checked as rs_roads_parse checks them, then dropped).
+ * Errors as rs_roads_parse: rs_ctx_message() starts with "line N:". */
+RS_API rs_result rs_styles_parse(rs_ctx *ctx, const char *text, size_t size, rs_styles **out);
+/* Add the style blocks of a text to `styles`; on failure the set is unchanged.
+ * A name already in the set is an error. */
+RS_API rs_result rs_styles_add_text(rs_ctx *ctx, rs_styles *styles, const char *text, size_t size);
+/* Add one style (copied), checked against the limits documented on
+ * rs_style; RS_ERR_INVALID_ARG naming the field otherwise. */
+RS_API rs_result rs_styles_add(rs_ctx *ctx, rs_styles *styles, const rs_style *style);
+RS_API void rs_styles_free(rs_ctx *ctx, rs_styles *styles);
+RS_API size_t rs_styles_count(const rs_styles *styles);
+/* Style i in the order added, or NULL. Owned by the set; valid until the
+ * next add to it or rs_styles_free. */
+RS_API const rs_style *rs_styles_get(const rs_styles *styles, size_t i);
+/* The style called `name`, or NULL. Same lifetime as rs_styles_get. */
+RS_API const rs_style *rs_styles_find(const rs_styles *styles, const char *name);
+
+/* What a built-in default style is made for. All-zero fields take the
+ * defaults shown. */
+typedef struct rs_style_request {
+    rs_road_class road_class; /* NONE: the unstyled road (no lines) */
+    uint32_t lanes;           /* 0 -> the class's default; else 1..16 */
+    rs_oneway oneway;         /* NONE -> the class's default */
+    rs_area area;             /* AUTO -> by class */
+    rs_profile profile;
+    double width;             /* road width, metres, 0..2000: the lanes are laid out
+                                 in it (scaled to fit); 0 -> rs_style_default_width */
+} rs_style_request;
+
+/* Built-in default style for `req` (tables and sources in
+ * docs/road-format.md). The name is the class name ("" for NONE). */
+RS_API rs_result rs_style_default(const rs_style_request *req, rs_style *out);
+/* Road width the lane-width table gives for `req` (req->width is ignored). */
+RS_API rs_result rs_style_default_width(const rs_style_request *req, double *width);
+
+/* The style road i is drawn with: its `style=` name looked up in `styles`
+ * (may be NULL), then among the built-in class names; else, for a road
+ * with a class, a style in `styles` named after the class, else the
+ * built-in default for its class, lanes, oneway, area and width under
+ * `profile` (a road wider than 2000 m is laid out as a 2000 m one); else
+ * the unstyled road (RS_SURFACE_DEFAULT, no lines). A
+ * `style=` name found nowhere gives RS_ERR_INVALID_ARG naming the road. */
+RS_API rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_styles *styles,
+                               rs_profile profile, rs_style *out);
+
+/* ---------------------------------------------------------------------------
  * Splatting (docs/design.md): a prepared, immutable splatter renders any
  * window of the output texture in four stages per window - coverage (how
  * much road is in each pixel), surface (terrain and road colours), overlays
