@@ -35,6 +35,7 @@ static const char render_usage[] =
     "Splat options (see roadsplat --help): --cell-size M, --z-scale S, --texels N,\n"
     "  --buffer distance|dilate, --road-cell M, --alpha-res N, --transition PX,\n"
     "  --jitter SEED, --terrain-texture IMG, --road-texture IMG, --texture-scale M,\n"
+    "  --styles FILE, --profile rms|us, --aa exact|hermite, --no-styles,\n"
     "  --png-level N (OUT.png compression 0..12, default 1)\n"
     "Render options:\n"
     "  --size WxH          image size (default 1280x960; with --ortho: the splat's size)\n"

@@ -28,13 +28,18 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
     static const char *const known[] = { "--cell-size", "--z-scale", "--texels", "--buffer", "--road-cell",
                                          "--alpha-res", "--transition", "--jitter", "--terrain-texture",
                                          "--road-texture", "--texture-scale", "--origin", "--edges", "--threads",
-                                         "--png-level" };
+                                         "--png-level", "--styles", "--profile", "--aa", "--no-styles" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
+    rs_splat_options *o = &s->o;
+    if (!strcmp(name, "--no-styles")) {
+        if (inl) { cli_error("%s takes no value", name); return 1; }
+        o->style.disable = 1;
+        return 0;
+    }
     const char *v;
     if (cli_option_value(argc, argv, i, name, inl, &v)) return 1;
-    rs_splat_options *o = &s->o;
     rs_dem_frame *fr = &s->frame;
     double d, xy[2];
     uint32_t u;
@@ -90,6 +95,16 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
             cli_error("%s: '%s' must be in [1e-6, 1e9] metres", name, v);
             return 1;
         }
+    } else if (!strcmp(name, "--styles")) {
+        s->styles_path = v;
+    } else if (!strcmp(name, "--profile")) {
+        if (!strcmp(v, "rms") || !strcmp(v, "de")) o->style.profile = RS_PROFILE_RMS;
+        else if (!strcmp(v, "us") || !strcmp(v, "mutcd")) o->style.profile = RS_PROFILE_MUTCD;
+        else { cli_error("%s: '%s' is not 'rms' (Germany) or 'us' (MUTCD)", name, v); return 1; }
+    } else if (!strcmp(name, "--aa")) {
+        if (!strcmp(v, "exact")) o->style.aa = RS_LINE_AA_EXACT;
+        else if (!strcmp(v, "hermite")) o->style.aa = RS_LINE_AA_HERMITE;
+        else { cli_error("%s: '%s' is not 'exact' or 'hermite'", name, v); return 1; }
     } else if (!strcmp(name, "--png-level")) {
         if (cli_parse_png_level(name, v, &s->png_level)) return 1;
         s->png_level_given = 1;
@@ -126,13 +141,33 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
         cli_error("%s: %s", dem_path, rs_ctx_message(ctx));
         return 1;
     }
+    if (rs_styles_create(ctx, &in->styles) != RS_OK) {
+        cli_error("%s", rs_ctx_message(ctx));
+        return 1;
+    }
+    /* --styles first: a road file's own style block of the same name is then an error naming its line */
+    if (s->styles_path) {
+        if (cli_read_file(s->styles_path, (size_t)16 << 20, &text, &size)) return 1;
+        rs_result r = rs_styles_add_text(ctx, in->styles, text, size);
+        free(text);
+        text = NULL;
+        if (r) {
+            cli_error("%s: %s", s->styles_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+            return 1;
+        }
+    }
     if (cli_read_file(roads_path, (size_t)lim.max_points * 64 + (1u << 20), &text, &size)) return 1;
-    rs_result r = rs_roads_parse(ctx, text, size, &in->roads);
+    rs_road_parse_options po;
+    memset(&po, 0, sizeof po);
+    po.profile = s->o.style.profile;
+    po.styles = in->styles;
+    rs_result r = rs_roads_parse_ex(ctx, text, size, &po, &in->roads);
     free(text);
     if (r) {
         cli_error("%s: %s", roads_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
         return 1;
     }
+    s->o.style.styles = in->styles;
     if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
         load_texture(s->road_tex, &in->road, &in->road_px))
         return 1;
@@ -144,6 +179,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
 void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in)
 {
     rs_roads_free(ctx, in->roads);
+    rs_styles_free(ctx, in->styles);
     rs_dem_free(ctx, in->dem);
     free(in->terrain_px);
     free(in->road_px);

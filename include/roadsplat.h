@@ -425,12 +425,33 @@ typedef struct rs_surface_options {
     double texture_scale;            /* metres per texture repeat; 0 -> 10; else 1e-6..1e9 */
 } rs_surface_options;
 
+/* Line-symbol anti-aliasing (docs/linesym.md). */
+typedef enum rs_line_aa {
+    RS_LINE_AA_EXACT = 0,  /* the exact area of each pixel inside each band (box filter) */
+    RS_LINE_AA_HERMITE = 1 /* seed 003: smoothstep of the pixel centre's distance to each band edge */
+} rs_line_aa;
+
+/* Road styles (issue 13; docs/road-format.md, docs/linesym.md): every road is
+ * drawn with rs_road_style(roads, i, styles, profile): casings under every
+ * road surface, fill or gradient surfaces, then its lines, by the overlays
+ * stage. Roads without class= or style= are unstyled, as before. All-zero
+ * means defaults. The grid build resolves the styles; a splatter checks
+ * that its grid was built with the same style options. */
+typedef struct rs_style_options {
+    const rs_styles *styles; /* named styles for style= and per-class overrides (borrowed while
+                                the grid is built); NULL -> built-in styles only */
+    rs_profile profile;      /* built-in styles' standard: RS_PROFILE_RMS (0) or RS_PROFILE_MUTCD */
+    rs_line_aa aa;           /* line anti-aliasing */
+    int disable;             /* non-zero: every road unstyled (no casing, fill or line) */
+} rs_style_options;
+
 /* All-zero means defaults. The frame (cell size, z-scale, origin) is the DEM's. */
 typedef struct rs_splat_options {
     uint32_t texels;                /* output texels per DEM cell side; 0 -> 8, else 1..1024 */
     rs_grid_options grid;
     rs_coverage_options coverage;
     rs_surface_options surface;
+    rs_style_options style;
     rs_progress_fn progress;        /* may be NULL; see rs_splat_window */
     void *progress_user;
 } rs_splat_options;
@@ -455,7 +476,7 @@ typedef struct rs_road_grid_stats {
 } rs_road_grid_stats;
 
 /* Prepare `roads` over `dem` (its frame included). `opts` may be NULL. Reads
- * texels, grid, coverage.edges and progress. The grid keeps no pointer to
+ * texels, grid, coverage.edges, style and progress. The grid keeps no pointer to
  * dem or roads. */
 RS_API rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                     const rs_splat_options *opts, rs_road_grid **out);

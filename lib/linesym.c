@@ -26,6 +26,7 @@ enum { PIECE_SLAB = 0, PIECE_WEDGE = 1 };
 typedef struct ls_piece {
     double ox, oy, ux, uy;
     double hp[HP_MAX][3];
+    double hpm[HP_MAX];  /* pixel margin x |normal| of each half-plane (set by push_piece) */
     uint32_t nhp;
     uint32_t kind;
     uint32_t band;
@@ -158,22 +159,23 @@ static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, u
     double pix = L->pixel, x0 = (double)px * pix - P->ox, y0 = (double)py * pix - P->oy, x1 = x0 + pix,
            y1 = y0 + pix;
     double ux = P->ux, uy = P->uy;
+    /* quick accept / reject on the centre, before any corner */
+    double xc = x0 + 0.5 * pix, yc = y0 + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+    double hm = L->margin;
+    int inside = 1;
+    for (uint32_t k = 0; k < P->nhp; k++) {
+        const double *h = P->hp[k];
+        double d = h[0] + h[1] * cu + h[2] * cv;
+        if (d < -P->hpm[k]) return 0;
+        if (d < P->hpm[k]) inside = 0;
+    }
+    if (P->kind == PIECE_WEDGE && sqrt(cu * cu + cv * cv) - hm >= P->r1) return 0;
     double bx[POLY_MAX], by[POLY_MAX], cx[POLY_MAX], cy[POLY_MAX];
     /* corners in (u, v) */
     const double X[4] = { x0, x1, x1, x0 }, Y[4] = { y0, y0, y1, y1 };
     for (int k = 0; k < 4; k++) {
         bx[k] = X[k] * ux + Y[k] * uy;
         by[k] = X[k] * uy - Y[k] * ux;
-    }
-    /* quick accept / reject on the centre */
-    double cu = 0.25 * (bx[0] + bx[1] + bx[2] + bx[3]), cv = 0.25 * (by[0] + by[1] + by[2] + by[3]);
-    double hm = L->margin;
-    int inside = 1;
-    for (uint32_t k = 0; k < P->nhp; k++) {
-        const double *h = P->hp[k];
-        double d = h[0] + h[1] * cu + h[2] * cv, nn = sqrt(h[1] * h[1] + h[2] * h[2]);
-        if (d < -hm * nn) return 0;
-        if (d < hm * nn) inside = 0;
     }
     uint32_t n = 4;
     double *sx = bx, *sy = by, *tx = cx, *ty = cy;
@@ -282,7 +284,9 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         L->pc = np;
         L->cap = nc;
     }
-    L->pc[L->npc++] = *P;
+    ls_piece *Q = &L->pc[L->npc++];
+    *Q = *P;
+    for (uint32_t k = 0; k < Q->nhp; k++) Q->hpm[k] = L->margin * sqrt(Q->hp[k][1] * Q->hp[k][1] + Q->hp[k][2] * Q->hp[k][2]);
     return RS_OK;
 }
 
@@ -941,6 +945,32 @@ static double piece_cover(const rs__linesym *L, const ls_piece *P, uint32_t px, 
     return L->aa == RS__AA_HERMITE ? piece_hermite(L, P, px, py) : piece_area(L, P, px, py);
 }
 
+/* Pixel columns [*lo, *hi] of row y whose centres lie in slab P's rectangle
+ * grown by the pixel margin (every pixel that can touch P; a superset is
+ * harmless, piece_cover gives 0 outside). Narrows *lo, *hi. */
+static void slab_row(const rs__linesym *L, const ls_piece *P, uint32_t y, double *lo, double *hi)
+{
+    double pix = L->pixel, m = L->margin, yc = ((double)y + 0.5) * pix - P->oy;
+    /* u = xr ux + yc uy in [-m, len + m]; v = xr uy - yc ux in [a - m, b + m]; xr = x - ox */
+    double k[2] = { P->ux, P->uy }, c[2] = { yc * P->uy, -yc * P->ux };
+    double l[2] = { -m, P->a - m }, h[2] = { P->len + m, P->b + m };
+    double xlo = -DBL_MAX, xhi = DBL_MAX;
+    for (int i = 0; i < 2; i++) {
+        if (fabs(k[i]) < 1e-12) {
+            if (c[i] < l[i] - 1e-9 || c[i] > h[i] + 1e-9) { *hi = *lo - 1; return; }
+            continue;
+        }
+        double t0 = (l[i] - c[i]) / k[i], t1 = (h[i] - c[i]) / k[i];
+        if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+        xlo = fmax(xlo, t0);
+        xhi = fmin(xhi, t1);
+    }
+    /* pixel centres (x + 0.5) pix = xr + ox, with a little slack for rounding */
+    double plo = ceil((xlo + P->ox) / pix - 0.5 - 1e-6), phi = floor((xhi + P->ox) / pix - 0.5 + 1e-6);
+    if (plo > *lo) *lo = plo;
+    if (phi < *hi) *hi = phi;
+}
+
 /* Visit the block cell by cell; per cell, each run of pieces of one band:
  * sum their covers into scratch, then hand the run to `emit`. Each pixel
  * belongs to the one cell that holds it, whose list is in painting order,
@@ -992,10 +1022,11 @@ static void visit(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, 
                            gy1 = floor(P->y1 / pix - 0.5);
                     for (uint32_t y = y0; y < y1; y++) {
                         if ((double)y < gy0 || (double)y > gy1) continue;
-                        for (uint32_t x = x0; x < x1; x++) {
-                            if ((double)x < gx0 || (double)x > gx1) continue;
-                            scratch[(y - y0) * cs + (x - x0)] += piece_cover(L, P, x, y);
-                        }
+                        double lo = gx0, hi = gx1;
+                        if (P->kind == PIECE_SLAB) slab_row(L, P, y, &lo, &hi);
+                        uint32_t qa = lo > (double)x0 ? (lo < (double)x1 ? (uint32_t)lo : x1) : x0;
+                        uint32_t qb = hi + 1 < (double)x1 ? (hi + 1 > (double)qa ? (uint32_t)(hi + 1) : qa) : x1;
+                        for (uint32_t x = qa; x < qb; x++) scratch[(y - y0) * cs + (x - x0)] += piece_cover(L, P, x, y);
                     }
                 }
                 emit(L, band, x0, x1, y0, y1, scratch, cs, user);

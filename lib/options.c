@@ -36,6 +36,10 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "jitter amount %g must be in (0,1]", c->jitter_amount);
     if (!(f->texture_scale >= 1e-6 && f->texture_scale <= 1e9))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "texture scale %g must be in [1e-6, 1e9] metres", f->texture_scale);
+    if (o.style.profile != RS_PROFILE_RMS && o.style.profile != RS_PROFILE_MUTCD)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown style profile %d", (int)o.style.profile);
+    if (o.style.aa != RS_LINE_AA_EXACT && o.style.aa != RS_LINE_AA_HERMITE)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown line anti-aliasing %d", (int)o.style.aa);
     const rs_image *tex[2] = { f->terrain_texture, f->road_texture };
     for (int i = 0; i < 2; i++)
         if (tex[i]) {

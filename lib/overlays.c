@@ -1,10 +1,80 @@
-/* Overlays stage: line symbols and markings drawn onto the road colour S
- * (SPEC: markings are composited onto S). None yet: the stage is the place
- * they plug in, after the surface and before the composite. */
+/* Overlays stage: road styles drawn between the surface and the composite
+ * (issue 13; docs/linesym.md "In the splat"), in layer order: casings onto
+ * the terrain colour T (under every road surface, so the composite's road
+ * weight covers them wherever a road is), fill and gradient surfaces onto
+ * the road colour S, then the line symbols onto S. Markings (issue 14)
+ * come next, onto S (SPEC: markings are composited onto S). */
 #include "splatter.h"
+#include "linesym.h"
+#include "roadfield.h"
+#include "styling.h"
+
+#include <math.h>
+
+#define HALF_SQRT2 0.70710678118654752440
+
+static void casings(const rs__styling *st, double pix, rs__piece *p)
+{
+    const size_t w = p->w;
+    double *cov = p->ov;
+    rs__roadfield_coverage(st->casing, p->x0, p->y0, p->w, p->rows, pix, cov, w);
+    for (uint32_t r = 0; r < p->rows; r++) {
+        float *tc = p->tc + (size_t)r * w * 3;
+        for (size_t k = 0; k < w; k++) {
+            double c = cov[(size_t)r * w + k];
+            /* a whole road pixel shows no terrain, hence no casing */
+            if (!(c > 0) || p->q[(size_t)r * w + k] == 65535u) continue;
+            const float *col = st->casing_rgba;
+            if (!st->casing_uniform) {
+                /* the colour of the nearest casing */
+                rs__road_point rp;
+                double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+                if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) continue;
+                col = st->colour + 16 * (size_t)st->casing_road[rp.road] + 12;
+            }
+            float a = (float)(c > 1 ? 1 : c) * col[3];
+            for (int ch = 0; ch < 3; ch++) {
+                float *v = tc + (size_t)ch * w + k;
+                *v = *v * (1.0f - a) + col[ch] * a;
+            }
+        }
+    }
+}
+
+static void surfaces(const rs__styling *st, double pix, rs__piece *p)
+{
+    const size_t w = p->w;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        float *sc = p->sc + (size_t)r * w * 3;
+        for (size_t k = 0; k < w; k++) {
+            if (p->q[(size_t)r * w + k] == 0) continue;
+            rs__road_point rp;
+            double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+            if (!rs__roadfield_nearest(st->near, x, y, pix * HALF_SQRT2, &rp)) continue;
+            uint8_t kind = st->surface[rp.road];
+            if (kind == RS_SURFACE_DEFAULT) continue;
+            const float *col = st->colour + 16 * (size_t)rp.road;
+            float c[4];
+            if (kind == RS_SURFACE_GRADIENT) {
+                double hw = st->half_width[rp.road], f = hw > 0 ? fabs(rp.t) / hw : 1;
+                float g = (float)(f > 1 ? 1 : f);
+                for (int ch = 0; ch < 4; ch++) c[ch] = col[4 + ch] + (col[8 + ch] - col[4 + ch]) * g;
+            } else {
+                for (int ch = 0; ch < 4; ch++) c[ch] = col[ch];
+            }
+            for (int ch = 0; ch < 3; ch++) {
+                float *v = sc + (size_t)ch * w + k;
+                *v = *v * (1.0f - c[3]) + c[ch] * c[3];
+            }
+        }
+    }
+}
 
 void rs__overlays(const rs_splatter *s, rs__piece *p)
 {
-    (void)s;
-    (void)p;
+    const rs__styling *st = s->grid->styling;
+    if (!st || p->w == 0 || p->rows == 0) return;
+    if (st->casing) casings(st, s->texel_m, p);
+    if (st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);
+    if (st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ov);
 }

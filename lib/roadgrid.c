@@ -6,6 +6,7 @@
 #include "roadgrid.h"
 #include "mask.h"
 #include "roadfield.h"
+#include "styling.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -584,6 +585,7 @@ void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
 {
     if (!ctx || !grid) return;
     rs__roadfield_free(ctx, grid->field);
+    rs__styling_free(ctx, grid->styling);
     if (grid->tiles) {
         for (size_t i = 0; i < (size_t)grid->tw * grid->th; i++) rs__free(ctx, grid->tiles[i]);
         rs__free(ctx, grid->tiles);
@@ -667,7 +669,15 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->texels = o.texels;
     g->opts = o.grid;
     g->edges = o.coverage.edges;
+    g->style = o.style;
+    g->style.styles = NULL; /* borrowed only while building */
     g->stats.bytes = sizeof *g;
+    r = rs__styling_build(ctx, dem, roads, &o, &g->styling);
+    if (r) {
+        rs__free(ctx, g);
+        return r;
+    }
+    if (g->styling) g->stats.bytes += g->styling->bytes;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
         r = build_field(ctx, dem, roads, o.texels, g);
         if (r) {
@@ -681,7 +691,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     uint32_t k = 1;
     r = choose_k(ctx, dem, roads, dem->frame.cell_size, o.texels, o.grid.road_cell, &k);
     if (r) {
-        rs__free(ctx, g);
+        rs_road_grid_free(ctx, g);
         return r;
     }
     g->k = k;
@@ -694,7 +704,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->stats.road_cell = g->c;
     g->tiles = rs__calloc(ctx, (size_t)g->tw * g->th, sizeof *g->tiles);
     if (!g->tiles) {
-        rs__free(ctx, g);
+        rs_road_grid_free(ctx, g);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the road grid directory");
     }
     marker m = { ctx, g };

@@ -26,6 +26,10 @@ struct rs_road_grid {
     uint8_t **tiles;         /* tw*th, NULL where there is no road */
     /* Analytic edges (or overlays): the road field, else NULL. */
     struct rs__roadfield *field;
+    /* Road styles (lib/styling.c), NULL when no road is styled; and the
+     * style options they were resolved with. */
+    struct rs__styling *styling;
+    rs_style_options style;
     rs_road_grid_stats stats;
 };
 

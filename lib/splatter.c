@@ -41,6 +41,9 @@ static rs_result check_grid(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *
     else if (g->frame.origin_x != dem->frame.origin_x || g->frame.origin_y != dem->frame.origin_y)
         what = "another origin";
     else if (g->edges != o->coverage.edges) what = "another edge mode";
+    else if (g->style.profile != o->style.profile || g->style.aa != o->style.aa ||
+             (g->style.disable != 0) != (o->style.disable != 0))
+        what = "other style options";
     else if (g->edges == RS_EDGES_ALPHAMAP &&
              (g->texels != o->texels || g->opts.buffer != o->grid.buffer || g->opts.road_cell != o->grid.road_cell))
         what = "other texels or grid options";
@@ -119,7 +122,7 @@ const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid 
 #define PIECE_PIXELS (1u << 18)
 
 typedef struct scratch {
-    double *cov, *hx, *tf;
+    double *cov, *hx, *tf, *ov;
     uint16_t *q;
     uint32_t *ti;
     float *tc, *sc, *trow0, *trow1;
@@ -128,6 +131,7 @@ typedef struct scratch {
 static void scratch_free(rs_ctx *ctx, scratch *b)
 {
     rs__free(ctx, b->cov);
+    rs__free(ctx, b->ov);
     rs__free(ctx, b->hx);
     rs__free(ctx, b->tf);
     rs__free(ctx, b->q);
@@ -170,6 +174,7 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     size_t npx = (size_t)cols * max_rows, ncol = tcache.ncol, nax = (size_t)cols + max_rows;
     scratch b;
     b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
+    b.ov = s->grid->styling ? rs__alloc_array(ctx, npx, sizeof *b.ov) : NULL;
     b.hx = rs__alloc_array(ctx, (size_t)cols * 6, sizeof *b.hx);
     b.tf = rs__alloc_array(ctx, nax * 2, sizeof *b.tf);
     b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
@@ -179,13 +184,14 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     b.sc = rs__calloc(ctx, npx * 3, sizeof *b.sc);
     b.trow0 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow0);
     b.trow1 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow1);
-    if (!b.cov || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
+    if (!b.cov || (s->grid->styling && !b.ov) || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
         scratch_free(ctx, &b);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", npx);
     }
     rs__piece p;
     memset(&p, 0, sizeof p);
     p.cov = b.cov;
+    p.ov = b.ov;
     p.q = b.q;
     p.tc = b.tc;
     p.sc = b.sc;

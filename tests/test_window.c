@@ -17,6 +17,8 @@ typedef struct fixture {
     sc_scene sc;
     rs_dem *dem;
     rs_roads *roads;
+    rs_roads *sroads;   /* the same roads with class= and style= attributes */
+    rs_styles *styles;
     rs_image tex[2];
     uint8_t tex_px[2][5 * 3 * 4];
 } fixture;
@@ -40,6 +42,26 @@ static void fixture_init(fixture *f, double origin)
     CHECK(rs_roads_add(ctx, f->roads, "b", 3.0, t, 2) == RS_OK);
     for (int i = 0; i < 4; i++) t[i] = c[i] + (i & 1 ? -origin : origin);
     CHECK(rs_roads_add(ctx, f->roads, "c", 1.2, t, 2) == RS_OK);
+    /* styled copy: a primary road with lines, a gradient with a casing and
+     * dashes, a residential street with a kerb */
+    static const char style_text[] = "style gradkerb\n"
+                                     "  gradient #505050 #909090\n"
+                                     "  casing 0.8 #C0C0C0\n"
+                                     "  line 0 0.3 #FFFFFF dash 1.5 1 phase 0.4\n"
+                                     "  line 1.2 0.15 #FFFF00C0\n"
+                                     "end\n";
+    CHECK(rs_styles_parse(ctx, style_text, sizeof style_text - 1, &f->styles) == RS_OK);
+    CHECK(rs_roads_create(ctx, &f->sroads) == RS_OK);
+    static const char *const attr[3][2] = { { "class", "primary" }, { "style", "gradkerb" }, { "class", "residential" } };
+    for (size_t i = 0; i < 3; i++) {
+        const char *name;
+        double w;
+        const double *xy;
+        size_t n;
+        CHECK(rs_roads_get(f->roads, i, &name, &w, &xy, &n) == RS_OK);
+        CHECK(rs_roads_add(ctx, f->sroads, name, w, xy, n) == RS_OK);
+        CHECK(rs_roads_set_attr(ctx, f->sroads, i, attr[i][0], attr[i][1]) == RS_OK);
+    }
     for (int k = 0; k < 2; k++) {
         for (size_t i = 0; i < sizeof f->tex_px[k]; i++) f->tex_px[k][i] = (uint8_t)(i * 37 + k * 101);
         f->tex[k].width = 5;
@@ -51,6 +73,8 @@ static void fixture_init(fixture *f, double origin)
 static void fixture_free(fixture *f)
 {
     rs_roads_free(ctx, f->roads);
+    rs_roads_free(ctx, f->sroads);
+    rs_styles_free(ctx, f->styles);
     rs_dem_free(ctx, f->dem);
     sc_scene_free(&f->sc);
 }
@@ -116,12 +140,22 @@ static void settings(int i, rs_splat_options *o, fixture *f, const char **name)
         o->surface.texture_scale = 3.7; break;
     case 5: *name = "1 texel"; o->texels = 1; break;
     case 6: *name = "defaults (analytic edges), 4 texels"; memset(o, 0, sizeof *o); o->texels = 4; break;
-    default: *name = "analytic, textures, 7 texels"; o->coverage.edges = RS_EDGES_ANALYTIC; o->texels = 7;
+    case 7: *name = "analytic, textures, 7 texels"; o->coverage.edges = RS_EDGES_ANALYTIC; o->texels = 7;
         o->surface.terrain_texture = &f->tex[0]; break;
+    case 8: *name = "styles (analytic), 4 texels"; memset(o, 0, sizeof *o); o->texels = 4; o->style.styles = f->styles;
+        break;
+    default: *name = "styles, alpha-map, Hermite lines, US profile, 5 texels"; o->texels = 5;
+        o->style.styles = f->styles; o->style.aa = RS_LINE_AA_HERMITE; o->style.profile = RS_PROFILE_MUTCD; break;
     }
 }
 
-#define NSETTINGS 8
+#define NSETTINGS 10
+
+/* The roads of setting i: the styled copy for the style settings. */
+static const rs_roads *roads_for(int i, const fixture *f)
+{
+    return i >= 8 ? f->sroads : f->roads;
+}
 
 static void test_tiling(void)
 {
@@ -134,7 +168,7 @@ static void test_tiling(void)
         const char *name;
         settings(i, &o, &f, &name);
         rs_splatter *s = NULL;
-        rs_result r = rs_splatter_create(ctx, f.dem, f.roads, NULL, &o, &s);
+        rs_result r = rs_splatter_create(ctx, f.dem, roads_for(i, &f), NULL, &o, &s);
         CHECKF(r == RS_OK, "%s: %s", name, rs_ctx_message(ctx));
         if (r) continue;
         whole ref;
@@ -157,6 +191,31 @@ static void test_tiling(void)
     fixture_free(&f);
 }
 
+/* The style settings draw something: setting 8 is setting 6 plus styles. */
+static void test_styles_drawn(void)
+{
+    fixture f;
+    fixture_init(&f, 0);
+    whole im[2] = { { 0, 0, NULL, NULL }, { 0, 0, NULL, NULL } };
+    const int which[2] = { 6, 8 };
+    for (int k = 0; k < 2; k++) {
+        rs_splat_options o;
+        const char *name;
+        settings(which[k], &o, &f, &name);
+        rs_splatter *s = NULL;
+        CHECK(rs_splatter_create(ctx, f.dem, roads_for(which[k], &f), NULL, &o, &s) == RS_OK);
+        if (s) CHECK(render_whole(s, &im[k]) == RS_OK);
+        rs_splatter_free(ctx, s);
+    }
+    size_t differ = 0, n = (size_t)im[0].w * im[0].h;
+    for (size_t i = 0; im[0].rgba && im[1].rgba && i < n; i++) differ += memcmp(im[0].rgba + 4 * i, im[1].rgba + 4 * i, 4) != 0;
+    CHECKF(differ > n / 20, "styles changed only %zu of %zu pixels", differ, n);
+    /* the road weight is the road's, styles or not */
+    CHECK(im[0].wt && im[1].wt && memcmp(im[0].wt, im[1].wt, n * 2) == 0);
+    for (int k = 0; k < 2; k++) free(im[k].rgba), free(im[k].wt);
+    fixture_free(&f);
+}
+
 /* A scene translated by 5e6 m (roads and origin together): same bytes. */
 static void test_translation(void)
 {
@@ -169,8 +228,9 @@ static void test_translation(void)
         settings(i, &o, &a, &name);
         settings(i, &o, &b, &name);
         rs_splatter *sa = NULL, *sb = NULL;
-        CHECK(rs_splatter_create(ctx, a.dem, a.roads, NULL, &o, &sa) == RS_OK);
-        CHECK(rs_splatter_create(ctx, b.dem, b.roads, NULL, &o, &sb) == RS_OK);
+        o.style.styles = a.styles; /* the two fixtures' style sets are the same */
+        CHECK(rs_splatter_create(ctx, a.dem, roads_for(i, &a), NULL, &o, &sa) == RS_OK);
+        CHECK(rs_splatter_create(ctx, b.dem, roads_for(i, &b), NULL, &o, &sb) == RS_OK);
         whole ia = { 0, 0, NULL, NULL }, ib = { 0, 0, NULL, NULL };
         if (sa && sb && render_whole(sa, &ia) == RS_OK && render_whole(sb, &ib) == RS_OK)
             CHECKF(memcmp(ia.rgba, ib.rgba, (size_t)ia.w * ia.h * 4) == 0, "%s: translation by 5e6 m changed bytes",
@@ -214,7 +274,7 @@ static void test_threads(void)
         const char *name;
         settings(i, &o, &f, &name);
         rs_splatter *s = NULL;
-        CHECK(rs_splatter_create(ctx, f.dem, f.roads, NULL, &o, &s) == RS_OK);
+        CHECK(rs_splatter_create(ctx, f.dem, roads_for(i, &f), NULL, &o, &s) == RS_OK);
         if (!s) continue;
         whole ref;
         CHECK(render_whole(s, &ref) == RS_OK);
@@ -317,7 +377,7 @@ static void test_alloc_failures(void)
 {
     fixture f;
     fixture_init(&f, 0);
-    for (int mode = 0; mode < 2; mode++) {
+    for (int mode = 0; mode < 4; mode++) {
         int succeeded = 0, wrong = 0, leaks = 0;
         long n;
         for (n = 0; n < 5000 && !succeeded; n++) {
@@ -329,10 +389,11 @@ static void test_alloc_failures(void)
             rs_splat_options o;
             memset(&o, 0, sizeof o);
             o.texels = 2;
-            o.coverage.edges = mode ? RS_EDGES_ANALYTIC : RS_EDGES_ALPHAMAP;
+            o.coverage.edges = mode & 1 ? RS_EDGES_ANALYTIC : RS_EDGES_ALPHAMAP;
+            if (mode >= 2) o.style.styles = f.styles; /* modes 2, 3: the styled roads */
             rs_splatter *s = NULL;
             uint8_t px[9 * 7 * 4];
-            rs_result r = rs_splatter_create(c, f.dem, f.roads, NULL, &o, &s);
+            rs_result r = rs_splatter_create(c, f.dem, mode >= 2 ? f.sroads : f.roads, NULL, &o, &s);
             if (!r) r = rs_splat_window(c, s, 3, 4, 9, 7, px, 9 * 4, NULL, 0, NULL);
             if (r == RS_OK) succeeded = 1;
             else if (r != RS_ERR_NOMEM) wrong++;
@@ -352,6 +413,7 @@ int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_tiling();
+    test_styles_drawn();
     test_translation();
     test_threads();
     test_arguments();

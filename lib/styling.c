@@ -1,0 +1,184 @@
+/* Road styles on the splat: per-road style resolution, the casing field,
+ * the surface lookup field and the line symbols (lib/styling.h). */
+#include "styling.h"
+#include "linesym.h"
+#include "roadfield.h"
+
+#include <math.h>
+#include <string.h>
+
+void rs__styling_free(rs_ctx *ctx, rs__styling *st)
+{
+    if (!st) return;
+    rs__linesym_free(ctx, st->lines);
+    rs__roadfield_free(ctx, st->casing);
+    rs__roadfield_free(ctx, st->near);
+    rs__free(ctx, st->casing_road);
+    rs__free(ctx, st->surface);
+    rs__free(ctx, st->colour);
+    rs__free(ctx, st->half_width);
+    rs__free(ctx, st);
+}
+
+static void put_colour(float *dst, rs_colour c)
+{
+    dst[0] = c.r;
+    dst[1] = c.g;
+    dst[2] = c.b;
+    dst[3] = (float)c.a / 255.0f;
+}
+
+static rs__roadfield_params field_params(const rs_dem *dem, uint32_t texels)
+{
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.origin_x = dem->frame.origin_x;
+    p.origin_y = dem->frame.origin_y;
+    p.cell_size = dem->frame.cell_size;
+    p.width_m = (double)(dem->width - 1) * dem->frame.cell_size;
+    p.height_m = (double)(dem->height - 1) * dem->frame.cell_size;
+    p.pixel = dem->frame.cell_size / texels;
+    return p;
+}
+
+rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                            rs__styling **out)
+{
+    *out = NULL;
+    if (o->style.disable) return RS_OK;
+    size_t n = rs_roads_count(roads);
+    if (n == 0) return RS_OK;
+    rs_result r = RS_OK;
+    rs__styling *st = rs__calloc(ctx, 1, sizeof *st);
+    rs_style *sty = NULL;
+    uint32_t *band_start = NULL;
+    rs__band *bands = NULL;
+    rs_roads *casing_roads = NULL;
+    if (!st) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road styles");
+    st->surface = rs__calloc(ctx, n, 1);
+    st->colour = rs__alloc_array(ctx, n, 16 * sizeof *st->colour);
+    st->half_width = rs__alloc_array(ctx, n, sizeof *st->half_width);
+    band_start = rs__alloc_array(ctx, n + 1, sizeof *band_start);
+    sty = rs__malloc(ctx, sizeof *sty);
+    if (!st->surface || !st->colour || !st->half_width || !band_start || !sty) { r = RS_ERR_NOMEM; goto fail; }
+    /* pass 1: styles, counts */
+    size_t nbands = 0, ncasing = 0;
+    int styled = 0;
+    for (size_t i = 0; i < n; i++) {
+        if ((r = rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, sty)) != RS_OK) goto fail_msg;
+        double w = 0;
+        rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+        st->half_width[i] = 0.5 * w;
+        st->surface[i] = (uint8_t)sty->surface;
+        float *c = st->colour + 16 * i;
+        put_colour(c, sty->surface == RS_SURFACE_GRADIENT ? sty->gradient_centre : sty->fill);
+        put_colour(c + 4, sty->gradient_centre);
+        put_colour(c + 8, sty->gradient_edge);
+        put_colour(c + 12, sty->casing);
+        if (sty->surface != RS_SURFACE_DEFAULT) st->any_surface = 1;
+        band_start[i] = (uint32_t)nbands;
+        nbands += sty->line_count;
+        if (sty->casing_width > 0) ncasing++;
+        styled |= sty->surface != RS_SURFACE_DEFAULT || sty->line_count || sty->casing_width > 0;
+    }
+    band_start[n] = (uint32_t)nbands;
+    if (!styled) {
+        rs__free(ctx, sty);
+        rs__free(ctx, band_start);
+        rs__styling_free(ctx, st);
+        rs__ok(ctx);
+        return RS_OK;
+    }
+    rs__roadfield_params fp = field_params(dem, o->texels);
+    /* pass 2: bands and casing roads (styles resolved again: each is small) */
+    if (nbands) {
+        bands = rs__alloc_array(ctx, nbands, sizeof *bands);
+        if (!bands) { r = RS_ERR_NOMEM; goto fail; }
+    }
+    /* dash arrays must outlive the build: one style per road is too many
+     * to keep, so copy the dashes into one array */
+    double *dash = NULL;
+    size_t ndash = 0;
+    if (nbands) {
+        dash = rs__alloc_array(ctx, nbands, RS_STYLE_MAX_DASH * sizeof *dash);
+        if (!dash) { r = RS_ERR_NOMEM; goto fail; }
+    }
+    if (ncasing && (r = rs_roads_create(ctx, &casing_roads)) != RS_OK) goto fail_dash;
+    if (ncasing) {
+        st->casing_road = rs__alloc_array(ctx, ncasing, sizeof *st->casing_road);
+        if (!st->casing_road) { r = RS_ERR_NOMEM; goto fail_dash; }
+    }
+    for (size_t i = 0, k = 0, cr = 0; i < n; i++) {
+        if ((r = rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, sty)) != RS_OK) goto fail_dash;
+        for (uint32_t j = 0; j < sty->line_count; j++, k++) {
+            const rs_style_line *ln = &sty->line[j];
+            rs__band *b = &bands[k];
+            b->t = ln->offset;
+            b->w = ln->width;
+            put_colour(b->rgba, ln->colour);
+            b->ndash = ln->dash_count;
+            b->dash = dash + ndash;
+            memcpy(dash + ndash, ln->dash, ln->dash_count * sizeof *dash);
+            ndash += ln->dash_count;
+            b->phase = ln->phase;
+        }
+        if (sty->casing_width > 0) {
+            const char *name = NULL;
+            const double *xy = NULL;
+            size_t np = 0;
+            double w = 0;
+            rs_roads_get(roads, i, &name, &w, &xy, &np);
+            if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * sty->casing_width, xy, np)) != RS_OK)
+                goto fail_dash;
+            const float *c = st->colour + 16 * i + 12;
+            if (cr == 0) {
+                memcpy(st->casing_rgba, c, sizeof st->casing_rgba);
+                st->casing_uniform = 1;
+            } else if (memcmp(st->casing_rgba, c, sizeof st->casing_rgba)) {
+                st->casing_uniform = 0;
+            }
+            st->casing_road[cr++] = (uint32_t)i;
+        }
+    }
+    if (nbands) {
+        rs__linesym_params lp;
+        memset(&lp, 0, sizeof lp);
+        lp.origin_x = dem->frame.origin_x;
+        lp.origin_y = dem->frame.origin_y;
+        lp.cell_size = dem->frame.cell_size;
+        lp.out_w = (dem->width - 1) * o->texels;
+        lp.out_h = (dem->height - 1) * o->texels;
+        lp.pixel = fp.pixel;
+        lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
+        if ((r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines)) != RS_OK) goto fail_dash;
+        st->bytes += rs__linesym_bytes(st->lines);
+    }
+    if (ncasing) {
+        if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
+        st->bytes += rs__roadfield_bytes(st->casing);
+    }
+    if (st->any_surface) {
+        if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near)) != RS_OK) goto fail_dash;
+        st->bytes += rs__roadfield_bytes(st->near);
+    }
+    st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double)) + ncasing * sizeof(uint32_t);
+    rs__free(ctx, dash);
+    rs__free(ctx, bands);
+    rs__free(ctx, band_start);
+    rs__free(ctx, sty);
+    rs_roads_free(ctx, casing_roads);
+    *out = st;
+    rs__ok(ctx);
+    return RS_OK;
+fail_dash:
+    rs__free(ctx, dash);
+fail:
+    if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory for road styles");
+fail_msg:
+    rs__free(ctx, bands);
+    rs__free(ctx, band_start);
+    rs__free(ctx, sty);
+    rs_roads_free(ctx, casing_roads);
+    rs__styling_free(ctx, st);
+    return r;
+}

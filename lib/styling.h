@@ -1,0 +1,32 @@
+/* Road styles on the splat (issue 13; docs/linesym.md "In the splat"):
+ * casings under every road surface, fill and gradient surfaces, and line
+ * symbols, prepared with the road grid and drawn by the overlays stage. */
+#ifndef RS_STYLING_H
+#define RS_STYLING_H
+#include "internal.h"
+
+struct rs__roadfield;
+struct rs__linesym;
+
+typedef struct rs__styling {
+    struct rs__linesym *lines;        /* NULL: no road has lines */
+    struct rs__roadfield *casing;     /* roads with a casing, widened by it on both sides; NULL: none */
+    uint32_t *casing_road;            /* casing field road -> road */
+    int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */
+    float casing_rgba[4];
+    struct rs__roadfield *near;       /* field for fill / gradient lookups (own) */
+    uint8_t *surface;                 /* per road: rs_surface */
+    float *colour;                    /* per road: fill rgba, gradient centre rgba, edge rgba, casing rgba (16 floats;
+                                         rgb 0..255, a 0..1) */
+    double *half_width;               /* per road */
+    int any_surface;                  /* some road has a fill or gradient */
+    size_t bytes;
+} rs__styling;
+
+/* Resolve every road's style (rs_road_style with o->style) and prepare what
+ * the overlays stage draws. *out stays NULL when no road is styled (or
+ * o->style.disable): the splat is then the unstyled one. */
+rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                            rs__styling **out);
+void rs__styling_free(rs_ctx *ctx, rs__styling *st);
+#endif
