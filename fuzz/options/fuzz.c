@@ -76,6 +76,16 @@ static void fuzz_splat(rs_ctx *ctx, rs_dem *dem, reader *rd)
     if (next_u(rd, 2)) o.surface.terrain_texture = &tex;
     if (next_u(rd, 2)) o.surface.road_texture = &tex;
     o.surface.texture_scale = next_d(rd);
+    /* styles last, so older corpus inputs keep their meaning: raw enums,
+     * and classes on the roads (lines, kerbs, fills) */
+    o.style.profile = (rs_profile)next_u(rd, 3);
+    o.style.aa = (rs_line_aa)next_u(rd, 3);
+    o.style.disable = (int)next_u(rd, 2);
+    static const char *const cls[] = { "motorway", "primary", "residential", "track", "footway" };
+    for (size_t k = 0; k < rs_roads_count(roads); k++) {
+        uint32_t c = next_u(rd, 6);
+        if (c < 5) REQUIRE(rs_roads_set_attr(ctx, roads, k, "class", cls[c]) == RS_OK);
+    }
     rs_splatter *s = (rs_splatter *)&o;
     rs_result r = rs_splatter_create(ctx, dem, roads, NULL, &o, &s);
     REQUIRE(known(r));
