@@ -153,6 +153,20 @@ static double hermite(double x)
     return x * x * (3 - 2 * x);
 }
 
+/* Area of the pixel square (side pix, centred at v = 0 of slab P's frame)
+ * where v <= x: a ramp, a plateau and a ramp along the normal. */
+static double strip_below(const ls_piece *P, double pix, double x)
+{
+    double p1 = pix * fabs(P->ux), p2 = pix * fabs(P->uy), lo = fmin(p1, p2), hi = fmax(p1, p2);
+    double e = 0.5 * (lo + hi), t = x + e, full = pix * pix;
+    if (t <= 0) return 0;
+    if (t >= 2 * e) return full;
+    int flip = t > e;
+    if (flip) t = 2 * e - t;
+    double h = full / hi, a = t <= lo ? (lo > 0 ? 0.5 * t * t * h / lo : 0) : 0.5 * lo * h + (t - lo) * h;
+    return flip ? full - a : a;
+}
+
 /* Area fraction of pixel (px, py) inside piece P (exact mode). */
 static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, uint32_t py)
 {
@@ -162,14 +176,36 @@ static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, u
     /* quick accept / reject on the centre, before any corner */
     double xc = x0 + 0.5 * pix, yc = y0 + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
     double hm = L->margin;
-    int inside = 1;
+    int inside = 1, across = 1; /* across: only the v limits (slab half-planes 2, 3) cut the pixel */
     for (uint32_t k = 0; k < P->nhp; k++) {
         const double *h = P->hp[k];
         double d = h[0] + h[1] * cu + h[2] * cv;
         if (d < -P->hpm[k]) return 0;
-        if (d < P->hpm[k]) inside = 0;
+        if (d < P->hpm[k]) {
+            inside = 0;
+            if (k != 2 && k != 3) across = 0;
+        }
     }
     if (P->kind == PIECE_WEDGE && sqrt(cu * cu + cv * cv) - hm >= P->r1) return 0;
+    if (P->kind == PIECE_SLAB && across) {
+        /* the pixel crosses the band's edges only: the strip's area in
+         * closed form (most line pixels), unless a dash end is in it */
+        double on = 1;
+        if (P->dashed) {
+            const ls_band *B = &L->band[P->band];
+            const double *d = L->dash + B->dash0;
+            double eu = 0.5 * pix * (fabs(ux) + fabs(uy)), x = P->s0 + cu - B->phase;
+            double m = x - floor(x / B->period) * B->period, acc = 0;
+            on = -1;
+            for (uint32_t j = 0; j < B->ndash; j++) {
+                double lo = acc, hi = acc + d[j];
+                if (m - eu >= lo && m + eu <= hi) { on = (j & 1) == 0; break; }
+                acc = hi;
+            }
+        }
+        if (on == 0) return 0;
+        if (on > 0) return (strip_below(P, pix, P->b - cv) - strip_below(P, pix, P->a - cv)) / (pix * pix);
+    }
     double bx[POLY_MAX], by[POLY_MAX], cx[POLY_MAX], cy[POLY_MAX];
     /* corners in (u, v) */
     const double X[4] = { x0, x1, x1, x0 }, Y[4] = { y0, y0, y1, y1 };
