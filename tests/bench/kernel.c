@@ -6,7 +6,8 @@
  * procedural terrain and a tiled terrain texture. Stage times come from
  * rs_splat_profile.
  * Usage: kernel OUTDIR      (writes OUTDIR/kernel.md and kernel.csv)
- *        kernel OUTDIR once (each case once, no files: for callgrind) */
+ *        kernel OUTDIR once [CASE] (each case, or only case CASE 0..3, once,
+ *                                   no files: for callgrind) */
 #include "roadsplat.h"
 #include "scenes.h"
 #include "timing.h"
@@ -19,6 +20,7 @@
 
 typedef struct kcase {
     const char *name;
+    int index;
     double ms, fill_ms, cov, surf, comp;
     uint32_t w, h;
 } kcase;
@@ -30,10 +32,13 @@ static double clock_ms(void *user)
 }
 
 /* Fastest of `runs` whole-image windows, and the fill of the same buffer. */
+static int only_case = -1;
+
 static int measure(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, int runs,
                    kcase *k)
 {
     rs_splatter *s = NULL;
+    if (only_case >= 0 && only_case != k->index) return 0;
     if (rs_splatter_create(ctx, dem, roads, NULL, o, &s)) return -1;
     rs_splatter_size(s, &k->w, &k->h);
     size_t n = (size_t)k->w * k->h;
@@ -69,6 +74,7 @@ int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
     int once = argc > 2 && !strcmp(argv[2], "once"), runs = once ? 1 : RUNS;
+    int only = once && argc > 3 ? atoi(argv[3]) : -1;
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
     const uint32_t TS = 256;
@@ -78,6 +84,8 @@ int main(int argc, char **argv)
     rs_image img = { TS, TS, tex };
     kcase ks[4];
     memset(ks, 0, sizeof ks);
+    only_case = only;
+    for (int i = 0; i < 4; i++) ks[i].index = i;
     ks[0].name = "1025^2 fractal, procedural terrain";
     ks[1].name = "1025^2 fractal, terrain texture";
     ks[2].name = "city scene, procedural terrain";
