@@ -114,7 +114,9 @@ void rs_splatter_size(const rs_splatter *s, uint32_t *width, uint32_t *height)
 
 const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid : NULL; }
 
-/* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window. */
+/* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window; per
+ * window column, the terrain colour rows and each texture's column
+ * coordinates add a few dozen bytes. */
 #define PIECE_COLS 2048u
 #define PIECE_PIXELS (1u << 18)
 
