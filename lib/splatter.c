@@ -117,7 +117,9 @@ void rs_splatter_size(const rs_splatter *s, uint32_t *width, uint32_t *height)
 
 const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid : NULL; }
 
-/* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window. */
+/* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window; per
+ * window column, the terrain colour rows and each texture's column
+ * coordinates add a few dozen bytes. */
 #define PIECE_COLS 2048u
 #define PIECE_PIXELS (1u << 18)
 
@@ -171,7 +173,10 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     tcache.c0 = x0 / T;
     tcache.ncol = (x0 + w - 1) / T + 2 - tcache.c0;
     tcache.row_of[0] = tcache.row_of[1] = UINT32_MAX;
-    size_t npx = (size_t)cols * max_rows, ncol = tcache.ncol, nax = (size_t)cols + max_rows;
+    /* texture coordinates: the window's columns per texture, a piece's rows */
+    const int has_tex[2] = { s->o.surface.terrain_texture != NULL, s->o.surface.road_texture != NULL };
+    size_t npx = (size_t)cols * max_rows, ncol = tcache.ncol;
+    size_t nax = (size_t)max_rows + (size_t)w * (size_t)(has_tex[0] + has_tex[1]);
     scratch b;
     b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
     b.ov = s->grid->styling ? rs__alloc_array(ctx, npx, sizeof *b.ov) : NULL;
@@ -196,8 +201,16 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     p.tc = b.tc;
     p.sc = b.sc;
     p.hx = b.hx;
-    p.tf = b.tf;
-    p.ti = b.ti;
+    p.win_x0 = x0;
+    p.win_w = w;
+    p.tiy = b.ti;
+    p.twy = b.tf;
+    size_t at = 2 * (size_t)max_rows;
+    for (int t = 0; t < 2; t++) {
+        p.tix[t] = has_tex[t] ? b.ti + at : NULL;
+        p.twx[t] = has_tex[t] ? b.tf + at : NULL;
+        at += has_tex[t] ? 2 * (size_t)w : 0;
+    }
     tcache.rgb[0] = b.trow0;
     tcache.rgb[1] = b.trow1;
     p.tcache = &tcache;

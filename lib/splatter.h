@@ -56,8 +56,15 @@ typedef struct rs__piece {
     float *tc, *sc;   /* surface: terrain and road colour; each row planar: w R, w G, w B */
     rs__terrain_cache *tcache; /* surface: the window's terrain colour rows */
     double *hx;       /* surface: two horizontal interpolants, 6 planes of w */
-    uint32_t *ti;     /* surface: texture indices, 2 per column or row */
-    double *tf;       /* surface: texture weights (1 - f, f), 2 per column or row */
+    /* surface: bilinear texture coordinates, planar (texel i0 then i1,
+     * weight 1 - f then f). Columns of the whole window [win_x0, win_x0 +
+     * win_w) per texture (terrain [0], road [1]; NULL: no such texture),
+     * computed by the window's first piece that needs them (tx_ready);
+     * rows per piece. */
+    uint32_t win_x0, win_w;
+    uint32_t *tix[2], *tiy;
+    double *twx[2], *twy;
+    int tx_ready[2];
     uint64_t road_pixels;
 } rs__piece;
 

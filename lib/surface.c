@@ -119,18 +119,10 @@ static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i,
     }
 }
 
-#if defined(__SSE2__)
-static int load32(const uint8_t *p)
-{
-    uint32_t v;
-    memcpy(&v, p, 4);
-    return (int)v;
-}
-#endif
-
 /* Texture coordinate tables along one axis: for n pixels starting at pixel
- * p0, the texel pair (i0, i1) and the weights (1 - f, f) of the bilinear
- * sample of an image of `size` texels per repeat. */
+ * p0, the texel pair (i0[k], i1[k] = i0[n + k]) and the weights (1 - f in
+ * wt[k], f in wt[n + k]) of the bilinear sample of an image of `size`
+ * texels per repeat. */
 static void texture_axis(uint32_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
                          double *wt)
 {
@@ -141,62 +133,92 @@ static void texture_axis(uint32_t p0, uint32_t n, double texel_m, double scale, 
         double fu = floor(u), au = u - fu;
         int64_t x0 = (int64_t)fu;
         int64_t a = x0 >= 0 && x0 < S ? x0 : ((x0 % S) + S) % S;
-        idx[2 * k] = (uint32_t)a;
-        idx[2 * k + 1] = (uint32_t)(a + 1 == S ? 0 : a + 1);
-        wt[2 * k] = 1 - au;
-        wt[2 * k + 1] = au;
+        idx[k] = (uint32_t)a;
+        idx[n + k] = (uint32_t)(a + 1 == S ? 0 : a + 1);
+        wt[k] = 1 - au;
+        wt[n + k] = au;
     }
 }
 
+#if defined(__SSE2__)
+static __m128i load32(const uint8_t *p)
+{
+    int32_t v;
+    memcpy(&v, p, 4);
+    return _mm_cvtsi32_si128(v);
+}
+
+/* Texel a (one pixel) and texel b (the next pixel) widened to 32 bits:
+ * lo = R R' G G', hi = B B' A A'. */
+static void texel_pair(const uint8_t *a, const uint8_t *b, __m128i *lo, __m128i *hi)
+{
+    const __m128i z = _mm_setzero_si128();
+    __m128i x = _mm_unpacklo_epi8(_mm_unpacklo_epi8(load32(a), load32(b)), z);
+    *lo = _mm_unpacklo_epi16(x, z);
+    *hi = _mm_unpackhi_epi16(x, z);
+}
+
+/* One channel of two pixels: the bilinear sample as float, in the scalar
+ * loop's order of operations; i selects the channel's 32-bit pair. */
+#define TEX_CHANNEL(i00, i01, i10, i11)                                                                         \
+    _mm_cvtpd_ps(_mm_add_pd(                                                                                   \
+        _mm_mul_pd(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(i00), vbu), _mm_mul_pd(_mm_cvtepi32_pd(i01), vau)), vbv), \
+        _mm_mul_pd(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(i10), vbu), _mm_mul_pd(_mm_cvtepi32_pd(i11), vau)), vav)))
+#endif
+
 /* A tiled texture into dst over the piece's pixels with terrain (road = 0)
- * or with road (road = 1): coordinates once per column and per row. */
+ * or with road (road = 1); the other pixels may get colours too, which the
+ * composite never reads. Column coordinates once per run of pieces with
+ * the same columns, row coordinates per piece. */
 static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *img, int road, float *dst)
 {
-    uint32_t *cx = p->ti, *ry = p->ti + 2 * (size_t)p->w;
-    double *wx = p->tf, *wy = p->tf + 2 * (size_t)p->w;
+    const size_t w = p->w, ww = p->win_w, off = p->x0 - p->win_x0;
+    uint32_t *ry = p->tiy;
+    double *wy = p->twy;
     double scale = s->o.surface.texture_scale;
-    texture_axis(p->x0, p->w, s->texel_m, scale, img->width, cx, wx);
+    if (!p->tx_ready[road]) {
+        texture_axis(p->win_x0, p->win_w, s->texel_m, scale, img->width, p->tix[road], p->twx[road]);
+        p->tx_ready[road] = 1;
+    }
     texture_axis(p->y0, p->rows, s->texel_m, scale, img->height, ry, wy);
+    const uint32_t *cx = p->tix[road] + off, *cx1 = cx + ww;
+    const double *bu = p->twx[road] + off, *au = bu + ww;
+    /* pixels of no interest: pure road for the terrain, pure terrain for
+     * the road; skipped two at a time */
+    const uint16_t skip = road ? 0 : 65535u;
     const size_t W4 = 4 * (size_t)img->width;
     for (uint32_t r = 0; r < p->rows; r++) {
-        const uint16_t *q = p->q + (size_t)r * p->w;
-        float *out = dst + (size_t)r * p->w * 3;
-        const uint8_t *ra = img->rgba + ry[2 * r] * W4, *rb = img->rgba + ry[2 * r + 1] * W4;
-        const double bv = wy[2 * r], av = wy[2 * r + 1];
-        for (uint32_t k = 0; k < p->w; k++) {
-            if (road ? q[k] == 0 : q[k] == 65535u) continue;
-            const uint8_t *p00 = ra + 4 * (size_t)cx[2 * k], *p01 = ra + 4 * (size_t)cx[2 * k + 1];
-            const uint8_t *p10 = rb + 4 * (size_t)cx[2 * k], *p11 = rb + 4 * (size_t)cx[2 * k + 1];
-            const double bu = wx[2 * k], au = wx[2 * k + 1];
+        const uint16_t *q = p->q + (size_t)r * w;
+        float *out = dst + (size_t)r * w * 3;
+        const uint8_t *ra = img->rgba + ry[r] * W4, *rb = img->rgba + ry[p->rows + r] * W4;
+        const double bv = wy[r], av = wy[p->rows + r];
+        size_t k = 0;
 #if defined(__SSE2__)
-            /* all four channels of a texel at once, the scalar arithmetic */
-            const __m128i z = _mm_setzero_si128();
-            __m128d v[2], vbu = _mm_set1_pd(bu), vau = _mm_set1_pd(au), vbv = _mm_set1_pd(bv), vav = _mm_set1_pd(av);
-            __m128i t00 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p00)), z), z);
-            __m128i t01 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p01)), z), z);
-            __m128i t10 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p10)), z), z);
-            __m128i t11 = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(load32(p11)), z), z);
-            for (int h = 0; h < 2; h++) {
-                __m128d a = _mm_cvtepi32_pd(t00), b = _mm_cvtepi32_pd(t01), c = _mm_cvtepi32_pd(t10),
-                        d = _mm_cvtepi32_pd(t11);
-                v[h] = _mm_add_pd(_mm_mul_pd(_mm_add_pd(_mm_mul_pd(a, vbu), _mm_mul_pd(b, vau)), vbv),
-                                  _mm_mul_pd(_mm_add_pd(_mm_mul_pd(c, vbu), _mm_mul_pd(d, vau)), vav));
-                t00 = _mm_srli_si128(t00, 8);
-                t01 = _mm_srli_si128(t01, 8);
-                t10 = _mm_srli_si128(t10, 8);
-                t11 = _mm_srli_si128(t11, 8);
-            }
-            __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(v[0]), _mm_cvtpd_ps(v[1]));
-            float rgb[4];
-            _mm_storeu_ps(rgb, f);
-            out[k] = rgb[0];
-            out[(size_t)p->w + k] = rgb[1];
-            out[2 * (size_t)p->w + k] = rgb[2];
-#else
-            for (int c = 0; c < 3; c++)
-                out[c * (size_t)p->w + k] =
-                    (float)((p00[c] * bu + p01[c] * au) * bv + (p10[c] * bu + p11[c] * au) * av);
+        /* two pixels per channel in a register, the scalar arithmetic */
+        const __m128d vbv = _mm_set1_pd(bv), vav = _mm_set1_pd(av);
+        for (; k + 2 <= w; k += 2) {
+            if (q[k] == skip && q[k + 1] == skip) continue;
+            __m128i l00, h00, l01, h01, l10, h10, l11, h11;
+            texel_pair(ra + 4 * (size_t)cx[k], ra + 4 * (size_t)cx[k + 1], &l00, &h00);
+            texel_pair(ra + 4 * (size_t)cx1[k], ra + 4 * (size_t)cx1[k + 1], &l01, &h01);
+            texel_pair(rb + 4 * (size_t)cx[k], rb + 4 * (size_t)cx[k + 1], &l10, &h10);
+            texel_pair(rb + 4 * (size_t)cx1[k], rb + 4 * (size_t)cx1[k + 1], &l11, &h11);
+            const __m128d vbu = _mm_loadu_pd(bu + k), vau = _mm_loadu_pd(au + k);
+            __m128 fr = TEX_CHANNEL(l00, l01, l10, l11);
+            __m128 fg = TEX_CHANNEL(_mm_srli_si128(l00, 8), _mm_srli_si128(l01, 8), _mm_srli_si128(l10, 8),
+                                    _mm_srli_si128(l11, 8));
+            __m128 fb = TEX_CHANNEL(h00, h01, h10, h11);
+            _mm_storel_epi64((__m128i *)(void *)(out + k), _mm_castps_si128(fr));
+            _mm_storel_epi64((__m128i *)(void *)(out + w + k), _mm_castps_si128(fg));
+            _mm_storel_epi64((__m128i *)(void *)(out + 2 * w + k), _mm_castps_si128(fb));
+        }
 #endif
+        for (; k < w; k++) {
+            if (q[k] == skip) continue;
+            const uint8_t *p00 = ra + 4 * (size_t)cx[k], *p01 = ra + 4 * (size_t)cx1[k];
+            const uint8_t *p10 = rb + 4 * (size_t)cx[k], *p11 = rb + 4 * (size_t)cx1[k];
+            for (int c = 0; c < 3; c++)
+                out[c * w + k] = (float)((p00[c] * bu[k] + p01[c] * au[k]) * bv + (p10[c] * bu[k] + p11[c] * au[k]) * av);
         }
     }
 }

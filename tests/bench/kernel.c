@@ -1,12 +1,13 @@
 /* Splat kernel speed, one thread: rs_splat_window over the whole image on a
  * prepared splatter (the road grid or field is built once, outside the
  * timing), fastest of RUNS, against a plain RGBA fill of the same image in
- * the same run. Scenes: the 1025^2 fractal of tests/bench/sparse.c (one
+ * the same run; the procedural and textured runs of a scene alternate. Scenes: the 1025^2 fractal of tests/bench/sparse.c (one
  * short road) and the city scene of tests/bench/splat.c, both at 4 texels,
  * procedural terrain and a tiled terrain texture. Stage times come from
  * rs_splat_profile.
  * Usage: kernel OUTDIR      (writes OUTDIR/kernel.md and kernel.csv)
- *        kernel OUTDIR once (each case once, no files: for callgrind) */
+ *        kernel OUTDIR once [CASE] (each case, or only case CASE 0..3, once,
+ *                                   no files: for callgrind) */
 #include "roadsplat.h"
 #include "scenes.h"
 #include "timing.h"
@@ -19,6 +20,7 @@
 
 typedef struct kcase {
     const char *name;
+    int index;
     double ms, fill_ms, cov, surf, comp;
     uint32_t w, h;
 } kcase;
@@ -29,46 +31,69 @@ static double clock_ms(void *user)
     return tm_now_ms();
 }
 
-/* Fastest of `runs` whole-image windows, and the fill of the same buffer. */
-static int measure(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, int runs,
-                   kcase *k)
+static int only_case = -1;
+
+/* One whole-image window of splatter s into rgba, after a fill of the same
+ * buffer; keeps the fastest of each in k. */
+static int run_once(rs_ctx *ctx, const rs_splatter *s, uint8_t *rgba, int i, int profile, kcase *k)
 {
-    rs_splatter *s = NULL;
-    if (rs_splatter_create(ctx, dem, roads, NULL, o, &s)) return -1;
-    rs_splatter_size(s, &k->w, &k->h);
     size_t n = (size_t)k->w * k->h;
-    uint8_t *rgba = malloc(n * 4);
-    if (!rgba) return -1;
-    k->ms = k->fill_ms = 1e300;
-    for (int i = 0; i < runs; i++) {
-        double t0 = tm_now_ms();
-        uint32_t px = 0x11223344u + (uint32_t)i, *p32 = (uint32_t *)(void *)rgba;
-        for (size_t j = 0; j < n; j++) p32[j] = px;
-        double t = tm_now_ms() - t0;
-        if (t < k->fill_ms) k->fill_ms = t;
-        rs_splat_profile pf;
-        memset(&pf, 0, sizeof pf);
-        pf.clock_ms = clock_ms;
-        t0 = tm_now_ms();
-        if (rs_splat_window(ctx, s, 0, 0, k->w, k->h, rgba, (size_t)k->w * 4, NULL, 0, runs > 1 ? &pf : NULL))
-            return -1;
-        t = tm_now_ms() - t0;
-        if (t < k->ms) {
-            k->ms = t;
-            k->cov = pf.coverage_ms;
-            k->surf = pf.surface_ms;
-            k->comp = pf.composite_ms;
+    double t0 = tm_now_ms();
+    uint32_t px = 0x11223344u + (uint32_t)i, *p32 = (uint32_t *)(void *)rgba;
+    for (size_t j = 0; j < n; j++) p32[j] = px;
+    double t = tm_now_ms() - t0;
+    if (t < k->fill_ms) k->fill_ms = t;
+    rs_splat_profile pf;
+    memset(&pf, 0, sizeof pf);
+    pf.clock_ms = clock_ms;
+    t0 = tm_now_ms();
+    if (rs_splat_window(ctx, s, 0, 0, k->w, k->h, rgba, (size_t)k->w * 4, NULL, 0, profile ? &pf : NULL)) return -1;
+    t = tm_now_ms() - t0;
+    if (t < k->ms) {
+        k->ms = t;
+        k->cov = pf.coverage_ms;
+        k->surf = pf.surface_ms;
+        k->comp = pf.composite_ms;
+    }
+    return 0;
+}
+
+/* Fastest of `runs` whole-image windows, and of the fill of the same buffer,
+ * for the two option sets of one scene (procedural and textured terrain):
+ * their runs alternate, so that a busy machine slows both alike and their
+ * ratio holds. */
+static int measure(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options o[2], int runs,
+                   kcase k[2])
+{
+    rs_splatter *s[2] = { NULL, NULL };
+    int use[2], rc = -1;
+    uint8_t *rgba = NULL;
+    for (int c = 0; c < 2; c++) {
+        use[c] = only_case < 0 || only_case == k[c].index;
+        k[c].ms = k[c].fill_ms = 1e300;
+        if (use[c]) {
+            if (rs_splatter_create(ctx, dem, roads, NULL, &o[c], &s[c])) goto done;
+            rs_splatter_size(s[c], &k[c].w, &k[c].h);
         }
     }
+    if (!use[0] && !use[1]) return 0;
+    rgba = malloc((size_t)k[use[0] ? 0 : 1].w * k[use[0] ? 0 : 1].h * 4);
+    if (!rgba) goto done;
+    for (int i = 0; i < runs; i++)
+        for (int c = 0; c < 2; c++)
+            if (use[c] && run_once(ctx, s[c], rgba, i, runs > 1, &k[c])) goto done;
+    rc = 0;
+done:
     free(rgba);
-    rs_splatter_free(ctx, s);
-    return 0;
+    for (int c = 0; c < 2; c++) rs_splatter_free(ctx, s[c]);
+    return rc;
 }
 
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
     int once = argc > 2 && !strcmp(argv[2], "once"), runs = once ? 1 : RUNS;
+    int only = once && argc > 3 ? atoi(argv[3]) : -1;
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
     const uint32_t TS = 256;
@@ -78,6 +103,8 @@ int main(int argc, char **argv)
     rs_image img = { TS, TS, tex };
     kcase ks[4];
     memset(ks, 0, sizeof ks);
+    only_case = only;
+    for (int i = 0; i < 4; i++) ks[i].index = i;
     ks[0].name = "1025^2 fractal, procedural terrain";
     ks[1].name = "1025^2 fractal, terrain texture";
     ks[2].name = "city scene, procedural terrain";
@@ -99,9 +126,9 @@ int main(int argc, char **argv)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
-    rs_splat_options ot = o;
-    ot.surface.terrain_texture = &img;
-    if (measure(ctx, dem, roads, &o, runs, &ks[0]) || measure(ctx, dem, roads, &ot, runs, &ks[1])) return 1;
+    rs_splat_options oo[2] = { o, o };
+    oo[1].surface.terrain_texture = &img;
+    if (measure(ctx, dem, roads, oo, runs, &ks[0])) return 1;
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
 
@@ -113,7 +140,7 @@ int main(int argc, char **argv)
         if (rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n)) return 1;
     rs_dem_frame fc = { sc.cell_size, 0.01, 0, 0 };
     if (rs_dem_set_frame(ctx, dem, &fc)) return 1;
-    if (measure(ctx, dem, roads, &o, runs, &ks[2]) || measure(ctx, dem, roads, &ot, runs, &ks[3])) return 1;
+    if (measure(ctx, dem, roads, oo, runs, &ks[2])) return 1;
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
@@ -129,7 +156,7 @@ int main(int argc, char **argv)
     if (!md || !csv) return 1;
     fprintf(md, "## Splat kernel, one thread (tests/bench/kernel.c)\n\n"
                 "`rs_splat_window` over the whole image on a prepared splatter (road grid built once, not timed), RGBA "
-                "only, one thread; fastest of %d runs. \"Ratio to fill\" = time of a plain RGBA fill of the same buffer "
+                "only, one thread; fastest of %d runs, the procedural and textured runs of a scene alternating. \"Ratio to fill\" = time of a plain RGBA fill of the same buffer "
                 "(fastest of %d, interleaved) / splat time. Stage columns: coverage, surface and composite ms of the "
                 "fastest run (rs_splat_profile). Scenes at 4 texels: the 1025^2 fractal of the sparse benchmark (one "
                 "50 m road) and `sc_city_default(1)` (z-scale 0.01); the terrain texture is 256 x 256.\n\n"
