@@ -143,6 +143,23 @@ expect_fail "bad edges" "'alphamap' or 'analytic'" --edges smooth "$T/dem.pgm" "
 # --- the bundled example renders ---
 "$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 "$E/dem.pgm" "$E/roads.txt" "$T/ex.png" && ok || bad "example"
 
+# --- road styles (issue 13) ---
+expect_fail "bad profile" "--profile: 'fr'" --profile fr "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "bad aa" "--aa: 'smooth'" --aa smooth "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+expect_fail "missing styles file" "$T/nostyles.txt" --styles "$T/nostyles.txt" "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+printf 'style s\n  line 0 0.2 #FFFFFF\n  fill #12345\nend\n' >"$T/badstyle.txt"
+expect_fail "bad style line" "badstyle.txt: line 3" --styles "$T/badstyle.txt" "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
+sed 's/^road \([^ ]*\) width \([^ ]*\)$/road \1 width \2 style=nowhere/' "$T/roads.txt" >"$T/undef.txt"
+expect_fail "undefined style" "style 'nowhere' is not defined" "$T/dem.pgm" "$T/undef.txt" "$T/out.png"
+# the example's classed roads: styled differs from --no-styles; threads and windows stay byte-identical
+"$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 --threads 1 "$E/dem.pgm" "$E/roads.txt" "$T/st1.png" &&
+    "$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 --threads 3 "$E/dem.pgm" "$E/roads.txt" "$T/st3.png" &&
+    cmp -s "$T/st1.png" "$T/st3.png" && ok || bad "styled example: threads differ or failed"
+"$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 --no-styles "$E/dem.pgm" "$E/roads.txt" "$T/plain.png" &&
+    ! cmp -s "$T/st1.png" "$T/plain.png" && ok || bad "--no-styles gives the styled image"
+"$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 --aa hermite --profile us "$E/dem.pgm" "$E/roads.txt" "$T/us.png" &&
+    ! cmp -s "$T/st1.png" "$T/us.png" && ok || bad "--aa hermite --profile us"
+
 # --- the README's C example compiles against the header and runs ---
 B=$(dirname "$RS")
 sed -n '/^```c$/,/^```$/p' README.md | sed '1d;$d' >"$T/example.c"
