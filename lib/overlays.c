@@ -24,6 +24,13 @@ static void casings(const rs__styling *st, double pix, rs__piece *p)
             double c = cov[(size_t)r * w + k];
             /* a whole road pixel shows no terrain, hence no casing */
             if (!(c > 0) || p->q[(size_t)r * w + k] == 65535u) continue;
+            /* The composite shows T' over 1 - R of the pixel; the casing's
+             * own share of the pixel is C - R (the casing field holds the
+             * road), so T' takes (C - R) / (1 - R) of casing colour. */
+            double R = p->cov[(size_t)r * w + k];
+            if (!(R < 1)) continue;
+            double share = ((c > 1 ? 1 : c) - R) / (1 - R);
+            if (!(share > 0)) continue;
             const float *col = st->casing_rgba;
             if (!st->casing_uniform) {
                 /* the colour of the nearest casing */
@@ -32,7 +39,7 @@ static void casings(const rs__styling *st, double pix, rs__piece *p)
                 if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) continue;
                 col = st->colour + 16 * (size_t)st->casing_road[rp.road] + 12;
             }
-            float a = (float)(c > 1 ? 1 : c) * col[3];
+            float a = (float)(share > 1 ? 1 : share) * col[3];
             for (int ch = 0; ch < 3; ch++) {
                 float *v = tc + (size_t)ch * w + k;
                 *v = *v * (1.0f - a) + col[ch] * a;
