@@ -271,6 +271,7 @@ struct cli_png_coder {
     size_t out_cap;
     uint8_t *rows16[2];  /* 16-bit: the big-endian rows (current, above) */
     uint8_t *walk;       /* inflate's output in walk_blocks */
+    uint64_t joins[3];   /* pieces joined as stored, by end-of-block code, by inflate */
 };
 
 #define WALK_SCRATCH ((size_t)64 << 10)
@@ -291,6 +292,7 @@ static size_t make_joinable(cli_png_coder *c, uint8_t *p, size_t n)
     if (pad >= 0) {
         hdr = 0;
         end = n * 8 - (size_t)pad;
+        c->joins[btype == 0 ? 0 : 1]++;
     } else { /* several blocks, a fixed-code block, or an ambiguous end */
         if (!c->z_ready) {
             memset(&c->z, 0, sizeof c->z);
@@ -301,6 +303,7 @@ static size_t make_joinable(cli_png_coder *c, uint8_t *p, size_t n)
             !bit_at(p, hdr))
             return 0;
         pad = (int)(n * 8 - end);
+        c->joins[2]++;
     }
     p[hdr >> 3] &= (uint8_t) ~(1u << (hdr & 7)); /* BFINAL = 0 */
     if (pad == 0) return n; /* the next block starts on the next byte */
@@ -342,6 +345,11 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
         return NULL;
     }
     return c;
+}
+
+void cli_png_coder_joins(const cli_png_coder *c, uint64_t joins[3])
+{
+    for (int i = 0; i < 3; i++) joins[i] = c->joins[i];
 }
 
 void cli_png_coder_free(cli_png_coder *c)

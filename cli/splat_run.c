@@ -291,6 +291,11 @@ static void *png_work(void *arg)
             }
         }
     }
+    if (coder) {
+        uint64_t j[3];
+        cli_png_coder_joins(coder, j);
+        for (int i = 0; i < 3; i++) sh->st.joins[i] += j[i];
+    }
     pthread_mutex_unlock(&sh->mu);
     free(rgba);
     cli_png_coder_free(coder);

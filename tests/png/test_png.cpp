@@ -7,7 +7,7 @@
 //   test_png --time-oiio IN.png OUT.png RUNS     OpenImageIO 2.4 defaults (libpng)
 //   test_png --time-level L IN.png OUT.png RUNS  cli/png.c at level L
 // read IN (RGBA8), write OUT RUNS times, print "median_ms bytes".
-#include "../../cli/cli.h"
+#include "../../cli/png.h"
 
 #include <OpenImageIO/imageio.h>
 #include <png.h>
@@ -46,7 +46,8 @@ struct image {
     size_t samples() const { return (size_t)w * h * (size_t)channels; }
 };
 
-// Smooth gradients with some noise (kind 0) or pure noise (kind 1).
+// Smooth gradients with some noise (kind 0), pure noise (kind 1) or one flat
+// value (kind 2).
 static image make_image(uint32_t w, uint32_t h, int channels, int bits, int kind, uint32_t seed)
 {
     image im{ w, h, channels, bits, {}, {} };
@@ -58,8 +59,10 @@ static image make_image(uint32_t w, uint32_t h, int channels, int bits, int kind
         for (uint32_t x = 0; x < w; x++)
             for (int c = 0; c < channels; c++) {
                 s = s * 1103515245u + 12345u;
-                uint32_t noise = s >> 8;
-                uint32_t v = kind ? noise : (x * 7 + y * 3 + (uint32_t)c * 50) * (bits == 8 ? 1u : 131u) + (noise & 7);
+                uint32_t noise = s >> 16; /* the LCG's better bits */
+                uint32_t v = kind == 1 ? noise
+                             : kind == 2 ? 77u
+                                         : (x * 7 + y * 3 + (uint32_t)c * 50) * (bits == 8 ? 1u : 131u) + (noise & 7);
                 size_t i = ((size_t)y * w + x) * (size_t)channels + (size_t)c;
                 if (bits == 8) im.b8[i] = (uint8_t)v;
                 else im.b16[i] = (uint16_t)v;
@@ -173,6 +176,23 @@ static void round_trip(uint32_t w, uint32_t h, int channels, int bits, int kind,
     CHECK(!pl.done.empty() && pl.done.back() == 1000 && mono && !pl.bad_total, "%s: progress", name);
 }
 
+// How the pieces of an image's bands were joined (cli_png_coder_joins).
+static void joins_of(const image &im, int level, uint64_t j[3])
+{
+    cli_png_layout l;
+    j[0] = j[1] = j[2] = 0;
+    if (cli_png_layout_init(&l, "joins", im.w, im.h, im.channels, im.bits, level)) return;
+    cli_png_coder *c = cli_png_coder_new(&l);
+    if (!c) return;
+    size_t stride = (size_t)im.w * (size_t)im.channels * (size_t)(im.bits / 8);
+    for (uint32_t b = 0; b < l.nbands; b++) {
+        cli_png_piece p;
+        if (cli_png_coder_band(c, b, (const uint8_t *)im.data() + (size_t)b * l.band_rows * stride, stride, &p)) break;
+    }
+    cli_png_coder_joins(c, j);
+    cli_png_coder_free(c);
+}
+
 static bool read_rgba8(const char *path, std::vector<uint8_t> &px, uint32_t &w, uint32_t &h)
 {
     OIIO::ImageSpec config;
@@ -244,6 +264,38 @@ int main(int argc, char **argv)
     round_trip(800, 400, 4, 8, 1, 1);
     round_trip(700, 300, 1, 16, 1, 9);
     round_trip(1024, 300, 4, 8, 1, 0);
+    // Several bands (cli/png.h): each compressed alone and joined into one
+    // stream, at every kind of level; 16-bit rows across band edges; a flat
+    // image; noise that libdeflate stores.
+    for (int level : { 0, 1, 2, 6, 12 }) round_trip(2000, 700, 4, 8, 0, level);
+    round_trip(3000, 200, 1, 16, 0, 1);
+    round_trip(1500, 500, 4, 16, 0, 4);
+    round_trip(1024, 600, 4, 8, 2, 1);
+    round_trip(1024, 600, 3, 8, 2, 9);
+    round_trip(1500, 400, 4, 8, 1, 1);
+    round_trip(4096, 100, 4, 8, 0, 1);
+    { // every way of joining pieces is used
+        uint64_t j[3];
+        joins_of(make_image(2000, 700, 4, 8, 0, 1), 1, j);
+        CHECK(j[1] > 0, "level 1: no piece joined by its end-of-block code (%llu %llu %llu)", (unsigned long long)j[0],
+              (unsigned long long)j[1], (unsigned long long)j[2]);
+        joins_of(make_image(2000, 700, 4, 8, 0, 1), 0, j);
+        CHECK(j[0] > 0 && j[1] == 0 && j[2] == 0, "level 0: pieces not stored");
+        joins_of(make_image(1500, 400, 4, 8, 1, 1), 1, j);
+        CHECK(j[0] > 0, "noise at level 1: no stored piece (%llu %llu %llu)", (unsigned long long)j[0],
+              (unsigned long long)j[1], (unsigned long long)j[2]);
+        joins_of(make_image(2000, 700, 4, 8, 0, 1), 6, j);
+        CHECK(j[2] > 0, "level 6: no piece joined through inflate");
+    }
+    // Random layouts, sizes and levels.
+    uint32_t rs = 12345;
+    auto rnd = [&rs](uint32_t n) { rs = rs * 1103515245u + 12345u; return (rs >> 8) % n; };
+    for (int i = 0; i < 24; i++) {
+        uint32_t w = 1 + rnd(1800), h = 1 + rnd(600);
+        int ch = 1 + (int)rnd(4), bits = rnd(3) ? 8 : 16, kind = (int)rnd(3), level = (int)rnd(13);
+        if ((uint64_t)w * h * (uint64_t)ch * (uint64_t)(bits / 8) > (6u << 20)) h = 1 + h / 4;
+        round_trip(w, h, ch, bits, kind, level);
+    }
 
     // Atomic replacement: an old file is replaced whole, no temporary left.
     std::string sub = dir + "/atomic";
