@@ -204,7 +204,8 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      "\"composite\": %.3f},\n"
                      "  \"splat_write_ms\": {\"wall\": %.3f, \"splat_cpu\": %.3f, \"png_cpu\": %.3f, \"file\": %.3f, "
                      "\"splat_done\": %.3f},\n"
-                     "  \"png_pieces_joined\": {\"stored\": %llu, \"end_of_block\": %llu, \"inflate\": %llu},\n"
+                     "  \"png_pieces_joined\": {\"stored\": %llu, \"end_of_block\": %llu, \"inflate\": %llu, "
+                     "\"isal_bands\": %llu},\n"
                      "  \"threads\": %u,\n"
                      "  \"edges\": \"%s\",\n  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
                      "  \"window\": {\"x\": %u, \"y\": %u, \"width\": %u, \"height\": %u},\n"
@@ -218,7 +219,7 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      rs->startup, t[0], t[1], t[2], t[3], t[4], pf->coverage_ms, pf->surface_ms, pf->overlays_ms, pf->composite_ms,
                      rs->png.wall_ms, rs->png.splat_cpu_ms, rs->png.png_cpu_ms, rs->png.file_ms, rs->png.splat_done_ms,
                      (unsigned long long)rs->png.joins[0], (unsigned long long)rs->png.joins[1],
-                     (unsigned long long)rs->png.joins[2],
+                     (unsigned long long)rs->png.joins[2], (unsigned long long)rs->png.joins[3],
                      rs->job->threads_used, rs->o->coverage.edges == RS_EDGES_ANALYTIC ? "analytic" : "alphamap",
                      rs->o->grid.buffer == RS_BUFFER_DILATE ? "dilate" : "distance", gs->k, gs->road_cell,
                      rs->o->texels ? rs->o->texels : 8, rs->x0, rs->y0, rs->w, rs->h, rs->full_w, rs->full_h, rs->w,

@@ -32,6 +32,9 @@
 #include <string.h>
 #include <unistd.h>
 #include <zlib.h>
+#ifdef RS_WITH_ISAL
+#include <isa-l/igzip_lib.h>
+#endif
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
@@ -94,6 +97,9 @@ int cli_png_layout_init(cli_png_layout *l, const char *shown, uint32_t w, uint32
     if (rows > 8) rows = (rows + 7) / 8 * 8;
     l->band_rows = rows < h ? (uint32_t)rows : h;
     l->nbands = (uint32_t)(((uint64_t)h + l->band_rows - 1) / l->band_rows);
+#ifdef RS_WITH_ISAL
+    l->isal = level == 1;
+#endif
     return 0;
 }
 
@@ -109,22 +115,6 @@ static void sub_bytes(uint8_t *o, const uint8_t *a, const uint8_t *b, size_t n)
                                                                   _mm_loadu_si128((const __m128i *)(const void *)(b + i))));
 #endif
     for (; i < n; i++) o[i] = (uint8_t)(a[i] - b[i]);
-}
-
-/* Row r of a band as PNG bytes: 8-bit rows as they are, 16-bit samples
- * big-endian into `tmp`. */
-static const uint8_t *png_row(const uint8_t *rows, size_t stride, uint32_t r, int bits, size_t row_bytes,
-                              uint8_t *tmp)
-{
-    const uint8_t *src = rows + (size_t)r * stride;
-    if (bits == 8) return src;
-    for (size_t i = 0; i < row_bytes / 2; i++) {
-        uint16_t v;
-        memcpy(&v, src + 2 * i, 2);
-        tmp[2 * i] = (uint8_t)(v >> 8);
-        tmp[2 * i + 1] = (uint8_t)(v & 0xFF);
-    }
-    return tmp;
 }
 
 /* ---- joining deflate streams ----------------------------------------------- */
@@ -272,12 +262,14 @@ struct cli_png_coder {
     z_stream z;
     int z_ready;
     size_t piece;        /* bytes per piece */
-    uint8_t *filt;       /* one band, filtered */
-    uint8_t *out;        /* its compressed form */
+    uint8_t *filt;       /* one piece, filtered */
+    uint8_t *out;        /* the band's compressed form */
     size_t out_cap;
-    uint8_t *rows16[2];  /* 16-bit: the big-endian rows (current, above) */
+    uint8_t *rows16[2];  /* 16-bit: big-endian copies of rows of either parity */
+    uint32_t row16_of[2]; /* which rows they hold */
     uint8_t *walk;       /* inflate's output in walk_blocks */
-    uint64_t joins[3];   /* pieces joined as stored, by end-of-block code, by inflate */
+    uint64_t joins[4];   /* pieces joined as stored, by end-of-block code, by inflate; ISA-L bands */
+    uint8_t *isal_buf;   /* ISA-L's level 1 hash table and token buffer */
 };
 
 #define WALK_SCRATCH ((size_t)64 << 10)
@@ -326,15 +318,77 @@ static size_t make_joinable(cli_png_coder *c, uint8_t *p, size_t n)
 
 static size_t pieces_of(size_t filtered, size_t piece) { return (filtered + piece - 1) / piece; }
 
+/* Row r of the band as PNG bytes: 8-bit rows as they are, 16-bit samples
+ * big-endian (converted once into the buffer of r's parity). */
+static const uint8_t *band_row(cli_png_coder *c, const uint8_t *rows, size_t stride, uint32_t r)
+{
+    const uint8_t *src = rows + (size_t)r * stride;
+    if (c->l.bits == 8) return src;
+    uint8_t *t = c->rows16[r & 1];
+    if (c->row16_of[r & 1] != r) {
+        for (size_t i = 0; i < c->l.row_bytes / 2; i++) {
+            uint16_t v;
+            memcpy(&v, src + 2 * i, 2);
+            t[2 * i] = (uint8_t)(v >> 8);
+            t[2 * i + 1] = (uint8_t)(v & 0xFF);
+        }
+        c->row16_of[r & 1] = r;
+    }
+    return t;
+}
+
+/* Bytes [off, off + m) of the band's filtered rows (each row: its filter
+ * type, then the filtered bytes) into dst, so that each piece is filtered
+ * just before it is compressed, while both are in cache. The first row of
+ * a band has no row above: SUB; the others UP; level 0 stores rows as they
+ * are (filtering would not pay). */
+static void filter_range(cli_png_coder *c, const uint8_t *rows, size_t stride, size_t off, size_t m, uint8_t *dst)
+{
+    const size_t rb = c->l.row_bytes, bpp = (size_t)c->l.channels * (size_t)(c->l.bits / 8);
+    uint32_t r = (uint32_t)(off / (rb + 1));
+    size_t col = off % (rb + 1);
+    while (m) {
+        const uint8_t *cur = band_row(c, rows, stride, r);
+        const int type = c->l.level == 0 ? 0 : r == 0 ? 1 : 2;
+        if (col == 0) {
+            *dst++ = (uint8_t)type;
+            if (!--m) break;
+            col = 1;
+        }
+        const size_t a = col - 1, n = rb - a < m ? rb - a : m; /* bytes [a, a + n) of the row */
+        if (type == 0) {
+            memcpy(dst, cur + a, n);
+        } else if (type == 2) {
+            sub_bytes(dst, cur + a, band_row(c, rows, stride, r - 1) + a, n);
+        } else {
+            size_t i = a;
+            for (; i < a + n && i < bpp; i++) dst[i - a] = cur[i];
+            if (i < a + n) sub_bytes(dst + (i - a), cur + i, cur + i - bpp, a + n - i);
+        }
+        dst += n;
+        m -= n;
+        r++;
+        col = 0;
+    }
+}
+
 cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
 {
     cli_png_coder *c = calloc(1, sizeof *c);
     if (!c) return NULL;
     c->l = *l;
     const size_t filtered = (l->row_bytes + 1) * l->band_rows;
-    c->piece = l->level <= 1 ? PIECE_FAST : filtered;
+    c->piece = (l->level <= 1 || l->isal) && PIECE_FAST < filtered ? PIECE_FAST : filtered;
+#ifdef RS_WITH_ISAL
+    if (l->isal && !(c->isal_buf = malloc(ISAL_DEF_LVL1_DEFAULT))) {
+        cli_png_coder_free(c);
+        return NULL;
+    }
+#else
+    c->l.isal = 0;
+#endif
     c->c = libdeflate_alloc_compressor(l->level);
-    c->filt = malloc(filtered);
+    c->filt = malloc(c->piece);
     c->walk = malloc(WALK_SCRATCH);
     if (l->bits == 16) {
         c->rows16[0] = malloc(l->row_bytes);
@@ -344,6 +398,8 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
         /* every piece of a band at its bound, its ending, the zlib header */
         size_t np = pieces_of(filtered, c->piece), each = (filtered + np - 1) / np;
         c->out_cap = np * (libdeflate_deflate_compress_bound(c->c, each) + 5) + 2;
+        /* ISA-L's stream over the whole band: at worst stored blocks */
+        if (c->l.isal && c->out_cap < filtered + filtered / 8 + 4096) c->out_cap = filtered + filtered / 8 + 4096;
         c->out = malloc(c->out_cap);
     }
     if (!c->c || !c->filt || !c->walk || !c->out || (l->bits == 16 && (!c->rows16[0] || !c->rows16[1]))) {
@@ -353,9 +409,9 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
     return c;
 }
 
-void cli_png_coder_joins(const cli_png_coder *c, uint64_t joins[3])
+void cli_png_coder_joins(const cli_png_coder *c, uint64_t joins[4])
 {
-    for (int i = 0; i < 3; i++) joins[i] = c->joins[i];
+    for (int i = 0; i < 4; i++) joins[i] = c->joins[i];
 }
 
 void cli_png_coder_free(cli_png_coder *c)
@@ -368,6 +424,7 @@ void cli_png_coder_free(cli_png_coder *c)
     free(c->walk);
     free(c->rows16[0]);
     free(c->rows16[1]);
+    free(c->isal_buf);
     free(c);
 }
 
@@ -375,27 +432,10 @@ int cli_png_coder_band(cli_png_coder *c, uint32_t band, const void *rows_in, siz
 {
     const cli_png_layout *l = &c->l;
     const uint8_t *rows = rows_in;
-    const size_t rb = l->row_bytes, bpp = (size_t)l->channels * (size_t)(l->bits / 8);
     const uint32_t y0 = band * l->band_rows, nrows = l->height - y0 < l->band_rows ? l->height - y0 : l->band_rows;
-    const uint8_t *above = NULL;
-    for (uint32_t r = 0; r < nrows; r++) {
-        uint8_t *o = c->filt + (size_t)r * (rb + 1), *tmp = c->rows16[r & 1];
-        const uint8_t *cur = png_row(rows, stride, r, l->bits, rb, tmp);
-        if (l->level == 0) { /* stored: filtering would not pay */
-            o[0] = 0;
-            memcpy(o + 1, cur, rb);
-        } else if (!above) { /* SUB */
-            o[0] = 1;
-            memcpy(o + 1, cur, bpp < rb ? bpp : rb);
-            if (rb > bpp) sub_bytes(o + 1 + bpp, cur + bpp, cur, rb - bpp);
-        } else { /* UP */
-            o[0] = 2;
-            sub_bytes(o + 1, cur, above, rb);
-        }
-        above = cur;
-    }
-    const size_t filtered = (rb + 1) * nrows;
+    const size_t filtered = (l->row_bytes + 1) * nrows;
     const int last_band = band + 1 == l->nbands;
+    c->row16_of[0] = c->row16_of[1] = UINT32_MAX;
     size_t n = 0;
     if (band == 0) { /* zlib header: deflate, 32 KiB window, FLEVEL as libdeflate sets it */
         static const uint8_t flg[4] = { 0x01, 0x5E, 0x9C, 0xDA };
@@ -404,18 +444,50 @@ int cli_png_coder_band(cli_png_coder *c, uint32_t band, const void *rows_in, siz
     }
     /* pieces of (nearly) equal size: no tiny last piece */
     const size_t np = pieces_of(filtered, c->piece), each = (filtered + np - 1) / np;
+    uint32_t adler = 1;
+#ifdef RS_WITH_ISAL
+    if (l->isal) { /* one ISA-L stream over the band's pieces, ended by a full flush */
+        struct isal_zstream z;
+        isal_deflate_init(&z);
+        z.level = 1;
+        z.level_buf = c->isal_buf;
+        z.level_buf_size = ISAL_DEF_LVL1_DEFAULT;
+        z.gzip_flag = IGZIP_DEFLATE;
+        z.next_out = c->out + n;
+        z.avail_out = (uint32_t)(c->out_cap - n);
+        for (size_t off = 0; off < filtered; off += each) {
+            size_t m = filtered - off < each ? filtered - off : each;
+            const int last = off + m == filtered;
+            filter_range(c, rows, stride, off, m, c->filt);
+            adler = libdeflate_adler32(adler, c->filt, m);
+            z.next_in = c->filt;
+            z.avail_in = (uint32_t)m;
+            z.flush = last ? FULL_FLUSH : NO_FLUSH;
+            z.end_of_stream = (uint16_t)(last && last_band);
+            if (isal_deflate(&z) != COMP_OK || z.avail_in || !z.avail_out) return 1;
+        }
+        /* every byte out: at a new block (full flush) or at the stream's end */
+        if (z.internal_state.state != (last_band ? ZSTATE_END : ZSTATE_NEW_HDR)) return 1;
+        n += z.total_out;
+        c->joins[3]++;
+        goto done;
+    }
+#endif
     for (size_t off = 0; off < filtered; off += each) {
         size_t m = filtered - off < each ? filtered - off : each;
-        size_t room = c->out_cap - n;
-        size_t k = libdeflate_deflate_compress(c->c, c->filt + off, m, c->out + n, room - 5);
-        if (!k) return 1;
-        if (!(last_band && off + m == filtered)) k = make_joinable(c, c->out + n, k);
+        filter_range(c, rows, stride, off, m, c->filt);
+        adler = libdeflate_adler32(adler, c->filt, m);
+        size_t k = libdeflate_deflate_compress(c->c, c->filt, m, c->out + n, c->out_cap - n - 5);
+        if (k && !(last_band && off + m == filtered)) k = make_joinable(c, c->out + n, k);
         if (!k) return 1;
         n += k;
     }
+#ifdef RS_WITH_ISAL
+done:
+#endif
     out->data = c->out;
     out->size = n;
-    out->adler = libdeflate_adler32(1, c->filt, filtered);
+    out->adler = adler;
     out->raw = filtered;
     return 0;
 }

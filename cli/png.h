@@ -22,6 +22,7 @@ typedef struct cli_png_layout {
     int channels, bits, level; /* level: 0..CLI_PNG_LEVEL_MAX */
     size_t row_bytes;          /* unfiltered bytes per row */
     uint32_t band_rows, nbands;
+    int isal; /* level 1 by ISA-L's igzip (builds with RS_WITH_ISAL), else libdeflate */
 } cli_png_layout;
 
 /* 0, or 1 after a message naming `shown` (a layout PNG cannot hold, a bad
@@ -47,11 +48,13 @@ void cli_png_coder_free(cli_png_coder *c);
  * band) top first, `stride` bytes apart, 16-bit samples in native order.
  * 0, or 1 when compression failed (no message). */
 int cli_png_coder_band(cli_png_coder *c, uint32_t band, const void *rows, size_t stride, cli_png_piece *out);
-/* How the coder's pieces so far were made joinable: [0] one stored block,
- * [1] one block whose end was found from its end-of-block code, [2] decoded
- * by zlib's inflate (several blocks, a fixed-code block, or an ambiguous
- * end). The last piece of an image needs none and is not counted. */
-void cli_png_coder_joins(const cli_png_coder *c, uint64_t joins[3]);
+/* How the coder's libdeflate pieces so far were made joinable: [0] one
+ * stored block, [1] one block whose end was found from its end-of-block
+ * code, [2] decoded by zlib's inflate (several blocks, a fixed-code block,
+ * or an ambiguous end); the last piece of an image needs none and is not
+ * counted. [3]: bands compressed by ISA-L, whose full flush ends them on a
+ * byte boundary itself. */
+void cli_png_coder_joins(const cli_png_coder *c, uint64_t joins[4]);
 
 /* The file: signature and IHDR, then every band's piece in band order
  * (IDAT chunks), then IEND. Each returns 0, or 1 with errno set. */
@@ -79,7 +82,7 @@ typedef struct cli_png_run_stats {
     double file_ms;      /* writing the chunks into f, summed */
     double splat_done_ms; /* wall time from the start until every pixel was splatted */
     double wall_ms;       /* wall time of the whole run */
-    uint64_t joins[3];    /* cli_png_coder_joins summed over the threads */
+    uint64_t joins[4];    /* cli_png_coder_joins summed over the threads */
 } cli_png_run_stats;
 int cli_splat_png_run(cli_splat_job *job, FILE *f, const char *shown, int level, cli_png_run_stats *st);
 

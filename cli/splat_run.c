@@ -292,9 +292,9 @@ static void *png_work(void *arg)
         }
     }
     if (coder) {
-        uint64_t j[3];
+        uint64_t j[4];
         cli_png_coder_joins(coder, j);
-        for (int i = 0; i < 3; i++) sh->st.joins[i] += j[i];
+        for (int i = 0; i < 4; i++) sh->st.joins[i] += j[i];
     }
     pthread_mutex_unlock(&sh->mu);
     free(rgba);
