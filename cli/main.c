@@ -3,6 +3,7 @@
 #include "png.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -148,12 +149,35 @@ static int parse_args(int argc, char **argv, args *a)
 /* Flush, check and close a temporary without renaming it. */
 static int out_finish(cli_out *o) { return cli_out_finish(o); }
 
+/* fsync in a second thread while the first re-reads the file. */
+typedef struct sync_job {
+    int fd, err;
+} sync_job;
+
+static void *sync_thread(void *arg)
+{
+    sync_job *j = arg;
+    j->err = fsync(j->fd) != 0 && errno != EINVAL ? errno : 0;
+    return NULL;
+}
+
 /* The PNG (written into o->f by cli_splat_png_run) is flushed, synced and
- * closed, then checked whole. */
+ * closed, and checked whole; the sync (waiting on the disk) and the check
+ * (re-reading the page cache) run side by side. */
 static int png_finish(cli_out *o)
 {
-    if (out_finish(o)) return 1;
-    if (!cli_png_file_complete(o->tmp)) {
+    if (fflush(o->f) != 0 || ferror(o->f)) return out_finish(o); /* reports the error */
+    sync_job j = { fileno(o->f), 0 };
+    pthread_t t;
+    int threaded = pthread_create(&t, NULL, sync_thread, &j) == 0;
+    int whole = cli_png_file_complete(o->tmp);
+    if (threaded) pthread_join(t, NULL);
+    if (j.err) {
+        cli_error("%s: write failed: %s", o->path, strerror(j.err));
+        return 1;
+    }
+    if (out_finish(o)) return 1; /* fsyncs again when the thread could not start: cheap once synced */
+    if (!whole) {
         cli_error("%s: write failed: the PNG did not reach the disk whole", o->path);
         return 1;
     }
