@@ -48,6 +48,9 @@
  * after 65535 bytes or 8192 matches, so a piece this size is almost always
  * one block, which make_joinable handles without decoding. */
 #define PIECE_FAST ((size_t)32 << 10)
+/* Pieces and ISA-L streams stay far below the 32-bit counts of zlib's and
+ * ISA-L's streams (a band is one row when rows are long). */
+#define PIECE_MAX ((size_t)64 << 20)
 /* Largest IDAT payload written; the progress bar advances per band. */
 #define IDAT_CHUNK ((size_t)1 << 20)
 /* The writer asks the kernel to start writing the file out every this many
@@ -98,7 +101,7 @@ int cli_png_layout_init(cli_png_layout *l, const char *shown, uint32_t w, uint32
     l->band_rows = rows < h ? (uint32_t)rows : h;
     l->nbands = (uint32_t)(((uint64_t)h + l->band_rows - 1) / l->band_rows);
 #ifdef RS_WITH_ISAL
-    l->isal = level == 1;
+    l->isal = level == 1 && (l->row_bytes + 1) * l->band_rows <= PIECE_MAX;
 #endif
     return 0;
 }
@@ -379,6 +382,7 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
     c->l = *l;
     const size_t filtered = (l->row_bytes + 1) * l->band_rows;
     c->piece = (l->level <= 1 || l->isal) && PIECE_FAST < filtered ? PIECE_FAST : filtered;
+    if (c->piece > PIECE_MAX) c->piece = PIECE_MAX;
 #ifdef RS_WITH_ISAL
     if (l->isal && !(c->isal_buf = malloc(ISAL_DEF_LVL1_DEFAULT))) {
         cli_png_coder_free(c);
@@ -387,22 +391,23 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
 #else
     c->l.isal = 0;
 #endif
-    c->c = libdeflate_alloc_compressor(l->level);
     c->filt = malloc(c->piece);
-    c->walk = malloc(WALK_SCRATCH);
     if (l->bits == 16) {
         c->rows16[0] = malloc(l->row_bytes);
         c->rows16[1] = malloc(l->row_bytes);
     }
-    if (c->c) {
+    int ok = c->filt && (l->bits == 8 || (c->rows16[0] && c->rows16[1]));
+    if (c->l.isal) {
+        /* ISA-L's stream over the whole band, at worst stored blocks; and the zlib header */
+        c->out_cap = filtered + filtered / 8 + 4096;
+    } else if ((c->c = libdeflate_alloc_compressor(l->level)) && (c->walk = malloc(WALK_SCRATCH))) {
         /* every piece of a band at its bound, its ending, the zlib header */
         size_t np = pieces_of(filtered, c->piece), each = (filtered + np - 1) / np;
         c->out_cap = np * (libdeflate_deflate_compress_bound(c->c, each) + 5) + 2;
-        /* ISA-L's stream over the whole band: at worst stored blocks */
-        if (c->l.isal && c->out_cap < filtered + filtered / 8 + 4096) c->out_cap = filtered + filtered / 8 + 4096;
-        c->out = malloc(c->out_cap);
+    } else {
+        ok = 0;
     }
-    if (!c->c || !c->filt || !c->walk || !c->out || (l->bits == 16 && (!c->rows16[0] || !c->rows16[1]))) {
+    if (!ok || !(c->out = malloc(c->out_cap))) {
         cli_png_coder_free(c);
         return NULL;
     }
