@@ -65,6 +65,19 @@ else
     echo "SKIP: $PNGT not built"
 fi
 
+# A full disk in the middle of the bands (file size limit, SIGXFSZ ignored):
+# one error line, exit 1, no OUT and no temporary left.
+if command -v prlimit >/dev/null 2>&1; then
+    mkdir "$T/full"
+    sh -c 'trap "" XFSZ; exec prlimit --fsize=300000 "$@"' sh "$RS" --quiet --threads 2 --texels 32 "$D" "$R" "$T/full/o.png" \
+        2>"$T/err"
+    rc=$?
+    check "bands: a full disk mid-way fails cleanly (exit $rc: $(cat "$T/err"))" sh -c \
+        "[ $rc = 1 ] && [ -z \"\$(ls -A '$T/full')\" ] && [ \$(wc -l < '$T/err') = 1 ] && grep -q 'o.png: write failed' '$T/err'"
+else
+    echo "SKIP: no prlimit"
+fi
+
 check "stats: timings_ms.startup" sh -c "'$RS' --quiet --stats '$T/s.json' '$D' '$R' '$T/s.png' && grep -Eq '\"startup\": [0-9]+\\.[0-9]+' '$T/s.json'"
 
 # What gets loaded: LD_DEBUG_OUTPUT, since the CLI redirects fd 2 while OpenImageIO reads.
