@@ -34,7 +34,7 @@ for r in $(seq "$RUNS"); do
     "$BIN" --quiet --threads 1 --texels 4 --z-scale 0.01 --stats "$T/s$r.json" "$T/dem.pgm" "$T/roads.txt" "$T/out1.png"
     "$BIN" --quiet --texels 4 --z-scale 0.01 --stats "$T/d$r.json" "$T/dem.pgm" "$T/roads.txt" "$T/out.png"
 done
-for k in startup read roads splat write total png_cpu; do
+for k in startup read roads splat write total png_cpu splat_cpu wall; do
     eval "t_$k=\$(for r in \$(seq $RUNS); do field $k \"\$T/s\$r.json\"; done | fastest)"
     eval "d_$k=\$(for r in \$(seq $RUNS); do field $k \"\$T/d\$r.json\"; done | fastest)"
 done
@@ -104,6 +104,11 @@ echo "| splat | $t_splat | $d_splat |"
 echo "| write (default level 1, $(awk -v b="$size_cli" 'BEGIN { printf "%.1f", b / 1048576 }') MiB) | $t_write | $d_write |"
 echo "| (png cpu) | $t_png_cpu | $d_png_cpu |"
 echo "| total | $t_total | $d_total |"
+echo
+echo "Where the default run's total goes (fastest runs): read + roads $(awk -v a="$d_read" -v b="$d_roads" 'BEGIN { printf "%.0f", a + b }') ms, one thread each;"
+echo "the splat and the PNG together $(printf '%.0f' "$d_wall") ms of wall time for $(printf '%.0f' "$d_splat_cpu") + $(printf '%.0f' "$d_png_cpu") ms of splat + PNG CPU time"
+echo "(one thread: $(printf '%.0f' "$t_splat_cpu") + $(printf '%.0f' "$t_png_cpu") ms); the rest (flush, fsync beside the completeness check, close) about"
+echo "$(awk -v t="$d_total" -v a="$d_read" -v b="$d_roads" -v w="$d_wall" 'BEGIN { v = t - a - b - w; printf "%.0f", v < 0 ? 0 : v }') ms."
 echo
 echo "The writers then write the same pixels again in one thread (tests/png/test_png.cpp, the in-memory"
 echo "encoder cli_png_encode, which writes the same bytes as the CLI: $same_encode; the default level $RUNS"
