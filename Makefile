@@ -42,9 +42,18 @@ LDLIBS_CORE := -lm
 PKG_CONFIG ?= pkg-config
 OIIO_CFLAGS = $(shell $(PKG_CONFIG) --cflags OpenImageIO 2>/dev/null)
 OIIO_LIBS   = $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null)
-# PNG output (cli/png.c): libdeflate.
-DEFLATE_CFLAGS = $(shell $(PKG_CONFIG) --cflags libdeflate 2>/dev/null)
-DEFLATE_LIBS   = $(or $(shell $(PKG_CONFIG) --libs libdeflate 2>/dev/null),-ldeflate)
+# PNG output (cli/png.c): libdeflate compresses, zlib joins the bands'
+# streams (inflate's Z_BLOCK when a piece has several blocks, adler32_combine).
+DEFLATE_CFLAGS = $(shell $(PKG_CONFIG) --cflags libdeflate zlib 2>/dev/null)
+DEFLATE_LIBS   = $(or $(shell $(PKG_CONFIG) --libs libdeflate 2>/dev/null),-ldeflate) \
+                 $(or $(shell $(PKG_CONFIG) --libs zlib 2>/dev/null),-lz)
+# The default PNG level 1 by ISA-L's igzip (libisal-dev), 2.5x faster than
+# libdeflate's level 1 here: auto-detected, or forced with WITH_ISAL=1/0.
+WITH_ISAL ?= $(shell [ -f /usr/include/isa-l/igzip_lib.h ] && echo 1 || echo 0)
+ifeq ($(WITH_ISAL),1)
+DEFLATE_CFLAGS += -DRS_WITH_ISAL
+DEFLATE_LIBS   += $(or $(shell $(PKG_CONFIG) --libs libisal 2>/dev/null),-lisal)
+endif
 
 # Optional OSMesa renderer: auto-detected, or forced with WITH_OSMESA=1/0.
 WITH_OSMESA ?= $(shell $(PKG_CONFIG) --exists osmesa 2>/dev/null && echo 1 || echo 0)
@@ -55,7 +64,7 @@ endif
 
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
-# The executable links only libc, libm, libdl and libdeflate; OpenImageIO
+# The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
 # (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
 # first use (docs/packaging.md).
 RENDER_SRC := cli/render.c cli/render_gl.c
@@ -81,7 +90,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -136,6 +145,8 @@ check-deps:
 	  echo "roadsplat CLI needs OpenImageIO: run 'make deps' (or: apt-get install -y libopenimageio-dev pkg-config)"; exit 1; }
 	@$(PKG_CONFIG) --exists libdeflate 2>/dev/null || [ -f /usr/include/libdeflate.h ] || { \
 	  echo "roadsplat CLI needs libdeflate: run 'make deps' (or: apt-get install -y libdeflate-dev)"; exit 1; }
+	@$(PKG_CONFIG) --exists zlib 2>/dev/null || [ -f /usr/include/zlib.h ] || { \
+	  echo "roadsplat CLI needs zlib: run 'make deps' (or: apt-get install -y zlib1g-dev)"; exit 1; }
 
 $(CONFIG): FORCE
 	@mkdir -p $(dir $@)
@@ -216,7 +227,7 @@ $(BUILD)/fuzz/demimage-replay: $(BUILD)/fuzz/demimage/fuzz.o $(BUILD)/fuzz/repla
 TEST_PNG_OBJ := $(BUILD)/cli/png.o $(BUILD)/cli/util.o $(BUILD)/cli/imageio.o
 $(BUILD)/tests/test_png: tests/png/test_png.cpp $(TEST_PNG_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
-	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) -o $@ $< $(TEST_PNG_OBJ) $(LDFLAGS) $(STATIC_LIB) $(OIIO_LIBS) -lpng \
+	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) $(DEFLATE_CFLAGS) -o $@ $< $(TEST_PNG_OBJ) $(LDFLAGS) $(STATIC_LIB) $(OIIO_LIBS) -lpng \
 	  $(DEFLATE_LIBS) $(LDLIBS_CORE)
 
 # Helper programs of the tests and benchmarks (not run by themselves).

@@ -1,8 +1,9 @@
 /* roadsplat: the command-line tool. `roadsplat [options] DEM ROADS OUT.png`
  * splats roads into a terrain texture; `roadsplat mesh ...` meshes a DEM. */
-#include "cli.h"
+#include "png.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -43,8 +44,8 @@ static const char usage_text[] =
     "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
-    "  --png-level N         PNG compression, 0 (none, fastest) .. 12 (smallest,\n"
-    "                        slowest); default 1, about 10 % larger than level 6\n"
+    "  --png-level N         PNG compression, 0 (none) .. 12 (smallest, slowest);\n"
+    "                        default 1, about 17 % larger than zlib's level 6\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
     "  --quiet               no progress bar\n"
     "  --help                show this help and exit\n"
@@ -155,12 +156,35 @@ static int parse_args(int argc, char **argv, args *a)
 /* Flush, check and close a temporary without renaming it. */
 static int out_finish(cli_out *o) { return cli_out_finish(o); }
 
-/* The PNG (cli/png.c) goes into o->tmp, which is then checked whole. */
-static int png_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint8_t *rgba, const cli_png_options *po)
+/* fsync in a second thread while the first re-reads the file. */
+typedef struct sync_job {
+    int fd, err;
+} sync_job;
+
+static void *sync_thread(void *arg)
 {
-    cli_png_image img = { w, h, 4, 8, rgba };
-    if (cli_png_encode(o->f, o->path, &img, po) || out_finish(o)) return 1;
-    if (!cli_png_file_complete(o->tmp)) {
+    sync_job *j = arg;
+    j->err = fsync(j->fd) != 0 && errno != EINVAL ? errno : 0;
+    return NULL;
+}
+
+/* The PNG (written into o->f by cli_splat_png_run) is flushed, synced and
+ * closed, and checked whole; the sync (waiting on the disk) and the check
+ * (re-reading the page cache) run side by side. */
+static int png_finish(cli_out *o)
+{
+    if (fflush(o->f) != 0 || ferror(o->f)) return out_finish(o); /* reports the error */
+    sync_job j = { fileno(o->f), 0 };
+    pthread_t t;
+    int threaded = pthread_create(&t, NULL, sync_thread, &j) == 0;
+    int whole = cli_png_file_complete(o->tmp);
+    if (threaded) pthread_join(t, NULL);
+    if (j.err) {
+        cli_error("%s: write failed: %s", o->path, strerror(j.err));
+        return 1;
+    }
+    if (out_finish(o)) return 1; /* fsyncs again when the thread could not start: cheap once synced */
+    if (!whole) {
         cli_error("%s: write failed: the PNG did not reach the disk whole", o->path);
         return 1;
     }
@@ -191,7 +215,8 @@ static int weight_pgm_to_temp(cli_out *o, uint32_t w, uint32_t h, const uint16_t
 
 typedef struct run_stats {
     double startup;              /* before the work began (cli_startup_ms) */
-    double t[5];                 /* read, roads, splat (wall), write, total */
+    double t[5];                 /* read, roads, splat, write, total (see splat_main) */
+    cli_png_run_stats png;
     const rs_road_grid_stats *gs;
     const rs_splat_options *o;
     uint32_t w, h, x0, y0, full_w, full_h;
@@ -207,7 +232,12 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
                      "\"write\": %.3f, \"total\": %.3f},\n"
                      "  \"stages_ms\": {\"coverage\": %.3f, \"surface\": %.3f, \"overlays\": %.3f, "
-                     "\"composite\": %.3f},\n  \"threads\": %u,\n"
+                     "\"composite\": %.3f},\n"
+                     "  \"splat_write_ms\": {\"wall\": %.3f, \"splat_cpu\": %.3f, \"png_cpu\": %.3f, \"file\": %.3f, "
+                     "\"splat_done\": %.3f},\n"
+                     "  \"png_pieces_joined\": {\"stored\": %llu, \"end_of_block\": %llu, \"inflate\": %llu, "
+                     "\"isal_bands\": %llu},\n"
+                     "  \"threads\": %u,\n"
                      "  \"edges\": \"%s\",\n  \"buffer\": \"%s\",\n  \"k\": %u,\n  \"road_cell_m\": %.9g,\n  \"texels\": %u,\n"
                      "  \"window\": {\"x\": %u, \"y\": %u, \"width\": %u, \"height\": %u},\n"
                      "  \"image\": {\"width\": %u, \"height\": %u},\n"
@@ -218,6 +248,9 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      "\"saddle\": %llu, \"too_thin\": %llu},\n"
                      "  \"grid_tiles\": %llu,\n  \"grid_bytes\": %llu\n}\n",
                      rs->startup, t[0], t[1], t[2], t[3], t[4], pf->coverage_ms, pf->surface_ms, pf->overlays_ms, pf->composite_ms,
+                     rs->png.wall_ms, rs->png.splat_cpu_ms, rs->png.png_cpu_ms, rs->png.file_ms, rs->png.splat_done_ms,
+                     (unsigned long long)rs->png.joins[0], (unsigned long long)rs->png.joins[1],
+                     (unsigned long long)rs->png.joins[2], (unsigned long long)rs->png.joins[3],
                      rs->job->threads_used, rs->o->coverage.edges == RS_EDGES_ANALYTIC ? "analytic" : "alphamap",
                      rs->o->grid.buffer == RS_BUFFER_DILATE ? "dilate" : "distance", gs->k, gs->road_cell,
                      rs->o->texels ? rs->o->texels : 8, rs->x0, rs->y0, rs->w, rs->h, rs->full_w, rs->full_h, rs->w,
@@ -247,7 +280,6 @@ static int splat_main(int argc, char **argv)
     cli_splat_input in;
     rs_splatter *sp = NULL;
     rs_road_grid *grid = NULL;
-    uint8_t *rgba = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
     cli_out out_png, out_wt, out_stats;
@@ -290,30 +322,25 @@ static int splat_main(int argc, char **argv)
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     st.t[1] = cli_now_ms() - t1;
 
+    /* The splat and the PNG run together (cli_splat_png_run): no image-sized
+     * buffer, compression overlapping the splat. Their wall time is split
+     * into "splat", the splat's time per thread (its CPU time summed over
+     * the threads, divided by them: exact with one thread), and "write",
+     * the rest: what writing OUT adds to the run, sync and check included. */
     t1 = cli_now_ms();
-    size_t npx = (size_t)w * h;
-    rgba = malloc(npx * 4);
-    if (a.weight_out) wt = malloc(npx * sizeof *wt);
-    if (!rgba || (a.weight_out && !wt)) {
-        cli_error("%s: out of memory for a %u x %u image", a.out, w, h);
+    if (a.weight_out && !(wt = malloc((size_t)w * h * sizeof *wt))) {
+        cli_error("%s: out of memory for a %u x %u image", a.weight_out, w, h);
         goto done;
     }
     cli_splat_job_init(&job, sp, &a.s, a.quiet);
     job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
-    job.rgba = rgba;
     job.weight = wt;
-    if (cli_splat_run(&job)) goto done;
-    st.t[2] = cli_now_ms() - t1;
-
-    t1 = cli_now_ms();
-    cli_progress prog;
-    cli_progress_init(&prog, "write", a.quiet);
-    cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, cli_progress_cb, &prog };
-    r = png_to_temp(&out_png, w, h, rgba, &po);
-    cli_progress_done(&prog);
-    if (r) goto done;
+    if (cli_splat_png_run(&job, out_png.f, a.out, a.s.png_level_given ? a.s.png_level : -1, &st.png) ||
+        png_finish(&out_png))
+        goto done;
     if (wt && weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
-    st.t[3] = cli_now_ms() - t1;
+    st.t[2] = st.png.splat_cpu_ms / (job.threads_used ? job.threads_used : 1);
+    st.t[3] = cli_now_ms() - t1 - st.t[2];
     st.t[4] = cli_now_ms() - t_start;
     if (a.stats) {
         rs_road_grid_stats gs;
@@ -332,7 +359,6 @@ done:
     cli_out_abort(&out_png); /* no-ops once renamed */
     cli_out_abort(&out_wt);
     cli_out_abort(&out_stats);
-    free(rgba);
     free(wt);
     rs_splatter_free(ctx, sp);
     rs_road_grid_free(ctx, grid);

@@ -3,8 +3,9 @@
  * with its own context. Every band is rendered by rs_splat_window, whose
  * output does not depend on how the image is cut, so any thread count gives
  * the same bytes. */
-#include "cli.h"
+#include "png.h"
 
+#include <errno.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -158,6 +159,207 @@ int cli_splat_run(cli_splat_job *job)
     pthread_mutex_destroy(&sh.mu);
     cli_progress_done(&prog);
     if (sh.err) {
+        cli_error("%s", sh.msg);
+        return 1;
+    }
+    return 0;
+}
+
+/* ---- the splat written as a PNG while it runs (cli/png.h) ------------------- */
+
+typedef struct band_slot { /* a finished band waiting for the ones before it */
+    uint8_t *data;
+    size_t size, raw;
+    uint32_t adler;
+    int ready;
+} band_slot;
+
+typedef struct png_shared {
+    cli_splat_job *job;
+    const cli_png_layout *l;
+    cli_png_writer wr;
+    cli_progress *prog;
+    const char *shown;
+    band_slot *slots;
+    uint32_t next;    /* next band to splat */
+    uint32_t written; /* bands in the file */
+    int writing;      /* a worker is writing bands into the file */
+    int stop;
+    char msg[256];
+    double t0, splat_done;
+    cli_png_run_stats st;
+    pthread_mutex_t mu;
+} png_shared;
+
+typedef struct png_worker {
+    png_shared *sh;
+    rs_splat_profile prof;
+} png_worker;
+
+/* The first error wins; called with the lock held. */
+static void png_fail(png_shared *sh, const char *fmt, const char *a, const char *b)
+{
+    if (!sh->stop) snprintf(sh->msg, sizeof sh->msg, fmt, a, b);
+    sh->stop = 1;
+}
+
+/* Write band `b` (piece p, or the slots that follow once it is in), with
+ * the lock held on entry and exit; the lock is dropped around the I/O. */
+static void png_write_from(png_shared *sh, const cli_png_piece *p)
+{
+    sh->writing = 1;
+    cli_png_piece cur = *p;
+    band_slot *s = NULL;
+    for (;;) {
+        pthread_mutex_unlock(&sh->mu);
+        double t = cli_now_ms();
+        int bad = cli_png_writer_band(&sh->wr, &cur);
+        int e = errno;
+        t = cli_now_ms() - t;
+        if (s) {
+            free(s->data);
+            s->data = NULL;
+        }
+        pthread_mutex_lock(&sh->mu);
+        sh->st.file_ms += t;
+        if (bad) {
+            png_fail(sh, "%s: write failed: %s", sh->shown, strerror(e ? e : EIO));
+            break;
+        }
+        sh->written++;
+        if (cli_progress_cb(sh->prog, sh->written, sh->l->nbands)) png_fail(sh, "%s%s", "cancelled", "");
+        if (sh->stop || sh->written == sh->l->nbands || !sh->slots[sh->written].ready) break;
+        s = &sh->slots[sh->written];
+        cur.data = s->data;
+        cur.size = s->size;
+        cur.adler = s->adler;
+        cur.raw = s->raw;
+    }
+    sh->writing = 0;
+}
+
+static void *png_work(void *arg)
+{
+    png_worker *wk = arg;
+    png_shared *sh = wk->sh;
+    cli_splat_job *job = sh->job;
+    const cli_png_layout *l = sh->l;
+    rs_ctx *ctx = NULL;
+    rs_result r = rs_ctx_create(NULL, NULL, &ctx);
+    cli_png_coder *coder = cli_png_coder_new(l);
+    uint8_t *rgba = malloc((size_t)l->band_rows * job->w * 4);
+    wk->prof.clock_ms = clock_ms;
+    pthread_mutex_lock(&sh->mu);
+    if (r) png_fail(sh, "%s%s", rs_strerror(r), "");
+    else if (!coder || !rgba) png_fail(sh, "%s: %s", sh->shown, "out of memory");
+    for (;;) {
+        if (sh->stop || sh->next >= l->nbands) break;
+        uint32_t b = sh->next++;
+        pthread_mutex_unlock(&sh->mu);
+
+        uint32_t y = b * l->band_rows, rows = job->h - y < l->band_rows ? job->h - y : l->band_rows;
+        double t0 = cli_now_ms();
+        r = rs_splat_window(ctx, job->s, job->x0, job->y0 + y, job->w, rows, rgba, (size_t)job->w * 4,
+                            job->weight ? job->weight + (size_t)y * job->w : NULL, job->w, &wk->prof);
+        double t1 = cli_now_ms();
+        cli_png_piece p;
+        int bad = !r && cli_png_coder_band(coder, b, rgba, (size_t)job->w * 4, &p);
+        double t2 = cli_now_ms();
+
+        pthread_mutex_lock(&sh->mu);
+        sh->st.splat_cpu_ms += t1 - t0;
+        sh->st.png_cpu_ms += t2 - t1;
+        if (t1 - sh->t0 > sh->splat_done) sh->splat_done = t1 - sh->t0;
+        if (r) {
+            const char *m = rs_ctx_message(ctx);
+            png_fail(sh, "%s%s", m[0] ? m : rs_strerror(r), "");
+        } else if (bad) {
+            png_fail(sh, "%s: %s", sh->shown, "compression failed");
+        } else if (!sh->stop && b == sh->written && !sh->writing) {
+            png_write_from(sh, &p); /* straight from the coder's buffer */
+        } else if (!sh->stop) {
+            band_slot *s = &sh->slots[b];
+            s->data = malloc(p.size ? p.size : 1);
+            if (!s->data) {
+                png_fail(sh, "%s: %s", sh->shown, "out of memory");
+            } else {
+                memcpy(s->data, p.data, p.size);
+                s->size = p.size;
+                s->raw = p.raw;
+                s->adler = p.adler;
+                s->ready = 1; /* the writer takes it once the bands before are in */
+            }
+        }
+    }
+    if (coder) {
+        uint64_t j[4];
+        cli_png_coder_joins(coder, j);
+        for (int i = 0; i < 4; i++) sh->st.joins[i] += j[i];
+    }
+    pthread_mutex_unlock(&sh->mu);
+    free(rgba);
+    cli_png_coder_free(coder);
+    rs_ctx_free(ctx);
+    return NULL;
+}
+
+int cli_splat_png_run(cli_splat_job *job, FILE *f, const char *shown, int level, cli_png_run_stats *st)
+{
+    cli_png_layout l;
+    if (cli_png_layout_init(&l, shown, job->w, job->h, 4, 8, level)) return 1;
+    png_shared sh;
+    cli_progress prog;
+    memset(&sh, 0, sizeof sh);
+    sh.job = job;
+    sh.l = &l;
+    sh.shown = shown;
+    sh.prog = &prog;
+    sh.t0 = cli_now_ms();
+    cli_progress_init(&prog, "splat+write", job->quiet);
+    if (cli_png_writer_begin(&sh.wr, f, &l)) {
+        cli_error("%s: write failed: %s", shown, strerror(errno ? errno : EIO));
+        return 1;
+    }
+    unsigned n = job->threads ? job->threads : 1;
+    if (n > l.nbands) n = l.nbands;
+    pthread_mutex_init(&sh.mu, NULL);
+    png_worker *wk = calloc(n, sizeof *wk);
+    pthread_t *tid = calloc(n, sizeof *tid);
+    sh.slots = calloc(l.nbands, sizeof *sh.slots);
+    unsigned started = 0;
+    if (wk && tid && sh.slots) {
+        for (unsigned i = 0; i < n; i++) wk[i].sh = &sh;
+        for (unsigned i = 1; i < n; i++) {
+            if (pthread_create(&tid[i], NULL, png_work, &wk[i]) != 0) break;
+            started = i;
+        }
+        png_work(&wk[0]); /* the calling thread works too */
+        for (unsigned i = 1; i <= started; i++) pthread_join(tid[i], NULL);
+        for (unsigned i = 0; i < n; i++) {
+            job->profile.coverage_ms += wk[i].prof.coverage_ms;
+            job->profile.surface_ms += wk[i].prof.surface_ms;
+            job->profile.overlays_ms += wk[i].prof.overlays_ms;
+            job->profile.composite_ms += wk[i].prof.composite_ms;
+            job->profile.pixels += wk[i].prof.pixels;
+            job->profile.road_pixels += wk[i].prof.road_pixels;
+        }
+        job->threads_used = started + 1;
+    } else {
+        png_fail(&sh, "%s: %s", shown, "out of memory");
+    }
+    if (!sh.stop && (sh.written != l.nbands || cli_png_writer_end(&sh.wr)))
+        png_fail(&sh, "%s: write failed: %s", shown, strerror(errno ? errno : EIO));
+    if (sh.slots)
+        for (uint32_t b = 0; b < l.nbands; b++) free(sh.slots[b].data);
+    free(sh.slots);
+    free(wk);
+    free(tid);
+    pthread_mutex_destroy(&sh.mu);
+    cli_progress_done(&prog);
+    sh.st.splat_done_ms = sh.splat_done;
+    sh.st.wall_ms = cli_now_ms() - sh.t0;
+    if (st) *st = sh.st;
+    if (sh.stop) {
         cli_error("%s", sh.msg);
         return 1;
     }
