@@ -12,6 +12,9 @@
 #include <float.h>
 #include <math.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define HALF_SQRT2 0.70710678118654752440
 /* Sub-squares per pixel side where a pixel's coverage is not one straight
@@ -615,28 +618,43 @@ static void px_set(rf_px *q, double side)
     q->c2 = 1 / (2 * side * side);
 }
 
+/* x >= y ? a : b and max(w, 0) without a branch (the covers' cases depend
+ * on the data and are badly predicted); either way the same doubles. */
+#if defined(__SSE2__)
+static double rf_ge(double x, double y, double a, double b)
+{
+    __m128d m = _mm_cmpge_sd(_mm_set_sd(x), _mm_set_sd(y));
+    return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
+}
+static double rf_pos(double w) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(w), _mm_setzero_pd())); }
+#else
+static double rf_ge(double x, double y, double a, double b) { return x >= y ? a : b; }
+static double rf_pos(double w) { return w > 0 ? w : 0; }
+#endif
+
 /* halfplane() for the segment's own normal, without divisions: a = hs ga,
- * b = hs gb, apb = a + b (the caller's), x = |h|. Returns lo (the fraction
- * where u <= -x). w^2/(8ab) = w^2 c2 igab and (a-x)/(2a) = 1/2 - x iside iga. */
+ * b = hs gb, apb = a + b (the caller's), x = |h| >= 0. Returns lo (the
+ * fraction where u <= -x): 0 for x >= a + b, w^2/(8ab) = w^2 c2 igab with
+ * w = a + b - x for x >= a - b, else (a-x)/(2a) = 1/2 - x iside iga.
+ * Without branches: w is clamped at 0, so the quadratic piece gives the 0. */
 static double band_lo(const rf_seg *s, const rf_px *q, double a, double b, double apb, double x)
 {
-    if (x >= apb) return 0;
-    if (x >= a - b) { double w = apb - x; return w * w * (q->c2 * s->igab); }
-    return 0.5 - x * (q->iside * s->iga);
+    double w = apb - x, lin = 0.5 - x * (q->iside * s->iga);
+    w = rf_pos(w);
+    return rf_ge(x, a - b, w * w * (q->c2 * s->igab), lin);
 }
 
 /* Coverage of the square (side q->side) whose centre is at signed offset t
  * from the segment's line, inside the segment's slab, by the band |t| <= r:
  * the fraction between two parallel lines, each the CDF of the sum of two
  * uniform variables (a trapezoid, closed form). The caller has settled
- * |t| <= r - e (1) and |t| >= r + e (0). */
+ * |t| <= r - e (1) and |t| >= r + e (0). The far edge (offset -r - at, never
+ * above 0) usually misses the square: its term is then exactly 0. */
 static double band_cover(const rf_seg *s, const rf_px *q, double t)
 {
     double a = q->hs * s->ga, b = q->hs * s->gb, apb = a + b, at = fabs(t), h = s->r - at;
-    double near = h < 0 ? band_lo(s, q, a, b, apb, -h) : 1 - band_lo(s, q, a, b, apb, h);
-    /* the far edge (offset -r - at, never above 0) misses the square: its term is 0 */
-    if (at + s->r >= apb) return near;
-    return near - band_lo(s, q, a, b, apb, at + s->r);
+    double lo = band_lo(s, q, a, b, apb, fabs(h));
+    return rf_ge(h, 0, 1 - lo, lo) - band_lo(s, q, a, b, apb, at + s->r);
 }
 
 /* Coverage of the square centred (x, y) of size q by one capsule: exact
