@@ -43,6 +43,9 @@ typedef struct rf_seg {
      * (0 for a component below 1e-100) */
     double ga, gb, iga, igab, l1, iux, iuy;
     uint32_t road, seg;
+    /* 1: the next segment (index + 1) is the road's next one, both of
+     * positive length, turning by less than acos(JOINT_COS) (joint_cover) */
+    uint32_t jnext;
 } rf_seg;
 
 struct rs__roadfield {
@@ -225,6 +228,7 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     s->s0 = s0;
     s->road = road;
     s->seg = seg;
+    s->jnext = 0;
 }
 
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
@@ -504,6 +508,13 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
     if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
+    for (size_t k = 0; k + 1 < f->nseg; k++) {
+        const rf_seg *sa = &f->seg[k], *sb = &f->seg[k + 1];
+        /* consecutive segments of a road, or the first of the next road when
+         * it starts where this one ends with the same width */
+        f->seg[k].jnext = sa->bx == sb->ax && sa->by == sb->ay && sa->r == sb->r && sa->len > 0 && sb->len > 0 &&
+                          sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
+    }
     if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
     build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
@@ -626,9 +637,24 @@ static double rf_ge(double x, double y, double a, double b)
     __m128d m = _mm_cmpge_sd(_mm_set_sd(x), _mm_set_sd(y));
     return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
 }
+static double rf_gt(double x, double y, double a, double b)
+{
+    __m128d m = _mm_cmpgt_sd(_mm_set_sd(x), _mm_set_sd(y));
+    return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
+}
+static double rf_if(int c, double a, double b)
+{
+    __m128d m = _mm_castsi128_pd(_mm_set1_epi32(-(c != 0)));
+    return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
+}
+/* a > b ? a : b */
+static double rf_max(double a, double b) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(b))); }
 static double rf_pos(double w) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(w), _mm_setzero_pd())); }
 #else
 static double rf_ge(double x, double y, double a, double b) { return x >= y ? a : b; }
+static double rf_gt(double x, double y, double a, double b) { return x > y ? a : b; }
+static double rf_if(int c, double a, double b) { return c ? a : b; }
+static double rf_max(double a, double b) { return a > b ? a : b; }
 static double rf_pos(double w) { return w > 0 ? w : 0; }
 #endif
 
@@ -655,6 +681,15 @@ static double band_cover(const rf_seg *s, const rf_px *q, double t)
     double a = q->hs * s->ga, b = q->hs * s->gb, apb = a + b, at = fabs(t), h = s->r - at;
     double lo = band_lo(s, q, a, b, apb, fabs(h));
     return rf_ge(h, 0, 1 - lo, lo) - band_lo(s, q, a, b, apb, at + s->r);
+}
+
+/* The band's cover of a square in the slab at offset t: 0 when clear
+ * (|t| - r >= e), 1 when deep (|t| + e <= r), else band_cover; chosen
+ * without a branch. */
+static double band_value(const rf_seg *s, const rf_px *q, double t)
+{
+    double at = fabs(t);
+    return rf_ge(at - s->r, q->e, 0, rf_ge(s->r, at + q->e, 1, band_cover(s, q, t)));
 }
 
 /* Coverage of the square centred (x, y) of size q by one capsule: exact
@@ -684,78 +719,76 @@ static double capsule_cover(const rf_seg *s, double x, double y, const rf_px *q)
     return halfplane(dx / d, dy / d, q->side, -D);
 }
 
+/* The near capsules of a pixel with seg_eval's results. */
+typedef struct rf_near {
+    uint32_t id[NEAR_MAX];
+    double p[NEAR_MAX], t[NEAR_MAX]; /* the centre's projection on the segment (from a) and offset t */
+    double u[NEAR_MAX], v[NEAR_MAX]; /* the centre minus the nearest centreline point */
+    int slab[NEAR_MAX];              /* 1: the pixel lies in the segment's slab */
+    int n, many;
+} rf_near;
+
 /* Classifies the capsule against the pixel centred (x, y) of size q:
- * 2 = deep (d <= r - e), 0 = clear (d >= r + e), 1 = near. Squared
- * distances: no root for most. For a near capsule, *slab = 1 when the pixel
- * lies in the segment's slab (then *u = t, the offset from the line), else
- * (*u, *v) = the pixel centre minus the nearest centreline point; near_value
- * turns these into capsule_cover's value. */
-static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, int *slab, double *u, double *v)
+ * 2 = deep (d <= r - e), 0 = clear (d >= r + e), 1 = near. In the slab (all
+ * of the pixel projects into the segment) by the offset t from the line,
+ * else by the squared distance to the nearest centreline point (no root).
+ * Fills slot n of nr (p, t, u, v, slab); near_value turns these into
+ * capsule_cover's value. Both ways are computed and one is chosen without
+ * a branch (which way applies depends on the data). */
+static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, rf_near *nr, int n)
 {
-    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, e = q->e, hp = q->hs * s->l1, qx, qy;
-    if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-        double t = wx * s->uy - wy * s->ux, at = fabs(t);
-        if (at - s->r >= e) return 0;
-        if (at + e <= s->r) return 2;
-        *slab = 1;
-        *u = t;
-        return 1;
-    }
-    if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
-    else if (pr >= s->len) { qx = s->bx; qy = s->by; }
-    else { qx = s->ax + pr * s->ux; qy = s->ay + pr * s->uy; }
+    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, e = q->e, hp = q->hs * s->l1;
+    double t = wx * s->uy - wy * s->ux, at = fabs(t);
+    int slab = (s->len > 0) & (pr - hp >= 0) & (pr + hp <= s->len);
+    int cs = at - s->r >= e ? 0 : at + e <= s->r ? 2 : 1;
+    /* nearest point: a when !(pr > 0), b when pr >= len, else on the line */
+    double qx = rf_gt(pr, 0, rf_ge(pr, s->len, s->bx, s->ax + pr * s->ux), s->ax);
+    double qy = rf_gt(pr, 0, rf_ge(pr, s->len, s->by, s->ay + pr * s->uy), s->ay);
     double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
-    if (d2 < 1e300) {
-        if (d2 >= ro * ro) return 0;
-        if (ri > 0 && d2 <= ri * ri) return 2;
-    } else {
+    int cn = d2 >= ro * ro ? 0 : (ri > 0) & (d2 <= ri * ri) ? 2 : 1;
+    if (!(d2 < 1e300)) {
         double D = hypot(dx, dy) - s->r;
-        if (D >= e) return 0;
-        if (D <= -e) return 2;
+        cn = D >= e ? 0 : D <= -e ? 2 : 1;
     }
-    *slab = 0;
-    *u = dx;
-    *v = dy;
-    return 1;
+    nr->p[n] = pr;
+    nr->t[n] = t;
+    nr->u[n] = rf_if(slab, t, dx);
+    nr->v[n] = dy;
+    nr->slab[n] = slab;
+    return slab ? cs : cn;
 }
 
 /* capsule_cover's value for a near capsule from seg_eval's results (the
- * exact band in the slab, else the linearised distance); *D = d - r. */
-static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, double v, double *D)
+ * exact band in the slab, else the linearised distance). */
+static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, double v)
 {
-    if (slab) {
-        *D = fabs(u) - s->r;
-        return band_cover(s, q, u);
-    }
+    if (slab) return band_cover(s, q, u);
     double d = len2(u, v), Dd = d - s->r;
-    *D = Dd;
     if (Dd >= q->e) return 0;  /* rounding at the threshold */
     if (Dd <= -q->e) return 1;
     return d > 0 ? halfplane(u / d, v / d, q->side, -Dd) : 1; /* d = 0: a tiny road; rare */
 }
 
-/* A pixel near only two consecutive segments of one road with a gentle
- * turn (the common case on curves): the road edge in the pixel is two
- * nearly collinear lines joined by a short arc. On the inner side the road
- * is the union of the two straight edges (max of their exact covers); on
- * the outer side the edge is the tangent at the nearest boundary point. The
- * error is second order in the turn angle (docs/roadfield.md). joint_ok:
- * does this case apply to a pixel near exactly ia and ib (near_cover
- * then takes the max, or the cover of the smaller d - r)? */
-static int joint_ok(const rs__roadfield *f, uint32_t ia, uint32_t ib, double e)
+/* A pixel near only two consecutive segments a, b of one road with a
+ * gentle turn (the common case on curves; rf_seg.jnext), its centre not
+ * beyond the far ends: the road edge in the pixel is two nearly collinear
+ * lines joined by a short arc around the shared vertex V. On the inner
+ * side of the turn the road is the union of the two half-planes (the max
+ * of their exact covers); on the outer side the edge is the tangent at the
+ * nearest boundary point: a's edge line while the centre projects into a,
+ * b's while it projects into b, else (the fan at V) the tangent to the arc.
+ * The error is second order in the turn angle (docs/roadfield.md). ia, ib:
+ * the slots of a and b in nr. */
+static double joint_cover(const rf_seg *a, const rf_seg *b, const rf_near *nr, int ia, int ib, const rf_px *q,
+                          double cx, double cy)
 {
-    const rf_seg *a = &f->seg[ia < ib ? ia : ib], *b = &f->seg[ia < ib ? ib : ia];
-    if (a->road != b->road || b->seg != a->seg + 1 || !(a->len > 0) || !(b->len > 0)) return 0;
-    return !(a->ux * b->ux + a->uy * b->uy < JOINT_COS || a->r < 2 * e || b->r < 2 * e);
+    double pa = nr->p[ia], ta = nr->t[ia], pb = nr->p[ib];
+    double ca = band_value(a, q, ta), cb = band_value(b, q, nr->t[ib]);
+    double turn = b->ux * a->uy - b->uy * a->ux;
+    if (ta * turn > 0) return rf_max(ca, cb);
+    if (pa < a->len || pb > 0) return rf_if(pa < a->len, ca, cb);
+    return near_value(a, q, 0, cx - a->bx, cy - a->by);
 }
-
-/* The near capsules of a pixel with seg_eval's results. */
-typedef struct rf_near {
-    uint32_t id[NEAR_MAX];
-    double u[NEAR_MAX], v[NEAR_MAX];
-    int slab[NEAR_MAX];
-    int n, many;
-} rf_near;
 
 /* Evaluates capsule id against the pixel and adds it to nr when near
  * (each once). Returns 1 when the pixel is deep inside it. */
@@ -764,7 +797,7 @@ static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx
     for (int m = 0; m < nr->n; m++)
         if (nr->id[m] == id) return 0;
     int n = nr->n < NEAR_MAX ? nr->n : NEAR_MAX - 1; /* past NEAR_MAX: scratch slot */
-    int c = seg_eval(&f->seg[id], cx, cy, q, &nr->slab[n], &nr->u[n], &nr->v[n]);
+    int c = seg_eval(&f->seg[id], cx, cy, q, nr, n);
     if (c == 2) return 1;
     if (c) {
         if (nr->n < NEAR_MAX) nr->id[nr->n++] = id;
@@ -776,57 +809,182 @@ static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx
 static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
                         const rf_px *qs);
 
-/* Crossings of straight roads (two or more near capsules, each with the
- * pixel in its slab and only its nearer edge crossing the pixel): within
- * the pixel every road is a half-plane, so the uncovered part is the
- * intersection of their complements, a convex polygon: the square clipped
- * by each edge line (Sutherland-Hodgman), area by the shoelace formula.
- * Exact. Returns -1 when a capsule does not qualify. */
-static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const rf_px *q)
+/* Exact area of one capsule in a square where its boundary is not one
+ * straight line (road ends, and squares reaching past a segment's end
+ * normal): the normals at a and b cut the plane into the disc side of a,
+ * the band and the disc side of b; the square's part in each is a convex
+ * polygon (rf_poly, Sutherland-Hodgman), whose area inside the disc or the
+ * band is summed. */
+typedef struct rf_poly {
+    int n;
+    double x[12], y[12]; /* counter-clockwise; a square clipped by at most 4 lines */
+} rf_poly;
+
+static void poly_square(rf_poly *P, double hs)
 {
-    double hs = q->hs, px[2][NEAR_MAX + 4], py[2][NEAR_MAX + 4];
-    int ord[NEAR_MAX];
+    P->n = 4;
+    P->x[0] = -hs; P->y[0] = -hs;
+    P->x[1] = hs;  P->y[1] = -hs;
+    P->x[2] = hs;  P->y[2] = hs;
+    P->x[3] = -hs; P->y[3] = hs;
+}
+
+/* Keeps the part of P where g0 + gx x + gy y <= 0. */
+static void poly_clip(rf_poly *P, double gx, double gy, double g0)
+{
+    rf_poly o;
+    o.n = 0;
+    if (P->n == 0) return;
+    double gp = g0 + gx * P->x[P->n - 1] + gy * P->y[P->n - 1];
+    for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++) {
+        double gk = g0 + gx * P->x[k] + gy * P->y[k];
+        if ((gk > 0) != (gp > 0)) {
+            double w = gp / (gp - gk); /* gp and gk differ in sign: no division by 0 */
+            o.x[o.n] = P->x[kp] + w * (P->x[k] - P->x[kp]);
+            o.y[o.n++] = P->y[kp] + w * (P->y[k] - P->y[kp]);
+        }
+        if (!(gk > 0)) { o.x[o.n] = P->x[k]; o.y[o.n++] = P->y[k]; }
+        gp = gk;
+    }
+    *P = o;
+}
+
+static double poly_area(const rf_poly *P)
+{
+    double a = 0;
+    for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++) a += P->x[kp] * P->y[k] - P->x[k] * P->y[kp];
+    return 0.5 * a;
+}
+
+/* Signed area of the part of the triangle (0, P, Q) inside the disc of
+ * radius r about 0: the chord of PQ inside the circle as a triangle, the
+ * rest as circular sectors. */
+static double tri_disc(double px, double py, double qx, double qy, double r)
+{
+    double dx = qx - px, dy = qy - py, a = dx * dx + dy * dy, r2 = 0.5 * r * r;
+    if (!(a > 0)) return 0;
+    double b = px * dx + py * dy, c = px * px + py * py - r * r, disc = b * b - a * c, s1 = 1, s2 = 0;
+    if (disc > 0) {
+        double sq = sqrt(disc);
+        s1 = (-b - sq) / a;
+        s2 = (-b + sq) / a;
+        if (s1 < 0) s1 = 0;
+        if (s2 > 1) s2 = 1;
+    }
+    if (!(s1 < s2)) return r2 * atan2(px * qy - py * qx, px * qx + py * qy);
+    double m1x = px + s1 * dx, m1y = py + s1 * dy, m2x = px + s2 * dx, m2y = py + s2 * dy;
+    double area = 0.5 * (m1x * m2y - m1y * m2x);
+    if (s1 > 0) area += r2 * atan2(px * m1y - py * m1x, px * m1x + py * m1y);
+    if (s2 < 1) area += r2 * atan2(m2x * qy - m2y * qx, m2x * qx + m2y * qy);
+    return area;
+}
+
+/* Area of P inside the disc of radius r about (ox, oy). */
+static double poly_disc(const rf_poly *P, double ox, double oy, double r)
+{
+    double a = 0;
+    for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++)
+        a += tri_disc(P->x[kp] - ox, P->y[kp] - oy, P->x[k] - ox, P->y[k] - oy, r);
+    return a;
+}
+
+/* Crossings of straight roads, and of roads with gentle joints: within
+ * the pixel every road is one or two half-planes, so the uncovered part is
+ * the intersection of their complements, a convex polygon: the square
+ * clipped by each edge line, area by the shoelace formula. A near capsule
+ * with the pixel in its slab and only its nearer edge crossing the pixel
+ * gives its edge line. A gentle joint (rf_seg.jnext, both segments near,
+ * as joint_cover) gives both edge lines on the inner side of the turn
+ * (exact) and on the outer side the tangent joint_cover takes. The lines
+ * are clipped in the order of their segments, so the rounding never
+ * depends on the order the candidates were found in. Returns -1 when a
+ * capsule does not qualify (or there are more than HP_MAX lines). */
+#define HP_MAX 8
+static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const rf_px *q, double cx, double cy)
+{
+    /* line k: outside its road where g0 + gx X + gy Y > 0 (square coordinates) */
+    double g0[HP_MAX], gx[HP_MAX], gy[HP_MAX], hs = q->hs;
+    uint64_t key[HP_MAX];
+    uint32_t used = 0;
+    int nl = 0;
+#define RF_LINE(s, t, kk)                                                                                        \
+    do {                                                                                                         \
+        double sg_ = (t) >= 0 ? 1 : -1;                                                                          \
+        if (nl == HP_MAX) return -1;                                                                             \
+        g0[nl] = sg_ * (t) - (s)->r; gx[nl] = sg_ * (s)->uy; gy[nl] = -sg_ * (s)->ux; key[nl++] = (kk);          \
+    } while (0)
+    for (int m = 0; m < nr->n; m++) {
+        const rf_seg *a = &f->seg[nr->id[m]];
+        if (!a->jnext || (used >> m & 1u)) continue;
+        int m2 = 0;
+        while (m2 < nr->n && nr->id[m2] != nr->id[m] + 1) m2++;
+        if (m2 == nr->n || (used >> m2 & 1u)) continue;
+        const rf_seg *b = &f->seg[nr->id[m2]];
+        if (!(a->r >= 2 * q->e && nr->p[m] >= hs * a->l1 && nr->p[m2] + hs * b->l1 <= b->len)) continue;
+        used |= 1u << m | 1u << m2;
+        uint64_t k0 = 2 * (uint64_t)nr->id[m];
+        if (nr->t[m] * (b->ux * a->uy - b->uy * a->ux) > 0) {
+            RF_LINE(a, nr->t[m], k0);
+            RF_LINE(b, nr->t[m2], k0 + 1);
+        } else if (nr->p[m] < a->len) RF_LINE(a, nr->t[m], k0);
+        else if (nr->p[m2] > 0) RF_LINE(b, nr->t[m2], k0);
+        else {
+            /* the fan at the shared vertex: the tangent to the arc */
+            double dx = cx - a->bx, dy = cy - a->by, d = len2(dx, dy);
+            if (!(d > 0) || nl == HP_MAX) return -1;
+            g0[nl] = d - a->r; gx[nl] = dx / d; gy[nl] = dy / d; key[nl++] = k0;
+        }
+    }
     for (int m = 0; m < nr->n; m++) {
         const rf_seg *s = &f->seg[nr->id[m]];
+        if (used >> m & 1u) continue;
         if (!nr->slab[m] || fabs(nr->u[m]) + s->r < hs * (s->ga + s->gb)) return -1;
-        /* clip in ascending segment order: the rounding never depends on
-         * the order the candidates were found in */
+        RF_LINE(s, nr->u[m], 2 * (uint64_t)nr->id[m]);
+    }
+#undef RF_LINE
+    int ord[HP_MAX];
+    for (int m = 0; m < nl; m++) {
         int k = m;
-        for (; k > 0 && nr->id[ord[k - 1]] > nr->id[m]; k--) ord[k] = ord[k - 1];
+        for (; k > 0 && key[ord[k - 1]] > key[m]; k--) ord[k] = ord[k - 1];
         ord[k] = m;
     }
-    /* the square, counter-clockwise, centred at the pixel centre */
-    int np = 4, cur = 0;
-    px[0][0] = -hs; py[0][0] = -hs;
-    px[0][1] = hs;  py[0][1] = -hs;
-    px[0][2] = hs;  py[0][2] = hs;
-    px[0][3] = -hs; py[0][3] = hs;
-    for (int j = 0; j < nr->n && np > 0; j++) {
-        int m = ord[j];
-        const rf_seg *s = &f->seg[nr->id[m]];
-        /* outside the road: g = sg (t(X, Y)) - r > 0, t = u + X uy - Y ux */
-        double sg = nr->u[m] >= 0 ? 1 : -1, gx = sg * s->uy, gy = -sg * s->ux, g0 = sg * nr->u[m] - s->r;
-        const double *ix = px[cur], *iy = py[cur];
-        double *ox = px[1 - cur], *oy = py[1 - cur];
-        int no = 0;
-        double gp = g0 + gx * ix[np - 1] + gy * iy[np - 1];
-        for (int k = 0, kp = np - 1; k < np; kp = k, k++) {
-            double gk = g0 + gx * ix[k] + gy * iy[k];
-            if ((gk > 0) != (gp > 0)) {
-                double w = gp / (gp - gk); /* gp and gk differ in sign: no division by 0 */
-                ox[no] = ix[kp] + w * (ix[k] - ix[kp]);
-                oy[no++] = iy[kp] + w * (iy[k] - iy[kp]);
-            }
-            if (gk > 0) { ox[no] = ix[k]; oy[no++] = iy[k]; }
-            gp = gk;
+    rf_poly P;
+    poly_square(&P, hs);
+    /* poly_clip keeps g <= 0: the outside of each road is -g <= 0 */
+    for (int j = 0; j < nl && P.n > 0; j++) poly_clip(&P, -gx[ord[j]], -gy[ord[j]], -g0[ord[j]]);
+    double v = 1 - poly_area(&P) * (q->iside * q->iside);
+    return v < 0 ? 0 : v > 1 ? 1 : v;
+}
+
+/* The pixel centred (cx, cy) has projection pr on s (from a) and offset t. */
+static double cap_cover(const rf_seg *s, const rf_px *q, double cx, double cy, double pr, double t)
+{
+    double hs = q->hs, hp = hs * s->l1, area = 0;
+    rf_poly P;
+    poly_square(&P, hs);
+    if (!(s->len > 0)) {
+        area = poly_disc(&P, s->ax - cx, s->ay - cy, s->r);
+    } else {
+        /* in square coordinates (X, Y): projection pr + X ux + Y uy, offset t + X uy - Y ux */
+        if (pr - hp < 0) {
+            rf_poly D = P;
+            poly_clip(&D, s->ux, s->uy, pr);
+            area += poly_disc(&D, s->ax - cx, s->ay - cy, s->r);
         }
-        np = no;
-        cur = 1 - cur;
+        if (pr + hp > s->len) {
+            rf_poly D = P;
+            poly_clip(&D, -s->ux, -s->uy, s->len - pr);
+            area += poly_disc(&D, s->bx - cx, s->by - cy, s->r);
+        }
+        if (pr + hp > 0 && pr - hp < s->len) {
+            poly_clip(&P, -s->ux, -s->uy, -pr);
+            poly_clip(&P, s->ux, s->uy, pr - s->len);
+            poly_clip(&P, s->uy, -s->ux, t - s->r);
+            poly_clip(&P, -s->uy, s->ux, -t - s->r);
+            area += poly_area(&P);
+        }
     }
-    double area = 0;
-    for (int k = 0, kp = np - 1; k < np; kp = k, k++)
-        area += px[cur][kp] * py[cur][k] - px[cur][k] * py[cur][kp];
-    double v = 1 - 0.5 * area * (q->iside * q->iside);
+    double v = area * (q->iside * q->iside);
     return v < 0 ? 0 : v > 1 ? 1 : v;
 }
 
@@ -835,26 +993,21 @@ static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const 
 static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
                          const rf_px *q, const rf_px *qs)
 {
-    if (nr->n == 0) return 0;
+    if (nr->n == 0 || nr->many) return nr->n ? sub_cover(f, nr, cr, cx, cy, qs) : 0;
     /* one boundary: exact if straight within the pixel */
-    if (nr->n == 1 && !nr->many && nr->slab[0]) {
-        double D;
-        return near_value(&f->seg[nr->id[0]], q, 1, nr->u[0], 0, &D);
+    if (nr->n == 1) {
+        const rf_seg *s = &f->seg[nr->id[0]];
+        return nr->slab[0] ? band_cover(s, q, nr->u[0]) : cap_cover(s, q, cx, cy, nr->p[0], nr->t[0]);
     }
-    if (nr->n == 2 && !nr->many && joint_ok(f, nr->id[0], nr->id[1], q->e)) {
+    if (nr->n == 2) {
         int ia = nr->id[0] < nr->id[1] ? 0 : 1, ib = 1 - ia;
         const rf_seg *a = &f->seg[nr->id[ia]], *b = &f->seg[nr->id[ib]];
-        double Da, Db, ca = near_value(a, q, nr->slab[ia], nr->u[ia], nr->v[ia], &Da),
-                       cb = near_value(b, q, nr->slab[ib], nr->u[ib], nr->v[ib], &Db);
-        double side = (cx - a->bx) * a->uy - (cy - a->by) * a->ux, turn = b->ux * a->uy - b->uy * a->ux;
-        if (side * turn > 0) return ca > cb ? ca : cb;
-        return Da <= Db ? ca : cb;
+        if (a->jnext && nr->id[ib] == nr->id[ia] + 1 && a->r >= 2 * q->e && nr->p[ia] >= q->hs * a->l1 &&
+            nr->p[ib] + q->hs * b->l1 <= b->len)
+            return joint_cover(a, b, nr, ia, ib, q, cx, cy);
     }
-    if (!nr->many) {
-        double v = halfplanes_cover(f, nr, q);
-        if (v >= 0) return v;
-    }
-    return sub_cover(f, nr, cr, cx, cy, qs);
+    double v = halfplanes_cover(f, nr, q, cx, cy);
+    return v >= 0 ? v : sub_cover(f, nr, cr, cx, cy, qs);
 }
 
 /* capsule_cover for a segment of positive length, from the square centre's
@@ -1016,11 +1169,13 @@ static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0,
 /* Candidates kept per pixel by the row spans (a power of 2); more falls
  * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024, ACT_MAX = 1024 };
+enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 4, FILL_RUN = 8 };
 
 typedef struct rf_rowbuf {
-    uint8_t cnt[CHUNK];
-    uint32_t cand[CHUNK][SPAN_CAND];
+    /* candidates per pixel; slots CHUNK.. CHUNK + PAINT_RUN - 1 take the
+     * unused stores of paint_run (never listed, never read) */
+    uint8_t cnt[CHUNK + PAINT_RUN];
+    uint32_t cand[CHUNK + PAINT_RUN][SPAN_CAND];
     /* runs of pixels with the same cell column: run m is pixels
      * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
     uint32_t rc[CHUNK], rk[CHUNK + 1], nrun;
@@ -1033,8 +1188,54 @@ typedef struct rf_rowbuf {
     /* pixels of the current row with at least one candidate (cnt > 0), in
      * the order first painted; cnt is zero again after each row */
     uint32_t npl;
-    uint16_t pl[CHUNK];
+    uint16_t pl[CHUNK + 1];
+    /* the painted pixels still to compute: one candidate (l1), more (lm,
+     * with their counts lc) */
+    uint16_t l1[CHUNK], lm[CHUNK];
+    uint8_t lc[CHUNK];
 } rf_rowbuf;
+
+/* Adds candidate id to pixels [x, y] of the row (none when y < x) and
+ * lists the pixels that get their first one; returns the new list length.
+ * Runs are mostly a pixel or two: up to PAINT_RUN pixels take a fixed
+ * number of stores, the unused ones into spare slots, so no loop exit
+ * depends on the data (such branches are mispredicted). */
+static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uint32_t id)
+{
+    if (y - x < PAINT_RUN) {
+        for (int j = 0; j < PAINT_RUN; j++) {
+            int64_t k = x + j;
+            int valid = k <= y;
+            uint32_t idx = valid ? (uint32_t)k : (uint32_t)(CHUNK + j);
+            uint8_t c = rb->cnt[idx];
+            rb->pl[npl] = (uint16_t)idx;
+            npl += (uint32_t)(valid & (c == 0));
+            /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
+            rb->cand[idx][c & (SPAN_CAND - 1)] = id;
+            rb->cnt[idx] = (uint8_t)(c + (c <= SPAN_CAND));
+        }
+        return npl;
+    }
+    for (int64_t k = x; k <= y; k++) {
+        uint8_t c = rb->cnt[k];
+        rb->pl[npl] = (uint16_t)k;
+        npl += c == 0;
+        rb->cand[k][c & (SPAN_CAND - 1)] = id;
+        rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
+    }
+    return npl;
+}
+
+/* o[il..ih] = 1 (il <= ih); short runs by a fixed number of stores (the
+ * last pixel repeated), as in paint_run. */
+static void fill_one(double *o, int64_t il, int64_t ih)
+{
+    if (ih - il < FILL_RUN) {
+        for (int j = 0; j < FILL_RUN; j++) o[il + j <= ih ? il + j : ih] = 1;
+        return;
+    }
+    for (int64_t k = il; k <= ih; k++) o[k] = 1;
+}
 
 /* Cell column of pixel k of the chunk (the run holding it; k is in a run). */
 static uint32_t run_col(const rf_rowbuf *rb, uint32_t k)
@@ -1104,8 +1305,8 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         return;
     }
     double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
-    uint32_t nm = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row], npl = 0;
-    for (uint32_t j = 0; j < nm; j++) {
+    uint32_t nent = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row], npl = 0;
+    for (uint32_t j = 0; j < nent; j++) {
         uint32_t m = rb->nact != UINT32_MAX ? rb->act[j] : f->rstart[row] + j;
         /* the box (grown by margin >= e) first: no segment load for most */
         const float *bx = f->rbox + 4 * (size_t)m;
@@ -1119,29 +1320,47 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         /* deep pixels are 1 at once (a deep pixel's cell lists the segment,
          * so it is in a todo or full run) and need no candidate: paint the
          * near span minus the deep one */
-        uint32_t il, ih, p0 = kh + 1, p1 = kl; /* p0 <= p1: the pixels [p0, p1] are skipped */
+        uint32_t il, ih;
         if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
-            for (uint32_t k = il; k <= ih; k++) o[k] = 1;
-            p0 = il;
-            p1 = ih;
-        }
-        for (uint32_t k = kl; k <= kh; k++) {
-            if (k == p0) { k = p1; continue; }
-            /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
-            uint8_t c = rb->cnt[k];
-            rb->pl[npl] = (uint16_t)k; /* kept when first painted (no branch) */
-            npl += c == 0;
-            rb->cand[k][c & (SPAN_CAND - 1)] = id;
-            rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
-        }
+            fill_one(o, il, ih);
+            npl = paint_run(rb, npl, kl, (int64_t)il - 1, id);
+            npl = paint_run(rb, npl, (int64_t)ih + 1, kh, id);
+        } else
+            npl = paint_run(rb, npl, kl, kh, id);
     }
-    /* the painted pixels: 1 (deep in some capsule, or a full cell), 0 (an
-     * empty cell: no candidate is near) or classified from the candidates */
+    /* the painted pixels: 1 (deep in some capsule, or a full cell) stay;
+     * the others are listed by their number of candidates (no branch) */
+    uint32_t n1 = 0, nm = 0;
     for (uint32_t t = 0; t < npl; t++) {
         uint32_t k = rb->pl[t];
         uint8_t c = rb->cnt[k];
+        int todo = o[k] != 1;
         rb->cnt[k] = 0;
-        if (o[k] == 1) continue;
+        rb->l1[n1] = (uint16_t)k;
+        n1 += (uint32_t)(todo & (c == 1));
+        rb->lm[nm] = (uint16_t)k;
+        rb->lc[nm] = c;
+        nm += (uint32_t)(todo & (c != 1));
+    }
+    for (uint32_t t = 0; t < n1; t++) {
+        /* one candidate with the pixel in its slab (most edge pixels):
+         * seg_eval's slab branch and band_cover, same arithmetic; 0
+         * (clear), 1 (deep) or the cover, selected without a branch */
+        uint32_t k = rb->l1[t];
+        double cx = (a + (double)k) * pix;
+        const rf_seg *s = &f->seg[rb->cand[k][0]];
+        double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
+        if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+            double ts = wx * s->uy - wy * s->ux, at = fabs(ts);
+            o[k] = rf_ge(at - s->r, e, 0, rf_ge(s->r, at + e, 1, band_cover(s, q, ts)));
+        } else {
+            rb->lm[nm] = (uint16_t)k;
+            rb->lc[nm++] = 1;
+        }
+    }
+    for (uint32_t t = 0; t < nm; t++) {
+        uint32_t k = rb->lm[t];
+        uint8_t c = rb->lc[t];
         double cx = (a + (double)k) * pix;
         if (c > SPAN_CAND) {
             uint32_t col = run_col(rb, k);
@@ -1149,34 +1368,20 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             o[k] = pixel_cover(f, &cr, cx, cy, q, qs);
             continue;
         }
-        if (c == 1) {
-            /* one candidate with the pixel in its slab (most edge pixels):
-             * seg_eval's slab branch and band_cover, same arithmetic */
-            const rf_seg *s = &f->seg[rb->cand[k][0]];
-            double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
-            if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-                double ts = wx * s->uy - wy * s->ux, at = fabs(ts);
-                if (at - s->r >= e) continue; /* clear: already 0 */
-                o[k] = at + e <= s->r ? 1 : band_cover(s, q, ts);
-                continue;
-            }
-        }
         /* the candidates are distinct segments: no duplicate check */
         rf_near nr;
         int n = 0, deep = 0;
         for (uint8_t j = 0; j < c; j++) {
             uint32_t id = rb->cand[k][j];
-            int cl = seg_eval(&f->seg[id], cx, cy, q, &nr.slab[n], &nr.u[n], &nr.v[n]);
-            if (cl == 2) { deep = 1; break; }
-            if (cl) nr.id[n++] = id;
+            int cl = seg_eval(&f->seg[id], cx, cy, q, &nr, n);
+            deep |= cl == 2;
+            nr.id[n] = id;
+            n += cl == 1;
         }
-        if (deep) o[k] = 1;
-        else if (n == 1 && nr.slab[0]) o[k] = band_cover(&f->seg[nr.id[0]], q, nr.u[0]); /* one straight edge */
-        else if (n) {
-            nr.n = n;
-            nr.many = 0;
-            o[k] = near_cover(f, &nr, NULL, cx, cy, q, qs); /* the cells are read only when nr.many */
-        }
+        nr.n = n;
+        nr.many = 0;
+        /* the cells are read only when nr.many */
+        o[k] = deep ? 1 : near_cover(f, &nr, NULL, cx, cy, q, qs);
     }
 }
 
