@@ -637,11 +637,6 @@ static double rf_ge(double x, double y, double a, double b)
     __m128d m = _mm_cmpge_sd(_mm_set_sd(x), _mm_set_sd(y));
     return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
 }
-static double rf_gt(double x, double y, double a, double b)
-{
-    __m128d m = _mm_cmpgt_sd(_mm_set_sd(x), _mm_set_sd(y));
-    return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
-}
 static double rf_if(int c, double a, double b)
 {
     __m128d m = _mm_castsi128_pd(_mm_set1_epi32(-(c != 0)));
@@ -650,12 +645,13 @@ static double rf_if(int c, double a, double b)
 /* a > b ? a : b */
 static double rf_max(double a, double b) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(b))); }
 static double rf_pos(double w) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(w), _mm_setzero_pd())); }
+static double rf_neg(double w) { return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(w), _mm_setzero_pd())); }
 #else
 static double rf_ge(double x, double y, double a, double b) { return x >= y ? a : b; }
-static double rf_gt(double x, double y, double a, double b) { return x > y ? a : b; }
 static double rf_if(int c, double a, double b) { return c ? a : b; }
 static double rf_max(double a, double b) { return a > b ? a : b; }
 static double rf_pos(double w) { return w > 0 ? w : 0; }
+static double rf_neg(double w) { return w < 0 ? w : 0; }
 #endif
 
 /* halfplane() for the segment's own normal, without divisions: a = hs ga,
@@ -723,7 +719,6 @@ static double capsule_cover(const rf_seg *s, double x, double y, const rf_px *q)
 typedef struct rf_near {
     uint32_t id[NEAR_MAX];
     double p[NEAR_MAX], t[NEAR_MAX]; /* the centre's projection on the segment (from a) and offset t */
-    double u[NEAR_MAX], v[NEAR_MAX]; /* the centre minus the nearest centreline point */
     int slab[NEAR_MAX];              /* 1: the pixel lies in the segment's slab */
     int n, many;
 } rf_near;
@@ -732,19 +727,19 @@ typedef struct rf_near {
  * 2 = deep (d <= r - e), 0 = clear (d >= r + e), 1 = near. In the slab (all
  * of the pixel projects into the segment) by the offset t from the line,
  * else by the squared distance to the nearest centreline point (no root).
- * Fills slot n of nr (p, t, u, v, slab); near_value turns these into
- * capsule_cover's value. Both ways are computed and one is chosen without
- * a branch (which way applies depends on the data). */
+ * Fills slot n of nr (p, t, slab). Both ways are computed and one is
+ * chosen without a branch (which way applies depends on the data). */
 static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, rf_near *nr, int n)
 {
     double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, e = q->e, hp = q->hs * s->l1;
     double t = wx * s->uy - wy * s->ux, at = fabs(t);
     int slab = (s->len > 0) & (pr - hp >= 0) & (pr + hp <= s->len);
     int cs = at - s->r >= e ? 0 : at + e <= s->r ? 2 : 1;
-    /* nearest point: a when !(pr > 0), b when pr >= len, else on the line */
-    double qx = rf_gt(pr, 0, rf_ge(pr, s->len, s->bx, s->ax + pr * s->ux), s->ax);
-    double qy = rf_gt(pr, 0, rf_ge(pr, s->len, s->by, s->ay + pr * s->uy), s->ay);
-    double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
+    /* the nearest centreline point is dp past an end along the segment (at
+     * most one of the terms is not 0) and t off its line; a zero-length
+     * segment: the point itself */
+    double dp = rf_neg(pr) + rf_pos(pr - s->len), dx = rf_if(s->len > 0, dp, wx), dy = rf_if(s->len > 0, t, wy);
+    double d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
     int cn = d2 >= ro * ro ? 0 : (ri > 0) & (d2 <= ri * ri) ? 2 : 1;
     if (!(d2 < 1e300)) {
         double D = hypot(dx, dy) - s->r;
@@ -752,8 +747,6 @@ static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, rf_near
     }
     nr->p[n] = pr;
     nr->t[n] = t;
-    nr->u[n] = rf_if(slab, t, dx);
-    nr->v[n] = dy;
     nr->slab[n] = slab;
     return slab ? cs : cn;
 }
@@ -938,8 +931,8 @@ static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const 
     for (int m = 0; m < nr->n; m++) {
         const rf_seg *s = &f->seg[nr->id[m]];
         if (used >> m & 1u) continue;
-        if (!nr->slab[m] || fabs(nr->u[m]) + s->r < hs * (s->ga + s->gb)) return -1;
-        RF_LINE(s, nr->u[m], 2 * (uint64_t)nr->id[m]);
+        if (!nr->slab[m] || fabs(nr->t[m]) + s->r < hs * (s->ga + s->gb)) return -1;
+        RF_LINE(s, nr->t[m], 2 * (uint64_t)nr->id[m]);
     }
 #undef RF_LINE
     int ord[HP_MAX];
@@ -997,7 +990,7 @@ static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cel
     /* one boundary: exact if straight within the pixel */
     if (nr->n == 1) {
         const rf_seg *s = &f->seg[nr->id[0]];
-        return nr->slab[0] ? band_cover(s, q, nr->u[0]) : cap_cover(s, q, cx, cy, nr->p[0], nr->t[0]);
+        return nr->slab[0] ? band_cover(s, q, nr->t[0]) : cap_cover(s, q, cx, cy, nr->p[0], nr->t[0]);
     }
     if (nr->n == 2) {
         int ia = nr->id[0] < nr->id[1] ? 0 : 1, ib = 1 - ia;
@@ -1107,6 +1100,61 @@ static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx,
  * and in the band |t| <= rho between the end normals (a capsule is
  * convex). Bit 0 of the result: the outer interval is not empty; bit 1:
  * the inner one. ri <= ro. */
+#if defined(__SSE2__)
+/* SSE2: lane 0 the outer radius, lane 1 the inner; both end discs at once;
+ * every case chosen by masks, not branches (the row decides which pieces
+ * exist, unpredictably). The same intervals up to rounding, far below the
+ * spans' slack tol. */
+static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, double *olo, double *ohi, double *ilo,
+                         double *ihi)
+{
+    const __m128d inf = _mm_set1_pd(HUGE_VAL), ninf = _mm_set1_pd(-HUGE_VAL), zero = _mm_setzero_pd();
+    __m128d rho = _mm_set_pd(ri, ro), rho2 = _mm_mul_pd(rho, rho);
+    /* lane 1 (inner) exists only for ri >= 0 */
+    __m128d use = _mm_cmpge_pd(rho, zero);
+    double dya = cy - s->ay, dyb = cy - s->by;
+    __m128d lo = inf, hi = ninf;
+    /* end discs: |dy| <= rho gives the chord x +- sqrt(rho^2 - dy^2) */
+    __m128d da = _mm_set1_pd(dya * dya), db = _mm_set1_pd(dyb * dyb);
+    __m128d ma = _mm_and_pd(use, _mm_cmple_pd(da, rho2)), mb = _mm_and_pd(use, _mm_cmple_pd(db, rho2));
+    __m128d qa = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(rho2, da), zero));
+    __m128d qb = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(rho2, db), zero));
+    __m128d xa = _mm_set1_pd(s->ax), xb = _mm_set1_pd(s->bx);
+    lo = _mm_or_pd(_mm_and_pd(ma, _mm_sub_pd(xa, qa)), _mm_andnot_pd(ma, lo));
+    hi = _mm_or_pd(_mm_and_pd(ma, _mm_add_pd(xa, qa)), _mm_andnot_pd(ma, hi));
+    lo = _mm_min_pd(lo, _mm_or_pd(_mm_and_pd(mb, _mm_sub_pd(xb, qb)), _mm_andnot_pd(mb, inf)));
+    hi = _mm_max_pd(hi, _mm_or_pd(_mm_and_pd(mb, _mm_add_pd(xb, qb)), _mm_andnot_pd(mb, ninf)));
+    if (s->len > 0) {
+        /* u = x - ax: p = u ux + dy uy in [0, len], t = u uy - dy ux in [-rho, rho] */
+        double pl = -HUGE_VAL, ph = HUGE_VAL, t0 = dya * s->ux, p0 = dya * s->uy;
+        if (s->iux != 0) {
+            double u1 = -p0 * s->iux, u2 = (s->len - p0) * s->iux;
+            pl = RF_MIN(u1, u2);
+            ph = RF_MAX(u1, u2);
+        } else if (p0 < 0 || p0 > s->len) pl = HUGE_VAL;
+        __m128d ul, uh;
+        if (s->iuy != 0) {
+            __m128d iy = _mm_set1_pd(s->iuy), t = _mm_set1_pd(t0);
+            __m128d u1 = _mm_mul_pd(_mm_sub_pd(t, rho), iy), u2 = _mm_mul_pd(_mm_add_pd(t, rho), iy);
+            ul = _mm_max_pd(_mm_set1_pd(pl), _mm_min_pd(u1, u2));
+            uh = _mm_min_pd(_mm_set1_pd(ph), _mm_max_pd(u1, u2));
+        } else {
+            /* parallel to the row: all of [pl, ph] when |t0| <= rho */
+            __m128d in = _mm_cmple_pd(_mm_set1_pd(fabs(t0)), rho);
+            ul = _mm_or_pd(_mm_and_pd(in, _mm_set1_pd(pl)), _mm_andnot_pd(in, inf));
+            uh = _mm_or_pd(_mm_and_pd(in, _mm_set1_pd(ph)), _mm_andnot_pd(in, ninf));
+        }
+        __m128d mband = _mm_and_pd(use, _mm_cmple_pd(ul, uh));
+        lo = _mm_min_pd(lo, _mm_or_pd(_mm_and_pd(mband, _mm_add_pd(xa, ul)), _mm_andnot_pd(mband, inf)));
+        hi = _mm_max_pd(hi, _mm_or_pd(_mm_and_pd(mband, _mm_add_pd(xa, uh)), _mm_andnot_pd(mband, ninf)));
+    }
+    double l[2], h[2];
+    _mm_storeu_pd(l, lo);
+    _mm_storeu_pd(h, hi);
+    *olo = l[0]; *ohi = h[0]; *ilo = l[1]; *ihi = h[1];
+    return (l[0] <= h[0]) | (l[1] <= h[1]) << 1;
+}
+#else
 static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, double *olo, double *ohi, double *ilo,
                          double *ihi)
 {
@@ -1148,6 +1196,7 @@ static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, doubl
     *olo = ol; *ohi = oh; *ilo = il; *ihi = ih;
     return (ol <= oh) | (il <= ih) << 1;
 }
+#endif
 
 /* Pixels [k0, k1] of a row whose centres lie in [lo, hi]: centre of pixel k
  * is (a + k) pix. Returns 0 when none. */
@@ -1169,7 +1218,7 @@ static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0,
 /* Candidates kept per pixel by the row spans (a power of 2); more falls
  * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 4, FILL_RUN = 8 };
+enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 4, FILL_RUN = 8 /* fill_one unrolls 8 */ };
 
 typedef struct rf_rowbuf {
     /* candidates per pixel; slots CHUNK.. CHUNK + PAINT_RUN - 1 take the
@@ -1231,7 +1280,9 @@ static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uin
 static void fill_one(double *o, int64_t il, int64_t ih)
 {
     if (ih - il < FILL_RUN) {
-        for (int j = 0; j < FILL_RUN; j++) o[il + j <= ih ? il + j : ih] = 1;
+#define RF_ONE(j) o[il + (j) <= ih ? il + (j) : ih] = 1
+        RF_ONE(0); RF_ONE(1); RF_ONE(2); RF_ONE(3); RF_ONE(4); RF_ONE(5); RF_ONE(6); RF_ONE(7);
+#undef RF_ONE
         return;
     }
     for (int64_t k = il; k <= ih; k++) o[k] = 1;
