@@ -688,6 +688,37 @@ static double band_value(const rf_seg *s, const rf_px *q, double t)
     return rf_ge(at - s->r, q->e, 0, rf_ge(s->r, at + q->e, 1, band_cover(s, q, t)));
 }
 
+#if defined(__SSE2__)
+#define RF_SEL(m, a, b) _mm_or_pd(_mm_and_pd((m), (a)), _mm_andnot_pd((m), (b)))
+#define RF_PAIR(s0, s1, field) _mm_set_pd((s1)->field, (s0)->field)
+static __m128d rf_abs2(__m128d v) { return _mm_andnot_pd(_mm_set1_pd(-0.0), v); }
+
+/* band_lo for the two lanes: x >= 0, k1 = iside iga, k2 = c2 igab */
+static __m128d band_lo2(__m128d amb, __m128d apb, __m128d k1, __m128d k2, __m128d x)
+{
+    __m128d w = _mm_max_pd(_mm_sub_pd(apb, x), _mm_setzero_pd());
+    __m128d lin = _mm_sub_pd(_mm_set1_pd(0.5), _mm_mul_pd(x, k1));
+    return RF_SEL(_mm_cmpge_pd(x, amb), _mm_mul_pd(_mm_mul_pd(w, w), k2), lin);
+}
+
+/* band_value of two squares: lane 0 of s0 at offset t[0], lane 1 of s1 at
+ * t[1]; the same arithmetic as band_value lane by lane (the same doubles). */
+static __m128d band_value2(const rf_seg *s0, const rf_seg *s1, const rf_px *q, __m128d t)
+{
+    __m128d hs = _mm_set1_pd(q->hs), e = _mm_set1_pd(q->e), r = RF_PAIR(s0, s1, r);
+    __m128d a = _mm_mul_pd(hs, RF_PAIR(s0, s1, ga)), b = _mm_mul_pd(hs, RF_PAIR(s0, s1, gb));
+    __m128d apb = _mm_add_pd(a, b), amb = _mm_sub_pd(a, b);
+    __m128d k1 = _mm_mul_pd(_mm_set1_pd(q->iside), RF_PAIR(s0, s1, iga));
+    __m128d k2 = _mm_mul_pd(_mm_set1_pd(q->c2), RF_PAIR(s0, s1, igab));
+    __m128d at = rf_abs2(t), h = _mm_sub_pd(r, at), one = _mm_set1_pd(1);
+    __m128d lo = band_lo2(amb, apb, k1, k2, rf_abs2(h));
+    __m128d bc = _mm_sub_pd(RF_SEL(_mm_cmpge_pd(h, _mm_setzero_pd()), _mm_sub_pd(one, lo), lo),
+                            band_lo2(amb, apb, k1, k2, _mm_add_pd(at, r)));
+    __m128d v = RF_SEL(_mm_cmpge_pd(r, _mm_add_pd(at, e)), one, bc);
+    return _mm_andnot_pd(_mm_cmpge_pd(_mm_sub_pd(at, r), e), v);
+}
+#endif
+
 /* Coverage of the square centred (x, y) of size q by one capsule: exact
  * when the square lies within the segment's slab (the band |t| <= r cut by
  * straight lines), otherwise the half-plane of the distance field
@@ -751,6 +782,51 @@ static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, rf_near
     return slab ? cs : cn;
 }
 
+/* seg_eval of two segments (the common two-candidate pixel) into slots n,
+ * n + 1; their classes in *c0, *c1. */
+#if defined(__SSE2__)
+static void seg_eval2(const rf_seg *s0, const rf_seg *s1, double x, double y, const rf_px *q, rf_near *nr, int n,
+                      int *c0, int *c1)
+{
+    __m128d ux = RF_PAIR(s0, s1, ux), uy = RF_PAIR(s0, s1, uy), len = RF_PAIR(s0, s1, len), r = RF_PAIR(s0, s1, r);
+    __m128d e = _mm_set1_pd(q->e), zero = _mm_setzero_pd();
+    __m128d wx = _mm_sub_pd(_mm_set1_pd(x), RF_PAIR(s0, s1, ax)), wy = _mm_sub_pd(_mm_set1_pd(y), RF_PAIR(s0, s1, ay));
+    __m128d pr = _mm_add_pd(_mm_mul_pd(wx, ux), _mm_mul_pd(wy, uy));
+    __m128d t = _mm_sub_pd(_mm_mul_pd(wx, uy), _mm_mul_pd(wy, ux)), at = rf_abs2(t);
+    __m128d hp = _mm_mul_pd(_mm_set1_pd(q->hs), RF_PAIR(s0, s1, l1)), pos = _mm_cmpgt_pd(len, zero);
+    __m128d slab = _mm_and_pd(_mm_and_pd(pos, _mm_cmpge_pd(_mm_sub_pd(pr, hp), zero)),
+                              _mm_cmple_pd(_mm_add_pd(pr, hp), len));
+    __m128d sclear = _mm_cmpge_pd(_mm_sub_pd(at, r), e), sdeep = _mm_cmple_pd(_mm_add_pd(at, e), r);
+    __m128d dp = _mm_add_pd(_mm_min_pd(pr, zero), _mm_max_pd(_mm_sub_pd(pr, len), zero));
+    __m128d dx = RF_SEL(pos, dp, wx), dy = RF_SEL(pos, t, wy);
+    __m128d d2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), ro = _mm_add_pd(r, e), ri = _mm_sub_pd(r, e);
+    __m128d nclear = _mm_cmpge_pd(d2, _mm_mul_pd(ro, ro));
+    __m128d ndeep = _mm_and_pd(_mm_cmpgt_pd(ri, zero), _mm_cmple_pd(d2, _mm_mul_pd(ri, ri)));
+    if (_mm_movemask_pd(_mm_cmplt_pd(d2, _mm_set1_pd(1e300))) != 3) {
+        /* huge distances: the scalar way (hypot) */
+        *c0 = seg_eval(s0, x, y, q, nr, n);
+        *c1 = seg_eval(s1, x, y, q, nr, n + 1);
+        return;
+    }
+    int ms = _mm_movemask_pd(slab), mc = _mm_movemask_pd(RF_SEL(slab, sclear, nclear));
+    int md = _mm_movemask_pd(RF_SEL(slab, sdeep, ndeep));
+    _mm_storeu_pd(nr->p + n, pr);
+    _mm_storeu_pd(nr->t + n, t);
+    nr->slab[n] = ms & 1;
+    nr->slab[n + 1] = ms >> 1;
+    /* clear and deep never hold together */
+    *c0 = (md & 1) ? 2 : (mc & 1) ? 0 : 1;
+    *c1 = (md & 2) ? 2 : (mc & 2) ? 0 : 1;
+}
+#else
+static void seg_eval2(const rf_seg *s0, const rf_seg *s1, double x, double y, const rf_px *q, rf_near *nr, int n,
+                      int *c0, int *c1)
+{
+    *c0 = seg_eval(s0, x, y, q, nr, n);
+    *c1 = seg_eval(s1, x, y, q, nr, n + 1);
+}
+#endif
+
 /* capsule_cover's value for a near capsule from seg_eval's results (the
  * exact band in the slab, else the linearised distance). */
 static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, double v)
@@ -775,8 +851,16 @@ static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, do
 static double joint_cover(const rf_seg *a, const rf_seg *b, const rf_near *nr, int ia, int ib, const rf_px *q,
                           double cx, double cy)
 {
-    double pa = nr->p[ia], ta = nr->t[ia], pb = nr->p[ib];
-    double ca = band_value(a, q, ta), cb = band_value(b, q, nr->t[ib]);
+    double pa = nr->p[ia], ta = nr->t[ia], pb = nr->p[ib], ca, cb;
+#if defined(__SSE2__)
+    double c[2];
+    _mm_storeu_pd(c, band_value2(a, b, q, _mm_set_pd(nr->t[ib], ta)));
+    ca = c[0];
+    cb = c[1];
+#else
+    ca = band_value(a, q, ta);
+    cb = band_value(b, q, nr->t[ib]);
+#endif
     double turn = b->ux * a->uy - b->uy * a->ux;
     if (ta * turn > 0) return rf_max(ca, cb);
     if (pa < a->len || pb > 0) return rf_if(pa < a->len, ca, cb);
@@ -1300,6 +1384,24 @@ static uint32_t run_col(const rf_rowbuf *rb, uint32_t k)
     return rb->rc[lo];
 }
 
+/* A pixel with one candidate: band_value when the pixel is in its slab,
+ * else it joins the list lm (cap_cover and the others). Returns lm's new
+ * length. */
+static uint32_t one_cand(const rs__roadfield *f, rf_rowbuf *rb, uint32_t k, double a, double cy, const rf_px *q,
+                         double *o, uint32_t nm)
+{
+    double cx = (a + (double)k) * q->side;
+    const rf_seg *s = &f->seg[rb->cand[k][0]];
+    double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
+    if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+        o[k] = band_value(s, q, wx * s->uy - wy * s->ux);
+        return nm;
+    }
+    rb->lm[nm] = (uint16_t)k;
+    rb->lc[nm] = 1;
+    return nm + 1;
+}
+
 /* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
  * full cells 1. For the rest, every segment of the grid row gives two
  * spans along the row: where the pixel centre is certainly deep inside
@@ -1393,23 +1495,36 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         rb->lc[nm] = c;
         nm += (uint32_t)(todo & (c != 1));
     }
-    for (uint32_t t = 0; t < n1; t++) {
-        /* one candidate with the pixel in its slab (most edge pixels):
-         * seg_eval's slab branch and band_cover, same arithmetic; 0
-         * (clear), 1 (deep) or the cover, selected without a branch */
-        uint32_t k = rb->l1[t];
-        double cx = (a + (double)k) * pix;
-        const rf_seg *s = &f->seg[rb->cand[k][0]];
-        double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
-        if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-            double ts = wx * s->uy - wy * s->ux, at = fabs(ts);
-            o[k] = rf_ge(at - s->r, e, 0, rf_ge(s->r, at + e, 1, band_cover(s, q, ts)));
+    /* one candidate with the pixel in its slab (most edge pixels):
+     * seg_eval's slab branch and band_value, same arithmetic */
+    uint32_t t = 0;
+#if defined(__SSE2__)
+    for (; t + 1 < n1; t += 2) {
+        /* two pixels at once when both are in their slabs */
+        uint32_t p0 = rb->l1[t], p1 = rb->l1[t + 1];
+        const rf_seg *s0 = &f->seg[rb->cand[p0][0]], *s1 = &f->seg[rb->cand[p1][0]];
+        __m128d ux = RF_PAIR(s0, s1, ux), uy = RF_PAIR(s0, s1, uy), len = RF_PAIR(s0, s1, len), zero = _mm_setzero_pd();
+        __m128d wx = _mm_sub_pd(_mm_mul_pd(_mm_set_pd(a + (double)p1, a + (double)p0), _mm_set1_pd(pix)),
+                                RF_PAIR(s0, s1, ax));
+        __m128d wy = _mm_sub_pd(_mm_set1_pd(cy), RF_PAIR(s0, s1, ay));
+        __m128d pr = _mm_add_pd(_mm_mul_pd(wx, ux), _mm_mul_pd(wy, uy));
+        __m128d hp = _mm_mul_pd(_mm_set1_pd(q->hs), RF_PAIR(s0, s1, l1));
+        __m128d slab = _mm_and_pd(_mm_and_pd(_mm_cmpgt_pd(len, zero), _mm_cmpge_pd(_mm_sub_pd(pr, hp), zero)),
+                                  _mm_cmple_pd(_mm_add_pd(pr, hp), len));
+        if (_mm_movemask_pd(slab) == 3) {
+            double v[2];
+            _mm_storeu_pd(v, band_value2(s0, s1, q, _mm_sub_pd(_mm_mul_pd(wx, uy), _mm_mul_pd(wy, ux))));
+            o[p0] = v[0];
+            o[p1] = v[1];
         } else {
-            rb->lm[nm] = (uint16_t)k;
-            rb->lc[nm++] = 1;
+            /* not both (rare): one by one */
+            nm = one_cand(f, rb, p0, a, cy, q, o, nm);
+            nm = one_cand(f, rb, p1, a, cy, q, o, nm);
         }
     }
-    for (uint32_t t = 0; t < nm; t++) {
+#endif
+    for (; t < n1; t++) nm = one_cand(f, rb, rb->l1[t], a, cy, q, o, nm);
+    for (t = 0; t < nm; t++) {
         uint32_t k = rb->lm[t];
         uint8_t c = rb->lc[t];
         double cx = (a + (double)k) * pix;
@@ -1422,7 +1537,23 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         /* the candidates are distinct segments: no duplicate check */
         rf_near nr;
         int n = 0, deep = 0;
-        for (uint8_t j = 0; j < c; j++) {
+        uint8_t j = 0;
+        if (c == 2) {
+            /* the common case (joints, crossings): both in one go */
+            uint32_t i0 = rb->cand[k][0], i1 = rb->cand[k][1];
+            int c0, c1;
+            seg_eval2(&f->seg[i0], &f->seg[i1], cx, cy, q, &nr, 0, &c0, &c1);
+            deep = (c0 == 2) | (c1 == 2);
+            /* a clear first candidate: the second's results move to slot 0 */
+            nr.id[0] = c0 == 1 ? i0 : i1;
+            nr.p[0] = c0 == 1 ? nr.p[0] : nr.p[1];
+            nr.t[0] = c0 == 1 ? nr.t[0] : nr.t[1];
+            nr.slab[0] = c0 == 1 ? nr.slab[0] : nr.slab[1];
+            nr.id[1] = i1;
+            n = (c0 == 1) + (c1 == 1);
+            j = c;
+        }
+        for (; j < c; j++) {
             uint32_t id = rb->cand[k][j];
             int cl = seg_eval(&f->seg[id], cx, cy, q, &nr, n);
             deep |= cl == 2;
