@@ -862,9 +862,10 @@ static double joint_cover(const rf_seg *a, const rf_seg *b, const rf_near *nr, i
     cb = band_value(b, q, nr->t[ib]);
 #endif
     double turn = b->ux * a->uy - b->uy * a->ux;
-    if (ta * turn > 0) return rf_max(ca, cb);
-    if (pa < a->len || pb > 0) return rf_if(pa < a->len, ca, cb);
-    return near_value(a, q, 0, cx - a->bx, cy - a->by);
+    int inner = ta * turn > 0;
+    /* the fan (rare): its own way; else chosen without a branch */
+    if (!inner & !(pa < a->len) & !(pb > 0)) return near_value(a, q, 0, cx - a->bx, cy - a->by);
+    return rf_if(inner, rf_max(ca, cb), rf_if(pa < a->len, ca, cb));
 }
 
 /* Evaluates capsule id against the pixel and adds it to nr when near
@@ -894,7 +895,7 @@ static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cell
  * band is summed. */
 typedef struct rf_poly {
     int n;
-    double x[12], y[12]; /* counter-clockwise; a square clipped by at most 4 lines */
+    double x[16], y[16]; /* counter-clockwise; the square clipped by at most HP_MAX lines, +1 for poly_clip */
 } rf_poly;
 
 static void poly_square(rf_poly *P, double hs)
@@ -906,24 +907,27 @@ static void poly_square(rf_poly *P, double hs)
     P->x[3] = -hs; P->y[3] = hs;
 }
 
-/* Keeps the part of P where g0 + gx x + gy y <= 0. */
-static void poly_clip(rf_poly *P, double gx, double gy, double g0)
+/* Keeps the part of P where g0 + gx x + gy y <= 0. Every vertex is
+ * written and kept or not by advancing the count (which case holds depends
+ * on the data; branches would be mispredicted). */
+static void poly_clip(const rf_poly *P, rf_poly *o, double gx, double gy, double g0)
 {
-    rf_poly o;
-    o.n = 0;
+    o->n = 0;
     if (P->n == 0) return;
     double gp = g0 + gx * P->x[P->n - 1] + gy * P->y[P->n - 1];
     for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++) {
         double gk = g0 + gx * P->x[k] + gy * P->y[k];
-        if ((gk > 0) != (gp > 0)) {
-            double w = gp / (gp - gk); /* gp and gk differ in sign: no division by 0 */
-            o.x[o.n] = P->x[kp] + w * (P->x[k] - P->x[kp]);
-            o.y[o.n++] = P->y[kp] + w * (P->y[k] - P->y[kp]);
-        }
-        if (!(gk > 0)) { o.x[o.n] = P->x[k]; o.y[o.n++] = P->y[k]; }
+        int in = !(gk > 0), cross = in != !(gp > 0);
+        /* gp and gk differ in sign when it is kept: no division by 0 then */
+        double w = gp / (gp - gk);
+        o->x[o->n] = P->x[kp] + w * (P->x[k] - P->x[kp]);
+        o->y[o->n] = P->y[kp] + w * (P->y[k] - P->y[kp]);
+        o->n += cross;
+        o->x[o->n] = P->x[k];
+        o->y[o->n] = P->y[k];
+        o->n += in;
         gp = gk;
     }
-    *P = o;
 }
 
 static double poly_area(const rf_poly *P)
@@ -1025,11 +1029,12 @@ static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const 
         for (; k > 0 && key[ord[k - 1]] > key[m]; k--) ord[k] = ord[k - 1];
         ord[k] = m;
     }
-    rf_poly P;
-    poly_square(&P, hs);
+    rf_poly P[2];
+    int cur = 0;
+    poly_square(&P[0], hs);
     /* poly_clip keeps g <= 0: the outside of each road is -g <= 0 */
-    for (int j = 0; j < nl && P.n > 0; j++) poly_clip(&P, -gx[ord[j]], -gy[ord[j]], -g0[ord[j]]);
-    double v = 1 - poly_area(&P) * (q->iside * q->iside);
+    for (int j = 0; j < nl; j++, cur ^= 1) poly_clip(&P[cur], &P[cur ^ 1], -gx[ord[j]], -gy[ord[j]], -g0[ord[j]]);
+    double v = 1 - poly_area(&P[cur]) * (q->iside * q->iside);
     return v < 0 ? 0 : v > 1 ? 1 : v;
 }
 
@@ -1037,28 +1042,26 @@ static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const 
 static double cap_cover(const rf_seg *s, const rf_px *q, double cx, double cy, double pr, double t)
 {
     double hs = q->hs, hp = hs * s->l1, area = 0;
-    rf_poly P;
+    rf_poly P, D, E;
     poly_square(&P, hs);
     if (!(s->len > 0)) {
         area = poly_disc(&P, s->ax - cx, s->ay - cy, s->r);
     } else {
         /* in square coordinates (X, Y): projection pr + X ux + Y uy, offset t + X uy - Y ux */
         if (pr - hp < 0) {
-            rf_poly D = P;
-            poly_clip(&D, s->ux, s->uy, pr);
+            poly_clip(&P, &D, s->ux, s->uy, pr);
             area += poly_disc(&D, s->ax - cx, s->ay - cy, s->r);
         }
         if (pr + hp > s->len) {
-            rf_poly D = P;
-            poly_clip(&D, -s->ux, -s->uy, s->len - pr);
+            poly_clip(&P, &D, -s->ux, -s->uy, s->len - pr);
             area += poly_disc(&D, s->bx - cx, s->by - cy, s->r);
         }
         if (pr + hp > 0 && pr - hp < s->len) {
-            poly_clip(&P, -s->ux, -s->uy, -pr);
-            poly_clip(&P, s->ux, s->uy, pr - s->len);
-            poly_clip(&P, s->uy, -s->ux, t - s->r);
-            poly_clip(&P, -s->uy, s->ux, -t - s->r);
-            area += poly_area(&P);
+            poly_clip(&P, &D, -s->ux, -s->uy, -pr);
+            poly_clip(&D, &E, s->ux, s->uy, pr - s->len);
+            poly_clip(&E, &D, s->uy, -s->ux, t - s->r);
+            poly_clip(&D, &E, -s->uy, s->ux, -t - s->r);
+            area += poly_area(&E);
         }
     }
     double v = area * (q->iside * q->iside);
@@ -1238,6 +1241,33 @@ static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, doubl
     *olo = l[0]; *ohi = h[0]; *ilo = l[1]; *ihi = h[1];
     return (l[0] <= h[0]) | (l[1] <= h[1]) << 1;
 }
+
+/* capsule_spans as pixel ranges of the row (centre of pixel k at (a + k)
+ * pix), clipped to [k0, k1]: k[0..1] the outer (near) span, k[2..3] the
+ * inner (deep) one when ri > 0; bit 0 / bit 1: not empty. Both lanes at
+ * once and without branches: the values are clamped to [k0, k1 + 1] and
+ * [k0 - 1, k1] first (an empty span then has k_lo > k_hi), ceil and floor
+ * by truncation of non-negative values; the same ranges as span_pixels. */
+static int capsule_pixels(const rf_seg *s, double cy, double ro, double ri, double a, double ipix, uint32_t k0,
+                          uint32_t k1, int32_t *k)
+{
+    double olo, ohi, ilo, ihi;
+    capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
+    __m128d va = _mm_set1_pd(a), vi = _mm_set1_pd(ipix), one = _mm_set1_pd(1);
+    __m128d vl = _mm_sub_pd(_mm_mul_pd(_mm_set_pd(ilo, olo), vi), va);
+    __m128d vh = _mm_sub_pd(_mm_mul_pd(_mm_set_pd(ihi, ohi), vi), va);
+    vl = _mm_min_pd(_mm_max_pd(vl, _mm_set1_pd((double)k0)), _mm_set1_pd((double)k1 + 1));
+    vh = _mm_min_pd(_mm_max_pd(vh, _mm_set1_pd((double)k0 - 1)), _mm_set1_pd((double)k1));
+    __m128i tl = _mm_cvttpd_epi32(vl); /* ceil(vl) = trunc + (trunc < vl) */
+    __m128d up = _mm_cmplt_pd(_mm_cvtepi32_pd(tl), vl);
+    tl = _mm_sub_epi32(tl, _mm_shuffle_epi32(_mm_castpd_si128(up), _MM_SHUFFLE(3, 3, 2, 0)));
+    __m128i th = _mm_sub_epi32(_mm_cvttpd_epi32(_mm_add_pd(vh, one)), _mm_set1_epi32(1)); /* floor(vh), vh >= -1 */
+    int32_t t[4], u[4];
+    _mm_storeu_si128((__m128i *)t, tl);
+    _mm_storeu_si128((__m128i *)u, th);
+    k[0] = t[0]; k[1] = u[0]; k[2] = t[1]; k[3] = u[1];
+    return (k[0] <= k[1]) | ((k[2] <= k[3]) & (ri > 0)) << 1;
+}
 #else
 static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, double *olo, double *ohi, double *ilo,
                          double *ihi)
@@ -1282,6 +1312,7 @@ static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, doubl
 }
 #endif
 
+#if !defined(__SSE2__)
 /* Pixels [k0, k1] of a row whose centres lie in [lo, hi]: centre of pixel k
  * is (a + k) pix. Returns 0 when none. */
 static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0, uint32_t k1, uint32_t *kl,
@@ -1299,10 +1330,26 @@ static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0,
     return 1;
 }
 
+static int capsule_pixels(const rf_seg *s, double cy, double ro, double ri, double a, double ipix, uint32_t k0,
+                          uint32_t k1, int32_t *k)
+{
+    double olo, ohi, ilo, ihi;
+    uint32_t kl, kh, il, ih;
+    int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi), r = 0;
+    if ((got & 1) && span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) {
+        k[0] = (int32_t)kl; k[1] = (int32_t)kh; r = 1;
+    }
+    if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
+        k[2] = (int32_t)il; k[3] = (int32_t)ih; r |= 2;
+    }
+    return r;
+}
+#endif
+
 /* Candidates kept per pixel by the row spans (a power of 2); more falls
  * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 4, FILL_RUN = 8 /* fill_one unrolls 8 */ };
+enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 4 /* paint_run unrolls 4 */, FILL_RUN = 8 /* fill_one: 8 */ };
 
 typedef struct rf_rowbuf {
     /* candidates per pixel; slots CHUNK.. CHUNK + PAINT_RUN - 1 take the
@@ -1336,17 +1383,19 @@ typedef struct rf_rowbuf {
 static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uint32_t id)
 {
     if (y - x < PAINT_RUN) {
-        for (int j = 0; j < PAINT_RUN; j++) {
-            int64_t k = x + j;
-            int valid = k <= y;
-            uint32_t idx = valid ? (uint32_t)k : (uint32_t)(CHUNK + j);
-            uint8_t c = rb->cnt[idx];
-            rb->pl[npl] = (uint16_t)idx;
-            npl += (uint32_t)(valid & (c == 0));
-            /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
-            rb->cand[idx][c & (SPAN_CAND - 1)] = id;
-            rb->cnt[idx] = (uint8_t)(c + (c <= SPAN_CAND));
-        }
+        /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
+#define RF_SLOT(j)                                                                                               \
+    do {                                                                                                         \
+        uint32_t v_ = x + (j) <= y, i_ = (uint32_t)(x + (j));                                                   \
+        i_ += ((uint32_t)(CHUNK + (j)) - i_) & (v_ - 1u); /* unused: the spare slot, no branch */                \
+        uint8_t c_ = rb->cnt[i_];                                                                                \
+        rb->pl[npl] = (uint16_t)i_;                                                                              \
+        npl += (uint32_t)(v_ & (c_ == 0));                                                                       \
+        rb->cand[i_][c_ & (SPAN_CAND - 1)] = id;                                                                 \
+        rb->cnt[i_] = (uint8_t)(c_ + (c_ <= SPAN_CAND));                                                         \
+    } while (0)
+        RF_SLOT(0); RF_SLOT(1); RF_SLOT(2); RF_SLOT(3);
+#undef RF_SLOT
         return npl;
     }
     for (int64_t k = x; k <= y; k++) {
@@ -1466,20 +1515,19 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
         uint32_t id = f->rids[m];
         const rf_seg *s = &f->seg[id];
-        double ro = s->r + e + s->tol, ri = s->r - e - s->tol, olo, ohi, ilo, ihi;
-        uint32_t kl, kh;
-        int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
-        if (!(got & 1) || !span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) continue;
+        double ro = s->r + e + s->tol, ri = s->r - e - s->tol;
+        int32_t kk[4];
+        int got = capsule_pixels(s, cy, ro, ri, a, ipix, k0, k1, kk);
+        if (!(got & 1)) continue;
         /* deep pixels are 1 at once (a deep pixel's cell lists the segment,
          * so it is in a todo or full run) and need no candidate: paint the
          * near span minus the deep one */
-        uint32_t il, ih;
-        if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
-            fill_one(o, il, ih);
-            npl = paint_run(rb, npl, kl, (int64_t)il - 1, id);
-            npl = paint_run(rb, npl, (int64_t)ih + 1, kh, id);
+        if (got & 2) {
+            fill_one(o, kk[2], kk[3]);
+            npl = paint_run(rb, npl, kk[0], (int64_t)kk[2] - 1, id);
+            npl = paint_run(rb, npl, (int64_t)kk[3] + 1, kk[1], id);
         } else
-            npl = paint_run(rb, npl, kl, kh, id);
+            npl = paint_run(rb, npl, kk[0], kk[1], id);
     }
     /* the painted pixels: 1 (deep in some capsule, or a full cell) stay;
      * the others are listed by their number of candidates (no branch) */
