@@ -43,9 +43,11 @@ typedef struct rf_seg {
      * (0 for a component below 1e-100) */
     double ga, gb, iga, igab, l1, iux, iuy;
     uint32_t road, seg;
-    /* 1: the next segment (index + 1) is the road's next one, both of
-     * positive length, turning by less than acos(JOINT_COS) (joint_cover) */
-    uint32_t jnext;
+    /* jnext = 1: segment jpart continues this one (a gentle joint,
+     * joint_cover); redundant = 1: the capsule lies within another one
+     * (near_keep) */
+    uint32_t jpart;
+    uint8_t jnext, redundant;
 } rf_seg;
 
 struct rs__roadfield {
@@ -148,6 +150,7 @@ typedef struct rf_builder {
     uint32_t *cnt;   /* per cell: count (pass 1), then end cursor (pass 2) */
     uint64_t total;  /* entries so far */
     uint64_t limit;
+    uint32_t *cell1; /* pass 2: per segment, a cell that lists it */
 } rf_builder;
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
@@ -191,6 +194,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
             visited++;
             if (fill) {
                 f->ids[--b->cnt[cell]] = id;
+                b->cell1[id] = (uint32_t)cell;
             } else {
                 if (++b->total > b->limit) return -1;
                 b->cnt[cell]++;
@@ -229,6 +233,8 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     s->road = road;
     s->seg = seg;
     s->jnext = 0;
+    s->redundant = 0;
+    s->jpart = 0;
 }
 
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
@@ -393,6 +399,49 @@ static int clip_far(double *ax, double *ay, double *bx, double *by, double w, do
     return 1;
 }
 
+/* Does capsule s lie within capsule t (up to a rounding slack)? The
+ * distance to a segment is convex, so it is enough that both ends of s are
+ * within t's half width minus s's. */
+static int capsule_within(const rf_seg *s, const rf_seg *t)
+{
+    double m = fmax(fmax(fabs(t->ax), fabs(t->ay)), fmax(fabs(s->ax), fabs(s->ay)));
+    double room = t->r - s->r + 1e-9 * (1 + m + t->len + t->r);
+    return room >= 0 && seg_dist(t, s->ax, s->ay) <= room && seg_dist(t, s->bx, s->by) <= room;
+}
+
+/* Per segment: its gentle-joint partner (the next segment of positive
+ * length, past zero-length ones at the shared point: consecutive segments
+ * of a road, or the first of the next road when it starts where this one
+ * ends with the same width), and whether its capsule is redundant: within
+ * another one (repeated points, retraced segments, a road given twice;
+ * of two equal capsules the later one). A redundant capsule never changes
+ * the union, and leaving it out of a pixel's near set keeps the cover the
+ * same as without it (the exact one-capsule covers would otherwise give
+ * way to the approximations for several). The capsule that holds it is in
+ * the same cell lists (its reach is at least as large) and is near or
+ * deep wherever the redundant one is near (docs/roadfield.md). */
+static void seg_relations(rs__roadfield *f, const uint32_t *cell1)
+{
+    for (size_t k = 0; k < f->nseg; k++) {
+        rf_seg *sa = &f->seg[k];
+        size_t m = k + 1;
+        while (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m++;
+        if (m < f->nseg && m <= UINT32_MAX) {
+            const rf_seg *sb = &f->seg[m];
+            sa->jnext = sa->bx == sb->ax && sa->by == sb->ay && sa->r == sb->r && sa->len > 0 && sb->len > 0 &&
+                        sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
+            sa->jpart = (uint32_t)m;
+        }
+        /* the holder is listed wherever this one is (its grown capsule is larger) */
+        size_t cell = cell1[k];
+        for (uint32_t i = f->start[cell]; i < f->start[cell + 1]; i++) {
+            uint32_t j = f->ids[i];
+            if (j == k || !capsule_within(sa, &f->seg[j])) continue;
+            if (j < k || !capsule_within(&f->seg[j], sa)) { sa->redundant = 1; break; }
+        }
+    }
+}
+
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out)
 {
@@ -431,7 +480,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->margin = f->pixel * HALF_SQRT2;
     f->reach = p->reach_extra + f->margin;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u };
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL };
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
@@ -507,14 +556,12 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->nent = (size_t)run;
     f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
     if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
+    b.cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b.cell1);
+    if (!b.cell1) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
-    for (size_t k = 0; k + 1 < f->nseg; k++) {
-        const rf_seg *sa = &f->seg[k], *sb = &f->seg[k + 1];
-        /* consecutive segments of a road, or the first of the next road when
-         * it starts where this one ends with the same width */
-        f->seg[k].jnext = sa->bx == sb->ax && sa->by == sb->ay && sa->r == sb->r && sa->len > 0 && sb->len > 0 &&
-                          sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
-    }
+    seg_relations(f, b.cell1);
+    rs__free(ctx, b.cell1);
+    b.cell1 = NULL;
     if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
     build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
@@ -525,6 +572,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     rs__ok(ctx);
     return RS_OK;
 fail:
+    rs__free(ctx, b.cell1);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
     return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
@@ -877,7 +925,7 @@ static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx
     int n = nr->n < NEAR_MAX ? nr->n : NEAR_MAX - 1; /* past NEAR_MAX: scratch slot */
     int c = seg_eval(&f->seg[id], cx, cy, q, nr, n);
     if (c == 2) return 1;
-    if (c) {
+    if (c && !f->seg[id].redundant) {
         if (nr->n < NEAR_MAX) nr->id[nr->n++] = id;
         else nr->many = 1;
     }
@@ -998,7 +1046,7 @@ static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const 
         const rf_seg *a = &f->seg[nr->id[m]];
         if (!a->jnext || (used >> m & 1u)) continue;
         int m2 = 0;
-        while (m2 < nr->n && nr->id[m2] != nr->id[m] + 1) m2++;
+        while (m2 < nr->n && nr->id[m2] != a->jpart) m2++;
         if (m2 == nr->n || (used >> m2 & 1u)) continue;
         const rf_seg *b = &f->seg[nr->id[m2]];
         if (!(a->r >= 2 * q->e && nr->p[m] >= hs * a->l1 && nr->p[m2] + hs * b->l1 <= b->len)) continue;
@@ -1082,7 +1130,7 @@ static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cel
     if (nr->n == 2) {
         int ia = nr->id[0] < nr->id[1] ? 0 : 1, ib = 1 - ia;
         const rf_seg *a = &f->seg[nr->id[ia]], *b = &f->seg[nr->id[ib]];
-        if (a->jnext && nr->id[ib] == nr->id[ia] + 1 && a->r >= 2 * q->e && nr->p[ia] >= q->hs * a->l1 &&
+        if (a->jnext && nr->id[ib] == a->jpart && a->r >= 2 * q->e && nr->p[ia] >= q->hs * a->l1 &&
             nr->p[ib] + q->hs * b->l1 <= b->len)
             return joint_cover(a, b, nr, ia, ib, q, cx, cy);
     }
@@ -1592,13 +1640,14 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             int c0, c1;
             seg_eval2(&f->seg[i0], &f->seg[i1], cx, cy, q, &nr, 0, &c0, &c1);
             deep = (c0 == 2) | (c1 == 2);
-            /* a clear first candidate: the second's results move to slot 0 */
-            nr.id[0] = c0 == 1 ? i0 : i1;
-            nr.p[0] = c0 == 1 ? nr.p[0] : nr.p[1];
-            nr.t[0] = c0 == 1 ? nr.t[0] : nr.t[1];
-            nr.slab[0] = c0 == 1 ? nr.slab[0] : nr.slab[1];
+            int keep0 = (c0 == 1) & !f->seg[i0].redundant, keep1 = (c1 == 1) & !f->seg[i1].redundant;
+            /* a first candidate not kept: the second's results move to slot 0 */
+            nr.id[0] = keep0 ? i0 : i1;
+            nr.p[0] = keep0 ? nr.p[0] : nr.p[1];
+            nr.t[0] = keep0 ? nr.t[0] : nr.t[1];
+            nr.slab[0] = keep0 ? nr.slab[0] : nr.slab[1];
             nr.id[1] = i1;
-            n = (c0 == 1) + (c1 == 1);
+            n = keep0 + keep1;
             j = c;
         }
         for (; j < c; j++) {
@@ -1606,7 +1655,7 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             int cl = seg_eval(&f->seg[id], cx, cy, q, &nr, n);
             deep |= cl == 2;
             nr.id[n] = id;
-            n += cl == 1;
+            n += (cl == 1) & !f->seg[id].redundant;
         }
         nr.n = n;
         nr.many = 0;
