@@ -966,8 +966,9 @@ static void poly_clip(const rf_poly *P, rf_poly *o, double gx, double gy, double
     for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++) {
         double gk = g0 + gx * P->x[k] + gy * P->y[k];
         int in = !(gk > 0), cross = in != !(gp > 0);
-        /* gp and gk differ in sign when it is kept: no division by 0 then */
-        double w = gp / (gp - gk);
+        /* gp and gk differ in sign when the point is kept (no division by
+         * 0); otherwise 1 stands in for the difference */
+        double w = gp / rf_if(cross, gp - gk, 1);
         o->x[o->n] = P->x[kp] + w * (P->x[k] - P->x[kp]);
         o->y[o->n] = P->y[kp] + w * (P->y[k] - P->y[kp]);
         o->n += cross;
@@ -1397,7 +1398,7 @@ static int capsule_pixels(const rf_seg *s, double cy, double ro, double ri, doub
 /* Candidates kept per pixel by the row spans (a power of 2); more falls
  * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 4 /* paint_run unrolls 4 */, FILL_RUN = 8 /* fill_one: 8 */ };
+enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 2 /* paint_run unrolls 2 */, FILL_RUN = 8 /* fill_one: 8 */ };
 
 typedef struct rf_rowbuf {
     /* candidates per pixel; slots CHUNK.. CHUNK + PAINT_RUN - 1 take the
@@ -1412,7 +1413,7 @@ typedef struct rf_rowbuf {
      * row-list entries whose box meets that range in x (nact = UINT32_MAX:
      * more than ACT_MAX, check them all) */
     uint32_t crow, ntodo, nfull, k0, k1, nact;
-    uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX];
+    uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX], sel[ACT_MAX];
     /* pixels of the current row with at least one candidate (cnt > 0), in
      * the order first painted; cnt is zero again after each row */
     uint32_t npl;
@@ -1430,8 +1431,7 @@ typedef struct rf_rowbuf {
  * depends on the data (such branches are mispredicted). */
 static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uint32_t id)
 {
-    if (y - x < PAINT_RUN) {
-        /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
+    /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
 #define RF_SLOT(j)                                                                                               \
     do {                                                                                                         \
         uint32_t v_ = x + (j) <= y, i_ = (uint32_t)(x + (j));                                                   \
@@ -1442,11 +1442,9 @@ static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uin
         rb->cand[i_][c_ & (SPAN_CAND - 1)] = id;                                                                 \
         rb->cnt[i_] = (uint8_t)(c_ + (c_ <= SPAN_CAND));                                                         \
     } while (0)
-        RF_SLOT(0); RF_SLOT(1); RF_SLOT(2); RF_SLOT(3);
+    RF_SLOT(0); RF_SLOT(1);
 #undef RF_SLOT
-        return npl;
-    }
-    for (int64_t k = x; k <= y; k++) {
+    for (int64_t k = x + PAINT_RUN; k <= y; k++) {
         uint8_t c = rb->cnt[k];
         rb->pl[npl] = (uint16_t)k;
         npl += c == 0;
@@ -1457,15 +1455,31 @@ static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uin
 }
 
 /* o[il..ih] = 1 (il <= ih); short runs by a fixed number of stores (the
- * last pixel repeated), as in paint_run. */
+ * last ones repeated), as in paint_run: with SSE2 eight pair stores inside
+ * the run (up to 16 pixels), else eight single ones. */
 static void fill_one(double *o, int64_t il, int64_t ih)
 {
+#if defined(__SSE2__)
+    if (ih - il < 2 * FILL_RUN) {
+        o[il] = 1;
+        o[ih] = 1;
+        if (ih - il >= 2) {
+            const __m128d one = _mm_set1_pd(1);
+            int64_t last = ih - 1;
+#define RF_TWO(j) _mm_storeu_pd(o + (il + 2 * (j) <= last ? il + 2 * (j) : last), one)
+            RF_TWO(0); RF_TWO(1); RF_TWO(2); RF_TWO(3); RF_TWO(4); RF_TWO(5); RF_TWO(6); RF_TWO(7);
+#undef RF_TWO
+        }
+        return;
+    }
+#else
     if (ih - il < FILL_RUN) {
 #define RF_ONE(j) o[il + (j) <= ih ? il + (j) : ih] = 1
         RF_ONE(0); RF_ONE(1); RF_ONE(2); RF_ONE(3); RF_ONE(4); RF_ONE(5); RF_ONE(6); RF_ONE(7);
 #undef RF_ONE
         return;
     }
+#endif
     for (int64_t k = il; k <= ih; k++) o[k] = 1;
 }
 
@@ -1515,15 +1529,21 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
     if (rb->crow != row) {
         size_t base = (size_t)row * f->gw;
         uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0, nfull = 0;
+        /* runs of empty, full and other cells, listed without a branch (a
+         * run outside the grid reads cell `base`, and counts as empty) */
         for (uint32_t m = 0; m < rb->nrun; m++) {
-            size_t cell = base + rb->rc[m];
-            if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
-            if (f->full[cell]) rb->fullr[nfull++] = m;
-            else {
-                rb->todo[ntodo++] = m;
-                if (rb->rk[m] < k0) k0 = rb->rk[m];
-                k1 = rb->rk[m + 1] - 1;
-            }
+            uint32_t in = rb->rc[m] != UINT32_MAX;
+            size_t cell = base + (in ? rb->rc[m] : 0);
+            uint32_t some = in & (f->start[cell] != f->start[cell + 1]), full = some & (f->full[cell] != 0);
+            rb->fullr[nfull] = m;
+            nfull += full;
+            rb->todo[ntodo] = m;
+            ntodo += some & !full;
+        }
+        /* the runs are in pixel order: the first and the last todo run */
+        if (ntodo) {
+            k0 = rb->rk[rb->todo[0]];
+            k1 = rb->rk[rb->todo[ntodo - 1] + 1] - 1;
         }
         rb->crow = row;
         rb->ntodo = ntodo;
@@ -1555,12 +1575,29 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         return;
     }
     double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
-    uint32_t nent = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row], npl = 0;
+    uint32_t nent = rb->nact, npl = 0;
+    const uint32_t *list = NULL;
+    if (nent != UINT32_MAX) {
+        /* the entries of act meet [xlo, xhi] already: those whose box (grown
+         * by margin >= e) meets this pixel row, listed without a branch */
+        uint32_t n = 0;
+        for (uint32_t j = 0; j < nent; j++) {
+            const float *bx = f->rbox + 4 * (size_t)rb->act[j];
+            rb->sel[n] = rb->act[j];
+            n += (uint32_t)(!(cy < bx[2]) & !(cy > bx[3]));
+        }
+        nent = n;
+        list = rb->sel;
+    } else
+        nent = f->rstart[row + 1] - f->rstart[row];
     for (uint32_t j = 0; j < nent; j++) {
-        uint32_t m = rb->nact != UINT32_MAX ? rb->act[j] : f->rstart[row] + j;
-        /* the box (grown by margin >= e) first: no segment load for most */
-        const float *bx = f->rbox + 4 * (size_t)m;
-        if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
+        uint32_t m;
+        if (list) m = list[j];
+        else {
+            m = f->rstart[row] + j;
+            const float *bx = f->rbox + 4 * (size_t)m;
+            if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
+        }
         uint32_t id = f->rids[m];
         const rf_seg *s = &f->seg[id];
         double ro = s->r + e + s->tol, ri = s->r - e - s->tol;
