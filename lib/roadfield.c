@@ -1407,13 +1407,15 @@ typedef struct rf_rowbuf {
     uint32_t cand[CHUNK + PAINT_RUN][SPAN_CAND];
     /* runs of pixels with the same cell column: run m is pixels
      * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
-    uint32_t rc[CHUNK], rk[CHUNK + 1], nrun;
+    uint32_t rc[CHUNK], nrun;
+    uint16_t rk[CHUNK + 1];
     /* per grid row (cached while consecutive pixel rows share it): runs
      * needing per-pixel work, full runs, their pixel range [k0, k1], and the
      * row-list entries whose box meets that range in x (nact = UINT32_MAX:
      * more than ACT_MAX, check them all) */
     uint32_t crow, ntodo, nfull, k0, k1, nact;
-    uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX], sel[ACT_MAX];
+    uint16_t todo[CHUNK], fullr[CHUNK];
+    uint32_t act[ACT_MAX], sel[ACT_MAX];
     /* pixels of the current row with at least one candidate (cnt > 0), in
      * the order first painted; cnt is zero again after each row */
     uint32_t npl;
@@ -1535,9 +1537,9 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             uint32_t in = rb->rc[m] != UINT32_MAX;
             size_t cell = base + (in ? rb->rc[m] : 0);
             uint32_t some = in & (f->start[cell] != f->start[cell + 1]), full = some & (f->full[cell] != 0);
-            rb->fullr[nfull] = m;
+            rb->fullr[nfull] = (uint16_t)m;
             nfull += full;
-            rb->todo[ntodo] = m;
+            rb->todo[ntodo] = (uint16_t)m;
             ntodo += some & !full;
         }
         /* the runs are in pixel order: the first and the last todo run */
@@ -1736,7 +1738,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
                     uint32_t kn = e1 - p0 >= n ? n : (uint32_t)(e1 - p0);
                     if (kn > k) {
                         rb.rc[rb.nrun] = (uint32_t)c;
-                        rb.rk[rb.nrun++] = k;
+                        rb.rk[rb.nrun++] = (uint16_t)k;
                         k = kn;
                     }
                 }
@@ -1752,11 +1754,11 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
                 }
                 if (rb.nrun == 0 || cc != rb.rc[rb.nrun - 1]) {
                     rb.rc[rb.nrun] = cc;
-                    rb.rk[rb.nrun++] = k;
+                    rb.rk[rb.nrun++] = (uint16_t)k;
                 }
                 k = kn;
             }
-            rb.rk[rb.nrun] = n;
+            rb.rk[rb.nrun] = (uint16_t)n;
             for (uint32_t y = 0; y < h; y++) {
                 double cy = ((double)py0 + (double)y + 0.5) * pix;
                 double *o = out + (size_t)y * stride + x0;
