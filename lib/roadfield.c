@@ -12,6 +12,9 @@
 #include <float.h>
 #include <math.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define HALF_SQRT2 0.70710678118654752440
 /* Sub-squares per pixel side where a pixel's coverage is not one straight
@@ -40,6 +43,11 @@ typedef struct rf_seg {
      * (0 for a component below 1e-100) */
     double ga, gb, iga, igab, l1, iux, iuy;
     uint32_t road, seg;
+    /* jnext = 1: segment jpart continues this one (a gentle joint,
+     * joint_cover); redundant = 1: the capsule lies within another one
+     * (near_keep) */
+    uint32_t jpart;
+    uint8_t jnext, redundant;
 } rf_seg;
 
 struct rs__roadfield {
@@ -142,6 +150,7 @@ typedef struct rf_builder {
     uint32_t *cnt;   /* per cell: count (pass 1), then end cursor (pass 2) */
     uint64_t total;  /* entries so far */
     uint64_t limit;
+    uint32_t *cell1; /* pass 2: per segment, a cell that lists it */
 } rf_builder;
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
@@ -185,6 +194,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
             visited++;
             if (fill) {
                 f->ids[--b->cnt[cell]] = id;
+                b->cell1[id] = (uint32_t)cell;
             } else {
                 if (++b->total > b->limit) return -1;
                 b->cnt[cell]++;
@@ -222,6 +232,9 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     s->s0 = s0;
     s->road = road;
     s->seg = seg;
+    s->jnext = 0;
+    s->redundant = 0;
+    s->jpart = 0;
 }
 
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
@@ -386,6 +399,49 @@ static int clip_far(double *ax, double *ay, double *bx, double *by, double w, do
     return 1;
 }
 
+/* Does capsule s lie within capsule t (up to a rounding slack)? The
+ * distance to a segment is convex, so it is enough that both ends of s are
+ * within t's half width minus s's. */
+static int capsule_within(const rf_seg *s, const rf_seg *t)
+{
+    double m = fmax(fmax(fabs(t->ax), fabs(t->ay)), fmax(fabs(s->ax), fabs(s->ay)));
+    double room = t->r - s->r + 1e-9 * (1 + m + t->len + t->r);
+    return room >= 0 && seg_dist(t, s->ax, s->ay) <= room && seg_dist(t, s->bx, s->by) <= room;
+}
+
+/* Per segment: its gentle-joint partner (the next segment of positive
+ * length, past zero-length ones at the shared point: consecutive segments
+ * of a road, or the first of the next road when it starts where this one
+ * ends with the same width), and whether its capsule is redundant: within
+ * another one (repeated points, retraced segments, a road given twice;
+ * of two equal capsules the later one). A redundant capsule never changes
+ * the union, and leaving it out of a pixel's near set keeps the cover the
+ * same as without it (the exact one-capsule covers would otherwise give
+ * way to the approximations for several). The capsule that holds it is in
+ * the same cell lists (its reach is at least as large) and is near or
+ * deep wherever the redundant one is near (docs/roadfield.md). */
+static void seg_relations(rs__roadfield *f, const uint32_t *cell1)
+{
+    for (size_t k = 0; k < f->nseg; k++) {
+        rf_seg *sa = &f->seg[k];
+        size_t m = k + 1;
+        while (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m++;
+        if (m < f->nseg && m <= UINT32_MAX) {
+            const rf_seg *sb = &f->seg[m];
+            sa->jnext = sa->bx == sb->ax && sa->by == sb->ay && sa->r == sb->r && sa->len > 0 && sb->len > 0 &&
+                        sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
+            sa->jpart = (uint32_t)m;
+        }
+        /* the holder is listed wherever this one is (its grown capsule is larger) */
+        size_t cell = cell1[k];
+        for (uint32_t i = f->start[cell]; i < f->start[cell + 1]; i++) {
+            uint32_t j = f->ids[i];
+            if (j == k || !capsule_within(sa, &f->seg[j])) continue;
+            if (j < k || !capsule_within(&f->seg[j], sa)) { sa->redundant = 1; break; }
+        }
+    }
+}
+
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out)
 {
@@ -424,7 +480,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->margin = f->pixel * HALF_SQRT2;
     f->reach = p->reach_extra + f->margin;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u };
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL };
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
@@ -500,7 +556,12 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->nent = (size_t)run;
     f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
     if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
+    b.cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b.cell1);
+    if (!b.cell1) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
+    seg_relations(f, b.cell1);
+    rs__free(ctx, b.cell1);
+    b.cell1 = NULL;
     if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
     build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
@@ -511,6 +572,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     rs__ok(ctx);
     return RS_OK;
 fail:
+    rs__free(ctx, b.cell1);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
     return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
@@ -615,29 +677,95 @@ static void px_set(rf_px *q, double side)
     q->c2 = 1 / (2 * side * side);
 }
 
+/* x >= y ? a : b and max(w, 0) without a branch (the covers' cases depend
+ * on the data and are badly predicted); either way the same doubles. */
+#if defined(__SSE2__)
+static double rf_ge(double x, double y, double a, double b)
+{
+    __m128d m = _mm_cmpge_sd(_mm_set_sd(x), _mm_set_sd(y));
+    return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
+}
+static double rf_if(int c, double a, double b)
+{
+    __m128d m = _mm_castsi128_pd(_mm_set1_epi32(-(c != 0)));
+    return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(m, _mm_set_sd(a)), _mm_andnot_pd(m, _mm_set_sd(b))));
+}
+/* a > b ? a : b */
+static double rf_max(double a, double b) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(b))); }
+static double rf_pos(double w) { return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(w), _mm_setzero_pd())); }
+static double rf_neg(double w) { return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(w), _mm_setzero_pd())); }
+#else
+static double rf_ge(double x, double y, double a, double b) { return x >= y ? a : b; }
+static double rf_if(int c, double a, double b) { return c ? a : b; }
+static double rf_max(double a, double b) { return a > b ? a : b; }
+static double rf_pos(double w) { return w > 0 ? w : 0; }
+static double rf_neg(double w) { return w < 0 ? w : 0; }
+#endif
+
 /* halfplane() for the segment's own normal, without divisions: a = hs ga,
- * b = hs gb, apb = a + b (the caller's), x = |h|. Returns lo (the fraction
- * where u <= -x). w^2/(8ab) = w^2 c2 igab and (a-x)/(2a) = 1/2 - x iside iga. */
+ * b = hs gb, apb = a + b (the caller's), x = |h| >= 0. Returns lo (the
+ * fraction where u <= -x): 0 for x >= a + b, w^2/(8ab) = w^2 c2 igab with
+ * w = a + b - x for x >= a - b, else (a-x)/(2a) = 1/2 - x iside iga.
+ * Without branches: w is clamped at 0, so the quadratic piece gives the 0. */
 static double band_lo(const rf_seg *s, const rf_px *q, double a, double b, double apb, double x)
 {
-    if (x >= apb) return 0;
-    if (x >= a - b) { double w = apb - x; return w * w * (q->c2 * s->igab); }
-    return 0.5 - x * (q->iside * s->iga);
+    double w = apb - x, lin = 0.5 - x * (q->iside * s->iga);
+    w = rf_pos(w);
+    return rf_ge(x, a - b, w * w * (q->c2 * s->igab), lin);
 }
 
 /* Coverage of the square (side q->side) whose centre is at signed offset t
  * from the segment's line, inside the segment's slab, by the band |t| <= r:
  * the fraction between two parallel lines, each the CDF of the sum of two
  * uniform variables (a trapezoid, closed form). The caller has settled
- * |t| <= r - e (1) and |t| >= r + e (0). */
+ * |t| <= r - e (1) and |t| >= r + e (0). The far edge (offset -r - at, never
+ * above 0) usually misses the square: its term is then exactly 0. */
 static double band_cover(const rf_seg *s, const rf_px *q, double t)
 {
     double a = q->hs * s->ga, b = q->hs * s->gb, apb = a + b, at = fabs(t), h = s->r - at;
-    double near = h < 0 ? band_lo(s, q, a, b, apb, -h) : 1 - band_lo(s, q, a, b, apb, h);
-    /* the far edge (offset -r - at, never above 0) misses the square: its term is 0 */
-    if (at + s->r >= apb) return near;
-    return near - band_lo(s, q, a, b, apb, at + s->r);
+    double lo = band_lo(s, q, a, b, apb, fabs(h));
+    return rf_ge(h, 0, 1 - lo, lo) - band_lo(s, q, a, b, apb, at + s->r);
 }
+
+/* The band's cover of a square in the slab at offset t: 0 when clear
+ * (|t| - r >= e), 1 when deep (|t| + e <= r), else band_cover; chosen
+ * without a branch. */
+static double band_value(const rf_seg *s, const rf_px *q, double t)
+{
+    double at = fabs(t);
+    return rf_ge(at - s->r, q->e, 0, rf_ge(s->r, at + q->e, 1, band_cover(s, q, t)));
+}
+
+#if defined(__SSE2__)
+#define RF_SEL(m, a, b) _mm_or_pd(_mm_and_pd((m), (a)), _mm_andnot_pd((m), (b)))
+#define RF_PAIR(s0, s1, field) _mm_set_pd((s1)->field, (s0)->field)
+static __m128d rf_abs2(__m128d v) { return _mm_andnot_pd(_mm_set1_pd(-0.0), v); }
+
+/* band_lo for the two lanes: x >= 0, k1 = iside iga, k2 = c2 igab */
+static __m128d band_lo2(__m128d amb, __m128d apb, __m128d k1, __m128d k2, __m128d x)
+{
+    __m128d w = _mm_max_pd(_mm_sub_pd(apb, x), _mm_setzero_pd());
+    __m128d lin = _mm_sub_pd(_mm_set1_pd(0.5), _mm_mul_pd(x, k1));
+    return RF_SEL(_mm_cmpge_pd(x, amb), _mm_mul_pd(_mm_mul_pd(w, w), k2), lin);
+}
+
+/* band_value of two squares: lane 0 of s0 at offset t[0], lane 1 of s1 at
+ * t[1]; the same arithmetic as band_value lane by lane (the same doubles). */
+static __m128d band_value2(const rf_seg *s0, const rf_seg *s1, const rf_px *q, __m128d t)
+{
+    __m128d hs = _mm_set1_pd(q->hs), e = _mm_set1_pd(q->e), r = RF_PAIR(s0, s1, r);
+    __m128d a = _mm_mul_pd(hs, RF_PAIR(s0, s1, ga)), b = _mm_mul_pd(hs, RF_PAIR(s0, s1, gb));
+    __m128d apb = _mm_add_pd(a, b), amb = _mm_sub_pd(a, b);
+    __m128d k1 = _mm_mul_pd(_mm_set1_pd(q->iside), RF_PAIR(s0, s1, iga));
+    __m128d k2 = _mm_mul_pd(_mm_set1_pd(q->c2), RF_PAIR(s0, s1, igab));
+    __m128d at = rf_abs2(t), h = _mm_sub_pd(r, at), one = _mm_set1_pd(1);
+    __m128d lo = band_lo2(amb, apb, k1, k2, rf_abs2(h));
+    __m128d bc = _mm_sub_pd(RF_SEL(_mm_cmpge_pd(h, _mm_setzero_pd()), _mm_sub_pd(one, lo), lo),
+                            band_lo2(amb, apb, k1, k2, _mm_add_pd(at, r)));
+    __m128d v = RF_SEL(_mm_cmpge_pd(r, _mm_add_pd(at, e)), one, bc);
+    return _mm_andnot_pd(_mm_cmpge_pd(_mm_sub_pd(at, r), e), v);
+}
+#endif
 
 /* Coverage of the square centred (x, y) of size q by one capsule: exact
  * when the square lies within the segment's slab (the band |t| <= r cut by
@@ -666,78 +794,127 @@ static double capsule_cover(const rf_seg *s, double x, double y, const rf_px *q)
     return halfplane(dx / d, dy / d, q->side, -D);
 }
 
+/* The near capsules of a pixel with seg_eval's results. */
+typedef struct rf_near {
+    uint32_t id[NEAR_MAX];
+    double p[NEAR_MAX], t[NEAR_MAX]; /* the centre's projection on the segment (from a) and offset t */
+    int slab[NEAR_MAX];              /* 1: the pixel lies in the segment's slab */
+    int n, many;
+} rf_near;
+
 /* Classifies the capsule against the pixel centred (x, y) of size q:
- * 2 = deep (d <= r - e), 0 = clear (d >= r + e), 1 = near. Squared
- * distances: no root for most. For a near capsule, *slab = 1 when the pixel
- * lies in the segment's slab (then *u = t, the offset from the line), else
- * (*u, *v) = the pixel centre minus the nearest centreline point; near_value
- * turns these into capsule_cover's value. */
-static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, int *slab, double *u, double *v)
+ * 2 = deep (d <= r - e), 0 = clear (d >= r + e), 1 = near. In the slab (all
+ * of the pixel projects into the segment) by the offset t from the line,
+ * else by the squared distance to the nearest centreline point (no root).
+ * Fills slot n of nr (p, t, slab). Both ways are computed and one is
+ * chosen without a branch (which way applies depends on the data). */
+static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, rf_near *nr, int n)
 {
-    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, e = q->e, hp = q->hs * s->l1, qx, qy;
-    if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-        double t = wx * s->uy - wy * s->ux, at = fabs(t);
-        if (at - s->r >= e) return 0;
-        if (at + e <= s->r) return 2;
-        *slab = 1;
-        *u = t;
-        return 1;
-    }
-    if (!(pr > 0)) { qx = s->ax; qy = s->ay; }
-    else if (pr >= s->len) { qx = s->bx; qy = s->by; }
-    else { qx = s->ax + pr * s->ux; qy = s->ay + pr * s->uy; }
-    double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
-    if (d2 < 1e300) {
-        if (d2 >= ro * ro) return 0;
-        if (ri > 0 && d2 <= ri * ri) return 2;
-    } else {
+    double wx = x - s->ax, wy = y - s->ay, pr = wx * s->ux + wy * s->uy, e = q->e, hp = q->hs * s->l1;
+    double t = wx * s->uy - wy * s->ux, at = fabs(t);
+    int slab = (s->len > 0) & (pr - hp >= 0) & (pr + hp <= s->len);
+    int cs = at - s->r >= e ? 0 : at + e <= s->r ? 2 : 1;
+    /* the nearest centreline point is dp past an end along the segment (at
+     * most one of the terms is not 0) and t off its line; a zero-length
+     * segment: the point itself */
+    double dp = rf_neg(pr) + rf_pos(pr - s->len), dx = rf_if(s->len > 0, dp, wx), dy = rf_if(s->len > 0, t, wy);
+    double d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
+    int cn = d2 >= ro * ro ? 0 : (ri > 0) & (d2 <= ri * ri) ? 2 : 1;
+    if (!(d2 < 1e300)) {
         double D = hypot(dx, dy) - s->r;
-        if (D >= e) return 0;
-        if (D <= -e) return 2;
+        cn = D >= e ? 0 : D <= -e ? 2 : 1;
     }
-    *slab = 0;
-    *u = dx;
-    *v = dy;
-    return 1;
+    nr->p[n] = pr;
+    nr->t[n] = t;
+    nr->slab[n] = slab;
+    return slab ? cs : cn;
 }
 
-/* capsule_cover's value for a near capsule from seg_eval's results (the
- * exact band in the slab, else the linearised distance); *D = d - r. */
-static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, double v, double *D)
+/* seg_eval of two segments (the common two-candidate pixel) into slots n,
+ * n + 1; their classes in *c0, *c1. */
+#if defined(__SSE2__)
+static void seg_eval2(const rf_seg *s0, const rf_seg *s1, double x, double y, const rf_px *q, rf_near *nr, int n,
+                      int *c0, int *c1)
 {
-    if (slab) {
-        *D = fabs(u) - s->r;
-        return band_cover(s, q, u);
+    __m128d ux = RF_PAIR(s0, s1, ux), uy = RF_PAIR(s0, s1, uy), len = RF_PAIR(s0, s1, len), r = RF_PAIR(s0, s1, r);
+    __m128d e = _mm_set1_pd(q->e), zero = _mm_setzero_pd();
+    __m128d wx = _mm_sub_pd(_mm_set1_pd(x), RF_PAIR(s0, s1, ax)), wy = _mm_sub_pd(_mm_set1_pd(y), RF_PAIR(s0, s1, ay));
+    __m128d pr = _mm_add_pd(_mm_mul_pd(wx, ux), _mm_mul_pd(wy, uy));
+    __m128d t = _mm_sub_pd(_mm_mul_pd(wx, uy), _mm_mul_pd(wy, ux)), at = rf_abs2(t);
+    __m128d hp = _mm_mul_pd(_mm_set1_pd(q->hs), RF_PAIR(s0, s1, l1)), pos = _mm_cmpgt_pd(len, zero);
+    __m128d slab = _mm_and_pd(_mm_and_pd(pos, _mm_cmpge_pd(_mm_sub_pd(pr, hp), zero)),
+                              _mm_cmple_pd(_mm_add_pd(pr, hp), len));
+    __m128d sclear = _mm_cmpge_pd(_mm_sub_pd(at, r), e), sdeep = _mm_cmple_pd(_mm_add_pd(at, e), r);
+    __m128d dp = _mm_add_pd(_mm_min_pd(pr, zero), _mm_max_pd(_mm_sub_pd(pr, len), zero));
+    __m128d dx = RF_SEL(pos, dp, wx), dy = RF_SEL(pos, t, wy);
+    __m128d d2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), ro = _mm_add_pd(r, e), ri = _mm_sub_pd(r, e);
+    __m128d nclear = _mm_cmpge_pd(d2, _mm_mul_pd(ro, ro));
+    __m128d ndeep = _mm_and_pd(_mm_cmpgt_pd(ri, zero), _mm_cmple_pd(d2, _mm_mul_pd(ri, ri)));
+    if (_mm_movemask_pd(_mm_cmplt_pd(d2, _mm_set1_pd(1e300))) != 3) {
+        /* huge distances: the scalar way (hypot) */
+        *c0 = seg_eval(s0, x, y, q, nr, n);
+        *c1 = seg_eval(s1, x, y, q, nr, n + 1);
+        return;
     }
+    int ms = _mm_movemask_pd(slab), mc = _mm_movemask_pd(RF_SEL(slab, sclear, nclear));
+    int md = _mm_movemask_pd(RF_SEL(slab, sdeep, ndeep));
+    _mm_storeu_pd(nr->p + n, pr);
+    _mm_storeu_pd(nr->t + n, t);
+    nr->slab[n] = ms & 1;
+    nr->slab[n + 1] = ms >> 1;
+    /* clear and deep never hold together */
+    *c0 = (md & 1) ? 2 : (mc & 1) ? 0 : 1;
+    *c1 = (md & 2) ? 2 : (mc & 2) ? 0 : 1;
+}
+#else
+static void seg_eval2(const rf_seg *s0, const rf_seg *s1, double x, double y, const rf_px *q, rf_near *nr, int n,
+                      int *c0, int *c1)
+{
+    *c0 = seg_eval(s0, x, y, q, nr, n);
+    *c1 = seg_eval(s1, x, y, q, nr, n + 1);
+}
+#endif
+
+/* capsule_cover's value for a near capsule from seg_eval's results (the
+ * exact band in the slab, else the linearised distance). */
+static double near_value(const rf_seg *s, const rf_px *q, int slab, double u, double v)
+{
+    if (slab) return band_cover(s, q, u);
     double d = len2(u, v), Dd = d - s->r;
-    *D = Dd;
     if (Dd >= q->e) return 0;  /* rounding at the threshold */
     if (Dd <= -q->e) return 1;
     return d > 0 ? halfplane(u / d, v / d, q->side, -Dd) : 1; /* d = 0: a tiny road; rare */
 }
 
-/* A pixel near only two consecutive segments of one road with a gentle
- * turn (the common case on curves): the road edge in the pixel is two
- * nearly collinear lines joined by a short arc. On the inner side the road
- * is the union of the two straight edges (max of their exact covers); on
- * the outer side the edge is the tangent at the nearest boundary point. The
- * error is second order in the turn angle (docs/roadfield.md). joint_ok:
- * does this case apply to a pixel near exactly ia and ib (near_cover
- * then takes the max, or the cover of the smaller d - r)? */
-static int joint_ok(const rs__roadfield *f, uint32_t ia, uint32_t ib, double e)
+/* A pixel near only two consecutive segments a, b of one road with a
+ * gentle turn (the common case on curves; rf_seg.jnext), its centre not
+ * beyond the far ends: the road edge in the pixel is two nearly collinear
+ * lines joined by a short arc around the shared vertex V. On the inner
+ * side of the turn the road is the union of the two half-planes (the max
+ * of their exact covers); on the outer side the edge is the tangent at the
+ * nearest boundary point: a's edge line while the centre projects into a,
+ * b's while it projects into b, else (the fan at V) the tangent to the arc.
+ * The error is second order in the turn angle (docs/roadfield.md). ia, ib:
+ * the slots of a and b in nr. */
+static double joint_cover(const rf_seg *a, const rf_seg *b, const rf_near *nr, int ia, int ib, const rf_px *q,
+                          double cx, double cy)
 {
-    const rf_seg *a = &f->seg[ia < ib ? ia : ib], *b = &f->seg[ia < ib ? ib : ia];
-    if (a->road != b->road || b->seg != a->seg + 1 || !(a->len > 0) || !(b->len > 0)) return 0;
-    return !(a->ux * b->ux + a->uy * b->uy < JOINT_COS || a->r < 2 * e || b->r < 2 * e);
+    double pa = nr->p[ia], ta = nr->t[ia], pb = nr->p[ib], ca, cb;
+#if defined(__SSE2__)
+    double c[2];
+    _mm_storeu_pd(c, band_value2(a, b, q, _mm_set_pd(nr->t[ib], ta)));
+    ca = c[0];
+    cb = c[1];
+#else
+    ca = band_value(a, q, ta);
+    cb = band_value(b, q, nr->t[ib]);
+#endif
+    double turn = b->ux * a->uy - b->uy * a->ux;
+    int inner = ta * turn > 0;
+    /* the fan (rare): its own way; else chosen without a branch */
+    if (!inner & !(pa < a->len) & !(pb > 0)) return near_value(a, q, 0, cx - a->bx, cy - a->by);
+    return rf_if(inner, rf_max(ca, cb), rf_if(pa < a->len, ca, cb));
 }
-
-/* The near capsules of a pixel with seg_eval's results. */
-typedef struct rf_near {
-    uint32_t id[NEAR_MAX];
-    double u[NEAR_MAX], v[NEAR_MAX];
-    int slab[NEAR_MAX];
-    int n, many;
-} rf_near;
 
 /* Evaluates capsule id against the pixel and adds it to nr when near
  * (each once). Returns 1 when the pixel is deep inside it. */
@@ -746,9 +923,9 @@ static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx
     for (int m = 0; m < nr->n; m++)
         if (nr->id[m] == id) return 0;
     int n = nr->n < NEAR_MAX ? nr->n : NEAR_MAX - 1; /* past NEAR_MAX: scratch slot */
-    int c = seg_eval(&f->seg[id], cx, cy, q, &nr->slab[n], &nr->u[n], &nr->v[n]);
+    int c = seg_eval(&f->seg[id], cx, cy, q, nr, n);
     if (c == 2) return 1;
-    if (c) {
+    if (c && !f->seg[id].redundant) {
         if (nr->n < NEAR_MAX) nr->id[nr->n++] = id;
         else nr->many = 1;
     }
@@ -758,57 +935,185 @@ static int near_eval(const rs__roadfield *f, rf_near *nr, uint32_t id, double cx
 static double sub_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
                         const rf_px *qs);
 
-/* Crossings of straight roads (two or more near capsules, each with the
- * pixel in its slab and only its nearer edge crossing the pixel): within
- * the pixel every road is a half-plane, so the uncovered part is the
- * intersection of their complements, a convex polygon: the square clipped
- * by each edge line (Sutherland-Hodgman), area by the shoelace formula.
- * Exact. Returns -1 when a capsule does not qualify. */
-static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const rf_px *q)
+/* Exact area of one capsule in a square where its boundary is not one
+ * straight line (road ends, and squares reaching past a segment's end
+ * normal): the normals at a and b cut the plane into the disc side of a,
+ * the band and the disc side of b; the square's part in each is a convex
+ * polygon (rf_poly, Sutherland-Hodgman), whose area inside the disc or the
+ * band is summed. */
+typedef struct rf_poly {
+    int n;
+    double x[16], y[16]; /* counter-clockwise; the square clipped by at most HP_MAX lines, +1 for poly_clip */
+} rf_poly;
+
+static void poly_square(rf_poly *P, double hs)
 {
-    double hs = q->hs, px[2][NEAR_MAX + 4], py[2][NEAR_MAX + 4];
-    int ord[NEAR_MAX];
+    P->n = 4;
+    P->x[0] = -hs; P->y[0] = -hs;
+    P->x[1] = hs;  P->y[1] = -hs;
+    P->x[2] = hs;  P->y[2] = hs;
+    P->x[3] = -hs; P->y[3] = hs;
+}
+
+/* Keeps the part of P where g0 + gx x + gy y <= 0. Every vertex is
+ * written and kept or not by advancing the count (which case holds depends
+ * on the data; branches would be mispredicted). */
+static void poly_clip(const rf_poly *P, rf_poly *o, double gx, double gy, double g0)
+{
+    o->n = 0;
+    if (P->n == 0) return;
+    double gp = g0 + gx * P->x[P->n - 1] + gy * P->y[P->n - 1];
+    for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++) {
+        double gk = g0 + gx * P->x[k] + gy * P->y[k];
+        int in = !(gk > 0), cross = in != !(gp > 0);
+        /* gp and gk differ in sign when the point is kept (no division by
+         * 0); otherwise 1 stands in for the difference */
+        double w = gp / rf_if(cross, gp - gk, 1);
+        o->x[o->n] = P->x[kp] + w * (P->x[k] - P->x[kp]);
+        o->y[o->n] = P->y[kp] + w * (P->y[k] - P->y[kp]);
+        o->n += cross;
+        o->x[o->n] = P->x[k];
+        o->y[o->n] = P->y[k];
+        o->n += in;
+        gp = gk;
+    }
+}
+
+static double poly_area(const rf_poly *P)
+{
+    double a = 0;
+    for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++) a += P->x[kp] * P->y[k] - P->x[k] * P->y[kp];
+    return 0.5 * a;
+}
+
+/* Signed area of the part of the triangle (0, P, Q) inside the disc of
+ * radius r about 0: the chord of PQ inside the circle as a triangle, the
+ * rest as circular sectors. */
+static double tri_disc(double px, double py, double qx, double qy, double r)
+{
+    double dx = qx - px, dy = qy - py, a = dx * dx + dy * dy, r2 = 0.5 * r * r;
+    if (!(a > 0)) return 0;
+    double b = px * dx + py * dy, c = px * px + py * py - r * r, disc = b * b - a * c, s1 = 1, s2 = 0;
+    if (disc > 0) {
+        double sq = sqrt(disc);
+        s1 = (-b - sq) / a;
+        s2 = (-b + sq) / a;
+        if (s1 < 0) s1 = 0;
+        if (s2 > 1) s2 = 1;
+    }
+    if (!(s1 < s2)) return r2 * atan2(px * qy - py * qx, px * qx + py * qy);
+    double m1x = px + s1 * dx, m1y = py + s1 * dy, m2x = px + s2 * dx, m2y = py + s2 * dy;
+    double area = 0.5 * (m1x * m2y - m1y * m2x);
+    if (s1 > 0) area += r2 * atan2(px * m1y - py * m1x, px * m1x + py * m1y);
+    if (s2 < 1) area += r2 * atan2(m2x * qy - m2y * qx, m2x * qx + m2y * qy);
+    return area;
+}
+
+/* Area of P inside the disc of radius r about (ox, oy). */
+static double poly_disc(const rf_poly *P, double ox, double oy, double r)
+{
+    double a = 0;
+    for (int k = 0, kp = P->n - 1; k < P->n; kp = k, k++)
+        a += tri_disc(P->x[kp] - ox, P->y[kp] - oy, P->x[k] - ox, P->y[k] - oy, r);
+    return a;
+}
+
+/* Crossings of straight roads, and of roads with gentle joints: within
+ * the pixel every road is one or two half-planes, so the uncovered part is
+ * the intersection of their complements, a convex polygon: the square
+ * clipped by each edge line, area by the shoelace formula. A near capsule
+ * with the pixel in its slab and only its nearer edge crossing the pixel
+ * gives its edge line. A gentle joint (rf_seg.jnext, both segments near,
+ * as joint_cover) gives both edge lines on the inner side of the turn
+ * (exact) and on the outer side the tangent joint_cover takes. The lines
+ * are clipped in the order of their segments, so the rounding never
+ * depends on the order the candidates were found in. Returns -1 when a
+ * capsule does not qualify (or there are more than HP_MAX lines). */
+#define HP_MAX 8
+static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const rf_px *q, double cx, double cy)
+{
+    /* line k: outside its road where g0 + gx X + gy Y > 0 (square coordinates) */
+    double g0[HP_MAX], gx[HP_MAX], gy[HP_MAX], hs = q->hs;
+    uint64_t key[HP_MAX];
+    uint32_t used = 0;
+    int nl = 0;
+#define RF_LINE(s, t, kk)                                                                                        \
+    do {                                                                                                         \
+        double sg_ = (t) >= 0 ? 1 : -1;                                                                          \
+        if (nl == HP_MAX) return -1;                                                                             \
+        g0[nl] = sg_ * (t) - (s)->r; gx[nl] = sg_ * (s)->uy; gy[nl] = -sg_ * (s)->ux; key[nl++] = (kk);          \
+    } while (0)
+    for (int m = 0; m < nr->n; m++) {
+        const rf_seg *a = &f->seg[nr->id[m]];
+        if (!a->jnext || (used >> m & 1u)) continue;
+        int m2 = 0;
+        while (m2 < nr->n && nr->id[m2] != a->jpart) m2++;
+        if (m2 == nr->n || (used >> m2 & 1u)) continue;
+        const rf_seg *b = &f->seg[nr->id[m2]];
+        if (!(a->r >= 2 * q->e && nr->p[m] >= hs * a->l1 && nr->p[m2] + hs * b->l1 <= b->len)) continue;
+        used |= 1u << m | 1u << m2;
+        uint64_t k0 = 2 * (uint64_t)nr->id[m];
+        if (nr->t[m] * (b->ux * a->uy - b->uy * a->ux) > 0) {
+            RF_LINE(a, nr->t[m], k0);
+            RF_LINE(b, nr->t[m2], k0 + 1);
+        } else if (nr->p[m] < a->len) RF_LINE(a, nr->t[m], k0);
+        else if (nr->p[m2] > 0) RF_LINE(b, nr->t[m2], k0);
+        else {
+            /* the fan at the shared vertex: the tangent to the arc */
+            double dx = cx - a->bx, dy = cy - a->by, d = len2(dx, dy);
+            if (!(d > 0) || nl == HP_MAX) return -1;
+            g0[nl] = d - a->r; gx[nl] = dx / d; gy[nl] = dy / d; key[nl++] = k0;
+        }
+    }
     for (int m = 0; m < nr->n; m++) {
         const rf_seg *s = &f->seg[nr->id[m]];
-        if (!nr->slab[m] || fabs(nr->u[m]) + s->r < hs * (s->ga + s->gb)) return -1;
-        /* clip in ascending segment order: the rounding never depends on
-         * the order the candidates were found in */
+        if (used >> m & 1u) continue;
+        if (!nr->slab[m] || fabs(nr->t[m]) + s->r < hs * (s->ga + s->gb)) return -1;
+        RF_LINE(s, nr->t[m], 2 * (uint64_t)nr->id[m]);
+    }
+#undef RF_LINE
+    int ord[HP_MAX];
+    for (int m = 0; m < nl; m++) {
         int k = m;
-        for (; k > 0 && nr->id[ord[k - 1]] > nr->id[m]; k--) ord[k] = ord[k - 1];
+        for (; k > 0 && key[ord[k - 1]] > key[m]; k--) ord[k] = ord[k - 1];
         ord[k] = m;
     }
-    /* the square, counter-clockwise, centred at the pixel centre */
-    int np = 4, cur = 0;
-    px[0][0] = -hs; py[0][0] = -hs;
-    px[0][1] = hs;  py[0][1] = -hs;
-    px[0][2] = hs;  py[0][2] = hs;
-    px[0][3] = -hs; py[0][3] = hs;
-    for (int j = 0; j < nr->n && np > 0; j++) {
-        int m = ord[j];
-        const rf_seg *s = &f->seg[nr->id[m]];
-        /* outside the road: g = sg (t(X, Y)) - r > 0, t = u + X uy - Y ux */
-        double sg = nr->u[m] >= 0 ? 1 : -1, gx = sg * s->uy, gy = -sg * s->ux, g0 = sg * nr->u[m] - s->r;
-        const double *ix = px[cur], *iy = py[cur];
-        double *ox = px[1 - cur], *oy = py[1 - cur];
-        int no = 0;
-        double gp = g0 + gx * ix[np - 1] + gy * iy[np - 1];
-        for (int k = 0, kp = np - 1; k < np; kp = k, k++) {
-            double gk = g0 + gx * ix[k] + gy * iy[k];
-            if ((gk > 0) != (gp > 0)) {
-                double w = gp / (gp - gk); /* gp and gk differ in sign: no division by 0 */
-                ox[no] = ix[kp] + w * (ix[k] - ix[kp]);
-                oy[no++] = iy[kp] + w * (iy[k] - iy[kp]);
-            }
-            if (gk > 0) { ox[no] = ix[k]; oy[no++] = iy[k]; }
-            gp = gk;
+    rf_poly P[2];
+    int cur = 0;
+    poly_square(&P[0], hs);
+    /* poly_clip keeps g <= 0: the outside of each road is -g <= 0 */
+    for (int j = 0; j < nl; j++, cur ^= 1) poly_clip(&P[cur], &P[cur ^ 1], -gx[ord[j]], -gy[ord[j]], -g0[ord[j]]);
+    double v = 1 - poly_area(&P[cur]) * (q->iside * q->iside);
+    return v < 0 ? 0 : v > 1 ? 1 : v;
+}
+
+/* The pixel centred (cx, cy) has projection pr on s (from a) and offset t. */
+static double cap_cover(const rf_seg *s, const rf_px *q, double cx, double cy, double pr, double t)
+{
+    double hs = q->hs, hp = hs * s->l1, area = 0;
+    rf_poly P, D, E;
+    poly_square(&P, hs);
+    if (!(s->len > 0)) {
+        area = poly_disc(&P, s->ax - cx, s->ay - cy, s->r);
+    } else {
+        /* in square coordinates (X, Y): projection pr + X ux + Y uy, offset t + X uy - Y ux */
+        if (pr - hp < 0) {
+            poly_clip(&P, &D, s->ux, s->uy, pr);
+            area += poly_disc(&D, s->ax - cx, s->ay - cy, s->r);
         }
-        np = no;
-        cur = 1 - cur;
+        if (pr + hp > s->len) {
+            poly_clip(&P, &D, -s->ux, -s->uy, s->len - pr);
+            area += poly_disc(&D, s->bx - cx, s->by - cy, s->r);
+        }
+        if (pr + hp > 0 && pr - hp < s->len) {
+            poly_clip(&P, &D, -s->ux, -s->uy, -pr);
+            poly_clip(&D, &E, s->ux, s->uy, pr - s->len);
+            poly_clip(&E, &D, s->uy, -s->ux, t - s->r);
+            poly_clip(&D, &E, -s->uy, s->ux, -t - s->r);
+            area += poly_area(&E);
+        }
     }
-    double area = 0;
-    for (int k = 0, kp = np - 1; k < np; kp = k, k++)
-        area += px[cur][kp] * py[cur][k] - px[cur][k] * py[cur][kp];
-    double v = 1 - 0.5 * area * (q->iside * q->iside);
+    double v = area * (q->iside * q->iside);
     return v < 0 ? 0 : v > 1 ? 1 : v;
 }
 
@@ -817,26 +1122,21 @@ static double halfplanes_cover(const rs__roadfield *f, const rf_near *nr, const 
 static double near_cover(const rs__roadfield *f, const rf_near *nr, const rf_cells *cr, double cx, double cy,
                          const rf_px *q, const rf_px *qs)
 {
-    if (nr->n == 0) return 0;
+    if (nr->n == 0 || nr->many) return nr->n ? sub_cover(f, nr, cr, cx, cy, qs) : 0;
     /* one boundary: exact if straight within the pixel */
-    if (nr->n == 1 && !nr->many && nr->slab[0]) {
-        double D;
-        return near_value(&f->seg[nr->id[0]], q, 1, nr->u[0], 0, &D);
+    if (nr->n == 1) {
+        const rf_seg *s = &f->seg[nr->id[0]];
+        return nr->slab[0] ? band_cover(s, q, nr->t[0]) : cap_cover(s, q, cx, cy, nr->p[0], nr->t[0]);
     }
-    if (nr->n == 2 && !nr->many && joint_ok(f, nr->id[0], nr->id[1], q->e)) {
+    if (nr->n == 2) {
         int ia = nr->id[0] < nr->id[1] ? 0 : 1, ib = 1 - ia;
         const rf_seg *a = &f->seg[nr->id[ia]], *b = &f->seg[nr->id[ib]];
-        double Da, Db, ca = near_value(a, q, nr->slab[ia], nr->u[ia], nr->v[ia], &Da),
-                       cb = near_value(b, q, nr->slab[ib], nr->u[ib], nr->v[ib], &Db);
-        double side = (cx - a->bx) * a->uy - (cy - a->by) * a->ux, turn = b->ux * a->uy - b->uy * a->ux;
-        if (side * turn > 0) return ca > cb ? ca : cb;
-        return Da <= Db ? ca : cb;
+        if (a->jnext && nr->id[ib] == a->jpart && a->r >= 2 * q->e && nr->p[ia] >= q->hs * a->l1 &&
+            nr->p[ib] + q->hs * b->l1 <= b->len)
+            return joint_cover(a, b, nr, ia, ib, q, cx, cy);
     }
-    if (!nr->many) {
-        double v = halfplanes_cover(f, nr, q);
-        if (v >= 0) return v;
-    }
-    return sub_cover(f, nr, cr, cx, cy, qs);
+    double v = halfplanes_cover(f, nr, q, cx, cy);
+    return v >= 0 ? v : sub_cover(f, nr, cr, cx, cy, qs);
 }
 
 /* capsule_cover for a segment of positive length, from the square centre's
@@ -936,6 +1236,88 @@ static double pixel_cover(const rs__roadfield *f, const rf_cells *cr, double cx,
  * and in the band |t| <= rho between the end normals (a capsule is
  * convex). Bit 0 of the result: the outer interval is not empty; bit 1:
  * the inner one. ri <= ro. */
+#if defined(__SSE2__)
+/* SSE2: lane 0 the outer radius, lane 1 the inner; both end discs at once;
+ * every case chosen by masks, not branches (the row decides which pieces
+ * exist, unpredictably). The same intervals up to rounding, far below the
+ * spans' slack tol. */
+static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, double *olo, double *ohi, double *ilo,
+                         double *ihi)
+{
+    const __m128d inf = _mm_set1_pd(HUGE_VAL), ninf = _mm_set1_pd(-HUGE_VAL), zero = _mm_setzero_pd();
+    __m128d rho = _mm_set_pd(ri, ro), rho2 = _mm_mul_pd(rho, rho);
+    /* lane 1 (inner) exists only for ri >= 0 */
+    __m128d use = _mm_cmpge_pd(rho, zero);
+    double dya = cy - s->ay, dyb = cy - s->by;
+    __m128d lo = inf, hi = ninf;
+    /* end discs: |dy| <= rho gives the chord x +- sqrt(rho^2 - dy^2) */
+    __m128d da = _mm_set1_pd(dya * dya), db = _mm_set1_pd(dyb * dyb);
+    __m128d ma = _mm_and_pd(use, _mm_cmple_pd(da, rho2)), mb = _mm_and_pd(use, _mm_cmple_pd(db, rho2));
+    __m128d qa = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(rho2, da), zero));
+    __m128d qb = _mm_sqrt_pd(_mm_max_pd(_mm_sub_pd(rho2, db), zero));
+    __m128d xa = _mm_set1_pd(s->ax), xb = _mm_set1_pd(s->bx);
+    lo = _mm_or_pd(_mm_and_pd(ma, _mm_sub_pd(xa, qa)), _mm_andnot_pd(ma, lo));
+    hi = _mm_or_pd(_mm_and_pd(ma, _mm_add_pd(xa, qa)), _mm_andnot_pd(ma, hi));
+    lo = _mm_min_pd(lo, _mm_or_pd(_mm_and_pd(mb, _mm_sub_pd(xb, qb)), _mm_andnot_pd(mb, inf)));
+    hi = _mm_max_pd(hi, _mm_or_pd(_mm_and_pd(mb, _mm_add_pd(xb, qb)), _mm_andnot_pd(mb, ninf)));
+    if (s->len > 0) {
+        /* u = x - ax: p = u ux + dy uy in [0, len], t = u uy - dy ux in [-rho, rho] */
+        double pl = -HUGE_VAL, ph = HUGE_VAL, t0 = dya * s->ux, p0 = dya * s->uy;
+        if (s->iux != 0) {
+            double u1 = -p0 * s->iux, u2 = (s->len - p0) * s->iux;
+            pl = RF_MIN(u1, u2);
+            ph = RF_MAX(u1, u2);
+        } else if (p0 < 0 || p0 > s->len) pl = HUGE_VAL;
+        __m128d ul, uh;
+        if (s->iuy != 0) {
+            __m128d iy = _mm_set1_pd(s->iuy), t = _mm_set1_pd(t0);
+            __m128d u1 = _mm_mul_pd(_mm_sub_pd(t, rho), iy), u2 = _mm_mul_pd(_mm_add_pd(t, rho), iy);
+            ul = _mm_max_pd(_mm_set1_pd(pl), _mm_min_pd(u1, u2));
+            uh = _mm_min_pd(_mm_set1_pd(ph), _mm_max_pd(u1, u2));
+        } else {
+            /* parallel to the row: all of [pl, ph] when |t0| <= rho */
+            __m128d in = _mm_cmple_pd(_mm_set1_pd(fabs(t0)), rho);
+            ul = _mm_or_pd(_mm_and_pd(in, _mm_set1_pd(pl)), _mm_andnot_pd(in, inf));
+            uh = _mm_or_pd(_mm_and_pd(in, _mm_set1_pd(ph)), _mm_andnot_pd(in, ninf));
+        }
+        __m128d mband = _mm_and_pd(use, _mm_cmple_pd(ul, uh));
+        lo = _mm_min_pd(lo, _mm_or_pd(_mm_and_pd(mband, _mm_add_pd(xa, ul)), _mm_andnot_pd(mband, inf)));
+        hi = _mm_max_pd(hi, _mm_or_pd(_mm_and_pd(mband, _mm_add_pd(xa, uh)), _mm_andnot_pd(mband, ninf)));
+    }
+    double l[2], h[2];
+    _mm_storeu_pd(l, lo);
+    _mm_storeu_pd(h, hi);
+    *olo = l[0]; *ohi = h[0]; *ilo = l[1]; *ihi = h[1];
+    return (l[0] <= h[0]) | (l[1] <= h[1]) << 1;
+}
+
+/* capsule_spans as pixel ranges of the row (centre of pixel k at (a + k)
+ * pix), clipped to [k0, k1]: k[0..1] the outer (near) span, k[2..3] the
+ * inner (deep) one when ri > 0; bit 0 / bit 1: not empty. Both lanes at
+ * once and without branches: the values are clamped to [k0, k1 + 1] and
+ * [k0 - 1, k1] first (an empty span then has k_lo > k_hi), ceil and floor
+ * by truncation of non-negative values; the same ranges as span_pixels. */
+static int capsule_pixels(const rf_seg *s, double cy, double ro, double ri, double a, double ipix, uint32_t k0,
+                          uint32_t k1, int32_t *k)
+{
+    double olo, ohi, ilo, ihi;
+    capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
+    __m128d va = _mm_set1_pd(a), vi = _mm_set1_pd(ipix), one = _mm_set1_pd(1);
+    __m128d vl = _mm_sub_pd(_mm_mul_pd(_mm_set_pd(ilo, olo), vi), va);
+    __m128d vh = _mm_sub_pd(_mm_mul_pd(_mm_set_pd(ihi, ohi), vi), va);
+    vl = _mm_min_pd(_mm_max_pd(vl, _mm_set1_pd((double)k0)), _mm_set1_pd((double)k1 + 1));
+    vh = _mm_min_pd(_mm_max_pd(vh, _mm_set1_pd((double)k0 - 1)), _mm_set1_pd((double)k1));
+    __m128i tl = _mm_cvttpd_epi32(vl); /* ceil(vl) = trunc + (trunc < vl) */
+    __m128d up = _mm_cmplt_pd(_mm_cvtepi32_pd(tl), vl);
+    tl = _mm_sub_epi32(tl, _mm_shuffle_epi32(_mm_castpd_si128(up), _MM_SHUFFLE(3, 3, 2, 0)));
+    __m128i th = _mm_sub_epi32(_mm_cvttpd_epi32(_mm_add_pd(vh, one)), _mm_set1_epi32(1)); /* floor(vh), vh >= -1 */
+    int32_t t[4], u[4];
+    _mm_storeu_si128((__m128i *)t, tl);
+    _mm_storeu_si128((__m128i *)u, th);
+    k[0] = t[0]; k[1] = u[0]; k[2] = t[1]; k[3] = u[1];
+    return (k[0] <= k[1]) | ((k[2] <= k[3]) & (ri > 0)) << 1;
+}
+#else
 static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, double *olo, double *ohi, double *ilo,
                          double *ihi)
 {
@@ -977,7 +1359,9 @@ static int capsule_spans(const rf_seg *s, double cy, double ro, double ri, doubl
     *olo = ol; *ohi = oh; *ilo = il; *ihi = ih;
     return (ol <= oh) | (il <= ih) << 1;
 }
+#endif
 
+#if !defined(__SSE2__)
 /* Pixels [k0, k1] of a row whose centres lie in [lo, hi]: centre of pixel k
  * is (a + k) pix. Returns 0 when none. */
 static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0, uint32_t k1, uint32_t *kl,
@@ -995,28 +1379,111 @@ static int span_pixels(double lo, double hi, double a, double ipix, uint32_t k0,
     return 1;
 }
 
+static int capsule_pixels(const rf_seg *s, double cy, double ro, double ri, double a, double ipix, uint32_t k0,
+                          uint32_t k1, int32_t *k)
+{
+    double olo, ohi, ilo, ihi;
+    uint32_t kl, kh, il, ih;
+    int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi), r = 0;
+    if ((got & 1) && span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) {
+        k[0] = (int32_t)kl; k[1] = (int32_t)kh; r = 1;
+    }
+    if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
+        k[2] = (int32_t)il; k[3] = (int32_t)ih; r |= 2;
+    }
+    return r;
+}
+#endif
+
 /* Candidates kept per pixel by the row spans (a power of 2); more falls
  * back to the cell scan. */
 #define SPAN_CAND 4
-enum { CHUNK = 1024, ACT_MAX = 1024 };
+enum { CHUNK = 1024, ACT_MAX = 1024, PAINT_RUN = 2 /* paint_run unrolls 2 */, FILL_RUN = 8 /* fill_one: 8 */ };
 
 typedef struct rf_rowbuf {
-    uint8_t cnt[CHUNK];
-    uint32_t cand[CHUNK][SPAN_CAND];
+    /* candidates per pixel; slots CHUNK.. CHUNK + PAINT_RUN - 1 take the
+     * unused stores of paint_run (never listed, never read) */
+    uint8_t cnt[CHUNK + PAINT_RUN];
+    uint32_t cand[CHUNK + PAINT_RUN][SPAN_CAND];
     /* runs of pixels with the same cell column: run m is pixels
      * [rk[m], rk[m+1]) in cell column rc[m] (UINT32_MAX: outside the grid) */
-    uint32_t rc[CHUNK], rk[CHUNK + 1], nrun;
+    uint32_t rc[CHUNK], nrun;
+    uint16_t rk[CHUNK + 1];
     /* per grid row (cached while consecutive pixel rows share it): runs
      * needing per-pixel work, full runs, their pixel range [k0, k1], and the
      * row-list entries whose box meets that range in x (nact = UINT32_MAX:
      * more than ACT_MAX, check them all) */
     uint32_t crow, ntodo, nfull, k0, k1, nact;
-    uint32_t todo[CHUNK], fullr[CHUNK], act[ACT_MAX];
+    uint16_t todo[CHUNK], fullr[CHUNK];
+    uint32_t act[ACT_MAX], sel[ACT_MAX];
     /* pixels of the current row with at least one candidate (cnt > 0), in
      * the order first painted; cnt is zero again after each row */
     uint32_t npl;
-    uint16_t pl[CHUNK];
+    uint16_t pl[CHUNK + 1];
+    /* the painted pixels still to compute: one candidate (l1), more (lm,
+     * with their counts lc) */
+    uint16_t l1[CHUNK], lm[CHUNK];
+    uint8_t lc[CHUNK];
 } rf_rowbuf;
+
+/* Adds candidate id to pixels [x, y] of the row (none when y < x) and
+ * lists the pixels that get their first one; returns the new list length.
+ * Runs are mostly a pixel or two: up to PAINT_RUN pixels take a fixed
+ * number of stores, the unused ones into spare slots, so no loop exit
+ * depends on the data (such branches are mispredicted). */
+static uint32_t paint_run(rf_rowbuf *rb, uint32_t npl, int64_t x, int64_t y, uint32_t id)
+{
+    /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
+#define RF_SLOT(j)                                                                                               \
+    do {                                                                                                         \
+        uint32_t v_ = x + (j) <= y, i_ = (uint32_t)(x + (j));                                                   \
+        i_ += ((uint32_t)(CHUNK + (j)) - i_) & (v_ - 1u); /* unused: the spare slot, no branch */                \
+        uint8_t c_ = rb->cnt[i_];                                                                                \
+        rb->pl[npl] = (uint16_t)i_;                                                                              \
+        npl += (uint32_t)(v_ & (c_ == 0));                                                                       \
+        rb->cand[i_][c_ & (SPAN_CAND - 1)] = id;                                                                 \
+        rb->cnt[i_] = (uint8_t)(c_ + (c_ <= SPAN_CAND));                                                         \
+    } while (0)
+    RF_SLOT(0); RF_SLOT(1);
+#undef RF_SLOT
+    for (int64_t k = x + PAINT_RUN; k <= y; k++) {
+        uint8_t c = rb->cnt[k];
+        rb->pl[npl] = (uint16_t)k;
+        npl += c == 0;
+        rb->cand[k][c & (SPAN_CAND - 1)] = id;
+        rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
+    }
+    return npl;
+}
+
+/* o[il..ih] = 1 (il <= ih); short runs by a fixed number of stores (the
+ * last ones repeated), as in paint_run: with SSE2 eight pair stores inside
+ * the run (up to 16 pixels), else eight single ones. */
+static void fill_one(double *o, int64_t il, int64_t ih)
+{
+#if defined(__SSE2__)
+    if (ih - il < 2 * FILL_RUN) {
+        o[il] = 1;
+        o[ih] = 1;
+        if (ih - il >= 2) {
+            const __m128d one = _mm_set1_pd(1);
+            int64_t last = ih - 1;
+#define RF_TWO(j) _mm_storeu_pd(o + (il + 2 * (j) <= last ? il + 2 * (j) : last), one)
+            RF_TWO(0); RF_TWO(1); RF_TWO(2); RF_TWO(3); RF_TWO(4); RF_TWO(5); RF_TWO(6); RF_TWO(7);
+#undef RF_TWO
+        }
+        return;
+    }
+#else
+    if (ih - il < FILL_RUN) {
+#define RF_ONE(j) o[il + (j) <= ih ? il + (j) : ih] = 1
+        RF_ONE(0); RF_ONE(1); RF_ONE(2); RF_ONE(3); RF_ONE(4); RF_ONE(5); RF_ONE(6); RF_ONE(7);
+#undef RF_ONE
+        return;
+    }
+#endif
+    for (int64_t k = il; k <= ih; k++) o[k] = 1;
+}
 
 /* Cell column of pixel k of the chunk (the run holding it; k is in a run). */
 static uint32_t run_col(const rf_rowbuf *rb, uint32_t k)
@@ -1028,6 +1495,24 @@ static uint32_t run_col(const rf_rowbuf *rb, uint32_t k)
         else hi = mid;
     }
     return rb->rc[lo];
+}
+
+/* A pixel with one candidate: band_value when the pixel is in its slab,
+ * else it joins the list lm (cap_cover and the others). Returns lm's new
+ * length. */
+static uint32_t one_cand(const rs__roadfield *f, rf_rowbuf *rb, uint32_t k, double a, double cy, const rf_px *q,
+                         double *o, uint32_t nm)
+{
+    double cx = (a + (double)k) * q->side;
+    const rf_seg *s = &f->seg[rb->cand[k][0]];
+    double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
+    if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
+        o[k] = band_value(s, q, wx * s->uy - wy * s->ux);
+        return nm;
+    }
+    rb->lm[nm] = (uint16_t)k;
+    rb->lc[nm] = 1;
+    return nm + 1;
 }
 
 /* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
@@ -1046,15 +1531,21 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
     if (rb->crow != row) {
         size_t base = (size_t)row * f->gw;
         uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0, nfull = 0;
+        /* runs of empty, full and other cells, listed without a branch (a
+         * run outside the grid reads cell `base`, and counts as empty) */
         for (uint32_t m = 0; m < rb->nrun; m++) {
-            size_t cell = base + rb->rc[m];
-            if (rb->rc[m] == UINT32_MAX || f->start[cell] == f->start[cell + 1]) continue;
-            if (f->full[cell]) rb->fullr[nfull++] = m;
-            else {
-                rb->todo[ntodo++] = m;
-                if (rb->rk[m] < k0) k0 = rb->rk[m];
-                k1 = rb->rk[m + 1] - 1;
-            }
+            uint32_t in = rb->rc[m] != UINT32_MAX;
+            size_t cell = base + (in ? rb->rc[m] : 0);
+            uint32_t some = in & (f->start[cell] != f->start[cell + 1]), full = some & (f->full[cell] != 0);
+            rb->fullr[nfull] = (uint16_t)m;
+            nfull += full;
+            rb->todo[ntodo] = (uint16_t)m;
+            ntodo += some & !full;
+        }
+        /* the runs are in pixel order: the first and the last todo run */
+        if (ntodo) {
+            k0 = rb->rk[rb->todo[0]];
+            k1 = rb->rk[rb->todo[ntodo - 1] + 1] - 1;
         }
         rb->crow = row;
         rb->ntodo = ntodo;
@@ -1086,44 +1577,91 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         return;
     }
     double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix, ipix = 1 / pix;
-    uint32_t nm = rb->nact != UINT32_MAX ? rb->nact : f->rstart[row + 1] - f->rstart[row], npl = 0;
-    for (uint32_t j = 0; j < nm; j++) {
-        uint32_t m = rb->nact != UINT32_MAX ? rb->act[j] : f->rstart[row] + j;
-        /* the box (grown by margin >= e) first: no segment load for most */
-        const float *bx = f->rbox + 4 * (size_t)m;
-        if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
+    uint32_t nent = rb->nact, npl = 0;
+    const uint32_t *list = NULL;
+    if (nent != UINT32_MAX) {
+        /* the entries of act meet [xlo, xhi] already: those whose box (grown
+         * by margin >= e) meets this pixel row, listed without a branch */
+        uint32_t n = 0;
+        for (uint32_t j = 0; j < nent; j++) {
+            const float *bx = f->rbox + 4 * (size_t)rb->act[j];
+            rb->sel[n] = rb->act[j];
+            n += (uint32_t)(!(cy < bx[2]) & !(cy > bx[3]));
+        }
+        nent = n;
+        list = rb->sel;
+    } else
+        nent = f->rstart[row + 1] - f->rstart[row];
+    for (uint32_t j = 0; j < nent; j++) {
+        uint32_t m;
+        if (list) m = list[j];
+        else {
+            m = f->rstart[row] + j;
+            const float *bx = f->rbox + 4 * (size_t)m;
+            if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
+        }
         uint32_t id = f->rids[m];
         const rf_seg *s = &f->seg[id];
-        double ro = s->r + e + s->tol, ri = s->r - e - s->tol, olo, ohi, ilo, ihi;
-        uint32_t kl, kh;
-        int got = capsule_spans(s, cy, ro, ri, &olo, &ohi, &ilo, &ihi);
-        if (!(got & 1) || !span_pixels(olo, ohi, a, ipix, k0, k1, &kl, &kh)) continue;
+        double ro = s->r + e + s->tol, ri = s->r - e - s->tol;
+        int32_t kk[4];
+        int got = capsule_pixels(s, cy, ro, ri, a, ipix, k0, k1, kk);
+        if (!(got & 1)) continue;
         /* deep pixels are 1 at once (a deep pixel's cell lists the segment,
          * so it is in a todo or full run) and need no candidate: paint the
          * near span minus the deep one */
-        uint32_t il, ih, p0 = kh + 1, p1 = kl; /* p0 <= p1: the pixels [p0, p1] are skipped */
-        if (ri > 0 && (got & 2) && span_pixels(ilo, ihi, a, ipix, k0, k1, &il, &ih)) {
-            for (uint32_t k = il; k <= ih; k++) o[k] = 1;
-            p0 = il;
-            p1 = ih;
-        }
-        for (uint32_t k = kl; k <= kh; k++) {
-            if (k == p0) { k = p1; continue; }
-            /* a slot past SPAN_CAND is never read (the pixel scans its cell) */
-            uint8_t c = rb->cnt[k];
-            rb->pl[npl] = (uint16_t)k; /* kept when first painted (no branch) */
-            npl += c == 0;
-            rb->cand[k][c & (SPAN_CAND - 1)] = id;
-            rb->cnt[k] = (uint8_t)(c + (c <= SPAN_CAND));
-        }
+        if (got & 2) {
+            fill_one(o, kk[2], kk[3]);
+            npl = paint_run(rb, npl, kk[0], (int64_t)kk[2] - 1, id);
+            npl = paint_run(rb, npl, (int64_t)kk[3] + 1, kk[1], id);
+        } else
+            npl = paint_run(rb, npl, kk[0], kk[1], id);
     }
-    /* the painted pixels: 1 (deep in some capsule, or a full cell), 0 (an
-     * empty cell: no candidate is near) or classified from the candidates */
+    /* the painted pixels: 1 (deep in some capsule, or a full cell) stay;
+     * the others are listed by their number of candidates (no branch) */
+    uint32_t n1 = 0, nm = 0;
     for (uint32_t t = 0; t < npl; t++) {
         uint32_t k = rb->pl[t];
         uint8_t c = rb->cnt[k];
+        int todo = o[k] != 1;
         rb->cnt[k] = 0;
-        if (o[k] == 1) continue;
+        rb->l1[n1] = (uint16_t)k;
+        n1 += (uint32_t)(todo & (c == 1));
+        rb->lm[nm] = (uint16_t)k;
+        rb->lc[nm] = c;
+        nm += (uint32_t)(todo & (c != 1));
+    }
+    /* one candidate with the pixel in its slab (most edge pixels):
+     * seg_eval's slab branch and band_value, same arithmetic */
+    uint32_t t = 0;
+#if defined(__SSE2__)
+    for (; t + 1 < n1; t += 2) {
+        /* two pixels at once when both are in their slabs */
+        uint32_t p0 = rb->l1[t], p1 = rb->l1[t + 1];
+        const rf_seg *s0 = &f->seg[rb->cand[p0][0]], *s1 = &f->seg[rb->cand[p1][0]];
+        __m128d ux = RF_PAIR(s0, s1, ux), uy = RF_PAIR(s0, s1, uy), len = RF_PAIR(s0, s1, len), zero = _mm_setzero_pd();
+        __m128d wx = _mm_sub_pd(_mm_mul_pd(_mm_set_pd(a + (double)p1, a + (double)p0), _mm_set1_pd(pix)),
+                                RF_PAIR(s0, s1, ax));
+        __m128d wy = _mm_sub_pd(_mm_set1_pd(cy), RF_PAIR(s0, s1, ay));
+        __m128d pr = _mm_add_pd(_mm_mul_pd(wx, ux), _mm_mul_pd(wy, uy));
+        __m128d hp = _mm_mul_pd(_mm_set1_pd(q->hs), RF_PAIR(s0, s1, l1));
+        __m128d slab = _mm_and_pd(_mm_and_pd(_mm_cmpgt_pd(len, zero), _mm_cmpge_pd(_mm_sub_pd(pr, hp), zero)),
+                                  _mm_cmple_pd(_mm_add_pd(pr, hp), len));
+        if (_mm_movemask_pd(slab) == 3) {
+            double v[2];
+            _mm_storeu_pd(v, band_value2(s0, s1, q, _mm_sub_pd(_mm_mul_pd(wx, uy), _mm_mul_pd(wy, ux))));
+            o[p0] = v[0];
+            o[p1] = v[1];
+        } else {
+            /* not both (rare): one by one */
+            nm = one_cand(f, rb, p0, a, cy, q, o, nm);
+            nm = one_cand(f, rb, p1, a, cy, q, o, nm);
+        }
+    }
+#endif
+    for (; t < n1; t++) nm = one_cand(f, rb, rb->l1[t], a, cy, q, o, nm);
+    for (t = 0; t < nm; t++) {
+        uint32_t k = rb->lm[t];
+        uint8_t c = rb->lc[t];
         double cx = (a + (double)k) * pix;
         if (c > SPAN_CAND) {
             uint32_t col = run_col(rb, k);
@@ -1131,34 +1669,37 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
             o[k] = pixel_cover(f, &cr, cx, cy, q, qs);
             continue;
         }
-        if (c == 1) {
-            /* one candidate with the pixel in its slab (most edge pixels):
-             * seg_eval's slab branch and band_cover, same arithmetic */
-            const rf_seg *s = &f->seg[rb->cand[k][0]];
-            double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
-            if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-                double ts = wx * s->uy - wy * s->ux, at = fabs(ts);
-                if (at - s->r >= e) continue; /* clear: already 0 */
-                o[k] = at + e <= s->r ? 1 : band_cover(s, q, ts);
-                continue;
-            }
-        }
         /* the candidates are distinct segments: no duplicate check */
         rf_near nr;
         int n = 0, deep = 0;
-        for (uint8_t j = 0; j < c; j++) {
+        uint8_t j = 0;
+        if (c == 2) {
+            /* the common case (joints, crossings): both in one go */
+            uint32_t i0 = rb->cand[k][0], i1 = rb->cand[k][1];
+            int c0, c1;
+            seg_eval2(&f->seg[i0], &f->seg[i1], cx, cy, q, &nr, 0, &c0, &c1);
+            deep = (c0 == 2) | (c1 == 2);
+            int keep0 = (c0 == 1) & !f->seg[i0].redundant, keep1 = (c1 == 1) & !f->seg[i1].redundant;
+            /* a first candidate not kept: the second's results move to slot 0 */
+            nr.id[0] = keep0 ? i0 : i1;
+            nr.p[0] = keep0 ? nr.p[0] : nr.p[1];
+            nr.t[0] = keep0 ? nr.t[0] : nr.t[1];
+            nr.slab[0] = keep0 ? nr.slab[0] : nr.slab[1];
+            nr.id[1] = i1;
+            n = keep0 + keep1;
+            j = c;
+        }
+        for (; j < c; j++) {
             uint32_t id = rb->cand[k][j];
-            int cl = seg_eval(&f->seg[id], cx, cy, q, &nr.slab[n], &nr.u[n], &nr.v[n]);
-            if (cl == 2) { deep = 1; break; }
-            if (cl) nr.id[n++] = id;
+            int cl = seg_eval(&f->seg[id], cx, cy, q, &nr, n);
+            deep |= cl == 2;
+            nr.id[n] = id;
+            n += (cl == 1) & !f->seg[id].redundant;
         }
-        if (deep) o[k] = 1;
-        else if (n == 1 && nr.slab[0]) o[k] = band_cover(&f->seg[nr.id[0]], q, nr.u[0]); /* one straight edge */
-        else if (n) {
-            nr.n = n;
-            nr.many = 0;
-            o[k] = near_cover(f, &nr, NULL, cx, cy, q, qs); /* the cells are read only when nr.many */
-        }
+        nr.n = n;
+        nr.many = 0;
+        /* the cells are read only when nr.many */
+        o[k] = deep ? 1 : near_cover(f, &nr, NULL, cx, cy, q, qs);
     }
 }
 
@@ -1197,7 +1738,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
                     uint32_t kn = e1 - p0 >= n ? n : (uint32_t)(e1 - p0);
                     if (kn > k) {
                         rb.rc[rb.nrun] = (uint32_t)c;
-                        rb.rk[rb.nrun++] = k;
+                        rb.rk[rb.nrun++] = (uint16_t)k;
                         k = kn;
                     }
                 }
@@ -1213,11 +1754,11 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
                 }
                 if (rb.nrun == 0 || cc != rb.rc[rb.nrun - 1]) {
                     rb.rc[rb.nrun] = cc;
-                    rb.rk[rb.nrun++] = k;
+                    rb.rk[rb.nrun++] = (uint16_t)k;
                 }
                 k = kn;
             }
-            rb.rk[rb.nrun] = n;
+            rb.rk[rb.nrun] = (uint16_t)n;
             for (uint32_t y = 0; y < h; y++) {
                 double cy = ((double)py0 + (double)y + 0.5) * pix;
                 double *o = out + (size_t)y * stride + x0;

@@ -5,7 +5,8 @@
  * which must give the same doubles); optionally Cairo
  * (python3-cairo) filling the same stroked roads, timed in the same run.
  * Usage: roadfield OUTDIR   (writes OUTDIR/roadfield.md, and
- * OUTDIR/roadfield_roads.txt for tests/bench/roadfield_cairo.py) */
+ * OUTDIR/roadfield_roads.txt for tests/bench/roadfield_cairo.py);
+ * roadfield --profile [N [FILE [whole|pieces]]] (see profile()). */
 #include "groundtruth.h"
 #include "roadfield.h"
 #include "roadsplat.h"
@@ -16,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 /* Timing on a shared machine: every time is the minimum (fastest) of its
  * runs, the least disturbed one (medians swing 2x with load). The auto-cell
@@ -140,6 +142,63 @@ static int measure(rs_ctx *ctx, const rs_roads *roads, const sc_scene *sc, unsig
     return 0;
 }
 
+static double cpu_ms(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts)) return 0;
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* `roadfield --profile [N [FILE [whole|pieces]]]`: only the auto-cell
+ * build and N (default 1) whole-image coverage calls plus N passes of row
+ * pieces (or only one of the two), for callgrind
+ * (--toggle-collect=rs__roadfield_coverage); prints a checksum and the
+ * fastest call of each kind, and writes the doubles to FILE ("-": none;
+ * to compare builds with cmp). */
+static int profile(rs_ctx *ctx, const rs_roads *roads, const sc_scene *sc, unsigned T, int n, const char *file,
+                   const char *only)
+{
+    uint32_t w = (sc->w - 1) * T, h = (sc->h - 1) * T;
+    double pix = sc->cell_size / T, sum = 0;
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.cell_size = sc->cell_size;
+    p.width_m = sc_extent_x(sc);
+    p.height_m = sc_extent_y(sc);
+    p.pixel = pix;
+    rs__roadfield *f = NULL;
+    double *cov = malloc((size_t)w * h * sizeof *cov), *rowcov = malloc((size_t)w * h * sizeof *rowcov);
+    if (!cov || !rowcov || rs__roadfield_build(ctx, roads, &p, &f)) return 1;
+    /* wall clock and this thread's CPU time (less disturbed by other
+     * processes taking turns on the cores) */
+    double tw = 1e300, tp = 1e300, cw = 1e300, cp = 1e300;
+    for (int i = 0; i < n; i++) {
+        double t0 = tm_now_ms(), c0 = cpu_ms();
+        if (!only || strcmp(only, "pieces") != 0) rs__roadfield_coverage(f, 0, 0, w, h, pix, cov, w);
+        double t1 = tm_now_ms(), c1 = cpu_ms();
+        for (uint32_t y = 0; y < h && (!only || strcmp(only, "whole") != 0); y += T)
+            rs__roadfield_coverage(f, 0, y, w, h - y < T ? h - y : T, pix, rowcov + (size_t)y * w, w);
+        double t2 = tm_now_ms(), c2 = cpu_ms();
+        tw = fmin(tw, t1 - t0);
+        tp = fmin(tp, t2 - t1);
+        cw = fmin(cw, c1 - c0);
+        cp = fmin(cp, c2 - c1);
+    }
+    int same = only || memcmp(rowcov, cov, (size_t)w * h * sizeof *cov) == 0;
+    if (only && strcmp(only, "pieces") == 0) memcpy(cov, rowcov, (size_t)w * h * sizeof *cov);
+    for (size_t i = 0; i < (size_t)w * h; i++) sum += cov[i];
+    printf("roadfield profile: sum %.17g, pieces %s; fastest whole %.2f ms, pieces %.2f ms (thread CPU time "
+           "%.2f, %.2f ms)\n", sum, same ? "identical" : "DIFFER", tw, tp, cw, cp);
+    if (file && strcmp(file, "-") != 0) {
+        FILE *fo = fopen(file, "wb");
+        if (!fo || fwrite(cov, sizeof *cov, (size_t)w * h, fo) != (size_t)w * h || fclose(fo)) return 1;
+    }
+    rs__roadfield_free(ctx, f);
+    free(cov);
+    free(rowcov);
+    return !same;
+}
+
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
@@ -151,6 +210,9 @@ int main(int argc, char **argv)
     if (rs_ctx_create(NULL, NULL, &ctx) || sc_city_default(&sc, 1) || rs_roads_create(ctx, &roads)) return 1;
     for (size_t i = 0; i < sc.nroads; i++)
         if (rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n)) return 1;
+    if (argc > 1 && strcmp(argv[1], "--profile") == 0)
+        return profile(ctx, roads, &sc, T, argc > 2 ? atoi(argv[2]) : 1, argc > 3 ? argv[3] : NULL,
+                       argc > 4 ? argv[4] : NULL);
     uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
     size_t n = (size_t)w * h;
     float *G = malloc(n * sizeof *G), *R = malloc(n * sizeof *R);
