@@ -1,6 +1,7 @@
 /* `roadsplat mesh`: ROAM-mesh a DEM to OBJ or PLY (atomic write), with an
  * optional stats JSON. OBJ/PLY axes: y up; sample (row i, column j) is
  * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
+#include "bigalloc.h"
 #include "cli.h"
 
 #include <errno.h>
@@ -179,8 +180,14 @@ int cli_mesh_main(int argc, char **argv)
     int ply = ends_with(outp, ".ply");
     if (!ply && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj or .ply", outp); return 1; }
 
+    /* Huge pages for the landscape, the DEM and the output buffers: their
+     * first touch is most of a cold mesh in 4 KiB pages (docs/roam.md). */
+    cli_bigalloc *ba = cli_bigalloc_create(0);
+    rs_allocator hook;
+    memset(&hook, 0, sizeof hook);
+    if (ba) hook = cli_bigalloc_hook(ba);
     rs_ctx *ctx = NULL;
-    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { cli_error("out of memory"); return 1; }
+    if (!ba || rs_ctx_create(&hook, NULL, &ctx) != RS_OK) { cli_bigalloc_destroy(ba); cli_error("out of memory"); return 1; }
     int rc = 1;
     rs_roam *L = NULL;
     float *v = NULL, *nrm = NULL;
@@ -251,10 +258,10 @@ int cli_mesh_main(int argc, char **argv)
     mo.skirt_depth = skirt;
     size_t mv, mi, nv, ni;
     rs_roam_mesh_bound(L, &mo, &mv, &mi);
-    v = malloc((mv ? mv : 1) * 5 * sizeof *v);
-    nrm = normals ? malloc((mv ? mv : 1) * 3 * sizeof *nrm) : NULL;
-    idx = malloc((mi ? mi : 1) * sizeof *idx);
-    smp = malloc((mv ? mv : 1) * sizeof *smp);
+    v = cli_big_malloc(ba, (mv ? mv : 1) * 5 * sizeof *v);
+    nrm = normals ? cli_big_malloc(ba, (mv ? mv : 1) * 3 * sizeof *nrm) : NULL;
+    idx = cli_big_malloc(ba, (mi ? mi : 1) * sizeof *idx);
+    smp = cli_big_malloc(ba, (mv ? mv : 1) * sizeof *smp);
     mo.samples = smp;
     if (!v || !idx || !smp || (normals && !nrm)) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
     if (rs_roam_extract(ctx, L, &mo, v, nrm, mv, idx, mi, &nv, &ni) != RS_OK) {
@@ -298,9 +305,10 @@ int cli_mesh_main(int argc, char **argv)
 done:
     cli_out_abort(&out); /* no-ops once committed */
     cli_out_abort(&so);
-    free(v); free(nrm); free(idx); free(smp);
+    cli_big_free(ba, v); cli_big_free(ba, nrm); cli_big_free(ba, idx); cli_big_free(ba, smp);
     rs_roam_free(ctx, L);
     if (dem) rs_dem_free(ctx, dem);
     rs_ctx_free(ctx);
+    cli_bigalloc_destroy(ba);
     return rc;
 }
