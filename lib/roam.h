@@ -74,6 +74,7 @@ struct rs_roam {
     size_t nwords, nsum;
     uint32_t *smap;                 /* 2(w+h): skirt vertex of a border sample */
     double threshold;
+    double err_stop;                /* error mode: rs__roam_err_stop of the threshold */
     float *ucol, *vrow;             /* texture u of each column, v of each row */
     double tol;                     /* view mode: tolerance carried between frames */
     uint32_t frame_passes, culled;
@@ -176,6 +177,11 @@ uint32_t rs__roam_imp_slot(const rs_roam *L, const roam_node *n, uint32_t pos);
  * of an explicit node (0 for cell halves). */
 float rs__roam_slot_err(rs_roam *L, uint32_t slot, const tri *t);
 float rs__roam_node_err(rs_roam *L, const roam_node *n, const tri *t);
+/* Refinement's decision in error mode: bound of t above max_error (metres),
+ * possibly found without computing the whole bound; L->err_stop must be
+ * rs__roam_err_stop(max_error, L->zs). */
+int rs__roam_err_above(rs_roam *L, uint32_t slot, const tri *t, double max_error);
+double rs__roam_err_stop(double max_error, double zs);
 
 /* ---- bintree, implicit levels, refinement (lib/roam_tree.c) ------------ */
 

@@ -348,10 +348,7 @@ void rs__roam_reset_mesh(rs_roam *L)
 static int wants_split(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch, const refine_params *rp)
 {
     if (rp->border_only) return tri_class(L, t) == NODE_STRADDLES;
-    if (!rp->view) {
-        float e = rs__roam_slot_err(L, slot, t);
-        return e == INFINITY || (e > 0.0f && (double)e * L->zs > rp->max_error);
-    }
+    if (!rp->view) return rs__roam_err_above(L, slot, t, rp->max_error);
     int cls = tri_class(L, t);
     if (cls != NODE_ON) return cls == NODE_STRADDLES;
     const view_params *v = rp->view;
@@ -438,6 +435,7 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
     uint32_t *st = L->stack;
     L->sp = 0;
     L->scan = NIL;
+    if (!rp->view && !rp->border_only) L->err_stop = rs__roam_err_stop(rp->max_error, L->zs);
     for (uint32_t i = L->used; i-- > 0;) { /* node 0 on top */
         if (n[i].lc == NIL) st[L->sp++] = i;
         else if (n[i].lc == IMPL && L->dq > 1) { n[i].rc |= QUEUED; st[L->sp++] = i | TAG; }
