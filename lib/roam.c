@@ -6,6 +6,9 @@
 #include <float.h>
 #include <math.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define MAX_PATCH_LOG 14          /* patch side <= 16384 cells: heap index < 2^30 */
 #define MAX_SIDE 32768u           /* node coordinates are uint16 */
@@ -28,19 +31,47 @@ static rs_result fill_nodata(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
 
 /* ---- heights -------------------------------------------------------------------- */
 
+/* Largest |z| over the finite samples of z[0..n), and whether there are
+ * others (NaN or infinite: nodata). */
+static float abs_max_finite(const float *z, size_t n, int *bad)
+{
+    size_t i = 0;
+    float zmax = 0.0f;
+    *bad = 0;
+#if defined(__SSE2__)
+    /* The usual DEM, all finite, in four lanes: max of |z| and a NaN flag;
+     * an infinity shows in the max. Anything non-finite takes the scalar
+     * loop below from the start, which skips it exactly. */
+    {
+        const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+        __m128 m = _mm_setzero_ps(), nan = _mm_setzero_ps();
+        for (; i + 4 <= n; i += 4) {
+            __m128 a = _mm_and_ps(_mm_loadu_ps(z + i), absmask);
+            nan = _mm_or_ps(nan, _mm_cmpunord_ps(a, a));
+            m = _mm_max_ps(a, m); /* NaN lanes keep m */
+        }
+        float lane[4];
+        _mm_storeu_ps(lane, m);
+        zmax = lane[0];
+        for (int k = 1; k < 4; k++) if (lane[k] > zmax) zmax = lane[k];
+        if (_mm_movemask_ps(nan) || !(zmax <= FLT_MAX)) { i = 0; zmax = 0.0f; }
+    }
+#endif
+    for (; i < n; i++) {
+        float a = fabsf(z[i]);
+        if (!(a <= FLT_MAX)) *bad = 1; /* NaN or inf */
+        else if (a > zmax) zmax = a;
+    }
+    return zmax;
+}
+
 /* Heights must stay finite through the error arithmetic (checked over the
  * valid samples: filled nodata copies one of them). One pass, which also
  * tells whether there is nodata to fill. */
 static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem, int *has_nodata, float *zabs)
 {
-    size_t n = (size_t)L->w * L->hgt;
-    float zmax = 0.0f;
-    int bad = 0;
-    for (size_t i = 0; i < n; i++) {
-        float a = fabsf(dem->z[i]);
-        if (!(a <= FLT_MAX)) bad = 1; /* NaN or inf */
-        else if (a > zmax) zmax = a;
-    }
+    int bad;
+    float zmax = abs_max_finite(dem->z, (size_t)L->w * L->hgt, &bad);
     *has_nodata = bad;
     *zabs = zmax;
     /* In float, where they are kept: error bounds (differences of up to
@@ -69,6 +100,13 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
     }
     rs__free(ctx, old);
     memset(L->err, 0xFF, L->nerr * sizeof(float)); /* all NaN: computed on first use */
+    L->zrange_ok = 0; /* rs__roam_patch_ranges, when a view frame needs them */
+    return RS_OK;
+}
+
+void rs__roam_patch_ranges(rs_roam *L)
+{
+    if (L->zrange_ok) return;
     size_t W = L->w;
     uint32_t P = L->P;
     for (uint32_t py = 0; py < L->npy; py++)
@@ -84,7 +122,7 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
                 }
             L->pzmin[p] = lo; L->pzmax[p] = hi;
         }
-    return RS_OK;
+    L->zrange_ok = 1;
 }
 
 rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)

@@ -56,7 +56,8 @@ struct rs_roam {
     uint32_t elog;                  /* log2(epp) */
     size_t nerr;                    /* entries of err */
     float *err;                     /* per patch, by heap index; NaN = not computed yet */
-    float *pzmin, *pzmax;           /* per patch height range (DEM units) */
+    float *pzmin, *pzmax;           /* per patch height range (DEM units), view mode only */
+    int zrange_ok;                  /* pzmin / pzmax are those of z */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
     roam_node *nodes, *base_copy;
     uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
@@ -147,6 +148,10 @@ static inline int tri_inside(const rs_roam *L, const tri *t)
     if (t->on) return 1;
     return inside_xy(L, t->ax, t->ay, t->bx, t->by, t->cx, t->cy);
 }
+
+/* The per-patch height ranges of the current heights (lib/roam.c), once
+ * per DEM: only view frames need them. */
+void rs__roam_patch_ranges(rs_roam *L);
 
 /* ---- error bounds (lib/roam_bounds.c) ---------------------------------- */
 

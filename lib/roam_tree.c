@@ -435,7 +435,10 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
     uint32_t *st = L->stack;
     L->sp = 0;
     L->scan = NIL;
-    if (!rp->view && !rp->border_only) L->err_stop = rs__roam_err_stop(rp->max_error, L->zs);
+    /* the passes of a triangle budget's search test the same nodes at
+     * other thresholds: they keep every bound they compute */
+    if (!rp->view && !rp->border_only)
+        L->err_stop = rp->stop_above ? INFINITY : rs__roam_err_stop(rp->max_error, L->zs);
     for (uint32_t i = L->used; i-- > 0;) { /* node 0 on top */
         if (n[i].lc == NIL) st[L->sp++] = i;
         else if (n[i].lc == IMPL && L->dq > 1) { n[i].rc |= QUEUED; st[L->sp++] = i | TAG; }
