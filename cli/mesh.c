@@ -1,6 +1,7 @@
 /* `roadsplat mesh`: ROAM-mesh a DEM to OBJ or PLY (atomic write), with an
  * optional stats JSON. OBJ/PLY axes: y up; sample (row i, column j) is
  * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
+#define _POSIX_C_SOURCE 200809L /* getrusage */
 #include "bigalloc.h"
 #include "cli.h"
 
@@ -10,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 static const char *mesh_usage =
     "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
@@ -18,6 +20,13 @@ static const char *mesh_usage =
     "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
     "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
     "  --pool N        ROAM node pool size (default: what the finest mesh needs, <= 2^26)\n";
+
+/* Page faults of this process so far (the mesh stage reports its own). */
+static long minor_faults(void)
+{
+    struct rusage u;
+    return getrusage(RUSAGE_SELF, &u) == 0 ? (long)u.ru_minflt : 0;
+}
 
 static int ends_with(const char *s, const char *suf)
 {
@@ -203,6 +212,7 @@ int cli_mesh_main(int argc, char **argv)
     if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path))) goto done;
     dem = cli_load_dem(ctx, in);
     if (!dem) goto done;
+    double read_ms = cli_now_ms() - t_start;
     /* Every value that reaches the float output must fit, checked before
      * the work with the option that decides it named. */
     {
@@ -237,6 +247,10 @@ int cli_mesh_main(int argc, char **argv)
             goto done;
         }
     }
+    /* timings_ms.mesh: everything between the DEM in memory and the mesh in
+     * the output arrays: rs_roam_create, the refinement, the mesh bound,
+     * allocating the output arrays and rs_roam_extract (docs/roam.md) */
+    long flt0 = minor_faults();
     double t_mesh = cli_now_ms();
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -249,9 +263,11 @@ int cli_mesh_main(int argc, char **argv)
     }
     rs_result r = rs_roam_create(ctx, dem, &o, &L);
     if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
+    double t_refine = cli_now_ms();
     r = tris ? rs_roam_refine_count(ctx, L, tris) : rs_roam_refine_error(ctx, L, max_error);
     if (r == RS_ERR_POOL_EXHAUSTED) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
     else if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
+    double t_extract = cli_now_ms();
     rs_roam_mesh_options mo;
     memset(&mo, 0, sizeof mo);
     mo.normals = normals;
@@ -268,7 +284,8 @@ int cli_mesh_main(int argc, char **argv)
         cli_error("%s: %s", in, rs_ctx_message(ctx));
         goto done;
     }
-    double mesh_ms = cli_now_ms() - t_mesh;
+    double t_mesh_end = cli_now_ms(), mesh_ms = t_mesh_end - t_mesh;
+    long mesh_faults = minor_faults() - flt0;
     rs_roam_stats st;
     rs_roam_get_stats(L, &st);
     size_t ntop = 0;
@@ -277,6 +294,7 @@ int cli_mesh_main(int argc, char **argv)
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
+    double write_ms = cli_now_ms() - t_mesh_end;
     if (stats_path) {
         double measured = measure_error(rs_dem_samples(dem), rs_dem_width(dem), zs, v, smp, idx, st.triangles);
         fprintf(so.f, "{\n  \"command\": \"mesh\",\n  \"dem\": {\"width\": %u, \"height\": %u, \"cell_size\": %.9g, \"z_scale\": %.9g},\n",
@@ -289,7 +307,14 @@ int cli_mesh_main(int argc, char **argv)
         fprintf(so.f, "  \"patch_size\": %u,\n  \"pool\": {\"nodes\": %u, \"used\": %u, \"base_nodes\": %u, \"exhausted\": %s, \"bytes\": %llu},\n",
                 st.patch_size, st.pool_nodes, st.pool_used, st.base_nodes, st.pool_exhausted ? "true" : "false",
                 (unsigned long long)st.bytes);
-        fprintf(so.f, "  \"timings_ms\": {\"mesh\": %.3f, \"total\": %.3f}\n}\n", mesh_ms, cli_now_ms() - t_start);
+        cli_bigalloc_stats bs;
+        cli_bigalloc_get_stats(ba, &bs);
+        fprintf(so.f, "  \"memory\": {\"mesh_page_faults\": %ld, \"mapped_blocks\": %zu, \"mapped_bytes\": %zu},\n",
+                mesh_faults, bs.mapped_blocks, bs.mapped_bytes);
+        fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"mesh\": %.3f, \"create\": %.3f, \"refine\": %.3f, "
+                      "\"extract\": %.3f, \"write\": %.3f, \"total\": %.3f}\n}\n",
+                read_ms, mesh_ms, t_refine - t_mesh, t_extract - t_refine, t_mesh_end - t_extract, write_ms,
+                cli_now_ms() - t_start);
         if (fflush(so.f) != 0 || ferror(so.f)) {
             cli_error("%s: write failed: %s", stats_path, strerror(errno ? errno : EIO));
             goto done;

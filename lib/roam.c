@@ -100,6 +100,7 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
     }
     rs__free(ctx, old);
     memset(L->err, 0xFF, L->nerr * sizeof(float)); /* all NaN: computed on first use */
+    L->err_empty = 1;
     L->zrange_ok = 0; /* rs__roam_patch_ranges, when a view frame needs them */
     return RS_OK;
 }

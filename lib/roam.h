@@ -56,6 +56,9 @@ struct rs_roam {
     uint32_t elog;                  /* log2(epp) */
     size_t nerr;                    /* entries of err */
     float *err;                     /* per patch, by heap index; NaN = not computed yet */
+    int err_empty;                  /* every entry of err is NaN, and stays so until the
+                                       end of the refinement pass under way (each node is
+                                       tested at most once per pass) */
     float *pzmin, *pzmax;           /* per patch height range (DEM units), view mode only */
     int zrange_ok;                  /* pzmin / pzmax are those of z */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */

@@ -272,6 +272,7 @@ float rs__roam_slot_err(rs_roam *L, uint32_t slot, const tri *t)
     if (v != v) {
         v = rs__roam_compute_err(L, t);
         L->err[slot] = v;
+        L->err_empty = 0;
     }
     return v;
 }
@@ -291,7 +292,8 @@ float rs__roam_node_err(rs_roam *L, const roam_node *n, const tri *t)
  * triangles that are split. */
 int rs__roam_err_above(rs_roam *L, uint32_t slot, const tri *t, double max_error)
 {
-    float v = slot == NIL ? NAN : L->err[slot];
+    /* nothing cached yet: no need to wait for the slot's cache line */
+    float v = slot == NIL || L->err_empty ? NAN : L->err[slot];
     if (v != v) {
         int p = t->bx - t->ax, q = t->by - t->ay;
         if (p * p + q * q > 8 && tri_class(L, t) == NODE_ON) {

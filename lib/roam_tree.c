@@ -429,6 +429,8 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
  * decision rule, never on the pool size; refinement stops at the first
  * split the pool cannot hold, so the mesh of a larger pool is a refinement
  * of a smaller pool's. Returns 1 when abandoned for stop_above. */
+static int refine_loop(rs_roam *L, const refine_params *rp);
+
 int rs__roam_refine(rs_roam *L, const refine_params *rp)
 {
     roam_node *n = L->nodes;
@@ -443,6 +445,15 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
         if (n[i].lc == NIL) st[L->sp++] = i;
         else if (n[i].lc == IMPL && L->dq > 1) { n[i].rc |= QUEUED; st[L->sp++] = i | TAG; }
     }
+    int res = refine_loop(L, rp);
+    if (!rp->view && !rp->border_only) L->err_empty = 0; /* the bounds this pass computed are cached now */
+    return res;
+}
+
+static int refine_loop(rs_roam *L, const refine_params *rp)
+{
+    roam_node *n = L->nodes;
+    uint32_t *st = L->stack;
     while (L->sp) {
         uint32_t i = st[--L->sp];
         tri t;
