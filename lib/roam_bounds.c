@@ -171,14 +171,17 @@ void rs__roam_load_s_terms(const rs_roam *L, s_terms *o)
     const float *z = L->z;
     const size_t W = L->w;
     const tri *t = &o->S;
-#define Z(x, y) ((double)z[(size_t)(y) * W + (size_t)(x)])
-    int mx = (t->bx + t->cx) / 2, my = (t->by + t->cy) / 2;
-    int ux = (t->cx - t->bx) / 4, uy = (t->cy - t->by) / 4;
-    double za = Z(t->ax, t->ay), zb = Z(t->bx, t->by), zc = Z(t->cx, t->cy), zm = Z(mx, my);
-    double zla = Z((t->ax + t->bx) / 2, (t->ay + t->by) / 2), zlc = Z((t->ax + t->cx) / 2, (t->ay + t->cy) / 2);
-    double zh1 = Z(t->bx + ux, t->by + uy), zh3 = Z(t->cx - ux, t->cy - uy);
-    double zi = Z((t->ax + mx) / 2, (t->ay + my) / 2);
-#undef Z
+    /* The nine samples by index: every one is an integer point, and the
+     * index y * W + x is affine, so midpoints are half sums of indices (the
+     * sums are even) and the quarter points of the hypotenuse (4 samples
+     * long on an axis) are a quarter of its index difference away. */
+    const size_t ia = (size_t)t->ay * W + (size_t)t->ax, ib = (size_t)t->by * W + (size_t)t->bx;
+    const size_t ic = (size_t)t->cy * W + (size_t)t->cx, im = (ib + ic) / 2;
+    const ptrdiff_t q = ((ptrdiff_t)ic - (ptrdiff_t)ib) / 4;
+    double za = z[ia], zb = z[ib], zc = z[ic], zm = z[im];
+    double zla = z[(ia + ib) / 2], zlc = z[(ia + ic) / 2];
+    double zh1 = z[(ptrdiff_t)ib + q], zh3 = z[(ptrdiff_t)ic - q];
+    double zi = z[(ia + im) / 2];
     double la = fabs(zla - 0.5 * (za + zb)), lc = fabs(zlc - 0.5 * (za + zc));
     double sm = fabs(zm - 0.5 * (zb + zc));
     double sh1 = fabs(zh1 - (0.75 * zb + 0.25 * zc)), sh3 = fabs(zh3 - (0.25 * zb + 0.75 * zc));
