@@ -420,6 +420,8 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
     return 0;
 }
 
+static int refine_loop(rs_roam *L, const refine_params *rp);
+
 /* Depth-first refinement with an explicit stack: every explicit node is
  * pushed when it is created (children of forced splits too), and a block
  * whose implicit subtree got untested leaves is pushed once (QUEUED), so
@@ -429,8 +431,6 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
  * decision rule, never on the pool size; refinement stops at the first
  * split the pool cannot hold, so the mesh of a larger pool is a refinement
  * of a smaller pool's. Returns 1 when abandoned for stop_above. */
-static int refine_loop(rs_roam *L, const refine_params *rp);
-
 int rs__roam_refine(rs_roam *L, const refine_params *rp)
 {
     roam_node *n = L->nodes;
@@ -450,6 +450,7 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
     return res;
 }
 
+/* rs__roam_refine's loop over the stack. */
 static int refine_loop(rs_roam *L, const refine_params *rp)
 {
     roam_node *n = L->nodes;
