@@ -1,9 +1,9 @@
 /* A caller allocator (rs_allocator) for the CLI that serves large blocks
- * from their own anonymous mappings in transparent huge pages. On the
- * benchmark VMs the first touch of a 4 KiB page costs ~10 us (PVM), of a
- * 2 MiB huge page ~0.13 ms: 40x less per byte. Small blocks go to malloc.
- * Thread-safe (a mutex guards the list of mapped blocks), so every context
- * of a run may share one. */
+ * from their own anonymous mappings, mostly in transparent huge pages. On
+ * the benchmark VMs the first touch of a 4 KiB page costs ~10 us (PVM), of
+ * a 2 MiB huge page 0.13 to 3.2 ms (cli/bigalloc.c has the layout and why).
+ * Small blocks go to malloc. Thread-safe (a mutex guards the list of
+ * mapped blocks), so every context of a run may share one. */
 #ifndef RS_CLI_BIGALLOC_H
 #define RS_CLI_BIGALLOC_H
 #include <stddef.h>
@@ -11,8 +11,8 @@
 
 typedef struct cli_bigalloc cli_bigalloc;
 
-/* Blocks of at least `threshold` bytes are mapped (0: the default, 128
- * KiB); NULL when out of memory. */
+/* Blocks of at least `threshold` bytes are mapped (0: the default, 1
+ * MiB); NULL when out of memory. */
 cli_bigalloc *cli_bigalloc_create(size_t threshold);
 /* Unmaps what is still mapped. */
 void cli_bigalloc_destroy(cli_bigalloc *b);

@@ -189,8 +189,9 @@ int cli_mesh_main(int argc, char **argv)
     int ply = ends_with(outp, ".ply");
     if (!ply && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj or .ply", outp); return 1; }
 
-    /* Huge pages for the landscape, the DEM and the output buffers: their
-     * first touch is most of a cold mesh in 4 KiB pages (docs/roam.md). */
+    /* Huge pages for the bulk of the landscape, the DEM and the output
+     * buffers: their first touch in 4 KiB pages was most of a cold mesh
+     * (docs/roam.md, "Cold roadsplat mesh"). */
     cli_bigalloc *ba = cli_bigalloc_create(0);
     rs_allocator hook;
     memset(&hook, 0, sizeof hook);

@@ -99,7 +99,8 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
         L->z = dem->z;
     }
     rs__free(ctx, old);
-    memset(L->err, 0xFF, L->nerr * sizeof(float)); /* all NaN: computed on first use */
+    /* all NaN (computed on first use): no chunk initialised */
+    memset(L->eready, 0, (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK);
     L->err_empty = 1;
     L->zrange_ok = 0; /* rs__roam_patch_ranges, when a view frame needs them */
     return RS_OK;
@@ -210,6 +211,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     if (!ctx || !L) return;
     rs__free(ctx, L->zown);
     rs__free(ctx, L->err);
+    rs__free(ctx, L->eready);
     rs__free(ctx, L->pzmin);
     rs__free(ctx, L->pzmax);
     rs__free(ctx, L->pin);
@@ -322,6 +324,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     uint64_t nerr = (s->nerr + 1) / 2; /* cached above the R level only (err_slot) */
     L->nerr = (size_t)nerr;
     L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
+    L->eready = rs__alloc_array(ctx, ((size_t)nerr + ERR_CHUNK - 1) / ERR_CHUNK, 1);
     L->pzmin = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pin = rs__alloc_array(ctx, npatch, 1);
@@ -334,7 +337,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
+    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
         return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                         (unsigned long long)nerr);
     memset(L->vbits, 0, L->nwords * sizeof(uint64_t));
@@ -401,7 +404,7 @@ static rs_result alloc_pool(rs_ctx *ctx, rs_roam *L, uint64_t pool)
 static uint64_t landscape_bytes(const rs_roam *L)
 {
     uint64_t W = L->w, H = L->hgt, npatch = (uint64_t)L->npx * L->npy;
-    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + npatch * (2 * sizeof(float) + 1)
+    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1)
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)

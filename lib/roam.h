@@ -7,6 +7,9 @@
 #define RS_ROAM_H
 #include "dem.h"
 
+#include <math.h>
+#include <string.h>
+
 #define NIL 0xFFFFFFFFu
 /* The finest levels are implicit: a split node at the "block level" (legs^2
  * = 2^dq, dq = min(IMPL_DEPTH, 2 log2 P)) gets lc = IMPL and keeps in rc the
@@ -56,6 +59,9 @@ struct rs_roam {
     uint32_t elog;                  /* log2(epp) */
     size_t nerr;                    /* entries of err */
     float *err;                     /* per patch, by heap index; NaN = not computed yet */
+    unsigned char *eready;          /* per chunk of ERR_CHUNK entries: 1 once the chunk
+                                       holds real entries (NaN-filled on its first
+                                       write); entries of a chunk still at 0 are NaN */
     int err_empty;                  /* every entry of err is NaN, and stays so until the
                                        end of the refinement pass under way (each node is
                                        tested at most once per pass) */
@@ -84,6 +90,29 @@ struct rs_roam {
     uint32_t frame_passes, culled;
     uint64_t bytes;
 };
+
+/* The error cache is initialised a chunk (4 KiB) at a time, when the first
+ * bound in it is stored: a coarse mesh stores a few thousand bounds and
+ * touches a few pages instead of the whole array (2 MB for 1025^2). */
+#define ERR_CHUNK_LOG 10
+#define ERR_CHUNK (1u << ERR_CHUNK_LOG)
+
+/* Cached bound of `slot` (NaN: none). */
+static inline float err_get(const rs_roam *L, uint32_t slot)
+{
+    return L->eready[slot >> ERR_CHUNK_LOG] ? L->err[slot] : NAN;
+}
+
+static inline void err_put(rs_roam *L, uint32_t slot, float v)
+{
+    size_t c = slot >> ERR_CHUNK_LOG;
+    if (!L->eready[c]) {
+        size_t n = L->nerr - c * ERR_CHUNK < ERR_CHUNK ? L->nerr - c * ERR_CHUNK : ERR_CHUNK;
+        memset(L->err + c * ERR_CHUNK, 0xFF, n * sizeof(float)); /* NaN */
+        L->eready[c] = 1;
+    }
+    L->err[slot] = v;
+}
 
 /* ---- geometry helpers -------------------------------------------------- */
 

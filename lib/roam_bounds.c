@@ -271,10 +271,10 @@ uint32_t rs__roam_imp_slot(const rs_roam *L, const roam_node *n, uint32_t pos)
 float rs__roam_slot_err(rs_roam *L, uint32_t slot, const tri *t)
 {
     if (slot == NIL) return rs__roam_compute_err(L, t);
-    float v = L->err[slot];
+    float v = err_get(L, slot);
     if (v != v) {
         v = rs__roam_compute_err(L, t);
-        L->err[slot] = v;
+        err_put(L, slot, v);
         L->err_empty = 0;
     }
     return v;
@@ -296,7 +296,7 @@ float rs__roam_node_err(rs_roam *L, const roam_node *n, const tri *t)
 int rs__roam_err_above(rs_roam *L, uint32_t slot, const tri *t, double max_error)
 {
     /* nothing cached yet: no need to wait for the slot's cache line */
-    float v = slot == NIL || L->err_empty ? NAN : L->err[slot];
+    float v = slot == NIL || L->err_empty ? NAN : err_get(L, slot);
     if (v != v) {
         int p = t->bx - t->ax, q = t->by - t->ay;
         if (p * p + q * q > 8 && tri_class(L, t) == NODE_ON) {
@@ -304,7 +304,7 @@ int rs__roam_err_above(rs_roam *L, uint32_t slot, const tri *t, double max_error
             if (m > L->err_stop) return 1;
             v = round_up_float(m);
         } else v = rs__roam_compute_err(L, t);
-        if (slot != NIL) L->err[slot] = v;
+        if (slot != NIL) err_put(L, slot, v);
     }
     return v == INFINITY || (v > 0.0f && (double)v * L->zs > max_error);
 }

@@ -490,7 +490,7 @@ static int refine_loop(rs_roam *L, const refine_params *rp)
  * (and not stored: the landscape is const here). */
 static float peek_err(const rs_roam *L, uint32_t slot, const tri *t)
 {
-    float e = slot == NIL ? NAN : L->err[slot];
+    float e = slot == NIL ? NAN : err_get(L, slot);
     return e == e ? e : rs__roam_compute_err(L, t);
 }
 
