@@ -245,7 +245,8 @@ static double min_of(const double *v, int n)
 /* The 1025^2 fractal quantised to a 16-bit PGM (the CLI's input) and the
  * same heights in metres as float32 (martini's). Rounds alternate which
  * runs first; each round is one cold CLI process per E and one node
- * process (warm-up, then RUNS warm runs per E). Writes roam_cold.md/.csv;
+ * process (warm-up, then RUNS warm runs per E). Writes roam_cold.md/.csv
+ * and every run to roam_cold_runs.csv;
  * returns 1 when a mesh is invalid or a run failed. */
 static int run_cold(const char *outdir)
 {
@@ -304,6 +305,17 @@ static int run_cold(const char *outdir)
         }
     remove(pgm);
     remove(f32);
+    snprintf(path, sizeof path, "%s/roam_cold_runs.csv", outdir);
+    FILE *runs = fopen(path, "w");
+    if (runs) {
+        fprintf(runs, "round,E,cli_mesh_ms,create_ms,refine_ms,extract_ms,page_faults,martini_fastest_ms,martini_median_ms\n");
+        for (int r = 0; r < rounds && !bad; r++)
+            for (int k = 0; k < COLD_NE; k++)
+                fprintf(runs, "%d,%g,%.3f,%.3f,%.3f,%.3f,%.0f,%.3f,%.3f\n", r, Es[k], cr[k][r].mesh, cr[k][r].create,
+                        cr[k][r].refine, cr[k][r].extract, cr[k][r].faults, have_m ? mmin[k][r] : 0.0,
+                        have_m ? mmed[k][r] : 0.0);
+        fclose(runs);
+    }
     fprintf(md, "## Cold `roadsplat mesh` vs @mapbox/martini (tests/bench/roam.c; issue 18, target 4)\n\n");
     if (bad) fprintf(md, "The run failed (a CLI run failed or a mesh exceeded its E).\n\n");
     fprintf(md, "The 1025x1025 fractal of the table above, quantised to a 16-bit PGM (z-scale %.6g m); martini\n"
