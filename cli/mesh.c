@@ -1,6 +1,8 @@
 /* `roadsplat mesh`: ROAM-mesh a DEM to OBJ or PLY (atomic write), with an
  * optional stats JSON. OBJ/PLY axes: y up; sample (row i, column j) is
  * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
+#define _POSIX_C_SOURCE 200809L /* getrusage */
+#include "bigalloc.h"
 #include "cli.h"
 
 #include <errno.h>
@@ -9,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 static const char *mesh_usage =
     "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
@@ -17,6 +20,13 @@ static const char *mesh_usage =
     "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
     "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
     "  --pool N        ROAM node pool size (default: what the finest mesh needs, <= 2^26)\n";
+
+/* Page faults of this process so far (the mesh stage reports its own). */
+static long minor_faults(void)
+{
+    struct rusage u;
+    return getrusage(RUSAGE_SELF, &u) == 0 ? (long)u.ru_minflt : 0;
+}
 
 static int ends_with(const char *s, const char *suf)
 {
@@ -179,8 +189,15 @@ int cli_mesh_main(int argc, char **argv)
     int ply = ends_with(outp, ".ply");
     if (!ply && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj or .ply", outp); return 1; }
 
+    /* Huge pages for the bulk of the landscape, the DEM and the output
+     * buffers: their first touch in 4 KiB pages was most of a cold mesh
+     * (docs/roam.md, "Cold roadsplat mesh"). */
+    cli_bigalloc *ba = cli_bigalloc_create(0);
+    rs_allocator hook;
+    memset(&hook, 0, sizeof hook);
+    if (ba) hook = cli_bigalloc_hook(ba);
     rs_ctx *ctx = NULL;
-    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { cli_error("out of memory"); return 1; }
+    if (!ba || rs_ctx_create(&hook, NULL, &ctx) != RS_OK) { cli_bigalloc_destroy(ba); cli_error("out of memory"); return 1; }
     int rc = 1;
     rs_roam *L = NULL;
     float *v = NULL, *nrm = NULL;
@@ -196,6 +213,7 @@ int cli_mesh_main(int argc, char **argv)
     if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path))) goto done;
     dem = cli_load_dem(ctx, in);
     if (!dem) goto done;
+    double read_ms = cli_now_ms() - t_start;
     /* Every value that reaches the float output must fit, checked before
      * the work with the option that decides it named. */
     {
@@ -230,6 +248,10 @@ int cli_mesh_main(int argc, char **argv)
             goto done;
         }
     }
+    /* timings_ms.mesh: everything between the DEM in memory and the mesh in
+     * the output arrays: rs_roam_create, the refinement, the mesh bound,
+     * allocating the output arrays and rs_roam_extract (docs/roam.md) */
+    long flt0 = minor_faults();
     double t_mesh = cli_now_ms();
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -242,26 +264,29 @@ int cli_mesh_main(int argc, char **argv)
     }
     rs_result r = rs_roam_create(ctx, dem, &o, &L);
     if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
+    double t_refine = cli_now_ms();
     r = tris ? rs_roam_refine_count(ctx, L, tris) : rs_roam_refine_error(ctx, L, max_error);
     if (r == RS_ERR_POOL_EXHAUSTED) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
     else if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
+    double t_extract = cli_now_ms();
     rs_roam_mesh_options mo;
     memset(&mo, 0, sizeof mo);
     mo.normals = normals;
     mo.skirt_depth = skirt;
     size_t mv, mi, nv, ni;
     rs_roam_mesh_bound(L, &mo, &mv, &mi);
-    v = malloc((mv ? mv : 1) * 5 * sizeof *v);
-    nrm = normals ? malloc((mv ? mv : 1) * 3 * sizeof *nrm) : NULL;
-    idx = malloc((mi ? mi : 1) * sizeof *idx);
-    smp = malloc((mv ? mv : 1) * sizeof *smp);
+    v = cli_big_malloc(ba, (mv ? mv : 1) * 5 * sizeof *v);
+    nrm = normals ? cli_big_malloc(ba, (mv ? mv : 1) * 3 * sizeof *nrm) : NULL;
+    idx = cli_big_malloc(ba, (mi ? mi : 1) * sizeof *idx);
+    smp = cli_big_malloc(ba, (mv ? mv : 1) * sizeof *smp);
     mo.samples = smp;
     if (!v || !idx || !smp || (normals && !nrm)) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
     if (rs_roam_extract(ctx, L, &mo, v, nrm, mv, idx, mi, &nv, &ni) != RS_OK) {
         cli_error("%s: %s", in, rs_ctx_message(ctx));
         goto done;
     }
-    double mesh_ms = cli_now_ms() - t_mesh;
+    double t_mesh_end = cli_now_ms(), mesh_ms = t_mesh_end - t_mesh;
+    long mesh_faults = minor_faults() - flt0;
     rs_roam_stats st;
     rs_roam_get_stats(L, &st);
     size_t ntop = 0;
@@ -270,6 +295,7 @@ int cli_mesh_main(int argc, char **argv)
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
+    double write_ms = cli_now_ms() - t_mesh_end;
     if (stats_path) {
         double measured = measure_error(rs_dem_samples(dem), rs_dem_width(dem), zs, v, smp, idx, st.triangles);
         fprintf(so.f, "{\n  \"command\": \"mesh\",\n  \"dem\": {\"width\": %u, \"height\": %u, \"cell_size\": %.9g, \"z_scale\": %.9g},\n",
@@ -282,7 +308,14 @@ int cli_mesh_main(int argc, char **argv)
         fprintf(so.f, "  \"patch_size\": %u,\n  \"pool\": {\"nodes\": %u, \"used\": %u, \"base_nodes\": %u, \"exhausted\": %s, \"bytes\": %llu},\n",
                 st.patch_size, st.pool_nodes, st.pool_used, st.base_nodes, st.pool_exhausted ? "true" : "false",
                 (unsigned long long)st.bytes);
-        fprintf(so.f, "  \"timings_ms\": {\"mesh\": %.3f, \"total\": %.3f}\n}\n", mesh_ms, cli_now_ms() - t_start);
+        cli_bigalloc_stats bs;
+        cli_bigalloc_get_stats(ba, &bs);
+        fprintf(so.f, "  \"memory\": {\"mesh_page_faults\": %ld, \"mapped_blocks\": %zu, \"mapped_bytes\": %zu},\n",
+                mesh_faults, bs.mapped_blocks, bs.mapped_bytes);
+        fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"mesh\": %.3f, \"create\": %.3f, \"refine\": %.3f, "
+                      "\"extract\": %.3f, \"write\": %.3f, \"total\": %.3f}\n}\n",
+                read_ms, mesh_ms, t_refine - t_mesh, t_extract - t_refine, t_mesh_end - t_extract, write_ms,
+                cli_now_ms() - t_start);
         if (fflush(so.f) != 0 || ferror(so.f)) {
             cli_error("%s: write failed: %s", stats_path, strerror(errno ? errno : EIO));
             goto done;
@@ -298,9 +331,10 @@ int cli_mesh_main(int argc, char **argv)
 done:
     cli_out_abort(&out); /* no-ops once committed */
     cli_out_abort(&so);
-    free(v); free(nrm); free(idx); free(smp);
+    cli_big_free(ba, v); cli_big_free(ba, nrm); cli_big_free(ba, idx); cli_big_free(ba, smp);
     rs_roam_free(ctx, L);
     if (dem) rs_dem_free(ctx, dem);
     rs_ctx_free(ctx);
+    cli_bigalloc_destroy(ba);
     return rc;
 }

@@ -6,6 +6,9 @@
 #include <float.h>
 #include <math.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define MAX_PATCH_LOG 14          /* patch side <= 16384 cells: heap index < 2^30 */
 #define MAX_SIDE 32768u           /* node coordinates are uint16 */
@@ -28,19 +31,47 @@ static rs_result fill_nodata(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
 
 /* ---- heights -------------------------------------------------------------------- */
 
+/* Largest |z| over the finite samples of z[0..n), and whether there are
+ * others (NaN or infinite: nodata). */
+static float abs_max_finite(const float *z, size_t n, int *bad)
+{
+    size_t i = 0;
+    float zmax = 0.0f;
+    *bad = 0;
+#if defined(__SSE2__)
+    /* The usual DEM, all finite, in four lanes: max of |z| and a NaN flag;
+     * an infinity shows in the max. Anything non-finite takes the scalar
+     * loop below from the start, which skips it exactly. */
+    {
+        const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+        __m128 m = _mm_setzero_ps(), nan = _mm_setzero_ps();
+        for (; i + 4 <= n; i += 4) {
+            __m128 a = _mm_and_ps(_mm_loadu_ps(z + i), absmask);
+            nan = _mm_or_ps(nan, _mm_cmpunord_ps(a, a));
+            m = _mm_max_ps(a, m); /* NaN lanes keep m */
+        }
+        float lane[4];
+        _mm_storeu_ps(lane, m);
+        zmax = lane[0];
+        for (int k = 1; k < 4; k++) if (lane[k] > zmax) zmax = lane[k];
+        if (_mm_movemask_ps(nan) || !(zmax <= FLT_MAX)) { i = 0; zmax = 0.0f; }
+    }
+#endif
+    for (; i < n; i++) {
+        float a = fabsf(z[i]);
+        if (!(a <= FLT_MAX)) *bad = 1; /* NaN or inf */
+        else if (a > zmax) zmax = a;
+    }
+    return zmax;
+}
+
 /* Heights must stay finite through the error arithmetic (checked over the
  * valid samples: filled nodata copies one of them). One pass, which also
  * tells whether there is nodata to fill. */
 static rs_result check_heights(rs_ctx *ctx, const rs_roam *L, const rs_dem *dem, int *has_nodata, float *zabs)
 {
-    size_t n = (size_t)L->w * L->hgt;
-    float zmax = 0.0f;
-    int bad = 0;
-    for (size_t i = 0; i < n; i++) {
-        float a = fabsf(dem->z[i]);
-        if (!(a <= FLT_MAX)) bad = 1; /* NaN or inf */
-        else if (a > zmax) zmax = a;
-    }
+    int bad;
+    float zmax = abs_max_finite(dem->z, (size_t)L->w * L->hgt, &bad);
     *has_nodata = bad;
     *zabs = zmax;
     /* In float, where they are kept: error bounds (differences of up to
@@ -68,7 +99,16 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
         L->z = dem->z;
     }
     rs__free(ctx, old);
-    memset(L->err, 0xFF, L->nerr * sizeof(float)); /* all NaN: computed on first use */
+    /* all NaN (computed on first use): no chunk initialised */
+    memset(L->eready, 0, (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK);
+    L->err_empty = 1;
+    L->zrange_ok = 0; /* rs__roam_patch_ranges, when a view frame needs them */
+    return RS_OK;
+}
+
+void rs__roam_patch_ranges(rs_roam *L)
+{
+    if (L->zrange_ok) return;
     size_t W = L->w;
     uint32_t P = L->P;
     for (uint32_t py = 0; py < L->npy; py++)
@@ -84,7 +124,7 @@ static rs_result load_heights(rs_ctx *ctx, rs_roam *L, const rs_dem *dem, int ha
                 }
             L->pzmin[p] = lo; L->pzmax[p] = hi;
         }
-    return RS_OK;
+    L->zrange_ok = 1;
 }
 
 rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
@@ -171,6 +211,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     if (!ctx || !L) return;
     rs__free(ctx, L->zown);
     rs__free(ctx, L->err);
+    rs__free(ctx, L->eready);
     rs__free(ctx, L->pzmin);
     rs__free(ctx, L->pzmax);
     rs__free(ctx, L->pin);
@@ -283,6 +324,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     uint64_t nerr = (s->nerr + 1) / 2; /* cached above the R level only (err_slot) */
     L->nerr = (size_t)nerr;
     L->err = rs__alloc_array(ctx, (size_t)nerr, sizeof(float));
+    L->eready = rs__alloc_array(ctx, ((size_t)nerr + ERR_CHUNK - 1) / ERR_CHUNK, 1);
     L->pzmin = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pin = rs__alloc_array(ctx, npatch, 1);
@@ -295,7 +337,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
+    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
         return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                         (unsigned long long)nerr);
     memset(L->vbits, 0, L->nwords * sizeof(uint64_t));
@@ -362,7 +404,7 @@ static rs_result alloc_pool(rs_ctx *ctx, rs_roam *L, uint64_t pool)
 static uint64_t landscape_bytes(const rs_roam *L)
 {
     uint64_t W = L->w, H = L->hgt, npatch = (uint64_t)L->npx * L->npy;
-    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + npatch * (2 * sizeof(float) + 1)
+    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1)
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)

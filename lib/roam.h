@@ -7,6 +7,9 @@
 #define RS_ROAM_H
 #include "dem.h"
 
+#include <math.h>
+#include <string.h>
+
 #define NIL 0xFFFFFFFFu
 /* The finest levels are implicit: a split node at the "block level" (legs^2
  * = 2^dq, dq = min(IMPL_DEPTH, 2 log2 P)) gets lc = IMPL and keeps in rc the
@@ -56,7 +59,14 @@ struct rs_roam {
     uint32_t elog;                  /* log2(epp) */
     size_t nerr;                    /* entries of err */
     float *err;                     /* per patch, by heap index; NaN = not computed yet */
-    float *pzmin, *pzmax;           /* per patch height range (DEM units) */
+    unsigned char *eready;          /* per chunk of ERR_CHUNK entries: 1 once the chunk
+                                       holds real entries (NaN-filled on its first
+                                       write); entries of a chunk still at 0 are NaN */
+    int err_empty;                  /* every entry of err is NaN, and stays so until the
+                                       end of the refinement pass under way (each node is
+                                       tested at most once per pass) */
+    float *pzmin, *pzmax;           /* per patch height range (DEM units), view mode only */
+    int zrange_ok;                  /* pzmin / pzmax are those of z */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
     roam_node *nodes, *base_copy;
     uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
@@ -74,11 +84,35 @@ struct rs_roam {
     size_t nwords, nsum;
     uint32_t *smap;                 /* 2(w+h): skirt vertex of a border sample */
     double threshold;
+    double err_stop;                /* error mode: rs__roam_err_stop of the threshold */
     float *ucol, *vrow;             /* texture u of each column, v of each row */
     double tol;                     /* view mode: tolerance carried between frames */
     uint32_t frame_passes, culled;
     uint64_t bytes;
 };
+
+/* The error cache is initialised a chunk (4 KiB) at a time, when the first
+ * bound in it is stored: a coarse mesh stores a few thousand bounds and
+ * touches a few pages instead of the whole array (2 MB for 1025^2). */
+#define ERR_CHUNK_LOG 10
+#define ERR_CHUNK (1u << ERR_CHUNK_LOG)
+
+/* Cached bound of `slot` (NaN: none). */
+static inline float err_get(const rs_roam *L, uint32_t slot)
+{
+    return L->eready[slot >> ERR_CHUNK_LOG] ? L->err[slot] : NAN;
+}
+
+static inline void err_put(rs_roam *L, uint32_t slot, float v)
+{
+    size_t c = slot >> ERR_CHUNK_LOG;
+    if (!L->eready[c]) {
+        size_t n = L->nerr - c * ERR_CHUNK < ERR_CHUNK ? L->nerr - c * ERR_CHUNK : ERR_CHUNK;
+        memset(L->err + c * ERR_CHUNK, 0xFF, n * sizeof(float)); /* NaN */
+        L->eready[c] = 1;
+    }
+    L->err[slot] = v;
+}
 
 /* ---- geometry helpers -------------------------------------------------- */
 
@@ -147,6 +181,10 @@ static inline int tri_inside(const rs_roam *L, const tri *t)
     return inside_xy(L, t->ax, t->ay, t->bx, t->by, t->cx, t->cy);
 }
 
+/* The per-patch height ranges of the current heights (lib/roam.c), once
+ * per DEM: only view frames need them. */
+void rs__roam_patch_ranges(rs_roam *L);
+
 /* ---- error bounds (lib/roam_bounds.c) ---------------------------------- */
 
 /* The error terms of a legs-2-sqrt-2 triangle S = (a, b, c) and of its
@@ -176,6 +214,11 @@ uint32_t rs__roam_imp_slot(const rs_roam *L, const roam_node *n, uint32_t pos);
  * of an explicit node (0 for cell halves). */
 float rs__roam_slot_err(rs_roam *L, uint32_t slot, const tri *t);
 float rs__roam_node_err(rs_roam *L, const roam_node *n, const tri *t);
+/* Refinement's decision in error mode: bound of t above max_error (metres),
+ * possibly found without computing the whole bound; L->err_stop must be
+ * rs__roam_err_stop(max_error, L->zs). */
+int rs__roam_err_above(rs_roam *L, uint32_t slot, const tri *t, double max_error);
+double rs__roam_err_stop(double max_error, double zs);
 
 /* ---- bintree, implicit levels, refinement (lib/roam_tree.c) ------------ */
 

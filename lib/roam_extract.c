@@ -212,9 +212,32 @@ static uint32_t key_vertex(const rs_roam *L, uint32_t p)
     return L->vrank[p >> 6] + popcount64(L->vbits[p >> 6] & below);
 }
 
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__)) && !defined(__POPCNT__)
+/* The same with the popcnt instruction, on the CPUs that have it (all
+ * x86-64 made since about 2009; the baseline target does not assume it):
+ * one instruction instead of twelve per index, a third of the pass. */
+#define RS_POPCNT_DISPATCH 1
+__attribute__((target("popcnt"))) static void number_indices_popcnt(const extract_state *s, size_t n)
+{
+    const rs_roam *L = s->L;
+    uint32_t *ix = s->idx;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t p = ix[i];
+        uint64_t below = ((uint64_t)1 << (p & 63u)) - 1u;
+        ix[i] = L->vrank[p >> 6] + (uint32_t)__builtin_popcountll(L->vbits[p >> 6] & below);
+    }
+}
+#endif
+
 /* Pass 3: sample keys in the first n entries of the index buffer -> vertex numbers. */
 static void number_indices(const extract_state *s, size_t n)
 {
+#ifdef RS_POPCNT_DISPATCH
+    if (__builtin_cpu_supports("popcnt")) {
+        number_indices_popcnt(s, n);
+        return;
+    }
+#endif
     uint32_t *ix = s->idx;
     for (size_t i = 0; i < n; i++) ix[i] = key_vertex(s->L, ix[i]);
 }

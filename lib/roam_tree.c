@@ -348,10 +348,7 @@ void rs__roam_reset_mesh(rs_roam *L)
 static int wants_split(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch, const refine_params *rp)
 {
     if (rp->border_only) return tri_class(L, t) == NODE_STRADDLES;
-    if (!rp->view) {
-        float e = rs__roam_slot_err(L, slot, t);
-        return e == INFINITY || (e > 0.0f && (double)e * L->zs > rp->max_error);
-    }
+    if (!rp->view) return rs__roam_err_above(L, slot, t, rp->max_error);
     int cls = tri_class(L, t);
     if (cls != NODE_ON) return cls == NODE_STRADDLES;
     const view_params *v = rp->view;
@@ -423,6 +420,8 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
     return 0;
 }
 
+static int refine_loop(rs_roam *L, const refine_params *rp);
+
 /* Depth-first refinement with an explicit stack: every explicit node is
  * pushed when it is created (children of forced splits too), and a block
  * whose implicit subtree got untested leaves is pushed once (QUEUED), so
@@ -438,10 +437,24 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
     uint32_t *st = L->stack;
     L->sp = 0;
     L->scan = NIL;
+    /* the passes of a triangle budget's search test the same nodes at
+     * other thresholds: they keep every bound they compute */
+    if (!rp->view && !rp->border_only)
+        L->err_stop = rp->stop_above ? INFINITY : rs__roam_err_stop(rp->max_error, L->zs);
     for (uint32_t i = L->used; i-- > 0;) { /* node 0 on top */
         if (n[i].lc == NIL) st[L->sp++] = i;
         else if (n[i].lc == IMPL && L->dq > 1) { n[i].rc |= QUEUED; st[L->sp++] = i | TAG; }
     }
+    int res = refine_loop(L, rp);
+    if (!rp->view && !rp->border_only) L->err_empty = 0; /* the bounds this pass computed are cached now */
+    return res;
+}
+
+/* rs__roam_refine's loop over the stack. */
+static int refine_loop(rs_roam *L, const refine_params *rp)
+{
+    roam_node *n = L->nodes;
+    uint32_t *st = L->stack;
     while (L->sp) {
         uint32_t i = st[--L->sp];
         tri t;
@@ -477,7 +490,7 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
  * (and not stored: the landscape is const here). */
 static float peek_err(const rs_roam *L, uint32_t slot, const tri *t)
 {
-    float e = slot == NIL ? NAN : L->err[slot];
+    float e = slot == NIL ? NAN : err_get(L, slot);
     return e == e ? e : rs__roam_compute_err(L, t);
 }
 

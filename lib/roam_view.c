@@ -88,6 +88,7 @@ rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
     view_params v;
     rs_result r = make_view(ctx, L, vw, &v);
     if (r != RS_OK) return r;
+    rs__roam_patch_ranges(L);
     uint32_t np = L->npx * L->npy;
     /* visibility per patch, kept in the smap scratch when it is large enough */
     unsigned char visbuf[256];

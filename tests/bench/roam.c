@@ -1,7 +1,10 @@
 /* ROAM mesher against @mapbox/martini (RTIN, run with node) on the same
  * grids in the same run: triangles, true max / RMS vertical error (measured
  * by tests/roam_check.h for both), and build + extraction time (medians).
- * Usage: roam OUTDIR  -> OUTDIR/roam.md, OUTDIR/roam.csv.
+ * Usage: roam OUTDIR  -> OUTDIR/roam.md, OUTDIR/roam.csv, and the cold CLI
+ * section (issue 18, target 4: `roadsplat mesh` processes against martini
+ * warm, same run) in OUTDIR/roam_cold.md and .csv; `roam OUTDIR cold` runs
+ * that section alone.
  * martini comes from the npm registry into $BUILD/npm (installed here when
  * missing); without node or npm the martini columns say so. */
 #include "roadsplat.h"
@@ -86,26 +89,34 @@ static int run_roam(rs_ctx *ctx, const rs_dem *dem, const float *z, uint32_t W, 
 }
 
 typedef struct mart {
-    double E, ms, build_ms, init_ms, cold_ms, max_err, rms_err;
+    double E, ms, build_ms, init_ms, cold_ms, min_ms, max_err, rms_err;
     uint32_t tris;
     int covered;
 } mart;
 
-/* Run martini through node; fills m[0..n) and returns n, or -1. */
-static int run_martini(const char *outdir, const char *name, const float *z, uint32_t S, const double *Es, int nE,
-                       mart *m)
+/* The martini package under $BUILD/npm, installed from the npm registry
+ * when missing; 0 when there. */
+static int martini_dir(char *mdir, size_t n)
 {
     const char *b = getenv("BUILD");
-    char npm[512], mdir[600], cmd[4096], f32[600], prefix[600], errs[512] = "";
+    char npm[512], cmd[1200], probe[700];
     snprintf(npm, sizeof npm, "%s/npm", b && *b ? b : "build");
-    snprintf(mdir, sizeof mdir, "%s/node_modules/@mapbox/martini", npm);
+    snprintf(mdir, n, "%s/node_modules/@mapbox/martini", npm);
     struct stat st;
-    char probe[700];
     snprintf(probe, sizeof probe, "%s/martini.js", mdir);
     if (stat(probe, &st) != 0) {
         snprintf(cmd, sizeof cmd, "npm install --prefix '%s' @mapbox/martini@0.2.0 --no-audit --no-fund >&2", npm);
         if (system(cmd) != 0 || stat(probe, &st) != 0) return -1;
     }
+    return 0;
+}
+
+/* Run martini through node; fills m[0..n) and returns n, or -1. */
+static int run_martini(const char *outdir, const char *name, const float *z, uint32_t S, const double *Es, int nE,
+                       mart *m)
+{
+    char mdir[600], cmd[4096], f32[600], prefix[600], errs[512] = "";
+    if (martini_dir(mdir, sizeof mdir) != 0) return -1;
     snprintf(f32, sizeof f32, "%s/roam_%s.f32", outdir, name);
     snprintf(prefix, sizeof prefix, "%s/roam_martini_%s_", outdir, name);
     FILE *f = fopen(f32, "wb");
@@ -120,8 +131,8 @@ static int run_martini(const char *outdir, const char *name, const float *z, uin
     FILE *p = popen(cmd, "r");
     if (!p) return -1;
     int n = 0;
-    while (n < nE && fscanf(p, "%lf %lf %lf %u %lf %lf", &m[n].E, &m[n].ms, &m[n].build_ms, &m[n].tris, &m[n].init_ms,
-                            &m[n].cold_ms) == 6)
+    while (n < nE && fscanf(p, "%lf %lf %lf %u %lf %lf %lf", &m[n].E, &m[n].ms, &m[n].build_ms, &m[n].tris,
+                            &m[n].init_ms, &m[n].cold_ms, &m[n].min_ms) == 7)
         n++;
     if (pclose(p) != 0 || n != nE) return -1;
     for (int k = 0; k < nE; k++) {
@@ -153,10 +164,212 @@ static int run_martini(const char *outdir, const char *name, const float *z, uin
     return nE;
 }
 
+/* ---- cold `roadsplat mesh` against martini (issue 18, target 4) ---------- */
+
+#define COLD_NE 4
+
+static double json_num(const char *buf, const char *key)
+{
+    char pat[64];
+    snprintf(pat, sizeof pat, "\"%s\": ", key);
+    const char *p = strstr(buf, pat);
+    return p ? strtod(p + strlen(pat), NULL) : -1.0;
+}
+
+typedef struct cold_run {
+    double mesh, create, refine, extract, measured, faults;
+    uint32_t tris;
+} cold_run;
+
+/* One `roadsplat mesh` process: the stats of its mesh stage; -1 on failure. */
+static int run_cli_mesh(const char *bin, const char *outdir, const char *pgm, double zs, double E, cold_run *o)
+{
+    char cmd[4096], json[600], ply[600];
+    snprintf(json, sizeof json, "%s/mesh_cold.json", outdir);
+    snprintf(ply, sizeof ply, "%s/mesh_cold.ply", outdir);
+    snprintf(cmd, sizeof cmd, "'%s' mesh --z-scale %.17g --max-error %g --stats '%s' '%s' '%s'", bin, zs, E, json, pgm,
+             ply);
+    if (system(cmd) != 0) return -1;
+    FILE *f = fopen(json, "rb");
+    if (!f) return -1;
+    char buf[4096];
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = 0;
+    o->mesh = json_num(buf, "mesh");
+    o->create = json_num(buf, "create");
+    o->refine = json_num(buf, "refine");
+    o->extract = json_num(buf, "extract");
+    o->measured = json_num(buf, "max_error_measured");
+    o->faults = json_num(buf, "mesh_page_faults");
+    o->tris = (uint32_t)json_num(buf, "triangles");
+    remove(json);
+    remove(ply);
+    return o->mesh >= 0 ? 0 : -1;
+}
+
+/* One node process: martini's warm createTile + getMesh at each E (after
+ * its warm-up run): fastest and median of RUNS, triangles. */
+static int run_martini_warm(const char *mdir, const char *outdir, const char *f32, uint32_t S, const double *Es,
+                            mart *m)
+{
+    char cmd[4096], prefix[600], errs[256] = "";
+    snprintf(prefix, sizeof prefix, "%s/mesh_cold_martini_", outdir);
+    for (int k = 0; k < COLD_NE; k++) {
+        size_t l = strlen(errs);
+        snprintf(errs + l, sizeof errs - l, "%s%g", k ? "," : "", Es[k]);
+    }
+    snprintf(cmd, sizeof cmd, "node tests/bench/martini.js '%s' '%s' %u %s '%s' %d", mdir, f32, S, errs, prefix, RUNS);
+    FILE *p = popen(cmd, "r");
+    if (!p) return -1;
+    int n = 0;
+    while (n < COLD_NE && fscanf(p, "%lf %lf %lf %u %lf %lf %lf", &m[n].E, &m[n].ms, &m[n].build_ms, &m[n].tris,
+                                 &m[n].init_ms, &m[n].cold_ms, &m[n].min_ms) == 7)
+        n++;
+    if (pclose(p) != 0 || n != COLD_NE) return -1;
+    for (int k = 0; k < COLD_NE; k++) {
+        char path[700];
+        snprintf(path, sizeof path, "%s%d.bin", prefix, k);
+        remove(path);
+    }
+    return 0;
+}
+
+static double min_of(const double *v, int n)
+{
+    double m = v[0];
+    for (int i = 1; i < n; i++) if (v[i] < m) m = v[i];
+    return m;
+}
+
+/* The 1025^2 fractal quantised to a 16-bit PGM (the CLI's input) and the
+ * same heights in metres as float32 (martini's). Rounds alternate which
+ * runs first; each round is one cold CLI process per E and one node
+ * process (warm-up, then RUNS warm runs per E). Writes roam_cold.md/.csv
+ * and every run to roam_cold_runs.csv;
+ * returns 1 when a mesh is invalid or a run failed. */
+static int run_cold(const char *outdir)
+{
+    const uint32_t S = 1025;
+    static const double Es[COLD_NE] = { 2, 5, 10, 20 };
+    const char *b = getenv("BUILD"), *re = getenv("ROAM_COLD_ROUNDS");
+    int rounds = re && atoi(re) > 0 ? atoi(re) : 7;
+    if (rounds > 64) rounds = 64;
+    char bin[600], pgm[600], f32[600], path[600], mdir[600];
+    snprintf(bin, sizeof bin, "%s/roadsplat", b && *b ? b : "build");
+    snprintf(pgm, sizeof pgm, "%s/mesh_cold.pgm", outdir);
+    snprintf(f32, sizeof f32, "%s/mesh_cold.f32", outdir);
+    snprintf(path, sizeof path, "%s/roam_cold.md", outdir);
+    FILE *md = fopen(path, "w");
+    snprintf(path, sizeof path, "%s/roam_cold.csv", outdir);
+    FILE *csv = fopen(path, "w");
+    float *z = malloc((size_t)S * S * sizeof *z);
+    if (!md || !csv || !z) { fprintf(stderr, "roam bench: cannot write to %s\n", outdir); return 1; }
+    rc_dem_fractal(z, S, S, 1234, 512.0, 400.0, 0.5);
+    float lo = z[0], hi = z[0];
+    for (size_t i = 0; i < (size_t)S * S; i++) {
+        if (z[i] < lo) lo = z[i];
+        if (z[i] > hi) hi = z[i];
+    }
+    double zs = ((double)hi - lo) / 65535.0;
+    FILE *fp = fopen(pgm, "wb"), *ff = fopen(f32, "wb");
+    if (!fp || !ff) { fprintf(stderr, "roam bench: cannot write to %s\n", outdir); return 1; }
+    fprintf(fp, "P5\n%u %u\n65535\n", S, S);
+    for (size_t i = 0; i < (size_t)S * S; i++) {
+        long q = lround(((double)z[i] - lo) / zs);
+        if (q < 0) q = 0;
+        if (q > 65535) q = 65535;
+        unsigned char be[2] = { (unsigned char)(q >> 8), (unsigned char)(q & 0xFF) };
+        fwrite(be, 1, 2, fp);
+        z[i] = (float)((double)q * zs); /* what the CLI meshes, in metres */
+    }
+    fwrite(z, sizeof(float), (size_t)S * S, ff);
+    int bad = (fclose(fp) != 0) | (fclose(ff) != 0);
+    int have_m = martini_dir(mdir, sizeof mdir) == 0;
+    static cold_run cr[COLD_NE][64];
+    static double cms[COLD_NE][64], mmin[COLD_NE][64], mmed[COLD_NE][64];
+    uint32_t mtris[COLD_NE] = { 0 };
+    for (int r = 0; r < rounds && !bad; r++)
+        for (int half = 0; half < 2 && !bad; half++) {
+            if ((half == 0) == (r % 2 == 0)) {
+                if (!have_m) continue;
+                mart m[COLD_NE];
+                if (run_martini_warm(mdir, outdir, f32, S, Es, m) != 0) { have_m = 0; continue; }
+                for (int k = 0; k < COLD_NE; k++) { mmin[k][r] = m[k].min_ms; mmed[k][r] = m[k].ms; mtris[k] = m[k].tris; }
+            } else
+                for (int k = 0; k < COLD_NE && !bad; k++) {
+                    if (run_cli_mesh(bin, outdir, pgm, zs, Es[k], &cr[k][r]) != 0) { bad = 1; break; }
+                    cms[k][r] = cr[k][r].mesh;
+                    if (!(cr[k][r].measured <= Es[k] + 1e-9)) bad = 1;
+                }
+        }
+    remove(pgm);
+    remove(f32);
+    snprintf(path, sizeof path, "%s/roam_cold_runs.csv", outdir);
+    FILE *runs = fopen(path, "w");
+    if (runs) {
+        fprintf(runs, "round,E,cli_mesh_ms,create_ms,refine_ms,extract_ms,page_faults,martini_fastest_ms,martini_median_ms\n");
+        for (int r = 0; r < rounds && !bad; r++)
+            for (int k = 0; k < COLD_NE; k++)
+                fprintf(runs, "%d,%g,%.3f,%.3f,%.3f,%.3f,%.0f,%.3f,%.3f\n", r, Es[k], cr[k][r].mesh, cr[k][r].create,
+                        cr[k][r].refine, cr[k][r].extract, cr[k][r].faults, have_m ? mmin[k][r] : 0.0,
+                        have_m ? mmed[k][r] : 0.0);
+        fclose(runs);
+    }
+    fprintf(md, "## Cold `roadsplat mesh` vs @mapbox/martini (tests/bench/roam.c; issue 18, target 4)\n\n");
+    if (bad) fprintf(md, "The run failed (a CLI run failed or a mesh exceeded its E).\n\n");
+    fprintf(md, "The 1025x1025 fractal of the table above, quantised to a 16-bit PGM (z-scale %.6g m); martini\n"
+                "meshes the same heights in metres (float32). roadsplat: one `roadsplat mesh --max-error E --stats`\n"
+                "process per run, its `timings_ms.mesh` (`rs_roam_create` + refinement + mesh bound + output arrays\n"
+                "+ `rs_roam_extract`, the DEM already read; every page the mesher touches is touched for the first\n"
+                "time in that process). martini: warm `createTile + getMesh` (after a JIT warm-up run in the same\n"
+                "node process, `new Martini(1025)` excluded). %d rounds, alternating which of the two goes first;\n"
+                "per round one CLI process per E and one node process with %d warm runs per E. *Fastest* is the\n"
+                "fastest CLI process against martini's fastest warm run, *median* the median CLI process against\n"
+                "the median of martini's per-round medians. Target: fastest ratio <= 0.5.\n\n", zs, rounds, RUNS);
+    fprintf(md, "| E (m) | roadsplat tris | martini tris | roadsplat cold mesh ms, fastest / median | of the fastest: create + refine + extract | its page faults | martini warm ms, fastest / median | ratio fastest | ratio median | <= 0.5 |\n");
+    fprintf(md, "|---|---|---|---|---|---|---|---|---|---|\n");
+    fprintf(csv, "E,roadsplat_tris,martini_tris,cli_fastest_ms,cli_median_ms,martini_fastest_ms,martini_median_ms,ratio_fastest,ratio_median\n");
+    int met = 0;
+    for (int k = 0; k < COLD_NE && !bad; k++) {
+        int fr = 0;
+        for (int r = 1; r < rounds; r++) if (cms[k][r] < cms[k][fr]) fr = r;
+        double tmp[64];
+        memcpy(tmp, cms[k], sizeof(double) * (size_t)rounds);
+        double cfast = cms[k][fr], cmed = tm_median(tmp, rounds);
+        const cold_run *c = &cr[k][fr];
+        if (have_m) {
+            double mfast = min_of(mmin[k], rounds);
+            memcpy(tmp, mmed[k], sizeof(double) * (size_t)rounds);
+            double mmedian = tm_median(tmp, rounds);
+            double rf = cfast / mfast, rm = cmed / mmedian;
+            met += rf <= 0.5;
+            fprintf(md, "| %g | %u | %u | %.1f / %.1f | %.1f + %.1f + %.1f | %.0f | %.1f / %.1f | %.2f | %.2f | %s |\n", Es[k],
+                    c->tris, mtris[k], cfast, cmed, c->create, c->refine, c->extract, c->faults, mfast, mmedian, rf, rm,
+                    rf <= 0.5 ? "yes" : "**no**");
+            fprintf(csv, "%g,%u,%u,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", Es[k], c->tris, mtris[k], cfast, cmed, mfast,
+                    mmedian, rf, rm);
+        } else {
+            fprintf(md, "| %g | %u | - | %.1f / %.1f | %.1f + %.1f + %.1f | %.0f | - | - | - | - |\n", Es[k], c->tris,
+                    cfast, cmed, c->create, c->refine, c->extract, c->faults);
+            fprintf(csv, "%g,%u,,%.3f,%.3f,,,,\n", Es[k], c->tris, cfast, cmed);
+        }
+    }
+    if (!have_m) fprintf(md, "\nmartini could not be run (node/npm unavailable): roadsplat only.\n");
+    else if (!bad) fprintf(md, "\nTarget 4 (cold CLI <= 0.5x martini warm at E = 2, 5, 10, 20): met at %d of %d E.\n", met, COLD_NE);
+    fprintf(md, "\n");
+    fclose(md);
+    fclose(csv);
+    free(z);
+    if (bad) fprintf(stderr, "roam bench: a cold roadsplat mesh run failed or exceeded its E\n");
+    return bad;
+}
+
 int main(int argc, char **argv)
 {
-    if (argc < 2) { fprintf(stderr, "usage: roam OUTDIR\n"); return 2; }
+    if (argc < 2) { fprintf(stderr, "usage: roam OUTDIR [cold]\n"); return 2; }
     const char *outdir = argv[1];
+    if (argc > 2 && !strcmp(argv[2], "cold")) return run_cold(outdir); /* that section alone */
     char path[600];
     snprintf(path, sizeof path, "%s/roam.md", outdir);
     FILE *md = fopen(path, "w");
@@ -266,5 +479,5 @@ int main(int argc, char **argv)
     fclose(csv);
     rs_ctx_free(ctx);
     if (fail) fprintf(stderr, "roam bench: a roadsplat mesh was invalid or exceeded its bound\n");
-    return fail;
+    return run_cold(outdir) | fail;
 }
