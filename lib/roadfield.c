@@ -819,7 +819,7 @@ static int seg_eval(const rf_seg *s, double x, double y, const rf_px *q, rf_near
      * segment: the point itself */
     double dp = rf_neg(pr) + rf_pos(pr - s->len), dx = rf_if(s->len > 0, dp, wx), dy = rf_if(s->len > 0, t, wy);
     double d2 = dx * dx + dy * dy, ro = s->r + e, ri = s->r - e;
-    int cn = d2 >= ro * ro ? 0 : (ri > 0) & (d2 <= ri * ri) ? 2 : 1;
+    int cn = d2 >= ro * ro ? 0 : (((ri > 0) & (d2 <= ri * ri)) ? 2 : 1);
     if (!(d2 < 1e300)) {
         double D = hypot(dx, dy) - s->r;
         cn = D >= e ? 0 : D <= -e ? 2 : 1;
