@@ -581,6 +581,19 @@ fail:
 
 size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
 
+rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t texels)
+{
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.origin_x = dem->frame.origin_x;
+    p.origin_y = dem->frame.origin_y;
+    p.cell_size = dem->frame.cell_size;
+    p.width_m = (double)(dem->width - 1) * dem->frame.cell_size;
+    p.height_m = (double)(dem->height - 1) * dem->frame.cell_size;
+    p.pixel = dem->frame.cell_size / texels;
+    return p;
+}
+
 void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out)
 {
     if (!out) return;

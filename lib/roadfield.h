@@ -18,6 +18,10 @@ typedef struct rs__roadfield_params {
                                   0 -> cell_size. Larger pixels still work, only slower. */
 } rs__roadfield_params;
 
+/* Parameters of a road field over the whole map of `dem` for output pixels
+ * of cell_size / texels (the road grid's field, the styles' fields). */
+rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t texels);
+
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out);
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);

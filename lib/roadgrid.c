@@ -631,14 +631,7 @@ int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reac
 static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, uint32_t texels,
                              rs_road_grid *g)
 {
-    rs__roadfield_params p;
-    memset(&p, 0, sizeof p);
-    p.origin_x = dem->frame.origin_x;
-    p.origin_y = dem->frame.origin_y;
-    p.cell_size = dem->frame.cell_size;
-    p.width_m = (double)(dem->width - 1) * dem->frame.cell_size;
-    p.height_m = (double)(dem->height - 1) * dem->frame.cell_size;
-    p.pixel = dem->frame.cell_size / texels;
+    rs__roadfield_params p = rs__roadfield_params_for_dem(dem, texels);
     rs_result r = rs__roadfield_build(ctx, roads, &p, &g->field);
     if (r == RS_OK) {
         for (size_t i = 0; i < rs_roads_count(roads); i++) {
@@ -672,18 +665,15 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->style = o.style;
     g->style.styles = NULL; /* borrowed only while building */
     g->stats.bytes = sizeof *g;
-    r = rs__styling_build(ctx, dem, roads, &o, &g->styling);
+    if (o.coverage.edges == RS_EDGES_ANALYTIC) r = build_field(ctx, dem, roads, o.texels, g);
+    /* the styles look pixels' roads up in the grid's field when it has one */
+    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, &g->styling);
     if (r) {
-        rs__free(ctx, g);
+        rs_road_grid_free(ctx, g);
         return r;
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
-        r = build_field(ctx, dem, roads, o.texels, g);
-        if (r) {
-            rs_road_grid_free(ctx, g);
-            return r;
-        }
         *out = g;
         rs__ok(ctx);
         return RS_OK;

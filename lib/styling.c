@@ -12,7 +12,7 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     if (!st) return;
     rs__linesym_free(ctx, st->lines);
     rs__roadfield_free(ctx, st->casing);
-    rs__roadfield_free(ctx, st->near);
+    rs__roadfield_free(ctx, st->near_own);
     rs__free(ctx, st->casing_road);
     rs__free(ctx, st->surface);
     rs__free(ctx, st->colour);
@@ -28,21 +28,8 @@ static void put_colour(float *dst, rs_colour c)
     dst[3] = (float)c.a / 255.0f;
 }
 
-static rs__roadfield_params field_params(const rs_dem *dem, uint32_t texels)
-{
-    rs__roadfield_params p;
-    memset(&p, 0, sizeof p);
-    p.origin_x = dem->frame.origin_x;
-    p.origin_y = dem->frame.origin_y;
-    p.cell_size = dem->frame.cell_size;
-    p.width_m = (double)(dem->width - 1) * dem->frame.cell_size;
-    p.height_m = (double)(dem->height - 1) * dem->frame.cell_size;
-    p.pixel = dem->frame.cell_size / texels;
-    return p;
-}
-
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            rs__styling **out)
+                            const rs__roadfield *field, rs__styling **out)
 {
     *out = NULL;
     if (o->style.disable) return RS_OK;
@@ -89,7 +76,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         rs__ok(ctx);
         return RS_OK;
     }
-    rs__roadfield_params fp = field_params(dem, o->texels);
+    rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
     /* pass 2: bands and casing roads (styles resolved again: each is small) */
     if (nbands) {
         bands = rs__alloc_array(ctx, nbands, sizeof *bands);
@@ -158,8 +145,12 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->bytes += rs__roadfield_bytes(st->casing);
     }
     if (st->any_surface) {
-        if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near)) != RS_OK) goto fail_dash;
-        st->bytes += rs__roadfield_bytes(st->near);
+        st->near = field;
+        if (!field) {
+            if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near_own)) != RS_OK) goto fail_dash;
+            st->near = st->near_own;
+            st->bytes += rs__roadfield_bytes(st->near_own);
+        }
     }
     st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double)) + ncasing * sizeof(uint32_t);
     rs__free(ctx, dash);

@@ -14,7 +14,8 @@ typedef struct rs__styling {
     uint32_t *casing_road;            /* casing field road -> road */
     int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */
     float casing_rgba[4];
-    struct rs__roadfield *near;       /* field for fill / gradient lookups (own) */
+    const struct rs__roadfield *near; /* field for fill / gradient lookups: the grid's, else near_own */
+    struct rs__roadfield *near_own;
     uint8_t *surface;                 /* per road: rs_surface */
     float *colour;                    /* per road: fill rgba, gradient centre rgba, edge rgba, casing rgba (16 floats;
                                          rgb 0..255, a 0..1) */
@@ -24,9 +25,11 @@ typedef struct rs__styling {
 } rs__styling;
 
 /* Resolve every road's style (rs_road_style with o->style) and prepare what
- * the overlays stage draws. *out stays NULL when no road is styled (or
- * o->style.disable): the splat is then the unstyled one. */
+ * the overlays stage draws. `field` is the grid's road field of the same
+ * roads (borrowed; it must outlive the styling) or NULL: then one is built
+ * when a fill or gradient needs it. *out stays NULL when no road is styled
+ * (or o->style.disable): the splat is then the unstyled one. */
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            rs__styling **out);
+                            const struct rs__roadfield *field, rs__styling **out);
 void rs__styling_free(rs_ctx *ctx, rs__styling *st);
 #endif
