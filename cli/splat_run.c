@@ -58,8 +58,10 @@ typedef struct shared {
     pthread_mutex_t mu;
 } shared;
 
+/* One thread of a splat pass: its pass's shared state (shared or
+ * png_shared) and its own stage profile. */
 typedef struct worker {
-    shared *sh;
+    void *sh;
     rs_splat_profile prof;
 } worker;
 
@@ -113,6 +115,38 @@ static void *work(void *arg)
     return NULL;
 }
 
+/* Run fn on n workers sharing sh: threads for workers 1..n-1, the calling
+ * thread for worker 0, then their stage profiles summed into job. Returns
+ * the number of threads that ran (job->threads_used), 0 when out of memory
+ * (nothing ran). */
+static unsigned run_workers(cli_splat_job *job, void *sh, unsigned n, void *(*fn)(void *))
+{
+    worker *wk = calloc(n, sizeof *wk);
+    pthread_t *tid = calloc(n, sizeof *tid);
+    unsigned started = 0, ran = 0;
+    if (wk && tid) {
+        for (unsigned i = 0; i < n; i++) wk[i].sh = sh;
+        for (unsigned i = 1; i < n; i++) {
+            if (pthread_create(&tid[i], NULL, fn, &wk[i]) != 0) break;
+            started = i;
+        }
+        fn(&wk[0]);
+        for (unsigned i = 1; i <= started; i++) pthread_join(tid[i], NULL);
+        for (unsigned i = 0; i < n; i++) {
+            job->profile.coverage_ms += wk[i].prof.coverage_ms;
+            job->profile.surface_ms += wk[i].prof.surface_ms;
+            job->profile.overlays_ms += wk[i].prof.overlays_ms;
+            job->profile.composite_ms += wk[i].prof.composite_ms;
+            job->profile.pixels += wk[i].prof.pixels;
+            job->profile.road_pixels += wk[i].prof.road_pixels;
+        }
+        ran = job->threads_used = started + 1;
+    }
+    free(wk);
+    free(tid);
+    return ran;
+}
+
 int cli_splat_run(cli_splat_job *job)
 {
     shared sh;
@@ -130,32 +164,10 @@ int cli_splat_run(cli_splat_job *job)
     sh.nbands = (uint32_t)(((uint64_t)job->h + sh.band_rows - 1) / sh.band_rows);
     if (n > sh.nbands) n = sh.nbands;
     pthread_mutex_init(&sh.mu, NULL);
-    worker *wk = calloc(n, sizeof *wk);
-    pthread_t *tid = calloc(n, sizeof *tid);
-    unsigned started = 0;
-    if (wk && tid) {
-        for (unsigned i = 0; i < n; i++) wk[i].sh = &sh;
-        for (unsigned i = 1; i < n; i++) {
-            if (pthread_create(&tid[i], NULL, work, &wk[i]) != 0) break;
-            started = i;
-        }
-        work(&wk[0]); /* the calling thread works too */
-        for (unsigned i = 1; i <= started; i++) pthread_join(tid[i], NULL);
-        for (unsigned i = 0; i < n; i++) {
-            job->profile.coverage_ms += wk[i].prof.coverage_ms;
-            job->profile.surface_ms += wk[i].prof.surface_ms;
-            job->profile.overlays_ms += wk[i].prof.overlays_ms;
-            job->profile.composite_ms += wk[i].prof.composite_ms;
-            job->profile.pixels += wk[i].prof.pixels;
-            job->profile.road_pixels += wk[i].prof.road_pixels;
-        }
-        job->threads_used = started + 1;
-    } else {
+    if (!run_workers(job, &sh, n, work)) {
         sh.err = RS_ERR_NOMEM;
         snprintf(sh.msg, sizeof sh.msg, "out of memory for %u threads", n);
     }
-    free(wk);
-    free(tid);
     pthread_mutex_destroy(&sh.mu);
     cli_progress_done(&prog);
     if (sh.err) {
@@ -190,11 +202,6 @@ typedef struct png_shared {
     cli_png_run_stats st;
     pthread_mutex_t mu;
 } png_shared;
-
-typedef struct png_worker {
-    png_shared *sh;
-    rs_splat_profile prof;
-} png_worker;
 
 /* The first error wins; called with the lock held. */
 static void png_fail(png_shared *sh, const char *fmt, const char *a, const char *b)
@@ -240,7 +247,7 @@ static void png_write_from(png_shared *sh, const cli_png_piece *p)
 
 static void *png_work(void *arg)
 {
-    png_worker *wk = arg;
+    worker *wk = arg;
     png_shared *sh = wk->sh;
     cli_splat_job *job = sh->job;
     const cli_png_layout *l = sh->l;
@@ -323,37 +330,13 @@ int cli_splat_png_run(cli_splat_job *job, FILE *f, const char *shown, int level,
     unsigned n = job->threads ? job->threads : 1;
     if (n > l.nbands) n = l.nbands;
     pthread_mutex_init(&sh.mu, NULL);
-    png_worker *wk = calloc(n, sizeof *wk);
-    pthread_t *tid = calloc(n, sizeof *tid);
     sh.slots = calloc(l.nbands, sizeof *sh.slots);
-    unsigned started = 0;
-    if (wk && tid && sh.slots) {
-        for (unsigned i = 0; i < n; i++) wk[i].sh = &sh;
-        for (unsigned i = 1; i < n; i++) {
-            if (pthread_create(&tid[i], NULL, png_work, &wk[i]) != 0) break;
-            started = i;
-        }
-        png_work(&wk[0]); /* the calling thread works too */
-        for (unsigned i = 1; i <= started; i++) pthread_join(tid[i], NULL);
-        for (unsigned i = 0; i < n; i++) {
-            job->profile.coverage_ms += wk[i].prof.coverage_ms;
-            job->profile.surface_ms += wk[i].prof.surface_ms;
-            job->profile.overlays_ms += wk[i].prof.overlays_ms;
-            job->profile.composite_ms += wk[i].prof.composite_ms;
-            job->profile.pixels += wk[i].prof.pixels;
-            job->profile.road_pixels += wk[i].prof.road_pixels;
-        }
-        job->threads_used = started + 1;
-    } else {
-        png_fail(&sh, "%s: %s", shown, "out of memory");
-    }
+    if (!sh.slots || !run_workers(job, &sh, n, png_work)) png_fail(&sh, "%s: %s", shown, "out of memory");
     if (!sh.stop && (sh.written != l.nbands || cli_png_writer_end(&sh.wr)))
         png_fail(&sh, "%s: write failed: %s", shown, strerror(errno ? errno : EIO));
     if (sh.slots)
         for (uint32_t b = 0; b < l.nbands; b++) free(sh.slots[b].data);
     free(sh.slots);
-    free(wk);
-    free(tid);
     pthread_mutex_destroy(&sh.mu);
     cli_progress_done(&prog);
     sh.st.splat_done_ms = sh.splat_done;
