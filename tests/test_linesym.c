@@ -12,6 +12,7 @@
  * of the reference. */
 #include "harness.h"
 #include "fail_alloc.h"
+#include "bandref.h"
 #include "linesym.h"
 
 #include <stdlib.h>
@@ -19,99 +20,6 @@
 #define REF_N 96
 
 static rs_ctx *ctx;
-
-/* --- the reference -------------------------------------------------------- */
-typedef struct ref_line {
-    const double *x, *y; /* local points */
-    double s[64];
-    size_t n;
-} ref_line;
-
-static void ref_init(ref_line *L, const double *x, const double *y, size_t n)
-{
-    L->x = x;
-    L->y = y;
-    L->n = n;
-    L->s[0] = 0;
-    for (size_t k = 1; k < n; k++) L->s[k] = L->s[k - 1] + hypot(x[k] - x[k - 1], y[k] - y[k - 1]);
-}
-
-static int ref_dash_on(const rs__band *b, double s)
-{
-    if (!b->ndash) return 1;
-    double per = 0;
-    for (uint32_t j = 0; j < b->ndash; j++) per += b->dash[j];
-    double m = fmod(s - b->phase, per);
-    if (m < 0) m += per;
-    double acc = 0;
-    for (uint32_t j = 0; j < b->ndash; j++) {
-        acc += b->dash[j];
-        if (m < acc) return (j & 1) == 0;
-    }
-    return 0;
-}
-
-/* Is (x, y) in the band? SPEC: q = nearest point of the polyline, s its arc
- * length, t the signed offset; at a vertex q the offset is the distance,
- * signed by the side; beyond the first or last point: no band (flat ends). */
-static int ref_in(const ref_line *L, const rs__band *b, double x, double y)
-{
-    double best = INFINITY, bu = 0, blen = 0, bt = 0;
-    size_t bk = 0;
-    for (size_t k = 0; k + 1 < L->n; k++) {
-        double ax = L->x[k], ay = L->y[k], dx = L->x[k + 1] - ax, dy = L->y[k + 1] - ay, len = hypot(dx, dy);
-        double u = ((x - ax) * dx + (y - ay) * dy) / len;
-        if (u < 0) u = 0;
-        if (u > len) u = len;
-        double qx = ax + u * dx / len, qy = ay + u * dy / len, d = hypot(x - qx, y - qy);
-        if (d < best) {
-            best = d;
-            bk = k;
-            bu = u;
-            blen = len;
-            bt = ((x - ax) * dy - (y - ay) * dx) / len;
-        }
-    }
-    double s, t;
-    if (bu > 0 && bu < blen) {
-        s = L->s[bk] + bu;
-        t = bt;
-    } else {
-        size_t j = bu <= 0 ? bk : bk + 1; /* the vertex */
-        if (j == 0 || j == L->n - 1) return 0;
-        double px = L->x[j] - L->x[j - 1], py = L->y[j] - L->y[j - 1], nx = L->x[j + 1] - L->x[j],
-               ny = L->y[j + 1] - L->y[j];
-        double lp = hypot(px, py), ln = hypot(nx, ny);
-        /* left normals (dy, -dx) of both segments, summed */
-        double sx = py / lp + ny / ln, sy = -px / lp - nx / ln;
-        double side = (x - L->x[j]) * sx + (y - L->y[j]) * sy;
-        s = L->s[j];
-        t = side >= 0 ? best : -best;
-    }
-    return t >= b->t - 0.5 * b->w && t <= b->t + 0.5 * b->w && ref_dash_on(b, s);
-}
-
-static double ref_cover(const ref_line *L, const rs__band *b, double pix, uint32_t px, uint32_t py)
-{
-    int in = 0;
-    for (int j = 0; j < REF_N; j++)
-        for (int i = 0; i < REF_N; i++)
-            in += ref_in(L, b, ((double)px + (i + 0.5) / REF_N) * pix, ((double)py + (j + 0.5) / REF_N) * pix);
-    return (double)in / (REF_N * REF_N);
-}
-
-/* Distance from (x, y) to the polyline (to skip pixels far from the band). */
-static double ref_dist(const ref_line *L, double x, double y)
-{
-    double best = INFINITY;
-    for (size_t k = 0; k + 1 < L->n; k++) {
-        double ax = L->x[k], ay = L->y[k], dx = L->x[k + 1] - ax, dy = L->y[k + 1] - ay, l2 = dx * dx + dy * dy;
-        double u = ((x - ax) * dx + (y - ay) * dy) / l2;
-        u = u < 0 ? 0 : (u > 1 ? 1 : u);
-        best = fmin(best, hypot(x - ax - u * dx, y - ay - u * dy));
-    }
-    return best;
-}
 
 /* --- helpers -------------------------------------------------------------- */
 static rs_roads *one_road(const double *x, const double *y, size_t n)
@@ -156,8 +64,8 @@ static void compare_scene(const double *x, const double *y, size_t n, const rs__
     rs__linesym_params p = params(W, H, pix, RS__AA_EXACT);
     rs__linesym *L = NULL;
     CHECK_EQ_INT(rs__linesym_build(ctx, roads, &p, bs, bands, &L), RS_OK);
-    ref_line rl;
-    ref_init(&rl, x, y, n);
+    bandref_line rl;
+    bandref_init(&rl, x, y, n);
     double *cov = malloc(sizeof(double) * W * H);
     for (uint32_t bi = 0; bi < nb && L && cov; bi++) {
         rs__linesym_coverage(L, bi, 0, 0, W, H, cov, W);
@@ -168,12 +76,12 @@ static void compare_scene(const double *x, const double *y, size_t n, const rs__
         for (uint32_t py = 0; py < H; py++)
             for (uint32_t px = 0; px < W; px++) {
                 double c = cov[(size_t)py * W + px];
-                double dc = ref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix);
+                double dc = bandref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix);
                 if (dc > reach || dc < inner) {
                     if (c != 0) one.max = fmax(one.max, fabs(c));
                     continue;
                 }
-                double g = ref_cover(&rl, &bands[bi], pix, px, py), e = fabs(c - g);
+                double g = bandref_cover(&rl, &bands[bi], pix, px, py, REF_N), e = fabs(c - g);
                 one.n_px++;
                 one.max = fmax(one.max, e);
                 if ((c > 0 && c < 1) || (g > 0 && g < 1)) {
@@ -484,21 +392,21 @@ static void test_junctions(void)
     double maxe = 0, sum = 0;
     size_t ne = 0, cut_px = 0;
     for (int ri = 0; ri < 3 && L && cov; ri++) {
-        ref_line rl;
-        ref_init(&rl, R[ri].x, R[ri].y, R[ri].n);
+        bandref_line rl;
+        bandref_init(&rl, R[ri].x, R[ri].y, R[ri].n);
         for (uint32_t bi = bs[ri]; bi < bs[ri + 1]; bi++) {
             rs__linesym_coverage(L, bi, 0, 0, W, H, cov, W);
             double reach = fabs(b[bi].t) + 0.5 * b[bi].w + pix;
             for (uint32_t py = 0; py < H; py++)
                 for (uint32_t px = 0; px < W; px++) {
                     double c = cov[(size_t)py * W + px];
-                    if (ref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix) > reach) continue;
+                    if (bandref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix) > reach) continue;
                     int in = 0, cut = 0;
                     const int N = 48;
                     for (int j = 0; j < N; j++)
                         for (int i = 0; i < N; i++) {
                             double x = (px + (i + 0.5) / N) * pix, y = (py + (j + 0.5) / N) * pix;
-                            if (!ref_in(&rl, &b[bi], x, y)) continue;
+                            if (!bandref_in(&rl, &b[bi], x, y)) continue;
                             int other = 0;
                             for (int q = 0; q < 3; q++) /* D continues A: it cuts nothing of A */
                                 if (q != ri && !(ri == 0 && q == 3) && in_surface(&R[q], x, y)) other = 1;

@@ -10,6 +10,7 @@
  * splatter, the cases interleaved run by run.
  * Usage: styles OUTDIR   (writes OUTDIR/styles.md and styles.csv) */
 #include "roadsplat.h"
+#include "bandref.h"
 #include "linesym.h"
 #include "scenes.h"
 #include "timing.h"
@@ -48,48 +49,6 @@ static int run_once(rs_ctx *ctx, scase *k, uint8_t *rgba, uint32_t w, uint32_t h
 }
 
 /* --- accuracy of exact vs Hermite line coverage --------------------------- */
-static double dash_len(const double *d, uint32_t n)
-{
-    double p = 0;
-    for (uint32_t i = 0; i < n; i++) p += d[i];
-    return p;
-}
-
-/* the SPEC band on a polyline (nearest point; flat ends; vertex: signed distance) */
-static int ref_in(const double *x, const double *y, const double *s, size_t n, const rs__band *b, double px,
-                  double py)
-{
-    double best = INFINITY, bu = 0, blen = 0, bt = 0;
-    size_t bk = 0;
-    for (size_t k = 0; k + 1 < n; k++) {
-        double dx = x[k + 1] - x[k], dy = y[k + 1] - y[k], len = hypot(dx, dy);
-        double u = ((px - x[k]) * dx + (py - y[k]) * dy) / len;
-        u = u < 0 ? 0 : (u > len ? len : u);
-        double d = hypot(px - x[k] - u * dx / len, py - y[k] - u * dy / len);
-        if (d < best) best = d, bk = k, bu = u, blen = len, bt = ((px - x[k]) * dy - (py - y[k]) * dx) / len;
-    }
-    double sv, t;
-    if (bu > 0 && bu < blen) sv = s[bk] + bu, t = bt;
-    else {
-        size_t j = bu <= 0 ? bk : bk + 1;
-        if (j == 0 || j == n - 1) return 0;
-        double ax = x[j] - x[j - 1], ay = y[j] - y[j - 1], cx = x[j + 1] - x[j], cy = y[j + 1] - y[j];
-        double la = hypot(ax, ay), lc = hypot(cx, cy);
-        double side = (px - x[j]) * (ay / la + cy / lc) - (py - y[j]) * (ax / la + cx / lc);
-        sv = s[j];
-        t = side >= 0 ? best : -best;
-    }
-    if (t < b->t - 0.5 * b->w || t > b->t + 0.5 * b->w) return 0;
-    if (!b->ndash) return 1;
-    double per = dash_len(b->dash, b->ndash), m = fmod(sv - b->phase, per);
-    if (m < 0) m += per;
-    for (uint32_t j = 0; j < b->ndash; j++) {
-        if (m < b->dash[j]) return (j & 1) == 0;
-        m -= b->dash[j];
-    }
-    return 0;
-}
-
 typedef struct acc {
     double sum, max;
     size_t n;
@@ -114,9 +73,8 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
     for (int scene = 0; scene < 2; scene++) {
         const double *x = scene ? sx : cx, *y = scene ? sy : cy;
         size_t n = scene ? 2 : N;
-        double s[N];
-        s[0] = 0;
-        for (size_t k = 1; k < n; k++) s[k] = s[k - 1] + hypot(x[k] - x[k - 1], y[k] - y[k - 1]);
+        bandref_line rl;
+        bandref_init(&rl, x, y, n);
         rs_roads *roads;
         double xy[2 * N];
         for (size_t k = 0; k < n; k++) xy[2 * k] = x[k], xy[2 * k + 1] = y[k];
@@ -138,19 +96,10 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
             double reach = fabs(b[bi].t) + 0.5 * b[bi].w + pix, inner = fabs(b[bi].t) - 0.5 * b[bi].w - pix;
             for (uint32_t py = 0; py < H; py++)
                 for (uint32_t px = 0; px < W; px++) {
-                    double c = cov[(size_t)py * W + px], xc = (px + 0.5) * pix, yc = (py + 0.5) * pix, dmin = INFINITY;
-                    for (size_t k = 0; k + 1 < n; k++) {
-                        double dx = x[k + 1] - x[k], dy = y[k + 1] - y[k], l2 = dx * dx + dy * dy;
-                        double u = ((xc - x[k]) * dx + (yc - y[k]) * dy) / l2;
-                        u = u < 0 ? 0 : (u > 1 ? 1 : u);
-                        dmin = fmin(dmin, hypot(xc - x[k] - u * dx, yc - y[k] - u * dy));
-                    }
+                    double c = cov[(size_t)py * W + px];
+                    double dmin = bandref_dist(&rl, (px + 0.5) * pix, (py + 0.5) * pix);
                     if (dmin > reach || dmin < inner) continue;
-                    int in = 0;
-                    for (int j = 0; j < REF_N; j++)
-                        for (int i = 0; i < REF_N; i++)
-                            in += ref_in(x, y, s, n, &b[bi], (px + (i + 0.5) / REF_N) * pix, (py + (j + 0.5) / REF_N) * pix);
-                    double g = (double)in / (REF_N * REF_N), e = fabs(c - g);
+                    double g = bandref_cover(&rl, &b[bi], pix, px, py, REF_N), e = fabs(c - g);
                     if (!((c > 0 && c < 1) || (g > 0 && g < 1))) continue;
                     out->sum += e;
                     out->n++;
