@@ -443,7 +443,7 @@ static uint32_t piece_poly(const ls_piece *P, double *x, double *y)
     return n;
 }
 
-/* Does piece P with extra half-planes h[m] keep any area? */
+/* Does piece P (its box cut by its half-planes) keep any area? */
 static int piece_nonempty(const ls_piece *P)
 {
     double x[POLY_MAX], y[POLY_MAX];

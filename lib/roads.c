@@ -480,6 +480,19 @@ static size_t scan_quoted(rs__lex *L, size_t q)
     return 0;
 }
 
+/* The token [b, end of the quoted string starting at q): 1, or -1 when the
+ * quoted part is malformed (scan_quoted set L->err). */
+static int quoted_token(rs__lex *L, rs__tok *t, size_t b, size_t q)
+{
+    size_t e = scan_quoted(L, q);
+    if (!e) return -1;
+    t->s = L->s + b;
+    t->n = e - b;
+    t->quoted = 1;
+    L->i = e;
+    return 1;
+}
+
 /* rs__lex_next in PLAIN mode, inline for the point lines (most of a file). */
 static inline int lex_plain(rs__lex *L, rs__tok *t)
 {
@@ -526,28 +539,12 @@ int rs__lex_next(rs__lex *L, int mode, rs__tok *t)
         L->i = L->n;
         return 0;
     }
-    if (L->s[b] == '"' && (mode == RS__LEX_NAME || mode == RS__LEX_ATTR)) {
-        size_t e = scan_quoted(L, b);
-        if (!e) return -1;
-        t->s = L->s + b;
-        t->n = e - b;
-        t->quoted = 1;
-        L->i = e;
-        return 1;
-    }
+    if (L->s[b] == '"' && (mode == RS__LEX_NAME || mode == RS__LEX_ATTR)) return quoted_token(L, t, b, b);
     int seen_eq = 0;
     while (i < L->n && !blank(L->s[i]) && L->s[i] != '#') {
         if (mode == RS__LEX_ATTR && !seen_eq && L->s[i] == '=') {
             seen_eq = 1;
-            if (i + 1 < L->n && L->s[i + 1] == '"') {
-                size_t e = scan_quoted(L, i + 1);
-                if (!e) return -1;
-                t->s = L->s + b;
-                t->n = e - b;
-                t->quoted = 1;
-                L->i = e;
-                return 1;
-            }
+            if (i + 1 < L->n && L->s[i + 1] == '"') return quoted_token(L, t, b, i + 1);
         }
         i++;
     }

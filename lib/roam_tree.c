@@ -582,8 +582,8 @@ rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *L, uint32_t max_triangles)
     if (!L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_refine_count: roam is NULL");
     if (L->base_tris > max_triangles) {
         rs__roam_reset_mesh(L);
-            return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: the base mesh already has %u triangles > %u",
-                        L->base_tris, max_triangles);
+        return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: the base mesh already has %u triangles > %u", L->base_tris,
+                        max_triangles);
     }
     /* Smallest error threshold (over float bit patterns, which order like
      * the values for non-negative floats) whose mesh fits the budget. */
