@@ -111,18 +111,13 @@ static int martini_dir(char *mdir, size_t n)
     return 0;
 }
 
-/* Run martini through node; fills m[0..n) and returns n, or -1. */
-static int run_martini(const char *outdir, const char *name, const float *z, uint32_t S, const double *Es, int nE,
-                       mart *m)
+/* One node process running tests/bench/martini.js over f32 (S x S) at each
+ * of Es[0..nE): fills m[0..nE) from its output lines (its meshes go to
+ * PREFIX<k>.bin). 0, or -1 when node failed or printed fewer lines. */
+static int martini_node(const char *mdir, const char *f32, uint32_t S, const double *Es, int nE, const char *prefix,
+                        mart *m)
 {
-    char mdir[600], cmd[4096], f32[600], prefix[600], errs[512] = "";
-    if (martini_dir(mdir, sizeof mdir) != 0) return -1;
-    snprintf(f32, sizeof f32, "%s/roam_%s.f32", outdir, name);
-    snprintf(prefix, sizeof prefix, "%s/roam_martini_%s_", outdir, name);
-    FILE *f = fopen(f32, "wb");
-    if (!f) return -1;
-    fwrite(z, sizeof(float), (size_t)S * S, f);
-    fclose(f);
+    char cmd[4096], errs[512] = "";
     for (int k = 0; k < nE; k++) {
         size_t l = strlen(errs);
         snprintf(errs + l, sizeof errs - l, "%s%g", k ? "," : "", Es[k]);
@@ -134,7 +129,22 @@ static int run_martini(const char *outdir, const char *name, const float *z, uin
     while (n < nE && fscanf(p, "%lf %lf %lf %u %lf %lf %lf", &m[n].E, &m[n].ms, &m[n].build_ms, &m[n].tris,
                             &m[n].init_ms, &m[n].cold_ms, &m[n].min_ms) == 7)
         n++;
-    if (pclose(p) != 0 || n != nE) return -1;
+    return pclose(p) != 0 || n != nE ? -1 : 0;
+}
+
+/* Run martini through node; fills m[0..n) and returns n, or -1. */
+static int run_martini(const char *outdir, const char *name, const float *z, uint32_t S, const double *Es, int nE,
+                       mart *m)
+{
+    char mdir[600], f32[600], prefix[600];
+    if (martini_dir(mdir, sizeof mdir) != 0) return -1;
+    snprintf(f32, sizeof f32, "%s/roam_%s.f32", outdir, name);
+    snprintf(prefix, sizeof prefix, "%s/roam_martini_%s_", outdir, name);
+    FILE *f = fopen(f32, "wb");
+    if (!f) return -1;
+    fwrite(z, sizeof(float), (size_t)S * S, f);
+    fclose(f);
+    if (martini_node(mdir, f32, S, Es, nE, prefix, m)) return -1;
     for (int k = 0; k < nE; k++) {
         char path[700];
         snprintf(path, sizeof path, "%s%d.bin", prefix, k);
@@ -213,26 +223,15 @@ static int run_cli_mesh(const char *bin, const char *outdir, const char *pgm, do
 static int run_martini_warm(const char *mdir, const char *outdir, const char *f32, uint32_t S, const double *Es,
                             mart *m)
 {
-    char cmd[4096], prefix[600], errs[256] = "";
+    char prefix[600];
     snprintf(prefix, sizeof prefix, "%s/mesh_cold_martini_", outdir);
-    for (int k = 0; k < COLD_NE; k++) {
-        size_t l = strlen(errs);
-        snprintf(errs + l, sizeof errs - l, "%s%g", k ? "," : "", Es[k]);
-    }
-    snprintf(cmd, sizeof cmd, "node tests/bench/martini.js '%s' '%s' %u %s '%s' %d", mdir, f32, S, errs, prefix, RUNS);
-    FILE *p = popen(cmd, "r");
-    if (!p) return -1;
-    int n = 0;
-    while (n < COLD_NE && fscanf(p, "%lf %lf %lf %u %lf %lf %lf", &m[n].E, &m[n].ms, &m[n].build_ms, &m[n].tris,
-                                 &m[n].init_ms, &m[n].cold_ms, &m[n].min_ms) == 7)
-        n++;
-    if (pclose(p) != 0 || n != COLD_NE) return -1;
+    int r = martini_node(mdir, f32, S, Es, COLD_NE, prefix, m);
     for (int k = 0; k < COLD_NE; k++) {
         char path[700];
         snprintf(path, sizeof path, "%s%d.bin", prefix, k);
         remove(path);
     }
-    return 0;
+    return r;
 }
 
 static double min_of(const double *v, int n)
