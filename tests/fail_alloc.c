@@ -34,3 +34,26 @@ rs_allocator fail_alloc_hook(fail_alloc *f)
     rs_allocator a = { fa_malloc, fa_realloc, fa_free, f };
     return a;
 }
+
+fail_sweep fail_alloc_sweep(long max_tries, fail_try_fn fn, void *user)
+{
+    fail_sweep fs = { 0, 0, 0, 0 };
+    for (long n = 0; n < max_tries && !fs.succeeded; n++) {
+        fail_alloc fa = { -1, 0 };
+        rs_allocator al = fail_alloc_hook(&fa);
+        rs_ctx *c = NULL;
+        fs.tries++;
+        if (rs_ctx_create(&al, NULL, &c) != RS_OK) {
+            fs.wrong++;
+            break;
+        }
+        fa.countdown = n;
+        int wrong = 0;
+        rs_result r = fn(c, user, &wrong);
+        if (r == RS_OK) fs.succeeded = 1;
+        else if (r != RS_ERR_NOMEM || wrong) fs.wrong++;
+        rs_ctx_free(c);
+        if (fa.live != 0) fs.leaks++;
+    }
+    return fs;
+}

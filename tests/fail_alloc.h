@@ -12,4 +12,18 @@ typedef struct fail_alloc {
 
 /* An rs_allocator whose user is `f`. */
 rs_allocator fail_alloc_hook(fail_alloc *f);
+
+/* One try of a failure sweep: make what is tested on context c, free it,
+ * return the result; set *wrong when a failure left an object behind. */
+typedef rs_result (*fail_try_fn)(rs_ctx *c, void *user, int *wrong);
+typedef struct fail_sweep {
+    int succeeded; /* a try succeeded (the sweep stops there) */
+    long tries;    /* tries made, the successful one included */
+    long wrong;    /* tries that failed other than with RS_ERR_NOMEM, or set *wrong */
+    long leaks;    /* tries that left blocks allocated */
+} fail_sweep;
+/* Fail the first, second, ... allocation in turn: try n runs on a fresh
+ * context whose allocator fails after n successful allocations, until a
+ * try succeeds or max_tries were made. */
+fail_sweep fail_alloc_sweep(long max_tries, fail_try_fn fn, void *user);
 #endif

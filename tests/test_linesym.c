@@ -460,6 +460,23 @@ static void test_bad_input(void)
     rs_roads_free(ctx, roads);
 }
 
+typedef struct alloc_case {
+    const rs_roads *roads;
+    const uint32_t *bs;
+    const rs__band *bands;
+} alloc_case;
+
+static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
+{
+    const alloc_case *ac = user;
+    rs__linesym_params p = params(100, 100, 0.4, RS__AA_EXACT);
+    rs__linesym *L = NULL;
+    rs_result r = rs__linesym_build(c, ac->roads, &p, ac->bs, ac->bands, &L);
+    *wrong = r != RS_OK && L != NULL;
+    rs__linesym_free(c, L);
+    return r;
+}
+
 static void test_alloc_failures(void)
 {
     uint32_t seed = 7;
@@ -468,27 +485,14 @@ static void test_alloc_failures(void)
     uint32_t bs[31];
     for (int i = 0; i <= 30; i++) bs[i] = (uint32_t)(2 * i);
     random_bands(&seed, bands, 60);
-    int succeeded = 0, wrong = 0, leaks = 0;
-    long n;
-    for (n = 0; n < 1000 && !succeeded && roads; n++) {
-        fail_alloc fa = { -1, 0 };
-        rs_allocator al = fail_alloc_hook(&fa);
-        rs_ctx *c = NULL;
-        if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong++; break; }
-        fa.countdown = n;
-        rs__linesym_params p = params(100, 100, 0.4, RS__AA_EXACT);
-        rs__linesym *L = NULL;
-        rs_result r = rs__linesym_build(c, roads, &p, bs, bands, &L);
-        if (r == RS_OK) succeeded = 1;
-        else if (r != RS_ERR_NOMEM || L != NULL) wrong++;
-        rs__linesym_free(c, L);
-        rs_ctx_free(c);
-        if (fa.live != 0) leaks++;
-    }
-    CHECK(succeeded);
-    CHECK(n > 4);
-    CHECK_EQ_INT(wrong, 0);
-    CHECK_EQ_INT(leaks, 0);
+    CHECK(roads != NULL);
+    if (!roads) return;
+    alloc_case ac = { roads, bs, bands };
+    fail_sweep fs = fail_alloc_sweep(1000, alloc_try, &ac);
+    CHECK(fs.succeeded);
+    CHECK(fs.tries > 4);
+    CHECK_EQ_INT(fs.wrong, 0);
+    CHECK_EQ_INT(fs.leaks, 0);
     rs_roads_free(ctx, roads);
 }
 

@@ -443,33 +443,28 @@ static void test_extreme(void)
 
 /* --- allocation failures ----------------------------------------------------------- */
 
+static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
+{
+    rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
+    rs__roadfield *f = NULL;
+    rs_result r = rs__roadfield_build(c, user, &p, &f);
+    *wrong = r != RS_OK && f != NULL;
+    rs__roadfield_free(c, f);
+    return r;
+}
+
 static void test_alloc_failures(void)
 {
     sc_rng g;
     sc_rng_seed(&g, 5);
     rs_roads *roads = random_roads(&g, 60, 60, 40, 0, 0, NULL); /* > 64 segments: the array grows */
     CHECK(roads != NULL);
-    int succeeded = 0, wrong = 0, leaks = 0;
-    long n;
-    for (n = 0; n < 1000 && !succeeded && roads; n++) {
-        fail_alloc fa = { -1, 0 };
-        rs_allocator al = fail_alloc_hook(&fa);
-        rs_ctx *c = NULL;
-        if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong++; break; }
-        fa.countdown = n;
-        rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
-        rs__roadfield *f = NULL;
-        rs_result r = rs__roadfield_build(c, roads, &p, &f);
-        if (r == RS_OK) succeeded = 1;
-        else if (r != RS_ERR_NOMEM || f != NULL) wrong++;
-        rs__roadfield_free(c, f);
-        rs_ctx_free(c);
-        if (fa.live != 0) leaks++;
-    }
-    CHECK(succeeded);
-    CHECK(n > 4);
-    CHECK_EQ_INT(wrong, 0);
-    CHECK_EQ_INT(leaks, 0);
+    if (!roads) return;
+    fail_sweep fs = fail_alloc_sweep(1000, alloc_try, roads);
+    CHECK(fs.succeeded);
+    CHECK(fs.tries > 4);
+    CHECK_EQ_INT(fs.wrong, 0);
+    CHECK_EQ_INT(fs.leaks, 0);
     rs_roads_free(ctx, roads);
 }
 

@@ -487,40 +487,35 @@ static void test_threads(void)
 
 /* --- allocation failures ----------------------------------------------------------- */
 
+static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
+{
+    static const char text[] = "road a width 3\n0 0\n16 12\nend\nroad b width 2\n0 12\n16 0\n3 3\nend\n";
+    const float *z = user;
+    (void)wrong;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_result r = rs_dem_create(c, 17, 13, z, &dem);
+    if (!r) r = rs_roads_parse(c, text, sizeof text - 1, &roads);
+    image im = { 0, 0, NULL, NULL };
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
+    if (!r) r = splat(c, dem, roads, &o, &im);
+    image_free(&im);
+    rs_roads_free(c, roads);
+    rs_dem_free(c, dem);
+    return r;
+}
+
 static void test_alloc_failures(void)
 {
-    const char text[] = "road a width 3\n0 0\n16 12\nend\nroad b width 2\n0 12\n16 0\n3 3\nend\n";
     float z[17 * 13];
     for (int i = 0; i < 17 * 13; i++) z[i] = (float)(i % 5);
-    int succeeded = 0, wrong_code = 0, leaks = 0;
-    long n;
-    for (n = 0; n < 10000 && !succeeded; n++) {
-        fail_alloc fa = { -1, 0 };
-        rs_allocator al = fail_alloc_hook(&fa);
-        rs_ctx *c = NULL;
-        if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong_code++; break; }
-        fa.countdown = n;
-        rs_dem *dem = NULL;
-        rs_roads *roads = NULL;
-        rs_result r = rs_dem_create(c, 17, 13, z, &dem);
-        if (!r) r = rs_roads_parse(c, text, sizeof text - 1, &roads);
-        image im = { 0, 0, NULL, NULL };
-        rs_splat_options o;
-        memset(&o, 0, sizeof o);
-        o.coverage.edges = RS_EDGES_ALPHAMAP; /* this file tests the alpha-map table */
-        if (!r) r = splat(c, dem, roads, &o, &im);
-        if (r == RS_OK) succeeded = 1;
-        else if (r != RS_ERR_NOMEM) wrong_code++;
-        image_free(&im);
-        rs_roads_free(c, roads);
-        rs_dem_free(c, dem);
-        rs_ctx_free(c);
-        if (fa.live != 0) leaks++;
-    }
-    CHECK(succeeded);
-    CHECK(n > 5);
-    CHECK_EQ_INT(wrong_code, 0);
-    CHECK_EQ_INT(leaks, 0);
+    fail_sweep fs = fail_alloc_sweep(10000, alloc_try, z);
+    CHECK(fs.succeeded);
+    CHECK(fs.tries > 5);
+    CHECK_EQ_INT(fs.wrong, 0);
+    CHECK_EQ_INT(fs.leaks, 0);
 }
 
 /* Absurd but finite input: far-away points, a huge width, a road that is

@@ -373,38 +373,40 @@ static void test_arguments(void)
 
 /* Every allocation of create + window failing in turn: RS_ERR_NOMEM, no leak. */
 
+/* Modes 0, 1: alpha-map and analytic edges; 2, 3: the same on the styled roads. */
+typedef struct alloc_case {
+    const fixture *f;
+    int mode;
+} alloc_case;
+
+static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
+{
+    const alloc_case *ac = user;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    o.coverage.edges = ac->mode & 1 ? RS_EDGES_ANALYTIC : RS_EDGES_ALPHAMAP;
+    if (ac->mode >= 2) o.style.styles = ac->f->styles;
+    rs_splatter *s = NULL;
+    uint8_t px[9 * 7 * 4];
+    rs_result r = rs_splatter_create(c, ac->f->dem, ac->mode >= 2 ? ac->f->sroads : ac->f->roads, NULL, &o, &s);
+    if (!r) r = rs_splat_window(c, s, 3, 4, 9, 7, px, 9 * 4, NULL, 0, NULL);
+    (void)wrong;
+    rs_splatter_free(c, s);
+    return r;
+}
+
 static void test_alloc_failures(void)
 {
     fixture f;
     fixture_init(&f, 0);
     for (int mode = 0; mode < 4; mode++) {
-        int succeeded = 0, wrong = 0, leaks = 0;
-        long n;
-        for (n = 0; n < 5000 && !succeeded; n++) {
-            fail_alloc fa = { -1, 0 };
-            rs_allocator al = fail_alloc_hook(&fa);
-            rs_ctx *c = NULL;
-            if (rs_ctx_create(&al, NULL, &c) != RS_OK) { wrong++; break; }
-            fa.countdown = n;
-            rs_splat_options o;
-            memset(&o, 0, sizeof o);
-            o.texels = 2;
-            o.coverage.edges = mode & 1 ? RS_EDGES_ANALYTIC : RS_EDGES_ALPHAMAP;
-            if (mode >= 2) o.style.styles = f.styles; /* modes 2, 3: the styled roads */
-            rs_splatter *s = NULL;
-            uint8_t px[9 * 7 * 4];
-            rs_result r = rs_splatter_create(c, f.dem, mode >= 2 ? f.sroads : f.roads, NULL, &o, &s);
-            if (!r) r = rs_splat_window(c, s, 3, 4, 9, 7, px, 9 * 4, NULL, 0, NULL);
-            if (r == RS_OK) succeeded = 1;
-            else if (r != RS_ERR_NOMEM) wrong++;
-            rs_splatter_free(c, s);
-            rs_ctx_free(c);
-            if (fa.live != 0) leaks++;
-        }
-        CHECK(succeeded);
-        CHECK(n > 3);
-        CHECK_EQ_INT(wrong, 0);
-        CHECK_EQ_INT(leaks, 0);
+        alloc_case ac = { &f, mode };
+        fail_sweep fs = fail_alloc_sweep(5000, alloc_try, &ac);
+        CHECK(fs.succeeded);
+        CHECK(fs.tries > 3);
+        CHECK_EQ_INT(fs.wrong, 0);
+        CHECK_EQ_INT(fs.leaks, 0);
     }
     fixture_free(&f);
 }
