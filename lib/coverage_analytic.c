@@ -2,10 +2,15 @@
  * the union of the road buffers, from the road field (lib/roadfield.c). */
 #include "splatter.h"
 #include "roadfield.h"
+#include "styling.h"
 
 void rs__coverage_analytic(const rs_splatter *s, rs__piece *p)
 {
-    rs__roadfield_coverage(s->grid->field, p->x0, p->y0, p->w, p->rows, s->texel_m, p->cov, p->w);
+    /* casings from the grid's field widened: their coverage C into ov in
+     * the same pass (the overlays stage reads it there) */
+    const rs__styling *st = s->grid->styling;
+    const rs__roadfield *g = st && st->casing_merged ? st->casing : NULL;
+    rs__roadfield_coverage2(s->grid->field, g, p->x0, p->y0, p->w, p->rows, s->texel_m, p->cov, p->ov, p->w);
 }
 
 /* Shared end of both coverage modes: R to 16 bits, the value the weight

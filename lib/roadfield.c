@@ -29,6 +29,9 @@
  * cells; an explicit cell is grown (never shrunk) to at most MAX cells. */
 #define GRID_AUTO_CELLS ((double)(1u << 22))
 #define GRID_MAX_CELLS ((double)(1u << 24))
+/* rs__roadfield_coverage2: where f's cover is within this of 1, g's
+ * complex covers are skipped (below a quarter of an 8-bit level) */
+#define CASING_SKIP (1.0 / 1024)
 
 typedef struct rf_seg {
     double ax, ay, bx, by; /* end points, local metres */
@@ -442,6 +445,41 @@ static void seg_relations(rs__roadfield *f, const uint32_t *cell1)
     }
 }
 
+/* The index from the counts in b (pass 1, seg_cells with fill = 0, run
+ * over f->seg): offsets, lists, segment relations, row lists, colpix. */
+static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size_t cap_seg)
+{
+    size_t ncell = (size_t)f->gw * f->gh;
+    rs_result res;
+    /* Counts to end offsets; pass 2 fills each list from its end, visiting
+     * segments last to first, so every list comes out ascending. */
+    uint64_t run = 0;
+    for (size_t i = 0; i < ncell; i++) {
+        if (f->start[i]) f->nonempty++;
+        if (f->start[i] > f->maxlist) f->maxlist = f->start[i];
+        if (f->full[i]) f->nfull++;
+        run += f->start[i];
+        f->start[i] = (uint32_t)run;
+    }
+    f->start[ncell] = (uint32_t)run;
+    f->nent = (size_t)run;
+    f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
+    if (!f->ids) return RS_ERR_NOMEM;
+    b->cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b->cell1);
+    if (!b->cell1) return RS_ERR_NOMEM;
+    for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+    seg_relations(f, b->cell1);
+    rs__free(ctx, b->cell1);
+    b->cell1 = NULL;
+    if ((res = build_rows(ctx, f)) != RS_OK) return res;
+    build_colpix(ctx, f);
+    f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
+               cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
+               (size_t)f->rstart[f->gh] * (sizeof *f->rids + 4 * sizeof *f->rbox) +
+               (f->colpix ? ((size_t)f->gw + 1) * sizeof *f->colpix : 0);
+    return RS_OK;
+}
+
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out)
 {
@@ -542,32 +580,61 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             f->seg[f->nseg++] = sg;
         }
     }
-    /* Counts to end offsets; pass 2 fills each list from its end, visiting
-     * segments last to first, so every list comes out ascending. */
-    uint64_t run = 0;
-    for (size_t i = 0; i < ncell; i++) {
-        if (f->start[i]) f->nonempty++;
-        if (f->start[i] > f->maxlist) f->maxlist = f->start[i];
-        if (f->full[i]) f->nfull++;
-        run += f->start[i];
-        f->start[i] = (uint32_t)run;
-    }
-    f->start[ncell] = (uint32_t)run;
-    f->nent = (size_t)run;
-    f->ids = rs__alloc_array(ctx, f->nent ? f->nent : 1, sizeof *f->ids);
-    if (!f->ids) { res = RS_ERR_NOMEM; goto fail; }
-    b.cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b.cell1);
-    if (!b.cell1) { res = RS_ERR_NOMEM; goto fail; }
-    for (size_t k = f->nseg; k-- > 0;) seg_cells(&b, &f->seg[k], 1, (uint32_t)k);
-    seg_relations(f, b.cell1);
+    if ((res = index_finish(ctx, f, &b, cap_seg)) != RS_OK) goto fail;
+    *out = f;
+    rs__ok(ctx);
+    return RS_OK;
+fail:
     rs__free(ctx, b.cell1);
-    b.cell1 = NULL;
-    if ((res = build_rows(ctx, f)) != RS_OK) goto fail;
-    build_colpix(ctx, f);
-    f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
-               cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
-               (size_t)f->rstart[f->gh] * (sizeof *f->rids + 4 * sizeof *f->rbox) +
-               (f->colpix ? ((size_t)f->gw + 1) * sizeof *f->colpix : 0);
+    rs__roadfield_free(ctx, f);
+    if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
+    return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
+                    (unsigned long long)b.limit);
+}
+
+rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
+                              rs__roadfield **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out || !src || !extra) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
+    *out = NULL;
+    for (size_t k = 0; k < src->nseg; k++) {
+        uint32_t road = src->seg[k].road;
+        if (road >= nroads || !(extra[road] >= 0 && extra[road] <= src->c))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: widening of road %lu must be 0..%g m",
+                            (unsigned long)road, src->c);
+    }
+    rs__roadfield *f = rs__calloc(ctx, 1, sizeof *f);
+    if (!f) return rs__fail(ctx, RS_ERR_NOMEM, "roadfield: out of memory");
+    f->c = src->c;
+    f->inv_c = src->inv_c;
+    f->gw = src->gw;
+    f->gh = src->gh;
+    f->pixel = src->pixel;
+    f->margin = src->margin;
+    f->reach = src->reach;
+    size_t ncell = (size_t)f->gw * f->gh;
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL };
+    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
+    rs_result res = RS_OK;
+    f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
+    f->full = rs__calloc(ctx, ncell, 1);
+    f->seg = rs__alloc_array(ctx, src->nseg ? src->nseg : 1, sizeof *f->seg);
+    if (!f->start || !f->full || !f->seg) { res = RS_ERR_NOMEM; goto fail; }
+    b.cnt = f->start;
+    f->nseg = src->nseg;
+    /* the same segments in the same order (the ids of both fields agree),
+     * each grown by its road's extra half width; the index anew */
+    for (size_t k = 0; k < f->nseg; k++) {
+        rf_seg *sg = &f->seg[k];
+        *sg = src->seg[k];
+        sg->r += extra[sg->road];
+        sg->jnext = 0;
+        sg->jpart = 0;
+        sg->redundant = 0;
+        if (seg_cells(&b, sg, 0, 0) < 0) { res = RS_ERR_LIMIT; goto fail; }
+    }
+    if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
     *out = f;
     rs__ok(ctx);
     return RS_OK;
@@ -580,6 +647,8 @@ fail:
 }
 
 size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
+
+double rs__roadfield_cell(const rs__roadfield *f) { return f ? f->c : 0; }
 
 rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t texels)
 {
@@ -1426,8 +1495,8 @@ typedef struct rf_rowbuf {
      * needing per-pixel work, full runs, their pixel range [k0, k1], and the
      * row-list entries whose box meets that range in x (nact = UINT32_MAX:
      * more than ACT_MAX, check them all) */
-    uint32_t crow, ntodo, nfull, k0, k1, nact;
-    uint16_t todo[CHUNK], fullr[CHUNK];
+    uint32_t crow, ntodo, nfull, nfullg, k0, k1, nact;
+    uint16_t todo[CHUNK], fullr[CHUNK], fullg[CHUNK];
     uint32_t act[ACT_MAX], sel[ACT_MAX];
     /* pixels of the current row with at least one candidate (cnt > 0), in
      * the order first painted; cnt is zero again after each row */
@@ -1512,20 +1581,68 @@ static uint32_t run_col(const rf_rowbuf *rb, uint32_t k)
 
 /* A pixel with one candidate: band_value when the pixel is in its slab,
  * else it joins the list lm (cap_cover and the others). Returns lm's new
- * length. */
-static uint32_t one_cand(const rs__roadfield *f, rf_rowbuf *rb, uint32_t k, double a, double cy, const rf_px *q,
-                         double *o, uint32_t nm)
+ * length. With a second field g (the same segments, wider: coverage2),
+ * og[k] gets g's band_value too, unless already 1 (a full cell of g). */
+static uint32_t one_cand(const rs__roadfield *f, const rs__roadfield *g, rf_rowbuf *rb, uint32_t k, double a,
+                         double cy, const rf_px *q, double *o, double *og, uint32_t nm)
 {
     double cx = (a + (double)k) * q->side;
-    const rf_seg *s = &f->seg[rb->cand[k][0]];
+    uint32_t id = rb->cand[k][0];
+    const rf_seg *s = &f->seg[id];
     double wx = cx - s->ax, wy = cy - s->ay, pr = wx * s->ux + wy * s->uy, hp = q->hs * s->l1;
     if (s->len > 0 && pr - hp >= 0 && pr + hp <= s->len) {
-        o[k] = band_value(s, q, wx * s->uy - wy * s->ux);
+        double t = wx * s->uy - wy * s->ux;
+        o[k] = band_value(s, q, t);
+        if (g && og[k] != 1) og[k] = band_value(&g->seg[id], q, t);
         return nm;
     }
     rb->lm[nm] = (uint16_t)k;
     rb->lc[nm] = 1;
     return nm + 1;
+}
+
+/* The cover of pixel k with c candidates (not all in one slab, or more
+ * than one): the near ones by seg_eval, then near_cover; the cell scan
+ * (pixel_cover) past SPAN_CAND candidates. */
+static double cand_cover(const rs__roadfield *f, const rf_rowbuf *rb, uint32_t k, uint8_t c, uint32_t row,
+                         double cx, double cy, const rf_px *q, const rf_px *qs)
+{
+    if (c > SPAN_CAND) {
+        uint32_t col = run_col(rb, k);
+        rf_cells cr = { col, col, row, row };
+        return pixel_cover(f, &cr, cx, cy, q, qs);
+    }
+    /* the candidates are distinct segments: no duplicate check */
+    rf_near nr;
+    int n = 0, deep = 0;
+    uint8_t j = 0;
+    if (c == 2) {
+        /* the common case (joints, crossings): both in one go */
+        uint32_t i0 = rb->cand[k][0], i1 = rb->cand[k][1];
+        int c0, c1;
+        seg_eval2(&f->seg[i0], &f->seg[i1], cx, cy, q, &nr, 0, &c0, &c1);
+        deep = (c0 == 2) | (c1 == 2);
+        int keep0 = (c0 == 1) & !f->seg[i0].redundant, keep1 = (c1 == 1) & !f->seg[i1].redundant;
+        /* a first candidate not kept: the second's results move to slot 0 */
+        nr.id[0] = keep0 ? i0 : i1;
+        nr.p[0] = keep0 ? nr.p[0] : nr.p[1];
+        nr.t[0] = keep0 ? nr.t[0] : nr.t[1];
+        nr.slab[0] = keep0 ? nr.slab[0] : nr.slab[1];
+        nr.id[1] = i1;
+        n = keep0 + keep1;
+        j = c;
+    }
+    for (; j < c; j++) {
+        uint32_t id = rb->cand[k][j];
+        int cl = seg_eval(&f->seg[id], cx, cy, q, &nr, n);
+        deep |= cl == 2;
+        nr.id[n] = id;
+        n += (cl == 1) & !f->seg[id].redundant;
+    }
+    nr.n = n;
+    nr.many = 0;
+    /* the cells are read only when nr.many */
+    return deep ? 1 : near_cover(f, &nr, NULL, cx, cy, q, qs);
 }
 
 /* One pixel row of a chunk, one-cell path. Pixels in empty cells are 0, in
@@ -1536,22 +1653,33 @@ static uint32_t one_cand(const rs__roadfield *f, rf_rowbuf *rb, uint32_t k, doub
  * only their few candidates exactly (seg_class, as the cell scan does).
  * tol is far above the rounding of the spans, so this equals the scan of
  * the pixel's cell list (docs/roadfield.md): a pixel's value never depends
- * on the block. */
-static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t row, double cy, const rf_px *q,
-                      const rf_px *qs, double *o)
+ * on the block.
+ * With a second field g (rs__roadfield_widen of f: the same segments and
+ * grid, radii at least f's), og gets g's coverage in the same pass: the
+ * rows list g's segments (near spans of g's radii list every pixel either
+ * field needs), deep spans and full cells are f's (deep or full in f is so
+ * in g), cells full only in g are 1 in og, and every listed pixel is
+ * evaluated with both fields' segments. Each output equals its field's
+ * own pass: a pixel's candidates are a superset of that pass's, and the
+ * extra ones classify as clear (docs/roadfield.md). */
+static void cover_row(const rs__roadfield *f, const rs__roadfield *g, rf_rowbuf *rb, double a, uint32_t row,
+                      double cy, const rf_px *q, const rf_px *qs, double *o, double *og)
 {
     double pix = q->side, e = q->e;
+    const rs__roadfield *L = g ? g : f; /* the lists */
     if (rb->crow != row) {
         size_t base = (size_t)row * f->gw;
-        uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0, nfull = 0;
+        uint32_t k0 = UINT32_MAX, k1 = 0, ntodo = 0, nfull = 0, nfullg = 0;
         /* runs of empty, full and other cells, listed without a branch (a
          * run outside the grid reads cell `base`, and counts as empty) */
         for (uint32_t m = 0; m < rb->nrun; m++) {
             uint32_t in = rb->rc[m] != UINT32_MAX;
             size_t cell = base + (in ? rb->rc[m] : 0);
-            uint32_t some = in & (f->start[cell] != f->start[cell + 1]), full = some & (f->full[cell] != 0);
+            uint32_t some = in & (L->start[cell] != L->start[cell + 1]), full = some & (f->full[cell] != 0);
             rb->fullr[nfull] = (uint16_t)m;
             nfull += full;
+            rb->fullg[nfullg] = (uint16_t)m;
+            nfullg += g ? some & !full & (g->full[cell] != 0) : 0;
             rb->todo[ntodo] = (uint16_t)m;
             ntodo += some & !full;
         }
@@ -1563,14 +1691,15 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
         rb->crow = row;
         rb->ntodo = ntodo;
         rb->nfull = nfull;
+        rb->nfullg = nfullg;
         rb->k0 = k0;
         rb->k1 = k1;
         rb->nact = UINT32_MAX;
-        if (ntodo && f->rspan[row] && f->rstart[row + 1] - f->rstart[row] <= ACT_MAX) {
+        if (ntodo && L->rspan[row] && f->rspan[row] && L->rstart[row + 1] - L->rstart[row] <= ACT_MAX) {
             double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix;
             uint32_t n = 0;
-            for (uint32_t m = f->rstart[row]; m < f->rstart[row + 1]; m++) {
-                const float *bx = f->rbox + 4 * (size_t)m;
+            for (uint32_t m = L->rstart[row]; m < L->rstart[row + 1]; m++) {
+                const float *bx = L->rbox + 4 * (size_t)m;
                 if (!(xhi < bx[0] || xlo > bx[1])) rb->act[n++] = m;
             }
             rb->nact = n;
@@ -1580,12 +1709,20 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
     memset(o, 0, rb->rk[rb->nrun] * sizeof *o);
     for (uint32_t t = 0; t < rb->nfull; t++)
         for (uint32_t k = rb->rk[rb->fullr[t]]; k < rb->rk[rb->fullr[t] + 1]; k++) o[k] = 1;
+    if (g) {
+        memcpy(og, o, rb->rk[rb->nrun] * sizeof *o);
+        for (uint32_t t = 0; t < rb->nfullg; t++)
+            for (uint32_t k = rb->rk[rb->fullg[t]]; k < rb->rk[rb->fullg[t] + 1]; k++) og[k] = 1;
+    }
     if (!ntodo) return;
-    if (!f->rspan[row]) {
+    if (!L->rspan[row] || !f->rspan[row]) {
         for (uint32_t t = 0; t < ntodo; t++) {
             uint32_t m = rb->todo[t];
             rf_cells cr = { rb->rc[m], rb->rc[m], row, row };
-            for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) o[k] = pixel_cover(f, &cr, (a + (double)k) * pix, cy, q, qs);
+            for (uint32_t k = rb->rk[m]; k < rb->rk[m + 1]; k++) {
+                o[k] = pixel_cover(f, &cr, (a + (double)k) * pix, cy, q, qs);
+                if (g && og[k] != 1) og[k] = pixel_cover(g, &cr, (a + (double)k) * pix, cy, q, qs);
+            }
         }
         return;
     }
@@ -1597,25 +1734,25 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
          * by margin >= e) meets this pixel row, listed without a branch */
         uint32_t n = 0;
         for (uint32_t j = 0; j < nent; j++) {
-            const float *bx = f->rbox + 4 * (size_t)rb->act[j];
+            const float *bx = L->rbox + 4 * (size_t)rb->act[j];
             rb->sel[n] = rb->act[j];
             n += (uint32_t)(!(cy < bx[2]) & !(cy > bx[3]));
         }
         nent = n;
         list = rb->sel;
     } else
-        nent = f->rstart[row + 1] - f->rstart[row];
+        nent = L->rstart[row + 1] - L->rstart[row];
     for (uint32_t j = 0; j < nent; j++) {
         uint32_t m;
         if (list) m = list[j];
         else {
-            m = f->rstart[row] + j;
-            const float *bx = f->rbox + 4 * (size_t)m;
+            m = L->rstart[row] + j;
+            const float *bx = L->rbox + 4 * (size_t)m;
             if (cy < bx[2] || cy > bx[3] || xhi < bx[0] || xlo > bx[1]) continue;
         }
-        uint32_t id = f->rids[m];
-        const rf_seg *s = &f->seg[id];
-        double ro = s->r + e + s->tol, ri = s->r - e - s->tol;
+        uint32_t id = L->rids[m];
+        const rf_seg *s = &f->seg[id], *sl = &L->seg[id];
+        double ro = sl->r + e + sl->tol, ri = s->r - e - s->tol;
         int32_t kk[4];
         int got = capsule_pixels(s, cy, ro, ri, a, ipix, k0, k1, kk);
         if (!(got & 1)) continue;
@@ -1624,6 +1761,7 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
          * near span minus the deep one */
         if (got & 2) {
             fill_one(o, kk[2], kk[3]);
+            if (g) fill_one(og, kk[2], kk[3]);
             npl = paint_run(rb, npl, kk[0], (int64_t)kk[2] - 1, id);
             npl = paint_run(rb, npl, (int64_t)kk[3] + 1, kk[1], id);
         } else
@@ -1661,67 +1799,43 @@ static void cover_row(const rs__roadfield *f, rf_rowbuf *rb, double a, uint32_t 
                                   _mm_cmple_pd(_mm_add_pd(pr, hp), len));
         if (_mm_movemask_pd(slab) == 3) {
             double v[2];
-            _mm_storeu_pd(v, band_value2(s0, s1, q, _mm_sub_pd(_mm_mul_pd(wx, uy), _mm_mul_pd(wy, ux))));
+            __m128d tt = _mm_sub_pd(_mm_mul_pd(wx, uy), _mm_mul_pd(wy, ux));
+            _mm_storeu_pd(v, band_value2(s0, s1, q, tt));
             o[p0] = v[0];
             o[p1] = v[1];
+            if (g) {
+                _mm_storeu_pd(v, band_value2(&g->seg[rb->cand[p0][0]], &g->seg[rb->cand[p1][0]], q, tt));
+                if (og[p0] != 1) og[p0] = v[0];
+                if (og[p1] != 1) og[p1] = v[1];
+            }
         } else {
             /* not both (rare): one by one */
-            nm = one_cand(f, rb, p0, a, cy, q, o, nm);
-            nm = one_cand(f, rb, p1, a, cy, q, o, nm);
+            nm = one_cand(f, g, rb, p0, a, cy, q, o, og, nm);
+            nm = one_cand(f, g, rb, p1, a, cy, q, o, og, nm);
         }
     }
 #endif
-    for (; t < n1; t++) nm = one_cand(f, rb, rb->l1[t], a, cy, q, o, nm);
+    for (; t < n1; t++) nm = one_cand(f, g, rb, rb->l1[t], a, cy, q, o, og, nm);
     for (t = 0; t < nm; t++) {
         uint32_t k = rb->lm[t];
         uint8_t c = rb->lc[t];
         double cx = (a + (double)k) * pix;
-        if (c > SPAN_CAND) {
-            uint32_t col = run_col(rb, k);
-            rf_cells cr = { col, col, row, row };
-            o[k] = pixel_cover(f, &cr, cx, cy, q, qs);
-            continue;
-        }
-        /* the candidates are distinct segments: no duplicate check */
-        rf_near nr;
-        int n = 0, deep = 0;
-        uint8_t j = 0;
-        if (c == 2) {
-            /* the common case (joints, crossings): both in one go */
-            uint32_t i0 = rb->cand[k][0], i1 = rb->cand[k][1];
-            int c0, c1;
-            seg_eval2(&f->seg[i0], &f->seg[i1], cx, cy, q, &nr, 0, &c0, &c1);
-            deep = (c0 == 2) | (c1 == 2);
-            int keep0 = (c0 == 1) & !f->seg[i0].redundant, keep1 = (c1 == 1) & !f->seg[i1].redundant;
-            /* a first candidate not kept: the second's results move to slot 0 */
-            nr.id[0] = keep0 ? i0 : i1;
-            nr.p[0] = keep0 ? nr.p[0] : nr.p[1];
-            nr.t[0] = keep0 ? nr.t[0] : nr.t[1];
-            nr.slab[0] = keep0 ? nr.slab[0] : nr.slab[1];
-            nr.id[1] = i1;
-            n = keep0 + keep1;
-            j = c;
-        }
-        for (; j < c; j++) {
-            uint32_t id = rb->cand[k][j];
-            int cl = seg_eval(&f->seg[id], cx, cy, q, &nr, n);
-            deep |= cl == 2;
-            nr.id[n] = id;
-            n += (cl == 1) & !f->seg[id].redundant;
-        }
-        nr.n = n;
-        nr.many = 0;
-        /* the cells are read only when nr.many */
-        o[k] = deep ? 1 : near_cover(f, &nr, NULL, cx, cy, q, qs);
+        o[k] = cand_cover(f, rb, k, c, row, cx, cy, q, qs);
+        /* g is the casing field: a pixel that f covers to within
+         * CASING_SKIP shows no casing the output can hold, so its costly
+         * cover (joints, crossings) is not needed: og = o */
+        if (g && og[k] != 1) og[k] = o[k] >= 1 - CASING_SKIP ? o[k] : cand_cover(g, rb, k, c, row, cx, cy, q, qs);
     }
 }
 
-void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
-                            double pix, double *out, size_t stride)
+static void coverage(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0, uint32_t w,
+                     uint32_t h, double pix, double *out, double *outg, size_t stride)
 {
-    if (!f || !out || !w || !h) return;
     if (!(pix > 0) || !isfinite(pix)) {
-        for (uint32_t y = 0; y < h; y++) memset(out + (size_t)y * stride, 0, w * sizeof *out);
+        for (uint32_t y = 0; y < h; y++) {
+            memset(out + (size_t)y * stride, 0, w * sizeof *out);
+            if (g) memset(outg + (size_t)y * stride, 0, w * sizeof *out);
+        }
         return;
     }
     rf_px q, qs; /* the pixel and its sub-squares */
@@ -1774,10 +1888,13 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
             rb.rk[rb.nrun] = (uint16_t)n;
             for (uint32_t y = 0; y < h; y++) {
                 double cy = ((double)py0 + (double)y + 0.5) * pix;
-                double *o = out + (size_t)y * stride + x0;
+                double *o = out + (size_t)y * stride + x0, *og = g ? outg + (size_t)y * stride + x0 : NULL;
                 int64_t row = cell_of(f, cy, f->gh);
-                if (row < 0) memset(o, 0, n * sizeof *o);
-                else cover_row(f, &rb, a, (uint32_t)row, cy, &q, &qs, o);
+                if (row >= 0) cover_row(f, g, &rb, a, (uint32_t)row, cy, &q, &qs, o, og);
+                else {
+                    memset(o, 0, n * sizeof *o);
+                    if (g) memset(og, 0, n * sizeof *o);
+                }
             }
         }
         return;
@@ -1787,7 +1904,27 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
         for (uint32_t k = 0; k < w; k++) {
             double cx = ((double)px0 + (double)k + 0.5) * pix;
             rf_cells cr;
-            o[k] = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr) ? pixel_cover(f, &cr, cx, cy, &q, &qs) : 0;
+            int any = cells_around(f, cx, cy, 0.5 * pix + 1e-6 * f->c, &cr);
+            o[k] = any ? pixel_cover(f, &cr, cx, cy, &q, &qs) : 0;
+            if (g) outg[(size_t)y * stride + k] = any ? pixel_cover(g, &cr, cx, cy, &q, &qs) : 0;
         }
     }
+}
+
+void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
+                            double pix, double *out, size_t stride)
+{
+    if (!f || !out || !w || !h) return;
+    coverage(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
+}
+
+void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0,
+                             uint32_t w, uint32_t h, double pix, double *out, double *outg, size_t stride)
+{
+    if (!f || !out || !w || !h) return;
+    if (!g || !outg) {
+        coverage(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
+        return;
+    }
+    coverage(f, g, px0, py0, w, h, pix, out, outg, stride);
 }

@@ -25,6 +25,15 @@ rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t te
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out);
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);
+
+/* A field of the same segments as src (the same ids, grid and pixel), each
+ * road's half width grown by extra[road] (nroads entries, each 0..the
+ * index cell: rs__roadfield_cell): what rs__roadfield_coverage2 computes
+ * beside src in one pass (casings). */
+rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
+                              rs__roadfield **out);
+/* The index cell of f, metres. */
+double rs__roadfield_cell(const rs__roadfield *f);
 size_t rs__roadfield_bytes(const rs__roadfield *f);
 
 typedef struct rs__road_point {
@@ -49,6 +58,15 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
  * (px, py, pix) and the field, never on the block. */
 void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
                             double pix, double *out, size_t stride);
+
+/* rs__roadfield_coverage of f into out and of g into outg (same stride),
+ * in one pass: g must be rs__roadfield_widen of f (or NULL: f alone).
+ * out equals f's own rs__roadfield_coverage; outg equals g's, except that
+ * a pixel whose cover by f is within 2^-10 of 1 and is not one straight
+ * edge may get f's cover (g is for casings: what they add to such a pixel
+ * cannot show in 8 bits). */
+void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0,
+                             uint32_t w, uint32_t h, double pix, double *out, double *outg, size_t stride);
 
 /* Index statistics (tests, benchmarks, docs). */
 typedef struct rs__roadfield_stats {

@@ -13,7 +13,6 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__linesym_free(ctx, st->lines);
     rs__roadfield_free(ctx, st->casing);
     rs__roadfield_free(ctx, st->near_own);
-    rs__free(ctx, st->casing_road);
     rs__free(ctx, st->surface);
     rs__free(ctx, st->colour);
     rs__free(ctx, st->half_width);
@@ -41,6 +40,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     uint32_t *band_start = NULL;
     rs__band *bands = NULL;
     rs_roads *casing_roads = NULL;
+    double *extra = NULL;
     if (!st) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road styles");
     st->surface = rs__calloc(ctx, n, 1);
     st->colour = rs__alloc_array(ctx, n, 16 * sizeof *st->colour);
@@ -90,10 +90,9 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         dash = rs__alloc_array(ctx, nbands, RS_STYLE_MAX_DASH * sizeof *dash);
         if (!dash) { r = RS_ERR_NOMEM; goto fail; }
     }
-    if (ncasing && (r = rs_roads_create(ctx, &casing_roads)) != RS_OK) goto fail_dash;
     if (ncasing) {
-        st->casing_road = rs__alloc_array(ctx, ncasing, sizeof *st->casing_road);
-        if (!st->casing_road) { r = RS_ERR_NOMEM; goto fail_dash; }
+        extra = rs__calloc(ctx, n, sizeof *extra);
+        if (!extra) { r = RS_ERR_NOMEM; goto fail_dash; }
     }
     for (size_t i = 0, k = 0, cr = 0; i < n; i++) {
         if ((r = rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, sty)) != RS_OK) goto fail_dash;
@@ -110,13 +109,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             b->phase = ln->phase;
         }
         if (sty->casing_width > 0) {
-            const char *name = NULL;
-            const double *xy = NULL;
-            size_t np = 0;
-            double w = 0;
-            rs_roads_get(roads, i, &name, &w, &xy, &np);
-            if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * sty->casing_width, xy, np)) != RS_OK)
-                goto fail_dash;
+            extra[i] = sty->casing_width;
             const float *c = st->colour + 16 * i + 12;
             if (cr == 0) {
                 memcpy(st->casing_rgba, c, sizeof st->casing_rgba);
@@ -124,7 +117,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             } else if (memcmp(st->casing_rgba, c, sizeof st->casing_rgba)) {
                 st->casing_uniform = 0;
             }
-            st->casing_road[cr++] = (uint32_t)i;
+            cr++;
         }
     }
     if (nbands) {
@@ -141,7 +134,27 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->bytes += rs__linesym_bytes(st->lines);
     }
     if (ncasing) {
-        if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
+        /* The casing field: every road, those with a casing widened by it
+         * (C holds R). From the grid's field when the casings are at most
+         * an index cell wide: the same segments, so the coverage stage
+         * computes C beside R in one pass (docs/linesym.md). */
+        double widest = 0;
+        for (size_t i = 0; i < n; i++) widest = fmax(widest, extra[i]);
+        if (field && widest <= rs__roadfield_cell(field)) {
+            if ((r = rs__roadfield_widen(ctx, field, extra, n, &st->casing)) != RS_OK) goto fail_dash;
+            st->casing_merged = 1;
+        } else {
+            if ((r = rs_roads_create(ctx, &casing_roads)) != RS_OK) goto fail_dash;
+            for (size_t i = 0; i < n; i++) {
+                const char *name = NULL;
+                const double *xy = NULL;
+                size_t np = 0;
+                double w = 0;
+                rs_roads_get(roads, i, &name, &w, &xy, &np);
+                if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np)) != RS_OK) goto fail_dash;
+            }
+            if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
+        }
         st->bytes += rs__roadfield_bytes(st->casing);
     }
     if (st->any_surface) {
@@ -152,8 +165,9 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             st->bytes += rs__roadfield_bytes(st->near_own);
         }
     }
-    st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double)) + ncasing * sizeof(uint32_t);
+    st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double));
     rs__free(ctx, dash);
+    rs__free(ctx, extra);
     rs__free(ctx, bands);
     rs__free(ctx, band_start);
     rs__free(ctx, sty);
@@ -163,6 +177,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     return RS_OK;
 fail_dash:
     rs__free(ctx, dash);
+    rs__free(ctx, extra);
 fail:
     if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory for road styles");
 fail_msg:

@@ -10,8 +10,10 @@ struct rs__linesym;
 
 typedef struct rs__styling {
     struct rs__linesym *lines;        /* NULL: no road has lines */
-    struct rs__roadfield *casing;     /* roads with a casing, widened by it on both sides; NULL: none */
-    uint32_t *casing_road;            /* casing field road -> road */
+    struct rs__roadfield *casing;     /* every road, those with a casing widened by it on both sides (road
+                                         ids as in rs_roads); NULL: no casing */
+    int casing_merged;                /* casing is rs__roadfield_widen of the grid's field: the analytic
+                                         coverage stage computes its coverage into rs__piece.ov */
     int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */
     float casing_rgba[4];
     const struct rs__roadfield *near; /* field for fill / gradient lookups: the grid's, else near_own */

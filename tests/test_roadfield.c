@@ -441,6 +441,102 @@ static void test_extreme(void)
     rs_roads_free(ctx, roads);
 }
 
+/* --- casing field: rs__roadfield_widen and the one-pass coverage2 ------------------ */
+/* coverage2(f, g) against the two fields' own passes, whole and in
+ * windows: R bit for bit; C bit for bit except where R >= 1 - 2^-10 (the
+ * skipped joints and crossings); and C against a field built from the
+ * widened roads themselves (other cells, other lists: the same areas up to
+ * rounding). */
+static void test_widen(void)
+{
+    sc_rng g;
+    sc_rng_seed(&g, 23);
+    size_t r_diff = 0, c_diff = 0, c_skip = 0, listed = 0, bad_window = 0;
+    double worst_built = 0;
+    for (int scene = 0; scene < 6; scene++) {
+        const double W = 120, H = 90, pix = scene % 2 ? 0.5 : 1.0;
+        rs_roads *roads = random_roads(&g, W, H, 14, 0, 0, NULL), *wide = NULL;
+        CHECK(roads != NULL && rs_roads_create(ctx, &wide) == RS_OK);
+        if (!roads || !wide) return;
+        size_t n = rs_roads_count(roads);
+        double extra[16];
+        for (size_t i = 0; i < n; i++) {
+            /* no casing, a thin one, one of a pixel, one of an index cell (the limit) */
+            int kind = (int)(sc_rng_unit(&g) * 4);
+            extra[i] = kind == 0 ? 0 : kind == 1 ? 0.15 : kind == 2 ? pix : -1;
+        }
+        rs__roadfield_params p = params(0, 0, 2.0, W, H, 0, pix);
+        rs__roadfield *f = NULL, *gw = NULL, *h = NULL;
+        CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+        if (!f) return;
+        for (size_t i = 0; i < n; i++) {
+            if (extra[i] < 0) extra[i] = rs__roadfield_cell(f);
+            const double *xy;
+            size_t np;
+            double w;
+            rs_roads_get(roads, i, NULL, &w, &xy, &np);
+            CHECK(rs_roads_add(ctx, wide, NULL, w + 2 * extra[i], xy, np) == RS_OK);
+        }
+        CHECK(rs__roadfield_widen(ctx, f, extra, n, &gw) == RS_OK);
+        CHECK(rs__roadfield_build(ctx, wide, &p, &h) == RS_OK);
+        uint32_t w = (uint32_t)(W / pix), hh = (uint32_t)(H / pix);
+        double *R = coverage_image(f, w, hh, pix), *C = gw ? coverage_image(gw, w, hh, pix) : NULL;
+        double *Cb = h ? coverage_image(h, w, hh, pix) : NULL;
+        double *R2 = calloc((size_t)w * hh, sizeof *R2), *C2 = calloc((size_t)w * hh, sizeof *C2);
+        double *R3 = calloc((size_t)w * hh, sizeof *R3), *C3 = calloc((size_t)w * hh, sizeof *C3);
+        CHECK(R && C && Cb && R2 && C2 && R3 && C3);
+        if (R && C && Cb && R2 && C2 && R3 && C3) {
+            rs__roadfield_coverage2(f, gw, 0, 0, w, hh, pix, R2, C2, w);
+            /* windows of odd sizes */
+            for (uint32_t y0 = 0; y0 < hh; y0 += 37)
+                for (uint32_t x0 = 0; x0 < w; x0 += 53) {
+                    uint32_t ww = w - x0 < 53 ? w - x0 : 53, wh = hh - y0 < 37 ? hh - y0 : 37;
+                    rs__roadfield_coverage2(f, gw, x0, y0, ww, wh, pix, R3 + (size_t)y0 * w + x0,
+                                            C3 + (size_t)y0 * w + x0, w);
+                }
+            for (size_t i = 0; i < (size_t)w * hh; i++) {
+                r_diff += R2[i] != R[i];
+                int skip = R[i] >= 1 - 1.0 / 1024;
+                c_skip += skip && C2[i] != C[i];
+                c_diff += !skip && C2[i] != C[i];
+                listed += C[i] != R[i];
+                bad_window += R3[i] != R2[i] || C3[i] != C2[i];
+                if (!skip && fabs(C[i] - Cb[i]) > worst_built) worst_built = fabs(C[i] - Cb[i]);
+            }
+        }
+        free(R); free(C); free(Cb); free(R2); free(C2); free(R3); free(C3);
+        rs__roadfield_free(ctx, f);
+        rs__roadfield_free(ctx, gw);
+        rs__roadfield_free(ctx, h);
+        rs_roads_free(ctx, roads);
+        rs_roads_free(ctx, wide);
+    }
+    printf("widened field: %zu casing pixels; one pass vs own passes: %zu R and %zu C differ (%zu skipped near R = 1); "
+           "vs a field of the widened roads: max %.2g\n", listed, r_diff, c_diff, c_skip, worst_built);
+    CHECK(listed > 1000);
+    CHECK_EQ_INT(r_diff, 0);
+    CHECK_EQ_INT(c_diff, 0);
+    CHECK_EQ_INT(bad_window, 0);
+    CHECK(worst_built < 1e-9);
+
+    /* the widening is refused beyond an index cell, and for a negative or NaN one */
+    rs_roads *roads = random_roads(&g, 60, 60, 3, 0, 0, NULL);
+    rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
+    rs__roadfield *f = NULL, *gw = NULL;
+    CHECK(roads && rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+    if (f) {
+        double bad[3][3] = { { 0, 0, 2 * rs__roadfield_cell(f) }, { -0.1, 0, 0 }, { NAN, 0, 0 } };
+        for (int k = 0; k < 3; k++) {
+            CHECK(rs__roadfield_widen(ctx, f, bad[k], 3, &gw) == RS_ERR_INVALID_ARG);
+            CHECK(gw == NULL);
+        }
+        double few[1] = { 0 };
+        CHECK(rs__roadfield_widen(ctx, f, few, 1, &gw) == RS_ERR_INVALID_ARG); /* too few entries */
+    }
+    rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, roads);
+}
+
 /* --- allocation failures ----------------------------------------------------------- */
 
 static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
@@ -450,6 +546,22 @@ static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
     rs_result r = rs__roadfield_build(c, user, &p, &f);
     *wrong = r != RS_OK && f != NULL;
     rs__roadfield_free(c, f);
+    return r;
+}
+
+typedef struct widen_try_arg {
+    const rs__roadfield *f;
+    const double *extra;
+    size_t n;
+} widen_try_arg;
+
+static rs_result widen_try(rs_ctx *c, void *user, int *wrong)
+{
+    const widen_try_arg *a = user;
+    rs__roadfield *g = NULL;
+    rs_result r = rs__roadfield_widen(c, a->f, a->extra, a->n, &g);
+    *wrong = r != RS_OK && g != NULL;
+    rs__roadfield_free(c, g);
     return r;
 }
 
@@ -465,6 +577,21 @@ static void test_alloc_failures(void)
     CHECK(fs.tries > 4);
     CHECK_EQ_INT(fs.wrong, 0);
     CHECK_EQ_INT(fs.leaks, 0);
+    /* the widened field */
+    rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
+    rs__roadfield *f = NULL;
+    double extra[40];
+    for (int i = 0; i < 40; i++) extra[i] = 0.1 * (i % 3);
+    CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+    if (f) {
+        widen_try_arg a = { f, extra, 40 };
+        fs = fail_alloc_sweep(1000, widen_try, &a);
+        CHECK(fs.succeeded);
+        CHECK(fs.tries > 4);
+        CHECK_EQ_INT(fs.wrong, 0);
+        CHECK_EQ_INT(fs.leaks, 0);
+    }
+    rs__roadfield_free(ctx, f);
     rs_roads_free(ctx, roads);
 }
 
@@ -477,6 +604,7 @@ int main(void)
     test_coverage_random();
     test_coverage_city();
     test_coverage_redundant();
+    test_widen();
     test_extreme();
     test_alloc_failures();
     rs_ctx_free(ctx);
