@@ -118,14 +118,14 @@ static const char *show(char *buf, size_t cap, const char *s, size_t n)
     return buf;
 }
 
-rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, size_t size, rs_atlas **out)
+static rs_result create(rs_ctx *ctx, const rs_image *img, const char *index, size_t size, int builtin, rs_atlas **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_atlas_create: out is NULL");
     *out = NULL;
     if (!img || !img->rgba || !img->width || !img->height)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_atlas_create: the atlas image is NULL or empty");
-    if ((uint64_t)img->width * img->height > ctx->limits.max_texture_pixels)
+    if (!builtin && (uint64_t)img->width * img->height > ctx->limits.max_texture_pixels)
         return rs__fail(ctx, RS_ERR_LIMIT, "atlas image of %u x %u pixels exceeds the texture limit", img->width,
                         img->height);
     if (!index && size) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_atlas_create: index is NULL");
@@ -156,14 +156,14 @@ rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, s
             break;
         }
         if (tn[0] > RS_MARK_TYPE_MAX) {
-            r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: name %s is longer than %d bytes", line,
+            r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: name '%s' is longer than %d bytes", line,
                          show(b1, sizeof b1, tok[0], tn[0]), RS_MARK_TYPE_MAX);
             break;
         }
         for (size_t i = 0; i < tn[0]; i++) {
             char c = tok[0][i];
             if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-')) {
-                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: name %s: only A-Z a-z 0-9 _ - allowed", line,
+                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: name '%s': only A-Z a-z 0-9 _ - allowed", line,
                              show(b1, sizeof b1, tok[0], tn[0]));
                 break;
             }
@@ -174,13 +174,13 @@ rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, s
         for (int k = 0; k < 6 && !r; k++) {
             const char *stop;
             if (!rs__parse_double(tok[k + 1], tok[k + 1] + tn[k + 1], &v[k], &stop) || stop != tok[k + 1] + tn[k + 1])
-                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: %s %s is not a number", line, what[k],
+                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: %s '%s' is not a number", line, what[k],
                              show(b1, sizeof b1, tok[k + 1], tn[k + 1]));
             else if (k < 4 && !(v[k] >= 0 && v[k] <= 1e9 && v[k] == floor(v[k])))
-                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: %s %s must be a whole number >= 0", line,
+                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: %s '%s' must be a whole number >= 0", line,
                              what[k], show(b1, sizeof b1, tok[k + 1], tn[k + 1]));
             else if (k >= 4 && !(v[k] > 0 && v[k] <= 1e6))
-                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: %s %s must be > 0 and <= 1e6 metres", line,
+                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: %s '%s' must be > 0 and <= 1e6 metres", line,
                              what[k], show(b1, sizeof b1, tok[k + 1], tn[k + 1]));
         }
         if (r) break;
@@ -191,7 +191,7 @@ rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, s
         }
         for (size_t i = 0; i < a->n; i++)
             if (strlen(a->t[i].name) == tn[0] && memcmp(a->t[i].name, tok[0], tn[0]) == 0) {
-                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: type %s given twice", line,
+                r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: type '%s' given twice", line,
                              show(b1, sizeof b1, tok[0], tn[0]));
                 break;
             }
@@ -228,6 +228,12 @@ rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, s
     return RS_OK;
 }
 
+rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, size_t size, rs_atlas **out)
+{
+    return create(ctx, img, index, size, 0, out);
+}
+
+/* The built-in atlas is not the caller's texture: no texture limit. */
 rs_result rs_atlas_default(rs_ctx *ctx, rs_atlas **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
@@ -244,7 +250,7 @@ rs_result rs_atlas_default(rs_ctx *ctx, rs_atlas **out)
         }
     for (; at < n; at++) px[4 * at] = px[4 * at + 1] = px[4 * at + 2] = px[4 * at + 3] = 0;
     rs_image img = { rs__atlas_default_w, rs__atlas_default_h, px };
-    rs_result r = rs_atlas_create(ctx, &img, rs__atlas_default_index, strlen(rs__atlas_default_index), out);
+    rs_result r = create(ctx, &img, rs__atlas_default_index, strlen(rs__atlas_default_index), 1, out);
     rs__free(ctx, px);
     return r;
 }
