@@ -893,7 +893,7 @@ static rs_result point_attr(text_parser *P, const rs__tok *t)
     rs_roads *R = P->roads;
     const char *eq = memchr(t->s, '=', t->n);
     if (!eq)
-        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: extra token %s after the point (point attributes are key=value)",
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: extra token %s after the point",
                         P->line, rs__quote(q, sizeof q, t->s, t->n));
     size_t kn = (size_t)(eq - t->s), vn = t->n - kn - 1;
     if (!key_ok(t->s, kn))

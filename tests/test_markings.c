@@ -330,6 +330,74 @@ static void test_parse(void)
     rs_dem_free(ctx, dem);
 }
 
+
+/* Automatic placement on a small junction: a residential street ending on
+ * a primary road gets a give-way line on its incoming half and the arrows
+ * of its turn:lanes, the primary road a zebra at its crossing point; none
+ * inside the junction area; none with no_auto. */
+static void test_auto(void)
+{
+    static const char text[] = "road main width 8 class=primary\n0 50\n20 50 crossing=zebra\n100 50\nend\n"
+                               "road side width 7 class=residential turn:lanes=left|right\n50 95\n50 50\nend\n"
+                               "road stopper width 6 class=service control=stop\n100 20\n80 50\nend\n";
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    rs_dem *dem = flat_dem(101, 101, 1.0);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    rs__markings *mk = NULL;
+    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk);
+    int give = 0, stop = 0, left = 0, right = 0, zebra = 0;
+    for (size_t i = 0; mk && i < mk->n; i++) {
+        const rs__mk *m = &mk->m[i];
+        const char *name = m->ty->name;
+        if (!strcmp(name, "give_way_line")) {
+            give++;
+            /* side runs north; its end at s = 45 meets main (half width 4 +
+             * 0.5): line centre 0.5 + 0.25 m before that, on the right half */
+            CHECK_NEAR(m->s0, 45 - 4.5 - 0.5 - 0.25, 1e-9);
+            CHECK_NEAR(m->t0, -7.0 / 4, 1e-9);
+            CHECK(!m->flip);
+        } else if (!strcmp(name, "stop_line")) {
+            stop++;
+            CHECK(m->t0 < 0);
+        } else if (!strcmp(name, "arrow_left") || !strcmp(name, "arrow_right")) {
+            if (name[6] == 'l') left++; else right++;
+            CHECK(m->s0 + m->hl <= 45 - 4.5 - 6 + 1e-9);
+            CHECK(m->t0 < 0 && m->t0 > -3.5);
+            /* the left lane is nearer the centre line */
+            if (name[6] == 'l') CHECK(m->t0 > -1.75); else CHECK(m->t0 < -1.75);
+        } else if (!strcmp(name, "zebra")) {
+            zebra++;
+            CHECK_NEAR(m->s0, 20, 1e-9);
+            CHECK_NEAR(2 * m->hw, 7.6, 1e-9);
+        }
+    }
+    CHECK_EQ_INT(give, 1);
+    CHECK_EQ_INT(stop, 1);
+    CHECK_EQ_INT(left, 1);
+    CHECK_EQ_INT(right, 1);
+    CHECK_EQ_INT(zebra, 1);
+    CHECK_EQ_INT(mk ? mk->n_auto : 0, 5);
+    rs__markings_free(ctx, mk);
+    /* a zebra inside the junction area of main is dropped */
+    static const char text2[] = "road main width 8 class=primary\n0 50\n50 50 crossing=zebra\n100 50\nend\n"
+                                "road side width 7 class=residential\n50 95\n50 50\nend\n";
+    rs_roads *r2 = NULL;
+    CHECK(rs_roads_parse(ctx, text2, sizeof text2 - 1, &r2) == RS_OK);
+    mk = NULL;
+    CHECK(rs__markings_build(ctx, dem, r2, &o, &mk) == RS_OK && mk);
+    for (size_t i = 0; mk && i < mk->n; i++) CHECK(strcmp(mk->m[i].ty->name, "zebra") != 0);
+    rs__markings_free(ctx, mk);
+    o.markings.no_auto = 1;
+    mk = (rs__markings *)1;
+    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk == NULL);
+    rs_roads_free(ctx, r2);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
 typedef struct alloc_case {
     const char *text;
 } alloc_case;
@@ -375,6 +443,7 @@ int main(void)
     test_curve();
     test_errors();
     test_parse();
+    test_auto();
     test_alloc_failures();
     rs_ctx_free(ctx);
     return th_finish("test_markings");
