@@ -243,7 +243,8 @@ test: deps
 demo: deps
 	@$(MAKE) --no-print-directory all
 	$(CLI) --cell-size 5 --z-scale 0.01 --stats $(BUILD)/demo-stats.json docs/examples/dem.pgm docs/examples/roads.txt out.png
-	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json)"
+	$(CLI) --cell-size 2 --z-scale 0.01 --texels 20 docs/examples/junction-dem.pgm docs/examples/junction.txt junction.png
+	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json) and junction.png (road markings at 0.1 m per pixel)"
 
 # --- benchmarks ---------------------------------------------------------------
 $(BUILD)/bench/%: tests/bench/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
