@@ -255,41 +255,58 @@ rs_result rs_atlas_default(rs_ctx *ctx, rs_atlas **out)
     return r;
 }
 
-static void bilinear(const rs__atlas_level *L, double x, double y, float out[4])
+/* The up to 4 texels (and weights) of a bilinear tap at level texel
+ * coordinates (x, y) (texel centres at integers); texels outside the level
+ * are transparent and left out. */
+static int taps(const rs__atlas_level *L, double x, double y, const float **q, float *w)
 {
     double fx = floor(x), fy = floor(y);
     float wx = (float)(x - fx), wy = (float)(y - fy);
-    double ix = fx, iy = fy;
-    for (int c = 0; c < 4; c++) out[c] = 0;
+    int n = 0;
     for (int b = 0; b < 2; b++) {
-        double yy = iy + b;
+        double yy = fy + b;
         if (yy < 0 || yy >= L->h) continue;
         float wb = b ? wy : 1 - wy;
         for (int a = 0; a < 2; a++) {
-            double xx = ix + a;
+            double xx = fx + a;
             if (xx < 0 || xx >= L->w) continue;
-            float w = wb * (a ? wx : 1 - wx);
-            const float *q = L->px + ((size_t)yy * L->w + (size_t)xx) * 4;
-            for (int c = 0; c < 4; c++) out[c] += w * q[c];
+            q[n] = L->px + ((size_t)yy * L->w + (size_t)xx) * 4;
+            w[n] = wb * (a ? wx : 1 - wx);
+            n++;
         }
     }
+    return n;
 }
 
+/* Alpha first: most samples of a sprite's box are transparent. */
 void rs__atlas_sample(const rs__atlas_type *t, double x, double y, double lod, float out[4])
 {
+    const float *q[8];
+    float w[8];
     if (!(lod > 0)) lod = 0;
     double top = (double)(t->nlev - 1);
-    if (lod >= top) {
-        double sc = ldexp(1.0, -(int)top);
-        bilinear(&t->lev[t->nlev - 1], x * sc - 0.5, y * sc - 0.5, out);
+    int l = lod >= top ? (int)top : (int)lod;
+    float f = lod >= top ? 0 : (float)(lod - l);
+    double s0 = ldexp(1.0, -l);
+    int n0 = taps(&t->lev[l], x * s0 - 0.5, y * s0 - 0.5, q, w), n = n0;
+    if (f > 0) {
+        n += taps(&t->lev[l + 1], x * s0 * 0.5 - 0.5, y * s0 * 0.5 - 0.5, q + n0, w + n0);
+        for (int i = 0; i < n; i++) w[i] *= i < n0 ? 1 - f : f;
+    }
+    float a = 0;
+    for (int i = 0; i < n; i++) a += w[i] * q[i][3];
+    out[3] = a;
+    if (!(a > 0)) {
+        out[0] = out[1] = out[2] = 0;
         return;
     }
-    int l = (int)lod;
-    float f = (float)(lod - l), o1[4];
-    double s0 = ldexp(1.0, -l), s1 = s0 * 0.5;
-    bilinear(&t->lev[l], x * s0 - 0.5, y * s0 - 0.5, out);
-    if (f > 0) {
-        bilinear(&t->lev[l + 1], x * s1 - 0.5, y * s1 - 0.5, o1);
-        for (int c = 0; c < 4; c++) out[c] += f * (o1[c] - out[c]);
+    float r = 0, g = 0, b = 0;
+    for (int i = 0; i < n; i++) {
+        r += w[i] * q[i][0];
+        g += w[i] * q[i][1];
+        b += w[i] * q[i][2];
     }
+    out[0] = r;
+    out[1] = g;
+    out[2] = b;
 }

@@ -87,6 +87,13 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
  * bends with the road as its buffer does. */
 static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out)
 {
+    if (npt == 2) { /* one segment, extended both ways: the line's own coordinates */
+        double len = pts[5] - pts[2];
+        double ux = (pts[3] - pts[0]) / len, uy = (pts[4] - pts[1]) / len, px = x - pts[0], py = y - pts[1];
+        *s_out = pts[2] + px * ux + py * uy;
+        *t_out = px * uy - py * ux;
+        return;
+    }
     double best = INFINITY, bs = 0, bt = 0;
     for (size_t k = 0; k + 1 < npt; k++) {
         const double *a = pts + 3 * k, *b = a + 3;
@@ -167,34 +174,44 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     }
     m->first = *npts;
     m->npt = np;
-    double far = fabs(m->t0) + m->hw + m->mt + pix;
-    double ext = m->hl + m->ms + pix; /* the end segments reach on */
-    m->bx0 = m->by0 = INFINITY;
-    m->bx1 = m->by1 = -INFINITY;
     for (size_t k = 0; k < np; k++) {
         double *o = *pts + 3 * (*npts + k);
         o[0] = r->x[a + k];
         o[1] = r->y[a + k];
         o[2] = r->s[a + k];
     }
-    /* the box: the stretch, the extended ends, widened by the reach */
-    for (size_t k = 0; k < np; k++) {
-        const double *o = *pts + 3 * (*npts + k);
-        double xs[2] = { o[0], o[0] }, ys[2] = { o[1], o[1] };
-        if (k == 0 || k + 1 == np) {
-            const double *q = k == 0 ? o + 3 : o - 3;
-            double len = fabs(q[2] - o[2]);
-            if (len > 0) {
-                xs[1] = o[0] + (o[0] - q[0]) / len * ext;
-                ys[1] = o[1] + (o[1] - q[1]) / len * ext;
-            }
+    /* the box: the offset rectangle's corners where [lo, hi] starts and
+     * ends (on the end segments' lines, extended past the stretch as the
+     * lookup extends them), and around every vertex inside [lo, hi] the
+     * square of the farthest offset (an outer bend's arc stays in it) */
+    const double *c0 = *pts + 3 * *npts;
+    double tin = m->t0 - m->hw - m->mt, tout = m->t0 + m->hw + m->mt;
+    double far = fabs(tin) > fabs(tout) ? fabs(tin) : fabs(tout);
+    m->bx0 = m->by0 = INFINITY;
+    m->bx1 = m->by1 = -INFINITY;
+    for (int end = 0; end < 2; end++) {
+        double sv = end ? hi : lo;
+        /* the segment of the chain that holds sv (end segments extended) */
+        size_t k = 0;
+        while (k + 2 < np && c0[3 * (k + 1) + 2] <= sv) k++;
+        const double *A = c0 + 3 * k, *B = A + 3;
+        double len = B[2] - A[2], ux = len > 0 ? (B[0] - A[0]) / len : 1, uy = len > 0 ? (B[1] - A[1]) / len : 0;
+        double px = A[0] + (sv - A[2]) * ux, py = A[1] + (sv - A[2]) * uy;
+        for (int side = 0; side < 2; side++) {
+            double tt = side ? tout : tin, x = px + tt * uy, y = py - tt * ux; /* left normal (dy, -dx) */
+            if (x < m->bx0) m->bx0 = x;
+            if (x > m->bx1) m->bx1 = x;
+            if (y < m->by0) m->by0 = y;
+            if (y > m->by1) m->by1 = y;
         }
-        for (int j = 0; j < 2; j++) {
-            if (xs[j] - far < m->bx0) m->bx0 = xs[j] - far;
-            if (xs[j] + far > m->bx1) m->bx1 = xs[j] + far;
-            if (ys[j] - far < m->by0) m->by0 = ys[j] - far;
-            if (ys[j] + far > m->by1) m->by1 = ys[j] + far;
-        }
+    }
+    for (size_t k = 1; k + 1 < np; k++) {
+        const double *V = c0 + 3 * k;
+        if (!(V[2] > lo && V[2] < hi)) continue;
+        if (V[0] - far < m->bx0) m->bx0 = V[0] - far;
+        if (V[0] + far > m->bx1) m->bx1 = V[0] + far;
+        if (V[1] - far < m->by0) m->by0 = V[1] - far;
+        if (V[1] + far > m->by1) m->by1 = V[1] + far;
     }
     *npts += np;
     return 1;
@@ -229,7 +246,14 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
                     for (uint32_t x = x0; x <= x1; x++) mk->start[(size_t)y * mk->gw + x + 1]++;
             } else {
                 for (uint32_t y = y0; y <= y1; y++)
-                    for (uint32_t x = x0; x <= x1; x++) mk->list[mk->start[(size_t)y * mk->gw + x]++] = (uint32_t)i;
+                    for (uint32_t x = x0; x <= x1; x++) {
+                        rs__mk_ref *e = &mk->list[mk->start[(size_t)y * mk->gw + x]++];
+                        e->x0 = nextafterf((float)m->bx0, -INFINITY);
+                        e->y0 = nextafterf((float)m->by0, -INFINITY);
+                        e->x1 = nextafterf((float)m->bx1, INFINITY);
+                        e->y1 = nextafterf((float)m->by1, INFINITY);
+                        e->i = (uint32_t)i;
+                    }
             }
         }
         if (pass == 0) {
@@ -352,9 +376,11 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
             size_t c = row + (size_t)cx;
             uint32_t a = mk->start[c], b = mk->start[c + 1];
             int any = 0;
+            const float fx = (float)x, fy = (float)y;
             for (uint32_t i = a; i < b; i++) {
-                const rs__mk *m = &mk->m[mk->list[i]];
-                if (x < m->bx0 || x > m->bx1 || y < m->by0 || y > m->by1) continue;
+                const rs__mk_ref *e = &mk->list[i];
+                if (fx < e->x0 || fx > e->x1 || fy < e->y0 || fy > e->y1) continue;
+                const rs__mk *m = &mk->m[e->i];
                 tests++;
                 double s, t;
                 road_coords(mk->pts + 3 * m->first, m->npt, x, y, &s, &t);

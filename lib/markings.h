@@ -38,6 +38,11 @@ typedef struct rs__mk {
     double bx0, by0, bx1, by1; /* local bounding box (metres) */
 } rs__mk;
 
+typedef struct rs__mk_ref {
+    float x0, y0, x1, y1; /* the marking's box, rounded outwards */
+    uint32_t i;
+} rs__mk_ref;
+
 typedef struct rs__markings {
     rs_atlas *atlas_own;       /* the built-in atlas when none was given */
     rs__mk *m;
@@ -47,7 +52,7 @@ typedef struct rs__markings {
     double cell;               /* index cell, metres */
     uint32_t gw, gh;
     uint32_t *start;           /* gw*gh + 1 offsets into list */
-    uint32_t *list;            /* marking indices per cell, ascending */
+    struct rs__mk_ref *list;   /* per cell, ascending marking index: the index and its box */
     uint64_t n_explicit, n_auto;
     size_t bytes;
 } rs__markings;
