@@ -98,7 +98,7 @@ DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config
 CONFIG      := $(BUILD)/config.txt
 CONFIG_TEXT := prefix=$(PREFIX) libdir=$(LIBDIR) includedir=$(INCDIR) moduledir=$(MODULEDIR) version=$(VERSION)
 
-.PHONY: all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install install-lib uninstall help clean check-deps FORCE
+.PHONY: atlas all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install install-lib uninstall help clean check-deps FORCE
 .DEFAULT_GOAL := all
 # keep objects of pattern rules (tests, fuzz replays) between runs
 .SECONDARY:
@@ -236,14 +236,15 @@ $(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
 
 test: deps
-	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png
+	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/atlasgen
 	@BUILD=$(BUILD) SAN="$(SAN)" OPT="$(OPT)" sh tests/run.sh
 
 # --- demo ---------------------------------------------------------------------
 demo: deps
 	@$(MAKE) --no-print-directory all
 	$(CLI) --cell-size 5 --z-scale 0.01 --stats $(BUILD)/demo-stats.json docs/examples/dem.pgm docs/examples/roads.txt out.png
-	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json)"
+	$(CLI) --cell-size 2 --z-scale 0.01 --texels 20 docs/examples/junction-dem.pgm docs/examples/junction.txt junction.png
+	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json) and junction.png (road markings at 0.1 m per pixel)"
 
 # --- benchmarks ---------------------------------------------------------------
 $(BUILD)/bench/%: tests/bench/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
@@ -327,3 +328,15 @@ clean:
 
 # Header dependencies written by the compiler (-MMD -MP).
 -include $(wildcard $(BUILD)/lib/*.d $(BUILD)/cli/*.d $(BUILD)/tests/*.d $(BUILD)/tests/*/*.d $(BUILD)/fuzz/*.d $(BUILD)/fuzz/*/*.d)
+
+# --- the built-in marking atlas -----------------------------------------------
+# lib/atlas_default.c is generated and committed; `make atlas` regenerates it
+# (and $(BUILD)/markings/atlas.png + atlas-index.txt, the same atlas as the
+# files `roadsplat --atlas IMG --atlas-index FILE` reads).
+$(BUILD)/atlasgen: tests/tools/atlasgen.c
+	@mkdir -p $(dir $@)
+	$(CC) -std=c99 $(OPT) $(WARN) -D_POSIX_C_SOURCE=200809L -o $@ $< -lm
+
+atlas: $(BUILD)/atlasgen
+	@mkdir -p $(BUILD)/markings
+	$(BUILD)/atlasgen lib/atlas_default.c $(BUILD)/markings/atlas.png $(BUILD)/markings/atlas-index.txt

@@ -174,6 +174,7 @@ typedef struct cli_splat_args {
     unsigned threads;   /* --threads; 0 = all cores */
     const char *terrain_tex, *road_tex;
     const char *styles_path;        /* --styles FILE */
+    const char *atlas_path, *atlas_index_path; /* --atlas IMG --atlas-index FILE */
     int png_level_given, png_level; /* --png-level (OUT.png), also read here */
 } cli_splat_args;
 /* Value of option `name`: inline ("--x=v", inl) or the next argument. */
@@ -190,6 +191,8 @@ typedef struct cli_splat_input {
     rs_image terrain, road;
     uint8_t *terrain_px, *road_px;
     rs_styles *styles; /* style blocks of the road file and of --styles FILE */
+    rs_atlas *atlas;   /* --atlas, NULL: the built-in one */
+    uint8_t *atlas_px;
 } cli_splat_input;
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in);

@@ -40,6 +40,11 @@ static const char usage_text[] =
     "  --aa exact|hermite    line anti-aliasing: exact pixel area (default) or the\n"
     "                        seed's Hermite smoothing\n"
     "  --no-styles           draw every road unstyled (no casings, fills or lines)\n"
+    "  --atlas IMG --atlas-index FILE  road-marking atlas (RGBA image) and its index\n"
+    "                        (docs/markings.md; default: the built-in atlas)\n"
+    "  --no-auto-markings    only the road file's `mark` lines (no automatic\n"
+    "                        stop lines, arrows, zebras)\n"
+    "  --no-markings         no road markings at all\n"
     "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
     "                        in that world frame (e.g. UTM metres; default 0,0)\n"
     "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
@@ -244,6 +249,7 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      "  \"image\": {\"width\": %u, \"height\": %u},\n"
                      "  \"width\": %u,\n  \"height\": %u,\n  \"pixels\": %llu,\n  \"road_pixels\": %llu,\n"
                      "  \"segments\": %llu,\n"
+                     "  \"markings\": {\"explicit\": %llu, \"auto\": %llu, \"tests\": %llu, \"pixels\": %llu},\n"
                      "  \"road_cells\": %llu,\n  \"interior_cells\": %llu,\n  \"boundary_cells\": %llu,\n"
                      "  \"boundary_by_type\": {\"edge\": %llu, \"inner_corner\": %llu, \"outer_corner\": %llu, "
                      "\"saddle\": %llu, \"too_thin\": %llu},\n"
@@ -256,7 +262,9 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
                      rs->o->grid.buffer == RS_BUFFER_DILATE ? "dilate" : "distance", gs->k, gs->road_cell,
                      rs->o->texels ? rs->o->texels : 8, rs->x0, rs->y0, rs->w, rs->h, rs->full_w, rs->full_h, rs->w,
                      rs->h, (unsigned long long)rs->w * rs->h, (unsigned long long)pf->road_pixels,
-                     (unsigned long long)gs->segments, (unsigned long long)gs->road_cells,
+                     (unsigned long long)gs->segments, (unsigned long long)gs->marks_explicit,
+                     (unsigned long long)gs->marks_auto, (unsigned long long)pf->mark_tests,
+                     (unsigned long long)pf->mark_pixels, (unsigned long long)gs->road_cells,
                      (unsigned long long)gs->interior_cells, (unsigned long long)gs->boundary_cells,
                      (unsigned long long)gs->by_type[RS_TILE_EDGE], (unsigned long long)gs->by_type[RS_TILE_INNER],
                      (unsigned long long)gs->by_type[RS_TILE_OUTER], (unsigned long long)gs->by_type[RS_TILE_SADDLE],

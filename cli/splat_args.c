@@ -28,14 +28,17 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
     static const char *const known[] = { "--cell-size", "--z-scale", "--texels", "--buffer", "--road-cell",
                                          "--alpha-res", "--transition", "--jitter", "--terrain-texture",
                                          "--road-texture", "--texture-scale", "--origin", "--edges", "--threads",
-                                         "--png-level", "--styles", "--profile", "--aa", "--no-styles" };
+                                         "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
+                                         "--atlas-index", "--no-auto-markings", "--no-markings" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
     rs_splat_options *o = &s->o;
-    if (!strcmp(name, "--no-styles")) {
+    if (!strcmp(name, "--no-styles") || !strcmp(name, "--no-auto-markings") || !strcmp(name, "--no-markings")) {
         if (inl) { cli_error("%s takes no value", name); return 1; }
-        o->style.disable = 1;
+        if (name[5] == 's') o->style.disable = 1;
+        else if (name[5] == 'a') o->markings.no_auto = 1;
+        else o->markings.disable = 1;
         return 0;
     }
     const char *v;
@@ -97,6 +100,10 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
         }
     } else if (!strcmp(name, "--styles")) {
         s->styles_path = v;
+    } else if (!strcmp(name, "--atlas")) {
+        s->atlas_path = v;
+    } else if (!strcmp(name, "--atlas-index")) {
+        s->atlas_index_path = v;
     } else if (!strcmp(name, "--profile")) {
         if (!strcmp(v, "rms") || !strcmp(v, "de")) o->style.profile = RS_PROFILE_RMS;
         else if (!strcmp(v, "us") || !strcmp(v, "mutcd")) o->style.profile = RS_PROFILE_MUTCD;
@@ -173,6 +180,23 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
         return 1;
     if (in->terrain_px) s->o.surface.terrain_texture = &in->terrain;
     if (in->road_px) s->o.surface.road_texture = &in->road;
+    if ((s->atlas_path != NULL) != (s->atlas_index_path != NULL)) {
+        cli_error("--atlas and --atlas-index go together (an RGBA image and its index file)");
+        return 1;
+    }
+    if (s->atlas_path) {
+        rs_image img;
+        if (load_texture(s->atlas_path, &img, &in->atlas_px)) return 1;
+        if (cli_read_file(s->atlas_index_path, (size_t)16 << 20, &text, &size)) return 1;
+        r = rs_atlas_create(ctx, &img, text, size, &in->atlas);
+        free(text);
+        if (r) {
+            cli_error("%s: %s", r == RS_ERR_PARSE ? s->atlas_index_path : s->atlas_path,
+                      rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+            return 1;
+        }
+        s->o.markings.atlas = in->atlas;
+    }
     return 0;
 }
 
@@ -183,5 +207,7 @@ void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in)
     rs_dem_free(ctx, in->dem);
     free(in->terrain_px);
     free(in->road_px);
+    rs_atlas_free(ctx, in->atlas);
+    free(in->atlas_px);
     memset(in, 0, sizeof *in);
 }

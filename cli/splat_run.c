@@ -139,6 +139,8 @@ static unsigned run_workers(cli_splat_job *job, void *sh, unsigned n, void *(*fn
             job->profile.composite_ms += wk[i].prof.composite_ms;
             job->profile.pixels += wk[i].prof.pixels;
             job->profile.road_pixels += wk[i].prof.road_pixels;
+            job->profile.mark_tests += wk[i].prof.mark_tests;
+            job->profile.mark_pixels += wk[i].prof.mark_pixels;
         }
         ran = job->threads_used = started + 1;
     }

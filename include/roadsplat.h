@@ -445,6 +445,78 @@ typedef struct rs_style_options {
     int disable;             /* non-zero: every road unstyled (no casing, fill or line) */
 } rs_style_options;
 
+
+/* ---------------------------------------------------------------------------
+ * Road markings (issue 14, docs/markings.md): sprites of a marking atlas
+ * placed in road coordinates. A marking's centre sits at arc length s (from
+ * the road's first point) and lateral offset t (+ left of travel); it spans
+ * `length` metres along the road and `width` across it and bends with the
+ * road. The road file's `mark TYPE road=NAME s=S t=T [length=L] [width=W]
+ * [flip]` lines add explicit markings; the type name is checked against the
+ * atlas when the road grid is built (an unknown type fails there, naming the
+ * mark's line).
+ * ------------------------------------------------------------------------- */
+#define RS_MARK_TYPE_MAX 31 /* bytes of a marking type name, NUL excluded */
+
+typedef struct rs_mark {
+    const char *type; /* atlas type name: 1..RS_MARK_TYPE_MAX of A-Z a-z 0-9 _ - */
+    size_t road;      /* road index */
+    double s, t;      /* centre: arc length and lateral offset, metres */
+    double length;    /* along the road, metres; 0 -> the atlas type's LENGTH */
+    double width;     /* across the road, metres; 0 -> the atlas type's WIDTH */
+    int flip;         /* non-zero: turned 180 degrees (facing against the road's direction) */
+    uint64_t line;    /* road-file line (0: added through the API) */
+} rs_mark;
+
+/* Append an explicit marking (the type name is copied). RS_ERR_INVALID_ARG
+ * for a bad name, a road out of range, non-finite s or t, or a negative or
+ * non-finite length or width. */
+RS_API rs_result rs_roads_add_mark(rs_ctx *ctx, rs_roads *roads, const rs_mark *mark);
+RS_API size_t rs_roads_mark_count(const rs_roads *roads);
+/* Marking i; out->type is owned by the road set (valid as road names are). */
+RS_API rs_result rs_roads_get_mark(const rs_roads *roads, size_t i, rs_mark *out);
+
+/* Point attributes: `X Y key=value ...` on a point line of a road block
+ * (`crossing=zebra` places a zebra crossing there, docs/markings.md). All
+ * of them in file order: road index, point index within the road, key and
+ * value (owned by the road set, valid as road names are). */
+RS_API size_t rs_roads_point_attr_count(const rs_roads *roads);
+RS_API rs_result rs_roads_point_attr_at(const rs_roads *roads, size_t k, size_t *road, size_t *point,
+                                        const char **key, const char **value);
+
+/* A marking atlas: an RGBA image and its index (one line per type, `NAME X
+ * Y W H LENGTH WIDTH`: the type's pixel rectangle and its size in metres
+ * along x across the road; atlas row 0 points the way the road runs),
+ * mipmapped per type with premultiplied alpha. Immutable once made; share
+ * it between threads freely. */
+typedef struct rs_atlas rs_atlas;
+#define RS_ATLAS_MAX_TYPES 1024
+
+/* From an image and an index text (need not be NUL-terminated). Errors in
+ * the index are RS_ERR_PARSE with "atlas index line N: ..." messages. The
+ * image is copied (only the types' rectangles). */
+RS_API rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *image, const char *index, size_t size,
+                                 rs_atlas **out);
+/* The built-in atlas (arrows, stop and give-way lines, zebra, cycle, BUS,
+ * STOP, SLOW; docs/markings.md lists the types). */
+RS_API rs_result rs_atlas_default(rs_ctx *ctx, rs_atlas **out);
+RS_API void rs_atlas_free(rs_ctx *ctx, rs_atlas *atlas);
+RS_API size_t rs_atlas_count(const rs_atlas *atlas);
+/* Type i: name (owned by the atlas), LENGTH and WIDTH in metres, pixel
+ * size. Any output may be NULL. */
+RS_API rs_result rs_atlas_get(const rs_atlas *atlas, size_t i, const char **name, double *length,
+                              double *width, uint32_t *w, uint32_t *h);
+/* Index of the type called `name`, or -1. */
+RS_API long rs_atlas_find(const rs_atlas *atlas, const char *name);
+
+/* Markings (issue 14, docs/markings.md). All-zero means defaults: the
+ * built-in atlas, explicit and automatic markings. */
+typedef struct rs_marking_options {
+    const rs_atlas *atlas; /* NULL -> the built-in atlas; else borrowed: it must outlive the grid */
+    int no_auto;           /* non-zero: only the road set's explicit markings */
+    int disable;           /* non-zero: no markings at all */
+} rs_marking_options;
+
 /* All-zero means defaults. The frame (cell size, z-scale, origin) is the DEM's. */
 typedef struct rs_splat_options {
     uint32_t texels;                /* output texels per DEM cell side; 0 -> 8, else 1..1024 */
@@ -452,6 +524,7 @@ typedef struct rs_splat_options {
     rs_coverage_options coverage;
     rs_surface_options surface;
     rs_style_options style;
+    rs_marking_options markings;
     rs_progress_fn progress;        /* may be NULL; see rs_splat_window */
     void *progress_user;
 } rs_splat_options;
@@ -472,6 +545,8 @@ typedef struct rs_road_grid_stats {
     uint64_t by_type[6];        /* boundary cells by tile type (RS_TILE_*) */
     uint64_t tiles_allocated;   /* sparse storage blocks in use */
     uint64_t segments;          /* road segments in the road field (0: none built) */
+    uint64_t marks_explicit;    /* markings placed from the road set's records */
+    uint64_t marks_auto;        /* markings placed by the automatic rules */
     uint64_t bytes;             /* memory held by the grid */
 } rs_road_grid_stats;
 
@@ -514,6 +589,8 @@ typedef struct rs_splat_profile {
     double coverage_ms, surface_ms, overlays_ms, composite_ms;
     uint64_t pixels;       /* pixels rendered */
     uint64_t road_pixels;  /* pixels with some road (weight > 0) */
+    uint64_t mark_tests;   /* (pixel, marking) pairs examined by the markings stage */
+    uint64_t mark_pixels;  /* pixels a marking painted */
 } rs_splat_profile;
 
 /* Render the window [x0, x0+w) x [y0, y0+h) of the output image: RGBA8 into

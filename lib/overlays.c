@@ -8,6 +8,7 @@
 #include "linesym.h"
 #include "roadfield.h"
 #include "styling.h"
+#include "markings.h"
 
 #include <math.h>
 #if defined(__SSE2__)
@@ -99,8 +100,9 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
 void rs__overlays(const rs_splatter *s, rs__piece *p)
 {
     const rs__styling *st = s->grid->styling;
-    if (!st || p->w == 0 || p->rows == 0) return;
-    if (st->casing) casings(s, st, s->texel_m, p);
-    if (st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);
-    if (st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ov);
+    if (p->w == 0 || p->rows == 0) return;
+    if (st && st->casing) casings(s, st, s->texel_m, p);
+    if (st && st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);
+    if (st && st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ov);
+    if (s->grid->markings && p->road_pixels) rs__markings_paint(s->grid->markings, p);
 }

@@ -7,6 +7,7 @@
 #include "mask.h"
 #include "roadfield.h"
 #include "styling.h"
+#include "markings.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -586,6 +587,7 @@ void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
     if (!ctx || !grid) return;
     rs__roadfield_free(ctx, grid->field);
     rs__styling_free(ctx, grid->styling);
+    rs__markings_free(ctx, grid->markings);
     if (grid->tiles) {
         for (size_t i = 0; i < (size_t)grid->tw * grid->th; i++) rs__free(ctx, grid->tiles[i]);
         rs__free(ctx, grid->tiles);
@@ -664,15 +666,22 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->edges = o.coverage.edges;
     g->style = o.style;
     g->style.styles = NULL; /* borrowed only while building */
+    g->marks = o.markings;
     g->stats.bytes = sizeof *g;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) r = build_field(ctx, dem, roads, o.texels, g);
     /* the styles look pixels' roads up in the grid's field when it has one */
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, &g->styling);
+    if (!r) r = rs__markings_build(ctx, dem, roads, &o, &g->markings);
     if (r) {
         rs_road_grid_free(ctx, g);
         return r;
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;
+    if (g->markings) {
+        g->stats.bytes += g->markings->bytes;
+        g->stats.marks_explicit = g->markings->n_explicit;
+        g->stats.marks_auto = g->markings->n_auto;
+    }
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
         *out = g;
         rs__ok(ctx);

@@ -30,6 +30,10 @@ struct rs_road_grid {
      * style options they were resolved with. */
     struct rs__styling *styling;
     rs_style_options style;
+    /* Markings (lib/markings.c), NULL when there are none; the marking
+     * options they were placed with. */
+    struct rs__markings *markings;
+    rs_marking_options marks;
     rs_road_grid_stats stats;
 };
 

@@ -37,6 +37,22 @@ typedef struct rs_attr {
     size_t key, value; /* offsets into names */
 } rs_attr;
 
+/* An explicit marking (issue 14): a `mark` line or rs_roads_add_mark. */
+typedef struct rs_mark_rec {
+    size_t type;      /* offset into names */
+    size_t road;      /* road index; SIZE_MAX while the parser resolves road_name */
+    size_t road_name; /* offset into names (parser) */
+    double s, t, length, width;
+    int flip;
+    uint64_t line;
+} rs_mark_rec;
+
+/* A point attribute (`X Y crossing=zebra`). */
+typedef struct rs_point_attr {
+    size_t road, point; /* road index, point index within it */
+    size_t key, value;  /* offsets into names */
+} rs_point_attr;
+
 struct rs_roads {
     rs_road_rec *roads;
     size_t count, cap;
@@ -46,6 +62,10 @@ struct rs_roads {
     size_t names_len, names_cap;
     rs_attr *attrs;
     size_t attrs_len, attrs_cap;
+    rs_mark_rec *marks;
+    size_t marks_len, marks_cap;
+    rs_point_attr *pattrs;
+    size_t pattrs_len, pattrs_cap;
 };
 
 /* Make room for `need` (>= 1) elements of `elem` bytes: capacity doubles
@@ -85,6 +105,8 @@ void rs_roads_free(rs_ctx *ctx, rs_roads *roads)
     rs__free(ctx, roads->xy);
     rs__free(ctx, roads->names);
     rs__free(ctx, roads->attrs);
+    rs__free(ctx, roads->marks);
+    rs__free(ctx, roads->pattrs);
     rs__free(ctx, roads);
 }
 
@@ -244,6 +266,101 @@ rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, double wi
         return rs__fail(ctx, RS_ERR_NOMEM, "rs_roads_add: out of memory");
     }
     rs__ok(ctx);
+    return RS_OK;
+}
+
+/* ------------------------------------------------------------------------
+ * Markings and point attributes (issue 14)
+ * ---------------------------------------------------------------------- */
+
+static int mark_type_ok(const char *s, size_t n)
+{
+    if (n == 0 || n > RS_MARK_TYPE_MAX) return 0;
+    for (size_t i = 0; i < n; i++) {
+        char c = s[i];
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-'))
+            return 0;
+    }
+    return 1;
+}
+
+static int mark_size_ok(double v) { return v >= 0 && v <= 1e6; }
+
+/* Append a marking record; the type text is copied into the pool. */
+static int push_mark(rs_ctx *ctx, rs_roads *roads, const rs_mark_rec *rec, const char *type, size_t tn)
+{
+    size_t names_len = roads->names_len;
+    size_t off = pool_add(ctx, roads, type, tn);
+    if (off == SIZE_MAX) return 0;
+    rs_mark_rec *m = grow(ctx, roads->marks, &roads->marks_cap, roads->marks_len + 1, sizeof *m);
+    if (!m) {
+        roads->names_len = names_len;
+        return 0;
+    }
+    roads->marks = m;
+    m[roads->marks_len] = *rec;
+    m[roads->marks_len].type = off;
+    roads->marks_len++;
+    return 1;
+}
+
+rs_result rs_roads_add_mark(rs_ctx *ctx, rs_roads *roads, const rs_mark *mark)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!roads || !mark || !mark->type) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add_mark: NULL argument");
+    size_t tn = strlen(mark->type);
+    if (!mark_type_ok(mark->type, tn))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add_mark: type must be 1..%d characters of A-Z a-z 0-9 _ -",
+                        RS_MARK_TYPE_MAX);
+    if (mark->road >= roads->count)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add_mark: road %zu of %zu", mark->road, roads->count);
+    if (!isfinite(mark->s) || !isfinite(mark->t) || fabs(mark->s) > 1e12 || fabs(mark->t) > 1e6)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add_mark: s and t must be finite (|s| <= 1e12, |t| <= 1e6)");
+    if (!mark_size_ok(mark->length) || !mark_size_ok(mark->width))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add_mark: length and width must be 0..1e6 (0: the atlas size)");
+    rs_mark_rec rec;
+    memset(&rec, 0, sizeof rec);
+    rec.road = mark->road;
+    rec.s = mark->s;
+    rec.t = mark->t;
+    rec.length = mark->length;
+    rec.width = mark->width;
+    rec.flip = mark->flip != 0;
+    rec.line = mark->line;
+    if (!push_mark(ctx, roads, &rec, mark->type, tn)) return rs__fail(ctx, RS_ERR_NOMEM, "rs_roads_add_mark: out of memory");
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+size_t rs_roads_mark_count(const rs_roads *roads) { return roads ? roads->marks_len : 0; }
+
+rs_result rs_roads_get_mark(const rs_roads *roads, size_t i, rs_mark *out)
+{
+    if (!roads || !out || i >= roads->marks_len) return RS_ERR_INVALID_ARG;
+    const rs_mark_rec *m = &roads->marks[i];
+    memset(out, 0, sizeof *out);
+    out->type = roads->names + m->type;
+    out->road = m->road;
+    out->s = m->s;
+    out->t = m->t;
+    out->length = m->length;
+    out->width = m->width;
+    out->flip = m->flip;
+    out->line = m->line;
+    return RS_OK;
+}
+
+size_t rs_roads_point_attr_count(const rs_roads *roads) { return roads ? roads->pattrs_len : 0; }
+
+rs_result rs_roads_point_attr_at(const rs_roads *roads, size_t k, size_t *road, size_t *point, const char **key,
+                                 const char **value)
+{
+    if (!roads || k >= roads->pattrs_len) return RS_ERR_INVALID_ARG;
+    const rs_point_attr *a = &roads->pattrs[k];
+    if (road) *road = a->road;
+    if (point) *point = a->point;
+    if (key) *key = roads->names + a->key;
+    if (value) *value = roads->names + a->value;
     return RS_OK;
 }
 
@@ -768,8 +885,195 @@ static rs_result road_header(text_parser *P, rs__lex *L)
     return RS_OK;
 }
 
+/* `key=value` words after a point's X Y (t: those already read). */
+static rs_result point_attr(text_parser *P, const rs__tok *t)
+{
+    char q[64];
+    rs_ctx *ctx = P->ctx;
+    rs_roads *R = P->roads;
+    const char *eq = memchr(t->s, '=', t->n);
+    if (!eq)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: extra token %s after the point",
+                        P->line, rs__quote(q, sizeof q, t->s, t->n));
+    size_t kn = (size_t)(eq - t->s), vn = t->n - kn - 1;
+    if (!key_ok(t->s, kn))
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: point attribute key %s must be 1..%d characters of A-Z a-z 0-9 _ : . -",
+                        P->line, rs__quote(q, sizeof q, t->s, kn), MAX_KEY);
+    if (vn == 0)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: point attribute %s has no value", P->line,
+                        rs__quote(q, sizeof q, t->s, t->n));
+    if (!P->keep_points) return RS_OK;
+    size_t names_len = R->names_len;
+    size_t k = pool_add(ctx, R, t->s, kn), v = k == SIZE_MAX ? SIZE_MAX : pool_add(ctx, R, eq + 1, vn);
+    rs_point_attr *a = v == SIZE_MAX ? NULL : grow(ctx, R->pattrs, &R->pattrs_cap, R->pattrs_len + 1, sizeof *a);
+    if (!a) {
+        R->names_len = names_len;
+        return rs__fail(ctx, RS_ERR_NOMEM, "line %llu: out of memory", P->line);
+    }
+    R->pattrs = a;
+    a[R->pattrs_len].road = R->count;
+    a[R->pattrs_len].point = R->points - P->road_first;
+    a[R->pattrs_len].key = k;
+    a[R->pattrs_len].value = v;
+    R->pattrs_len++;
+    return RS_OK;
+}
+
+static rs_result point_attrs(text_parser *P, const rs__tok *t, size_t n, rs__lex *L)
+{
+    for (size_t i = 0; i < n; i++) {
+        rs_result rc = point_attr(P, &t[i]);
+        if (rc != RS_OK) return rc;
+    }
+    rs__tok x;
+    int k;
+    while ((k = rs__lex_next(L, RS__LEX_PLAIN, &x)) == 1) {
+        rs_result rc = point_attr(P, &x);
+        if (rc != RS_OK) return rc;
+    }
+    return k < 0 ? rs__lex_fail(P->ctx, P->line, L) : RS_OK;
+}
+
+/* `mark TYPE road=NAME s=S t=T [length=L] [width=W] [flip]`; L after `mark`. */
+static rs_result mark_line(text_parser *P, rs__lex *L)
+{
+    char q[64];
+    rs_ctx *ctx = P->ctx;
+    rs_roads *R = P->roads;
+    if (P->in_road)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: 'mark' inside road %s (line %llu); missing 'end'?", P->line,
+                        rs__quote(q, sizeof q, P->road_name, P->road_name_len), P->road_line);
+    rs__tok type, t;
+    int k = rs__lex_next(L, RS__LEX_PLAIN, &type);
+    if (k == 0)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: 'mark' needs a type: mark TYPE road=NAME s=S t=T", P->line);
+    if (!mark_type_ok(type.s, type.n))
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark type %s must be 1..%d characters of A-Z a-z 0-9 _ -", P->line,
+                        rs__quote(q, sizeof q, type.s, type.n), RS_MARK_TYPE_MAX);
+    rs_mark_rec rec;
+    memset(&rec, 0, sizeof rec);
+    rec.road = SIZE_MAX;
+    rec.line = P->line;
+    rs__tok road;
+    int have[6] = { 0 }; /* road s t length width flip */
+    static const char *const keys[6] = { "road", "s", "t", "length", "width", "flip" };
+    while ((k = rs__lex_next(L, RS__LEX_ATTR, &t)) != 0) {
+        if (k < 0) return rs__lex_fail(ctx, P->line, L);
+        const char *eq = t.s[0] == '"' ? NULL : memchr(t.s, '=', t.n);
+        size_t kn = eq ? (size_t)(eq - t.s) : t.n;
+        int which = -1;
+        for (int i = 0; i < 6; i++)
+            if (strlen(keys[i]) == kn && memcmp(t.s, keys[i], kn) == 0) which = i;
+        if (which < 0 || (which == 5) != (eq == NULL))
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: unexpected %s (expected road=, s=, t=, length=, width= or flip)",
+                            P->line, rs__quote(q, sizeof q, t.s, t.n));
+        if (have[which])
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: '%s' given twice", P->line, keys[which]);
+        have[which] = 1;
+        if (which == 5) {
+            rec.flip = 1;
+            continue;
+        }
+        rs__tok v = { eq + 1, (size_t)(t.s + t.n - (eq + 1)), t.quoted };
+        if (v.n == 0) return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: '%s' has no value", P->line, keys[which]);
+        if (which == 0) {
+            road = v;
+            continue;
+        }
+        double d;
+        rs_result rc = rs__number(ctx, P->line, &v, keys[which], &d);
+        if (rc != RS_OK) return rc;
+        if (which == 1 && !(fabs(d) <= 1e12))
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: s must be within +-1e12", P->line);
+        if (which == 2 && !(fabs(d) <= 1e6))
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: t must be within +-1e6", P->line);
+        if (which >= 3 && !(d > 0 && d <= 1e6))
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: %s must be > 0 and <= 1e6", P->line, keys[which]);
+        if (which == 1) rec.s = d;
+        else if (which == 2) rec.t = d;
+        else if (which == 3) rec.length = d;
+        else rec.width = d;
+    }
+    for (int i = 0; i < 3; i++)
+        if (!have[i])
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: missing %s= (mark TYPE road=NAME s=S t=T)", P->line,
+                            keys[i]);
+    if (!P->keep_points) return RS_OK;
+    size_t names_len = R->names_len;
+    char *w = pool_reserve(ctx, R, road.n);
+    if (w) rec.road_name = pool_commit(R, rs__tok_text(&road, w));
+    if (!w || !push_mark(ctx, R, &rec, type.s, type.n)) {
+        R->names_len = names_len;
+        return rs__fail(ctx, RS_ERR_NOMEM, "line %llu: out of memory", P->line);
+    }
+    return RS_OK;
+}
+
+/* Road names to indices for the parsed marks (first road of a name). */
+static int by_name_cmp(const void *a, const void *b, const rs_roads *R)
+{
+    size_t i = *(const size_t *)a, j = *(const size_t *)b;
+    int c = strcmp(R->names + R->roads[i].name, R->names + R->roads[j].name);
+    return c ? c : (i < j ? -1 : i > j);
+}
+
+static void sort_names(size_t *ix, size_t n, const rs_roads *R)
+{
+    /* heap sort: no qsort context pointer in C99 */
+    for (size_t start = n / 2; start-- > 0;) {
+        for (size_t root = start;;) {
+            size_t c = 2 * root + 1;
+            if (c >= n) break;
+            if (c + 1 < n && by_name_cmp(&ix[c], &ix[c + 1], R) < 0) c++;
+            if (by_name_cmp(&ix[root], &ix[c], R) >= 0) break;
+            size_t tmp = ix[root]; ix[root] = ix[c]; ix[c] = tmp;
+            root = c;
+        }
+    }
+    for (size_t end = n; end-- > 1;) {
+        size_t tmp = ix[0]; ix[0] = ix[end]; ix[end] = tmp;
+        for (size_t root = 0;;) {
+            size_t c = 2 * root + 1;
+            if (c >= end) break;
+            if (c + 1 < end && by_name_cmp(&ix[c], &ix[c + 1], R) < 0) c++;
+            if (by_name_cmp(&ix[root], &ix[c], R) >= 0) break;
+            size_t t2 = ix[root]; ix[root] = ix[c]; ix[c] = t2;
+            root = c;
+        }
+    }
+}
+
+static rs_result resolve_marks(rs_ctx *ctx, rs_roads *R, size_t first)
+{
+    if (first >= R->marks_len) return RS_OK;
+    size_t *ix = rs__alloc_array(ctx, R->count ? R->count : 1, sizeof *ix);
+    if (!ix) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory resolving marks");
+    for (size_t i = 0; i < R->count; i++) ix[i] = i;
+    sort_names(ix, R->count, R);
+    rs_result rc = RS_OK;
+    for (size_t m = first; m < R->marks_len && rc == RS_OK; m++) {
+        rs_mark_rec *mk = &R->marks[m];
+        if (mk->road != SIZE_MAX) continue;
+        const char *want = R->names + mk->road_name;
+        size_t lo = 0, hi = R->count;
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (strcmp(R->names + R->roads[ix[mid]].name, want) < 0) lo = mid + 1;
+            else hi = mid;
+        }
+        if (lo < R->count && strcmp(R->names + R->roads[ix[lo]].name, want) == 0) mk->road = ix[lo];
+        else {
+            char q[64];
+            rc = rs__fail(ctx, RS_ERR_PARSE, "line %llu: mark: no road named %s", (unsigned long long)mk->line,
+                          rs__quote(q, sizeof q, want, strlen(want)));
+        }
+    }
+    rs__free(ctx, ix);
+    return rc;
+}
+
 /* `end`, a point, or an unknown keyword (the road format before styles). */
-static rs_result road_line(text_parser *P, const rs__tok *t, size_t nt)
+static rs_result road_line(text_parser *P, const rs__tok *t, size_t nt, rs__lex *L)
 {
     char q[64];
     rs_ctx *ctx = P->ctx;
@@ -803,10 +1107,8 @@ static rs_result road_line(text_parser *P, const rs__tok *t, size_t nt)
             return rs__fail(ctx, RS_ERR_PARSE, "line %llu: point needs 'X Y', got only %s", P->line,
                             rs__quote(q, sizeof q, t[0].s, t[0].n));
         if ((rc = rs__number(ctx, P->line, &t[1], "y", &y)) != RS_OK) return rc;
-        if (nt > 2)
-            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: extra token %s after the point", P->line,
-                            rs__quote(q, sizeof q, t[2].s, t[2].n));
         rs_roads *R = P->roads;
+        if (nt > 2 && (rc = point_attrs(P, t + 2, nt - 2, L)) != RS_OK) return rc;
         if (R->points >= ctx->limits.max_points)
             return rs__fail(ctx, RS_ERR_LIMIT, "line %llu: more than %llu road points in total", P->line,
                             (unsigned long long)ctx->limits.max_points);
@@ -868,11 +1170,12 @@ static rs_result text_line(text_parser *P, rs__lex *L, const rs__tok *t0)
         return rs__style_begin(ctx, &P->style, P->line, L);
     }
     if (rs__tok_is(t0, "road")) return road_header(P, L);
+    if (rs__tok_is(t0, "mark")) return mark_line(P, L);
     rs__tok t[MAX_TOKENS];
     size_t nt = 1;
     t[0] = *t0;
     while (nt < MAX_TOKENS && lex_plain(L, &t[nt]) == 1) nt++;
-    return road_line(P, t, nt);
+    return road_line(P, t, nt, L);
 }
 
 rs_result rs__text_parse(rs_ctx *ctx, const char *text, size_t size, rs_profile profile, rs_roads *roads,
@@ -892,6 +1195,7 @@ rs_result rs__text_parse(rs_ctx *ctx, const char *text, size_t size, rs_profile 
         return rc;
     }
     size_t styles_before = rs_styles_count(P.styles);
+    size_t marks_before = P.roads->marks_len;
 
     size_t pos = 0;
     /* A UTF-8 byte order mark, as some editors write, is not content. */
@@ -922,7 +1226,7 @@ rs_result rs__text_parse(rs_ctx *ctx, const char *text, size_t size, rs_profile 
             size_t nt = 1;
             t[0] = t0;
             while (nt < MAX_TOKENS && lex_plain(&L, &t[nt]) == 1) nt++;
-            rc = road_line(&P, t, nt);
+            rc = road_line(&P, t, nt, &L);
         } else {
             rc = text_line(&P, &L, &t0);
         }
@@ -936,6 +1240,8 @@ rs_result rs__text_parse(rs_ctx *ctx, const char *text, size_t size, rs_profile 
         char q[64];
         rc = rs__fail(ctx, RS_ERR_PARSE, "line %llu: style %s (started on line %llu) has no 'end'", P.line,
                       rs__quote(q, sizeof q, P.style.st.name, strlen(P.style.st.name)), P.style.line);
+    } else if (roads) {
+        rc = resolve_marks(ctx, P.roads, marks_before);
     }
 done:
     if (rc != RS_OK) rs__styles_truncate(P.styles, styles_before);

@@ -44,6 +44,9 @@ static rs_result check_grid(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *
     else if (g->style.profile != o->style.profile || g->style.aa != o->style.aa ||
              (g->style.disable != 0) != (o->style.disable != 0))
         what = "other style options";
+    else if (g->marks.atlas != o->markings.atlas || (g->marks.no_auto != 0) != (o->markings.no_auto != 0) ||
+             (g->marks.disable != 0) != (o->markings.disable != 0))
+        what = "other marking options";
     else if (g->edges == RS_EDGES_ALPHAMAP &&
              (g->texels != o->texels || g->opts.buffer != o->grid.buffer || g->opts.road_cell != o->grid.road_cell))
         what = "other texels or grid options";
@@ -244,7 +247,10 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                 profile->composite_ms += t4 - t3;
                 profile->pixels += (uint64_t)p.rows * p.w;
                 profile->road_pixels += p.road_pixels;
+                profile->mark_tests += p.mark_tests;
+                profile->mark_pixels += p.mark_pixels;
             }
+            p.mark_tests = p.mark_pixels = 0;
         }
         y += p.rows;
         if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h)) {

@@ -66,6 +66,7 @@ typedef struct rs__piece {
     double *twx[2], *twy;
     int tx_ready[2];
     uint64_t road_pixels;
+    uint64_t mark_tests, mark_pixels; /* markings stage counts (added to) */
 } rs__piece;
 
 /* Stages. */

@@ -62,6 +62,13 @@ static void fixture_init(fixture *f, double origin)
         CHECK(rs_roads_add(ctx, f->sroads, name, w, xy, n) == RS_OK);
         CHECK(rs_roads_set_attr(ctx, f->sroads, i, attr[i][0], attr[i][1]) == RS_OK);
     }
+    /* markings (issue 14) on the styled copy: one over the bend of road a,
+     * one flipped, one across road b */
+    static const rs_mark marks[] = { { "arrow_straight", 0, 20, -1.5, 0, 0, 0, 0 },
+                                     { "word_slow", 0, 44, 1.5, 12, 2.5, 1, 0 },
+                                     { "zebra", 1, 20, 0, 0, 3.0, 0, 0 },
+                                     { "stop_line", 0, 60, -1.6, 0, 3.2, 0, 0 } };
+    for (size_t i = 0; i < sizeof marks / sizeof marks[0]; i++) CHECK(rs_roads_add_mark(ctx, f->sroads, &marks[i]) == RS_OK);
     for (int k = 0; k < 2; k++) {
         for (size_t i = 0; i < sizeof f->tex_px[k]; i++) f->tex_px[k][i] = (uint8_t)(i * 37 + k * 101);
         f->tex[k].width = 5;
@@ -142,9 +149,9 @@ static void settings(int i, rs_splat_options *o, fixture *f, const char **name)
     case 6: *name = "defaults (analytic edges), 4 texels"; memset(o, 0, sizeof *o); o->texels = 4; break;
     case 7: *name = "analytic, textures, 7 texels"; o->coverage.edges = RS_EDGES_ANALYTIC; o->texels = 7;
         o->surface.terrain_texture = &f->tex[0]; break;
-    case 8: *name = "styles (analytic), 4 texels"; memset(o, 0, sizeof *o); o->texels = 4; o->style.styles = f->styles;
+    case 8: *name = "styles and markings (analytic), 4 texels"; memset(o, 0, sizeof *o); o->texels = 4; o->style.styles = f->styles;
         break;
-    default: *name = "styles, alpha-map, Hermite lines, US profile, 5 texels"; o->texels = 5;
+    default: *name = "styles and markings, alpha-map, Hermite lines, US profile, 5 texels"; o->texels = 5;
         o->style.styles = f->styles; o->style.aa = RS_LINE_AA_HERMITE; o->style.profile = RS_PROFILE_MUTCD; break;
     }
 }

@@ -1,0 +1,342 @@
+/* Automatic marking placement (issue 14, docs/markings.md "Automatic
+ * placement"):
+ *
+ * - junctions: an end of road A within B's half width (+ 0.5 m) of road B's
+ *   centreline (B != A) is a junction of A at that end and of B at the
+ *   nearest point's arc length. Its area on A is the stretch within B's
+ *   half width + 0.5 m of the junction; on B, A's half width + 0.5 m.
+ * - stop / give-way lines: where A ends at B and A's class ranks below B's
+ *   (motorway > trunk > primary > secondary > tertiary > residential >
+ *   service > track > path, footway, cycleway; no class ranks lowest), a
+ *   give_way_line (stop_line with `control=stop`) across A's incoming half
+ *   (the whole width when one-way), 0.5 m before A's junction area.
+ * - turn arrows: `turn:lanes=left|through;right|...` (OpenStreetMap, lanes
+ *   from left to right) on a road whose end is a junction: one arrow per
+ *   lane, its tip 6 m before the junction area; the lanes share the
+ *   incoming half (the whole width when one-way).
+ * - zebra crossings: a `X Y crossing=zebra` point attribute puts a zebra
+ *   across the road there (width = road width - 0.4 m).
+ *
+ * A placement is dropped when it would spill off its road (|t| + width/2
+ * beyond the half width, or past either end) or overlap a junction area. */
+#include "markings.h"
+
+#include <math.h>
+#include <string.h>
+
+#define JUNCTION_TOL 0.5   /* metres beyond the other road's half width */
+#define LINE_GAP 0.5       /* stop line to junction area */
+#define ARROW_GAP 6.0      /* arrow tip to junction area */
+
+typedef struct jn {
+    size_t road;
+    double s, half; /* centre and half extent of the junction area along the road */
+} jn;
+
+typedef struct ctxa {
+    rs_ctx *ctx;
+    const rs_roads *roads;
+    rs__road_local *rl; /* per road */
+    double *box;        /* per road: x0 y0 x1 y1 */
+    jn *j;
+    size_t nj, capj;
+} ctxa;
+
+static int rank_of(rs_road_class c)
+{
+    switch (c) {
+    case RS_CLASS_MOTORWAY: return 9;
+    case RS_CLASS_TRUNK: return 8;
+    case RS_CLASS_PRIMARY: return 7;
+    case RS_CLASS_SECONDARY: return 6;
+    case RS_CLASS_TERTIARY: return 5;
+    case RS_CLASS_RESIDENTIAL: return 4;
+    case RS_CLASS_SERVICE: return 3;
+    case RS_CLASS_TRACK: return 2;
+    case RS_CLASS_PATH: case RS_CLASS_FOOTWAY: case RS_CLASS_CYCLEWAY: return 1;
+    default: return 0;
+    }
+}
+
+static rs_result add_jn(ctxa *A, size_t road, double s, double half)
+{
+    if (A->nj == A->capj) {
+        size_t nc = A->capj ? 2 * A->capj : 64;
+        jn *q = rs__realloc(A->ctx, A->j, nc * sizeof *q);
+        if (!q) return RS_ERR_NOMEM;
+        A->j = q;
+        A->capj = nc;
+    }
+    A->j[A->nj].road = road;
+    A->j[A->nj].s = s;
+    A->j[A->nj].half = half;
+    A->nj++;
+    return RS_OK;
+}
+
+/* Nearest point of road r to (x, y): distance and arc length. */
+static double nearest(const rs__road_local *r, double x, double y, double *s_out)
+{
+    double best = INFINITY;
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], len = r->s[k + 1] - r->s[k];
+        if (!(len > 0)) continue;
+        double u = ((x - r->x[k]) * dx + (y - r->y[k]) * dy) / len;
+        if (u < 0) u = 0;
+        if (u > len) u = len;
+        double ex = x - r->x[k] - u * dx / len, ey = y - r->y[k] - u * dy / len, d = hypot(ex, ey);
+        if (d < best) {
+            best = d;
+            *s_out = r->s[k] + u;
+        }
+    }
+    return best;
+}
+
+static int in_junction(const ctxa *A, size_t road, double lo, double hi)
+{
+    for (size_t i = 0; i < A->nj; i++)
+        if (A->j[i].road == road && hi > A->j[i].s - A->j[i].half && lo < A->j[i].s + A->j[i].half) return 1;
+    return 0;
+}
+
+/* Push p unless it spills off its road or into a junction area. */
+static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size_t *n, size_t *cap)
+{
+    double w;
+    rs_roads_get(A->roads, p->road, NULL, &w, NULL, NULL);
+    const rs__road_local *r = &A->rl[p->road];
+    if (r->n < 2) return RS_OK;
+    double lo = p->s - p->length / 2, hi = p->s + p->length / 2;
+    if (lo < 0 || hi > r->s[r->n - 1] || fabs(p->t) + p->width / 2 > w / 2 + 1e-9) return RS_OK;
+    if (in_junction(A, p->road, lo, hi)) return RS_OK;
+    return rs__placement_push(A->ctx, pl, n, cap, p);
+}
+
+/* One `turn:lanes` entry to an arrow type name, or NULL (none). */
+static const char *arrow_for(const char *v, size_t n)
+{
+    int left = 0, right = 0, through = 0, reverse = 0;
+    for (size_t i = 0; i < n;) {
+        size_t j = i;
+        while (j < n && v[j] != ';') j++;
+        size_t k = j - i;
+        const char *w = v + i;
+        if ((k == 4 && !memcmp(w, "left", 4)) || (k == 11 && !memcmp(w, "slight_left", 11)) ||
+            (k == 10 && !memcmp(w, "sharp_left", 10)))
+            left = 1;
+        else if ((k == 5 && !memcmp(w, "right", 5)) || (k == 12 && !memcmp(w, "slight_right", 12)) ||
+                 (k == 11 && !memcmp(w, "sharp_right", 11)))
+            right = 1;
+        else if (k == 7 && !memcmp(w, "through", 7)) through = 1;
+        else if (k == 7 && !memcmp(w, "reverse", 7)) reverse = 1;
+        i = j + 1;
+    }
+    if (reverse) return "arrow_uturn";
+    if (through && left && !right) return "arrow_straight_left";
+    if (through && right && !left) return "arrow_straight_right";
+    if (through && !left && !right) return "arrow_straight";
+    if (left && !right && !through) return "arrow_left";
+    if (right && !left && !through) return "arrow_right";
+    return NULL;
+}
+
+static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
+                            const double end_half[2], const int end_minor[2], rs__placement **pl, size_t *n,
+                            size_t *cap)
+{
+    const rs__road_local *r = &A->rl[i];
+    if (r->n < 2) return RS_OK;
+    double w, total = r->s[r->n - 1];
+    rs_roads_get(A->roads, i, NULL, &w, NULL, NULL);
+    rs_road_info info;
+    rs_roads_get_info(A->roads, i, &info);
+    int oneway = info.oneway == RS_ONEWAY_YES || (info.oneway == RS_ONEWAY_NONE && info.road_class == RS_CLASS_MOTORWAY);
+    int reverse = info.oneway == RS_ONEWAY_REVERSE;
+    const char *ctrl = rs_roads_get_attr(A->roads, i, "control");
+    const char *turn = rs_roads_get_attr(A->roads, i, "turn:lanes");
+    for (int e = 0; e < 2; e++) {
+        if (!end_junction[e]) continue;
+        /* traffic arriving at end e: at the last point (e = 1) it travels
+         * with the road (flip 0, incoming half on the right, t < 0) */
+        int flip = e == 0;
+        if ((oneway && e == 0) || (reverse && e == 1)) continue;
+        int whole = oneway || reverse;
+        double half_w = whole ? w / 2 : w / 4; /* half the incoming width */
+        double tc = whole ? 0 : (flip ? w / 4 : -w / 4);
+        double edge = e == 1 ? total - end_half[e] : end_half[e]; /* the junction area's near side */
+        double dir = e == 1 ? -1 : 1;                             /* towards the road's inside */
+        if (end_minor[e]) {
+            long ti = rs_atlas_find(atlas, ctrl && !strcmp(ctrl, "stop") ? "stop_line" : "give_way_line");
+            if (ti >= 0) {
+                rs__placement p;
+                memset(&p, 0, sizeof p);
+                p.type = (uint32_t)ti;
+                p.road = i;
+                p.length = atlas->t[ti].length;
+                p.width = 2 * half_w - 0.2;
+                p.s = edge + dir * (LINE_GAP + p.length / 2);
+                p.t = tc;
+                p.flip = flip;
+                if (p.width > 0 && offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
+            }
+        }
+        if (turn && e == (reverse ? 0 : 1)) {
+            size_t lanes = 1;
+            for (const char *c = turn; *c; c++) lanes += *c == '|';
+            double lw = 2 * half_w / (double)lanes, left = tc + (flip ? -half_w : half_w);
+            const char *v = turn;
+            for (size_t k = 0; k < lanes; k++) {
+                const char *bar = strchr(v, '|');
+                size_t len = bar ? (size_t)(bar - v) : strlen(v);
+                const char *type = arrow_for(v, len);
+                long ti = type ? rs_atlas_find(atlas, type) : -1;
+                if (ti >= 0) {
+                    rs__placement p;
+                    memset(&p, 0, sizeof p);
+                    p.type = (uint32_t)ti;
+                    p.road = i;
+                    p.length = atlas->t[ti].length;
+                    p.width = atlas->t[ti].width;
+                    if (p.width > 0.8 * lw) {
+                        p.length *= 0.8 * lw / p.width;
+                        p.width = 0.8 * lw;
+                    }
+                    p.s = edge + dir * (ARROW_GAP + p.length / 2);
+                    /* lanes from the driver's left: left of travel is +t unflipped */
+                    p.t = flip ? left + (k + 0.5) * lw : left - (k + 0.5) * lw;
+                    p.flip = flip;
+                    if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
+                }
+                if (!bar) break;
+                v = bar + 1;
+            }
+        }
+    }
+    return RS_OK;
+}
+
+rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                            rs__placement **pl, size_t *n, size_t *cap)
+{
+    size_t nr = rs_roads_count(roads);
+    int wants = 0;
+    for (size_t i = 0; i < nr && !wants; i++)
+        if (rs_roads_get_attr(roads, i, "turn:lanes")) wants = 1;
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !wants; k++) {
+        const char *key, *v;
+        rs_roads_point_attr_at(roads, k, NULL, NULL, &key, &v);
+        if (!strcmp(key, "crossing") && !strcmp(v, "zebra")) wants = 1;
+    }
+    /* stop lines need a road with a class */
+    int ranks = 0;
+    for (size_t i = 0; i < nr && ranks < 1; i++) {
+        rs_road_info info;
+        rs_roads_get_info(roads, i, &info);
+        if (rank_of(info.road_class) > 0) ranks++;
+    }
+    if (!wants && ranks < 1) return RS_OK;
+    ctxa A;
+    memset(&A, 0, sizeof A);
+    A.ctx = ctx;
+    A.roads = roads;
+    A.rl = rs__calloc(ctx, nr ? nr : 1, sizeof *A.rl);
+    if (!A.rl) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory placing markings");
+    rs_result r = RS_OK;
+    for (size_t i = 0; i < nr && !r; i++) r = rs__road_local_get(ctx, roads, i, dem, &A.rl[i]);
+    A.box = r ? NULL : rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof(double));
+    if (!r && !A.box) r = RS_ERR_NOMEM;
+    for (size_t i = 0; i < nr && !r; i++) {
+        double *b = A.box + 4 * i;
+        b[0] = b[1] = INFINITY;
+        b[2] = b[3] = -INFINITY;
+        for (size_t k = 0; k < A.rl[i].n; k++) {
+            if (A.rl[i].x[k] < b[0]) b[0] = A.rl[i].x[k];
+            if (A.rl[i].y[k] < b[1]) b[1] = A.rl[i].y[k];
+            if (A.rl[i].x[k] > b[2]) b[2] = A.rl[i].x[k];
+            if (A.rl[i].y[k] > b[3]) b[3] = A.rl[i].y[k];
+        }
+    }
+    /* per road end: junction, its half extent, minor */
+    int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
+    double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
+    if (!r && (!endj || !endh)) r = RS_ERR_NOMEM;
+    for (size_t i = 0; i < nr && !r; i++) {
+        const rs__road_local *a = &A.rl[i];
+        if (a->n < 2) continue;
+        double wa;
+        rs_road_info ia;
+        rs_roads_get(roads, i, NULL, &wa, NULL, NULL);
+        rs_roads_get_info(roads, i, &ia);
+        for (int e = 0; e < 2 && !r; e++) {
+            size_t pi = e ? a->n - 1 : 0;
+            double x = a->x[pi], y = a->y[pi];
+            /* two passes: is it a junction (another road passes through, or
+             * two or more others end here; one other road ending here is the
+             * same street going on), then record it */
+            size_t meet = 0;
+            int through = 0;
+            for (int pass = 0; pass < 2 && !r; pass++) {
+                if (pass == 1 && !(through || meet >= 2)) break;
+                for (size_t j = 0; j < nr && !r; j++) {
+                    if (j == i || A.rl[j].n < 2) continue;
+                    double wb, s = 0;
+                    rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
+                    const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;
+                    if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
+                    if (nearest(&A.rl[j], x, y, &s) > wb / 2 + JUNCTION_TOL) continue;
+                    double ha = wb / 2 + JUNCTION_TOL, hb = wa / 2 + JUNCTION_TOL;
+                    if (pass == 0) {
+                        meet++;
+                        if (s > hb && s < A.rl[j].s[A.rl[j].n - 1] - hb) through = 1;
+                        continue;
+                    }
+                    rs_road_info ib;
+                    rs_roads_get_info(roads, j, &ib);
+                    endj[i][e] = 1;
+                    if (ha > endh[i][e]) endh[i][e] = ha;
+                    if (rank_of(ia.road_class) < rank_of(ib.road_class)) endj[i][2] |= 1 << e;
+                    r = add_jn(&A, i, e ? a->s[a->n - 1] : 0, ha);
+                    if (!r) r = add_jn(&A, j, s, hb);
+                }
+            }
+        }
+    }
+    for (size_t i = 0; i < nr && !r; i++) {
+        int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
+        r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
+    }
+    long zt = rs_atlas_find(atlas, "zebra");
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !r && zt >= 0; k++) {
+        const char *key, *v;
+        size_t ri, pt;
+        rs_roads_point_attr_at(roads, k, &ri, &pt, &key, &v);
+        if (strcmp(key, "crossing") || strcmp(v, "zebra") || ri >= nr) continue;
+        /* the point's arc length: its local position on the road */
+        const double *xy;
+        size_t np;
+        double w;
+        rs_roads_get(roads, ri, NULL, &w, &xy, &np);
+        if (pt >= np) continue;
+        double per_unit = rs__local_quantum(dem->frame.cell_size), s = 0;
+        double x = rs__local_coord(xy[2 * pt], dem->frame.origin_x, per_unit);
+        double y = rs__local_coord(xy[2 * pt + 1], dem->frame.origin_y, per_unit);
+        nearest(&A.rl[ri], x, y, &s);
+        rs__placement p;
+        memset(&p, 0, sizeof p);
+        p.type = (uint32_t)zt;
+        p.road = ri;
+        p.s = s;
+        p.length = atlas->t[zt].length;
+        p.width = w - 0.4;
+        if (p.width > 0) r = offer(&A, &p, pl, n, cap);
+    }
+    if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory placing markings");
+    for (size_t i = 0; i < nr; i++) rs__road_local_free(ctx, &A.rl[i]);
+    rs__free(ctx, A.rl);
+    rs__free(ctx, A.box);
+    rs__free(ctx, A.j);
+    rs__free(ctx, endj);
+    rs__free(ctx, endh);
+    return r;
+}

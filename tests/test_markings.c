@@ -1,0 +1,450 @@
+/* Road markings (issue 14, docs/markings.md): a marking covers its
+ * rectangle (area, centroid) on straight roads at any angle against an
+ * independent reference; a marking on a curved road follows the curve; the
+ * atlas index, atlas and `mark` lines fail cleanly naming the line; the
+ * build survives every allocation failure. Windows and threads: test_window. */
+#include "roadsplat.h"
+#include "harness.h"
+#include "fail_alloc.h"
+#include "markings.h"
+#include "splatter.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static rs_ctx *ctx;
+
+#define PI 3.14159265358979323846
+
+/* An all-opaque white box sprite of 16 x 16 texels as the only type. */
+static rs_atlas *box_atlas(double length, double width)
+{
+    static uint8_t px[16 * 16 * 4];
+    memset(px, 255, sizeof px);
+    rs_image img = { 16, 16, px };
+    char idx[128];
+    snprintf(idx, sizeof idx, "# a box\nbox 0 0 16 16 %g %g\n", length, width);
+    rs_atlas *a = NULL;
+    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &a) == RS_OK);
+    return a;
+}
+
+/* Alpha of the markings per pixel over the whole DEM: the stage run on
+ * one piece whose S is 0 and whose pixels are all road (white sprites:
+ * S afterwards = 255 a). */
+typedef struct amap {
+    uint32_t w, h;
+    double pix;
+    double *a;
+} amap;
+
+static int paint_alpha(const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, amap *m)
+{
+    rs__markings *mk = NULL;
+    if (rs__markings_build(ctx, dem, roads, o, &mk) != RS_OK || !mk) return -1;
+    m->w = (dem->width - 1) * o->texels;
+    m->h = (dem->height - 1) * o->texels;
+    m->pix = dem->frame.cell_size / o->texels;
+    size_t n = (size_t)m->w * m->h;
+    m->a = calloc(n, sizeof *m->a);
+    rs__piece p;
+    memset(&p, 0, sizeof p);
+    p.w = m->w;
+    p.rows = 1;
+    p.q = malloc(m->w * sizeof *p.q);
+    p.sc = malloc(m->w * 3 * sizeof *p.sc);
+    for (uint32_t k = 0; k < m->w; k++) p.q[k] = 65535;
+    for (uint32_t y = 0; y < m->h; y++) {
+        p.y0 = y;
+        memset(p.sc, 0, m->w * 3 * sizeof *p.sc);
+        rs__markings_paint(mk, &p);
+        for (uint32_t k = 0; k < m->w; k++) m->a[(size_t)y * m->w + k] = p.sc[k] / 255.0;
+    }
+    free(p.q);
+    free(p.sc);
+    rs__markings_free(ctx, mk);
+    return 0;
+}
+
+static rs_dem *flat_dem(uint32_t w, uint32_t h, double cs)
+{
+    float *z = calloc((size_t)w * h, sizeof *z);
+    rs_dem *d = NULL;
+    CHECK(rs_dem_create(ctx, w, h, z, &d) == RS_OK);
+    rs_dem_frame fr = { cs, 1, 0, 0 };
+    CHECK(rs_dem_set_frame(ctx, d, &fr) == RS_OK);
+    free(z);
+    return d;
+}
+
+/* Straight roads through the middle at several angles: the painted alpha
+ * integrates to the rectangle's area within 1 % and its centroid is the
+ * rectangle's centre within 0.25 pixel; nothing is painted more than 1.5
+ * pixels outside the rectangle (the reference: the rectangle's corners
+ * from the road's direction, computed here from scratch). */
+static void test_rectangle(void)
+{
+    static const double angles[] = { 0, 11, 30, 45, 63.4, 90, 137, 200, 271 };
+    static const double pixes[] = { 0.1, 0.05, 0.25 };
+    rs_dem *dem = flat_dem(41, 41, 1.0);
+    for (size_t pi = 0; pi < 3; pi++)
+        for (size_t ai = 0; ai < sizeof angles / sizeof angles[0]; ai++) {
+            double th = angles[ai] * PI / 180, dx = cos(th), dy = sin(th);
+            double cx = 20.3, cy = 19.7, half = 18;
+            double xy[4] = { cx - half * dx, cy - half * dy, cx + half * dx, cy + half * dy };
+            double L = 3.0, W = 1.2, s0 = 17.4, t0 = -0.9;
+            rs_roads *roads = NULL;
+            CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+            CHECK(rs_roads_add(ctx, roads, "r", 6, xy, 2) == RS_OK);
+            rs_mark mark = { "box", 0, s0, t0, 0, 0, (int)(ai & 1), 0 };
+            CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
+            rs_atlas *atlas = box_atlas(L, W);
+            rs_splat_options o;
+            memset(&o, 0, sizeof o);
+            o.texels = (uint32_t)lround(1.0 / pixes[pi]);
+            o.markings.atlas = atlas;
+            o.markings.no_auto = 1;
+            amap m;
+            CHECK(paint_alpha(dem, roads, &o, &m) == 0);
+            /* reference: centre = P0 + s0 d + t0 n, n = (dy, -dx) (left) */
+            double nx = dy, ny = -dx;
+            double rcx = xy[0] + s0 * dx + t0 * nx, rcy = xy[1] + s0 * dy + t0 * ny;
+            double sum = 0, sx = 0, sy = 0, outside = 0;
+            for (uint32_t y = 0; y < m.h; y++)
+                for (uint32_t x = 0; x < m.w; x++) {
+                    double a = m.a[(size_t)y * m.w + x];
+                    if (a == 0) continue;
+                    double px = (x + 0.5) * m.pix, py = (y + 0.5) * m.pix;
+                    sum += a;
+                    sx += a * px;
+                    sy += a * py;
+                    /* distance outside the rectangle, in its own frame */
+                    double u = (px - rcx) * dx + (py - rcy) * dy, v = (px - rcx) * nx + (py - rcy) * ny;
+                    double eu = fabs(u) - L / 2, ev = fabs(v) - W / 2;
+                    double out = hypot(eu > 0 ? eu : 0, ev > 0 ? ev : 0);
+                    if (out > outside) outside = out;
+                }
+            double area = sum * m.pix * m.pix;
+            CHECKF(fabs(area - L * W) <= 0.01 * L * W, "angle %g pix %g: area %.4f m2, rectangle %.4f", angles[ai],
+                   m.pix, area, L * W);
+            double ex = sx / sum - rcx, ey = sy / sum - rcy;
+            CHECKF(hypot(ex, ey) <= 0.25 * m.pix, "angle %g pix %g: centroid off by %.3f px", angles[ai], m.pix,
+                   hypot(ex, ey) / m.pix);
+            /* the filtered edge reaches half a texel of the coarser mip level
+             * used (the level for the finer axis), plus half a pixel diagonal */
+            double tl = L / 16, tw = W / 16, fine = tl < tw ? tl : tw, coarse = tl < tw ? tw : tl;
+            double lvl = m.pix > fine ? ceil(log2(m.pix / fine)) : 0;
+            double bound = 0.5 * ldexp(1.0, (int)lvl) * coarse + 0.7072 * m.pix;
+            CHECKF(outside <= bound, "angle %g pix %g: painted %.3f m outside (bound %.3f)", angles[ai], m.pix,
+                   outside, bound);
+            free(m.a);
+            rs_atlas_free(ctx, atlas);
+            rs_roads_free(ctx, roads);
+        }
+    rs_dem_free(ctx, dem);
+}
+
+/* A long marking on an arc of radius R: every painted pixel lies within
+ * the marking's band around the arc (a rigid box would stray by the
+ * sagitta, 1.7 m here), its area is L x W and it spans L / R radians. */
+static void test_curve(void)
+{
+    rs_dem *dem = flat_dem(81, 81, 1.0);
+    double R = 30, ccx = 40, ccy = 40, xy[2 * 121];
+    for (int k = 0; k <= 120; k++) {
+        double a = PI * k / 120; /* a half circle, counter-clockwise on the map (y down) */
+        xy[2 * k] = ccx + R * cos(a);
+        xy[2 * k + 1] = ccy - R * sin(a);
+    }
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, "arc", 8, xy, 121) == RS_OK);
+    double L = 20, W = 0.6, s0 = R * PI / 2, t0 = 1.5; /* t0 > 0: left = towards the centre */
+    rs_mark mark = { "box", 0, s0, t0, L, W, 0, 0 };
+    CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
+    rs_atlas *atlas = box_atlas(1, 1);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 10;
+    o.markings.atlas = atlas;
+    o.markings.no_auto = 1;
+    amap m;
+    CHECK(paint_alpha(dem, roads, &o, &m) == 0);
+    double sum = 0, worst = 0, amin = 1e9, amax = -1e9;
+    for (uint32_t y = 0; y < m.h; y++)
+        for (uint32_t x = 0; x < m.w; x++) {
+            double a = m.a[(size_t)y * m.w + x];
+            if (a == 0) continue;
+            double px = (x + 0.5) * m.pix, py = (y + 0.5) * m.pix;
+            sum += a;
+            double r = hypot(px - ccx, py - ccy), off = fabs(r - (R - t0)) - W / 2;
+            if (off > worst) worst = off;
+            if (a > 0.5) {
+                double ang = atan2(ccy - py, px - ccx);
+                if (ang < amin) amin = ang;
+                if (ang > amax) amax = ang;
+            }
+        }
+    /* the polyline's chords sit up to R (1 - cos(pi/240)) = 2.6 mm inside the circle */
+    CHECKF(worst <= 1.5 * m.pix + 0.003, "painted %.3f m off the curved band", worst);
+    double area = sum * m.pix * m.pix, want = L * W * (R - t0) / R; /* the band at radius R - t0 is shorter */
+    CHECKF(fabs(area - want) <= 0.02 * want, "curved area %.3f, expected %.3f", area, want);
+    CHECKF(fabs((amax - amin) - L / R) <= 0.02, "spans %.4f rad, expected %.4f", amax - amin, L / R);
+    free(m.a);
+    rs_atlas_free(ctx, atlas);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+/* The built-in atlas has every type issue 14 asks for. */
+static void test_default_atlas(void)
+{
+    rs_atlas *a = NULL;
+    CHECK(rs_atlas_default(ctx, &a) == RS_OK);
+    static const char *const want[] = { "arrow_straight", "arrow_left", "arrow_right", "arrow_straight_left",
+                                        "arrow_straight_right", "arrow_uturn", "stop_line", "give_way_line",
+                                        "give_way_triangles", "give_way_triangle", "zebra", "cycle", "word_bus",
+                                        "word_stop", "word_slow" };
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) CHECKF(rs_atlas_find(a, want[i]) >= 0, "%s", want[i]);
+    const char *name;
+    double len, wid;
+    uint32_t w, h;
+    CHECK(rs_atlas_get(a, 0, &name, &len, &wid, &w, &h) == RS_OK);
+    CHECK(len > 0 && wid > 0 && w > 0 && h > 0);
+    CHECK(rs_atlas_get(a, rs_atlas_count(a), NULL, NULL, NULL, NULL, NULL) == RS_ERR_INVALID_ARG);
+    rs_atlas_free(ctx, a);
+}
+
+static void expect_index_error(const char *idx, const char *msg)
+{
+    static uint8_t px[8 * 8 * 4];
+    rs_image img = { 8, 8, px };
+    rs_atlas *a = (rs_atlas *)&img;
+    rs_result r = rs_atlas_create(ctx, &img, idx, strlen(idx), &a);
+    CHECKF(r == RS_ERR_PARSE || r == RS_ERR_LIMIT, "index %s: result %d", idx, (int)r);
+    CHECK(a == NULL);
+    CHECKF(strstr(rs_ctx_message(ctx), msg) != NULL, "index %s: message '%s', wanted '%s'", idx, rs_ctx_message(ctx), msg);
+}
+
+static void expect_roads_error(const char *text, const char *msg)
+{
+    rs_roads *r = NULL;
+    CHECKF(rs_roads_parse(ctx, text, strlen(text), &r) == RS_ERR_PARSE, "%s", text);
+    CHECK(r == NULL);
+    CHECKF(strstr(rs_ctx_message(ctx), msg) != NULL, "message '%s', wanted '%s'", rs_ctx_message(ctx), msg);
+}
+
+static void test_errors(void)
+{
+    expect_index_error("a 0 0 4 4 1 1\nb 0 0 4\n", "atlas index line 2: expected NAME X Y W H LENGTH WIDTH");
+    expect_index_error("a 0 0 4 4 1 1 9\n", "atlas index line 1: expected");
+    expect_index_error("\n\na 0 0 9 4 1 1\n", "atlas index line 3: rectangle");
+    expect_index_error("a 0 0 0 4 1 1\n", "line 1: rectangle");
+    expect_index_error("a 0 0 4 4 0 1\n", "line 1: LENGTH");
+    expect_index_error("a 0 0 4 4 1 nan\n", "line 1: WIDTH");
+    expect_index_error("a 0.5 0 4 4 1 1\n", "line 1: X");
+    expect_index_error("a 0 0 4 4 1 1\na 1 1 2 2 1 1\n", "line 2: type 'a' given twice");
+    expect_index_error("a/b 0 0 4 4 1 1\n", "line 1: name");
+    expect_index_error("# only a comment\n", "names no marking type");
+    expect_index_error("a 0 0 4 4 1 1\nb\x01 0 0 4 4 1 1\n", "line 2: control character");
+    /* the image itself */
+    rs_atlas *a = NULL;
+    rs_image empty = { 0, 0, NULL };
+    CHECK(rs_atlas_create(ctx, &empty, "a 0 0 1 1 1 1", 13, &a) == RS_ERR_INVALID_ARG && !a);
+    /* mark lines */
+    expect_roads_error("road a width 4\n0 0\n10 0\nend\nmark box road=b s=1 t=0\n", "line 5: mark: no road named 'b'");
+    expect_roads_error("road a width 4\n0 0\n10 0\nend\nmark box road=a t=0\n", "line 5: mark: missing s=");
+    expect_roads_error("mark box road=a s=1 t=0 s=2\n", "line 1: mark: 's' given twice");
+    expect_roads_error("mark box road=a s=x t=0\n", "line 1: s 'x' is not a number");
+    expect_roads_error("mark box road=a s=1 t=0 length=-1\n", "line 1: mark: length must be > 0");
+    expect_roads_error("mark box road=a s=1 t=0 spin\n", "line 1: mark: unexpected 'spin'");
+    expect_roads_error("mark\n", "line 1: 'mark' needs a type");
+    expect_roads_error("mark a/b road=a s=1 t=0\n", "line 1: mark type 'a/b'");
+    expect_roads_error("road a width 4\n0 0\nmark box road=a s=1 t=0\n", "line 3: 'mark' inside road");
+    expect_roads_error("road a width 4\n0 0 crossing\n1 1\nend\n", "line 2: extra token 'crossing' after the point");
+    expect_roads_error("road a width 4\n0 0 =zebra\n1 1\nend\n", "line 2: point attribute key");
+    /* an unknown type fails when the grid is built, naming the line */
+    static const char text[] = "road a width 4\n0 5\n10 5\nend\n\nmark nosuch road=a s=1 t=0\n";
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    CHECK(rs_roads_mark_count(roads) == 1);
+    rs_mark mk;
+    CHECK(rs_roads_get_mark(roads, 0, &mk) == RS_OK && mk.line == 6 && !strcmp(mk.type, "nosuch") && mk.road == 0);
+    rs_dem *dem = flat_dem(12, 12, 1.0);
+    rs_road_grid *g = NULL;
+    CHECK(rs_road_grid_build(ctx, dem, roads, NULL, &g) == RS_ERR_INVALID_ARG && !g);
+    CHECKF(strstr(rs_ctx_message(ctx), "line 6: mark: the atlas has no type 'nosuch'") != NULL, "%s", rs_ctx_message(ctx));
+    /* API checks */
+    rs_mark bad = { "ok", 5, 0, 0, 0, 0, 0, 0 };
+    CHECK(rs_roads_add_mark(ctx, roads, &bad) == RS_ERR_INVALID_ARG);
+    bad.road = 0;
+    bad.type = "";
+    CHECK(rs_roads_add_mark(ctx, roads, &bad) == RS_ERR_INVALID_ARG);
+    bad.type = "ok";
+    bad.s = NAN;
+    CHECK(rs_roads_add_mark(ctx, roads, &bad) == RS_ERR_INVALID_ARG);
+    bad.s = 0;
+    bad.width = -1;
+    CHECK(rs_roads_add_mark(ctx, roads, &bad) == RS_ERR_INVALID_ARG);
+    CHECK(rs_roads_mark_count(roads) == 1);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+/* Parsed marks and point attributes round-trip; a mark may come before
+ * its road; disable and no_auto. */
+static void test_parse(void)
+{
+    static const char text[] = "mark arrow_left road=\"main st\" s=12.5 t=-1.75 length=4 width=1.2 flip\n"
+                               "road \"main st\" width 7\n0 10\n30 10 crossing=zebra\n60 10\nend\n"
+                               "mark stop_line road=\"main st\" s=50 t=-1.75\n";
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    CHECK_EQ_INT(rs_roads_mark_count(roads), 2);
+    rs_mark m;
+    CHECK(rs_roads_get_mark(roads, 0, &m) == RS_OK);
+    CHECK(!strcmp(m.type, "arrow_left") && m.road == 0 && m.s == 12.5 && m.t == -1.75 && m.length == 4 &&
+          m.width == 1.2 && m.flip && m.line == 1);
+    CHECK(rs_roads_get_mark(roads, 1, &m) == RS_OK && m.length == 0 && !m.flip && m.line == 7);
+    CHECK_EQ_INT(rs_roads_point_attr_count(roads), 1);
+    size_t ri, pi;
+    const char *k, *v;
+    CHECK(rs_roads_point_attr_at(roads, 0, &ri, &pi, &k, &v) == RS_OK && ri == 0 && pi == 1 && !strcmp(k, "crossing") &&
+          !strcmp(v, "zebra"));
+    rs_dem *dem = flat_dem(61, 21, 1.0);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    rs_road_grid *g = NULL;
+    rs_road_grid_stats st;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
+    rs_road_grid_get_stats(g, &st);
+    CHECK_EQ_INT(st.marks_explicit, 2);
+    rs_road_grid_free(ctx, g);
+    o.markings.disable = 1;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
+    rs_road_grid_get_stats(g, &st);
+    CHECK_EQ_INT(st.marks_explicit + st.marks_auto, 0);
+    rs_road_grid_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+
+/* Automatic placement on a small junction: a residential street ending on
+ * a primary road gets a give-way line on its incoming half and the arrows
+ * of its turn:lanes, the primary road a zebra at its crossing point; none
+ * inside the junction area; none with no_auto. */
+static void test_auto(void)
+{
+    static const char text[] = "road main width 8 class=primary\n0 50\n20 50 crossing=zebra\n100 50\nend\n"
+                               "road side width 7 class=residential turn:lanes=left|right\n50 95\n50 50\nend\n"
+                               "road stopper width 6 class=service control=stop\n100 20\n80 50\nend\n";
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    rs_dem *dem = flat_dem(101, 101, 1.0);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    rs__markings *mk = NULL;
+    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk);
+    int give = 0, stop = 0, left = 0, right = 0, zebra = 0;
+    for (size_t i = 0; mk && i < mk->n; i++) {
+        const rs__mk *m = &mk->m[i];
+        const char *name = m->ty->name;
+        if (!strcmp(name, "give_way_line")) {
+            give++;
+            /* side runs north; its end at s = 45 meets main (half width 4 +
+             * 0.5): line centre 0.5 + 0.25 m before that, on the right half */
+            CHECK_NEAR(m->s0, 45 - 4.5 - 0.5 - 0.25, 1e-9);
+            CHECK_NEAR(m->t0, -7.0 / 4, 1e-9);
+            CHECK(!m->flip);
+        } else if (!strcmp(name, "stop_line")) {
+            stop++;
+            CHECK(m->t0 < 0);
+        } else if (!strcmp(name, "arrow_left") || !strcmp(name, "arrow_right")) {
+            if (name[6] == 'l') left++; else right++;
+            CHECK(m->s0 + m->hl <= 45 - 4.5 - 6 + 1e-9);
+            CHECK(m->t0 < 0 && m->t0 > -3.5);
+            /* the left lane is nearer the centre line */
+            if (name[6] == 'l') CHECK(m->t0 > -1.75); else CHECK(m->t0 < -1.75);
+        } else if (!strcmp(name, "zebra")) {
+            zebra++;
+            CHECK_NEAR(m->s0, 20, 1e-9);
+            CHECK_NEAR(2 * m->hw, 7.6, 1e-9);
+        }
+    }
+    CHECK_EQ_INT(give, 1);
+    CHECK_EQ_INT(stop, 1);
+    CHECK_EQ_INT(left, 1);
+    CHECK_EQ_INT(right, 1);
+    CHECK_EQ_INT(zebra, 1);
+    CHECK_EQ_INT(mk ? mk->n_auto : 0, 5);
+    rs__markings_free(ctx, mk);
+    /* a zebra inside the junction area of main is dropped */
+    static const char text2[] = "road main width 8 class=primary\n0 50\n50 50 crossing=zebra\n100 50\nend\n"
+                                "road side width 7 class=residential\n50 95\n50 50\nend\n";
+    rs_roads *r2 = NULL;
+    CHECK(rs_roads_parse(ctx, text2, sizeof text2 - 1, &r2) == RS_OK);
+    mk = NULL;
+    CHECK(rs__markings_build(ctx, dem, r2, &o, &mk) == RS_OK && mk);
+    for (size_t i = 0; mk && i < mk->n; i++) CHECK(strcmp(mk->m[i].ty->name, "zebra") != 0);
+    rs__markings_free(ctx, mk);
+    o.markings.no_auto = 1;
+    mk = (rs__markings *)1;
+    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk == NULL);
+    rs_roads_free(ctx, r2);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+typedef struct alloc_case {
+    const char *text;
+} alloc_case;
+
+static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
+{
+    const alloc_case *ac = user;
+    rs_roads *roads = NULL;
+    rs_dem *dem = NULL;
+    rs_road_grid *g = NULL;
+    static float z[31 * 21];
+    rs_result r = rs_roads_parse(c, ac->text, strlen(ac->text), &roads);
+    if (r == RS_OK) r = rs_dem_create(c, 31, 21, z, &dem);
+    if (r == RS_OK) {
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = 4;
+        r = rs_road_grid_build(c, dem, roads, &o, &g);
+        if (r != RS_OK && g) *wrong = 1;
+    }
+    rs_road_grid_free(c, g);
+    rs_dem_free(c, dem);
+    rs_roads_free(c, roads);
+    return r;
+}
+
+static void test_alloc_failures(void)
+{
+    alloc_case ac = { "road a width 6\n1 10\n15 10 crossing=zebra\n29 12\nend\n"
+                      "mark arrow_straight road=a s=5 t=-1.5\nmark word_bus road=a s=20 t=1.5 flip\n" };
+    fail_sweep fs = fail_alloc_sweep(5000, alloc_try, &ac);
+    CHECK(fs.succeeded);
+    CHECKF(fs.wrong == 0, "%ld tries failed with the wrong code or left objects", fs.wrong);
+    CHECKF(fs.leaks == 0, "%ld tries leaked", fs.leaks);
+    CHECK(fs.tries > 10);
+}
+
+int main(void)
+{
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_default_atlas();
+    test_rectangle();
+    test_curve();
+    test_errors();
+    test_parse();
+    test_auto();
+    test_alloc_failures();
+    rs_ctx_free(ctx);
+    return th_finish("test_markings");
+}
