@@ -212,3 +212,16 @@ rs_allocator cli_bigalloc_hook(cli_bigalloc *b)
     a.user = b;
     return a;
 }
+
+void cli_prefault(void *p, size_t n)
+{
+#ifdef MADV_POPULATE_WRITE
+    long ps = sysconf(_SC_PAGESIZE);
+    if (ps <= 0 || !p) return;
+    uintptr_t a = ((uintptr_t)p + (uintptr_t)ps - 1) & ~((uintptr_t)ps - 1), e = ((uintptr_t)p + n) & ~((uintptr_t)ps - 1);
+    if (e > a) (void)madvise((void *)a, e - a, MADV_POPULATE_WRITE);
+#else
+    (void)p;
+    (void)n;
+#endif
+}

@@ -22,6 +22,11 @@ rs_allocator cli_bigalloc_hook(cli_bigalloc *b);
 void *cli_big_malloc(cli_bigalloc *b, size_t size);
 void cli_big_free(cli_bigalloc *b, void *p);
 
+/* Faults in the whole pages of [p, p + n) in one call (Linux 5.14+
+ * MADV_POPULATE_WRITE; elsewhere, or when refused, nothing): a fresh buffer
+ * that read() is about to fill then takes no fault per 4 KiB page. */
+void cli_prefault(void *p, size_t n);
+
 /* What it did (for --stats): blocks and bytes mapped in all. */
 typedef struct cli_bigalloc_stats {
     size_t mapped_blocks, mapped_bytes, fallback_blocks;
