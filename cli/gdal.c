@@ -459,9 +459,28 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
         }
     } else if (OSRIsGeographic(src)) { /* the UTM zone of the extent's centre */
         OGREnvelope env;
-        if (OGR_L_GetExtent(layer, &env, 1) != OGRERR_NONE) {
-            cli_error("%s: layer '%s' is empty", shown, lname);
-            goto out;
+        if (OGR_L_GetExtent(layer, &env, 1) != OGRERR_NONE) { /* OSM: none; from the features */
+            int any = 0;
+            OGRFeatureH f;
+            OGR_L_ResetReading(layer);
+            while ((f = OGR_L_GetNextFeature(layer)) != NULL) {
+                OGRGeometryH g = OGR_F_GetGeometryRef(f);
+                OGREnvelope e;
+                if (g && !OGR_G_IsEmpty(g)) {
+                    OGR_G_GetEnvelope(g, &e);
+                    if (!any) env = e;
+                    if (e.MinX < env.MinX) env.MinX = e.MinX;
+                    if (e.MinY < env.MinY) env.MinY = e.MinY;
+                    if (e.MaxX > env.MaxX) env.MaxX = e.MaxX;
+                    if (e.MaxY > env.MaxY) env.MaxY = e.MaxY;
+                    any = 1;
+                }
+                OGR_F_Destroy(f);
+            }
+            if (!any) {
+                cli_error("%s: layer '%s' has no features%s", shown, lname, o->where ? " matching --where" : "");
+                goto out;
+            }
         }
         char code[32];
         snprintf(code, sizeof code, "EPSG:%d", utm_epsg((env.MinX + env.MaxX) / 2, (env.MinY + env.MaxY) / 2));
