@@ -122,18 +122,19 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
         /* the default rs_limits.max_points (10^7) at 64 bytes a point */
         return cli_read_file(roads_path, (size_t)10000000 * 64 + (1u << 20), text, size);
     }
-    if (!geo->georef || !geo->crs) {
-        cli_error("%s: GIS roads are reprojected to the DEM's coordinate system, and the DEM has %s; use a "
-                  "georeferenced DEM, or write the roads in a chosen CRS first: roadsplat convert --t-srs EPSG:XXXX %s "
-                  "roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
-        return 1;
-    }
     cli_gdal_roads_opts o;
     memset(&o, 0, sizeof o);
     o.layer = s->layer;
     o.where = s->where;
     o.dst_crs = geo->crs;
     o.shown = roads_path;
+    if (!cli_gdal_available()) return cli_gdal_roads_text(roads_path, &o, text, size); /* says why */
+    if (!geo->georef || !geo->crs) {
+        cli_error("%s: GIS roads are reprojected to the DEM's coordinate system, and the DEM has %s; use a "
+                  "georeferenced DEM, or write the roads in a chosen CRS first: roadsplat convert --t-srs EPSG:XXXX %s "
+                  "roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
+        return 1;
+    }
     return cli_gdal_roads_text(roads_path, &o, text, size);
 }
 

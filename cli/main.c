@@ -351,7 +351,9 @@ static int splat_main(int argc, char **argv)
     int fmt = 0, wfmt = 0;
     if (cli_check_outputs(outs, 5, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
         (a.weight_out && (wfmt = cli_out_format(a.weight_out, "--weight-out", 1)) < 0) ||
-        (a.cog && fmt != CLI_FMT_TIF && (cli_error("--cog: OUT %s is not a .tif", a.out), 1))) {
+        (a.cog && fmt != CLI_FMT_TIF && (cli_error("--cog: OUT %s is not a .tif", a.out), 1)) ||
+        (!cli_gdal_available() && (fmt == CLI_FMT_TIF || wfmt == CLI_FMT_TIF) &&
+         (cli_gdal_write_tiff(NULL, fmt == CLI_FMT_TIF ? a.out : a.weight_out, 0, 0, 0, 0, NULL, NULL, NULL, 0), 1))) {
         free(wf_path);
         free(prj_path);
         return 1;
@@ -369,7 +371,7 @@ static int splat_main(int argc, char **argv)
         (prj_path && cli_out_open(&out_prj, prj_path)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
-    if (a.world_file && !in.world) {
+    if (a.world_file && !(in.world && in.geo.georef)) {
         cli_error("--world-file: %s", in.geo.georef ? "the roads are not in the DEM's world frame ('frame world' or GIS roads)"
                                                     : "the DEM has no georeference");
         goto done;
