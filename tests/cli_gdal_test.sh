@@ -204,6 +204,16 @@ printf 'frame world EPSG:32632\nroad far width 4\n600000 6000000\n600100 6000000
 err "--strict: no road on the map" "^roadsplat: far.txt: no road touches the map" --strict dem_f32.tif far.txt out.tif
 err "--cell-size with a georeferenced DEM" "^roadsplat: dem_f32.tif: --cell-size: the DEM is georeferenced" --cell-size 5 dem_f32.tif roads.gpkg out.tif
 
+# ---- mesh: the DEM's cell size, the world point of sample (0,0), the .mtl ----------
+"$BIN" mesh --max-error 0 --texture out.tif dem_f32.tif m.obj 2>e || bad "mesh run: $(cat e)"
+grep -q "^# world: sample (0,0) at x 500001, y 5000079 (north up, EPSG:32632);" m.obj && grep -q "^mtllib m.mtl$" m.obj &&
+    grep -q "^map_Kd out.tif$" m.mtl && ok || bad "mesh header / .mtl: $(head -4 m.obj)"
+awk '$1 == "v" && $2 > mx { mx = $2 } $1 == "v" && $4 > mz { mz = $4 } END { exit !(mx == 120 && mz == 80) }' m.obj &&
+    ok || bad "mesh extent is not 120 x 80 m (2 m cells)"
+rm -f m2.obj
+"$BIN" mesh --cell-size 3 dem_f32.tif m2.obj 2>e; [ $? = 1 ] && [ ! -e m2.obj ] &&
+    grep -q "^roadsplat: dem_f32.tif: --cell-size: the DEM is georeferenced" e && ok || bad "mesh --cell-size: $(cat e)"
+
 # ---- bad GIS input: one clear line each ------------------------------------------
 err "DEM in degrees" "^roadsplat: dem_deg.tif: the DEM is in geographic degrees \(EPSG:4326\); roadsplat needs metres: gdalwarp -t_srs EPSG:32632 -r bilinear dem_deg.tif dem_utm.tif$" \
     dem_deg.tif roads.gpkg out.tif
