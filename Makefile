@@ -62,19 +62,31 @@ OSMESA_CFLAGS = -DRS_WITH_OSMESA $(shell $(PKG_CONFIG) --cflags osmesa 2>/dev/nu
 OSMESA_LIBS   = $(or $(shell $(PKG_CONFIG) --libs osmesa 2>/dev/null),-lOSMesa)
 endif
 
+# Optional GDAL layer (georeferenced DEMs, OGR roads, GeoTIFF output; issue
+# 17): auto-detected, or forced with WITH_GDAL=1/0. Its headers are system
+# headers here (-isystem), so the project's warnings do not apply to them.
+WITH_GDAL ?= $(shell $(PKG_CONFIG) --exists gdal 2>/dev/null && echo 1 || echo 0)
+ifeq ($(WITH_GDAL),1)
+GDAL_CFLAGS = $(patsubst -I%,-isystem %,$(shell $(PKG_CONFIG) --cflags gdal 2>/dev/null))
+GDAL_LIBS   = $(or $(shell $(PKG_CONFIG) --libs gdal 2>/dev/null),-lgdal)
+GDAL_DEF    = -DRS_WITH_GDAL
+endif
+
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
 # (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
 # first use (docs/packaging.md).
 RENDER_SRC := cli/render.c cli/render_gl.c
-CLI_CSRC  := $(filter-out $(RENDER_SRC),$(sort $(wildcard cli/*.c)))
+GDAL_SRC  := cli/gdal.c
+CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC),$(sort $(wildcard cli/*.c)))
 CLI_OBJ   := $(CLI_CSRC:%.c=$(BUILD)/%.o)
 RENDER_OBJ := $(RENDER_SRC:%.c=$(BUILD)/%.o)
 IMAGE_OBJ := $(BUILD)/cli/imageio.o
 IMAGE_MOD := $(BUILD)/roadsplat-image.so
 RENDER_MOD := $(BUILD)/roadsplat-render.so
-MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD))
+GDAL_MOD  := $(BUILD)/roadsplat-gdal.so
+MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD)) $(if $(filter 1,$(WITH_GDAL)),$(GDAL_MOD))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TESTLIB_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
@@ -90,7 +102,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -123,7 +135,7 @@ help:
 	@echo "  make install-lib   install only the library, header and roadsplat.pc (no OpenImageIO needed)"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 FUZZ_SECONDS"
+	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 FUZZ_SECONDS"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
@@ -178,7 +190,7 @@ $(PCFILE): $(CONFIG)
 # CLI symbols keep default visibility: the executable exports them
 # (--export-dynamic) to the modules, which call back into it. The whole
 # library is linked in, since the render module uses parts the rest does not.
-CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS)
+CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF)
 $(BUILD)/cli/%.o: cli/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) -c $< -o $@
@@ -186,6 +198,10 @@ $(BUILD)/cli/%.o: cli/%.c
 $(BUILD)/cli/module.o: cli/module.c $(CONFIG)
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) -DRS_MODULEDIR='"$(MODULEDIR)"' -c $< -o $@
+
+$(BUILD)/cli/gdal.o: cli/gdal.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CLI_CFLAGS) $(GDAL_CFLAGS) -c $< -o $@
 
 $(BUILD)/cli/%.o: cli/%.cpp
 	@mkdir -p $(dir $@)
@@ -200,6 +216,9 @@ $(IMAGE_MOD): $(IMAGE_OBJ)
 
 $(RENDER_MOD): $(RENDER_OBJ)
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(OSMESA_LIBS) $(LDLIBS_CORE)
+
+$(GDAL_MOD): $(BUILD)/cli/gdal.o
+	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(GDAL_LIBS) $(LDLIBS_CORE)
 
 # --- tests --------------------------------------------------------------------
 $(BUILD)/tests/%.o: tests/%.c
@@ -320,7 +339,8 @@ uninstall:
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME) \
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so $(DESTDIR)$(PKGCONFIGDIR)/roadsplat.pc \
 	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1 \
-	  $(DESTDIR)$(MODULEDIR)/roadsplat-image.so $(DESTDIR)$(MODULEDIR)/roadsplat-render.so
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-image.so $(DESTDIR)$(MODULEDIR)/roadsplat-render.so \
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-gdal.so
 	-rmdir $(DESTDIR)$(MODULEDIR) 2>/dev/null
 
 clean:

@@ -166,6 +166,14 @@ void cli_progress_done(cli_progress *p);
 /* Monotonic wall clock in milliseconds. */
 double cli_now_ms(void);
 
+/* A raster's georeference (cli/gis.h). crs is malloc'd: "EPSG:32632" when
+ * GDAL identifies an EPSG code, else the WKT; NULL when the file has none. */
+typedef struct cli_geo {
+    int georef;   /* 1: the file has a geotransform (or a CRS) */
+    double gt[6]; /* GDAL's geotransform: X0, gx, 0, Y0, 0, gy (gy = -gx) */
+    char *crs;
+} cli_geo;
+
 /* Splat options and inputs shared by `roadsplat` and `roadsplat render`
  * (cli/splat_args.c). */
 typedef struct cli_splat_args {
@@ -176,6 +184,9 @@ typedef struct cli_splat_args {
     const char *styles_path;        /* --styles FILE */
     const char *atlas_path, *atlas_index_path; /* --atlas IMG --atlas-index FILE */
     int png_level_given, png_level; /* --png-level (OUT.png), also read here */
+    int cell_size_given, origin_given;
+    const char *layer, *where; /* --layer NAME, --where SQL: GIS road sources (cli/geo.c) */
+    int strict;                /* --strict: no road on the map is an error, not a warning */
 } cli_splat_args;
 /* Value of option `name`: inline ("--x=v", inl) or the next argument. */
 int cli_option_value(int argc, char **argv, int *i, const char *name, const char *inl, const char **val);
@@ -193,6 +204,10 @@ typedef struct cli_splat_input {
     rs_styles *styles; /* style blocks of the road file and of --styles FILE */
     rs_atlas *atlas;   /* --atlas, NULL: the built-in one */
     uint8_t *atlas_px;
+    cli_geo geo;       /* the DEM's georeference (geo.georef 0: none) */
+    uint8_t *nodata;   /* W x H, 1 where the DEM sample is nodata (NaN); NULL: none */
+    int world;         /* roads and DEM in a north-up world frame (cli/geo.c) */
+    double wx0, wy0;   /* world point of DEM sample (0,0) (x, y north) when world */
 } cli_splat_input;
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in);
@@ -219,6 +234,8 @@ typedef struct cli_splat_job {
     uint8_t *rgba;
     uint16_t *weight;
     rs_splat_profile profile;
+    const uint8_t *nodata; /* the input's nodata mask (alpha 0 there), or NULL */
+    uint32_t dem_w, dem_h;
 } cli_splat_job;
 void cli_splat_job_init(cli_splat_job *job, const rs_splatter *sp, const cli_splat_args *s, int quiet);
 int cli_splat_run(cli_splat_job *job);

@@ -2,21 +2,28 @@
  * splats roads into a terrain texture; `roadsplat mesh ...` meshes a DEM. */
 #include "bigalloc.h"
 #include "png.h"
+#include "gis.h"
 
 #include <errno.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <unistd.h>
 
 static const char usage_text[] =
-    "Usage: roadsplat [options] DEM ROADS OUT.png\n"
+    "Usage: roadsplat [options] DEM ROADS OUT.png|OUT.tif\n"
     "       roadsplat mesh [options] DEM OUT.obj|OUT.ply   (see roadsplat mesh --help)\n"
+    "       roadsplat convert [options] ROADS_IN ROADS.txt (GIS roads to road text; needs GDAL)\n"
     "       roadsplat render [options] DEM ROADS OUT.png  (see roadsplat render --help; needs OSMesa)\n"
     "\n"
     "Burns the roads of ROADS (text, docs/road-format.md) into a terrain texture\n"
     "of the height map DEM (PGM, PNG or TIFF) and writes it to OUT.png: (W-1)*T x\n"
     "(H-1)*T pixels for a W x H DEM and T texels per cell.\n"
+    "With GDAL (docs/gis.md): DEM may be any georeferenced raster (GeoTIFF, VRT,\n"
+    "ASCII grid, .hgt, ...), whose cell size, origin, CRS and nodata are used;\n"
+    "ROADS may be any OGR source (GeoJSON, GeoPackage, Shapefile, OSM, ...),\n"
+    "reprojected to the DEM's CRS; OUT.tif is a georeferenced GeoTIFF.\n"
     "\n"
     "Options:\n"
     "  --cell-size M         DEM cell size in metres (default 1)\n"
@@ -48,8 +55,15 @@ static const char usage_text[] =
     "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
     "                        in that world frame (e.g. UTM metres; default 0,0)\n"
     "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
+    "  --layer NAME          GIS roads: the layer to read (default: the first line\n"
+    "                        layer; OSM: lines)\n"
+    "  --where SQL           GIS roads: only features matching this filter\n"
+    "  --strict              no road touching the map is an error (default: a warning)\n"
+    "  --world-file          also write OUT's world file (.pgw, .tfw) and .prj\n"
+    "  --cog                 OUT.tif as a Cloud Optimized GeoTIFF (with overviews)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
-    "  --weight-out FILE.pgm write the road weight R = 1 - alpha as 16-bit PGM\n"
+    "  --weight-out FILE     write the road weight R = 1 - alpha, 16-bit: .pgm (or no\n"
+    "                        extension), .png or .tif (GeoTIFF)\n"
     "  --png-level N         PNG compression, 0 (none) .. 12 (smallest, slowest);\n"
     "                        default 1, about 17 % larger than zlib's level 6\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
@@ -61,7 +75,7 @@ typedef struct args {
     cli_splat_args s;
     const char *dem, *roads, *out;
     const char *weight_out, *stats;
-    int quiet, have_window;
+    int quiet, have_window, world_file, cog;
     uint32_t window[4];
 } args;
 
@@ -123,6 +137,11 @@ static int parse_args(int argc, char **argv, args *a)
             return 2;
         } else if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) {
             a->quiet = 1;
+            continue;
+        } else if (!strcmp(name, "--world-file") || !strcmp(name, "--cog")) {
+            if (inl) { cli_error("%s takes no value", name); return 1; }
+            if (name[2] == 'w') a->world_file = 1;
+            else a->cog = 1;
             continue;
         }
         int sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
@@ -291,7 +310,9 @@ static int splat_main(int argc, char **argv)
     rs_road_grid *grid = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
-    cli_out out_png, out_wt, out_stats;
+    cli_out out_png, out_wt, out_stats, out_wf, out_prj;
+    char *wf_path = NULL, *prj_path = NULL;
+    uint8_t *rgba = NULL;
     run_stats st;
     cli_splat_job job;
     memset(&st, 0, sizeof st);
@@ -300,11 +321,43 @@ static int splat_main(int argc, char **argv)
     memset(&out_png, 0, sizeof out_png);
     memset(&out_wt, 0, sizeof out_wt);
     memset(&out_stats, 0, sizeof out_stats);
+    memset(&out_wf, 0, sizeof out_wf);
+    memset(&out_prj, 0, sizeof out_prj);
+    size_t ol = strlen(a.out);
+    int tif_name = (ol > 4 && !strcasecmp(a.out + ol - 4, ".tif")) || (ol > 5 && !strcasecmp(a.out + ol - 5, ".tiff"));
+    if (a.world_file) { /* OUT's name with .pgw / .tfw and .prj for its extension */
+        size_t n = strlen(a.out), e = n;
+        const char *slash = strrchr(a.out, '/'), *dot = strrchr(a.out, '.');
+        if (dot && (!slash || dot > slash + 1) && dot != a.out) e = (size_t)(dot - a.out);
+        wf_path = malloc(e + 5);
+        prj_path = malloc(e + 5);
+        if (!wf_path || !prj_path) {
+            free(wf_path);
+            free(prj_path);
+            cli_error("out of memory");
+            return 1;
+        }
+        memcpy(wf_path, a.out, e);
+        memcpy(prj_path, a.out, e);
+        strcpy(wf_path + e, tif_name ? ".tfw" : ".pgw");
+        strcpy(prj_path + e, ".prj");
+    }
     /* Every output is checked and opened before any work. */
-    const cli_file_role outs[3] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" } };
+    const cli_file_role outs[5] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
+                                    { wf_path, "the world file" }, { prj_path, "the .prj" } };
     const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
                                    { a.s.road_tex, "--road-texture" } };
-    if (cli_check_outputs(outs, 3, ins, 4)) return 1;
+    /* Output formats follow the extensions (docs/gis.md). */
+    int fmt = 0, wfmt = 0;
+    if (cli_check_outputs(outs, 5, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
+        (a.weight_out && (wfmt = cli_out_format(a.weight_out, "--weight-out", 1)) < 0) ||
+        (a.cog && fmt != CLI_FMT_TIF && (cli_error("--cog: OUT %s is not a .tif", a.out), 1)) ||
+        (!cli_gdal_available() && (fmt == CLI_FMT_TIF || wfmt == CLI_FMT_TIF) &&
+         (cli_gdal_write_tiff(NULL, fmt == CLI_FMT_TIF ? a.out : a.weight_out, 0, 0, 0, 0, NULL, NULL, NULL, 0), 1))) {
+        free(wf_path);
+        free(prj_path);
+        return 1;
+    }
     /* Huge pages for the DEM, its filled copy and the road index: their
      * first touch in 4 KiB pages was most of the read stage (cli/bigalloc.c) */
     cli_bigalloc *ba = cli_bigalloc_create(0);
@@ -312,11 +365,17 @@ static int splat_main(int argc, char **argv)
     memset(&hook, 0, sizeof hook);
     if (ba) hook = cli_bigalloc_hook(ba);
     rs_result r = rs_ctx_create(ba ? &hook : NULL, NULL, &ctx);
-    if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); return 1; }
+    if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); return 1; }
     if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
-        (a.stats && cli_out_open(&out_stats, a.stats)))
+        (a.stats && cli_out_open(&out_stats, a.stats)) || (wf_path && cli_out_open(&out_wf, wf_path)) ||
+        (prj_path && cli_out_open(&out_prj, prj_path)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    if (a.world_file && !(in.world && in.geo.georef)) {
+        cli_error("--world-file: %s", in.geo.georef ? "the roads are not in the DEM's world frame ('frame world' or GIS roads)"
+                                                    : "the DEM has no georeference");
+        goto done;
+    }
     const rs_dem *dem = in.dem;
     st.t[0] = cli_now_ms() - t_start;
 
@@ -350,11 +409,64 @@ static int splat_main(int argc, char **argv)
     cli_splat_job_init(&job, sp, &a.s, a.quiet);
     job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
     job.weight = wt;
-    if (cli_splat_png_run(&job, out_png.f, a.out, a.s.png_level_given ? a.s.png_level : -1, &st.png) ||
-        png_finish(&out_png))
-        goto done;
-    if (wt && weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
-    st.t[2] = st.png.splat_cpu_ms / (job.threads_used ? job.threads_used : 1);
+    job.nodata = in.nodata;
+    job.dem_w = rs_dem_width(dem), job.dem_h = rs_dem_height(dem);
+    double gt[6];
+    int have_gt = !cli_geo_texture_gt(&in, job.texels, x0, y0, gt);
+    if (fmt == CLI_FMT_TIF) {
+        /* the whole image, then GDAL's GeoTIFF writer into OUT's temporary */
+        if (!(rgba = malloc((size_t)w * h * 4))) {
+            cli_error("%s: out of memory for a %u x %u image", a.out, w, h);
+            goto done;
+        }
+        job.rgba = rgba;
+        if (cli_splat_run(&job)) goto done;
+        st.t[2] = cli_now_ms() - t1;
+        fclose(out_png.f);
+        out_png.f = NULL;
+        if (cli_gdal_write_tiff(out_png.tmp, a.out, w, h, 4, 8, rgba, have_gt ? gt : NULL,
+                                have_gt ? in.geo.crs : NULL, a.cog))
+            goto done;
+    } else {
+        if (cli_splat_png_run(&job, out_png.f, a.out, a.s.png_level_given ? a.s.png_level : -1, &st.png) ||
+            png_finish(&out_png))
+            goto done;
+        st.t[2] = st.png.splat_cpu_ms / (job.threads_used ? job.threads_used : 1);
+    }
+    if (wt) {
+        if (wfmt == CLI_FMT_PGM) {
+            if (weight_pgm_to_temp(&out_wt, w, h, wt)) goto done;
+        } else if (wfmt == CLI_FMT_PNG) {
+            cli_png_image img = { w, h, 1, 16, wt };
+            if (cli_png_encode(out_wt.f, a.weight_out, &img, NULL) || out_finish(&out_wt)) goto done;
+        } else {
+            fclose(out_wt.f);
+            out_wt.f = NULL;
+            if (cli_gdal_write_tiff(out_wt.tmp, a.weight_out, w, h, 1, 16, wt, have_gt ? gt : NULL,
+                                    have_gt ? in.geo.crs : NULL, 0))
+                goto done;
+        }
+    }
+    if (wf_path) { /* the world file: pixel size, rotations, then the centre of the first pixel */
+        if (fprintf(out_wf.f, "%.17g\n0\n0\n%.17g\n%.17g\n%.17g\n", gt[1], gt[5], gt[0] + gt[1] / 2,
+                    gt[3] + gt[5] / 2) < 0 || out_finish(&out_wf)) {
+            cli_error("%s: write failed: %s", wf_path, strerror(errno ? errno : EIO));
+            goto done;
+        }
+        if (in.geo.crs) {
+            char *prj = cli_gdal_prj_text(in.geo.crs, prj_path);
+            if (!prj) goto done;
+            int bad = fprintf(out_prj.f, "%s\n", prj) < 0 || out_finish(&out_prj);
+            free(prj);
+            if (bad) {
+                cli_error("%s: write failed: %s", prj_path, strerror(errno ? errno : EIO));
+                goto done;
+            }
+        } else {
+            cli_out_abort(&out_prj); /* no CRS: no .prj */
+            memset(&out_prj, 0, sizeof out_prj);
+        }
+    }
     st.t[3] = cli_now_ms() - t1 - st.t[2];
     st.t[4] = cli_now_ms() - t_start;
     if (a.stats) {
@@ -367,13 +479,18 @@ static int splat_main(int argc, char **argv)
         st.job = &job;
         if (stats_to_temp(&out_stats, &st)) goto done;
     }
-    cli_out *const all[3] = { &out_png, &out_wt, &out_stats };
-    if (cli_out_commit_all(all, 3)) goto done;
+    cli_out *const all[5] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj };
+    if (cli_out_commit_all(all, 5)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out_png); /* no-ops once renamed */
     cli_out_abort(&out_wt);
     cli_out_abort(&out_stats);
+    cli_out_abort(&out_wf);
+    cli_out_abort(&out_prj);
+    free(wf_path);
+    free(prj_path);
+    free(rgba);
     free(wt);
     rs_splatter_free(ctx, sp);
     rs_road_grid_free(ctx, grid);
@@ -388,5 +505,6 @@ int main(int argc, char **argv)
     cli_signals_install();
     if (argc > 1 && !strcmp(argv[1], "mesh")) return cli_mesh_main(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "render")) return cli_render_main(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "convert")) return cli_convert_main(argc - 1, argv + 1);
     return splat_main(argc, argv);
 }

@@ -3,7 +3,7 @@
  * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
 #define _POSIX_C_SOURCE 200809L /* getrusage */
 #include "bigalloc.h"
-#include "cli.h"
+#include "gis.h"
 
 #include <errno.h>
 #include <float.h>
@@ -16,10 +16,14 @@
 static const char *mesh_usage =
     "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
     "                      [--pool N] [--normals] [--skirt DEPTH] [--stats FILE.json]\n"
+    "                      [--texture IMG]\n"
     "                      DEM OUT.obj|OUT.ply\n"
     "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
     "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
-    "  --pool N        ROAM node pool size (default: what the finest mesh needs, <= 2^26)\n";
+    "  --pool N        ROAM node pool size (default: what the finest mesh needs, <= 2^26)\n"
+    "  --texture IMG   OUT.obj: also write OUT.mtl with IMG as the diffuse texture\n"
+    "A georeferenced DEM (GDAL, docs/gis.md) brings its cell size; vertices stay\n"
+    "relative to sample (0,0), whose world point the header records.\n";
 
 /* Page faults of this process so far (the mesh stage reports its own). */
 static long minor_faults(void)
@@ -100,11 +104,15 @@ static void put_u32(unsigned char *b, uint32_t u)
     b[0] = (unsigned char)u; b[1] = (unsigned char)(u >> 8); b[2] = (unsigned char)(u >> 16); b[3] = (unsigned char)(u >> 24);
 }
 
+/* `world`: comment lines on the world frame (or ""); mtl: the .mtl's file
+ * name for OBJ (or NULL). */
 static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *v, const uint32_t *smp,
-                      const float *n, size_t nv, const uint32_t *idx, size_t ni, size_t ntop)
+                      const float *n, size_t nv, const uint32_t *idx, size_t ni, size_t ntop, const char *world,
+                      const char *mtl)
 {
     if (!ply) {
-        fprintf(f, "# roadsplat mesh: y up, v = (column*cs, height, row*cs) metres\n");
+        fprintf(f, "# roadsplat mesh: y up, v = (column*cs, height, row*cs) metres\n%s", world);
+        if (mtl) fprintf(f, "mtllib %s\nusemtl roadsplat\n", mtl);
         for (size_t k = 0; k < nv; k++) {
             const float *p = v + 5 * k;
             double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
@@ -120,7 +128,14 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
             else fprintf(f, "f %lu/%lu %lu/%lu %lu/%lu\n", a, a, b, b, c, c);
         }
     } else {
-        fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment roadsplat mesh: y up, (column*cs, height, row*cs) metres\n"
+        fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment roadsplat mesh: y up, (column*cs, height, row*cs) metres\n");
+        for (const char *l = world; *l;) { /* the world lines as PLY comments */
+            const char *e = strchr(l, '\n');
+            size_t len = e ? (size_t)(e - l) : strlen(l);
+            fprintf(f, "comment%.*s\n", (int)(len > 1 ? len - 1 : 0), l + 1);
+            l += len + (e ? 1 : 0);
+        }
+        fprintf(f, ""
                    "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
                    "property float s\nproperty float t\n", nv);
         if (n) fprintf(f, "property float nx\nproperty float ny\nproperty float nz\n");
@@ -150,14 +165,16 @@ int cli_mesh_main(int argc, char **argv)
     double cs = 1.0, zs = 1.0, max_error = 1.0, skirt = 0.0;
     uint32_t tris = 0, pool = 0;
     int have_err = 0, normals = 0;
-    const char *stats_path = NULL, *in = NULL, *outp = NULL;
+    const char *stats_path = NULL, *in = NULL, *outp = NULL, *texture = NULL;
+    int cs_given = 0;
     for (int a = 1; a < argc; a++) {
         const char *s = argv[a];
         int more = a + 1 < argc;
         if (!strcmp(s, "--help") || !strcmp(s, "-h")) { fputs(mesh_usage, stdout); return 0; }
         else if (!strcmp(s, "--normals")) normals = 1;
         else if (s[0] == '-' && s[1] == '-' && !more) { cli_error("%s needs a value", s); return 1; }
-        else if (!strcmp(s, "--cell-size")) { if (cli_parse_double(s, argv[++a], &cs)) return 1; }
+        else if (!strcmp(s, "--cell-size")) { if (cli_parse_double(s, argv[++a], &cs)) return 1; cs_given = 1; }
+        else if (!strcmp(s, "--texture")) texture = argv[++a];
         else if (!strcmp(s, "--z-scale")) { if (cli_parse_double(s, argv[++a], &zs)) return 1; }
         else if (!strcmp(s, "--max-error")) { if (cli_parse_double(s, argv[++a], &max_error)) return 1; have_err = 1; }
         else if (!strcmp(s, "--triangles")) {
@@ -188,6 +205,21 @@ int cli_mesh_main(int argc, char **argv)
     if (have_err == 0 && tris == 0) have_err = 1;
     int ply = ends_with(outp, ".ply");
     if (!ply && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj or .ply", outp); return 1; }
+    if (texture && ply) { cli_error("--texture: %s is a PLY; the material file goes with OUT.obj", outp); return 1; }
+    /* OUT.mtl beside OUT.obj, named in its mtllib line */
+    char *mtl_path = NULL;
+    const char *mtl_name = NULL;
+    if (texture) {
+        size_t n = strlen(outp);
+        if (!(mtl_path = malloc(n + 1))) { cli_error("out of memory"); return 1; }
+        memcpy(mtl_path, outp, n - 4);
+        strcpy(mtl_path + n - 4, ".mtl");
+        const char *slash = strrchr(mtl_path, '/');
+        mtl_name = slash ? slash + 1 : mtl_path;
+        const cli_file_role o2[3] = { { outp, "OUT" }, { stats_path, "--stats" }, { mtl_path, "OUT.mtl" } },
+                            i2[1] = { { in, "DEM" } };
+        if (cli_check_outputs(o2, 3, i2, 1)) { free(mtl_path); return 1; }
+    }
 
     /* Huge pages for the bulk of the landscape, the DEM and the output
      * buffers: their first touch in 4 KiB pages was most of a cold mesh
@@ -197,7 +229,12 @@ int cli_mesh_main(int argc, char **argv)
     memset(&hook, 0, sizeof hook);
     if (ba) hook = cli_bigalloc_hook(ba);
     rs_ctx *ctx = NULL;
-    if (!ba || rs_ctx_create(&hook, NULL, &ctx) != RS_OK) { cli_bigalloc_destroy(ba); cli_error("out of memory"); return 1; }
+    if (!ba || rs_ctx_create(&hook, NULL, &ctx) != RS_OK) {
+        cli_bigalloc_destroy(ba);
+        free(mtl_path);
+        cli_error("out of memory");
+        return 1;
+    }
     int rc = 1;
     rs_roam *L = NULL;
     float *v = NULL, *nrm = NULL;
@@ -205,14 +242,33 @@ int cli_mesh_main(int argc, char **argv)
     /* OUT and the stats go to temporaries opened before the work (an
      * unwritable target fails at once) and are renamed only when both are
      * written, so a failing stats file leaves the old OUT alone too. */
-    cli_out out, so;
+    cli_out out, so, mo_out;
     memset(&out, 0, sizeof out);
     memset(&so, 0, sizeof so);
+    memset(&mo_out, 0, sizeof mo_out);
     uint32_t *smp = NULL;
     rs_dem *dem = NULL;
-    if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path))) goto done;
-    dem = cli_load_dem(ctx, in);
+    cli_geo geo;
+    memset(&geo, 0, sizeof geo);
+    char world[400] = "";
+    if (cli_out_open(&out, outp) || (stats_path && cli_out_open(&so, stats_path)) ||
+        (mtl_path && cli_out_open(&mo_out, mtl_path)))
+        goto done;
+    dem = cli_geo_load_dem(ctx, in, &geo);
     if (!dem) goto done;
+    if (geo.georef) { /* the DEM's cell size; the world point of sample (0,0) in the header */
+        if (cs_given) {
+            cli_error("%s: --cell-size: the DEM is georeferenced, so its cell size (%.12g) comes from the file; leave "
+                      "the option out", in, geo.gt[1]);
+            goto done;
+        }
+        cs = geo.gt[1];
+        snprintf(world, sizeof world,
+                 "# world: sample (0,0) at x %.17g, y %.17g (north up%s%.60s); a vertex (vx, vy, vz) is at x + vx "
+                 "(east), y - vz (north), height vy\n",
+                 geo.gt[0] + geo.gt[1] / 2, geo.gt[3] + geo.gt[5] / 2, geo.crs && strlen(geo.crs) < 60 ? ", " : "",
+                 geo.crs && strlen(geo.crs) < 60 ? geo.crs : "");
+    }
     double read_ms = cli_now_ms() - t_start;
     /* Every value that reaches the float output must fit, checked before
      * the work with the option that decides it named. */
@@ -291,7 +347,14 @@ int cli_mesh_main(int argc, char **argv)
     rs_roam_get_stats(L, &st);
     size_t ntop = 0;
     for (size_t k = 0; k < 3 * (size_t)st.triangles; k++) if (idx[k] + (size_t)1 > ntop) ntop = idx[k] + (size_t)1;
-    if (write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop) != 0) {
+    if (mtl_path) { /* the texture covers the DEM's cells as the mesh's UVs do */
+        if (fprintf(mo_out.f, "# roadsplat mesh material\n%snewmtl roadsplat\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nillum 1\n"
+                              "map_Kd %s\n", world, texture) < 0) {
+            cli_error("%s: write failed: %s", mtl_path, strerror(errno ? errno : EIO));
+            goto done;
+        }
+    }
+    if (write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, world, mtl_name) != 0) {
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
@@ -325,12 +388,15 @@ int cli_mesh_main(int argc, char **argv)
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
-    cli_out *const all[2] = { &out, &so };
-    if (cli_out_commit_all(all, 2)) goto done;
+    cli_out *const all[3] = { &out, &so, &mo_out };
+    if (cli_out_commit_all(all, 3)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out); /* no-ops once committed */
     cli_out_abort(&so);
+    cli_out_abort(&mo_out);
+    free(mtl_path);
+    cli_geo_free(&geo);
     cli_big_free(ba, v); cli_big_free(ba, nrm); cli_big_free(ba, idx); cli_big_free(ba, smp);
     rs_roam_free(ctx, L);
     if (dem) rs_dem_free(ctx, dem);

@@ -4,7 +4,9 @@
  * (and its ~100 libraries) or OSMesa (which pulls in LLVM).
  *
  * - roadsplat-image.so: cli/imageio.cpp (OpenImageIO readers);
- * - roadsplat-render.so: cli/render.c + cli/render_gl.c (`roadsplat render`).
+ * - roadsplat-render.so: cli/render.c + cli/render_gl.c (`roadsplat render`);
+ * - roadsplat-gdal.so: cli/gdal.c (GDAL: georeferenced DEMs, OGR roads,
+ *   GeoTIFF output; cli/gis.h).
  *
  * Search order: the folder of the running executable (/proc/self/exe: the
  * build folder, or a relocated install), then RS_MODULEDIR, the
@@ -12,7 +14,7 @@
  * executable (cli_* helpers, the library), which is linked with
  * --export-dynamic for that. Also here: the stand-ins of the module entry
  * points, and the start-up clock. */
-#include "cli.h"
+#include "gis.h"
 
 #include <dlfcn.h>
 #include <errno.h>
@@ -37,6 +39,7 @@ typedef struct module {
 static module modules[] = {
     { "image", "OpenImageIO", NULL, 0, { 0 } },
     { "render", "OSMesa", NULL, 0, { 0 } },
+    { "gdal", "GDAL", NULL, 0, { 0 } },
 };
 
 /* Folder of the executable, with a trailing '/'; "" when unknown. */
@@ -134,6 +137,127 @@ int cli_render_main(int argc, char **argv)
     memcpy(&f, &s, sizeof f);
     return f(argc, argv);
 #endif
+}
+
+/* ---- the GDAL module (cli/gis.h) ------------------------------------------------ */
+
+#ifdef RS_WITH_GDAL
+/* The symbol, or NULL after the module's message naming `what`. */
+static void *gdal_symbol(const char *symbol, const char *what)
+{
+    return cli_module_symbol("gdal", symbol, what);
+}
+#define GDAL_FN(type, var, symbol, what, fail)         \
+    type var;                                          \
+    do {                                               \
+        void *s_ = gdal_symbol(symbol, what);          \
+        if (!s_) return fail;                          \
+        memcpy(&var, &s_, sizeof var);                 \
+    } while (0)
+#endif
+
+int cli_gdal_available(void)
+{
+#ifdef RS_WITH_GDAL
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+int cli_gdal_loadable(void)
+{
+#ifdef RS_WITH_GDAL
+    module *m = &modules[2];
+    if (!m->handle && !m->failed) module_open(m);
+    return m->handle != NULL;
+#else
+    return 0;
+#endif
+}
+
+#ifndef RS_WITH_GDAL
+static int no_gdal(const char *what)
+{
+    cli_error("%s: this build has no GDAL support (install libgdal-dev, or run 'make deps', and rebuild)", what);
+    return 1;
+}
+#endif
+
+typedef int (*gdal_dem_fn)(const char *, uint32_t, uint32_t *, uint32_t *, float **, size_t *, cli_geo *);
+typedef int (*gdal_roads_fn)(const char *, const cli_gdal_roads_opts *, char **, size_t *);
+typedef int (*gdal_tiff_fn)(const char *, const char *, uint32_t, uint32_t, int, int, const void *, const double *,
+                            const char *, int);
+typedef int (*gdal_same_fn)(const char *, const char *, const char *);
+typedef char *(*gdal_prj_fn)(const char *, const char *);
+
+int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
+                      cli_geo *geo)
+{
+    memset(geo, 0, sizeof *geo);
+    *z = NULL;
+    *nodata = 0;
+#ifdef RS_WITH_GDAL
+    GDAL_FN(gdal_dem_fn, f, "cli_gdal_read_dem", path, 1);
+    return f(path, max_side, w, h, z, nodata, geo);
+#else
+    (void)path; (void)max_side; (void)w; (void)h;
+    return 2;
+#endif
+}
+
+int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size)
+{
+    *text = NULL;
+    *size = 0;
+#ifdef RS_WITH_GDAL
+    GDAL_FN(gdal_roads_fn, f, "cli_gdal_roads_text", o->shown ? o->shown : path, 1);
+    return f(path, o, text, size);
+#else
+    return no_gdal(o->shown ? o->shown : path);
+#endif
+}
+
+int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                        const void *data, const double gt[6], const char *crs, int cog)
+{
+#ifdef RS_WITH_GDAL
+    GDAL_FN(gdal_tiff_fn, f, "cli_gdal_write_tiff", shown, 1);
+    return f(path, shown, w, h, channels, bits, data, gt, crs, cog);
+#else
+    (void)path; (void)w; (void)h; (void)channels; (void)bits; (void)data; (void)gt; (void)crs; (void)cog;
+    return no_gdal(shown);
+#endif
+}
+
+int cli_gdal_same_crs(const char *a, const char *b, const char *shown)
+{
+#ifdef RS_WITH_GDAL
+    GDAL_FN(gdal_same_fn, f, "cli_gdal_same_crs", shown, -1);
+    return f(a, b, shown);
+#else
+    (void)a; (void)b;
+    no_gdal(shown);
+    return -1;
+#endif
+}
+
+char *cli_gdal_prj_text(const char *crs, const char *shown)
+{
+#ifdef RS_WITH_GDAL
+    GDAL_FN(gdal_prj_fn, f, "cli_gdal_prj_text", shown, NULL);
+    return f(crs, shown);
+#else
+    (void)crs;
+    no_gdal(shown);
+    return NULL;
+#endif
+}
+
+void cli_geo_free(cli_geo *g)
+{
+    free(g->crs);
+    memset(g, 0, sizeof *g);
 }
 
 /* ---- start-up clock ----------------------------------------------------------- */

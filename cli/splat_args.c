@@ -1,5 +1,5 @@
 /* Splat options and inputs shared by `roadsplat` and `roadsplat render`. */
-#include "cli.h"
+#include "gis.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -29,11 +29,17 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
                                          "--alpha-res", "--transition", "--jitter", "--terrain-texture",
                                          "--road-texture", "--texture-scale", "--origin", "--edges", "--threads",
                                          "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
-                                         "--atlas-index", "--no-auto-markings", "--no-markings" };
+                                         "--atlas-index", "--no-auto-markings", "--no-markings", "--layer", "--where",
+                                         "--strict" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
     rs_splat_options *o = &s->o;
+    if (!strcmp(name, "--strict")) {
+        if (inl) { cli_error("%s takes no value", name); return 1; }
+        s->strict = 1;
+        return 0;
+    }
     if (!strcmp(name, "--no-styles") || !strcmp(name, "--no-auto-markings") || !strcmp(name, "--no-markings")) {
         if (inl) { cli_error("%s takes no value", name); return 1; }
         if (name[5] == 's') o->style.disable = 1;
@@ -46,7 +52,12 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
     rs_dem_frame *fr = &s->frame;
     double d, xy[2];
     uint32_t u;
-    if (!strcmp(name, "--cell-size")) {
+    if (!strcmp(name, "--layer")) {
+        s->layer = v;
+    } else if (!strcmp(name, "--where")) {
+        s->where = v;
+    } else if (!strcmp(name, "--cell-size")) {
+        s->cell_size_given = 1;
         if (cli_parse_double(name, v, &fr->cell_size) || positive(name, v, fr->cell_size)) return 1;
         if (!(fr->cell_size >= 1e-9 && fr->cell_size <= 1e9)) {
             cli_error("%s: '%s' must be in [1e-9, 1e9] metres", name, v);
@@ -123,6 +134,7 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
         }
         fr->origin_x = xy[0];
         fr->origin_y = xy[1];
+        s->origin_given = 1;
     }
     return 0;
 }
@@ -140,13 +152,22 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
 {
     char *text = NULL;
     size_t size = 0;
-    rs_limits lim;
     memset(in, 0, sizeof *in);
-    rs_ctx_limits(ctx, &lim);
-    if (!(in->dem = cli_load_dem(ctx, dem_path))) return 1;
-    if (rs_dem_set_frame(ctx, in->dem, &s->frame) != RS_OK) {
-        cli_error("%s: %s", dem_path, rs_ctx_message(ctx));
-        return 1;
+    if (!(in->dem = cli_geo_load_dem(ctx, dem_path, &in->geo))) return 1;
+    /* nodata (NaN) samples: the library fills them; the colour output
+     * makes them transparent (cli_nodata_alpha) */
+    {
+        uint32_t W = rs_dem_width(in->dem), H = rs_dem_height(in->dem);
+        const float *z = rs_dem_samples(in->dem);
+        size_t n = (size_t)W * H, k = 0;
+        while (k < n && z[k] == z[k]) k++;
+        if (k < n) {
+            if (!(in->nodata = malloc(n))) {
+                cli_error("%s: out of memory for the nodata mask", dem_path);
+                return 1;
+            }
+            for (size_t i = 0; i < n; i++) in->nodata[i] = z[i] != z[i];
+        }
     }
     if (rs_styles_create(ctx, &in->styles) != RS_OK) {
         cli_error("%s", rs_ctx_message(ctx));
@@ -163,7 +184,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
             return 1;
         }
     }
-    if (cli_read_file(roads_path, (size_t)lim.max_points * 64 + (1u << 20), &text, &size)) return 1;
+    if (cli_geo_roads_text(roads_path, s, &in->geo, &text, &size)) return 1;
     rs_road_parse_options po;
     memset(&po, 0, sizeof po);
     po.profile = s->o.style.profile;
@@ -174,6 +195,8 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
         cli_error("%s: %s", roads_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
         return 1;
     }
+    /* the frame: the DEM's georeference, the road file's frame line */
+    if (cli_geo_frame(ctx, in, s, dem_path, roads_path)) return 1;
     s->o.style.styles = in->styles;
     if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
         load_texture(s->road_tex, &in->road, &in->road_px))
@@ -209,5 +232,7 @@ void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in)
     free(in->road_px);
     rs_atlas_free(ctx, in->atlas);
     free(in->atlas_px);
+    cli_geo_free(&in->geo);
+    free(in->nodata);
     memset(in, 0, sizeof *in);
 }

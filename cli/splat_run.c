@@ -4,6 +4,7 @@
  * output does not depend on how the image is cut, so any thread count gives
  * the same bytes. */
 #include "png.h"
+#include "gis.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -95,6 +96,9 @@ static void *work(void *arg)
         r = rs_splat_window(ctx, job->s, job->x0, job->y0 + y, job->w, rows, job->rgba + (size_t)y * job->w * 4,
                             (size_t)job->w * 4, job->weight ? job->weight + (size_t)y * job->w : NULL, job->w,
                             &wk->prof);
+        if (!r && job->nodata)
+            cli_nodata_alpha(job->nodata, job->dem_w, job->dem_h, job->texels, job->x0, job->y0 + y, job->w, rows,
+                             job->rgba + (size_t)y * job->w * 4, (size_t)job->w * 4);
         pthread_mutex_lock(&sh->mu);
         if (r && !sh->err) {
             sh->err = r;
@@ -270,6 +274,9 @@ static void *png_work(void *arg)
         double t0 = cli_now_ms();
         r = rs_splat_window(ctx, job->s, job->x0, job->y0 + y, job->w, rows, rgba, (size_t)job->w * 4,
                             job->weight ? job->weight + (size_t)y * job->w : NULL, job->w, &wk->prof);
+        if (!r && job->nodata)
+            cli_nodata_alpha(job->nodata, job->dem_w, job->dem_h, job->texels, job->x0, job->y0 + y, job->w, rows,
+                             rgba, (size_t)job->w * 4);
         double t1 = cli_now_ms();
         cli_png_piece p;
         int bad = !r && cli_png_coder_band(coder, b, rgba, (size_t)job->w * 4, &p);

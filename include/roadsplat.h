@@ -173,6 +173,22 @@ RS_API rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, do
                               const double *xy, size_t n);
 RS_API void rs_roads_free(rs_ctx *ctx, rs_roads *roads);
 RS_API size_t rs_roads_count(const rs_roads *roads);
+/* The road file's `frame` header line (docs/road-format.md): NONE when the
+ * file has none (the local frame, as before it existed), LOCAL for `frame
+ * local`, WORLD for `frame world [CRS]`: points in a georeferenced CRS
+ * with y growing north. *crs (may be NULL) gets the CRS text or NULL. The
+ * library itself always works in the local frame (y down); the CLI maps
+ * world roads into it with rs_roads_negate_y and a DEM origin of
+ * (X, -Y) for the world point (X, Y) of sample (0,0). */
+typedef enum rs_road_frame {
+    RS_FRAME_NONE = 0,
+    RS_FRAME_LOCAL = 1,
+    RS_FRAME_WORLD = 2
+} rs_road_frame;
+RS_API rs_road_frame rs_roads_frame(const rs_roads *roads, const char **crs);
+/* y -> -y for every point (north-up world coordinates to the y-down local
+ * frame; s and t of markings are unchanged, since the map picture is). */
+RS_API rs_result rs_roads_negate_y(rs_ctx *ctx, rs_roads *roads);
 /* Road i: name (never NULL), width, points (owned by roads), point count.
  * Any output pointer may be NULL. The name and points stay valid until the
  * next rs_roads_add() on this set or rs_roads_free(). */

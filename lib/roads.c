@@ -66,6 +66,8 @@ struct rs_roads {
     size_t marks_len, marks_cap;
     rs_point_attr *pattrs;
     size_t pattrs_len, pattrs_cap;
+    int frame;        /* rs_road_frame: the `frame` header line (RS_FRAME_NONE: none) */
+    size_t frame_crs; /* offset into names of its CRS; SIZE_MAX: none */
 };
 
 /* Make room for `need` (>= 1) elements of `elem` bytes: capacity doubles
@@ -93,6 +95,7 @@ rs_result rs_roads_create(rs_ctx *ctx, rs_roads **out)
     if (!ctx) return RS_ERR_INVALID_ARG;
     rs_roads *r = rs__calloc(ctx, 1, sizeof *r);
     if (!r) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory creating a road set");
+    r->frame_crs = SIZE_MAX;
     *out = r;
     rs__ok(ctx);
     return RS_OK;
@@ -111,6 +114,21 @@ void rs_roads_free(rs_ctx *ctx, rs_roads *roads)
 }
 
 size_t rs_roads_count(const rs_roads *roads) { return roads ? roads->count : 0; }
+
+rs_road_frame rs_roads_frame(const rs_roads *roads, const char **crs)
+{
+    if (crs) *crs = roads && roads->frame_crs != SIZE_MAX ? roads->names + roads->frame_crs : NULL;
+    return roads ? (rs_road_frame)roads->frame : RS_FRAME_NONE;
+}
+
+rs_result rs_roads_negate_y(rs_ctx *ctx, rs_roads *roads)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_negate_y: roads is NULL");
+    for (size_t k = 0; k < roads->points; k++) roads->xy[2 * k + 1] = -roads->xy[2 * k + 1];
+    rs__ok(ctx);
+    return RS_OK;
+}
 
 rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name, double *width,
                        const double **xy, size_t *n)
@@ -759,6 +777,8 @@ typedef struct text_parser {
     size_t road_first;     /* index of the open road's first point */
     int in_style;
     rs__style_block style;
+    int seen_block;                /* a road, style or mark line came before */
+    unsigned long long frame_line; /* line of the `frame` line, 0: none */
 } text_parser;
 
 /* One key=value word of a road header. `eq` points at its '='. */
@@ -1146,6 +1166,49 @@ static rs_result check_bytes(text_parser *P, const unsigned char *s, size_t n)
     return RS_OK;
 }
 
+/* `frame local` or `frame world [CRS]`: once, before any road, style or
+ * mark line. The CRS is one word or a quoted string (EPSG:32632, a WKT). */
+static rs_result frame_line(text_parser *P, rs__lex *L)
+{
+    char q[64];
+    rs_ctx *ctx = P->ctx;
+    rs_roads *R = P->roads;
+    if (P->frame_line)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: 'frame' given twice (first on line %llu)", P->line,
+                        P->frame_line);
+    if (P->seen_block || P->in_road)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: 'frame' must come before the first road, style or mark",
+                        P->line);
+    rs__tok kind, crs, extra;
+    int k = rs__lex_next(L, RS__LEX_PLAIN, &kind);
+    if (k <= 0 || !(rs__tok_is(&kind, "local") || rs__tok_is(&kind, "world")))
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: frame %s must be 'local' or 'world [CRS]' (e.g. frame world EPSG:32632)",
+                        P->line, k > 0 ? rs__quote(q, sizeof q, kind.s, kind.n) : "''");
+    int world = kind.s[0] == 'w';
+    k = rs__lex_next(L, RS__LEX_NAME, &crs);
+    if (k < 0) return rs__lex_fail(ctx, P->line, L);
+    if (k > 0 && !world)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: extra token %s after 'frame local'", P->line,
+                        rs__quote(q, sizeof q, crs.s, crs.n));
+    if (k > 0) {
+        int k2 = rs__lex_next(L, RS__LEX_NAME, &extra);
+        if (k2 < 0) return rs__lex_fail(ctx, P->line, L);
+        if (k2 > 0)
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: extra token %s after the CRS (quote a CRS with blanks)",
+                            P->line, rs__quote(q, sizeof q, extra.s, extra.n));
+        if (R) {
+            char *w = pool_reserve(ctx, R, crs.n);
+            if (!w) return rs__fail(ctx, RS_ERR_NOMEM, "line %llu: out of memory", P->line);
+            size_t len = rs__tok_text(&crs, w);
+            if (len == 0) return rs__fail(ctx, RS_ERR_PARSE, "line %llu: the CRS is empty", P->line);
+            R->frame_crs = pool_commit(R, len);
+        }
+    }
+    if (R) R->frame = world ? RS_FRAME_WORLD : RS_FRAME_LOCAL;
+    P->frame_line = P->line;
+    return RS_OK;
+}
+
 /* One meaningful line: L is after its first token t0. */
 static rs_result text_line(text_parser *P, rs__lex *L, const rs__tok *t0)
 {
@@ -1167,10 +1230,12 @@ static rs_result text_line(text_parser *P, rs__lex *L, const rs__tok *t0)
             return rs__fail(ctx, RS_ERR_PARSE, "line %llu: 'style' inside road %s (line %llu); missing 'end'?",
                             P->line, rs__quote(q, sizeof q, P->road_name, P->road_name_len), P->road_line);
         P->in_style = 1;
+        P->seen_block = 1;
         return rs__style_begin(ctx, &P->style, P->line, L);
     }
-    if (rs__tok_is(t0, "road")) return road_header(P, L);
-    if (rs__tok_is(t0, "mark")) return mark_line(P, L);
+    if (rs__tok_is(t0, "frame")) return frame_line(P, L);
+    if (rs__tok_is(t0, "road")) { P->seen_block = 1; return road_header(P, L); }
+    if (rs__tok_is(t0, "mark")) { P->seen_block = 1; return mark_line(P, L); }
     rs__tok t[MAX_TOKENS];
     size_t nt = 1;
     t[0] = *t0;

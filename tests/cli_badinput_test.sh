@@ -304,7 +304,17 @@ valid "180-degree reversals (retracing a segment)" "$T/ref.png" dem.pgm reversal
 printf 'road a width 4\n2 10\n29 11\n2 12\nend\nroad b width 1\n15 1\n16 19\n15.1 1\nend\n' >"$D/acute.txt"
 valid "very acute turns" - dem.pgm acute.txt
 printf 'road a width 5\n-100 -100\n-50 -80\n-200 500\nend\nroad b width 3\n1e6 1e6\n1e6 -1e6\nend\n' >"$D/outside.txt"
-valid "roads wholly outside the map" "$T/terrain.png" dem.pgm outside.txt
+# roads wholly outside the map: the same terrain-only image, and one warning line
+# naming the road file and both extents (issue 17); --strict makes it an error
+rm -f "$T/v.png"
+"$RS" --quiet "$D/dem.pgm" "$D/outside.txt" "$T/v.png" 2>"$T/stderr" && cmp -s "$T/v.png" "$T/terrain.png" &&
+    [ "$(wc -l <"$T/stderr")" -eq 1 ] &&
+    grep -q "^roadsplat: warning: $D/outside.txt: no road touches the map: the roads span x -200..1000000, y -1000000..1000000; the map ($D/dem.pgm) spans x 0..30, y 0..20" "$T/stderr" &&
+    ok || bad "roads wholly outside the map: $(head -c 300 "$T/stderr")"
+rm -f "$T/v.png"
+"$RS" --quiet --strict "$D/dem.pgm" "$D/outside.txt" "$T/v.png" 2>"$T/stderr"
+[ $? -eq 1 ] && [ ! -e "$T/v.png" ] && [ "$(wc -l <"$T/stderr")" -eq 1 ] &&
+    grep -q "^roadsplat: $D/outside.txt: no road touches the map" "$T/stderr" && ok || bad "--strict: roads outside the map"
 printf 'road a width 5\n-50 10\n15 10\n15 500\nend\n' >"$D/partly.txt"; valid "a road partly outside the map" - dem.pgm partly.txt
 printf 'road thin width 0.01\n2 2\n28 18\nend\nroad hair width 1e-9\n2 18\n28 2\nend\n' >"$D/thin.txt"
 valid "very thin roads" - dem.pgm thin.txt

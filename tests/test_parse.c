@@ -608,12 +608,61 @@ static void test_alloc_failures(void)
     free(buf);
 }
 
+/* The `frame` header line (issue 17) and rs_roads_negate_y. */
+static void test_frame(void)
+{
+    test_alloc ta;
+    rs_ctx *ctx = make_ctx(&ta, NULL);
+    rs_roads *r = NULL;
+    const char *crs = "x";
+    const double *xy;
+    if (!ctx) { CHECK(0); return; }
+    static const char none[] = "road a width 2\n1 2\n3 4\nend\n";
+    CHECK(rs_roads_parse(ctx, none, strlen(none), &r) == RS_OK);
+    CHECK(rs_roads_frame(r, &crs) == RS_FRAME_NONE && crs == NULL);
+    rs_roads_free(ctx, r);
+    static const char local[] = "# c\n\nframe local # a comment\nroad a width 2\n1 2\n3 4\nend\n";
+    CHECK(rs_roads_parse(ctx, local, strlen(local), &r) == RS_OK);
+    CHECK(rs_roads_frame(r, &crs) == RS_FRAME_LOCAL && crs == NULL);
+    rs_roads_free(ctx, r);
+    static const char world[] = "frame world EPSG:32632\nroad a width 2\n500001 5000079\n3 -4\nend\n";
+    CHECK(rs_roads_parse(ctx, world, strlen(world), &r) == RS_OK);
+    CHECK(rs_roads_frame(r, &crs) == RS_FRAME_WORLD && crs && !strcmp(crs, "EPSG:32632"));
+    CHECK(rs_roads_negate_y(ctx, r) == RS_OK);
+    CHECK(rs_roads_get(r, 0, NULL, NULL, &xy, NULL) == RS_OK && xy[0] == 500001 && xy[1] == -5000079 &&
+          xy[2] == 3 && xy[3] == 4);
+    CHECK(rs_roads_negate_y(ctx, NULL) == RS_ERR_INVALID_ARG);
+    rs_roads_free(ctx, r);
+    static const char quoted[] = "frame world \"PROJCS[\\\"x y\\\"]\"\n";
+    CHECK(rs_roads_parse(ctx, quoted, strlen(quoted), &r) == RS_OK);
+    CHECK(rs_roads_frame(r, &crs) == RS_FRAME_WORLD && crs && !strcmp(crs, "PROJCS[\"x y\"]"));
+    rs_roads_free(ctx, r);
+    static const char bare[] = "frame world\n";
+    CHECK(rs_roads_parse(ctx, bare, strlen(bare), &r) == RS_OK);
+    CHECK(rs_roads_frame(r, &crs) == RS_FRAME_WORLD && crs == NULL);
+    rs_roads_free(ctx, r);
+    CHECK(rs_roads_frame(NULL, &crs) == RS_FRAME_NONE && crs == NULL);
+    roads_bad(ctx, "frame local\nframe local\n", RS_ERR_PARSE, "line 2: 'frame' given twice (first on line 1)", NULL);
+    roads_bad(ctx, "road a width 2\n1 2\n3 4\nend\nframe local\n", RS_ERR_PARSE,
+              "line 5: 'frame' must come before the first road, style or mark", NULL);
+    roads_bad(ctx, "style s\nfill #000000\nend\nframe world\n", RS_ERR_PARSE, "line 4: 'frame' must come before", NULL);
+    roads_bad(ctx, "frame utm\n", RS_ERR_PARSE, "line 1: frame 'utm' must be 'local' or 'world [CRS]'", NULL);
+    roads_bad(ctx, "frame\n", RS_ERR_PARSE, "line 1: frame '' must be", NULL);
+    roads_bad(ctx, "frame local EPSG:1\n", RS_ERR_PARSE, "line 1: extra token 'EPSG:1' after 'frame local'", NULL);
+    roads_bad(ctx, "frame world EPSG:1 x\n", RS_ERR_PARSE, "line 1: extra token 'x' after the CRS", NULL);
+    roads_bad(ctx, "frame world \"EPSG\n", RS_ERR_PARSE, "line 1: the quote at column 13 is not closed", NULL);
+    roads_bad(ctx, "frame world \"\"\n", RS_ERR_PARSE, "line 1: the CRS is empty", NULL);
+    rs_ctx_free(ctx);
+    CHECK_EQ_INT(ta.live, 0);
+}
+
 int main(void)
 {
     test_numbers();
     test_locale();
     test_pgm();
     test_roads();
+    test_frame();
     test_alloc_failures();
     return th_finish("test_parse");
 }

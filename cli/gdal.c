@@ -1,0 +1,692 @@
+/* roadsplat-gdal.so: the GDAL layer of the CLI (issue 17), loaded on first
+ * use (cli/module.c) so that runs without GIS data never map GDAL. Reads
+ * georeferenced DEMs and OGR road sources, writes GeoTIFFs; the splat
+ * itself stays in the library, which never sees GDAL. Interface and rules:
+ * cli/gis.h; the road attribute mapping: docs/gis.md. */
+#include "gis.h"
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_string.h>
+#include <gdal.h>
+#include <ogr_api.h>
+#include <ogr_srs_api.h>
+
+#include <ctype.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void init(void)
+{
+    static int done;
+    if (done) return;
+    done = 1;
+    GDALAllRegister();
+    CPLSetErrorHandler(CPLQuietErrorHandler); /* messages come from us, one line each */
+}
+
+/* GDAL's last error as one line (newlines folded), or `fallback`. */
+static const char *last_error(const char *fallback)
+{
+    static char buf[400];
+    const char *m = CPLGetLastErrorMsg();
+    if (!m || !m[0]) return fallback;
+    size_t n = 0;
+    for (; m[n] && n + 1 < sizeof buf; n++) buf[n] = (m[n] == '\n' || m[n] == '\r') ? ' ' : m[n];
+    buf[n] = '\0';
+    return buf;
+}
+
+/* "EPSG:X" when the CRS has (or is identified with) an EPSG code, else
+ * its WKT; malloc'd. */
+static char *crs_text(OGRSpatialReferenceH srs)
+{
+    OGRSpatialReferenceH c = OSRClone(srs);
+    const char *auth, *code;
+    char *out = NULL;
+    if (c && (OSRGetAuthorityName(c, NULL) || OSRAutoIdentifyEPSG(c) == OGRERR_NONE) &&
+        (auth = OSRGetAuthorityName(c, NULL)) && !strcmp(auth, "EPSG") && (code = OSRGetAuthorityCode(c, NULL))) {
+        out = malloc(strlen(code) + 6);
+        if (out) sprintf(out, "EPSG:%s", code);
+    }
+    if (!out) {
+        char *wkt = NULL;
+        if (OSRExportToWkt(srs, &wkt) == OGRERR_NONE && wkt) {
+            out = malloc(strlen(wkt) + 1);
+            if (out) strcpy(out, wkt);
+        }
+        CPLFree(wkt);
+    }
+    if (c) OSRDestroySpatialReference(c);
+    return out;
+}
+
+static OGRSpatialReferenceH srs_from(const char *text)
+{
+    OGRSpatialReferenceH s = OSRNewSpatialReference(NULL);
+    if (!s) return NULL;
+    if (OSRSetFromUserInput(s, text) != OGRERR_NONE) {
+        OSRDestroySpatialReference(s);
+        return NULL;
+    }
+    OSRSetAxisMappingStrategy(s, OAMS_TRADITIONAL_GIS_ORDER); /* x = easting / longitude */
+    return s;
+}
+
+static int utm_epsg(double lon, double lat)
+{
+    int zone = (int)floor((lon + 180.0) / 6.0) + 1;
+    if (zone < 1) zone = 1;
+    if (zone > 60) zone = 60;
+    return (lat >= 0 ? 32600 : 32700) + zone;
+}
+
+/* ---- DEMs ------------------------------------------------------------------ */
+
+int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
+                      cli_geo *geo)
+{
+    init();
+    memset(geo, 0, sizeof *geo);
+    *z = NULL;
+    *nodata = 0;
+    CPLErrorReset();
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
+    if (!ds) return 2;
+    const char *drv = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
+    double gt[6];
+    int has_gt = GDALGetGeoTransform(ds, gt) == CE_None;
+    OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+    int plain = !strcmp(drv, "PNG") || !strcmp(drv, "GTiff") || !strcmp(drv, "JPEG") || !strcmp(drv, "BMP");
+    if (!has_gt && !srs && plain) { /* an image without georeference: read as before */
+        GDALClose(ds);
+        return 2;
+    }
+    int rc = 1;
+    int nb = GDALGetRasterCount(ds);
+    int W = GDALGetRasterXSize(ds), H = GDALGetRasterYSize(ds);
+    if (nb != 1) {
+        cli_error("%s: the raster has %d bands; a DEM has one (pick it: gdal_translate -b 1 %s dem.tif)", path, nb,
+                  path);
+        goto out;
+    }
+    if (W < 2 || H < 2 || (max_side && ((uint32_t)W > max_side || (uint32_t)H > max_side))) {
+        cli_error("%s: DEM is %dx%d; width and height must be 2..%u", path, W, H, max_side);
+        goto out;
+    }
+    if (!has_gt) { gt[0] = 0; gt[1] = 1; gt[2] = 0; gt[3] = 0; gt[4] = 0; gt[5] = -1; }
+    if (gt[2] != 0 || gt[4] != 0) {
+        cli_error("%s: the geotransform is rotated (terms %g and %g); roadsplat needs a north-up grid: "
+                  "gdalwarp %s north_up.tif", path, gt[2], gt[4], path);
+        goto out;
+    }
+    if (!(gt[1] > 0) || !(gt[5] < 0)) {
+        cli_error("%s: the grid is not north-up (pixel size %g x %g); roadsplat needs x growing east and rows "
+                  "going south: gdalwarp %s north_up.tif", path, gt[1], gt[5], path);
+        goto out;
+    }
+    if (fabs(gt[1] + gt[5]) > 1e-9 * gt[1]) {
+        cli_error("%s: pixels are not square (%.12g x %.12g); resample them: gdalwarp -tr %.12g %.12g %s square.tif",
+                  path, gt[1], -gt[5], gt[1], gt[1], path);
+        goto out;
+    }
+    if (srs && OSRIsGeographic(srs)) {
+        double lon = gt[0] + gt[1] * W / 2.0, lat = gt[3] + gt[5] * H / 2.0;
+        char *c = crs_text(srs);
+        int e = utm_epsg(lon, lat);
+        cli_error("%s: the DEM is in geographic degrees (%.60s); roadsplat needs metres: "
+                  "gdalwarp -t_srs EPSG:%d -r bilinear %s dem_utm.tif", path, c && strlen(c) < 40 ? c : "lat/lon", e,
+                  path);
+        free(c);
+        goto out;
+    }
+    if (srs) {
+        double f = OSRGetLinearUnits(srs, NULL);
+        if (fabs(f - 1.0) > 1e-9) {
+            cli_error("%s: the CRS's unit is %g m, not a metre; warp it to a metre CRS (gdalwarp -t_srs EPSG:...)",
+                      path, f);
+            goto out;
+        }
+    }
+    GDALRasterBandH b = GDALGetRasterBand(ds, 1);
+    size_t n = (size_t)W * (size_t)H;
+    float *buf = malloc(n * sizeof *buf);
+    if (!buf) {
+        cli_error("%s: out of memory for a %dx%d DEM", path, W, H);
+        goto out;
+    }
+    if (GDALRasterIO(b, GF_Read, 0, 0, W, H, buf, W, H, GDT_Float32, 0, 0) != CE_None) {
+        cli_error("%s: %s", path, last_error("cannot read the raster"));
+        free(buf);
+        goto out;
+    }
+    int has_nd = 0;
+    double nd = GDALGetRasterNoDataValue(b, &has_nd);
+    float ndf = (float)nd;
+    for (size_t i = 0; i < n; i++) {
+        if ((has_nd && buf[i] == ndf) || buf[i] != buf[i] || isinf(buf[i])) {
+            buf[i] = NAN;
+            (*nodata)++;
+        }
+    }
+    *w = (uint32_t)W;
+    *h = (uint32_t)H;
+    *z = buf;
+    geo->georef = 1;
+    memcpy(geo->gt, gt, sizeof gt);
+    geo->crs = srs ? crs_text(srs) : NULL;
+    rc = 0;
+out:
+    GDALClose(ds);
+    return rc;
+}
+
+/* ---- roads ----------------------------------------------------------------- */
+
+typedef struct sbuf {
+    char *s;
+    size_t n, cap;
+    int oom;
+} sbuf;
+
+static void put(sbuf *b, const char *fmt, ...)
+{
+    va_list ap;
+    if (b->oom) return;
+    for (;;) {
+        va_start(ap, fmt);
+        int k = vsnprintf(b->s ? b->s + b->n : NULL, b->s ? b->cap - b->n : 0, fmt, ap);
+        va_end(ap);
+        if (k < 0) { b->oom = 1; return; }
+        if (b->s && (size_t)k < b->cap - b->n) { b->n += (size_t)k; return; }
+        size_t nc = b->cap ? b->cap * 2 : 4096;
+        while (nc < b->n + (size_t)k + 1) nc *= 2;
+        char *p = realloc(b->s, nc);
+        if (!p) { b->oom = 1; return; }
+        b->s = p;
+        b->cap = nc;
+    }
+}
+
+/* A quoted string of the road format: \" and \\ escaped, control
+ * characters and bytes of broken UTF-8 as '?'. */
+static void put_quoted(sbuf *b, const char *s)
+{
+    put(b, "\"");
+    const unsigned char *p = (const unsigned char *)s;
+    while (*p) {
+        unsigned char c = *p;
+        size_t k = 1;
+        if (c >= 0x80) { /* one whole UTF-8 sequence, or '?' */
+            size_t need = c >= 0xF0 && c < 0xF5 ? 4 : c >= 0xE0 ? 3 : c >= 0xC2 && c < 0xE0 ? 2 : 0;
+            size_t j = 1;
+            while (need && j < need && (p[j] & 0xC0) == 0x80) j++;
+            if (need && j == need) {
+                put(b, "%.*s", (int)need, (const char *)p);
+                p += need;
+                continue;
+            }
+            put(b, "?");
+        } else if (c == '"' || c == '\\') put(b, "\\%c", c);
+        else if (c < 0x20 || c == 0x7F) put(b, " ");
+        else put(b, "%c", c);
+        p += k;
+    }
+    put(b, "\"");
+}
+
+/* OpenStreetMap highway= (or Geofabrik fclass=) to a road class of the
+ * format; NULL: not a road for cars, bikes or feet (skipped). Documented
+ * in docs/gis.md. */
+static const char *class_for(const char *hw)
+{
+    static const char *const same[] = { "motorway", "trunk", "primary", "secondary", "tertiary", "motorway_link",
+                                        "trunk_link", "primary_link", "secondary_link", "tertiary_link",
+                                        "residential", "service", "track", "path", "footway", "cycleway" };
+    static const char *const map[][2] = { { "unclassified", "tertiary" }, { "living_street", "residential" },
+                                          { "road", "residential" }, { "pedestrian", "footway" },
+                                          { "steps", "footway" }, { "corridor", "footway" },
+                                          { "bridleway", "path" }, { "busway", "service" },
+                                          { "bus_guideway", "service" } };
+    for (size_t i = 0; i < sizeof same / sizeof same[0]; i++)
+        if (!strcmp(hw, same[i])) return same[i];
+    for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+        if (!strcmp(hw, map[i][0])) return map[i][1];
+    if (!strncmp(hw, "track_grade", 11)) return "track";
+    return NULL;
+}
+
+/* A field's value by name (NULL: no such field or unset). */
+static const char *field(OGRFeatureH f, const char *name)
+{
+    int i = OGR_F_GetFieldIndex(f, name);
+    if (i < 0 || !OGR_F_IsFieldSetAndNotNull(f, i)) return NULL;
+    const char *v = OGR_F_GetFieldAsString(f, i);
+    return v && v[0] ? v : NULL;
+}
+
+/* A key of the OSM driver's other_tags ("k"=>"v","k2"=>"v2"), copied
+ * into out; NULL when absent. */
+static const char *hstore(const char *tags, const char *key, char *out, size_t cap)
+{
+    if (!tags) return NULL;
+    const char *p = tags;
+    size_t kl = strlen(key);
+    while ((p = strchr(p, '"'))) {
+        p++;
+        const char *ks = p;
+        while (*p && *p != '"') p += (*p == '\\' && p[1]) ? 2 : 1;
+        if (!*p) return NULL;
+        size_t kn = (size_t)(p - ks);
+        p++;
+        if (strncmp(p, "=>\"", 3)) return NULL;
+        p += 3;
+        size_t o = 0;
+        while (*p && *p != '"') {
+            if (*p == '\\' && p[1]) p++;
+            if (o + 1 < cap) out[o++] = *p;
+            p++;
+        }
+        out[o] = '\0';
+        if (*p) p++;
+        if (kn == kl && !memcmp(ks, key, kl)) return out;
+    }
+    return NULL;
+}
+
+/* A tag from a field of that name, else from other_tags. */
+static const char *tag(OGRFeatureH f, const char *tags, const char *key, char *out, size_t cap)
+{
+    const char *v = field(f, key);
+    if (v) return v;
+    return hstore(tags, key, out, cap);
+}
+
+static int lanes_ok(const char *v)
+{
+    size_t n = strlen(v);
+    if (n < 1 || n > 2) return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isdigit((unsigned char)v[i])) return 0;
+    int k = atoi(v);
+    return k >= 1 && k <= 16;
+}
+
+/* "7", "7.5", "7.5 m", "7,5": metres, or 0 when unreadable or off range. */
+static double width_m(const char *v)
+{
+    char buf[32];
+    size_t n = strlen(v);
+    if (n >= sizeof buf) return 0;
+    for (size_t i = 0; i <= n; i++) buf[i] = v[i] == ',' ? '.' : v[i];
+    char *e;
+    double d = strtod(buf, &e);
+    while (*e == ' ') e++;
+    if (*e == 'm' && e[1] == '\0') e++;
+    if (*e || !(d > 0.1 && d <= 200)) return 0;
+    return d;
+}
+
+static const char *oneway_of(const char *v)
+{
+    if (!strcmp(v, "yes") || !strcmp(v, "true") || !strcmp(v, "1") || !strcmp(v, "F")) return "yes";
+    if (!strcmp(v, "no") || !strcmp(v, "false") || !strcmp(v, "0") || !strcmp(v, "B")) return "no";
+    if (!strcmp(v, "-1") || !strcmp(v, "reverse") || !strcmp(v, "T")) return "-1";
+    return NULL;
+}
+
+#define DEFAULT_WIDTH 5.5 /* m: a road with no class, lanes or width (docs/gis.md) */
+
+typedef struct road_ctx {
+    sbuf *b;
+    OGRCoordinateTransformationH ct;
+    size_t roads, points;
+    int failed_transform;
+} road_ctx;
+
+/* One LineString as a road block under the header already written. */
+static int put_line(road_ctx *R, OGRGeometryH g, const char *header)
+{
+    int n = OGR_G_GetPointCount(g);
+    if (n < 2) return 0;
+    double *x = malloc((size_t)n * sizeof *x), *y = malloc((size_t)n * sizeof *y);
+    if (!x || !y) { free(x); free(y); R->b->oom = 1; return 0; }
+    for (int i = 0; i < n; i++) {
+        x[i] = OGR_G_GetX(g, i);
+        y[i] = OGR_G_GetY(g, i);
+    }
+    if (R->ct && !OCTTransform(R->ct, n, x, y, NULL)) {
+        R->failed_transform++;
+        free(x); free(y);
+        return 0;
+    }
+    put(R->b, "%s\n", header);
+    for (int i = 0; i < n; i++) put(R->b, "%.15g %.15g\n", x[i], y[i]);
+    put(R->b, "end\n");
+    R->roads++;
+    R->points += (size_t)n;
+    free(x); free(y);
+    return 1;
+}
+
+static int is_line(OGRwkbGeometryType t)
+{
+    t = wkbFlatten(t);
+    return t == wkbLineString || t == wkbMultiLineString;
+}
+
+static const char *geom_word(OGRwkbGeometryType t)
+{
+    switch (wkbFlatten(t)) {
+    case wkbPoint: return "points";
+    case wkbMultiPoint: return "multipoints";
+    case wkbPolygon: return "polygons";
+    case wkbMultiPolygon: return "multipolygons";
+    case wkbGeometryCollection: return "geometry collections";
+    default: return "non-line geometries";
+    }
+}
+
+int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size)
+{
+    init();
+    const char *shown = o->shown ? o->shown : path;
+    *text = NULL;
+    *size = 0;
+    CPLErrorReset();
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+    if (!ds) {
+        cli_error("%s: not a vector source GDAL can read (%s)", shown, last_error("unknown format or broken file"));
+        return 1;
+    }
+    int rc = 1;
+    sbuf b = { NULL, 0, 0, 0 };
+    OGRSpatialReferenceH src = NULL, dst = NULL;
+    road_ctx R;
+    memset(&R, 0, sizeof R);
+    R.b = &b;
+    const char *drv = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
+    int osm = !strcmp(drv, "OSM");
+    OGRLayerH layer = NULL;
+    int nl = GDALDatasetGetLayerCount(ds);
+    if (o->layer) {
+        layer = GDALDatasetGetLayerByName(ds, o->layer);
+        if (!layer) {
+            char names[300] = "";
+            for (int i = 0; i < nl && strlen(names) < 240; i++)
+                snprintf(names + strlen(names), sizeof names - strlen(names), "%s'%s'", i ? ", " : "",
+                         OGR_L_GetName(GDALDatasetGetLayer(ds, i)));
+            cli_error("%s: no layer '%s' (layers: %s)", shown, o->layer, nl ? names : "none");
+            goto out;
+        }
+    } else if (osm) {
+        layer = GDALDatasetGetLayerByName(ds, "lines");
+    } else {
+        for (int i = 0; i < nl && !layer; i++)
+            if (is_line(OGR_L_GetGeomType(GDALDatasetGetLayer(ds, i)))) layer = GDALDatasetGetLayer(ds, i);
+        if (!layer && nl > 0) layer = GDALDatasetGetLayer(ds, 0);
+    }
+    if (!layer) {
+        cli_error("%s: the source has no layers", shown);
+        goto out;
+    }
+    const char *lname = OGR_L_GetName(layer);
+    OGRwkbGeometryType lt = OGR_L_GetGeomType(layer);
+    if (wkbFlatten(lt) != wkbUnknown && !is_line(lt)) {
+        cli_error("%s: layer '%s' holds %s, not lines (LineString or MultiLineString)%s", shown, lname, geom_word(lt),
+                  nl > 1 ? "; pick another with --layer" : "");
+        goto out;
+    }
+    if (o->where && OGR_L_SetAttributeFilter(layer, o->where) != OGRERR_NONE) {
+        cli_error("%s: --where '%s': %s", shown, o->where, last_error("invalid expression"));
+        goto out;
+    }
+    OGRSpatialReferenceH lsrs = OGR_L_GetSpatialRef(layer);
+    if (!lsrs) {
+        cli_error("%s: layer '%s' has no coordinate system; give it one: ogr2ogr -a_srs EPSG:4326 roads.gpkg %s",
+                  shown, lname, path);
+        goto out;
+    }
+    src = OSRClone(lsrs);
+    OSRSetAxisMappingStrategy(src, OAMS_TRADITIONAL_GIS_ORDER);
+    if (o->dst_crs) {
+        dst = srs_from(o->dst_crs);
+        if (!dst) {
+            cli_error("%s: cannot read the target CRS '%.80s'", shown, o->dst_crs);
+            goto out;
+        }
+    } else if (OSRIsGeographic(src)) { /* the UTM zone of the extent's centre */
+        OGREnvelope env;
+        if (OGR_L_GetExtent(layer, &env, 1) != OGRERR_NONE) { /* OSM: none; from the features */
+            int any = 0;
+            OGRFeatureH f;
+            OGR_L_ResetReading(layer);
+            while ((f = OGR_L_GetNextFeature(layer)) != NULL) {
+                OGRGeometryH g = OGR_F_GetGeometryRef(f);
+                OGREnvelope e;
+                if (g && !OGR_G_IsEmpty(g)) {
+                    OGR_G_GetEnvelope(g, &e);
+                    if (!any) env = e;
+                    if (e.MinX < env.MinX) env.MinX = e.MinX;
+                    if (e.MinY < env.MinY) env.MinY = e.MinY;
+                    if (e.MaxX > env.MaxX) env.MaxX = e.MaxX;
+                    if (e.MaxY > env.MaxY) env.MaxY = e.MaxY;
+                    any = 1;
+                }
+                OGR_F_Destroy(f);
+            }
+            if (!any) {
+                cli_error("%s: layer '%s' has no features%s", shown, lname, o->where ? " matching --where" : "");
+                goto out;
+            }
+        }
+        char code[32];
+        snprintf(code, sizeof code, "EPSG:%d", utm_epsg((env.MinX + env.MaxX) / 2, (env.MinY + env.MaxY) / 2));
+        dst = srs_from(code);
+    } else {
+        dst = OSRClone(src);
+        OSRSetAxisMappingStrategy(dst, OAMS_TRADITIONAL_GIS_ORDER);
+    }
+    if (!dst) {
+        cli_error("%s: out of memory", shown);
+        goto out;
+    }
+    if (OSRIsGeographic(dst)) {
+        cli_error("%s: the target CRS is in degrees; roads need a metre CRS (e.g. a UTM zone, EPSG:326xx)", shown);
+        goto out;
+    }
+    if (!OSRIsSame(src, dst)) {
+        R.ct = OCTNewCoordinateTransformation(src, dst);
+        if (!R.ct) {
+            cli_error("%s: cannot reproject layer '%s' to the DEM's CRS: %s", shown, lname,
+                      last_error("no transformation"));
+            goto out;
+        }
+    }
+    char *dcrs = crs_text(dst);
+    put(&b, "# roads from %s, layer '%s' (roadsplat convert; docs/gis.md)\nframe world ", shown, lname);
+    if (dcrs && !strchr(dcrs, ' ') && !strchr(dcrs, '"') && !strchr(dcrs, '#')) put(&b, "%s\n", dcrs);
+    else put_quoted(&b, dcrs ? dcrs : ""), put(&b, "\n");
+    free(dcrs);
+
+    size_t feats = 0, not_lines = 0, not_roads = 0;
+    OGRFeatureH f;
+    OGR_L_ResetReading(layer);
+    while ((f = OGR_L_GetNextFeature(layer)) != NULL) {
+        feats++;
+        OGRGeometryH g = OGR_F_GetGeometryRef(f);
+        if (!g || !is_line(OGR_G_GetGeometryType(g))) {
+            not_lines++;
+            OGR_F_Destroy(f);
+            continue;
+        }
+        const char *tags = osm ? field(f, "other_tags") : NULL;
+        char t1[64], t2[64], t3[64], t4[256];
+        const char *hw = field(f, "highway");
+        if (!hw) hw = field(f, "fclass");
+        const char *cls = hw ? class_for(hw) : NULL;
+        if (hw && !cls) {
+            not_roads++;
+            OGR_F_Destroy(f);
+            continue;
+        }
+        const char *name = field(f, "name");
+        char fid[40];
+        if (!name) {
+            const char *oid = field(f, "osm_id");
+            if (oid) snprintf(fid, sizeof fid, "way%.30s", oid);
+            else snprintf(fid, sizeof fid, "feature%lld", (long long)OGR_F_GetFID(f));
+            name = fid;
+        }
+        sbuf h = { NULL, 0, 0, 0 };
+        put(&h, "road ");
+        put_quoted(&h, name);
+        const char *lanes = tag(f, tags, "lanes", t1, sizeof t1);
+        const char *wv = tag(f, tags, "width", t2, sizeof t2);
+        const char *ow = tag(f, tags, "oneway", t3, sizeof t3);
+        const char *tl = tag(f, tags, "turn:lanes", t4, sizeof t4);
+        double wd = wv ? width_m(wv) : 0;
+        if (lanes && !lanes_ok(lanes)) lanes = NULL;
+        if (wd > 0) put(&h, " width %.6g", wd);
+        else if (!cls && !lanes) put(&h, " width %g", DEFAULT_WIDTH);
+        if (cls) put(&h, " class=%s", cls);
+        if (hw && strcmp(hw, cls)) put(&h, " highway="), put_quoted(&h, hw);
+        if (lanes) put(&h, " lanes=%s", lanes);
+        if (ow && oneway_of(ow)) put(&h, " oneway=%s", oneway_of(ow));
+        if (tl) put(&h, " turn:lanes="), put_quoted(&h, tl);
+        if (h.oom) {
+            free(h.s);
+            OGR_F_Destroy(f);
+            b.oom = 1;
+            break;
+        }
+        if (wkbFlatten(OGR_G_GetGeometryType(g)) == wkbLineString) put_line(&R, g, h.s);
+        else
+            for (int k = 0; k < OGR_G_GetGeometryCount(g); k++) put_line(&R, OGR_G_GetGeometryRef(g, k), h.s);
+        free(h.s);
+        OGR_F_Destroy(f);
+    }
+    if (b.oom) {
+        cli_error("%s: out of memory", shown);
+        goto out;
+    }
+    if (R.roads == 0) {
+        if (feats == 0)
+            cli_error("%s: layer '%s' has no features%s", shown, lname, o->where ? " matching --where" : "");
+        else if (R.failed_transform)
+            cli_error("%s: layer '%s': no line could be reprojected to the target CRS (%s)", shown, lname,
+                      last_error("outside its area"));
+        else
+            cli_error("%s: layer '%s' has no road lines (%zu features: %zu not LineString/MultiLineString, %zu "
+                      "highway= values that are not roads)", shown, lname, feats, not_lines, not_roads);
+        goto out;
+    }
+    put(&b, "# %zu roads, %zu points from %zu features (skipped: %zu not lines, %zu not roads, %d not "
+            "reprojectable)\n", R.roads, R.points, feats, not_lines, not_roads, R.failed_transform);
+    if (b.oom) {
+        cli_error("%s: out of memory", shown);
+        goto out;
+    }
+    *text = b.s;
+    *size = b.n;
+    b.s = NULL;
+    rc = 0;
+out:
+    free(b.s);
+    if (R.ct) OCTDestroyCoordinateTransformation(R.ct);
+    if (src) OSRDestroySpatialReference(src);
+    if (dst) OSRDestroySpatialReference(dst);
+    GDALClose(ds);
+    return rc;
+}
+
+/* ---- CRS helpers ------------------------------------------------------------- */
+
+int cli_gdal_same_crs(const char *a, const char *b, const char *shown)
+{
+    init();
+    OGRSpatialReferenceH x = srs_from(a), y = srs_from(b);
+    int r = -1;
+    if (!x || !y) cli_error("%s: cannot read the CRS '%.80s'", shown, x ? b : a);
+    else r = OSRIsSame(x, y) ? 1 : 0;
+    if (x) OSRDestroySpatialReference(x);
+    if (y) OSRDestroySpatialReference(y);
+    return r;
+}
+
+char *cli_gdal_prj_text(const char *crs, const char *shown)
+{
+    init();
+    OGRSpatialReferenceH s = srs_from(crs);
+    char *wkt = NULL, *out = NULL;
+    const char *opts[] = { "FORMAT=WKT1_ESRI", NULL };
+    if (s && OSRExportToWktEx(s, &wkt, opts) == OGRERR_NONE && wkt) {
+        out = malloc(strlen(wkt) + 1);
+        if (out) strcpy(out, wkt);
+    }
+    if (!out) cli_error("%s: cannot write the CRS '%.80s' as a .prj", shown, crs);
+    CPLFree(wkt);
+    if (s) OSRDestroySpatialReference(s);
+    return out;
+}
+
+/* ---- GeoTIFF output ------------------------------------------------------------ */
+
+int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                        const void *data, const double gt[6], const char *crs, int cog)
+{
+    init();
+    CPLErrorReset();
+    GDALDataType dt = bits == 16 ? GDT_UInt16 : GDT_Byte;
+    int bytes = bits == 16 ? 2 : 1;
+    GDALDriverH mem = GDALGetDriverByName("MEM"), gtiff = GDALGetDriverByName(cog ? "COG" : "GTiff");
+    if (!mem || !gtiff) {
+        cli_error("%s: this GDAL has no %s driver", shown, cog ? "COG" : "GTiff");
+        return 1;
+    }
+    GDALDatasetH src = GDALCreate(mem, "", (int)w, (int)h, channels, dt, NULL);
+    if (!src) {
+        cli_error("%s: out of memory for a %ux%u image", shown, w, h);
+        return 1;
+    }
+    int bands[4] = { 1, 2, 3, 4 };
+    int rc = 1;
+    OGRSpatialReferenceH srs = NULL;
+    if (GDALDatasetRasterIO(src, GF_Write, 0, 0, (int)w, (int)h, (void *)data, (int)w, (int)h, dt, channels, bands,
+                            (GSpacing)channels * bytes, (GSpacing)w * channels * bytes, bytes) != CE_None) {
+        cli_error("%s: %s", shown, last_error("cannot fill the image"));
+        goto out;
+    }
+    if (channels == 4) GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 4), GCI_AlphaBand);
+    if (gt) GDALSetGeoTransform(src, (double *)gt);
+    if (crs) {
+        srs = srs_from(crs);
+        if (!srs) {
+            cli_error("%s: cannot read the CRS '%.80s'", shown, crs);
+            goto out;
+        }
+        GDALSetSpatialRef(src, srs);
+    }
+    const char *topts[] = { "TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", "COMPRESS=DEFLATE",
+                            channels >= 3 ? "PHOTOMETRIC=RGB" : "PHOTOMETRIC=MINISBLACK",
+                            channels == 4 ? "ALPHA=UNASSOCIATED" : NULL, NULL };
+    const char *copts[] = { "COMPRESS=DEFLATE", "BLOCKSIZE=256", "OVERVIEWS=AUTO", NULL };
+    GDALDatasetH out = GDALCreateCopy(gtiff, path, src, FALSE, (char **)(cog ? copts : topts), NULL, NULL);
+    if (!out) {
+        cli_error("%s: write failed: %s", shown, last_error("GDAL could not write it"));
+        goto out;
+    }
+    CPLErrorReset();
+    GDALClose(out); /* void in GDAL 3.6: a failed flush shows as an error state */
+    if (CPLGetLastErrorType() >= CE_Failure) {
+        cli_error("%s: write failed: %s", shown, last_error("GDAL could not close it"));
+        goto out;
+    }
+    rc = 0;
+out:
+    if (srs) OSRDestroySpatialReference(srs);
+    GDALClose(src);
+    return rc;
+}

@@ -1,0 +1,239 @@
+#!/bin/sh
+# CLI tests of the GDAL layer (issue 17, docs/gis.md): georeferenced DEMs,
+# OGR roads, the world frame, GeoTIFF / world-file output, bad GIS input.
+# Usage: sh tests/cli_gdal_test.sh PATH/TO/roadsplat. Every input is made
+# here with GDAL's own tools (gdal_translate, ogr2ogr, gdaltransform) from
+# text. Prints "N passed, N failed"; skips (0 passed, 0 failed, a SKIP line)
+# without the GDAL module or GDAL's tools.
+BIN=${1:?usage: cli_gdal_test.sh ROADSPLAT}
+. "$(dirname "$0")/cli_lib.sh"
+
+skip() {
+    echo "SKIP cli gdal: $1"
+    echo "cli_gdal: 0 passed, 0 failed"
+    exit 0
+}
+"$BIN" convert "$T/none.geojson" "$T/none.txt" 2>"$T/e"
+grep -q "no GDAL support" "$T/e" && skip "$BIN was built without GDAL (make deps installs libgdal-dev)"
+for tool in gdal_translate ogr2ogr gdaltransform gdalinfo gdallocationinfo python3; do
+    command -v $tool >/dev/null 2>&1 || skip "$tool is missing (make deps installs gdal-bin)"
+done
+TESTS=$(cd "$(dirname "$0")" && pwd)
+BIN=$(cd "$(dirname "$BIN")" && pwd)/$(basename "$BIN")
+cd "$T" || exit 1
+
+# ---- data -------------------------------------------------------------------
+# A 61 x 41 DEM of 2 m cells in UTM 32N: the first pixel's corner at
+# (500000, 5000080), so sample (0,0) - the first pixel's centre - is at
+# (500001, 5000079). A 5 x 5 nodata block in the top-left corner.
+X0=500000 Y0=5000080
+python3 - <<'PY'
+W, H, cs = 61, 41, 2
+def grid(name, nodata, fmt, deg=False):
+    with open(name, 'w') as f:
+        if deg:
+            f.write("ncols %d\nnrows %d\nxllcorner 9.0\nyllcorner 45.1\ncellsize 0.0001\n" % (W, H))
+        else:
+            f.write("ncols %d\nnrows %d\nxllcorner 500000\nyllcorner %d\ncellsize %d\n" % (W, H, 5000080 - H * cs, cs))
+        if nodata: f.write("NODATA_value -9999\n")
+        for i in range(H):
+            f.write(" ".join("-9999" if nodata and i < 5 and j < 5 else fmt % (200 + 0.3 * j + 0.2 * i)
+                             for j in range(W)) + "\n")
+grid('dem_f.asc', True, '%.2f')
+grid('dem_i.asc', False, '%.0f')
+grid('dem_deg.asc', False, '%.2f', True)
+PY
+gdal_translate -q -a_srs EPSG:32632 -ot Float32 dem_f.asc dem_f32.tif
+gdal_translate -q -a_srs EPSG:32632 -ot UInt16 dem_i.asc dem_u16.tif
+gdal_translate -q -a_srs EPSG:4326 -ot Float32 dem_deg.asc dem_deg.tif
+gdal_translate -q -a_srs EPSG:32632 -a_ullr 500000 5000080 500122 5000000 dem_f.asc dem_nonsq.tif
+gdal_translate -q -ot Float32 dem_f.asc dem_nocrs.tif
+cat >dem_rot.vrt <<'V'
+<VRTDataset rasterXSize="61" rasterYSize="41">
+  <SRS>EPSG:32632</SRS>
+  <GeoTransform>500000, 2, 0.5, 5000080, 0.5, -2</GeoTransform>
+  <VRTRasterBand dataType="Float32" band="1">
+    <SimpleSource><SourceFilename relativeToVRT="1">dem_f32.tif</SourceFilename><SourceBand>1</SourceBand></SimpleSource>
+  </VRTRasterBand>
+</VRTDataset>
+V
+sed 's/, 0.5, 5000080, 0.5, -2/, 0, 5000080, 0, -2/' dem_rot.vrt >dem_ok.vrt
+# Roads in the DEM's CRS: "Main" east-west at y = 5000040 (x 500010..500110),
+# "Side" north-south at x = 500060 (y 5000010..5000070), and a footpath point.
+cat >roads_utm.geojson <<'J'
+{"type": "FeatureCollection",
+ "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}},
+ "features": [
+  {"type": "Feature", "properties": {"name": "Main", "highway": "residential", "width": "6"},
+   "geometry": {"type": "LineString", "coordinates": [[500010, 5000040], [500110, 5000040]]}},
+  {"type": "Feature", "properties": {"name": "Side", "highway": "service", "lanes": "1", "oneway": "yes"},
+   "geometry": {"type": "MultiLineString", "coordinates": [[[500060, 5000010], [500060, 5000070]]]}}
+ ]}
+J
+ogr2ogr -q -t_srs EPSG:4326 roads_wgs84.geojson roads_utm.geojson
+ogr2ogr -q -f GPKG roads.gpkg roads_utm.geojson
+ogr2ogr -q -f GPKG -t_srs EPSG:4326 roads_wgs84.gpkg roads_utm.geojson
+# OSM XML in WGS84, nodes from gdaltransform
+ll() { echo "$1 $2" | gdaltransform -s_srs EPSG:32632 -t_srs EPSG:4326 | awk '{ printf "lat=\"%.10f\" lon=\"%.10f\"", $2, $1 }'; }
+cat >roads.osm <<O
+<?xml version="1.0" encoding="UTF-8"?>
+<osm version="0.6" generator="roadsplat test">
+  <node id="1" version="1" $(ll 500010 5000040)/>
+  <node id="2" version="1" $(ll 500110 5000040)/>
+  <node id="3" version="1" $(ll 500060 5000010)/>
+  <node id="4" version="1" $(ll 500060 5000070)/>
+  <way id="10" version="1"><nd ref="1"/><nd ref="2"/>
+    <tag k="highway" v="residential"/><tag k="name" v="Main"/><tag k="width" v="6"/></way>
+  <way id="11" version="1"><nd ref="3"/><nd ref="4"/>
+    <tag k="highway" v="service"/><tag k="name" v="Side"/><tag k="lanes" v="1"/><tag k="oneway" v="yes"/></way>
+</osm>
+O
+
+# ---- helpers --------------------------------------------------------------------
+# weight W X Y: the --weight-out GeoTIFF W at world point (X, Y), 0..65535
+weight() { gdallocationinfo -valonly -geoloc "$1" "$2" "$3"; }
+# on_roads W: centre weight >= 0.99 on both centrelines, 0 well away from them
+on_roads() {
+    for p in "500020 5000040" "500100 5000040" "500060 5000020" "500060 5000065" "500040 5000040"; do
+        v=$(weight "$1" $p)
+        [ -n "$v" ] && [ "$v" -ge 64880 ] || { echo "weight at $p is '$v'"; return 1; }
+    done
+    for p in "500020 5000050" "500040 5000065" "500100 5000015"; do
+        v=$(weight "$1" $p)
+        [ "$v" = 0 ] || { echo "weight at $p is '$v' (off the roads)"; return 1; }
+    done
+}
+# err DESC PATTERN ARGS...: exit 1, one stderr line matching PATTERN, no out.tif
+err() {
+    d=$1 pat=$2; shift 2
+    rm -f out.tif
+    "$BIN" --quiet "$@" 2>e; rc=$?
+    if [ $rc -eq 1 ] && [ "$(wc -l <e)" -eq 1 ] && grep -Eq "$pat" e && [ ! -e out.tif ]; then ok
+    else bad "$d: exit $rc, stderr: $(cat e)"; fi
+}
+
+# ---- roads from each source land on the expected pixels ---------------------------
+for src in roads_utm.geojson roads_wgs84.geojson roads.gpkg roads_wgs84.gpkg roads.osm; do
+    rm -f w.tif
+    if "$BIN" --quiet --texels 4 --weight-out w.tif dem_f32.tif "$src" out_$src.tif 2>e && [ ! -s e ]; then
+        check "$src: roads on the expected pixels" on_roads w.tif
+    else
+        bad "$src: run failed: $(cat e)"
+    fi
+done
+check "16-bit DEM: run" "$BIN" --quiet --texels 4 --weight-out w16.tif dem_u16.tif roads.gpkg o16.png
+check "16-bit DEM: weight" on_roads w16.tif
+check "VRT DEM: roads on the expected pixels" "$BIN" --quiet --texels 4 --weight-out wv.tif dem_ok.vrt roads.osm ov.png
+check "VRT DEM: weight" on_roads wv.tif
+
+# ---- the output GeoTIFF's georeference is the texture grid's ----------------------
+"$BIN" --quiet --texels 4 dem_f32.tif roads_utm.geojson out.tif 2>e || bad "GeoTIFF run: $(cat e)"
+gdalinfo -json out.tif >info.json 2>/dev/null
+python3 - info.json <<'PY' && ok || bad "GeoTIFF geotransform / CRS / layout"
+import json, sys
+j = json.load(open(sys.argv[1]))
+gt = j['geoTransform']
+want = [500001.0, 0.5, 0.0, 5000079.0, 0.0, -0.5]   # sample (0,0) = first DEM pixel's centre; 2 m / 4 texels
+ok = all(abs(a - b) < 1e-9 for a, b in zip(gt, want)) and j['size'] == [240, 160]
+wkt = j['coordinateSystem']['wkt']
+ok = ok and 'ID["EPSG",32632]' in wkt
+ok = ok and j['metadata']['IMAGE_STRUCTURE'].get('COMPRESSION') == 'DEFLATE'
+ok = ok and j['bands'][0]['block'] == [256, 256] and len(j['bands']) == 4 and j['bands'][3]['colorInterpretation'] == 'Alpha'
+if not ok: print(gt, j['size'], wkt[-40:], j['metadata'], j['bands'][0]['block'])
+sys.exit(0 if ok else 1)
+PY
+# nodata: transparent where the nearest DEM sample is nodata, opaque elsewhere
+a_nd=$(gdallocationinfo -valonly -b 4 -geoloc out.tif 500003 5000077)
+a_nd2=$(gdallocationinfo -valonly -b 4 -geoloc out.tif 500009.9 5000070.1)
+a_ok=$(gdallocationinfo -valonly -b 4 -geoloc out.tif 500011.1 5000068.9)
+a_far=$(gdallocationinfo -valonly -b 4 -geoloc out.tif 500100 5000010)
+[ "$a_nd" = 0 ] && [ "$a_nd2" = 0 ] && [ "$a_ok" = 255 ] && [ "$a_far" = 255 ] && ok ||
+    bad "nodata alpha: $a_nd $a_nd2 $a_ok $a_far (want 0 0 255 255)"
+# the same texture as a PNG: the same RGBA; --world-file writes .pgw and .prj
+"$BIN" --quiet --texels 4 --world-file dem_f32.tif roads_utm.geojson out.png 2>e || bad "PNG run: $(cat e)"
+gdal_translate -q -of PNG out.tif fromtif.png
+PYTHONPATH="$TESTS" python3 - out.png fromtif.png <<'PY' && ok || bad "PNG and GeoTIFF pixels differ"
+import sys
+from png_read import read
+a, b = read(sys.argv[1]), read(sys.argv[2])
+sys.exit(0 if a[:3] == b[:3] and list(a[3]) == list(b[3]) else 1)
+PY
+[ "$(tr '\n' ' ' <out.pgw)" = "0.5 0 0 -0.5 500001.25 5000078.75 " ] && ok || bad "world file: $(tr '\n' ' ' <out.pgw)"
+grep -q 'PROJCS\["WGS_1984_UTM_Zone_32N"' out.prj && ok || bad ".prj: $(head -c 100 out.prj)"
+# --window: the window's own geotransform
+"$BIN" --quiet --texels 4 --window 8,4,100,60 dem_f32.tif roads_utm.geojson win.tif 2>e || bad "window run: $(cat e)"
+gdalinfo -json win.tif | python3 -c "
+import json, sys; gt = json.load(sys.stdin)['geoTransform']
+sys.exit(0 if gt == [500005.0, 0.5, 0.0, 5000077.0, 0.0, -0.5] else 1)" && ok || bad "--window geotransform"
+# --cog: a Cloud Optimized GeoTIFF with the same georeference
+"$BIN" --quiet --texels 4 --cog dem_f32.tif roads_utm.geojson cog.tif 2>e || bad "--cog run: $(cat e)"
+gdalinfo cog.tif 2>/dev/null | grep -q "LAYOUT=COG" && ok || bad "--cog: no COG layout"
+gdalinfo cog.tif | grep -q "Origin = (500001.000000000000000,5000079.000000000000000)" && ok || bad "--cog: origin"
+
+# ---- convert: road text with a frame line, the same image --------------------------
+check "convert --dem" "$BIN" convert --dem dem_f32.tif roads_wgs84.geojson conv.txt
+grep -q "^frame world EPSG:32632$" conv.txt && grep -q '^road "Main" width 6 class=residential$' conv.txt &&
+    grep -q '^road "Side" class=service lanes=1 oneway=yes$' conv.txt && ok || bad "convert output: $(head -5 conv.txt)"
+"$BIN" --quiet --texels 4 --weight-out wc.tif dem_f32.tif conv.txt conv.png 2>e && check "converted text: roads on pixels" on_roads wc.tif ||
+    bad "converted text run: $(cat e)"
+check "convert (auto UTM zone of degrees)" "$BIN" convert roads.osm conv_osm.txt
+grep -q "^frame world EPSG:32632$" conv_osm.txt && ok || bad "convert picks the UTM zone: $(sed -n 2p conv_osm.txt)"
+check "convert --t-srs" "$BIN" convert --t-srs EPSG:32632 --where "name = 'Side'" roads_wgs84.gpkg side.txt
+[ "$(grep -c '^road ' side.txt)" = 1 ] && ok || bad "convert --where: $(grep '^road' side.txt)"
+# --where and --layer in the splat
+"$BIN" --quiet --texels 4 --where "name = 'Main'" --weight-out ww.tif dem_f32.tif roads.gpkg wh.png 2>e || bad "--where run: $(cat e)"
+[ "$(weight ww.tif 500060 5000020)" = 0 ] && [ "$(weight ww.tif 500020 5000040)" -ge 64880 ] && ok || bad "--where selects"
+err "--layer missing" "^roadsplat: roads.gpkg: no layer 'nope' \(layers: 'roads_utm'\)$" --layer nope dem_f32.tif roads.gpkg out.tif
+err "--layer on road text" "^roadsplat: conv.txt: --layer and --where select from GIS road sources" --layer x dem_f32.tif conv.txt out.tif
+
+# ---- world frame of road text ------------------------------------------------------
+printf 'frame world EPSG:32632\nroad a width 4\n500010 5000040\n500110 5000040\nend\n' >world.txt
+"$BIN" --quiet --texels 4 --weight-out wt.tif dem_f32.tif world.txt wt.png 2>e && [ ! -s e ] &&
+    [ "$(weight wt.tif 500030 5000040)" -ge 64880 ] && ok || bad "frame world text: $(cat e)"
+printf 'P2\n3 3\n9\n1 2 3 4 5 6 7 8 9\n' >dem.pgm
+printf 'road a width 1\n0 0\n2 2\nend\n' >local.txt
+err "frame world on a PGM" "^roadsplat: world.txt: the roads are in world coordinates \('frame world'\) but the DEM dem.pgm has no georeference" \
+    dem.pgm world.txt out.png
+sed 's/EPSG:32632/EPSG:32633/' world.txt >world33.txt
+err "CRS mismatch" "^roadsplat: world33.txt: the roads are in EPSG:32633 but the DEM dem_f32.tif is in EPSG:32632" dem_f32.tif world33.txt out.tif
+# no road on the map: a warning naming the road file and both extents; --strict: an error
+printf 'frame world EPSG:32632\nroad far width 4\n600000 6000000\n600100 6000000\nend\n' >far.txt
+"$BIN" --quiet dem_f32.tif far.txt far.tif 2>e; rc=$?
+[ $rc = 0 ] && grep -q "^roadsplat: warning: far.txt: no road touches the map: the roads span x 600000..600100, y 6000000..6000000; the map (dem_f32.tif) spans x 500001..500121, y 4999999..5000079 (y north, EPSG:32632)$" e &&
+    ok || bad "no road on the map: exit $rc: $(cat e)"
+err "--strict: no road on the map" "^roadsplat: far.txt: no road touches the map" --strict dem_f32.tif far.txt out.tif
+err "--cell-size with a georeferenced DEM" "^roadsplat: dem_f32.tif: --cell-size: the DEM is georeferenced" --cell-size 5 dem_f32.tif roads.gpkg out.tif
+
+# ---- mesh: the DEM's cell size, the world point of sample (0,0), the .mtl ----------
+"$BIN" mesh --max-error 0 --texture out.tif dem_f32.tif m.obj 2>e || bad "mesh run: $(cat e)"
+grep -q "^# world: sample (0,0) at x 500001, y 5000079 (north up, EPSG:32632);" m.obj && grep -q "^mtllib m.mtl$" m.obj &&
+    grep -q "^map_Kd out.tif$" m.mtl && ok || bad "mesh header / .mtl: $(head -4 m.obj)"
+awk '$1 == "v" && $2 > mx { mx = $2 } $1 == "v" && $4 > mz { mz = $4 } END { exit !(mx == 120 && mz == 80) }' m.obj &&
+    ok || bad "mesh extent is not 120 x 80 m (2 m cells)"
+rm -f m2.obj
+"$BIN" mesh --cell-size 3 dem_f32.tif m2.obj 2>e; [ $? = 1 ] && [ ! -e m2.obj ] &&
+    grep -q "^roadsplat: dem_f32.tif: --cell-size: the DEM is georeferenced" e && ok || bad "mesh --cell-size: $(cat e)"
+
+# ---- bad GIS input: one clear line each ------------------------------------------
+err "DEM in degrees" "^roadsplat: dem_deg.tif: the DEM is in geographic degrees \(EPSG:4326\); roadsplat needs metres: gdalwarp -t_srs EPSG:32632 -r bilinear dem_deg.tif dem_utm.tif$" \
+    dem_deg.tif roads.gpkg out.tif
+err "non-square pixels" "^roadsplat: dem_nonsq.tif: pixels are not square \(2 x 1.95121951" dem_nonsq.tif roads.gpkg out.tif
+err "rotated DEM" "^roadsplat: dem_rot.vrt: the geotransform is rotated \(terms 0.5 and 0.5\)" dem_rot.vrt roads.gpkg out.tif
+err "GIS roads on a DEM without CRS" "^roadsplat: roads.gpkg: GIS roads are reprojected to the DEM's coordinate system, and the DEM has no CRS" \
+    dem_nocrs.tif roads.gpkg out.tif
+printf 'WKT,name\n"LINESTRING (500010 5000040,500110 5000040)",a\n' >nocrs.csv
+err "roads without CRS" "^roadsplat: nocrs.csv: layer 'nocrs' has no coordinate system; give it one: ogr2ogr -a_srs" dem_f32.tif nocrs.csv out.tif
+printf '{"type": "FeatureCollection", "features": []}\n' >empty.geojson
+err "empty layer" "^roadsplat: empty.geojson: layer 'empty' has no features$" dem_f32.tif empty.geojson out.tif
+printf '{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {}, "geometry": {"type": "Point", "coordinates": [9, 45]}}]}\n' >points.geojson
+err "point layer" "^roadsplat: points.geojson: layer 'points' holds points, not lines \(LineString or MultiLineString\)$" dem_f32.tif points.geojson out.tif
+head -c 150 roads_utm.geojson >broken.geojson
+err "broken file" "^roadsplat: broken.geojson: not a vector source GDAL can read" dem_f32.tif broken.geojson out.tif
+err "unknown output extension" "^roadsplat: out.jpg: OUT has the unknown extension '.jpg': roadsplat writes .png or .tif \(GeoTIFF\)$" \
+    dem_f32.tif roads.gpkg out.jpg
+rm -f out.png out.pgw out.prj
+err "--world-file without georeference" "^roadsplat: --world-file: the DEM has no georeference$" --world-file dem.pgm local.txt out.png
+[ ! -e out.png ] && [ ! -e out.pgw ] && ok || bad "--world-file failure left files"
+
+echo "cli_gdal: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
