@@ -237,13 +237,13 @@ $(BUILD)/fuzz/%-replay: $(BUILD)/fuzz/%/fuzz.o $(BUILD)/fuzz/replay_main.o $(STA
 
 # The demimage target drives the CLI's DEM loader: it also needs the CLI
 # objects that hold it and OpenImageIO, linked as C++.
-FUZZ_CLI_OBJ := $(BUILD)/cli/util.o $(BUILD)/cli/imageio.o
+FUZZ_CLI_OBJ := $(BUILD)/cli/util.o $(BUILD)/cli/bigalloc.o $(BUILD)/cli/imageio.o
 $(BUILD)/fuzz/demimage-replay: $(BUILD)/fuzz/demimage/fuzz.o $(BUILD)/fuzz/replay_main.o $(FUZZ_CLI_OBJ) $(STATIC_LIB)
 	$(CXX) $(SAN) $(LDFLAGS) -o $@ $^ $(OIIO_LIBS) $(LDLIBS_CORE)
 
 # PNG writer test (C++: reads back through OpenImageIO, and libpng directly).
 # It doubles as the benchmark's OpenImageIO/libpng writer (tests/bench/write.sh).
-TEST_PNG_OBJ := $(BUILD)/cli/png.o $(BUILD)/cli/util.o $(BUILD)/cli/imageio.o
+TEST_PNG_OBJ := $(BUILD)/cli/png.o $(BUILD)/cli/util.o $(BUILD)/cli/bigalloc.o $(BUILD)/cli/imageio.o
 $(BUILD)/tests/test_png: tests/png/test_png.cpp $(TEST_PNG_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) $(DEFLATE_CFLAGS) -o $@ $< $(TEST_PNG_OBJ) $(LDFLAGS) $(STATIC_LIB) $(OIIO_LIBS) -lpng \
@@ -298,7 +298,7 @@ fuzz:
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $$nocmp -Iinclude fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
 	done
 	@echo "fuzz: demimage (CLI DEM loader + OpenImageIO)"; \
-	for f in $(LIB_SRC) cli/util.c fuzz/demimage/fuzz.c; do \
+	for f in $(LIB_SRC) cli/util.c cli/bigalloc.c fuzz/demimage/fuzz.c; do \
 	  o=$(FUZZ_OBJ)/$$(echo $$f | tr / _).o; \
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -D_POSIX_C_SOURCE=200809L -Iinclude -c $$f -o $$o || exit 1; \
 	done; \
