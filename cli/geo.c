@@ -294,6 +294,67 @@ int cli_geo_texture_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, 
     return 0;
 }
 
+int cli_geo_world_origin(const cli_splat_input *in, double *x, double *y)
+{
+    if (in->world) {
+        *x = in->wx0;
+        *y = in->wy0;
+        return 1;
+    }
+    if (in->geo.georef) { /* the first pixel's centre */
+        *x = in->geo.gt[0] + in->geo.gt[1] / 2;
+        *y = in->geo.gt[3] + in->geo.gt[5] / 2;
+        return 1;
+    }
+    return 0;
+}
+
+/* floor / ceil of v, a count of pixels, forgiving the rounding error of a
+ * box edge given on a pixel edge (1e-6 px). */
+static double floor_px(double v) { return floor(v + 1e-6); }
+static double ceil_px(double v) { return ceil(v - 1e-6); }
+
+int cli_geo_window(const cli_splat_input *in, const char *dem_path, uint32_t texels, uint32_t fw, uint32_t fh,
+                   const double box[4], uint32_t win[4])
+{
+    double X0, Y0;
+    if (!cli_geo_world_origin(in, &X0, &Y0)) {
+        cli_error("--window-world: the DEM %s has no georeference and the roads are not in a world frame; give a "
+                  "georeferenced DEM (GeoTIFF, ...), or --origin X,Y with 'frame world' roads, or use --window X,Y,W,H "
+                  "in output pixels", dem_path);
+        return 1;
+    }
+    if (!(box[0] < box[2]) || !(box[1] < box[3])) {
+        cli_error("--window-world: %.12g,%.12g,%.12g,%.12g is not XMIN,YMIN,XMAX,YMAX with XMIN < XMAX and "
+                  "YMIN < YMAX", box[0], box[1], box[2], box[3]);
+        return 1;
+    }
+    rs_dem_frame fr;
+    rs_dem_get_frame(in->dem, &fr);
+    uint32_t T = texels ? texels : 1;
+    double px = fr.cell_size / T;
+    /* the texture spans x X0 .. X0 + fw px, y Y0 - fh px .. Y0 (y north) */
+    double mx1 = X0 + fw * px, my0 = Y0 - fh * px;
+    double a = floor_px((box[0] - X0) / px), b = ceil_px((box[2] - X0) / px);
+    double c = floor_px((Y0 - box[3]) / px), d = ceil_px((Y0 - box[1]) / px);
+    if (a < 0 || c < 0 || b > fw || d > fh) {
+        cli_error("--window-world: %.12g,%.12g,%.12g,%.12g is not inside the map (%s): it spans x %.12g..%.12g, "
+                  "y %.12g..%.12g (y north%s%s)", box[0], box[1], box[2], box[3], dem_path, X0, mx1, my0, Y0,
+                  in->geo.crs && strlen(in->geo.crs) < 24 ? ", " : "",
+                  in->geo.crs && strlen(in->geo.crs) < 24 ? in->geo.crs : "");
+        return 1;
+    }
+    if (b <= a) b = a + 1; /* a box thinner than a pixel: the pixel it is in */
+    if (d <= c) d = c + 1;
+    if (b > fw) a = fw - 1, b = fw;
+    if (d > fh) c = fh - 1, d = fh;
+    win[0] = (uint32_t)a;
+    win[1] = (uint32_t)c;
+    win[2] = (uint32_t)(b - a);
+    win[3] = (uint32_t)(d - c);
+    return 0;
+}
+
 /* ---- roadsplat convert -------------------------------------------------------------- */
 
 static const char convert_usage[] =

@@ -89,6 +89,16 @@ int cli_out_format(const char *path, const char *role, int pgm_ok);
 /* The texture's geotransform for a window at (x0, y0) of T texels per
  * cell (docs/gis.md): 0, or 1 when the input has no georeference. */
 int cli_geo_texture_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6]);
+/* The world point (x east, y north) of DEM sample (0,0), the texture's
+ * corner: 1 when the run has a world frame (world roads, or a
+ * georeferenced DEM), else 0. */
+int cli_geo_world_origin(const cli_splat_input *in, double *x, double *y);
+/* --window-world XMIN,YMIN,XMAX,YMAX (world units, y north) as an output
+ * pixel window: snapped outwards to whole pixels of T texels per cell;
+ * win = x0, y0, w, h inside the fw x fh output. 0, or 1 after a message
+ * (no world frame, a box not inside the map). */
+int cli_geo_window(const cli_splat_input *in, const char *dem_path, uint32_t texels, uint32_t fw, uint32_t fh,
+                   const double box[4], uint32_t win[4]);
 /* `roadsplat convert` (cli/geo.c). */
 int cli_convert_main(int argc, char **argv);
 

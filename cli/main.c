@@ -55,6 +55,9 @@ static const char usage_text[] =
     "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
     "                        in that world frame (e.g. UTM metres; default 0,0)\n"
     "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
+    "  --window-world XMIN,YMIN,XMAX,YMAX  the same in world units (y north), for\n"
+    "                        a georeferenced DEM or world roads; snapped outwards\n"
+    "                        to whole output pixels\n"
     "  --layer NAME          GIS roads: the layer to read (default: the first line\n"
     "                        layer; OSM: lines)\n"
     "  --where SQL           GIS roads: only features matching this filter\n"
@@ -75,8 +78,9 @@ typedef struct args {
     cli_splat_args s;
     const char *dem, *roads, *out;
     const char *weight_out, *stats;
-    int quiet, have_window, world_file, cog;
+    int quiet, have_window, have_window_world, world_file, cog;
     uint32_t window[4];
+    double window_world[4]; /* XMIN, YMIN, XMAX, YMAX */
 } args;
 
 /* "X,Y,W,H": whole numbers, W and H >= 1, all below 2^32. */
@@ -101,6 +105,30 @@ static int parse_window(const char *name, const char *v, double d[4])
     if (d[2] < 1 || d[3] < 1) {
         cli_error("%s: '%s': width and height must be >= 1", name, v);
         return 1;
+    }
+    return 0;
+}
+
+/* "XMIN,YMIN,XMAX,YMAX": four finite numbers. */
+static int parse_box(const char *name, const char *v, double d[4])
+{
+    const char *p = v;
+    for (int k = 0; k < 4; k++) {
+        const char *e = strchr(p, ',');
+        size_t len = k < 3 ? (e ? (size_t)(e - p) : 0) : strlen(p);
+        char buf[64];
+        if ((k < 3 && !e) || len == 0 || len >= sizeof buf) {
+            cli_error("%s: '%s' is not XMIN,YMIN,XMAX,YMAX (world units, y north)", name, v);
+            return 1;
+        }
+        memcpy(buf, p, len);
+        buf[len] = '\0';
+        if (cli_parse_double(name, buf, &d[k])) return 1;
+        if (!(d[k] >= -1e12 && d[k] <= 1e12)) {
+            cli_error("%s: '%s' must be within 1e12 on each axis", name, v);
+            return 1;
+        }
+        p = e ? e + 1 : p + len;
     }
     return 0;
 }
@@ -157,10 +185,18 @@ static int parse_args(int argc, char **argv, args *a)
             if (cli_option_value(argc, argv, &i, name, inl, &v) || parse_window(name, v, d)) return 1;
             for (int k = 0; k < 4; k++) a->window[k] = (uint32_t)d[k];
             a->have_window = 1;
+        } else if (!strcmp(name, "--window-world")) {
+            const char *v;
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || parse_box(name, v, a->window_world)) return 1;
+            a->have_window_world = 1;
         } else {
             cli_error("unknown option '%s' (see roadsplat --help)", arg);
             return 1;
         }
+    }
+    if (a->have_window && a->have_window_world) {
+        cli_error("--window and --window-world are exclusive (output pixels or world units)");
+        return 1;
     }
     if (npos != 3) {
         cli_error("expected DEM ROADS OUT.png, got %d argument%s (see roadsplat --help)", npos, npos == 1 ? "" : "s");
@@ -391,6 +427,10 @@ static int splat_main(int argc, char **argv)
             cli_error("--window: %u,%u,%u,%u is not inside the %u x %u output", x0, y0, w, h, fw, fh);
             goto done;
         }
+    } else if (a.have_window_world) {
+        uint32_t win[4];
+        if (cli_geo_window(&in, a.dem, o->texels ? o->texels : 8, fw, fh, a.window_world, win)) goto done;
+        x0 = win[0], y0 = win[1], w = win[2], h = win[3];
     }
     double t1 = cli_now_ms();
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
