@@ -16,27 +16,31 @@ int cli_render_main(int argc, char **argv)
 
 #else
 #include "render_gl.h"
+#include "gis.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define RENDER_PI 3.14159265358979323846
-#define RENDER_MAX_COORD 1e9 /* metres: --camera / --look-at */
+#define RENDER_MAX_COORD 1e9 /* metres: --camera / --look-at, local or world */
 
 static const char render_usage[] =
     "Usage: roadsplat render [splat options] [render options] DEM ROADS OUT.png\n"
     "\n"
     "Splats ROADS into the terrain texture of DEM (as `roadsplat` does), meshes the\n"
     "terrain with view-dependent ROAM and renders it offscreen (OSMesa) to OUT.png.\n"
-    "Positions are in the road file's frame: X, Y map metres (Y grows down the\n"
-    "map), Z height in metres.\n"
+    "Positions (--camera, --look-at) are world coordinates when the DEM is\n"
+    "georeferenced or the roads are in a world frame ('frame world', GIS roads):\n"
+    "X east, Y north (the DEM's CRS), Z height in metres. Otherwise they are local:\n"
+    "metres from DEM sample (0,0), Y growing down the map.\n"
     "\n"
     "Splat options (see roadsplat --help): --cell-size M, --z-scale S, --texels N,\n"
     "  --buffer distance|dilate, --road-cell M, --alpha-res N, --transition PX,\n"
     "  --jitter SEED, --terrain-texture IMG, --road-texture IMG, --texture-scale M,\n"
     "  --styles FILE, --profile rms|us, --aa exact|hermite, --no-styles,\n"
-    "  --png-level N (OUT.png compression 0..12, default 1)\n"
+    "  --png-level N (OUT.png compression 0..12, default 1), --origin X,Y,\n"
+    "  --layer NAME, --where SQL (GIS roads), --strict\n"
     "Render options:\n"
     "  --size WxH          image size (default 1280x960; with --ortho: the splat's size)\n"
     "  --camera X,Y,Z      eye position (default: oblique view of the whole map from the south)\n"
@@ -260,6 +264,24 @@ int cli_render_main(int argc, char **argv)
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     const rs_dem *dem = in.dem;
     t_read = cli_now_ms() - t_start;
+    {
+        /* the DEM's own frame: a georeferenced DEM brings its cell size */
+        rs_dem_frame fr;
+        rs_dem_get_frame(dem, &fr);
+        cs = fr.cell_size;
+    }
+    /* World positions (docs/gis.md): x east, y north from the world point
+     * of sample (0,0); the view works in the local frame (y down). */
+    double wx0 = 0, wy0 = 0;
+    int world = cli_geo_world_origin(&in, &wx0, &wy0);
+    if (world) {
+        for (int k = 0; k < 2; k++) {
+            double *p = k ? a.look : a.camera;
+            if (!(k ? a.have_look : a.have_camera)) continue;
+            p[0] -= wx0;
+            p[1] = wy0 - p[1];
+        }
+    }
 
     /* the texture: the CPU splat */
     uint32_t tw, th;
@@ -296,6 +318,19 @@ int cli_render_main(int argc, char **argv)
         rs_dem_height_range(dem, &lo, &hi, NULL);
         view.zmin = lo * zs;
         view.zmax = hi * zs;
+    }
+    for (int k = 0; k < 2; k++) { /* an eye or target far off the map: likely the wrong frame */
+        const double *p = k ? a.look : a.camera;
+        if (!(k ? a.have_look : a.have_camera)) continue;
+        double span = fmax(fmax(view.map_w, view.map_h), 1.0), lim = k ? span : 1000 * span;
+        if (p[0] < -lim || p[0] > view.map_w + lim || p[1] < -lim || p[1] > view.map_h + lim) {
+            double mx0 = world ? wx0 : 0, mx1 = mx0 + view.map_w, my0 = world ? wy0 - view.map_h : 0,
+                   my1 = world ? wy0 : view.map_h;
+            fprintf(stderr, "roadsplat: warning: %s %.10g,%.10g is far off the map %s, which spans x %.10g..%.10g, "
+                    "y %.10g..%.10g (%s)\n", k ? "--look-at" : "--camera", world ? p[0] + wx0 : p[0],
+                    world ? wy0 - p[1] : p[1], a.dem, mx0, mx1, my0, my1,
+                    world ? "world coordinates, y north" : "local metres from sample (0,0), y down");
+        }
     }
     if (a.ortho && !a.have_size) { a.width = tw; a.height = th; }
     if (a.width > 16384 || a.height > 16384) {
@@ -423,8 +458,12 @@ int cli_render_main(int argc, char **argv)
         rg_describe(gl, desc, sizeof desc);
         fprintf(so.f, "{\n  \"command\": \"render\",\n  \"gl\": \"%s\",\n", desc);
         fprintf(so.f, "  \"width\": %u,\n  \"height\": %u,\n  \"mode\": \"%s\",\n", a.width, a.height, a.ortho ? "ortho" : "perspective");
-        fprintf(so.f, "  \"camera\": [%.9g, %.9g, %.9g],\n  \"look_at\": [%.9g, %.9g, %.9g],\n  \"fov\": %.9g,\n",
-                view.eye[0], view.eye[1], view.eye[2], view.look[0], view.look[1], view.look[2], a.fov);
+        /* in the frame of --camera / --look-at */
+        fprintf(so.f, "  \"frame\": \"%s\",\n", world ? "world" : "local");
+        fprintf(so.f, "  \"camera\": [%.17g, %.17g, %.17g],\n  \"look_at\": [%.17g, %.17g, %.17g],\n  \"fov\": %.9g,\n",
+                world ? view.eye[0] + wx0 : view.eye[0], world ? wy0 - view.eye[1] : view.eye[1], view.eye[2],
+                world ? view.look[0] + wx0 : view.look[0], world ? wy0 - view.look[1] : view.look[1], view.look[2],
+                a.fov);
         fprintf(so.f, "  \"lighting\": %s,\n  \"fog\": %s,\n", a.lighting ? "true" : "false", a.fog ? "true" : "false");
         if (a.triangles) fprintf(so.f, "  \"triangle_budget\": %u,\n", a.triangles);
         else fprintf(so.f, "  \"pixel_error\": %.9g,\n", a.pixel_error);
