@@ -339,15 +339,47 @@ static const char *oneway_of(const char *v)
 
 #define DEFAULT_WIDTH 5.5 /* m: a road with no class, lanes or width (docs/gis.md) */
 
+/* Zebra crossings: OSM highway=crossing nodes with crossing=zebra,
+ * crossing:markings=zebra or crossing_ref=zebra, in the target CRS, sorted
+ * by x; a road point within CROSSING_TOL of one gets `crossing=zebra`. */
+#define CROSSING_TOL 0.05 /* m: OSM's 1e-7 degree node grid is about 1 cm */
+typedef struct crossing {
+    double x, y;
+    int used;
+} crossing;
+
 typedef struct road_ctx {
     sbuf *b;
     OGRCoordinateTransformationH ct;
-    size_t roads, points;
+    size_t roads, points, zebras;
     int failed_transform;
+    crossing *cx;
+    size_t ncx, capcx;
 } road_ctx;
 
-/* One LineString as a road block under the header already written. */
-static int put_line(road_ctx *R, OGRGeometryH g, const char *header)
+static int cmp_crossing(const void *a, const void *b)
+{
+    double u = ((const crossing *)a)->x, v = ((const crossing *)b)->x;
+    return u < v ? -1 : u > v;
+}
+
+/* The crossing at (x, y), or NULL. */
+static crossing *crossing_at(road_ctx *R, double x, double y)
+{
+    size_t lo = 0, hi = R->ncx;
+    while (lo < hi) { /* the first with cx.x >= x - tol */
+        size_t m = lo + (hi - lo) / 2;
+        if (R->cx[m].x < x - CROSSING_TOL) lo = m + 1;
+        else hi = m;
+    }
+    for (size_t i = lo; i < R->ncx && R->cx[i].x <= x + CROSSING_TOL; i++)
+        if (fabs(R->cx[i].y - y) <= CROSSING_TOL) return &R->cx[i];
+    return NULL;
+}
+
+/* One LineString as a road block under the header already written;
+ * zebras: mark its points that are crossing nodes. */
+static int put_line(road_ctx *R, OGRGeometryH g, const char *header, int zebras)
 {
     int n = OGR_G_GetPointCount(g);
     if (n < 2) return 0;
@@ -363,7 +395,14 @@ static int put_line(road_ctx *R, OGRGeometryH g, const char *header)
         return 0;
     }
     put(R->b, "%s\n", header);
-    for (int i = 0; i < n; i++) put(R->b, "%.15g %.15g\n", x[i], y[i]);
+    for (int i = 0; i < n; i++) {
+        crossing *c = zebras && R->ncx ? crossing_at(R, x[i], y[i]) : NULL;
+        put(R->b, "%.15g %.15g%s\n", x[i], y[i], c ? " crossing=zebra" : "");
+        if (c) {
+            c->used = 1;
+            R->zebras++;
+        }
+    }
     put(R->b, "end\n");
     R->roads++;
     R->points += (size_t)n;
@@ -387,6 +426,50 @@ static const char *geom_word(OGRwkbGeometryType t)
     case wkbGeometryCollection: return "geometry collections";
     default: return "non-line geometries";
     }
+}
+
+/* A point feature that is a zebra crossing (docs/gis.md). */
+static int is_zebra(OGRFeatureH f, const char *tags)
+{
+    char t1[64], t2[64];
+    const char *hw = tag(f, tags, "highway", t1, sizeof t1);
+    if (!hw || strcmp(hw, "crossing")) return 0;
+    const char *keys[] = { "crossing", "crossing:markings", "crossing_ref" };
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+        const char *v = tag(f, tags, keys[i], t2, sizeof t2);
+        if (v && !strcmp(v, "zebra")) return 1;
+    }
+    return 0;
+}
+
+/* The zebra crossings of a layer's Point features, reprojected with ct,
+ * appended to R->cx. 0, or 1 when out of memory. */
+static int collect_crossings(road_ctx *R, OGRLayerH l, int osm)
+{
+    OGRFeatureH f;
+    OGR_L_ResetReading(l);
+    while ((f = OGR_L_GetNextFeature(l)) != NULL) {
+        OGRGeometryH g = OGR_F_GetGeometryRef(f);
+        if (g && wkbFlatten(OGR_G_GetGeometryType(g)) == wkbPoint &&
+            is_zebra(f, osm ? field(f, "other_tags") : NULL)) {
+            double x = OGR_G_GetX(g, 0), y = OGR_G_GetY(g, 0);
+            if (!R->ct || OCTTransform(R->ct, 1, &x, &y, NULL)) {
+                if (R->ncx == R->capcx) {
+                    size_t nc = R->capcx ? 2 * R->capcx : 64;
+                    crossing *p = realloc(R->cx, nc * sizeof *p);
+                    if (!p) { OGR_F_Destroy(f); return 1; }
+                    R->cx = p;
+                    R->capcx = nc;
+                }
+                R->cx[R->ncx].x = x;
+                R->cx[R->ncx].y = y;
+                R->cx[R->ncx].used = 0;
+                R->ncx++;
+            }
+        }
+        OGR_F_Destroy(f);
+    }
+    return 0;
 }
 
 int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size)
@@ -511,6 +594,24 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
     else put_quoted(&b, dcrs ? dcrs : ""), put(&b, "\n");
     free(dcrs);
 
+    /* zebra crossings: OSM's points layer (a second handle: the OSM driver
+     * reads its layers in one stream), or the Point features of a layer of
+     * mixed geometries (GeoJSON from OSM) */
+    if (osm) {
+        GDALDatasetH pds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+        OGRLayerH pl = pds ? GDALDatasetGetLayerByName(pds, "points") : NULL;
+        int oom = 0;
+        if (pl) {
+            OGR_L_SetAttributeFilter(pl, "highway = 'crossing'"); /* a speed-up only: is_zebra checks */
+            oom = collect_crossings(&R, pl, 1);
+        }
+        if (pds) GDALClose(pds);
+        if (oom) b.oom = 1;
+    } else if (wkbFlatten(lt) == wkbUnknown && collect_crossings(&R, layer, 0)) {
+        b.oom = 1;
+    }
+    if (R.ncx) qsort(R.cx, R.ncx, sizeof *R.cx, cmp_crossing);
+
     size_t feats = 0, not_lines = 0, not_roads = 0;
     OGRFeatureH f;
     OGR_L_ResetReading(layer);
@@ -562,9 +663,12 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
             b.oom = 1;
             break;
         }
-        if (wkbFlatten(OGR_G_GetGeometryType(g)) == wkbLineString) put_line(&R, g, h.s);
+        /* zebras across roads for vehicles, not along the footway that crosses */
+        int zebras = !cls || (strcmp(cls, "footway") && strcmp(cls, "path") && strcmp(cls, "cycleway"));
+        if (wkbFlatten(OGR_G_GetGeometryType(g)) == wkbLineString) put_line(&R, g, h.s, zebras);
         else
-            for (int k = 0; k < OGR_G_GetGeometryCount(g); k++) put_line(&R, OGR_G_GetGeometryRef(g, k), h.s);
+            for (int k = 0; k < OGR_G_GetGeometryCount(g); k++)
+                put_line(&R, OGR_G_GetGeometryRef(g, k), h.s, zebras);
         free(h.s);
         OGR_F_Destroy(f);
     }
@@ -585,6 +689,12 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
     }
     put(&b, "# %zu roads, %zu points from %zu features (skipped: %zu not lines, %zu not roads, %d not "
             "reprojectable)\n", R.roads, R.points, feats, not_lines, not_roads, R.failed_transform);
+    if (R.ncx) {
+        size_t used = 0;
+        for (size_t i = 0; i < R.ncx; i++) used += R.cx[i].used != 0;
+        put(&b, "# %zu zebra crossing nodes: %zu on roads (%zu crossing=zebra points), %zu on no road for "
+                "vehicles\n", R.ncx, used, R.zebras, R.ncx - used);
+    }
     if (b.oom) {
         cli_error("%s: out of memory", shown);
         goto out;
@@ -595,6 +705,7 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
     rc = 0;
 out:
     free(b.s);
+    free(R.cx);
     if (R.ct) OCTDestroyCoordinateTransformation(R.ct);
     if (src) OSRDestroySpatialReference(src);
     if (dst) OSRDestroySpatialReference(dst);
