@@ -170,6 +170,25 @@ sys.exit(0 if gt == [500005.0, 0.5, 0.0, 5000077.0, 0.0, -0.5] else 1)" && ok ||
 gdalinfo cog.tif 2>/dev/null | grep -q "LAYOUT=COG" && ok || bad "--cog: no COG layout"
 gdalinfo cog.tif | grep -q "Origin = (500001.000000000000000,5000079.000000000000000)" && ok || bad "--cog: origin"
 
+# --window-world: the same window in world units, snapped outwards to whole pixels
+"$BIN" --quiet --texels 4 --window-world 500005,5000047,500055,5000077 dem_f32.tif roads_utm.geojson ww1.tif 2>e &&
+    [ "$(gdalinfo -checksum ww1.tif | grep Checksum)" = "$(gdalinfo -checksum win.tif | grep Checksum)" ] &&
+    gdalinfo ww1.tif | grep -q "Size is 100, 60" && ok || bad "--window-world = --window 8,4,100,60: $(cat e)"
+"$BIN" --quiet --texels 4 --window-world 500005.1,5000047.2,500054.8,5000076.9 dem_f32.tif roads_utm.geojson ww2.tif 2>e &&
+    gdalinfo -json ww2.tif | python3 -c "
+import json, sys; j = json.load(sys.stdin)
+sys.exit(0 if j['geoTransform'] == [500005.0, 0.5, 0.0, 5000077.0, 0.0, -0.5] and j['size'] == [100, 60] else 1)" &&
+    ok || bad "--window-world snaps outwards: $(cat e)"
+"$BIN" --quiet --texels 4 --window-world 500001,4999999,500121,5000079 dem_f32.tif roads_utm.geojson ww3.tif 2>e &&
+    gdalinfo ww3.tif | grep -q "Size is 240, 160" && ok || bad "--window-world of the whole map: $(cat e)"
+err "--window-world outside the map" "^roadsplat: --window-world: 500100,5000000,500130,5000020 is not inside the map \(dem_f32.tif\): it spans x 500001..500121, y 4999999..5000079 \(y north, EPSG:32632\)$" \
+    --window-world 500100,5000000,500130,5000020 dem_f32.tif roads_utm.geojson out.tif
+err "--window-world empty box" "^roadsplat: --window-world: 500050,5000010,500040,5000020 is not XMIN,YMIN,XMAX,YMAX with XMIN < XMAX" \
+    --window-world 500050,5000010,500040,5000020 dem_f32.tif roads_utm.geojson out.tif
+err "--window-world syntax" "^roadsplat: --window-world: '1,2,3' is not XMIN,YMIN,XMAX,YMAX" --window-world 1,2,3 dem_f32.tif roads_utm.geojson out.tif
+err "--window and --window-world" "^roadsplat: --window and --window-world are exclusive" --window 0,0,1,1 --window-world 1,2,3,4 \
+    dem_f32.tif roads_utm.geojson out.tif
+
 # ---- convert: road text with a frame line, the same image --------------------------
 check "convert --dem" "$BIN" convert --dem dem_f32.tif roads_wgs84.geojson conv.txt
 grep -q "^frame world EPSG:32632$" conv.txt && grep -q '^road "Main" width 6 class=residential$' conv.txt &&
@@ -213,6 +232,85 @@ awk '$1 == "v" && $2 > mx { mx = $2 } $1 == "v" && $4 > mz { mz = $4 } END { exi
 rm -f m2.obj
 "$BIN" mesh --cell-size 3 dem_f32.tif m2.obj 2>e; [ $? = 1 ] && [ ! -e m2.obj ] &&
     grep -q "^roadsplat: dem_f32.tif: --cell-size: the DEM is georeferenced" e && ok || bad "mesh --cell-size: $(cat e)"
+
+# ---- OSM crossing nodes: crossing=zebra on the road's point, not on the footway ----
+cat >crossings.osm <<O
+<?xml version="1.0" encoding="UTF-8"?>
+<osm version="0.6" generator="roadsplat test">
+  <node id="1" version="1" $(ll 500010 5000040)/>
+  <node id="2" version="1" $(ll 500110 5000040)/>
+  <node id="5" version="1" $(ll 500030 5000040)><tag k="highway" v="crossing"/><tag k="crossing" v="zebra"/></node>
+  <node id="6" version="1" $(ll 500090 5000040)><tag k="highway" v="crossing"/><tag k="crossing" v="uncontrolled"/><tag k="crossing:markings" v="zebra"/></node>
+  <node id="7" version="1" $(ll 500045 5000040)><tag k="highway" v="crossing"/><tag k="crossing" v="traffic_signals"/></node>
+  <node id="8" version="1" $(ll 500030 5000030)/>
+  <node id="9" version="1" $(ll 500030 5000050)/>
+  <node id="12" version="1" $(ll 500070 5000060)><tag k="highway" v="crossing"/><tag k="crossing" v="zebra"/></node>
+  <way id="10" version="1"><nd ref="1"/><nd ref="5"/><nd ref="7"/><nd ref="6"/><nd ref="2"/>
+    <tag k="highway" v="residential"/><tag k="name" v="Main"/><tag k="width" v="6"/></way>
+  <way id="11" version="1"><nd ref="8"/><nd ref="5"/><nd ref="9"/>
+    <tag k="highway" v="footway"/><tag k="footway" v="crossing"/></way>
+</osm>
+O
+check "convert: OSM crossings" "$BIN" convert --dem dem_f32.tif crossings.osm cx.txt
+# Main's points 2 and 4 carry crossing=zebra (x 500030 and 500090, to the centimetre); no other point does
+awk '/^road "Main"/ { r = 1; k = 0; next } /^road / { r = 2; next } /^end/ { r = 0 }
+     r == 1 && $1 + 0 > 0 { k++; if (($3 == "crossing=zebra") != (k == 2 || k == 4)) bad = 1
+                             if ($3 == "crossing=zebra") { d = ($1 - (k == 2 ? 500030 : 500090)); if (d * d > 0.0004) bad = 1 } }
+     r == 2 && /crossing/ { bad = 1 }
+     /crossing=zebra/ && !/^#/ { n++ }
+     END { exit !(n == 2 && !bad) }' cx.txt && grep -q "^# 3 zebra crossing nodes: 2 on roads" cx.txt &&
+    ok || bad "convert: crossing=zebra points: $(grep -n crossing cx.txt)"
+"$BIN" --quiet --texels 8 --stats cx.json dem_f32.tif crossings.osm cx.png 2>e &&
+    python3 -c "import json, sys; sys.exit(0 if json.load(open('cx.json'))['markings']['auto'] == 2 else 1)" &&
+    ok || bad "OSM crossings: two zebra markings: $(cat e) $(grep -o '"markings": {[^}]*}' cx.json)"
+cat >mixed.geojson <<'J'
+{"type": "FeatureCollection",
+ "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}},
+ "features": [
+  {"type": "Feature", "properties": {"name": "Main", "highway": "residential", "width": "6"},
+   "geometry": {"type": "LineString", "coordinates": [[500010, 5000040], [500030, 5000040], [500110, 5000040]]}},
+  {"type": "Feature", "properties": {"highway": "crossing", "crossing": "zebra"},
+   "geometry": {"type": "Point", "coordinates": [500030, 5000040]}}
+ ]}
+J
+"$BIN" convert mixed.geojson mixed.txt 2>e && grep -q "^500030 5000040 crossing=zebra$" mixed.txt && ok ||
+    bad "crossing points in a mixed GeoJSON layer: $(cat e) $(cat mixed.txt)"
+
+# ---- render: the camera in world coordinates (x east, y north) ---------------------
+if "$BIN" render --help >/dev/null 2>&1; then
+    printf 'frame world EPSG:32632\nroad main width 4\n500010 5000040\n500110 5000040\nend\nroad stub width 4\n500061 5000040\n500061 5000079\nend\n' >stub.txt
+    R="$BIN render --quiet --texels 4 --size 160x120"
+    # the default view's camera and target, reported in world coordinates, give the same picture
+    $R --stats rs.json dem_f32.tif stub.txt r1.png 2>e || bad "render on a GeoTIFF: $(cat e)"
+    python3 - rs.json >cam.txt <<'PY' && ok || bad "render --stats: frame and look_at in world coordinates: $(grep -E 'frame|camera|look_at' rs.json)"
+import json, sys
+j = json.load(open(sys.argv[1]))
+c, l = j['camera'], j['look_at']
+ok = j['frame'] == 'world' and l[0] == 500061 and l[1] == 5000039 and c[0] == 500061 and c[1] < 5000039
+print(' '.join('%.17g,%.17g,%.17g' % tuple(v) for v in (c, l)))
+sys.exit(0 if ok else 1)
+PY
+    read cam look <cam.txt
+    $R --camera "$cam" --look-at "$look" dem_f32.tif stub.txt r2.png 2>e && cmp -s r1.png r2.png && ok ||
+        bad "render: --camera/--look-at in world coordinates round-trip: $(cat e)"
+    # straight down on the map centre: north (the stub) is up in the picture
+    $R --camera 500061,5000039,313 --look-at 500061,5000039,200 --lighting off dem_f32.tif stub.txt r3.png 2>e && [ ! -s e ] &&
+        PYTHONPATH="$TESTS" python3 - r3.png <<'PY' && ok || bad "render: world top-down view is not north up: $(cat e)"
+import sys
+from png_read import read
+w, h, c, px = read(sys.argv[1])
+def grey(x, y):
+    r, g, b = px[(y * w + x) * c:(y * w + x) * c + 3]
+    return max(r, g, b) < 110 and max(r, g, b) - min(r, g, b) < 12
+sys.exit(0 if grey(80, 30) and grey(80, 60) and not grey(80, 90) and not grey(30, 30) else 1)
+PY
+    # local numbers on a georeferenced DEM: a warning naming the map's world extent
+    $R --camera 60,100,300 --look-at 60,40,200 dem_f32.tif stub.txt r4.png 2>e &&
+        grep -q "^roadsplat: warning: --look-at 60,40 is far off the map dem_f32.tif, which spans x 500001..500121, y 4999999..5000079 (world coordinates, y north)$" e &&
+        ok || bad "render: far --look-at warning: $(cat e)"
+else
+    echo "SKIP cli gdal: render checks (this build has no OSMesa)"
+fi
 
 # ---- bad GIS input: one clear line each ------------------------------------------
 err "DEM in degrees" "^roadsplat: dem_deg.tif: the DEM is in geographic degrees \(EPSG:4326\); roadsplat needs metres: gdalwarp -t_srs EPSG:32632 -r bilinear dem_deg.tif dem_utm.tif$" \
