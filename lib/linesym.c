@@ -208,7 +208,7 @@ static double hermite(double x)
 /* Fraction of the pixel square (centred at v = 0 of slab P's frame) where
  * v <= x: a ramp, a plateau and a ramp along the normal (constants from
  * push_piece). */
-static double strip_below(const ls_ppc *P, double x)
+static inline double strip_below(const ls_ppc *P, double x)
 {
     double e = P->st_e, t = x + e;
     if (t <= 0) return 0;
@@ -221,12 +221,34 @@ static double strip_below(const ls_ppc *P, double x)
 
 /* Keep the part of polygon (*sx, *sy)[n] inside the half-planes of P whose
  * bits are set in `cut`, swapping the buffers; returns the vertex count. */
-static uint32_t clip_cut(const rs__linesym *L, const ls_ppc *P, uint32_t cut, double **sx, double **sy, double **tx, double **ty, uint32_t n)
+static uint32_t clip_cut(const rs__linesym *L, const ls_ppc *P, uint32_t cut, double **sx, double **sy, double **tx,
+                         double **ty, uint32_t n)
 {
     for (uint32_t k = 0; cut && n; k++, cut >>= 1) {
         if (!(cut & 1u)) continue;
-        const double *h = HPP(L, P, k);
-        n = clip_poly(*sx, *sy, n, h[0], h[1], h[2], *tx, *ty);
+        const double *h = HPP(L, P, k), *x = *sx, *y = *sy;
+        double d[POLY_MAX], *ox = *tx, *oy = *ty;
+        uint32_t out = 0, m = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            d[i] = h[0] + h[1] * x[i] + h[2] * y[i];
+            out += d[i] < 0;
+        }
+        if (out == 0) continue; /* the plane misses the polygon */
+        if (out == n) return 0;
+        for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+            if ((d[j] >= 0) != (d[i] >= 0)) {
+                double f = d[j] / (d[j] - d[i]);
+                ox[m] = x[j] + f * (x[i] - x[j]);
+                oy[m] = y[j] + f * (y[i] - y[j]);
+                m++;
+            }
+            if (d[i] >= 0) {
+                ox[m] = x[i];
+                oy[m] = y[i];
+                m++;
+            }
+        }
+        n = m;
         double *t;
         t = *sx; *sx = *tx; *tx = t;
         t = *sy; *sy = *ty; *ty = t;
@@ -1228,7 +1250,7 @@ static double fast_ceil(double x)
 /* Pixel columns [*lo, *hi] whose centres' u lies in [ua, ub] on the row
  * at yc (relative to P's origin; a superset by a little slack for
  * rounding). Narrows *lo, *hi. */
-static void u_cols(const ls_ppc *P, double yc, double ua, double ub, double *lo, double *hi)
+static inline void u_cols(const ls_ppc *P, double yc, double ua, double ub, double *lo, double *hi)
 {
     /* u = xr ux + yc uy; xr = x - ox; pixel centres (x + 0.5) pix = xr + ox */
     double c = yc * P->uy;
@@ -1288,19 +1310,51 @@ static void cover_cols(const rs__linesym *L, const ls_ppc *P, uint32_t y, double
     uint32_t qb = hi + 1 < (double)x1 ? (hi + 1 > (double)qa ? (uint32_t)(hi + 1) : qa) : x1;
     if (qa >= qb) return;
     uint32_t r = y - R->y0;
-    double *row = R->scratch + r * R->cs - x0;
+    double *row = R->scratch + r * R->cs; /* column x at row[x - x0] */
     if (R->rhi[r] == 0) {
-        for (size_t x = 0; x < R->cs; x++) row[x0 + x] = 0;
+        for (size_t x = 0; x < R->cs; x++) row[x] = 0;
         R->rlo[r] = qa - x0;
         R->rhi[r] = qb - x0;
     } else {
         if (qa - x0 < R->rlo[r]) R->rlo[r] = qa - x0;
         if (qb - x0 > R->rhi[r]) R->rhi[r] = qb - x0;
     }
-    if (L->aa == RS__AA_HERMITE)
-        for (uint32_t x = qa; x < qb; x++) row[x] += piece_hermite(L, P, x, y);
-    else
-        for (uint32_t x = qa; x < qb; x++) row[x] += piece_area(L, P, x, y);
+    if (L->aa == RS__AA_HERMITE) {
+        for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_hermite(L, P, x, y);
+    } else if (P->kind == PIECE_SLAB && !P->dashed) {
+        /* piece_area's first steps inline: outside the band, or crossing
+         * only its edges well inside its ends (the same arithmetic) */
+        double pix = L->pixel, yc = ((double)y * pix - P->oy) + 0.5 * pix, ux = P->ux, uy = P->uy, su = P->su;
+        for (uint32_t x = qa; x < qb; x++) {
+            double xc = ((double)x * pix - P->ox) + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+            double d0 = cv - P->a, d1 = P->b - cv;
+            if (d0 <= -su || d1 <= -su) continue;
+            if (cu >= P->uin0 && cu <= P->uin1)
+                row[x - x0] += d0 < su || d1 < su ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+            else
+                row[x - x0] += piece_area(L, P, x, y);
+        }
+    } else if (P->kind == PIECE_SLAB) {
+        /* the same for a dashed slab, with the dash test */
+        const ls_band *B = &L->band[P->band];
+        double pix = L->pixel, yc = ((double)y * pix - P->oy) + 0.5 * pix, ux = P->ux, uy = P->uy, su = P->su;
+        for (uint32_t x = qa; x < qb; x++) {
+            double xc = ((double)x * pix - P->ox) + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+            double d0 = cv - P->a, d1 = P->b - cv;
+            if (d0 <= -su || d1 <= -su) continue;
+            if (cu >= P->uin0 && cu <= P->uin1) {
+                int on = dash_span(L, B, P->s0 + cu - B->phase, su);
+                if (on == 0) continue;
+                if (on > 0) {
+                    row[x - x0] += d0 < su || d1 < su ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+                    continue;
+                }
+            }
+            row[x - x0] += piece_area(L, P, x, y);
+        }
+    } else {
+        for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_area(L, P, x, y);
+    }
 }
 
 /* Row y of dashed slab P over columns [lo, hi]: only the pixels that can
@@ -1426,19 +1480,21 @@ static void emit_paint(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_
 {
     const paint_ctx *pc = user;
     const ls_band *B = &L->band[band];
+    const float c0 = B->rgba[0], c1 = B->rgba[1], c2 = B->rgba[2];
+    const double op = B->rgba[3];
     for (uint32_t y = y0; y < y1; y++) {
-        float *row = pc->rgb + (size_t)(y - pc->py0) * pc->stride;
         if (rhi[y - y0] == 0) continue;
-        for (uint32_t x = x0 + rlo[y - y0]; x < x0 + rhi[y - y0]; x++) {
-            double c = cov[(size_t)(y - y0) * cs + (x - x0)];
+        /* the block's row and the run's, both from column x0 */
+        float *r0 = pc->rgb + (size_t)(y - pc->py0) * pc->stride + (x0 - pc->px0), *r1 = r0 + pc->w, *r2 = r1 + pc->w;
+        const double *cr = cov + (size_t)(y - y0) * cs;
+        for (uint32_t i = rlo[y - y0]; i < rhi[y - y0]; i++) {
+            double c = cr[i];
             if (!(c > 0)) continue;
             if (c > 1) c = 1;
-            float a = (float)(c * B->rgba[3]);
-            size_t i = x - pc->px0;
-            for (int k = 0; k < 3; k++) {
-                float *v = row + (size_t)k * pc->w + i;
-                *v = *v * (1.0f - a) + B->rgba[k] * a;
-            }
+            float a = (float)(c * op), k = 1.0f - a;
+            r0[i] = r0[i] * k + c0 * a;
+            r1[i] = r1[i] * k + c1 * a;
+            r2[i] = r2[i] * k + c2 * a;
         }
     }
 }
