@@ -9,8 +9,11 @@
 #define HALF_SQRT2 0.70710678118654752440
 /* Offsets and widths beyond this are refused: a style is about a road. */
 #define BAND_MAX_EXTENT 1e4
-/* Index cells: CELL_PX x CELL_PX pixels, grown until at most MAX_CELLS. */
+/* Index cells: CELL_PX columns x CELL_ROWS rows of pixels (both doubled
+ * until there are at most MAX_CELLS): as tall as the splat's pieces of
+ * rows (texels), so painting a piece reads only the entries it needs. */
 #define CELL_PX 32u
+#define CELL_ROWS 4u
 #define MAX_CELLS ((uint64_t)1 << 22)
 #define POLY_MAX 24
 /* Half-planes per piece: 6 of its own, 3 per junction cut (two cuts). */
@@ -77,11 +80,18 @@ typedef struct ls_band {
     double period, phase;
 } ls_band;
 
+/* A grid of index cells: gw x gh cells of cmx x cmy metres. */
+typedef struct ls_grid {
+    uint32_t gw, gh;
+    double cmx, cmy;
+} ls_grid;
+
 struct rs__linesym {
     double pixel, margin;
     rs__band_aa aa;
     uint32_t out_w, out_h;
-    uint32_t cpx;          /* pixels per index cell side */
+    uint32_t cpx, cpy;     /* pixels per index cell: columns, rows */
+    ls_grid grid;          /* the same in metres */
     uint32_t gw, gh;
     uint32_t *start, *ids; /* CSR: pieces per cell, ascending (ids while building) */
     ls_pbox *ent;          /* the entries of ids */
@@ -575,6 +585,7 @@ typedef struct ls_ends {
 } ls_ends;
 
 typedef struct ls_junc {
+    ls_grid grid;          /* its own cells, square */
     ls_surf *sf;
     size_t nsf;
     uint32_t *start, *ids; /* CSR per index cell, like the pieces */
@@ -680,19 +691,19 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
 {
     if (!J || !J->nsf) return push_piece(ctx, L, P);
     /* candidate surfaces: those listed in the cells of P's box */
-    double cm = (double)L->cpx * L->pixel;
-    double fx0 = floor(P->x0 / cm), fx1 = floor(P->x1 / cm), fy0 = floor(P->y0 / cm), fy1 = floor(P->y1 / cm);
+    const ls_grid *G = &J->grid;
+    double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
     enum { QMAX = 16 };
     ls_piece q[QMAX], tmp[4];
     uint32_t nq = 1;
     q[0] = *P;
-    if (!(fx1 < 0 || fy1 < 0 || fx0 >= L->gw || fy0 >= L->gh)) {
-        uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= L->gw ? L->gw - 1 : (uint32_t)fx1;
-        uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= L->gh ? L->gh - 1 : (uint32_t)fy1;
+    if (!(fx1 < 0 || fy1 < 0 || fx0 >= G->gw || fy0 >= G->gh)) {
+        uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
+        uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
         J->query++;
         for (uint32_t j = j0; j <= j1; j++)
             for (uint32_t i = i0; i <= i1; i++) {
-                size_t c = (size_t)j * L->gw + i;
+                size_t c = (size_t)j * G->gw + i;
                 for (uint32_t e = J->start[c]; e < J->start[c + 1]; e++) {
                     uint32_t k = J->ids[e];
                     if (J->stamp[k] == J->query) continue;
@@ -873,17 +884,17 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
  * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
  * row, the x extent of the rectangle cut to that row); pass 0 counts into
  * start[], pass 1 fills ids[] from the ends, item k. */
-static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, double uy, double u0, double u1,
+static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double uy, double u0, double u1,
                        double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
                        uint32_t *ids, uint32_t k, int fill)
 {
-    double cm = (double)L->cpx * L->pixel;
-    double fy0 = floor(y0 / cm), fy1 = floor(y1 / cm);
-    if (!(fy1 >= 0) || !(fy0 < L->gh)) return;
-    uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= L->gh ? L->gh - 1 : (uint32_t)fy1;
+    double cm = G->cmx, cmy = G->cmy;
+    double fy0 = floor(y0 / cmy), fy1 = floor(y1 / cmy);
+    if (!(fy1 >= 0) || !(fy0 < G->gh)) return;
+    uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
     double fx0 = floor(x0 / cm), fx1 = floor(x1 / cm);
-    if (!(fx1 >= 0) || !(fx0 < L->gw)) return;
-    uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= L->gw ? L->gw - 1 : (uint32_t)fx1;
+    if (!(fx1 >= 0) || !(fx0 < G->gw)) return;
+    uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
     for (uint32_t j = j0; j <= j1; j++) {
         uint32_t a = i0, b = i1;
         if (i1 > i0) {
@@ -893,8 +904,8 @@ static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, do
                 xs[q] = ox + U[q] * ux + V[q] * uy;
                 ys[q] = oy + U[q] * uy - V[q] * ux;
             }
-            uint32_t nn = clip_poly(xs, ys, 4, -(double)j * cm, 0, 1, tx, ty);
-            nn = clip_poly(tx, ty, nn, (double)(j + 1) * cm, 0, -1, xs, ys);
+            uint32_t nn = clip_poly(xs, ys, 4, -(double)j * cmy, 0, 1, tx, ty);
+            nn = clip_poly(tx, ty, nn, (double)(j + 1) * cmy, 0, -1, xs, ys);
             if (nn == 0) continue;
             double lo = xs[0], hi = xs[0];
             for (uint32_t q = 1; q < nn; q++) {
@@ -907,7 +918,7 @@ static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, do
             b = gb < (double)i1 ? (uint32_t)gb : i1;
         }
         for (uint32_t i = a; i <= b; i++) {
-            size_t c = (size_t)j * L->gw + i;
+            size_t c = (size_t)j * G->gw + i;
             if (fill) ids[--start[c]] = k;
             else start[c]++;
         }
@@ -919,10 +930,10 @@ static void piece_cells(rs__linesym *L, uint32_t k, int fill)
     const ls_piece *P = &L->pc[k];
     double m = L->margin;
     if (P->kind == PIECE_SLAB)
-        rect_cells(L, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
+        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
                    L->start, L->ids, k, fill);
     else /* the sector's box grown by the margin, as an axis-aligned rectangle */
-        rect_cells(L, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
+        rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
                    P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, L->ids, k, fill);
 }
 
@@ -1040,7 +1051,19 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             J->sf[J->nsf++] = Q;
         }
     }
-    size_t ncell = (size_t)L->gw * L->gh, total = 0;
+    /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
+    uint32_t jpx = CELL_PX;
+    for (;;) {
+        uint64_t gw = ((uint64_t)p->out_w + jpx - 1) / jpx, gh = ((uint64_t)p->out_h + jpx - 1) / jpx;
+        if (gw * gh <= MAX_CELLS || jpx >= (1u << 30)) {
+            J->grid.gw = (uint32_t)gw;
+            J->grid.gh = (uint32_t)gh;
+            break;
+        }
+        jpx *= 2;
+    }
+    J->grid.cmx = J->grid.cmy = (double)jpx * p->pixel;
+    size_t ncell = (size_t)J->grid.gw * J->grid.gh, total = 0;
     J->start = rs__calloc(ctx, ncell + 1, sizeof *J->start);
     J->stamp = rs__calloc(ctx, J->nsf ? J->nsf : 1, sizeof *J->stamp);
     if (!J->start || !J->stamp) return RS_ERR_NOMEM;
@@ -1060,7 +1083,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
                 x0 = fmin(x0, x), x1 = fmax(x1, x), y0 = fmin(y0, y), y1 = fmax(y1, y);
             }
-            rect_cells(L, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
+            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
                        J->ids, (uint32_t)k, pass);
         }
     }
@@ -1118,15 +1141,21 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->out_w = p->out_w;
     L->out_h = p->out_h;
     L->cpx = CELL_PX;
+    L->cpy = CELL_ROWS;
     for (;;) {
-        uint64_t gw = ((uint64_t)p->out_w + L->cpx - 1) / L->cpx, gh = ((uint64_t)p->out_h + L->cpx - 1) / L->cpx;
+        uint64_t gw = ((uint64_t)p->out_w + L->cpx - 1) / L->cpx, gh = ((uint64_t)p->out_h + L->cpy - 1) / L->cpy;
         if (gw * gh <= MAX_CELLS || L->cpx >= (1u << 30)) {
             L->gw = (uint32_t)gw;
             L->gh = (uint32_t)gh;
             break;
         }
         L->cpx *= 2;
+        L->cpy *= 2;
     }
+    L->grid.gw = L->gw;
+    L->grid.gh = L->gh;
+    L->grid.cmx = (double)L->cpx * p->pixel;
+    L->grid.cmy = (double)L->cpy * p->pixel;
     L->band = rs__alloc_array(ctx, nband ? nband : 1, sizeof *L->band);
     L->dash = rs__alloc_array(ctx, ndash ? ndash : 1, sizeof *L->dash);
     size_t ncell = (size_t)L->gw * L->gh;
@@ -1403,11 +1432,11 @@ static void visit(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, 
                   ls_emit emit, void *user, uint32_t only_band)
 {
     if (!L || w == 0 || h == 0) return;
-    uint32_t cx0 = px0 / L->cpx, cx1 = (px0 + w - 1) / L->cpx, cy0 = py0 / L->cpx, cy1 = (py0 + h - 1) / L->cpx;
+    uint32_t cx0 = px0 / L->cpx, cx1 = (px0 + w - 1) / L->cpx, cy0 = py0 / L->cpy, cy1 = (py0 + h - 1) / L->cpy;
     if (cx1 >= L->gw) cx1 = L->gw - 1;
     if (cy1 >= L->gh) cy1 = L->gh - 1;
     for (uint32_t cy = cy0; cy <= cy1 && cy < L->gh; cy++) {
-        uint32_t ya0 = cy * L->cpx, yb0 = ya0 + L->cpx;
+        uint32_t ya0 = cy * L->cpy, yb0 = ya0 + L->cpy;
         if (ya0 < py0) ya0 = py0;
         if (yb0 > py0 + h) yb0 = py0 + h;
         /* (a cell larger than CELL_PX rows is walked CELL_PX rows at a time) */
@@ -1534,7 +1563,7 @@ void rs__linesym_coverage(const rs__linesym *L, uint32_t band, uint32_t px0, uin
         for (uint32_t x = 0; x < w; x++) out[(size_t)y * stride + x] = 0;
     /* scratch: one cell at most */
     double scratch[CELL_PX * CELL_PX];
-    if (!L || L->cpx > CELL_PX) return;
+    if (!L || L->cpx > CELL_PX || L->cpy > CELL_PX) return;
     cov_ctx cc = { px0, py0, out, stride };
     visit(L, px0, py0, w, h, scratch, emit_cov, &cc, band);
 }
