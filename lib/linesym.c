@@ -9,8 +9,11 @@
 #define HALF_SQRT2 0.70710678118654752440
 /* Offsets and widths beyond this are refused: a style is about a road. */
 #define BAND_MAX_EXTENT 1e4
-/* Index cells: CELL_PX x CELL_PX pixels, grown until at most MAX_CELLS. */
+/* Index cells: CELL_PX columns x CELL_ROWS rows of pixels (both doubled
+ * until there are at most MAX_CELLS): as tall as the splat's pieces of
+ * rows (texels), so painting a piece reads only the entries it needs. */
 #define CELL_PX 32u
+#define CELL_ROWS 4u
 #define MAX_CELLS ((uint64_t)1 << 22)
 #define POLY_MAX 24
 /* Half-planes per piece: 6 of its own, 3 per junction cut (two cuts). */
@@ -22,21 +25,54 @@ enum { PIECE_SLAB = 0, PIECE_WEDGE = 1 };
  * (unit vector (ux, uy)) from (ox, oy), v = left normal offset, so a
  * point's (u, v) = ((p-o).u, (p-o).(uy, -ux)). The piece is the set where
  * every half-plane c0 + cu u + cv v >= 0 holds; a wedge is further cut to
- * the annulus r0 <= |p-o| <= r1. */
+ * the annulus r0 <= |p-o| <= r1. A slab's first two half-planes are its
+ * v limits (v >= a, v <= b). */
 typedef struct ls_piece {
+    /* what every visited pixel reads first */
     double ox, oy, ux, uy;
-    double hp[HP_MAX][3];
-    double hpm[HP_MAX];  /* pixel margin x |normal| of each half-plane (set by push_piece) */
     uint32_t nhp;
     uint32_t kind;
     uint32_t band;
     uint32_t dashed;     /* slab: cut by the band's dash pattern along u */
+    double a, b;         /* slab: v range */
+    double uin0, uin1;   /* slab: centre u range where no half-plane but the v limits can cut a pixel (push_piece) */
+    double su;           /* half the pixel's extent along u (and v) (push_piece) */
+    double st_lo, st_e, st_q, st_h; /* slab: the strip's ramp (strip_below), in pixel areas (push_piece) */
     double s0;           /* slab: s at u = 0 */
     double r0, r1;       /* wedge radii */
-    double a, b;         /* slab: v range */
+    double wx0, wy0, wx1, wy1; /* wedge: box of the sector relative to (ox, oy), padded */
+    double warea;              /* wedge: the sector's area in pixel areas */
+    double sup[HP_MAX];  /* half the pixel square's extent along each half-plane's normal (push_piece) */
+    double hp[HP_MAX][3];
+    /* rows and columns to visit (push_piece) */
+    double gx0, gx1, gy0, gy1; /* pixels to visit: their columns and rows */
+    double ru0, ru1, rv0, rv1; /* slab: the piece's u and v ranges grown by su */
+    /* build only */
+    uint32_t nlim;       /* half-planes counted against HP_MAX (a dropped redundant one still counts) */
     double len;          /* slab: u range [0, len] of its box */
     double x0, y0, x1, y1; /* local box, grown by the pixel margin */
 } ls_piece;
+
+/* An index entry: a piece listed in a cell, with what the painter reads
+ * before its pixels (its band, the rows and columns of its pixels), so a
+ * cell's list is read in one sweep. */
+typedef struct ls_pbox {
+    double gx0, gx1, gy0, gy1;
+    uint32_t id, band;
+} ls_pbox;
+
+/* A piece as the painter reads it (built from ls_piece): the fields a
+ * pixel reads first come first; the half-planes live in one pool,
+ * L->hpp[4 (hp0 + k) ..] = c0, cu, cv, sup of half-plane k. */
+typedef struct ls_ppc {
+    double ox, oy, ux, uy, a, b, su, uin0, uin1, st_lo, st_e, st_q, st_h, s0;
+    double ru0, ru1, rv0, rv1;
+    double iku, ikv, cbase; /* 1 / (ux pix), 1 / (uy pix) (0 when below 1e-12 / pix), ox / pix - 0.5 */
+    double r0, r1, wx0, wy0, wx1, wy1, warea;
+    uint32_t nhp, kind, band, dashed, hp0;
+} ls_ppc;
+
+#define HPP(L, P, k) ((L)->hpp + 4 * ((size_t)(P)->hp0 + (k)))
 
 typedef struct ls_band {
     float rgba[4];
@@ -44,14 +80,24 @@ typedef struct ls_band {
     double period, phase;
 } ls_band;
 
+/* A grid of index cells: gw x gh cells of cmx x cmy metres. */
+typedef struct ls_grid {
+    uint32_t gw, gh;
+    double cmx, cmy;
+} ls_grid;
+
 struct rs__linesym {
     double pixel, margin;
     rs__band_aa aa;
     uint32_t out_w, out_h;
-    uint32_t cpx;          /* pixels per index cell side */
+    uint32_t cpx, cpy;     /* pixels per index cell: columns, rows */
+    ls_grid grid;          /* the same in metres */
     uint32_t gw, gh;
-    uint32_t *start, *ids; /* CSR: pieces per cell, ascending */
-    ls_piece *pc;
+    uint32_t *start, *ids; /* CSR: pieces per cell, ascending (ids while building) */
+    ls_pbox *ent;          /* the entries of ids */
+    ls_piece *pc;          /* while building */
+    ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
+    double *hpp;
     size_t npc, cap;
     ls_band *band;
     uint32_t nband;
@@ -95,6 +141,22 @@ static double poly_area(const double *x, const double *y, uint32_t n)
     double a = 0;
     for (uint32_t i = 0, j = n ? n - 1 : 0; i < n; j = i++) a += x[j] * y[i] - x[i] * y[j];
     return 0.5 * fabs(a);
+}
+
+/* Area of polygon (x, y)[n] (either orientation) where a <= y <= b: the
+ * integral of x dy round its edges cut to the strip (Green's theorem; the
+ * strip's own edges, dy = 0, add nothing), so nothing is clipped. */
+static double strip_area(const double *x, const double *y, uint32_t n, double a, double b)
+{
+    double s = 0;
+    for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+        double y0 = y[j], y1 = y[i];
+        double c0 = y0 < a ? a : (y0 > b ? b : y0), c1 = y1 < a ? a : (y1 > b ? b : y1);
+        if (c0 == c1) continue;
+        double t = (0.5 * (c0 + c1) - y0) / (y1 - y0);
+        s += (c1 - c0) * (x[j] + t * (x[i] - x[j]));
+    }
+    return fabs(s);
 }
 
 /* Signed area of triangle (origin, p, q) inside the disc of radius r. */
@@ -153,58 +215,113 @@ static double hermite(double x)
     return x * x * (3 - 2 * x);
 }
 
-/* Area of the pixel square (side pix, centred at v = 0 of slab P's frame)
- * where v <= x: a ramp, a plateau and a ramp along the normal. */
-static double strip_below(const ls_piece *P, double pix, double x)
+/* Fraction of the pixel square (centred at v = 0 of slab P's frame) where
+ * v <= x: a ramp, a plateau and a ramp along the normal (constants from
+ * push_piece). */
+static inline double strip_below(const ls_ppc *P, double x)
 {
-    double p1 = pix * fabs(P->ux), p2 = pix * fabs(P->uy), lo = fmin(p1, p2), hi = fmax(p1, p2);
-    double e = 0.5 * (lo + hi), t = x + e, full = pix * pix;
+    double e = P->st_e, t = x + e;
     if (t <= 0) return 0;
-    if (t >= 2 * e) return full;
+    if (t >= 2 * e) return 1;
     int flip = t > e;
     if (flip) t = 2 * e - t;
-    double h = full / hi, a = t <= lo ? (lo > 0 ? 0.5 * t * t * h / lo : 0) : 0.5 * lo * h + (t - lo) * h;
-    return flip ? full - a : a;
+    double a = t <= P->st_lo ? t * t * P->st_q : (0.5 * P->st_lo + (t - P->st_lo)) * P->st_h;
+    return flip ? 1 - a : a;
+}
+
+/* Keep the part of polygon (*sx, *sy)[n] inside the half-planes of P whose
+ * bits are set in `cut`, swapping the buffers; returns the vertex count. */
+static uint32_t clip_cut(const rs__linesym *L, const ls_ppc *P, uint32_t cut, double **sx, double **sy, double **tx,
+                         double **ty, uint32_t n)
+{
+    for (uint32_t k = 0; cut && n; k++, cut >>= 1) {
+        if (!(cut & 1u)) continue;
+        const double *h = HPP(L, P, k), *x = *sx, *y = *sy;
+        double d[POLY_MAX], *ox = *tx, *oy = *ty;
+        uint32_t out = 0, m = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            d[i] = h[0] + h[1] * x[i] + h[2] * y[i];
+            out += d[i] < 0;
+        }
+        if (out == 0) continue; /* the plane misses the polygon */
+        if (out == n) return 0;
+        for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+            if ((d[j] >= 0) != (d[i] >= 0)) {
+                double f = d[j] / (d[j] - d[i]);
+                ox[m] = x[j] + f * (x[i] - x[j]);
+                oy[m] = y[j] + f * (y[i] - y[j]);
+                m++;
+            }
+            if (d[i] >= 0) {
+                ox[m] = x[i];
+                oy[m] = y[i];
+                m++;
+            }
+        }
+        n = m;
+        double *t;
+        t = *sx; *sx = *tx; *tx = t;
+        t = *sy; *sy = *ty; *ty = t;
+    }
+    return n;
+}
+
+/* Is s - phase (mod period) "on" over the whole of [m - eu, m + eu]?
+ * 1 on, 0 off, -1 a dash end lies in it. */
+static int dash_span(const rs__linesym *L, const ls_band *B, double x, double eu)
+{
+    const double *d = L->dash + B->dash0;
+    double m = x - floor(x / B->period) * B->period, acc = 0;
+    for (uint32_t j = 0; j < B->ndash; j++) {
+        double hi = acc + d[j];
+        if (m - eu >= acc && m + eu <= hi) return (j & 1) == 0;
+        acc = hi;
+    }
+    return -1;
 }
 
 /* Area fraction of pixel (px, py) inside piece P (exact mode). */
-static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, uint32_t py)
+static double piece_area(const rs__linesym *L, const ls_ppc *P, uint32_t px, uint32_t py)
 {
     double pix = L->pixel, x0 = (double)px * pix - P->ox, y0 = (double)py * pix - P->oy, x1 = x0 + pix,
            y1 = y0 + pix;
     double ux = P->ux, uy = P->uy;
-    /* quick accept / reject on the centre, before any corner */
+    /* which half-planes cut the pixel (its centre against each, by the
+     * square's exact extent along the normal), before any corner */
     double xc = x0 + 0.5 * pix, yc = y0 + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
-    double hm = L->margin;
-    int inside = 1, across = 1; /* across: only the v limits (slab half-planes 2, 3) cut the pixel */
-    for (uint32_t k = 0; k < P->nhp; k++) {
-        const double *h = P->hp[k];
-        double d = h[0] + h[1] * cu + h[2] * cv;
-        if (d < -P->hpm[k]) return 0;
-        if (d < P->hpm[k]) {
-            inside = 0;
-            if (k != 2 && k != 3) across = 0;
-        }
+    uint32_t cut = 0, k0 = 0;
+    if (P->kind == PIECE_SLAB) {
+        /* the v limits; then, well inside the ends, nothing else */
+        double d0 = cv - P->a, d1 = P->b - cv;
+        if (d0 <= -P->su || d1 <= -P->su) return 0;
+        cut = (uint32_t)(d0 < P->su) | (uint32_t)(d1 < P->su) << 1;
+        k0 = cu >= P->uin0 && cu <= P->uin1 ? P->nhp : 2;
     }
-    if (P->kind == PIECE_WEDGE && sqrt(cu * cu + cv * cv) - hm >= P->r1) return 0;
-    if (P->kind == PIECE_SLAB && across) {
-        /* the pixel crosses the band's edges only: the strip's area in
-         * closed form (most line pixels), unless a dash end is in it */
-        double on = 1;
+    for (uint32_t k = k0; k < P->nhp; k++) {
+        const double *h = HPP(L, P, k);
+        double d = h[0] + h[1] * cu + h[2] * cv;
+        if (d <= -h[3]) return 0;
+        if (d < h[3]) cut |= 1u << k;
+    }
+    if (P->kind == PIECE_SLAB && !(cut & ~3u)) {
+        /* the pixel crosses the band's edges only (half-planes 0, 1): the
+         * strip's area in closed form (most line pixels), unless a dash
+         * end is in it */
+        int on = 1;
         if (P->dashed) {
             const ls_band *B = &L->band[P->band];
-            const double *d = L->dash + B->dash0;
-            double eu = 0.5 * pix * (fabs(ux) + fabs(uy)), x = P->s0 + cu - B->phase;
-            double m = x - floor(x / B->period) * B->period, acc = 0;
-            on = -1;
-            for (uint32_t j = 0; j < B->ndash; j++) {
-                double lo = acc, hi = acc + d[j];
-                if (m - eu >= lo && m + eu <= hi) { on = (j & 1) == 0; break; }
-                acc = hi;
-            }
+            on = dash_span(L, B, P->s0 + cu - B->phase, P->su);
         }
         if (on == 0) return 0;
-        if (on > 0) return (strip_below(P, pix, P->b - cv) - strip_below(P, pix, P->a - cv)) / (pix * pix);
+        if (on > 0) return cut ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+    }
+    double hm = L->margin, far = 0;
+    if (P->kind == PIECE_WEDGE) {
+        /* outside the sector's box, or holding it all */
+        if (x1 <= P->wx0 || x0 >= P->wx1 || y1 <= P->wy0 || y0 >= P->wy1) return 0;
+        if (P->nhp == 2 && x0 <= P->wx0 && x1 >= P->wx1 && y0 <= P->wy0 && y1 >= P->wy1) return P->warea;
+        far = sqrt(cu * cu + cv * cv);
+        if (far - hm >= P->r1 || far + hm <= P->r0) return 0;
     }
     double bx[POLY_MAX], by[POLY_MAX], cx[POLY_MAX], cy[POLY_MAX];
     /* corners in (u, v) */
@@ -213,34 +330,28 @@ static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, u
         bx[k] = X[k] * ux + Y[k] * uy;
         by[k] = X[k] * uy - Y[k] * ux;
     }
-    uint32_t n = 4;
     double *sx = bx, *sy = by, *tx = cx, *ty = cy;
-    if (!inside) {
-        for (uint32_t k = 0; k < P->nhp && n; k++) {
-            n = clip_poly(sx, sy, n, P->hp[k][0], P->hp[k][1], P->hp[k][2], tx, ty);
-            double *t;
-            t = sx; sx = tx; tx = t;
-            t = sy; sy = ty; ty = t;
-        }
-        if (n < 3) return 0;
-    }
     double pa = pix * pix;
+    if (P->kind == PIECE_SLAB && !P->dashed) {
+        /* the ends and cuts by clipping, the band's edges by the strip's
+         * area in v */
+        uint32_t n = clip_cut(L, P, cut & ~3u, &sx, &sy, &tx, &ty, 4);
+        return n < 3 ? 0 : strip_area(sx, sy, n, P->a, P->b) / pa;
+    }
+    uint32_t n = clip_cut(L, P, cut, &sx, &sy, &tx, &ty, 4);
+    if (n < 3) return 0;
     if (P->kind == PIECE_WEDGE) {
-        double far = sqrt(cu * cu + cv * cv);
-        if (far - hm >= P->r1) return 0;
         double a1 = far + hm <= P->r1 ? poly_area(sx, sy, n) : poly_disc(sx, sy, n, P->r1);
-        double a0 = P->r0 > 0 && far - hm < P->r0 ? (far + hm <= P->r0 ? poly_area(sx, sy, n) : poly_disc(sx, sy, n, P->r0))
-                                                 : 0;
+        double a0 = P->r0 > 0 && far - hm < P->r0 ? poly_disc(sx, sy, n, P->r0) : 0;
         return (a1 - a0) / pa;
     }
-    if (!P->dashed) return inside ? 1.0 : poly_area(sx, sy, n) / pa;
     /* dashes: the on-intervals of s over the polygon's u range */
     const ls_band *B = &L->band[P->band];
     const double *d = L->dash + B->dash0;
     double umin = sx[0], umax = sx[0];
     for (uint32_t k = 1; k < n; k++) {
-        umin = fmin(umin, sx[k]);
-        umax = fmax(umax, sx[k]);
+        umin = sx[k] < umin ? sx[k] : umin;
+        umax = sx[k] > umax ? sx[k] : umax;
     }
     double s_lo = P->s0 + umin - B->phase, s_hi = P->s0 + umax - B->phase;
     double base = floor(s_lo / B->period) * B->period, area = 0;
@@ -252,13 +363,10 @@ static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, u
             if (on1 > s_lo && on0 < s_hi) {
                 double lo = on0 + B->phase - P->s0, hi = on1 + B->phase - P->s0;
                 if (lo <= umin && hi >= umax) {
-                    if (whole < 0) whole = inside ? pa : poly_area(sx, sy, n);
+                    if (whole < 0) whole = cut ? poly_area(sx, sy, n) : pa;
                     area += whole;
                 } else {
-                    double ex[POLY_MAX], ey[POLY_MAX], fx[POLY_MAX], fy[POLY_MAX];
-                    uint32_t m = clip_poly(sx, sy, n, -lo, 1, 0, ex, ey);
-                    m = clip_poly(ex, ey, m, hi, -1, 0, fx, fy);
-                    if (m >= 3) area += poly_area(fx, fy, m);
+                    area += strip_area(sy, sx, n, lo, hi); /* the part with u in [lo, hi] */
                 }
             }
             on0 = on1 + d[j + 1];
@@ -269,21 +377,22 @@ static double piece_area(const rs__linesym *L, const ls_piece *P, uint32_t px, u
 }
 
 /* Hermite mode: smoothstep of the pixel centre's distance to each edge. */
-static double piece_hermite(const rs__linesym *L, const ls_piece *P, uint32_t px, uint32_t py)
+static double piece_hermite(const rs__linesym *L, const ls_ppc *P, uint32_t px, uint32_t py)
 {
     double pix = L->pixel, x = ((double)px + 0.5) * pix - P->ox, y = ((double)py + 0.5) * pix - P->oy;
     double u = x * P->ux + y * P->uy, v = x * P->uy - y * P->ux;
     if (P->kind == PIECE_WEDGE) {
         /* the centre picks the piece; radial smoothing across the band */
-        if (P->hp[0][1] * u + P->hp[0][2] * v < 0 || P->hp[1][1] * u + P->hp[1][2] * v < 0) return 0;
+        const double *h0 = HPP(L, P, 0), *h1 = HPP(L, P, 1);
+        if (h0[1] * u + h0[2] * v < 0 || h1[1] * u + h1[2] * v < 0) return 0;
         double r = sqrt(u * u + v * v);
         double c = hermite(0.5 + (P->r1 - r) / pix) + (P->r0 > 0 ? hermite(0.5 + (r - P->r0) / pix) : 1.0) - 1.0;
         return c > 0 ? c : 0;
     }
     /* the other half-planes (ends, bisectors, junctions) by the centre */
     for (uint32_t k = 0; k < P->nhp; k++) {
-        const double *h = P->hp[k];
-        if (k == 2 || k == 3) continue; /* the v limits: smoothed below */
+        const double *h = HPP(L, P, k);
+        if (k < 2) continue; /* the v limits: smoothed below */
         if (h[0] + h[1] * u + h[2] * v < 0) return 0;
     }
     double c = hermite(0.5 + (v - P->a) / pix) + hermite(0.5 + (P->b - v) / pix) - 1.0;
@@ -310,6 +419,8 @@ static double piece_hermite(const rs__linesym *L, const ls_piece *P, uint32_t px
  * Build
  * ---------------------------------------------------------------------- */
 
+static uint32_t piece_poly(const ls_piece *P, double *x, double *y);
+
 static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
 {
     if (L->npc == L->cap) {
@@ -322,7 +433,78 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
     }
     ls_piece *Q = &L->pc[L->npc++];
     *Q = *P;
-    for (uint32_t k = 0; k < Q->nhp; k++) Q->hpm[k] = L->margin * sqrt(Q->hp[k][1] * Q->hp[k][1] + Q->hp[k][2] * Q->hp[k][2]);
+    double pix = L->pixel, hp = 0.5 * pix, ax = fabs(Q->ux), ay = fabs(Q->uy);
+    /* half-plane c0 + cu u + cv v in local (x, y): normal (cu ux + cv uy, cu uy - cv ux) */
+    for (uint32_t k = 0; k < Q->nhp; k++) {
+        double cu = Q->hp[k][1], cv = Q->hp[k][2];
+        Q->sup[k] = hp * (fabs(cu * Q->ux + cv * Q->uy) + fabs(cu * Q->uy - cv * Q->ux));
+    }
+    Q->su = hp * (ax + ay);
+    /* the piece's polygon (a wedge's: its box cut by the two radii):
+     * its box and ranges, a little wider against rounding */
+    double px[POLY_MAX], py[POLY_MAX], bx0 = DBL_MAX, bx1 = -DBL_MAX, by0 = DBL_MAX, by1 = -DBL_MAX;
+    double pu0 = DBL_MAX, pu1 = -DBL_MAX, pv0 = DBL_MAX, pv1 = -DBL_MAX;
+    int herm = L->aa == RS__AA_HERMITE;
+    uint32_t n;
+    if (herm && Q->kind == PIECE_SLAB) {
+        /* Hermite: the centres that pick the piece, with v half a pixel
+         * beyond the band (its smoothing) */
+        ls_piece G = *Q;
+        G.hp[0][0] += hp;
+        G.hp[1][0] += hp;
+        n = piece_poly(&G, px, py);
+    } else {
+        n = piece_poly(Q, px, py);
+    }
+    for (uint32_t k = 0; k < n; k++) {
+        double x = Q->ox + px[k] * Q->ux + py[k] * Q->uy, y = Q->oy + px[k] * Q->uy - py[k] * Q->ux;
+        bx0 = fmin(bx0, x), bx1 = fmax(bx1, x), by0 = fmin(by0, y), by1 = fmax(by1, y);
+        pu0 = fmin(pu0, px[k]), pu1 = fmax(pu1, px[k]), pv0 = fmin(pv0, py[k]), pv1 = fmax(pv1, py[k]);
+    }
+    if (n < 3) { /* nothing left of it (the inner side of a sharp bend): never visited */
+        Q->gx0 = Q->gy0 = 1;
+        Q->gx1 = Q->gy1 = 0;
+        Q->ru0 = Q->rv0 = 1;
+        Q->ru1 = Q->rv1 = 0;
+        return RS_OK;
+    }
+    double eb = 1e-9 * (1 + fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
+    if (Q->kind == PIECE_WEDGE && herm) {
+        /* Hermite: the centre in the sector's angle, within half a pixel of its radii */
+        bx0 = Q->ox + Q->wx0, bx1 = Q->ox + Q->wx1, by0 = Q->oy + Q->wy0, by1 = Q->oy + Q->wy1;
+    } else if (Q->kind == PIECE_WEDGE) {
+        bx0 = fmax(bx0, Q->ox + Q->wx0), bx1 = fmin(bx1, Q->ox + Q->wx1);
+        by0 = fmax(by0, Q->oy + Q->wy0), by1 = fmin(by1, Q->oy + Q->wy1);
+    }
+    /* pixels that overlap the box */
+    Q->gx0 = ceil((bx0 - eb) / pix - 1);
+    Q->gx1 = floor((bx1 + eb) / pix);
+    Q->gy0 = ceil((by0 - eb) / pix - 1);
+    Q->gy1 = floor((by1 + eb) / pix);
+    if (Q->kind == PIECE_SLAB) {
+        double p1 = pix * ax, p2 = pix * ay, lo = p1 < p2 ? p1 : p2, hi = p1 < p2 ? p2 : p1;
+        Q->st_lo = lo;
+        Q->st_e = 0.5 * (lo + hi);
+        Q->st_h = 1 / hi;
+        Q->st_q = lo > 0 ? 0.5 / (hi * lo) : 0;
+        Q->ru0 = pu0 - Q->su - eb;
+        Q->ru1 = pu1 + Q->su + eb;
+        Q->rv0 = pv0 - Q->su - eb;
+        Q->rv1 = pv1 + Q->su + eb;
+        /* A centre that passes the v limits has v in (a - su, b + su);
+         * there half-plane k >= 2 holds with the square's extent to spare
+         * where cu u >= sup - c0 - min over v of cv v (by a margin). */
+        double ulo = -DBL_MAX, uhi = DBL_MAX, va = Q->a - Q->su, vb = Q->b + Q->su;
+        for (uint32_t k = 2; k < Q->nhp; k++) {
+            double c0 = Q->hp[k][0], cu = Q->hp[k][1], cv = Q->hp[k][2];
+            double need = Q->sup[k] - c0 - fmin(cv * va, cv * vb) + eb * (1 + fabs(cu) + fabs(cv));
+            if (cu > 0) ulo = fmax(ulo, need / cu);
+            else if (cu < 0) uhi = fmin(uhi, need / cu);
+            else if (need > 0) uhi = -DBL_MAX; /* never safe */
+        }
+        Q->uin0 = ulo;
+        Q->uin1 = uhi;
+    }
     return RS_OK;
 }
 
@@ -330,7 +512,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
 static void piece_box(const rs__linesym *L, ls_piece *P, double len, double a, double b)
 {
     double m = L->margin;
-    if (P->kind == PIECE_WEDGE) {
+    if (P->kind == PIECE_WEDGE) { /* the disc's (the junction cuts test against it; the painter uses the sector's) */
         P->x0 = P->ox - P->r1 - m;
         P->x1 = P->ox + P->r1 + m;
         P->y0 = P->oy - P->r1 - m;
@@ -403,6 +585,7 @@ typedef struct ls_ends {
 } ls_ends;
 
 typedef struct ls_junc {
+    ls_grid grid;          /* its own cells, square */
     ls_surf *sf;
     size_t nsf;
     uint32_t *start, *ids; /* CSR per index cell, like the pieces */
@@ -453,7 +636,8 @@ static int piece_nonempty(const ls_piece *P)
 
 static int add_hp(ls_piece *P, double c0, double cu, double cv)
 {
-    if (P->nhp >= HP_MAX) return 0;
+    if (P->nlim >= HP_MAX) return 0;
+    P->nlim++;
     P->hp[P->nhp][0] = c0;
     P->hp[P->nhp][1] = cu;
     P->hp[P->nhp][2] = cv;
@@ -507,19 +691,19 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
 {
     if (!J || !J->nsf) return push_piece(ctx, L, P);
     /* candidate surfaces: those listed in the cells of P's box */
-    double cm = (double)L->cpx * L->pixel;
-    double fx0 = floor(P->x0 / cm), fx1 = floor(P->x1 / cm), fy0 = floor(P->y0 / cm), fy1 = floor(P->y1 / cm);
+    const ls_grid *G = &J->grid;
+    double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
     enum { QMAX = 16 };
     ls_piece q[QMAX], tmp[4];
     uint32_t nq = 1;
     q[0] = *P;
-    if (!(fx1 < 0 || fy1 < 0 || fx0 >= L->gw || fy0 >= L->gh)) {
-        uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= L->gw ? L->gw - 1 : (uint32_t)fx1;
-        uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= L->gh ? L->gh - 1 : (uint32_t)fy1;
+    if (!(fx1 < 0 || fy1 < 0 || fx0 >= G->gw || fy0 >= G->gh)) {
+        uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
+        uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
         J->query++;
         for (uint32_t j = j0; j <= j1; j++)
             for (uint32_t i = i0; i <= i1; i++) {
-                size_t c = (size_t)j * L->gw + i;
+                size_t c = (size_t)j * G->gw + i;
                 for (uint32_t e = J->start[c]; e < J->start[c + 1]; e++) {
                     uint32_t k = J->ids[e];
                     if (J->stamp[k] == J->query) continue;
@@ -580,17 +764,21 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
          * reach, so the box and s stay finite and small. */
         double lo, hi;
         if (!cut_to_map(P.ox, P.oy, ux, uy, len, ext, wmap, hmap, &lo, &hi)) continue;
-        P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = 1, P.hp[P.nhp++][2] = 0;          /* u >= 0 */
-        P.hp[P.nhp][0] = len, P.hp[P.nhp][1] = -1, P.hp[P.nhp++][2] = 0;       /* u <= len */
         P.hp[P.nhp][0] = -a, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = 1;         /* v >= a */
         P.hp[P.nhp][0] = b, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = -1;         /* v <= b */
+        /* Each end: the end perpendicular and the bisector with the
+         * neighbouring segment. Over v in [a, b] one of the two lies wholly
+         * beyond the other when the band is on one side of the centreline
+         * (the perpendicular on the inner side of the bend, the bisector
+         * on the outer): that one cuts nothing and is left out. */
+        double bm[2][2];
+        int has_bis[2] = { 0, 0 };
         if (i > 0) { /* bisector with the previous segment: m.(p - A) >= 0 */
             double pdx = 0.5 * pts[i].x - 0.5 * pts[i - 1].x, pdy = 0.5 * pts[i].y - 0.5 * pts[i - 1].y, pl = hypot(pdx, pdy);
             double mx = pdx / pl + ux, my = pdy / pl + uy, ml = hypot(mx, my);
             if (ml > 1e-9) {
-                double mu, mv;
-                in_frame(mx / ml, my / ml, ux, uy, &mu, &mv);
-                P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = mu, P.hp[P.nhp++][2] = mv;
+                in_frame(mx / ml, my / ml, ux, uy, &bm[0][0], &bm[0][1]);
+                has_bis[0] = 1;
             }
         }
         if (i + 2 < n) { /* with the next: m.(p - B) <= 0 */
@@ -598,11 +786,31 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
                    nl = hypot(ndx, ndy);
             double mx = ndx / nl + ux, my = ndy / nl + uy, ml = hypot(mx, my);
             if (ml > 1e-9) {
-                double mu, mv;
-                in_frame(mx / ml, my / ml, ux, uy, &mu, &mv);
-                P.hp[P.nhp][0] = mu * len, P.hp[P.nhp][1] = -mu, P.hp[P.nhp++][2] = -mv;
+                in_frame(mx / ml, my / ml, ux, uy, &bm[1][0], &bm[1][1]);
+                has_bis[1] = 1;
             }
         }
+        for (int end = 0; end < 2; end++) {
+            /* the start: mu u + mv v >= 0 (mu > 0) against u >= 0; the end:
+             * mu (len - u) - mv v >= 0 against u <= len */
+            int keep_perp = 1, keep_bis = has_bis[end];
+            P.nlim += 1 + (uint32_t)has_bis[end];
+            if (has_bis[end] && L->aa == RS__AA_EXACT) { /* (Hermite smooths beyond [a, b]: keep both) */
+                double mv = end ? -bm[end][1] : bm[end][1];
+                if (mv * a >= 0 && mv * b >= 0) keep_bis = 0;       /* the bisector holds wherever the perpendicular does */
+                else if (mv * a <= 0 && mv * b <= 0) keep_perp = 0; /* and conversely */
+            }
+            if (keep_perp) {
+                if (end == 0) P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = 1, P.hp[P.nhp++][2] = 0;  /* u >= 0 */
+                else P.hp[P.nhp][0] = len, P.hp[P.nhp][1] = -1, P.hp[P.nhp++][2] = 0;       /* u <= len */
+            }
+            if (keep_bis) {
+                double mu = bm[end][0], mv = bm[end][1];
+                if (end == 0) P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = mu, P.hp[P.nhp++][2] = mv;
+                else P.hp[P.nhp][0] = mu * len, P.hp[P.nhp][1] = -mu, P.hp[P.nhp++][2] = -mv;
+            }
+        }
+        P.nlim += 2;
         if (lo > 0) {
             /* Re-anchor at the cut start (only u shifts; the half-planes
              * keep the exact piece). The cut-off parts lie more than a
@@ -647,7 +855,24 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
         in_frame(px, py, nx, ny, &mu, &mv);
         P.hp[0][0] = 0, P.hp[0][1] = mu, P.hp[0][2] = mv; /* (p - V).u_prev >= 0 */
         P.hp[1][0] = 0, P.hp[1][1] = -1, P.hp[1][2] = 0;  /* (p - V).u_next <= 0 */
-        P.nhp = 2;
+        P.nhp = P.nlim = 2;
+        /* the sector's box: its four corners and the axis directions
+         * inside it at r1; padded against rounding */
+        double c0x = out * py, c0y = -out * px, c1x = out * ny, c1y = -out * nx; /* outer normals */
+        double bxs[8] = { r0 * c0x, r1 * c0x, r0 * c1x, r1 * c1x }, bys[8] = { r0 * c0y, r1 * c0y, r0 * c1y, r1 * c1y };
+        int nb = 4;
+        static const double AX[4] = { 1, -1, 0, 0 }, AY[4] = { 0, 0, 1, -1 };
+        for (int q = 0; q < 4; q++)
+            if (AX[q] * px + AY[q] * py > 0 && AX[q] * nx + AY[q] * ny < 0) bxs[nb] = r1 * AX[q], bys[nb++] = r1 * AY[q];
+        P.wx0 = P.wx1 = bxs[0];
+        P.wy0 = P.wy1 = bys[0];
+        for (int q = 1; q < nb; q++) {
+            P.wx0 = fmin(P.wx0, bxs[q]), P.wx1 = fmax(P.wx1, bxs[q]);
+            P.wy0 = fmin(P.wy0, bys[q]), P.wy1 = fmax(P.wy1, bys[q]);
+        }
+        double pad = 1e-9 * (1 + r1);
+        P.wx0 -= pad, P.wy0 -= pad, P.wx1 += pad, P.wy1 += pad;
+        P.warea = 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / (L->pixel * L->pixel);
         piece_box(L, &P, 0, 0, 0);
         rs_result r = push_cut(ctx, L, J, &P, road);
         if (r) return r;
@@ -659,17 +884,17 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
  * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
  * row, the x extent of the rectangle cut to that row); pass 0 counts into
  * start[], pass 1 fills ids[] from the ends, item k. */
-static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, double uy, double u0, double u1,
+static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double uy, double u0, double u1,
                        double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
                        uint32_t *ids, uint32_t k, int fill)
 {
-    double cm = (double)L->cpx * L->pixel;
-    double fy0 = floor(y0 / cm), fy1 = floor(y1 / cm);
-    if (!(fy1 >= 0) || !(fy0 < L->gh)) return;
-    uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= L->gh ? L->gh - 1 : (uint32_t)fy1;
+    double cm = G->cmx, cmy = G->cmy;
+    double fy0 = floor(y0 / cmy), fy1 = floor(y1 / cmy);
+    if (!(fy1 >= 0) || !(fy0 < G->gh)) return;
+    uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
     double fx0 = floor(x0 / cm), fx1 = floor(x1 / cm);
-    if (!(fx1 >= 0) || !(fx0 < L->gw)) return;
-    uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= L->gw ? L->gw - 1 : (uint32_t)fx1;
+    if (!(fx1 >= 0) || !(fx0 < G->gw)) return;
+    uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
     for (uint32_t j = j0; j <= j1; j++) {
         uint32_t a = i0, b = i1;
         if (i1 > i0) {
@@ -679,8 +904,8 @@ static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, do
                 xs[q] = ox + U[q] * ux + V[q] * uy;
                 ys[q] = oy + U[q] * uy - V[q] * ux;
             }
-            uint32_t nn = clip_poly(xs, ys, 4, -(double)j * cm, 0, 1, tx, ty);
-            nn = clip_poly(tx, ty, nn, (double)(j + 1) * cm, 0, -1, xs, ys);
+            uint32_t nn = clip_poly(xs, ys, 4, -(double)j * cmy, 0, 1, tx, ty);
+            nn = clip_poly(tx, ty, nn, (double)(j + 1) * cmy, 0, -1, xs, ys);
             if (nn == 0) continue;
             double lo = xs[0], hi = xs[0];
             for (uint32_t q = 1; q < nn; q++) {
@@ -693,7 +918,7 @@ static void rect_cells(const rs__linesym *L, double ox, double oy, double ux, do
             b = gb < (double)i1 ? (uint32_t)gb : i1;
         }
         for (uint32_t i = a; i <= b; i++) {
-            size_t c = (size_t)j * L->gw + i;
+            size_t c = (size_t)j * G->gw + i;
             if (fill) ids[--start[c]] = k;
             else start[c]++;
         }
@@ -705,11 +930,11 @@ static void piece_cells(rs__linesym *L, uint32_t k, int fill)
     const ls_piece *P = &L->pc[k];
     double m = L->margin;
     if (P->kind == PIECE_SLAB)
-        rect_cells(L, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
+        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
                    L->start, L->ids, k, fill);
-    else /* the sector's box, as an axis-aligned rectangle */
-        rect_cells(L, P->ox, P->oy, 1, 0, P->x0 - P->ox, P->x1 - P->ox, P->oy - P->y1, P->oy - P->y0, P->x0, P->y0,
-                   P->x1, P->y1, L->start, L->ids, k, fill);
+    else /* the sector's box grown by the margin, as an axis-aligned rectangle */
+        rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
+                   P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, L->ids, k, fill);
 }
 
 /* Counts to CSR end offsets (a list is then filled from its end). */
@@ -826,7 +1051,19 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             J->sf[J->nsf++] = Q;
         }
     }
-    size_t ncell = (size_t)L->gw * L->gh, total = 0;
+    /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
+    uint32_t jpx = CELL_PX;
+    for (;;) {
+        uint64_t gw = ((uint64_t)p->out_w + jpx - 1) / jpx, gh = ((uint64_t)p->out_h + jpx - 1) / jpx;
+        if (gw * gh <= MAX_CELLS || jpx >= (1u << 30)) {
+            J->grid.gw = (uint32_t)gw;
+            J->grid.gh = (uint32_t)gh;
+            break;
+        }
+        jpx *= 2;
+    }
+    J->grid.cmx = J->grid.cmy = (double)jpx * p->pixel;
+    size_t ncell = (size_t)J->grid.gw * J->grid.gh, total = 0;
     J->start = rs__calloc(ctx, ncell + 1, sizeof *J->start);
     J->stamp = rs__calloc(ctx, J->nsf ? J->nsf : 1, sizeof *J->stamp);
     if (!J->start || !J->stamp) return RS_ERR_NOMEM;
@@ -846,7 +1083,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
                 x0 = fmin(x0, x), x1 = fmax(x1, x), y0 = fmin(y0, y), y1 = fmax(y1, y);
             }
-            rect_cells(L, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
+            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
                        J->ids, (uint32_t)k, pass);
         }
     }
@@ -859,6 +1096,9 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
     rs__free(ctx, L->start);
     rs__free(ctx, L->ids);
     rs__free(ctx, L->pc);
+    rs__free(ctx, L->pp);
+    rs__free(ctx, L->ent);
+    rs__free(ctx, L->hpp);
     rs__free(ctx, L->band);
     rs__free(ctx, L->dash);
     rs__free(ctx, L);
@@ -901,15 +1141,21 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->out_w = p->out_w;
     L->out_h = p->out_h;
     L->cpx = CELL_PX;
+    L->cpy = CELL_ROWS;
     for (;;) {
-        uint64_t gw = ((uint64_t)p->out_w + L->cpx - 1) / L->cpx, gh = ((uint64_t)p->out_h + L->cpx - 1) / L->cpx;
+        uint64_t gw = ((uint64_t)p->out_w + L->cpx - 1) / L->cpx, gh = ((uint64_t)p->out_h + L->cpy - 1) / L->cpy;
         if (gw * gh <= MAX_CELLS || L->cpx >= (1u << 30)) {
             L->gw = (uint32_t)gw;
             L->gh = (uint32_t)gh;
             break;
         }
         L->cpx *= 2;
+        L->cpy *= 2;
     }
+    L->grid.gw = L->gw;
+    L->grid.gh = L->gh;
+    L->grid.cmx = (double)L->cpx * p->pixel;
+    L->grid.cmy = (double)L->cpy * p->pixel;
     L->band = rs__alloc_array(ctx, nband ? nband : 1, sizeof *L->band);
     L->dash = rs__alloc_array(ctx, ndash ? ndash : 1, sizeof *L->dash);
     size_t ncell = (size_t)L->gw * L->gh;
@@ -951,6 +1197,30 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
+    /* the painter's copy: compact pieces, boxes and one pool of half-planes */
+    size_t nhpp = 0;
+    for (size_t k = 0; k < L->npc; k++) nhpp += L->pc[k].nhp;
+    if (nhpp > UINT32_MAX) { res = RS_ERR_LIMIT; goto fail; }
+    L->pp = rs__alloc_array(ctx, L->npc ? L->npc : 1, sizeof *L->pp);
+    L->hpp = rs__alloc_array(ctx, nhpp ? 4 * nhpp : 1, sizeof *L->hpp);
+    if (!L->pp || !L->hpp) { res = RS_ERR_NOMEM; goto fail; }
+    for (size_t k = 0, h = 0; k < L->npc; k++) {
+        const ls_piece *P = &L->pc[k];
+        ls_ppc *Q = &L->pp[k];
+        Q->ox = P->ox, Q->oy = P->oy, Q->ux = P->ux, Q->uy = P->uy, Q->a = P->a, Q->b = P->b, Q->su = P->su;
+        Q->uin0 = P->uin0, Q->uin1 = P->uin1, Q->st_lo = P->st_lo, Q->st_e = P->st_e, Q->st_q = P->st_q;
+        Q->st_h = P->st_h, Q->s0 = P->s0, Q->ru0 = P->ru0, Q->ru1 = P->ru1, Q->rv0 = P->rv0, Q->rv1 = P->rv1;
+        Q->r0 = P->r0, Q->r1 = P->r1, Q->wx0 = P->wx0, Q->wy0 = P->wy0, Q->wx1 = P->wx1, Q->wy1 = P->wy1;
+        Q->warea = P->warea, Q->nhp = P->nhp, Q->kind = P->kind, Q->band = P->band, Q->dashed = P->dashed;
+        Q->hp0 = (uint32_t)h;
+        Q->iku = fabs(P->ux) < 1e-12 ? 0 : 1 / (P->ux * L->pixel);
+        Q->ikv = fabs(P->uy) < 1e-12 ? 0 : 1 / (P->uy * L->pixel);
+        Q->cbase = P->ox / L->pixel - 0.5;
+        for (uint32_t j = 0; j < P->nhp; j++, h++) {
+            memcpy(L->hpp + 4 * h, P->hp[j], 3 * sizeof *L->hpp);
+            L->hpp[4 * h + 3] = P->sup[j];
+        }
+    }
     for (size_t k = 0; k < L->npc; k++) piece_cells(L, (uint32_t)k, 0);
     uint64_t lim = UINT32_MAX - 1u;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
@@ -958,8 +1228,23 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ids);
     if (!L->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = L->npc; k-- > 0;) piece_cells(L, (uint32_t)k, 1);
-    L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ids + L->cap * sizeof *L->pc +
-               nband * sizeof *L->band + ndash * sizeof *L->dash;
+    L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
+    if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
+    for (size_t e = 0; e < total; e++) {
+        const ls_piece *P = &L->pc[L->ids[e]];
+        ls_pbox *B = &L->ent[e];
+        B->gx0 = P->gx0, B->gx1 = P->gx1, B->gy0 = P->gy0, B->gy1 = P->gy1;
+        B->id = L->ids[e];
+        B->band = P->band;
+    }
+    rs__free(ctx, L->pc); /* built */
+    rs__free(ctx, L->ids);
+    L->pc = NULL;
+    L->ids = NULL;
+    L->cap = 0;
+    L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ent + L->npc * sizeof *L->pp +
+               4 * nhpp * sizeof *L->hpp + nband * sizeof *L->band +
+               ndash * sizeof *L->dash;
     *out = L;
     rs__ok(ctx);
     return RS_OK;
@@ -976,96 +1261,237 @@ fail:
  * Painting
  * ---------------------------------------------------------------------- */
 
-static double piece_cover(const rs__linesym *L, const ls_piece *P, uint32_t px, uint32_t py)
+/* floor and ceil by a conversion (the painter's hot loops) */
+static double fast_floor(double x)
 {
-    return L->aa == RS__AA_HERMITE ? piece_hermite(L, P, px, py) : piece_area(L, P, px, py);
+    if (!(x > -1e15 && x < 1e15)) return floor(x);
+    double t = (double)(long long)x;
+    return t > x ? t - 1 : t;
 }
 
-/* Pixel columns [*lo, *hi] of row y whose centres lie in slab P's rectangle
- * grown by the pixel margin (every pixel that can touch P; a superset is
- * harmless, piece_cover gives 0 outside). Narrows *lo, *hi. */
-static void slab_row(const rs__linesym *L, const ls_piece *P, uint32_t y, double *lo, double *hi)
+static double fast_ceil(double x)
 {
-    double pix = L->pixel, m = L->margin, yc = ((double)y + 0.5) * pix - P->oy;
-    /* u = xr ux + yc uy in [-m, len + m]; v = xr uy - yc ux in [a - m, b + m]; xr = x - ox */
-    double k[2] = { P->ux, P->uy }, c[2] = { yc * P->uy, -yc * P->ux };
-    double l[2] = { -m, P->a - m }, h[2] = { P->len + m, P->b + m };
-    double xlo = -DBL_MAX, xhi = DBL_MAX;
-    for (int i = 0; i < 2; i++) {
-        if (fabs(k[i]) < 1e-12) {
-            if (c[i] < l[i] - 1e-9 || c[i] > h[i] + 1e-9) { *hi = *lo - 1; return; }
-            continue;
-        }
-        double t0 = (l[i] - c[i]) / k[i], t1 = (h[i] - c[i]) / k[i];
-        if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
-        xlo = fmax(xlo, t0);
-        xhi = fmin(xhi, t1);
+    if (!(x > -1e15 && x < 1e15)) return ceil(x);
+    double t = (double)(long long)x;
+    return t < x ? t + 1 : t;
+}
+
+/* Pixel columns [*lo, *hi] whose centres' u lies in [ua, ub] on the row
+ * at yc (relative to P's origin; a superset by a little slack for
+ * rounding). Narrows *lo, *hi. */
+static inline void u_cols(const ls_ppc *P, double yc, double ua, double ub, double *lo, double *hi)
+{
+    /* u = xr ux + yc uy; xr = x - ox; pixel centres (x + 0.5) pix = xr + ox */
+    double c = yc * P->uy;
+    if (P->iku == 0) {
+        if (c < ua - 1e-9 || c > ub + 1e-9) *hi = *lo - 1;
+        return;
     }
-    /* pixel centres (x + 0.5) pix = xr + ox, with a little slack for rounding */
-    double plo = ceil((xlo + P->ox) / pix - 0.5 - 1e-6), phi = floor((xhi + P->ox) / pix - 0.5 + 1e-6);
+    double t0 = (ua - c) * P->iku + P->cbase, t1 = (ub - c) * P->iku + P->cbase;
+    if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+    double plo = fast_ceil(t0 - 1e-6), phi = fast_floor(t1 + 1e-6);
     if (plo > *lo) *lo = plo;
     if (phi < *hi) *hi = phi;
+}
+
+/* Pixel columns [*lo, *hi] of row y whose squares can touch slab P: their
+ * centres lie in its u and v ranges grown by the square's extent along u
+ * and v (a superset is harmless: its cover is 0). Narrows *lo, *hi. */
+static void slab_row(const rs__linesym *L, const ls_ppc *P, uint32_t y, double *lo, double *hi)
+{
+    double yc = ((double)y + 0.5) * L->pixel - P->oy;
+    /* v = xr uy - yc ux: the u formula in the frame turned by 90 degrees */
+    double c = -yc * P->ux;
+    if (P->ikv == 0) {
+        if (c < P->rv0 - 1e-9 || c > P->rv1 + 1e-9) { *hi = *lo - 1; return; }
+    } else {
+        double t0 = (P->rv0 - c) * P->ikv + P->cbase, t1 = (P->rv1 - c) * P->ikv + P->cbase;
+        if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+        double plo = fast_ceil(t0 - 1e-6), phi = fast_floor(t1 + 1e-6);
+        if (plo > *lo) *lo = plo;
+        if (phi < *hi) *hi = phi;
+    }
+    u_cols(P, yc, P->ru0, P->ru1, lo, hi);
 }
 
 /* Visit the block cell by cell; per cell, each run of pieces of one band:
  * sum their covers into scratch, then hand the run to `emit`. Each pixel
  * belongs to the one cell that holds it, whose list is in painting order,
  * so a pixel sees the same sums in the same order in every block. */
-typedef void (*ls_emit)(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1,
-                        const double *cov, size_t cstride, void *user);
+typedef void (*ls_emit)(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t y0, uint32_t y1, const uint32_t *rlo,
+                        const uint32_t *rhi, const double *cov, size_t cstride, void *user);
+
+/* A run's scratch rows: row y - y0 holds columns [x0, x1) (cs of them),
+ * zeroed when first touched; [x0 + rlo, x0 + rhi) are the touched ones
+ * (rhi 0: none). */
+typedef struct ls_rows {
+    uint32_t x0, x1, y0;
+    size_t cs;
+    double *scratch;
+    uint32_t *rlo, *rhi;
+} ls_rows;
+
+/* Add piece P's cover of row y, columns [lo, hi] cut to the run's, into its scratch row. */
+static void cover_cols(const rs__linesym *L, const ls_ppc *P, uint32_t y, double lo, double hi, const ls_rows *R)
+{
+    uint32_t x0 = R->x0, x1 = R->x1;
+    uint32_t qa = lo > (double)x0 ? (lo < (double)x1 ? (uint32_t)lo : x1) : x0;
+    uint32_t qb = hi + 1 < (double)x1 ? (hi + 1 > (double)qa ? (uint32_t)(hi + 1) : qa) : x1;
+    if (qa >= qb) return;
+    uint32_t r = y - R->y0;
+    double *row = R->scratch + r * R->cs; /* column x at row[x - x0] */
+    if (R->rhi[r] == 0) {
+        for (size_t x = 0; x < R->cs; x++) row[x] = 0;
+        R->rlo[r] = qa - x0;
+        R->rhi[r] = qb - x0;
+    } else {
+        if (qa - x0 < R->rlo[r]) R->rlo[r] = qa - x0;
+        if (qb - x0 > R->rhi[r]) R->rhi[r] = qb - x0;
+    }
+    if (L->aa == RS__AA_HERMITE) {
+        for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_hermite(L, P, x, y);
+    } else if (P->kind == PIECE_SLAB && !P->dashed) {
+        /* piece_area's first steps inline: outside the band, or crossing
+         * only its edges well inside its ends (the same arithmetic) */
+        double pix = L->pixel, yc = ((double)y * pix - P->oy) + 0.5 * pix, ux = P->ux, uy = P->uy, su = P->su;
+        for (uint32_t x = qa; x < qb; x++) {
+            double xc = ((double)x * pix - P->ox) + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+            double d0 = cv - P->a, d1 = P->b - cv;
+            if (d0 <= -su || d1 <= -su) continue;
+            if (cu >= P->uin0 && cu <= P->uin1)
+                row[x - x0] += d0 < su || d1 < su ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+            else
+                row[x - x0] += piece_area(L, P, x, y);
+        }
+    } else if (P->kind == PIECE_SLAB) {
+        /* the same for a dashed slab, with the dash test */
+        const ls_band *B = &L->band[P->band];
+        double pix = L->pixel, yc = ((double)y * pix - P->oy) + 0.5 * pix, ux = P->ux, uy = P->uy, su = P->su;
+        for (uint32_t x = qa; x < qb; x++) {
+            double xc = ((double)x * pix - P->ox) + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+            double d0 = cv - P->a, d1 = P->b - cv;
+            if (d0 <= -su || d1 <= -su) continue;
+            if (cu >= P->uin0 && cu <= P->uin1) {
+                int on = dash_span(L, B, P->s0 + cu - B->phase, su);
+                if (on == 0) continue;
+                if (on > 0) {
+                    row[x - x0] += d0 < su || d1 < su ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+                    continue;
+                }
+            }
+            row[x - x0] += piece_area(L, P, x, y);
+        }
+    } else {
+        for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_area(L, P, x, y);
+    }
+}
+
+/* Row y of dashed slab P over columns [lo, hi]: only the pixels that can
+ * touch a dash (centre u within the square's extent of an on-interval), in
+ * increasing column order, each once. */
+static void dashed_row(const rs__linesym *L, const ls_ppc *P, uint32_t y, double lo, double hi, const ls_rows *R)
+{
+    const ls_band *B = &L->band[P->band];
+    const double *d = L->dash + B->dash0;
+    double pix = L->pixel, yc = ((double)y + 0.5) * pix - P->oy, m = P->su;
+    /* the u range of the row's centres */
+    double ua = (((lo + 0.5) * pix) - P->ox) * P->ux + yc * P->uy, ub = (((hi + 0.5) * pix) - P->ox) * P->ux + yc * P->uy;
+    if (ua > ub) { double t = ua; ua = ub; ub = t; }
+    double s_lo = P->s0 + ua - m - B->phase, s_hi = P->s0 + ub + m - B->phase;
+    /* more periods than columns, or s too coarse for the period: every column */
+    if (!((s_hi - s_lo) / B->period <= hi - lo + 1) || s_lo + B->period == s_lo) {
+        cover_cols(L, P, y, lo, hi, R);
+        return;
+    }
+    double done_lo = hi + 1, done_hi = lo - 1; /* columns covered so far (a run, growing at one end) */
+    int asc = P->ux >= 0;
+    for (double base = floor(s_lo / B->period) * B->period; base <= s_hi; base += B->period) {
+        double on0 = base;
+        for (uint32_t j = 0; j < B->ndash; j += 2) {
+            double on1 = on0 + d[j];
+            if (on1 + m >= s_lo && on0 - m <= s_hi && d[j] > 0) {
+                double ca = lo, cb = hi, e = 1e-9 * (1 + fabs(on0) + fabs(P->s0));
+                u_cols(P, yc, on0 + B->phase - P->s0 - m - e, on1 + B->phase - P->s0 + m + e, &ca, &cb);
+                if (done_lo <= done_hi) { /* the pixels already visited lie before (asc) or after these */
+                    if (asc && ca <= done_hi) ca = done_hi + 1;
+                    if (!asc && cb >= done_lo) cb = done_lo - 1;
+                }
+                if (ca <= cb) {
+                    cover_cols(L, P, y, ca, cb, R);
+                    if (done_lo > done_hi) done_lo = ca, done_hi = cb;
+                    else if (asc) done_hi = cb;
+                    else done_lo = ca;
+                }
+            }
+            on0 = on1 + d[j + 1];
+        }
+    }
+}
 
 static void visit(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, double *scratch,
                   ls_emit emit, void *user, uint32_t only_band)
 {
     if (!L || w == 0 || h == 0) return;
-    uint32_t cx0 = px0 / L->cpx, cx1 = (px0 + w - 1) / L->cpx, cy0 = py0 / L->cpx, cy1 = (py0 + h - 1) / L->cpx;
+    uint32_t cx0 = px0 / L->cpx, cx1 = (px0 + w - 1) / L->cpx, cy0 = py0 / L->cpy, cy1 = (py0 + h - 1) / L->cpy;
     if (cx1 >= L->gw) cx1 = L->gw - 1;
     if (cy1 >= L->gh) cy1 = L->gh - 1;
     for (uint32_t cy = cy0; cy <= cy1 && cy < L->gh; cy++) {
-        uint32_t ya = cy * L->cpx, yb = ya + L->cpx;
-        if (ya < py0) ya = py0;
-        if (yb > py0 + h) yb = py0 + h;
+        uint32_t ya0 = cy * L->cpy, yb0 = ya0 + L->cpy;
+        if (ya0 < py0) ya0 = py0;
+        if (yb0 > py0 + h) yb0 = py0 + h;
+        /* (a cell larger than CELL_PX rows is walked CELL_PX rows at a time) */
+        for (uint32_t ya = ya0; ya < yb0; ya += CELL_PX)
         for (uint32_t cx = cx0; cx <= cx1 && cx < L->gw; cx++) {
+            uint32_t yb = yb0 - ya > CELL_PX ? ya + CELL_PX : yb0;
             uint32_t xa = cx * L->cpx, xb = xa + L->cpx;
             if (xa < px0) xa = px0;
             if (xb > px0 + w) xb = px0 + w;
             size_t c = (size_t)cy * L->gw + cx;
             uint32_t e0 = L->start[c], e1 = L->start[c + 1];
+#if defined(__GNUC__)
+            /* ask for the pieces this block of the cell will read, before reading them */
+            for (uint32_t e = e0; e < e1; e++) {
+                const ls_pbox *B = &L->ent[e];
+                if (B->gy1 < (double)ya || B->gy0 >= (double)yb || B->gx1 < (double)xa || B->gx0 >= (double)xb) continue;
+                const char *q = (const char *)&L->pp[B->id];
+                __builtin_prefetch(q);
+                __builtin_prefetch(q + 64);
+                __builtin_prefetch(q + 128);
+                __builtin_prefetch(q + sizeof(ls_ppc) - 1);
+            }
+#endif
             for (uint32_t e = e0; e < e1;) {
-                uint32_t band = L->pc[L->ids[e]].band, f = e;
-                while (f < e1 && L->pc[L->ids[f]].band == band) f++;
+                const ls_pbox *PB = L->ent;
+                uint32_t band = PB[e].band, f = e;
+                while (f < e1 && PB[f].band == band) f++;
                 if (only_band != UINT32_MAX && band != only_band) { e = f; continue; }
-                /* the run's pixel box */
-                double pix = L->pixel;
-                double bx0 = DBL_MAX, bx1 = -DBL_MAX, by0 = DBL_MAX, by1 = -DBL_MAX;
+                /* the run's rows are the block's part of the cell: [xa, xb) x [ya, yb) */
+                uint32_t rlo[CELL_PX], rhi[CELL_PX];
+                ls_rows R = { xa, xb, ya, xb - xa, scratch, rlo, rhi };
+                for (uint32_t r = 0; r < yb - ya; r++) rhi[r] = 0;
                 for (uint32_t g = e; g < f; g++) {
-                    const ls_piece *P = &L->pc[L->ids[g]];
-                    bx0 = fmin(bx0, P->x0), bx1 = fmax(bx1, P->x1), by0 = fmin(by0, P->y0), by1 = fmax(by1, P->y1);
-                }
-                /* pixels whose centre lies in the grown box (the margin already holds the half diagonal) */
-                double fx0 = ceil(bx0 / pix - 0.5), fx1 = floor(bx1 / pix - 0.5), fy0 = ceil(by0 / pix - 0.5),
-                       fy1 = floor(by1 / pix - 0.5);
-                uint32_t x0 = fx0 > (double)xa ? (fx0 < (double)xb ? (uint32_t)fx0 : xb) : xa;
-                uint32_t x1 = fx1 + 1 < (double)xb ? (fx1 + 1 > (double)x0 ? (uint32_t)(fx1 + 1) : x0) : xb;
-                uint32_t y0 = fy0 > (double)ya ? (fy0 < (double)yb ? (uint32_t)fy0 : yb) : ya;
-                uint32_t y1 = fy1 + 1 < (double)yb ? (fy1 + 1 > (double)y0 ? (uint32_t)(fy1 + 1) : y0) : yb;
-                if (x0 >= x1 || y0 >= y1) { e = f; continue; }
-                size_t cs = x1 - x0;
-                for (size_t q = 0; q < cs * (y1 - y0); q++) scratch[q] = 0;
-                for (uint32_t g = e; g < f; g++) {
-                    const ls_piece *P = &L->pc[L->ids[g]];
-                    double gx0 = ceil(P->x0 / pix - 0.5), gx1 = floor(P->x1 / pix - 0.5), gy0 = ceil(P->y0 / pix - 0.5),
-                           gy1 = floor(P->y1 / pix - 0.5);
-                    for (uint32_t y = y0; y < y1; y++) {
-                        if ((double)y < gy0 || (double)y > gy1) continue;
-                        double lo = gx0, hi = gx1;
-                        if (P->kind == PIECE_SLAB) slab_row(L, P, y, &lo, &hi);
-                        uint32_t qa = lo > (double)x0 ? (lo < (double)x1 ? (uint32_t)lo : x1) : x0;
-                        uint32_t qb = hi + 1 < (double)x1 ? (hi + 1 > (double)qa ? (uint32_t)(hi + 1) : qa) : x1;
-                        for (uint32_t x = qa; x < qb; x++) scratch[(y - y0) * cs + (x - x0)] += piece_cover(L, P, x, y);
+                    const ls_pbox *Q = &PB[g];
+                    if (Q->gy1 < (double)ya || Q->gy0 >= (double)yb || Q->gx1 < (double)xa || Q->gx0 >= (double)xb) continue;
+                    uint32_t ry0 = Q->gy0 > (double)ya ? (uint32_t)Q->gy0 : ya;
+                    uint32_t ry1 = Q->gy1 + 1 < (double)yb ? (uint32_t)(Q->gy1 + 1) : yb;
+                    const ls_ppc *P = &L->pp[Q->id];
+                    for (uint32_t y = ry0; y < ry1; y++) {
+                        double lo = Q->gx0, hi = Q->gx1;
+                        if (P->kind == PIECE_SLAB) {
+                            slab_row(L, P, y, &lo, &hi);
+                            if (lo > hi) continue;
+                            if (P->dashed) {
+                                /* cut to the block first: fewer dashes to walk */
+                                if (lo < (double)xa) lo = (double)xa;
+                                if (hi > (double)xb - 1) hi = (double)xb - 1;
+                                if (lo <= hi) dashed_row(L, P, y, lo, hi, &R);
+                                continue;
+                            }
+                        }
+                        cover_cols(L, P, y, lo, hi, &R);
                     }
                 }
-                emit(L, band, x0, x1, y0, y1, scratch, cs, user);
+                emit(L, band, xa, ya, yb, rlo, rhi, scratch, R.cs, user);
                 e = f;
             }
         }
@@ -1078,23 +1504,26 @@ typedef struct paint_ctx {
     size_t stride;
 } paint_ctx;
 
-static void emit_paint(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1,
-                       const double *cov, size_t cs, void *user)
+static void emit_paint(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t y0, uint32_t y1, const uint32_t *rlo,
+                       const uint32_t *rhi, const double *cov, size_t cs, void *user)
 {
     const paint_ctx *pc = user;
     const ls_band *B = &L->band[band];
+    const float c0 = B->rgba[0], c1 = B->rgba[1], c2 = B->rgba[2];
+    const double op = B->rgba[3];
     for (uint32_t y = y0; y < y1; y++) {
-        float *row = pc->rgb + (size_t)(y - pc->py0) * pc->stride;
-        for (uint32_t x = x0; x < x1; x++) {
-            double c = cov[(size_t)(y - y0) * cs + (x - x0)];
+        if (rhi[y - y0] == 0) continue;
+        /* the block's row and the run's, both from column x0 */
+        float *r0 = pc->rgb + (size_t)(y - pc->py0) * pc->stride + (x0 - pc->px0), *r1 = r0 + pc->w, *r2 = r1 + pc->w;
+        const double *cr = cov + (size_t)(y - y0) * cs;
+        for (uint32_t i = rlo[y - y0]; i < rhi[y - y0]; i++) {
+            double c = cr[i];
             if (!(c > 0)) continue;
             if (c > 1) c = 1;
-            float a = (float)(c * B->rgba[3]);
-            size_t i = x - pc->px0;
-            for (int k = 0; k < 3; k++) {
-                float *v = row + (size_t)k * pc->w + i;
-                *v = *v * (1.0f - a) + B->rgba[k] * a;
-            }
+            float a = (float)(c * op), k = 1.0f - a;
+            r0[i] = r0[i] * k + c0 * a;
+            r1[i] = r1[i] * k + c1 * a;
+            r2[i] = r2[i] * k + c2 * a;
         }
     }
 }
@@ -1112,17 +1541,19 @@ typedef struct cov_ctx {
     size_t stride;
 } cov_ctx;
 
-static void emit_cov(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1,
-                     const double *cov, size_t cs, void *user)
+static void emit_cov(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t y0, uint32_t y1, const uint32_t *rlo,
+                     const uint32_t *rhi, const double *cov, size_t cs, void *user)
 {
     (void)L;
     (void)band;
     const cov_ctx *cc = user;
-    for (uint32_t y = y0; y < y1; y++)
-        for (uint32_t x = x0; x < x1; x++) {
+    for (uint32_t y = y0; y < y1; y++) {
+        if (rhi[y - y0] == 0) continue;
+        for (uint32_t x = x0 + rlo[y - y0]; x < x0 + rhi[y - y0]; x++) {
             double c = cov[(size_t)(y - y0) * cs + (x - x0)];
             cc->out[(size_t)(y - cc->py0) * cc->stride + (x - cc->px0)] = c > 1 ? 1 : c;
         }
+    }
 }
 
 void rs__linesym_coverage(const rs__linesym *L, uint32_t band, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
@@ -1132,7 +1563,7 @@ void rs__linesym_coverage(const rs__linesym *L, uint32_t band, uint32_t px0, uin
         for (uint32_t x = 0; x < w; x++) out[(size_t)y * stride + x] = 0;
     /* scratch: one cell at most */
     double scratch[CELL_PX * CELL_PX];
-    if (!L || L->cpx > CELL_PX) return;
+    if (!L || L->cpx > CELL_PX || L->cpy > CELL_PX) return;
     cov_ctx cc = { px0, py0, out, stride };
     visit(L, px0, py0, w, h, scratch, emit_cov, &cc, band);
 }
