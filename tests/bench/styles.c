@@ -160,18 +160,24 @@ int main(int argc, char **argv)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
-    enum { C_PLAIN, C_CLASSED, C_HERMITE, C_SOLID, C_DASHED, NC };
+    enum { C_PLAIN, C_CLASSED, C_HERMITE, C_MARKED, C_SOLID, C_DASHED, NC };
     scase k[NC] = { { "unstyled", NULL, 1e300, 1e300 },
                     { "default class styles (RMS), exact lines", NULL, 1e300, 1e300 },
                     { "default class styles (RMS), Hermite lines", NULL, 1e300, 1e300 },
+                    { "default class styles (RMS), exact lines, and automatic markings", NULL, 1e300, 1e300 },
                     { "three solid lines on every road", NULL, 1e300, 1e300 },
                     { "the same lines dashed 6/12 m", NULL, 1e300, 1e300 } };
     rs_splat_options oc[NC];
     for (int i = 0; i < NC; i++) oc[i] = o;
     oc[C_HERMITE].style.aa = RS_LINE_AA_HERMITE;
+    /* the styles alone: the classes also bring automatic markings (give-way
+     * lines where a lower class meets a higher one; issue 14, its own
+     * benchmark tests/bench/markings.c), shown in their own row */
+    oc[C_CLASSED].markings.no_auto = 1;
+    oc[C_HERMITE].markings.no_auto = 1;
     oc[C_SOLID].style.styles = solid;
     oc[C_DASHED].style.styles = dashed;
-    const rs_roads *rr[NC] = { plain, classed, classed, lined, lined };
+    const rs_roads *rr[NC] = { plain, classed, classed, classed, lined, lined };
     double build_ms[NC];
     for (int i = 0; i < NC; i++) {
         double t0 = tm_now_ms();
@@ -206,10 +212,13 @@ int main(int argc, char **argv)
             "## Road styles and line symbols (tests/bench/styles.c)\n\n"
             "City scene `sc_city_default(1)` (%zu roads, z-scale 0.01) at 4 texels: %u x %u pixels of 1.25 m. "
             "`rs_splat_window` over the whole image on a prepared splatter, one thread, fastest of %d runs, the "
-            "cases interleaved run by run; overlays = the stage that draws casings, fills and lines "
+            "cases interleaved run by run; overlays = the stage that draws casings (whose coverage the analytic "
+            "coverage stage computes beside the road's: see coverage in the splat time), fills, lines and markings "
             "(rs_splat_profile). Classes by width for the styled case: >= 12 m `primary` (%zu roads: dashed centre "
             "line, edge lines), >= 6 m `residential` (%zu: kerb casing), else `service` (%zu: kerb), all "
-            "`lanes=2`.\n\n"
+            "`lanes=2`. The classes also place automatic markings (give-way lines where a lower class ends on a "
+            "higher one; issue 14, benchmarked in tests/bench/markings.c): the style rows leave them out "
+            "(`markings.no_auto`), the row \"and automatic markings\" has them.\n\n"
             "| case | splat ms | overlays ms | / unstyled | grid + styles build ms |\n|---|---|---|---|---|\n",
             sc.nroads, w, h, RUNS, nprim, nres, nsrv);
     fprintf(csv, "case,splat_ms,overlays_ms,build_ms\n");
