@@ -72,6 +72,9 @@ rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t 
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
 {
     if (!mk) return;
+    for (size_t i = 0; mk->tex && i < mk->ntex; i++)
+        for (uint32_t l = 0; l < mk->tex[i].nlev; l++) rs__free(ctx, mk->tex[i].lev[l].px);
+    rs__free(ctx, mk->tex);
     rs_atlas_free(ctx, mk->atlas_own);
     rs__free(ctx, mk->m);
     rs__free(ctx, mk->pts);
@@ -80,26 +83,48 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk);
 }
 
+/* The paint-time levels of a type: padded copies and their alpha boxes. */
+static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx, size_t *bytes)
+{
+    const uint32_t P = RS__MK_PAD;
+    for (uint32_t l = 0; l < ty->nlev; l++) {
+        const rs__atlas_level *L = &ty->lev[l];
+        rs__mk_level *o = &tx->lev[l];
+        o->w = L->w;
+        o->h = L->h;
+        o->pw = L->w + 2 * P;
+        o->px = rs__calloc(ctx, (size_t)o->pw * (L->h + 2 * P), 4 * sizeof(float));
+        if (!o->px) return RS_ERR_NOMEM;
+        tx->nlev = l + 1;
+        *bytes += (size_t)o->pw * (L->h + 2 * P) * 4 * sizeof(float);
+        o->ax0 = o->ay0 = INT32_MAX;
+        o->ax1 = o->ay1 = INT32_MIN;
+        for (uint32_t j = 0; j < L->h; j++) {
+            memcpy(o->px + ((size_t)(j + P) * o->pw + P) * 4, L->px + (size_t)j * L->w * 4, (size_t)L->w * 4 * sizeof(float));
+            for (uint32_t i = 0; i < L->w; i++)
+                if (L->px[((size_t)j * L->w + i) * 4 + 3] > 0) {
+                    if ((int32_t)i < o->ax0) o->ax0 = (int32_t)i;
+                    if ((int32_t)i > o->ax1) o->ax1 = (int32_t)i;
+                    if ((int32_t)j < o->ay0) o->ay0 = (int32_t)j;
+                    if ((int32_t)j > o->ay1) o->ay1 = (int32_t)j;
+                }
+        }
+    }
+    return RS_OK;
+}
+
 /* The road coordinates of local point (x, y) on a marking's stretch of
- * road: the nearest point of its segments (the first and last extended
- * beyond their ends, so that pixels past the stretch never clamp onto it),
- * s there and t = the signed distance (+ left of travel), so a marking
- * bends with the road as its buffer does. */
+ * road (RS__MK_PT doubles per point): the nearest point of its segments
+ * (the first and last extended beyond their ends, so that pixels past the
+ * stretch never clamp onto it), s there and t = the signed distance (+ left
+ * of travel), so a marking bends with the road as its buffer does. */
 static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out)
 {
-    if (npt == 2) { /* one segment, extended both ways: the line's own coordinates */
-        double len = pts[5] - pts[2];
-        double ux = (pts[3] - pts[0]) / len, uy = (pts[4] - pts[1]) / len, px = x - pts[0], py = y - pts[1];
-        *s_out = pts[2] + px * ux + py * uy;
-        *t_out = px * uy - py * ux;
-        return;
-    }
     double best = INFINITY, bs = 0, bt = 0;
     for (size_t k = 0; k + 1 < npt; k++) {
-        const double *a = pts + 3 * k, *b = a + 3;
-        double dx = b[0] - a[0], dy = b[1] - a[1], len = b[2] - a[2];
+        const double *a = pts + RS__MK_PT * k;
+        double ux = a[3], uy = a[4], len = a[5];
         if (!(len > 0)) continue;
-        double ux = dx / len, uy = dy / len;
         double px = x - a[0], py = y - a[1];
         double u = px * ux + py * uy;
         if (k > 0 && u < 0) u = 0;
@@ -117,10 +142,11 @@ static void road_coords(const double *pts, size_t npt, double x, double y, doubl
     *t_out = bt;
 }
 
-/* Geometry of one placement: its stretch of road, bounding box, filter
- * reach. Returns 0 when it lies wholly off its road. */
-static int place(const rs__placement *pl, const rs__road_local *r, const rs__atlas_type *ty, double pix, rs__mk *m,
-                 double **pts, size_t *npts, size_t *cap, rs_ctx *ctx, rs_result *err)
+/* Geometry of one placement: its levels, support, stretch of road,
+ * bounding box. Returns 0 when it lies wholly off its road or its sprite
+ * is transparent. */
+static int place(const rs__placement *pl, const rs__road_local *r, const rs__atlas_type *ty, const rs__mk_tex *tx,
+                 double pix, rs__mk *m, double **pts, size_t *npts, size_t *cap, rs_ctx *ctx, rs_result *err)
 {
     memset(m, 0, sizeof *m);
     m->ty = ty;
@@ -133,29 +159,79 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     m->ky = ty->lev[0].h / pl->length;
     double rho = pix * (m->kx > m->ky ? m->kx : m->ky);
     m->lod = rho > 1 ? log2(rho) : 0;
-    double top = ceil(m->lod);
-    if (top > ty->nlev - 1) top = ty->nlev - 1;
-    double reach = 0.5 * ldexp(1.0, (int)top); /* level-0 texels past the edge */
-    m->ms = reach / m->ky;
-    m->mt = reach / m->kx;
+    /* the levels: bilinear in floor(lod) and the next, blended (trilinear) */
+    double top = (double)(ty->nlev - 1);
+    int l = m->lod >= top ? (int)top : (int)m->lod;
+    float f = m->lod >= top ? 0 : (float)(m->lod - l);
+    m->fine = &tx->lev[l];
+    m->coarse = f > 0 ? &tx->lev[l + 1] : NULL;
+    m->f = f;
+    const double P = RS__MK_PAD, sgn = m->flip ? -1 : 1, sc = ldexp(1.0, -l);
+    m->cu = m->hw * m->kx * sc - 0.5 + P;
+    m->su = -sgn * m->kx * sc;
+    m->cv = m->hl * m->ky * sc - 0.5 + P;
+    m->sv = -sgn * m->ky * sc;
+    /* support: a fine texel box [a0, a1] reaches [a0 - 1, a1 + 1); a coarse
+     * one (coarse u2 = u / 2 - 1/4) [2 a0 - 1.5, 2 a1 + 2.5) */
+    const rs__mk_level *F = m->fine, *C = m->coarse;
+    if (F->ax0 > F->ax1 && (!C || C->ax0 > C->ax1)) return 0;
+    if (C) {
+        m->ulo = 2.0 * C->ax0 - 1.5 + P;
+        m->uhi = 2.0 * C->ax1 + 2.5 + P;
+        m->vlo = 2.0 * C->ay0 - 1.5 + P;
+        m->vhi = 2.0 * C->ay1 + 2.5 + P;
+    } else {
+        m->ulo = F->ax0 - 1.0 + P;
+        m->uhi = F->ax1 + 1.0 + P;
+        m->vlo = F->ay0 - 1.0 + P;
+        m->vhi = F->ay1 + 1.0 + P;
+    }
+    {
+        /* and no further than the filter's reach past the rectangle: half
+         * a texel of the coarser level (where an odd size padded it, the
+         * coarse texels would reach further) */
+        double tp = ceil(m->lod);
+        if (tp > ty->nlev - 1) tp = ty->nlev - 1;
+        double reach = 0.5 * ldexp(1.0, (int)tp);
+        double a0 = -reach * sc - 0.5 + P, a1 = (ty->lev[0].w + reach) * sc - 0.5 + P;
+        double b1 = (ty->lev[0].h + reach) * sc - 0.5 + P;
+        if (m->ulo < a0) m->ulo = a0;
+        if (m->uhi > a1) m->uhi = nextafter(a1, INFINITY);
+        if (m->vlo < a0) m->vlo = a0;
+        if (m->vhi > b1) m->vhi = nextafter(b1, INFINITY);
+        if (!(m->ulo < m->uhi && m->vlo < m->vhi)) return 0;
+    }
+    {
+        double d0 = (m->ulo - m->cu) / m->su, d1 = (m->uhi - m->cu) / m->su;
+        double e0 = (m->vlo - m->cv) / m->sv, e1 = (m->vhi - m->cv) / m->sv;
+        double dlo = d0 < d1 ? d0 : d1, dhi = d0 < d1 ? d1 : d0;
+        double elo = e0 < e1 ? e0 : e1, ehi = e0 < e1 ? e1 : e0;
+        /* a margin far above rounding: the box and row spans must hold
+         * every pixel whose own test passes */
+        double mt = 1e-6 + 1e-12 * fabs(m->t0), ms = 1e-6 + 1e-12 * fabs(m->s0);
+        m->tlo = m->t0 + dlo - mt;
+        m->thi = m->t0 + dhi + mt;
+        m->slo = m->s0 + elo - ms;
+        m->shi = m->s0 + ehi + ms;
+    }
     if (r->n < 2) return 0;
     double total = r->s[r->n - 1];
-    double lo = m->s0 - m->hl - m->ms, hi = m->s0 + m->hl + m->ms;
+    double lo = m->slo, hi = m->shi;
     if (hi < 0 || lo > total) return 0;
     /* segments [a, b] overlapping [lo, hi] */
     size_t a = 0, b = r->n - 2;
     {
-        size_t l = 0, h = r->n - 1; /* last k with s[k] <= lo */
-        while (l + 1 < h) {
-            size_t mid = (l + h) / 2;
-            if (r->s[mid] <= lo) l = mid; else h = mid;
+        size_t lw = 0, h = r->n - 1; /* last k with s[k] <= lo */
+        while (lw + 1 < h) {
+            size_t mid = (lw + h) / 2;
+            if (r->s[mid] <= lo) lw = mid; else h = mid;
         }
-        a = l;
-        l = 0;
+        a = lw;
+        lw = 0;
         h = r->n - 1; /* first k with s[k] >= hi */
-        while (l + 1 < h) {
-            size_t mid = (l + h) / 2;
-            if (r->s[mid] >= hi) h = mid; else l = mid;
+        while (lw + 1 < h) {
+            size_t mid = (lw + h) / 2;
+            if (r->s[mid] >= hi) h = mid; else lw = mid;
         }
         b = h > 0 ? h - 1 : 0;
         if (b < a) b = a;
@@ -164,7 +240,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     if (*npts + np > *cap) {
         size_t nc = *cap ? *cap : 256;
         while (nc < *npts + np) nc *= 2;
-        double *q = rs__realloc(ctx, *pts, nc * 3 * sizeof(double));
+        double *q = rs__realloc(ctx, *pts, nc * RS__MK_PT * sizeof(double));
         if (!q) {
             *err = RS_ERR_NOMEM;
             return 0;
@@ -174,18 +250,36 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     }
     m->first = *npts;
     m->npt = np;
+    double *c0 = *pts + RS__MK_PT * *npts;
     for (size_t k = 0; k < np; k++) {
-        double *o = *pts + 3 * (*npts + k);
+        double *o = c0 + RS__MK_PT * k;
         o[0] = r->x[a + k];
         o[1] = r->y[a + k];
         o[2] = r->s[a + k];
+        o[3] = o[4] = o[5] = 0;
+        if (k > 0) {
+            double *pv = o - RS__MK_PT, len = o[2] - pv[2];
+            pv[5] = len;
+            pv[3] = len > 0 ? (o[0] - pv[0]) / len : 1;
+            pv[4] = len > 0 ? (o[1] - pv[1]) / len : 0;
+        }
     }
-    /* the box: the offset rectangle's corners where [lo, hi] starts and
-     * ends (on the end segments' lines, extended past the stretch as the
-     * lookup extends them), and around every vertex inside [lo, hi] the
-     * square of the farthest offset (an outer bend's arc stays in it) */
-    const double *c0 = *pts + 3 * *npts;
-    double tin = m->t0 - m->hw - m->mt, tout = m->t0 + m->hw + m->mt;
+    if (np == 2) {
+        /* one segment, extended both ways: s and t are affine in (x, y) */
+        const double *A = c0;
+        double ux = A[3], uy = A[4];
+        m->bux = m->su * uy;
+        m->buy = -m->su * ux;
+        m->au = m->cu + m->su * (A[1] * ux - A[0] * uy - m->t0);
+        m->bvx = m->sv * ux;
+        m->bvy = m->sv * uy;
+        m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
+    }
+    /* the box: the support's corners where [lo, hi] starts and ends (on
+     * the end segments' lines, extended past the stretch as the lookup
+     * extends them), and around every vertex inside [lo, hi] the square of
+     * the farthest offset (an outer bend's arc stays in it) */
+    double tin = m->tlo, tout = m->thi;
     double far = fabs(tin) > fabs(tout) ? fabs(tin) : fabs(tout);
     m->bx0 = m->by0 = INFINITY;
     m->bx1 = m->by1 = -INFINITY;
@@ -193,9 +287,9 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         double sv = end ? hi : lo;
         /* the segment of the chain that holds sv (end segments extended) */
         size_t k = 0;
-        while (k + 2 < np && c0[3 * (k + 1) + 2] <= sv) k++;
-        const double *A = c0 + 3 * k, *B = A + 3;
-        double len = B[2] - A[2], ux = len > 0 ? (B[0] - A[0]) / len : 1, uy = len > 0 ? (B[1] - A[1]) / len : 0;
+        while (k + 2 < np && c0[RS__MK_PT * (k + 1) + 2] <= sv) k++;
+        const double *A = c0 + RS__MK_PT * k;
+        double ux = A[3], uy = A[4];
         double px = A[0] + (sv - A[2]) * ux, py = A[1] + (sv - A[2]) * uy;
         for (int side = 0; side < 2; side++) {
             double tt = side ? tout : tin, x = px + tt * uy, y = py - tt * ux; /* left normal (dy, -dx) */
@@ -206,7 +300,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         }
     }
     for (size_t k = 1; k + 1 < np; k++) {
-        const double *V = c0 + 3 * k;
+        const double *V = c0 + RS__MK_PT * k;
         if (!(V[2] > lo && V[2] < hi)) continue;
         if (V[0] - far < m->bx0) m->bx0 = V[0] - far;
         if (V[0] + far > m->bx1) m->bx1 = V[0] + far;
@@ -215,6 +309,15 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     }
     *npts += np;
     return 1;
+}
+
+/* Index cell of coordinate v (metres), clamped to [0, n - 1]; the build
+ * and the paint use the same function on the same (float) box. */
+static uint32_t cell_of(float v, double cell, uint32_t n)
+{
+    double c = floor((double)v / cell);
+    if (!(c > 0)) return 0;
+    return c >= n ? n - 1 : (uint32_t)c;
 }
 
 static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double map_h)
@@ -232,11 +335,15 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
     for (int pass = 0; pass < 2; pass++) {
         for (size_t i = 0; i < mk->n; i++) {
             const rs__mk *m = &mk->m[i];
-            double cx0 = floor(m->bx0 / cell), cx1 = floor(m->bx1 / cell);
-            double cy0 = floor(m->by0 / cell), cy1 = floor(m->by1 / cell);
-            if (cx1 < 0 || cy1 < 0 || cx0 >= mk->gw || cy0 >= mk->gh) continue;
-            uint32_t x0 = cx0 < 0 ? 0 : (uint32_t)cx0, y0 = cy0 < 0 ? 0 : (uint32_t)cy0;
-            uint32_t x1 = cx1 >= mk->gw ? mk->gw - 1 : (uint32_t)cx1, y1 = cy1 >= mk->gh ? mk->gh - 1 : (uint32_t)cy1;
+            rs__mk_ref e;
+            e.x0 = nextafterf((float)m->bx0, -INFINITY);
+            e.y0 = nextafterf((float)m->by0, -INFINITY);
+            e.x1 = nextafterf((float)m->bx1, INFINITY);
+            e.y1 = nextafterf((float)m->by1, INFINITY);
+            e.i = (uint32_t)i;
+            if (!(e.x1 >= 0 && e.y1 >= 0 && e.x0 < map_w + cell && e.y0 < map_h + cell)) continue;
+            uint32_t x0 = cell_of(e.x0, cell, mk->gw), y0 = cell_of(e.y0, cell, mk->gh);
+            uint32_t x1 = cell_of(e.x1, cell, mk->gw), y1 = cell_of(e.y1, cell, mk->gh);
             if (pass == 0) {
                 total += (uint64_t)(x1 - x0 + 1) * (y1 - y0 + 1);
                 if (total > MAX_INDEX_ENTRIES)
@@ -246,14 +353,7 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
                     for (uint32_t x = x0; x <= x1; x++) mk->start[(size_t)y * mk->gw + x + 1]++;
             } else {
                 for (uint32_t y = y0; y <= y1; y++)
-                    for (uint32_t x = x0; x <= x1; x++) {
-                        rs__mk_ref *e = &mk->list[mk->start[(size_t)y * mk->gw + x]++];
-                        e->x0 = nextafterf((float)m->bx0, -INFINITY);
-                        e->y0 = nextafterf((float)m->by0, -INFINITY);
-                        e->x1 = nextafterf((float)m->bx1, INFINITY);
-                        e->y1 = nextafterf((float)m->by1, INFINITY);
-                        e->i = (uint32_t)i;
-                    }
+                    for (uint32_t x = x0; x <= x1; x++) mk->list[mk->start[(size_t)y * mk->gw + x]++] = e;
             }
         }
         if (pass == 0) {
@@ -315,7 +415,10 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r && npl) {
         mk->pix = dem->frame.cell_size / o->texels;
         mk->m = rs__alloc_array(ctx, npl, sizeof *mk->m);
-        if (!mk->m) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        mk->ntex = atlas->n;
+        mk->tex = rs__calloc(ctx, atlas->n, sizeof *mk->tex);
+        if (!mk->m || !mk->tex) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        size_t tex_bytes = 0;
         size_t pcap = 0, npts = 0;
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
@@ -330,8 +433,14 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                 }
                 have_road = pl[i].road;
             }
+            rs__mk_tex *tx = &mk->tex[pl[i].type];
+            if (tx->nlev == 0 && build_tex(ctx, &atlas->t[pl[i].type], tx, &tex_bytes)) {
+                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+                break;
+            }
             rs_result e = RS_OK;
-            if (place(&pl[i], &rl, &atlas->t[pl[i].type], mk->pix, &mk->m[mk->n], &mk->pts, &npts, &pcap, ctx, &e)) {
+            if (place(&pl[i], &rl, &atlas->t[pl[i].type], tx, mk->pix, &mk->m[mk->n], &mk->pts, &npts, &pcap, ctx,
+                      &e)) {
                 mk->n++;
                 if (i < n_explicit) mk->n_explicit++;
                 else mk->n_auto++;
@@ -339,7 +448,8 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
             if (e) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
         }
         rs__road_local_free(ctx, &rl);
-        mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * 3 * sizeof(double);
+        mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
+                    mk->ntex * sizeof *mk->tex + tex_bytes;
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
             double map_h = (double)(dem->height - 1) * dem->frame.cell_size;
@@ -356,52 +466,217 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     return RS_OK;
 }
 
-void rs__markings_paint(const rs__markings *mk, rs__piece *p)
+/* Trilinear sample at padded fine-level coordinates (u, v) inside the
+ * marking's support: bilinear in the fine level and (when f > 0) in the
+ * coarse one, u2 = u / 2 + (pad / 2 - 1/4), blended; premultiplied. */
+static void sample(const rs__mk *m, double u, double v, float out[4])
+{
+    const rs__mk_level *F = m->fine;
+    size_t i = (size_t)u, j = (size_t)v;
+    float wx = (float)(u - (double)i), wy = (float)(v - (double)j);
+    const float *t0 = F->px + (j * F->pw + i) * 4, *t1 = t0 + (size_t)F->pw * 4;
+    for (int c = 0; c < 4; c++) {
+        float a = t0[c] + wx * (t0[4 + c] - t0[c]), b = t1[c] + wx * (t1[4 + c] - t1[c]);
+        out[c] = a + wy * (b - a);
+    }
+    const rs__mk_level *C = m->coarse;
+    if (C) {
+        const double off = 0.5 * RS__MK_PAD - 0.25;
+        double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
+        size_t i2 = (size_t)u2, j2 = (size_t)v2;
+        float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2), f = m->f;
+        const float *c0 = C->px + (j2 * C->pw + i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
+        for (int c = 0; c < 4; c++) {
+            float a = c0[c] + wx2 * (c0[4 + c] - c0[c]), b = c1[c] + wx2 * (c1[4 + c] - c1[c]);
+            float g = a + wy2 * (b - a);
+            out[c] += f * (g - out[c]);
+        }
+    }
+}
+
+/* Row spans are widened by this many pixels: far above the rounding of
+ * the per-pixel test (about 1e-12 of a pixel), so every pixel it passes
+ * is in the span, whichever piece holds it. */
+#define SPAN_EPS 1e-4
+
+/* Columns [*k0, *k1] (piece-relative, inside [0, w)) whose pixel centre
+ * x = (gx + 1/2) pix may satisfy lo <= a + b (gx + 1/2) <= hi, narrowed to
+ * that. Returns 0 when none. */
+static int slab(double a, double b, double lo, double hi, double gx0, double w, double *k0, double *k1)
+{
+    if (b == 0) return a >= lo && a <= hi;
+    double e0 = (lo - a) / b - 0.5 - gx0, e1 = (hi - a) / b - 0.5 - gx0;
+    if (e0 > e1) {
+        double tmp = e0;
+        e0 = e1;
+        e1 = tmp;
+    }
+    e0 = ceil(e0 - SPAN_EPS);
+    e1 = floor(e1 + SPAN_EPS);
+    if (e0 > *k0) *k0 = e0;
+    if (e1 < *k1) *k1 = e1;
+    return *k0 <= *k1 && *k1 >= 0 && *k0 < w;
+}
+
+/* The span of row centre y on a marking with a curved stretch: the hull
+ * of each segment's part of the support (a rectangle in its own frame)
+ * and, around each vertex inside it, the disc of the farthest offset. */
+static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double gx0, double w, double *k0,
+                       double *k1)
+{
+    const double *c0 = mk->pts + RS__MK_PT * m->first, pix = mk->pix;
+    double lo = INFINITY, hi = -INFINITY;
+    double far = fabs(m->tlo) > fabs(m->thi) ? fabs(m->tlo) : fabs(m->thi);
+    for (size_t k = 0; k + 1 < m->npt; k++) {
+        const double *A = c0 + RS__MK_PT * k;
+        double ux = A[3], uy = A[4], len = A[5];
+        if (!(len > 0)) continue;
+        double ua = m->slo - A[2], ub = m->shi - A[2];
+        if (k > 0 && ua < 0) ua = 0;
+        if (k + 2 < m->npt && ub > len) ub = len;
+        if (ua > ub) continue;
+        /* u(x) = (x - ax) ux + (y - ay) uy, t(x) = (x - ax) uy - (y - ay) ux, over x = (gx + 1/2) pix */
+        double dy = y - A[1];
+        double a0 = -A[0] * ux + dy * uy, a1 = -A[0] * uy - dy * ux;
+        double s0 = -INFINITY, s1 = INFINITY;
+        if (!slab(a0, ux * pix, ua, ub, gx0, w, &s0, &s1)) continue;
+        if (!slab(a1, uy * pix, m->tlo, m->thi, gx0, w, &s0, &s1)) continue;
+        if (s0 < lo) lo = s0;
+        if (s1 > hi) hi = s1;
+    }
+    for (size_t k = 1; k + 1 < m->npt; k++) {
+        const double *V = c0 + RS__MK_PT * k;
+        if (!(V[2] >= m->slo && V[2] <= m->shi)) continue;
+        double dy = y - V[1], r2 = far * far - dy * dy;
+        if (!(r2 >= 0)) continue;
+        double h = sqrt(r2), e0 = ceil((V[0] - h) / pix - 0.5 - gx0 - SPAN_EPS);
+        double e1 = floor((V[0] + h) / pix - 0.5 - gx0 + SPAN_EPS);
+        if (e0 < lo) lo = e0;
+        if (e1 > hi) hi = e1;
+    }
+    if (lo < *k0) lo = *k0;
+    if (hi > *k1) hi = *k1;
+    *k0 = lo;
+    *k1 = hi;
+    return lo <= hi;
+}
+
+/* Marking m over the piece's rows whose centres its box holds. */
+static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
 {
     const size_t w = p->w;
-    const double pix = mk->pix, cell = mk->cell;
-    uint64_t tests = 0, painted = 0;
-    for (uint32_t r = 0; r < p->rows; r++) {
+    const double pix = mk->pix, gx0 = (double)p->x0;
+    double r0 = ceil(m->by0 / pix - 0.5) - (double)p->y0, r1 = floor(m->by1 / pix - 0.5) - (double)p->y0;
+    if (r0 < 0) r0 = 0;
+    if (r1 > (double)p->rows - 1) r1 = (double)p->rows - 1;
+    const double *pts = mk->pts + RS__MK_PT * m->first;
+    const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi;
+    for (double rr = r0; rr <= r1; rr++) {
+        uint32_t r = (uint32_t)rr;
+        double y = ((double)p->y0 + (double)r + 0.5) * pix;
+        double k0 = 0, k1 = (double)w - 1;
+        const int straight = m->npt == 2;
+        double ur = 0, vr = 0, bu = 0, bv = 0;
+        if (straight) {
+            ur = m->au + m->buy * y;
+            vr = m->av + m->bvy * y;
+            bu = m->bux * pix;
+            bv = m->bvx * pix;
+            if (!slab(ur, bu, ulo, uhi, gx0, (double)w, &k0, &k1) || !slab(vr, bv, vlo, vhi, gx0, (double)w, &k0, &k1))
+                continue;
+        } else if (!curved_span(mk, m, y, gx0, (double)w, &k0, &k1)) {
+            continue;
+        }
+        if (k0 < 0) k0 = 0;
+        if (k1 > (double)w - 1) k1 = (double)w - 1;
         float *sc = p->sc + (size_t)r * w * 3;
         const uint16_t *q = p->q + (size_t)r * w;
-        double y = ((double)p->y0 + (double)r + 0.5) * pix;
-        double cy = floor(y / cell);
-        if (cy < 0 || cy >= mk->gh) continue;
-        size_t row = (size_t)cy * mk->gw;
-        for (size_t k = 0; k < w; k++) {
+        for (size_t k = (size_t)k0, ke = (size_t)k1; k <= ke; k++) {
             if (q[k] == 0) continue;
-            double x = ((double)p->x0 + (double)k + 0.5) * pix;
-            double cx = floor(x / cell);
-            if (cx < 0 || cx >= mk->gw) continue;
-            size_t c = row + (size_t)cx;
-            uint32_t a = mk->start[c], b = mk->start[c + 1];
-            int any = 0;
-            const float fx = (float)x, fy = (float)y;
-            for (uint32_t i = a; i < b; i++) {
-                const rs__mk_ref *e = &mk->list[i];
-                if (fx < e->x0 || fx > e->x1 || fy < e->y0 || fy > e->y1) continue;
-                const rs__mk *m = &mk->m[e->i];
-                tests++;
+            ++*tests;
+            double gx = gx0 + (double)k + 0.5, u, v;
+            if (straight) {
+                u = ur + m->bux * pix * gx;
+                v = vr + m->bvx * pix * gx;
+            } else {
                 double s, t;
-                road_coords(mk->pts + 3 * m->first, m->npt, x, y, &s, &t);
-                double ds = s - m->s0, dt = t - m->t0;
-                if (fabs(ds) > m->hl + m->ms || fabs(dt) > m->hw + m->mt) continue;
-                if (m->flip) {
-                    ds = -ds;
-                    dt = -dt;
-                }
-                float c4[4];
-                rs__atlas_sample(m->ty, (m->hw - dt) * m->kx, (m->hl - ds) * m->ky, m->lod, c4);
-                if (!(c4[3] > 0)) continue;
-                any = 1;
-                float keep = 1.0f - c4[3];
-                for (int ch = 0; ch < 3; ch++) {
-                    float *v = sc + (size_t)ch * w + k;
-                    *v = *v * keep + c4[ch];
+                road_coords(pts, m->npt, gx * pix, y, &s, &t);
+                u = m->cu + m->su * (t - m->t0);
+                v = m->cv + m->sv * (s - m->s0);
+            }
+            if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            float c4[4];
+            sample(m, u, v, c4);
+            if (!(c4[3] > 0)) continue;
+            ++*painted;
+            float keep = 1.0f - c4[3];
+            for (int ch = 0; ch < 3; ch++) {
+                float *o = sc + (size_t)ch * w + k;
+                *o = *o * keep + c4[ch];
+            }
+        }
+    }
+}
+
+static void sort_u32(uint32_t *a, size_t n)
+{
+    /* Shell sort (Ciura's gaps): small lists, no recursion, no allocation */
+    static const size_t gaps[] = { 701, 301, 132, 57, 23, 10, 4, 1 };
+    for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
+        size_t h = gaps[g];
+        for (size_t i = h; i < n; i++) {
+            uint32_t v = a[i];
+            size_t j = i;
+            for (; j >= h && a[j - h] > v; j -= h) a[j] = a[j - h];
+            a[j] = v;
+        }
+    }
+}
+
+#define CAND_CAP 1024
+
+void rs__markings_paint(const rs__markings *mk, rs__piece *p)
+{
+    const double pix = mk->pix, cell = mk->cell;
+    /* the piece's pixel centres */
+    const double xa = ((double)p->x0 + 0.5) * pix, xb = ((double)p->x0 + (double)p->w - 0.5) * pix;
+    const double ya = ((double)p->y0 + 0.5) * pix, yb = ((double)p->y0 + (double)p->rows - 0.5) * pix;
+    const uint32_t cx0 = cell_of((float)xa, cell, mk->gw), cx1 = cell_of((float)xb, cell, mk->gw);
+    const uint32_t cy0 = cell_of((float)ya, cell, mk->gh), cy1 = cell_of((float)yb, cell, mk->gh);
+    uint32_t cand[CAND_CAP];
+    uint64_t tests = 0, painted = 0;
+    /* the markings whose box meets the piece, each once (from the first of
+     * its cells that the piece's cells hold), in ascending index; in
+     * index ranges that hold at most CAND_CAP of them */
+    uint32_t lo = 0, hi = UINT32_MAX;
+    for (;;) {
+        size_t n = 0;
+        int over = 0;
+        for (uint32_t cy = cy0; cy <= cy1 && !over; cy++)
+            for (uint32_t cx = cx0; cx <= cx1 && !over; cx++) {
+                size_t c = (size_t)cy * mk->gw + cx;
+                for (uint32_t k = mk->start[c], ke = mk->start[c + 1]; k < ke; k++) {
+                    const rs__mk_ref *e = &mk->list[k];
+                    if (e->i < lo || e->i > hi) continue;
+                    if (e->x1 < xa || e->x0 > xb || e->y1 < ya || e->y0 > yb) continue;
+                    uint32_t fx = cell_of(e->x0, cell, mk->gw), fy = cell_of(e->y0, cell, mk->gh);
+                    if ((fx > cx0 ? fx : cx0) != cx || (fy > cy0 ? fy : cy0) != cy) continue;
+                    if (n == CAND_CAP) {
+                        over = 1;
+                        break;
+                    }
+                    cand[n++] = e->i;
                 }
             }
-            painted += (uint64_t)any;
+        if (over) {
+            hi = lo + (hi - lo) / 2;
+            continue;
         }
+        sort_u32(cand, n);
+        for (size_t k = 0; k < n; k++) paint_one(mk, &mk->m[cand[k]], p, &tests, &painted);
+        if (hi == UINT32_MAX) break;
+        lo = hi + 1;
+        hi = UINT32_MAX;
     }
     p->mark_tests += tests;
     p->mark_pixels += painted;
