@@ -8,6 +8,7 @@
 #include "splatter.h"
 
 #include <float.h>
+#include <limits.h>
 #include <stdio.h>
 #include <math.h>
 #include <string.h>
@@ -120,26 +121,30 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
  * of travel), so a marking bends with the road as its buffer does. */
 static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out)
 {
-    double best = INFINITY, bs = 0, bt = 0;
+    /* the nearest segment by index (selects, not branches), then its s, t */
+    double best = INFINITY;
+    size_t bk = 0;
     for (size_t k = 0; k + 1 < npt; k++) {
         const double *a = pts + RS__MK_PT * k;
-        double ux = a[3], uy = a[4], len = a[5];
-        if (!(len > 0)) continue;
+        double ux = a[3], uy = a[4];
         double px = x - a[0], py = y - a[1];
         double u = px * ux + py * uy;
-        if (k > 0 && u < 0) u = 0;
-        if (k + 2 < npt && u > len) u = len;
+        u = u < a[6] ? a[6] : u;
+        u = u > a[7] ? a[7] : u;
         double ex = px - u * ux, ey = py - u * uy, d2 = ex * ex + ey * ey;
-        if (d2 < best) {
-            best = d2;
-            bs = a[2] + u;
-            double side = ex * uy - ey * ux; /* (p - q) . (dy, -dx) */
-            double d = sqrt(d2);
-            bt = side < 0 ? -d : d;
-        }
+        d2 = a[5] > 0 ? d2 : INFINITY;
+        bk = d2 < best ? k : bk;
+        best = d2 < best ? d2 : best;
     }
-    *s_out = bs;
-    *t_out = bt;
+    const double *a = pts + RS__MK_PT * bk;
+    double ux = a[3], uy = a[4], px = x - a[0], py = y - a[1];
+    double u = px * ux + py * uy;
+    u = u < a[6] ? a[6] : u;
+    u = u > a[7] ? a[7] : u;
+    double ex = px - u * ux, ey = py - u * uy;
+    double side = ex * uy - ey * ux; /* (p - q) . (dy, -dx) */
+    *s_out = a[2] + u;
+    *t_out = copysign(sqrt(best), side);
 }
 
 /* Geometry of one placement: its levels, support, stretch of road,
@@ -257,23 +262,36 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         o[1] = r->y[a + k];
         o[2] = r->s[a + k];
         o[3] = o[4] = o[5] = 0;
+        o[6] = k > 0 ? 0 : -INFINITY;
+        o[7] = INFINITY;
         if (k > 0) {
             double *pv = o - RS__MK_PT, len = o[2] - pv[2];
             pv[5] = len;
             pv[3] = len > 0 ? (o[0] - pv[0]) / len : 1;
             pv[4] = len > 0 ? (o[1] - pv[1]) / len : 0;
+            if (k + 1 < np) pv[7] = len;
+            pv[8] = pv[3] != 0 ? 1 / (pv[3] * pix) : 0;
+            pv[9] = pv[4] != 0 ? 1 / (pv[4] * pix) : 0;
         }
+        o[8] = o[9] = 0;
     }
     if (np == 2) {
         /* one segment, extended both ways: s and t are affine in (x, y) */
         const double *A = c0;
         double ux = A[3], uy = A[4];
-        m->bux = m->su * uy;
+        m->bu = m->su * uy * pix;
+        m->ibu = m->bu != 0 ? 1 / m->bu : 0;
         m->buy = -m->su * ux;
         m->au = m->cu + m->su * (A[1] * ux - A[0] * uy - m->t0);
-        m->bvx = m->sv * ux;
+        m->bv = m->sv * ux * pix;
+        m->ibv = m->bv != 0 ? 1 / m->bv : 0;
         m->bvy = m->sv * uy;
         m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
+        m->flat = m->bu == 0 || m->bv == 0;
+        m->ua = m->ibu >= 0 ? m->ulo : m->uhi;
+        m->ub = m->ibu >= 0 ? m->uhi : m->ulo;
+        m->va = m->ibv >= 0 ? m->vlo : m->vhi;
+        m->vb = m->ibv >= 0 ? m->vhi : m->vlo;
     }
     /* the box: the support's corners where [lo, hi] starts and ends (on
      * the end segments' lines, extended past the stretch as the lookup
@@ -312,10 +330,10 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
 }
 
 /* Index cell of coordinate v (metres), clamped to [0, n - 1]; the build
- * and the paint use the same function on the same (float) box. */
-static uint32_t cell_of(float v, double cell, uint32_t n)
+ * and the paint use the same function on the same (float) boxes. */
+static uint32_t cell_of(double v, double cell, uint32_t n)
 {
-    double c = floor((double)v / cell);
+    double c = floor(v / cell);
     if (!(c > 0)) return 0;
     return c >= n ? n - 1 : (uint32_t)c;
 }
@@ -472,9 +490,10 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
 static void sample(const rs__mk *m, double u, double v, float out[4])
 {
     const rs__mk_level *F = m->fine;
-    size_t i = (size_t)u, j = (size_t)v;
+    /* u, v >= 0 here, and the levels' sizes are far below 2^31 */
+    int i = (int)u, j = (int)v;
     float wx = (float)(u - (double)i), wy = (float)(v - (double)j);
-    const float *t0 = F->px + (j * F->pw + i) * 4, *t1 = t0 + (size_t)F->pw * 4;
+    const float *t0 = F->px + ((size_t)j * F->pw + (size_t)i) * 4, *t1 = t0 + (size_t)F->pw * 4;
     for (int c = 0; c < 4; c++) {
         float a = t0[c] + wx * (t0[4 + c] - t0[c]), b = t1[c] + wx * (t1[4 + c] - t1[c]);
         out[c] = a + wy * (b - a);
@@ -483,9 +502,9 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
     if (C) {
         const double off = 0.5 * RS__MK_PAD - 0.25;
         double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
-        size_t i2 = (size_t)u2, j2 = (size_t)v2;
+        int i2 = (int)u2, j2 = (int)v2;
         float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2), f = m->f;
-        const float *c0 = C->px + (j2 * C->pw + i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
+        const float *c0 = C->px + ((size_t)j2 * C->pw + (size_t)i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
         for (int c = 0; c < 4; c++) {
             float a = c0[c] + wx2 * (c0[4 + c] - c0[c]), b = c1[c] + wx2 * (c1[4 + c] - c1[c]);
             float g = a + wy2 * (b - a);
@@ -499,48 +518,56 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
  * is in the span, whichever piece holds it. */
 #define SPAN_EPS 1e-4
 
-/* Columns [*k0, *k1] (piece-relative, inside [0, w)) whose pixel centre
- * x = (gx + 1/2) pix may satisfy lo <= a + b (gx + 1/2) <= hi, narrowed to
- * that. Returns 0 when none. */
-static int slab(double a, double b, double lo, double hi, double gx0, double w, double *k0, double *k1)
+/* ceil(e - SPAN_EPS) and floor(e + SPAN_EPS) for e clamped to [-2, w + 2]
+ * (spans are clamped to [0, w) anyway): integer conversions, no libm. */
+static long span_lo(double e, double w)
+{
+    e = e < -2 ? 0 : e > w + 2 ? w + 4 : e + 2 - SPAN_EPS;
+    long t = (long)e;
+    return t + ((double)t < e) - 2;
+}
+
+static long span_hi(double e, double w)
+{
+    e = e < -2 ? 0 : e > w + 2 ? w + 4 : e + 2 + SPAN_EPS;
+    return (long)e - 2;
+}
+
+/* Narrows columns [*k0, *k1] (piece-relative) to those whose pixel centre
+ * x = (gx + 1/2) pix, gx = gx0 + k, may satisfy lo <= a + b (gx + 1/2) <=
+ * hi (ib = 1 / b). Returns 0 when none. */
+static int slab(double a, double b, double ib, double lo, double hi, double gx0, double w, long *k0, long *k1)
 {
     if (b == 0) return a >= lo && a <= hi;
-    double e0 = (lo - a) / b - 0.5 - gx0, e1 = (hi - a) / b - 0.5 - gx0;
-    if (e0 > e1) {
-        double tmp = e0;
-        e0 = e1;
-        e1 = tmp;
-    }
-    e0 = ceil(e0 - SPAN_EPS);
-    e1 = floor(e1 + SPAN_EPS);
-    if (e0 > *k0) *k0 = e0;
-    if (e1 < *k1) *k1 = e1;
-    return *k0 <= *k1 && *k1 >= 0 && *k0 < w;
+    double e0 = (lo - a) * ib - 0.5 - gx0, e1 = (hi - a) * ib - 0.5 - gx0;
+    long l0 = span_lo(e0 < e1 ? e0 : e1, w), l1 = span_hi(e0 < e1 ? e1 : e0, w);
+    if (l0 > *k0) *k0 = l0;
+    if (l1 < *k1) *k1 = l1;
+    return *k0 <= *k1;
 }
 
 /* The span of row centre y on a marking with a curved stretch: the hull
  * of each segment's part of the support (a rectangle in its own frame)
  * and, around each vertex inside it, the disc of the farthest offset. */
-static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double gx0, double w, double *k0,
-                       double *k1)
+static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double gx0, double w, long *k0, long *k1)
 {
     const double *c0 = mk->pts + RS__MK_PT * m->first, pix = mk->pix;
-    double lo = INFINITY, hi = -INFINITY;
+    long lo = LONG_MAX, hi = LONG_MIN;
     double far = fabs(m->tlo) > fabs(m->thi) ? fabs(m->tlo) : fabs(m->thi);
     for (size_t k = 0; k + 1 < m->npt; k++) {
         const double *A = c0 + RS__MK_PT * k;
         double ux = A[3], uy = A[4], len = A[5];
         if (!(len > 0)) continue;
         double ua = m->slo - A[2], ub = m->shi - A[2];
-        if (k > 0 && ua < 0) ua = 0;
-        if (k + 2 < m->npt && ub > len) ub = len;
+        if (ua < A[6]) ua = A[6];
+        if (ub > A[7]) ub = A[7];
         if (ua > ub) continue;
         /* u(x) = (x - ax) ux + (y - ay) uy, t(x) = (x - ax) uy - (y - ay) ux, over x = (gx + 1/2) pix */
         double dy = y - A[1];
-        double a0 = -A[0] * ux + dy * uy, a1 = -A[0] * uy - dy * ux;
-        double s0 = -INFINITY, s1 = INFINITY;
-        if (!slab(a0, ux * pix, ua, ub, gx0, w, &s0, &s1)) continue;
-        if (!slab(a1, uy * pix, m->tlo, m->thi, gx0, w, &s0, &s1)) continue;
+        double a0 = -A[0] * ux + dy * uy, a1 = -A[0] * uy - dy * ux, bx = ux * pix, by = uy * pix;
+        long s0 = *k0, s1 = *k1;
+        if (!slab(a0, bx, A[8], ua, ub, gx0, w, &s0, &s1)) continue;
+        if (!slab(a1, by, A[9], m->tlo, m->thi, gx0, w, &s0, &s1)) continue;
         if (s0 < lo) lo = s0;
         if (s1 > hi) hi = s1;
     }
@@ -549,8 +576,8 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
         if (!(V[2] >= m->slo && V[2] <= m->shi)) continue;
         double dy = y - V[1], r2 = far * far - dy * dy;
         if (!(r2 >= 0)) continue;
-        double h = sqrt(r2), e0 = ceil((V[0] - h) / pix - 0.5 - gx0 - SPAN_EPS);
-        double e1 = floor((V[0] + h) / pix - 0.5 - gx0 + SPAN_EPS);
+        double h = sqrt(r2);
+        long e0 = span_lo((V[0] - h) / pix - 0.5 - gx0, w), e1 = span_hi((V[0] + h) / pix - 0.5 - gx0, w);
         if (e0 < lo) lo = e0;
         if (e1 > hi) hi = e1;
     }
@@ -565,39 +592,47 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
 static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
 {
     const size_t w = p->w;
-    const double pix = mk->pix, gx0 = (double)p->x0;
-    double r0 = ceil(m->by0 / pix - 0.5) - (double)p->y0, r1 = floor(m->by1 / pix - 0.5) - (double)p->y0;
+    const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
+    long r0 = span_lo(m->by0 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    long r1 = span_hi(m->by1 / pix - 0.5 - (double)p->y0, (double)p->rows);
     if (r0 < 0) r0 = 0;
-    if (r1 > (double)p->rows - 1) r1 = (double)p->rows - 1;
+    if (r1 > (long)p->rows - 1) r1 = (long)p->rows - 1;
     const double *pts = mk->pts + RS__MK_PT * m->first;
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi;
-    for (double rr = r0; rr <= r1; rr++) {
-        uint32_t r = (uint32_t)rr;
+    const int straight = m->npt == 2;
+    for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
-        double k0 = 0, k1 = (double)w - 1;
-        const int straight = m->npt == 2;
-        double ur = 0, vr = 0, bu = 0, bv = 0;
+        long k0 = 0, k1 = (long)w - 1;
+        double ur = 0, vr = 0;
         if (straight) {
             ur = m->au + m->buy * y;
             vr = m->av + m->bvy * y;
-            bu = m->bux * pix;
-            bv = m->bvx * pix;
-            if (!slab(ur, bu, ulo, uhi, gx0, (double)w, &k0, &k1) || !slab(vr, bv, vlo, vhi, gx0, (double)w, &k0, &k1))
-                continue;
-        } else if (!curved_span(mk, m, y, gx0, (double)w, &k0, &k1)) {
+            if (m->flat) {
+                if (!slab(ur, m->bu, m->ibu, ulo, uhi, gx0, wd, &k0, &k1) ||
+                    !slab(vr, m->bv, m->ibv, vlo, vhi, gx0, wd, &k0, &k1))
+                    continue;
+            } else {
+                /* both slabs, bounds ordered by the slopes' signs: no branch */
+                double a0 = (m->ua - ur) * m->ibu, a1 = (m->ub - ur) * m->ibu;
+                double b0 = (m->va - vr) * m->ibv, b1 = (m->vb - vr) * m->ibv;
+                double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
+                long l0 = span_lo(e0 - 0.5 - gx0, wd), l1 = span_hi(e1 - 0.5 - gx0, wd);
+                k0 = l0 > 0 ? l0 : 0;
+                k1 = l1 < k1 ? l1 : k1;
+                if (k0 > k1) continue;
+            }
+        } else if (!curved_span(mk, m, y, gx0, wd, &k0, &k1)) {
             continue;
         }
-        if (k0 < 0) k0 = 0;
-        if (k1 > (double)w - 1) k1 = (double)w - 1;
         float *sc = p->sc + (size_t)r * w * 3;
         const uint16_t *q = p->q + (size_t)r * w;
-        for (size_t k = (size_t)k0, ke = (size_t)k1; k <= ke; k++) {
+        for (long k = k0; k <= k1; k++) {
             if (q[k] == 0) continue;
             ++*tests;
             double gx = gx0 + (double)k + 0.5, u, v;
             if (straight) {
-                u = ur + m->bux * pix * gx;
-                v = vr + m->bvx * pix * gx;
+                u = ur + m->bu * gx;
+                v = vr + m->bv * gx;
             } else {
                 double s, t;
                 road_coords(pts, m->npt, gx * pix, y, &s, &t);
@@ -611,7 +646,7 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
             ++*painted;
             float keep = 1.0f - c4[3];
             for (int ch = 0; ch < 3; ch++) {
-                float *o = sc + (size_t)ch * w + k;
+                float *o = sc + (size_t)ch * w + (size_t)k;
                 *o = *o * keep + c4[ch];
             }
         }
@@ -620,6 +655,15 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
 
 static void sort_u32(uint32_t *a, size_t n)
 {
+    if (n <= 96) {
+        for (size_t i = 1; i < n; i++) {
+            uint32_t v = a[i];
+            size_t j = i;
+            for (; j > 0 && a[j - 1] > v; j--) a[j] = a[j - 1];
+            a[j] = v;
+        }
+        return;
+    }
     /* Shell sort (Ciura's gaps): small lists, no recursion, no allocation */
     static const size_t gaps[] = { 701, 301, 132, 57, 23, 10, 4, 1 };
     for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
@@ -641,8 +685,10 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
     /* the piece's pixel centres */
     const double xa = ((double)p->x0 + 0.5) * pix, xb = ((double)p->x0 + (double)p->w - 0.5) * pix;
     const double ya = ((double)p->y0 + 0.5) * pix, yb = ((double)p->y0 + (double)p->rows - 0.5) * pix;
-    const uint32_t cx0 = cell_of((float)xa, cell, mk->gw), cx1 = cell_of((float)xb, cell, mk->gw);
-    const uint32_t cy0 = cell_of((float)ya, cell, mk->gh), cy1 = cell_of((float)yb, cell, mk->gh);
+    /* a box meeting [xa, xb] has cell_of(x1) >= cell_of(xa), and so on
+     * (division and floor are monotonic) */
+    const uint32_t cx0 = cell_of(xa, cell, mk->gw), cx1 = cell_of(xb, cell, mk->gw);
+    const uint32_t cy0 = cell_of(ya, cell, mk->gh), cy1 = cell_of(yb, cell, mk->gh);
     uint32_t cand[CAND_CAP];
     uint64_t tests = 0, painted = 0;
     /* the markings whose box meets the piece, each once (from the first of
@@ -659,8 +705,11 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
                     const rs__mk_ref *e = &mk->list[k];
                     if (e->i < lo || e->i > hi) continue;
                     if (e->x1 < xa || e->x0 > xb || e->y1 < ya || e->y0 > yb) continue;
-                    uint32_t fx = cell_of(e->x0, cell, mk->gw), fy = cell_of(e->y0, cell, mk->gh);
-                    if ((fx > cx0 ? fx : cx0) != cx || (fy > cy0 ? fy : cy0) != cy) continue;
+                    /* seen before unless its first cell is this one
+                     * (cell_of(v) == c <=> v / cell >= c, for c > 0
+                     * and a box known to touch cell c) */
+                    if ((cx > cx0 && (double)e->x0 / cell < (double)cx) || (cy > cy0 && (double)e->y0 / cell < (double)cy))
+                        continue;
                     if (n == CAND_CAP) {
                         over = 1;
                         break;

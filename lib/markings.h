@@ -56,9 +56,12 @@ typedef struct rs__mk {
     double cu, su, cv, sv;
     double ulo, uhi, vlo, vhi;
     double slo, shi, tlo, thi; /* that support in road coordinates (s, t) */
-    /* one-segment stretch: U, V affine in the pixel centre (x, y):
-     * U = au + bux x + buy y, V = av + bvx x + bvy y */
-    double au, bux, buy, av, bvx, bvy;
+    /* one-segment stretch: U, V affine in the pixel centre (x, y) =
+     * ((gx + 1/2) pix, y): U = au + buy y + bu (gx + 1/2), V = av + bvy y
+     * + bv (gx + 1/2); ibu, ibv = 1 / bu, 1 / bv (0 when bu, bv are 0) */
+    double au, buy, bu, ibu, av, bvy, bv, ibv;
+    double ua, ub, va, vb;     /* ulo, uhi in the order of ibu's sign (va, vb: ibv) */
+    int flat;                  /* bu or bv is 0 */
     size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
     double bx0, by0, bx1, by1; /* local bounding box of the support (metres) */
 } rs__mk;
@@ -69,8 +72,10 @@ typedef struct rs__mk_ref {
 } rs__mk_ref;
 
 /* Per stretch point: x, y, s and the segment to the next point: unit
- * direction ux, uy and its arc length (0 after the last point). */
-#define RS__MK_PT 6
+ * direction ux, uy, its arc length (0 after the last point) and the range
+ * the nearest-point lookup clamps u to (-inf / +inf at the stretch's
+ * ends, else 0 / length), 1 / (ux pix) and 1 / (uy pix) (0 for 0). */
+#define RS__MK_PT 10
 
 typedef struct rs__markings {
     rs_atlas *atlas_own;       /* the built-in atlas when none was given */
