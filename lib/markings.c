@@ -11,6 +11,7 @@
 #include <limits.h>
 #include <stdio.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #define MAX_INDEX_ENTRIES (1u << 26)
@@ -572,12 +573,22 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
         if (s1 > hi) hi = s1;
     }
     for (size_t k = 1; k + 1 < m->npt; k++) {
-        const double *V = c0 + RS__MK_PT * k;
+        /* a pixel whose nearest point is vertex V is past the end of the
+         * segment before (u >= its length) and before the start of the
+         * one after (u <= 0): the wedge between their normals at V (on
+         * the outer side of the bend), within the farthest offset */
+        const double *V = c0 + RS__MK_PT * k, *B = V - RS__MK_PT;
         if (!(V[2] >= m->slo && V[2] <= m->shi)) continue;
         double dy = y - V[1], r2 = far * far - dy * dy;
         if (!(r2 >= 0)) continue;
         double h = sqrt(r2);
         long e0 = span_lo((V[0] - h) / pix - 0.5 - gx0, w), e1 = span_hi((V[0] + h) / pix - 0.5 - gx0, w);
+        if (e0 < *k0) e0 = *k0;
+        if (e1 > *k1) e1 = *k1;
+        if (e0 > e1) continue;
+        double dyb = y - B[1];
+        if (B[5] > 0 && !slab(-B[0] * B[3] + dyb * B[4], B[3] * pix, B[8], B[5], INFINITY, gx0, w, &e0, &e1)) continue;
+        if (V[5] > 0 && !slab(-V[0] * V[3] + dy * V[4], V[3] * pix, V[8], -INFINITY, 0, gx0, w, &e0, &e1)) continue;
         if (e0 < lo) lo = e0;
         if (e1 > hi) hi = e1;
     }
@@ -587,6 +598,8 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
     *k1 = hi;
     return lo <= hi;
 }
+
+#define MAX_ROW_SEG 8
 
 /* Marking m over the piece's rows whose centres its box holds. */
 static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
@@ -600,6 +613,11 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
     const double *pts = mk->pts + RS__MK_PT * m->first;
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi;
     const int straight = m->npt == 2;
+    /* a curved stretch of at most MAX_ROW_SEG segments: per row, each
+     * segment's u and t affine in the column */
+    const size_t nseg = m->npt - 1;
+    const int rowseg = !straight && nseg <= MAX_ROW_SEG;
+    double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -623,6 +641,15 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
             }
         } else if (!curved_span(mk, m, y, gx0, wd, &k0, &k1)) {
             continue;
+        } else if (rowseg) {
+            for (size_t k = 0; k < nseg; k++) {
+                const double *A = pts + RS__MK_PT * k;
+                double dy = y - A[1];
+                su0[k] = dy * A[4] - A[0] * A[3];
+                su1[k] = A[3] * pix;
+                st0[k] = -A[0] * A[4] - dy * A[3];
+                st1[k] = A[4] * pix;
+            }
         }
         float *sc = p->sc + (size_t)r * w * 3;
         const uint16_t *q = p->q + (size_t)r * w;
@@ -633,6 +660,28 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
             if (straight) {
                 u = ur + m->bu * gx;
                 v = vr + m->bv * gx;
+            } else if (rowseg) {
+                /* road_coords with each segment's u, t from the row's
+                 * coefficients: the distance to the clamped point is
+                 * hypot(u - uc, t), its side the sign of t */
+                double best = INFINITY;
+                size_t bk = 0;
+                for (size_t kk = 0; kk < nseg; kk++) {
+                    const double *A = pts + RS__MK_PT * kk;
+                    double uu = su0[kk] + su1[kk] * gx, tt = st0[kk] + st1[kk] * gx;
+                    double uc = uu < A[6] ? A[6] : uu;
+                    uc = uc > A[7] ? A[7] : uc;
+                    double e = uu - uc, d2 = e * e + tt * tt;
+                    d2 = A[5] > 0 ? d2 : INFINITY;
+                    bk = d2 < best ? kk : bk;
+                    best = d2 < best ? d2 : best;
+                }
+                const double *A = pts + RS__MK_PT * bk;
+                double uu = su0[bk] + su1[bk] * gx, tt = st0[bk] + st1[bk] * gx;
+                double uc = uu < A[6] ? A[6] : uu;
+                uc = uc > A[7] ? A[7] : uc;
+                u = m->cu + m->su * (copysign(sqrt(best), tt) - m->t0);
+                v = m->cv + m->sv * (A[2] + uc - m->s0);
             } else {
                 double s, t;
                 road_coords(pts, m->npt, gx * pix, y, &s, &t);
@@ -644,11 +693,10 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
             sample(m, u, v, c4);
             if (!(c4[3] > 0)) continue;
             ++*painted;
-            float keep = 1.0f - c4[3];
-            for (int ch = 0; ch < 3; ch++) {
-                float *o = sc + (size_t)ch * w + (size_t)k;
-                *o = *o * keep + c4[ch];
-            }
+            float keep = 1.0f - c4[3], *o = sc + (size_t)k;
+            o[0] = o[0] * keep + c4[0];
+            o[w] = o[w] * keep + c4[1];
+            o[2 * w] = o[2 * w] * keep + c4[2];
         }
     }
 }
@@ -678,6 +726,20 @@ static void sort_u32(uint32_t *a, size_t n)
 }
 
 #define CAND_CAP 1024
+
+/* The markings of a piece are scattered over mk->m: ask for the next ones'
+ * records while painting one (a hint; nothing where the compiler has no
+ * such builtin). */
+#define PREFETCH_AHEAD 4
+static void prefetch_mk(const rs__mk *m)
+{
+#if defined(__GNUC__)
+    const char *c = (const char *)m;
+    for (size_t o = 0; o < offsetof(rs__mk, ty); o += 64) __builtin_prefetch(c + o);
+#else
+    (void)m;
+#endif
+}
 
 void rs__markings_paint(const rs__markings *mk, rs__piece *p)
 {
@@ -722,7 +784,11 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
             continue;
         }
         sort_u32(cand, n);
-        for (size_t k = 0; k < n; k++) paint_one(mk, &mk->m[cand[k]], p, &tests, &painted);
+        for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
+        for (size_t k = 0; k < n; k++) {
+            if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
+            paint_one(mk, &mk->m[cand[k]], p, &tests, &painted);
+        }
         if (hi == UINT32_MAX) break;
         lo = hi + 1;
         hi = UINT32_MAX;

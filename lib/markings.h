@@ -43,27 +43,33 @@ typedef struct rs__mk_tex {
 } rs__mk_tex;
 
 typedef struct rs__mk {
-    const rs__atlas_type *ty;
-    int flip;
-    double s0, t0, hl, hw;     /* centre, half length and width (metres) */
-    double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
-    double lod;                /* log2 of level-0 texels per output pixel */
+    /* what the paint reads, first (the records are scattered over a
+     * piece's markings: few cache lines each) */
     const rs__mk_level *fine, *coarse; /* the two levels sampled (coarse NULL: fine only) */
     float f;                   /* the coarse level's weight */
-    /* padded fine-level texel coordinates of a point (ds, dt) from the
-     * centre: U = cu + su dt (across), V = cv + sv ds (along); the sample
-     * is transparent outside [ulo, uhi) x [vlo, vhi) */
-    double cu, su, cv, sv;
+    int flat;                  /* one segment, and bu or bv is 0 */
+    size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
+    double by0, by1;           /* rows of the box */
+    /* padded fine-level texel coordinates U (across), V (along): the
+     * sample is transparent outside [ulo, uhi) x [vlo, vhi) */
     double ulo, uhi, vlo, vhi;
-    double slo, shi, tlo, thi; /* that support in road coordinates (s, t) */
     /* one-segment stretch: U, V affine in the pixel centre (x, y) =
      * ((gx + 1/2) pix, y): U = au + buy y + bu (gx + 1/2), V = av + bvy y
-     * + bv (gx + 1/2); ibu, ibv = 1 / bu, 1 / bv (0 when bu, bv are 0) */
+     * + bv (gx + 1/2); ibu, ibv = 1 / bu, 1 / bv (0 when bu, bv are 0);
+     * ua, ub = ulo, uhi in the order of ibu's sign (va, vb: ibv) */
     double au, buy, bu, ibu, av, bvy, bv, ibv;
-    double ua, ub, va, vb;     /* ulo, uhi in the order of ibu's sign (va, vb: ibv) */
-    int flat;                  /* bu or bv is 0 */
-    size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
-    double bx0, by0, bx1, by1; /* local bounding box of the support (metres) */
+    double ua, ub, va, vb;
+    /* a point (ds, dt) from the centre: U = cu + su dt, V = cv + sv ds */
+    double cu, su, cv, sv;
+    double s0, t0;             /* centre (road coordinates) */
+    double slo, shi, tlo, thi; /* the support in road coordinates (s, t) */
+    /* the rest */
+    const rs__atlas_type *ty;
+    int flip;
+    double hl, hw;             /* half length and width (metres) */
+    double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
+    double lod;                /* log2 of level-0 texels per output pixel */
+    double bx0, bx1;           /* columns of the box (metres) */
 } rs__mk;
 
 typedef struct rs__mk_ref {
