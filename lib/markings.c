@@ -523,15 +523,18 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
  * (spans are clamped to [0, w) anyway): integer conversions, no libm. */
 static long span_lo(double e, double w)
 {
-    e = e < -2 ? 0 : e > w + 2 ? w + 4 : e + 2 - SPAN_EPS;
+    e = e > -2 ? e : -2; /* NaN: -2 */
+    e = e < w + 2 ? e : w + 2;
+    e = e + 2 - SPAN_EPS;
     long t = (long)e;
     return t + ((double)t < e) - 2;
 }
 
 static long span_hi(double e, double w)
 {
-    e = e < -2 ? 0 : e > w + 2 ? w + 4 : e + 2 + SPAN_EPS;
-    return (long)e - 2;
+    e = e > -2 ? e : -2;
+    e = e < w + 2 ? e : w + 2;
+    return (long)(e + 2 + SPAN_EPS) - 2;
 }
 
 /* Narrows columns [*k0, *k1] (piece-relative) to those whose pixel centre
@@ -547,30 +550,47 @@ static int slab(double a, double b, double ib, double lo, double hi, double gx0,
     return *k0 <= *k1;
 }
 
+/* The columns k (unrounded, piece-relative: gx = gx0 + k) where lo <= a + b
+ * (gx + 1/2) <= hi: [*e0, *e1] (empty: *e0 > *e1); ib = 1 / b. */
+static void slab_d(double a, double b, double ib, double lo, double hi, double gx0, double *e0, double *e1)
+{
+    if (b == 0) {
+        int in = a >= lo && a <= hi;
+        *e0 = in ? -INFINITY : INFINITY;
+        *e1 = in ? INFINITY : -INFINITY;
+        return;
+    }
+    double f0 = (lo - a) * ib - 0.5 - gx0, f1 = (hi - a) * ib - 0.5 - gx0;
+    double mn = f0 < f1 ? f0 : f1, mx = f1 > f0 ? f1 : f0; /* minsd, maxsd */
+    *e0 = mn;
+    *e1 = mx;
+}
+
 /* The span of row centre y on a marking with a curved stretch: the hull
  * of each segment's part of the support (a rectangle in its own frame)
- * and, around each vertex inside it, the disc of the farthest offset. */
+ * and, around each vertex inside it, the wedge where that vertex is the
+ * nearest point. Selects rather than branches: the segments are few. */
 static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double gx0, double w, long *k0, long *k1)
 {
     const double *c0 = mk->pts + RS__MK_PT * m->first, pix = mk->pix;
-    long lo = LONG_MAX, hi = LONG_MIN;
+    double lo = INFINITY, hi = -INFINITY;
     double far = fabs(m->tlo) > fabs(m->thi) ? fabs(m->tlo) : fabs(m->thi);
     for (size_t k = 0; k + 1 < m->npt; k++) {
         const double *A = c0 + RS__MK_PT * k;
-        double ux = A[3], uy = A[4], len = A[5];
-        if (!(len > 0)) continue;
+        double ux = A[3], uy = A[4];
         double ua = m->slo - A[2], ub = m->shi - A[2];
-        if (ua < A[6]) ua = A[6];
-        if (ub > A[7]) ub = A[7];
-        if (ua > ub) continue;
+        ua = ua < A[6] ? A[6] : ua;
+        ub = ub > A[7] ? A[7] : ub;
         /* u(x) = (x - ax) ux + (y - ay) uy, t(x) = (x - ax) uy - (y - ay) ux, over x = (gx + 1/2) pix */
-        double dy = y - A[1];
-        double a0 = -A[0] * ux + dy * uy, a1 = -A[0] * uy - dy * ux, bx = ux * pix, by = uy * pix;
-        long s0 = *k0, s1 = *k1;
-        if (!slab(a0, bx, A[8], ua, ub, gx0, w, &s0, &s1)) continue;
-        if (!slab(a1, by, A[9], m->tlo, m->thi, gx0, w, &s0, &s1)) continue;
-        if (s0 < lo) lo = s0;
-        if (s1 > hi) hi = s1;
+        double dy = y - A[1], a0, a1, b0, b1;
+        slab_d(-A[0] * ux + dy * uy, ux * pix, A[8], ua, ub, gx0, &a0, &a1);
+        slab_d(-A[0] * uy - dy * ux, uy * pix, A[9], m->tlo, m->thi, gx0, &b0, &b1);
+        double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
+        int ok = (A[5] > 0) & (ua <= ub) & (e0 <= e1 + 2 * SPAN_EPS);
+        e0 = ok ? e0 : INFINITY;
+        e1 = ok ? e1 : -INFINITY;
+        lo = e0 < lo ? e0 : lo;
+        hi = e1 > hi ? e1 : hi;
     }
     for (size_t k = 1; k + 1 < m->npt; k++) {
         /* a pixel whose nearest point is vertex V is past the end of the
@@ -578,78 +598,119 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
          * one after (u <= 0): the wedge between their normals at V (on
          * the outer side of the bend), within the farthest offset */
         const double *V = c0 + RS__MK_PT * k, *B = V - RS__MK_PT;
-        if (!(V[2] >= m->slo && V[2] <= m->shi)) continue;
         double dy = y - V[1], r2 = far * far - dy * dy;
-        if (!(r2 >= 0)) continue;
-        double h = sqrt(r2);
-        long e0 = span_lo((V[0] - h) / pix - 0.5 - gx0, w), e1 = span_hi((V[0] + h) / pix - 0.5 - gx0, w);
-        if (e0 < *k0) e0 = *k0;
-        if (e1 > *k1) e1 = *k1;
-        if (e0 > e1) continue;
+        double h = sqrt(r2 > 0 ? r2 : 0);
+        double e0 = (V[0] - h) / pix - 0.5 - gx0, e1 = (V[0] + h) / pix - 0.5 - gx0, a0 = -INFINITY, a1 = INFINITY,
+               b0 = -INFINITY, b1 = INFINITY;
         double dyb = y - B[1];
-        if (B[5] > 0 && !slab(-B[0] * B[3] + dyb * B[4], B[3] * pix, B[8], B[5], INFINITY, gx0, w, &e0, &e1)) continue;
-        if (V[5] > 0 && !slab(-V[0] * V[3] + dy * V[4], V[3] * pix, V[8], -INFINITY, 0, gx0, w, &e0, &e1)) continue;
-        if (e0 < lo) lo = e0;
-        if (e1 > hi) hi = e1;
+        if (B[5] > 0) slab_d(-B[0] * B[3] + dyb * B[4], B[3] * pix, B[8], B[5], INFINITY, gx0, &a0, &a1);
+        if (V[5] > 0) slab_d(-V[0] * V[3] + dy * V[4], V[3] * pix, V[8], -INFINITY, 0, gx0, &b0, &b1);
+        e0 = e0 > a0 ? e0 : a0;
+        e0 = e0 > b0 ? e0 : b0;
+        e1 = e1 < a1 ? e1 : a1;
+        e1 = e1 < b1 ? e1 : b1;
+        int ok = (V[2] >= m->slo) & (V[2] <= m->shi) & (r2 >= 0) & (e0 <= e1 + 2 * SPAN_EPS);
+        e0 = ok ? e0 : INFINITY;
+        e1 = ok ? e1 : -INFINITY;
+        lo = e0 < lo ? e0 : lo;
+        hi = e1 > hi ? e1 : hi;
     }
-    if (lo < *k0) lo = *k0;
-    if (hi > *k1) hi = *k1;
-    *k0 = lo;
-    *k1 = hi;
-    return lo <= hi;
+    if (!(lo <= hi + 2 * SPAN_EPS)) return 0;
+    long l0 = span_lo(lo, w), l1 = span_hi(hi, w);
+    if (l0 > *k0) *k0 = l0;
+    if (l1 < *k1) *k1 = l1;
+    return *k0 <= *k1;
+}
+
+/* Blend the sample at (u, v), inside the support, over pixel k of a row
+ * of S (planar, row length w). */
+static void put(const rs__mk *m, double u, double v, float *sc, size_t w, long k, uint64_t *painted)
+{
+    float c4[4];
+    sample(m, u, v, c4);
+    if (!(c4[3] > 0)) return;
+    ++*painted;
+    float keep = 1.0f - c4[3], *o = sc + (size_t)k;
+    o[0] = o[0] * keep + c4[0];
+    o[w] = o[w] * keep + c4[1];
+    o[2 * w] = o[2 * w] * keep + c4[2];
+}
+
+/* The piece's rows [*r0, *r1] whose centres the box holds; 0: none. */
+static int box_rows(const rs__mk *m, const rs__piece *p, double pix, long *r0, long *r1)
+{
+    *r0 = span_lo(m->by0 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    *r1 = span_hi(m->by1 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    if (*r0 < 0) *r0 = 0;
+    if (*r1 > (long)p->rows - 1) *r1 = (long)p->rows - 1;
+    return *r0 <= *r1;
+}
+
+/* A marking on a one-segment stretch: U, V affine in the pixel centre. */
+static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+{
+    const size_t w = p->w;
+    const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
+    const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
+    long r0, r1;
+    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    for (long r = r0; r <= r1; r++) {
+        double y = ((double)p->y0 + (double)r + 0.5) * pix;
+        long k0 = 0, k1 = (long)w - 1;
+        double ur = m->au + m->buy * y, vr = m->av + m->bvy * y;
+        if (m->flat) {
+            if (!slab(ur, bu, m->ibu, ulo, uhi, gx0, wd, &k0, &k1) || !slab(vr, bv, m->ibv, vlo, vhi, gx0, wd, &k0, &k1))
+                continue;
+        } else {
+            /* both slabs, bounds ordered by the slopes' signs: no branch */
+            double a0 = (m->ua - ur) * m->ibu, a1 = (m->ub - ur) * m->ibu;
+            double b0 = (m->va - vr) * m->ibv, b1 = (m->vb - vr) * m->ibv;
+            double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
+            long l0 = span_lo(e0 - 0.5 - gx0, wd), l1 = span_hi(e1 - 0.5 - gx0, wd);
+            k0 = l0 > 0 ? l0 : 0;
+            k1 = l1 < k1 ? l1 : k1;
+            if (k0 > k1) continue;
+        }
+        float *sc = p->sc + (size_t)r * w * 3;
+        const uint16_t *q = p->q + (size_t)r * w;
+        for (long k = k0; k <= k1; k++) {
+            if (q[k] == 0) continue;
+            ++*tests;
+            double gx = gx0 + (double)k + 0.5;
+            double u = ur + bu * gx, v = vr + bv * gx;
+            if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            put(m, u, v, sc, w, k, painted);
+        }
+    }
 }
 
 #define MAX_ROW_SEG 8
 
-/* Marking m over the piece's rows whose centres its box holds. */
-static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+/* A marking on a curved stretch: the nearest point per pixel. */
+static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
 {
     const size_t w = p->w;
     const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
-    long r0 = span_lo(m->by0 / pix - 0.5 - (double)p->y0, (double)p->rows);
-    long r1 = span_hi(m->by1 / pix - 0.5 - (double)p->y0, (double)p->rows);
-    if (r0 < 0) r0 = 0;
-    if (r1 > (long)p->rows - 1) r1 = (long)p->rows - 1;
     const double *pts = mk->pts + RS__MK_PT * m->first;
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi;
-    const int straight = m->npt == 2;
-    /* a curved stretch of at most MAX_ROW_SEG segments: per row, each
-     * segment's u and t affine in the column */
+    /* at most MAX_ROW_SEG segments: per row, each segment's u and t
+     * affine in the column */
     const size_t nseg = m->npt - 1;
-    const int rowseg = !straight && nseg <= MAX_ROW_SEG;
+    const int rowseg = nseg <= MAX_ROW_SEG;
     double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
+    long r0, r1;
+    if (!box_rows(m, p, pix, &r0, &r1)) return;
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
-        double ur = 0, vr = 0;
-        if (straight) {
-            ur = m->au + m->buy * y;
-            vr = m->av + m->bvy * y;
-            if (m->flat) {
-                if (!slab(ur, m->bu, m->ibu, ulo, uhi, gx0, wd, &k0, &k1) ||
-                    !slab(vr, m->bv, m->ibv, vlo, vhi, gx0, wd, &k0, &k1))
-                    continue;
-            } else {
-                /* both slabs, bounds ordered by the slopes' signs: no branch */
-                double a0 = (m->ua - ur) * m->ibu, a1 = (m->ub - ur) * m->ibu;
-                double b0 = (m->va - vr) * m->ibv, b1 = (m->vb - vr) * m->ibv;
-                double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
-                long l0 = span_lo(e0 - 0.5 - gx0, wd), l1 = span_hi(e1 - 0.5 - gx0, wd);
-                k0 = l0 > 0 ? l0 : 0;
-                k1 = l1 < k1 ? l1 : k1;
-                if (k0 > k1) continue;
-            }
-        } else if (!curved_span(mk, m, y, gx0, wd, &k0, &k1)) {
-            continue;
-        } else if (rowseg) {
-            for (size_t k = 0; k < nseg; k++) {
-                const double *A = pts + RS__MK_PT * k;
-                double dy = y - A[1];
-                su0[k] = dy * A[4] - A[0] * A[3];
-                su1[k] = A[3] * pix;
-                st0[k] = -A[0] * A[4] - dy * A[3];
-                st1[k] = A[4] * pix;
-            }
+        if (!curved_span(mk, m, y, gx0, wd, &k0, &k1)) continue;
+        for (size_t k = 0; rowseg && k < nseg; k++) {
+            const double *A = pts + RS__MK_PT * k;
+            double dy = y - A[1];
+            su0[k] = dy * A[4] - A[0] * A[3];
+            su1[k] = A[3] * pix;
+            st0[k] = -A[0] * A[4] - dy * A[3];
+            st1[k] = A[4] * pix;
         }
         float *sc = p->sc + (size_t)r * w * 3;
         const uint16_t *q = p->q + (size_t)r * w;
@@ -657,10 +718,7 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
             if (q[k] == 0) continue;
             ++*tests;
             double gx = gx0 + (double)k + 0.5, u, v;
-            if (straight) {
-                u = ur + m->bu * gx;
-                v = vr + m->bv * gx;
-            } else if (rowseg) {
+            if (rowseg) {
                 /* road_coords with each segment's u, t from the row's
                  * coefficients: the distance to the clamped point is
                  * hypot(u - uc, t), its side the sign of t */
@@ -689,14 +747,7 @@ static void paint_one(const rs__markings *mk, const rs__mk *m, rs__piece *p, uin
                 v = m->cv + m->sv * (s - m->s0);
             }
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            float c4[4];
-            sample(m, u, v, c4);
-            if (!(c4[3] > 0)) continue;
-            ++*painted;
-            float keep = 1.0f - c4[3], *o = sc + (size_t)k;
-            o[0] = o[0] * keep + c4[0];
-            o[w] = o[w] * keep + c4[1];
-            o[2 * w] = o[2 * w] * keep + c4[2];
+            put(m, u, v, sc, w, k, painted);
         }
     }
 }
@@ -766,11 +817,11 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
                 for (uint32_t k = mk->start[c], ke = mk->start[c + 1]; k < ke; k++) {
                     const rs__mk_ref *e = &mk->list[k];
                     if (e->i < lo || e->i > hi) continue;
-                    if (e->x1 < xa || e->x0 > xb || e->y1 < ya || e->y0 > yb) continue;
+                    if ((e->x1 < xa) | (e->x0 > xb) | (e->y1 < ya) | (e->y0 > yb)) continue;
                     /* seen before unless its first cell is this one
                      * (cell_of(v) == c <=> v / cell >= c, for c > 0
                      * and a box known to touch cell c) */
-                    if ((cx > cx0 && (double)e->x0 / cell < (double)cx) || (cy > cy0 && (double)e->y0 / cell < (double)cy))
+                    if (((cx > cx0) & ((double)e->x0 / cell < (double)cx)) | ((cy > cy0) & ((double)e->y0 / cell < (double)cy)))
                         continue;
                     if (n == CAND_CAP) {
                         over = 1;
@@ -787,7 +838,9 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
         for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
         for (size_t k = 0; k < n; k++) {
             if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
-            paint_one(mk, &mk->m[cand[k]], p, &tests, &painted);
+            const rs__mk *m = &mk->m[cand[k]];
+            if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
+            else paint_curved(mk, m, p, &tests, &painted);
         }
         if (hi == UINT32_MAX) break;
         lo = hi + 1;
