@@ -718,7 +718,23 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
             if (q[k] == 0) continue;
             ++*tests;
             double gx = gx0 + (double)k + 0.5, u, v;
-            if (rowseg) {
+            if (nseg == 2) {
+                /* the common bend: rowseg's loop unrolled, same arithmetic */
+                const double *A = pts, *B = pts + RS__MK_PT;
+                double uu0 = su0[0] + su1[0] * gx, tt0 = st0[0] + st1[0] * gx;
+                double uu1 = su0[1] + su1[1] * gx, tt1 = st0[1] + st1[1] * gx;
+                double uc0 = uu0 < A[6] ? A[6] : uu0, uc1 = uu1 < B[6] ? B[6] : uu1;
+                uc0 = uc0 > A[7] ? A[7] : uc0;
+                uc1 = uc1 > B[7] ? B[7] : uc1;
+                double e0 = uu0 - uc0, e1 = uu1 - uc1;
+                double d0 = e0 * e0 + tt0 * tt0, d1 = e1 * e1 + tt1 * tt1;
+                d0 = A[5] > 0 ? d0 : INFINITY;
+                d1 = B[5] > 0 ? d1 : INFINITY;
+                int one = d1 < d0;
+                double best = one ? d1 : d0, tt = one ? tt1 : tt0, sv = one ? B[2] + uc1 : A[2] + uc0;
+                u = m->cu + m->su * (copysign(sqrt(best), tt) - m->t0);
+                v = m->cv + m->sv * (sv - m->s0);
+            } else if (rowseg) {
                 /* road_coords with each segment's u, t from the row's
                  * coefficients: the distance to the clamped point is
                  * hypot(u - uc, t), its side the sign of t */
