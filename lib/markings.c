@@ -80,6 +80,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs_atlas_free(ctx, mk->atlas_own);
     rs__free(ctx, mk->m);
     rs__free(ctx, mk->pts);
+    rs__free(ctx, mk->parts);
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
     rs__free(ctx, mk);
@@ -330,6 +331,99 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     return 1;
 }
 
+/* Bounds on K (pixel column + 1/2) from lo <= q <= hi, where q = K pix cx +
+ * (y - py) cy + c0 over the row centre y: into o[0..3] (lower a, b, upper
+ * a, b) when cx != 0, else into the y range [*ylo, *yhi]. */
+static void part_slab(double cx, double cy, double c0, double py, double lo, double hi, double pix, double *o,
+                      double *ylo, double *yhi)
+{
+    if (cx != 0) {
+        /* K = (q - c0 + py cy - y cy) / (pix cx) */
+        double ib = 1 / (pix * cx), a = (lo - c0 + py * cy) * ib, c = (hi - c0 + py * cy) * ib, b = -cy * ib;
+        if (ib < 0) {
+            double t = a;
+            a = c;
+            c = t;
+        }
+        o[0] = a;
+        o[1] = b;
+        o[2] = c;
+        o[3] = b;
+        return;
+    }
+    o[0] = -INFINITY;
+    o[1] = 0;
+    o[2] = INFINITY;
+    o[3] = 0;
+    /* q = (y - py) cy + c0: y in [(lo - c0) / cy + py, (hi - c0) / cy + py] */
+    double y0 = (lo - c0) / cy + py, y1 = (hi - c0) / cy + py;
+    if (y0 > y1) {
+        double t = y0;
+        y0 = y1;
+        y1 = t;
+    }
+    /* widened as the spans are: the per-pixel test decides */
+    double e = 1e-6 * (1 + fabs(py));
+    if (y0 - e > *ylo) *ylo = y0 - e;
+    if (y1 + e < *yhi) *yhi = y1 + e;
+}
+
+/* The span parts of curved marking m: each segment's rectangle of the
+ * support and the wedge at each vertex inside its s range. */
+static rs_result build_parts(rs_ctx *ctx, rs__markings *mk, rs__mk *m, size_t *n, size_t *cap)
+{
+    const double *c0 = mk->pts + RS__MK_PT * m->first, pix = mk->pix;
+    double far = fabs(m->tlo) > fabs(m->thi) ? fabs(m->tlo) : fabs(m->thi);
+    m->part = *n;
+    m->nparts = 0;
+    for (size_t k = 0; k + 1 < m->npt; k++) {
+        for (int wedge = 0; wedge < 2; wedge++) {
+            const double *A = c0 + RS__MK_PT * k;
+            double o[RS__MK_PART];
+            o[8] = -INFINITY;
+            o[9] = INFINITY;
+            o[12] = -1;
+            if (!wedge) {
+                if (!(A[5] > 0)) continue;
+                double ua = m->slo - A[2], ub = m->shi - A[2];
+                ua = ua < A[6] ? A[6] : ua;
+                ub = ub > A[7] ? A[7] : ub;
+                if (!(ua <= ub)) continue;
+                /* u = (x - ax) ux + (y - ay) uy, t = (x - ax) uy - (y - ay) ux, x = K pix */
+                part_slab(A[3], A[4], -A[0] * A[3], A[1], ua, ub, pix, o, &o[8], &o[9]);
+                part_slab(A[4], -A[3], -A[0] * A[4], A[1], m->tlo, m->thi, pix, o + 4, &o[8], &o[9]);
+            } else {
+                if (k == 0) continue;
+                /* vertex k is the nearest point only past the end of segment
+                 * k - 1 and before the start of segment k: the wedge between
+                 * their normals (outer side of the bend), within the
+                 * farthest offset */
+                const double *B = A - RS__MK_PT;
+                if (!(A[2] >= m->slo && A[2] <= m->shi)) continue;
+                double *h1 = o, *h2 = o + 4;
+                h1[0] = -INFINITY, h1[1] = 0, h1[2] = INFINITY, h1[3] = 0;
+                h2[0] = -INFINITY, h2[1] = 0, h2[2] = INFINITY, h2[3] = 0;
+                if (B[5] > 0) part_slab(B[3], B[4], -B[0] * B[3], B[1], B[5], INFINITY, pix, h1, &o[8], &o[9]);
+                if (A[5] > 0) part_slab(A[3], A[4], -A[0] * A[3], A[1], -INFINITY, 0, pix, h2, &o[8], &o[9]);
+                o[10] = A[0];
+                o[11] = A[1];
+                o[12] = far;
+            }
+            if (*n == *cap) {
+                size_t nc = *cap ? 2 * *cap : 256;
+                double *q = rs__realloc(ctx, mk->parts, nc * RS__MK_PART * sizeof(double));
+                if (!q) return RS_ERR_NOMEM;
+                mk->parts = q;
+                *cap = nc;
+            }
+            memcpy(mk->parts + RS__MK_PART * *n, o, sizeof o);
+            ++*n;
+            m->nparts++;
+        }
+    }
+    return RS_OK;
+}
+
 /* Index cell of coordinate v (metres), clamped to [0, n - 1]; the build
  * and the paint use the same function on the same (float) boxes. */
 static uint32_t cell_of(double v, double cell, uint32_t n)
@@ -469,6 +563,11 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__road_local_free(ctx, &rl);
         mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
                     mk->ntex * sizeof *mk->tex + tex_bytes;
+        size_t npart = 0, partcap = 0;
+        for (size_t i = 0; i < mk->n && !r; i++)
+            if (mk->m[i].npt > 2 && build_parts(ctx, mk, &mk->m[i], &npart, &partcap))
+                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        mk->bytes += partcap * RS__MK_PART * sizeof(double);
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
             double map_h = (double)(dem->height - 1) * dem->frame.cell_size;
@@ -550,73 +649,34 @@ static int slab(double a, double b, double ib, double lo, double hi, double gx0,
     return *k0 <= *k1;
 }
 
-/* The columns k (unrounded, piece-relative: gx = gx0 + k) where lo <= a + b
- * (gx + 1/2) <= hi: [*e0, *e1] (empty: *e0 > *e1); ib = 1 / b. */
-static void slab_d(double a, double b, double ib, double lo, double hi, double gx0, double *e0, double *e1)
-{
-    if (b == 0) {
-        int in = a >= lo && a <= hi;
-        *e0 = in ? -INFINITY : INFINITY;
-        *e1 = in ? INFINITY : -INFINITY;
-        return;
-    }
-    double f0 = (lo - a) * ib - 0.5 - gx0, f1 = (hi - a) * ib - 0.5 - gx0;
-    double mn = f0 < f1 ? f0 : f1, mx = f1 > f0 ? f1 : f0; /* minsd, maxsd */
-    *e0 = mn;
-    *e1 = mx;
-}
-
 /* The span of row centre y on a marking with a curved stretch: the hull
- * of each segment's part of the support (a rectangle in its own frame)
- * and, around each vertex inside it, the wedge where that vertex is the
- * nearest point. Selects rather than branches: the segments are few. */
+ * of its parts (build_parts: each segment's rectangle of the support, the
+ * wedge at each vertex where that vertex is the nearest point), from
+ * bounds linear in y; selects rather than branches. */
 static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double gx0, double w, long *k0, long *k1)
 {
-    const double *c0 = mk->pts + RS__MK_PT * m->first, pix = mk->pix;
+    const double *P = mk->parts + RS__MK_PART * m->part, ipix = 1 / mk->pix;
     double lo = INFINITY, hi = -INFINITY;
-    double far = fabs(m->tlo) > fabs(m->thi) ? fabs(m->tlo) : fabs(m->thi);
-    for (size_t k = 0; k + 1 < m->npt; k++) {
-        const double *A = c0 + RS__MK_PT * k;
-        double ux = A[3], uy = A[4];
-        double ua = m->slo - A[2], ub = m->shi - A[2];
-        ua = ua < A[6] ? A[6] : ua;
-        ub = ub > A[7] ? A[7] : ub;
-        /* u(x) = (x - ax) ux + (y - ay) uy, t(x) = (x - ax) uy - (y - ay) ux, over x = (gx + 1/2) pix */
-        double dy = y - A[1], a0, a1, b0, b1;
-        slab_d(-A[0] * ux + dy * uy, ux * pix, A[8], ua, ub, gx0, &a0, &a1);
-        slab_d(-A[0] * uy - dy * ux, uy * pix, A[9], m->tlo, m->thi, gx0, &b0, &b1);
-        double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
-        int ok = (A[5] > 0) & (ua <= ub) & (e0 <= e1 + 2 * SPAN_EPS);
-        e0 = ok ? e0 : INFINITY;
-        e1 = ok ? e1 : -INFINITY;
-        lo = e0 < lo ? e0 : lo;
-        hi = e1 > hi ? e1 : hi;
-    }
-    for (size_t k = 1; k + 1 < m->npt; k++) {
-        /* a pixel whose nearest point is vertex V is past the end of the
-         * segment before (u >= its length) and before the start of the
-         * one after (u <= 0): the wedge between their normals at V (on
-         * the outer side of the bend), within the farthest offset */
-        const double *V = c0 + RS__MK_PT * k, *B = V - RS__MK_PT;
-        double dy = y - V[1], r2 = far * far - dy * dy;
-        double h = sqrt(r2 > 0 ? r2 : 0);
-        double e0 = (V[0] - h) / pix - 0.5 - gx0, e1 = (V[0] + h) / pix - 0.5 - gx0, a0 = -INFINITY, a1 = INFINITY,
-               b0 = -INFINITY, b1 = INFINITY;
-        double dyb = y - B[1];
-        if (B[5] > 0) slab_d(-B[0] * B[3] + dyb * B[4], B[3] * pix, B[8], B[5], INFINITY, gx0, &a0, &a1);
-        if (V[5] > 0) slab_d(-V[0] * V[3] + dy * V[4], V[3] * pix, V[8], -INFINITY, 0, gx0, &b0, &b1);
-        e0 = e0 > a0 ? e0 : a0;
-        e0 = e0 > b0 ? e0 : b0;
-        e1 = e1 < a1 ? e1 : a1;
-        e1 = e1 < b1 ? e1 : b1;
-        int ok = (V[2] >= m->slo) & (V[2] <= m->shi) & (r2 >= 0) & (e0 <= e1 + 2 * SPAN_EPS);
+    for (size_t k = 0; k < m->nparts; k++, P += RS__MK_PART) {
+        double l0 = P[0] + P[1] * y, l1 = P[4] + P[5] * y, h0 = P[2] + P[3] * y, h1 = P[6] + P[7] * y;
+        double e0 = l0 > l1 ? l0 : l1, e1 = h0 < h1 ? h0 : h1;
+        int ok = (y >= P[8]) & (y <= P[9]);
+        if (P[12] >= 0) {
+            double dy = y - P[11], r2 = P[12] * P[12] - dy * dy, h = sqrt(r2 > 0 ? r2 : 0);
+            double d0 = (P[10] - h) * ipix, d1 = (P[10] + h) * ipix;
+            e0 = e0 > d0 ? e0 : d0;
+            e1 = e1 < d1 ? e1 : d1;
+            ok &= r2 >= 0;
+        }
+        ok &= e0 <= e1 + 2 * SPAN_EPS;
         e0 = ok ? e0 : INFINITY;
         e1 = ok ? e1 : -INFINITY;
         lo = e0 < lo ? e0 : lo;
         hi = e1 > hi ? e1 : hi;
     }
     if (!(lo <= hi + 2 * SPAN_EPS)) return 0;
-    long l0 = span_lo(lo, w), l1 = span_hi(hi, w);
+    /* K = gx0 + k + 1/2 */
+    long l0 = span_lo(lo - 0.5 - gx0, w), l1 = span_hi(hi - 0.5 - gx0, w);
     if (l0 > *k0) *k0 = l0;
     if (l1 < *k1) *k1 = l1;
     return *k0 <= *k1;

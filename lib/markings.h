@@ -49,6 +49,7 @@ typedef struct rs__mk {
     float f;                   /* the coarse level's weight */
     int flat;                  /* one segment, and bu or bv is 0 */
     size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
+    size_t part, nparts;       /* curved: its span parts, parts[part..part+nparts-1] */
     double by0, by1;           /* rows of the box */
     /* padded fine-level texel coordinates U (across), V (along): the
      * sample is transparent outside [ulo, uhi) x [vlo, vhi) */
@@ -83,6 +84,13 @@ typedef struct rs__mk_ref {
  * ends, else 0 / length), 1 / (ux pix) and 1 / (uy pix) (0 for 0). */
 #define RS__MK_PT 10
 
+/* A part of a curved marking's row spans (a segment's rectangle, or the
+ * wedge at a vertex), as bounds on K = column + 1/2 (absolute) linear in
+ * the row centre y: K in [max(a0 + b0 y, a2 + b2 y), min(a1 + b1 y, a3 +
+ * b3 y)] for y in [ylo, yhi], and (wedge) within r metres of (vx, vy):
+ * a0 b0 a1 b1 a2 b2 a3 b3 ylo yhi vx vy r (r < 0: no disc). */
+#define RS__MK_PART 13
+
 typedef struct rs__markings {
     rs_atlas *atlas_own;       /* the built-in atlas when none was given */
     rs__mk_tex *tex;           /* per atlas type, built for the types placed */
@@ -90,6 +98,7 @@ typedef struct rs__markings {
     rs__mk *m;
     size_t n;
     double *pts;               /* RS__MK_PT doubles per point */
+    double *parts;             /* RS__MK_PART doubles per span part of a curved marking */
     double pix;                /* output pixel, metres */
     double cell;               /* index cell, metres */
     uint32_t gw, gh;
