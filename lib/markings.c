@@ -8,8 +8,10 @@
 #include "splatter.h"
 
 #include <float.h>
+#include <limits.h>
 #include <stdio.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #define MAX_INDEX_ENTRIES (1u << 26)
@@ -72,55 +74,86 @@ rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t 
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
 {
     if (!mk) return;
+    for (size_t i = 0; mk->tex && i < mk->ntex; i++)
+        for (uint32_t l = 0; l < mk->tex[i].nlev; l++) rs__free(ctx, mk->tex[i].lev[l].px);
+    rs__free(ctx, mk->tex);
     rs_atlas_free(ctx, mk->atlas_own);
     rs__free(ctx, mk->m);
     rs__free(ctx, mk->pts);
+    rs__free(ctx, mk->parts);
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
     rs__free(ctx, mk);
 }
 
-/* The road coordinates of local point (x, y) on a marking's stretch of
- * road: the nearest point of its segments (the first and last extended
- * beyond their ends, so that pixels past the stretch never clamp onto it),
- * s there and t = the signed distance (+ left of travel), so a marking
- * bends with the road as its buffer does. */
-static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out)
+/* The paint-time levels of a type: padded copies and their alpha boxes. */
+static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx, size_t *bytes)
 {
-    if (npt == 2) { /* one segment, extended both ways: the line's own coordinates */
-        double len = pts[5] - pts[2];
-        double ux = (pts[3] - pts[0]) / len, uy = (pts[4] - pts[1]) / len, px = x - pts[0], py = y - pts[1];
-        *s_out = pts[2] + px * ux + py * uy;
-        *t_out = px * uy - py * ux;
-        return;
-    }
-    double best = INFINITY, bs = 0, bt = 0;
-    for (size_t k = 0; k + 1 < npt; k++) {
-        const double *a = pts + 3 * k, *b = a + 3;
-        double dx = b[0] - a[0], dy = b[1] - a[1], len = b[2] - a[2];
-        if (!(len > 0)) continue;
-        double ux = dx / len, uy = dy / len;
-        double px = x - a[0], py = y - a[1];
-        double u = px * ux + py * uy;
-        if (k > 0 && u < 0) u = 0;
-        if (k + 2 < npt && u > len) u = len;
-        double ex = px - u * ux, ey = py - u * uy, d2 = ex * ex + ey * ey;
-        if (d2 < best) {
-            best = d2;
-            bs = a[2] + u;
-            double side = ex * uy - ey * ux; /* (p - q) . (dy, -dx) */
-            double d = sqrt(d2);
-            bt = side < 0 ? -d : d;
+    const uint32_t P = RS__MK_PAD;
+    for (uint32_t l = 0; l < ty->nlev; l++) {
+        const rs__atlas_level *L = &ty->lev[l];
+        rs__mk_level *o = &tx->lev[l];
+        o->w = L->w;
+        o->h = L->h;
+        o->pw = L->w + 2 * P;
+        o->px = rs__calloc(ctx, (size_t)o->pw * (L->h + 2 * P), 4 * sizeof(float));
+        if (!o->px) return RS_ERR_NOMEM;
+        tx->nlev = l + 1;
+        *bytes += (size_t)o->pw * (L->h + 2 * P) * 4 * sizeof(float);
+        o->ax0 = o->ay0 = INT32_MAX;
+        o->ax1 = o->ay1 = INT32_MIN;
+        for (uint32_t j = 0; j < L->h; j++) {
+            memcpy(o->px + ((size_t)(j + P) * o->pw + P) * 4, L->px + (size_t)j * L->w * 4, (size_t)L->w * 4 * sizeof(float));
+            for (uint32_t i = 0; i < L->w; i++)
+                if (L->px[((size_t)j * L->w + i) * 4 + 3] > 0) {
+                    if ((int32_t)i < o->ax0) o->ax0 = (int32_t)i;
+                    if ((int32_t)i > o->ax1) o->ax1 = (int32_t)i;
+                    if ((int32_t)j < o->ay0) o->ay0 = (int32_t)j;
+                    if ((int32_t)j > o->ay1) o->ay1 = (int32_t)j;
+                }
         }
     }
-    *s_out = bs;
-    *t_out = bt;
+    return RS_OK;
 }
 
-/* Geometry of one placement: its stretch of road, bounding box, filter
- * reach. Returns 0 when it lies wholly off its road. */
-static int place(const rs__placement *pl, const rs__road_local *r, const rs__atlas_type *ty, double pix, rs__mk *m,
-                 double **pts, size_t *npts, size_t *cap, rs_ctx *ctx, rs_result *err)
+/* The road coordinates of local point (x, y) on a marking's stretch of
+ * road (RS__MK_PT doubles per point): the nearest point of its segments
+ * (the first and last extended beyond their ends, so that pixels past the
+ * stretch never clamp onto it), s there and t = the signed distance (+ left
+ * of travel), so a marking bends with the road as its buffer does. */
+static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out)
+{
+    /* the nearest segment by index (selects, not branches), then its s, t */
+    double best = INFINITY;
+    size_t bk = 0;
+    for (size_t k = 0; k + 1 < npt; k++) {
+        const double *a = pts + RS__MK_PT * k;
+        double ux = a[3], uy = a[4];
+        double px = x - a[0], py = y - a[1];
+        double u = px * ux + py * uy;
+        u = u < a[6] ? a[6] : u;
+        u = u > a[7] ? a[7] : u;
+        double ex = px - u * ux, ey = py - u * uy, d2 = ex * ex + ey * ey;
+        d2 = a[5] > 0 ? d2 : INFINITY;
+        bk = d2 < best ? k : bk;
+        best = d2 < best ? d2 : best;
+    }
+    const double *a = pts + RS__MK_PT * bk;
+    double ux = a[3], uy = a[4], px = x - a[0], py = y - a[1];
+    double u = px * ux + py * uy;
+    u = u < a[6] ? a[6] : u;
+    u = u > a[7] ? a[7] : u;
+    double ex = px - u * ux, ey = py - u * uy;
+    double side = ex * uy - ey * ux; /* (p - q) . (dy, -dx) */
+    *s_out = a[2] + u;
+    *t_out = copysign(sqrt(best), side);
+}
+
+/* Geometry of one placement: its levels, support, stretch of road,
+ * bounding box. Returns 0 when it lies wholly off its road or its sprite
+ * is transparent. */
+static int place(const rs__placement *pl, const rs__road_local *r, const rs__atlas_type *ty, const rs__mk_tex *tx,
+                 double pix, rs__mk *m, double **pts, size_t *npts, size_t *cap, rs_ctx *ctx, rs_result *err)
 {
     memset(m, 0, sizeof *m);
     m->ty = ty;
@@ -133,29 +166,79 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     m->ky = ty->lev[0].h / pl->length;
     double rho = pix * (m->kx > m->ky ? m->kx : m->ky);
     m->lod = rho > 1 ? log2(rho) : 0;
-    double top = ceil(m->lod);
-    if (top > ty->nlev - 1) top = ty->nlev - 1;
-    double reach = 0.5 * ldexp(1.0, (int)top); /* level-0 texels past the edge */
-    m->ms = reach / m->ky;
-    m->mt = reach / m->kx;
+    /* the levels: bilinear in floor(lod) and the next, blended (trilinear) */
+    double top = (double)(ty->nlev - 1);
+    int l = m->lod >= top ? (int)top : (int)m->lod;
+    float f = m->lod >= top ? 0 : (float)(m->lod - l);
+    m->fine = &tx->lev[l];
+    m->coarse = f > 0 ? &tx->lev[l + 1] : NULL;
+    m->f = f;
+    const double P = RS__MK_PAD, sgn = m->flip ? -1 : 1, sc = ldexp(1.0, -l);
+    m->cu = m->hw * m->kx * sc - 0.5 + P;
+    m->su = -sgn * m->kx * sc;
+    m->cv = m->hl * m->ky * sc - 0.5 + P;
+    m->sv = -sgn * m->ky * sc;
+    /* support: a fine texel box [a0, a1] reaches [a0 - 1, a1 + 1); a coarse
+     * one (coarse u2 = u / 2 - 1/4) [2 a0 - 1.5, 2 a1 + 2.5) */
+    const rs__mk_level *F = m->fine, *C = m->coarse;
+    if (F->ax0 > F->ax1 && (!C || C->ax0 > C->ax1)) return 0;
+    if (C) {
+        m->ulo = 2.0 * C->ax0 - 1.5 + P;
+        m->uhi = 2.0 * C->ax1 + 2.5 + P;
+        m->vlo = 2.0 * C->ay0 - 1.5 + P;
+        m->vhi = 2.0 * C->ay1 + 2.5 + P;
+    } else {
+        m->ulo = F->ax0 - 1.0 + P;
+        m->uhi = F->ax1 + 1.0 + P;
+        m->vlo = F->ay0 - 1.0 + P;
+        m->vhi = F->ay1 + 1.0 + P;
+    }
+    {
+        /* and no further than the filter's reach past the rectangle: half
+         * a texel of the coarser level (where an odd size padded it, the
+         * coarse texels would reach further) */
+        double tp = ceil(m->lod);
+        if (tp > ty->nlev - 1) tp = ty->nlev - 1;
+        double reach = 0.5 * ldexp(1.0, (int)tp);
+        double a0 = -reach * sc - 0.5 + P, a1 = (ty->lev[0].w + reach) * sc - 0.5 + P;
+        double b1 = (ty->lev[0].h + reach) * sc - 0.5 + P;
+        if (m->ulo < a0) m->ulo = a0;
+        if (m->uhi > a1) m->uhi = nextafter(a1, INFINITY);
+        if (m->vlo < a0) m->vlo = a0;
+        if (m->vhi > b1) m->vhi = nextafter(b1, INFINITY);
+        if (!(m->ulo < m->uhi && m->vlo < m->vhi)) return 0;
+    }
+    {
+        double d0 = (m->ulo - m->cu) / m->su, d1 = (m->uhi - m->cu) / m->su;
+        double e0 = (m->vlo - m->cv) / m->sv, e1 = (m->vhi - m->cv) / m->sv;
+        double dlo = d0 < d1 ? d0 : d1, dhi = d0 < d1 ? d1 : d0;
+        double elo = e0 < e1 ? e0 : e1, ehi = e0 < e1 ? e1 : e0;
+        /* a margin far above rounding: the box and row spans must hold
+         * every pixel whose own test passes */
+        double mt = 1e-6 + 1e-12 * fabs(m->t0), ms = 1e-6 + 1e-12 * fabs(m->s0);
+        m->tlo = m->t0 + dlo - mt;
+        m->thi = m->t0 + dhi + mt;
+        m->slo = m->s0 + elo - ms;
+        m->shi = m->s0 + ehi + ms;
+    }
     if (r->n < 2) return 0;
     double total = r->s[r->n - 1];
-    double lo = m->s0 - m->hl - m->ms, hi = m->s0 + m->hl + m->ms;
+    double lo = m->slo, hi = m->shi;
     if (hi < 0 || lo > total) return 0;
     /* segments [a, b] overlapping [lo, hi] */
     size_t a = 0, b = r->n - 2;
     {
-        size_t l = 0, h = r->n - 1; /* last k with s[k] <= lo */
-        while (l + 1 < h) {
-            size_t mid = (l + h) / 2;
-            if (r->s[mid] <= lo) l = mid; else h = mid;
+        size_t lw = 0, h = r->n - 1; /* last k with s[k] <= lo */
+        while (lw + 1 < h) {
+            size_t mid = (lw + h) / 2;
+            if (r->s[mid] <= lo) lw = mid; else h = mid;
         }
-        a = l;
-        l = 0;
+        a = lw;
+        lw = 0;
         h = r->n - 1; /* first k with s[k] >= hi */
-        while (l + 1 < h) {
-            size_t mid = (l + h) / 2;
-            if (r->s[mid] >= hi) h = mid; else l = mid;
+        while (lw + 1 < h) {
+            size_t mid = (lw + h) / 2;
+            if (r->s[mid] >= hi) h = mid; else lw = mid;
         }
         b = h > 0 ? h - 1 : 0;
         if (b < a) b = a;
@@ -164,7 +247,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     if (*npts + np > *cap) {
         size_t nc = *cap ? *cap : 256;
         while (nc < *npts + np) nc *= 2;
-        double *q = rs__realloc(ctx, *pts, nc * 3 * sizeof(double));
+        double *q = rs__realloc(ctx, *pts, nc * RS__MK_PT * sizeof(double));
         if (!q) {
             *err = RS_ERR_NOMEM;
             return 0;
@@ -174,18 +257,49 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     }
     m->first = *npts;
     m->npt = np;
+    double *c0 = *pts + RS__MK_PT * *npts;
     for (size_t k = 0; k < np; k++) {
-        double *o = *pts + 3 * (*npts + k);
+        double *o = c0 + RS__MK_PT * k;
         o[0] = r->x[a + k];
         o[1] = r->y[a + k];
         o[2] = r->s[a + k];
+        o[3] = o[4] = o[5] = 0;
+        o[6] = k > 0 ? 0 : -INFINITY;
+        o[7] = INFINITY;
+        if (k > 0) {
+            double *pv = o - RS__MK_PT, len = o[2] - pv[2];
+            pv[5] = len;
+            pv[3] = len > 0 ? (o[0] - pv[0]) / len : 1;
+            pv[4] = len > 0 ? (o[1] - pv[1]) / len : 0;
+            if (k + 1 < np) pv[7] = len;
+            pv[8] = pv[3] != 0 ? 1 / (pv[3] * pix) : 0;
+            pv[9] = pv[4] != 0 ? 1 / (pv[4] * pix) : 0;
+        }
+        o[8] = o[9] = 0;
     }
-    /* the box: the offset rectangle's corners where [lo, hi] starts and
-     * ends (on the end segments' lines, extended past the stretch as the
-     * lookup extends them), and around every vertex inside [lo, hi] the
-     * square of the farthest offset (an outer bend's arc stays in it) */
-    const double *c0 = *pts + 3 * *npts;
-    double tin = m->t0 - m->hw - m->mt, tout = m->t0 + m->hw + m->mt;
+    if (np == 2) {
+        /* one segment, extended both ways: s and t are affine in (x, y) */
+        const double *A = c0;
+        double ux = A[3], uy = A[4];
+        m->bu = m->su * uy * pix;
+        m->ibu = m->bu != 0 ? 1 / m->bu : 0;
+        m->buy = -m->su * ux;
+        m->au = m->cu + m->su * (A[1] * ux - A[0] * uy - m->t0);
+        m->bv = m->sv * ux * pix;
+        m->ibv = m->bv != 0 ? 1 / m->bv : 0;
+        m->bvy = m->sv * uy;
+        m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
+        m->flat = m->bu == 0 || m->bv == 0;
+        m->ua = m->ibu >= 0 ? m->ulo : m->uhi;
+        m->ub = m->ibu >= 0 ? m->uhi : m->ulo;
+        m->va = m->ibv >= 0 ? m->vlo : m->vhi;
+        m->vb = m->ibv >= 0 ? m->vhi : m->vlo;
+    }
+    /* the box: the support's corners where [lo, hi] starts and ends (on
+     * the end segments' lines, extended past the stretch as the lookup
+     * extends them), and around every vertex inside [lo, hi] the square of
+     * the farthest offset (an outer bend's arc stays in it) */
+    double tin = m->tlo, tout = m->thi;
     double far = fabs(tin) > fabs(tout) ? fabs(tin) : fabs(tout);
     m->bx0 = m->by0 = INFINITY;
     m->bx1 = m->by1 = -INFINITY;
@@ -193,9 +307,9 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         double sv = end ? hi : lo;
         /* the segment of the chain that holds sv (end segments extended) */
         size_t k = 0;
-        while (k + 2 < np && c0[3 * (k + 1) + 2] <= sv) k++;
-        const double *A = c0 + 3 * k, *B = A + 3;
-        double len = B[2] - A[2], ux = len > 0 ? (B[0] - A[0]) / len : 1, uy = len > 0 ? (B[1] - A[1]) / len : 0;
+        while (k + 2 < np && c0[RS__MK_PT * (k + 1) + 2] <= sv) k++;
+        const double *A = c0 + RS__MK_PT * k;
+        double ux = A[3], uy = A[4];
         double px = A[0] + (sv - A[2]) * ux, py = A[1] + (sv - A[2]) * uy;
         for (int side = 0; side < 2; side++) {
             double tt = side ? tout : tin, x = px + tt * uy, y = py - tt * ux; /* left normal (dy, -dx) */
@@ -206,7 +320,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         }
     }
     for (size_t k = 1; k + 1 < np; k++) {
-        const double *V = c0 + 3 * k;
+        const double *V = c0 + RS__MK_PT * k;
         if (!(V[2] > lo && V[2] < hi)) continue;
         if (V[0] - far < m->bx0) m->bx0 = V[0] - far;
         if (V[0] + far > m->bx1) m->bx1 = V[0] + far;
@@ -215,6 +329,108 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     }
     *npts += np;
     return 1;
+}
+
+/* Bounds on K (pixel column + 1/2) from lo <= q <= hi, where q = K pix cx +
+ * (y - py) cy + c0 over the row centre y: into o[0..3] (lower a, b, upper
+ * a, b) when cx != 0, else into the y range [*ylo, *yhi]. */
+static void part_slab(double cx, double cy, double c0, double py, double lo, double hi, double pix, double *o,
+                      double *ylo, double *yhi)
+{
+    if (cx != 0) {
+        /* K = (q - c0 + py cy - y cy) / (pix cx) */
+        double ib = 1 / (pix * cx), a = (lo - c0 + py * cy) * ib, c = (hi - c0 + py * cy) * ib, b = -cy * ib;
+        if (ib < 0) {
+            double t = a;
+            a = c;
+            c = t;
+        }
+        o[0] = a;
+        o[1] = b;
+        o[2] = c;
+        o[3] = b;
+        return;
+    }
+    o[0] = -INFINITY;
+    o[1] = 0;
+    o[2] = INFINITY;
+    o[3] = 0;
+    /* q = (y - py) cy + c0: y in [(lo - c0) / cy + py, (hi - c0) / cy + py] */
+    double y0 = (lo - c0) / cy + py, y1 = (hi - c0) / cy + py;
+    if (y0 > y1) {
+        double t = y0;
+        y0 = y1;
+        y1 = t;
+    }
+    /* widened as the spans are: the per-pixel test decides */
+    double e = 1e-6 * (1 + fabs(py));
+    if (y0 - e > *ylo) *ylo = y0 - e;
+    if (y1 + e < *yhi) *yhi = y1 + e;
+}
+
+/* The span parts of curved marking m: each segment's rectangle of the
+ * support and the wedge at each vertex inside its s range. */
+static rs_result build_parts(rs_ctx *ctx, rs__markings *mk, rs__mk *m, size_t *n, size_t *cap)
+{
+    const double *c0 = mk->pts + RS__MK_PT * m->first, pix = mk->pix;
+    double far = fabs(m->tlo) > fabs(m->thi) ? fabs(m->tlo) : fabs(m->thi);
+    m->part = *n;
+    m->nparts = 0;
+    for (size_t k = 0; k + 1 < m->npt; k++) {
+        for (int wedge = 0; wedge < 2; wedge++) {
+            const double *A = c0 + RS__MK_PT * k;
+            double o[RS__MK_PART];
+            o[8] = -INFINITY;
+            o[9] = INFINITY;
+            o[12] = -1;
+            if (!wedge) {
+                if (!(A[5] > 0)) continue;
+                double ua = m->slo - A[2], ub = m->shi - A[2];
+                ua = ua < A[6] ? A[6] : ua;
+                ub = ub > A[7] ? A[7] : ub;
+                if (!(ua <= ub)) continue;
+                /* u = (x - ax) ux + (y - ay) uy, t = (x - ax) uy - (y - ay) ux, x = K pix */
+                part_slab(A[3], A[4], -A[0] * A[3], A[1], ua, ub, pix, o, &o[8], &o[9]);
+                part_slab(A[4], -A[3], -A[0] * A[4], A[1], m->tlo, m->thi, pix, o + 4, &o[8], &o[9]);
+            } else {
+                if (k == 0) continue;
+                /* vertex k is the nearest point only past the end of segment
+                 * k - 1 and before the start of segment k: the wedge between
+                 * their normals (outer side of the bend), within the
+                 * farthest offset */
+                const double *B = A - RS__MK_PT;
+                if (!(A[2] >= m->slo && A[2] <= m->shi)) continue;
+                double *h1 = o, *h2 = o + 4;
+                h1[0] = -INFINITY, h1[1] = 0, h1[2] = INFINITY, h1[3] = 0;
+                h2[0] = -INFINITY, h2[1] = 0, h2[2] = INFINITY, h2[3] = 0;
+                if (B[5] > 0) part_slab(B[3], B[4], -B[0] * B[3], B[1], B[5], INFINITY, pix, h1, &o[8], &o[9]);
+                if (A[5] > 0) part_slab(A[3], A[4], -A[0] * A[3], A[1], -INFINITY, 0, pix, h2, &o[8], &o[9]);
+                o[10] = A[0];
+                o[11] = A[1];
+                o[12] = far;
+            }
+            if (*n == *cap) {
+                size_t nc = *cap ? 2 * *cap : 256;
+                double *q = rs__realloc(ctx, mk->parts, nc * RS__MK_PART * sizeof(double));
+                if (!q) return RS_ERR_NOMEM;
+                mk->parts = q;
+                *cap = nc;
+            }
+            memcpy(mk->parts + RS__MK_PART * *n, o, sizeof o);
+            ++*n;
+            m->nparts++;
+        }
+    }
+    return RS_OK;
+}
+
+/* Index cell of coordinate v (metres), clamped to [0, n - 1]; the build
+ * and the paint use the same function on the same (float) boxes. */
+static uint32_t cell_of(double v, double cell, uint32_t n)
+{
+    double c = floor(v / cell);
+    if (!(c > 0)) return 0;
+    return c >= n ? n - 1 : (uint32_t)c;
 }
 
 static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double map_h)
@@ -232,11 +448,15 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
     for (int pass = 0; pass < 2; pass++) {
         for (size_t i = 0; i < mk->n; i++) {
             const rs__mk *m = &mk->m[i];
-            double cx0 = floor(m->bx0 / cell), cx1 = floor(m->bx1 / cell);
-            double cy0 = floor(m->by0 / cell), cy1 = floor(m->by1 / cell);
-            if (cx1 < 0 || cy1 < 0 || cx0 >= mk->gw || cy0 >= mk->gh) continue;
-            uint32_t x0 = cx0 < 0 ? 0 : (uint32_t)cx0, y0 = cy0 < 0 ? 0 : (uint32_t)cy0;
-            uint32_t x1 = cx1 >= mk->gw ? mk->gw - 1 : (uint32_t)cx1, y1 = cy1 >= mk->gh ? mk->gh - 1 : (uint32_t)cy1;
+            rs__mk_ref e;
+            e.x0 = nextafterf((float)m->bx0, -INFINITY);
+            e.y0 = nextafterf((float)m->by0, -INFINITY);
+            e.x1 = nextafterf((float)m->bx1, INFINITY);
+            e.y1 = nextafterf((float)m->by1, INFINITY);
+            e.i = (uint32_t)i;
+            if (!(e.x1 >= 0 && e.y1 >= 0 && e.x0 < map_w + cell && e.y0 < map_h + cell)) continue;
+            uint32_t x0 = cell_of(e.x0, cell, mk->gw), y0 = cell_of(e.y0, cell, mk->gh);
+            uint32_t x1 = cell_of(e.x1, cell, mk->gw), y1 = cell_of(e.y1, cell, mk->gh);
             if (pass == 0) {
                 total += (uint64_t)(x1 - x0 + 1) * (y1 - y0 + 1);
                 if (total > MAX_INDEX_ENTRIES)
@@ -246,14 +466,7 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
                     for (uint32_t x = x0; x <= x1; x++) mk->start[(size_t)y * mk->gw + x + 1]++;
             } else {
                 for (uint32_t y = y0; y <= y1; y++)
-                    for (uint32_t x = x0; x <= x1; x++) {
-                        rs__mk_ref *e = &mk->list[mk->start[(size_t)y * mk->gw + x]++];
-                        e->x0 = nextafterf((float)m->bx0, -INFINITY);
-                        e->y0 = nextafterf((float)m->by0, -INFINITY);
-                        e->x1 = nextafterf((float)m->bx1, INFINITY);
-                        e->y1 = nextafterf((float)m->by1, INFINITY);
-                        e->i = (uint32_t)i;
-                    }
+                    for (uint32_t x = x0; x <= x1; x++) mk->list[mk->start[(size_t)y * mk->gw + x]++] = e;
             }
         }
         if (pass == 0) {
@@ -315,7 +528,10 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r && npl) {
         mk->pix = dem->frame.cell_size / o->texels;
         mk->m = rs__alloc_array(ctx, npl, sizeof *mk->m);
-        if (!mk->m) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        mk->ntex = atlas->n;
+        mk->tex = rs__calloc(ctx, atlas->n, sizeof *mk->tex);
+        if (!mk->m || !mk->tex) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        size_t tex_bytes = 0;
         size_t pcap = 0, npts = 0;
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
@@ -330,8 +546,14 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                 }
                 have_road = pl[i].road;
             }
+            rs__mk_tex *tx = &mk->tex[pl[i].type];
+            if (tx->nlev == 0 && build_tex(ctx, &atlas->t[pl[i].type], tx, &tex_bytes)) {
+                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+                break;
+            }
             rs_result e = RS_OK;
-            if (place(&pl[i], &rl, &atlas->t[pl[i].type], mk->pix, &mk->m[mk->n], &mk->pts, &npts, &pcap, ctx, &e)) {
+            if (place(&pl[i], &rl, &atlas->t[pl[i].type], tx, mk->pix, &mk->m[mk->n], &mk->pts, &npts, &pcap, ctx,
+                      &e)) {
                 mk->n++;
                 if (i < n_explicit) mk->n_explicit++;
                 else mk->n_auto++;
@@ -339,7 +561,13 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
             if (e) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
         }
         rs__road_local_free(ctx, &rl);
-        mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * 3 * sizeof(double);
+        mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
+                    mk->ntex * sizeof *mk->tex + tex_bytes;
+        size_t npart = 0, partcap = 0;
+        for (size_t i = 0; i < mk->n && !r; i++)
+            if (mk->m[i].npt > 2 && build_parts(ctx, mk, &mk->m[i], &npart, &partcap))
+                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        mk->bytes += partcap * RS__MK_PART * sizeof(double);
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
             double map_h = (double)(dem->height - 1) * dem->frame.cell_size;
@@ -356,52 +584,343 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     return RS_OK;
 }
 
-void rs__markings_paint(const rs__markings *mk, rs__piece *p)
+/* Trilinear sample at padded fine-level coordinates (u, v) inside the
+ * marking's support: bilinear in the fine level and (when f > 0) in the
+ * coarse one, u2 = u / 2 + (pad / 2 - 1/4), blended; premultiplied. */
+static void sample(const rs__mk *m, double u, double v, float out[4])
+{
+    const rs__mk_level *F = m->fine;
+    /* u, v >= 0 here, and the levels' sizes are far below 2^31 */
+    int i = (int)u, j = (int)v;
+    float wx = (float)(u - (double)i), wy = (float)(v - (double)j);
+    const float *t0 = F->px + ((size_t)j * F->pw + (size_t)i) * 4, *t1 = t0 + (size_t)F->pw * 4;
+    for (int c = 0; c < 4; c++) {
+        float a = t0[c] + wx * (t0[4 + c] - t0[c]), b = t1[c] + wx * (t1[4 + c] - t1[c]);
+        out[c] = a + wy * (b - a);
+    }
+    const rs__mk_level *C = m->coarse;
+    if (C) {
+        const double off = 0.5 * RS__MK_PAD - 0.25;
+        double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
+        int i2 = (int)u2, j2 = (int)v2;
+        float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2), f = m->f;
+        const float *c0 = C->px + ((size_t)j2 * C->pw + (size_t)i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
+        for (int c = 0; c < 4; c++) {
+            float a = c0[c] + wx2 * (c0[4 + c] - c0[c]), b = c1[c] + wx2 * (c1[4 + c] - c1[c]);
+            float g = a + wy2 * (b - a);
+            out[c] += f * (g - out[c]);
+        }
+    }
+}
+
+/* Row spans are widened by this many pixels: far above the rounding of
+ * the per-pixel test (about 1e-12 of a pixel), so every pixel it passes
+ * is in the span, whichever piece holds it. */
+#define SPAN_EPS 1e-4
+
+/* ceil(e - SPAN_EPS) and floor(e + SPAN_EPS) for e clamped to [-2, w + 2]
+ * (spans are clamped to [0, w) anyway): integer conversions, no libm. */
+static long span_lo(double e, double w)
+{
+    e = e > -2 ? e : -2; /* NaN: -2 */
+    e = e < w + 2 ? e : w + 2;
+    e = e + 2 - SPAN_EPS;
+    long t = (long)e;
+    return t + ((double)t < e) - 2;
+}
+
+static long span_hi(double e, double w)
+{
+    e = e > -2 ? e : -2;
+    e = e < w + 2 ? e : w + 2;
+    return (long)(e + 2 + SPAN_EPS) - 2;
+}
+
+/* Narrows columns [*k0, *k1] (piece-relative) to those whose pixel centre
+ * x = (gx + 1/2) pix, gx = gx0 + k, may satisfy lo <= a + b (gx + 1/2) <=
+ * hi (ib = 1 / b). Returns 0 when none. */
+static int slab(double a, double b, double ib, double lo, double hi, double gx0, double w, long *k0, long *k1)
+{
+    if (b == 0) return a >= lo && a <= hi;
+    double e0 = (lo - a) * ib - 0.5 - gx0, e1 = (hi - a) * ib - 0.5 - gx0;
+    long l0 = span_lo(e0 < e1 ? e0 : e1, w), l1 = span_hi(e0 < e1 ? e1 : e0, w);
+    if (l0 > *k0) *k0 = l0;
+    if (l1 < *k1) *k1 = l1;
+    return *k0 <= *k1;
+}
+
+/* The span of row centre y on a marking with a curved stretch: the hull
+ * of its parts (build_parts: each segment's rectangle of the support, the
+ * wedge at each vertex where that vertex is the nearest point), from
+ * bounds linear in y; selects rather than branches. */
+static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double gx0, double w, long *k0, long *k1)
+{
+    const double *P = mk->parts + RS__MK_PART * m->part, ipix = 1 / mk->pix;
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t k = 0; k < m->nparts; k++, P += RS__MK_PART) {
+        double l0 = P[0] + P[1] * y, l1 = P[4] + P[5] * y, h0 = P[2] + P[3] * y, h1 = P[6] + P[7] * y;
+        double e0 = l0 > l1 ? l0 : l1, e1 = h0 < h1 ? h0 : h1;
+        int ok = (y >= P[8]) & (y <= P[9]);
+        if (P[12] >= 0) {
+            double dy = y - P[11], r2 = P[12] * P[12] - dy * dy, h = sqrt(r2 > 0 ? r2 : 0);
+            double d0 = (P[10] - h) * ipix, d1 = (P[10] + h) * ipix;
+            e0 = e0 > d0 ? e0 : d0;
+            e1 = e1 < d1 ? e1 : d1;
+            ok &= r2 >= 0;
+        }
+        ok &= e0 <= e1 + 2 * SPAN_EPS;
+        e0 = ok ? e0 : INFINITY;
+        e1 = ok ? e1 : -INFINITY;
+        lo = e0 < lo ? e0 : lo;
+        hi = e1 > hi ? e1 : hi;
+    }
+    if (!(lo <= hi + 2 * SPAN_EPS)) return 0;
+    /* K = gx0 + k + 1/2 */
+    long l0 = span_lo(lo - 0.5 - gx0, w), l1 = span_hi(hi - 0.5 - gx0, w);
+    if (l0 > *k0) *k0 = l0;
+    if (l1 < *k1) *k1 = l1;
+    return *k0 <= *k1;
+}
+
+/* Blend the sample at (u, v), inside the support, over pixel k of a row
+ * of S (planar, row length w). */
+static void put(const rs__mk *m, double u, double v, float *sc, size_t w, long k, uint64_t *painted)
+{
+    float c4[4];
+    sample(m, u, v, c4);
+    if (!(c4[3] > 0)) return;
+    ++*painted;
+    float keep = 1.0f - c4[3], *o = sc + (size_t)k;
+    o[0] = o[0] * keep + c4[0];
+    o[w] = o[w] * keep + c4[1];
+    o[2 * w] = o[2 * w] * keep + c4[2];
+}
+
+/* The piece's rows [*r0, *r1] whose centres the box holds; 0: none. */
+static int box_rows(const rs__mk *m, const rs__piece *p, double pix, long *r0, long *r1)
+{
+    *r0 = span_lo(m->by0 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    *r1 = span_hi(m->by1 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    if (*r0 < 0) *r0 = 0;
+    if (*r1 > (long)p->rows - 1) *r1 = (long)p->rows - 1;
+    return *r0 <= *r1;
+}
+
+/* A marking on a one-segment stretch: U, V affine in the pixel centre. */
+static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
 {
     const size_t w = p->w;
-    const double pix = mk->pix, cell = mk->cell;
-    uint64_t tests = 0, painted = 0;
-    for (uint32_t r = 0; r < p->rows; r++) {
+    const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
+    const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
+    long r0, r1;
+    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    for (long r = r0; r <= r1; r++) {
+        double y = ((double)p->y0 + (double)r + 0.5) * pix;
+        long k0 = 0, k1 = (long)w - 1;
+        double ur = m->au + m->buy * y, vr = m->av + m->bvy * y;
+        if (m->flat) {
+            if (!slab(ur, bu, m->ibu, ulo, uhi, gx0, wd, &k0, &k1) || !slab(vr, bv, m->ibv, vlo, vhi, gx0, wd, &k0, &k1))
+                continue;
+        } else {
+            /* both slabs, bounds ordered by the slopes' signs: no branch */
+            double a0 = (m->ua - ur) * m->ibu, a1 = (m->ub - ur) * m->ibu;
+            double b0 = (m->va - vr) * m->ibv, b1 = (m->vb - vr) * m->ibv;
+            double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
+            long l0 = span_lo(e0 - 0.5 - gx0, wd), l1 = span_hi(e1 - 0.5 - gx0, wd);
+            k0 = l0 > 0 ? l0 : 0;
+            k1 = l1 < k1 ? l1 : k1;
+            if (k0 > k1) continue;
+        }
         float *sc = p->sc + (size_t)r * w * 3;
         const uint16_t *q = p->q + (size_t)r * w;
-        double y = ((double)p->y0 + (double)r + 0.5) * pix;
-        double cy = floor(y / cell);
-        if (cy < 0 || cy >= mk->gh) continue;
-        size_t row = (size_t)cy * mk->gw;
-        for (size_t k = 0; k < w; k++) {
+        for (long k = k0; k <= k1; k++) {
             if (q[k] == 0) continue;
-            double x = ((double)p->x0 + (double)k + 0.5) * pix;
-            double cx = floor(x / cell);
-            if (cx < 0 || cx >= mk->gw) continue;
-            size_t c = row + (size_t)cx;
-            uint32_t a = mk->start[c], b = mk->start[c + 1];
-            int any = 0;
-            const float fx = (float)x, fy = (float)y;
-            for (uint32_t i = a; i < b; i++) {
-                const rs__mk_ref *e = &mk->list[i];
-                if (fx < e->x0 || fx > e->x1 || fy < e->y0 || fy > e->y1) continue;
-                const rs__mk *m = &mk->m[e->i];
-                tests++;
-                double s, t;
-                road_coords(mk->pts + 3 * m->first, m->npt, x, y, &s, &t);
-                double ds = s - m->s0, dt = t - m->t0;
-                if (fabs(ds) > m->hl + m->ms || fabs(dt) > m->hw + m->mt) continue;
-                if (m->flip) {
-                    ds = -ds;
-                    dt = -dt;
+            ++*tests;
+            double gx = gx0 + (double)k + 0.5;
+            double u = ur + bu * gx, v = vr + bv * gx;
+            if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            put(m, u, v, sc, w, k, painted);
+        }
+    }
+}
+
+#define MAX_ROW_SEG 8
+
+/* A marking on a curved stretch: the nearest point per pixel. */
+static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+{
+    const size_t w = p->w;
+    const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
+    const double *pts = mk->pts + RS__MK_PT * m->first;
+    const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi;
+    /* at most MAX_ROW_SEG segments: per row, each segment's u and t
+     * affine in the column */
+    const size_t nseg = m->npt - 1;
+    const int rowseg = nseg <= MAX_ROW_SEG;
+    double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
+    long r0, r1;
+    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    for (long r = r0; r <= r1; r++) {
+        double y = ((double)p->y0 + (double)r + 0.5) * pix;
+        long k0 = 0, k1 = (long)w - 1;
+        if (!curved_span(mk, m, y, gx0, wd, &k0, &k1)) continue;
+        for (size_t k = 0; rowseg && k < nseg; k++) {
+            const double *A = pts + RS__MK_PT * k;
+            double dy = y - A[1];
+            su0[k] = dy * A[4] - A[0] * A[3];
+            su1[k] = A[3] * pix;
+            st0[k] = -A[0] * A[4] - dy * A[3];
+            st1[k] = A[4] * pix;
+        }
+        float *sc = p->sc + (size_t)r * w * 3;
+        const uint16_t *q = p->q + (size_t)r * w;
+        for (long k = k0; k <= k1; k++) {
+            if (q[k] == 0) continue;
+            ++*tests;
+            double gx = gx0 + (double)k + 0.5, u, v;
+            if (nseg == 2) {
+                /* the common bend: rowseg's loop unrolled, same arithmetic */
+                const double *A = pts, *B = pts + RS__MK_PT;
+                double uu0 = su0[0] + su1[0] * gx, tt0 = st0[0] + st1[0] * gx;
+                double uu1 = su0[1] + su1[1] * gx, tt1 = st0[1] + st1[1] * gx;
+                double uc0 = uu0 < A[6] ? A[6] : uu0, uc1 = uu1 < B[6] ? B[6] : uu1;
+                uc0 = uc0 > A[7] ? A[7] : uc0;
+                uc1 = uc1 > B[7] ? B[7] : uc1;
+                double e0 = uu0 - uc0, e1 = uu1 - uc1;
+                double d0 = e0 * e0 + tt0 * tt0, d1 = e1 * e1 + tt1 * tt1;
+                d0 = A[5] > 0 ? d0 : INFINITY;
+                d1 = B[5] > 0 ? d1 : INFINITY;
+                int one = d1 < d0;
+                double best = one ? d1 : d0, tt = one ? tt1 : tt0, sv = one ? B[2] + uc1 : A[2] + uc0;
+                u = m->cu + m->su * (copysign(sqrt(best), tt) - m->t0);
+                v = m->cv + m->sv * (sv - m->s0);
+            } else if (rowseg) {
+                /* road_coords with each segment's u, t from the row's
+                 * coefficients: the distance to the clamped point is
+                 * hypot(u - uc, t), its side the sign of t */
+                double best = INFINITY;
+                size_t bk = 0;
+                for (size_t kk = 0; kk < nseg; kk++) {
+                    const double *A = pts + RS__MK_PT * kk;
+                    double uu = su0[kk] + su1[kk] * gx, tt = st0[kk] + st1[kk] * gx;
+                    double uc = uu < A[6] ? A[6] : uu;
+                    uc = uc > A[7] ? A[7] : uc;
+                    double e = uu - uc, d2 = e * e + tt * tt;
+                    d2 = A[5] > 0 ? d2 : INFINITY;
+                    bk = d2 < best ? kk : bk;
+                    best = d2 < best ? d2 : best;
                 }
-                float c4[4];
-                rs__atlas_sample(m->ty, (m->hw - dt) * m->kx, (m->hl - ds) * m->ky, m->lod, c4);
-                if (!(c4[3] > 0)) continue;
-                any = 1;
-                float keep = 1.0f - c4[3];
-                for (int ch = 0; ch < 3; ch++) {
-                    float *v = sc + (size_t)ch * w + k;
-                    *v = *v * keep + c4[ch];
+                const double *A = pts + RS__MK_PT * bk;
+                double uu = su0[bk] + su1[bk] * gx, tt = st0[bk] + st1[bk] * gx;
+                double uc = uu < A[6] ? A[6] : uu;
+                uc = uc > A[7] ? A[7] : uc;
+                u = m->cu + m->su * (copysign(sqrt(best), tt) - m->t0);
+                v = m->cv + m->sv * (A[2] + uc - m->s0);
+            } else {
+                double s, t;
+                road_coords(pts, m->npt, gx * pix, y, &s, &t);
+                u = m->cu + m->su * (t - m->t0);
+                v = m->cv + m->sv * (s - m->s0);
+            }
+            if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            put(m, u, v, sc, w, k, painted);
+        }
+    }
+}
+
+static void sort_u32(uint32_t *a, size_t n)
+{
+    if (n <= 96) {
+        for (size_t i = 1; i < n; i++) {
+            uint32_t v = a[i];
+            size_t j = i;
+            for (; j > 0 && a[j - 1] > v; j--) a[j] = a[j - 1];
+            a[j] = v;
+        }
+        return;
+    }
+    /* Shell sort (Ciura's gaps): small lists, no recursion, no allocation */
+    static const size_t gaps[] = { 701, 301, 132, 57, 23, 10, 4, 1 };
+    for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
+        size_t h = gaps[g];
+        for (size_t i = h; i < n; i++) {
+            uint32_t v = a[i];
+            size_t j = i;
+            for (; j >= h && a[j - h] > v; j -= h) a[j] = a[j - h];
+            a[j] = v;
+        }
+    }
+}
+
+#define CAND_CAP 1024
+
+/* The markings of a piece are scattered over mk->m: ask for the next ones'
+ * records while painting one (a hint; nothing where the compiler has no
+ * such builtin). */
+#define PREFETCH_AHEAD 4
+static void prefetch_mk(const rs__mk *m)
+{
+#if defined(__GNUC__)
+    const char *c = (const char *)m;
+    for (size_t o = 0; o < offsetof(rs__mk, ty); o += 64) __builtin_prefetch(c + o);
+#else
+    (void)m;
+#endif
+}
+
+void rs__markings_paint(const rs__markings *mk, rs__piece *p)
+{
+    const double pix = mk->pix, cell = mk->cell;
+    /* the piece's pixel centres */
+    const double xa = ((double)p->x0 + 0.5) * pix, xb = ((double)p->x0 + (double)p->w - 0.5) * pix;
+    const double ya = ((double)p->y0 + 0.5) * pix, yb = ((double)p->y0 + (double)p->rows - 0.5) * pix;
+    /* a box meeting [xa, xb] has cell_of(x1) >= cell_of(xa), and so on
+     * (division and floor are monotonic) */
+    const uint32_t cx0 = cell_of(xa, cell, mk->gw), cx1 = cell_of(xb, cell, mk->gw);
+    const uint32_t cy0 = cell_of(ya, cell, mk->gh), cy1 = cell_of(yb, cell, mk->gh);
+    uint32_t cand[CAND_CAP];
+    uint64_t tests = 0, painted = 0;
+    /* the markings whose box meets the piece, each once (from the first of
+     * its cells that the piece's cells hold), in ascending index; in
+     * index ranges that hold at most CAND_CAP of them */
+    uint32_t lo = 0, hi = UINT32_MAX;
+    for (;;) {
+        size_t n = 0;
+        int over = 0;
+        for (uint32_t cy = cy0; cy <= cy1 && !over; cy++)
+            for (uint32_t cx = cx0; cx <= cx1 && !over; cx++) {
+                size_t c = (size_t)cy * mk->gw + cx;
+                for (uint32_t k = mk->start[c], ke = mk->start[c + 1]; k < ke; k++) {
+                    const rs__mk_ref *e = &mk->list[k];
+                    if (e->i < lo || e->i > hi) continue;
+                    if ((e->x1 < xa) | (e->x0 > xb) | (e->y1 < ya) | (e->y0 > yb)) continue;
+                    /* seen before unless its first cell is this one
+                     * (cell_of(v) == c <=> v / cell >= c, for c > 0
+                     * and a box known to touch cell c) */
+                    if (((cx > cx0) & ((double)e->x0 / cell < (double)cx)) | ((cy > cy0) & ((double)e->y0 / cell < (double)cy)))
+                        continue;
+                    if (n == CAND_CAP) {
+                        over = 1;
+                        break;
+                    }
+                    cand[n++] = e->i;
                 }
             }
-            painted += (uint64_t)any;
+        if (over) {
+            hi = lo + (hi - lo) / 2;
+            continue;
         }
+        sort_u32(cand, n);
+        for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
+        for (size_t k = 0; k < n; k++) {
+            if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
+            const rs__mk *m = &mk->m[cand[k]];
+            if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
+            else paint_curved(mk, m, p, &tests, &painted);
+        }
+        if (hi == UINT32_MAX) break;
+        lo = hi + 1;
+        hi = UINT32_MAX;
     }
     p->mark_tests += tests;
     p->mark_pixels += painted;

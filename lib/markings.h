@@ -27,15 +27,50 @@ typedef struct rs__road_local {
 rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out);
 void rs__road_local_free(rs_ctx *ctx, rs__road_local *r);
 
+/* Paint-time copy of one mip level of a type: a border of RS__MK_PAD
+ * transparent texels on every side (bilinear taps need no bounds checks)
+ * and the box of its texels with alpha > 0. */
+#define RS__MK_PAD 3
+typedef struct rs__mk_level {
+    uint32_t w, h, pw;         /* the level's size; padded row length w + 2 pad */
+    float *px;                 /* (w + 2 pad) x (h + 2 pad) x 4, premultiplied */
+    int32_t ax0, ay0, ax1, ay1; /* texels with alpha > 0 (ax0 > ax1: none) */
+} rs__mk_level;
+
+typedef struct rs__mk_tex {
+    uint32_t nlev;             /* 0: not built (type unused) */
+    rs__mk_level lev[RS__ATLAS_MAX_LEVELS];
+} rs__mk_tex;
+
 typedef struct rs__mk {
+    /* what the paint reads, first (the records are scattered over a
+     * piece's markings: few cache lines each) */
+    const rs__mk_level *fine, *coarse; /* the two levels sampled (coarse NULL: fine only) */
+    float f;                   /* the coarse level's weight */
+    int flat;                  /* one segment, and bu or bv is 0 */
+    size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
+    size_t part, nparts;       /* curved: its span parts, parts[part..part+nparts-1] */
+    double by0, by1;           /* rows of the box */
+    /* padded fine-level texel coordinates U (across), V (along): the
+     * sample is transparent outside [ulo, uhi) x [vlo, vhi) */
+    double ulo, uhi, vlo, vhi;
+    /* one-segment stretch: U, V affine in the pixel centre (x, y) =
+     * ((gx + 1/2) pix, y): U = au + buy y + bu (gx + 1/2), V = av + bvy y
+     * + bv (gx + 1/2); ibu, ibv = 1 / bu, 1 / bv (0 when bu, bv are 0);
+     * ua, ub = ulo, uhi in the order of ibu's sign (va, vb: ibv) */
+    double au, buy, bu, ibu, av, bvy, bv, ibv;
+    double ua, ub, va, vb;
+    /* a point (ds, dt) from the centre: U = cu + su dt, V = cv + sv ds */
+    double cu, su, cv, sv;
+    double s0, t0;             /* centre (road coordinates) */
+    double slo, shi, tlo, thi; /* the support in road coordinates (s, t) */
+    /* the rest */
     const rs__atlas_type *ty;
     int flip;
-    double s0, t0, hl, hw;     /* centre, half length and width (metres) */
+    double hl, hw;             /* half length and width (metres) */
     double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
     double lod;                /* log2 of level-0 texels per output pixel */
-    double ms, mt;             /* how far past its rectangle the filtered sprite reaches */
-    size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
-    double bx0, by0, bx1, by1; /* local bounding box (metres) */
+    double bx0, bx1;           /* columns of the box (metres) */
 } rs__mk;
 
 typedef struct rs__mk_ref {
@@ -43,11 +78,27 @@ typedef struct rs__mk_ref {
     uint32_t i;
 } rs__mk_ref;
 
+/* Per stretch point: x, y, s and the segment to the next point: unit
+ * direction ux, uy, its arc length (0 after the last point) and the range
+ * the nearest-point lookup clamps u to (-inf / +inf at the stretch's
+ * ends, else 0 / length), 1 / (ux pix) and 1 / (uy pix) (0 for 0). */
+#define RS__MK_PT 10
+
+/* A part of a curved marking's row spans (a segment's rectangle, or the
+ * wedge at a vertex), as bounds on K = column + 1/2 (absolute) linear in
+ * the row centre y: K in [max(a0 + b0 y, a2 + b2 y), min(a1 + b1 y, a3 +
+ * b3 y)] for y in [ylo, yhi], and (wedge) within r metres of (vx, vy):
+ * a0 b0 a1 b1 a2 b2 a3 b3 ylo yhi vx vy r (r < 0: no disc). */
+#define RS__MK_PART 13
+
 typedef struct rs__markings {
     rs_atlas *atlas_own;       /* the built-in atlas when none was given */
+    rs__mk_tex *tex;           /* per atlas type, built for the types placed */
+    size_t ntex;
     rs__mk *m;
     size_t n;
-    double *pts;               /* x, y, s per point */
+    double *pts;               /* RS__MK_PT doubles per point */
+    double *parts;             /* RS__MK_PART doubles per span part of a curved marking */
     double pix;                /* output pixel, metres */
     double cell;               /* index cell, metres */
     uint32_t gw, gh;
@@ -71,6 +122,8 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
 rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t *cap, const rs__placement *p);
 
 /* The overlays stage's last layer: blend every marking over S on the
- * piece's road pixels. */
+ * piece's road pixels, marking by marking in index order (so each pixel
+ * sees its markings in record order, whatever the piece), each over the
+ * pixels of its support's row spans. */
 void rs__markings_paint(const rs__markings *mk, struct rs__piece *p);
 #endif

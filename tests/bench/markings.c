@@ -1,8 +1,9 @@
 /* Road markings (issue 14), one thread, same run: the city scene
  * sc_city_default(1) with 10,000 markings of the built-in atlas against the
  * same scene without markings (target <= 1.2x), and with 1,000 markings
- * (per-pixel work must not grow with the number of markings: the index
- * hands a pixel only the markings whose box holds it). Writes
+ * (per-pixel work must not grow with the number of markings: a piece of
+ * the image takes from the index only the markings whose box meets it, and
+ * each is painted over the row spans of its own support). Writes
  * markings.md / markings.csv to the folder given. */
 #include "roadsplat.h"
 #include "scenes.h"
@@ -129,10 +130,11 @@ int main(int argc, char **argv)
                 "City scene `sc_city_default(1)` (%zu roads, z-scale 0.01), unstyled, with 0, 1,000 and 10,000 "
                 "markings of the built-in atlas (every type in turn, random road by length, random s, t on the "
                 "road, half of them flipped; explicit, no automatic ones). `rs_splat_window` on a prepared "
-                "splatter, one thread, fastest of %d runs, the cases interleaved run by run. Tests = (pixel, "
-                "marking) pairs whose box held the pixel; painted = pixels a marking changed.\n\n"
-                "| pixels | markings | splat ms | overlays ms | / no markings | tests per road pixel | painted "
-                "pixels | build ms |\n|---|---|---|---|---|---|---|---|\n",
+                "splatter, one thread, fastest of %d runs, the cases interleaved run by run. Tests = (road "
+                "pixel, marking) pairs in the marking's row spans; blends = those it painted (alpha > 0; a "
+                "pixel under two markings counts twice).\n\n"
+                "| pixels | markings | splat ms | overlays ms | / no markings | tests per road pixel | blends "
+                "| build ms |\n|---|---|---|---|---|---|---|---|\n",
             sc.nroads, RUNS);
     fprintf(csv, "texels,markings,splat_ms,overlays_ms,tests,painted,road_pixels,build_ms\n");
     double ratio10k[2] = { 0, 0 }, tpp[2][3];
@@ -185,8 +187,8 @@ int main(int argc, char **argv)
     }
     fprintf(md,
             "\nPer-pixel work grows with the markings' density on the road (10x the markings: about 10x the "
-            "tests per road pixel), not with their number: a pixel is handed only the markings of its index "
-            "cell whose box holds it.\n\n"
+            "tests per road pixel), not with their number: a piece of the image takes from the index only "
+            "the markings whose box meets it, and each is painted over the row spans of its own support.\n\n"
             "| target (issue 14) | measured | |\n|---|---|---|\n"
             "| 10,000 markings / no markings, city at 1.25 m <= 1.2x | %.2fx | %s |\n"
             "| the same, 0.1 m window | %.2fx | %s |\n",
