@@ -605,8 +605,8 @@ typedef struct rs_splat_profile {
     double coverage_ms, surface_ms, overlays_ms, composite_ms;
     uint64_t pixels;       /* pixels rendered */
     uint64_t road_pixels;  /* pixels with some road (weight > 0) */
-    uint64_t mark_tests;   /* (pixel, marking) pairs examined by the markings stage */
-    uint64_t mark_pixels;  /* pixels a marking painted */
+    uint64_t mark_tests;   /* road pixels inside the markings' row spans (pixel, marking pairs examined) */
+    uint64_t mark_pixels;  /* blends: a pixel under two markings counts twice */
 } rs_splat_profile;
 
 /* Render the window [x0, x0+w) x [y0, y0+h) of the output image: RGBA8 into
