@@ -236,6 +236,7 @@ typedef struct cli_splat_job {
     rs_splat_profile profile;
     const uint8_t *nodata; /* the input's nodata mask (alpha 0 there), or NULL */
     uint32_t dem_w, dem_h;
+    int alpha;             /* cli_splat_png_run: keep the alpha channel although every pixel is opaque */
 } cli_splat_job;
 void cli_splat_job_init(cli_splat_job *job, const rs_splatter *sp, const cli_splat_args *s, int quiet);
 int cli_splat_run(cli_splat_job *job);

@@ -62,11 +62,15 @@ static const char usage_text[] =
     "                        layer; OSM: lines)\n"
     "  --where SQL           GIS roads: only features matching this filter\n"
     "  --strict              no road touching the map is an error (default: a warning)\n"
-    "  --world-file          also write OUT's world file (.pgw, .tfw) and .prj\n"
+    "  --world-file          also write OUT's world file (.pgw, .tfw) and .prj\n";
+/* two strings: C99 compilers need only take 4095 characters in one */
+static const char usage_text2[] =
     "  --cog                 OUT.tif as a Cloud Optimized GeoTIFF (with overviews)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE     write the road weight R = 1 - alpha, 16-bit: .pgm (or no\n"
     "                        extension), .png or .tif (GeoTIFF)\n"
+    "  --rgba                OUT.png with an alpha channel even when every pixel is\n"
+    "                        opaque (default: RGB then; RGBA with GIS nodata)\n"
     "  --png-level N         PNG compression, 0 (none) .. 12 (smallest, slowest);\n"
     "                        default 1, about 17 % larger than zlib's level 6\n"
     "  --stats FILE.json     write timings and counts as JSON\n"
@@ -78,7 +82,7 @@ typedef struct args {
     cli_splat_args s;
     const char *dem, *roads, *out;
     const char *weight_out, *stats;
-    int quiet, have_window, have_window_world, world_file, cog;
+    int quiet, have_window, have_window_world, world_file, cog, rgba;
     uint32_t window[4];
     double window_world[4]; /* XMIN, YMIN, XMAX, YMAX */
 } args;
@@ -159,6 +163,7 @@ static int parse_args(int argc, char **argv, args *a)
         if (eq) inl = eq + 1;
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
             fputs(usage_text, stdout);
+            fputs(usage_text2, stdout);
             return 2;
         } else if (!strcmp(name, "--version")) {
             printf("roadsplat %s\n", rs_version_string());
@@ -166,10 +171,11 @@ static int parse_args(int argc, char **argv, args *a)
         } else if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) {
             a->quiet = 1;
             continue;
-        } else if (!strcmp(name, "--world-file") || !strcmp(name, "--cog")) {
+        } else if (!strcmp(name, "--world-file") || !strcmp(name, "--cog") || !strcmp(name, "--rgba")) {
             if (inl) { cli_error("%s takes no value", name); return 1; }
             if (name[2] == 'w') a->world_file = 1;
-            else a->cog = 1;
+            else if (name[2] == 'c') a->cog = 1;
+            else a->rgba = 1;
             continue;
         }
         int sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
@@ -450,6 +456,7 @@ static int splat_main(int argc, char **argv)
     job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
     job.weight = wt;
     job.nodata = in.nodata;
+    job.alpha = a.rgba;
     job.dem_w = rs_dem_width(dem), job.dem_h = rs_dem_height(dem);
     double gt[6];
     int have_gt = !cli_geo_texture_gt(&in, job.texels, x0, y0, gt);

@@ -251,6 +251,34 @@ static void png_write_from(png_shared *sh, const cli_png_piece *p)
     sh->writing = 0;
 }
 
+/* RGBA rows to RGB in place (row r at rows + r * stride). Four pixels at a
+ * time where the byte order is known: four loads, then three stores that
+ * end before the next group's first byte (12 (q + 1) <= 16 (q + 1)). */
+static void rgba_to_rgb(uint8_t *rows, size_t stride, uint32_t w, uint32_t n)
+{
+    for (uint32_t r = 0; r < n; r++) {
+        uint8_t *p = rows + (size_t)r * stride;
+        size_t k = 0;
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+        for (; k + 4 <= w; k += 4) {
+            uint32_t a, b, c, d;
+            memcpy(&a, p + 4 * k, 4);
+            memcpy(&b, p + 4 * k + 4, 4);
+            memcpy(&c, p + 4 * k + 8, 4);
+            memcpy(&d, p + 4 * k + 12, 4);
+            uint32_t o0 = (a & 0xFFFFFFu) | b << 24, o1 = (b >> 8 & 0xFFFFu) | c << 16, o2 = (c >> 16 & 0xFFu) | d << 8;
+            memcpy(p + 3 * k, &o0, 4);
+            memcpy(p + 3 * k + 4, &o1, 4);
+            memcpy(p + 3 * k + 8, &o2, 4);
+        }
+#endif
+        for (; k < w; k++) {
+            uint8_t px[3] = { p[4 * k], p[4 * k + 1], p[4 * k + 2] };
+            memcpy(p + 3 * k, px, 3);
+        }
+    }
+}
+
 static void *png_work(void *arg)
 {
     worker *wk = arg;
@@ -277,7 +305,8 @@ static void *png_work(void *arg)
         if (!r && job->nodata)
             cli_nodata_alpha(job->nodata, job->dem_w, job->dem_h, job->texels, job->x0, job->y0 + y, job->w, rows,
                              rgba, (size_t)job->w * 4);
-        double t1 = cli_now_ms();
+        double t1 = cli_now_ms(); /* the packing below is the PNG's */
+        if (!r && l->channels == 3) rgba_to_rgb(rgba, (size_t)job->w * 4, job->w, rows);
         cli_png_piece p;
         int bad = !r && cli_png_coder_band(coder, b, rgba, (size_t)job->w * 4, &p);
         double t2 = cli_now_ms();
@@ -322,7 +351,10 @@ static void *png_work(void *arg)
 int cli_splat_png_run(cli_splat_job *job, FILE *f, const char *shown, int level, cli_png_run_stats *st)
 {
     cli_png_layout l;
-    if (cli_png_layout_init(&l, shown, job->w, job->h, 4, 8, level)) return 1;
+    /* every pixel is opaque unless nodata is masked: RGB, a quarter less to
+     * filter, compress and store (docs/packaging.md) */
+    const int channels = job->alpha || job->nodata ? 4 : 3;
+    if (cli_png_layout_init(&l, shown, job->w, job->h, channels, 8, level)) return 1;
     png_shared sh;
     cli_progress prog;
     memset(&sh, 0, sizeof sh);

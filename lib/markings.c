@@ -489,7 +489,8 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     *out = NULL;
     if (o->markings.disable) return RS_OK;
     size_t nexp = rs_roads_mark_count(roads);
-    if (nexp == 0 && o->markings.no_auto) return RS_OK;
+    /* nothing to place: no atlas to load (the built-in one takes ms) */
+    if (nexp == 0 && (o->markings.no_auto || !rs__markings_auto_possible(roads))) return RS_OK;
     rs__markings *mk = rs__calloc(ctx, 1, sizeof *mk);
     if (!mk) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
     rs_result r = RS_OK;

@@ -115,6 +115,10 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                              rs__markings **out);
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
 
+/* Whether the automatic rules can place anything on these roads (a road
+ * with a class, turn:lanes or a crossing=zebra point). */
+int rs__markings_auto_possible(const rs_roads *roads);
+
 /* Automatic placement (lib/markings_auto.c): appends to *pl (capacity
  * *cap, count *n). */
 rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,

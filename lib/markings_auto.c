@@ -216,26 +216,30 @@ static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, cons
     return RS_OK;
 }
 
+int rs__markings_auto_possible(const rs_roads *roads)
+{
+    size_t nr = rs_roads_count(roads);
+    for (size_t i = 0; i < nr; i++)
+        if (rs_roads_get_attr(roads, i, "turn:lanes")) return 1;
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads); k++) {
+        const char *key, *v;
+        rs_roads_point_attr_at(roads, k, NULL, NULL, &key, &v);
+        if (!strcmp(key, "crossing") && !strcmp(v, "zebra")) return 1;
+    }
+    /* stop lines need a road with a class */
+    for (size_t i = 0; i < nr; i++) {
+        rs_road_info info;
+        rs_roads_get_info(roads, i, &info);
+        if (rank_of(info.road_class) > 0) return 1;
+    }
+    return 0;
+}
+
 rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
                             rs__placement **pl, size_t *n, size_t *cap)
 {
     size_t nr = rs_roads_count(roads);
-    int wants = 0;
-    for (size_t i = 0; i < nr && !wants; i++)
-        if (rs_roads_get_attr(roads, i, "turn:lanes")) wants = 1;
-    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !wants; k++) {
-        const char *key, *v;
-        rs_roads_point_attr_at(roads, k, NULL, NULL, &key, &v);
-        if (!strcmp(key, "crossing") && !strcmp(v, "zebra")) wants = 1;
-    }
-    /* stop lines need a road with a class */
-    int ranks = 0;
-    for (size_t i = 0; i < nr && ranks < 1; i++) {
-        rs_road_info info;
-        rs_roads_get_info(roads, i, &info);
-        if (rank_of(info.road_class) > 0) ranks++;
-    }
-    if (!wants && ranks < 1) return RS_OK;
+    if (!rs__markings_auto_possible(roads)) return RS_OK;
     ctxa A;
     memset(&A, 0, sizeof A);
     A.ctx = ctx;

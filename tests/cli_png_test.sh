@@ -36,7 +36,7 @@ import sys
 from png_read import read
 def pixels(path):
     w, h, ch, data = read(path)
-    assert ch == 4, 'RGBA expected'
+    assert ch == 3, 'RGB expected (every pixel is opaque)'
     return (w, h, data)
 ref = pixels(sys.argv[1])
 for p in sys.argv[2:]:
@@ -44,6 +44,18 @@ for p in sys.argv[2:]:
 print('same')
 PY
     check "every level decodes to the same pixels" sh -c "PYTHONPATH='$TESTS' python3 '$T/png.py' '$T/l0.png' '$T/l1.png' '$T/l6.png' '$T/l12.png' | grep -q same"
+    # --rgba: the same colours with an alpha channel, every pixel opaque
+    "$RS" --quiet --texels 4 --rgba "$D" "$R" "$T/rgba.png"
+    check "--rgba writes RGBA: the default's RGB and alpha 255" sh -c "PYTHONPATH='$TESTS' python3 -c \"
+from png_read import read
+w, h, c, a = read('$T/l1.png')
+w2, h2, c2, b = read('$T/rgba.png')
+n = w * h
+assert (c, c2, w, h) == (3, 4, w2, h2)
+assert bytes(b[k] for k in range(4 * n) if k % 4 != 3) == bytes(a)
+assert set(b[3::4]) == {255}
+print('ok')
+\" | grep -q ok"
 fi
 
 # Several bands (960x640 at --texels 32: five bands compressed apart and

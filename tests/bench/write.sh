@@ -1,6 +1,6 @@
 #!/bin/sh
 # PNG output and start-up benchmark (`make bench` runs it; issue 18). In one run:
-# - `roadsplat` on a 1025^2 fractal DEM at 4 texels (4096^2 RGBA, 64 MB, one
+# - `roadsplat` on a 1025^2 fractal DEM at 4 texels (4096^2 pixels, written as RGB: 48 MB raw, one
 #   road), with --threads 1 and with the default thread count, the runs
 #   interleaved: stages from --stats, fastest of RUNS each;
 # - the same texture written by cli/png.c at several --png-level values and by
@@ -87,7 +87,7 @@ verdict() { awk -v a="$1" -v b="$2" 'BEGIN { print (a <= b) ? "met" : "**missed*
 echo "## PNG output and start-up (tests/bench/write.sh)"
 echo
 echo "\`roadsplat --texels 4 --z-scale 0.01\` on a 1025x1025 fractal DEM (tests/tools/demgen.c) with one"
-echo "road: a 4096x4096 RGBA texture (64 MiB), run $RUNS times with \`--threads 1\` and $RUNS times with the"
+echo "road: a 4096x4096 texture (written as RGB, 48 MiB raw: every pixel is opaque; docs/packaging.md), run $RUNS times with \`--threads 1\` and $RUNS times with the"
 echo "default thread count ($d_threads threads, $ncpu cores), interleaved; every time is the fastest of its $RUNS"
 echo "from \`--stats\`. The splat and the PNG run together, band by band (docs/packaging.md): \`splat\` is the"
 echo "splat's time per thread (its CPU time summed over the threads, divided by them; with one thread"

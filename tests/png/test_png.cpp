@@ -6,7 +6,7 @@
 // Also the writers' timing tool of tests/bench/write.sh:
 //   test_png --time-oiio IN.png OUT.png RUNS     OpenImageIO 2.4 defaults (libpng)
 //   test_png --time-level L IN.png OUT.png RUNS  cli/png.c at level L
-// read IN (RGBA8), write OUT RUNS times, print "fastest_ms bytes".
+// read IN (RGB8 or RGBA8), write OUT RUNS times, print "fastest_ms bytes".
 #include "../../cli/png.h"
 
 #include <OpenImageIO/imageio.h>
@@ -222,7 +222,9 @@ static void joins_of(const image &im, int level, uint64_t j[4], bool isal = true
     cli_png_coder_free(c);
 }
 
-static bool read_rgba8(const char *path, std::vector<uint8_t> &px, uint32_t &w, uint32_t &h)
+// An 8-bit RGB or RGBA image (the CLI's output: RGB when opaque, RGBA
+// with --rgba or nodata); *ch = its channels.
+static bool read_rgb8(const char *path, std::vector<uint8_t> &px, uint32_t &w, uint32_t &h, int &ch)
 {
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
@@ -230,9 +232,10 @@ static bool read_rgba8(const char *path, std::vector<uint8_t> &px, uint32_t &w, 
     if (!in) return false;
     w = (uint32_t)in->spec().width;
     h = (uint32_t)in->spec().height;
-    if (in->spec().nchannels != 4) return false;
-    px.resize((size_t)w * h * 4);
-    return in->read_image(0, 0, 0, 4, OIIO::TypeDesc::UINT8, px.data());
+    ch = in->spec().nchannels;
+    if (ch != 3 && ch != 4) return false;
+    px.resize((size_t)w * h * (size_t)ch);
+    return in->read_image(0, 0, 0, ch, OIIO::TypeDesc::UINT8, px.data());
 }
 
 static int time_writer(int argc, char **argv)
@@ -244,20 +247,21 @@ static int time_writer(int argc, char **argv)
     int runs = std::atoi(argv[oiio ? 4 : 5]);
     std::vector<uint8_t> px;
     uint32_t w, h;
-    if (!read_rgba8(in, px, w, h)) { std::fprintf(stderr, "test_png: cannot read %s as RGBA8\n", in); return 1; }
+    int ch;
+    if (!read_rgb8(in, px, w, h, ch)) { std::fprintf(stderr, "test_png: cannot read %s as RGB8 or RGBA8\n", in); return 1; }
     std::vector<double> ms;
     for (int r = 0; r < (runs > 0 ? runs : 1); r++) {
         double t0 = cli_now_ms();
         if (oiio) { // what cli/imageio.cpp did before cli/png.c (minus the temporary + rename)
             auto o = OIIO::ImageOutput::create("png");
-            OIIO::ImageSpec spec((int)w, (int)h, 4, OIIO::TypeDesc::UINT8);
+            OIIO::ImageSpec spec((int)w, (int)h, ch, OIIO::TypeDesc::UINT8);
             spec.attribute("oiio:UnassociatedAlpha", 1);
             if (!o || !o->open(out, spec) || !o->write_image(OIIO::TypeDesc::UINT8, px.data()) || !o->close()) {
                 std::fprintf(stderr, "test_png: OpenImageIO write failed\n");
                 return 1;
             }
         } else {
-            cli_png_image img = { w, h, 4, 8, px.data() };
+            cli_png_image img = { w, h, ch, 8, px.data() };
             cli_png_options opt = { level, nullptr, nullptr };
             if (cli_png_write(out, nullptr, &img, &opt)) return 1;
         }
