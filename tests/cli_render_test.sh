@@ -74,6 +74,15 @@ check "render --ortho --lighting off exits 0" "$BIN" render $S --quiet --ortho -
 check "ortho defaults to the splat's size (256x192)" py size "$T/ortho.png" 256 192
 check "ortho reproduces the CPU splat (MAD <= 2/255)" py mad "$T/ortho.png" "$T/splat.png" 2
 # the same through 64-texel tiles (forced tiling, clipped geometry, bordered tiles)
+# markings (issue 14) reach the render: the junction example at 0.4 m pixels,
+# GL ortho against the CPU splat, and against the same render without markings
+EX="$(dirname "$0")/../docs/examples"
+J="--cell-size 2 --z-scale 0.01 --texels 5"
+check "junction: CPU splat with markings" "$BIN" $J --quiet "$EX/junction-dem.pgm" "$EX/junction.txt" "$T/jc.png"
+check "junction: render --ortho with markings" "$BIN" render $J --quiet --ortho --lighting off "$EX/junction-dem.pgm" "$EX/junction.txt" "$T/jr.png"
+check "junction: render --ortho --no-markings" "$BIN" render $J --quiet --ortho --lighting off --no-markings "$EX/junction-dem.pgm" "$EX/junction.txt" "$T/jn.png"
+check "junction: the render shows the CPU splat's markings (MAD <= 2/255)" py mad "$T/jr.png" "$T/jc.png" 2
+check "junction: without markings the render differs (MAD > 0.3/255)" sh -c "! python3 '$T/png.py' mad '$T/jr.png' '$T/jn.png' 0.3 >/dev/null"
 check "tiled upload renders" "$BIN" render $S --quiet --ortho --lighting off --tile-size 64 --stats "$T/tile.json" "$T/dem.pgm" "$T/roads.txt" "$T/tiled.png"
 check "tiled stats report 5x4 tiles" sh -c "grep -q '\"tiles_x\": 5, \"tiles_y\": 4' '$T/tile.json'"
 check "tiled render matches the CPU splat (MAD <= 2/255)" py mad "$T/tiled.png" "$T/splat.png" 2
