@@ -180,6 +180,54 @@ static void test_rectangle(void)
     rs_dem_free(ctx, dem);
 }
 
+/* Per-pixel work does not grow with the number of markings elsewhere: a
+ * window around one marking of a long road examines the same (pixel,
+ * marking) pairs and paints the same bytes whether the road carries that
+ * marking alone or 2,000 more spread along it (counts from
+ * rs_splat_profile, not times). */
+static void test_local_work(void)
+{
+    rs_dem *dem = flat_dem(2049, 9, 1.0);
+    double xy[4] = { 0.5, 4, 2047.5, 4 };
+    uint32_t counts[2][2];
+    uint8_t *px[2] = { NULL, NULL };
+    const uint32_t T = 4, wx = 40 * T, wy = 0, ww = 24 * T, wh = 8 * T;
+    for (int many = 0; many < 2; many++) {
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        CHECK(rs_roads_add(ctx, roads, "r", 6, xy, 2) == RS_OK);
+        rs_mark mark = { "arrow_straight", 0, 50, -1.5, 0, 0, 0, 0 };
+        CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
+        for (int k = 0; many && k < 2000; k++) {
+            rs_mark m2 = { k % 2 ? "word_bus" : "arrow_left", 0, 72 + 0.9 * k, k % 3 ? 1.5 : -1.5, 0, 0, k % 2, 0 };
+            CHECK(rs_roads_add_mark(ctx, roads, &m2) == RS_OK);
+        }
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = T;
+        o.markings.no_auto = 1;
+        rs_splatter *sp = NULL;
+        CHECK(rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
+        px[many] = malloc((size_t)ww * wh * 4);
+        rs_splat_profile pf;
+        memset(&pf, 0, sizeof pf);
+        CHECK(sp && px[many] && rs_splat_window(ctx, sp, wx, wy, ww, wh, px[many], (size_t)ww * 4, NULL, 0, &pf) == RS_OK);
+        counts[many][0] = (uint32_t)pf.mark_tests;
+        counts[many][1] = (uint32_t)pf.mark_pixels;
+        rs_splatter_free(ctx, sp);
+        rs_roads_free(ctx, roads);
+    }
+    printf("one marking in the window, alone / with 2,000 more on the road: %u / %u pairs examined, %u / %u blends\n",
+           counts[0][0], counts[1][0], counts[0][1], counts[1][1]);
+    CHECK(counts[0][1] > 50);
+    CHECK_EQ_INT(counts[1][0], counts[0][0]);
+    CHECK_EQ_INT(counts[1][1], counts[0][1]);
+    CHECK(px[0] && px[1] && memcmp(px[0], px[1], (size_t)ww * wh * 4) == 0);
+    free(px[0]);
+    free(px[1]);
+    rs_dem_free(ctx, dem);
+}
+
 /* A long marking on an arc of radius R: every painted pixel lies within
  * the marking's band around the arc (a rigid box would stray by the
  * sagitta, 1.7 m here), its area is L x W and it spans L / R radians. On
@@ -491,6 +539,7 @@ int main(void)
     test_default_atlas();
     test_rectangle();
     test_curve();
+    test_local_work();
     test_errors();
     test_parse();
     test_auto();
