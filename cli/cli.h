@@ -188,6 +188,10 @@ typedef struct cli_splat_args {
     const char *layer, *where; /* --layer NAME, --where SQL: GIS road sources (cli/geo.c) */
     int strict;                /* --strict: no road on the map is an error, not a warning */
 } cli_splat_args;
+/* Splits an argument "--name=value" into name (NUL-terminated, cut to
+ * CLI_OPT_NAME - 1 bytes) and the inline value (NULL without '='). */
+#define CLI_OPT_NAME 64
+const char *cli_option_split(const char *arg, char name[CLI_OPT_NAME]);
 /* Value of option `name`: inline ("--x=v", inl) or the next argument. */
 int cli_option_value(int argc, char **argv, int *i, const char *name, const char *inl, const char **val);
 /* When `name` is a splat option, read and apply its value: 0, or 1 on a bad

@@ -392,13 +392,8 @@ int cli_convert_main(int argc, char **argv)
             pos[npos++] = arg;
             continue;
         }
-        char name[64];
-        const char *eq = strchr(arg, '='), *inl = NULL, *v;
-        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
-        if (len >= sizeof name) len = sizeof name - 1;
-        memcpy(name, arg, len);
-        name[len] = '\0';
-        if (eq) inl = eq + 1;
+        char name[CLI_OPT_NAME];
+        const char *inl = cli_option_split(arg, name), *v;
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
             fputs(convert_usage, stdout);
             return 0;

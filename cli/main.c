@@ -87,8 +87,10 @@ typedef struct args {
     double window_world[4]; /* XMIN, YMIN, XMAX, YMAX */
 } args;
 
-/* "X,Y,W,H": whole numbers, W and H >= 1, all below 2^32. */
-static int parse_window(const char *name, const char *v, double d[4])
+/* Four comma-separated numbers into d: whole numbers below 2^32
+ * (`whole`), else finite numbers within 1e12; `form` names them in the
+ * message. */
+static int parse_four(const char *name, const char *v, const char *form, int whole, double d[4])
 {
     const char *p = v;
     for (int k = 0; k < 4; k++) {
@@ -96,16 +98,31 @@ static int parse_window(const char *name, const char *v, double d[4])
         size_t len = k < 3 ? (e ? (size_t)(e - p) : 0) : strlen(p);
         char buf[64];
         if ((k < 3 && !e) || len == 0 || len >= sizeof buf) {
-            cli_error("%s: '%s' is not X,Y,W,H", name, v);
+            cli_error("%s: '%s' is not %s", name, v, form);
             return 1;
         }
         memcpy(buf, p, len);
         buf[len] = '\0';
-        uint32_t u;
-        if (cli_parse_u32(name, buf, &u)) return 1;
-        d[k] = u;
+        if (whole) {
+            uint32_t u;
+            if (cli_parse_u32(name, buf, &u)) return 1;
+            d[k] = u;
+        } else {
+            if (cli_parse_double(name, buf, &d[k])) return 1;
+            if (!(d[k] >= -1e12 && d[k] <= 1e12)) {
+                cli_error("%s: '%s' must be within 1e12 on each axis", name, v);
+                return 1;
+            }
+        }
         p = e ? e + 1 : p + len;
     }
+    return 0;
+}
+
+/* "X,Y,W,H": whole numbers, W and H >= 1, all below 2^32. */
+static int parse_window(const char *name, const char *v, double d[4])
+{
+    if (parse_four(name, v, "X,Y,W,H", 1, d)) return 1;
     if (d[2] < 1 || d[3] < 1) {
         cli_error("%s: '%s': width and height must be >= 1", name, v);
         return 1;
@@ -116,25 +133,7 @@ static int parse_window(const char *name, const char *v, double d[4])
 /* "XMIN,YMIN,XMAX,YMAX": four finite numbers. */
 static int parse_box(const char *name, const char *v, double d[4])
 {
-    const char *p = v;
-    for (int k = 0; k < 4; k++) {
-        const char *e = strchr(p, ',');
-        size_t len = k < 3 ? (e ? (size_t)(e - p) : 0) : strlen(p);
-        char buf[64];
-        if ((k < 3 && !e) || len == 0 || len >= sizeof buf) {
-            cli_error("%s: '%s' is not XMIN,YMIN,XMAX,YMAX (world units, y north)", name, v);
-            return 1;
-        }
-        memcpy(buf, p, len);
-        buf[len] = '\0';
-        if (cli_parse_double(name, buf, &d[k])) return 1;
-        if (!(d[k] >= -1e12 && d[k] <= 1e12)) {
-            cli_error("%s: '%s' must be within 1e12 on each axis", name, v);
-            return 1;
-        }
-        p = e ? e + 1 : p + len;
-    }
-    return 0;
+    return parse_four(name, v, "XMIN,YMIN,XMAX,YMAX (world units, y north)", 0, d);
 }
 
 /* Returns 0 to run, 1 on a usage error, 2 when --help/--version was handled. */
@@ -154,13 +153,8 @@ static int parse_args(int argc, char **argv, args *a)
             continue;
         }
         if (!strcmp(arg, "--")) { only_pos = 1; continue; }
-        char name[64];
-        const char *eq = strchr(arg, '='), *inl = NULL;
-        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
-        if (len >= sizeof name) len = sizeof name - 1;
-        memcpy(name, arg, len);
-        name[len] = '\0';
-        if (eq) inl = eq + 1;
+        char name[CLI_OPT_NAME];
+        const char *inl = cli_option_split(arg, name);
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
             fputs(usage_text, stdout);
             fputs(usage_text2, stdout);

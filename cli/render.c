@@ -83,12 +83,8 @@ static int parse_render_args(int argc, char **argv, render_args *a)
             continue;
         }
         if (!strcmp(arg, "--")) { only_pos = 1; continue; }
-        char name[64];
-        const char *eq = strchr(arg, '='), *inl = eq ? eq + 1 : NULL;
-        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
-        if (len >= sizeof name) len = sizeof name - 1;
-        memcpy(name, arg, len);
-        name[len] = '\0';
+        char name[CLI_OPT_NAME];
+        const char *inl = cli_option_split(arg, name);
         double d[3];
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) { fputs(render_usage, stdout); return 2; }
         if (!strcmp(name, "--quiet") || !strcmp(name, "-q")) { a->quiet = 1; continue; }

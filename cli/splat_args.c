@@ -5,6 +5,16 @@
 #include <stdlib.h>
 #include <string.h>
 
+const char *cli_option_split(const char *arg, char name[CLI_OPT_NAME])
+{
+    const char *eq = strchr(arg, '=');
+    size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+    if (len >= CLI_OPT_NAME) len = CLI_OPT_NAME - 1;
+    memcpy(name, arg, len);
+    name[len] = '\0';
+    return eq ? eq + 1 : NULL;
+}
+
 int cli_option_value(int argc, char **argv, int *i, const char *name, const char *inl, const char **val)
 {
     if (inl) { *val = inl; return 0; }
