@@ -485,8 +485,10 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         double p1 = pix * ax, p2 = pix * ay, lo = p1 < p2 ? p1 : p2, hi = p1 < p2 ? p2 : p1;
         Q->st_lo = lo;
         Q->st_e = 0.5 * (lo + hi);
-        Q->st_h = 1 / hi;
-        Q->st_q = lo > 0 ? 0.5 / (hi * lo) : 0;
+        /* a subnormal pixel (fuzzed options) may make hi or hi lo 0: e is
+         * then 0 or the ramp below lo too thin to matter */
+        Q->st_h = hi > 0 ? 1 / hi : 0;
+        Q->st_q = hi * lo > 0 ? 0.5 / (hi * lo) : 0;
         Q->ru0 = pu0 - Q->su - eb;
         Q->ru1 = pu1 + Q->su + eb;
         Q->rv0 = pv0 - Q->su - eb;
@@ -872,7 +874,8 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
         }
         double pad = 1e-9 * (1 + r1);
         P.wx0 -= pad, P.wy0 -= pad, P.wx1 += pad, P.wy1 += pad;
-        P.warea = 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / (L->pixel * L->pixel);
+        double pp = L->pixel * L->pixel; /* 0 only for a subnormal pixel: no shortcut then */
+        P.warea = pp > 0 ? 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / pp : 0;
         piece_box(L, &P, 0, 0, 0);
         rs_result r = push_cut(ctx, L, J, &P, road);
         if (r) return r;
@@ -1213,8 +1216,9 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         Q->r0 = P->r0, Q->r1 = P->r1, Q->wx0 = P->wx0, Q->wy0 = P->wy0, Q->wx1 = P->wx1, Q->wy1 = P->wy1;
         Q->warea = P->warea, Q->nhp = P->nhp, Q->kind = P->kind, Q->band = P->band, Q->dashed = P->dashed;
         Q->hp0 = (uint32_t)h;
-        Q->iku = fabs(P->ux) < 1e-12 ? 0 : 1 / (P->ux * L->pixel);
-        Q->ikv = fabs(P->uy) < 1e-12 ? 0 : 1 / (P->uy * L->pixel);
+        double du = P->ux * L->pixel, dv = P->uy * L->pixel; /* 0 for a subnormal pixel */
+        Q->iku = fabs(P->ux) < 1e-12 || du == 0 ? 0 : 1 / du;
+        Q->ikv = fabs(P->uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
         Q->cbase = P->ox / L->pixel - 0.5;
         for (uint32_t j = 0; j < P->nhp; j++, h++) {
             memcpy(L->hpp + 4 * h, P->hp[j], 3 * sizeof *L->hpp);
