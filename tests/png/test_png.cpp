@@ -101,7 +101,7 @@ static bool read_libpng(const std::string &path, const image &want, std::string 
     if (!info) { std::fclose(f); why = "libpng init"; return false; }
     std::vector<uint8_t> buf(want.samples() * (size_t)(want.bits / 8));
     std::vector<png_bytep> rows(want.h);
-    bool ok = false;
+    volatile bool ok = false; // set between setjmp and a possible longjmp
     if (setjmp(png_jmpbuf(p)) == 0) {
         png_init_io(p, f);
         png_read_info(p, info);
