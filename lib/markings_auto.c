@@ -141,6 +141,20 @@ static const char *arrow_for(const char *v, size_t n)
     return NULL;
 }
 
+/* A placement of atlas type ti on road `road` at the type's own size
+ * (s, t to be set by the caller). */
+static rs__placement sprite_at(const rs_atlas *atlas, long ti, size_t road, int flip)
+{
+    rs__placement p;
+    memset(&p, 0, sizeof p);
+    p.type = (uint32_t)ti;
+    p.road = road;
+    p.length = atlas->t[ti].length;
+    p.width = atlas->t[ti].width;
+    p.flip = flip;
+    return p;
+}
+
 static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
                             const double end_half[2], const int end_minor[2], rs__placement **pl, size_t *n,
                             size_t *cap)
@@ -169,15 +183,10 @@ static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, cons
         if (end_minor[e]) {
             long ti = rs_atlas_find(atlas, ctrl && !strcmp(ctrl, "stop") ? "stop_line" : "give_way_line");
             if (ti >= 0) {
-                rs__placement p;
-                memset(&p, 0, sizeof p);
-                p.type = (uint32_t)ti;
-                p.road = i;
-                p.length = atlas->t[ti].length;
+                rs__placement p = sprite_at(atlas, ti, i, flip);
                 p.width = 2 * half_w - 0.2;
                 p.s = edge + dir * (LINE_GAP + p.length / 2);
                 p.t = tc;
-                p.flip = flip;
                 if (p.width > 0 && offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
             }
         }
@@ -192,12 +201,7 @@ static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, cons
                 const char *type = arrow_for(v, len);
                 long ti = type ? rs_atlas_find(atlas, type) : -1;
                 if (ti >= 0) {
-                    rs__placement p;
-                    memset(&p, 0, sizeof p);
-                    p.type = (uint32_t)ti;
-                    p.road = i;
-                    p.length = atlas->t[ti].length;
-                    p.width = atlas->t[ti].width;
+                    rs__placement p = sprite_at(atlas, ti, i, flip);
                     if (p.width > 0.8 * lw) {
                         p.length *= 0.8 * lw / p.width;
                         p.width = 0.8 * lw;
@@ -205,7 +209,6 @@ static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, cons
                     p.s = edge + dir * (ARROW_GAP + p.length / 2);
                     /* lanes from the driver's left: left of travel is +t unflipped */
                     p.t = flip ? left + (k + 0.5) * lw : left - (k + 0.5) * lw;
-                    p.flip = flip;
                     if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
                 }
                 if (!bar) break;
