@@ -1102,7 +1102,8 @@ int cli_tiles_main(int argc, char **argv)
             void *db = r.db;
             r.db = NULL;
             if (r.mb->close(db, !mb) || mb) goto done;
-            if (cli_out_commit(&mout)) goto done;
+            cli_out *one[1] = { &mout }; /* closed: SQLite wrote it */
+            if (cli_out_commit_all(one, 1)) goto done;
         } else {
             char *mp = join(a.out, "tiles.json", NULL);
             if (!mp || cli_out_open(&mani, mp)) {
