@@ -72,6 +72,14 @@ GDAL_LIBS   = $(or $(shell $(PKG_CONFIG) --libs gdal 2>/dev/null),-lgdal)
 GDAL_DEF    = -DRS_WITH_GDAL
 endif
 
+# Optional MBTiles output of `roadsplat tiles` (SQLite, in the module
+# roadsplat-mbtiles.so): auto-detected, or forced with WITH_SQLITE=1/0.
+WITH_SQLITE ?= $(shell $(PKG_CONFIG) --exists sqlite3 2>/dev/null && echo 1 || echo 0)
+ifeq ($(WITH_SQLITE),1)
+SQLITE_DEF  = -DRS_WITH_SQLITE
+SQLITE_LIBS = $(or $(shell $(PKG_CONFIG) --libs sqlite3 2>/dev/null),-lsqlite3)
+endif
+
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
@@ -79,14 +87,17 @@ LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # first use (docs/packaging.md).
 RENDER_SRC := cli/render.c cli/render_gl.c
 GDAL_SRC  := cli/gdal.c
-CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC),$(sort $(wildcard cli/*.c)))
+MBTILES_SRC := cli/mbtiles.c
+CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC) $(MBTILES_SRC),$(sort $(wildcard cli/*.c)))
 CLI_OBJ   := $(CLI_CSRC:%.c=$(BUILD)/%.o)
 RENDER_OBJ := $(RENDER_SRC:%.c=$(BUILD)/%.o)
 IMAGE_OBJ := $(BUILD)/cli/imageio.o
 IMAGE_MOD := $(BUILD)/roadsplat-image.so
 RENDER_MOD := $(BUILD)/roadsplat-render.so
 GDAL_MOD  := $(BUILD)/roadsplat-gdal.so
-MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD)) $(if $(filter 1,$(WITH_GDAL)),$(GDAL_MOD))
+MBTILES_MOD := $(BUILD)/roadsplat-mbtiles.so
+MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD)) $(if $(filter 1,$(WITH_GDAL)),$(GDAL_MOD)) \
+             $(if $(filter 1,$(WITH_SQLITE)),$(MBTILES_MOD))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TESTLIB_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
@@ -102,7 +113,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -135,7 +146,7 @@ help:
 	@echo "  make install-lib   install only the library, header and roadsplat.pc (no OpenImageIO needed)"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 FUZZ_SECONDS"
+	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 FUZZ_SECONDS"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
@@ -190,7 +201,7 @@ $(PCFILE): $(CONFIG)
 # CLI symbols keep default visibility: the executable exports them
 # (--export-dynamic) to the modules, which call back into it. The whole
 # library is linked in, since the render module uses parts the rest does not.
-CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF)
+CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF) $(SQLITE_DEF)
 $(BUILD)/cli/%.o: cli/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) -c $< -o $@
@@ -219,6 +230,9 @@ $(RENDER_MOD): $(RENDER_OBJ)
 
 $(GDAL_MOD): $(BUILD)/cli/gdal.o
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(GDAL_LIBS) $(LDLIBS_CORE)
+
+$(MBTILES_MOD): $(BUILD)/cli/mbtiles.o
+	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(SQLITE_LIBS)
 
 # --- tests --------------------------------------------------------------------
 $(BUILD)/tests/%.o: tests/%.c
@@ -340,7 +354,7 @@ uninstall:
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so $(DESTDIR)$(PKGCONFIGDIR)/roadsplat.pc \
 	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1 \
 	  $(DESTDIR)$(MODULEDIR)/roadsplat-image.so $(DESTDIR)$(MODULEDIR)/roadsplat-render.so \
-	  $(DESTDIR)$(MODULEDIR)/roadsplat-gdal.so
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-gdal.so $(DESTDIR)$(MODULEDIR)/roadsplat-mbtiles.so
 	-rmdir $(DESTDIR)$(MODULEDIR) 2>/dev/null
 
 clean:

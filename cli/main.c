@@ -3,6 +3,7 @@
 #include "bigalloc.h"
 #include "png.h"
 #include "gis.h"
+#include "tiles.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -16,6 +17,7 @@ static const char usage_text[] =
     "       roadsplat mesh [options] DEM OUT.obj|OUT.ply   (see roadsplat mesh --help)\n"
     "       roadsplat convert [options] ROADS_IN ROADS.txt (GIS roads to road text; needs GDAL)\n"
     "       roadsplat render [options] DEM ROADS OUT.png  (see roadsplat render --help; needs OSMesa)\n"
+    "       roadsplat tiles [options] DEM ROADS OUTDIR  (tile pyramid; see roadsplat tiles --help)\n"
     "\n"
     "Burns the roads of ROADS (text, docs/road-format.md) into a terrain texture\n"
     "of the height map DEM (PGM, PNG or TIFF) and writes it to OUT.png: (W-1)*T x\n"
@@ -547,5 +549,6 @@ int main(int argc, char **argv)
     if (argc > 1 && !strcmp(argv[1], "mesh")) return cli_mesh_main(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "render")) return cli_render_main(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "convert")) return cli_convert_main(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "tiles")) return cli_tiles_main(argc - 1, argv + 1);
     return splat_main(argc, argv);
 }

@@ -40,6 +40,7 @@ static module modules[] = {
     { "image", "OpenImageIO", NULL, 0, { 0 } },
     { "render", "OSMesa", NULL, 0, { 0 } },
     { "gdal", "GDAL", NULL, 0, { 0 } },
+    { "mbtiles", "SQLite", NULL, 0, { 0 } },
 };
 
 /* Folder of the executable, with a trailing '/'; "" when unknown. */

@@ -1,0 +1,1145 @@
+/* `roadsplat tiles [options] DEM ROADS OUTDIR`: the texture as a tile
+ * pyramid, OUTDIR/{z}/{x}/{y}.png (or one MBTiles file), streamed through
+ * a quadtree so that memory does not grow with the map (docs/tiles.md).
+ *
+ * - The finest level zmax is the splat at its texel size; its tile (x, y)
+ *   is the window [xS, (x+1)S) x [yS, (y+1)S) of the whole image (S = tile
+ *   size), rendered by rs_splat_window, whose windows are byte-identical
+ *   to the whole image. Pixels beyond the image are transparent (0,0,0,0).
+ * - Every coarser tile is the 2x2 box filter of its four children (alpha-
+ *   weighted colour, so transparent padding does not darken edges); no
+ *   level re-renders the scene. z = 0 is the level where the image fits in
+ *   one tile.
+ * - Tiles are visited depth first in Morton (Z) order: a parent is built
+ *   as soon as its four children are, so at most one tile buffer per level
+ *   is alive (levels x S^2 x 4 bytes).
+ * - Sparse: on levels finer than zd (the coarsest level whose pixel is no
+ *   larger than a DEM cell) a tile is written only when it holds a road;
+ *   road-free ones are computed in memory for their parent.
+ * - Runs: --shard I/N takes a contiguous run of the finest tiles in Morton
+ *   order (and every coarser tile whose subtree lies inside it); each run
+ *   appends a line per finished tile to OUTDIR/.tiles-log/NAME.log, after
+ *   the tile's atomic rename. --resume and --from-children read every log
+ *   there, skip tiles whose file still has the logged SHA-256, and build
+ *   what is missing; --from-children renders no finest tile that holds a
+ *   road (they must come from the shards). A whole run and --from-children
+ *   end by writing tiles.json, the manifest. */
+#include "png.h"
+#include "gis.h"
+#include "sha256.h"
+#include "tiles.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+static const char tiles_usage[] =
+    "Usage: roadsplat tiles [options] DEM ROADS OUTDIR\n"
+    "       roadsplat tiles --format mbtiles [options] DEM ROADS OUT.mbtiles\n"
+    "\n"
+    "Writes the texture of `roadsplat DEM ROADS OUT.png` as a tile pyramid:\n"
+    "OUTDIR/{z}/{x}/{y}.png, the finest level at the splat's texel size, z = 0\n"
+    "the level where the whole image fits one tile, each coarser tile the 2x2\n"
+    "box filter of its four children; OUTDIR/tiles.json lists the levels, the\n"
+    "frame, the inputs' and every tile's SHA-256 (docs/tiles.md).\n"
+    "\n"
+    "Options (and every splat option of roadsplat --help but --window*,\n"
+    "--weight-out, --stats, --world-file, --cog, --rgba):\n"
+    "  --tile-size N      256 (default), 512 or 1024 pixels\n"
+    "  --scheme xyz|tms   y down (default) or up (TMS) in the file names\n"
+    "  --format png|mbtiles  a folder of PNG files (default) or one MBTiles 1.3\n"
+    "                     file (SQLite; needs the module roadsplat-mbtiles.so)\n"
+    "  --dense            write every tile (default: on levels finer than a DEM\n"
+    "                     cell, only tiles that hold a road)\n"
+    "  --shard I/N        render only shard I (0..N-1) of N: a compact run of the\n"
+    "                     finest tiles in Morton order; then --from-children\n"
+    "  --from-children    build the coarser levels from the shards' tiles on disk\n"
+    "                     and write tiles.json\n"
+    "  --resume           keep tiles whose file matches its logged SHA-256\n"
+    "  --threads N        splat threads (default: all cores; same tiles for any N)\n"
+    "  --png-level N      PNG compression 0..12 (default 1)\n"
+    "  --quiet, --help\n";
+
+#define LOG_DIR ".tiles-log"
+#define MAX_ZOOM 24
+
+typedef struct targs {
+    cli_splat_args s;
+    const char *dem, *roads, *out;
+    uint32_t tile;
+    int tms, mbtiles, dense, resume, from_children, quiet, sharded;
+    uint32_t shard_i, shard_n;
+    const char **opt; /* the splat options as given (for the manifest), --threads left out */
+    int nopt;
+} targs;
+
+/* ---- tile table: what the logs say about each tile ---------------------------- */
+
+typedef struct entry {
+    uint64_t key;     /* z << 58 | x << 29 | y, +1 (0: empty slot) */
+    uint8_t flag;     /* 'r': written, holds a road; 'w': written, road-free; 'e': road-free, not written */
+    uint8_t checked;  /* 1: the file was found to match this run */
+    uint8_t hash[32];
+} entry;
+
+typedef struct table {
+    entry *e;
+    size_t cap, n;
+} table;
+
+static uint64_t tkey(uint32_t z, uint64_t x, uint64_t y) { return ((uint64_t)z << 58 | x << 29 | y) + 1; }
+
+static size_t tslot(const table *t, uint64_t key)
+{
+    uint64_t h = key * 0x9E3779B97F4A7C15ull;
+    size_t i = (size_t)(h >> 17) & (t->cap - 1);
+    while (t->e[i].key && t->e[i].key != key) i = (i + 1) & (t->cap - 1);
+    return i;
+}
+
+static entry *tfind(table *t, uint64_t key)
+{
+    if (!t->cap) return NULL;
+    entry *e = &t->e[tslot(t, key)];
+    return e->key ? e : NULL;
+}
+
+static entry *tput(table *t, uint64_t key, int flag, const uint8_t *hash)
+{
+    if ((t->n + 1) * 2 > t->cap) {
+        size_t nc = t->cap ? t->cap * 2 : 1024;
+        entry *ne = calloc(nc, sizeof *ne), *old = t->e;
+        if (!ne) return NULL;
+        size_t oc = t->cap;
+        t->e = ne, t->cap = nc;
+        for (size_t i = 0; i < oc; i++)
+            if (old[i].key) t->e[tslot(t, old[i].key)] = old[i];
+        free(old);
+    }
+    entry *e = &t->e[tslot(t, key)];
+    if (!e->key) t->n++;
+    e->key = key;
+    e->flag = (uint8_t)flag;
+    e->checked = 0;
+    if (hash) memcpy(e->hash, hash, 32);
+    else memset(e->hash, 0, 32);
+    return e;
+}
+
+/* ---- the run -------------------------------------------------------------------- */
+
+typedef struct run {
+    targs *a;
+    const cli_splat_input *in;
+    const rs_splatter *sp;
+    uint32_t fw, fh, S, T, zmax, zd;
+    uint64_t nx, ny;    /* finest tiles per row, column */
+    uint64_t lo, hi;    /* this run's finest tiles: Morton ranks [lo, hi) */
+    table tab;
+    FILE *log;
+    char *log_path;
+    char fingerprint[65];
+    const cli_mbtiles_api *mb;
+    void *db;
+    uint8_t *bufs[MAX_ZOOM + 2]; /* one S x S RGBA tile per depth */
+    uint8_t *rgb;                /* packing scratch */
+    char *path;                  /* tile path scratch */
+    size_t path_cap;
+    uint64_t rendered, written, road_free, kept, done_finest, total_finest;
+    cli_progress prog;
+} run;
+
+/* Side of a level-z tile in finest tiles, and whether (z, x, y) exists. */
+static uint64_t span(const run *r, uint32_t z) { return (uint64_t)1 << (r->zmax - z); }
+
+static int exists(const run *r, uint32_t z, uint64_t x, uint64_t y)
+{
+    return x * span(r, z) < r->nx && y * span(r, z) < r->ny;
+}
+
+/* Finest tiles of the image under (z, x, y). */
+static uint64_t finest_count(const run *r, uint32_t z, uint64_t x, uint64_t y)
+{
+    uint64_t k = span(r, z), x0 = x * k, y0 = y * k;
+    if (x0 >= r->nx || y0 >= r->ny) return 0;
+    uint64_t x1 = x0 + k < r->nx ? x0 + k : r->nx, y1 = y0 + k < r->ny ? y0 + k : r->ny;
+    return (x1 - x0) * (y1 - y0);
+}
+
+static uint64_t file_y(const run *r, uint32_t z, uint64_t y)
+{
+    return r->a->tms ? (((uint64_t)1 << z) - 1 - y) : y;
+}
+
+/* "OUTDIR/z/x/y.png" in r->path; with mk, its folders are made. */
+static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk)
+{
+    size_t need = strlen(r->a->out) + 80;
+    if (need > r->path_cap) {
+        free(r->path);
+        if (!(r->path = malloc(need))) {
+            r->path_cap = 0;
+            cli_error("out of memory");
+            return 1;
+        }
+        r->path_cap = need;
+    }
+    int n = snprintf(r->path, need, "%s/%u", r->a->out, z);
+    if (mk && mkdir(r->path, 0777) != 0 && errno != EEXIST) goto fail;
+    n += snprintf(r->path + n, need - n, "/%llu", (unsigned long long)x);
+    if (mk && mkdir(r->path, 0777) != 0 && errno != EEXIST) goto fail;
+    snprintf(r->path + n, need - n, "/%llu.png", (unsigned long long)file_y(r, z, y));
+    return 0;
+fail:
+    cli_error("%s: cannot create the folder: %s", r->path, strerror(errno));
+    return 1;
+}
+
+/* ---- PNG bytes: encode into memory, decode our own tiles ------------------------ */
+
+/* The tile as a PNG in memory (*png malloc'd): RGB when every pixel is
+ * opaque, else RGBA. */
+static int encode_tile(run *r, const uint8_t *rgba, const char *shown, char **png, size_t *size)
+{
+    size_t n = (size_t)r->S * r->S;
+    int opaque = 1;
+    for (size_t i = 0; i < n && opaque; i++) opaque = rgba[4 * i + 3] == 255;
+    if (opaque)
+        for (size_t i = 0; i < n; i++) memcpy(r->rgb + 3 * i, rgba + 4 * i, 3);
+    cli_png_image img = { r->S, r->S, opaque ? 3 : 4, 8, opaque ? (const void *)r->rgb : (const void *)rgba };
+    cli_png_options po = { r->a->s.png_level_given ? r->a->s.png_level : -1, NULL, NULL };
+    *png = NULL;
+    *size = 0;
+    FILE *f = open_memstream(png, size);
+    if (!f) {
+        cli_error("%s: out of memory", shown);
+        return 1;
+    }
+    int bad = cli_png_encode(f, shown, &img, &po);
+    if (fclose(f) != 0 && !bad) {
+        cli_error("%s: out of memory", shown);
+        bad = 1;
+    }
+    if (bad) {
+        free(*png);
+        *png = NULL;
+    }
+    return bad;
+}
+
+static uint32_t be32(const uint8_t *p) { return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]; }
+
+static int paeth(int a, int b, int c)
+{
+    int p = a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
+    return pa <= pb && pa <= pc ? a : (pb <= pc ? b : c);
+}
+
+/* An S x S 8-bit RGB or RGBA PNG (what encode_tile writes) into rgba. */
+static int decode_tile(const uint8_t *p, size_t n, uint32_t S, uint8_t *rgba)
+{
+    static const uint8_t sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
+    if (n < 8 + 25 || memcmp(p, sig, 8) || memcmp(p + 12, "IHDR", 4)) return 1;
+    uint32_t w = be32(p + 16), h = be32(p + 20);
+    int bits = p[24], ct = p[25], ch = ct == 2 ? 3 : ct == 6 ? 4 : 0;
+    if (w != S || h != S || bits != 8 || !ch || p[28] != 0) return 1;
+    size_t rowb = (size_t)S * ch, raw_n = (rowb + 1) * S;
+    uint8_t *z = NULL, *raw = malloc(raw_n);
+    size_t zn = 0, zcap = 0;
+    int bad = !raw;
+    for (size_t off = 8; !bad && off + 12 <= n;) {
+        uint32_t len = be32(p + off);
+        if (len > n - off - 12) { bad = 1; break; }
+        const uint8_t *type = p + off + 4;
+        if (!memcmp(type, "IDAT", 4)) {
+            if (zn + len > zcap) {
+                size_t nc = (zn + len) * 2;
+                uint8_t *nz = realloc(z, nc);
+                if (!nz) { bad = 1; break; }
+                z = nz, zcap = nc;
+            }
+            memcpy(z + zn, p + off + 8, len);
+            zn += len;
+        }
+        off += 12 + (size_t)len;
+        if (!memcmp(type, "IEND", 4)) break;
+    }
+    uLongf got = (uLongf)raw_n;
+    if (!bad && (uncompress(raw, &got, z, (uLong)zn) != Z_OK || got != raw_n)) bad = 1;
+    for (uint32_t y = 0; !bad && y < S; y++) {
+        uint8_t *row = raw + y * (rowb + 1) + 1, *prev = y ? row - (rowb + 1) : NULL;
+        int ft = row[-1];
+        for (size_t i = 0; i < rowb; i++) {
+            int a = i >= (size_t)ch ? row[i - ch] : 0, b = prev ? prev[i] : 0, c = prev && i >= (size_t)ch ? prev[i - ch] : 0;
+            int v = ft == 0 ? 0 : ft == 1 ? a : ft == 2 ? b : ft == 3 ? (a + b) / 2 : ft == 4 ? paeth(a, b, c) : -1;
+            if (v < 0) { bad = 1; break; }
+            row[i] = (uint8_t)(row[i] + v);
+        }
+        for (uint32_t x = 0; !bad && x < S; x++) {
+            uint8_t *o = rgba + ((size_t)y * S + x) * 4;
+            memcpy(o, row + (size_t)x * ch, (size_t)ch);
+            if (ch == 3) o[3] = 255;
+        }
+    }
+    free(z);
+    free(raw);
+    return bad;
+}
+
+/* ---- pixels ---------------------------------------------------------------------- */
+
+/* Child (S x S) into quadrant (qx, qy) of parent: each parent pixel from a
+ * 2x2 block, alpha the rounded mean, colour the alpha-weighted mean
+ * (rounded; all four opaque: (c0 + c1 + c2 + c3 + 2) / 4). */
+static void box_down(const uint8_t *c, uint8_t *parent, uint32_t S, int qx, int qy)
+{
+    uint32_t h = S / 2;
+    for (uint32_t y = 0; y < h; y++) {
+        const uint8_t *r0 = c + (size_t)(2 * y) * S * 4, *r1 = r0 + (size_t)S * 4;
+        uint8_t *o = parent + ((size_t)(qy * h + y) * S + (size_t)qx * h) * 4;
+        for (uint32_t x = 0; x < h; x++, r0 += 8, r1 += 8, o += 4) {
+            uint32_t a0 = r0[3], a1 = r0[7], a2 = r1[3], a3 = r1[7], A = a0 + a1 + a2 + a3;
+            if (A == 4 * 255) {
+                for (int k = 0; k < 3; k++) o[k] = (uint8_t)((r0[k] + r0[4 + k] + r1[k] + r1[4 + k] + 2) >> 2);
+                o[3] = 255;
+            } else if (A == 0) {
+                memset(o, 0, 4);
+            } else {
+                for (int k = 0; k < 3; k++)
+                    o[k] = (uint8_t)((r0[k] * a0 + r0[4 + k] * a1 + r1[k] * a2 + r1[4 + k] * a3 + A / 2) / A);
+                o[3] = (uint8_t)((A + 2) >> 2);
+            }
+        }
+    }
+}
+
+/* The finest tile (x, y): its window of the image, transparent beyond it. */
+static int render_tile(run *r, uint64_t x, uint64_t y, uint8_t *out, int *has_road)
+{
+    uint32_t S = r->S, x0 = (uint32_t)(x * S), y0 = (uint32_t)(y * S);
+    uint32_t w = r->fw - x0 < S ? r->fw - x0 : S, h = r->fh - y0 < S ? r->fh - y0 : S;
+    cli_splat_job job;
+    cli_splat_job_init(&job, r->sp, &r->a->s, 1);
+    job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
+    job.rgba = out; /* rows w * 4 apart, spread to S * 4 below */
+    job.nodata = r->in->nodata;
+    job.dem_w = rs_dem_width(r->in->dem), job.dem_h = rs_dem_height(r->in->dem);
+    if (cli_splat_run(&job)) return 1;
+    if (w < S || h < S) {
+        for (uint32_t row = h; row-- > 0;) {
+            memmove(out + (size_t)row * S * 4, out + (size_t)row * w * 4, (size_t)w * 4);
+            memset(out + (size_t)row * S * 4 + (size_t)w * 4, 0, (size_t)(S - w) * 4);
+        }
+        memset(out + (size_t)h * S * 4, 0, (size_t)(S - h) * S * 4);
+    }
+    *has_road = job.profile.road_pixels > 0;
+    r->rendered++;
+    return 0;
+}
+
+/* ---- writing a tile ------------------------------------------------------------ */
+
+static int write_all(int fd, const char *p, size_t n)
+{
+    while (n) {
+        ssize_t k = write(fd, p, n);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return 1;
+        p += k, n -= (size_t)k;
+    }
+    return 0;
+}
+
+static int log_line(run *r, uint32_t z, uint64_t x, uint64_t y, int flag, const uint8_t *hash)
+{
+    char hex[65] = "-";
+    if (hash) cli_sha256_hex(hash, hex);
+    if (fprintf(r->log, "%u %llu %llu %c %s\n", z, (unsigned long long)x, (unsigned long long)y, flag, hex) < 0 ||
+        fflush(r->log) != 0) {
+        cli_error("%s: write failed: %s", r->log_path, strerror(errno ? errno : EIO));
+        return 1;
+    }
+    return tput(&r->tab, tkey(z, x, y), flag, hash) ? 0 : (cli_error("out of memory"), 1);
+}
+
+/* Encode, hash and store a finished tile (a file renamed into place, or a
+ * row of the MBTiles file), then log it. */
+static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, const uint8_t *rgba, int has_road)
+{
+    char shown[96], *png = NULL;
+    size_t size = 0;
+    snprintf(shown, sizeof shown, "tile %u/%llu/%llu", z, (unsigned long long)x, (unsigned long long)file_y(r, z, y));
+    if (encode_tile(r, rgba, shown, &png, &size)) return 1;
+    uint8_t hash[32];
+    cli_sha256(png, size, hash);
+    int bad = 0;
+    if (r->db) {
+        bad = r->mb->put(r->db, z, (uint32_t)x, (uint32_t)((((uint64_t)1 << z) - 1 - y)), png, size);
+    } else {
+        char *tmp = NULL;
+        int fd = -1;
+        bad = tile_path(r, z, x, y, 1);
+        if (!bad && (fd = cli_temp_create(r->path, &tmp)) < 0) {
+            cli_error("%s: cannot create a temporary file next to it: %s", r->path, strerror(errno));
+            bad = 1;
+        }
+        if (!bad) {
+            int e = 0;
+            if (write_all(fd, png, size)) e = errno ? errno : EIO;
+            if (close(fd) != 0 && !e) e = errno;
+            if (!e && rename(tmp, r->path) != 0) e = errno;
+            if (e) {
+                cli_error("%s: write failed: %s", r->path, strerror(e));
+                cli_temp_remove(tmp);
+                bad = 1;
+            } else {
+                cli_temp_forget(tmp);
+            }
+        }
+        free(tmp);
+    }
+    free(png);
+    if (bad) return 1;
+    r->written++;
+    return log_line(r, z, x, y, has_road ? 'r' : 'w', hash);
+}
+
+/* A whole file, quietly: 0, or 1 (missing, unreadable). */
+static int read_whole(const char *path, char **data, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    *data = NULL;
+    if (!f) return 1;
+    size_t cap = 1 << 16, n = 0, k;
+    char *b = malloc(cap);
+    while (b && (k = fread(b + n, 1, cap - n, f)) > 0) {
+        n += k;
+        if (n == cap) {
+            char *nb = realloc(b, cap *= 2);
+            if (!nb) { free(b); b = NULL; }
+            b = nb;
+        }
+    }
+    int bad = !b || ferror(f);
+    fclose(f);
+    if (bad) { free(b); return 1; }
+    *data = b;
+    *size = n;
+    return 0;
+}
+
+/* A logged tile's file, when it still has the logged hash: 1 (its bytes
+ * in *data, malloc'd, when data is not NULL), else 0. */
+static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, uint8_t **data, size_t *size)
+{
+    if (data) *data = NULL;
+    if (e->checked && !data) return 1;
+    if (tile_path(r, z, x, y, 0)) return 0;
+    char *bytes = NULL;
+    size_t n = 0;
+    if (read_whole(r->path, &bytes, &n)) return 0;
+    uint8_t h[32];
+    cli_sha256(bytes, n, h);
+    int ok = !memcmp(h, e->hash, 32);
+    if (ok && data) {
+        *data = (uint8_t *)bytes;
+        *size = n;
+    } else {
+        free(bytes);
+    }
+    e->checked = (uint8_t)ok;
+    return ok;
+}
+
+/* ---- the quadtree ---------------------------------------------------------------- */
+
+/* Tile (z, x, y) into out (S x S RGBA, r->bufs[depth] of the caller).
+ * need: the caller needs the pixels (a tile already done is then read back
+ * from its file, or recomputed when it was road-free and not written).
+ * record 0: compute only (a road-free tile recomputed for its parent).
+ * *has_road: some pixel of the tile holds a road. */
+static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *out, int need, int record, int *has_road)
+{
+    entry *e = tfind(&r->tab, tkey(z, x, y));
+    if (e && record && (e->flag == 'r' || e->flag == 'w')) {
+        uint8_t *data = NULL;
+        size_t n = 0;
+        if (logged_file_ok(r, z, x, y, e, need ? &data : NULL, &n)) {
+            int bad = need && decode_tile(data, n, r->S, out);
+            free(data);
+            if (bad) {
+                cli_error("%s: not a %u x %u tile of roadsplat", r->path, r->S, r->S);
+                return 1;
+            }
+            *has_road = e->flag == 'r';
+            r->kept++;
+            if (z == r->zmax) r->done_finest++;
+            return 0;
+        }
+        e = NULL; /* missing or changed: made again */
+    }
+    if (e && record && e->flag == 'e') {
+        if (!need) {
+            *has_road = 0;
+            if (z == r->zmax) r->done_finest++;
+            return 0;
+        }
+        record = 0; /* road-free: its pixels again, nothing written */
+    }
+    if (z == r->zmax) {
+        if (record && r->a->from_children && !e) {
+            if (tile_path(r, z, x, y, 0)) return 1;
+            cli_error("--from-children: %s is missing or differs from its log: run its shard (with --resume) first",
+                      r->path);
+            return 1;
+        }
+        if (render_tile(r, x, y, out, has_road)) return 1;
+        if (record) {
+            r->done_finest++;
+            cli_progress_cb(&r->prog, r->done_finest, r->total_finest);
+        }
+    } else {
+        uint8_t *child = r->bufs[r->zmax - z - 1];
+        int any = 0;
+        memset(out, 0, (size_t)r->S * r->S * 4);
+        for (int q = 0; q < 4; q++) {
+            uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+            if (!exists(r, z + 1, cx, cy)) continue;
+            int cr = 0;
+            if (build(r, z + 1, cx, cy, child, 1, record, &cr)) return 1;
+            box_down(child, out, r->S, q & 1, q >> 1);
+            any |= cr;
+        }
+        *has_road = any;
+    }
+    if (!record) {
+        if (*has_road) {
+            cli_error("tile %u/%llu/%llu: logged as road-free but holds a road (logs of other inputs?)", z,
+                      (unsigned long long)x, (unsigned long long)file_y(r, z, y));
+            return 1;
+        }
+        return 0;
+    }
+    if (z <= r->zd || *has_road) return store_tile(r, z, x, y, out, *has_road);
+    r->road_free++;
+    return log_line(r, z, x, y, 'e', NULL);
+}
+
+/* The tiles of this run under (z, x, y), whose finest tiles have the
+ * Morton ranks [rank, rank + count): whole subtrees inside [lo, hi) are
+ * built; a subtree across a boundary is split. */
+static int visit(run *r, uint32_t z, uint64_t x, uint64_t y, uint64_t rank)
+{
+    uint64_t cnt = finest_count(r, z, x, y);
+    if (!cnt || rank + cnt <= r->lo || rank >= r->hi) return 0;
+    if (rank >= r->lo && rank + cnt <= r->hi) {
+        int hr;
+        return build(r, z, x, y, r->bufs[r->zmax - z], 0, 1, &hr);
+    }
+    for (int q = 0; q < 4; q++) {
+        uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+        if (visit(r, z + 1, cx, cy, rank)) return 1;
+        rank += finest_count(r, z + 1, cx, cy);
+    }
+    return 0;
+}
+
+/* ---- arguments ------------------------------------------------------------------- */
+
+static int parse_shard(const char *v, uint32_t *i, uint32_t *n)
+{
+    const char *sl = strchr(v, '/');
+    char a[32], b[32];
+    if (!sl || sl == v || (size_t)(sl - v) >= sizeof a || strlen(sl + 1) >= sizeof b || !sl[1]) {
+        cli_error("--shard: '%s' is not I/N (e.g. 0/4)", v);
+        return 1;
+    }
+    memcpy(a, v, (size_t)(sl - v));
+    a[sl - v] = '\0';
+    strcpy(b, sl + 1);
+    if (cli_parse_u32("--shard", a, i) || cli_parse_u32("--shard", b, n)) return 1;
+    if (*n < 1 || *i >= *n) {
+        cli_error("--shard: '%s': need N >= 1 and 0 <= I < N", v);
+        return 1;
+    }
+    return 0;
+}
+
+/* 0 to run, 1 on a usage error, 2 after --help. */
+static int parse_targs(int argc, char **argv, targs *a)
+{
+    const char *pos[3];
+    int npos = 0, only_pos = 0;
+    memset(a, 0, sizeof *a);
+    a->tile = 256;
+    a->opt = calloc((size_t)argc + 1, sizeof *a->opt);
+    if (!a->opt) {
+        cli_error("out of memory");
+        return 1;
+    }
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        if (only_pos || arg[0] != '-' || arg[1] == '\0') {
+            if (npos == 3) {
+                cli_error("tiles: unexpected argument '%s' (see roadsplat tiles --help)", arg);
+                return 1;
+            }
+            pos[npos++] = arg;
+            continue;
+        }
+        if (!strcmp(arg, "--")) { only_pos = 1; continue; }
+        char name[64];
+        const char *eq = strchr(arg, '='), *inl = eq ? eq + 1 : NULL, *v;
+        size_t len = eq ? (size_t)(eq - arg) : strlen(arg);
+        if (len >= sizeof name) len = sizeof name - 1;
+        memcpy(name, arg, len);
+        name[len] = '\0';
+        if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
+            fputs(tiles_usage, stdout);
+            return 2;
+        }
+        int *flag = !strcmp(name, "--quiet") || !strcmp(name, "-q") ? &a->quiet
+                    : !strcmp(name, "--dense")                       ? &a->dense
+                    : !strcmp(name, "--resume")                      ? &a->resume
+                    : !strcmp(name, "--from-children")               ? &a->from_children
+                                                                     : NULL;
+        if (flag) {
+            if (inl) { cli_error("%s takes no value", name); return 1; }
+            *flag = 1;
+            if (flag == &a->dense) a->opt[a->nopt++] = arg;
+            continue;
+        }
+        if (!strcmp(name, "--tile-size")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &a->tile)) return 1;
+            if (a->tile != 256 && a->tile != 512 && a->tile != 1024) {
+                cli_error("--tile-size: '%s' must be 256, 512 or 1024", v);
+                return 1;
+            }
+        } else if (!strcmp(name, "--scheme")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            if (strcmp(v, "xyz") && strcmp(v, "tms")) {
+                cli_error("--scheme: '%s' must be xyz or tms", v);
+                return 1;
+            }
+            a->tms = v[0] == 't';
+        } else if (!strcmp(name, "--format")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            if (strcmp(v, "png") && strcmp(v, "mbtiles")) {
+                cli_error("--format: '%s' must be png or mbtiles", v);
+                return 1;
+            }
+            a->mbtiles = v[0] == 'm';
+        } else if (!strcmp(name, "--shard")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || parse_shard(v, &a->shard_i, &a->shard_n)) return 1;
+            a->sharded = 1;
+        } else {
+            int i0 = i, sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
+            if (sr > 0) return 1;
+            if (sr < 0) {
+                cli_error("tiles: unknown option '%s' (see roadsplat tiles --help)", arg);
+                return 1;
+            }
+            if (strcmp(name, "--threads"))
+                for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
+        }
+    }
+    if (npos != 3) {
+        cli_error("tiles: expected DEM ROADS OUTDIR, got %d argument%s (see roadsplat tiles --help)", npos,
+                  npos == 1 ? "" : "s");
+        return 1;
+    }
+    a->dem = pos[0], a->roads = pos[1], a->out = pos[2];
+    if (!a->sharded) a->shard_n = 1;
+    if (a->sharded && a->from_children) {
+        cli_error("--shard and --from-children are separate steps: shards first, then one --from-children run");
+        return 1;
+    }
+    if (a->mbtiles && (a->sharded || a->resume || a->from_children)) {
+        cli_error("--format mbtiles is written by one process: use --format png for --shard, --resume and --from-children");
+        return 1;
+    }
+    return 0;
+}
+
+/* ---- inputs, fingerprint, logs ------------------------------------------------- */
+
+typedef struct input_hash {
+    const char *role, *path;
+    char hex[65]; /* "" for a folder (a GIS source) */
+} input_hash;
+
+static int hash_inputs(const targs *a, input_hash *ih, int *n)
+{
+    const char *roles[7] = { "DEM", "ROADS", "--terrain-texture", "--road-texture", "--styles", "--atlas",
+                             "--atlas-index" };
+    const char *paths[7] = { a->dem, a->roads, a->s.terrain_tex, a->s.road_tex, a->s.styles_path, a->s.atlas_path,
+                             a->s.atlas_index_path };
+    *n = 0;
+    for (int k = 0; k < 7; k++) {
+        if (!paths[k]) continue;
+        input_hash *h = &ih[(*n)++];
+        h->role = roles[k], h->path = paths[k], h->hex[0] = '\0';
+        struct stat st;
+        if (!strcmp(paths[k], "-")) {
+            cli_error("%s: tiles needs a file, not standard input (its SHA-256 goes into the manifest)", roles[k]);
+            return 1;
+        }
+        if (stat(paths[k], &st) != 0) {
+            cli_error("%s: %s", paths[k], strerror(errno));
+            return 1;
+        }
+        if (S_ISDIR(st.st_mode)) continue;
+        uint8_t d[32];
+        if (cli_sha256_file(paths[k], d)) {
+            cli_error("%s: cannot read: %s", paths[k], strerror(errno ? errno : EIO));
+            return 1;
+        }
+        cli_sha256_hex(d, h->hex);
+    }
+    return 0;
+}
+
+/* SHA-256 of everything that decides the tiles' bytes: runs of one
+ * pyramid (shards, resumes, the merge) must agree on it. */
+static void fingerprint(const targs *a, const input_hash *ih, int nin, char hex[65])
+{
+    cli_sha256_ctx s;
+    char line[160];
+    cli_sha256_init(&s);
+    int n = snprintf(line, sizeof line, "roadsplat-tiles 1\ntile_size %u\nscheme %s\nformat %s\n", a->tile,
+                     a->tms ? "tms" : "xyz", a->mbtiles ? "mbtiles" : "png");
+    cli_sha256_update(&s, line, (size_t)n);
+    for (int k = 0; k < a->nopt; k++) {
+        cli_sha256_update(&s, "option ", 7);
+        cli_sha256_update(&s, a->opt[k], strlen(a->opt[k]) + 1);
+    }
+    for (int k = 0; k < nin; k++) {
+        n = snprintf(line, sizeof line, "input %s %s\n", ih[k].role, ih[k].hex[0] ? ih[k].hex : ih[k].path);
+        cli_sha256_update(&s, line, (size_t)n);
+    }
+    uint8_t d[32];
+    cli_sha256_final(&s, d);
+    cli_sha256_hex(d, hex);
+}
+
+static char *join(const char *a, const char *b, const char *c)
+{
+    size_t n = strlen(a) + strlen(b) + (c ? strlen(c) : 0) + 2;
+    char *p = malloc(n);
+    if (p) snprintf(p, n, "%s/%s%s", a, b, c ? c : "");
+    return p;
+}
+
+static int hexval(int c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; }
+
+/* Every log in OUTDIR/.tiles-log into the table (a line cut by a kill is
+ * skipped); a log of another fingerprint is an error. */
+static int load_logs(run *r, const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) return 0;
+    struct dirent *de;
+    int bad = 0;
+    while (!bad && (de = readdir(d))) {
+        size_t nl = strlen(de->d_name);
+        if (nl < 5 || strcmp(de->d_name + nl - 4, ".log")) continue;
+        char *p = join(dir, de->d_name, NULL);
+        FILE *f = p ? fopen(p, "r") : NULL;
+        if (!f) {
+            cli_error("%s: %s", p ? p : de->d_name, strerror(errno));
+            free(p);
+            bad = 1;
+            break;
+        }
+        char line[256], fp[80];
+        if (!fgets(line, sizeof line, f) || sscanf(line, "roadsplat-tiles-log 1 %70s", fp) != 1 ||
+            strcmp(fp, r->fingerprint)) {
+            cli_error("%s: made from other inputs or options than this run (remove it, or rerun that step with the "
+                      "same inputs and options)", p);
+            bad = 1;
+        }
+        while (!bad && fgets(line, sizeof line, f)) {
+            unsigned z;
+            unsigned long long x, y;
+            char flag, hex[80];
+            uint8_t h[32];
+            size_t L = strlen(line);
+            if (!L || line[L - 1] != '\n') break; /* cut short */
+            if (sscanf(line, "%u %llu %llu %c %70s", &z, &x, &y, &flag, hex) != 5 || z > r->zmax ||
+                (flag != 'r' && flag != 'w' && flag != 'e') || !exists(r, z, x, y))
+                continue;
+            int okh = flag == 'e' || strlen(hex) == 64;
+            for (int k = 0; okh && flag != 'e' && k < 32; k++) {
+                int hi = hexval(hex[2 * k]), lo = hexval(hex[2 * k + 1]);
+                if (hi < 0 || lo < 0) okh = 0;
+                else h[k] = (uint8_t)(hi << 4 | lo);
+            }
+            if (!okh) continue;
+            if (!tput(&r->tab, tkey(z, x, y), flag, flag == 'e' ? NULL : h)) {
+                cli_error("out of memory");
+                bad = 1;
+            }
+        }
+        fclose(f);
+        free(p);
+    }
+    closedir(d);
+    return bad;
+}
+
+/* Remove the logs of earlier runs (a whole run without --resume). */
+static void clear_logs(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) return;
+    struct dirent *de;
+    while ((de = readdir(d))) {
+        size_t nl = strlen(de->d_name);
+        if (nl < 5 || strcmp(de->d_name + nl - 4, ".log")) continue;
+        char *p = join(dir, de->d_name, NULL);
+        if (p) unlink(p);
+        free(p);
+    }
+    closedir(d);
+}
+
+/* ---- the manifest ------------------------------------------------------------- */
+
+static int cmp_key(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
+        else if (c < 0x20) fprintf(f, "\\u%04x", c);
+        else fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+/* The manifest as JSON into f: everything but run-specific numbers, so a
+ * single run and shards + merge give the same bytes. */
+static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
+{
+    const targs *a = r->a;
+    size_t nw = 0, ne = 0;
+    for (size_t i = 0; i < r->tab.cap; i++)
+        if (r->tab.e[i].key) { if (r->tab.e[i].flag == 'e') ne++; else nw++; }
+    uint64_t *keys = malloc((nw ? nw : 1) * sizeof *keys);
+    if (!keys) {
+        cli_error("out of memory");
+        return 1;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < r->tab.cap; i++)
+        if (r->tab.e[i].key && r->tab.e[i].flag != 'e') keys[k++] = r->tab.e[i].key;
+    qsort(keys, nw, sizeof *keys, cmp_key);
+    double gt[6];
+    int geo = !cli_geo_texture_gt(r->in, r->T, 0, 0, gt);
+    rs_dem_frame fr;
+    rs_dem_get_frame(r->in->dem, &fr);
+    double cs = fr.cell_size > 0 ? fr.cell_size : 1;
+    fprintf(f, "{\n  \"roadsplat_tiles\": 1,\n  \"roadsplat\": \"%s\",\n", rs_version_string());
+    fprintf(f, "  \"tile_size\": %u,\n  \"scheme\": \"%s\",\n  \"format\": \"%s\",\n", r->S, a->tms ? "tms" : "xyz",
+            a->mbtiles ? "mbtiles" : "png");
+    fprintf(f, "  \"path\": \"%s\",\n", a->mbtiles ? "tiles table, tile_row = 2^z - 1 - y (MBTiles 1.3)"
+                                                   : (a->tms ? "{z}/{x}/{y}.png, y = 2^z - 1 - row (row 0 at the top)"
+                                                             : "{z}/{x}/{y}.png, y = row (row 0 at the top)"));
+    fprintf(f, "  \"image\": {\"width\": %u, \"height\": %u, \"texels\": %u},\n", r->fw, r->fh, r->T);
+    fprintf(f, "  \"levels\": {\"min\": 0, \"max\": %u, \"dense_max\": %u},\n", r->zmax, r->zd);
+    fprintf(f, "  \"level_tiles\": [");
+    for (uint32_t z = 0; z <= r->zmax; z++) {
+        uint64_t s = span(r, z);
+        fprintf(f, "%s[%llu, %llu]", z ? ", " : "", (unsigned long long)((r->nx + s - 1) / s),
+                (unsigned long long)((r->ny + s - 1) / s));
+    }
+    fprintf(f, "],\n");
+    fprintf(f, "  \"rule\": \"tile (x, y) of the finest level z = %u is the window [x*%u, (x+1)*%u) x [y*%u, (y+1)*%u) of "
+               "the %u x %u image, pixels beyond it transparent (0,0,0,0); a tile of level z < %u is the 2x2 box "
+               "filter of its four children (alpha the rounded mean, colour the alpha-weighted rounded mean); "
+               "levels 0..%u are complete, a tile of a finer level is written only when it holds a road (a viewer "
+               "over-zooms its parent); PNG RGB when every pixel is opaque, else RGBA\",\n",
+            r->zmax, r->S, r->S, r->S, r->S, r->fw, r->fh, r->zmax, r->zd);
+    fprintf(f, "  \"frame\": {\"cell_size_m\": %.17g, \"pixel_m\": %.17g", cs, cs / r->T);
+    if (geo) {
+        fprintf(f, ", \"geotransform\": [%.17g, %.17g, %.17g, %.17g, %.17g, %.17g], \"crs\": ", gt[0], gt[1], gt[2],
+                gt[3], gt[4], gt[5]);
+        if (r->in->geo.crs) json_str(f, r->in->geo.crs);
+        else fputs("null", f);
+        fprintf(f, ", \"note\": \"geotransform of the finest level; level z has pixels 2^(%u - z) times larger\"",
+                r->zmax);
+    } else {
+        fprintf(f, ", \"local\": \"metres from DEM sample (0,0), y down\"");
+    }
+    fprintf(f, "},\n  \"inputs\": [");
+    for (int i = 0; i < nin; i++) {
+        fprintf(f, "%s\n    {\"role\": \"%s\", \"path\": ", i ? "," : "", ih[i].role);
+        json_str(f, ih[i].path);
+        if (ih[i].hex[0]) fprintf(f, ", \"sha256\": \"%s\"}", ih[i].hex);
+        else fprintf(f, ", \"sha256\": null}");
+    }
+    fprintf(f, "\n  ],\n  \"options\": [");
+    for (int i = 0; i < a->nopt; i++) {
+        fputs(i ? ", " : "", f);
+        json_str(f, a->opt[i]);
+    }
+    fprintf(f, "],\n  \"fingerprint\": \"%s\",\n", r->fingerprint);
+    fprintf(f, "  \"tiles_written\": %zu,\n  \"tiles_road_free_not_written\": %zu,\n  \"tiles\": {", nw, ne);
+    for (size_t i = 0; i < nw; i++) {
+        uint64_t key = keys[i] - 1;
+        uint32_t z = (uint32_t)(key >> 58);
+        uint64_t x = key >> 29 & ((1u << 29) - 1), y = key & ((1u << 29) - 1);
+        entry *e = tfind(&r->tab, keys[i]);
+        char hex[65];
+        cli_sha256_hex(e->hash, hex);
+        fprintf(f, "%s\n    \"%u/%llu/%llu\": \"%s\"", i ? "," : "", z, (unsigned long long)x,
+                (unsigned long long)file_y(r, z, y), hex);
+    }
+    fprintf(f, "\n  }\n}\n");
+    free(keys);
+    return ferror(f) != 0;
+}
+
+/* ---- main ------------------------------------------------------------------------ */
+
+static uint32_t floor_log2(uint32_t v)
+{
+    uint32_t k = 0;
+    while (v >> (k + 1)) k++;
+    return k;
+}
+
+/* First Morton rank of shard i of n over `total` finest tiles. */
+static uint64_t shard_bound(uint64_t total, uint32_t i, uint32_t n)
+{
+    return total / n * i + total % n * i / n; /* floor(total * i / n) without overflow */
+}
+
+int cli_tiles_main(int argc, char **argv)
+{
+    targs a;
+    int pr = parse_targs(argc, argv, &a);
+    if (pr) {
+        free(a.opt);
+        return pr == 2 ? 0 : 1;
+    }
+    int rc = 1;
+    rs_ctx *ctx = NULL;
+    cli_splat_input in;
+    rs_road_grid *grid = NULL;
+    rs_splatter *sp = NULL;
+    run r;
+    cli_out mout, mani;
+    input_hash ih[7];
+    int nin = 0;
+    char *logdir = NULL;
+    memset(&in, 0, sizeof in);
+    memset(&r, 0, sizeof r);
+    memset(&mout, 0, sizeof mout);
+    memset(&mani, 0, sizeof mani);
+    r.a = &a;
+    r.S = a.tile;
+
+    /* the output: a folder (made here; its parent must exist) or one file */
+    struct stat st;
+    if (!a.out[0]) {
+        cli_error("tiles: OUTDIR is empty");
+        goto done;
+    }
+    if (a.mbtiles) {
+        const cli_file_role outs[1] = { { a.out, "OUT" } };
+        const cli_file_role ins[2] = { { a.dem, "DEM" }, { a.roads, "ROADS" } };
+        if (cli_check_outputs(outs, 1, ins, 2)) goto done;
+#ifndef RS_WITH_SQLITE
+        cli_error("--format mbtiles: this roadsplat was built without SQLite (make deps installs libsqlite3-dev; rebuild)");
+        goto done;
+#else
+        void *sym = cli_module_symbol("mbtiles", "cli_mbtiles_api_v1", "--format mbtiles");
+        if (!sym) goto done;
+        r.mb = sym;
+#endif
+    } else {
+        if (stat(a.out, &st) == 0 && !S_ISDIR(st.st_mode)) {
+            cli_error("%s: OUTDIR exists and is not a folder", a.out);
+            goto done;
+        }
+        if (mkdir(a.out, 0777) != 0 && errno != EEXIST) {
+            cli_error("%s: cannot create the folder: %s", a.out, strerror(errno));
+            goto done;
+        }
+    }
+    if (hash_inputs(&a, ih, &nin)) goto done;
+    fingerprint(&a, ih, nin, r.fingerprint);
+
+    /* the splat, with no limit on the output size: tiles never hold it */
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_pixels = (uint64_t)1 << 52;
+    rs_result res = rs_ctx_create(NULL, &lim, &ctx);
+    if (res) {
+        cli_error("%s", rs_strerror(res));
+        goto done;
+    }
+    if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    if ((res = rs_splat_size(ctx, in.dem, &a.s.o, &r.fw, &r.fh))) {
+        cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
+        goto done;
+    }
+    r.in = &in;
+    r.T = a.s.o.texels ? a.s.o.texels : 8;
+    r.nx = (r.fw + (uint64_t)r.S - 1) / r.S;
+    r.ny = (r.fh + (uint64_t)r.S - 1) / r.S;
+    while (((uint64_t)1 << r.zmax) < (r.nx > r.ny ? r.nx : r.ny)) r.zmax++;
+    if (r.zmax > MAX_ZOOM) {
+        cli_error("%s: a %u x %u image needs more than %d levels of %u-pixel tiles", a.dem, r.fw, r.fh, MAX_ZOOM, r.S);
+        goto done;
+    }
+    uint32_t lt = floor_log2(r.T);
+    r.zd = a.dense || lt >= r.zmax ? (a.dense ? r.zmax : 0) : r.zmax - lt;
+    uint64_t total = r.nx * r.ny;
+    r.lo = shard_bound(total, a.shard_i, a.shard_n);
+    r.hi = shard_bound(total, a.shard_i + 1, a.shard_n);
+    r.total_finest = r.hi - r.lo;
+
+    /* logs: read (--resume, --from-children), then this run's own */
+    if (!a.mbtiles) {
+        logdir = join(a.out, LOG_DIR, NULL);
+        if (!logdir || (mkdir(logdir, 0777) != 0 && errno != EEXIST)) {
+            cli_error("%s/%s: cannot create the folder: %s", a.out, LOG_DIR, strerror(errno));
+            goto done;
+        }
+        if (a.resume || a.from_children) {
+            if (load_logs(&r, logdir)) goto done;
+        } else if (!a.sharded) {
+            clear_logs(logdir);
+        }
+        char name[64];
+        if (a.from_children) snprintf(name, sizeof name, "/merge.log");
+        else if (a.sharded) snprintf(name, sizeof name, "/shard-%u-of-%u.log", a.shard_i, a.shard_n);
+        else snprintf(name, sizeof name, "/whole.log");
+        r.log_path = join(logdir, name + 1, NULL);
+        int append = a.resume || a.from_children;
+        if (!r.log_path || !(r.log = fopen(r.log_path, append ? "a+" : "w"))) {
+            cli_error("%s: %s", r.log_path ? r.log_path : logdir, strerror(errno));
+            goto done;
+        }
+        if (append) { /* a line cut by a kill ends here */
+            long end = (fseek(r.log, 0, SEEK_END), ftell(r.log));
+            if (end > 0 && fseek(r.log, end - 1, SEEK_SET) == 0 && fgetc(r.log) != '\n') {
+                fseek(r.log, 0, SEEK_END);
+                fputc('\n', r.log);
+            }
+            fseek(r.log, 0, SEEK_END);
+            if (end <= 0) fprintf(r.log, "roadsplat-tiles-log 1 %s\n", r.fingerprint);
+        } else {
+            fprintf(r.log, "roadsplat-tiles-log 1 %s\n", r.fingerprint);
+        }
+        if (fflush(r.log) != 0) {
+            cli_error("%s: write failed: %s", r.log_path, strerror(errno));
+            goto done;
+        }
+    } else {
+        r.log = fopen("/dev/null", "w");
+        r.log_path = join(a.out, "", NULL);
+        if (!r.log || !r.log_path) {
+            cli_error("/dev/null: %s", strerror(errno));
+            goto done;
+        }
+        if (cli_out_open(&mout, a.out)) goto done;
+        fclose(mout.f);
+        mout.f = NULL;
+        if (!(r.db = r.mb->open(mout.tmp, a.out))) goto done;
+    }
+
+    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
+    r.sp = sp;
+    for (uint32_t d = 0; d <= r.zmax; d++)
+        if (!(r.bufs[d] = malloc((size_t)r.S * r.S * 4))) {
+            cli_error("out of memory for the tile buffers");
+            goto done;
+        }
+    if (!(r.rgb = malloc((size_t)r.S * r.S * 3))) {
+        cli_error("out of memory for the tile buffers");
+        goto done;
+    }
+    cli_progress_init(&r.prog, "tiles", a.quiet);
+    int bad = visit(&r, 0, 0, 0, 0);
+    cli_progress_done(&r.prog);
+    if (bad) goto done;
+    if (fflush(r.log) != 0 || ferror(r.log)) {
+        cli_error("%s: write failed: %s", r.log_path, strerror(errno ? errno : EIO));
+        goto done;
+    }
+
+    if (!a.sharded) {
+        if (a.mbtiles) {
+            char *text = NULL, num[32];
+            size_t tn = 0;
+            FILE *mf = open_memstream(&text, &tn);
+            int mb = !mf || manifest(&r, mf, ih, nin);
+            if (mf && fclose(mf) != 0) mb = 1;
+            const char *base = strrchr(a.out, '/') ? strrchr(a.out, '/') + 1 : a.out;
+            mb = mb || r.mb->meta(r.db, "name", base) || r.mb->meta(r.db, "format", "png") ||
+                 r.mb->meta(r.db, "type", "baselayer") || r.mb->meta(r.db, "version", "1") ||
+                 r.mb->meta(r.db, "description", "roadsplat terrain texture with roads");
+            snprintf(num, sizeof num, "0");
+            mb = mb || r.mb->meta(r.db, "minzoom", num);
+            snprintf(num, sizeof num, "%u", r.zmax);
+            mb = mb || r.mb->meta(r.db, "maxzoom", num) || r.mb->meta(r.db, "roadsplat_manifest", text);
+            free(text);
+            void *db = r.db;
+            r.db = NULL;
+            if (r.mb->close(db, !mb) || mb) goto done;
+            cli_out *one[1] = { &mout }; /* closed: SQLite wrote it */
+            if (cli_out_commit_all(one, 1)) goto done;
+        } else {
+            char *mp = join(a.out, "tiles.json", NULL);
+            if (!mp || cli_out_open(&mani, mp)) {
+                free(mp);
+                goto done;
+            }
+            free(mp);
+            if (manifest(&r, mani.f, ih, nin)) {
+                cli_error("%s: write failed: %s", mani.path, strerror(errno ? errno : EIO));
+                goto done;
+            }
+            if (cli_out_commit(&mani)) goto done;
+        }
+    }
+    if (!a.quiet)
+        fprintf(stderr,
+                "roadsplat: tiles: %llu rendered, %llu written, %llu road-free not written, %llu kept from earlier runs%s\n",
+                (unsigned long long)r.rendered, (unsigned long long)r.written, (unsigned long long)r.road_free,
+                (unsigned long long)r.kept,
+                a.sharded ? "; run --from-children once every shard is done" : "");
+    rc = 0;
+done:
+    if (r.db) r.mb->close(r.db, 0);
+    cli_out_abort(&mout);
+    cli_out_abort(&mani);
+    if (r.log) fclose(r.log);
+    for (uint32_t d = 0; d <= MAX_ZOOM + 1; d++) free(r.bufs[d]);
+    free(r.rgb);
+    free(r.path);
+    free(r.log_path);
+    free(r.tab.e);
+    free(logdir);
+    rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, grid);
+    cli_splat_input_free(ctx, &in);
+    rs_ctx_free(ctx);
+    free(a.opt);
+    return rc;
+}

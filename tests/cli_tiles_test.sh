@@ -1,0 +1,113 @@
+#!/bin/sh
+# CLI tests for `roadsplat tiles` (docs/tiles.md). Usage: sh tests/cli_tiles_test.sh PATH/TO/roadsplat
+# Prints "N passed, N failed"; exits non-zero on any failure.
+BIN=${1:?usage: cli_tiles_test.sh ROADSPLAT}
+D=$(cd "$(dirname "$0")" && pwd)
+. "$D/cli_lib.sh"
+PY="python3 $D/tiles_check.py"
+ref_scene "$T"
+O="--texels 40"   # 1200 x 800 pixels: 5 x 4 finest tiles of 256, levels 0..3
+same_tree() { diff -r -x .tiles-log "$1" "$2" >/dev/null; }
+
+# 1. the dense pyramid: finest tiles are windows of the whole image, parents box filters
+check "dense run exits 0" "$BIN" tiles --quiet --dense $O "$T/dem.pgm" "$T/roads.txt" "$T/dense"
+check "dense: manifest hashes = files" $PY manifest "$T/dense"
+check "dense: levels 0..3" grep -q '"levels": {"min": 0, "max": 3, "dense_max": 3}' "$T/dense/tiles.json"
+for xy in 0,0 1,0 3,1 2,2; do
+    x=${xy%,*} y=${xy#*,}
+    "$BIN" --quiet $O --window $((x * 256)),$((y * 256)),256,256 "$T/dem.pgm" "$T/roads.txt" "$T/w$x$y.png"
+    check "finest tile $x,$y byte-identical to the window PNG" cmp -s "$T/w$x$y.png" "$T/dense/3/$x/$y.png"
+done
+"$BIN" --quiet $O --window 1024,768,176,32 "$T/dem.pgm" "$T/roads.txt" "$T/wedge.png"
+check "edge tile 4,3 = window + transparent padding" $PY window "$T/dense/3/4/3.png" "$T/wedge.png"
+check "parent 2/0/0 = box filter of its children" $PY parent "$T/dense" 2 0 0
+check "parent 2/2/1 (edge) = box filter of its children" $PY parent "$T/dense" 2 2 1
+check "parent 0/0/0 = box filter of its children" $PY parent "$T/dense" 0 0 0
+"$BIN" tiles --quiet --dense --threads 1 $O "$T/dem.pgm" "$T/roads.txt" "$T/dense1"
+check "1 thread = all threads (tiles and manifest)" same_tree "$T/dense" "$T/dense1"
+
+# 2. sparse: finer than a DEM cell, only tiles with a road
+check "sparse run exits 0" "$BIN" tiles --quiet $O "$T/dem.pgm" "$T/roads.txt" "$T/sp"
+"$BIN" --quiet $O --weight-out "$T/wt.pgm" "$T/dem.pgm" "$T/roads.txt" "$T/whole.png"
+check "sparse: written iff dense level or holds a road" $PY sparse "$T/sp" "$T/wt.pgm"
+check "sparse: manifest hashes = files" $PY manifest "$T/sp"
+check "sparse tiles = the dense run's" sh -c "cd '$T/sp' && for f in \$(find . -name '*.png'); do cmp -s \$f '$T/dense/'\$f || exit 1; done"
+check "sparse: the manifest states the rule" grep -q 'written only when it holds a road' "$T/sp/tiles.json"
+"$BIN" tiles --quiet --scheme tms $O "$T/dem.pgm" "$T/roads.txt" "$T/tms"
+check "tms flips y" cmp -s "$T/tms/3/4/4.png" "$T/sp/3/4/3.png"
+
+# 3. shards: 4 shards then --from-children = one run, byte for byte
+for i in 0 1 2 3; do "$BIN" tiles --quiet --shard $i/4 $O "$T/dem.pgm" "$T/roads.txt" "$T/sh" || bad "shard $i"; done
+check "shards write no manifest" test ! -e "$T/sh/tiles.json"
+check "--from-children exits 0" "$BIN" tiles --quiet --from-children $O "$T/dem.pgm" "$T/roads.txt" "$T/sh"
+check "4 shards + merge = single run (tiles and tiles.json)" same_tree "$T/sh" "$T/sp"
+if command -v parallel >/dev/null 2>&1; then
+    check "GNU parallel recipe (4 shards) = single run" sh -c "ROADSPLAT='$BIN' sh '$D/../docs/examples/tiles_parallel.sh' 4 '$T/dem.pgm' '$T/roads.txt' '$T/par' $O && diff -r -x .tiles-log '$T/par' '$T/sp' >/dev/null"
+else
+    echo "SKIP: GNU parallel not installed (make deps): the parallel recipe is not run"
+fi
+check "Slurm script passes bash -n" bash -n "$D/../docs/examples/tiles_slurm.sh"
+check "Slurm array tasks + merge = single run" sh -c "for i in 0 1 2; do SLURM_ARRAY_TASK_ID=\$i SLURM_ARRAY_TASK_COUNT=3 ROADSPLAT='$BIN' DEM='$T/dem.pgm' ROADS='$T/roads.txt' OUT='$T/slurm' OPTS='$O' bash '$D/../docs/examples/tiles_slurm.sh' || exit 1; done;
+  ROADSPLAT='$BIN' DEM='$T/dem.pgm' ROADS='$T/roads.txt' OUT='$T/slurm' OPTS='$O' bash '$D/../docs/examples/tiles_slurm.sh' merge && diff -r -x .tiles-log '$T/slurm' '$T/sp' >/dev/null"
+
+# 4. resume: a shard killed part-way, a tile lost, one changed, a log line cut
+"$BIN" tiles --quiet --shard 0/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/rs"
+log="$T/rs/.tiles-log/shard-0-of-2.log"
+head -n 4 "$log" >"$T/l" && printf '3 1 1 r 12ab' >>"$T/l" && mv "$T/l" "$log"
+rm -f "$T/rs/3/0/1.png"; printf x >>"$T/rs/3/0/0.png"
+check "resumed shard exits 0" "$BIN" tiles --quiet --resume --shard 0/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/rs"
+check "resume kept the finished tiles" sh -c "'$BIN' tiles --resume --shard 0/2 $O '$T/dem.pgm' '$T/roads.txt' '$T/rs' 2>&1 | grep -q ' 0 rendered, 0 written'"
+# a real kill at some moment, then --resume: the same tiles whatever the moment
+( "$BIN" tiles --quiet --shard 1/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/rs" & p=$!; sleep 0.2; kill -9 $p 2>/dev/null; wait $p ) 2>/dev/null
+check "killed shard resumed" "$BIN" tiles --quiet --resume --shard 1/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/rs"
+check "no temporaries left" sh -c "! find '$T/rs' -name '.rs-*' | grep -q ."
+check "merge after resume = single run" sh -c "'$BIN' tiles --quiet --from-children $O '$T/dem.pgm' '$T/roads.txt' '$T/rs' && diff -r -x .tiles-log '$T/rs' '$T/sp' >/dev/null"
+mkdir -p "$T/half" && "$BIN" tiles --quiet --shard 0/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/half"
+check "--from-children with a shard missing fails naming a tile" sh -c "! '$BIN' tiles --quiet --from-children $O '$T/dem.pgm' '$T/roads.txt' '$T/half' 2>'$T/e' && grep -q 'run its shard' '$T/e' && test ! -e '$T/half/tiles.json'"
+check "--resume with other options refused" sh -c "! '$BIN' tiles --quiet --resume --texels 20 '$T/dem.pgm' '$T/roads.txt' '$T/sp' 2>'$T/e' && grep -q 'other inputs or options' '$T/e'"
+
+# 5. MBTiles
+if "$BIN" tiles --quiet --format mbtiles $O "$T/dem.pgm" "$T/roads.txt" "$T/p.mbtiles" 2>"$T/e"; then
+    check "MBTiles rows (TMS) = the folder's tiles" $PY mbtiles "$T/p.mbtiles" "$T/sp"
+    check "mbtiles with --shard refused" sh -c "! '$BIN' tiles --format mbtiles --shard 0/2 '$T/dem.pgm' '$T/roads.txt' '$T/q.mbtiles' 2>/dev/null"
+elif grep -q 'SQLite' "$T/e"; then
+    echo "SKIP: MBTiles: $(cat "$T/e")"
+    check "without SQLite: one clear line, no file" sh -c "test \$(wc -l <'$T/e') = 1 && test ! -e '$T/p.mbtiles'"
+else
+    bad "mbtiles: $(cat "$T/e")"
+fi
+
+# 6. bad arguments: exit 1 and one line each
+: >"$T/file"
+for args in "--tile-size 300" "--tile-size x" "--scheme foo" "--format jpg" "--shard 4/4" "--shard 1" "--shard a/b" \
+    "--bogus" "--from-children --shard 0/2" "--format mbtiles --resume" "--texels 0"; do
+    "$BIN" tiles $args "$T/dem.pgm" "$T/roads.txt" "$T/bad" 2>"$T/e"; rc=$?
+    check "tiles $args: exit 1, one line" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1"
+done
+"$BIN" tiles "$T/dem.pgm" "$T/roads.txt" 2>"$T/e"; rc=$?
+check "missing OUTDIR: exit 1, one line" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1"
+"$BIN" tiles "$T/dem.pgm" "$T/roads.txt" "$T/file" 2>"$T/e"; rc=$?
+check "OUTDIR a file: exit 1, one line naming it" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1 && grep -q 'not a folder' '$T/e'"
+"$BIN" tiles "$T/nope.pgm" "$T/roads.txt" "$T/bad2" 2>"$T/e"; rc=$?
+check "missing DEM: exit 1, one line naming it" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1 && grep -q nope.pgm '$T/e'"
+
+# 7. a large pyramid (2049 x 2049 cells at 16 texels: 32784 x 32784 pixels, 4.3 GB as
+# RGBA) within a fixed memory bound: a city of roads in one corner, the rest terrain
+if [ -x /usr/bin/time ]; then
+    python3 -c "
+import sys
+W = 2050
+sys.stdout.buffer.write(b'P5\n%d %d\n255\n' % (W, W) + bytes(((i % W) // 16 + (i // W) // 24) % 200 for i in range(W * W)))" >"$T/big.pgm"
+    awk 'BEGIN { for (i = 0; i < 6; i++) { printf "road h%d width 8\n20 %d\n300 %d\nend\nroad v%d width 8\n%d 20\n%d 300\nend\n", i, 30 + 50 * i, 30 + 50 * i, i, 30 + 50 * i, 30 + 50 * i } }' >"$T/city.txt"
+    /usr/bin/time -f %M -o "$T/rss" "$BIN" tiles --quiet --texels 16 --tile-size 1024 "$T/big.pgm" "$T/city.txt" "$T/big" 2>"$T/e"
+    rss=$(tail -n 1 "$T/rss")
+    check "32784^2 pyramid built" grep -q '"levels": {"min": 0, "max": 6, "dense_max": 2}' "$T/big/tiles.json"
+    check "32784^2 pyramid within 400 MB (peak $rss KB; the image is 4.3 GB)" test "$rss" -lt 400000
+    check "32784^2 pyramid sparse: only city tiles on the finest level" test "$(ls "$T/big/6"/*/ | grep -c png)" -lt 40
+    check "32784^2 pyramid: manifest hashes = files" $PY manifest "$T/big"
+else
+    echo "SKIP: /usr/bin/time not installed: the large pyramid's memory is not measured"
+fi
+
+echo "$pass passed, $fail failed"
+[ "$fail" = 0 ]

@@ -1,0 +1,133 @@
+"""Checks of `roadsplat tiles` output for tests/cli_tiles_test.sh (pure
+Python; PNGs through tests/png_read.py, independent of cli/png.c).
+
+  tiles_check.py manifest OUTDIR          every listed hash = the file's, every file listed
+  tiles_check.py window TILE WIN.png      TILE = WIN padded with transparent pixels
+  tiles_check.py parent OUTDIR Z X Y      tile = 2x2 box filter of its children on disk
+  tiles_check.py sparse OUTDIR WEIGHT.pgm tiles finer than dense_max exist iff they hold a road
+  tiles_check.py mbtiles FILE OUTDIR      the MBTiles rows (TMS) = the folder's tiles
+"""
+import hashlib, json, os, sqlite3, sys
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from png_read import read
+
+
+def rgba(path):
+    w, h, ch, px = read(path)
+    if ch == 4:
+        return w, h, bytes(px)
+    out = bytearray(w * h * 4)
+    for i in range(w * h):
+        out[4 * i:4 * i + 3] = px[3 * i:3 * i + 3]
+        out[4 * i + 3] = 255
+    return w, h, bytes(out)
+
+
+def manifest(d):
+    m = json.load(open(os.path.join(d, 'tiles.json')))
+    listed = m['tiles']
+    on_disk = set()
+    for root, _, files in os.walk(d):
+        for f in files:
+            if f.endswith('.png'):
+                rel = os.path.relpath(os.path.join(root, f), d)[:-4]
+                on_disk.add(rel)
+    assert on_disk == set(listed), 'files %d, listed %d' % (len(on_disk), len(listed))
+    for k, h in listed.items():
+        assert hashlib.sha256(open(os.path.join(d, k + '.png'), 'rb').read()).hexdigest() == h, k
+    assert m['tiles_written'] == len(listed)
+    return m
+
+
+def window(tile, win):
+    tw, th, t = rgba(tile)
+    ww, wh, w = rgba(win)
+    for y in range(th):
+        for x in range(tw):
+            a = t[4 * (y * tw + x):4 * (y * tw + x) + 4]
+            b = w[4 * (y * ww + x):4 * (y * ww + x) + 4] if x < ww and y < wh else b'\0\0\0\0'
+            assert a == b, 'pixel %d,%d: %r != %r' % (x, y, a, b)
+
+
+def parent(d, z, x, y):
+    m = json.load(open(os.path.join(d, 'tiles.json')))
+    S = m['tile_size']
+    tms = m['scheme'] == 'tms'
+    def path(z, x, y):
+        yy = (1 << z) - 1 - y if tms else y
+        return os.path.join(d, str(z), str(x), '%d.png' % yy)
+    _, _, p = rgba(path(z, x, y))
+    h = S // 2
+    for q in range(4):
+        cx, cy = 2 * x + (q & 1), 2 * y + (q >> 1)
+        cp = path(z + 1, cx, cy)
+        c = rgba(cp)[2] if os.path.exists(cp) else None
+        for j in range(h):
+            for i in range(h):
+                o = 4 * ((((q >> 1) * h + j) * S) + (q & 1) * h + i)
+                if c is None:
+                    assert p[o + 3] == 0, 'missing child %s under an opaque pixel' % cp
+                    continue
+                px = [c[4 * ((2 * j + dy) * S + 2 * i + dx):4 * ((2 * j + dy) * S + 2 * i + dx) + 4]
+                      for dy in (0, 1) for dx in (0, 1)]
+                A = sum(v[3] for v in px)
+                if A == 0:
+                    want = (0, 0, 0, 0)
+                else:
+                    want = tuple((sum(v[k] * v[3] for v in px) + A // 2) // A for k in range(3)) + ((A + 2) >> 2,)
+                assert tuple(p[o:o + 4]) == want, 'tile %d/%d/%d pixel %d: %r != %r' % (z, x, y, o // 4, tuple(p[o:o + 4]), want)
+
+
+def sparse(d, pgm):
+    m = json.load(open(os.path.join(d, 'tiles.json')))
+    S, zmax, zd = m['tile_size'], m['levels']['max'], m['levels']['dense_max']
+    data = open(pgm, 'rb').read()
+    parts = data.split(b'\n', 3)
+    W, H = map(int, parts[1].split())
+    px = parts[3]
+    nx, ny = (W + S - 1) // S, (H + S - 1) // S
+    road = {}
+    for ty in range(ny):
+        for tx in range(nx):
+            r = False
+            for y in range(ty * S, min(H, ty * S + S)):
+                row = px[2 * (y * W + tx * S):2 * (y * W + min(W, tx * S + S))]
+                if row.strip(b'\0'):
+                    r = True
+                    break
+            road[(zmax, tx, ty)] = r
+    for z in range(zmax - 1, -1, -1):
+        k = 1 << (zmax - z)
+        for ty in range((ny + k - 1) // k):
+            for tx in range((nx + k - 1) // k):
+                road[(z, tx, ty)] = any(road.get((z + 1, 2 * tx + (q & 1), 2 * ty + (q >> 1)), False) for q in range(4))
+    n_road = 0
+    for (z, x, y), r in road.items():
+        yy = (1 << z) - 1 - y if m['scheme'] == 'tms' else y
+        has = ('%d/%d/%d' % (z, x, yy)) in m['tiles']
+        want = z <= zd or r
+        assert has == want, 'tile %d/%d/%d: written %s, should be %s (road %s)' % (z, x, y, has, want, r)
+        n_road += r
+    print('sparse: %d tiles, %d with a road, %d written' % (len(road), n_road, len(m['tiles'])))
+
+
+def mbtiles(f, d):
+    m = json.load(open(os.path.join(d, 'tiles.json')))
+    db = sqlite3.connect(f)
+    meta = dict(db.execute('SELECT name, value FROM metadata'))
+    assert meta['format'] == 'png' and int(meta['maxzoom']) == m['levels']['max'], meta
+    rows = list(db.execute('SELECT zoom_level, tile_column, tile_row, tile_data FROM tiles'))
+    assert len(rows) == len(m['tiles']), (len(rows), len(m['tiles']))
+    for z, x, row, blob in rows:
+        y = (1 << z) - 1 - row
+        assert hashlib.sha256(blob).hexdigest() == m['tiles']['%d/%d/%d' % (z, x, y)], (z, x, y)
+
+
+if __name__ == '__main__':
+    c, a = sys.argv[1], sys.argv[2:]
+    if c == 'manifest': manifest(a[0])
+    elif c == 'window': window(a[0], a[1])
+    elif c == 'parent': parent(a[0], int(a[1]), int(a[2]), int(a[3]))
+    elif c == 'sparse': sparse(a[0], a[1])
+    elif c == 'mbtiles': mbtiles(a[0], a[1])
+    else: sys.exit('unknown check ' + c)
