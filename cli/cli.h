@@ -245,6 +245,14 @@ typedef struct cli_splat_job {
 void cli_splat_job_init(cli_splat_job *job, const rs_splatter *sp, const cli_splat_args *s, int quiet);
 int cli_splat_run(cli_splat_job *job);
 
+/* --normal-out (cli/normals.c): 0 when path ends in .png, else 1 after a
+ * message; the normal map of the window [x0, x0+w) x [y0, y0+h) on
+ * `threads` threads, encoded as an RGB8 PNG into f (flushed, not closed;
+ * png_level -1: the default). 0, or 1 after a message naming path. */
+int cli_normal_png_check(const char *path);
+int cli_normal_png(const rs_splatter *s, const rs_normal_options *o, uint32_t x0, uint32_t y0, uint32_t w,
+                   uint32_t h, unsigned threads, int png_level, FILE *f, const char *path);
+
 /* Subcommands, each `int f(int argc, char **argv)` with argv[0] the
  * subcommand name; return the process exit code (0 ok, 1 error). */
 int cli_mesh_main(int argc, char **argv);   /* cli/mesh.c   (roadsplat mesh)   */

@@ -71,6 +71,10 @@ static const char usage_text2[] =
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE     write the road weight R = 1 - alpha, 16-bit: .pgm (or no\n"
     "                        extension), .png or .tif (GeoTIFF)\n"
+    "  --normal-out FILE.png write the tangent-space normal map of the same pixels\n"
+    "                        (RGB8; docs/normals.md)\n"
+    "  --normal-convention gl|dx  green = north/image up (gl, default) or down (dx)\n"
+    "  --normal-strength S   road-texture relief: slope per luminance step (default 1)\n"
     "  --rgba                OUT.png with an alpha channel even when every pixel is\n"
     "                        opaque (default: RGB then; RGBA with GIS nodata)\n"
     "  --png-level N         PNG compression, 0 (none) .. 12 (smallest, slowest);\n"
@@ -83,7 +87,9 @@ static const char usage_text2[] =
 typedef struct args {
     cli_splat_args s;
     const char *dem, *roads, *out;
-    const char *weight_out, *stats;
+    const char *weight_out, *stats, *normal_out;
+    rs_normal_options normal;
+    int normal_given; /* --normal-convention or --normal-strength */
     int quiet, have_window, have_window_world, world_file, cog, rgba;
     uint32_t window[4];
     double window_world[4]; /* XMIN, YMIN, XMAX, YMAX */
@@ -179,6 +185,27 @@ static int parse_args(int argc, char **argv, args *a)
         if (sr == 0) continue;
         if (!strcmp(name, "--weight-out")) {
             if (cli_option_value(argc, argv, &i, name, inl, &a->weight_out)) return 1;
+        } else if (!strcmp(name, "--normal-out")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &a->normal_out) || cli_normal_png_check(a->normal_out))
+                return 1;
+        } else if (!strcmp(name, "--normal-convention")) {
+            const char *v;
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            if (strcmp(v, "gl") && strcmp(v, "dx")) {
+                cli_error("%s: '%s' is not gl or dx", name, v);
+                return 1;
+            }
+            a->normal.directx = v[0] == 'd';
+            a->normal_given = 1;
+        } else if (!strcmp(name, "--normal-strength")) {
+            const char *v;
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->normal.strength))
+                return 1;
+            if (!(a->normal.strength > 0 && a->normal.strength <= 1e6)) {
+                cli_error("%s: '%s' must be in (0, 1e6]", name, v);
+                return 1;
+            }
+            a->normal_given = 1;
         } else if (!strcmp(name, "--stats")) {
             if (cli_option_value(argc, argv, &i, name, inl, &a->stats)) return 1;
         } else if (!strcmp(name, "--window")) {
@@ -195,6 +222,10 @@ static int parse_args(int argc, char **argv, args *a)
             cli_error("unknown option '%s' (see roadsplat --help)", arg);
             return 1;
         }
+    }
+    if (a->normal_given && !a->normal_out) {
+        cli_error("--normal-convention and --normal-strength need --normal-out");
+        return 1;
     }
     if (a->have_window && a->have_window_world) {
         cli_error("--window and --window-world are exclusive (output pixels or world units)");
@@ -348,7 +379,7 @@ static int splat_main(int argc, char **argv)
     rs_road_grid *grid = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
-    cli_out out_png, out_wt, out_stats, out_wf, out_prj;
+    cli_out out_png, out_wt, out_stats, out_wf, out_prj, out_nm;
     char *wf_path = NULL, *prj_path = NULL;
     uint8_t *rgba = NULL;
     run_stats st;
@@ -361,6 +392,7 @@ static int splat_main(int argc, char **argv)
     memset(&out_stats, 0, sizeof out_stats);
     memset(&out_wf, 0, sizeof out_wf);
     memset(&out_prj, 0, sizeof out_prj);
+    memset(&out_nm, 0, sizeof out_nm);
     size_t ol = strlen(a.out);
     int tif_name = (ol > 4 && !strcasecmp(a.out + ol - 4, ".tif")) || (ol > 5 && !strcasecmp(a.out + ol - 5, ".tiff"));
     if (a.world_file) { /* OUT's name with .pgw / .tfw and .prj for its extension */
@@ -381,13 +413,14 @@ static int splat_main(int argc, char **argv)
         strcpy(prj_path + e, ".prj");
     }
     /* Every output is checked and opened before any work. */
-    const cli_file_role outs[5] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
-                                    { wf_path, "the world file" }, { prj_path, "the .prj" } };
+    const cli_file_role outs[6] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
+                                    { wf_path, "the world file" }, { prj_path, "the .prj" },
+                                    { a.normal_out, "--normal-out" } };
     const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
                                    { a.s.road_tex, "--road-texture" } };
     /* Output formats follow the extensions (docs/gis.md). */
     int fmt = 0, wfmt = 0;
-    if (cli_check_outputs(outs, 5, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
+    if (cli_check_outputs(outs, 6, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
         (a.weight_out && (wfmt = cli_out_format(a.weight_out, "--weight-out", 1)) < 0) ||
         (a.cog && fmt != CLI_FMT_TIF && (cli_error("--cog: OUT %s is not a .tif", a.out), 1)) ||
         (!cli_gdal_available() && (fmt == CLI_FMT_TIF || wfmt == CLI_FMT_TIF) &&
@@ -406,7 +439,7 @@ static int splat_main(int argc, char **argv)
     if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); return 1; }
     if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
         (a.stats && cli_out_open(&out_stats, a.stats)) || (wf_path && cli_out_open(&out_wf, wf_path)) ||
-        (prj_path && cli_out_open(&out_prj, prj_path)))
+        (prj_path && cli_out_open(&out_prj, prj_path)) || (a.normal_out && cli_out_open(&out_nm, a.normal_out)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     if (a.world_file && !(in.world && in.geo.georef)) {
@@ -490,6 +523,10 @@ static int splat_main(int argc, char **argv)
                 goto done;
         }
     }
+    if (a.normal_out && (cli_normal_png(sp, &a.normal, x0, y0, w, h, job.threads, a.s.png_level_given ? a.s.png_level : -1,
+                                        out_nm.f, a.normal_out) ||
+                         out_finish(&out_nm)))
+        goto done;
     if (wf_path) { /* the world file: pixel size, rotations, then the centre of the first pixel */
         if (fprintf(out_wf.f, "%.17g\n0\n0\n%.17g\n%.17g\n%.17g\n", gt[1], gt[5], gt[0] + gt[1] / 2,
                     gt[3] + gt[5] / 2) < 0 || out_finish(&out_wf)) {
@@ -522,8 +559,8 @@ static int splat_main(int argc, char **argv)
         st.job = &job;
         if (stats_to_temp(&out_stats, &st)) goto done;
     }
-    cli_out *const all[5] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj };
-    if (cli_out_commit_all(all, 5)) goto done;
+    cli_out *const all[6] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj, &out_nm };
+    if (cli_out_commit_all(all, 6)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out_png); /* no-ops once renamed */
@@ -531,6 +568,7 @@ done:
     cli_out_abort(&out_stats);
     cli_out_abort(&out_wf);
     cli_out_abort(&out_prj);
+    cli_out_abort(&out_nm);
     free(wf_path);
     free(prj_path);
     free(rgba);

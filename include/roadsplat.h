@@ -629,6 +629,35 @@ RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gr
                           const rs_splat_options *opts, uint8_t *rgba, size_t rgba_size,
                           uint16_t *weight, size_t weight_count);
 
+/* Normal maps (docs/normals.md): a tangent-space normal per pixel of the
+ * same grid as rs_splat_window's colour output. Terrain: Horn's gradient
+ * at the DEM samples (the hillshade's), interpolated bilinearly per pixel
+ * as the terrain colour is. Road pixels add, weighted by the road weight
+ * R, the relief of the road surface: the road texture's luminance as a
+ * height (Sobel gradient per output pixel, times `strength`; only with a
+ * road texture) and raised paint (lines and markings, `paint_height`
+ * metres high). Encoding: byte = round((n * 0.5 + 0.5) * 255) per
+ * component, R = X east (image right), G = Y north (image up: OpenGL),
+ * B = Z up; flat ground is (128, 128, 255). All-zero means defaults. */
+typedef struct rs_normal_options {
+    int directx;          /* non-zero: G = -Y, south / image down (DirectX engines) */
+    double strength;      /* road-texture relief: slope per unit of luminance change per pixel;
+                             0 -> 1, else (0, 1e6] */
+    double paint_height;  /* raised paint, metres; 0 -> 0.003, else (0, 1] */
+    int no_paint;         /* non-zero: paint adds no relief */
+} rs_normal_options;
+
+/* Write the normal map of the window [x0, x0+w) x [y0, y0+h) as RGB8 into
+ * `rgb` (row r at rgb + r*rgb_stride bytes; rgb_stride >= 3*w). The window
+ * must lie inside the image (RS_ERR_INVALID_ARG), options as documented
+ * (RS_ERR_INVALID_ARG naming the field). Any window gives the bytes of the
+ * same pixels of the whole image; the splatter may be shared by several
+ * threads as for rs_splat_window. Scratch (about 60 bytes per pixel of a
+ * piece of at most 1026 x (texels + 2) pixels) comes from ctx's
+ * allocator; no progress calls. `opts` may be NULL. */
+RS_API rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w,
+                                  uint32_t h, uint8_t *rgb, size_t rgb_stride, const rs_normal_options *opts);
+
 /* Road field query (needs a grid built with analytic edges, or any grid
  * from rs_splatter_create when the splatter needed the field): the nearest
  * road centreline to local point (x, y) metres within `reach` metres of a
