@@ -479,15 +479,15 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *out, int n
             }
             *has_road = e->flag == 'r';
             r->kept++;
-            if (z == r->zmax) r->done_finest++;
+            r->done_finest += finest_count(r, z, x, y);
             return 0;
         }
         e = NULL; /* missing or changed: made again */
     }
     if (e && record && e->flag == 'e') {
+        r->done_finest += finest_count(r, z, x, y);
         if (!need) {
             *has_road = 0;
-            if (z == r->zmax) r->done_finest++;
             return 0;
         }
         record = 0; /* road-free: its pixels again, nothing written */
@@ -880,8 +880,11 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
         else fputs("null", f);
         fprintf(f, ", \"note\": \"geotransform of the finest level; level z has pixels 2^(%u - z) times larger\"",
                 r->zmax);
+        fprintf(f, ", \"extent\": [%.17g, %.17g, %.17g, %.17g]", gt[0], gt[3] + r->fh * gt[5], gt[0] + r->fw * gt[1],
+                gt[3]);
     } else {
-        fprintf(f, ", \"local\": \"metres from DEM sample (0,0), y down\"");
+        fprintf(f, ", \"local\": \"metres from DEM sample (0,0), y down\", \"extent\": [0, 0, %.17g, %.17g]",
+                r->fw * (cs / r->T), r->fh * (cs / r->T));
     }
     fprintf(f, "},\n  \"inputs\": [");
     for (int i = 0; i < nin; i++) {
