@@ -480,6 +480,16 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     return RS_OK;
 }
 
+/* A failed build or widening: frees what was made, says why. */
+static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_result res)
+{
+    rs__free(ctx, b->cell1);
+    rs__roadfield_free(ctx, f);
+    if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
+    return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
+                    (unsigned long long)b->limit);
+}
+
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out)
 {
@@ -585,11 +595,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     rs__ok(ctx);
     return RS_OK;
 fail:
-    rs__free(ctx, b.cell1);
-    rs__roadfield_free(ctx, f);
-    if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
-    return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
-                    (unsigned long long)b.limit);
+    return build_fail(ctx, f, &b, res);
 }
 
 rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
@@ -639,11 +645,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     rs__ok(ctx);
     return RS_OK;
 fail:
-    rs__free(ctx, b.cell1);
-    rs__roadfield_free(ctx, f);
-    if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
-    return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
-                    (unsigned long long)b.limit);
+    return build_fail(ctx, f, &b, res);
 }
 
 size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
