@@ -32,6 +32,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -55,6 +56,12 @@ static const char tiles_usage[] =
     "  --scheme xyz|tms   y down (default) or up (TMS) in the file names\n"
     "  --format png|mbtiles  a folder of PNG files (default) or one MBTiles 1.3\n"
     "                     file (SQLite; needs the module roadsplat-mbtiles.so)\n"
+    "  --normals          also the tangent-space normal map, {z}/{x}/{y}_n.png\n"
+    "                     (finest tiles = roadsplat --normal-out; coarser: the\n"
+    "                     mean of the four children's vectors, renormalised)\n"
+    "  --normal-convention gl|dx, --normal-strength S  as for roadsplat --normal-out\n"
+    "  --halo PX          each tile with a PX-pixel border of its neighbours'\n"
+    "                     pixels (S + 2 PX square; 0..128, default 0)\n"
     "  --dense            write every tile (default: on levels finer than a DEM\n"
     "                     cell, only tiles that hold a road)\n"
     "  --shard I/N        render only shard I (0..N-1) of N: a compact run of the\n"
@@ -74,6 +81,9 @@ typedef struct targs {
     const char *dem, *roads, *out;
     uint32_t tile;
     int tms, mbtiles, dense, resume, from_children, quiet, sharded;
+    int normals, normal_given;
+    rs_normal_options normal;
+    uint32_t halo;
     uint32_t shard_i, shard_n;
     const char **opt; /* the splat options as given (for the manifest), --threads left out */
     int nopt;
@@ -84,8 +94,10 @@ typedef struct targs {
 typedef struct entry {
     uint64_t key;     /* z << 58 | x << 29 | y, +1 (0: empty slot) */
     uint8_t flag;     /* 'r': written, holds a road; 'w': written, road-free; 'e': road-free, not written */
-    uint8_t checked;  /* 1: the file was found to match this run */
+    uint8_t checked;  /* 1: the file (and its normal tile) was found to match this run */
+    uint8_t has_n;    /* nhash is known (a run with --normals) */
     uint8_t hash[32];
+    uint8_t nhash[32]; /* the normal tile's, with --normals */
 } entry;
 
 typedef struct table {
@@ -110,7 +122,7 @@ static entry *tfind(table *t, uint64_t key)
     return e->key ? e : NULL;
 }
 
-static entry *tput(table *t, uint64_t key, int flag, const uint8_t *hash)
+static entry *tput(table *t, uint64_t key, int flag, const uint8_t *hash, const uint8_t *nhash)
 {
     if ((t->n + 1) * 2 > t->cap) {
         size_t nc = t->cap ? t->cap * 2 : 1024;
@@ -129,6 +141,9 @@ static entry *tput(table *t, uint64_t key, int flag, const uint8_t *hash)
     e->checked = 0;
     if (hash) memcpy(e->hash, hash, 32);
     else memset(e->hash, 0, 32);
+    e->has_n = nhash != NULL;
+    if (nhash) memcpy(e->nhash, nhash, 32);
+    else memset(e->nhash, 0, 32);
     return e;
 }
 
@@ -136,9 +151,12 @@ static entry *tput(table *t, uint64_t key, int flag, const uint8_t *hash)
 
 typedef struct run {
     targs *a;
+    rs_ctx *ctx;
     const cli_splat_input *in;
     const rs_splatter *sp;
     uint32_t fw, fh, S, T, zmax, zd;
+    uint32_t P, side;   /* halo, and a written tile's side S + 2P */
+    int layers;         /* 1, or 2 with --normals (layer 1: the normal map) */
     uint64_t nx, ny;    /* finest tiles per row, column */
     uint64_t lo, hi;    /* this run's finest tiles: Morton ranks [lo, hi) */
     table tab;
@@ -147,8 +165,12 @@ typedef struct run {
     char fingerprint[65];
     const cli_mbtiles_api *mb;
     void *db;
-    uint8_t *bufs[MAX_ZOOM + 2]; /* one S x S RGBA tile per depth */
-    uint8_t *rgb;                /* packing scratch */
+    uint8_t *bufs[2][MAX_ZOOM + 2]; /* per layer, one S x S RGBA tile per depth */
+    uint8_t *lbuf[2][MAX_ZOOM + 2]; /* --halo: per layer, one S x S block per level (level_rect) */
+    uint8_t *full;               /* a written tile, side x side RGBA (halo) or a decoded one */
+    uint8_t *scratch;            /* a finest render, side x side RGBA */
+    uint8_t *nrgb;               /* a finest normal render, side x side RGB */
+    uint8_t *rgb;                /* packing scratch, side x side RGB */
     char *path;                  /* tile path scratch */
     size_t path_cap;
     uint64_t rendered, written, road_free, kept, done_finest, total_finest;
@@ -177,8 +199,9 @@ static uint64_t file_y(const run *r, uint32_t z, uint64_t y)
     return r->a->tms ? (((uint64_t)1 << z) - 1 - y) : y;
 }
 
-/* "OUTDIR/z/x/y.png" in r->path; with mk, its folders are made. */
-static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk)
+/* "OUTDIR/z/x/y.png" (layer 1: "y_n.png") in r->path; with mk, its
+ * folders are made. */
+static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk, int layer)
 {
     size_t need = strlen(r->a->out) + 80;
     if (need > r->path_cap) {
@@ -194,7 +217,7 @@ static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk)
     if (mk && mkdir(r->path, 0777) != 0 && errno != EEXIST) goto fail;
     n += snprintf(r->path + n, need - n, "/%llu", (unsigned long long)x);
     if (mk && mkdir(r->path, 0777) != 0 && errno != EEXIST) goto fail;
-    snprintf(r->path + n, need - n, "/%llu.png", (unsigned long long)file_y(r, z, y));
+    snprintf(r->path + n, need - n, "/%llu%s.png", (unsigned long long)file_y(r, z, y), layer ? "_n" : "");
     return 0;
 fail:
     cli_error("%s: cannot create the folder: %s", r->path, strerror(errno));
@@ -203,16 +226,16 @@ fail:
 
 /* ---- PNG bytes: encode into memory, decode our own tiles ------------------------ */
 
-/* The tile as a PNG in memory (*png malloc'd): RGB when every pixel is
- * opaque, else RGBA. */
-static int encode_tile(run *r, const uint8_t *rgba, const char *shown, char **png, size_t *size)
+/* The side x side tile as a PNG in memory (*png malloc'd): RGB when every
+ * pixel is opaque, else RGBA. */
+static int encode_tile(run *r, const uint8_t *rgba, uint32_t side, const char *shown, char **png, size_t *size)
 {
-    size_t n = (size_t)r->S * r->S;
+    size_t n = (size_t)side * side;
     int opaque = 1;
     for (size_t i = 0; i < n && opaque; i++) opaque = rgba[4 * i + 3] == 255;
     if (opaque)
         for (size_t i = 0; i < n; i++) memcpy(r->rgb + 3 * i, rgba + 4 * i, 3);
-    cli_png_image img = { r->S, r->S, opaque ? 3 : 4, 8, opaque ? (const void *)r->rgb : (const void *)rgba };
+    cli_png_image img = { side, side, opaque ? 3 : 4, 8, opaque ? (const void *)r->rgb : (const void *)rgba };
     cli_png_options po = { r->a->s.png_level_given ? r->a->s.png_level : -1, NULL, NULL };
     *png = NULL;
     *size = 0;
@@ -294,53 +317,146 @@ static int decode_tile(const uint8_t *p, size_t n, uint32_t S, uint8_t *rgba)
 
 /* ---- pixels ---------------------------------------------------------------------- */
 
-/* Child (S x S) into quadrant (qx, qy) of parent: each parent pixel from a
- * 2x2 block, alpha the rounded mean, colour the alpha-weighted mean
- * (rounded; all four opaque: (c0 + c1 + c2 + c3 + 2) / 4). */
-static void box_down(const uint8_t *c, uint8_t *parent, uint32_t S, int qx, int qy)
+/* The 2x2 box filter of a cw x ch block c (rows cstride pixels apart; cw,
+ * ch even) into the (cw/2) x (ch/2) block o (rows ostride pixels apart).
+ * Colour (layer 0): alpha the rounded mean, colour the alpha-weighted mean
+ * (rounded; all four opaque: (c0 + c1 + c2 + c3 + 2) / 4). Normal map
+ * (layer 1): the four decoded vectors (2b - 255 per component), weighted
+ * by alpha, summed, renormalised and encoded again as
+ * floor((n / 2 + 1/2) * 255 + 1/2); alpha as for the colour. */
+static void box_rect(int layer, const uint8_t *c, uint32_t cw, uint32_t ch, size_t cstride, uint8_t *o,
+                     size_t ostride)
 {
-    uint32_t h = S / 2;
-    for (uint32_t y = 0; y < h; y++) {
-        const uint8_t *r0 = c + (size_t)(2 * y) * S * 4, *r1 = r0 + (size_t)S * 4;
-        uint8_t *o = parent + ((size_t)(qy * h + y) * S + (size_t)qx * h) * 4;
-        for (uint32_t x = 0; x < h; x++, r0 += 8, r1 += 8, o += 4) {
+    for (uint32_t y = 0; y < ch / 2; y++) {
+        const uint8_t *r0 = c + (size_t)(2 * y) * cstride * 4, *r1 = r0 + cstride * 4;
+        uint8_t *op = o + (size_t)y * ostride * 4;
+        for (uint32_t x = 0; x < cw / 2; x++, r0 += 8, r1 += 8, op += 4) {
             uint32_t a0 = r0[3], a1 = r0[7], a2 = r1[3], a3 = r1[7], A = a0 + a1 + a2 + a3;
-            if (A == 4 * 255) {
-                for (int k = 0; k < 3; k++) o[k] = (uint8_t)((r0[k] + r0[4 + k] + r1[k] + r1[4 + k] + 2) >> 2);
-                o[3] = 255;
-            } else if (A == 0) {
-                memset(o, 0, 4);
+            if (A == 0) {
+                memset(op, 0, 4);
+            } else if (layer) {
+                long v[3];
+                for (int k = 0; k < 3; k++)
+                    v[k] = (long)a0 * (2 * r0[k] - 255) + (long)a1 * (2 * r0[4 + k] - 255) +
+                           (long)a2 * (2 * r1[k] - 255) + (long)a3 * (2 * r1[4 + k] - 255);
+                double len = sqrt((double)v[0] * (double)v[0] + (double)v[1] * (double)v[1] + (double)v[2] * (double)v[2]);
+                for (int k = 0; k < 3; k++) {
+                    double b = len > 0 ? floor(((double)v[k] / len * 0.5 + 0.5) * 255.0 + 0.5) : (k == 2 ? 255 : 128);
+                    op[k] = (uint8_t)(b < 0 ? 0 : b > 255 ? 255 : b);
+                }
+                op[3] = (uint8_t)((A + 2) >> 2);
+            } else if (A == 4 * 255) {
+                for (int k = 0; k < 3; k++) op[k] = (uint8_t)((r0[k] + r0[4 + k] + r1[k] + r1[4 + k] + 2) >> 2);
+                op[3] = 255;
             } else {
                 for (int k = 0; k < 3; k++)
-                    o[k] = (uint8_t)((r0[k] * a0 + r0[4 + k] * a1 + r1[k] * a2 + r1[4 + k] * a3 + A / 2) / A);
-                o[3] = (uint8_t)((A + 2) >> 2);
+                    op[k] = (uint8_t)((r0[k] * a0 + r0[4 + k] * a1 + r1[k] * a2 + r1[4 + k] * a3 + A / 2) / A);
+                op[3] = (uint8_t)((A + 2) >> 2);
             }
         }
     }
 }
 
-/* The finest tile (x, y): its window of the image, transparent beyond it. */
-static int render_tile(run *r, uint64_t x, uint64_t y, uint8_t *out, int *has_road)
+/* Pixels [X0, X0+w) x [Y0, Y0+h) of the finest level's image (w, h <=
+ * side; X0, Y0 may lie outside it) into out (rows ostride pixels apart),
+ * transparent (0,0,0,0) beyond the image. Layer 0: the splat (with
+ * *road_pixels, when not NULL, its road pixel count); layer 1: the normal
+ * map, alpha 255. */
+static int finest_rect(run *r, int layer, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out, size_t ostride,
+                       uint64_t *road_pixels)
 {
-    uint32_t S = r->S, x0 = (uint32_t)(x * S), y0 = (uint32_t)(y * S);
-    uint32_t w = r->fw - x0 < S ? r->fw - x0 : S, h = r->fh - y0 < S ? r->fh - y0 : S;
-    cli_splat_job job;
-    cli_splat_job_init(&job, r->sp, &r->a->s, 1);
-    job.x0 = x0, job.y0 = y0, job.w = w, job.h = h;
-    job.rgba = out; /* rows w * 4 apart, spread to S * 4 below */
-    job.nodata = r->in->nodata;
-    job.dem_w = rs_dem_width(r->in->dem), job.dem_h = rs_dem_height(r->in->dem);
-    if (cli_splat_run(&job)) return 1;
-    if (w < S || h < S) {
-        for (uint32_t row = h; row-- > 0;) {
-            memmove(out + (size_t)row * S * 4, out + (size_t)row * w * 4, (size_t)w * 4);
-            memset(out + (size_t)row * S * 4 + (size_t)w * 4, 0, (size_t)(S - w) * 4);
+    int64_t x0 = X0 < 0 ? 0 : X0, y0 = Y0 < 0 ? 0 : Y0;
+    int64_t x1 = X0 + w < (int64_t)r->fw ? X0 + w : (int64_t)r->fw, y1 = Y0 + h < (int64_t)r->fh ? Y0 + h : (int64_t)r->fh;
+    if (road_pixels) *road_pixels = 0;
+    for (uint32_t j = 0; j < h; j++) memset(out + (size_t)j * ostride * 4, 0, (size_t)w * 4);
+    if (x0 >= x1 || y0 >= y1) return 0;
+    uint32_t cw = (uint32_t)(x1 - x0), chh = (uint32_t)(y1 - y0);
+    if (layer == 0) {
+        cli_splat_job job;
+        cli_splat_job_init(&job, r->sp, &r->a->s, 1);
+        job.x0 = (uint32_t)x0, job.y0 = (uint32_t)y0, job.w = cw, job.h = chh;
+        job.rgba = r->scratch;
+        job.nodata = r->in->nodata;
+        job.dem_w = rs_dem_width(r->in->dem), job.dem_h = rs_dem_height(r->in->dem);
+        if (cli_splat_run(&job)) return 1;
+        if (road_pixels) *road_pixels = job.profile.road_pixels;
+    } else {
+        if (rs_normal_window(r->ctx, r->sp, (uint32_t)x0, (uint32_t)y0, cw, chh, r->nrgb, (size_t)cw * 3, &r->a->normal)) {
+            cli_error("normal map: %s", rs_ctx_message(r->ctx));
+            return 1;
         }
-        memset(out + (size_t)h * S * 4, 0, (size_t)(S - h) * S * 4);
+        for (size_t i = 0, n = (size_t)cw * chh; i < n; i++) {
+            memcpy(r->scratch + 4 * i, r->nrgb + 3 * i, 3);
+            r->scratch[4 * i + 3] = 255;
+        }
     }
-    *has_road = job.profile.road_pixels > 0;
+    for (uint32_t j = 0; j < chh; j++)
+        memcpy(out + ((size_t)(y0 - Y0 + j) * ostride + (size_t)(x0 - X0)) * 4, r->scratch + (size_t)j * cw * 4,
+               (size_t)cw * 4);
+    return 0;
+}
+
+/* Pixels [X0, X0+w) x [Y0, Y0+h) of level z's image (the finest image
+ * box-filtered zmax - z times, transparent beyond it) into out (rows
+ * ostride pixels apart): what the tiles of level z hold there. For --halo:
+ * blocks of at most S/2 x S/2, each from a 2x block of level z + 1. */
+static int level_rect(run *r, int layer, uint32_t z, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out,
+                      size_t ostride)
+{
+    if (z == r->zmax) return finest_rect(r, layer, X0, Y0, w, h, out, ostride, NULL);
+    uint32_t k = r->zmax - z;
+    int64_t lw = (int64_t)((r->fw + ((uint64_t)1 << k) - 1) >> k), lh = (int64_t)((r->fh + ((uint64_t)1 << k) - 1) >> k);
+    if (X0 >= lw || Y0 >= lh || X0 + w <= 0 || Y0 + h <= 0) {
+        for (uint32_t j = 0; j < h; j++) memset(out + (size_t)j * ostride * 4, 0, (size_t)w * 4);
+        return 0;
+    }
+    uint32_t H = r->S / 2;
+    uint8_t *cb = r->lbuf[layer][z + 1];
+    for (uint32_t by = 0; by < h; by += H)
+        for (uint32_t bx = 0; bx < w; bx += H) {
+            uint32_t bw = w - bx < H ? w - bx : H, bh = h - by < H ? h - by : H;
+            if (level_rect(r, layer, z + 1, 2 * (X0 + bx), 2 * (Y0 + by), 2 * bw, 2 * bh, cb, 2 * bw)) return 1;
+            box_rect(layer, cb, 2 * bw, 2 * bh, 2 * bw, out + ((size_t)by * ostride + bx) * 4, ostride);
+        }
+    return 0;
+}
+
+/* Child (S x S) into quadrant (qx, qy) of parent. */
+static void box_down(int layer, const uint8_t *c, uint8_t *parent, uint32_t S, int qx, int qy)
+{
+    uint32_t h = S / 2;
+    box_rect(layer, c, S, S, S, parent + ((size_t)qy * h * S + (size_t)qx * h) * 4, S);
+}
+
+/* The finest tile (x, y) of each layer into out[layer]: its window of the
+ * image, transparent beyond it. */
+static int render_tile(run *r, uint64_t x, uint64_t y, uint8_t *const *out, int *has_road)
+{
+    uint64_t roads = 0;
+    for (int l = 0; l < r->layers; l++)
+        if (finest_rect(r, l, (int64_t)(x * r->S), (int64_t)(y * r->S), r->S, r->S, out[l], r->S, l ? NULL : &roads))
+            return 1;
+    *has_road = roads > 0;
     r->rendered++;
     return 0;
+}
+
+/* The written form of a level-z tile of one layer whose S x S pixels are
+ * core: with --halo, r->full with the P-pixel ring of level z's image
+ * around it; else core itself. */
+static const uint8_t *with_halo(run *r, int layer, uint32_t z, uint64_t x, uint64_t y, const uint8_t *core)
+{
+    uint32_t S = r->S, P = r->P, side = r->side;
+    if (!P) return core;
+    int64_t X = (int64_t)(x * S), Y = (int64_t)(y * S);
+    uint8_t *f = r->full;
+    for (uint32_t j = 0; j < S; j++) memcpy(f + ((size_t)(P + j) * side + P) * 4, core + (size_t)j * S * 4, (size_t)S * 4);
+    if (level_rect(r, layer, z, X - P, Y - P, side, P, f, side) ||
+        level_rect(r, layer, z, X - P, Y + S, side, P, f + (size_t)(P + S) * side * 4, side) ||
+        level_rect(r, layer, z, X - P, Y, P, S, f + (size_t)P * side * 4, side) ||
+        level_rect(r, layer, z, X + S, Y, P, S, f + ((size_t)P * side + P + S) * 4, side))
+        return NULL;
+    return f;
 }
 
 /* ---- writing a tile ------------------------------------------------------------ */
@@ -356,27 +472,32 @@ static int write_all(int fd, const char *p, size_t n)
     return 0;
 }
 
-static int log_line(run *r, uint32_t z, uint64_t x, uint64_t y, int flag, const uint8_t *hash)
+static int log_line(run *r, uint32_t z, uint64_t x, uint64_t y, int flag, const uint8_t *hash, const uint8_t *nhash)
 {
-    char hex[65] = "-";
+    char hex[65] = "-", nhex[66] = "";
     if (hash) cli_sha256_hex(hash, hex);
-    if (fprintf(r->log, "%u %llu %llu %c %s\n", z, (unsigned long long)x, (unsigned long long)y, flag, hex) < 0 ||
+    if (nhash) {
+        nhex[0] = ' ';
+        cli_sha256_hex(nhash, nhex + 1);
+    }
+    if (fprintf(r->log, "%u %llu %llu %c %s%s\n", z, (unsigned long long)x, (unsigned long long)y, flag, hex, nhex) < 0 ||
         fflush(r->log) != 0) {
         cli_error("%s: write failed: %s", r->log_path, strerror(errno ? errno : EIO));
         return 1;
     }
-    return tput(&r->tab, tkey(z, x, y), flag, hash) ? 0 : (cli_error("out of memory"), 1);
+    return tput(&r->tab, tkey(z, x, y), flag, hash, nhash) ? 0 : (cli_error("out of memory"), 1);
 }
 
-/* Encode, hash and store a finished tile (a file renamed into place, or a
- * row of the MBTiles file), then log it. */
-static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, const uint8_t *rgba, int has_road)
+/* Encode, hash and store one layer of a finished tile (a file renamed
+ * into place, or a row of the MBTiles file). */
+static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, const uint8_t *core, uint8_t hash[32])
 {
     char shown[96], *png = NULL;
     size_t size = 0;
-    snprintf(shown, sizeof shown, "tile %u/%llu/%llu", z, (unsigned long long)x, (unsigned long long)file_y(r, z, y));
-    if (encode_tile(r, rgba, shown, &png, &size)) return 1;
-    uint8_t hash[32];
+    snprintf(shown, sizeof shown, "tile %u/%llu/%llu%s", z, (unsigned long long)x, (unsigned long long)file_y(r, z, y),
+             layer ? "_n" : "");
+    const uint8_t *px = with_halo(r, layer, z, x, y, core);
+    if (!px || encode_tile(r, px, r->side, shown, &png, &size)) return 1;
     cli_sha256(png, size, hash);
     int bad = 0;
     if (r->db) {
@@ -384,7 +505,7 @@ static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, const uint8_t 
     } else {
         char *tmp = NULL;
         int fd = -1;
-        bad = tile_path(r, z, x, y, 1);
+        bad = tile_path(r, z, x, y, 1, layer);
         if (!bad && (fd = cli_temp_create(r->path, &tmp)) < 0) {
             cli_error("%s: cannot create a temporary file next to it: %s", r->path, strerror(errno));
             bad = 1;
@@ -405,9 +526,17 @@ static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, const uint8_t 
         free(tmp);
     }
     free(png);
-    if (bad) return 1;
+    return bad;
+}
+
+/* Store every layer of a finished tile, then log it. */
+static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *core, int has_road)
+{
+    uint8_t hash[32], nhash[32];
+    if (store_layer(r, z, x, y, 0, core[0], hash)) return 1;
+    if (r->layers > 1 && store_layer(r, z, x, y, 1, core[1], nhash)) return 1;
     r->written++;
-    return log_line(r, z, x, y, has_road ? 'r' : 'w', hash);
+    return log_line(r, z, x, y, has_road ? 'r' : 'w', hash, r->layers > 1 ? nhash : NULL);
 }
 
 /* A whole file, quietly: 0, or 1 (missing, unreadable). */
@@ -434,23 +563,33 @@ static int read_whole(const char *path, char **data, size_t *size)
     return 0;
 }
 
-/* A logged tile's file, when it still has the logged hash: 1 (its bytes
- * in *data, malloc'd, when data is not NULL), else 0. */
-static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, uint8_t **data, size_t *size)
+/* A logged tile's files, when each still has its logged hash: 1 (with
+ * out, the S x S pixels of each layer decoded into out[layer]), else 0. */
+static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, uint8_t *const *out)
 {
-    if (data) *data = NULL;
-    if (e->checked && !data) return 1;
-    if (tile_path(r, z, x, y, 0)) return 0;
-    char *bytes = NULL;
-    size_t n = 0;
-    if (read_whole(r->path, &bytes, &n)) return 0;
-    uint8_t h[32];
-    cli_sha256(bytes, n, h);
-    int ok = !memcmp(h, e->hash, 32);
-    if (ok && data) {
-        *data = (uint8_t *)bytes;
-        *size = n;
-    } else {
+    if (e->checked && !out) return 1;
+    if (r->layers > 1 && !e->has_n) return 0;
+    int ok = 1;
+    for (int l = 0; ok && l < r->layers; l++) {
+        if (tile_path(r, z, x, y, 0, l)) return 0;
+        char *bytes = NULL;
+        size_t n = 0;
+        if (read_whole(r->path, &bytes, &n)) return 0;
+        uint8_t h[32];
+        cli_sha256(bytes, n, h);
+        ok = !memcmp(h, l ? e->nhash : e->hash, 32);
+        if (ok && out) {
+            uint8_t *dst = r->P ? r->full : out[l];
+            if (decode_tile((const uint8_t *)bytes, n, r->side, dst)) {
+                cli_error("%s: not a %u x %u tile of roadsplat", r->path, r->side, r->side);
+                free(bytes);
+                return -1;
+            }
+            if (r->P)
+                for (uint32_t j = 0; j < r->S; j++)
+                    memcpy(out[l] + (size_t)j * r->S * 4, r->full + ((size_t)(r->P + j) * r->side + r->P) * 4,
+                           (size_t)r->S * 4);
+        }
         free(bytes);
     }
     e->checked = (uint8_t)ok;
@@ -459,26 +598,32 @@ static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, 
 
 /* ---- the quadtree ---------------------------------------------------------------- */
 
-/* Tile (z, x, y) into out (S x S RGBA, r->bufs[depth] of the caller).
- * need: the caller needs the pixels (a tile already done is then read back
- * from its file, or recomputed when it was road-free and not written).
- * record 0: compute only (a road-free tile recomputed for its parent).
- * *has_road: some pixel of the tile holds a road. */
-static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *out, int need, int record, int *has_road)
+/* Tile (z, x, y) into out[layer] (S x S RGBA, r->bufs[layer][depth] of
+ * the caller). need: the caller needs the pixels (a tile already done is
+ * then read back from its files, or recomputed when it was road-free and
+ * not written). record 0: compute only (a road-free tile recomputed for
+ * its parent). *has_road: some pixel of the tile holds a road. */
+static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out, int need, int record, int *has_road)
 {
     entry *e = tfind(&r->tab, tkey(z, x, y));
     if (e && record && (e->flag == 'r' || e->flag == 'w')) {
-        uint8_t *data = NULL;
-        size_t n = 0;
-        if (logged_file_ok(r, z, x, y, e, need ? &data : NULL, &n)) {
-            int bad = need && decode_tile(data, n, r->S, out);
-            free(data);
-            if (bad) {
-                cli_error("%s: not a %u x %u tile of roadsplat", r->path, r->S, r->S);
-                return 1;
-            }
+        int ok = logged_file_ok(r, z, x, y, e, need ? out : NULL);
+        if (ok < 0) return 1;
+        if (ok) {
             *has_road = e->flag == 'r';
             r->kept++;
+            if (!need && r->a->resume && z < r->zmax) {
+                /* --resume: a kept tile's subtree is checked too (a child lost
+                 * under an intact parent is made again) */
+                uint32_t d = r->zmax - z - 1;
+                uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
+                for (int q = 0; q < 4; q++) {
+                    uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+                    int cr = 0;
+                    if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, child, 0, 1, &cr)) return 1;
+                }
+                return 0;
+            }
             r->done_finest += finest_count(r, z, x, y);
             return 0;
         }
@@ -494,7 +639,7 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *out, int n
     }
     if (z == r->zmax) {
         if (record && r->a->from_children && !e) {
-            if (tile_path(r, z, x, y, 0)) return 1;
+            if (tile_path(r, z, x, y, 0, 0)) return 1;
             cli_error("--from-children: %s is missing or differs from its log: run its shard (with --resume) first",
                       r->path);
             return 1;
@@ -505,15 +650,16 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *out, int n
             cli_progress_cb(&r->prog, r->done_finest, r->total_finest);
         }
     } else {
-        uint8_t *child = r->bufs[r->zmax - z - 1];
+        uint32_t d = r->zmax - z - 1;
+        uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
         int any = 0;
-        memset(out, 0, (size_t)r->S * r->S * 4);
+        for (int l = 0; l < r->layers; l++) memset(out[l], 0, (size_t)r->S * r->S * 4);
         for (int q = 0; q < 4; q++) {
             uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
             if (!exists(r, z + 1, cx, cy)) continue;
             int cr = 0;
             if (build(r, z + 1, cx, cy, child, 1, record, &cr)) return 1;
-            box_down(child, out, r->S, q & 1, q >> 1);
+            for (int l = 0; l < r->layers; l++) box_down(l, child[l], out[l], r->S, q & 1, q >> 1);
             any |= cr;
         }
         *has_road = any;
@@ -528,7 +674,7 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *out, int n
     }
     if (z <= r->zd || *has_road) return store_tile(r, z, x, y, out, *has_road);
     r->road_free++;
-    return log_line(r, z, x, y, 'e', NULL);
+    return log_line(r, z, x, y, 'e', NULL, NULL);
 }
 
 /* The tiles of this run under (z, x, y), whose finest tiles have the
@@ -540,7 +686,8 @@ static int visit(run *r, uint32_t z, uint64_t x, uint64_t y, uint64_t rank)
     if (!cnt || rank + cnt <= r->lo || rank >= r->hi) return 0;
     if (rank >= r->lo && rank + cnt <= r->hi) {
         int hr;
-        return build(r, z, x, y, r->bufs[r->zmax - z], 0, 1, &hr);
+        uint8_t *out[2] = { r->bufs[0][r->zmax - z], r->bufs[1][r->zmax - z] };
+        return build(r, z, x, y, out, 0, 1, &hr);
     }
     for (int q = 0; q < 4; q++) {
         uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
@@ -608,11 +755,12 @@ static int parse_targs(int argc, char **argv, targs *a)
                     : !strcmp(name, "--dense")                       ? &a->dense
                     : !strcmp(name, "--resume")                      ? &a->resume
                     : !strcmp(name, "--from-children")               ? &a->from_children
+                    : !strcmp(name, "--normals")                     ? &a->normals
                                                                      : NULL;
         if (flag) {
             if (inl) { cli_error("%s takes no value", name); return 1; }
             *flag = 1;
-            if (flag == &a->dense) a->opt[a->nopt++] = arg;
+            if (flag == &a->dense || flag == &a->normals) a->opt[a->nopt++] = arg;
             continue;
         }
         if (!strcmp(name, "--tile-size")) {
@@ -635,6 +783,34 @@ static int parse_targs(int argc, char **argv, targs *a)
                 return 1;
             }
             a->mbtiles = v[0] == 'm';
+        } else if (!strcmp(name, "--normal-convention")) {
+            int i0 = i;
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            if (strcmp(v, "gl") && strcmp(v, "dx")) {
+                cli_error("--normal-convention: '%s' must be gl or dx", v);
+                return 1;
+            }
+            a->normal.directx = v[0] == 'd';
+            a->normal_given = 1;
+            for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
+        } else if (!strcmp(name, "--normal-strength")) {
+            int i0 = i;
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->normal.strength))
+                return 1;
+            if (!(a->normal.strength > 0 && a->normal.strength <= 1e6)) {
+                cli_error("--normal-strength: '%s' must be in (0, 1e6]", v);
+                return 1;
+            }
+            a->normal_given = 1;
+            for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
+        } else if (!strcmp(name, "--halo")) {
+            int i0 = i;
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_u32(name, v, &a->halo)) return 1;
+            if (a->halo > 128) {
+                cli_error("--halo: '%s' must be 0..128 pixels", v);
+                return 1;
+            }
+            for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
         } else if (!strcmp(name, "--shard")) {
             if (cli_option_value(argc, argv, &i, name, inl, &v) || parse_shard(v, &a->shard_i, &a->shard_n)) return 1;
             a->sharded = 1;
@@ -658,6 +834,14 @@ static int parse_targs(int argc, char **argv, targs *a)
     if (!a->sharded) a->shard_n = 1;
     if (a->sharded && a->from_children) {
         cli_error("--shard and --from-children are separate steps: shards first, then one --from-children run");
+        return 1;
+    }
+    if (a->normal_given && !a->normals) {
+        cli_error("--normal-convention and --normal-strength need --normals");
+        return 1;
+    }
+    if (a->mbtiles && a->normals) {
+        cli_error("--normals with --format mbtiles: an MBTiles file holds one layer; use --format png for the normal map");
         return 1;
     }
     if (a->mbtiles && (a->sharded || a->resume || a->from_children)) {
@@ -767,21 +951,27 @@ static int load_logs(run *r, const char *dir)
         while (!bad && fgets(line, sizeof line, f)) {
             unsigned z;
             unsigned long long x, y;
-            char flag, hex[80];
-            uint8_t h[32];
+            char flag, hex[80], nhex[80];
+            uint8_t h[32], nh[32];
             size_t L = strlen(line);
             if (!L || line[L - 1] != '\n') break; /* cut short */
-            if (sscanf(line, "%u %llu %llu %c %70s", &z, &x, &y, &flag, hex) != 5 || z > r->zmax ||
-                (flag != 'r' && flag != 'w' && flag != 'e') || !exists(r, z, x, y))
+            int nf = sscanf(line, "%u %llu %llu %c %70s %70s", &z, &x, &y, &flag, hex, nhex);
+            if ((nf != 5 && nf != 6) || z > r->zmax || (flag != 'r' && flag != 'w' && flag != 'e') ||
+                !exists(r, z, x, y))
                 continue;
-            int okh = flag == 'e' || strlen(hex) == 64;
+            int okh = flag == 'e' || (strlen(hex) == 64 && (nf == 5 || strlen(nhex) == 64));
             for (int k = 0; okh && flag != 'e' && k < 32; k++) {
                 int hi = hexval(hex[2 * k]), lo = hexval(hex[2 * k + 1]);
                 if (hi < 0 || lo < 0) okh = 0;
                 else h[k] = (uint8_t)(hi << 4 | lo);
+                if (nf == 6) {
+                    hi = hexval(nhex[2 * k]), lo = hexval(nhex[2 * k + 1]);
+                    if (hi < 0 || lo < 0) okh = 0;
+                    else nh[k] = (uint8_t)(hi << 4 | lo);
+                }
             }
             if (!okh) continue;
-            if (!tput(&r->tab, tkey(z, x, y), flag, flag == 'e' ? NULL : h)) {
+            if (!tput(&r->tab, tkey(z, x, y), flag, flag == 'e' ? NULL : h, flag == 'e' || nf == 5 ? NULL : nh)) {
                 cli_error("out of memory");
                 bad = 1;
             }
@@ -834,7 +1024,7 @@ static void json_str(FILE *f, const char *s)
 static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
 {
     const targs *a = r->a;
-    size_t nw = 0, ne = 0;
+    size_t nw = 0, ne = 0, nn = 0;
     for (size_t i = 0; i < r->tab.cap; i++)
         if (r->tab.e[i].key) { if (r->tab.e[i].flag == 'e') ne++; else nw++; }
     uint64_t *keys = malloc((nw ? nw : 1) * sizeof *keys);
@@ -852,8 +1042,15 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
     rs_dem_get_frame(r->in->dem, &fr);
     double cs = fr.cell_size > 0 ? fr.cell_size : 1;
     fprintf(f, "{\n  \"roadsplat_tiles\": 1,\n  \"roadsplat\": \"%s\",\n", rs_version_string());
-    fprintf(f, "  \"tile_size\": %u,\n  \"scheme\": \"%s\",\n  \"format\": \"%s\",\n", r->S, a->tms ? "tms" : "xyz",
-            a->mbtiles ? "mbtiles" : "png");
+    fprintf(f, "  \"tile_size\": %u,\n  \"halo\": %u,\n  \"scheme\": \"%s\",\n  \"format\": \"%s\",\n", r->S, r->P,
+            a->tms ? "tms" : "xyz", a->mbtiles ? "mbtiles" : "png");
+    fprintf(f, "  \"layers\": [\"colour\"%s],\n", r->layers > 1 ? ", \"normal\"" : "");
+    if (r->layers > 1)
+        fprintf(f, "  \"normal\": {\"path\": \"{z}/{x}/{y}_n.png\", \"convention\": \"%s\", \"encoding\": \"byte = "
+                   "round((n / 2 + 1/2) * 255); R east, G %s, B up; alpha 0 beyond the image\", \"coarser\": \"the "
+                   "alpha-weighted sum of the four children's decoded vectors (2 byte - 255), renormalised and encoded "
+                   "again; alpha as for the colour\"},\n",
+                a->normal.directx ? "dx" : "gl", a->normal.directx ? "south (image down)" : "north (image up)");
     fprintf(f, "  \"path\": \"%s\",\n", a->mbtiles ? "tiles table, tile_row = 2^z - 1 - y (MBTiles 1.3)"
                                                    : (a->tms ? "{z}/{x}/{y}.png, y = 2^z - 1 - row (row 0 at the top)"
                                                              : "{z}/{x}/{y}.png, y = row (row 0 at the top)"));
@@ -870,8 +1067,11 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
                "the %u x %u image, pixels beyond it transparent (0,0,0,0); a tile of level z < %u is the 2x2 box "
                "filter of its four children (alpha the rounded mean, colour the alpha-weighted rounded mean); "
                "levels 0..%u are complete, a tile of a finer level is written only when it holds a road (a viewer "
-               "over-zooms its parent); PNG RGB when every pixel is opaque, else RGBA\",\n",
-            r->zmax, r->S, r->S, r->S, r->S, r->fw, r->fh, r->zmax, r->zd);
+               "over-zooms its parent); PNG RGB when every pixel is opaque, else RGBA%s\",\n",
+            r->zmax, r->S, r->S, r->S, r->S, r->fw, r->fh, r->zmax, r->zd,
+            r->P ? "; with halo P, a tile's file is (S + 2P) square: the tile's S x S pixels framed by the P pixels "
+                   "around them of the same level's image (= its neighbour tiles' pixels; transparent beyond the image)"
+                 : "");
     fprintf(f, "  \"frame\": {\"cell_size_m\": %.17g, \"pixel_m\": %.17g", cs, cs / r->T);
     if (geo) {
         fprintf(f, ", \"geotransform\": [%.17g, %.17g, %.17g, %.17g, %.17g, %.17g], \"crs\": ", gt[0], gt[1], gt[2],
@@ -899,7 +1099,9 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
         json_str(f, a->opt[i]);
     }
     fprintf(f, "],\n  \"fingerprint\": \"%s\",\n", r->fingerprint);
-    fprintf(f, "  \"tiles_written\": %zu,\n  \"tiles_road_free_not_written\": %zu,\n  \"tiles\": {", nw, ne);
+    if (r->layers > 1) nn = nw;
+    fprintf(f, "  \"tiles_written\": %zu,\n  \"normal_tiles_written\": %zu,\n  \"tiles_road_free_not_written\": %zu,\n  \"tiles\": {",
+            nw, nn, ne);
     for (size_t i = 0; i < nw; i++) {
         uint64_t key = keys[i] - 1;
         uint32_t z = (uint32_t)(key >> 58);
@@ -909,6 +1111,11 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
         cli_sha256_hex(e->hash, hex);
         fprintf(f, "%s\n    \"%u/%llu/%llu\": \"%s\"", i ? "," : "", z, (unsigned long long)x,
                 (unsigned long long)file_y(r, z, y), hex);
+        if (r->layers > 1) {
+            cli_sha256_hex(e->nhash, hex);
+            fprintf(f, ",\n    \"%u/%llu/%llu_n\": \"%s\"", z, (unsigned long long)x, (unsigned long long)file_y(r, z, y),
+                    hex);
+        }
     }
     fprintf(f, "\n  }\n}\n");
     free(keys);
@@ -954,6 +1161,9 @@ int cli_tiles_main(int argc, char **argv)
     memset(&mani, 0, sizeof mani);
     r.a = &a;
     r.S = a.tile;
+    r.P = a.halo;
+    r.side = r.S + 2 * r.P;
+    r.layers = a.normals ? 2 : 1;
 
     /* the output: a folder (made here; its parent must exist) or one file */
     struct stat st;
@@ -1001,6 +1211,7 @@ int cli_tiles_main(int argc, char **argv)
         goto done;
     }
     r.in = &in;
+    r.ctx = ctx;
     r.T = a.s.o.texels ? a.s.o.texels : 8;
     r.nx = (r.fw + (uint64_t)r.S - 1) / r.S;
     r.ny = (r.fh + (uint64_t)r.S - 1) / r.S;
@@ -1068,12 +1279,16 @@ int cli_tiles_main(int argc, char **argv)
 
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     r.sp = sp;
-    for (uint32_t d = 0; d <= r.zmax; d++)
-        if (!(r.bufs[d] = malloc((size_t)r.S * r.S * 4))) {
-            cli_error("out of memory for the tile buffers");
-            goto done;
-        }
-    if (!(r.rgb = malloc((size_t)r.S * r.S * 3))) {
+    for (int l = 0; l < r.layers; l++)
+        for (uint32_t d = 0; d <= r.zmax; d++)
+            if (!(r.bufs[l][d] = malloc((size_t)r.S * r.S * 4)) ||
+                (r.P && !(r.lbuf[l][d] = malloc((size_t)r.S * r.S * 4)))) {
+                cli_error("out of memory for the tile buffers");
+                goto done;
+            }
+    size_t side2 = (size_t)r.side * r.side;
+    if (!(r.rgb = malloc(side2 * 3)) || !(r.full = malloc(side2 * 4)) || !(r.scratch = malloc(side2 * 4)) ||
+        (r.layers > 1 && !(r.nrgb = malloc(side2 * 3)))) {
         cli_error("out of memory for the tile buffers");
         goto done;
     }
@@ -1133,8 +1348,12 @@ done:
     cli_out_abort(&mout);
     cli_out_abort(&mani);
     if (r.log) fclose(r.log);
-    for (uint32_t d = 0; d <= MAX_ZOOM + 1; d++) free(r.bufs[d]);
+    for (int l = 0; l < 2; l++)
+        for (uint32_t d = 0; d <= MAX_ZOOM + 1; d++) free(r.bufs[l][d]), free(r.lbuf[l][d]);
     free(r.rgb);
+    free(r.full);
+    free(r.scratch);
+    free(r.nrgb);
     free(r.path);
     free(r.log_path);
     free(r.tab.e);

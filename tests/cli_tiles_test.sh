@@ -91,7 +91,45 @@ check "OUTDIR a file: exit 1, one line naming it" sh -c "test $rc = 1 && test \$
 "$BIN" tiles "$T/nope.pgm" "$T/roads.txt" "$T/bad2" 2>"$T/e"; rc=$?
 check "missing DEM: exit 1, one line naming it" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1 && grep -q nope.pgm '$T/e'"
 
-# 7. a large pyramid (2049 x 2049 cells at 16 texels: 32784 x 32784 pixels, 4.3 GB as
+# 7. the normal map as a second layer ({y}_n.png) and --halo
+N="$O --normals"
+check "dense --normals run exits 0" "$BIN" tiles --quiet --dense $N "$T/dem.pgm" "$T/roads.txt" "$T/nd"
+check "--normals: manifest hashes = files (both layers)" $PY manifest "$T/nd"
+check "--normals: the colour tiles are unchanged" sh -c "cd '$T/dense' && for f in \$(find . -name '*.png'); do cmp -s \$f '$T/nd/'\$f || exit 1; done"
+for xy in 1,0 2,2; do
+    x=${xy%,*} y=${xy#*,}
+    "$BIN" --quiet $O --window $((x * 256)),$((y * 256)),256,256 --normal-out "$T/n$x$y.png" "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
+    check "finest normal tile $x,$y byte-identical to --normal-out of its window" cmp -s "$T/n$x$y.png" "$T/nd/3/$x/${y}_n.png"
+done
+"$BIN" --quiet $O --window 1024,768,176,32 --normal-out "$T/nedge.png" "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
+check "edge normal tile 4,3 = --normal-out window + alpha 0 beyond" $PY normal_window "$T/nd/3/4/3_n.png" "$T/nedge.png"
+check "normal parent 2/0/0 = renormalised mean of its children" $PY parent "$T/nd" 2 0 0 n
+check "normal parent 2/2/1 (edge) = renormalised mean of its children" $PY parent "$T/nd" 2 2 1 n
+check "normal parent 0/0/0 = renormalised mean of its children" $PY parent "$T/nd" 0 0 0 n
+"$BIN" tiles --quiet --dense $N --normal-convention dx --normal-strength 3 "$T/dem.pgm" "$T/roads.txt" "$T/ndx"
+"$BIN" --quiet $O --window 256,0,256,256 --normal-out "$T/ndx.png" --normal-convention dx --normal-strength 3 "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
+check "--normal-convention dx --normal-strength 3: finest tile = --normal-out" cmp -s "$T/ndx.png" "$T/ndx/3/1/0_n.png"
+H="$N --halo 5"
+check "sparse --normals --halo 5 run exits 0" "$BIN" tiles --quiet $H "$T/dem.pgm" "$T/roads.txt" "$T/ha"
+"$BIN" --quiet $O --window 251,251,266,266 --normal-out "$T/hn.png" "$T/dem.pgm" "$T/roads.txt" "$T/hc.png"
+check "halo: finest tile 1,1 = the 266^2 window (colour)" cmp -s "$T/hc.png" "$T/ha/3/1/1.png"
+check "halo: finest tile 1,1 = the 266^2 window (normal)" cmp -s "$T/hn.png" "$T/ha/3/1/1_n.png"
+check "halo: every halo pixel = the neighbour tile's pixel, all levels, both layers" $PY halo "$T/ha"
+check "halo: parent 1/0/0 = box filter of its children's cores" $PY parent "$T/ha" 1 0 0
+check "halo: normal parent 2/0/0 = mean of its children's cores" $PY parent "$T/ha" 2 0 0 n
+check "halo: manifest hashes = files, halo stated" sh -c "$PY manifest '$T/ha' && grep -q '\"halo\": 5' '$T/ha/tiles.json'"
+for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $H "$T/dem.pgm" "$T/roads.txt" "$T/hsh" || bad "halo shard $i"; done
+"$BIN" tiles --quiet --shard 0/3 $H "$T/dem.pgm" "$T/roads.txt" "$T/hsh"
+rm -f "$T/hsh/3/0/1_n.png"; printf x >>"$T/hsh/3/1/0_n.png"
+check "--resume remakes a lost and a changed normal tile under an intact parent" "$BIN" tiles --quiet --resume --shard 0/3 $H "$T/dem.pgm" "$T/roads.txt" "$T/hsh"
+check "3 shards + merge = one run (--normals --halo)" sh -c "'$BIN' tiles --quiet --from-children $H '$T/dem.pgm' '$T/roads.txt' '$T/hsh' && diff -r -x .tiles-log '$T/hsh' '$T/ha' >/dev/null"
+for args in "--halo 129" "--halo -1" "--normal-strength 0 --normals" "--normal-convention up --normals" "--normal-convention dx" \
+    "--normals --format mbtiles"; do
+    "$BIN" tiles $args "$T/dem.pgm" "$T/roads.txt" "$T/bad" 2>"$T/e"; rc=$?
+    check "tiles $args: exit 1, one line" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1"
+done
+
+# 8. a large pyramid (2049 x 2049 cells at 16 texels: 32784 x 32784 pixels, 4.3 GB as
 # RGBA) within a fixed memory bound: a city of roads in one corner, the rest terrain
 if [ -x /usr/bin/time ]; then
     python3 -c "

@@ -3,11 +3,14 @@ Python; PNGs through tests/png_read.py, independent of cli/png.c).
 
   tiles_check.py manifest OUTDIR          every listed hash = the file's, every file listed
   tiles_check.py window TILE WIN.png      TILE = WIN padded with transparent pixels
-  tiles_check.py parent OUTDIR Z X Y      tile = 2x2 box filter of its children on disk
+  tiles_check.py parent OUTDIR Z X Y [n]  tile = 2x2 box filter of its children on disk
+                                          (n: the normal layer, the renormalised vector mean)
+  tiles_check.py halo OUTDIR              every halo pixel = the neighbour tile's pixel
+  tiles_check.py normal_window TILE WIN.png  normal TILE = WIN, alpha 0 beyond it
   tiles_check.py sparse OUTDIR WEIGHT.pgm tiles finer than dense_max exist iff they hold a road
   tiles_check.py mbtiles FILE OUTDIR      the MBTiles rows (TMS) = the folder's tiles
 """
-import hashlib, json, os, sqlite3, sys
+import hashlib, json, math, os, sqlite3, sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from png_read import read
 
@@ -35,7 +38,7 @@ def manifest(d):
     assert on_disk == set(listed), 'files %d, listed %d' % (len(on_disk), len(listed))
     for k, h in listed.items():
         assert hashlib.sha256(open(os.path.join(d, k + '.png'), 'rb').read()).hexdigest() == h, k
-    assert m['tiles_written'] == len(listed)
+    assert m['tiles_written'] + m.get('normal_tiles_written', 0) == len(listed)
     return m
 
 
@@ -49,19 +52,40 @@ def window(tile, win):
             assert a == b, 'pixel %d,%d: %r != %r' % (x, y, a, b)
 
 
-def parent(d, z, x, y):
+def core(path, S, P):
+    """The S x S pixels of a tile file (without its halo), RGBA bytes."""
+    side, _, px = rgba(path)
+    assert side == S + 2 * P, (path, side)
+    if not P:
+        return px
+    return b''.join(px[4 * ((P + j) * side + P):4 * ((P + j) * side + P + S)] for j in range(S))
+
+
+def normal_px(px):
+    """The box filter of four RGBA normal pixels (cli/tiles.c box_rect, layer 1)."""
+    A = sum(v[3] for v in px)
+    if A == 0:
+        return (0, 0, 0, 0)
+    s = [sum(v[3] * (2 * v[k] - 255) for v in px) for k in range(3)]
+    ln = math.sqrt(float(s[0]) * float(s[0]) + float(s[1]) * float(s[1]) + float(s[2]) * float(s[2]))
+    out = tuple(min(255, max(0, int(math.floor((s[k] / ln * 0.5 + 0.5) * 255.0 + 0.5)))) for k in range(3))
+    return out + ((A + 2) >> 2,)
+
+
+def parent(d, z, x, y, layer=''):
     m = json.load(open(os.path.join(d, 'tiles.json')))
-    S = m['tile_size']
+    S, P = m['tile_size'], m.get('halo', 0)
     tms = m['scheme'] == 'tms'
+    suf = '_n' if layer == 'n' else ''
     def path(z, x, y):
         yy = (1 << z) - 1 - y if tms else y
-        return os.path.join(d, str(z), str(x), '%d.png' % yy)
-    _, _, p = rgba(path(z, x, y))
+        return os.path.join(d, str(z), str(x), '%d%s.png' % (yy, suf))
+    p = core(path(z, x, y), S, P)
     h = S // 2
     for q in range(4):
         cx, cy = 2 * x + (q & 1), 2 * y + (q >> 1)
         cp = path(z + 1, cx, cy)
-        c = rgba(cp)[2] if os.path.exists(cp) else None
+        c = core(cp, S, P) if os.path.exists(cp) else None
         for j in range(h):
             for i in range(h):
                 o = 4 * ((((q >> 1) * h + j) * S) + (q & 1) * h + i)
@@ -71,11 +95,69 @@ def parent(d, z, x, y):
                 px = [c[4 * ((2 * j + dy) * S + 2 * i + dx):4 * ((2 * j + dy) * S + 2 * i + dx) + 4]
                       for dy in (0, 1) for dx in (0, 1)]
                 A = sum(v[3] for v in px)
-                if A == 0:
+                if suf:
+                    want = normal_px(px)
+                elif A == 0:
                     want = (0, 0, 0, 0)
                 else:
                     want = tuple((sum(v[k] * v[3] for v in px) + A // 2) // A for k in range(3)) + ((A + 2) >> 2,)
                 assert tuple(p[o:o + 4]) == want, 'tile %d/%d/%d pixel %d: %r != %r' % (z, x, y, o // 4, tuple(p[o:o + 4]), want)
+
+
+def halo(d):
+    m = json.load(open(os.path.join(d, 'tiles.json')))
+    S, P, zmax = m['tile_size'], m['halo'], m['levels']['max']
+    W, H = m['image']['width'], m['image']['height']
+    tms = m['scheme'] == 'tms'
+    assert P > 0
+    cache = {}
+    def tile(z, x, y, suf):
+        yy = (1 << z) - 1 - y if tms else y
+        k = (z, x, y, suf)
+        if k not in cache:
+            p = os.path.join(d, str(z), str(x), '%d%s.png' % (yy, suf))
+            cache[k] = rgba(p)[2] if os.path.exists(p) else None
+        return cache[k]
+    side = S + 2 * P
+    n_cmp = 0
+    for key in m['tiles']:
+        z, x, yy = key.split('/')
+        suf = '_n' if yy.endswith('_n') else ''
+        z, x, y = int(z), int(x), int(yy[:-2] if suf else yy)
+        if tms:
+            y = (1 << z) - 1 - y
+        t = tile(z, x, y, suf)
+        k = zmax - z
+        lw, lh = -(-W // (1 << k)), -(-H // (1 << k))
+        for j in range(side):
+            for i in range(side):
+                if P <= i < P + S and P <= j < P + S:
+                    continue
+                X, Y = x * S + i - P, y * S + j - P
+                got = t[4 * (j * side + i):4 * (j * side + i) + 4]
+                if X < 0 or Y < 0 or X >= lw or Y >= lh:
+                    assert got == b'\0\0\0\0', 'tile %s halo pixel %d,%d beyond the image: %r' % (key, i, j, got)
+                    continue
+                nb = tile(z, X // S, Y // S, suf)
+                if nb is None:
+                    continue  # a road-free neighbour that is not written
+                ii, jj = X % S + P, Y % S + P
+                want = nb[4 * (jj * side + ii):4 * (jj * side + ii) + 4]
+                assert got == want, 'tile %s halo pixel %d,%d: %r != neighbour %r' % (key, i, j, got, want)
+                n_cmp += 1
+    assert n_cmp > 0
+    print('halo: %d pixels equal their neighbour tile\'s' % n_cmp)
+
+
+def normal_window(tile, win):
+    tw, th, t = rgba(tile)
+    ww, wh, ch, w = read(win)
+    assert ch == 3
+    for y in range(th):
+        for x in range(tw):
+            a = t[4 * (y * tw + x):4 * (y * tw + x) + 4]
+            b = bytes(w[3 * (y * ww + x):3 * (y * ww + x) + 3]) + b'\xff' if x < ww and y < wh else b'\0\0\0\0'
+            assert a == b, 'pixel %d,%d: %r != %r' % (x, y, a, b)
 
 
 def sparse(d, pgm):
@@ -127,7 +209,9 @@ if __name__ == '__main__':
     c, a = sys.argv[1], sys.argv[2:]
     if c == 'manifest': manifest(a[0])
     elif c == 'window': window(a[0], a[1])
-    elif c == 'parent': parent(a[0], int(a[1]), int(a[2]), int(a[3]))
+    elif c == 'parent': parent(a[0], int(a[1]), int(a[2]), int(a[3]), *a[4:])
+    elif c == 'halo': halo(a[0])
+    elif c == 'normal_window': normal_window(a[0], a[1])
     elif c == 'sparse': sparse(a[0], a[1])
     elif c == 'mbtiles': mbtiles(a[0], a[1])
     else: sys.exit('unknown check ' + c)
