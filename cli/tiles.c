@@ -33,6 +33,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -157,6 +158,7 @@ typedef struct run {
     uint32_t fw, fh, S, T, zmax, zd;
     uint32_t P, side;   /* halo, and a written tile's side S + 2P */
     int layers;         /* 1, or 2 with --normals (layer 1: the normal map) */
+    unsigned threads;   /* the splat's thread count (the normal map's too) */
     uint64_t nx, ny;    /* finest tiles per row, column */
     uint64_t lo, hi;    /* this run's finest tiles: Morton ranks [lo, hi) */
     table tab;
@@ -322,8 +324,9 @@ static int decode_tile(const uint8_t *p, size_t n, uint32_t S, uint8_t *rgba)
  * Colour (layer 0): alpha the rounded mean, colour the alpha-weighted mean
  * (rounded; all four opaque: (c0 + c1 + c2 + c3 + 2) / 4). Normal map
  * (layer 1): the four decoded vectors (2b - 255 per component), weighted
- * by alpha, summed, renormalised and encoded again as
- * floor((n / 2 + 1/2) * 255 + 1/2); alpha as for the colour. */
+ * by alpha, summed (s), renormalised and encoded again as
+ * floor(s_k * (127.5 / |s|) + 128) = round((n / 2 + 1/2) * 255) in double
+ * arithmetic, in this order; alpha as for the colour. */
 static void box_rect(int layer, const uint8_t *c, uint32_t cw, uint32_t ch, size_t cstride, uint8_t *o,
                      size_t ostride)
 {
@@ -335,15 +338,17 @@ static void box_rect(int layer, const uint8_t *c, uint32_t cw, uint32_t ch, size
             if (A == 0) {
                 memset(op, 0, 4);
             } else if (layer) {
-                long v[3];
+                double v[3];
                 for (int k = 0; k < 3; k++)
-                    v[k] = (long)a0 * (2 * r0[k] - 255) + (long)a1 * (2 * r0[4 + k] - 255) +
-                           (long)a2 * (2 * r1[k] - 255) + (long)a3 * (2 * r1[4 + k] - 255);
-                double len = sqrt((double)v[0] * (double)v[0] + (double)v[1] * (double)v[1] + (double)v[2] * (double)v[2]);
+                    v[k] = (double)((long)a0 * (2 * r0[k] - 255) + (long)a1 * (2 * r0[4 + k] - 255) +
+                                    (long)a2 * (2 * r1[k] - 255) + (long)a3 * (2 * r1[4 + k] - 255));
+                double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                double f = len > 0 ? 127.5 / len : 0; /* byte = n * 127.5 + 128, floored */
                 for (int k = 0; k < 3; k++) {
-                    double b = len > 0 ? floor(((double)v[k] / len * 0.5 + 0.5) * 255.0 + 0.5) : (k == 2 ? 255 : 128);
-                    op[k] = (uint8_t)(b < 0 ? 0 : b > 255 ? 255 : b);
+                    double b = v[k] * f + 128.0;
+                    op[k] = (uint8_t)(b < 0 ? 0 : b >= 255 ? 255 : (int)b);
                 }
+                if (len == 0) op[2] = 255;
                 op[3] = (uint8_t)((A + 2) >> 2);
             } else if (A == 4 * 255) {
                 for (int k = 0; k < 3; k++) op[k] = (uint8_t)((r0[k] + r0[4 + k] + r1[k] + r1[4 + k] + 2) >> 2);
@@ -355,6 +360,67 @@ static void box_rect(int layer, const uint8_t *c, uint32_t cw, uint32_t ch, size
             }
         }
     }
+}
+
+/* rs_normal_window of a window by bands of rows on the splat's thread
+ * count, each thread with its own context (the same bytes for any count). */
+typedef struct nm_job {
+    const run *r;
+    uint32_t x0, y0, w, h, band, next;
+    uint8_t *rgb;
+    pthread_mutex_t mu;
+    int failed;
+    char msg[256];
+} nm_job;
+
+static void *nm_worker(void *arg)
+{
+    nm_job *j = arg;
+    rs_ctx *c = NULL;
+    rs_result e = rs_ctx_create(NULL, NULL, &c);
+    for (;;) {
+        pthread_mutex_lock(&j->mu);
+        uint32_t y = j->next;
+        int stop = j->failed || y >= j->h || e;
+        if (!stop) j->next = j->h - y < j->band ? j->h : y + j->band;
+        if (e && !j->failed) {
+            j->failed = 1;
+            snprintf(j->msg, sizeof j->msg, "%s", rs_strerror(e));
+        }
+        pthread_mutex_unlock(&j->mu);
+        if (stop) break;
+        uint32_t rows = j->h - y < j->band ? j->h - y : j->band;
+        if (rs_normal_window(c, j->r->sp, j->x0, j->y0 + y, j->w, rows, j->rgb + (size_t)y * j->w * 3, (size_t)j->w * 3,
+                             &j->r->a->normal)) {
+            pthread_mutex_lock(&j->mu);
+            if (!j->failed) snprintf(j->msg, sizeof j->msg, "%s", rs_ctx_message(c));
+            j->failed = 1;
+            pthread_mutex_unlock(&j->mu);
+            break;
+        }
+    }
+    rs_ctx_free(c);
+    return NULL;
+}
+
+static int normal_window(const run *r, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h, uint8_t *rgb)
+{
+    nm_job j;
+    memset(&j, 0, sizeof j);
+    j.r = r, j.x0 = x0, j.y0 = y0, j.w = w, j.h = h, j.rgb = rgb;
+    unsigned n = r->threads < 1 ? 1 : r->threads > 64 ? 64 : r->threads;
+    j.band = (h + n - 1) / n;
+    if (j.band < 16) j.band = 16;
+    pthread_mutex_init(&j.mu, NULL);
+    pthread_t t[64];
+    unsigned started = 0;
+    for (unsigned k = 1; k < n && (size_t)k * j.band < h; k++, started++)
+        if (pthread_create(&t[k - 1], NULL, nm_worker, &j)) break;
+    nm_worker(&j);
+    for (unsigned k = 0; k < started; k++) pthread_join(t[k], NULL);
+    pthread_mutex_destroy(&j.mu);
+    if (j.failed) cli_error("normal map: %s", j.msg);
+    return j.failed;
 }
 
 /* Pixels [X0, X0+w) x [Y0, Y0+h) of the finest level's image (w, h <=
@@ -381,10 +447,7 @@ static int finest_rect(run *r, int layer, int64_t X0, int64_t Y0, uint32_t w, ui
         if (cli_splat_run(&job)) return 1;
         if (road_pixels) *road_pixels = job.profile.road_pixels;
     } else {
-        if (rs_normal_window(r->ctx, r->sp, (uint32_t)x0, (uint32_t)y0, cw, chh, r->nrgb, (size_t)cw * 3, &r->a->normal)) {
-            cli_error("normal map: %s", rs_ctx_message(r->ctx));
-            return 1;
-        }
+        if (normal_window(r, (uint32_t)x0, (uint32_t)y0, cw, chh, r->nrgb)) return 1;
         for (size_t i = 0, n = (size_t)cw * chh; i < n; i++) {
             memcpy(r->scratch + 4 * i, r->nrgb + 3 * i, 3);
             r->scratch[4 * i + 3] = 255;
@@ -1279,6 +1342,11 @@ int cli_tiles_main(int argc, char **argv)
 
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     r.sp = sp;
+    {
+        cli_splat_job j0;
+        cli_splat_job_init(&j0, sp, &a.s, 1);
+        r.threads = j0.threads;
+    }
     for (int l = 0; l < r.layers; l++)
         for (uint32_t d = 0; d <= r.zmax; d++)
             if (!(r.bufs[l][d] = malloc((size_t)r.S * r.S * 4)) ||

@@ -103,6 +103,8 @@ for xy in 1,0 2,2; do
 done
 "$BIN" --quiet $O --window 1024,768,176,32 --normal-out "$T/nedge.png" "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
 check "edge normal tile 4,3 = --normal-out window + alpha 0 beyond" $PY normal_window "$T/nd/3/4/3_n.png" "$T/nedge.png"
+"$BIN" tiles --quiet --dense $N --threads 1 "$T/dem.pgm" "$T/roads.txt" "$T/nd1"
+check "--normals: 1 thread = all threads (tiles and manifest)" same_tree "$T/nd" "$T/nd1"
 check "normal parent 2/0/0 = renormalised mean of its children" $PY parent "$T/nd" 2 0 0 n
 check "normal parent 2/2/1 (edge) = renormalised mean of its children" $PY parent "$T/nd" 2 2 1 n
 check "normal parent 0/0/0 = renormalised mean of its children" $PY parent "$T/nd" 0 0 0 n

@@ -66,9 +66,9 @@ def normal_px(px):
     A = sum(v[3] for v in px)
     if A == 0:
         return (0, 0, 0, 0)
-    s = [sum(v[3] * (2 * v[k] - 255) for v in px) for k in range(3)]
-    ln = math.sqrt(float(s[0]) * float(s[0]) + float(s[1]) * float(s[1]) + float(s[2]) * float(s[2]))
-    out = tuple(min(255, max(0, int(math.floor((s[k] / ln * 0.5 + 0.5) * 255.0 + 0.5)))) for k in range(3))
+    s = [float(sum(v[3] * (2 * v[k] - 255) for v in px)) for k in range(3)]
+    f = 127.5 / math.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+    out = tuple(min(255, max(0, math.floor(s[k] * f + 128.0))) for k in range(3))
     return out + ((A + 2) >> 2,)
 
 
