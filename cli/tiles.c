@@ -94,7 +94,8 @@ typedef struct targs {
 
 typedef struct entry {
     uint64_t key;     /* z << 58 | x << 29 | y, +1 (0: empty slot) */
-    uint8_t flag;     /* 'r': written, holds a road; 'w': written, road-free; 'e': road-free, not written */
+    uint8_t flag;     /* 'r': written, holds a road; 'w': written, road-free; 'e': road-free, not written;
+                         'd': written, a terrain-only level-zd tile rendered directly (no subtree) */
     uint8_t checked;  /* 1: the file (and its normal tile) was found to match this run */
     uint8_t has_n;    /* nhash is known (a run with --normals) */
     uint8_t hash[32];
@@ -159,6 +160,15 @@ typedef struct run {
     uint32_t P, side;   /* halo, and a written tile's side S + 2P */
     int layers;         /* 1, or 2 with --normals (layer 1: the normal map) */
     unsigned threads;   /* the splat's thread count (the normal map's too) */
+    /* Terrain-only subtrees (docs/tiles.md, "Sparse levels"): a level-zd tile
+     * whose area holds no road's reach is rendered directly by dsp, the same
+     * splat at T >> (zmax - zd) texels, and its subtree is never rendered. */
+    int route;
+    const rs_splatter *dsp;
+    uint32_t dw, dh;    /* dsp's image: level zd's image size */
+    uint8_t *zfree;     /* per level-zd tile (row-major), 1: no road reaches it */
+    uint64_t zx, zy;    /* level-zd tiles per row, column */
+    uint64_t direct;    /* tiles rendered directly */
     uint64_t nx, ny;    /* finest tiles per row, column */
     uint64_t lo, hi;    /* this run's finest tiles: Morton ranks [lo, hi) */
     table tab;
@@ -366,6 +376,7 @@ static void box_rect(int layer, const uint8_t *c, uint32_t cw, uint32_t ch, size
  * count, each thread with its own context (the same bytes for any count). */
 typedef struct nm_job {
     const run *r;
+    const rs_splatter *sp;
     uint32_t x0, y0, w, h, band, next;
     uint8_t *rgb;
     pthread_mutex_t mu;
@@ -390,7 +401,7 @@ static void *nm_worker(void *arg)
         pthread_mutex_unlock(&j->mu);
         if (stop) break;
         uint32_t rows = j->h - y < j->band ? j->h - y : j->band;
-        if (rs_normal_window(c, j->r->sp, j->x0, j->y0 + y, j->w, rows, j->rgb + (size_t)y * j->w * 3, (size_t)j->w * 3,
+        if (rs_normal_window(c, j->sp, j->x0, j->y0 + y, j->w, rows, j->rgb + (size_t)y * j->w * 3, (size_t)j->w * 3,
                              &j->r->a->normal)) {
             pthread_mutex_lock(&j->mu);
             if (!j->failed) snprintf(j->msg, sizeof j->msg, "%s", rs_ctx_message(c));
@@ -403,11 +414,12 @@ static void *nm_worker(void *arg)
     return NULL;
 }
 
-static int normal_window(const run *r, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h, uint8_t *rgb)
+static int normal_window(const run *r, const rs_splatter *sp, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                         uint8_t *rgb)
 {
     nm_job j;
     memset(&j, 0, sizeof j);
-    j.r = r, j.x0 = x0, j.y0 = y0, j.w = w, j.h = h, j.rgb = rgb;
+    j.r = r, j.sp = sp, j.x0 = x0, j.y0 = y0, j.w = w, j.h = h, j.rgb = rgb;
     unsigned n = r->threads < 1 ? 1 : r->threads > 64 ? 64 : r->threads;
     j.band = (h + n - 1) / n;
     if (j.band < 16) j.band = 16;
@@ -428,18 +440,21 @@ static int normal_window(const run *r, uint32_t x0, uint32_t y0, uint32_t w, uin
  * transparent (0,0,0,0) beyond the image. Layer 0: the splat (with
  * *road_pixels, when not NULL, its road pixel count); layer 1: the normal
  * map, alpha 255. */
-static int finest_rect(run *r, int layer, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out, size_t ostride,
-                       uint64_t *road_pixels)
+static int splat_rect(run *r, int direct, int layer, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out,
+                      size_t ostride, uint64_t *road_pixels)
 {
+    const rs_splatter *sp = direct ? r->dsp : r->sp;
+    int64_t W = direct ? r->dw : r->fw, Hh = direct ? r->dh : r->fh;
     int64_t x0 = X0 < 0 ? 0 : X0, y0 = Y0 < 0 ? 0 : Y0;
-    int64_t x1 = X0 + w < (int64_t)r->fw ? X0 + w : (int64_t)r->fw, y1 = Y0 + h < (int64_t)r->fh ? Y0 + h : (int64_t)r->fh;
+    int64_t x1 = X0 + w < W ? X0 + w : W, y1 = Y0 + h < Hh ? Y0 + h : Hh;
     if (road_pixels) *road_pixels = 0;
     for (uint32_t j = 0; j < h; j++) memset(out + (size_t)j * ostride * 4, 0, (size_t)w * 4);
     if (x0 >= x1 || y0 >= y1) return 0;
     uint32_t cw = (uint32_t)(x1 - x0), chh = (uint32_t)(y1 - y0);
     if (layer == 0) {
         cli_splat_job job;
-        cli_splat_job_init(&job, r->sp, &r->a->s, 1);
+        cli_splat_job_init(&job, sp, &r->a->s, 1);
+        if (direct) job.texels = r->T >> (r->zmax - r->zd);
         job.x0 = (uint32_t)x0, job.y0 = (uint32_t)y0, job.w = cw, job.h = chh;
         job.rgba = r->scratch;
         job.nodata = r->in->nodata;
@@ -447,7 +462,7 @@ static int finest_rect(run *r, int layer, int64_t X0, int64_t Y0, uint32_t w, ui
         if (cli_splat_run(&job)) return 1;
         if (road_pixels) *road_pixels = job.profile.road_pixels;
     } else {
-        if (normal_window(r, (uint32_t)x0, (uint32_t)y0, cw, chh, r->nrgb)) return 1;
+        if (normal_window(r, sp, (uint32_t)x0, (uint32_t)y0, cw, chh, r->nrgb)) return 1;
         for (size_t i = 0, n = (size_t)cw * chh; i < n; i++) {
             memcpy(r->scratch + 4 * i, r->nrgb + 3 * i, 3);
             r->scratch[4 * i + 3] = 255;
@@ -458,6 +473,21 @@ static int finest_rect(run *r, int layer, int64_t X0, int64_t Y0, uint32_t w, ui
                (size_t)cw * 4);
     return 0;
 }
+
+static int finest_rect(run *r, int layer, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out, size_t ostride,
+                       uint64_t *road_pixels)
+{
+    return splat_rect(r, 0, layer, X0, Y0, w, h, out, ostride, road_pixels);
+}
+
+/* Level-zd tile (x, y) is terrain only, rendered directly. */
+static int zone_free(const run *r, uint64_t x, uint64_t y)
+{
+    return r->route && x < r->zx && y < r->zy && r->zfree[y * r->zx + x];
+}
+
+static int level_blocks(run *r, int layer, uint32_t z, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out,
+                        size_t ostride);
 
 /* Pixels [X0, X0+w) x [Y0, Y0+h) of level z's image (the finest image
  * box-filtered zmax - z times, transparent beyond it) into out (rows
@@ -473,6 +503,33 @@ static int level_rect(run *r, int layer, uint32_t z, int64_t X0, int64_t Y0, uin
         for (uint32_t j = 0; j < h; j++) memset(out + (size_t)j * ostride * 4, 0, (size_t)w * 4);
         return 0;
     }
+    if (r->route && z == r->zd) { /* piece by piece: a terrain-only tile's pixels are its direct render */
+        int64_t S = r->S;
+        for (int64_t ty = (Y0 < 0 ? 0 : Y0) / S; ty * S < Y0 + h && ty * S < lh; ty++)
+            for (int64_t tx = (X0 < 0 ? 0 : X0) / S; tx * S < X0 + w && tx * S < lw; tx++) {
+                int64_t px0 = tx * S > X0 ? tx * S : X0, py0 = ty * S > Y0 ? ty * S : Y0;
+                int64_t px1 = (tx + 1) * S < X0 + w ? (tx + 1) * S : X0 + w;
+                int64_t py1 = (ty + 1) * S < Y0 + h ? (ty + 1) * S : Y0 + h;
+                uint8_t *o = out + ((size_t)(py0 - Y0) * ostride + (size_t)(px0 - X0)) * 4;
+                int bad = zone_free(r, (uint64_t)tx, (uint64_t)ty)
+                              ? splat_rect(r, 1, layer, px0, py0, (uint32_t)(px1 - px0), (uint32_t)(py1 - py0), o, ostride, NULL)
+                              : level_blocks(r, layer, z, px0, py0, (uint32_t)(px1 - px0), (uint32_t)(py1 - py0), o, ostride);
+                if (bad) return 1;
+            }
+        /* the parts beyond the image: transparent */
+        for (uint32_t j = 0; j < h; j++)
+            for (uint32_t i = 0; i < w; i++)
+                if (X0 + i < 0 || Y0 + j < 0 || X0 + i >= lw || Y0 + j >= lh) memset(out + ((size_t)j * ostride + i) * 4, 0, 4);
+        return 0;
+    }
+    return level_blocks(r, layer, z, X0, Y0, w, h, out, ostride);
+}
+
+/* level_rect by blocks of at most S/2 x S/2, each the box filter of the
+ * 2x block of level z + 1. */
+static int level_blocks(run *r, int layer, uint32_t z, int64_t X0, int64_t Y0, uint32_t w, uint32_t h, uint8_t *out,
+                        size_t ostride)
+{
     uint32_t H = r->S / 2;
     uint8_t *cb = r->lbuf[layer][z + 1];
     for (uint32_t by = 0; by < h; by += H)
@@ -593,13 +650,13 @@ static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, co
 }
 
 /* Store every layer of a finished tile, then log it. */
-static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *core, int has_road)
+static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *core, int flag)
 {
     uint8_t hash[32], nhash[32];
     if (store_layer(r, z, x, y, 0, core[0], hash)) return 1;
     if (r->layers > 1 && store_layer(r, z, x, y, 1, core[1], nhash)) return 1;
     r->written++;
-    return log_line(r, z, x, y, has_road ? 'r' : 'w', hash, r->layers > 1 ? nhash : NULL);
+    return log_line(r, z, x, y, flag, hash, r->layers > 1 ? nhash : NULL);
 }
 
 /* A whole file, quietly: 0, or 1 (missing, unreadable). */
@@ -669,13 +726,13 @@ static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, 
 static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out, int need, int record, int *has_road)
 {
     entry *e = tfind(&r->tab, tkey(z, x, y));
-    if (e && record && (e->flag == 'r' || e->flag == 'w')) {
+    if (e && record && (e->flag == 'r' || e->flag == 'w' || e->flag == 'd')) {
         int ok = logged_file_ok(r, z, x, y, e, need ? out : NULL);
         if (ok < 0) return 1;
         if (ok) {
             *has_road = e->flag == 'r';
             r->kept++;
-            if (!need && r->a->resume && z < r->zmax) {
+            if (!need && r->a->resume && z < r->zmax && e->flag != 'd') {
                 /* --resume: a kept tile's subtree is checked too (a child lost
                  * under an intact parent is made again) */
                 uint32_t d = r->zmax - z - 1;
@@ -700,7 +757,19 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
         }
         record = 0; /* road-free: its pixels again, nothing written */
     }
-    if (z == r->zmax) {
+    if (r->route && z == r->zd && zone_free(r, x, y)) {
+        /* terrain only: this level's pixels rendered directly, no subtree */
+        for (int l = 0; l < r->layers; l++)
+            if (splat_rect(r, 1, l, (int64_t)(x * r->S), (int64_t)(y * r->S), r->S, r->S, out[l], r->S, NULL)) return 1;
+        *has_road = 0;
+        r->direct++;
+        if (record) {
+            r->done_finest += finest_count(r, z, x, y);
+            cli_progress_cb(&r->prog, r->done_finest, r->total_finest);
+            return store_tile(r, z, x, y, out, 'd');
+        }
+        return 0;
+    } else if (z == r->zmax) {
         if (record && r->a->from_children && !e) {
             if (tile_path(r, z, x, y, 0, 0)) return 1;
             cli_error("--from-children: %s is missing or differs from its log: run its shard (with --resume) first",
@@ -735,7 +804,7 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
         }
         return 0;
     }
-    if (z <= r->zd || *has_road) return store_tile(r, z, x, y, out, *has_road);
+    if (z <= r->zd || *has_road) return store_tile(r, z, x, y, out, *has_road ? 'r' : 'w');
     r->road_free++;
     return log_line(r, z, x, y, 'e', NULL, NULL);
 }
@@ -747,6 +816,8 @@ static int visit(run *r, uint32_t z, uint64_t x, uint64_t y, uint64_t rank)
 {
     uint64_t cnt = finest_count(r, z, x, y);
     if (!cnt || rank + cnt <= r->lo || rank >= r->hi) return 0;
+    if (z == r->zd && zone_free(r, x, y) && !(rank >= r->lo && rank + cnt <= r->hi))
+        return 0; /* a terrain-only tile across shards: --from-children renders it */
     if (rank >= r->lo && rank + cnt <= r->hi) {
         int hr;
         uint8_t *out[2] = { r->bufs[0][r->zmax - z], r->bufs[1][r->zmax - z] };
@@ -959,7 +1030,7 @@ static void fingerprint(const targs *a, const input_hash *ih, int nin, char hex[
     cli_sha256_ctx s;
     char line[160];
     cli_sha256_init(&s);
-    int n = snprintf(line, sizeof line, "roadsplat-tiles 1\ntile_size %u\nscheme %s\nformat %s\n", a->tile,
+    int n = snprintf(line, sizeof line, "roadsplat-tiles 2\ntile_size %u\nscheme %s\nformat %s\n", a->tile,
                      a->tms ? "tms" : "xyz", a->mbtiles ? "mbtiles" : "png");
     cli_sha256_update(&s, line, (size_t)n);
     for (int k = 0; k < a->nopt; k++) {
@@ -1019,7 +1090,7 @@ static int load_logs(run *r, const char *dir)
             size_t L = strlen(line);
             if (!L || line[L - 1] != '\n') break; /* cut short */
             int nf = sscanf(line, "%u %llu %llu %c %70s %70s", &z, &x, &y, &flag, hex, nhex);
-            if ((nf != 5 && nf != 6) || z > r->zmax || (flag != 'r' && flag != 'w' && flag != 'e') ||
+            if ((nf != 5 && nf != 6) || z > r->zmax || (flag != 'r' && flag != 'w' && flag != 'e' && flag != 'd') ||
                 !exists(r, z, x, y))
                 continue;
             int okh = flag == 'e' || (strlen(hex) == 64 && (nf == 5 || strlen(nhex) == 64));
@@ -1130,8 +1201,12 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
                "the %u x %u image, pixels beyond it transparent (0,0,0,0); a tile of level z < %u is the 2x2 box "
                "filter of its four children (alpha the rounded mean, colour the alpha-weighted rounded mean); "
                "levels 0..%u are complete, a tile of a finer level is written only when it holds a road (a viewer "
-               "over-zooms its parent); PNG RGB when every pixel is opaque, else RGBA%s\",\n",
+               "over-zooms its parent)%s; PNG RGB when every pixel is opaque, else RGBA%s\",\n",
             r->zmax, r->S, r->S, r->S, r->S, r->fw, r->fh, r->zmax, r->zd,
+            r->route ? "; a tile of level dense_max whose area, grown by each road's reach and 2 DEM cells, meets no "
+                       "road's bounding box is terrain only: it is rendered directly at its own pixel size (the same "
+                       "splat at texels / 2^(max - dense_max)) and nothing below it is rendered or written"
+                     : "",
             r->P ? "; with halo P, a tile's file is (S + 2P) square: the tile's S x S pixels framed by the P pixels "
                    "around them of the same level's image (= its neighbour tiles' pixels; transparent beyond the image)"
                  : "");
@@ -1185,6 +1260,106 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
     return ferror(f) != 0;
 }
 
+/* ---- terrain-only subtrees ------------------------------------------------------- */
+
+/* The road-free level-zd tiles (r->zfree) and the direct splatter: a
+ * level-zd tile is terrain only when its area meets no road's box, the
+ * bounding box of the road's points grown by its reach (half width or its
+ * farthest line, plus casing, plus the largest marking of the atlas, plus
+ * its explicit markings' |t| and size) and a margin of 2 DEM cells. Only
+ * when T is divisible by 2^(zmax - zd) (the direct splat's texel count is
+ * a whole number), and not with --dense, --terrain-texture, --normals or a
+ * DEM with nodata: a texture's detail, or the normals of rough terrain,
+ * rendered at the coarser size are not the mean of the finer pixels (mean
+ * differences of 10 and 9 of 255 measured, against 0.2-0.4 for the tint
+ * and hillshade; docs/tiles.md), and the nodata mask is per pixel. 0, or 1
+ * after a message. */
+static int route_setup(run *r, rs_ctx *ctx, const cli_splat_input *in, const rs_road_grid *grid, rs_splatter **dsp)
+{
+    const targs *a = r->a;
+    uint32_t k = r->zmax - r->zd;
+    if (a->dense || k == 0 || k > 20 || r->T % (1u << k)) return 0;
+    rs_splat_options o = a->s.o;
+    if (o.surface.terrain_texture || a->normals || in->nodata) return 0; /* docs/tiles.md, "Sparse levels" */
+    o.texels = r->T >> k;
+    o.progress = NULL;
+    o.progress_user = NULL;
+    if (rs_splatter_create(ctx, in->dem, NULL, grid, &o, dsp) && rs_splatter_create(ctx, in->dem, in->roads, NULL, &o, dsp)) {
+        cli_error("%s: %s", a->roads, rs_ctx_message(ctx));
+        return 1;
+    }
+    rs_splatter_size(*dsp, &r->dw, &r->dh);
+    uint64_t sk = (uint64_t)1 << k;
+    if (r->dw != (r->fw + sk - 1) / sk || r->dh != (r->fh + sk - 1) / sk) return 0; /* not the same grid: no route */
+    r->zx = (r->nx + sk - 1) / sk;
+    r->zy = (r->ny + sk - 1) / sk;
+    if (!(r->zfree = malloc(r->zx * r->zy))) {
+        cli_error("out of memory");
+        return 1;
+    }
+    memset(r->zfree, 1, r->zx * r->zy);
+    /* the largest marking of the atlas */
+    double mark_max = 0;
+    rs_atlas *own = NULL;
+    const rs_atlas *atlas = in->atlas;
+    if (!o.markings.disable) {
+        if (!atlas && !rs_atlas_default(ctx, &own)) atlas = own;
+        for (size_t i = 0, n = atlas ? rs_atlas_count(atlas) : 0; i < n; i++) {
+            double L = 0, W = 0;
+            if (!rs_atlas_get(atlas, i, NULL, &L, &W, NULL, NULL)) mark_max = fmax(mark_max, fmax(L, W));
+        }
+        if (!atlas) mark_max = 1e9; /* unknown: no route */
+    }
+    rs_atlas_free(ctx, own);
+    rs_dem_frame fr;
+    rs_dem_get_frame(in->dem, &fr);
+    double cs = fr.cell_size > 0 ? fr.cell_size : 1, tile_m = cs / r->T * (double)r->S * (double)sk;
+    size_t nroads = rs_roads_count(in->roads), nmarks = o.markings.disable ? 0 : rs_roads_mark_count(in->roads);
+    double *extra = calloc(nroads ? nroads : 1, sizeof *extra);
+    if (!extra) {
+        cli_error("out of memory");
+        return 1;
+    }
+    for (size_t m = 0; m < nmarks; m++) {
+        rs_mark mk;
+        if (rs_roads_get_mark(in->roads, m, &mk) || mk.road >= nroads) continue;
+        double e = fabs(mk.t) + fmax(fmax(mk.length, mk.width), mark_max);
+        if (e > extra[mk.road]) extra[mk.road] = e;
+    }
+    for (size_t i = 0; i < nroads; i++) {
+        const double *xy;
+        size_t n;
+        double width = 0;
+        if (rs_roads_get(in->roads, i, NULL, &width, &xy, &n) || !n) continue;
+        double reach = width / 2;
+        rs_style st;
+        if (!o.style.disable && !rs_road_style(ctx, in->roads, i, o.style.styles, o.style.profile, &st)) {
+            for (uint32_t l = 0; l < st.line_count; l++) reach = fmax(reach, fabs(st.line[l].offset) + st.line[l].width / 2);
+            reach += st.casing_width;
+        }
+        reach += mark_max + 2 * cs;
+        if (extra[i] + 2 * cs > reach) reach = extra[i] + 2 * cs;
+        double x0 = xy[0], x1 = xy[0], y0 = xy[1], y1 = xy[1];
+        for (size_t j = 1; j < n; j++) {
+            x0 = fmin(x0, xy[2 * j]), x1 = fmax(x1, xy[2 * j]);
+            y0 = fmin(y0, xy[2 * j + 1]), y1 = fmax(y1, xy[2 * j + 1]);
+        }
+        /* local metres from sample (0,0), in level-zd tiles */
+        double tx0 = floor((x0 - fr.origin_x - reach) / tile_m), tx1 = floor((x1 - fr.origin_x + reach) / tile_m);
+        double ty0 = floor((y0 - fr.origin_y - reach) / tile_m), ty1 = floor((y1 - fr.origin_y + reach) / tile_m);
+        if (!(tx1 >= 0 && ty1 >= 0 && tx0 < (double)r->zx && ty0 < (double)r->zy)) {
+            if (isnan(tx0) || isnan(tx1) || isnan(ty0) || isnan(ty1)) memset(r->zfree, 0, r->zx * r->zy);
+            continue;
+        }
+        uint64_t a0 = tx0 < 0 ? 0 : (uint64_t)tx0, a1 = tx1 >= (double)r->zx ? r->zx - 1 : (uint64_t)tx1;
+        uint64_t b0 = ty0 < 0 ? 0 : (uint64_t)ty0, b1 = ty1 >= (double)r->zy ? r->zy - 1 : (uint64_t)ty1;
+        for (uint64_t ty = b0; ty <= b1; ty++) memset(r->zfree + ty * r->zx + a0, 0, a1 - a0 + 1);
+    }
+    free(extra);
+    r->route = 1;
+    return 0;
+}
+
 /* ---- main ------------------------------------------------------------------------ */
 
 static uint32_t floor_log2(uint32_t v)
@@ -1212,7 +1387,7 @@ int cli_tiles_main(int argc, char **argv)
     rs_ctx *ctx = NULL;
     cli_splat_input in;
     rs_road_grid *grid = NULL;
-    rs_splatter *sp = NULL;
+    rs_splatter *sp = NULL, *dsp = NULL;
     run r;
     cli_out mout, mani;
     input_hash ih[7];
@@ -1342,6 +1517,8 @@ int cli_tiles_main(int argc, char **argv)
 
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     r.sp = sp;
+    if (route_setup(&r, ctx, &in, grid, &dsp)) goto done;
+    r.dsp = dsp;
     {
         cli_splat_job j0;
         cli_splat_job_init(&j0, sp, &a.s, 1);
@@ -1406,9 +1583,10 @@ int cli_tiles_main(int argc, char **argv)
     }
     if (!a.quiet)
         fprintf(stderr,
-                "roadsplat: tiles: %llu rendered, %llu written, %llu road-free not written, %llu kept from earlier runs%s\n",
+                "roadsplat: tiles: %llu rendered, %llu written, %llu road-free not written, %llu kept from earlier runs, "
+                "%llu terrain-only rendered at level %u%s\n",
                 (unsigned long long)r.rendered, (unsigned long long)r.written, (unsigned long long)r.road_free,
-                (unsigned long long)r.kept,
+                (unsigned long long)r.kept, (unsigned long long)r.direct, r.zd,
                 a.sharded ? "; run --from-children once every shard is done" : "");
     rc = 0;
 done:
@@ -1426,6 +1604,8 @@ done:
     free(r.log_path);
     free(r.tab.e);
     free(logdir);
+    rs_splatter_free(ctx, dsp);
+    free(r.zfree);
     rs_splatter_free(ctx, sp);
     rs_road_grid_free(ctx, grid);
     cli_splat_input_free(ctx, &in);

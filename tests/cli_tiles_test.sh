@@ -131,7 +131,30 @@ for args in "--halo 129" "--halo -1" "--normal-strength 0 --normals" "--normal-c
     check "tiles $args: exit 1, one line" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1"
 done
 
-# 8. a large pyramid (2049 x 2049 cells at 16 texels: 32784 x 32784 pixels, 4.3 GB as
+# 8. terrain-only subtrees: a 513^2-cell DEM at 4 texels (2048^2 pixels, levels 0..3, complete
+# up to 1) with roads in one corner: 3 of the 4 level-1 tiles are rendered directly at 1 texel
+python3 -c "
+import sys
+W = 513
+sys.stdout.buffer.write(b'P5\n%d %d\n255\n' % (W, W) + bytes(((i % W) // 16 + (i // W) // 24) % 200 for i in range(W * W)))" >"$T/r.pgm"
+awk 'BEGIN { for (i = 0; i < 3; i++) { printf "road h%d width 6\n10 %d\n120 %d\nend\nroad v%d width 6\n%d 10\n%d 120\nend\n", i, 20 + 40 * i, 20 + 40 * i, i, 20 + 40 * i, 20 + 40 * i } }' >"$T/r.txt"
+R="--texels 4"
+check "terrain-only run exits 0" sh -c "'$BIN' tiles $R '$T/r.pgm' '$T/r.txt' '$T/rt' 2>'$T/e' && grep -q ', 3 terrain-only rendered at level 1' '$T/e'"
+"$BIN" tiles --quiet --dense $R "$T/r.pgm" "$T/r.txt" "$T/rd"
+"$BIN" --quiet --texels 1 --window 256,0,256,256 "$T/r.pgm" "$T/r.txt" "$T/r1.png"
+check "terrain-only tile 1/1/0 = the 1-texel splat's window" cmp -s "$T/r1.png" "$T/rt/1/1/0.png"
+"$BIN" --quiet $R --weight-out "$T/rw.pgm" "$T/r.pgm" "$T/r.txt" "$T/r.png"
+check "terrain-only: written iff dense level or holds a road" $PY sparse "$T/rt" "$T/rw.pgm"
+check "terrain-only: finer tiles = the dense run's" sh -c "cd '$T/rt' && for f in 2/*/*.png 3/*/*.png; do cmp -s \$f '$T/rd/'\$f || exit 1; done"
+check "terrain-only: seam against the box-filtered tiles < 1/255" $PY seam "$T/rt" "$T/rd" 1 1.0
+check "terrain-only: the manifest states the rule" grep -q 'terrain only: it is rendered directly' "$T/rt/tiles.json"
+for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $R "$T/r.pgm" "$T/r.txt" "$T/rsh" || bad "terrain-only shard $i"; done
+check "terrain-only: 3 shards + merge = one run" sh -c "'$BIN' tiles --quiet --from-children $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
+rm -f "$T/rsh/1/1/1.png" "$T/rsh/tiles.json"
+check "terrain-only: --resume remakes a lost direct tile" sh -c "'$BIN' tiles --quiet --resume $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
+check "terrain-only with --halo 3: every halo pixel = the neighbour's" sh -c "'$BIN' tiles --quiet --halo 3 $R '$T/r.pgm' '$T/r.txt' '$T/rh' && $PY halo '$T/rh'"
+
+# 9. a large pyramid (2049 x 2049 cells at 16 texels: 32784 x 32784 pixels, 4.3 GB as
 # RGBA) within a fixed memory bound: a city of roads in one corner, the rest terrain
 if [ -x /usr/bin/time ]; then
     python3 -c "

@@ -6,6 +6,7 @@ Python; PNGs through tests/png_read.py, independent of cli/png.c).
   tiles_check.py parent OUTDIR Z X Y [n]  tile = 2x2 box filter of its children on disk
                                           (n: the normal layer, the renormalised vector mean)
   tiles_check.py halo OUTDIR              every halo pixel = the neighbour tile's pixel
+  tiles_check.py seam A B Z LIMIT         level-Z tiles of A that differ from B's: mean |diff| < LIMIT
   tiles_check.py normal_window TILE WIN.png  normal TILE = WIN, alpha 0 beyond it
   tiles_check.py sparse OUTDIR WEIGHT.pgm tiles finer than dense_max exist iff they hold a road
   tiles_check.py mbtiles FILE OUTDIR      the MBTiles rows (TMS) = the folder's tiles
@@ -160,6 +161,25 @@ def normal_window(tile, win):
             assert a == b, 'pixel %d,%d: %r != %r' % (x, y, a, b)
 
 
+def seam(a, b, z, limit):
+    """Tiles of level z in a and b that differ (a's terrain-only tiles rendered directly, b's box-filtered):
+    the mean and max per-channel difference over their opaque pixels; the mean must stay below limit."""
+    m = json.load(open(os.path.join(a, 'tiles.json')))
+    tot = n = mx = nd = 0
+    for key in m['tiles']:
+        if not key.startswith('%d/' % z) or key.endswith('_n'):
+            continue
+        pa, pb = os.path.join(a, key + '.png'), os.path.join(b, key + '.png')
+        if open(pa, 'rb').read() == open(pb, 'rb').read():
+            continue
+        p, q = rgba(pa)[2], rgba(pb)[2]
+        d = [abs(p[i] - q[i]) for i in range(len(p)) if i % 4 != 3 and p[i | 3] and q[i | 3]]
+        tot, n, mx, nd = tot + sum(d), n + len(d), max([mx] + d), nd + 1
+    assert nd > 0, 'no tile of level %d differs' % z
+    print('seam: %d tiles of level %d rendered directly: mean |difference| %.3f, max %d (of 255)' % (nd, z, tot / n, mx))
+    assert tot / n < limit, tot / n
+
+
 def sparse(d, pgm):
     m = json.load(open(os.path.join(d, 'tiles.json')))
     S, zmax, zd = m['tile_size'], m['levels']['max'], m['levels']['dense_max']
@@ -211,6 +231,7 @@ if __name__ == '__main__':
     elif c == 'window': window(a[0], a[1])
     elif c == 'parent': parent(a[0], int(a[1]), int(a[2]), int(a[3]), *a[4:])
     elif c == 'halo': halo(a[0])
+    elif c == 'seam': seam(a[0], a[1], int(a[2]), float(a[3]))
     elif c == 'normal_window': normal_window(a[0], a[1])
     elif c == 'sparse': sparse(a[0], a[1])
     elif c == 'mbtiles': mbtiles(a[0], a[1])
