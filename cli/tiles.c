@@ -65,6 +65,8 @@ static const char tiles_usage[] =
     "                     pixels (S + 2 PX square; 0..128, default 0)\n"
     "  --dense            write every tile (default: on levels finer than a DEM\n"
     "                     cell, only tiles that hold a road)\n"
+    "  --render-all       render every finest tile, also under terrain-only tiles\n"
+    "                     (default: those are rendered at their own level's size)\n"
     "  --shard I/N        render only shard I (0..N-1) of N: a compact run of the\n"
     "                     finest tiles in Morton order; then --from-children\n"
     "  --from-children    build the coarser levels from the shards' tiles on disk\n"
@@ -82,7 +84,7 @@ typedef struct targs {
     const char *dem, *roads, *out;
     uint32_t tile;
     int tms, mbtiles, dense, resume, from_children, quiet, sharded;
-    int normals, normal_given;
+    int normals, normal_given, render_all;
     rs_normal_options normal;
     uint32_t halo;
     uint32_t shard_i, shard_n;
@@ -890,11 +892,12 @@ static int parse_targs(int argc, char **argv, targs *a)
                     : !strcmp(name, "--resume")                      ? &a->resume
                     : !strcmp(name, "--from-children")               ? &a->from_children
                     : !strcmp(name, "--normals")                     ? &a->normals
+                    : !strcmp(name, "--render-all")                  ? &a->render_all
                                                                      : NULL;
         if (flag) {
             if (inl) { cli_error("%s takes no value", name); return 1; }
             *flag = 1;
-            if (flag == &a->dense || flag == &a->normals) a->opt[a->nopt++] = arg;
+            if (flag == &a->dense || flag == &a->normals || flag == &a->render_all) a->opt[a->nopt++] = arg;
             continue;
         }
         if (!strcmp(name, "--tile-size")) {
@@ -1278,7 +1281,7 @@ static int route_setup(run *r, rs_ctx *ctx, const cli_splat_input *in, const rs_
 {
     const targs *a = r->a;
     uint32_t k = r->zmax - r->zd;
-    if (a->dense || k == 0 || k > 20 || r->T % (1u << k)) return 0;
+    if (a->dense || a->render_all || k == 0 || k > 20 || r->T % (1u << k)) return 0;
     rs_splat_options o = a->s.o;
     if (o.surface.terrain_texture || a->normals || in->nodata) return 0; /* docs/tiles.md, "Sparse levels" */
     o.texels = r->T >> k;

@@ -148,6 +148,8 @@ check "terrain-only: written iff dense level or holds a road" $PY sparse "$T/rt"
 check "terrain-only: finer tiles = the dense run's" sh -c "cd '$T/rt' && for f in 2/*/*.png 3/*/*.png; do cmp -s \$f '$T/rd/'\$f || exit 1; done"
 check "terrain-only: seam against the box-filtered tiles < 1/255" $PY seam "$T/rt" "$T/rd" 1 1.0
 check "terrain-only: the manifest states the rule" grep -q 'terrain only: it is rendered directly' "$T/rt/tiles.json"
+"$BIN" tiles --quiet --render-all $R "$T/r.pgm" "$T/r.txt" "$T/ra"
+check "--render-all: every tile written = the --dense run's" sh -c "cd '$T/ra' && test \$(find . -name '*.png' | wc -l) = 10 && for f in \$(find . -name '*.png'); do cmp -s \$f '$T/rd/'\$f || exit 1; done"
 for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $R "$T/r.pgm" "$T/r.txt" "$T/rsh" || bad "terrain-only shard $i"; done
 check "terrain-only: 3 shards + merge = one run" sh -c "'$BIN' tiles --quiet --from-children $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
 rm -f "$T/rsh/1/1/1.png" "$T/rsh/tiles.json"

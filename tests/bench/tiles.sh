@@ -1,10 +1,13 @@
 #!/bin/sh
 # `make bench`: the tile pyramid (docs/tiles.md). A 2049 x 2049-cell DEM at
 # 8 texels (16392 x 16392 pixels, 4225 finest tiles of 256) with a small
-# city of 12 roads in one corner. Reports finest tiles per second per core
-# (--threads 1), the sparse saving (default against --dense: files, bytes,
-# time) and 1 against 2 processes (--shard 0/2 and 1/2 side by side, each
-# --threads 1, then --from-children; the same tiles). Writes OUT/tiles.md.
+# city of 12 roads in one corner, every run --threads 1, fastest of 3.
+# Reports finest tiles per second per core (--dense: every tile rendered,
+# encoded and written), the sparse saving (default, and --render-all: every
+# finest tile rendered; against --dense: files, bytes, time), the fixed
+# cost of one process (a shard of one finest tile), and 1 against 2
+# processes (--shard 0/2 and 1/2 side by side, then --from-children; wall
+# and CPU seconds of each step, the same run's ratios). Writes OUT/tiles.md.
 set -e
 OUT=${1:-build/bench}
 B=${BUILD:-build}
@@ -16,43 +19,87 @@ W = 2050
 sys.stdout.buffer.write(b'P5\n%d %d\n255\n' % (W, W) + bytes(((i % W) // 16 + (i // W) // 24) % 200 for i in range(W * W)))" >"$W/dem.pgm"
 awk 'BEGIN { for (i = 0; i < 6; i++) { printf "road h%d width 8\n20 %d\n300 %d\nend\nroad v%d width 8\n%d 20\n%d 300\nend\n", i, 30 + 50 * i, 30 + 50 * i, i, 30 + 50 * i, 30 + 50 * i } }' >"$W/city.txt"
 O="--quiet --texels 8 --threads 1"
+IN="$W/dem.pgm $W/city.txt"
 now() { date +%s.%N; }
-best() { # command...: the fastest of 3 runs, seconds
+fmt() { printf %.${2:-2}f "$1"; }
+calc() { echo "$*" | bc -l; }
+best() { # command...: the fastest of 3 runs, seconds (the output of the last run stays in $W/o)
     b=
     for k in 1 2 3; do
-        rm -rf "$W/o" "$W/o2"; t0=$(now); "$@"; t=$(echo "$(now) - $t0" | bc -l)
-        if [ -z "$b" ] || [ "$(echo "$t < $b" | bc -l)" = 1 ]; then b=$t; fi
+        rm -rf "$W/o"; t0=$(now); "$@"; t=$(calc "$(now) - $t0")
+        if [ -z "$b" ] || [ "$(calc "$t < $b")" = 1 ]; then b=$t; fi
     done
-    printf %.2f "$b"
+    echo "$b"
 }
-sparse=$(best "$BIN" tiles $O "$W/dem.pgm" "$W/city.txt" "$W/o")
-sp_files=$(find "$W/o" -name '*.png' | wc -l); sp_bytes=$(du -sk "$W/o" | cut -f1)
-dense=$(best "$BIN" tiles $O --dense "$W/dem.pgm" "$W/city.txt" "$W/o")
-de_files=$(find "$W/o" -name '*.png' | wc -l); de_bytes=$(du -sk "$W/o" | cut -f1)
-two() {
-    "$BIN" tiles $O --shard 0/2 "$W/dem.pgm" "$W/city.txt" "$W/o" & p=$!
-    "$BIN" tiles $O --shard 1/2 "$W/dem.pgm" "$W/city.txt" "$W/o"; wait $p
-    "$BIN" tiles $O --from-children "$W/dem.pgm" "$W/city.txt" "$W/o"
+files() { find "$W/o" -name '*.png' | wc -l; }
+kib() { du -sk "$W/o" | cut -f1; }
+
+dense=$(best "$BIN" tiles $O --dense $IN "$W/o"); de_files=$(files); de_kib=$(kib)
+full=$(best "$BIN" tiles $O --render-all $IN "$W/o"); fu_files=$(files); fu_kib=$(kib)
+sparse=$(best "$BIN" tiles $O $IN "$W/o"); sp_files=$(files); sp_kib=$(kib)
+"$BIN" tiles --texels 8 --threads 1 $IN "$W/o" 2>"$W/msg"
+rendered=$(sed -n 's/.*tiles: \([0-9]*\) rendered.*/\1/p' "$W/msg")
+direct=$(sed -n 's/.* \([0-9]*\) terrain-only rendered.*/\1/p' "$W/msg")
+setup=$(best "$BIN" tiles $O --dense --shard 0/4225 $IN "$W/o")
+
+# 1 against 2 processes: wall of the pair of shards and of the merge, and
+# the CPU seconds (user + system) of each process, for OPTS
+cpu() { # file: user + sys seconds written by /usr/bin/time -f "%U %S"
+    awk '{ s = $1 + $2 } END { print s }' "$1"
 }
-two=$(best two)
+two() { # OPTS: prints "pair_wall merge_wall cpu0 cpu1 cpu_merge cpu_one wall_one" (fastest pair of 3)
+    bp=; for k in 1 2 3; do
+        rm -rf "$W/o"
+        t0=$(now)
+        /usr/bin/time -f "%U %S" -o "$W/c0" "$BIN" tiles $O $1 --shard 0/2 $IN "$W/o" & p=$!
+        /usr/bin/time -f "%U %S" -o "$W/c1" "$BIN" tiles $O $1 --shard 1/2 $IN "$W/o"; wait $p
+        t1=$(now)
+        /usr/bin/time -f "%U %S" -o "$W/cm" "$BIN" tiles $O $1 --from-children $IN "$W/o"
+        t2=$(now)
+        pw=$(calc "$t1 - $t0"); mw=$(calc "$t2 - $t1")
+        if [ -z "$bp" ] || [ "$(calc "$pw + $mw < $bp + $bm")" = 1 ]; then
+            bp=$pw; bm=$mw; c0=$(cpu "$W/c0"); c1=$(cpu "$W/c1"); cm=$(cpu "$W/cm")
+        fi
+    done
+    rm -rf "$W/o"; /usr/bin/time -f "%U %S" -o "$W/c" "$BIN" tiles $O $1 $IN "$W/o"; c=$(cpu "$W/c")
+    echo "$bp $bm $c0 $c1 $cm $c"
+}
+set -- $(two --dense); d_pair=$1 d_merge=$2 d_c0=$3 d_c1=$4 d_cm=$5 d_c=$6
+set -- $(two --render-all); f_pair=$1 f_merge=$2 f_c0=$3 f_c1=$4 f_cm=$5 f_c=$6
+set -- $(two ""); s_pair=$1 s_merge=$2 s_c0=$3 s_c1=$4 s_cm=$5 s_c=$6
 cores=$(nproc)
 finest=4225
+load=$(cut -d' ' -f1-3 /proc/loadavg)
+row() { # name one_wall pair merge c0 c1 cm c
+    echo "| $1 | $(fmt "$2") | $(fmt "$3") + $(fmt "$4") | $(fmt "$(calc "$2 / ($3 + $4)")") | $(fmt "$5") / $(fmt "$6") / $(fmt "$7") | $(fmt "$8") | $(fmt "$(calc "($2 - $setup) / 2 + $setup + $4")") |"
+}
 {
     echo "## Tile pyramid (roadsplat tiles)"
     echo
     echo "\`tests/bench/tiles.sh\`: 2049 x 2049-cell DEM at 8 texels (16392 x 16392 pixels, $finest finest"
     echo "tiles of 256, levels 0..7, complete up to level 4), a city of 12 roads in one corner; fastest of 3 runs,"
-    echo "\`--threads 1\`; $cores cores."
+    echo "\`--threads 1\`; $cores cores, load average $load at the end."
     echo
     echo "| run | seconds | finest tiles per second per core | files | KiB on disk |"
     echo "|---|---|---|---|---|"
-    echo "| sparse (default) | $sparse | $(echo "$finest / $sparse" | bc -l | xargs printf %.0f) | $sp_files | $sp_bytes |"
-    echo "| --dense | $dense | $(echo "$finest / $dense" | bc -l | xargs printf %.0f) | $de_files | $de_bytes |"
-    echo "| 2 processes (--shard 0/2, 1/2 together) + --from-children | $two | $(echo "$finest / $two / 2" | bc -l | xargs printf %.0f) | | |"
+    echo "| --dense (every tile rendered and written) | $(fmt "$dense") | $(fmt "$(calc "$finest / $dense")" 0) | $de_files | $de_kib |"
+    echo "| --render-all (sparse files, every finest tile rendered) | $(fmt "$full") | $(fmt "$(calc "$finest / $full")" 0) | $fu_files | $fu_kib |"
+    echo "| sparse (default: $rendered finest tiles rendered, $direct terrain-only tiles at level 4) | $(fmt "$sparse") | $(fmt "$(calc "$finest / $sparse")" 0) | $sp_files | $sp_kib |"
+    echo "| one process's fixed cost (a shard of one finest tile) | $(fmt "$setup") | | | |"
     echo
-    echo "Sparse saving: $(echo "$de_files / $sp_files" | bc -l | xargs printf %.1f)x fewer files,"
-    echo "$(echo "$de_bytes / $sp_bytes" | bc -l | xargs printf %.1f)x fewer bytes, $(echo "$dense / $sparse" | bc -l | xargs printf %.2f)x the speed"
-    echo "(every finest tile is still rendered in memory for its parent: the saving is encoding and writing)."
-    echo "2 processes against 1: $(echo "$sparse / $two" | bc -l | xargs printf %.2f)x (ideal 2.00 on 2 free cores; the merge step is included)."
+    echo "Sparse saving against --dense: $(fmt "$(calc "$de_files / $sp_files")" 1)x fewer files,"
+    echo "$(fmt "$(calc "$de_kib / $sp_kib")" 1)x fewer bytes, $(fmt "$(calc "$dense / $sparse")")x the speed"
+    echo "($(fmt "$(calc "$dense / $full")")x with --render-all, which renders every finest tile)."
+    echo
+    echo "1 against 2 processes (--shard 0/2 and 1/2 side by side, then --from-children):"
+    echo
+    echo "| run | 1 process s | 2 processes s (shards + merge) | speed-up | CPU s: shard 0 / shard 1 / merge | CPU s of 1 process | ideal s (fixed cost not shared) |"
+    echo "|---|---|---|---|---|---|---|"
+    row "--dense" "$dense" "$d_pair" "$d_merge" "$d_c0" "$d_c1" "$d_cm" "$d_c"
+    row "--render-all" "$full" "$f_pair" "$f_merge" "$f_c0" "$f_c1" "$f_cm" "$f_c"
+    row "sparse (default)" "$sparse" "$s_pair" "$s_merge" "$s_c0" "$s_c1" "$s_cm" "$s_c"
+    echo
+    echo "The ideal column is what two free cores would give: the work after the fixed cost halved, the fixed"
+    echo "cost paid by each process, plus the merge as measured (docs/tiles.md, \"1 and 2 processes\")."
 } >"$OUT/tiles.md"
 cat "$OUT/tiles.md"
