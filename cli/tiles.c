@@ -1363,6 +1363,41 @@ static int route_setup(run *r, rs_ctx *ctx, const cli_splat_input *in, const rs_
     return 0;
 }
 
+/* The work under (z, x, y) in finest-tile renders: a terrain-only tile
+ * counts as one (it is one render of S x S pixels). */
+static uint64_t work(const run *r, uint32_t z, uint64_t x, uint64_t y)
+{
+    if (!exists(r, z, x, y)) return 0;
+    if (z == r->zmax || (z == r->zd && zone_free(r, x, y))) return 1;
+    uint64_t w = 0;
+    for (int q = 0; q < 4; q++) w += work(r, z + 1, 2 * x + (q & 1), 2 * y + (q >> 1));
+    return w;
+}
+
+/* The Morton rank of the first finest tile after `target` units of work
+ * (terrain-only tiles are not split: a boundary inside one moves to its
+ * start). */
+static uint64_t work_bound(const run *r, uint64_t target)
+{
+    uint32_t z = 0;
+    uint64_t x = 0, y = 0, rank = 0, done = 0;
+    for (;;) {
+        if (z == r->zmax || (z == r->zd && zone_free(r, x, y))) return rank;
+        int q = 0;
+        for (; q < 4; q++) {
+            uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1), w = work(r, z + 1, cx, cy);
+            if (done + w > target) {
+                x = cx, y = cy;
+                break;
+            }
+            done += w;
+            rank += finest_count(r, z + 1, cx, cy);
+        }
+        if (q == 4) return rank;
+        z++;
+    }
+}
+
 /* ---- main ------------------------------------------------------------------------ */
 
 static uint32_t floor_log2(uint32_t v)
@@ -1522,6 +1557,12 @@ int cli_tiles_main(int argc, char **argv)
     r.sp = sp;
     if (route_setup(&r, ctx, &in, grid, &dsp)) goto done;
     r.dsp = dsp;
+    if (r.route && a.shard_n > 1) { /* shards of equal work rather than equal tile counts */
+        uint64_t wt = work(&r, 0, 0, 0);
+        r.lo = work_bound(&r, shard_bound(wt, a.shard_i, a.shard_n));
+        r.hi = a.shard_i + 1 == a.shard_n ? r.nx * r.ny : work_bound(&r, shard_bound(wt, a.shard_i + 1, a.shard_n));
+        r.total_finest = r.hi - r.lo;
+    }
     {
         cli_splat_job j0;
         cli_splat_job_init(&j0, sp, &a.s, 1);
