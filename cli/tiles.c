@@ -15,9 +15,17 @@
  *   is alive (levels x S^2 x 4 bytes).
  * - Sparse: on levels finer than zd (the coarsest level whose pixel is no
  *   larger than a DEM cell) a tile is written only when it holds a road;
- *   road-free ones are computed in memory for their parent.
+ *   road-free ones are computed in memory for their parent. A level-zd
+ *   tile that no road's reach meets is terrain only: rendered directly at
+ *   its own pixel size (the splat at T / 2^(zmax - zd) texels), nothing
+ *   under it rendered (route_setup).
+ * - Layers: the colour, and with --normals the normal map ({y}_n.png; the
+ *   coarser tiles the renormalised mean of the children's vectors). With
+ *   --halo P each file carries P pixels of the same level's image around
+ *   the tile (level_rect), the parent is built from the children's cores.
  * - Runs: --shard I/N takes a contiguous run of the finest tiles in Morton
- *   order (and every coarser tile whose subtree lies inside it); each run
+ *   order, of equal count or, with terrain-only tiles, equal work (and
+ *   every coarser tile whose subtree lies inside it); each run
  *   appends a line per finished tile to OUTDIR/.tiles-log/NAME.log, after
  *   the tile's atomic rename. --resume and --from-children read every log
  *   there, skip tiles whose file still has the logged SHA-256, and build
@@ -155,7 +163,6 @@ static entry *tput(table *t, uint64_t key, int flag, const uint8_t *hash, const 
 
 typedef struct run {
     targs *a;
-    rs_ctx *ctx;
     const cli_splat_input *in;
     const rs_splatter *sp;
     uint32_t fw, fh, S, T, zmax, zd;
@@ -1487,7 +1494,6 @@ int cli_tiles_main(int argc, char **argv)
         goto done;
     }
     r.in = &in;
-    r.ctx = ctx;
     r.T = a.s.o.texels ? a.s.o.texels : 8;
     r.nx = (r.fw + (uint64_t)r.S - 1) / r.S;
     r.ny = (r.fh + (uint64_t)r.S - 1) / r.S;
