@@ -113,7 +113,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
