@@ -630,7 +630,7 @@ static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, co
     cli_sha256(png, size, hash);
     int bad = 0;
     if (r->db) {
-        bad = r->mb->put(r->db, z, (uint32_t)x, (uint32_t)((((uint64_t)1 << z) - 1 - y)), png, size);
+        bad = r->mb->put(r->db, layer, z, (uint32_t)x, (uint32_t)((((uint64_t)1 << z) - 1 - y)), png, size);
     } else {
         char *tmp = NULL;
         int fd = -1;
@@ -984,10 +984,6 @@ static int parse_targs(int argc, char **argv, targs *a)
         cli_error("--normal-convention and --normal-strength need --normals");
         return 1;
     }
-    if (a->mbtiles && a->normals) {
-        cli_error("--normals with --format mbtiles: an MBTiles file holds one layer; use --format png for the normal map");
-        return 1;
-    }
     if (a->mbtiles && (a->sharded || a->resume || a->from_children)) {
         cli_error("--format mbtiles is written by one process: use --format png for --shard, --resume and --from-children");
         return 1;
@@ -1195,7 +1191,9 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
                    "alpha-weighted sum of the four children's decoded vectors (2 byte - 255), renormalised and encoded "
                    "again; alpha as for the colour\"},\n",
                 a->normal.directx ? "dx" : "gl", a->normal.directx ? "south (image down)" : "north (image up)");
-    fprintf(f, "  \"path\": \"%s\",\n", a->mbtiles ? "tiles table, tile_row = 2^z - 1 - y (MBTiles 1.3)"
+    fprintf(f, "  \"path\": \"%s\",\n", a->mbtiles ? (r->layers > 1 ? "tiles table (the normal map: normal_tiles, the same "
+                                                                   "columns), tile_row = 2^z - 1 - y (MBTiles 1.3)"
+                                                                 : "tiles table, tile_row = 2^z - 1 - y (MBTiles 1.3)")
                                                    : (a->tms ? "{z}/{x}/{y}.png, y = 2^z - 1 - row (row 0 at the top)"
                                                              : "{z}/{x}/{y}.png, y = row (row 0 at the top)"));
     fprintf(f, "  \"image\": {\"width\": %u, \"height\": %u, \"texels\": %u},\n", r->fw, r->fh, r->T);
@@ -1462,7 +1460,7 @@ int cli_tiles_main(int argc, char **argv)
         cli_error("--format mbtiles: this roadsplat was built without SQLite (make deps installs libsqlite3-dev; rebuild)");
         goto done;
 #else
-        void *sym = cli_module_symbol("mbtiles", "cli_mbtiles_api_v1", "--format mbtiles");
+        void *sym = cli_module_symbol("mbtiles", "cli_mbtiles_api_v2", "--format mbtiles");
         if (!sym) goto done;
         r.mb = sym;
 #endif
@@ -1556,7 +1554,7 @@ int cli_tiles_main(int argc, char **argv)
         if (cli_out_open(&mout, a.out)) goto done;
         fclose(mout.f);
         mout.f = NULL;
-        if (!(r.db = r.mb->open(mout.tmp, a.out))) goto done;
+        if (!(r.db = r.mb->open(mout.tmp, a.out, a.normals))) goto done;
     }
 
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;

@@ -5,14 +5,16 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* The module's one symbol, "cli_mbtiles_api". Every function prints one
+/* The module's one symbol, "cli_mbtiles_api_v2". Every function prints one
  * line naming `shown` on failure and returns 1 (NULL from open). */
 typedef struct cli_mbtiles_api {
-    /* a new MBTiles 1.3 database at `path` (an empty temporary file) */
-    void *(*open)(const char *path, const char *shown);
+    /* a new MBTiles 1.3 database at `path` (an empty temporary file); with
+     * normals, a second table normal_tiles of the same columns and index */
+    void *(*open)(const char *path, const char *shown, int normals);
     int (*meta)(void *db, const char *name, const char *value);
-    /* tile_row in TMS order (row 0 at the bottom), as MBTiles 1.3 says */
-    int (*put)(void *db, uint32_t z, uint32_t x, uint32_t tms_row, const void *png, size_t size);
+    /* tile_row in TMS order (row 0 at the bottom), as MBTiles 1.3 says;
+     * layer 0 into tiles, 1 into normal_tiles */
+    int (*put)(void *db, int layer, uint32_t z, uint32_t x, uint32_t tms_row, const void *png, size_t size);
     /* commit (or, commit 0, roll back) and close */
     int (*close)(void *db, int commit);
 } cli_mbtiles_api;

@@ -125,8 +125,10 @@ for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $H "$T/dem.pgm" "$T/roads.t
 rm -f "$T/hsh/3/0/1_n.png"; printf x >>"$T/hsh/3/1/0_n.png"
 check "--resume remakes a lost and a changed normal tile under an intact parent" "$BIN" tiles --quiet --resume --shard 0/3 $H "$T/dem.pgm" "$T/roads.txt" "$T/hsh"
 check "3 shards + merge = one run (--normals --halo)" sh -c "'$BIN' tiles --quiet --from-children $H '$T/dem.pgm' '$T/roads.txt' '$T/hsh' && diff -r -x .tiles-log '$T/hsh' '$T/ha' >/dev/null"
-for args in "--halo 129" "--halo -1" "--normal-strength 0 --normals" "--normal-convention up --normals" "--normal-convention dx" \
-    "--normals --format mbtiles"; do
+if "$BIN" tiles --quiet --format mbtiles $H "$T/dem.pgm" "$T/roads.txt" "$T/ha.mbtiles" 2>"$T/e"; then
+    check "MBTiles --normals --halo: tiles and normal_tiles rows = the folder's" $PY mbtiles "$T/ha.mbtiles" "$T/ha"
+fi
+for args in "--halo 129" "--halo -1" "--normal-strength 0 --normals" "--normal-convention up --normals" "--normal-convention dx"; do
     "$BIN" tiles $args "$T/dem.pgm" "$T/roads.txt" "$T/bad" 2>"$T/e"; rc=$?
     check "tiles $args: exit 1, one line" sh -c "test $rc = 1 && test \$(wc -l <'$T/e') = 1"
 done

@@ -9,7 +9,7 @@ Python; PNGs through tests/png_read.py, independent of cli/png.c).
   tiles_check.py seam A B Z LIMIT         level-Z tiles of A that differ from B's: mean |diff| < LIMIT
   tiles_check.py normal_window TILE WIN.png  normal TILE = WIN, alpha 0 beyond it
   tiles_check.py sparse OUTDIR WEIGHT.pgm tiles finer than dense_max exist iff they hold a road
-  tiles_check.py mbtiles FILE OUTDIR      the MBTiles rows (TMS) = the folder's tiles
+  tiles_check.py mbtiles FILE OUTDIR      the MBTiles rows (TMS) = the folder's tiles (normal_tiles: the _n ones)
 """
 import hashlib, json, math, os, sqlite3, sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -218,11 +218,16 @@ def mbtiles(f, d):
     db = sqlite3.connect(f)
     meta = dict(db.execute('SELECT name, value FROM metadata'))
     assert meta['format'] == 'png' and int(meta['maxzoom']) == m['levels']['max'], meta
-    rows = list(db.execute('SELECT zoom_level, tile_column, tile_row, tile_data FROM tiles'))
-    assert len(rows) == len(m['tiles']), (len(rows), len(m['tiles']))
-    for z, x, row, blob in rows:
-        y = (1 << z) - 1 - row
-        assert hashlib.sha256(blob).hexdigest() == m['tiles']['%d/%d/%d' % (z, x, y)], (z, x, y)
+    n = 0
+    for table, suf in (('tiles', ''), ('normal_tiles', '_n')):
+        if suf and not m.get('normal_tiles_written'):
+            break
+        rows = list(db.execute('SELECT zoom_level, tile_column, tile_row, tile_data FROM ' + table))
+        for z, x, row, blob in rows:
+            y = (1 << z) - 1 - row
+            assert hashlib.sha256(blob).hexdigest() == m['tiles']['%d/%d/%d%s' % (z, x, y, suf)], (table, z, x, y)
+        n += len(rows)
+    assert n == len(m['tiles']), (n, len(m['tiles']))
 
 
 if __name__ == '__main__':
