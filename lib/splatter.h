@@ -67,6 +67,11 @@ typedef struct rs__piece {
     int tx_ready[2];
     uint64_t road_pixels;
     uint64_t mark_tests, mark_pixels; /* markings stage counts (added to) */
+    /* overlays -> composite: casings of one colour are blended by the
+     * composite (one pass over the pixels instead of two): the casing field's
+     * coverage C (rows x w, NULL: none) and the colour */
+    const double *cas;
+    float cas_rgba[4];
 } rs__piece;
 
 /* Stages. */
