@@ -13,6 +13,9 @@
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define MAX_INDEX_ENTRIES (1u << 26)
 #define MAX_INDEX_CELLS (1u << 22)
@@ -457,6 +460,8 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
             if (!(e.x1 >= 0 && e.y1 >= 0 && e.x0 < map_w + cell && e.y0 < map_h + cell)) continue;
             uint32_t x0 = cell_of(e.x0, cell, mk->gw), y0 = cell_of(e.y0, cell, mk->gh);
             uint32_t x1 = cell_of(e.x1, cell, mk->gw), y1 = cell_of(e.y1, cell, mk->gh);
+            e.cx = x0;
+            e.cy = y0;
             if (pass == 0) {
                 total += (uint64_t)(x1 - x0 + 1) * (y1 - y0 + 1);
                 if (total > MAX_INDEX_ENTRIES)
@@ -595,11 +600,31 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
     int i = (int)u, j = (int)v;
     float wx = (float)(u - (double)i), wy = (float)(v - (double)j);
     const float *t0 = F->px + ((size_t)j * F->pw + (size_t)i) * 4, *t1 = t0 + (size_t)F->pw * 4;
+    const rs__mk_level *C = m->coarse;
+#if defined(__SSE2__)
+    /* the four channels at once: the scalar code's operations, in order */
+    __m128 a0 = _mm_loadu_ps(t0), b0 = _mm_loadu_ps(t1), X = _mm_set1_ps(wx);
+    __m128 a = _mm_add_ps(a0, _mm_mul_ps(X, _mm_sub_ps(_mm_loadu_ps(t0 + 4), a0)));
+    __m128 b = _mm_add_ps(b0, _mm_mul_ps(X, _mm_sub_ps(_mm_loadu_ps(t1 + 4), b0)));
+    __m128 r = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(wy), _mm_sub_ps(b, a)));
+    if (C) {
+        const double off = 0.5 * RS__MK_PAD - 0.25;
+        double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
+        int i2 = (int)u2, j2 = (int)v2;
+        float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2);
+        const float *c0 = C->px + ((size_t)j2 * C->pw + (size_t)i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
+        __m128 p0 = _mm_loadu_ps(c0), q0 = _mm_loadu_ps(c1), X2 = _mm_set1_ps(wx2);
+        __m128 pa = _mm_add_ps(p0, _mm_mul_ps(X2, _mm_sub_ps(_mm_loadu_ps(c0 + 4), p0)));
+        __m128 qb = _mm_add_ps(q0, _mm_mul_ps(X2, _mm_sub_ps(_mm_loadu_ps(c1 + 4), q0)));
+        __m128 g = _mm_add_ps(pa, _mm_mul_ps(_mm_set1_ps(wy2), _mm_sub_ps(qb, pa)));
+        r = _mm_add_ps(r, _mm_mul_ps(_mm_set1_ps(m->f), _mm_sub_ps(g, r)));
+    }
+    _mm_storeu_ps(out, r);
+#else
     for (int c = 0; c < 4; c++) {
         float a = t0[c] + wx * (t0[4 + c] - t0[c]), b = t1[c] + wx * (t1[4 + c] - t1[c]);
         out[c] = a + wy * (b - a);
     }
-    const rs__mk_level *C = m->coarse;
     if (C) {
         const double off = 0.5 * RS__MK_PAD - 0.25;
         double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
@@ -612,6 +637,7 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
             out[c] += f * (g - out[c]);
         }
     }
+#endif
 }
 
 /* Row spans are widened by this many pixels: far above the rounding of
@@ -829,9 +855,9 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     }
 }
 
-static void sort_u32(uint32_t *a, size_t n)
+static void sort_u32(uint32_t *a, size_t n, uint32_t *tmp)
 {
-    if (n <= 96) {
+    if (n <= 32) {
         for (size_t i = 1; i < n; i++) {
             uint32_t v = a[i];
             size_t j = i;
@@ -840,17 +866,29 @@ static void sort_u32(uint32_t *a, size_t n)
         }
         return;
     }
-    /* Shell sort (Ciura's gaps): small lists, no recursion, no allocation */
-    static const size_t gaps[] = { 701, 301, 132, 57, 23, 10, 4, 1 };
-    for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
-        size_t h = gaps[g];
-        for (size_t i = h; i < n; i++) {
-            uint32_t v = a[i];
-            size_t j = i;
-            for (; j >= h && a[j - h] > v; j -= h) a[j] = a[j - h];
-            a[j] = v;
-        }
+    /* LSD radix sort by bytes, skipping the bytes all keys share (marking
+     * indices: mostly two passes) */
+    uint32_t all_or = 0, all_and = UINT32_MAX;
+    for (size_t i = 0; i < n; i++) {
+        all_or |= a[i];
+        all_and &= a[i];
     }
+    uint32_t *src = a, *dst = tmp;
+    for (int sh = 0; sh < 32; sh += 8) {
+        if (!(((all_or ^ all_and) >> sh) & 0xFFu)) continue;
+        size_t cnt[256] = { 0 };
+        for (size_t i = 0; i < n; i++) cnt[(src[i] >> sh) & 0xFFu]++;
+        for (size_t b = 0, sum = 0; b < 256; b++) {
+            size_t c = cnt[b];
+            cnt[b] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++) dst[cnt[(src[i] >> sh) & 0xFFu]++] = src[i];
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+    }
+    if (src != a) memcpy(a, src, n * sizeof *a);
 }
 
 #define CAND_CAP 1024
@@ -879,7 +917,7 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
      * (division and floor are monotonic) */
     const uint32_t cx0 = cell_of(xa, cell, mk->gw), cx1 = cell_of(xb, cell, mk->gw);
     const uint32_t cy0 = cell_of(ya, cell, mk->gh), cy1 = cell_of(yb, cell, mk->gh);
-    uint32_t cand[CAND_CAP];
+    uint32_t cand[CAND_CAP], tmp[CAND_CAP];
     uint64_t tests = 0, painted = 0;
     /* the markings whose box meets the piece, each once (from the first of
      * its cells that the piece's cells hold), in ascending index; in
@@ -898,8 +936,7 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
                     /* seen before unless its first cell is this one
                      * (cell_of(v) == c <=> v / cell >= c, for c > 0
                      * and a box known to touch cell c) */
-                    if (((cx > cx0) & ((double)e->x0 / cell < (double)cx)) | ((cy > cy0) & ((double)e->y0 / cell < (double)cy)))
-                        continue;
+                    if (((cx > cx0) & (e->cx < cx)) | ((cy > cy0) & (e->cy < cy))) continue;
                     if (n == CAND_CAP) {
                         over = 1;
                         break;
@@ -911,7 +948,7 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
             hi = lo + (hi - lo) / 2;
             continue;
         }
-        sort_u32(cand, n);
+        sort_u32(cand, n, tmp);
         for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
         for (size_t k = 0; k < n; k++) {
             if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
