@@ -179,7 +179,6 @@ static void test_curve(void)
         }
     CHECKF(in > 1000 && in_red == in, "stripe pixels %ld, red %ld", in, in_red);
     CHECKF(out > 10000 && out_red == 0, "other pixels %ld, red %ld", out, out_red);
-    /* reversing the road moves the stripe to the other side (t -> -t) */
     free(img);
     free(wt);
     rs_splatter_free(ctx, s);
