@@ -493,7 +493,7 @@ typedef struct rs_surface_image {
 /* Normal-map options (rs_normal_window, below; docs/normals.md). */
 typedef struct rs_normal_options {
     int directx;          /* non-zero: G = -Y, south / image down (DirectX engines) */
-    double strength;      /* road-texture relief: slope per unit of luminance change per pixel;
+    double strength;      /* road-texture and surface-image relief: slope per unit of luminance change per pixel;
                              0 -> 1, else (0, 1e6] */
     double paint_height;  /* raised paint, metres; 0 -> 0.003, else (0, 1] */
     int no_paint;         /* non-zero: paint adds no relief */
@@ -691,9 +691,9 @@ RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gr
  * same grid as rs_splat_window's colour output. Terrain: Horn's gradient
  * at the DEM samples (the hillshade's), interpolated bilinearly per pixel
  * as the terrain colour is. Road pixels add, weighted by the road weight
- * R, the relief of the road surface: the road texture's luminance as a
- * height (Sobel gradient per output pixel, times `strength`; only with a
- * road texture) and raised paint (lines and markings, `paint_height`
+ * R, the relief of the road surface: the road texture's or the style's
+ * surface image's luminance as a height (Sobel gradient per output pixel,
+ * times `strength`; only with one of them) and raised paint (lines and markings, `paint_height`
  * metres high). Encoding: byte = round((n * 0.5 + 0.5) * 255) per
  * component, R = X east (image right), G = Y north (image up: OpenGL),
  * B = Z up; flat ground is (128, 128, 255). All-zero means defaults. */
