@@ -13,6 +13,7 @@
  *   documented ratio; flat ground keeps its colour (factor 1); the specular
  *   term; bad options. */
 #include "harness.h"
+#include "fail_alloc.h"
 #include "roadsplat.h"
 
 #include <math.h>
@@ -580,6 +581,59 @@ static void test_lighting(void)
     rs_roads_free(ctx, roads);
 }
 
+/* ---- allocation failures ------------------------------------------------ */
+
+typedef struct alloc_case {
+    rs_dem *dem;
+    rs_roads *roads;
+    rs_styles *styles;
+    const rs_surface_image *si;
+    int lit;
+} alloc_case;
+
+static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
+{
+    const alloc_case *ac = user;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    o.style.styles = ac->styles;
+    o.style.surface_images = ac->si;
+    o.style.surface_image_count = 1;
+    o.lighting.enable = ac->lit;
+    rs_splatter *s = NULL;
+    uint8_t px[13 * 9 * 4];
+    rs_result r = rs_splatter_create(c, ac->dem, ac->roads, NULL, &o, &s);
+    if (r && s) *wrong = 1;
+    if (!r) r = rs_splat_window(c, s, 30, 50, 13, 9, px, 13 * 4, NULL, 0, NULL);
+    rs_splatter_free(c, s);
+    return r;
+}
+
+static void test_alloc_failures(void)
+{
+    static uint8_t px[64 * 64 * 4];
+    stripe_image(px);
+    rs_surface_image si = { "stripe.png", { 64, 64, px } };
+    static const char text[] = "style s\n surface stripe.png\n line 0 0.2 #FFFFFF\nend\n"
+                               "road r width 8 style=s\n0 10\n40 13\nend\n";
+    alloc_case ac;
+    CHECK(rs_styles_create(ctx, &ac.styles) == RS_OK);
+    ac.roads = parse(text, ac.styles);
+    ac.dem = plane(41, 21, 1, 0.1, 0);
+    ac.si = &si;
+    for (ac.lit = 0; ac.lit < 2; ac.lit++) {
+        fail_sweep fs = fail_alloc_sweep(5000, alloc_try, &ac);
+        CHECK(fs.succeeded);
+        CHECK(fs.tries > 5);
+        CHECK_EQ_INT(fs.wrong, 0);
+        CHECK_EQ_INT(fs.leaks, 0);
+    }
+    rs_roads_free(ctx, ac.roads);
+    rs_styles_free(ctx, ac.styles);
+    rs_dem_free(ctx, ac.dem);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -591,6 +645,7 @@ int main(void)
     test_windows();
     test_normals();
     test_lighting();
+    test_alloc_failures();
     rs_ctx_free(ctx);
     return th_finish("test_surfimg");
 }
