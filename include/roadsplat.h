@@ -674,7 +674,9 @@ typedef struct rs_splat_profile {
  * must lie inside the image (RS_ERR_INVALID_ARG). Scratch memory (a few
  * rows of the window) comes from ctx's allocator. Progress: the splatter's
  * progress callback gets (rows done, h) from this thread; with several
- * threads it must be thread-safe. `profile` may be NULL. */
+ * threads it must be thread-safe. `profile` may be NULL. With
+ * opts->lighting.enable, each band of rows is lit by its normals as soon as
+ * it is splatted (scratch as rs_normal_window's; docs/surface.md). */
 RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0,
                                  uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
                                  uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
