@@ -83,6 +83,14 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
             rs__road_point rp;
             double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
             if (!rs__roadfield_nearest(st->near, x, y, pix * HALF_SQRT2, &rp)) continue;
+            /* the surface image replaces the base surface, blended by its
+             * alpha (premultiplied); fill or gradient go on top */
+            double im[4];
+            if (rs__styling_image(st, rp.road, rp.s, rp.t, im))
+                for (int ch = 0; ch < 3; ch++) {
+                    float *v = sc + (size_t)ch * w + k;
+                    *v = (float)(*v * (1 - im[3]) + im[ch]);
+                }
             uint8_t kind = st->surface[rp.road];
             if (kind == RS_SURFACE_DEFAULT) continue;
             const float *col = st->colour + 16 * (size_t)rp.road;
