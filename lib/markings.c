@@ -471,7 +471,10 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
                     for (uint32_t x = x0; x <= x1; x++) mk->start[(size_t)y * mk->gw + x + 1]++;
             } else {
                 for (uint32_t y = y0; y <= y1; y++)
-                    for (uint32_t x = x0; x <= x1; x++) mk->list[mk->start[(size_t)y * mk->gw + x]++] = e;
+                    for (uint32_t x = x0; x <= x1; x++) {
+                        e.lx = x;
+                        mk->list[mk->start[(size_t)y * mk->gw + x]++] = e;
+                    }
             }
         }
         if (pass == 0) {
@@ -724,10 +727,11 @@ static void put(const rs__mk *m, double u, double v, float *sc, size_t w, long k
 }
 
 /* The piece's rows [*r0, *r1] whose centres the box holds; 0: none. */
-static int box_rows(const rs__mk *m, const rs__piece *p, double pix, long *r0, long *r1)
+static int box_rows(const rs__mk *m, const rs__piece *p, double ipix, long *r0, long *r1)
 {
-    *r0 = span_lo(m->by0 / pix - 0.5 - (double)p->y0, (double)p->rows);
-    *r1 = span_hi(m->by1 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    /* ipix = 1 / pix: its rounding is far below SPAN_EPS */
+    *r0 = span_lo(m->by0 * ipix - 0.5 - (double)p->y0, (double)p->rows);
+    *r1 = span_hi(m->by1 * ipix - 0.5 - (double)p->y0, (double)p->rows);
     if (*r0 < 0) *r0 = 0;
     if (*r1 > (long)p->rows - 1) *r1 = (long)p->rows - 1;
     return *r0 <= *r1;
@@ -740,7 +744,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
     const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
     long r0, r1;
-    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -786,7 +790,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     const int rowseg = nseg <= MAX_ROW_SEG;
     double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
     long r0, r1;
-    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -866,24 +870,24 @@ static void sort_u32(uint32_t *a, size_t n, uint32_t *tmp)
         }
         return;
     }
-    /* LSD radix sort by bytes, skipping the bytes all keys share (marking
-     * indices: mostly two passes) */
+    /* LSD radix sort by 7-bit digits, skipping the digits all keys share
+     * (marking indices below 2^14: two passes) */
     uint32_t all_or = 0, all_and = UINT32_MAX;
     for (size_t i = 0; i < n; i++) {
         all_or |= a[i];
         all_and &= a[i];
     }
     uint32_t *src = a, *dst = tmp;
-    for (int sh = 0; sh < 32; sh += 8) {
-        if (!(((all_or ^ all_and) >> sh) & 0xFFu)) continue;
-        size_t cnt[256] = { 0 };
-        for (size_t i = 0; i < n; i++) cnt[(src[i] >> sh) & 0xFFu]++;
-        for (size_t b = 0, sum = 0; b < 256; b++) {
+    for (int sh = 0; sh < 32; sh += 7) {
+        if (!(((all_or ^ all_and) >> sh) & 0x7Fu)) continue;
+        size_t cnt[128] = { 0 };
+        for (size_t i = 0; i < n; i++) cnt[(src[i] >> sh) & 0x7Fu]++;
+        for (size_t b = 0, sum = 0; b < 128; b++) {
             size_t c = cnt[b];
             cnt[b] = sum;
             sum += c;
         }
-        for (size_t i = 0; i < n; i++) dst[cnt[(src[i] >> sh) & 0xFFu]++] = src[i];
+        for (size_t i = 0; i < n; i++) dst[cnt[(src[i] >> sh) & 0x7Fu]++] = src[i];
         uint32_t *t = src;
         src = dst;
         dst = t;
@@ -926,24 +930,22 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
     for (;;) {
         size_t n = 0;
         int over = 0;
-        for (uint32_t cy = cy0; cy <= cy1 && !over; cy++)
-            for (uint32_t cx = cx0; cx <= cx1 && !over; cx++) {
-                size_t c = (size_t)cy * mk->gw + cx;
-                for (uint32_t k = mk->start[c], ke = mk->start[c + 1]; k < ke; k++) {
-                    const rs__mk_ref *e = &mk->list[k];
-                    if (e->i < lo || e->i > hi) continue;
-                    if ((e->x1 < xa) | (e->x0 > xb) | (e->y1 < ya) | (e->y0 > yb)) continue;
-                    /* seen before unless its first cell is this one
-                     * (cell_of(v) == c <=> v / cell >= c, for c > 0
-                     * and a box known to touch cell c) */
-                    if (((cx > cx0) & (e->cx < cx)) | ((cy > cy0) & (e->cy < cy))) continue;
-                    if (n == CAND_CAP) {
-                        over = 1;
-                        break;
-                    }
-                    cand[n++] = e->i;
+        for (uint32_t cy = cy0; cy <= cy1 && !over; cy++) {
+            /* the row's cells cx0..cx1 are one run of the list */
+            size_t c0 = (size_t)cy * mk->gw;
+            for (uint32_t k = mk->start[c0 + cx0], ke = mk->start[c0 + cx1 + 1]; k < ke; k++) {
+                const rs__mk_ref *e = &mk->list[k];
+                if (e->i < lo || e->i > hi) continue;
+                if ((e->x1 < xa) | (e->x0 > xb) | (e->y1 < ya) | (e->y0 > yb)) continue;
+                /* once: from the first of its cells that the piece's cells hold */
+                if (((e->lx > cx0) & (e->cx < e->lx)) | ((cy > cy0) & (e->cy < cy))) continue;
+                if (n == CAND_CAP) {
+                    over = 1;
+                    break;
                 }
+                cand[n++] = e->i;
             }
+        }
         if (over) {
             hi = lo + (hi - lo) / 2;
             continue;
