@@ -59,12 +59,12 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
                 for (int h = 0; h < 2; h++) {
                     __m128d c = c4[h], rw = _mm_loadu_pd(cov + k + 2 * h);
                     __m128d m = _mm_and_pd(_mm_cmpgt_pd(c, rw), _mm_cmplt_pd(rw, one));
-                    if (!_mm_movemask_pd(m)) continue;
-                    anyc = 1;
-                    /* lanes outside m may divide by zero: masked off */
+                    /* lanes outside m may divide by zero: masked off (b = 0
+                     * leaves T as it is: T + (K - T) 0 = T) */
                     __m128d b = _mm_div_pd(_mm_sub_pd(_mm_min_pd(c, one), rw), _mm_sub_pd(one, rw));
                     cb[h] = _mm_and_pd(m, _mm_mul_pd(_mm_min_pd(b, one), ka));
                 }
+                anyc = 1;
             }
             if ((q4 == 0 && !anyc) || q4 == UINT64_MAX) {
                 /* four pure terrain or four pure road pixels: one colour */
