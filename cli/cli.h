@@ -40,6 +40,9 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path);
 /* A texture image as RGBA8 (malloc'd, the caller frees *rgba); OpenImageIO's
  * own stderr output is filtered as for DEMs. 0 or 1 after a message. */
 int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba);
+/* A context for the next cli_error lines ("FILE line N: surface image"),
+ * printed before their message; NULL: none. */
+void cli_error_context(const char *context);
 
 /* Atomic output: write into a temporary file in the same folder, then
  * rename over `path` on commit. Abort (or a failed commit) removes the
@@ -210,6 +213,10 @@ typedef struct cli_splat_input {
     uint8_t *atlas_px;
     cli_geo geo;       /* the DEM's georeference (geo.georef 0: none) */
     uint8_t *nodata;   /* W x H, 1 where the DEM sample is nodata (NaN); NULL: none */
+    rs_surface_image *surf; /* the styles' `surface IMG` images, decoded (docs/surface.md) */
+    char **surf_path;       /* each one's file (relative to its style file's folder) */
+    uint8_t **surf_px;
+    size_t nsurf;
     int world;         /* roads and DEM in a north-up world frame (cli/geo.c) */
     double wx0, wy0;   /* world point of DEM sample (0,0) (x, y north) when world */
 } cli_splat_input;

@@ -75,6 +75,13 @@ static const char usage_text2[] =
     "                        (RGB8; docs/normals.md)\n"
     "  --normal-convention gl|dx  green = north/image up (gl, default) or down (dx)\n"
     "  --normal-strength S   road-texture relief: slope per luminance step (default 1)\n"
+    "  --lighting            light the colour by the sun with the normal map (Lambert;\n"
+    "                        replaces the terrain hillshade; flat ground unchanged;\n"
+    "                        docs/surface.md)\n"
+    "  --sun AZ,ALT          sun azimuth (compass degrees) and altitude for --lighting\n"
+    "                        (default 315,45, the hillshade's)\n"
+    "  --specular K          --lighting: wet-looking asphalt, a specular share 0..1\n"
+    "                        on roads (default 0)\n"
     "  --rgba                OUT.png with an alpha channel even when every pixel is\n"
     "                        opaque (default: RGB then; RGBA with GIS nodata)\n"
     "  --png-level N         PNG compression, 0 (none) .. 12 (smallest, slowest);\n"
@@ -90,6 +97,8 @@ typedef struct args {
     const char *weight_out, *stats, *normal_out;
     rs_normal_options normal;
     int normal_given; /* --normal-convention or --normal-strength */
+    int conv_given;   /* --normal-convention */
+    int light_given;  /* --sun or --specular */
     int quiet, have_window, have_window_world, world_file, cog, rgba;
     uint32_t window[4];
     double window_world[4]; /* XMIN, YMIN, XMAX, YMAX */
@@ -196,7 +205,7 @@ static int parse_args(int argc, char **argv, args *a)
                 return 1;
             }
             a->normal.directx = v[0] == 'd';
-            a->normal_given = 1;
+            a->normal_given = a->conv_given = 1;
         } else if (!strcmp(name, "--normal-strength")) {
             const char *v;
             if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_double(name, v, &a->normal.strength))
@@ -206,6 +215,31 @@ static int parse_args(int argc, char **argv, args *a)
                 return 1;
             }
             a->normal_given = 1;
+        } else if (!strcmp(name, "--lighting")) {
+            if (inl) { cli_error("%s takes no value", name); return 1; }
+            a->s.o.lighting.enable = 1;
+        } else if (!strcmp(name, "--sun")) {
+            const char *v;
+            double d[2];
+            if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_vec(name, v, d, 2)) return 1;
+            if (!(d[0] >= -360 && d[0] <= 360 && d[1] > 0 && d[1] <= 90)) {
+                cli_error("%s: '%s': azimuth must be -360..360 and altitude in (0, 90] degrees", name, v);
+                return 1;
+            }
+            a->s.o.lighting.sun_given = 1;
+            a->s.o.lighting.sun_azimuth = d[0];
+            a->s.o.lighting.sun_altitude = d[1];
+            a->light_given = 1;
+        } else if (!strcmp(name, "--specular")) {
+            const char *v;
+            if (cli_option_value(argc, argv, &i, name, inl, &v) ||
+                cli_parse_double(name, v, &a->s.o.lighting.specular))
+                return 1;
+            if (!(a->s.o.lighting.specular >= 0 && a->s.o.lighting.specular <= 1)) {
+                cli_error("%s: '%s' must be in [0, 1]", name, v);
+                return 1;
+            }
+            a->light_given = 1;
         } else if (!strcmp(name, "--stats")) {
             if (cli_option_value(argc, argv, &i, name, inl, &a->stats)) return 1;
         } else if (!strcmp(name, "--window")) {
@@ -223,10 +257,16 @@ static int parse_args(int argc, char **argv, args *a)
             return 1;
         }
     }
-    if (a->normal_given && !a->normal_out) {
-        cli_error("--normal-convention and --normal-strength need --normal-out");
+    if (a->normal_given && !a->normal_out && (a->conv_given || !a->s.o.lighting.enable)) {
+        cli_error("--normal-convention and --normal-strength need --normal-out (--normal-strength also serves "
+                  "--lighting)");
         return 1;
     }
+    if (a->light_given && !a->s.o.lighting.enable) {
+        cli_error("--sun and --specular need --lighting");
+        return 1;
+    }
+    a->s.o.lighting.normal.strength = a->normal.strength;
     if (a->have_window && a->have_window_world) {
         cli_error("--window and --window-world are exclusive (output pixels or world units)");
         return 1;

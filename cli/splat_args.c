@@ -157,6 +157,79 @@ static int load_texture(const char *path, rs_image *img, uint8_t **data)
     return 0;
 }
 
+/* `name` of a style's `surface` relative to the folder of `file`, the
+ * file it was written in (an absolute name, or a file without a folder:
+ * as it is). Malloc'd. */
+static char *beside(const char *file, const char *name)
+{
+    const char *slash = file ? strrchr(file, '/') : NULL;
+    size_t d = name[0] == '/' || !slash ? 0 : (size_t)(slash - file) + 1, n = strlen(name);
+    char *p = malloc(d + n + 1);
+    if (!p) return NULL;
+    memcpy(p, file, d);
+    memcpy(p + d, name, n + 1);
+    return p;
+}
+
+/* Decode the image of every style with `surface IMG`: styles [0, nfile)
+ * came from --styles FILE, the rest from the road file. */
+static int load_surface_images(cli_splat_args *s, const char *roads_path, size_t nfile, cli_splat_input *in)
+{
+    size_t n = rs_styles_count(in->styles), m = 0;
+    for (size_t i = 0; i < n; i++) m += rs_styles_get(in->styles, i)->surface_image[0] != 0;
+    if (!m) return 0;
+    in->surf = calloc(m, sizeof *in->surf);
+    in->surf_path = calloc(m, sizeof *in->surf_path);
+    in->surf_px = calloc(m, sizeof *in->surf_px);
+    if (!in->surf || !in->surf_path || !in->surf_px) {
+        cli_error("out of memory for surface images");
+        return 1;
+    }
+    for (size_t i = 0; i < n; i++) {
+        const rs_style *st = rs_styles_get(in->styles, i);
+        if (!st->surface_image[0]) continue;
+        const char *file = i < nfile ? s->styles_path : roads_path;
+        char *path = beside(file, st->surface_image);
+        if (!path) {
+            cli_error("out of memory for surface images");
+            return 1;
+        }
+        size_t k = 0;
+        while (k < in->nsurf && strcmp(in->surf[k].name, st->surface_image)) k++;
+        if (k < in->nsurf) {
+            int same = !strcmp(in->surf_path[k], path);
+            if (!same)
+                cli_error("%s line %llu: surface image '%s' is %s here but %s in an earlier style; give one of them "
+                          "another name", file, (unsigned long long)st->surface_line, st->surface_image, path,
+                          in->surf_path[k]);
+            free(path);
+            if (!same) return 1;
+            continue;
+        }
+        char where[512];
+        snprintf(where, sizeof where, "%s line %llu: surface image", file, (unsigned long long)st->surface_line);
+        uint32_t w = 0, h = 0;
+        uint8_t *px = NULL;
+        cli_error_context(where);
+        int bad = cli_load_texture(path, &w, &h, &px);
+        cli_error_context(NULL);
+        if (bad) {
+            free(path);
+            return 1;
+        }
+        in->surf[k].name = st->surface_image;
+        in->surf[k].image.width = w;
+        in->surf[k].image.height = h;
+        in->surf[k].image.rgba = px;
+        in->surf_px[k] = px;
+        in->surf_path[k] = path;
+        in->nsurf++;
+    }
+    s->o.style.surface_images = in->surf;
+    s->o.style.surface_image_count = in->nsurf;
+    return 0;
+}
+
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in)
 {
@@ -194,6 +267,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
             return 1;
         }
     }
+    size_t nfile = rs_styles_count(in->styles);
     if (cli_geo_roads_text(roads_path, s, &in->geo, &text, &size)) return 1;
     rs_road_parse_options po;
     memset(&po, 0, sizeof po);
@@ -208,6 +282,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     /* the frame: the DEM's georeference, the road file's frame line */
     if (cli_geo_frame(ctx, in, s, dem_path, roads_path)) return 1;
     s->o.style.styles = in->styles;
+    if (load_surface_images(s, roads_path, nfile, in)) return 1;
     if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
         load_texture(s->road_tex, &in->road, &in->road_px))
         return 1;
@@ -242,6 +317,13 @@ void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in)
     free(in->road_px);
     rs_atlas_free(ctx, in->atlas);
     free(in->atlas_px);
+    for (size_t i = 0; i < in->nsurf; i++) {
+        free(in->surf_px[i]);
+        free(in->surf_path[i]);
+    }
+    free(in->surf);
+    free(in->surf_px);
+    free(in->surf_path);
     cli_geo_free(&in->geo);
     free(in->nodata);
     memset(in, 0, sizeof *in);

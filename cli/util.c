@@ -21,10 +21,18 @@
 #include <time.h>
 #include <unistd.h>
 
+static const char *error_context;
+
+void cli_error_context(const char *context) { error_context = context; }
+
 void cli_error(const char *fmt, ...)
 {
     va_list ap;
     fputs("roadsplat: ", stderr);
+    if (error_context) {
+        fputs(error_context, stderr);
+        fputs(": ", stderr);
+    }
     va_start(ap, fmt);
     vfprintf(stderr, fmt, ap);
     va_end(ap);

@@ -303,6 +303,7 @@ RS_API rs_road_class rs_road_class_from_name(const char *name, int *link);
 #define RS_STYLE_NAME_MAX 63 /* bytes of a style name, NUL excluded */
 #define RS_STYLE_MAX_LINES 32
 #define RS_STYLE_MAX_DASH 8  /* on/off lengths of one dash pattern (even count) */
+#define RS_STYLE_IMAGE_MAX 255 /* bytes of a style's surface image name (a path), NUL excluded */
 
 /* Colours are straight (not premultiplied) sRGB bytes with alpha. */
 typedef struct rs_colour {
@@ -336,6 +337,20 @@ typedef struct rs_style {
     rs_colour casing;
     uint32_t line_count;              /* 0..RS_STYLE_MAX_LINES, in paint order */
     rs_style_line line[RS_STYLE_MAX_LINES];
+    /* `surface IMG [length L]` (docs/surface.md): a road-aligned image of
+     * the road surface, mapped by (t, s): the image's left edge at t =
+     * +half width (left of travel), its right edge at t = -half width,
+     * its rows down the road in the travel direction, repeating along s
+     * every `surface_length` metres and clamped across. It replaces the
+     * procedural asphalt (or road texture) of the road, blended by its
+     * alpha; fill / gradient, lines and markings go on top, the casing
+     * stays under. The name (the path as written in the style text) is
+     * matched against rs_style_options.surface_images when the grid is
+     * built. */
+    char surface_image[RS_STYLE_IMAGE_MAX + 1]; /* "" none; else 1..RS_STYLE_IMAGE_MAX bytes, UTF-8, no control characters */
+    double surface_length;            /* metres of road per image height; 0 -> the image's aspect
+                                         with the road width; else 0.001..1e6 */
+    uint64_t surface_line;            /* text line of the `surface` keyword (0: added through the API) */
 } rs_style;
 
 RS_API rs_result rs_styles_create(rs_ctx *ctx, rs_styles **out);
@@ -459,7 +474,49 @@ typedef struct rs_style_options {
     rs_profile profile;      /* built-in styles' standard: RS_PROFILE_RMS (0) or RS_PROFILE_MUTCD */
     rs_line_aa aa;           /* line anti-aliasing */
     int disable;             /* non-zero: every road unstyled (no casing, fill or line) */
+    /* The decoded images of the styles' `surface IMG` (docs/surface.md):
+     * one entry per name, matched byte for byte against
+     * rs_style.surface_image. Copied when the grid is built (mipmaps in
+     * the grid), so the caller may free them afterwards. A style in use
+     * whose image is not in the table fails the build (RS_ERR_INVALID_ARG
+     * naming the style and the image). */
+    const struct rs_surface_image *surface_images;
+    size_t surface_image_count;
 } rs_style_options;
+
+/* A named RGBA8 image for rs_style_options.surface_images. */
+typedef struct rs_surface_image {
+    const char *name; /* NUL-terminated: the style's surface_image text */
+    rs_image image;   /* 1..65536 pixels a side, at most the context's max_texture_pixels */
+} rs_surface_image;
+
+/* Normal-map options (rs_normal_window, below; docs/normals.md). */
+typedef struct rs_normal_options {
+    int directx;          /* non-zero: G = -Y, south / image down (DirectX engines) */
+    double strength;      /* road-texture and surface-image relief: slope per unit of luminance change per pixel;
+                             0 -> 1, else (0, 1e6] */
+    double paint_height;  /* raised paint, metres; 0 -> 0.003, else (0, 1] */
+    int no_paint;         /* non-zero: paint adds no relief */
+} rs_normal_options;
+
+/* Lit output (docs/surface.md, `--lighting`): the colour of every pixel
+ * times a Lambert factor from the normal map (rs_normal_window's normals,
+ * before encoding) and a sun: f = ambient + (1 - ambient) * max(0, N.L) /
+ * L.z, so flat ground keeps its colour (f = 1) and ground facing away from
+ * the sun gets `ambient`. The terrain's own hillshade is then left out
+ * (the tint alone), so relief is shaded once. An optional specular term
+ * (Blinn-Phong, viewer straight above) adds specular * R * max(0, N.H)^40
+ * of white on road pixels (R = road weight): wet-looking asphalt. All-zero
+ * means off. */
+typedef struct rs_lighting_options {
+    int enable;               /* non-zero: light the colour output */
+    double sun_azimuth;       /* degrees clockwise from north (image up); used when sun_given */
+    double sun_altitude;      /* degrees above the horizon, (0, 90]; used when sun_given */
+    int sun_given;            /* 0 -> azimuth 315, altitude 45 (the hillshade's sun) */
+    double ambient;           /* share of light in full shadow; 0 -> 0.3 (the hillshade's), else (0, 1] */
+    double specular;          /* 0: none; else (0, 1] */
+    rs_normal_options normal; /* the normals' strength and paint (directx is ignored) */
+} rs_lighting_options;
 
 
 /* ---------------------------------------------------------------------------
@@ -543,6 +600,7 @@ typedef struct rs_splat_options {
     rs_marking_options markings;
     rs_progress_fn progress;        /* may be NULL; see rs_splat_window */
     void *progress_user;
+    rs_lighting_options lighting;   /* lit output (off by default) */
 } rs_splat_options;
 
 /* The road grid: the roads prepared for one DEM and one set of options -
@@ -616,7 +674,9 @@ typedef struct rs_splat_profile {
  * must lie inside the image (RS_ERR_INVALID_ARG). Scratch memory (a few
  * rows of the window) comes from ctx's allocator. Progress: the splatter's
  * progress callback gets (rows done, h) from this thread; with several
- * threads it must be thread-safe. `profile` may be NULL. */
+ * threads it must be thread-safe. `profile` may be NULL. With
+ * opts->lighting.enable, each band of rows is lit by its normals as soon as
+ * it is splatted (scratch as rs_normal_window's; docs/surface.md). */
 RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0,
                                  uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
                                  uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
@@ -633,19 +693,13 @@ RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gr
  * same grid as rs_splat_window's colour output. Terrain: Horn's gradient
  * at the DEM samples (the hillshade's), interpolated bilinearly per pixel
  * as the terrain colour is. Road pixels add, weighted by the road weight
- * R, the relief of the road surface: the road texture's luminance as a
- * height (Sobel gradient per output pixel, times `strength`; only with a
- * road texture) and raised paint (lines and markings, `paint_height`
+ * R, the relief of the road surface: the road texture's or the style's
+ * surface image's luminance as a height (Sobel gradient per output pixel,
+ * times `strength`; only with one of them) and raised paint (lines and markings, `paint_height`
  * metres high). Encoding: byte = round((n * 0.5 + 0.5) * 255) per
  * component, R = X east (image right), G = Y north (image up: OpenGL),
  * B = Z up; flat ground is (128, 128, 255). All-zero means defaults. */
-typedef struct rs_normal_options {
-    int directx;          /* non-zero: G = -Y, south / image down (DirectX engines) */
-    double strength;      /* road-texture relief: slope per unit of luminance change per pixel;
-                             0 -> 1, else (0, 1e6] */
-    double paint_height;  /* raised paint, metres; 0 -> 0.003, else (0, 1] */
-    int no_paint;         /* non-zero: paint adds no relief */
-} rs_normal_options;
+/* (rs_normal_options is defined above, with the lighting options.) */
 
 /* Write the normal map of the window [x0, x0+w) x [y0, y0+h) as RGB8 into
  * `rgb` (row r at rgb + r*rgb_stride bytes; rgb_stride >= 3*w). The window

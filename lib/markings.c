@@ -13,6 +13,9 @@
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define MAX_INDEX_ENTRIES (1u << 26)
 #define MAX_INDEX_CELLS (1u << 22)
@@ -457,6 +460,8 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
             if (!(e.x1 >= 0 && e.y1 >= 0 && e.x0 < map_w + cell && e.y0 < map_h + cell)) continue;
             uint32_t x0 = cell_of(e.x0, cell, mk->gw), y0 = cell_of(e.y0, cell, mk->gh);
             uint32_t x1 = cell_of(e.x1, cell, mk->gw), y1 = cell_of(e.y1, cell, mk->gh);
+            e.cx = x0;
+            e.cy = y0;
             if (pass == 0) {
                 total += (uint64_t)(x1 - x0 + 1) * (y1 - y0 + 1);
                 if (total > MAX_INDEX_ENTRIES)
@@ -466,7 +471,10 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
                     for (uint32_t x = x0; x <= x1; x++) mk->start[(size_t)y * mk->gw + x + 1]++;
             } else {
                 for (uint32_t y = y0; y <= y1; y++)
-                    for (uint32_t x = x0; x <= x1; x++) mk->list[mk->start[(size_t)y * mk->gw + x]++] = e;
+                    for (uint32_t x = x0; x <= x1; x++) {
+                        e.lx = x;
+                        mk->list[mk->start[(size_t)y * mk->gw + x]++] = e;
+                    }
             }
         }
         if (pass == 0) {
@@ -595,11 +603,31 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
     int i = (int)u, j = (int)v;
     float wx = (float)(u - (double)i), wy = (float)(v - (double)j);
     const float *t0 = F->px + ((size_t)j * F->pw + (size_t)i) * 4, *t1 = t0 + (size_t)F->pw * 4;
+    const rs__mk_level *C = m->coarse;
+#if defined(__SSE2__)
+    /* the four channels at once: the scalar code's operations, in order */
+    __m128 a0 = _mm_loadu_ps(t0), b0 = _mm_loadu_ps(t1), X = _mm_set1_ps(wx);
+    __m128 a = _mm_add_ps(a0, _mm_mul_ps(X, _mm_sub_ps(_mm_loadu_ps(t0 + 4), a0)));
+    __m128 b = _mm_add_ps(b0, _mm_mul_ps(X, _mm_sub_ps(_mm_loadu_ps(t1 + 4), b0)));
+    __m128 r = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(wy), _mm_sub_ps(b, a)));
+    if (C) {
+        const double off = 0.5 * RS__MK_PAD - 0.25;
+        double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
+        int i2 = (int)u2, j2 = (int)v2;
+        float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2);
+        const float *c0 = C->px + ((size_t)j2 * C->pw + (size_t)i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
+        __m128 p0 = _mm_loadu_ps(c0), q0 = _mm_loadu_ps(c1), X2 = _mm_set1_ps(wx2);
+        __m128 pa = _mm_add_ps(p0, _mm_mul_ps(X2, _mm_sub_ps(_mm_loadu_ps(c0 + 4), p0)));
+        __m128 qb = _mm_add_ps(q0, _mm_mul_ps(X2, _mm_sub_ps(_mm_loadu_ps(c1 + 4), q0)));
+        __m128 g = _mm_add_ps(pa, _mm_mul_ps(_mm_set1_ps(wy2), _mm_sub_ps(qb, pa)));
+        r = _mm_add_ps(r, _mm_mul_ps(_mm_set1_ps(m->f), _mm_sub_ps(g, r)));
+    }
+    _mm_storeu_ps(out, r);
+#else
     for (int c = 0; c < 4; c++) {
         float a = t0[c] + wx * (t0[4 + c] - t0[c]), b = t1[c] + wx * (t1[4 + c] - t1[c]);
         out[c] = a + wy * (b - a);
     }
-    const rs__mk_level *C = m->coarse;
     if (C) {
         const double off = 0.5 * RS__MK_PAD - 0.25;
         double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
@@ -612,6 +640,7 @@ static void sample(const rs__mk *m, double u, double v, float out[4])
             out[c] += f * (g - out[c]);
         }
     }
+#endif
 }
 
 /* Row spans are widened by this many pixels: far above the rounding of
@@ -698,10 +727,11 @@ static void put(const rs__mk *m, double u, double v, float *sc, size_t w, long k
 }
 
 /* The piece's rows [*r0, *r1] whose centres the box holds; 0: none. */
-static int box_rows(const rs__mk *m, const rs__piece *p, double pix, long *r0, long *r1)
+static int box_rows(const rs__mk *m, const rs__piece *p, double ipix, long *r0, long *r1)
 {
-    *r0 = span_lo(m->by0 / pix - 0.5 - (double)p->y0, (double)p->rows);
-    *r1 = span_hi(m->by1 / pix - 0.5 - (double)p->y0, (double)p->rows);
+    /* ipix = 1 / pix: its rounding is far below SPAN_EPS */
+    *r0 = span_lo(m->by0 * ipix - 0.5 - (double)p->y0, (double)p->rows);
+    *r1 = span_hi(m->by1 * ipix - 0.5 - (double)p->y0, (double)p->rows);
     if (*r0 < 0) *r0 = 0;
     if (*r1 > (long)p->rows - 1) *r1 = (long)p->rows - 1;
     return *r0 <= *r1;
@@ -714,7 +744,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
     const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
     long r0, r1;
-    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -760,7 +790,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     const int rowseg = nseg <= MAX_ROW_SEG;
     double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
     long r0, r1;
-    if (!box_rows(m, p, pix, &r0, &r1)) return;
+    if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -829,9 +859,9 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     }
 }
 
-static void sort_u32(uint32_t *a, size_t n)
+static void sort_u32(uint32_t *a, size_t n, uint32_t *tmp)
 {
-    if (n <= 96) {
+    if (n <= 32) {
         for (size_t i = 1; i < n; i++) {
             uint32_t v = a[i];
             size_t j = i;
@@ -840,17 +870,29 @@ static void sort_u32(uint32_t *a, size_t n)
         }
         return;
     }
-    /* Shell sort (Ciura's gaps): small lists, no recursion, no allocation */
-    static const size_t gaps[] = { 701, 301, 132, 57, 23, 10, 4, 1 };
-    for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
-        size_t h = gaps[g];
-        for (size_t i = h; i < n; i++) {
-            uint32_t v = a[i];
-            size_t j = i;
-            for (; j >= h && a[j - h] > v; j -= h) a[j] = a[j - h];
-            a[j] = v;
-        }
+    /* LSD radix sort by 7-bit digits, skipping the digits all keys share
+     * (marking indices below 2^14: two passes) */
+    uint32_t all_or = 0, all_and = UINT32_MAX;
+    for (size_t i = 0; i < n; i++) {
+        all_or |= a[i];
+        all_and &= a[i];
     }
+    uint32_t *src = a, *dst = tmp;
+    for (int sh = 0; sh < 32; sh += 7) {
+        if (!(((all_or ^ all_and) >> sh) & 0x7Fu)) continue;
+        size_t cnt[128] = { 0 };
+        for (size_t i = 0; i < n; i++) cnt[(src[i] >> sh) & 0x7Fu]++;
+        for (size_t b = 0, sum = 0; b < 128; b++) {
+            size_t c = cnt[b];
+            cnt[b] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++) dst[cnt[(src[i] >> sh) & 0x7Fu]++] = src[i];
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+    }
+    if (src != a) memcpy(a, src, n * sizeof *a);
 }
 
 #define CAND_CAP 1024
@@ -879,7 +921,7 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
      * (division and floor are monotonic) */
     const uint32_t cx0 = cell_of(xa, cell, mk->gw), cx1 = cell_of(xb, cell, mk->gw);
     const uint32_t cy0 = cell_of(ya, cell, mk->gh), cy1 = cell_of(yb, cell, mk->gh);
-    uint32_t cand[CAND_CAP];
+    uint32_t cand[CAND_CAP], tmp[CAND_CAP];
     uint64_t tests = 0, painted = 0;
     /* the markings whose box meets the piece, each once (from the first of
      * its cells that the piece's cells hold), in ascending index; in
@@ -888,30 +930,27 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
     for (;;) {
         size_t n = 0;
         int over = 0;
-        for (uint32_t cy = cy0; cy <= cy1 && !over; cy++)
-            for (uint32_t cx = cx0; cx <= cx1 && !over; cx++) {
-                size_t c = (size_t)cy * mk->gw + cx;
-                for (uint32_t k = mk->start[c], ke = mk->start[c + 1]; k < ke; k++) {
-                    const rs__mk_ref *e = &mk->list[k];
-                    if (e->i < lo || e->i > hi) continue;
-                    if ((e->x1 < xa) | (e->x0 > xb) | (e->y1 < ya) | (e->y0 > yb)) continue;
-                    /* seen before unless its first cell is this one
-                     * (cell_of(v) == c <=> v / cell >= c, for c > 0
-                     * and a box known to touch cell c) */
-                    if (((cx > cx0) & ((double)e->x0 / cell < (double)cx)) | ((cy > cy0) & ((double)e->y0 / cell < (double)cy)))
-                        continue;
-                    if (n == CAND_CAP) {
-                        over = 1;
-                        break;
-                    }
-                    cand[n++] = e->i;
+        for (uint32_t cy = cy0; cy <= cy1 && !over; cy++) {
+            /* the row's cells cx0..cx1 are one run of the list */
+            size_t c0 = (size_t)cy * mk->gw;
+            for (uint32_t k = mk->start[c0 + cx0], ke = mk->start[c0 + cx1 + 1]; k < ke; k++) {
+                const rs__mk_ref *e = &mk->list[k];
+                if (e->i < lo || e->i > hi) continue;
+                if ((e->x1 < xa) | (e->x0 > xb) | (e->y1 < ya) | (e->y0 > yb)) continue;
+                /* once: from the first of its cells that the piece's cells hold */
+                if (((e->lx > cx0) & (e->cx < e->lx)) | ((cy > cy0) & (e->cy < cy))) continue;
+                if (n == CAND_CAP) {
+                    over = 1;
+                    break;
                 }
+                cand[n++] = e->i;
             }
+        }
         if (over) {
             hi = lo + (hi - lo) / 2;
             continue;
         }
-        sort_u32(cand, n);
+        sort_u32(cand, n, tmp);
         for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
         for (size_t k = 0; k < n; k++) {
             if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);

@@ -76,6 +76,8 @@ typedef struct rs__mk {
 typedef struct rs__mk_ref {
     float x0, y0, x1, y1; /* the marking's box, rounded outwards */
     uint32_t i;
+    uint32_t cx, cy;      /* its first index cell (the box's x0, y0) */
+    uint32_t lx;          /* the column of the cell whose list holds this entry */
 } rs__mk_ref;
 
 /* Per stretch point: x, y, s and the segment to the next point: unit

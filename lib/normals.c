@@ -15,6 +15,7 @@
 #include "linesym.h"
 #include "markings.h"
 #include "styling.h"
+#include "roadfield.h"
 
 #include <math.h>
 #include <string.h>
@@ -87,6 +88,19 @@ static double luminance(const rs_splatter *s, const rs_image *img, int64_t px, i
     for (int c = 0; c < 3; c++)
         l += wt[c] * ((p00[c] * (1 - fx) + p01[c] * fx) * (1 - fy) + (p10[c] * (1 - fx) + p11[c] * fx) * fy);
     return l / 255.0;
+}
+
+/* The surface image's share of the luminance at the centre of pixel (px,
+ * py) over the base luminance `base`: the nearest road within two pixels
+ * (so the 3 x 3 neighbours of a road pixel see the image clamped across,
+ * not a step at the road edge), when its style has a surface image. */
+static double image_luminance(const rs__styling *st, double pix, int64_t px, int64_t py, double base)
+{
+    rs__road_point rp;
+    double x = ((double)px + 0.5) * pix, y = ((double)py + 0.5) * pix, im[4];
+    if (!st->near || !rs__roadfield_nearest(st->near, x, y, 2 * pix, &rp)) return base;
+    if (!rs__styling_image(st, rp.road, rp.s, rp.t, im)) return base;
+    return (0.2126 * im[0] + 0.7152 * im[1] + 0.0722 * im[2]) / 255.0 + (1 - im[3]) * base;
 }
 
 /* Road weight (cov, q) and, when `paint`, the paint coverage of lines and
@@ -177,11 +191,64 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
     if (rgb_stride / 3 < w)
         return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGB row stride %zu bytes, need %zu", rgb_stride,
                         (size_t)w * 3);
+    res = rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0);
+    if (!res) rs__ok(ctx);
+    return res;
+}
+
+rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l)
+{
+    rs_normal_options o;
+    rs_result r = nm_defaults(ctx, &l->normal, &o);
+    if (r) return r;
+    if (l->sun_given && !(l->sun_azimuth >= -1e6 && l->sun_azimuth <= 1e6))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "lighting: sun azimuth %g must be finite (degrees)", l->sun_azimuth);
+    if (l->sun_given && !(l->sun_altitude > 0 && l->sun_altitude <= 90))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "lighting: sun altitude %g must be in (0, 90] degrees",
+                        l->sun_altitude);
+    if (!(l->ambient >= 0 && l->ambient <= 1))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "lighting: ambient %g must be in (0, 1] (0 = 0.3)", l->ambient);
+    if (!(l->specular >= 0 && l->specular <= 1))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "lighting: specular %g must be in [0, 1]", l->specular);
+    return RS_OK;
+}
+
+/* The colour of one pixel (rgba) lit with unit normal n (tangent space)
+ * and road weight R (docs/surface.md). */
+static void light_pixel(const rs_splatter *s, const double n[3], double R, uint8_t *px)
+{
+    const double *L = s->light, *Hv = s->half;
+    double d = n[0] * L[0] + n[1] * L[1] + n[2] * L[2];
+    if (!(d > 0)) d = 0;
+    double f = s->ambient + (1 - s->ambient) * d / L[2];
+    double sp = 0;
+    if (s->specular > 0 && R > 0) {
+        double hd = n[0] * Hv[0] + n[1] * Hv[1] + n[2] * Hv[2];
+        if (hd > 0) {
+            double h2 = hd * hd, h4 = h2 * h2, h8 = h4 * h4, h32 = h8 * h8 * h8 * h8;
+            sp = 255 * s->specular * (R > 1 ? 1 : R) * h32 * h8; /* hd^40 */
+        }
+    }
+    for (int c = 0; c < 3; c++) {
+        double v = px[c] * f + sp + 0.5;
+        px[c] = (uint8_t)(v >= 255 ? 255 : (v > 0 ? v : 0));
+    }
+}
+
+rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                          const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
+                          size_t rgba_stride)
+{
+    rs_normal_options o;
+    rs_result res = nm_defaults(ctx, opts, &o);
+    if (res) return res;
     const uint32_t T = s->o.texels;
     const rs_dem *d = s->dem;
     const rs_image *tex = s->o.surface.road_texture;
     const rs__styling *st = s->grid->styling;
     const int paint = !o.no_paint && ((st && st->lines) || s->grid->markings);
+    const int images = st && st->img_of;
+    const int relief = tex || images;
     const double pix = s->texel_m;
     uint32_t cols = w < NM_COLS ? w : NM_COLS;
     uint32_t max_rows = T < h ? T : h;
@@ -193,9 +260,9 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
     b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
     b.sc = rs__alloc_array(ctx, npx * 3, sizeof *b.sc);
     b.paint = paint ? rs__alloc_array(ctx, npx, sizeof *b.paint) : NULL;
-    b.lum = tex ? rs__alloc_array(ctx, npx, sizeof *b.lum) : NULL;
+    b.lum = relief ? rs__alloc_array(ctx, npx, sizeof *b.lum) : NULL;
     b.g = rs__alloc_array(ctx, ncol * 4, sizeof *b.g);
-    if (!b.cov || !b.ov || !b.q || !b.sc || (paint && !b.paint) || (tex && !b.lum) || !b.g) {
+    if (!b.cov || !b.ov || !b.q || !b.sc || (paint && !b.paint) || (relief && !b.lum) || !b.g) {
         nm_free(ctx, &b);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for normal-map scratch (%zu pixels)", npx);
     }
@@ -222,14 +289,18 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
             int road = 0;
             for (uint32_t r = 0; r < rows && !road; r++)
                 for (uint32_t k = 0; k < pw && !road; k++) road = b.q[(size_t)(r + oy) * rw + k + ox] != 0;
-            if (road && tex)
+            if (road && relief)
                 for (uint32_t r = 0; r < rh; r++)
-                    for (uint32_t k = 0; k < rw; k++)
-                        b.lum[(size_t)r * rw + k] = luminance(s, tex, (int64_t)hx0 + k, (int64_t)hy0 + r);
+                    for (uint32_t k = 0; k < rw; k++) {
+                        int64_t px = (int64_t)hx0 + k, py = (int64_t)hy0 + r;
+                        double l = tex ? luminance(s, tex, px, py) : 0;
+                        b.lum[(size_t)r * rw + k] = images ? image_luminance(st, pix, px, py, l) : l;
+                    }
             for (uint32_t r = 0; r < rows; r++) {
                 uint32_t py = y + r;
                 double fy = ((py - crow * T) + 0.5) / T, gy_ = 1 - fy;
-                uint8_t *out = rgb + (size_t)(py - y0) * rgb_stride + (size_t)(x - x0) * 3;
+                uint8_t *out = rgba ? rgba + (size_t)(py - y0) * rgba_stride + (size_t)(x - x0) * 4
+                                    : rgb + (size_t)(py - y0) * rgb_stride + (size_t)(x - x0) * 3;
                 for (uint32_t k = 0; k < pw; k++) {
                     uint32_t px = x + k, cc = px / T - c0;
                     double fx = ((px - (px / T) * T) + 0.5) / T, gx_ = 1 - fx;
@@ -237,9 +308,9 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
                     double gy = (gy0[cc] * gx_ + gy0[cc + 1] * fx) * gy_ + (gy1[cc] * gx_ + gy1[cc + 1] * fx) * fy;
                     size_t at = (size_t)(r + oy) * rw + k + ox;
                     double R = b.cov[at];
-                    if (R > 0 && (tex || paint)) {
+                    if (R > 0 && (relief || paint)) {
                         double dx = 0, dy = 0, ax, ay;
-                        if (tex) {
+                        if (relief) {
                             sobel(b.lum, rw, rh, r + oy, k + ox, &ax, &ay);
                             dx += o.strength * ax;
                             dy += o.strength * ay;
@@ -261,6 +332,11 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
                     double nx = -gx / m, ny = gy / m, nz = 1 / m;
                     double len = sqrt(nx * nx + ny * ny + nz * nz);
                     if (!(len > 0 && len < HUGE_VAL)) nx = 0, ny = 0, nz = len = 1;
+                    if (rgba) {
+                        const double n[3] = { nx / len, ny / len, nz / len };
+                        light_pixel(s, n, b.cov[at], out + 4 * (size_t)k);
+                        continue;
+                    }
                     if (o.directx) ny = -ny;
                     out[3 * k] = enc(nx / len);
                     out[3 * k + 1] = enc(ny / len);
@@ -271,6 +347,5 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
         y = end;
     }
     nm_free(ctx, &b);
-    rs__ok(ctx);
     return RS_OK;
 }

@@ -11,13 +11,15 @@
 #include "markings.h"
 
 #include <math.h>
+#include <string.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 #define HALF_SQRT2 0.70710678118654752440
 
-/* Casing colour into terrain pixel k of row r (share of the pixel > 0). */
+/* Casing colour into terrain pixel k of row r (share of the pixel > 0),
+ * casings of several colours (one colour: the composite blends it). */
 static void casing_pixel(const rs__styling *st, double pix, const rs__piece *p, uint32_t r, size_t k, double c,
                          double R)
 {
@@ -26,15 +28,12 @@ static void casing_pixel(const rs__styling *st, double pix, const rs__piece *p, 
      * T' takes (C - R) / (1 - R) of casing colour. */
     double share = ((c > 1 ? 1 : c) - R) / (1 - R);
     if (!(share > 0)) return;
-    const float *col = st->casing_rgba;
-    if (!st->casing_uniform) {
-        /* the colour of the nearest road's casing (none: a road without
-         * one is nearest) */
-        rs__road_point rp;
-        double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
-        if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) return;
-        col = st->colour + 16 * (size_t)rp.road + 12;
-    }
+    /* the colour of the nearest road's casing (none: a road without one
+     * is nearest) */
+    rs__road_point rp;
+    double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+    if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) return;
+    const float *col = st->colour + 16 * (size_t)rp.road + 12;
     float a = (float)(share > 1 ? 1 : share) * col[3], *tc = p->tc + (size_t)r * p->w * 3;
     for (int ch = 0; ch < 3; ch++) {
         float *v = tc + (size_t)ch * p->w + k;
@@ -48,6 +47,12 @@ static void casings(const rs_splatter *s, const rs__styling *st, double pix, rs_
     /* the analytic coverage stage has C in ov already when merged */
     if (!(st->casing_merged && s->o.coverage.edges == RS_EDGES_ANALYTIC))
         rs__roadfield_coverage(st->casing, p->x0, p->y0, p->w, p->rows, pix, p->ov, w);
+    if (st->casing_uniform) {
+        /* one colour: the composite blends it (lib/composite.c) */
+        p->cas = p->ov;
+        memcpy(p->cas_rgba, st->casing_rgba, sizeof p->cas_rgba);
+        return;
+    }
     for (uint32_t r = 0; r < p->rows; r++) {
         const double *cr = p->ov + (size_t)r * w, *rr = p->cov + (size_t)r * w;
         size_t k = 0;
@@ -78,6 +83,14 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
             rs__road_point rp;
             double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
             if (!rs__roadfield_nearest(st->near, x, y, pix * HALF_SQRT2, &rp)) continue;
+            /* the surface image replaces the base surface, blended by its
+             * alpha (premultiplied); fill or gradient go on top */
+            double im[4];
+            if (rs__styling_image(st, rp.road, rp.s, rp.t, im))
+                for (int ch = 0; ch < 3; ch++) {
+                    float *v = sc + (size_t)ch * w + k;
+                    *v = (float)(*v * (1 - im[3]) + im[ch]);
+                }
             uint8_t kind = st->surface[rp.road];
             if (kind == RS_SURFACE_DEFAULT) continue;
             const float *col = st->colour + 16 * (size_t)rp.road;
@@ -100,6 +113,7 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
 void rs__overlays(const rs_splatter *s, rs__piece *p)
 {
     const rs__styling *st = s->grid->styling;
+    p->cas = NULL;
     if (p->w == 0 || p->rows == 0) return;
     if (st && st->casing) casings(s, st, s->texel_m, p);
     if (st && st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);

@@ -76,6 +76,7 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     uint32_t w = 0, h = 0;
     if (!r) r = output_size(ctx, dem, &o, &w, &h);
     if (!r && grid) r = check_grid(ctx, dem, grid, &o);
+    if (!r && o.lighting.enable) r = rs__lighting_check(ctx, &o.lighting);
     if (r) return r;
     rs_splatter *s = rs__calloc(ctx, 1, sizeof *s);
     if (!s) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the splatter");
@@ -107,6 +108,19 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     s->sun_az = fmod(360.0 - 315.0 + 90.0, 360.0) * RS__PI / 180.0;
     s->cos_zen = cos(zen);
     s->sin_zen = sin(zen);
+    if (o.lighting.enable) {
+        double az = (o.lighting.sun_given ? o.lighting.sun_azimuth : 315.0) * RS__PI / 180.0;
+        double alt = (o.lighting.sun_given ? o.lighting.sun_altitude : 45.0) * RS__PI / 180.0;
+        s->light[0] = sin(az) * cos(alt); /* east */
+        s->light[1] = cos(az) * cos(alt); /* north */
+        s->light[2] = sin(alt);
+        double hz = s->light[2] + 1, hl = sqrt(s->light[0] * s->light[0] + s->light[1] * s->light[1] + hz * hz);
+        s->half[0] = s->light[0] / hl;
+        s->half[1] = s->light[1] / hl;
+        s->half[2] = hz / hl;
+        s->ambient = o.lighting.ambient > 0 ? o.lighting.ambient : 0.3;
+        s->specular = o.lighting.specular;
+    }
     *out = s;
     rs__ok(ctx);
     return RS_OK;
@@ -251,6 +265,16 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                 profile->mark_pixels += p.mark_pixels;
             }
             p.mark_tests = p.mark_pixels = 0;
+        }
+        if (s->o.lighting.enable) {
+            /* these rows of the window, lit by their normals (the normals of
+             * a pixel do not depend on the window: same bytes for any cut) */
+            rs_result lr = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
+                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride);
+            if (lr) {
+                scratch_free(ctx, &b);
+                return lr;
+            }
         }
         y += p.rows;
         if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h)) {

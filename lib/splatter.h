@@ -34,6 +34,9 @@ struct rs_splatter {
     double zmin, zrange;       /* DEM units, valid samples */
     double cos_zen, sin_zen, sun_az; /* light: azimuth 315, altitude 45 */
     double texel_m;            /* cell_size / texels */
+    /* lighting (o.lighting.enable): unit vector towards the sun and the
+     * Blinn half vector (tangent space: X east, Y north, Z up) */
+    double light[3], half[3], ambient, specular;
 };
 
 /* Terrain colours (3 floats per sample) of the window's sample columns
@@ -67,6 +70,11 @@ typedef struct rs__piece {
     int tx_ready[2];
     uint64_t road_pixels;
     uint64_t mark_tests, mark_pixels; /* markings stage counts (added to) */
+    /* overlays -> composite: casings of one colour are blended by the
+     * composite (one pass over the pixels instead of two): the casing field's
+     * coverage C (rows x w, NULL: none) and the colour */
+    const double *cas;
+    float cas_rgba[4];
 } rs__piece;
 
 /* Stages. */
@@ -77,5 +85,12 @@ void rs__coverage_analytic(const rs_splatter *s, rs__piece *p);
 void rs__coverage_quantise(rs__piece *p);
 void rs__surface(const rs_splatter *s, rs__piece *p);
 void rs__overlays(const rs_splatter *s, rs__piece *p);
+/* Normal maps (lib/normals.c): the normals of a window (options checked),
+ * encoded into rgb (RGB8) or, when rgba is not NULL, lighting the colours
+ * already there (o.lighting). */
+rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                          const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
+                          size_t rgba_stride);
+rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l);
 void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride);
 #endif

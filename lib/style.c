@@ -19,6 +19,8 @@
 #define MIN_DASH 0.001
 #define MAX_DASH 1e6
 #define MAX_PHASE 1e9
+#define MIN_SURF_LEN 0.001
+#define MAX_SURF_LEN 1e6
 
 struct rs_styles {
     rs_style *v;
@@ -132,6 +134,30 @@ static int style_ok(const rs_style *s, char *why, size_t cap)
     if ((unsigned)s->surface > RS_SURFACE_GRADIENT) {
         snprintf(why, cap, "surface %d is not an rs_surface", (int)s->surface);
         return 0;
+    }
+    {
+        const char *inul = memchr(s->surface_image, '\0', sizeof s->surface_image);
+        if (!inul) {
+            snprintf(why, cap, "the surface image name is longer than %d bytes", RS_STYLE_IMAGE_MAX);
+            return 0;
+        }
+        size_t ni = (size_t)(inul - s->surface_image);
+        for (size_t i = 0; i < ni;) {
+            unsigned char c = (unsigned char)s->surface_image[i];
+            if (c >= 0x80) {
+                size_t k = rs__utf8_len((const unsigned char *)s->surface_image + i, ni - i);
+                if (!k) { snprintf(why, cap, "the surface image name is not valid UTF-8"); return 0; }
+                i += k;
+            } else if (c < 0x20 || c == 0x7F) {
+                snprintf(why, cap, "the surface image name has a control character");
+                return 0;
+            } else i++;
+        }
+        if (s->surface_length != 0 && !(ni > 0 && s->surface_length >= MIN_SURF_LEN && s->surface_length <= MAX_SURF_LEN)) {
+            snprintf(why, cap, "surface length %g must be 0 (the image's aspect) or %g..%g metres, with an image",
+                     s->surface_length, MIN_SURF_LEN, MAX_SURF_LEN);
+            return 0;
+        }
     }
     if (s->casing_width != 0 && !(s->casing_width >= MIN_WIDTH && s->casing_width <= MAX_WIDTH)) {
         snprintf(why, cap, "casing width %g must be 0 (none) or %g..%g metres", s->casing_width, MIN_WIDTH, MAX_WIDTH);
@@ -397,6 +423,49 @@ static rs_result style_lineword(rs_ctx *ctx, rs__style_block *b, unsigned long l
     return RS_OK;
 }
 
+#define SURFACE_USAGE "surface IMG [length L]"
+
+/* `surface IMG [length L]`: the image's name (a path, quoted when it has
+ * blanks) is kept as written; the caller decodes the image. */
+static rs_result style_surface(rs_ctx *ctx, rs__style_block *b, unsigned long long line, rs__lex *L)
+{
+    char q[64];
+    rs__tok t;
+    rs_result rc;
+    if (b->st.surface_image[0])
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: style %s: 'surface' given twice", line,
+                        block_name(q, sizeof q, b));
+    int k = rs__lex_next(L, RS__LEX_NAME, &t);
+    if (k < 0) return rs__lex_fail(ctx, line, L);
+    if (k == 0) return rs__fail(ctx, RS_ERR_PARSE, "line %llu: 'surface' needs an image: " SURFACE_USAGE, line);
+    if (t.n > RS_STYLE_IMAGE_MAX + 2 || (!t.quoted && t.n > RS_STYLE_IMAGE_MAX))
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: surface image %s is longer than %d bytes", line,
+                        rs__quote(q, sizeof q, t.s, t.n), RS_STYLE_IMAGE_MAX);
+    char name[RS_STYLE_IMAGE_MAX + 3];
+    size_t n = rs__tok_text(&t, name);
+    if (n == 0 || n > RS_STYLE_IMAGE_MAX)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: surface image %s must be 1..%d bytes", line,
+                        rs__quote(q, sizeof q, t.s, t.n), RS_STYLE_IMAGE_MAX);
+    for (size_t i = 0; i < n; i++)
+        if ((unsigned char)name[i] < 0x20 || name[i] == 0x7F)
+            return rs__fail(ctx, RS_ERR_PARSE, "line %llu: surface image %s has a control character", line,
+                            rs__quote(q, sizeof q, t.s, t.n));
+    memcpy(b->st.surface_image, name, n);
+    b->st.surface_image[n] = '\0';
+    b->st.surface_line = line;
+    k = rs__lex_next(L, RS__LEX_PLAIN, &t);
+    if (k == 1 && rs__tok_is(&t, "length")) {
+        if ((rc = number(ctx, line, L, "surface length", SURFACE_USAGE, MIN_SURF_LEN, MAX_SURF_LEN,
+                         &b->st.surface_length)) != RS_OK)
+            return rc;
+        return no_more(ctx, line, L, "the surface length");
+    }
+    if (k == 1)
+        return rs__fail(ctx, RS_ERR_PARSE, "line %llu: unexpected %s after the surface image (expected 'length L')",
+                        line, rs__quote(q, sizeof q, t.s, t.n));
+    return RS_OK;
+}
+
 rs_result rs__style_line(rs_ctx *ctx, rs__style_block *b, unsigned long long line, const rs__tok *first,
                          rs__lex *L)
 {
@@ -430,8 +499,10 @@ rs_result rs__style_line(rs_ctx *ctx, rs__style_block *b, unsigned long long lin
         return no_more(ctx, line, L, "the colour");
     }
     if (rs__tok_is(first, "line")) return style_lineword(ctx, b, line, L);
+    if (rs__tok_is(first, "surface")) return style_surface(ctx, b, line, L);
     return rs__fail(ctx, RS_ERR_PARSE,
-                    "line %llu: unknown keyword %s in style %s (expected fill, gradient, casing, line or end)", line,
+                    "line %llu: unknown keyword %s in style %s (expected fill, gradient, surface, casing, line or end)",
+                    line,
                     rs__quote(q, sizeof q, first->s, first->n), block_name(q2, sizeof q2, b));
 }
 

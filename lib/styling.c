@@ -3,6 +3,8 @@
 #include "styling.h"
 #include "linesym.h"
 #include "roadfield.h"
+#include "surfimg.h"
+#include "style.h"
 
 #include <math.h>
 #include <string.h>
@@ -16,7 +18,74 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__free(ctx, st->surface);
     rs__free(ctx, st->colour);
     rs__free(ctx, st->half_width);
+    rs__free(ctx, st->img_of);
+    rs__free(ctx, st->img_len);
+    rs__free(ctx, st->img_lev);
+    rs__free(ctx, st->img_f);
+    if (st->imgs)
+        for (size_t i = 0; i < st->nimgs; i++) rs__surfimg_free(ctx, st->imgs[i]);
+    rs__free(ctx, st->imgs);
     rs__free(ctx, st);
+}
+
+int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, double out[4])
+{
+    if (!st->img_of || st->img_of[road] < 0) return 0;
+    const rs__surfimg *m = st->imgs[st->img_of[road]];
+    double hw = st->half_width[road];
+    /* the image's left edge at t = +hw (left of travel), right edge at -hw */
+    double u = hw > 0 ? (hw - t) / (2 * hw) : 0.5;
+    rs__surfimg_sample(m, u, s / st->img_len[road], st->img_lev[road], st->img_f[road], out);
+    return 1;
+}
+
+/* Road i's surface image: find its name in the options' table, mipmap it
+ * once, and the road's length per image height and level of detail. */
+static rs_result road_image(rs_ctx *ctx, rs__styling *st, const rs_style *sty, size_t i, const rs_roads *roads,
+                            const rs_splat_options *o, double pix)
+{
+    char q[64], q2[64], q3[64];
+    const rs_style_options *so = &o->style;
+    size_t k = 0;
+    while (k < so->surface_image_count &&
+           !(so->surface_images[k].name && strcmp(so->surface_images[k].name, sty->surface_image) == 0))
+        k++;
+    if (k == so->surface_image_count) {
+        const char *name = NULL;
+        rs_roads_get(roads, i, &name, NULL, NULL, NULL);
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "road %zu (%s): style %s: surface image %s was not given", i,
+                        rs__quote(q, sizeof q, name, strlen(name)),
+                        rs__quote(q2, sizeof q2, sty->name, strlen(sty->name)),
+                        rs__quote(q3, sizeof q3, sty->surface_image, strlen(sty->surface_image)));
+    }
+    if (!st->imgs) {
+        st->imgs = rs__calloc(ctx, so->surface_image_count, sizeof *st->imgs);
+        st->img_of = rs__alloc_array(ctx, rs_roads_count(roads), sizeof *st->img_of);
+        st->img_len = rs__calloc(ctx, rs_roads_count(roads), sizeof *st->img_len);
+        st->img_lev = rs__calloc(ctx, rs_roads_count(roads), sizeof *st->img_lev);
+        st->img_f = rs__calloc(ctx, rs_roads_count(roads), sizeof *st->img_f);
+        if (!st->imgs || !st->img_of || !st->img_len || !st->img_lev || !st->img_f)
+            return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road styles");
+        st->nimgs = so->surface_image_count;
+        for (size_t r = 0; r < rs_roads_count(roads); r++) st->img_of[r] = -1;
+    }
+    if (!st->imgs[k]) {
+        rs_result r = rs__surfimg_build(ctx, &so->surface_images[k].image,
+                                        rs__quote(q, sizeof q, sty->surface_image, strlen(sty->surface_image)),
+                                        &st->imgs[k]);
+        if (r) return r;
+        st->bytes += st->imgs[k]->bytes;
+    }
+    const rs__surfimg *m = st->imgs[k];
+    double w = 2 * st->half_width[i];
+    double len = sty->surface_length > 0 ? sty->surface_length : w * m->h[0] / m->w[0];
+    if (!(len >= 1e-9)) len = 1e-9; /* a road of width ~0 */
+    st->img_of[i] = (int32_t)k;
+    st->img_len[i] = len;
+    /* footprint of one output pixel in level-0 texels, the larger axis */
+    double across = w > 0 ? pix * m->w[0] / w : 0, along = pix * m->h[0] / len;
+    rs__surfimg_lod(m, across > along ? across : along, &st->img_lev[i], &st->img_f[i]);
+    return RS_OK;
 }
 
 static void put_colour(float *dst, rs_colour c)
@@ -63,10 +132,15 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         put_colour(c + 8, sty->gradient_edge);
         put_colour(c + 12, sty->casing);
         if (sty->surface != RS_SURFACE_DEFAULT) st->any_surface = 1;
+        if (sty->surface_image[0]) {
+            if ((r = road_image(ctx, st, sty, i, roads, o, dem->frame.cell_size / o->texels)) != RS_OK) goto fail_msg;
+            st->any_surface = 1;
+        }
         band_start[i] = (uint32_t)nbands;
         nbands += sty->line_count;
         if (sty->casing_width > 0) ncasing++;
-        styled |= sty->surface != RS_SURFACE_DEFAULT || sty->line_count || sty->casing_width > 0;
+        styled |= sty->surface != RS_SURFACE_DEFAULT || sty->line_count || sty->casing_width > 0 ||
+                  sty->surface_image[0];
     }
     band_start[n] = (uint32_t)nbands;
     if (!styled) {
@@ -166,6 +240,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         }
     }
     st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double));
+    if (st->img_of) st->bytes += n * (sizeof *st->img_of + sizeof *st->img_len + sizeof *st->img_lev + sizeof *st->img_f);
     rs__free(ctx, dash);
     rs__free(ctx, extra);
     rs__free(ctx, bands);

@@ -22,7 +22,16 @@ typedef struct rs__styling {
     float *colour;                    /* per road: fill rgba, gradient centre rgba, edge rgba, casing rgba (16 floats;
                                          rgb 0..255, a 0..1) */
     double *half_width;               /* per road */
-    int any_surface;                  /* some road has a fill or gradient */
+    int any_surface;                  /* some road has a fill, gradient or surface image */
+    /* Surface images (`surface IMG`, lib/surfimg.h): per road the image
+     * (index into imgs, -1: none), its metres per image height, width and
+     * level of detail; NULL when no road has one. */
+    int32_t *img_of;
+    double *img_len;
+    uint32_t *img_lev;
+    double *img_f;
+    struct rs__surfimg **imgs;        /* one per rs_style_options.surface_images entry in use (NULL: unused) */
+    size_t nimgs;
     size_t bytes;
 } rs__styling;
 
@@ -34,4 +43,8 @@ typedef struct rs__styling {
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                             const struct rs__roadfield *field, rs__styling **out);
 void rs__styling_free(rs_ctx *ctx, rs__styling *st);
+
+/* The surface image colour of road `road` at (s, t), premultiplied (rgb
+ * 0..255, a 0..1); 0 when the road has no surface image. */
+int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, double out[4]);
 #endif

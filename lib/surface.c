@@ -88,6 +88,11 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
         float tint[3];
         hypsometric(t, tint);
         float *out = rgb + 3 * (size_t)(j - c0);
+        if (s->o.lighting.enable) {
+            /* lit output: the relief is shaded once, by the lighting */
+            terrain_rgb(tint, 1.0, out);
+            continue;
+        }
         double g2 = dzdx * dzdx + dzdy * dzdy;
         double hs = (cz + lx * dzdx + ly * dzdy) / sqrt(1 + g2);
         if (!(hs > 0)) hs = 0;

@@ -86,6 +86,33 @@ static void fuzz_splat(rs_ctx *ctx, rs_dem *dem, reader *rd)
         uint32_t c = next_u(rd, 6);
         if (c < 5) REQUIRE(rs_roads_set_attr(ctx, roads, k, "class", cls[c]) == RS_OK);
     }
+    /* issue 16: lighting and a road-aligned surface image, raw doubles */
+    o.lighting.enable = (int)next_u(rd, 2);
+    o.lighting.sun_given = (int)next_u(rd, 2);
+    o.lighting.sun_azimuth = next_d(rd);
+    o.lighting.sun_altitude = next_d(rd);
+    o.lighting.ambient = next_d(rd);
+    o.lighting.specular = next_d(rd);
+    o.lighting.normal.strength = next_d(rd);
+    o.lighting.normal.paint_height = next_d(rd);
+    rs_styles *sty = NULL;
+    rs_surface_image si = { "s", { 4, 4, tex_px } };
+    if (next_u(rd, 2) && rs_roads_count(roads)) {
+        REQUIRE(rs_styles_create(ctx, &sty) == RS_OK);
+        rs_style st;
+        memset(&st, 0, sizeof st);
+        strcpy(st.name, "img");
+        strcpy(st.surface_image, "s");
+        st.surface_length = next_d(rd);
+        rs_result ar = rs_styles_add(ctx, sty, &st);
+        REQUIRE(known(ar));
+        if (ar == RS_OK) {
+            o.style.styles = sty;
+            o.style.surface_images = &si;
+            o.style.surface_image_count = 1;
+            REQUIRE(rs_roads_set_attr(ctx, roads, 0, "style", "img") == RS_OK);
+        }
+    }
     rs_splatter *s = (rs_splatter *)&o;
     rs_result r = rs_splatter_create(ctx, dem, roads, NULL, &o, &s);
     REQUIRE(known(r));
@@ -110,6 +137,7 @@ static void fuzz_splat(rs_ctx *ctx, rs_dem *dem, reader *rd)
             REQUIRE(p.road < 2 && isfinite(p.s) && isfinite(p.t) && p.distance >= 0);
         rs_splatter_free(ctx, s);
     }
+    rs_styles_free(ctx, sty);
     rs_roads_free(ctx, roads);
 }
 

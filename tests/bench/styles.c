@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define RUNS 7
+#define RUNS 15
 #define REF_N 64
 
 static double clock_ms(void *user)

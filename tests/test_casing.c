@@ -1,0 +1,164 @@
+/* Casings in the splat (issue 13, docs/linesym.md "Casings"): the colour a
+ * casing gives a pixel, against an independent supersampled reference of
+ * the widened road, by both ways the splat blends it (one casing colour: in
+ * the composite; several: the overlays stage), and windows against the
+ * whole image. */
+#include "roadsplat.h"
+#include "harness.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static rs_ctx *ctx;
+
+enum { DW = 26, DH = 22, TEX = 4 };
+#define CELL 1.0
+#define PIX (CELL / TEX)
+#define RW 3.0    /* road A's width */
+#define CW 0.5    /* casing width */
+#define REF_N 128 /* point samples per pixel side */
+
+static const double road_a[4] = { 2.3, 3.1, 21.7, 15.4 };
+static const double road_b[4] = { 2.0, 19.5, 9.0, 20.2 };
+
+static double seg_dist(const double *s, double x, double y)
+{
+    double dx = s[2] - s[0], dy = s[3] - s[1], wx = x - s[0], wy = y - s[1];
+    double u = (wx * dx + wy * dy) / (dx * dx + dy * dy);
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    double ex = wx - u * dx, ey = wy - u * dy;
+    return sqrt(ex * ex + ey * ey);
+}
+
+/* Fraction of pixel (px, py) within distance r of segment s. */
+static double ref_cover(const double *s, double r, uint32_t px, uint32_t py)
+{
+    uint32_t in = 0;
+    for (int j = 0; j < REF_N; j++)
+        for (int i = 0; i < REF_N; i++) {
+            double x = (px + (i + 0.5) / REF_N) * PIX, y = (py + (j + 0.5) / REF_N) * PIX;
+            in += seg_dist(s, x, y) <= r;
+        }
+    return (double)in / (REF_N * REF_N);
+}
+
+typedef struct image {
+    uint32_t w, h;
+    uint8_t *rgba;
+    uint16_t *wt;
+} image;
+
+/* Splat roads A and B, each with the given style ("" = none). */
+static int render(const rs_dem *dem, const char *styles_text, const char *sa, const char *sb, image *im)
+{
+    rs_roads *roads = NULL;
+    rs_styles *styles = NULL;
+    rs_splatter *s = NULL;
+    int ok = rs_roads_create(ctx, &roads) == RS_OK && rs_roads_add(ctx, roads, "a", RW, road_a, 2) == RS_OK &&
+             rs_roads_add(ctx, roads, "b", 1.5, road_b, 2) == RS_OK;
+    if (ok && *sa) ok = rs_roads_set_attr(ctx, roads, 0, "style", sa) == RS_OK;
+    if (ok && *sb) ok = rs_roads_set_attr(ctx, roads, 1, "style", sb) == RS_OK;
+    if (ok && styles_text) ok = rs_styles_parse(ctx, styles_text, strlen(styles_text), &styles) == RS_OK;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = TEX;
+    o.style.styles = styles;
+    if (ok) ok = rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK;
+    if (ok) {
+        rs_splatter_size(s, &im->w, &im->h);
+        im->rgba = malloc((size_t)im->w * im->h * 4);
+        im->wt = malloc((size_t)im->w * im->h * 2);
+        ok = im->rgba && im->wt &&
+             rs_splat_window(ctx, s, 0, 0, im->w, im->h, im->rgba, (size_t)im->w * 4, im->wt, im->w, NULL) == RS_OK;
+        /* windows of odd sizes give the same bytes */
+        size_t n = (size_t)im->w * im->h * 4;
+        uint8_t *win = ok ? malloc(n) : NULL;
+        int same = win != NULL;
+        for (uint32_t y = 0; same && y < im->h; y += 13)
+            for (uint32_t x = 0; x < im->w; x += 17) {
+                uint32_t ww = im->w - x < 17 ? im->w - x : 17, hh = im->h - y < 13 ? im->h - y : 13;
+                uint8_t *p = win + ((size_t)y * im->w + x) * 4;
+                if (rs_splat_window(ctx, s, x, y, ww, hh, p, (size_t)im->w * 4, NULL, 0, NULL) != RS_OK) same = 0;
+            }
+        CHECKF(same && memcmp(win, im->rgba, n) == 0, "windows of 17 x 13 differ from the whole image");
+        free(win);
+    }
+    rs_splatter_free(ctx, s);
+    rs_styles_free(ctx, styles);
+    rs_roads_free(ctx, roads);
+    return ok;
+}
+
+static void test_casing_colour(void)
+{
+    float z[DW * DH];
+    for (int i = 0; i < DW * DH; i++) z[i] = 10.0f;
+    rs_dem *dem = NULL;
+    CHECK(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK);
+    rs_dem_frame fr = { CELL, 1, 0, 0 };
+    CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    static const char styles[] = "style red\n casing 0.5 #FF0000\nend\n"
+                                 "style green\n casing 0.5 #00FF00\nend\n"
+                                 "style plain\n fill #404040\nend\n";
+    image plain = { 0 }, uni = { 0 }, multi = { 0 };
+    /* plain: no casing anywhere; uni: both red (the composite blends it);
+     * multi: A red, B green (the overlays stage blends per road) */
+    CHECK(render(dem, styles, "plain", "plain", &plain));
+    CHECK(render(dem, styles, "red", "red", &uni));
+    CHECK(render(dem, styles, "red", "green", &multi));
+    CHECK(plain.w == uni.w && plain.h == uni.h && multi.w == uni.w && multi.h == uni.h && uni.w > 90);
+    size_t ring = 0, full = 0, bad_full = 0, far_b = 0, bad_multi = 0;
+    double max_err = 0, sum_err = 0;
+    for (uint32_t py = 0; py < uni.h && plain.rgba && uni.rgba && multi.rgba; py++)
+        for (uint32_t px = 0; px < uni.w; px++) {
+            size_t i = (size_t)py * uni.w + px;
+            double cx = (px + 0.5) * PIX, cy = (py + 0.5) * PIX;
+            const uint8_t *u = uni.rgba + 4 * i, *m = multi.rgba + 4 * i, *p0 = plain.rgba + 4 * i;
+            /* away from road B both ways give the same colours (they round
+             * in float and double: one unit) */
+            if (seg_dist(road_b, cx, cy) > 2.0) {
+                far_b++;
+                for (int c = 0; c < 3; c++) bad_multi += abs((int)u[c] - (int)m[c]) > 1;
+            }
+            /* terrain pixels (R = 0) near road A: T + (K - T) C, C the
+             * widened road's cover, T the plain image */
+            double d = seg_dist(road_a, cx, cy);
+            if (uni.wt[i] != 0 || d > RW / 2 + CW + PIX || d < RW / 2 - PIX) continue;
+            double C = ref_cover(road_a, RW / 2 + CW, px, py);
+            if (C == 0) continue;
+            ring++;
+            const double K[3] = { 255, 0, 0 };
+            for (int c = 0; c < 3; c++) {
+                double want = p0[c] + (K[c] - p0[c]) * C, e = fabs(u[c] - want);
+                max_err = e > max_err ? e : max_err;
+                sum_err += e / 3;
+            }
+            if (C == 1) {
+                full++;
+                bad_full += !(u[0] == 255 && u[1] == 0 && u[2] == 0);
+            }
+        }
+    /* the reference's own error is up to 255/128 = 2 units on an edge */
+    CHECKF(ring > 300 && max_err <= 3 && sum_err / (double)ring <= 1,
+           "casing ring: %zu pixels, max error %.2f, mean %.3f (units of 1/255)", ring, max_err,
+           ring ? sum_err / (double)ring : 0);
+    CHECKF(full > 20 && bad_full == 0, "%zu of %zu pixels wholly in the casing are not the casing colour", bad_full, full);
+    CHECKF(far_b > 1000 && bad_multi == 0, "one colour vs several: %zu channel values differ by more than 1", bad_multi);
+    printf("casing ring: %zu pixels (%zu whole), max error %.2f, mean %.3f; one vs several colours: %zu differ\n", ring,
+           full, max_err, ring ? sum_err / (double)ring : 0, bad_multi);
+    free(plain.rgba);
+    free(plain.wt);
+    free(uni.rgba);
+    free(uni.wt);
+    free(multi.rgba);
+    free(multi.wt);
+    rs_dem_free(ctx, dem);
+}
+
+int main(void)
+{
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_casing_colour();
+    rs_ctx_free(ctx);
+    return th_finish("test_casing");
+}
