@@ -998,6 +998,30 @@ typedef struct input_hash {
     char hex[65]; /* "" for a folder (a GIS source) */
 } input_hash;
 
+/* One input into h: its SHA-256 ("" for a folder, a GIS source). */
+static int hash_input(const char *role, const char *path, input_hash *h)
+{
+    h->role = role, h->path = path, h->hex[0] = '\0';
+    struct stat st;
+    if (!strcmp(path, "-")) {
+        cli_error("%s: tiles needs a file, not standard input (its SHA-256 goes into the manifest)", role);
+        return 1;
+    }
+    if (stat(path, &st) != 0) {
+        cli_error("%s: %s", path, strerror(errno));
+        return 1;
+    }
+    if (S_ISDIR(st.st_mode)) return 0;
+    uint8_t d[32];
+    if (cli_sha256_file(path, d)) {
+        cli_error("%s: cannot read: %s", path, strerror(errno ? errno : EIO));
+        return 1;
+    }
+    cli_sha256_hex(d, h->hex);
+    return 0;
+}
+
+/* The inputs named on the command line into ih (7 entries at most). */
 static int hash_inputs(const targs *a, input_hash *ih, int *n)
 {
     const char *roles[7] = { "DEM", "ROADS", "--terrain-texture", "--road-texture", "--styles", "--atlas",
@@ -1005,27 +1029,8 @@ static int hash_inputs(const targs *a, input_hash *ih, int *n)
     const char *paths[7] = { a->dem, a->roads, a->s.terrain_tex, a->s.road_tex, a->s.styles_path, a->s.atlas_path,
                              a->s.atlas_index_path };
     *n = 0;
-    for (int k = 0; k < 7; k++) {
-        if (!paths[k]) continue;
-        input_hash *h = &ih[(*n)++];
-        h->role = roles[k], h->path = paths[k], h->hex[0] = '\0';
-        struct stat st;
-        if (!strcmp(paths[k], "-")) {
-            cli_error("%s: tiles needs a file, not standard input (its SHA-256 goes into the manifest)", roles[k]);
-            return 1;
-        }
-        if (stat(paths[k], &st) != 0) {
-            cli_error("%s: %s", paths[k], strerror(errno));
-            return 1;
-        }
-        if (S_ISDIR(st.st_mode)) continue;
-        uint8_t d[32];
-        if (cli_sha256_file(paths[k], d)) {
-            cli_error("%s: cannot read: %s", paths[k], strerror(errno ? errno : EIO));
-            return 1;
-        }
-        cli_sha256_hex(d, h->hex);
-    }
+    for (int k = 0; k < 7; k++)
+        if (paths[k] && hash_input(roles[k], paths[k], &ih[(*n)++])) return 1;
     return 0;
 }
 
@@ -1276,8 +1281,9 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
  * farthest line, plus casing, plus the largest marking of the atlas, plus
  * its explicit markings' |t| and size) and a margin of 2 DEM cells. Only
  * when T is divisible by 2^(zmax - zd) (the direct splat's texel count is
- * a whole number), and not with --dense, --terrain-texture, --normals or a
- * DEM with nodata: a texture's detail, or the normals of rough terrain,
+ * a whole number), and not with --dense, --terrain-texture, --normals,
+ * lit output (lit by the normals; not a tiles option yet) or a DEM with
+ * nodata: a texture's detail, or the normals of rough terrain,
  * rendered at the coarser size are not the mean of the finer pixels (mean
  * differences of 10 and 9 of 255 measured, against 0.2-0.4 for the tint
  * and hillshade; docs/tiles.md), and the nodata mask is per pixel. 0, or 1
@@ -1288,7 +1294,8 @@ static int route_setup(run *r, rs_ctx *ctx, const cli_splat_input *in, const rs_
     uint32_t k = r->zmax - r->zd;
     if (a->dense || a->render_all || k == 0 || k > 20 || r->T % (1u << k)) return 0;
     rs_splat_options o = a->s.o;
-    if (o.surface.terrain_texture || a->normals || in->nodata) return 0; /* docs/tiles.md, "Sparse levels" */
+    if (o.surface.terrain_texture || a->normals || o.lighting.enable || in->nodata)
+        return 0; /* docs/tiles.md, "Sparse levels" */
     o.texels = r->T >> k;
     o.progress = NULL;
     o.progress_user = NULL;
@@ -1433,7 +1440,7 @@ int cli_tiles_main(int argc, char **argv)
     rs_splatter *sp = NULL, *dsp = NULL;
     run r;
     cli_out mout, mani;
-    input_hash ih[7];
+    input_hash *ih = NULL;
     int nin = 0;
     char *logdir = NULL;
     memset(&in, 0, sizeof in);
@@ -1474,8 +1481,11 @@ int cli_tiles_main(int argc, char **argv)
             goto done;
         }
     }
+    if (!(ih = calloc(7, sizeof *ih))) {
+        cli_error("out of memory");
+        goto done;
+    }
     if (hash_inputs(&a, ih, &nin)) goto done;
-    fingerprint(&a, ih, nin, r.fingerprint);
 
     /* the splat, with no limit on the output size: tiles never hold it */
     rs_limits lim;
@@ -1487,6 +1497,17 @@ int cli_tiles_main(int argc, char **argv)
         goto done;
     }
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    if (in.nsurf) { /* the styles' surface images decide pixels too */
+        input_hash *more = realloc(ih, (7 + in.nsurf) * sizeof *ih);
+        if (!more) {
+            cli_error("out of memory");
+            goto done;
+        }
+        ih = more;
+        for (size_t k = 0; k < in.nsurf; k++)
+            if (hash_input("surface", in.surf_path[k], &ih[nin++])) goto done;
+    }
+    fingerprint(&a, ih, nin, r.fingerprint);
     if ((res = rs_splat_size(ctx, in.dem, &a.s.o, &r.fw, &r.fh))) {
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
         goto done;
@@ -1652,6 +1673,7 @@ done:
     free(r.log_path);
     free(r.tab.e);
     free(logdir);
+    free(ih);
     rs_splatter_free(ctx, dsp);
     free(r.zfree);
     rs_splatter_free(ctx, sp);

@@ -156,6 +156,10 @@ for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $R "$T/r.pgm" "$T/r.txt" "$
 check "terrain-only: 3 shards + merge = one run" sh -c "'$BIN' tiles --quiet --from-children $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
 rm -f "$T/rsh/1/1/1.png" "$T/rsh/tiles.json"
 check "terrain-only: --resume remakes a lost direct tile" sh -c "'$BIN' tiles --quiet --resume $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
+E="$D/../docs/examples"
+if [ -f "$E/surface.txt" ]; then
+    check "the styles' surface images are inputs of the manifest" sh -c "'$BIN' tiles --quiet --texels 2 '$E/dem.pgm' '$E/surface.txt' '$T/su' && grep -q '\"role\": \"surface\", \"path\": \"[^\"]*asphalt-strip.png\", \"sha256\": \"[0-9a-f]\{64\}' '$T/su/tiles.json'"
+fi
 check "terrain-only with --halo 3: every halo pixel = the neighbour's" sh -c "'$BIN' tiles --quiet --halo 3 $R '$T/r.pgm' '$T/r.txt' '$T/rh' && $PY halo '$T/rh'"
 
 # 9. a large pyramid (2049 x 2049 cells at 16 texels: 32784 x 32784 pixels, 4.3 GB as
