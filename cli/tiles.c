@@ -636,9 +636,19 @@ static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, co
         char *tmp = NULL;
         int fd = -1;
         bad = tile_path(r, z, x, y, 1, layer);
-        if (!bad && (fd = cli_temp_create(r->path, &tmp)) < 0) {
-            cli_error("%s: cannot create a temporary file next to it: %s", r->path, strerror(errno));
-            bad = 1;
+        if (!bad) { /* "DIR/.NAME.part": the same name when the tile is made again (after a kill) */
+            const char *base = strrchr(r->path, '/') + 1;
+            size_t dl = (size_t)(base - r->path);
+            if (!(tmp = malloc(strlen(r->path) + 8))) {
+                cli_error("out of memory");
+                bad = 1;
+            } else {
+                snprintf(tmp, strlen(r->path) + 8, "%.*s.%s.part", (int)dl, r->path, base);
+                if ((fd = cli_temp_create_named(tmp)) < 0) {
+                    cli_error("%s: cannot create a temporary file next to it: %s", r->path, strerror(errno));
+                    bad = 1;
+                }
+            }
         }
         if (!bad) {
             int e = 0;

@@ -321,6 +321,28 @@ int cli_temp_create(const char *path, char **tmp)
     return fd;
 }
 
+/* A temporary of a fixed name `tmp` (made or truncated; 0666 & ~umask),
+ * registered for removal on a signal: a rerun that makes the same output
+ * again reuses the name, so a temporary left by SIGKILL does not stay.
+ * Only for outputs that one process at a time writes. Returns the
+ * descriptor or -1 with errno set. */
+int cli_temp_create_named(const char *tmp)
+{
+    sigset_t saved;
+    signals_block(1, &saved);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    int e = errno;
+    if (fd >= 0 && temp_register(tmp)) {
+        close(fd);
+        unlink(tmp);
+        fd = -1;
+        e = ENAMETOOLONG;
+    }
+    signals_block(0, &saved);
+    if (fd < 0) errno = e;
+    return fd;
+}
+
 /* Remove a temporary made by cli_temp_create and forget it. */
 void cli_temp_remove(const char *tmp)
 {

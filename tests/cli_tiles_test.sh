@@ -60,7 +60,7 @@ check "resume kept the finished tiles" sh -c "'$BIN' tiles --resume --shard 0/2 
 # a real kill at some moment, then --resume: the same tiles whatever the moment
 ( "$BIN" tiles --quiet --shard 1/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/rs" & p=$!; sleep 0.2; kill -9 $p 2>/dev/null; wait $p ) 2>/dev/null
 check "killed shard resumed" "$BIN" tiles --quiet --resume --shard 1/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/rs"
-check "no temporaries left" sh -c "! find '$T/rs' -name '.rs-*' | grep -q ."
+check "no temporaries left" sh -c "! find '$T/rs' -name '.rs-*' -o -name '*.part' | grep -q ."
 check "merge after resume = single run" sh -c "'$BIN' tiles --quiet --from-children $O '$T/dem.pgm' '$T/roads.txt' '$T/rs' && diff -r -x .tiles-log '$T/rs' '$T/sp' >/dev/null"
 mkdir -p "$T/half" && "$BIN" tiles --quiet --shard 0/2 $O "$T/dem.pgm" "$T/roads.txt" "$T/half"
 check "--from-children with a shard missing fails naming a tile" sh -c "! '$BIN' tiles --quiet --from-children $O '$T/dem.pgm' '$T/roads.txt' '$T/half' 2>'$T/e' && grep -q 'run its shard' '$T/e' && test ! -e '$T/half/tiles.json'"
@@ -154,6 +154,8 @@ check "terrain-only: the manifest states the rule" grep -q 'terrain only: it is 
 check "--render-all: every tile written = the --dense run's" sh -c "cd '$T/ra' && test \$(find . -name '*.png' | wc -l) = 10 && for f in \$(find . -name '*.png'); do cmp -s \$f '$T/rd/'\$f || exit 1; done"
 for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $R "$T/r.pgm" "$T/r.txt" "$T/rsh" || bad "terrain-only shard $i"; done
 check "terrain-only: 3 shards + merge = one run" sh -c "'$BIN' tiles --quiet --from-children $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
+work() { "$BIN" tiles $R --shard $1/2 "$T/r.pgm" "$T/r.txt" "$T/rw$1" 2>&1 | sed -n 's/.*tiles: \([0-9]*\) rendered.*, \([0-9]*\) terrain-only.*/\1 + \2/p' | bc; }
+check "terrain-only: 2 shards of equal work (renders + terrain-only tiles: $(work 0) and $(work 1))" test $(( $(work 0) - $(work 1) )) -le 1 -a $(( $(work 1) - $(work 0) )) -le 1
 rm -f "$T/rsh/1/1/1.png" "$T/rsh/tiles.json"
 check "terrain-only: --resume remakes a lost direct tile" sh -c "'$BIN' tiles --quiet --resume $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
 E="$D/../docs/examples"
