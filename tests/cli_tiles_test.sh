@@ -160,7 +160,13 @@ rm -f "$T/rsh/1/1/1.png" "$T/rsh/tiles.json"
 check "terrain-only: --resume remakes a lost direct tile" sh -c "'$BIN' tiles --quiet --resume $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
 E="$D/../docs/examples"
 if [ -f "$E/surface.txt" ]; then
-    check "the styles' surface images are inputs of the manifest" sh -c "'$BIN' tiles --quiet --texels 2 '$E/dem.pgm' '$E/surface.txt' '$T/su' && grep -q '\"role\": \"surface\", \"path\": \"[^\"]*asphalt-strip.png\", \"sha256\": \"[0-9a-f]\{64\}' '$T/su/tiles.json'"
+    if "$BIN" tiles --quiet --texels 2 "$E/dem.pgm" "$E/surface.txt" "$T/su" 2>"$T/e"; then
+        check "the styles' surface images are inputs of the manifest" grep -q '"role": "surface", "path": "[^"]*asphalt-strip.png", "sha256": "[0-9a-f]\{64\}' "$T/su/tiles.json"
+    elif grep -q 'OpenImageIO module' "$T/e"; then
+        echo "SKIP: surface images: $(cat "$T/e")"
+    else
+        bad "surface images: $(cat "$T/e")"
+    fi
 fi
 check "terrain-only with --halo 3: every halo pixel = the neighbour's" sh -c "'$BIN' tiles --quiet --halo 3 $R '$T/r.pgm' '$T/r.txt' '$T/rh' && $PY halo '$T/rh'"
 
