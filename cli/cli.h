@@ -191,6 +191,7 @@ typedef struct cli_splat_args {
     int cell_size_given, origin_given;
     const char *layer, *where; /* --layer NAME, --where SQL: GIS road sources (cli/geo.c) */
     int strict;                /* --strict: no road on the map is an error, not a warning */
+    int light_given;           /* --sun or --specular (they need --lighting) */
 } cli_splat_args;
 /* Splits an argument "--name=value" into name (NUL-terminated, cut to
  * CLI_OPT_NAME - 1 bytes) and the inline value (NULL without '='). */
@@ -201,6 +202,13 @@ int cli_option_value(int argc, char **argv, int *i, const char *name, const char
 /* When `name` is a splat option, read and apply its value: 0, or 1 on a bad
  * value (error printed). -1 when `name` is not a splat option. */
 int cli_splat_option(int argc, char **argv, int *i, const char *name, const char *inl, cli_splat_args *s);
+/* Lit output (docs/surface.md): --lighting, --sun AZ,ALT, --specular K for
+ * the main command and tiles (render has its own GL lighting options).
+ * Returns as cli_splat_option. */
+int cli_lighting_option(int argc, char **argv, int *i, const char *name, const char *inl, cli_splat_args *s);
+/* After the options: --sun and --specular without --lighting is an error
+ * (printed; 1), else 0. */
+int cli_lighting_check(const cli_splat_args *s);
 /* The DEM, the parsed roads and the textures named in s; sets s->o's
  * texture pointers into `in`. Errors printed; free with cli_splat_input_free
  * (also after a failed load). */

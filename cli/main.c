@@ -98,7 +98,6 @@ typedef struct args {
     rs_normal_options normal;
     int normal_given; /* --normal-convention or --normal-strength */
     int conv_given;   /* --normal-convention */
-    int light_given;  /* --sun or --specular */
     int quiet, have_window, have_window_world, world_file, cog, rgba;
     uint32_t window[4];
     double window_world[4]; /* XMIN, YMIN, XMAX, YMAX */
@@ -190,6 +189,7 @@ static int parse_args(int argc, char **argv, args *a)
             continue;
         }
         int sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
+        if (sr < 0) sr = cli_lighting_option(argc, argv, &i, name, inl, &a->s);
         if (sr > 0) return 1;
         if (sr == 0) continue;
         if (!strcmp(name, "--weight-out")) {
@@ -215,31 +215,6 @@ static int parse_args(int argc, char **argv, args *a)
                 return 1;
             }
             a->normal_given = 1;
-        } else if (!strcmp(name, "--lighting")) {
-            if (inl) { cli_error("%s takes no value", name); return 1; }
-            a->s.o.lighting.enable = 1;
-        } else if (!strcmp(name, "--sun")) {
-            const char *v;
-            double d[2];
-            if (cli_option_value(argc, argv, &i, name, inl, &v) || cli_parse_vec(name, v, d, 2)) return 1;
-            if (!(d[0] >= -360 && d[0] <= 360 && d[1] > 0 && d[1] <= 90)) {
-                cli_error("%s: '%s': azimuth must be -360..360 and altitude in (0, 90] degrees", name, v);
-                return 1;
-            }
-            a->s.o.lighting.sun_given = 1;
-            a->s.o.lighting.sun_azimuth = d[0];
-            a->s.o.lighting.sun_altitude = d[1];
-            a->light_given = 1;
-        } else if (!strcmp(name, "--specular")) {
-            const char *v;
-            if (cli_option_value(argc, argv, &i, name, inl, &v) ||
-                cli_parse_double(name, v, &a->s.o.lighting.specular))
-                return 1;
-            if (!(a->s.o.lighting.specular >= 0 && a->s.o.lighting.specular <= 1)) {
-                cli_error("%s: '%s' must be in [0, 1]", name, v);
-                return 1;
-            }
-            a->light_given = 1;
         } else if (!strcmp(name, "--stats")) {
             if (cli_option_value(argc, argv, &i, name, inl, &a->stats)) return 1;
         } else if (!strcmp(name, "--window")) {
@@ -262,10 +237,7 @@ static int parse_args(int argc, char **argv, args *a)
                   "--lighting)");
         return 1;
     }
-    if (a->light_given && !a->s.o.lighting.enable) {
-        cli_error("--sun and --specular need --lighting");
-        return 1;
-    }
+    if (cli_lighting_check(&a->s)) return 1;
     a->s.o.lighting.normal.strength = a->normal.strength;
     if (a->have_window && a->have_window_world) {
         cli_error("--window and --window-world are exclusive (output pixels or world units)");

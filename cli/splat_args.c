@@ -230,6 +230,48 @@ static int load_surface_images(cli_splat_args *s, const char *roads_path, size_t
     return 0;
 }
 
+int cli_lighting_option(int argc, char **argv, int *i, const char *name, const char *inl, cli_splat_args *s)
+{
+    rs_lighting_options *l = &s->o.lighting;
+    const char *v;
+    if (!strcmp(name, "--lighting")) {
+        if (inl) {
+            cli_error("%s takes no value", name);
+            return 1;
+        }
+        l->enable = 1;
+    } else if (!strcmp(name, "--sun")) {
+        double d[2];
+        if (cli_option_value(argc, argv, i, name, inl, &v) || cli_parse_vec(name, v, d, 2)) return 1;
+        if (!(d[0] >= -360 && d[0] <= 360 && d[1] > 0 && d[1] <= 90)) {
+            cli_error("%s: '%s': azimuth must be -360..360 and altitude in (0, 90] degrees", name, v);
+            return 1;
+        }
+        l->sun_given = 1;
+        l->sun_azimuth = d[0];
+        l->sun_altitude = d[1];
+        s->light_given = 1;
+    } else if (!strcmp(name, "--specular")) {
+        if (cli_option_value(argc, argv, i, name, inl, &v) || cli_parse_double(name, v, &l->specular)) return 1;
+        if (!(l->specular >= 0 && l->specular <= 1)) {
+            cli_error("%s: '%s' must be in [0, 1]", name, v);
+            return 1;
+        }
+        s->light_given = 1;
+    } else
+        return -1;
+    return 0;
+}
+
+int cli_lighting_check(const cli_splat_args *s)
+{
+    if (s->light_given && !s->o.lighting.enable) {
+        cli_error("--sun and --specular need --lighting");
+        return 1;
+    }
+    return 0;
+}
+
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in)
 {

@@ -69,6 +69,8 @@ static const char tiles_usage[] =
     "                     (finest tiles = roadsplat --normal-out; coarser: the\n"
     "                     mean of the four children's vectors, renormalised)\n"
     "  --normal-convention gl|dx, --normal-strength S  as for roadsplat --normal-out\n"
+    "  --lighting, --sun AZ,ALT, --specular K  lit tiles, as for roadsplat (the\n"
+    "                     finest tiles = windows of the lit image)\n"
     "  --halo PX          each tile with a PX-pixel border of its neighbours'\n"
     "                     pixels (S + 2 PX square; 0..128, default 0)\n"
     "  --dense            write every tile (default: on levels finer than a DEM\n"
@@ -93,7 +95,7 @@ typedef struct targs {
     const char *dem, *roads, *out;
     uint32_t tile;
     int tms, mbtiles, dense, resume, from_children, quiet, sharded;
-    int normals, normal_given, render_all;
+    int normals, normal_given, conv_given, render_all;
     rs_normal_options normal;
     uint32_t halo;
     uint32_t shard_i, shard_n;
@@ -946,7 +948,7 @@ static int parse_targs(int argc, char **argv, targs *a)
                 return 1;
             }
             a->normal.directx = v[0] == 'd';
-            a->normal_given = 1;
+            a->normal_given = a->conv_given = 1;
             for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
         } else if (!strcmp(name, "--normal-strength")) {
             int i0 = i;
@@ -971,6 +973,7 @@ static int parse_targs(int argc, char **argv, targs *a)
             a->sharded = 1;
         } else {
             int i0 = i, sr = cli_splat_option(argc, argv, &i, name, inl, &a->s);
+            if (sr < 0) sr = cli_lighting_option(argc, argv, &i, name, inl, &a->s);
             if (sr > 0) return 1;
             if (sr < 0) {
                 cli_error("tiles: unknown option '%s' (see roadsplat tiles --help)", arg);
@@ -991,10 +994,13 @@ static int parse_targs(int argc, char **argv, targs *a)
         cli_error("--shard and --from-children are separate steps: shards first, then one --from-children run");
         return 1;
     }
-    if (a->normal_given && !a->normals) {
-        cli_error("--normal-convention and --normal-strength need --normals");
+    if (a->normal_given && !a->normals && (a->conv_given || !a->s.o.lighting.enable)) {
+        cli_error("--normal-convention and --normal-strength need --normals (--normal-strength also serves "
+                  "--lighting)");
         return 1;
     }
+    if (cli_lighting_check(&a->s)) return 1;
+    a->s.o.lighting.normal.strength = a->normal.strength;
     if (a->mbtiles && (a->sharded || a->resume || a->from_children)) {
         cli_error("--format mbtiles is written by one process: use --format png for --shard, --resume and --from-children");
         return 1;

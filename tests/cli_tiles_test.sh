@@ -154,6 +154,15 @@ check "terrain-only: the manifest states the rule" grep -q 'terrain only: it is 
 check "--render-all: every tile written = the --dense run's" sh -c "cd '$T/ra' && test \$(find . -name '*.png' | wc -l) = 10 && for f in \$(find . -name '*.png'); do cmp -s \$f '$T/rd/'\$f || exit 1; done"
 for i in 0 1 2; do "$BIN" tiles --quiet --shard $i/3 $R "$T/r.pgm" "$T/r.txt" "$T/rsh" || bad "terrain-only shard $i"; done
 check "terrain-only: 3 shards + merge = one run" sh -c "'$BIN' tiles --quiet --from-children $R '$T/r.pgm' '$T/r.txt' '$T/rsh' && diff -r -x .tiles-log '$T/rsh' '$T/rt' >/dev/null"
+# lit tiles (--lighting): finest tiles = windows of the lit image; no terrain-only shortcut
+L="--texels 1 --lighting --sun 200,30"
+check "lit run exits 0" "$BIN" tiles --quiet $L "$T/r.pgm" "$T/r.txt" "$T/lit"
+"$BIN" --quiet $L --window 256,0,256,256 "$T/r.pgm" "$T/r.txt" "$T/l1.png"
+check "lit tile 1/1/0 = the lit splat's window" cmp -s "$T/l1.png" "$T/lit/1/1/0.png"
+"$BIN" tiles --quiet --texels 1 "$T/r.pgm" "$T/r.txt" "$T/unlit"
+check "lit tiles differ from unlit ones" sh -c "! cmp -s '$T/lit/1/1/0.png' '$T/unlit/1/1/0.png'"
+check "lit: the manifest records --lighting and --sun" grep -q '"--lighting", "--sun", "200,30"' "$T/lit/tiles.json"
+check "tiles: --sun without --lighting is refused" sh -c "! '$BIN' tiles --quiet --sun 200,30 '$T/r.pgm' '$T/r.txt' '$T/x' 2>'$T/e' && grep -q 'need --lighting' '$T/e'"
 work() { "$BIN" tiles $R --shard $1/2 "$T/r.pgm" "$T/r.txt" "$T/rw$1" 2>&1 | sed -n 's/.*tiles: \([0-9]*\) rendered.*, \([0-9]*\) terrain-only.*/\1 + \2/p' | bc; }
 check "terrain-only: 2 shards of equal work (renders + terrain-only tiles: $(work 0) and $(work 1))" test $(( $(work 0) - $(work 1) )) -le 1 -a $(( $(work 1) - $(work 0) )) -le 1
 rm -f "$T/rsh/1/1/1.png" "$T/rsh/tiles.json"
