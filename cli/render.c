@@ -16,6 +16,7 @@ int cli_render_main(int argc, char **argv)
 
 #else
 #include "render_gl.h"
+#include "render_shader.h"
 #include "gis.h"
 
 #include <math.h>
@@ -51,7 +52,11 @@ static const char render_usage[] =
     "  --sun AZ,ALT        sun azimuth (compass, degrees) and altitude (default 315,45)\n"
     "  --lighting on|off   shade the texture by the sun (default on)\n"
     "  --fog               linear distance fog towards the horizon colour\n"
-    "  --ortho             top-down orthographic view of the whole map\n"
+    "  --ortho             top-down orthographic view of the whole map: at the splat's\n"
+    "                      size one pixel is one texel (the CPU cross-check)\n"
+    "  --roads MODE        shader: the fragment shader draws roads, styles and markings\n"
+    "                      per screen pixel (OpenGL 3.3 core; default when available);\n"
+    "                      texture: the CPU splat as the terrain texture\n"
     "  --frames N          render the view N times, for timing (default 1; 10 with --stats)\n"
     "  --tile-size N       split the texture into tiles of at most N texels per side\n"
     "                      (default: only when it exceeds GL_MAX_TEXTURE_SIZE)\n"
@@ -65,6 +70,7 @@ typedef struct render_args {
     int have_size, have_camera, have_look, have_pixel_error;
     double camera[3], look[3], fov, pixel_error, sun_az, sun_alt;
     int lighting, fog, ortho, quiet;
+    int roads_mode; /* 0: shader when the context supports it, 1: texture, 2: shader (asked for) */
 } render_args;
 
 /* 0 run, 1 usage error, 2 --help handled. */
@@ -138,6 +144,10 @@ static int parse_render_args(int argc, char **argv, render_args *a)
         } else if (!strcmp(name, "--tile-size")) {
             if (cli_parse_u32(name, v, &a->tile_size)) return 1;
             if (a->tile_size < 16) { cli_error("%s: '%s' must be >= 16", name, v); return 1; }
+        } else if (!strcmp(name, "--roads")) {
+            if (!strcmp(v, "shader")) a->roads_mode = 2;
+            else if (!strcmp(v, "texture")) a->roads_mode = 1;
+            else { cli_error("%s: '%s' is not 'shader' or 'texture'", name, v); return 1; }
         } else if (!strcmp(name, "--stats")) a->stats = v;
         else { cli_error("render: unknown option '%s' (see roadsplat render --help)", arg); return 1; }
     }
@@ -218,6 +228,64 @@ static void clip_range(rg_view *v)
     v->fog_end = fmax(v->zfar * 1.3, v->fog_start + 1.0);
 }
 
+/* One splat of `roads` (styles and markings off) into a new tw x th RGBA
+ * buffer; the error is printed. */
+static int splat_plain(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, const rs_roads *roads,
+                       const char *what, uint32_t tw, uint32_t th, uint8_t **out)
+{
+    rs_splat_options o = a->s.o;
+    o.style.disable = 1;
+    o.markings.disable = 1;
+    o.progress = NULL;
+    o.progress_user = NULL;
+    rs_road_grid *grid = NULL;
+    rs_splatter *sp = NULL;
+    int rc = 1;
+    rs_result r = rs_road_grid_build(ctx, in->dem, roads, &o, &grid);
+    if (!r) r = rs_splatter_create(ctx, in->dem, NULL, grid, &o, &sp);
+    if (r) {
+        cli_error("render: %s: %s", what, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    *out = malloc((size_t)tw * th * 4);
+    if (!*out) { cli_error("render: out of memory for a %u x %u %s", tw, th, what); goto done; }
+    cli_splat_job job;
+    cli_splat_job_init(&job, sp, &a->s, 1);
+    job.rgba = *out;
+    if (cli_splat_run(&job)) goto done;
+    rc = 0;
+done:
+    rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, grid);
+    return rc;
+}
+
+/* The shader mode's textures: the terrain colour T (the splat with no
+ * roads) and the unstyled road surface S (the splat under one road wider
+ * than the map: procedural asphalt or --road-texture, exactly the CPU's S). */
+static int bake_surfaces(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, uint32_t tw, uint32_t th,
+                         uint8_t **terrain, uint8_t **road)
+{
+    rs_roads *none = NULL, *all = NULL;
+    int rc = 1;
+    rs_dem_frame fr;
+    rs_dem_get_frame(in->dem, &fr);
+    double w = (rs_dem_width(in->dem) - 1) * fr.cell_size, h = (rs_dem_height(in->dem) - 1) * fr.cell_size;
+    double xy[4] = { fr.origin_x - w - 1, fr.origin_y + h / 2, fr.origin_x + 2 * w + 1, fr.origin_y + h / 2 };
+    rs_result r = rs_roads_create(ctx, &none);
+    if (!r) r = rs_roads_create(ctx, &all);
+    if (!r) r = rs_roads_add(ctx, all, "surface", 2 * (w + h) + 4, xy, 2);
+    if (r) { cli_error("render: %s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r)); goto done; }
+    if (splat_plain(ctx, in, a, none, "terrain texture", tw, th, terrain) ||
+        splat_plain(ctx, in, a, all, "road surface texture", tw, th, road))
+        goto done;
+    rc = 0;
+done:
+    rs_roads_free(ctx, none);
+    rs_roads_free(ctx, all);
+    return rc;
+}
+
 int cli_render_main(int argc, char **argv)
 {
     render_args a;
@@ -233,6 +301,9 @@ int cli_render_main(int argc, char **argv)
     rs_road_grid *grid = NULL;
     rs_roam *roam = NULL;
     rg_renderer *gl = NULL;
+    rsh_renderer *sh = NULL;
+    rs_gpu_scene *scene = NULL;
+    uint8_t *tex_road = NULL;
     char err[256];
     uint8_t *tex = NULL, *frame = NULL;
     float *vtx = NULL, *nrm = NULL;
@@ -282,19 +353,7 @@ int cli_render_main(int argc, char **argv)
     /* the texture: the CPU splat */
     uint32_t tw, th;
     if ((r = rs_splat_size(ctx, dem, &a.s.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
-    double t1 = cli_now_ms();
-    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
-    t_grid = cli_now_ms() - t1;
-    t1 = cli_now_ms();
-    tex = malloc((size_t)tw * th * 4);
-    if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
-    {
-        cli_splat_job job;
-        cli_splat_job_init(&job, sp, &a.s, a.quiet);
-        job.rgba = tex;
-        if (cli_splat_run(&job)) goto done;
-    }
-    t_splat = cli_now_ms() - t1;
+    double t1;
 
     /* the mesh */
     t1 = cli_now_ms();
@@ -349,17 +408,63 @@ int cli_render_main(int argc, char **argv)
         view.look[2] -= 1.0;
     clip_range(&view);
 
+    /* the shader mode when the context supports it (docs/render.md "Shader mode") */
     t1 = cli_now_ms();
-    if (!(gl = rg_create(a.width, a.height, err, sizeof err))) { cli_error("render: %s", err); goto done; }
-    t_ctx = cli_now_ms() - t1;
-    t1 = cli_now_ms();
-    if (rg_upload_texture(gl, tex, tw, th, a.tile_size, &view, &tst, err, sizeof err)) {
-        cli_error("render: %s", err);
-        goto done;
+    memset(&tst, 0, sizeof tst);
+    if (a.roads_mode != 1) {
+        if (!(sh = rsh_create(a.width, a.height, err, sizeof err)))
+            fprintf(stderr, "roadsplat: note: render: %s; drawing the roads as a texture (--roads texture)\n", err);
+        else if (tw > rsh_max_texture_size(sh) || th > rsh_max_texture_size(sh)) {
+            fprintf(stderr, "roadsplat: note: render: the %u x %u texture exceeds GL_MAX_TEXTURE_SIZE %u of the "
+                    "shader mode; drawing the roads as a texture (--roads texture)\n", tw, th, rsh_max_texture_size(sh));
+            rsh_destroy(sh);
+            sh = NULL;
+        }
     }
-    t_upload = cli_now_ms() - t1;
+    t_ctx = cli_now_ms() - t1;
+    if (sh) {
+        /* terrain colour T and road surface S baked on the CPU, the roads
+         * exported for the fragment shader */
+        t1 = cli_now_ms();
+        if (bake_surfaces(ctx, &in, &a, tw, th, &tex, &tex_road)) goto done;
+        t_splat = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if ((r = rs_gpu_scene_create(ctx, dem, in.roads, &a.s.o, NULL, &scene))) {
+            cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+            goto done;
+        }
+        t_grid = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if (rsh_upload(sh, scene, tex, tex_road, tw, th, err, sizeof err)) { cli_error("render: %s", err); goto done; }
+        t_upload = cli_now_ms() - t1;
+    } else {
+        t1 = cli_now_ms();
+        if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
+        t_grid = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        tex = malloc((size_t)tw * th * 4);
+        if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
+        {
+            cli_splat_job job;
+            cli_splat_job_init(&job, sp, &a.s, a.quiet);
+            job.rgba = tex;
+            if (cli_splat_run(&job)) goto done;
+        }
+        t_splat = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if (!(gl = rg_create(a.width, a.height, err, sizeof err))) { cli_error("render: %s", err); goto done; }
+        t_ctx += cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if (rg_upload_texture(gl, tex, tw, th, a.tile_size, &view, &tst, err, sizeof err)) {
+            cli_error("render: %s", err);
+            goto done;
+        }
+        t_upload = cli_now_ms() - t1;
+    }
     free(tex);
     tex = NULL;
+    free(tex_road);
+    tex_road = NULL;
 
     frame_ms = malloc(a.frames * sizeof *frame_ms);
     mesh_ms = malloc(a.frames * sizeof *mesh_ms);
@@ -415,7 +520,11 @@ int cli_render_main(int argc, char **argv)
             goto done;
         }
         double f1 = cli_now_ms();
-        if (rg_draw(gl, &view, vtx, nrm, nv, idx, ni, err, sizeof err)) { cli_error("render: %s", err); goto done; }
+        if (sh ? rsh_draw(sh, &view, vtx, nrm, nv, idx, ni, err, sizeof err)
+               : rg_draw(gl, &view, vtx, nrm, nv, idx, ni, err, sizeof err)) {
+            cli_error("render: %s", err);
+            goto done;
+        }
         double f2 = cli_now_ms();
         mesh_ms[f] = f1 - f0;
         draw_ms[f] = f2 - f1;
@@ -426,7 +535,8 @@ int cli_render_main(int argc, char **argv)
     t1 = cli_now_ms();
     frame = malloc((size_t)a.width * a.height * 4);
     if (!frame) { cli_error("out of memory for a %u x %u image", a.width, a.height); goto done; }
-    rg_read_rgba(gl, frame);
+    if (sh) rsh_read_rgba(sh, frame);
+    else rg_read_rgba(gl, frame);
     for (size_t k = 0; k < (size_t)a.width * a.height; k++) /* RGBA -> RGB in place */
         memmove(frame + 3 * k, frame + 4 * k, 3);
     t_readback = cli_now_ms() - t1;
@@ -451,7 +561,8 @@ int cli_render_main(int argc, char **argv)
         }
         double fm = median(frame_ms, a.frames), mm = median(mesh_ms, a.frames), dm = median(draw_ms, a.frames);
         char desc[256];
-        rg_describe(gl, desc, sizeof desc);
+        if (sh) rsh_describe(sh, desc, sizeof desc);
+        else rg_describe(gl, desc, sizeof desc);
         fprintf(so.f, "{\n  \"command\": \"render\",\n  \"gl\": \"%s\",\n", desc);
         fprintf(so.f, "  \"width\": %u,\n  \"height\": %u,\n  \"mode\": \"%s\",\n", a.width, a.height, a.ortho ? "ortho" : "perspective");
         /* in the frame of --camera / --look-at */
@@ -461,6 +572,12 @@ int cli_render_main(int argc, char **argv)
                 world ? view.look[0] + wx0 : view.look[0], world ? wy0 - view.look[1] : view.look[1], view.look[2],
                 a.fov);
         fprintf(so.f, "  \"lighting\": %s,\n  \"fog\": %s,\n", a.lighting ? "true" : "false", a.fog ? "true" : "false");
+        fprintf(so.f, "  \"roads\": \"%s\",\n", sh ? "shader" : "texture");
+        if (scene)
+            fprintf(so.f, "  \"scene\": {\"segments\": %zu, \"index_cell\": %.9g, \"index_cells\": %zu, "
+                          "\"index_entries\": %zu, \"bands\": %zu, \"markings\": %zu, \"bytes\": %zu},\n",
+                    scene->nseg, scene->cell, (size_t)scene->gw * scene->gh, scene->nseg_entries, scene->nbands,
+                    scene->nmarks, scene->bytes);
         if (a.triangles) fprintf(so.f, "  \"triangle_budget\": %u,\n", a.triangles);
         else fprintf(so.f, "  \"pixel_error\": %.9g,\n", a.pixel_error);
         fprintf(so.f, "  \"triangles\": %u,\n  \"vertices\": %zu,\n  \"roam_threshold\": %.9g,\n"
@@ -488,7 +605,9 @@ done:
     cli_out_abort(&out); /* no-ops once committed */
     cli_out_abort(&so);
     rg_destroy(gl);
-    free(frame); free(tex);
+    rsh_destroy(sh);
+    rs_gpu_scene_free(ctx, scene);
+    free(frame); free(tex); free(tex_road);
     free(vtx); free(nrm); free(idx);
     free(frame_ms); free(mesh_ms); free(draw_ms);
     rs_roam_free(ctx, roam);
