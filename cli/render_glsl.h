@@ -51,6 +51,8 @@ static const char *const rsh_fs_src[] = {
     "uniform vec4 u_grid;\n"           /* x0, y0, 1 / cell, reach */
     "uniform ivec2 u_gdim;\n"
     "uniform int u_lighting;\n"
+    "uniform sampler2D u_normal;\n"   /* rs_normal_window: R east, G north, B up */
+    "uniform int u_nmap;\n"
     "uniform vec3 u_sun;\n"            /* map frame, unit, towards the sun */
     "uniform vec3 u_amb;\n"
     "uniform vec3 u_dif;\n"
@@ -260,6 +262,7 @@ static const char *const rsh_fs_src[] = {
     "    col = min(col, vec3(1.0));\n"
     "    if (u_lighting != 0) {\n"
     "        vec3 n = normalize(v_nrm);\n"
+    "        if (u_nmap != 0) { vec3 m = texture(u_normal, uv).rgb * 2.0 - 1.0; n = normalize(vec3(m.x, -m.y, m.z)); }\n"
     "        col *= u_amb + u_dif * max(dot(n, u_sun), 0.0);\n"
     "    }\n"
     "    if (u_fog != 0) {\n"

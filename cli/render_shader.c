@@ -69,7 +69,7 @@ struct rsh_renderer {
     GLint max_tex;
     rsh_gl gl;
     GLuint prog, sky_prog, vao, vbo, ibo, sky_vao, sky_vbo;
-    GLuint tex_terrain, tex_road;
+    GLuint tex_terrain, tex_road, tex_normal;
     GLuint bufs[NBUF], btex[NBUF];
     int have_scene;
     double map_w, map_h;
@@ -206,6 +206,7 @@ void rsh_destroy(rsh_renderer *r)
         }
         if (r->tex_terrain) glDeleteTextures(1, &r->tex_terrain);
         if (r->tex_road) glDeleteTextures(1, &r->tex_road);
+        if (r->tex_normal) glDeleteTextures(1, &r->tex_normal);
         if (r->prog) r->gl.DeleteProgram(r->prog);
         if (r->sky_prog) r->gl.DeleteProgram(r->sky_prog);
         if (r->vao) r->gl.DeleteVertexArrays(1, &r->vao);
@@ -233,11 +234,12 @@ void rsh_describe(const rsh_renderer *r, char *out, size_t out_size)
 
 uint32_t rsh_max_texture_size(const rsh_renderer *r) { return (uint32_t)r->max_tex; }
 
-static void tex2d(rsh_renderer *r, GLuint *t, const uint8_t *rgba, uint32_t w, uint32_t h)
+static void tex2d(rsh_renderer *r, GLuint *t, const uint8_t *px, uint32_t w, uint32_t h, GLenum fmt)
 {
     glGenTextures(1, t);
     glBindTexture(GL_TEXTURE_2D, *t);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, (GLsizei)w, (GLsizei)h, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glTexImage2D(GL_TEXTURE_2D, 0, fmt == GL_RGB ? GL_RGB8 : GL_RGBA8, (GLsizei)w, (GLsizei)h, 0, fmt,
+                 GL_UNSIGNED_BYTE, px);
     r->gl.GenerateMipmap(GL_TEXTURE_2D);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -245,15 +247,16 @@ static void tex2d(rsh_renderer *r, GLuint *t, const uint8_t *rgba, uint32_t w, u
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
-int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, const uint8_t *road, uint32_t tex_w,
-               uint32_t tex_h, char *err, size_t err_size)
+int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, const uint8_t *road,
+               const uint8_t *normals, uint32_t tex_w, uint32_t tex_h, char *err, size_t err_size)
 {
     if (tex_w > (uint32_t)r->max_tex || tex_h > (uint32_t)r->max_tex) {
         set_err(err, err_size, "texture larger than GL_MAX_TEXTURE_SIZE");
         return 1;
     }
-    tex2d(r, &r->tex_terrain, terrain, tex_w, tex_h);
-    tex2d(r, &r->tex_road, road ? road : terrain, tex_w, tex_h);
+    tex2d(r, &r->tex_terrain, terrain, tex_w, tex_h, GL_RGBA);
+    tex2d(r, &r->tex_road, road ? road : terrain, tex_w, tex_h, GL_RGBA);
+    if (normals) tex2d(r, &r->tex_normal, normals, tex_w, tex_h, GL_RGB);
     if (g) {
         const struct {
             const void *data;
@@ -428,6 +431,10 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
     r->gl.ActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, r->tex_road);
     r->gl.Uniform1i(r->gl.GetUniformLocation(p, "u_road"), 1);
+    r->gl.ActiveTexture(GL_TEXTURE2 + NBUF);
+    glBindTexture(GL_TEXTURE_2D, r->tex_normal);
+    r->gl.Uniform1i(r->gl.GetUniformLocation(p, "u_normal"), 2 + NBUF);
+    r->gl.Uniform1i(r->gl.GetUniformLocation(p, "u_nmap"), r->tex_normal != 0);
     for (int k = 0; k < NBUF; k++) {
         r->gl.ActiveTexture(GL_TEXTURE2 + k);
         if (r->have_scene) glBindTexture(GL_TEXTURE_BUFFER, r->btex[k]);

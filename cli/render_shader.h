@@ -21,10 +21,12 @@ void rsh_describe(const rsh_renderer *r, char *out, size_t out_size);
 uint32_t rsh_max_texture_size(const rsh_renderer *r);
 
 /* Upload the scene (buffer textures), the terrain colour T and the road
- * surface S (tex_w x tex_h RGBA8 each, top row = map y 0, mipmapped). g may
- * be NULL (terrain only). Returns 0, or non-zero with a message. */
-int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, const uint8_t *road, uint32_t tex_w,
-               uint32_t tex_h, char *err, size_t err_size);
+ * surface S (tex_w x tex_h RGBA8 each, top row = map y 0, mipmapped) and
+ * the normal map for lighting (RGB8 as rs_normal_window, or NULL: the mesh
+ * normals). g may be NULL (terrain only). Returns 0, or non-zero with a
+ * message. */
+int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, const uint8_t *road,
+               const uint8_t *normals, uint32_t tex_w, uint32_t tex_h, char *err, size_t err_size);
 
 /* One frame: sky, then the mesh (5 floats per vertex as rs_roam_extract,
  * normals 3 per vertex, map frame) in one draw call. Ends with glFinish. */

@@ -149,6 +149,14 @@ check "deterministic output (same bytes twice)" sh -c "'$BIN' render $S --quiet 
 check "lighting changes the picture" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 --lighting off '$T/dem.pgm' '$T/roads.txt' '$T/unlit.png' && python3 '$T/png.py' differ '$T/obl.png' '$T/unlit.png'"
 check "fog changes the picture" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 --fog '$T/dem.pgm' '$T/roads.txt' '$T/fog.png' && python3 '$T/png.py' differ '$T/obl.png' '$T/fog.png'"
 
+# camera checks (issue 15): warnings that name the problem; --origin cameras
+# are in the roads' frame
+check "a camera below the terrain is a warning naming it" sh -c "'$BIN' render $S --quiet --size 64x48 --camera 64,48,-100 --look-at 64,30,-100 '$T/dem.pgm' '$T/roads.txt' '$T/below.png' 2>'$T/below.err' && grep -q 'below the terrain' '$T/below.err'"
+check "a view away from the map is a warning naming it" sh -c "'$BIN' render $S --quiet --size 64x48 --camera 64,-50,20 --look-at 64,-100,20 '$T/dem.pgm' '$T/roads.txt' '$T/away.png' 2>'$T/away.err' && grep -q 'misses the map' '$T/away.err'"
+check "a good view gives no warning" sh -c "'$BIN' render $S --quiet --size 64x48 --camera 64,94,30 --look-at 64,30,8 '$T/dem.pgm' '$T/roads.txt' '$T/good.png' 2>'$T/good.err' && test ! -s '$T/good.err'"
+printf 'road main width 12\n990 2048\n1140 2048\nend\n' > "$T/roads_o.txt"
+check "--origin: camera in the roads' frame gives the untranslated picture" sh -c "'$BIN' render $S --quiet --origin 1000,2000 --size 320x240 --camera 1064,2094,30 --look-at 1064,2030,8 --stats '$T/o.json' '$T/dem.pgm' '$T/roads_o.txt' '$T/orig.png' 2>'$T/orig.err' && test ! -s '$T/orig.err' && cmp -s '$T/orig.png' '$T/obl.png' && grep -q '\"frame\": \"origin\"' '$T/o.json' && grep -q '\"camera\": \[1064, 2094, 30\]' '$T/o.json'"
+
 # stats and budgets
 check "stats run exits 0" "$BIN" render $S --quiet --size 320x240 --frames 4 --triangles 400 --stats "$T/s.json" "$T/dem.pgm" "$T/roads.txt" "$T/b.png"
 check "stats JSON has fps, triangles, timings" sh -c "grep -q '\"fps\"' '$T/s.json' && grep -q '\"triangles\"' '$T/s.json' && grep -q '\"timings_ms\"' '$T/s.json' && grep -q '\"frames\": 4' '$T/s.json'"
