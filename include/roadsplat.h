@@ -685,8 +685,11 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   ax, ay, bx, by (end points), half width, s at a (arc length from the
  *   road's first point, summed in double as the road field sums it), road
  *   index, flags (RS_GPU_SEG_FIRST: the road's first segment, its start is
- *   a flat road end; RS_GPU_SEG_LAST: its last). A road of one point is one
- *   segment of length 0. Ascending segment index = ascending road.
+ *   a flat road end; RS_GPU_SEG_LAST: its last); the road's casing width,
+ *   the segment's length and unit direction (1, 0 for length 0), so a
+ *   shader needs neither a division nor a second lookup. A road of one
+ *   point is one segment of length 0. Ascending segment index = ascending
+ *   road.
  * - the index grid: cell (i, j) spans [x0 + i cell, x0 + (i+1) cell) x
  *   [y0 + j cell, ...); cell_start has gw*gh + 1 offsets into cell_seg, which
  *   lists per cell, ascending, the segments whose capsule grown by the road's
@@ -711,7 +714,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   atlas_px: RGBA floats, rgb premultiplied 0..255, a 0..1, row-major,
  *   row 0 = the sprite's top (the way the road runs), exactly the CPU's mip
  *   chains (sampled trilinearly, transparent outside each level). */
-#define RS_GPU_SEG_FLOATS 8
+#define RS_GPU_SEG_FLOATS 12
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
 #define RS_GPU_ROAD_FLOATS 24

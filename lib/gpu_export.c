@@ -243,6 +243,11 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             sg[5] = (float)(m ? rl.s[p] : 0);
             sg[6] = (float)i;
             sg[7] = (float)((p == 0 ? RS_GPU_SEG_FIRST : 0) | (q + 1 >= m ? RS_GPU_SEG_LAST : 0));
+            double len = hypot(bx - ax, by - ay);
+            sg[8] = (float)sty->casing_width;
+            sg[9] = (float)len;
+            sg[10] = len > 0 ? (float)((bx - ax) / len) : 1.0f;
+            sg[11] = len > 0 ? (float)((by - ay) / len) : 0.0f;
         }
         if (m >= 2) {
             for (int e = 0; e < 2; e++) {

@@ -66,7 +66,11 @@ static void test_scene(void)
     CHECK(s[0] == 20 && s[5] == 20 && s[6] == 0 && s[7] == RS_GPU_SEG_LAST);
     s = g->seg + 4 * RS_GPU_SEG_FLOATS;
     CHECK(s[6] == 3 && s[4] == 1.5f && s[7] == RS_GPU_SEG_FIRST);
-    CHECK_NEAR(s[8 + 5], hypot(10, 7), 1e-5);
+    CHECK_NEAR(s[RS_GPU_SEG_FLOATS + 5], hypot(10, 7), 1e-5);
+    CHECK_NEAR(s[9], hypot(10, 7), 1e-5);
+    CHECK_NEAR(s[10], 10 / hypot(10, 7), 1e-6);
+    CHECK(s[8] == 0);
+    CHECK(g->seg[8] == (float)g->road[2]);
     /* the index: per cell ascending, and complete: a segment within its half
      * width + casing + reach of a cell's centre is listed there */
     int complete = 1, ascending = 1;
