@@ -15,7 +15,7 @@ mkdir -p "$OUT"
 MD="$OUT/render_shader.md"; CSV="$OUT/render_shader.csv"
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 DEM=docs/examples/dem.pgm
-G="--cell-size 5 --z-scale 0.01 --texels 4 --quiet --triangles 20000 --camera 400,700,160 --look-at 400,260,20"
+G="--cell-size 5 --z-scale 0.01 --texels 4 --quiet --triangles 20000 --camera 400,700,160 --look-at 400,260,20 --lighting off"
 
 # NV vertices in NR wavy roads across the map (x from X0 to X1), style STYLE;
 # the four symbol types of seed 003's table as style blocks.
@@ -48,7 +48,7 @@ fi
 renderer=$(sed -n 's/.*"gl": "\(.*\)".*/\1/p' "$T/probe.json")
 echo "\`roadsplat render --roads shader\` over docs/examples/dem.pgm (160x120 samples, 5 m cells, 636x476"
 echo "texels for T and S), ROAM held near 20,000 triangles, an oblique camera over the whole map, lighting"
-echo "on (per-pixel normal map). Roads: 40 roads of 20 vertices (800), 50 of 40 (2,000), 50 of 200"
+echo "off (the roads' cost; lighting adds one normal-map sample per pixel). Roads: 40 roads of 20 vertices (800), 50 of 40 (2,000), 50 of 200"
 echo "(10,000), 7 m wide, wavy, across the map. Symbols (seed 003's types as style blocks): *line* = one"
 echo "colour (fill); *road* = casing + fill + centre line; *boundary* = two dashed edge lines on the"
 echo "default surface; *combined* = casing + gradient + dashed centre line + two edge lines. fps = 1000 /"
@@ -81,16 +81,22 @@ echo
 # Per-pixel cost against the number of roads: a camera over the west of the
 # map sees the same 2,000 road vertices; 8,000 more far away (east, off the
 # screen) are in the scene or not.
-V="--cell-size 5 --z-scale 0.01 --texels 4 --quiet --triangles 20000 --size 1280x960 --camera 150,420,140 --look-at 150,300,0"
+V="--cell-size 5 --z-scale 0.01 --texels 4 --quiet --triangles 20000 --lighting off --size 1280x960 --camera 150,420,140 --look-at 150,300,0"
 roads 2000 50 -10 300 combined > "$T/near.txt"
 { cat "$T/near.txt"; roads 8000 40 520 805 combined | sed 's/^road r/road far/; /^style/,/^end/d'; } > "$T/all.txt"
-"$BIN" render $V --frames "$FRAMES" --stats "$T/n.json" "$DEM" "$T/near.txt" "$T/n.png"
-"$BIN" render $V --frames "$FRAMES" --stats "$T/a.json" "$DEM" "$T/all.txt" "$T/a.png"
-fn=$(val fps "$T/n.json"); fa=$(val fps "$T/a.json")
+# alternating runs, the best of three each: the machine is shared
+fn=0; fa=0
+for k in 1 2 3; do
+    "$BIN" render $V --frames "$FRAMES" --stats "$T/n.json" "$DEM" "$T/near.txt" "$T/n.png"
+    fn=$(awk -v a="$fn" -v b="$(val fps "$T/n.json")" 'BEGIN { print (b > a ? b : a) }')
+    "$BIN" render $V --frames "$FRAMES" --stats "$T/a.json" "$DEM" "$T/all.txt" "$T/a.png"
+    fa=$(awk -v a="$fa" -v b="$(val fps "$T/a.json")" 'BEGIN { print (b > a ? b : a) }')
+done
 sn=$(val segments "$T/n.json"); sa=$(val segments "$T/a.json")
 same=$(cmp -s "$T/n.png" "$T/a.png" && echo "identical" || echo "different")
 echo "Per-pixel cost follows the roads near the pixel (index grid), not their number: a view of the"
-echo "west of the map (1280x960, combined symbols, 2,000 road vertices in view) at $fn fps with"
+echo "west of the map (1280x960, combined symbols, 2,000 road vertices in view; best of three"
+echo "alternating runs each) at $fn fps with"
 echo "$sn segments in the scene, and at $fa fps with $sa ($(awk -v a="$fa" -v b="$fn" 'BEGIN { printf "%.2f", a / b }')x)"
 echo "when 8,000 vertices of roads are added far away, off the screen; the pictures are $same."
 } > "$MD"
