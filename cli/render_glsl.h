@@ -67,27 +67,30 @@ static const char *const rsh_fs_src[] = {
     "vec2 dpx, dpy;\n"
     /* P(X <= x) for X the pixel footprint's offset along unit direction n:
      * the sum of two uniform variables of widths |n.dpx| and |n.dpy|. */
-    "float cdf(float x, vec2 n) {\n"
+
+    /* the same for many x along one direction n: fp(n) once, cdfp(x, F) per x */
+    "vec4 fp(vec2 n) {\n"
     "    float e1 = abs(dot(n, dpx)), e2 = abs(dot(n, dpy));\n"
-    "    float a = max(e1, e2), b = min(e1, e2);\n"
-    "    if (a < 1e-9) return x >= 0.0 ? 1.0 : 0.0;\n"
-    "    float ax = abs(x), h = 0.5 * (a + b), k = 0.5 * (a - b), v;\n"
-    "    if (ax <= k) v = 0.5 + ax / a;\n"
-    "    else if (ax >= h) v = 1.0;\n"
-    "    else { float d = h - ax; v = 1.0 - d * d / (2.0 * a * b); }\n"
+    "    float a = max(max(e1, e2), 1e-9), b = min(e1, e2);\n"
+    "    return vec4(0.5 * (a + b), 0.5 * (a - b), 1.0 / a, b > 1e-12 ? 0.5 / (a * b) : 0.0);\n"
+    "}\n"
+    "float cdfp(float x, vec4 F) {\n"
+    "    float ax = abs(x), d = max(F.x - ax, 0.0);\n"
+    "    float v = ax <= F.y ? min(0.5 + ax * F.z, 1.0) : 1.0 - d * d * F.w;\n"
     "    return x >= 0.0 ? v : 1.0 - v;\n"
     "}\n"
-    /* nearest point of segment k: d, u (along, unclamped), side (+ left) */
+    "float cdf(float x, vec2 n) { return cdfp(x, fp(n)); }\n"
+    /* nearest point of segment k: d, u (along, unclamped), side (+ left) */,
     "struct Seg { vec2 a; vec2 dir; float len; float r; float s0; int road; int flags; float cw; };\n"
     "Seg seg_load(int k) {\n"
     "    vec4 p = texelFetch(u_seg, 3 * k), q = texelFetch(u_seg, 3 * k + 1), c = texelFetch(u_seg, 3 * k + 2);\n"
     "    Seg s; s.a = p.xy; s.len = c.y; s.dir = c.zw; s.cw = c.x;\n"
     "    s.r = q.x; s.s0 = q.y; s.road = int(q.z); s.flags = int(q.w);\n"
-    "    return s;\n"
+    "    return s;\n",
     "}\n"
     /* road coordinates of p at segment k: s, t, t's direction, the tangent
      * and the box filter at a flat road end */
-    "void road_coords(vec2 p, int k, out float rs, out float rt, out vec2 nt, out vec2 tg, out float ef) {\n",
+    "void road_coords(vec2 p, int k, out float rs, out float rt, out vec2 nt, out vec2 tg, out float ef) {\n"
     "    Seg s = seg_load(k);\n"
     "    vec2 w = p - s.a;\n"
     "    float u = dot(w, s.dir), side = w.x * s.dir.y - w.y * s.dir.x;\n"
@@ -141,11 +144,11 @@ static const char *const rsh_fs_src[] = {
     "    vec2 cf = floor((p - u_grid.xy) * u_grid.z);\n"
     "    bool inside = u_roads != 0 && cf.x >= 0.0 && cf.y >= 0.0 && cf.x < float(u_gdim.x) && cf.y < float(u_gdim.y);\n"
     "    int cell = inside ? int(cf.y) * u_gdim.x + int(cf.x) : 0;\n"
-    "    int e0 = int(texelFetch(u_cstart, cell).r), e1 = inside ? int(texelFetch(u_cstart, cell + 1).r) : e0;\n"
+    "    int e0 = int(texelFetch(u_cstart, cell).r), e1 = inside ? int(texelFetch(u_cstart, cell + 1).r) : e0;\n",
     "    ONCE(e1 > e0) {\n"
     "        float sdR = 1e30, sdC = 1e30, dS = 1e30, dC = 1e30;\n"
     "        vec2 nR = vec2(1.0, 0.0), nC = vec2(1.0, 0.0);\n"
-    "        int roadS = -1, roadC = -1; float tS = 0.0;\n",
+    "        int roadS = -1, roadC = -1; float tS = 0.0;\n"
     "        for (int e = e0; e < e1; e++) {\n"
     "            int k = int(texelFetch(u_cseg, e).r);\n"
     "            Seg s = seg_load(k);\n"
@@ -189,18 +192,18 @@ static const char *const rsh_fs_src[] = {
      * markings paint S, which shows only where R > 0 */
     "        ONCE(R > 0.0) {\n"
     /* the roads of the cell's list (ascending: grouped by road): each
-     * one's nearest segment and the cover of its own surface */
+     * one's nearest segment and the cover of its own surface */,
     "        int ng = 0;\n"
     "        int gRoad[MAXG]; int gSeg[MAXG]; float gD[MAXG]; float gSd[MAXG]; vec2 gN[MAXG];\n"
     "        for (int e = e0; e < e1; e++) {\n"
     "            int k = int(texelFetch(u_cseg, e).r);\n"
     "            Seg s = seg_load(k);\n"
     "            vec2 w = p - s.a;\n"
-    "            vec2 q = s.a + clamp(dot(w, s.dir), 0.0, s.len) * s.dir;\n"
+    "            vec2 q = s.a + clamp(dot(w, s.dir), 0.0, s.len) * s.dir;\n",
     "            vec2 pq = p - q; float d = length(pq), sd = d - s.r;\n"
     "            if (ng == 0 || gRoad[ng - 1] != s.road) {\n"
     "                if (ng == MAXG) break;\n"
-    "                gRoad[ng] = s.road; gSeg[ng] = k; gD[ng] = d; gSd[ng] = sd; gN[ng] = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x); ng++;\n",
+    "                gRoad[ng] = s.road; gSeg[ng] = k; gD[ng] = d; gSd[ng] = sd; gN[ng] = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x); ng++;\n"
     "            } else {\n"
     "                if (d < gD[ng - 1]) { gD[ng - 1] = d; gSeg[ng - 1] = k; }\n"
     "                if (sd < gSd[ng - 1]) { gSd[ng - 1] = sd; gN[ng - 1] = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x); }\n"
@@ -212,26 +215,28 @@ static const char *const rsh_fs_src[] = {
     "        for (int g = 0; g < ng; g++) {\n"
     "            vec4 r1 = texelFetch(u_roadt, 6 * gRoad[g] + 1);\n"
     "            int b0 = int(texelFetch(u_roadt, 6 * gRoad[g]).w), nb = int(r1.x);\n"
-    "            if (nb == 0) continue;\n"
+    /* a road whose lines cannot reach the pixel is skipped */
+    "            if (nb == 0 || gD[g] > r1.w + foot) continue;\n"
     "            float cut = 1.0;\n"
     "            for (int h = 0; h < ng; h++)\n"
     "                if (h != g && float(gRoad[h]) != r1.y && float(gRoad[h]) != r1.z) cut *= 1.0 - gCov[h];\n"
     "            float s, t, ef; vec2 nt, tg;\n"
     "            road_coords(p, gSeg[g], s, t, nt, tg, ef);\n"
+    "            vec4 Ft = fp(nt), Fs = fp(tg);\n"
     "            float base = ef * cut;\n"
     "            if (!(base > 0.0)) continue;\n"
     "            for (int j = 0; j < nb; j++) {\n"
     "                int bi = 5 * (b0 + j);\n"
     "                vec4 B0 = texelFetch(u_band, bi), col = texelFetch(u_band, bi + 1);\n"
     "                float lo = B0.x - 0.5 * B0.y, hi = B0.x + 0.5 * B0.y;\n"
-    "                float cov = cdf(hi - t, nt) - cdf(lo - t, nt);\n"
+    "                float cov = cdfp(hi - t, Ft) - cdfp(lo - t, Ft);\n"
     "                if (!(cov > 0.0)) continue;\n"
     "                int nd = int(texelFetch(u_band, bi + 2).x);\n"
     "                ONCE(nd > 0 && B0.w > 0.0) {\n"
     "                    vec4 D0 = texelFetch(u_band, bi + 3), D1 = texelFetch(u_band, bi + 4);\n"
     "                    float dash[8] = float[8](D0.x, D0.y, D0.z, D0.w, D1.x, D1.y, D1.z, D1.w);\n"
     "                    float P = B0.w, x = s - B0.z;\n"
-    "                    float ext = 0.5 * (abs(dot(tg, dpx)) + abs(dot(tg, dpy)));\n"
+    "                    float ext = Fs.x;\n"
     "                    float k0 = floor((x - ext) / P), k1 = floor((x + ext) / P);\n"
     "                    float along = 0.0;\n"
     "                    if (k1 - k0 > 3.0) {\n"
@@ -241,7 +246,7 @@ static const char *const rsh_fs_src[] = {
     "                        for (float kk = k0; kk <= k1; kk += 1.0) {\n"
     "                            float o = kk * P;\n"
     "                            for (int m = 0; m < nd; m += 2) {\n"
-    "                                along += cdf(o + dash[m] - x, tg) - cdf(o - x, tg);\n"
+    "                                along += cdfp(o + dash[m] - x, Fs) - cdfp(o - x, Fs);\n",
     "                                o += dash[m] + dash[m + 1];\n"
     "                            }\n"
     "                        }\n"

@@ -698,7 +698,8 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  * - road: RS_GPU_ROAD_FLOATS per road: surface (rs_surface), half width,
  *   casing width (0: none), first band, band count, the road continuing
  *   this one at its start and at its end (-1: none; SPEC junction rule of
- *   docs/linesym.md: shared end point, within 30 degrees of straight), 0;
+ *   docs/linesym.md: shared end point, within 30 degrees of straight), the
+ *   lines' reach (the largest |offset| + width/2 of its bands, 0: none);
  *   fill rgba, gradient centre rgba, gradient edge rgba, casing rgba (rgb
  *   0..255, a 0..1, as the CPU styling holds them).
  * - band: RS_GPU_BAND_FLOATS per line of a style (paint order): offset T,

@@ -228,6 +228,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             bd[2] = (float)ln->phase;
             bd[3] = (float)period;
             put_colour(bd + 4, ln->colour);
+            double breach = fabs(ln->offset) + 0.5 * ln->width;
+            if (breach > rd[7]) rd[7] = (float)breach;
             bd[8] = (float)ln->dash_count;
             for (uint32_t d = 0; d < ln->dash_count && d < 8; d++) bd[12 + d] = (float)ln->dash[d];
         }

@@ -108,6 +108,15 @@ static void test_scene(void)
         }
     }
     CHECK(g->road[4] > 0); /* a primary road has lines */
+    {
+        rs_style st;
+        rs_road_style(ctx, roads, 0, NULL, RS_PROFILE_RMS, &st);
+        double reach = 0;
+        for (uint32_t j = 0; j < st.line_count; j++)
+            reach = fmax(reach, fabs(st.line[j].offset) + 0.5 * st.line[j].width);
+        CHECK_NEAR(g->road[7], reach, 1e-5);
+        CHECK(g->road[3 * RS_GPU_ROAD_FLOATS + 7] == 0);
+    }
     CHECK(g->road[3 * RS_GPU_ROAD_FLOATS + 4] == 0 && g->road[3 * RS_GPU_ROAD_FLOATS + 0] == 0); /* unstyled */
     /* continuations: main_w's end and main_e's end meet head on; north meets them at right angles */
     CHECK(g->road[6] == 1 && g->road[RS_GPU_ROAD_FLOATS + 6] == 0);
