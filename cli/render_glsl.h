@@ -60,10 +60,9 @@ static const char *const rsh_fs_src[] = {
     "uniform vec2 u_fogr;\n"           /* start, end */
     "uniform vec3 u_fogc;\n"
     "const int MAXG = 8;\n"
-    /* ONCE(c): a block run when c holds. llvmpipe runs both sides of an
-     * `if` under a lane mask, but leaves a loop as soon as no lane is in
-     * it: so the blocks that most pixels skip are one-trip loops. */
-    "#define ONCE(c) for (int once_ = (c) ? 1 : 0; once_ > 0; once_--)\n"
+    /* llvmpipe runs every branch, and every loop body at least once,
+     * under a lane mask: the cost is the whole code per pixel group, so
+     * it is kept short and the loops few (measured with callgrind) */
     "vec2 dpx, dpy;\n"
     /* P(X <= x) for X the pixel footprint's offset along unit direction n:
      * the sum of two uniform variables of widths |n.dpx| and |n.dpy|. */
@@ -80,17 +79,17 @@ static const char *const rsh_fs_src[] = {
     "    return x >= 0.0 ? v : 1.0 - v;\n"
     "}\n"
     "float cdf(float x, vec2 n) { return cdfp(x, fp(n)); }\n"
-    /* nearest point of segment k: d, u (along, unclamped), side (+ left) */,
+    /* nearest point of segment k: d, u (along, unclamped), side (+ left) */
     "struct Seg { vec2 a; vec2 dir; float len; float r; float s0; int road; int flags; float cw; };\n"
     "Seg seg_load(int k) {\n"
     "    vec4 p = texelFetch(u_seg, 3 * k), q = texelFetch(u_seg, 3 * k + 1), c = texelFetch(u_seg, 3 * k + 2);\n"
     "    Seg s; s.a = p.xy; s.len = c.y; s.dir = c.zw; s.cw = c.x;\n"
     "    s.r = q.x; s.s0 = q.y; s.road = int(q.z); s.flags = int(q.w);\n"
-    "    return s;\n",
+    "    return s;\n"
     "}\n"
     /* road coordinates of p at segment k: s, t, t's direction, the tangent
      * and the box filter at a flat road end */
-    "void road_coords(vec2 p, int k, out float rs, out float rt, out vec2 nt, out vec2 tg, out float ef) {\n"
+    "void road_coords(vec2 p, int k, out float rs, out float rt, out vec2 nt, out vec2 tg, out float ef) {\n",
     "    Seg s = seg_load(k);\n"
     "    vec2 w = p - s.a;\n"
     "    float u = dot(w, s.dir), side = w.x * s.dir.y - w.y * s.dir.x;\n"
@@ -144,11 +143,15 @@ static const char *const rsh_fs_src[] = {
     "    vec2 cf = floor((p - u_grid.xy) * u_grid.z);\n"
     "    bool inside = u_roads != 0 && cf.x >= 0.0 && cf.y >= 0.0 && cf.x < float(u_gdim.x) && cf.y < float(u_gdim.y);\n"
     "    int cell = inside ? int(cf.y) * u_gdim.x + int(cf.x) : 0;\n"
-    "    int e0 = int(texelFetch(u_cstart, cell).r), e1 = inside ? int(texelFetch(u_cstart, cell + 1).r) : e0;\n",
-    "    ONCE(e1 > e0) {\n"
+    "    int e0 = int(texelFetch(u_cstart, cell).r), e1 = inside ? int(texelFetch(u_cstart, cell + 1).r) : e0;\n"
+    "    if (e1 > e0) {\n"
     "        float sdR = 1e30, sdC = 1e30, dS = 1e30, dC = 1e30;\n"
     "        vec2 nR = vec2(1.0, 0.0), nC = vec2(1.0, 0.0);\n"
     "        int roadS = -1, roadC = -1; float tS = 0.0;\n"
+    /* the roads of the cell's list (ascending: grouped by road): each
+     * one's nearest segment and the signed distance to its own surface */
+    "        int ng = 0;\n",
+    "        int gRoad[MAXG]; int gSeg[MAXG]; float gD[MAXG]; float gSd[MAXG]; vec2 gN[MAXG];\n"
     "        for (int e = e0; e < e1; e++) {\n"
     "            int k = int(texelFetch(u_cseg, e).r);\n"
     "            Seg s = seg_load(k);\n"
@@ -163,19 +166,25 @@ static const char *const rsh_fs_src[] = {
     "            if (sd - cw < sdC) { sdC = sd - cw; nC = n; }\n"
     "            if (sd <= near_reach && d < dS) { dS = d; roadS = s.road; tS = u >= 0.0 && u <= s.len ? side : sign(side) * d; }\n"
     "            if (sd - cw <= near_reach && d < dC) { dC = d; roadC = s.road; }\n"
+    "            if (ng == 0 || gRoad[ng - 1] != s.road) {\n"
+    "                if (ng < MAXG) { gRoad[ng] = s.road; gSeg[ng] = k; gD[ng] = d; gSd[ng] = sd; gN[ng] = n; ng++; }\n"
+    "            } else {\n"
+    "                if (d < gD[ng - 1]) { gD[ng - 1] = d; gSeg[ng - 1] = k; }\n"
+    "                if (sd < gSd[ng - 1]) { gSd[ng - 1] = sd; gN[ng - 1] = n; }\n"
+    "            }\n"
     "        }\n"
     "        R = sdR < 1e29 ? cdf(-sdR, nR) : 0.0;\n"
     "        R = floor(R * 65535.0 + 0.5) / 65535.0;\n"
-    "        ONCE(R > 0.0) S = textureGrad(u_road, uv, duvx, duvy).rgb * 255.0;\n"
+    "        if (R > 0.0) S = textureGrad(u_road, uv, duvx, duvy).rgb * 255.0;\n"
     /* casings onto T */
     "        float C = sdC < 1e29 ? cdf(-sdC, nC) : 0.0;\n"
-    "        ONCE(C > R && R < 1.0 && roadC >= 0) {\n"
+    "        if (C > R && R < 1.0 && roadC >= 0) {\n"
     "            vec4 cc = texelFetch(u_roadt, 6 * roadC + 5);\n"
     "            float a = clamp((min(C, 1.0) - R) / (1.0 - R), 0.0, 1.0) * cc.a;\n"
     "            T = T * (1.0 - a) + cc.rgb * a;\n"
     "        }\n"
     /* fill and gradient surfaces onto S */
-    "        ONCE(R > 0.0 && roadS >= 0) {\n"
+    "        if (R > 0.0 && roadS >= 0) {\n"
     "            vec4 r0 = texelFetch(u_roadt, 6 * roadS);\n"
     "            int kind = int(r0.x);\n"
     "            if (kind != 0) {\n"
@@ -190,29 +199,11 @@ static const char *const rsh_fs_src[] = {
     "        }\n"
     /* per road group: road coordinates at the nearest segment; lines and
      * markings paint S, which shows only where R > 0 */
-    "        ONCE(R > 0.0) {\n"
-    /* the roads of the cell's list (ascending: grouped by road): each
-     * one's nearest segment and the cover of its own surface */,
-    "        int ng = 0;\n"
-    "        int gRoad[MAXG]; int gSeg[MAXG]; float gD[MAXG]; float gSd[MAXG]; vec2 gN[MAXG];\n"
-    "        for (int e = e0; e < e1; e++) {\n"
-    "            int k = int(texelFetch(u_cseg, e).r);\n"
-    "            Seg s = seg_load(k);\n"
-    "            vec2 w = p - s.a;\n"
-    "            vec2 q = s.a + clamp(dot(w, s.dir), 0.0, s.len) * s.dir;\n",
-    "            vec2 pq = p - q; float d = length(pq), sd = d - s.r;\n"
-    "            if (ng == 0 || gRoad[ng - 1] != s.road) {\n"
-    "                if (ng == MAXG) break;\n"
-    "                gRoad[ng] = s.road; gSeg[ng] = k; gD[ng] = d; gSd[ng] = sd; gN[ng] = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x); ng++;\n"
-    "            } else {\n"
-    "                if (d < gD[ng - 1]) { gD[ng - 1] = d; gSeg[ng - 1] = k; }\n"
-    "                if (sd < gSd[ng - 1]) { gSd[ng - 1] = sd; gN[ng - 1] = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x); }\n"
-    "            }\n"
-    "        }\n"
+    "        if (R > 0.0) {\n"
     "        float gCov[MAXG];\n"
     "        for (int h = 0; h < ng; h++) gCov[h] = cdf(-gSd[h], gN[h]);\n"
     /* lines onto S, road by road, band by band; other roads' surfaces cut them */
-    "        for (int g = 0; g < ng; g++) {\n"
+    "        for (int g = 0; g < ng; g++) {\n",
     "            vec4 r1 = texelFetch(u_roadt, 6 * gRoad[g] + 1);\n"
     "            int b0 = int(texelFetch(u_roadt, 6 * gRoad[g]).w), nb = int(r1.x);\n"
     /* a road whose lines cannot reach the pixel is skipped */
@@ -232,7 +223,7 @@ static const char *const rsh_fs_src[] = {
     "                float cov = cdfp(hi - t, Ft) - cdfp(lo - t, Ft);\n"
     "                if (!(cov > 0.0)) continue;\n"
     "                int nd = int(texelFetch(u_band, bi + 2).x);\n"
-    "                ONCE(nd > 0 && B0.w > 0.0) {\n"
+    "                if (nd > 0 && B0.w > 0.0) {\n"
     "                    vec4 D0 = texelFetch(u_band, bi + 3), D1 = texelFetch(u_band, bi + 4);\n"
     "                    float dash[8] = float[8](D0.x, D0.y, D0.z, D0.w, D1.x, D1.y, D1.z, D1.w);\n"
     "                    float P = B0.w, x = s - B0.z;\n"
@@ -246,7 +237,7 @@ static const char *const rsh_fs_src[] = {
     "                        for (float kk = k0; kk <= k1; kk += 1.0) {\n"
     "                            float o = kk * P;\n"
     "                            for (int m = 0; m < nd; m += 2) {\n"
-    "                                along += cdfp(o + dash[m] - x, Fs) - cdfp(o - x, Fs);\n",
+    "                                along += cdfp(o + dash[m] - x, Fs) - cdfp(o - x, Fs);\n"
     "                                o += dash[m] + dash[m + 1];\n"
     "                            }\n"
     "                        }\n"
@@ -257,12 +248,12 @@ static const char *const rsh_fs_src[] = {
     "                S = S * (1.0 - a) + col.rgb * a;\n"
     "            }\n"
     "        }\n"
-    /* markings onto S (road pixels), in record order */,
+    /* markings onto S (road pixels), in record order */
     "        {\n"
     "            int m0 = int(texelFetch(u_mstart, cell).r), m1 = int(texelFetch(u_mstart, cell + 1).r);\n"
     "            for (int e = m0; e < m1; e++) {\n"
     "                int mi = int(texelFetch(u_mids, e).r);\n"
-    "                vec4 M0 = texelFetch(u_mark, 3 * mi), M1 = texelFetch(u_mark, 3 * mi + 1), M2 = texelFetch(u_mark, 3 * mi + 2);\n"
+    "                vec4 M0 = texelFetch(u_mark, 3 * mi), M1 = texelFetch(u_mark, 3 * mi + 1), M2 = texelFetch(u_mark, 3 * mi + 2);\n",
     "                int g = -1;\n"
     "                for (int h = 0; h < ng; h++) if (float(gRoad[h]) == M0.x) g = h;\n"
     "                if (g < 0) continue;\n"
@@ -276,7 +267,7 @@ static const char *const rsh_fs_src[] = {
     "                float reach = exp2(ceil(lod)) + 2.0;\n"
     "                if (xy.x < -reach || xy.y < -reach || xy.x > 2.0 * M1.y * M1.w + reach || xy.y > 2.0 * M1.x * M2.x + reach) continue;\n"
     "                vec4 c = vec4(0.0);\n"
-    "                ONCE(true) c = atlas_sample(int(M0.y), xy, lod);\n"
+    "                if (true) c = atlas_sample(int(M0.y), xy, lod);\n"
     "                if (c.a > 0.0) S = S * (1.0 - c.a) + c.rgb;\n"
     "            }\n"
     "        }\n"
@@ -284,12 +275,12 @@ static const char *const rsh_fs_src[] = {
     "    }\n"
     "    vec3 col = (R <= 0.0 ? T : (R >= 1.0 ? S : (1.0 - R) * T + R * S)) / 255.0;\n"
     "    col = min(col, vec3(1.0));\n"
-    "    ONCE(u_lighting != 0) {\n"
+    "    if (u_lighting != 0) {\n"
     "        vec3 n = normalize(v_nrm);\n"
-    "        ONCE(u_nmap != 0) { vec3 m = textureGrad(u_normal, uv, duvx, duvy).rgb * 2.0 - 1.0; n = normalize(vec3(m.x, -m.y, m.z)); }\n"
+    "        if (u_nmap != 0) { vec3 m = textureGrad(u_normal, uv, duvx, duvy).rgb * 2.0 - 1.0; n = normalize(vec3(m.x, -m.y, m.z)); }\n"
     "        col *= u_amb + u_dif * max(dot(n, u_sun), 0.0);\n"
     "    }\n"
-    "    ONCE(u_fog != 0) {\n"
+    "    if (u_fog != 0) {\n"
     "        float f = clamp((u_fogr.y - v_dist) / (u_fogr.y - u_fogr.x), 0.0, 1.0);\n"
     "        col = mix(u_fogc, col, f);\n"
     "    }\n"
