@@ -16,6 +16,7 @@ int cli_render_main(int argc, char **argv)
 
 #else
 #include "render_gl.h"
+#include "render_shader.h"
 #include "gis.h"
 
 #include <math.h>
@@ -28,12 +29,15 @@ int cli_render_main(int argc, char **argv)
 static const char render_usage[] =
     "Usage: roadsplat render [splat options] [render options] DEM ROADS OUT.png\n"
     "\n"
-    "Splats ROADS into the terrain texture of DEM (as `roadsplat` does), meshes the\n"
-    "terrain with view-dependent ROAM and renders it offscreen (OSMesa) to OUT.png.\n"
+    "Meshes the terrain of DEM with view-dependent ROAM and renders it offscreen\n"
+    "(OSMesa) to OUT.png, with ROADS drawn per screen pixel by a fragment shader\n"
+    "(--roads shader) or as the CPU splat (`roadsplat`'s image) for a texture.\n"
     "Positions (--camera, --look-at) are world coordinates when the DEM is\n"
     "georeferenced or the roads are in a world frame ('frame world', GIS roads):\n"
-    "X east, Y north (the DEM's CRS), Z height in metres. Otherwise they are local:\n"
-    "metres from DEM sample (0,0), Y growing down the map.\n"
+    "X east, Y north (the DEM's CRS), Z height in metres; with --origin (roads not in\n"
+    "a world frame) they are in the roads' frame: the origin plus metres, Y down the\n"
+    "map. Otherwise they are local: metres from DEM sample (0,0), Y growing down the map.\n"
+    "A camera below the terrain or a view that misses the map is a warning.\n"
     "\n"
     "Splat options (see roadsplat --help): --cell-size M, --z-scale S, --texels N,\n"
     "  --buffer distance|dilate, --road-cell M, --alpha-res N, --transition PX,\n"
@@ -49,11 +53,16 @@ static const char render_usage[] =
     "  --pixel-error P     ROAM screen-space tolerance in pixels (default 1)\n"
     "  --triangles N       hold the ROAM mesh near N triangles instead\n"
     "  --sun AZ,ALT        sun azimuth (compass, degrees) and altitude (default 315,45)\n"
-    "  --lighting on|off   shade the texture by the sun (default on)\n"
+    "  --lighting on|off   shade by the sun (default on; shader mode: per pixel from the\n"
+    "                      normal map, on the terrain tint without the splat's hillshade)\n"
     "  --fog               linear distance fog towards the horizon colour\n"
-    "  --ortho             top-down orthographic view of the whole map\n"
+    "  --ortho             top-down orthographic view of the whole map: at the splat's\n"
+    "                      size one pixel is one texel (the CPU cross-check)\n"
+    "  --roads MODE        shader: the fragment shader draws roads, styles and markings\n"
+    "                      per screen pixel (OpenGL 3.3 core; default when available);\n"
+    "                      texture: the CPU splat as the terrain texture\n"
     "  --frames N          render the view N times, for timing (default 1; 10 with --stats)\n"
-    "  --tile-size N       split the texture into tiles of at most N texels per side\n"
+    "  --tile-size N       texture mode: split the texture into tiles of at most N texels per side\n"
     "                      (default: only when it exceeds GL_MAX_TEXTURE_SIZE)\n"
     "  --stats FILE.json   fps, triangle count and timings as JSON\n"
     "  --quiet             no progress bar\n";
@@ -65,6 +74,7 @@ typedef struct render_args {
     int have_size, have_camera, have_look, have_pixel_error;
     double camera[3], look[3], fov, pixel_error, sun_az, sun_alt;
     int lighting, fog, ortho, quiet;
+    int roads_mode; /* 0: shader when the context supports it, 1: texture, 2: shader (asked for) */
 } render_args;
 
 /* 0 run, 1 usage error, 2 --help handled. */
@@ -138,6 +148,10 @@ static int parse_render_args(int argc, char **argv, render_args *a)
         } else if (!strcmp(name, "--tile-size")) {
             if (cli_parse_u32(name, v, &a->tile_size)) return 1;
             if (a->tile_size < 16) { cli_error("%s: '%s' must be >= 16", name, v); return 1; }
+        } else if (!strcmp(name, "--roads")) {
+            if (!strcmp(v, "shader")) a->roads_mode = 2;
+            else if (!strcmp(v, "texture")) a->roads_mode = 1;
+            else { cli_error("%s: '%s' is not 'shader' or 'texture'", name, v); return 1; }
         } else if (!strcmp(name, "--stats")) a->stats = v;
         else { cli_error("render: unknown option '%s' (see roadsplat render --help)", arg); return 1; }
     }
@@ -218,6 +232,124 @@ static void clip_range(rg_view *v)
     v->fog_end = fmax(v->zfar * 1.3, v->fog_start + 1.0);
 }
 
+/* A camera below the terrain, or a view that misses the map, gives an
+ * empty or odd picture: say so, naming the problem (issue 15). */
+static void view_warnings(const render_args *a, const rg_view *v, const rs_dem *dem, double cs, double zs, double fx0,
+                          double fy0, double fys, const char *frame_name)
+{
+    const double *e = v->eye;
+    uint32_t W = rs_dem_width(dem), H = rs_dem_height(dem);
+    if (e[0] >= 0 && e[0] <= v->map_w && e[1] >= 0 && e[1] <= v->map_h) {
+        /* the DEM's height under the eye, bilinear */
+        const float *z = rs_dem_samples(dem);
+        double gx = e[0] / cs, gy = e[1] / cs;
+        uint32_t i = (uint32_t)fmin(floor(gy), H > 1 ? H - 2 : 0), j = (uint32_t)fmin(floor(gx), W > 1 ? W - 2 : 0);
+        uint32_t i1 = H > 1 ? i + 1 : i, j1 = W > 1 ? j + 1 : j;
+        double fy = gy - i, fx = gx - j;
+        double z00 = z[(size_t)i * W + j], z01 = z[(size_t)i * W + j1], z10 = z[(size_t)i1 * W + j],
+               z11 = z[(size_t)i1 * W + j1];
+        double hz = ((z00 * (1 - fx) + z01 * fx) * (1 - fy) + (z10 * (1 - fx) + z11 * fx) * fy) * zs;
+        if (hz == hz && e[2] < hz)
+            fprintf(stderr, "roadsplat: warning: the camera %.10g,%.10g,%.10g (%s frame) is below the terrain, "
+                    "which is %.6g m high there: the picture shows the terrain from below\n", fx0 + e[0],
+                    fy0 + fys * e[1], e[2], frame_name, hz);
+    }
+    /* the map's box against the view frustum: all corners beyond one plane */
+    double f[3] = { v->look[0] - e[0], v->look[1] - e[1], v->look[2] - e[2] };
+    double fl = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    if (!(fl > 0)) return;
+    for (int k = 0; k < 3; k++) f[k] /= fl;
+    double sx[3] = { f[1], -f[0], 0 };
+    double sl = sqrt(sx[0] * sx[0] + sx[1] * sx[1]);
+    if (sl < 1e-9) { sx[0] = 1; sx[1] = 0; sl = 1; }
+    for (int k = 0; k < 2; k++) sx[k] /= sl;
+    double u[3] = { f[1] * sx[2] - f[2] * sx[1], f[2] * sx[0] - f[0] * sx[2], f[0] * sx[1] - f[1] * sx[0] };
+    double ty = tan(v->fov_y * RENDER_PI / 360.0), tx = ty * a->width / a->height;
+    int out[5] = { 1, 1, 1, 1, 1 };
+    for (int c = 0; c < 8; c++) {
+        double d[3] = { (c & 1 ? v->map_w : 0) - e[0], (c & 2 ? v->map_h : 0) - e[1], (c & 4 ? v->zmax : v->zmin) - e[2] };
+        double zz = d[0] * f[0] + d[1] * f[1] + d[2] * f[2], xx = d[0] * sx[0] + d[1] * sx[1] + d[2] * sx[2],
+               yy = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+        out[0] &= zz <= 0;
+        out[1] &= xx < -zz * tx;
+        out[2] &= xx > zz * tx;
+        out[3] &= yy < -zz * ty;
+        out[4] &= yy > zz * ty;
+    }
+    if (out[0] || out[1] || out[2] || out[3] || out[4])
+        fprintf(stderr, "roadsplat: warning: the view from %.10g,%.10g,%.10g towards %.10g,%.10g,%.10g (%s frame) "
+                "misses the map, which spans x %.10g..%.10g, y %.10g..%.10g: %s\n", fx0 + e[0], fy0 + fys * e[1],
+                e[2], fx0 + v->look[0], fy0 + fys * v->look[1], v->look[2], frame_name, fx0,
+                fx0 + v->map_w, fys > 0 ? fy0 : fy0 - v->map_h, fys > 0 ? fy0 + v->map_h : fy0,
+                out[0] ? "the map is behind the camera" : "the map lies outside the field of view");
+}
+
+/* One splat of `roads` (styles and markings off) into a new tw x th RGBA
+ * buffer; the error is printed. */
+static int splat_plain(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, const rs_roads *roads,
+                       const char *what, uint32_t tw, uint32_t th, uint8_t **out)
+{
+    rs_splat_options o = a->s.o;
+    o.style.disable = 1;
+    o.markings.disable = 1;
+    o.progress = NULL;
+    o.progress_user = NULL;
+    rs_road_grid *grid = NULL;
+    rs_splatter *sp = NULL;
+    int rc = 1;
+    rs_result r = rs_road_grid_build(ctx, in->dem, roads, &o, &grid);
+    if (!r) r = rs_splatter_create(ctx, in->dem, NULL, grid, &o, &sp);
+    if (r) {
+        cli_error("render: %s: %s", what, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        goto done;
+    }
+    *out = malloc((size_t)tw * th * 4);
+    if (!*out) { cli_error("render: out of memory for a %u x %u %s", tw, th, what); goto done; }
+    cli_splat_job job;
+    cli_splat_job_init(&job, sp, &a->s, 1);
+    job.rgba = *out;
+    if (cli_splat_run(&job)) goto done;
+    rc = 0;
+done:
+    rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, grid);
+    return rc;
+}
+
+/* The shader mode's textures: the terrain colour T (the splat with no
+ * roads) and the unstyled road surface S (the splat under one road wider
+ * than the map: procedural asphalt or --road-texture, exactly the CPU's S). */
+static int bake_surfaces(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, uint32_t tw, uint32_t th,
+                         int unshaded, uint8_t **terrain, uint8_t **road)
+{
+    rs_roads *none = NULL, *all = NULL;
+    int rc = 1;
+    rs_dem_frame fr;
+    rs_dem_get_frame(in->dem, &fr);
+    double w = (rs_dem_width(in->dem) - 1) * fr.cell_size, h = (rs_dem_height(in->dem) - 1) * fr.cell_size;
+    double xy[4] = { fr.origin_x - w - 1, fr.origin_y + h / 2, fr.origin_x + 2 * w + 1, fr.origin_y + h / 2 };
+    rs_result r = rs_roads_create(ctx, &none);
+    if (!r) r = rs_roads_create(ctx, &all);
+    if (!r) r = rs_roads_add(ctx, all, "surface", 2 * (w + h) + 4, xy, 2);
+    if (r) { cli_error("render: %s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r)); goto done; }
+    if (unshaded) {
+        /* lit by the renderer: the tint without the splat's hillshade
+         * (heights scaled to nothing flatten the gradient, shade = 1; the
+         * tint reads heights in DEM units, unchanged) */
+        rs_dem_frame flat = fr;
+        flat.z_scale = fr.z_scale < 0 ? -1e-12 : 1e-12;
+        if ((r = rs_dem_set_frame(ctx, in->dem, &flat))) { cli_error("render: %s", rs_ctx_message(ctx)); goto done; }
+    }
+    int bad = splat_plain(ctx, in, a, none, "terrain texture", tw, th, terrain);
+    if (unshaded) rs_dem_set_frame(ctx, in->dem, &fr);
+    if (bad || splat_plain(ctx, in, a, all, "road surface texture", tw, th, road)) goto done;
+    rc = 0;
+done:
+    rs_roads_free(ctx, none);
+    rs_roads_free(ctx, all);
+    return rc;
+}
+
 int cli_render_main(int argc, char **argv)
 {
     render_args a;
@@ -233,6 +365,9 @@ int cli_render_main(int argc, char **argv)
     rs_road_grid *grid = NULL;
     rs_roam *roam = NULL;
     rg_renderer *gl = NULL;
+    rsh_renderer *sh = NULL;
+    rs_gpu_scene *scene = NULL;
+    uint8_t *tex_road = NULL, *nmap = NULL;
     char err[256];
     uint8_t *tex = NULL, *frame = NULL;
     float *vtx = NULL, *nrm = NULL;
@@ -270,31 +405,37 @@ int cli_render_main(int argc, char **argv)
      * of sample (0,0); the view works in the local frame (y down). */
     double wx0 = 0, wy0 = 0;
     int world = cli_geo_world_origin(&in, &wx0, &wy0);
-    if (world) {
-        for (int k = 0; k < 2; k++) {
-            double *p = k ? a.look : a.camera;
-            if (!(k ? a.have_look : a.have_camera)) continue;
+    /* --origin with roads not in a 'frame world': the roads' points are
+     * that frame (the local axes moved by the origin), and so are the
+     * camera's (issue 15: a camera given as the roads are no longer lands
+     * far off the map) */
+    int orig = 0;
+    if (!world && a.s.origin_given) {
+        rs_dem_frame fr;
+        rs_dem_get_frame(dem, &fr);
+        wx0 = fr.origin_x;
+        wy0 = fr.origin_y;
+        orig = 1;
+    }
+    for (int k = 0; k < 2; k++) {
+        double *p = k ? a.look : a.camera;
+        if (!(k ? a.have_look : a.have_camera)) continue;
+        if (world) {
             p[0] -= wx0;
             p[1] = wy0 - p[1];
+        } else if (orig) {
+            p[0] -= wx0;
+            p[1] -= wy0;
         }
     }
+    /* local -> the frame of --camera */
+    double fx0 = world || orig ? wx0 : 0, fy0 = world || orig ? wy0 : 0, fys = world ? -1 : 1;
+    const char *frame_name = world ? "world" : orig ? "origin" : "local";
 
     /* the texture: the CPU splat */
     uint32_t tw, th;
     if ((r = rs_splat_size(ctx, dem, &a.s.o, &tw, &th))) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
-    double t1 = cli_now_ms();
-    if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
-    t_grid = cli_now_ms() - t1;
-    t1 = cli_now_ms();
-    tex = malloc((size_t)tw * th * 4);
-    if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
-    {
-        cli_splat_job job;
-        cli_splat_job_init(&job, sp, &a.s, a.quiet);
-        job.rgba = tex;
-        if (cli_splat_run(&job)) goto done;
-    }
-    t_splat = cli_now_ms() - t1;
+    double t1;
 
     /* the mesh */
     t1 = cli_now_ms();
@@ -320,12 +461,14 @@ int cli_render_main(int argc, char **argv)
         if (!(k ? a.have_look : a.have_camera)) continue;
         double span = fmax(fmax(view.map_w, view.map_h), 1.0), lim = k ? span : 1000 * span;
         if (p[0] < -lim || p[0] > view.map_w + lim || p[1] < -lim || p[1] > view.map_h + lim) {
-            double mx0 = world ? wx0 : 0, mx1 = mx0 + view.map_w, my0 = world ? wy0 - view.map_h : 0,
-                   my1 = world ? wy0 : view.map_h;
+            double mx0 = fx0, mx1 = mx0 + view.map_w, my0 = world ? wy0 - view.map_h : fy0,
+                   my1 = world ? wy0 : fy0 + view.map_h;
             fprintf(stderr, "roadsplat: warning: %s %.10g,%.10g is far off the map %s, which spans x %.10g..%.10g, "
-                    "y %.10g..%.10g (%s)\n", k ? "--look-at" : "--camera", world ? p[0] + wx0 : p[0],
-                    world ? wy0 - p[1] : p[1], a.dem, mx0, mx1, my0, my1,
-                    world ? "world coordinates, y north" : "local metres from sample (0,0), y down");
+                    "y %.10g..%.10g (%s)\n", k ? "--look-at" : "--camera", fx0 + p[0], fy0 + fys * p[1], a.dem, mx0,
+                    mx1, my0, my1,
+                    world  ? "world coordinates, y north"
+                    : orig ? "the roads' frame: --origin plus metres, y down"
+                           : "local metres from sample (0,0), y down");
         }
     }
     if (a.ortho && !a.have_size) { a.width = tw; a.height = th; }
@@ -348,18 +491,78 @@ int cli_render_main(int argc, char **argv)
         view.eye[2] == view.look[2])
         view.look[2] -= 1.0;
     clip_range(&view);
+    if (!a.ortho) view_warnings(&a, &view, dem, cs, zs, fx0, fy0, fys, frame_name);
 
+    /* the shader mode when the context supports it (docs/render.md "Shader mode") */
     t1 = cli_now_ms();
-    if (!(gl = rg_create(a.width, a.height, err, sizeof err))) { cli_error("render: %s", err); goto done; }
-    t_ctx = cli_now_ms() - t1;
-    t1 = cli_now_ms();
-    if (rg_upload_texture(gl, tex, tw, th, a.tile_size, &view, &tst, err, sizeof err)) {
-        cli_error("render: %s", err);
-        goto done;
+    memset(&tst, 0, sizeof tst);
+    if (a.roads_mode != 1) {
+        if (!(sh = rsh_create(a.width, a.height, err, sizeof err)))
+            fprintf(stderr, "roadsplat: note: render: %s; drawing the roads as a texture (--roads texture)\n", err);
+        else if (tw > rsh_max_texture_size(sh) || th > rsh_max_texture_size(sh)) {
+            fprintf(stderr, "roadsplat: note: render: the %u x %u texture exceeds GL_MAX_TEXTURE_SIZE %u of the "
+                    "shader mode; drawing the roads as a texture (--roads texture)\n", tw, th, rsh_max_texture_size(sh));
+            rsh_destroy(sh);
+            sh = NULL;
+        }
     }
-    t_upload = cli_now_ms() - t1;
+    t_ctx = cli_now_ms() - t1;
+    if (sh) {
+        /* terrain colour T and road surface S baked on the CPU, the roads
+         * exported for the fragment shader */
+        t1 = cli_now_ms();
+        if (bake_surfaces(ctx, &in, &a, tw, th, a.lighting, &tex, &tex_road)) goto done;
+        if (a.lighting) {
+            /* the normal map: Horn's gradient of the DEM per texel and the
+             * road surface's relief (docs/normals.md) */
+            if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, 1, &grid, &sp)) goto done;
+            nmap = malloc((size_t)tw * th * 3);
+            if (!nmap) { cli_error("%s: out of memory for a %u x %u normal map", a.out, tw, th); goto done; }
+            if ((r = rs_normal_window(ctx, sp, 0, 0, tw, th, nmap, (size_t)tw * 3, NULL))) {
+                cli_error("render: normal map: %s", rs_ctx_message(ctx));
+                goto done;
+            }
+        }
+        t_splat = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if ((r = rs_gpu_scene_create(ctx, dem, in.roads, &a.s.o, NULL, &scene))) {
+            cli_error("%s: %s", a.roads, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+            goto done;
+        }
+        t_grid = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if (rsh_upload(sh, scene, tex, tex_road, nmap, tw, th, err, sizeof err)) { cli_error("render: %s", err); goto done; }
+        t_upload = cli_now_ms() - t1;
+    } else {
+        t1 = cli_now_ms();
+        if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
+        t_grid = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        tex = malloc((size_t)tw * th * 4);
+        if (!tex) { cli_error("%s: out of memory for a %u x %u texture", a.out, tw, th); goto done; }
+        {
+            cli_splat_job job;
+            cli_splat_job_init(&job, sp, &a.s, a.quiet);
+            job.rgba = tex;
+            if (cli_splat_run(&job)) goto done;
+        }
+        t_splat = cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if (!(gl = rg_create(a.width, a.height, err, sizeof err))) { cli_error("render: %s", err); goto done; }
+        t_ctx += cli_now_ms() - t1;
+        t1 = cli_now_ms();
+        if (rg_upload_texture(gl, tex, tw, th, a.tile_size, &view, &tst, err, sizeof err)) {
+            cli_error("render: %s", err);
+            goto done;
+        }
+        t_upload = cli_now_ms() - t1;
+    }
     free(tex);
     tex = NULL;
+    free(tex_road);
+    tex_road = NULL;
+    free(nmap);
+    nmap = NULL;
 
     frame_ms = malloc(a.frames * sizeof *frame_ms);
     mesh_ms = malloc(a.frames * sizeof *mesh_ms);
@@ -415,7 +618,11 @@ int cli_render_main(int argc, char **argv)
             goto done;
         }
         double f1 = cli_now_ms();
-        if (rg_draw(gl, &view, vtx, nrm, nv, idx, ni, err, sizeof err)) { cli_error("render: %s", err); goto done; }
+        if (sh ? rsh_draw(sh, &view, vtx, nrm, nv, idx, ni, err, sizeof err)
+               : rg_draw(gl, &view, vtx, nrm, nv, idx, ni, err, sizeof err)) {
+            cli_error("render: %s", err);
+            goto done;
+        }
         double f2 = cli_now_ms();
         mesh_ms[f] = f1 - f0;
         draw_ms[f] = f2 - f1;
@@ -426,7 +633,8 @@ int cli_render_main(int argc, char **argv)
     t1 = cli_now_ms();
     frame = malloc((size_t)a.width * a.height * 4);
     if (!frame) { cli_error("out of memory for a %u x %u image", a.width, a.height); goto done; }
-    rg_read_rgba(gl, frame);
+    if (sh) rsh_read_rgba(sh, frame);
+    else rg_read_rgba(gl, frame);
     for (size_t k = 0; k < (size_t)a.width * a.height; k++) /* RGBA -> RGB in place */
         memmove(frame + 3 * k, frame + 4 * k, 3);
     t_readback = cli_now_ms() - t1;
@@ -451,16 +659,23 @@ int cli_render_main(int argc, char **argv)
         }
         double fm = median(frame_ms, a.frames), mm = median(mesh_ms, a.frames), dm = median(draw_ms, a.frames);
         char desc[256];
-        rg_describe(gl, desc, sizeof desc);
+        if (sh) rsh_describe(sh, desc, sizeof desc);
+        else rg_describe(gl, desc, sizeof desc);
         fprintf(so.f, "{\n  \"command\": \"render\",\n  \"gl\": \"%s\",\n", desc);
         fprintf(so.f, "  \"width\": %u,\n  \"height\": %u,\n  \"mode\": \"%s\",\n", a.width, a.height, a.ortho ? "ortho" : "perspective");
         /* in the frame of --camera / --look-at */
-        fprintf(so.f, "  \"frame\": \"%s\",\n", world ? "world" : "local");
+        fprintf(so.f, "  \"frame\": \"%s\",\n", frame_name);
         fprintf(so.f, "  \"camera\": [%.17g, %.17g, %.17g],\n  \"look_at\": [%.17g, %.17g, %.17g],\n  \"fov\": %.9g,\n",
-                world ? view.eye[0] + wx0 : view.eye[0], world ? wy0 - view.eye[1] : view.eye[1], view.eye[2],
-                world ? view.look[0] + wx0 : view.look[0], world ? wy0 - view.look[1] : view.look[1], view.look[2],
+                fx0 + view.eye[0], fy0 + fys * view.eye[1], view.eye[2], fx0 + view.look[0], fy0 + fys * view.look[1],
+                view.look[2],
                 a.fov);
         fprintf(so.f, "  \"lighting\": %s,\n  \"fog\": %s,\n", a.lighting ? "true" : "false", a.fog ? "true" : "false");
+        fprintf(so.f, "  \"roads\": \"%s\",\n", sh ? "shader" : "texture");
+        if (scene)
+            fprintf(so.f, "  \"scene\": {\"segments\": %zu, \"index_cell\": %.9g, \"index_cells\": %zu, "
+                          "\"index_entries\": %zu, \"bands\": %zu, \"markings\": %zu, \"bytes\": %zu},\n",
+                    scene->nseg, scene->cell, (size_t)scene->gw * scene->gh, scene->nseg_entries, scene->nbands,
+                    scene->nmarks, scene->bytes);
         if (a.triangles) fprintf(so.f, "  \"triangle_budget\": %u,\n", a.triangles);
         else fprintf(so.f, "  \"pixel_error\": %.9g,\n", a.pixel_error);
         fprintf(so.f, "  \"triangles\": %u,\n  \"vertices\": %zu,\n  \"roam_threshold\": %.9g,\n"
@@ -488,7 +703,9 @@ done:
     cli_out_abort(&out); /* no-ops once committed */
     cli_out_abort(&so);
     rg_destroy(gl);
-    free(frame); free(tex);
+    rsh_destroy(sh);
+    rs_gpu_scene_free(ctx, scene);
+    free(frame); free(tex); free(tex_road); free(nmap);
     free(vtx); free(nrm); free(idx);
     free(frame_ms); free(mesh_ms); free(draw_ms);
     rs_roam_free(ctx, roam);

@@ -729,6 +729,85 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
                               rs_road_point *out);
 
 /* ---------------------------------------------------------------------------
+ * GPU export (lib/gpu_export.c, docs/render.md "Shader mode"): everything a
+ * fragment shader needs to evaluate the roads, their styles and markings per
+ * screen pixel, as flat arrays in the local frame (SPEC: metres from DEM
+ * sample (0,0), y down), float32 where a GPU reads them. No GL in here: a
+ * renderer copies the arrays into buffer textures as they are.
+ *
+ * - seg: RS_GPU_SEG_FLOATS per segment, roads in order, points in order:
+ *   ax, ay, bx, by (end points), half width, s at a (arc length from the
+ *   road's first point, summed in double as the road field sums it), road
+ *   index, flags (RS_GPU_SEG_FIRST: the road's first segment, its start is
+ *   a flat road end; RS_GPU_SEG_LAST: its last); the road's casing width,
+ *   the segment's length and unit direction (1, 0 for length 0), so a
+ *   shader needs neither a division nor a second lookup. A road of one
+ *   point is one segment of length 0. Ascending segment index = ascending
+ *   road.
+ * - the index grid: cell (i, j) spans [x0 + i cell, x0 + (i+1) cell) x
+ *   [y0 + j cell, ...); cell_start has gw*gh + 1 offsets into cell_seg, which
+ *   lists per cell, ascending, the segments whose capsule grown by the road's
+ *   casing width plus `reach` touches the cell. Per-pixel work follows the
+ *   roads near the pixel, not the number of roads.
+ * - road: RS_GPU_ROAD_FLOATS per road: surface (rs_surface), half width,
+ *   casing width (0: none), first band, band count, the road continuing
+ *   this one at its start and at its end (-1: none; SPEC junction rule of
+ *   docs/linesym.md: shared end point, within 30 degrees of straight), the
+ *   lines' reach (the largest |offset| + width/2 of its bands, 0: none);
+ *   fill rgba, gradient centre rgba, gradient edge rgba, casing rgba (rgb
+ *   0..255, a 0..1, as the CPU styling holds them).
+ * - band: RS_GPU_BAND_FLOATS per line of a style (paint order): offset T,
+ *   width W, phase, period (0: solid); r, g, b (0..255), a (0..1); dash
+ *   count, 0, 0, 0; dash[0..7] (on, off, ... metres).
+ * - mark: RS_GPU_MARK_FLOATS per marking (record order: explicit, then
+ *   automatic): road, atlas type, s, t (centre), half length, half width,
+ *   flip (0/1), kx, ky (level-0 texels per metre across and along), 0, 0, 0;
+ *   and the same grid's cells listing the markings whose support box
+ *   touches them (mark_start, mark_ids).
+ * - atlas: per type RS_GPU_TYPE_INTS: first level record, level count;
+ *   per level RS_GPU_LEVEL_INTS: first texel in atlas_px, w, h, 0;
+ *   atlas_px: RGBA floats, rgb premultiplied 0..255, a 0..1, row-major,
+ *   row 0 = the sprite's top (the way the road runs), exactly the CPU's mip
+ *   chains (sampled trilinearly, transparent outside each level). */
+#define RS_GPU_SEG_FLOATS 12
+#define RS_GPU_SEG_FIRST 1u
+#define RS_GPU_SEG_LAST 2u
+#define RS_GPU_ROAD_FLOATS 24
+#define RS_GPU_BAND_FLOATS 20
+#define RS_GPU_MARK_FLOATS 12
+#define RS_GPU_TYPE_INTS 2
+#define RS_GPU_LEVEL_INTS 4
+
+typedef struct rs_gpu_options {
+    double cell;   /* index cell, metres; 0 -> automatic (the DEM cell, grown to at most 2^22 cells) */
+    double reach;  /* metres beyond each capsule (and casing) a cell still lists it: the widest
+                      anti-aliasing footprint served exactly; 0 -> half the index cell */
+} rs_gpu_options;
+
+typedef struct rs_gpu_scene {
+    double cell, x0, y0, reach;
+    uint32_t gw, gh;
+    double map_w, map_h;           /* map extent, metres */
+    size_t nseg, nroads, nbands, nmarks, ntypes, nlevels;
+    size_t nseg_entries, nmark_entries, atlas_texels;
+    float *seg, *road, *band, *mark;
+    uint32_t *cell_start, *cell_seg;   /* gw*gh + 1, nseg_entries */
+    uint32_t *mark_start, *mark_ids;   /* gw*gh + 1, nmark_entries */
+    uint32_t *types, *levels;          /* ntypes * RS_GPU_TYPE_INTS, nlevels * RS_GPU_LEVEL_INTS */
+    float *atlas_px;                   /* atlas_texels * 4 */
+    size_t bytes;
+} rs_gpu_scene;
+
+/* Export `roads` over `dem` with the styles and markings that the splat
+ * with `opts` (may be NULL) draws: opts->style and opts->markings are read
+ * as rs_road_grid_build reads them. *out belongs to the caller: free it
+ * with rs_gpu_scene_free and the same context. `gopts` may be NULL. */
+RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                     const rs_splat_options *opts, const rs_gpu_options *gopts,
+                                     rs_gpu_scene **out);
+RS_API void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *scene);
+
+/* ---------------------------------------------------------------------------
  * The classification table (exposed for tests and for renderers that want
  * to do their own blending with the same alpha-maps).
  * ------------------------------------------------------------------------- */

@@ -51,6 +51,20 @@ if cmd == 'road':  # straight-down view of an east-west road through the centre 
     edge = row(h // 2 - 2 * r), row(h // 2 + 2 * r)
     print('road row lum <= %.1f, terrain rows >= %.1f, +-2r rows %.1f %.1f' % (road, land, edge[0], edge[1]))
     sys.exit(0 if road < 90 and land > road + 40 and min(edge) > road + 30 else 1)
+if cmd == 'ramp':  # file: the widest 10-90 % transition at the road edge and at the line's rising side
+    # along the centre row of a close-up (docs/render.md "Shader mode"); argv[3], argv[4]: the road
+    # and line levels (luminance) the transitions run to; prints both widths in pixels
+    img = read(sys.argv[2]); w, h = img[:2]; R, W = float(sys.argv[3]), float(sys.argv[4])
+    L = [lum(px(img, x, h // 2)) for x in range(w)]
+    A = L[0]
+    xe = next(x for x in range(w) if L[x] < (A + R) / 2)
+    def count(lo, hi, a, b):
+        return sum(1 for x in range(max(lo, 0), min(hi, w)) if min(a, b) + 0.1 * abs(b - a) < L[x] < max(a, b) - 0.1 * abs(b - a))
+    edge = count(xe - 40, xe + 40, A, R)
+    xl = max(range(xe + 45, min(w, xe + 200)), key=lambda x: L[x])
+    line = count(xl - 40, xl + 1, R, W)
+    print('%d %d' % (edge, line))
+    sys.exit(0)
 if cmd == 'differ':  # two images differ somewhere by more than 8 levels
     A, B = read(sys.argv[2]), read(sys.argv[3])
     sys.exit(0 if any(abs(p - q) > 8 for a, b in zip(A[2], B[2]) for p, q in zip(a, b)) else 1)
@@ -83,10 +97,45 @@ check "junction: render --ortho with markings" "$BIN" render $J --quiet --ortho 
 check "junction: render --ortho --no-markings" "$BIN" render $J --quiet --ortho --lighting off --no-markings "$EX/junction-dem.pgm" "$EX/junction.txt" "$T/jn.png"
 check "junction: the render shows the CPU splat's markings (MAD <= 2/255)" py mad "$T/jr.png" "$T/jc.png" 2
 check "junction: without markings the render differs (MAD > 0.3/255)" sh -c "! python3 '$T/png.py' mad '$T/jr.png' '$T/jn.png' 0.3 >/dev/null"
-check "tiled upload renders" "$BIN" render $S --quiet --ortho --lighting off --tile-size 64 --stats "$T/tile.json" "$T/dem.pgm" "$T/roads.txt" "$T/tiled.png"
+check "tiled upload renders" "$BIN" render $S --quiet --roads texture --ortho --lighting off --tile-size 64 --stats "$T/tile.json" "$T/dem.pgm" "$T/roads.txt" "$T/tiled.png"
 check "tiled stats report 5x4 tiles" sh -c "grep -q '\"tiles_x\": 5, \"tiles_y\": 4' '$T/tile.json'"
 check "tiled render matches the CPU splat (MAD <= 2/255)" py mad "$T/tiled.png" "$T/splat.png" 2
 check "tiled render matches the untiled one (MAD <= 1/255)" py mad "$T/tiled.png" "$T/ortho.png" 1
+
+# Shader mode (issue 15, docs/render.md "Shader mode"). Cross-check: top-down
+# orthographic, lighting off, one screen pixel = one splat pixel, with
+# styles and markings: the fragment shader's roads equal the CPU splat
+# (mean <= 1/255, 99th percentile <= 8/255 on RGB).
+DIFF="$TESTS/tools/png_diff.py"
+xcheck() { # name a b: mean <= 1, p99 <= 8
+    out=$(python3 "$DIFF" "$2" "$3") || return 1
+    echo "$1: $out"
+    echo "$out" | awk '{ split($1, m, "="); split($2, p, "="); exit !(m[2] <= 1 && p[2] <= 8) }'
+}
+check "shader: junction ortho renders in shader mode" sh -c "'$BIN' render $J --quiet --ortho --lighting off --stats '$T/js.json' '$EX/junction-dem.pgm' '$EX/junction.txt' '$T/js.png' && grep -q '\"roads\": \"shader\"' '$T/js.json'"
+check "shader: junction (styles, markings) equals the CPU splat" xcheck junction "$T/js.png" "$T/jc.png"
+C="--cell-size 5 --z-scale 0.01 --texels 4"
+check "shader: city CPU splat" "$BIN" $C --quiet "$EX/dem.pgm" "$EX/roads.txt" "$T/cc.png"
+check "shader: city ortho render" "$BIN" render $C --quiet --ortho --lighting off "$EX/dem.pgm" "$EX/roads.txt" "$T/cs.png"
+check "shader: city (90 styled roads, casings, joins, crossings) equals the CPU splat" xcheck city "$T/cs.png" "$T/cc.png"
+check "shader: --roads texture still reproduces the splat" sh -c "'$BIN' render $J --quiet --roads texture --ortho --lighting off --stats '$T/jt.json' '$EX/junction-dem.pgm' '$EX/junction.txt' '$T/jt.png' && grep -q '\"roads\": \"texture\"' '$T/jt.json' && python3 '$T/png.py' mad '$T/jt.png' '$T/jc.png' 2"
+check "shader: bad --roads rejected" sh -c "! '$BIN' render --roads gpu '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>'$T/roads.err' && grep -q \"'gpu'\" '$T/roads.err' && test ! -e '$T/e.png'"
+# Edge profile: a close-up (2 cm pixels) across a 7 m road with a fill and a
+# 0.15 m white lane line; 0.5 m texels. Shader mode: the road edge and the
+# line's edge are at most 2 pixels wide; the baked texture blurs both over
+# 10 or more.
+awk 'BEGIN { print "P2"; print 31, 31; print 100; for (i = 0; i < 31; i++) { l = ""; for (j = 0; j < 31; j++) l = l " 50"; print l } }' > "$T/flat.pgm"
+printf 'style lane\n  fill #202020\n  line 1.75 0.15 #FFFFFF\nend\nroad r width 7 style=lane\n20 60\n20 0\nend\n' > "$T/lane.txt"
+E="--cell-size 2 --z-scale 0.01 --texels 4 --size 640x480 --fov 45 --camera 20,40,4 --look-at 20,30,0 --lighting off"
+check "edge: shader close-up renders" "$BIN" render $E --quiet "$T/flat.pgm" "$T/lane.txt" "$T/es.png"
+check "edge: texture close-up renders" "$BIN" render $E --quiet --roads texture "$T/flat.pgm" "$T/lane.txt" "$T/et.png"
+ramp_ok() { # file cmp limit: both widths cmp limit
+    out=$(python3 "$T/png.py" ramp "$1" 32 255) || return 1
+    echo "$1: edge and line transitions $out px"
+    echo "$out" | awk -v c="$2" -v l="$3" '{ if (c == "le") exit !($1 <= l && $2 <= l); exit !($1 >= l && $2 >= l) }'
+}
+check "edge: shader transitions (road edge, 0.15 m line) <= 2 px" ramp_ok "$T/es.png" le 2
+check "edge: texture transitions >= 10 px" ramp_ok "$T/et.png" ge 10
 
 # perspective: sky at the top, terrain below
 check "oblique render exits 0" "$BIN" render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 "$T/dem.pgm" "$T/roads.txt" "$T/obl.png"
@@ -99,6 +148,14 @@ check "the road is dark where it projects, terrain around it" py road "$T/down.p
 check "deterministic output (same bytes twice)" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 '$T/dem.pgm' '$T/roads.txt' '$T/obl2.png' && cmp -s '$T/obl.png' '$T/obl2.png'"
 check "lighting changes the picture" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 --lighting off '$T/dem.pgm' '$T/roads.txt' '$T/unlit.png' && python3 '$T/png.py' differ '$T/obl.png' '$T/unlit.png'"
 check "fog changes the picture" sh -c "'$BIN' render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 --fog '$T/dem.pgm' '$T/roads.txt' '$T/fog.png' && python3 '$T/png.py' differ '$T/obl.png' '$T/fog.png'"
+
+# camera checks (issue 15): warnings that name the problem; --origin cameras
+# are in the roads' frame
+check "a camera below the terrain is a warning naming it" sh -c "'$BIN' render $S --quiet --size 64x48 --camera 64,48,-100 --look-at 64,30,-100 '$T/dem.pgm' '$T/roads.txt' '$T/below.png' 2>'$T/below.err' && grep -q 'below the terrain' '$T/below.err'"
+check "a view away from the map is a warning naming it" sh -c "'$BIN' render $S --quiet --size 64x48 --camera 64,-50,20 --look-at 64,-100,20 '$T/dem.pgm' '$T/roads.txt' '$T/away.png' 2>'$T/away.err' && grep -q 'misses the map' '$T/away.err'"
+check "a good view gives no warning" sh -c "'$BIN' render $S --quiet --size 64x48 --camera 64,94,30 --look-at 64,30,8 '$T/dem.pgm' '$T/roads.txt' '$T/good.png' 2>'$T/good.err' && test ! -s '$T/good.err'"
+printf 'road main width 12\n990 2048\n1140 2048\nend\n' > "$T/roads_o.txt"
+check "--origin: camera in the roads' frame gives the untranslated picture" sh -c "'$BIN' render $S --quiet --origin 1000,2000 --size 320x240 --camera 1064,2094,30 --look-at 1064,2030,8 --stats '$T/o.json' '$T/dem.pgm' '$T/roads_o.txt' '$T/orig.png' 2>'$T/orig.err' && test ! -s '$T/orig.err' && cmp -s '$T/orig.png' '$T/obl.png' && grep -q '\"frame\": \"origin\"' '$T/o.json' && grep -q '\"camera\": \[1064, 2094, 30\]' '$T/o.json'"
 
 # stats and budgets
 check "stats run exits 0" "$BIN" render $S --quiet --size 320x240 --frames 4 --triangles 400 --stats "$T/s.json" "$T/dem.pgm" "$T/roads.txt" "$T/b.png"

@@ -1,0 +1,313 @@
+/* GLSL 3.30 core sources of the shader render mode (cli/render_shader.c,
+ * docs/render.md "Shader mode"). Included by cli/render_shader.c only. The
+ * fragment shader evaluates the roads per screen pixel from the buffer
+ * textures of rs_gpu_scene (include/roadsplat.h "GPU export"), in the CPU's
+ * layer order (lib/overlays.c, lib/composite.c): casings onto the terrain
+ * colour T, fill / gradient surfaces, lines, markings onto the road colour
+ * S, then C = (1 - R) T + R S. Coverage is the box filter of the pixel's
+ * footprint (the parallelogram of dFdx, dFdy of the map position) across
+ * each edge: exact for a straight edge, as the CPU's analytic mode. */
+#ifndef RS_RENDER_GLSL_H
+#define RS_RENDER_GLSL_H
+
+static const char rsh_vs_src[] =
+    "#version 330 core\n"
+    "layout(location = 0) in vec3 a_pos;\n" /* map frame: x east, y down the map, z up */
+    "layout(location = 1) in vec3 a_nrm;\n"
+    "uniform mat4 u_mvp;\n"
+    "uniform vec3 u_eye;\n"
+    "out vec2 v_xy;\n"
+    "out vec3 v_nrm;\n"
+    "out float v_dist;\n"
+    "void main() {\n"
+    "    v_xy = a_pos.xy;\n"
+    "    v_nrm = a_nrm;\n"
+    "    v_dist = length(a_pos - u_eye);\n"
+    "    gl_Position = u_mvp * vec4(a_pos, 1.0);\n"
+    "}\n";
+
+/* in parts: C99 compilers need support string literals of 4095 bytes only */
+static const char *const rsh_fs_src[] = {
+    "#version 330 core\n"
+    "in vec2 v_xy;\n"
+    "in vec3 v_nrm;\n"
+    "in float v_dist;\n"
+    "out vec4 o_col;\n"
+    "uniform sampler2D u_terrain;\n"   /* T, RGBA8 */
+    "uniform sampler2D u_road;\n"      /* S (unstyled road surface), RGBA8 */
+    "uniform vec2 u_map;\n"            /* map extent, metres */
+    "uniform int u_roads;\n"           /* 0: terrain only */
+    "uniform samplerBuffer u_seg;\n"   /* 2 texels per segment */
+    "uniform usamplerBuffer u_cstart;\n"
+    "uniform usamplerBuffer u_cseg;\n"
+    "uniform samplerBuffer u_roadt;\n" /* 6 texels per road */
+    "uniform samplerBuffer u_band;\n"  /* 5 texels per band */
+    "uniform samplerBuffer u_mark;\n"  /* 3 texels per marking */
+    "uniform usamplerBuffer u_mstart;\n"
+    "uniform usamplerBuffer u_mids;\n"
+    "uniform usamplerBuffer u_types;\n" /* 2 per type */
+    "uniform usamplerBuffer u_levels;\n" /* RGBA32UI per level */
+    "uniform samplerBuffer u_atlas;\n"
+    "uniform vec4 u_grid;\n"           /* x0, y0, 1 / cell, reach */
+    "uniform ivec2 u_gdim;\n"
+    "uniform int u_lighting;\n"
+    "uniform sampler2D u_normal;\n"   /* rs_normal_window: R east, G north, B up */
+    "uniform int u_nmap;\n"
+    "uniform vec3 u_sun;\n"            /* map frame, unit, towards the sun */
+    "uniform vec3 u_amb;\n"
+    "uniform vec3 u_dif;\n"
+    "uniform int u_fog;\n"
+    "uniform vec2 u_fogr;\n"           /* start, end */
+    "uniform vec3 u_fogc;\n"
+    "const int MAXG = 8;\n"
+    /* llvmpipe runs every branch, and every loop body at least once,
+     * under a lane mask: the cost is the whole code per pixel group, so
+     * it is kept short and the loops few (measured with callgrind) */
+    "vec2 dpx, dpy;\n"
+    /* P(X <= x) for X the pixel footprint's offset along unit direction n:
+     * the sum of two uniform variables of widths |n.dpx| and |n.dpy|. */
+
+    /* the same for many x along one direction n: fp(n) once, cdfp(x, F) per x */
+    "vec4 fp(vec2 n) {\n"
+    "    float e1 = abs(dot(n, dpx)), e2 = abs(dot(n, dpy));\n"
+    "    float a = max(max(e1, e2), 1e-9), b = min(e1, e2);\n"
+    "    return vec4(0.5 * (a + b), 0.5 * (a - b), 1.0 / a, b > 1e-12 ? 0.5 / (a * b) : 0.0);\n"
+    "}\n"
+    "float cdfp(float x, vec4 F) {\n"
+    "    float ax = abs(x), d = max(F.x - ax, 0.0);\n"
+    "    float v = ax <= F.y ? min(0.5 + ax * F.z, 1.0) : 1.0 - d * d * F.w;\n"
+    "    return x >= 0.0 ? v : 1.0 - v;\n"
+    "}\n"
+    "float cdf(float x, vec2 n) { return cdfp(x, fp(n)); }\n"
+    /* nearest point of segment k: d, u (along, unclamped), side (+ left) */
+    "struct Seg { vec2 a; vec2 dir; float len; float r; float s0; int road; int flags; float cw; };\n"
+    "Seg seg_load(int k) {\n"
+    "    vec4 p = texelFetch(u_seg, 3 * k), q = texelFetch(u_seg, 3 * k + 1), c = texelFetch(u_seg, 3 * k + 2);\n"
+    "    Seg s; s.a = p.xy; s.len = c.y; s.dir = c.zw; s.cw = c.x;\n"
+    "    s.r = q.x; s.s0 = q.y; s.road = int(q.z); s.flags = int(q.w);\n"
+    "    return s;\n"
+    "}\n"
+    /* road coordinates of p at segment k: s, t, t's direction, the tangent
+     * and the box filter at a flat road end */
+    "void road_coords(vec2 p, int k, out float rs, out float rt, out vec2 nt, out vec2 tg, out float ef) {\n",
+    "    Seg s = seg_load(k);\n"
+    "    vec2 w = p - s.a;\n"
+    "    float u = dot(w, s.dir), side = w.x * s.dir.y - w.y * s.dir.x;\n"
+    "    bool lo = u < 0.0, hi = u > s.len;\n"
+    "    bool endlo = lo && (s.flags & 1) != 0, endhi = hi && (s.flags & 2) != 0;\n"
+    "    tg = s.dir; rs = s.s0 + u; rt = side; nt = vec2(s.dir.y, -s.dir.x);\n"
+    "    if ((lo || hi) && !endlo && !endhi) {\n"
+    "        vec2 q = lo ? s.a : s.a + s.len * s.dir; vec2 pq = p - q; float d = length(pq);\n"
+    "        rs = s.s0 + (lo ? 0.0 : s.len);\n"
+    "        rt = side >= 0.0 ? d : -d;\n"
+    "        if (d > 0.0) nt = pq / d;\n"
+    "    }\n"
+    "    ef = 1.0;\n"
+    "    if ((s.flags & 1) != 0) ef *= cdf(u, s.dir);\n"
+    "    if ((s.flags & 2) != 0) ef *= cdf(s.len - u, s.dir);\n"
+    "}\n"
+    /* the atlas: bilinear taps at level texel coordinates, transparent outside */
+    "vec4 taps(uvec4 L, vec2 c) {\n"
+    "    vec2 f = floor(c); vec2 w = c - f; ivec2 i = ivec2(f); vec4 acc = vec4(0.0);\n"
+    "    for (int b = 0; b < 2; b++) {\n"
+    "        int yy = i.y + b; if (yy < 0 || yy >= int(L.z)) continue;\n"
+    "        float wb = b == 1 ? w.y : 1.0 - w.y;\n"
+    "        for (int a = 0; a < 2; a++) {\n"
+    "            int xx = i.x + a; if (xx < 0 || xx >= int(L.y)) continue;\n"
+    "            acc += wb * (a == 1 ? w.x : 1.0 - w.x) * texelFetch(u_atlas, int(L.x) + yy * int(L.y) + xx);\n"
+    "        }\n"
+    "    }\n"
+    "    return acc;\n"
+    "}\n"
+    "vec4 atlas_sample(int type, vec2 xy, float lod) {\n"
+    "    uint first = texelFetch(u_types, 2 * type).r, nlev = texelFetch(u_types, 2 * type + 1).r;\n"
+    "    lod = max(lod, 0.0);\n"
+    "    float top = float(nlev) - 1.0;\n"
+    "    int l = lod >= top ? int(top) : int(lod);\n"
+    "    float f = lod >= top ? 0.0 : lod - float(l);\n"
+    "    float s0 = exp2(-float(l));\n"
+    "    vec4 c = taps(texelFetch(u_levels, int(first) + l), xy * s0 - 0.5);\n"
+    "    if (f > 0.0) c = c * (1.0 - f) + f * taps(texelFetch(u_levels, int(first) + l + 1), xy * s0 * 0.5 - 0.5);\n"
+    "    return c;\n"
+    "}\n"
+    "void main() {\n"
+    "    vec2 p = v_xy;\n"
+    "    dpx = dFdx(p); dpy = dFdy(p);\n"
+    "    vec2 uv = p / u_map;\n"
+    "    vec3 T = texture(u_terrain, uv).rgb * 255.0;\n"
+    "    vec2 duvx = dpx / u_map, duvy = dpy / u_map;\n"
+    "    vec3 S = vec3(0.0);\n"
+    "    float R = 0.0;\n"
+    "    float foot = max(length(dpx), length(dpy));\n"
+    "    float near_reach = 0.70710678 * foot;\n"
+    "    vec2 cf = floor((p - u_grid.xy) * u_grid.z);\n"
+    "    bool inside = u_roads != 0 && cf.x >= 0.0 && cf.y >= 0.0 && cf.x < float(u_gdim.x) && cf.y < float(u_gdim.y);\n"
+    "    int cell = inside ? int(cf.y) * u_gdim.x + int(cf.x) : 0;\n"
+    "    int e0 = int(texelFetch(u_cstart, cell).r), e1 = inside ? int(texelFetch(u_cstart, cell + 1).r) : e0;\n"
+    "    if (e1 > e0) {\n"
+    "        float sdR = 1e30, sdC = 1e30, dS = 1e30, dC = 1e30;\n"
+    "        vec2 nR = vec2(1.0, 0.0), nC = vec2(1.0, 0.0);\n"
+    "        int roadS = -1, roadC = -1; float tS = 0.0;\n"
+    /* the roads of the cell's list (ascending: grouped by road): each
+     * one's nearest segment and the signed distance to its own surface */
+    "        int ng = 0;\n",
+    "        int gRoad[MAXG]; int gSeg[MAXG]; float gD[MAXG]; float gSd[MAXG]; vec2 gN[MAXG];\n"
+    "        for (int e = e0; e < e1; e++) {\n"
+    "            int k = int(texelFetch(u_cseg, e).r);\n"
+    "            Seg s = seg_load(k);\n"
+    "            vec2 w = p - s.a;\n"
+    "            float u = dot(w, s.dir), side = w.x * s.dir.y - w.y * s.dir.x;\n"
+    "            vec2 q = s.a + clamp(u, 0.0, s.len) * s.dir;\n"
+    "            vec2 pq = p - q; float d = length(pq);\n"
+    "            vec2 n = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x);\n"
+    "            float cw = s.cw;\n"
+    "            float sd = d - s.r;\n"
+    "            if (sd < sdR) { sdR = sd; nR = n; }\n"
+    "            if (sd - cw < sdC) { sdC = sd - cw; nC = n; }\n"
+    "            if (sd <= near_reach && d < dS) { dS = d; roadS = s.road; tS = u >= 0.0 && u <= s.len ? side : sign(side) * d; }\n"
+    "            if (sd - cw <= near_reach && d < dC) { dC = d; roadC = s.road; }\n"
+    "            if (ng == 0 || gRoad[ng - 1] != s.road) {\n"
+    "                if (ng < MAXG) { gRoad[ng] = s.road; gSeg[ng] = k; gD[ng] = d; gSd[ng] = sd; gN[ng] = n; ng++; }\n"
+    "            } else {\n"
+    "                if (d < gD[ng - 1]) { gD[ng - 1] = d; gSeg[ng - 1] = k; }\n"
+    "                if (sd < gSd[ng - 1]) { gSd[ng - 1] = sd; gN[ng - 1] = n; }\n"
+    "            }\n"
+    "        }\n"
+    "        R = sdR < 1e29 ? cdf(-sdR, nR) : 0.0;\n"
+    "        R = floor(R * 65535.0 + 0.5) / 65535.0;\n"
+    "        if (R > 0.0) S = textureGrad(u_road, uv, duvx, duvy).rgb * 255.0;\n"
+    /* casings onto T */
+    "        float C = sdC < 1e29 ? cdf(-sdC, nC) : 0.0;\n"
+    "        if (C > R && R < 1.0 && roadC >= 0) {\n"
+    "            vec4 cc = texelFetch(u_roadt, 6 * roadC + 5);\n"
+    "            float a = clamp((min(C, 1.0) - R) / (1.0 - R), 0.0, 1.0) * cc.a;\n"
+    "            T = T * (1.0 - a) + cc.rgb * a;\n"
+    "        }\n"
+    /* fill and gradient surfaces onto S */
+    "        if (R > 0.0 && roadS >= 0) {\n"
+    "            vec4 r0 = texelFetch(u_roadt, 6 * roadS);\n"
+    "            int kind = int(r0.x);\n"
+    "            if (kind != 0) {\n"
+    "                vec4 c = texelFetch(u_roadt, 6 * roadS + 2);\n"
+    "                if (kind == 2) {\n"
+    "                    float g = r0.y > 0.0 ? min(abs(tS) / r0.y, 1.0) : 1.0;\n"
+    "                    vec4 c0 = texelFetch(u_roadt, 6 * roadS + 3), c1 = texelFetch(u_roadt, 6 * roadS + 4);\n"
+    "                    c = c0 + (c1 - c0) * g;\n"
+    "                }\n"
+    "                S = S * (1.0 - c.a) + c.rgb * c.a;\n"
+    "            }\n"
+    "        }\n"
+    /* per road group: road coordinates at the nearest segment; lines and
+     * markings paint S, which shows only where R > 0 */
+    "        if (R > 0.0) {\n"
+    "        float gCov[MAXG];\n"
+    "        for (int h = 0; h < ng; h++) gCov[h] = cdf(-gSd[h], gN[h]);\n"
+    /* lines onto S, road by road, band by band; other roads' surfaces cut them */
+    "        for (int g = 0; g < ng; g++) {\n",
+    "            vec4 r1 = texelFetch(u_roadt, 6 * gRoad[g] + 1);\n"
+    "            int b0 = int(texelFetch(u_roadt, 6 * gRoad[g]).w), nb = int(r1.x);\n"
+    /* a road whose lines cannot reach the pixel is skipped */
+    "            if (nb == 0 || gD[g] > r1.w + foot) continue;\n"
+    "            float cut = 1.0;\n"
+    "            for (int h = 0; h < ng; h++)\n"
+    "                if (h != g && float(gRoad[h]) != r1.y && float(gRoad[h]) != r1.z) cut *= 1.0 - gCov[h];\n"
+    "            float s, t, ef; vec2 nt, tg;\n"
+    "            road_coords(p, gSeg[g], s, t, nt, tg, ef);\n"
+    "            vec4 Ft = fp(nt), Fs = fp(tg);\n"
+    "            float base = ef * cut;\n"
+    "            if (!(base > 0.0)) continue;\n"
+    "            for (int j = 0; j < nb; j++) {\n"
+    "                int bi = 5 * (b0 + j);\n"
+    "                vec4 B0 = texelFetch(u_band, bi), col = texelFetch(u_band, bi + 1);\n"
+    "                float lo = B0.x - 0.5 * B0.y, hi = B0.x + 0.5 * B0.y;\n"
+    "                float cov = cdfp(hi - t, Ft) - cdfp(lo - t, Ft);\n"
+    "                if (!(cov > 0.0)) continue;\n"
+    "                int nd = int(texelFetch(u_band, bi + 2).x);\n"
+    "                if (nd > 0 && B0.w > 0.0) {\n"
+    "                    vec4 D0 = texelFetch(u_band, bi + 3), D1 = texelFetch(u_band, bi + 4);\n"
+    "                    float dash[8] = float[8](D0.x, D0.y, D0.z, D0.w, D1.x, D1.y, D1.z, D1.w);\n"
+    "                    float P = B0.w, x = s - B0.z;\n"
+    "                    float ext = Fs.x;\n"
+    "                    float k0 = floor((x - ext) / P), k1 = floor((x + ext) / P);\n"
+    "                    float along = 0.0;\n"
+    "                    if (k1 - k0 > 3.0) {\n"
+    "                        float on = 0.0; for (int m = 0; m < nd; m += 2) on += dash[m];\n"
+    "                        along = on / P;\n"
+    "                    } else {\n"
+    "                        for (float kk = k0; kk <= k1; kk += 1.0) {\n"
+    "                            float o = kk * P;\n"
+    "                            for (int m = 0; m < nd; m += 2) {\n"
+    "                                along += cdfp(o + dash[m] - x, Fs) - cdfp(o - x, Fs);\n"
+    "                                o += dash[m] + dash[m + 1];\n"
+    "                            }\n"
+    "                        }\n"
+    "                    }\n"
+    "                    cov *= along;\n"
+    "                }\n"
+    "                float a = clamp(cov * base, 0.0, 1.0) * col.a;\n"
+    "                S = S * (1.0 - a) + col.rgb * a;\n"
+    "            }\n"
+    "        }\n"
+    /* markings onto S (road pixels), in record order */
+    "        {\n"
+    "            int m0 = int(texelFetch(u_mstart, cell).r), m1 = int(texelFetch(u_mstart, cell + 1).r);\n"
+    "            for (int e = m0; e < m1; e++) {\n"
+    "                int mi = int(texelFetch(u_mids, e).r);\n"
+    "                vec4 M0 = texelFetch(u_mark, 3 * mi), M1 = texelFetch(u_mark, 3 * mi + 1), M2 = texelFetch(u_mark, 3 * mi + 2);\n",
+    "                int g = -1;\n"
+    "                for (int h = 0; h < ng; h++) if (float(gRoad[h]) == M0.x) g = h;\n"
+    "                if (g < 0) continue;\n"
+    "                float sgn = M1.z != 0.0 ? -1.0 : 1.0;\n"
+    "                float ms, mt, mef; vec2 mnt, mtg;\n"
+    "                road_coords(p, gSeg[g], ms, mt, mnt, mtg, mef);\n"
+    "                float ds = ms - M0.z, dt = mt - M0.w;\n"
+    "                vec2 xy = vec2((M1.y - sgn * dt) * M1.w, (M1.x - sgn * ds) * M2.x);\n"
+    "                float kmax = max(M1.w, M2.x);\n"
+    "                float lod = log2(max(foot * kmax, 1.0));\n"
+    "                float reach = exp2(ceil(lod)) + 2.0;\n"
+    "                if (xy.x < -reach || xy.y < -reach || xy.x > 2.0 * M1.y * M1.w + reach || xy.y > 2.0 * M1.x * M2.x + reach) continue;\n"
+    "                vec4 c = vec4(0.0);\n"
+    "                if (true) c = atlas_sample(int(M0.y), xy, lod);\n"
+    "                if (c.a > 0.0) S = S * (1.0 - c.a) + c.rgb;\n"
+    "            }\n"
+    "        }\n"
+    "        }\n"
+    "    }\n"
+    "    vec3 col = (R <= 0.0 ? T : (R >= 1.0 ? S : (1.0 - R) * T + R * S)) / 255.0;\n"
+    "    col = min(col, vec3(1.0));\n"
+    "    if (u_lighting != 0) {\n"
+    "        vec3 n = normalize(v_nrm);\n"
+    "        if (u_nmap != 0) { vec3 m = textureGrad(u_normal, uv, duvx, duvy).rgb * 2.0 - 1.0; n = normalize(vec3(m.x, -m.y, m.z)); }\n"
+    "        col *= u_amb + u_dif * max(dot(n, u_sun), 0.0);\n"
+    "    }\n"
+    "    if (u_fog != 0) {\n"
+    "        float f = clamp((u_fogr.y - v_dist) / (u_fogr.y - u_fogr.x), 0.0, 1.0);\n"
+    "        col = mix(u_fogc, col, f);\n"
+    "    }\n"
+    "    o_col = vec4(col, 1.0);\n"
+    "}\n"
+};
+
+/* The sky: a full-screen triangle pair, coloured by the elevation of the
+ * ray through each pixel (the texture mode's 64 bands, per pixel). */
+static const char rsh_sky_vs_src[] =
+    "#version 330 core\n"
+    "layout(location = 0) in vec2 a_ndc;\n"
+    "out vec2 v_ndc;\n"
+    "void main() { v_ndc = a_ndc; gl_Position = vec4(a_ndc, 0.999, 1.0); }\n";
+
+static const char rsh_sky_fs_src[] =
+    "#version 330 core\n"
+    "in vec2 v_ndc;\n"
+    "out vec4 o_col;\n"
+    "uniform vec3 u_f, u_s, u_u;\n" /* camera basis, GL frame (y up) */
+    "uniform vec2 u_tan;\n"         /* tan of the half fields of view, x and y */
+    "const vec3 zenith = vec3(0.22, 0.42, 0.78), horizon = vec3(0.78, 0.85, 0.93), haze = vec3(0.62, 0.66, 0.70);\n"
+    "void main() {\n"
+    "    vec3 d = normalize(u_f + u_s * v_ndc.x * u_tan.x + u_u * v_ndc.y * u_tan.y);\n"
+    "    vec3 c;\n"
+    "    if (d.y <= 0.0) c = mix(horizon, haze, min(1.0, -d.y / 0.15));\n"
+    "    else c = mix(horizon, zenith, sqrt(min(1.0, d.y / 0.7)));\n"
+    "    o_col = vec4(c, 1.0);\n"
+    "}\n";
+#endif

@@ -1,0 +1,458 @@
+/* GPU export (include/roadsplat.h "GPU export", docs/render.md "Shader
+ * mode"): the roads as segments with their arc length, an index grid of
+ * cells -> segments, the resolved styles, the markings in road coordinates
+ * and the marking atlas's mip chains, as flat arrays for buffer textures.
+ * Pure C; the library never sees GL. */
+#include "internal.h"
+#include "atlas.h"
+#include "markings.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define GE_COS30 0.866
+#define GE_MAX_CELLS ((double)(1u << 22))
+
+typedef struct ge_end {
+    double x, y, dx, dy; /* end point and the direction the road leaves it */
+    uint32_t road;
+    int end;             /* 0 start, 1 end */
+} ge_end;
+
+static int ge_end_cmp(const void *a, const void *b)
+{
+    const ge_end *p = a, *q = b;
+    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    if (p->y != q->y) return p->y < q->y ? -1 : 1;
+    if (p->road != q->road) return p->road < q->road ? -1 : 1;
+    return p->end - q->end;
+}
+
+void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *g)
+{
+    if (!g) return;
+    rs__free(ctx, g->seg);
+    rs__free(ctx, g->road);
+    rs__free(ctx, g->band);
+    rs__free(ctx, g->mark);
+    rs__free(ctx, g->cell_start);
+    rs__free(ctx, g->cell_seg);
+    rs__free(ctx, g->mark_start);
+    rs__free(ctx, g->mark_ids);
+    rs__free(ctx, g->types);
+    rs__free(ctx, g->levels);
+    rs__free(ctx, g->atlas_px);
+    rs__free(ctx, g);
+}
+
+static void put_colour(float *dst, rs_colour c)
+{
+    dst[0] = c.r;
+    dst[1] = c.g;
+    dst[2] = c.b;
+    dst[3] = (float)c.a / 255.0f;
+}
+
+/* Cells [i0, i1] x [j0, j1] of the grid touched by a box, clamped. */
+static void box_cells(const rs_gpu_scene *g, double xa, double ya, double xb, double yb, uint32_t *i0, uint32_t *j0,
+                      uint32_t *i1, uint32_t *j1)
+{
+    double a = floor((xa - g->x0) / g->cell), b = floor((xb - g->x0) / g->cell);
+    double c = floor((ya - g->y0) / g->cell), d = floor((yb - g->y0) / g->cell);
+    a = a < 0 ? 0 : a > g->gw - 1 ? g->gw - 1 : a;
+    b = b < 0 ? 0 : b > g->gw - 1 ? g->gw - 1 : b;
+    c = c < 0 ? 0 : c > g->gh - 1 ? g->gh - 1 : c;
+    d = d < 0 ? 0 : d > g->gh - 1 ? g->gh - 1 : d;
+    *i0 = (uint32_t)a; *i1 = (uint32_t)b; *j0 = (uint32_t)c; *j1 = (uint32_t)d;
+}
+
+/* Distance from point (x, y) to segment a-b. */
+static double seg_dist(double ax, double ay, double bx, double by, double x, double y)
+{
+    double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy, u = 0;
+    if (l2 > 0) {
+        u = ((x - ax) * dx + (y - ay) * dy) / l2;
+        u = u < 0 ? 0 : u > 1 ? 1 : u;
+    }
+    return hypot(x - ax - u * dx, y - ay - u * dy);
+}
+
+/* Count (pass 0) or fill (pass 1) the cells of segment k: every cell whose
+ * square comes within R of it (centre distance <= R + half diagonal). */
+static size_t seg_cells(const rs_gpu_scene *g, const float *s, double R, uint32_t *fill_pos, uint32_t *ids,
+                        uint32_t k)
+{
+    double ax = s[0], ay = s[1], bx = s[2], by = s[3];
+    uint32_t i0, j0, i1, j1;
+    box_cells(g, fmin(ax, bx) - R, fmin(ay, by) - R, fmax(ax, bx) + R, fmax(ay, by) + R, &i0, &j0, &i1, &j1);
+    double hd = g->cell * 0.70710678118654752440, n = 0;
+    for (uint32_t j = j0; j <= j1; j++)
+        for (uint32_t i = i0; i <= i1; i++) {
+            double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
+            if (seg_dist(ax, ay, bx, by, cx, cy) > R + hd) continue;
+            n++;
+            if (ids) {
+                size_t c = (size_t)j * g->gw + i;
+                ids[fill_pos[c]++] = k;
+            }
+        }
+    return (size_t)n;
+}
+
+/* Placements as the road grid makes them (lib/markings.c): the explicit
+ * records, then the automatic rules. */
+static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                            const rs_atlas *atlas, rs__placement **pl, size_t *npl)
+{
+    size_t cap = 0, nexp = rs_roads_mark_count(roads);
+    *pl = NULL;
+    *npl = 0;
+    for (size_t i = 0; i < nexp; i++) {
+        rs_mark m;
+        rs_roads_get_mark(roads, i, &m);
+        long ti = rs_atlas_find(atlas, m.type);
+        if (ti < 0) {
+            char where[48];
+            if (m.line) snprintf(where, sizeof where, "line %llu: ", (unsigned long long)m.line);
+            else snprintf(where, sizeof where, "mark %zu: ", i);
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%smark: the atlas has no type '%s'", where, m.type);
+        }
+        rs__placement p;
+        memset(&p, 0, sizeof p);
+        p.type = (uint32_t)ti;
+        p.road = m.road;
+        p.s = m.s;
+        p.t = m.t;
+        p.length = m.length > 0 ? m.length : atlas->t[ti].length;
+        p.width = m.width > 0 ? m.width : atlas->t[ti].width;
+        p.flip = m.flip;
+        p.line = m.line;
+        if (rs__placement_push(ctx, pl, npl, &cap, &p)) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+    }
+    if (!o->markings.no_auto && rs__markings_auto_possible(roads))
+        return rs__markings_auto(ctx, dem, roads, atlas, pl, npl, &cap);
+    return RS_OK;
+}
+
+rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                              const rs_gpu_options *gopts, rs_gpu_scene **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_create: NULL argument");
+    *out = NULL;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    if (opts) o = *opts;
+    rs_gpu_options go;
+    memset(&go, 0, sizeof go);
+    if (gopts) go = *gopts;
+    if (!(go.cell >= 0 && go.cell <= 1e9) || !(go.reach >= 0 && go.reach <= 1e9))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_options: cell and reach must be 0..1e9 metres");
+
+    rs_gpu_scene *g = rs__calloc(ctx, 1, sizeof *g);
+    if (!g) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the GPU export");
+    rs_result r = RS_OK;
+    rs_style *sty = NULL;
+    rs_atlas *atlas_own = NULL;
+    rs__placement *pl = NULL;
+    ge_end *ends = NULL;
+    uint32_t *pos = NULL;
+    const double cs = dem->frame.cell_size;
+    g->map_w = (double)(dem->width - 1) * cs;
+    g->map_h = (double)(dem->height - 1) * cs;
+    double cell = go.cell > 0 ? go.cell : cs;
+    {
+        double ext_w = g->map_w + 2 * cell, ext_h = g->map_h + 2 * cell;
+        while ((ext_w / cell + 1) * (ext_h / cell + 1) > GE_MAX_CELLS) {
+            cell *= 1.5;
+            ext_w = g->map_w + 2 * cell;
+            ext_h = g->map_h + 2 * cell;
+        }
+    }
+    g->cell = cell;
+    g->reach = go.reach > 0 ? go.reach : 0.5 * cell;
+    g->x0 = -cell;
+    g->y0 = -cell;
+    g->gw = (uint32_t)ceil(g->map_w / cell) + 2;
+    g->gh = (uint32_t)ceil(g->map_h / cell) + 2;
+    const size_t ncell = (size_t)g->gw * g->gh;
+
+    /* roads: styles and segments */
+    const size_t n = rs_roads_count(roads);
+    g->nroads = n;
+    sty = rs__malloc(ctx, sizeof *sty);
+    g->road = rs__calloc(ctx, n ? n : 1, RS_GPU_ROAD_FLOATS * sizeof(float));
+    if (!sty || !g->road) { r = RS_ERR_NOMEM; goto fail; }
+    size_t nseg = 0, nbands = 0;
+    for (size_t i = 0; i < n; i++) {
+        size_t np = 0;
+        rs_roads_get(roads, i, NULL, NULL, NULL, &np);
+        nseg += np > 1 ? np - 1 : 1;
+        if (o.style.disable) continue;
+        if ((r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK) goto fail_msg;
+        nbands += sty->line_count;
+    }
+    g->seg = rs__alloc_array(ctx, nseg ? nseg : 1, RS_GPU_SEG_FLOATS * sizeof(float));
+    g->band = rs__calloc(ctx, nbands ? nbands : 1, RS_GPU_BAND_FLOATS * sizeof(float));
+    ends = rs__alloc_array(ctx, 2 * (n ? n : 1), sizeof *ends);
+    if (!g->seg || !g->band || !ends) { r = RS_ERR_NOMEM; goto fail; }
+    size_t nends = 0;
+    double max_casing = 0;
+    for (size_t i = 0, k = 0, b = 0; i < n; i++) {
+        float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+        double w = 0;
+        rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+        memset(sty, 0, sizeof *sty);
+        if (!o.style.disable && (r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK)
+            goto fail_msg;
+        rd[0] = (float)sty->surface;
+        rd[1] = (float)(0.5 * w);
+        rd[2] = (float)sty->casing_width;
+        if (sty->casing_width > max_casing) max_casing = sty->casing_width;
+        rd[3] = (float)b;
+        rd[4] = (float)sty->line_count;
+        rd[5] = rd[6] = -1;
+        put_colour(rd + 8, sty->surface == RS_SURFACE_GRADIENT ? sty->gradient_centre : sty->fill);
+        put_colour(rd + 12, sty->gradient_centre);
+        put_colour(rd + 16, sty->gradient_edge);
+        put_colour(rd + 20, sty->casing);
+        for (uint32_t j = 0; j < sty->line_count; j++, b++) {
+            const rs_style_line *ln = &sty->line[j];
+            float *bd = g->band + RS_GPU_BAND_FLOATS * b;
+            double period = 0;
+            for (uint32_t d = 0; d < ln->dash_count; d++) period += ln->dash[d];
+            bd[0] = (float)ln->offset;
+            bd[1] = (float)ln->width;
+            bd[2] = (float)ln->phase;
+            bd[3] = (float)period;
+            put_colour(bd + 4, ln->colour);
+            double breach = fabs(ln->offset) + 0.5 * ln->width;
+            if (breach > rd[7]) rd[7] = (float)breach;
+            bd[8] = (float)ln->dash_count;
+            for (uint32_t d = 0; d < ln->dash_count && d < 8; d++) bd[12 + d] = (float)ln->dash[d];
+        }
+        rs__road_local rl;
+        if (rs__road_local_get(ctx, roads, i, dem, &rl)) { r = RS_ERR_NOMEM; goto fail; }
+        size_t m = rl.n;
+        for (size_t p = 0; p + 1 < m || (m <= 1 && p == 0); p++, k++) {
+            float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
+            size_t q = p + 1 < m ? p + 1 : p;
+            double ax = m ? rl.x[p] : 0, ay = m ? rl.y[p] : 0, bx = m ? rl.x[q] : 0, by = m ? rl.y[q] : 0;
+            sg[0] = (float)ax; sg[1] = (float)ay; sg[2] = (float)bx; sg[3] = (float)by;
+            sg[4] = (float)(0.5 * w);
+            sg[5] = (float)(m ? rl.s[p] : 0);
+            sg[6] = (float)i;
+            sg[7] = (float)((p == 0 ? RS_GPU_SEG_FIRST : 0) | (q + 1 >= m ? RS_GPU_SEG_LAST : 0));
+            double len = hypot(bx - ax, by - ay);
+            sg[8] = (float)sty->casing_width;
+            sg[9] = (float)len;
+            sg[10] = len > 0 ? (float)((bx - ax) / len) : 1.0f;
+            sg[11] = len > 0 ? (float)((by - ay) / len) : 0.0f;
+        }
+        if (m >= 2) {
+            for (int e = 0; e < 2; e++) {
+                size_t a = e ? m - 1 : 0, c = e ? m - 2 : 1;
+                double dx = rl.x[c] - rl.x[a], dy = rl.y[c] - rl.y[a], l = hypot(dx, dy);
+                ge_end *E = &ends[nends++];
+                E->x = rl.x[a]; E->y = rl.y[a];
+                E->dx = dx / l; E->dy = dy / l;
+                E->road = (uint32_t)i;
+                E->end = e;
+            }
+        }
+        rs__road_local_free(ctx, &rl);
+    }
+    g->nseg = nseg;
+    g->nbands = nbands;
+    /* continuations: equal end points, leaving within 30 degrees of opposite */
+    qsort(ends, nends, sizeof *ends, ge_end_cmp);
+    for (size_t a = 0; a < nends; a++)
+        for (size_t c = a + 1; c < nends && ends[c].x == ends[a].x && ends[c].y == ends[a].y; c++) {
+            const ge_end *A = &ends[a], *C = &ends[c];
+            if (A->road == C->road || A->dx * C->dx + A->dy * C->dy >= -GE_COS30) continue;
+            float *ra = g->road + RS_GPU_ROAD_FLOATS * A->road + 5 + A->end;
+            float *rc = g->road + RS_GPU_ROAD_FLOATS * C->road + 5 + C->end;
+            if (*ra < 0) *ra = (float)C->road;
+            if (*rc < 0) *rc = (float)A->road;
+        }
+
+    /* the segment index */
+    g->cell_start = rs__calloc(ctx, ncell + 1, sizeof *g->cell_start);
+    pos = rs__alloc_array(ctx, ncell + 1, sizeof *pos);
+    if (!g->cell_start || !pos) { r = RS_ERR_NOMEM; goto fail; }
+    {
+        size_t total = 0;
+        for (size_t k = 0; k < nseg; k++) {
+            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+            double R = s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
+            total += seg_cells(g, s, R, NULL, NULL, 0);
+        }
+        if (total > (size_t)1 << 28) { r = rs__fail(ctx, RS_ERR_LIMIT, "GPU export: the index needs %zu entries (at most 2^28)", total); goto fail_msg; }
+        /* counts per cell, then offsets, then fill (ascending per cell) */
+        for (size_t k = 0; k < nseg; k++) {
+            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+            double R = s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
+            uint32_t i0, j0, i1, j1;
+            box_cells(g, fmin(s[0], s[2]) - R, fmin(s[1], s[3]) - R, fmax(s[0], s[2]) + R, fmax(s[1], s[3]) + R, &i0,
+                      &j0, &i1, &j1);
+            double hd = g->cell * 0.70710678118654752440;
+            for (uint32_t j = j0; j <= j1; j++)
+                for (uint32_t i = i0; i <= i1; i++) {
+                    double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
+                    if (seg_dist(s[0], s[1], s[2], s[3], cx, cy) <= R + hd) g->cell_start[(size_t)j * g->gw + i + 1]++;
+                }
+        }
+        for (size_t c = 0; c < ncell; c++) g->cell_start[c + 1] += g->cell_start[c];
+        g->nseg_entries = g->cell_start[ncell];
+        g->cell_seg = rs__alloc_array(ctx, g->nseg_entries ? g->nseg_entries : 1, sizeof *g->cell_seg);
+        if (!g->cell_seg) { r = RS_ERR_NOMEM; goto fail; }
+        memcpy(pos, g->cell_start, ncell * sizeof *pos);
+        for (size_t k = 0; k < nseg; k++) {
+            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+            double R = s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
+            seg_cells(g, s, R, pos, g->cell_seg, (uint32_t)k);
+        }
+    }
+
+    /* markings and the atlas */
+    g->mark_start = rs__calloc(ctx, ncell + 1, sizeof *g->mark_start);
+    if (!g->mark_start) { r = RS_ERR_NOMEM; goto fail; }
+    if (!o.markings.disable &&
+        (rs_roads_mark_count(roads) || (!o.markings.no_auto && rs__markings_auto_possible(roads)))) {
+        const rs_atlas *atlas = o.markings.atlas;
+        if (!atlas) {
+            if ((r = rs_atlas_default(ctx, &atlas_own)) != RS_OK) goto fail_msg;
+            atlas = atlas_own;
+        }
+        size_t npl = 0;
+        if ((r = placements(ctx, dem, roads, &o, atlas, &pl, &npl)) != RS_OK) goto fail_msg;
+        g->mark = rs__calloc(ctx, npl ? npl : 1, RS_GPU_MARK_FLOATS * sizeof(float));
+        g->ntypes = atlas->n;
+        g->types = rs__calloc(ctx, atlas->n ? atlas->n : 1, RS_GPU_TYPE_INTS * sizeof(uint32_t));
+        if (!g->mark || !g->types) { r = RS_ERR_NOMEM; goto fail; }
+        size_t nlev = 0, ntex = 0;
+        for (size_t t = 0; t < atlas->n; t++) {
+            nlev += atlas->t[t].nlev;
+            for (uint32_t l = 0; l < atlas->t[t].nlev; l++) ntex += (size_t)atlas->t[t].lev[l].w * atlas->t[t].lev[l].h;
+        }
+        g->levels = rs__calloc(ctx, nlev ? nlev : 1, RS_GPU_LEVEL_INTS * sizeof(uint32_t));
+        g->atlas_px = rs__alloc_array(ctx, ntex ? ntex : 1, 4 * sizeof(float));
+        if (!g->levels || !g->atlas_px) { r = RS_ERR_NOMEM; goto fail; }
+        for (size_t t = 0, li = 0, tx = 0; t < atlas->n; t++) {
+            const rs__atlas_type *ty = &atlas->t[t];
+            g->types[RS_GPU_TYPE_INTS * t] = (uint32_t)li;
+            g->types[RS_GPU_TYPE_INTS * t + 1] = ty->nlev;
+            for (uint32_t l = 0; l < ty->nlev; l++, li++) {
+                size_t cnt = (size_t)ty->lev[l].w * ty->lev[l].h;
+                uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * li;
+                L[0] = (uint32_t)tx; L[1] = ty->lev[l].w; L[2] = ty->lev[l].h;
+                memcpy(g->atlas_px + 4 * tx, ty->lev[l].px, cnt * 4 * sizeof(float));
+                tx += cnt;
+            }
+        }
+        g->nlevels = nlev;
+        g->atlas_texels = ntex;
+        /* records; support boxes from the road's segments over the s range */
+        size_t *first_seg = rs__alloc_array(ctx, n + 1, sizeof *first_seg);
+        if (!first_seg) { r = RS_ERR_NOMEM; goto fail; }
+        for (size_t k = 0, i = 0; i <= n; i++) {
+            while (k < nseg && (size_t)g->seg[RS_GPU_SEG_FLOATS * k + 6] < i) k++;
+            first_seg[i] = k;
+        }
+        double *box = rs__alloc_array(ctx, npl ? npl : 1, 4 * sizeof *box);
+        if (!box) { rs__free(ctx, first_seg); r = RS_ERR_NOMEM; goto fail; }
+        size_t nm = 0;
+        for (size_t i = 0; i < npl; i++) {
+            const rs__placement *p = &pl[i];
+            const rs__atlas_type *ty = &atlas->t[p->type];
+            float *mk = g->mark + RS_GPU_MARK_FLOATS * nm;
+            double hl = 0.5 * p->length, hw = 0.5 * p->width, kx = ty->lev[0].w / p->width, ky = ty->lev[0].h / p->length;
+            /* the filter reaches half a coarse texel past the rectangle: at a
+             * footprint up to `reach`, at most reach + a level-0 texel */
+            double pad = 2.0 * g->reach + 2.0 / fmin(kx, ky);
+            double slo = p->s - hl - pad, shi = p->s + hl + pad, grow = fabs(p->t) + hw + pad;
+            double bx0 = HUGE_VAL, by0 = HUGE_VAL, bx1 = -HUGE_VAL, by1 = -HUGE_VAL;
+            for (size_t k = first_seg[p->road]; k < first_seg[p->road + 1]; k++) {
+                const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+                double len = hypot((double)s[2] - s[0], (double)s[3] - s[1]);
+                int firstseg = k == first_seg[p->road], lastseg = k + 1 == first_seg[p->road + 1];
+                if (!((s[5] + len >= slo || lastseg) && (s[5] <= shi || firstseg))) continue;
+                bx0 = fmin(bx0, fmin(s[0], s[2])); bx1 = fmax(bx1, fmax(s[0], s[2]));
+                by0 = fmin(by0, fmin(s[1], s[3])); by1 = fmax(by1, fmax(s[1], s[3]));
+                /* the first and last segments extend past the road's ends */
+                if ((firstseg && slo < s[5]) || (lastseg && shi > s[5] + len)) {
+                    double ux = len > 0 ? (s[2] - s[0]) / len : 0, uy = len > 0 ? (s[3] - s[1]) / len : 0;
+                    double ex = firstseg && slo < s[5] ? s[0] + ux * (slo - s[5]) : s[2] + ux * (shi - s[5] - len);
+                    double ey = firstseg && slo < s[5] ? s[1] + uy * (slo - s[5]) : s[3] + uy * (shi - s[5] - len);
+                    bx0 = fmin(bx0, ex); bx1 = fmax(bx1, ex); by0 = fmin(by0, ey); by1 = fmax(by1, ey);
+                }
+            }
+            if (!(bx0 <= bx1)) continue; /* no road there */
+            double *bb = box + 4 * nm;
+            bb[0] = bx0 - grow; bb[1] = by0 - grow; bb[2] = bx1 + grow; bb[3] = by1 + grow;
+            mk[0] = (float)p->road; mk[1] = (float)p->type;
+            mk[2] = (float)p->s; mk[3] = (float)p->t;
+            mk[4] = (float)hl; mk[5] = (float)hw;
+            mk[6] = p->flip ? 1.0f : 0.0f;
+            mk[7] = (float)kx; mk[8] = (float)ky;
+            nm++;
+        }
+        rs__free(ctx, first_seg);
+        g->nmarks = nm;
+        for (int pass = 0; pass < 2 && !r; pass++) {
+            if (pass == 1) {
+                for (size_t c = 0; c < ncell; c++) g->mark_start[c + 1] += g->mark_start[c];
+                g->nmark_entries = g->mark_start[ncell];
+                g->mark_ids = rs__alloc_array(ctx, g->nmark_entries ? g->nmark_entries : 1, sizeof *g->mark_ids);
+                if (!g->mark_ids) { r = RS_ERR_NOMEM; break; }
+                memcpy(pos, g->mark_start, ncell * sizeof *pos);
+            }
+            for (size_t i = 0; i < nm; i++) {
+                const double *bb = box + 4 * i;
+                uint32_t i0, j0, i1, j1;
+                box_cells(g, bb[0], bb[1], bb[2], bb[3], &i0, &j0, &i1, &j1);
+                for (uint32_t j = j0; j <= j1; j++)
+                    for (uint32_t c = i0; c <= i1; c++) {
+                        size_t cc = (size_t)j * g->gw + c;
+                        if (pass == 0) g->mark_start[cc + 1]++;
+                        else g->mark_ids[pos[cc]++] = (uint32_t)i;
+                    }
+            }
+        }
+        rs__free(ctx, box);
+        if (r) goto fail;
+    } else {
+        g->mark_ids = rs__alloc_array(ctx, 1, sizeof *g->mark_ids);
+        if (!g->mark_ids) { r = RS_ERR_NOMEM; goto fail; }
+    }
+    if (!g->mark) g->mark = rs__calloc(ctx, 1, RS_GPU_MARK_FLOATS * sizeof(float));
+    if (!g->types) g->types = rs__calloc(ctx, 1, RS_GPU_TYPE_INTS * sizeof(uint32_t));
+    if (!g->levels) g->levels = rs__calloc(ctx, 1, RS_GPU_LEVEL_INTS * sizeof(uint32_t));
+    if (!g->atlas_px) g->atlas_px = rs__calloc(ctx, 1, 4 * sizeof(float));
+    if (!g->mark || !g->types || !g->levels || !g->atlas_px) { r = RS_ERR_NOMEM; goto fail; }
+    g->bytes = sizeof *g + (g->nseg * RS_GPU_SEG_FLOATS + g->nroads * RS_GPU_ROAD_FLOATS +
+                            g->nbands * RS_GPU_BAND_FLOATS + g->nmarks * RS_GPU_MARK_FLOATS + g->atlas_texels * 4) *
+                               sizeof(float) +
+               (2 * (ncell + 1) + g->nseg_entries + g->nmark_entries + g->ntypes * RS_GPU_TYPE_INTS +
+                g->nlevels * RS_GPU_LEVEL_INTS) * sizeof(uint32_t);
+    rs__free(ctx, pos);
+    rs__free(ctx, pl);
+    rs__free(ctx, ends);
+    rs__free(ctx, sty);
+    rs_atlas_free(ctx, atlas_own);
+    *out = g;
+    rs__ok(ctx);
+    return RS_OK;
+fail:
+    r = rs__fail(ctx, r ? r : RS_ERR_NOMEM, "out of memory for the GPU export");
+fail_msg:
+    rs__free(ctx, pos);
+    rs__free(ctx, pl);
+    rs__free(ctx, ends);
+    rs__free(ctx, sty);
+    rs_atlas_free(ctx, atlas_own);
+    rs_gpu_scene_free(ctx, g);
+    return r;
+}
