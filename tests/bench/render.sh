@@ -22,7 +22,8 @@ fi
     docs/examples/dem.pgm docs/examples/roads.txt "$T/gl.png"
 renderer=$(sed -n 's/.*"gl": "\(.*\)".*/\1/p' "$T/gl.json")
 echo "\`roadsplat render\` of docs/examples/ (160x120 DEM, 5 m cells, 90 roads, 1272x952 splat"
-echo "texture), default oblique camera, lighting on. Each run renders the same view $FRAMES times;"
+echo "texture), texture mode (\`--roads texture\`: the baked splat on the mesh; the shader mode has"
+echo "its own section below), default oblique camera, lighting on. Each run renders the same view $FRAMES times;"
 echo "fps = 1000 / median frame time, a frame = ROAM re-tessellation + extraction + GL draw +"
 echo "glFinish (\"draw fps\" counts the GL part only). Renderer: $renderer; $(nproc) cores."
 echo "Ratios are against the first row, measured in the same run."
@@ -33,7 +34,7 @@ echo "size,lod,triangles,fps,fps_draw,frame_ms,mesh_ms" > "$CSV"
 base=""
 for size in 640x480 1280x960 1920x1440; do
     for lod in "--triangles 5000" "--triangles 20000" "--triangles 80000" "--pixel-error 1"; do
-        "$BIN" render --cell-size 5 --z-scale 0.01 --quiet --size "$size" $lod --frames "$FRAMES" \
+        "$BIN" render --roads texture --cell-size 5 --z-scale 0.01 --quiet --size "$size" $lod --frames "$FRAMES" \
             --stats "$T/s.json" docs/examples/dem.pgm docs/examples/roads.txt "$T/r.png"
         tri=$(sed -n 's/.*"triangles": \([0-9]*\).*/\1/p' "$T/s.json")
         fps=$(sed -n 's/.*"fps": \([0-9.]*\).*/\1/p' "$T/s.json")

@@ -4,17 +4,20 @@
 # and CSV next to it; the gnuplot scripts tests/bench/*.gp turn the CSV into
 # docs/bench/*.png; this script joins the sections into docs/BENCHMARKS.md
 # with the machine and the command.
+# BENCH_ONLY="tests/bench/x.sh ...": run only those scripts, keep the other
+# sections of the last full run, and join them again.
 set -e
 B=${BUILD:-build}
 mkdir -p "$B/bench" docs/bench
-rm -f "$B"/bench/*.md
+[ -n "${BENCH_ONLY:-}" ] || rm -f "$B"/bench/*.md
 for b in "$B"/bench/*; do
+    [ -z "${BENCH_ONLY:-}" ] || break
     case "$b" in *.md|*.csv|*.json|*.txt|*.png|*.gp|*.f32|*.bin) continue;; esac
     [ -x "$b" ] && [ -f "$b" ] || continue
     echo "bench: $(basename "$b")"
     "$b" "$B/bench" || { echo "bench: $(basename "$b") failed"; exit 1; }
 done
-for s in tests/bench/*.sh; do
+for s in ${BENCH_ONLY:-tests/bench/*.sh}; do
     [ "$s" = tests/bench/run.sh ] && continue
     [ -f "$s" ] || continue
     echo "bench: $s"
