@@ -246,9 +246,7 @@ static void cross3(const double *a, const double *b, double *o)
     o[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* Camera basis in the GL frame (x, z, y): side s, up u, forward f. Straight
- * down, "up" on screen is north (-y map). */
-static void camera_basis(const double *eye_m, const double *look_m, double *E, double *s, double *u, double *f)
+void rg_camera_basis(const double *eye_m, const double *look_m, double *E, double *s, double *u, double *f)
 {
     E[0] = eye_m[0]; E[1] = eye_m[2]; E[2] = eye_m[1];
     f[0] = look_m[0] - eye_m[0]; f[1] = look_m[2] - eye_m[2]; f[2] = look_m[1] - eye_m[1];
@@ -423,14 +421,14 @@ int rg_draw(rg_renderer *r, const rg_view *v, const float *vertices, const float
     double E[3], s[3], u[3], f[3];
     if (v->ortho) {
         double eye[3] = { v->map_w / 2, v->map_h / 2, v->zmax + 1.0 }, look[3] = { v->map_w / 2, v->map_h / 2, v->zmin };
-        camera_basis(eye, look, E, s, u, f);
+        rg_camera_basis(eye, look, E, s, u, f);
         double ppm = fmin((double)r->w / v->map_w, (double)r->h / v->map_h);
         double hw = r->w / (2 * ppm), hh = r->h / (2 * ppm);
         glMatrixMode(GL_PROJECTION);
         glLoadIdentity();
         glOrtho(-hw, hw, -hh, hh, 0.5, v->zmax - v->zmin + 2.0);
     } else {
-        camera_basis(v->eye, v->look, E, s, u, f);
+        rg_camera_basis(v->eye, v->look, E, s, u, f);
         draw_sky(r, v, s, u, f);
         double ty = tan(v->fov_y * RG_PI / 360.0) * v->znear, tx = ty * r->w / r->h;
         glMatrixMode(GL_PROJECTION);

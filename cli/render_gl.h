@@ -61,6 +61,12 @@ int rg_upload_texture(rg_renderer *r, const uint8_t *rgba, uint32_t tex_w, uint3
 int rg_draw(rg_renderer *r, const rg_view *view, const float *vertices, const float *normals, size_t vertex_count,
             const uint32_t *indices, size_t index_count, char *err, size_t err_size);
 
+/* Camera basis in the GL frame (x, z, y) from eye and look-at in the map
+ * frame: E the eye, side s, up u, forward f (unit vectors). Straight down,
+ * "up" on screen is north (-y map). Shared by the shader mode
+ * (cli/render_shader.c). */
+void rg_camera_basis(const double *eye_m, const double *look_m, double *E, double *s, double *u, double *f);
+
 /* Read the frame back as width*height RGBA8, top row first. */
 void rg_read_rgba(rg_renderer *r, uint8_t *out);
 

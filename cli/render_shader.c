@@ -320,35 +320,6 @@ static void mat_mul(const double *a, const double *b, double *o)
     memcpy(o, t, sizeof t);
 }
 
-static void norm3(double *v)
-{
-    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (l > 0) { v[0] /= l; v[1] /= l; v[2] /= l; }
-}
-
-static void cross3(const double *a, const double *b, double *o)
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* Camera basis in the GL frame (x, z, y), as cli/render_gl.c. */
-static void camera_basis(const double *eye_m, const double *look_m, double *E, double *s, double *u, double *f)
-{
-    E[0] = eye_m[0]; E[1] = eye_m[2]; E[2] = eye_m[1];
-    f[0] = look_m[0] - eye_m[0]; f[1] = look_m[2] - eye_m[2]; f[2] = look_m[1] - eye_m[1];
-    norm3(f);
-    double up[3] = { 0, 1, 0 };
-    cross3(f, up, s);
-    if (sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) < 1e-6) {
-        double north[3] = { 0, 0, -1 };
-        cross3(f, north, s);
-    }
-    norm3(s);
-    cross3(s, f, u);
-}
-
 int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const float *normals, size_t nv,
              const uint32_t *indices, size_t ni, char *err, size_t err_size)
 {
@@ -369,7 +340,7 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
     memset(P, 0, sizeof P);
     if (v->ortho) {
         double eye[3] = { v->map_w / 2, v->map_h / 2, v->zmax + 1.0 }, look[3] = { v->map_w / 2, v->map_h / 2, v->zmin };
-        camera_basis(eye, look, E, s, u, f);
+        rg_camera_basis(eye, look, E, s, u, f);
         double ppm = fmin((double)r->w / v->map_w, (double)r->h / v->map_h);
         double hw = r->w / (2 * ppm), hh = r->h / (2 * ppm), n = 0.5, fa = v->zmax - v->zmin + 2.0;
         P[0] = 1 / hw;
@@ -378,7 +349,7 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
         P[14] = -(fa + n) / (fa - n);
         P[15] = 1;
     } else {
-        camera_basis(v->eye, v->look, E, s, u, f);
+        rg_camera_basis(v->eye, v->look, E, s, u, f);
         double ty = tan(v->fov_y * RSH_PI / 360.0), tx = ty * r->w / r->h, n = v->znear, fa = v->zfar;
         P[0] = 1 / tx;
         P[5] = 1 / ty;
