@@ -106,31 +106,11 @@ static size_t seg_cells(const rs_gpu_scene *g, const float *s, double R, uint32_
 static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                             const rs_atlas *atlas, rs__placement **pl, size_t *npl)
 {
-    size_t cap = 0, nexp = rs_roads_mark_count(roads);
+    size_t cap = 0;
     *pl = NULL;
     *npl = 0;
-    for (size_t i = 0; i < nexp; i++) {
-        rs_mark m;
-        rs_roads_get_mark(roads, i, &m);
-        long ti = rs_atlas_find(atlas, m.type);
-        if (ti < 0) {
-            char where[48];
-            if (m.line) snprintf(where, sizeof where, "line %llu: ", (unsigned long long)m.line);
-            else snprintf(where, sizeof where, "mark %zu: ", i);
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%smark: the atlas has no type '%s'", where, m.type);
-        }
-        rs__placement p;
-        memset(&p, 0, sizeof p);
-        p.type = (uint32_t)ti;
-        p.road = m.road;
-        p.s = m.s;
-        p.t = m.t;
-        p.length = m.length > 0 ? m.length : atlas->t[ti].length;
-        p.width = m.width > 0 ? m.width : atlas->t[ti].width;
-        p.flip = m.flip;
-        p.line = m.line;
-        if (rs__placement_push(ctx, pl, npl, &cap, &p)) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
-    }
+    rs_result r = rs__markings_explicit(ctx, roads, atlas, pl, npl, &cap);
+    if (r) return r;
     if (!o->markings.no_auto && rs__markings_auto_possible(roads))
         return rs__markings_auto(ctx, dem, roads, atlas, pl, npl, &cap);
     return RS_OK;

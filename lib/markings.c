@@ -74,6 +74,35 @@ rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t 
     return RS_OK;
 }
 
+rs_result rs__markings_explicit(rs_ctx *ctx, const rs_roads *roads, const rs_atlas *atlas, rs__placement **pl,
+                                size_t *npl, size_t *cap)
+{
+    size_t nexp = rs_roads_mark_count(roads);
+    for (size_t i = 0; i < nexp; i++) {
+        rs_mark m;
+        rs_roads_get_mark(roads, i, &m);
+        long ti = rs_atlas_find(atlas, m.type);
+        if (ti < 0) {
+            char where[48];
+            if (m.line) snprintf(where, sizeof where, "line %llu: ", (unsigned long long)m.line);
+            else snprintf(where, sizeof where, "mark %zu: ", i);
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%smark: the atlas has no type '%s'", where, m.type);
+        }
+        rs__placement p;
+        memset(&p, 0, sizeof p);
+        p.type = (uint32_t)ti;
+        p.road = m.road;
+        p.s = m.s;
+        p.t = m.t;
+        p.length = m.length > 0 ? m.length : atlas->t[ti].length;
+        p.width = m.width > 0 ? m.width : atlas->t[ti].width;
+        p.flip = m.flip;
+        p.line = m.line;
+        if (rs__placement_push(ctx, pl, npl, cap, &p)) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+    }
+    return RS_OK;
+}
+
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
 {
     if (!mk) return;
@@ -509,29 +538,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     }
     rs__placement *pl = NULL;
     size_t npl = 0, cap = 0;
-    for (size_t i = 0; i < nexp && !r; i++) {
-        rs_mark m;
-        rs_roads_get_mark(roads, i, &m);
-        long ti = rs_atlas_find(atlas, m.type);
-        if (ti < 0) {
-            char where[48];
-            if (m.line) snprintf(where, sizeof where, "line %llu: ", (unsigned long long)m.line);
-            else snprintf(where, sizeof where, "mark %zu: ", i);
-            r = rs__fail(ctx, RS_ERR_INVALID_ARG, "%smark: the atlas has no type '%s'", where, m.type);
-            break;
-        }
-        rs__placement p;
-        memset(&p, 0, sizeof p);
-        p.type = (uint32_t)ti;
-        p.road = m.road;
-        p.s = m.s;
-        p.t = m.t;
-        p.length = m.length > 0 ? m.length : atlas->t[ti].length;
-        p.width = m.width > 0 ? m.width : atlas->t[ti].width;
-        p.flip = m.flip;
-        p.line = m.line;
-        if (rs__placement_push(ctx, &pl, &npl, &cap, &p)) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
-    }
+    if (!r) r = rs__markings_explicit(ctx, roads, atlas, &pl, &npl, &cap);
     size_t n_explicit = npl;
     if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &pl, &npl, &cap);
     if (!r && npl) {

@@ -126,6 +126,11 @@ int rs__markings_auto_possible(const rs_roads *roads);
 rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
                             rs__placement **pl, size_t *n, size_t *cap);
 rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t *cap, const rs__placement *p);
+/* The road file's `mark` records as placements (appended to *pl; atlas
+ * sizes where a record gives none); a type missing from the atlas is an
+ * error naming the record's line. */
+rs_result rs__markings_explicit(rs_ctx *ctx, const rs_roads *roads, const rs_atlas *atlas, rs__placement **pl,
+                                size_t *npl, size_t *cap);
 
 /* The overlays stage's last layer: blend every marking over S on the
  * piece's road pixels, marking by marking in index order (so each pixel
