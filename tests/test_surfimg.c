@@ -62,6 +62,23 @@ static uint8_t *splat_whole(const rs_splatter *s, uint16_t **wt, uint32_t *w, ui
 
 /* ---- parser ------------------------------------------------------------- */
 
+/* A splatter of `roads` with the styles S and the one surface image si,
+ * markings off; NULL on failure (counted). */
+static rs_splatter *strip_splatter(const rs_dem *dem, const rs_roads *roads, rs_styles *S, const rs_surface_image *si,
+                                   uint32_t texels)
+{
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = texels;
+    o.style.styles = S;
+    o.style.surface_images = si;
+    o.style.surface_image_count = 1;
+    o.markings.disable = 1;
+    rs_splatter *s = NULL;
+    CHECKF(rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK, "%s", rs_ctx_message(ctx));
+    return s;
+}
+
 static int parse_fails(const char *text, const char *want)
 {
     rs_styles *S = NULL;
@@ -154,15 +171,8 @@ static void test_curve(void)
     CHECK(rs_styles_create(ctx, &S) == RS_OK);
     rs_roads *roads = parse(text, S);
     rs_dem *dem = plane(31, 31, 1, 0, 0);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 8; /* 0.125 m pixels: one image texel across and along (level 0) */
-    o.style.styles = S;
-    o.style.surface_images = &si;
-    o.style.surface_image_count = 1;
-    o.markings.disable = 1;
-    rs_splatter *s = NULL;
-    CHECKF(rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK, "%s", rs_ctx_message(ctx));
+    /* 0.125 m pixels: one image texel across and along (level 0) */
+    rs_splatter *s = strip_splatter(dem, roads, S, &si, 8);
     uint32_t w, h;
     uint16_t *wt;
     uint8_t *img = splat_whole(s, &wt, &w, &h);
@@ -209,15 +219,7 @@ static void test_wrap(void)
     CHECK(rs_styles_create(ctx, &S) == RS_OK);
     rs_roads *roads = parse(text, S);
     rs_dem *dem = plane(41, 17, 1, 0, 0);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 8;
-    o.style.styles = S;
-    o.style.surface_images = &si;
-    o.style.surface_image_count = 1;
-    o.markings.disable = 1;
-    rs_splatter *s = NULL;
-    CHECKF(rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK, "%s", rs_ctx_message(ctx));
+    rs_splatter *s = strip_splatter(dem, roads, S, &si, 8);
     uint32_t w, h;
     uint8_t *img = splat_whole(s, NULL, &w, &h);
     /* footprint: across 0.125 * 16 / 4 = 0.5, along 0.125 * 64 / 6.4 = 1.25
@@ -270,15 +272,8 @@ static void test_lod(void)
     rs_roads *roads = parse(text, S);
     rs_dem *dem = plane(41, 21, 1, 0, 0);
     for (uint32_t texels = 2; texels <= 64; texels *= 32) {
-        rs_splat_options o;
-        memset(&o, 0, sizeof o);
-        o.texels = texels; /* 2: 16 texels per pixel (level 4); 64: half a texel (level 0) */
-        o.style.styles = S;
-        o.style.surface_images = &si;
-        o.style.surface_image_count = 1;
-        o.markings.disable = 1;
-        rs_splatter *s = NULL;
-        CHECKF(rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK, "%s", rs_ctx_message(ctx));
+        /* 2: 16 texels per pixel (level 4); 64: half a texel (level 0) */
+        rs_splatter *s = strip_splatter(dem, roads, S, &si, texels);
         uint32_t w, h;
         uint16_t *wt;
         uint8_t *img = splat_whole(s, &wt, &w, &h);
