@@ -26,4 +26,13 @@ typedef struct fail_sweep {
  * context whose allocator fails after n successful allocations, until a
  * try succeeds or max_tries were made. */
 fail_sweep fail_alloc_sweep(long max_tries, fail_try_fn fn, void *user);
+/* The usual checks of a sweep (tests/harness.h's CHECK): a try succeeded
+ * after more than min_tries, none failed wrongly, none leaked. */
+#define CHECK_SWEEP(fs, min_tries)                                                                                \
+    do {                                                                                                         \
+        CHECK((fs).succeeded);                                                                                   \
+        CHECK((fs).tries > (min_tries));                                                                         \
+        CHECK_EQ_INT((fs).wrong, 0);                                                                             \
+        CHECK_EQ_INT((fs).leaks, 0);                                                                             \
+    } while (0)
 #endif

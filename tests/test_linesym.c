@@ -489,10 +489,7 @@ static void test_alloc_failures(void)
     if (!roads) return;
     alloc_case ac = { roads, bs, bands };
     fail_sweep fs = fail_alloc_sweep(1000, alloc_try, &ac);
-    CHECK(fs.succeeded);
-    CHECK(fs.tries > 4);
-    CHECK_EQ_INT(fs.wrong, 0);
-    CHECK_EQ_INT(fs.leaks, 0);
+    CHECK_SWEEP(fs, 4);
     rs_roads_free(ctx, roads);
 }
 

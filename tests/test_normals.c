@@ -334,10 +334,7 @@ static void test_alloc_failures(void)
     for (int mode = 0; mode < 4; mode++) {
         alloc_case ac = { &f, mode };
         fail_sweep fs = fail_alloc_sweep(5000, alloc_try, &ac);
-        CHECK(fs.succeeded);
-        CHECK(fs.tries > 3);
-        CHECK_EQ_INT(fs.wrong, 0);
-        CHECK_EQ_INT(fs.leaks, 0);
+        CHECK_SWEEP(fs, 3);
     }
     scene_free(&f);
 }

@@ -573,10 +573,7 @@ static void test_alloc_failures(void)
     CHECK(roads != NULL);
     if (!roads) return;
     fail_sweep fs = fail_alloc_sweep(1000, alloc_try, roads);
-    CHECK(fs.succeeded);
-    CHECK(fs.tries > 4);
-    CHECK_EQ_INT(fs.wrong, 0);
-    CHECK_EQ_INT(fs.leaks, 0);
+    CHECK_SWEEP(fs, 4);
     /* the widened field */
     rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
     rs__roadfield *f = NULL;
@@ -586,10 +583,7 @@ static void test_alloc_failures(void)
     if (f) {
         widen_try_arg a = { f, extra, 40 };
         fs = fail_alloc_sweep(1000, widen_try, &a);
-        CHECK(fs.succeeded);
-        CHECK(fs.tries > 4);
-        CHECK_EQ_INT(fs.wrong, 0);
-        CHECK_EQ_INT(fs.leaks, 0);
+        CHECK_SWEEP(fs, 4);
     }
     rs__roadfield_free(ctx, f);
     rs_roads_free(ctx, roads);

@@ -512,10 +512,7 @@ static void test_alloc_failures(void)
     float z[17 * 13];
     for (int i = 0; i < 17 * 13; i++) z[i] = (float)(i % 5);
     fail_sweep fs = fail_alloc_sweep(10000, alloc_try, z);
-    CHECK(fs.succeeded);
-    CHECK(fs.tries > 5);
-    CHECK_EQ_INT(fs.wrong, 0);
-    CHECK_EQ_INT(fs.leaks, 0);
+    CHECK_SWEEP(fs, 5);
 }
 
 /* Absurd but finite input: far-away points, a huge width, a road that is

@@ -619,10 +619,7 @@ static void test_alloc_failures(void)
     ac.si = &si;
     for (ac.lit = 0; ac.lit < 2; ac.lit++) {
         fail_sweep fs = fail_alloc_sweep(5000, alloc_try, &ac);
-        CHECK(fs.succeeded);
-        CHECK(fs.tries > 5);
-        CHECK_EQ_INT(fs.wrong, 0);
-        CHECK_EQ_INT(fs.leaks, 0);
+        CHECK_SWEEP(fs, 5);
     }
     rs_roads_free(ctx, ac.roads);
     rs_styles_free(ctx, ac.styles);
