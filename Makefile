@@ -266,7 +266,7 @@ $(BUILD)/tests/test_png: tests/png/test_png.cpp $(TEST_PNG_OBJ) $(STATIC_LIB)
 # Helper programs of the tests and benchmarks (not run by themselves).
 $(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 
 test: deps
 	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/atlasgen

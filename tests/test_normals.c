@@ -5,8 +5,8 @@
 #include "harness.h"
 #include "fail_alloc.h"
 #include "roadsplat.h"
+#include "band_threads.h"
 
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -171,27 +171,6 @@ static int tiled_equal(const rs_splatter *s, const rs_normal_options *o, const u
     return ok;
 }
 
-typedef struct band_job {
-    const rs_splatter *s;
-    const rs_normal_options *o;
-    uint8_t *px;
-    uint32_t w, h, band, first, step;
-    rs_result r;
-} band_job;
-
-static void *band_worker(void *arg)
-{
-    band_job *j = arg;
-    rs_ctx *c = NULL;
-    j->r = rs_ctx_create(NULL, NULL, &c);
-    for (uint32_t y = j->first * j->band; !j->r && y < j->h; y += j->step * j->band) {
-        uint32_t hh = j->h - y < j->band ? j->h - y : j->band;
-        j->r = rs_normal_window(c, j->s, 0, y, j->w, hh, j->px + (size_t)y * j->w * 3, (size_t)j->w * 3, j->o);
-    }
-    rs_ctx_free(c);
-    return NULL;
-}
-
 static void test_windows(void)
 {
     scene f;
@@ -212,22 +191,8 @@ static void test_windows(void)
         CHECKF(tiled_equal(s, &o, ref, w, h, 13, 11, 4), "mode %d: 13x11 windows offset 4", mode);
         CHECKF(tiled_equal(s, &o, ref, w, h, 1, 1, 0), "mode %d: 1x1 windows", mode);
         CHECKF(tiled_equal(s, &o, ref, w, h, w, 1, 0), "mode %d: rows", mode);
-        for (uint32_t n = 2; n <= 3; n++) {
-            uint8_t *px = calloc((size_t)w * h, 3);
-            pthread_t t[3];
-            band_job j[3];
-            for (uint32_t k = 0; k < n; k++) {
-                j[k] = (band_job){ s, &o, px, w, h, 4, k, n, RS_OK };
-                pthread_create(&t[k], NULL, band_worker, &j[k]);
-            }
-            int ok = 1;
-            for (uint32_t k = 0; k < n; k++) {
-                pthread_join(t[k], NULL);
-                ok &= j[k].r == RS_OK;
-            }
-            CHECKF(ok && memcmp(px, ref, (size_t)w * h * 3) == 0, "mode %d: %u threads differ", mode, n);
-            free(px);
-        }
+        for (uint32_t n = 2; n <= 3; n++)
+            CHECKF(bt_threads_equal(s, &o, ref, w, h, 4, n), "mode %d: %u threads differ", mode, n);
         /* the road relief shows: paint and texture change road pixels only */
         uint16_t *wt = malloc((size_t)w * h * 2);
         uint8_t *rgba = malloc((size_t)w * h * 4);

@@ -15,9 +15,9 @@
 #include "harness.h"
 #include "fail_alloc.h"
 #include "roadsplat.h"
+#include "band_threads.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -356,26 +356,6 @@ static void test_bad_input(void)
 
 /* ---- windows and threads ------------------------------------------------ */
 
-typedef struct band_job {
-    const rs_splatter *s;
-    uint8_t *px;
-    uint32_t w, h, band, first, step;
-    rs_result r;
-} band_job;
-
-static void *band_worker(void *arg)
-{
-    band_job *j = arg;
-    rs_ctx *c = NULL;
-    j->r = rs_ctx_create(NULL, NULL, &c);
-    for (uint32_t y = j->first * j->band; !j->r && y < j->h; y += j->step * j->band) {
-        uint32_t hh = j->h - y < j->band ? j->h - y : j->band;
-        j->r = rs_splat_window(c, j->s, 0, y, j->w, hh, j->px + (size_t)y * j->w * 4, (size_t)j->w * 4, NULL, 0, NULL);
-    }
-    rs_ctx_free(c);
-    return NULL;
-}
-
 static int tiled_equal(const rs_splatter *s, const uint8_t *ref, uint32_t w, uint32_t h, uint32_t tw, uint32_t th,
                        uint32_t off)
 {
@@ -442,22 +422,8 @@ static void test_windows(void)
         CHECKF(tiled_equal(s, ref, w, h, 7, 3, 2), "mode %d: 7 x 3 windows", mode);
         CHECKF(tiled_equal(s, ref, w, h, 13, 11, 5), "mode %d: 13 x 11 windows", mode);
         CHECKF(tiled_equal(s, ref, w, h, w, 4, 3), "mode %d: row bands", mode);
-        for (uint32_t nt = 2; nt <= 3; nt++) {
-            uint8_t *px = malloc((size_t)w * h * 4);
-            band_job jobs[3];
-            pthread_t th[3];
-            for (uint32_t k = 0; k < nt; k++) {
-                jobs[k] = (band_job){ s, px, w, h, 6, k, nt, RS_OK };
-                pthread_create(&th[k], NULL, band_worker, &jobs[k]);
-            }
-            int ok = 1;
-            for (uint32_t k = 0; k < nt; k++) {
-                pthread_join(th[k], NULL);
-                ok &= jobs[k].r == RS_OK;
-            }
-            CHECKF(ok && memcmp(px, ref, (size_t)w * h * 4) == 0, "mode %d: %u threads", mode, nt);
-            free(px);
-        }
+        for (uint32_t nt = 2; nt <= 3; nt++)
+            CHECKF(bt_threads_equal(s, NULL, ref, w, h, 6, nt), "mode %d: %u threads", mode, nt);
         free(ref);
         rs_splatter_free(ctx, s);
     }

@@ -6,8 +6,8 @@
 #include "roadsplat.h"
 #include "scenes.h"
 #include "scene_splat.h"
+#include "band_threads.h"
 
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -252,26 +252,6 @@ static void test_translation(void)
 
 /* Threads: one splatter, N threads with their own contexts rendering
  * interleaved row bands at once, for N = 1..4; every result the same. */
-typedef struct band_job {
-    const rs_splatter *s;
-    uint8_t *px;
-    uint32_t w, h, band, first, step;
-    rs_result r;
-} band_job;
-
-static void *band_worker(void *arg)
-{
-    band_job *j = arg;
-    rs_ctx *c = NULL;
-    j->r = rs_ctx_create(NULL, NULL, &c);
-    for (uint32_t y = j->first * j->band; !j->r && y < j->h; y += j->step * j->band) {
-        uint32_t hh = j->h - y < j->band ? j->h - y : j->band;
-        j->r = rs_splat_window(c, j->s, 0, y, j->w, hh, j->px + (size_t)y * j->w * 4, (size_t)j->w * 4, NULL, 0, NULL);
-    }
-    rs_ctx_free(c);
-    return NULL;
-}
-
 static void test_threads(void)
 {
     fixture f;
@@ -285,22 +265,8 @@ static void test_threads(void)
         if (!s) continue;
         whole ref;
         CHECK(render_whole(s, &ref) == RS_OK);
-        for (uint32_t n = 1; n <= 4; n++) {
-            uint8_t *px = calloc((size_t)ref.w * ref.h, 4);
-            pthread_t t[4];
-            band_job j[4];
-            for (uint32_t k = 0; k < n; k++) {
-                j[k] = (band_job){ s, px, ref.w, ref.h, 5, k, n, RS_OK };
-                pthread_create(&t[k], NULL, band_worker, &j[k]);
-            }
-            int ok = 1;
-            for (uint32_t k = 0; k < n; k++) {
-                pthread_join(t[k], NULL);
-                ok &= j[k].r == RS_OK;
-            }
-            CHECKF(ok && memcmp(px, ref.rgba, (size_t)ref.w * ref.h * 4) == 0, "%s: %u threads differ", name, n);
-            free(px);
-        }
+        for (uint32_t n = 1; n <= 4; n++)
+            CHECKF(bt_threads_equal(s, NULL, ref.rgba, ref.w, ref.h, 5, n), "%s: %u threads differ", name, n);
         free(ref.rgba);
         free(ref.wt);
         rs_splatter_free(ctx, s);
