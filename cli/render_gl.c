@@ -514,12 +514,12 @@ int rg_draw(rg_renderer *r, const rg_view *v, const float *vertices, const float
     return 0;
 }
 
-void rg_read_rgba(rg_renderer *r, uint8_t *out)
+void rg_read_current(uint32_t w, uint32_t h, uint8_t *out)
 {
-    glReadPixels(0, 0, (GLsizei)r->w, (GLsizei)r->h, GL_RGBA, GL_UNSIGNED_BYTE, out);
-    size_t row = (size_t)r->w * 4;
-    for (uint32_t y = 0; y < r->h / 2; y++) { /* GL rows run bottom-up */
-        uint8_t *a = out + row * y, *b = out + row * (r->h - 1 - y);
+    glReadPixels(0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE, out);
+    size_t row = (size_t)w * 4;
+    for (uint32_t y = 0; y < h / 2; y++) { /* GL rows run bottom-up */
+        uint8_t *a = out + row * y, *b = out + row * (h - 1 - y);
         for (size_t k = 0; k < row; k++) {
             uint8_t t = a[k];
             a[k] = b[k];
@@ -527,6 +527,8 @@ void rg_read_rgba(rg_renderer *r, uint8_t *out)
         }
     }
 }
+
+void rg_read_rgba(rg_renderer *r, uint8_t *out) { rg_read_current(r->w, r->h, out); }
 
 #else
 /* Without OSMesa nothing here is compiled (cli/render.c prints why). */

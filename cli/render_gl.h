@@ -69,5 +69,7 @@ void rg_camera_basis(const double *eye_m, const double *look_m, double *E, doubl
 
 /* Read the frame back as width*height RGBA8, top row first. */
 void rg_read_rgba(rg_renderer *r, uint8_t *out);
+/* The same for the current context's w x h frame (also the shader mode's). */
+void rg_read_current(uint32_t w, uint32_t h, uint8_t *out);
 
 #endif

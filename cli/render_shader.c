@@ -423,19 +423,7 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
     return 0;
 }
 
-void rsh_read_rgba(rsh_renderer *r, uint8_t *out)
-{
-    glReadPixels(0, 0, (GLsizei)r->w, (GLsizei)r->h, GL_RGBA, GL_UNSIGNED_BYTE, out);
-    size_t row = (size_t)r->w * 4;
-    for (uint32_t y = 0; y < r->h / 2; y++) {
-        uint8_t *a = out + row * y, *b = out + row * (r->h - 1 - y);
-        for (size_t k = 0; k < row; k++) {
-            uint8_t t = a[k];
-            a[k] = b[k];
-            b[k] = t;
-        }
-    }
-}
+void rsh_read_rgba(rsh_renderer *r, uint8_t *out) { rg_read_current(r->w, r->h, out); }
 
 #else
 typedef int rsh_no_osmesa_in_this_build;
