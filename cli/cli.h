@@ -268,6 +268,12 @@ int cli_splat_run(cli_splat_job *job);
 int cli_normal_png_check(const char *path);
 int cli_normal_png(const rs_splatter *s, const rs_normal_options *o, uint32_t x0, uint32_t y0, uint32_t w,
                    uint32_t h, unsigned threads, int png_level, FILE *f, const char *path);
+/* The same window's normal map into rgb (w*h*3 bytes), by bands of `band`
+ * rows on up to `threads` threads, each with its own context (the same bytes
+ * for any count and band). 0, or 1 with the library's message in msg. Also
+ * used by tiles (cli/tiles.c). */
+int cli_normal_rgb(const rs_splatter *s, const rs_normal_options *o, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                   unsigned threads, uint32_t band, uint8_t *rgb, char *msg, size_t msg_size);
 
 /* Subcommands, each `int f(int argc, char **argv)` with argv[0] the
  * subcommand name; return the process exit code (0 ok, 1 error). */

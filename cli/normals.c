@@ -62,36 +62,46 @@ int cli_normal_png_check(const char *path)
     return 0;
 }
 
-int cli_normal_png(const rs_splatter *s, const rs_normal_options *o, uint32_t x0, uint32_t y0, uint32_t w,
-                   uint32_t h, unsigned threads, int png_level, FILE *f, const char *path)
+int cli_normal_rgb(const rs_splatter *s, const rs_normal_options *o, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                   unsigned threads, uint32_t band, uint8_t *rgb, char *msg, size_t msg_size)
 {
     nm_shared sh;
     memset(&sh, 0, sizeof sh);
-    sh.s = s, sh.o = o, sh.x0 = x0, sh.y0 = y0, sh.w = w, sh.h = h;
-    sh.band = 64;
-    if (!(sh.rgb = malloc((size_t)w * h * 3))) {
-        cli_error("%s: out of memory for a %u x %u image", path, w, h);
-        return 1;
-    }
+    sh.s = s, sh.o = o, sh.x0 = x0, sh.y0 = y0, sh.w = w, sh.h = h, sh.rgb = rgb;
+    sh.band = band ? band : 1;
     pthread_mutex_init(&sh.lock, NULL);
     if (threads < 1) threads = 1;
     if (threads > 64) threads = 64;
     pthread_t t[64];
     unsigned started = 0;
-    for (unsigned k = 1; k < threads; k++, started++)
+    /* no more threads than bands */
+    for (unsigned k = 1; k < threads && (size_t)k * sh.band < h; k++, started++)
         if (pthread_create(&t[k - 1], NULL, nm_worker, &sh)) break;
     nm_worker(&sh);
     for (unsigned k = 0; k < started; k++) pthread_join(t[k], NULL);
     pthread_mutex_destroy(&sh.lock);
+    if (sh.failed) snprintf(msg, msg_size, "%s", sh.msg);
+    return sh.failed;
+}
+
+int cli_normal_png(const rs_splatter *s, const rs_normal_options *o, uint32_t x0, uint32_t y0, uint32_t w,
+                   uint32_t h, unsigned threads, int png_level, FILE *f, const char *path)
+{
+    uint8_t *rgb = malloc((size_t)w * h * 3);
+    if (!rgb) {
+        cli_error("%s: out of memory for a %u x %u image", path, w, h);
+        return 1;
+    }
+    char msg[256];
     int rc = 0;
-    if (sh.failed) {
-        cli_error("%s: %s", path, sh.msg);
+    if (cli_normal_rgb(s, o, x0, y0, w, h, threads, 64, rgb, msg, sizeof msg)) {
+        cli_error("%s: %s", path, msg);
         rc = 1;
     } else {
-        cli_png_image img = { w, h, 3, 8, sh.rgb };
+        cli_png_image img = { w, h, 3, 8, rgb };
         cli_png_options po = { png_level, NULL, NULL };
         rc = cli_png_encode(f, path, &img, &po);
     }
-    free(sh.rgb);
+    free(rgb);
     return rc;
 }

@@ -41,7 +41,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -385,66 +384,17 @@ static void box_rect(int layer, const uint8_t *c, uint32_t cw, uint32_t ch, size
 }
 
 /* rs_normal_window of a window by bands of rows on the splat's thread
- * count, each thread with its own context (the same bytes for any count). */
-typedef struct nm_job {
-    const run *r;
-    const rs_splatter *sp;
-    uint32_t x0, y0, w, h, band, next;
-    uint8_t *rgb;
-    pthread_mutex_t mu;
-    int failed;
-    char msg[256];
-} nm_job;
-
-static void *nm_worker(void *arg)
-{
-    nm_job *j = arg;
-    rs_ctx *c = NULL;
-    rs_result e = rs_ctx_create(NULL, NULL, &c);
-    for (;;) {
-        pthread_mutex_lock(&j->mu);
-        uint32_t y = j->next;
-        int stop = j->failed || y >= j->h || e;
-        if (!stop) j->next = j->h - y < j->band ? j->h : y + j->band;
-        if (e && !j->failed) {
-            j->failed = 1;
-            snprintf(j->msg, sizeof j->msg, "%s", rs_strerror(e));
-        }
-        pthread_mutex_unlock(&j->mu);
-        if (stop) break;
-        uint32_t rows = j->h - y < j->band ? j->h - y : j->band;
-        if (rs_normal_window(c, j->sp, j->x0, j->y0 + y, j->w, rows, j->rgb + (size_t)y * j->w * 3, (size_t)j->w * 3,
-                             &j->r->a->normal)) {
-            pthread_mutex_lock(&j->mu);
-            if (!j->failed) snprintf(j->msg, sizeof j->msg, "%s", rs_ctx_message(c));
-            j->failed = 1;
-            pthread_mutex_unlock(&j->mu);
-            break;
-        }
-    }
-    rs_ctx_free(c);
-    return NULL;
-}
-
+ * count (cli_normal_rgb: the same bytes for any count). */
 static int normal_window(const run *r, const rs_splatter *sp, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
                          uint8_t *rgb)
 {
-    nm_job j;
-    memset(&j, 0, sizeof j);
-    j.r = r, j.sp = sp, j.x0 = x0, j.y0 = y0, j.w = w, j.h = h, j.rgb = rgb;
     unsigned n = r->threads < 1 ? 1 : r->threads > 64 ? 64 : r->threads;
-    j.band = (h + n - 1) / n;
-    if (j.band < 16) j.band = 16;
-    pthread_mutex_init(&j.mu, NULL);
-    pthread_t t[64];
-    unsigned started = 0;
-    for (unsigned k = 1; k < n && (size_t)k * j.band < h; k++, started++)
-        if (pthread_create(&t[k - 1], NULL, nm_worker, &j)) break;
-    nm_worker(&j);
-    for (unsigned k = 0; k < started; k++) pthread_join(t[k], NULL);
-    pthread_mutex_destroy(&j.mu);
-    if (j.failed) cli_error("normal map: %s", j.msg);
-    return j.failed;
+    uint32_t band = (h + n - 1) / n;
+    if (band < 16) band = 16;
+    char msg[256];
+    if (!cli_normal_rgb(sp, &r->a->normal, x0, y0, w, h, n, band, rgb, msg, sizeof msg)) return 0;
+    cli_error("normal map: %s", msg);
+    return 1;
 }
 
 /* Pixels [X0, X0+w) x [Y0, Y0+h) of the finest level's image (w, h <=
