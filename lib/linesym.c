@@ -1532,6 +1532,12 @@ static void emit_paint(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_
     }
 }
 
+/* visit's runs are at most one cell block: at most CELL_PX rows of at most w columns */
+size_t rs__linesym_scratch_len(uint32_t w)
+{
+    return (size_t)(w ? w : 1) * CELL_PX;
+}
+
 void rs__linesym_paint(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, float *rgb,
                        size_t row_stride, double *scratch)
 {

@@ -45,11 +45,13 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                             const uint32_t *band_start, const rs__band *bands, rs__linesym **out);
 void rs__linesym_free(rs_ctx *ctx, rs__linesym *L);
 size_t rs__linesym_bytes(const rs__linesym *L);
+/* Doubles of scratch rs__linesym_paint needs for a window w pixels wide. */
+size_t rs__linesym_scratch_len(uint32_t w);
 
 /* Composite every band over the planar colour rows of the pixels
  * [px0, px0+w) x [py0, py0+h): rgb + y*row_stride holds w R, w G, w B floats.
  * c = c (1 - a cov) + colour a cov, band by band in painting order.
- * scratch: w*h doubles. A pixel's result depends only on its own
+ * scratch: rs__linesym_scratch_len(w) doubles. A pixel's result depends only on its own
  * coordinates, never on the block. pix must equal the build's pixel. */
 void rs__linesym_paint(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, float *rgb,
                        size_t row_stride, double *scratch);

@@ -117,6 +117,6 @@ void rs__overlays(const rs_splatter *s, rs__piece *p)
     if (p->w == 0 || p->rows == 0) return;
     if (st && st->casing) casings(s, st, s->texel_m, p);
     if (st && st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);
-    if (st && st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ov);
+    if (st && st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ls);
     if (s->grid->markings && p->road_pixels) rs__markings_paint(s->grid->markings, p);
 }

@@ -3,6 +3,7 @@
  * (lib/splatter.h; docs/design.md "Stages"). */
 #include "splatter.h"
 #include "dem.h"
+#include "linesym.h"
 
 #include <math.h>
 #include <string.h>
@@ -141,7 +142,7 @@ const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid 
 #define PIECE_PIXELS (1u << 18)
 
 typedef struct scratch {
-    double *cov, *hx, *tf, *ov;
+    double *cov, *hx, *tf, *ov, *ls;
     uint16_t *q;
     uint32_t *ti;
     float *tc, *sc, *trow0, *trow1;
@@ -151,6 +152,7 @@ static void scratch_free(rs_ctx *ctx, scratch *b)
 {
     rs__free(ctx, b->cov);
     rs__free(ctx, b->ov);
+    rs__free(ctx, b->ls);
     rs__free(ctx, b->hx);
     rs__free(ctx, b->tf);
     rs__free(ctx, b->q);
@@ -197,6 +199,7 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     scratch b;
     b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
     b.ov = s->grid->styling ? rs__alloc_array(ctx, npx, sizeof *b.ov) : NULL;
+    b.ls = s->grid->styling ? rs__alloc_array(ctx, rs__linesym_scratch_len(cols), sizeof *b.ls) : NULL;
     b.hx = rs__alloc_array(ctx, (size_t)cols * 6, sizeof *b.hx);
     b.tf = rs__alloc_array(ctx, nax * 2, sizeof *b.tf);
     b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
@@ -206,7 +209,7 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     b.sc = rs__calloc(ctx, npx * 3, sizeof *b.sc);
     b.trow0 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow0);
     b.trow1 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow1);
-    if (!b.cov || (s->grid->styling && !b.ov) || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
+    if (!b.cov || (s->grid->styling && (!b.ov || !b.ls)) || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
         scratch_free(ctx, &b);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", npx);
     }
@@ -214,6 +217,7 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     memset(&p, 0, sizeof p);
     p.cov = b.cov;
     p.ov = b.ov;
+    p.ls = b.ls;
     p.q = b.q;
     p.tc = b.tc;
     p.sc = b.sc;

@@ -55,7 +55,9 @@ typedef struct rs__piece {
     uint32_t x0, w, y0, rows, crow;
     double *cov;      /* coverage: road weight R in [0,1] */
     uint16_t *q;      /* coverage: R quantised to 0..65535 (the weight output) */
-    double *ov;       /* overlays: scratch, rows x w (only when the grid has styles) */
+    double *ov;       /* overlays: the casing field's coverage, rows x w (only when the grid has styles) */
+    double *ls;       /* overlays: the line symbols' scratch, rs__linesym_scratch_len(w) (only with styles);
+                       * apart from ov, which the composite still reads (issue 25) */
     float *tc, *sc;   /* surface: terrain and road colour; each row planar: w R, w G, w B */
     rs__terrain_cache *tcache; /* surface: the window's terrain colour rows */
     double *hx;       /* surface: two horizontal interpolants, 6 planes of w */
