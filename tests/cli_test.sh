@@ -159,6 +159,25 @@ expect_fail "undefined style" "style 'nowhere' is not defined" "$T/dem.pgm" "$T/
     ! cmp -s "$T/st1.png" "$T/plain.png" && ok || bad "--no-styles gives the styled image"
 "$RS" --quiet --cell-size 5 --z-scale 0.01 --texels 2 --aa hermite --profile us "$E/dem.pgm" "$E/roads.txt" "$T/us.png" &&
     ! cmp -s "$T/st1.png" "$T/us.png" && ok || bad "--aa hermite --profile us"
+# the styled, marked junction (casings + lines + markings): windows at odd
+# offsets, a 1-px row and the last partial rows are crops of the whole image
+# (issue 25: line scratch overwrote the casing coverage per piece)
+J="--quiet --cell-size 2 --z-scale 0.01 --texels 20"
+"$RS" $J "$E/junction-dem.pgm" "$E/junction.txt" "$T/jw.png" || bad "junction whole"
+for win in "3,341,397,1" "0,797,800,3" "77,1,9,798" "41,330,559,70"; do
+    "$RS" $J --threads 2 --window "$win" "$E/junction-dem.pgm" "$E/junction.txt" "$T/jwin.png" &&
+        python3 - "$T/jw.png" "$T/jwin.png" "$win" <<'PY' && ok || bad "styled junction --window $win is not the crop"
+import sys
+sys.path.insert(0, 'tests')
+from png_read import read
+W, H, C, a = read(sys.argv[1])
+w, h, c, b = read(sys.argv[2])
+x, y, ww, hh = map(int, sys.argv[3].split(','))
+assert (w, h, c) == (ww, hh, C)
+for j in range(h):
+    assert a[((y + j) * W + x) * C:((y + j) * W + x + w) * C] == b[j * w * C:(j + 1) * w * C], 'row %d' % j
+PY
+done
 
 # --- the README's C example compiles against the header and runs ---
 B=$(dirname "$RS")
