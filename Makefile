@@ -269,7 +269,7 @@ $(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 
 test: deps
-	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/atlasgen
+	@$(MAKE) --no-print-directory all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/atlasgen $(BUILD)/tools/grid_compare
 	@BUILD=$(BUILD) SAN="$(SAN)" OPT="$(OPT)" sh tests/run.sh
 
 # --- demo ---------------------------------------------------------------------

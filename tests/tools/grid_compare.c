@@ -4,11 +4,9 @@
  * tile and the stats, over the tests/scenes.c cities (both buffer modes,
  * automatic and explicit road cells) and 150 random scenes (thin to wide
  * roads, arcs, roads leaving the map, repeated points, short wiggles).
- * Not part of `make test` (tests/test_*.c compare the images too); build it
- * against two libraries and diff the outputs:
- *   cc -std=c99 -O2 -D_POSIX_C_SOURCE=200809L -Iinclude -Ilib -Itests \
- *      tests/tools/grid_compare.c build/tests/scenes.o build/libroadsplat.a -lm -o gc
- *   ./gc > after.txt   (same with the old library > before.txt; diff them) */
+ * Not run by `make test` (tests/test_*.c compare the images too), only
+ * built there so it keeps compiling; `make build/tools/grid_compare` in two
+ * trees, run both and diff the outputs. */
 #include "roadsplat.h"
 #include "roadgrid.h"
 #include "scenes.h"
@@ -31,11 +29,14 @@ static double total_ms;
 static void run(const char *name, sc_scene *s, int mode, uint32_t texels, double road_cell)
 {
     rs_dem *dem; rs_roads *roads;
+    rs_dem_frame fr = { s->cell_size, 1, 0, 0 };
     if (rs_dem_create(ctx, s->w, s->h, s->z, &dem)) { printf("%s dem fail\n", name); return; }
+    if (rs_dem_set_frame(ctx, dem, &fr)) { printf("%s frame fail\n", name); rs_dem_free(ctx, dem); return; }
     rs_roads_create(ctx, &roads);
     for (size_t i = 0; i < s->nroads; i++) rs_roads_add(ctx, roads, NULL, s->roads[i].width, s->roads[i].xy, s->roads[i].n);
     rs_splat_options o; memset(&o, 0, sizeof o);
-    o.cell_size = s->cell_size; o.buffer = mode; o.texels = texels; o.road_cell = road_cell;
+    o.grid.buffer = (rs_buffer_mode)mode; o.texels = texels; o.grid.road_cell = road_cell;
+    o.coverage.edges = RS_EDGES_ALPHAMAP; /* the cell grid is built for alpha-map edges only */
     rs_road_grid *g = NULL;
     struct timespec t0, t1; clock_gettime(CLOCK_MONOTONIC, &t0);
     rs_result r = rs_road_grid_build(ctx, dem, roads, &o, &g);
