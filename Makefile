@@ -80,6 +80,15 @@ SQLITE_DEF  = -DRS_WITH_SQLITE
 SQLITE_LIBS = $(or $(shell $(PKG_CONFIG) --libs sqlite3 2>/dev/null),-lsqlite3)
 endif
 
+# Optional glTF output of `roadsplat mesh` (module roadsplat-gltf.so, cli/gltf.c:
+# vertex cache and fetch order by meshoptimizer, which has no .pc file):
+# auto-detected by its header, or forced with WITH_MESHOPT=1/0.
+WITH_MESHOPT ?= $(shell [ -f /usr/include/meshoptimizer.h ] && echo 1 || echo 0)
+ifeq ($(WITH_MESHOPT),1)
+MESHOPT_DEF  = -DRS_WITH_MESHOPT
+MESHOPT_LIBS = -lmeshoptimizer
+endif
+
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
@@ -88,7 +97,8 @@ LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 RENDER_SRC := cli/render.c cli/render_gl.c cli/render_shader.c
 GDAL_SRC  := cli/gdal.c
 MBTILES_SRC := cli/mbtiles.c
-CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC) $(MBTILES_SRC),$(sort $(wildcard cli/*.c)))
+GLTF_SRC  := cli/gltf.c
+CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC) $(MBTILES_SRC) $(GLTF_SRC),$(sort $(wildcard cli/*.c)))
 CLI_OBJ   := $(CLI_CSRC:%.c=$(BUILD)/%.o)
 RENDER_OBJ := $(RENDER_SRC:%.c=$(BUILD)/%.o)
 IMAGE_OBJ := $(BUILD)/cli/imageio.o
@@ -96,8 +106,9 @@ IMAGE_MOD := $(BUILD)/roadsplat-image.so
 RENDER_MOD := $(BUILD)/roadsplat-render.so
 GDAL_MOD  := $(BUILD)/roadsplat-gdal.so
 MBTILES_MOD := $(BUILD)/roadsplat-mbtiles.so
+GLTF_MOD  := $(BUILD)/roadsplat-gltf.so
 MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD)) $(if $(filter 1,$(WITH_GDAL)),$(GDAL_MOD)) \
-             $(if $(filter 1,$(WITH_SQLITE)),$(MBTILES_MOD))
+             $(if $(filter 1,$(WITH_SQLITE)),$(MBTILES_MOD)) $(if $(filter 1,$(WITH_MESHOPT)),$(GLTF_MOD))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TESTLIB_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
@@ -113,7 +124,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -201,7 +212,7 @@ $(PCFILE): $(CONFIG)
 # CLI symbols keep default visibility: the executable exports them
 # (--export-dynamic) to the modules, which call back into it. The whole
 # library is linked in, since the render module uses parts the rest does not.
-CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF) $(SQLITE_DEF)
+CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF) $(SQLITE_DEF) $(MESHOPT_DEF)
 $(BUILD)/cli/%.o: cli/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) -c $< -o $@
@@ -233,6 +244,9 @@ $(GDAL_MOD): $(BUILD)/cli/gdal.o
 
 $(MBTILES_MOD): $(BUILD)/cli/mbtiles.o
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(SQLITE_LIBS)
+
+$(GLTF_MOD): $(BUILD)/cli/gltf.o
+	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(MESHOPT_LIBS) $(LDLIBS_CORE)
 
 # --- tests --------------------------------------------------------------------
 $(BUILD)/tests/%.o: tests/%.c
@@ -354,7 +368,8 @@ uninstall:
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so $(DESTDIR)$(PKGCONFIGDIR)/roadsplat.pc \
 	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1 \
 	  $(DESTDIR)$(MODULEDIR)/roadsplat-image.so $(DESTDIR)$(MODULEDIR)/roadsplat-render.so \
-	  $(DESTDIR)$(MODULEDIR)/roadsplat-gdal.so $(DESTDIR)$(MODULEDIR)/roadsplat-mbtiles.so
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-gdal.so $(DESTDIR)$(MODULEDIR)/roadsplat-mbtiles.so \
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-gltf.so
 	-rmdir $(DESTDIR)$(MODULEDIR) 2>/dev/null
 
 clean:

@@ -1,9 +1,11 @@
-/* `roadsplat mesh`: ROAM-mesh a DEM to OBJ or PLY (atomic write), with an
- * optional stats JSON. OBJ/PLY axes: y up; sample (row i, column j) is
- * written as (j*cs, height, i*cs); faces counter-clockwise seen from above. */
+/* `roadsplat mesh`: ROAM-mesh a DEM to OBJ, PLY or binary glTF (atomic
+ * write), with an optional stats JSON. Axes: y up; sample (row i, column j)
+ * is written as (j*cs, height, i*cs); faces counter-clockwise seen from
+ * above. */
 #define _POSIX_C_SOURCE 200809L /* getrusage */
 #include "bigalloc.h"
 #include "gis.h"
+#include "gltf.h"
 
 #include <errno.h>
 #include <float.h>
@@ -17,11 +19,14 @@ static const char *mesh_usage =
     "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
     "                      [--pool N] [--normals] [--skirt DEPTH] [--stats FILE.json]\n"
     "                      [--texture IMG]\n"
-    "                      DEM OUT.obj|OUT.ply\n"
+    "                      DEM OUT.obj|OUT.ply|OUT.glb\n"
     "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
     "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
     "  --pool N        ROAM node pool size (default: what the finest mesh needs, <= 2^26)\n"
-    "  --texture IMG   OUT.obj: also write OUT.mtl with IMG as the diffuse texture\n"
+    "  --texture IMG   OUT.obj: also write OUT.mtl with IMG as the diffuse texture;\n"
+    "                  OUT.glb: embed IMG (PNG or JPEG) as the base colour texture\n"
+    "OUT.glb is binary glTF 2.0 with normals, texture coordinates and the vertex\n"
+    "order optimised by meshoptimizer (docs/gltf.md).\n"
     "A georeferenced DEM (GDAL, docs/gis.md) brings its cell size; vertices stay\n"
     "relative to sample (0,0), whose world point the header records.\n";
 
@@ -159,6 +164,98 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
     return ferror(f) ? -1 : 0;
 }
 
+/* JSON string body of s (quotes, backslashes and control characters
+ * escaped) into out; 1 when it did not fit. */
+static int json_escape(const char *s, char *out, size_t n)
+{
+    size_t k = 0;
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        char e[8];
+        int len = c == '"' || c == '\\' ? snprintf(e, sizeof e, "\\%c", c)
+                  : c < 0x20              ? snprintf(e, sizeof e, "\\u%04x", c)
+                                          : snprintf(e, sizeof e, "%c", c);
+        if (k + (size_t)len + 1 > n) return 1;
+        memcpy(out + k, e, (size_t)len);
+        k += (size_t)len;
+    }
+    out[k] = '\0';
+    return 0;
+}
+
+/* OUT.glb: the same vertices (exact heights), texture coordinates and
+ * normals as OUT.obj, through the glTF module; the texture file embedded;
+ * the world frame of a georeferenced DEM in the scene's extras. */
+static int write_glb(FILE *f, const char *outp, const float *z, double zs, const float *v, const uint32_t *smp,
+                     const float *n, size_t nv, const uint32_t *idx, size_t ni, size_t ntop, const cli_geo *geo,
+                     const char *texture, cli_gltf_stats *gs)
+{
+    int rc = 1;
+    float *pos = malloc((nv ? nv : 1) * 3 * sizeof *pos), *uv = malloc((nv ? nv : 1) * 2 * sizeof *uv);
+    float *nn = n ? malloc((nv ? nv : 1) * 3 * sizeof *nn) : NULL;
+    char *img = NULL, *extras = NULL, *crs = NULL;
+    size_t img_len = 0;
+    cli_gltf_mesh m;
+    memset(&m, 0, sizeof m);
+    if (!pos || !uv || (n && !nn)) { cli_error("%s: out of memory for %zu vertices", outp, nv); goto out; }
+    for (size_t k = 0; k < nv; k++) {
+        const float *p = v + 5 * k;
+        double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
+        pos[3 * k] = p[0];
+        pos[3 * k + 1] = (float)h;
+        pos[3 * k + 2] = p[1];
+        uv[2 * k] = p[3];
+        uv[2 * k + 1] = p[4]; /* glTF's v runs down the image, as the library's does */
+        if (n) {
+            nn[3 * k] = n[3 * k];
+            nn[3 * k + 1] = n[3 * k + 2];
+            nn[3 * k + 2] = n[3 * k + 1];
+        }
+    }
+    m.nv = nv;
+    m.ni = ni;
+    m.pos = pos;
+    m.uv = uv;
+    m.nrm = nn;
+    m.idx = idx;
+    if (texture) {
+        /* embedded as it is: glTF's core images are PNG and JPEG */
+        if (cli_read_file(texture, (size_t)1 << 30, &img, &img_len)) goto out;
+        const unsigned char *b = (const unsigned char *)img;
+        if (img_len >= 8 && !memcmp(b, "\x89PNG\r\n\x1a\n", 8)) m.image_mime = "image/png";
+        else if (img_len >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF) m.image_mime = "image/jpeg";
+        else {
+            cli_error("--texture: %s is neither PNG nor JPEG, the two image formats a .glb can embed", texture);
+            goto out;
+        }
+        m.image = b;
+        m.image_len = img_len;
+    }
+    if (geo->georef) {
+        size_t cap = 2 * (geo->crs ? strlen(geo->crs) : 0) * 3 + 1;
+        extras = malloc(cap + 512);
+        crs = malloc(cap);
+        if (!extras || !crs || json_escape(geo->crs ? geo->crs : "", crs, cap)) {
+            cli_error("%s: out of memory for the world frame", outp);
+            goto out;
+        }
+        snprintf(extras, cap + 512,
+                 "{\"roadsplat\":{\"world_origin\":[%.17g,%.17g],\"crs\":\"%s\",\"frame\":\"a vertex (vx, vy, vz) is "
+                 "at world x0 + vx (east), y0 - vz (north), height vy\"}}",
+                 geo->gt[0] + geo->gt[1] / 2, geo->gt[3] + geo->gt[5] / 2, crs);
+        m.extras = extras;
+    }
+    rc = cli_gltf_write(f, outp, &m, gs);
+out:
+    free(pos);
+    free(uv);
+    free(nn);
+    free(img);
+    free(extras);
+    free(crs);
+    return rc;
+}
+
 int cli_mesh_main(int argc, char **argv)
 {
     double t_start = cli_now_ms();
@@ -189,9 +286,12 @@ int cli_mesh_main(int argc, char **argv)
         else if (!outp) outp = s;
         else { cli_error("mesh: unexpected argument '%s'", s); return 1; }
     }
-    if (!in || !outp) { cli_error("mesh: need DEM and OUT.obj|OUT.ply\n%s", mesh_usage); return 1; }
-    const cli_file_role outs[2] = { { outp, "OUT" }, { stats_path, "--stats" } }, ins[1] = { { in, "DEM" } };
-    if (cli_check_outputs(outs, 2, ins, 1)) return 1;
+    if (!in || !outp) { cli_error("mesh: need DEM and OUT.obj|OUT.ply|OUT.glb\n%s", mesh_usage); return 1; }
+    const int glb = ends_with(outp, ".glb");
+    /* a .glb reads the texture (embeds it); OBJ only names it */
+    const cli_file_role outs[2] = { { outp, "OUT" }, { stats_path, "--stats" } },
+                        ins[2] = { { in, "DEM" }, { glb ? texture : NULL, "--texture" } };
+    if (cli_check_outputs(outs, 2, ins, 2)) return 1;
     if (have_err && tris) { cli_error("mesh: --max-error and --triangles are exclusive"); return 1; }
     if (!(cs > 0)) { cli_error("--cell-size: '%g' must be > 0", cs); return 1; }
     if (!(zs > 0)) { cli_error("--z-scale: '%g' must be > 0", zs); return 1; }
@@ -204,12 +304,13 @@ int cli_mesh_main(int argc, char **argv)
     if (!(skirt >= 0)) { cli_error("--skirt: '%g' must be >= 0", skirt); return 1; }
     if (have_err == 0 && tris == 0) have_err = 1;
     int ply = ends_with(outp, ".ply");
-    if (!ply && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj or .ply", outp); return 1; }
+    if (!ply && !glb && !ends_with(outp, ".obj")) { cli_error("%s: output must end in .obj, .ply or .glb", outp); return 1; }
     if (texture && ply) { cli_error("--texture: %s is a PLY; the material file goes with OUT.obj", outp); return 1; }
+    if (glb) normals = 1; /* engines light a .glb: always with normals */
     /* OUT.mtl beside OUT.obj, named in its mtllib line */
     char *mtl_path = NULL;
     const char *mtl_name = NULL;
-    if (texture) {
+    if (texture && !glb) {
         size_t n = strlen(outp);
         if (!(mtl_path = malloc(n + 1))) { cli_error("out of memory"); return 1; }
         memcpy(mtl_path, outp, n - 4);
@@ -354,7 +455,12 @@ int cli_mesh_main(int argc, char **argv)
             goto done;
         }
     }
-    if (write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, world, mtl_name) != 0) {
+    cli_gltf_stats gs;
+    memset(&gs, 0, sizeof gs);
+    if (glb) {
+        if (write_glb(out.f, outp, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, &geo, texture, &gs))
+            goto done;
+    } else if (write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, world, mtl_name) != 0) {
         cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
         goto done;
     }
@@ -368,6 +474,10 @@ int cli_mesh_main(int argc, char **argv)
         fprintf(so.f, "  \"max_error_requested\": %.9g,\n  \"max_error_measured\": %.9g,\n  \"max_error_bound\": %.9g,\n",
                 tris ? st.threshold : max_error, measured, st.max_error_bound);
         fprintf(so.f, "  \"triangles\": %u,\n  \"vertices\": %zu,\n  \"indices\": %zu,\n", st.triangles, nv, ni);
+        if (glb)
+            fprintf(so.f, "  \"glb\": {\"vertices\": %zu, \"triangles\": %zu, \"acmr_before\": %.4f, \"acmr_after\": %.4f, "
+                          "\"bytes\": %zu},\n",
+                    gs.vertices, gs.triangles, gs.acmr_before, gs.acmr_after, gs.bytes);
         fprintf(so.f, "  \"patch_size\": %u,\n  \"pool\": {\"nodes\": %u, \"used\": %u, \"base_nodes\": %u, \"exhausted\": %s, \"bytes\": %llu},\n",
                 st.patch_size, st.pool_nodes, st.pool_used, st.base_nodes, st.pool_exhausted ? "true" : "false",
                 (unsigned long long)st.bytes);

@@ -6,7 +6,9 @@
  * - roadsplat-image.so: cli/imageio.cpp (OpenImageIO readers);
  * - roadsplat-render.so: cli/render.c + cli/render_gl.c (`roadsplat render`);
  * - roadsplat-gdal.so: cli/gdal.c (GDAL: georeferenced DEMs, OGR roads,
- *   GeoTIFF output; cli/gis.h).
+ *   GeoTIFF output; cli/gis.h);
+ * - roadsplat-mbtiles.so: cli/mbtiles.c (SQLite: `tiles --format mbtiles`);
+ * - roadsplat-gltf.so: cli/gltf.c (meshoptimizer: `mesh OUT.glb`).
  *
  * Search order: the folder of the running executable (/proc/self/exe: the
  * build folder, or a relocated install), then RS_MODULEDIR, the
@@ -15,6 +17,7 @@
  * --export-dynamic for that. Also here: the stand-ins of the module entry
  * points, and the start-up clock. */
 #include "gis.h"
+#include "gltf.h"
 
 #include <dlfcn.h>
 #include <errno.h>
@@ -41,6 +44,7 @@ static module modules[] = {
     { "render", "OSMesa", NULL, 0, { 0 } },
     { "gdal", "GDAL", NULL, 0, { 0 } },
     { "mbtiles", "SQLite", NULL, 0, { 0 } },
+    { "gltf", "meshoptimizer", NULL, 0, { 0 } },
 };
 
 /* Folder of the executable, with a trailing '/'; "" when unknown. */
@@ -277,4 +281,22 @@ __attribute__((constructor)) static void startup_mark(void)
 double cli_startup_ms(void)
 {
     return cpu_before_main_ms + (cli_now_ms() - main_wall_ms);
+}
+
+/* ---- the glTF module (cli/gltf.h) ------------------------------------------------ */
+typedef int (*gltf_write_fn)(FILE *, const char *, const cli_gltf_mesh *, cli_gltf_stats *);
+int cli_gltf_write(FILE *f, const char *shown, const cli_gltf_mesh *m, cli_gltf_stats *st)
+{
+    memset(st, 0, sizeof *st);
+#ifdef RS_WITH_MESHOPT
+    void *s = cli_module_symbol("gltf", "cli_gltf_write", shown);
+    gltf_write_fn fn;
+    if (!s) return 1;
+    memcpy(&fn, &s, sizeof fn);
+    return fn(f, shown, m, st);
+#else
+    (void)f; (void)m;
+    cli_error("%s: this build has no glTF support (install libmeshoptimizer-dev, or run 'make deps', and rebuild)", shown);
+    return 1;
+#endif
 }
