@@ -44,6 +44,10 @@ extern "C" {
 
 /* "MAJOR.MINOR.PATCH" of the library actually linked. Static storage. */
 RS_API const char *rs_version_string(void);
+/* RS_VERSION of the library actually linked: a host built against one
+ * header can compare it at run time with the shared library it loaded
+ * (same major: compatible; docs/embedding.md). */
+RS_API uint32_t rs_version_number(void);
 
 /* ---------------------------------------------------------------------------
  * Results
@@ -680,6 +684,26 @@ typedef struct rs_splat_profile {
 RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0,
                                  uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
                                  uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
+
+/* A reusable workspace: the scratch of rs_splat_window for every window at
+ * most `max_width` pixels wide (any height) of splatter `s`, allocated once
+ * from ctx's allocator (about 10 MB at most, whatever the window;
+ * rs_splat_workspace_bytes tells). rs_splat_window_ws then renders a window
+ * with no allocation at all (except with opts->lighting.enable, whose
+ * normal-map scratch is still taken per call) and the same bytes as
+ * rs_splat_window. A workspace belongs to one splatter and serves one call
+ * at a time: give each thread its own. max_width: 1..image width
+ * (RS_ERR_INVALID_ARG otherwise). Free it before the splatter. */
+typedef struct rs_splat_workspace rs_splat_workspace;
+RS_API rs_result rs_splat_workspace_create(rs_ctx *ctx, const rs_splatter *s, uint32_t max_width,
+                                           rs_splat_workspace **out);
+RS_API void rs_splat_workspace_free(rs_ctx *ctx, rs_splat_workspace *ws);
+RS_API size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws);
+/* rs_splat_window through `ws` (made for `s`; the window at most its width,
+ * else RS_ERR_INVALID_ARG). */
+RS_API rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0,
+                                    uint32_t y0, uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
+                                    uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
 
 /* Whole-image convenience: a splatter on `grid` (built with the same dem
  * and opts), one window covering the image, tightly packed buffers:

@@ -15,6 +15,11 @@ const char *rs_version_string(void)
     return RS__STR(RS_VERSION_MAJOR) "." RS__STR(RS_VERSION_MINOR) "." RS__STR(RS_VERSION_PATCH);
 }
 
+uint32_t rs_version_number(void)
+{
+    return (uint32_t)RS_VERSION;
+}
+
 const char *rs_strerror(rs_result r)
 {
     switch (r) {

@@ -137,7 +137,9 @@ const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid 
 
 /* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window; per
  * window column, the terrain colour rows and each texture's column
- * coordinates add a few dozen bytes. */
+ * coordinates add a few dozen bytes. A workspace (rs_splat_workspace_create)
+ * holds the same scratch for every window up to its width, so a window
+ * through it allocates nothing. */
 #define PIECE_COLS 2048u
 #define PIECE_PIXELS (1u << 18)
 
@@ -147,6 +149,30 @@ typedef struct scratch {
     uint32_t *ti;
     float *tc, *sc, *trow0, *trow1;
 } scratch;
+
+/* Element counts of a scratch set: for one window (w, h), or for every
+ * window at most max_w wide (a workspace: h = UINT32_MAX). */
+typedef struct scratch_size {
+    size_t npx, cols, nax, ncol;
+} scratch_size;
+
+static scratch_size scratch_size_of(const rs_splatter *s, uint32_t w, uint32_t h)
+{
+    const uint32_t T = s->o.texels;
+    const size_t ntex = (s->o.surface.terrain_texture != NULL) + (s->o.surface.road_texture != NULL);
+    scratch_size z;
+    z.cols = w < PIECE_COLS ? w : PIECE_COLS;
+    size_t rows = PIECE_PIXELS / z.cols;
+    if (rows > T) rows = T;
+    if (rows > h) rows = h;
+    /* a narrower window may take more rows of fewer columns: never more
+     * than PIECE_PIXELS, nor more than cols x T */
+    z.npx = z.cols * (size_t)T < PIECE_PIXELS ? z.cols * (size_t)T : PIECE_PIXELS;
+    if (h != UINT32_MAX) z.npx = z.cols * rows;
+    z.nax = (h != UINT32_MAX ? rows : (T < PIECE_PIXELS ? T : PIECE_PIXELS)) + (size_t)w * ntex;
+    z.ncol = (size_t)w / T + 3;
+    return z;
+}
 
 static void scratch_free(rs_ctx *ctx, scratch *b)
 {
@@ -163,25 +189,49 @@ static void scratch_free(rs_ctx *ctx, scratch *b)
     rs__free(ctx, b->trow1);
 }
 
+static rs_result scratch_alloc(rs_ctx *ctx, const rs_splatter *s, const scratch_size *z, scratch *b)
+{
+    const int styled = s->grid->styling != NULL;
+    b->cov = rs__alloc_array(ctx, z->npx, sizeof *b->cov);
+    b->ov = styled ? rs__alloc_array(ctx, z->npx, sizeof *b->ov) : NULL;
+    b->ls = styled ? rs__alloc_array(ctx, rs__linesym_scratch_len((uint32_t)z->cols), sizeof *b->ls) : NULL;
+    b->hx = rs__alloc_array(ctx, z->cols * 6, sizeof *b->hx);
+    b->tf = rs__alloc_array(ctx, z->nax * 2, sizeof *b->tf);
+    b->q = rs__alloc_array(ctx, z->npx, sizeof *b->q);
+    b->ti = rs__alloc_array(ctx, z->nax * 2, sizeof *b->ti);
+    /* zeroed: the composite reads both colours of every pixel, selecting one */
+    b->tc = rs__calloc(ctx, z->npx * 3, sizeof *b->tc);
+    b->sc = rs__calloc(ctx, z->npx * 3, sizeof *b->sc);
+    b->trow0 = rs__alloc_array(ctx, z->ncol * 3, sizeof *b->trow0);
+    b->trow1 = rs__alloc_array(ctx, z->ncol * 3, sizeof *b->trow1);
+    if (!b->cov || (styled && (!b->ov || !b->ls)) || !b->hx || !b->tf || !b->q || !b->ti || !b->tc || !b->sc ||
+        !b->trow0 || !b->trow1) {
+        scratch_free(ctx, b);
+        memset(b, 0, sizeof *b);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", z->npx);
+    }
+    return RS_OK;
+}
+
+struct rs_splat_workspace {
+    const rs_splatter *s;
+    uint32_t max_w;
+    scratch b;
+    size_t bytes;
+};
+
 static double now(const rs_splat_profile *pf)
 {
     return pf && pf->clock_ms ? pf->clock_ms(pf->clock_user) : 0;
 }
 
-rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
-                          uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
-                          rs_splat_profile *profile)
+/* The window through the stages with scratch b, which holds at least
+ * scratch_size_of(s, w, h) of everything. */
+static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint32_t x0, uint32_t y0, uint32_t w,
+                           uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
+                           rs_splat_profile *profile)
 {
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!s || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_window");
-    if (w == 0 || h == 0 || x0 >= s->out_w || y0 >= s->out_h || w > s->out_w - x0 || h > s->out_h - y0)
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "window %u,%u %ux%u is empty or outside the %ux%u image", x0, y0, w,
-                        h, s->out_w, s->out_h);
-    if (rgba_stride / 4 < w)
-        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA row stride %zu bytes, need %zu", rgba_stride,
-                        (size_t)w * 4);
-    if (weight && weight_stride < w)
-        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight row stride %zu values, need %u", weight_stride, w);
+    const scratch b = *bp;
     const uint32_t T = s->o.texels;
     uint32_t cols = w < PIECE_COLS ? w : PIECE_COLS;
     uint32_t max_rows = PIECE_PIXELS / cols;
@@ -194,25 +244,6 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     tcache.row_of[0] = tcache.row_of[1] = UINT32_MAX;
     /* texture coordinates: the window's columns per texture, a piece's rows */
     const int has_tex[2] = { s->o.surface.terrain_texture != NULL, s->o.surface.road_texture != NULL };
-    size_t npx = (size_t)cols * max_rows, ncol = tcache.ncol;
-    size_t nax = (size_t)max_rows + (size_t)w * (size_t)(has_tex[0] + has_tex[1]);
-    scratch b;
-    b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
-    b.ov = s->grid->styling ? rs__alloc_array(ctx, npx, sizeof *b.ov) : NULL;
-    b.ls = s->grid->styling ? rs__alloc_array(ctx, rs__linesym_scratch_len(cols), sizeof *b.ls) : NULL;
-    b.hx = rs__alloc_array(ctx, (size_t)cols * 6, sizeof *b.hx);
-    b.tf = rs__alloc_array(ctx, nax * 2, sizeof *b.tf);
-    b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
-    b.ti = rs__alloc_array(ctx, nax * 2, sizeof *b.ti);
-    /* zeroed: the composite reads both colours of every pixel, selecting one */
-    b.tc = rs__calloc(ctx, npx * 3, sizeof *b.tc);
-    b.sc = rs__calloc(ctx, npx * 3, sizeof *b.sc);
-    b.trow0 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow0);
-    b.trow1 = rs__alloc_array(ctx, ncol * 3, sizeof *b.trow1);
-    if (!b.cov || (s->grid->styling && (!b.ov || !b.ls)) || !b.hx || !b.tf || !b.q || !b.ti || !b.tc || !b.sc || !b.trow0 || !b.trow1) {
-        scratch_free(ctx, &b);
-        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", npx);
-    }
     rs__piece p;
     memset(&p, 0, sizeof p);
     p.cov = b.cov;
@@ -275,20 +306,95 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
              * a pixel do not depend on the window: same bytes for any cut) */
             rs_result lr = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
                                            rgba + (size_t)(y - y0) * rgba_stride, rgba_stride);
-            if (lr) {
-                scratch_free(ctx, &b);
-                return lr;
-            }
+            if (lr) return lr;
         }
         y += p.rows;
-        if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h)) {
-            scratch_free(ctx, &b);
+        if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h))
             return rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
-        }
     }
-    scratch_free(ctx, &b);
     rs__ok(ctx);
     return RS_OK;
+}
+
+static rs_result check_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                              size_t rgba_stride, const uint16_t *weight, size_t weight_stride)
+{
+    if (w == 0 || h == 0 || x0 >= s->out_w || y0 >= s->out_h || w > s->out_w - x0 || h > s->out_h - y0)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "window %u,%u %ux%u is empty or outside the %ux%u image", x0, y0, w,
+                        h, s->out_w, s->out_h);
+    if (rgba_stride / 4 < w)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA row stride %zu bytes, need %zu", rgba_stride,
+                        (size_t)w * 4);
+    if (weight && weight_stride < w)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight row stride %zu values, need %u", weight_stride, w);
+    return RS_OK;
+}
+
+rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                          uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
+                          rs_splat_profile *profile)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!s || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_window");
+    rs_result r = check_window(ctx, s, x0, y0, w, h, rgba_stride, weight, weight_stride);
+    if (r) return r;
+    scratch_size z = scratch_size_of(s, w, h);
+    scratch b;
+    if ((r = scratch_alloc(ctx, s, &z, &b)) != RS_OK) return r;
+    r = splat_run(ctx, s, &b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, profile);
+    scratch_free(ctx, &b);
+    return r;
+}
+
+rs_result rs_splat_workspace_create(rs_ctx *ctx, const rs_splatter *s, uint32_t max_width, rs_splat_workspace **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splat_workspace_create: out is NULL");
+    *out = NULL;
+    if (!s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splat_workspace_create: NULL splatter");
+    if (max_width == 0 || max_width > s->out_w)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "workspace width %u must be 1..%u (the image width)", max_width,
+                        s->out_w);
+    rs_splat_workspace *ws = rs__calloc(ctx, 1, sizeof *ws);
+    if (!ws) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a splat workspace");
+    scratch_size z = scratch_size_of(s, max_width, UINT32_MAX);
+    rs_result r = scratch_alloc(ctx, s, &z, &ws->b);
+    if (r) {
+        rs__free(ctx, ws);
+        return r;
+    }
+    ws->s = s;
+    ws->max_w = max_width;
+    ws->bytes = sizeof *ws + z.npx * (sizeof(double) * (s->grid->styling ? 2 : 1) + sizeof(uint16_t) + 6 * sizeof(float)) +
+                z.cols * 6 * sizeof(double) + z.nax * 2 * (sizeof(double) + sizeof(uint32_t)) +
+                z.ncol * 6 * sizeof(float) +
+                (s->grid->styling ? rs__linesym_scratch_len((uint32_t)z.cols) * sizeof(double) : 0);
+    *out = ws;
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+void rs_splat_workspace_free(rs_ctx *ctx, rs_splat_workspace *ws)
+{
+    if (!ctx || !ws) return;
+    scratch_free(ctx, &ws->b);
+    rs__free(ctx, ws);
+}
+
+size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws) { return ws ? ws->bytes : 0; }
+
+rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0, uint32_t y0,
+                             uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight,
+                             size_t weight_stride, rs_splat_profile *profile)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!s || !ws || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_window_ws");
+    if (ws->s != s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "the workspace was made for another splatter");
+    rs_result r = check_window(ctx, s, x0, y0, w, h, rgba_stride, weight, weight_stride);
+    if (r) return r;
+    if (w > ws->max_w)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
+    return splat_run(ctx, s, &ws->b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, profile);
 }
 
 rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,
