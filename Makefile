@@ -124,7 +124,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev libjs-leaflet
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -132,7 +132,7 @@ DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config
 CONFIG      := $(BUILD)/config.txt
 CONFIG_TEXT := prefix=$(PREFIX) libdir=$(LIBDIR) includedir=$(INCDIR) moduledir=$(MODULEDIR) version=$(VERSION)
 
-.PHONY: strip atlas all lib cli test demo deps bench fuzz fuzz-smoke sanitize-test install install-lib uninstall help clean check-deps FORCE
+.PHONY: strip atlas all lib cli test demo deps deps-viewer bench fuzz fuzz-smoke sanitize-test install install-lib uninstall help clean check-deps FORCE
 .DEFAULT_GOAL := all
 # keep objects of pattern rules (tests, fuzz replays) between runs
 .SECONDARY:
@@ -148,6 +148,7 @@ help:
 	@echo "  make demo          build and render docs/examples/ to out.png"
 	@echo "  make test          build and run every test (unit, CLI, fuzz-corpus replay)"
 	@echo "  make deps          install missing Debian packages (apt-get, needs root)"
+	@echo "  make deps-viewer   install Debian's chromium for the tile viewer's screenshot test (optional)"
 	@echo "  make all           library (static + shared), roadsplat.pc and the CLI"
 	@echo "  make bench         run the benchmarks, write docs/BENCHMARKS.md"
 	@echo "  make fuzz          build libFuzzer targets with clang + ASan/UBSan"
@@ -157,7 +158,7 @@ help:
 	@echo "  make install-lib   install only the library, header and roadsplat.pc (no OpenImageIO needed)"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 FUZZ_SECONDS"
+	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 WITH_MESHOPT=0|1 FUZZ_SECONDS"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
@@ -173,6 +174,15 @@ deps:
 	export DEBIAN_FRONTEND=noninteractive; \
 	apt-get update -q >/dev/null && apt-get install -y -q --no-install-recommends $$missing >/dev/null \
 	  || { echo "deps: apt-get failed; run: apt-get update && apt-get install -y$$missing"; exit 1; }
+
+# Debian's chromium (about 300 MB) only for the screenshot checks of
+# tests/cli_viewer_test.sh, which say SKIP without it: not part of `make deps`.
+deps-viewer:
+	@command -v chromium >/dev/null 2>&1 && { echo "deps-viewer: chromium present"; exit 0; }; \
+	if [ "$$(id -u)" != 0 ]; then echo "deps-viewer: run as root: apt-get update && apt-get install -y chromium"; exit 1; fi; \
+	export DEBIAN_FRONTEND=noninteractive; \
+	apt-get update -q >/dev/null && apt-get install -y -q --no-install-recommends chromium >/dev/null \
+	  || { echo "deps-viewer: apt-get failed; run: apt-get update && apt-get install -y chromium"; exit 1; }
 
 check-deps:
 	@$(PKG_CONFIG) --exists OpenImageIO 2>/dev/null || { \

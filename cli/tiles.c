@@ -48,6 +48,8 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include "viewer.h"
+
 static const char tiles_usage[] =
     "Usage: roadsplat tiles [options] DEM ROADS OUTDIR\n"
     "       roadsplat tiles --format mbtiles [options] DEM ROADS OUT.mbtiles\n"
@@ -84,6 +86,10 @@ static const char tiles_usage[] =
     "  --resume           keep tiles whose file matches its logged SHA-256\n"
     "  --threads N        splat threads (default: all cores; same tiles for any N)\n"
     "  --png-level N      PNG compression 0..12 (default 1)\n"
+    "  --viewer           also OUTDIR/index.html: the pyramid on a Leaflet map\n"
+    "                     (Leaflet copied from libjs-leaflet into OUTDIR/leaflet/)\n"
+    "  --attribution TEXT the viewer's attribution line (default: rendered with\n"
+    "                     roadsplat; name your data's source, e.g. OpenStreetMap)\n"
     "  --quiet, --help\n";
 
 #define LOG_DIR ".tiles-log"
@@ -95,6 +101,8 @@ typedef struct targs {
     uint32_t tile;
     int tms, mbtiles, dense, resume, from_children, quiet, sharded;
     int normals, normal_given, conv_given, render_all;
+    int viewer;               /* --viewer: OUTDIR/index.html (cli/viewer.c) */
+    const char *attribution;  /* --attribution TEXT for the viewer */
     rs_normal_options normal;
     uint32_t halo;
     uint32_t shard_i, shard_n;
@@ -863,6 +871,7 @@ static int parse_targs(int argc, char **argv, targs *a)
                     : !strcmp(name, "--from-children")               ? &a->from_children
                     : !strcmp(name, "--normals")                     ? &a->normals
                     : !strcmp(name, "--render-all")                  ? &a->render_all
+                    : !strcmp(name, "--viewer")                      ? &a->viewer
                                                                      : NULL;
         if (flag) {
             if (inl) { cli_error("%s takes no value", name); return 1; }
@@ -918,6 +927,9 @@ static int parse_targs(int argc, char **argv, targs *a)
                 return 1;
             }
             for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
+        } else if (!strcmp(name, "--attribution")) {
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            a->attribution = v;
         } else if (!strcmp(name, "--shard")) {
             if (cli_option_value(argc, argv, &i, name, inl, &v) || parse_shard(v, &a->shard_i, &a->shard_n)) return 1;
             a->sharded = 1;
@@ -951,6 +963,15 @@ static int parse_targs(int argc, char **argv, targs *a)
     }
     if (cli_lighting_check(&a->s)) return 1;
     a->s.o.lighting.normal.strength = a->normal.strength;
+    if (a->viewer && (a->mbtiles || a->halo || a->sharded)) {
+        cli_error("--viewer shows a folder of plain tiles: not with --format mbtiles, --halo or --shard (run it with "
+                  "--from-children)");
+        return 1;
+    }
+    if (a->attribution && !a->viewer) {
+        cli_error("--attribution is the viewer's attribution line: it needs --viewer");
+        return 1;
+    }
     if (a->mbtiles && (a->sharded || a->resume || a->from_children)) {
         cli_error("--format mbtiles is written by one process: use --format png for --shard, --resume and --from-children");
         return 1;
@@ -1615,6 +1636,11 @@ int cli_tiles_main(int argc, char **argv)
                 goto done;
             }
             if (cli_out_commit(&mani)) goto done;
+            if (a.viewer) {
+                cli_viewer_info vi = { r.S, r.fw, r.fh, r.zmax, r.zd, a.tms, "roadsplat tiles",
+                                       a.attribution ? a.attribution : "rendered with roadsplat" };
+                if (cli_tiles_viewer(a.out, &vi)) goto done;
+            }
         }
     }
     if (!a.quiet)
