@@ -109,7 +109,7 @@ rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo)
 }
 
 int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cli_geo *geo, char **text,
-                       size_t *size)
+                       size_t *size, cli_gdal_road_counts *counts)
 {
     *text = NULL;
     *size = 0;
@@ -128,6 +128,7 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
     o.where = s->where;
     o.dst_crs = geo->crs;
     o.shown = roads_path;
+    o.counts = counts;
     if (!cli_gdal_available()) return cli_gdal_roads_text(roads_path, &o, text, size); /* says why */
     if (!geo->georef || !geo->crs) {
         cli_error("%s: GIS roads are reprojected to the DEM's coordinate system, and the DEM has %s; use a "
@@ -135,7 +136,13 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
                   "roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
         return 1;
     }
-    return cli_gdal_roads_text(roads_path, &o, text, size);
+    if (cli_gdal_roads_text(roads_path, &o, text, size)) return 1;
+    /* one line on what OSM semantics left out (docs/gis.md) */
+    if (counts->no_highway || counts->not_roads)
+        fprintf(stderr, "roadsplat: %s: %zu roads from %zu features; skipped %zu ways without highway=* (fences, "
+                "rivers, railways, ...; --where selects features) and %zu whose highway= is not a road\n",
+                roads_path, counts->roads, counts->features, counts->no_highway, counts->not_roads);
+    return 0;
 }
 
 /* ---- the frame --------------------------------------------------------------------- */

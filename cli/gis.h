@@ -38,6 +38,7 @@ typedef struct cli_gdal_roads_opts {
     const char *where; /* --where SQL, or NULL */
     const char *dst_crs;
     const char *shown; /* the name messages give */
+    struct cli_gdal_road_counts *counts; /* filled when not NULL */
 } cli_gdal_roads_opts;
 int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size);
 
@@ -68,9 +69,10 @@ int cli_roads_are_gis(const char *path);
  * before. NULL after a message. */
 rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo);
 /* The road text of ROADS: the file, or an OGR source converted to the
- * DEM's CRS (s->layer, s->where). 0, or 1 after a message. */
+ * DEM's CRS (s->layer, s->where), its counts in *counts and one stderr
+ * line when features were skipped. 0, or 1 after a message. */
 int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cli_geo *geo, char **text,
-                       size_t *size);
+                       size_t *size, cli_gdal_road_counts *counts);
 /* The DEM's frame from its georeference and the road file's `frame` line
  * (rs_roads_negate_y for world roads), then the check that some road
  * touches the map (a warning; an error with --strict). 0, or 1 after a

@@ -327,6 +327,8 @@ typedef struct run_stats {
     const rs_splat_options *o;
     uint32_t w, h, x0, y0, full_w, full_h;
     const cli_splat_job *job;
+    const cli_gdal_road_counts *src; /* a GIS road source's counts (src->set 0: road text) */
+    double pixel_m;                  /* metres per output pixel */
 } run_stats;
 
 static int stats_to_temp(cli_out *o, const run_stats *rs)
@@ -334,8 +336,23 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
     const double *t = rs->t;
     const rs_road_grid_stats *gs = rs->gs;
     const rs_splat_profile *pf = &rs->job->profile;
+    char src[400] = "";
+    if (rs->src && rs->src->set) {
+        const cli_gdal_road_counts *c = rs->src;
+        snprintf(src, sizeof src,
+                 "  \"roads_source\": {\"features\": %zu, \"roads\": %zu, \"skipped_no_highway\": %zu, "
+                 "\"skipped_not_road\": %zu, \"skipped_not_lines\": %zu, \"skipped_not_reprojected\": %zu, "
+                 "\"crossings\": {\"zebra_nodes\": %zu, \"zebra_points\": %zu, \"traffic_signals\": %zu, "
+                 "\"unmarked\": %zu}},\n",
+                 c->features, c->roads, c->no_highway, c->not_roads, c->not_lines, c->not_reprojected,
+                 c->zebra_nodes, c->zebra_points, c->signal_nodes, c->unmarked_nodes);
+    }
+    if (fprintf(o->f, "{\n%s  \"pixel_size_m\": %.9g,\n", src, rs->pixel_m) < 0) {
+        cli_error("%s: write failed: %s", o->path, strerror(errno ? errno : EIO));
+        return 1;
+    }
     int ok = fprintf(o->f,
-                     "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
+                     "  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
                      "\"write\": %.3f, \"total\": %.3f},\n"
                      "  \"stages_ms\": {\"coverage\": %.3f, \"surface\": %.3f, \"overlays\": %.3f, "
                      "\"composite\": %.3f},\n"
@@ -569,6 +586,10 @@ static int splat_main(int argc, char **argv)
         st.o = o;
         st.w = w, st.h = h, st.x0 = x0, st.y0 = y0, st.full_w = fw, st.full_h = fh;
         st.job = &job;
+        st.src = &in.source;
+        rs_dem_frame dfr;
+        rs_dem_get_frame(dem, &dfr);
+        st.pixel_m = dfr.cell_size / (o->texels ? o->texels : 8);
         if (stats_to_temp(&out_stats, &st)) goto done;
     }
     cli_out *const all[6] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj, &out_nm };
