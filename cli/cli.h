@@ -205,7 +205,6 @@ typedef struct cli_splat_args {
     int light_given;           /* --sun or --specular (they need --lighting) */
     double pixel_size;         /* --pixel-size M (0: not given); sets o.texels once the cell size is known */
     const char *color_relief;  /* --color-relief FILE (gdaldem's text format) */
-    rs_colour_stop *relief;    /* its stops, malloc'd (cli_splat_input_free frees them) */
 } cli_splat_args;
 /* Most pixels of one image the CLI writes or renders (the library's default
  * limit); a window of a larger virtual image is fine (docs/gis.md). */
@@ -246,6 +245,7 @@ typedef struct cli_splat_input {
     int world;         /* roads and DEM in a north-up world frame (cli/geo.c) */
     double wx0, wy0;   /* world point of DEM sample (0,0) (x, y north) when world */
     cli_gdal_road_counts source; /* a GIS road source's counts (source.set 0: road text) */
+    rs_colour_stop *relief;      /* --color-relief's stops (s->o.surface.ramp points here) */
 } cli_splat_input;
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in);

@@ -867,6 +867,11 @@ int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_
         cli_error("%s: %s", shown, last_error("cannot fill the image"));
         goto out;
     }
+    if (channels >= 3) { /* the COG driver copies these (GTiff also takes PHOTOMETRIC=RGB below) */
+        GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 1), GCI_RedBand);
+        GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 2), GCI_GreenBand);
+        GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 3), GCI_BlueBand);
+    }
     if (channels == 4) GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 4), GCI_AlphaBand);
     if (gt) GDALSetGeoTransform(src, (double *)gt);
     if (crs) {

@@ -91,6 +91,9 @@ int cli_out_format(const char *path, const char *role, int pgm_ok);
 /* The texture's geotransform for a window at (x0, y0) of T texels per
  * cell (docs/gis.md): 0, or 1 when the input has no georeference. */
 int cli_geo_texture_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6]);
+/* The same for a world frame without georeference too (a PGM with --origin
+ * and roads in 'frame world'): the world file's geotransform. */
+int cli_geo_world_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6]);
 /* The world point (x east, y north) of DEM sample (0,0), the texture's
  * corner: 1 when the run has a world frame (world roads, or a
  * georeferenced DEM), else 0. */

@@ -408,8 +408,8 @@ static int splat_main(int argc, char **argv)
     rs_road_grid *grid = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
-    cli_out out_png, out_wt, out_stats, out_wf, out_prj, out_nm;
-    char *wf_path = NULL, *prj_path = NULL;
+    cli_out out_png, out_wt, out_stats, out_wf, out_prj, out_nm, out_aux;
+    char *wf_path = NULL, *prj_path = NULL, *aux_path = NULL;
     uint8_t *rgba = NULL;
     run_stats st;
     cli_splat_job job;
@@ -421,6 +421,7 @@ static int splat_main(int argc, char **argv)
     memset(&out_stats, 0, sizeof out_stats);
     memset(&out_wf, 0, sizeof out_wf);
     memset(&out_prj, 0, sizeof out_prj);
+    memset(&out_aux, 0, sizeof out_aux);
     memset(&out_nm, 0, sizeof out_nm);
     size_t ol = strlen(a.out);
     int tif_name = (ol > 4 && !strcasecmp(a.out + ol - 4, ".tif")) || (ol > 5 && !strcasecmp(a.out + ol - 5, ".tiff"));
@@ -430,9 +431,11 @@ static int splat_main(int argc, char **argv)
         if (dot && (!slash || dot > slash + 1) && dot != a.out) e = (size_t)(dot - a.out);
         wf_path = malloc(e + 5);
         prj_path = malloc(e + 5);
-        if (!wf_path || !prj_path) {
+        aux_path = tif_name ? NULL : malloc(n + 9); /* GDAL reads a PNG's CRS from OUT.aux.xml, not the .prj */
+        if (!wf_path || !prj_path || (!tif_name && !aux_path)) {
             free(wf_path);
             free(prj_path);
+            free(aux_path);
             cli_error("out of memory");
             return 1;
         }
@@ -440,22 +443,24 @@ static int splat_main(int argc, char **argv)
         memcpy(prj_path, a.out, e);
         strcpy(wf_path + e, tif_name ? ".tfw" : ".pgw");
         strcpy(prj_path + e, ".prj");
+        if (aux_path) sprintf(aux_path, "%s.aux.xml", a.out);
     }
     /* Every output is checked and opened before any work. */
-    const cli_file_role outs[6] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
+    const cli_file_role outs[7] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
                                     { wf_path, "the world file" }, { prj_path, "the .prj" },
-                                    { a.normal_out, "--normal-out" } };
+                                    { a.normal_out, "--normal-out" }, { aux_path, "the .aux.xml" } };
     const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
                                    { a.s.road_tex, "--road-texture" } };
     /* Output formats follow the extensions (docs/gis.md). */
     int fmt = 0, wfmt = 0;
-    if (cli_check_outputs(outs, 6, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
+    if (cli_check_outputs(outs, 7, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
         (a.weight_out && (wfmt = cli_out_format(a.weight_out, "--weight-out", 1)) < 0) ||
         (a.cog && fmt != CLI_FMT_TIF && (cli_error("--cog: OUT %s is not a .tif", a.out), 1)) ||
         (!cli_gdal_available() && (fmt == CLI_FMT_TIF || wfmt == CLI_FMT_TIF) &&
          (cli_gdal_write_tiff(NULL, fmt == CLI_FMT_TIF ? a.out : a.weight_out, 0, 0, 0, 0, NULL, NULL, NULL, 0), 1))) {
         free(wf_path);
         free(prj_path);
+        free(aux_path);
         return 1;
     }
     /* Huge pages for the DEM, its filled copy and the road index: their
@@ -464,16 +469,23 @@ static int splat_main(int argc, char **argv)
     rs_allocator hook;
     memset(&hook, 0, sizeof hook);
     if (ba) hook = cli_bigalloc_hook(ba);
-    rs_result r = rs_ctx_create(ba ? &hook : NULL, NULL, &ctx);
-    if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); return 1; }
+    /* no library limit on the virtual image: the limit is the window's
+     * (CLI_MAX_IMAGE_PIXELS, below), so a close-up of a big map works */
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_pixels = (uint64_t)1 << 52;
+    rs_result r = rs_ctx_create(ba ? &hook : NULL, &lim, &ctx);
+    if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); free(aux_path); return 1; }
     if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
         (a.stats && cli_out_open(&out_stats, a.stats)) || (wf_path && cli_out_open(&out_wf, wf_path)) ||
-        (prj_path && cli_out_open(&out_prj, prj_path)) || (a.normal_out && cli_out_open(&out_nm, a.normal_out)))
+        (prj_path && cli_out_open(&out_prj, prj_path)) || (a.normal_out && cli_out_open(&out_nm, a.normal_out)) ||
+        (aux_path && cli_out_open(&out_aux, aux_path)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
-    if (a.world_file && !(in.world && in.geo.georef)) {
+    if (a.world_file && !in.world) {
         cli_error("--world-file: %s", in.geo.georef ? "the roads are not in the DEM's world frame ('frame world' or GIS roads)"
-                                                    : "the DEM has no georeference");
+                                                    : "the DEM has no georeference; give --origin X,Y with roads in "
+                                                      "'frame world' (x east, y north)");
         goto done;
     }
     const rs_dem *dem = in.dem;
@@ -495,6 +507,16 @@ static int splat_main(int argc, char **argv)
         uint32_t win[4];
         if (cli_geo_window(&in, a.dem, o->texels ? o->texels : 8, fw, fh, a.window_world, win)) goto done;
         x0 = win[0], y0 = win[1], w = win[2], h = win[3];
+    }
+    if ((uint64_t)w * h > CLI_MAX_IMAGE_PIXELS) {
+        rs_dem_frame dfr;
+        rs_dem_get_frame(dem, &dfr);
+        cli_error("%s: the %s of %u x %u pixels of %.6g m exceeds the limit of %llu (2^28) pixels of one image: render a part "
+                  "with --window-world XMIN,YMIN,XMAX,YMAX (or --window), choose coarser pixels with --pixel-size, "
+                  "or write tiles of any size with 'roadsplat tiles'", a.dem, a.have_window || a.have_window_world ?
+                  "window" : "output", w, h, dfr.cell_size / (o->texels ? o->texels : 8),
+                  (unsigned long long)CLI_MAX_IMAGE_PIXELS);
+        goto done;
     }
     double t1 = cli_now_ms();
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
@@ -518,6 +540,7 @@ static int splat_main(int argc, char **argv)
     job.dem_w = rs_dem_width(dem), job.dem_h = rs_dem_height(dem);
     double gt[6];
     int have_gt = !cli_geo_texture_gt(&in, job.texels, x0, y0, gt);
+    if (!have_gt && a.world_file) cli_geo_world_gt(&in, job.texels, x0, y0, gt); /* PGM with --origin */
     if (fmt == CLI_FMT_TIF) {
         /* the whole image, then GDAL's GeoTIFF writer into OUT's temporary */
         if (!(rgba = malloc((size_t)w * h * 4))) {
@@ -575,6 +598,21 @@ static int splat_main(int argc, char **argv)
             cli_out_abort(&out_prj); /* no CRS: no .prj */
             memset(&out_prj, 0, sizeof out_prj);
         }
+        if (aux_path && in.geo.crs) { /* GDAL's sidecar: the CRS as given, XML-escaped, and the geotransform */
+            int bad = fputs("<PAMDataset>\n  <SRS>", out_aux.f) < 0;
+            for (const char *c = in.geo.crs; *c && !bad; c++)
+                bad = (*c == '<' ? fputs("&lt;", out_aux.f) : *c == '>' ? fputs("&gt;", out_aux.f)
+                       : *c == '&' ? fputs("&amp;", out_aux.f) : fputc(*c, out_aux.f)) < 0;
+            bad = bad || fprintf(out_aux.f, "</SRS>\n  <GeoTransform>%.17g, %.17g, 0, %.17g, 0, %.17g</GeoTransform>\n"
+                                 "</PAMDataset>\n", gt[0], gt[1], gt[3], gt[5]) < 0 || out_finish(&out_aux);
+            if (bad) {
+                cli_error("%s: write failed: %s", aux_path, strerror(errno ? errno : EIO));
+                goto done;
+            }
+        } else if (aux_path) {
+            cli_out_abort(&out_aux);
+            memset(&out_aux, 0, sizeof out_aux);
+        }
     }
     st.t[3] = cli_now_ms() - t1 - st.t[2];
     st.t[4] = cli_now_ms() - t_start;
@@ -592,8 +630,8 @@ static int splat_main(int argc, char **argv)
         st.pixel_m = dfr.cell_size / (o->texels ? o->texels : 8);
         if (stats_to_temp(&out_stats, &st)) goto done;
     }
-    cli_out *const all[6] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj, &out_nm };
-    if (cli_out_commit_all(all, 6)) goto done;
+    cli_out *const all[7] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj, &out_nm, &out_aux };
+    if (cli_out_commit_all(all, 7)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out_png); /* no-ops once renamed */
@@ -601,9 +639,11 @@ done:
     cli_out_abort(&out_stats);
     cli_out_abort(&out_wf);
     cli_out_abort(&out_prj);
+    cli_out_abort(&out_aux);
     cli_out_abort(&out_nm);
     free(wf_path);
     free(prj_path);
+    free(aux_path);
     free(rgba);
     free(wt);
     rs_splatter_free(ctx, sp);
