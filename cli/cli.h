@@ -205,6 +205,7 @@ typedef struct cli_splat_args {
     int light_given;           /* --sun or --specular (they need --lighting) */
     double pixel_size;         /* --pixel-size M (0: not given); sets o.texels once the cell size is known */
     const char *color_relief;  /* --color-relief FILE (gdaldem's text format) */
+    char pixel_note[240];      /* the pixel size chosen, when worth saying: printed once the run is sure to go on */
 } cli_splat_args;
 /* Most pixels of one image the CLI writes or renders (the library's default
  * limit); a window of a larger virtual image is fine (docs/gis.md). */

@@ -136,13 +136,15 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
                   "roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
         return 1;
     }
-    if (cli_gdal_roads_text(roads_path, &o, text, size)) return 1;
-    /* one line on what OSM semantics left out (docs/gis.md) */
-    if (counts->no_highway || counts->not_roads)
-        fprintf(stderr, "roadsplat: %s: %zu roads from %zu features; skipped %zu ways without highway=* (fences, "
-                "rivers, railways, ...; --where selects features) and %zu whose highway= is not a road\n",
-                roads_path, counts->roads, counts->features, counts->no_highway, counts->not_roads);
-    return 0;
+    return cli_gdal_roads_text(roads_path, &o, text, size);
+}
+
+void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path)
+{
+    if (c->set && (c->no_highway || c->not_roads))
+        fprintf(stderr, "roadsplat: note: %s: %zu roads from %zu features; skipped %zu ways without highway=* "
+                "(fences, rivers, railways, ...; --where selects features) and %zu whose highway= is not a road\n",
+                roads_path, c->roads, c->features, c->no_highway, c->not_roads);
 }
 
 /* ---- the frame --------------------------------------------------------------------- */

@@ -69,10 +69,12 @@ int cli_roads_are_gis(const char *path);
  * before. NULL after a message. */
 rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo);
 /* The road text of ROADS: the file, or an OGR source converted to the
- * DEM's CRS (s->layer, s->where), its counts in *counts and one stderr
- * line when features were skipped. 0, or 1 after a message. */
+ * DEM's CRS (s->layer, s->where), its counts in *counts. 0, or 1 after a
+ * message. */
 int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cli_geo *geo, char **text,
                        size_t *size, cli_gdal_road_counts *counts);
+/* One stderr line on what OSM semantics skipped (none when nothing was). */
+void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path);
 /* The DEM's frame from its georeference and the road file's `frame` line
  * (rs_roads_negate_y for world roads), then the check that some road
  * touches the map (a warning; an error with --strict). 0, or 1 after a

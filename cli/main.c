@@ -518,6 +518,8 @@ static int splat_main(int argc, char **argv)
                   (unsigned long long)CLI_MAX_IMAGE_PIXELS);
         goto done;
     }
+    if (a.s.pixel_note[0] && !a.quiet) fputs(a.s.pixel_note, stderr);
+    if (!a.quiet) cli_geo_source_note(&in.source, a.roads);
     double t1 = cli_now_ms();
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     st.t[1] = cli_now_ms() - t1;

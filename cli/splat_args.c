@@ -282,8 +282,9 @@ int cli_lighting_check(const cli_splat_args *s)
 
 /* o.texels from --pixel-size, or the default when neither it nor --texels
  * is given: 8 texels per cell, or 1 m pixels on cells over 8 m, fewer
- * when the whole map would pass CLI_MAX_IMAGE_PIXELS; said in a note on a
- * georeferenced DEM or when it is not 8 (docs/gis.md "Pixel size"). */
+ * when the whole map would pass CLI_MAX_IMAGE_PIXELS; said in a note
+ * (s->pixel_note) on a georeferenced DEM or when it is not 8, or when
+ * --pixel-size is rounded (docs/gis.md "Pixel size"). */
 static int resolve_texels(cli_splat_args *s, const cli_splat_input *in, const char *dem_path)
 {
     rs_dem_frame fr;
@@ -308,8 +309,9 @@ static int resolve_texels(cli_splat_args *s, const cli_splat_input *in, const ch
         uint32_t T = (uint32_t)floor(q + 0.5);
         if (T < 1) T = 1;
         if (fabs(cell / T - s->pixel_size) > 1e-6 * s->pixel_size)
-            fprintf(stderr, "roadsplat: note: --pixel-size %g: pixels are %.9g m (%u per %g m DEM cell; a size "
-                    "that divides the cell size is exact)\n", s->pixel_size, cell / T, T, cell);
+            snprintf(s->pixel_note, sizeof s->pixel_note, "roadsplat: note: --pixel-size %g: pixels are %.9g m "
+                     "(%u per %g m DEM cell; a size that divides the cell size is exact)\n", s->pixel_size, cell / T,
+                     T, cell);
         s->o.texels = T;
         return 0;
     }
@@ -324,8 +326,9 @@ static int resolve_texels(cli_splat_args *s, const cli_splat_input *in, const ch
         if (f < T) T = f, fitted = 1;
     }
     if (in->geo.georef || T != 8)
-        fprintf(stderr, "roadsplat: note: %s: %.6g m pixels (%u per %g m DEM cell%s); choose with --pixel-size M\n",
-                dem_path, cell / T, T, cell, fitted ? ", the most that keep the whole map within 2^28 pixels" : "");
+        snprintf(s->pixel_note, sizeof s->pixel_note, "roadsplat: note: %s: %.6g m pixels (%u per %g m DEM cell%s); "
+                 "choose with --pixel-size M\n", dem_path, cell / T, T, cell,
+                 fitted ? ", the most that keep the whole map within 2^28 pixels" : "");
     s->o.texels = T;
     return 0;
 }
@@ -479,6 +482,14 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     /* the frame: the DEM's georeference, the road file's frame line */
     if (cli_geo_frame(ctx, in, s, dem_path, roads_path)) return 1;
     if (resolve_texels(s, in, dem_path)) return 1;
+    if (in->geo.georef) { /* textures and asphalt on the world's pixel grid: DEM tiles of a map agree */
+        double px = in->geo.gt[1] / s->o.texels, x = (in->geo.gt[0] + in->geo.gt[1] / 2) / px,
+               y = -(in->geo.gt[3] + in->geo.gt[5] / 2) / px;
+        if (fabs(x) < 1e15 && fabs(y) < 1e15) {
+            s->o.surface.texel_offset_x = (int64_t)floor(x + 0.5);
+            s->o.surface.texel_offset_y = (int64_t)floor(y + 0.5);
+        }
+    }
     if (s->color_relief && read_color_relief(s, in)) return 1;
     s->o.style.styles = in->styles;
     if (load_surface_images(s, roads_path, nfile, in)) return 1;

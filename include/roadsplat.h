@@ -481,6 +481,11 @@ typedef struct rs_surface_options {
     const rs_colour_stop *ramp;
     size_t ramp_count;
     double height_min, height_max;   /* RS_TINT_RELATIVE: metres, finite, min < max; both 0 -> the DEM's range */
+    /* Added to the output pixel indices of the procedural asphalt's grain and of the tiled
+     * textures: give each DEM tile of a map its offset in the map's pixel grid (the CLI:
+     * the world position of sample (0,0) in pixels) and tiles rendered apart agree with
+     * the whole map; 0 -> none, |offset| <= 2^52. */
+    int64_t texel_offset_x, texel_offset_y;
 } rs_surface_options;
 
 /* Line-symbol anti-aliasing (docs/linesym.md). */

@@ -62,6 +62,10 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
             return rs__fail(ctx, RS_ERR_INVALID_ARG, "height range %g..%g must be finite with min < max",
                             f->height_min, f->height_max);
     }
+    if (f->texel_offset_x > ((int64_t)1 << 52) || f->texel_offset_x < -((int64_t)1 << 52) ||
+        f->texel_offset_y > ((int64_t)1 << 52) || f->texel_offset_y < -((int64_t)1 << 52))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "texel offset %lld, %lld must be within 2^52",
+                        (long long)f->texel_offset_x, (long long)f->texel_offset_y);
     const rs_image *tex[2] = { f->terrain_texture, f->road_texture };
     for (int i = 0; i < 2; i++)
         if (tex[i]) {

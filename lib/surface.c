@@ -164,12 +164,12 @@ static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i,
  * p0, the texel pair (i0[k], i1[k] = i0[n + k]) and the weights (1 - f in
  * wt[k], f in wt[n + k]) of the bilinear sample of an image of `size`
  * texels per repeat. */
-static void texture_axis(uint32_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
+static void texture_axis(int64_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
                          double *wt)
 {
     const int64_t S = size;
     for (uint32_t k = 0; k < n; k++) {
-        double u = (p0 + k + 0.5) * texel_m / scale;
+        double u = ((double)(p0 + k) + 0.5) * texel_m / scale;
         u = (u - floor(u)) * S - 0.5;
         double fu = floor(u), au = u - fu;
         int64_t x0 = (int64_t)fu;
@@ -218,10 +218,11 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
     double *wy = p->twy;
     double scale = s->o.surface.texture_scale;
     if (!p->tx_ready[road]) {
-        texture_axis(p->win_x0, p->win_w, s->texel_m, scale, img->width, p->tix[road], p->twx[road]);
+        texture_axis(p->win_x0 + s->o.surface.texel_offset_x, p->win_w, s->texel_m, scale, img->width, p->tix[road],
+                     p->twx[road]);
         p->tx_ready[road] = 1;
     }
-    texture_axis(p->y0, p->rows, s->texel_m, scale, img->height, ry, wy);
+    texture_axis(p->y0 + s->o.surface.texel_offset_y, p->rows, s->texel_m, scale, img->height, ry, wy);
     const uint32_t *cx = p->tix[road] + off, *cx1 = cx + ww;
     const double *bu = p->twx[road] + off, *au = bu + ww;
     /* pixels of no interest: pure road for the terrain, pure terrain for
@@ -329,11 +330,13 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         texture_piece(s, p, f->road_texture, 1, p->sc);
         return;
     }
+    /* the grain keyed to the map's pixel grid: (uint32) wraps the same in every tile */
+    const uint32_t ox = (uint32_t)(uint64_t)f->texel_offset_x, oy = (uint32_t)(uint64_t)f->texel_offset_y;
     for (uint32_t r = 0; r < p->rows; r++) {
-        uint32_t py = p->y0 + r;
+        uint32_t py = p->y0 + r + oy;
         const uint16_t *q = p->q + (size_t)r * p->w;
         float *sc = p->sc + (size_t)r * p->w * 3;
         for (uint32_t k = 0; k < p->w; k++)
-            if (q[k] > 0) asphalt(p->x0 + k, py, sc + k, p->w);
+            if (q[k] > 0) asphalt(p->x0 + k + ox, py, sc + k, p->w);
     }
 }
