@@ -30,7 +30,8 @@ static const char usage_text[] =
     "Options:\n"
     "  --cell-size M         DEM cell size in metres (default 1)\n"
     "  --z-scale S           metres per DEM unit (default 1)\n"
-    "  --texels N            output texels per DEM cell side (default 8)\n"
+    "  --texels N            output texels per DEM cell side (default 8; 1 m pixels\n"
+    "                        on cells over 8 m); or --pixel-size M\n"
     "  --edges MODE          road edges: 'analytic' (default; the exact area of each\n"
     "                        pixel inside the road buffers) or 'alphamap' (seed 000's\n"
     "                        table; the options marked * apply to it only)\n"
@@ -64,10 +65,17 @@ static const char usage_text[] =
     "                        layer; OSM: lines)\n"
     "  --where SQL           GIS roads: only features matching this filter\n"
     "  --strict              no road touching the map is an error (default: a warning)\n"
-    "  --world-file          also write OUT's world file (.pgw, .tfw) and .prj\n";
+    "  --world-file          also write OUT's world file (.pgw, .tfw), .prj and\n"
+    "                        (PNG) OUT.aux.xml\n";
 /* two strings: C99 compilers need only take 4095 characters in one */
 static const char usage_text2[] =
     "  --cog                 OUT.tif as a Cloud Optimized GeoTIFF (with overviews)\n"
+    "  --pixel-size M        metres per output pixel (sets --texels: the cell size / M,\n"
+    "                        rounded); one image is at most 2^28 pixels: --window-world\n"
+    "                        renders part of a finer virtual image\n"
+    "  --color-relief FILE   terrain tint by absolute height: gdaldem color-relief's\n"
+    "                        'HEIGHT R G B' lines, metres (default: a fixed ramp,\n"
+    "                        0 m green to 3500 m white)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE     write the road weight R = 1 - alpha, 16-bit: .pgm (or no\n"
     "                        extension), .png or .tif (GeoTIFF)\n"

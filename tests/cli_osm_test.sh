@@ -257,10 +257,13 @@ printf 'frame world\nroad a width 4\n1005 1990\n1095 1990\nend\n' >wroads.txt
 # the COG's bands say what they hold
 "$BIN" --quiet --texels 2 --cog dem.tif ext.geojson cog.tif 2>e && gdalinfo cog.tif >ci.txt &&
     grep -q "ColorInterp=Red" ci.txt && grep -q "ColorInterp=Alpha" ci.txt && ok || bad "COG ColorInterp: $(grep ColorInterp ci.txt)"
-# a render camera in degrees (or local numbers) on a UTM map: a warning
+# a render camera far off the map (degrees, local numbers, another place): a warning from 10
+# map sizes (here 60 km off a 3.6 km map; the old threshold, 1000 map sizes, let it pass)
 if "$BIN" render --help >/dev/null 2>&1; then
     "$BIN" render --quiet --texels 1 --size 64x48 --camera 9.0,45.1,500 --look-at 501800,5001400,50 dem.tif ext.geojson r.png 2>e
     grep -q "warning: --camera 9,45.1 is far off the map dem.tif" e && ok || bad "render camera in degrees: $(cat e)"
+    "$BIN" render --quiet --texels 1 --size 64x48 --camera 561800,5001400,500 --look-at 501800,5001400,50 dem.tif ext.geojson r.png 2>e
+    grep -q "warning: --camera 561800,5001400 is far off the map dem.tif" e && ok || bad "render camera 60 km off: $(cat e)"
 else
     echo "SKIP cli osm: render (no OSMesa)"
 fi
