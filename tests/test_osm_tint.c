@@ -178,14 +178,16 @@ static void test_non_car(void)
     /* a service road ending on the street gives way */
     snprintf(text, sizeof text, "%sroad s width 4 class=service\n50 95\n50 50\nend\n", street);
     CHECK_EQ_INT(auto_marks(text), 1);
-    /* footways, paths and cycleways do not, and leave the street's zebra alone */
+    /* footways, paths and cycleways do not, and the two halves of a crossing footway
+     * that end on the street leave its zebra alone (no junction area) */
     static const char *const cls[] = { "footway", "path", "cycleway" };
     for (int k = 0; k < 3; k++) {
         snprintf(text, sizeof text, "%sroad f width 2.5 class=%s\n50 95\n50 50\nend\n", street, cls[k]);
         CHECK_EQ_INT(auto_marks(text), 0);
         snprintf(text, sizeof text,
                  "road main width 6 class=residential\n0 50\n50 50 crossing=zebra\n100 50\nend\n"
-                 "road f width 2.5 class=%s\n50 95\n50 50\n50 5\nend\n", cls[k]);
+                 "road f width 2.5 class=%s\n50 95\n50 50\nend\nroad g width 2.5 class=%s\n50 50\n50 5\nend\n",
+                 cls[k], cls[k]);
         CHECK_EQ_INT(auto_marks(text), 1);
     }
 }
