@@ -23,37 +23,14 @@ for tool in gdal_translate gdalbuildvrt ogr2ogr gdaltransform gdalinfo python3; 
     command -v $tool >/dev/null 2>&1 || skip "$tool is missing (make deps installs gdal-bin)"
 done
 BIN=$(cd "$(dirname "$BIN")" && pwd)/$(basename "$BIN")
+PNGPY=$(cd "$(dirname "$0")" && pwd)/png_read.py
 cd "$T" || exit 1
 # json FILE EXPR: the python expression on the JSON file j is true
 json() { python3 -c "import json, sys; j = json.load(open(sys.argv[1])); sys.exit(0 if ($2) else 1)" "$1"; }
-# px FILE X Y: "R G B" of a PNG pixel (8-bit RGB or RGBA, no interlace)
-px() { python3 "$PNGREAD" "$1" "$2" "$3"; }
-PNGREAD=$T/pngpx.py
-cat >"$PNGREAD" <<'PY'
-import sys, zlib, struct
-d = open(sys.argv[1], 'rb').read()
-p, idat, w = 8, b'', 0
-while p < len(d):
-    n, t = struct.unpack('>I4s', d[p:p + 8])
-    if t == b'IHDR': w, h, bd, ct = struct.unpack('>IIBB', d[p + 8:p + 18])
-    if t == b'IDAT': idat += d[p + 8:p + 8 + n]
-    p += 12 + n
-ch = 4 if ct == 6 else 3
-raw, rows, prev, stride = zlib.decompress(idat), [], bytearray(w * ch), w * ch
-for y in range(h):
-    f, r = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-    for i in range(stride):
-        a = r[i - ch] if i >= ch else 0; b = prev[i]; c = prev[i - ch] if i >= ch else 0
-        if f == 1: r[i] = (r[i] + a) & 255
-        elif f == 2: r[i] = (r[i] + b) & 255
-        elif f == 3: r[i] = (r[i] + (a + b) // 2) & 255
-        elif f == 4:
-            pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
-            r[i] = (r[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-    rows.append(r); prev = r
-x, y = int(sys.argv[2]), int(sys.argv[3])
-print(' '.join(str(v) for v in rows[y][x * ch:x * ch + 3]))
-PY
+# px FILE X Y: "R G B" of a PNG pixel (tests/png_read.py's decoder)
+px() { python3 -c "import sys; sys.path.insert(0, sys.argv[1].rsplit('/', 1)[0]); import png_read
+w, h, c, d = png_read.read(sys.argv[2]); i = (int(sys.argv[4]) * w + int(sys.argv[3])) * c
+print(' '.join(str(v) for v in d[i:i + 3]))" "$PNGPY" "$@"; }
 
 # ---- data -------------------------------------------------------------------
 # A 41 x 31 DEM of 90 m cells in UTM 32N (an SRTM-like grid): the corner at
@@ -188,35 +165,18 @@ $R dem.tif ext.geojson whole.png 2>e && $R west.tif ext.geojson west.png 2>>e &&
 # every pixel of each tile but those of its cells on the shared edge (their
 # hillshade reads samples past it, which a tile does not hold) is the whole
 # map's, roads and their asphalt grain included
-python3 - <<'PY' && ok || bad "tiles against the whole map (above)"
-import subprocess, sys, zlib, struct
-def load(n):
-    d = open(n, 'rb').read(); p, idat = 8, b''
-    while p < len(d):
-        k, t = struct.unpack('>I4s', d[p:p + 8])
-        if t == b'IHDR': w, h, _, ct = struct.unpack('>IIBB', d[p + 8:p + 18])
-        if t == b'IDAT': idat += d[p + 8:p + 8 + k]
-        p += 12 + k
-    ch = 4 if ct == 6 else 3; s = w * ch; raw = zlib.decompress(idat); rows = []; prev = bytearray(s)
-    for y in range(h):
-        f, r = raw[y * (s + 1)], bytearray(raw[y * (s + 1) + 1:(y + 1) * (s + 1)])
-        for i in range(s):
-            a = r[i - ch] if i >= ch else 0; b = prev[i]; c = prev[i - ch] if i >= ch else 0
-            if f == 1: r[i] = (r[i] + a) & 255
-            elif f == 2: r[i] = (r[i] + b) & 255
-            elif f == 3: r[i] = (r[i] + (a + b) // 2) & 255
-            elif f == 4:
-                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
-                r[i] = (r[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        rows.append(bytes(r)); prev = r
-    return w, h, ch, rows
-W, H, ch, whole = load('whole.png')
+python3 - "$PNGPY" <<'PY' && ok || bad "tiles against the whole map (above)"
+import sys
+sys.path.insert(0, sys.argv[1].rsplit('/', 1)[0])
+import png_read
+W, H, ch, whole = png_read.read('whole.png')
 bad = edge = 0
 for name, x0, skip in (('west.png', 0, range(108, 112)), ('east.png', 112, range(0, 4))):
-    w, h, c, t = load(name)
+    w, h, c, t = png_read.read(name)
     for y in range(h):
         for x in range(w):
-            same = t[y][x * c:x * c + 3] == whole[y][(x0 + x) * ch:(x0 + x) * ch + 3]
+            i, j = (y * w + x) * c, (y * W + x0 + x) * ch
+            same = t[i:i + 3] == whole[j:j + 3]
             if x in skip: edge += not same
             else: bad += not same
 print("tiles: %d pixels differ from the whole map off the shared edge, %d in its cells" % (bad, edge))
