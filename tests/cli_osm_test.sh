@@ -12,16 +12,7 @@
 BIN=${1:?usage: cli_osm_test.sh ROADSPLAT}
 . "$(dirname "$0")/cli_lib.sh"
 
-skip() {
-    echo "SKIP cli osm: $1"
-    echo "cli_osm: 0 passed, 0 failed"
-    exit 0
-}
-"$BIN" convert "$T/none.geojson" "$T/none.txt" 2>"$T/e"
-grep -q "no GDAL support" "$T/e" && skip "$BIN was built without GDAL (make deps installs libgdal-dev)"
-for tool in gdal_translate gdalbuildvrt ogr2ogr gdaltransform gdalinfo python3; do
-    command -v $tool >/dev/null 2>&1 || skip "$tool is missing (make deps installs gdal-bin)"
-done
+need_gdal cli_osm "$BIN" gdal_translate gdalbuildvrt ogr2ogr gdaltransform gdalinfo python3
 BIN=$(cd "$(dirname "$BIN")" && pwd)/$(basename "$BIN")
 PNGPY=$(cd "$(dirname "$0")" && pwd)/png_read.py
 cd "$T" || exit 1
