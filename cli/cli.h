@@ -205,6 +205,8 @@ typedef struct cli_splat_args {
     int light_given;           /* --sun or --specular (they need --lighting) */
     double pixel_size;         /* --pixel-size M (0: not given); sets o.texels once the cell size is known */
     const char *color_relief;  /* --color-relief FILE (gdaldem's text format) */
+    int auto_pixel;            /* the main command: without --texels/--pixel-size, 1 m pixels on cells over 8 m
+                                  (render and tiles keep 8 texels per cell: they hold more per pixel) */
     char pixel_note[240];      /* the pixel size chosen, when worth saying: printed once the run is sure to go on */
 } cli_splat_args;
 /* Most pixels of one image the CLI writes or renders (the library's default

@@ -407,6 +407,7 @@ static int splat_main(int argc, char **argv)
     args a;
     int pr = parse_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
+    a.s.auto_pixel = 1; /* 1 m pixels by default on coarse DEMs (docs/gis.md "Pixel size") */
 
     double t_start = cli_now_ms(), startup = cli_startup_ms();
     int rc = 1;

@@ -280,8 +280,9 @@ int cli_lighting_check(const cli_splat_args *s)
     return 0;
 }
 
-/* o.texels from --pixel-size, or the default when neither it nor --texels
- * is given: 8 texels per cell, or 1 m pixels on cells over 8 m, fewer
+/* o.texels from --pixel-size, or, in the main command (s->auto_pixel), the
+ * default when neither it nor --texels is given: 8 texels per cell, or 1 m
+ * pixels on cells over 8 m, fewer
  * when the whole map would pass CLI_MAX_IMAGE_PIXELS; said in a note
  * (s->pixel_note) on a georeferenced DEM or when it is not 8, or when
  * --pixel-size is rounded (docs/gis.md "Pixel size"). */
@@ -315,7 +316,7 @@ static int resolve_texels(cli_splat_args *s, const cli_splat_input *in, const ch
         s->o.texels = T;
         return 0;
     }
-    if (s->o.texels) return 0;
+    if (s->o.texels || !s->auto_pixel) return 0;
     uint32_t T = 8;
     if (cell > 8) T = cell >= 1024 ? 1024 : (uint32_t)ceil(cell - 1e-9);
     double cells = (double)(rs_dem_width(in->dem) - 1) * (rs_dem_height(in->dem) - 1);
