@@ -178,6 +178,17 @@ typedef struct cli_geo {
     char *crs;
 } cli_geo;
 
+/* What a GIS road source held (cli_gdal_roads_text; --stats "roads_source"):
+ * features read, roads written, features skipped (no highway=* in OSM
+ * data, highway values that are not roads, not lines, not reprojectable),
+ * crossing nodes (zebras, on roads as points; signals and unmarked ones,
+ * not drawn). set: filled. */
+typedef struct cli_gdal_road_counts {
+    size_t features, roads, no_highway, not_roads, not_lines, not_reprojected;
+    size_t zebra_nodes, zebra_points, signal_nodes, unmarked_nodes;
+    int set;
+} cli_gdal_road_counts;
+
 /* Splat options and inputs shared by `roadsplat` and `roadsplat render`
  * (cli/splat_args.c). */
 typedef struct cli_splat_args {
@@ -192,7 +203,15 @@ typedef struct cli_splat_args {
     const char *layer, *where; /* --layer NAME, --where SQL: GIS road sources (cli/geo.c) */
     int strict;                /* --strict: no road on the map is an error, not a warning */
     int light_given;           /* --sun or --specular (they need --lighting) */
+    double pixel_size;         /* --pixel-size M (0: not given); sets o.texels once the cell size is known */
+    const char *color_relief;  /* --color-relief FILE (gdaldem's text format) */
+    int auto_pixel;            /* the main command: without --texels/--pixel-size, 1 m pixels on cells over 8 m
+                                  (render and tiles keep 8 texels per cell: they hold more per pixel) */
+    char pixel_note[240];      /* the pixel size chosen, when worth saying: printed once the run is sure to go on */
 } cli_splat_args;
+/* Most pixels of one image the CLI writes or renders (the library's default
+ * limit); a window of a larger virtual image is fine (docs/gis.md). */
+#define CLI_MAX_IMAGE_PIXELS ((uint64_t)1 << 28)
 /* Splits an argument "--name=value" into name (NUL-terminated, cut to
  * CLI_OPT_NAME - 1 bytes) and the inline value (NULL without '='). */
 #define CLI_OPT_NAME 64
@@ -228,6 +247,8 @@ typedef struct cli_splat_input {
     size_t nsurf;
     int world;         /* roads and DEM in a north-up world frame (cli/geo.c) */
     double wx0, wy0;   /* world point of DEM sample (0,0) (x, y north) when world */
+    cli_gdal_road_counts source; /* a GIS road source's counts (source.set 0: road text) */
+    rs_colour_stop *relief;      /* --color-relief's stops (s->o.surface.ramp points here) */
 } cli_splat_input;
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in);

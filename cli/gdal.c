@@ -267,33 +267,52 @@ static const char *field(OGRFeatureH f, const char *name)
     return v && v[0] ? v : NULL;
 }
 
-/* A key of the OSM driver's other_tags ("k"=>"v","k2"=>"v2"), copied
- * into out; NULL when absent. */
+/* A key of an hstore string, GDAL's `other_tags` ("k"=>"v", "k2"=>"v2";
+ * the OSM driver's, kept by ogr2ogr in GeoJSON, GeoPackage, ...), copied
+ * unescaped into out; NULL when absent or NULL. Keys and values are quoted
+ * with \" and \\ escaped; blanks around => and the commas are allowed. */
 static const char *hstore(const char *tags, const char *key, char *out, size_t cap)
 {
-    if (!tags) return NULL;
+    if (!tags || !cap) return NULL;
     const char *p = tags;
-    size_t kl = strlen(key);
-    while ((p = strchr(p, '"'))) {
-        p++;
-        const char *ks = p;
-        while (*p && *p != '"') p += (*p == '\\' && p[1]) ? 2 : 1;
-        if (!*p) return NULL;
-        size_t kn = (size_t)(p - ks);
-        p++;
-        if (strncmp(p, "=>\"", 3)) return NULL;
-        p += 3;
-        size_t o = 0;
-        while (*p && *p != '"') {
+    char kbuf[128];
+    for (;;) {
+        while (*p == ' ' || *p == ',') p++;
+        if (*p != '"') return NULL;
+        /* the key, unescaped (cut at the buffer: a long key never matches) */
+        size_t kn = 0;
+        int klong = 0;
+        for (p++; *p && *p != '"'; p++) {
             if (*p == '\\' && p[1]) p++;
-            if (o + 1 < cap) out[o++] = *p;
-            p++;
+            if (kn + 1 < sizeof kbuf) kbuf[kn++] = *p;
+            else klong = 1;
         }
-        out[o] = '\0';
-        if (*p) p++;
-        if (kn == kl && !memcmp(ks, key, kl)) return out;
+        if (!*p) return NULL;
+        kbuf[kn] = '\0';
+        p++;
+        while (*p == ' ') p++;
+        if (p[0] != '=' || p[1] != '>') return NULL;
+        p += 2;
+        while (*p == ' ') p++;
+        int match = !klong && !strcmp(kbuf, key);
+        if (!strncmp(p, "NULL", 4)) {
+            p += 4;
+            if (match) return NULL;
+            continue;
+        }
+        if (*p != '"') return NULL;
+        size_t o = 0;
+        for (p++; *p && *p != '"'; p++) {
+            if (*p == '\\' && p[1]) p++;
+            if (match && o + 1 < cap) out[o++] = *p;
+        }
+        if (match) {
+            out[o] = '\0';
+            return out;
+        }
+        if (!*p) return NULL;
+        p++;
     }
-    return NULL;
 }
 
 /* A tag from a field of that name, else from other_tags. */
@@ -314,18 +333,44 @@ static int lanes_ok(const char *v)
     return k >= 1 && k <= 16;
 }
 
-/* "7", "7.5", "7.5 m", "7,5": metres, or 0 when unreadable or off range. */
+/* OSM width values: "7", "7.5", "7,5", with a unit "7.5 m", "7.5m",
+ * "7 metres", "12 ft", "3.5 feet", "12'" and feet and inches "12'6\"":
+ * metres, or 0 when unreadable or outside 0.1..200 m. */
 static double width_m(const char *v)
 {
-    char buf[32];
+    char buf[40];
     size_t n = strlen(v);
     if (n >= sizeof buf) return 0;
     for (size_t i = 0; i <= n; i++) buf[i] = v[i] == ',' ? '.' : v[i];
     char *e;
-    double d = strtod(buf, &e);
+    const char *s = buf;
+    while (*s == ' ') s++;
+    if ((!isdigit((unsigned char)*s) && *s != '.') || strpbrk(s, "xXeE")) return 0; /* no sign, inf, hex */
+    for (size_t k = strlen(buf); k > 0 && buf[k - 1] == ' '; k--) buf[k - 1] = '\0';
+    double d = strtod(s, &e);
+    if (e == s) return 0;
     while (*e == ' ') e++;
-    if (*e == 'm' && e[1] == '\0') e++;
-    if (*e || !(d > 0.1 && d <= 200)) return 0;
+    static const char *const metre[] = { "", "m", "meter", "meters", "metre", "metres" };
+    static const char *const foot[] = { "ft", "feet", "foot", "'" };
+    double f = 0;
+    for (size_t i = 0; i < sizeof metre / sizeof metre[0] && !f; i++)
+        if (!strcmp(e, metre[i])) f = 1;
+    for (size_t i = 0; i < sizeof foot / sizeof foot[0] && !f; i++)
+        if (!strcmp(e, foot[i])) f = 0.3048;
+    if (!f && *e == '\'') { /* feet and inches: 12'6" */
+        const char *q = e + 1;
+        while (*q == ' ') q++;
+        if (isdigit((unsigned char)*q)) {
+            char *r;
+            double in = strtod(q, &r);
+            if (r[0] == '"' && r[1] == '\0' && in < 12) {
+                d += in / 12;
+                f = 0.3048;
+            }
+        }
+    }
+    d *= f;
+    if (!(d >= 0.1 && d <= 200)) return 0;
     return d;
 }
 
@@ -352,6 +397,7 @@ typedef struct road_ctx {
     sbuf *b;
     OGRCoordinateTransformationH ct;
     size_t roads, points, zebras;
+    size_t signal_nodes, unmarked_nodes; /* crossing nodes not drawn (docs/gis.md) */
     int failed_transform;
     crossing *cx;
     size_t ncx, capcx;
@@ -428,30 +474,45 @@ static const char *geom_word(OGRwkbGeometryType t)
     }
 }
 
-/* A point feature that is a zebra crossing (docs/gis.md). */
-static int is_zebra(OGRFeatureH f, const char *tags)
+/* What a crossing node's tags say about its road markings (docs/gis.md):
+ * crossing:markings first (no; zebra, yes, ladder...), then
+ * crossing_ref=zebra, then crossing= (zebra, marked, uncontrolled: a
+ * marked crossing, drawn as the zebra; traffic_signals; unmarked, no,
+ * informal). */
+enum { CX_NONE, CX_ZEBRA, CX_SIGNALS, CX_UNMARKED };
+static int crossing_kind(OGRFeatureH f, const char *tags)
 {
     char t1[64], t2[64];
     const char *hw = tag(f, tags, "highway", t1, sizeof t1);
-    if (!hw || strcmp(hw, "crossing")) return 0;
-    const char *keys[] = { "crossing", "crossing:markings", "crossing_ref" };
-    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
-        const char *v = tag(f, tags, keys[i], t2, sizeof t2);
-        if (v && !strcmp(v, "zebra")) return 1;
+    if (!hw || (strcmp(hw, "crossing") && strcmp(hw, "traffic_signals"))) return CX_NONE;
+    const char *m = tag(f, tags, "crossing:markings", t2, sizeof t2);
+    if (m) {
+        if (!strcmp(m, "no")) return CX_UNMARKED;
+        if (!strcmp(m, "zebra") || !strcmp(m, "yes") || !strncmp(m, "ladder", 6)) return CX_ZEBRA;
     }
-    return 0;
+    const char *r = tag(f, tags, "crossing_ref", t2, sizeof t2);
+    if (r && !strcmp(r, "zebra")) return CX_ZEBRA;
+    const char *c = tag(f, tags, "crossing", t2, sizeof t2);
+    if (!c) return CX_NONE;
+    if (!strcmp(c, "zebra") || !strcmp(c, "marked") || !strcmp(c, "uncontrolled")) return CX_ZEBRA;
+    if (!strcmp(c, "traffic_signals")) return CX_SIGNALS;
+    if (!strcmp(c, "unmarked") || !strcmp(c, "no") || !strcmp(c, "informal")) return CX_UNMARKED;
+    return CX_NONE;
 }
 
 /* The zebra crossings of a layer's Point features, reprojected with ct,
  * appended to R->cx. 0, or 1 when out of memory. */
-static int collect_crossings(road_ctx *R, OGRLayerH l, int osm)
+static int collect_crossings(road_ctx *R, OGRLayerH l)
 {
     OGRFeatureH f;
     OGR_L_ResetReading(l);
     while ((f = OGR_L_GetNextFeature(l)) != NULL) {
         OGRGeometryH g = OGR_F_GetGeometryRef(f);
-        if (g && wkbFlatten(OGR_G_GetGeometryType(g)) == wkbPoint &&
-            is_zebra(f, osm ? field(f, "other_tags") : NULL)) {
+        int kind = g && wkbFlatten(OGR_G_GetGeometryType(g)) == wkbPoint ? crossing_kind(f, field(f, "other_tags"))
+                                                                          : CX_NONE;
+        R->signal_nodes += kind == CX_SIGNALS;
+        R->unmarked_nodes += kind == CX_UNMARKED;
+        if (kind == CX_ZEBRA) {
             double x = OGR_G_GetX(g, 0), y = OGR_G_GetY(g, 0);
             if (!R->ct || OCTTransform(R->ct, 1, &x, &y, NULL)) {
                 if (R->ncx == R->capcx) {
@@ -602,17 +663,28 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
         OGRLayerH pl = pds ? GDALDatasetGetLayerByName(pds, "points") : NULL;
         int oom = 0;
         if (pl) {
-            OGR_L_SetAttributeFilter(pl, "highway = 'crossing'"); /* a speed-up only: is_zebra checks */
-            oom = collect_crossings(&R, pl, 1);
+            /* a speed-up only: crossing_kind checks */
+            OGR_L_SetAttributeFilter(pl, "highway IN ('crossing', 'traffic_signals')");
+            oom = collect_crossings(&R, pl);
         }
         if (pds) GDALClose(pds);
         if (oom) b.oom = 1;
-    } else if (wkbFlatten(lt) == wkbUnknown && collect_crossings(&R, layer, 0)) {
+    } else if (wkbFlatten(lt) == wkbUnknown && collect_crossings(&R, layer)) {
         b.oom = 1;
     }
     if (R.ncx) qsort(R.cx, R.ncx, sizeof *R.cx, cmp_crossing);
 
-    size_t feats = 0, not_lines = 0, not_roads = 0;
+    size_t feats = 0, not_lines = 0, not_roads = 0, no_highway = 0;
+    /* OSM data (the OSM driver, or a layer with highway-like fields: an
+     * ogr2ogr export): only highway=* ways are roads unless --where says
+     * which features are; a plain line layer's features all are */
+    int osm_layer = osm;
+    {
+        OGRFeatureDefnH fd = OGR_L_GetLayerDefn(layer);
+        const char *keys[] = { "highway", "fclass", "other_tags", "area:highway" };
+        for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
+            if (OGR_FD_GetFieldIndex(fd, keys[k]) >= 0) osm_layer = 1;
+    }
     OGRFeatureH f;
     OGR_L_ResetReading(layer);
     while ((f = OGR_L_GetNextFeature(layer)) != NULL) {
@@ -623,13 +695,19 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
             OGR_F_Destroy(f);
             continue;
         }
-        const char *tags = osm ? field(f, "other_tags") : NULL;
-        char t1[64], t2[64], t3[64], t4[256];
-        const char *hw = field(f, "highway");
+        const char *tags = field(f, "other_tags");
+        char t0[64], t1[64], t2[64], t3[64], t4[256];
+        const char *hw = tag(f, tags, "highway", t0, sizeof t0);
         if (!hw) hw = field(f, "fclass");
+        if (!hw) hw = tag(f, tags, "area:highway", t0, sizeof t0);
         const char *cls = hw ? class_for(hw) : NULL;
         if (hw && !cls) {
             not_roads++;
+            OGR_F_Destroy(f);
+            continue;
+        }
+        if (!hw && osm_layer && !o->where) { /* a fence, river, railway, ...: not a road */
+            no_highway++;
             OGR_F_Destroy(f);
             continue;
         }
@@ -684,11 +762,30 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
                       last_error("outside its area"));
         else
             cli_error("%s: layer '%s' has no road lines (%zu features: %zu not LineString/MultiLineString, %zu "
-                      "highway= values that are not roads)", shown, lname, feats, not_lines, not_roads);
+                      "highway= values that are not roads, %zu without highway=*%s)", shown, lname, feats, not_lines,
+                      not_roads, no_highway, no_highway ? "; --where selects other features" : "");
         goto out;
     }
-    put(&b, "# %zu roads, %zu points from %zu features (skipped: %zu not lines, %zu not roads, %d not "
-            "reprojectable)\n", R.roads, R.points, feats, not_lines, not_roads, R.failed_transform);
+    put(&b, "# %zu roads, %zu points from %zu features (skipped: %zu not lines, %zu not roads, %zu without "
+            "highway, %d not reprojectable)\n", R.roads, R.points, feats, not_lines, not_roads, no_highway,
+        R.failed_transform);
+    if (R.signal_nodes || R.unmarked_nodes)
+        put(&b, "# crossing nodes not drawn: %zu traffic_signals, %zu unmarked\n", R.signal_nodes,
+            R.unmarked_nodes);
+    if (o->counts) {
+        cli_gdal_road_counts *c = o->counts;
+        c->features = feats;
+        c->roads = R.roads;
+        c->no_highway = no_highway;
+        c->not_roads = not_roads;
+        c->not_lines = not_lines;
+        c->not_reprojected = (size_t)R.failed_transform;
+        c->zebra_nodes = R.ncx;
+        c->zebra_points = R.zebras;
+        c->signal_nodes = R.signal_nodes;
+        c->unmarked_nodes = R.unmarked_nodes;
+        c->set = 1;
+    }
     if (R.ncx) {
         size_t used = 0;
         for (size_t i = 0; i < R.ncx; i++) used += R.cx[i].used != 0;
@@ -769,6 +866,11 @@ int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_
                             (GSpacing)channels * bytes, (GSpacing)w * channels * bytes, bytes) != CE_None) {
         cli_error("%s: %s", shown, last_error("cannot fill the image"));
         goto out;
+    }
+    if (channels >= 3) { /* the COG driver copies these (GTiff also takes PHOTOMETRIC=RGB below) */
+        GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 1), GCI_RedBand);
+        GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 2), GCI_GreenBand);
+        GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 3), GCI_BlueBand);
     }
     if (channels == 4) GDALSetRasterColorInterpretation(GDALGetRasterBand(src, 4), GCI_AlphaBand);
     if (gt) GDALSetGeoTransform(src, (double *)gt);

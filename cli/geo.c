@@ -109,7 +109,7 @@ rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo)
 }
 
 int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cli_geo *geo, char **text,
-                       size_t *size)
+                       size_t *size, cli_gdal_road_counts *counts)
 {
     *text = NULL;
     *size = 0;
@@ -128,6 +128,7 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
     o.where = s->where;
     o.dst_crs = geo->crs;
     o.shown = roads_path;
+    o.counts = counts;
     if (!cli_gdal_available()) return cli_gdal_roads_text(roads_path, &o, text, size); /* says why */
     if (!geo->georef || !geo->crs) {
         cli_error("%s: GIS roads are reprojected to the DEM's coordinate system, and the DEM has %s; use a "
@@ -136,6 +137,14 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
         return 1;
     }
     return cli_gdal_roads_text(roads_path, &o, text, size);
+}
+
+void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path)
+{
+    if (c->set && (c->no_highway || c->not_roads))
+        fprintf(stderr, "roadsplat: note: %s: %zu roads from %zu features; skipped %zu ways without highway=* "
+                "(fences, rivers, railways, ...; --where selects features) and %zu whose highway= is not a road\n",
+                roads_path, c->roads, c->features, c->no_highway, c->not_roads);
 }
 
 /* ---- the frame --------------------------------------------------------------------- */
@@ -169,6 +178,27 @@ static int roads_touch(const rs_roads *roads, const rs_dem_frame *fr, double mw,
         if (b[0] - r <= mw && b[2] + r >= 0 && b[1] - r <= mh && b[3] + r >= 0) touch = 1;
     }
     return touch;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double u = *(const double *)a, v = *(const double *)b;
+    return u < v ? -1 : u > v;
+}
+
+/* The roads' median width (the lower one) is over 4 cells: a DEM whose
+ * cell size was left at 1 m (issue 28: roads drawn 5 times too wide). */
+static int roads_wide_for_cells(const rs_roads *roads, double cell)
+{
+    size_t n = rs_roads_count(roads);
+    if (!n) return 0;
+    double *w = malloc(n * sizeof *w);
+    if (!w) return 0;
+    for (size_t i = 0; i < n; i++) rs_roads_get(roads, i, NULL, &w[i], NULL, NULL);
+    qsort(w, n, sizeof *w, cmp_double);
+    int wide = w[(n - 1) / 2] > 4 * cell;
+    free(w);
+    return wide;
 }
 
 int cli_geo_frame(rs_ctx *ctx, cli_splat_input *in, cli_splat_args *s, const char *dem_path, const char *roads_path)
@@ -223,6 +253,10 @@ int cli_geo_frame(rs_ctx *ctx, cli_splat_input *in, cli_splat_args *s, const cha
         cli_error("%s: %s", dem_path, rs_ctx_message(ctx));
         return 1;
     }
+    if (!g->georef && !s->cell_size_given && roads_wide_for_cells(in->roads, fr.cell_size ? fr.cell_size : 1))
+        fprintf(stderr, "roadsplat: warning: %s: no --cell-size, so the DEM's cells are 1 m apart and the roads "
+                "(%s) are most of them over 4 cells wide; give --cell-size M, the metres between DEM samples\n",
+                dem_path, roads_path);
     if (rs_roads_count(in->roads) == 0) return 0;
     rs_dem_frame got;
     rs_dem_get_frame(in->dem, &got);
@@ -279,7 +313,13 @@ void cli_nodata_alpha(const uint8_t *mask, uint32_t dem_w, uint32_t dem_h, uint3
 
 int cli_geo_texture_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6])
 {
-    if (!in->world || !in->geo.georef) return 1;
+    if (!in->geo.georef) return 1;
+    return cli_geo_world_gt(in, texels, x0, y0, gt);
+}
+
+int cli_geo_world_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6])
+{
+    if (!in->world) return 1; /* a georeferenced DEM, or a PGM with --origin and world roads */
     rs_dem_frame fr;
     rs_dem_get_frame(in->dem, &fr);
     double px = fr.cell_size / (texels ? texels : 1);

@@ -38,6 +38,7 @@ typedef struct cli_gdal_roads_opts {
     const char *where; /* --where SQL, or NULL */
     const char *dst_crs;
     const char *shown; /* the name messages give */
+    struct cli_gdal_road_counts *counts; /* filled when not NULL */
 } cli_gdal_roads_opts;
 int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size);
 
@@ -68,9 +69,12 @@ int cli_roads_are_gis(const char *path);
  * before. NULL after a message. */
 rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo);
 /* The road text of ROADS: the file, or an OGR source converted to the
- * DEM's CRS (s->layer, s->where). 0, or 1 after a message. */
+ * DEM's CRS (s->layer, s->where), its counts in *counts. 0, or 1 after a
+ * message. */
 int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cli_geo *geo, char **text,
-                       size_t *size);
+                       size_t *size, cli_gdal_road_counts *counts);
+/* One stderr line on what OSM semantics skipped (none when nothing was). */
+void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path);
 /* The DEM's frame from its georeference and the road file's `frame` line
  * (rs_roads_negate_y for world roads), then the check that some road
  * touches the map (a warning; an error with --strict). 0, or 1 after a
@@ -89,6 +93,9 @@ int cli_out_format(const char *path, const char *role, int pgm_ok);
 /* The texture's geotransform for a window at (x0, y0) of T texels per
  * cell (docs/gis.md): 0, or 1 when the input has no georeference. */
 int cli_geo_texture_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6]);
+/* The same for a world frame without georeference too (a PGM with --origin
+ * and roads in 'frame world'): the world file's geotransform. */
+int cli_geo_world_gt(const cli_splat_input *in, uint32_t texels, uint32_t x0, uint32_t y0, double gt[6]);
 /* The world point (x east, y north) of DEM sample (0,0), the texture's
  * corner: 1 when the run has a world frame (world roads, or a
  * georeferenced DEM), else 0. */

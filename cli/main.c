@@ -30,7 +30,8 @@ static const char usage_text[] =
     "Options:\n"
     "  --cell-size M         DEM cell size in metres (default 1)\n"
     "  --z-scale S           metres per DEM unit (default 1)\n"
-    "  --texels N            output texels per DEM cell side (default 8)\n"
+    "  --texels N            output texels per DEM cell side (default 8; 1 m pixels\n"
+    "                        on cells over 8 m); or --pixel-size M\n"
     "  --edges MODE          road edges: 'analytic' (default; the exact area of each\n"
     "                        pixel inside the road buffers) or 'alphamap' (seed 000's\n"
     "                        table; the options marked * apply to it only)\n"
@@ -64,10 +65,17 @@ static const char usage_text[] =
     "                        layer; OSM: lines)\n"
     "  --where SQL           GIS roads: only features matching this filter\n"
     "  --strict              no road touching the map is an error (default: a warning)\n"
-    "  --world-file          also write OUT's world file (.pgw, .tfw) and .prj\n";
+    "  --world-file          also write OUT's world file (.pgw, .tfw), .prj and\n"
+    "                        (PNG) OUT.aux.xml\n";
 /* two strings: C99 compilers need only take 4095 characters in one */
 static const char usage_text2[] =
     "  --cog                 OUT.tif as a Cloud Optimized GeoTIFF (with overviews)\n"
+    "  --pixel-size M        metres per output pixel (sets --texels: the cell size / M,\n"
+    "                        rounded); one image is at most 2^28 pixels: --window-world\n"
+    "                        renders part of a finer virtual image\n"
+    "  --color-relief FILE   terrain tint by absolute height: gdaldem color-relief's\n"
+    "                        'HEIGHT R G B' lines, metres (default: a fixed ramp,\n"
+    "                        0 m green to 3500 m white)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE     write the road weight R = 1 - alpha, 16-bit: .pgm (or no\n"
     "                        extension), .png or .tif (GeoTIFF)\n"
@@ -327,6 +335,8 @@ typedef struct run_stats {
     const rs_splat_options *o;
     uint32_t w, h, x0, y0, full_w, full_h;
     const cli_splat_job *job;
+    const cli_gdal_road_counts *src; /* a GIS road source's counts (src->set 0: road text) */
+    double pixel_m;                  /* metres per output pixel */
 } run_stats;
 
 static int stats_to_temp(cli_out *o, const run_stats *rs)
@@ -334,8 +344,23 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
     const double *t = rs->t;
     const rs_road_grid_stats *gs = rs->gs;
     const rs_splat_profile *pf = &rs->job->profile;
+    char src[400] = "";
+    if (rs->src && rs->src->set) {
+        const cli_gdal_road_counts *c = rs->src;
+        snprintf(src, sizeof src,
+                 "  \"roads_source\": {\"features\": %zu, \"roads\": %zu, \"skipped_no_highway\": %zu, "
+                 "\"skipped_not_road\": %zu, \"skipped_not_lines\": %zu, \"skipped_not_reprojected\": %zu, "
+                 "\"crossings\": {\"zebra_nodes\": %zu, \"zebra_points\": %zu, \"traffic_signals\": %zu, "
+                 "\"unmarked\": %zu}},\n",
+                 c->features, c->roads, c->no_highway, c->not_roads, c->not_lines, c->not_reprojected,
+                 c->zebra_nodes, c->zebra_points, c->signal_nodes, c->unmarked_nodes);
+    }
+    if (fprintf(o->f, "{\n%s  \"pixel_size_m\": %.9g,\n", src, rs->pixel_m) < 0) {
+        cli_error("%s: write failed: %s", o->path, strerror(errno ? errno : EIO));
+        return 1;
+    }
     int ok = fprintf(o->f,
-                     "{\n  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
+                     "  \"timings_ms\": {\"startup\": %.3f, \"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, "
                      "\"write\": %.3f, \"total\": %.3f},\n"
                      "  \"stages_ms\": {\"coverage\": %.3f, \"surface\": %.3f, \"overlays\": %.3f, "
                      "\"composite\": %.3f},\n"
@@ -382,6 +407,7 @@ static int splat_main(int argc, char **argv)
     args a;
     int pr = parse_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
+    a.s.auto_pixel = 1; /* 1 m pixels by default on coarse DEMs (docs/gis.md "Pixel size") */
 
     double t_start = cli_now_ms(), startup = cli_startup_ms();
     int rc = 1;
@@ -391,8 +417,8 @@ static int splat_main(int argc, char **argv)
     rs_road_grid *grid = NULL;
     uint16_t *wt = NULL;
     rs_splat_options *o = &a.s.o;
-    cli_out out_png, out_wt, out_stats, out_wf, out_prj, out_nm;
-    char *wf_path = NULL, *prj_path = NULL;
+    cli_out out_png, out_wt, out_stats, out_wf, out_prj, out_nm, out_aux;
+    char *wf_path = NULL, *prj_path = NULL, *aux_path = NULL;
     uint8_t *rgba = NULL;
     run_stats st;
     cli_splat_job job;
@@ -404,6 +430,7 @@ static int splat_main(int argc, char **argv)
     memset(&out_stats, 0, sizeof out_stats);
     memset(&out_wf, 0, sizeof out_wf);
     memset(&out_prj, 0, sizeof out_prj);
+    memset(&out_aux, 0, sizeof out_aux);
     memset(&out_nm, 0, sizeof out_nm);
     size_t ol = strlen(a.out);
     int tif_name = (ol > 4 && !strcasecmp(a.out + ol - 4, ".tif")) || (ol > 5 && !strcasecmp(a.out + ol - 5, ".tiff"));
@@ -413,9 +440,11 @@ static int splat_main(int argc, char **argv)
         if (dot && (!slash || dot > slash + 1) && dot != a.out) e = (size_t)(dot - a.out);
         wf_path = malloc(e + 5);
         prj_path = malloc(e + 5);
-        if (!wf_path || !prj_path) {
+        aux_path = tif_name ? NULL : malloc(n + 9); /* GDAL reads a PNG's CRS from OUT.aux.xml, not the .prj */
+        if (!wf_path || !prj_path || (!tif_name && !aux_path)) {
             free(wf_path);
             free(prj_path);
+            free(aux_path);
             cli_error("out of memory");
             return 1;
         }
@@ -423,22 +452,24 @@ static int splat_main(int argc, char **argv)
         memcpy(prj_path, a.out, e);
         strcpy(wf_path + e, tif_name ? ".tfw" : ".pgw");
         strcpy(prj_path + e, ".prj");
+        if (aux_path) sprintf(aux_path, "%s.aux.xml", a.out);
     }
     /* Every output is checked and opened before any work. */
-    const cli_file_role outs[6] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
+    const cli_file_role outs[7] = { { a.out, "OUT" }, { a.weight_out, "--weight-out" }, { a.stats, "--stats" },
                                     { wf_path, "the world file" }, { prj_path, "the .prj" },
-                                    { a.normal_out, "--normal-out" } };
+                                    { a.normal_out, "--normal-out" }, { aux_path, "the .aux.xml" } };
     const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
                                    { a.s.road_tex, "--road-texture" } };
     /* Output formats follow the extensions (docs/gis.md). */
     int fmt = 0, wfmt = 0;
-    if (cli_check_outputs(outs, 6, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
+    if (cli_check_outputs(outs, 7, ins, 4) || (fmt = cli_out_format(a.out, "OUT", 0)) < 0 ||
         (a.weight_out && (wfmt = cli_out_format(a.weight_out, "--weight-out", 1)) < 0) ||
         (a.cog && fmt != CLI_FMT_TIF && (cli_error("--cog: OUT %s is not a .tif", a.out), 1)) ||
         (!cli_gdal_available() && (fmt == CLI_FMT_TIF || wfmt == CLI_FMT_TIF) &&
          (cli_gdal_write_tiff(NULL, fmt == CLI_FMT_TIF ? a.out : a.weight_out, 0, 0, 0, 0, NULL, NULL, NULL, 0), 1))) {
         free(wf_path);
         free(prj_path);
+        free(aux_path);
         return 1;
     }
     /* Huge pages for the DEM, its filled copy and the road index: their
@@ -447,16 +478,23 @@ static int splat_main(int argc, char **argv)
     rs_allocator hook;
     memset(&hook, 0, sizeof hook);
     if (ba) hook = cli_bigalloc_hook(ba);
-    rs_result r = rs_ctx_create(ba ? &hook : NULL, NULL, &ctx);
-    if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); return 1; }
+    /* no library limit on the virtual image: the limit is the window's
+     * (CLI_MAX_IMAGE_PIXELS, below), so a close-up of a big map works */
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_pixels = (uint64_t)1 << 52;
+    rs_result r = rs_ctx_create(ba ? &hook : NULL, &lim, &ctx);
+    if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); free(aux_path); return 1; }
     if (cli_out_open(&out_png, a.out) || (a.weight_out && cli_out_open(&out_wt, a.weight_out)) ||
         (a.stats && cli_out_open(&out_stats, a.stats)) || (wf_path && cli_out_open(&out_wf, wf_path)) ||
-        (prj_path && cli_out_open(&out_prj, prj_path)) || (a.normal_out && cli_out_open(&out_nm, a.normal_out)))
+        (prj_path && cli_out_open(&out_prj, prj_path)) || (a.normal_out && cli_out_open(&out_nm, a.normal_out)) ||
+        (aux_path && cli_out_open(&out_aux, aux_path)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
-    if (a.world_file && !(in.world && in.geo.georef)) {
+    if (a.world_file && !in.world) {
         cli_error("--world-file: %s", in.geo.georef ? "the roads are not in the DEM's world frame ('frame world' or GIS roads)"
-                                                    : "the DEM has no georeference");
+                                                    : "the DEM has no georeference; give --origin X,Y with roads in "
+                                                      "'frame world' (x east, y north)");
         goto done;
     }
     const rs_dem *dem = in.dem;
@@ -479,6 +517,18 @@ static int splat_main(int argc, char **argv)
         if (cli_geo_window(&in, a.dem, o->texels ? o->texels : 8, fw, fh, a.window_world, win)) goto done;
         x0 = win[0], y0 = win[1], w = win[2], h = win[3];
     }
+    if ((uint64_t)w * h > CLI_MAX_IMAGE_PIXELS) {
+        rs_dem_frame dfr;
+        rs_dem_get_frame(dem, &dfr);
+        cli_error("%s: the %s of %u x %u pixels of %.6g m exceeds the limit of %llu (2^28) pixels of one image: render a part "
+                  "with --window-world XMIN,YMIN,XMAX,YMAX (or --window), choose coarser pixels with --pixel-size, "
+                  "or write tiles of any size with 'roadsplat tiles'", a.dem, a.have_window || a.have_window_world ?
+                  "window" : "output", w, h, dfr.cell_size / (o->texels ? o->texels : 8),
+                  (unsigned long long)CLI_MAX_IMAGE_PIXELS);
+        goto done;
+    }
+    if (a.s.pixel_note[0] && !a.quiet) fputs(a.s.pixel_note, stderr);
+    if (!a.quiet) cli_geo_source_note(&in.source, a.roads);
     double t1 = cli_now_ms();
     if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, a.quiet, &grid, &sp)) goto done;
     st.t[1] = cli_now_ms() - t1;
@@ -501,6 +551,7 @@ static int splat_main(int argc, char **argv)
     job.dem_w = rs_dem_width(dem), job.dem_h = rs_dem_height(dem);
     double gt[6];
     int have_gt = !cli_geo_texture_gt(&in, job.texels, x0, y0, gt);
+    if (!have_gt && a.world_file) cli_geo_world_gt(&in, job.texels, x0, y0, gt); /* PGM with --origin */
     if (fmt == CLI_FMT_TIF) {
         /* the whole image, then GDAL's GeoTIFF writer into OUT's temporary */
         if (!(rgba = malloc((size_t)w * h * 4))) {
@@ -558,6 +609,21 @@ static int splat_main(int argc, char **argv)
             cli_out_abort(&out_prj); /* no CRS: no .prj */
             memset(&out_prj, 0, sizeof out_prj);
         }
+        if (aux_path && in.geo.crs) { /* GDAL's sidecar: the CRS as given, XML-escaped, and the geotransform */
+            int bad = fputs("<PAMDataset>\n  <SRS>", out_aux.f) < 0;
+            for (const char *c = in.geo.crs; *c && !bad; c++)
+                bad = (*c == '<' ? fputs("&lt;", out_aux.f) : *c == '>' ? fputs("&gt;", out_aux.f)
+                       : *c == '&' ? fputs("&amp;", out_aux.f) : fputc(*c, out_aux.f)) < 0;
+            bad = bad || fprintf(out_aux.f, "</SRS>\n  <GeoTransform>%.17g, %.17g, 0, %.17g, 0, %.17g</GeoTransform>\n"
+                                 "</PAMDataset>\n", gt[0], gt[1], gt[3], gt[5]) < 0 || out_finish(&out_aux);
+            if (bad) {
+                cli_error("%s: write failed: %s", aux_path, strerror(errno ? errno : EIO));
+                goto done;
+            }
+        } else if (aux_path) {
+            cli_out_abort(&out_aux);
+            memset(&out_aux, 0, sizeof out_aux);
+        }
     }
     st.t[3] = cli_now_ms() - t1 - st.t[2];
     st.t[4] = cli_now_ms() - t_start;
@@ -569,10 +635,14 @@ static int splat_main(int argc, char **argv)
         st.o = o;
         st.w = w, st.h = h, st.x0 = x0, st.y0 = y0, st.full_w = fw, st.full_h = fh;
         st.job = &job;
+        st.src = &in.source;
+        rs_dem_frame dfr;
+        rs_dem_get_frame(dem, &dfr);
+        st.pixel_m = dfr.cell_size / (o->texels ? o->texels : 8);
         if (stats_to_temp(&out_stats, &st)) goto done;
     }
-    cli_out *const all[6] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj, &out_nm };
-    if (cli_out_commit_all(all, 6)) goto done;
+    cli_out *const all[7] = { &out_png, &out_wt, &out_stats, &out_wf, &out_prj, &out_nm, &out_aux };
+    if (cli_out_commit_all(all, 7)) goto done;
     rc = 0;
 done:
     cli_out_abort(&out_png); /* no-ops once renamed */
@@ -580,9 +650,11 @@ done:
     cli_out_abort(&out_stats);
     cli_out_abort(&out_wf);
     cli_out_abort(&out_prj);
+    cli_out_abort(&out_aux);
     cli_out_abort(&out_nm);
     free(wf_path);
     free(prj_path);
+    free(aux_path);
     free(rgba);
     free(wt);
     rs_splatter_free(ctx, sp);

@@ -459,7 +459,7 @@ int cli_render_main(int argc, char **argv)
     for (int k = 0; k < 2; k++) { /* an eye or target far off the map: likely the wrong frame */
         const double *p = k ? a.look : a.camera;
         if (!(k ? a.have_look : a.have_camera)) continue;
-        double span = fmax(fmax(view.map_w, view.map_h), 1.0), lim = k ? span : 1000 * span;
+        double span = fmax(fmax(view.map_w, view.map_h), 1.0), lim = k ? span : 10 * span; /* issue 28: 10, not 1000 */
         if (p[0] < -lim || p[0] > view.map_w + lim || p[1] < -lim || p[1] > view.map_h + lim) {
             double mx0 = fx0, mx1 = mx0 + view.map_w, my0 = world ? wy0 - view.map_h : fy0,
                    my1 = world ? wy0 : fy0 + view.map_h;

@@ -40,7 +40,7 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
                                          "--road-texture", "--texture-scale", "--origin", "--edges", "--threads",
                                          "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
                                          "--atlas-index", "--no-auto-markings", "--no-markings", "--layer", "--where",
-                                         "--strict" };
+                                         "--strict", "--pixel-size", "--color-relief" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
@@ -87,6 +87,14 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
         if (!strcmp(v, "alphamap")) o->coverage.edges = RS_EDGES_ALPHAMAP;
         else if (!strcmp(v, "analytic")) o->coverage.edges = RS_EDGES_ANALYTIC;
         else { cli_error("%s: '%s' is not 'alphamap' or 'analytic'", name, v); return 1; }
+    } else if (!strcmp(name, "--pixel-size")) {
+        if (cli_parse_double(name, v, &s->pixel_size) || positive(name, v, s->pixel_size)) return 1;
+        if (!(s->pixel_size >= 1e-6 && s->pixel_size <= 1e9)) {
+            cli_error("%s: '%s' must be in [1e-6, 1e9] metres", name, v);
+            return 1;
+        }
+    } else if (!strcmp(name, "--color-relief")) {
+        s->color_relief = v;
     } else if (!strcmp(name, "--texels")) {
         if (cli_parse_u32(name, v, &o->texels)) return 1;
         if (o->texels < 1 || o->texels > 1024) { cli_error("%s: '%s' must be 1..1024", name, v); return 1; }
@@ -272,6 +280,157 @@ int cli_lighting_check(const cli_splat_args *s)
     return 0;
 }
 
+/* o.texels from --pixel-size, or, in the main command (s->auto_pixel), the
+ * default when neither it nor --texels is given: 8 texels per cell, or 1 m
+ * pixels on cells over 8 m, fewer
+ * when the whole map would pass CLI_MAX_IMAGE_PIXELS; said in a note
+ * (s->pixel_note) on a georeferenced DEM or when it is not 8, or when
+ * --pixel-size is rounded (docs/gis.md "Pixel size"). */
+static int resolve_texels(cli_splat_args *s, const cli_splat_input *in, const char *dem_path)
+{
+    rs_dem_frame fr;
+    rs_dem_get_frame(in->dem, &fr);
+    const double cell = fr.cell_size;
+    if (s->pixel_size) {
+        if (s->o.texels) {
+            cli_error("--pixel-size and --texels both set the pixel size; give one");
+            return 1;
+        }
+        double q = cell / s->pixel_size;
+        if (!(q >= 0.5)) {
+            cli_error("--pixel-size %g: coarser than the DEM's %g m cells (%s); the texture has at least one pixel "
+                      "per cell: --pixel-size %g", s->pixel_size, cell, dem_path, cell);
+            return 1;
+        }
+        if (!(q < 1024.5)) {
+            cli_error("--pixel-size %g: the DEM's %g m cells (%s) would need %.0f pixels per cell; at most 1024: "
+                      "--pixel-size %g or coarser", s->pixel_size, cell, dem_path, q, cell / 1024);
+            return 1;
+        }
+        uint32_t T = (uint32_t)floor(q + 0.5);
+        if (T < 1) T = 1;
+        if (fabs(cell / T - s->pixel_size) > 1e-6 * s->pixel_size)
+            snprintf(s->pixel_note, sizeof s->pixel_note, "roadsplat: note: --pixel-size %g: pixels are %.9g m "
+                     "(%u per %g m DEM cell; a size that divides the cell size is exact)\n", s->pixel_size, cell / T,
+                     T, cell);
+        s->o.texels = T;
+        return 0;
+    }
+    if (s->o.texels || !s->auto_pixel) return 0;
+    uint32_t T = 8;
+    if (cell > 8) T = cell >= 1024 ? 1024 : (uint32_t)ceil(cell - 1e-9);
+    double cells = (double)(rs_dem_width(in->dem) - 1) * (rs_dem_height(in->dem) - 1);
+    int fitted = 0;
+    if (cells * T * T > (double)CLI_MAX_IMAGE_PIXELS) {
+        uint32_t f = (uint32_t)floor(sqrt((double)CLI_MAX_IMAGE_PIXELS / cells));
+        if (f < 1) f = 1;
+        if (f < T) T = f, fitted = 1;
+    }
+    if (in->geo.georef || T != 8)
+        snprintf(s->pixel_note, sizeof s->pixel_note, "roadsplat: note: %s: %.6g m pixels (%u per %g m DEM cell%s); "
+                 "choose with --pixel-size M\n", dem_path, cell / T, T, cell,
+                 fitted ? ", the most that keep the whole map within 2^28 pixels" : "");
+    s->o.texels = T;
+    return 0;
+}
+
+/* --color-relief FILE: gdaldem color-relief's text format, one stop a
+ * line, "HEIGHT R G B [A]" (blanks, tabs or commas between), heights in
+ * metres in any order; `nv` (nodata) lines are skipped (nodata is
+ * transparent anyway), `#` starts a comment. Percentages and colour
+ * names are refused: a ramp relative to each DEM is what the absolute
+ * tint avoids. */
+static int read_color_relief(cli_splat_args *s, cli_splat_input *in)
+{
+    char *text = NULL;
+    size_t size = 0;
+    const char *path = s->color_relief;
+    if (cli_read_file(path, (size_t)1 << 20, &text, &size)) return 1;
+    rs_colour_stop *st = calloc(RS_RAMP_MAX_STOPS, sizeof *st);
+    size_t n = 0, line = 0;
+    int rc = 1;
+    if (!st) {
+        cli_error("%s: out of memory", path);
+        goto out;
+    }
+    for (char *p = text, *end = text + size; p < end;) {
+        char *nl = memchr(p, '\n', (size_t)(end - p));
+        char *e = nl ? nl : end;
+        line++;
+        char buf[256];
+        size_t len = (size_t)(e - p) < sizeof buf - 1 ? (size_t)(e - p) : sizeof buf - 1;
+        memcpy(buf, p, len);
+        buf[len] = '\0';
+        p = nl ? nl + 1 : end;
+        char *hash = strchr(buf, '#');
+        if (hash) *hash = '\0';
+        char *tok[6];
+        int nt = 0;
+        for (char *t = strtok(buf, " \t,\r"); t && nt < 6; t = strtok(NULL, " \t,\r")) tok[nt++] = t;
+        if (nt == 0) continue;
+        if (!strcmp(tok[0], "nv")) continue;
+        if (nt < 4 || nt > 5) {
+            cli_error("%s line %zu: expected 'HEIGHT R G B [A]' (gdaldem color-relief), got %d value%s", path, line,
+                      nt, nt == 1 ? "" : "s");
+            goto out;
+        }
+        if (strchr(tok[0], '%')) {
+            cli_error("%s line %zu: '%s' is a percentage of each DEM's range; give heights in metres (the tint is "
+                      "absolute)", path, line, tok[0]);
+            goto out;
+        }
+        double hgt, c[3];
+        char *q;
+        hgt = strtod(tok[0], &q);
+        if (*q || q == tok[0] || !(fabs(hgt) <= 1e9)) {
+            cli_error("%s line %zu: height '%s' is not a number", path, line, tok[0]);
+            goto out;
+        }
+        for (int k = 0; k < 3; k++) {
+            c[k] = strtod(tok[1 + k], &q);
+            if (*q || q == tok[1 + k] || !(c[k] >= 0 && c[k] <= 255) || c[k] != floor(c[k])) {
+                cli_error("%s line %zu: colour value '%s' must be a whole number 0..255 (colour names are not read)",
+                          path, line, tok[1 + k]);
+                goto out;
+            }
+        }
+        if (n == RS_RAMP_MAX_STOPS) {
+            cli_error("%s line %zu: more than %d stops", path, line, RS_RAMP_MAX_STOPS);
+            goto out;
+        }
+        for (size_t k = 0; k < n; k++)
+            if (st[k].height == hgt) {
+                cli_error("%s line %zu: height %g is given twice", path, line, hgt);
+                goto out;
+            }
+        st[n].height = hgt;
+        st[n].colour.r = (uint8_t)c[0];
+        st[n].colour.g = (uint8_t)c[1];
+        st[n].colour.b = (uint8_t)c[2];
+        st[n].colour.a = 255;
+        n++;
+    }
+    if (n < 2) {
+        cli_error("%s: a colour ramp needs at least 2 heights, found %zu", path, n);
+        goto out;
+    }
+    for (size_t i = 1; i < n; i++) /* by height: a few stops, insertion sort */
+        for (size_t k = i; k > 0 && st[k].height < st[k - 1].height; k--) {
+            rs_colour_stop t = st[k];
+            st[k] = st[k - 1];
+            st[k - 1] = t;
+        }
+    in->relief = st;
+    s->o.surface.ramp = st;
+    s->o.surface.ramp_count = n;
+    st = NULL;
+    rc = 0;
+out:
+    free(st);
+    free(text);
+    return rc;
+}
+
 int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_path, cli_splat_args *s,
                          cli_splat_input *in)
 {
@@ -310,7 +469,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
         }
     }
     size_t nfile = rs_styles_count(in->styles);
-    if (cli_geo_roads_text(roads_path, s, &in->geo, &text, &size)) return 1;
+    if (cli_geo_roads_text(roads_path, s, &in->geo, &text, &size, &in->source)) return 1;
     rs_road_parse_options po;
     memset(&po, 0, sizeof po);
     po.profile = s->o.style.profile;
@@ -323,6 +482,16 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     }
     /* the frame: the DEM's georeference, the road file's frame line */
     if (cli_geo_frame(ctx, in, s, dem_path, roads_path)) return 1;
+    if (resolve_texels(s, in, dem_path)) return 1;
+    if (in->geo.georef) { /* textures and asphalt on the world's pixel grid: DEM tiles of a map agree */
+        double px = in->geo.gt[1] / s->o.texels, x = (in->geo.gt[0] + in->geo.gt[1] / 2) / px,
+               y = -(in->geo.gt[3] + in->geo.gt[5] / 2) / px;
+        if (fabs(x) < 1e15 && fabs(y) < 1e15) {
+            s->o.surface.texel_offset_x = (int64_t)floor(x + 0.5);
+            s->o.surface.texel_offset_y = (int64_t)floor(y + 0.5);
+        }
+    }
+    if (s->color_relief && read_color_relief(s, in)) return 1;
     s->o.style.styles = in->styles;
     if (load_surface_images(s, roads_path, nfile, in)) return 1;
     if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
@@ -354,6 +523,7 @@ void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in)
 {
     rs_roads_free(ctx, in->roads);
     rs_styles_free(ctx, in->styles);
+    free(in->relief);
     rs_dem_free(ctx, in->dem);
     free(in->terrain_px);
     free(in->road_px);

@@ -453,11 +453,43 @@ typedef struct rs_coverage_options {
     double jitter_amount;  /* amplitude in (0,1]; 0 -> 0.5 */
 } rs_coverage_options;
 
+/* One stop of a terrain colour ramp: a height in metres (the DEM's value
+ * times z_scale) and its colour (a ignored: the terrain is opaque). */
+typedef struct rs_colour_stop {
+    double height;
+    rs_colour colour;
+} rs_colour_stop;
+
+#define RS_RAMP_MAX_STOPS 256
+
+/* How the terrain tint follows the height (docs/surface.md "Terrain colour"). */
+typedef enum rs_tint_mode {
+    RS_TINT_ABSOLUTE = 0, /* a function of the absolute height: `ramp`, else the built-in ramp
+                             (0 m green .. 3000 m white); the same height has the same colour in
+                             every DEM, crop and tile */
+    RS_TINT_RELATIVE = 1  /* the built-in palette stretched over [height_min, height_max] metres, or
+                             over the DEM's own height range when both are 0 (the behaviour before
+                             issue 28: it depends on each DEM's range) */
+} rs_tint_mode;
+
 /* Surface stage. All-zero means defaults. */
 typedef struct rs_surface_options {
     const rs_image *terrain_texture; /* NULL -> hypsometric tint + hillshade */
     const rs_image *road_texture;    /* NULL -> procedural asphalt */
     double texture_scale;            /* metres per texture repeat; 0 -> 10; else 1e-6..1e9 */
+    rs_tint_mode tint;               /* default RS_TINT_ABSOLUTE */
+    /* RS_TINT_ABSOLUTE: ramp_count stops (2..RS_RAMP_MAX_STOPS, finite heights strictly
+     * increasing; below the first and above the last the end colours hold), linear in
+     * between; NULL/0 -> the built-in ramp. Copied by rs_splatter_create (the caller's
+     * array may go after it). */
+    const rs_colour_stop *ramp;
+    size_t ramp_count;
+    double height_min, height_max;   /* RS_TINT_RELATIVE: metres, finite, min < max; both 0 -> the DEM's range */
+    /* Added to the output pixel indices of the procedural asphalt's grain and of the tiled
+     * textures: give each DEM tile of a map its offset in the map's pixel grid (the CLI:
+     * the world position of sample (0,0) in pixels) and tiles rendered apart agree with
+     * the whole map; 0 -> none, |offset| <= 2^52. */
+    int64_t texel_offset_x, texel_offset_y;
 } rs_surface_options;
 
 /* Line-symbol anti-aliasing (docs/linesym.md). */

@@ -17,6 +17,11 @@
  * - zebra crossings: a `X Y crossing=zebra` point attribute puts a zebra
  *   across the road there (width = road width - 0.4 m).
  *
+ * - non-car classes (path, footway, cycleway) get no stop or give-way
+ *   lines and no arrows, and make no junctions with other roads: a
+ *   footway meeting a street neither gives way nor cuts the street's
+ *   markings (issue 28).
+ *
  * A placement is dropped when it would spill off its road (|t| + width/2
  * beyond the half width, or past either end) or overlap a junction area. */
 #include "markings.h"
@@ -56,6 +61,19 @@ static int rank_of(rs_road_class c)
     case RS_CLASS_PATH: case RS_CLASS_FOOTWAY: case RS_CLASS_CYCLEWAY: return 1;
     default: return 0;
     }
+}
+
+/* Classes for feet and bikes: no car markings (docs/road-format.md). */
+static int non_car(rs_road_class c)
+{
+    return c == RS_CLASS_PATH || c == RS_CLASS_FOOTWAY || c == RS_CLASS_CYCLEWAY;
+}
+
+static rs_road_class road_class_of(const rs_roads *roads, size_t i)
+{
+    rs_road_info info;
+    rs_roads_get_info(roads, i, &info);
+    return info.road_class;
 }
 
 static rs_result add_jn(ctxa *A, size_t road, double s, double half)
@@ -275,6 +293,7 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         rs_road_info ia;
         rs_roads_get(roads, i, NULL, &wa, NULL, NULL);
         rs_roads_get_info(roads, i, &ia);
+        if (non_car(ia.road_class)) continue;
         for (int e = 0; e < 2 && !r; e++) {
             size_t pi = e ? a->n - 1 : 0;
             double x = a->x[pi], y = a->y[pi];
@@ -286,7 +305,7 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             for (int pass = 0; pass < 2 && !r; pass++) {
                 if (pass == 1 && !(through || meet >= 2)) break;
                 for (size_t j = 0; j < nr && !r; j++) {
-                    if (j == i || A.rl[j].n < 2) continue;
+                    if (j == i || A.rl[j].n < 2 || non_car(road_class_of(roads, j))) continue;
                     double wb, s = 0;
                     rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
                     const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;

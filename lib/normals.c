@@ -78,8 +78,9 @@ static double luminance(const rs_splatter *s, const rs_image *img, int64_t px, i
     uint32_t x0, x1, y0, y1;
     double fx, fy;
     double scale = s->o.surface.texture_scale;
-    tex_axis(px, s->texel_m, scale, img->width, &x0, &x1, &fx);
-    tex_axis(py, s->texel_m, scale, img->height, &y0, &y1, &fy);
+    /* on the map's pixel grid, as the colour (rs_surface_options.texel_offset_x/y) */
+    tex_axis(px + s->o.surface.texel_offset_x, s->texel_m, scale, img->width, &x0, &x1, &fx);
+    tex_axis(py + s->o.surface.texel_offset_y, s->texel_m, scale, img->height, &y0, &y1, &fy);
     const size_t W4 = 4 * (size_t)img->width;
     const uint8_t *p00 = img->rgba + y0 * W4 + 4 * (size_t)x0, *p01 = img->rgba + y0 * W4 + 4 * (size_t)x1;
     const uint8_t *p10 = img->rgba + y1 * W4 + 4 * (size_t)x0, *p11 = img->rgba + y1 * W4 + 4 * (size_t)x1;

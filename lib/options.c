@@ -40,6 +40,32 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown style profile %d", (int)o.style.profile);
     if (o.style.aa != RS_LINE_AA_EXACT && o.style.aa != RS_LINE_AA_HERMITE)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown line anti-aliasing %d", (int)o.style.aa);
+    if (f->tint != RS_TINT_ABSOLUTE && f->tint != RS_TINT_RELATIVE)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "unknown tint mode %d", (int)f->tint);
+    if (f->ramp || f->ramp_count) {
+        if (!f->ramp || f->ramp_count < 2 || f->ramp_count > RS_RAMP_MAX_STOPS)
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "colour ramp of %zu stops%s: it needs 2..%d", f->ramp_count,
+                            f->ramp ? "" : " (NULL)", RS_RAMP_MAX_STOPS);
+        for (size_t i = 0; i < f->ramp_count; i++) {
+            double hgt = f->ramp[i].height;
+            if (!(fabs(hgt) <= 1e9))
+                return rs__fail(ctx, RS_ERR_INVALID_ARG, "colour ramp stop %zu: height %g must be finite (|h| <= 1e9 m)",
+                                i, hgt);
+            if (i && !(hgt > f->ramp[i - 1].height))
+                return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                                "colour ramp stop %zu: height %g must be above the previous stop's %g", i, hgt,
+                                f->ramp[i - 1].height);
+        }
+    }
+    if (f->height_min != 0 || f->height_max != 0) {
+        if (!(fabs(f->height_min) <= 1e9 && fabs(f->height_max) <= 1e9 && f->height_min < f->height_max))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "height range %g..%g must be finite with min < max",
+                            f->height_min, f->height_max);
+    }
+    if (f->texel_offset_x > ((int64_t)1 << 52) || f->texel_offset_x < -((int64_t)1 << 52) ||
+        f->texel_offset_y > ((int64_t)1 << 52) || f->texel_offset_y < -((int64_t)1 << 52))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "texel offset %lld, %lld must be within 2^52",
+                        (long long)f->texel_offset_x, (long long)f->texel_offset_y);
     const rs_image *tex[2] = { f->terrain_texture, f->road_texture };
     for (int i = 0; i < 2; i++)
         if (tex[i]) {

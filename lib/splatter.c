@@ -60,6 +60,7 @@ void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
     if (!ctx || !s) return;
     rs__alphamap_tables_free(ctx, s);
     rs__free(ctx, s->z_own);
+    rs__free(ctx, s->ramp_own);
     rs_road_grid_free(ctx, s->grid_own);
     rs__free(ctx, s);
 }
@@ -96,6 +97,12 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     int nodata = 0;
     rs_dem_height_range(dem, &s->zmin, &s->zrange, &nodata);
     s->zrange -= s->zmin;
+    if (!r && o.surface.ramp) {
+        s->ramp_own = rs__alloc_array(ctx, o.surface.ramp_count, sizeof *s->ramp_own);
+        if (!s->ramp_own) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the colour ramp");
+        else memcpy(s->ramp_own, o.surface.ramp, o.surface.ramp_count * sizeof *s->ramp_own);
+        s->o.surface.ramp = s->ramp_own;
+    }
     s->z = dem->z;
     if (!r && nodata) {
         r = rs__dem_fill_nodata(ctx, dem, &s->z_own);

@@ -31,7 +31,8 @@ struct rs_splatter {
     rs__alpha_table tab[3];    /* EDGE, INNER, OUTER (alpha-map edges) */
     const float *z;            /* heights, nodata filled (lib/dem.c policy) */
     float *z_own;
-    double zmin, zrange;       /* DEM units, valid samples */
+    double zmin, zrange;       /* DEM units, valid samples (RS_TINT_RELATIVE without a range) */
+    rs_colour_stop *ramp_own;  /* the absolute tint's ramp: a copy of o.surface.ramp */
     double cos_zen, sin_zen, sun_az; /* light: azimuth 315, altitude 45 */
     double texel_m;            /* cell_size / texels */
     /* lighting (o.lighting.enable): unit vector towards the sun and the

@@ -19,18 +19,51 @@ static uint32_t hash2(uint32_t x, uint32_t y)
     return h;
 }
 
+/* The palette: lowland green, olive, brown, grey rock, snow. Relative
+ * tints place its stops at these fractions of the height range; the
+ * absolute default ramp at fixed heights (docs/surface.md "Terrain
+ * colour"), so a hill of 88 m is green wherever it stands. */
+static const double palette[6][4] = {
+    { 0.00, 74, 112, 62 }, { 0.25, 104, 138, 72 }, { 0.50, 158, 156, 96 },
+    { 0.70, 160, 132, 96 }, { 0.88, 150, 140, 132 }, { 1.00, 236, 236, 236 },
+};
+static const double default_heights[6] = { 0, 300, 800, 1500, 2400, 3500 }; /* metres */
+
 static void hypsometric(double t, float rgb[3])
 {
-    static const double stops[6][4] = {
-        { 0.00, 74, 112, 62 }, { 0.25, 104, 138, 72 }, { 0.50, 158, 156, 96 },
-        { 0.70, 160, 132, 96 }, { 0.88, 150, 140, 132 }, { 1.00, 236, 236, 236 },
-    };
+    const double (*stops)[4] = palette;
     if (!(t > 0)) t = 0;
     if (t > 1) t = 1;
     int i = 0;
     while (i < 4 && t > stops[i + 1][0]) i++;
     double f = (t - stops[i][0]) / (stops[i + 1][0] - stops[i][0]);
     for (int c = 0; c < 3; c++) rgb[c] = (float)(stops[i][c + 1] + f * (stops[i + 1][c + 1] - stops[i][c + 1]));
+}
+
+/* The absolute tint of height zm (metres): the ramp's colour, linear
+ * between stops, the end colours beyond them. */
+static void absolute_tint(const rs_surface_options *f, double zm, float rgb[3])
+{
+    if (!f->ramp) {
+        int i = 0;
+        if (!(zm > default_heights[0])) zm = default_heights[0];
+        if (zm > default_heights[5]) zm = default_heights[5];
+        while (i < 4 && zm > default_heights[i + 1]) i++;
+        double u = (zm - default_heights[i]) / (default_heights[i + 1] - default_heights[i]);
+        for (int c = 0; c < 3; c++)
+            rgb[c] = (float)(palette[i][c + 1] + u * (palette[i + 1][c + 1] - palette[i][c + 1]));
+        return;
+    }
+    const rs_colour_stop *r = f->ramp;
+    size_t n = f->ramp_count, i = 0;
+    if (!(zm > r[0].height)) zm = r[0].height;
+    if (zm > r[n - 1].height) zm = r[n - 1].height;
+    while (i + 2 < n && zm > r[i + 1].height) i++;
+    double u = (zm - r[i].height) / (r[i + 1].height - r[i].height);
+    const rs_colour a = r[i].colour, b = r[i + 1].colour;
+    rgb[0] = (float)(a.r + u * (b.r - a.r));
+    rgb[1] = (float)(a.g + u * (b.g - a.g));
+    rgb[2] = (float)(a.b + u * (b.b - a.b));
 }
 
 /* Hillshade factor by the trigonometric formula (gdaldem's): slope and
@@ -80,13 +113,16 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
     const double lx = -s->sin_zen * cos(s->sun_az), ly = s->sin_zen * sin(s->sun_az), cz = s->cos_zen;
     const uint32_t W = d->width, H = d->height;
     const float *z = s->z;
+    const rs_surface_options *sf = &s->o.surface;
     for (uint32_t j = c0; j < c0 + n; j++) {
         double dzdx, dzdy;
         rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
         double zc = z[(size_t)i * W + j] * zs;
-        double t = s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5;
         float tint[3];
-        hypsometric(t, tint);
+        if (sf->tint == RS_TINT_ABSOLUTE) absolute_tint(sf, zc, tint);
+        else if (sf->height_min != 0 || sf->height_max != 0)
+            hypsometric((zc - sf->height_min) / (sf->height_max - sf->height_min), tint);
+        else hypsometric(s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5, tint);
         float *out = rgb + 3 * (size_t)(j - c0);
         if (s->o.lighting.enable) {
             /* lit output: the relief is shaded once, by the lighting */
@@ -128,12 +164,12 @@ static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i,
  * p0, the texel pair (i0[k], i1[k] = i0[n + k]) and the weights (1 - f in
  * wt[k], f in wt[n + k]) of the bilinear sample of an image of `size`
  * texels per repeat. */
-static void texture_axis(uint32_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
+static void texture_axis(int64_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
                          double *wt)
 {
     const int64_t S = size;
     for (uint32_t k = 0; k < n; k++) {
-        double u = (p0 + k + 0.5) * texel_m / scale;
+        double u = ((double)(p0 + k) + 0.5) * texel_m / scale;
         u = (u - floor(u)) * S - 0.5;
         double fu = floor(u), au = u - fu;
         int64_t x0 = (int64_t)fu;
@@ -182,10 +218,11 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
     double *wy = p->twy;
     double scale = s->o.surface.texture_scale;
     if (!p->tx_ready[road]) {
-        texture_axis(p->win_x0, p->win_w, s->texel_m, scale, img->width, p->tix[road], p->twx[road]);
+        texture_axis(p->win_x0 + s->o.surface.texel_offset_x, p->win_w, s->texel_m, scale, img->width, p->tix[road],
+                     p->twx[road]);
         p->tx_ready[road] = 1;
     }
-    texture_axis(p->y0, p->rows, s->texel_m, scale, img->height, ry, wy);
+    texture_axis(p->y0 + s->o.surface.texel_offset_y, p->rows, s->texel_m, scale, img->height, ry, wy);
     const uint32_t *cx = p->tix[road] + off, *cx1 = cx + ww;
     const double *bu = p->twx[road] + off, *au = bu + ww;
     /* pixels of no interest: pure road for the terrain, pure terrain for
@@ -293,11 +330,13 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         texture_piece(s, p, f->road_texture, 1, p->sc);
         return;
     }
+    /* the grain keyed to the map's pixel grid: (uint32) wraps the same in every tile */
+    const uint32_t ox = (uint32_t)(uint64_t)f->texel_offset_x, oy = (uint32_t)(uint64_t)f->texel_offset_y;
     for (uint32_t r = 0; r < p->rows; r++) {
-        uint32_t py = p->y0 + r;
+        uint32_t py = p->y0 + r + oy;
         const uint16_t *q = p->q + (size_t)r * p->w;
         float *sc = p->sc + (size_t)r * p->w * 3;
         for (uint32_t k = 0; k < p->w; k++)
-            if (q[k] > 0) asphalt(p->x0 + k, py, sc + k, p->w);
+            if (q[k] > 0) asphalt(p->x0 + k + ox, py, sc + k, p->w);
     }
 }

@@ -330,7 +330,7 @@ err "broken file" "^roadsplat: broken.geojson: not a vector source GDAL can read
 err "unknown output extension" "^roadsplat: out.jpg: OUT has the unknown extension '.jpg': roadsplat writes .png or .tif \(GeoTIFF\)$" \
     dem_f32.tif roads.gpkg out.jpg
 rm -f out.png out.pgw out.prj
-err "--world-file without georeference" "^roadsplat: --world-file: the DEM has no georeference$" --world-file dem.pgm local.txt out.png
+err "--world-file without georeference" "^roadsplat: --world-file: the DEM has no georeference; give --origin X,Y with roads in .frame world." --world-file dem.pgm local.txt out.png
 [ ! -e out.png ] && [ ! -e out.pgw ] && ok || bad "--world-file failure left files"
 
 echo "cli_gdal: $pass passed, $fail failed"

@@ -25,3 +25,16 @@ road side width 3
 end
 R
 }
+# need_gdal NAME BIN TOOL...: exit with a SKIP line and "NAME: 0 passed, 0
+# failed" unless BIN has the GDAL module and every TOOL is on the PATH
+need_gdal() {
+    n=$1 b=$2; shift 2
+    "$b" convert "$T/none.geojson" "$T/none.txt" 2>"$T/e"
+    if grep -q "no GDAL support" "$T/e"; then
+        echo "SKIP $n: $b was built without GDAL (make deps installs libgdal-dev)"; echo "$n: 0 passed, 0 failed"; exit 0
+    fi
+    for tool in "$@"; do
+        command -v "$tool" >/dev/null 2>&1 && continue
+        echo "SKIP $n: $tool is missing (make deps installs gdal-bin)"; echo "$n: 0 passed, 0 failed"; exit 0
+    done
+}

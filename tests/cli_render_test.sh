@@ -50,7 +50,9 @@ if cmd == 'road':  # straight-down view of an east-west road through the centre 
     land = min(row(h // 2 - 3 * r), row(h // 2 + 3 * r))
     edge = row(h // 2 - 2 * r), row(h // 2 + 2 * r)
     print('road row lum <= %.1f, terrain rows >= %.1f, +-2r rows %.1f %.1f' % (road, land, edge[0], edge[1]))
-    sys.exit(0 if road < 90 and land > road + 40 and min(edge) > road + 30 else 1)
+    # the absolute tint (issue 28) paints this 15..27 m terrain lowland green (luminance
+    # about 97, before: the palette spread over its range, brighter): 20 levels apart
+    sys.exit(0 if road < 90 and land > road + 20 and min(edge) > road + 20 else 1)
 if cmd == 'ramp':  # file: the widest 10-90 % transition at the road edge and at the line's rising side
     # along the centre row of a close-up (docs/render.md "Shader mode"); argv[3], argv[4]: the road
     # and line levels (luminance) the transitions run to; prints both widths in pixels

@@ -113,6 +113,26 @@ static void fuzz_splat(rs_ctx *ctx, rs_dem *dem, reader *rd)
             REQUIRE(rs_roads_set_attr(ctx, roads, 0, "style", "img") == RS_OK);
         }
     }
+    /* issue 28: the tint mode, a ramp of raw doubles (0..3 stops), a height
+     * range and texel offsets up to and past their 2^52 bound */
+    rs_colour_stop ramp[3];
+    o.surface.tint = (rs_tint_mode)next_u(rd, 3);
+    uint32_t nramp = next_u(rd, 4);
+    for (int i = 0; i < 3; i++) {
+        ramp[i].height = next_d(rd);
+        ramp[i].colour.r = (uint8_t)next_u(rd, 256);
+        ramp[i].colour.g = (uint8_t)next_u(rd, 256);
+        ramp[i].colour.b = (uint8_t)next_u(rd, 256);
+        ramp[i].colour.a = 255;
+    }
+    if (nramp) {
+        o.surface.ramp = ramp;
+        o.surface.ramp_count = nramp;
+    }
+    o.surface.height_min = next_d(rd);
+    o.surface.height_max = next_d(rd);
+    o.surface.texel_offset_x = ((int64_t)next_u(rd, 0xFFFFFFFFu) - 0x7FFFFFFF) * (int64_t)(1 + next_u(rd, 1u << 21));
+    o.surface.texel_offset_y = ((int64_t)next_u(rd, 0xFFFFFFFFu) - 0x7FFFFFFF) * (int64_t)(1 + next_u(rd, 1u << 21));
     rs_splatter *s = (rs_splatter *)&o;
     rs_result r = rs_splatter_create(ctx, dem, roads, NULL, &o, &s);
     REQUIRE(known(r));
