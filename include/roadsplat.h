@@ -88,6 +88,10 @@ typedef struct rs_limits {
     uint32_t max_pool_nodes;   /* 2^26: max ROAM node pool size             */
     uint64_t max_texture_pixels; /* 2^26: max pixels of a terrain or road
                                     texture (8192 x 8192; 256 MiB as RGBA8) */
+    uint64_t max_field_work;   /* 2^30: steps the road-field build may spend
+                                  comparing segments that share index cells
+                                  (docs/roadfield.md; a city takes ~10^5,
+                                  10^6 points on one 100 m road ~10^8) */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;
