@@ -92,6 +92,10 @@ typedef struct rs_limits {
                                   comparing segments that share index cells
                                   (docs/roadfield.md; a city takes ~10^5,
                                   10^6 points on one 100 m road ~10^8) */
+    uint64_t max_atlas_bytes;  /* 2^28: bytes of a marking atlas's mip levels,
+                                  all types together (16 bytes a texel, ~4/3
+                                  of the types' rectangles; types with the
+                                  same rectangle share them) */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;

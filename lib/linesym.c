@@ -594,6 +594,7 @@ typedef struct ls_junc {
     uint32_t *stamp;       /* per surface: last query that saw it */
     uint32_t query;
     const ls_ends *ends;
+    uint64_t work, limit;  /* list entries visited by push_cut; rs_limits.max_field_work */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -689,9 +690,32 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     return m;
 }
 
+/* First index in [lo, hi) of the ascending ids whose value is >= v. */
+static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, uint32_t v)
+{
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (ids[mid] < v) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Surfaces are stored road by road and listed in ascending order, so a
+ * piece steps over its own road's run of a cell list in one binary search
+ * (a road of 10^6 tiny segments would otherwise test each piece against
+ * every surface of its own road in the cell). RS_ERR_LIMIT when the work
+ * (list entries visited) passes J->limit. */
 static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
     if (!J || !J->nsf) return push_piece(ctx, L, P);
+    /* the end of road's surfaces: the first with a larger road */
+    size_t own_end = 0, hi_s = J->nsf;
+    while (own_end < hi_s) {
+        size_t mid = own_end + (hi_s - own_end) / 2;
+        if (J->sf[mid].road <= road) own_end = mid + 1;
+        else hi_s = mid;
+    }
     /* candidate surfaces: those listed in the cells of P's box */
     const ls_grid *G = &J->grid;
     double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
@@ -708,10 +732,15 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                 size_t c = (size_t)j * G->gw + i;
                 for (uint32_t e = J->start[c]; e < J->start[c + 1]; e++) {
                     uint32_t k = J->ids[e];
+                    if (++J->work > J->limit) return RS_ERR_LIMIT;
+                    if (J->sf[k].road == road) { /* skip the rest of the own road's run */
+                        e = first_at_least(J->ids, e, J->start[c + 1], (uint32_t)own_end) - 1;
+                        continue;
+                    }
                     if (J->stamp[k] == J->query) continue;
                     J->stamp[k] = J->query;
                     const ls_surf *Q = &J->sf[k];
-                    if (Q->road == road || continues(J, road, Q->road)) continue;
+                    if (continues(J, road, Q->road)) continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
                     ls_piece next[QMAX];
@@ -1167,6 +1196,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double *sv = NULL;
     ls_junc J;
     memset(&J, 0, sizeof J);
+    int over = 0; /* push_cut passed the work limit */
     if (!L->band || !L->dash || !L->start) { res = RS_ERR_NOMEM; goto fail; }
     L->nband = nband;
     for (uint32_t k = 0, d0 = 0; k < nband; k++) {
@@ -1186,6 +1216,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     size_t cap = 0, total = 0;
     if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
+    J.limit = ctx->limits.max_field_work;
     for (size_t ri = 0; ri < nroads; ri++) {
         if (band_start[ri + 1] == band_start[ri]) continue;
         size_t m = 0;
@@ -1253,11 +1284,17 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     rs__ok(ctx);
     return RS_OK;
 fail:
+    over = J.limit && J.work > J.limit;
     rs__free(ctx, pts);
     rs__free(ctx, sv);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");
+    if (over)
+        return rs__fail(ctx, res,
+                        "line symbols: cutting lines at the other roads' surfaces takes more than %llu steps "
+                        "(too many roads in one place; the budget is rs_limits.max_field_work)",
+                        (unsigned long long)ctx->limits.max_field_work);
     return rs__fail(ctx, res, "line symbols: too many pieces or index entries");
 }
 

@@ -635,6 +635,7 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
     for (size_t k = f->nseg; k-- > 0;) {
         rf_seg *sa = &f->seg[k];
         size_t m = k + 1;
+        h->work++; /* the joint partner: one step */
         if (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m = after;
         if (m < f->nseg && m <= UINT32_MAX) {
             const rf_seg *sb = &f->seg[m];

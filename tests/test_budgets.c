@@ -1,0 +1,336 @@
+/* Issue 26 (library side): budgets for totals and work that stays near
+ * linear in the input.
+ * - Road field (row 7): the segment relations of one 100 m road of n tiny
+ *   segments cost O(n) work units, not n times the cell lists (the work
+ *   counter, not a clock); a run of repeated points is skipped in one step;
+ *   rs_limits.max_field_work stops a build that would pass it, with a
+ *   message naming the budget.
+ * - Line symbols: a styled road of many tiny segments builds within a
+ *   work budget linear in its points (each piece steps over its own road's
+ *   surfaces in one binary search).
+ * - Atlas (row 8): types with the same rectangle share one mip chain; the
+ *   chains of all types together stay within rs_limits.max_atlas_bytes,
+ *   checked before they are made.
+ * - Surface images: the images the styles use, together, stay within
+ *   rs_limits.max_texture_pixels. */
+#include "roadsplat.h"
+#include "harness.h"
+#include "roadfield.h"
+
+#include <stdlib.h>
+
+static rs_ctx *ctx;
+
+/* One straight road of n points spread over `len` metres (tiny segments
+ * that all share the same index cells), width 6 m. */
+static rs_roads *line_road(rs_ctx *c, size_t n, double len, const char *cls)
+{
+    rs_roads *R = NULL;
+    double *xy = malloc(2 * n * sizeof *xy);
+    if (!xy || rs_roads_create(c, &R)) { free(xy); return NULL; }
+    for (size_t k = 0; k < n; k++) {
+        xy[2 * k] = 10 + len * (double)k / (double)(n - 1);
+        xy[2 * k + 1] = 16;
+    }
+    rs_result r = rs_roads_add(c, R, "a", 6, xy, n);
+    if (!r && cls) r = rs_roads_set_attr(c, R, 0, "class", cls);
+    free(xy);
+    if (r) { rs_roads_free(c, R); return NULL; }
+    return R;
+}
+
+static rs__roadfield_params field_params(void)
+{
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.cell_size = 1;
+    p.width_m = 128;
+    p.height_m = 32;
+    p.pixel = 0.25;
+    return p;
+}
+
+/* Relation work per segment of a field of `roads`, or -1. */
+static double work_per_segment(const rs_roads *roads, rs__roadfield_stats *st)
+{
+    rs__roadfield_params p = field_params();
+    rs__roadfield *f = NULL;
+    if (rs__roadfield_build(ctx, roads, &p, &f) != RS_OK) return -1;
+    rs__roadfield_get_stats(f, st);
+    rs__roadfield_free(ctx, f);
+    return st->segments ? (double)st->relation_work / (double)st->segments : -1;
+}
+
+static void test_field_work(void)
+{
+    /* 100 m with 4000 and 16000 points: the cell lists hold thousands of
+     * segments; the old scan did ~list length per segment (~5800 and
+     * ~23000 units), growing 4x with 4x the points */
+    double per[2];
+    size_t ns[2] = { 4000, 16000 };
+    for (int i = 0; i < 2; i++) {
+        rs_roads *R = line_road(ctx, ns[i], 100, NULL);
+        rs__roadfield_stats st;
+        per[i] = R ? work_per_segment(R, &st) : -1;
+        CHECKF(per[i] > 0 && per[i] < 400, "%zu points: %.1f work units per segment (longest list %zu)", ns[i],
+               per[i], st.max_list);
+        CHECKF(st.max_list > ns[i] / 16, "longest list %zu", st.max_list); /* the lists really are long */
+        rs_roads_free(ctx, R);
+    }
+    CHECKF(per[1] < 2 * per[0], "work per segment %.1f -> %.1f for 4x the points", per[0], per[1]);
+
+    /* 20000 copies of one point (then one more): zero-length segments whose
+     * joint partner was searched for past every later copy */
+    rs_roads *R = NULL;
+    size_t n = 20001;
+    double *xy = malloc(2 * n * sizeof *xy);
+    CHECK(xy && rs_roads_create(ctx, &R) == RS_OK);
+    if (xy && R) {
+        for (size_t k = 0; k < n; k++) xy[2 * k] = 40, xy[2 * k + 1] = 16;
+        xy[2 * n - 2] = 60;
+        CHECK(rs_roads_add(ctx, R, "p", 4, xy, n) == RS_OK);
+        rs__roadfield_stats st;
+        double w = work_per_segment(R, &st);
+        CHECKF(w > 0 && w < 400, "repeated points: %.1f work units per segment", w);
+        CHECK(st.redundant + 1 >= st.segments - 1); /* every copy but one is held by another */
+    }
+    free(xy);
+    rs_roads_free(ctx, R);
+}
+
+/* A budget the work passes: RS_ERR_LIMIT naming rs_limits.max_field_work,
+ * through the public grid build; the default budget builds the same road. */
+static void test_field_budget(void)
+{
+    float z[129 * 33] = { 0 };
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_field_work = 1000;
+    rs_ctx *c = NULL;
+    CHECK(rs_ctx_create(NULL, &lim, &c) == RS_OK);
+    if (!c) return;
+    rs_dem *d = NULL;
+    rs_roads *R = line_road(c, 5000, 100, NULL);
+    CHECK(R && rs_dem_create(c, 129, 33, z, &d) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    rs_road_grid *g = (rs_road_grid *)(uintptr_t)1;
+    CHECK_EQ_INT(rs_road_grid_build(c, d, R, &o, &g), RS_ERR_LIMIT);
+    CHECK(g == NULL);
+    CHECKF(strstr(rs_ctx_message(c), "max_field_work") != NULL, "message: %s", rs_ctx_message(c));
+    g = NULL;
+    CHECK(rs_road_grid_build(ctx, d, R, &o, &g) == RS_OK);
+    rs_road_grid_free(ctx, g);
+    rs_roads_free(c, R);
+    rs_dem_free(c, d);
+    rs_ctx_free(c);
+}
+
+/* Line symbols of a motorway (several lines) along a road of 20000 tiny
+ * segments: a budget of 64 units per point suffices (each piece skips its
+ * own road's run of a cell list in one step; scanning it took ~10^4
+ * units per piece). */
+static void test_linesym_work(void)
+{
+    size_t n = 20000;
+    float z[129 * 33] = { 0 };
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_field_work = 64 * (uint64_t)n;
+    rs_ctx *c = NULL;
+    CHECK(rs_ctx_create(NULL, &lim, &c) == RS_OK);
+    if (!c) return;
+    rs_dem *d = NULL;
+    rs_roads *R = line_road(c, n, 100, "motorway");
+    CHECK(R && rs_dem_create(c, 129, 33, z, &d) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    rs_road_grid *g = NULL;
+    rs_result r = rs_road_grid_build(c, d, R, &o, &g);
+    CHECKF(r == RS_OK, "%s", rs_ctx_message(c));
+    rs_road_grid_free(c, g);
+    rs_roads_free(c, R);
+    rs_dem_free(c, d);
+    rs_ctx_free(c);
+}
+
+/* --- atlas ----------------------------------------------------------------------- */
+
+/* An allocator that refuses to hold more than `cap` bytes at once. */
+typedef struct cap_alloc { size_t cap, live, peak; } cap_alloc;
+
+static void *cap_malloc(void *user, size_t n)
+{
+    cap_alloc *a = user;
+    if (n > a->cap - a->live) return NULL;
+    size_t *p = malloc(n + sizeof(size_t) * 2);
+    if (!p) return NULL;
+    p[0] = n;
+    a->live += n;
+    if (a->live > a->peak) a->peak = a->live;
+    return p + 2;
+}
+
+static void cap_free(void *user, void *q)
+{
+    cap_alloc *a = user;
+    size_t *p = (size_t *)q - 2;
+    a->live -= p[0];
+    free(p);
+}
+
+static void *cap_realloc(void *user, void *q, size_t n)
+{
+    if (!q) return cap_malloc(user, n);
+    size_t old = ((size_t *)q)[-2];
+    void *nq = cap_malloc(user, n);
+    if (!nq) return NULL;
+    memcpy(nq, q, old < n ? old : n);
+    cap_free(user, q);
+    return nq;
+}
+
+/* A 1024 x 1024 atlas image: an opaque disc on transparency. */
+static uint8_t *atlas_image(uint32_t s)
+{
+    uint8_t *px = malloc((size_t)s * s * 4);
+    if (!px) return NULL;
+    for (uint32_t y = 0; y < s; y++)
+        for (uint32_t x = 0; x < s; x++) {
+            uint8_t *p = px + ((size_t)y * s + x) * 4;
+            double dx = x - 0.5 * s, dy = y - 0.5 * s;
+            p[0] = (uint8_t)x, p[1] = (uint8_t)y, p[2] = 200;
+            p[3] = dx * dx + dy * dy < 0.2 * s * s ? 255 : 0;
+        }
+    return px;
+}
+
+static void test_atlas_shared(void)
+{
+    /* six types on the same whole-image rectangle (the issue's 6-line
+     * index): one mip chain of ~22 MB, not six; with at most 64 MB to
+     * spend, the old per-type copies (134 MB) ran out of memory */
+    const uint32_t S = 1024;
+    uint8_t *px = atlas_image(S);
+    CHECK(px != NULL);
+    if (!px) return;
+    cap_alloc ca = { (size_t)64 << 20, 0, 0 };
+    rs_allocator al = { cap_malloc, cap_realloc, cap_free, &ca };
+    rs_ctx *c = NULL;
+    CHECK(rs_ctx_create(&al, NULL, &c) == RS_OK);
+    rs_image img = { S, S, px };
+    static const char index[] = "a 0 0 1024 1024 3 1\nb 0 0 1024 1024 3 1\nc 0 0 1024 1024 3 1\n"
+                                "d 0 0 1024 1024 3 1\ne 0 0 1024 1024 3 1\nf 0 0 1024 1024 3 1\n";
+    rs_atlas *a = NULL;
+    rs_result r = c ? rs_atlas_create(c, &img, index, sizeof index - 1, &a) : RS_ERR_NOMEM;
+    CHECKF(r == RS_OK, "%d: %s (peak %zu bytes)", (int)r, c ? rs_ctx_message(c) : "", ca.peak);
+    if (a) {
+        CHECK_EQ_INT(rs_atlas_count(a), 6);
+        const char *name = NULL;
+        uint32_t w = 0, h = 0;
+        CHECK(rs_atlas_get(a, 5, &name, NULL, NULL, &w, &h) == RS_OK && !strcmp(name, "f") && w == S && h == S);
+        CHECK(ca.peak < (size_t)32 << 20);
+    }
+    rs_atlas_free(c, a);
+    rs_ctx_free(c);
+    CHECK_EQ_INT(ca.live, 0); /* the shared chain is freed once */
+    free(px);
+}
+
+static void test_atlas_budget(void)
+{
+    /* distinct rectangles count one by one against max_atlas_bytes,
+     * before their chains are made: 3 x ~22 MB over a 48 MB budget */
+    const uint32_t S = 1024;
+    uint8_t *px = atlas_image(S);
+    CHECK(px != NULL);
+    if (!px) return;
+    cap_alloc ca = { (size_t)64 << 20, 0, 0 };
+    rs_allocator al = { cap_malloc, cap_realloc, cap_free, &ca };
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_atlas_bytes = (uint64_t)48 << 20;
+    rs_ctx *c = NULL;
+    CHECK(rs_ctx_create(&al, &lim, &c) == RS_OK);
+    if (!c) { free(px); return; }
+    rs_image img = { S, S, px };
+    static const char index[] = "a 0 0 1024 1024 3 1\nb 0 0 1024 1024 3 1\nc 1 0 1023 1024 3 1\n"
+                                "d 0 1 1024 1023 3 1\n";
+    rs_atlas *a = (rs_atlas *)(uintptr_t)1;
+    CHECK_EQ_INT(rs_atlas_create(c, &img, index, sizeof index - 1, &a), RS_ERR_LIMIT);
+    CHECK(a == NULL);
+    const char *m = rs_ctx_message(c);
+    CHECKF(strstr(m, "line 4") && strstr(m, "'d'") && strstr(m, "max_atlas_bytes"), "message: %s", m);
+    CHECK(ca.peak < (size_t)48 << 20);
+    rs_ctx_free(c);
+    CHECK_EQ_INT(ca.live, 0);
+    /* the default budget (256 MiB) takes them */
+    a = NULL;
+    CHECK(rs_atlas_create(ctx, &img, index, sizeof index - 1, &a) == RS_OK && rs_atlas_count(a) == 4);
+    rs_atlas_free(ctx, a);
+    free(px);
+}
+
+/* --- surface images ---------------------------------------------------------------- */
+
+static void test_surface_image_total(void)
+{
+    /* two styles with a 2 x 2 image each: 8 pixels in use; a limit of 6
+     * pixels (each image alone fits) refuses the second */
+    static const char text[] = "style s1\n surface one\nend\nstyle s2\n surface two\nend\n"
+                               "road a width 4 style=s1\n1 4\n9 4\nend\nroad b width 4 style=s2\n1 8\n9 8\nend\n";
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_texture_pixels = 6;
+    rs_ctx *c = NULL;
+    CHECK(rs_ctx_create(NULL, &lim, &c) == RS_OK);
+    if (!c) return;
+    rs_styles *st = NULL;
+    rs_roads *R = NULL;
+    rs_dem *d = NULL;
+    float z[11 * 11] = { 0 };
+    CHECK(rs_styles_create(c, &st) == RS_OK);
+    rs_road_parse_options po;
+    memset(&po, 0, sizeof po);
+    po.styles = st;
+    CHECK(rs_roads_parse_ex(c, text, sizeof text - 1, &po, &R) == RS_OK);
+    CHECK(rs_dem_create(c, 11, 11, z, &d) == RS_OK);
+    uint8_t px[16] = { 255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 9, 9, 9, 255 };
+    rs_surface_image si[2] = { { "one", { 2, 2, px } }, { "two", { 2, 2, px } } };
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    o.style.styles = st;
+    o.style.surface_images = si;
+    o.style.surface_image_count = 2;
+    rs_road_grid *g = NULL;
+    CHECK_EQ_INT(rs_road_grid_build(c, d, R, &o, &g), RS_ERR_LIMIT);
+    CHECKF(strstr(rs_ctx_message(c), "max_texture_pixels") != NULL, "message: %s", rs_ctx_message(c));
+    CHECK(g == NULL);
+    /* with room for both (8 pixels) the same build succeeds */
+    rs_ctx *c2 = NULL;
+    lim.max_texture_pixels = 8;
+    CHECK(rs_ctx_create(NULL, &lim, &c2) == RS_OK);
+    CHECKF(c2 && rs_road_grid_build(c2, d, R, &o, &g) == RS_OK, "%s", c2 ? rs_ctx_message(c2) : "");
+    rs_road_grid_free(c2, g);
+    rs_ctx_free(c2);
+    rs_roads_free(c, R);
+    rs_styles_free(c, st);
+    rs_dem_free(c, d);
+    rs_ctx_free(c);
+}
+
+int main(void)
+{
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_field_work();
+    test_field_budget();
+    test_linesym_work();
+    test_atlas_shared();
+    test_atlas_budget();
+    test_surface_image_total();
+    rs_ctx_free(ctx);
+    return th_finish("test_budgets");
+}
