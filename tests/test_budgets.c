@@ -16,26 +16,25 @@
 #include "roadsplat.h"
 #include "harness.h"
 #include "roadfield.h"
+#include "scene_splat.h"
 
 #include <stdlib.h>
 
 static rs_ctx *ctx;
 
-/* One straight road of n points spread over `len` metres (tiny segments
- * that all share the same index cells), width 6 m. */
+/* One straight road of n points over `len` metres at y = 16 (tiny
+ * segments that all share the same index cells), width 6 m, of class
+ * `cls` (NULL: unstyled). */
 static rs_roads *line_road(rs_ctx *c, size_t n, double len, const char *cls)
 {
-    rs_roads *R = NULL;
-    double *xy = malloc(2 * n * sizeof *xy);
-    if (!xy || rs_roads_create(c, &R)) { free(xy); return NULL; }
-    for (size_t k = 0; k < n; k++) {
-        xy[2 * k] = 10 + len * (double)k / (double)(n - 1);
-        xy[2 * k + 1] = 16;
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_roads *R = sc_road_crowded(&sc, 10, 16, len, n, 6) ? NULL : ss_roads(c, &sc);
+    sc_scene_free(&sc);
+    if (R && cls && rs_roads_set_attr(c, R, 0, "class", cls)) {
+        rs_roads_free(c, R);
+        R = NULL;
     }
-    rs_result r = rs_roads_add(c, R, "a", 6, xy, n);
-    if (!r && cls) r = rs_roads_set_attr(c, R, 0, "class", cls);
-    free(xy);
-    if (r) { rs_roads_free(c, R); return NULL; }
     return R;
 }
 
