@@ -88,8 +88,8 @@ int main(int argc, char **argv)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
-    fprintf(md, "## Crowded roads (issue 26 row 7)\n\n");
-    fprintf(md, "`tests/bench/crowded.c`: one road of n points evenly spread over 100 m, 6 m wide, on a %u x %u DEM "
+    fprintf(md, "## Crowded roads (tests/bench/crowded.c; issue 26 row 7)\n\n");
+    fprintf(md, "One road of n points evenly spread over 100 m, 6 m wide, on a %u x %u DEM "
                 "(1 m cells, 4 texels per cell); fastest of %d runs. Target: the whole grid build of 10^6 points "
                 "within 2 s.\n\n", W, H, RUNS);
     fprintf(md, "Whole grid build (`rs_road_grid_build`, analytic edges):\n\n");
