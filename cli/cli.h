@@ -192,7 +192,14 @@ typedef struct cli_splat_args {
     const char *layer, *where; /* --layer NAME, --where SQL: GIS road sources (cli/geo.c) */
     int strict;                /* --strict: no road on the map is an error, not a warning */
     int light_given;           /* --sun or --specular (they need --lighting) */
+    uint64_t max_field_work;   /* --max-field-work N: rs_limits.max_field_work (0 = default) */
+    uint64_t max_atlas_bytes;  /* --max-atlas-mb N: rs_limits.max_atlas_bytes (0 = default) */
 } cli_splat_args;
+/* The library limits the splat options ask for (defaults elsewhere). */
+void cli_splat_limits(const cli_splat_args *s, rs_limits *lim);
+/* The context's last message (or the result's text), and when it names a
+ * budget (rs_limits field) with an option here, that option: into buf. */
+const char *cli_lib_message(const rs_ctx *ctx, rs_result r, char *buf, size_t cap);
 /* Splits an argument "--name=value" into name (NUL-terminated, cut to
  * CLI_OPT_NAME - 1 bytes) and the inline value (NULL without '='). */
 #define CLI_OPT_NAME 64
