@@ -50,8 +50,9 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
                                 i ? "road" : "terrain", tex[i]->width, tex[i]->height,
                                 (unsigned long long)ctx->limits.max_texture_pixels);
         }
-    /* the surface-image table: a count needs its array, every entry a
-     * name and pixels (an entry is checked whether a style uses it or not) */
+    /* the surface-image table: a count needs its array, every entry a name
+     * and, when it has a size, pixels (checked whether a style uses the
+     * entry or not; an empty image is refused when a style uses it) */
     const rs_style_options *so = &o.style;
     if (so->surface_image_count && !so->surface_images)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images is NULL but surface_image_count is %zu",
@@ -60,9 +61,9 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
         const rs_surface_image *si = &so->surface_images[k];
         if (!si->name)
             return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images[%zu]: name is NULL", k);
-        if (!si->image.rgba || !si->image.width || !si->image.height)
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images[%zu]: the image is empty or its pixels NULL",
-                            k);
+        if (!si->image.rgba && si->image.width && si->image.height)
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images[%zu]: %u x %u pixels at NULL", k,
+                            si->image.width, si->image.height);
     }
     *out = o;
     return RS_OK;

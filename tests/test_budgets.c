@@ -97,62 +97,51 @@ static void test_field_work(void)
     rs_roads_free(ctx, R);
 }
 
-/* A budget the work passes: RS_ERR_LIMIT naming rs_limits.max_field_work,
- * through the public grid build; the default budget builds the same road. */
-static void test_field_budget(void)
+/* The whole grid build of line_road(n, 100 m, cls) on a 129 x 33 DEM at
+ * 4 texels, on a context with max_field_work = budget (0: default); its
+ * message into msg. A failure that leaves a grid is reported as
+ * RS_ERR_INVALID_ARG (*out must be cleared). */
+static rs_result crowded_build(size_t n, const char *cls, uint64_t budget, char *msg, size_t cap)
 {
-    float z[129 * 33] = { 0 };
+    static float z[129 * 33];
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
-    lim.max_field_work = 1000;
+    lim.max_field_work = budget;
     rs_ctx *c = NULL;
-    CHECK(rs_ctx_create(NULL, &lim, &c) == RS_OK);
-    if (!c) return;
+    if (rs_ctx_create(NULL, &lim, &c) != RS_OK) return RS_ERR_NOMEM;
     rs_dem *d = NULL;
-    rs_roads *R = line_road(c, 5000, 100, NULL);
-    CHECK(R && rs_dem_create(c, 129, 33, z, &d) == RS_OK);
+    rs_roads *R = line_road(c, n, 100, cls);
+    rs_result r = R ? rs_dem_create(c, 129, 33, z, &d) : RS_ERR_NOMEM;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
     rs_road_grid *g = (rs_road_grid *)(uintptr_t)1;
-    CHECK_EQ_INT(rs_road_grid_build(c, d, R, &o, &g), RS_ERR_LIMIT);
-    CHECK(g == NULL);
-    CHECKF(strstr(rs_ctx_message(c), "max_field_work") != NULL, "message: %s", rs_ctx_message(c));
-    g = NULL;
-    CHECK(rs_road_grid_build(ctx, d, R, &o, &g) == RS_OK);
-    rs_road_grid_free(ctx, g);
+    if (!r) {
+        r = rs_road_grid_build(c, d, R, &o, &g);
+        if (r && g) r = RS_ERR_INVALID_ARG;
+        if (!r) rs_road_grid_free(c, g);
+    }
+    snprintf(msg, cap, "%s", rs_ctx_message(c));
     rs_roads_free(c, R);
     rs_dem_free(c, d);
     rs_ctx_free(c);
+    return r;
 }
 
-/* Line symbols of a motorway (several lines) along a road of 20000 tiny
- * segments: a budget of 64 units per point suffices (each piece skips its
- * own road's run of a cell list in one step; scanning it took ~10^4
- * units per piece). */
-static void test_linesym_work(void)
+/* A budget the work passes: RS_ERR_LIMIT naming rs_limits.max_field_work,
+ * through the public grid build; the default budget builds the same road.
+ * Line symbols of a motorway (several lines) along 20000 tiny segments: a
+ * budget of 64 units per point suffices (each piece skips its own road's
+ * run of a cell list in one step; scanning it took ~10^4 units per piece). */
+static void test_field_budget(void)
 {
+    char m[512];
+    CHECK_EQ_INT(crowded_build(5000, NULL, 1000, m, sizeof m), RS_ERR_LIMIT);
+    CHECKF(strstr(m, "rs_limits.max_field_work") != NULL, "message: %s", m);
+    CHECK(crowded_build(5000, NULL, 0, m, sizeof m) == RS_OK);
     size_t n = 20000;
-    float z[129 * 33] = { 0 };
-    rs_limits lim;
-    memset(&lim, 0, sizeof lim);
-    lim.max_field_work = 64 * (uint64_t)n;
-    rs_ctx *c = NULL;
-    CHECK(rs_ctx_create(NULL, &lim, &c) == RS_OK);
-    if (!c) return;
-    rs_dem *d = NULL;
-    rs_roads *R = line_road(c, n, 100, "motorway");
-    CHECK(R && rs_dem_create(c, 129, 33, z, &d) == RS_OK);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 4;
-    rs_road_grid *g = NULL;
-    rs_result r = rs_road_grid_build(c, d, R, &o, &g);
-    CHECKF(r == RS_OK, "%s", rs_ctx_message(c));
-    rs_road_grid_free(c, g);
-    rs_roads_free(c, R);
-    rs_dem_free(c, d);
-    rs_ctx_free(c);
+    rs_result r = crowded_build(n, "motorway", 64 * (uint64_t)n, m, sizeof m);
+    CHECKF(r == RS_OK, "%s", m);
 }
 
 /* --- atlas ----------------------------------------------------------------------- */
@@ -191,7 +180,7 @@ static void *cap_realloc(void *user, void *q, size_t n)
     return nq;
 }
 
-/* A 1024 x 1024 atlas image: an opaque disc on transparency. */
+/* An s x s atlas image: an opaque disc on transparency. */
 static uint8_t *atlas_image(uint32_t s)
 {
     uint8_t *px = malloc((size_t)s * s * 4);
@@ -206,68 +195,63 @@ static uint8_t *atlas_image(uint32_t s)
     return px;
 }
 
-static void test_atlas_shared(void)
+/* rs_atlas_create on the 1024 x 1024 image with `index`, on a context
+ * whose allocator holds at most 64 MB and whose atlas budget is `budget`
+ * (0: default); the atlas is freed again. Its type count into *count, the
+ * message into msg; ca gets the peak and what stayed allocated after the
+ * context was freed. */
+static rs_result atlas_capped(const rs_image *img, const char *index, uint64_t budget, cap_alloc *ca,
+                              size_t *count, char *msg, size_t cap)
 {
-    /* six types on the same whole-image rectangle (the issue's 6-line
-     * index): one mip chain of ~22 MB, not six; with at most 64 MB to
-     * spend, the old per-type copies (134 MB) ran out of memory */
-    const uint32_t S = 1024;
-    uint8_t *px = atlas_image(S);
-    CHECK(px != NULL);
-    if (!px) return;
-    cap_alloc ca = { (size_t)64 << 20, 0, 0 };
-    rs_allocator al = { cap_malloc, cap_realloc, cap_free, &ca };
-    rs_ctx *c = NULL;
-    CHECK(rs_ctx_create(&al, NULL, &c) == RS_OK);
-    rs_image img = { S, S, px };
-    static const char index[] = "a 0 0 1024 1024 3 1\nb 0 0 1024 1024 3 1\nc 0 0 1024 1024 3 1\n"
-                                "d 0 0 1024 1024 3 1\ne 0 0 1024 1024 3 1\nf 0 0 1024 1024 3 1\n";
-    rs_atlas *a = NULL;
-    rs_result r = c ? rs_atlas_create(c, &img, index, sizeof index - 1, &a) : RS_ERR_NOMEM;
-    CHECKF(r == RS_OK, "%d: %s (peak %zu bytes)", (int)r, c ? rs_ctx_message(c) : "", ca.peak);
-    if (a) {
-        CHECK_EQ_INT(rs_atlas_count(a), 6);
-        const char *name = NULL;
-        uint32_t w = 0, h = 0;
-        CHECK(rs_atlas_get(a, 5, &name, NULL, NULL, &w, &h) == RS_OK && !strcmp(name, "f") && w == S && h == S);
-        CHECK(ca.peak < (size_t)32 << 20);
-    }
-    rs_atlas_free(c, a);
-    rs_ctx_free(c);
-    CHECK_EQ_INT(ca.live, 0); /* the shared chain is freed once */
-    free(px);
-}
-
-static void test_atlas_budget(void)
-{
-    /* distinct rectangles count one by one against max_atlas_bytes,
-     * before their chains are made: 3 x ~22 MB over a 48 MB budget */
-    const uint32_t S = 1024;
-    uint8_t *px = atlas_image(S);
-    CHECK(px != NULL);
-    if (!px) return;
-    cap_alloc ca = { (size_t)64 << 20, 0, 0 };
-    rs_allocator al = { cap_malloc, cap_realloc, cap_free, &ca };
+    ca->cap = (size_t)64 << 20;
+    ca->live = ca->peak = 0;
+    rs_allocator al = { cap_malloc, cap_realloc, cap_free, ca };
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
-    lim.max_atlas_bytes = (uint64_t)48 << 20;
+    lim.max_atlas_bytes = budget;
     rs_ctx *c = NULL;
-    CHECK(rs_ctx_create(&al, &lim, &c) == RS_OK);
-    if (!c) { free(px); return; }
-    rs_image img = { S, S, px };
-    static const char index[] = "a 0 0 1024 1024 3 1\nb 0 0 1024 1024 3 1\nc 1 0 1023 1024 3 1\n"
-                                "d 0 1 1024 1023 3 1\n";
+    if (rs_ctx_create(&al, &lim, &c) != RS_OK) return RS_ERR_NOMEM;
     rs_atlas *a = (rs_atlas *)(uintptr_t)1;
-    CHECK_EQ_INT(rs_atlas_create(c, &img, index, sizeof index - 1, &a), RS_ERR_LIMIT);
-    CHECK(a == NULL);
-    const char *m = rs_ctx_message(c);
+    rs_result r = rs_atlas_create(c, img, index, strlen(index), &a);
+    snprintf(msg, cap, "%s", rs_ctx_message(c));
+    *count = r == RS_OK ? rs_atlas_count(a) : 0;
+    if (r != RS_OK && a != NULL) r = RS_ERR_INVALID_ARG; /* *out must be cleared */
+    if (r == RS_OK) rs_atlas_free(c, a);
+    rs_ctx_free(c);
+    return r;
+}
+
+static void test_atlas(void)
+{
+    const uint32_t S = 1024;
+    uint8_t *px = atlas_image(S);
+    CHECK(px != NULL);
+    if (!px) return;
+    rs_image img = { S, S, px };
+    cap_alloc ca;
+    size_t n = 0;
+    char m[512];
+    /* six types on the same whole-image rectangle (the issue's 6-line
+     * index): one mip chain of ~22 MB, not six; the old per-type copies
+     * (134 MB) ran out of the 64 MB */
+    rs_result r = atlas_capped(&img, "a 0 0 1024 1024 3 1\nb 0 0 1024 1024 3 1\nc 0 0 1024 1024 3 1\n"
+                                     "d 0 0 1024 1024 3 1\ne 0 0 1024 1024 3 1\nf 0 0 1024 1024 3 1\n",
+                               0, &ca, &n, m, sizeof m);
+    CHECKF(r == RS_OK && n == 6, "%d: %s (peak %zu bytes)", (int)r, m, ca.peak);
+    CHECK(ca.peak < (size_t)32 << 20);
+    CHECK_EQ_INT(ca.live, 0); /* the shared chain is freed once */
+    /* distinct rectangles count one by one against max_atlas_bytes, before
+     * their chains are made: 3 x ~22 MB over a 48 MB budget */
+    static const char distinct[] = "a 0 0 1024 1024 3 1\nb 0 0 1024 1024 3 1\nc 1 0 1023 1024 3 1\n"
+                                   "d 0 1 1024 1023 3 1\n";
+    r = atlas_capped(&img, distinct, (uint64_t)48 << 20, &ca, &n, m, sizeof m);
+    CHECK_EQ_INT(r, RS_ERR_LIMIT);
     CHECKF(strstr(m, "line 4") && strstr(m, "'d'") && strstr(m, "max_atlas_bytes"), "message: %s", m);
     CHECK(ca.peak < (size_t)48 << 20);
-    rs_ctx_free(c);
     CHECK_EQ_INT(ca.live, 0);
     /* the default budget (256 MiB) takes them */
-    a = NULL;
-    CHECK(rs_atlas_create(ctx, &img, index, sizeof index - 1, &a) == RS_OK && rs_atlas_count(a) == 4);
+    rs_atlas *a = NULL;
+    CHECK(rs_atlas_create(ctx, &img, distinct, sizeof distinct - 1, &a) == RS_OK && rs_atlas_count(a) == 4);
     rs_atlas_free(ctx, a);
     free(px);
 }
@@ -326,9 +310,7 @@ int main(void)
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_field_work();
     test_field_budget();
-    test_linesym_work();
-    test_atlas_shared();
-    test_atlas_budget();
+    test_atlas();
     test_surface_image_total();
     rs_ctx_free(ctx);
     return th_finish("test_budgets");
