@@ -74,6 +74,14 @@ typedef struct ls_ppc {
 
 #define HPP(L, P, k) ((L)->hpp + 4 * ((size_t)(P)->hp0 + (k)))
 
+/* What the index build reads of a piece besides its ls_ppc (kept while
+ * building only; a whole ls_piece per piece was ~700 bytes). */
+typedef struct ls_pbuild {
+    double len;                /* slab: u range [0, len] */
+    double x0, y0, x1, y1;     /* local box, grown by the pixel margin */
+    double gx0, gx1, gy0, gy1; /* pixels to visit */
+} ls_pbuild;
+
 typedef struct ls_band {
     float rgba[4];
     uint32_t dash0, ndash; /* into L->dash */
@@ -95,10 +103,10 @@ struct rs__linesym {
     uint32_t gw, gh;
     uint32_t *start, *ids; /* CSR: pieces per cell, ascending (ids while building) */
     ls_pbox *ent;          /* the entries of ids */
-    ls_piece *pc;          /* while building */
+    ls_pbuild *pb;         /* while building */
     ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
     double *hpp;
-    size_t npc, cap;
+    size_t npc, cap, nhpp, hcap; /* pieces (pp, pb) and half-planes (hpp) held and allocated */
     ls_band *band;
     uint32_t nband;
     double *dash;
@@ -421,18 +429,59 @@ static double piece_hermite(const rs__linesym *L, const ls_ppc *P, uint32_t px, 
 
 static uint32_t piece_poly(const ls_piece *P, double *x, double *y);
 
+static void piece_finish(const rs__linesym *L, ls_piece *Q);
+
+/* Append piece P, finished (piece_finish), as the painter's record (pp,
+ * its half-planes in hpp) and the index build's (pb). */
 static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
 {
     if (L->npc == L->cap) {
-        size_t nc = L->cap ? 2 * L->cap : 256, bytes;
-        if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_piece), &bytes)) return RS_ERR_LIMIT;
-        ls_piece *np = rs__realloc(ctx, L->pc, bytes);
+        size_t nc = L->cap ? 2 * L->cap : 256, b1, b2;
+        if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_ppc), &b1) || !rs__mul_size(nc, sizeof(ls_pbuild), &b2))
+            return RS_ERR_LIMIT;
+        ls_ppc *np = rs__realloc(ctx, L->pp, b1);
         if (!np) return RS_ERR_NOMEM;
-        L->pc = np;
+        L->pp = np;
+        ls_pbuild *nb = rs__realloc(ctx, L->pb, b2);
+        if (!nb) return RS_ERR_NOMEM;
+        L->pb = nb;
         L->cap = nc;
     }
-    ls_piece *Q = &L->pc[L->npc++];
-    *Q = *P;
+    if (L->hcap - L->nhpp < HP_MAX) {
+        size_t nc = L->hcap ? 2 * L->hcap : 1024, bytes;
+        if (nc > UINT32_MAX || !rs__mul_size(nc, 4 * sizeof(double), &bytes)) return RS_ERR_LIMIT;
+        double *nh = rs__realloc(ctx, L->hpp, bytes);
+        if (!nh) return RS_ERR_NOMEM;
+        L->hpp = nh;
+        L->hcap = nc;
+    }
+    ls_piece Q = *P;
+    piece_finish(L, &Q);
+    ls_ppc *C = &L->pp[L->npc];
+    ls_pbuild *B = &L->pb[L->npc++];
+    C->ox = Q.ox, C->oy = Q.oy, C->ux = Q.ux, C->uy = Q.uy, C->a = Q.a, C->b = Q.b, C->su = Q.su;
+    C->uin0 = Q.uin0, C->uin1 = Q.uin1, C->st_lo = Q.st_lo, C->st_e = Q.st_e, C->st_q = Q.st_q;
+    C->st_h = Q.st_h, C->s0 = Q.s0, C->ru0 = Q.ru0, C->ru1 = Q.ru1, C->rv0 = Q.rv0, C->rv1 = Q.rv1;
+    C->r0 = Q.r0, C->r1 = Q.r1, C->wx0 = Q.wx0, C->wy0 = Q.wy0, C->wx1 = Q.wx1, C->wy1 = Q.wy1;
+    C->warea = Q.warea, C->nhp = Q.nhp, C->kind = Q.kind, C->band = Q.band, C->dashed = Q.dashed;
+    C->hp0 = (uint32_t)L->nhpp;
+    double du = Q.ux * L->pixel, dv = Q.uy * L->pixel; /* 0 for a subnormal pixel */
+    C->iku = fabs(Q.ux) < 1e-12 || du == 0 ? 0 : 1 / du;
+    C->ikv = fabs(Q.uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
+    C->cbase = Q.ox / L->pixel - 0.5;
+    for (uint32_t j = 0; j < Q.nhp; j++, L->nhpp++) {
+        memcpy(L->hpp + 4 * L->nhpp, Q.hp[j], 3 * sizeof *L->hpp);
+        L->hpp[4 * L->nhpp + 3] = Q.sup[j];
+    }
+    B->len = Q.len, B->x0 = Q.x0, B->y0 = Q.y0, B->x1 = Q.x1, B->y1 = Q.y1;
+    B->gx0 = Q.gx0, B->gx1 = Q.gx1, B->gy0 = Q.gy0, B->gy1 = Q.gy1;
+    return RS_OK;
+}
+
+/* The painter's constants of a piece: half-plane extents, box, pixel
+ * rows and columns, the slab's safe u range. */
+static void piece_finish(const rs__linesym *L, ls_piece *Q)
+{
     double pix = L->pixel, hp = 0.5 * pix, ax = fabs(Q->ux), ay = fabs(Q->uy);
     /* half-plane c0 + cu u + cv v in local (x, y): normal (cu ux + cv uy, cu uy - cv ux) */
     for (uint32_t k = 0; k < Q->nhp; k++) {
@@ -466,7 +515,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         Q->gx1 = Q->gy1 = 0;
         Q->ru0 = Q->rv0 = 1;
         Q->ru1 = Q->rv1 = 0;
-        return RS_OK;
+        return;
     }
     double eb = 1e-9 * (1 + fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
     if (Q->kind == PIECE_WEDGE && herm) {
@@ -507,7 +556,6 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         Q->uin0 = ulo;
         Q->uin1 = uhi;
     }
-    return RS_OK;
 }
 
 /* Local box of a piece's polygon outline, grown by the pixel margin. */
@@ -959,10 +1007,11 @@ static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double
 
 static void piece_cells(rs__linesym *L, uint32_t k, int fill)
 {
-    const ls_piece *P = &L->pc[k];
+    const ls_ppc *P = &L->pp[k];
+    const ls_pbuild *B = &L->pb[k];
     double m = L->margin;
     if (P->kind == PIECE_SLAB)
-        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
+        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, B->len + m, P->a - m, P->b + m, B->x0, B->y0, B->x1, B->y1,
                    L->start, L->ids, k, fill);
     else /* the sector's box grown by the margin, as an axis-aligned rectangle */
         rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
@@ -1127,7 +1176,7 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
     if (!L) return;
     rs__free(ctx, L->start);
     rs__free(ctx, L->ids);
-    rs__free(ctx, L->pc);
+    rs__free(ctx, L->pb);
     rs__free(ctx, L->pp);
     rs__free(ctx, L->ent);
     rs__free(ctx, L->hpp);
@@ -1231,30 +1280,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
-    /* the painter's copy: compact pieces, boxes and one pool of half-planes */
-    size_t nhpp = 0;
-    for (size_t k = 0; k < L->npc; k++) nhpp += L->pc[k].nhp;
-    if (nhpp > UINT32_MAX) { res = RS_ERR_LIMIT; goto fail; }
-    L->pp = rs__alloc_array(ctx, L->npc ? L->npc : 1, sizeof *L->pp);
-    L->hpp = rs__alloc_array(ctx, nhpp ? 4 * nhpp : 1, sizeof *L->hpp);
-    if (!L->pp || !L->hpp) { res = RS_ERR_NOMEM; goto fail; }
-    for (size_t k = 0, h = 0; k < L->npc; k++) {
-        const ls_piece *P = &L->pc[k];
-        ls_ppc *Q = &L->pp[k];
-        Q->ox = P->ox, Q->oy = P->oy, Q->ux = P->ux, Q->uy = P->uy, Q->a = P->a, Q->b = P->b, Q->su = P->su;
-        Q->uin0 = P->uin0, Q->uin1 = P->uin1, Q->st_lo = P->st_lo, Q->st_e = P->st_e, Q->st_q = P->st_q;
-        Q->st_h = P->st_h, Q->s0 = P->s0, Q->ru0 = P->ru0, Q->ru1 = P->ru1, Q->rv0 = P->rv0, Q->rv1 = P->rv1;
-        Q->r0 = P->r0, Q->r1 = P->r1, Q->wx0 = P->wx0, Q->wy0 = P->wy0, Q->wx1 = P->wx1, Q->wy1 = P->wy1;
-        Q->warea = P->warea, Q->nhp = P->nhp, Q->kind = P->kind, Q->band = P->band, Q->dashed = P->dashed;
-        Q->hp0 = (uint32_t)h;
-        double du = P->ux * L->pixel, dv = P->uy * L->pixel; /* 0 for a subnormal pixel */
-        Q->iku = fabs(P->ux) < 1e-12 || du == 0 ? 0 : 1 / du;
-        Q->ikv = fabs(P->uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
-        Q->cbase = P->ox / L->pixel - 0.5;
-        for (uint32_t j = 0; j < P->nhp; j++, h++) {
-            memcpy(L->hpp + 4 * h, P->hp[j], 3 * sizeof *L->hpp);
-            L->hpp[4 * h + 3] = P->sup[j];
-        }
+    /* the painter's records were made piece by piece: hand back the spare room */
+    size_t nhpp = L->nhpp;
+    if (L->npc && L->npc < L->cap) {
+        ls_ppc *np = rs__realloc(ctx, L->pp, L->npc * sizeof *L->pp);
+        if (np) L->pp = np;
+    }
+    if (nhpp && nhpp < L->hcap) {
+        double *nh = rs__realloc(ctx, L->hpp, 4 * nhpp * sizeof *L->hpp);
+        if (nh) L->hpp = nh;
     }
     for (size_t k = 0; k < L->npc; k++) piece_cells(L, (uint32_t)k, 0);
     uint64_t lim = UINT32_MAX - 1u;
@@ -1266,15 +1300,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
     if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t e = 0; e < total; e++) {
-        const ls_piece *P = &L->pc[L->ids[e]];
+        const ls_pbuild *P = &L->pb[L->ids[e]];
         ls_pbox *B = &L->ent[e];
         B->gx0 = P->gx0, B->gx1 = P->gx1, B->gy0 = P->gy0, B->gy1 = P->gy1;
         B->id = L->ids[e];
-        B->band = P->band;
+        B->band = L->pp[L->ids[e]].band;
     }
-    rs__free(ctx, L->pc); /* built */
+    rs__free(ctx, L->pb); /* built */
     rs__free(ctx, L->ids);
-    L->pc = NULL;
+    L->pb = NULL;
     L->ids = NULL;
     L->cap = 0;
     L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ent + L->npc * sizeof *L->pp +
