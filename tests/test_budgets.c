@@ -12,7 +12,10 @@
  *   chains of all types together stay within rs_limits.max_atlas_bytes,
  *   checked before they are made.
  * - Surface images: the images the styles use, together, stay within
- *   rs_limits.max_texture_pixels. */
+ *   rs_limits.max_texture_pixels.
+ * - Markings: marks alternating between roads make each road's local
+ *   points once (counted in allocations); the points the marks' stretches
+ *   copy count together against rs_limits.max_points. */
 #include "roadsplat.h"
 #include "harness.h"
 #include "roadfield.h"
@@ -147,11 +150,12 @@ static void test_field_budget(void)
 /* --- atlas ----------------------------------------------------------------------- */
 
 /* An allocator that refuses to hold more than `cap` bytes at once. */
-typedef struct cap_alloc { size_t cap, live, peak; } cap_alloc;
+typedef struct cap_alloc { size_t cap, live, peak, calls; } cap_alloc;
 
 static void *cap_malloc(void *user, size_t n)
 {
     cap_alloc *a = user;
+    a->calls++;
     if (n > a->cap - a->live) return NULL;
     size_t *p = malloc(n + sizeof(size_t) * 2);
     if (!p) return NULL;
@@ -204,7 +208,7 @@ static rs_result atlas_capped(const rs_image *img, const char *index, uint64_t b
                               size_t *count, char *msg, size_t cap)
 {
     ca->cap = (size_t)64 << 20;
-    ca->live = ca->peak = 0;
+    ca->live = ca->peak = ca->calls = 0;
     rs_allocator al = { cap_malloc, cap_realloc, cap_free, ca };
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
@@ -254,6 +258,71 @@ static void test_atlas(void)
     CHECK(rs_atlas_create(ctx, &img, distinct, sizeof distinct - 1, &a) == RS_OK && rs_atlas_count(a) == 4);
     rs_atlas_free(ctx, a);
     free(px);
+}
+
+/* --- markings ----------------------------------------------------------------------- */
+
+/* Two parallel roads of n points over 100 m (y = 10 and 20), `marks`
+ * explicit arrows of length `len` (0: the type's) at s = 50 alternating
+ * between them; the grid build on a context with max_points = budget (0:
+ * default) whose allocator counts its calls (*calls). */
+static rs_result marked_build(size_t n, size_t marks, double len, uint64_t budget, size_t *calls, char *msg,
+                              size_t cap)
+{
+    static float z[129 * 33];
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_roads *R = NULL;
+    if (!sc_road_crowded(&sc, 10, 10, 100, n, 6) && !sc_road_crowded(&sc, 10, 20, 100, n, 6)) R = ss_roads(ctx, &sc);
+    sc_scene_free(&sc);
+    for (size_t i = 0; R && i < marks; i++) {
+        rs_mark m;
+        memset(&m, 0, sizeof m);
+        m.type = "arrow_straight";
+        m.road = i % 2;
+        m.s = 50;
+        m.length = len;
+        if (rs_roads_add_mark(ctx, R, &m)) { rs_roads_free(ctx, R); R = NULL; }
+    }
+    cap_alloc ca = { (size_t)1 << 30, 0, 0, 0 };
+    rs_allocator al = { cap_malloc, cap_realloc, cap_free, &ca };
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_points = budget;
+    rs_ctx *c = NULL;
+    rs_dem *d = NULL;
+    rs_result r = R && rs_ctx_create(&al, &lim, &c) == RS_OK ? rs_dem_create(c, 129, 33, z, &d) : RS_ERR_NOMEM;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    o.style.disable = 1;
+    rs_road_grid *g = NULL;
+    size_t before = ca.calls;
+    if (!r) r = rs_road_grid_build(c, d, R, &o, &g);
+    *calls = ca.calls - before;
+    snprintf(msg, cap, "%s", c ? rs_ctx_message(c) : "");
+    rs_road_grid_free(c, g);
+    rs_dem_free(c, d);
+    rs_ctx_free(c);
+    rs_roads_free(ctx, R);
+    return r;
+}
+
+static void test_markings(void)
+{
+    /* 400 marks alternating between two roads of 5000 points: each road's
+     * local points are made once (they were remade at every switch: 5000
+     * points each time, marks x points in all) */
+    size_t few = 0, many = 0;
+    char m[512];
+    CHECK(marked_build(5000, 2, 0, 0, &few, m, sizeof m) == RS_OK);
+    CHECKF(marked_build(5000, 400, 0, 0, &many, m, sizeof m) == RS_OK, "%s", m);
+    CHECKF(many < few + 100, "allocations: %zu for 2 marks, %zu for 400", few, many);
+    /* the marks' stretches count together against max_points: 40 marks of
+     * 50 m over 2 x 5000 points (~100,000 stretch points) pass 50,000 */
+    CHECK_EQ_INT(marked_build(5000, 40, 50, 50000, &many, m, sizeof m), RS_ERR_LIMIT);
+    CHECKF(strstr(m, "stretches") && strstr(m, "rs_limits.max_points"), "message: %s", m);
+    CHECKF(marked_build(5000, 40, 50, 200000, &many, m, sizeof m) == RS_OK, "%s", m);
 }
 
 /* --- surface images ---------------------------------------------------------------- */
@@ -311,6 +380,7 @@ int main(void)
     test_field_work();
     test_field_budget();
     test_atlas();
+    test_markings();
     test_surface_image_total();
     rs_ctx_free(ctx);
     return th_finish("test_budgets");
