@@ -738,6 +738,10 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     return m;
 }
 
+/* Work units of one cut_piece call in push_cut's budget (rs_limits.max_field_work):
+ * measured against a list step, so that the budget bounds time. */
+#define CUT_WORK 32
+
 /* First index in [lo, hi) of the ascending ids whose value is >= v. */
 static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, uint32_t v)
 {
@@ -794,6 +798,7 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     ls_piece next[QMAX];
                     int full = 0;
                     for (uint32_t a = 0; a < nq; a++) {
+                        J->work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
                         int m = cut_piece(&q[a], Q, tmp);
                         if (m < 0) {
                             if (nn < QMAX) next[nn++] = q[a];

@@ -7,7 +7,8 @@
  *   message naming the budget.
  * - Line symbols: a styled road of many tiny segments builds within a
  *   work budget linear in its points (each piece steps over its own road's
- *   surfaces in one binary search).
+ *   surfaces in one binary search); many roads crossing in one place pass
+ *   the budget (their cuts grow with the square of the roads).
  * - Atlas (row 8): types with the same rectangle share one mip chain; the
  *   chains of all types together stay within rs_limits.max_atlas_bytes,
  *   checked before they are made.
@@ -145,6 +146,44 @@ static void test_field_budget(void)
     size_t n = 20000;
     rs_result r = crowded_build(n, "motorway", 64 * (uint64_t)n, m, sizeof m);
     CHECKF(r == RS_OK, "%s", m);
+}
+
+/* Many roads through one place: n motorways (several lines each) crossing
+ * at the centre of a 65 x 65 DEM. Their lines cut each other n^2 times;
+ * the cuts count against max_field_work (a clip as CUT_WORK steps), so a
+ * star of 200 passes a budget of 10^6 (RS_ERR_LIMIT naming the budget)
+ * and builds with the default. */
+static void test_star(void)
+{
+    sc_scene sc;
+    CHECK(sc_scene_init(&sc, 65, 65, 1) == 0);
+    for (int i = 0; i < 200; i++) sc_road_straight(&sc, 3.14159265358979 * i / 200, 60, 8);
+    rs_roads *R = ss_roads(ctx, &sc);
+    int bad = 0;
+    for (size_t i = 0; R && i < rs_roads_count(R); i++) bad |= rs_roads_set_attr(ctx, R, i, "class", "motorway") != 0;
+    CHECK(!bad);
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_field_work = 1000000;
+    rs_ctx *c = NULL;
+    rs_dem *d = NULL;
+    CHECK(R && rs_ctx_create(NULL, &lim, &c) == RS_OK && rs_dem_create(c, 65, 65, sc.z, &d) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    rs_road_grid *g = NULL;
+    if (d) {
+        CHECK_EQ_INT(rs_road_grid_build(c, d, R, &o, &g), RS_ERR_LIMIT);
+        const char *m = rs_ctx_message(c);
+        CHECKF(strstr(m, "line symbols") && strstr(m, "rs_limits.max_field_work"), "message: %s", m);
+        CHECK(g == NULL);
+        CHECKF(rs_road_grid_build(ctx, d, R, &o, &g) == RS_OK, "%s", rs_ctx_message(ctx));
+        rs_road_grid_free(ctx, g);
+    }
+    rs_dem_free(c, d);
+    rs_ctx_free(c);
+    rs_roads_free(ctx, R);
+    sc_scene_free(&sc);
 }
 
 /* --- atlas ----------------------------------------------------------------------- */
@@ -379,6 +418,7 @@ int main(void)
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_field_work();
     test_field_budget();
+    test_star();
     test_atlas();
     test_markings();
     test_surface_image_total();
