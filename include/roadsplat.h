@@ -82,9 +82,10 @@ typedef struct rs_allocator {
 typedef struct rs_limits {
     uint32_t max_dem_side;     /* 16384: max DEM width or height (samples)  */
     uint64_t max_pixels;       /* 2^28: max output pixels (splat texture)   */
-    uint64_t max_points;       /* 10^7: max road points over all roads, and
-                                  over the stretches of road all markings
-                                  copy together                            */
+    uint64_t max_points;       /* 10^7: max road points over all roads; also
+                                  the most markings (explicit and automatic)
+                                  and road points their stretches copy, all
+                                  together                                 */
     uint32_t max_line_length;  /* 65536: max bytes in one road-file line    */
     uint64_t max_road_cells;   /* 2^32: max road-grid cells (W*K x H*K)     */
     uint32_t max_pool_nodes;   /* 2^26: max ROAM node pool size             */

@@ -16,7 +16,7 @@
  *   rs_limits.max_texture_pixels.
  * - Markings: marks alternating between roads make each road's local
  *   points once (counted in allocations); the points the marks' stretches
- *   copy count together against rs_limits.max_points. */
+ *   copy, and the markings themselves, count against rs_limits.max_points. */
 #include "roadsplat.h"
 #include "harness.h"
 #include "roadfield.h"
@@ -362,6 +362,9 @@ static void test_markings(void)
     CHECK_EQ_INT(marked_build(5000, 40, 50, 50000, &many, m, sizeof m), RS_ERR_LIMIT);
     CHECKF(strstr(m, "stretches") && strstr(m, "rs_limits.max_points"), "message: %s", m);
     CHECKF(marked_build(5000, 40, 50, 200000, &many, m, sizeof m) == RS_OK, "%s", m);
+    /* and the markings themselves: 300 on roads of 2 x 100 points, budget 250 */
+    CHECK_EQ_INT(marked_build(100, 300, 0, 250, &many, m, sizeof m), RS_ERR_LIMIT);
+    CHECKF(strstr(m, "more than 250 markings") && strstr(m, "rs_limits.max_points"), "message: %s", m);
 }
 
 /* --- surface images ---------------------------------------------------------------- */
