@@ -26,22 +26,6 @@
 
 static rs_ctx *ctx;
 
-/* One straight road of n points over `len` metres at y = 16 (tiny
- * segments that all share the same index cells), width 6 m, of class
- * `cls` (NULL: unstyled). */
-static rs_roads *line_road(rs_ctx *c, size_t n, double len, const char *cls)
-{
-    sc_scene sc;
-    memset(&sc, 0, sizeof sc);
-    rs_roads *R = sc_road_crowded(&sc, 10, 16, len, n, 6) ? NULL : ss_roads(c, &sc);
-    sc_scene_free(&sc);
-    if (R && cls && rs_roads_set_attr(c, R, 0, "class", cls)) {
-        rs_roads_free(c, R);
-        R = NULL;
-    }
-    return R;
-}
-
 static rs__roadfield_params field_params(void)
 {
     rs__roadfield_params p;
@@ -72,7 +56,7 @@ static void test_field_work(void)
     double per[2];
     size_t ns[2] = { 4000, 16000 };
     for (int i = 0; i < 2; i++) {
-        rs_roads *R = line_road(ctx, ns[i], 100, NULL);
+        rs_roads *R = ss_crowded_road(ctx, ns[i], 100, NULL);
         rs__roadfield_stats st;
         per[i] = R ? work_per_segment(R, &st) : -1;
         CHECKF(per[i] > 0 && per[i] < 400, "%zu points: %.1f work units per segment (longest list %zu)", ns[i],
@@ -101,7 +85,7 @@ static void test_field_work(void)
     rs_roads_free(ctx, R);
 }
 
-/* The whole grid build of line_road(n, 100 m, cls) on a 129 x 33 DEM at
+/* The whole grid build of ss_crowded_road(n, 100 m, cls) on a 129 x 33 DEM at
  * 4 texels, on a context with max_field_work = budget (0: default); its
  * message into msg. A failure that leaves a grid is reported as
  * RS_ERR_INVALID_ARG (*out must be cleared). */
@@ -114,7 +98,7 @@ static rs_result crowded_build(size_t n, const char *cls, uint64_t budget, char 
     rs_ctx *c = NULL;
     if (rs_ctx_create(NULL, &lim, &c) != RS_OK) return RS_ERR_NOMEM;
     rs_dem *d = NULL;
-    rs_roads *R = line_road(c, n, 100, cls);
+    rs_roads *R = ss_crowded_road(c, n, 100, cls);
     rs_result r = R ? rs_dem_create(c, 129, 33, z, &d) : RS_ERR_NOMEM;
     rs_splat_options o;
     memset(&o, 0, sizeof o);

@@ -18,19 +18,6 @@
 #define W 129
 #define H 33
 
-static rs_roads *crowded(rs_ctx *ctx, size_t n, const char *cls)
-{
-    sc_scene sc;
-    memset(&sc, 0, sizeof sc);
-    rs_roads *R = sc_road_crowded(&sc, 10, 16, 100, n, 6) ? NULL : ss_roads(ctx, &sc);
-    sc_scene_free(&sc);
-    if (R && cls && rs_roads_set_attr(ctx, R, 0, "class", cls)) {
-        rs_roads_free(ctx, R);
-        R = NULL;
-    }
-    return R;
-}
-
 /* Process CPU time, ms: the builds and the splat run on one thread, and
  * on the shared machine the wall clock swings with the load. */
 static double cpu_ms(void)
@@ -107,7 +94,7 @@ int main(int argc, char **argv)
     size_t ns[3] = { 10000, 100000, 1000000 };
     double plain[3], styled[3];
     for (int i = 0; i < 3; i++) {
-        rs_roads *R = crowded(ctx, ns[i], NULL), *S = crowded(ctx, ns[i], "residential");
+        rs_roads *R = ss_crowded_road(ctx, ns[i], 100, NULL), *S = ss_crowded_road(ctx, ns[i], 100, "residential");
         rs__roadfield_stats st;
         memset(&st, 0, sizeof st);
         if (!R || !S) return 1;
@@ -128,7 +115,7 @@ int main(int argc, char **argv)
     size_t ms_n[3] = { 10000, 20000, 40000 };
     double scan_ms[3], tree_ms[3];
     for (int i = 0; i < 3; i++) {
-        rs_roads *R = crowded(ctx, ms_n[i], NULL);
+        rs_roads *R = ss_crowded_road(ctx, ms_n[i], 100, NULL);
         rs__roadfield_stats ss, tt;
         memset(&ss, 0, sizeof ss);
         memset(&tt, 0, sizeof tt);
@@ -151,7 +138,7 @@ int main(int argc, char **argv)
     uint8_t *rgba = malloc((size_t)w * h * 4);
     size_t sp_n[2] = { 100000, 1000000 };
     for (int i = 0; i < 2 && rgba; i++) {
-        rs_roads *R = crowded(ctx, sp_n[i], NULL);
+        rs_roads *R = ss_crowded_road(ctx, sp_n[i], 100, NULL);
         rs_road_grid *g = NULL;
         if (!R || rs_road_grid_build(ctx, d, R, &o, &g)) return 1;
         double t0 = cpu_ms();
