@@ -283,6 +283,41 @@ static void test_atlas(void)
     free(px);
 }
 
+/* The GPU export keeps the sharing: types on one rectangle point to the
+ * same level records, whose texels are exported once. */
+static void test_atlas_gpu(void)
+{
+    uint8_t *px = atlas_image(64);
+    rs_image img = { 64, 64, px };
+    static const char same[] = "a 0 0 64 64 3 1\nb 0 0 64 64 3 1\nc 0 0 64 64 3 1\nd 0 0 32 64 3 1\n";
+    rs_atlas *a = NULL;
+    CHECK(px && rs_atlas_create(ctx, &img, same, sizeof same - 1, &a) == RS_OK);
+    float z[9 * 9] = { 0 };
+    rs_dem *d = NULL;
+    rs_roads *R = ss_crowded_road(ctx, 2, 5, NULL);
+    rs_mark mk;
+    memset(&mk, 0, sizeof mk);
+    mk.type = "b";
+    mk.s = 2;
+    CHECK(R && rs_roads_add_mark(ctx, R, &mk) == RS_OK && rs_dem_create(ctx, 9, 9, z, &d) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.markings.atlas = a;
+    rs_gpu_scene *gs = NULL;
+    CHECK(a && d && rs_gpu_scene_create(ctx, d, R, &o, NULL, &gs) == RS_OK);
+    if (gs) {
+        /* 64 x 64 and 32 x 64 chains: 5461 + 2731 texels (levels down to 1 x 1) */
+        CHECK_EQ_INT(gs->ntypes, 4);
+        CHECK_EQ_INT(gs->atlas_texels, 5461 + 2731);
+        CHECK(gs->types[2] == gs->types[0] && gs->types[4] == gs->types[0] && gs->types[6] != gs->types[0]);
+    }
+    rs_gpu_scene_free(ctx, gs);
+    rs_dem_free(ctx, d);
+    rs_roads_free(ctx, R);
+    rs_atlas_free(ctx, a);
+    free(px);
+}
+
 /* --- markings ----------------------------------------------------------------------- */
 
 /* Two parallel roads of n points over 100 m (y = 10 and 20), `marks`
@@ -407,6 +442,7 @@ int main(void)
     test_field_budget();
     test_star();
     test_atlas();
+    test_atlas_gpu();
     test_markings();
     test_surface_image_total();
     rs_ctx_free(ctx);
