@@ -15,6 +15,15 @@ check "over --max-field-work: exit 1" test $? = 1
 check "one line" test "$(wc -l <"$T/err")" = 1
 check "names the budget and the option" grep -q "rs_limits.max_field_work); --max-field-work N raises it" "$T/err"
 check "no output" test ! -e "$T/w.png"
+# the other commands that take the splat options
+"$BIN" tiles --quiet --texels 2 --max-field-work 1000 "$T/dem.pgm" "$T/crowd.txt" "$T/tiles" 2>"$T/err"
+check "tiles: exit 1 over the budget" test $? = 1
+check "tiles: names the option" grep -q "; --max-field-work N raises it" "$T/err"
+check "tiles: no output" test ! -e "$T/tiles/metadata.json"
+"$BIN" render --texels 2 --max-field-work 1000 "$T/dem.pgm" "$T/crowd.txt" "$T/r.png" 2>"$T/err"
+check "render: exit 1 over the budget" test $? = 1
+check "render: names the option" grep -q "; --max-field-work N raises it" "$T/err"
+check "render: no output" test ! -e "$T/r.png"
 # an atlas whose types need 2 x ~1.4 MB of mip levels, over 2 MB; the same
 # rectangle twice is shared and fits
 printf 'P6\n512 512\n255\n' >"$T/atlas.ppm"
