@@ -208,10 +208,17 @@ typedef struct cli_splat_args {
     int auto_pixel;            /* the main command: without --texels/--pixel-size, 1 m pixels on cells over 8 m
                                   (render and tiles keep 8 texels per cell: they hold more per pixel) */
     char pixel_note[240];      /* the pixel size chosen, when worth saying: printed once the run is sure to go on */
+    uint64_t max_field_work;   /* --max-field-work N: rs_limits.max_field_work (0 = default) */
+    uint64_t max_atlas_bytes;  /* --max-atlas-mb N: rs_limits.max_atlas_bytes (0 = default) */
 } cli_splat_args;
 /* Most pixels of one image the CLI writes or renders (the library's default
  * limit); a window of a larger virtual image is fine (docs/gis.md). */
 #define CLI_MAX_IMAGE_PIXELS ((uint64_t)1 << 28)
+/* The library limits the splat options ask for (defaults elsewhere). */
+void cli_splat_limits(const cli_splat_args *s, rs_limits *lim);
+/* The context's last message (or the result's text), and when it names a
+ * budget (rs_limits field) with an option here, that option: into buf. */
+const char *cli_lib_message(const rs_ctx *ctx, rs_result r, char *buf, size_t cap);
 /* Splits an argument "--name=value" into name (NUL-terminated, cut to
  * CLI_OPT_NAME - 1 bytes) and the inline value (NULL without '='). */
 #define CLI_OPT_NAME 64

@@ -55,6 +55,9 @@ static const char usage_text[] =
     "  --no-auto-markings    only the road file's `mark` lines (no automatic\n"
     "                        stop lines, arrows, zebras)\n"
     "  --no-markings         no road markings at all\n"
+    "  --max-field-work N    budget of the road index build for segments crowding\n"
+    "                        one place (default 2^30 steps; docs/ROBUSTNESS.md)\n"
+    "  --max-atlas-mb N      budget of the marking atlas's mip levels (default 256)\n"
     "  --origin X,Y          world coordinates of DEM sample (0,0); road points are\n"
     "                        in that world frame (e.g. UTM metres; default 0,0)\n"
     "  --window X,Y,W,H      render only that rectangle of the output (pixels)\n"
@@ -482,6 +485,7 @@ static int splat_main(int argc, char **argv)
      * (CLI_MAX_IMAGE_PIXELS, below), so a close-up of a big map works */
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
+    cli_splat_limits(&a.s, &lim);
     lim.max_pixels = (uint64_t)1 << 52;
     rs_result r = rs_ctx_create(ba ? &hook : NULL, &lim, &ctx);
     if (r) { cli_bigalloc_destroy(ba); cli_error("%s", rs_strerror(r)); free(wf_path); free(prj_path); free(aux_path); return 1; }

@@ -300,7 +300,8 @@ static int splat_plain(rs_ctx *ctx, const cli_splat_input *in, const render_args
     rs_result r = rs_road_grid_build(ctx, in->dem, roads, &o, &grid);
     if (!r) r = rs_splatter_create(ctx, in->dem, NULL, grid, &o, &sp);
     if (r) {
-        cli_error("render: %s: %s", what, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+        char m[512];
+        cli_error("render: %s: %s", what, cli_lib_message(ctx, r, m, sizeof m));
         goto done;
     }
     *out = malloc((size_t)tw * th * 4);
@@ -387,7 +388,10 @@ int cli_render_main(int argc, char **argv)
     const cli_file_role ins[4] = { { a.dem, "DEM" }, { a.roads, "ROADS" }, { a.s.terrain_tex, "--terrain-texture" },
                                    { a.s.road_tex, "--road-texture" } };
     if (cli_check_outputs(outs, 2, ins, 4)) return 1;
-    rs_result r = rs_ctx_create(NULL, NULL, &ctx);
+    rs_limits budgets;
+    memset(&budgets, 0, sizeof budgets);
+    cli_splat_limits(&a.s, &budgets);
+    rs_result r = rs_ctx_create(NULL, &budgets, &ctx);
     if (r) { cli_error("%s", rs_strerror(r)); return 1; }
     double cs = a.s.frame.cell_size > 0 ? a.s.frame.cell_size : 1, zs = a.s.frame.z_scale > 0 ? a.s.frame.z_scale : 1;
     if (cli_out_open(&out, a.out) || (a.stats && cli_out_open(&so, a.stats))) goto done;

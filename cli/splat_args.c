@@ -5,6 +5,26 @@
 #include <stdlib.h>
 #include <string.h>
 
+void cli_splat_limits(const cli_splat_args *s, rs_limits *lim)
+{
+    lim->max_field_work = s->max_field_work;
+    lim->max_atlas_bytes = s->max_atlas_bytes;
+}
+
+const char *cli_lib_message(const rs_ctx *ctx, rs_result r, char *buf, size_t cap)
+{
+    static const char *const budget[2][2] = { { "rs_limits.max_field_work", "--max-field-work N" },
+                                             { "rs_limits.max_atlas_bytes", "--max-atlas-mb N" } };
+    const char *m = rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r);
+    for (int i = 0; i < 2; i++)
+        if (strstr(m, budget[i][0])) {
+            snprintf(buf, cap, "%s; %s raises it", m, budget[i][1]);
+            return buf;
+        }
+    snprintf(buf, cap, "%s", m);
+    return buf;
+}
+
 const char *cli_option_split(const char *arg, char name[CLI_OPT_NAME])
 {
     const char *eq = strchr(arg, '=');
@@ -40,7 +60,8 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
                                          "--road-texture", "--texture-scale", "--origin", "--edges", "--threads",
                                          "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
                                          "--atlas-index", "--no-auto-markings", "--no-markings", "--layer", "--where",
-                                         "--strict", "--pixel-size", "--color-relief" };
+                                         "--strict", "--pixel-size", "--color-relief", "--max-field-work",
+                                         "--max-atlas-mb" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
@@ -62,7 +83,18 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
     rs_dem_frame *fr = &s->frame;
     double d, xy[2];
     uint32_t u;
-    if (!strcmp(name, "--layer")) {
+    if (!strcmp(name, "--max-field-work") || !strcmp(name, "--max-atlas-mb")) {
+        /* budgets (docs/ROBUSTNESS.md, issue 26): whole numbers >= 1 */
+        if (cli_parse_double(name, v, &d)) return 1;
+        int mb = name[6] == 'a';
+        double top = mb ? 1048576.0 : 1e15;
+        if (!(d >= 1 && d <= top && d == floor(d))) {
+            cli_error("%s: '%s' must be a whole number in [1, %.0f]", name, v, top);
+            return 1;
+        }
+        if (mb) s->max_atlas_bytes = (uint64_t)d << 20;
+        else s->max_field_work = (uint64_t)d;
+    } else if (!strcmp(name, "--layer")) {
         s->layer = v;
     } else if (!strcmp(name, "--where")) {
         s->where = v;
@@ -510,8 +542,9 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
         r = rs_atlas_create(ctx, &img, text, size, &in->atlas);
         free(text);
         if (r) {
-            cli_error("%s: %s", r == RS_ERR_PARSE ? s->atlas_index_path : s->atlas_path,
-                      rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+            char m[512];
+            cli_error("%s: %s", r == RS_ERR_PARSE || r == RS_ERR_LIMIT ? s->atlas_index_path : s->atlas_path,
+                      cli_lib_message(ctx, r, m, sizeof m));
             return 1;
         }
         s->o.markings.atlas = in->atlas;

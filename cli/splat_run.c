@@ -35,7 +35,8 @@ int cli_splatter_prepare(rs_ctx *ctx, const cli_splat_input *in, const char *roa
     o.progress = NULL;
     o.progress_user = NULL;
     if (!r) r = rs_splatter_create(ctx, in->dem, NULL, *grid, &o, out);
-    if (r) cli_error("%s: %s", roads_path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r));
+    char m[512];
+    if (r) cli_error("%s: %s", roads_path, cli_lib_message(ctx, r, m, sizeof m));
     return r != RS_OK;
 }
 

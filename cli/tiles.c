@@ -1479,6 +1479,7 @@ int cli_tiles_main(int argc, char **argv)
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
     lim.max_pixels = (uint64_t)1 << 52;
+    cli_splat_limits(&a.s, &lim);
     rs_result res = rs_ctx_create(NULL, &lim, &ctx);
     if (res) {
         cli_error("%s", rs_strerror(res));

@@ -86,12 +86,25 @@ typedef struct rs_allocator {
 typedef struct rs_limits {
     uint32_t max_dem_side;     /* 16384: max DEM width or height (samples)  */
     uint64_t max_pixels;       /* 2^28: max output pixels (splat texture)   */
-    uint64_t max_points;       /* 10^7: max road points over all roads      */
+    uint64_t max_points;       /* 10^7: max road points over all roads; also
+                                  the most markings (explicit and automatic)
+                                  and road points their stretches copy, all
+                                  together                                 */
     uint32_t max_line_length;  /* 65536: max bytes in one road-file line    */
     uint64_t max_road_cells;   /* 2^32: max road-grid cells (W*K x H*K)     */
     uint32_t max_pool_nodes;   /* 2^26: max ROAM node pool size             */
     uint64_t max_texture_pixels; /* 2^26: max pixels of a terrain or road
                                     texture (8192 x 8192; 256 MiB as RGBA8) */
+    uint64_t max_field_work;   /* 2^30: steps the grid build may spend comparing
+                                  road segments that share index cells, for the
+                                  road field and for the line symbols' junction
+                                  cuts each (docs/roadfield.md; the benchmark
+                                  city takes 4x10^4, 10^6 points on one 100 m
+                                  road 4.4x10^7); RS_ERR_LIMIT beyond */
+    uint64_t max_atlas_bytes;  /* 2^28: bytes of a marking atlas's mip levels,
+                                  all types together (16 bytes a texel, ~4/3
+                                  of the types' rectangles; types with the
+                                  same rectangle share them) */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;

@@ -10,7 +10,7 @@ static void free_types(rs_ctx *ctx, rs__atlas_type *t, size_t n)
 {
     if (!t) return;
     for (size_t i = 0; i < n; i++)
-        for (uint32_t l = 0; l < t[i].nlev; l++) rs__free(ctx, t[i].lev[l].px);
+        for (uint32_t l = 0; l < t[i].nlev && !t[i].shared; l++) rs__free(ctx, t[i].lev[l].px);
     rs__free(ctx, t);
 }
 
@@ -42,6 +42,19 @@ long rs_atlas_find(const rs_atlas *a, const char *name)
     for (size_t i = 0; i < a->n; i++)
         if (strcmp(a->t[i].name, name) == 0) return (long)i;
     return -1;
+}
+
+/* Bytes of the mip chain of a w x h rectangle (as build_levels makes it). */
+static uint64_t chain_bytes(uint32_t w, uint32_t h)
+{
+    uint64_t b = 0;
+    for (uint32_t l = 0; l < RS__ATLAS_MAX_LEVELS; l++) {
+        b += (uint64_t)w * h * 4 * sizeof(float);
+        if (w == 1 && h == 1) break;
+        w = (w + 1) / 2;
+        h = (h + 1) / 2;
+    }
+    return b;
 }
 
 /* Level 0 from the image, premultiplied; then halving (odd sizes padded
@@ -210,12 +223,33 @@ static rs_result create(rs_ctx *ctx, const rs_image *img, const char *index, siz
             a->t = t;
             cap = nc;
         }
+        /* A rectangle given before shares its mip chain; a new one must
+         * fit the budget for all types together before it is made. */
+        uint32_t rx = (uint32_t)v[0], ry = (uint32_t)v[1], rw = (uint32_t)v[2], rh = (uint32_t)v[3];
+        size_t same = a->n;
+        for (size_t i = 0; i < a->n && same == a->n; i++)
+            if (a->t[i].x == rx && a->t[i].y == ry && a->t[i].lev[0].w == rw && a->t[i].lev[0].h == rh) same = i;
+        uint64_t need = same < a->n ? 0 : chain_bytes(rw, rh);
+        if (!builtin && need > ctx->limits.max_atlas_bytes - a->bytes) {
+            r = rs__fail(ctx, RS_ERR_LIMIT,
+                         "atlas index line %llu: type '%s' (%ux%u pixels) brings the mip levels of all types to "
+                         "%llu bytes, over the atlas budget of %llu bytes (rs_limits.max_atlas_bytes)",
+                         line, show(b1, sizeof b1, tok[0], tn[0]), rw, rh, (unsigned long long)(a->bytes + need),
+                         (unsigned long long)ctx->limits.max_atlas_bytes);
+            break;
+        }
         rs__atlas_type *t = &a->t[a->n++];
         memset(t, 0, sizeof *t);
         memcpy(t->name, tok[0], tn[0]);
         t->length = v[4];
         t->width = v[5];
-        if (build_levels(ctx, t, img, (uint32_t)v[0], (uint32_t)v[1], (uint32_t)v[2], (uint32_t)v[3], &a->bytes))
+        t->x = rx;
+        t->y = ry;
+        if (same < a->n - 1) {
+            memcpy(t->lev, a->t[same].lev, sizeof t->lev);
+            t->nlev = a->t[same].nlev;
+            t->shared = 1;
+        } else if (build_levels(ctx, t, img, rx, ry, rw, rh, &a->bytes))
             r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the atlas mip levels");
     }
     if (!r && a->n == 0) r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: the index names no marking type", line);

@@ -16,6 +16,8 @@ typedef struct rs__atlas_type {
     double length, width;   /* metres along, across */
     uint32_t nlev;
     rs__atlas_level lev[RS__ATLAS_MAX_LEVELS]; /* level l covers 2^l level-0 texels per texel */
+    uint32_t x, y;          /* the rectangle's corner in the atlas image */
+    int shared;             /* 1: lev[] belongs to an earlier type with the same rectangle */
 } rs__atlas_type;
 
 struct rs_atlas {

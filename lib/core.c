@@ -49,6 +49,8 @@ static void fill_limits(rs_limits *l)
     if (!l->max_road_cells) l->max_road_cells = (uint64_t)1 << 32;
     if (!l->max_pool_nodes) l->max_pool_nodes = (uint32_t)1 << 26;
     if (!l->max_texture_pixels) l->max_texture_pixels = (uint64_t)1 << 26;
+    if (!l->max_field_work) l->max_field_work = (uint64_t)1 << 30;
+    if (!l->max_atlas_bytes) l->max_atlas_bytes = (uint64_t)1 << 28;
 }
 
 rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out)

@@ -314,6 +314,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         if (!g->mark || !g->types) { r = RS_ERR_NOMEM; goto fail; }
         size_t nlev = 0, ntex = 0;
         for (size_t t = 0; t < atlas->n; t++) {
+            if (atlas->t[t].shared) continue; /* the same rectangle as an earlier type: its levels */
             nlev += atlas->t[t].nlev;
             for (uint32_t l = 0; l < atlas->t[t].nlev; l++) ntex += (size_t)atlas->t[t].lev[l].w * atlas->t[t].lev[l].h;
         }
@@ -322,6 +323,13 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         if (!g->levels || !g->atlas_px) { r = RS_ERR_NOMEM; goto fail; }
         for (size_t t = 0, li = 0, tx = 0; t < atlas->n; t++) {
             const rs__atlas_type *ty = &atlas->t[t];
+            if (ty->shared) {
+                size_t own = 0;
+                while (atlas->t[own].shared || atlas->t[own].lev[0].px != ty->lev[0].px) own++;
+                memcpy(g->types + RS_GPU_TYPE_INTS * t, g->types + RS_GPU_TYPE_INTS * own,
+                       RS_GPU_TYPE_INTS * sizeof *g->types);
+                continue;
+            }
             g->types[RS_GPU_TYPE_INTS * t] = (uint32_t)li;
             g->types[RS_GPU_TYPE_INTS * t + 1] = ty->nlev;
             for (uint32_t l = 0; l < ty->nlev; l++, li++) {

@@ -74,6 +74,14 @@ typedef struct ls_ppc {
 
 #define HPP(L, P, k) ((L)->hpp + 4 * ((size_t)(P)->hp0 + (k)))
 
+/* What the index build reads of a piece besides its ls_ppc (kept while
+ * building only; a whole ls_piece per piece was ~700 bytes). */
+typedef struct ls_pbuild {
+    double len;                /* slab: u range [0, len] */
+    double x0, y0, x1, y1;     /* local box, grown by the pixel margin */
+    double gx0, gx1, gy0, gy1; /* pixels to visit */
+} ls_pbuild;
+
 typedef struct ls_band {
     float rgba[4];
     uint32_t dash0, ndash; /* into L->dash */
@@ -95,10 +103,10 @@ struct rs__linesym {
     uint32_t gw, gh;
     uint32_t *start, *ids; /* CSR: pieces per cell, ascending (ids while building) */
     ls_pbox *ent;          /* the entries of ids */
-    ls_piece *pc;          /* while building */
+    ls_pbuild *pb;         /* while building */
     ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
     double *hpp;
-    size_t npc, cap;
+    size_t npc, cap, nhpp, hcap; /* pieces (pp, pb) and half-planes (hpp) held and allocated */
     ls_band *band;
     uint32_t nband;
     double *dash;
@@ -421,18 +429,59 @@ static double piece_hermite(const rs__linesym *L, const ls_ppc *P, uint32_t px, 
 
 static uint32_t piece_poly(const ls_piece *P, double *x, double *y);
 
+static void piece_finish(const rs__linesym *L, ls_piece *Q);
+
+/* Append piece P, finished (piece_finish), as the painter's record (pp,
+ * its half-planes in hpp) and the index build's (pb). */
 static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
 {
     if (L->npc == L->cap) {
-        size_t nc = L->cap ? 2 * L->cap : 256, bytes;
-        if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_piece), &bytes)) return RS_ERR_LIMIT;
-        ls_piece *np = rs__realloc(ctx, L->pc, bytes);
+        size_t nc = L->cap ? 2 * L->cap : 256, b1, b2;
+        if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_ppc), &b1) || !rs__mul_size(nc, sizeof(ls_pbuild), &b2))
+            return RS_ERR_LIMIT;
+        ls_ppc *np = rs__realloc(ctx, L->pp, b1);
         if (!np) return RS_ERR_NOMEM;
-        L->pc = np;
+        L->pp = np;
+        ls_pbuild *nb = rs__realloc(ctx, L->pb, b2);
+        if (!nb) return RS_ERR_NOMEM;
+        L->pb = nb;
         L->cap = nc;
     }
-    ls_piece *Q = &L->pc[L->npc++];
-    *Q = *P;
+    if (L->hcap - L->nhpp < HP_MAX) {
+        size_t nc = L->hcap ? 2 * L->hcap : 1024, bytes;
+        if (nc > UINT32_MAX || !rs__mul_size(nc, 4 * sizeof(double), &bytes)) return RS_ERR_LIMIT;
+        double *nh = rs__realloc(ctx, L->hpp, bytes);
+        if (!nh) return RS_ERR_NOMEM;
+        L->hpp = nh;
+        L->hcap = nc;
+    }
+    ls_piece Q = *P;
+    piece_finish(L, &Q);
+    ls_ppc *C = &L->pp[L->npc];
+    ls_pbuild *B = &L->pb[L->npc++];
+    C->ox = Q.ox, C->oy = Q.oy, C->ux = Q.ux, C->uy = Q.uy, C->a = Q.a, C->b = Q.b, C->su = Q.su;
+    C->uin0 = Q.uin0, C->uin1 = Q.uin1, C->st_lo = Q.st_lo, C->st_e = Q.st_e, C->st_q = Q.st_q;
+    C->st_h = Q.st_h, C->s0 = Q.s0, C->ru0 = Q.ru0, C->ru1 = Q.ru1, C->rv0 = Q.rv0, C->rv1 = Q.rv1;
+    C->r0 = Q.r0, C->r1 = Q.r1, C->wx0 = Q.wx0, C->wy0 = Q.wy0, C->wx1 = Q.wx1, C->wy1 = Q.wy1;
+    C->warea = Q.warea, C->nhp = Q.nhp, C->kind = Q.kind, C->band = Q.band, C->dashed = Q.dashed;
+    C->hp0 = (uint32_t)L->nhpp;
+    double du = Q.ux * L->pixel, dv = Q.uy * L->pixel; /* 0 for a subnormal pixel */
+    C->iku = fabs(Q.ux) < 1e-12 || du == 0 ? 0 : 1 / du;
+    C->ikv = fabs(Q.uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
+    C->cbase = Q.ox / L->pixel - 0.5;
+    for (uint32_t j = 0; j < Q.nhp; j++, L->nhpp++) {
+        memcpy(L->hpp + 4 * L->nhpp, Q.hp[j], 3 * sizeof *L->hpp);
+        L->hpp[4 * L->nhpp + 3] = Q.sup[j];
+    }
+    B->len = Q.len, B->x0 = Q.x0, B->y0 = Q.y0, B->x1 = Q.x1, B->y1 = Q.y1;
+    B->gx0 = Q.gx0, B->gx1 = Q.gx1, B->gy0 = Q.gy0, B->gy1 = Q.gy1;
+    return RS_OK;
+}
+
+/* The painter's constants of a piece: half-plane extents, box, pixel
+ * rows and columns, the slab's safe u range. */
+static void piece_finish(const rs__linesym *L, ls_piece *Q)
+{
     double pix = L->pixel, hp = 0.5 * pix, ax = fabs(Q->ux), ay = fabs(Q->uy);
     /* half-plane c0 + cu u + cv v in local (x, y): normal (cu ux + cv uy, cu uy - cv ux) */
     for (uint32_t k = 0; k < Q->nhp; k++) {
@@ -466,7 +515,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         Q->gx1 = Q->gy1 = 0;
         Q->ru0 = Q->rv0 = 1;
         Q->ru1 = Q->rv1 = 0;
-        return RS_OK;
+        return;
     }
     double eb = 1e-9 * (1 + fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
     if (Q->kind == PIECE_WEDGE && herm) {
@@ -507,7 +556,6 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         Q->uin0 = ulo;
         Q->uin1 = uhi;
     }
-    return RS_OK;
 }
 
 /* Local box of a piece's polygon outline, grown by the pixel margin. */
@@ -594,6 +642,7 @@ typedef struct ls_junc {
     uint32_t *stamp;       /* per surface: last query that saw it */
     uint32_t query;
     const ls_ends *ends;
+    uint64_t work, limit;  /* list entries visited by push_cut; rs_limits.max_field_work */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -689,9 +738,36 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     return m;
 }
 
+/* Work units of one cut_piece call in push_cut's budget (rs_limits.max_field_work):
+ * measured against a list step, so that the budget bounds time. */
+#define CUT_WORK 32
+
+/* First index in [lo, hi) of the ascending ids whose value is >= v. */
+static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, uint32_t v)
+{
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (ids[mid] < v) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Surfaces are stored road by road and listed in ascending order, so a
+ * piece steps over its own road's run of a cell list in one binary search
+ * (a road of 10^6 tiny segments would otherwise test each piece against
+ * every surface of its own road in the cell). RS_ERR_LIMIT when the work
+ * (list entries visited) passes J->limit. */
 static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
     if (!J || !J->nsf) return push_piece(ctx, L, P);
+    /* the end of road's surfaces: the first with a larger road */
+    size_t own_end = 0, hi_s = J->nsf;
+    while (own_end < hi_s) {
+        size_t mid = own_end + (hi_s - own_end) / 2;
+        if (J->sf[mid].road <= road) own_end = mid + 1;
+        else hi_s = mid;
+    }
     /* candidate surfaces: those listed in the cells of P's box */
     const ls_grid *G = &J->grid;
     double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
@@ -708,15 +784,21 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                 size_t c = (size_t)j * G->gw + i;
                 for (uint32_t e = J->start[c]; e < J->start[c + 1]; e++) {
                     uint32_t k = J->ids[e];
+                    if (++J->work > J->limit) return RS_ERR_LIMIT;
+                    if (J->sf[k].road == road) { /* skip the rest of the own road's run */
+                        e = first_at_least(J->ids, e, J->start[c + 1], (uint32_t)own_end) - 1;
+                        continue;
+                    }
                     if (J->stamp[k] == J->query) continue;
                     J->stamp[k] = J->query;
                     const ls_surf *Q = &J->sf[k];
-                    if (Q->road == road || continues(J, road, Q->road)) continue;
+                    if (continues(J, road, Q->road)) continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
                     ls_piece next[QMAX];
                     int full = 0;
                     for (uint32_t a = 0; a < nq; a++) {
+                        J->work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
                         int m = cut_piece(&q[a], Q, tmp);
                         if (m < 0) {
                             if (nn < QMAX) next[nn++] = q[a];
@@ -930,10 +1012,11 @@ static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double
 
 static void piece_cells(rs__linesym *L, uint32_t k, int fill)
 {
-    const ls_piece *P = &L->pc[k];
+    const ls_ppc *P = &L->pp[k];
+    const ls_pbuild *B = &L->pb[k];
     double m = L->margin;
     if (P->kind == PIECE_SLAB)
-        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, P->len + m, P->a - m, P->b + m, P->x0, P->y0, P->x1, P->y1,
+        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, B->len + m, P->a - m, P->b + m, B->x0, B->y0, B->x1, B->y1,
                    L->start, L->ids, k, fill);
     else /* the sector's box grown by the margin, as an axis-aligned rectangle */
         rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
@@ -1098,7 +1181,7 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
     if (!L) return;
     rs__free(ctx, L->start);
     rs__free(ctx, L->ids);
-    rs__free(ctx, L->pc);
+    rs__free(ctx, L->pb);
     rs__free(ctx, L->pp);
     rs__free(ctx, L->ent);
     rs__free(ctx, L->hpp);
@@ -1167,6 +1250,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double *sv = NULL;
     ls_junc J;
     memset(&J, 0, sizeof J);
+    int over = 0; /* push_cut passed the work limit */
     if (!L->band || !L->dash || !L->start) { res = RS_ERR_NOMEM; goto fail; }
     L->nband = nband;
     for (uint32_t k = 0, d0 = 0; k < nband; k++) {
@@ -1186,6 +1270,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     size_t cap = 0, total = 0;
     if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
+    J.limit = ctx->limits.max_field_work;
     for (size_t ri = 0; ri < nroads; ri++) {
         if (band_start[ri + 1] == band_start[ri]) continue;
         size_t m = 0;
@@ -1200,30 +1285,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
-    /* the painter's copy: compact pieces, boxes and one pool of half-planes */
-    size_t nhpp = 0;
-    for (size_t k = 0; k < L->npc; k++) nhpp += L->pc[k].nhp;
-    if (nhpp > UINT32_MAX) { res = RS_ERR_LIMIT; goto fail; }
-    L->pp = rs__alloc_array(ctx, L->npc ? L->npc : 1, sizeof *L->pp);
-    L->hpp = rs__alloc_array(ctx, nhpp ? 4 * nhpp : 1, sizeof *L->hpp);
-    if (!L->pp || !L->hpp) { res = RS_ERR_NOMEM; goto fail; }
-    for (size_t k = 0, h = 0; k < L->npc; k++) {
-        const ls_piece *P = &L->pc[k];
-        ls_ppc *Q = &L->pp[k];
-        Q->ox = P->ox, Q->oy = P->oy, Q->ux = P->ux, Q->uy = P->uy, Q->a = P->a, Q->b = P->b, Q->su = P->su;
-        Q->uin0 = P->uin0, Q->uin1 = P->uin1, Q->st_lo = P->st_lo, Q->st_e = P->st_e, Q->st_q = P->st_q;
-        Q->st_h = P->st_h, Q->s0 = P->s0, Q->ru0 = P->ru0, Q->ru1 = P->ru1, Q->rv0 = P->rv0, Q->rv1 = P->rv1;
-        Q->r0 = P->r0, Q->r1 = P->r1, Q->wx0 = P->wx0, Q->wy0 = P->wy0, Q->wx1 = P->wx1, Q->wy1 = P->wy1;
-        Q->warea = P->warea, Q->nhp = P->nhp, Q->kind = P->kind, Q->band = P->band, Q->dashed = P->dashed;
-        Q->hp0 = (uint32_t)h;
-        double du = P->ux * L->pixel, dv = P->uy * L->pixel; /* 0 for a subnormal pixel */
-        Q->iku = fabs(P->ux) < 1e-12 || du == 0 ? 0 : 1 / du;
-        Q->ikv = fabs(P->uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
-        Q->cbase = P->ox / L->pixel - 0.5;
-        for (uint32_t j = 0; j < P->nhp; j++, h++) {
-            memcpy(L->hpp + 4 * h, P->hp[j], 3 * sizeof *L->hpp);
-            L->hpp[4 * h + 3] = P->sup[j];
-        }
+    /* the painter's records were made piece by piece: hand back the spare room */
+    size_t nhpp = L->nhpp;
+    if (L->npc && L->npc < L->cap) {
+        ls_ppc *np = rs__realloc(ctx, L->pp, L->npc * sizeof *L->pp);
+        if (np) L->pp = np;
+    }
+    if (nhpp && nhpp < L->hcap) {
+        double *nh = rs__realloc(ctx, L->hpp, 4 * nhpp * sizeof *L->hpp);
+        if (nh) L->hpp = nh;
     }
     for (size_t k = 0; k < L->npc; k++) piece_cells(L, (uint32_t)k, 0);
     uint64_t lim = UINT32_MAX - 1u;
@@ -1235,15 +1305,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
     if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t e = 0; e < total; e++) {
-        const ls_piece *P = &L->pc[L->ids[e]];
+        const ls_pbuild *P = &L->pb[L->ids[e]];
         ls_pbox *B = &L->ent[e];
         B->gx0 = P->gx0, B->gx1 = P->gx1, B->gy0 = P->gy0, B->gy1 = P->gy1;
         B->id = L->ids[e];
-        B->band = P->band;
+        B->band = L->pp[L->ids[e]].band;
     }
-    rs__free(ctx, L->pc); /* built */
+    rs__free(ctx, L->pb); /* built */
     rs__free(ctx, L->ids);
-    L->pc = NULL;
+    L->pb = NULL;
     L->ids = NULL;
     L->cap = 0;
     L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ent + L->npc * sizeof *L->pp +
@@ -1253,11 +1323,17 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     rs__ok(ctx);
     return RS_OK;
 fail:
+    over = J.limit && J.work > J.limit;
     rs__free(ctx, pts);
     rs__free(ctx, sv);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");
+    if (over)
+        return rs__fail(ctx, res,
+                        "line symbols: cutting lines at the other roads' surfaces takes more than %llu steps "
+                        "(too many roads in one place; the budget is rs_limits.max_field_work)",
+                        (unsigned long long)ctx->limits.max_field_work);
     return rs__fail(ctx, res, "line symbols: too many pieces or index entries");
 }
 

@@ -276,6 +276,11 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         if (b < a) b = a;
     }
     size_t np = b - a + 2;
+    /* the stretches of all marks together: a budget, as the points of all roads */
+    if (np > ctx->limits.max_points - *npts) {
+        *err = RS_ERR_LIMIT;
+        return 0;
+    }
     if (*npts + np > *cap) {
         size_t nc = *cap ? *cap : 256;
         while (nc < *npts + np) nc *= 2;
@@ -541,6 +546,9 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r) r = rs__markings_explicit(ctx, roads, atlas, &pl, &npl, &cap);
     size_t n_explicit = npl;
     if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &pl, &npl, &cap);
+    if (!r && npl > ctx->limits.max_points) /* ~0.5 KB each: a total, as for road points */
+        r = rs__fail(ctx, RS_ERR_LIMIT, "markings: more than %llu markings (explicit and automatic; the budget is "
+                     "rs_limits.max_points)", (unsigned long long)ctx->limits.max_points);
     if (!r && npl) {
         mk->pix = dem->frame.cell_size / o->texels;
         mk->m = rs__alloc_array(ctx, npl, sizeof *mk->m);
@@ -552,7 +560,18 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
         size_t have_road = SIZE_MAX;
-        for (size_t i = 0; i < npl && !r; i++) {
+        /* placements road by road (a stable counting sort), so each road's
+         * local points are made once however the marks alternate between
+         * roads; kept[i]: placement i was placed into mk->m[i] */
+        size_t nroads = rs_roads_count(roads), *order = rs__alloc_array(ctx, npl, sizeof *order);
+        size_t *first = rs__calloc(ctx, nroads + 1, sizeof *first);
+        uint8_t *kept = rs__calloc(ctx, npl, 1);
+        if (!order || !first || !kept) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        for (size_t i = 0; i < npl && !r; i++) first[pl[i].road + 1]++;
+        for (size_t k = 0; k < nroads && !r; k++) first[k + 1] += first[k];
+        for (size_t i = 0; i < npl && !r; i++) order[first[pl[i].road]++] = i;
+        for (size_t q = 0; q < npl && !r; q++) {
+            size_t i = order[q];
             if (pl[i].road != have_road) {
                 rs__road_local_free(ctx, &rl);
                 have_road = SIZE_MAX;
@@ -568,14 +587,24 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                 break;
             }
             rs_result e = RS_OK;
-            if (place(&pl[i], &rl, &atlas->t[pl[i].type], tx, mk->pix, &mk->m[mk->n], &mk->pts, &npts, &pcap, ctx,
-                      &e)) {
-                mk->n++;
+            kept[i] = (uint8_t)place(&pl[i], &rl, &atlas->t[pl[i].type], tx, mk->pix, &mk->m[i], &mk->pts, &npts,
+                                     &pcap, ctx, &e);
+            if (e == RS_ERR_LIMIT)
+                r = rs__fail(ctx, e, "markings: the marks' stretches of road hold more than %llu points together "
+                             "(long marks on roads of many points; the budget is rs_limits.max_points)",
+                             (unsigned long long)ctx->limits.max_points);
+            else if (e)
+                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        }
+        for (size_t i = 0; i < npl && !r; i++) /* back to record order */
+            if (kept[i]) {
+                mk->m[mk->n++] = mk->m[i];
                 if (i < n_explicit) mk->n_explicit++;
                 else mk->n_auto++;
             }
-            if (e) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
-        }
+        rs__free(ctx, order);
+        rs__free(ctx, first);
+        rs__free(ctx, kept);
         rs__road_local_free(ctx, &rl);
         mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
                     mk->ntex * sizeof *mk->tex + tex_bytes;

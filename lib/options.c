@@ -76,6 +76,21 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
                                 i ? "road" : "terrain", tex[i]->width, tex[i]->height,
                                 (unsigned long long)ctx->limits.max_texture_pixels);
         }
+    /* the surface-image table: a count needs its array, every entry a name
+     * and, when it has a size, pixels (checked whether a style uses the
+     * entry or not; an empty image is refused when a style uses it) */
+    const rs_style_options *so = &o.style;
+    if (so->surface_image_count && !so->surface_images)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images is NULL but surface_image_count is %zu",
+                        so->surface_image_count);
+    for (size_t k = 0; k < so->surface_image_count; k++) {
+        const rs_surface_image *si = &so->surface_images[k];
+        if (!si->name)
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images[%zu]: name is NULL", k);
+        if (!si->image.rgba && si->image.width && si->image.height)
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "style.surface_images[%zu]: %u x %u pixels at NULL", k,
+                            si->image.width, si->image.height);
+    }
     *out = o;
     return RS_OK;
 }

@@ -73,6 +73,9 @@ struct rs__roadfield {
     rf_seg *seg;
     size_t nseg, nent, bytes;
     size_t nonempty, nfull, maxlist;
+    size_t nredundant; /* segments with redundant = 1 */
+    uint64_t relwork;  /* seg_relations' work units */
+    uint32_t relscan;  /* cell lists up to this long are scanned for holders (rs__roadfield_params) */
 };
 
 /* floor(v) clamped to [0, n-1]; NaN gives 0. Keeps every cast defined. */
@@ -154,6 +157,8 @@ typedef struct rf_builder {
     uint64_t total;  /* entries so far */
     uint64_t limit;
     uint32_t *cell1; /* pass 2: per segment, a cell that lists it */
+    uint64_t work_limit; /* seg_relations' work (rs_limits.max_field_work) */
+    int work_over;       /* 1: seg_relations passed work_limit */
 } rf_builder;
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
@@ -412,6 +417,199 @@ static int capsule_within(const rf_seg *s, const rf_seg *t)
     return room >= 0 && seg_dist(t, s->ax, s->ay) <= room && seg_dist(t, s->bx, s->by) <= room;
 }
 
+/* Holder search (seg_relations). A cell list up to this long is scanned;
+ * a segment whose list is longer asks a box tree over the segments of the
+ * long lists instead, so many short segments sharing cells (10^6 points on
+ * a 100 m road) cost n log n, not n times the list. Both ways find the same
+ * holders. */
+#define RELATION_SCAN_AUTO 64
+#define HOLDER_LEAF 8
+
+typedef struct rf_box { double xlo, ylo, xhi, yhi; } rf_box;
+
+/* Boxes that decide holders before capsule_within: if capsule k lies
+ * within capsule j (capsule_within(k, j), slack included), then k's "inner"
+ * box lies within j's "outer" box. Outer: j's centreline box grown by r_j
+ * plus twice capsule_within's slack bound for j; inner: k's centreline box
+ * grown by r_k minus twice the slack's share of k (|k's coordinates| <=
+ * M_k). The doubled slack covers rounding. */
+static double seg_mag(const rf_seg *s)
+{
+    return fmax(fmax(fabs(s->ax), fabs(s->ay)), fmax(fabs(s->bx), fabs(s->by)));
+}
+
+static rf_box outer_box(const rf_seg *s)
+{
+    double g = s->r + 2e-9 * (1 + seg_mag(s) + s->len + s->r);
+    rf_box b = { s->xmin - g, s->ymin - g, s->xmax + g, s->ymax + g };
+    return b;
+}
+
+static rf_box inner_box(const rf_seg *s)
+{
+    double h = s->r - 2e-9 * seg_mag(s);
+    rf_box b = { s->xmin - h, s->ymin - h, s->xmax + h, s->ymax + h };
+    return b;
+}
+
+static int box_holds(const rf_box *o, const rf_box *in)
+{
+    return o->xlo <= in->xlo && o->ylo <= in->ylo && o->xhi >= in->xhi && o->yhi >= in->yhi;
+}
+
+typedef struct rf_holders {
+    uint32_t *ids;  /* segments of the long lists, in Morton order of their centres */
+    rf_box *box;    /* outer box per ids entry */
+    rf_box *node;   /* 2 * nleaf_p2 nodes: 1 = root, leaf l at nleaf_p2 + l (items l*LEAF..) */
+    size_t n, p2;
+    uint64_t work, limit; /* work units (list entries scanned, tree nodes and items visited) */
+} rf_holders;
+
+typedef struct rf_key { uint64_t key; uint32_t id; } rf_key;
+
+static int cmp_key(const void *x, const void *y)
+{
+    const rf_key *a = x, *b = y;
+    if (a->key != b->key) return a->key < b->key ? -1 : 1;
+    return a->id < b->id ? -1 : a->id > b->id;
+}
+
+/* Interleave the bits of x (even) and y (odd). */
+static uint64_t morton(uint32_t x, uint32_t y)
+{
+    uint64_t k = 0;
+    for (int i = 0; i < 32; i++) k |= (uint64_t)((x >> i) & 1) << (2 * i) | (uint64_t)((y >> i) & 1) << (2 * i + 1);
+    return k;
+}
+
+static uint32_t morton_coord(double v, double lo, double span)
+{
+    double q = (v - lo) / span * 4294967295.0;
+    if (!(q > 0)) return 0;
+    return q >= 4294967295.0 ? 0xFFFFFFFFu : (uint32_t)q;
+}
+
+static void holders_free(rs_ctx *ctx, rf_holders *h)
+{
+    rs__free(ctx, h->ids);
+    rs__free(ctx, h->box);
+    rs__free(ctx, h->node);
+}
+
+/* The tree over every segment of a list longer than f->relscan. */
+static rs_result holders_build(rs_ctx *ctx, const rs__roadfield *f, rf_holders *h)
+{
+    size_t ncell = (size_t)f->gw * f->gh, n = 0;
+    uint8_t *in = rs__calloc(ctx, f->nseg ? f->nseg : 1, 1);
+    if (!in) return RS_ERR_NOMEM;
+    for (size_t c = 0; c < ncell; c++)
+        if (f->start[c + 1] - f->start[c] > f->relscan)
+            for (uint32_t i = f->start[c]; i < f->start[c + 1]; i++) {
+                n += !in[f->ids[i]];
+                in[f->ids[i]] = 1;
+            }
+    rf_key *keys = rs__alloc_array(ctx, n ? n : 1, sizeof *keys);
+    size_t nleaf = (n + HOLDER_LEAF - 1) / HOLDER_LEAF, p2 = 1;
+    while (p2 < nleaf) p2 *= 2;
+    h->ids = rs__alloc_array(ctx, n ? n : 1, sizeof *h->ids);
+    h->box = rs__alloc_array(ctx, n ? n : 1, sizeof *h->box);
+    h->node = rs__alloc_array(ctx, 2 * p2, sizeof *h->node);
+    if (!keys || !h->ids || !h->box || !h->node) {
+        rs__free(ctx, in);
+        rs__free(ctx, keys);
+        return RS_ERR_NOMEM;
+    }
+    double lo = -f->c, spanx = ((double)f->gw + 1) * f->c, spany = ((double)f->gh + 1) * f->c;
+    size_t m = 0;
+    for (size_t k = 0; k < f->nseg; k++) {
+        if (!in[k]) continue;
+        const rf_seg *s = &f->seg[k];
+        keys[m].key = morton(morton_coord(0.5 * s->xmin + 0.5 * s->xmax, lo, spanx),
+                             morton_coord(0.5 * s->ymin + 0.5 * s->ymax, lo, spany));
+        keys[m++].id = (uint32_t)k;
+    }
+    rs__free(ctx, in);
+    qsort(keys, n, sizeof *keys, cmp_key);
+    for (size_t i = 0; i < n; i++) {
+        h->ids[i] = keys[i].id;
+        h->box[i] = outer_box(&f->seg[keys[i].id]);
+    }
+    rs__free(ctx, keys);
+    h->n = n;
+    h->p2 = p2;
+    for (size_t l = 0; l < p2; l++) {
+        rf_box u = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        for (size_t i = l * HOLDER_LEAF; i < n && i < (l + 1) * HOLDER_LEAF; i++) {
+            const rf_box *b = &h->box[i];
+            u.xlo = fmin(u.xlo, b->xlo);
+            u.ylo = fmin(u.ylo, b->ylo);
+            u.xhi = fmax(u.xhi, b->xhi);
+            u.yhi = fmax(u.yhi, b->yhi);
+        }
+        h->node[p2 + l] = u;
+    }
+    for (size_t i = p2; i-- > 1;) {
+        const rf_box *a = &h->node[2 * i], *b = &h->node[2 * i + 1];
+        rf_box u = { fmin(a->xlo, b->xlo), fmin(a->ylo, b->ylo), fmax(a->xhi, b->xhi), fmax(a->yhi, b->yhi) };
+        h->node[i] = u;
+    }
+    return RS_OK;
+}
+
+/* Is segment j in the (ascending) list of cell? */
+static int listed(const rs__roadfield *f, size_t cell, uint32_t j)
+{
+    uint32_t lo = f->start[cell], hi = f->start[cell + 1];
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (f->ids[mid] < j) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < f->start[cell + 1] && f->ids[lo] == j;
+}
+
+/* Does j make k redundant (the rule of seg_relations)? */
+static int holds(const rs__roadfield *f, size_t k, uint32_t j)
+{
+    const rf_seg *sa = &f->seg[k];
+    if (j == k || !capsule_within(sa, &f->seg[j])) return 0;
+    return j < k || !capsule_within(&f->seg[j], sa);
+}
+
+/* Is segment k redundant: held by a segment of cell's list? 1, 0, or -1
+ * when the work limit is passed. */
+static int redundant_of(const rs__roadfield *f, rf_holders *h, size_t k, size_t cell)
+{
+    uint32_t a = f->start[cell], b = f->start[cell + 1];
+    if (b - a <= f->relscan || !h->node) {
+        h->work += b - a;
+        if (h->work > h->limit) return -1;
+        for (uint32_t i = a; i < b; i++)
+            if (holds(f, k, f->ids[i])) return 1;
+        return 0;
+    }
+    rf_box q = inner_box(&f->seg[k]);
+    size_t stack[130], sp = 0;
+    stack[sp++] = 1;
+    while (sp) {
+        size_t nd = stack[--sp];
+        if (++h->work > h->limit) return -1;
+        if (!box_holds(&h->node[nd], &q)) continue;
+        if (nd < h->p2) {
+            stack[sp++] = 2 * nd + 1;
+            stack[sp++] = 2 * nd;
+            continue;
+        }
+        size_t l = nd - h->p2;
+        for (size_t i = l * HOLDER_LEAF; i < h->n && i < (l + 1) * HOLDER_LEAF; i++) {
+            uint32_t j = h->ids[i];
+            h->work++;
+            if (box_holds(&h->box[i], &q) && j != k && listed(f, cell, j) && holds(f, k, j)) return 1;
+        }
+    }
+    return 0;
+}
+
 /* Per segment: its gentle-joint partner (the next segment of positive
  * length, past zero-length ones at the shared point: consecutive segments
  * of a road, or the first of the next road when it starts where this one
@@ -422,13 +620,23 @@ static int capsule_within(const rf_seg *s, const rf_seg *t)
  * same as without it (the exact one-capsule covers would otherwise give
  * way to the approximations for several). The capsule that holds it is in
  * the same cell lists (its reach is at least as large) and is near or
- * deep wherever the redundant one is near (docs/roadfield.md). */
-static void seg_relations(rs__roadfield *f, const uint32_t *cell1)
+ * deep wherever the redundant one is near (docs/roadfield.md). The
+ * segments are visited last to first so that a run of zero-length
+ * segments is skipped in one step (a million repeated points cost a
+ * million steps). RS_ERR_LIMIT when the holder search passes the work
+ * limit (h->limit). */
+static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h)
 {
-    for (size_t k = 0; k < f->nseg; k++) {
+    if (f->maxlist > f->relscan) {
+        rs_result r = holders_build(ctx, f, h);
+        if (r != RS_OK) return r;
+    }
+    size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
+    for (size_t k = f->nseg; k-- > 0;) {
         rf_seg *sa = &f->seg[k];
         size_t m = k + 1;
-        while (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m++;
+        h->work++; /* the joint partner: one step */
+        if (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m = after;
         if (m < f->nseg && m <= UINT32_MAX) {
             const rf_seg *sb = &f->seg[m];
             sa->jnext = sa->bx == sb->ax && sa->by == sb->ay && sa->r == sb->r && sa->len > 0 && sb->len > 0 &&
@@ -436,13 +644,16 @@ static void seg_relations(rs__roadfield *f, const uint32_t *cell1)
             sa->jpart = (uint32_t)m;
         }
         /* the holder is listed wherever this one is (its grown capsule is larger) */
-        size_t cell = cell1[k];
-        for (uint32_t i = f->start[cell]; i < f->start[cell + 1]; i++) {
-            uint32_t j = f->ids[i];
-            if (j == k || !capsule_within(sa, &f->seg[j])) continue;
-            if (j < k || !capsule_within(&f->seg[j], sa)) { sa->redundant = 1; break; }
-        }
+        int red = redundant_of(f, h, k, cell1[k]);
+        if (red < 0) return RS_ERR_LIMIT;
+        sa->redundant = (uint8_t)red;
+        f->nredundant += (size_t)red;
+        if (sa->len > 0) after = k;
+        else if (!(k + 1 < f->nseg && !(f->seg[k + 1].len > 0) && f->seg[k + 1].ax == sa->ax &&
+                   f->seg[k + 1].ay == sa->ay))
+            after = k + 1;
     }
+    return RS_OK;
 }
 
 /* The index from the counts in b (pass 1, seg_cells with fill = 0, run
@@ -468,9 +679,16 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     b->cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b->cell1);
     if (!b->cell1) return RS_ERR_NOMEM;
     for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
-    seg_relations(f, b->cell1);
+    rf_holders h;
+    memset(&h, 0, sizeof h);
+    h.limit = b->work_limit;
+    res = seg_relations(ctx, f, b->cell1, &h);
+    holders_free(ctx, &h);
+    f->relwork = h.work;
     rs__free(ctx, b->cell1);
     b->cell1 = NULL;
+    if (res == RS_ERR_LIMIT) b->work_over = 1;
+    if (res != RS_OK) return res;
     if ((res = build_rows(ctx, f)) != RS_OK) return res;
     build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
@@ -486,6 +704,11 @@ static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_res
     rs__free(ctx, b->cell1);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
+    if (b->work_over)
+        return rs__fail(ctx, res,
+                        "road field: comparing the segments that share index cells takes more than %llu steps "
+                        "(too many road segments in one place; the budget is rs_limits.max_field_work)",
+                        (unsigned long long)b->work_limit);
     return rs__fail(ctx, res, "roadfield: more than %llu index entries (roads too wide or too many for the map)",
                     (unsigned long long)b->limit);
 }
@@ -527,8 +750,9 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->pixel = p->pixel > 0 ? p->pixel : p->cell_size;
     f->margin = f->pixel * HALF_SQRT2;
     f->reach = p->reach_extra + f->margin;
+    f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL };
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0 };
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
@@ -619,8 +843,9 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     f->pixel = src->pixel;
     f->margin = src->margin;
     f->reach = src->reach;
+    f->relscan = src->relscan;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL };
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0 };
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     rs_result res = RS_OK;
     f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
@@ -678,6 +903,8 @@ void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out)
     out->nonempty_cells = f->nonempty;
     out->full_cells = f->nfull;
     out->max_list = f->maxlist;
+    out->redundant = f->nredundant;
+    out->relation_work = f->relwork;
 }
 
 /* ------------------------------------------------------------------------

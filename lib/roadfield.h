@@ -16,6 +16,9 @@ typedef struct rs__roadfield_params {
     double index_cell;         /* index grid cell size in metres; 0 -> automatic (docs/roadfield.md) */
     double pixel;              /* largest output pixel the coverage will be asked for, metres;
                                   0 -> cell_size. Larger pixels still work, only slower. */
+    uint32_t relation_scan;    /* holder search (docs/roadfield.md): cell lists up to this long are
+                                  scanned, longer ones use the box tree; 0 -> 64. Same result either
+                                  way (tests force each: 1 = always the tree, UINT32_MAX = never) */
 } rs__roadfield_params;
 
 /* Parameters of a road field over the whole map of `dem` for output pixels
@@ -76,6 +79,10 @@ typedef struct rs__roadfield_stats {
     size_t entries;        /* (cell, segment) pairs */
     size_t nonempty_cells, full_cells;
     size_t max_list;       /* longest cell list */
+    size_t redundant;      /* segments whose capsule lies within another one */
+    uint64_t relation_work; /* work units of the segment relations (list entries scanned, holder-tree
+                               nodes and items visited): near-linear in the segments, capped by
+                               rs_limits.max_field_work */
 } rs__roadfield_stats;
 void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out);
 #endif

@@ -70,11 +70,24 @@ static rs_result road_image(rs_ctx *ctx, rs__styling *st, const rs_style *sty, s
         for (size_t r = 0; r < rs_roads_count(roads); r++) st->img_of[r] = -1;
     }
     if (!st->imgs[k]) {
+        /* every image the styles use is copied and mipmapped: their pixels
+         * together stay within the texture limit, as one texture's do */
+        const rs_image *im = &so->surface_images[k].image;
+        uint64_t px = (uint64_t)im->width * im->height;
+        if (px > ctx->limits.max_texture_pixels - st->img_pixels)
+            return rs__fail(ctx, RS_ERR_LIMIT,
+                            "style %s: surface image %s (%u x %u) brings the surface images in use to %llu pixels, "
+                            "over the limit of %llu for all of them together (rs_limits.max_texture_pixels)",
+                            rs__quote(q2, sizeof q2, sty->name, strlen(sty->name)),
+                            rs__quote(q3, sizeof q3, sty->surface_image, strlen(sty->surface_image)), im->width,
+                            im->height, (unsigned long long)(st->img_pixels + px),
+                            (unsigned long long)ctx->limits.max_texture_pixels);
         rs_result r = rs__surfimg_build(ctx, &so->surface_images[k].image,
                                         rs__quote(q, sizeof q, sty->surface_image, strlen(sty->surface_image)),
                                         &st->imgs[k]);
         if (r) return r;
         st->bytes += st->imgs[k]->bytes;
+        st->img_pixels += px;
     }
     const rs__surfimg *m = st->imgs[k];
     double w = 2 * st->half_width[i];

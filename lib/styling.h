@@ -32,6 +32,7 @@ typedef struct rs__styling {
     double *img_f;
     struct rs__surfimg **imgs;        /* one per rs_style_options.surface_images entry in use (NULL: unused) */
     size_t nimgs;
+    uint64_t img_pixels; /* pixels of the surface images in imgs[], all together */
     size_t bytes;
 } rs__styling;
 

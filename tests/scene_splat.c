@@ -16,6 +16,19 @@ rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s)
     return roads;
 }
 
+rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls)
+{
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_roads *R = sc_road_crowded(&sc, 10, 16, length, n, 6) ? NULL : ss_roads(ctx, &sc);
+    sc_scene_free(&sc);
+    if (R && cls && rs_roads_set_attr(ctx, R, 0, "class", cls)) {
+        rs_roads_free(ctx, R);
+        R = NULL;
+    }
+    return R;
+}
+
 void ss_image_free(ss_image *im)
 {
     free(im->rgba);

@@ -8,6 +8,10 @@
 
 /* The scene's roads (unnamed), or NULL when the library refuses one. */
 rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s);
+/* One crowded road (sc_road_crowded): n points from (10, 16) over `length`
+ * metres along x, 6 m wide, of class `cls` (NULL: unstyled); NULL when the
+ * library refuses it. */
+rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls);
 
 typedef struct ss_image {
     uint32_t w, h;

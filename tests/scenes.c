@@ -308,6 +308,20 @@ int sc_road_leaving(sc_scene *s, double theta, double width, double beyond)
     return sc_add_road(s, width, xy, 3);
 }
 
+int sc_road_crowded(sc_scene *s, double x0, double y, double length, size_t n, double width)
+{
+    if (n < 2) return -1;
+    double *xy = malloc(2 * n * sizeof *xy);
+    if (!xy) return -1;
+    for (size_t k = 0; k < n; k++) {
+        xy[2 * k] = x0 + length * (double)k / (double)(n - 1);
+        xy[2 * k + 1] = y;
+    }
+    int r = sc_add_road(s, width, xy, n);
+    free(xy);
+    return r;
+}
+
 /* --- city ---------------------------------------------------------------------- */
 typedef struct sc_pts { double *xy; size_t n, cap; } sc_pts;
 

@@ -79,6 +79,10 @@ int sc_road_grid(sc_scene *s, unsigned nx, unsigned ny, double width, double mar
  * continuing `beyond` metres along the road past the map edge; it bends
  * 20 degrees halfway. */
 int sc_road_leaving(sc_scene *s, double theta, double width, double beyond);
+/* A crowded road (issue 26): n >= 2 points evenly spread along the x axis
+ * from (x0, y) over `length` metres, so thousands of tiny segments share
+ * every index cell (10^6 points on 100 m: 0.1 mm segments). */
+int sc_road_crowded(sc_scene *s, double x0, double y, double length, size_t n, double width);
 
 /* Realistic city: sc_dem_terrain DEM plus an OSM-like network of about
  * target_roads roads 4-14 m wide: curvy arterials (12-14 m, leaving the

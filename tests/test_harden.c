@@ -1,4 +1,5 @@
-/* Issue 19 (library side): extreme scales and bounded work.
+/* Issue 19 (library side): extreme scales and bounded work; issue 26
+ * row 14 (NULL pointers with counts, at the end).
  * - ROAM: every extracted value fits a float; values that would not are
  *   refused up front (cell size, heights x z-scale, skirt depth); the
  *   coarsest mesh stays the coarsest at the largest accepted heights;
@@ -233,11 +234,122 @@ static void test_grid(void)
     rs_dem_free(ctx, d);
 }
 
+/* Issue 26 row 14: every public (pointer, count) pair refuses a NULL
+ * pointer with a count above zero (RS_ERR_INVALID_ARG, never a
+ * dereference), and takes NULL with a count of zero where empty input is
+ * valid. The pairs of include/roadsplat.h: PGM bytes, DEM samples, road
+ * and style text, road points, the atlas image and index, the surface
+ * image table (row 14: it was dereferenced) and each entry's pixels and
+ * name, textures, the splat / window / normal-map / alpha-map outputs and
+ * the mesh buffers. */
+static void test_null_counts(void)
+{
+    rs_dem *d = dem_of(9, 9, 0.0f, 1.0f), *d2 = NULL;
+    rs_roads *R = NULL, *R2 = NULL;
+    rs_styles *st = NULL, *st2 = NULL;
+    rs_atlas *a = NULL;
+    CHECK(rs_roads_create(ctx, &R) == RS_OK && rs_styles_create(ctx, &st) == RS_OK);
+    const double xy[4] = { 1, 4, 7, 4 };
+    CHECK(rs_roads_add(ctx, R, "a", 2, xy, 2) == RS_OK);
+    CHECK_EQ_INT(rs_dem_parse_pgm(ctx, NULL, 10, &d2), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_dem_create(ctx, 4, 4, NULL, &d2), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roads_parse(ctx, NULL, 10, &R2), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roads_parse_ex(ctx, NULL, 10, NULL, &R2), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_styles_parse(ctx, NULL, 10, &st2), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_styles_add_text(ctx, st, NULL, 10), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roads_add(ctx, R, "b", 2, NULL, 2), RS_ERR_INVALID_ARG);
+    /* NULL with a count of zero: empty text is valid */
+    CHECK_EQ_INT(rs_roads_parse(ctx, NULL, 0, &R2), RS_OK);
+    rs_roads_free(ctx, R2);
+    CHECK_EQ_INT(rs_styles_add_text(ctx, st, NULL, 0), RS_OK);
+    uint8_t px[4 * 4 * 4];
+    memset(px, 255, sizeof px);
+    rs_image none = { 4, 4, NULL }, img = { 4, 4, px };
+    CHECK_EQ_INT(rs_atlas_create(ctx, &none, "x 0 0 2 2 1 1", 13, &a), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_atlas_create(ctx, &img, NULL, 13, &a), RS_ERR_INVALID_ARG);
+    CHECK(a == NULL);
+
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    rs_road_grid *g = NULL, *g2 = NULL;
+    rs_splatter *sp = NULL, *sp2 = NULL;
+    CHECK(rs_road_grid_build(ctx, d, R, &o, &g) == RS_OK && rs_splatter_create(ctx, d, NULL, g, &o, &sp) == RS_OK);
+    /* the surface-image table (row 14), whether a style uses it or not */
+    rs_splat_options ob = o;
+    ob.style.surface_images = NULL;
+    ob.style.surface_image_count = 2;
+    CHECK_EQ_INT(rs_road_grid_build(ctx, d, R, &ob, &g2), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_splatter_create(ctx, d, R, NULL, &ob, &sp2), RS_ERR_INVALID_ARG);
+    CHECK(g2 == NULL && sp2 == NULL);
+    rs_surface_image si = { "x", { 4, 4, NULL } };
+    ob.style.surface_images = &si;
+    ob.style.surface_image_count = 1;
+    CHECK_EQ_INT(rs_road_grid_build(ctx, d, R, &ob, &g2), RS_ERR_INVALID_ARG);
+    si.image.rgba = px;
+    si.name = NULL;
+    CHECK_EQ_INT(rs_road_grid_build(ctx, d, R, &ob, &g2), RS_ERR_INVALID_ARG);
+    ob.style.surface_images = NULL;
+    ob.style.surface_image_count = 0;
+    ob.surface.terrain_texture = &none;
+    CHECK_EQ_INT(rs_road_grid_build(ctx, d, R, &ob, &g2), RS_ERR_INVALID_ARG);
+    ob.surface.terrain_texture = NULL;
+    ob.surface.road_texture = &none;
+    CHECK_EQ_INT(rs_splatter_create(ctx, d, NULL, g, &ob, &sp2), RS_ERR_INVALID_ARG);
+    CHECK(g2 == NULL && sp2 == NULL);
+    /* a style that uses an image with the table NULL (dereferenced before) */
+    static const char text[] = "style s\n surface img.png\nend\nroad r width 2 style=s\n1 4\n7 4\nend\n";
+    rs_road_parse_options po;
+    memset(&po, 0, sizeof po);
+    po.styles = st;
+    CHECK(rs_roads_parse_ex(ctx, text, sizeof text - 1, &po, &R2) == RS_OK);
+    ob = o;
+    ob.style.styles = st;
+    ob.style.surface_image_count = 2;
+    CHECK_EQ_INT(rs_road_grid_build(ctx, d, R2, &ob, &g2), RS_ERR_INVALID_ARG);
+    rs_roads_free(ctx, R2);
+
+    /* outputs */
+    uint32_t w = 0, h = 0;
+    CHECK(rs_splat_size(ctx, d, &o, &w, &h) == RS_OK);
+    CHECK_EQ_INT(rs_splat(ctx, d, g, &o, NULL, (size_t)w * h * 4, NULL, 0), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_splat_window(ctx, sp, 0, 0, 2, 2, NULL, 8, NULL, 0, NULL), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_normal_window(ctx, sp, 0, 0, 2, 2, NULL, 6, NULL), RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_alpha_map(RS_TILE_EDGE, 4, 0, 0, 0, NULL, 25), RS_ERR_INVALID_ARG);
+    rs_roam *L = NULL;
+    rs_roam_options ro;
+    memset(&ro, 0, sizeof ro);
+    CHECK(rs_roam_create(ctx, d, &ro, &L) == RS_OK && rs_roam_refine_error(ctx, L, 0) == RS_OK);
+    if (L) {
+        rs_roam_mesh_options mo;
+        memset(&mo, 0, sizeof mo);
+        mo.normals = 1;
+        size_t mv = 0, mi = 0, nv = 0, ni = 0;
+        rs_roam_mesh_bound(L, &mo, &mv, &mi);
+        float *v = malloc(mv * 5 * sizeof *v), *nrm = malloc(mv * 3 * sizeof *nrm);
+        uint32_t *idx = malloc(mi * sizeof *idx);
+        CHECK_EQ_INT(rs_roam_extract(ctx, L, &mo, NULL, nrm, mv, idx, mi, &nv, &ni), RS_ERR_INVALID_ARG);
+        CHECK_EQ_INT(rs_roam_extract(ctx, L, &mo, v, NULL, mv, idx, mi, &nv, &ni), RS_ERR_INVALID_ARG);
+        CHECK_EQ_INT(rs_roam_extract(ctx, L, &mo, v, nrm, mv, NULL, mi, &nv, &ni), RS_ERR_INVALID_ARG);
+        CHECK_EQ_INT(rs_roam_extract(ctx, L, &mo, v, nrm, mv, idx, mi, &nv, &ni), RS_OK);
+        free(v);
+        free(nrm);
+        free(idx);
+    }
+    rs_roam_free(ctx, L);
+    rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, g);
+    rs_styles_free(ctx, st);
+    rs_roads_free(ctx, R);
+    rs_dem_free(ctx, d);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_roam_float_range();
     test_grid();
+    test_null_counts();
     rs_ctx_free(ctx);
     return th_finish("test_harden");
 }

@@ -332,17 +332,35 @@ static void test_coverage_redundant(void)
             if (i % 3 == 0) CHECK(rs_roads_add(ctx, b, NULL, w, xy, n) == RS_OK);
         }
         rs__roadfield_params p = params(0, 0, cs, W, H, 0, pix);
-        rs__roadfield *fa = NULL, *fb = NULL;
+        rs__roadfield *fa = NULL, *fb = NULL, *ft = NULL, *fs = NULL;
         CHECK(rs__roadfield_build(ctx, a, &p, &fa) == RS_OK && rs__roadfield_build(ctx, b, &p, &fb) == RS_OK);
-        if (fa && fb) {
+        /* the holder search by the box tree everywhere, and by list scans
+         * everywhere, finds the same redundant capsules */
+        rs__roadfield_params pt = p, ps = p;
+        pt.relation_scan = 1;
+        ps.relation_scan = UINT32_MAX;
+        CHECK(rs__roadfield_build(ctx, b, &pt, &ft) == RS_OK && rs__roadfield_build(ctx, b, &ps, &fs) == RS_OK);
+        if (fa && fb && ft && fs) {
+            rs__roadfield_stats sb, st, ss;
+            rs__roadfield_get_stats(fb, &sb);
+            rs__roadfield_get_stats(ft, &st);
+            rs__roadfield_get_stats(fs, &ss);
+            CHECK(sb.redundant > 0 && sb.redundant == st.redundant && sb.redundant == ss.redundant);
             uint32_t w = (uint32_t)(W / pix), h = (uint32_t)(H / pix);
             double *ca = coverage_image(fa, w, h, pix), *cb = coverage_image(fb, w, h, pix);
+            double *ct = coverage_image(ft, w, h, pix), *cs2 = coverage_image(fs, w, h, pix);
             CHECK(ca && cb && memcmp(ca, cb, (size_t)w * h * sizeof *ca) == 0);
+            CHECK(ct && cs2 && memcmp(ca, ct, (size_t)w * h * sizeof *ca) == 0 &&
+                  memcmp(ca, cs2, (size_t)w * h * sizeof *ca) == 0);
             free(ca);
             free(cb);
+            free(ct);
+            free(cs2);
         }
         rs__roadfield_free(ctx, fa);
         rs__roadfield_free(ctx, fb);
+        rs__roadfield_free(ctx, ft);
+        rs__roadfield_free(ctx, fs);
         rs_roads_free(ctx, a);
         rs_roads_free(ctx, b);
     }
@@ -549,6 +567,17 @@ static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
     return r;
 }
 
+static rs_result alloc_tree_try(rs_ctx *c, void *user, int *wrong)
+{
+    rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
+    p.relation_scan = 1;
+    rs__roadfield *f = NULL;
+    rs_result r = rs__roadfield_build(c, user, &p, &f);
+    *wrong = r != RS_OK && f != NULL;
+    rs__roadfield_free(c, f);
+    return r;
+}
+
 typedef struct widen_try_arg {
     const rs__roadfield *f;
     const double *extra;
@@ -574,6 +603,8 @@ static void test_alloc_failures(void)
     if (!roads) return;
     fail_sweep fs = fail_alloc_sweep(1000, alloc_try, roads);
     CHECK_SWEEP(fs, 4);
+    fs = fail_alloc_sweep(1000, alloc_tree_try, roads); /* the holder tree's allocations too */
+    CHECK_SWEEP(fs, 7);
     /* the widened field */
     rs__roadfield_params p = params(0, 0, 1, 60, 60, 0, 0.5);
     rs__roadfield *f = NULL;
