@@ -13,19 +13,11 @@
 #include <ogr_srs_api.h>
 
 #include <ctype.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-
-static void init(void)
-{
-    static int done;
-    if (done) return;
-    done = 1;
-    GDALAllRegister();
-    CPLSetErrorHandler(CPLQuietErrorHandler); /* messages come from us, one line each */
-}
 
 /* GDAL's last error as one line (newlines folded), or `fallback`. */
 static const char *last_error(const char *fallback)
@@ -37,6 +29,129 @@ static const char *last_error(const char *fallback)
     for (; m[n] && n + 1 < sizeof buf; n++) buf[n] = (m[n] == '\n' || m[n] == '\r') ? ' ' : m[n];
     buf[n] = '\0';
     return buf;
+}
+
+/* Untrusted inputs (no --gdal-trust): GDAL makes no network request.
+ * /vsicurl/ reads only files of an extension nothing has, every HTTP
+ * request of GDAL's own (schemas, the HTTP driver, WMS, ...) goes to a
+ * proxy on the discard port of this host, which refuses it, and a VRT
+ * cannot read raw bytes of any file. Paths that are URLs never reach GDAL
+ * (cli_gdal_path_check). */
+static void network_off(void)
+{
+    static const char *const opts[][2] = {
+        { "CPL_VSIL_CURL_ALLOWED_EXTENSIONS", ".roadsplat-network-disabled" },
+        { "CPL_VSIL_CURL_ALLOWED_FILENAME", "roadsplat-network-disabled" },
+        { "GDAL_HTTP_PROXY", "127.0.0.1:9" },
+        { "GDAL_HTTPS_PROXY", "127.0.0.1:9" },
+        { "GDAL_HTTP_MAX_RETRY", "0" },
+        { "GDAL_HTTP_TIMEOUT", "1" },
+        { "GML_DOWNLOAD_WFS_SCHEMA", "NO" },
+        { "GML_SKIP_RESOLVE_ELEMS", "ALL" },
+        { "GDAL_VRT_ENABLE_RAWRASTERBAND", "NO" },
+        { "GDAL_VRT_ENABLE_PYTHON", "NO" },
+    };
+    for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++) CPLSetConfigOption(opts[i][0], opts[i][1]);
+}
+
+static void init(void)
+{
+    static int done;
+    if (!done) {
+        done = 1;
+        GDALAllRegister();
+        CPLSetErrorHandler(CPLQuietErrorHandler); /* messages come from us, one line each */
+    }
+    if (!cli_gdal_trusted()) network_off();
+}
+
+/* The drivers untrusted DEMs and roads are opened with: formats of one
+ * local file (or a folder of them) that read no other file by a name
+ * written inside it. A VRT is checked first (vrt_sources_local). */
+static const char *const dem_drivers[] = { "GTiff", "AAIGrid", "GSAG", "GSBG", "GS7BG", "SRTMHGT", "EHdr", "ENVI",
+                                           "XYZ", "USGSDEM", "HFA", "PNG", "JPEG", "BMP", "GIF", "BT", "ERS", "RST",
+                                           "JP2OpenJPEG", "NetCDF", "VRT", NULL };
+static const char *const road_drivers[] = { "GeoJSON", "GeoJSONSeq", "ESRIJSON", "TopoJSON", "GPKG", "SQLite",
+                                            "ESRI Shapefile", "OSM", "FlatGeobuf", "GML", "KML", "CSV",
+                                            "OpenFileGDB", "MapInfo File", "GPX", NULL };
+
+/* Untrusted: 0 when the driver that identifies `path` is allowed (list),
+ * 2 when none does, 1 after a message naming the driver and the flag. */
+static int driver_allowed(const char *path, unsigned kind, const char *const *list, const char *what)
+{
+    if (cli_gdal_trusted()) return 0;
+    GDALDriverH d = GDALIdentifyDriverEx(path, kind, NULL, NULL);
+    if (!d) return 2;
+    const char *name = GDALGetDriverShortName(d);
+    for (size_t i = 0; list[i]; i++)
+        if (!strcmp(list[i], name)) return 0;
+    if (!strcmp(name, "PNM")) return 2; /* PPM and friends: OpenImageIO's (and refused there as DEMs) */
+    cli_error("%s: GDAL reads it with its %s driver, which roadsplat uses for %s only with --gdal-trust (it may "
+              "read other files or the network; docs/ROBUSTNESS.md)", path, name, what);
+    return 1;
+}
+
+/* A VRT is opened untrusted only when every source it names is a file
+ * in its own folder or below (relativeToVRT, no "..", no /vsi or URL),
+ * itself checked when it is a VRT, and no band is of a kind that reads
+ * raw bytes or runs code. 0, or 1 after a message. */
+static int vrt_sources_local(const char *path, int depth)
+{
+    if (cli_gdal_trusted()) return 0;
+    GDALDriverH d = GDALIdentifyDriverEx(path, GDAL_OF_RASTER, NULL, NULL);
+    if (!d || strcmp(GDALGetDriverShortName(d), "VRT")) return 0;
+    if (depth > 4) {
+        cli_error("%s: VRTs nested more than 4 deep", path);
+        return 1;
+    }
+    CPLXMLNode *root = CPLParseXMLFile(path);
+    if (!root) {
+        cli_error("%s: not a VRT roadsplat can read (%s)", path, last_error("XML error"));
+        return 1;
+    }
+    int bad = 0;
+    /* depth-first over the tree with an explicit stack */
+    CPLXMLNode *stack[64];
+    int sp = 0;
+    stack[sp++] = root;
+    while (sp && !bad) {
+        CPLXMLNode *n = stack[--sp];
+        for (; n && !bad; n = n->psNext) {
+            if (n->eType != CXT_Element) continue;
+            if (!strcmp(n->pszValue, "VRTRasterBand")) {
+                const char *sub = CPLGetXMLValue(n, "subClass", NULL);
+                if (sub && strcmp(sub, "VRTSourcedRasterBand")) {
+                    cli_error("%s: a VRT band of kind %s is read only with --gdal-trust (docs/ROBUSTNESS.md)", path,
+                              sub);
+                    bad = 1;
+                }
+            } else if (!strcmp(n->pszValue, "SourceFilename")) {
+                const char *rel = CPLGetXMLValue(n, "relativeToVRT", "0");
+                const char *v = CPLGetXMLValue(n, NULL, "");
+                if (strcmp(rel, "1") || !v[0] || v[0] == '/' || strstr(v, "..") || strstr(v, "://") ||
+                    strchr(v, ':')) {
+                    cli_error("%s: the VRT reads '%.200s', not a file beside it; roadsplat follows such a VRT only "
+                              "with --gdal-trust (docs/ROBUSTNESS.md)", path, v);
+                    bad = 1;
+                } else {
+                    const char *dir = CPLGetPath(path);
+                    char *src = CPLStrdup(CPLFormFilename(dir, v, NULL));
+                    bad = vrt_sources_local(src, depth + 1);
+                    CPLFree(src);
+                }
+            }
+            if (n->psChild && !bad) {
+                if (sp == 64) {
+                    cli_error("%s: the VRT is nested too deeply", path);
+                    bad = 1;
+                } else {
+                    stack[sp++] = n->psChild;
+                }
+            }
+        }
+    }
+    CPLDestroyXMLNode(root);
+    return bad;
 }
 
 /* "EPSG:X" when the CRS has (or is identified with) an EPSG code, else
@@ -93,8 +208,22 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
     *z = NULL;
     *nodata = 0;
     CPLErrorReset();
-    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
-    if (!ds) return 2;
+    if (cli_gdal_path_check(path)) return 1;
+    int allowed = driver_allowed(path, GDAL_OF_RASTER, dem_drivers, "DEMs");
+    if (allowed) return allowed;
+    if (vrt_sources_local(path, 0)) return 1;
+    const int trusted = cli_gdal_trusted();
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, trusted ? NULL : dem_drivers, NULL, NULL);
+    if (!ds) {
+        /* a format GDAL knows but could not open: GDAL's reason, not OpenImageIO's */
+        GDALDriverH d = GDALIdentifyDriverEx(path, GDAL_OF_RASTER, NULL, NULL);
+        const char *dn = d ? GDALGetDriverShortName(d) : NULL;
+        if (!dn || !strcmp(dn, "PNG") || !strcmp(dn, "GTiff") || !strcmp(dn, "JPEG") || !strcmp(dn, "BMP") ||
+            !strcmp(dn, "PNM"))
+            return 2;
+        cli_error("%s: GDAL (%s driver): %s", path, dn, last_error("cannot open it"));
+        return 1;
+    }
     const char *drv = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
     double gt[6];
     int has_gt = GDALGetGeoTransform(ds, gt) == CE_None;
@@ -117,6 +246,7 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
         goto out;
     }
     if (!has_gt) { gt[0] = 0; gt[1] = 1; gt[2] = 0; gt[3] = 0; gt[4] = 0; gt[5] = -1; }
+    if (cli_geo_check_gt(path, gt)) goto out;
     if (gt[2] != 0 || gt[4] != 0) {
         cli_error("%s: the geotransform is rotated (terms %g and %g); roadsplat needs a north-up grid: "
                   "gdalwarp %s north_up.tif", path, gt[2], gt[4], path);
@@ -157,11 +287,36 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
         cli_error("%s: out of memory for a %dx%d DEM", path, W, H);
         goto out;
     }
-    if (GDALRasterIO(b, GF_Read, 0, 0, W, H, buf, W, H, GDT_Float32, 0, 0) != CE_None) {
-        cli_error("%s: %s", path, last_error("cannot read the raster"));
+    /* row by row as doubles: a sample beyond the float range is an error
+     * naming it, not a silent nodata (an inf after the conversion) */
+    double *row = malloc((size_t)W * sizeof *row);
+    if (!row) {
+        cli_error("%s: out of memory for a %dx%d DEM", path, W, H);
         free(buf);
         goto out;
     }
+    int has_nd0 = 0;
+    double nd0 = GDALGetRasterNoDataValue(b, &has_nd0);
+    for (int y = 0; y < H; y++) {
+        if (GDALRasterIO(b, GF_Read, 0, y, W, 1, row, W, 1, GDT_Float64, 0, 0) != CE_None) {
+            cli_error("%s: %s", path, last_error("cannot read the raster"));
+            free(row);
+            free(buf);
+            goto out;
+        }
+        for (int x = 0; x < W; x++) {
+            double v = row[x];
+            if (isfinite(v) && fabs(v) > FLT_MAX && !(has_nd0 && v == nd0)) {
+                cli_error("%s: the sample at column %d, row %d is %.17g, beyond the float range of heights (%g); "
+                          "scale the DEM (gdal_translate -scale) or mark it nodata", path, x, y, v, (double)FLT_MAX);
+                free(row);
+                free(buf);
+                goto out;
+            }
+            buf[(size_t)y * W + x] = has_nd0 && v == nd0 ? NAN : (float)v;
+        }
+    }
+    free(row);
     int has_nd = 0;
     double nd = GDALGetRasterNoDataValue(b, &has_nd);
     float ndf = (float)nd;
@@ -479,7 +634,9 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
     *text = NULL;
     *size = 0;
     CPLErrorReset();
-    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+    if (cli_gdal_path_check(path) || driver_allowed(path, GDAL_OF_VECTOR, road_drivers, "roads") == 1) return 1;
+    const char *const *allow = cli_gdal_trusted() ? NULL : road_drivers;
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
     if (!ds) {
         cli_error("%s: not a vector source GDAL can read (%s)", shown, last_error("unknown format or broken file"));
         return 1;
@@ -598,7 +755,7 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
      * reads its layers in one stream), or the Point features of a layer of
      * mixed geometries (GeoJSON from OSM) */
     if (osm) {
-        GDALDatasetH pds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+        GDALDatasetH pds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
         OGRLayerH pl = pds ? GDALDatasetGetLayerByName(pds, "points") : NULL;
         int oom = 0;
         if (pl) {
