@@ -96,7 +96,7 @@ int cli_out_commit_all(cli_out *const *outs, size_t n);
  * so that a signal removes it. Returns the descriptor, or -1 with errno. */
 int cli_temp_create(const char *path, char **tmp);
 void cli_temp_remove(const char *tmp); /* unlink + forget */
-int cli_temp_create_named(const char *tmp); /* a temporary of a fixed name (cli/util.c) */
+int cli_temp_create_named(const char *tmp); /* a new temporary of a name unique to the run (O_EXCL | O_NOFOLLOW) */
 void cli_temp_forget(const char *tmp); /* after a rename */
 /* SIGINT, SIGTERM, SIGHUP: remove every registered temporary and exit with
  * status 128 + signal. Call once at start-up. */

@@ -450,16 +450,16 @@ int cli_temp_create(const char *path, char **tmp)
     return fd;
 }
 
-/* A temporary of a fixed name `tmp` (made or truncated; 0666 & ~umask),
- * registered for removal on a signal: a rerun that makes the same output
- * again reuses the name, so a temporary left by SIGKILL does not stay.
- * Only for outputs that one process at a time writes. Returns the
- * descriptor or -1 with errno set. */
+/* A temporary of the caller's name `tmp` (unique to the run: tiles'
+ * ".NAME.RUNID.part"), made new with O_EXCL | O_NOFOLLOW, so nothing
+ * planted under that name (a symbolic link, another run's file) is
+ * followed or truncated; 0666 & ~umask; registered for removal on a
+ * signal. Returns the descriptor or -1 with errno set. */
 int cli_temp_create_named(const char *tmp)
 {
     sigset_t saved;
     signals_block(1, &saved);
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     int e = errno;
     if (fd >= 0 && temp_register(tmp)) {
         close(fd);
