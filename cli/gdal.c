@@ -6,6 +6,7 @@
 #include "gis.h"
 
 #include <cpl_conv.h>
+#include <gdal_alg.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
 #include <gdal.h>
@@ -13,11 +14,15 @@
 #include <ogr_srs_api.h>
 
 #include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
 
 /* GDAL's last error as one line (newlines folded), or `fallback`. */
 static const char *last_error(const char *fallback)
@@ -902,6 +907,70 @@ char *cli_gdal_prj_text(const char *crs, const char *shown)
 
 /* ---- GeoTIFF output ------------------------------------------------------------ */
 
+/* Why a write failed, in the user's terms: a full file system is named
+ * as such (libtiff reports it as "Seek error at scanline 512" and the
+ * like), anything else as GDAL's message. */
+static const char *write_error(const char *path, uint64_t raw, const char *fallback)
+{
+    static char buf[160];
+    char *dir = CPLStrdup(CPLGetPath(path));
+    struct statvfs sv;
+    /* less room left than the image holds uncompressed: the likely cause */
+    int full = statvfs(dir[0] ? dir : ".", &sv) == 0 && (uint64_t)sv.f_bavail * sv.f_frsize < raw;
+    CPLFree(dir);
+    if (full) {
+        snprintf(buf, sizeof buf, "the file system is full (%llu KiB free there; the image holds %llu KiB before "
+                 "compression)", (unsigned long long)((uint64_t)sv.f_bavail * sv.f_frsize >> 10),
+                 (unsigned long long)(raw >> 10));
+        return buf;
+    }
+    return last_error(fallback);
+}
+
+/* The GeoTIFF at path read back whole: synced, every band of the full
+ * image equal to data, every overview readable. GDAL's writers (the COG
+ * driver above all) can lose a write error on a full disk and leave a
+ * truncated file behind: this is the check that catches it. 0, or 1
+ * after a message naming shown. */
+static int verify_tiff(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                       const void *data)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    int bad = fd < 0 || (fsync(fd) != 0 && errno != EINVAL);
+    int e = errno;
+    if (fd >= 0) close(fd);
+    if (bad) {
+        cli_error("%s: write failed: %s", shown, strerror(e ? e : EIO));
+        return 1;
+    }
+    static const char *const gtiff[] = { "GTiff", NULL };
+    CPLErrorReset();
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, gtiff, NULL, NULL);
+    size_t bytes = bits == 16 ? 2 : 1, row = (size_t)w * channels * bytes;
+    unsigned char *buf = ds ? malloc(row) : NULL;
+    bad = !ds || !buf || GDALGetRasterXSize(ds) != (int)w || GDALGetRasterYSize(ds) != (int)h ||
+          GDALGetRasterCount(ds) != channels;
+    int bands[4] = { 1, 2, 3, 4 };
+    GDALDataType dt = bits == 16 ? GDT_UInt16 : GDT_Byte;
+    for (uint32_t y = 0; !bad && y < h; y++)
+        bad = GDALDatasetRasterIO(ds, GF_Read, 0, (int)y, (int)w, 1, buf, (int)w, 1, dt, channels, bands,
+                                  (GSpacing)channels * bytes, (GSpacing)row, (GSpacing)bytes) != CE_None ||
+              memcmp(buf, (const unsigned char *)data + (size_t)y * row, row) != 0;
+    for (int b = 1; !bad && b <= channels; b++) {
+        GDALRasterBandH band = GDALGetRasterBand(ds, b);
+        for (int o = 0, no = GDALGetOverviewCount(band); !bad && o < no; o++) {
+            GDALRasterBandH ov = GDALGetOverview(band, o);
+            CPLErrorReset();
+            GDALChecksumImage(ov, 0, 0, GDALGetRasterBandXSize(ov), GDALGetRasterBandYSize(ov));
+            bad = CPLGetLastErrorType() >= CE_Failure;
+        }
+    }
+    if (bad) cli_error("%s: write failed: %s", shown, write_error(path, (uint64_t)row * h, "the GeoTIFF did not reach the disk whole"));
+    free(buf);
+    if (ds) GDALClose(ds);
+    return bad;
+}
+
 int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
                         const void *data, const double gt[6], const char *crs, int cog)
 {
@@ -943,15 +1012,16 @@ int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_
     const char *copts[] = { "COMPRESS=DEFLATE", "BLOCKSIZE=256", "OVERVIEWS=AUTO", NULL };
     GDALDatasetH out = GDALCreateCopy(gtiff, path, src, FALSE, (char **)(cog ? copts : topts), NULL, NULL);
     if (!out) {
-        cli_error("%s: write failed: %s", shown, last_error("GDAL could not write it"));
+        cli_error("%s: write failed: %s", shown, write_error(path, (uint64_t)w * h * channels * bytes, "GDAL could not write it"));
         goto out;
     }
     CPLErrorReset();
     GDALClose(out); /* void in GDAL 3.6: a failed flush shows as an error state */
     if (CPLGetLastErrorType() >= CE_Failure) {
-        cli_error("%s: write failed: %s", shown, last_error("GDAL could not close it"));
+        cli_error("%s: write failed: %s", shown, write_error(path, (uint64_t)w * h * channels * bytes, "GDAL could not close it"));
         goto out;
     }
+    if (verify_tiff(path, shown, w, h, channels, bits, data)) goto out;
     rc = 0;
 out:
     if (srs) OSRDestroySpatialReference(srs);
