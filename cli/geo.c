@@ -399,6 +399,9 @@ static const char convert_usage[] =
     "                   centre when that is in degrees)\n"
     "  --layer NAME     the layer to read (default: the first line layer; OSM: lines)\n"
     "  --where SQL      only features matching this attribute filter\n"
+    "  --gdal-trust     open ROADS_IN and --dem with every GDAL driver and network\n"
+    "                   access (URLs, VRTs naming any file); default: local files\n"
+    "                   of an allow-list of formats (docs/ROBUSTNESS.md)\n"
     "  --help           show this help and exit\n";
 
 int cli_convert_main(int argc, char **argv)
@@ -422,6 +425,14 @@ int cli_convert_main(int argc, char **argv)
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
             fputs(convert_usage, stdout);
             return 0;
+        }
+        if (!strcmp(name, "--gdal-trust")) {
+            if (inl) {
+                cli_error("%s takes no value", name);
+                return 1;
+            }
+            cli_gdal_set_trust(1);
+            continue;
         }
         if (!strcmp(name, "--dem") || !strcmp(name, "--t-srs") || !strcmp(name, "--layer") ||
             !strcmp(name, "--where")) {

@@ -67,6 +67,12 @@ static const char usage_text[] =
     "  --world-file          also write OUT's world file (.pgw, .tfw) and .prj\n";
 /* two strings: C99 compilers need only take 4095 characters in one */
 static const char usage_text2[] =
+    "  --gdal-trust          open DEM and ROADS with every GDAL driver (VRTs naming\n"
+    "                        any file, URLs, network access); default: local files\n"
+    "                        of an allow-list of formats only (docs/ROBUSTNESS.md)\n"
+    "  --max-image-pixels N  decoded-image budget: the pixels all textures, the atlas\n"
+    "                        and surface images may hold together (default 134217728\n"
+    "                        = 512 MiB as RGBA; 0: no budget)\n"
     "  --cog                 OUT.tif as a Cloud Optimized GeoTIFF (with overviews)\n"
     "  --threads N           worker threads (default: all cores; same output for any N)\n"
     "  --weight-out FILE     write the road weight R = 1 - alpha, 16-bit: .pgm (or no\n"
@@ -454,6 +460,10 @@ static int splat_main(int argc, char **argv)
         (prj_path && cli_out_open(&out_prj, prj_path)) || (a.normal_out && cli_out_open(&out_nm, a.normal_out)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    /* now every input is known (the styles' surface images, the atlas...):
+     * no output may replace one (checked again at the renames) */
+    for (size_t k = 0; k < 6; k++)
+        if (cli_inputs_check_output(outs[k].path, outs[k].role)) goto done;
     if (a.world_file && !(in.world && in.geo.georef)) {
         cli_error("--world-file: %s", in.geo.georef ? "the roads are not in the DEM's world frame ('frame world' or GIS roads)"
                                                     : "the DEM has no georeference");
@@ -590,6 +600,7 @@ done:
     cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     cli_bigalloc_destroy(ba);
+    cli_inputs_clear();
     return rc;
 }
 
