@@ -312,7 +312,7 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
         for (int x = 0; x < W; x++) {
             double v = row[x];
             if (isfinite(v) && fabs(v) > FLT_MAX && !(has_nd0 && v == nd0)) {
-                cli_error("%s: the sample at column %d, row %d is %.17g, beyond the float range of heights (%g); "
+                cli_error("%s: the sample at column %d, row %d is %.12g, beyond the float range of heights (%g); "
                           "scale the DEM (gdal_translate -scale) or mark it nodata", path, x, y, v, (double)FLT_MAX);
                 free(row);
                 free(buf);
