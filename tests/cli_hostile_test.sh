@@ -93,6 +93,7 @@ if [ -x "$GEN" ] && "$GEN" "$T/atlas.c" "$T/atlas.png" "$T/atlas.txt"; then
         "$T/roads.txt" "$T/o5.png" 2>"$T/e"
     check "--normal-out over --atlas refused ($(cat "$T/e"))" sh -c "cmp -s '$T/atlas.png' '$T/atlas.orig' && grep -q 'is also the --atlas' '$T/e'"
     # ---- row 12: a custom atlas without the automatic types ----
+    cp "$T/atlas.orig" "$T/atlas.png"
     grep -v '^arrow\|^stop_line\|^give_way_line\|^zebra' "$T/atlas.txt" >"$T/atlas_few.txt"
     "$BIN" --quiet --atlas "$T/atlas.png" --atlas-index "$T/atlas_few.txt" "$T/dem.pgm" "$T/roads.txt" "$T/o12.png" 2>"$T/e"
     check "custom atlas without the automatic types: a warning naming them ($(cat "$T/e"))" grep -q "warning: .*atlas_few.txt: the atlas has no stop_line, give_way_line, zebra" "$T/e"
