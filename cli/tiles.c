@@ -1196,23 +1196,64 @@ static void clear_logs(int ld, const char *keep)
     closedir(d);
 }
 
+/* One "run ID" line of a log into r->old_ids (the most recent OLD_RUNS). */
+static void old_run_line(run *r, const char *line, size_t n)
+{
+    if (n != 20 || memcmp(line, "run ", 4)) return;
+    for (size_t i = 4; i < 20; i++)
+        if (hexval(line[i]) < 0) return;
+    if (!memcmp(line + 4, r->runid, 16)) return;
+    if (r->n_old == OLD_RUNS) {
+        memmove(r->old_ids[0], r->old_ids[1], sizeof r->old_ids[0] * (OLD_RUNS - 1));
+        r->n_old--;
+    }
+    memcpy(r->old_ids[r->n_old], line + 4, 16);
+    r->old_ids[r->n_old++][16] = '\0';
+}
+
 /* The ids of earlier runs named in this run's own log (its "run ID"
- * lines), the most recent OLD_RUNS, into r->old_ids. */
+ * lines), read with pread: closing a second descriptor of the log would
+ * drop this process's lock on it (fcntl locks are per process and file). */
 static void read_old_runs(run *r, int fd)
 {
-    FILE *f = fdopen(fcntl(fd, F_DUPFD_CLOEXEC, 3), "r");
-    char line[256], id[32];
-    if (!f) return;
-    rewind(f);
-    while (fgets(line, sizeof line, f))
-        if (sscanf(line, "run %16[0-9a-f]", id) == 1 && strlen(id) == 16 && strcmp(id, r->runid)) {
-            if (r->n_old == OLD_RUNS) {
-                memmove(r->old_ids[0], r->old_ids[1], sizeof r->old_ids[0] * (OLD_RUNS - 1));
-                r->n_old--;
+    char buf[1 << 14], line[32];
+    size_t ln = 0;
+    int longline = 0;
+    off_t off = 0;
+    for (;;) {
+        ssize_t k = pread(fd, buf, sizeof buf, off);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) break;
+        off += k;
+        for (ssize_t i = 0; i < k; i++) {
+            if (buf[i] == '\n') {
+                if (!longline) old_run_line(r, line, ln);
+                ln = 0, longline = 0;
+            } else if (ln < sizeof line) {
+                line[ln++] = buf[i];
+            } else {
+                longline = 1;
             }
-            memcpy(r->old_ids[r->n_old++], id, 17);
         }
-    fclose(f);
+    }
+}
+
+/* Runs of one log hold a shared lock on it for their whole life; only a
+ * run that could take it exclusively - no other run of this log is alive,
+ * on this host or through the file system's locks - reads the earlier runs'
+ * ids, whose leftover temporaries it will remove. The exclusive lock then
+ * becomes shared at once (atomically, fcntl), so no later run ever takes a
+ * live run's temporaries for leftovers. */
+static void lock_log(run *r, int fd)
+{
+    struct flock fl;
+    memset(&fl, 0, sizeof fl);
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    int alone = fcntl(fd, F_SETLK, &fl) == 0;
+    if (alone) read_old_runs(r, fd);
+    fl.l_type = F_RDLCK;
+    while (fcntl(fd, alone ? F_SETLK : F_SETLKW, &fl) != 0 && errno == EINTR) {}
 }
 
 /* ---- the manifest ------------------------------------------------------------- */
@@ -1615,7 +1656,7 @@ int cli_tiles_main(int argc, char **argv)
         int append = a.resume || a.from_children;
         int lfd = r.log_path ? open_log_file(logfd, name, r.log_path, O_RDWR | O_CREAT | (append ? O_APPEND : 0)) : -1;
         if (lfd < 0) goto done;
-        read_old_runs(&r, lfd); /* before the truncation below */
+        lock_log(&r, lfd); /* the earlier runs' ids: before the truncation below */
         if (!append && (ftruncate(lfd, 0) != 0 || lseek(lfd, 0, SEEK_SET) != 0)) {
             cli_error("%s: %s", r.log_path, strerror(errno));
             close(lfd);
