@@ -176,17 +176,40 @@ static char *beside(const char *file, const char *name)
     return p;
 }
 
-/* 1 when some road is drawn with a style whose surface image is `name`. */
-static int surface_used(rs_ctx *ctx, const cli_splat_input *in, const cli_splat_args *s, const char *name)
+/* The surface image names of the styles some road is drawn with, each
+ * once: *names malloc'd (pointers into `styles`' copies), *n of them. */
+static int used_surfaces(rs_ctx *ctx, const cli_splat_input *in, const cli_splat_args *s, char (**names)[RS_STYLE_IMAGE_MAX + 1],
+                         size_t *n)
 {
+    *names = NULL;
+    *n = 0;
     if (s->o.style.disable) return 0;
+    size_t cap = 0;
     rs_style st;
-    for (size_t i = 0, n = rs_roads_count(in->roads); i < n; i++)
-        if (rs_road_style(ctx, in->roads, i, in->styles, s->o.style.profile, &st) == RS_OK &&
-            !strcmp(st.surface_image, name))
-            return 1;
+    for (size_t i = 0, nr = rs_roads_count(in->roads); i < nr; i++) {
+        if (rs_road_style(ctx, in->roads, i, in->styles, s->o.style.profile, &st) != RS_OK || !st.surface_image[0])
+            continue;
+        size_t k = 0;
+        while (k < *n && strcmp((*names)[k], st.surface_image)) k++;
+        if (k < *n) continue;
+        if (*n == cap) {
+            cap = cap ? 2 * cap : 8;
+            char(*p)[RS_STYLE_IMAGE_MAX + 1] = realloc(*names, cap * sizeof *p);
+            if (!p) {
+                free(*names);
+                *names = NULL;
+                cli_error("out of memory for surface images");
+                return 1;
+            }
+            *names = p;
+        }
+        memcpy((*names)[(*n)++], st.surface_image, sizeof st.surface_image);
+    }
     return 0;
 }
+
+static int load_used_surfaces(cli_splat_args *s, const char *roads_path, size_t nfile, cli_splat_input *in, size_t m,
+                              const char (*used)[RS_STYLE_IMAGE_MAX + 1], size_t nused);
 
 /* Decode the image of every style with `surface IMG` that some road is
  * drawn with (an unused style costs nothing), each file once (two names of
@@ -198,6 +221,20 @@ static int load_surface_images(rs_ctx *ctx, cli_splat_args *s, const char *roads
     size_t n = rs_styles_count(in->styles), m = 0;
     for (size_t i = 0; i < n; i++) m += rs_styles_get(in->styles, i)->surface_image[0] != 0;
     if (!m) return 0;
+    char(*used)[RS_STYLE_IMAGE_MAX + 1];
+    size_t nused;
+    if (used_surfaces(ctx, in, s, &used, &nused)) return 1;
+    int rc = load_used_surfaces(s, roads_path, nfile, in, m, (const char(*)[RS_STYLE_IMAGE_MAX + 1])used, nused);
+    free(used);
+    return rc;
+}
+
+/* load_surface_images for the m styles with a surface image, of which the
+ * names `used` are drawn. */
+static int load_used_surfaces(cli_splat_args *s, const char *roads_path, size_t nfile, cli_splat_input *in, size_t m,
+                              const char (*used)[RS_STYLE_IMAGE_MAX + 1], size_t nused)
+{
+    size_t n = rs_styles_count(in->styles);
     in->surf = calloc(m, sizeof *in->surf);
     in->surf_path = calloc(m, sizeof *in->surf_path);
     in->surf_px = calloc(m, sizeof *in->surf_px);
@@ -226,7 +263,9 @@ static int load_surface_images(rs_ctx *ctx, cli_splat_args *s, const char *roads
             if (!same) return 1;
             continue;
         }
-        if (!surface_used(ctx, in, s, st->surface_image)) {
+        size_t u = 0;
+        while (u < nused && strcmp(used[u], st->surface_image)) u++;
+        if (u == nused) { /* no road is drawn with it: not read at all */
             free(path);
             continue;
         }

@@ -232,8 +232,8 @@ typedef struct input_entry {
     char *path, *role;
     dev_t dev;
     ino_t ino;
-    int regular; /* dev/ino name a file an output could replace */
-    int fd;      /* the bytes loaded (from offset 0); -1: a folder */
+    int replaceable; /* a file or folder (not a pipe): an output could replace it */
+    int fd;          /* the bytes loaded (from offset 0); -1: not kept (a folder) */
 } input_entry;
 
 static input_entry *inputs;
@@ -258,7 +258,7 @@ static int input_push(const char *path, const char *role, const struct stat *st,
     }
     e->dev = st ? st->st_dev : 0;
     e->ino = st ? st->st_ino : 0;
-    e->regular = st && S_ISREG(st->st_mode);
+    e->replaceable = st && (S_ISREG(st->st_mode) || S_ISDIR(st->st_mode));
     e->fd = fd;
     ninputs++;
     return 0;
@@ -270,6 +270,9 @@ int cli_inputs_add(const char *path, const char *role, int fd, const void *data,
     if (fstat(fd, &st) != 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
     int keep = -1;
     if (S_ISREG(st.st_mode)) {
+        /* a file read again in that role (a loader called in a loop) is one entry */
+        for (size_t i = 0; i < ninputs; i++)
+            if (inputs[i].dev == st.st_dev && inputs[i].ino == st.st_ino && !strcmp(inputs[i].role, role)) return 0;
         keep = fcntl(fd, F_DUPFD_CLOEXEC, 3);
     } else if (data) { /* a pipe: its bytes, as read */
         FILE *t = tmpfile();
@@ -288,11 +291,12 @@ int cli_inputs_add(const char *path, const char *role, int fd, const void *data,
 
 int cli_inputs_add_path(const char *path, const char *role)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    /* O_NONBLOCK: a FIFO that GDAL has already drained must not block here */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
     struct stat st;
     int bad = fstat(fd, &st) != 0;
-    if (!bad && S_ISDIR(st.st_mode)) { /* a GIS source folder: checked by inode, not hashed */
+    if (!bad && !S_ISREG(st.st_mode)) { /* a GIS source folder (or a FIFO): checked by inode, not hashed */
         close(fd);
         if (input_push(path, role, &st, -1)) { cli_error("out of memory"); return 1; }
         return 0;
@@ -318,7 +322,7 @@ int cli_inputs_check_output(const char *path, const char *role)
     if (!path || stat(path, &so) != 0) return 0; /* not there yet: replaces nothing */
     for (size_t i = 0; i < ninputs; i++) {
         const input_entry *e = &inputs[i];
-        if (e->dev == so.st_dev && e->ino == so.st_ino) {
+        if (e->replaceable && e->dev == so.st_dev && e->ino == so.st_ino) {
             cli_error("%s: %s is also the %s (%s); refusing to overwrite an input", path, role, e->role, e->path);
             return 1;
         }
