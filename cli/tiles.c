@@ -100,7 +100,7 @@ typedef struct targs {
     rs_normal_options normal;
     uint32_t halo;
     uint32_t shard_i, shard_n;
-    const char **opt; /* the splat options as given (for the manifest), --threads left out */
+    const char **opt; /* the splat options as given (for the manifest), --threads, --gdal-trust, --max-image-pixels left out */
     int nopt;
 } targs;
 
@@ -968,7 +968,8 @@ static int parse_targs(int argc, char **argv, targs *a)
                 cli_error("tiles: unknown option '%s' (see roadsplat tiles --help)", arg);
                 return 1;
             }
-            if (strcmp(name, "--threads"))
+            /* not in the fingerprint: they change no byte of a tile */
+            if (strcmp(name, "--threads") && strcmp(name, "--gdal-trust") && strcmp(name, "--max-image-pixels"))
                 for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
         }
     }
