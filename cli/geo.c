@@ -480,7 +480,10 @@ int cli_convert_main(int argc, char **argv)
             cli_geo_free(&geo);
             return 1;
         }
-        if (r) return 1;
+        if (r || cli_inputs_add_path(dem, "--dem")) {
+            cli_geo_free(&geo);
+            return 1;
+        }
         tsrs = geo.crs;
     }
     cli_gdal_roads_opts o;
@@ -494,7 +497,7 @@ int cli_convert_main(int argc, char **argv)
     cli_out out;
     memset(&out, 0, sizeof out);
     int rc = 1;
-    if (cli_gdal_roads_text(pos[0], &o, &text, &size)) goto done;
+    if (cli_gdal_roads_text(pos[0], &o, &text, &size) || cli_inputs_add_path(pos[0], "ROADS_IN")) goto done;
     /* what was written reads back: a check of the converter, and of the CRS line */
     rs_ctx *ctx = NULL;
     rs_roads *roads = NULL;
