@@ -36,6 +36,17 @@ ln -s "$T/keep" "$T/t4/0/0"
 "$BIN" tiles --quiet "$T/dem.pgm" "$T/roads.txt" "$T/t4" 2>"$T/e"
 check "tiles: a tile folder that is a link is refused ($(cat "$T/e"))" sh -c "test ! -e '$T/keep/0.png' && grep -q 'is a symbolic link' '$T/e'"
 
+# a kill -9 leftover of an earlier run of the same log goes when its tile is made again
+"$BIN" tiles --quiet "$T/dem.pgm" "$T/roads.txt" "$T/k3"
+printf 'run 0123456789abcdef\n' >>"$T/k3/.tiles-log/whole.log"
+printf 'half a tile' >"$T/k3/0/0/.0.png.0123456789abcdef.part"
+rm "$T/k3/0/0/0.png"
+check "--resume after a kill: the dead run's temporary is removed" sh -c "'$BIN' tiles --quiet --resume '$T/dem.pgm' '$T/roads.txt' '$T/k3' && test -f '$T/k3/0/0/0.png' && test ! -e '$T/k3/0/0/.0.png.0123456789abcdef.part'"
+ln -s "$T/victim" "$T/k3/0/0/.0.png.0123456789abcdef.part"
+rm "$T/k3/0/0/0.png"
+"$BIN" tiles --quiet --resume "$T/dem.pgm" "$T/roads.txt" "$T/k3"
+check "... a link under a dead run's name is neither followed nor its target removed" sh -c "test -L '$T/k3/0/0/.0.png.0123456789abcdef.part' && test -f '$T/victim'"
+
 # ---- row 9: --resume reads back only regular files of a tile's size --------------
 "$BIN" tiles --quiet "$T/dem.pgm" "$T/roads.txt" "$T/r9"
 cp "$T/r9/0/0/0.png" "$T/tile.png"
