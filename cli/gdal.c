@@ -80,6 +80,17 @@ static const char *const road_drivers[] = { "GeoJSON", "GeoJSONSeq", "ESRIJSON",
                                             "ESRI Shapefile", "OSM", "FlatGeobuf", "GML", "KML", "CSV",
                                             "OpenFileGDB", "MapInfo File", "GPX", NULL };
 
+/* Image formats a DEM without georeference is read in by OpenImageIO, as
+ * before GDAL: when GDAL does not open one, OpenImageIO gets the file. */
+static int image_format(const char *driver)
+{
+    static const char *const names[] = { "PNG", "GTiff", "JPEG", "BMP", "PNM", "EXR", "WEBP", "HEIF", "JPEGXL", "DDS",
+                                         NULL };
+    for (size_t i = 0; names[i]; i++)
+        if (!strcmp(names[i], driver)) return 1;
+    return 0;
+}
+
 /* Untrusted: 0 when the driver that identifies `path` is allowed (list),
  * 2 when none does, 1 after a message naming the driver and the flag. */
 static int driver_allowed(const char *path, unsigned kind, const char *const *list, const char *what)
@@ -90,7 +101,7 @@ static int driver_allowed(const char *path, unsigned kind, const char *const *li
     const char *name = GDALGetDriverShortName(d);
     for (size_t i = 0; list[i]; i++)
         if (!strcmp(list[i], name)) return 0;
-    if (!strcmp(name, "PNM")) return 2; /* PPM and friends: OpenImageIO's (and refused there as DEMs) */
+    if (image_format(name)) return 2; /* OpenImageIO reads it, from that one file */
     cli_error("%s: GDAL reads it with its %s driver, which roadsplat uses for %s only with --gdal-trust (it may "
               "read other files or the network; docs/ROBUSTNESS.md)", path, name, what);
     return 1;
@@ -223,9 +234,7 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
         /* a format GDAL knows but could not open: GDAL's reason, not OpenImageIO's */
         GDALDriverH d = GDALIdentifyDriverEx(path, GDAL_OF_RASTER, NULL, NULL);
         const char *dn = d ? GDALGetDriverShortName(d) : NULL;
-        if (!dn || !strcmp(dn, "PNG") || !strcmp(dn, "GTiff") || !strcmp(dn, "JPEG") || !strcmp(dn, "BMP") ||
-            !strcmp(dn, "PNM"))
-            return 2;
+        if (!dn || image_format(dn)) return 2;
         cli_error("%s: GDAL (%s driver): %s", path, dn, last_error("cannot open it"));
         return 1;
     }
