@@ -40,9 +40,12 @@ int cli_read_input(const char *path, const char *role, size_t limit, char **data
  * no output replaces an input (cli_out_commit_all checks every rename) and
  * tiles can hash exactly the bytes that were loaded. A regular file keeps
  * a descriptor of that inode; a pipe's bytes (data, size; NULL when fd is
- * already a copy) go to an unlinked temporary file. 0, or 1 after a
- * message. */
+ * already a copy) go to an unlinked temporary file when
+ * cli_inputs_keep_pipes is on. 0, or 1 after a message. */
 int cli_inputs_add(const char *path, const char *role, int fd, const void *data, size_t size);
+/* Keep a copy of what is read from pipes (for hashing: tiles); off by
+ * default, so a pipe costs no temporary file where nothing hashes it. */
+void cli_inputs_keep_pipes(int on);
 /* An input opened by name by another reader (GDAL): a file or a folder. */
 int cli_inputs_add_path(const char *path, const char *role);
 size_t cli_inputs_count(void);

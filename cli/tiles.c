@@ -1605,6 +1605,7 @@ int cli_tiles_main(int argc, char **argv)
         cli_error("%s", rs_strerror(res));
         goto done;
     }
+    cli_inputs_keep_pipes(1); /* the manifest hashes a pipe's bytes too */
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     /* every file the run read (the styles' surface images too) is hashed
      * as loaded; an MBTiles OUT naming one of them is refused now */

@@ -238,6 +238,9 @@ typedef struct input_entry {
 
 static input_entry *inputs;
 static size_t ninputs, cap_inputs;
+static int keep_pipe_bytes; /* cli_inputs_keep_pipes */
+
+void cli_inputs_keep_pipes(int on) { keep_pipe_bytes = on != 0; }
 
 static int input_push(const char *path, const char *role, const struct stat *st, int fd)
 {
@@ -274,6 +277,12 @@ int cli_inputs_add(const char *path, const char *role, int fd, const void *data,
         for (size_t i = 0; i < ninputs; i++)
             if (inputs[i].dev == st.st_dev && inputs[i].ino == st.st_ino && !strcmp(inputs[i].role, role)) return 0;
         keep = fcntl(fd, F_DUPFD_CLOEXEC, 3);
+    } else if (data && !keep_pipe_bytes) { /* a pipe nobody will hash: nothing to keep */
+        if (input_push(path, role, &st, -1)) {
+            cli_error("out of memory");
+            return 1;
+        }
+        return 0;
     } else if (data) { /* a pipe: its bytes, as read */
         FILE *t = tmpfile();
         if (t && fwrite(data, 1, size, t) == size && fflush(t) == 0) keep = fcntl(fileno(t), F_DUPFD_CLOEXEC, 3);
