@@ -1251,10 +1251,14 @@ static void lock_log(run *r, int fd)
     memset(&fl, 0, sizeof fl);
     fl.l_type = F_WRLCK;
     fl.l_whence = SEEK_SET;
-    int alone = fcntl(fd, F_SETLK, &fl) == 0;
+    int got = fcntl(fd, F_SETLK, &fl) == 0;
+    /* busy: another run of this log is alive; a file system without locks
+     * (ENOLCK, ...): as if alone, the leftovers matter more there */
+    int alone = got || (errno != EAGAIN && errno != EACCES);
     if (alone) read_old_runs(r, fd);
+    if (!got && alone) return;
     fl.l_type = F_RDLCK;
-    while (fcntl(fd, alone ? F_SETLK : F_SETLKW, &fl) != 0 && errno == EINTR) {}
+    while (fcntl(fd, got ? F_SETLK : F_SETLKW, &fl) != 0 && errno == EINTR) {}
 }
 
 /* ---- the manifest ------------------------------------------------------------- */
