@@ -1135,8 +1135,8 @@ static int load_logs(run *r, const char *dir, int ld)
             break;
         }
         char line[256], fp[80];
-        if (!fgets(line, sizeof line, f) || sscanf(line, "roadsplat-tiles-log 1 %70s", fp) != 1 ||
-            strcmp(fp, r->fingerprint)) {
+        int empty = !fgets(line, sizeof line, f); /* a run that has just begun its log */
+        if (!empty && (sscanf(line, "roadsplat-tiles-log 1 %70s", fp) != 1 || strcmp(fp, r->fingerprint))) {
             cli_error("%s: made from other inputs or options than this run (remove it, or rerun that step with the "
                       "same inputs and options)", p);
             bad = 1;
@@ -1176,8 +1176,11 @@ static int load_logs(run *r, const char *dir, int ld)
     return bad;
 }
 
+static int log_in_use(int ld, const char *name);
+
 /* Remove the logs of earlier runs (a whole run without --resume): only
- * regular files of the log folder, never what a symbolic link there names. */
+ * regular files of the log folder, never what a symbolic link there names,
+ * never the log of a run still going. */
 static void clear_logs(int ld, const char *keep)
 {
     int dd = fcntl(ld, F_DUPFD_CLOEXEC, 3);
@@ -1191,7 +1194,8 @@ static void clear_logs(int ld, const char *keep)
         size_t nl = strlen(de->d_name);
         struct stat st;
         if (nl < 5 || strcmp(de->d_name + nl - 4, ".log") || !strcmp(de->d_name, keep)) continue;
-        if (fstatat(ld, de->d_name, &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(st.st_mode))
+        if (fstatat(ld, de->d_name, &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(st.st_mode) &&
+            !log_in_use(ld, de->d_name)) /* a live run's log stays */
             unlinkat(ld, de->d_name, 0);
     }
     closedir(d);
@@ -1244,21 +1248,37 @@ static void read_old_runs(run *r, int fd)
  * on this host or through the file system's locks - reads the earlier runs'
  * ids, whose leftover temporaries it will remove. The exclusive lock then
  * becomes shared at once (atomically, fcntl), so no later run ever takes a
- * live run's temporaries for leftovers. */
-static void lock_log(run *r, int fd)
+ * live run's temporaries for leftovers. 1 when another run holds the log
+ * (nothing locked, nothing read: this run then keeps a log of its own). */
+static int lock_log(run *r, int fd)
 {
     struct flock fl;
     memset(&fl, 0, sizeof fl);
     fl.l_type = F_WRLCK;
     fl.l_whence = SEEK_SET;
-    int got = fcntl(fd, F_SETLK, &fl) == 0;
-    /* busy: another run of this log is alive; a file system without locks
-     * (ENOLCK, ...): as if alone, the leftovers matter more there */
-    int alone = got || (errno != EAGAIN && errno != EACCES);
-    if (alone) read_old_runs(r, fd);
-    if (!got && alone) return;
+    if (fcntl(fd, F_SETLK, &fl) != 0) {
+        if (errno == EAGAIN || errno == EACCES) return 1;
+        read_old_runs(r, fd); /* a file system without locks: as if alone */
+        return 0;
+    }
+    read_old_runs(r, fd);
     fl.l_type = F_RDLCK;
-    while (fcntl(fd, got ? F_SETLK : F_SETLKW, &fl) != 0 && errno == EINTR) {}
+    while (fcntl(fd, F_SETLK, &fl) != 0 && errno == EINTR) {}
+    return 0;
+}
+
+/* 1 when a live run holds a lock on the log `name` of the folder ld. */
+static int log_in_use(int ld, const char *name)
+{
+    int fd = openat(ld, name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return 0;
+    struct flock fl;
+    memset(&fl, 0, sizeof fl);
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    int busy = fcntl(fd, F_GETLK, &fl) == 0 && fl.l_type != F_UNLCK;
+    close(fd);
+    return busy;
 }
 
 /* ---- the manifest ------------------------------------------------------------- */
@@ -1662,7 +1682,18 @@ int cli_tiles_main(int argc, char **argv)
         int append = a.resume || a.from_children;
         int lfd = r.log_path ? open_log_file(logfd, name, r.log_path, O_RDWR | O_CREAT | (append ? O_APPEND : 0)) : -1;
         if (lfd < 0) goto done;
-        lock_log(&r, lfd); /* the earlier runs' ids: before the truncation below */
+        if (lock_log(&r, lfd)) { /* the earlier runs' ids: before the truncation below */
+            /* another run of this step into OUTDIR is alive: a log of this run's own, "NAME-RUNID.log" */
+            char own[96];
+            close(lfd);
+            snprintf(own, sizeof own, "%.*s-%s.log", (int)(strlen(name) - 4), name, r.runid);
+            free(r.log_path);
+            r.log_path = join(logdir, own, NULL);
+            lfd = r.log_path ? open_log_file(logfd, own, r.log_path, O_RDWR | O_CREAT | O_EXCL) : -1;
+            if (lfd < 0) goto done;
+            lock_log(&r, lfd);
+            append = 0;
+        }
         if (!append && (ftruncate(lfd, 0) != 0 || lseek(lfd, 0, SEEK_SET) != 0)) {
             cli_error("%s: %s", r.log_path, strerror(errno));
             close(lfd);
