@@ -74,6 +74,16 @@ for k in 1 2 3; do
 done
 check "three runs into one OUTDIR at once, three times: all exit 0" test $ok10 = 1
 check "... and leave no temporaries" sh -c "! find '$T/c10' -name '*.part' -o -name '.rs-*' | grep -q ."
+ok10=1
+for k in 1 2; do
+    for j in 0 1 2; do
+        "$BIN" tiles --quiet --dense --texels 40 --shard $j/3 "$T/dem.pgm" "$T/roads.txt" "$T/s10" & eval "q$j=\$!"
+        "$BIN" tiles --quiet --dense --texels 40 --resume --shard $j/3 "$T/dem.pgm" "$T/roads.txt" "$T/s10" & eval "u$j=\$!"
+    done
+    for j in 0 1 2; do eval "wait \$q$j" || ok10=0; eval "wait \$u$j" || ok10=0; done
+done
+check "a shard and its --resume at once, each shard, twice: all exit 0" test $ok10 = 1
+check "... and the merge equals one run" sh -c "'$BIN' tiles --quiet --dense --texels 40 --from-children '$T/dem.pgm' '$T/roads.txt' '$T/s10' && diff -r -x .tiles-log '$T/s10' '$T/c10' >/dev/null"
 
 # ---- row 6: tiles from pipes -------------------------------------------------------
 "$BIN" tiles --quiet "$T/dem.pgm" "$T/roads.txt" "$T/p6f"
