@@ -107,6 +107,42 @@ static int driver_allowed(const char *path, unsigned kind, const char *const *li
     return 1;
 }
 
+static int vrt_sources_local(const char *path, int depth);
+
+/* The elements under n (siblings and their children, XML depth `level`)
+ * of the VRT `path`: 0, or 1 after a message (vrt_sources_local). */
+static int vrt_nodes_local(const char *path, const CPLXMLNode *n, int depth, int level)
+{
+    if (level > 32) {
+        cli_error("%s: the VRT is nested too deeply", path);
+        return 1;
+    }
+    for (; n; n = n->psNext) {
+        if (n->eType != CXT_Element) continue;
+        if (!strcmp(n->pszValue, "VRTRasterBand")) {
+            const char *sub = CPLGetXMLValue(n, "subClass", NULL);
+            if (sub && strcmp(sub, "VRTSourcedRasterBand")) {
+                cli_error("%s: a VRT band of kind %s is read only with --gdal-trust (docs/ROBUSTNESS.md)", path, sub);
+                return 1;
+            }
+        } else if (!strcmp(n->pszValue, "SourceFilename")) {
+            const char *rel = CPLGetXMLValue(n, "relativeToVRT", "0");
+            const char *v = CPLGetXMLValue(n, NULL, "");
+            if (strcmp(rel, "1") || !v[0] || v[0] == '/' || strstr(v, "..") || strchr(v, ':')) {
+                cli_error("%s: the VRT reads '%.200s', not a file beside it; roadsplat follows such a VRT only with "
+                          "--gdal-trust (docs/ROBUSTNESS.md)", path, v);
+                return 1;
+            }
+            char *src = CPLStrdup(CPLFormFilename(CPLGetPath(path), v, NULL));
+            int bad = vrt_sources_local(src, depth + 1);
+            CPLFree(src);
+            if (bad) return 1;
+        }
+        if (n->psChild && vrt_nodes_local(path, n->psChild, depth, level + 1)) return 1;
+    }
+    return 0;
+}
+
 /* A VRT is opened untrusted only when every source it names is a file
  * in its own folder or below (relativeToVRT, no "..", no /vsi or URL),
  * itself checked when it is a VRT, and no band is of a kind that reads
@@ -125,47 +161,7 @@ static int vrt_sources_local(const char *path, int depth)
         cli_error("%s: not a VRT roadsplat can read (%s)", path, last_error("XML error"));
         return 1;
     }
-    int bad = 0;
-    /* depth-first over the tree with an explicit stack */
-    CPLXMLNode *stack[64];
-    int sp = 0;
-    stack[sp++] = root;
-    while (sp && !bad) {
-        CPLXMLNode *n = stack[--sp];
-        for (; n && !bad; n = n->psNext) {
-            if (n->eType != CXT_Element) continue;
-            if (!strcmp(n->pszValue, "VRTRasterBand")) {
-                const char *sub = CPLGetXMLValue(n, "subClass", NULL);
-                if (sub && strcmp(sub, "VRTSourcedRasterBand")) {
-                    cli_error("%s: a VRT band of kind %s is read only with --gdal-trust (docs/ROBUSTNESS.md)", path,
-                              sub);
-                    bad = 1;
-                }
-            } else if (!strcmp(n->pszValue, "SourceFilename")) {
-                const char *rel = CPLGetXMLValue(n, "relativeToVRT", "0");
-                const char *v = CPLGetXMLValue(n, NULL, "");
-                if (strcmp(rel, "1") || !v[0] || v[0] == '/' || strstr(v, "..") || strstr(v, "://") ||
-                    strchr(v, ':')) {
-                    cli_error("%s: the VRT reads '%.200s', not a file beside it; roadsplat follows such a VRT only "
-                              "with --gdal-trust (docs/ROBUSTNESS.md)", path, v);
-                    bad = 1;
-                } else {
-                    const char *dir = CPLGetPath(path);
-                    char *src = CPLStrdup(CPLFormFilename(dir, v, NULL));
-                    bad = vrt_sources_local(src, depth + 1);
-                    CPLFree(src);
-                }
-            }
-            if (n->psChild && !bad) {
-                if (sp == 64) {
-                    cli_error("%s: the VRT is nested too deeply", path);
-                    bad = 1;
-                } else {
-                    stack[sp++] = n->psChild;
-                }
-            }
-        }
-    }
+    int bad = vrt_nodes_local(path, root, depth, 0);
     CPLDestroyXMLNode(root);
     return bad;
 }

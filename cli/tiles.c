@@ -236,6 +236,7 @@ static uint64_t file_y(const run *r, uint32_t z, uint64_t y)
 static int own_folder(const char *path)
 {
     struct stat st;
+    memset(&st, 0, sizeof st);
     if (mkdir(path, 0777) != 0 && errno != EEXIST) {
         cli_error("%s: cannot create the folder: %s", path, strerror(errno));
         return 1;
