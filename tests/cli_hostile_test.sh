@@ -193,6 +193,9 @@ V
 V
     "$BIN" --quiet "$T/abs.vrt" "$T/roads.txt" "$T/o11.png" 2>"$T/e"
     check "VRT naming a file by an absolute path refused ($(cat "$T/e"))" sh -c "test ! -e '$T/o11.png' && grep -q 'not a file beside it' '$T/e'"
+    sed 's|<SourceFilename relativeToVRT="0">[^<]*</SourceFilename>|<SourceFilename relativeToVRT="1">abs.vrt</SourceFilename>|' "$T/abs.vrt" >"$T/outer.vrt"
+    "$BIN" --quiet "$T/outer.vrt" "$T/roads.txt" "$T/o11n.png" 2>"$T/e"
+    check "a VRT beside it that names a file by an absolute path: refused too ($(cat "$T/e"))" sh -c "test ! -e '$T/o11n.png' && grep -q 'abs.vrt: the VRT reads' '$T/e'"
     # ROADS as a URL: no request may reach the server
     port=$(python3 -c "import socket; s = socket.socket(); s.bind(('127.0.0.1', 0)); print(s.getsockname()[1])")
     (cd "$T" && exec python3 -m http.server "$port" --bind 127.0.0.1 >"$T/http.log" 2>&1) & hp=$!
