@@ -32,14 +32,44 @@ int cli_parse_size(const char *option, const char *s, uint32_t *w, uint32_t *h);
 /* Read a whole file (max `limit` bytes, 0 = no limit). *data is malloc'd
  * and NUL-terminated (size excludes the NUL). */
 int cli_read_file(const char *path, size_t limit, char **data, size_t *size);
+/* The same for an input of the run: registered under `role` (below). */
+int cli_read_input(const char *path, const char *role, size_t limit, char **data, size_t *size);
+
+/* The run's inputs (docs/ROBUSTNESS.md, "trust model"): every loader
+ * registers the file it read, by the descriptor it read it from, so that
+ * no output replaces an input (cli_out_commit_all checks every rename) and
+ * tiles can hash exactly the bytes that were loaded. A regular file keeps
+ * a descriptor of that inode; a pipe's bytes (data, size; NULL when fd is
+ * already a copy) go to an unlinked temporary file when
+ * cli_inputs_keep_pipes is on. 0, or 1 after a message. */
+int cli_inputs_add(const char *path, const char *role, int fd, const void *data, size_t size);
+/* Keep a copy of what is read from pipes (for hashing: tiles); off by
+ * default, so a pipe costs no temporary file where nothing hashes it. */
+void cli_inputs_keep_pipes(int on);
+/* An input opened by name by another reader (GDAL): a file or a folder. */
+int cli_inputs_add_path(const char *path, const char *role);
+size_t cli_inputs_count(void);
+/* Entry i's names; returns its descriptor (read it with pread from offset
+ * 0; -1: a folder, -1 too when i is out of range). */
+int cli_inputs_get(size_t i, const char **path, const char **role);
+/* 1 after a message when the existing file `path` is one of the inputs. */
+int cli_inputs_check_output(const char *path, const char *role);
+void cli_inputs_clear(void);
+
+/* The decoded-image budget: the pixels every texture, atlas and surface
+ * image of a run may hold together (--max-image-pixels; 0: none). */
+#define CLI_IMAGE_BUDGET_DEFAULT ((uint64_t)1 << 27)
+void cli_image_budget_set(uint64_t pixels);
 
 /* Load a DEM: PGM (P2/P5) through the library, anything else through
  * OpenImageIO (PNG 8/16-bit, TIFF incl. float32; single channel, or the
  * first channel of a grey+alpha image). Prints the error and returns NULL. */
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path);
 /* A texture image as RGBA8 (malloc'd, the caller frees *rgba); OpenImageIO's
- * own stderr output is filtered as for DEMs. 0 or 1 after a message. */
-int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba);
+ * own stderr output is filtered as for DEMs. Registered as an input under
+ * `role` (NULL: not) and charged to the decoded-image budget (a PNG from
+ * its header, before decoding). 0 or 1 after a message. */
+int cli_load_texture(const char *path, const char *role, uint32_t *w, uint32_t *h, uint8_t **rgba);
 /* A context for the next cli_error lines ("FILE line N: surface image"),
  * printed before their message; NULL: none. */
 void cli_error_context(const char *context);
@@ -69,7 +99,7 @@ int cli_out_commit_all(cli_out *const *outs, size_t n);
  * so that a signal removes it. Returns the descriptor, or -1 with errno. */
 int cli_temp_create(const char *path, char **tmp);
 void cli_temp_remove(const char *tmp); /* unlink + forget */
-int cli_temp_create_named(const char *tmp); /* a temporary of a fixed name (cli/util.c) */
+int cli_temp_create_named(const char *tmp); /* a new temporary of a name unique to the run (O_EXCL | O_NOFOLLOW) */
 void cli_temp_forget(const char *tmp); /* after a rename */
 /* SIGINT, SIGTERM, SIGHUP: remove every registered temporary and exit with
  * status 128 + signal. Call once at start-up. */

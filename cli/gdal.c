@@ -6,6 +6,7 @@
 #include "gis.h"
 
 #include <cpl_conv.h>
+#include <gdal_alg.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
 #include <gdal.h>
@@ -13,19 +14,15 @@
 #include <ogr_srs_api.h>
 
 #include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-
-static void init(void)
-{
-    static int done;
-    if (done) return;
-    done = 1;
-    GDALAllRegister();
-    CPLSetErrorHandler(CPLQuietErrorHandler); /* messages come from us, one line each */
-}
+#include <sys/statvfs.h>
+#include <unistd.h>
 
 /* GDAL's last error as one line (newlines folded), or `fallback`. */
 static const char *last_error(const char *fallback)
@@ -37,6 +34,136 @@ static const char *last_error(const char *fallback)
     for (; m[n] && n + 1 < sizeof buf; n++) buf[n] = (m[n] == '\n' || m[n] == '\r') ? ' ' : m[n];
     buf[n] = '\0';
     return buf;
+}
+
+/* Untrusted inputs (no --gdal-trust): GDAL makes no network request.
+ * /vsicurl/ reads only files of an extension nothing has, every HTTP
+ * request of GDAL's own (schemas, the HTTP driver, WMS, ...) goes to a
+ * proxy on the discard port of this host, which refuses it, and a VRT
+ * cannot read raw bytes of any file. Paths that are URLs never reach GDAL
+ * (cli_gdal_path_check). */
+static void network_off(void)
+{
+    static const char *const opts[][2] = {
+        { "CPL_VSIL_CURL_ALLOWED_EXTENSIONS", ".roadsplat-network-disabled" },
+        { "CPL_VSIL_CURL_ALLOWED_FILENAME", "roadsplat-network-disabled" },
+        { "GDAL_HTTP_PROXY", "127.0.0.1:9" },
+        { "GDAL_HTTPS_PROXY", "127.0.0.1:9" },
+        { "GDAL_HTTP_MAX_RETRY", "0" },
+        { "GDAL_HTTP_TIMEOUT", "1" },
+        { "GML_DOWNLOAD_WFS_SCHEMA", "NO" },
+        { "GML_SKIP_RESOLVE_ELEMS", "ALL" },
+        { "GDAL_VRT_ENABLE_RAWRASTERBAND", "NO" },
+        { "GDAL_VRT_ENABLE_PYTHON", "NO" },
+    };
+    for (size_t i = 0; i < sizeof opts / sizeof opts[0]; i++) CPLSetConfigOption(opts[i][0], opts[i][1]);
+}
+
+static void init(void)
+{
+    static int done;
+    if (!done) {
+        done = 1;
+        GDALAllRegister();
+        CPLSetErrorHandler(CPLQuietErrorHandler); /* messages come from us, one line each */
+    }
+    if (!cli_gdal_trusted()) network_off();
+}
+
+/* The drivers untrusted DEMs and roads are opened with: formats of one
+ * local file (or a folder of them) that read no other file by a name
+ * written inside it. A VRT is checked first (vrt_sources_local). */
+static const char *const dem_drivers[] = { "GTiff", "AAIGrid", "GSAG", "GSBG", "GS7BG", "SRTMHGT", "EHdr", "ENVI",
+                                           "XYZ", "USGSDEM", "HFA", "PNG", "JPEG", "BMP", "GIF", "BT", "ERS", "RST",
+                                           "JP2OpenJPEG", "NetCDF", "VRT", NULL };
+static const char *const road_drivers[] = { "GeoJSON", "GeoJSONSeq", "ESRIJSON", "TopoJSON", "GPKG", "SQLite",
+                                            "ESRI Shapefile", "OSM", "FlatGeobuf", "GML", "KML", "CSV",
+                                            "OpenFileGDB", "MapInfo File", "GPX", NULL };
+
+/* Image formats a DEM without georeference is read in by OpenImageIO, as
+ * before GDAL: when GDAL does not open one, OpenImageIO gets the file. */
+static int image_format(const char *driver)
+{
+    static const char *const names[] = { "PNG", "GTiff", "JPEG", "BMP", "PNM", "EXR", "WEBP", "HEIF", "JPEGXL", "DDS",
+                                         NULL };
+    for (size_t i = 0; names[i]; i++)
+        if (!strcmp(names[i], driver)) return 1;
+    return 0;
+}
+
+/* Untrusted: 0 when the driver that identifies `path` is allowed (list),
+ * 2 when none does, 1 after a message naming the driver and the flag. */
+static int driver_allowed(const char *path, unsigned kind, const char *const *list, const char *what)
+{
+    if (cli_gdal_trusted()) return 0;
+    GDALDriverH d = GDALIdentifyDriverEx(path, kind, NULL, NULL);
+    if (!d) return 2;
+    const char *name = GDALGetDriverShortName(d);
+    for (size_t i = 0; list[i]; i++)
+        if (!strcmp(list[i], name)) return 0;
+    if (image_format(name)) return 2; /* OpenImageIO reads it, from that one file */
+    cli_error("%s: GDAL reads it with its %s driver, which roadsplat uses for %s only with --gdal-trust (it may "
+              "read other files or the network; docs/ROBUSTNESS.md)", path, name, what);
+    return 1;
+}
+
+static int vrt_sources_local(const char *path, int depth);
+
+/* The elements under n (siblings and their children, XML depth `level`)
+ * of the VRT `path`: 0, or 1 after a message (vrt_sources_local). */
+static int vrt_nodes_local(const char *path, const CPLXMLNode *n, int depth, int level)
+{
+    if (level > 32) {
+        cli_error("%s: the VRT is nested too deeply", path);
+        return 1;
+    }
+    for (; n; n = n->psNext) {
+        if (n->eType != CXT_Element) continue;
+        if (!strcmp(n->pszValue, "VRTRasterBand")) {
+            const char *sub = CPLGetXMLValue(n, "subClass", NULL);
+            if (sub && strcmp(sub, "VRTSourcedRasterBand")) {
+                cli_error("%s: a VRT band of kind %s is read only with --gdal-trust (docs/ROBUSTNESS.md)", path, sub);
+                return 1;
+            }
+        } else if (!strcmp(n->pszValue, "SourceFilename")) {
+            const char *rel = CPLGetXMLValue(n, "relativeToVRT", "0");
+            const char *v = CPLGetXMLValue(n, NULL, "");
+            if (strcmp(rel, "1") || !v[0] || v[0] == '/' || strstr(v, "..") || strchr(v, ':')) {
+                cli_error("%s: the VRT reads '%.200s', not a file beside it; roadsplat follows such a VRT only with "
+                          "--gdal-trust (docs/ROBUSTNESS.md)", path, v);
+                return 1;
+            }
+            char *src = CPLStrdup(CPLFormFilename(CPLGetPath(path), v, NULL));
+            int bad = vrt_sources_local(src, depth + 1);
+            CPLFree(src);
+            if (bad) return 1;
+        }
+        if (n->psChild && vrt_nodes_local(path, n->psChild, depth, level + 1)) return 1;
+    }
+    return 0;
+}
+
+/* A VRT is opened untrusted only when every source it names is a file
+ * in its own folder or below (relativeToVRT, no "..", no /vsi or URL),
+ * itself checked when it is a VRT, and no band is of a kind that reads
+ * raw bytes or runs code. 0, or 1 after a message. */
+static int vrt_sources_local(const char *path, int depth)
+{
+    if (cli_gdal_trusted()) return 0;
+    GDALDriverH d = GDALIdentifyDriverEx(path, GDAL_OF_RASTER, NULL, NULL);
+    if (!d || strcmp(GDALGetDriverShortName(d), "VRT")) return 0;
+    if (depth > 4) {
+        cli_error("%s: VRTs nested more than 4 deep", path);
+        return 1;
+    }
+    CPLXMLNode *root = CPLParseXMLFile(path);
+    if (!root) {
+        cli_error("%s: not a VRT roadsplat can read (%s)", path, last_error("XML error"));
+        return 1;
+    }
+    int bad = vrt_nodes_local(path, root, depth, 0);
+    CPLDestroyXMLNode(root);
+    return bad;
 }
 
 /* "EPSG:X" when the CRS has (or is identified with) an EPSG code, else
@@ -93,8 +220,20 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
     *z = NULL;
     *nodata = 0;
     CPLErrorReset();
-    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
-    if (!ds) return 2;
+    if (cli_gdal_path_check(path)) return 1;
+    int allowed = driver_allowed(path, GDAL_OF_RASTER, dem_drivers, "DEMs");
+    if (allowed) return allowed;
+    if (vrt_sources_local(path, 0)) return 1;
+    const int trusted = cli_gdal_trusted();
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, trusted ? NULL : dem_drivers, NULL, NULL);
+    if (!ds) {
+        /* a format GDAL knows but could not open: GDAL's reason, not OpenImageIO's */
+        GDALDriverH d = GDALIdentifyDriverEx(path, GDAL_OF_RASTER, NULL, NULL);
+        const char *dn = d ? GDALGetDriverShortName(d) : NULL;
+        if (!dn || image_format(dn)) return 2;
+        cli_error("%s: GDAL (%s driver): %s", path, dn, last_error("cannot open it"));
+        return 1;
+    }
     const char *drv = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
     double gt[6];
     int has_gt = GDALGetGeoTransform(ds, gt) == CE_None;
@@ -117,6 +256,7 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
         goto out;
     }
     if (!has_gt) { gt[0] = 0; gt[1] = 1; gt[2] = 0; gt[3] = 0; gt[4] = 0; gt[5] = -1; }
+    if (cli_geo_check_gt(path, gt)) goto out;
     if (gt[2] != 0 || gt[4] != 0) {
         cli_error("%s: the geotransform is rotated (terms %g and %g); roadsplat needs a north-up grid: "
                   "gdalwarp %s north_up.tif", path, gt[2], gt[4], path);
@@ -157,11 +297,36 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
         cli_error("%s: out of memory for a %dx%d DEM", path, W, H);
         goto out;
     }
-    if (GDALRasterIO(b, GF_Read, 0, 0, W, H, buf, W, H, GDT_Float32, 0, 0) != CE_None) {
-        cli_error("%s: %s", path, last_error("cannot read the raster"));
+    /* row by row as doubles: a sample beyond the float range is an error
+     * naming it, not a silent nodata (an inf after the conversion) */
+    double *row = malloc((size_t)W * sizeof *row);
+    if (!row) {
+        cli_error("%s: out of memory for a %dx%d DEM", path, W, H);
         free(buf);
         goto out;
     }
+    int has_nd0 = 0;
+    double nd0 = GDALGetRasterNoDataValue(b, &has_nd0);
+    for (int y = 0; y < H; y++) {
+        if (GDALRasterIO(b, GF_Read, 0, y, W, 1, row, W, 1, GDT_Float64, 0, 0) != CE_None) {
+            cli_error("%s: %s", path, last_error("cannot read the raster"));
+            free(row);
+            free(buf);
+            goto out;
+        }
+        for (int x = 0; x < W; x++) {
+            double v = row[x];
+            if (isfinite(v) && fabs(v) > FLT_MAX && !(has_nd0 && v == nd0)) {
+                cli_error("%s: the sample at column %d, row %d is %.12g, beyond the float range of heights (%g); "
+                          "scale the DEM (gdal_translate -scale) or mark it nodata", path, x, y, v, (double)FLT_MAX);
+                free(row);
+                free(buf);
+                goto out;
+            }
+            buf[(size_t)y * W + x] = has_nd0 && v == nd0 ? NAN : (float)v;
+        }
+    }
+    free(row);
     int has_nd = 0;
     double nd = GDALGetRasterNoDataValue(b, &has_nd);
     float ndf = (float)nd;
@@ -540,7 +705,9 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
     *text = NULL;
     *size = 0;
     CPLErrorReset();
-    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+    if (cli_gdal_path_check(path) || driver_allowed(path, GDAL_OF_VECTOR, road_drivers, "roads") == 1) return 1;
+    const char *const *allow = cli_gdal_trusted() ? NULL : road_drivers;
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
     if (!ds) {
         cli_error("%s: not a vector source GDAL can read (%s)", shown, last_error("unknown format or broken file"));
         return 1;
@@ -659,7 +826,7 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
      * reads its layers in one stream), or the Point features of a layer of
      * mixed geometries (GeoJSON from OSM) */
     if (osm) {
-        GDALDatasetH pds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+        GDALDatasetH pds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
         OGRLayerH pl = pds ? GDALDatasetGetLayerByName(pds, "points") : NULL;
         int oom = 0;
         if (pl) {
@@ -842,6 +1009,70 @@ char *cli_gdal_prj_text(const char *crs, const char *shown)
 
 /* ---- GeoTIFF output ------------------------------------------------------------ */
 
+/* Why a write failed, in the user's terms: a full file system is named
+ * as such (libtiff reports it as "Seek error at scanline 512" and the
+ * like), anything else as GDAL's message. */
+static const char *write_error(const char *path, uint64_t raw, const char *fallback)
+{
+    static char buf[160];
+    char *dir = CPLStrdup(CPLGetPath(path));
+    struct statvfs sv;
+    /* less room left than the image holds uncompressed: the likely cause */
+    int full = statvfs(dir[0] ? dir : ".", &sv) == 0 && (uint64_t)sv.f_bavail * sv.f_frsize < raw;
+    CPLFree(dir);
+    if (full) {
+        snprintf(buf, sizeof buf, "the file system is full (%llu KiB free there; the image holds %llu KiB before "
+                 "compression)", (unsigned long long)((uint64_t)sv.f_bavail * sv.f_frsize >> 10),
+                 (unsigned long long)(raw >> 10));
+        return buf;
+    }
+    return last_error(fallback);
+}
+
+/* The GeoTIFF at path read back whole: synced, every band of the full
+ * image equal to data, every overview readable. GDAL's writers (the COG
+ * driver above all) can lose a write error on a full disk and leave a
+ * truncated file behind: this is the check that catches it. 0, or 1
+ * after a message naming shown. */
+static int verify_tiff(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
+                       const void *data)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    int bad = fd < 0 || (fsync(fd) != 0 && errno != EINVAL);
+    int e = errno;
+    if (fd >= 0) close(fd);
+    if (bad) {
+        cli_error("%s: write failed: %s", shown, strerror(e ? e : EIO));
+        return 1;
+    }
+    static const char *const gtiff[] = { "GTiff", NULL };
+    CPLErrorReset();
+    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, gtiff, NULL, NULL);
+    size_t bytes = bits == 16 ? 2 : 1, row = (size_t)w * channels * bytes;
+    unsigned char *buf = ds ? malloc(row) : NULL;
+    bad = !ds || !buf || GDALGetRasterXSize(ds) != (int)w || GDALGetRasterYSize(ds) != (int)h ||
+          GDALGetRasterCount(ds) != channels;
+    int bands[4] = { 1, 2, 3, 4 };
+    GDALDataType dt = bits == 16 ? GDT_UInt16 : GDT_Byte;
+    for (uint32_t y = 0; !bad && y < h; y++)
+        bad = GDALDatasetRasterIO(ds, GF_Read, 0, (int)y, (int)w, 1, buf, (int)w, 1, dt, channels, bands,
+                                  (GSpacing)channels * bytes, (GSpacing)row, (GSpacing)bytes) != CE_None ||
+              memcmp(buf, (const unsigned char *)data + (size_t)y * row, row) != 0;
+    for (int b = 1; !bad && b <= channels; b++) {
+        GDALRasterBandH band = GDALGetRasterBand(ds, b);
+        for (int o = 0, no = GDALGetOverviewCount(band); !bad && o < no; o++) {
+            GDALRasterBandH ov = GDALGetOverview(band, o);
+            CPLErrorReset();
+            GDALChecksumImage(ov, 0, 0, GDALGetRasterBandXSize(ov), GDALGetRasterBandYSize(ov));
+            bad = CPLGetLastErrorType() >= CE_Failure;
+        }
+    }
+    if (bad) cli_error("%s: write failed: %s", shown, write_error(path, (uint64_t)row * h, "the GeoTIFF did not reach the disk whole"));
+    free(buf);
+    if (ds) GDALClose(ds);
+    return bad;
+}
+
 int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_t h, int channels, int bits,
                         const void *data, const double gt[6], const char *crs, int cog)
 {
@@ -888,15 +1119,16 @@ int cli_gdal_write_tiff(const char *path, const char *shown, uint32_t w, uint32_
     const char *copts[] = { "COMPRESS=DEFLATE", "BLOCKSIZE=256", "OVERVIEWS=AUTO", NULL };
     GDALDatasetH out = GDALCreateCopy(gtiff, path, src, FALSE, (char **)(cog ? copts : topts), NULL, NULL);
     if (!out) {
-        cli_error("%s: write failed: %s", shown, last_error("GDAL could not write it"));
+        cli_error("%s: write failed: %s", shown, write_error(path, (uint64_t)w * h * channels * bytes, "GDAL could not write it"));
         goto out;
     }
     CPLErrorReset();
     GDALClose(out); /* void in GDAL 3.6: a failed flush shows as an error state */
     if (CPLGetLastErrorType() >= CE_Failure) {
-        cli_error("%s: write failed: %s", shown, last_error("GDAL could not close it"));
+        cli_error("%s: write failed: %s", shown, write_error(path, (uint64_t)w * h * channels * bytes, "GDAL could not close it"));
         goto out;
     }
+    if (verify_tiff(path, shown, w, h, channels, bits, data)) goto out;
     rc = 0;
 out:
     if (srs) OSRDestroySpatialReference(srs);

@@ -96,7 +96,11 @@ rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo)
     size_t nd = 0;
     int r = cli_gdal_read_dem(path, lim.max_dem_side, &w, &h, &z, &nd, geo);
     if (r == 2) return cli_load_dem(ctx, path);
-    if (r) return NULL;
+    if (r || cli_inputs_add_path(path, "DEM")) {
+        free(z);
+        cli_geo_free(geo);
+        return NULL;
+    }
     rs_dem *dem = NULL;
     rs_result rc = rs_dem_create(ctx, w, h, z, &dem);
     free(z);
@@ -120,7 +124,7 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
             return 1;
         }
         /* the default rs_limits.max_points (10^7) at 64 bytes a point */
-        return cli_read_file(roads_path, (size_t)10000000 * 64 + (1u << 20), text, size);
+        return cli_read_input(roads_path, "ROADS", (size_t)10000000 * 64 + (1u << 20), text, size);
     }
     cli_gdal_roads_opts o;
     memset(&o, 0, sizeof o);
@@ -130,13 +134,14 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
     o.shown = roads_path;
     o.counts = counts;
     if (!cli_gdal_available()) return cli_gdal_roads_text(roads_path, &o, text, size); /* says why */
+    if (cli_gdal_path_check(roads_path)) return 1;
     if (!geo->georef || !geo->crs) {
         cli_error("%s: GIS roads are reprojected to the DEM's coordinate system, and the DEM has %s; use a "
                   "georeferenced DEM, or write the roads in a chosen CRS first: roadsplat convert --t-srs EPSG:XXXX %s "
                   "roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
         return 1;
     }
-    return cli_gdal_roads_text(roads_path, &o, text, size);
+    return cli_gdal_roads_text(roads_path, &o, text, size) || cli_inputs_add_path(roads_path, "ROADS");
 }
 
 void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path)
@@ -148,6 +153,26 @@ void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path)
 }
 
 /* ---- the frame --------------------------------------------------------------------- */
+
+int cli_geo_check_gt(const char *path, const double gt[6])
+{
+    for (int k = 0; k < 6; k++)
+        if (!isfinite(gt[k])) {
+            cli_error("%s: the geotransform is not finite (%g, %g, %g, %g, %g, %g)", path, gt[0], gt[1], gt[2], gt[3],
+                      gt[4], gt[5]);
+            return 1;
+        }
+    /* the limits of --origin and --cell-size, in the file's own terms (y north) */
+    if (!(fabs(gt[0]) <= 1e12 && fabs(gt[3]) <= 1e12)) {
+        cli_error("%s: the grid's corner x %.12g, y %.12g (y north) is not within 1e12 m", path, gt[0], gt[3]);
+        return 1;
+    }
+    if (!(fabs(gt[1]) >= 1e-9 && fabs(gt[1]) <= 1e9 && fabs(gt[5]) >= 1e-9 && fabs(gt[5]) <= 1e9)) {
+        cli_error("%s: the pixel size %.12g x %.12g is not in [1e-9, 1e9] m", path, gt[1], fabs(gt[5]));
+        return 1;
+    }
+    return 0;
+}
 
 /* Some road's box, grown by half its width, meets the map's. Boxes in the
  * local frame (library coordinates: world - origin, y down). */
@@ -414,6 +439,9 @@ static const char convert_usage[] =
     "                   centre when that is in degrees)\n"
     "  --layer NAME     the layer to read (default: the first line layer; OSM: lines)\n"
     "  --where SQL      only features matching this attribute filter\n"
+    "  --gdal-trust     open ROADS_IN and --dem with every GDAL driver and network\n"
+    "                   access (URLs, VRTs naming any file); default: local files\n"
+    "                   of an allow-list of formats (docs/ROBUSTNESS.md)\n"
     "  --help           show this help and exit\n";
 
 int cli_convert_main(int argc, char **argv)
@@ -437,6 +465,14 @@ int cli_convert_main(int argc, char **argv)
         if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
             fputs(convert_usage, stdout);
             return 0;
+        }
+        if (!strcmp(name, "--gdal-trust")) {
+            if (inl) {
+                cli_error("%s takes no value", name);
+                return 1;
+            }
+            cli_gdal_set_trust(1);
+            continue;
         }
         if (!strcmp(name, "--dem") || !strcmp(name, "--t-srs") || !strcmp(name, "--layer") ||
             !strcmp(name, "--where")) {
@@ -484,7 +520,10 @@ int cli_convert_main(int argc, char **argv)
             cli_geo_free(&geo);
             return 1;
         }
-        if (r) return 1;
+        if (r || cli_inputs_add_path(dem, "--dem")) {
+            cli_geo_free(&geo);
+            return 1;
+        }
         tsrs = geo.crs;
     }
     cli_gdal_roads_opts o;
@@ -498,7 +537,7 @@ int cli_convert_main(int argc, char **argv)
     cli_out out;
     memset(&out, 0, sizeof out);
     int rc = 1;
-    if (cli_gdal_roads_text(pos[0], &o, &text, &size)) goto done;
+    if (cli_gdal_roads_text(pos[0], &o, &text, &size) || cli_inputs_add_path(pos[0], "ROADS_IN")) goto done;
     /* what was written reads back: a check of the converter, and of the CRS line */
     rs_ctx *ctx = NULL;
     rs_roads *roads = NULL;

@@ -56,6 +56,17 @@ int cli_gdal_same_crs(const char *a, const char *b, const char *shown);
 /* The CRS as ESRI WKT for a .prj (malloc'd), or NULL after a message. */
 char *cli_gdal_prj_text(const char *crs, const char *shown);
 
+/* --gdal-trust (docs/ROBUSTNESS.md, "trust model"): off, DEMs and roads
+ * are opened only with an allow-list of file drivers, a VRT only when
+ * every source it names is a file beside it, and GDAL makes no network
+ * request. cli/module.c keeps the flag; the GDAL module reads it. */
+void cli_gdal_set_trust(int on);
+int cli_gdal_trusted(void);
+/* Untrusted: refuse a name GDAL would not read as a local file (a URL,
+ * /vsicurl/ and other /vsi paths, a connection string, a name that is not
+ * an existing file or folder). 0, or 1 after a message. */
+int cli_gdal_path_check(const char *path);
+
 /* 1 when `path` should be read as an OGR source rather than road text:
  * a known GIS extension (.geojson .json .gpkg .shp .osm .pbf .fgb .gml
  * .kml .sqlite .csv), a folder, or content that starts like JSON, XML or
@@ -68,6 +79,11 @@ int cli_roads_are_gis(const char *path);
  * through GDAL when it has a georeference for them, else OpenImageIO as
  * before. NULL after a message. */
 rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo);
+/* The one frame check of every command, on a DEM's geotransform (GDAL's
+ * order, y north): finite, the corner within 1e12 m, the pixel size in
+ * [1e-9, 1e9] m (the limits of --origin and --cell-size). 0, or 1 after a
+ * message naming path. */
+int cli_geo_check_gt(const char *path, const double gt[6]);
 /* The road text of ROADS: the file, or an OGR source converted to the
  * DEM's CRS (s->layer, s->where), its counts in *counts. 0, or 1 after a
  * message. */

@@ -72,6 +72,12 @@ static const char usage_text[] =
     "                        (PNG) OUT.aux.xml\n";
 /* two strings: C99 compilers need only take 4095 characters in one */
 static const char usage_text2[] =
+    "  --gdal-trust          open DEM and ROADS with every GDAL driver (VRTs naming\n"
+    "                        any file, URLs, network access); default: local files\n"
+    "                        of an allow-list of formats only (docs/ROBUSTNESS.md)\n"
+    "  --max-image-pixels N  decoded-image budget: the pixels all textures, the atlas\n"
+    "                        and surface images may hold together (default 134217728\n"
+    "                        = 512 MiB as RGBA; 0: no budget)\n"
     "  --cog                 OUT.tif as a Cloud Optimized GeoTIFF (with overviews)\n"
     "  --pixel-size M        metres per output pixel (sets --texels: the cell size / M,\n"
     "                        rounded); one image is at most 2^28 pixels: --window-world\n"
@@ -495,6 +501,10 @@ static int splat_main(int argc, char **argv)
         (aux_path && cli_out_open(&out_aux, aux_path)))
         goto done;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
+    /* now every input is known (the styles' surface images, the atlas...):
+     * no output may replace one (checked again at the renames) */
+    for (size_t k = 0; k < 6; k++)
+        if (cli_inputs_check_output(outs[k].path, outs[k].role)) goto done;
     if (a.world_file && !in.world) {
         cli_error("--world-file: %s", in.geo.georef ? "the roads are not in the DEM's world frame ('frame world' or GIS roads)"
                                                     : "the DEM has no georeference; give --origin X,Y with roads in "
@@ -666,6 +676,7 @@ done:
     cli_splat_input_free(ctx, &in);
     rs_ctx_free(ctx);
     cli_bigalloc_destroy(ba);
+    cli_inputs_clear();
     return rc;
 }
 

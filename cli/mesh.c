@@ -18,7 +18,7 @@
 static const char *mesh_usage =
     "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
     "                      [--pool N] [--normals] [--skirt DEPTH] [--stats FILE.json]\n"
-    "                      [--texture IMG]\n"
+    "                      [--texture IMG] [--gdal-trust]\n"
     "                      DEM OUT.obj|OUT.ply|OUT.glb\n"
     "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
     "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
@@ -27,6 +27,9 @@ static const char *mesh_usage =
     "                  OUT.glb: embed IMG (PNG or JPEG) as the base colour texture\n"
     "OUT.glb is binary glTF 2.0 with normals, texture coordinates and the vertex\n"
     "order optimised by meshoptimizer (docs/gltf.md).\n"
+    "  --gdal-trust    open the DEM with every GDAL driver and network access (a VRT\n"
+    "                  naming any file, URLs); default: local files, an allow-list\n"
+    "                  of formats (docs/ROBUSTNESS.md)\n"
     "A georeferenced DEM (GDAL, docs/gis.md) brings its cell size; vertices stay\n"
     "relative to sample (0,0), whose world point the header records.\n";
 
@@ -269,6 +272,7 @@ int cli_mesh_main(int argc, char **argv)
         int more = a + 1 < argc;
         if (!strcmp(s, "--help") || !strcmp(s, "-h")) { fputs(mesh_usage, stdout); return 0; }
         else if (!strcmp(s, "--normals")) normals = 1;
+        else if (!strcmp(s, "--gdal-trust")) cli_gdal_set_trust(1);
         else if (s[0] == '-' && s[1] == '-' && !more) { cli_error("%s needs a value", s); return 1; }
         else if (!strcmp(s, "--cell-size")) { if (cli_parse_double(s, argv[++a], &cs)) return 1; cs_given = 1; }
         else if (!strcmp(s, "--texture")) texture = argv[++a];

@@ -20,6 +20,7 @@
 #include "gltf.h"
 
 #include <dlfcn.h>
+#include <sys/stat.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdlib.h>
@@ -257,6 +258,25 @@ char *cli_gdal_prj_text(const char *crs, const char *shown)
     no_gdal(shown);
     return NULL;
 #endif
+}
+
+static int gdal_trust;
+
+void cli_gdal_set_trust(int on) { gdal_trust = on != 0; }
+
+int cli_gdal_trusted(void) { return gdal_trust; }
+
+int cli_gdal_path_check(const char *path)
+{
+    if (gdal_trust) return 0;
+    struct stat st;
+    const char *why = NULL;
+    if (!strncmp(path, "/vsi", 4)) why = "a GDAL virtual file system path";
+    else if (strstr(path, "://")) why = "a URL";
+    else if (stat(path, &st) != 0) why = "not an existing file or folder (a connection string?)";
+    if (!why) return 0;
+    cli_error("%s: %s; roadsplat reads only local files unless --gdal-trust is given (docs/ROBUSTNESS.md)", path, why);
+    return 1;
 }
 
 void cli_geo_free(cli_geo *g)

@@ -2,8 +2,10 @@
  * dozen lines keep the CLI free of a crypto library for one checksum. */
 #include "sha256.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 static const uint32_t K[64] = {
     0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
@@ -96,18 +98,20 @@ void cli_sha256_hex(const uint8_t d[32], char hex[65])
     hex[64] = '\0';
 }
 
-int cli_sha256_file(const char *path, uint8_t out[32])
+int cli_sha256_fd(int fd, uint8_t out[32])
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return 1;
     cli_sha256_ctx s;
     cli_sha256_init(&s);
     uint8_t buf[1 << 16];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0) cli_sha256_update(&s, buf, n);
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) return 1;
+    off_t off = 0;
+    for (;;) {
+        ssize_t n = pread(fd, buf, sizeof buf, off);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) return 1;
+        if (n == 0) break;
+        cli_sha256_update(&s, buf, (size_t)n);
+        off += n;
+    }
     cli_sha256_final(&s, out);
     return 0;
 }

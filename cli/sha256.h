@@ -18,7 +18,8 @@ void cli_sha256_final(cli_sha256_ctx *s, uint8_t out[32]);
 /* One call; hex: 64 lower-case digits and a NUL. */
 void cli_sha256(const void *data, size_t n, uint8_t out[32]);
 void cli_sha256_hex(const uint8_t d[32], char hex[65]);
-/* The SHA-256 of a file's bytes: 0, or 1 with errno set. */
-int cli_sha256_file(const char *path, uint8_t out[32]);
+/* The SHA-256 of all of an open file, from offset 0 (pread: its position
+ * is untouched): 0, or 1 with errno set. */
+int cli_sha256_fd(int fd, uint8_t out[32]);
 
 #endif

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 void cli_splat_limits(const cli_splat_args *s, rs_limits *lim)
 {
@@ -61,14 +62,15 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
                                          "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
                                          "--atlas-index", "--no-auto-markings", "--no-markings", "--layer", "--where",
                                          "--strict", "--pixel-size", "--color-relief", "--max-field-work",
-                                         "--max-atlas-mb" };
+                                         "--max-atlas-mb", "--gdal-trust", "--max-image-pixels" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
     rs_splat_options *o = &s->o;
-    if (!strcmp(name, "--strict")) {
+    if (!strcmp(name, "--strict") || !strcmp(name, "--gdal-trust")) {
         if (inl) { cli_error("%s takes no value", name); return 1; }
-        s->strict = 1;
+        if (name[2] == 's') s->strict = 1;
+        else cli_gdal_set_trust(1);
         return 0;
     }
     if (!strcmp(name, "--no-styles") || !strcmp(name, "--no-auto-markings") || !strcmp(name, "--no-markings")) {
@@ -94,6 +96,9 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
         }
         if (mb) s->max_atlas_bytes = (uint64_t)d << 20;
         else s->max_field_work = (uint64_t)d;
+    } else if (!strcmp(name, "--max-image-pixels")) {
+        if (cli_parse_u32(name, v, &u)) return 1;
+        cli_image_budget_set(u);
     } else if (!strcmp(name, "--layer")) {
         s->layer = v;
     } else if (!strcmp(name, "--where")) {
@@ -189,10 +194,10 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
     return 0;
 }
 
-static int load_texture(const char *path, rs_image *img, uint8_t **data)
+static int load_texture(const char *path, const char *role, rs_image *img, uint8_t **data)
 {
     if (!path) return 0;
-    if (cli_load_texture(path, &img->width, &img->height, data)) return 1;
+    if (cli_load_texture(path, role, &img->width, &img->height, data)) return 1;
     img->rgba = *data;
     return 0;
 }
@@ -211,13 +216,65 @@ static char *beside(const char *file, const char *name)
     return p;
 }
 
-/* Decode the image of every style with `surface IMG`: styles [0, nfile)
- * came from --styles FILE, the rest from the road file. */
-static int load_surface_images(cli_splat_args *s, const char *roads_path, size_t nfile, cli_splat_input *in)
+/* The surface image names of the styles some road is drawn with, each
+ * once: *names malloc'd (pointers into `styles`' copies), *n of them. */
+static int used_surfaces(rs_ctx *ctx, const cli_splat_input *in, const cli_splat_args *s, char (**names)[RS_STYLE_IMAGE_MAX + 1],
+                         size_t *n)
+{
+    *names = NULL;
+    *n = 0;
+    if (s->o.style.disable) return 0;
+    size_t cap = 0;
+    rs_style st;
+    for (size_t i = 0, nr = rs_roads_count(in->roads); i < nr; i++) {
+        if (rs_road_style(ctx, in->roads, i, in->styles, s->o.style.profile, &st) != RS_OK || !st.surface_image[0])
+            continue;
+        size_t k = 0;
+        while (k < *n && strcmp((*names)[k], st.surface_image)) k++;
+        if (k < *n) continue;
+        if (*n == cap) {
+            cap = cap ? 2 * cap : 8;
+            char(*p)[RS_STYLE_IMAGE_MAX + 1] = realloc(*names, cap * sizeof *p);
+            if (!p) {
+                free(*names);
+                *names = NULL;
+                cli_error("out of memory for surface images");
+                return 1;
+            }
+            *names = p;
+        }
+        memcpy((*names)[(*n)++], st.surface_image, sizeof st.surface_image);
+    }
+    return 0;
+}
+
+static int load_used_surfaces(cli_splat_args *s, const char *roads_path, size_t nfile, cli_splat_input *in, size_t m,
+                              const char (*used)[RS_STYLE_IMAGE_MAX + 1], size_t nused);
+
+/* Decode the image of every style with `surface IMG` that some road is
+ * drawn with (an unused style costs nothing), each file once (two names of
+ * one file share its pixels): styles [0, nfile) came from --styles FILE,
+ * the rest from the road file. */
+static int load_surface_images(rs_ctx *ctx, cli_splat_args *s, const char *roads_path, size_t nfile,
+                               cli_splat_input *in)
 {
     size_t n = rs_styles_count(in->styles), m = 0;
     for (size_t i = 0; i < n; i++) m += rs_styles_get(in->styles, i)->surface_image[0] != 0;
     if (!m) return 0;
+    char(*used)[RS_STYLE_IMAGE_MAX + 1];
+    size_t nused;
+    if (used_surfaces(ctx, in, s, &used, &nused)) return 1;
+    int rc = load_used_surfaces(s, roads_path, nfile, in, m, (const char(*)[RS_STYLE_IMAGE_MAX + 1])used, nused);
+    free(used);
+    return rc;
+}
+
+/* load_surface_images for the m styles with a surface image, of which the
+ * names `used` are drawn. */
+static int load_used_surfaces(cli_splat_args *s, const char *roads_path, size_t nfile, cli_splat_input *in, size_t m,
+                              const char (*used)[RS_STYLE_IMAGE_MAX + 1], size_t nused)
+{
+    size_t n = rs_styles_count(in->styles);
     in->surf = calloc(m, sizeof *in->surf);
     in->surf_path = calloc(m, sizeof *in->surf_path);
     in->surf_px = calloc(m, sizeof *in->surf_px);
@@ -246,28 +303,70 @@ static int load_surface_images(cli_splat_args *s, const char *roads_path, size_t
             if (!same) return 1;
             continue;
         }
-        char where[512];
-        snprintf(where, sizeof where, "%s line %llu: surface image", file, (unsigned long long)st->surface_line);
-        uint32_t w = 0, h = 0;
-        uint8_t *px = NULL;
-        cli_error_context(where);
-        int bad = cli_load_texture(path, &w, &h, &px);
-        cli_error_context(NULL);
-        if (bad) {
+        size_t u = 0;
+        while (u < nused && strcmp(used[u], st->surface_image)) u++;
+        if (u == nused) { /* no road is drawn with it: not read at all */
             free(path);
-            return 1;
+            continue;
+        }
+        /* the same file under another name: its pixels again, not a second decode */
+        struct stat sb;
+        const uint8_t *shared = NULL;
+        uint32_t w = 0, h = 0;
+        if (stat(path, &sb) == 0 && S_ISREG(sb.st_mode))
+            for (size_t j = 0; j < in->nsurf && !shared; j++) {
+                struct stat sj;
+                if (stat(in->surf_path[j], &sj) == 0 && sj.st_dev == sb.st_dev && sj.st_ino == sb.st_ino) {
+                    shared = in->surf[j].image.rgba;
+                    w = in->surf[j].image.width;
+                    h = in->surf[j].image.height;
+                }
+            }
+        uint8_t *px = NULL;
+        if (!shared) {
+            char where[512];
+            snprintf(where, sizeof where, "%s line %llu: surface image", file, (unsigned long long)st->surface_line);
+            cli_error_context(where);
+            int bad = cli_load_texture(path, "surface image", &w, &h, &px);
+            cli_error_context(NULL);
+            if (bad) {
+                free(path);
+                return 1;
+            }
         }
         in->surf[k].name = st->surface_image;
         in->surf[k].image.width = w;
         in->surf[k].image.height = h;
-        in->surf[k].image.rgba = px;
-        in->surf_px[k] = px;
+        in->surf[k].image.rgba = shared ? shared : px;
+        in->surf_px[k] = px; /* NULL when shared: freed once, by its first name */
         in->surf_path[k] = path;
         in->nsurf++;
     }
     s->o.style.surface_images = in->surf;
     s->o.style.surface_image_count = in->nsurf;
     return 0;
+}
+
+/* A custom atlas without a type the automatic markings place
+ * (lib/markings_auto.c) silently loses those markings: say which. */
+static void warn_atlas_types(const cli_splat_args *s, const rs_atlas *atlas)
+{
+    static const char *const auto_types[] = { "stop_line", "give_way_line", "zebra", "arrow_left", "arrow_right",
+                                              "arrow_straight", "arrow_straight_left", "arrow_straight_right",
+                                              "arrow_uturn" };
+    if (s->o.markings.disable || s->o.markings.no_auto) return;
+    char missing[300] = "";
+    size_t nm = 0;
+    for (size_t i = 0; i < sizeof auto_types / sizeof auto_types[0]; i++)
+        if (rs_atlas_find(atlas, auto_types[i]) < 0) {
+            size_t l = strlen(missing);
+            snprintf(missing + l, sizeof missing - l, "%s%s", nm ? ", " : "", auto_types[i]);
+            nm++;
+        }
+    if (nm)
+        fprintf(stderr, "roadsplat: warning: %s: the atlas has no %s; automatic markings of %s are not drawn "
+                        "(--no-auto-markings: none are wanted)\n", s->atlas_index_path, missing,
+                nm > 1 ? "these types" : "this type");
 }
 
 int cli_lighting_option(int argc, char **argv, int *i, const char *name, const char *inl, cli_splat_args *s)
@@ -491,7 +590,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     }
     /* --styles first: a road file's own style block of the same name is then an error naming its line */
     if (s->styles_path) {
-        if (cli_read_file(s->styles_path, (size_t)16 << 20, &text, &size)) return 1;
+        if (cli_read_input(s->styles_path, "--styles", (size_t)16 << 20, &text, &size)) return 1;
         rs_result r = rs_styles_add_text(ctx, in->styles, text, size);
         free(text);
         text = NULL;
@@ -525,9 +624,9 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     }
     if (s->color_relief && read_color_relief(s, in)) return 1;
     s->o.style.styles = in->styles;
-    if (load_surface_images(s, roads_path, nfile, in)) return 1;
-    if (load_texture(s->terrain_tex, &in->terrain, &in->terrain_px) ||
-        load_texture(s->road_tex, &in->road, &in->road_px))
+    if (load_surface_images(ctx, s, roads_path, nfile, in)) return 1;
+    if (load_texture(s->terrain_tex, "--terrain-texture", &in->terrain, &in->terrain_px) ||
+        load_texture(s->road_tex, "--road-texture", &in->road, &in->road_px))
         return 1;
     if (in->terrain_px) s->o.surface.terrain_texture = &in->terrain;
     if (in->road_px) s->o.surface.road_texture = &in->road;
@@ -537,8 +636,8 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     }
     if (s->atlas_path) {
         rs_image img;
-        if (load_texture(s->atlas_path, &img, &in->atlas_px)) return 1;
-        if (cli_read_file(s->atlas_index_path, (size_t)16 << 20, &text, &size)) return 1;
+        if (load_texture(s->atlas_path, "--atlas", &img, &in->atlas_px)) return 1;
+        if (cli_read_input(s->atlas_index_path, "--atlas-index", (size_t)16 << 20, &text, &size)) return 1;
         r = rs_atlas_create(ctx, &img, text, size, &in->atlas);
         free(text);
         if (r) {
@@ -548,6 +647,7 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
             return 1;
         }
         s->o.markings.atlas = in->atlas;
+        warn_atlas_types(s, in->atlas);
     }
     return 0;
 }

@@ -45,6 +45,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -93,6 +94,7 @@ static const char tiles_usage[] =
     "  --quiet, --help\n";
 
 #define LOG_DIR ".tiles-log"
+#define OLD_RUNS 8 /* earlier runs of a log whose temporaries are looked for */
 #define MAX_ZOOM 24
 
 typedef struct targs {
@@ -106,7 +108,7 @@ typedef struct targs {
     rs_normal_options normal;
     uint32_t halo;
     uint32_t shard_i, shard_n;
-    const char **opt; /* the splat options as given (for the manifest), --threads left out */
+    const char **opt; /* the splat options as given (for the manifest), --threads, --gdal-trust, --max-image-pixels left out */
     int nopt;
 } targs;
 
@@ -194,6 +196,12 @@ typedef struct run {
     FILE *log;
     char *log_path;
     char fingerprint[65];
+    /* temporaries: "DIR/.NAME.<runid>.part", unique to the run; the ids of
+     * earlier runs of this log, whose leftovers (a kill) are removed when
+     * their tile is made again */
+    char runid[17];
+    char old_ids[OLD_RUNS][17];
+    int n_old;
     const cli_mbtiles_api *mb;
     void *db;
     uint8_t *bufs[2][MAX_ZOOM + 2]; /* per layer, one S x S RGBA tile per depth */
@@ -230,6 +238,25 @@ static uint64_t file_y(const run *r, uint32_t z, uint64_t y)
     return r->a->tms ? (((uint64_t)1 << z) - 1 - y) : y;
 }
 
+/* A folder inside OUTDIR, made when missing: a real folder, never a
+ * symbolic link someone planted to send tiles elsewhere (lstat). 0, or 1
+ * after a message. */
+static int own_folder(const char *path)
+{
+    struct stat st;
+    memset(&st, 0, sizeof st);
+    if (mkdir(path, 0777) != 0 && errno != EEXIST) {
+        cli_error("%s: cannot create the folder: %s", path, strerror(errno));
+        return 1;
+    }
+    if (lstat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        cli_error("%s: %s; the tile folders must be real folders (remove it)", path,
+                  S_ISLNK(st.st_mode) ? "is a symbolic link" : "is not a folder");
+        return 1;
+    }
+    return 0;
+}
+
 /* "OUTDIR/z/x/y.png" (layer 1: "y_n.png") in r->path; with mk, its
  * folders are made. */
 static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk, int layer)
@@ -245,14 +272,11 @@ static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk, int lay
         r->path_cap = need;
     }
     int n = snprintf(r->path, need, "%s/%u", r->a->out, z);
-    if (mk && mkdir(r->path, 0777) != 0 && errno != EEXIST) goto fail;
+    if (mk && own_folder(r->path)) return 1;
     n += snprintf(r->path + n, need - n, "/%llu", (unsigned long long)x);
-    if (mk && mkdir(r->path, 0777) != 0 && errno != EEXIST) goto fail;
+    if (mk && own_folder(r->path)) return 1;
     snprintf(r->path + n, need - n, "/%llu%s.png", (unsigned long long)file_y(r, z, y), layer ? "_n" : "");
     return 0;
-fail:
-    cli_error("%s: cannot create the folder: %s", r->path, strerror(errno));
-    return 1;
 }
 
 /* ---- PNG bytes: encode into memory, decode our own tiles ------------------------ */
@@ -596,14 +620,20 @@ static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, co
         char *tmp = NULL;
         int fd = -1;
         bad = tile_path(r, z, x, y, 1, layer);
-        if (!bad) { /* "DIR/.NAME.part": the same name when the tile is made again (after a kill) */
+        if (!bad) { /* "DIR/.NAME.RUNID.part": this run's own, made with O_EXCL | O_NOFOLLOW */
             const char *base = strrchr(r->path, '/') + 1;
-            size_t dl = (size_t)(base - r->path);
-            if (!(tmp = malloc(strlen(r->path) + 8))) {
+            size_t dl = (size_t)(base - r->path), cap = strlen(r->path) + 32;
+            if (!(tmp = malloc(cap))) {
                 cli_error("out of memory");
                 bad = 1;
             } else {
-                snprintf(tmp, strlen(r->path) + 8, "%.*s.%s.part", (int)dl, r->path, base);
+                /* a temporary an earlier, killed run of this log left for this tile */
+                for (int k = 0; k < r->n_old; k++) {
+                    struct stat ls;
+                    snprintf(tmp, cap, "%.*s.%s.%s.part", (int)dl, r->path, base, r->old_ids[k]);
+                    if (lstat(tmp, &ls) == 0 && S_ISREG(ls.st_mode)) unlink(tmp);
+                }
+                snprintf(tmp, cap, "%.*s.%s.%s.part", (int)dl, r->path, base, r->runid);
                 if ((fd = cli_temp_create_named(tmp)) < 0) {
                     cli_error("%s: cannot create a temporary file next to it: %s", r->path, strerror(errno));
                     bad = 1;
@@ -614,9 +644,10 @@ static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, co
             int e = 0;
             if (write_all(fd, png, size)) e = errno ? errno : EIO;
             if (close(fd) != 0 && !e) e = errno;
-            if (!e && rename(tmp, r->path) != 0) e = errno;
-            if (e) {
-                cli_error("%s: write failed: %s", r->path, strerror(e));
+            int clash = !e && cli_inputs_check_output(r->path, "a tile");
+            if (!e && !clash && rename(tmp, r->path) != 0) e = errno;
+            if (e || clash) {
+                if (e) cli_error("%s: write failed: %s", r->path, strerror(e));
                 cli_temp_remove(tmp);
                 bad = 1;
             } else {
@@ -639,25 +670,34 @@ static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const
     return log_line(r, z, x, y, flag, hash, r->layers > 1 ? nhash : NULL);
 }
 
-/* A whole file, quietly: 0, or 1 (missing, unreadable). */
-static int read_whole(const char *path, char **data, size_t *size)
+/* A tile file read back, quietly: 0, or 1 (missing, unreadable, not a
+ * regular file - a symbolic link is not followed, a FIFO not waited on -
+ * or larger than any tile of `side` pixels can be). */
+static int read_tile_file(const char *path, uint32_t side, char **data, size_t *size)
 {
-    FILE *f = fopen(path, "rb");
     *data = NULL;
-    if (!f) return 1;
-    size_t cap = 1 << 16, n = 0, k;
-    char *b = malloc(cap);
-    while (b && (k = fread(b + n, 1, cap - n, f)) > 0) {
-        n += k;
-        if (n == cap) {
-            char *nb = realloc(b, cap *= 2);
-            if (!nb) { free(b); b = NULL; }
-            b = nb;
-        }
+    int fd = open(path, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return 1;
+    struct stat st;
+    /* a stored (level 0) RGBA PNG: 4 bytes a pixel, a filter byte a row, 5 bytes a 64 KiB block */
+    uint64_t cap = (uint64_t)side * side * 4 * 2 + ((uint64_t)1 << 20);
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || (uint64_t)st.st_size > cap) {
+        close(fd);
+        return 1;
     }
-    int bad = !b || ferror(f);
-    fclose(f);
-    if (bad) { free(b); return 1; }
+    size_t n = (size_t)st.st_size, got = 0;
+    char *b = malloc(n ? n : 1);
+    while (b && got < n) {
+        ssize_t k = read(fd, b + got, n - got);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) break;
+        got += (size_t)k;
+    }
+    close(fd);
+    if (!b || got != n) {
+        free(b);
+        return 1;
+    }
     *data = b;
     *size = n;
     return 0;
@@ -674,7 +714,7 @@ static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, 
         if (tile_path(r, z, x, y, 0, l)) return 0;
         char *bytes = NULL;
         size_t n = 0;
-        if (read_whole(r->path, &bytes, &n)) return 0;
+        if (read_tile_file(r->path, r->side, &bytes, &n)) return 0;
         uint8_t h[32];
         cli_sha256(bytes, n, h);
         ok = !memcmp(h, l ? e->nhash : e->hash, 32);
@@ -941,7 +981,8 @@ static int parse_targs(int argc, char **argv, targs *a)
                 cli_error("tiles: unknown option '%s' (see roadsplat tiles --help)", arg);
                 return 1;
             }
-            if (strcmp(name, "--threads"))
+            /* not in the fingerprint: they change no byte of a tile */
+            if (strcmp(name, "--threads") && strcmp(name, "--gdal-trust") && strcmp(name, "--max-image-pixels"))
                 for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
         }
     }
@@ -986,40 +1027,55 @@ typedef struct input_hash {
     char hex[65]; /* "" for a folder (a GIS source) */
 } input_hash;
 
-/* One input into h: its SHA-256 ("" for a folder, a GIS source). */
-static int hash_input(const char *role, const char *path, input_hash *h)
+/* The inputs this run loaded (the registry, cli/util.c), hashed from the
+ * very bytes loaded - a pipe's too - in a fixed order of roles: *ih
+ * malloc'd, *n entries. */
+static int hash_inputs(input_hash **ih, int *n)
 {
-    h->role = role, h->path = path, h->hex[0] = '\0';
-    struct stat st;
-    if (!strcmp(path, "-")) {
-        cli_error("%s: tiles needs a file, not standard input (its SHA-256 goes into the manifest)", role);
+    static const char *const roles[8][2] = { { "DEM", "DEM" }, { "ROADS", "ROADS" },
+                                              { "--terrain-texture", "--terrain-texture" },
+                                              { "--road-texture", "--road-texture" }, { "--styles", "--styles" },
+                                              { "--atlas", "--atlas" }, { "--atlas-index", "--atlas-index" },
+                                              { "surface image", "surface" } };
+    size_t m = cli_inputs_count();
+    *n = 0;
+    if (!(*ih = calloc(m ? m : 1, sizeof **ih))) {
+        cli_error("out of memory");
         return 1;
     }
-    if (stat(path, &st) != 0) {
-        cli_error("%s: %s", path, strerror(errno));
-        return 1;
-    }
-    if (S_ISDIR(st.st_mode)) return 0;
-    uint8_t d[32];
-    if (cli_sha256_file(path, d)) {
-        cli_error("%s: cannot read: %s", path, strerror(errno ? errno : EIO));
-        return 1;
-    }
-    cli_sha256_hex(d, h->hex);
+    for (int k = 0; k < 8; k++)
+        for (size_t i = 0; i < m; i++) {
+            const char *path, *role;
+            int fd = cli_inputs_get(i, &path, &role);
+            if (strcmp(role, roles[k][0])) continue;
+            input_hash *h = &(*ih)[(*n)++];
+            h->role = roles[k][1], h->path = path, h->hex[0] = '\0';
+            uint8_t d[32];
+            if (fd >= 0) {
+                if (cli_sha256_fd(fd, d)) {
+                    cli_error("%s: cannot read: %s", path, strerror(errno ? errno : EIO));
+                    return 1;
+                }
+                cli_sha256_hex(d, h->hex);
+            }
+            if (k < 7) break; /* one file a role, but surface images */
+        }
     return 0;
 }
 
-/* The inputs named on the command line into ih (7 entries at most). */
-static int hash_inputs(const targs *a, input_hash *ih, int *n)
+/* 16 hex digits naming this run's temporaries: the process id, the clock
+ * and the address of a stack variable, mixed. Unique among runs on one
+ * host at a time, which is what two runs into one OUTDIR need. */
+static void run_id(char out[17])
 {
-    const char *roles[7] = { "DEM", "ROADS", "--terrain-texture", "--road-texture", "--styles", "--atlas",
-                             "--atlas-index" };
-    const char *paths[7] = { a->dem, a->roads, a->s.terrain_tex, a->s.road_tex, a->s.styles_path, a->s.atlas_path,
-                             a->s.atlas_index_path };
-    *n = 0;
-    for (int k = 0; k < 7; k++)
-        if (paths[k] && hash_input(roles[k], paths[k], &ih[(*n)++])) return 1;
-    return 0;
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    uint64_t v = (uint64_t)getpid() * 0x9E3779B97F4A7C15ull ^ (uint64_t)ts.tv_sec * 1000000007ull ^
+                 (uint64_t)ts.tv_nsec ^ (uint64_t)(uintptr_t)&ts;
+    v ^= v >> 31;
+    v *= 0xBF58476D1CE4E5B9ull;
+    v ^= v >> 29;
+    snprintf(out, 17, "%016llx", (unsigned long long)v);
 }
 
 /* SHA-256 of everything that decides the tiles' bytes: runs of one
@@ -1055,28 +1111,54 @@ static char *join(const char *a, const char *b, const char *c)
 
 static int hexval(int c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; }
 
-/* Every log in OUTDIR/.tiles-log into the table (a line cut by a kill is
- * skipped); a log of another fingerprint is an error. */
-static int load_logs(run *r, const char *dir)
+/* A log inside the log folder (descriptor ld), opened without following
+ * a symbolic link or waiting on a FIFO: only a regular file. The
+ * descriptor, or -1 after a message naming path. */
+static int open_log_file(int ld, const char *name, const char *path, int flags)
 {
-    DIR *d = opendir(dir);
-    if (!d) return 0;
+    int fd = openat(ld, name, flags | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0666);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        if (fd >= 0 || errno == ELOOP)
+            cli_error("%s: not a regular file (a symbolic link?); remove it", path);
+        else
+            cli_error("%s: %s", path, strerror(errno));
+        if (fd >= 0) close(fd);
+        return -1;
+    }
+    int fl = fcntl(fd, F_GETFL);
+    if (fl >= 0) fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+    return fd;
+}
+
+/* Every log in OUTDIR/.tiles-log (descriptor ld) into the table (a line
+ * cut by a kill is skipped); a log of another fingerprint is an error. */
+static int load_logs(run *r, const char *dir, int ld)
+{
+    int dd = fcntl(ld, F_DUPFD_CLOEXEC, 3);
+    DIR *d = dd >= 0 ? fdopendir(dd) : NULL;
+    if (!d) {
+        if (dd >= 0) close(dd);
+        return 0;
+    }
     struct dirent *de;
     int bad = 0;
     while (!bad && (de = readdir(d))) {
         size_t nl = strlen(de->d_name);
         if (nl < 5 || strcmp(de->d_name + nl - 4, ".log")) continue;
         char *p = join(dir, de->d_name, NULL);
-        FILE *f = p ? fopen(p, "r") : NULL;
+        int fd = p ? open_log_file(ld, de->d_name, p, O_RDONLY) : -1;
+        FILE *f = fd >= 0 ? fdopen(fd, "r") : NULL;
         if (!f) {
-            cli_error("%s: %s", p ? p : de->d_name, strerror(errno));
+            if (fd >= 0) close(fd);
+            if (!p) cli_error("out of memory");
             free(p);
             bad = 1;
             break;
         }
         char line[256], fp[80];
-        if (!fgets(line, sizeof line, f) || sscanf(line, "roadsplat-tiles-log 1 %70s", fp) != 1 ||
-            strcmp(fp, r->fingerprint)) {
+        int empty = !fgets(line, sizeof line, f); /* a run that has just begun its log */
+        if (!empty && (sscanf(line, "roadsplat-tiles-log 1 %70s", fp) != 1 || strcmp(fp, r->fingerprint))) {
             cli_error("%s: made from other inputs or options than this run (remove it, or rerun that step with the "
                       "same inputs and options)", p);
             bad = 1;
@@ -1116,20 +1198,109 @@ static int load_logs(run *r, const char *dir)
     return bad;
 }
 
-/* Remove the logs of earlier runs (a whole run without --resume). */
-static void clear_logs(const char *dir)
+static int log_in_use(int ld, const char *name);
+
+/* Remove the logs of earlier runs (a whole run without --resume): only
+ * regular files of the log folder, never what a symbolic link there names,
+ * never the log of a run still going. */
+static void clear_logs(int ld, const char *keep)
 {
-    DIR *d = opendir(dir);
-    if (!d) return;
+    int dd = fcntl(ld, F_DUPFD_CLOEXEC, 3);
+    DIR *d = dd >= 0 ? fdopendir(dd) : NULL;
+    if (!d) {
+        if (dd >= 0) close(dd);
+        return;
+    }
     struct dirent *de;
     while ((de = readdir(d))) {
         size_t nl = strlen(de->d_name);
-        if (nl < 5 || strcmp(de->d_name + nl - 4, ".log")) continue;
-        char *p = join(dir, de->d_name, NULL);
-        if (p) unlink(p);
-        free(p);
+        struct stat st;
+        if (nl < 5 || strcmp(de->d_name + nl - 4, ".log") || !strcmp(de->d_name, keep)) continue;
+        if (fstatat(ld, de->d_name, &st, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(st.st_mode) &&
+            !log_in_use(ld, de->d_name)) /* a live run's log stays */
+            unlinkat(ld, de->d_name, 0);
     }
     closedir(d);
+}
+
+/* One "run ID" line of a log into r->old_ids (the most recent OLD_RUNS). */
+static void old_run_line(run *r, const char *line, size_t n)
+{
+    if (n != 20 || memcmp(line, "run ", 4)) return;
+    for (size_t i = 4; i < 20; i++)
+        if (hexval(line[i]) < 0) return;
+    if (!memcmp(line + 4, r->runid, 16)) return;
+    if (r->n_old == OLD_RUNS) {
+        memmove(r->old_ids[0], r->old_ids[1], sizeof r->old_ids[0] * (OLD_RUNS - 1));
+        r->n_old--;
+    }
+    memcpy(r->old_ids[r->n_old], line + 4, 16);
+    r->old_ids[r->n_old++][16] = '\0';
+}
+
+/* The ids of earlier runs named in this run's own log (its "run ID"
+ * lines), read with pread: closing a second descriptor of the log would
+ * drop this process's lock on it (fcntl locks are per process and file). */
+static void read_old_runs(run *r, int fd)
+{
+    char buf[1 << 14], line[32];
+    size_t ln = 0;
+    int longline = 0;
+    off_t off = 0;
+    for (;;) {
+        ssize_t k = pread(fd, buf, sizeof buf, off);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) break;
+        off += k;
+        for (ssize_t i = 0; i < k; i++) {
+            if (buf[i] == '\n') {
+                if (!longline) old_run_line(r, line, ln);
+                ln = 0, longline = 0;
+            } else if (ln < sizeof line) {
+                line[ln++] = buf[i];
+            } else {
+                longline = 1;
+            }
+        }
+    }
+}
+
+/* Runs of one log hold a shared lock on it for their whole life; only a
+ * run that could take it exclusively - no other run of this log is alive,
+ * on this host or through the file system's locks - reads the earlier runs'
+ * ids, whose leftover temporaries it will remove. The exclusive lock then
+ * becomes shared at once (atomically, fcntl), so no later run ever takes a
+ * live run's temporaries for leftovers. 1 when another run holds the log
+ * (nothing locked, nothing read: this run then keeps a log of its own). */
+static int lock_log(run *r, int fd)
+{
+    struct flock fl;
+    memset(&fl, 0, sizeof fl);
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    if (fcntl(fd, F_SETLK, &fl) != 0) {
+        if (errno == EAGAIN || errno == EACCES) return 1;
+        read_old_runs(r, fd); /* a file system without locks: as if alone */
+        return 0;
+    }
+    read_old_runs(r, fd);
+    fl.l_type = F_RDLCK;
+    while (fcntl(fd, F_SETLK, &fl) != 0 && errno == EINTR) {}
+    return 0;
+}
+
+/* 1 when a live run holds a lock on the log `name` of the folder ld. */
+static int log_in_use(int ld, const char *name)
+{
+    int fd = openat(ld, name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return 0;
+    struct flock fl;
+    memset(&fl, 0, sizeof fl);
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    int busy = fcntl(fd, F_GETLK, &fl) == 0 && fl.l_type != F_UNLCK;
+    close(fd);
+    return busy;
 }
 
 /* ---- the manifest ------------------------------------------------------------- */
@@ -1431,6 +1602,7 @@ int cli_tiles_main(int argc, char **argv)
     input_hash *ih = NULL;
     int nin = 0;
     char *logdir = NULL;
+    int logfd = -1;
     memset(&in, 0, sizeof in);
     memset(&r, 0, sizeof r);
     memset(&mout, 0, sizeof mout);
@@ -1469,11 +1641,6 @@ int cli_tiles_main(int argc, char **argv)
             goto done;
         }
     }
-    if (!(ih = calloc(7, sizeof *ih))) {
-        cli_error("out of memory");
-        goto done;
-    }
-    if (hash_inputs(&a, ih, &nin)) goto done;
 
     /* the splat, with no limit on the output size: tiles never hold it */
     rs_limits lim;
@@ -1485,18 +1652,13 @@ int cli_tiles_main(int argc, char **argv)
         cli_error("%s", rs_strerror(res));
         goto done;
     }
+    cli_inputs_keep_pipes(1); /* the manifest hashes a pipe's bytes too */
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
-    if (in.nsurf) { /* the styles' surface images decide pixels too */
-        input_hash *more = realloc(ih, (7 + in.nsurf) * sizeof *ih);
-        if (!more) {
-            cli_error("out of memory");
-            goto done;
-        }
-        ih = more;
-        for (size_t k = 0; k < in.nsurf; k++)
-            if (hash_input("surface", in.surf_path[k], &ih[nin++])) goto done;
-    }
+    /* every file the run read (the styles' surface images too) is hashed
+     * as loaded; an MBTiles OUT naming one of them is refused now */
+    if ((a.mbtiles && cli_inputs_check_output(a.out, "OUT")) || hash_inputs(&ih, &nin)) goto done;
     fingerprint(&a, ih, nin, r.fingerprint);
+    run_id(r.runid);
     if ((res = rs_splat_size(ctx, in.dem, &a.s.o, &r.fw, &r.fh))) {
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
         goto done;
@@ -1524,19 +1686,45 @@ int cli_tiles_main(int argc, char **argv)
             cli_error("%s/%s: cannot create the folder: %s", a.out, LOG_DIR, strerror(errno));
             goto done;
         }
-        if (a.resume || a.from_children) {
-            if (load_logs(&r, logdir)) goto done;
-        } else if (!a.sharded) {
-            clear_logs(logdir);
+        /* the log folder itself, never a symbolic link to another folder */
+        if ((logfd = open(logdir, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC)) < 0) {
+            cli_error("%s: %s; it must be a real folder (remove it)", logdir,
+                      errno == ELOOP || errno == ENOTDIR ? "is a symbolic link or not a folder" : strerror(errno));
+            goto done;
         }
         char name[64];
-        if (a.from_children) snprintf(name, sizeof name, "/merge.log");
-        else if (a.sharded) snprintf(name, sizeof name, "/shard-%u-of-%u.log", a.shard_i, a.shard_n);
-        else snprintf(name, sizeof name, "/whole.log");
-        r.log_path = join(logdir, name + 1, NULL);
+        if (a.from_children) snprintf(name, sizeof name, "merge.log");
+        else if (a.sharded) snprintf(name, sizeof name, "shard-%u-of-%u.log", a.shard_i, a.shard_n);
+        else snprintf(name, sizeof name, "whole.log");
+        if (a.resume || a.from_children) {
+            if (load_logs(&r, logdir, logfd)) goto done;
+        } else if (!a.sharded) {
+            clear_logs(logfd, name);
+        }
+        r.log_path = join(logdir, name, NULL);
         int append = a.resume || a.from_children;
-        if (!r.log_path || !(r.log = fopen(r.log_path, append ? "a+" : "w"))) {
-            cli_error("%s: %s", r.log_path ? r.log_path : logdir, strerror(errno));
+        int lfd = r.log_path ? open_log_file(logfd, name, r.log_path, O_RDWR | O_CREAT | (append ? O_APPEND : 0)) : -1;
+        if (lfd < 0) goto done;
+        if (lock_log(&r, lfd)) { /* the earlier runs' ids: before the truncation below */
+            /* another run of this step into OUTDIR is alive: a log of this run's own, "NAME-RUNID.log" */
+            char own[96];
+            close(lfd);
+            snprintf(own, sizeof own, "%.*s-%s.log", (int)(strlen(name) - 4), name, r.runid);
+            free(r.log_path);
+            r.log_path = join(logdir, own, NULL);
+            lfd = r.log_path ? open_log_file(logfd, own, r.log_path, O_RDWR | O_CREAT | O_EXCL) : -1;
+            if (lfd < 0) goto done;
+            lock_log(&r, lfd);
+            append = 0;
+        }
+        if (!append && (ftruncate(lfd, 0) != 0 || lseek(lfd, 0, SEEK_SET) != 0)) {
+            cli_error("%s: %s", r.log_path, strerror(errno));
+            close(lfd);
+            goto done;
+        }
+        if (!(r.log = fdopen(lfd, append ? "a+" : "w+"))) {
+            cli_error("%s: %s", r.log_path, strerror(errno));
+            close(lfd);
             goto done;
         }
         if (append) { /* a line cut by a kill ends here */
@@ -1549,7 +1737,9 @@ int cli_tiles_main(int argc, char **argv)
             if (end <= 0) fprintf(r.log, "roadsplat-tiles-log 1 %s\n", r.fingerprint);
         } else {
             fprintf(r.log, "roadsplat-tiles-log 1 %s\n", r.fingerprint);
+            for (int k = 0; k < r.n_old; k++) fprintf(r.log, "run %s\n", r.old_ids[k]); /* still to clean */
         }
+        fprintf(r.log, "run %s\n", r.runid);
         if (fflush(r.log) != 0) {
             cli_error("%s: write failed: %s", r.log_path, strerror(errno));
             goto done;
@@ -1667,7 +1857,9 @@ done:
     free(r.log_path);
     free(r.tab.e);
     free(logdir);
+    if (logfd >= 0) close(logfd);
     free(ih);
+    cli_inputs_clear();
     rs_splatter_free(ctx, dsp);
     free(r.zfree);
     rs_splatter_free(ctx, sp);

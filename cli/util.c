@@ -152,12 +152,21 @@ int cli_parse_size(const char *option, const char *s, uint32_t *w, uint32_t *h)
 
 /* ---- files ---------------------------------------------------------------- */
 
+static char *dup_str(const char *s);
+
 int cli_read_file(const char *path, size_t limit, char **data, size_t *size)
+{
+    return cli_read_input(path, NULL, limit, data, size);
+}
+
+int cli_read_input(const char *path, const char *role, size_t limit, char **data, size_t *size)
 {
     *data = NULL;
     *size = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) { cli_error("%s: %s", path, strerror(errno)); return 1; }
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
+    FILE *f = fdopen(fd, "rb");
+    if (!f) { cli_error("%s: %s", path, strerror(errno)); close(fd); return 1; }
     struct stat st;
     memset(&st, 0, sizeof st);
     if (fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
@@ -196,17 +205,150 @@ int cli_read_file(const char *path, size_t limit, char **data, size_t *size)
     }
     int err = ferror(f);
     int saved = errno;
-    fclose(f);
-    if (err) { free(buf); cli_error("%s: read error: %s", path, strerror(saved)); return 1; }
+    if (err) { fclose(f); free(buf); cli_error("%s: read error: %s", path, strerror(saved)); return 1; }
     if (limit && n > limit) {
+        fclose(f);
         free(buf);
         cli_error("%s: file is larger than the %zu-byte limit", path, limit);
         return 1;
     }
     buf[n] = '\0';
+    /* registered from the descriptor read, with the bytes read (a pipe) */
+    int bad = role && cli_inputs_add(path, role, fileno(f), buf, n);
+    fclose(f);
+    if (bad) { free(buf); return 1; }
     *data = buf;
     *size = n;
     return 0;
+}
+
+/* ---- the run's inputs ---------------------------------------------------------- */
+
+/* Every file a run reads (docs/ROBUSTNESS.md, "trust model"): for the
+ * output-collision check at commit and for hashing what was loaded
+ * (tiles' manifest). A regular file keeps a descriptor of the inode that
+ * was read; a pipe's bytes are kept in an unlinked temporary file. */
+typedef struct input_entry {
+    char *path, *role;
+    dev_t dev;
+    ino_t ino;
+    int replaceable; /* a file or folder (not a pipe): an output could replace it */
+    int fd;          /* the bytes loaded (from offset 0); -1: not kept (a folder) */
+} input_entry;
+
+static input_entry *inputs;
+static size_t ninputs, cap_inputs;
+static int keep_pipe_bytes; /* cli_inputs_keep_pipes */
+
+void cli_inputs_keep_pipes(int on) { keep_pipe_bytes = on != 0; }
+
+static int input_push(const char *path, const char *role, const struct stat *st, int fd)
+{
+    if (ninputs == cap_inputs) {
+        size_t nc = cap_inputs ? 2 * cap_inputs : 16;
+        input_entry *p = realloc(inputs, nc * sizeof *p);
+        if (!p) return 1;
+        inputs = p;
+        cap_inputs = nc;
+    }
+    input_entry *e = &inputs[ninputs];
+    e->path = dup_str(path);
+    e->role = dup_str(role);
+    if (!e->path || !e->role) {
+        free(e->path);
+        free(e->role);
+        return 1;
+    }
+    e->dev = st ? st->st_dev : 0;
+    e->ino = st ? st->st_ino : 0;
+    e->replaceable = st && (S_ISREG(st->st_mode) || S_ISDIR(st->st_mode));
+    e->fd = fd;
+    ninputs++;
+    return 0;
+}
+
+int cli_inputs_add(const char *path, const char *role, int fd, const void *data, size_t size)
+{
+    struct stat st;
+    if (fstat(fd, &st) != 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
+    int keep = -1;
+    if (S_ISREG(st.st_mode)) {
+        /* a file read again in that role (a loader called in a loop) is one entry */
+        for (size_t i = 0; i < ninputs; i++)
+            if (inputs[i].dev == st.st_dev && inputs[i].ino == st.st_ino && !strcmp(inputs[i].role, role)) return 0;
+        keep = fcntl(fd, F_DUPFD_CLOEXEC, 3);
+    } else if (data && !keep_pipe_bytes) { /* a pipe nobody will hash: nothing to keep */
+        if (input_push(path, role, &st, -1)) {
+            cli_error("out of memory");
+            return 1;
+        }
+        return 0;
+    } else if (data) { /* a pipe: its bytes, as read */
+        FILE *t = tmpfile();
+        if (t && fwrite(data, 1, size, t) == size && fflush(t) == 0) keep = fcntl(fileno(t), F_DUPFD_CLOEXEC, 3);
+        if (t) fclose(t);
+    } else {
+        keep = fcntl(fd, F_DUPFD_CLOEXEC, 3); /* a copy already (cli_load_*) */
+    }
+    if (keep < 0 || input_push(path, role, &st, keep)) {
+        if (keep >= 0) close(keep);
+        cli_error("%s: cannot keep track of the input: %s", path, strerror(errno ? errno : ENOMEM));
+        return 1;
+    }
+    return 0;
+}
+
+int cli_inputs_add_path(const char *path, const char *role)
+{
+    /* O_NONBLOCK: a FIFO that GDAL has already drained must not block here */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
+    struct stat st;
+    int bad = fstat(fd, &st) != 0;
+    if (!bad && !S_ISREG(st.st_mode)) { /* a GIS source folder (or a FIFO): checked by inode, not hashed */
+        close(fd);
+        if (input_push(path, role, &st, -1)) { cli_error("out of memory"); return 1; }
+        return 0;
+    }
+    bad = bad || cli_inputs_add(path, role, fd, NULL, 0);
+    close(fd);
+    return bad;
+}
+
+size_t cli_inputs_count(void) { return ninputs; }
+
+int cli_inputs_get(size_t i, const char **path, const char **role)
+{
+    if (i >= ninputs) return -1;
+    if (path) *path = inputs[i].path;
+    if (role) *role = inputs[i].role;
+    return inputs[i].fd;
+}
+
+int cli_inputs_check_output(const char *path, const char *role)
+{
+    struct stat so;
+    if (!path || stat(path, &so) != 0) return 0; /* not there yet: replaces nothing */
+    for (size_t i = 0; i < ninputs; i++) {
+        const input_entry *e = &inputs[i];
+        if (e->replaceable && e->dev == so.st_dev && e->ino == so.st_ino) {
+            cli_error("%s: %s is also the %s (%s); refusing to overwrite an input", path, role, e->role, e->path);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+void cli_inputs_clear(void)
+{
+    for (size_t i = 0; i < ninputs; i++) {
+        if (inputs[i].fd >= 0) close(inputs[i].fd);
+        free(inputs[i].path);
+        free(inputs[i].role);
+    }
+    free(inputs);
+    inputs = NULL;
+    ninputs = cap_inputs = 0;
 }
 
 static char *dup_str(const char *s)
@@ -321,16 +463,16 @@ int cli_temp_create(const char *path, char **tmp)
     return fd;
 }
 
-/* A temporary of a fixed name `tmp` (made or truncated; 0666 & ~umask),
- * registered for removal on a signal: a rerun that makes the same output
- * again reuses the name, so a temporary left by SIGKILL does not stay.
- * Only for outputs that one process at a time writes. Returns the
- * descriptor or -1 with errno set. */
+/* A temporary of the caller's name `tmp` (unique to the run: tiles'
+ * ".NAME.RUNID.part"), made new with O_EXCL | O_NOFOLLOW, so nothing
+ * planted under that name (a symbolic link, another run's file) is
+ * followed or truncated; 0666 & ~umask; registered for removal on a
+ * signal. Returns the descriptor or -1 with errno set. */
 int cli_temp_create_named(const char *tmp)
 {
     sigset_t saved;
     signals_block(1, &saved);
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     int e = errno;
     if (fd >= 0 && temp_register(tmp)) {
         close(fd);
@@ -430,6 +572,9 @@ int cli_out_commit_all(cli_out *const *outs, size_t n)
 {
     for (size_t i = 0; i < n; i++)
         if (outs[i] && outs[i]->tmp && cli_out_finish(outs[i])) return 1;
+    /* the last word on collisions: no rename replaces a file this run read */
+    for (size_t i = 0; i < n; i++)
+        if (outs[i] && outs[i]->tmp && cli_inputs_check_output(outs[i]->path, "the output")) return 1;
     /* Every output is complete: rename them all with the signals held, so
      * an interrupt cannot land between two renames. */
     sigset_t saved;
@@ -730,20 +875,66 @@ static void default_limits(rs_limits *lim)
     rs_ctx_free(c);
 }
 
-int cli_load_texture(const char *path, uint32_t *w, uint32_t *h, uint8_t **rgba)
+/* The pixels all decoded images (textures, the atlas, surface images) may
+ * hold together, and what they hold so far. */
+static uint64_t image_budget = CLI_IMAGE_BUDGET_DEFAULT, image_pixels;
+
+void cli_image_budget_set(uint64_t pixels) { image_budget = pixels; }
+
+/* A PNG's declared size from its IHDR (the first 24 bytes): 1, else 0. */
+static int png_header_size(const char *p, size_t n, uint64_t *pixels)
+{
+    static const unsigned char sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
+    const unsigned char *u = (const unsigned char *)p;
+    if (n < 24 || memcmp(u, sig, 8) || memcmp(u + 12, "IHDR", 4)) return 0;
+    uint64_t w = (uint64_t)u[16] << 24 | (uint64_t)u[17] << 16 | (uint64_t)u[18] << 8 | u[19];
+    uint64_t h = (uint64_t)u[20] << 24 | (uint64_t)u[21] << 16 | (uint64_t)u[22] << 8 | u[23];
+    *pixels = w * h;
+    return 1;
+}
+
+static int over_budget(const char *path, uint64_t pixels)
+{
+    if (!image_budget || pixels <= image_budget - (image_pixels < image_budget ? image_pixels : image_budget))
+        return 0;
+    cli_error("%s: its %llu pixels would bring the decoded images of this run to %llu pixels, over the budget of "
+              "%llu (--max-image-pixels N raises it)", path, (unsigned long long)pixels,
+              (unsigned long long)(image_pixels + pixels), (unsigned long long)image_budget);
+    return 1;
+}
+
+int cli_load_texture(const char *path, const char *role, uint32_t *w, uint32_t *h, uint8_t **rgba)
 {
     input in;
+    *rgba = NULL;
     if (input_open(&in, path)) return 1;
+    rs_limits lim;
+    default_limits(&lim);
+    uint64_t declared;
+    /* before decoding (one image over its own limit gets that message) */
+    if (png_header_size(in.head, in.got, &declared) &&
+        (!lim.max_texture_pixels || declared <= lim.max_texture_pixels) && over_budget(path, declared)) {
+        close(in.fd);
+        return 1;
+    }
     char name[64];
     FILE *keep;
     const char *p = input_for_image(&in, name, sizeof name, &keep);
+    int bad = !p || (role && cli_inputs_add(path, role, keep ? fileno(keep) : in.fd, NULL, 0));
     close(in.fd);
-    if (!p) return 1;
-    rs_limits lim;
-    default_limits(&lim);
+    if (bad) {
+        if (keep) fclose(keep);
+        return 1;
+    }
     image_read r = { p, path, 0, lim.max_texture_pixels, w, h, NULL, rgba };
     int rc = read_image_quietly(&r);
     if (keep) fclose(keep);
+    if (!rc && over_budget(path, (uint64_t)*w * *h)) { /* formats whose size was not read above */
+        free(*rgba);
+        *rgba = NULL;
+        return 1;
+    }
+    if (!rc) image_pixels += (uint64_t)*w * *h;
     return rc;
 }
 
@@ -769,9 +960,14 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
          * only counts when it is the whole file (or the limit is the error). */
         rs_result rc = rs_dem_parse_pgm(ctx, in.head, in.got, &dem);
         if (rc == RS_ERR_LIMIT || in.eof) {
+            int bad = rc == RS_OK && cli_inputs_add(path, "DEM", in.fd, in.head, in.got);
             close(in.fd);
             if (rc != RS_OK) {
                 cli_error("%s: %s", path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(rc));
+                return NULL;
+            }
+            if (bad) {
+                rs_dem_free(ctx, dem);
                 return NULL;
             }
             return dem;
@@ -783,8 +979,12 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
         char *data;
         size_t size;
         int bad = input_read_all(&in, limit, &data, &size);
+        bad = bad || cli_inputs_add(path, "DEM", in.fd, data, size);
         close(in.fd);
-        if (bad) return NULL;
+        if (bad) {
+            free(data);
+            return NULL;
+        }
         rc = rs_dem_parse_pgm(ctx, data, size, &dem);
         free(data);
         if (rc != RS_OK) {
@@ -796,8 +996,12 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     char name[64];
     FILE *keep;
     const char *p = input_for_image(&in, name, sizeof name, &keep);
+    int reg_bad = !p || cli_inputs_add(path, "DEM", keep ? fileno(keep) : in.fd, NULL, 0);
     close(in.fd);
-    if (!p) return NULL;
+    if (reg_bad) {
+        if (keep) fclose(keep);
+        return NULL;
+    }
     uint32_t w, h;
     float *z;
     rs_limits lim;
