@@ -8,7 +8,7 @@ BIN=${1:?usage: cli_budgets_test.sh ROADSPLAT}
 . "$(dirname "$0")/cli_lib.sh"
 ref_scene "$T"
 awk 'BEGIN { print "road a width 6"; for (k = 0; k < 20000; k++) printf "%.6f 10\n", 2 + 26 * k / 19999; print "end" }' >"$T/crowd.txt"
-run() { "$BIN" --quiet "$@"; }
+run() { "$BIN" --quiet --cell-size 1 "$@"; }
 check "crowded road, default budget" run --texels 2 "$T/dem.pgm" "$T/crowd.txt" "$T/c.png"
 run --texels 2 --max-field-work 1000 "$T/dem.pgm" "$T/crowd.txt" "$T/w.png" 2>"$T/err"
 check "over --max-field-work: exit 1" test $? = 1

@@ -155,8 +155,8 @@ if "$BIN" --quiet "$T/dem.pgm" "$T/roads.txt" "$T/probe.tif" 2>/dev/null; then
         printf 'P2\n201 201\n255\n' >"$T/big.pgm"
         awk 'BEGIN { for (i = 0; i < 201 * 201; i++) printf "%d ", (i * 7919) % 251 }' >>"$T/big.pgm"
         printf 'road a width 6\n2 2\n190 190\nend\n' >"$T/rbig.txt"
-        head -c 150k /dev/zero >"$T/full/filler"
-        "$BIN" --quiet --texels 2 --cog "$T/big.pgm" "$T/rbig.txt" "$T/full/o.tif" 2>"$T/e"; rc=$?
+        head -c 190k /dev/zero >"$T/full/filler"
+        "$BIN" --quiet --cell-size 1 --texels 2 --cog "$T/big.pgm" "$T/rbig.txt" "$T/full/o.tif" 2>"$T/e"; rc=$?
         check "--cog on a nearly full disk: exit 1, no OUT ($(cat "$T/e"))" sh -c "test $rc = 1 && test ! -e '$T/full/o.tif'"
         check "... the message names the full file system, not libtiff" sh -c "grep -q 'file system is full' '$T/e' && ! grep -q TIFF '$T/e'"
         check "... no temporary left" sh -c "! ls -a '$T/full' | grep -q '^\.rs-'"
