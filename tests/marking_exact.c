@@ -115,7 +115,7 @@ int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out)
     /* the rectangle: centre P0 + s0 d + t0 n, n = (dy, -dx) (left of travel) */
     double cx = xy[0] + s0 * dx + t0 * dy, cy = xy[1] + s0 * dy - t0 * dx;
     double hl = 0.5 * c->length, hw = 0.5 * c->width, r = hypot(hl, hw) + 2 * pix;
-    double sum = 0, sx = 0, sy = 0;
+    double sum = 0, sx = 0, sy = 0, esum = 0, ex = 0, ey = 0;
     long ne = 0;
     for (uint32_t y = 0; y < H; y++)
         for (uint32_t x = 0; x < W; x++) {
@@ -127,15 +127,18 @@ int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out)
             sum += v;
             sx += v * (px + 0.5 * pix);
             sy += v * (py + 0.5 * pix);
+            esum += e;
+            ex += e * (px + 0.5 * pix);
+            ey += e * (py + 0.5 * pix);
         }
-    if (ne == 0 || sum == 0) goto done;
+    if (ne == 0 || sum == 0 || esum == 0) goto done;
     double tot = 0;
     for (long k = 0; k < ne; k++) tot += err[k];
     qsort(err, (size_t)ne, sizeof *err, cmp_double);
     out->mean = tot / ne;
     out->p99 = err[(size_t)floor(0.99 * (double)(ne - 1))];
     out->area = sum * pix * pix / (c->length * c->width) - 1;
-    out->centroid = hypot(sx / sum - cx, sy / sum - cy) / pix;
+    out->centroid = hypot(sx / sum - ex / esum, sy / sum - ey / esum) / pix;
     out->pixels = ne;
     rc = 0;
 done:

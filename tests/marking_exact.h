@@ -11,7 +11,7 @@ typedef struct me_stats {
     double mean;     /* mean |painted - exact| over pixels where either is > 0 */
     double p99;      /* its 99th percentile */
     double area;     /* (painted area - L W) / (L W) */
-    double centroid; /* distance of the painted centroid from the rectangle's centre, pixels */
+    double centroid; /* distance of the painted centroid from the exact coverage's, pixels */
     long pixels;     /* pixels where either is > 0 */
 } me_stats;
 
