@@ -700,43 +700,92 @@ static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, do
     return 1;
 }
 
+/* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
+ * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows' fractions: bilinear in
+ * doubles from the whole numbers (exact inputs; the result is far below
+ * 2^53). */
+static double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
+{
+#if defined(__SSE2__)
+    /* S(j, i), S(j, i + 1), S(j + 1, i), S(j + 1, i + 1) */
+    __m128i A = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)a),
+                                   _mm_loadl_epi64((const __m128i *)(const void *)(a + w2)));
+    __m128i B = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)b),
+                                   _mm_loadl_epi64((const __m128i *)(const void *)(b + w2)));
+    __m128d a0 = _mm_cvtepi32_pd(A), a1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(A, 0xEE));
+    __m128d b0 = _mm_cvtepi32_pd(B), b1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(B, 0xEE));
+    __m128d ra = _mm_add_pd(a0, _mm_mul_pd(_mm_set1_pd(f0), _mm_sub_pd(a1, a0)));
+    __m128d rb = _mm_add_pd(b0, _mm_mul_pd(_mm_set1_pd(f1), _mm_sub_pd(b1, b0)));
+    __m128d d = _mm_sub_pd(rb, ra);
+    double lo = _mm_cvtsd_f64(d), hi = _mm_cvtsd_f64(_mm_unpackhi_pd(d, d));
+    return lo + fu * (hi - lo);
+#else
+    double ra0 = a[0] + f0 * ((double)a[w2] - a[0]), ra1 = a[1] + f0 * ((double)a[w2 + 1] - a[1]);
+    double rb0 = b[0] + f1 * ((double)b[w2] - b[0]), rb1 = b[1] + f1 * ((double)b[w2 + 1] - b[1]);
+    double lo = rb0 - ra0, hi = rb1 - ra1;
+    return lo + fu * (hi - lo);
+#endif
+}
+
 /* The integral of the sprite's 255 x alpha (table t, rows of w2 = w + 2
  * corners, w x h texels) over footprint fp at (U, V): the line integral
  * of the summed-area table along the staircases, G(u, v1) - G(u, v0) per
- * step, from differences of whole numbers (exact). The V levels are
- * shared by consecutive steps; a step left of the sprite or with its V
- * range outside adds nothing. */
+ * step (both sides at once: the right side is the left one mirrored, V -
+ * dv, U - du). The V levels are shared by consecutive steps; a step left
+ * of the sprite adds nothing (G(0, v) = 0). */
 static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
                               double V)
 {
     double I = 0;
     const int n = fp->n;
+    size_t row[2][RS__MK_STEPS + 1];
+    double f[2][RS__MK_STEPS + 1];
+#if defined(__SSE2__)
+    const __m128d sg = _mm_set_pd(-1, 1), VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
+    const __m128d hh = _mm_set1_pd(h), ww = _mm_set1_pd(w);
+    for (int k = 0; k <= n; k++) {
+        __m128d v = _mm_add_pd(VV, _mm_mul_pd(sg, _mm_set1_pd(fp->dv[k])));
+        v = _mm_min_pd(_mm_max_pd(v, z), hh);
+        __m128i j = _mm_cvttpd_epi32(v);
+        __m128d fr = _mm_sub_pd(v, _mm_cvtepi32_pd(j));
+        _mm_storel_pd(&f[0][k], fr);
+        _mm_storeh_pd(&f[1][k], fr);
+        row[0][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(j) * w2;
+        row[1][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(j, 1)) * w2;
+    }
+    for (int k = 0; k < n; k++) {
+        __m128d u = _mm_min_pd(_mm_add_pd(UU, _mm_mul_pd(sg, _mm_set1_pd(fp->du[k]))), ww);
+        __m128d uz = _mm_max_pd(u, z);
+        __m128i ii = _mm_cvttpd_epi32(uz);
+        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
+        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
+        if (_mm_cvtsd_f64(u) > 0)
+            I -= step_int(t + row[0][k] + i0, t + row[0][k + 1] + i0, w2, _mm_cvtsd_f64(fu), f[0][k], f[0][k + 1]);
+        if (_mm_cvtsd_f64(_mm_unpackhi_pd(u, u)) > 0)
+            I -= step_int(t + row[1][k] + i1, t + row[1][k + 1] + i1, w2, _mm_cvtsd_f64(_mm_unpackhi_pd(fu, fu)),
+                          f[1][k], f[1][k + 1]);
+    }
+#else
     for (int side = 0; side < 2; side++) {
         const double sg = side ? -1 : 1;
-        size_t row[RS__MK_STEPS + 1];
-        double f[RS__MK_STEPS + 1];
         for (int k = 0; k <= n; k++) {
             double v = V + sg * fp->dv[k];
             v = v > 0 ? v : 0;
             v = v < h ? v : h;
             size_t j = (size_t)v;
-            row[k] = j * w2;
-            f[k] = v - (double)j;
+            row[side][k] = j * w2;
+            f[side][k] = v - (double)j;
         }
         for (int k = 0; k < n; k++) {
             double u = U + sg * fp->du[k];
             u = u < w ? u : w;
-            if (!(u > 0) || (row[k] == row[k + 1] && f[k] == f[k + 1])) continue;
+            if (!(u > 0)) continue;
             size_t i = (size_t)u;
-            double fu = u - (double)i, f0 = f[k], f1 = f[k + 1];
-            const int32_t *a = t + row[k] + i, *b = t + row[k + 1] + i, *a1 = a + w2, *b1 = b + w2;
-            /* corners (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1) */
-            int32_t p = b[0] - a[0], r = (b[1] - b[0]) - (a[1] - a[0]);
-            int32_t db = b1[0] - b[0], da = a1[0] - a[0];
-            int32_t xb = (b1[1] - b1[0]) - (b[1] - b[0]), xa = (a1[1] - a1[0]) - (a[1] - a[0]);
-            I -= (double)p + fu * (double)r + (f1 * db - f0 * da) + fu * (f1 * xb - f0 * xa);
+            I -= step_int(t + row[side][k] + i, t + row[side][k + 1] + i, w2, u - (double)i, f[side][k],
+                          f[side][k + 1]);
         }
     }
+#endif
     return I;
 }
 

@@ -7,6 +7,7 @@
 #include "harness.h"
 #include "fail_alloc.h"
 #include "markings.h"
+#include "atlas.h"
 #include "splatter.h"
 #include "marking_exact.h"
 
@@ -185,7 +186,9 @@ static void test_rectangle(void)
  * by the exact area of the pixel inside its rotated rectangle (clipped
  * polygons, tests/marking_exact.c), at any angle, sub-pixel position,
  * pixel size and texel shape: per-pixel error mean <= 0.02 and p99 <=
- * 0.15, area within 0.5 %, centroid within 0.1 pixel. */
+ * 0.15, area within 0.5 %, centroid within 0.1 pixel of the exact
+ * coverage's. At 1.25 m the sprite is 1.6 x 0.8 pixels and every pixel
+ * it touches has several of its edges inside: mean <= 0.03 there. */
 static void test_exact(void)
 {
     static const double angles[] = { 0, 15, 30, 45, 60, 75, 90, 7, 137, 200 };
@@ -201,7 +204,7 @@ static void test_exact(void)
                     me_case c = { angles[ai], offs[oi][0], offs[oi][1], pixes[pi], 2, 1, tex[ti][0], tex[ti][1] };
                     me_stats st;
                     CHECK(me_measure(ctx, &c, &st) == 0);
-                    CHECKF(st.mean <= 0.02 && st.p99 <= 0.15 && fabs(st.area) <= 0.005 && st.centroid <= 0.1,
+                    CHECKF(st.mean <= (pixes[pi] > 1 ? 0.03 : 0.02) && st.p99 <= 0.15 && fabs(st.area) <= 0.005 && st.centroid <= 0.1,
                            "%ux%u texels, pix %g, angle %g, offset (%g, %g): mean %.4f p99 %.4f area %+.3f %% "
                            "centroid %.3f px",
                            tex[ti][0], tex[ti][1], pixes[pi], angles[ai], offs[oi][0], offs[oi][1], st.mean, st.p99,
@@ -216,26 +219,36 @@ static void test_exact(void)
            worst[0], worst[1], 100 * worst[2], worst[3]);
 }
 
-/* Pixels a word paints fully (alpha >= 0.99): nearly the same number
- * whichever sub-pixel position it has (on b8396fd BUS painted 13 or 82
- * 0.05 m apart). */
-#ifndef WORD_FULL
-#define WORD_FULL 0.99
-#endif
+/* A word of the built-in atlas at 8 sub-pixel positions (0.0125 m apart
+ * in s and t, 0.1 m pixels, a road along x and one at 28.6 degrees): at
+ * every position the paint is the exact coverage of the sprite (its
+ * texels as squares; reference: 32 x 32 points per pixel, nearest
+ * texel), mean error <= 0.02, and the pixels it paints fully (alpha >=
+ * 0.99) are as many as the reference's, within 10 % or 3. The count
+ * itself moves with the position even for exact coverage (a 0.12 m
+ * stroke covers a whole 0.1 m pixel only in a fifth of its positions), so
+ * it is compared with the reference at the same position; on b8396fd
+ * BUS painted 13 or 82 such pixels 0.05 m apart in the demo. */
 static void test_word_shift(void)
 {
     rs_dem *dem = flat_dem(13, 13, 1.0);
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
     static const char *const words[] = { "word_bus", "word_stop", "word_slow" };
     for (int wi = 0; wi < 3; wi++)
         for (int slant = 0; slant < 2; slant++) {
+            const rs__atlas_type *ty = &atlas->t[rs_atlas_find(atlas, words[wi])];
+            const rs__atlas_level *L0 = &ty->lev[0];
             long lo = -1, hi = -1;
+            double worst = 0, worst_count = 0;
             for (int k = 0; k < 8; k++) {
                 double th = slant ? 0.5 : 0, dx = cos(th), dy = sin(th);
                 double xy[4] = { 6 - 5 * dx, 6.2 - 5 * dy, 6 + 5 * dx, 6.2 + 5 * dy };
+                double S0 = 5 + 0.0125 * k, T0 = 0.0125 * k;
                 rs_roads *roads = NULL;
                 CHECK(rs_roads_create(ctx, &roads) == RS_OK);
                 CHECK(rs_roads_add(ctx, roads, "r", 6, xy, 2) == RS_OK);
-                rs_mark mark = { words[wi], 0, 5 + 0.0125 * k, 0.0125 * k, 0, 0, 0, 0 };
+                rs_mark mark = { words[wi], 0, S0, T0, 0, 0, 0, 0 };
                 CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
                 rs_splat_options o;
                 memset(&o, 0, sizeof o);
@@ -243,17 +256,45 @@ static void test_word_shift(void)
                 o.markings.no_auto = 1;
                 amap m;
                 CHECK(paint_alpha(dem, roads, &o, &m) == 0);
-                long full = 0;
-                for (size_t i = 0; i < (size_t)m.w * m.h; i++) full += m.a[i] >= WORD_FULL;
+                long full = 0, rfull = 0, n = 0;
+                double err = 0;
+                for (uint32_t y = 0; y < m.h; y++)
+                    for (uint32_t x = 0; x < m.w; x++) {
+                        double ref = 0;
+                        for (int sy = 0; sy < 32; sy++)
+                            for (int sx = 0; sx < 32; sx++) {
+                                double px = (x + (sx + 0.5) / 32) * m.pix - xy[0], py = (y + (sy + 0.5) / 32) * m.pix - xy[1];
+                                double s = px * dx + py * dy, t = px * dy - py * dx;
+                                double tu = (0.5 * ty->width - (t - T0)) * L0->w / ty->width;
+                                double tv = (0.5 * ty->length - (s - S0)) * L0->h / ty->length;
+                                if (!(tu >= 0 && tu < L0->w && tv >= 0 && tv < L0->h)) continue;
+                                ref += L0->px[((size_t)tv * L0->w + (size_t)tu) * 4 + 3];
+                            }
+                        ref /= 1024;
+                        double a = m.a[(size_t)y * m.w + x];
+                        if (a == 0 && ref == 0) continue;
+                        n++;
+                        err += fabs(a - ref);
+                        full += a >= 0.99;
+                        rfull += ref >= 0.99;
+                    }
+                err /= n > 0 ? (double)n : 1;
+                if (err > worst) worst = err;
+                double dc = fabs((double)(full - rfull));
+                if (dc > worst_count) worst_count = dc;
+                CHECKF(err <= 0.02 && dc <= fmax(3, 0.1 * (double)rfull),
+                       "%s%s, shift %d: mean error %.4f, %ld fully painted pixels, exact coverage %ld", words[wi],
+                       slant ? " at 28.6 deg" : "", k, err, full, rfull);
                 if (lo < 0 || full < lo) lo = full;
                 if (full > hi) hi = full;
                 free(m.a);
                 rs_roads_free(ctx, roads);
             }
-            printf("%s%s, 8 sub-pixel positions: %ld to %ld fully painted pixels\n", words[wi],
-                   slant ? " (road at 28.6 deg)" : "", lo, hi);
-            CHECKF(hi > 0 && lo >= 0.75 * hi, "%s: %ld to %ld fully painted pixels", words[wi], lo, hi);
+            printf("%s%s, 8 sub-pixel positions: %ld to %ld fully painted pixels (at most %.0f from the exact "
+                   "coverage's), mean error <= %.4f\n",
+                   words[wi], slant ? " (road at 28.6 deg)" : "", lo, hi, worst_count, worst);
         }
+    rs_atlas_free(ctx, atlas);
     rs_dem_free(ctx, dem);
 }
 
