@@ -704,7 +704,7 @@ static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, do
  * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows' fractions: bilinear in
  * doubles from the whole numbers (exact inputs; the result is far below
  * 2^53). */
-static double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
+static inline double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
 {
 #if defined(__SSE2__)
     /* S(j, i), S(j, i + 1), S(j + 1, i), S(j + 1, i + 1) */
