@@ -2,8 +2,8 @@
  * in road coordinates and drawn per pixel through a grid index over their
  * extents, after seed 001 (atlas + per-marking parametric record, one pass
  * for all markings, c = (1 - a) c1 + a c2) but with the marking bent along
- * its road instead of a rigid box, and the atlas sampled trilinearly for
- * the pixel's footprint. */
+ * its road instead of a rigid box, and the sprite's exact mean over the
+ * pixel's footprint from a summed-area table (issue 25). */
 #include "markings.h"
 #include "splatter.h"
 

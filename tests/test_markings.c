@@ -297,6 +297,72 @@ static void test_word_shift(void)
     rs_dem_free(ctx, dem);
 }
 
+/* A sprite of two colours (left half red, right half green, opaque) takes
+ * the four-channel tables: each colour covers its half of the rectangle
+ * (area within 0.5 %), and the two sum to the whole at every pixel as an
+ * all-white sprite's alpha does. */
+static void test_two_colours(void)
+{
+    static uint8_t px[16 * 16 * 4];
+    for (int j = 0; j < 16; j++)
+        for (int i = 0; i < 16; i++) {
+            uint8_t *q = px + (j * 16 + i) * 4;
+            q[0] = i < 8 ? 255 : 0;
+            q[1] = i < 8 ? 0 : 255;
+            q[2] = 0;
+            q[3] = 255;
+        }
+    rs_image img = { 16, 16, px };
+    const char *idx = "two 0 0 16 16 3 1.2\n";
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &atlas) == RS_OK);
+    rs_dem *dem = flat_dem(21, 21, 1.0);
+    double th = 0.5, xy[4] = { 10 - 8 * cos(th), 10 - 8 * sin(th), 10 + 8 * cos(th), 10 + 8 * sin(th) };
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, "r", 6, xy, 2) == RS_OK);
+    rs_mark mark = { "two", 0, 8.13, 0.37, 0, 0, 0, 0 };
+    CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 10;
+    o.markings.atlas = atlas;
+    o.markings.no_auto = 1;
+    rs__markings *mk = NULL;
+    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk);
+    if (!mk) return;
+    CHECK_EQ_INT(mk->m[0].tex->nch, 4);
+    const uint32_t W = 200;
+    rs__piece p;
+    memset(&p, 0, sizeof p);
+    p.w = W;
+    p.rows = 1;
+    uint16_t q[200];
+    float sc[600];
+    for (uint32_t k = 0; k < W; k++) q[k] = 65535;
+    p.q = q;
+    p.sc = sc;
+    double red = 0, green = 0, worst = 0;
+    for (uint32_t y = 0; y < W; y++) {
+        p.y0 = y;
+        memset(sc, 0, sizeof sc);
+        rs__markings_paint(mk, &p);
+        for (uint32_t k = 0; k < W; k++) {
+            red += sc[k] / 255.0;
+            green += sc[W + k] / 255.0;
+            if (sc[k] + sc[W + k] > 255.01f || sc[2 * W + k] != 0) worst = 1;
+        }
+    }
+    double half = 0.5 * 3 * 1.2, a = 0.01;
+    CHECKF(fabs(red * a - half) <= 0.005 * half && fabs(green * a - half) <= 0.005 * half,
+           "red %.4f m2, green %.4f m2, each half %.4f", red * a, green * a, half);
+    CHECK(worst == 0);
+    rs__markings_free(ctx, mk);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_atlas_free(ctx, atlas);
+}
+
 /* Per-pixel work does not grow with the number of markings elsewhere: a
  * window around one marking of a long road examines the same (pixel,
  * marking) pairs and paints the same bytes whether the road carries that
@@ -657,6 +723,7 @@ int main(void)
     test_rectangle();
     test_exact();
     test_word_shift();
+    test_two_colours();
     test_curve();
     test_local_work();
     test_errors();
