@@ -10,6 +10,7 @@
 #include <GL/glext.h>
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -247,6 +248,59 @@ static void tex2d(rsh_renderer *r, GLuint *t, const uint8_t *px, uint32_t w, uin
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
+/* The markings' summed-area tables (issue 25, docs/markings.md) from each
+ * type's level 0 in the export: per type (h + 1) x (w + 1) corners of the
+ * sums of 255 x premultiplied r g b and 255 x alpha (whole numbers, so the
+ * shader's differences are exact), and a copy of the level records whose
+ * level-0 .w is the type's first corner. */
+static int marking_tables(const rs_gpu_scene *g, int32_t **sat_out, uint32_t **lev_out, char *err, size_t err_size)
+{
+    size_t n = 0;
+    for (size_t t = 0; t < g->ntypes; t++) {
+        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
+        n += (size_t)(L[1] + 1) * (L[2] + 1);
+    }
+    int32_t *sat = malloc((n ? n : 1) * 4 * sizeof *sat);
+    uint32_t *lev = malloc((g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof *lev);
+    if (!sat || !lev) {
+        free(sat);
+        free(lev);
+        set_err(err, err_size, "out of memory for the marking tables");
+        return 1;
+    }
+    memset(lev, 0, (g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof *lev);
+    if (g->nlevels) memcpy(lev, g->levels, g->nlevels * RS_GPU_LEVEL_INTS * sizeof *lev);
+    size_t off = 0;
+    for (size_t t = 0; t < g->ntypes; t++) {
+        uint32_t *L = lev + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
+        const size_t w = L[1], h = L[2], w1 = w + 1;
+        const float *px = g->atlas_px + 4 * (size_t)L[0];
+        int32_t *S = sat + 4 * off;
+        L[3] = (uint32_t)off;
+        for (size_t i = 0; i < 4 * w1; i++) S[i] = 0;
+        for (size_t j = 0; j < h; j++) {
+            int64_t row[4] = { 0, 0, 0, 0 };
+            for (int c = 0; c < 4; c++) S[4 * (j + 1) * w1 + (size_t)c] = 0;
+            for (size_t i = 0; i < w; i++)
+                for (int c = 0; c < 4; c++) {
+                    row[c] += (int64_t)lrintf(px[4 * (j * w + i) + (size_t)c] * 255.0f);
+                    int64_t v = S[4 * (j * w1 + i + 1) + (size_t)c] + row[c];
+                    if (v > INT32_MAX) {
+                        free(sat);
+                        free(lev);
+                        set_err(err, err_size, "a marking sprite is too large for the shader's tables");
+                        return 1;
+                    }
+                    S[4 * ((j + 1) * w1 + i + 1) + (size_t)c] = (int32_t)v;
+                }
+        }
+        off += w1 * (h + 1);
+    }
+    *sat_out = sat;
+    *lev_out = lev;
+    return 0;
+}
+
 int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, const uint8_t *road,
                const uint8_t *normals, uint32_t tex_w, uint32_t tex_h, char *err, size_t err_size)
 {
@@ -257,7 +311,15 @@ int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, c
     tex2d(r, &r->tex_terrain, terrain, tex_w, tex_h, GL_RGBA);
     tex2d(r, &r->tex_road, road ? road : terrain, tex_w, tex_h, GL_RGBA);
     if (normals) tex2d(r, &r->tex_normal, normals, tex_w, tex_h, GL_RGB);
+    int32_t *sat = NULL;
+    uint32_t *lev = NULL;
+    if (g && marking_tables(g, &sat, &lev, err, err_size)) return 1;
     if (g) {
+        size_t sat_n = 0;
+        for (size_t t = 0; t < g->ntypes; t++) {
+            const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
+            sat_n += (size_t)(L[1] + 1) * (L[2] + 1);
+        }
         const struct {
             const void *data;
             size_t bytes;
@@ -272,8 +334,8 @@ int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, c
             { g->mark_start, ((size_t)g->gw * g->gh + 1) * sizeof(uint32_t), GL_R32UI },
             { g->mark_ids, (g->nmark_entries ? g->nmark_entries : 1) * sizeof(uint32_t), GL_R32UI },
             { g->types, (g->ntypes ? g->ntypes : 1) * RS_GPU_TYPE_INTS * sizeof(uint32_t), GL_R32UI },
-            { g->levels, (g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof(uint32_t), GL_RGBA32UI },
-            { g->atlas_px, (g->atlas_texels ? g->atlas_texels : 1) * 4 * sizeof(float), GL_RGBA32F },
+            { lev, (g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof(uint32_t), GL_RGBA32UI },
+            { sat, (sat_n ? sat_n : 1) * 4 * sizeof(int32_t), GL_RGBA32I },
         };
         GLint maxbuf = 0;
         glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxbuf);
@@ -285,6 +347,8 @@ int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, c
             size_t bytes = src[k].bytes ? src[k].bytes : texel;
             if (bytes / texel > (size_t)maxbuf) {
                 set_err(err, err_size, "the road scene exceeds GL_MAX_TEXTURE_BUFFER_SIZE");
+                free(sat);
+                free(lev);
                 return 1;
             }
             r->gl.BindBuffer(GL_TEXTURE_BUFFER, r->bufs[k]);
@@ -293,6 +357,8 @@ int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, c
             r->gl.TexBuffer(GL_TEXTURE_BUFFER, src[k].fmt, r->bufs[k]);
         }
         r->gl.BindBuffer(GL_TEXTURE_BUFFER, 0);
+        free(sat);
+        free(lev);
         r->grid[0] = (float)g->x0;
         r->grid[1] = (float)g->y0;
         r->grid[2] = (float)(1.0 / g->cell);

@@ -2,8 +2,8 @@
  * in road coordinates and drawn per pixel through a grid index over their
  * extents, after seed 001 (atlas + per-marking parametric record, one pass
  * for all markings, c = (1 - a) c1 + a c2) but with the marking bent along
- * its road instead of a rigid box, and the atlas sampled trilinearly for
- * the pixel's footprint. */
+ * its road instead of a rigid box, and the sprite's exact mean over the
+ * pixel's footprint from a summed-area table (issue 25). */
 #include "markings.h"
 #include "splatter.h"
 
@@ -106,8 +106,10 @@ rs_result rs__markings_explicit(rs_ctx *ctx, const rs_roads *roads, const rs_atl
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
 {
     if (!mk) return;
-    for (size_t i = 0; mk->tex && i < mk->ntex; i++)
-        for (uint32_t l = 0; l < mk->tex[i].nlev; l++) rs__free(ctx, mk->tex[i].lev[l].px);
+    for (size_t i = 0; mk->tex && i < mk->ntex; i++) {
+        rs__free(ctx, mk->tex[i].sat);
+        rs__free(ctx, mk->tex[i].isat);
+    }
     rs__free(ctx, mk->tex);
     rs_atlas_free(ctx, mk->atlas_own);
     rs__free(ctx, mk->m);
@@ -118,34 +120,124 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk);
 }
 
-/* The paint-time levels of a type: padded copies and their alpha boxes. */
+/* The paint-time table of a type (rs__mk_tex): its level-0 texels'
+ * summed-area table, alpha only when every texel's colour is the same. */
 static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx, size_t *bytes)
 {
-    const uint32_t P = RS__MK_PAD;
-    for (uint32_t l = 0; l < ty->nlev; l++) {
-        const rs__atlas_level *L = &ty->lev[l];
-        rs__mk_level *o = &tx->lev[l];
-        o->w = L->w;
-        o->h = L->h;
-        o->pw = L->w + 2 * P;
-        o->px = rs__calloc(ctx, (size_t)o->pw * (L->h + 2 * P), 4 * sizeof(float));
-        if (!o->px) return RS_ERR_NOMEM;
-        tx->nlev = l + 1;
-        *bytes += (size_t)o->pw * (L->h + 2 * P) * 4 * sizeof(float);
-        o->ax0 = o->ay0 = INT32_MAX;
-        o->ax1 = o->ay1 = INT32_MIN;
-        for (uint32_t j = 0; j < L->h; j++) {
-            memcpy(o->px + ((size_t)(j + P) * o->pw + P) * 4, L->px + (size_t)j * L->w * 4, (size_t)L->w * 4 * sizeof(float));
-            for (uint32_t i = 0; i < L->w; i++)
-                if (L->px[((size_t)j * L->w + i) * 4 + 3] > 0) {
-                    if ((int32_t)i < o->ax0) o->ax0 = (int32_t)i;
-                    if ((int32_t)i > o->ax1) o->ax1 = (int32_t)i;
-                    if ((int32_t)j < o->ay0) o->ay0 = (int32_t)j;
-                    if ((int32_t)j > o->ay1) o->ay1 = (int32_t)j;
-                }
+    const rs__atlas_level *L = &ty->lev[0];
+    const uint32_t w = L->w, h = L->h;
+    const size_t n = (size_t)w * h, w1 = (size_t)w + 1, h1 = (size_t)h + 1;
+    /* one colour: every texel's premultiplied colour is that 8-bit colour
+     * times its alpha, as lib/atlas.c computed it */
+    int uniform = 1, have = 0;
+    float col[3] = { 0, 0, 0 };
+    tx->ax0 = tx->ay0 = INT32_MAX;
+    tx->ax1 = tx->ay1 = INT32_MIN;
+    for (size_t k = 0; k < n; k++) {
+        const float *q = L->px + 4 * k;
+        if (!(q[3] > 0)) continue;
+        int32_t i = (int32_t)(k % w), j = (int32_t)(k / w);
+        if (i < tx->ax0) tx->ax0 = i;
+        if (i > tx->ax1) tx->ax1 = i;
+        if (j < tx->ay0) tx->ay0 = j;
+        if (j > tx->ay1) tx->ay1 = j;
+        for (int c = 0; c < 3; c++) {
+            if (!have) col[c] = (float)floor(q[c] / q[3] + 0.5);
+            if (q[c] != col[c] * q[3]) uniform = 0;
         }
+        have = 1;
     }
+    tx->nch = uniform ? 1 : 4;
+    memcpy(tx->col, col, sizeof col);
+    /* alpha only: 255 a is a whole number (the image's 8 bits); the sums
+     * stay below 2^31 for up to 8 M texels */
+    if (uniform && n > ((size_t)1 << 23)) tx->nch = 4;
+    double *S = rs__alloc_array(ctx, w1 * h1, sizeof *S);
+    if (tx->nch == 1) tx->isat = rs__alloc_array(ctx, (w1 + 1) * (h1 + 1), sizeof(int32_t));
+    else tx->sat = rs__alloc_array(ctx, 4 * w1 * h1, 4 * sizeof(double));
+    if (!S || (!tx->isat && !tx->sat)) {
+        rs__free(ctx, S);
+        return RS_ERR_NOMEM;
+    }
+    *bytes += tx->nch == 1 ? (w1 + 1) * (h1 + 1) * sizeof(int32_t) : 4 * w1 * h1 * 4 * sizeof(double);
+    for (uint32_t c = 0; c < tx->nch; c++) {
+        const int ch = tx->nch == 1 ? 3 : (int)c;
+        for (size_t i = 0; i < w1; i++) S[i] = 0;
+        for (size_t j = 0; j < h; j++) {
+            double row = 0;
+            S[(j + 1) * w1] = 0;
+            for (size_t i = 0; i < w; i++) {
+                double x = L->px[(j * w + i) * 4 + (size_t)ch];
+                row += tx->nch == 1 ? floor(x * 255 + 0.5) : x;
+                S[(j + 1) * w1 + i + 1] = S[j * w1 + i + 1] + row;
+            }
+        }
+        if (tx->nch == 1) {
+            for (size_t j = 0; j <= h1; j++)
+                for (size_t i = 0; i <= w1; i++)
+                    tx->isat[j * (w1 + 1) + i] = (int32_t)S[(j < h1 ? j : h) * w1 + (i < w1 ? i : w)];
+            continue;
+        }
+        for (size_t j = 0; j < h1; j++)
+            for (size_t i = 0; i < w1; i++) {
+                size_t i1 = i < w ? i + 1 : i, j1 = j < h ? j + 1 : j;
+                double s00 = S[j * w1 + i], s01 = S[j * w1 + i1], s10 = S[j1 * w1 + i], s11 = S[j1 * w1 + i1];
+                double e[4] = { s00, s01 - s00, s10 - s00, s11 - s10 - s01 + s00 };
+                memcpy(tx->sat + (c * w1 * h1 + j * w1 + i) * 4, e, sizeof e);
+            }
+    }
+    rs__free(ctx, S);
+    tx->w = w;
+    tx->h = h;
     return RS_OK;
+}
+
+/* Parts per parallelogram edge: enough that a sprite edge crossing one
+ * part's slanted end costs at most FP_EPS of the pixel's coverage (the
+ * triangle between the slant and the step, h^2 |slope| / 8 of area for a
+ * part of height h), at most RS__MK_STEPS / 2. */
+#define FP_EPS 0.016
+
+/* The footprint of a pixel whose steps in x and y move the texel
+ * coordinates by (e1u, e1v) and (e2u, e2v) (rs__mk_fp). */
+static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp *fp)
+{
+    double A = fabs(e1u * e2v - e1v * e2u);
+    fp->n = 0;
+    fp->ia = 0;
+    if (!(A > 0)) return;
+    /* both steps pointing to +V; the bottom vertex, then the left path to
+     * the top one: along a then b (a, b: the two steps in some order) */
+    if (e1v < 0) e1u = -e1u, e1v = -e1v;
+    if (e2v < 0) e2u = -e2u, e2v = -e2v;
+    /* via e1 first or e2 first: the one that starts further left (the
+     * first edge's slope du/dv smaller); a horizontal step goes first */
+    int e1_first = e1v == 0 || (e2v != 0 && e1u * e2v < e2u * e1v);
+    double au = e1_first ? e1u : e2u, av = e1_first ? e1v : e2v;
+    double bu = e1_first ? e2u : e1u, bv = e1_first ? e2v : e1v;
+    if (av == 0) au = -fabs(au); /* along the bottom edge to its left end */
+    double u = -0.5 * (au + bu), v = -0.5 * (av + bv);
+    fp->dv[0] = v;
+    double area = 0;
+    for (int e = 0; e < 2; e++) {
+        double eu = e ? bu : au, ev = e ? bv : av;
+        if (ev > 0) {
+            /* a part of height h = ev / n: h^2 |eu / ev| / 8 <= FP_EPS A */
+            double need = sqrt(ev * fabs(eu) / (8 * FP_EPS * A));
+            int n = need < 1 ? 1 : need >= RS__MK_STEPS / 2 ? RS__MK_STEPS / 2 : (int)ceil(need);
+            for (int k = 0; k < n; k++) {
+                double t1 = (double)(k + 1) / n, tm = (k + 0.5) / n;
+                fp->du[fp->n] = u + tm * eu;
+                fp->dv[fp->n + 1] = k + 1 == n ? v + ev : v + t1 * ev;
+                /* the band between this step and its mirror image */
+                area += -2 * fp->du[fp->n] * (fp->dv[fp->n + 1] - fp->dv[fp->n]);
+                fp->n++;
+            }
+        }
+        u += eu;
+        v += ev;
+    }
+    fp->ia = area > 0 ? 1 / area : 0;
 }
 
 /* The road coordinates of local point (x, y) on a marking's stretch of
@@ -153,7 +245,8 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
  * (the first and last extended beyond their ends, so that pixels past the
  * stretch never clamp onto it), s there and t = the signed distance (+ left
  * of travel), so a marking bends with the road as its buffer does. */
-static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out)
+static void road_coords(const double *pts, size_t npt, double x, double y, double *s_out, double *t_out,
+                        size_t *seg_out)
 {
     /* the nearest segment by index (selects, not branches), then its s, t */
     double best = INFINITY;
@@ -179,6 +272,7 @@ static void road_coords(const double *pts, size_t npt, double x, double y, doubl
     double side = ex * uy - ey * ux; /* (p - q) . (dy, -dx) */
     *s_out = a[2] + u;
     *t_out = copysign(sqrt(best), side);
+    *seg_out = bk;
 }
 
 /* Geometry of one placement: its levels, support, stretch of road,
@@ -196,49 +290,22 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     m->hw = 0.5 * pl->width;
     m->kx = ty->lev[0].w / pl->width;
     m->ky = ty->lev[0].h / pl->length;
-    double rho = pix * (m->kx > m->ky ? m->kx : m->ky);
-    m->lod = rho > 1 ? log2(rho) : 0;
-    /* the levels: bilinear in floor(lod) and the next, blended (trilinear) */
-    double top = (double)(ty->nlev - 1);
-    int l = m->lod >= top ? (int)top : (int)m->lod;
-    float f = m->lod >= top ? 0 : (float)(m->lod - l);
-    m->fine = &tx->lev[l];
-    m->coarse = f > 0 ? &tx->lev[l + 1] : NULL;
-    m->f = f;
-    const double P = RS__MK_PAD, sgn = m->flip ? -1 : 1, sc = ldexp(1.0, -l);
-    m->cu = m->hw * m->kx * sc - 0.5 + P;
-    m->su = -sgn * m->kx * sc;
-    m->cv = m->hl * m->ky * sc - 0.5 + P;
-    m->sv = -sgn * m->ky * sc;
-    /* support: a fine texel box [a0, a1] reaches [a0 - 1, a1 + 1); a coarse
-     * one (coarse u2 = u / 2 - 1/4) [2 a0 - 1.5, 2 a1 + 2.5) */
-    const rs__mk_level *F = m->fine, *C = m->coarse;
-    if (F->ax0 > F->ax1 && (!C || C->ax0 > C->ax1)) return 0;
-    if (C) {
-        m->ulo = 2.0 * C->ax0 - 1.5 + P;
-        m->uhi = 2.0 * C->ax1 + 2.5 + P;
-        m->vlo = 2.0 * C->ay0 - 1.5 + P;
-        m->vhi = 2.0 * C->ay1 + 2.5 + P;
-    } else {
-        m->ulo = F->ax0 - 1.0 + P;
-        m->uhi = F->ax1 + 1.0 + P;
-        m->vlo = F->ay0 - 1.0 + P;
-        m->vhi = F->ay1 + 1.0 + P;
-    }
+    m->tex = tx;
+    if (tx->ax0 > tx->ax1) return 0;
+    const double sgn = m->flip ? -1 : 1;
+    m->cu = m->hw * m->kx;
+    m->su = -sgn * m->kx;
+    m->cv = m->hl * m->ky;
+    m->sv = -sgn * m->ky;
+    /* support: the footprint (reaching at most pix / sqrt 2 from the
+     * centre; sharper on a one-segment stretch, below) meets a texel with
+     * alpha > 0 */
     {
-        /* and no further than the filter's reach past the rectangle: half
-         * a texel of the coarser level (where an odd size padded it, the
-         * coarse texels would reach further) */
-        double tp = ceil(m->lod);
-        if (tp > ty->nlev - 1) tp = ty->nlev - 1;
-        double reach = 0.5 * ldexp(1.0, (int)tp);
-        double a0 = -reach * sc - 0.5 + P, a1 = (ty->lev[0].w + reach) * sc - 0.5 + P;
-        double b1 = (ty->lev[0].h + reach) * sc - 0.5 + P;
-        if (m->ulo < a0) m->ulo = a0;
-        if (m->uhi > a1) m->uhi = nextafter(a1, INFINITY);
-        if (m->vlo < a0) m->vlo = a0;
-        if (m->vhi > b1) m->vhi = nextafter(b1, INFINITY);
-        if (!(m->ulo < m->uhi && m->vlo < m->vhi)) return 0;
+        double hu = 0.70711 * pix * m->kx, hv = 0.70711 * pix * m->ky;
+        m->ulo = tx->ax0 - hu;
+        m->uhi = tx->ax1 + 1 + hu;
+        m->vlo = tx->ay0 - hv;
+        m->vhi = tx->ay1 + 1 + hv;
     }
     {
         double d0 = (m->ulo - m->cu) / m->su, d1 = (m->uhi - m->cu) / m->su;
@@ -326,6 +393,16 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         m->ibv = m->bv != 0 ? 1 / m->bv : 0;
         m->bvy = m->sv * uy;
         m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
+        footprint(m->bu, m->bv, m->buy * pix, m->bvy * pix, &m->fp);
+        double hu = 0, hv = 0;
+        for (int k = 0; k < m->fp.n; k++) {
+            hu = fmax(hu, fabs(m->fp.du[k]));
+            hv = fmax(hv, fmax(fabs(m->fp.dv[k]), fabs(m->fp.dv[k + 1])));
+        }
+        m->ulo = fmax(m->ulo, m->tex->ax0 - hu);
+        m->uhi = fmin(m->uhi, m->tex->ax1 + 1 + hu);
+        m->vlo = fmax(m->vlo, m->tex->ay0 - hv);
+        m->vhi = fmin(m->vhi, m->tex->ay1 + 1 + hv);
         m->flat = m->bu == 0 || m->bv == 0;
         m->ua = m->ibu >= 0 ? m->ulo : m->uhi;
         m->ub = m->ibu >= 0 ? m->uhi : m->ulo;
@@ -582,7 +659,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                 have_road = pl[i].road;
             }
             rs__mk_tex *tx = &mk->tex[pl[i].type];
-            if (tx->nlev == 0 && build_tex(ctx, &atlas->t[pl[i].type], tx, &tex_bytes)) {
+            if (tx->w == 0 && build_tex(ctx, &atlas->t[pl[i].type], tx, &tex_bytes)) {
                 r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
                 break;
             }
@@ -629,54 +706,160 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     return RS_OK;
 }
 
-/* Trilinear sample at padded fine-level coordinates (u, v) inside the
- * marking's support: bilinear in the fine level and (when f > 0) in the
- * coarse one, u2 = u / 2 + (pad / 2 - 1/4), blended; premultiplied. */
-static void sample(const rs__mk *m, double u, double v, float out[4])
+/* Clamps one step of footprint fp (side: +1 left, -1 the right side,
+ * the left turned by 180 degrees) at (U, V) to the sprite (w x h; no
+ * alpha outside); 0 when it adds nothing (left of the sprite, or its V
+ * range outside). */
+static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, double w, double h, size_t w1,
+                   size_t *ea, size_t *eb, double *fu, double *f0, double *f1)
 {
-    const rs__mk_level *F = m->fine;
-    /* u, v >= 0 here, and the levels' sizes are far below 2^31 */
-    int i = (int)u, j = (int)v;
-    float wx = (float)(u - (double)i), wy = (float)(v - (double)j);
-    const float *t0 = F->px + ((size_t)j * F->pw + (size_t)i) * 4, *t1 = t0 + (size_t)F->pw * 4;
-    const rs__mk_level *C = m->coarse;
+    double u = U + sg * fp->du[k], v0 = V + sg * fp->dv[k], v1 = V + sg * fp->dv[k + 1];
+    u = u < w ? u : w;
+    v0 = v0 > 0 ? v0 : 0;
+    v0 = v0 < h ? v0 : h;
+    v1 = v1 > 0 ? v1 : 0;
+    v1 = v1 < h ? v1 : h;
+    if (!(u > 0) || v0 == v1) return 0;
+    size_t i = (size_t)u, j0 = (size_t)v0, j1 = (size_t)v1;
+    *fu = u - (double)i;
+    *f0 = v0 - (double)j0;
+    *f1 = v1 - (double)j1;
+    *ea = j0 * w1 + i;
+    *eb = j1 * w1 + i;
+    return 1;
+}
+
+/* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
+ * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows' fractions: bilinear in
+ * doubles from the whole numbers (exact inputs; the result is far below
+ * 2^53). */
+static inline double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
+{
 #if defined(__SSE2__)
-    /* the four channels at once: the scalar code's operations, in order */
-    __m128 a0 = _mm_loadu_ps(t0), b0 = _mm_loadu_ps(t1), X = _mm_set1_ps(wx);
-    __m128 a = _mm_add_ps(a0, _mm_mul_ps(X, _mm_sub_ps(_mm_loadu_ps(t0 + 4), a0)));
-    __m128 b = _mm_add_ps(b0, _mm_mul_ps(X, _mm_sub_ps(_mm_loadu_ps(t1 + 4), b0)));
-    __m128 r = _mm_add_ps(a, _mm_mul_ps(_mm_set1_ps(wy), _mm_sub_ps(b, a)));
-    if (C) {
-        const double off = 0.5 * RS__MK_PAD - 0.25;
-        double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
-        int i2 = (int)u2, j2 = (int)v2;
-        float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2);
-        const float *c0 = C->px + ((size_t)j2 * C->pw + (size_t)i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
-        __m128 p0 = _mm_loadu_ps(c0), q0 = _mm_loadu_ps(c1), X2 = _mm_set1_ps(wx2);
-        __m128 pa = _mm_add_ps(p0, _mm_mul_ps(X2, _mm_sub_ps(_mm_loadu_ps(c0 + 4), p0)));
-        __m128 qb = _mm_add_ps(q0, _mm_mul_ps(X2, _mm_sub_ps(_mm_loadu_ps(c1 + 4), q0)));
-        __m128 g = _mm_add_ps(pa, _mm_mul_ps(_mm_set1_ps(wy2), _mm_sub_ps(qb, pa)));
-        r = _mm_add_ps(r, _mm_mul_ps(_mm_set1_ps(m->f), _mm_sub_ps(g, r)));
-    }
-    _mm_storeu_ps(out, r);
+    /* S(j, i), S(j, i + 1), S(j + 1, i), S(j + 1, i + 1) */
+    __m128i A = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)a),
+                                   _mm_loadl_epi64((const __m128i *)(const void *)(a + w2)));
+    __m128i B = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)b),
+                                   _mm_loadl_epi64((const __m128i *)(const void *)(b + w2)));
+    __m128d a0 = _mm_cvtepi32_pd(A), a1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(A, 0xEE));
+    __m128d b0 = _mm_cvtepi32_pd(B), b1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(B, 0xEE));
+    __m128d ra = _mm_add_pd(a0, _mm_mul_pd(_mm_set1_pd(f0), _mm_sub_pd(a1, a0)));
+    __m128d rb = _mm_add_pd(b0, _mm_mul_pd(_mm_set1_pd(f1), _mm_sub_pd(b1, b0)));
+    __m128d d = _mm_sub_pd(rb, ra);
+    double lo = _mm_cvtsd_f64(d), hi = _mm_cvtsd_f64(_mm_unpackhi_pd(d, d));
+    return lo + fu * (hi - lo);
 #else
-    for (int c = 0; c < 4; c++) {
-        float a = t0[c] + wx * (t0[4 + c] - t0[c]), b = t1[c] + wx * (t1[4 + c] - t1[c]);
-        out[c] = a + wy * (b - a);
+    double ra0 = a[0] + f0 * ((double)a[w2] - a[0]), ra1 = a[1] + f0 * ((double)a[w2 + 1] - a[1]);
+    double rb0 = b[0] + f1 * ((double)b[w2] - b[0]), rb1 = b[1] + f1 * ((double)b[w2 + 1] - b[1]);
+    double lo = rb0 - ra0, hi = rb1 - ra1;
+    return lo + fu * (hi - lo);
+#endif
+}
+
+/* The integral of the sprite's 255 x alpha (table t, rows of w2 = w + 2
+ * corners, w x h texels) over footprint fp at (U, V): the line integral
+ * of the summed-area table along the staircases, G(u, v1) - G(u, v0) per
+ * step (both sides at once: the right side is the left one mirrored, V -
+ * dv, U - du). The V levels are shared by consecutive steps; a step left
+ * of the sprite adds nothing (G(0, v) = 0). */
+static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
+                              double V)
+{
+    double I = 0;
+    const int n = fp->n;
+    size_t row[2][RS__MK_STEPS + 1];
+    double f[2][RS__MK_STEPS + 1];
+#if defined(__SSE2__)
+    const __m128d sg = _mm_set_pd(-1, 1), VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
+    const __m128d hh = _mm_set1_pd(h), ww = _mm_set1_pd(w);
+    for (int k = 0; k <= n; k++) {
+        __m128d v = _mm_add_pd(VV, _mm_mul_pd(sg, _mm_set1_pd(fp->dv[k])));
+        v = _mm_min_pd(_mm_max_pd(v, z), hh);
+        __m128i j = _mm_cvttpd_epi32(v);
+        __m128d fr = _mm_sub_pd(v, _mm_cvtepi32_pd(j));
+        _mm_storel_pd(&f[0][k], fr);
+        _mm_storeh_pd(&f[1][k], fr);
+        row[0][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(j) * w2;
+        row[1][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(j, 1)) * w2;
     }
-    if (C) {
-        const double off = 0.5 * RS__MK_PAD - 0.25;
-        double u2 = 0.5 * u + off, v2 = 0.5 * v + off;
-        int i2 = (int)u2, j2 = (int)v2;
-        float wx2 = (float)(u2 - (double)i2), wy2 = (float)(v2 - (double)j2), f = m->f;
-        const float *c0 = C->px + ((size_t)j2 * C->pw + (size_t)i2) * 4, *c1 = c0 + (size_t)C->pw * 4;
-        for (int c = 0; c < 4; c++) {
-            float a = c0[c] + wx2 * (c0[4 + c] - c0[c]), b = c1[c] + wx2 * (c1[4 + c] - c1[c]);
-            float g = a + wy2 * (b - a);
-            out[c] += f * (g - out[c]);
+    for (int k = 0; k < n; k++) {
+        __m128d u = _mm_min_pd(_mm_add_pd(UU, _mm_mul_pd(sg, _mm_set1_pd(fp->du[k]))), ww);
+        __m128d uz = _mm_max_pd(u, z);
+        __m128i ii = _mm_cvttpd_epi32(uz);
+        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
+        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
+        if (_mm_cvtsd_f64(u) > 0)
+            I -= step_int(t + row[0][k] + i0, t + row[0][k + 1] + i0, w2, _mm_cvtsd_f64(fu), f[0][k], f[0][k + 1]);
+        if (_mm_cvtsd_f64(_mm_unpackhi_pd(u, u)) > 0)
+            I -= step_int(t + row[1][k] + i1, t + row[1][k + 1] + i1, w2, _mm_cvtsd_f64(_mm_unpackhi_pd(fu, fu)),
+                          f[1][k], f[1][k + 1]);
+    }
+#else
+    for (int side = 0; side < 2; side++) {
+        const double sg = side ? -1 : 1;
+        for (int k = 0; k <= n; k++) {
+            double v = V + sg * fp->dv[k];
+            v = v > 0 ? v : 0;
+            v = v < h ? v : h;
+            size_t j = (size_t)v;
+            row[side][k] = j * w2;
+            f[side][k] = v - (double)j;
+        }
+        for (int k = 0; k < n; k++) {
+            double u = U + sg * fp->du[k];
+            u = u < w ? u : w;
+            if (!(u > 0)) continue;
+            size_t i = (size_t)u;
+            I -= step_int(t + row[side][k] + i, t + row[side][k + 1] + i, w2, u - (double)i, f[side][k],
+                          f[side][k + 1]);
         }
     }
 #endif
+    return I;
+}
+
+/* The same for one plane of a table of doubles (several colours). */
+static double fp_integral(const double *t, size_t w1, double w, double h, const rs__mk_fp *fp, double U, double V)
+{
+    double I = 0;
+    for (int side = 0; side < 2; side++) {
+        const double sg = side ? -1 : 1;
+        for (int k = 0; k < fp->n; k++) {
+            size_t ea, eb;
+            double fu, f0, f1;
+            if (!fp_step(fp, k, sg, U, V, w, h, w1, &ea, &eb, &fu, &f0, &f1)) continue;
+            const double *a = t + 4 * ea, *b = t + 4 * eb;
+            I -= (b[0] - a[0]) + fu * (b[1] - a[1]) + (f1 * b[2] - f0 * a[2]) + fu * (f1 * b[3] - f0 * a[3]);
+        }
+    }
+    return I;
+}
+
+/* The sprite's mean premultiplied colour and alpha over footprint fp of
+ * the pixel whose centre has level-0 texel coordinates (U, V): the exact
+ * integral over the staircase polygon from the summed-area table. */
+static void sample(const rs__mk *m, const rs__mk_fp *fp, double U, double V, float out[4])
+{
+    const rs__mk_tex *tx = m->tex;
+    const size_t w1 = (size_t)tx->w + 1;
+    const double w = tx->w, h = tx->h;
+    if (tx->nch == 1) {
+        double a = fp_integral_int(tx->isat, w1 + 1, w, h, fp, U, V) * fp->ia * (1.0 / 255);
+        a = a > 0 ? a : 0;
+        a = a < 1 ? a : 1;
+        out[0] = (float)(tx->col[0] * a);
+        out[1] = (float)(tx->col[1] * a);
+        out[2] = (float)(tx->col[2] * a);
+        out[3] = (float)a;
+        return;
+    }
+    const size_t plane = w1 * ((size_t)tx->h + 1) * 4;
+    for (int c = 0; c < 4; c++) {
+        double x = fp_integral(tx->sat + (size_t)c * plane, w1, w, h, fp, U, V) * fp->ia;
+        double hi = c == 3 ? 1 : 255;
+        x = x > 0 ? x : 0;
+        out[c] = (float)(x < hi ? x : hi);
+    }
 }
 
 /* Row spans are widened by this many pixels: far above the rounding of
@@ -750,10 +933,11 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
 
 /* Blend the sample at (u, v), inside the support, over pixel k of a row
  * of S (planar, row length w). */
-static void put(const rs__mk *m, double u, double v, float *sc, size_t w, long k, uint64_t *painted)
+static void put(const rs__mk *m, const rs__mk_fp *fp, double u, double v, float *sc, size_t w, long k,
+                uint64_t *painted)
 {
     float c4[4];
-    sample(m, u, v, c4);
+    sample(m, fp, u, v, c4);
     if (!(c4[3] > 0)) return;
     ++*painted;
     float keep = 1.0f - c4[3], *o = sc + (size_t)k;
@@ -806,7 +990,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
             double gx = gx0 + (double)k + 0.5;
             double u = ur + bu * gx, v = vr + bv * gx;
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            put(m, u, v, sc, w, k, painted);
+            put(m, &m->fp, u, v, sc, w, k, painted);
         }
     }
 }
@@ -825,6 +1009,10 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     const size_t nseg = m->npt - 1;
     const int rowseg = nseg <= MAX_ROW_SEG;
     double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
+    /* the footprint of the nearest segment's direction (kept while the
+     * nearest segment stays the same) */
+    rs__mk_fp fp;
+    size_t fp_seg = SIZE_MAX;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
     for (long r = r0; r <= r1; r++) {
@@ -845,6 +1033,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
             if (q[k] == 0) continue;
             ++*tests;
             double gx = gx0 + (double)k + 0.5, u, v;
+            size_t seg;
             if (nseg == 2) {
                 /* the common bend: rowseg's loop unrolled, same arithmetic */
                 const double *A = pts, *B = pts + RS__MK_PT;
@@ -858,6 +1047,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
                 d0 = A[5] > 0 ? d0 : INFINITY;
                 d1 = B[5] > 0 ? d1 : INFINITY;
                 int one = d1 < d0;
+                seg = (size_t)one;
                 double best = one ? d1 : d0, tt = one ? tt1 : tt0, sv = one ? B[2] + uc1 : A[2] + uc0;
                 u = m->cu + m->su * (copysign(sqrt(best), tt) - m->t0);
                 v = m->cv + m->sv * (sv - m->s0);
@@ -877,6 +1067,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
                     bk = d2 < best ? kk : bk;
                     best = d2 < best ? d2 : best;
                 }
+                seg = bk;
                 const double *A = pts + RS__MK_PT * bk;
                 double uu = su0[bk] + su1[bk] * gx, tt = st0[bk] + st1[bk] * gx;
                 double uc = uu < A[6] ? A[6] : uu;
@@ -885,12 +1076,17 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
                 v = m->cv + m->sv * (A[2] + uc - m->s0);
             } else {
                 double s, t;
-                road_coords(pts, m->npt, gx * pix, y, &s, &t);
+                road_coords(pts, m->npt, gx * pix, y, &s, &t, &seg);
                 u = m->cu + m->su * (t - m->t0);
                 v = m->cv + m->sv * (s - m->s0);
             }
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            put(m, u, v, sc, w, k, painted);
+            if (seg != fp_seg) {
+                const double *A = pts + RS__MK_PT * seg;
+                footprint(m->su * A[4] * pix, m->sv * A[3] * pix, -m->su * A[3] * pix, m->sv * A[4] * pix, &fp);
+                fp_seg = seg;
+            }
+            put(m, &fp, u, v, sc, w, k, painted);
         }
     }
 }

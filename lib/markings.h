@@ -27,32 +27,50 @@ typedef struct rs__road_local {
 rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out);
 void rs__road_local_free(rs_ctx *ctx, rs__road_local *r);
 
-/* Paint-time copy of one mip level of a type: a border of RS__MK_PAD
- * transparent texels on every side (bilinear taps need no bounds checks)
- * and the box of its texels with alpha > 0. */
-#define RS__MK_PAD 3
-typedef struct rs__mk_level {
-    uint32_t w, h, pw;         /* the level's size; padded row length w + 2 pad */
-    float *px;                 /* (w + 2 pad) x (h + 2 pad) x 4, premultiplied */
-    int32_t ax0, ay0, ax1, ay1; /* texels with alpha > 0 (ax0 > ax1: none) */
-} rs__mk_level;
-
+/* Paint-time table of a type (issue 25): the summed-area table S of its
+ * level-0 texels (S(j, i) = the sum over texels [0, i) x [0, j)), so that
+ * the integral of the sprite (each texel a square of constant colour)
+ * over [0, u] x [0, v] is the bilinear interpolation of S. Alpha-only
+ * types (one colour): 255 x alpha, whole numbers, in int32 (4 bytes a
+ * corner: the table stays in cache), (h + 2) x (w + 2) corners, the last
+ * row and column repeated. Types of
+ * several colours: per r g b a plane and corner (j, i), j in [0, h], i in
+ * [0, w], the doubles S, R = S(j, i + 1) - S(j, i), D = S(j + 1, i) -
+ * S(j, i), X = the texel (j, i) (0 past the last column or row). */
 typedef struct rs__mk_tex {
-    uint32_t nlev;             /* 0: not built (type unused) */
-    rs__mk_level lev[RS__ATLAS_MAX_LEVELS];
+    uint32_t w, h;             /* level-0 texels; w == 0: not built (type unused) */
+    uint32_t nch;              /* 1: alpha only, colour = col x alpha; 4: r g b a */
+    float col[3];              /* premultiplied colour per unit alpha (nch 1) */
+    int32_t *isat;             /* nch 1: (h + 2) x (w + 2), 255 x alpha */
+    double *sat;               /* nch 4: 4 planes of (h + 1) x (w + 1) x 4 */
+    int32_t ax0, ay0, ax1, ay1; /* texels with alpha > 0 (ax0 > ax1: none) */
 } rs__mk_tex;
+
+/* The pixel's footprint in texel coordinates, its two slanted sides each
+ * replaced by a staircase (docs/markings.md): on the left, for V - Vc in
+ * [dv[k], dv[k + 1]], the boundary is at U - Uc = du[k]; the right side is
+ * the left one turned by 180 degrees about the centre (Uc, Vc). Each
+ * parallelogram edge is cut into equal parts with a step at each part's
+ * middle, so the staircases of neighbouring pixels fit together and the
+ * footprints still tile the plane. */
+#define RS__MK_STEPS 4
+typedef struct rs__mk_fp {
+    int n;
+    double ia; /* 1 / the staircase polygon's area */
+    double du[RS__MK_STEPS], dv[RS__MK_STEPS + 1];
+} rs__mk_fp;
 
 typedef struct rs__mk {
     /* what the paint reads, first (the records are scattered over a
      * piece's markings: few cache lines each) */
-    const rs__mk_level *fine, *coarse; /* the two levels sampled (coarse NULL: fine only) */
-    float f;                   /* the coarse level's weight */
+    const rs__mk_tex *tex;     /* the type's summed-area table */
+    rs__mk_fp fp;              /* one-segment stretch: the pixel's footprint */
     int flat;                  /* one segment, and bu or bv is 0 */
     size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
     size_t part, nparts;       /* curved: its span parts, parts[part..part+nparts-1] */
     double by0, by1;           /* rows of the box */
-    /* padded fine-level texel coordinates U (across), V (along): the
-     * sample is transparent outside [ulo, uhi) x [vlo, vhi) */
+    /* level-0 texel coordinates U (across), V (along), texel i covering
+     * [i, i + 1): the sample is transparent outside [ulo, uhi) x [vlo, vhi) */
     double ulo, uhi, vlo, vhi;
     /* one-segment stretch: U, V affine in the pixel centre (x, y) =
      * ((gx + 1/2) pix, y): U = au + buy y + bu (gx + 1/2), V = av + bvy y
@@ -69,7 +87,6 @@ typedef struct rs__mk {
     int flip;
     double hl, hw;             /* half length and width (metres) */
     double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
-    double lod;                /* log2 of level-0 texels per output pixel */
     double bx0, bx1;           /* columns of the box (metres) */
 } rs__mk;
 

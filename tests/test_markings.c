@@ -7,7 +7,9 @@
 #include "harness.h"
 #include "fail_alloc.h"
 #include "markings.h"
+#include "atlas.h"
 #include "splatter.h"
+#include "marking_exact.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -115,8 +117,8 @@ static rs_dem *flat_dem(uint32_t w, uint32_t h, double cs)
 
 /* Straight roads through the middle at several angles: the painted alpha
  * integrates to the rectangle's area within 1 % and its centroid is the
- * rectangle's centre within 0.25 pixel; nothing is painted more than 1.5
- * pixels outside the rectangle (the reference: the rectangle's corners
+ * rectangle's centre within 0.25 pixel; nothing is painted where the
+ * pixel does not meet the rectangle (the reference: the rectangle's corners
  * from the road's direction, computed here from scratch). */
 static void test_rectangle(void)
 {
@@ -166,11 +168,9 @@ static void test_rectangle(void)
             double ex = sx / sum - rcx, ey = sy / sum - rcy;
             CHECKF(hypot(ex, ey) <= 0.25 * m.pix, "angle %g pix %g: centroid off by %.3f px", angles[ai], m.pix,
                    hypot(ex, ey) / m.pix);
-            /* the filtered edge reaches half a texel of the coarser mip level
-             * used (the level for the finer axis), plus half a pixel diagonal */
-            double tl = L / 16, tw = W / 16, fine = tl < tw ? tl : tw, coarse = tl < tw ? tw : tl;
-            double lvl = m.pix > fine ? ceil(log2(m.pix / fine)) : 0;
-            double bound = 0.5 * ldexp(1.0, (int)lvl) * coarse + 0.7072 * m.pix;
+            /* a pixel is painted only where the pixel itself meets the
+             * rectangle: its centre within half a pixel diagonal */
+            double bound = 0.7072 * m.pix;
             CHECKF(outside <= bound, "angle %g pix %g: painted %.3f m outside (bound %.3f)", angles[ai], m.pix,
                    outside, bound);
             free(m.a);
@@ -178,6 +178,189 @@ static void test_rectangle(void)
             rs_roads_free(ctx, roads);
         }
     rs_dem_free(ctx, dem);
+}
+
+/* Issue 25: a hard-edged sprite (every texel opaque) covers each pixel
+ * by the exact area of the pixel inside its rotated rectangle (clipped
+ * polygons, tests/marking_exact.c), at any angle, sub-pixel position,
+ * pixel size and texel shape: per-pixel error mean <= 0.02 and p99 <=
+ * 0.15, area within 0.5 %, centroid within 0.1 pixel of the exact
+ * coverage's. At 1.25 m the sprite is 1.6 x 0.8 pixels and every pixel
+ * it touches has several of its edges inside: mean <= 0.03 there. */
+static void test_exact(void)
+{
+    static const double angles[] = { 0, 15, 30, 45, 60, 75, 90, 7, 137, 200 };
+    static const double offs[][2] = { { 0, 0 }, { 0.5, 0.5 }, { 0.25, 0.1 }, { 0.37, 0.81 } };
+    static const double pixes[] = { 0.1, 0.25, 0.04, 1.25 };
+    /* 20 texels per metre; 8 along by 16 across (non-square texels); odd
+     * sizes (the coarse summed-area levels clamp at the sprite edge) */
+    static const uint32_t tex[][2] = { { 20, 40 }, { 16, 16 }, { 21, 37 } };
+    double worst[4] = { 0, 0, 0, 0 };
+    for (size_t ti = 0; ti < 3; ti++)
+        for (size_t pi = 0; pi < sizeof pixes / sizeof pixes[0]; pi++)
+            for (size_t ai = 0; ai < sizeof angles / sizeof angles[0]; ai++)
+                for (size_t oi = 0; oi < sizeof offs / sizeof offs[0]; oi++) {
+                    me_case c = { angles[ai], offs[oi][0], offs[oi][1], pixes[pi], 2, 1, tex[ti][0], tex[ti][1] };
+                    me_stats st;
+                    CHECK(me_measure(ctx, &c, &st) == 0);
+                    CHECKF(st.mean <= (pixes[pi] > 1 ? 0.03 : 0.02) && st.p99 <= 0.15 && fabs(st.area) <= 0.005 && st.centroid <= 0.1,
+                           "%ux%u texels, pix %g, angle %g, offset (%g, %g): mean %.4f p99 %.4f area %+.3f %% "
+                           "centroid %.3f px",
+                           tex[ti][0], tex[ti][1], pixes[pi], angles[ai], offs[oi][0], offs[oi][1], st.mean, st.p99,
+                           100 * st.area, st.centroid);
+                    if (st.mean > worst[0]) worst[0] = st.mean;
+                    if (st.p99 > worst[1]) worst[1] = st.p99;
+                    if (fabs(st.area) > worst[2]) worst[2] = fabs(st.area);
+                    if (st.centroid > worst[3]) worst[3] = st.centroid;
+                }
+    printf("hard-edged box, worst over %zu cases: mean %.4f, p99 %.4f, area %.3f %%, centroid %.3f px\n",
+           3 * sizeof pixes / sizeof pixes[0] * sizeof angles / sizeof angles[0] * sizeof offs / sizeof offs[0],
+           worst[0], worst[1], 100 * worst[2], worst[3]);
+}
+
+/* A word of the built-in atlas at 8 sub-pixel positions (0.0125 m apart
+ * in s and t, 0.1 m pixels, a road along x and one at 28.6 degrees): at
+ * every position the paint is the exact coverage of the sprite (its
+ * texels as squares; reference: 32 x 32 points per pixel, nearest
+ * texel), mean error <= 0.02, and the pixels it paints fully (alpha >=
+ * 0.99) are as many as the reference's, within 10 % or 3. The count
+ * itself moves with the position even for exact coverage (a 0.12 m
+ * stroke covers a whole 0.1 m pixel only in a fifth of its positions), so
+ * it is compared with the reference at the same position; on b8396fd
+ * BUS painted 13 or 82 such pixels 0.05 m apart in the demo. */
+static void test_word_shift(void)
+{
+    rs_dem *dem = flat_dem(13, 13, 1.0);
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
+    static const char *const words[] = { "word_bus", "word_stop", "word_slow" };
+    for (int wi = 0; wi < 3; wi++)
+        for (int slant = 0; slant < 2; slant++) {
+            const rs__atlas_type *ty = &atlas->t[rs_atlas_find(atlas, words[wi])];
+            const rs__atlas_level *L0 = &ty->lev[0];
+            long lo = -1, hi = -1;
+            double worst = 0, worst_count = 0;
+            for (int k = 0; k < 8; k++) {
+                double th = slant ? 0.5 : 0, dx = cos(th), dy = sin(th);
+                double xy[4] = { 6 - 5 * dx, 6.2 - 5 * dy, 6 + 5 * dx, 6.2 + 5 * dy };
+                double S0 = 5 + 0.0125 * k, T0 = 0.0125 * k;
+                rs_roads *roads = NULL;
+                CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+                CHECK(rs_roads_add(ctx, roads, "r", 6, xy, 2) == RS_OK);
+                rs_mark mark = { words[wi], 0, S0, T0, 0, 0, 0, 0 };
+                CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
+                rs_splat_options o;
+                memset(&o, 0, sizeof o);
+                o.texels = 10;
+                o.markings.no_auto = 1;
+                amap m;
+                CHECK(paint_alpha(dem, roads, &o, &m) == 0);
+                long full = 0, rfull = 0, n = 0;
+                double err = 0;
+                for (uint32_t y = 0; y < m.h; y++)
+                    for (uint32_t x = 0; x < m.w; x++) {
+                        double ref = 0;
+                        for (int sy = 0; sy < 32; sy++)
+                            for (int sx = 0; sx < 32; sx++) {
+                                double px = (x + (sx + 0.5) / 32) * m.pix - xy[0], py = (y + (sy + 0.5) / 32) * m.pix - xy[1];
+                                double s = px * dx + py * dy, t = px * dy - py * dx;
+                                double tu = (0.5 * ty->width - (t - T0)) * L0->w / ty->width;
+                                double tv = (0.5 * ty->length - (s - S0)) * L0->h / ty->length;
+                                if (!(tu >= 0 && tu < L0->w && tv >= 0 && tv < L0->h)) continue;
+                                ref += L0->px[((size_t)tv * L0->w + (size_t)tu) * 4 + 3];
+                            }
+                        ref /= 1024;
+                        double a = m.a[(size_t)y * m.w + x];
+                        if (a == 0 && ref == 0) continue;
+                        n++;
+                        err += fabs(a - ref);
+                        full += a >= 0.99;
+                        rfull += ref >= 0.99;
+                    }
+                err /= n > 0 ? (double)n : 1;
+                if (err > worst) worst = err;
+                double dc = fabs((double)(full - rfull));
+                if (dc > worst_count) worst_count = dc;
+                CHECKF(err <= 0.02 && dc <= fmax(3, 0.1 * (double)rfull),
+                       "%s%s, shift %d: mean error %.4f, %ld fully painted pixels, exact coverage %ld", words[wi],
+                       slant ? " at 28.6 deg" : "", k, err, full, rfull);
+                if (lo < 0 || full < lo) lo = full;
+                if (full > hi) hi = full;
+                free(m.a);
+                rs_roads_free(ctx, roads);
+            }
+            printf("%s%s, 8 sub-pixel positions: %ld to %ld fully painted pixels (at most %.0f from the exact "
+                   "coverage's), mean error <= %.4f\n",
+                   words[wi], slant ? " (road at 28.6 deg)" : "", lo, hi, worst_count, worst);
+        }
+    rs_atlas_free(ctx, atlas);
+    rs_dem_free(ctx, dem);
+}
+
+/* A sprite of two colours (left half red, right half green, opaque) takes
+ * the four-channel tables: each colour covers its half of the rectangle
+ * (area within 0.5 %), and the two sum to the whole at every pixel as an
+ * all-white sprite's alpha does. */
+static void test_two_colours(void)
+{
+    static uint8_t px[16 * 16 * 4];
+    for (int j = 0; j < 16; j++)
+        for (int i = 0; i < 16; i++) {
+            uint8_t *q = px + (j * 16 + i) * 4;
+            q[0] = i < 8 ? 255 : 0;
+            q[1] = i < 8 ? 0 : 255;
+            q[2] = 0;
+            q[3] = 255;
+        }
+    rs_image img = { 16, 16, px };
+    const char *idx = "two 0 0 16 16 3 1.2\n";
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &atlas) == RS_OK);
+    rs_dem *dem = flat_dem(21, 21, 1.0);
+    double th = 0.5, xy[4] = { 10 - 8 * cos(th), 10 - 8 * sin(th), 10 + 8 * cos(th), 10 + 8 * sin(th) };
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    CHECK(rs_roads_add(ctx, roads, "r", 6, xy, 2) == RS_OK);
+    rs_mark mark = { "two", 0, 8.13, 0.37, 0, 0, 0, 0 };
+    CHECK(rs_roads_add_mark(ctx, roads, &mark) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 10;
+    o.markings.atlas = atlas;
+    o.markings.no_auto = 1;
+    rs__markings *mk = NULL;
+    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk);
+    if (!mk) return;
+    CHECK_EQ_INT(mk->m[0].tex->nch, 4);
+    const uint32_t W = 200;
+    rs__piece p;
+    memset(&p, 0, sizeof p);
+    p.w = W;
+    p.rows = 1;
+    uint16_t q[200];
+    float sc[600];
+    for (uint32_t k = 0; k < W; k++) q[k] = 65535;
+    p.q = q;
+    p.sc = sc;
+    double red = 0, green = 0, worst = 0;
+    for (uint32_t y = 0; y < W; y++) {
+        p.y0 = y;
+        memset(sc, 0, sizeof sc);
+        rs__markings_paint(mk, &p);
+        for (uint32_t k = 0; k < W; k++) {
+            red += sc[k] / 255.0;
+            green += sc[W + k] / 255.0;
+            if (sc[k] + sc[W + k] > 255.01f || sc[2 * W + k] != 0) worst = 1;
+        }
+    }
+    double half = 0.5 * 3 * 1.2, a = 0.01;
+    CHECKF(fabs(red * a - half) <= 0.005 * half && fabs(green * a - half) <= 0.005 * half,
+           "red %.4f m2, green %.4f m2, each half %.4f", red * a, green * a, half);
+    CHECK(worst == 0);
+    rs__markings_free(ctx, mk);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_atlas_free(ctx, atlas);
 }
 
 /* Per-pixel work does not grow with the number of markings elsewhere: a
@@ -219,7 +402,7 @@ static void test_local_work(void)
     }
     printf("one marking in the window, alone / with 2,000 more on the road: %u / %u pairs examined, %u / %u blends\n",
            counts[0][0], counts[1][0], counts[0][1], counts[1][1]);
-    CHECK(counts[0][1] > 50);
+    CHECK(counts[0][1] > 30);
     CHECK_EQ_INT(counts[1][0], counts[0][0]);
     CHECK_EQ_INT(counts[1][1], counts[0][1]);
     CHECK(px[0] && px[1] && memcmp(px[0], px[1], (size_t)ww * wh * 4) == 0);
@@ -538,6 +721,9 @@ int main(void)
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_default_atlas();
     test_rectangle();
+    test_exact();
+    test_word_shift();
+    test_two_colours();
     test_curve();
     test_local_work();
     test_errors();
