@@ -459,10 +459,10 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             double *bb = box + 4 * nm;
             bb[0] = bx0 - grow; bb[1] = by0 - grow; bb[2] = bx1 + grow; bb[3] = by1 + grow;
             mk[0] = (float)p->road; mk[1] = (float)p->type;
-            mk[2] = (float)p->s; mk[3] = (float)p->t;
-            mk[4] = (float)hl; mk[5] = (float)hw;
+            mk[2] = ge_float(p->s); mk[3] = ge_float(p->t);
+            mk[4] = ge_float(hl); mk[5] = ge_float(hw);
             mk[6] = p->flip ? 1.0f : 0.0f;
-            mk[7] = (float)kx; mk[8] = (float)ky;
+            mk[7] = ge_float(kx); mk[8] = ge_float(ky);
             nm++;
         }
         rs__free(ctx, first_seg);

@@ -19,6 +19,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -101,7 +102,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         REQUIRE(g == NULL && rs_ctx_message(ctx)[0]);
         goto done;
     }
-    REQUIRE(gpu_scene_check(g) == NULL);
+    const char *bad = gpu_scene_check(g);
+    if (bad) {
+        fprintf(stderr, "gpu_export: %s\n", bad);
+        abort();
+    }
     REQUIRE((size_t)g->gw * g->gh * g->nseg > 200000 || complete(g));
     rs_gpu_scene_free(ctx, g);
 done:
