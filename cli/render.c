@@ -350,6 +350,25 @@ done:
     return rc;
 }
 
+/* What the shader mode does not draw (docs/render.md "Shader mode",
+ * "What is drawn how"): NULL when it draws everything the CPU splat would,
+ * else the feature, for the note that sends the run to the texture mode. */
+static const char *shader_missing(rs_ctx *ctx, const render_args *a, const rs_roads *roads, char *buf, size_t n)
+{
+    const rs_splat_options *o = &a->s.o;
+    if (o->coverage.edges == RS_EDGES_ALPHAMAP) return "alpha-map road edges (--edges alphamap)";
+    if (o->style.aa == RS_LINE_AA_HERMITE && !o->style.disable) return "Hermite line smoothing (--aa hermite)";
+    for (size_t i = 0; !o->style.disable && i < rs_roads_count(roads); i++) {
+        rs_style st;
+        if (rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, &st) != RS_OK) continue;
+        if (st.surface_image[0]) {
+            snprintf(buf, n, "surface images (style '%s': surface %s)", st.name, st.surface_image);
+            return buf;
+        }
+    }
+    return NULL;
+}
+
 int cli_render_main(int argc, char **argv)
 {
     render_args a;
@@ -368,7 +387,7 @@ int cli_render_main(int argc, char **argv)
     rsh_renderer *sh = NULL;
     rs_gpu_scene *scene = NULL;
     uint8_t *tex_road = NULL, *nmap = NULL;
-    char err[256];
+    char err[256], miss[RS_STYLE_NAME_MAX + RS_STYLE_IMAGE_MAX + 64];
     uint8_t *tex = NULL, *frame = NULL;
     float *vtx = NULL, *nrm = NULL;
     uint32_t *idx = NULL;
@@ -496,7 +515,11 @@ int cli_render_main(int argc, char **argv)
     /* the shader mode when the context supports it (docs/render.md "Shader mode") */
     t1 = cli_now_ms();
     memset(&tst, 0, sizeof tst);
-    if (a.roads_mode != 1) {
+    const char *missing = a.roads_mode != 1 ? shader_missing(ctx, &a, in.roads, miss, sizeof miss) : NULL;
+    if (missing)
+        fprintf(stderr, "roadsplat: note: render: the shader mode does not draw %s; drawing the roads as a texture "
+                "(--roads texture)\n", missing);
+    else if (a.roads_mode != 1) {
         if (!(sh = rsh_create(a.width, a.height, err, sizeof err)))
             fprintf(stderr, "roadsplat: note: render: %s; drawing the roads as a texture (--roads texture)\n", err);
         else if (tw > rsh_max_texture_size(sh) || th > rsh_max_texture_size(sh)) {
