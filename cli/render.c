@@ -62,6 +62,8 @@ static const char render_usage[] =
     "                      per screen pixel (OpenGL 3.3 core; default when available);\n"
     "                      texture: the CPU splat as the terrain texture\n"
     "  --frames N          render the view N times, for timing (default 1; 10 with --stats)\n"
+    "  --anisotropy N      texture mode: anisotropic texture filtering with at most N taps\n"
+    "                      (1: off; default: the GL's maximum, 16 on llvmpipe)\n"
     "  --tile-size N       texture mode: split the texture into tiles of at most N texels per side\n"
     "                      (default: only when it exceeds GL_MAX_TEXTURE_SIZE)\n"
     "  --stats FILE.json   fps, triangle count and timings as JSON\n"
@@ -72,7 +74,7 @@ typedef struct render_args {
     const char *dem, *roads, *out, *stats;
     uint32_t width, height, triangles, frames, tile_size;
     int have_size, have_camera, have_look, have_pixel_error;
-    double camera[3], look[3], fov, pixel_error, sun_az, sun_alt;
+    double camera[3], look[3], fov, pixel_error, sun_az, sun_alt, anisotropy;
     int lighting, fog, ortho, quiet;
     int roads_mode; /* 0: shader when the context supports it, 1: texture, 2: shader (asked for) */
 } render_args;
@@ -145,6 +147,12 @@ static int parse_render_args(int argc, char **argv, render_args *a)
         } else if (!strcmp(name, "--frames")) {
             if (cli_parse_u32(name, v, &a->frames)) return 1;
             if (a->frames < 1 || a->frames > 100000) { cli_error("%s: '%s' must be 1..100000", name, v); return 1; }
+        } else if (!strcmp(name, "--anisotropy")) {
+            if (cli_parse_double(name, v, &a->anisotropy)) return 1;
+            if (!(a->anisotropy >= 1 && a->anisotropy <= 64)) {
+                cli_error("%s: '%s' must be 1..64", name, v);
+                return 1;
+            }
         } else if (!strcmp(name, "--tile-size")) {
             if (cli_parse_u32(name, v, &a->tile_size)) return 1;
             if (a->tile_size < 16) { cli_error("%s: '%s' must be >= 16", name, v); return 1; }
@@ -499,6 +507,7 @@ int cli_render_main(int argc, char **argv)
     view.fov_y = a.fov;
     view.lighting = a.lighting;
     view.fog = a.fog;
+    view.anisotropy = a.anisotropy;
     double az = a.sun_az * RENDER_PI / 180, alt = a.sun_alt * RENDER_PI / 180;
     view.sun[0] = sin(az) * cos(alt);
     view.sun[1] = -cos(az) * cos(alt); /* north is -y */
@@ -706,9 +715,11 @@ int cli_render_main(int argc, char **argv)
                 rst.triangles, nv, rst.threshold, rst.frame_passes, rst.patches_culled);
         fprintf(so.f, "  \"texture\": {\"width\": %u, \"height\": %u, \"max_texture_size\": %u, \"tiles_x\": %u, "
                       "\"tiles_y\": %u, \"tile_core\": %u, \"base_level_min\": %u, \"base_level_max\": %u, "
-                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu},\n",
+                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu, \"anisotropy\": %g, "
+                      "\"anisotropy_max\": %g},\n",
                 tw, th, tst.max_texture_size, tst.tiles_x, tst.tiles_y, tst.tile_core, tst.finest_level,
-                tst.coarsest_base, (unsigned long long)tst.texels_uploaded, (unsigned long long)tst.texels_full);
+                tst.coarsest_base, (unsigned long long)tst.texels_uploaded, (unsigned long long)tst.texels_full,
+                tst.anisotropy, tst.anisotropy_max);
         fprintf(so.f, "  \"frames\": %u,\n  \"fps\": %.3f,\n  \"fps_draw\": %.3f,\n", a.frames, 1000.0 / fm,
                 1000.0 / dm);
         fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"roam_create\": %.3f, "

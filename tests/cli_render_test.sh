@@ -192,6 +192,33 @@ ramp_ok() { # file cmp limit: both widths cmp limit
 check "edge: shader transitions (road edge, 0.15 m line) <= 2 px" ramp_ok "$T/es.png" le 2
 check "edge: texture transitions >= 10 px" ramp_ok "$T/et.png" ge 10
 
+# Dashes at a distance (issue 25 target 4, docs/render.md): a driver's eye
+# 1.2 m above a dashed centre line (3 m on, 6 m off, 0.15 m, white on
+# #404040) over flat ground, 0.1 m texels; tests/tools/dash_range.py gives
+# the distance to which the dash/gap contrast along the line stays >= 25 %
+# of white against the road's grey (191 levels). Texture mode with
+# anisotropic filtering (the GL's maximum by default) and the shader keep
+# dashes to >= 40 m; isotropic mip levels lose them near 20 m.
+awk 'BEGIN { print "P2"; print 101, 11; print 100; for (i = 0; i < 11; i++) { l = ""; for (j = 0; j < 101; j++) l = l " 50"; print l } }' > "$T/long.pgm"
+printf 'style dashed\n  fill #404040\n  line 0 0.15 #FFFFFF dash 3 6\nend\nroad r width 7 style=dashed\n-5 10\n205 10\nend\n' > "$T/long.txt"
+DV="--cell-size 2 --z-scale 0.01 --texels 20 --size 1281x721 --fov 40 --camera 0,10,1.7 --look-at 100,10,0.5 --lighting off --quiet"
+dash_ge() { # file min_metres: dashes visible to at least min_metres
+    out=$(python3 "$TESTS/tools/dash_range.py" "$1" 1.2 100 40 9 191) || return 1
+    echo "$1: $out"
+    echo "$out" | awk -v m="$2" '{ split($1, v, "="); exit !(v[2] >= m) }'
+}
+check "dashes: texture mode render" "$BIN" render $DV --roads texture --stats "$T/dt.json" "$T/long.pgm" "$T/long.txt" "$T/dt.png"
+if grep -q '"anisotropy_max": 1,' "$T/dt.json"; then
+    echo "cli_render: note: this GL offers no anisotropic filtering; the texture-mode distance check is skipped"
+else
+    check "dashes: texture mode uses the GL's anisotropic filtering" grep -q '"anisotropy": 16' "$T/dt.json"
+    check "dashes: texture mode (anisotropic) keeps dashes visible to >= 40 m" dash_ge "$T/dt.png" 40
+fi
+check "dashes: shader mode render" "$BIN" render $DV --roads shader "$T/long.pgm" "$T/long.txt" "$T/ds2.png"
+check "dashes: shader mode keeps dashes visible to >= 40 m" dash_ge "$T/ds2.png" 40
+check "dashes: --anisotropy 1 (isotropic) loses them before 30 m" sh -c "'$BIN' render $DV --roads texture --anisotropy 1 '$T/long.pgm' '$T/long.txt' '$T/di.png' && ! python3 '$TESTS/tools/dash_range.py' '$T/di.png' 1.2 100 40 9 191 | awk '{ split(\$1, v, \"=\"); exit !(v[2] >= 30) }'"
+check "bad --anisotropy rejected" sh -c "! '$BIN' render --anisotropy 0.5 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>'$T/an.err' && grep -q 'anisotropy' '$T/an.err' && test ! -e '$T/e.png'"
+
 # perspective: sky at the top, terrain below
 check "oblique render exits 0" "$BIN" render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 "$T/dem.pgm" "$T/roads.txt" "$T/obl.png"
 check "output is 320x240" py size "$T/obl.png" 320 240
