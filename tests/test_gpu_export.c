@@ -233,6 +233,23 @@ static int listed_at(const rs_gpu_scene *g, double road, double x, double y)
     return 0;
 }
 
+/* Road text exported over make_dem's DEM with the defaults, the scene
+ * checked (tests/gpu_scene_check.h): the scene, or NULL after a failed check. */
+static rs_gpu_scene *export_text(rs_ctx *ctx, const rs_dem *dem, const char *text, rs_roads **roads)
+{
+    *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, strlen(text), roads) == RS_OK);
+    rs_gpu_scene *g = NULL;
+    CHECK(*roads && rs_gpu_scene_create(ctx, dem, *roads, NULL, NULL, &g) == RS_OK);
+    const char *bad = gpu_scene_check(g);
+    CHECKF(bad == NULL, "%s", bad ? bad : "");
+    if (bad) {
+        rs_gpu_scene_free(ctx, g);
+        return NULL;
+    }
+    return g;
+}
+
 /* Issue 26 row 1: points at 1e300 (valid road text) made float casts give
  * inf and NaN, and the index's count and fill passes disagree: a heap
  * overflow. Far parts are cut to the disc around the map (every float near
@@ -248,12 +265,8 @@ static void test_far_points(void)
                     "road near width 2\n30 70\n60 70\nend\n"
                     "mark cycle road=diag s=1e12 t=0\n";
     rs_roads *roads = NULL;
-    CHECK(rs_roads_parse(ctx, t, strlen(t), &roads) == RS_OK);
-    rs_gpu_scene *g = NULL;
-    CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
-    const char *bad = gpu_scene_check(g);
-    CHECKF(bad == NULL, "%s", bad ? bad : "");
-    if (g && !bad) {
+    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    if (g) {
         CHECK(listed_at(g, 0, 30, 10));  /* east runs along y = 10 */
         CHECK(listed_at(g, 1, 40, 40));  /* diag crosses the map through its centre */
         CHECK(listed_at(g, 3, 45, 70));
@@ -284,12 +297,8 @@ static void test_repeated_points(void)
                     "road tiny width 2\n50 50\n50.000001 50\nend\n"
                     "road dot width 3\n60 20\n60 20\nend\n";
     rs_roads *roads = NULL;
-    CHECK(rs_roads_parse(ctx, t, strlen(t), &roads) == RS_OK);
-    rs_gpu_scene *g = NULL;
-    CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
-    const char *bad = gpu_scene_check(g);
-    CHECKF(bad == NULL, "%s", bad ? bad : "");
-    if (g && !bad) {
+    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    if (g) {
         CHECK_EQ_INT(g->nseg, 2 + 1 + 1);
         const float *s = g->seg;
         CHECK(s[0] == 10 && s[2] == 30 && s[5] == 0 && s[7] == RS_GPU_SEG_FIRST);
