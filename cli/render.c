@@ -715,11 +715,12 @@ int cli_render_main(int argc, char **argv)
                 rst.triangles, nv, rst.threshold, rst.frame_passes, rst.patches_culled);
         fprintf(so.f, "  \"texture\": {\"width\": %u, \"height\": %u, \"max_texture_size\": %u, \"tiles_x\": %u, "
                       "\"tiles_y\": %u, \"tile_core\": %u, \"base_level_min\": %u, \"base_level_max\": %u, "
-                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu, \"anisotropy\": %g, "
-                      "\"anisotropy_max\": %g},\n",
+                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu",
                 tw, th, tst.max_texture_size, tst.tiles_x, tst.tiles_y, tst.tile_core, tst.finest_level,
-                tst.coarsest_base, (unsigned long long)tst.texels_uploaded, (unsigned long long)tst.texels_full,
-                tst.anisotropy, tst.anisotropy_max);
+                tst.coarsest_base, (unsigned long long)tst.texels_uploaded, (unsigned long long)tst.texels_full);
+        if (!sh) /* the texture mode's filter (the shader mode filters its own way) */
+            fprintf(so.f, ", \"anisotropy\": %g, \"anisotropy_max\": %g", tst.anisotropy, tst.anisotropy_max);
+        fprintf(so.f, "},\n");
         fprintf(so.f, "  \"frames\": %u,\n  \"fps\": %.3f,\n  \"fps_draw\": %.3f,\n", a.frames, 1000.0 / fm,
                 1000.0 / dm);
         fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"roam_create\": %.3f, "

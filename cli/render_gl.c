@@ -198,9 +198,9 @@ int rg_upload_texture(rg_renderer *r, const uint8_t *rgba, uint32_t tex_w, uint3
                    : view->anisotropy > 0 && view->anisotropy < r->max_aniso ? view->anisotropy : r->max_aniso;
     st->anisotropy = aniso;
     st->anisotropy_max = r->max_aniso;
-    /* with N taps GL samples a level up to log2(N) finer than the
-     * isotropic footprint's: upload those levels too */
-    uint32_t aniso_levels = aniso > 1 ? (uint32_t)ceil(log2(aniso)) : 0;
+    /* No finer levels are needed for it: with N taps GL samples the level
+     * of the footprint's minor axis at the finest, and a texel's size seen
+     * face-on at the tile's nearest point (tile_base_level) bounds that. */
     double texel_m = fmax(view->map_w / tex_w, view->map_h / tex_h);
     uint32_t B = r->border;
     for (uint32_t ty = 0; ty < r->nty; ty++)
@@ -224,7 +224,6 @@ int rg_upload_texture(rg_renderer *r, const uint8_t *rgba, uint32_t tex_w, uint3
             uint32_t base = tile_base_level(r, view, x0 * (view->map_w / tex_w), (x0 + cw) * (view->map_w / tex_w),
                                             y0 * (view->map_h / tex_h), (y0 + ch) * (view->map_h / tex_h), texel_m,
                                             nlevels);
-            base = base > aniso_levels ? base - aniso_levels : 0;
             glBindTexture(GL_TEXTURE_2D, r->tex[ty * r->ntx + tx]);
             uint32_t lw = tw, lh = th;
             for (uint32_t l = 0; l < nlevels; l++) {
