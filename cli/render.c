@@ -62,6 +62,8 @@ static const char render_usage[] =
     "                      per screen pixel (OpenGL 3.3 core; default when available);\n"
     "                      texture: the CPU splat as the terrain texture\n"
     "  --frames N          render the view N times, for timing (default 1; 10 with --stats)\n"
+    "  --anisotropy N      texture mode: anisotropic texture filtering with at most N taps\n"
+    "                      (1: off; default: the GL's maximum, 16 on llvmpipe)\n"
     "  --tile-size N       texture mode: split the texture into tiles of at most N texels per side\n"
     "                      (default: only when it exceeds GL_MAX_TEXTURE_SIZE)\n"
     "  --stats FILE.json   fps, triangle count and timings as JSON\n"
@@ -72,7 +74,7 @@ typedef struct render_args {
     const char *dem, *roads, *out, *stats;
     uint32_t width, height, triangles, frames, tile_size;
     int have_size, have_camera, have_look, have_pixel_error;
-    double camera[3], look[3], fov, pixel_error, sun_az, sun_alt;
+    double camera[3], look[3], fov, pixel_error, sun_az, sun_alt, anisotropy;
     int lighting, fog, ortho, quiet;
     int roads_mode; /* 0: shader when the context supports it, 1: texture, 2: shader (asked for) */
 } render_args;
@@ -145,6 +147,12 @@ static int parse_render_args(int argc, char **argv, render_args *a)
         } else if (!strcmp(name, "--frames")) {
             if (cli_parse_u32(name, v, &a->frames)) return 1;
             if (a->frames < 1 || a->frames > 100000) { cli_error("%s: '%s' must be 1..100000", name, v); return 1; }
+        } else if (!strcmp(name, "--anisotropy")) {
+            if (cli_parse_double(name, v, &a->anisotropy)) return 1;
+            if (!(a->anisotropy >= 1 && a->anisotropy <= 64)) {
+                cli_error("%s: '%s' must be 1..64", name, v);
+                return 1;
+            }
         } else if (!strcmp(name, "--tile-size")) {
             if (cli_parse_u32(name, v, &a->tile_size)) return 1;
             if (a->tile_size < 16) { cli_error("%s: '%s' must be >= 16", name, v); return 1; }
@@ -351,6 +359,25 @@ done:
     return rc;
 }
 
+/* What the shader mode does not draw (docs/render.md "Shader mode",
+ * "What is drawn how"): NULL when it draws everything the CPU splat would,
+ * else the feature, for the note that sends the run to the texture mode. */
+static const char *shader_missing(rs_ctx *ctx, const render_args *a, const rs_roads *roads, char *buf, size_t n)
+{
+    const rs_splat_options *o = &a->s.o;
+    if (o->coverage.edges == RS_EDGES_ALPHAMAP) return "alpha-map road edges (--edges alphamap)";
+    if (o->style.aa == RS_LINE_AA_HERMITE && !o->style.disable) return "Hermite line smoothing (--aa hermite)";
+    for (size_t i = 0; !o->style.disable && i < rs_roads_count(roads); i++) {
+        rs_style st;
+        if (rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, &st) != RS_OK) continue;
+        if (st.surface_image[0]) {
+            snprintf(buf, n, "surface images (style '%s': surface %s)", st.name, st.surface_image);
+            return buf;
+        }
+    }
+    return NULL;
+}
+
 int cli_render_main(int argc, char **argv)
 {
     render_args a;
@@ -369,7 +396,7 @@ int cli_render_main(int argc, char **argv)
     rsh_renderer *sh = NULL;
     rs_gpu_scene *scene = NULL;
     uint8_t *tex_road = NULL, *nmap = NULL;
-    char err[256];
+    char err[256], miss[RS_STYLE_NAME_MAX + RS_STYLE_IMAGE_MAX + 64];
     uint8_t *tex = NULL, *frame = NULL;
     float *vtx = NULL, *nrm = NULL;
     uint32_t *idx = NULL;
@@ -484,6 +511,7 @@ int cli_render_main(int argc, char **argv)
     view.fov_y = a.fov;
     view.lighting = a.lighting;
     view.fog = a.fog;
+    view.anisotropy = a.anisotropy;
     double az = a.sun_az * RENDER_PI / 180, alt = a.sun_alt * RENDER_PI / 180;
     view.sun[0] = sin(az) * cos(alt);
     view.sun[1] = -cos(az) * cos(alt); /* north is -y */
@@ -500,7 +528,11 @@ int cli_render_main(int argc, char **argv)
     /* the shader mode when the context supports it (docs/render.md "Shader mode") */
     t1 = cli_now_ms();
     memset(&tst, 0, sizeof tst);
-    if (a.roads_mode != 1) {
+    const char *missing = a.roads_mode != 1 ? shader_missing(ctx, &a, in.roads, miss, sizeof miss) : NULL;
+    if (missing)
+        fprintf(stderr, "roadsplat: note: render: the shader mode does not draw %s; drawing the roads as a texture "
+                "(--roads texture)\n", missing);
+    else if (a.roads_mode != 1) {
         if (!(sh = rsh_create(a.width, a.height, err, sizeof err)))
             fprintf(stderr, "roadsplat: note: render: %s; drawing the roads as a texture (--roads texture)\n", err);
         else if (tw > rsh_max_texture_size(sh) || th > rsh_max_texture_size(sh)) {
@@ -687,9 +719,12 @@ int cli_render_main(int argc, char **argv)
                 rst.triangles, nv, rst.threshold, rst.frame_passes, rst.patches_culled);
         fprintf(so.f, "  \"texture\": {\"width\": %u, \"height\": %u, \"max_texture_size\": %u, \"tiles_x\": %u, "
                       "\"tiles_y\": %u, \"tile_core\": %u, \"base_level_min\": %u, \"base_level_max\": %u, "
-                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu},\n",
+                      "\"texels_uploaded\": %llu, \"texels_full_chain\": %llu",
                 tw, th, tst.max_texture_size, tst.tiles_x, tst.tiles_y, tst.tile_core, tst.finest_level,
                 tst.coarsest_base, (unsigned long long)tst.texels_uploaded, (unsigned long long)tst.texels_full);
+        if (!sh) /* the texture mode's filter (the shader mode filters its own way) */
+            fprintf(so.f, ", \"anisotropy\": %g, \"anisotropy_max\": %g", tst.anisotropy, tst.anisotropy_max);
+        fprintf(so.f, "},\n");
         fprintf(so.f, "  \"frames\": %u,\n  \"fps\": %.3f,\n  \"fps_draw\": %.3f,\n", a.frames, 1000.0 / fm,
                 1000.0 / dm);
         fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"roam_create\": %.3f, "

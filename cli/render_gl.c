@@ -13,12 +13,16 @@
 #include <string.h>
 
 #define RG_PI 3.14159265358979323846
+/* GL_EXT_texture_filter_anisotropic (= the GL 4.6 core names without _EXT) */
+#define RG_TEXTURE_MAX_ANISOTROPY 0x84FE
+#define RG_MAX_TEXTURE_MAX_ANISOTROPY 0x84FF
 
 struct rg_renderer {
     OSMesaContext osm;
     GLubyte *buf;
     uint32_t w, h;
     GLint max_tex;
+    GLfloat max_aniso; /* GL_MAX_TEXTURE_MAX_ANISOTROPY; 1: not offered */
     /* texture tiles: core texels [tx*core, ..) plus `border` texels each side */
     uint32_t tex_w, tex_h, core, border, ntx, nty;
     GLuint *tex;
@@ -51,6 +55,20 @@ rg_renderer *rg_create(uint32_t width, uint32_t height, char *err, size_t err_si
     }
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &r->max_tex);
     if (r->max_tex < 64) r->max_tex = 64;
+    /* anisotropic filtering: GL_EXT/ARB_texture_filter_anisotropic (core in
+     * GL 4.6, same enums); llvmpipe offers it, up to 16 taps */
+    r->max_aniso = 1;
+    {
+        const char *ext = (const char *)glGetString(GL_EXTENSIONS), *ver = (const char *)glGetString(GL_VERSION);
+        int major = 0, minor = 0;
+        if (ver) sscanf(ver, "%d.%d", &major, &minor);
+        if ((ext && (strstr(ext, "GL_EXT_texture_filter_anisotropic") || strstr(ext, "GL_ARB_texture_filter_anisotropic"))) ||
+            major > 4 || (major == 4 && minor >= 6)) {
+            GLfloat m = 1;
+            glGetFloatv(RG_MAX_TEXTURE_MAX_ANISOTROPY, &m);
+            if (glGetError() == GL_NO_ERROR && m > 1) r->max_aniso = m;
+        }
+    }
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     return r;
@@ -174,6 +192,15 @@ int rg_upload_texture(rg_renderer *r, const uint8_t *rgba, uint32_t tex_w, uint3
     st->tiles_y = r->nty;
     st->tile_core = r->core;
     st->finest_level = UINT32_MAX;
+    /* the ortho view looks straight down: its footprints are isotropic,
+     * and llvmpipe's anisotropic path would not give the exact texels */
+    double aniso = view->ortho ? 1
+                   : view->anisotropy > 0 && view->anisotropy < r->max_aniso ? view->anisotropy : r->max_aniso;
+    st->anisotropy = aniso;
+    st->anisotropy_max = r->max_aniso;
+    /* No finer levels are needed for it: with N taps GL samples the level
+     * of the footprint's minor axis at the finest, and a texel's size seen
+     * face-on at the tile's nearest point (tile_base_level) bounds that. */
     double texel_m = fmax(view->map_w / tex_w, view->map_h / tex_h);
     uint32_t B = r->border;
     for (uint32_t ty = 0; ty < r->nty; ty++)
@@ -224,6 +251,7 @@ int rg_upload_texture(rg_renderer *r, const uint8_t *rgba, uint32_t tex_w, uint3
             glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
             glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
             glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+            if (aniso > 1) glTexParameterf(GL_TEXTURE_2D, RG_TEXTURE_MAX_ANISOTROPY, aniso);
             if (base < st->finest_level) st->finest_level = base;
             if (base > st->coarsest_base) st->coarsest_base = base;
         }

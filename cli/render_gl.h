@@ -24,6 +24,8 @@ typedef struct rg_view {
     double sun[3];              /* unit vector towards the sun */
     int fog;                    /* linear fog towards the horizon colour */
     double fog_start, fog_end;  /* metres from the eye */
+    double anisotropy;          /* texture mode: at most this many anisotropic taps; 0: the GL's
+                                   maximum, 1: off (isotropic mip levels only) */
 } rg_view;
 
 typedef struct rg_tex_stats {
@@ -34,6 +36,8 @@ typedef struct rg_tex_stats {
     uint32_t coarsest_base;     /* coarsest base level chosen for a tile */
     uint64_t texels_uploaded;   /* all levels, all tiles */
     uint64_t texels_full;       /* what a full mip chain of every tile would hold */
+    double anisotropy;          /* anisotropic filtering used (1: none; the GL offers none or --anisotropy 1) */
+    double anisotropy_max;      /* what the GL offers (1: no anisotropic filtering) */
 } rg_tex_stats;
 
 /* Create an RGBA offscreen context with a 24-bit depth buffer, width x

@@ -812,7 +812,13 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   the segment's length and unit direction (1, 0 for length 0), so a
  *   shader needs neither a division nor a second lookup. A road of one
  *   point is one segment of length 0. Ascending segment index = ascending
- *   road.
+ *   road. Segments join the road's points once repeated points are
+ *   dropped (in double precision, as the CPU's lines and markings do); a
+ *   segment reaching beyond a map size from the map is cut to the part
+ *   that can touch it, and one that cannot is left out, so every float is
+ *   finite and near the map (half widths above 1e15 m are 1e15 m, s
+ *   saturates at FLT_MAX). RS_ERR_LIMIT for 2^24 roads or more (indices
+ *   travel as floats) or an index of more than 2^28 entries.
  * - the index grid: cell (i, j) spans [x0 + i cell, x0 + (i+1) cell) x
  *   [y0 + j cell, ...); cell_start has gw*gh + 1 offsets into cell_seg, which
  *   lists per cell, ascending, the segments whose capsule grown by the road's

@@ -6,7 +6,9 @@
 #include "internal.h"
 #include "atlas.h"
 #include "markings.h"
+#include "roadfield.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -55,17 +57,19 @@ static void put_colour(float *dst, rs_colour c)
     dst[3] = (float)c.a / 255.0f;
 }
 
-/* Cells [i0, i1] x [j0, j1] of the grid touched by a box, clamped. */
+/* Cells [i0, i1] x [j0, j1] of the grid touched by a box, clamped (a NaN
+ * or infinite bound clamps to the grid's edge). */
 static void box_cells(const rs_gpu_scene *g, double xa, double ya, double xb, double yb, uint32_t *i0, uint32_t *j0,
                       uint32_t *i1, uint32_t *j1)
 {
-    double a = floor((xa - g->x0) / g->cell), b = floor((xb - g->x0) / g->cell);
-    double c = floor((ya - g->y0) / g->cell), d = floor((yb - g->y0) / g->cell);
-    a = a < 0 ? 0 : a > g->gw - 1 ? g->gw - 1 : a;
-    b = b < 0 ? 0 : b > g->gw - 1 ? g->gw - 1 : b;
-    c = c < 0 ? 0 : c > g->gh - 1 ? g->gh - 1 : c;
-    d = d < 0 ? 0 : d > g->gh - 1 ? g->gh - 1 : d;
-    *i0 = (uint32_t)a; *i1 = (uint32_t)b; *j0 = (uint32_t)c; *j1 = (uint32_t)d;
+    double v[4] = { floor((xa - g->x0) / g->cell), floor((ya - g->y0) / g->cell), floor((xb - g->x0) / g->cell),
+                    floor((yb - g->y0) / g->cell) };
+    uint32_t u[4];
+    for (int k = 0; k < 4; k++) {
+        double hi = (k & 1) ? g->gh - 1 : g->gw - 1;
+        u[k] = v[k] >= 0 ? (v[k] <= hi ? (uint32_t)v[k] : (uint32_t)hi) : 0;
+    }
+    *i0 = u[0]; *j0 = u[1]; *i1 = u[2]; *j1 = u[3];
 }
 
 /* Distance from point (x, y) to segment a-b. */
@@ -79,26 +83,152 @@ static double seg_dist(double ax, double ay, double bx, double by, double x, dou
     return hypot(x - ax - u * dx, y - ay - u * dy);
 }
 
-/* Count (pass 0) or fill (pass 1) the cells of segment k: every cell whose
- * square comes within R of it (centre distance <= R + half diagonal). */
-static size_t seg_cells(const rs_gpu_scene *g, const float *s, double R, uint32_t *fill_pos, uint32_t *ids,
-                        uint32_t k)
+/* A double as a finite float: saturated to +-FLT_MAX (a NaN as 0). */
+static float ge_float(double v)
 {
-    double ax = s[0], ay = s[1], bx = s[2], by = s[3];
-    uint32_t i0, j0, i1, j1;
-    box_cells(g, fmin(ax, bx) - R, fmin(ay, by) - R, fmax(ax, bx) + R, fmax(ay, by) + R, &i0, &j0, &i1, &j1);
-    double hd = g->cell * 0.70710678118654752440, n = 0;
-    for (uint32_t j = j0; j <= j1; j++)
-        for (uint32_t i = i0; i <= i1; i++) {
-            double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
-            if (seg_dist(ax, ay, bx, by, cx, cy) > R + hd) continue;
-            n++;
-            if (ids) {
+    return v >= -FLT_MAX ? (v <= FLT_MAX ? (float)v : FLT_MAX) : (v < 0 ? -FLT_MAX : 0.0f);
+}
+
+/* The items an index grid lists: segments (listed in every cell whose
+ * square comes within R of the stored float segment: centre distance <=
+ * R + half diagonal) or markings' support boxes (every cell the box
+ * touches). The count and the fill pass ask these two functions, with the
+ * same stored numbers, so they cannot disagree on a cell. */
+typedef struct ge_items {
+    const float *seg;   /* segments, or NULL */
+    const double *box;  /* or boxes: x0, y0, x1, y1 per item */
+    size_t n;
+} ge_items;
+
+static double item_reach(const rs_gpu_scene *g, const float *s)
+{
+    return (double)s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
+}
+
+static void item_cells(const rs_gpu_scene *g, const ge_items *it, size_t k, uint32_t b[4])
+{
+    if (it->seg) {
+        const float *s = it->seg + RS_GPU_SEG_FLOATS * k;
+        double R = item_reach(g, s);
+        box_cells(g, fmin(s[0], s[2]) - R, fmin(s[1], s[3]) - R, fmax(s[0], s[2]) + R, fmax(s[1], s[3]) + R, &b[0],
+                  &b[1], &b[2], &b[3]);
+    } else {
+        const double *bb = it->box + 4 * k;
+        box_cells(g, bb[0], bb[1], bb[2], bb[3], &b[0], &b[1], &b[2], &b[3]);
+    }
+}
+
+static int item_in_cell(const rs_gpu_scene *g, const ge_items *it, size_t k, uint32_t i, uint32_t j)
+{
+    if (!it->seg) return 1;
+    const float *s = it->seg + RS_GPU_SEG_FLOATS * k;
+    double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
+    return seg_dist(s[0], s[1], s[2], s[3], cx, cy) <= item_reach(g, s) + g->cell * 0.70710678118654752440;
+}
+
+#define GE_MAX_ENTRIES ((size_t)1 << 28)
+
+/* An index grid over the items: *start (gw*gh + 1 offsets) and *ids (the
+ * items per cell, ascending). Counted, then filled, by the same two
+ * functions; a fill that would leave its cell's range is not written, and
+ * the ranges must come out exactly full. */
+static rs_result index_build(rs_ctx *ctx, const rs_gpu_scene *g, const ge_items *it, const char *what,
+                             uint32_t **start_out, uint32_t **ids_out, size_t *nentries)
+{
+    const size_t ncell = (size_t)g->gw * g->gh;
+    uint32_t *start = rs__calloc(ctx, ncell + 1, sizeof *start), *ids = NULL, *pos = NULL;
+    if (!start) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the GPU export");
+    size_t total = 0;
+    for (size_t k = 0; k < it->n; k++) {
+        uint32_t b[4];
+        item_cells(g, it, k, b);
+        for (uint32_t j = b[1]; j <= b[3]; j++)
+            for (uint32_t i = b[0]; i <= b[2]; i++)
+                if (item_in_cell(g, it, k, i, j)) {
+                    start[(size_t)j * g->gw + i + 1]++;
+                    if (++total > GE_MAX_ENTRIES) {
+                        rs__free(ctx, start);
+                        return rs__fail(ctx, RS_ERR_LIMIT, "GPU export: the %s index needs more than 2^28 entries",
+                                        what);
+                    }
+                }
+    }
+    for (size_t c = 0; c < ncell; c++) start[c + 1] += start[c];
+    ids = rs__alloc_array(ctx, total ? total : 1, sizeof *ids);
+    pos = rs__alloc_array(ctx, ncell, sizeof *pos);
+    if (!ids || !pos) {
+        rs__free(ctx, start);
+        rs__free(ctx, ids);
+        rs__free(ctx, pos);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the GPU export");
+    }
+    memcpy(pos, start, ncell * sizeof *pos);
+    int full = 1;
+    for (size_t k = 0; k < it->n; k++) {
+        uint32_t b[4];
+        item_cells(g, it, k, b);
+        for (uint32_t j = b[1]; j <= b[3]; j++)
+            for (uint32_t i = b[0]; i <= b[2]; i++) {
                 size_t c = (size_t)j * g->gw + i;
-                ids[fill_pos[c]++] = k;
+                if (!item_in_cell(g, it, k, i, j)) continue;
+                if (pos[c] < start[c + 1]) ids[pos[c]++] = (uint32_t)k;
+                else full = 0;
             }
+    }
+    for (size_t c = 0; c < ncell; c++) full &= pos[c] == start[c + 1];
+    rs__free(ctx, pos);
+    if (!full) { /* cannot happen: both passes ask the same functions */
+        rs__free(ctx, start);
+        rs__free(ctx, ids);
+        return rs__fail(ctx, RS_ERR_LIMIT, "GPU export: the %s index came out inconsistent", what);
+    }
+    *start_out = start;
+    *ids_out = ids;
+    *nentries = total;
+    return RS_OK;
+}
+
+/* The segments of road i as the GPU draws them, appended to g->seg: one per
+ * pair of consecutive points of the road in the local frame once repeated
+ * points are dropped in double precision (the points the lines and the
+ * markings use, rs__road_local_get), so whether a segment exists never
+ * depends on what float makes of its ends; a road of one point is one
+ * segment of length 0. Lengths, directions and s come from the doubles.
+ * A segment reaching beyond a map size (plus its reach `pad`) from the map
+ * is cut to the disc around the map it can touch (rs__clip_far, as the
+ * road field cuts), or left out when it cannot reach the map, so every
+ * stored coordinate is a float near the map; the flags stay those of the
+ * road's ends. */
+static rs_result road_segments(rs_ctx *ctx, rs_gpu_scene *g, const rs__road_local *rl, size_t i, double hw,
+                               double casing, double pad, size_t *cap)
+{
+    size_t m = rl->n;
+    for (size_t p = 0; p + 1 < m || (m == 1 && p == 0); p++) {
+        size_t q = p + 1 < m ? p + 1 : p;
+        double ax = rl->x[p], ay = rl->y[p], bx = rl->x[q], by = rl->y[q], along = 0;
+        if (!rs__clip_far(&ax, &ay, &bx, &by, g->map_w, g->map_h, pad, g->map_w + g->map_h + 2 * pad, &along))
+            continue;
+        if (g->nseg == *cap) {
+            size_t nc = *cap ? 2 * *cap : 64, bytes;
+            if (!rs__mul_size(nc, RS_GPU_SEG_FLOATS * sizeof(float), &bytes)) return RS_ERR_NOMEM;
+            float *ns = rs__realloc(ctx, g->seg, bytes);
+            if (!ns) return RS_ERR_NOMEM;
+            g->seg = ns;
+            *cap = nc;
         }
-    return (size_t)n;
+        float *sg = g->seg + RS_GPU_SEG_FLOATS * g->nseg++;
+        double len = hypot(bx - ax, by - ay);
+        sg[0] = ge_float(ax); sg[1] = ge_float(ay); sg[2] = ge_float(bx); sg[3] = ge_float(by);
+        sg[4] = ge_float(hw);
+        sg[5] = ge_float(rl->s[p] + along);
+        sg[6] = (float)i;
+        sg[7] = (float)((p == 0 ? RS_GPU_SEG_FIRST : 0) | (q + 1 >= m ? RS_GPU_SEG_LAST : 0));
+        sg[8] = ge_float(casing);
+        sg[9] = ge_float(len);
+        sg[10] = len > 0 ? (float)((bx - ax) / len) : 1.0f;
+        sg[11] = len > 0 ? (float)((by - ay) / len) : 0.0f;
+    }
+    return RS_OK;
 }
 
 /* Placements as the road grid makes them (lib/markings.c): the explicit
@@ -138,7 +268,6 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     rs_atlas *atlas_own = NULL;
     rs__placement *pl = NULL;
     ge_end *ends = NULL;
-    uint32_t *pos = NULL;
     const double cs = dem->frame.cell_size;
     g->map_w = (double)(dem->width - 1) * cs;
     g->map_h = (double)(dem->height - 1) * cs;
@@ -161,36 +290,36 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
 
     /* roads: styles and segments */
     const size_t n = rs_roads_count(roads);
+    if (n >= ((size_t)1 << 24)) { /* road indices travel as floats */
+        r = rs__fail(ctx, RS_ERR_LIMIT, "GPU export: %zu roads (at most 2^24 - 1)", n);
+        goto fail_msg;
+    }
     g->nroads = n;
     sty = rs__malloc(ctx, sizeof *sty);
     g->road = rs__calloc(ctx, n ? n : 1, RS_GPU_ROAD_FLOATS * sizeof(float));
     if (!sty || !g->road) { r = RS_ERR_NOMEM; goto fail; }
-    size_t nseg = 0, nbands = 0;
+    size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
-        size_t np = 0;
-        rs_roads_get(roads, i, NULL, NULL, NULL, &np);
-        nseg += np > 1 ? np - 1 : 1;
         if (o.style.disable) continue;
         if ((r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
-    g->seg = rs__alloc_array(ctx, nseg ? nseg : 1, RS_GPU_SEG_FLOATS * sizeof(float));
     g->band = rs__calloc(ctx, nbands ? nbands : 1, RS_GPU_BAND_FLOATS * sizeof(float));
     ends = rs__alloc_array(ctx, 2 * (n ? n : 1), sizeof *ends);
-    if (!g->seg || !g->band || !ends) { r = RS_ERR_NOMEM; goto fail; }
+    if (!g->band || !ends) { r = RS_ERR_NOMEM; goto fail; }
     size_t nends = 0;
-    double max_casing = 0;
-    for (size_t i = 0, k = 0, b = 0; i < n; i++) {
+    for (size_t i = 0, b = 0; i < n; i++) {
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
         double w = 0;
         rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+        /* wider than 2e15 m covers any map; the cap keeps it a float */
+        double hw = fmin(0.5 * w, 1e15);
         memset(sty, 0, sizeof *sty);
         if (!o.style.disable && (r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK)
             goto fail_msg;
         rd[0] = (float)sty->surface;
-        rd[1] = (float)(0.5 * w);
-        rd[2] = (float)sty->casing_width;
-        if (sty->casing_width > max_casing) max_casing = sty->casing_width;
+        rd[1] = ge_float(hw);
+        rd[2] = ge_float(sty->casing_width);
         rd[3] = (float)b;
         rd[4] = (float)sty->line_count;
         rd[5] = rd[6] = -1;
@@ -198,6 +327,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         put_colour(rd + 12, sty->gradient_centre);
         put_colour(rd + 16, sty->gradient_edge);
         put_colour(rd + 20, sty->casing);
+        double lines_reach = 0;
         for (uint32_t j = 0; j < sty->line_count; j++, b++) {
             const rs_style_line *ln = &sty->line[j];
             float *bd = g->band + RS_GPU_BAND_FLOATS * b;
@@ -208,30 +338,17 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             bd[2] = (float)ln->phase;
             bd[3] = (float)period;
             put_colour(bd + 4, ln->colour);
-            double breach = fabs(ln->offset) + 0.5 * ln->width;
-            if (breach > rd[7]) rd[7] = (float)breach;
+            lines_reach = fmax(lines_reach, fabs(ln->offset) + 0.5 * ln->width);
             bd[8] = (float)ln->dash_count;
             for (uint32_t d = 0; d < ln->dash_count && d < 8; d++) bd[12 + d] = (float)ln->dash[d];
         }
+        rd[7] = ge_float(lines_reach);
         rs__road_local rl;
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) { r = RS_ERR_NOMEM; goto fail; }
+        double pad = 2 * (hw + sty->casing_width + lines_reach + g->reach) + g->cell;
+        r = road_segments(ctx, g, &rl, i, hw, sty->casing_width, pad, &segcap);
         size_t m = rl.n;
-        for (size_t p = 0; p + 1 < m || (m <= 1 && p == 0); p++, k++) {
-            float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
-            size_t q = p + 1 < m ? p + 1 : p;
-            double ax = m ? rl.x[p] : 0, ay = m ? rl.y[p] : 0, bx = m ? rl.x[q] : 0, by = m ? rl.y[q] : 0;
-            sg[0] = (float)ax; sg[1] = (float)ay; sg[2] = (float)bx; sg[3] = (float)by;
-            sg[4] = (float)(0.5 * w);
-            sg[5] = (float)(m ? rl.s[p] : 0);
-            sg[6] = (float)i;
-            sg[7] = (float)((p == 0 ? RS_GPU_SEG_FIRST : 0) | (q + 1 >= m ? RS_GPU_SEG_LAST : 0));
-            double len = hypot(bx - ax, by - ay);
-            sg[8] = (float)sty->casing_width;
-            sg[9] = (float)len;
-            sg[10] = len > 0 ? (float)((bx - ax) / len) : 1.0f;
-            sg[11] = len > 0 ? (float)((by - ay) / len) : 0.0f;
-        }
-        if (m >= 2) {
+        if (!r && m >= 2) {
             for (int e = 0; e < 2; e++) {
                 size_t a = e ? m - 1 : 0, c = e ? m - 2 : 1;
                 double dx = rl.x[c] - rl.x[a], dy = rl.y[c] - rl.y[a], l = hypot(dx, dy);
@@ -243,8 +360,10 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             }
         }
         rs__road_local_free(ctx, &rl);
+        if (r) goto fail;
     }
-    g->nseg = nseg;
+    if (!g->seg && !(g->seg = rs__calloc(ctx, 1, RS_GPU_SEG_FLOATS * sizeof(float)))) { r = RS_ERR_NOMEM; goto fail; }
+    nseg = g->nseg;
     g->nbands = nbands;
     /* continuations: equal end points, leaving within 30 degrees of opposite */
     qsort(ends, nends, sizeof *ends, ge_end_cmp);
@@ -259,46 +378,13 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         }
 
     /* the segment index */
-    g->cell_start = rs__calloc(ctx, ncell + 1, sizeof *g->cell_start);
-    pos = rs__alloc_array(ctx, ncell + 1, sizeof *pos);
-    if (!g->cell_start || !pos) { r = RS_ERR_NOMEM; goto fail; }
     {
-        size_t total = 0;
-        for (size_t k = 0; k < nseg; k++) {
-            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
-            double R = s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
-            total += seg_cells(g, s, R, NULL, NULL, 0);
-        }
-        if (total > (size_t)1 << 28) { r = rs__fail(ctx, RS_ERR_LIMIT, "GPU export: the index needs %zu entries (at most 2^28)", total); goto fail_msg; }
-        /* counts per cell, then offsets, then fill (ascending per cell) */
-        for (size_t k = 0; k < nseg; k++) {
-            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
-            double R = s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
-            uint32_t i0, j0, i1, j1;
-            box_cells(g, fmin(s[0], s[2]) - R, fmin(s[1], s[3]) - R, fmax(s[0], s[2]) + R, fmax(s[1], s[3]) + R, &i0,
-                      &j0, &i1, &j1);
-            double hd = g->cell * 0.70710678118654752440;
-            for (uint32_t j = j0; j <= j1; j++)
-                for (uint32_t i = i0; i <= i1; i++) {
-                    double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
-                    if (seg_dist(s[0], s[1], s[2], s[3], cx, cy) <= R + hd) g->cell_start[(size_t)j * g->gw + i + 1]++;
-                }
-        }
-        for (size_t c = 0; c < ncell; c++) g->cell_start[c + 1] += g->cell_start[c];
-        g->nseg_entries = g->cell_start[ncell];
-        g->cell_seg = rs__alloc_array(ctx, g->nseg_entries ? g->nseg_entries : 1, sizeof *g->cell_seg);
-        if (!g->cell_seg) { r = RS_ERR_NOMEM; goto fail; }
-        memcpy(pos, g->cell_start, ncell * sizeof *pos);
-        for (size_t k = 0; k < nseg; k++) {
-            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
-            double R = s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
-            seg_cells(g, s, R, pos, g->cell_seg, (uint32_t)k);
-        }
+        ge_items it = { g->seg, NULL, nseg };
+        if ((r = index_build(ctx, g, &it, "segment", &g->cell_start, &g->cell_seg, &g->nseg_entries)) != RS_OK)
+            goto fail_msg;
     }
 
     /* markings and the atlas */
-    g->mark_start = rs__calloc(ctx, ncell + 1, sizeof *g->mark_start);
-    if (!g->mark_start) { r = RS_ERR_NOMEM; goto fail; }
     if (!o.markings.disable &&
         (rs_roads_mark_count(roads) || (!o.markings.no_auto && rs__markings_auto_possible(roads)))) {
         const rs_atlas *atlas = o.markings.atlas;
@@ -381,39 +467,22 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             double *bb = box + 4 * nm;
             bb[0] = bx0 - grow; bb[1] = by0 - grow; bb[2] = bx1 + grow; bb[3] = by1 + grow;
             mk[0] = (float)p->road; mk[1] = (float)p->type;
-            mk[2] = (float)p->s; mk[3] = (float)p->t;
-            mk[4] = (float)hl; mk[5] = (float)hw;
+            mk[2] = ge_float(p->s); mk[3] = ge_float(p->t);
+            mk[4] = ge_float(hl); mk[5] = ge_float(hw);
             mk[6] = p->flip ? 1.0f : 0.0f;
-            mk[7] = (float)kx; mk[8] = (float)ky;
+            mk[7] = ge_float(kx); mk[8] = ge_float(ky);
             nm++;
         }
         rs__free(ctx, first_seg);
         g->nmarks = nm;
-        for (int pass = 0; pass < 2 && !r; pass++) {
-            if (pass == 1) {
-                for (size_t c = 0; c < ncell; c++) g->mark_start[c + 1] += g->mark_start[c];
-                g->nmark_entries = g->mark_start[ncell];
-                g->mark_ids = rs__alloc_array(ctx, g->nmark_entries ? g->nmark_entries : 1, sizeof *g->mark_ids);
-                if (!g->mark_ids) { r = RS_ERR_NOMEM; break; }
-                memcpy(pos, g->mark_start, ncell * sizeof *pos);
-            }
-            for (size_t i = 0; i < nm; i++) {
-                const double *bb = box + 4 * i;
-                uint32_t i0, j0, i1, j1;
-                box_cells(g, bb[0], bb[1], bb[2], bb[3], &i0, &j0, &i1, &j1);
-                for (uint32_t j = j0; j <= j1; j++)
-                    for (uint32_t c = i0; c <= i1; c++) {
-                        size_t cc = (size_t)j * g->gw + c;
-                        if (pass == 0) g->mark_start[cc + 1]++;
-                        else g->mark_ids[pos[cc]++] = (uint32_t)i;
-                    }
-            }
-        }
+        ge_items it = { NULL, box, nm };
+        r = index_build(ctx, g, &it, "marking", &g->mark_start, &g->mark_ids, &g->nmark_entries);
         rs__free(ctx, box);
-        if (r) goto fail;
+        if (r) goto fail_msg;
     } else {
+        g->mark_start = rs__calloc(ctx, ncell + 1, sizeof *g->mark_start);
         g->mark_ids = rs__alloc_array(ctx, 1, sizeof *g->mark_ids);
-        if (!g->mark_ids) { r = RS_ERR_NOMEM; goto fail; }
+        if (!g->mark_start || !g->mark_ids) { r = RS_ERR_NOMEM; goto fail; }
     }
     if (!g->mark) g->mark = rs__calloc(ctx, 1, RS_GPU_MARK_FLOATS * sizeof(float));
     if (!g->types) g->types = rs__calloc(ctx, 1, RS_GPU_TYPE_INTS * sizeof(uint32_t));
@@ -425,7 +494,6 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                                sizeof(float) +
                (2 * (ncell + 1) + g->nseg_entries + g->nmark_entries + g->ntypes * RS_GPU_TYPE_INTS +
                 g->nlevels * RS_GPU_LEVEL_INTS) * sizeof(uint32_t);
-    rs__free(ctx, pos);
     rs__free(ctx, pl);
     rs__free(ctx, ends);
     rs__free(ctx, sty);
@@ -436,7 +504,6 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
 fail:
     r = rs__fail(ctx, r ? r : RS_ERR_NOMEM, "out of memory for the GPU export");
 fail_msg:
-    rs__free(ctx, pos);
     rs__free(ctx, pl);
     rs__free(ctx, ends);
     rs__free(ctx, sty);

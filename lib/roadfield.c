@@ -378,14 +378,12 @@ static void build_colpix(rs_ctx *ctx, rs__roadfield *f)
  * disc's centre, so they keep full precision however far A and B are (as
  * lib/roadgrid.c does). *along is how far the new A lies along the segment
  * from the old one (for the arc length). Returns 0 when nothing is left.
- * Nearer segments are left exactly as they are. */
-static int clip_far(double *ax, double *ay, double *bx, double *by, double w, double h, double pad, double *along)
+ * Segments within `far` of the map's box are left exactly as they are. Also
+ * the GPU export's cut (lib/gpu_export.c), with a nearer `far` for float. */
+int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, double h, double pad, double far,
+                 double *along)
 {
     *along = 0;
-    /* Within a million map sizes the digits lost are below 1e-9 of a pixel:
-     * such segments are kept as given (and the nearest-road ties stay those
-     * of the exact geometry). */
-    double far = 1e6 * (w + h + 2 * pad);
     if (fmin(*ax, *bx) >= -far && fmax(*ax, *bx) <= w + far && fmin(*ay, *by) >= -far && fmax(*ay, *by) <= h + far)
         return 1;
     double dxh = 0.5 * *bx - 0.5 * *ax, dyh = 0.5 * *by - 0.5 * *ay, lh = hypot(dxh, dyh);
@@ -785,7 +783,11 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             double cax = ax, cay = ay, cbx = bx, cby = by, along = 0;
             /* the reach of this capsule beyond the map, with room to spare */
             double pad = 2 * (fmin(0.5 * w, 1e15) + f->reach) + c;
-            int keep = clip_far(&cax, &cay, &cbx, &cby, p->width_m, p->height_m, pad, &along);
+            /* Within a million map sizes the digits lost are below 1e-9 of a
+             * pixel: such segments are kept as given (and the nearest-road
+             * ties stay those of the exact geometry). */
+            int keep = rs__clip_far(&cax, &cay, &cbx, &cby, p->width_m, p->height_m, pad,
+                                    1e6 * (p->width_m + p->height_m + 2 * pad), &along);
             if (along == 0 && cax == ax && cay == ay && cbx == bx && cby == by) {
                 seg_set(&sg, ax, ay, bx, by, 0.5 * w, s, (uint32_t)ri, (uint32_t)k);
                 s += sg.len;

@@ -29,6 +29,13 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                               rs__roadfield **out);
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);
 
+/* Cut segment A-B, if it reaches beyond `far` from the w x h map, to the
+ * disc around the map that a capsule of reach `pad` can touch from it
+ * (full precision however far A and B are); *along = the new A's distance
+ * from the old one. Returns 0 when nothing can reach the map. */
+int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, double h, double pad, double far,
+                 double *along);
+
 /* A field of the same segments as src (the same ids, grid and pixel), each
  * road's half width grown by extra[road] (nroads entries, each 0..the
  * index cell: rs__roadfield_cell): what rs__roadfield_coverage2 computes

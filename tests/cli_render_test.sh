@@ -67,6 +67,12 @@ if cmd == 'ramp':  # file: the widest 10-90 % transition at the road edge and at
     line = count(xl - 40, xl + 1, R, W)
     print('%d %d' % (edge, line))
     sys.exit(0)
+if cmd == 'bright':  # a b level: of b's pixels with every channel >= level, the share that a
+    # shows at >= level - 10 (lines drawn in both); prints it, fails below 0.95
+    A, B, L = read(sys.argv[2]), read(sys.argv[3]), int(sys.argv[4])
+    sel = [i for i, c in enumerate(B[2]) if min(c) >= L]
+    share = sum(1 for i in sel if min(A[2][i]) >= L - 10) / max(len(sel), 1)
+    print('%d bright pixels, %.4f of them in both' % (len(sel), share)); sys.exit(0 if sel and share >= 0.95 else 1)
 if cmd == 'differ':  # two images differ somewhere by more than 8 levels
     A, B = read(sys.argv[2]), read(sys.argv[3])
     sys.exit(0 if any(abs(p - q) > 8 for a, b in zip(A[2], B[2]) for p, q in zip(a, b)) else 1)
@@ -122,6 +128,55 @@ check "shader: city ortho render" "$BIN" render $C --quiet --ortho --lighting of
 check "shader: city (90 styled roads, casings, joins, crossings) equals the CPU splat" xcheck city "$T/cs.png" "$T/cc.png"
 check "shader: --roads texture still reproduces the splat" sh -c "'$BIN' render $J --quiet --roads texture --ortho --lighting off --stats '$T/jt.json' '$EX/junction-dem.pgm' '$EX/junction.txt' '$T/jt.png' && grep -q '\"roads\": \"texture\"' '$T/jt.json' && python3 '$T/png.py' mad '$T/jt.png' '$T/jc.png' 2"
 check "shader: bad --roads rejected" sh -c "! '$BIN' render --roads gpu '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>'$T/roads.err' && grep -q \"'gpu'\" '$T/roads.err' && test ! -e '$T/e.png'"
+# Dense urban roads over a coarse DEM (issue 25 target 3): 8 x 8 samples of
+# 90 m (an index cell each), a street every ~45 m (8 m, casing, dashed
+# centre line, edge lines) with a sidewalk on each side of every block
+# (2.5 m, a dashed 0.5 m line): 30 and more roads share each index cell.
+# Before, only the first 8 roads of a cell drew lines and markings (the
+# sidewalks' lines vanished) and a pixel took the casing colour of the
+# nearest road even when that road had none.
+awk 'BEGIN { W = 8; H = 8; print "P2"; print W, H; print 1000;
+  for (i = 0; i < H; i++) { l = ""; for (j = 0; j < W; j++) l = l " " int(400 + 30 * sin(i / 2.0) + 20 * cos(j / 3.0)); print l } }' > "$T/dense-dem.pgm"
+awk 'BEGIN {
+  print "style street\n  casing 0.5 #5A5A5A\n  fill #3A3A3A\n  line 0 0.15 #FFFFFF dash 3 6\n  line 3.2 0.12 #FFFFFF\n  line -3.2 0.12 #FFFFFF\nend"
+  print "style walk\n  fill #9A9A90\n  line 0 0.5 #FFFFFF dash 2 2\nend"
+  n = 14
+  for (k = 0; k < n; k++) c[k] = 20 + 45 * k + 7 * (k % 3)
+  c[-1] = -40; c[n] = 690
+  # streets with a vertex mid-block, as map data has nodes along a street
+  # (the CPU cuts a segment by a few crossing surfaces only, docs/render.md)
+  for (k = 0; k < n; k++) {
+    printf "road ew%d width 8 style=street\n-20 %g\n", k, c[k]
+    for (b = 0; b + 1 < n; b++) printf "%g %g\n", (c[b] + c[b + 1]) / 2, c[k]
+    printf "650 %g\nend\n", c[k]
+    printf "road ns%d width 8 style=street\n%g -20\n", k, c[k]
+    for (b = 0; b + 1 < n; b++) printf "%g %g\n", c[k], (c[b] + c[b + 1]) / 2
+    printf "%g 650\nend\n", c[k]
+  }
+  for (k = 0; k < n; k++)
+    for (b = -1; b < n; b++) { # both sides of each block; round ends clear of the streets
+      a0 = c[b] + 6.5; a1 = c[b + 1] - 6.5
+      for (s = -1; s <= 1; s += 2) {
+        printf "road ew%d_%d_%d width 2.5 style=walk\n%g %g\n%g %g\nend\n", k, b, s, a0, c[k] + 6.5 * s, a1, c[k] + 6.5 * s
+        printf "road ns%d_%d_%d width 2.5 style=walk\n%g %g\n%g %g\nend\n", k, b, s, c[k] + 6.5 * s, a0, c[k] + 6.5 * s, a1
+      }
+    }
+  print "mark word_bus road=ew3 s=200 t=-2 length=3 width=2"
+  print "mark cycle road=ns4 s=300 t=1.5"
+}' > "$T/dense.txt"
+DN="--cell-size 90 --z-scale 0.1 --texels 90"
+check "dense: CPU splat" "$BIN" $DN --quiet "$T/dense-dem.pgm" "$T/dense.txt" "$T/dc.png"
+check "dense: shader ortho render" sh -c "'$BIN' render $DN --quiet --ortho --lighting off --stats '$T/ds.json' '$T/dense-dem.pgm' '$T/dense.txt' '$T/ds.png' && grep -q '\"roads\": \"shader\"' '$T/ds.json'"
+check "dense: 90 m cells, 30+ roads per cell: the shader equals the CPU splat" xcheck dense "$T/ds.png" "$T/dc.png"
+check "dense: every road's lines are drawn (the sidewalks' too)" py bright "$T/ds.png" "$T/dc.png" 195
+# What the shader does not draw goes to the texture mode, with a note
+# naming it: the render is then the CPU splat
+SF="$EX/surface.txt"
+for f in "surface images:--quiet:$SF" "alpha-map road edges:--edges alphamap:$EX/junction.txt" \
+         "Hermite line smoothing:--aa hermite:$EX/junction.txt"; do
+    what=${f%%:*}; rest=${f#*:}; opt=${rest%%:*}; rt=${rest#*:}
+    check "fallback: $what -> texture mode with a note" sh -c "'$BIN' render $J --quiet $opt --ortho --lighting off --stats '$T/fb.json' '$EX/junction-dem.pgm' '$rt' '$T/fb.png' 2>'$T/fb.err' && grep -q '\"roads\": \"texture\"' '$T/fb.json' && grep -q 'shader mode does not draw $what' '$T/fb.err' && test \$(wc -l <'$T/fb.err') -eq 1 && '$BIN' $J --quiet $opt '$EX/junction-dem.pgm' '$rt' '$T/fbc.png' && python3 '$T/png.py' mad '$T/fb.png' '$T/fbc.png' 0.5"
+done
 # Edge profile: a close-up (2 cm pixels) across a 7 m road with a fill and a
 # 0.15 m white lane line; 0.5 m texels. Shader mode: the road edge and the
 # line's edge are at most 2 pixels wide; the baked texture blurs both over
@@ -138,6 +193,33 @@ ramp_ok() { # file cmp limit: both widths cmp limit
 }
 check "edge: shader transitions (road edge, 0.15 m line) <= 2 px" ramp_ok "$T/es.png" le 2
 check "edge: texture transitions >= 10 px" ramp_ok "$T/et.png" ge 10
+
+# Dashes at a distance (issue 25 target 4, docs/render.md): a driver's eye
+# 1.2 m above a dashed centre line (3 m on, 6 m off, 0.15 m, white on
+# #404040) over flat ground, 0.1 m texels; tests/tools/dash_range.py gives
+# the distance to which the dash/gap contrast along the line stays >= 25 %
+# of white against the road's grey (191 levels). Texture mode with
+# anisotropic filtering (the GL's maximum by default) and the shader keep
+# dashes to >= 40 m; isotropic mip levels lose them near 20 m.
+awk 'BEGIN { print "P2"; print 101, 11; print 100; for (i = 0; i < 11; i++) { l = ""; for (j = 0; j < 101; j++) l = l " 50"; print l } }' > "$T/long.pgm"
+printf 'style dashed\n  fill #404040\n  line 0 0.15 #FFFFFF dash 3 6\nend\nroad r width 7 style=dashed\n-5 10\n205 10\nend\n' > "$T/long.txt"
+DV="--cell-size 2 --z-scale 0.01 --texels 20 --size 1281x721 --fov 40 --camera 0,10,1.7 --look-at 100,10,0.5 --lighting off --quiet"
+dash_ge() { # file min_metres: dashes visible to at least min_metres
+    out=$(python3 "$TESTS/tools/dash_range.py" "$1" 1.2 100 40 9 191) || return 1
+    echo "$1: $out"
+    echo "$out" | awk -v m="$2" '{ split($1, v, "="); exit !(v[2] >= m) }'
+}
+check "dashes: texture mode render" "$BIN" render $DV --roads texture --stats "$T/dt.json" "$T/long.pgm" "$T/long.txt" "$T/dt.png"
+if grep -q '"anisotropy_max": 1,' "$T/dt.json"; then
+    echo "cli_render: note: this GL offers no anisotropic filtering; the texture-mode distance check is skipped"
+else
+    check "dashes: texture mode uses the GL's anisotropic filtering" grep -q '"anisotropy": 16' "$T/dt.json"
+    check "dashes: texture mode (anisotropic) keeps dashes visible to >= 40 m" dash_ge "$T/dt.png" 40
+fi
+check "dashes: shader mode render" "$BIN" render $DV --roads shader "$T/long.pgm" "$T/long.txt" "$T/ds2.png"
+check "dashes: shader mode keeps dashes visible to >= 40 m" dash_ge "$T/ds2.png" 40
+check "dashes: --anisotropy 1 (isotropic) loses them before 30 m" sh -c "'$BIN' render $DV --roads texture --anisotropy 1 '$T/long.pgm' '$T/long.txt' '$T/di.png' && ! python3 '$TESTS/tools/dash_range.py' '$T/di.png' 1.2 100 40 9 191 | awk '{ split(\$1, v, \"=\"); exit !(v[2] >= 30) }'"
+check "bad --anisotropy rejected" sh -c "! '$BIN' render --anisotropy 0.5 '$T/dem.pgm' '$T/roads.txt' '$T/e.png' 2>'$T/an.err' && grep -q 'anisotropy' '$T/an.err' && test ! -e '$T/e.png'"
 
 # perspective: sky at the top, terrain below
 check "oblique render exits 0" "$BIN" render $S --quiet --size 320x240 --camera 64,94,30 --look-at 64,30,8 "$T/dem.pgm" "$T/roads.txt" "$T/obl.png"

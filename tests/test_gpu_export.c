@@ -5,6 +5,7 @@
  * errors, and no leak under allocation failures. */
 #include "harness.h"
 #include "fail_alloc.h"
+#include "gpu_scene_check.h"
 #include "roadsplat.h"
 
 #include <math.h>
@@ -90,6 +91,7 @@ static void test_scene(void)
             }
         }
     CHECK(complete && ascending);
+    CHECK(gpu_scene_check(g) == NULL);
     CHECK(g->nseg_entries == g->cell_start[(size_t)g->gw * g->gh]);
     /* styles: as rs_road_style resolves them */
     for (size_t i = 0; i < 4; i++) {
@@ -222,8 +224,102 @@ static void test_alloc_failures(void)
     rs_ctx_free(ctx);
 }
 
+/* A segment of road `road` is listed in the cell holding (x, y). */
+static int listed_at(const rs_gpu_scene *g, double road, double x, double y)
+{
+    size_t c = (size_t)floor((y - g->y0) / g->cell) * g->gw + (size_t)floor((x - g->x0) / g->cell);
+    for (uint32_t e = g->cell_start[c]; e < g->cell_start[c + 1]; e++)
+        if (g->seg[RS_GPU_SEG_FLOATS * (size_t)g->cell_seg[e] + 6] == road) return 1;
+    return 0;
+}
+
+/* Road text exported over make_dem's DEM with the defaults, the scene
+ * checked (tests/gpu_scene_check.h): the scene, or NULL after a failed check. */
+static rs_gpu_scene *export_text(rs_ctx *ctx, const rs_dem *dem, const char *text, rs_roads **roads)
+{
+    *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, strlen(text), roads) == RS_OK);
+    rs_gpu_scene *g = NULL;
+    CHECK(*roads && rs_gpu_scene_create(ctx, dem, *roads, NULL, NULL, &g) == RS_OK);
+    const char *bad = gpu_scene_check(g);
+    CHECKF(bad == NULL, "%s", bad ? bad : "");
+    if (bad) {
+        rs_gpu_scene_free(ctx, g);
+        return NULL;
+    }
+    return g;
+}
+
+/* Issue 26 row 1: points at 1e300 (valid road text) made float casts give
+ * inf and NaN, and the index's count and fill passes disagree: a heap
+ * overflow. Far parts are cut to the disc around the map (every float near
+ * the map, every index in range), and what crosses the map is still drawn. */
+static void test_far_points(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    const char *t = "road east width 4\n10 10\n1e300 10\n20 1e300\nend\n"
+                    "road diag width 3 class=primary\n-1e300 -1e300\n1e300 1e300\nend\n"
+                    "road wide width 1e300\n1e300 -1e300\n-1e300 -1e300\nend\n"
+                    "road near width 2\n30 70\n60 70\nend\n"
+                    "mark cycle road=diag s=1e12 t=0\n";
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    if (g) {
+        CHECK(listed_at(g, 0, 30, 10));  /* east runs along y = 10 */
+        CHECK(listed_at(g, 1, 40, 40));  /* diag crosses the map through its centre */
+        CHECK(listed_at(g, 3, 45, 70));
+        /* the far segments' near parts keep their line */
+        int along = 0;
+        for (size_t k = 0; k < g->nseg; k++) {
+            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+            if (s[6] == 0 && s[0] == 10 && s[1] == 10 && s[3] == 10 && s[2] > 80 && s[2] < 1e6) along = 1;
+        }
+        CHECK(along);
+    }
+    rs_gpu_scene_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
+/* Issue 26 row 2: a repeated point (valid) was counted as a segment from
+ * the raw points but never written (the points are de-duplicated): the
+ * last segments stayed uninitialised. Segments exist where the double
+ * points differ, whatever float makes of them. */
+static void test_repeated_points(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    const char *t = "road r width 4\n10 10\n10 10\n30 10\n30 10\n30 10\n30 30\nend\n"
+                    "road tiny width 2\n50 50\n50.000001 50\nend\n"
+                    "road dot width 3\n60 20\n60 20\nend\n";
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    if (g) {
+        CHECK_EQ_INT(g->nseg, 2 + 1 + 1);
+        const float *s = g->seg;
+        CHECK(s[0] == 10 && s[2] == 30 && s[5] == 0 && s[7] == RS_GPU_SEG_FIRST);
+        s += RS_GPU_SEG_FLOATS;
+        CHECK(s[0] == 30 && s[3] == 30 && s[5] == 20 && s[7] == RS_GPU_SEG_LAST);
+        s += RS_GPU_SEG_FLOATS; /* float ends equal, the doubles are not: one segment, its direction kept */
+        CHECK(s[6] == 1 && s[10] == 1 && s[11] == 0 && s[9] > 0 && s[7] == (RS_GPU_SEG_FIRST | RS_GPU_SEG_LAST));
+        s += RS_GPU_SEG_FLOATS; /* one point throughout: one segment of length 0 */
+        CHECK(s[6] == 2 && s[9] == 0 && s[0] == 60 && s[2] == 60);
+        CHECK(listed_at(g, 2, 60, 20));
+    }
+    rs_gpu_scene_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
+    test_far_points();
+    test_repeated_points();
     test_scene();
     test_alloc_failures();
     return th_finish("test_gpu_export");

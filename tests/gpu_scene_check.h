@@ -1,0 +1,85 @@
+/* Structural check of an rs_gpu_scene (include/roadsplat.h "GPU export"):
+ * every index it holds points inside the array it indexes and every float
+ * a shader reads is finite. Shared by tests/test_gpu_export.c and the
+ * fuzz target fuzz/gpu_export/fuzz.c. Returns NULL when the scene is sound,
+ * else what is wrong. */
+#ifndef RS_TESTS_GPU_SCENE_CHECK_H
+#define RS_TESTS_GPU_SCENE_CHECK_H
+#include "roadsplat.h"
+
+#include <math.h>
+#include <stddef.h>
+
+static int gsc_finite(const float *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+/* v is an integer in [lo, hi) */
+static int gsc_index(float v, double lo, double hi)
+{
+    return v >= lo && v < hi && v == floorf(v);
+}
+
+/* start: n + 1 ascending offsets from 0 to `entries`; ids below `items`, ascending per range */
+static int gsc_lists(const uint32_t *start, const uint32_t *ids, size_t n, size_t entries, size_t items)
+{
+    if (!start || !ids || start[0] != 0 || start[n] != entries) return 0;
+    for (size_t c = 0; c < n; c++) {
+        if (start[c] > start[c + 1]) return 0;
+        for (uint32_t e = start[c]; e < start[c + 1]; e++)
+            if (ids[e] >= items || (e > start[c] && ids[e] <= ids[e - 1])) return 0;
+    }
+    return 1;
+}
+
+static const char *gpu_scene_check(const rs_gpu_scene *g)
+{
+    if (!g) return "no scene";
+    if (!(g->cell > 0) || !isfinite(g->x0) || !isfinite(g->y0) || g->gw == 0 || g->gh == 0) return "grid";
+    const size_t ncell = (size_t)g->gw * g->gh;
+    if (!g->seg || !g->road || !g->band || !g->mark || !g->types || !g->levels || !g->atlas_px)
+        return "an array is NULL";
+    for (size_t k = 0; k < g->nseg; k++) {
+        const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+        if (!gsc_finite(s, RS_GPU_SEG_FLOATS)) return "segment float not finite";
+        if (!gsc_index(s[6], 0, (double)g->nroads)) return "segment road index";
+        if (!gsc_index(s[7], 0, 4)) return "segment flags";
+        if (k > 0 && s[6] < s[6 - RS_GPU_SEG_FLOATS]) return "segments not in road order";
+        if (!(s[4] >= 0 && s[8] >= 0 && s[9] >= 0)) return "segment width or length negative";
+    }
+    if (!gsc_lists(g->cell_start, g->cell_seg, ncell, g->nseg_entries, g->nseg)) return "segment index";
+    for (size_t i = 0; i < g->nroads; i++) {
+        const float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+        if (!gsc_finite(rd, RS_GPU_ROAD_FLOATS)) return "road float not finite";
+        if (!gsc_index(rd[3], 0, (double)g->nbands + 1) || !gsc_index(rd[4], 0, 33) ||
+            (double)rd[3] + rd[4] > (double)g->nbands)
+            return "road bands";
+        for (int e = 5; e <= 6; e++)
+            if (rd[e] != -1 && !gsc_index(rd[e], 0, (double)g->nroads)) return "road continuation";
+    }
+    for (size_t b = 0; b < g->nbands; b++) {
+        const float *bd = g->band + RS_GPU_BAND_FLOATS * b;
+        if (!gsc_finite(bd, RS_GPU_BAND_FLOATS)) return "band float not finite";
+        if (!gsc_index(bd[8], 0, 9)) return "band dash count";
+    }
+    for (size_t m = 0; m < g->nmarks; m++) {
+        const float *mk = g->mark + RS_GPU_MARK_FLOATS * m;
+        if (!gsc_finite(mk, RS_GPU_MARK_FLOATS)) return "marking float not finite";
+        if (!gsc_index(mk[0], 0, (double)g->nroads) || !gsc_index(mk[1], 0, (double)g->ntypes))
+            return "marking road or type";
+    }
+    if (!gsc_lists(g->mark_start, g->mark_ids, ncell, g->nmark_entries, g->nmarks)) return "marking index";
+    for (size_t t = 0; t < g->ntypes; t++) {
+        const uint32_t *ty = g->types + RS_GPU_TYPE_INTS * t;
+        if ((size_t)ty[0] + ty[1] > g->nlevels) return "atlas type levels";
+    }
+    for (size_t l = 0; l < g->nlevels; l++) {
+        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * l;
+        if ((size_t)L[0] + (size_t)L[1] * L[2] > g->atlas_texels) return "atlas level texels";
+    }
+    return NULL;
+}
+#endif
