@@ -220,7 +220,7 @@ static const char *const rsh_fs_src[] = {
     "    vec4 p = vec4(b00 - a00), r = vec4((b01 - b00) - (a01 - a00));\n"
     "    vec4 db = vec4(b10 - b00), da = vec4(a10 - a00), xb = vec4((b11 - b10) - (b01 - b00)), xa = vec4((a11 - a10) - (a01 - a00));\n"
     "    return p + fu * r + (f1 * db - f0 * da) + fu * (f1 * xb - f0 * xa);\n"
-    "}\n"
+    "}\n",
     "vec4 atlas_box(int type, vec2 c, vec2 e1, vec2 e2) {\n"
     "    uvec4 L = texelFetch(u_levels, int(texelFetch(u_types, 2 * type).r));\n"
     "    int off = int(L.w), w = int(L.y), h = int(L.z);\n"
@@ -252,7 +252,7 @@ static const char *const rsh_fs_src[] = {
     "    if (!(area > 0.0)) return vec4(0.0);\n"
     "    acc /= 255.0 * area;\n"
     "    return clamp(acc, vec4(0.0), vec4(255.0, 255.0, 255.0, 1.0));\n"
-    "}\n"
+    "}\n",
     "void main() {\n"
     "    vec2 p = v_xy;\n"
     "    dpx = dFdx(p); dpy = dFdy(p);\n"
