@@ -1,6 +1,7 @@
 /* Line symbols: convex band pieces, a pixel-cell index, exact per-pixel
  * areas (lib/linesym.h; docs/linesym.md). */
 #include "linesym.h"
+#include "network.h"
 
 #include <float.h>
 #include <math.h>
@@ -594,6 +595,7 @@ typedef struct ls_junc {
     uint32_t *stamp;       /* per surface: last query that saw it */
     uint32_t query;
     const ls_ends *ends;
+    const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -711,7 +713,9 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->stamp[k] == J->query) continue;
                     J->stamp[k] = J->query;
                     const ls_surf *Q = &J->sf[k];
-                    if (Q->road == road || continues(J, road, Q->road)) continue;
+                    if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == J->stroke_of[road]) ||
+                        continues(J, road, Q->road))
+                        continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
                     ls_piece next[QMAX];
@@ -739,11 +743,12 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
     return RS_OK;
 }
 
-/* Pieces of one band along one road. pts: n distinct consecutive local
- * points, s: arc length at each. */
-static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint32_t road, const ls_vtx *pts,
-                                  const double *s, size_t n, const rs__band *bd, uint32_t band, double wmap,
-                                  double hmap)
+/* Pieces of one band along one road or stroke. pts: n distinct
+ * consecutive local points, s: arc length at each, seg_road: the record
+ * of each segment (for the junction cuts). */
+static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const uint32_t *seg_road,
+                                  const ls_vtx *pts, const double *s, size_t n, const rs__band *bd, uint32_t band,
+                                  double wmap, double hmap)
 {
     double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
@@ -824,7 +829,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
         }
         P.len = hi - lo;
         piece_box(L, &P, P.len, a, b);
-        rs_result r = push_cut(ctx, L, J, &P, road);
+        rs_result r = push_cut(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
     /* Round joins: the outer side of each interior vertex. */
@@ -877,7 +882,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
         double pp = L->pixel * L->pixel; /* 0 only for a subnormal pixel: no shortcut then */
         P.warea = pp > 0 ? 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / pp : 0;
         piece_box(L, &P, 0, 0, 0);
-        rs_result r = push_cut(ctx, L, J, &P, road);
+        rs_result r = push_cut(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
     return RS_OK;
@@ -954,27 +959,28 @@ static int csr_close(uint32_t *start, size_t ncell, uint64_t lim, size_t *total)
     return 1;
 }
 
-/* One road in local coordinates: distinct consecutive points and their arc
- * lengths (summed as lib/roadfield.c sums them). */
-static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
-                            double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+/* Append road ri's points to the *m_out points already in *pts (a stroke's
+ * records one after the other: a point equal to the last is left out). */
+static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
+                                   double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
 {
     const double *xy = NULL;
-    size_t n = 0;
+    size_t n = 0, m0 = *m_out;
     rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
-    if (n > *cap) {
-        size_t b1, b2;
-        if (!rs__mul_size(n, sizeof **pts, &b1) || !rs__mul_size(n, sizeof **sv, &b2)) return RS_ERR_LIMIT;
+    if (n > *cap - m0) {
+        size_t b1, b2, want = m0 + n;
+        if (want < 2 * *cap) want = 2 * *cap;
+        if (!rs__mul_size(want, sizeof **pts, &b1) || !rs__mul_size(want, sizeof **sv, &b2)) return RS_ERR_LIMIT;
         ls_vtx *np = rs__realloc(ctx, *pts, b1);
         if (!np) return RS_ERR_NOMEM;
         *pts = np;
         double *ns = rs__realloc(ctx, *sv, b2);
         if (!ns) return RS_ERR_NOMEM;
         *sv = ns;
-        *cap = n;
+        *cap = want;
     }
-    size_t m = 0;
-    double s = 0;
+    size_t m = m0;
+    double s = m0 ? (*sv)[m0 - 1] : 0;
     for (size_t k = 0; k < n; k++) {
         double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
         if (m > 0) {
@@ -989,6 +995,34 @@ static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const
     }
     *m_out = m;
     return RS_OK;
+}
+
+/* Records split a road anywhere, also inside a straight stretch: the
+ * joint point j of two records (points j-1, j, j+1 of the stroke) is left
+ * out when it lies on the segment j-1 .. j+1 within eps (a few local
+ * quanta), so the stroke has the unsplit road's points and arc lengths (a
+ * collinear point would bend the mitres of a band on the inner side of a
+ * nearby bend). Returns 1 when it was left out (points j.. move down). */
+static int drop_straight_joint(ls_vtx *pts, double *sv, size_t j, size_t m, double eps)
+{
+    double ax = pts[j - 1].x, ay = pts[j - 1].y, dx = pts[j + 1].x - ax, dy = pts[j + 1].y - ay;
+    double px = pts[j].x - ax, py = pts[j].y - ay, l2 = dx * dx + dy * dy, dot = px * dx + py * dy;
+    if (!(l2 > 0) || !(dot > 0) || !(dot < l2) || !(fabs(px * dy - py * dx) <= eps * sqrt(l2))) return 0;
+    for (size_t k = j; k + 1 < m; k++) {
+        pts[k] = pts[k + 1];
+        double s = sv[k - 1] + 2 * hypot(0.5 * pts[k].x - 0.5 * pts[k - 1].x, 0.5 * pts[k].y - 0.5 * pts[k - 1].y);
+        sv[k] = s <= DBL_MAX ? s : DBL_MAX;
+    }
+    return 1;
+}
+
+/* One road in local coordinates: distinct consecutive points and their arc
+ * lengths (summed as lib/roadfield.c sums them). */
+static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
+                            double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+{
+    *m_out = 0;
+    return road_local_append(ctx, roads, ri, p, per_unit, pts, sv, cap, m_out);
 }
 
 static void unit_dir(double ax, double ay, double bx, double by, double *dx, double *dy)
@@ -1165,6 +1199,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->start = rs__calloc(ctx, ncell + 1, sizeof *L->start);
     ls_vtx *pts = NULL;
     double *sv = NULL;
+    uint32_t *sr = NULL; /* the record of each segment of pts */
+    size_t srcap = 0;
     ls_junc J;
     memset(&J, 0, sizeof J);
     if (!L->band || !L->dash || !L->start) { res = RS_ERR_NOMEM; goto fail; }
@@ -1186,17 +1222,37 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     size_t cap = 0, total = 0;
     if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
-    for (size_t ri = 0; ri < nroads; ri++) {
-        if (band_start[ri + 1] == band_start[ri]) continue;
-        size_t m = 0;
-        if ((res = road_local(ctx, roads, ri, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK) goto fail;
+    /* road by road, or stroke by stroke: the stroke's records as one polyline */
+    const rs_network *net = p->net && rs_network_road_count(p->net) == nroads ? p->net : NULL;
+    J.stroke_of = net ? net->stroke_of : NULL;
+    size_t nstroke = net ? net->nstrokes : nroads;
+    for (size_t k = 0; k < nstroke; k++) {
+        uint32_t one = (uint32_t)k;
+        const uint32_t *recs = net ? net->stroke_roads + net->stroke_start[k] : &one;
+        size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1, m = 0;
+        uint32_t head = recs[0];
+        if (band_start[head + 1] == band_start[head]) continue;
+        for (size_t q = 0; q < nrec; q++) {
+            size_t m0 = m;
+            if ((res = road_local_append(ctx, roads, recs[q], p, per_unit, &pts, &sv, &cap, &m)) != RS_OK) goto fail;
+            if (m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
+            if (cap > srcap) {
+                uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
+                if (!ns) { res = RS_ERR_NOMEM; goto fail; }
+                sr = ns;
+                srcap = cap;
+            }
+            for (size_t i = m0 ? m0 - 1 : 0; i + 1 < m; i++) sr[i] = recs[q];
+        }
         if (m < 2) continue;
-        for (uint32_t k = band_start[ri]; k < band_start[ri + 1]; k++)
-            if ((res = road_band_pieces(ctx, L, &J, (uint32_t)ri, pts, sv, m, &bands[k], k, wmap, hmap)) != RS_OK)
+        for (uint32_t b = band_start[head]; b < band_start[head + 1]; b++)
+            if ((res = road_band_pieces(ctx, L, &J, sr, pts, sv, m, &bands[b], b, wmap, hmap)) != RS_OK)
                 goto fail;
     }
     rs__free(ctx, pts);
     rs__free(ctx, sv);
+    rs__free(ctx, sr);
+    sr = NULL;
     junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
@@ -1255,6 +1311,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
 fail:
     rs__free(ctx, pts);
     rs__free(ctx, sv);
+    rs__free(ctx, sr);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");

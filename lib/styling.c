@@ -22,6 +22,7 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__free(ctx, st->img_len);
     rs__free(ctx, st->img_lev);
     rs__free(ctx, st->img_f);
+    rs__free(ctx, st->img_s0);
     if (st->imgs)
         for (size_t i = 0; i < st->nimgs; i++) rs__surfimg_free(ctx, st->imgs[i]);
     rs__free(ctx, st->imgs);
@@ -35,6 +36,7 @@ int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, 
     double hw = st->half_width[road];
     /* the image's left edge at t = +hw (left of travel), right edge at -hw */
     double u = hw > 0 ? (hw - t) / (2 * hw) : 0.5;
+    if (st->img_s0) s += st->img_s0[road];
     rs__surfimg_sample(m, u, s / st->img_len[road], st->img_lev[road], st->img_f[road], out);
     return 1;
 }
@@ -97,7 +99,7 @@ static void put_colour(float *dst, rs_colour c)
 }
 
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const rs__roadfield *field, rs__styling **out)
+                            const rs__roadfield *field, const rs_network *net, rs__styling **out)
 {
     *out = NULL;
     if (o->style.disable) return RS_OK;
@@ -204,6 +206,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.out_h = (dem->height - 1) * o->texels;
         lp.pixel = fp.pixel;
         lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
+        lp.net = net;
         if ((r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines)) != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }
@@ -231,6 +234,14 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         }
         st->bytes += rs__roadfield_bytes(st->casing);
     }
+    if (st->img_of && net && rs_network_road_count(net) == n) {
+        if (!(st->img_s0 = rs__alloc_array(ctx, n, sizeof *st->img_s0))) { r = RS_ERR_NOMEM; goto fail_dash; }
+        for (size_t i = 0; i < n; i++) {
+            rs_road_stroke k;
+            rs_network_road_stroke(net, i, &k);
+            st->img_s0[i] = k.s_offset;
+        }
+    }
     if (st->any_surface) {
         st->near = field;
         if (!field) {
@@ -241,6 +252,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     }
     st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double));
     if (st->img_of) st->bytes += n * (sizeof *st->img_of + sizeof *st->img_len + sizeof *st->img_lev + sizeof *st->img_f);
+    if (st->img_s0) st->bytes += n * sizeof *st->img_s0;
     rs__free(ctx, dash);
     rs__free(ctx, extra);
     rs__free(ctx, bands);
