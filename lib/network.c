@@ -49,6 +49,7 @@ typedef struct pt_hash {
     double cell;
     uint64_t mask;
     uint32_t *start, *ids;
+    double *pxy; /* the points' coordinates in bucket order (beside ids) */
 } pt_hash;
 
 static int64_t cell_of(double x, double cell)
@@ -59,13 +60,19 @@ static int64_t cell_of(double x, double cell)
     return (int64_t)q;
 }
 
+/* Blocks of 4 x 4 cells hash to 16 consecutive buckets (one cache line of
+ * starts): the cells around a point mostly share a block. The cell's place
+ * in the block is offset by the block's hash, so points on a regular grid
+ * (all at one place in their blocks) still spread over all buckets. */
 static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
 {
-    uint64_t h = (uint64_t)cx * 0x9E3779B97F4A7C15ull ^ ((uint64_t)cy + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
+    uint64_t bx = (uint64_t)cx >> 2, by = (uint64_t)cy >> 2;
+    uint64_t h = bx * 0x9E3779B97F4A7C15ull ^ (by + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
     h ^= h >> 29;
     h *= 0xBF58476D1CE4E5B9ull;
     h ^= h >> 32;
-    return h & H->mask;
+    uint64_t sub = ((((uint64_t)cx & 3) << 2 | ((uint64_t)cy & 3)) + (h >> 40)) & 15;
+    return ((h << 4) | sub) & H->mask;
 }
 
 /* Hash the points xy[2 id] of the ids for which keep[id] (NULL: all). */
@@ -79,7 +86,8 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uin
     H->mask = nb - 1;
     H->start = rs__calloc(ctx, (size_t)nb + 1, sizeof *H->start);
     H->ids = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ids);
-    if (!H->start || !H->ids) return RS_ERR_NOMEM;
+    H->pxy = rs__alloc_array(ctx, count ? count : 1, 2 * sizeof *H->pxy);
+    if (!H->start || !H->ids || !H->pxy) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++)
         if (!keep || keep[i]) H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell)) + 1]++;
     for (uint64_t b = 0; b < nb; b++) H->start[b + 1] += H->start[b];
@@ -87,6 +95,7 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uin
         if (!keep || keep[i]) H->ids[H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell))]++] = (uint32_t)i;
     for (uint64_t b = nb; b > 0; b--) H->start[b] = H->start[b - 1];
     H->start[0] = 0;
+    for (size_t q = 0; q < count; q++) memcpy(H->pxy + 2 * q, xy + 2 * (size_t)H->ids[q], 2 * sizeof *xy);
     return RS_OK;
 }
 
@@ -94,6 +103,7 @@ static void hash_free(rs_ctx *ctx, pt_hash *H)
 {
     rs__free(ctx, H->start);
     rs__free(ctx, H->ids);
+    rs__free(ctx, H->pxy);
     memset(H, 0, sizeof *H);
 }
 
@@ -182,7 +192,7 @@ static rs_result find_tees(build *B)
         }
     /* end points hashed in cells a quarter of a mean segment (at least 4
      * tolerances): walking every segment's cells stays linear */
-    double g = nseg ? total / (4.0 * (double)nseg) : 1;
+    double g = nseg ? total / (2.0 * (double)nseg) : 1;
     if (!(g >= 4 * B->tol)) g = 4 * B->tol;
     if (!(g <= 1e300)) g = 1e300;
     uint8_t *isend = rs__calloc(B->ctx, B->nv ? B->nv : 1, 1);
@@ -221,7 +231,7 @@ static rs_result find_tees(build *B)
                     uint64_t b = bucket_of(&H, cx, cy);
                     for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                         uint32_t e = H.ids[q];
-                        const double *pe = B->xy + 2 * e;
+                        const double *pe = H.pxy + 2 * (size_t)q;
                         if (cell_of(pe[0], g) != cx || cell_of(pe[1], g) != cy) continue; /* another cell */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
@@ -254,6 +264,28 @@ static int pass_cmp(const void *pa, const void *pb)
     if (a->seg != b->seg) return a->seg < b->seg ? -1 : 1; /* (a pass through points has seg NONE: last) */
     if (a->dist != b->dist) return a->dist < b->dist ? -1 : 1;
     return 0;
+}
+
+/* Passes by node (a counting sort), then by pass_cmp within each node. */
+static rs_result sort_passes(build *B, size_t nn)
+{
+    uint32_t *start = rs__calloc(B->ctx, nn + 2, sizeof *start);
+    pass *out = rs__alloc_array(B->ctx, B->nps ? B->nps : 1, sizeof *out);
+    if (!start || !out) {
+        rs__free(B->ctx, start);
+        rs__free(B->ctx, out);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < B->nps; i++) start[B->ps[i].node + 2]++;
+    for (size_t i = 0; i < nn; i++) start[i + 2] += start[i + 1];
+    for (size_t i = 0; i < B->nps; i++) out[start[B->ps[i].node + 1]++] = B->ps[i];
+    for (size_t i = 0; i < nn; i++)
+        if (start[i + 1] - start[i] > 1) qsort(out + start[i], start[i + 1] - start[i], sizeof *out, pass_cmp);
+    rs__free(B->ctx, start);
+    rs__free(B->ctx, B->ps);
+    B->ps = out;
+    B->cps = B->nps ? B->nps : 1;
+    return RS_OK;
 }
 
 static int leg_cmp(const void *pa, const void *pb)
@@ -480,12 +512,15 @@ static rs_result cluster_points(build *B)
         if (!B->inhash[v]) continue;
         const double *p = B->xy + 2 * v;
         int64_t cx = cell_of(p[0], B->tol), cy = cell_of(p[1], B->tol);
-        for (int dy = -1; dy <= 1; dy++)
-            for (int dx = -1; dx <= 1; dx++) {
-                uint64_t b = bucket_of(&H, cx + dx, cy + dy);
+        /* the disc of radius tol around p meets its cell and the neighbours
+         * on the nearer side in x and in y: 2 x 2 cells */
+        int sx = p[0] - (double)cx * B->tol < 0.5 * B->tol ? -1 : 1, sy = p[1] - (double)cy * B->tol < 0.5 * B->tol ? -1 : 1;
+        for (int dy = 0; dy < 2; dy++)
+            for (int dx = 0; dx < 2; dx++) {
+                uint64_t b = bucket_of(&H, cx + dx * sx, cy + dy * sy);
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                     uint32_t w = H.ids[q];
-                    if (w <= v || same_place(B, (uint32_t)v, w) || !near2(p, B->xy + 2 * w, B->tol)) continue;
+                    if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol) || same_place(B, (uint32_t)v, w)) continue;
                     unite(B->parent, (uint32_t)v, w);
                 }
             }
@@ -544,7 +579,7 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
     }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
-    if (B.nps > 1) qsort(B.ps, B.nps, sizeof *B.ps, pass_cmp);
+    if ((res = sort_passes(&B, nn)) != RS_OK) goto fail;
     /* merge: points of one road in one run; a T beside a pass of its road, or
      * found twice, is dropped */
     size_t np = 0;

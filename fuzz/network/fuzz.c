@@ -67,19 +67,24 @@ static int same(const rs_network *a, const rs_network *b)
         rs_network_node x, y;
         rs_network_get_node(a, i, &x);
         rs_network_get_node(b, i, &y);
-        if (memcmp(&x, &y, sizeof x)) return 0;
+        if (x.x != y.x || x.y != y.y || x.degree != y.degree || x.kind != y.kind || x.control != y.control) return 0;
         for (size_t k = 0; k < x.degree; k++) {
             rs_network_leg p, q;
             rs_network_get_leg(a, i, k, &p);
             rs_network_get_leg(b, i, k, &q);
-            if (memcmp(&p, &q, sizeof p)) return 0;
+            if (p.road != q.road || p.kind != q.kind || p.segment != q.segment || p.s != q.s || p.angle != q.angle ||
+                p.priority != q.priority || p.major != q.major)
+                return 0;
         }
     }
     for (size_t r = 0; r < rs_network_road_count(a); r++) {
         rs_road_stroke p, q;
         rs_network_road_stroke(a, r, &p);
         rs_network_road_stroke(b, r, &q);
-        if (memcmp(&p, &q, sizeof p)) return 0;
+        /* (fields, not bytes: the structs have padding) */
+        if (p.stroke != q.stroke || p.s_offset != q.s_offset || p.length != q.length || p.prev != q.prev ||
+            p.next != q.next || p.closed != q.closed)
+            return 0;
     }
     return 1;
 }
