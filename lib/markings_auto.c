@@ -20,6 +20,7 @@
  * A placement is dropped when it would spill off its road (|t| + width/2
  * beyond the half width, or past either end) or overlap a junction area. */
 #include "markings.h"
+#include "network.h"
 
 #include <math.h>
 #include <string.h>
@@ -41,22 +42,6 @@ typedef struct ctxa {
     jn *j;
     size_t nj, capj;
 } ctxa;
-
-static int rank_of(rs_road_class c)
-{
-    switch (c) {
-    case RS_CLASS_MOTORWAY: return 9;
-    case RS_CLASS_TRUNK: return 8;
-    case RS_CLASS_PRIMARY: return 7;
-    case RS_CLASS_SECONDARY: return 6;
-    case RS_CLASS_TERTIARY: return 5;
-    case RS_CLASS_RESIDENTIAL: return 4;
-    case RS_CLASS_SERVICE: return 3;
-    case RS_CLASS_TRACK: return 2;
-    case RS_CLASS_PATH: case RS_CLASS_FOOTWAY: case RS_CLASS_CYCLEWAY: return 1;
-    default: return 0;
-    }
-}
 
 static rs_result add_jn(ctxa *A, size_t road, double s, double half)
 {
@@ -233,7 +218,7 @@ int rs__markings_auto_possible(const rs_roads *roads)
     for (size_t i = 0; i < nr; i++) {
         rs_road_info info;
         rs_roads_get_info(roads, i, &info);
-        if (rank_of(info.road_class) > 0) return 1;
+        if (rs__class_rank(info.road_class) > 0) return 1;
     }
     return 0;
 }
@@ -302,7 +287,7 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                     rs_roads_get_info(roads, j, &ib);
                     endj[i][e] = 1;
                     if (ha > endh[i][e]) endh[i][e] = ha;
-                    if (rank_of(ia.road_class) < rank_of(ib.road_class)) endj[i][2] |= 1 << e;
+                    if (rs__class_rank(ia.road_class) < rs__class_rank(ib.road_class)) endj[i][2] |= 1 << e;
                     r = add_jn(&A, i, e ? a->s[a->n - 1] : 0, ha);
                     if (!r) r = add_jn(&A, j, s, hb);
                 }
