@@ -577,8 +577,22 @@ static int cut_to_map(double ox, double oy, double ux, double uy, double len, do
  * joins). */
 typedef struct ls_surf {
     double ax, ay, ux, uy, len, r;
+    double u0, u1;        /* the rectangle along u: -r .. len + r, or shorter at a T (below) */
     uint32_t road;
+    uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
 } ls_surf;
+
+#define NO_STROKE UINT32_MAX
+#define TEE_EDGE_ZONE 2.0 /* metres inside a through road's edge where its lines stop at a side road's mouth */
+
+/* A road end at a T on a through road with the right of way
+ * (docs/network.md "The through road at a T"): the through stroke, the
+ * depth into it the end's surface keeps cutting (lines within `keep` of its
+ * centre line run on), and its direction there. */
+typedef struct ls_tee {
+    uint32_t stroke;
+    double keep, dx, dy;
+} ls_tee;
 
 /* Road end points and the unit directions pointing away from them along
  * the road (to tell a road that continues another from one that meets it). */
@@ -660,7 +674,7 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     /* v' = cv0 + u fvu + v fvv, u' = cu0 + u fuu + v fuv in P's frame */
     double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
     double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
-    double r = Q->r, hi = Q->len + r;
+    double r = Q->r, lo = Q->u0, hi = Q->u1;
     double x[POLY_MAX], y[POLY_MAX];
     uint32_t n = piece_poly(P, x, y);
     if (n < 3) return -1;
@@ -669,7 +683,7 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
         double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
         out_v_hi &= v >= r;
         out_v_lo &= v <= -r;
-        out_u_lo &= u <= -r;
+        out_u_lo &= u <= lo;
         out_u_hi &= u >= hi;
     }
     if (out_v_hi || out_v_lo || out_u_lo || out_u_hi) return -1;
@@ -683,8 +697,8 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     for (int side = 0; side < 2; side++) {
         A = *P;
         if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv)) return -1;
-        int ok = side == 0 ? add_hp(&A, -cu0 - r, -fuu, -fuv)            /* u' <= -r */
-                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= len + r */
+        int ok = side == 0 ? add_hp(&A, lo - cu0, -fuu, -fuv)            /* u' <= u0 */
+                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= u1 */
         if (!ok) return -1;
         if (piece_nonempty(&A)) out[m++] = A;
     }
@@ -713,8 +727,9 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->stamp[k] == J->query) continue;
                     J->stamp[k] = J->query;
                     const ls_surf *Q = &J->sf[k];
-                    if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == J->stroke_of[road]) ||
-                        continues(J, road, Q->road))
+                    uint32_t sr = J->stroke_of ? J->stroke_of[road] : road;
+                    if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
+                        continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr) || Q->skip == sr)
                         continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
@@ -1042,6 +1057,51 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
     memset(J, 0, sizeof *J);
 }
 
+/* The road ends that meet a through road with the right of way at a T
+ * (per road two entries, start and end; stroke NO_STROKE: none): at a
+ * junction node, the strokes that pass through it (a road through a shared
+ * point or a T, or two records of one stroke); when exactly one of them
+ * has the highest priority there, every other road ending there is a side
+ * road of it. NULL (and RS_OK) without a network. */
+static rs_result find_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, ls_tee **out)
+{
+    *out = NULL;
+    size_t n = rs_roads_count(roads);
+    if (!net || rs_network_road_count(net) != n) return RS_OK;
+    ls_tee *T = rs__alloc_array(ctx, n ? 2 * n : 1, sizeof *T);
+    if (!T) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = NO_STROKE;
+    for (size_t nd = 0; nd < net->nnodes; nd++) {
+        const rs_network_leg *L = net->leg + net->leg_start[nd];
+        uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
+        const rs_network_leg *tl = NULL;
+        if (d < 3) continue;
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road, st = net->stroke_of[r];
+            /* (a record's stroke predecessor always ends at its start) */
+            int passes = L[k].kind == RS_LEG_FORWARD || (L[k].kind == RS_LEG_START && net->prev[r] != UINT32_MAX);
+            if (!passes || !L[k].major || st == through) continue;
+            through = st, tl = &L[k];
+            nthrough++;
+        }
+        if (nthrough != 1) continue;
+        double w = 0;
+        rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road;
+            if ((L[k].kind != RS_LEG_START && L[k].kind != RS_LEG_END) || net->stroke_of[r] == through) continue;
+            ls_tee *t = &T[2 * r + (L[k].kind == RS_LEG_END)];
+            t->stroke = through;
+            /* lines within 2 m of the through road's edges are edge lines:
+             * they stop at the side road's mouth; the rest run on */
+            t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
+            t->dx = cos(tl->angle), t->dy = sin(tl->angle);
+        }
+    }
+    *out = T;
+    return RS_OK;
+}
+
 /* Surfaces of every road with a width, their index, and the road ends. */
 static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
                             ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
@@ -1052,12 +1112,18 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     ls_ends *ends = rs__calloc(ctx, nroads ? nroads : 1, sizeof *ends);
     J->ends = ends;
     if (!ends) return RS_ERR_NOMEM;
+    ls_tee *tees = NULL;
+    rs_result rt = find_tees(ctx, roads, p->net, &tees);
+    if (rt) return rt;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         size_t m = 0;
         rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
         rs_result r = road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
-        if (r) return r;
+        if (r) {
+            rs__free(ctx, tees);
+            return r;
+        }
         if (m < 2) continue;
         const ls_vtx *v = *pts;
         ends[ri].valid = 1;
@@ -1076,18 +1142,43 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.ay = v[i].y + lo * Q.uy;
             Q.len = hi - lo;
             Q.r = hw;
+            Q.u0 = -hw;
+            Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
-            if (J->nsf == ncap) {
-                size_t nc = ncap ? 2 * ncap : 256, bytes;
-                if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)) return RS_ERR_LIMIT;
-                ls_surf *ns = rs__realloc(ctx, J->sf, bytes);
-                if (!ns) return RS_ERR_NOMEM;
-                J->sf = ns;
-                ncap = nc;
+            Q.only = Q.skip = NO_STROKE;
+            /* an end segment at a T: the through stroke gets a copy that
+             * stops `keep` short of its centre line (no extension) */
+            int at_end = i + 2 == m && hi == len, at_start = i == 0 && lo == 0;
+            const ls_tee *T = tees ? &tees[2 * ri + (at_end ? 1 : 0)] : NULL;
+            ls_surf Qt = Q;
+            int tee = 0;
+            if (T && (at_end || at_start) && T->stroke != NO_STROKE) {
+                double sn = fabs(Q.ux * T->dy - Q.uy * T->dx); /* sine of the angle between the roads */
+                if (sn > 0.2) {
+                    double back = T->keep / sn;
+                    if (at_end) Qt.u1 = fmax(Q.len - back, Qt.u0);
+                    else Qt.u0 = fmin(back, Qt.u1);
+                    Qt.only = Q.skip = T->stroke;
+                    tee = 1;
+                }
             }
-            J->sf[J->nsf++] = Q;
+            for (int c = 0; c <= tee; c++) {
+                if (J->nsf == ncap) {
+                    size_t nc = ncap ? 2 * ncap : 256, bytes;
+                    ls_surf *ns = nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)
+                                      ? NULL : rs__realloc(ctx, J->sf, bytes);
+                    if (!ns) {
+                        rs__free(ctx, tees);
+                        return nc > UINT32_MAX ? RS_ERR_LIMIT : RS_ERR_NOMEM;
+                    }
+                    J->sf = ns;
+                    ncap = nc;
+                }
+                J->sf[J->nsf++] = c ? Qt : Q;
+            }
         }
     }
+    rs__free(ctx, tees);
     /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
     uint32_t jpx = CELL_PX;
     for (;;) {
@@ -1115,12 +1206,12 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
             const ls_surf *Q = &J->sf[k];
             double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
-            const double U[4] = { -Q->r, Q->len + Q->r, Q->len + Q->r, -Q->r }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
+            const double U[4] = { Q->u0, Q->u1, Q->u1, Q->u0 }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
             for (int c = 0; c < 4; c++) {
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
                 x0 = fmin(x0, x), x1 = fmax(x1, x), y0 = fmin(y0, y), y1 = fmax(y1, y);
             }
-            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
+            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
                        J->ids, (uint32_t)k, pass);
         }
     }
