@@ -81,7 +81,7 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uin
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
     uint64_t nb = 16;
-    while (nb < 2 * (uint64_t)count) nb *= 2;
+    while (nb < (uint64_t)count) nb *= 2;
     H->cell = cell;
     H->mask = nb - 1;
     H->start = rs__calloc(ctx, (size_t)nb + 1, sizeof *H->start);
