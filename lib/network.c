@@ -695,7 +695,9 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
         size_t r = 0, pt = 0;
         const char *key = NULL, *val = NULL;
-        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r]) continue;
+        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r] ||
+            pt >= B.voff[r + 1] - B.voff[r])
+            continue;
         uint32_t nd = B.nodeof[find(B.parent, B.rep[B.voff[r] + pt])];
         if (nd == NONE) continue;
         uint32_t f = 0;
