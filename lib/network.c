@@ -124,7 +124,8 @@ typedef struct build {
     double tol;
     size_t *voff;      /* nroads + 1: the points of road r are voff[r] .. voff[r+1]-1 */
     uint32_t *vroad;   /* per point */
-    double *xy, *s;    /* per point */
+    const double *xy;  /* per point: the road set's array, or xy_own */
+    double *xy_own, *s;
     uint32_t *rep;     /* per point: the first of its run of equal consecutive points */
     uint32_t *parent;  /* union-find over points */
     uint8_t *live;     /* per road: longer than twice the tolerance */
@@ -421,7 +422,7 @@ static void build_free(build *B)
     rs_ctx *ctx = B->ctx;
     rs__free(ctx, B->voff);
     rs__free(ctx, B->vroad);
-    rs__free(ctx, B->xy);
+    rs__free(ctx, B->xy_own);
     rs__free(ctx, B->s);
     rs__free(ctx, B->rep);
     rs__free(ctx, B->parent);
@@ -466,18 +467,29 @@ static rs_result load_points(build *B)
     B->nv = nv;
     size_t m = nv ? nv : 1;
     B->vroad = rs__alloc_array(B->ctx, m, sizeof *B->vroad);
-    B->xy = rs__alloc_array(B->ctx, m, 2 * sizeof *B->xy);
+    /* the road set keeps its points in one array in road order: read them
+     * there when they are (no copy), else copy them */
+    const double *base = NULL;
+    if (n > 0) rs_roads_get(B->roads, 0, NULL, NULL, &base, NULL);
+    for (size_t r = 0; base && r < n; r++) {
+        const double *xy = NULL;
+        rs_roads_get(B->roads, r, NULL, NULL, &xy, NULL);
+        if (xy != base + 2 * B->voff[r]) base = NULL;
+    }
+    B->xy = base;
+    if (!base && !(B->xy_own = rs__alloc_array(B->ctx, m, 2 * sizeof *B->xy_own))) return RS_ERR_NOMEM;
+    if (!base) B->xy = B->xy_own;
     B->s = rs__alloc_array(B->ctx, m, sizeof *B->s);
     B->rep = rs__alloc_array(B->ctx, m, sizeof *B->rep);
     B->parent = rs__alloc_array(B->ctx, m, sizeof *B->parent);
     B->inhash = rs__calloc(B->ctx, m, 1);
     B->nodeof = rs__alloc_array(B->ctx, m, sizeof *B->nodeof);
-    if (!B->vroad || !B->xy || !B->s || !B->rep || !B->parent || !B->inhash || !B->nodeof) return RS_ERR_NOMEM;
+    if (!B->vroad || !B->s || !B->rep || !B->parent || !B->inhash || !B->nodeof) return RS_ERR_NOMEM;
     for (size_t r = 0; r < n; r++) {
         const double *xy = NULL;
         size_t np = 0, v0 = B->voff[r];
         rs_roads_get(B->roads, r, NULL, NULL, &xy, &np);
-        memcpy(B->xy + 2 * v0, xy, np * 2 * sizeof *xy);
+        if (B->xy_own) memcpy(B->xy_own + 2 * v0, xy, np * 2 * sizeof *xy);
         double s = 0;
         for (size_t k = 0; k < np; k++) {
             size_t v = v0 + k;
@@ -570,6 +582,10 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         if (B.inhash[v] && B.parent[v] == v && qual[v]) B.nodeof[v] = (uint32_t)nn++;
     rs__free(ctx, qual);
     N->nnodes = nn;
+    size_t npass = 0;
+    for (size_t v = 0; v < B.nv; v++) npass += B.inhash[v] && B.nodeof[find(B.parent, (uint32_t)v)] != NONE;
+    if (npass && !(B.ps = rs__alloc_array(ctx, npass, sizeof *B.ps))) { res = RS_ERR_NOMEM; goto fail; }
+    B.cps = npass;
     /* passes through points: a node's points by road, runs along the road */
     for (size_t v = 0; v < B.nv; v++) {
         if (!B.inhash[v]) continue;
