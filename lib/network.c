@@ -91,11 +91,15 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uin
     for (size_t i = 0; i < n; i++)
         if (!keep || keep[i]) H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell)) + 1]++;
     for (uint64_t b = 0; b < nb; b++) H->start[b + 1] += H->start[b];
-    for (size_t i = 0; i < n; i++) /* (start[b] runs ahead while filling, then is restored below) */
-        if (!keep || keep[i]) H->ids[H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell))]++] = (uint32_t)i;
+    for (size_t i = 0; i < n; i++) { /* (start[b] runs ahead while filling, then is restored below) */
+        if (keep && !keep[i]) continue;
+        uint32_t q = H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell))]++;
+        H->ids[q] = (uint32_t)i;
+        H->pxy[2 * (size_t)q] = xy[2 * i];
+        H->pxy[2 * (size_t)q + 1] = xy[2 * i + 1];
+    }
     for (uint64_t b = nb; b > 0; b--) H->start[b] = H->start[b - 1];
     H->start[0] = 0;
-    for (size_t q = 0; q < count; q++) memcpy(H->pxy + 2 * q, xy + 2 * (size_t)H->ids[q], 2 * sizeof *xy);
     return RS_OK;
 }
 
@@ -232,8 +236,7 @@ static rs_result find_tees(build *B)
                     uint64_t b = bucket_of(&H, cx, cy);
                     for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                         uint32_t e = H.ids[q];
-                        const double *pe = H.pxy + 2 * (size_t)q;
-                        if (cell_of(pe[0], g) != cx || cell_of(pe[1], g) != cy) continue; /* another cell */
+                        const double *pe = H.pxy + 2 * (size_t)q; /* (maybe of another cell: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
@@ -520,9 +523,12 @@ static rs_result cluster_points(build *B)
         hash_free(B->ctx, &H);
         return res;
     }
-    for (size_t v = 0; v < B->nv; v++) {
-        if (!B->inhash[v]) continue;
-        const double *p = B->xy + 2 * v;
+    /* points in bucket order: the buckets around one are mostly in the
+     * cache lines just read (the union does not depend on the order) */
+    for (size_t i = 0; i < H.start[H.mask + 1]; i++) {
+        uint32_t v = H.ids[i];
+        size_t vend = 0;
+        const double *p = H.pxy + 2 * i;
         int64_t cx = cell_of(p[0], B->tol), cy = cell_of(p[1], B->tol);
         /* the disc of radius tol around p meets its cell and the neighbours
          * on the nearer side in x and in y: 2 x 2 cells */
@@ -532,8 +538,11 @@ static rs_result cluster_points(build *B)
                 uint64_t b = bucket_of(&H, cx + dx * sx, cy + dy * sy);
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                     uint32_t w = H.ids[q];
-                    if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol) || same_place(B, (uint32_t)v, w)) continue;
-                    unite(B->parent, (uint32_t)v, w);
+                    if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol)) continue;
+                    /* points are numbered road by road: w (> v) is of v's road when below its end */
+                    if (vend == 0) vend = B->voff[B->vroad[v] + 1];
+                    if (w < vend && fabs(B->s[v] - B->s[w]) <= 2 * B->tol) continue; /* same_place */
+                    unite(B->parent, v, w);
                 }
             }
     }
