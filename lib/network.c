@@ -50,6 +50,7 @@ typedef struct pt_hash {
     uint64_t mask;
     uint32_t *start, *ids;
     double *pxy; /* the points' coordinates in bucket order (beside ids) */
+    uint64_t *occ; /* a bit per bucket: not empty (small enough to stay in cache) */
 } pt_hash;
 
 static int64_t cell_of(double x, double cell)
@@ -80,14 +81,15 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uin
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
-    uint64_t nb = 16;
-    while (nb < (uint64_t)count) nb *= 2;
+    uint64_t nb = 64; /* (a word of occupancy bits at least) */
+    while (nb < 4 * (uint64_t)count) nb *= 2; /* mostly empty buckets: the occupancy bits answer */
     H->cell = cell;
     H->mask = nb - 1;
     H->start = rs__calloc(ctx, (size_t)nb + 1, sizeof *H->start);
     H->ids = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ids);
     H->pxy = rs__alloc_array(ctx, count ? count : 1, 2 * sizeof *H->pxy);
-    if (!H->start || !H->ids || !H->pxy) return RS_ERR_NOMEM;
+    H->occ = rs__calloc(ctx, (size_t)(nb / 64), sizeof *H->occ);
+    if (!H->start || !H->ids || !H->pxy || !H->occ) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++)
         if (!keep || keep[i]) H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell)) + 1]++;
     for (uint64_t b = 0; b < nb; b++) H->start[b + 1] += H->start[b];
@@ -100,6 +102,8 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uin
     }
     for (uint64_t b = nb; b > 0; b--) H->start[b] = H->start[b - 1];
     H->start[0] = 0;
+    for (uint64_t b = 0; b < nb; b++)
+        if (H->start[b + 1] > H->start[b]) H->occ[b >> 6] |= 1ull << (b & 63);
     return RS_OK;
 }
 
@@ -108,6 +112,7 @@ static void hash_free(rs_ctx *ctx, pt_hash *H)
     rs__free(ctx, H->start);
     rs__free(ctx, H->ids);
     rs__free(ctx, H->pxy);
+    rs__free(ctx, H->occ);
     memset(H, 0, sizeof *H);
 }
 
@@ -234,6 +239,7 @@ static rs_result find_tees(build *B)
                 int64_t c0 = cell_of(fmin(xa, xb) - tol, g), c1 = cell_of(fmax(xa, xb) + tol, g);
                 for (int64_t cx = c0; cx <= c1 && !res; cx++) {
                     uint64_t b = bucket_of(&H, cx, cy);
+                    if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                     for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                         uint32_t e = H.ids[q];
                         const double *pe = H.pxy + 2 * (size_t)q; /* (maybe of another cell: a T found twice merges) */
@@ -536,6 +542,7 @@ static rs_result cluster_points(build *B)
         for (int dy = 0; dy < 2; dy++)
             for (int dx = 0; dx < 2; dx++) {
                 uint64_t b = bucket_of(&H, cx + dx * sx, cy + dy * sy);
+                if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                     uint32_t w = H.ids[q];
                     if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol)) continue;
