@@ -43,6 +43,11 @@ typedef struct ctxa {
     size_t nj, capj;
 } ctxa;
 
+static int rank_of(rs_road_class c)
+{
+    return rs__class_rank(c); /* shared with the network (lib/network.c) */
+}
+
 static rs_result add_jn(ctxa *A, size_t road, double s, double half)
 {
     if (A->nj == A->capj) {
@@ -218,7 +223,7 @@ int rs__markings_auto_possible(const rs_roads *roads)
     for (size_t i = 0; i < nr; i++) {
         rs_road_info info;
         rs_roads_get_info(roads, i, &info);
-        if (rs__class_rank(info.road_class) > 0) return 1;
+        if (rank_of(info.road_class) > 0) return 1;
     }
     return 0;
 }
@@ -287,7 +292,7 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                     rs_roads_get_info(roads, j, &ib);
                     endj[i][e] = 1;
                     if (ha > endh[i][e]) endh[i][e] = ha;
-                    if (rs__class_rank(ia.road_class) < rs__class_rank(ib.road_class)) endj[i][2] |= 1 << e;
+                    if (rank_of(ia.road_class) < rank_of(ib.road_class)) endj[i][2] |= 1 << e;
                     r = add_jn(&A, i, e ? a->s[a->n - 1] : 0, ha);
                     if (!r) r = add_jn(&A, j, s, hb);
                 }
