@@ -526,6 +526,8 @@ typedef struct image {
 
 static uint8_t strip_px[16 * 64 * 4];
 
+static rs_profile render_profile; /* the built-in styles' standard for render() */
+
 static int render(const rs_roads *roads, const char *styles_text, image *im)
 {
     static float z[DW * DH];
@@ -541,6 +543,7 @@ static int render(const rs_roads *roads, const char *styles_text, image *im)
     o.style.styles = styles;
     o.style.surface_images = &si;
     o.style.surface_image_count = 1;
+    o.style.profile = render_profile;
     if (ok) ok = rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK;
     if (ok) {
         rs_splatter_size(s, &im->w, &im->h);
@@ -574,8 +577,8 @@ static void save_ppm(const char *path, const image *im)
 }
 
 /* A straight road and a curve (an S of two arcs), class=primary (default
- * style: 6/12 m dashed centre line, edge lines) and a dashed style with a
- * surface image, each split at 1..6 random places (inside segments and at
+ * style: 6/12 m dashed centre line, edge lines; and under the US profile:
+ * 10/30 ft), and a dashed style with a surface image, each split at 1..6 random places (inside segments and at
  * points): within 8/255 of the unsplit road everywhere. */
 static void test_split_draws_alike(void)
 {
@@ -603,11 +606,13 @@ static void test_split_draws_alike(void)
     static const char *const primary[] = { "class", "primary", NULL }, *const dashy[] = { "style", "dashy", NULL };
     const char *const *attrs[2] = { primary, dashy };
     int worst_all = 0;
+    /* st 2: the primary under the US profile (MUTCD 10/30 ft dashes, yellow centre line) */
     for (int shape = 0; shape < 2; shape++)
-        for (int st = 0; st < 2; st++) {
+        for (int st = 0; st < 3; st++) {
+            render_profile = st == 2 ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
             rs_roads *whole = NULL;
             CHECK(rs_roads_create(ctx, &whole) == RS_OK);
-            add_split(whole, "r", st ? 6.5 : 7.5, &shapes[shape], NULL, 0, attrs[st]);
+            add_split(whole, "r", st == 1 ? 6.5 : 7.5, &shapes[shape], NULL, 0, attrs[st % 2]);
             image ref = { 0 };
             CHECK(render(whole, styles, &ref));
             if (shape == 1 && st == 0) save_ppm("network_whole.ppm", &ref);
@@ -625,14 +630,15 @@ static void test_split_draws_alike(void)
                     }
                 rs_roads *split = NULL;
                 CHECK(rs_roads_create(ctx, &split) == RS_OK);
-                size_t nrec = add_split(split, "r", st ? 6.5 : 7.5, &shapes[shape], cuts, nc, attrs[st]);
+                size_t nrec = add_split(split, "r", st == 1 ? 6.5 : 7.5, &shapes[shape], cuts, nc, attrs[st % 2]);
                 image im = { 0 };
                 CHECK(render(split, styles, &im));
                 uint32_t wx = 0, wy = 0;
                 int d = im.rgba && ref.rgba ? max_diff(&ref, &im, &wx, &wy) : 255;
                 if (d > worst_all) worst_all = d;
                 CHECKF(d <= 8, "%s %s split into %zu records: a pixel off by %d/255 at (%u, %u)",
-                       shape ? "curve" : "straight", st ? "dashy" : "primary", nrec, d, wx, wy);
+                       shape ? "curve" : "straight", st == 1 ? "dashy" : st ? "primary (US)" : "primary", nrec, d, wx,
+                       wy);
                 if (shape == 1 && st == 0 && trial == 5) save_ppm("network_split.ppm", &im);
                 if (d > 8) {
                     char nm[64];
@@ -648,6 +654,7 @@ static void test_split_draws_alike(void)
             free(ref.rgba);
             rs_roads_free(ctx, whole);
         }
+    render_profile = RS_PROFILE_RMS;
     printf("split roads: worst pixel %d/255 against the unsplit road\n", worst_all);
 }
 
