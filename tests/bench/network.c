@@ -21,11 +21,6 @@
 
 #define RUNS 7
 
-static const char *class_of(double width)
-{
-    return width >= 12 ? "primary" : (width >= 6 ? "residential" : "service");
-}
-
 /* The city's roads with classes; split: every two segments a new record. */
 static int city_roads(rs_ctx *ctx, const sc_scene *sc, int split, rs_roads **out)
 {
@@ -36,7 +31,7 @@ static int city_roads(rs_ctx *ctx, const sc_scene *sc, int split, rs_roads **out
             size_t b = split ? (a + 2 < r->n ? a + 2 : r->n - 1) : r->n - 1;
             if (rs_roads_add(ctx, *out, NULL, r->width, r->xy + 2 * a, b - a + 1)) return 1;
             size_t k = rs_roads_count(*out) - 1;
-            if (rs_roads_set_attr(ctx, *out, k, "class", class_of(r->width)) ||
+            if (rs_roads_set_attr(ctx, *out, k, "class", sc_city_class(r->width)) ||
                 rs_roads_set_attr(ctx, *out, k, "lanes", "2"))
                 return 1;
             a = b;
