@@ -114,6 +114,7 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
 }
 
 /* --- scenes ------------------------------------------------------------------ */
+
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
