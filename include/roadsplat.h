@@ -617,11 +617,14 @@ typedef struct rs_network_leg {
 typedef struct rs_road_stroke {
     uint32_t stroke;   /* stroke index, 0 .. rs_network_stroke_count - 1 (strokes are numbered by
                           their first record, in road order) */
-    double s_offset;   /* stroke arc length at the record's first point, metres */
+    double s_offset;   /* stroke arc length at the record's first point, metres (reversed: at its
+                          last point it is s_offset - length) */
     double length;     /* the record's length, metres */
     uint32_t prev, next; /* the records before and after it in the stroke; UINT32_MAX at the stroke's
                             ends (a closed stroke's last record has next UINT32_MAX: its seam) */
     int closed;        /* the stroke is a ring (its last record ends where its first begins) */
+    int reversed;      /* the record runs against the stroke (a two-way record pointing the other
+                          way): the stroke's arc length at the record's own s is s_offset - s */
 } rs_road_stroke;
 
 /* Build the network of `roads` (opts may be NULL). RS_ERR_INVALID_ARG for

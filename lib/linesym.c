@@ -974,10 +974,26 @@ static int csr_close(uint32_t *start, size_t ncell, uint64_t lim, size_t *total)
     return 1;
 }
 
+/* The bands look the same drawn either way: each has its mirror image
+ * (offset -t, all else equal) among them. */
+static int bands_mirror(const rs__band *b, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        int found = 0;
+        for (uint32_t j = 0; j < n && !found; j++)
+            found = b[j].t == -b[i].t && b[j].w == b[i].w && !memcmp(b[j].rgba, b[i].rgba, sizeof b[i].rgba) &&
+                    b[j].ndash == b[i].ndash && b[j].phase == b[i].phase &&
+                    (b[i].ndash == 0 || !memcmp(b[j].dash, b[i].dash, b[i].ndash * sizeof *b[i].dash));
+        if (!found) return 0;
+    }
+    return 1;
+}
+
 /* Append road ri's points to the *m_out points already in *pts (a stroke's
  * records one after the other: a point equal to the last is left out). */
-static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
-                                   double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, int rev,
+                                   const rs__linesym_params *p, double per_unit, ls_vtx **pts, double **sv,
+                                   size_t *cap, size_t *m_out)
 {
     const double *xy = NULL;
     size_t n = 0, m0 = *m_out;
@@ -996,7 +1012,8 @@ static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri
     }
     size_t m = m0;
     double s = m0 ? (*sv)[m0 - 1] : 0;
-    for (size_t k = 0; k < n; k++) {
+    for (size_t i = 0; i < n; i++) {
+        size_t k = rev ? n - 1 - i : i; /* (a record drawn against its points: last to first) */
         double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
         if (m > 0) {
             if (x == (*pts)[m - 1].x && y == (*pts)[m - 1].y) continue;
@@ -1037,7 +1054,7 @@ static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const
                             double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
 {
     *m_out = 0;
-    return road_local_append(ctx, roads, ri, p, per_unit, pts, sv, cap, m_out);
+    return road_local_append(ctx, roads, ri, 0, p, per_unit, pts, sv, cap, m_out);
 }
 
 static void unit_dir(double ax, double ay, double bx, double by, double *dx, double *dy)
@@ -1078,8 +1095,9 @@ static rs_result find_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         if (d < 3) continue;
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road, st = net->stroke_of[r];
-            /* (a record's stroke predecessor always ends at its start) */
-            int passes = L[k].kind == RS_LEG_FORWARD || (L[k].kind == RS_LEG_START && net->prev[r] != UINT32_MAX);
+            /* a road through the node, or a road end that its stroke continues */
+            int passes = L[k].kind == RS_LEG_FORWARD || (L[k].kind == RS_LEG_START && net->link[2 * r] != UINT32_MAX) ||
+                         (L[k].kind == RS_LEG_END && net->link[2 * r + 1] != UINT32_MAX);
             if (!passes || !L[k].major || st == through) continue;
             through = st, tl = &L[k];
             nthrough++;
@@ -1320,25 +1338,36 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     for (size_t k = 0; k < nstroke; k++) {
         uint32_t one = (uint32_t)k;
         const uint32_t *recs = net ? net->stroke_roads + net->stroke_start[k] : &one;
-        size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1, m = 0;
+        size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1;
         uint32_t head = recs[0];
         if (band_start[head + 1] == band_start[head]) continue;
-        for (size_t q = 0; q < nrec; q++) {
-            size_t m0 = m;
-            if ((res = road_local_append(ctx, roads, recs[q], p, per_unit, &pts, &sv, &cap, &m)) != RS_OK) goto fail;
-            if (m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
-            if (cap > srcap) {
-                uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
-                if (!ns) { res = RS_ERR_NOMEM; goto fail; }
-                sr = ns;
-                srcap = cap;
+        /* records drawn both ways need lines that look the same both ways;
+         * else each record is drawn alone */
+        int alone = 0;
+        for (size_t q = 1; net && q < nrec && !alone; q++)
+            alone = net->rev[recs[q]] != net->rev[head] && !bands_mirror(bands + band_start[head], band_start[head + 1] - band_start[head]);
+        for (size_t q0 = 0; q0 < nrec; q0 = alone ? q0 + 1 : nrec) {
+            size_t m = 0, q1 = alone ? q0 + 1 : nrec;
+            uint32_t first = recs[q0];
+            for (size_t q = q0; q < q1; q++) {
+                size_t m0 = m;
+                int rev = net && !alone ? net->rev[recs[q]] : 0;
+                if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK)
+                    goto fail;
+                if (m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
+                if (cap > srcap) {
+                    uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
+                    if (!ns) { res = RS_ERR_NOMEM; goto fail; }
+                    sr = ns;
+                    srcap = cap;
+                }
+                for (size_t i = m0 ? m0 - 1 : 0; i + 1 < m; i++) sr[i] = recs[q];
             }
-            for (size_t i = m0 ? m0 - 1 : 0; i + 1 < m; i++) sr[i] = recs[q];
+            if (m < 2) continue;
+            for (uint32_t b = band_start[first]; b < band_start[first + 1]; b++)
+                if ((res = road_band_pieces(ctx, L, &J, sr, pts, sv, m, &bands[b], b, wmap, hmap)) != RS_OK)
+                    goto fail;
         }
-        if (m < 2) continue;
-        for (uint32_t b = band_start[head]; b < band_start[head + 1]; b++)
-            if ((res = road_band_pieces(ctx, L, &J, sr, pts, sv, m, &bands[b], b, wmap, hmap)) != RS_OK)
-                goto fail;
     }
     rs__free(ctx, pts);
     rs__free(ctx, sv);

@@ -352,76 +352,128 @@ static double wrap_angle(double a)
     return a;
 }
 
-/* Pair road ends into strokes at every node: prev/next per road. */
-static void link_strokes(const build *B, rs_network *N)
+/* A two-way road: a record drawn against its points is the same road. */
+static int two_way(const rs_roads *roads, size_t r)
+{
+    rs_road_info in;
+    if (rs_roads_get_info(roads, r, &in)) return 0;
+    return in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
+}
+
+/* Can road ends a and b (start or end legs, other roads) continue each
+ * other: they draw alike and keep the direction of travel (an end meets a
+ * start), or both roads are two-way. */
+static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_leg *b)
+{
+    if (a->road == b->road || !draw_alike(B->roads, a->road, b->road)) return 0;
+    return a->kind != b->kind || two_way(B->roads, a->road);
+}
+
+static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
+
+/* Pair road ends into strokes at every node: link[2 r + e] is the road end
+ * (2 q + f; e, f: 0 start, 1 end) that road r's end e continues into. */
+static void link_strokes(const build *B, const rs_network *N, uint32_t *link)
 {
     for (size_t i = 0; i < N->nnodes; i++) {
         const rs_network_leg *L = N->leg + N->leg_start[i];
         uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
         if (d == 2) {
-            const rs_network_leg *e = L[0].kind == RS_LEG_END ? &L[0] : &L[1], *st = e == &L[0] ? &L[1] : &L[0];
-            if (e->kind == RS_LEG_END && st->kind == RS_LEG_START && draw_alike(B->roads, e->road, st->road)) {
-                N->next[e->road] = st->road;
-                N->prev[st->road] = e->road;
+            if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
+                (L[0].road == L[1].road ? L[0].kind != L[1].kind : ends_fit(B, &L[0], &L[1]))) {
+                uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
+                link[ea] = eb;
+                link[eb] = ea;
             }
             continue;
         }
-        /* a junction: pairs that deflect little, taken when neither leg has another */
+        /* a junction: pairs that deflect little, taken when neither end has another */
         for (uint32_t a = 0; a < d; a++) {
-            if (L[a].kind != RS_LEG_END) continue;
+            if (!is_end_leg(&L[a])) continue;
             uint32_t match = NONE, count = 0;
             for (uint32_t b = 0; b < d; b++)
-                if (L[b].kind == RS_LEG_START && L[b].road != L[a].road &&
-                    fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
-                    draw_alike(B->roads, L[a].road, L[b].road))
+                if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
+                    ends_fit(B, &L[a], &L[b]))
                     match = b, count++;
-            if (count != 1) continue;
+            if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
             uint32_t back = 0;
             for (uint32_t c = 0; c < d; c++)
-                if (L[c].kind == RS_LEG_END && L[c].road != L[match].road &&
-                    fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION &&
-                    draw_alike(B->roads, L[c].road, L[match].road))
+                if (c != match && is_end_leg(&L[c]) &&
+                    fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
                     back++;
             if (back != 1) continue;
-            N->next[L[a].road] = L[match].road;
-            N->prev[L[match].road] = L[a].road;
+            uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+            link[ea] = eb;
+            link[eb] = ea;
         }
     }
 }
 
-/* Number the strokes by their first record and lay out their arc lengths. */
-static void number_strokes(rs_network *N, uint8_t *seen)
+/* Walk a stroke from road r entered at its end e (0: start, 1: end): the
+ * roads in order, each with its direction; returns the last road and the
+ * end it leaves by (*out_end). Stops at a free end or back at `stop`. */
+static uint32_t walk_stroke(const uint32_t *link, uint32_t r, uint32_t e, uint32_t stop, uint32_t *out_end)
 {
-    size_t n = N->nroads;
-    memset(seen, 0, n);
-    for (size_t r = 0; r < n; r++)
-        if (N->prev[r] == NONE)
-            for (uint32_t q = (uint32_t)r; q != NONE; q = N->next[q]) seen[q] = 1;
-    /* what is left are rings: each opens at its lowest record */
-    for (size_t r = 0; r < n; r++) {
-        if (seen[r]) continue;
-        uint32_t q = (uint32_t)r;
-        do {
-            seen[q] = 2;
-            q = N->next[q];
-        } while (q != (uint32_t)r);
-        N->next[N->prev[r]] = NONE;
-        N->prev[r] = NONE;
-    }
-    size_t k = 0, at = 0;
-    for (size_t r = 0; r < n; r++) {
-        if (N->prev[r] != NONE) continue;
-        N->stroke_start[k] = (uint32_t)at;
-        N->closed[k] = seen[r] == 2;
-        double s = 0;
-        for (uint32_t q = (uint32_t)r; q != NONE; q = N->next[q]) {
-            N->stroke_of[q] = (uint32_t)k;
-            N->s_off[q] = s;
-            s += N->length[q];
-            N->stroke_roads[at++] = q;
+    for (;;) {
+        uint32_t x = 2 * r + (1 - e), nx = link[x];
+        if (nx == NONE || nx / 2 == stop) {
+            *out_end = 1 - e;
+            return r;
         }
-        k++;
+        r = nx / 2;
+        e = nx % 2;
     }
+}
+
+/* Number the strokes by their first record and lay out their arc lengths.
+ * A stroke runs from the terminal record whose free end is its start (the
+ * direction of travel), else from the lower of its two terminal records;
+ * a ring from its lowest record, along it. */
+static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
+{
+    size_t n = N->nroads, k = 0, at = 0;
+    memset(seen, 0, n);
+    for (int rings = 0; rings < 2; rings++)
+        for (size_t r0 = 0; r0 < n; r0++) {
+            if (seen[r0]) continue;
+            uint32_t head = (uint32_t)r0, e_in = 0;
+            if (!rings) {
+                /* a path: r0 has a free end (the other terminal is higher) */
+                int free0 = link[2 * r0] == NONE, free1 = link[2 * r0 + 1] == NONE;
+                if (!free0 && !free1) continue; /* on a ring: the second round */
+                uint32_t tend = 0, t = free0 ? walk_stroke(link, (uint32_t)r0, 0, NONE, &tend)
+                                            : walk_stroke(link, (uint32_t)r0, 1, NONE, &tend);
+                /* r0 enters by its free end; the other terminal leaves by tend */
+                e_in = free0 ? 0 : 1;
+                if (e_in == 1 && tend == 0) head = t, e_in = 0; /* the other terminal starts the travel */
+            } else {
+                /* a ring: open it before r0 */
+                uint32_t x = link[2 * r0];
+                link[x] = NONE;
+                link[2 * r0] = NONE;
+            }
+            N->stroke_start[k] = (uint32_t)at;
+            N->closed[k] = (uint8_t)rings;
+            double s = 0;
+            uint32_t r = head, e = e_in, prev = NONE;
+            for (;;) {
+                seen[r] = 1;
+                N->stroke_of[r] = (uint32_t)k;
+                N->rev[r] = (uint8_t)e;
+                N->s_off[r] = e ? s + N->length[r] : s;
+                s += N->length[r];
+                N->prev[r] = prev;
+                N->next[r] = NONE;
+                if (prev != NONE) N->next[prev] = r;
+                N->stroke_roads[at++] = r;
+                uint32_t nx = link[2 * r + (1 - e)];
+                if (nx == NONE) break;
+                prev = r;
+                r = nx / 2;
+                e = nx % 2;
+            }
+            k++;
+        }
     N->stroke_start[k] = (uint32_t)at;
     N->nstrokes = k;
 }
@@ -455,6 +507,8 @@ void rs_network_free(rs_ctx *ctx, rs_network *net)
     rs__free(ctx, net->stroke_start);
     rs__free(ctx, net->stroke_roads);
     rs__free(ctx, net->closed);
+    rs__free(ctx, net->rev);
+    rs__free(ctx, net->link);
     rs__free(ctx, net);
 }
 
@@ -648,8 +702,10 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
     N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
     N->closed = rs__calloc(ctx, m, 1);
+    N->rev = rs__calloc(ctx, m, 1);
+    N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
     if (!N->node || !N->leg_start || !N->leg || !N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next ||
-        !N->stroke_start || !N->stroke_roads || !N->closed) {
+        !N->stroke_start || !N->stroke_roads || !N->closed || !N->rev || !N->link) {
         res = RS_ERR_NOMEM;
         goto fail;
     }
@@ -743,13 +799,14 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     /* strokes */
     for (size_t r = 0; r < n; r++) {
         N->prev[r] = N->next[r] = NONE;
+        N->link[2 * r] = N->link[2 * r + 1] = NONE;
         N->length[r] = B.voff[r + 1] > B.voff[r] ? B.s[B.voff[r + 1] - 1] : 0;
     }
-    link_strokes(&B, N);
-    number_strokes(N, B.live); /* (live is no longer needed: scratch) */
+    link_strokes(&B, N, N->link);
+    number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
     N->bytes = sizeof *N + nn * sizeof *N->node + (nn + 1) * sizeof *N->leg_start + N->nlegs * sizeof *N->leg +
                n * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev + sizeof *N->next +
-                    sizeof *N->stroke_start + sizeof *N->stroke_roads + 1);
+                    sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);
     build_free(&B);
     *out = N;
     rs__ok(ctx);
@@ -793,6 +850,7 @@ rs_result rs_network_road_stroke(const rs_network *net, size_t road, rs_road_str
     out->prev = net->prev[road];
     out->next = net->next[road];
     out->closed = net->closed[net->stroke_of[road]];
+    out->reversed = net->rev[road];
     return RS_OK;
 }
 

@@ -16,12 +16,16 @@ struct rs_network {
     /* strokes */
     size_t nstrokes;
     uint32_t *stroke_of;    /* per road */
-    double *s_off;          /* per road: stroke arc length at its first point */
+    double *s_off;          /* per road: stroke arc length at its first point (reversed: the stroke's s
+                               falls along the record: s_off - s) */
     double *length;         /* per road */
     uint32_t *prev, *next;  /* per road, UINT32_MAX: none (a ring's seam has none) */
     uint32_t *stroke_start; /* nstrokes + 1 */
     uint32_t *stroke_roads; /* nroads: the records of each stroke in order */
     uint8_t *closed;        /* per stroke */
+    uint8_t *rev;           /* per road: drawn against its points (a two-way record pointing the other way) */
+    uint32_t *link;         /* per road end (2 r: start, 2 r + 1: end): the road end it continues into
+                               (2 q + f), NONE: none (a ring's seam is cut) */
     size_t bytes;
 };
 

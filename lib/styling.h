@@ -32,6 +32,7 @@ typedef struct rs__styling {
     double *img_f;
     double *img_s0;                   /* per road: the stroke arc length at its first point (images run on
                                          along a stroke); NULL: 0 */
+    uint8_t *img_rev;                 /* per road: drawn against its points in its stroke (s and t turn) */
     struct rs__surfimg **imgs;        /* one per rs_style_options.surface_images entry in use (NULL: unused) */
     size_t nimgs;
     size_t bytes;

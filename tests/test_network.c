@@ -39,8 +39,33 @@ static double poly_len(const poly *p)
  * segment inserts the point there; at a vertex it splits there) and add the
  * pieces to roads, each with attributes attr (key=value pairs, NULL
  * ended). Returns the number of records added. */
+static size_t add_split_rev(rs_roads *roads, const char *name, double width, const poly *p, const double *cut,
+                            size_t ncut, const char *const *attr, unsigned rev_mask);
+
 static size_t add_split(rs_roads *roads, const char *name, double width, const poly *p, const double *cut, size_t ncut,
                         const char *const *attr)
+{
+    return add_split_rev(roads, name, width, p, cut, ncut, attr, 0);
+}
+
+/* Add points xy[0..m/2) as a road, last to first when rev. */
+static void add_record(rs_roads *roads, const char *name, double width, double *xy, size_t m, int rev,
+                       const char *const *attr)
+{
+    if (rev)
+        for (size_t a = 0, b = m / 2 - 1; a < b; a++, b--) {
+            double tx = xy[2 * a], ty = xy[2 * a + 1];
+            xy[2 * a] = xy[2 * b], xy[2 * a + 1] = xy[2 * b + 1];
+            xy[2 * b] = tx, xy[2 * b + 1] = ty;
+        }
+    CHECK(rs_roads_add(ctx, roads, name, width, xy, m / 2) == RS_OK);
+    for (size_t a = 0; attr && attr[a]; a += 2)
+        CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, attr[a], attr[a + 1]) == RS_OK);
+}
+
+/* add_split with record i drawn against its points when bit i of rev_mask is set. */
+static size_t add_split_rev(rs_roads *roads, const char *name, double width, const poly *p, const double *cut,
+                            size_t ncut, const char *const *attr, unsigned rev_mask)
 {
     double buf[2 * 512];
     size_t m = 0, added = 0, c = 0;
@@ -54,9 +79,7 @@ static size_t add_split(rs_roads *roads, const char *name, double width, const p
             double x = f >= 1 ? bx : ax + f * (bx - ax), y = f >= 1 ? by : ay + f * (by - ay);
             if (!(x == buf[m - 2] && y == buf[m - 1])) buf[m++] = x, buf[m++] = y;
             if (m >= 4) {
-                CHECK(rs_roads_add(ctx, roads, name, width, buf, m / 2) == RS_OK);
-                for (size_t a = 0; attr && attr[a]; a += 2)
-                    CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, attr[a], attr[a + 1]) == RS_OK);
+                add_record(roads, name, width, buf, m, (rev_mask >> added) & 1, attr);
                 added++;
                 buf[0] = x, buf[1] = y;
                 m = 2;
@@ -67,9 +90,7 @@ static size_t add_split(rs_roads *roads, const char *name, double width, const p
         s += l;
     }
     if (m >= 4) {
-        CHECK(rs_roads_add(ctx, roads, name, width, buf, m / 2) == RS_OK);
-        for (size_t a = 0; attr && attr[a]; a += 2)
-            CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, attr[a], attr[a + 1]) == RS_OK);
+        add_record(roads, name, width, buf, m, (rev_mask >> added) & 1, attr);
         added++;
     }
     return added;
@@ -154,7 +175,8 @@ static int net_consistent(const rs_network *net, const rs_roads *roads)
             if (recs[i] >= n) continue;
             seen[recs[i]] = 1;
             ok &= rs_network_road_stroke(net, recs[i], &st) == RS_OK && st.stroke == k;
-            ok &= fabs(st.s_offset - s) <= 1e-9 * (1 + s);
+            double s0 = st.reversed ? s + st.length : s; /* (reversed: the stroke's s at its first point) */
+            ok &= fabs(st.s_offset - s0) <= 1e-9 * (1 + s0);
             ok &= st.prev == (i ? recs[i - 1] : UINT32_MAX) && st.next == (i + 1 < m ? recs[i + 1] : UINT32_MAX);
             s += st.length;
         }
@@ -721,6 +743,88 @@ static void test_tee_lines(void)
     }
 }
 
+/* Two-way records pointing either way (OSM ways need not agree): one
+ * stroke in the order along the road, the reversed ones flagged, offsets
+ * at their first points; a one-way road's reversed record is not joined;
+ * drawn (symmetric default style) within 8/255 of the unsplit road drawn
+ * in the stroke's direction. */
+static void test_reversed_records(void)
+{
+    poly c;
+    c.n = 0;
+    for (int k = 0; k <= 40; k++) {
+        double a = 3.14159265358979323846 * (double)k / 40;
+        c.xy[2 * c.n] = 15 + 45 - 45 * cos(a), c.xy[2 * c.n + 1] = 60 - 40 * sin(a);
+        c.n++;
+    }
+    static const char *const primary[] = { "class", "primary", NULL }, *const oneway[] = { "class", "primary", "oneway", "yes", NULL };
+    double len = poly_len(&c);
+    int worst = 0;
+    for (int trial = 0; trial < 8; trial++) {
+        double cuts[8];
+        size_t nc = random_cuts(len, 2 + (size_t)(trial % 4), 3.0, cuts);
+        unsigned mask = 1u + 4u * (unsigned)trial; /* the first record and others reversed */
+        rs_roads *whole = NULL, *split = NULL, *ow = NULL;
+        CHECK(rs_roads_create(ctx, &whole) == RS_OK && rs_roads_create(ctx, &split) == RS_OK &&
+              rs_roads_create(ctx, &ow) == RS_OK);
+        size_t nrec = add_split_rev(split, "r", 7.5, &c, cuts, nc, primary, mask);
+        add_split_rev(ow, "r", 7.5, &c, cuts, nc, oneway, mask);
+        rs_network *net = NULL, *neto = NULL;
+        CHECK(rs_network_build(ctx, split, NULL, &net) == RS_OK && net_consistent(net, split));
+        CHECK(rs_network_build(ctx, ow, NULL, &neto) == RS_OK && net_consistent(neto, ow));
+        CHECK_EQ_INT(rs_network_stroke_count(net), 1);
+        CHECKF(rs_network_stroke_count(neto) > 1, "one-way records pointing both ways joined");
+        uint32_t recs[16];
+        size_t m = rs_network_stroke_roads(net, 0, recs, 16);
+        CHECK_EQ_INT(m, nrec);
+        /* the stroke runs from record 0 or from the last record, in order */
+        int fwd = m > 0 && recs[0] == 0, in_order = 1;
+        for (size_t i = 0; i < m; i++) {
+            in_order &= recs[i] == (fwd ? i : m - 1 - i);
+            rs_road_stroke st;
+            rs_network_road_stroke(net, recs[i], &st);
+            in_order &= st.reversed == (int)(((mask >> recs[i]) & 1) ^ (unsigned)!fwd);
+        }
+        CHECKF(in_order, "trial %d: records out of order or wrongly flagged", trial);
+        /* the unsplit road in the stroke's direction (the dashes start at its first point) */
+        add_split_rev(whole, "r", 7.5, &c, NULL, 0, primary, fwd ? 0u : 1u);
+        image a = { 0 }, b = { 0 };
+        CHECK(render(whole, NULL, &a) && render(split, NULL, &b));
+        uint32_t wx = 0, wy = 0;
+        int d = a.rgba && b.rgba ? max_diff(&a, &b, &wx, &wy) : 255;
+        worst = d > worst ? d : worst;
+        CHECKF(d <= 8, "reversed records (trial %d): a pixel off by %d/255 at (%u, %u)", trial, d, wx, wy);
+        /* a surface image (asymmetric across the road) runs on along the stroke too */
+        static const char strip_style[] = "style strip\n surface strip.png length 7.3\nend\n";
+        for (size_t r = 0; r < rs_roads_count(whole); r++) CHECK(rs_roads_set_attr(ctx, whole, r, "style", "strip") == RS_OK);
+        for (size_t r = 0; r < rs_roads_count(split); r++) CHECK(rs_roads_set_attr(ctx, split, r, "style", "strip") == RS_OK);
+        image ai = { 0 }, bi = { 0 };
+        CHECK(render(whole, strip_style, &ai) && render(split, strip_style, &bi));
+        int di = ai.rgba && bi.rgba ? max_diff(&ai, &bi, &wx, &wy) : 255;
+        worst = di > worst ? di : worst;
+        CHECKF(di <= 8, "reversed records, surface image (trial %d): a pixel off by %d/255 at (%u, %u)", trial, di, wx, wy);
+        if (di > 8) {
+            save_ppm("revi_bad.ppm", &bi);
+            save_ppm("revi_ref.ppm", &ai);
+        }
+        free(ai.rgba);
+        free(bi.rgba);
+        if (d > 8) {
+            save_ppm("rev_bad.ppm", &b);
+            save_ppm("rev_ref.ppm", &a);
+            for (size_t i = 0; i < nc; i++) fprintf(stderr, "    cut %zu at s=%.3f\n", i, cuts[i]);
+        }
+        free(a.rgba);
+        free(b.rgba);
+        rs_network_free(ctx, net);
+        rs_network_free(ctx, neto);
+        rs_roads_free(ctx, whole);
+        rs_roads_free(ctx, split);
+        rs_roads_free(ctx, ow);
+    }
+    printf("reversed records: worst pixel %d/255 against the unsplit road\n", worst);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -732,6 +836,7 @@ int main(void)
     test_alloc_failures();
     test_split_draws_alike();
     test_tee_lines();
+    test_reversed_records();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

@@ -48,8 +48,10 @@ static void check(const rs_network *net, size_t n)
             seen[recs[i]] = 1;
             if (rs_network_road_stroke(net, recs[i], &st) != RS_OK || st.stroke != k) abort();
             if (st.prev != (i ? recs[i - 1] : UINT32_MAX) || st.next != (i + 1 < m ? recs[i + 1] : UINT32_MAX)) abort();
-            /* offsets are the sums of the lengths before (monotone) */
-            if (!(st.s_offset >= s * (1 - 1e-12)) || !(st.s_offset <= s * (1 + 1e-12)) || !(st.length >= 0)) abort();
+            /* offsets are the sums of the lengths before (monotone); a reversed
+             * record's first point is at its far end */
+            double s0 = st.reversed ? s + st.length : s;
+            if (!(st.s_offset >= s0 * (1 - 1e-12)) || !(st.s_offset <= s0 * (1 + 1e-12)) || !(st.length >= 0)) abort();
             s += st.length;
         }
         total += m;
@@ -83,7 +85,7 @@ static int same(const rs_network *a, const rs_network *b)
         rs_network_road_stroke(b, r, &q);
         /* (fields, not bytes: the structs have padding) */
         if (p.stroke != q.stroke || p.s_offset != q.s_offset || p.length != q.length || p.prev != q.prev ||
-            p.next != q.next || p.closed != q.closed)
+            p.next != q.next || p.closed != q.closed || p.reversed != q.reversed)
             return 0;
     }
     return 1;
