@@ -606,6 +606,97 @@ RS_API size_t rs_roads_point_attr_count(const rs_roads *roads);
 RS_API rs_result rs_roads_point_attr_at(const rs_roads *roads, size_t k, size_t *road, size_t *point,
                                         const char **key, const char **value);
 
+/* The road network (docs/network.md): where road records meet (nodes, each
+ * with its legs) and which records continue each other (strokes: chains of
+ * records that share one arc length s, so a road split into several
+ * records is drawn as one). Built from a road set alone; the road grid
+ * builds its own with default options for drawing. Immutable after the
+ * build: the queries may run from several threads at once. */
+typedef struct rs_network rs_network;
+
+/* Options of rs_network_build. All-zero means defaults. */
+typedef struct rs_network_options {
+    double tolerance; /* metres: points closer than this are one node, an end point
+                         this near another road's centreline is a T; 0 -> 0.05,
+                         else 1e-9 .. 1000 */
+} rs_network_options;
+
+typedef enum rs_node_kind {
+    RS_NODE_END = 0,          /* degree 1: a road ends here and meets nothing */
+    RS_NODE_CONTINUATION = 1, /* degree 2: two road ends meet (a split) or a road touches itself */
+    RS_NODE_JUNCTION = 2      /* degree 3 or more */
+} rs_node_kind;
+
+/* rs_network_node.control: flags from the node's point attributes and roads */
+#define RS_NODE_STOP 1u        /* highway=stop on a point of the node */
+#define RS_NODE_GIVE_WAY 2u    /* highway=give_way */
+#define RS_NODE_SIGNALS 4u     /* highway=traffic_signals */
+#define RS_NODE_CROSSING 8u    /* crossing=<any value> */
+#define RS_NODE_ROUNDABOUT 16u /* a leg's road has junction=roundabout */
+
+typedef struct rs_network_node {
+    double x, y;        /* position in the road set's frame (a point of one of its roads) */
+    uint32_t degree;    /* number of legs */
+    rs_node_kind kind;
+    uint32_t control;   /* RS_NODE_* flags */
+} rs_network_node;
+
+typedef enum rs_leg_kind {
+    RS_LEG_START = 0,   /* the road's first point is at the node; the leg leaves along the road */
+    RS_LEG_END = 1,     /* the road's last point; the leg runs back along the road */
+    RS_LEG_FORWARD = 2, /* the road passes through the node (a shared interior point or a T on a
+                           segment): the part after it ... */
+    RS_LEG_BACKWARD = 3 /* ... and the part before it */
+} rs_leg_kind;
+
+typedef struct rs_network_leg {
+    uint32_t road;     /* road index in the road set */
+    rs_leg_kind kind;
+    uint32_t segment;  /* the road's point index at the node (START: 0, END: last), or for a T
+                          on a segment, the segment (points segment, segment+1) */
+    double s;          /* the road's arc length at the node, metres from its first point */
+    double angle;      /* direction of the leg away from the node, radians (atan2 of dy, dx in
+                          the road set's frame), -pi .. pi */
+    int priority;      /* class rank (motorway 9 .. path/footway/cycleway 1, none 0), + 10 for
+                          priority_road=designated|yes_unposted, + 20 for junction=roundabout */
+    int major;         /* 1: the highest priority at this node (the road with right of way) */
+} rs_network_leg;
+
+/* A record's place in its stroke. */
+typedef struct rs_road_stroke {
+    uint32_t stroke;   /* stroke index, 0 .. rs_network_stroke_count - 1 (strokes are numbered by
+                          their first record, in road order) */
+    double s_offset;   /* stroke arc length at the record's first point, metres (reversed: at its
+                          last point it is s_offset - length) */
+    double length;     /* the record's length, metres */
+    uint32_t prev, next; /* the records before and after it in the stroke; UINT32_MAX at the stroke's
+                            ends (a closed stroke's last record has next UINT32_MAX: its seam) */
+    int closed;        /* the stroke is a ring (its last record ends where its first begins) */
+    int reversed;      /* the record runs against the stroke (a two-way record pointing the other
+                          way): the stroke's arc length at the record's own s is s_offset - s */
+} rs_road_stroke;
+
+/* Build the network of `roads` (opts may be NULL). RS_ERR_INVALID_ARG for
+ * a bad tolerance, RS_ERR_NOMEM; *out is the caller's (rs_network_free).
+ * Cost: near-linear in the number of points (spatial hashing). */
+RS_API rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts,
+                                  rs_network **out);
+RS_API void rs_network_free(rs_ctx *ctx, rs_network *net);
+/* Number of road records the network was built from. */
+RS_API size_t rs_network_road_count(const rs_network *net);
+RS_API size_t rs_network_node_count(const rs_network *net);
+/* Node i (0 .. count-1; nodes are numbered by their first point in road order). */
+RS_API rs_result rs_network_get_node(const rs_network *net, size_t i, rs_network_node *out);
+/* Leg k (0 .. degree-1) of node i, legs sorted by angle (then road, kind). */
+RS_API rs_result rs_network_get_leg(const rs_network *net, size_t node, size_t k, rs_network_leg *out);
+RS_API size_t rs_network_stroke_count(const rs_network *net);
+/* The stroke of road record `road`. */
+RS_API rs_result rs_network_road_stroke(const rs_network *net, size_t road, rs_road_stroke *out);
+/* The records of stroke k in order along it: writes up to `cap` road
+ * indices into `roads` (may be NULL when cap is 0) and returns the
+ * stroke's record count (0 for k out of range). */
+RS_API size_t rs_network_stroke_roads(const rs_network *net, size_t k, uint32_t *roads, size_t cap);
+
 /* A marking atlas: an RGBA image and its index (one line per type, `NAME X
  * Y W H LENGTH WIDTH`: the type's pixel rectangle and its size in metres
  * along x across the road; atlas row 0 points the way the road runs),

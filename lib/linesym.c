@@ -1,6 +1,7 @@
 /* Line symbols: convex band pieces, a pixel-cell index, exact per-pixel
  * areas (lib/linesym.h; docs/linesym.md). */
 #include "linesym.h"
+#include "network.h"
 
 #include <float.h>
 #include <math.h>
@@ -624,8 +625,22 @@ static int cut_to_map(double ox, double oy, double ux, double uy, double len, do
  * joins). */
 typedef struct ls_surf {
     double ax, ay, ux, uy, len, r;
+    double u0, u1;        /* the rectangle along u: -r .. len + r, or shorter at a T (below) */
     uint32_t road;
+    uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
 } ls_surf;
+
+#define NO_STROKE UINT32_MAX
+#define TEE_EDGE_ZONE 2.0 /* metres inside a through road's edge where its lines stop at a side road's mouth */
+
+/* A road end at a T on a through road with the right of way
+ * (docs/network.md "The through road at a T"): the through stroke, the
+ * depth into it the end's surface keeps cutting (lines within `keep` of its
+ * centre line run on), and its direction there. */
+typedef struct ls_tee {
+    uint32_t stroke;
+    double keep, dx, dy;
+} ls_tee;
 
 /* Road end points and the unit directions pointing away from them along
  * the road (to tell a road that continues another from one that meets it). */
@@ -643,6 +658,7 @@ typedef struct ls_junc {
     uint32_t query;
     const ls_ends *ends;
     uint64_t work, limit;  /* list entries visited by push_cut; rs_limits.max_field_work */
+    const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -707,7 +723,7 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     /* v' = cv0 + u fvu + v fvv, u' = cu0 + u fuu + v fuv in P's frame */
     double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
     double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
-    double r = Q->r, hi = Q->len + r;
+    double r = Q->r, lo = Q->u0, hi = Q->u1;
     double x[POLY_MAX], y[POLY_MAX];
     uint32_t n = piece_poly(P, x, y);
     if (n < 3) return -1;
@@ -716,7 +732,7 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
         double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
         out_v_hi &= v >= r;
         out_v_lo &= v <= -r;
-        out_u_lo &= u <= -r;
+        out_u_lo &= u <= lo;
         out_u_hi &= u >= hi;
     }
     if (out_v_hi || out_v_lo || out_u_lo || out_u_hi) return -1;
@@ -730,8 +746,8 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     for (int side = 0; side < 2; side++) {
         A = *P;
         if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv)) return -1;
-        int ok = side == 0 ? add_hp(&A, -cu0 - r, -fuu, -fuv)            /* u' <= -r */
-                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= len + r */
+        int ok = side == 0 ? add_hp(&A, lo - cu0, -fuu, -fuv)            /* u' <= u0 */
+                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= u1 */
         if (!ok) return -1;
         if (piece_nonempty(&A)) out[m++] = A;
     }
@@ -792,7 +808,10 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->stamp[k] == J->query) continue;
                     J->stamp[k] = J->query;
                     const ls_surf *Q = &J->sf[k];
-                    if (continues(J, road, Q->road)) continue;
+                    uint32_t sr = J->stroke_of ? J->stroke_of[road] : road;
+                    if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
+                        continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr) || Q->skip == sr)
+                        continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
                     ls_piece next[QMAX];
@@ -821,11 +840,12 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
     return RS_OK;
 }
 
-/* Pieces of one band along one road. pts: n distinct consecutive local
- * points, s: arc length at each. */
-static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint32_t road, const ls_vtx *pts,
-                                  const double *s, size_t n, const rs__band *bd, uint32_t band, double wmap,
-                                  double hmap)
+/* Pieces of one band along one road or stroke. pts: n distinct
+ * consecutive local points, s: arc length at each, seg_road: the record
+ * of each segment (for the junction cuts). */
+static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const uint32_t *seg_road,
+                                  const ls_vtx *pts, const double *s, size_t n, const rs__band *bd, uint32_t band,
+                                  double wmap, double hmap)
 {
     double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
@@ -906,7 +926,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
         }
         P.len = hi - lo;
         piece_box(L, &P, P.len, a, b);
-        rs_result r = push_cut(ctx, L, J, &P, road);
+        rs_result r = push_cut(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
     /* Round joins: the outer side of each interior vertex. */
@@ -959,7 +979,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, uint3
         double pp = L->pixel * L->pixel; /* 0 only for a subnormal pixel: no shortcut then */
         P.warea = pp > 0 ? 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / pp : 0;
         piece_box(L, &P, 0, 0, 0);
-        rs_result r = push_cut(ctx, L, J, &P, road);
+        rs_result r = push_cut(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
     return RS_OK;
@@ -1037,28 +1057,46 @@ static int csr_close(uint32_t *start, size_t ncell, uint64_t lim, size_t *total)
     return 1;
 }
 
-/* One road in local coordinates: distinct consecutive points and their arc
- * lengths (summed as lib/roadfield.c sums them). */
-static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
-                            double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+/* The bands look the same drawn either way: each has its mirror image
+ * (offset -t, all else equal) among them. */
+static int bands_mirror(const rs__band *b, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        int found = 0;
+        for (uint32_t j = 0; j < n && !found; j++)
+            found = b[j].t == -b[i].t && b[j].w == b[i].w && !memcmp(b[j].rgba, b[i].rgba, sizeof b[i].rgba) &&
+                    b[j].ndash == b[i].ndash && b[j].phase == b[i].phase &&
+                    (b[i].ndash == 0 || !memcmp(b[j].dash, b[i].dash, b[i].ndash * sizeof *b[i].dash));
+        if (!found) return 0;
+    }
+    return 1;
+}
+
+/* Append road ri's points to the *m_out points already in *pts (a stroke's
+ * records one after the other: a point equal to the last is left out). */
+static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, int rev,
+                                   const rs__linesym_params *p, double per_unit, ls_vtx **pts, double **sv,
+                                   size_t *cap, size_t *m_out)
 {
     const double *xy = NULL;
-    size_t n = 0;
+    size_t n = 0, m0 = *m_out;
     rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
-    if (n > *cap) {
-        size_t b1, b2;
-        if (!rs__mul_size(n, sizeof **pts, &b1) || !rs__mul_size(n, sizeof **sv, &b2)) return RS_ERR_LIMIT;
+    if (n > *cap - m0) {
+        size_t b1, b2, want = m0 + n;
+        if (want < 2 * *cap) want = 2 * *cap;
+        if (!rs__mul_size(want, sizeof **pts, &b1) || !rs__mul_size(want, sizeof **sv, &b2)) return RS_ERR_LIMIT;
         ls_vtx *np = rs__realloc(ctx, *pts, b1);
         if (!np) return RS_ERR_NOMEM;
         *pts = np;
         double *ns = rs__realloc(ctx, *sv, b2);
         if (!ns) return RS_ERR_NOMEM;
         *sv = ns;
-        *cap = n;
+        *cap = want;
     }
-    size_t m = 0;
-    double s = 0;
-    for (size_t k = 0; k < n; k++) {
+    size_t m = m0;
+    double s = m0 ? (*sv)[m0 - 1] : 0;
+    for (size_t i = 0; i < n; i++) {
+        size_t k = rev ? n - 1 - i : i; /* (a record drawn against its points: last to first) */
         double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
         if (m > 0) {
             if (x == (*pts)[m - 1].x && y == (*pts)[m - 1].y) continue;
@@ -1072,6 +1110,34 @@ static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const
     }
     *m_out = m;
     return RS_OK;
+}
+
+/* Records split a road anywhere, also inside a straight stretch: the
+ * joint point j of two records (points j-1, j, j+1 of the stroke) is left
+ * out when it lies on the segment j-1 .. j+1 within eps (a few local
+ * quanta), so the stroke has the unsplit road's points and arc lengths (a
+ * collinear point would bend the mitres of a band on the inner side of a
+ * nearby bend). Returns 1 when it was left out (points j.. move down). */
+static int drop_straight_joint(ls_vtx *pts, double *sv, size_t j, size_t m, double eps)
+{
+    double ax = pts[j - 1].x, ay = pts[j - 1].y, dx = pts[j + 1].x - ax, dy = pts[j + 1].y - ay;
+    double px = pts[j].x - ax, py = pts[j].y - ay, l2 = dx * dx + dy * dy, dot = px * dx + py * dy;
+    if (!(l2 > 0) || !(dot > 0) || !(dot < l2) || !(fabs(px * dy - py * dx) <= eps * sqrt(l2))) return 0;
+    for (size_t k = j; k + 1 < m; k++) {
+        pts[k] = pts[k + 1];
+        double s = sv[k - 1] + 2 * hypot(0.5 * pts[k].x - 0.5 * pts[k - 1].x, 0.5 * pts[k].y - 0.5 * pts[k - 1].y);
+        sv[k] = s <= DBL_MAX ? s : DBL_MAX;
+    }
+    return 1;
+}
+
+/* One road in local coordinates: distinct consecutive points and their arc
+ * lengths (summed as lib/roadfield.c sums them). */
+static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
+                            double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+{
+    *m_out = 0;
+    return road_local_append(ctx, roads, ri, 0, p, per_unit, pts, sv, cap, m_out);
 }
 
 static void unit_dir(double ax, double ay, double bx, double by, double *dx, double *dy)
@@ -1091,6 +1157,52 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
     memset(J, 0, sizeof *J);
 }
 
+/* The road ends that meet a through road with the right of way at a T
+ * (per road two entries, start and end; stroke NO_STROKE: none): at a
+ * junction node, the strokes that pass through it (a road through a shared
+ * point or a T, or two records of one stroke); when exactly one of them
+ * has the highest priority there, every other road ending there is a side
+ * road of it. NULL (and RS_OK) without a network. */
+static rs_result find_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, ls_tee **out)
+{
+    *out = NULL;
+    size_t n = rs_roads_count(roads);
+    if (!net || rs_network_road_count(net) != n) return RS_OK;
+    ls_tee *T = rs__alloc_array(ctx, n ? 2 * n : 1, sizeof *T);
+    if (!T) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = NO_STROKE;
+    for (size_t nd = 0; nd < net->nnodes; nd++) {
+        const rs_network_leg *L = net->leg + net->leg_start[nd];
+        uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
+        const rs_network_leg *tl = NULL;
+        if (d < 3) continue;
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road, st = net->stroke_of[r];
+            /* a road through the node, or a road end that its stroke continues */
+            int passes = L[k].kind == RS_LEG_FORWARD || (L[k].kind == RS_LEG_START && net->link[2 * r] != UINT32_MAX) ||
+                         (L[k].kind == RS_LEG_END && net->link[2 * r + 1] != UINT32_MAX);
+            if (!passes || !L[k].major || st == through) continue;
+            through = st, tl = &L[k];
+            nthrough++;
+        }
+        if (nthrough != 1) continue;
+        double w = 0;
+        rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road;
+            if ((L[k].kind != RS_LEG_START && L[k].kind != RS_LEG_END) || net->stroke_of[r] == through) continue;
+            ls_tee *t = &T[2 * r + (L[k].kind == RS_LEG_END)];
+            t->stroke = through;
+            /* lines within 2 m of the through road's edges are edge lines:
+             * they stop at the side road's mouth; the rest run on */
+            t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
+            t->dx = cos(tl->angle), t->dy = sin(tl->angle);
+        }
+    }
+    *out = T;
+    return RS_OK;
+}
+
 /* Surfaces of every road with a width, their index, and the road ends. */
 static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
                             ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
@@ -1101,12 +1213,18 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     ls_ends *ends = rs__calloc(ctx, nroads ? nroads : 1, sizeof *ends);
     J->ends = ends;
     if (!ends) return RS_ERR_NOMEM;
+    ls_tee *tees = NULL;
+    rs_result rt = find_tees(ctx, roads, p->net, &tees);
+    if (rt) return rt;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         size_t m = 0;
         rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
         rs_result r = road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
-        if (r) return r;
+        if (r) {
+            rs__free(ctx, tees);
+            return r;
+        }
         if (m < 2) continue;
         const ls_vtx *v = *pts;
         ends[ri].valid = 1;
@@ -1125,18 +1243,43 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.ay = v[i].y + lo * Q.uy;
             Q.len = hi - lo;
             Q.r = hw;
+            Q.u0 = -hw;
+            Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
-            if (J->nsf == ncap) {
-                size_t nc = ncap ? 2 * ncap : 256, bytes;
-                if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)) return RS_ERR_LIMIT;
-                ls_surf *ns = rs__realloc(ctx, J->sf, bytes);
-                if (!ns) return RS_ERR_NOMEM;
-                J->sf = ns;
-                ncap = nc;
+            Q.only = Q.skip = NO_STROKE;
+            /* an end segment at a T: the through stroke gets a copy that
+             * stops `keep` short of its centre line (no extension) */
+            int at_end = i + 2 == m && hi == len, at_start = i == 0 && lo == 0;
+            const ls_tee *T = tees ? &tees[2 * ri + (at_end ? 1 : 0)] : NULL;
+            ls_surf Qt = Q;
+            int tee = 0;
+            if (T && (at_end || at_start) && T->stroke != NO_STROKE) {
+                double sn = fabs(Q.ux * T->dy - Q.uy * T->dx); /* sine of the angle between the roads */
+                if (sn > 0.2) {
+                    double back = T->keep / sn;
+                    if (at_end) Qt.u1 = fmax(Q.len - back, Qt.u0);
+                    else Qt.u0 = fmin(back, Qt.u1);
+                    Qt.only = Q.skip = T->stroke;
+                    tee = 1;
+                }
             }
-            J->sf[J->nsf++] = Q;
+            for (int c = 0; c <= tee; c++) {
+                if (J->nsf == ncap) {
+                    size_t nc = ncap ? 2 * ncap : 256, bytes;
+                    ls_surf *ns = nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)
+                                      ? NULL : rs__realloc(ctx, J->sf, bytes);
+                    if (!ns) {
+                        rs__free(ctx, tees);
+                        return nc > UINT32_MAX ? RS_ERR_LIMIT : RS_ERR_NOMEM;
+                    }
+                    J->sf = ns;
+                    ncap = nc;
+                }
+                J->sf[J->nsf++] = c ? Qt : Q;
+            }
         }
     }
+    rs__free(ctx, tees);
     /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
     uint32_t jpx = CELL_PX;
     for (;;) {
@@ -1164,12 +1307,12 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
             const ls_surf *Q = &J->sf[k];
             double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
-            const double U[4] = { -Q->r, Q->len + Q->r, Q->len + Q->r, -Q->r }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
+            const double U[4] = { Q->u0, Q->u1, Q->u1, Q->u0 }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
             for (int c = 0; c < 4; c++) {
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
                 x0 = fmin(x0, x), x1 = fmax(x1, x), y0 = fmin(y0, y), y1 = fmax(y1, y);
             }
-            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, -Q->r, Q->len + Q->r, -Q->r, Q->r, x0, y0, x1, y1, J->start,
+            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
                        J->ids, (uint32_t)k, pass);
         }
     }
@@ -1248,6 +1391,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->start = rs__calloc(ctx, ncell + 1, sizeof *L->start);
     ls_vtx *pts = NULL;
     double *sv = NULL;
+    uint32_t *sr = NULL; /* the record of each segment of pts */
+    size_t srcap = 0;
     ls_junc J;
     memset(&J, 0, sizeof J);
     int over = 0; /* push_cut passed the work limit */
@@ -1271,17 +1416,48 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     size_t cap = 0, total = 0;
     if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
     J.limit = ctx->limits.max_field_work;
-    for (size_t ri = 0; ri < nroads; ri++) {
-        if (band_start[ri + 1] == band_start[ri]) continue;
-        size_t m = 0;
-        if ((res = road_local(ctx, roads, ri, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK) goto fail;
-        if (m < 2) continue;
-        for (uint32_t k = band_start[ri]; k < band_start[ri + 1]; k++)
-            if ((res = road_band_pieces(ctx, L, &J, (uint32_t)ri, pts, sv, m, &bands[k], k, wmap, hmap)) != RS_OK)
-                goto fail;
+    /* road by road, or stroke by stroke: the stroke's records as one polyline */
+    const rs_network *net = p->net && rs_network_road_count(p->net) == nroads ? p->net : NULL;
+    J.stroke_of = net ? net->stroke_of : NULL;
+    size_t nstroke = net ? net->nstrokes : nroads;
+    for (size_t k = 0; k < nstroke; k++) {
+        uint32_t one = (uint32_t)k;
+        const uint32_t *recs = net ? net->stroke_roads + net->stroke_start[k] : &one;
+        size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1;
+        uint32_t head = recs[0];
+        if (band_start[head + 1] == band_start[head]) continue;
+        /* records drawn both ways need lines that look the same both ways;
+         * else each record is drawn alone */
+        int alone = 0;
+        for (size_t q = 1; net && q < nrec && !alone; q++)
+            alone = net->rev[recs[q]] != net->rev[head] && !bands_mirror(bands + band_start[head], band_start[head + 1] - band_start[head]);
+        for (size_t q0 = 0; q0 < nrec; q0 = alone ? q0 + 1 : nrec) {
+            size_t m = 0, q1 = alone ? q0 + 1 : nrec;
+            uint32_t first = recs[q0];
+            for (size_t q = q0; q < q1; q++) {
+                size_t m0 = m;
+                int rev = net && !alone ? net->rev[recs[q]] : 0;
+                if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK)
+                    goto fail;
+                if (m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
+                if (cap > srcap) {
+                    uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
+                    if (!ns) { res = RS_ERR_NOMEM; goto fail; }
+                    sr = ns;
+                    srcap = cap;
+                }
+                for (size_t i = m0 ? m0 - 1 : 0; i + 1 < m; i++) sr[i] = recs[q];
+            }
+            if (m < 2) continue;
+            for (uint32_t b = band_start[first]; b < band_start[first + 1]; b++)
+                if ((res = road_band_pieces(ctx, L, &J, sr, pts, sv, m, &bands[b], b, wmap, hmap)) != RS_OK)
+                    goto fail;
+        }
     }
     rs__free(ctx, pts);
     rs__free(ctx, sv);
+    rs__free(ctx, sr);
+    sr = NULL;
     junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
@@ -1326,6 +1502,7 @@ fail:
     over = J.limit && J.work > J.limit;
     rs__free(ctx, pts);
     rs__free(ctx, sv);
+    rs__free(ctx, sr);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");

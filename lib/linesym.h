@@ -34,13 +34,16 @@ typedef struct rs__linesym_params {
     uint32_t out_w, out_h;     /* output pixels */
     double pixel;              /* pixel side, metres (the only size rs__linesym_paint accepts) */
     rs__band_aa aa;
+    const rs_network *net;     /* NULL: every road alone. Else the roads' network: each stroke is drawn
+                                  as one polyline with the bands of its first record (every record of a
+                                  stroke draws alike), so a road split into records draws as one */
 } rs__linesym_params;
 
 typedef struct rs__linesym rs__linesym; /* immutable after build; safe to read from many threads */
 
 /* Bands of road i are bands[band_start[i] .. band_start[i+1]); band_start
- * has rs_roads_count(roads) + 1 entries. Painting order: road by road,
- * band by band. */
+ * has rs_roads_count(roads) + 1 entries. Painting order: road by road (with
+ * p->net: stroke by stroke, in stroke order), band by band. */
 rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesym_params *p,
                             const uint32_t *band_start, const rs__band *bands, rs__linesym **out);
 void rs__linesym_free(rs_ctx *ctx, rs__linesym *L);

@@ -25,6 +25,7 @@
  * A placement is dropped when it would spill off its road (|t| + width/2
  * beyond the half width, or past either end) or overlap a junction area. */
 #include "markings.h"
+#include "network.h"
 
 #include <math.h>
 #include <string.h>
@@ -49,18 +50,7 @@ typedef struct ctxa {
 
 static int rank_of(rs_road_class c)
 {
-    switch (c) {
-    case RS_CLASS_MOTORWAY: return 9;
-    case RS_CLASS_TRUNK: return 8;
-    case RS_CLASS_PRIMARY: return 7;
-    case RS_CLASS_SECONDARY: return 6;
-    case RS_CLASS_TERTIARY: return 5;
-    case RS_CLASS_RESIDENTIAL: return 4;
-    case RS_CLASS_SERVICE: return 3;
-    case RS_CLASS_TRACK: return 2;
-    case RS_CLASS_PATH: case RS_CLASS_FOOTWAY: case RS_CLASS_CYCLEWAY: return 1;
-    default: return 0;
-    }
+    return rs__class_rank(c); /* shared with the network (lib/network.c) */
 }
 
 /* Classes for feet and bikes: no car markings (docs/road-format.md). */

@@ -670,8 +670,14 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->stats.bytes = sizeof *g;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) r = build_field(ctx, dem, roads, o.texels, g);
     /* the styles look pixels' roads up in the grid's field when it has one */
-    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, &g->styling);
+    /* the network (docs/network.md): strokes carry dashes and surface
+     * images across the records a road is split into; read while building
+     * the styles only */
+    rs_network *net = NULL;
+    if (!r && !o.style.disable && rs_roads_count(roads) > 0) r = rs_network_build(ctx, roads, NULL, &net);
+    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, &g->styling);
     if (!r) r = rs__markings_build(ctx, dem, roads, &o, &g->markings);
+    rs_network_free(ctx, net);
     if (r) {
         rs_road_grid_free(ctx, g);
         return r;

@@ -22,6 +22,8 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__free(ctx, st->img_len);
     rs__free(ctx, st->img_lev);
     rs__free(ctx, st->img_f);
+    rs__free(ctx, st->img_s0);
+    rs__free(ctx, st->img_rev);
     if (st->imgs)
         for (size_t i = 0; i < st->nimgs; i++) rs__surfimg_free(ctx, st->imgs[i]);
     rs__free(ctx, st->imgs);
@@ -33,6 +35,9 @@ int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, 
     if (!st->img_of || st->img_of[road] < 0) return 0;
     const rs__surfimg *m = st->imgs[st->img_of[road]];
     double hw = st->half_width[road];
+    /* along the stroke (a record drawn against its points: s and t turn) */
+    if (st->img_s0 && st->img_rev[road]) s = st->img_s0[road] - s, t = -t;
+    else if (st->img_s0) s += st->img_s0[road];
     /* the image's left edge at t = +hw (left of travel), right edge at -hw */
     double u = hw > 0 ? (hw - t) / (2 * hw) : 0.5;
     rs__surfimg_sample(m, u, s / st->img_len[road], st->img_lev[road], st->img_f[road], out);
@@ -110,7 +115,7 @@ static void put_colour(float *dst, rs_colour c)
 }
 
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const rs__roadfield *field, rs__styling **out)
+                            const rs__roadfield *field, const rs_network *net, rs__styling **out)
 {
     *out = NULL;
     if (o->style.disable) return RS_OK;
@@ -217,6 +222,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.out_h = (dem->height - 1) * o->texels;
         lp.pixel = fp.pixel;
         lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
+        lp.net = net;
         if ((r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines)) != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }
@@ -244,6 +250,17 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         }
         st->bytes += rs__roadfield_bytes(st->casing);
     }
+    if (st->img_of && net && rs_network_road_count(net) == n) {
+        st->img_s0 = rs__alloc_array(ctx, n, sizeof *st->img_s0);
+        st->img_rev = rs__alloc_array(ctx, n, 1);
+        if (!st->img_s0 || !st->img_rev) { r = RS_ERR_NOMEM; goto fail_dash; }
+        for (size_t i = 0; i < n; i++) {
+            rs_road_stroke k;
+            rs_network_road_stroke(net, i, &k);
+            st->img_s0[i] = k.s_offset;
+            st->img_rev[i] = (uint8_t)k.reversed;
+        }
+    }
     if (st->any_surface) {
         st->near = field;
         if (!field) {
@@ -254,6 +271,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     }
     st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double));
     if (st->img_of) st->bytes += n * (sizeof *st->img_of + sizeof *st->img_len + sizeof *st->img_lev + sizeof *st->img_f);
+    if (st->img_s0) st->bytes += n * (sizeof *st->img_s0 + 1);
     rs__free(ctx, dash);
     rs__free(ctx, extra);
     rs__free(ctx, bands);

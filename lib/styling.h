@@ -30,6 +30,9 @@ typedef struct rs__styling {
     double *img_len;
     uint32_t *img_lev;
     double *img_f;
+    double *img_s0;                   /* per road: the stroke arc length at its first point (images run on
+                                         along a stroke); NULL: 0 */
+    uint8_t *img_rev;                 /* per road: drawn against its points in its stroke (s and t turn) */
     struct rs__surfimg **imgs;        /* one per rs_style_options.surface_images entry in use (NULL: unused) */
     size_t nimgs;
     uint64_t img_pixels; /* pixels of the surface images in imgs[], all together */
@@ -39,13 +42,16 @@ typedef struct rs__styling {
 /* Resolve every road's style (rs_road_style with o->style) and prepare what
  * the overlays stage draws. `field` is the grid's road field of the same
  * roads (borrowed; it must outlive the styling) or NULL: then one is built
- * when a fill or gradient needs it. *out stays NULL when no road is styled
+ * when a fill or gradient needs it. `net` (NULL: every road alone) is the
+ * roads' network, read during the build only: a stroke's records share
+ * one arc length for dashes and surface images (docs/network.md). *out stays NULL when no road is styled
  * (or o->style.disable): the splat is then the unstyled one. */
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const struct rs__roadfield *field, rs__styling **out);
+                            const struct rs__roadfield *field, const rs_network *net, rs__styling **out);
 void rs__styling_free(rs_ctx *ctx, rs__styling *st);
 
-/* The surface image colour of road `road` at (s, t), premultiplied (rgb
+/* The surface image colour of road `road` at (s, t) (s of the road, as
+ * the road field gives it), premultiplied (rgb
  * 0..255, a 0..1); 0 when the road has no surface image. */
 int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, double out[4]);
 #endif

@@ -570,6 +570,11 @@ fail:
 
 int sc_city_default(sc_scene *s, uint64_t seed) { return sc_city(s, 400, 350, 5.0, 1000, seed); }
 
+const char *sc_city_class(double width)
+{
+    return width >= 12 ? "primary" : (width >= 6 ? "residential" : "service");
+}
+
 /* --- writers ---------------------------------------------------------------------- */
 int sc_write_pgm16(const char *path, uint32_t w, uint32_t h, const float *z)
 {

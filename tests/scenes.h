@@ -93,6 +93,10 @@ int sc_road_crowded(sc_scene *s, double x0, double y, double length, size_t n, d
 int sc_city(sc_scene *s, uint32_t w, uint32_t h, double cs, size_t target_roads, uint64_t seed);
 /* The benchmark scene: 400 x 350 samples, 5 m cells, ~1000 roads. */
 int sc_city_default(sc_scene *s, uint64_t seed);
+/* The OSM class the benchmarks give a city road of this width: arterials
+ * (12 m and wider) primary, streets (6 m and wider) residential, lanes
+ * service. */
+const char *sc_city_class(double width);
 
 /* --- writers --- */
 /* P5, maxval 65535, big-endian; values rounded and clamped to 0..65535. */

@@ -114,10 +114,6 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
 }
 
 /* --- scenes ------------------------------------------------------------------ */
-static const char *class_of(double width)
-{
-    return width >= 12 ? "primary" : (width >= 6 ? "residential" : "service");
-}
 
 int main(int argc, char **argv)
 {
@@ -137,7 +133,7 @@ int main(int argc, char **argv)
             rs_roads_add(ctx, classed, NULL, r->width, r->xy, r->n) ||
             rs_roads_add(ctx, lined, NULL, r->width, r->xy, r->n))
             return 1;
-        const char *c = class_of(r->width);
+        const char *c = sc_city_class(r->width);
         nprim += c[0] == 'p';
         nres += c[0] == 'r';
         nsrv += c[0] == 's';

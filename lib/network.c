@@ -1,0 +1,863 @@
+/* The road network (issue 27; docs/network.md): nodes, legs and strokes of
+ * a road set.
+ *
+ * - Points of different roads (or of one road far apart along it) within
+ *   the tolerance are one node: a spatial hash of the points with cells of
+ *   the tolerance, union-find over the pairs it finds. A node needs a road
+ *   end or two such points; the node's points of one road within twice the
+ *   tolerance along it are one pass of that road through the node.
+ * - A road end within the tolerance of another road's segment (away from
+ *   its points) is a T: that road passes through the end's node.
+ * - Legs: a pass at a road's start or end gives one leg, an interior pass
+ *   two (forward and backward).
+ * - Strokes: a road's end leg and another road's start leg at one node
+ *   continue each other when the roads draw alike (width, class, lanes,
+ *   oneway, area, style, junction) and the node has degree 2, or the pair
+ *   deflects less than 30 degrees and neither leg has another such pair.
+ *
+ * Everything is ordered by road and point index, so the result does not
+ * depend on the hash or on memory addresses. */
+#include "network.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NONE UINT32_MAX
+#define MAX_DEFLECTION (RS__PI / 6) /* a stroke through a junction turns less than this */
+
+int rs__class_rank(rs_road_class c)
+{
+    switch (c) {
+    case RS_CLASS_MOTORWAY: return 9;
+    case RS_CLASS_TRUNK: return 8;
+    case RS_CLASS_PRIMARY: return 7;
+    case RS_CLASS_SECONDARY: return 6;
+    case RS_CLASS_TERTIARY: return 5;
+    case RS_CLASS_RESIDENTIAL: return 4;
+    case RS_CLASS_SERVICE: return 3;
+    case RS_CLASS_TRACK: return 2;
+    case RS_CLASS_PATH: case RS_CLASS_FOOTWAY: case RS_CLASS_CYCLEWAY: return 1;
+    default: return 0;
+    }
+}
+
+/* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
+
+typedef struct pt_hash {
+    double cell;
+    uint64_t mask;
+    uint32_t *start, *ids;
+    double *pxy; /* the points' coordinates in bucket order (beside ids) */
+    uint64_t *occ; /* a bit per bucket: not empty (small enough to stay in cache) */
+} pt_hash;
+
+static int64_t cell_of(double x, double cell)
+{
+    double q = floor(x / cell);
+    if (!(q > -4.6e18)) q = -4.6e18; /* (also catches -inf) */
+    if (!(q < 4.6e18)) q = 4.6e18;
+    return (int64_t)q;
+}
+
+/* Blocks of 4 x 4 cells hash to 16 consecutive buckets (one cache line of
+ * starts): the cells around a point mostly share a block. The cell's place
+ * in the block is offset by the block's hash, so points on a regular grid
+ * (all at one place in their blocks) still spread over all buckets. */
+static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
+{
+    uint64_t bx = (uint64_t)cx >> 2, by = (uint64_t)cy >> 2;
+    uint64_t h = bx * 0x9E3779B97F4A7C15ull ^ (by + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
+    h ^= h >> 29;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 32;
+    uint64_t sub = ((((uint64_t)cx & 3) << 2 | ((uint64_t)cy & 3)) + (h >> 40)) & 15;
+    return ((h << 4) | sub) & H->mask;
+}
+
+/* Hash the points xy[2 id] of the ids for which keep[id] (NULL: all). */
+static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uint8_t *keep, size_t n, double cell)
+{
+    size_t count = 0;
+    for (size_t i = 0; i < n; i++) count += !keep || keep[i];
+    uint64_t nb = 64; /* (a word of occupancy bits at least) */
+    while (nb < 4 * (uint64_t)count) nb *= 2; /* mostly empty buckets: the occupancy bits answer */
+    H->cell = cell;
+    H->mask = nb - 1;
+    H->start = rs__calloc(ctx, (size_t)nb + 1, sizeof *H->start);
+    H->ids = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ids);
+    H->pxy = rs__alloc_array(ctx, count ? count : 1, 2 * sizeof *H->pxy);
+    H->occ = rs__calloc(ctx, (size_t)(nb / 64), sizeof *H->occ);
+    if (!H->start || !H->ids || !H->pxy || !H->occ) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < n; i++)
+        if (!keep || keep[i]) H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell)) + 1]++;
+    for (uint64_t b = 0; b < nb; b++) H->start[b + 1] += H->start[b];
+    for (size_t i = 0; i < n; i++) { /* (start[b] runs ahead while filling, then is restored below) */
+        if (keep && !keep[i]) continue;
+        uint32_t q = H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell))]++;
+        H->ids[q] = (uint32_t)i;
+        H->pxy[2 * (size_t)q] = xy[2 * i];
+        H->pxy[2 * (size_t)q + 1] = xy[2 * i + 1];
+    }
+    for (uint64_t b = nb; b > 0; b--) H->start[b] = H->start[b - 1];
+    H->start[0] = 0;
+    for (uint64_t b = 0; b < nb; b++)
+        if (H->start[b + 1] > H->start[b]) H->occ[b >> 6] |= 1ull << (b & 63);
+    return RS_OK;
+}
+
+static void hash_free(rs_ctx *ctx, pt_hash *H)
+{
+    rs__free(ctx, H->start);
+    rs__free(ctx, H->ids);
+    rs__free(ctx, H->pxy);
+    rs__free(ctx, H->occ);
+    memset(H, 0, sizeof *H);
+}
+
+/* ---- build state ---- */
+
+typedef struct pass {
+    uint32_t road, v0, v1; /* first and last point (global ids) of the road at the node */
+    uint32_t seg;          /* a T: the segment; NONE for a pass through points */
+    double s;              /* a T: the arc length of the nearest point */
+    double dist;           /* a T: its distance */
+    uint32_t node;
+} pass;
+
+typedef struct build {
+    rs_ctx *ctx;
+    const rs_roads *roads;
+    size_t nroads, nv;
+    double tol;
+    size_t *voff;      /* nroads + 1: the points of road r are voff[r] .. voff[r+1]-1 */
+    uint32_t *vroad;   /* per point */
+    const double *xy;  /* per point: the road set's array, or xy_own */
+    double *xy_own, *s;
+    uint32_t *rep;     /* per point: the first of its run of equal consecutive points */
+    uint32_t *parent;  /* union-find over points */
+    uint8_t *live;     /* per road: longer than twice the tolerance */
+    uint8_t *inhash;   /* per point: a live road's point that starts its run */
+    uint32_t *nodeof;  /* per point (a root): its node, or NONE */
+    pass *ps;
+    size_t nps, cps;
+} build;
+
+static uint32_t find(uint32_t *parent, uint32_t v)
+{
+    uint32_t r = v;
+    while (parent[r] != r) r = parent[r];
+    while (parent[v] != r) {
+        uint32_t n = parent[v];
+        parent[v] = r;
+        v = n;
+    }
+    return r;
+}
+
+static void unite(uint32_t *parent, uint32_t a, uint32_t b)
+{
+    a = find(parent, a);
+    b = find(parent, b);
+    if (a < b) parent[b] = a; /* the root is the lowest point: deterministic */
+    else if (b < a) parent[a] = b;
+}
+
+/* Points v and w are the same place of one road (no node between them). */
+static int same_place(const build *B, uint32_t v, uint32_t w)
+{
+    return B->vroad[v] == B->vroad[w] && fabs(B->s[v] - B->s[w]) <= 2 * B->tol;
+}
+
+static int near2(const double *a, const double *b, double tol)
+{
+    double dx = a[0] - b[0], dy = a[1] - b[1];
+    return dx * dx + dy * dy <= tol * tol;
+}
+
+static rs_result push_pass(build *B, const pass *p)
+{
+    if (B->nps == B->cps) {
+        size_t nc = B->cps ? 2 * B->cps : 64, bytes;
+        if (!rs__mul_size(nc, sizeof *B->ps, &bytes)) return RS_ERR_NOMEM;
+        pass *np = rs__realloc(B->ctx, B->ps, bytes);
+        if (!np) return RS_ERR_NOMEM;
+        B->ps = np;
+        B->cps = nc;
+    }
+    B->ps[B->nps++] = *p;
+    return RS_OK;
+}
+
+/* Road ends near the inside of other roads' segments: T passes. */
+static rs_result find_tees(build *B)
+{
+    size_t nseg = 0;
+    double total = 0;
+    for (size_t r = 0; r < B->nroads; r++)
+        if (B->live[r]) {
+            nseg += B->voff[r + 1] - B->voff[r] - 1;
+            total += B->s[B->voff[r + 1] - 1];
+        }
+    /* end points hashed in cells a quarter of a mean segment (at least 4
+     * tolerances): walking every segment's cells stays linear */
+    double g = nseg ? total / (2.0 * (double)nseg) : 1;
+    if (!(g >= 4 * B->tol)) g = 4 * B->tol;
+    if (!(g <= 1e300)) g = 1e300;
+    uint8_t *isend = rs__calloc(B->ctx, B->nv ? B->nv : 1, 1);
+    if (!isend) return RS_ERR_NOMEM;
+    for (size_t r = 0; r < B->nroads; r++)
+        if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
+    pt_hash H;
+    memset(&H, 0, sizeof H);
+    rs_result res = hash_build(B->ctx, &H, B->xy, isend, B->nv, g);
+    if (res) goto done;
+    double tol = B->tol;
+    for (size_t r = 0; r < B->nroads && !res; r++) {
+        if (!B->live[r]) continue;
+        for (size_t k = B->voff[r]; k + 1 < B->voff[r + 1] && !res; k++) {
+            size_t k1 = k + 1;
+            if (B->rep[k1] != k1) continue; /* a repeated point: no segment */
+            uint32_t a = B->rep[k];
+            const double *pa = B->xy + 2 * a, *pb = B->xy + 2 * k1;
+            double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
+            if (!(dd > 0) || !isfinite(dd)) continue;
+            double ymin = fmin(pa[1], pb[1]) - tol, ymax = fmax(pa[1], pb[1]) + tol;
+            int64_t r0 = cell_of(ymin, g), r1 = cell_of(ymax, g);
+            for (int64_t cy = r0; cy <= r1 && !res; cy++) {
+                double y0 = fmax((double)cy * g, ymin) - tol, y1 = fmin((double)(cy + 1) * g, ymax) + tol;
+                double t0 = 0, t1 = 1;
+                if (dy != 0) {
+                    t0 = (y0 - pa[1]) / dy;
+                    t1 = (y1 - pa[1]) / dy;
+                    if (t0 > t1) { double q = t0; t0 = t1; t1 = q; }
+                    t0 = fmax(t0, 0), t1 = fmin(t1, 1);
+                    if (t0 > t1) continue;
+                }
+                double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
+                int64_t c0 = cell_of(fmin(xa, xb) - tol, g), c1 = cell_of(fmax(xa, xb) + tol, g);
+                for (int64_t cx = c0; cx <= c1 && !res; cx++) {
+                    uint64_t b = bucket_of(&H, cx, cy);
+                    if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
+                    for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
+                        uint32_t e = H.ids[q];
+                        const double *pe = H.pxy + 2 * (size_t)q; /* (maybe of another cell: a T found twice merges) */
+                        double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
+                        if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
+                        double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
+                        double dist = sqrt(ex * ex + ey * ey);
+                        if (!(dist <= tol)) continue;
+                        uint32_t root = find(B->parent, e);
+                        if (find(B->parent, a) == root || find(B->parent, (uint32_t)k1) == root) continue;
+                        double s = B->s[a] + u * (B->s[k1] - B->s[a]);
+                        if (B->vroad[e] == r && fabs(s - B->s[e]) <= 2 * tol) continue;
+                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, dist, B->nodeof[root] };
+                        if ((res = push_pass(B, &p)) != RS_OK) break;
+                    }
+                }
+            }
+        }
+    }
+done:
+    hash_free(B->ctx, &H);
+    rs__free(B->ctx, isend);
+    return res;
+}
+
+static int pass_cmp(const void *pa, const void *pb)
+{
+    const pass *a = pa, *b = pb;
+    if (a->node != b->node) return a->node < b->node ? -1 : 1;
+    if (a->road != b->road) return a->road < b->road ? -1 : 1;
+    if (a->s != b->s) return a->s < b->s ? -1 : 1;
+    if (a->seg != b->seg) return a->seg < b->seg ? -1 : 1; /* (a pass through points has seg NONE: last) */
+    if (a->dist != b->dist) return a->dist < b->dist ? -1 : 1;
+    return 0;
+}
+
+/* Passes by node (a counting sort), then by pass_cmp within each node. */
+static rs_result sort_passes(build *B, size_t nn)
+{
+    uint32_t *start = rs__calloc(B->ctx, nn + 2, sizeof *start);
+    pass *out = rs__alloc_array(B->ctx, B->nps ? B->nps : 1, sizeof *out);
+    if (!start || !out) {
+        rs__free(B->ctx, start);
+        rs__free(B->ctx, out);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < B->nps; i++) start[B->ps[i].node + 2]++;
+    for (size_t i = 0; i < nn; i++) start[i + 2] += start[i + 1];
+    for (size_t i = 0; i < B->nps; i++) out[start[B->ps[i].node + 1]++] = B->ps[i];
+    for (size_t i = 0; i < nn; i++)
+        if (start[i + 1] - start[i] > 1) qsort(out + start[i], start[i + 1] - start[i], sizeof *out, pass_cmp);
+    rs__free(B->ctx, start);
+    rs__free(B->ctx, B->ps);
+    B->ps = out;
+    B->cps = B->nps ? B->nps : 1;
+    return RS_OK;
+}
+
+static int leg_cmp(const void *pa, const void *pb)
+{
+    const rs_network_leg *a = pa, *b = pb;
+    if (a->angle != b->angle) return a->angle < b->angle ? -1 : 1;
+    if (a->road != b->road) return a->road < b->road ? -1 : 1;
+    if (a->kind != b->kind) return a->kind < b->kind ? -1 : 1;
+    if (a->s != b->s) return a->s < b->s ? -1 : 1;
+    return 0;
+}
+
+/* Direction away from node position c along road r from point v, forward
+ * (+1) or backward (-1): towards the first point beyond the tolerance. */
+static double leg_angle(const build *B, const double *c, uint32_t v, int dir)
+{
+    uint32_t r = B->vroad[v];
+    size_t lo = B->voff[r], hi = B->voff[r + 1] - 1, w = v;
+    for (;;) {
+        if (dir > 0 ? w >= hi : w <= lo) break;
+        w = dir > 0 ? w + 1 : w - 1;
+        if (!near2(B->xy + 2 * w, c, B->tol)) break;
+    }
+    double dx = B->xy[2 * w] - c[0], dy = B->xy[2 * w + 1] - c[1];
+    if (dx == 0 && dy == 0) return 0;
+    return atan2(dy, dx);
+}
+
+static int attr_is(const rs_roads *roads, size_t r, const char *key, const char *v1, const char *v2)
+{
+    const char *v = rs_roads_get_attr(roads, r, key);
+    return v && (strcmp(v, v1) == 0 || (v2 && strcmp(v, v2) == 0));
+}
+
+static int str_eq(const char *a, const char *b) { return a == b || (a && b && strcmp(a, b) == 0); }
+
+/* Roads a and b draw alike: one may continue the other in a stroke. */
+static int draw_alike(const rs_roads *roads, size_t a, size_t b)
+{
+    rs_road_info ia, ib;
+    double wa = 0, wb = 0;
+    if (rs_roads_get_info(roads, a, &ia) || rs_roads_get_info(roads, b, &ib)) return 0;
+    rs_roads_get(roads, a, NULL, &wa, NULL, NULL);
+    rs_roads_get(roads, b, NULL, &wb, NULL, NULL);
+    return wa == wb && ia.road_class == ib.road_class && ia.link == ib.link && ia.lanes == ib.lanes &&
+           ia.oneway == ib.oneway && ia.area == ib.area && str_eq(ia.style, ib.style) &&
+           str_eq(rs_roads_get_attr(roads, a, "junction"), rs_roads_get_attr(roads, b, "junction"));
+}
+
+static double wrap_angle(double a)
+{
+    while (a > RS__PI) a -= 2 * RS__PI;
+    while (a < -RS__PI) a += 2 * RS__PI;
+    return a;
+}
+
+/* A two-way road: a record drawn against its points is the same road. */
+static int two_way(const rs_roads *roads, size_t r)
+{
+    rs_road_info in;
+    if (rs_roads_get_info(roads, r, &in)) return 0;
+    return in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
+}
+
+/* Can road ends a and b (start or end legs, other roads) continue each
+ * other: they draw alike and keep the direction of travel (an end meets a
+ * start), or both roads are two-way. */
+static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_leg *b)
+{
+    if (a->road == b->road || !draw_alike(B->roads, a->road, b->road)) return 0;
+    return a->kind != b->kind || two_way(B->roads, a->road);
+}
+
+static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
+
+/* Pair road ends into strokes at every node: link[2 r + e] is the road end
+ * (2 q + f; e, f: 0 start, 1 end) that road r's end e continues into. */
+static void link_strokes(const build *B, const rs_network *N, uint32_t *link)
+{
+    for (size_t i = 0; i < N->nnodes; i++) {
+        const rs_network_leg *L = N->leg + N->leg_start[i];
+        uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
+        if (d == 2) {
+            if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
+                (L[0].road == L[1].road ? L[0].kind != L[1].kind : ends_fit(B, &L[0], &L[1]))) {
+                uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
+                link[ea] = eb;
+                link[eb] = ea;
+            }
+            continue;
+        }
+        /* a junction: pairs that deflect little, taken when neither end has another */
+        for (uint32_t a = 0; a < d; a++) {
+            if (!is_end_leg(&L[a])) continue;
+            uint32_t match = NONE, count = 0;
+            for (uint32_t b = 0; b < d; b++)
+                if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
+                    ends_fit(B, &L[a], &L[b]))
+                    match = b, count++;
+            if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
+            uint32_t back = 0;
+            for (uint32_t c = 0; c < d; c++)
+                if (c != match && is_end_leg(&L[c]) &&
+                    fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
+                    back++;
+            if (back != 1) continue;
+            uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+            link[ea] = eb;
+            link[eb] = ea;
+        }
+    }
+}
+
+/* Walk a stroke from road r entered at its end e (0: start, 1: end): the
+ * roads in order, each with its direction; returns the last road and the
+ * end it leaves by (*out_end). Stops at a free end or back at `stop`. */
+static uint32_t walk_stroke(const uint32_t *link, uint32_t r, uint32_t e, uint32_t stop, uint32_t *out_end)
+{
+    for (;;) {
+        uint32_t x = 2 * r + (1 - e), nx = link[x];
+        if (nx == NONE || nx / 2 == stop) {
+            *out_end = 1 - e;
+            return r;
+        }
+        r = nx / 2;
+        e = nx % 2;
+    }
+}
+
+/* Number the strokes by their first record and lay out their arc lengths.
+ * A stroke runs from the terminal record whose free end is its start (the
+ * direction of travel), else from the lower of its two terminal records;
+ * a ring from its lowest record, along it. */
+static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
+{
+    size_t n = N->nroads, k = 0, at = 0;
+    memset(seen, 0, n);
+    for (int rings = 0; rings < 2; rings++)
+        for (size_t r0 = 0; r0 < n; r0++) {
+            if (seen[r0]) continue;
+            uint32_t head = (uint32_t)r0, e_in = 0;
+            if (!rings) {
+                /* a path: r0 has a free end (the other terminal is higher) */
+                int free0 = link[2 * r0] == NONE, free1 = link[2 * r0 + 1] == NONE;
+                if (!free0 && !free1) continue; /* on a ring: the second round */
+                uint32_t tend = 0, t = free0 ? walk_stroke(link, (uint32_t)r0, 0, NONE, &tend)
+                                            : walk_stroke(link, (uint32_t)r0, 1, NONE, &tend);
+                /* r0 enters by its free end; the other terminal leaves by tend */
+                e_in = free0 ? 0 : 1;
+                if (e_in == 1 && tend == 0) head = t, e_in = 0; /* the other terminal starts the travel */
+            } else {
+                /* a ring: open it before r0 */
+                uint32_t x = link[2 * r0];
+                link[x] = NONE;
+                link[2 * r0] = NONE;
+            }
+            N->stroke_start[k] = (uint32_t)at;
+            N->closed[k] = (uint8_t)rings;
+            double s = 0;
+            uint32_t r = head, e = e_in, prev = NONE;
+            for (;;) {
+                seen[r] = 1;
+                N->stroke_of[r] = (uint32_t)k;
+                N->rev[r] = (uint8_t)e;
+                N->s_off[r] = e ? s + N->length[r] : s;
+                s += N->length[r];
+                N->prev[r] = prev;
+                N->next[r] = NONE;
+                if (prev != NONE) N->next[prev] = r;
+                N->stroke_roads[at++] = r;
+                uint32_t nx = link[2 * r + (1 - e)];
+                if (nx == NONE) break;
+                prev = r;
+                r = nx / 2;
+                e = nx % 2;
+            }
+            k++;
+        }
+    N->stroke_start[k] = (uint32_t)at;
+    N->nstrokes = k;
+}
+
+static void build_free(build *B)
+{
+    rs_ctx *ctx = B->ctx;
+    rs__free(ctx, B->voff);
+    rs__free(ctx, B->vroad);
+    rs__free(ctx, B->xy_own);
+    rs__free(ctx, B->s);
+    rs__free(ctx, B->rep);
+    rs__free(ctx, B->parent);
+    rs__free(ctx, B->live);
+    rs__free(ctx, B->inhash);
+    rs__free(ctx, B->nodeof);
+    rs__free(ctx, B->ps);
+}
+
+void rs_network_free(rs_ctx *ctx, rs_network *net)
+{
+    if (!net) return;
+    rs__free(ctx, net->node);
+    rs__free(ctx, net->leg_start);
+    rs__free(ctx, net->leg);
+    rs__free(ctx, net->stroke_of);
+    rs__free(ctx, net->s_off);
+    rs__free(ctx, net->length);
+    rs__free(ctx, net->prev);
+    rs__free(ctx, net->next);
+    rs__free(ctx, net->stroke_start);
+    rs__free(ctx, net->stroke_roads);
+    rs__free(ctx, net->closed);
+    rs__free(ctx, net->rev);
+    rs__free(ctx, net->link);
+    rs__free(ctx, net);
+}
+
+/* Points, arc lengths, runs of repeated points, live roads. */
+static rs_result load_points(build *B)
+{
+    size_t n = B->nroads, nv = 0;
+    B->voff = rs__alloc_array(B->ctx, n + 1, sizeof *B->voff);
+    B->live = rs__calloc(B->ctx, n ? n : 1, 1);
+    if (!B->voff || !B->live) return RS_ERR_NOMEM;
+    for (size_t r = 0; r < n; r++) {
+        size_t np = 0;
+        rs_roads_get(B->roads, r, NULL, NULL, NULL, &np);
+        B->voff[r] = nv;
+        nv += np;
+    }
+    B->voff[n] = nv;
+    if (nv >= UINT32_MAX) return RS_ERR_LIMIT;
+    B->nv = nv;
+    size_t m = nv ? nv : 1;
+    B->vroad = rs__alloc_array(B->ctx, m, sizeof *B->vroad);
+    /* the road set keeps its points in one array in road order: read them
+     * there when they are (no copy), else copy them */
+    const double *base = NULL;
+    if (n > 0) rs_roads_get(B->roads, 0, NULL, NULL, &base, NULL);
+    for (size_t r = 0; base && r < n; r++) {
+        const double *xy = NULL;
+        rs_roads_get(B->roads, r, NULL, NULL, &xy, NULL);
+        if (xy != base + 2 * B->voff[r]) base = NULL;
+    }
+    B->xy = base;
+    if (!base && !(B->xy_own = rs__alloc_array(B->ctx, m, 2 * sizeof *B->xy_own))) return RS_ERR_NOMEM;
+    if (!base) B->xy = B->xy_own;
+    B->s = rs__alloc_array(B->ctx, m, sizeof *B->s);
+    B->rep = rs__alloc_array(B->ctx, m, sizeof *B->rep);
+    B->parent = rs__alloc_array(B->ctx, m, sizeof *B->parent);
+    B->inhash = rs__calloc(B->ctx, m, 1);
+    B->nodeof = rs__alloc_array(B->ctx, m, sizeof *B->nodeof);
+    if (!B->vroad || !B->s || !B->rep || !B->parent || !B->inhash || !B->nodeof) return RS_ERR_NOMEM;
+    for (size_t r = 0; r < n; r++) {
+        const double *xy = NULL;
+        size_t np = 0, v0 = B->voff[r];
+        rs_roads_get(B->roads, r, NULL, NULL, &xy, &np);
+        if (B->xy_own) memcpy(B->xy_own + 2 * v0, xy, np * 2 * sizeof *xy);
+        double s = 0;
+        for (size_t k = 0; k < np; k++) {
+            size_t v = v0 + k;
+            B->vroad[v] = (uint32_t)r;
+            B->parent[v] = (uint32_t)v;
+            B->nodeof[v] = NONE;
+            int repeat = k > 0 && xy[2 * k] == xy[2 * k - 2] && xy[2 * k + 1] == xy[2 * k - 1];
+            B->rep[v] = repeat ? B->rep[v - 1] : (uint32_t)v;
+            if (k > 0) { /* summed as the road field and the line symbols sum it */
+                s += 2 * hypot(0.5 * xy[2 * k] - 0.5 * xy[2 * k - 2], 0.5 * xy[2 * k + 1] - 0.5 * xy[2 * k - 1]);
+                if (!(s <= DBL_MAX)) s = DBL_MAX;
+            }
+            B->s[v] = s;
+        }
+        B->live[r] = np >= 2 && s > 2 * B->tol;
+        for (size_t k = 0; k < np; k++) B->inhash[v0 + k] = B->live[r] && B->rep[v0 + k] == v0 + k;
+    }
+    return RS_OK;
+}
+
+/* Union the hashed points within the tolerance of each other. */
+static rs_result cluster_points(build *B)
+{
+    pt_hash H;
+    memset(&H, 0, sizeof H);
+    rs_result res = hash_build(B->ctx, &H, B->xy, B->inhash, B->nv, B->tol);
+    if (res) {
+        hash_free(B->ctx, &H);
+        return res;
+    }
+    /* points in bucket order: the buckets around one are mostly in the
+     * cache lines just read (the union does not depend on the order) */
+    for (size_t i = 0; i < H.start[H.mask + 1]; i++) {
+        uint32_t v = H.ids[i];
+        size_t vend = 0;
+        const double *p = H.pxy + 2 * i;
+        int64_t cx = cell_of(p[0], B->tol), cy = cell_of(p[1], B->tol);
+        /* the disc of radius tol around p meets its cell and the neighbours
+         * on the nearer side in x and in y: 2 x 2 cells */
+        int sx = p[0] - (double)cx * B->tol < 0.5 * B->tol ? -1 : 1, sy = p[1] - (double)cy * B->tol < 0.5 * B->tol ? -1 : 1;
+        for (int dy = 0; dy < 2; dy++)
+            for (int dx = 0; dx < 2; dx++) {
+                uint64_t b = bucket_of(&H, cx + dx * sx, cy + dy * sy);
+                if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
+                for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
+                    uint32_t w = H.ids[q];
+                    if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol)) continue;
+                    /* points are numbered road by road: w (> v) is of v's road when below its end */
+                    if (vend == 0) vend = B->voff[B->vroad[v] + 1];
+                    if (w < vend && fabs(B->s[v] - B->s[w]) <= 2 * B->tol) continue; /* same_place */
+                    unite(B->parent, v, w);
+                }
+            }
+    }
+    hash_free(B->ctx, &H);
+    return RS_OK;
+}
+
+rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out)
+{
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: out is NULL");
+    *out = NULL;
+    if (!roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: roads is NULL");
+    double tol = opts && opts->tolerance != 0 ? opts->tolerance : RS__NETWORK_TOL;
+    if (!(tol >= 1e-9 && tol <= 1000))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: tolerance %g must be 1e-9..1000 metres (0: 0.05)", tol);
+    build B;
+    memset(&B, 0, sizeof B);
+    B.ctx = ctx;
+    B.roads = roads;
+    B.nroads = rs_roads_count(roads);
+    B.tol = tol;
+    if (B.nroads >= UINT32_MAX) return rs__fail(ctx, RS_ERR_LIMIT, "network: too many roads");
+    rs_network *N = rs__calloc(ctx, 1, sizeof *N);
+    rs_result res = RS_OK;
+    if (!N) return rs__fail(ctx, RS_ERR_NOMEM, "network: out of memory");
+    N->nroads = B.nroads;
+    N->tol = tol;
+    size_t n = B.nroads, m = n ? n : 1;
+    if ((res = load_points(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK) goto fail;
+
+    /* nodes: clusters holding a road end or two places of roads */
+    uint8_t *qual = rs__calloc(ctx, B.nv ? B.nv : 1, 1);
+    if (!qual) { res = RS_ERR_NOMEM; goto fail; }
+    for (size_t r = 0; r < n; r++) {
+        if (!B.live[r]) continue;
+        qual[find(B.parent, (uint32_t)B.voff[r])] = 1;
+        qual[find(B.parent, B.rep[B.voff[r + 1] - 1])] = 1;
+    }
+    for (size_t v = 0; v < B.nv; v++) {
+        if (!B.inhash[v]) continue;
+        uint32_t root = find(B.parent, (uint32_t)v);
+        if (root != v && !same_place(&B, root, (uint32_t)v)) qual[root] = 1;
+    }
+    size_t nn = 0;
+    for (size_t v = 0; v < B.nv; v++)
+        if (B.inhash[v] && B.parent[v] == v && qual[v]) B.nodeof[v] = (uint32_t)nn++;
+    rs__free(ctx, qual);
+    N->nnodes = nn;
+    size_t npass = 0;
+    for (size_t v = 0; v < B.nv; v++) npass += B.inhash[v] && B.nodeof[find(B.parent, (uint32_t)v)] != NONE;
+    if (npass && !(B.ps = rs__alloc_array(ctx, npass, sizeof *B.ps))) { res = RS_ERR_NOMEM; goto fail; }
+    B.cps = npass;
+    /* passes through points: a node's points by road, runs along the road */
+    for (size_t v = 0; v < B.nv; v++) {
+        if (!B.inhash[v]) continue;
+        uint32_t nd = B.nodeof[find(B.parent, (uint32_t)v)];
+        if (nd == NONE) continue;
+        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], 0, nd };
+        if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
+    }
+    if ((res = find_tees(&B)) != RS_OK) goto fail;
+    if ((res = sort_passes(&B, nn)) != RS_OK) goto fail;
+    /* merge: points of one road in one run; a T beside a pass of its road, or
+     * found twice, is dropped */
+    size_t np = 0;
+    for (size_t i = 0; i < B.nps; i++) {
+        pass *p = &B.ps[i];
+        if (np > 0) {
+            pass *q = &B.ps[np - 1];
+            double qs = q->seg != NONE ? q->s : B.s[q->v1];
+            if (q->node == p->node && q->road == p->road && p->s - qs <= 2 * tol) {
+                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1;
+                else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
+                else if (q->seg != NONE && p->dist < q->dist) *q = *p;
+                continue;
+            }
+        }
+        B.ps[np++] = *p;
+    }
+    B.nps = np;
+    /* legs */
+    size_t nl = 0;
+    for (size_t i = 0; i < np; i++) {
+        const pass *p = &B.ps[i];
+        int st = p->seg == NONE && p->v0 == B.voff[p->road], en = p->seg == NONE && p->v1 == B.rep[B.voff[p->road + 1] - 1];
+        nl += st || en ? (size_t)st + (size_t)en : 2;
+    }
+    N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
+    N->leg_start = rs__calloc(ctx, nn + 1, sizeof *N->leg_start);
+    N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
+    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
+    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
+    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
+    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
+    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
+    N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
+    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
+    N->closed = rs__calloc(ctx, m, 1);
+    N->rev = rs__calloc(ctx, m, 1);
+    N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
+    if (!N->node || !N->leg_start || !N->leg || !N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next ||
+        !N->stroke_start || !N->stroke_roads || !N->closed || !N->rev || !N->link) {
+        res = RS_ERR_NOMEM;
+        goto fail;
+    }
+    N->nlegs = nl;
+    for (size_t v = 0; v < B.nv; v++)
+        if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] != NONE) {
+            rs_network_node *d = &N->node[B.nodeof[v]];
+            d->x = B.xy[2 * v];
+            d->y = B.xy[2 * v + 1];
+        }
+    nl = 0;
+    for (size_t i = 0, j; i < np; i = j) {
+        uint32_t nd = B.ps[i].node;
+        const double *c = &N->node[nd].x;
+        N->leg_start[nd] = (uint32_t)nl;
+        for (j = i; j < np && B.ps[j].node == nd; j++) {
+            const pass *p = &B.ps[j];
+            size_t r = p->road, v0 = B.voff[r];
+            int pr = rs__class_rank(RS_CLASS_NONE);
+            rs_road_info info;
+            if (rs_roads_get_info(roads, r, &info) == RS_OK) pr = rs__class_rank(info.road_class);
+            if (attr_is(roads, r, "priority_road", "designated", "yes_unposted")) pr += 10;
+            if (attr_is(roads, r, "junction", "roundabout", NULL)) {
+                pr += 20;
+                N->node[nd].control |= RS_NODE_ROUNDABOUT;
+            }
+            rs_network_leg L;
+            memset(&L, 0, sizeof L);
+            L.road = (uint32_t)r;
+            L.priority = pr;
+            if (p->seg != NONE) { /* a T on segment seg: the segment's own direction */
+                L.segment = p->seg;
+                L.s = p->s;
+                double dx = B.xy[2 * p->v1] - B.xy[2 * p->v0], dy = B.xy[2 * p->v1 + 1] - B.xy[2 * p->v0 + 1];
+                L.kind = RS_LEG_FORWARD;
+                L.angle = atan2(dy, dx);
+                N->leg[nl++] = L;
+                L.kind = RS_LEG_BACKWARD;
+                L.angle = atan2(-dy, -dx);
+                N->leg[nl++] = L;
+                continue;
+            }
+            int st = p->v0 == v0, en = p->v1 == B.rep[B.voff[r + 1] - 1];
+            if (st) {
+                L.kind = RS_LEG_START, L.segment = 0, L.s = 0, L.angle = leg_angle(&B, c, p->v1, 1);
+                N->leg[nl++] = L;
+            }
+            if (en) {
+                L.kind = RS_LEG_END, L.segment = (uint32_t)(B.voff[r + 1] - 1 - v0), L.s = B.s[B.voff[r + 1] - 1];
+                L.angle = leg_angle(&B, c, p->v0, -1);
+                N->leg[nl++] = L;
+            }
+            if (!st && !en) {
+                L.segment = (uint32_t)(p->v0 - v0), L.s = B.s[p->v0];
+                L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, c, p->v1, 1);
+                N->leg[nl++] = L;
+                L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, c, p->v0, -1);
+                N->leg[nl++] = L;
+            }
+        }
+    }
+    /* every qualifying node got legs (it holds a live road's point) */
+    N->leg_start[nn] = (uint32_t)nl;
+    for (size_t i = 0; i < nn; i++) {
+        rs_network_leg *L = N->leg + N->leg_start[i];
+        uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
+        if (d > 1) qsort(L, d, sizeof *L, leg_cmp);
+        int best = -1;
+        for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
+        for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
+        N->node[i].degree = d;
+        N->node[i].kind = d <= 1 ? RS_NODE_END : d == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
+    }
+    /* controls from point attributes at a node's points */
+    for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
+        size_t r = 0, pt = 0;
+        const char *key = NULL, *val = NULL;
+        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r] ||
+            pt >= B.voff[r + 1] - B.voff[r])
+            continue;
+        uint32_t nd = B.nodeof[find(B.parent, B.rep[B.voff[r] + pt])];
+        if (nd == NONE) continue;
+        uint32_t f = 0;
+        if (strcmp(key, "highway") == 0)
+            f = strcmp(val, "stop") == 0 ? RS_NODE_STOP : strcmp(val, "give_way") == 0 ? RS_NODE_GIVE_WAY
+                : strcmp(val, "traffic_signals") == 0 ? RS_NODE_SIGNALS : 0;
+        else if (strcmp(key, "crossing") == 0)
+            f = RS_NODE_CROSSING;
+        N->node[nd].control |= f;
+    }
+    /* strokes */
+    for (size_t r = 0; r < n; r++) {
+        N->prev[r] = N->next[r] = NONE;
+        N->link[2 * r] = N->link[2 * r + 1] = NONE;
+        N->length[r] = B.voff[r + 1] > B.voff[r] ? B.s[B.voff[r + 1] - 1] : 0;
+    }
+    link_strokes(&B, N, N->link);
+    number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
+    N->bytes = sizeof *N + nn * sizeof *N->node + (nn + 1) * sizeof *N->leg_start + N->nlegs * sizeof *N->leg +
+               n * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev + sizeof *N->next +
+                    sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);
+    build_free(&B);
+    *out = N;
+    rs__ok(ctx);
+    return RS_OK;
+fail:
+    build_free(&B);
+    rs_network_free(ctx, N);
+    if (res == RS_ERR_LIMIT) return rs__fail(ctx, res, "network: more than 2^32 points");
+    return rs__fail(ctx, RS_ERR_NOMEM, "network: out of memory");
+}
+
+size_t rs__network_bytes(const rs_network *net) { return net ? net->bytes : 0; }
+
+size_t rs_network_road_count(const rs_network *net) { return net ? net->nroads : 0; }
+
+size_t rs_network_node_count(const rs_network *net) { return net ? net->nnodes : 0; }
+
+rs_result rs_network_get_node(const rs_network *net, size_t i, rs_network_node *out)
+{
+    if (!net || !out || i >= net->nnodes) return RS_ERR_INVALID_ARG;
+    *out = net->node[i];
+    return RS_OK;
+}
+
+rs_result rs_network_get_leg(const rs_network *net, size_t node, size_t k, rs_network_leg *out)
+{
+    if (!net || !out || node >= net->nnodes || k >= net->leg_start[node + 1] - net->leg_start[node])
+        return RS_ERR_INVALID_ARG;
+    *out = net->leg[net->leg_start[node] + k];
+    return RS_OK;
+}
+
+size_t rs_network_stroke_count(const rs_network *net) { return net ? net->nstrokes : 0; }
+
+rs_result rs_network_road_stroke(const rs_network *net, size_t road, rs_road_stroke *out)
+{
+    if (!net || !out || road >= net->nroads) return RS_ERR_INVALID_ARG;
+    out->stroke = net->stroke_of[road];
+    out->s_offset = net->s_off[road];
+    out->length = net->length[road];
+    out->prev = net->prev[road];
+    out->next = net->next[road];
+    out->closed = net->closed[net->stroke_of[road]];
+    out->reversed = net->rev[road];
+    return RS_OK;
+}
+
+size_t rs_network_stroke_roads(const rs_network *net, size_t k, uint32_t *roads, size_t cap)
+{
+    if (!net || k >= net->nstrokes) return 0;
+    size_t a = net->stroke_start[k], b = net->stroke_start[k + 1];
+    for (size_t i = a; i < b && i - a < cap && roads; i++) roads[i - a] = net->stroke_roads[i];
+    return b - a;
+}

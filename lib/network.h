@@ -1,0 +1,40 @@
+/* The road network (issue 27, docs/network.md): nodes where road records
+ * meet, their legs, and strokes (chains of records that continue each
+ * other and share one arc length). The public queries are rs_network_* in
+ * include/roadsplat.h; the drawing code reads the arrays below directly. */
+#ifndef RS_NETWORK_H
+#define RS_NETWORK_H
+#include "internal.h"
+
+struct rs_network {
+    size_t nroads;
+    double tol;
+    size_t nnodes, nlegs;
+    rs_network_node *node;  /* nnodes */
+    uint32_t *leg_start;    /* nnodes + 1: legs of node i are leg[leg_start[i] .. leg_start[i+1]) */
+    rs_network_leg *leg;
+    /* strokes */
+    size_t nstrokes;
+    uint32_t *stroke_of;    /* per road */
+    double *s_off;          /* per road: stroke arc length at its first point (reversed: the stroke's s
+                               falls along the record: s_off - s) */
+    double *length;         /* per road */
+    uint32_t *prev, *next;  /* per road, UINT32_MAX: none (a ring's seam has none) */
+    uint32_t *stroke_start; /* nstrokes + 1 */
+    uint32_t *stroke_roads; /* nroads: the records of each stroke in order */
+    uint8_t *closed;        /* per stroke */
+    uint8_t *rev;           /* per road: drawn against its points (a two-way record pointing the other way) */
+    uint32_t *link;         /* per road end (2 r: start, 2 r + 1: end): the road end it continues into
+                               (2 q + f), NONE: none (a ring's seam is cut) */
+    size_t bytes;
+};
+
+/* Default tolerance, metres (rs_network_options.tolerance = 0). */
+#define RS__NETWORK_TOL 0.05
+
+/* Class rank for priorities (motorway 9 .. path/footway/cycleway 1, none 0);
+ * shared with the automatic markings. */
+int rs__class_rank(rs_road_class c);
+
+size_t rs__network_bytes(const rs_network *net);
+#endif
