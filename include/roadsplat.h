@@ -925,6 +925,30 @@ typedef struct rs_roam_view {
  * lands within +-5 % whenever the target is reachable. */
 RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view);
 
+/* Frame-coherent view mode (seed 004's split and merge queues): start
+ * from the current mesh (the previous update's, or whatever the last call
+ * left) and adapt it to `view`. Leaves whose priority (error bound
+ * projected at their nearest distance to the eye, pixels) rose above the
+ * tolerance split, highest first, with their forced splits; diamonds whose
+ * two parents' priorities are both within it merge, lowest first. With a
+ * fixed pixel_error the result, when the update completes, is the mesh
+ * rs_roam_frame builds from scratch for the same view (same triangles,
+ * every leaf within the tolerance). With target_triangles the loop merges
+ * while above the target, splits while below, then trades the highest
+ * split for the lowest merge while the split's priority is the larger:
+ * one update lands within +-1 % of the target whenever the pool and
+ * budget allow; stats.threshold is then the largest leaf priority left.
+ * `budget` caps the split and merge operations of this call (a split
+ * counts once with its forced splits; 0: no cap); when it runs out the
+ * mesh is valid and crack-free but not yet at the tolerance (stats
+ * update_done = 0) and the next update carries on. Cost: one pass over
+ * the mesh's leaves and diamonds for their priorities, plus a heap
+ * operation per change. The first call allocates 4 bytes per pool node
+ * (parent links) and the queues, which grow with the mesh (RS_ERR_NOMEM:
+ * the mesh stays valid). Like every rs_roam call it mutates the landscape:
+ * one thread per landscape at a time. */
+RS_API rs_result rs_roam_update(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view, uint32_t budget);
+
 typedef struct rs_roam_stats {
     uint32_t width, height;     /* DEM samples */
     uint32_t patch_size;        /* cells per patch side */
@@ -938,6 +962,8 @@ typedef struct rs_roam_stats {
     double max_error_bound;     /* largest node error bound of the mesh, metres */
     uint32_t frame_passes;      /* tessellation passes of the last frame */
     uint32_t patches_culled;    /* patches outside the frustum in the last frame */
+    uint32_t update_ops;        /* split/merge operations of the last rs_roam_update */
+    int update_done;            /* the last rs_roam_update reached its goal (budget not hit) */
     uint64_t bytes;             /* memory held by the landscape */
 } rs_roam_stats;
 RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);

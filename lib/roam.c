@@ -224,6 +224,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->vbits);
     rs__free(ctx, L->vsum);
     rs__free(ctx, L->smap);
+    rs__roam_update_free(ctx, L);
     rs__free(ctx, L);
 }
 
@@ -310,6 +311,7 @@ static rs_roam *new_landscape(rs_ctx *ctx, const roam_size *s)
     L->elog = 2 * s->plog;
     L->dq = s->dq; L->ncut = 1u << s->dq;
     L->scan = NIL;
+    L->free_head = NIL;
     rs__roam_build_partner_table(L);
     return L;
 }
@@ -450,13 +452,15 @@ void rs_roam_get_stats(const rs_roam *L, rs_roam_stats *o)
     o->patch_size = L->P; o->patches_x = L->npx; o->patches_y = L->npy;
     o->base_nodes = L->base_count;
     o->pool_nodes = L->cap - L->base_count;
-    o->pool_used = L->used - L->base_count;
+    o->pool_used = L->used - L->base_count - L->nfree;
     o->pool_exhausted = L->exhausted;
     o->triangles = L->tris;
     o->threshold = L->threshold;
     o->max_error_bound = rs__roam_leaves_max_bound(L);
     o->frame_passes = L->frame_passes;
     o->patches_culled = L->culled;
+    o->update_ops = L->update_ops;
+    o->update_done = L->update_done;
     o->bytes = L->bytes;
 }
 

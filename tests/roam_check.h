@@ -134,6 +134,69 @@ static inline int rc_all_ok(const rc_result *r)
            && r->ok_coverage;
 }
 
+/* A view-dependent mesh against its tolerance, independently of the
+ * mesher: for every triangle whose DEM samples (with their heights) all
+ * lie inside the cone of half-angle `half` (radians) about `dir` from
+ * `eye` (take it inside the view frustum), its true max vertical error
+ * times k (pixels per metre at distance 1) over the distance from the eye
+ * to its nearest sample (at least `floor_d`) must be <= tol: the mesher's
+ * bounding-sphere distance is never larger, and its error bound never
+ * smaller. Grid coordinates gx, gy per vertex, heights z * zs, cell size cs.
+ * Returns the largest ratio (projected error / tol) over the checked
+ * triangles (*nchecked of them). */
+static inline double rc_view_worst(uint32_t W, uint32_t H, const float *z, double zs, double cs,
+                                   const int32_t *gx, const int32_t *gy, const uint32_t *tri, size_t nt,
+                                   const double eye[3], const double dir[3], double half, double k,
+                                   double tol, double floor_d, size_t *nchecked)
+{
+    double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]), ch = cos(half);
+    double worst = 0.0;
+    size_t checked = 0;
+    (void)H;
+    for (size_t t = 0; t < nt; t++) {
+        int64_t x[3], y[3];
+        double vz[3];
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = tri[3 * t + (size_t)c];
+            x[c] = gx[v]; y[c] = gy[v];
+            vz[c] = (double)z[(size_t)y[c] * W + (size_t)x[c]] * zs;
+        }
+        int64_t cr = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+        if (cr == 0) continue;
+        int64_t x0 = x[0], x1 = x[0], y0 = y[0], y1 = y[0];
+        for (int c = 1; c < 3; c++) {
+            if (x[c] < x0) x0 = x[c];
+            if (x[c] > x1) x1 = x[c];
+            if (y[c] < y0) y0 = y[c];
+            if (y[c] > y1) y1 = y[c];
+        }
+        double emax = 0.0, dmin = INFINITY;
+        int inside = 1;
+        for (int64_t py = y0; py <= y1 && inside; py++)
+            for (int64_t px = x0; px <= x1; px++) {
+                int64_t w0 = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
+                int64_t w1 = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
+                int64_t w2 = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
+                if (cr < 0) { w0 = -w0; w1 = -w1; w2 = -w2; }
+                if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+                double zi = (w0 * vz[0] + w1 * vz[1] + w2 * vz[2]) / (double)(w0 + w1 + w2);
+                double zs_ = (double)z[(size_t)py * W + (size_t)px] * zs;
+                double e = fabs(zi - zs_);
+                if (e > emax) emax = e;
+                double d[3] = { px * cs - eye[0], py * cs - eye[1], zs_ - eye[2] };
+                double dd = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                if (dd < dmin) dmin = dd;
+                if (d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2] < ch * dd * dl) { inside = 0; break; }
+            }
+        if (!inside) continue;
+        checked++;
+        double r = emax * k / (dmin > floor_d ? dmin : floor_d) / tol;
+        if (r > worst) worst = r;
+    }
+    if (nchecked) *nchecked = checked;
+    return worst;
+}
+
 /* ---- deterministic synthetic DEMs (any size) ---- */
 static inline uint64_t rc_hash(uint64_t x)
 {

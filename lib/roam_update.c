@@ -1,0 +1,407 @@
+/* ROAM with frame coherence (seed 004, after Duchaineau 1997): the mesh is
+ * kept from one update to the next and adapted by a split queue (leaves,
+ * highest priority first) and a merge queue (diamonds, lowest priority
+ * first). See docs/roam.md, "Frame-coherent updates". */
+#include "roam.h"
+
+#include <math.h>
+#include <string.h>
+#ifdef ROAM_UPDATE_DEBUG
+#include <stdio.h>
+#endif
+
+/* A queue entry: a leaf (split queue) or a diamond named by one of its two
+ * parents (merge queue), with its priority. Entries are never removed
+ * when a split or merge elsewhere invalidates them: they are checked when
+ * they come to the top (the node's corners name the triangle, so a node
+ * index reused from the free list is not mistaken for the old one). */
+typedef struct qent {
+    double p;
+    uint32_t node;
+    uint16_t pos, ax, ay, bx, by;
+} qent;
+
+struct roam_queue {
+    qent *a;
+    size_t n, cap;
+    int max;            /* 1: max-heap (splits), 0: min-heap (merges) */
+};
+
+static int above(const struct roam_queue *q, const qent *x, const qent *y)
+{
+    return q->max ? x->p > y->p : x->p < y->p;
+}
+
+static void sift_down(struct roam_queue *q, size_t i)
+{
+    qent *a = q->a;
+    for (;;) {
+        size_t l = 2 * i + 1, b = i;
+        if (l < q->n && above(q, &a[l], &a[b])) b = l;
+        if (l + 1 < q->n && above(q, &a[l + 1], &a[b])) b = l + 1;
+        if (b == i) return;
+        qent t = a[i]; a[i] = a[b]; a[b] = t;
+        i = b;
+    }
+}
+
+/* Append without ordering (rs_roam_update heapifies after the scan). */
+static int q_append(rs_ctx *ctx, struct roam_queue *q, const qent *e)
+{
+    if (q->n == q->cap) {
+        size_t nc = q->cap ? 2 * q->cap : 4096;
+        qent *na = rs__realloc(ctx, q->a, nc * sizeof *na);
+        if (!na) return 0;
+        q->a = na;
+        q->cap = nc;
+    }
+    q->a[q->n++] = *e;
+    return 1;
+}
+
+static int q_push(rs_ctx *ctx, struct roam_queue *q, const qent *e)
+{
+    if (!q_append(ctx, q, e)) return 0;
+    qent *a = q->a;
+    for (size_t i = q->n - 1; i > 0;) {
+        size_t p = (i - 1) / 2;
+        if (!above(q, &a[i], &a[p])) break;
+        qent t = a[i]; a[i] = a[p]; a[p] = t;
+        i = p;
+    }
+    return 1;
+}
+
+static void q_pop(struct roam_queue *q)
+{
+    q->a[0] = q->a[--q->n];
+    sift_down(q, 0);
+}
+
+static void q_heapify(struct roam_queue *q)
+{
+    for (size_t i = q->n / 2; i-- > 0;) sift_down(q, i);
+}
+
+/* State of one update. */
+typedef struct upd {
+    rs_ctx *ctx;
+    rs_roam *L;
+    const view_params *v;
+    const unsigned char *vis;
+    double tol;
+    int all;            /* triangle target: queue everything, not only what crosses tol */
+    int nomem;
+} upd;
+
+static double item_prio(upd *u, uint32_t node, uint32_t pos)
+{
+    tri t;
+    uint32_t slot, patch;
+    rs__roam_item_tri(u->L, node, pos, &t, &slot, &patch);
+    return view_prio(u->L, slot, &t, patch, u->v, u->vis);
+}
+
+static void fill_ent(const rs_roam *L, qent *e, double p, uint32_t node, uint32_t pos)
+{
+    const roam_node *nd = &L->nodes[node];
+    e->p = p; e->node = node; e->pos = (uint16_t)pos;
+    e->ax = nd->ax; e->ay = nd->ay; e->bx = nd->bx; e->by = nd->by;
+}
+
+static int same_node(const rs_roam *L, const qent *e)
+{
+    const roam_node *nd = &L->nodes[e->node];
+    return nd->ax == e->ax && nd->ay == e->ay && nd->bx == e->bx && nd->by == e->by;
+}
+
+/* Is the entry still a leaf that can split? */
+static int leaf_valid(const rs_roam *L, const qent *e)
+{
+    const roam_node *nd = &L->nodes[e->node];
+    if (!same_node(L, e)) return 0;
+    if (e->pos == 0) return nd->lc == NIL && nd->e != NIL;
+    if (nd->lc != IMPL || (nd->rc & SPLIT_BIT(e->pos))) return 0;
+    return e->pos < 4 || (nd->rc & SPLIT_BIT(e->pos >> 1u));
+}
+
+/* Queue leaf (node, pos) for a split when its priority calls for one. */
+static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
+{
+    double p = item_prio(u, node, pos);
+    if (!u->all && !(p > u->tol)) return;
+    qent e;
+    fill_ent(u->L, &e, p, node, pos);
+    if (!(build ? q_append(u->ctx, u->L->qs, &e) : q_push(u->ctx, u->L->qs, &e))) u->nomem = 1;
+}
+
+/* Queue the diamond of (node, pos) for a merge when it can merge and its
+ * priority (the larger of its two parents': the error once merged) allows. */
+static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
+{
+    uint32_t N, pp;
+    if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
+    if (build && N != NIL && (N < node || (N == node && pp < pos))) return; /* once per diamond */
+    double p = item_prio(u, node, pos);
+    if (N != NIL) {
+        double q = item_prio(u, N, pp);
+        if (q > p) p = q;
+    }
+    if (!u->all && p > u->tol) return;
+    qent e;
+    fill_ent(u->L, &e, p, node, pos);
+    if (!(build ? q_append(u->ctx, u->L->qm, &e) : q_push(u->ctx, u->L->qm, &e))) u->nomem = 1;
+}
+
+/* The leaves of block r below its split positions (cell halves excluded). */
+static void offer_block_leaves(upd *u, uint32_t r, int build)
+{
+    uint32_t rc = u->L->nodes[r].rc;
+    for (uint32_t pos = 2; pos < u->L->ncut; pos++)
+        if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u)))) offer_leaf(u, r, pos, build);
+}
+
+/* Every leaf and every diamond of the current mesh, queued. */
+static void scan_mesh(upd *u)
+{
+    rs_roam *L = u->L;
+    roam_node *n = L->nodes;
+    for (uint32_t i = 0; i < L->used; i++) {
+        uint32_t lc = n[i].lc;
+        if (lc == FREE) continue;
+        if (lc == NIL) {
+            if (n[i].e != NIL) offer_leaf(u, i, 0, 1);
+        } else if (lc == IMPL) {
+            n[i].rc &= ~QUEUED;
+            offer_block_leaves(u, i, 1);
+            uint32_t rc = n[i].rc;
+            for (uint32_t pos = 2; pos < L->ncut; pos++)
+                if (rc & SPLIT_BIT(pos)) offer_diamond(u, i, pos, 1);
+            offer_diamond(u, i, 1, 1);
+        } else offer_diamond(u, i, 0, 1);
+    }
+    q_heapify(L->qs);
+    q_heapify(L->qm);
+}
+
+/* The leaves a split left on L->stack (new explicit nodes, blocks with new
+ * implicit leaves), queued. */
+static void drain_stack(upd *u)
+{
+    rs_roam *L = u->L;
+    roam_node *n = L->nodes;
+    while (L->sp) {
+        uint32_t i = L->stack[--L->sp];
+        if (i & TAG) {
+            i &= ~TAG;
+            n[i].rc &= ~QUEUED;
+            offer_block_leaves(u, i, 0);
+        } else if (n[i].lc == NIL && n[i].e != NIL) offer_leaf(u, i, 0, 0);
+    }
+}
+
+/* Top of a queue after dropping the entries that no longer name a leaf
+ * (splits) or a mergeable diamond (merges); NULL when empty. */
+static const qent *top_split(rs_roam *L)
+{
+    struct roam_queue *q = L->qs;
+    while (q->n && !leaf_valid(L, &q->a[0])) q_pop(q);
+    return q->n ? &q->a[0] : NULL;
+}
+
+static const qent *top_merge(rs_roam *L)
+{
+    struct roam_queue *q = L->qm;
+    uint32_t N, pp;
+    while (q->n && !(same_node(L, &q->a[0]) && rs__roam_mergeable(L, q->a[0].node, q->a[0].pos, &N, &pp))) q_pop(q);
+    return q->n ? &q->a[0] : NULL;
+}
+
+/* Split the top of the split queue; 0 when the pool cannot hold it. */
+static int do_split(upd *u)
+{
+    rs_roam *L = u->L;
+    qent e = L->qs->a[0];
+    q_pop(L->qs);
+    L->sp = 0;
+    if (rs__roam_split_leaf(L, e.node, e.pos) != 0) {
+        L->sp = 0;
+        L->exhausted = 1;
+        return 0;
+    }
+    drain_stack(u);
+    /* the new diamond (this leaf and its partner) can merge back */
+    if (u->all) offer_diamond(u, e.node, e.pos == 0 && L->nodes[e.node].lc == IMPL ? 1u : e.pos, 0);
+    return 1;
+}
+
+static void do_merge(upd *u)
+{
+    rs_roam *L = u->L;
+    qent e = L->qm->a[0];
+    q_pop(L->qm);
+    uint32_t N, pp, pn, ppos;
+    rs__roam_mergeable(L, e.node, e.pos, &N, &pp);
+    rs__roam_merge(L, e.node, e.pos);
+    /* the two parents are leaves again, and their own parents' diamonds
+     * may have become mergeable */
+    uint32_t nodes[2] = { e.node, N }, poss[2] = { e.pos, pp };
+    for (int k = 0; k < 2; k++) {
+        if (nodes[k] == NIL) continue;
+        uint32_t lpos = poss[k] == 1 ? 0u : poss[k]; /* a merged block is an explicit leaf */
+        if (u->all) offer_leaf(u, nodes[k], lpos, 0);
+        if (rs__roam_item_parent(L, nodes[k], poss[k], &pn, &ppos)) offer_diamond(u, pn, ppos, 0);
+    }
+}
+
+static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
+{
+    uint32_t np = L->npx * L->npy;
+    if (!L->par) {
+        L->par = rs__alloc_array(ctx, L->cap, sizeof *L->par);
+        if (!L->par) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %u parent links", L->cap);
+        roam_node *n = L->nodes;
+        for (uint32_t i = 0; i < L->used; i++) L->par[i] = NIL;
+        for (uint32_t i = 0; i < L->used; i++)
+            if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) L->par[n[i].lc] = L->par[n[i].rc] = i;
+        L->bytes += (uint64_t)L->cap * sizeof *L->par;
+    }
+    if (!L->qs) {
+        L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
+        L->qm = rs__calloc(ctx, 1, sizeof *L->qm);
+        L->pgen = rs__calloc(ctx, np, sizeof *L->pgen);
+        if (!L->qs || !L->qm || !L->pgen) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the update queues");
+        L->qs->max = 1;
+        L->bytes += np * sizeof *L->pgen;
+    }
+    return RS_OK;
+}
+
+void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
+{
+    rs__free(ctx, L->par);
+    if (L->qs) rs__free(ctx, L->qs->a);
+    if (L->qm) rs__free(ctx, L->qm->a);
+    rs__free(ctx, L->qs);
+    rs__free(ctx, L->qm);
+    rs__free(ctx, L->pgen);
+}
+
+/* Safety net when no budget is given: a triangle target's exchanges of a
+ * split for a merge could in principle cycle (the bounds are not monotone
+ * down the tree). */
+#define UNBOUNDED_OPS_PER_NODE 8u
+
+rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_update: roam and view must not be NULL");
+    rs_result r = ensure_state(ctx, L);
+    if (r != RS_OK) return r;
+    view_params v;
+    unsigned char visbuf[256], *vis;
+    if ((r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis)) != RS_OK) return r;
+    upd u;
+    memset(&u, 0, sizeof u);
+    u.ctx = ctx; u.L = L; u.v = &v; u.vis = vis;
+    u.tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
+    u.all = vw->target_triangles != 0;
+    v.tol = u.tol;
+    L->gen++;
+    L->exhausted = 0;
+    L->qs->n = L->qm->n = 0;
+    L->sp = 0;
+    scan_mesh(&u);
+    uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
+    uint64_t ops = 0;
+    int done = 0;
+    const qent *s, *m;
+    if (!u.all) {
+        /* every leaf above the tolerance splits, then every diamond whose
+         * two parents are within it merges: the unique coarsest mesh that
+         * meets the tolerance, which a rebuild gives too (docs/roam.md) */
+        while (!u.nomem && ops < limit && (s = top_split(L)) != NULL) {
+            if (!do_split(&u)) break;
+            ops++;
+        }
+        while (!u.nomem && ops < limit && top_merge(L) != NULL) {
+            do_merge(&u);
+            ops++;
+        }
+        done = ops < limit && !u.nomem;
+    } else {
+        /* the seed's loop: merge while above the target, split while below,
+         * then trade the highest split for the lowest merge while the
+         * split priority is the larger */
+        double target = vw->target_triangles;
+        double lo = target - target / 100.0, hi = target + target / 100.0;
+        for (;;) {
+            if (u.nomem) break;
+            if (ops >= limit) break;
+            s = top_split(L);
+            m = top_merge(L);
+            if (L->tris > hi) {
+                if (!m) { done = 1; break; }
+                do_merge(&u);
+            } else if (L->tris < lo) {
+                if (!s || !(s->p > 0.0) || L->exhausted) { done = 1; break; }
+                if (!do_split(&u)) continue;
+            } else if (s && m && s->p > m->p && !L->exhausted) {
+                if (L->tris <= target) { if (!do_split(&u)) continue; }
+                else do_merge(&u);
+            } else { done = 1; break; }
+            ops++;
+        }
+        s = top_split(L);
+        u.tol = s ? s->p : 0.0;
+    }
+    if (vis != visbuf) rs__free(ctx, vis);
+    L->update_ops = (uint32_t)(ops > UINT32_MAX ? UINT32_MAX : ops);
+    L->update_done = done;
+    L->frame_passes = 1;
+    L->threshold = u.tol;
+    L->tol = u.tol;
+    if (u.nomem) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the update queues");
+    if (L->exhausted)
+        return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out in an update "
+                        "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, L->tris);
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+#ifdef ROAM_UPDATE_DEBUG
+int rs__roam_debug_check(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw);
+int rs__roam_debug_check(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
+{
+    view_params v;
+    unsigned char visbuf[256], *vis;
+    rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
+    upd u;
+    memset(&u, 0, sizeof u);
+    u.ctx = ctx; u.L = L; u.v = &v; u.vis = vis;
+    u.tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
+    roam_node *n = L->nodes;
+    int bad = 0;
+    for (uint32_t i = 0; i < L->used; i++) {
+        uint32_t N, pp, lc = n[i].lc;
+        if (lc == FREE) continue;
+        if (lc == NIL) {
+            if (n[i].e != NIL && item_prio(&u, i, 0) > u.tol) { fprintf(stderr, "leaf %u wants split\n", i); bad++; }
+            continue;
+        }
+        if (lc == IMPL) {
+            uint32_t rc = n[i].rc;
+            for (uint32_t pos = 2; pos < L->ncut; pos++)
+                if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u))) && item_prio(&u, i, pos) > u.tol) {
+                    fprintf(stderr, "imp leaf %u/%u wants split\n", i, pos); bad++; }
+        }
+        for (uint32_t pos = lc == IMPL ? 1u : 0u; pos < (lc == IMPL ? L->ncut : 1u); pos++) {
+            if (!rs__roam_mergeable(L, i, pos, &N, &pp)) continue;
+            double p = item_prio(&u, i, pos), q = N != NIL ? item_prio(&u, N, pp) : 0;
+            if (!(p > u.tol) && !(q > u.tol)) { fprintf(stderr, "missed merge node %u pos %u (lc %u) partner %u/%u prio %g %g\n", i, pos, lc, N, pp, p, q); bad++; }
+        }
+    }
+    if (vis != visbuf) rs__free(ctx, vis);
+    return bad;
+}
+#endif
