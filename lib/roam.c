@@ -11,6 +11,10 @@
 #endif
 
 #define MAX_PATCH_LOG 14          /* patch side <= 16384 cells: heap index < 2^30 */
+/* The automatic patch side is at most 64 cells: patches are the unit of
+ * frustum culling, of the height range behind the view priorities and of
+ * rs_roam_extract_patch; error-mode meshes do not depend on it (docs/roam.md). */
+#define AUTO_PATCH_LOG 6
 #define MAX_SIDE 32768u           /* node coordinates are uint16 */
 #define AUTO_POOL_CAP (1u << 21)
 
@@ -162,7 +166,7 @@ static uint32_t choose_patch_log(uint32_t cw, uint32_t ch)
     uint32_t best = 0;
     double best_cost = -1.0;
     uint32_t big = cw > ch ? cw : ch;
-    for (uint32_t lg = 0; lg <= MAX_PATCH_LOG; lg++) {
+    for (uint32_t lg = 0; lg <= AUTO_PATCH_LOG; lg++) {
         uint32_t P = 1u << lg;
         if (lg > 0 && (P >> 1) >= big) break;
         double nx = (double)((cw + P - 1) / P), ny = (double)((ch + P - 1) / P);

@@ -100,17 +100,27 @@ struct rs_roam {
     uint32_t free_head, nfree;      /* first free pair (NIL: none), free nodes */
     struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
     uint32_t *pgen;                 /* per patch: generation of its leaves */
+    double *crecheck;               /* per node: odometer reading at which its subtree
+                                       must be scanned again (-1: at the next update) */
+    unsigned char *ccls;            /* per node: its class against the view at its
+                                       last scan */
+    double odo, last_eye[3], last_k, last_tol; /* camera travel; the view of the last scan */
+    int full_next;                  /* the next update scans every cluster */
     uint32_t gen;                   /* generation counter (bumped per change) */
     uint32_t update_ops;            /* split/merge operations of the last update */
     int update_done;                /* the last update reached its goal (not cut by the budget) */
 };
 
-/* Record that the leaves of node's patch changed (rs_roam_patch_generation). */
+/* Record that the leaves under node changed: its patch's generation
+ * (rs_roam_patch_generation), and the cached scans of the node and its
+ * ancestors (lib/roam_update.c; an ancestor of a node to scan is marked
+ * already, so the walk up stops there). */
 static inline void touch_patch(rs_roam *L, uint32_t node)
 {
     if (L->pgen) {
         uint32_t e = L->nodes[node].e;
         L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
+        for (uint32_t c = node; c != NIL && L->crecheck[c] >= 0.0; c = L->par[c]) L->crecheck[c] = -1.0;
     }
 }
 
@@ -273,16 +283,11 @@ static inline int sphere_visible(const view_params *v, const double c[3], double
     return 1;
 }
 
-/* A leaf's priority in view mode: its error bound (cached in `slot`)
- * projected at its nearest distance to the eye, in pixels; 0 when it
- * never needs a split (off the map, culled, flat), +inf when it straddles
- * the map edge. A split is wanted when this exceeds the tolerance. */
-static inline double view_prio(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch,
-                               const view_params *v, const unsigned char *vis)
+/* Bounding sphere of triangle t of patch `patch`: centre at its centroid
+ * and the middle of the patch's height range, radius over its corners and
+ * that range (metres). */
+static inline void tri_sphere(const rs_roam *L, const tri *t, uint32_t patch, double c[3], double *r)
 {
-    int cls = tri_class(L, t);
-    if (cls != NODE_ON) return cls == NODE_STRADDLES ? INFINITY : 0.0;
-    if (vis && !vis[patch]) return 0.0;
     int cx = t->cx, cy = t->cy;
     double cs = L->cs;
     double gx = (t->ax + t->bx + cx) / 3.0, gy = (t->ay + t->by + cy) / 3.0;
@@ -292,13 +297,40 @@ static inline double view_prio(rs_roam *L, uint32_t slot, const tri *t, uint32_t
     d = (cx - gx) * (cx - gx) + (cy - gy) * (cy - gy); if (d > r2) r2 = d;
     double zlo = (double)L->pzmin[patch] * L->zs, zhi = (double)L->pzmax[patch] * L->zs;
     double hz = 0.5 * (zhi - zlo);
-    double c[3] = { gx * cs, gy * cs, 0.5 * (zlo + zhi) };
-    double r = sqrt(r2 * cs * cs + hz * hz);
-    if (!sphere_visible(v, c, r)) return 0.0;
+    c[0] = gx * cs; c[1] = gy * cs; c[2] = 0.5 * (zlo + zhi);
+    *r = sqrt(r2 * cs * cs + hz * hz);
+}
+
+/* The distance part of a leaf's view priority: 0 when the leaf never needs
+ * a split (off the map, culled), 1 when it straddles the map edge (must
+ * split), 2 with *dist = distance from the eye to its bounding sphere (the
+ * triangle's xy extent and the patch's height range), floored. */
+static inline int view_dist(const rs_roam *L, const tri *t, uint32_t patch, const view_params *v,
+                            const unsigned char *vis, double *dist)
+{
+    int cls = tri_class(L, t);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
+    if (vis && !vis[patch]) return 0;
+    double c[3], r;
+    tri_sphere(L, t, patch, c, &r);
+    if (!sphere_visible(v, c, r)) return 0;
     double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
-    double dist = sqrt(dx * dx + dy * dy + dz * dz) - r;
-    double floor_d = 1e-3 * cs;
-    if (dist < floor_d) dist = floor_d;
+    double dst = sqrt(dx * dx + dy * dy + dz * dz) - r;
+    double floor_d = 1e-3 * L->cs;
+    *dist = dst < floor_d ? floor_d : dst;
+    return 2;
+}
+
+/* A leaf's priority in view mode: its error bound (cached in `slot`)
+ * projected at its nearest distance to the eye, in pixels; 0 when it
+ * never needs a split (off the map, culled, flat), +inf when it straddles
+ * the map edge. A split is wanted when this exceeds the tolerance. */
+static inline double view_prio(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch,
+                               const view_params *v, const unsigned char *vis)
+{
+    double dist;
+    int k = view_dist(L, t, patch, v, vis, &dist);
+    if (k != 2) return k ? INFINITY : 0.0;
     /* the error is computed last: culled nodes never need it */
     float e = rs__roam_slot_err(L, slot, t);
     if (!(e > 0.0f)) return 0.0; /* flat */

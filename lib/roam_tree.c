@@ -87,7 +87,10 @@ static void split(rs_roam *L, uint32_t t)
         L->used += 2;
     }
     uint32_t rc = lc + 1;
-    if (L->par) L->par[lc] = L->par[rc] = t;
+    if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
+        L->par[lc] = L->par[rc] = t;
+        L->crecheck[lc] = L->crecheck[rc] = -1.0;
+    }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
     node_corner(T, &cx, &cy);
@@ -354,6 +357,7 @@ void rs__roam_reset_mesh(rs_roam *L)
     L->tris = L->base_tris;
     L->exhausted = 0;
     if (L->pgen) { /* every patch may have changed */
+        L->full_next = 1;
         L->gen++;
         for (uint32_t p = 0; p < L->npx * L->npy; p++) L->pgen[p] = L->gen;
     }

@@ -91,15 +91,31 @@ typedef struct upd {
     const unsigned char *vis;
     double tol;
     int all;            /* triangle target: queue everything, not only what crosses tol */
+    int full;           /* scan every cluster, whatever its cache says */
+    int track;          /* scanning: keep `slack` */
+    double slack;       /* how far the eye may move before an item seen so far
+                           in the node under scan crosses the tolerance (metres) */
     int nomem;
 } upd;
 
+/* Priority of (node, pos) as a leaf (view_prio); in a cluster's scan, also
+ * how far its distance is from the one where it would cross the tolerance. */
 static double item_prio(upd *u, uint32_t node, uint32_t pos)
 {
     tri t;
     uint32_t slot, patch;
+    double d;
     rs__roam_item_tri(u->L, node, pos, &t, &slot, &patch);
-    return view_prio(u->L, slot, &t, patch, u->v, u->vis);
+    int k = view_dist(u->L, &t, patch, u->v, u->vis, &d);
+    if (k != 2) return k ? INFINITY : 0.0;
+    float e = rs__roam_slot_err(u->L, slot, &t);
+    if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
+    double ek = (double)e * u->L->zs * u->v->k;
+    if (u->track) {
+        double sl = fabs(d - ek / u->tol);
+        if (sl < u->slack) u->slack = sl;
+    }
+    return ek / d;
 }
 
 static void fill_ent(const rs_roam *L, qent *e, double p, uint32_t node, uint32_t pos)
@@ -141,7 +157,10 @@ static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
 {
     uint32_t N, pp;
     if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
-    if (build && N != NIL && (N < node || (N == node && pp < pos))) return; /* once per diamond */
+    /* a full scan of a triangle target sees each diamond once; the
+     * tolerance's scans see it from both sides, as the two clusters that
+     * hold its parents may be scanned in different frames */
+    if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
     double p = item_prio(u, node, pos);
     if (N != NIL) {
         double q = item_prio(u, N, pp);
@@ -161,25 +180,105 @@ static void offer_block_leaves(upd *u, uint32_t r, int build)
         if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u)))) offer_leaf(u, r, pos, build);
 }
 
-/* Every leaf and every diamond of the current mesh, queued. */
+/* A node's place against the view: 0 when its items are all
+ * culled, 1 when they are all in the frustum, 2 in between. An item's
+ * bounding sphere (tri_sphere) is centred on its centroid at the middle
+ * of the patch's height range, so its centre lies in the cluster's
+ * triangle lifted to that height, and its radius is at most the cluster's
+ * and at least half the height range: all items are visible when the
+ * lifted triangle's corners are inside every plane or outside by less
+ * than that half range, all culled when they are further outside one
+ * than the cluster's radius (or the patch is culled). */
+static int node_class(const upd *u, uint32_t i)
+{
+    const rs_roam *L = u->L;
+    const roam_node *nd = &L->nodes[i];
+    if (nd->e == NIL) return 2;
+    uint32_t patch = nd->e >> L->elog;
+    if (!u->vis[patch]) return 0;
+    tri t;
+    node_tri(L, nd, &t);
+    double c[3], r;
+    tri_sphere(L, &t, patch, c, &r);
+    double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
+    double cx[3] = { t.ax * L->cs, t.bx * L->cs, t.cx * L->cs }, cy[3] = { t.ay * L->cs, t.by * L->cs, t.cy * L->cs };
+    int part = 0;
+    for (int p = 0; p < u->v->nplanes; p++) {
+        const double *pl = u->v->planes[p];
+        double lo = INFINITY, hi = -INFINITY;
+        for (int k = 0; k < 3; k++) {
+            double sd = pl[0] * cx[k] + pl[1] * cy[k] + pl[2] * c[2] + pl[3];
+            if (sd < lo) lo = sd;
+            if (sd > hi) hi = sd;
+        }
+        if (hi < -r) return 0;
+        if (lo < -hz) part = 1;
+    }
+    return part ? 2 : 1;
+}
+
+static double walk(upd *u, uint32_t i, int pcls);
+
+/* The items at and below node i: its leaves and its diamonds. Returns the
+ * smallest recheck reading of the children's subtrees (+inf: none). */
+static double walk_items(upd *u, uint32_t i, int cls)
+{
+    roam_node *n = u->L->nodes;
+    uint32_t lc = n[i].lc;
+    if (lc == NIL) {
+        if (n[i].e != NIL) offer_leaf(u, i, 0, 1);
+    } else if (lc == IMPL) {
+        n[i].rc &= ~QUEUED;
+        offer_block_leaves(u, i, 1);
+        uint32_t rc = n[i].rc;
+        for (uint32_t pos = 2; pos < u->L->ncut; pos++)
+            if (rc & SPLIT_BIT(pos)) offer_diamond(u, i, pos, 1);
+        offer_diamond(u, i, 1, 1);
+    } else {
+        offer_diamond(u, i, 0, 1);
+        double a = walk(u, lc, cls), b = walk(u, n[i].rc, cls);
+        return a < b ? a : b;
+    }
+    return INFINITY;
+}
+
+/* Depth-first over the tree under node i, skipping a subtree when nothing
+ * in it can have crossed the tolerance since the last update (which
+ * completed): nothing under it changed (a split or merge marks the node
+ * and its ancestors), its class against the view is the same and not "in
+ * between", and the eye has moved less than the smallest slack its items
+ * had at their last scan (the odometer is below its recheck reading).
+ * Returns the subtree's recheck reading (-1: scan it every update). A
+ * child's triangle lies in its parent's, so it has the class of a parent
+ * wholly in or out (pcls 0 or 1). */
+static double walk(upd *u, uint32_t i, int pcls)
+{
+    rs_roam *L = u->L;
+    if (u->all) { walk_items(u, i, 2); return -1.0; }
+    int cls = pcls == 2 ? node_class(u, i) : pcls;
+    double rc = L->crecheck[i];
+    if (!u->full && rc >= 0.0 && cls != 2 && cls == L->ccls[i] && (cls == 0 || L->odo < rc)) return rc;
+    double save = u->slack;
+    u->slack = INFINITY;
+    double sub = walk_items(u, i, cls);
+    /* a margin for the rounding of the distances */
+    rc = L->odo + u->slack * (1.0 - 1e-9) - 1e-9 * (1.0 + L->odo);
+    if (sub < rc) rc = sub;
+    if (cls == 2 || rc < 0.0) rc = -1.0;
+    L->crecheck[i] = rc;
+    L->ccls[i] = (unsigned char)cls;
+    u->slack = save;
+    return rc;
+}
+
+/* The leaves and diamonds of the current mesh that may have crossed the
+ * tolerance (every one of them for a triangle target), queued. */
 static void scan_mesh(upd *u)
 {
     rs_roam *L = u->L;
-    roam_node *n = L->nodes;
-    for (uint32_t i = 0; i < L->used; i++) {
-        uint32_t lc = n[i].lc;
-        if (lc == FREE) continue;
-        if (lc == NIL) {
-            if (n[i].e != NIL) offer_leaf(u, i, 0, 1);
-        } else if (lc == IMPL) {
-            n[i].rc &= ~QUEUED;
-            offer_block_leaves(u, i, 1);
-            uint32_t rc = n[i].rc;
-            for (uint32_t pos = 2; pos < L->ncut; pos++)
-                if (rc & SPLIT_BIT(pos)) offer_diamond(u, i, pos, 1);
-            offer_diamond(u, i, 1, 1);
-        } else offer_diamond(u, i, 0, 1);
-    }
+    u->track = !u->all;
+    for (uint32_t i = 0; i < 2 * L->npx * L->npy; i++) walk(u, i, 2); /* the roots */
+    u->track = 0;
     q_heapify(L->qs);
     q_heapify(L->qm);
 }
@@ -258,13 +357,20 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
     uint32_t np = L->npx * L->npy;
     if (!L->par) {
-        L->par = rs__alloc_array(ctx, L->cap, sizeof *L->par);
-        if (!L->par) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %u parent links", L->cap);
+        uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
+        double *rc = rs__alloc_array(ctx, L->cap, sizeof *rc);
+        unsigned char *cl = rs__alloc_array(ctx, L->cap, 1);
+        if (!par || !rc || !cl) {
+            rs__free(ctx, par); rs__free(ctx, rc); rs__free(ctx, cl);
+            return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
+        }
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) L->par[i] = NIL;
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; rc[i] = -1.0; }
         for (uint32_t i = 0; i < L->used; i++)
-            if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) L->par[n[i].lc] = L->par[n[i].rc] = i;
-        L->bytes += (uint64_t)L->cap * sizeof *L->par;
+            if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
+        L->par = par; L->crecheck = rc; L->ccls = cl;
+        L->full_next = 1;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *rc + 1);
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -280,6 +386,8 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
+    rs__free(ctx, L->crecheck);
+    rs__free(ctx, L->ccls);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
     rs__free(ctx, L->qs);
@@ -307,6 +415,9 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
     u.tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
     u.all = vw->target_triangles != 0;
     v.tol = u.tol;
+    u.full = L->full_next || u.all || v.k != L->last_k || u.tol != L->last_tol;
+    double ex = v.eye[0] - L->last_eye[0], ey = v.eye[1] - L->last_eye[1], ez = v.eye[2] - L->last_eye[2];
+    L->odo += sqrt(ex * ex + ey * ey + ez * ez);
     L->gen++;
     L->exhausted = 0;
     L->qs->n = L->qm->n = 0;
@@ -356,6 +467,11 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
         u.tol = s ? s->p : 0.0;
     }
     if (vis != visbuf) rs__free(ctx, vis);
+    /* the clusters' caches assume a completed update at this tolerance */
+    L->full_next = u.all || !done || L->exhausted || u.nomem;
+    memcpy(L->last_eye, v.eye, sizeof v.eye);
+    L->last_k = v.k;
+    L->last_tol = u.tol;
     L->update_ops = (uint32_t)(ops > UINT32_MAX ? UINT32_MAX : ops);
     L->update_done = done;
     L->frame_passes = 1;

@@ -285,7 +285,10 @@ static void test_budget(rs_ctx *ctx)
     const uint32_t W = 129, H = 129;
     float *z = gen(DEM_FRACTAL, W, H);
     rs_dem *d = NULL;
-    rs_roam *r = make(ctx, z, W, H, NULL, &d);
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.patch_size = 128; /* one patch: a base mesh of 2 triangles (the automatic size gives 4 patches) */
+    rs_roam *r = make(ctx, z, W, H, &o, &d);
     CHECK(r != NULL);
     static const uint32_t Ns[] = { 2, 50, 1000, 5000 };
     for (size_t k = 0; r && k < 4; k++) {
