@@ -400,6 +400,67 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
  * down the tree). */
 #define UNBOUNDED_OPS_PER_NODE 8u
 
+/* Every leaf above the tolerance splits, then every diamond whose two
+ * parents are within it merges (docs/roam.md: the rebuild's mesh, but for
+ * a split node whose own bound exceeds the tolerance under an ancestor
+ * whose bound does not). 1 when complete. */
+static int tolerance_pass(upd *u, uint64_t limit, uint64_t *ops)
+{
+    rs_roam *L = u->L;
+    while (!u->nomem && *ops < limit && top_split(L) != NULL) {
+        if (!do_split(u)) break;
+        ++*ops;
+    }
+    while (!u->nomem && *ops < limit && top_merge(L) != NULL) {
+        do_merge(u);
+        ++*ops;
+    }
+    return *ops < limit && !u->nomem && !L->exhausted;
+}
+
+/* The seed's loop over every leaf and diamond: merge while above the
+ * target, split while below (to the target itself, so the next update's
+ * tolerance pass lands inside the band), then trade the highest split for
+ * the lowest merge while the split's priority is the larger and the count
+ * stays within 1 %. 1 when complete. */
+static int target_pass(upd *u, double target, uint64_t limit, uint64_t *ops)
+{
+    rs_roam *L = u->L;
+    double lo = target - target / 100.0, hi = target + target / 100.0;
+    int reached = 0;
+    for (;;) {
+        if (u->nomem || *ops >= limit) return 0;
+        const qent *s = top_split(L), *m = top_merge(L);
+        if (!reached && L->tris > target) {
+            if (!m) return 1;
+            do_merge(u);
+            if (L->tris <= target) reached = 1;
+        } else if (!reached && L->tris < target) {
+            if (!s || !(s->p > 0.0) || L->exhausted) return 1;
+            if (!do_split(u)) continue;
+            if (L->tris >= target) reached = 1;
+        } else if (L->tris > hi) {
+            if (!m) return 1;
+            do_merge(u);
+        } else if (L->tris < lo) {
+            if (!s || !(s->p > 0.0) || L->exhausted) return 1;
+            if (!do_split(u)) continue;
+        } else if (s && m && s->p > m->p && !L->exhausted) {
+            reached = 1;
+            if (L->tris <= target) { if (!do_split(u)) continue; }
+            else do_merge(u);
+        } else return 1;
+        ++*ops;
+    }
+}
+
+static void scan_fresh(upd *u)
+{
+    u->L->qs->n = u->L->qm->n = 0;
+    u->L->sp = 0;
+    scan_mesh(u);
+}
+
 rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
@@ -413,62 +474,38 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
     memset(&u, 0, sizeof u);
     u.ctx = ctx; u.L = L; u.v = &v; u.vis = vis;
     u.tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
-    u.all = vw->target_triangles != 0;
+    /* a triangle target starts from the tolerance the last update ended
+     * at (the seed's gFrameVariance) */
+    if (vw->target_triangles && L->tol > 0.0 && isfinite(L->tol)) u.tol = L->tol;
     v.tol = u.tol;
-    u.full = L->full_next || u.all || v.k != L->last_k || u.tol != L->last_tol;
+    u.full = L->full_next || v.k != L->last_k || u.tol != L->last_tol;
     double ex = v.eye[0] - L->last_eye[0], ey = v.eye[1] - L->last_eye[1], ez = v.eye[2] - L->last_eye[2];
     L->odo += sqrt(ex * ex + ey * ey + ez * ez);
     L->gen++;
     L->exhausted = 0;
-    L->qs->n = L->qm->n = 0;
-    L->sp = 0;
-    scan_mesh(&u);
     uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
     uint64_t ops = 0;
-    int done = 0;
-    const qent *s, *m;
-    if (!u.all) {
-        /* every leaf above the tolerance splits, then every diamond whose
-         * two parents are within it merges: the unique coarsest mesh that
-         * meets the tolerance, which a rebuild gives too (docs/roam.md) */
-        while (!u.nomem && ops < limit && (s = top_split(L)) != NULL) {
-            if (!do_split(&u)) break;
-            ops++;
-        }
-        while (!u.nomem && ops < limit && top_merge(L) != NULL) {
-            do_merge(&u);
-            ops++;
-        }
-        done = ops < limit && !u.nomem;
-    } else {
-        /* the seed's loop: merge while above the target, split while below,
-         * then trade the highest split for the lowest merge while the
-         * split priority is the larger */
+    scan_fresh(&u);
+    int done = tolerance_pass(&u, limit, &ops), fixed = done;
+    if (vw->target_triangles && done) {
         double target = vw->target_triangles;
-        double lo = target - target / 100.0, hi = target + target / 100.0;
-        for (;;) {
-            if (u.nomem) break;
-            if (ops >= limit) break;
-            s = top_split(L);
-            m = top_merge(L);
-            if (L->tris > hi) {
-                if (!m) { done = 1; break; }
-                do_merge(&u);
-            } else if (L->tris < lo) {
-                if (!s || !(s->p > 0.0) || L->exhausted) { done = 1; break; }
-                if (!do_split(&u)) continue;
-            } else if (s && m && s->p > m->p && !L->exhausted) {
-                if (L->tris <= target) { if (!do_split(&u)) continue; }
-                else do_merge(&u);
-            } else { done = 1; break; }
-            ops++;
+        if (fabs((double)L->tris - target) > target / 100.0) {
+            /* off the target: every leaf and diamond into the queues */
+            u.all = 1;
+            u.full = 1;
+            scan_fresh(&u);
+            done = target_pass(&u, target, limit, &ops);
+            fixed = 0;
+            /* a tolerance between the largest split and the smallest merge
+             * priority left keeps this mesh at the next update */
+            const qent *s = top_split(L), *m = top_merge(L);
+            double ps = s ? s->p : 0.0;
+            u.tol = m && m->p > ps && ps > 0.0 ? sqrt(ps * m->p) : ps > 0.0 ? ps : u.tol;
         }
-        s = top_split(L);
-        u.tol = s ? s->p : 0.0;
     }
     if (vis != visbuf) rs__free(ctx, vis);
-    /* the clusters' caches assume a completed update at this tolerance */
-    L->full_next = u.all || !done || L->exhausted || u.nomem;
+    /* the cached scans assume a completed update at this tolerance */
+    L->full_next = !fixed || u.nomem;
     memcpy(L->last_eye, v.eye, sizeof v.eye);
     L->last_k = v.k;
     L->last_tol = u.tol;
