@@ -398,6 +398,141 @@ static void test_view(rs_ctx *ctx)
     free(z);
 }
 
+/* The mesh of r: valid and crack-free (rc_check), and within the view
+ * tolerance on every triangle in the frustum (rc_view_worst; 29 degrees
+ * is inside a 60 degree vertical field of view at any aspect >= 1). */
+static int view_mesh_ok(rs_ctx *ctx, rs_roam *r, const float *z, uint32_t W, uint32_t H, double cs,
+                        const rs_roam_view *v, double tol, double *worst)
+{
+    mesh m;
+    rc_result res;
+    int ok = extract(ctx, r, NULL, &m) == RS_OK && check(z, W, H, cs, 1.0, &m, m.ni / 3, &res) && rc_all_ok(&res);
+    if (ok && worst) {
+        int32_t *gx = malloc((m.nv + 1) * sizeof *gx), *gy = malloc((m.nv + 1) * sizeof *gy);
+        for (size_t k = 0; k < m.nv; k++) {
+            gx[k] = (int32_t)lround(m.v[5 * k] / cs);
+            gy[k] = (int32_t)lround(m.v[5 * k + 1] / cs);
+        }
+        double k = v->height / (2.0 * tan(30.0 * 3.14159265358979323846 / 180.0));
+        *worst = rc_view_worst(W, H, z, 1.0, cs, gx, gy, m.i, m.ni / 3, v->eye, v->dir,
+                               29.0 * 3.14159265358979323846 / 180.0, k, tol, 1e-3 * cs, NULL);
+        free(gx); free(gy);
+    }
+    mesh_free(&m);
+    return ok;
+}
+
+/* Frame f of a low flight over a W x H map of cs-metre cells, turning. */
+static void flight_view(int f, uint32_t W, double cs, rs_roam_view *v)
+{
+    double c = 0.5 * (W - 1) * cs, t = f / 60.0 * 3.0;
+    memset(v, 0, sizeof *v);
+    v->eye[0] = c + 0.35 * c * cos(t) + 2.0 * f; v->eye[1] = c + 0.35 * c * sin(t); v->eye[2] = 90 + f % 7;
+    v->dir[0] = -sin(t); v->dir[1] = cos(t); v->dir[2] = -0.25;
+    v->fov_y = 60; v->width = 1024; v->height = 768;
+}
+
+/* rs_roam_update over a flight: crack-free and within the tolerance after
+ * every update, never fewer triangles than a rebuild at the same view
+ * (the rebuild's mesh is the coarsest that meets the tolerance) and at
+ * most 5 % more; with a small work budget still crack-free at every step
+ * and within the tolerance once an update completes; a triangle target
+ * within 2 % in one update per frame. */
+static void test_update(rs_ctx *ctx, uint32_t patch)
+{
+    const uint32_t W = 257, H = 257;
+    const double cs = 10.0, tol = 1.5;
+    float *z = malloc((size_t)W * H * sizeof *z);
+    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    rs_dem *d = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.patch_size = patch;
+    rs_roam *up = make_f(ctx, z, W, H, cs, 0, &o, &d), *reb = NULL, *bud = NULL, *tgt = NULL;
+    CHECK(up && rs_roam_create(ctx, d, &o, &reb) == RS_OK && rs_roam_create(ctx, d, &o, &bud) == RS_OK
+          && rs_roam_create(ctx, d, &o, &tgt) == RS_OK);
+    if (!up || !reb || !bud || !tgt) goto out;
+    int valid = 1, bound = 1, counts = 1, bvalid = 1, bbound = 1, within = 1, rc_ok = 1;
+    double worst = 0, bworst = 0, most = 0, tdev = 0;
+    uint32_t ops = 0, frames = 0;
+    for (int f = 0; f < 60; f++) {
+        rs_roam_view v;
+        flight_view(f, W, cs, &v);
+        v.pixel_error = tol;
+        if (rs_roam_update(ctx, up, &v, 0) != RS_OK || rs_roam_frame(ctx, reb, &v) != RS_OK) rc_ok = 0;
+        rs_roam_stats a, b, c;
+        rs_roam_get_stats(up, &a);
+        rs_roam_get_stats(reb, &b);
+        double w = 0;
+        if (!view_mesh_ok(ctx, up, z, W, H, cs, &v, tol, &w)) valid = 0;
+        if (w > worst) worst = w;
+        if (!a.update_done || w > 1.0) bound = 0;
+        double ratio = (double)a.triangles / b.triangles;
+        if (ratio > most) most = ratio;
+        if (a.triangles < b.triangles || ratio > 1.05) counts = 0;
+        ops += a.update_ops;
+        /* 7 operations per update: valid at every step, within the
+         * tolerance when an update completes */
+        if (rs_roam_update(ctx, bud, &v, 7) != RS_OK) rc_ok = 0;
+        rs_roam_get_stats(bud, &c);
+        if (!view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, c.update_done ? &w : NULL)) bvalid = 0;
+        if (c.update_done && w > bworst) bworst = w;
+        if (c.update_done && w > 1.0) bbound = 0;
+        frames += (uint32_t)c.update_done;
+        v.target_triangles = 3000;
+        if (rs_roam_update(ctx, tgt, &v, 0) != RS_OK) rc_ok = 0;
+        rs_roam_get_stats(tgt, &c);
+        double dev = fabs((double)c.triangles - 3000.0) / 3000.0;
+        if (dev > tdev) tdev = dev;
+        if (dev > 0.02 || c.frame_passes != 1) within = 0;
+        if (f % 6 == 0 && !view_mesh_ok(ctx, tgt, z, W, H, cs, &v, tol, NULL)) within = 0;
+    }
+    CHECK(rc_ok);
+    CHECKF(valid, "update (patch %u): every mesh valid and crack-free", patch);
+    CHECKF(bound, "update (patch %u): within the tolerance after every update (worst %.4f of it)", patch, worst);
+    CHECKF(counts, "update (patch %u): rebuild <= update <= 1.05 x rebuild triangles (worst %.4f)", patch, most);
+    CHECKF(bvalid, "update (patch %u) with a budget of 7: crack-free after every step", patch);
+    CHECKF(bbound, "update (patch %u) with a budget: within the tolerance when complete (%u of 60, worst %.4f)",
+           patch, frames, bworst);
+    CHECKF(within, "update (patch %u): triangle target within 2 %% in one update per frame (worst %.2f %%)", patch,
+           100 * tdev);
+    printf("update (patch %u): %u split/merge operations over 60 frames, worst tris ratio %.4f\n", patch, ops, most);
+    /* the budgeted landscape catches up at the last view */
+    {
+        rs_roam_view v;
+        flight_view(59, W, cs, &v);
+        v.pixel_error = tol;
+        rs_roam_stats c;
+        int n = 0;
+        do {
+            rs_roam_update(ctx, bud, &v, 7);
+            rs_roam_get_stats(bud, &c);
+        } while (!c.update_done && ++n < 100000);
+        double w = 0;
+        CHECK(c.update_done && view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, &w) && w <= 1.0);
+        /* other modes and updates mix: a rebuild, then updates from it */
+        CHECK_EQ_INT(rs_roam_refine_error(ctx, bud, 2.0), RS_OK);
+        CHECK_EQ_INT(rs_roam_update(ctx, bud, &v, 0), RS_OK);
+        rs_roam_stats a, b;
+        rs_roam_get_stats(bud, &a);
+        CHECK_EQ_INT(rs_roam_frame(ctx, reb, &v), RS_OK);
+        rs_roam_get_stats(reb, &b);
+        CHECK(view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, &w) && w <= 1.0 && a.triangles >= b.triangles
+              && a.triangles <= b.triangles * 1.05);
+    }
+    /* bad arguments */
+    CHECK_EQ_INT(rs_roam_update(ctx, NULL, NULL, 0), RS_ERR_INVALID_ARG);
+    {
+        rs_roam_view v;
+        memset(&v, 0, sizeof v);
+        CHECK_EQ_INT(rs_roam_update(ctx, up, &v, 0), RS_ERR_INVALID_ARG); /* dir 0 */
+    }
+out:
+    rs_roam_free(ctx, up); rs_roam_free(ctx, reb); rs_roam_free(ctx, bud); rs_roam_free(ctx, tgt);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
 static void test_extract_options(rs_ctx *ctx)
 {
     const uint32_t W = 45, H = 30; /* not 2^n+1: border splits */
@@ -888,6 +1023,9 @@ int main(void)
     test_scaling_and_determinism(ctx);
     test_budget(ctx);
     test_view(ctx);
+    test_update(ctx, 0);
+    test_update(ctx, 16);
+    test_update(ctx, 256);
     test_extract_options(ctx);
     test_errors(ctx);
     test_set_dem(ctx);
