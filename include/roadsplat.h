@@ -995,6 +995,24 @@ RS_API rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *roam, const rs_roam_mesh_
                                  float *vertices, float *normals, size_t vertex_capacity,
                                  uint32_t *indices, size_t index_capacity,
                                  size_t *vertex_count, size_t *index_count);
+/* Per-patch output, for hosts that keep one GPU buffer per patch and
+ * re-upload only what changed. Patch p = py * patches_x + px covers cells
+ * [px P, px P + P) x [py P, py P + P) of the map (P = stats.patch_size;
+ * clipped at the map's edge). The automatic patch size is at most 64
+ * cells, so patches can be culled (docs/roam.md). */
+/* Generation of patch p's triangles: changes whenever they may have
+ * changed (an rs_roam_update split or merge in it; any other mode
+ * changes every patch's). Compare with the value at the last upload. 0
+ * for a patch out of range. */
+RS_API uint32_t rs_roam_patch_generation(const rs_roam *roam, uint32_t patch);
+/* rs_roam_extract for the triangles of one patch: its own vertex numbering
+ * (vertices on a patch edge appear in both patches' buffers, at the same
+ * sample), the same options, order rules and errors; rs_roam_mesh_bound's
+ * counts hold for any patch. RS_ERR_INVALID_ARG for a patch out of range. */
+RS_API rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *roam, uint32_t patch,
+                                       const rs_roam_mesh_options *opts, float *vertices, float *normals,
+                                       size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
+                                       size_t *vertex_count, size_t *index_count);
 /* == end ROAM mesher ===================================================== */
 
 #ifdef __cplusplus

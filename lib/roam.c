@@ -219,6 +219,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->pzmin);
     rs__free(ctx, L->pzmax);
     rs__free(ctx, L->pin);
+    rs__free(ctx, L->pgen);
     rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
     rs__free(ctx, L->stack);
@@ -334,6 +335,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->pzmin = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pin = rs__alloc_array(ctx, npatch, 1);
+    L->pgen = rs__alloc_array(ctx, npatch, sizeof(uint32_t));
     L->wpr = (W + 63) / 64;
     L->nwords = (size_t)L->wpr * H;
     L->nsum = (L->nwords + 63) / 64;
@@ -343,7 +345,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
+    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->pgen || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
         return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                         (unsigned long long)nerr);
     memset(L->vbits, 0, L->nwords * sizeof(uint64_t));
@@ -351,6 +353,8 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     for (uint32_t x = 0; x < W; x++) L->ucol[x] = (float)((double)x / L->cw);
     for (uint32_t y = 0; y < H; y++) L->vrow[y] = (float)((double)y / L->ch);
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
+    L->gen = 1;
+    for (size_t p = 0; p < npatch; p++) L->pgen[p] = 1;
     for (uint32_t py = 0; py < s->npy; py++)
         for (uint32_t px = 0; px < s->npx; px++)
             L->pin[py * s->npx + px] = (unsigned char)(px * P + P <= L->cw && py * P + P <= L->ch);
@@ -410,7 +414,7 @@ static rs_result alloc_pool(rs_ctx *ctx, rs_roam *L, uint64_t pool)
 static uint64_t landscape_bytes(const rs_roam *L)
 {
     uint64_t W = L->w, H = L->hgt, npatch = (uint64_t)L->npx * L->npy;
-    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1)
+    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1 + sizeof(uint32_t))
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)

@@ -93,13 +93,14 @@ struct rs_roam {
     uint32_t frame_passes, culled;
     uint64_t bytes;
     /* Frame-coherent updates (lib/roam_update.c), allocated by the first
-     * rs_roam_update: the parent of every node (kept by split() once
-     * allocated), the free list of node pairs that merges gave back, the
-     * two queues, and a generation per patch (bumped when its leaves change). */
+     * rs_roam_update (but pgen, at creation): the parent of every node
+     * (kept by split() once allocated), the free list of node pairs that
+     * merges gave back, the two queues, and a generation per patch. */
     uint32_t *par;
     uint32_t free_head, nfree;      /* first free pair (NIL: none), free nodes */
     struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
-    uint32_t *pgen;                 /* per patch: generation of its leaves */
+    uint32_t *pgen;                 /* per patch: generation of its leaves (the value of
+                                       gen when they last changed) */
     double *crecheck;               /* per node: odometer reading at which its subtree
                                        must be scanned again (-1: at the next update) */
     unsigned char *ccls;            /* per node: its class against the view at its
@@ -117,11 +118,10 @@ struct rs_roam {
  * already, so the walk up stops there). */
 static inline void touch_patch(rs_roam *L, uint32_t node)
 {
-    if (L->pgen) {
-        uint32_t e = L->nodes[node].e;
-        L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
+    uint32_t e = L->nodes[node].e;
+    L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
+    if (L->par)
         for (uint32_t c = node; c != NIL && L->crecheck[c] >= 0.0; c = L->par[c]) L->crecheck[c] = -1.0;
-    }
 }
 
 /* Nodes the pool can still give. */

@@ -356,11 +356,10 @@ void rs__roam_reset_mesh(rs_roam *L)
     L->nfree = 0;
     L->tris = L->base_tris;
     L->exhausted = 0;
-    if (L->pgen) { /* every patch may have changed */
-        L->full_next = 1;
-        L->gen++;
-        for (uint32_t p = 0; p < L->npx * L->npy; p++) L->pgen[p] = L->gen;
-    }
+    /* every patch may have changed */
+    L->full_next = 1;
+    L->gen++;
+    for (uint32_t p = 0; p < L->npx * L->npy; p++) L->pgen[p] = L->gen;
 }
 
 /* ---- refinement ------------------------------------------------------------ */

@@ -355,7 +355,6 @@ static void do_merge(upd *u)
 
 static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
-    uint32_t np = L->npx * L->npy;
     if (!L->par) {
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
         double *rc = rs__alloc_array(ctx, L->cap, sizeof *rc);
@@ -375,10 +374,8 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
         L->qm = rs__calloc(ctx, 1, sizeof *L->qm);
-        L->pgen = rs__calloc(ctx, np, sizeof *L->pgen);
-        if (!L->qs || !L->qm || !L->pgen) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the update queues");
+        if (!L->qs || !L->qm) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the update queues");
         L->qs->max = 1;
-        L->bytes += np * sizeof *L->pgen;
     }
     return RS_OK;
 }
@@ -392,7 +389,6 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
     if (L->qm) rs__free(ctx, L->qm->a);
     rs__free(ctx, L->qs);
     rs__free(ctx, L->qm);
-    rs__free(ctx, L->pgen);
 }
 
 /* Safety net when no budget is given: a triangle target's exchanges of a

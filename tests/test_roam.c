@@ -533,6 +533,100 @@ out:
     free(z);
 }
 
+/* Triangles of patch p (or of the whole mesh, p = UINT32_MAX) as sorted
+ * keys of their corner samples (rotated to start at the smallest, so the
+ * winding is kept); NULL on failure. */
+static uint64_t *tri_keys(rs_ctx *ctx, rs_roam *r, uint32_t p, uint32_t W, double cs, size_t *n)
+{
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(r, NULL, &mv, &mi);
+    float *v = malloc((mv + 1) * 5 * sizeof *v);
+    uint32_t *ix = malloc((mi + 1) * sizeof *ix);
+    rs_result rr = p == UINT32_MAX ? rs_roam_extract(ctx, r, NULL, v, NULL, mv, ix, mi, &nv, &ni)
+                                   : rs_roam_extract_patch(ctx, r, p, NULL, v, NULL, mv, ix, mi, &nv, &ni);
+    uint64_t *k = rr == RS_OK ? malloc((ni / 3 + 1) * sizeof *k) : NULL;
+    for (size_t t = 0; k && t < ni / 3; t++) {
+        uint64_t s[3];
+        for (int c = 0; c < 3; c++) {
+            const float *q = v + 5 * (size_t)ix[3 * t + (size_t)c];
+            s[c] = (uint64_t)lround(q[1] / cs) * W + (uint64_t)lround(q[0] / cs);
+        }
+        int m = s[0] < s[1] ? (s[0] < s[2] ? 0 : 2) : (s[1] < s[2] ? 1 : 2);
+        k[t] = s[m] << 42 | s[(m + 1) % 3] << 21 | s[(m + 2) % 3];
+    }
+    if (k) qsort(k, ni / 3, sizeof *k, rc_cmp_u64);
+    *n = ni / 3;
+    free(v); free(ix);
+    return k;
+}
+
+/* Per-patch output over a flight: the patches' triangles together are the
+ * mesh's, and a patch whose generation did not change since the last
+ * update has the same triangles as then. */
+static void test_patches(rs_ctx *ctx)
+{
+    const uint32_t W = 257, H = 257, np = 16; /* automatic size: 64-cell patches */
+    const double cs = 10.0;
+    float *z = malloc((size_t)W * H * sizeof *z);
+    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    rs_dem *d = NULL;
+    rs_roam *r = make_f(ctx, z, W, H, cs, 0, NULL, &d);
+    CHECK(r != NULL);
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    CHECK_EQ_INT(st.patches_x * st.patches_y, np);
+    uint64_t *prev[16] = { NULL };
+    size_t nprev[16] = { 0 };
+    uint32_t gen[16] = { 0 };
+    int union_ok = 1, kept_ok = 1, kept = 0, changed = 0;
+    for (int f = 0; r && f < 30; f++) {
+        rs_roam_view v;
+        flight_view(f, W, cs, &v);
+        v.pixel_error = 1.5;
+        CHECK_EQ_INT(rs_roam_update(ctx, r, &v, 0), RS_OK);
+        size_t nall, sum = 0;
+        uint64_t *all = tri_keys(ctx, r, UINT32_MAX, W, cs, &nall), *cat = malloc((nall + 1) * sizeof *cat);
+        for (uint32_t p = 0; p < np; p++) {
+            size_t n = 0;
+            uint64_t *k = tri_keys(ctx, r, p, W, cs, &n);
+            if (!k) { union_ok = 0; continue; }
+            if (sum + n <= nall) memcpy(cat + sum, k, n * sizeof *k);
+            sum += n;
+            uint32_t g = rs_roam_patch_generation(r, p);
+            if (f > 0 && g == gen[p]) {
+                kept++;
+                if (n != nprev[p] || memcmp(k, prev[p], n * sizeof *k) != 0) kept_ok = 0;
+            } else if (f > 0) changed++;
+            free(prev[p]);
+            prev[p] = k; nprev[p] = n; gen[p] = g;
+        }
+        if (sum != nall) union_ok = 0;
+        else {
+            qsort(cat, sum, sizeof *cat, rc_cmp_u64);
+            if (!all || memcmp(cat, all, sum * sizeof *cat) != 0) union_ok = 0;
+        }
+        free(all); free(cat);
+    }
+    CHECKF(union_ok, "patches: their triangles together are the mesh's");
+    CHECKF(kept_ok, "patches: an unchanged generation means unchanged triangles");
+    CHECKF(kept > 0 && changed > 0, "patches: %d kept and %d changed over the flight", kept, changed);
+    CHECK_EQ_INT(rs_roam_patch_generation(r, np), 0);
+    {
+        size_t nv, ni;
+        float vb[5];
+        uint32_t ib[3];
+        CHECK_EQ_INT(rs_roam_extract_patch(ctx, r, np, NULL, vb, NULL, 1, ib, 3, &nv, &ni), RS_ERR_INVALID_ARG);
+    }
+    /* a rebuild changes every patch's generation */
+    uint32_t g0 = rs_roam_patch_generation(r, 0);
+    rs_roam_refine_error(ctx, r, 1.0);
+    CHECK(rs_roam_patch_generation(r, 0) != g0);
+    for (uint32_t p = 0; p < np; p++) free(prev[p]);
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
 static void test_extract_options(rs_ctx *ctx)
 {
     const uint32_t W = 45, H = 30; /* not 2^n+1: border splits */
@@ -1026,6 +1120,7 @@ int main(void)
     test_update(ctx, 0);
     test_update(ctx, 16);
     test_update(ctx, 256);
+    test_patches(ctx);
     test_extract_options(ctx);
     test_errors(ctx);
     test_set_dem(ctx);
