@@ -916,8 +916,8 @@ typedef struct rs_roam_view {
     double far_dist;      /* far plane, metres; 0 -> none */
 } rs_roam_view;
 
-/* Per-frame reset and split-only re-tessellation (no frame-to-frame merge
- * queue; see docs/roam.md). A triangle splits when its error bound,
+/* Per-frame reset and split-only re-tessellation (rs_roam_update keeps
+ * the mesh between frames instead; docs/roam.md). A triangle splits when its error bound,
  * projected at its nearest distance to the eye, exceeds the tolerance;
  * triangles outside the view frustum are not refined. With
  * target_triangles, the tolerance is carried from frame to frame and
@@ -931,22 +931,26 @@ RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *v
  * projected at their nearest distance to the eye, pixels) rose above the
  * tolerance split, highest first, with their forced splits; diamonds whose
  * two parents' priorities are both within it merge, lowest first. With a
- * fixed pixel_error the result, when the update completes, is the mesh
- * rs_roam_frame builds from scratch for the same view (same triangles,
- * every leaf within the tolerance). With target_triangles the loop merges
- * while above the target, splits while below, then trades the highest
- * split for the lowest merge while the split's priority is the larger:
- * one update lands within +-1 % of the target whenever the pool and
- * budget allow; stats.threshold is then the largest leaf priority left.
- * `budget` caps the split and merge operations of this call (a split
- * counts once with its forced splits; 0: no cap); when it runs out the
- * mesh is valid and crack-free but not yet at the tolerance (stats
- * update_done = 0) and the next update carries on. Cost: one pass over
- * the mesh's leaves and diamonds for their priorities, plus a heap
- * operation per change. The first call allocates 4 bytes per pool node
- * (parent links) and the queues, which grow with the mesh (RS_ERR_NOMEM:
- * the mesh stays valid). Like every rs_roam call it mutates the landscape:
- * one thread per landscape at a time. */
+ * fixed pixel_error, when the update completes every leaf is within the
+ * tolerance (the bound rs_roam_frame gives) and the mesh is crack-free,
+ * with at least rs_roam_frame's triangles and rarely a few more (docs/
+ * roam.md). With target_triangles it starts at the tolerance the last
+ * update ended at and, when the count is off by more than 1 %, runs the
+ * seed's loop over all leaves and diamonds (merge while above, split while
+ * below, trade the highest split for the lowest merge): one update lands
+ * within 1 % of the target whenever the pool and budget allow
+ * (stats.threshold: the tolerance reached). `budget` caps the split and
+ * merge operations of this call (a split counts once with its forced
+ * splits; 0: no cap); when it runs out the mesh is valid and crack-free but
+ * not yet at the tolerance (stats.update_done = 0), and the next update
+ * goes on. Cost: what changed, plus a walk that skips every subtree whose
+ * items cannot have crossed the tolerance since their last look (the eye
+ * has not moved far enough, nothing in it changed). The first call
+ * allocates 13 bytes per pool node (parent links, the walk's cache) and the
+ * queues, which grow with the mesh (RS_ERR_NOMEM: the mesh stays valid).
+ * Like every rs_roam call it mutates the landscape: one thread per
+ * landscape at a time; landscapes are independent. RS_ERR_POOL_EXHAUSTED
+ * as for rs_roam_frame. */
 RS_API rs_result rs_roam_update(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view, uint32_t budget);
 
 typedef struct rs_roam_stats {
