@@ -1017,6 +1017,22 @@ RS_API rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *roam, uint32_t patc
                                        const rs_roam_mesh_options *opts, float *vertices, float *normals,
                                        size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
                                        size_t *vertex_count, size_t *index_count);
+/* Seams between DEM tiles. Two landscapes on tiles that share an edge
+ * row or column (the same samples on both sides, e.g. columns 0..1024 and
+ * 1024..2048 of a larger map) mesh it independently, so their vertices on
+ * it differ (T-junctions across the seam). rs_roam_stitch splits border
+ * leaves of each (with their forced splits) until both have the union of
+ * the two vertex sets on the shared edge: the meshes then meet vertex to
+ * vertex, no skirts needed. The edges are named as seen in each tile's own
+ * frame and run the same way (by increasing column or row); they must have
+ * the same length, the landscapes the same patch size, and a right or
+ * bottom edge must lie on the patch grid (cells across a multiple of the
+ * patch size). The host calls it after every update of either landscape
+ * (an update may merge the extra splits again); it allocates 4 bytes per
+ * edge sample for the call. RS_ERR_POOL_EXHAUSTED when a pool ran short
+ * (both meshes valid, the seam not closed). */
+enum { RS_ROAM_EDGE_TOP = 0, RS_ROAM_EDGE_BOTTOM = 1, RS_ROAM_EDGE_LEFT = 2, RS_ROAM_EDGE_RIGHT = 3 };
+RS_API rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b);
 /* == end ROAM mesher ===================================================== */
 
 #ifdef __cplusplus

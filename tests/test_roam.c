@@ -627,6 +627,91 @@ static void test_patches(rs_ctx *ctx)
     free(z);
 }
 
+/* Seams: two landscapes on the halves of one DEM (sharing the middle
+ * column, or the middle row), updated with the same camera, then
+ * stitched: together they must be one crack-free mesh of the whole DEM
+ * (rc_check: every interior edge paired, no T-junction across the seam);
+ * without the stitch they are not. */
+static void test_seams(rs_ctx *ctx, int vertical_seam)
+{
+    const uint32_t S = 129, N = 2 * S - 1; /* the whole map: N x S or S x N */
+    const uint32_t WW = vertical_seam ? N : S, HH = vertical_seam ? S : N;
+    const double cs = 10.0;
+    float *z = malloc((size_t)WW * HH * sizeof *z), *h[2];
+    rc_dem_fractal(z, WW, HH, 21, 48.0, 60.0, 0.55);
+    rs_dem *d[2] = { NULL, NULL };
+    rs_roam *r[2] = { NULL, NULL };
+    for (int k = 0; k < 2; k++) {
+        h[k] = malloc((size_t)S * S * sizeof *h[k]);
+        for (uint32_t y = 0; y < S; y++)
+            for (uint32_t x = 0; x < S; x++)
+                h[k][(size_t)y * S + x] = vertical_seam ? z[(size_t)y * WW + x + (uint32_t)k * (S - 1)]
+                                                        : z[(size_t)(y + (uint32_t)k * (S - 1)) * WW + x];
+        r[k] = make_f(ctx, h[k], S, S, cs, 0, NULL, &d[k]);
+    }
+    CHECK(r[0] && r[1]);
+    int open_before = 0, closed = 1, valid = 1;
+    for (int f = 0; r[0] && r[1] && f < 12; f++) {
+        rs_roam_view v;
+        flight_view(f, WW, cs, &v);
+        v.eye[1] = 0.5 * (HH - 1) * cs + 0.2 * (HH - 1) * cs * sin(f / 4.0);
+        v.pixel_error = 1.0;
+        for (int k = 0; k < 2; k++) {
+            rs_roam_view w = v; /* the same camera in each tile's frame */
+            if (vertical_seam) w.eye[0] -= k * (S - 1) * cs; else w.eye[1] -= k * (S - 1) * cs;
+            CHECK_EQ_INT(rs_roam_update(ctx, r[k], &w, 0), RS_OK);
+        }
+        for (int pass = 0; pass < 2; pass++) {
+            if (pass == 1)
+                CHECK_EQ_INT(rs_roam_stitch(ctx, r[0], vertical_seam ? RS_ROAM_EDGE_RIGHT : RS_ROAM_EDGE_BOTTOM, r[1],
+                                            vertical_seam ? RS_ROAM_EDGE_LEFT : RS_ROAM_EDGE_TOP), RS_OK);
+            /* both meshes in the whole map's grid */
+            mesh m[2];
+            extract(ctx, r[0], NULL, &m[0]);
+            extract(ctx, r[1], NULL, &m[1]);
+            size_t nv = m[0].nv + m[1].nv, ni = m[0].ni + m[1].ni;
+            int32_t *gx = malloc((nv + 1) * sizeof *gx), *gy = malloc((nv + 1) * sizeof *gy);
+            double *vz = malloc((nv + 1) * sizeof *vz);
+            uint32_t *ix = malloc((ni + 1) * sizeof *ix);
+            for (int k = 0; k < 2; k++) {
+                size_t v0 = k ? m[0].nv : 0, i0 = k ? m[0].ni : 0;
+                for (size_t q = 0; q < m[k].nv; q++) {
+                    gx[v0 + q] = (int32_t)lround(m[k].v[5 * q] / cs) + (vertical_seam ? k * (int32_t)(S - 1) : 0);
+                    gy[v0 + q] = (int32_t)lround(m[k].v[5 * q + 1] / cs) + (vertical_seam ? 0 : k * (int32_t)(S - 1));
+                    vz[v0 + q] = m[k].v[5 * q + 2];
+                }
+                for (size_t q = 0; q < m[k].ni; q++) ix[i0 + q] = m[k].i[q] + (uint32_t)v0;
+            }
+            float *zf = malloc((size_t)WW * HH * sizeof *zf);
+            for (size_t q = 0; q < (size_t)WW * HH; q++) zf[q] = (float)z[q];
+            rc_result res;
+            int ok = rc_check(WW, HH, zf, 1.0, gx, gy, vz, nv, ix, ni / 3, &res);
+            if (!ok || !res.ok_grid || !res.ok_heights || !res.ok_winding || !res.ok_area || !res.ok_coverage) valid = 0;
+            int seamless = ok && res.ok_edges && res.ok_tjunction;
+            if (pass == 0 && !seamless) open_before++;
+            if (pass == 1 && !seamless) closed = 0;
+            free(gx); free(gy); free(vz); free(ix); free(zf);
+            mesh_free(&m[0]); mesh_free(&m[1]);
+        }
+    }
+    CHECKF(valid, "seams (%s): both tiles' meshes valid", vertical_seam ? "columns" : "rows");
+    CHECKF(closed, "seams (%s): stitched tiles form one crack-free mesh on every frame", vertical_seam ? "columns" : "rows");
+    CHECKF(open_before > 0, "seams (%s): unstitched tiles had T-junctions on %d of 12 frames", vertical_seam ? "columns" : "rows",
+           open_before);
+    printf("seams (%s): open before stitching on %d of 12 frames\n", vertical_seam ? "columns" : "rows", open_before);
+    /* refused: mismatched edges */
+    if (r[0] && r[1]) {
+        CHECK_EQ_INT(rs_roam_stitch(ctx, r[0], 7, r[1], RS_ROAM_EDGE_LEFT), RS_ERR_INVALID_ARG);
+        CHECK_EQ_INT(rs_roam_stitch(ctx, r[0], RS_ROAM_EDGE_LEFT, r[0], RS_ROAM_EDGE_RIGHT), RS_ERR_INVALID_ARG);
+    }
+    for (int k = 0; k < 2; k++) {
+        rs_roam_free(ctx, r[k]);
+        rs_dem_free(ctx, d[k]);
+        free(h[k]);
+    }
+    free(z);
+}
+
 static void test_extract_options(rs_ctx *ctx)
 {
     const uint32_t W = 45, H = 30; /* not 2^n+1: border splits */
@@ -1121,6 +1206,8 @@ int main(void)
     test_update(ctx, 16);
     test_update(ctx, 256);
     test_patches(ctx);
+    test_seams(ctx, 1);
+    test_seams(ctx, 0);
     test_extract_options(ctx);
     test_errors(ctx);
     test_set_dem(ctx);
