@@ -27,6 +27,30 @@ static inline int rc_cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Bounding box of a triangle's three lattice corners. */
+static inline void rc_bbox(const int64_t x[3], const int64_t y[3], int64_t *x0, int64_t *x1, int64_t *y0, int64_t *y1)
+{
+    *x0 = *x1 = x[0];
+    *y0 = *y1 = y[0];
+    for (int c = 1; c < 3; c++) {
+        if (x[c] < *x0) *x0 = x[c];
+        if (x[c] > *x1) *x1 = x[c];
+        if (y[c] < *y0) *y0 = y[c];
+        if (y[c] > *y1) *y1 = y[c];
+    }
+}
+
+/* Barycentric weights (times twice the area) of lattice point (px, py) in
+ * the triangle of corners x, y with cross product cr; 0 when outside. */
+static inline int rc_bary(const int64_t x[3], const int64_t y[3], int64_t cr, int64_t px, int64_t py, int64_t w[3])
+{
+    w[0] = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
+    w[1] = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
+    w[2] = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
+    if (cr < 0) { w[0] = -w[0]; w[1] = -w[1]; w[2] = -w[2]; }
+    return w[0] >= 0 && w[1] >= 0 && w[2] >= 0;
+}
+
 /* gx, gy: grid column and row per vertex; vz: height per vertex (metres);
  * z: DEM (DEM units, NaN = nodata), heights in metres = z * zs;
  * tri: 3 indices per triangle, `nt` triangles. Returns 0 if out of memory. */
@@ -78,23 +102,15 @@ static inline int rc_check(uint32_t W, uint32_t H, const float *z, double zs, co
             }
         }
         /* rasterize the samples of the triangle */
-        int64_t x0 = x[0], x1 = x[0], y0 = y[0], y1 = y[0];
-        for (int c = 1; c < 3; c++) {
-            if (x[c] < x0) x0 = x[c];
-            if (x[c] > x1) x1 = x[c];
-            if (y[c] < y0) y0 = y[c];
-            if (y[c] > y1) y1 = y[c];
-        }
+        int64_t x0, x1, y0, y1;
+        rc_bbox(x, y, &x0, &x1, &y0, &y1);
         if (cr == 0) continue;
         for (int64_t py = y0; py <= y1; py++)
             for (int64_t px = x0; px <= x1; px++) {
-                int64_t w0 = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
-                int64_t w1 = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
-                int64_t w2 = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
-                if (cr < 0) { w0 = -w0; w1 = -w1; w2 = -w2; }
-                if (w0 < 0 || w1 < 0 || w2 < 0) continue;
-                double den = (double)(w0 + w1 + w2);
-                double zi = (w0 * vz[k[0]] + w1 * vz[k[1]] + w2 * vz[k[2]]) / den;
+                int64_t w[3];
+                if (!rc_bary(x, y, cr, px, py, w)) continue;
+                double den = (double)(w[0] + w[1] + w[2]);
+                double zi = (w[0] * vz[k[0]] + w[1] * vz[k[1]] + w[2] * vz[k[2]]) / den;
                 size_t id = (size_t)py * W + (size_t)px;
                 double e = isnan(z[id]) ? 0.0 : fabs(zi - (double)z[id] * zs);
                 if (e > err[id]) err[id] = e;
@@ -163,23 +179,15 @@ static inline double rc_view_worst(uint32_t W, uint32_t H, const float *z, doubl
         }
         int64_t cr = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
         if (cr == 0) continue;
-        int64_t x0 = x[0], x1 = x[0], y0 = y[0], y1 = y[0];
-        for (int c = 1; c < 3; c++) {
-            if (x[c] < x0) x0 = x[c];
-            if (x[c] > x1) x1 = x[c];
-            if (y[c] < y0) y0 = y[c];
-            if (y[c] > y1) y1 = y[c];
-        }
+        int64_t x0, x1, y0, y1;
+        rc_bbox(x, y, &x0, &x1, &y0, &y1);
         double emax = 0.0, dmin = INFINITY;
         int inside = 1;
         for (int64_t py = y0; py <= y1 && inside; py++)
             for (int64_t px = x0; px <= x1; px++) {
-                int64_t w0 = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
-                int64_t w1 = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
-                int64_t w2 = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
-                if (cr < 0) { w0 = -w0; w1 = -w1; w2 = -w2; }
-                if (w0 < 0 || w1 < 0 || w2 < 0) continue;
-                double zi = (w0 * vz[0] + w1 * vz[1] + w2 * vz[2]) / (double)(w0 + w1 + w2);
+                int64_t w[3];
+                if (!rc_bary(x, y, cr, px, py, w)) continue;
+                double zi = (w[0] * vz[0] + w[1] * vz[1] + w[2] * vz[2]) / (double)(w[0] + w[1] + w[2]);
                 double zs_ = (double)z[(size_t)py * W + (size_t)px] * zs;
                 double e = fabs(zi - zs_);
                 if (e > emax) emax = e;

@@ -317,11 +317,18 @@ static void test_budget(rs_ctx *ctx)
     free(z);
 }
 
+/* The fractal the view-mode tests fly over (80 m relief at 10 m cells). */
+static float *view_dem(uint32_t W, uint32_t H)
+{
+    float *z = malloc((size_t)W * H * sizeof *z);
+    if (z) rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    return z;
+}
+
 static void test_view(rs_ctx *ctx)
 {
     const uint32_t W = 257, H = 257;
-    float *z = malloc((size_t)W * H * sizeof *z);
-    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    float *z = view_dem(W, H);
     rs_dem *d = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -442,8 +449,7 @@ static void test_update(rs_ctx *ctx, uint32_t patch)
 {
     const uint32_t W = 257, H = 257;
     const double cs = 10.0, tol = 1.5;
-    float *z = malloc((size_t)W * H * sizeof *z);
-    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    float *z = view_dem(W, H);
     rs_dem *d = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -567,8 +573,7 @@ static void test_patches(rs_ctx *ctx)
 {
     const uint32_t W = 257, H = 257, np = 16; /* automatic size: 64-cell patches */
     const double cs = 10.0;
-    float *z = malloc((size_t)W * H * sizeof *z);
-    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    float *z = view_dem(W, H);
     rs_dem *d = NULL;
     rs_roam *r = make_f(ctx, z, W, H, cs, 0, NULL, &d);
     CHECK(r != NULL);
