@@ -98,24 +98,35 @@ typedef struct upd {
     int nomem;
 } upd;
 
-/* Priority of (node, pos) as a leaf (view_prio); in a cluster's scan, also
- * how far its distance is from the one where it would cross the tolerance. */
-static double item_prio(upd *u, uint32_t node, uint32_t pos)
+/* Priority of (node, pos) as a leaf (view_prio), its triangle t given or
+ * (NULL) worked out; in a scan, also how far its distance is from the one
+ * where it would cross the tolerance. */
+static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
 {
     tri t;
     uint32_t slot, patch;
     double d;
-    rs__roam_item_tri(u->L, node, pos, &t, &slot, &patch);
-    int k = view_dist(u->L, &t, patch, u->v, u->vis, &d);
+    const rs_roam *L = u->L;
+    if (tk) {
+        t = *tk;
+        slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
+        patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
+    } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
+    int k = view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k != 2) return k ? INFINITY : 0.0;
     float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
-    double ek = (double)e * u->L->zs * u->v->k;
+    double ek = (double)e * L->zs * u->v->k;
     if (u->track) {
         double sl = fabs(d - ek / u->tol);
         if (sl < u->slack) u->slack = sl;
     }
     return ek / d;
+}
+
+static double item_prio(upd *u, uint32_t node, uint32_t pos)
+{
+    return item_prio_t(u, node, pos, NULL);
 }
 
 static void fill_ent(const rs_roam *L, qent *e, double p, uint32_t node, uint32_t pos)
@@ -142,9 +153,9 @@ static int leaf_valid(const rs_roam *L, const qent *e)
 }
 
 /* Queue leaf (node, pos) for a split when its priority calls for one. */
-static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
+static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
 {
-    double p = item_prio(u, node, pos);
+    double p = item_prio_t(u, node, pos, t);
     if (!u->all && !(p > u->tol)) return;
     qent e;
     fill_ent(u->L, &e, p, node, pos);
@@ -153,7 +164,7 @@ static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
 
 /* Queue the diamond of (node, pos) for a merge when it can merge and its
  * priority (the larger of its two parents': the error once merged) allows. */
-static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
+static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
 {
     uint32_t N, pp;
     if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
@@ -161,7 +172,7 @@ static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
      * tolerance's scans see it from both sides, as the two clusters that
      * hold its parents may be scanned in different frames */
     if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
-    double p = item_prio(u, node, pos);
+    double p = item_prio_t(u, node, pos, t);
     if (N != NIL) {
         double q = item_prio(u, N, pp);
         if (q > p) p = q;
@@ -172,12 +183,32 @@ static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
     if (!(build ? q_append(u->ctx, u->L->qm, &e) : q_push(u->ctx, u->L->qm, &e))) u->nomem = 1;
 }
 
-/* The leaves of block r below its split positions (cell halves excluded). */
-static void offer_block_leaves(upd *u, uint32_t r, int build)
+static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
 {
-    uint32_t rc = u->L->nodes[r].rc;
-    for (uint32_t pos = 2; pos < u->L->ncut; pos++)
-        if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u)))) offer_leaf(u, r, pos, build);
+    offer_leaf_t(u, node, pos, build, NULL);
+}
+
+static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
+{
+    offer_diamond_t(u, node, pos, build, NULL);
+}
+
+/* The leaves of block r below its split positions (cell halves excluded),
+ * and with `diamonds` its diamonds too: the positions' triangles worked
+ * out once, top down. */
+static void offer_block(upd *u, uint32_t r, int build, int diamonds)
+{
+    const rs_roam *L = u->L;
+    uint32_t rc = L->nodes[r].rc;
+    tri pt[1 << IMPL_DEPTH];
+    node_tri(L, &L->nodes[r], &pt[1]);
+    for (uint32_t pos = 2; pos < L->ncut; pos++) {
+        if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
+        child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
+        if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
+        else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos]);
+    }
+    if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1]);
 }
 
 /* A node's place against the view: 0 when its items are all
@@ -229,11 +260,7 @@ static double walk_items(upd *u, uint32_t i, int cls)
         if (n[i].e != NIL) offer_leaf(u, i, 0, 1);
     } else if (lc == IMPL) {
         n[i].rc &= ~QUEUED;
-        offer_block_leaves(u, i, 1);
-        uint32_t rc = n[i].rc;
-        for (uint32_t pos = 2; pos < u->L->ncut; pos++)
-            if (rc & SPLIT_BIT(pos)) offer_diamond(u, i, pos, 1);
-        offer_diamond(u, i, 1, 1);
+        offer_block(u, i, 1, 1);
     } else {
         offer_diamond(u, i, 0, 1);
         double a = walk(u, lc, cls), b = walk(u, n[i].rc, cls);
@@ -294,7 +321,7 @@ static void drain_stack(upd *u)
         if (i & TAG) {
             i &= ~TAG;
             n[i].rc &= ~QUEUED;
-            offer_block_leaves(u, i, 0);
+            offer_block(u, i, 0, 0);
         } else if (n[i].lc == NIL && n[i].e != NIL) offer_leaf(u, i, 0, 0);
     }
 }
