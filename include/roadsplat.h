@@ -935,10 +935,10 @@ RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *v
  * tolerance (the bound rs_roam_frame gives) and the mesh is crack-free,
  * with at least rs_roam_frame's triangles and rarely a few more (docs/
  * roam.md). With target_triangles it starts at the tolerance the last
- * update ended at and, when the count is off by more than 1 %, runs the
+ * update ended at and, when the count is off by more than 1.5 %, runs the
  * seed's loop over all leaves and diamonds (merge while above, split while
  * below, trade the highest split for the lowest merge): one update lands
- * within 1 % of the target whenever the pool and budget allow
+ * within 1.5 % of the target whenever the pool and budget allow
  * (stats.threshold: the tolerance reached). `budget` caps the split and
  * merge operations of this call (a split counts once with its forced
  * splits; 0: no cap); when it runs out the mesh is valid and crack-free but
