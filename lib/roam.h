@@ -105,7 +105,7 @@ struct rs_roam {
                                        must be scanned again (-1: at the next update) */
     unsigned char *ccls;            /* per node: its class against the view at its
                                        last scan */
-    double odo, last_eye[3], last_k, last_tol; /* camera travel; the view of the last scan */
+    double odo, last_eye[3], last_k, last_tol, last_mtol; /* camera travel; the view of the last scan */
     int full_next;                  /* the next update scans every cluster */
     uint32_t gen;                   /* generation counter (bumped per change) */
     uint32_t update_ops;            /* split/merge operations of the last update */

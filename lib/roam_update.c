@@ -92,6 +92,8 @@ typedef struct upd {
     double tol;
     int all;            /* triangle target: queue everything, not only what crosses tol */
     int full;           /* scan every cluster, whatever its cache says */
+    double mtol;        /* merges: both parents at or below this (tol / MERGE_HYSTERESIS) */
+    double thr;         /* the threshold item_prio_t measures the slack against */
     int track;          /* scanning: keep `slack` */
     double slack;       /* how far the eye may move before an item seen so far
                            in the node under scan crosses the tolerance (metres) */
@@ -118,7 +120,7 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
     double ek = (double)e * L->zs * u->v->k;
     if (u->track) {
-        double sl = fabs(d - ek / u->tol);
+        double sl = fabs(d - ek / u->thr);
         if (sl < u->slack) u->slack = sl;
     }
     return ek / d;
@@ -155,6 +157,7 @@ static int leaf_valid(const rs_roam *L, const qent *e)
 /* Queue leaf (node, pos) for a split when its priority calls for one. */
 static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
 {
+    u->thr = u->tol;
     double p = item_prio_t(u, node, pos, t);
     if (!u->all && !(p > u->tol)) return;
     qent e;
@@ -172,12 +175,13 @@ static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, cons
      * tolerance's scans see it from both sides, as the two clusters that
      * hold its parents may be scanned in different frames */
     if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
+    u->thr = u->mtol;
     double p = item_prio_t(u, node, pos, t);
     if (N != NIL) {
         double q = item_prio(u, N, pp);
         if (q > p) p = q;
     }
-    if (!u->all && p > u->tol) return;
+    if (!u->all && p > u->mtol) return;
     qent e;
     fill_ent(u->L, &e, p, node, pos);
     if (!(build ? q_append(u->ctx, u->L->qm, &e) : q_push(u->ctx, u->L->qm, &e))) u->nomem = 1;
@@ -418,6 +422,13 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->qm);
 }
 
+/* The default rs_roam_view.merge_hysteresis: a fixed tolerance merges a
+ * diamond only when both parents are within tol / 1.1. The items between
+ * the two thresholds are stable both ways, so far fewer cross one per
+ * metre of eye travel (the seed's hysteresis); the split side, hence the
+ * error bound, is unchanged. */
+#define MERGE_HYSTERESIS 1.1
+
 /* A triangle target accepts the carried tolerance's mesh within 1.5 % of
  * the target (the seed's full loop, which lands within 1 %, costs a scan
  * of every leaf and diamond: at a fixed tolerance the count drifts by a
@@ -507,7 +518,8 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
      * at (the seed's gFrameVariance) */
     if (vw->target_triangles && L->tol > 0.0 && isfinite(L->tol)) u.tol = L->tol;
     v.tol = u.tol;
-    u.full = L->full_next || v.k != L->last_k || u.tol != L->last_tol;
+    u.mtol = vw->target_triangles ? u.tol : u.tol / (vw->merge_hysteresis > 0.0 ? vw->merge_hysteresis : MERGE_HYSTERESIS);
+    u.full = L->full_next || v.k != L->last_k || u.tol != L->last_tol || u.mtol != L->last_mtol;
     double ex = v.eye[0] - L->last_eye[0], ey = v.eye[1] - L->last_eye[1], ez = v.eye[2] - L->last_eye[2];
     L->odo += sqrt(ex * ex + ey * ey + ez * ez);
     L->gen++;
@@ -538,6 +550,7 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
     memcpy(L->last_eye, v.eye, sizeof v.eye);
     L->last_k = v.k;
     L->last_tol = u.tol;
+    L->last_mtol = u.mtol;
     L->update_ops = (uint32_t)(ops > UINT32_MAX ? UINT32_MAX : ops);
     L->update_done = done;
     L->frame_passes = 1;

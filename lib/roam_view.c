@@ -19,6 +19,8 @@ static rs_result make_view(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: fov_y %g must be in (0, 179) degrees", fov);
     if (!(vw->pixel_error >= 0.0) || !isfinite(vw->pixel_error) || !(vw->far_dist >= 0.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: pixel_error and far_dist must be >= 0");
+    if (!(vw->merge_hysteresis == 0.0 || (vw->merge_hysteresis >= 1.0 && isfinite(vw->merge_hysteresis))))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: merge_hysteresis %g must be 0 or >= 1", vw->merge_hysteresis);
     double fl = sqrt(vw->dir[0] * vw->dir[0] + vw->dir[1] * vw->dir[1] + vw->dir[2] * vw->dir[2]);
     if (!(fl > 0.0)) return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: dir must not be zero");
     double f[3] = { vw->dir[0] / fl, vw->dir[1] / fl, vw->dir[2] / fl };

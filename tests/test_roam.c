@@ -532,6 +532,9 @@ static void test_update(rs_ctx *ctx, uint32_t patch)
         rs_roam_view v;
         memset(&v, 0, sizeof v);
         CHECK_EQ_INT(rs_roam_update(ctx, up, &v, 0), RS_ERR_INVALID_ARG); /* dir 0 */
+        v.dir[0] = 1;
+        v.merge_hysteresis = 0.5;
+        CHECK_EQ_INT(rs_roam_update(ctx, up, &v, 0), RS_ERR_INVALID_ARG);
     }
 out:
     rs_roam_free(ctx, up); rs_roam_free(ctx, reb); rs_roam_free(ctx, bud); rs_roam_free(ctx, tgt);
