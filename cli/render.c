@@ -400,7 +400,8 @@ int cli_render_main(int argc, char **argv)
     uint8_t *tex = NULL, *frame = NULL;
     float *vtx = NULL, *nrm = NULL;
     uint32_t *idx = NULL;
-    double *frame_ms = NULL, *mesh_ms = NULL, *draw_ms = NULL;
+    double *frame_ms = NULL, *mesh_ms = NULL, *draw_ms = NULL, *mesh_seq = NULL;
+    uint32_t *tris_seq = NULL;
     size_t cap_v = 0, cap_i = 0, nv = 0, ni = 0;
     rs_roam_stats rst;
     rg_tex_stats tst;
@@ -603,7 +604,9 @@ int cli_render_main(int argc, char **argv)
     frame_ms = malloc(a.frames * sizeof *frame_ms);
     mesh_ms = malloc(a.frames * sizeof *mesh_ms);
     draw_ms = malloc(a.frames * sizeof *draw_ms);
-    if (!frame_ms || !mesh_ms || !draw_ms) { cli_error("out of memory"); goto done; }
+    mesh_seq = malloc(a.frames * sizeof *mesh_seq);
+    tris_seq = malloc(a.frames * sizeof *tris_seq);
+    if (!frame_ms || !mesh_ms || !draw_ms || !mesh_seq || !tris_seq) { cli_error("out of memory"); goto done; }
     rs_roam_view rv;
     memset(&rv, 0, sizeof rv);
     for (int k = 0; k < 3; k++) {
@@ -622,8 +625,8 @@ int cli_render_main(int argc, char **argv)
         if (a.ortho) /* heights do not move pixels top-down: the tolerance is in map metres */
             r = a.triangles ? rs_roam_refine_count(ctx, roam, a.triangles)
                             : rs_roam_refine_error(ctx, roam, a.pixel_error / ppm);
-        else
-            r = rs_roam_frame(ctx, roam, &rv);
+        else /* frame to frame: split and merge what the view changed */
+            r = rs_roam_update(ctx, roam, &rv, 0);
         if (r == RS_ERR_POOL_EXHAUSTED || (a.ortho && r == RS_ERR_LIMIT)) {
             if (!warned) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
             warned = 1;
@@ -660,7 +663,8 @@ int cli_render_main(int argc, char **argv)
             goto done;
         }
         double f2 = cli_now_ms();
-        mesh_ms[f] = f1 - f0;
+        mesh_ms[f] = mesh_seq[f] = f1 - f0;
+        tris_seq[f] = (uint32_t)(ni / 3);
         draw_ms[f] = f2 - f1;
         frame_ms[f] = f2 - f0;
     }
@@ -727,6 +731,12 @@ int cli_render_main(int argc, char **argv)
         fprintf(so.f, "},\n");
         fprintf(so.f, "  \"frames\": %u,\n  \"fps\": %.3f,\n  \"fps_draw\": %.3f,\n", a.frames, 1000.0 / fm,
                 1000.0 / dm);
+        /* per frame: mesh time (update or refinement + extraction) and triangles */
+        fprintf(so.f, "  \"per_frame\": {\"mesh_ms\": [");
+        for (uint32_t f = 0; f < a.frames; f++) fprintf(so.f, "%s%.3f", f ? ", " : "", mesh_seq[f]);
+        fprintf(so.f, "], \"mesh_triangles\": [");
+        for (uint32_t f = 0; f < a.frames; f++) fprintf(so.f, "%s%u", f ? ", " : "", tris_seq[f]);
+        fprintf(so.f, "]},\n");
         fprintf(so.f, "  \"timings_ms\": {\"read\": %.3f, \"roads\": %.3f, \"splat\": %.3f, \"roam_create\": %.3f, "
                       "\"context\": %.3f, \"upload\": %.3f, \"frame_median\": %.3f, \"frame_min\": %.3f, "
                       "\"frame_max\": %.3f, \"mesh_median\": %.3f, \"draw_median\": %.3f, \"readback\": %.3f, "
@@ -746,7 +756,7 @@ done:
     rs_gpu_scene_free(ctx, scene);
     free(frame); free(tex); free(tex_road); free(nmap);
     free(vtx); free(nrm); free(idx);
-    free(frame_ms); free(mesh_ms); free(draw_ms);
+    free(frame_ms); free(mesh_ms); free(draw_ms); free(mesh_seq); free(tris_seq);
     rs_roam_free(ctx, roam);
     rs_splatter_free(ctx, sp);
     rs_road_grid_free(ctx, grid);

@@ -1080,16 +1080,48 @@ typedef struct rs_roam_view {
     uint32_t target_triangles; /* 0: fixed pixel_error; else feedback on the
                                   tolerance (gFrameVariance) holds the count near it */
     double far_dist;      /* far plane, metres; 0 -> none */
+    double merge_hysteresis; /* rs_roam_update with a fixed pixel_error: merge a
+                                diamond only when both parents are within
+                                pixel_error / this (>= 1; 0 -> 1.1; 1: none) */
 } rs_roam_view;
 
-/* Per-frame reset and split-only re-tessellation (no frame-to-frame merge
- * queue; see docs/roam.md). A triangle splits when its error bound,
+/* Per-frame reset and split-only re-tessellation (rs_roam_update keeps
+ * the mesh between frames instead; docs/roam.md). A triangle splits when its error bound,
  * projected at its nearest distance to the eye, exceeds the tolerance;
  * triangles outside the view frustum are not refined. With
  * target_triangles, the tolerance is carried from frame to frame and
  * corrected within the frame (a few re-tessellations at most) so the count
  * lands within +-5 % whenever the target is reachable. */
 RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view);
+
+/* Frame-coherent view mode (seed 004's split and merge queues): start
+ * from the current mesh (the previous update's, or whatever the last call
+ * left) and adapt it to `view`. Leaves whose priority (error bound
+ * projected at their nearest distance to the eye, pixels) rose above the
+ * tolerance split, highest first, with their forced splits; diamonds whose
+ * two parents' priorities are both within pixel_error / merge_hysteresis
+ * merge, lowest first. With a fixed pixel_error, when the update completes
+ * every leaf is within the tolerance (the bound rs_roam_frame gives) and
+ * the mesh is crack-free, with at least rs_roam_frame's triangles and a
+ * few more where the hysteresis kept splits (0.7 % on the drive of
+ * docs/roam.md; none beyond the bounds' own slack with merge_hysteresis 1). With target_triangles it starts at the tolerance the last
+ * update ended at and, when the count is off by more than 1.5 %, runs the
+ * seed's loop over all leaves and diamonds (merge while above, split while
+ * below, trade the highest split for the lowest merge): one update lands
+ * within 1.5 % of the target whenever the pool and budget allow
+ * (stats.threshold: the tolerance reached). `budget` caps the split and
+ * merge operations of this call (a split counts once with its forced
+ * splits; 0: no cap); when it runs out the mesh is valid and crack-free but
+ * not yet at the tolerance (stats.update_done = 0), and the next update
+ * goes on. Cost: what changed, plus a walk that skips every subtree whose
+ * items cannot have crossed the tolerance since their last look (the eye
+ * has not moved far enough, nothing in it changed). The first call
+ * allocates 13 bytes per pool node (parent links, the walk's cache) and the
+ * queues, which grow with the mesh (RS_ERR_NOMEM: the mesh stays valid).
+ * Like every rs_roam call it mutates the landscape: one thread per
+ * landscape at a time; landscapes are independent. RS_ERR_POOL_EXHAUSTED
+ * as for rs_roam_frame. */
+RS_API rs_result rs_roam_update(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view, uint32_t budget);
 
 typedef struct rs_roam_stats {
     uint32_t width, height;     /* DEM samples */
@@ -1104,6 +1136,8 @@ typedef struct rs_roam_stats {
     double max_error_bound;     /* largest node error bound of the mesh, metres */
     uint32_t frame_passes;      /* tessellation passes of the last frame */
     uint32_t patches_culled;    /* patches outside the frustum in the last frame */
+    uint32_t update_ops;        /* split/merge operations of the last rs_roam_update */
+    int update_done;            /* the last rs_roam_update reached its goal (budget not hit) */
     uint64_t bytes;             /* memory held by the landscape */
 } rs_roam_stats;
 RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
@@ -1135,6 +1169,40 @@ RS_API rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *roam, const rs_roam_mesh_
                                  float *vertices, float *normals, size_t vertex_capacity,
                                  uint32_t *indices, size_t index_capacity,
                                  size_t *vertex_count, size_t *index_count);
+/* Per-patch output, for hosts that keep one GPU buffer per patch and
+ * re-upload only what changed. Patch p = py * patches_x + px covers cells
+ * [px P, px P + P) x [py P, py P + P) of the map (P = stats.patch_size;
+ * clipped at the map's edge). The automatic patch size is at most 64
+ * cells, so patches can be culled (docs/roam.md). */
+/* Generation of patch p's triangles: changes whenever they may have
+ * changed (an rs_roam_update split or merge in it; any other mode
+ * changes every patch's). Compare with the value at the last upload. 0
+ * for a patch out of range. */
+RS_API uint32_t rs_roam_patch_generation(const rs_roam *roam, uint32_t patch);
+/* rs_roam_extract for the triangles of one patch: its own vertex numbering
+ * (vertices on a patch edge appear in both patches' buffers, at the same
+ * sample), the same options, order rules and errors; rs_roam_mesh_bound's
+ * counts hold for any patch. RS_ERR_INVALID_ARG for a patch out of range. */
+RS_API rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *roam, uint32_t patch,
+                                       const rs_roam_mesh_options *opts, float *vertices, float *normals,
+                                       size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
+                                       size_t *vertex_count, size_t *index_count);
+/* Seams between DEM tiles. Two landscapes on tiles that share an edge
+ * row or column (the same samples on both sides, e.g. columns 0..1024 and
+ * 1024..2048 of a larger map) mesh it independently, so their vertices on
+ * it differ (T-junctions across the seam). rs_roam_stitch splits border
+ * leaves of each (with their forced splits) until both have the union of
+ * the two vertex sets on the shared edge: the meshes then meet vertex to
+ * vertex, no skirts needed. The edges are named as seen in each tile's own
+ * frame and run the same way (by increasing column or row); they must have
+ * the same length, the landscapes the same patch size, and a right or
+ * bottom edge must lie on the patch grid (cells across a multiple of the
+ * patch size). The host calls it after every update of either landscape
+ * (an update may merge the extra splits again); it allocates 4 bytes per
+ * edge sample for the call. RS_ERR_POOL_EXHAUSTED when a pool ran short
+ * (both meshes valid, the seam not closed). */
+enum { RS_ROAM_EDGE_TOP = 0, RS_ROAM_EDGE_BOTTOM = 1, RS_ROAM_EDGE_LEFT = 2, RS_ROAM_EDGE_RIGHT = 3 };
+RS_API rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b);
 /* == end ROAM mesher ===================================================== */
 
 #ifdef __cplusplus

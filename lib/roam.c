@@ -11,6 +11,10 @@
 #endif
 
 #define MAX_PATCH_LOG 14          /* patch side <= 16384 cells: heap index < 2^30 */
+/* The automatic patch side is at most 64 cells: patches are the unit of
+ * frustum culling, of the height range behind the view priorities and of
+ * rs_roam_extract_patch; error-mode meshes do not depend on it (docs/roam.md). */
+#define AUTO_PATCH_LOG 6
 #define MAX_SIDE 32768u           /* node coordinates are uint16 */
 #define AUTO_POOL_CAP (1u << 21)
 
@@ -162,7 +166,7 @@ static uint32_t choose_patch_log(uint32_t cw, uint32_t ch)
     uint32_t best = 0;
     double best_cost = -1.0;
     uint32_t big = cw > ch ? cw : ch;
-    for (uint32_t lg = 0; lg <= MAX_PATCH_LOG; lg++) {
+    for (uint32_t lg = 0; lg <= AUTO_PATCH_LOG; lg++) {
         uint32_t P = 1u << lg;
         if (lg > 0 && (P >> 1) >= big) break;
         double nx = (double)((cw + P - 1) / P), ny = (double)((ch + P - 1) / P);
@@ -215,6 +219,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->pzmin);
     rs__free(ctx, L->pzmax);
     rs__free(ctx, L->pin);
+    rs__free(ctx, L->pgen);
     rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
     rs__free(ctx, L->stack);
@@ -224,6 +229,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->vbits);
     rs__free(ctx, L->vsum);
     rs__free(ctx, L->smap);
+    rs__roam_update_free(ctx, L);
     rs__free(ctx, L);
 }
 
@@ -310,6 +316,7 @@ static rs_roam *new_landscape(rs_ctx *ctx, const roam_size *s)
     L->elog = 2 * s->plog;
     L->dq = s->dq; L->ncut = 1u << s->dq;
     L->scan = NIL;
+    L->free_head = NIL;
     rs__roam_build_partner_table(L);
     return L;
 }
@@ -328,6 +335,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->pzmin = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pzmax = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pin = rs__alloc_array(ctx, npatch, 1);
+    L->pgen = rs__alloc_array(ctx, npatch, sizeof(uint32_t));
     L->wpr = (W + 63) / 64;
     L->nwords = (size_t)L->wpr * H;
     L->nsum = (L->nwords + 63) / 64;
@@ -337,7 +345,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
+    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->pgen || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
         return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                         (unsigned long long)nerr);
     memset(L->vbits, 0, L->nwords * sizeof(uint64_t));
@@ -345,6 +353,8 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     for (uint32_t x = 0; x < W; x++) L->ucol[x] = (float)((double)x / L->cw);
     for (uint32_t y = 0; y < H; y++) L->vrow[y] = (float)((double)y / L->ch);
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
+    L->gen = 1;
+    for (size_t p = 0; p < npatch; p++) L->pgen[p] = 1;
     for (uint32_t py = 0; py < s->npy; py++)
         for (uint32_t px = 0; px < s->npx; px++)
             L->pin[py * s->npx + px] = (unsigned char)(px * P + P <= L->cw && py * P + P <= L->ch);
@@ -404,7 +414,7 @@ static rs_result alloc_pool(rs_ctx *ctx, rs_roam *L, uint64_t pool)
 static uint64_t landscape_bytes(const rs_roam *L)
 {
     uint64_t W = L->w, H = L->hgt, npatch = (uint64_t)L->npx * L->npy;
-    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1)
+    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1 + sizeof(uint32_t))
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)
@@ -450,13 +460,15 @@ void rs_roam_get_stats(const rs_roam *L, rs_roam_stats *o)
     o->patch_size = L->P; o->patches_x = L->npx; o->patches_y = L->npy;
     o->base_nodes = L->base_count;
     o->pool_nodes = L->cap - L->base_count;
-    o->pool_used = L->used - L->base_count;
+    o->pool_used = L->used - L->base_count - L->nfree;
     o->pool_exhausted = L->exhausted;
     o->triangles = L->tris;
     o->threshold = L->threshold;
     o->max_error_bound = rs__roam_leaves_max_bound(L);
     o->frame_passes = L->frame_passes;
     o->patches_culled = L->culled;
+    o->update_ops = L->update_ops;
+    o->update_done = L->update_done;
     o->bytes = L->bytes;
 }
 

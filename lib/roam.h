@@ -19,6 +19,9 @@
  * bit per position 2 .. 2^dq - 1, and QUEUED while a stack entry asks for
  * its untested leaves. See docs/roam.md. */
 #define IMPL 0xFFFFFFFEu
+/* lc of a pool node on the free list (rs_roam_update's merges); its rc is
+ * the next free pair (nodes come and go in pairs: lc, lc + 1) */
+#define FREE 0xFFFFFFFDu
 #define IMPL_DEPTH 4
 #if IMPL_DEPTH > 4
 #error "the split and tested bits of positions 2..15 fill rc (see TESTED_BIT)"
@@ -89,7 +92,40 @@ struct rs_roam {
     double tol;                     /* view mode: tolerance carried between frames */
     uint32_t frame_passes, culled;
     uint64_t bytes;
+    /* Frame-coherent updates (lib/roam_update.c), allocated by the first
+     * rs_roam_update (but pgen, at creation): the parent of every node
+     * (kept by split() once allocated), the free list of node pairs that
+     * merges gave back, the two queues, and a generation per patch. */
+    uint32_t *par;
+    uint32_t free_head, nfree;      /* first free pair (NIL: none), free nodes */
+    struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
+    uint32_t *pgen;                 /* per patch: generation of its leaves (the value of
+                                       gen when they last changed) */
+    double *crecheck;               /* per node: odometer reading at which its subtree
+                                       must be scanned again (-1: at the next update) */
+    unsigned char *ccls;            /* per node: its class against the view at its
+                                       last scan */
+    double odo, last_eye[3], last_k, last_tol, last_mtol; /* camera travel; the view of the last scan */
+    int full_next;                  /* the next update scans every cluster */
+    uint32_t gen;                   /* generation counter (bumped per change) */
+    uint32_t update_ops;            /* split/merge operations of the last update */
+    int update_done;                /* the last update reached its goal (not cut by the budget) */
 };
+
+/* Record that the leaves under node changed: its patch's generation
+ * (rs_roam_patch_generation), and the cached scans of the node and its
+ * ancestors (lib/roam_update.c; an ancestor of a node to scan is marked
+ * already, so the walk up stops there). */
+static inline void touch_patch(rs_roam *L, uint32_t node)
+{
+    uint32_t e = L->nodes[node].e;
+    L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
+    if (L->par)
+        for (uint32_t c = node; c != NIL && L->crecheck[c] >= 0.0; c = L->par[c]) L->crecheck[c] = -1.0;
+}
+
+/* Nodes the pool can still give. */
+static inline uint32_t pool_avail(const rs_roam *L) { return L->cap - L->used + L->nfree; }
 
 /* The error cache is initialised a chunk (4 KiB) at a time, when the first
  * bound in it is stored: a coarse mesh stores a few thousand bounds and
@@ -247,6 +283,60 @@ static inline int sphere_visible(const view_params *v, const double c[3], double
     return 1;
 }
 
+/* Bounding sphere of triangle t of patch `patch`: centre at its centroid
+ * and the middle of the patch's height range, radius over its corners and
+ * that range (metres). */
+static inline void tri_sphere(const rs_roam *L, const tri *t, uint32_t patch, double c[3], double *r)
+{
+    int cx = t->cx, cy = t->cy;
+    double cs = L->cs;
+    double gx = (t->ax + t->bx + cx) / 3.0, gy = (t->ay + t->by + cy) / 3.0;
+    double r2 = 0.0, d;
+    d = (t->ax - gx) * (t->ax - gx) + (t->ay - gy) * (t->ay - gy); if (d > r2) r2 = d;
+    d = (t->bx - gx) * (t->bx - gx) + (t->by - gy) * (t->by - gy); if (d > r2) r2 = d;
+    d = (cx - gx) * (cx - gx) + (cy - gy) * (cy - gy); if (d > r2) r2 = d;
+    double zlo = (double)L->pzmin[patch] * L->zs, zhi = (double)L->pzmax[patch] * L->zs;
+    double hz = 0.5 * (zhi - zlo);
+    c[0] = gx * cs; c[1] = gy * cs; c[2] = 0.5 * (zlo + zhi);
+    *r = sqrt(r2 * cs * cs + hz * hz);
+}
+
+/* The distance part of a leaf's view priority: 0 when the leaf never needs
+ * a split (off the map, culled), 1 when it straddles the map edge (must
+ * split), 2 with *dist = distance from the eye to its bounding sphere (the
+ * triangle's xy extent and the patch's height range), floored. */
+static inline int view_dist(const rs_roam *L, const tri *t, uint32_t patch, const view_params *v,
+                            const unsigned char *vis, double *dist)
+{
+    int cls = tri_class(L, t);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
+    if (vis && !vis[patch]) return 0;
+    double c[3], r;
+    tri_sphere(L, t, patch, c, &r);
+    if (!sphere_visible(v, c, r)) return 0;
+    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+    double dst = sqrt(dx * dx + dy * dy + dz * dz) - r;
+    double floor_d = 1e-3 * L->cs;
+    *dist = dst < floor_d ? floor_d : dst;
+    return 2;
+}
+
+/* A leaf's priority in view mode: its error bound (cached in `slot`)
+ * projected at its nearest distance to the eye, in pixels; 0 when it
+ * never needs a split (off the map, culled, flat), +inf when it straddles
+ * the map edge. A split is wanted when this exceeds the tolerance. */
+static inline double view_prio(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch,
+                               const view_params *v, const unsigned char *vis)
+{
+    double dist;
+    int k = view_dist(L, t, patch, v, vis, &dist);
+    if (k != 2) return k ? INFINITY : 0.0;
+    /* the error is computed last: culled nodes never need it */
+    float e = rs__roam_slot_err(L, slot, t);
+    if (!(e > 0.0f)) return 0.0; /* flat */
+    return (double)e * L->zs * v->k / dist;
+}
+
 /* The implicit levels' tables of L (pwhere, ppos, pgeo, below) from dq. */
 void rs__roam_build_partner_table(rs_roam *L);
 /* Back to the base mesh. */
@@ -254,6 +344,31 @@ void rs__roam_reset_mesh(rs_roam *L);
 /* Refine the current mesh by rp's rule until no leaf wants a split or the
  * pool runs out (L->exhausted); 1 when abandoned for rp->stop_above. */
 int rs__roam_refine(rs_roam *L, const refine_params *rp);
+/* Frame-coherent updates (lib/roam_tree.c for the bintree side). A leaf or
+ * diamond is named by (node, pos): pos 0 an explicit node, pos 1 a block
+ * node as a whole, pos >= 2 an implicit position of block `node`. */
+/* Split leaf (node, pos) with its forced splits; -1 (nothing done) when
+ * the pool cannot hold the worst case. New leaves go on L->stack. */
+int rs__roam_split_leaf(rs_roam *L, uint32_t node, uint32_t pos);
+/* Is (node, pos) a split triangle whose diamond (it and its base partner)
+ * can merge: both split into two leaves each, pool nodes (not the base
+ * mesh)? *partner / *ppos name the partner (NIL at the border). */
+int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos);
+/* Merge the diamond of (node, pos) (rs__roam_mergeable said yes). */
+void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos);
+/* Triangle, cache slot and patch of (node, pos). */
+void rs__roam_item_tri(const rs_roam *L, uint32_t node, uint32_t pos, tri *t, uint32_t *slot, uint32_t *patch);
+/* The parent of (node, pos) as a (node, pos) pair; 0 at a root. */
+int rs__roam_item_parent(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *pn, uint32_t *ppos);
+
+/* The view of a frame (lib/roam_view.c): projection and frustum planes,
+ * the patch height ranges, and per patch 1 when visible (*vis is visbuf
+ * when nbuf is enough, else allocated: the caller frees it). */
+rs_result rs__roam_view_begin(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, view_params *v,
+                              unsigned char *visbuf, size_t nbuf, unsigned char **vis);
+/* Free what the first rs_roam_update allocated (lib/roam_update.c). */
+void rs__roam_update_free(rs_ctx *ctx, rs_roam *L);
+
 /* Largest error bound over the leaves on the map (metres). */
 double rs__roam_leaves_max_bound(const rs_roam *L);
 #endif

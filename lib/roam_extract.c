@@ -147,6 +147,16 @@ static int emit_block_on(extract_state *s, const roam_node *nd, const tri *t)
     return 0;
 }
 
+/* The leaves at node nd (itself, or its implicit ones); 1 on overflow. */
+static int emit_node(extract_state *s, const roam_node *nd)
+{
+    tri r;
+    node_tri(s->L, nd, &r);
+    if (nd->lc == NIL) return emit_tri(s, &r);
+    if (r.on) return emit_block_on(s, nd, &r);
+    return emit_imp(s, nd, 1, &r);
+}
+
 /* Leaves in allocation order (the implicit ones with their block node):
  * one linear pass over the node array (cache friendly; the order is
  * deterministic). */
@@ -155,16 +165,27 @@ static void emit_leaves(extract_state *s)
     rs_roam *L = s->L;
     const roam_node *nodes = L->nodes;
     for (uint32_t t = 0; t < L->used; t++) {
-        const roam_node *nd = &nodes[t];
-        uint32_t lc = nd->lc;
-        if (lc != NIL && lc != IMPL) continue; /* inner node */
-        tri r;
-        node_tri(L, nd, &r);
-        int stop;
-        if (lc == NIL) stop = emit_tri(s, &r);
-        else if (r.on) stop = emit_block_on(s, nd, &r);
-        else stop = emit_imp(s, nd, 1, &r);
-        if (stop) return;
+        uint32_t lc = nodes[t].lc;
+        if (lc != NIL && lc != IMPL) continue; /* inner node or free */
+        if (emit_node(s, &nodes[t])) return;
+    }
+}
+
+/* The leaves of one patch, depth first from its two roots (the order is
+ * deterministic); the refinement stack is free between calls. */
+static void emit_patch_leaves(extract_state *s, uint32_t patch)
+{
+    rs_roam *L = s->L;
+    const roam_node *nodes = L->nodes;
+    uint32_t *st = L->stack, sp = 0;
+    st[sp++] = 2 * patch + 1;
+    st[sp++] = 2 * patch;
+    while (sp) {
+        const roam_node *nd = &nodes[st[--sp]];
+        if (nd->lc != NIL && nd->lc != IMPL) {
+            st[sp++] = nd->rc;
+            st[sp++] = nd->lc;
+        } else if (emit_node(s, nd)) return;
     }
 }
 
@@ -287,15 +308,18 @@ static uint32_t skirt_vertex(extract_state *s, uint32_t top, int x, int y, doubl
     return (uint32_t)s->nv++;
 }
 
-rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *opts, float *vertices,
-                          float *normals, size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
-                          size_t *vertex_count, size_t *index_count)
+/* rs_roam_extract (patch NIL) and rs_roam_extract_patch. */
+static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_roam_mesh_options *opts,
+                              float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
+                              size_t index_capacity, size_t *vertex_count, size_t *index_count)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (vertex_count) *vertex_count = 0;
     if (index_count) *index_count = 0;
     if (!L || (!vertices && vertex_capacity) || (!indices && index_capacity))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: roam and buffers must not be NULL");
+    if (patch != NIL && patch >= L->npx * L->npy)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract_patch: patch %u of %u", patch, L->npx * L->npy);
     rs_roam_mesh_options o;
     if (opts) o = *opts; else memset(&o, 0, sizeof o);
     if (o.normals && !normals)
@@ -311,7 +335,8 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
     s.samples = o.samples;
-    emit_leaves(&s);
+    if (patch == NIL) emit_leaves(&s);
+    else emit_patch_leaves(&s, patch);
     if (!s.overflow) {
         s.nv = emit_vertices(&s);
         if (s.nv > s.vcap) s.overflow = 1;
@@ -349,4 +374,27 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
     if (index_count) *index_count = s.ni;
     rs__ok(ctx);
     return RS_OK;
+}
+
+rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *opts, float *vertices,
+                          float *normals, size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
+                          size_t *vertex_count, size_t *index_count)
+{
+    return extract_mesh(ctx, L, NIL, opts, vertices, normals, vertex_capacity, indices, index_capacity, vertex_count,
+                        index_count);
+}
+
+rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_roam_mesh_options *opts,
+                                float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
+                                size_t index_capacity, size_t *vertex_count, size_t *index_count)
+{
+    if (patch == NIL) patch = NIL - 1; /* refused as out of range */
+    return extract_mesh(ctx, L, patch, opts, vertices, normals, vertex_capacity, indices, index_capacity,
+                        vertex_count, index_count);
+}
+
+uint32_t rs_roam_patch_generation(const rs_roam *L, uint32_t patch)
+{
+    if (!L || patch >= L->npx * L->npy) return 0;
+    return L->pgen[patch];
 }

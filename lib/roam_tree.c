@@ -64,6 +64,7 @@ static void split(rs_roam *L, uint32_t t)
     roam_node *n = L->nodes;
     if (n[t].lc != NIL) return;
     if (n[t].base != NIL && n[n[t].base].base != t) split(L, n[t].base);
+    touch_patch(L, t);
     if (is_block(L, &n[t])) {
         /* subtree implicit: no nodes, no relinks (neighbours keep pointing
          * at this node); its base partner is on the same level */
@@ -76,7 +77,20 @@ static void split(rs_roam *L, uint32_t t)
         if (b != NIL && n[b].lc == NIL) split(L, b);
         return;
     }
-    uint32_t lc = L->used++, rc = L->used++;
+    uint32_t lc;
+    if (L->free_head != NIL) { /* a pair a merge gave back */
+        lc = L->free_head;
+        L->free_head = n[lc].rc;
+        L->nfree -= 2;
+    } else {
+        lc = L->used;
+        L->used += 2;
+    }
+    uint32_t rc = lc + 1;
+    if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
+        L->par[lc] = L->par[rc] = t;
+        L->crecheck[lc] = L->crecheck[rc] = -1.0;
+    }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
     node_corner(T, &cx, &cy);
@@ -281,6 +295,7 @@ static void imp_mark(rs_roam *L, uint32_t r, uint32_t pos, const tri *t)
 {
     L->nodes[r].rc |= SPLIT_BIT(pos);
     L->tris += (uint32_t)tris_delta(L, t);
+    touch_patch(L, r);
     if (2 * pos >= L->ncut) return;
     if (r != L->scan) queue_block(L, r);
     else if (pre_before(pos, L->scan_pos)) L->scan_dirty = 1; /* the scan has passed it */
@@ -337,8 +352,14 @@ void rs__roam_reset_mesh(rs_roam *L)
 {
     memcpy(L->nodes, L->base_copy, (size_t)L->base_count * sizeof(roam_node));
     L->used = L->base_count;
+    L->free_head = NIL;
+    L->nfree = 0;
     L->tris = L->base_tris;
     L->exhausted = 0;
+    /* every patch may have changed */
+    L->full_next = 1;
+    L->gen++;
+    for (uint32_t p = 0; p < L->npx * L->npy; p++) L->pgen[p] = L->gen;
 }
 
 /* ---- refinement ------------------------------------------------------------ */
@@ -349,30 +370,7 @@ static int wants_split(rs_roam *L, uint32_t slot, const tri *t, uint32_t patch, 
 {
     if (rp->border_only) return tri_class(L, t) == NODE_STRADDLES;
     if (!rp->view) return rs__roam_err_above(L, slot, t, rp->max_error);
-    int cls = tri_class(L, t);
-    if (cls != NODE_ON) return cls == NODE_STRADDLES;
-    const view_params *v = rp->view;
-    if (rp->vis && !rp->vis[patch]) return 0;
-    int cx = t->cx, cy = t->cy;
-    double cs = L->cs;
-    double gx = (t->ax + t->bx + cx) / 3.0, gy = (t->ay + t->by + cy) / 3.0;
-    double r2 = 0.0, d;
-    d = (t->ax - gx) * (t->ax - gx) + (t->ay - gy) * (t->ay - gy); if (d > r2) r2 = d;
-    d = (t->bx - gx) * (t->bx - gx) + (t->by - gy) * (t->by - gy); if (d > r2) r2 = d;
-    d = (cx - gx) * (cx - gx) + (cy - gy) * (cy - gy); if (d > r2) r2 = d;
-    double zlo = (double)L->pzmin[patch] * L->zs, zhi = (double)L->pzmax[patch] * L->zs;
-    double hz = 0.5 * (zhi - zlo);
-    double c[3] = { gx * cs, gy * cs, 0.5 * (zlo + zhi) };
-    double r = sqrt(r2 * cs * cs + hz * hz);
-    if (!sphere_visible(v, c, r)) return 0;
-    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
-    double dist = sqrt(dx * dx + dy * dy + dz * dz) - r;
-    double floor_d = 1e-3 * cs;
-    if (dist < floor_d) dist = floor_d;
-    /* the error is computed last: culled nodes never need it */
-    float e = rs__roam_slot_err(L, slot, t);
-    if (!(e > 0.0f)) return 0; /* flat */
-    return (double)e * L->zs * v->k / dist > v->tol;
+    return view_prio(L, slot, t, patch, rp->view, rp->vis) > rp->view->tol;
 }
 
 /* Test the untested implicit leaves of block r below position pos
@@ -406,7 +404,7 @@ static int scan_block(rs_roam *L, uint32_t r, uint32_t pos, const tri *t, uint32
                 want = e > 0.0f && (double)e * L->zs > rp->max_error;
             } else want = wants_split(L, rs__roam_imp_slot(L, &n[r], c), &u, n[r].e >> L->elog, rp);
             if (want) {
-                if (imp_need(L, r, c) > L->cap - L->used) { L->exhausted = 1; return -1; }
+                if (imp_need(L, r, c) > pool_avail(L)) { L->exhausted = 1; return -1; }
                 L->scan_pos = c;
                 imp_split(L, r, c, &u);
                 if (rp->stop_above && L->tris > rp->stop_above) return 1;
@@ -479,7 +477,7 @@ static int refine_loop(rs_roam *L, const refine_params *rp)
         node_tri(L, &n[i], &t);
         if (!wants_split(L, rs__roam_err_slot(L, &n[i]), &t, n[i].e >> L->elog, rp)) continue;
         uint32_t need = split_need(L, i);
-        if (need > L->cap - L->used) { L->exhausted = 1; return 0; }
+        if (need > pool_avail(L)) { L->exhausted = 1; return 0; }
         split(L, i);
         if (rp->stop_above && L->tris > rp->stop_above) return 1;
     }
@@ -601,3 +599,110 @@ rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *L, uint32_t max_triangles)
     return rs_roam_refine_error(ctx, L, (double)bits_float(lo) * L->zs);
 }
 
+
+/* ---- split and merge by name (rs_roam_update) ------------------------------------ */
+
+void rs__roam_item_tri(const rs_roam *L, uint32_t node, uint32_t pos, tri *t, uint32_t *slot, uint32_t *patch)
+{
+    const roam_node *nd = &L->nodes[node];
+    if (pos >= 2) {
+        imp_tri(L, node, pos, t);
+        *slot = rs__roam_imp_slot(L, nd, pos);
+    } else {
+        node_tri(L, nd, t);
+        *slot = rs__roam_err_slot(L, nd);
+    }
+    *patch = nd->e == NIL ? 0 : nd->e >> L->elog;
+}
+
+int rs__roam_split_leaf(rs_roam *L, uint32_t node, uint32_t pos)
+{
+    L->scan = NIL;
+    if (pos < 2) {
+        if (split_need(L, node) > pool_avail(L)) return -1;
+        split(L, node);
+        return 0;
+    }
+    if (imp_need(L, node, pos) > pool_avail(L)) return -1;
+    tri t;
+    imp_tri(L, node, pos, &t);
+    imp_split(L, node, pos, &t);
+    return 0;
+}
+
+/* Is (node, pos) split into two leaves? */
+static int split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
+{
+    const roam_node *n = L->nodes;
+    const roam_node *nd = &n[node];
+    if (pos >= 2) {
+        if (nd->lc != IMPL || !(nd->rc & SPLIT_BIT(pos))) return 0;
+        if (node < L->base_count && L->base_copy[node].lc == IMPL && (L->base_copy[node].rc & SPLIT_BIT(pos)))
+            return 0; /* a split of the base mesh */
+        return 2 * pos >= L->ncut || !(nd->rc & (SPLIT_BIT(2 * pos) | SPLIT_BIT(2 * pos + 1)));
+    }
+    if (pos == 1) /* a block whose subtree is just its two children */
+        return nd->lc == IMPL && !(nd->rc & (SPLIT_BIT(L->ncut) - 1u))
+               && !(node < L->base_count && L->base_copy[node].lc == IMPL);
+    if (nd->lc == NIL || nd->lc == IMPL || nd->lc == FREE) return 0;
+    return nd->lc >= L->base_count && n[nd->lc].lc == NIL && n[nd->rc].lc == NIL;
+}
+
+int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos)
+{
+    const roam_node *n = L->nodes;
+    if (!split_into_leaves(L, node, pos)) return 0;
+    uint32_t N, pp;
+    if (pos >= 2) N = partner_node(L, node, pos, &pp);
+    else { N = n[node].base; pp = pos; }
+    *partner = N;
+    *ppos = pp;
+    if (N == NIL || (N == node && pp == pos)) return 1;
+    return split_into_leaves(L, N, pp);
+}
+
+static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
+{
+    roam_node *n = L->nodes;
+    tri t;
+    uint32_t slot, patch;
+    rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
+    L->tris -= (uint32_t)tris_delta(L, &t);
+    touch_patch(L, node);
+    if (pos >= 2) {
+        n[node].rc &= ~SPLIT_BIT(pos);
+        return;
+    }
+    if (pos == 1) { n[node].lc = n[node].rc = NIL; return; }
+    uint32_t lc = n[node].lc, rc = n[node].rc;
+    /* the children's base neighbours are this node's leg neighbours again */
+    uint32_t nl = n[lc].base, nr = n[rc].base;
+    if (nl != NIL) relink(n, nl, lc, node);
+    if (nr != NIL) relink(n, nr, rc, node);
+    n[node].left = nl;
+    n[node].right = nr;
+    n[node].lc = n[node].rc = NIL;
+    n[lc].lc = n[rc].lc = FREE;
+    n[lc].rc = L->free_head;
+    L->free_head = lc;
+    L->nfree += 2;
+}
+
+void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos)
+{
+    uint32_t N, pp;
+    if (!rs__roam_mergeable(L, node, pos, &N, &pp)) return;
+    merge_one(L, node, pos);
+    if (N != NIL && !(N == node && pp == pos)) merge_one(L, N, pp);
+}
+
+int rs__roam_item_parent(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *pn, uint32_t *ppos)
+{
+    if (pos >= 4) { *pn = node; *ppos = pos >> 1; return 1; }
+    if (pos >= 2) { *pn = node; *ppos = 1; return 1; }
+    uint32_t p = L->par ? L->par[node] : NIL;
+    if (p == NIL) return 0;
+    *pn = p;
+    *ppos = 0; /* a block's children are implicit: explicit parents are never blocks */
+    return 1;
+}

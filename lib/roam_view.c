@@ -19,6 +19,8 @@ static rs_result make_view(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: fov_y %g must be in (0, 179) degrees", fov);
     if (!(vw->pixel_error >= 0.0) || !isfinite(vw->pixel_error) || !(vw->far_dist >= 0.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: pixel_error and far_dist must be >= 0");
+    if (!(vw->merge_hysteresis == 0.0 || (vw->merge_hysteresis >= 1.0 && isfinite(vw->merge_hysteresis))))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: merge_hysteresis %g must be 0 or >= 1", vw->merge_hysteresis);
     double fl = sqrt(vw->dir[0] * vw->dir[0] + vw->dir[1] * vw->dir[1] + vw->dir[2] * vw->dir[2]);
     if (!(fl > 0.0)) return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM view: dir must not be zero");
     double f[3] = { vw->dir[0] / fl, vw->dir[1] / fl, vw->dir[2] / fl };
@@ -81,29 +83,35 @@ static void frame_pass(rs_roam *L, const view_params *v0, double tol, const unsi
     rs__roam_refine(L, &rp);
 }
 
+rs_result rs__roam_view_begin(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, view_params *v,
+                              unsigned char *visbuf, size_t nbuf, unsigned char **vis)
+{
+    rs_result r = make_view(ctx, L, vw, v);
+    if (r != RS_OK) return r;
+    rs__roam_patch_ranges(L);
+    uint32_t np = L->npx * L->npy;
+    *vis = visbuf;
+    if (np > nbuf) {
+        *vis = rs__malloc(ctx, np);
+        if (!*vis) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %u patch flags", np);
+    }
+    L->culled = 0;
+    for (uint32_t p = 0; p < np; p++) {
+        (*vis)[p] = (unsigned char)patch_visible(L, v, p, vw->far_dist);
+        if (!(*vis)[p]) L->culled++;
+    }
+    return RS_OK;
+}
+
 rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_frame: roam and view must not be NULL");
     view_params v;
-    rs_result r = make_view(ctx, L, vw, &v);
+    unsigned char visbuf[256], *vis;
+    rs_result r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
     if (r != RS_OK) return r;
-    rs__roam_patch_ranges(L);
-    uint32_t np = L->npx * L->npy;
-    /* visibility per patch, kept in the smap scratch when it is large enough */
-    unsigned char visbuf[256];
-    unsigned char *vis = visbuf;
-    int own = 0;
-    if (np > sizeof visbuf) {
-        vis = rs__malloc(ctx, np);
-        if (!vis) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for %u patch flags", np);
-        own = 1;
-    }
-    L->culled = 0;
-    for (uint32_t p = 0; p < np; p++) {
-        vis[p] = (unsigned char)patch_visible(L, &v, p, vw->far_dist);
-        if (!vis[p]) L->culled++;
-    }
+    int own = vis != visbuf;
     double tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
     if (vw->target_triangles && L->tol > 0.0 && isfinite(L->tol)) tol = L->tol; /* gFrameVariance */
     uint32_t passes = 0;

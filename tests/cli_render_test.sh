@@ -245,6 +245,14 @@ check "--origin: camera in the roads' frame gives the untranslated picture" sh -
 check "stats run exits 0" "$BIN" render $S --quiet --size 320x240 --frames 4 --triangles 400 --stats "$T/s.json" "$T/dem.pgm" "$T/roads.txt" "$T/b.png"
 check "stats JSON has fps, triangles, timings" sh -c "grep -q '\"fps\"' '$T/s.json' && grep -q '\"triangles\"' '$T/s.json' && grep -q '\"timings_ms\"' '$T/s.json' && grep -q '\"frames\": 4' '$T/s.json'"
 check "fps is positive" awk -F'[:,]' '/"fps"/ { f = $2 } END { exit !(f > 0) }' "$T/s.json"
+check "stats JSON has the mesh time and triangles of each of the 4 frames" python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+p = d['per_frame']
+assert len(p['mesh_ms']) == 4 and len(p['mesh_triangles']) == 4
+assert all(t > 0 for t in p['mesh_triangles']) and all(m >= 0 for m in p['mesh_ms'])
+assert p['mesh_triangles'][-1] == d['triangles']
+" "$T/s.json"
 check "triangle budget held (<= 105 %)" awk -F'[:,]' '/"triangles"/ { t = $2 } END { exit !(t > 0 && t <= 420) }' "$T/s.json"
 check "finer pixel error gives more triangles" sh -c "'$BIN' render $S --quiet --size 320x240 --pixel-error 8 --stats '$T/p8.json' '$T/dem.pgm' '$T/roads.txt' '$T/p8.png' && '$BIN' render $S --quiet --size 320x240 --pixel-error 0.25 --stats '$T/p1.json' '$T/dem.pgm' '$T/roads.txt' '$T/p1.png' && test \$(sed -n 's/.*\"triangles\": \([0-9]*\).*/\1/p' '$T/p1.json') -gt \$(sed -n 's/.*\"triangles\": \([0-9]*\).*/\1/p' '$T/p8.json')"
 

@@ -27,6 +27,30 @@ static inline int rc_cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Bounding box of a triangle's three lattice corners. */
+static inline void rc_bbox(const int64_t x[3], const int64_t y[3], int64_t *x0, int64_t *x1, int64_t *y0, int64_t *y1)
+{
+    *x0 = *x1 = x[0];
+    *y0 = *y1 = y[0];
+    for (int c = 1; c < 3; c++) {
+        if (x[c] < *x0) *x0 = x[c];
+        if (x[c] > *x1) *x1 = x[c];
+        if (y[c] < *y0) *y0 = y[c];
+        if (y[c] > *y1) *y1 = y[c];
+    }
+}
+
+/* Barycentric weights (times twice the area) of lattice point (px, py) in
+ * the triangle of corners x, y with cross product cr; 0 when outside. */
+static inline int rc_bary(const int64_t x[3], const int64_t y[3], int64_t cr, int64_t px, int64_t py, int64_t w[3])
+{
+    w[0] = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
+    w[1] = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
+    w[2] = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
+    if (cr < 0) { w[0] = -w[0]; w[1] = -w[1]; w[2] = -w[2]; }
+    return w[0] >= 0 && w[1] >= 0 && w[2] >= 0;
+}
+
 /* gx, gy: grid column and row per vertex; vz: height per vertex (metres);
  * z: DEM (DEM units, NaN = nodata), heights in metres = z * zs;
  * tri: 3 indices per triangle, `nt` triangles. Returns 0 if out of memory. */
@@ -78,23 +102,15 @@ static inline int rc_check(uint32_t W, uint32_t H, const float *z, double zs, co
             }
         }
         /* rasterize the samples of the triangle */
-        int64_t x0 = x[0], x1 = x[0], y0 = y[0], y1 = y[0];
-        for (int c = 1; c < 3; c++) {
-            if (x[c] < x0) x0 = x[c];
-            if (x[c] > x1) x1 = x[c];
-            if (y[c] < y0) y0 = y[c];
-            if (y[c] > y1) y1 = y[c];
-        }
+        int64_t x0, x1, y0, y1;
+        rc_bbox(x, y, &x0, &x1, &y0, &y1);
         if (cr == 0) continue;
         for (int64_t py = y0; py <= y1; py++)
             for (int64_t px = x0; px <= x1; px++) {
-                int64_t w0 = (x[2] - x[1]) * (py - y[1]) - (y[2] - y[1]) * (px - x[1]);
-                int64_t w1 = (x[0] - x[2]) * (py - y[2]) - (y[0] - y[2]) * (px - x[2]);
-                int64_t w2 = (x[1] - x[0]) * (py - y[0]) - (y[1] - y[0]) * (px - x[0]);
-                if (cr < 0) { w0 = -w0; w1 = -w1; w2 = -w2; }
-                if (w0 < 0 || w1 < 0 || w2 < 0) continue;
-                double den = (double)(w0 + w1 + w2);
-                double zi = (w0 * vz[k[0]] + w1 * vz[k[1]] + w2 * vz[k[2]]) / den;
+                int64_t w[3];
+                if (!rc_bary(x, y, cr, px, py, w)) continue;
+                double den = (double)(w[0] + w[1] + w[2]);
+                double zi = (w[0] * vz[k[0]] + w[1] * vz[k[1]] + w[2] * vz[k[2]]) / den;
                 size_t id = (size_t)py * W + (size_t)px;
                 double e = isnan(z[id]) ? 0.0 : fabs(zi - (double)z[id] * zs);
                 if (e > err[id]) err[id] = e;
@@ -132,6 +148,61 @@ static inline int rc_all_ok(const rc_result *r)
 {
     return r->ok_grid && r->ok_heights && r->ok_winding && r->ok_area && r->ok_edges && r->ok_tjunction
            && r->ok_coverage;
+}
+
+/* A view-dependent mesh against its tolerance, independently of the
+ * mesher: for every triangle whose DEM samples (with their heights) all
+ * lie inside the cone of half-angle `half` (radians) about `dir` from
+ * `eye` (take it inside the view frustum), its true max vertical error
+ * times k (pixels per metre at distance 1) over the distance from the eye
+ * to its nearest sample (at least `floor_d`) must be <= tol: the mesher's
+ * bounding-sphere distance is never larger, and its error bound never
+ * smaller. Grid coordinates gx, gy per vertex, heights z * zs, cell size cs.
+ * Returns the largest ratio (projected error / tol) over the checked
+ * triangles (*nchecked of them). */
+static inline double rc_view_worst(uint32_t W, uint32_t H, const float *z, double zs, double cs,
+                                   const int32_t *gx, const int32_t *gy, const uint32_t *tri, size_t nt,
+                                   const double eye[3], const double dir[3], double half, double k,
+                                   double tol, double floor_d, size_t *nchecked)
+{
+    double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]), ch = cos(half);
+    double worst = 0.0;
+    size_t checked = 0;
+    (void)H;
+    for (size_t t = 0; t < nt; t++) {
+        int64_t x[3], y[3];
+        double vz[3];
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = tri[3 * t + (size_t)c];
+            x[c] = gx[v]; y[c] = gy[v];
+            vz[c] = (double)z[(size_t)y[c] * W + (size_t)x[c]] * zs;
+        }
+        int64_t cr = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+        if (cr == 0) continue;
+        int64_t x0, x1, y0, y1;
+        rc_bbox(x, y, &x0, &x1, &y0, &y1);
+        double emax = 0.0, dmin = INFINITY;
+        int inside = 1;
+        for (int64_t py = y0; py <= y1 && inside; py++)
+            for (int64_t px = x0; px <= x1; px++) {
+                int64_t w[3];
+                if (!rc_bary(x, y, cr, px, py, w)) continue;
+                double zi = (w[0] * vz[0] + w[1] * vz[1] + w[2] * vz[2]) / (double)(w[0] + w[1] + w[2]);
+                double zs_ = (double)z[(size_t)py * W + (size_t)px] * zs;
+                double e = fabs(zi - zs_);
+                if (e > emax) emax = e;
+                double d[3] = { px * cs - eye[0], py * cs - eye[1], zs_ - eye[2] };
+                double dd = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                if (dd < dmin) dmin = dd;
+                if (d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2] < ch * dd * dl) { inside = 0; break; }
+            }
+        if (!inside) continue;
+        checked++;
+        double r = emax * k / (dmin > floor_d ? dmin : floor_d) / tol;
+        if (r > worst) worst = r;
+    }
+    if (nchecked) *nchecked = checked;
+    return worst;
 }
 
 /* ---- deterministic synthetic DEMs (any size) ---- */

@@ -285,7 +285,10 @@ static void test_budget(rs_ctx *ctx)
     const uint32_t W = 129, H = 129;
     float *z = gen(DEM_FRACTAL, W, H);
     rs_dem *d = NULL;
-    rs_roam *r = make(ctx, z, W, H, NULL, &d);
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.patch_size = 128; /* one patch: a base mesh of 2 triangles (the automatic size gives 4 patches) */
+    rs_roam *r = make(ctx, z, W, H, &o, &d);
     CHECK(r != NULL);
     static const uint32_t Ns[] = { 2, 50, 1000, 5000 };
     for (size_t k = 0; r && k < 4; k++) {
@@ -314,11 +317,18 @@ static void test_budget(rs_ctx *ctx)
     free(z);
 }
 
+/* The fractal the view-mode tests fly over (80 m relief at 10 m cells). */
+static float *view_dem(uint32_t W, uint32_t H)
+{
+    float *z = malloc((size_t)W * H * sizeof *z);
+    if (z) rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    return z;
+}
+
 static void test_view(rs_ctx *ctx)
 {
     const uint32_t W = 257, H = 257;
-    float *z = malloc((size_t)W * H * sizeof *z);
-    rc_dem_fractal(z, W, H, 11, 64.0, 80.0, 0.55);
+    float *z = view_dem(W, H);
     rs_dem *d = NULL;
     rs_roam_options o;
     memset(&o, 0, sizeof o);
@@ -392,6 +402,321 @@ static void test_view(rs_ctx *ctx)
     CHECK_EQ_INT(rs_roam_frame(ctx, r, &v), RS_ERR_INVALID_ARG);
     rs_roam_free(ctx, r);
     rs_dem_free(ctx, d);
+    free(z);
+}
+
+/* The mesh of r: valid and crack-free (rc_check), and within the view
+ * tolerance on every triangle in the frustum (rc_view_worst; 29 degrees
+ * is inside a 60 degree vertical field of view at any aspect >= 1). */
+static int view_mesh_ok(rs_ctx *ctx, rs_roam *r, const float *z, uint32_t W, uint32_t H, double cs,
+                        const rs_roam_view *v, double tol, double *worst)
+{
+    mesh m;
+    rc_result res;
+    int ok = extract(ctx, r, NULL, &m) == RS_OK && check(z, W, H, cs, 1.0, &m, m.ni / 3, &res) && rc_all_ok(&res);
+    if (ok && worst) {
+        int32_t *gx = malloc((m.nv + 1) * sizeof *gx), *gy = malloc((m.nv + 1) * sizeof *gy);
+        for (size_t k = 0; k < m.nv; k++) {
+            gx[k] = (int32_t)lround(m.v[5 * k] / cs);
+            gy[k] = (int32_t)lround(m.v[5 * k + 1] / cs);
+        }
+        double k = v->height / (2.0 * tan(30.0 * 3.14159265358979323846 / 180.0));
+        *worst = rc_view_worst(W, H, z, 1.0, cs, gx, gy, m.i, m.ni / 3, v->eye, v->dir,
+                               29.0 * 3.14159265358979323846 / 180.0, k, tol, 1e-3 * cs, NULL);
+        free(gx); free(gy);
+    }
+    mesh_free(&m);
+    return ok;
+}
+
+/* Frame f of a low flight over a W x H map of cs-metre cells, turning. */
+static void flight_view(int f, uint32_t W, double cs, rs_roam_view *v)
+{
+    double c = 0.5 * (W - 1) * cs, t = f / 60.0 * 3.0;
+    memset(v, 0, sizeof *v);
+    v->eye[0] = c + 0.35 * c * cos(t) + 2.0 * f; v->eye[1] = c + 0.35 * c * sin(t); v->eye[2] = 90 + f % 7;
+    v->dir[0] = -sin(t); v->dir[1] = cos(t); v->dir[2] = -0.25;
+    v->fov_y = 60; v->width = 1024; v->height = 768;
+}
+
+/* rs_roam_update over a flight: crack-free and within the tolerance after
+ * every update, never fewer triangles than a rebuild at the same view
+ * (the rebuild's mesh is the coarsest that meets the tolerance) and at
+ * most 5 % more; with a small work budget still crack-free at every step
+ * and within the tolerance once an update completes; a triangle target
+ * within 2 % in one update per frame. */
+static void test_update(rs_ctx *ctx, uint32_t patch)
+{
+    const uint32_t W = 257, H = 257;
+    const double cs = 10.0, tol = 1.5;
+    float *z = view_dem(W, H);
+    rs_dem *d = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.patch_size = patch;
+    rs_roam *up = make_f(ctx, z, W, H, cs, 0, &o, &d), *reb = NULL, *bud = NULL, *tgt = NULL;
+    CHECK(up && rs_roam_create(ctx, d, &o, &reb) == RS_OK && rs_roam_create(ctx, d, &o, &bud) == RS_OK
+          && rs_roam_create(ctx, d, &o, &tgt) == RS_OK);
+    if (!up || !reb || !bud || !tgt) goto out;
+    int valid = 1, bound = 1, counts = 1, bvalid = 1, bbound = 1, within = 1, rc_ok = 1;
+    double worst = 0, bworst = 0, most = 0, tdev = 0;
+    uint32_t ops = 0, frames = 0;
+    for (int f = 0; f < 60; f++) {
+        rs_roam_view v;
+        flight_view(f, W, cs, &v);
+        v.pixel_error = tol;
+        if (rs_roam_update(ctx, up, &v, 0) != RS_OK || rs_roam_frame(ctx, reb, &v) != RS_OK) rc_ok = 0;
+        rs_roam_stats a, b, c;
+        rs_roam_get_stats(up, &a);
+        rs_roam_get_stats(reb, &b);
+        double w = 0;
+        if (!view_mesh_ok(ctx, up, z, W, H, cs, &v, tol, &w)) valid = 0;
+        if (w > worst) worst = w;
+        if (!a.update_done || w > 1.0) bound = 0;
+        double ratio = (double)a.triangles / b.triangles;
+        if (ratio > most) most = ratio;
+        if (a.triangles < b.triangles || ratio > 1.05) counts = 0;
+        ops += a.update_ops;
+        /* 7 operations per update: valid at every step, within the
+         * tolerance when an update completes */
+        if (rs_roam_update(ctx, bud, &v, 7) != RS_OK) rc_ok = 0;
+        rs_roam_get_stats(bud, &c);
+        if (!view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, c.update_done ? &w : NULL)) bvalid = 0;
+        if (c.update_done && w > bworst) bworst = w;
+        if (c.update_done && w > 1.0) bbound = 0;
+        frames += (uint32_t)c.update_done;
+        v.target_triangles = 3000;
+        if (rs_roam_update(ctx, tgt, &v, 0) != RS_OK) rc_ok = 0;
+        rs_roam_get_stats(tgt, &c);
+        double dev = fabs((double)c.triangles - 3000.0) / 3000.0;
+        if (dev > tdev) tdev = dev;
+        if (dev > 0.02 || c.frame_passes != 1) within = 0;
+        if (f % 6 == 0 && !view_mesh_ok(ctx, tgt, z, W, H, cs, &v, tol, NULL)) within = 0;
+    }
+    CHECK(rc_ok);
+    CHECKF(valid, "update (patch %u): every mesh valid and crack-free", patch);
+    CHECKF(bound, "update (patch %u): within the tolerance after every update (worst %.4f of it)", patch, worst);
+    CHECKF(counts, "update (patch %u): rebuild <= update <= 1.05 x rebuild triangles (worst %.4f)", patch, most);
+    CHECKF(bvalid, "update (patch %u) with a budget of 7: crack-free after every step", patch);
+    CHECKF(bbound, "update (patch %u) with a budget: within the tolerance when complete (%u of 60, worst %.4f)",
+           patch, frames, bworst);
+    CHECKF(within, "update (patch %u): triangle target within 2 %% in one update per frame (worst %.2f %%)", patch,
+           100 * tdev);
+    printf("update (patch %u): %u split/merge operations over 60 frames, worst tris ratio %.4f\n", patch, ops, most);
+    /* the budgeted landscape catches up at the last view */
+    {
+        rs_roam_view v;
+        flight_view(59, W, cs, &v);
+        v.pixel_error = tol;
+        rs_roam_stats c;
+        int n = 0;
+        do {
+            rs_roam_update(ctx, bud, &v, 7);
+            rs_roam_get_stats(bud, &c);
+        } while (!c.update_done && ++n < 100000);
+        double w = 0;
+        CHECK(c.update_done && view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, &w) && w <= 1.0);
+        /* other modes and updates mix: a rebuild, then updates from it */
+        CHECK_EQ_INT(rs_roam_refine_error(ctx, bud, 2.0), RS_OK);
+        CHECK_EQ_INT(rs_roam_update(ctx, bud, &v, 0), RS_OK);
+        rs_roam_stats a, b;
+        rs_roam_get_stats(bud, &a);
+        CHECK_EQ_INT(rs_roam_frame(ctx, reb, &v), RS_OK);
+        rs_roam_get_stats(reb, &b);
+        CHECK(view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, &w) && w <= 1.0 && a.triangles >= b.triangles
+              && a.triangles <= b.triangles * 1.05);
+    }
+    /* bad arguments */
+    CHECK_EQ_INT(rs_roam_update(ctx, NULL, NULL, 0), RS_ERR_INVALID_ARG);
+    {
+        rs_roam_view v;
+        memset(&v, 0, sizeof v);
+        CHECK_EQ_INT(rs_roam_update(ctx, up, &v, 0), RS_ERR_INVALID_ARG); /* dir 0 */
+        v.dir[0] = 1;
+        v.merge_hysteresis = 0.5;
+        CHECK_EQ_INT(rs_roam_update(ctx, up, &v, 0), RS_ERR_INVALID_ARG);
+    }
+out:
+    rs_roam_free(ctx, up); rs_roam_free(ctx, reb); rs_roam_free(ctx, bud); rs_roam_free(ctx, tgt);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
+/* Triangles of patch p (or of the whole mesh, p = UINT32_MAX) as sorted
+ * keys of their corner samples (rotated to start at the smallest, so the
+ * winding is kept); NULL on failure. */
+static uint64_t *tri_keys(rs_ctx *ctx, rs_roam *r, uint32_t p, uint32_t W, double cs, size_t *n)
+{
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(r, NULL, &mv, &mi);
+    float *v = malloc((mv + 1) * 5 * sizeof *v);
+    uint32_t *ix = malloc((mi + 1) * sizeof *ix);
+    rs_result rr = p == UINT32_MAX ? rs_roam_extract(ctx, r, NULL, v, NULL, mv, ix, mi, &nv, &ni)
+                                   : rs_roam_extract_patch(ctx, r, p, NULL, v, NULL, mv, ix, mi, &nv, &ni);
+    uint64_t *k = rr == RS_OK ? malloc((ni / 3 + 1) * sizeof *k) : NULL;
+    for (size_t t = 0; k && t < ni / 3; t++) {
+        uint64_t s[3];
+        for (int c = 0; c < 3; c++) {
+            const float *q = v + 5 * (size_t)ix[3 * t + (size_t)c];
+            s[c] = (uint64_t)lround(q[1] / cs) * W + (uint64_t)lround(q[0] / cs);
+        }
+        int m = s[0] < s[1] ? (s[0] < s[2] ? 0 : 2) : (s[1] < s[2] ? 1 : 2);
+        k[t] = s[m] << 42 | s[(m + 1) % 3] << 21 | s[(m + 2) % 3];
+    }
+    if (k) qsort(k, ni / 3, sizeof *k, rc_cmp_u64);
+    *n = ni / 3;
+    free(v); free(ix);
+    return k;
+}
+
+/* Per-patch output over a flight: the patches' triangles together are the
+ * mesh's, and a patch whose generation did not change since the last
+ * update has the same triangles as then. */
+static void test_patches(rs_ctx *ctx)
+{
+    const uint32_t W = 257, H = 257, np = 16; /* automatic size: 64-cell patches */
+    const double cs = 10.0;
+    float *z = view_dem(W, H);
+    rs_dem *d = NULL;
+    rs_roam *r = make_f(ctx, z, W, H, cs, 0, NULL, &d);
+    CHECK(r != NULL);
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    CHECK_EQ_INT(st.patches_x * st.patches_y, np);
+    uint64_t *prev[16] = { NULL };
+    size_t nprev[16] = { 0 };
+    uint32_t gen[16] = { 0 };
+    int union_ok = 1, kept_ok = 1, kept = 0, changed = 0;
+    for (int f = 0; r && f < 30; f++) {
+        rs_roam_view v;
+        flight_view(f, W, cs, &v);
+        v.pixel_error = 1.5;
+        CHECK_EQ_INT(rs_roam_update(ctx, r, &v, 0), RS_OK);
+        size_t nall, sum = 0;
+        uint64_t *all = tri_keys(ctx, r, UINT32_MAX, W, cs, &nall), *cat = malloc((nall + 1) * sizeof *cat);
+        for (uint32_t p = 0; p < np; p++) {
+            size_t n = 0;
+            uint64_t *k = tri_keys(ctx, r, p, W, cs, &n);
+            if (!k) { union_ok = 0; continue; }
+            if (sum + n <= nall) memcpy(cat + sum, k, n * sizeof *k);
+            sum += n;
+            uint32_t g = rs_roam_patch_generation(r, p);
+            if (f > 0 && g == gen[p]) {
+                kept++;
+                if (n != nprev[p] || memcmp(k, prev[p], n * sizeof *k) != 0) kept_ok = 0;
+            } else if (f > 0) changed++;
+            free(prev[p]);
+            prev[p] = k; nprev[p] = n; gen[p] = g;
+        }
+        if (sum != nall) union_ok = 0;
+        else {
+            qsort(cat, sum, sizeof *cat, rc_cmp_u64);
+            if (!all || memcmp(cat, all, sum * sizeof *cat) != 0) union_ok = 0;
+        }
+        free(all); free(cat);
+    }
+    CHECKF(union_ok, "patches: their triangles together are the mesh's");
+    CHECKF(kept_ok, "patches: an unchanged generation means unchanged triangles");
+    CHECKF(kept > 0 && changed > 0, "patches: %d kept and %d changed over the flight", kept, changed);
+    CHECK_EQ_INT(rs_roam_patch_generation(r, np), 0);
+    {
+        size_t nv, ni;
+        float vb[5];
+        uint32_t ib[3];
+        CHECK_EQ_INT(rs_roam_extract_patch(ctx, r, np, NULL, vb, NULL, 1, ib, 3, &nv, &ni), RS_ERR_INVALID_ARG);
+    }
+    /* a rebuild changes every patch's generation */
+    uint32_t g0 = rs_roam_patch_generation(r, 0);
+    rs_roam_refine_error(ctx, r, 1.0);
+    CHECK(rs_roam_patch_generation(r, 0) != g0);
+    for (uint32_t p = 0; p < np; p++) free(prev[p]);
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
+/* Seams: two landscapes on the halves of one DEM (sharing the middle
+ * column, or the middle row), updated with the same camera, then
+ * stitched: together they must be one crack-free mesh of the whole DEM
+ * (rc_check: every interior edge paired, no T-junction across the seam);
+ * without the stitch they are not. */
+static void test_seams(rs_ctx *ctx, int vertical_seam)
+{
+    const uint32_t S = 129, N = 2 * S - 1; /* the whole map: N x S or S x N */
+    const uint32_t WW = vertical_seam ? N : S, HH = vertical_seam ? S : N;
+    const double cs = 10.0;
+    float *z = malloc((size_t)WW * HH * sizeof *z), *h[2];
+    rc_dem_fractal(z, WW, HH, 21, 48.0, 60.0, 0.55);
+    rs_dem *d[2] = { NULL, NULL };
+    rs_roam *r[2] = { NULL, NULL };
+    for (int k = 0; k < 2; k++) {
+        h[k] = malloc((size_t)S * S * sizeof *h[k]);
+        for (uint32_t y = 0; y < S; y++)
+            for (uint32_t x = 0; x < S; x++)
+                h[k][(size_t)y * S + x] = vertical_seam ? z[(size_t)y * WW + x + (uint32_t)k * (S - 1)]
+                                                        : z[(size_t)(y + (uint32_t)k * (S - 1)) * WW + x];
+        r[k] = make_f(ctx, h[k], S, S, cs, 0, NULL, &d[k]);
+    }
+    CHECK(r[0] && r[1]);
+    int open_before = 0, closed = 1, valid = 1;
+    for (int f = 0; r[0] && r[1] && f < 12; f++) {
+        rs_roam_view v;
+        flight_view(f, WW, cs, &v);
+        v.eye[1] = 0.5 * (HH - 1) * cs + 0.2 * (HH - 1) * cs * sin(f / 4.0);
+        v.pixel_error = 1.0;
+        for (int k = 0; k < 2; k++) {
+            rs_roam_view w = v; /* the same camera in each tile's frame */
+            if (vertical_seam) w.eye[0] -= k * (S - 1) * cs; else w.eye[1] -= k * (S - 1) * cs;
+            CHECK_EQ_INT(rs_roam_update(ctx, r[k], &w, 0), RS_OK);
+        }
+        for (int pass = 0; pass < 2; pass++) {
+            if (pass == 1)
+                CHECK_EQ_INT(rs_roam_stitch(ctx, r[0], vertical_seam ? RS_ROAM_EDGE_RIGHT : RS_ROAM_EDGE_BOTTOM, r[1],
+                                            vertical_seam ? RS_ROAM_EDGE_LEFT : RS_ROAM_EDGE_TOP), RS_OK);
+            /* both meshes in the whole map's grid */
+            mesh m[2];
+            extract(ctx, r[0], NULL, &m[0]);
+            extract(ctx, r[1], NULL, &m[1]);
+            size_t nv = m[0].nv + m[1].nv, ni = m[0].ni + m[1].ni;
+            int32_t *gx = malloc((nv + 1) * sizeof *gx), *gy = malloc((nv + 1) * sizeof *gy);
+            double *vz = malloc((nv + 1) * sizeof *vz);
+            uint32_t *ix = malloc((ni + 1) * sizeof *ix);
+            for (int k = 0; k < 2; k++) {
+                size_t v0 = k ? m[0].nv : 0, i0 = k ? m[0].ni : 0;
+                for (size_t q = 0; q < m[k].nv; q++) {
+                    gx[v0 + q] = (int32_t)lround(m[k].v[5 * q] / cs) + (vertical_seam ? k * (int32_t)(S - 1) : 0);
+                    gy[v0 + q] = (int32_t)lround(m[k].v[5 * q + 1] / cs) + (vertical_seam ? 0 : k * (int32_t)(S - 1));
+                    vz[v0 + q] = m[k].v[5 * q + 2];
+                }
+                for (size_t q = 0; q < m[k].ni; q++) ix[i0 + q] = m[k].i[q] + (uint32_t)v0;
+            }
+            float *zf = malloc((size_t)WW * HH * sizeof *zf);
+            for (size_t q = 0; q < (size_t)WW * HH; q++) zf[q] = (float)z[q];
+            rc_result res;
+            int ok = rc_check(WW, HH, zf, 1.0, gx, gy, vz, nv, ix, ni / 3, &res);
+            if (!ok || !res.ok_grid || !res.ok_heights || !res.ok_winding || !res.ok_area || !res.ok_coverage) valid = 0;
+            int seamless = ok && res.ok_edges && res.ok_tjunction;
+            if (pass == 0 && !seamless) open_before++;
+            if (pass == 1 && !seamless) closed = 0;
+            free(gx); free(gy); free(vz); free(ix); free(zf);
+            mesh_free(&m[0]); mesh_free(&m[1]);
+        }
+    }
+    CHECKF(valid, "seams (%s): both tiles' meshes valid", vertical_seam ? "columns" : "rows");
+    CHECKF(closed, "seams (%s): stitched tiles form one crack-free mesh on every frame", vertical_seam ? "columns" : "rows");
+    CHECKF(open_before > 0, "seams (%s): unstitched tiles had T-junctions on %d of 12 frames", vertical_seam ? "columns" : "rows",
+           open_before);
+    printf("seams (%s): open before stitching on %d of 12 frames\n", vertical_seam ? "columns" : "rows", open_before);
+    /* refused: mismatched edges */
+    if (r[0] && r[1]) {
+        CHECK_EQ_INT(rs_roam_stitch(ctx, r[0], 7, r[1], RS_ROAM_EDGE_LEFT), RS_ERR_INVALID_ARG);
+        CHECK_EQ_INT(rs_roam_stitch(ctx, r[0], RS_ROAM_EDGE_LEFT, r[0], RS_ROAM_EDGE_RIGHT), RS_ERR_INVALID_ARG);
+    }
+    for (int k = 0; k < 2; k++) {
+        rs_roam_free(ctx, r[k]);
+        rs_dem_free(ctx, d[k]);
+        free(h[k]);
+    }
     free(z);
 }
 
@@ -885,6 +1210,12 @@ int main(void)
     test_scaling_and_determinism(ctx);
     test_budget(ctx);
     test_view(ctx);
+    test_update(ctx, 0);
+    test_update(ctx, 16);
+    test_update(ctx, 256);
+    test_patches(ctx);
+    test_seams(ctx, 1);
+    test_seams(ctx, 0);
     test_extract_options(ctx);
     test_errors(ctx);
     test_set_dem(ctx);

@@ -1,9 +1,12 @@
 /* Fuzz target for the ROAM mesher. Input: byte 0 = width-2, byte 1 =
  * height-2 (each taken mod 33), then one byte per sample (255 = nodata,
  * samples repeat when the input is short); the last 4 bytes choose the pool
- * size (2 bytes), the error threshold and the mode. Checks invariants and
- * traps on a violation (no NaN vertex, indices in range, count == stats,
- * the triangles tile the map, no T-junction). */
+ * size (2 bytes), the error threshold and the mode. With bit 3 of the last
+ * byte, a sequence of rs_roam_update calls follows (views, budgets,
+ * tolerance or triangle target and patch size from the body's bytes, in
+ * reverse). Checks invariants after each mesh and traps on a violation (no
+ * NaN vertex, indices in range, count == stats, the triangles tile the
+ * map, no T-junction, the patches' triangles add up to the mesh's). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -13,6 +16,60 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #define REQUIRE(c) do { if (!(c)) __builtin_trap(); } while (0)
+
+
+/* Extract r's mesh (whole and per patch) and check it. */
+static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double cs, uint8_t opt)
+{
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    REQUIRE(st.pool_used <= st.pool_nodes);
+    rs_roam_mesh_options mo = { opt & 1, (opt & 2) ? 3.0 : 0.0, NULL };
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(r, &mo, &mv, &mi);
+    float *v = malloc((mv + 1) * 5 * sizeof *v), *n = malloc((mv + 1) * 3 * sizeof *n);
+    uint32_t *idx = malloc((mi + 1) * sizeof *idx);
+    if (v && n && idx) {
+        REQUIRE(rs_roam_extract(ctx, r, &mo, v, n, mv, idx, mi, &nv, &ni) == RS_OK);
+        REQUIRE(ni >= 3 * (size_t)st.triangles);
+        for (size_t k = 0; k < nv * 5; k++) REQUIRE(isfinite(v[k]));
+        for (size_t k = 0; k < ni; k++) REQUIRE(idx[k] < nv);
+        double area = 0;
+        for (size_t t = 0; t < 3 * (size_t)st.triangles; t += 3) {
+            const float *a = v + 5 * idx[t], *b = v + 5 * idx[t + 1], *c = v + 5 * idx[t + 2];
+            area += -((double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1])) / 2;
+        }
+        double want = (W - 1) * (H - 1) * cs * cs;
+        REQUIRE(fabs(area - want) <= 1e-6 * want);
+        /* conforming: no vertex strictly inside a triangle edge (a crack) */
+        unsigned char *isv = calloc((size_t)W * H, 1);
+        if (isv) {
+            for (size_t k = 0; k < nv; k++) {
+                long gx = lround(v[5 * k] / cs), gy = lround(v[5 * k + 1] / cs);
+                REQUIRE(gx >= 0 && gy >= 0 && gx < (long)W && gy < (long)H);
+                isv[(size_t)gy * W + (size_t)gx] = 1;
+            }
+            for (size_t t = 0; t < 3 * (size_t)st.triangles; t++) {
+                const float *a = v + 5 * idx[t], *b = v + 5 * idx[t % 3 == 2 ? t - 2 : t + 1];
+                long ax = lround(a[0] / cs), ay = lround(a[1] / cs);
+                long ex = lround(b[0] / cs) - ax, ey = lround(b[1] / cs) - ay;
+                long g = labs(ex) > labs(ey) ? labs(ex) : labs(ey); /* bintree edges: axis or diagonal */
+                for (long s = 1; s < g; s++) REQUIRE(!isv[(size_t)(ay + ey / g * s) * W + (size_t)(ax + ex / g * s)]);
+            }
+            free(isv);
+        }
+        /* the patches' triangles add up to the mesh's */
+        size_t sum = 0;
+        for (uint32_t p = 0; p < st.patches_x * st.patches_y; p++) {
+            size_t pv, pi;
+            REQUIRE(rs_roam_extract_patch(ctx, r, p, NULL, v, NULL, mv, idx, mi, &pv, &pi) == RS_OK);
+            for (size_t k = 0; k < pi; k++) REQUIRE(idx[k] < pv);
+            sum += pi / 3;
+        }
+        REQUIRE(sum == st.triangles);
+    }
+    free(v); free(n); free(idx);
+}
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -54,45 +111,26 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         rr = rs_roam_frame(ctx, r, &v);
     }
     REQUIRE(rr == RS_OK || rr == RS_ERR_POOL_EXHAUSTED || rr == RS_ERR_LIMIT);
-    rs_roam_stats st;
-    rs_roam_get_stats(r, &st);
-    REQUIRE(st.pool_used <= st.pool_nodes);
-    rs_roam_mesh_options mo = { tail[2] & 1, (tail[2] & 2) ? 3.0 : 0.0, NULL };
-    size_t mv, mi, nv, ni;
-    rs_roam_mesh_bound(r, &mo, &mv, &mi);
-    float *v = malloc((mv + 1) * 5 * sizeof *v), *n = malloc((mv + 1) * 3 * sizeof *n);
-    uint32_t *idx = malloc((mi + 1) * sizeof *idx);
-    if (v && n && idx) {
-        REQUIRE(rs_roam_extract(ctx, r, &mo, v, n, mv, idx, mi, &nv, &ni) == RS_OK);
-        REQUIRE(ni >= 3 * (size_t)st.triangles);
-        for (size_t k = 0; k < nv * 5; k++) REQUIRE(isfinite(v[k]));
-        for (size_t k = 0; k < ni; k++) REQUIRE(idx[k] < nv);
-        double area = 0;
-        for (size_t t = 0; t < 3 * (size_t)st.triangles; t += 3) {
-            const float *a = v + 5 * idx[t], *b = v + 5 * idx[t + 1], *c = v + 5 * idx[t + 2];
-            area += -((double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1])) / 2;
-        }
-        double want = (W - 1) * (H - 1) * cs * cs;
-        REQUIRE(fabs(area - want) <= 1e-6 * want);
-        /* conforming: no vertex strictly inside a triangle edge (a crack) */
-        unsigned char *isv = calloc((size_t)W * H, 1);
-        if (isv) {
-            for (size_t k = 0; k < nv; k++) {
-                long gx = lround(v[5 * k] / cs), gy = lround(v[5 * k + 1] / cs);
-                REQUIRE(gx >= 0 && gy >= 0 && gx < (long)W && gy < (long)H);
-                isv[(size_t)gy * W + (size_t)gx] = 1;
-            }
-            for (size_t t = 0; t < 3 * (size_t)st.triangles; t++) {
-                const float *a = v + 5 * idx[t], *b = v + 5 * idx[t % 3 == 2 ? t - 2 : t + 1];
-                long ax = lround(a[0] / cs), ay = lround(a[1] / cs);
-                long ex = lround(b[0] / cs) - ax, ey = lround(b[1] / cs) - ay;
-                long g = labs(ex) > labs(ey) ? labs(ex) : labs(ey); /* bintree edges: axis or diagonal */
-                for (long s = 1; s < g; s++) REQUIRE(!isv[(size_t)(ay + ey / g * s) * W + (size_t)(ax + ex / g * s)]);
-            }
-            free(isv);
+    check_mesh(ctx, r, W, H, cs, tail[2]);
+    if (tail[3] & 8) {
+        /* an update sequence from the current mesh */
+        for (int k = 0; k < 6; k++) {
+            const uint8_t *q = data + 2 + (nbody - 1 - (size_t)(k * 5) % nbody); /* reading backwards */
+            uint8_t q0 = q[0], q1 = data[2 + (size_t)(k * 5 + 1) % nbody], q2 = data[2 + (size_t)(k * 5 + 2) % nbody];
+            rs_roam_view v;
+            memset(&v, 0, sizeof v);
+            v.eye[0] = (double)q0 / 4.0 - 10; v.eye[1] = (double)q1 / 4.0 - 10; v.eye[2] = 2 + q2 / 2.0;
+            v.dir[0] = W / 2.0 - v.eye[0] + (q2 & 15) - 7.5; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -(double)(q0 & 7);
+            if (v.dir[0] == 0 && v.dir[1] == 0 && v.dir[2] == 0) v.dir[2] = -1;
+            v.pixel_error = 0.25 + (q1 & 31) / 8.0;
+            v.target_triangles = (q2 & 64) ? 4u + q0 : 0u;
+            v.width = 64 + q1; v.height = 48 + q2;
+            uint32_t budget = (q0 & 128) ? q1 % 9 : 0;
+            rs_result ru = rs_roam_update(ctx, r, &v, budget);
+            REQUIRE(ru == RS_OK || ru == RS_ERR_POOL_EXHAUSTED);
+            check_mesh(ctx, r, W, H, cs, (uint8_t)(tail[2] ^ q0));
         }
     }
-    free(v); free(n); free(idx);
 out:
     rs_roam_free(ctx, r);
     rs_dem_free(ctx, dem);

@@ -9,6 +9,7 @@
  * missing); without node or npm the martini columns say so. */
 #include "roadsplat.h"
 #include "../roam_check.h"
+#include "../scenes.h"
 
 #include "timing.h"
 
@@ -364,17 +365,304 @@ static int run_cold(const char *outdir)
     return bad;
 }
 
+
+/* OUTDIR/NAME.md and OUTDIR/NAME.csv opened for writing; 1 on failure. */
+static int open_section(const char *outdir, const char *name, FILE **md, FILE **csv)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/%s.md", outdir, name);
+    *md = fopen(path, "w");
+    snprintf(path, sizeof path, "%s/%s.csv", outdir, name);
+    *csv = fopen(path, "w");
+    if (*md && *csv) return 0;
+    fprintf(stderr, "roam bench: cannot write to %s\n", outdir);
+    if (*md) fclose(*md);
+    if (*csv) fclose(*csv);
+    return 1;
+}
+
+/* ---- drive: frame-coherent updates against per-frame rebuilds (issue 31) ---- */
+
+#define DRIVE_FRAMES 600
+
+/* Thread CPU time in ms: the drive's frames are short, and on a shared
+ * host wall time would mostly measure preemption. */
+static double cpu_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+#define DRIVE_TOL 2.0
+#define DRIVE_FRACTAL_M 500.0 /* height range of the fractal drive DEM */
+
+typedef struct drive_scene {
+    const char *name;
+    uint32_t W, H;
+    float *z;           /* DEM units */
+    double cs, zs;
+    uint32_t target;    /* triangle target of the target-mode runs */
+} drive_scene;
+
+/* Height (metres) at map point (x, y) metres, bilinear, clamped to the map. */
+static double drive_height(const drive_scene *s, double x, double y)
+{
+    double fx = x / s->cs, fy = y / s->cs;
+    if (fx < 0) fx = 0;
+    if (fy < 0) fy = 0;
+    if (fx > s->W - 1.001) fx = s->W - 1.001;
+    if (fy > s->H - 1.001) fy = s->H - 1.001;
+    size_t i = (size_t)fx, j = (size_t)fy;
+    double u = fx - (double)i, v = fy - (double)j;
+    const float *r0 = s->z + j * s->W + i, *r1 = r0 + s->W;
+    return ((r0[0] * (1 - u) + r0[1] * u) * (1 - v) + (r1[0] * (1 - u) + r1[1] * u) * v) * s->zs;
+}
+
+/* Frame f of the drive: 200 m along a gentle S-curve through the map's
+ * middle at 1/3 m per frame (20 m/s at 60 fps), the eye 3 m above the
+ * highest ground within 10 m, looking ahead and 6 degrees down. */
+static void drive_view(const drive_scene *s, int f, rs_roam_view *v)
+{
+    double cx = 0.5 * (s->W - 1) * s->cs, cy = 0.5 * (s->H - 1) * s->cs;
+    double t = (double)f / DRIVE_FRAMES;
+    double x = cx - 100.0 + 200.0 * t, y = cy + 20.0 * sin(6.283185307179586 * t);
+    double hx = 200.0, hy = 20.0 * 6.283185307179586 * cos(6.283185307179586 * t);
+    double hl = sqrt(hx * hx + hy * hy);
+    double h = drive_height(s, x, y);
+    for (int k = 0; k < 8; k++) {
+        double a = k * 0.7853981633974483, g = drive_height(s, x + 10 * cos(a), y + 10 * sin(a));
+        if (g > h) h = g;
+    }
+    memset(v, 0, sizeof *v);
+    v->eye[0] = x; v->eye[1] = y; v->eye[2] = h + 3.0;
+    v->dir[0] = hx / hl; v->dir[1] = hy / hl; v->dir[2] = -0.105;
+    v->fov_y = 60; v->width = 1280; v->height = 720;
+    v->pixel_error = DRIVE_TOL;
+}
+
+typedef struct drive_frame {
+    double upd_ms, reb_ms, tgt_ms, tgt_reb_ms, worst, upload;
+    uint32_t upd_tris, reb_tris, tgt_tris, ops;
+} drive_frame;
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double pct(const double *sorted, int n, double q)
+{
+    int i = (int)ceil(q * n) - 1;
+    return sorted[i < 0 ? 0 : i >= n ? n - 1 : i];
+}
+
+typedef struct drive_sum {
+    double mean[4], p50[4], p99[4], max[4]; /* update, rebuild, target update, target rebuild */
+    double worst, max_tri_ratio, max_tgt_dev, mean_tris, max_upload, mean_upload;
+    int cracks, bad;
+} drive_sum;
+
+static void drive_stats(const drive_frame *fr, int n, drive_sum *o)
+{
+    double *a = malloc((size_t)n * sizeof *a);
+    for (int c = 0; c < 4; c++) {
+        double sum = 0;
+        for (int f = 0; f < n; f++) {
+            a[f] = c == 0 ? fr[f].upd_ms : c == 1 ? fr[f].reb_ms : c == 2 ? fr[f].tgt_ms : fr[f].tgt_reb_ms;
+            sum += a[f];
+        }
+        qsort(a, (size_t)n, sizeof *a, cmp_double);
+        o->mean[c] = sum / n; o->p50[c] = pct(a, n, 0.5); o->p99[c] = pct(a, n, 0.99); o->max[c] = a[n - 1];
+    }
+    free(a);
+}
+
+/* Extract the mesh of L into grid coordinates; returns the triangle count
+ * or -1. */
+static long drive_extract(rs_ctx *ctx, rs_roam *L, const drive_scene *s, int32_t **gx, int32_t **gy, double **vz,
+                          uint32_t **idx, size_t *nv)
+{
+    size_t mv, mi, ni;
+    rs_roam_mesh_bound(L, NULL, &mv, &mi);
+    float *v = malloc(mv * 5 * sizeof *v);
+    *idx = malloc(mi * sizeof **idx);
+    if (!v || !*idx || rs_roam_extract(ctx, L, NULL, v, NULL, mv, *idx, mi, nv, &ni) != RS_OK) { free(v); return -1; }
+    *gx = malloc(*nv * sizeof **gx); *gy = malloc(*nv * sizeof **gy); *vz = malloc(*nv * sizeof **vz);
+    for (size_t k = 0; k < *nv; k++) {
+        (*gx)[k] = (int32_t)lround(v[5 * k] / s->cs);
+        (*gy)[k] = (int32_t)lround(v[5 * k + 1] / s->cs);
+        (*vz)[k] = v[5 * k + 2];
+    }
+    free(v);
+    return (long)(ni / 3);
+}
+
+/* One scene's drive: landscape A updated frame to frame (pixel tolerance),
+ * B rebuilt every frame at the same view (rs_roam_frame), C updated with a
+ * triangle target and D rebuilt with it. A's mesh is checked every frame
+ * against the tolerance (rc_view_worst) and every 25th for cracks. */
+static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_sum *o)
+{
+    memset(o, 0, sizeof *o);
+    rs_dem *dem = NULL;
+    rs_dem_frame frm = { s->cs, s->zs, 0, 0 };
+    if (rs_dem_create(ctx, s->W, s->H, s->z, &dem) != RS_OK || rs_dem_set_frame(ctx, dem, &frm) != RS_OK) return -1;
+    rs_roam *L[4] = { NULL, NULL, NULL, NULL };
+    for (int k = 0; k < 4; k++)
+        if (rs_roam_create(ctx, dem, NULL, &L[k]) != RS_OK) { fprintf(stderr, "%s\n", rs_ctx_message(ctx)); return -1; }
+    drive_frame *fr = calloc(DRIVE_FRAMES, sizeof *fr);
+    float *zm = malloc((size_t)s->W * s->H * sizeof *zm);
+    for (size_t i = 0; i < (size_t)s->W * s->H; i++) zm[i] = (float)((double)s->z[i] * s->zs);
+    o->worst = 0; o->max_tri_ratio = 0;
+    double tris_sum = 0, upload_sum = 0;
+    rs_roam_stats st0;
+    rs_roam_get_stats(L[0], &st0);
+    uint32_t npatch = st0.patches_x * st0.patches_y;
+    uint32_t *gens = calloc(npatch, sizeof *gens);
+    for (int f = 0; f < DRIVE_FRAMES; f++) {
+        rs_roam_view v;
+        drive_view(s, f, &v);
+        rs_roam_view vt = v;
+        vt.target_triangles = s->target;
+        double t[5];
+        rs_result rr[4];
+        /* alternate which goes first */
+        if (f & 1) {
+            t[0] = cpu_ms(); rr[1] = rs_roam_frame(ctx, L[1], &v); t[1] = cpu_ms();
+            rr[0] = rs_roam_update(ctx, L[0], &v, 0); t[2] = cpu_ms();
+            fr[f].reb_ms = t[1] - t[0]; fr[f].upd_ms = t[2] - t[1];
+        } else {
+            t[0] = cpu_ms(); rr[0] = rs_roam_update(ctx, L[0], &v, 0); t[1] = cpu_ms();
+            rr[1] = rs_roam_frame(ctx, L[1], &v); t[2] = cpu_ms();
+            fr[f].upd_ms = t[1] - t[0]; fr[f].reb_ms = t[2] - t[1];
+        }
+        t[0] = cpu_ms(); rr[2] = rs_roam_update(ctx, L[2], &vt, 0); t[1] = cpu_ms();
+        rr[3] = rs_roam_frame(ctx, L[3], &vt); t[2] = cpu_ms();
+        fr[f].tgt_ms = t[1] - t[0]; fr[f].tgt_reb_ms = t[2] - t[1];
+        for (int k = 0; k < 4; k++)
+            if (rr[k] != RS_OK) { fprintf(stderr, "roam drive %s frame %d: %s\n", s->name, f, rs_ctx_message(ctx)); o->bad = 1; }
+        rs_roam_stats st[4];
+        for (int k = 0; k < 4; k++) rs_roam_get_stats(L[k], &st[k]);
+        fr[f].upd_tris = st[0].triangles; fr[f].reb_tris = st[1].triangles; fr[f].tgt_tris = st[2].triangles;
+        fr[f].ops = st[0].update_ops;
+        tris_sum += st[1].triangles;
+        double ratio = (double)st[0].triangles / st[1].triangles;
+        if (ratio > o->max_tri_ratio) o->max_tri_ratio = ratio;
+        double dev = fabs((double)st[2].triangles - s->target) / s->target;
+        if (dev > o->max_tgt_dev) o->max_tgt_dev = dev;
+        /* the tolerance on A's mesh, independently */
+        int32_t *gx = NULL, *gy = NULL;
+        double *vz = NULL;
+        uint32_t *idx = NULL;
+        size_t nv = 0;
+        long nt = drive_extract(ctx, L[0], s, &gx, &gy, &vz, &idx, &nv);
+        if (nt < 0) o->bad = 1;
+        else {
+            double k = 720.0 / (2.0 * tan(30.0 * 3.14159265358979323846 / 180.0));
+            size_t nchk = 0;
+            fr[f].worst = rc_view_worst(s->W, s->H, s->z, s->zs, s->cs, gx, gy, idx, (size_t)nt, v.eye, v.dir,
+                                        29.0 * 3.14159265358979323846 / 180.0, k, DRIVE_TOL, 1e-3 * s->cs, &nchk);
+            if (fr[f].worst > o->worst) o->worst = fr[f].worst;
+            if (f % 25 == 0) {
+                rc_result res;
+                if (!rc_check(s->W, s->H, zm, 1.0, gx, gy, vz, nv, idx, (size_t)nt, &res) || !rc_all_ok(&res)) o->cracks++;
+            }
+        }
+        free(gx); free(gy); free(vz); free(idx);
+        /* per-patch upload: the vertices of the patches whose generation
+         * changed, against those of all patches */
+        {
+            size_t mv, mi, nvp, nip, all = 0, changed = 0;
+            rs_roam_mesh_bound(L[0], NULL, &mv, &mi);
+            float *pv = malloc(mv * 5 * sizeof *pv);
+            uint32_t *pi = malloc(mi * sizeof *pi);
+            for (uint32_t p = 0; pv && pi && p < npatch; p++) {
+                if (rs_roam_extract_patch(ctx, L[0], p, NULL, pv, NULL, mv, pi, mi, &nvp, &nip) != RS_OK) { o->bad = 1; break; }
+                uint32_t g = rs_roam_patch_generation(L[0], p);
+                all += nvp;
+                if (g != gens[p]) changed += nvp;
+                gens[p] = g;
+            }
+            free(pv); free(pi);
+            fr[f].upload = all ? (double)changed / (double)all : 0.0;
+            if (f > 0) {
+                upload_sum += fr[f].upload;
+                if (fr[f].upload > o->max_upload) o->max_upload = fr[f].upload;
+            }
+        }
+        fprintf(csv, "%s,%d,%.4f,%.4f,%u,%u,%u,%.4f,%.4f,%u,%.5f,%.5f\n", s->name, f, fr[f].upd_ms, fr[f].reb_ms,
+                fr[f].upd_tris, fr[f].reb_tris, fr[f].ops, fr[f].tgt_ms, fr[f].tgt_reb_ms, fr[f].tgt_tris, fr[f].worst,
+                fr[f].upload);
+    }
+    drive_stats(fr, DRIVE_FRAMES, o);
+    o->mean_tris = tris_sum / DRIVE_FRAMES;
+    o->mean_upload = upload_sum / (DRIVE_FRAMES - 1);
+    free(fr); free(zm); free(gens);
+    for (int k = 0; k < 4; k++) rs_roam_free(ctx, L[k]);
+    rs_dem_free(ctx, dem);
+    return 0;
+}
+
+static int run_drive(const char *outdir)
+{
+    FILE *md, *csv;
+    if (open_section(outdir, "roam_drive", &md, &csv)) return 1;
+    rs_ctx *ctx = NULL;
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    fprintf(csv, "scene,frame,update_ms,rebuild_ms,update_tris,rebuild_tris,update_ops,target_update_ms,"
+                 "target_rebuild_ms,target_tris,worst_over_tol,upload_fraction\n");
+    drive_scene sc[2];
+    sc[0].name = "fractal"; sc[0].W = sc[0].H = 1025; sc[0].cs = 1.0; sc[0].zs = DRIVE_FRACTAL_M / 65535.0; sc[0].target = 100000;
+    sc[0].z = malloc((size_t)1025 * 1025 * sizeof(float));
+    sc_dem_fractal(sc[0].z, 1025, 1025, 5, 0.5);
+    sc_scene city;
+    if (sc_city_default(&city, 1)) return 1;
+    sc[1].name = "city"; sc[1].W = city.w; sc[1].H = city.h; sc[1].cs = city.cell_size; sc[1].zs = 0.01; sc[1].z = city.z; sc[1].target = 20000;
+    fprintf(md, "## ROAM drive: frame-coherent updates against per-frame rebuilds (tests/bench/roam.c)\n\n"
+                "%d frames at 1280x720 (60 degree vertical field of view), 1/3 m per frame (20 m/s at 60 fps) "
+                "along a 200 m S-curve through the map's middle, the eye 3 m above the ground, one core, times in thread CPU time (on a shared host wall time mostly measures preemption). Per frame: `rs_roam_update` "
+                "(split and merge queues, tolerance %.0f px, merge hysteresis 1.1 (the default), no budget) on one landscape and `rs_roam_frame` "
+                "(from scratch) on another at the same view, alternating which goes first; then the same with "
+                "a triangle target (100,000 on the fractal, 20,000 on the city). The updated mesh is checked every frame against the tolerance by "
+                "`rc_view_worst` (true error over the distance to the nearest sample, triangles inside a 29 "
+                "degree cone) and every 25th frame for cracks by `rc_check`.\n\n"
+                "![per-frame mesh time over the drive](bench/roam_drive.png)\n\n"
+                "| scene | mean tris (rebuild) | update ms mean / p50 / p99 / max | rebuild ms mean / p50 / p99 / max "
+                "| update / rebuild (mean) | max tris update / rebuild | worst error / tolerance | cracked frames "
+                "| target: update ms mean / p99 | target: rebuild ms mean / p99 | target: max deviation "
+                "| vertices re-uploaded per frame, mean / max |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|\n", DRIVE_FRAMES, DRIVE_TOL);
+    int fail = 0;
+    for (int k = 0; k < 2; k++) {
+        drive_sum o;
+        if (drive_scene_run(ctx, &sc[k], csv, &o) != 0) { fail = 1; continue; }
+        fprintf(md, "| %s %ux%u | %.0f | %.3f / %.3f / %.3f / %.3f | %.3f / %.3f / %.3f / %.3f | %.2f | %.4f | %.4f | %d "
+                    "| %.3f / %.3f | %.3f / %.3f | %.2f %% | %.1f %% / %.1f %% |\n", sc[k].name, sc[k].W, sc[k].H, o.mean_tris,
+                o.mean[0], o.p50[0], o.p99[0], o.max[0], o.mean[1], o.p50[1], o.p99[1], o.max[1], o.mean[0] / o.mean[1],
+                o.max_tri_ratio, o.worst, o.cracks, o.mean[2], o.p99[2], o.mean[3], o.p99[3], 100 * o.max_tgt_dev,
+                100 * o.mean_upload, 100 * o.max_upload);
+        fflush(md);
+        if (o.bad || o.cracks || o.worst > 1.0 + 1e-9 || o.max_tri_ratio > 1.05) fail = 1;
+    }
+    fprintf(md, "\n");
+    free(sc[0].z);
+    sc_scene_free(&city);
+    fclose(md);
+    fclose(csv);
+    rs_ctx_free(ctx);
+    if (fail) fprintf(stderr, "roam bench: a drive frame broke the tolerance, cracked or failed\n");
+    return fail;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) { fprintf(stderr, "usage: roam OUTDIR [cold]\n"); return 2; }
     const char *outdir = argv[1];
     if (argc > 2 && !strcmp(argv[2], "cold")) return run_cold(outdir); /* that section alone */
-    char path[600];
-    snprintf(path, sizeof path, "%s/roam.md", outdir);
-    FILE *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/roam.csv", outdir);
-    FILE *csv = fopen(path, "w");
-    if (!md || !csv) { fprintf(stderr, "roam bench: cannot write to %s\n", outdir); return 1; }
+    if (argc > 2 && !strcmp(argv[2], "drive")) return run_drive(outdir);
+    FILE *md, *csv;
+    if (open_section(outdir, "roam", &md, &csv)) return 1;
     rs_ctx *ctx = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     fprintf(csv, "dem,mesher,requested_error,triangles,max_error,rms_error,build_ms,extract_ms,total_ms\n");
@@ -478,5 +766,5 @@ int main(int argc, char **argv)
     fclose(csv);
     rs_ctx_free(ctx);
     if (fail) fprintf(stderr, "roam bench: a roadsplat mesh was invalid or exceeded its bound\n");
-    return run_cold(outdir) | fail;
+    return run_cold(outdir) | run_drive(outdir) | fail;
 }

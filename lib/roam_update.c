@@ -1,0 +1,602 @@
+/* ROAM with frame coherence (seed 004, after Duchaineau 1997): the mesh is
+ * kept from one update to the next and adapted by a split queue (leaves,
+ * highest priority first) and a merge queue (diamonds, lowest priority
+ * first). See docs/roam.md, "Frame-coherent updates". */
+#include "roam.h"
+
+#include <math.h>
+#include <string.h>
+#ifdef ROAM_UPDATE_DEBUG
+#include <stdio.h>
+#endif
+
+/* A queue entry: a leaf (split queue) or a diamond named by one of its two
+ * parents (merge queue), with its priority. Entries are never removed
+ * when a split or merge elsewhere invalidates them: they are checked when
+ * they come to the top (the node's corners name the triangle, so a node
+ * index reused from the free list is not mistaken for the old one). */
+typedef struct qent {
+    double p;
+    uint32_t node;
+    uint16_t pos, ax, ay, bx, by;
+} qent;
+
+struct roam_queue {
+    qent *a;
+    size_t n, cap;
+    int max;            /* 1: max-heap (splits), 0: min-heap (merges) */
+};
+
+static int above(const struct roam_queue *q, const qent *x, const qent *y)
+{
+    return q->max ? x->p > y->p : x->p < y->p;
+}
+
+static void sift_down(struct roam_queue *q, size_t i)
+{
+    qent *a = q->a;
+    for (;;) {
+        size_t l = 2 * i + 1, b = i;
+        if (l < q->n && above(q, &a[l], &a[b])) b = l;
+        if (l + 1 < q->n && above(q, &a[l + 1], &a[b])) b = l + 1;
+        if (b == i) return;
+        qent t = a[i]; a[i] = a[b]; a[b] = t;
+        i = b;
+    }
+}
+
+/* Append without ordering (rs_roam_update heapifies after the scan). */
+static int q_append(rs_ctx *ctx, struct roam_queue *q, const qent *e)
+{
+    if (q->n == q->cap) {
+        size_t nc = q->cap ? 2 * q->cap : 4096;
+        qent *na = rs__realloc(ctx, q->a, nc * sizeof *na);
+        if (!na) return 0;
+        q->a = na;
+        q->cap = nc;
+    }
+    q->a[q->n++] = *e;
+    return 1;
+}
+
+static int q_push(rs_ctx *ctx, struct roam_queue *q, const qent *e)
+{
+    if (!q_append(ctx, q, e)) return 0;
+    qent *a = q->a;
+    for (size_t i = q->n - 1; i > 0;) {
+        size_t p = (i - 1) / 2;
+        if (!above(q, &a[i], &a[p])) break;
+        qent t = a[i]; a[i] = a[p]; a[p] = t;
+        i = p;
+    }
+    return 1;
+}
+
+static void q_pop(struct roam_queue *q)
+{
+    q->a[0] = q->a[--q->n];
+    sift_down(q, 0);
+}
+
+static void q_heapify(struct roam_queue *q)
+{
+    for (size_t i = q->n / 2; i-- > 0;) sift_down(q, i);
+}
+
+/* State of one update. */
+typedef struct upd {
+    rs_ctx *ctx;
+    rs_roam *L;
+    const view_params *v;
+    const unsigned char *vis;
+    double tol;
+    int all;            /* triangle target: queue everything, not only what crosses tol */
+    int full;           /* scan every cluster, whatever its cache says */
+    double mtol;        /* merges: both parents at or below this (tol / MERGE_HYSTERESIS) */
+    double thr;         /* the threshold item_prio_t measures the slack against */
+    int track;          /* scanning: keep `slack` */
+    double slack;       /* how far the eye may move before an item seen so far
+                           in the node under scan crosses the tolerance (metres) */
+    int nomem;
+} upd;
+
+/* Priority of (node, pos) as a leaf (view_prio), its triangle t given or
+ * (NULL) worked out; in a scan, also how far its distance is from the one
+ * where it would cross the tolerance. */
+static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
+{
+    tri t;
+    uint32_t slot, patch;
+    double d;
+    const rs_roam *L = u->L;
+    if (tk) {
+        t = *tk;
+        slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
+        patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
+    } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
+    int k = view_dist(L, &t, patch, u->v, u->vis, &d);
+    if (k != 2) return k ? INFINITY : 0.0;
+    float e = rs__roam_slot_err(u->L, slot, &t);
+    if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
+    double ek = (double)e * L->zs * u->v->k;
+    if (u->track) {
+        double sl = fabs(d - ek / u->thr);
+        if (sl < u->slack) u->slack = sl;
+    }
+    return ek / d;
+}
+
+static double item_prio(upd *u, uint32_t node, uint32_t pos)
+{
+    return item_prio_t(u, node, pos, NULL);
+}
+
+static void fill_ent(const rs_roam *L, qent *e, double p, uint32_t node, uint32_t pos)
+{
+    const roam_node *nd = &L->nodes[node];
+    e->p = p; e->node = node; e->pos = (uint16_t)pos;
+    e->ax = nd->ax; e->ay = nd->ay; e->bx = nd->bx; e->by = nd->by;
+}
+
+static int same_node(const rs_roam *L, const qent *e)
+{
+    const roam_node *nd = &L->nodes[e->node];
+    return nd->ax == e->ax && nd->ay == e->ay && nd->bx == e->bx && nd->by == e->by;
+}
+
+/* Is the entry still a leaf that can split? */
+static int leaf_valid(const rs_roam *L, const qent *e)
+{
+    const roam_node *nd = &L->nodes[e->node];
+    if (!same_node(L, e)) return 0;
+    if (e->pos == 0) return nd->lc == NIL && nd->e != NIL;
+    if (nd->lc != IMPL || (nd->rc & SPLIT_BIT(e->pos))) return 0;
+    return e->pos < 4 || (nd->rc & SPLIT_BIT(e->pos >> 1u));
+}
+
+/* Queue leaf (node, pos) for a split when its priority calls for one. */
+static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
+{
+    u->thr = u->tol;
+    double p = item_prio_t(u, node, pos, t);
+    if (!u->all && !(p > u->tol)) return;
+    qent e;
+    fill_ent(u->L, &e, p, node, pos);
+    if (!(build ? q_append(u->ctx, u->L->qs, &e) : q_push(u->ctx, u->L->qs, &e))) u->nomem = 1;
+}
+
+/* Queue the diamond of (node, pos) for a merge when it can merge and its
+ * priority (the larger of its two parents': the error once merged) allows. */
+static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
+{
+    uint32_t N, pp;
+    if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
+    /* a full scan of a triangle target sees each diamond once; the
+     * tolerance's scans see it from both sides, as the two clusters that
+     * hold its parents may be scanned in different frames */
+    if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
+    u->thr = u->mtol;
+    double p = item_prio_t(u, node, pos, t);
+    if (N != NIL) {
+        double q = item_prio(u, N, pp);
+        if (q > p) p = q;
+    }
+    if (!u->all && p > u->mtol) return;
+    qent e;
+    fill_ent(u->L, &e, p, node, pos);
+    if (!(build ? q_append(u->ctx, u->L->qm, &e) : q_push(u->ctx, u->L->qm, &e))) u->nomem = 1;
+}
+
+static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
+{
+    offer_leaf_t(u, node, pos, build, NULL);
+}
+
+static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
+{
+    offer_diamond_t(u, node, pos, build, NULL);
+}
+
+/* The leaves of block r below its split positions (cell halves excluded),
+ * and with `diamonds` its diamonds too: the positions' triangles worked
+ * out once, top down. */
+static void offer_block(upd *u, uint32_t r, int build, int diamonds)
+{
+    const rs_roam *L = u->L;
+    uint32_t rc = L->nodes[r].rc;
+    tri pt[1 << IMPL_DEPTH];
+    node_tri(L, &L->nodes[r], &pt[1]);
+    for (uint32_t pos = 2; pos < L->ncut; pos++) {
+        if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
+        child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
+        if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
+        else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos]);
+    }
+    if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1]);
+}
+
+/* A node's place against the view: 0 when its items are all
+ * culled, 1 when they are all in the frustum, 2 in between. An item's
+ * bounding sphere (tri_sphere) is centred on its centroid at the middle
+ * of the patch's height range, so its centre lies in the cluster's
+ * triangle lifted to that height, and its radius is at most the cluster's
+ * and at least half the height range: all items are visible when the
+ * lifted triangle's corners are inside every plane or outside by less
+ * than that half range, all culled when they are further outside one
+ * than the cluster's radius (or the patch is culled). */
+static int node_class(const upd *u, uint32_t i)
+{
+    const rs_roam *L = u->L;
+    const roam_node *nd = &L->nodes[i];
+    if (nd->e == NIL) return 2;
+    uint32_t patch = nd->e >> L->elog;
+    if (!u->vis[patch]) return 0;
+    tri t;
+    node_tri(L, nd, &t);
+    double c[3], r;
+    tri_sphere(L, &t, patch, c, &r);
+    double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
+    double cx[3] = { t.ax * L->cs, t.bx * L->cs, t.cx * L->cs }, cy[3] = { t.ay * L->cs, t.by * L->cs, t.cy * L->cs };
+    int part = 0;
+    for (int p = 0; p < u->v->nplanes; p++) {
+        const double *pl = u->v->planes[p];
+        double lo = INFINITY, hi = -INFINITY;
+        for (int k = 0; k < 3; k++) {
+            double sd = pl[0] * cx[k] + pl[1] * cy[k] + pl[2] * c[2] + pl[3];
+            if (sd < lo) lo = sd;
+            if (sd > hi) hi = sd;
+        }
+        if (hi < -r) return 0;
+        if (lo < -hz) part = 1;
+    }
+    return part ? 2 : 1;
+}
+
+static double walk(upd *u, uint32_t i, int pcls);
+
+/* The items at and below node i: its leaves and its diamonds. Returns the
+ * smallest recheck reading of the children's subtrees (+inf: none). */
+static double walk_items(upd *u, uint32_t i, int cls)
+{
+    roam_node *n = u->L->nodes;
+    uint32_t lc = n[i].lc;
+    if (lc == NIL) {
+        if (n[i].e != NIL) offer_leaf(u, i, 0, 1);
+    } else if (lc == IMPL) {
+        n[i].rc &= ~QUEUED;
+        offer_block(u, i, 1, 1);
+    } else {
+        offer_diamond(u, i, 0, 1);
+        double a = walk(u, lc, cls), b = walk(u, n[i].rc, cls);
+        return a < b ? a : b;
+    }
+    return INFINITY;
+}
+
+/* Depth-first over the tree under node i, skipping a subtree when nothing
+ * in it can have crossed the tolerance since the last update (which
+ * completed): nothing under it changed (a split or merge marks the node
+ * and its ancestors), its class against the view is the same and not "in
+ * between", and the eye has moved less than the smallest slack its items
+ * had at their last scan (the odometer is below its recheck reading).
+ * Returns the subtree's recheck reading (-1: scan it every update). A
+ * child's triangle lies in its parent's, so it has the class of a parent
+ * wholly in or out (pcls 0 or 1). */
+static double walk(upd *u, uint32_t i, int pcls)
+{
+    rs_roam *L = u->L;
+    if (u->all) { walk_items(u, i, 2); return -1.0; }
+    int cls = pcls == 2 ? node_class(u, i) : pcls;
+    double rc = L->crecheck[i];
+    if (!u->full && rc >= 0.0 && cls != 2 && cls == L->ccls[i] && (cls == 0 || L->odo < rc)) return rc;
+    double save = u->slack;
+    u->slack = INFINITY;
+    double sub = walk_items(u, i, cls);
+    /* a margin for the rounding of the distances */
+    rc = L->odo + u->slack * (1.0 - 1e-9) - 1e-9 * (1.0 + L->odo);
+    if (sub < rc) rc = sub;
+    if (cls == 2 || rc < 0.0) rc = -1.0;
+    L->crecheck[i] = rc;
+    L->ccls[i] = (unsigned char)cls;
+    u->slack = save;
+    return rc;
+}
+
+/* The leaves and diamonds of the current mesh that may have crossed the
+ * tolerance (every one of them for a triangle target), queued. */
+static void scan_mesh(upd *u)
+{
+    rs_roam *L = u->L;
+    u->track = !u->all;
+    for (uint32_t i = 0; i < 2 * L->npx * L->npy; i++) walk(u, i, 2); /* the roots */
+    u->track = 0;
+    q_heapify(L->qs);
+    q_heapify(L->qm);
+}
+
+/* The leaves a split left on L->stack (new explicit nodes, blocks with new
+ * implicit leaves), queued. */
+static void drain_stack(upd *u)
+{
+    rs_roam *L = u->L;
+    roam_node *n = L->nodes;
+    while (L->sp) {
+        uint32_t i = L->stack[--L->sp];
+        if (i & TAG) {
+            i &= ~TAG;
+            n[i].rc &= ~QUEUED;
+            offer_block(u, i, 0, 0);
+        } else if (n[i].lc == NIL && n[i].e != NIL) offer_leaf(u, i, 0, 0);
+    }
+}
+
+/* Top of a queue after dropping the entries that no longer name a leaf
+ * (splits) or a mergeable diamond (merges); NULL when empty. */
+static const qent *top_split(rs_roam *L)
+{
+    struct roam_queue *q = L->qs;
+    while (q->n && !leaf_valid(L, &q->a[0])) q_pop(q);
+    return q->n ? &q->a[0] : NULL;
+}
+
+static const qent *top_merge(rs_roam *L)
+{
+    struct roam_queue *q = L->qm;
+    uint32_t N, pp;
+    while (q->n && !(same_node(L, &q->a[0]) && rs__roam_mergeable(L, q->a[0].node, q->a[0].pos, &N, &pp))) q_pop(q);
+    return q->n ? &q->a[0] : NULL;
+}
+
+/* Split the top of the split queue; 0 when the pool cannot hold it. */
+static int do_split(upd *u)
+{
+    rs_roam *L = u->L;
+    qent e = L->qs->a[0];
+    q_pop(L->qs);
+    L->sp = 0;
+    if (rs__roam_split_leaf(L, e.node, e.pos) != 0) {
+        L->sp = 0;
+        L->exhausted = 1;
+        return 0;
+    }
+    drain_stack(u);
+    /* the new diamond (this leaf and its partner) can merge back */
+    if (u->all) offer_diamond(u, e.node, e.pos == 0 && L->nodes[e.node].lc == IMPL ? 1u : e.pos, 0);
+    return 1;
+}
+
+static void do_merge(upd *u)
+{
+    rs_roam *L = u->L;
+    qent e = L->qm->a[0];
+    q_pop(L->qm);
+    uint32_t N, pp, pn, ppos;
+    rs__roam_mergeable(L, e.node, e.pos, &N, &pp);
+    rs__roam_merge(L, e.node, e.pos);
+    /* the two parents are leaves again, and their own parents' diamonds
+     * may have become mergeable */
+    uint32_t nodes[2] = { e.node, N }, poss[2] = { e.pos, pp };
+    for (int k = 0; k < 2; k++) {
+        if (nodes[k] == NIL) continue;
+        uint32_t lpos = poss[k] == 1 ? 0u : poss[k]; /* a merged block is an explicit leaf */
+        if (u->all) offer_leaf(u, nodes[k], lpos, 0);
+        if (rs__roam_item_parent(L, nodes[k], poss[k], &pn, &ppos)) offer_diamond(u, pn, ppos, 0);
+    }
+}
+
+static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
+{
+    if (!L->par) {
+        uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
+        double *rc = rs__alloc_array(ctx, L->cap, sizeof *rc);
+        unsigned char *cl = rs__alloc_array(ctx, L->cap, 1);
+        if (!par || !rc || !cl) {
+            rs__free(ctx, par); rs__free(ctx, rc); rs__free(ctx, cl);
+            return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
+        }
+        roam_node *n = L->nodes;
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; rc[i] = -1.0; }
+        for (uint32_t i = 0; i < L->used; i++)
+            if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
+        L->par = par; L->crecheck = rc; L->ccls = cl;
+        L->full_next = 1;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *rc + 1);
+    }
+    if (!L->qs) {
+        L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
+        L->qm = rs__calloc(ctx, 1, sizeof *L->qm);
+        if (!L->qs || !L->qm) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the update queues");
+        L->qs->max = 1;
+    }
+    return RS_OK;
+}
+
+void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
+{
+    rs__free(ctx, L->par);
+    rs__free(ctx, L->crecheck);
+    rs__free(ctx, L->ccls);
+    if (L->qs) rs__free(ctx, L->qs->a);
+    if (L->qm) rs__free(ctx, L->qm->a);
+    rs__free(ctx, L->qs);
+    rs__free(ctx, L->qm);
+}
+
+/* The default rs_roam_view.merge_hysteresis: a fixed tolerance merges a
+ * diamond only when both parents are within tol / 1.1. The items between
+ * the two thresholds are stable both ways, so far fewer cross one per
+ * metre of eye travel (the seed's hysteresis); the split side, hence the
+ * error bound, is unchanged. */
+#define MERGE_HYSTERESIS 1.1
+
+/* A triangle target accepts the carried tolerance's mesh within 1.5 % of
+ * the target (the seed's full loop, which lands within 1 %, costs a scan
+ * of every leaf and diamond: at a fixed tolerance the count drifts by a
+ * few tenths of a percent per frame on a moving camera). */
+#define TARGET_BAND 0.015
+
+/* Safety net when no budget is given: a triangle target's exchanges of a
+ * split for a merge could in principle cycle (the bounds are not monotone
+ * down the tree). */
+#define UNBOUNDED_OPS_PER_NODE 8u
+
+/* Every leaf above the tolerance splits, then every diamond whose two
+ * parents are within it merges (docs/roam.md: the rebuild's mesh, but for
+ * a split node whose own bound exceeds the tolerance under an ancestor
+ * whose bound does not). 1 when complete. */
+static int tolerance_pass(upd *u, uint64_t limit, uint64_t *ops)
+{
+    rs_roam *L = u->L;
+    while (!u->nomem && *ops < limit && top_split(L) != NULL) {
+        if (!do_split(u)) break;
+        ++*ops;
+    }
+    while (!u->nomem && *ops < limit && top_merge(L) != NULL) {
+        do_merge(u);
+        ++*ops;
+    }
+    return *ops < limit && !u->nomem && !L->exhausted;
+}
+
+/* The seed's loop over every leaf and diamond: merge while above the
+ * target, split while below (to the target itself, so the next update's
+ * tolerance pass lands inside the band), then trade the highest split for
+ * the lowest merge while the split's priority is the larger and the count
+ * stays within 1 %. 1 when complete. */
+static int target_pass(upd *u, double target, uint64_t limit, uint64_t *ops)
+{
+    rs_roam *L = u->L;
+    double lo = target - target / 100.0, hi = target + target / 100.0;
+    int reached = 0;
+    for (;;) {
+        if (u->nomem || *ops >= limit) return 0;
+        const qent *s = top_split(L), *m = top_merge(L);
+        if (!reached && L->tris > target) {
+            if (!m) return 1;
+            do_merge(u);
+            if (L->tris <= target) reached = 1;
+        } else if (!reached && L->tris < target) {
+            if (!s || !(s->p > 0.0) || L->exhausted) return 1;
+            if (!do_split(u)) continue;
+            if (L->tris >= target) reached = 1;
+        } else if (L->tris > hi) {
+            if (!m) return 1;
+            do_merge(u);
+        } else if (L->tris < lo) {
+            if (!s || !(s->p > 0.0) || L->exhausted) return 1;
+            if (!do_split(u)) continue;
+        } else if (s && m && s->p > m->p && !L->exhausted) {
+            reached = 1;
+            if (L->tris <= target) { if (!do_split(u)) continue; }
+            else do_merge(u);
+        } else return 1;
+        ++*ops;
+    }
+}
+
+static void scan_fresh(upd *u)
+{
+    u->L->qs->n = u->L->qm->n = 0;
+    u->L->sp = 0;
+    scan_mesh(u);
+}
+
+rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_update: roam and view must not be NULL");
+    rs_result r = ensure_state(ctx, L);
+    if (r != RS_OK) return r;
+    view_params v;
+    unsigned char visbuf[256], *vis;
+    if ((r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis)) != RS_OK) return r;
+    upd u;
+    memset(&u, 0, sizeof u);
+    u.ctx = ctx; u.L = L; u.v = &v; u.vis = vis;
+    u.tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
+    /* a triangle target starts from the tolerance the last update ended
+     * at (the seed's gFrameVariance) */
+    if (vw->target_triangles && L->tol > 0.0 && isfinite(L->tol)) u.tol = L->tol;
+    v.tol = u.tol;
+    u.mtol = vw->target_triangles ? u.tol : u.tol / (vw->merge_hysteresis > 0.0 ? vw->merge_hysteresis : MERGE_HYSTERESIS);
+    u.full = L->full_next || v.k != L->last_k || u.tol != L->last_tol || u.mtol != L->last_mtol;
+    double ex = v.eye[0] - L->last_eye[0], ey = v.eye[1] - L->last_eye[1], ez = v.eye[2] - L->last_eye[2];
+    L->odo += sqrt(ex * ex + ey * ey + ez * ez);
+    L->gen++;
+    L->exhausted = 0;
+    uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
+    uint64_t ops = 0;
+    scan_fresh(&u);
+    int done = tolerance_pass(&u, limit, &ops), fixed = done;
+    if (vw->target_triangles && done) {
+        double target = vw->target_triangles;
+        if (fabs((double)L->tris - target) > TARGET_BAND * target) {
+            /* off the target: every leaf and diamond into the queues */
+            u.all = 1;
+            u.full = 1;
+            scan_fresh(&u);
+            done = target_pass(&u, target, limit, &ops);
+            fixed = 0;
+            /* a tolerance between the largest split and the smallest merge
+             * priority left keeps this mesh at the next update */
+            const qent *s = top_split(L), *m = top_merge(L);
+            double ps = s ? s->p : 0.0;
+            u.tol = m && m->p > ps && ps > 0.0 ? sqrt(ps * m->p) : ps > 0.0 ? ps : u.tol;
+        }
+    }
+    if (vis != visbuf) rs__free(ctx, vis);
+    /* the cached scans assume a completed update at this tolerance */
+    L->full_next = !fixed || u.nomem;
+    memcpy(L->last_eye, v.eye, sizeof v.eye);
+    L->last_k = v.k;
+    L->last_tol = u.tol;
+    L->last_mtol = u.mtol;
+    L->update_ops = (uint32_t)(ops > UINT32_MAX ? UINT32_MAX : ops);
+    L->update_done = done;
+    L->frame_passes = 1;
+    L->threshold = u.tol;
+    L->tol = u.tol;
+    if (u.nomem) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the update queues");
+    if (L->exhausted)
+        return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out in an update "
+                        "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, L->tris);
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+#ifdef ROAM_UPDATE_DEBUG
+int rs__roam_debug_check(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw);
+int rs__roam_debug_check(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
+{
+    view_params v;
+    unsigned char visbuf[256], *vis;
+    rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
+    upd u;
+    memset(&u, 0, sizeof u);
+    u.ctx = ctx; u.L = L; u.v = &v; u.vis = vis;
+    u.tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
+    roam_node *n = L->nodes;
+    int bad = 0;
+    for (uint32_t i = 0; i < L->used; i++) {
+        uint32_t N, pp, lc = n[i].lc;
+        if (lc == FREE) continue;
+        if (lc == NIL) {
+            if (n[i].e != NIL && item_prio(&u, i, 0) > u.tol) { fprintf(stderr, "leaf %u wants split\n", i); bad++; }
+            continue;
+        }
+        if (lc == IMPL) {
+            uint32_t rc = n[i].rc;
+            for (uint32_t pos = 2; pos < L->ncut; pos++)
+                if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u))) && item_prio(&u, i, pos) > u.tol) {
+                    fprintf(stderr, "imp leaf %u/%u wants split\n", i, pos); bad++; }
+        }
+        for (uint32_t pos = lc == IMPL ? 1u : 0u; pos < (lc == IMPL ? L->ncut : 1u); pos++) {
+            if (!rs__roam_mergeable(L, i, pos, &N, &pp)) continue;
+            double p = item_prio(&u, i, pos), q = N != NIL ? item_prio(&u, N, pp) : 0;
+            if (!(p > u.tol) && !(q > u.tol)) { fprintf(stderr, "missed merge node %u pos %u (lc %u) partner %u/%u prio %g %g\n", i, pos, lc, N, pp, p, q); bad++; }
+        }
+    }
+    if (vis != visbuf) rs__free(ctx, vis);
+    return bad;
+}
+#endif
