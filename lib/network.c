@@ -379,8 +379,14 @@ static void link_strokes(const build *B, const rs_network *N, uint32_t *link)
         const rs_network_leg *L = N->leg + N->leg_start[i];
         uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
         if (d == 2) {
+            /* two ends: one stroke when they continue each other (a ring's
+             * own two ends at any angle; two records only with a small
+             * deflection, as the issue's rule and the GPU export's have it:
+             * a corner is where a line's pattern may start anew) */
             if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
-                (L[0].road == L[1].road ? L[0].kind != L[1].kind : ends_fit(B, &L[0], &L[1]))) {
+                (L[0].road == L[1].road ? L[0].kind != L[1].kind
+                                        : ends_fit(B, &L[0], &L[1]) &&
+                                              fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION)) {
                 uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
                 link[ea] = eb;
                 link[eb] = ea;

@@ -96,6 +96,22 @@ static size_t add_split_rev(rs_roads *roads, const char *name, double width, con
     return added;
 }
 
+/* The turn of p at its interior vertex nearest to arc length s, when that
+ * vertex is within `near` metres of s (0: none that near). */
+static double turn_near(const poly *p, double s, double near)
+{
+    double acc = 0;
+    for (size_t k = 1; k + 1 < p->n; k++) {
+        acc += hypot(p->xy[2 * k] - p->xy[2 * k - 2], p->xy[2 * k + 1] - p->xy[2 * k - 1]);
+        if (fabs(acc - s) > near) continue;
+        double a0 = atan2(p->xy[2 * k + 1] - p->xy[2 * k - 1], p->xy[2 * k] - p->xy[2 * k - 2]);
+        double a1 = atan2(p->xy[2 * k + 3] - p->xy[2 * k + 1], p->xy[2 * k + 2] - p->xy[2 * k]);
+        double d = fabs(remainder(a1 - a0, 2 * 3.14159265358979323846));
+        return d;
+    }
+    return 0;
+}
+
 static void point_at(const poly *p, double s, double *x, double *y)
 {
     for (size_t k = 1; k < p->n; k++) {
@@ -294,7 +310,10 @@ static void test_random_splits(void)
                 point_at(&P[i], cuts[i][c], &x, &y);
                 for (int o = 0; o < NP; o++)
                     if (o != i) dmin = fmin(dmin, dist_to(&P[o], x, y));
-                if (dmin > 0.5) cuts[i][kept++] = cuts[i][c];
+                /* a cut at (or within the tolerance of) a vertex where the
+                 * polyline turns 30 degrees or more is a corner: a stroke
+                 * ends there by the rule (docs/network.md) */
+                if (dmin > 0.5 && turn_near(&P[i], cuts[i][c], 0.11) < 3.14159265358979323846 / 6 - 1e-9) cuts[i][kept++] = cuts[i][c];
             }
             ncut[i] = kept;
             first[i] = rs_roads_count(split);
@@ -825,6 +844,26 @@ static void test_reversed_records(void)
     printf("reversed records: worst pixel %d/255 against the unsplit road\n", worst);
 }
 
+/* Two records meeting end to end form one stroke only when they turn less
+ * than 30 degrees there: a corner (a block's sidewalk ring) starts anew, as
+ * the GPU export has it (issue 27: "small deflection"). */
+static void test_corner_rule(void)
+{
+    static const double turns[] = { 0, 20, 29, 31, 60, 90 };
+    for (size_t i = 0; i < sizeof turns / sizeof *turns; i++) {
+        double a = turns[i] * 3.14159265358979323846 / 180;
+        const double p0[4] = { 0, 0, 10, 0 }, p1[4] = { 10, 0, 10 + 10 * cos(a), 10 * sin(a) };
+        rs_roads *r = NULL;
+        rs_network *n = NULL;
+        CHECK(rs_roads_create(ctx, &r) == RS_OK && rs_roads_add(ctx, r, "a", 4, p0, 2) == RS_OK &&
+              rs_roads_add(ctx, r, "b", 4, p1, 2) == RS_OK && rs_network_build(ctx, r, NULL, &n) == RS_OK);
+        if (n) CHECKF((rs_network_stroke_count(n) == 1) == (turns[i] < 30), "a %g degree corner: %zu strokes",
+                      turns[i], rs_network_stroke_count(n));
+        rs_network_free(ctx, n);
+        rs_roads_free(ctx, r);
+    }
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -837,6 +876,7 @@ int main(void)
     test_split_draws_alike();
     test_tee_lines();
     test_reversed_records();
+    test_corner_rule();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }
