@@ -897,7 +897,10 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *
  * - seg: RS_GPU_SEG_FLOATS per segment, roads in order, points in order:
  *   ax, ay, bx, by (end points), half width, s at a (arc length from the
- *   road's first point, summed in double as the road field sums it), road
+ *   road's first point, summed in double as the road field sums it; for a
+ *   record the CPU draws as part of a stroke, docs/network.md, the
+ *   stroke's arc length, and a record running against its stroke has its
+ *   points last to first, its t and markings mirrored to match), road
  *   index, flags (RS_GPU_SEG_FIRST: the road's first segment, its start is
  *   a flat road end; RS_GPU_SEG_LAST: its last); the road's casing width,
  *   the segment's length and unit direction (1, 0 for length 0), so a

@@ -32,6 +32,80 @@ static int ge_end_cmp(const void *a, const void *b)
     return p->end - q->end;
 }
 
+/* The lines look the same drawn either way: each has its mirror image
+ * (offset -t, all else equal) among them (lib/linesym.c's rule on its
+ * quantised offsets: a centre line at 1e-15 m is at 0). */
+static int ge_lines_mirror(const rs_style *st)
+{
+    for (uint32_t i = 0; i < st->line_count; i++) {
+        const rs_style_line *a = &st->line[i];
+        int found = 0;
+        for (uint32_t j = 0; j < st->line_count && !found; j++) {
+            const rs_style_line *b = &st->line[j];
+            found = fabs(b->offset + a->offset) <= 1e-9 && b->width == a->width && !memcmp(&b->colour, &a->colour, sizeof a->colour) &&
+                    b->dash_count == a->dash_count && b->phase == a->phase &&
+                    (a->dash_count == 0 || !memcmp(b->dash, a->dash, a->dash_count * sizeof *a->dash));
+        }
+        if (!found) return 0;
+    }
+    return 1;
+}
+
+/* Where the CPU draws a stroke's records as one polyline (lib/linesym.c,
+ * docs/network.md "Drawing by strokes"), the export gives their segments
+ * the stroke's arc length, and a record drawn against the stroke its
+ * points last to first: dashes then run on across the splits in the
+ * shader as on the CPU. soff[i] < 0: the record keeps its own s. */
+static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_style *sty,
+                            double *soff, unsigned char *srev)
+{
+    size_t n = rs_roads_count(roads);
+    for (size_t i = 0; i < n; i++) soff[i] = -1, srev[i] = 0;
+    if (o->style.disable || n < 2) return RS_OK;
+    rs_network *net = NULL;
+    uint32_t *recs = NULL;
+    rs_result r = rs_network_build(ctx, roads, NULL, &net);
+    if (r) return r;
+    if (!(recs = rs__alloc_array(ctx, n, sizeof *recs))) { rs_network_free(ctx, net); return RS_ERR_NOMEM; }
+    size_t nk = rs_network_stroke_count(net);
+    for (size_t k = 0; k < nk; k++) {
+        size_t nrec = rs_network_stroke_roads(net, k, recs, n);
+        if (nrec < 2 || nrec > n) continue;
+        rs_road_stroke h, q;
+        rs_network_road_stroke(net, recs[0], &h);
+        int mixed = 0;
+        for (size_t j = 1; j < nrec && !mixed; j++) {
+            rs_network_road_stroke(net, recs[j], &q);
+            mixed = q.reversed != h.reversed;
+        }
+        if (mixed) {
+            if ((r = rs_road_style(ctx, roads, recs[0], o->style.styles, o->style.profile, sty)) != RS_OK) break;
+            if (!ge_lines_mirror(sty)) continue; /* drawn record by record */
+        }
+        for (size_t j = 0; j < nrec; j++) {
+            rs_network_road_stroke(net, recs[j], &q);
+            soff[recs[j]] = q.s_offset;
+            srev[recs[j]] = (unsigned char)(q.reversed != 0);
+        }
+    }
+    rs__free(ctx, recs);
+    rs_network_free(ctx, net);
+    return r;
+}
+
+/* A record's local points in the stroke's terms (see ge_strokes). */
+static void ge_local_to_stroke(rs__road_local *rl, double off, int rev)
+{
+    size_t m = rl->n;
+    for (size_t j = 0; rev && j < m / 2; j++) {
+        double t;
+        t = rl->x[j], rl->x[j] = rl->x[m - 1 - j], rl->x[m - 1 - j] = t;
+        t = rl->y[j], rl->y[j] = rl->y[m - 1 - j], rl->y[m - 1 - j] = t;
+        t = rl->s[j], rl->s[j] = rl->s[m - 1 - j], rl->s[m - 1 - j] = t;
+    }
+    for (size_t j = 0; j < m; j++) rl->s[j] = rev ? off - rl->s[j] : off + rl->s[j];
+}
+
 void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *g)
 {
     if (!g) return;
@@ -268,6 +342,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     rs_atlas *atlas_own = NULL;
     rs__placement *pl = NULL;
     ge_end *ends = NULL;
+    double *soff = NULL;
+    unsigned char *srev = NULL;
     const double cs = dem->frame.cell_size;
     g->map_w = (double)(dem->width - 1) * cs;
     g->map_h = (double)(dem->height - 1) * cs;
@@ -306,7 +382,10 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     }
     g->band = rs__calloc(ctx, nbands ? nbands : 1, RS_GPU_BAND_FLOATS * sizeof(float));
     ends = rs__alloc_array(ctx, 2 * (n ? n : 1), sizeof *ends);
-    if (!g->band || !ends) { r = RS_ERR_NOMEM; goto fail; }
+    soff = rs__alloc_array(ctx, n ? n : 1, sizeof *soff);
+    srev = rs__alloc_array(ctx, n ? n : 1, sizeof *srev);
+    if (!g->band || !ends || !soff || !srev) { r = RS_ERR_NOMEM; goto fail; }
+    if ((r = ge_strokes(ctx, roads, &o, sty, soff, srev)) != RS_OK) goto fail_msg;
     size_t nends = 0;
     for (size_t i = 0, b = 0; i < n; i++) {
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
@@ -345,6 +424,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         rd[7] = ge_float(lines_reach);
         rs__road_local rl;
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) { r = RS_ERR_NOMEM; goto fail; }
+        if (soff[i] >= 0) ge_local_to_stroke(&rl, soff[i], srev[i]);
         double pad = 2 * (hw + sty->casing_width + lines_reach + g->reach) + g->cell;
         r = road_segments(ctx, g, &rl, i, hw, sty->casing_width, pad, &segcap);
         size_t m = rl.n;
@@ -438,8 +518,13 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         double *box = rs__alloc_array(ctx, npl ? npl : 1, 4 * sizeof *box);
         if (!box) { rs__free(ctx, first_seg); r = RS_ERR_NOMEM; goto fail; }
         size_t nm = 0;
-        for (size_t i = 0; i < npl; i++) {
-            const rs__placement *p = &pl[i];
+        for (size_t i = 0; i < npl; i++) { /* in the segments' terms (ge_strokes) */
+            rs__placement *p = &pl[i];
+            if (soff[p->road] >= 0) {
+                int rev = srev[p->road];
+                p->s = rev ? soff[p->road] - p->s : soff[p->road] + p->s;
+                if (rev) p->t = -p->t, p->flip = !p->flip;
+            }
             const rs__atlas_type *ty = &atlas->t[p->type];
             float *mk = g->mark + RS_GPU_MARK_FLOATS * nm;
             double hl = 0.5 * p->length, hw = 0.5 * p->width, kx = ty->lev[0].w / p->width, ky = ty->lev[0].h / p->length;
@@ -496,6 +581,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                 g->nlevels * RS_GPU_LEVEL_INTS) * sizeof(uint32_t);
     rs__free(ctx, pl);
     rs__free(ctx, ends);
+    rs__free(ctx, soff);
+    rs__free(ctx, srev);
     rs__free(ctx, sty);
     rs_atlas_free(ctx, atlas_own);
     *out = g;
@@ -506,6 +593,8 @@ fail:
 fail_msg:
     rs__free(ctx, pl);
     rs__free(ctx, ends);
+    rs__free(ctx, soff);
+    rs__free(ctx, srev);
     rs__free(ctx, sty);
     rs_atlas_free(ctx, atlas_own);
     rs_gpu_scene_free(ctx, g);

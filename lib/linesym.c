@@ -1058,13 +1058,14 @@ static int csr_close(uint32_t *start, size_t ncell, uint64_t lim, size_t *total)
 }
 
 /* The bands look the same drawn either way: each has its mirror image
- * (offset -t, all else equal) among them. */
+ * (offset -t within 1e-9 m, all else equal) among them: a centre line
+ * computed at 1e-15 m is at 0. */
 static int bands_mirror(const rs__band *b, uint32_t n)
 {
     for (uint32_t i = 0; i < n; i++) {
         int found = 0;
         for (uint32_t j = 0; j < n && !found; j++)
-            found = b[j].t == -b[i].t && b[j].w == b[i].w && !memcmp(b[j].rgba, b[i].rgba, sizeof b[i].rgba) &&
+            found = fabs(b[j].t + b[i].t) <= 1e-9 && b[j].w == b[i].w && !memcmp(b[j].rgba, b[i].rgba, sizeof b[i].rgba) &&
                     b[j].ndash == b[i].ndash && b[j].phase == b[i].phase &&
                     (b[i].ndash == 0 || !memcmp(b[j].dash, b[i].dash, b[i].ndash * sizeof *b[i].dash));
         if (!found) return 0;

@@ -120,9 +120,15 @@ static void test_scene(void)
         CHECK(g->road[3 * RS_GPU_ROAD_FLOATS + 7] == 0);
     }
     CHECK(g->road[3 * RS_GPU_ROAD_FLOATS + 4] == 0 && g->road[3 * RS_GPU_ROAD_FLOATS + 0] == 0); /* unstyled */
-    /* continuations: main_w's end and main_e's end meet head on; north meets them at right angles */
-    CHECK(g->road[6] == 1 && g->road[RS_GPU_ROAD_FLOATS + 6] == 0);
+    /* continuations: main_w's end and main_e's end meet head on; north meets them at right angles.
+     * main_e runs against the stroke it forms with main_w: its points are exported last to first
+     * with the stroke's arc length (40 .. 80), so its start is where main_w ends */
+    CHECK(g->road[6] == 1 && g->road[RS_GPU_ROAD_FLOATS + 5] == 0 && g->road[RS_GPU_ROAD_FLOATS + 6] == -1);
     CHECK(g->road[5] == -1 && g->road[2 * RS_GPU_ROAD_FLOATS + 6] == -1);
+    {
+        const float *e = g->seg + 2 * RS_GPU_SEG_FLOATS;
+        CHECK(e[6] == 1 && e[0] == 40 && e[2] == 80 && e[5] == 40 && e[10] == 1);
+    }
     /* markings: the two explicit ones first, then the automatic ones */
     CHECK(g->nmarks >= 3);
     CHECK(g->mark[0] == 0 && g->mark[2] == 8 && g->mark[3] == -2.5f && g->mark[4] == 1.5f && g->mark[5] == 1 &&
