@@ -40,7 +40,7 @@ static const char *const rsh_fs_src[] = {
     "uniform samplerBuffer u_seg;\n"   /* 2 texels per segment */
     "uniform usamplerBuffer u_cstart;\n"
     "uniform usamplerBuffer u_cseg;\n"
-    "uniform samplerBuffer u_roadt;\n" /* 6 texels per road */
+    "uniform samplerBuffer u_roadt;\n" /* 8 texels per road */
     "uniform samplerBuffer u_band;\n"  /* 5 texels per band */
     "uniform samplerBuffer u_mark;\n"  /* 3 texels per marking */
     "uniform usamplerBuffer u_mstart;\n"
@@ -127,6 +127,31 @@ static const char *const rsh_fs_src[] = {
     "    }\n"
     "    return best < 1e29 ? 1.0 - cdf(-best, bn) : 1.0;\n"
     "}\n"
+    /* road_free for the lines of the through stroke st at a T
+     * (lib/linesym.c, docs/network.md): an end segment of `road` that meets
+     * st (b6: the road's stroke, the strokes its start and end meet, the
+     * start's depth; keepE the end's) is a rectangle stopping depth / sine
+     * short of st's centre line, without its round end */
+    "float road_free_tee(vec2 p, int road, int e0, int e1, float st, vec4 b6, float keepE, vec2 tg) {\n",
+    "    float best = 1e30, d, sd, u, side; vec2 bn = vec2(1.0, 0.0), n;\n"
+    "    for (int e = e0; e < e1; e++) {\n"
+    "        Seg s = seg_at(p, int(texelFetch(u_cseg, e).r), d, sd, n, u, side);\n"
+    "        if (s.road != road) continue;\n"
+    "        bool ts = (s.flags & 1) != 0 && b6.y == st, te = (s.flags & 2) != 0 && b6.z == st;\n"
+    "        float sn = abs(s.dir.x * tg.y - s.dir.y * tg.x);\n"
+    "        if ((ts || te) && sn > 0.2) {\n"
+    "            float u0 = -s.r, u1 = s.len + s.r;\n"
+    "            if (te) u1 = max(s.len - keepE / sn, u0);\n"
+    "            if (ts) u0 = min(b6.w / sn, u1);\n"
+    "            float qx = max(u0 - u, u - u1), qy = abs(side) - s.r;\n"
+    "            vec2 q = max(vec2(qx, qy), 0.0);\n"
+    "            sd = u1 > u0 ? (q.x > 0.0 || q.y > 0.0 ? length(q) : max(qx, qy)) : 1e30;\n"
+    "            n = qy >= qx ? (side >= 0.0 ? 1.0 : -1.0) * vec2(s.dir.y, -s.dir.x) : (u - u1 > u0 - u ? 1.0 : -1.0) * s.dir;\n"
+    "        }\n"
+    "        if (sd < best) { best = sd; bn = n; }\n"
+    "    }\n"
+    "    return best < 1e29 ? 1.0 - cdf(-best, bn) : 1.0;\n"
+    "}\n"
     /* road `road`'s nearest segment in list [e0, e1) (-1: absent) */
     "int road_nearest(vec2 p, int road, int e0, int e1) {\n"
     "    float best = 1e30, d, sd, u, side; vec2 n; int kb = -1;\n"
@@ -159,16 +184,30 @@ static const char *const rsh_fs_src[] = {
      * cuts them (its surface's coverage, product `prod` with `zeros` zero
      * factors over the whole list) except the roads continuing this one */
     "void paint_lines(vec2 p, int road, int k, float d, float fo, float prod, int zeros, int e0, int e1, inout vec3 S) {\n"
-    "    vec4 r0 = texelFetch(u_roadt, 6 * road), r1 = texelFetch(u_roadt, 6 * road + 1);\n"
+    "    vec4 r0 = texelFetch(u_roadt, 8 * road), r1 = texelFetch(u_roadt, 8 * road + 1);\n"
     "    int b0 = int(r0.w), nb = int(r1.x);\n"
     /* a road whose lines cannot reach the pixel is skipped */
     "    if (nb == 0 || d > r1.w + foot) return;\n"
     "    cut_add(fo, prod, zeros, -1.0);\n"
     "    if (r1.y >= 0.0) cut_add(road_free(p, int(r1.y), e0, e1), prod, zeros, -1.0);\n"
     "    if (r1.z >= 0.0 && r1.z != r1.y) cut_add(road_free(p, int(r1.z), e0, e1), prod, zeros, -1.0);\n"
-    "    float cut = zeros > 0 ? 0.0 : min(prod, 1.0);\n"
     "    float s, t, ef; vec2 nt, tg;\n"
     "    road_coords(p, k, s, t, nt, tg, ef);\n"
+    /* side roads ending on this road's stroke at a T cut its lines only
+     * with their cut-back ends (the list is grouped by road) */
+    "    if (texelFetch(u_roadt, 8 * road + 7).y > 0.0) {\n"
+    "        float st = texelFetch(u_roadt, 8 * road + 6).x; int lr = -1;\n"
+    "        for (int e = e0; e < e1; e++) {\n"
+    "            int b = int(texelFetch(u_seg, 3 * int(texelFetch(u_cseg, e).r) + 1).z);\n"
+    "            if (b == lr || b == road) continue;\n"
+    "            lr = b;\n"
+    "            vec4 b6 = texelFetch(u_roadt, 8 * b + 6);\n"
+    "            if (b6.y != st && b6.z != st) continue;\n"
+    "            cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0);\n"
+    "            cut_add(road_free_tee(p, b, e0, e1, st, b6, texelFetch(u_roadt, 8 * b + 7).x, tg), prod, zeros, 1.0);\n"
+    "        }\n"
+    "    }\n"
+    "    float cut = zeros > 0 ? 0.0 : min(prod, 1.0);\n"
     "    vec4 Ft = fp(nt), Fs = fp(tg);\n"
     "    float base = ef * cut;\n"
     "    if (!(base > 0.0)) return;\n"
@@ -306,19 +345,19 @@ static const char *const rsh_fs_src[] = {
     /* casings onto T */
     "        float C = max(min(UC, 1.0), R);\n"
     "        if (C > R && R < 1.0 && roadC >= 0) {\n"
-    "            vec4 cc = texelFetch(u_roadt, 6 * roadC + 5);\n"
+    "            vec4 cc = texelFetch(u_roadt, 8 * roadC + 5);\n"
     "            float a = clamp((min(C, 1.0) - R) / (1.0 - R), 0.0, 1.0) * cc.a;\n"
     "            T = T * (1.0 - a) + cc.rgb * a;\n"
     "        }\n"
     /* fill and gradient surfaces onto S */
     "        if (R > 0.0 && roadS >= 0) {\n"
-    "            vec4 r0 = texelFetch(u_roadt, 6 * roadS);\n"
+    "            vec4 r0 = texelFetch(u_roadt, 8 * roadS);\n"
     "            int kind = int(r0.x);\n"
     "            if (kind != 0) {\n"
-    "                vec4 c = texelFetch(u_roadt, 6 * roadS + 2);\n"
+    "                vec4 c = texelFetch(u_roadt, 8 * roadS + 2);\n"
     "                if (kind == 2) {\n"
     "                    float g = r0.y > 0.0 ? min(abs(tS) / r0.y, 1.0) : 1.0;\n"
-    "                    vec4 c0 = texelFetch(u_roadt, 6 * roadS + 3), c1 = texelFetch(u_roadt, 6 * roadS + 4);\n"
+    "                    vec4 c0 = texelFetch(u_roadt, 8 * roadS + 3), c1 = texelFetch(u_roadt, 8 * roadS + 4);\n"
     "                    c = c0 + (c1 - c0) * g;\n"
     "                }\n"
     "                S = S * (1.0 - c.a) + c.rgb * c.a;\n"

@@ -924,7 +924,11 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   docs/linesym.md: shared end point, within 30 degrees of straight), the
  *   lines' reach (the largest |offset| + width/2 of its bands, 0: none);
  *   fill rgba, gradient centre rgba, gradient edge rgba, casing rgba (rgb
- *   0..255, a 0..1, as the CPU styling holds them).
+ *   0..255, a 0..1, as the CPU styling holds them); the T rule of
+ *   docs/network.md: the road's stroke (-1: no network), the through
+ *   stroke its start and its end meet at a T (-1: none), how far from
+ *   that stroke's centre line each of those ends keeps cutting its lines
+ *   (metres), 1 when some road end meets this road's stroke at a T, 0, 0.
  * - band: RS_GPU_BAND_FLOATS per line of a style (paint order): offset T,
  *   width W, phase, period (0: solid); r, g, b (0..255), a (0..1); dash
  *   count, 0, 0, 0; dash[0..7] (on, off, ... metres).
@@ -941,7 +945,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_SEG_FLOATS 12
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
-#define RS_GPU_ROAD_FLOATS 24
+#define RS_GPU_ROAD_FLOATS 32
 #define RS_GPU_BAND_FLOATS 20
 #define RS_GPU_MARK_FLOATS 12
 #define RS_GPU_TYPE_INTS 2

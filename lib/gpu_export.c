@@ -5,6 +5,7 @@
  * Pure C; the library never sees GL. */
 #include "internal.h"
 #include "atlas.h"
+#include "linesym.h"
 #include "markings.h"
 #include "roadfield.h"
 
@@ -32,6 +33,12 @@ static int ge_end_cmp(const void *a, const void *b)
     return p->end - q->end;
 }
 
+/* A double as a finite float: saturated to +-FLT_MAX (a NaN as 0). */
+static float ge_float(double v)
+{
+    return v >= -FLT_MAX ? (v <= FLT_MAX ? (float)v : FLT_MAX) : (v < 0 ? -FLT_MAX : 0.0f);
+}
+
 /* The lines look the same drawn either way: each has its mirror image
  * (offset -t, all else equal) among them (lib/linesym.c's rule on its
  * quantised offsets: a centre line at 1e-15 m is at 0). */
@@ -56,17 +63,15 @@ static int ge_lines_mirror(const rs_style *st)
  * the stroke's arc length, and a record drawn against the stroke its
  * points last to first: dashes then run on across the splits in the
  * shader as on the CPU. soff[i] < 0: the record keeps its own s. */
-static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_style *sty,
-                            double *soff, unsigned char *srev)
+static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs_splat_options *o,
+                            rs_style *sty, double *soff, unsigned char *srev)
 {
     size_t n = rs_roads_count(roads);
     for (size_t i = 0; i < n; i++) soff[i] = -1, srev[i] = 0;
-    if (o->style.disable || n < 2) return RS_OK;
-    rs_network *net = NULL;
-    uint32_t *recs = NULL;
-    rs_result r = rs_network_build(ctx, roads, NULL, &net);
-    if (r) return r;
-    if (!(recs = rs__alloc_array(ctx, n, sizeof *recs))) { rs_network_free(ctx, net); return RS_ERR_NOMEM; }
+    if (!net || n < 2) return RS_OK;
+    uint32_t *recs = rs__alloc_array(ctx, n, sizeof *recs);
+    if (!recs) return RS_ERR_NOMEM;
+    rs_result r = RS_OK;
     size_t nk = rs_network_stroke_count(net);
     for (size_t k = 0; k < nk; k++) {
         size_t nrec = rs_network_stroke_roads(net, k, recs, n);
@@ -89,8 +94,51 @@ static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_splat_o
         }
     }
     rs__free(ctx, recs);
-    rs_network_free(ctx, net);
     return r;
+}
+
+/* The T rule of lib/linesym.c for the shader (docs/render.md): per road its
+ * stroke, the through stroke each end meets at a T and how deep its end
+ * keeps cutting there, and whether some road end meets its own stroke so. */
+static rs_result ge_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs_gpu_scene *g,
+                         const unsigned char *srev)
+{
+    size_t n = g->nroads;
+    for (size_t i = 0; i < n; i++) {
+        float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+        rd[24] = rd[25] = rd[26] = -1;
+        rd[27] = rd[28] = rd[29] = 0;
+    }
+    if (!net) return RS_OK;
+    rs__tee *T = NULL;
+    rs_result r = rs__network_tees(ctx, roads, net, &T);
+    if (r || !T) return r;
+    size_t nk = rs_network_stroke_count(net);
+    unsigned char *met = rs__calloc(ctx, nk ? nk : 1, 1); /* per stroke: some road end meets it at a T */
+    if (!met) { rs__free(ctx, T); return RS_ERR_NOMEM; }
+    for (size_t i = 0; i < n; i++) {
+        rs_road_stroke k;
+        rs_network_road_stroke(net, i, &k);
+        g->road[RS_GPU_ROAD_FLOATS * i + 24] = (float)k.stroke;
+    }
+    for (size_t i = 0; i < n; i++)
+        for (int e = 0; e < 2; e++) {
+            const rs__tee *t = &T[2 * i + e];
+            if (t->stroke == RS__NO_STROKE) continue;
+            /* the exported start is the record's end when it runs against its stroke */
+            int ge = srev[i] ? !e : e;
+            float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+            rd[25 + ge] = (float)t->stroke;
+            rd[27 + ge] = ge_float(t->keep);
+            if (t->stroke < nk) met[t->stroke] = 1;
+        }
+    for (size_t i = 0; i < n; i++) {
+        float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+        if (rd[24] >= 0 && (size_t)rd[24] < nk && met[(size_t)rd[24]]) rd[29] = 1;
+    }
+    rs__free(ctx, met);
+    rs__free(ctx, T);
+    return RS_OK;
 }
 
 /* A record's local points in the stroke's terms (see ge_strokes). */
@@ -155,12 +203,6 @@ static double seg_dist(double ax, double ay, double bx, double by, double x, dou
         u = u < 0 ? 0 : u > 1 ? 1 : u;
     }
     return hypot(x - ax - u * dx, y - ay - u * dy);
-}
-
-/* A double as a finite float: saturated to +-FLT_MAX (a NaN as 0). */
-static float ge_float(double v)
-{
-    return v >= -FLT_MAX ? (v <= FLT_MAX ? (float)v : FLT_MAX) : (v < 0 ? -FLT_MAX : 0.0f);
 }
 
 /* The items an index grid lists: segments (listed in every cell whose
@@ -344,6 +386,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     ge_end *ends = NULL;
     double *soff = NULL;
     unsigned char *srev = NULL;
+    rs_network *net = NULL;
     const double cs = dem->frame.cell_size;
     g->map_w = (double)(dem->width - 1) * cs;
     g->map_h = (double)(dem->height - 1) * cs;
@@ -385,7 +428,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     soff = rs__alloc_array(ctx, n ? n : 1, sizeof *soff);
     srev = rs__alloc_array(ctx, n ? n : 1, sizeof *srev);
     if (!g->band || !ends || !soff || !srev) { r = RS_ERR_NOMEM; goto fail; }
-    if ((r = ge_strokes(ctx, roads, &o, sty, soff, srev)) != RS_OK) goto fail_msg;
+    if (!o.style.disable && n > 0 && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto fail_msg;
+    if ((r = ge_strokes(ctx, roads, net, &o, sty, soff, srev)) != RS_OK) goto fail_msg;
     size_t nends = 0;
     for (size_t i = 0, b = 0; i < n; i++) {
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
@@ -445,6 +489,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!g->seg && !(g->seg = rs__calloc(ctx, 1, RS_GPU_SEG_FLOATS * sizeof(float)))) { r = RS_ERR_NOMEM; goto fail; }
     nseg = g->nseg;
     g->nbands = nbands;
+    if ((r = ge_tees(ctx, roads, net, g, srev)) != RS_OK) goto fail;
     /* continuations: equal end points, leaving within 30 degrees of opposite */
     qsort(ends, nends, sizeof *ends, ge_end_cmp);
     for (size_t a = 0; a < nends; a++)
@@ -583,6 +628,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     rs__free(ctx, ends);
     rs__free(ctx, soff);
     rs__free(ctx, srev);
+    rs_network_free(ctx, net);
     rs__free(ctx, sty);
     rs_atlas_free(ctx, atlas_own);
     *out = g;
@@ -595,6 +641,7 @@ fail_msg:
     rs__free(ctx, ends);
     rs__free(ctx, soff);
     rs__free(ctx, srev);
+    rs_network_free(ctx, net);
     rs__free(ctx, sty);
     rs_atlas_free(ctx, atlas_own);
     rs_gpu_scene_free(ctx, g);

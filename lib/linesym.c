@@ -630,17 +630,9 @@ typedef struct ls_surf {
     uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
 } ls_surf;
 
-#define NO_STROKE UINT32_MAX
+#define NO_STROKE RS__NO_STROKE
 #define TEE_EDGE_ZONE 2.0 /* metres inside a through road's edge where its lines stop at a side road's mouth */
-
-/* A road end at a T on a through road with the right of way
- * (docs/network.md "The through road at a T"): the through stroke, the
- * depth into it the end's surface keeps cutting (lines within `keep` of its
- * centre line run on), and its direction there. */
-typedef struct ls_tee {
-    uint32_t stroke;
-    double keep, dx, dy;
-} ls_tee;
+typedef rs__tee ls_tee;
 
 /* Road end points and the unit directions pointing away from them along
  * the road (to tell a road that continues another from one that meets it). */
@@ -1164,7 +1156,7 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
  * point or a T, or two records of one stroke); when exactly one of them
  * has the highest priority there, every other road ending there is a side
  * road of it. NULL (and RS_OK) without a network. */
-static rs_result find_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, ls_tee **out)
+rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee **out)
 {
     *out = NULL;
     size_t n = rs_roads_count(roads);
@@ -1215,7 +1207,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     J->ends = ends;
     if (!ends) return RS_ERR_NOMEM;
     ls_tee *tees = NULL;
-    rs_result rt = find_tees(ctx, roads, p->net, &tees);
+    rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
     if (rt) return rt;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;

@@ -28,6 +28,21 @@ typedef enum rs__band_aa {
     RS__AA_HERMITE = 1  /* seed 003: smoothstep of the pixel centre's distance to each band edge */
 } rs__band_aa;
 
+/* A road end at a T on a through road with the right of way
+ * (docs/network.md "The through road at a T"): the through stroke
+ * (RS__NO_STROKE: none), the depth into it the end's surface keeps cutting
+ * (lines within `keep` of its centre line run on), and the through road's
+ * direction there. */
+#define RS__NO_STROKE UINT32_MAX
+typedef struct rs__tee {
+    uint32_t stroke;
+    double keep, dx, dy;
+} rs__tee;
+/* Per road two entries (start, end) into *out (the caller's, rs__free);
+ * *out NULL without a network or when it is not of these roads. The GPU
+ * export applies the same rule (lib/gpu_export.c). */
+rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee **out);
+
 typedef struct rs__linesym_params {
     double origin_x, origin_y; /* world coords of DEM sample (0,0) */
     double cell_size;          /* DEM cell, metres (for rs__local_quantum) */

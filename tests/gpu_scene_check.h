@@ -59,6 +59,9 @@ static const char *gpu_scene_check(const rs_gpu_scene *g)
             return "road bands";
         for (int e = 5; e <= 6; e++)
             if (rd[e] != -1 && !gsc_index(rd[e], 0, (double)g->nroads)) return "road continuation";
+        for (int e = 24; e <= 26; e++) /* strokes: at most one per road */
+            if (rd[e] != -1 && !gsc_index(rd[e], 0, (double)g->nroads)) return "road stroke";
+        if (!(rd[27] >= 0 && rd[28] >= 0) || (rd[29] != 0 && rd[29] != 1)) return "road T fields";
     }
     for (size_t b = 0; b < g->nbands; b++) {
         const float *bd = g->band + RS_GPU_BAND_FLOATS * b;

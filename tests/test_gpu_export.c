@@ -290,6 +290,36 @@ static void test_far_points(void)
     rs_ctx_free(ctx);
 }
 
+/* The T rule (docs/network.md): a side road ending on a through road's
+ * centre line carries the through stroke at that end and how far from its
+ * centre line its surface keeps cutting the lines (half width - 2 m); the
+ * through road is flagged; the export is checked like the fuzz target's. */
+static void test_tee_fields(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    const char *t = "road main width 9 class=primary\n2 20\n78 20\nend\n"
+                    "road side width 6 class=secondary\n41 40\n41 20\nend\n"
+                    "road away width 5\n5 60\n30 60\nend\n";
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    if (g) {
+        const float *m = g->road, *sd = g->road + RS_GPU_ROAD_FLOATS, *aw = g->road + 2 * RS_GPU_ROAD_FLOATS;
+        CHECK(m[24] >= 0 && sd[24] >= 0 && m[24] != sd[24]);
+        CHECK(sd[25] == -1 && sd[26] == m[24]); /* its end meets main at a T */
+        CHECK_NEAR(sd[28], 0.5 * 9 - 2, 1e-6);
+        CHECK(m[29] == 1 && sd[29] == 0 && aw[29] == 0);
+        CHECK(m[25] == -1 && m[26] == -1 && aw[25] == -1 && aw[26] == -1);
+        const char *why = gpu_scene_check(g);
+        CHECKF(why == NULL, "%s", why ? why : "");
+        rs_gpu_scene_free(ctx, g);
+    }
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
 /* Issue 26 row 2: a repeated point (valid) was counted as a segment from
  * the raw points but never written (the points are de-duplicated): the
  * last segments stayed uninitialised. Segments exist where the double
@@ -326,6 +356,7 @@ int main(void)
 {
     test_far_points();
     test_repeated_points();
+    test_tee_fields();
     test_scene();
     test_alloc_failures();
     return th_finish("test_gpu_export");
