@@ -291,7 +291,7 @@ void cli_merc_center_text(const cli_merc_grid *g, char *buf, size_t cap)
     snprintf(buf, cap, "%.9f,%.9f,%u", g->centre[0], g->centre[1], z);
 }
 
-int cli_tiles_gdal_xml(const char *outdir, const double ul[2], double px, uint64_t w, uint64_t h, uint32_t zmax,
+int cli_tiles_gdal_xml(const char *outdir, const double ul[2], double px, uint32_t zmax,
                        uint32_t tile, int tms, const char *crs)
 {
     char *abs = realpath(outdir, NULL);
@@ -326,7 +326,6 @@ int cli_tiles_gdal_xml(const char *outdir, const double ul[2], double px, uint64
     fprintf(f, "/${z}/${x}/${y}.png</ServerUrl>\n  </Service>\n");
     fprintf(f, "  <DataWindow>\n    <UpperLeftX>%.17g</UpperLeftX>\n    <UpperLeftY>%.17g</UpperLeftY>\n", ul[0], ul[1]);
     fprintf(f, "    <LowerRightX>%.17g</LowerRightX>\n    <LowerRightY>%.17g</LowerRightY>\n", ul[0] + side, ul[1] - side);
-    fprintf(f, "    <SizeX>%llu</SizeX>\n    <SizeY>%llu</SizeY>\n", (unsigned long long)w, (unsigned long long)h);
     fprintf(f, "    <TileLevel>%u</TileLevel>\n    <TileCountX>1</TileCountX>\n    <TileCountY>1</TileCountY>\n", zmax);
     fprintf(f, "    <YOrigin>%s</YOrigin>\n  </DataWindow>\n", tms ? "bottom" : "top");
     fprintf(f, "  <Projection>");

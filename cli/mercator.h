@@ -45,9 +45,10 @@ void cli_merc_center_text(const cli_merc_grid *g, char *buf, size_t cap);
 
 /* A GDAL WMS description (TMS minidriver) of a folder of tiles, so that
  * gdalinfo/QGIS open the pyramid in place: OUTDIR/tiles.xml. ul/px: the
- * top-left corner and pixel size of the finest level (zmax) whose tile
- * (0, 0) starts at ul; w, h its size in pixels; crs: a CRS text; levels
- * zmax + 1 (tile (0, 0, 0) the level-0 square). 0, or 1 after a message. */
-int cli_tiles_gdal_xml(const char *outdir, const double ul[2], double px, uint64_t w, uint64_t h, uint32_t zmax,
+ * top-left corner and pixel size of level zmax, whose tile (0, 0) starts
+ * at ul; the raster GDAL sees is the level-0 tile's square (tile << zmax
+ * pixels a side: GDAL's TMS minidriver knows no partial grid), transparent
+ * beyond the tiles; crs: a CRS text. 0, or 1 after a message. */
+int cli_tiles_gdal_xml(const char *outdir, const double ul[2], double px, uint32_t zmax,
                        uint32_t tile, int tms, const char *crs);
 #endif

@@ -775,6 +775,19 @@ static int all_clear(const uint8_t *rgba, uint32_t S)
  * its parent). *has_road: some pixel of the tile holds a road. */
 static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out, int need, int record, int *has_road)
 {
+    if (z < r->zmin) { /* --tiling mercator: a level not written, whose pixels nothing needs */
+        uint32_t d = r->zmax - z - 1;
+        uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
+        int any = 0;
+        for (int q = 0; q < 4; q++) {
+            uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+            int cr = 0;
+            if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, child, 0, record, &cr)) return 1;
+            any |= cr;
+        }
+        *has_road = any;
+        return 0;
+    }
     entry *e = tfind(&r->tab, tkey(z, x, y));
     if (e && record && (e->flag == 'r' || e->flag == 'w' || e->flag == 'd')) {
         int ok = logged_file_ok(r, z, x, y, e, need ? out : NULL);
@@ -854,7 +867,6 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
         }
         return 0;
     }
-    if (z < r->zmin) return 0; /* --tiling mercator: above the first level written */
     if (*has_road || (z <= r->zd && !(r->merc && all_clear(out[0], r->S))))
         return store_tile(r, z, x, y, out, *has_road ? 'r' : 'w');
     r->road_free++;
@@ -1690,20 +1702,19 @@ static uint64_t work_bound(const run *r, uint64_t target)
 static int gdal_description(const run *r)
 {
     double ul[2], px;
-    uint64_t w, h;
     uint32_t z = r->zd, k = r->zmax - z;
     if (r->merc) {
         if ((uint64_t)r->S << z > 0x7fffffffull) return 0; /* GDAL's raster size is an int: no description */
         px = 2 * CLI_MERC_HALF / ((double)r->S * (double)((uint64_t)1 << z));
-        ul[0] = -CLI_MERC_HALF, ul[1] = CLI_MERC_HALF, w = h = (uint64_t)r->S << z;
-        return cli_tiles_gdal_xml(r->a->out, ul, px, w, h, z, r->S, r->a->tms, "EPSG:3857");
+        ul[0] = -CLI_MERC_HALF, ul[1] = CLI_MERC_HALF;
+        return cli_tiles_gdal_xml(r->a->out, ul, px, z, r->S, r->a->tms, "EPSG:3857");
     }
     double gt[6];
     if (cli_geo_texture_gt(r->in, r->T, 0, 0, gt) || !r->in->geo.crs) return 0;
     px = gt[1] * (double)((uint64_t)1 << k);
     ul[0] = gt[0], ul[1] = gt[3];
-    w = ((uint64_t)r->fw + ((uint64_t)1 << k) - 1) >> k, h = ((uint64_t)r->fh + ((uint64_t)1 << k) - 1) >> k;
-    return cli_tiles_gdal_xml(r->a->out, ul, px, w, h, z, r->S, r->a->tms, r->in->geo.crs);
+    if ((uint64_t)r->S << z > 0x7fffffffull) return 0;
+    return cli_tiles_gdal_xml(r->a->out, ul, px, z, r->S, r->a->tms, r->in->geo.crs);
 }
 
 static uint32_t floor_log2(uint32_t v)
