@@ -165,6 +165,19 @@ rm "$victim"
 "$BIN" tiles $O --texels 16 --threads 1 --resume dem.tif roads.txt t1 && cmp -s "$victim" "m/${victim#t1/}" &&
     cmp -s t1/tiles.json m/tiles.json && ok || bad "--resume did not make $victim again"
 
+# ---- DEM tiles of one map (issue 28 target 3): the mosaic, not each tile alone ----
+# two DEM files sharing the sample column 40, mosaicked by GDAL's own gdalbuildvrt
+# (the VRT passes the allow-list: its sources sit beside it): the same tiles as
+# the whole DEM, byte for byte
+if command -v gdalbuildvrt >/dev/null 2>&1; then
+    gdal_translate -q -srcwin 0 0 41 61 dem.tif west.tif && gdal_translate -q -srcwin 40 0 41 61 dem.tif east.tif &&
+        gdalbuildvrt -q mosaic.vrt west.tif east.tif &&
+        "$BIN" tiles $O --texels 16 mosaic.vrt roads.txt mv 2>e &&
+        diff -r -x .tiles-log -x tiles.json -x tiles.xml mv m >/dev/null && ok || bad "tiles of the mosaic VRT differ: $(cat e)"
+else
+    echo "SKIP cli_mercator mosaic: no gdalbuildvrt"
+fi
+
 # ---- sparse levels, --zoom, the raster tiling's description, refusals ------------
 # without --dense: the road-free tiles of the finer levels are left out, the rest the same bytes
 S="--quiet --tiling mercator --no-markings"
