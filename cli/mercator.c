@@ -195,6 +195,47 @@ void cli_merc_close(cli_merc *m)
     free(m);
 }
 
+/* The tile's pixel centres in the DEM's CRS (m->u, m->v) interpolated
+ * bilinearly between exact transforms every G pixels, as GDAL's approximate
+ * transformer does: the projection is smooth at that scale. Checked at the
+ * middle of every grid cell (where the interpolation is worst) against the
+ * exact transform: 0 when all are within 0.01 of a source pixel, else 1
+ * (the caller transforms every pixel). */
+enum { G = 16, GN = 1024 / G + 1 };
+static int approx_centres(cli_merc *m, double ox, double oy, double res)
+{
+    uint32_t S = m->S, n = S / G + 1;
+    double gx[GN * GN], gy[GN * GN], cx[GN * GN], cy[GN * GN];
+    for (uint32_t j = 0; j < n; j++)
+        for (uint32_t i = 0; i < n; i++) {
+            gx[j * n + i] = ox + (i * G + 0.5) * res, gy[j * n + i] = oy - (j * G + 0.5) * res;
+            if (i + 1 < n && j + 1 < n)
+                cx[j * (n - 1) + i] = ox + (i * G + G / 2 + 0.5) * res, cy[j * (n - 1) + i] = oy - (j * G + G / 2 + 0.5) * res;
+        }
+    m->transform(m->proj, 1, (size_t)n * n, gx, gy);
+    m->transform(m->proj, 1, (size_t)(n - 1) * (n - 1), cx, cy);
+    double tol = 0.01 * m->px;
+    for (uint32_t j = 0; j + 1 < n; j++)
+        for (uint32_t i = 0; i + 1 < n; i++) {
+            const double *a = gx + j * n + i, *b = gy + j * n + i;
+            double ix = (a[0] + a[1] + a[n] + a[n + 1]) / 4, iy = (b[0] + b[1] + b[n] + b[n + 1]) / 4;
+            double ex = cx[j * (n - 1) + i], ey = cy[j * (n - 1) + i];
+            if (!(fabs(ix - ex) <= tol && fabs(iy - ey) <= tol)) return 1; /* NaN too */
+        }
+    for (uint32_t y = 0; y < S; y++) {
+        uint32_t j = y / G;
+        double fy = (double)(y - j * G) / G;
+        for (uint32_t x = 0; x < S; x++) {
+            uint32_t i = x / G;
+            double fx = (double)(x - i * G) / G;
+            size_t k = (size_t)j * n + i;
+            m->u[(size_t)y * S + x] = (1 - fy) * ((1 - fx) * gx[k] + fx * gx[k + 1]) + fy * ((1 - fx) * gx[k + n] + fx * gx[k + n + 1]);
+            m->v[(size_t)y * S + x] = (1 - fy) * ((1 - fx) * gy[k] + fx * gy[k + 1]) + fy * ((1 - fx) * gy[k + n] + fx * gy[k + n + 1]);
+        }
+    }
+    return 0;
+}
+
 int cli_merc_tile(cli_merc *m, const rs_splatter *sp, const cli_splat_args *s, uint64_t x, uint64_t y,
                   uint8_t *rgba, int *has_road)
 {
@@ -202,12 +243,14 @@ int cli_merc_tile(cli_merc *m, const rs_splatter *sp, const cli_splat_args *s, u
     size_t n = (size_t)S * S;
     double res = res_at(S, m->g.zmax);
     double ox = -CLI_MERC_HALF + (double)x * S * res, oy = CLI_MERC_HALF - (double)y * S * res;
-    for (uint32_t j = 0; j < S; j++)
-        for (uint32_t i = 0; i < S; i++) {
-            m->u[(size_t)j * S + i] = ox + (i + 0.5) * res;
-            m->v[(size_t)j * S + i] = oy - (j + 0.5) * res;
-        }
-    m->transform(m->proj, 1, n, m->u, m->v);
+    if (approx_centres(m, ox, oy, res)) { /* exact, pixel by pixel */
+        for (uint32_t j = 0; j < S; j++)
+            for (uint32_t i = 0; i < S; i++) {
+                m->u[(size_t)j * S + i] = ox + (i + 0.5) * res;
+                m->v[(size_t)j * S + i] = oy - (j + 0.5) * res;
+            }
+        m->transform(m->proj, 1, n, m->u, m->v);
+    }
     /* to the splat's pixel coordinates, pixel centres at whole numbers */
     double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
     for (size_t k = 0; k < n; k++) {
