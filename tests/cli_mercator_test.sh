@@ -154,6 +154,12 @@ gdalinfo m/tiles.xml >gx.txt 2>&1 && grep -q 'Pseudo-Mercator' gx.txt && ok || b
 gdal_translate -q -projwin $(sed -n 1p pts3857.txt | awk '{print $1-60, $2+60, $1+60, $2-60}') m/tiles.xml crop.tif 2>e &&
     gdalinfo -stats crop.tif >cs.txt 2>&1 && grep -q 'Band 4' cs.txt && ok || bad "tiles.xml crop: $(cat e)"
 
+# --scheme tms: the same pictures under TMS names, and tiles.xml says so (GDAL reads the same crop)
+"$BIN" tiles $O --texels 16 --scheme tms dem.tif roads.txt tms 2>e &&
+    gdal_translate -q -projwin $(sed -n 1p pts3857.txt | awk '{print $1-60, $2+60, $1+60, $2-60}') tms/tiles.xml crop_tms.tif &&
+    gdal_translate -q -projwin $(sed -n 1p pts3857.txt | awk '{print $1-60, $2+60, $1+60, $2-60}') m/tiles.xml crop_xyz.tif &&
+    cmp -s crop_tms.tif crop_xyz.tif && ok || bad "--scheme tms: $(cat e)"
+
 # ---- determinism: threads, shards + merge, resume -----------------------------
 "$BIN" tiles $O --texels 16 --threads 1 dem.tif roads.txt t1 && cmp -s t1/tiles.json m/tiles.json && ok ||
     bad "--threads 1 differs"
