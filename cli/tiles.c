@@ -191,7 +191,7 @@ typedef struct run {
     uint32_t fw, fh, S, T, zmax, zd;
     /* --tiling mercator: the finest tiles are [fx0, fx0 + nx) x [fy0, fy0 + ny)
      * of the global grid, rendered by cli_merc_tile; levels below zmin are
-     * built in memory but not written */
+     * only walked through (build), never made nor written */
     cli_merc *merc;
     cli_merc_grid mg;
     uint64_t fx0, fy0;
@@ -1997,9 +1997,9 @@ int cli_tiles_main(int argc, char **argv)
     }
     if (!a.quiet && !r.merc && in.geo.georef && !a.sharded)
         fprintf(stderr, "roadsplat: note: %s: the raster tiling is the DEM's own pixel grid, not Web Mercator: "
-                        "web maps and MBTiles readers would misplace it (%s opens in place with GDAL); --tiling "
-                        "mercator writes web-map tiles\n",
-                a.out, a.mbtiles ? "tiles.json records the georeference;" : "tiles.xml");
+                        "web maps and MBTiles readers would misplace it (%s); --tiling mercator writes web-map "
+                        "tiles\n",
+                a.out, a.mbtiles ? "its roadsplat_manifest records the georeference" : "tiles.xml opens it in place with GDAL");
     if (!a.quiet)
         fprintf(stderr,
                 "roadsplat: tiles: %llu rendered, %llu written, %llu road-free not written, %llu kept from earlier runs, "
