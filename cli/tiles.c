@@ -1799,6 +1799,10 @@ int cli_tiles_main(int argc, char **argv)
         goto done;
     }
     cli_inputs_keep_pipes(1); /* the manifest hashes a pipe's bytes too */
+    /* the default 8 texels set before the load, which puts the surface
+     * textures on the world's pixel grid at this texel size (with 0 it
+     * divided by zero) */
+    if (!a.s.o.texels && !a.s.pixel_size) a.s.o.texels = 8;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     /* every file the run read (the styles' surface images too) is hashed
      * as loaded; an MBTiles OUT naming one of them is refused now */
@@ -1808,7 +1812,15 @@ int cli_tiles_main(int argc, char **argv)
     if (a.mercator) { /* the grid, and the splat's texels the tiles are resampled from */
         if (cli_merc_open(&in, a.dem, r.S, a.s.o.texels ? a.s.o.texels : 8, a.zoom_min, a.zoom_max, &r.merc, &r.mg))
             goto done;
+        /* the source splat's texels, and its surface textures on the world's pixel
+         * grid at that size (as cli_splat_input_load puts them for the options') */
+        double px = in.geo.gt[1] / r.mg.texels, wx = (in.geo.gt[0] + in.geo.gt[1] / 2) / px,
+               wy = -(in.geo.gt[3] + in.geo.gt[5] / 2) / px;
         a.s.o.texels = r.mg.texels;
+        if (fabs(wx) < 1e15 && fabs(wy) < 1e15) {
+            a.s.o.surface.texel_offset_x = (int64_t)floor(wx + 0.5);
+            a.s.o.surface.texel_offset_y = (int64_t)floor(wy + 0.5);
+        }
     }
     if ((res = rs_splat_size(ctx, in.dem, &a.s.o, &r.fw, &r.fh))) {
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
