@@ -95,7 +95,7 @@ LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
 # first use (docs/packaging.md).
 RENDER_SRC := cli/render.c cli/render_gl.c cli/render_shader.c
-GDAL_SRC  := cli/gdal.c
+GDAL_SRC  := cli/gdal.c cli/mercator_gdal.c
 MBTILES_SRC := cli/mbtiles.c
 GLTF_SRC  := cli/gltf.c
 CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC) $(MBTILES_SRC) $(GLTF_SRC),$(sort $(wildcard cli/*.c)))
@@ -231,7 +231,7 @@ $(BUILD)/cli/module.o: cli/module.c $(CONFIG)
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) -DRS_MODULEDIR='"$(MODULEDIR)"' -c $< -o $@
 
-$(BUILD)/cli/gdal.o: cli/gdal.c
+$(BUILD)/cli/gdal.o $(BUILD)/cli/mercator_gdal.o: $(BUILD)/cli/%.o: cli/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) $(GDAL_CFLAGS) -c $< -o $@
 
@@ -249,7 +249,7 @@ $(IMAGE_MOD): $(IMAGE_OBJ)
 $(RENDER_MOD): $(RENDER_OBJ)
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(OSMESA_LIBS) $(LDLIBS_CORE)
 
-$(GDAL_MOD): $(BUILD)/cli/gdal.o
+$(GDAL_MOD): $(BUILD)/cli/gdal.o $(BUILD)/cli/mercator_gdal.o
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(GDAL_LIBS) $(LDLIBS_CORE)
 
 $(MBTILES_MOD): $(BUILD)/cli/mbtiles.o

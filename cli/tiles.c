@@ -49,6 +49,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include "mercator.h"
 #include "viewer.h"
 
 static const char tiles_usage[] =
@@ -63,6 +64,14 @@ static const char tiles_usage[] =
     "\n"
     "Options (and every splat option of roadsplat --help but --window*,\n"
     "--weight-out, --stats, --world-file, --cog, --rgba):\n"
+    "  --tiling raster|mercator  raster (default): the splat's own pixel grid,\n"
+    "                     z = 0 the whole image; mercator: XYZ tiles in EPSG:3857\n"
+    "                     (the web-map grid), resampled from the DEM's CRS; needs a\n"
+    "                     DEM with a CRS (docs/tiles.md \"Tiling\")\n"
+    "  --zoom MAX | MIN-MAX  mercator: the finest level (default: the zoom whose\n"
+    "                     pixel is just finer than --pixel-size/--texels at the\n"
+    "                     map's centre) and the first level written (default: where\n"
+    "                     the map is about one tile wide)\n"
     "  --tile-size N      256 (default), 512 or 1024 pixels\n"
     "  --scheme xyz|tms   y down (default) or up (TMS) in the file names\n"
     "  --format png|mbtiles  a folder of PNG files (default) or one MBTiles 1.3\n"
@@ -107,6 +116,8 @@ typedef struct targs {
     const char *attribution;  /* --attribution TEXT for the viewer */
     rs_normal_options normal;
     uint32_t halo;
+    int mercator;             /* --tiling mercator (cli/mercator.c) */
+    int zoom_min, zoom_max;   /* --zoom, -1 when not given */
     uint32_t shard_i, shard_n;
     const char **opt; /* the splat options as given (for the manifest), --threads, --gdal-trust, --max-image-pixels left out */
     int nopt;
@@ -178,6 +189,13 @@ typedef struct run {
     const cli_splat_input *in;
     const rs_splatter *sp;
     uint32_t fw, fh, S, T, zmax, zd;
+    /* --tiling mercator: the finest tiles are [fx0, fx0 + nx) x [fy0, fy0 + ny)
+     * of the global grid, rendered by cli_merc_tile; levels below zmin are
+     * only walked through (build), never made nor written */
+    cli_merc *merc;
+    cli_merc_grid mg;
+    uint64_t fx0, fy0;
+    uint32_t zmin;
     uint32_t P, side;   /* halo, and a written tile's side S + 2P */
     int layers;         /* 1, or 2 with --normals (layer 1: the normal map) */
     unsigned threads;   /* the splat's thread count (the normal map's too) */
@@ -219,19 +237,18 @@ typedef struct run {
 /* Side of a level-z tile in finest tiles, and whether (z, x, y) exists. */
 static uint64_t span(const run *r, uint32_t z) { return (uint64_t)1 << (r->zmax - z); }
 
-static int exists(const run *r, uint32_t z, uint64_t x, uint64_t y)
-{
-    return x * span(r, z) < r->nx && y * span(r, z) < r->ny;
-}
-
 /* Finest tiles of the image under (z, x, y). */
 static uint64_t finest_count(const run *r, uint32_t z, uint64_t x, uint64_t y)
 {
-    uint64_t k = span(r, z), x0 = x * k, y0 = y * k;
-    if (x0 >= r->nx || y0 >= r->ny) return 0;
-    uint64_t x1 = x0 + k < r->nx ? x0 + k : r->nx, y1 = y0 + k < r->ny ? y0 + k : r->ny;
+    uint64_t k = span(r, z), x0 = x * k, y0 = y * k, ex = r->fx0 + r->nx, ey = r->fy0 + r->ny;
+    if (x0 < r->fx0) x0 = r->fx0;
+    if (y0 < r->fy0) y0 = r->fy0;
+    uint64_t x1 = x * k + k < ex ? x * k + k : ex, y1 = y * k + k < ey ? y * k + k : ey;
+    if (x0 >= x1 || y0 >= y1) return 0;
     return (x1 - x0) * (y1 - y0);
 }
+
+static int exists(const run *r, uint32_t z, uint64_t x, uint64_t y) { return finest_count(r, z, x, y) > 0; }
 
 static uint64_t file_y(const run *r, uint32_t z, uint64_t y)
 {
@@ -547,6 +564,11 @@ static void box_down(int layer, const uint8_t *c, uint8_t *parent, uint32_t S, i
 static int render_tile(run *r, uint64_t x, uint64_t y, uint8_t *const *out, int *has_road)
 {
     uint64_t roads = 0;
+    if (r->merc) { /* Web Mercator: resampled from the splat in the DEM's CRS */
+        if (cli_merc_tile(r->merc, r->sp, &r->a->s, x, y, out[0], has_road)) return 1;
+        r->rendered++;
+        return 0;
+    }
     for (int l = 0; l < r->layers; l++)
         if (finest_rect(r, l, (int64_t)(x * r->S), (int64_t)(y * r->S), r->S, r->S, out[l], r->S, l ? NULL : &roads))
             return 1;
@@ -738,6 +760,14 @@ static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, 
 
 /* ---- the quadtree ---------------------------------------------------------------- */
 
+/* Every pixel transparent: a mercator tile off the DEM is not written. */
+static int all_clear(const uint8_t *rgba, uint32_t S)
+{
+    for (size_t i = 0, n = (size_t)S * S; i < n; i++)
+        if (rgba[4 * i + 3]) return 0;
+    return 1;
+}
+
 /* Tile (z, x, y) into out[layer] (S x S RGBA, r->bufs[layer][depth] of
  * the caller). need: the caller needs the pixels (a tile already done is
  * then read back from its files, or recomputed when it was road-free and
@@ -745,6 +775,19 @@ static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, 
  * its parent). *has_road: some pixel of the tile holds a road. */
 static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out, int need, int record, int *has_road)
 {
+    if (z < r->zmin) { /* --tiling mercator: a level not written, whose pixels nothing needs */
+        uint32_t d = r->zmax - z - 1;
+        uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
+        int any = 0;
+        for (int q = 0; q < 4; q++) {
+            uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+            int cr = 0;
+            if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, child, 0, record, &cr)) return 1;
+            any |= cr;
+        }
+        *has_road = any;
+        return 0;
+    }
     entry *e = tfind(&r->tab, tkey(z, x, y));
     if (e && record && (e->flag == 'r' || e->flag == 'w' || e->flag == 'd')) {
         int ok = logged_file_ok(r, z, x, y, e, need ? out : NULL);
@@ -824,7 +867,8 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
         }
         return 0;
     }
-    if (z <= r->zd || *has_road) return store_tile(r, z, x, y, out, *has_road ? 'r' : 'w');
+    if (*has_road || (z <= r->zd && !(r->merc && all_clear(out[0], r->S))))
+        return store_tile(r, z, x, y, out, *has_road ? 'r' : 'w');
     r->road_free++;
     return log_line(r, z, x, y, 'e', NULL, NULL);
 }
@@ -879,6 +923,7 @@ static int parse_targs(int argc, char **argv, targs *a)
     int npos = 0, only_pos = 0;
     memset(a, 0, sizeof *a);
     a->tile = 256;
+    a->zoom_min = a->zoom_max = -1;
     a->opt = calloc((size_t)argc + 1, sizeof *a->opt);
     if (!a->opt) {
         cli_error("out of memory");
@@ -967,6 +1012,33 @@ static int parse_targs(int argc, char **argv, targs *a)
                 return 1;
             }
             for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
+        } else if (!strcmp(name, "--tiling")) {
+            int i0 = i;
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            if (strcmp(v, "raster") && strcmp(v, "mercator")) {
+                cli_error("--tiling: '%s' must be raster (the splat's pixel grid) or mercator (EPSG:3857 XYZ tiles)", v);
+                return 1;
+            }
+            a->mercator = v[0] == 'm';
+            for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
+        } else if (!strcmp(name, "--zoom")) {
+            int i0 = i;
+            uint32_t z0 = 0, z1 = 0;
+            if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
+            const char *dash = strchr(v, '-');
+            char lo[16] = "";
+            if (dash && (size_t)(dash - v) < sizeof lo) memcpy(lo, v, (size_t)(dash - v)), lo[dash - v] = '\0';
+            if (dash ? (dash == v || (size_t)(dash - v) >= sizeof lo || cli_parse_u32(name, lo, &z0) ||
+                        cli_parse_u32(name, dash + 1, &z1))
+                     : cli_parse_u32(name, v, &z1))
+                return 1;
+            if (z1 > MAX_ZOOM || z0 > z1) {
+                cli_error("--zoom: '%s' must be MAX or MIN-MAX with 0 <= MIN <= MAX <= %d", v, MAX_ZOOM);
+                return 1;
+            }
+            a->zoom_max = (int)z1;
+            if (dash) a->zoom_min = (int)z0;
+            for (int k = i0; k <= i; k++) a->opt[a->nopt++] = argv[k];
         } else if (!strcmp(name, "--attribution")) {
             if (cli_option_value(argc, argv, &i, name, inl, &v)) return 1;
             a->attribution = v;
@@ -1007,6 +1079,15 @@ static int parse_targs(int argc, char **argv, targs *a)
     if (a->viewer && (a->mbtiles || a->halo || a->sharded)) {
         cli_error("--viewer shows a folder of plain tiles: not with --format mbtiles, --halo or --shard (run it with "
                   "--from-children)");
+        return 1;
+    }
+    if (a->mercator && (a->halo || a->normals)) {
+        cli_error("--tiling mercator resamples the colour: not with %s (use --tiling raster)",
+                  a->halo ? "--halo" : "--normals (a normal map's vectors would have to turn with the grid)");
+        return 1;
+    }
+    if (a->zoom_max >= 0 && !a->mercator) {
+        cli_error("--zoom picks the levels of --tiling mercator; the raster grid's levels follow from the image size");
         return 1;
     }
     if (a->attribution && !a->viewer) {
@@ -1323,6 +1404,42 @@ static void json_str(FILE *f, const char *s)
     fputc('"', f);
 }
 
+/* The manifest's levels, rule and frame for --tiling mercator. */
+static void merc_manifest(const run *r, FILE *f)
+{
+    const cli_merc_grid *g = &r->mg;
+    fprintf(f, "  \"tiling\": \"mercator\",\n");
+    fprintf(f, "  \"source\": {\"texels\": %u, \"pixel_m\": %.17g, \"width\": %u, \"height\": %u},\n", r->T,
+            r->in->geo.gt[1] / r->T, r->fw, r->fh);
+    fprintf(f, "  \"levels\": {\"min\": %u, \"max\": %u, \"dense_max\": %u},\n", r->zmin, r->zmax, r->zd);
+    fprintf(f, "  \"level_tiles\": {");
+    for (uint32_t z = r->zmin; z <= r->zmax; z++) {
+        uint64_t k = span(r, z);
+        fprintf(f, "%s\"%u\": {\"x\": [%llu, %llu], \"y\": [%llu, %llu]}", z > r->zmin ? ", " : "", z,
+                (unsigned long long)(r->fx0 / k), (unsigned long long)((r->fx0 + r->nx - 1) / k),
+                (unsigned long long)(r->fy0 / k), (unsigned long long)((r->fy0 + r->ny - 1) / k));
+    }
+    fprintf(f, "},\n");
+    fprintf(f, "  \"rule\": \"XYZ tiles of EPSG:3857 (Web Mercator): tile (z, x, y) covers x from %.9f + x*s to %.9f "
+               "+ (x+1)*s and y from %.9f - y*s down to %.9f - (y+1)*s metres, s = %.9f / 2^z, y from the north; a tile "
+               "of the finest level z = %u is the splat at %u texels per DEM cell resampled at its pixel centres "
+               "(taken to the DEM's CRS by PROJ; alpha-weighted bilinear), transparent where the centre is off the "
+               "DEM; a tile of level z < %u is the 2x2 box filter of its four children (alpha the rounded mean, "
+               "colour the alpha-weighted rounded mean); tiles with no opaque pixel are not written; levels %u..%u "
+               "are complete, a tile of a finer level is written only when it samples a road pixel (a viewer "
+               "over-zooms its parent); levels below %u are not written; PNG RGB when every pixel is opaque, else "
+               "RGBA\",\n",
+            -CLI_MERC_HALF, -CLI_MERC_HALF, CLI_MERC_HALF, CLI_MERC_HALF, 2 * CLI_MERC_HALF, r->zmax, r->T, r->zmax,
+            r->zmin, r->zd, r->zmin);
+    fprintf(f, "  \"frame\": {\"crs\": \"EPSG:3857\", \"dem_crs\": ");
+    json_str(f, r->in->geo.crs);
+    fprintf(f, ", \"cell_size_m\": %.17g, \"pixel_m\": %.17g, \"pixel_note\": \"a finest-level pixel on the ground at "
+               "the centre\", \"extent_3857\": [%.17g, %.17g, %.17g, %.17g], \"bounds_wgs84\": [%.12g, %.12g, %.12g, "
+               "%.12g], \"center_wgs84\": [%.12g, %.12g]},\n",
+            r->in->geo.gt[1], g->pixel_m, g->m[0], g->m[1], g->m[2], g->m[3], g->ll[0], g->ll[1], g->ll[2], g->ll[3],
+            g->centre[0], g->centre[1]);
+}
+
 /* The manifest as JSON into f: everything but run-specific numbers, so a
  * single run and shards + merge give the same bytes. */
 static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
@@ -1360,6 +1477,11 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
                                                                  : "tiles table, tile_row = 2^z - 1 - y (MBTiles 1.3)")
                                                    : (a->tms ? "{z}/{x}/{y}.png, y = 2^z - 1 - row (row 0 at the top)"
                                                              : "{z}/{x}/{y}.png, y = row (row 0 at the top)"));
+    if (r->merc) {
+        merc_manifest(r, f);
+        goto inputs;
+    }
+    fprintf(f, "  \"tiling\": \"raster\",\n");
     fprintf(f, "  \"image\": {\"width\": %u, \"height\": %u, \"texels\": %u},\n", r->fw, r->fh, r->T);
     fprintf(f, "  \"levels\": {\"min\": 0, \"max\": %u, \"dense_max\": %u},\n", r->zmax, r->zd);
     fprintf(f, "  \"level_tiles\": [");
@@ -1396,7 +1518,9 @@ static int manifest(run *r, FILE *f, const input_hash *ih, int nin)
         fprintf(f, ", \"local\": \"metres from DEM sample (0,0), y down\", \"extent\": [0, 0, %.17g, %.17g]",
                 r->fw * (cs / r->T), r->fh * (cs / r->T));
     }
-    fprintf(f, "},\n  \"inputs\": [");
+    fprintf(f, "},\n");
+inputs:
+    fprintf(f, "  \"inputs\": [");
     for (int i = 0; i < nin; i++) {
         fprintf(f, "%s\n    {\"role\": \"%s\", \"path\": ", i ? "," : "", ih[i].role);
         json_str(f, ih[i].path);
@@ -1451,7 +1575,7 @@ static int route_setup(run *r, rs_ctx *ctx, const cli_splat_input *in, const rs_
 {
     const targs *a = r->a;
     uint32_t k = r->zmax - r->zd;
-    if (a->dense || a->render_all || k == 0 || k > 20 || r->T % (1u << k)) return 0;
+    if (r->merc || a->dense || a->render_all || k == 0 || k > 20 || r->T % (1u << k)) return 0;
     rs_splat_options o = a->s.o;
     if (o.surface.terrain_texture || a->normals || o.lighting.enable || in->nodata)
         return 0; /* docs/tiles.md, "Sparse levels" */
@@ -1571,6 +1695,28 @@ static uint64_t work_bound(const run *r, uint64_t target)
 
 /* ---- main ------------------------------------------------------------------------ */
 
+/* OUTDIR/tiles.xml, GDAL's description of the pyramid (cli_tiles_gdal_xml)
+ * for a georeferenced run: the level dense_max, the finest complete one
+ * (a finer level lacks its road-free tiles, which GDAL would read as
+ * holes). */
+static int gdal_description(const run *r)
+{
+    double ul[2], px;
+    uint32_t z = r->zd, k = r->zmax - z;
+    if (r->merc) {
+        if ((uint64_t)r->S << z > 0x7fffffffull) return 0; /* GDAL's raster size is an int: no description */
+        px = 2 * CLI_MERC_HALF / ((double)r->S * (double)((uint64_t)1 << z));
+        ul[0] = -CLI_MERC_HALF, ul[1] = CLI_MERC_HALF;
+        return cli_tiles_gdal_xml(r->a->out, ul, px, z, r->S, r->a->tms, "EPSG:3857");
+    }
+    double gt[6];
+    if (cli_geo_texture_gt(r->in, r->T, 0, 0, gt) || !r->in->geo.crs) return 0;
+    px = gt[1] * (double)((uint64_t)1 << k);
+    ul[0] = gt[0], ul[1] = gt[3];
+    if ((uint64_t)r->S << z > 0x7fffffffull) return 0;
+    return cli_tiles_gdal_xml(r->a->out, ul, px, z, r->S, r->a->tms, r->in->geo.crs);
+}
+
 static uint32_t floor_log2(uint32_t v)
 {
     uint32_t k = 0;
@@ -1653,12 +1799,29 @@ int cli_tiles_main(int argc, char **argv)
         goto done;
     }
     cli_inputs_keep_pipes(1); /* the manifest hashes a pipe's bytes too */
+    /* the default 8 texels set before the load, which puts the surface
+     * textures on the world's pixel grid at this texel size (with 0 it
+     * divided by zero) */
+    if (!a.s.o.texels && !a.s.pixel_size) a.s.o.texels = 8;
     if (cli_splat_input_load(ctx, a.dem, a.roads, &a.s, &in)) goto done;
     /* every file the run read (the styles' surface images too) is hashed
      * as loaded; an MBTiles OUT naming one of them is refused now */
     if ((a.mbtiles && cli_inputs_check_output(a.out, "OUT")) || hash_inputs(&ih, &nin)) goto done;
     fingerprint(&a, ih, nin, r.fingerprint);
     run_id(r.runid);
+    if (a.mercator) { /* the grid, and the splat's texels the tiles are resampled from */
+        if (cli_merc_open(&in, a.dem, r.S, a.s.o.texels ? a.s.o.texels : 8, a.zoom_min, a.zoom_max, &r.merc, &r.mg))
+            goto done;
+        /* the source splat's texels, and its surface textures on the world's pixel
+         * grid at that size (as cli_splat_input_load puts them for the options') */
+        double px = in.geo.gt[1] / r.mg.texels, wx = (in.geo.gt[0] + in.geo.gt[1] / 2) / px,
+               wy = -(in.geo.gt[3] + in.geo.gt[5] / 2) / px;
+        a.s.o.texels = r.mg.texels;
+        if (fabs(wx) < 1e15 && fabs(wy) < 1e15) {
+            a.s.o.surface.texel_offset_x = (int64_t)floor(wx + 0.5);
+            a.s.o.surface.texel_offset_y = (int64_t)floor(wy + 0.5);
+        }
+    }
     if ((res = rs_splat_size(ctx, in.dem, &a.s.o, &r.fw, &r.fh))) {
         cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
         goto done;
@@ -1667,13 +1830,15 @@ int cli_tiles_main(int argc, char **argv)
     r.T = a.s.o.texels ? a.s.o.texels : 8;
     r.nx = (r.fw + (uint64_t)r.S - 1) / r.S;
     r.ny = (r.fh + (uint64_t)r.S - 1) / r.S;
-    while (((uint64_t)1 << r.zmax) < (r.nx > r.ny ? r.nx : r.ny)) r.zmax++;
+    while (!r.merc && ((uint64_t)1 << r.zmax) < (r.nx > r.ny ? r.nx : r.ny)) r.zmax++;
+    if (r.merc) r.nx = r.mg.nx, r.ny = r.mg.ny, r.fx0 = r.mg.fx0, r.fy0 = r.mg.fy0, r.zmax = r.mg.zmax, r.zmin = r.mg.zmin;
     if (r.zmax > MAX_ZOOM) {
         cli_error("%s: a %u x %u image needs more than %d levels of %u-pixel tiles", a.dem, r.fw, r.fh, MAX_ZOOM, r.S);
         goto done;
     }
     uint32_t lt = floor_log2(r.T);
     r.zd = a.dense || lt >= r.zmax ? (a.dense ? r.zmax : 0) : r.zmax - lt;
+    if (r.merc && !a.dense) r.zd = r.mg.zd;
     uint64_t total = r.nx * r.ny;
     r.lo = shard_bound(total, a.shard_i, a.shard_n);
     r.hi = shard_bound(total, a.shard_i + 1, a.shard_n);
@@ -1805,8 +1970,14 @@ int cli_tiles_main(int argc, char **argv)
             mb = mb || r.mb->meta(r.db, "name", base) || r.mb->meta(r.db, "format", "png") ||
                  r.mb->meta(r.db, "type", "baselayer") || r.mb->meta(r.db, "version", "1") ||
                  r.mb->meta(r.db, "description", "roadsplat terrain texture with roads");
-            snprintf(num, sizeof num, "0");
+            snprintf(num, sizeof num, "%u", r.zmin);
             mb = mb || r.mb->meta(r.db, "minzoom", num);
+            if (r.merc) { /* MBTiles 1.3: WGS84 bounds and centre, for web-map tiles only */
+                char bounds[160], center[160];
+                cli_merc_bounds_text(&r.mg, bounds, sizeof bounds);
+                cli_merc_center_text(&r.mg, center, sizeof center);
+                mb = mb || r.mb->meta(r.db, "bounds", bounds) || r.mb->meta(r.db, "center", center);
+            }
             snprintf(num, sizeof num, "%u", r.zmax);
             mb = mb || r.mb->meta(r.db, "maxzoom", num) || r.mb->meta(r.db, "roadsplat_manifest", text);
             free(text);
@@ -1827,13 +1998,20 @@ int cli_tiles_main(int argc, char **argv)
                 goto done;
             }
             if (cli_out_commit(&mani)) goto done;
+            if (gdal_description(&r)) goto done;
             if (a.viewer) {
                 cli_viewer_info vi = { r.S, r.fw, r.fh, r.zmax, r.zd, a.tms, "roadsplat tiles",
-                                       a.attribution ? a.attribution : "rendered with roadsplat" };
+                                       a.attribution ? a.attribution : "rendered with roadsplat", r.merc != NULL,
+                                       r.zmin, { r.mg.ll[0], r.mg.ll[1], r.mg.ll[2], r.mg.ll[3] } };
                 if (cli_tiles_viewer(a.out, &vi)) goto done;
             }
         }
     }
+    if (!a.quiet && !r.merc && in.geo.georef && !a.sharded)
+        fprintf(stderr, "roadsplat: note: %s: the raster tiling is the DEM's own pixel grid, not Web Mercator: "
+                        "web maps and MBTiles readers would misplace it (%s); --tiling mercator writes web-map "
+                        "tiles\n",
+                a.out, a.mbtiles ? "its roadsplat_manifest records the georeference" : "tiles.xml opens it in place with GDAL");
     if (!a.quiet)
         fprintf(stderr,
                 "roadsplat: tiles: %llu rendered, %llu written, %llu road-free not written, %llu kept from earlier runs, "
@@ -1861,6 +2039,7 @@ done:
     free(ih);
     cli_inputs_clear();
     rs_splatter_free(ctx, dsp);
+    cli_merc_close(r.merc);
     free(r.zfree);
     rs_splatter_free(ctx, sp);
     rs_road_grid_free(ctx, grid);

@@ -8,7 +8,11 @@
  * zoom z does; image y runs down, latitude up (lat = -y). Levels above
  * dense_max hold only tiles with roads: they are a second layer over the
  * complete levels, whose missing tiles stay transparent, so the coarser
- * picture shows through wherever no finer tile was written. */
+ * picture shows through wherever no finer tile was written.
+ *
+ * Mercator tiling (EPSG:3857 XYZ tiles): Leaflet's default CRS, the tiles
+ * at their geographic place, the same two layers; #Z/LAT/LON views. No
+ * basemap: the page loads nothing from the network. */
 #include "viewer.h"
 #include "cli.h"
 
@@ -71,6 +75,52 @@ static void put_escaped(FILE *f, const char *s)
     }
 }
 
+/* The attribution inside a JS string inside HTML: both escaped. */
+static void put_js_attribution(FILE *f, const char *s)
+{
+    for (; *s; s++) {
+        if (*s == '\\' || *s == '\'') fputc('\\', f);
+        if (*s == '<') fputs("&lt;", f);
+        else if (*s == '>') fputs("&gt;", f);
+        else if (*s == '&') fputs("&amp;", f);
+        else if (*s == '\n' || *s == '\r') fputc(' ', f);
+        else fputc(*s, f);
+    }
+}
+
+/* The script of a Web Mercator pyramid: Leaflet's default CRS (EPSG:3857). */
+static void mercator_script(FILE *f, const cli_viewer_info *v)
+{
+    fprintf(f, "var S = %u, zmin = %u, zmax = %u, zdense = %u, tms = %s;\n", v->tile, v->zmin, v->zmax, v->zdense,
+            v->tms ? "true" : "false");
+    fprintf(f, "var bounds = L.latLngBounds([%.12g, %.12g], [%.12g, %.12g]);\n", v->bounds[1], v->bounds[0],
+            v->bounds[3], v->bounds[2]);
+    /* Leaflet's zoom z is the XYZ zoom only for 256-pixel tiles: a 512 tile is
+     * shown at zoomOffset -1 */
+    fprintf(f, "var off = -Math.round(Math.log2(S / 256));\n");
+    fprintf(f, "var map = L.map('map', { minZoom: Math.max(0, zmin - off - 2), maxZoom: zmax - off + 2, zoomSnap: 0.25 });\n");
+    fprintf(f, "var opts = { tileSize: S, zoomOffset: off, tms: tms, bounds: bounds, minZoom: Math.max(0, zmin - off - 2),"
+               " maxZoom: zmax - off + 2 };\n");
+    fprintf(f, "// the complete levels, stretched beyond zdense; the sparse ones over them\n");
+    fprintf(f, "L.tileLayer('{z}/{x}/{y}.png', Object.assign({}, opts, { minNativeZoom: zmin - off, maxNativeZoom: zdense - off,"
+               " errorTileUrl: '', attribution: '");
+    put_js_attribution(f, v->attribution);
+    fprintf(f, "' })).addTo(map);\n");
+    fprintf(f, "if (zmax > zdense) L.tileLayer('{z}/{x}/{y}.png', Object.assign({}, opts, { minZoom: zdense + 1 - off,"
+               " minNativeZoom: zdense + 1 - off, maxNativeZoom: zmax - off, errorTileUrl: '' })).addTo(map);\n");
+    fprintf(f, "// #Z/LAT/LON: zoom Z centred there; else the whole map\n"
+               "var m = location.hash.match(/^#([\\d.]+)\\/(-?[\\d.]+)\\/(-?[\\d.]+)$/);\n"
+               "if (m) map.setView([+m[2], +m[3]], +m[1], { animate: false });\n"
+               "else map.fitBounds(bounds);\n"
+               "var touched = !!m;\n"
+               "['mousedown', 'wheel', 'touchstart', 'keydown'].forEach(function (e) {\n"
+               "  map.getContainer().addEventListener(e, function () { touched = true; }); });\n"
+               "map.on('resize', function () { if (!touched) map.fitBounds(bounds); });\n"
+               "map.on('moveend', function () { var c = map.getCenter();\n"
+               "  history.replaceState(null, '', '#' + map.getZoom() + '/' + c.lat.toFixed(7) + '/' + c.lng.toFixed(7)); });\n"
+               "map.setMaxBounds(bounds.pad(0.5));\n");
+}
+
 int cli_tiles_viewer(const char *outdir, const cli_viewer_info *v)
 {
     char *ldir = join2(outdir, "leaflet"), *idir = ldir ? join2(ldir, "images") : NULL;
@@ -109,6 +159,11 @@ int cli_tiles_viewer(const char *outdir, const cli_viewer_info *v)
                "<style>html, body, #map { height: 100%%; margin: 0; background: #ddd; }</style>\n"
                "<script src=\"leaflet/leaflet.js\"></script>\n</head>\n<body>\n<div id=\"map\"></div>\n<script>\n");
     fprintf(f, "// written by roadsplat tiles --viewer (docs/tiles.md, \"Viewer\")\n");
+    if (v->mercator) {
+        mercator_script(f, v);
+        fprintf(f, "</script>\n</body>\n</html>\n");
+        goto written;
+    }
     fprintf(f, "var S = %u, W = %u, H = %u, zmax = %u, zdense = %u, unit = %.17g, tms = %s;\n", v->tile, v->width,
             v->height, v->zmax, v->zdense, unit, v->tms ? "true" : "false");
     fprintf(f, "var Tiles = L.TileLayer.extend({ getTileUrl: function (c) {\n"
@@ -119,15 +174,7 @@ int cli_tiles_viewer(const char *outdir, const cli_viewer_info *v)
     fprintf(f, "var opts = { tileSize: S, noWrap: true, bounds: bounds, minZoom: 0, maxZoom: zmax + 2 };\n");
     fprintf(f, "// the complete levels, stretched beyond zdense; the sparse ones over them\n");
     fprintf(f, "new Tiles('', Object.assign({}, opts, { maxNativeZoom: zdense, attribution: '");
-    /* the attribution sits inside a JS string inside HTML: escape both */
-    for (const char *s = v->attribution; *s; s++) {
-        if (*s == '\\' || *s == '\'') fputc('\\', f);
-        if (*s == '<') fputs("&lt;", f);
-        else if (*s == '>') fputs("&gt;", f);
-        else if (*s == '&') fputs("&amp;", f);
-        else if (*s == '\n' || *s == '\r') fputc(' ', f);
-        else fputc(*s, f);
-    }
+    put_js_attribution(f, v->attribution);
     fprintf(f, "' })).addTo(map);\n");
     fprintf(f, "if (zmax > zdense) new Tiles('', Object.assign({}, opts, { minZoom: zdense + 1, maxNativeZoom: zmax,"
                " errorTileUrl: '' })).addTo(map);\n");
@@ -145,6 +192,7 @@ int cli_tiles_viewer(const char *outdir, const cli_viewer_info *v)
                "  history.replaceState(null, '', '#' + map.getZoom() + '/' + Math.round(c.lng * unit) + '/' + "
                "Math.round(-c.lat * unit)); });\n"
                "map.setMaxBounds(bounds.pad(0.5));\n</script>\n</body>\n</html>\n");
+written:
     if (fflush(f) != 0 || ferror(f)) {
         cli_error("%s: write failed: %s", o.path, strerror(errno ? errno : EIO));
         cli_out_abort(&o);

@@ -11,6 +11,9 @@ typedef struct cli_viewer_info {
     int tms;                /* file names count y up */
     const char *title;
     const char *attribution; /* plain text for the map's attribution line */
+    int mercator;            /* --tiling mercator: EPSG:3857 XYZ tiles, Leaflet's default CRS */
+    uint32_t zmin;           /* mercator: the first level written */
+    double bounds[4];        /* mercator: west, south, east, north (degrees) */
 } cli_viewer_info;
 
 /* Writes OUTDIR/index.html and OUTDIR/leaflet/ (from libjs-leaflet). 0, or

@@ -70,5 +70,50 @@ for dy in range(-20, 21, 5):
 assert worst <= 3, 'max difference %d' % worst
 PY
 fi
+
+# ---- --tiling mercator: Leaflet's default CRS, the tiles at their place ----------
+"$BIN" convert "$T/none.geojson" "$T/none.txt" 2>"$T/e"
+if grep -q "no GDAL support" "$T/e" || ! command -v gdal_translate >/dev/null 2>&1 || ! command -v gdaltransform >/dev/null 2>&1; then
+    echo "SKIP cli_viewer mercator: no GDAL (make deps installs libgdal-dev and gdal-bin)"
+else
+    python3 - "$T/dem.asc" <<'PY'
+import math, sys
+with open(sys.argv[1], 'w') as f:
+    f.write("ncols 81\nnrows 61\nxllcorner 300000\nyllcorner 5000000\ncellsize 10\n")
+    for j in range(61):
+        f.write(' '.join('%.2f' % (100 + 20 * math.sin(i * 0.1) + 15 * math.cos(j * 0.13)) for i in range(81)) + '\n')
+PY
+    gdal_translate -q -a_srs EPSG:32632 -ot Float32 "$T/dem.asc" "$T/dem.tif"
+    printf 'frame world EPSG:32632\nroad ns width 6\n300400 5000020\n300400 5000590\nend\n' >"$T/utm.txt"
+    "$BIN" tiles --quiet --tiling mercator --no-markings --viewer "$T/dem.tif" "$T/utm.txt" "$T/m" && ok || bad "mercator --viewer"
+    grep -q 'CRS.Simple' "$T/m/index.html" && bad "mercator viewer uses CRS.Simple" || ok
+    grep -q 'http' "$T/m/index.html" && bad "mercator index.html loads something from the network" || ok
+    if [ -n "$CH" ]; then
+        rm -rf "$T/t" && cp -r "$T/m" "$T/t" # shot() opens $T/t
+        shot "" "$T/mfit.png" 800 600 && python3 - "$T/mfit.png" <<PY && ok || bad "mercator fitted view shows no tiles"
+import sys
+sys.path.insert(0, '$PYDIR')
+from png_read import read
+w, h, c, d = read(sys.argv[1])
+green = sum(1 for i in range(0, w * h * c, c) if d[i + 1] > d[i] + 10 and d[i + 1] > d[i + 2] + 10)
+assert green > 0.2 * w * h, 'green %d of %d' % (green, w * h)
+PY
+        # centred on the road's longitude and latitude (gdaltransform) at the finest zoom: the centre is road
+        ll=$(echo "300400 5000300" | gdaltransform -s_srs EPSG:32632 -t_srs EPSG:4326)
+        set -- $ll
+        zmax=$(python3 -c "import json; print(json.load(open('$T/m/tiles.json'))['levels']['max'])")
+        shot "#$zmax/$2/$1" "$T/mroad.png" 400 300 && python3 - "$T/mroad.png" <<PY && ok || bad "mercator: the road is not at its place"
+import sys
+sys.path.insert(0, '$PYDIR')
+from png_read import read
+w, h, c, d = read(sys.argv[1])
+def grey(x, y):
+    i = (y * w + x) * c
+    return abs(d[i + 1] - d[i]) < 8
+assert grey(w // 2, h // 2) and grey(w // 2, h // 2 - 40), 'centre not road'
+assert not grey(w // 2 + 30, h // 2) and not grey(w // 2 - 30, h // 2), 'terrain beside it is grey too'
+PY
+    fi
+fi
 echo "cli_viewer: $pass passed, $fail failed"
 [ "$fail" = 0 ]
