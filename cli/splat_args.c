@@ -615,7 +615,8 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
     if (cli_geo_frame(ctx, in, s, dem_path, roads_path)) return 1;
     if (resolve_texels(s, in, dem_path)) return 1;
     if (in->geo.georef) { /* textures and asphalt on the world's pixel grid: DEM tiles of a map agree */
-        double px = in->geo.gt[1] / s->o.texels, x = (in->geo.gt[0] + in->geo.gt[1] / 2) / px,
+        /* texels 0 is the library's default of 8 (render and mesh leave it unset) */
+        double px = in->geo.gt[1] / (s->o.texels ? s->o.texels : 8), x = (in->geo.gt[0] + in->geo.gt[1] / 2) / px,
                y = -(in->geo.gt[3] + in->geo.gt[5] / 2) / px;
         if (fabs(x) < 1e15 && fabs(y) < 1e15) {
             s->o.surface.texel_offset_x = (int64_t)floor(x + 0.5);
