@@ -301,7 +301,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
         if (o.style.disable) continue;
-        if ((r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK) goto fail_msg;
+        if ((r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
     g->band = rs__calloc(ctx, nbands ? nbands : 1, RS_GPU_BAND_FLOATS * sizeof(float));
@@ -315,7 +315,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         /* wider than 2e15 m covers any map; the cap keeps it a float */
         double hw = fmin(0.5 * w, 1e15);
         memset(sty, 0, sizeof *sty);
-        if (!o.style.disable && (r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK)
+        if (!o.style.disable && (r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK)
             goto fail_msg;
         rd[0] = (float)sty->surface;
         rd[1] = ge_float(hw);
