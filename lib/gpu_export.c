@@ -242,7 +242,7 @@ static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     rs_result r = rs__markings_explicit(ctx, roads, atlas, pl, npl, &cap);
     if (r) return r;
     if (!o->markings.no_auto && rs__markings_auto_possible(roads))
-        return rs__markings_auto(ctx, dem, roads, atlas, pl, npl, &cap);
+        return rs__markings_auto(ctx, dem, roads, atlas, &o->style, pl, npl, &cap);
     return RS_OK;
 }
 
