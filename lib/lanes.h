@@ -33,4 +33,17 @@ void rs__section(rs_profile p, rs_road_class c, uint32_t *lanes, double *lane, d
                  double *strip_right);
 /* `driving_side=` of road i, or the default. */
 rs_driving_side rs__driving_side(const rs_roads *roads, size_t i, rs_driving_side side_default);
+
+/* Where the automatic markings interrupt their road's lane and centre
+ * lines (lib/markings_auto.c): between a stop or give-way line and the
+ * junction, and across a zebra. A rectangle in the local frame of the
+ * road field: u in [u0, u1] along (ux, uy) from (ax, ay), |v| <= r. */
+typedef struct rs__line_cut {
+    uint32_t road;
+    double ax, ay, ux, uy, u0, u1, r;
+} rs__line_cut;
+/* The cuts of the automatic markings the splat options place (none when
+ * they place none); *out is the caller's (rs__free). */
+rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                 rs__line_cut **out, size_t *n);
 #endif

@@ -26,6 +26,8 @@
  * beyond the half width, or past either end) or overlap a junction area. */
 #include "markings.h"
 #include "network.h"
+#include "lanes.h"
+#include "atlas.h"
 
 #include <math.h>
 #include <string.h>
@@ -43,6 +45,9 @@ typedef struct ctxa {
     rs_ctx *ctx;
     const rs_roads *roads;
     const rs_style_options *so; /* profile, default driving side (may be NULL) */
+    rs__line_cut *cuts;         /* where the markings interrupt their road's lines (NULL: not asked) */
+    size_t ncut, capcut;
+    int want_cuts;
     rs__road_local *rl; /* per road */
     double *box;        /* per road: x0 y0 x1 y1 */
     jn *j;
@@ -122,6 +127,50 @@ static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size
     return rs__placement_push(A->ctx, pl, n, cap, p);
 }
 
+/* The lane and centre lines of `road` stop over s in [s0, s1] within
+ * `half` of its centre line: one rectangle per segment the range meets
+ * (the first and last segments' reach past the road's ends). */
+static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half)
+{
+    if (!A->want_cuts || !(half > 0)) return RS_OK;
+    const rs__road_local *r = &A->rl[road];
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        double len = r->s[k + 1] - r->s[k], u0 = s0 - r->s[k], u1 = s1 - r->s[k];
+        if (!(len > 0)) continue;
+        if (k > 0 && u0 < 0) u0 = 0;
+        if (k + 2 < r->n && u1 > len) u1 = len;
+        if (!(u1 > u0)) continue;
+        if (A->ncut == A->capcut) {
+            size_t nc = A->capcut ? 2 * A->capcut : 16;
+            rs__line_cut *q = rs__realloc(A->ctx, A->cuts, nc * sizeof *q);
+            if (!q) return RS_ERR_NOMEM;
+            A->cuts = q;
+            A->capcut = nc;
+        }
+        double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], d = hypot(dx, dy);
+        rs__line_cut *c = &A->cuts[A->ncut++];
+        c->road = (uint32_t)road;
+        c->ax = r->x[k];
+        c->ay = r->y[k];
+        c->ux = dx / d;
+        c->uy = dy / d;
+        c->u0 = u0;
+        c->u1 = u1;
+        c->r = half;
+    }
+    return RS_OK;
+}
+
+/* Half the width the cuts take: clear of the outer lanes' edges, where the
+ * edge lines lie. */
+#define CUT_EDGE_CLEAR 0.3
+
+static double cut_half(const rs_road_lanes *L)
+{
+    double a = L->lane[0].t_left, b = -L->lane[L->count - 1].t_right;
+    return (a < b ? a : b) - CUT_EDGE_CLEAR;
+}
+
 /* RS_TURN_* flags to an arrow type name, or NULL (none). Left-hand
  * traffic turns back to the right. */
 static const char *arrow_for(uint32_t f, int left_hand)
@@ -174,7 +223,7 @@ static rs_result repeat_across(const ctxa *A, const rs_atlas *atlas, long ti, si
 #define ZEBRA_GAP 0.5        /* Fussgaengerueberweg: 0.50 m bars, 0.50 m gaps */
 #define ZEBRA_MARGIN 0.2     /* zebra bars stay this far inside the road edges */
 
-static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
+static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
                             const double end_half[2], const int end_minor[2], rs__placement **pl, size_t *n,
                             size_t *cap)
 {
@@ -213,11 +262,14 @@ static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, cons
         double edge = e == 1 ? total - end_half[e] : end_half[e]; /* the junction area's near side */
         double dir = e == 1 ? -1 : 1;                             /* towards the road's inside */
         if (end_minor[e]) {
+            size_t before = *n;
+            double lead = 0; /* the line's extent along the road */
             int stop = ctrl && !strcmp(ctrl, "stop");
             long ti = rs_atlas_find(atlas, stop ? "stop_line" : us ? "yield_tooth" : "give_way_block");
             if (ti >= 0 && !stop) {
                 /* repeated at its standard size, never stretched */
                 double len = atlas->t[ti].length, s = edge + dir * (LINE_GAP + len / 2);
+                lead = len;
                 if (repeat_across(A, atlas, ti, i, flip, s, t0, t1, us ? MUTCD_TOOTH_GAP : RMS_BLOCK_GAP, pl, n, cap))
                     return RS_ERR_NOMEM;
             } else {
@@ -228,8 +280,16 @@ static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, cons
                     p.width = t1 - t0;
                     p.s = edge + dir * (LINE_GAP + p.length / 2);
                     p.t = (t0 + t1) / 2;
+                    lead = p.length;
                     if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
                 }
+            }
+            /* the lane and centre lines end at the line's far side from the
+             * junction and do not run on into it */
+            if (*n > before) {
+                double near = edge + dir * (LINE_GAP + lead), reach = end_half[e] + L.width;
+                if (add_cut(A, i, e == 1 ? near : -reach, e == 1 ? total + reach : near, cut_half(&L)))
+                    return RS_ERR_NOMEM;
             }
         }
         /* turn arrows, centred in their lanes */
@@ -274,8 +334,9 @@ int rs__markings_auto_possible(const rs_roads *roads)
     return 0;
 }
 
-rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
-                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap)
+static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                           const rs_style_options *so, rs__line_cut **cuts, size_t *ncut, rs__placement **pl,
+                           size_t *n, size_t *cap)
 {
     size_t nr = rs_roads_count(roads);
     if (!rs__markings_auto_possible(roads)) return RS_OK;
@@ -284,6 +345,7 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     A.ctx = ctx;
     A.roads = roads;
     A.so = so;
+    A.want_cuts = cuts != NULL;
     A.rl = rs__calloc(ctx, nr ? nr : 1, sizeof *A.rl);
     if (!A.rl) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory placing markings");
     rs_result r = RS_OK;
@@ -370,8 +432,14 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         double y = rs__local_coord(xy[2 * pt + 1], dem->frame.origin_y, per_unit);
         nearest(&A.rl[ri], x, y, &s);
         if (zb >= 0) {
-            double m = w / 2 - ZEBRA_MARGIN;
+            double m = w / 2 - ZEBRA_MARGIN, len = atlas->t[zb].length;
+            size_t before = *n;
             r = repeat_across(&A, atlas, zb, ri, 0, s, -m, m, ZEBRA_GAP, pl, n, cap);
+            if (!r && *n > before && A.want_cuts) { /* lane lines are interrupted at the zebra */
+                rs_road_lanes L;
+                rs_road_lanes_get(roads, ri, so, &L);
+                r = add_cut(&A, ri, s - len / 2, s + len / 2, cut_half(&L));
+            }
             continue;
         }
         rs__placement p;
@@ -384,11 +452,70 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         if (p.width > 0) r = offer(&A, &p, pl, n, cap);
     }
     if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory placing markings");
+    if (cuts && !r) {
+        *cuts = A.cuts;
+        *ncut = A.ncut;
+        A.cuts = NULL;
+    }
+    rs__free(ctx, A.cuts);
     for (size_t i = 0; i < nr; i++) rs__road_local_free(ctx, &A.rl[i]);
     rs__free(ctx, A.rl);
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
     rs__free(ctx, endj);
     rs__free(ctx, endh);
+    return r;
+}
+
+rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap)
+{
+    return auto_core(ctx, dem, roads, atlas, so, NULL, NULL, pl, n, cap);
+}
+
+/* The sizes of the built-in atlas's line and crossing types (tests/tools/
+ * atlasgen.c; test_lanes checks them against rs_atlas_default): where the
+ * automatic lines go depends on sizes alone, not on the sprites' pixels,
+ * so the cuts need no atlas images. */
+static const struct {
+    const char *name;
+    double length, width;
+} default_sizes[] = { { "stop_line", 0.5, 3.5 },       { "give_way_line", 0.5, 3.5 }, { "give_way_block", 0.5, 0.5 },
+                      { "yield_tooth", 0.6858, 0.4572 }, { "zebra_bar", 4.0, 0.5 },    { "zebra", 4.0, 6.0 } };
+
+static rs_result sizes_atlas(rs_ctx *ctx, rs_atlas *a)
+{
+    size_t n = sizeof default_sizes / sizeof default_sizes[0];
+    a->t = rs__calloc(ctx, n, sizeof *a->t);
+    if (!a->t) return RS_ERR_NOMEM;
+    for (size_t k = 0; k < n; k++) {
+        memcpy(a->t[k].name, default_sizes[k].name, strlen(default_sizes[k].name) + 1);
+        a->t[k].length = default_sizes[k].length;
+        a->t[k].width = default_sizes[k].width;
+    }
+    a->n = n;
+    return RS_OK;
+}
+
+rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                 rs__line_cut **out, size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    if (o->markings.disable || o->markings.no_auto || !rs__markings_auto_possible(roads)) return RS_OK;
+    rs_atlas own;
+    memset(&own, 0, sizeof own);
+    const rs_atlas *atlas = o->markings.atlas;
+    rs_result r = RS_OK;
+    if (!atlas) {
+        r = sizes_atlas(ctx, &own);
+        atlas = &own;
+    }
+    rs__placement *pl = NULL;
+    size_t n = 0, cap = 0;
+    if (!r) r = auto_core(ctx, dem, roads, atlas, &o->style, out, nout, &pl, &n, &cap);
+    rs__free(ctx, pl);
+    rs__free(ctx, own.t);
+    if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
     return r;
 }

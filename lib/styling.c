@@ -5,6 +5,7 @@
 #include "roadfield.h"
 #include "surfimg.h"
 #include "style.h"
+#include "lanes.h"
 
 #include <math.h>
 #include <string.h>
@@ -223,7 +224,15 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.pixel = fp.pixel;
         lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
         lp.net = net;
-        if ((r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines)) != RS_OK) goto fail_dash;
+        /* lane and centre lines stop at the automatic stop lines and zebras */
+        rs__line_cut *cuts = NULL;
+        size_t ncuts = 0;
+        if ((r = rs__markings_line_cuts(ctx, dem, roads, o, &cuts, &ncuts)) != RS_OK) goto fail_dash;
+        lp.cuts = cuts;
+        lp.ncuts = ncuts;
+        r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
+        rs__free(ctx, cuts);
+        if (r != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }
     if (ncasing) {
