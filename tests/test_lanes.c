@@ -37,6 +37,8 @@ static const uint8_t grey_px[4] = { 60, 60, 60, 255 };
 
 /* Render `text` over a flat dw x dh DEM (1 m cells): with lines and
  * markings (`paint`) or without either. */
+static const rs_atlas *render_atlas; /* NULL: the built-in one */
+
 static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile, int paint, int no_auto, img *im)
 {
     float *z = calloc((size_t)dw * dh, sizeof *z);
@@ -54,6 +56,7 @@ static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile
     o.style.disable = !paint;
     o.markings.disable = !paint;
     o.markings.no_auto = no_auto;
+    o.markings.atlas = render_atlas;
     memset(im, 0, sizeof *im);
     if (ok) ok = rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK;
     if (ok) {
@@ -278,6 +281,77 @@ static void test_standard_sizes(void)
     }
 }
 
+/* Lane lines end at the stop line and are interrupted at a zebra. The
+ * lines are measured with the markings drawn from an atlas of the same
+ * sizes whose sprites are transparent (so the automatic markings are
+ * placed, and cut the lines, but paint nothing); the stop line's edge
+ * from the built-in atlas. */
+static void test_line_ends(void)
+{
+    static const char text[] =
+        "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n60 20\nend\n"
+        "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
+    static uint8_t clear[8 * 8 * 4];
+    static const char index[] = "stop_line 0 0 8 8 0.5 3.5\ngive_way_line 0 0 8 8 0.5 3.5\n"
+                                "give_way_block 0 0 8 8 0.5 0.5\nzebra_bar 0 0 8 8 4 0.5\n";
+    rs_image im = { 8, 8, clear };
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_create(ctx, &im, index, sizeof index - 1, &atlas) == RS_OK);
+    double *real = NULL, *lines = NULL, *cut = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &real, &lines, &w, &h));
+    render_atlas = atlas;
+    CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &cut, NULL, &w, &h));
+    render_atlas = NULL;
+    if (!real || !lines || !cut) goto done;
+    {
+        /* the side road's solid centre line (4 lanes) at x = 30 m: where it
+         * ends towards the junction */
+        run C[8];
+        int nc = runs(cut, w, 0, 300, 205, 400, C, 8);
+        CHECK(nc >= 1);
+        /* the stop line's edge towards the drivers: the stop line alone
+         * (real minus the lines) in the middle of the outer approach lane */
+        size_t n = (size_t)w * h;
+        double *mk = malloc(n * sizeof *mk);
+        for (size_t i = 0; i < n; i++) mk[i] = real[i] - lines[i] > 0.01 ? real[i] - lines[i] : 0;
+        run S[8];
+        int ns = runs(mk, w, 0, 300 + 45, 205, 300, S, 8); /* x = 34.5 m: the outer forward lane (t < 0) */
+        CHECK(ns >= 1);
+        if (nc >= 1 && ns >= 1) {
+            double end = C[0].lo, edge = S[ns - 1].hi;
+            CHECKF(fabs(end - edge) <= 0.1, "the centre line ends at y = %.3f m, the stop line's edge is at %.3f m",
+                   end, edge);
+            printf("line end: centre line ends at y = %.3f m, stop line edge %.3f m\n", end, edge);
+        }
+        free(mk);
+        /* the main road's centre line at y = 20 m: a gap over the zebra
+         * (x = 8 .. 12 m) and none elsewhere before the junction; the edge
+         * lines run on */
+        run Z[8];
+        int nz = runs(cut, w, 1, 200, 0, 230, Z, 8);
+        CHECKF(nz == 2, "%d runs of the centre line", nz);
+        if (nz == 2) {
+            CHECKF(fabs(Z[0].hi - 8) <= 0.1 && fabs(Z[1].lo - 12) <= 0.1, "centre line gap %.3f .. %.3f m", Z[0].hi,
+                   Z[1].lo);
+            printf("zebra: centre line gap %.3f .. %.3f m (the zebra: 8 .. 12 m)\n", Z[0].hi, Z[1].lo);
+        }
+        for (uint32_t y = 140; y < 260; y++) {
+            int edge_row = 0;
+            for (uint32_t x = 0; x < 230; x++) edge_row += lines[(size_t)y * w + x] > 0.9;
+            if (edge_row < 225) continue; /* a solid line the whole way in the lines alone: an edge or centre line */
+            int cut_row = 0;
+            for (uint32_t x = 0; x < 230; x++) cut_row += cut[(size_t)y * w + x] > 0.9;
+            if (y > 150 && y < 250 && (y < 195 || y > 205)) CHECKF(cut_row >= 225, "edge line row %u cut (%d px)", y, cut_row);
+        }
+    }
+done:
+    free(real);
+    free(lines);
+    free(cut);
+    rs_atlas_free(ctx, atlas);
+}
+
 /* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
 static void mirror_turns(const char *in, char *out, size_t cap)
 {
@@ -464,6 +538,7 @@ int main(void)
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_arrows_and_stop_line();
     test_standard_sizes();
+    test_line_ends();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX
