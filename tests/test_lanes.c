@@ -527,6 +527,24 @@ static void test_lane_queries(void)
                      sl.line[j].dash_count == sr.line[k].dash_count;
         CHECK(found);
     }
+    /* the built-in sizes the line cuts assume (lib/markings_auto.c
+     * default_sizes) are the built-in atlas's */
+    rs_atlas *at = NULL;
+    CHECK(rs_atlas_default(ctx, &at) == RS_OK);
+    static const struct {
+        const char *name;
+        double length, width;
+    } sz[] = { { "stop_line", 0.5, 3.5 },         { "give_way_line", 0.5, 3.5 }, { "give_way_block", 0.5, 0.5 },
+               { "yield_tooth", 0.6858, 0.4572 }, { "zebra_bar", 4.0, 0.5 },     { "zebra", 4.0, 6.0 },
+               { "arrow_uturn_right", 5.0, 1.6 } };
+    for (size_t k = 0; k < sizeof sz / sizeof sz[0]; k++) {
+        long ti = rs_atlas_find(at, sz[k].name);
+        double len = 0, wid = 0;
+        CHECKF(ti >= 0 && rs_atlas_get(at, (size_t)ti, NULL, &len, &wid, NULL, NULL) == RS_OK &&
+                   len == sz[k].length && wid == sz[k].width,
+               "atlas type %s", sz[k].name);
+    }
+    rs_atlas_free(ctx, at);
     rq.driving_side = (rs_driving_side)2;
     CHECK(rs_style_default(&rq, &sl) == RS_ERR_INVALID_ARG);
     rs_roads_free(ctx, roads);
