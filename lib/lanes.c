@@ -8,7 +8,6 @@
 #include "network.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 #define DIR_MAX 16 /* lanes per direction (as `lanes=`) */
@@ -89,11 +88,12 @@ static int width_list(const char *v, uint32_t n, double *w)
 {
     if (!v || entries(v) != n) return 0;
     for (uint32_t k = 0; k < n; k++) {
-        char *end;
-        double x = strtod(v, &end);
-        if (end == v || !(x > 0 && x <= 100) || (*end != '|' && *end != '\0')) return 0;
+        const char *bar = strchr(v, '|'), *e = bar ? bar : v + strlen(v), *stop;
+        double x;
+        /* locale-independent, the whole entry */
+        if (!rs__parse_double(v, e, &x, &stop) || stop != e || !(x > 0 && x <= 100)) return 0;
         w[k] = x;
-        v = *end ? end + 1 : end;
+        v = bar ? bar + 1 : e;
     }
     return 1;
 }
