@@ -385,7 +385,7 @@ static void test_mirror(rs_profile profile)
         "road side width 9 class=secondary area=rural lanes=3 lanes:backward=1 turn:lanes=%s control=stop%s\n"
         "%g 40\n%g 20\nend\n"
         "road north width 7 class=residential turn:lanes:forward=%s%s\n%g 0\n%g 20\nend\n"
-        "road oneway width 8 class=tertiary oneway=yes lanes=2 turn:lanes=%s%s\n%g 40\n%g 20\nend\n";
+        "road oneway width 8 class=secondary area=rural oneway=yes lanes=2 turn:lanes=%s%s\n%g 40\n%g 20\nend\n";
     const char *t_main = "through|through;right", *t_side = "left|through", *t_north = "reverse", *t_one = "left|right";
     char m_main[256], m_side[256], m_north[256], m_one[256];
     mirror_turns(t_main, m_main, sizeof m_main);
