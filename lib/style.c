@@ -752,6 +752,15 @@ static void default_style(const rs_style_request *req, const rs__lanes_in *in, r
         add_line(out, first, e, us && ow && !left ? us_yellow : white, 0, 0);
         add_line(out, second, e, us && ow && left ? us_yellow : white, 0, 0);
     }
+    /* many lanes of one direction in a narrow road put the centre line's
+     * double yellow near an edge: keep every line inside the road */
+    for (uint32_t k = 0; k < out->line_count; k++) {
+        rs_style_line *l = &out->line[k];
+        double lim = hw - l->width / 2;
+        if (lim < 0) lim = 0;
+        if (l->offset > lim) l->offset = lim;
+        if (l->offset < -lim) l->offset = -lim;
+    }
 }
 
 static void request_input(const rs_style_request *req, rs__lanes_in *in)

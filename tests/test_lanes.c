@@ -549,6 +549,80 @@ static void test_lane_queries(void)
     CHECK(rs_style_default(&rq, &sl) == RS_ERR_INVALID_ARG);
     rs_roads_free(ctx, roads);
 }
+
+/* Random lane attributes (valid and not): the model always holds its
+ * invariants, left-hand traffic is the exact mirror of right-hand, and the
+ * default style's lines stay inside the road. */
+static uint32_t rnd_state = 12345;
+static uint32_t rnd(uint32_t n)
+{
+    rnd_state = rnd_state * 1664525u + 1013904223u;
+    return (rnd_state >> 8) % n;
+}
+
+static void test_random_lanes(void)
+{
+    static const char *const classes[] = { "motorway", "trunk", "primary", "secondary", "tertiary",
+                                           "residential", "service", "track", "path", "footway", "cycleway" };
+    static const char *const ow[] = { NULL, "yes", "no", "-1" };
+    static const char *const counts[] = { NULL, "1", "2", "3", "4", "7", "16", "17", "0", "x", "08" };
+    static const char *const turns[] = { NULL, "left", "left|through", "through;right|right", "reverse|left|through",
+                                         "|", "none|none|none|none", "left|left|left|left|left|left|left|left|left" };
+    static const char *const widths[] = { NULL, "3", "3|3.5", "2.75|3|3.25", "3,5|3", "1e3|2", "3|", "0.5|0.5|0.5|0.5" };
+    int bad = 0;
+    for (int it = 0; it < 3000; it++) {
+        rs_roads *roads = NULL;
+        double xy[4] = { 0, 0, 50, 0 };
+        double w = 2 + rnd(200) / 10.0;
+        if (rs_roads_create(ctx, &roads) != RS_OK) return;
+        rs_roads_add(ctx, roads, "r", w, xy, 2);
+        rs_roads_set_attr(ctx, roads, 0, "class", classes[rnd(11)]);
+        const char *v;
+        if ((v = ow[rnd(4)])) rs_roads_set_attr(ctx, roads, 0, "oneway", v);
+        if ((v = counts[rnd(8)])) rs_roads_set_attr(ctx, roads, 0, "lanes", v);
+        if ((v = counts[rnd(11)])) rs_roads_set_attr(ctx, roads, 0, "lanes:forward", v);
+        if ((v = counts[rnd(11)])) rs_roads_set_attr(ctx, roads, 0, "lanes:backward", v);
+        if ((v = turns[rnd(8)])) rs_roads_set_attr(ctx, roads, 0, "turn:lanes", v);
+        if ((v = turns[rnd(8)])) rs_roads_set_attr(ctx, roads, 0, "turn:lanes:backward", v);
+        /* lists (turn:, width:lanes) read from the driver's left on either
+         * side: only the rest is a mirror */
+        int listed = (v = widths[rnd(8)]) != NULL;
+        if (listed) rs_roads_set_attr(ctx, roads, 0, "width:lanes", v);
+        rs_style_options so;
+        memset(&so, 0, sizeof so);
+        so.profile = rnd(2) ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
+        rs_road_lanes R, L;
+        CHECK(rs_road_lanes_get(roads, 0, &so, &R) == RS_OK);
+        so.driving_side = RS_DRIVING_LEFT;
+        CHECK(rs_road_lanes_get(roads, 0, &so, &L) == RS_OK);
+        int ok = R.count >= 1 && R.count <= RS_LANES_MAX && L.count == R.count && R.width == w &&
+                 R.forward + R.backward <= R.count && fabs(R.lane[0].t_left) <= w / 2 + 1e-9 &&
+                 fabs(R.lane[R.count - 1].t_right) <= w / 2 + 1e-9;
+        for (uint32_t k = 0; ok && k < R.count; k++) {
+            const rs_lane *a = &R.lane[k], *b = &L.lane[R.count - 1 - k];
+            ok = a->t_left > a->t_right && (k == 0 || a->t_left == R.lane[k - 1].t_right) &&
+                 b->direction == a->direction &&
+                 (listed || (fabs(b->t_left + a->t_right) < 1e-9 && fabs(b->t_right + a->t_left) < 1e-9));
+        }
+        rs_style st;
+        so.driving_side = (rs_driving_side)rnd(2);
+        ok = ok && rs_road_style_ex(ctx, roads, 0, &so, &st) == RS_OK;
+        for (uint32_t k = 0; ok && k < st.line_count; k++)
+            ok = fabs(st.line[k].offset) + st.line[k].width / 2 <= w / 2 + 1e-9;
+        if (!ok && bad++ < 5) {
+            fprintf(stderr, "    random lanes case %d (width %g):", it, w);
+            for (size_t k = 0; k < rs_roads_attr_count(roads, 0); k++) {
+                const char *key, *val;
+                rs_roads_attr_at(roads, 0, k, &key, &val);
+                fprintf(stderr, " %s=%s", key, val);
+            }
+            fprintf(stderr, "\n");
+        }
+        CHECK(ok);
+        rs_roads_free(ctx, roads);
+    }
+}
+
 #endif
 
 int main(void)
@@ -561,6 +635,7 @@ int main(void)
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX
     test_lane_queries();
+    test_random_lanes();
 #endif
     rs_ctx_free(ctx);
     return th_finish("test_lanes");
