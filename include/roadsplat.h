@@ -1002,7 +1002,15 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   per level RS_GPU_LEVEL_INTS: first texel in atlas_px, w, h, 0;
  *   atlas_px: RGBA floats, rgb premultiplied 0..255, a 0..1, row-major,
  *   row 0 = the sprite's top (the way the road runs), exactly the CPU's mip
- *   chains (sampled trilinearly, transparent outside each level). */
+ *   chains (sampled trilinearly, transparent outside each level).
+ * - cut (issue 27): where a road's lane and centre lines stop (between an
+ *   automatic stop or give-way line and the junction, across a zebra):
+ *   first 4 floats per road, the index of its first cut record (in
+ *   RS_GPU_CUT_FLOATS units after the road part) and its cut count, 0, 0;
+ *   then RS_GPU_CUT_FLOATS per cut, road by road: ax, ay, ux, uy (a
+ *   segment's start and unit direction), u0, u1 (the cut along it), r (its
+ *   lines within |t| <= r are cut), 0. A band's part inside |t| <= r loses
+ *   the pixel's share of u0 <= (p - a).u <= u1. */
 #define RS_GPU_SEG_FLOATS 12
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
@@ -1011,6 +1019,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_MARK_FLOATS 12
 #define RS_GPU_TYPE_INTS 2
 #define RS_GPU_LEVEL_INTS 4
+#define RS_GPU_CUT_FLOATS 8
 
 typedef struct rs_gpu_options {
     double cell;   /* index cell, metres; 0 -> automatic (the DEM cell, grown to at most 2^22 cells) */
@@ -1030,6 +1039,8 @@ typedef struct rs_gpu_scene {
     uint32_t *types, *levels;          /* ntypes * RS_GPU_TYPE_INTS, nlevels * RS_GPU_LEVEL_INTS */
     float *atlas_px;                   /* atlas_texels * 4 */
     size_t bytes;
+    size_t ncuts;                      /* line cuts (issue 27) */
+    float *cut;                        /* 4 * max(nroads, 1) + ncuts * RS_GPU_CUT_FLOATS */
 } rs_gpu_scene;
 
 /* Export `roads` over `dem` with the styles and markings that the splat
