@@ -550,6 +550,42 @@ static void test_lane_queries(void)
     rs_roads_free(ctx, roads);
 }
 
+/* The GPU export carries the line cuts: per road its range, per cut a
+ * unit direction and a positive range; the stop line's road has them, the
+ * through road only its zebra's. */
+static void test_gpu_cuts(void)
+{
+    static const char text[] =
+        "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n60 20\nend\n"
+        "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
+    float z[61 * 41];
+    memset(z, 0, sizeof z);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = NULL;
+    CHECK(rs_dem_create(ctx, 61, 41, z, &dem) == RS_OK);
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
+    if (g) {
+        CHECK(g->ncuts >= 2 && g->cut);
+        size_t total = 0;
+        for (size_t r = 0; r < g->nroads; r++) {
+            size_t first = (size_t)g->cut[4 * r], n = (size_t)g->cut[4 * r + 1];
+            CHECK(n == 0 || first == total);
+            total += n;
+            CHECK(n >= 1); /* main: the zebra; side: the stop line */
+            for (size_t k = first; k < first + n && k < g->ncuts; k++) {
+                const float *c = g->cut + 4 * g->nroads + RS_GPU_CUT_FLOATS * k;
+                CHECK(fabs(hypot(c[2], c[3]) - 1) < 1e-5 && c[5] > c[4] && c[6] > 0);
+            }
+        }
+        CHECK_EQ_INT(total, g->ncuts);
+    }
+    rs_gpu_scene_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
 /* Random lane attributes (valid and not): the model always holds its
  * invariants, left-hand traffic is the exact mirror of right-hand, and the
  * default style's lines stay inside the road. */
@@ -636,6 +672,7 @@ int main(void)
 #ifdef RS_LANES_MAX
     test_lane_queries();
     test_random_lanes();
+    test_gpu_cuts();
 #endif
     rs_ctx_free(ctx);
     return th_finish("test_lanes");
