@@ -72,15 +72,24 @@ static rs_road_class road_class_of(const rs_roads *roads, size_t i)
     return info.road_class;
 }
 
+/* Room for one more of `n` items of `size` bytes in *arr (capacity *cap,
+ * doubled, first `first`); 0 when out of memory. */
+static int room_for_one(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first)
+{
+    if (n < *cap) return 1;
+    size_t nc = *cap ? 2 * *cap : first;
+    void *q = rs__realloc(ctx, *arr, nc * size);
+    if (!q) return 0;
+    *arr = q;
+    *cap = nc;
+    return 1;
+}
+
 static rs_result add_jn(ctxa *A, size_t road, double s, double half)
 {
-    if (A->nj == A->capj) {
-        size_t nc = A->capj ? 2 * A->capj : 64;
-        jn *q = rs__realloc(A->ctx, A->j, nc * sizeof *q);
-        if (!q) return RS_ERR_NOMEM;
-        A->j = q;
-        A->capj = nc;
-    }
+    void *arr = A->j;
+    if (!room_for_one(A->ctx, &arr, A->nj, &A->capj, sizeof *A->j, 64)) return RS_ERR_NOMEM;
+    A->j = arr;
     A->j[A->nj].road = road;
     A->j[A->nj].s = s;
     A->j[A->nj].half = half;
@@ -140,13 +149,9 @@ static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half
         if (k > 0 && u0 < 0) u0 = 0;
         if (k + 2 < r->n && u1 > len) u1 = len;
         if (!(u1 > u0)) continue;
-        if (A->ncut == A->capcut) {
-            size_t nc = A->capcut ? 2 * A->capcut : 16;
-            rs__line_cut *q = rs__realloc(A->ctx, A->cuts, nc * sizeof *q);
-            if (!q) return RS_ERR_NOMEM;
-            A->cuts = q;
-            A->capcut = nc;
-        }
+        void *arr = A->cuts;
+        if (!room_for_one(A->ctx, &arr, A->ncut, &A->capcut, sizeof *A->cuts, 16)) return RS_ERR_NOMEM;
+        A->cuts = arr;
         double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], d = hypot(dx, dy);
         rs__line_cut *c = &A->cuts[A->ncut++];
         c->road = (uint32_t)road;

@@ -17,6 +17,7 @@
  * road attribute), so they build there and fail; the queries are new. */
 #include "roadsplat.h"
 #include "harness.h"
+#include "scene_splat.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -44,7 +45,6 @@ static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile
     float *z = calloc((size_t)dw * dh, sizeof *z);
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
-    rs_splatter *s = NULL;
     rs_image tex = { 1, 1, grey_px };
     int ok = z && rs_dem_create(ctx, dw, dh, z, &dem) == RS_OK &&
              rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK;
@@ -58,13 +58,7 @@ static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile
     o.markings.no_auto = no_auto;
     o.markings.atlas = render_atlas;
     memset(im, 0, sizeof *im);
-    if (ok) ok = rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK;
-    if (ok) {
-        rs_splatter_size(s, &im->w, &im->h);
-        im->rgba = malloc((size_t)im->w * im->h * 4);
-        ok = im->rgba && rs_splat_window(ctx, s, 0, 0, im->w, im->h, im->rgba, (size_t)im->w * 4, NULL, 0, NULL) == RS_OK;
-    }
-    rs_splatter_free(ctx, s);
+    if (ok) ok = ss_splat_window(ctx, dem, roads, &o, &im->w, &im->h, &im->rgba) == RS_OK;
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
     free(z);
