@@ -47,6 +47,8 @@ static const char usage_text[] =
     "                        per-class overrides; the road file may hold some too\n"
     "  --profile rms|us      built-in road styles and lane widths: German RMS\n"
     "                        (default) or US MUTCD markings\n"
+    "  --driving-side left|right  traffic side for roads without driving_side=\n"
+    "                        (default right): lanes, arrows, stop lines mirrored\n"
     "  --aa exact|hermite    line anti-aliasing: exact pixel area (default) or the\n"
     "                        seed's Hermite smoothing\n"
     "  --no-styles           draw every road unstyled (no casings, fills or lines)\n"

@@ -48,6 +48,7 @@ static const char *const rsh_fs_src[] = {
     "uniform usamplerBuffer u_types;\n" /* 2 per type */
     "uniform usamplerBuffer u_levels;\n" /* RGBA32UI per level; level 0: .w = the type's first u_atlas entry */
     "uniform isamplerBuffer u_atlas;\n" /* per type (h + 1) x (w + 1) summed-area corners: 255 x premultiplied r g b a */
+    "uniform samplerBuffer u_cut;\n"   /* per road: first cut, count; then 2 texels per cut (lines stop) */
     "uniform vec4 u_grid;\n"           /* x0, y0, 1 / cell, reach */
     "uniform ivec2 u_gdim;\n"
     "uniform int u_lighting;\n"
@@ -211,11 +212,22 @@ static const char *const rsh_fs_src[] = {
     "    vec4 Ft = fp(nt), Fs = fp(tg);\n"
     "    float base = ef * cut;\n"
     "    if (!(base > 0.0)) return;\n"
+    /* the road's line cuts (stop lines, zebras; lib/markings_auto.c) */
+    "    int nr = textureSize(u_roadt) / 6;\n"
+    "    vec4 cr = texelFetch(u_cut, road); int c0 = nr + 2 * int(cr.x), nc = int(cr.y);\n"
     "    for (int j = 0; j < nb; j++) {\n"
     "        int bi = 5 * (b0 + j);\n"
     "        vec4 B0 = texelFetch(u_band, bi), col = texelFetch(u_band, bi + 1);\n"
     "        float lo = B0.x - 0.5 * B0.y, hi = B0.x + 0.5 * B0.y;\n"
     "        float cov = cdfp(hi - t, Ft) - cdfp(lo - t, Ft);\n"
+    "        for (int c = 0; c < nc && cov > 0.0; c++) {\n"
+    "            vec4 C0 = texelFetch(u_cut, c0 + 2 * c), C1 = texelFetch(u_cut, c0 + 2 * c + 1);\n"
+    "            float l2 = max(lo, -C1.z), h2 = min(hi, C1.z);\n"
+    "            if (!(h2 > l2)) continue;\n"
+    "            float u = dot(p - C0.xy, C0.zw);\n"
+    "            float al = cdfp(C1.y - u, Fs) - cdfp(C1.x - u, Fs);\n"
+    "            if (al > 0.0) cov = max(cov - al * (cdfp(h2 - t, Ft) - cdfp(l2 - t, Ft)), 0.0);\n"
+    "        }\n"
     "        if (!(cov > 0.0)) continue;\n"
     "        int nd = int(texelFetch(u_band, bi + 2).x);\n"
     "        if (nd > 0 && B0.w > 0.0) {\n"

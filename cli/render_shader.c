@@ -61,7 +61,7 @@ typedef struct rsh_gl {
 } rsh_gl;
 
 enum { BUF_SEG, BUF_CSTART, BUF_CSEG, BUF_ROAD, BUF_BAND, BUF_MARK, BUF_MSTART, BUF_MIDS, BUF_TYPES, BUF_LEVELS,
-       BUF_ATLAS, NBUF };
+       BUF_ATLAS, BUF_CUT, NBUF };
 
 struct rsh_renderer {
     OSMesaContext osm;
@@ -336,6 +336,7 @@ int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, c
             { g->types, (g->ntypes ? g->ntypes : 1) * RS_GPU_TYPE_INTS * sizeof(uint32_t), GL_R32UI },
             { lev, (g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof(uint32_t), GL_RGBA32UI },
             { sat, (sat_n ? sat_n : 1) * 4 * sizeof(int32_t), GL_RGBA32I },
+            { g->cut, (4 * (g->nroads ? g->nroads : 1) + RS_GPU_CUT_FLOATS * g->ncuts) * sizeof(float), GL_RGBA32F },
         };
         GLint maxbuf = 0;
         glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxbuf);
@@ -461,7 +462,7 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
     r->gl.Uniform2f(r->gl.GetUniformLocation(p, "u_fogr"), (float)v->fog_start, (float)v->fog_end);
     r->gl.Uniform3f(r->gl.GetUniformLocation(p, "u_fogc"), 0.78f, 0.85f, 0.93f);
     static const char *const names[NBUF] = { "u_seg", "u_cstart", "u_cseg", "u_roadt", "u_band", "u_mark",
-                                             "u_mstart", "u_mids", "u_types", "u_levels", "u_atlas" };
+                                             "u_mstart", "u_mids", "u_types", "u_levels", "u_atlas", "u_cut" };
     r->gl.ActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, r->tex_terrain);
     r->gl.Uniform1i(r->gl.GetUniformLocation(p, "u_terrain"), 0);

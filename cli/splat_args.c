@@ -62,7 +62,7 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
                                          "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
                                          "--atlas-index", "--no-auto-markings", "--no-markings", "--layer", "--where",
                                          "--strict", "--pixel-size", "--color-relief", "--max-field-work",
-                                         "--max-atlas-mb", "--gdal-trust", "--max-image-pixels" };
+                                         "--max-atlas-mb", "--gdal-trust", "--max-image-pixels", "--driving-side" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
@@ -174,6 +174,10 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
         if (!strcmp(v, "rms") || !strcmp(v, "de")) o->style.profile = RS_PROFILE_RMS;
         else if (!strcmp(v, "us") || !strcmp(v, "mutcd")) o->style.profile = RS_PROFILE_MUTCD;
         else { cli_error("%s: '%s' is not 'rms' (Germany) or 'us' (MUTCD)", name, v); return 1; }
+    } else if (!strcmp(name, "--driving-side")) {
+        if (!strcmp(v, "right")) o->style.driving_side = RS_DRIVING_RIGHT;
+        else if (!strcmp(v, "left")) o->style.driving_side = RS_DRIVING_LEFT;
+        else { cli_error("%s: '%s' is not 'left' or 'right'", name, v); return 1; }
     } else if (!strcmp(name, "--aa")) {
         if (!strcmp(v, "exact")) o->style.aa = RS_LINE_AA_EXACT;
         else if (!strcmp(v, "hermite")) o->style.aa = RS_LINE_AA_HERMITE;

@@ -389,6 +389,14 @@ RS_API const rs_style *rs_styles_get(const rs_styles *styles, size_t i);
 /* The style called `name`, or NULL. Same lifetime as rs_styles_get. */
 RS_API const rs_style *rs_styles_find(const rs_styles *styles, const char *name);
 
+/* Which side of the road traffic keeps to (issue 27). The road attribute
+ * `driving_side=left|right` wins over the default given in the options
+ * (rs_style_options.driving_side, all-zero = right). */
+typedef enum rs_driving_side {
+    RS_DRIVING_RIGHT = 0, /* right-hand traffic (continental Europe, the Americas) */
+    RS_DRIVING_LEFT = 1   /* left-hand traffic (UK, Japan, Australia, ...): everything side-dependent mirrored */
+} rs_driving_side;
+
 /* What a built-in default style is made for. All-zero fields take the
  * defaults shown. */
 typedef struct rs_style_request {
@@ -399,6 +407,11 @@ typedef struct rs_style_request {
     rs_profile profile;
     double width;             /* road width, metres, 0..2000: the lanes are laid out
                                  in it (scaled to fit); 0 -> rs_style_default_width */
+    /* Lanes per direction (two-way roads; `lanes:forward`, `lanes:backward`):
+     * 0 -> from `lanes` (half, rounded down, against the points), else 1..16 each;
+     * when both are given they override `lanes`. */
+    uint32_t lanes_forward, lanes_backward;
+    rs_driving_side driving_side;
 } rs_style_request;
 
 /* Built-in default style for `req` (tables and sources in
@@ -416,6 +429,13 @@ RS_API rs_result rs_style_default_width(const rs_style_request *req, double *wid
  * `style=` name found nowhere gives RS_ERR_INVALID_ARG naming the road. */
 RS_API rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_styles *styles,
                                rs_profile profile, rs_style *out);
+struct rs_style_options;
+/* rs_road_style with all style options (NULL: defaults): also takes the
+ * default driving side (opts->driving_side) for roads without a
+ * `driving_side=` attribute. rs_road_style uses right-hand traffic for
+ * those. */
+RS_API rs_result rs_road_style_ex(rs_ctx *ctx, const rs_roads *roads, size_t i,
+                                  const struct rs_style_options *opts, rs_style *out);
 
 /* ---------------------------------------------------------------------------
  * Splatting (docs/design.md): a prepared, immutable splatter renders any
@@ -523,6 +543,9 @@ typedef struct rs_style_options {
     rs_profile profile;      /* built-in styles' standard: RS_PROFILE_RMS (0) or RS_PROFILE_MUTCD */
     rs_line_aa aa;           /* line anti-aliasing */
     int disable;             /* non-zero: every road unstyled (no casing, fill or line) */
+    rs_driving_side driving_side; /* default for roads without `driving_side=`: lanes, centre
+                                     and edge lines, stop and give-way lines and arrows
+                                     (docs/road-format.md "Lanes") */
     /* The decoded images of the styles' `surface IMG` (docs/surface.md):
      * one entry per name, matched byte for byte against
      * rs_style.surface_image. Copied when the grid is built (mipmaps in
@@ -696,6 +719,51 @@ RS_API rs_result rs_network_road_stroke(const rs_network *net, size_t road, rs_r
  * indices into `roads` (may be NULL when cap is 0) and returns the
  * stroke's record count (0 for k out of range). */
 RS_API size_t rs_network_stroke_roads(const rs_network *net, size_t k, uint32_t *roads, size_t cap);
+
+/* Lanes (issue 27; docs/road-format.md "Lanes"): the cross-section of a
+ * road record from `lanes`, `lanes:forward`, `lanes:backward`, `oneway`,
+ * `turn:lanes(:forward|:backward)`, `width:lanes(:forward|:backward)`,
+ * `driving_side` and the class defaults of the profile. Lanes are listed
+ * across the road from its left edge (t = +width/2, left of the direction
+ * of its points) to its right edge; t as everywhere (SPEC). */
+#define RS_LANES_MAX 32
+/* rs_lane.turn: arrows of one `turn:lanes` entry */
+#define RS_TURN_THROUGH 1u
+#define RS_TURN_LEFT 2u    /* left, slight_left, sharp_left */
+#define RS_TURN_RIGHT 4u   /* right, slight_right, sharp_right */
+#define RS_TURN_REVERSE 8u
+
+typedef struct rs_lane {
+    double t_left, t_right; /* the lane's edges, metres from the centreline (t_left > t_right) */
+    int direction;          /* +1: traffic along the points, -1: against them, 0: both ways
+                               (the one lane of a single-lane two-way road) */
+    uint32_t turn;          /* RS_TURN_* flags, 0: none given */
+} rs_lane;
+
+typedef struct rs_road_lanes {
+    uint32_t count;             /* lanes, 1 .. RS_LANES_MAX */
+    uint32_t forward, backward; /* lanes with direction +1 and -1 */
+    rs_driving_side side;       /* the side in effect (attribute or default) */
+    double width;               /* the road's width, metres */
+    double centre;              /* t of the boundary between the two directions (two-way roads
+                                   with lanes both ways), else 0 */
+    rs_lane lane[RS_LANES_MAX]; /* lane[0 .. count-1] from the left edge to the right */
+} rs_road_lanes;
+
+/* The lanes of road i (opts: profile and default driving side; NULL:
+ * defaults). Filled into the caller's *out (no allocation); malformed
+ * lane attributes are ignored (class defaults instead), as documented.
+ * RS_ERR_INVALID_ARG if i is out of range or out is NULL. */
+RS_API rs_result rs_road_lanes_get(const rs_roads *roads, size_t i, const struct rs_style_options *opts,
+                                   rs_road_lanes *out);
+/* The lanes at arc length s along stroke k of net (built from `roads`):
+ * the record there (*road, may be NULL) and its lanes seen in the
+ * stroke's direction (a record drawn against its points has its lanes
+ * mirrored and directions negated, so +1 is along the stroke). s is
+ * clamped to the stroke. RS_ERR_INVALID_ARG for k out of range, roads not
+ * the network's or out NULL. */
+RS_API rs_result rs_network_lanes_at(const rs_network *net, const rs_roads *roads, size_t k, double s,
+                                     const struct rs_style_options *opts, size_t *road, rs_road_lanes *out);
 
 /* A marking atlas: an RGBA image and its index (one line per type, `NAME X
  * Y W H LENGTH WIDTH`: the type's pixel rectangle and its size in metres
@@ -941,7 +1009,15 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   per level RS_GPU_LEVEL_INTS: first texel in atlas_px, w, h, 0;
  *   atlas_px: RGBA floats, rgb premultiplied 0..255, a 0..1, row-major,
  *   row 0 = the sprite's top (the way the road runs), exactly the CPU's mip
- *   chains (sampled trilinearly, transparent outside each level). */
+ *   chains (sampled trilinearly, transparent outside each level).
+ * - cut (issue 27): where a road's lane and centre lines stop (between an
+ *   automatic stop or give-way line and the junction, across a zebra):
+ *   first 4 floats per road, the index of its first cut record (in
+ *   RS_GPU_CUT_FLOATS units after the road part) and its cut count, 0, 0;
+ *   then RS_GPU_CUT_FLOATS per cut, road by road: ax, ay, ux, uy (a
+ *   segment's start and unit direction), u0, u1 (the cut along it), r (its
+ *   lines within |t| <= r are cut), 0. A band's part inside |t| <= r loses
+ *   the pixel's share of u0 <= (p - a).u <= u1. */
 #define RS_GPU_SEG_FLOATS 12
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
@@ -950,6 +1026,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_MARK_FLOATS 12
 #define RS_GPU_TYPE_INTS 2
 #define RS_GPU_LEVEL_INTS 4
+#define RS_GPU_CUT_FLOATS 8
 
 typedef struct rs_gpu_options {
     double cell;   /* index cell, metres; 0 -> automatic (the DEM cell, grown to at most 2^22 cells) */
@@ -969,6 +1046,8 @@ typedef struct rs_gpu_scene {
     uint32_t *types, *levels;          /* ntypes * RS_GPU_TYPE_INTS, nlevels * RS_GPU_LEVEL_INTS */
     float *atlas_px;                   /* atlas_texels * 4 */
     size_t bytes;
+    size_t ncuts;                      /* line cuts (issue 27) */
+    float *cut;                        /* 4 * max(nroads, 1) + ncuts * RS_GPU_CUT_FLOATS */
 } rs_gpu_scene;
 
 /* Export `roads` over `dem` with the styles and markings that the splat

@@ -7,6 +7,7 @@
 #include "atlas.h"
 #include "linesym.h"
 #include "markings.h"
+#include "lanes.h"
 #include "roadfield.h"
 
 #include <float.h>
@@ -168,6 +169,7 @@ void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *g)
     rs__free(ctx, g->types);
     rs__free(ctx, g->levels);
     rs__free(ctx, g->atlas_px);
+    rs__free(ctx, g->cut);
     rs__free(ctx, g);
 }
 
@@ -358,7 +360,7 @@ static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     rs_result r = rs__markings_explicit(ctx, roads, atlas, pl, npl, &cap);
     if (r) return r;
     if (!o->markings.no_auto && rs__markings_auto_possible(roads))
-        return rs__markings_auto(ctx, dem, roads, atlas, pl, npl, &cap);
+        return rs__markings_auto(ctx, dem, roads, atlas, &o->style, pl, npl, &cap);
     return RS_OK;
 }
 
@@ -420,7 +422,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
         if (o.style.disable) continue;
-        if ((r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK) goto fail_msg;
+        if ((r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
     g->band = rs__calloc(ctx, nbands ? nbands : 1, RS_GPU_BAND_FLOATS * sizeof(float));
@@ -438,7 +440,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         /* wider than 2e15 m covers any map; the cap keeps it a float */
         double hw = fmin(0.5 * w, 1e15);
         memset(sty, 0, sizeof *sty);
-        if (!o.style.disable && (r = rs_road_style(ctx, roads, i, o.style.styles, o.style.profile, sty)) != RS_OK)
+        if (!o.style.disable && (r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK)
             goto fail_msg;
         rd[0] = (float)sty->surface;
         rd[1] = ge_float(hw);
@@ -614,13 +616,47 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         g->mark_ids = rs__alloc_array(ctx, 1, sizeof *g->mark_ids);
         if (!g->mark_start || !g->mark_ids) { r = RS_ERR_NOMEM; goto fail; }
     }
+    /* the lines' cuts at stop lines and zebras, as the CPU's line symbols
+     * take them (lib/styling.c) */
+    if (!o.style.disable) {
+        rs__line_cut *cuts = NULL;
+        size_t nc = 0;
+        if ((r = rs__markings_line_cuts(ctx, dem, roads, &o, &cuts, &nc)) != RS_OK) goto fail_msg;
+        g->cut = rs__calloc(ctx, 4 * (n ? n : 1) + RS_GPU_CUT_FLOATS * nc, sizeof(float));
+        if (!g->cut) {
+            rs__free(ctx, cuts);
+            r = RS_ERR_NOMEM;
+            goto fail;
+        }
+        g->ncuts = nc;
+        /* road by road (a counting sort on the road's cut count) */
+        for (size_t k = 0; k < nc; k++) g->cut[4 * cuts[k].road + 1] += 1;
+        size_t at = 0;
+        for (size_t i = 0; nc && i < n; i++) {
+            g->cut[4 * i] = (float)at;
+            at += (size_t)g->cut[4 * i + 1];
+            g->cut[4 * i + 1] = 0;
+        }
+        for (size_t k = 0; k < nc; k++) {
+            float *rc = g->cut + 4 * cuts[k].road;
+            float *c = g->cut + 4 * n + RS_GPU_CUT_FLOATS * ((size_t)rc[0] + (size_t)rc[1]);
+            rc[1] += 1;
+            const rs__line_cut *q = &cuts[k];
+            c[0] = (float)q->ax, c[1] = (float)q->ay, c[2] = (float)q->ux, c[3] = (float)q->uy;
+            c[4] = ge_float(q->u0), c[5] = ge_float(q->u1), c[6] = ge_float(q->r), c[7] = 0;
+        }
+        rs__free(ctx, cuts);
+    }
+    if (!g->cut) g->cut = rs__calloc(ctx, 4 * (n ? n : 1), sizeof(float));
+    if (!g->cut) { r = RS_ERR_NOMEM; goto fail; }
     if (!g->mark) g->mark = rs__calloc(ctx, 1, RS_GPU_MARK_FLOATS * sizeof(float));
     if (!g->types) g->types = rs__calloc(ctx, 1, RS_GPU_TYPE_INTS * sizeof(uint32_t));
     if (!g->levels) g->levels = rs__calloc(ctx, 1, RS_GPU_LEVEL_INTS * sizeof(uint32_t));
     if (!g->atlas_px) g->atlas_px = rs__calloc(ctx, 1, 4 * sizeof(float));
     if (!g->mark || !g->types || !g->levels || !g->atlas_px) { r = RS_ERR_NOMEM; goto fail; }
     g->bytes = sizeof *g + (g->nseg * RS_GPU_SEG_FLOATS + g->nroads * RS_GPU_ROAD_FLOATS +
-                            g->nbands * RS_GPU_BAND_FLOATS + g->nmarks * RS_GPU_MARK_FLOATS + g->atlas_texels * 4) *
+                            g->nbands * RS_GPU_BAND_FLOATS + g->nmarks * RS_GPU_MARK_FLOATS + g->atlas_texels * 4 +
+                            4 * (n ? n : 1) + RS_GPU_CUT_FLOATS * g->ncuts) *
                                sizeof(float) +
                (2 * (ncell + 1) + g->nseg_entries + g->nmark_entries + g->ntypes * RS_GPU_TYPE_INTS +
                 g->nlevels * RS_GPU_LEVEL_INTS) * sizeof(uint32_t);

@@ -2,6 +2,7 @@
  * areas (lib/linesym.h; docs/linesym.md). */
 #include "linesym.h"
 #include "network.h"
+#include "lanes.h"
 
 #include <float.h>
 #include <math.h>
@@ -112,6 +113,10 @@ struct rs__linesym {
     uint32_t nband;
     double *dash;
     size_t bytes;
+    /* while building: the cuts of each road (p->cuts[cut_ord[cut_start[r] ..
+     * cut_start[r + 1])]) */
+    const rs__line_cut *cuts;
+    uint32_t *cut_start, *cut_ord;
 };
 
 /* ------------------------------------------------------------------------
@@ -832,6 +837,44 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
     return RS_OK;
 }
 
+/* Push P less the cuts of its road (lib/lanes.h: its lane and centre
+ * lines stop at a stop line, across a zebra), then cut at the junctions.
+ * Like a junction cut, a cut that would split P into too many pieces
+ * leaves it whole. */
+static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
+{
+    if (!L->cut_start || L->cut_start[road] == L->cut_start[road + 1]) return push_cut(ctx, L, J, P, road);
+    enum { QMAX = 16 };
+    ls_piece q[QMAX], next[QMAX], tmp[4];
+    uint32_t nq = 1;
+    q[0] = *P;
+    for (uint32_t e = L->cut_start[road]; e < L->cut_start[road + 1]; e++) {
+        const rs__line_cut *c = &L->cuts[L->cut_ord[e]];
+        ls_surf Q;
+        memset(&Q, 0, sizeof Q);
+        Q.ax = c->ax, Q.ay = c->ay, Q.ux = c->ux, Q.uy = c->uy, Q.u0 = c->u0, Q.u1 = c->u1, Q.r = c->r;
+        uint32_t nn = 0;
+        int full = 0;
+        for (uint32_t a = 0; a < nq && !full; a++) {
+            int m = cut_piece(&q[a], &Q, tmp);
+            if (m < 0) {
+                if (nn < QMAX) next[nn++] = q[a];
+                else full = 1;
+            } else if (nn + (uint32_t)m > QMAX) full = 1;
+            else
+                for (int b = 0; b < m; b++) next[nn++] = tmp[b];
+        }
+        if (full) continue;
+        memcpy(q, next, nn * sizeof *q);
+        nq = nn;
+    }
+    for (uint32_t a = 0; a < nq; a++) {
+        rs_result r = push_cut(ctx, L, J, &q[a], road);
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
 /* Pieces of one band along one road or stroke. pts: n distinct
  * consecutive local points, s: arc length at each, seg_road: the record
  * of each segment (for the junction cuts). */
@@ -918,7 +961,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         }
         P.len = hi - lo;
         piece_box(L, &P, P.len, a, b);
-        rs_result r = push_cut(ctx, L, J, &P, seg_road[i]);
+        rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
     /* Round joins: the outer side of each interior vertex. */
@@ -971,7 +1014,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         double pp = L->pixel * L->pixel; /* 0 only for a subnormal pixel: no shortcut then */
         P.warea = pp > 0 ? 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / pp : 0;
         piece_box(L, &P, 0, 0, 0);
-        rs_result r = push_cut(ctx, L, J, &P, seg_road[i]);
+        rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
     return RS_OK;
@@ -1323,6 +1366,8 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
     rs__free(ctx, L->hpp);
     rs__free(ctx, L->band);
     rs__free(ctx, L->dash);
+    rs__free(ctx, L->cut_start);
+    rs__free(ctx, L->cut_ord);
     rs__free(ctx, L);
 }
 
@@ -1404,6 +1449,17 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         }
         d0 += B->ndash;
     }
+    if (p->ncuts) { /* the cuts by road (a counting sort) */
+        L->cuts = p->cuts;
+        L->cut_start = rs__calloc(ctx, nroads + 2, sizeof *L->cut_start);
+        L->cut_ord = rs__alloc_array(ctx, p->ncuts, sizeof *L->cut_ord);
+        if (!L->cut_start || !L->cut_ord) { res = RS_ERR_NOMEM; goto fail; }
+        for (size_t k = 0; k < p->ncuts; k++)
+            if (p->cuts[k].road < nroads) L->cut_start[p->cuts[k].road + 2]++;
+        for (size_t r = 0; r < nroads; r++) L->cut_start[r + 2] += L->cut_start[r + 1];
+        for (size_t k = 0; k < p->ncuts; k++)
+            if (p->cuts[k].road < nroads) L->cut_ord[L->cut_start[p->cuts[k].road + 1]++] = (uint32_t)k;
+    }
     double per_unit = rs__local_quantum(p->cell_size);
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     size_t cap = 0, total = 0;
@@ -1482,8 +1538,12 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     }
     rs__free(ctx, L->pb); /* built */
     rs__free(ctx, L->ids);
+    rs__free(ctx, L->cut_start);
+    rs__free(ctx, L->cut_ord);
     L->pb = NULL;
     L->ids = NULL;
+    L->cut_start = L->cut_ord = NULL;
+    L->cuts = NULL;
     L->cap = 0;
     L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ent + L->npc * sizeof *L->pp +
                4 * nhpp * sizeof *L->hpp + nband * sizeof *L->band +

@@ -52,6 +52,9 @@ typedef struct rs__linesym_params {
     const rs_network *net;     /* NULL: every road alone. Else the roads' network: each stroke is drawn
                                   as one polyline with the bands of its first record (every record of a
                                   stroke draws alike), so a road split into records draws as one */
+    const struct rs__line_cut *cuts; /* where a road's lane and centre lines stop (lib/lanes.h: stop lines,
+                                        zebras); read while building */
+    size_t ncuts;
 } rs__linesym_params;
 
 typedef struct rs__linesym rs__linesym; /* immutable after build; safe to read from many threads */

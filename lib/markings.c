@@ -622,7 +622,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     size_t npl = 0, cap = 0;
     if (!r) r = rs__markings_explicit(ctx, roads, atlas, &pl, &npl, &cap);
     size_t n_explicit = npl;
-    if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &pl, &npl, &cap);
+    if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &o->style, &pl, &npl, &cap);
     if (!r && npl > ctx->limits.max_points) /* ~0.5 KB each: a total, as for road points */
         r = rs__fail(ctx, RS_ERR_LIMIT, "markings: more than %llu markings (explicit and automatic; the budget is "
                      "rs_limits.max_points)", (unsigned long long)ctx->limits.max_points);

@@ -139,9 +139,10 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
 int rs__markings_auto_possible(const rs_roads *roads);
 
 /* Automatic placement (lib/markings_auto.c): appends to *pl (capacity
- * *cap, count *n). */
+ * *cap, count *n). `so`: the style options (profile, default driving
+ * side; NULL: defaults). */
 rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
-                            rs__placement **pl, size_t *n, size_t *cap);
+                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap);
 rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t *cap, const rs__placement *p);
 /* The road file's `mark` records as placements (appended to *pl; atlas
  * sizes where a record gives none); a type missing from the atlas is an

@@ -26,6 +26,8 @@
  * beyond the half width, or past either end) or overlap a junction area. */
 #include "markings.h"
 #include "network.h"
+#include "lanes.h"
+#include "atlas.h"
 
 #include <math.h>
 #include <string.h>
@@ -42,6 +44,10 @@ typedef struct jn {
 typedef struct ctxa {
     rs_ctx *ctx;
     const rs_roads *roads;
+    const rs_style_options *so; /* profile, default driving side (may be NULL) */
+    rs__line_cut *cuts;         /* where the markings interrupt their road's lines (NULL: not asked) */
+    size_t ncut, capcut;
+    int want_cuts;
     rs__road_local *rl; /* per road */
     double *box;        /* per road: x0 y0 x1 y1 */
     jn *j;
@@ -66,15 +72,24 @@ static rs_road_class road_class_of(const rs_roads *roads, size_t i)
     return info.road_class;
 }
 
+/* Room for one more of `n` items of `size` bytes in *arr (capacity *cap,
+ * doubled, first `first`); 0 when out of memory. */
+static int room_for_one(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first)
+{
+    if (n < *cap) return 1;
+    size_t nc = *cap ? 2 * *cap : first;
+    void *q = rs__realloc(ctx, *arr, nc * size);
+    if (!q) return 0;
+    *arr = q;
+    *cap = nc;
+    return 1;
+}
+
 static rs_result add_jn(ctxa *A, size_t road, double s, double half)
 {
-    if (A->nj == A->capj) {
-        size_t nc = A->capj ? 2 * A->capj : 64;
-        jn *q = rs__realloc(A->ctx, A->j, nc * sizeof *q);
-        if (!q) return RS_ERR_NOMEM;
-        A->j = q;
-        A->capj = nc;
-    }
+    void *arr = A->j;
+    if (!room_for_one(A->ctx, &arr, A->nj, &A->capj, sizeof *A->j, 64)) return RS_ERR_NOMEM;
+    A->j = arr;
     A->j[A->nj].road = road;
     A->j[A->nj].s = s;
     A->j[A->nj].half = half;
@@ -121,26 +136,52 @@ static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size
     return rs__placement_push(A->ctx, pl, n, cap, p);
 }
 
-/* One `turn:lanes` entry to an arrow type name, or NULL (none). */
-static const char *arrow_for(const char *v, size_t n)
+/* The lane and centre lines of `road` stop over s in [s0, s1] within
+ * `half` of its centre line: one rectangle per segment the range meets
+ * (the first and last segments' reach past the road's ends). */
+static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half)
 {
-    int left = 0, right = 0, through = 0, reverse = 0;
-    for (size_t i = 0; i < n;) {
-        size_t j = i;
-        while (j < n && v[j] != ';') j++;
-        size_t k = j - i;
-        const char *w = v + i;
-        if ((k == 4 && !memcmp(w, "left", 4)) || (k == 11 && !memcmp(w, "slight_left", 11)) ||
-            (k == 10 && !memcmp(w, "sharp_left", 10)))
-            left = 1;
-        else if ((k == 5 && !memcmp(w, "right", 5)) || (k == 12 && !memcmp(w, "slight_right", 12)) ||
-                 (k == 11 && !memcmp(w, "sharp_right", 11)))
-            right = 1;
-        else if (k == 7 && !memcmp(w, "through", 7)) through = 1;
-        else if (k == 7 && !memcmp(w, "reverse", 7)) reverse = 1;
-        i = j + 1;
+    if (!A->want_cuts || !(half > 0)) return RS_OK;
+    const rs__road_local *r = &A->rl[road];
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        double len = r->s[k + 1] - r->s[k], u0 = s0 - r->s[k], u1 = s1 - r->s[k];
+        if (!(len > 0)) continue;
+        if (k > 0 && u0 < 0) u0 = 0;
+        if (k + 2 < r->n && u1 > len) u1 = len;
+        if (!(u1 > u0)) continue;
+        void *arr = A->cuts;
+        if (!room_for_one(A->ctx, &arr, A->ncut, &A->capcut, sizeof *A->cuts, 16)) return RS_ERR_NOMEM;
+        A->cuts = arr;
+        double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], d = hypot(dx, dy);
+        rs__line_cut *c = &A->cuts[A->ncut++];
+        c->road = (uint32_t)road;
+        c->ax = r->x[k];
+        c->ay = r->y[k];
+        c->ux = dx / d;
+        c->uy = dy / d;
+        c->u0 = u0;
+        c->u1 = u1;
+        c->r = half;
     }
-    if (reverse) return "arrow_uturn";
+    return RS_OK;
+}
+
+/* Half the width the cuts take: clear of the outer lanes' edges, where the
+ * edge lines lie. */
+#define CUT_EDGE_CLEAR 0.3
+
+static double cut_half(const rs_road_lanes *L)
+{
+    double a = L->lane[0].t_left, b = -L->lane[L->count - 1].t_right;
+    return (a < b ? a : b) - CUT_EDGE_CLEAR;
+}
+
+/* RS_TURN_* flags to an arrow type name, or NULL (none). Left-hand
+ * traffic turns back to the right. */
+static const char *arrow_for(uint32_t f, int left_hand)
+{
+    int left = !!(f & RS_TURN_LEFT), right = !!(f & RS_TURN_RIGHT), through = !!(f & RS_TURN_THROUGH);
+    if (f & RS_TURN_REVERSE) return left_hand ? "arrow_uturn_right" : "arrow_uturn";
     if (through && left && !right) return "arrow_straight_left";
     if (through && right && !left) return "arrow_straight_right";
     if (through && !left && !right) return "arrow_straight";
@@ -163,65 +204,115 @@ static rs__placement sprite_at(const rs_atlas *atlas, long ti, size_t road, int 
     return p;
 }
 
-static rs_result place_road(const ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
+/* Elements of atlas type ti (own size), repeated across [t0, t1] with
+ * `gap` between them: as many as fit, the run centred in the span. */
+static rs_result repeat_across(const ctxa *A, const rs_atlas *atlas, long ti, size_t road, int flip, double s,
+                               double t0, double t1, double gap, rs__placement **pl, size_t *n, size_t *cap)
+{
+    rs__placement p = sprite_at(atlas, ti, road, flip);
+    double span = t1 - t0, period = p.width + gap;
+    if (!(span >= p.width) || !(period > 0)) return RS_OK;
+    size_t m = (size_t)floor((span + gap) / period + 1e-9);
+    double run = m * period - gap, start = t0 + (span - run) / 2;
+    p.s = s;
+    for (size_t k = 0; k < m; k++) {
+        p.t = start + k * period + p.width / 2;
+        if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
+    }
+    return RS_OK;
+}
+
+/* Standard sizes (docs/road-format.md "Marking elements"). */
+#define RMS_BLOCK_GAP 0.25   /* Wartelinie: 0.50 m blocks, 0.25 m gaps */
+#define MUTCD_TOOTH_GAP 0.1524 /* 3B.16: 6 in between 18 in teeth */
+#define ZEBRA_GAP 0.5        /* Fussgaengerueberweg: 0.50 m bars, 0.50 m gaps */
+#define ZEBRA_MARGIN 0.2     /* zebra bars stay this far inside the road edges */
+
+static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
                             const double end_half[2], const int end_minor[2], rs__placement **pl, size_t *n,
                             size_t *cap)
 {
     const rs__road_local *r = &A->rl[i];
     if (r->n < 2) return RS_OK;
-    double w, total = r->s[r->n - 1];
-    rs_roads_get(A->roads, i, NULL, &w, NULL, NULL);
-    rs_road_info info;
-    rs_roads_get_info(A->roads, i, &info);
-    int oneway = info.oneway == RS_ONEWAY_YES || (info.oneway == RS_ONEWAY_NONE && info.road_class == RS_CLASS_MOTORWAY);
-    int reverse = info.oneway == RS_ONEWAY_REVERSE;
+    double total = r->s[r->n - 1];
+    rs_road_lanes L;
+    rs_road_lanes_get(A->roads, i, A->so, &L);
+    const double hw = L.width / 2;
+    const int left_hand = L.side == RS_DRIVING_LEFT, us = A->so && A->so->profile == RS_PROFILE_MUTCD;
     const char *ctrl = rs_roads_get_attr(A->roads, i, "control");
-    const char *turn = rs_roads_get_attr(A->roads, i, "turn:lanes");
     for (int e = 0; e < 2; e++) {
         if (!end_junction[e]) continue;
         /* traffic arriving at end e: at the last point (e = 1) it travels
-         * with the road (flip 0, incoming half on the right, t < 0) */
-        int flip = e == 0;
-        if ((oneway && e == 0) || (reverse && e == 1)) continue;
-        int whole = oneway || reverse;
-        double half_w = whole ? w / 2 : w / 4; /* half the incoming width */
-        double tc = whole ? 0 : (flip ? w / 4 : -w / 4);
+         * with the points (lanes of direction +1, flip 0) */
+        int arrive = e == 1 ? 1 : -1, flip = e == 0;
+        /* the approach: its lanes, out to the kerb on the outer side and to
+         * the centre line on the inner side */
+        double t0 = INFINITY, t1 = -INFINITY;
+        for (uint32_t k = 0; k < L.count; k++) {
+            const rs_lane *ln = &L.lane[k];
+            double a = ln->t_right, b = ln->t_left;
+            if (ln->direction == 0) { /* one lane both ways: its approach half */
+                int plus = (arrive > 0) == left_hand;
+                a = plus ? 0 : -hw;
+                b = plus ? hw : 0;
+            } else if (ln->direction != arrive) continue;
+            else {
+                if (k == 0) b = hw;
+                if (k + 1 == L.count) a = -hw;
+            }
+            if (a < t0) t0 = a;
+            if (b > t1) t1 = b;
+        }
+        if (!(t1 > t0)) continue; /* a one-way road leaving here */
         double edge = e == 1 ? total - end_half[e] : end_half[e]; /* the junction area's near side */
         double dir = e == 1 ? -1 : 1;                             /* towards the road's inside */
         if (end_minor[e]) {
-            long ti = rs_atlas_find(atlas, ctrl && !strcmp(ctrl, "stop") ? "stop_line" : "give_way_line");
-            if (ti >= 0) {
-                rs__placement p = sprite_at(atlas, ti, i, flip);
-                p.width = 2 * half_w - 0.2;
-                p.s = edge + dir * (LINE_GAP + p.length / 2);
-                p.t = tc;
-                if (p.width > 0 && offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
-            }
-        }
-        if (turn && e == (reverse ? 0 : 1)) {
-            size_t lanes = 1;
-            for (const char *c = turn; *c; c++) lanes += *c == '|';
-            double lw = 2 * half_w / (double)lanes, left = tc + (flip ? -half_w : half_w);
-            const char *v = turn;
-            for (size_t k = 0; k < lanes; k++) {
-                const char *bar = strchr(v, '|');
-                size_t len = bar ? (size_t)(bar - v) : strlen(v);
-                const char *type = arrow_for(v, len);
-                long ti = type ? rs_atlas_find(atlas, type) : -1;
+            size_t before = *n;
+            double lead = 0; /* the line's extent along the road */
+            int stop = ctrl && !strcmp(ctrl, "stop");
+            long ti = rs_atlas_find(atlas, stop ? "stop_line" : us ? "yield_tooth" : "give_way_block");
+            if (ti >= 0 && !stop) {
+                /* repeated at its standard size, never stretched */
+                double len = atlas->t[ti].length, s = edge + dir * (LINE_GAP + len / 2);
+                lead = len;
+                if (repeat_across(A, atlas, ti, i, flip, s, t0, t1, us ? MUTCD_TOOTH_GAP : RMS_BLOCK_GAP, pl, n, cap))
+                    return RS_ERR_NOMEM;
+            } else {
+                /* a stop line, or an atlas without the elements: one line across */
+                if (ti < 0) ti = rs_atlas_find(atlas, stop ? "stop_line" : "give_way_line");
                 if (ti >= 0) {
                     rs__placement p = sprite_at(atlas, ti, i, flip);
-                    if (p.width > 0.8 * lw) {
-                        p.length *= 0.8 * lw / p.width;
-                        p.width = 0.8 * lw;
-                    }
-                    p.s = edge + dir * (ARROW_GAP + p.length / 2);
-                    /* lanes from the driver's left: left of travel is +t unflipped */
-                    p.t = flip ? left + (k + 0.5) * lw : left - (k + 0.5) * lw;
+                    p.width = t1 - t0;
+                    p.s = edge + dir * (LINE_GAP + p.length / 2);
+                    p.t = (t0 + t1) / 2;
+                    lead = p.length;
                     if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
                 }
-                if (!bar) break;
-                v = bar + 1;
             }
+            /* the lane and centre lines end at the line's far side from the
+             * junction and do not run on into it */
+            if (*n > before) {
+                double near = edge + dir * (LINE_GAP + lead), reach = end_half[e] + L.width;
+                if (add_cut(A, i, e == 1 ? near : -reach, e == 1 ? total + reach : near, cut_half(&L)))
+                    return RS_ERR_NOMEM;
+            }
+        }
+        /* turn arrows, centred in their lanes */
+        for (uint32_t k = 0; k < L.count; k++) {
+            const rs_lane *ln = &L.lane[k];
+            if (ln->direction != arrive || !ln->turn) continue;
+            const char *type = arrow_for(ln->turn, left_hand);
+            long ti = type ? rs_atlas_find(atlas, type) : -1;
+            if (ti < 0) continue;
+            double lw = ln->t_left - ln->t_right;
+            rs__placement p = sprite_at(atlas, ti, i, flip);
+            if (p.width > 0.8 * lw) {
+                p.length *= 0.8 * lw / p.width;
+                p.width = 0.8 * lw;
+            }
+            p.s = edge + dir * (ARROW_GAP + p.length / 2);
+            p.t = (ln->t_left + ln->t_right) / 2;
+            if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
         }
     }
     return RS_OK;
@@ -231,7 +322,9 @@ int rs__markings_auto_possible(const rs_roads *roads)
 {
     size_t nr = rs_roads_count(roads);
     for (size_t i = 0; i < nr; i++)
-        if (rs_roads_get_attr(roads, i, "turn:lanes")) return 1;
+        if (rs_roads_get_attr(roads, i, "turn:lanes") || rs_roads_get_attr(roads, i, "turn:lanes:forward") ||
+            rs_roads_get_attr(roads, i, "turn:lanes:backward"))
+            return 1;
     for (size_t k = 0; k < rs_roads_point_attr_count(roads); k++) {
         const char *key, *v;
         rs_roads_point_attr_at(roads, k, NULL, NULL, &key, &v);
@@ -246,8 +339,9 @@ int rs__markings_auto_possible(const rs_roads *roads)
     return 0;
 }
 
-rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
-                            rs__placement **pl, size_t *n, size_t *cap)
+static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                           const rs_style_options *so, rs__line_cut **cuts, size_t *ncut, rs__placement **pl,
+                           size_t *n, size_t *cap)
 {
     size_t nr = rs_roads_count(roads);
     if (!rs__markings_auto_possible(roads)) return RS_OK;
@@ -255,6 +349,8 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     memset(&A, 0, sizeof A);
     A.ctx = ctx;
     A.roads = roads;
+    A.so = so;
+    A.want_cuts = cuts != NULL;
     A.rl = rs__calloc(ctx, nr ? nr : 1, sizeof *A.rl);
     if (!A.rl) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory placing markings");
     rs_result r = RS_OK;
@@ -322,8 +418,10 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
         r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
     }
-    long zt = rs_atlas_find(atlas, "zebra");
-    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !r && zt >= 0; k++) {
+    /* zebras: bars of their standard size repeated across the road (the
+     * whole `zebra` sprite stretched to the road when the atlas has no bars) */
+    long zb = rs_atlas_find(atlas, "zebra_bar"), zt = rs_atlas_find(atlas, "zebra");
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !r && (zt >= 0 || zb >= 0); k++) {
         const char *key, *v;
         size_t ri, pt;
         rs_roads_point_attr_at(roads, k, &ri, &pt, &key, &v);
@@ -338,6 +436,17 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         double x = rs__local_coord(xy[2 * pt], dem->frame.origin_x, per_unit);
         double y = rs__local_coord(xy[2 * pt + 1], dem->frame.origin_y, per_unit);
         nearest(&A.rl[ri], x, y, &s);
+        if (zb >= 0) {
+            double m = w / 2 - ZEBRA_MARGIN, len = atlas->t[zb].length;
+            size_t before = *n;
+            r = repeat_across(&A, atlas, zb, ri, 0, s, -m, m, ZEBRA_GAP, pl, n, cap);
+            if (!r && *n > before && A.want_cuts) { /* lane lines are interrupted at the zebra */
+                rs_road_lanes L;
+                rs_road_lanes_get(roads, ri, so, &L);
+                r = add_cut(&A, ri, s - len / 2, s + len / 2, cut_half(&L));
+            }
+            continue;
+        }
         rs__placement p;
         memset(&p, 0, sizeof p);
         p.type = (uint32_t)zt;
@@ -348,11 +457,70 @@ rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         if (p.width > 0) r = offer(&A, &p, pl, n, cap);
     }
     if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory placing markings");
+    if (cuts && !r) {
+        *cuts = A.cuts;
+        *ncut = A.ncut;
+        A.cuts = NULL;
+    }
+    rs__free(ctx, A.cuts);
     for (size_t i = 0; i < nr; i++) rs__road_local_free(ctx, &A.rl[i]);
     rs__free(ctx, A.rl);
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
     rs__free(ctx, endj);
     rs__free(ctx, endh);
+    return r;
+}
+
+rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap)
+{
+    return auto_core(ctx, dem, roads, atlas, so, NULL, NULL, pl, n, cap);
+}
+
+/* The sizes of the built-in atlas's line and crossing types (tests/tools/
+ * atlasgen.c; test_lanes checks them against rs_atlas_default): where the
+ * automatic lines go depends on sizes alone, not on the sprites' pixels,
+ * so the cuts need no atlas images. */
+static const struct {
+    const char *name;
+    double length, width;
+} default_sizes[] = { { "stop_line", 0.5, 3.5 },       { "give_way_line", 0.5, 3.5 }, { "give_way_block", 0.5, 0.5 },
+                      { "yield_tooth", 0.6858, 0.4572 }, { "zebra_bar", 4.0, 0.5 },    { "zebra", 4.0, 6.0 } };
+
+static rs_result sizes_atlas(rs_ctx *ctx, rs_atlas *a)
+{
+    size_t n = sizeof default_sizes / sizeof default_sizes[0];
+    a->t = rs__calloc(ctx, n, sizeof *a->t);
+    if (!a->t) return RS_ERR_NOMEM;
+    for (size_t k = 0; k < n; k++) {
+        memcpy(a->t[k].name, default_sizes[k].name, strlen(default_sizes[k].name) + 1);
+        a->t[k].length = default_sizes[k].length;
+        a->t[k].width = default_sizes[k].width;
+    }
+    a->n = n;
+    return RS_OK;
+}
+
+rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                 rs__line_cut **out, size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    if (o->markings.disable || o->markings.no_auto || !rs__markings_auto_possible(roads)) return RS_OK;
+    rs_atlas own;
+    memset(&own, 0, sizeof own);
+    const rs_atlas *atlas = o->markings.atlas;
+    rs_result r = RS_OK;
+    if (!atlas) {
+        r = sizes_atlas(ctx, &own);
+        atlas = &own;
+    }
+    rs__placement *pl = NULL;
+    size_t n = 0, cap = 0;
+    if (!r) r = auto_core(ctx, dem, roads, atlas, &o->style, out, nout, &pl, &n, &cap);
+    rs__free(ctx, pl);
+    rs__free(ctx, own.t);
+    if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
     return r;
 }

@@ -6,6 +6,7 @@
  * set is one array plus a hash index over the names. The block parser
  * reads lines handed over by the text parser in lib/roads.c. */
 #include "style.h"
+#include "lanes.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -632,7 +633,18 @@ static int request_ok(const rs_style_request *req)
 {
     return req && (unsigned)req->road_class < RS_CLASS_COUNT && req->lanes <= 16 &&
            (unsigned)req->oneway <= RS_ONEWAY_REVERSE && (unsigned)req->area <= RS_AREA_RURAL &&
-           (unsigned)req->profile <= RS_PROFILE_MUTCD && req->width >= 0 && req->width <= 2 * MAX_OFFSET;
+           (unsigned)req->profile <= RS_PROFILE_MUTCD && req->width >= 0 && req->width <= 2 * MAX_OFFSET &&
+           req->lanes_forward <= 16 && req->lanes_backward <= 16 && (unsigned)req->driving_side <= RS_DRIVING_LEFT;
+}
+
+void rs__section(rs_profile p, rs_road_class c, uint32_t *lanes, double *lane, double *strip_left,
+                 double *strip_right)
+{
+    const section *s = &sections[p == RS_PROFILE_MUTCD][(unsigned)c < RS_CLASS_COUNT ? c : RS_CLASS_NONE];
+    *lanes = s->lanes;
+    *lane = s->lane;
+    *strip_left = s->strip_left;
+    *strip_right = s->strip_right;
 }
 
 static uint32_t lanes_of(const rs_style_request *req)
@@ -642,18 +654,12 @@ static uint32_t lanes_of(const rs_style_request *req)
     return s->lanes ? s->lanes : 1;
 }
 
-static int oneway_of(const rs_style_request *req)
-{
-    if (req->oneway == RS_ONEWAY_NONE) return req->road_class == RS_CLASS_MOTORWAY ? 1 : 0;
-    return req->oneway == RS_ONEWAY_YES ? 1 : req->oneway == RS_ONEWAY_REVERSE ? -1 : 0;
-}
-
 /* Nominal width and its parts. */
 static double nominal(const rs_style_request *req, double *left, double *lane, double *right)
 {
     const section *s = &sections[req->profile][req->road_class];
     uint32_t n = lanes_of(req);
-    if (oneway_of(req)) {
+    if (rs__lanes_oneway(req->road_class, req->oneway)) {
         *left = s->strip_left;
         *right = s->strip_right;
     } else {
@@ -673,7 +679,7 @@ rs_result rs_style_default_width(const rs_style_request *req, double *width)
 
 static void add_line(rs_style *st, double t, double w, rs_colour c, double on, double off)
 {
-    if (st->line_count >= RS_STYLE_MAX_LINES) return; /* not reached: 16 lanes need 19 */
+    if (st->line_count >= RS_STYLE_MAX_LINES) return; /* not reached: 32 lanes need 33 + 2 */
     rs_style_line *l = &st->line[st->line_count++];
     memset(l, 0, sizeof *l);
     l->offset = t;
@@ -686,13 +692,13 @@ static void add_line(rs_style *st, double t, double w, rs_colour c, double on, d
     }
 }
 
-rs_result rs_style_default(const rs_style_request *req, rs_style *out)
+/* The default style of req's class, its lines on the lanes of `in`. */
+static void default_style(const rs_style_request *req, const rs__lanes_in *in, rs_style *out)
 {
-    if (!request_ok(req) || !out) return RS_ERR_INVALID_ARG;
     memset(out, 0, sizeof *out);
     rs_road_class c = req->road_class;
     memcpy(out->name, rs_road_class_name(c), strlen(rs_road_class_name(c)) + 1);
-    if (c == RS_CLASS_NONE) return RS_OK;
+    if (c == RS_CLASS_NONE) return;
     if (class_fill[c].a) {
         out->surface = RS_SURFACE_FILL;
         out->fill = class_fill[c];
@@ -704,52 +710,83 @@ rs_result rs_style_default(const rs_style_request *req, rs_style *out)
         out->casing_width = KERB_W;
         out->casing = kerb_grey;
     }
-    if (m.lane_w == 0) return RS_OK;
+    if (m.lane_w == 0) return;
 
-    /* Lay the lanes out across the road, in the travel frame u (+ left of
-     * travel), scaled to the road's width; t = dir * u. */
-    double sl, lane, sr;
-    double w0 = nominal(req, &sl, &lane, &sr);
-    double w = req->width > 0 ? req->width : w0, k = w / w0;
-    sl *= k, lane *= k, sr *= k;
-    uint32_t n = lanes_of(req);
-    int ow = oneway_of(req);
-    double dir = ow < 0 ? -1.0 : 1.0;
-    double top = w / 2 - sl; /* u of the leftmost lane's left boundary */
+    /* Lines on the lane boundaries (lib/lanes.c), listed from the left of
+     * the main direction of travel, t = + left of the points. */
+    rs_road_lanes L;
+    double strip[2];
+    rs__lanes_layout(in, &L, strip);
+    uint32_t n = L.count;
+    int ow = rs__lanes_oneway(c, req->oneway), left = L.side == RS_DRIVING_LEFT;
+    double dir = ow < 0 ? -1.0 : 1.0, hw = L.width / 2;
     rs_colour white = us ? us_white : rms_white;
-    /* two-way: the backward lanes on the left (right-hand traffic) */
-    uint32_t back = ow ? 0 : n / 2;
     for (uint32_t b = 1; b < n; b++) {
-        double u = top - b * lane;
-        if (!ow && b == back) {
+        uint32_t k = dir > 0 ? b : n - b; /* the boundary between lanes k - 1 and k */
+        double t = L.lane[k].t_left;
+        if (L.lane[k - 1].direction * L.lane[k].direction < 0) { /* between the directions */
             if (us && n >= 4) { /* two-direction no-passing: double solid yellow */
                 double d = m.lane_w / 2 + 2 * IN;
-                add_line(out, dir * (u + d), m.lane_w, us_yellow, 0, 0);
-                add_line(out, dir * (u - d), m.lane_w, us_yellow, 0, 0);
+                add_line(out, t + dir * d, m.lane_w, us_yellow, 0, 0);
+                add_line(out, t - dir * d, m.lane_w, us_yellow, 0, 0);
             } else if (us) {
-                add_line(out, dir * u, m.lane_w, us_yellow, m.dash_on, m.dash_off);
+                add_line(out, t, m.lane_w, us_yellow, m.dash_on, m.dash_off);
             } else if (n >= 4) {
-                add_line(out, dir * u, m.lane_w, white, 0, 0); /* Fahrstreifenbegrenzung */
+                add_line(out, t, m.lane_w, white, 0, 0); /* Fahrstreifenbegrenzung */
             } else {
-                add_line(out, dir * u, m.lane_w, white, m.dash_on, m.dash_off);
+                add_line(out, t, m.lane_w, white, m.dash_on, m.dash_off);
             }
         } else {
-            add_line(out, dir * u, m.lane_w, white, m.dash_on, m.dash_off);
+            add_line(out, t, m.lane_w, white, m.dash_on, m.dash_off);
         }
     }
     if (m.edge_w > 0) {
         /* inside the paved strip when it is wide enough, else flush with the road edge */
-        double ul = sl >= m.edge_w ? top + m.edge_w / 2 : w / 2 - m.edge_w / 2;
-        double bottom = top - n * lane;
-        double ur = sr >= m.edge_w ? bottom - m.edge_w / 2 : -w / 2 + m.edge_w / 2;
-        add_line(out, dir * ul, m.edge_w, us && ow ? us_yellow : white, 0, 0);
-        add_line(out, dir * ur, m.edge_w, white, 0, 0);
+        double e = m.edge_w;
+        double tl = strip[0] >= e ? L.lane[0].t_left + e / 2 : hw - e / 2;
+        double tr = strip[1] >= e ? L.lane[n - 1].t_right - e / 2 : -hw + e / 2;
+        /* the left edge of travel first; a one-way road's edge on the side
+         * of opposing traffic (left of travel, right in left-hand traffic)
+         * is yellow in the US */
+        double first = dir > 0 ? tl : tr, second = dir > 0 ? tr : tl;
+        add_line(out, first, e, us && ow && !left ? us_yellow : white, 0, 0);
+        add_line(out, second, e, us && ow && left ? us_yellow : white, 0, 0);
     }
+    /* many lanes of one direction in a narrow road put the centre line's
+     * double yellow near an edge: keep every line inside the road */
+    for (uint32_t k = 0; k < out->line_count; k++) {
+        rs_style_line *l = &out->line[k];
+        double lim = hw - l->width / 2;
+        if (lim < 0) lim = 0;
+        if (l->offset > lim) l->offset = lim;
+        if (l->offset < -lim) l->offset = -lim;
+    }
+}
+
+static void request_input(const rs_style_request *req, rs__lanes_in *in)
+{
+    memset(in, 0, sizeof *in);
+    in->road_class = req->road_class;
+    in->profile = req->profile;
+    in->oneway = req->oneway;
+    in->side = req->driving_side;
+    in->lanes = req->lanes;
+    in->forward = req->lanes_forward;
+    in->backward = req->lanes_backward;
+    in->width = req->width;
+}
+
+rs_result rs_style_default(const rs_style_request *req, rs_style *out)
+{
+    if (!request_ok(req) || !out) return RS_ERR_INVALID_ARG;
+    rs__lanes_in in;
+    request_input(req, &in);
+    default_style(req, &in, out);
     return RS_OK;
 }
 
-rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_styles *styles, rs_profile profile,
-                        rs_style *out)
+static rs_result road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_styles *styles,
+                            rs_profile profile, rs_driving_side side, rs_style *out)
 {
     char q[64], q2[64];
     if (!ctx) return RS_ERR_INVALID_ARG;
@@ -789,8 +826,32 @@ rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_s
         rs__ok(ctx);
         return RS_OK;
     }
-    rs_result rc = rs_style_default(&req, out);
-    if (rc != RS_OK) return rs__fail(ctx, rc, "rs_road_style: road %zu: no default style", i);
+    /* the lanes of the road itself (lanes per direction, width:lanes,
+     * turn:lanes, driving_side: lib/lanes.c) */
+    rs__lanes_in in;
+    rs__lanes_input(roads, i, profile, side, &in);
+    in.road_class = req.road_class;
+    in.width = req.width;
+    req.driving_side = in.side;
+    default_style(&req, &in, out);
     rs__ok(ctx);
     return RS_OK;
+}
+
+rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_styles *styles, rs_profile profile,
+                        rs_style *out)
+{
+    return road_style(ctx, roads, i, styles, profile, RS_DRIVING_RIGHT, out);
+}
+
+rs_result rs_road_style_ex(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_style_options *opts,
+                           rs_style *out)
+{
+    if (!opts) return road_style(ctx, roads, i, NULL, RS_PROFILE_RMS, RS_DRIVING_RIGHT, out);
+    if ((unsigned)opts->driving_side > RS_DRIVING_LEFT) {
+        if (!ctx) return RS_ERR_INVALID_ARG;
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_road_style_ex: unknown driving side %d",
+                        (int)opts->driving_side);
+    }
+    return road_style(ctx, roads, i, opts->styles, opts->profile, opts->driving_side, out);
 }

@@ -5,6 +5,7 @@
 #include "roadfield.h"
 #include "surfimg.h"
 #include "style.h"
+#include "lanes.h"
 
 #include <math.h>
 #include <string.h>
@@ -139,7 +140,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     size_t nbands = 0, ncasing = 0;
     int styled = 0;
     for (size_t i = 0; i < n; i++) {
-        if ((r = rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, sty)) != RS_OK) goto fail_msg;
+        if ((r = rs_road_style_ex(ctx, roads, i, &o->style, sty)) != RS_OK) goto fail_msg;
         double w = 0;
         rs_roads_get(roads, i, NULL, &w, NULL, NULL);
         st->half_width[i] = 0.5 * w;
@@ -187,7 +188,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         if (!extra) { r = RS_ERR_NOMEM; goto fail_dash; }
     }
     for (size_t i = 0, k = 0, cr = 0; i < n; i++) {
-        if ((r = rs_road_style(ctx, roads, i, o->style.styles, o->style.profile, sty)) != RS_OK) goto fail_dash;
+        if ((r = rs_road_style_ex(ctx, roads, i, &o->style, sty)) != RS_OK) goto fail_dash;
         for (uint32_t j = 0; j < sty->line_count; j++, k++) {
             const rs_style_line *ln = &sty->line[j];
             rs__band *b = &bands[k];
@@ -223,7 +224,15 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.pixel = fp.pixel;
         lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
         lp.net = net;
-        if ((r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines)) != RS_OK) goto fail_dash;
+        /* lane and centre lines stop at the automatic stop lines and zebras */
+        rs__line_cut *cuts = NULL;
+        size_t ncuts = 0;
+        if ((r = rs__markings_line_cuts(ctx, dem, roads, o, &cuts, &ncuts)) != RS_OK) goto fail_dash;
+        lp.cuts = cuts;
+        lp.ncuts = ncuts;
+        r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
+        rs__free(ctx, cuts);
+        if (r != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }
     if (ncasing) {

@@ -48,5 +48,19 @@ check "unknown mark type named with its line" grep -q "line 5: mark: the atlas h
 printf 'road a width 4\n0 5\n50 5\nend\nmark arrow_left road=b s=3 t=0\n' >"$T/badmark2.txt"
 run "$T/dem.pgm" "$T/badmark2.txt" "$T/g.png" 2>"$T/err" && bad "mark on a missing road accepted"
 check "missing road named with its line" grep -q "badmark2.txt: line 5: mark: no road named 'b'" "$T/err"
+# --driving-side (issue 27): left-hand traffic moves the lanes' markings;
+# the option is the default of the road attribute driving_side=
+check "--driving-side left" run --driving-side left "$T/dem.pgm" "$T/roads.txt" "$T/l.png"
+check "left-hand traffic differs" sh -c "! cmp -s '$T/a.png' '$T/l.png'"
+check "--driving-side right is the default" run --driving-side=right "$T/dem.pgm" "$T/roads.txt" "$T/r.png"
+check "right gives the default bytes" cmp -s "$T/a.png" "$T/r.png"
+sed 's/^road \([^ ]*\) width \([^ ]*\) \(.*\)$/road \1 width \2 \3 driving_side=left/' "$T/roads.txt" >"$T/left.txt"
+check "driving_side=left attribute" run "$T/dem.pgm" "$T/left.txt" "$T/la.png"
+check "attribute and option agree" cmp -s "$T/l.png" "$T/la.png"
+check "the attribute wins over the option" run --driving-side right "$T/dem.pgm" "$T/left.txt" "$T/lb.png"
+check "... same bytes" cmp -s "$T/l.png" "$T/lb.png"
+run --driving-side middle "$T/dem.pgm" "$T/roads.txt" "$T/m.png" 2>"$T/err" && bad "--driving-side middle accepted"
+check "bad --driving-side named" grep -q "driving-side: 'middle' is not 'left' or 'right'" "$T/err"
+check "no output on a bad option" test ! -e "$T/m.png"
 echo "cli_markings: $pass passed, $fail failed"
 [ "$fail" = 0 ]

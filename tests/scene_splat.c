@@ -68,3 +68,19 @@ rs_result ss_splat_z(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opt
     if (r) ss_image_free(out);
     return r;
 }
+
+rs_result ss_splat_window(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                          uint32_t *w, uint32_t *h, uint8_t **rgba)
+{
+    rs_splatter *s = NULL;
+    *rgba = NULL;
+    *w = *h = 0;
+    rs_result r = rs_splatter_create(ctx, dem, roads, NULL, opts, &s);
+    if (!r) {
+        rs_splatter_size(s, w, h);
+        *rgba = malloc((size_t)*w * *h * 4);
+        r = *rgba ? rs_splat_window(ctx, s, 0, 0, *w, *h, *rgba, (size_t)*w * 4, NULL, 0, NULL) : RS_ERR_NOMEM;
+    }
+    rs_splatter_free(ctx, s);
+    return r;
+}

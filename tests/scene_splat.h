@@ -27,4 +27,8 @@ rs_result ss_splat(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts,
 rs_result ss_splat_z(rs_ctx *ctx, const sc_scene *s, const rs_splat_options *opts, double z_scale, int seam,
                      ss_image *out);
 void ss_image_free(ss_image *im);
+/* The whole splat of `roads` over `dem` through a splatter (one window):
+ * *rgba malloc'd, w x h pixels; on failure *rgba may be NULL or partial. */
+rs_result ss_splat_window(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                          uint32_t *w, uint32_t *h, uint8_t **rgba);
 #endif

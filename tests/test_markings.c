@@ -619,7 +619,7 @@ static void test_parse(void)
 static void test_auto(void)
 {
     static const char text[] = "road main width 8 class=primary\n0 50\n20 50 crossing=zebra\n100 50\nend\n"
-                               "road side width 7 class=residential turn:lanes=left|right\n50 95\n50 50\nend\n"
+                               "road side width 7 class=residential lanes=4 turn:lanes=left|right\n50 95\n50 50\nend\n"
                                "road stopper width 6 class=service control=stop\n100 20\n80 50\nend\n";
     rs_roads *roads = NULL;
     CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
@@ -633,12 +633,14 @@ static void test_auto(void)
     for (size_t i = 0; mk && i < mk->n; i++) {
         const rs__mk *m = &mk->m[i];
         const char *name = m->ty->name;
-        if (!strcmp(name, "give_way_line")) {
+        if (!strcmp(name, "give_way_block")) {
             give++;
             /* side runs north; its end at s = 45 meets main (half width 4 +
-             * 0.5): line centre 0.5 + 0.25 m before that, on the right half */
+             * 0.5): blocks centred 0.5 + 0.25 m before that, on the right
+             * half (issue 27: 0.5 m blocks, 0.25 m gaps, centred in it) */
             CHECK_NEAR(m->s0, 45 - 4.5 - 0.5 - 0.25, 1e-9);
-            CHECK_NEAR(m->t0, -7.0 / 4, 1e-9);
+            CHECK(m->t0 < 0 && m->t0 > -3.5);
+            CHECK_NEAR(2 * m->hw, 0.5, 1e-9);
             CHECK(!m->flip);
         } else if (!strcmp(name, "stop_line")) {
             stop++;
@@ -649,18 +651,18 @@ static void test_auto(void)
             CHECK(m->t0 < 0 && m->t0 > -3.5);
             /* the left lane is nearer the centre line */
             if (name[6] == 'l') CHECK(m->t0 > -1.75); else CHECK(m->t0 < -1.75);
-        } else if (!strcmp(name, "zebra")) {
+        } else if (!strcmp(name, "zebra_bar")) {
             zebra++;
             CHECK_NEAR(m->s0, 20, 1e-9);
-            CHECK_NEAR(2 * m->hw, 7.6, 1e-9);
+            CHECK_NEAR(2 * m->hw, 0.5, 1e-9);
         }
     }
-    CHECK_EQ_INT(give, 1);
+    CHECK_EQ_INT(give, 5);  /* 3.5 m approach: 5 blocks of 0.5 m, 0.25 m apart */
     CHECK_EQ_INT(stop, 1);
     CHECK_EQ_INT(left, 1);
     CHECK_EQ_INT(right, 1);
-    CHECK_EQ_INT(zebra, 1);
-    CHECK_EQ_INT(mk ? mk->n_auto : 0, 5);
+    CHECK_EQ_INT(zebra, 8); /* 7.6 m: 8 bars of 0.5 m, 0.5 m apart */
+    CHECK_EQ_INT(mk ? mk->n_auto : 0, 16);
     rs__markings_free(ctx, mk);
     /* a zebra inside the junction area of main is dropped */
     static const char text2[] = "road main width 8 class=primary\n0 50\n50 50 crossing=zebra\n100 50\nend\n"
@@ -669,7 +671,7 @@ static void test_auto(void)
     CHECK(rs_roads_parse(ctx, text2, sizeof text2 - 1, &r2) == RS_OK);
     mk = NULL;
     CHECK(rs__markings_build(ctx, dem, r2, &o, &mk) == RS_OK && mk);
-    for (size_t i = 0; mk && i < mk->n; i++) CHECK(strcmp(mk->m[i].ty->name, "zebra") != 0);
+    for (size_t i = 0; mk && i < mk->n; i++) CHECK(strncmp(mk->m[i].ty->name, "zebra", 5) != 0);
     rs__markings_free(ctx, mk);
     o.markings.no_auto = 1;
     mk = (rs__markings *)1;

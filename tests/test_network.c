@@ -5,6 +5,7 @@
  * images), which must agree to 8/255. */
 #include "roadsplat.h"
 #include "harness.h"
+#include "scene_splat.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -574,7 +575,6 @@ static int render(const rs_roads *roads, const char *styles_text, image *im)
     static float z[DW * DH];
     rs_dem *dem = NULL;
     rs_styles *styles = NULL;
-    rs_splatter *s = NULL;
     int ok = rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK;
     if (ok && styles_text) ok = rs_styles_parse(ctx, styles_text, strlen(styles_text), &styles) == RS_OK;
     rs_surface_image si = { "strip.png", { 16, 64, strip_px } };
@@ -585,13 +585,7 @@ static int render(const rs_roads *roads, const char *styles_text, image *im)
     o.style.surface_images = &si;
     o.style.surface_image_count = 1;
     o.style.profile = render_profile;
-    if (ok) ok = rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK;
-    if (ok) {
-        rs_splatter_size(s, &im->w, &im->h);
-        im->rgba = malloc((size_t)im->w * im->h * 4);
-        ok = im->rgba && rs_splat_window(ctx, s, 0, 0, im->w, im->h, im->rgba, (size_t)im->w * 4, NULL, 0, NULL) == RS_OK;
-    }
-    rs_splatter_free(ctx, s);
+    if (ok) ok = ss_splat_window(ctx, dem, roads, &o, &im->w, &im->h, &im->rgba) == RS_OK;
     rs_styles_free(ctx, styles);
     rs_dem_free(ctx, dem);
     return ok;

@@ -175,9 +175,10 @@ static void test_non_car(void)
 {
     static const char *const street = "road main width 6 class=residential\n0 50\n100 50\nend\n";
     char text[512];
-    /* a service road ending on the street gives way */
+    /* a service road ending on the street gives way (issue 27: a line of
+     * three 0.5 m blocks across its 2 m approach half) */
     snprintf(text, sizeof text, "%sroad s width 4 class=service\n50 95\n50 50\nend\n", street);
-    CHECK_EQ_INT(auto_marks(text), 1);
+    CHECK_EQ_INT(auto_marks(text), 3);
     /* footways, paths and cycleways do not, and the two halves of a crossing footway
      * that end on the street leave its zebra alone (no junction area) */
     static const char *const cls[] = { "footway", "path", "cycleway" };
@@ -188,7 +189,7 @@ static void test_non_car(void)
                  "road main width 6 class=residential\n0 50\n50 50 crossing=zebra\n100 50\nend\n"
                  "road f width 2.5 class=%s\n50 95\n50 50\nend\nroad g width 2.5 class=%s\n50 50\n50 5\nend\n",
                  cls[k], cls[k]);
-        CHECK_EQ_INT(auto_marks(text), 1);
+        CHECK_EQ_INT(auto_marks(text), 6); /* the zebra: six 0.5 m bars across 5.6 m */
     }
 }
 

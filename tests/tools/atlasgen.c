@@ -250,6 +250,29 @@ static void build(void)
     word(p, "STOP");
     p = begin("word_slow", 2.5, 2.0);
     word(p, "SLOW");
+
+    /* single elements that the automatic markings repeat at their standard
+     * size across any road (docs/road-format.md "Marking elements") */
+    p = begin("give_way_block", 0.5, 0.5); /* RMS Wartelinie block */
+    rect(p, 0, 0, 0.5, 0.5);
+    p = begin("zebra_bar", 4.0, 0.5); /* RMS Fussgaengerueberweg bar */
+    rect(p, 0, 0, 0.5, 4.0);
+    p = begin("arrow_uturn_right", 5.0, 1.6); /* arrow_uturn mirrored: left-hand traffic */
+    rect(p, 1.6 - 1.25 - SH, 1.0, 1.6 - 1.25 + SH, 4.98);
+    for (int k = 0; k < 12; k++) {
+        double a0 = PI * k / 12, a1 = PI * (k + 1) / 12, r = 0.475, cx = 1.6 - 0.775, cy = 1.0;
+        stroke(p, cx - r * cos(a0), cy - r * sin(a0), cx - r * cos(a1), cy - r * sin(a1), SH);
+    }
+    rect(p, 1.3 - SH, 1.0, 1.3 + SH, 2.4);
+    {
+        double v[6] = { 1.3, 3.2, 1.3 - 0.3, 2.4, 1.3 + 0.3, 2.4 };
+        poly(p, 3, v);
+    }
+    p = begin("yield_tooth", 0.6858, 0.4572); /* MUTCD 3B.16: 18 in base, 27 in high */
+    {
+        double v[6] = { 0, 0, 0.4572, 0, 0.2286, 0.6858 };
+        poly(p, 3, v);
+    }
 }
 
 static void raster(sprite *p)

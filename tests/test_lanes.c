@@ -1,0 +1,673 @@
+/* Lanes per direction and left-hand traffic (issue 27 targets 4 and 5;
+ * docs/road-format.md "Lanes"). Property tests on images at 0.1 m per
+ * pixel, measured from the pixels alone: paint alpha = (C - C_plain) /
+ * (white - C_plain) against the same scene drawn without lines and
+ * markings, over a plain grey road texture.
+ *
+ * - arrows: each painted arrow's centroid within 0.1 m of the centre of a
+ *   lane, the lanes measured from the painted lane, centre and edge lines;
+ * - stop lines: from the painted centre line (+-0.1 m) to the kerb (the
+ *   road edge, +-0.1 m), on the side of the arrows;
+ * - give-way blocks (RMS 0.5 x 0.5 m, 0.25 m gaps) and zebra bars (0.5 m,
+ *   0.5 m gaps) keep their size on roads of any width (+-0.02 m);
+ * - mirror: a left-hand scene equals the mirrored right-hand scene;
+ * - the lane queries (rs_road_lanes_get, rs_network_lanes_at).
+ *
+ * The property tests use only the API of main 449fdfd (driving_side as a
+ * road attribute), so they build there and fail; the queries are new. */
+#include "roadsplat.h"
+#include "harness.h"
+#include "scene_splat.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static rs_ctx *ctx;
+
+#define TEX 10   /* texels per 1 m cell: 0.1 m pixels */
+#define PIX 0.1
+#define WHITE 244.0 /* the green of the built-in markings and RMS lines */
+
+typedef struct img {
+    uint32_t w, h;
+    uint8_t *rgba;
+} img;
+
+static const uint8_t grey_px[4] = { 60, 60, 60, 255 };
+
+/* Render `text` over a flat dw x dh DEM (1 m cells): with lines and
+ * markings (`paint`) or without either. */
+static const rs_atlas *render_atlas; /* NULL: the built-in one */
+
+static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile, int paint, int no_auto, img *im)
+{
+    float *z = calloc((size_t)dw * dh, sizeof *z);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_image tex = { 1, 1, grey_px };
+    int ok = z && rs_dem_create(ctx, dw, dh, z, &dem) == RS_OK &&
+             rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = TEX;
+    o.surface.road_texture = &tex;
+    o.style.profile = profile;
+    o.style.disable = !paint;
+    o.markings.disable = !paint;
+    o.markings.no_auto = no_auto;
+    o.markings.atlas = render_atlas;
+    memset(im, 0, sizeof *im);
+    if (ok) ok = ss_splat_window(ctx, dem, roads, &o, &im->w, &im->h, &im->rgba) == RS_OK;
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    free(z);
+    return ok;
+}
+
+/* Paint alpha per pixel: `a` drawn with paint, `b` without. */
+static double *paint_alpha(const img *a, const img *b)
+{
+    size_t n = (size_t)a->w * a->h;
+    double *al = calloc(n ? n : 1, sizeof *al);
+    for (size_t i = 0; al && i < n; i++) {
+        double c = a->rgba[4 * i + 1], c0 = b->rgba[4 * i + 1];
+        al[i] = WHITE - c0 > 20 ? (c - c0) / (WHITE - c0) : 0;
+        if (al[i] < 0) al[i] = 0;
+        if (al[i] > 1) al[i] = 1;
+    }
+    return al;
+}
+
+/* The paint of a scene: alpha with everything, with lines only (no
+ * automatic markings: `lines`), both may be NULL. */
+static int scene_paint(const char *text, uint32_t dw, uint32_t dh, rs_profile profile, double **all, double **lines,
+                       uint32_t *w, uint32_t *h)
+{
+    img plain, full, nomark;
+    int ok = render(text, dw, dh, profile, 0, 0, &plain) && render(text, dw, dh, profile, 1, 0, &full) &&
+             render(text, dw, dh, profile, 1, 1, &nomark);
+    if (ok) {
+        *w = plain.w;
+        *h = plain.h;
+        if (all) *all = paint_alpha(&full, &plain);
+        if (lines) *lines = paint_alpha(&nomark, &plain);
+    }
+    free(plain.rgba);
+    free(full.rgba);
+    free(nomark.rgba);
+    return ok;
+}
+
+/* Runs of alpha > 0.01 along a row (dx = 1) or a column of `a`, within
+ * pixel indices [i0, i1): each run's extent (the partial end pixels
+ * counted by their alpha), painted width (sum of alpha x pixel) and
+ * centroid, in metres. */
+typedef struct run {
+    double lo, hi, width, centre;
+} run;
+
+static int runs(const double *a, uint32_t w, int along_row, uint32_t fixed, uint32_t i0, uint32_t i1, run *out,
+                int cap)
+{
+    int n = 0;
+    uint32_t i = i0;
+    while (i < i1) {
+#define AT(k) (along_row ? a[(size_t)fixed * w + (k)] : a[(size_t)(k) * w + fixed])
+        if (AT(i) <= 0.01) { i++; continue; }
+        uint32_t j = i;
+        double sum = 0, mom = 0;
+        while (j < i1 && AT(j) > 0.01) {
+            sum += AT(j);
+            mom += AT(j) * (j + 0.5) * PIX;
+            j++;
+        }
+        if (n < cap) {
+            out[n].lo = (i + 1 - AT(i)) * PIX;
+            out[n].hi = (j - 1 + AT(j - 1)) * PIX;
+            out[n].width = sum * PIX;
+            out[n].centre = mom / sum;
+        }
+        n++;
+        i = j;
+#undef AT
+    }
+    return n;
+}
+
+/* A secondary road of 3 lanes (2 towards the junction) meeting a primary
+ * road at a T; its lines, arrows and stop line. DEM 61 x 41: the side road
+ * runs north from (30, 40) to the main road's centre line at y = 20. */
+static const char lanes_scene[] =
+    "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+    "road side width 10.5 class=secondary area=rural lanes=3 lanes:forward=2 turn:lanes=through|through "
+    "control=stop\n30 40\n30 20\nend\n";
+
+static void test_arrows_and_stop_line(void)
+{
+    double *all = NULL, *lines = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(lanes_scene, 61, 41, RS_PROFILE_RMS, &all, &lines, &w, &h));
+    if (!all || !lines) return;
+    /* the lines across the side road at y = 38 m (no markings there) */
+    run L[8];
+    int nl = runs(lines, w, 1, 380, 240, 360, L, 8);
+    CHECK_EQ_INT(nl, 4); /* edge, two lane/centre lines, edge */
+    if (nl != 4) goto done;
+    /* lane boundaries: the inner edges of the edge lines, the centres of the others */
+    double b[4] = { L[0].centre + L[0].width / 2, L[1].centre, L[2].centre, L[3].centre - L[3].width / 2 };
+    for (int k = 0; k < 3; k++) CHECKF(b[k + 1] - b[k] > 3.0, "lane %d is %.3f m wide", k, b[k + 1] - b[k]);
+    /* markings = all paint minus the lines */
+    size_t n = (size_t)w * h;
+    double *mk = malloc(n * sizeof *mk);
+    for (size_t i = 0; i < n; i++) mk[i] = all[i] - lines[i] > 0.01 ? all[i] - lines[i] : 0;
+    /* arrows: between y = 28 and 37 m; centroid per lane */
+    double sx[3] = { 0, 0, 0 }, sa[3] = { 0, 0, 0 };
+    for (uint32_t y = 280; y < 370; y++)
+        for (uint32_t x = 240; x < 360; x++) {
+            double a = mk[(size_t)y * w + x], xc = (x + 0.5) * PIX;
+            for (int k = 0; k < 3; k++)
+                if (xc > b[k] && xc < b[k + 1]) sx[k] += a * xc, sa[k] += a;
+        }
+    int arrows = 0, bare = -1;
+    for (int k = 0; k < 3; k++) {
+        if (sa[k] * PIX * PIX < 0.5) { bare = k; continue; } /* an arrow paints about 1.3 m^2 */
+        arrows++;
+        double c = sx[k] / sa[k], want = (b[k] + b[k + 1]) / 2;
+        CHECKF(fabs(c - want) <= 0.1, "arrow in lane %d: centroid x %.3f m, lane centre %.3f m", k, c, want);
+        printf("arrow in lane %d: centroid %.4f m from the lane centre\n", k, c - want);
+    }
+    CHECK_EQ_INT(arrows, 2);
+    CHECK(bare == 0 || bare == 2); /* the lane without an arrow is the outer one of the other direction */
+    /* the stop line: the marking row with the most paint between y = 20 and 28 m */
+    uint32_t best = 0;
+    double bestsum = 0;
+    for (uint32_t y = 200; y < 280; y++) {
+        double sum = 0;
+        for (uint32_t x = 240; x < 360; x++) sum += mk[(size_t)y * w + x];
+        if (sum > bestsum) bestsum = sum, best = y;
+    }
+    /* all paint on that row: the stop line with the lines it crosses, one
+     * run (a stop line short of the centre line leaves a gap); the widest */
+    run S[8];
+    int ns = runs(all, w, 1, best, 240, 360, S, 8), wi = 0;
+    for (int i = 1; i < ns && i < 8; i++)
+        if (S[i].width > S[wi].width) wi = i;
+    CHECK(ns >= 1 && S[wi].width > 3);
+    if (ns >= 1 && bare >= 0) {
+        /* from the centre line to the kerb on the arrows' side */
+        double centre = bare == 0 ? L[1].centre : L[2].centre;
+        double kerb = bare == 0 ? 30 + 5.25 : 30 - 5.25;
+        double near = bare == 0 ? S[wi].lo : S[wi].hi, far = bare == 0 ? S[wi].hi : S[wi].lo;
+        CHECKF(fabs(near - centre) <= 0.1, "stop line starts at %.3f m, the centre line is at %.3f m", near, centre);
+        CHECKF(fabs(far - kerb) <= 0.1, "stop line ends at %.3f m, the kerb is at %.3f m", far, kerb);
+        printf("stop line: %.3f .. %.3f m; centre line %.3f, kerb %.3f\n", S[wi].lo, S[wi].hi, centre, kerb);
+    }
+    free(mk);
+done:
+    free(all);
+    free(lines);
+}
+
+/* Give-way blocks on side roads of four widths, zebra bars on main roads of
+ * three: each element 0.5 m (+-0.02) across, gaps 0.25 / 0.5 m. */
+static void test_standard_sizes(void)
+{
+    static const double widths[] = { 5.5, 7, 9, 11 };
+    for (int k = 0; k < 4; k++) {
+        char text[512];
+        snprintf(text, sizeof text,
+                 "road main width 10 class=primary area=rural\n0 20\n60 20\nend\n"
+                 "road side width %g class=residential\n30 40\n30 20\nend\n",
+                 widths[k]);
+        double *all = NULL, *lines = NULL;
+        uint32_t w = 0, h = 0;
+        CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &all, &lines, &w, &h));
+        if (!all || !lines) continue;
+        /* the block row: the row with the most marking paint (y 25 .. 35 m) */
+        uint32_t best = 0;
+        double bestsum = 0;
+        for (uint32_t y = 250; y < 350; y++) {
+            double sum = 0;
+            for (uint32_t x = 200; x < 400; x++) sum += all[(size_t)y * w + x] - lines[(size_t)y * w + x];
+            if (sum > bestsum) bestsum = sum, best = y;
+        }
+        /* the markings alone (the kerbs are lines' business) */
+        for (size_t i = 0; i < (size_t)w * h; i++) all[i] = all[i] - lines[i] > 0.01 ? all[i] - lines[i] : 0;
+        run B[32];
+        int nb = runs(all, w, 1, best, 200, 400, B, 32);
+        CHECKF(nb >= 2 && nb <= 32, "width %g: %d blocks", widths[k], nb);
+        for (int i = 0; i < nb && i < 32; i++) {
+            CHECKF(fabs(B[i].width - 0.5) <= 0.02, "width %g: block %d is %.3f m across", widths[k], i, B[i].width);
+            if (i) CHECKF(fabs(B[i].lo - B[i - 1].hi - 0.25) <= 0.02, "width %g: gap %.3f m", widths[k],
+                          B[i].lo - B[i - 1].hi);
+            /* along the road: 0.5 m */
+            run A[4];
+            uint32_t col = (uint32_t)(B[i].centre / PIX);
+            int na = runs(all, w, 0, col, best - 20, best + 20, A, 4);
+            CHECKF(na == 1 && fabs(A[0].width - 0.5) <= 0.02, "width %g: block %d is %.3f m along", widths[k], i,
+                   na ? A[0].width : 0);
+        }
+        free(all);
+        free(lines);
+    }
+    static const double zw[] = { 6, 8, 10.5 };
+    for (int k = 0; k < 3; k++) {
+        char text[256];
+        snprintf(text, sizeof text, "road main width %g class=residential\n0 20\n30 20 crossing=zebra\n60 20\nend\n",
+                 zw[k]);
+        double *all = NULL, *lines = NULL;
+        uint32_t w = 0, h = 0;
+        CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &all, &lines, &w, &h));
+        if (!all || !lines) continue;
+        for (size_t i = 0; i < (size_t)w * h; i++) all[i] = all[i] - lines[i] > 0.01 ? all[i] - lines[i] : 0;
+        run Z[32];
+        int nz = runs(all, w, 0, 300, 100, 300, Z, 32);
+        int want = (int)floor((zw[k] - 0.4 + 0.5) / 1.0);
+        CHECKF(nz == want, "zebra on %g m: %d bars, want %d", zw[k], nz, want);
+        for (int i = 0; i < nz && i < 32; i++) {
+            CHECKF(fabs(Z[i].width - 0.5) <= 0.02, "zebra on %g m: bar %d is %.3f m", zw[k], i, Z[i].width);
+            if (i) CHECKF(fabs(Z[i].lo - Z[i - 1].hi - 0.5) <= 0.02, "zebra on %g m: gap %.3f", zw[k],
+                          Z[i].lo - Z[i - 1].hi);
+        }
+        free(all);
+        free(lines);
+    }
+}
+
+/* Lane lines end at the stop line and are interrupted at a zebra. The
+ * lines are measured with the markings drawn from an atlas of the same
+ * sizes whose sprites are transparent (so the automatic markings are
+ * placed, and cut the lines, but paint nothing); the stop line's edge
+ * from the built-in atlas. */
+static void test_line_ends(void)
+{
+    static const char text[] =
+        "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n60 20\nend\n"
+        "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
+    static uint8_t clear[8 * 8 * 4];
+    static const char index[] = "stop_line 0 0 8 8 0.5 3.5\ngive_way_line 0 0 8 8 0.5 3.5\n"
+                                "give_way_block 0 0 8 8 0.5 0.5\nzebra_bar 0 0 8 8 4 0.5\n";
+    rs_image im = { 8, 8, clear };
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_create(ctx, &im, index, sizeof index - 1, &atlas) == RS_OK);
+    double *real = NULL, *lines = NULL, *cut = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &real, &lines, &w, &h));
+    render_atlas = atlas;
+    CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &cut, NULL, &w, &h));
+    render_atlas = NULL;
+    if (!real || !lines || !cut) goto done;
+    {
+        /* the side road's solid centre line (4 lanes) at x = 30 m: where it
+         * ends towards the junction */
+        run C[8];
+        int nc = runs(cut, w, 0, 300, 205, 400, C, 8);
+        CHECK(nc >= 1);
+        /* the stop line's edge towards the drivers: the stop line alone
+         * (real minus the lines) in the middle of the outer approach lane */
+        size_t n = (size_t)w * h;
+        double *mk = malloc(n * sizeof *mk);
+        for (size_t i = 0; i < n; i++) mk[i] = real[i] - lines[i] > 0.01 ? real[i] - lines[i] : 0;
+        run S[8];
+        int ns = runs(mk, w, 0, 300 + 45, 205, 300, S, 8); /* x = 34.5 m: the outer forward lane (t < 0) */
+        CHECK(ns >= 1);
+        if (nc >= 1 && ns >= 1) {
+            double end = C[0].lo, edge = S[ns - 1].hi;
+            CHECKF(fabs(end - edge) <= 0.1, "the centre line ends at y = %.3f m, the stop line's edge is at %.3f m",
+                   end, edge);
+            printf("line end: centre line ends at y = %.3f m, stop line edge %.3f m\n", end, edge);
+        }
+        free(mk);
+        /* the main road's centre line at y = 20 m: a gap over the zebra
+         * (x = 8 .. 12 m) and none elsewhere before the junction; the edge
+         * lines run on */
+        run Z[8];
+        int nz = runs(cut, w, 1, 200, 0, 230, Z, 8);
+        CHECKF(nz == 2, "%d runs of the centre line", nz);
+        if (nz == 2) {
+            CHECKF(fabs(Z[0].hi - 8) <= 0.1 && fabs(Z[1].lo - 12) <= 0.1, "centre line gap %.3f .. %.3f m", Z[0].hi,
+                   Z[1].lo);
+            printf("zebra: centre line gap %.3f .. %.3f m (the zebra: 8 .. 12 m)\n", Z[0].hi, Z[1].lo);
+        }
+        for (uint32_t y = 140; y < 260; y++) {
+            int edge_row = 0;
+            for (uint32_t x = 0; x < 230; x++) edge_row += lines[(size_t)y * w + x] > 0.9;
+            if (edge_row < 225) continue; /* a solid line the whole way in the lines alone: an edge or centre line */
+            int cut_row = 0;
+            for (uint32_t x = 0; x < 230; x++) cut_row += cut[(size_t)y * w + x] > 0.9;
+            if (y > 150 && y < 250 && (y < 195 || y > 205)) CHECKF(cut_row >= 225, "edge line row %u cut (%d px)", y, cut_row);
+        }
+    }
+done:
+    free(real);
+    free(lines);
+    free(cut);
+    rs_atlas_free(ctx, atlas);
+}
+
+/* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
+static void mirror_turns(const char *in, char *out, size_t cap)
+{
+    char tmp[256];
+    size_t n = 0;
+    const char *end = in + strlen(in);
+    /* entries from the last to the first */
+    while (end > in && n + 1 < sizeof tmp) {
+        const char *bar = end;
+        while (bar > in && bar[-1] != '|') bar--;
+        for (const char *c = bar; c < end; c++) {
+            if (!strncmp(c, "left", 4)) { memcpy(tmp + n, "right", 5); n += 5; c += 3; }
+            else if (!strncmp(c, "right", 5)) { memcpy(tmp + n, "left", 4); n += 4; c += 4; }
+            else tmp[n++] = *c;
+        }
+        end = bar > in ? bar - 1 : in;
+        if (bar > in) tmp[n++] = '|';
+    }
+    tmp[n] = '\0';
+    snprintf(out, cap, "%s", tmp);
+}
+
+/* A junction scene, right-hand, and its mirror image x -> 60 - x with
+ * driving_side=left and mirrored turn lists: the paint (lines and
+ * markings) is the mirrored paint. */
+static void test_mirror(rs_profile profile)
+{
+    static const char *const fmt =
+        "road main width 10.5 class=primary area=rural lanes=3 lanes:forward=2 turn:lanes=%s%s\n"
+        "%g 20\n%g 20 crossing=zebra\n%g 20\nend\n"
+        "road side width 9 class=secondary area=rural lanes=3 lanes:backward=1 turn:lanes=%s control=stop%s\n"
+        "%g 40\n%g 20\nend\n"
+        "road north width 7 class=residential turn:lanes:forward=%s%s\n%g 0\n%g 20\nend\n"
+        "road oneway width 8 class=secondary area=rural oneway=yes lanes=2 turn:lanes=%s%s\n%g 40\n%g 20\nend\n";
+    const char *t_main = "through|through;right", *t_side = "left|through", *t_north = "reverse", *t_one = "left|right";
+    char m_main[256], m_side[256], m_north[256], m_one[256];
+    mirror_turns(t_main, m_main, sizeof m_main);
+    mirror_turns(t_side, m_side, sizeof m_side);
+    mirror_turns(t_north, m_north, sizeof m_north);
+    mirror_turns(t_one, m_one, sizeof m_one);
+    CHECK(!strcmp(m_main, "through;left|through") && !strcmp(m_side, "through|right"));
+    char right[2048], left[2048];
+    const char *L = " driving_side=left";
+    snprintf(right, sizeof right, fmt, t_main, "", 0.0, 12.0, 60.0, t_side, "", 30.0, 30.0, t_north, "", 27.0, 27.0,
+             t_one, "", 50.0, 50.0);
+    snprintf(left, sizeof left, fmt, m_main, L, 60.0, 48.0, 0.0, m_side, L, 30.0, 30.0, m_north, L, 33.0, 33.0, m_one,
+             L, 10.0, 10.0);
+    double *ar = NULL, *al = NULL;
+    uint32_t w = 0, h = 0, w2 = 0, h2 = 0;
+    CHECK(scene_paint(right, 61, 41, profile, &ar, NULL, &w, &h));
+    CHECK(scene_paint(left, 61, 41, profile, &al, NULL, &w2, &h2));
+    if (!ar || !al || w != w2 || h != h2) {
+        free(ar);
+        free(al);
+        return;
+    }
+    double worst = 0, sum = 0, painted = 0;
+    uint32_t wx = 0, wy = 0;
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) {
+            double a = ar[(size_t)y * w + x], b = al[(size_t)y * w + (w - 1 - x)], d = fabs(a - b);
+            sum += d;
+            painted += a;
+            if (d > worst) worst = d, wx = x, wy = y;
+        }
+    CHECKF(worst <= 0.02, "profile %d: mirrored paint differs by %.3f at (%u, %u) (right %.3f, left %.3f)",
+           (int)profile, worst, wx, wy, ar[(size_t)wy * w + wx], al[(size_t)wy * w + (w - 1 - wx)]);
+    CHECK(painted * PIX * PIX > 20); /* the scene has paint: lines, arrows, lines across */
+    printf("mirror (profile %d): worst %.4f, mean %.2g over %u x %u pixels, %.1f m^2 of paint\n", (int)profile, worst,
+           sum / ((double)w * h), w, h, painted * PIX * PIX);
+    free(ar);
+    free(al);
+}
+
+#ifdef RS_LANES_MAX
+/* The lane queries: counts, widths, directions, arrows, sides. */
+static void test_lane_queries(void)
+{
+    static const char text[] =
+        "road a width 12 class=primary lanes=3 lanes:forward=2 turn:lanes=left|through\n0 0\n100 0\nend\n"
+        "road b width 12 class=primary lanes=3 lanes:forward=2 turn:lanes=left|through driving_side=left\n"
+        "0 10\n100 10\nend\n"
+        "road c width 9 class=secondary oneway=-1 lanes=2 width:lanes=3|4 turn:lanes=left|right\n0 20\n100 20\nend\n"
+        "road d width 5.5 class=service\n0 30\n100 30\nend\n"
+        "road e1 width 7 class=residential turn:lanes:backward=reverse\n0 40\n50 40\nend\n"
+        "road e2 width 7 class=residential turn:lanes:backward=reverse\n100 40\n50 40\nend\n";
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    if (!roads) return;
+    rs_road_lanes L;
+    /* a: right-hand: the backward lane on the left (+t), then forward lanes
+     * from the driver's left: left, through */
+    CHECK(rs_road_lanes_get(roads, 0, NULL, &L) == RS_OK);
+    CHECK_EQ_INT(L.count, 3);
+    CHECK_EQ_INT(L.forward, 2);
+    CHECK_EQ_INT(L.backward, 1);
+    CHECK(L.lane[0].direction == -1 && L.lane[1].direction == 1 && L.lane[2].direction == 1);
+    CHECK(L.lane[1].turn == RS_TURN_LEFT && L.lane[2].turn == RS_TURN_THROUGH && L.lane[0].turn == 0);
+    CHECK_NEAR(L.centre, L.lane[0].t_right, 1e-12);
+    CHECK(L.lane[0].t_left <= 6 && L.lane[2].t_right >= -6);
+    for (uint32_t k = 0; k + 1 < L.count; k++) CHECK_NEAR(L.lane[k].t_right, L.lane[k + 1].t_left, 1e-12);
+    rs_road_lanes M;
+    /* b: the same road in left-hand traffic is its mirror */
+    CHECK(rs_road_lanes_get(roads, 1, NULL, &M) == RS_OK);
+    CHECK(M.side == RS_DRIVING_LEFT && M.count == 3);
+    for (uint32_t k = 0; k < 3; k++) {
+        const rs_lane *p = &L.lane[k], *q = &M.lane[2 - k];
+        CHECK_NEAR(q->t_left, -p->t_right, 1e-12);
+        CHECK_NEAR(q->t_right, -p->t_left, 1e-12);
+        CHECK(q->direction == p->direction);
+    }
+    /* forward lanes from the driver's left (+t): left on the outside in left-hand traffic */
+    CHECK(M.lane[0].turn == RS_TURN_LEFT && M.lane[1].turn == RS_TURN_THROUGH);
+    CHECK_NEAR(M.centre, -L.centre, 1e-12);
+    /* the default in the options: road a in left-hand traffic is road b */
+    rs_style_options so;
+    memset(&so, 0, sizeof so);
+    so.driving_side = RS_DRIVING_LEFT;
+    CHECK(rs_road_lanes_get(roads, 0, &so, &L) == RS_OK);
+    CHECK(memcmp(&L, &M, sizeof L) == 0);
+    /* c: one-way against its points, width:lanes along travel: 3 m then 4 m
+     * from the driver's left (-t), the strips share the rest */
+    CHECK(rs_road_lanes_get(roads, 2, NULL, &L) == RS_OK);
+    CHECK(L.count == 2 && L.backward == 2 && L.forward == 0);
+    CHECK_NEAR(L.lane[1].t_left - L.lane[1].t_right, 3, 1e-12); /* the driver's left lane: at -t */
+    CHECK_NEAR(L.lane[0].t_left - L.lane[0].t_right, 4, 1e-12);
+    CHECK(L.lane[1].turn == RS_TURN_LEFT && L.lane[0].turn == RS_TURN_RIGHT);
+    /* d: a service road: one lane both ways */
+    CHECK(rs_road_lanes_get(roads, 3, NULL, &L) == RS_OK);
+    CHECK(L.count == 1 && L.lane[0].direction == 0 && L.centre == 0);
+    CHECK_NEAR(L.lane[0].t_left, 2.75, 1e-12);
+    /* defaults per class: a residential road has one lane each way */
+    CHECK(rs_road_lanes_get(roads, 4, NULL, &L) == RS_OK);
+    CHECK(L.count == 2 && L.forward == 1 && L.backward == 1 && L.lane[0].turn == RS_TURN_REVERSE);
+    /* bad arguments */
+    CHECK(rs_road_lanes_get(roads, 6, NULL, &L) == RS_ERR_INVALID_ARG);
+    CHECK(rs_road_lanes_get(roads, 0, NULL, NULL) == RS_ERR_INVALID_ARG);
+    /* along a stroke: e1 and e2 point at each other (two-way: one stroke);
+     * the record drawn against the stroke has its lanes turned */
+    rs_network *net = NULL;
+    CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK);
+    rs_road_stroke st;
+    CHECK(rs_network_road_stroke(net, 4, &st) == RS_OK);
+    size_t road = 99;
+    rs_road_lanes A, B;
+    CHECK(rs_network_lanes_at(net, roads, st.stroke, 10, NULL, &road, &A) == RS_OK);
+    CHECK(rs_network_lanes_at(net, roads, st.stroke, 90, NULL, &road, &B) == RS_OK);
+    uint32_t rs2[2];
+    CHECK_EQ_INT(rs_network_stroke_roads(net, st.stroke, rs2, 2), 2);
+    CHECK_EQ_INT(road, rs2[1]);
+    /* the backward lane (its U-turn arrow) is on the stroke's left for the
+     * record along it, and the same lane is the stroke's forward... */
+    CHECK(A.count == 2 && B.count == 2);
+    CHECK(A.lane[0].direction == -1 && B.lane[0].direction == -1);
+    CHECK(A.lane[0].turn == RS_TURN_REVERSE || B.lane[1].turn == RS_TURN_REVERSE);
+    CHECK(rs_network_lanes_at(net, roads, 99, 0, NULL, NULL, &A) == RS_ERR_INVALID_ARG);
+    rs_network_free(ctx, net);
+    /* the default styles on the lanes: a left-hand two-way primary's lines
+     * are the right-hand ones mirrored */
+    rs_style_request rq;
+    memset(&rq, 0, sizeof rq);
+    rq.road_class = RS_CLASS_PRIMARY;
+    rq.lanes = 3;
+    rs_style sr, sl;
+    CHECK(rs_style_default(&rq, &sr) == RS_OK);
+    rq.driving_side = RS_DRIVING_LEFT;
+    CHECK(rs_style_default(&rq, &sl) == RS_OK);
+    CHECK_EQ_INT(sl.line_count, sr.line_count);
+    for (uint32_t k = 0; k < sr.line_count; k++) {
+        int found = 0;
+        for (uint32_t j = 0; j < sl.line_count; j++)
+            found |= fabs(sl.line[j].offset + sr.line[k].offset) < 1e-12 && sl.line[j].width == sr.line[k].width &&
+                     sl.line[j].dash_count == sr.line[k].dash_count;
+        CHECK(found);
+    }
+    /* the built-in sizes the line cuts assume (lib/markings_auto.c
+     * default_sizes) are the built-in atlas's */
+    rs_atlas *at = NULL;
+    CHECK(rs_atlas_default(ctx, &at) == RS_OK);
+    static const struct {
+        const char *name;
+        double length, width;
+    } sz[] = { { "stop_line", 0.5, 3.5 },         { "give_way_line", 0.5, 3.5 }, { "give_way_block", 0.5, 0.5 },
+               { "yield_tooth", 0.6858, 0.4572 }, { "zebra_bar", 4.0, 0.5 },     { "zebra", 4.0, 6.0 },
+               { "arrow_uturn_right", 5.0, 1.6 } };
+    for (size_t k = 0; k < sizeof sz / sizeof sz[0]; k++) {
+        long ti = rs_atlas_find(at, sz[k].name);
+        double len = 0, wid = 0;
+        CHECKF(ti >= 0 && rs_atlas_get(at, (size_t)ti, NULL, &len, &wid, NULL, NULL) == RS_OK &&
+                   len == sz[k].length && wid == sz[k].width,
+               "atlas type %s", sz[k].name);
+    }
+    rs_atlas_free(ctx, at);
+    rq.driving_side = (rs_driving_side)2;
+    CHECK(rs_style_default(&rq, &sl) == RS_ERR_INVALID_ARG);
+    rs_roads_free(ctx, roads);
+}
+
+/* The GPU export carries the line cuts: per road its range, per cut a
+ * unit direction and a positive range; the stop line's road has them, the
+ * through road only its zebra's. */
+static void test_gpu_cuts(void)
+{
+    static const char text[] =
+        "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n60 20\nend\n"
+        "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
+    float z[61 * 41];
+    memset(z, 0, sizeof z);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = NULL;
+    CHECK(rs_dem_create(ctx, 61, 41, z, &dem) == RS_OK);
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
+    CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
+    if (g) {
+        CHECK(g->ncuts >= 2 && g->cut);
+        size_t total = 0;
+        for (size_t r = 0; r < g->nroads; r++) {
+            size_t first = (size_t)g->cut[4 * r], n = (size_t)g->cut[4 * r + 1];
+            CHECK(n == 0 || first == total);
+            total += n;
+            CHECK(n >= 1); /* main: the zebra; side: the stop line */
+            for (size_t k = first; k < first + n && k < g->ncuts; k++) {
+                const float *c = g->cut + 4 * g->nroads + RS_GPU_CUT_FLOATS * k;
+                CHECK(fabs(hypot(c[2], c[3]) - 1) < 1e-5 && c[5] > c[4] && c[6] > 0);
+            }
+        }
+        CHECK_EQ_INT(total, g->ncuts);
+    }
+    rs_gpu_scene_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+/* Random lane attributes (valid and not): the model always holds its
+ * invariants, left-hand traffic is the exact mirror of right-hand, and the
+ * default style's lines stay inside the road. */
+static uint32_t rnd_state = 12345;
+static uint32_t rnd(uint32_t n)
+{
+    rnd_state = rnd_state * 1664525u + 1013904223u;
+    return (rnd_state >> 8) % n;
+}
+
+static void test_random_lanes(void)
+{
+    static const char *const classes[] = { "motorway", "trunk", "primary", "secondary", "tertiary",
+                                           "residential", "service", "track", "path", "footway", "cycleway" };
+    static const char *const ow[] = { NULL, "yes", "no", "-1" };
+    static const char *const counts[] = { NULL, "1", "2", "3", "4", "7", "16", "17", "0", "x", "08" };
+    static const char *const turns[] = { NULL, "left", "left|through", "through;right|right", "reverse|left|through",
+                                         "|", "none|none|none|none", "left|left|left|left|left|left|left|left|left" };
+    static const char *const widths[] = { NULL, "3", "3|3.5", "2.75|3|3.25", "3,5|3", "1e3|2", "3|", "0.5|0.5|0.5|0.5" };
+    int bad = 0;
+    for (int it = 0; it < 3000; it++) {
+        rs_roads *roads = NULL;
+        double xy[4] = { 0, 0, 50, 0 };
+        double w = 2 + rnd(200) / 10.0;
+        if (rs_roads_create(ctx, &roads) != RS_OK) return;
+        rs_roads_add(ctx, roads, "r", w, xy, 2);
+        rs_roads_set_attr(ctx, roads, 0, "class", classes[rnd(11)]);
+        const char *v;
+        if ((v = ow[rnd(4)])) rs_roads_set_attr(ctx, roads, 0, "oneway", v);
+        if ((v = counts[rnd(8)])) rs_roads_set_attr(ctx, roads, 0, "lanes", v);
+        if ((v = counts[rnd(11)])) rs_roads_set_attr(ctx, roads, 0, "lanes:forward", v);
+        if ((v = counts[rnd(11)])) rs_roads_set_attr(ctx, roads, 0, "lanes:backward", v);
+        if ((v = turns[rnd(8)])) rs_roads_set_attr(ctx, roads, 0, "turn:lanes", v);
+        if ((v = turns[rnd(8)])) rs_roads_set_attr(ctx, roads, 0, "turn:lanes:backward", v);
+        /* lists (turn:, width:lanes) read from the driver's left on either
+         * side: only the rest is a mirror */
+        int listed = (v = widths[rnd(8)]) != NULL;
+        if (listed) rs_roads_set_attr(ctx, roads, 0, "width:lanes", v);
+        rs_style_options so;
+        memset(&so, 0, sizeof so);
+        so.profile = rnd(2) ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
+        rs_road_lanes R, L;
+        CHECK(rs_road_lanes_get(roads, 0, &so, &R) == RS_OK);
+        so.driving_side = RS_DRIVING_LEFT;
+        CHECK(rs_road_lanes_get(roads, 0, &so, &L) == RS_OK);
+        int ok = R.count >= 1 && R.count <= RS_LANES_MAX && L.count == R.count && R.width == w &&
+                 R.forward + R.backward <= R.count && fabs(R.lane[0].t_left) <= w / 2 + 1e-9 &&
+                 fabs(R.lane[R.count - 1].t_right) <= w / 2 + 1e-9;
+        for (uint32_t k = 0; ok && k < R.count; k++) {
+            const rs_lane *a = &R.lane[k], *b = &L.lane[R.count - 1 - k];
+            ok = a->t_left > a->t_right && (k == 0 || a->t_left == R.lane[k - 1].t_right) &&
+                 b->direction == a->direction &&
+                 (listed || (fabs(b->t_left + a->t_right) < 1e-9 && fabs(b->t_right + a->t_left) < 1e-9));
+        }
+        rs_style st;
+        so.driving_side = (rs_driving_side)rnd(2);
+        ok = ok && rs_road_style_ex(ctx, roads, 0, &so, &st) == RS_OK;
+        for (uint32_t k = 0; ok && k < st.line_count; k++)
+            ok = fabs(st.line[k].offset) + st.line[k].width / 2 <= w / 2 + 1e-9;
+        if (!ok && bad++ < 5) {
+            fprintf(stderr, "    random lanes case %d (width %g):", it, w);
+            for (size_t k = 0; k < rs_roads_attr_count(roads, 0); k++) {
+                const char *key, *val;
+                rs_roads_attr_at(roads, 0, k, &key, &val);
+                fprintf(stderr, " %s=%s", key, val);
+            }
+            fprintf(stderr, "\n");
+        }
+        CHECK(ok);
+        rs_roads_free(ctx, roads);
+    }
+}
+
+#endif
+
+int main(void)
+{
+    if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_arrows_and_stop_line();
+    test_standard_sizes();
+    test_line_ends();
+    test_mirror(RS_PROFILE_RMS);
+    test_mirror(RS_PROFILE_MUTCD);
+#ifdef RS_LANES_MAX
+    test_lane_queries();
+    test_random_lanes();
+    test_gpu_cuts();
+#endif
+    rs_ctx_free(ctx);
+    return th_finish("test_lanes");
+}
