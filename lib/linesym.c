@@ -116,6 +116,7 @@ struct rs__linesym {
     /* while building: the cuts of each road (p->cuts[cut_ord[cut_start[r] ..
      * cut_start[r + 1])]) */
     const rs__line_cut *cuts;
+    const uint32_t *cut_stroke; /* per road its stroke (NULL: every road its own) */
     uint32_t *cut_start, *cut_ord;
 };
 
@@ -841,14 +842,20 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
  * lines stop at a stop line, across a zebra), then cut at the junctions.
  * Like a junction cut, a cut that would split P into too many pieces
  * leaves it whole. */
+static uint32_t cut_key(const rs__linesym *L, uint32_t road)
+{
+    return L->cut_stroke ? L->cut_stroke[road] : road;
+}
+
 static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
-    if (!L->cut_start || L->cut_start[road] == L->cut_start[road + 1]) return push_cut(ctx, L, J, P, road);
+    uint32_t key = L->cut_start ? cut_key(L, road) : 0;
+    if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road);
     enum { QMAX = 16 };
     ls_piece q[QMAX], next[QMAX], tmp[4];
     uint32_t nq = 1;
     q[0] = *P;
-    for (uint32_t e = L->cut_start[road]; e < L->cut_start[road + 1]; e++) {
+    for (uint32_t e = L->cut_start[key]; e < L->cut_start[key + 1]; e++) {
         const rs__line_cut *c = &L->cuts[L->cut_ord[e]];
         ls_surf Q;
         memset(&Q, 0, sizeof Q);
@@ -1449,17 +1456,6 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         }
         d0 += B->ndash;
     }
-    if (p->ncuts) { /* the cuts by road (a counting sort) */
-        L->cuts = p->cuts;
-        L->cut_start = rs__calloc(ctx, nroads + 2, sizeof *L->cut_start);
-        L->cut_ord = rs__alloc_array(ctx, p->ncuts, sizeof *L->cut_ord);
-        if (!L->cut_start || !L->cut_ord) { res = RS_ERR_NOMEM; goto fail; }
-        for (size_t k = 0; k < p->ncuts; k++)
-            if (p->cuts[k].road < nroads) L->cut_start[p->cuts[k].road + 2]++;
-        for (size_t r = 0; r < nroads; r++) L->cut_start[r + 2] += L->cut_start[r + 1];
-        for (size_t k = 0; k < p->ncuts; k++)
-            if (p->cuts[k].road < nroads) L->cut_ord[L->cut_start[p->cuts[k].road + 1]++] = (uint32_t)k;
-    }
     double per_unit = rs__local_quantum(p->cell_size);
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     size_t cap = 0, total = 0;
@@ -1468,6 +1464,22 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     /* road by road, or stroke by stroke: the stroke's records as one polyline */
     const rs_network *net = p->net && rs_network_road_count(p->net) == nroads ? p->net : NULL;
     J.stroke_of = net ? net->stroke_of : NULL;
+    /* the cuts by stroke (a counting sort): a stroke's polyline leaves out
+     * the points where its records meet in a straight line, so a piece
+     * cannot tell which record it lies on; the cuts are places, so every
+     * cut of the stroke applies to each of its pieces */
+    if (p->ncuts) {
+        L->cuts = p->cuts;
+        L->cut_stroke = J.stroke_of;
+        L->cut_start = rs__calloc(ctx, nroads + 2, sizeof *L->cut_start);
+        L->cut_ord = rs__alloc_array(ctx, p->ncuts, sizeof *L->cut_ord);
+        if (!L->cut_start || !L->cut_ord) { res = RS_ERR_NOMEM; goto fail; }
+        for (size_t k = 0; k < p->ncuts; k++)
+            if (p->cuts[k].road < nroads) L->cut_start[cut_key(L, p->cuts[k].road) + 2]++;
+        for (size_t r = 0; r < nroads; r++) L->cut_start[r + 2] += L->cut_start[r + 1];
+        for (size_t k = 0; k < p->ncuts; k++)
+            if (p->cuts[k].road < nroads) L->cut_ord[L->cut_start[cut_key(L, p->cuts[k].road) + 1]++] = (uint32_t)k;
+    }
     size_t nstroke = net ? net->nstrokes : nroads;
     for (size_t k = 0; k < nstroke; k++) {
         uint32_t one = (uint32_t)k;
@@ -1544,6 +1556,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     L->ids = NULL;
     L->cut_start = L->cut_ord = NULL;
     L->cuts = NULL;
+    L->cut_stroke = NULL;
     L->cap = 0;
     L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ent + L->npc * sizeof *L->pp +
                4 * nhpp * sizeof *L->hpp + nband * sizeof *L->band +

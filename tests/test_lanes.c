@@ -280,11 +280,18 @@ static void test_standard_sizes(void)
  * sizes whose sprites are transparent (so the automatic markings are
  * placed, and cut the lines, but paint nothing); the stop line's edge
  * from the built-in atlas. */
-static void test_line_ends(void)
+static const char line_ends_one[] =
+    "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n60 20\nend\n"
+    "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
+/* the main road in two records meeting in a straight line (one stroke,
+ * drawn as one polyline without the joint): the zebra's cut still applies */
+static const char line_ends_split[] =
+    "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n45 20\nend\n"
+    "road main width 12 class=primary area=rural lanes=4\n45 20\n60 20\nend\n"
+    "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
+
+static void test_line_ends(const char *text)
 {
-    static const char text[] =
-        "road main width 12 class=primary area=rural lanes=4\n0 20\n10 20 crossing=zebra\n60 20\nend\n"
-        "road side width 12 class=secondary area=rural lanes=4 control=stop\n30 40\n30 20\nend\n";
     static uint8_t clear[8 * 8 * 4];
     static const char index[] = "stop_line 0 0 8 8 0.5 3.5\ngive_way_line 0 0 8 8 0.5 3.5\n"
                                 "give_way_block 0 0 8 8 0.5 0.5\nzebra_bar 0 0 8 8 4 0.5\n";
@@ -660,7 +667,8 @@ int main(void)
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_arrows_and_stop_line();
     test_standard_sizes();
-    test_line_ends();
+    test_line_ends(line_ends_one);
+    test_line_ends(line_ends_split);
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX
