@@ -316,7 +316,8 @@ static int sidecars_open(gdal_source *s, uint64_t *total)
         size_t n = strlen(dir) + strlen(e->d_name) + 2;
         char *p = malloc(n);
         if (!p) { bad = 1; cli_error("out of memory"); break; }
-        snprintf(p, n, "%s/%s", dir, e->d_name);
+        if (slash) snprintf(p, n, "%s/%s", dir, e->d_name);
+        else snprintf(p, n, "%s", e->d_name); /* named as the input is, for messages */
         /* not blocking on a FIFO; only regular files are read */
         int fd = open(p, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
         struct stat st;
