@@ -584,28 +584,44 @@ out:
     return rc;
 }
 
+/* The start of a read of an input: 0 with s open, or 1 after a message. */
+static int source_begin(gdal_source *s, cli_input *in)
+{
+    init();
+    CPLErrorReset();
+    if (cli_gdal_path_check(in->path)) return 1;
+    if (source_open(s, in)) {
+        source_close(s, 0);
+        return 1;
+    }
+    return 0;
+}
+
+/* The end of a read that returned rc: checked and registered when rc is 0
+ * (-1 when that fails, after a message), then closed (a pipe's bytes
+ * handed back on 2: not GDAL's). */
+static int source_end(gdal_source *s, const char *role, int rc)
+{
+    if (rc == 0 && (source_verify(s) || source_register(s, role))) rc = -1;
+    source_close(s, rc == 2);
+    return rc;
+}
+
 int cli_gdal_read_dem_input(cli_input *in, const char *role, uint32_t max_side, uint32_t *w, uint32_t *h, float **z,
                             size_t *nodata, cli_geo *geo)
 {
-    init();
     memset(geo, 0, sizeof *geo);
     *z = NULL;
     *nodata = 0;
-    CPLErrorReset();
-    if (cli_gdal_path_check(in->path)) return 1;
     gdal_source s;
-    if (source_open(&s, in)) {
-        source_close(&s, 0);
-        return 1;
-    }
-    int rc = read_dem(&s, max_side, w, h, z, nodata, geo);
-    if (rc == 0 && (source_verify(&s) || source_register(&s, role))) {
-        rc = 1;
+    if (source_begin(&s, in)) return 1;
+    int rc = source_end(&s, role, read_dem(&s, max_side, w, h, z, nodata, geo));
+    if (rc < 0) {
         free(*z);
         *z = NULL;
         cli_geo_free(geo);
+        rc = 1;
     }
-    source_close(&s, rc == 2);
     return rc;
 }
 
@@ -1239,24 +1255,17 @@ out:
 int cli_gdal_roads_text_input(cli_input *in, const char *role, const cli_gdal_roads_opts *o, char **text,
                               size_t *size)
 {
-    init();
     *text = NULL;
     *size = 0;
-    CPLErrorReset();
-    if (cli_gdal_path_check(in->path)) return 1;
     gdal_source s;
-    if (source_open(&s, in)) {
-        source_close(&s, 0);
-        return 1;
-    }
-    int rc = roads_text(&s, o, text, size);
-    if (rc == 0 && (source_verify(&s) || source_register(&s, role))) {
-        rc = 1;
+    if (source_begin(&s, in)) return 1;
+    int rc = source_end(&s, role, roads_text(&s, o, text, size));
+    if (rc < 0) {
         free(*text);
         *text = NULL;
         *size = 0;
+        rc = 1;
     }
-    source_close(&s, 0);
     return rc;
 }
 
