@@ -44,11 +44,10 @@ int cli_read_input(const char *path, const char *role, size_t limit, char **data
  * already a copy) go to an unlinked temporary file when
  * cli_inputs_keep_pipes is on. 0, or 1 after a message. */
 int cli_inputs_add(const char *path, const char *role, int fd, const void *data, size_t size);
+/* (A folder - a GIS source - is registered by inode, not hashed.) */
 /* Keep a copy of what is read from pipes (for hashing: tiles); off by
  * default, so a pipe costs no temporary file where nothing hashes it. */
 void cli_inputs_keep_pipes(int on);
-/* An input opened by name by another reader (GDAL): a file or a folder. */
-int cli_inputs_add_path(const char *path, const char *role);
 size_t cli_inputs_count(void);
 /* Entry i's names; returns its descriptor (read it with pread from offset
  * 0; -1: a folder, -1 too when i is out of range). */

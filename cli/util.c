@@ -306,23 +306,6 @@ int cli_inputs_add(const char *path, const char *role, int fd, const void *data,
     return 0;
 }
 
-int cli_inputs_add_path(const char *path, const char *role)
-{
-    /* O_NONBLOCK: a FIFO that GDAL has already drained must not block here */
-    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
-    struct stat st;
-    int bad = fstat(fd, &st) != 0;
-    if (!bad && !S_ISREG(st.st_mode)) { /* a GIS source folder (or a FIFO): checked by inode, not hashed */
-        close(fd);
-        if (input_push(path, role, &st, -1)) { cli_error("out of memory"); return 1; }
-        return 0;
-    }
-    bad = bad || cli_inputs_add(path, role, fd, NULL, 0);
-    close(fd);
-    return bad;
-}
-
 size_t cli_inputs_count(void) { return ninputs; }
 
 int cli_inputs_get(size_t i, const char **path, const char **role)
