@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <sys/stat.h>
 #include "roadsplat.h"
 
 #ifdef __cplusplus
@@ -43,11 +44,10 @@ int cli_read_input(const char *path, const char *role, size_t limit, char **data
  * already a copy) go to an unlinked temporary file when
  * cli_inputs_keep_pipes is on. 0, or 1 after a message. */
 int cli_inputs_add(const char *path, const char *role, int fd, const void *data, size_t size);
+/* (A folder - a GIS source - is registered by inode, not hashed.) */
 /* Keep a copy of what is read from pipes (for hashing: tiles); off by
  * default, so a pipe costs no temporary file where nothing hashes it. */
 void cli_inputs_keep_pipes(int on);
-/* An input opened by name by another reader (GDAL): a file or a folder. */
-int cli_inputs_add_path(const char *path, const char *role);
 size_t cli_inputs_count(void);
 /* Entry i's names; returns its descriptor (read it with pread from offset
  * 0; -1: a folder, -1 too when i is out of range). */
@@ -61,10 +61,37 @@ void cli_inputs_clear(void);
 #define CLI_IMAGE_BUDGET_DEFAULT ((uint64_t)1 << 27)
 void cli_image_budget_set(uint64_t pixels);
 
+/* An input opened once (docs/ROBUSTNESS.md, "trust model"): every reader
+ * of a run's input reads this descriptor (or what was read from it), never
+ * the name again, so what is loaded, registered and hashed is one inode (or
+ * one pipe's bytes). cli_input_open: a regular file or a pipe (a folder
+ * when folder_ok: a GIS source), devices refused; the first bytes are read
+ * into head (got of them; eof: that is all). 0, or 1 after a message. */
+typedef struct cli_input {
+    const char *path;
+    int fd;
+    struct stat st;
+    char head[4096];
+    size_t got;
+    int eof;
+    char *all; /* a pipe's bytes handed back by a reader (cli_input_keep) */
+    size_t all_size;
+} cli_input;
+int cli_input_open(cli_input *in, const char *path, int folder_ok);
+/* The whole input, head included (malloc'd, NUL-terminated, at most limit
+ * bytes): a regular file from its descriptor, a pipe once. 0, or 1 after a
+ * message. */
+int cli_input_read_all(cli_input *in, size_t limit, char **data, size_t *size);
+/* Give a pipe's bytes back for the next reader (the input owns them). */
+void cli_input_keep(cli_input *in, char *data, size_t size);
+void cli_input_close(cli_input *in);
+
 /* Load a DEM: PGM (P2/P5) through the library, anything else through
  * OpenImageIO (PNG 8/16-bit, TIFF incl. float32; single channel, or the
  * first channel of a grey+alpha image). Prints the error and returns NULL. */
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path);
+/* The same from an opened input (closed here, on every path). */
+rs_dem *cli_load_dem_input(rs_ctx *ctx, cli_input *in);
 /* A texture image as RGBA8 (malloc'd, the caller frees *rgba); OpenImageIO's
  * own stderr output is filtered as for DEMs. Registered as an input under
  * `role` (NULL: not) and charged to the decoded-image budget (a PNG from

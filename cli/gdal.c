@@ -14,6 +14,7 @@
 #include <ogr_srs_api.h>
 
 #include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <float.h>
@@ -21,6 +22,8 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -91,19 +94,21 @@ static int image_format(const char *driver)
     return 0;
 }
 
-/* Untrusted: 0 when the driver that identifies `path` is allowed (list),
+/* Untrusted: 0 when the driver that identifies `name` (GDAL's name for the
+ * input `path`) is allowed (list),
  * 2 when none does, 1 after a message naming the driver and the flag. */
-static int driver_allowed(const char *path, unsigned kind, const char *const *list, const char *what)
+static int driver_allowed(const char *name, const char *path, unsigned kind, const char *const *list,
+                          const char *what)
 {
     if (cli_gdal_trusted()) return 0;
-    GDALDriverH d = GDALIdentifyDriverEx(path, kind, NULL, NULL);
+    GDALDriverH d = GDALIdentifyDriverEx(name, kind, NULL, NULL);
     if (!d) return 2;
-    const char *name = GDALGetDriverShortName(d);
+    const char *dn = GDALGetDriverShortName(d);
     for (size_t i = 0; list[i]; i++)
-        if (!strcmp(list[i], name)) return 0;
-    if (image_format(name)) return 2; /* OpenImageIO reads it, from that one file */
+        if (!strcmp(list[i], dn)) return 0;
+    if (image_format(dn)) return 2; /* OpenImageIO reads it, from that one file */
     cli_error("%s: GDAL reads it with its %s driver, which roadsplat uses for %s only with --gdal-trust (it may "
-              "read other files or the network; docs/ROBUSTNESS.md)", path, name, what);
+              "read other files or the network; docs/ROBUSTNESS.md)", path, dn, what);
     return 1;
 }
 
@@ -210,28 +215,259 @@ static int utm_epsg(double lon, double lat)
     return (lat >= 0 ? 32600 : 32700) + zone;
 }
 
+/* ---- reading an input once (docs/ROBUSTNESS.md, "trust model") ------------- */
+
+/* GDAL reads the bytes the run registered, not the name again: the input
+ * (opened once by the caller, cli_input) and the sidecar files GDAL would
+ * look for beside it are copied from descriptors into a private /vsimem/
+ * folder, up to this many bytes together (a pipe: at most this many).
+ * Beyond it, and for a VRT (which reads its sources by name), a netCDF
+ * file (its library opens the name itself) or a folder, GDAL opens the
+ * name and the file found there afterwards must still be the inode that
+ * was registered. */
+#define GDAL_COPY_LIMIT ((size_t)1 << 30)
+#define GDAL_MAX_SIDECARS 32
+
+typedef struct sidecar {
+    char *path;
+    int fd;
+    char *bytes;
+    size_t size;
+} sidecar;
+
+typedef struct gdal_source {
+    cli_input *in;      /* fd -1: a name GDAL reads itself (--gdal-trust: a URL, a /vsi path) */
+    char name[4200];    /* what GDAL opens */
+    char dir[64];       /* the private /vsimem/ folder; "" when GDAL opens the name */
+    char *bytes;        /* the input's bytes in that folder */
+    size_t size;
+    sidecar side[GDAL_MAX_SIDECARS];
+    size_t nside;
+} gdal_source;
+
+/* A file GDAL reads beside `base` (the input's file name): BASE.x for x of
+ * its own sidecars (.aux.xml, overviews, masks), STEM.x for world files,
+ * .prj, raw headers and the parts of a shapefile, MapInfo table, CSV or
+ * GML (STEM: base without its extension). Case-insensitive, as GDAL. */
+static int is_sidecar(const char *entry, const char *base)
+{
+    static const char *const of_base[] = { "aux.xml", "ovr", "msk", "aux", NULL };
+    static const char *const of_stem[] = { "tfw", "tifw", "tiffw", "wld", "jgw", "jpgw", "pgw", "pngw", "gfw",
+                                           "gifw", "bpw", "bmpw", "j2w", "prj", "hdr", "stx", "clr", "rrd", "ige",
+                                           "aux", "aux.xml", "shx", "dbf", "cpg", "qix", "sbn", "sbx", "csvt",
+                                           "xsd", "gfs", "dat", "map", "id", "ind", NULL };
+    size_t nb = strlen(base);
+    const char *dot = strrchr(base, '.');
+    size_t ns = dot && dot != base ? (size_t)(dot - base) : nb;
+    if (!strcmp(entry, base)) return 0;
+    if (!strncasecmp(entry, base, nb) && entry[nb] == '.')
+        for (size_t i = 0; of_base[i]; i++)
+            if (!strcasecmp(entry + nb + 1, of_base[i])) return 1;
+    if (!strncasecmp(entry, base, ns) && entry[ns] == '.')
+        for (size_t i = 0; of_stem[i]; i++)
+            if (!strcasecmp(entry + ns + 1, of_stem[i])) return 1;
+    return 0;
+}
+
+static int read_fd_all(int fd, char *buf, size_t size)
+{
+    size_t n = 0;
+    while (n < size) {
+        ssize_t k = pread(fd, buf + n, size - n, (off_t)n);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return 1;
+        n += (size_t)k;
+    }
+    return 0;
+}
+
+static void sidecars_free(gdal_source *s)
+{
+    for (size_t i = 0; i < s->nside; i++) {
+        free(s->side[i].path);
+        free(s->side[i].bytes);
+        if (s->side[i].fd >= 0) close(s->side[i].fd);
+    }
+    s->nside = 0;
+}
+
+/* The sidecars of the regular file s->in, opened (regular files only) and
+ * their sizes added to *total. 0, or 1 after a message. */
+static int sidecars_open(gdal_source *s, uint64_t *total)
+{
+    const char *path = s->in->path, *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char dir[4096];
+    size_t nd = slash ? (size_t)(slash - path) : 0;
+    if (nd + 2 > sizeof dir) return 0;
+    if (slash) {
+        memcpy(dir, path, nd ? nd : 1); /* "/x": the root */
+        dir[nd ? nd : 1] = '\0';
+    } else {
+        strcpy(dir, ".");
+    }
+    DIR *d = opendir(dir);
+    if (!d) return 0; /* not listable: GDAL would not find sidecars either */
+    struct dirent *e;
+    int bad = 0;
+    while (!bad && (e = readdir(d)) != NULL) {
+        if (!is_sidecar(e->d_name, base)) continue;
+        if (s->nside == GDAL_MAX_SIDECARS) break;
+        size_t n = strlen(dir) + strlen(e->d_name) + 2;
+        char *p = malloc(n);
+        if (!p) { bad = 1; cli_error("out of memory"); break; }
+        if (slash) snprintf(p, n, "%s/%s", dir, e->d_name);
+        else snprintf(p, n, "%s", e->d_name); /* named as the input is, for messages */
+        /* not blocking on a FIFO; only regular files are read */
+        int fd = open(p, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+        struct stat st;
+        if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+            if (fd >= 0) close(fd);
+            free(p);
+            continue;
+        }
+        sidecar *c = &s->side[s->nside++];
+        c->path = p;
+        c->fd = fd;
+        c->bytes = NULL;
+        c->size = (size_t)st.st_size;
+        *total += (uint64_t)st.st_size;
+    }
+    closedir(d);
+    return bad;
+}
+
+/* Makes s->name, the name GDAL opens for the input: 0, or 1 after a
+ * message. */
+static int source_open(gdal_source *s, cli_input *in)
+{
+    static unsigned serial; /* folders of one process */
+    memset(s, 0, sizeof *s);
+    s->in = in;
+    snprintf(s->name, sizeof s->name, "%s", in->path);
+    if (in->fd < 0 || S_ISDIR(in->st.st_mode)) return 0; /* GDAL opens the name */
+    int pipe = !S_ISREG(in->st.st_mode);
+    if (!pipe) {
+        char head[sizeof in->head + 1];
+        memcpy(head, in->head, in->got);
+        head[in->got] = '\0';
+        static const unsigned char hdf5[8] = { 0x89, 'H', 'D', 'F', '\r', '\n', 0x1A, '\n' };
+        if (strstr(head, "<VRTDataset") || (in->got >= 4 && !memcmp(head, "CDF", 3)) ||
+            (in->got >= 8 && !memcmp(head, hdf5, 8)))
+            return 0;
+        uint64_t total = (uint64_t)in->st.st_size;
+        if (sidecars_open(s, &total)) return 1;
+        if (total > GDAL_COPY_LIMIT) { /* too large to copy: GDAL opens the name, checked after */
+            sidecars_free(s);
+            return 0;
+        }
+    }
+    if (cli_input_read_all(in, GDAL_COPY_LIMIT, &s->bytes, &s->size)) {
+        sidecars_free(s);
+        return 1;
+    }
+    for (size_t i = 0; i < s->nside; i++) {
+        sidecar *c = &s->side[i];
+        if (!(c->bytes = malloc(c->size ? c->size : 1)) || read_fd_all(c->fd, c->bytes, c->size)) {
+            cli_error("%s: cannot read: %s", c->path, c->bytes ? strerror(errno ? errno : EIO) : "out of memory");
+            return 1; /* source_close frees */
+        }
+    }
+    const char *slash = strrchr(in->path, '/'), *base = slash ? slash + 1 : in->path;
+    snprintf(s->dir, sizeof s->dir, "/vsimem/roadsplat-%ld-%u", (long)getpid(), ++serial);
+    snprintf(s->name, sizeof s->name, "%s/%s", s->dir, base[0] ? base : "input");
+    VSILFILE *f = VSIFileFromMemBuffer(s->name, (GByte *)s->bytes, s->size, FALSE);
+    int bad = !f;
+    if (f) VSIFCloseL(f);
+    for (size_t i = 0; !bad && i < s->nside; i++) {
+        char n[4200];
+        const char *cs = strrchr(s->side[i].path, '/');
+        snprintf(n, sizeof n, "%s/%s", s->dir, cs ? cs + 1 : s->side[i].path);
+        f = VSIFileFromMemBuffer(n, (GByte *)s->side[i].bytes, s->side[i].size, FALSE);
+        bad = !f;
+        if (f) VSIFCloseL(f);
+    }
+    if (bad) cli_error("%s: out of memory for GDAL's copy", in->path);
+    return bad;
+}
+
+/* Frees the copies; a pipe's bytes go back to the input when `hand_back`
+ * (for the next reader: OpenImageIO). */
+static void source_close(gdal_source *s, int hand_back)
+{
+    if (s->dir[0]) VSIRmdirRecursive(s->dir);
+    if (hand_back && s->bytes && !S_ISREG(s->in->st.st_mode)) cli_input_keep(s->in, s->bytes, s->size);
+    else free(s->bytes);
+    s->bytes = NULL;
+    sidecars_free(s);
+}
+
+/* GDAL opened the name: the file there must still be the one registered
+ * (a file replaced between the two opens would be loaded from one inode
+ * and registered and hashed from another). 0, or 1 after a message. */
+static int source_verify(const gdal_source *s)
+{
+    struct stat st;
+    if (s->dir[0] || s->in->fd < 0) return 0;
+    if (stat(s->in->path, &st) != 0 || st.st_dev != s->in->st.st_dev || st.st_ino != s->in->st.st_ino) {
+        cli_error("%s: the file was replaced while it was read; run again", s->in->path);
+        return 1;
+    }
+    return 0;
+}
+
+/* The input and its sidecars into the run's registry under role (NULL:
+ * not registered). 0, or 1 after a message. */
+static int source_register(const gdal_source *s, const char *role)
+{
+    if (!role || s->in->fd < 0) return 0;
+    int pipe = !S_ISREG(s->in->st.st_mode) && !S_ISDIR(s->in->st.st_mode);
+    if (cli_inputs_add(s->in->path, role, s->in->fd, pipe ? s->bytes : NULL, s->size)) return 1;
+    char r[96];
+    snprintf(r, sizeof r, "%s sidecar", role);
+    for (size_t i = 0; i < s->nside; i++)
+        if (cli_inputs_add(s->side[i].path, r, s->side[i].fd, NULL, 0)) return 1;
+    return 0;
+}
+
+/* GDAL's last error as one line with the private name replaced by the
+ * input's. */
+static const char *source_error(const gdal_source *s, const char *fallback)
+{
+    static char buf[600];
+    const char *m = last_error(fallback);
+    size_t nn = strlen(s->name), o = 0;
+    if (!s->dir[0]) return m;
+    while (*m && o + 1 < sizeof buf) {
+        if (!strncmp(m, s->name, nn)) {
+            int k = snprintf(buf + o, sizeof buf - o, "%s", s->in->path);
+            o = k < 0 || (size_t)k >= sizeof buf - o ? sizeof buf - 1 : o + (size_t)k;
+            m += nn;
+        } else {
+            buf[o++] = *m++;
+        }
+    }
+    buf[o] = '\0';
+    return buf;
+}
+
 /* ---- DEMs ------------------------------------------------------------------ */
 
-int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
-                      cli_geo *geo)
+static int read_dem(const gdal_source *s, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
+                    cli_geo *geo)
 {
-    init();
-    memset(geo, 0, sizeof *geo);
-    *z = NULL;
-    *nodata = 0;
-    CPLErrorReset();
-    if (cli_gdal_path_check(path)) return 1;
-    int allowed = driver_allowed(path, GDAL_OF_RASTER, dem_drivers, "DEMs");
+    const char *path = s->in->path, *name = s->name;
+    int allowed = driver_allowed(name, path, GDAL_OF_RASTER, dem_drivers, "DEMs");
     if (allowed) return allowed;
-    if (vrt_sources_local(path, 0)) return 1;
+    if (!s->dir[0] && vrt_sources_local(name, 0)) return 1; /* a VRT is never copied */
     const int trusted = cli_gdal_trusted();
-    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, trusted ? NULL : dem_drivers, NULL, NULL);
+    GDALDatasetH ds = GDALOpenEx(name, GDAL_OF_RASTER | GDAL_OF_READONLY, trusted ? NULL : dem_drivers, NULL, NULL);
     if (!ds) {
         /* a format GDAL knows but could not open: GDAL's reason, not OpenImageIO's */
-        GDALDriverH d = GDALIdentifyDriverEx(path, GDAL_OF_RASTER, NULL, NULL);
+        GDALDriverH d = GDALIdentifyDriverEx(name, GDAL_OF_RASTER, NULL, NULL);
         const char *dn = d ? GDALGetDriverShortName(d) : NULL;
         if (!dn || image_format(dn)) return 2;
-        cli_error("%s: GDAL (%s driver): %s", path, dn, last_error("cannot open it"));
+        cli_error("%s: GDAL (%s driver): %s", path, dn, source_error(s, "cannot open it"));
         return 1;
     }
     const char *drv = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
@@ -309,7 +545,7 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
     double nd0 = GDALGetRasterNoDataValue(b, &has_nd0);
     for (int y = 0; y < H; y++) {
         if (GDALRasterIO(b, GF_Read, 0, y, W, 1, row, W, 1, GDT_Float64, 0, 0) != CE_None) {
-            cli_error("%s: %s", path, last_error("cannot read the raster"));
+            cli_error("%s: %s", path, source_error(s, "cannot read the raster"));
             free(row);
             free(buf);
             goto out;
@@ -345,6 +581,47 @@ int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t
     rc = 0;
 out:
     GDALClose(ds);
+    return rc;
+}
+
+/* The start of a read of an input: 0 with s open, or 1 after a message. */
+static int source_begin(gdal_source *s, cli_input *in)
+{
+    init();
+    CPLErrorReset();
+    if (cli_gdal_path_check(in->path)) return 1;
+    if (source_open(s, in)) {
+        source_close(s, 0);
+        return 1;
+    }
+    return 0;
+}
+
+/* The end of a read that returned rc: checked and registered when rc is 0
+ * (-1 when that fails, after a message), then closed (a pipe's bytes
+ * handed back on 2: not GDAL's). */
+static int source_end(gdal_source *s, const char *role, int rc)
+{
+    if (rc == 0 && (source_verify(s) || source_register(s, role))) rc = -1;
+    source_close(s, rc == 2);
+    return rc;
+}
+
+int cli_gdal_read_dem_input(cli_input *in, const char *role, uint32_t max_side, uint32_t *w, uint32_t *h, float **z,
+                            size_t *nodata, cli_geo *geo)
+{
+    memset(geo, 0, sizeof *geo);
+    *z = NULL;
+    *nodata = 0;
+    gdal_source s;
+    if (source_begin(&s, in)) return 1;
+    int rc = source_end(&s, role, read_dem(&s, max_side, w, h, z, nodata, geo));
+    if (rc < 0) {
+        free(*z);
+        *z = NULL;
+        cli_geo_free(geo);
+        rc = 1;
+    }
     return rc;
 }
 
@@ -698,18 +975,16 @@ static int collect_crossings(road_ctx *R, OGRLayerH l)
     return 0;
 }
 
-int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size)
+static int roads_text(const gdal_source *s, const cli_gdal_roads_opts *o, char **text, size_t *size)
 {
-    init();
+    const char *path = s->in->path, *gname = s->name;
     const char *shown = o->shown ? o->shown : path;
-    *text = NULL;
-    *size = 0;
-    CPLErrorReset();
-    if (cli_gdal_path_check(path) || driver_allowed(path, GDAL_OF_VECTOR, road_drivers, "roads") == 1) return 1;
+    if (driver_allowed(gname, shown, GDAL_OF_VECTOR, road_drivers, "roads") == 1) return 1;
     const char *const *allow = cli_gdal_trusted() ? NULL : road_drivers;
-    GDALDatasetH ds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
+    GDALDatasetH ds = GDALOpenEx(gname, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
     if (!ds) {
-        cli_error("%s: not a vector source GDAL can read (%s)", shown, last_error("unknown format or broken file"));
+        cli_error("%s: not a vector source GDAL can read (%s)", shown,
+                  source_error(s, "unknown format or broken file"));
         return 1;
     }
     int rc = 1;
@@ -826,7 +1101,7 @@ int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **t
      * reads its layers in one stream), or the Point features of a layer of
      * mixed geometries (GeoJSON from OSM) */
     if (osm) {
-        GDALDatasetH pds = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
+        GDALDatasetH pds = GDALOpenEx(gname, GDAL_OF_VECTOR | GDAL_OF_READONLY, allow, NULL, NULL);
         OGRLayerH pl = pds ? GDALDatasetGetLayerByName(pds, "points") : NULL;
         int oom = 0;
         if (pl) {
@@ -974,6 +1249,23 @@ out:
     if (src) OSRDestroySpatialReference(src);
     if (dst) OSRDestroySpatialReference(dst);
     GDALClose(ds);
+    return rc;
+}
+
+int cli_gdal_roads_text_input(cli_input *in, const char *role, const cli_gdal_roads_opts *o, char **text,
+                              size_t *size)
+{
+    *text = NULL;
+    *size = 0;
+    gdal_source s;
+    if (source_begin(&s, in)) return 1;
+    int rc = source_end(&s, role, roads_text(&s, o, text, size));
+    if (rc < 0) {
+        free(*text);
+        *text = NULL;
+        *size = 0;
+        rc = 1;
+    }
     return rc;
 }
 

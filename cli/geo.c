@@ -47,21 +47,16 @@ int cli_out_format(const char *path, const char *role, int pgm_ok)
     return -1;
 }
 
-int cli_roads_are_gis(const char *path)
+int cli_roads_are_gis(const cli_input *in)
 {
     static const char *const exts[] = { ".geojson", ".json", ".gpkg", ".shp", ".osm", ".pbf", ".fgb",
                                         ".gml", ".kml", ".sqlite", ".csv", ".geojsonl", ".gdb" };
     for (size_t i = 0; i < sizeof exts / sizeof exts[0]; i++)
-        if (ext_is(path, exts[i])) return 1;
-    struct stat st;
-    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) return 1;
-    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode)) return 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return 0;
-    unsigned char head[16];
-    size_t n = fread(head, 1, sizeof head, f);
-    fclose(f);
-    size_t i = 0;
+        if (ext_is(in->path, exts[i])) return 1;
+    if (in->fd < 0) return 0;
+    if (S_ISDIR(in->st.st_mode)) return 1;
+    const unsigned char *head = (const unsigned char *)in->head;
+    size_t n = in->got, i = 0;
     if (n >= 3 && head[0] == 0xEF && head[1] == 0xBB && head[2] == 0xBF) i = 3;
     while (i < n && (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n')) i++;
     if (i < n && (head[i] == '{' || head[i] == '<')) return 1;
@@ -70,33 +65,31 @@ int cli_roads_are_gis(const char *path)
 
 /* ---- inputs ---------------------------------------------------------------------- */
 
-static int is_pgm(const char *path)
+static int is_pgm(const cli_input *in)
 {
-    if (ext_is(path, ".pgm")) return 1;
-    FILE *f = fopen(path, "rb");
-    if (!f) return 0;
-    char m[2] = { 0, 0 };
-    size_t n = fread(m, 1, 2, f);
-    fclose(f);
-    return n == 2 && m[0] == 'P' && (m[1] == '2' || m[1] == '5');
+    return ext_is(in->path, ".pgm") || (in->got >= 2 && in->head[0] == 'P' && (in->head[1] == '2' || in->head[1] == '5'));
 }
 
 rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo)
 {
     memset(geo, 0, sizeof *geo);
-    struct stat st;
-    /* pipes, PGMs and builds without GDAL: as before */
-    if (!cli_gdal_available() || stat(path, &st) != 0 || !S_ISREG(st.st_mode) || is_pgm(path) ||
-        !cli_gdal_loadable())
-        return cli_load_dem(ctx, path);
+    /* builds without GDAL: as before */
+    if (!cli_gdal_available()) return cli_load_dem(ctx, path);
+    /* opened once: every reader below (GDAL, the library, OpenImageIO)
+     * reads this descriptor, which is what gets registered */
+    cli_input in;
+    if (cli_gdal_input_open(&in, path, 0)) return NULL;
+    if (in.fd >= 0 && (is_pgm(&in) || !cli_gdal_loadable())) return cli_load_dem_input(ctx, &in);
     rs_limits lim;
     rs_ctx_limits(ctx, &lim);
     uint32_t w = 0, h = 0;
     float *z = NULL;
     size_t nd = 0;
-    int r = cli_gdal_read_dem(path, lim.max_dem_side, &w, &h, &z, &nd, geo);
-    if (r == 2) return cli_load_dem(ctx, path);
-    if (r || cli_inputs_add_path(path, "DEM")) {
+    int r = cli_gdal_read_dem_input(&in, "DEM", lim.max_dem_side, &w, &h, &z, &nd, geo);
+    if (r == 2 && in.fd >= 0) return cli_load_dem_input(ctx, &in);
+    cli_input_close(&in);
+    if (r == 2) cli_error("%s: not a DEM GDAL can read", path);
+    if (r) {
         free(z);
         cli_geo_free(geo);
         return NULL;
@@ -117,14 +110,27 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
 {
     *text = NULL;
     *size = 0;
-    if (!cli_roads_are_gis(roads_path)) {
+    cli_input in;
+    if (cli_gdal_input_open(&in, roads_path, 1)) return 1;
+    int rc = 1;
+    if (!cli_roads_are_gis(&in)) {
         if (s->layer || s->where) {
             cli_error("%s: --layer and --where select from GIS road sources (GeoJSON, GeoPackage, Shapefile, OSM, "
                       "...), not from road text", roads_path);
-            return 1;
+        } else if (in.fd < 0) {
+            cli_error("%s: not a local file", roads_path);
+        } else {
+            /* the default rs_limits.max_points (10^7) at 64 bytes a point */
+            rc = cli_input_read_all(&in, (size_t)10000000 * 64 + (1u << 20), text, size) ||
+                 cli_inputs_add(roads_path, "ROADS", in.fd, *text, *size);
+            if (rc) {
+                free(*text);
+                *text = NULL;
+                *size = 0;
+            }
         }
-        /* the default rs_limits.max_points (10^7) at 64 bytes a point */
-        return cli_read_input(roads_path, "ROADS", (size_t)10000000 * 64 + (1u << 20), text, size);
+        cli_input_close(&in);
+        return rc;
     }
     cli_gdal_roads_opts o;
     memset(&o, 0, sizeof o);
@@ -133,15 +139,17 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
     o.dst_crs = geo->crs;
     o.shown = roads_path;
     o.counts = counts;
-    if (!cli_gdal_available()) return cli_gdal_roads_text(roads_path, &o, text, size); /* says why */
-    if (cli_gdal_path_check(roads_path)) return 1;
-    if (!geo->georef || !geo->crs) {
+    if (!cli_gdal_available()) {
+        cli_gdal_roads_text_input(&in, NULL, &o, text, size); /* says why */
+    } else if (!geo->georef || !geo->crs) {
         cli_error("%s: GIS roads are reprojected to the DEM's coordinate system, and the DEM has %s; use a "
-                  "georeferenced DEM, or write the roads in a chosen CRS first: roadsplat convert --t-srs EPSG:XXXX %s "
-                  "roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
-        return 1;
+                  "georeferenced DEM, or write the roads in a chosen CRS first: roadsplat convert --t-srs "
+                  "EPSG:XXXX %s roads.txt", roads_path, geo->georef ? "no CRS" : "no georeference", roads_path);
+    } else {
+        rc = cli_gdal_roads_text_input(&in, "ROADS", &o, text, size);
     }
-    return cli_gdal_roads_text(roads_path, &o, text, size) || cli_inputs_add_path(roads_path, "ROADS");
+    cli_input_close(&in);
+    return rc;
 }
 
 void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path)
@@ -513,14 +521,19 @@ int cli_convert_main(int argc, char **argv)
         uint32_t w, h;
         float *z = NULL;
         size_t nd;
-        int r = cli_gdal_read_dem(dem, 0, &w, &h, &z, &nd, &geo);
+        cli_input din;
+        int r = cli_gdal_input_open(&din, dem, 0);
+        if (!r) {
+            r = cli_gdal_read_dem_input(&din, "--dem", 0, &w, &h, &z, &nd, &geo);
+            cli_input_close(&din);
+        }
         free(z);
         if (r == 2 || (r == 0 && !geo.crs)) {
             cli_error("%s: --dem: the DEM has no coordinate system", dem);
             cli_geo_free(&geo);
             return 1;
         }
-        if (r || cli_inputs_add_path(dem, "--dem")) {
+        if (r) {
             cli_geo_free(&geo);
             return 1;
         }
@@ -537,7 +550,11 @@ int cli_convert_main(int argc, char **argv)
     cli_out out;
     memset(&out, 0, sizeof out);
     int rc = 1;
-    if (cli_gdal_roads_text(pos[0], &o, &text, &size) || cli_inputs_add_path(pos[0], "ROADS_IN")) goto done;
+    cli_input rin;
+    if (cli_gdal_input_open(&rin, pos[0], 1)) goto done;
+    int rr = cli_gdal_roads_text_input(&rin, "ROADS_IN", &o, &text, &size);
+    cli_input_close(&rin);
+    if (rr) goto done;
     /* what was written reads back: a check of the converter, and of the CRS line */
     rs_ctx *ctx = NULL;
     rs_roads *roads = NULL;

@@ -27,6 +27,13 @@ int cli_gdal_loadable(void);
  * use), CRS units other than metres, more than one band. */
 int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
                       cli_geo *geo);
+/* The same from an input opened once (cli_gdal_input_open): GDAL reads
+ * what that descriptor holds (docs/ROBUSTNESS.md, "trust model"); on
+ * success the input and the sidecar files read with it are registered
+ * under role (NULL: not). On 2 a pipe's bytes stay with the input, for the
+ * next reader. The caller closes it. */
+int cli_gdal_read_dem_input(cli_input *in, const char *role, uint32_t max_side, uint32_t *w, uint32_t *h, float **z,
+                            size_t *nodata, cli_geo *geo);
 
 /* An OGR vector source as road text (docs/road-format.md), malloc'd and
  * NUL-terminated, starting with `frame world CRS`. dst_crs: the CRS to
@@ -41,6 +48,14 @@ typedef struct cli_gdal_roads_opts {
     struct cli_gdal_road_counts *counts; /* filled when not NULL */
 } cli_gdal_roads_opts;
 int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size);
+/* The same from an input opened once, registered under role on success. */
+int cli_gdal_roads_text_input(cli_input *in, const char *role, const cli_gdal_roads_opts *o, char **text,
+                              size_t *size);
+/* Open a GIS input once: cli_input_open (a folder too when folder_ok),
+ * after cli_gdal_path_check; with --gdal-trust a name that is no local
+ * file (a URL, a /vsi path) is left for GDAL to read (in->fd -1, not
+ * registered). 0, or 1 after a message. */
+int cli_gdal_input_open(cli_input *in, const char *path, int folder_ok);
 
 /* A GeoTIFF of w x h pixels, channels 1..4 (4: RGBA, alpha unassociated),
  * bits 8 or 16, tiled 256 x 256, deflate; cog: Cloud Optimized GeoTIFF
@@ -67,11 +82,11 @@ int cli_gdal_trusted(void);
  * an existing file or folder). 0, or 1 after a message. */
 int cli_gdal_path_check(const char *path);
 
-/* 1 when `path` should be read as an OGR source rather than road text:
+/* 1 when the input should be read as an OGR source rather than road text:
  * a known GIS extension (.geojson .json .gpkg .shp .osm .pbf .fgb .gml
  * .kml .sqlite .csv), a folder, or content that starts like JSON, XML or
- * SQLite. */
-int cli_roads_are_gis(const char *path);
+ * SQLite (its first bytes, read once: a pipe too). */
+int cli_roads_are_gis(const cli_input *in);
 
 /* ---- cli/geo.c: the GIS layer in the splat ---------------------------------- */
 

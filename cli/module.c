@@ -190,37 +190,68 @@ static int no_gdal(const char *what)
 }
 #endif
 
-typedef int (*gdal_dem_fn)(const char *, uint32_t, uint32_t *, uint32_t *, float **, size_t *, cli_geo *);
-typedef int (*gdal_roads_fn)(const char *, const cli_gdal_roads_opts *, char **, size_t *);
+typedef int (*gdal_dem_fn)(cli_input *, const char *, uint32_t, uint32_t *, uint32_t *, float **, size_t *, cli_geo *);
+typedef int (*gdal_roads_fn)(cli_input *, const char *, const cli_gdal_roads_opts *, char **, size_t *);
 typedef int (*gdal_tiff_fn)(const char *, const char *, uint32_t, uint32_t, int, int, const void *, const double *,
                             const char *, int);
 typedef int (*gdal_same_fn)(const char *, const char *, const char *);
 typedef char *(*gdal_prj_fn)(const char *, const char *);
 
-int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
-                      cli_geo *geo)
+int cli_gdal_read_dem_input(cli_input *in, const char *role, uint32_t max_side, uint32_t *w, uint32_t *h, float **z,
+                            size_t *nodata, cli_geo *geo)
 {
     memset(geo, 0, sizeof *geo);
     *z = NULL;
     *nodata = 0;
 #ifdef RS_WITH_GDAL
-    GDAL_FN(gdal_dem_fn, f, "cli_gdal_read_dem", path, 1);
-    return f(path, max_side, w, h, z, nodata, geo);
+    GDAL_FN(gdal_dem_fn, f, "cli_gdal_read_dem_input", in->path, 1);
+    return f(in, role, max_side, w, h, z, nodata, geo);
 #else
-    (void)path; (void)max_side; (void)w; (void)h;
+    (void)in; (void)role; (void)max_side; (void)w; (void)h;
     return 2;
+#endif
+}
+
+int cli_gdal_read_dem(const char *path, uint32_t max_side, uint32_t *w, uint32_t *h, float **z, size_t *nodata,
+                      cli_geo *geo)
+{
+    cli_input in;
+    memset(geo, 0, sizeof *geo);
+    *z = NULL;
+    *nodata = 0;
+    if (cli_gdal_input_open(&in, path, 0)) return 1;
+    int r = cli_gdal_read_dem_input(&in, NULL, max_side, w, h, z, nodata, geo);
+    cli_input_close(&in);
+    return r;
+}
+
+int cli_gdal_roads_text_input(cli_input *in, const char *role, const cli_gdal_roads_opts *o, char **text,
+                              size_t *size)
+{
+    *text = NULL;
+    *size = 0;
+#ifdef RS_WITH_GDAL
+    GDAL_FN(gdal_roads_fn, f, "cli_gdal_roads_text_input", o->shown ? o->shown : in->path, 1);
+    return f(in, role, o, text, size);
+#else
+    (void)role;
+    return no_gdal(o->shown ? o->shown : in->path);
 #endif
 }
 
 int cli_gdal_roads_text(const char *path, const cli_gdal_roads_opts *o, char **text, size_t *size)
 {
+    cli_input in;
     *text = NULL;
     *size = 0;
-#ifdef RS_WITH_GDAL
-    GDAL_FN(gdal_roads_fn, f, "cli_gdal_roads_text", o->shown ? o->shown : path, 1);
-    return f(path, o, text, size);
-#else
+#ifndef RS_WITH_GDAL
+    (void)in;
     return no_gdal(o->shown ? o->shown : path);
+#else
+    if (cli_gdal_input_open(&in, path, 1)) return 1;
+    int r = cli_gdal_roads_text_input(&in, NULL, o, text, size);
+    cli_input_close(&in);
+    return r;
 #endif
 }
 
@@ -277,6 +308,18 @@ int cli_gdal_path_check(const char *path)
     if (!why) return 0;
     cli_error("%s: %s; roadsplat reads only local files unless --gdal-trust is given (docs/ROBUSTNESS.md)", path, why);
     return 1;
+}
+
+int cli_gdal_input_open(cli_input *in, const char *path, int folder_ok)
+{
+    struct stat st;
+    int local = strncmp(path, "/vsi", 4) && !strstr(path, "://") && stat(path, &st) == 0;
+    memset(in, 0, sizeof *in);
+    in->path = path;
+    in->fd = -1;
+    if (!local && gdal_trust) return 0; /* GDAL reads the name: a URL, a /vsi path, a connection string */
+    if (!local && (!strncmp(path, "/vsi", 4) || strstr(path, "://"))) return cli_gdal_path_check(path);
+    return cli_input_open(in, path, folder_ok);
 }
 
 void cli_geo_free(cli_geo *g)

@@ -13,6 +13,7 @@
 #include <locale.h>
 #include <limits.h>
 #include <math.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -272,6 +273,13 @@ int cli_inputs_add(const char *path, const char *role, int fd, const void *data,
     struct stat st;
     if (fstat(fd, &st) != 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
     int keep = -1;
+    if (S_ISDIR(st.st_mode)) { /* a GIS source folder: checked by inode, not hashed */
+        if (input_push(path, role, &st, -1)) {
+            cli_error("out of memory");
+            return 1;
+        }
+        return 0;
+    }
     if (S_ISREG(st.st_mode)) {
         /* a file read again in that role (a loader called in a loop) is one entry */
         for (size_t i = 0; i < ninputs; i++)
@@ -296,23 +304,6 @@ int cli_inputs_add(const char *path, const char *role, int fd, const void *data,
         return 1;
     }
     return 0;
-}
-
-int cli_inputs_add_path(const char *path, const char *role)
-{
-    /* O_NONBLOCK: a FIFO that GDAL has already drained must not block here */
-    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
-    struct stat st;
-    int bad = fstat(fd, &st) != 0;
-    if (!bad && !S_ISREG(st.st_mode)) { /* a GIS source folder (or a FIFO): checked by inode, not hashed */
-        close(fd);
-        if (input_push(path, role, &st, -1)) { cli_error("out of memory"); return 1; }
-        return 0;
-    }
-    bad = bad || cli_inputs_add(path, role, fd, NULL, 0);
-    close(fd);
-    return bad;
 }
 
 size_t cli_inputs_count(void) { return ninputs; }
@@ -366,7 +357,7 @@ static char *dup_str(const char *s)
  * all (unlink is async-signal-safe) before exiting with 128 + signal. The
  * paths live in static storage: the handler reads nothing malloc'd. */
 #define CLI_MAX_TEMPS 8
-/* input_read_all: buffers from this size are faulted in at once */
+/* cli_input_read_all: buffers from this size are faulted in at once */
 #define PREFAULT_MIN ((size_t)256 << 10)
 #define CLI_TEMP_PATH 4112
 static char temp_paths[CLI_MAX_TEMPS][CLI_TEMP_PATH];
@@ -754,41 +745,42 @@ static int looks_like_roads(const char *p, size_t n)
     return 0;
 }
 
-/* An input opened once: regular files and pipes (a pipe or process
- * substitution is read once, never reopened); devices are refused (/dev/zero
- * would never end). */
-typedef struct input {
-    const char *path;
-    int fd;
-    struct stat st;
-    char head[4096];
-    size_t got; /* bytes of head read */
-    int eof;    /* the whole input is in head */
-} input;
-
-static int input_open(input *in, const char *path)
+/* Inputs opened once (cli.h, cli_input). The open does not block (a FIFO
+ * with no writer yet, a device whose open has effects); a pipe then waits
+ * for its first bytes or its end before reading blocks again. */
+int cli_input_open(cli_input *in, const char *path, int folder_ok)
 {
     memset(in, 0, sizeof *in);
     in->path = path;
-    in->fd = open(path, O_RDONLY);
+    in->fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (in->fd < 0) { cli_error("%s: %s", path, strerror(errno)); return 1; }
     if (fstat(in->fd, &in->st) != 0) {
         cli_error("%s: %s", path, strerror(errno));
-        close(in->fd);
+        cli_input_close(in);
         return 1;
     }
-    if (S_ISDIR(in->st.st_mode) || (!S_ISREG(in->st.st_mode) && !S_ISFIFO(in->st.st_mode) && !S_ISSOCK(in->st.st_mode))) {
-        cli_error("%s: %s; inputs must be regular files or pipes", path,
-                  S_ISDIR(in->st.st_mode) ? "is a directory" : "is a device");
-        close(in->fd);
+    int dir = S_ISDIR(in->st.st_mode);
+    if ((dir && !folder_ok) || (!dir && !S_ISREG(in->st.st_mode) && !S_ISFIFO(in->st.st_mode) &&
+                                !S_ISSOCK(in->st.st_mode))) {
+        cli_error("%s: %s; inputs must be regular files or pipes", path, dir ? "is a directory" : "is a device");
+        cli_input_close(in);
         return 1;
     }
+    if (dir) return 0;
+    if (!S_ISREG(in->st.st_mode)) {
+        struct pollfd p;
+        p.fd = in->fd;
+        p.events = POLLIN;
+        while (poll(&p, 1, -1) < 0 && errno == EINTR) {}
+    }
+    int fl = fcntl(in->fd, F_GETFL);
+    if (fl != -1) fcntl(in->fd, F_SETFL, fl & ~O_NONBLOCK);
     while (in->got < sizeof in->head) {
         ssize_t k = read(in->fd, in->head + in->got, sizeof in->head - in->got);
         if (k < 0 && errno == EINTR) continue;
         if (k < 0) {
             cli_error("%s: read error: %s", path, strerror(errno));
-            close(in->fd);
+            cli_input_close(in);
             return 1;
         }
         if (k == 0) { in->eof = 1; break; }
@@ -797,14 +789,35 @@ static int input_open(input *in, const char *path)
     return 0;
 }
 
-/* The rest of the input after head, appended: *data holds all of it
- * (malloc'd, NUL-terminated). At most `limit` bytes in total. */
-static int input_read_all(input *in, size_t limit, char **data, size_t *size)
+void cli_input_close(cli_input *in)
+{
+    if (in->fd >= 0) close(in->fd);
+    in->fd = -1;
+    free(in->all);
+    in->all = NULL;
+}
+
+int cli_input_read_all(cli_input *in, size_t limit, char **data, size_t *size)
 {
     *data = NULL;
     *size = 0;
+    if (in->all) { /* read before (a pipe): handed on */
+        if (in->all_size > limit) {
+            cli_error("%s: file is larger than the %zu-byte limit", in->path, limit);
+            return 1;
+        }
+        *data = in->all;
+        *size = in->all_size;
+        in->all = NULL;
+        return 0;
+    }
     if (S_ISREG(in->st.st_mode) && (uint64_t)in->st.st_size > (uint64_t)limit) { /* before allocating */
         cli_error("%s: file is larger than the %zu-byte limit", in->path, limit);
+        return 1;
+    }
+    /* a regular file from after its head, wherever an earlier reader left it */
+    if (S_ISREG(in->st.st_mode) && lseek(in->fd, (off_t)in->got, SEEK_SET) < 0) {
+        cli_error("%s: read error: %s", in->path, strerror(errno));
         return 1;
     }
     size_t cap = in->got + 1, n = in->got;
@@ -843,16 +856,27 @@ static int input_read_all(input *in, size_t limit, char **data, size_t *size)
     return 0;
 }
 
-/* A name OpenImageIO can open for this input: the path of a regular file;
- * a pipe's contents are first copied into an unlinked temporary file
- * (*keep, named through /dev/fd). */
-static const char *input_for_image(input *in, char *name, size_t name_size, FILE **keep)
+void cli_input_keep(cli_input *in, char *data, size_t size)
+{
+    free(in->all);
+    in->all = data;
+    in->all_size = size;
+}
+
+/* A name OpenImageIO can open for this input, naming the inode that was
+ * opened (and is registered), never the path again: a regular file through
+ * /dev/fd; a pipe's contents are first copied into an unlinked temporary
+ * file (*keep, named through /dev/fd). */
+static const char *input_for_image(cli_input *in, char *name, size_t name_size, FILE **keep)
 {
     *keep = NULL;
-    if (S_ISREG(in->st.st_mode)) return in->path;
+    if (S_ISREG(in->st.st_mode)) {
+        snprintf(name, name_size, "/dev/fd/%d", in->fd);
+        return name;
+    }
     char *data;
     size_t size;
-    if (input_read_all(in, (size_t)1 << 31, &data, &size)) return NULL;
+    if (cli_input_read_all(in, (size_t)1 << 31, &data, &size)) return NULL;
     FILE *f = tmpfile();
     int ok = f && fwrite(data, 1, size, f) == size && fflush(f) == 0;
     free(data);
@@ -905,30 +929,31 @@ static int over_budget(const char *path, uint64_t pixels)
 
 int cli_load_texture(const char *path, const char *role, uint32_t *w, uint32_t *h, uint8_t **rgba)
 {
-    input in;
+    cli_input in;
     *rgba = NULL;
-    if (input_open(&in, path)) return 1;
+    if (cli_input_open(&in, path, 0)) return 1;
     rs_limits lim;
     default_limits(&lim);
     uint64_t declared;
     /* before decoding (one image over its own limit gets that message) */
     if (png_header_size(in.head, in.got, &declared) &&
         (!lim.max_texture_pixels || declared <= lim.max_texture_pixels) && over_budget(path, declared)) {
-        close(in.fd);
+        cli_input_close(&in);
         return 1;
     }
     char name[64];
     FILE *keep;
     const char *p = input_for_image(&in, name, sizeof name, &keep);
     int bad = !p || (role && cli_inputs_add(path, role, keep ? fileno(keep) : in.fd, NULL, 0));
-    close(in.fd);
     if (bad) {
         if (keep) fclose(keep);
+        cli_input_close(&in);
         return 1;
     }
     image_read r = { p, path, 0, lim.max_texture_pixels, w, h, NULL, rgba };
     int rc = read_image_quietly(&r);
     if (keep) fclose(keep);
+    cli_input_close(&in);
     if (!rc && over_budget(path, (uint64_t)*w * *h)) { /* formats whose size was not read above */
         free(*rgba);
         *rgba = NULL;
@@ -940,13 +965,22 @@ int cli_load_texture(const char *path, const char *role, uint32_t *w, uint32_t *
 
 rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
 {
-    input in;
-    if (input_open(&in, path)) return NULL;
+    cli_input in;
+    if (cli_input_open(&in, path, 0)) return NULL;
+    return cli_load_dem_input(ctx, &in);
+}
+
+rs_dem *cli_load_dem_input(rs_ctx *ctx, cli_input *inp)
+{
+    cli_input in = *inp; /* ours now: closed on every path */
+    const char *path = in.path;
+    inp->fd = -1;
+    inp->all = NULL;
     rs_dem *dem = NULL;
     /* DEM and ROADS swapped on the command line: say so, rather than pass a
      * text file to OpenImageIO ("could not find a format reader"). */
     if (looks_like_roads(in.head, in.got)) {
-        close(in.fd);
+        cli_input_close(&in);
         cli_error("%s: this is a road file, not a DEM (arguments in the wrong order?)", path);
         return NULL;
     }
@@ -961,7 +995,7 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
         rs_result rc = rs_dem_parse_pgm(ctx, in.head, in.got, &dem);
         if (rc == RS_ERR_LIMIT || in.eof) {
             int bad = rc == RS_OK && cli_inputs_add(path, "DEM", in.fd, in.head, in.got);
-            close(in.fd);
+            cli_input_close(&in);
             if (rc != RS_OK) {
                 cli_error("%s: %s", path, rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(rc));
                 return NULL;
@@ -978,9 +1012,9 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
         size_t limit = SIZE_MAX > 0xFFFFFFFFu ? (size_t)1 << 33 : (size_t)1 << 30;
         char *data;
         size_t size;
-        int bad = input_read_all(&in, limit, &data, &size);
+        int bad = cli_input_read_all(&in, limit, &data, &size);
         bad = bad || cli_inputs_add(path, "DEM", in.fd, data, size);
-        close(in.fd);
+        cli_input_close(&in);
         if (bad) {
             free(data);
             return NULL;
@@ -997,9 +1031,9 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     FILE *keep;
     const char *p = input_for_image(&in, name, sizeof name, &keep);
     int reg_bad = !p || cli_inputs_add(path, "DEM", keep ? fileno(keep) : in.fd, NULL, 0);
-    close(in.fd);
     if (reg_bad) {
         if (keep) fclose(keep);
+        cli_input_close(&in);
         return NULL;
     }
     uint32_t w, h;
@@ -1009,6 +1043,7 @@ rs_dem *cli_load_dem(rs_ctx *ctx, const char *path)
     image_read r = { p, path, lim.max_dem_side, 0, &w, &h, &z, NULL };
     int bad = read_image_quietly(&r);
     if (keep) fclose(keep);
+    cli_input_close(&in);
     if (bad) return NULL;
     rs_result rc = rs_dem_create(ctx, w, h, z, &dem);
     free(z);

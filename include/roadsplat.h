@@ -105,6 +105,13 @@ typedef struct rs_limits {
                                   all types together (16 bytes a texel, ~4/3
                                   of the types' rectangles; types with the
                                   same rectangle share them) */
+    uint64_t max_linesym_bytes; /* 2^32: bytes of the line symbols (a road
+                                  style's lines and dashes) while they are
+                                  built, all roads together: ~470 bytes a
+                                  piece (a segment, dash or join wedge of one
+                                  line) with its half-planes, and the index
+                                  entries over the pieces (docs/ROBUSTNESS.md);
+                                  RS_ERR_LIMIT beyond */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;

@@ -51,6 +51,7 @@ static void fill_limits(rs_limits *l)
     if (!l->max_texture_pixels) l->max_texture_pixels = (uint64_t)1 << 26;
     if (!l->max_field_work) l->max_field_work = (uint64_t)1 << 30;
     if (!l->max_atlas_bytes) l->max_atlas_bytes = (uint64_t)1 << 28;
+    if (!l->max_linesym_bytes) l->max_linesym_bytes = (uint64_t)1 << 32;
 }
 
 rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out)

@@ -109,6 +109,8 @@ struct rs__linesym {
     ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
     double *hpp;
     size_t npc, cap, nhpp, hcap; /* pieces (pp, pb) and half-planes (hpp) held and allocated */
+    uint64_t budget;       /* rs_limits.max_linesym_bytes: pieces, half-planes and index entries */
+    int over_budget;       /* the build stopped at it */
     ls_band *band;
     uint32_t nband;
     double *dash;
@@ -440,10 +442,31 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q);
 
 /* Append piece P, finished (piece_finish), as the painter's record (pp,
  * its half-planes in hpp) and the index build's (pb). */
+/* Bytes of a piece while building (painter's record and index build's). */
+#define PIECE_BYTES (sizeof(ls_ppc) + sizeof(ls_pbuild))
+#define HP_BYTES (4 * sizeof(double))
+
+/* Room for at most the budget: capacity `want`, cut to what the bytes left
+ * after `other` hold of items of `item` bytes (at least `need`). */
+static size_t budget_cap(const rs__linesym *L, size_t want, size_t need, uint64_t other, size_t item)
+{
+    if (!L->budget || other >= L->budget) return want;
+    uint64_t fit = (L->budget - other) / item;
+    if (fit < need) fit = need;
+    return fit < want ? (size_t)fit : want;
+}
+
 static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
 {
+    /* all roads' pieces together (rs_limits.max_linesym_bytes) */
+    if (L->budget &&
+        (uint64_t)(L->npc + 1) * PIECE_BYTES + (uint64_t)(L->nhpp + HP_MAX) * HP_BYTES > L->budget) {
+        L->over_budget = 1;
+        return RS_ERR_LIMIT;
+    }
     if (L->npc == L->cap) {
-        size_t nc = L->cap ? 2 * L->cap : 256, b1, b2;
+        size_t nc = budget_cap(L, L->cap ? 2 * L->cap : 256, L->npc + 1, (uint64_t)L->hcap * HP_BYTES,
+                               PIECE_BYTES), b1, b2;
         if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_ppc), &b1) || !rs__mul_size(nc, sizeof(ls_pbuild), &b2))
             return RS_ERR_LIMIT;
         ls_ppc *np = rs__realloc(ctx, L->pp, b1);
@@ -455,7 +478,8 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         L->cap = nc;
     }
     if (L->hcap - L->nhpp < HP_MAX) {
-        size_t nc = L->hcap ? 2 * L->hcap : 1024, bytes;
+        size_t nc = budget_cap(L, L->hcap ? 2 * L->hcap : 1024, L->nhpp + HP_MAX, (uint64_t)L->cap * PIECE_BYTES,
+                               HP_BYTES), bytes;
         if (nc > UINT32_MAX || !rs__mul_size(nc, 4 * sizeof(double), &bytes)) return RS_ERR_LIMIT;
         double *nh = rs__realloc(ctx, L->hpp, bytes);
         if (!nh) return RS_ERR_NOMEM;
@@ -1410,6 +1434,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     if (!L) return rs__fail(ctx, RS_ERR_NOMEM, "line symbols: out of memory");
     rs_result res = RS_OK;
     L->pixel = p->pixel;
+    L->budget = ctx->limits.max_linesym_bytes;
     L->margin = p->pixel * HALF_SQRT2;
     L->aa = p->aa;
     L->out_w = p->out_w;
@@ -1536,6 +1561,13 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     uint64_t lim = UINT32_MAX - 1u;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
     if (!csr_close(L->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; goto fail; }
+    /* the index entries count too: a piece is listed in every cell it covers */
+    if (L->budget && (uint64_t)total * (sizeof *L->ids + sizeof *L->ent) >
+                         L->budget - ((uint64_t)L->npc * PIECE_BYTES + (uint64_t)nhpp * HP_BYTES)) {
+        L->over_budget = 1;
+        res = RS_ERR_LIMIT;
+        goto fail;
+    }
     L->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ids);
     if (!L->ids) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = L->npc; k-- > 0;) piece_cells(L, (uint32_t)k, 1);
@@ -1566,12 +1598,18 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     return RS_OK;
 fail:
     over = J.limit && J.work > J.limit;
+    int over_bytes = L->over_budget;
     rs__free(ctx, pts);
     rs__free(ctx, sv);
     rs__free(ctx, sr);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");
+    if (over_bytes)
+        return rs__fail(ctx, res,
+                        "line symbols: the pieces of the roads' lines and dashes and their index take more than "
+                        "%llu bytes together (many styled lines, dashes or points; the budget is "
+                        "rs_limits.max_linesym_bytes)", (unsigned long long)ctx->limits.max_linesym_bytes);
     if (over)
         return rs__fail(ctx, res,
                         "line symbols: cutting lines at the other roads' surfaces takes more than %llu steps "

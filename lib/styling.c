@@ -171,6 +171,16 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     }
     rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
     /* pass 2: bands and casing roads (styles resolved again: each is small) */
+    /* every road's lines with room for their dashes: part of the line
+     * symbols' total (rs_limits.max_linesym_bytes; the pieces add to it) */
+    if (nbands && ctx->limits.max_linesym_bytes &&
+        (uint64_t)nbands > ctx->limits.max_linesym_bytes / (sizeof *bands + RS_STYLE_MAX_DASH * sizeof(double))) {
+        r = rs__fail(ctx, RS_ERR_LIMIT,
+                     "line symbols: the roads' %llu styled lines take more than %llu bytes together (many "
+                     "styled lines; the budget is rs_limits.max_linesym_bytes)",
+                     (unsigned long long)nbands, (unsigned long long)ctx->limits.max_linesym_bytes);
+        goto fail_msg;
+    }
     if (nbands) {
         bands = rs__alloc_array(ctx, nbands, sizeof *bands);
         if (!bands) { r = RS_ERR_NOMEM; goto fail; }

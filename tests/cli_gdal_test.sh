@@ -333,5 +333,95 @@ rm -f out.png out.pgw out.prj
 err "--world-file without georeference" "^roadsplat: --world-file: the DEM has no georeference; give --origin X,Y with roads in .frame world." --world-file dem.pgm local.txt out.png
 [ ! -e out.png ] && [ ! -e out.pgw ] && ok || bad "--world-file failure left files"
 
+# ---- read once (issue 26, class 1): GDAL reads the bytes the run registered ----------
+# Pipes: a GeoTIFF DEM and a GeoJSON road source from process substitution
+# give the picture of the files, and tiles hash the bytes loaded.
+"$BIN" --quiet --texels 2 dem_f32.tif roads_utm.geojson ro_file.png 2>e || bad "read once: file run: $(cat e)"
+if command -v bash >/dev/null 2>&1; then
+    BIN="$BIN" bash -c '"$BIN" --quiet --texels 2 <(cat dem_f32.tif) <(cat roads_utm.geojson) ro_pipe.png' 2>e &&
+        cmp -s ro_file.png ro_pipe.png && ok || bad "a pipe GeoTIFF DEM and a pipe GeoJSON give the files' picture: $(cat e)"
+    BIN="$BIN" bash -c '"$BIN" tiles --quiet --texels 2 <(cat dem_f32.tif) <(cat roads_utm.geojson) ro_tp' 2>e &&
+        python3 - dem_f32.tif roads_utm.geojson ro_tp/tiles.json >e 2>&1 <<'PY' && ok || bad "tiles from pipes: manifest hashes the bytes loaded: $(cat e)"
+import hashlib, json, sys
+m = json.load(open(sys.argv[3]))
+got = {i["role"]: i["sha256"] for i in m["inputs"]}
+want = {"DEM": hashlib.sha256(open(sys.argv[1], "rb").read()).hexdigest(),
+        "ROADS": hashlib.sha256(open(sys.argv[2], "rb").read()).hexdigest()}
+assert got == want, (got, want)
+PY
+else
+    echo "SKIP cli gdal: no bash for process substitution: pipe checks not run"
+fi
+mkfifo ro_fifo.tif && { cat dem_f32.tif >ro_fifo.tif & } &&
+    "$BIN" --quiet --texels 2 ro_fifo.tif roads_utm.geojson ro_fifo.png 2>e && cmp -s ro_file.png ro_fifo.png && ok ||
+    bad "a FIFO GeoTIFF DEM: $(cat e)"
+wait
+# A shapefile: the .shp and its sidecars each opened once, all registered
+ogr2ogr -q -f "ESRI Shapefile" ro_shp.shp roads_utm.geojson
+"$BIN" --quiet --texels 2 dem_f32.tif ro_shp.shp ro_shp.png 2>e && cmp -s ro_file.png ro_shp.png && ok ||
+    bad "shapefile roads (sidecars copied with it): $(cat e)"
+cp ro_shp.prj ro_prj.keep; rm -f ro_shp.png
+"$BIN" --quiet --texels 2 --world-file dem_f32.tif ro_shp.shp ro_shp.png 2>e
+grep -q "ro_shp.prj: .* is also the ROADS sidecar" e && cmp -s ro_shp.prj ro_prj.keep && [ ! -e ro_shp.png ] && ok ||
+    bad "--world-file's .prj over the shapefile's own .prj refused: $(cat e)"
+# By construction: under strace, every input name is opened exactly once, so
+# no later open can find another file there (a file replaced between two
+# opens was loaded from one inode and registered and hashed from another).
+if command -v strace >/dev/null 2>&1 && strace -f -o /dev/null true 2>/dev/null; then
+    # LeakSanitizer cannot run under ptrace (make sanitize-test): leaks are checked by the other runs
+    ro_asan=${ASAN_OPTIONS-}; ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0; export ASAN_OPTIONS
+    strace -f -qq -e trace=open,openat -o ro_trace "$BIN" --quiet --texels 2 dem_f32.tif ro_shp.shp ro_st.png 2>e
+    for f in dem_f32.tif ro_shp.shp ro_shp.shx ro_shp.dbf ro_shp.prj; do
+        n=$(grep -c "\"$f\"" ro_trace)
+        [ "$n" = 1 ] && ok || bad "$f opened $n times (once expected): $(grep "\"$f\"" ro_trace | head -5)"
+    done
+    # Replaced right after the k-th open of its name (strace holds every later
+    # open of it 0.3 s; the file is renamed over in the meantime): the run
+    # fails naming the replacement, or its tiles are the picture of the
+    # file whose SHA-256 the manifest gives. A VRT (GDAL opens its name) and
+    # a GeoTIFF (a copy of the descriptor's bytes).
+    sed 's/500000, 2, 0, 5000080/500010, 2, 0, 5000090/' dem_ok.vrt >ro_b.vrt
+    gdal_translate -q ro_b.vrt ro_b.tif
+    shas() { (cd "$1" && find . -name '*.png' | sort | xargs sha256sum); }
+    cnt() { n=0; [ -f "$2" ] && n=$(grep -c -- "$1" "$2"); echo "${n:-0}"; }
+    for pair in "dem_ok.vrt ro_b.vrt vrt" "dem_f32.tif ro_b.tif tif"; do
+        set -- $pair
+        rm -rf ro_ra ro_rb
+        "$BIN" tiles --quiet --texels 2 "$1" roads_utm.geojson ro_ra 2>e && "$BIN" tiles --quiet --texels 2 "$2" \
+            roads_utm.geojson ro_rb 2>>e || bad "race references: $(cat e)"
+        sa=$(sha256sum <"$1" | cut -c1-64) sb=$(sha256sum <"$2" | cut -c1-64)
+        shas ro_ra >ro_sa; shas ro_rb >ro_sb
+        cmp -s ro_sa ro_sb && bad "race: the two DEMs give the same tiles"
+        k=1 bad0=$fail
+        while [ $k -le 8 ]; do
+            rm -rf ro_out ro_log; cp "$1" "ro_in.$3"
+            strace -f -qq -o ro_log -P "ro_in.$3" -e trace=open,openat -e inject=openat:delay_enter=300000:when=2+ \
+                "$BIN" tiles --quiet --texels 2 "ro_in.$3" roads_utm.geojson ro_out 2>e & sp=$!
+            w=0
+            while [ "$(cnt "ro_in.$3" ro_log)" -lt $k ] && kill -0 $sp 2>/dev/null && [ $w -lt 500 ]; do
+                sleep 0.01; w=$((w + 1))
+            done
+            opened=$(cnt "ro_in.$3" ro_log)
+            cp "$2" ro_new && mv ro_new "ro_in.$3"
+            wait $sp; rc=$?
+            if [ $rc = 0 ]; then
+                m=$(python3 -c "import json; print([i['sha256'] for i in json.load(open('ro_out/tiles.json'))['inputs'] if i['role'] == 'DEM'][0])")
+                shas ro_out >ro_so
+                if [ "$m" = "$sa" ]; then cmp -s ro_so ro_sa || bad "$3, replaced after open $k: the manifest names the first file, the tiles are not its picture"
+                elif [ "$m" = "$sb" ]; then cmp -s ro_so ro_sb || bad "$3, replaced after open $k: the manifest names the second file, the tiles are not its picture"
+                else bad "$3, replaced after open $k: the manifest hash is neither file's"; fi
+            else
+                grep -q "was replaced while it was read" e || bad "$3, replaced after open $k: exit $rc: $(cat e)"
+            fi
+            [ "$opened" -lt $k ] && break # the run ended before a k-th open
+            k=$((k + 1))
+        done
+        [ $fail = $bad0 ] && ok
+    done
+    ASAN_OPTIONS=$ro_asan
+else
+    echo "SKIP cli gdal: strace is missing or cannot trace here: the open-once and replacement checks not run"
+fi
+
 echo "cli_gdal: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -9,6 +9,8 @@
  *   work budget linear in its points (each piece steps over its own road's
  *   surfaces in one binary search); many roads crossing in one place pass
  *   the budget (their cuts grow with the square of the roads).
+ * - Line-symbol memory: the pieces of all roads' lines and dashes and
+ *   their index entries stay within rs_limits.max_linesym_bytes.
  * - Atlas (row 8): types with the same rectangle share one mip chain; the
  *   chains of all types together stay within rs_limits.max_atlas_bytes,
  *   checked before they are made.
@@ -89,12 +91,58 @@ static void test_field_work(void)
  * 4 texels, on a context with max_field_work = budget (0: default); its
  * message into msg. A failure that leaves a grid is reported as
  * RS_ERR_INVALID_ARG (*out must be cleared). */
-static rs_result crowded_build(size_t n, const char *cls, uint64_t budget, char *msg, size_t cap)
+/* n motorways (several lines each) crossing at the centre of a 65 x 65
+ * DEM (sc, freed by the caller); NULL when they cannot be made. */
+static rs_roads *motorway_star(sc_scene *sc, int n)
+{
+    memset(sc, 0, sizeof *sc);
+    if (sc_scene_init(sc, 65, 65, 1) != 0) return NULL;
+    for (int i = 0; i < n; i++) sc_road_straight(sc, 3.14159265358979 * i / n, 60, 8);
+    rs_roads *R = ss_roads(ctx, sc);
+    for (size_t i = 0; R && i < rs_roads_count(R); i++)
+        if (rs_roads_set_attr(ctx, R, i, "class", "motorway") != 0) {
+            rs_roads_free(ctx, R);
+            return NULL;
+        }
+    return R;
+}
+
+/* The star of 200 motorways (motorway_star) on a context with limits lim:
+ * RS_ERR_LIMIT with a message holding both strings and no grid; then the
+ * default limits build it. */
+static void star_over_limit(const rs_limits *lim, const char *say, const char *budget)
+{
+    sc_scene sc;
+    rs_roads *R = motorway_star(&sc, 200);
+    rs_ctx *c = NULL;
+    rs_dem *d = NULL;
+    CHECK(R && rs_ctx_create(NULL, lim, &c) == RS_OK && rs_dem_create(c, 65, 65, sc.z, &d) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    rs_road_grid *g = NULL;
+    if (d) {
+        CHECK_EQ_INT(rs_road_grid_build(c, d, R, &o, &g), RS_ERR_LIMIT);
+        const char *m = rs_ctx_message(c);
+        CHECKF(strstr(m, say) && strstr(m, budget), "message: %s", m);
+        CHECK(g == NULL);
+        CHECKF(rs_road_grid_build(ctx, d, R, &o, &g) == RS_OK, "%s", rs_ctx_message(ctx));
+        rs_road_grid_free(ctx, g);
+    }
+    rs_dem_free(c, d);
+    rs_ctx_free(c);
+    rs_roads_free(ctx, R);
+    sc_scene_free(&sc);
+}
+
+static rs_result crowded_build_ex(size_t n, const char *cls, uint64_t budget, uint64_t linesym_bytes, char *msg,
+                                  size_t cap)
 {
     static float z[129 * 33];
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
     lim.max_field_work = budget;
+    lim.max_linesym_bytes = linesym_bytes;
     rs_ctx *c = NULL;
     if (rs_ctx_create(NULL, &lim, &c) != RS_OK) return RS_ERR_NOMEM;
     rs_dem *d = NULL;
@@ -114,6 +162,38 @@ static rs_result crowded_build(size_t n, const char *cls, uint64_t budget, char 
     rs_dem_free(c, d);
     rs_ctx_free(c);
     return r;
+}
+
+static rs_result crowded_build(size_t n, const char *cls, uint64_t budget, char *msg, size_t cap)
+{
+    return crowded_build_ex(n, cls, budget, 0, msg, cap);
+}
+
+/* Line-symbol memory has a total (rs_limits.max_linesym_bytes): a motorway
+ * (several lines, dashed lanes) along n tiny segments needs pieces for
+ * every segment of every line; a budget of 64 KiB stops the build with
+ * RS_ERR_LIMIT naming the budget, and no grid; 2,000 bytes a point builds
+ * it (the pieces cost ~470 bytes each, a few a point), and so does the
+ * default. Before, only the piece count (UINT32_MAX) bounded it. */
+static void test_linesym_bytes(void)
+{
+    char m[512];
+    size_t n = 4000;
+    CHECK_EQ_INT(crowded_build_ex(n, "motorway", 0, (uint64_t)64 << 10, m, sizeof m), RS_ERR_LIMIT);
+    CHECKF(strstr(m, "line symbols") && strstr(m, "rs_limits.max_linesym_bytes"), "message: %s", m);
+    rs_result r = crowded_build_ex(n, "motorway", 0, 2000 * (uint64_t)n, m, sizeof m);
+    CHECKF(r == RS_OK, "%s", m);
+    CHECKF(crowded_build(n, "motorway", 0, m, sizeof m) == RS_OK, "%s", m);
+    /* an unstyled road makes no line symbols: any budget */
+    CHECKF(crowded_build_ex(n, NULL, 0, 1, m, sizeof m) == RS_OK, "%s", m);
+    rs_limits lim;
+    rs_ctx_limits(ctx, &lim);
+    CHECK(lim.max_linesym_bytes == (uint64_t)1 << 32);
+    /* the lines (with room for their dashes) of many styled roads count
+     * before their pieces: 200 motorways of two points on 16 KiB */
+    memset(&lim, 0, sizeof lim);
+    lim.max_linesym_bytes = 16 << 10;
+    star_over_limit(&lim, "styled lines take more than", "rs_limits.max_linesym_bytes");
 }
 
 /* A budget the work passes: RS_ERR_LIMIT naming rs_limits.max_field_work,
@@ -139,35 +219,10 @@ static void test_field_budget(void)
  * and builds with the default. */
 static void test_star(void)
 {
-    sc_scene sc;
-    CHECK(sc_scene_init(&sc, 65, 65, 1) == 0);
-    for (int i = 0; i < 200; i++) sc_road_straight(&sc, 3.14159265358979 * i / 200, 60, 8);
-    rs_roads *R = ss_roads(ctx, &sc);
-    int bad = 0;
-    for (size_t i = 0; R && i < rs_roads_count(R); i++) bad |= rs_roads_set_attr(ctx, R, i, "class", "motorway") != 0;
-    CHECK(!bad);
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
     lim.max_field_work = 1000000;
-    rs_ctx *c = NULL;
-    rs_dem *d = NULL;
-    CHECK(R && rs_ctx_create(NULL, &lim, &c) == RS_OK && rs_dem_create(c, 65, 65, sc.z, &d) == RS_OK);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 2;
-    rs_road_grid *g = NULL;
-    if (d) {
-        CHECK_EQ_INT(rs_road_grid_build(c, d, R, &o, &g), RS_ERR_LIMIT);
-        const char *m = rs_ctx_message(c);
-        CHECKF(strstr(m, "line symbols") && strstr(m, "rs_limits.max_field_work"), "message: %s", m);
-        CHECK(g == NULL);
-        CHECKF(rs_road_grid_build(ctx, d, R, &o, &g) == RS_OK, "%s", rs_ctx_message(ctx));
-        rs_road_grid_free(ctx, g);
-    }
-    rs_dem_free(c, d);
-    rs_ctx_free(c);
-    rs_roads_free(ctx, R);
-    sc_scene_free(&sc);
+    star_over_limit(&lim, "line symbols", "rs_limits.max_field_work");
 }
 
 /* --- atlas ----------------------------------------------------------------------- */
@@ -441,6 +496,7 @@ int main(void)
     test_field_work();
     test_field_budget();
     test_star();
+    test_linesym_bytes();
     test_atlas();
     test_atlas_gpu();
     test_markings();
