@@ -46,7 +46,7 @@ static const char render_usage[] =
     "  --png-level N (OUT.png compression 0..12, default 1), --origin X,Y,\n"
     "  --edges MODE, --threads N, --pixel-size M, --color-relief FILE,\n"
     "  --atlas IMG, --atlas-index FILE, --no-auto-markings, --no-markings,\n"
-    "  --layer NAME, --where SQL (GIS roads), --strict,\n"
+    "  --layer NAME, --where SQL (GIS roads), --strict, --driving-side left|right,\n"
     "  --gdal-trust (every GDAL driver and the network for DEM and ROADS),\n"
     "  --max-image-pixels N, --max-field-work N, --max-atlas-mb N (budgets)\n"
     "Render options:\n"
