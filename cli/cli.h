@@ -267,6 +267,7 @@ typedef struct cli_splat_args {
     char pixel_note[240];      /* the pixel size chosen, when worth saying: printed once the run is sure to go on */
     uint64_t max_field_work;   /* --max-field-work N: rs_limits.max_field_work (0 = default) */
     uint64_t max_atlas_bytes;  /* --max-atlas-mb N: rs_limits.max_atlas_bytes (0 = default) */
+    uint64_t max_linesym_bytes; /* --max-linesym-mb N: rs_limits.max_linesym_bytes (0 = default) */
 } cli_splat_args;
 /* Most pixels of one image the CLI writes or renders (the library's default
  * limit); a window of a larger virtual image is fine (docs/gis.md). */

@@ -74,7 +74,8 @@ static const char usage_text[] =
     "                        (PNG) OUT.aux.xml\n";
 /* two strings: C99 compilers need only take 4095 characters in one */
 static const char usage_text2[] =
-    "  --gdal-trust          open DEM and ROADS with every GDAL driver (VRTs naming\n"
+    "  --max-linesym-mb N    budget of all roads' line symbols (lines, dashes;\n"
+    "                        default 4096)\n"    "  --gdal-trust          open DEM and ROADS with every GDAL driver (VRTs naming\n"
     "                        any file, URLs, network access); default: local files\n"
     "                        of an allow-list of formats only (docs/ROBUSTNESS.md)\n"
     "  --max-image-pixels N  decoded-image budget: the pixels all textures, the atlas\n"

@@ -10,14 +10,16 @@ void cli_splat_limits(const cli_splat_args *s, rs_limits *lim)
 {
     lim->max_field_work = s->max_field_work;
     lim->max_atlas_bytes = s->max_atlas_bytes;
+    lim->max_linesym_bytes = s->max_linesym_bytes;
 }
 
 const char *cli_lib_message(const rs_ctx *ctx, rs_result r, char *buf, size_t cap)
 {
-    static const char *const budget[2][2] = { { "rs_limits.max_field_work", "--max-field-work N" },
-                                             { "rs_limits.max_atlas_bytes", "--max-atlas-mb N" } };
+    static const char *const budget[3][2] = { { "rs_limits.max_field_work", "--max-field-work N" },
+                                             { "rs_limits.max_atlas_bytes", "--max-atlas-mb N" },
+                                             { "rs_limits.max_linesym_bytes", "--max-linesym-mb N" } };
     const char *m = rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r);
-    for (int i = 0; i < 2; i++)
+    for (int i = 0; i < 3; i++)
         if (strstr(m, budget[i][0])) {
             snprintf(buf, cap, "%s; %s raises it", m, budget[i][1]);
             return buf;
@@ -62,7 +64,8 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
                                          "--png-level", "--styles", "--profile", "--aa", "--no-styles", "--atlas",
                                          "--atlas-index", "--no-auto-markings", "--no-markings", "--layer", "--where",
                                          "--strict", "--pixel-size", "--color-relief", "--max-field-work",
-                                         "--max-atlas-mb", "--gdal-trust", "--max-image-pixels", "--driving-side" };
+                                         "--max-atlas-mb", "--gdal-trust", "--max-image-pixels", "--driving-side",
+                                         "--max-linesym-mb" };
     size_t k, n = sizeof known / sizeof known[0];
     for (k = 0; k < n && strcmp(name, known[k]); k++) {}
     if (k == n) return -1;
@@ -85,16 +88,17 @@ int cli_splat_option(int argc, char **argv, int *i, const char *name, const char
     rs_dem_frame *fr = &s->frame;
     double d, xy[2];
     uint32_t u;
-    if (!strcmp(name, "--max-field-work") || !strcmp(name, "--max-atlas-mb")) {
+    if (!strcmp(name, "--max-field-work") || !strcmp(name, "--max-atlas-mb") || !strcmp(name, "--max-linesym-mb")) {
         /* budgets (docs/ROBUSTNESS.md, issue 26): whole numbers >= 1 */
         if (cli_parse_double(name, v, &d)) return 1;
-        int mb = name[6] == 'a';
+        int mb = name[6] == 'a' || name[6] == 'l';
         double top = mb ? 1048576.0 : 1e15;
         if (!(d >= 1 && d <= top && d == floor(d))) {
             cli_error("%s: '%s' must be a whole number in [1, %.0f]", name, v, top);
             return 1;
         }
-        if (mb) s->max_atlas_bytes = (uint64_t)d << 20;
+        if (name[6] == 'a') s->max_atlas_bytes = (uint64_t)d << 20;
+        else if (name[6] == 'l') s->max_linesym_bytes = (uint64_t)d << 20;
         else s->max_field_work = (uint64_t)d;
     } else if (!strcmp(name, "--max-image-pixels")) {
         if (cli_parse_u32(name, v, &u)) return 1;

@@ -8,6 +8,7 @@ BIN=${1:?usage: cli_budgets_test.sh ROADSPLAT}
 . "$(dirname "$0")/cli_lib.sh"
 ref_scene "$T"
 awk 'BEGIN { print "road a width 6"; for (k = 0; k < 20000; k++) printf "%.6f 10\n", 2 + 26 * k / 19999; print "end" }' >"$T/crowd.txt"
+awk 'BEGIN { print "road a width 8 class=primary"; for (k = 0; k < 20000; k++) printf "%.6f %.6f\n", 2 + 26 * k / 19999, 10 + (k % 2) * 0.01; print "end" }' >"$T/crowdp.txt"
 run() { "$BIN" --quiet --cell-size 1 "$@"; }
 check "crowded road, default budget" run --texels 2 "$T/dem.pgm" "$T/crowd.txt" "$T/c.png"
 run --texels 2 --max-field-work 1000 "$T/dem.pgm" "$T/crowd.txt" "$T/w.png" 2>"$T/err"
@@ -44,5 +45,11 @@ done
 run --max-atlas-mb 2000000 "$T/dem.pgm" "$T/roads.txt" "$T/v.png" 2>"$T/err" && bad "--max-atlas-mb 2000000 accepted"
 check "--max-atlas-mb range" grep -q "must be a whole number in \[1, 1048576\]" "$T/err"
 check "no output on bad values" test ! -e "$T/v.png"
+# the line symbols' total: a dashed primary of 20000 points over 1 MB
+run --texels 2 --max-linesym-mb 1 "$T/dem.pgm" "$T/crowdp.txt" "$T/l.png" 2>"$T/err"
+check "over --max-linesym-mb: exit 1" test $? = 1
+check "over --max-linesym-mb: names the budget and the option" grep -q "rs_limits.max_linesym_bytes.*; --max-linesym-mb N raises it" "$T/err"
+check "over --max-linesym-mb: no output" test ! -e "$T/l.png"
+check "the same within the default budget" run --texels 2 "$T/dem.pgm" "$T/crowdp.txt" "$T/l.png"
 echo "cli_budgets: $pass passed, $fail failed"
 [ "$fail" = 0 ]
