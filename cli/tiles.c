@@ -1113,18 +1113,21 @@ typedef struct input_hash {
  * malloc'd, *n entries. */
 static int hash_inputs(input_hash **ih, int *n)
 {
-    static const char *const roles[8][2] = { { "DEM", "DEM" }, { "ROADS", "ROADS" },
-                                              { "--terrain-texture", "--terrain-texture" },
-                                              { "--road-texture", "--road-texture" }, { "--styles", "--styles" },
-                                              { "--atlas", "--atlas" }, { "--atlas-index", "--atlas-index" },
-                                              { "surface image", "surface" } };
+    /* the sidecars GDAL read beside a DEM or GIS roads (world files, .prj,
+     * .aux.xml, a shapefile's .shx/.dbf) shape the output too */
+    static const char *const roles[10][2] = { { "DEM", "DEM" }, { "ROADS", "ROADS" },
+                                               { "--terrain-texture", "--terrain-texture" },
+                                               { "--road-texture", "--road-texture" }, { "--styles", "--styles" },
+                                               { "--atlas", "--atlas" }, { "--atlas-index", "--atlas-index" },
+                                               { "surface image", "surface" }, { "DEM sidecar", "DEM sidecar" },
+                                               { "ROADS sidecar", "ROADS sidecar" } };
     size_t m = cli_inputs_count();
     *n = 0;
     if (!(*ih = calloc(m ? m : 1, sizeof **ih))) {
         cli_error("out of memory");
         return 1;
     }
-    for (int k = 0; k < 8; k++)
+    for (int k = 0; k < 10; k++)
         for (size_t i = 0; i < m; i++) {
             const char *path, *role;
             int fd = cli_inputs_get(i, &path, &role);
@@ -1139,7 +1142,7 @@ static int hash_inputs(input_hash **ih, int *n)
                 }
                 cli_sha256_hex(d, h->hex);
             }
-            if (k < 7) break; /* one file a role, but surface images */
+            if (k < 7) break; /* one file a role, but surface images and sidecars */
         }
     return 0;
 }

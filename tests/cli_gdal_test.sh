@@ -360,6 +360,10 @@ wait
 ogr2ogr -q -f "ESRI Shapefile" ro_shp.shp roads_utm.geojson
 "$BIN" --quiet --texels 2 dem_f32.tif ro_shp.shp ro_shp.png 2>e && cmp -s ro_file.png ro_shp.png && ok ||
     bad "shapefile roads (sidecars copied with it): $(cat e)"
+# the tiles manifest hashes the sidecars GDAL read too (the .dbf holds the tags)
+rm -rf ro_shp_t; "$BIN" tiles --quiet --texels 2 dem_f32.tif ro_shp.shp ro_shp_t 2>e &&
+    grep -q "\"ROADS sidecar\", \"path\": \"[^\"]*ro_shp.dbf\", \"sha256\": \"$(sha256sum <ro_shp.dbf | cut -c1-64)\"" ro_shp_t/tiles.json && ok ||
+    bad "the tiles manifest lists the shapefile's .dbf with its SHA-256: $(cat e)"
 cp ro_shp.prj ro_prj.keep; rm -f ro_shp.png
 "$BIN" --quiet --texels 2 --world-file dem_f32.tif ro_shp.shp ro_shp.png 2>e
 grep -q "ro_shp.prj: .* is also the ROADS sidecar" e && cmp -s ro_shp.prj ro_prj.keep && [ ! -e ro_shp.png ] && ok ||
