@@ -729,39 +729,60 @@ static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, do
     return 1;
 }
 
+#if defined(__SSE2__)
+/* Both sides' levels v (clamped to [0, h]; lane 0 the left side, lane 1
+ * the right): the table rows *pa, *pb and the fractions, each in both
+ * lanes. */
+static inline void level2(const int32_t *t, size_t w2, __m128d v, const int32_t **pa, const int32_t **pb, __m128d *fa,
+                          __m128d *fb)
+{
+    __m128i j = _mm_cvttpd_epi32(v);
+    __m128d f = _mm_sub_pd(v, _mm_cvtepi32_pd(j));
+    *pa = t + (size_t)(uint32_t)_mm_cvtsi128_si32(j) * w2;
+    *pb = t + (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(j, 1)) * w2;
+    *fa = _mm_unpacklo_pd(f, f);
+    *fb = _mm_unpackhi_pd(f, f);
+}
+
 /* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
- * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows' fractions: bilinear in
- * doubles from the whole numbers (exact inputs; the result is far below
- * 2^53). */
+ * v1) of column i (rows of w2 corners), fu = u - i in lane 0, the rows'
+ * fractions f0, f1 in both lanes: bilinear in doubles from the whole
+ * numbers (exact inputs; the result is far below 2^53), columns i and i
+ * + 1 in the two lanes. */
+static inline double step2(const int32_t *a, const int32_t *b, size_t w2, __m128d fu, __m128d f0, __m128d f1)
+{
+    __m128d a0 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)a));
+    __m128d a1 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)(a + w2)));
+    __m128d b0 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)b));
+    __m128d b1 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)(b + w2)));
+    __m128d ra = _mm_add_pd(a0, _mm_mul_pd(f0, _mm_sub_pd(a1, a0)));
+    __m128d rb = _mm_add_pd(b0, _mm_mul_pd(f1, _mm_sub_pd(b1, b0)));
+    __m128d d = _mm_sub_pd(rb, ra);
+    __m128d dh = _mm_unpackhi_pd(d, d);
+    return _mm_cvtsd_f64(_mm_add_sd(d, _mm_mul_sd(fu, _mm_sub_sd(dh, d))));
+}
+#else
+/* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
+ * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows'
+ * fractions: bilinear in doubles from the whole numbers (exact inputs;
+ * the result is far below 2^53). */
 static inline double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
 {
-#if defined(__SSE2__)
-    /* S(j, i), S(j, i + 1), S(j + 1, i), S(j + 1, i + 1) */
-    __m128i A = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)a),
-                                   _mm_loadl_epi64((const __m128i *)(const void *)(a + w2)));
-    __m128i B = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)b),
-                                   _mm_loadl_epi64((const __m128i *)(const void *)(b + w2)));
-    __m128d a0 = _mm_cvtepi32_pd(A), a1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(A, 0xEE));
-    __m128d b0 = _mm_cvtepi32_pd(B), b1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(B, 0xEE));
-    __m128d ra = _mm_add_pd(a0, _mm_mul_pd(_mm_set1_pd(f0), _mm_sub_pd(a1, a0)));
-    __m128d rb = _mm_add_pd(b0, _mm_mul_pd(_mm_set1_pd(f1), _mm_sub_pd(b1, b0)));
-    __m128d d = _mm_sub_pd(rb, ra);
-    double lo = _mm_cvtsd_f64(d), hi = _mm_cvtsd_f64(_mm_unpackhi_pd(d, d));
-    return lo + fu * (hi - lo);
-#else
     double ra0 = a[0] + f0 * ((double)a[w2] - a[0]), ra1 = a[1] + f0 * ((double)a[w2 + 1] - a[1]);
     double rb0 = b[0] + f1 * ((double)b[w2] - b[0]), rb1 = b[1] + f1 * ((double)b[w2 + 1] - b[1]);
     double lo = rb0 - ra0, hi = rb1 - ra1;
     return lo + fu * (hi - lo);
-#endif
 }
+#endif
 
+
+#if !defined(__SSE2__)
 /* The integral of the sprite's 255 x alpha (table t, rows of w2 = w + 2
  * corners, w x h texels) over footprint fp at (U, V): the line integral
  * of the summed-area table along the staircases, G(u, v1) - G(u, v0) per
- * step (both sides at once: the right side is the left one mirrored, V -
- * dv, U - du). The V levels are shared by consecutive steps; a step left
- * of the sprite adds nothing (G(0, v) = 0). */
+ * step (both sides: the right side is the left one mirrored, V - dv, U -
+ * du). The V levels are shared by consecutive steps; a step left of the
+ * sprite adds nothing (G(0, v) = 0). (kern_integral: the same with SSE2.) */
 static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
                               double V)
 {
@@ -769,32 +790,6 @@ static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, c
     const int n = fp->n;
     size_t row[2][RS__MK_STEPS + 1];
     double f[2][RS__MK_STEPS + 1];
-#if defined(__SSE2__)
-    const __m128d sg = _mm_set_pd(-1, 1), VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
-    const __m128d hh = _mm_set1_pd(h), ww = _mm_set1_pd(w);
-    for (int k = 0; k <= n; k++) {
-        __m128d v = _mm_add_pd(VV, _mm_mul_pd(sg, _mm_set1_pd(fp->dv[k])));
-        v = _mm_min_pd(_mm_max_pd(v, z), hh);
-        __m128i j = _mm_cvttpd_epi32(v);
-        __m128d fr = _mm_sub_pd(v, _mm_cvtepi32_pd(j));
-        _mm_storel_pd(&f[0][k], fr);
-        _mm_storeh_pd(&f[1][k], fr);
-        row[0][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(j) * w2;
-        row[1][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(j, 1)) * w2;
-    }
-    for (int k = 0; k < n; k++) {
-        __m128d u = _mm_min_pd(_mm_add_pd(UU, _mm_mul_pd(sg, _mm_set1_pd(fp->du[k]))), ww);
-        __m128d uz = _mm_max_pd(u, z);
-        __m128i ii = _mm_cvttpd_epi32(uz);
-        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
-        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
-        if (_mm_cvtsd_f64(u) > 0)
-            I -= step_int(t + row[0][k] + i0, t + row[0][k + 1] + i0, w2, _mm_cvtsd_f64(fu), f[0][k], f[0][k + 1]);
-        if (_mm_cvtsd_f64(_mm_unpackhi_pd(u, u)) > 0)
-            I -= step_int(t + row[1][k] + i1, t + row[1][k + 1] + i1, w2, _mm_cvtsd_f64(_mm_unpackhi_pd(fu, fu)),
-                          f[1][k], f[1][k + 1]);
-    }
-#else
     for (int side = 0; side < 2; side++) {
         const double sg = side ? -1 : 1;
         for (int k = 0; k <= n; k++) {
@@ -814,9 +809,9 @@ static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, c
                           f[side][k + 1]);
         }
     }
-#endif
     return I;
 }
+#endif
 
 /* The same for one plane of a table of doubles (several colours). */
 static double fp_integral(const double *t, size_t w1, double w, double h, const rs__mk_fp *fp, double U, double V)
@@ -836,23 +831,14 @@ static double fp_integral(const double *t, size_t w1, double w, double h, const 
 }
 
 /* The sprite's mean premultiplied colour and alpha over footprint fp of
- * the pixel whose centre has level-0 texel coordinates (U, V): the exact
- * integral over the staircase polygon from the summed-area table. */
-static void sample(const rs__mk *m, const rs__mk_fp *fp, double U, double V, float out[4])
+ * the pixel whose centre has level-0 texel coordinates (U, V), for a type
+ * of several colours (four planes; alpha-only types: kern_put): the
+ * exact integral over the staircase polygon from the summed-area table. */
+static void sample4(const rs__mk *m, const rs__mk_fp *fp, double U, double V, float out[4])
 {
     const rs__mk_tex *tx = m->tex;
     const size_t w1 = (size_t)tx->w + 1;
     const double w = tx->w, h = tx->h;
-    if (tx->nch == 1) {
-        double a = fp_integral_int(tx->isat, w1 + 1, w, h, fp, U, V) * fp->ia * (1.0 / 255);
-        a = a > 0 ? a : 0;
-        a = a < 1 ? a : 1;
-        out[0] = (float)(tx->col[0] * a);
-        out[1] = (float)(tx->col[1] * a);
-        out[2] = (float)(tx->col[2] * a);
-        out[3] = (float)a;
-        return;
-    }
     const size_t plane = w1 * ((size_t)tx->h + 1) * 4;
     for (int c = 0; c < 4; c++) {
         double x = fp_integral(tx->sat + (size_t)c * plane, w1, w, h, fp, U, V) * fp->ia;
@@ -860,6 +846,100 @@ static void sample(const rs__mk *m, const rs__mk_fp *fp, double U, double V, flo
         x = x > 0 ? x : 0;
         out[c] = (float)(x < hi ? x : hi);
     }
+}
+
+/* What the paint reads per pixel of one marking and footprint, set up
+ * once per marking (or per footprint on a curved stretch): the table, the
+ * sprite's size and, for the SSE2 kernel, each level and step offset as
+ * a pair (+ left side, - right side) so that a pixel does one add each. */
+typedef struct mk_kern {
+    const rs__mk *m;
+    const rs__mk_fp *fp;
+    const int32_t *t;      /* alpha-only table, NULL: the four-plane sample */
+    size_t w2;             /* its row length, w + 2 */
+    double w, h, ia;       /* texels; 1 / the staircase polygon's area */
+    double col[3];
+    int n;
+#if defined(__SSE2__)
+    __m128d dv[RS__MK_STEPS + 1], du[RS__MK_STEPS];
+#endif
+} mk_kern;
+
+static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
+{
+    const rs__mk_tex *tx = m->tex;
+    kn->m = m;
+    kn->fp = fp;
+    kn->t = tx->nch == 1 ? tx->isat : NULL;
+    kn->w2 = (size_t)tx->w + 2;
+    kn->w = tx->w;
+    kn->h = tx->h;
+    kn->ia = fp->ia;
+    for (int c = 0; c < 3; c++) kn->col[c] = tx->col[c];
+    kn->n = fp->n;
+#if defined(__SSE2__)
+    const __m128d sg = _mm_set_pd(-1, 1);
+    for (int k = 0; k <= fp->n; k++) kn->dv[k] = _mm_mul_pd(sg, _mm_set1_pd(fp->dv[k]));
+    for (int k = 0; k < fp->n; k++) kn->du[k] = _mm_mul_pd(sg, _mm_set1_pd(fp->du[k]));
+#endif
+}
+
+#if defined(__SSE2__)
+/* fp_integral_int with the pairs of kn: the same operations in the same
+ * order (so the same bits), fewer instructions. */
+static inline double kern_integral(const mk_kern *kn, double U, double V)
+{
+    const int32_t *t = kn->t;
+    const size_t w2 = kn->w2;
+    const __m128d VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
+    const __m128d hh = _mm_set1_pd(kn->h), ww = _mm_set1_pd(kn->w);
+    const int32_t *pa, *pb;
+    __m128d fa, fb;
+    double I = 0;
+    level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, kn->dv[0]), z), hh), &pa, &pb, &fa, &fb);
+    for (int k = 0; k < kn->n; k++) {
+        const int32_t *pa1, *pb1;
+        __m128d fa1, fb1;
+        level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, kn->dv[k + 1]), z), hh), &pa1, &pb1, &fa1, &fb1);
+        __m128d uz = _mm_max_pd(_mm_min_pd(_mm_add_pd(UU, kn->du[k]), ww), z);
+        __m128i ii = _mm_cvttpd_epi32(uz);
+        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
+        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
+        I -= step2(pa + i0, pa1 + i0, w2, fu, fa, fa1);
+        I -= step2(pb + i1, pb1 + i1, w2, _mm_unpackhi_pd(fu, fu), fb, fb1);
+        pa = pa1, pb = pb1, fa = fa1, fb = fb1;
+    }
+    return I;
+}
+#endif
+
+/* The sample at (U, V) (inside the support) blended over pixel o of a
+ * planar row (row length w): sample() and the blend, with no branch on
+ * a transparent sample (keep 1, colour 0: o unchanged). */
+static inline void kern_put(const mk_kern *kn, double U, double V, float *o, size_t w, uint64_t *painted)
+{
+    float c4[4];
+    if (kn->t) {
+#if defined(__SSE2__)
+        double a = kern_integral(kn, U, V) * kn->ia * (1.0 / 255);
+#else
+        double a = fp_integral_int(kn->t, kn->w2, kn->w, kn->h, kn->fp, U, V) * kn->ia * (1.0 / 255);
+#endif
+        a = a > 0 ? a : 0;
+        a = a < 1 ? a : 1;
+        c4[0] = (float)(kn->col[0] * a);
+        c4[1] = (float)(kn->col[1] * a);
+        c4[2] = (float)(kn->col[2] * a);
+        c4[3] = (float)a;
+    } else {
+        sample4(kn->m, kn->fp, U, V, c4);
+        if (!(c4[3] > 0)) return;
+    }
+    *painted += c4[3] > 0;
+    float keep = 1.0f - c4[3];
+    o[0] = o[0] * keep + c4[0];
+    o[w] = o[w] * keep + c4[1];
+    o[2 * w] = o[2 * w] * keep + c4[2];
 }
 
 /* Row spans are widened by this many pixels: far above the rounding of
@@ -931,21 +1011,6 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
     return *k0 <= *k1;
 }
 
-/* Blend the sample at (u, v), inside the support, over pixel k of a row
- * of S (planar, row length w). */
-static void put(const rs__mk *m, const rs__mk_fp *fp, double u, double v, float *sc, size_t w, long k,
-                uint64_t *painted)
-{
-    float c4[4];
-    sample(m, fp, u, v, c4);
-    if (!(c4[3] > 0)) return;
-    ++*painted;
-    float keep = 1.0f - c4[3], *o = sc + (size_t)k;
-    o[0] = o[0] * keep + c4[0];
-    o[w] = o[w] * keep + c4[1];
-    o[2 * w] = o[2 * w] * keep + c4[2];
-}
-
 /* The piece's rows [*r0, *r1] whose centres the box holds; 0: none. */
 static int box_rows(const rs__mk *m, const rs__piece *p, double ipix, long *r0, long *r1)
 {
@@ -965,6 +1030,8 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
+    mk_kern kn;
+    kern_init(&kn, m, &m->fp);
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -990,7 +1057,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
             double gx = gx0 + (double)k + 0.5;
             double u = ur + bu * gx, v = vr + bv * gx;
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            put(m, &m->fp, u, v, sc, w, k, painted);
+            kern_put(&kn, u, v, sc + k, w, painted);
         }
     }
 }
@@ -1012,6 +1079,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     /* the footprint of the nearest segment's direction (kept while the
      * nearest segment stays the same) */
     rs__mk_fp fp;
+    mk_kern kn;
     size_t fp_seg = SIZE_MAX;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
@@ -1084,9 +1152,10 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
             if (seg != fp_seg) {
                 const double *A = pts + RS__MK_PT * seg;
                 footprint(m->su * A[4] * pix, m->sv * A[3] * pix, -m->su * A[3] * pix, m->sv * A[4] * pix, &fp);
+                kern_init(&kn, m, &fp);
                 fp_seg = seg;
             }
-            put(m, &fp, u, v, sc, w, k, painted);
+            kern_put(&kn, u, v, sc + k, w, painted);
         }
     }
 }
@@ -1143,6 +1212,20 @@ static void prefetch_mk(const rs__mk *m)
 #endif
 }
 
+/* A curved marking's stretch points and span parts (read per row). */
+static void prefetch_stretch(const rs__markings *mk, const rs__mk *m)
+{
+#if defined(__GNUC__)
+    if (m->npt <= 2) return;
+    const char *a = (const char *)(mk->pts + RS__MK_PT * m->first), *b = (const char *)(mk->parts + RS__MK_PART * m->part);
+    for (size_t o = 0; o < m->npt * RS__MK_PT * sizeof(double); o += 64) __builtin_prefetch(a + o);
+    for (size_t o = 0; o < m->nparts * RS__MK_PART * sizeof(double); o += 64) __builtin_prefetch(b + o);
+#else
+    (void)mk;
+    (void)m;
+#endif
+}
+
 void rs__markings_paint(const rs__markings *mk, rs__piece *p)
 {
     const double pix = mk->pix, cell = mk->cell;
@@ -1186,6 +1269,7 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
         for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
         for (size_t k = 0; k < n; k++) {
             if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
+            if (k + 2 < n) prefetch_stretch(mk, &mk->m[cand[k + 2]]);
             const rs__mk *m = &mk->m[cand[k]];
             if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
             else paint_curved(mk, m, p, &tests, &painted);
