@@ -153,13 +153,13 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
      * stay below 2^31 for up to 8 M texels */
     if (uniform && n > ((size_t)1 << 23)) tx->nch = 4;
     double *S = rs__alloc_array(ctx, w1 * h1, sizeof *S);
-    if (tx->nch == 1) tx->isat = rs__alloc_array(ctx, (w1 + 1) * (h1 + 1), sizeof(int32_t));
+    if (tx->nch == 1) tx->isat = rs__alloc_array(ctx, (w1 + 1) * (h1 + 1), sizeof(double));
     else tx->sat = rs__alloc_array(ctx, 4 * w1 * h1, 4 * sizeof(double));
     if (!S || (!tx->isat && !tx->sat)) {
         rs__free(ctx, S);
         return RS_ERR_NOMEM;
     }
-    *bytes += tx->nch == 1 ? (w1 + 1) * (h1 + 1) * sizeof(int32_t) : 4 * w1 * h1 * 4 * sizeof(double);
+    *bytes += tx->nch == 1 ? (w1 + 1) * (h1 + 1) * sizeof(double) : 4 * w1 * h1 * 4 * sizeof(double);
     for (uint32_t c = 0; c < tx->nch; c++) {
         const int ch = tx->nch == 1 ? 3 : (int)c;
         for (size_t i = 0; i < w1; i++) S[i] = 0;
@@ -175,7 +175,7 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
         if (tx->nch == 1) {
             for (size_t j = 0; j <= h1; j++)
                 for (size_t i = 0; i <= w1; i++)
-                    tx->isat[j * (w1 + 1) + i] = (int32_t)S[(j < h1 ? j : h) * w1 + (i < w1 ? i : w)];
+                    tx->isat[j * (w1 + 1) + i] = S[(j < h1 ? j : h) * w1 + (i < w1 ? i : w)];
             continue;
         }
         for (size_t j = 0; j < h1; j++)
@@ -733,7 +733,7 @@ static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, do
 /* Both sides' levels v (clamped to [0, h]; lane 0 the left side, lane 1
  * the right): the table rows *pa, *pb and the fractions, each in both
  * lanes. */
-static inline void level2(const int32_t *t, size_t w2, __m128d v, const int32_t **pa, const int32_t **pb, __m128d *fa,
+static inline void level2(const double *t, size_t w2, __m128d v, const double **pa, const double **pb, __m128d *fa,
                           __m128d *fb)
 {
     __m128i j = _mm_cvttpd_epi32(v);
@@ -749,12 +749,9 @@ static inline void level2(const int32_t *t, size_t w2, __m128d v, const int32_t 
  * fractions f0, f1 in both lanes: bilinear in doubles from the whole
  * numbers (exact inputs; the result is far below 2^53), columns i and i
  * + 1 in the two lanes. */
-static inline double step2(const int32_t *a, const int32_t *b, size_t w2, __m128d fu, __m128d f0, __m128d f1)
+static inline double step2(const double *a, const double *b, size_t w2, __m128d fu, __m128d f0, __m128d f1)
 {
-    __m128d a0 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)a));
-    __m128d a1 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)(a + w2)));
-    __m128d b0 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)b));
-    __m128d b1 = _mm_cvtepi32_pd(_mm_loadl_epi64((const __m128i *)(const void *)(b + w2)));
+    __m128d a0 = _mm_loadu_pd(a), a1 = _mm_loadu_pd(a + w2), b0 = _mm_loadu_pd(b), b1 = _mm_loadu_pd(b + w2);
     __m128d ra = _mm_add_pd(a0, _mm_mul_pd(f0, _mm_sub_pd(a1, a0)));
     __m128d rb = _mm_add_pd(b0, _mm_mul_pd(f1, _mm_sub_pd(b1, b0)));
     __m128d d = _mm_sub_pd(rb, ra);
@@ -766,7 +763,7 @@ static inline double step2(const int32_t *a, const int32_t *b, size_t w2, __m128
  * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows'
  * fractions: bilinear in doubles from the whole numbers (exact inputs;
  * the result is far below 2^53). */
-static inline double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
+static inline double step_int(const double *a, const double *b, size_t w2, double fu, double f0, double f1)
 {
     double ra0 = a[0] + f0 * ((double)a[w2] - a[0]), ra1 = a[1] + f0 * ((double)a[w2 + 1] - a[1]);
     double rb0 = b[0] + f1 * ((double)b[w2] - b[0]), rb1 = b[1] + f1 * ((double)b[w2 + 1] - b[1]);
@@ -783,7 +780,7 @@ static inline double step_int(const int32_t *a, const int32_t *b, size_t w2, dou
  * step (both sides: the right side is the left one mirrored, V - dv, U -
  * du). The V levels are shared by consecutive steps; a step left of the
  * sprite adds nothing (G(0, v) = 0). (kern_integral: the same with SSE2.) */
-static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
+static double fp_integral_int(const double *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
                               double V)
 {
     double I = 0;
@@ -855,7 +852,7 @@ static void sample4(const rs__mk *m, const rs__mk_fp *fp, double U, double V, fl
 typedef struct mk_kern {
     const rs__mk *m;
     const rs__mk_fp *fp;
-    const int32_t *t;      /* alpha-only table, NULL: the four-plane sample */
+    const double *t;       /* alpha-only table, NULL: the four-plane sample */
     size_t w2;             /* its row length, w + 2 */
     double w, h, ia;       /* texels; 1 / the staircase polygon's area */
     double col[3];
@@ -889,16 +886,16 @@ static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
  * order (so the same bits), fewer instructions. */
 static inline double kern_integral(const mk_kern *kn, double U, double V)
 {
-    const int32_t *t = kn->t;
+    const double *t = kn->t;
     const size_t w2 = kn->w2;
     const __m128d VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
     const __m128d hh = _mm_set1_pd(kn->h), ww = _mm_set1_pd(kn->w);
-    const int32_t *pa, *pb;
+    const double *pa, *pb;
     __m128d fa, fb;
     double I = 0;
     level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, kn->dv[0]), z), hh), &pa, &pb, &fa, &fb);
     for (int k = 0; k < kn->n; k++) {
-        const int32_t *pa1, *pb1;
+        const double *pa1, *pb1;
         __m128d fa1, fb1;
         level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, kn->dv[k + 1]), z), hh), &pa1, &pb1, &fa1, &fb1);
         __m128d uz = _mm_max_pd(_mm_min_pd(_mm_add_pd(UU, kn->du[k]), ww), z);

@@ -41,7 +41,7 @@ typedef struct rs__mk_tex {
     uint32_t w, h;             /* level-0 texels; w == 0: not built (type unused) */
     uint32_t nch;              /* 1: alpha only, colour = col x alpha; 4: r g b a */
     float col[3];              /* premultiplied colour per unit alpha (nch 1) */
-    int32_t *isat;             /* nch 1: (h + 2) x (w + 2), 255 x alpha */
+    double *isat;              /* nch 1: (h + 2) x (w + 2), 255 x alpha */
     double *sat;               /* nch 4: 4 planes of (h + 1) x (w + 1) x 4 */
     int32_t ax0, ay0, ax1, ay1; /* texels with alpha > 0 (ax0 > ax1: none) */
 } rs__mk_tex;
