@@ -115,6 +115,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->m);
     rs__free(ctx, mk->pts);
     rs__free(ctx, mk->parts);
+    rs__free(ctx, mk->fps);
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
     rs__free(ctx, mk);
@@ -238,6 +239,12 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
         v += ev;
     }
     fp->ia = area > 0 ? 1 / area : 0;
+    /* the staircase polygon's reach from the centre (both sides) */
+    fp->hu = fp->hv = 0;
+    for (int k = 0; k < fp->n; k++) {
+        fp->hu = fmax(fp->hu, fabs(fp->du[k]));
+        fp->hv = fmax(fp->hv, fmax(fabs(fp->dv[k]), fabs(fp->dv[k + 1])));
+    }
 }
 
 /* The road coordinates of local point (x, y) on a marking's stretch of
@@ -394,11 +401,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         m->bvy = m->sv * uy;
         m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
         footprint(m->bu, m->bv, m->buy * pix, m->bvy * pix, &m->fp);
-        double hu = 0, hv = 0;
-        for (int k = 0; k < m->fp.n; k++) {
-            hu = fmax(hu, fabs(m->fp.du[k]));
-            hv = fmax(hv, fmax(fabs(m->fp.dv[k]), fabs(m->fp.dv[k + 1])));
-        }
+        double hu = m->fp.hu, hv = m->fp.hv;
         m->ulo = fmax(m->ulo, m->tex->ax0 - hu);
         m->uhi = fmin(m->uhi, m->tex->ax1 + 1 + hu);
         m->vlo = fmax(m->vlo, m->tex->ay0 - hv);
@@ -685,11 +688,30 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__road_local_free(ctx, &rl);
         mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
                     mk->ntex * sizeof *mk->tex + tex_bytes;
-        size_t npart = 0, partcap = 0;
+        size_t npart = 0, partcap = 0, nfp = 0;
         for (size_t i = 0; i < mk->n && !r; i++)
-            if (mk->m[i].npt > 2 && build_parts(ctx, mk, &mk->m[i], &npart, &partcap))
-                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+            if (mk->m[i].npt > 2) {
+                if (build_parts(ctx, mk, &mk->m[i], &npart, &partcap))
+                    r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+                nfp += mk->m[i].npt - 1;
+            }
         mk->bytes += partcap * RS__MK_PART * sizeof(double);
+        /* curved stretches: the footprint of each segment's direction */
+        if (!r && nfp) {
+            mk->fps = rs__alloc_array(ctx, nfp, sizeof *mk->fps);
+            if (!mk->fps) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+            mk->bytes += nfp * sizeof *mk->fps;
+        }
+        for (size_t i = 0, f = 0; i < mk->n && !r; i++) {
+            rs__mk *m = &mk->m[i];
+            if (m->npt <= 2) continue;
+            m->fpi = f;
+            for (size_t k = 0; k + 1 < m->npt; k++, f++) {
+                const double *A = mk->pts + RS__MK_PT * (m->first + k);
+                footprint(m->su * A[4] * mk->pix, m->sv * A[3] * mk->pix, -m->su * A[3] * mk->pix,
+                          m->sv * A[4] * mk->pix, &mk->fps[f]);
+            }
+        }
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
             double map_h = (double)(dem->height - 1) * dem->frame.cell_size;
@@ -1075,7 +1097,8 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
     /* the footprint of the nearest segment's direction (kept while the
      * nearest segment stays the same) */
-    rs__mk_fp fp;
+    const rs__mk_fp *fps = mk->fps + m->fpi;
+    const double ax0 = m->tex->ax0, ax1 = m->tex->ax1 + 1, ay0 = m->tex->ay0, ay1 = m->tex->ay1 + 1;
     mk_kern kn;
     size_t fp_seg = SIZE_MAX;
     long r0, r1;
@@ -1146,10 +1169,12 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
                 v = m->cv + m->sv * (s - m->s0);
             }
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            /* the support of this segment's footprint (ulo..vhi: of any
+             * direction): outside it the sample is 0 */
+            const rs__mk_fp *fp = fps + seg;
+            if (!(u >= ax0 - fp->hu && u < ax1 + fp->hu && v >= ay0 - fp->hv && v < ay1 + fp->hv)) continue;
             if (seg != fp_seg) {
-                const double *A = pts + RS__MK_PT * seg;
-                footprint(m->su * A[4] * pix, m->sv * A[3] * pix, -m->su * A[3] * pix, m->sv * A[4] * pix, &fp);
-                kern_init(&kn, m, &fp);
+                kern_init(&kn, m, fp);
                 fp_seg = seg;
             }
             kern_put(&kn, u, v, sc + k, w, painted);

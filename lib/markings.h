@@ -58,6 +58,7 @@ typedef struct rs__mk_fp {
     int n;
     double ia; /* 1 / the staircase polygon's area */
     double du[RS__MK_STEPS], dv[RS__MK_STEPS + 1];
+    double hu, hv; /* the polygon's reach from the centre in U and in V */
 } rs__mk_fp;
 
 typedef struct rs__mk {
@@ -68,6 +69,7 @@ typedef struct rs__mk {
     int flat;                  /* one segment, and bu or bv is 0 */
     size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
     size_t part, nparts;       /* curved: its span parts, parts[part..part+nparts-1] */
+    size_t fpi;                /* curved: its segments' footprints, fps[fpi..fpi+npt-2] */
     double by0, by1;           /* rows of the box */
     /* level-0 texel coordinates U (across), V (along), texel i covering
      * [i, i + 1): the sample is transparent outside [ulo, uhi) x [vlo, vhi) */
@@ -118,6 +120,7 @@ typedef struct rs__markings {
     size_t n;
     double *pts;               /* RS__MK_PT doubles per point */
     double *parts;             /* RS__MK_PART doubles per span part of a curved marking */
+    rs__mk_fp *fps;            /* per segment of a curved marking's stretch: the footprint of its direction */
     double pix;                /* output pixel, metres */
     double cell;               /* index cell, metres */
     uint32_t gw, gh;
