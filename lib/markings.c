@@ -239,6 +239,8 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
         v += ev;
     }
     fp->ia = area > 0 ? 1 / area : 0;
+    for (int k = 0; k <= fp->n; k++) fp->pv[k][0] = fp->dv[k], fp->pv[k][1] = -fp->dv[k];
+    for (int k = 0; k < fp->n; k++) fp->pu[k][0] = fp->du[k], fp->pu[k][1] = -fp->du[k];
     /* the staircase polygon's reach from the centre (both sides) */
     fp->hu = fp->hv = 0;
     for (int k = 0; k < fp->n; k++) {
@@ -868,9 +870,7 @@ static void sample4(const rs__mk *m, const rs__mk_fp *fp, double U, double V, fl
 }
 
 /* What the paint reads per pixel of one marking and footprint, set up
- * once per marking (or per footprint on a curved stretch): the table, the
- * sprite's size and, for the SSE2 kernel, each level and step offset as
- * a pair (+ left side, - right side) so that a pixel does one add each. */
+ * once per marking (or per segment on a curved stretch). */
 typedef struct mk_kern {
     const rs__mk *m;
     const rs__mk_fp *fp;
@@ -878,10 +878,6 @@ typedef struct mk_kern {
     size_t w2;             /* its row length, w + 2 */
     double w, h, ia;       /* texels; 1 / the staircase polygon's area */
     double col[3];
-    int n;
-#if defined(__SSE2__)
-    __m128d dv[RS__MK_STEPS + 1], du[RS__MK_STEPS];
-#endif
 } mk_kern;
 
 static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
@@ -895,17 +891,14 @@ static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
     kn->h = tx->h;
     kn->ia = fp->ia;
     for (int c = 0; c < 3; c++) kn->col[c] = tx->col[c];
-    kn->n = fp->n;
-#if defined(__SSE2__)
-    const __m128d sg = _mm_set_pd(-1, 1);
-    for (int k = 0; k <= fp->n; k++) kn->dv[k] = _mm_mul_pd(sg, _mm_set1_pd(fp->dv[k]));
-    for (int k = 0; k < fp->n; k++) kn->du[k] = _mm_mul_pd(sg, _mm_set1_pd(fp->du[k]));
-#endif
 }
 
 #if defined(__SSE2__)
-/* fp_integral_int with the pairs of kn: the same operations in the same
- * order (so the same bits), fewer instructions. */
+/* fp_integral_int with SSE2, both sides at once (lane 0 the left side,
+ * lane 1 the right: the footprint's offset pairs): the same operations in
+ * the same order, so the same bits. A step left of the sprite is clamped
+ * onto column 0, where the table is 0, and adds exactly +0 (fu = 0): no
+ * branch. */
 static inline double kern_integral(const mk_kern *kn, double U, double V)
 {
     const double *t = kn->t;
@@ -915,12 +908,14 @@ static inline double kern_integral(const mk_kern *kn, double U, double V)
     const double *pa, *pb;
     __m128d fa, fb;
     double I = 0;
-    level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, kn->dv[0]), z), hh), &pa, &pb, &fa, &fb);
-    for (int k = 0; k < kn->n; k++) {
+    const rs__mk_fp *fp = kn->fp;
+    level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, _mm_loadu_pd(fp->pv[0])), z), hh), &pa, &pb, &fa, &fb);
+    for (int k = 0; k < fp->n; k++) {
         const double *pa1, *pb1;
         __m128d fa1, fb1;
-        level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, kn->dv[k + 1]), z), hh), &pa1, &pb1, &fa1, &fb1);
-        __m128d uz = _mm_max_pd(_mm_min_pd(_mm_add_pd(UU, kn->du[k]), ww), z);
+        level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, _mm_loadu_pd(fp->pv[k + 1])), z), hh), &pa1, &pb1, &fa1,
+               &fb1);
+        __m128d uz = _mm_max_pd(_mm_min_pd(_mm_add_pd(UU, _mm_loadu_pd(fp->pu[k])), ww), z);
         __m128i ii = _mm_cvttpd_epi32(uz);
         __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
         size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));

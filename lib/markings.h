@@ -59,6 +59,8 @@ typedef struct rs__mk_fp {
     double ia; /* 1 / the staircase polygon's area */
     double du[RS__MK_STEPS], dv[RS__MK_STEPS + 1];
     double hu, hv; /* the polygon's reach from the centre in U and in V */
+    /* the same offsets for both sides at once: (dv, -dv), (du, -du) */
+    double pv[RS__MK_STEPS + 1][2], pu[RS__MK_STEPS][2];
 } rs__mk_fp;
 
 typedef struct rs__mk {
