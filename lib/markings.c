@@ -899,6 +899,9 @@ static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
  * the same order, so the same bits. A step left of the sprite is clamped
  * onto column 0, where the table is 0, and adds exactly +0 (fu = 0): no
  * branch. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 static inline double kern_integral(const mk_kern *kn, double U, double V)
 {
     const double *t = kn->t;
@@ -930,6 +933,9 @@ static inline double kern_integral(const mk_kern *kn, double U, double V)
 /* The sample at (U, V) (inside the support) blended over pixel o of a
  * planar row (row length w): sample() and the blend, with no branch on
  * a transparent sample (keep 1, colour 0: o unchanged). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 static inline void kern_put(const mk_kern *kn, double U, double V, float *o, size_t w, uint64_t *painted)
 {
     float c4[4];
