@@ -218,7 +218,7 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
     double bu = e1_first ? e2u : e1u, bv = e1_first ? e2v : e1v;
     if (av == 0) au = -fabs(au); /* along the bottom edge to its left end */
     double u = -0.5 * (au + bu), v = -0.5 * (av + bv);
-    fp->dv[0] = v;
+    fp->pv[0][0] = v;
     double area = 0;
     for (int e = 0; e < 2; e++) {
         double eu = e ? bu : au, ev = e ? bv : av;
@@ -228,10 +228,10 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
             int n = need < 1 ? 1 : need >= RS__MK_STEPS / 2 ? RS__MK_STEPS / 2 : (int)ceil(need);
             for (int k = 0; k < n; k++) {
                 double t1 = (double)(k + 1) / n, tm = (k + 0.5) / n;
-                fp->du[fp->n] = u + tm * eu;
-                fp->dv[fp->n + 1] = k + 1 == n ? v + ev : v + t1 * ev;
+                fp->pu[fp->n][0] = u + tm * eu;
+                fp->pv[fp->n + 1][0] = k + 1 == n ? v + ev : v + t1 * ev;
                 /* the band between this step and its mirror image */
-                area += -2 * fp->du[fp->n] * (fp->dv[fp->n + 1] - fp->dv[fp->n]);
+                area += -2 * fp->pu[fp->n][0] * (fp->pv[fp->n + 1][0] - fp->pv[fp->n][0]);
                 fp->n++;
             }
         }
@@ -239,13 +239,13 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
         v += ev;
     }
     fp->ia = area > 0 ? 1 / area : 0;
-    for (int k = 0; k <= fp->n; k++) fp->pv[k][0] = fp->dv[k], fp->pv[k][1] = -fp->dv[k];
-    for (int k = 0; k < fp->n; k++) fp->pu[k][0] = fp->du[k], fp->pu[k][1] = -fp->du[k];
+    for (int k = 0; k <= fp->n; k++) fp->pv[k][1] = -fp->pv[k][0];
+    for (int k = 0; k < fp->n; k++) fp->pu[k][1] = -fp->pu[k][0];
     /* the staircase polygon's reach from the centre (both sides) */
     fp->hu = fp->hv = 0;
     for (int k = 0; k < fp->n; k++) {
-        fp->hu = fmax(fp->hu, fabs(fp->du[k]));
-        fp->hv = fmax(fp->hv, fmax(fabs(fp->dv[k]), fabs(fp->dv[k + 1])));
+        fp->hu = fmax(fp->hu, fabs(fp->pu[k][0]));
+        fp->hv = fmax(fp->hv, fmax(fabs(fp->pv[k][0]), fabs(fp->pv[k + 1][0])));
     }
 }
 
@@ -737,7 +737,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
 static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, double w, double h, size_t w1,
                    size_t *ea, size_t *eb, double *fu, double *f0, double *f1)
 {
-    double u = U + sg * fp->du[k], v0 = V + sg * fp->dv[k], v1 = V + sg * fp->dv[k + 1];
+    double u = U + sg * fp->pu[k][0], v0 = V + sg * fp->pv[k][0], v1 = V + sg * fp->pv[k + 1][0];
     u = u < w ? u : w;
     v0 = v0 > 0 ? v0 : 0;
     v0 = v0 < h ? v0 : h;
@@ -814,7 +814,7 @@ static double fp_integral_int(const double *t, size_t w2, double w, double h, co
     for (int side = 0; side < 2; side++) {
         const double sg = side ? -1 : 1;
         for (int k = 0; k <= n; k++) {
-            double v = V + sg * fp->dv[k];
+            double v = V + sg * fp->pv[k][0];
             v = v > 0 ? v : 0;
             v = v < h ? v : h;
             size_t j = (size_t)v;
@@ -822,7 +822,7 @@ static double fp_integral_int(const double *t, size_t w2, double w, double h, co
             f[side][k] = v - (double)j;
         }
         for (int k = 0; k < n; k++) {
-            double u = U + sg * fp->du[k];
+            double u = U + sg * fp->pu[k][0];
             u = u < w ? u : w;
             if (!(u > 0)) continue;
             size_t i = (size_t)u;

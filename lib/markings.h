@@ -52,14 +52,13 @@ typedef struct rs__mk_tex {
  * the left one turned by 180 degrees about the centre (Uc, Vc). Each
  * parallelogram edge is cut into equal parts with a step at each part's
  * middle, so the staircases of neighbouring pixels fit together and the
- * footprints still tile the plane. */
+ * footprints still tile the plane. Kept as pairs for both sides at once:
+ * pv[k] = (dv[k], -dv[k]), pu[k] = (du[k], -du[k]). */
 #define RS__MK_STEPS 4
 typedef struct rs__mk_fp {
     int n;
     double ia; /* 1 / the staircase polygon's area */
-    double du[RS__MK_STEPS], dv[RS__MK_STEPS + 1];
     double hu, hv; /* the polygon's reach from the centre in U and in V */
-    /* the same offsets for both sides at once: (dv, -dv), (du, -du) */
     double pv[RS__MK_STEPS + 1][2], pu[RS__MK_STEPS][2];
 } rs__mk_fp;
 
