@@ -1235,14 +1235,17 @@ static void prefetch_mk(const rs__mk *m)
 #endif
 }
 
-/* A curved marking's stretch points and span parts (read per row). */
+/* A curved marking's stretch points, span parts and footprints (read per
+ * row and pixel; separate arrays, so not fetched with its record). */
 static void prefetch_stretch(const rs__markings *mk, const rs__mk *m)
 {
 #if defined(__GNUC__)
     if (m->npt <= 2) return;
     const char *a = (const char *)(mk->pts + RS__MK_PT * m->first), *b = (const char *)(mk->parts + RS__MK_PART * m->part);
+    const char *c = (const char *)(mk->fps + m->fpi);
     for (size_t o = 0; o < m->npt * RS__MK_PT * sizeof(double); o += 64) __builtin_prefetch(a + o);
     for (size_t o = 0; o < m->nparts * RS__MK_PART * sizeof(double); o += 64) __builtin_prefetch(b + o);
+    for (size_t o = 0; o < (m->npt - 1) * sizeof *mk->fps; o += 64) __builtin_prefetch(c + o);
 #else
     (void)mk;
     (void)m;
