@@ -84,9 +84,9 @@ typedef struct rs__mk {
     /* a point (ds, dt) from the centre: U = cu + su dt, V = cv + sv ds */
     double cu, su, cv, sv;
     double s0, t0;             /* centre (road coordinates) */
-    double slo, shi, tlo, thi; /* the support in road coordinates (s, t) */
     /* the rest */
     const rs__atlas_type *ty;
+    double slo, shi, tlo, thi; /* the support in road coordinates (s, t) */
     int flip;
     double hl, hw;             /* half length and width (metres) */
     double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
