@@ -803,7 +803,8 @@ static inline double step_int(const double *a, const double *b, size_t w2, doubl
  * of the summed-area table along the staircases, G(u, v1) - G(u, v0) per
  * step (both sides: the right side is the left one mirrored, V - dv, U -
  * du). The V levels are shared by consecutive steps; a step left of the
- * sprite adds nothing (G(0, v) = 0). (kern_integral: the same with SSE2.) */
+ * sprite adds nothing (G(0, v) = 0). kern_integral does the same with
+ * SSE2, in the same order: the same bits. */
 static double fp_integral_int(const double *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
                               double V)
 {
@@ -811,25 +812,26 @@ static double fp_integral_int(const double *t, size_t w2, double w, double h, co
     const int n = fp->n;
     size_t row[2][RS__MK_STEPS + 1];
     double f[2][RS__MK_STEPS + 1];
-    for (int side = 0; side < 2; side++) {
-        const double sg = side ? -1 : 1;
-        for (int k = 0; k <= n; k++) {
-            double v = V + sg * fp->pv[k][0];
+    for (int k = 0; k <= n; k++)
+        for (int side = 0; side < 2; side++) {
+            double v = V + fp->pv[k][side];
             v = v > 0 ? v : 0;
             v = v < h ? v : h;
             size_t j = (size_t)v;
             row[side][k] = j * w2;
             f[side][k] = v - (double)j;
         }
-        for (int k = 0; k < n; k++) {
-            double u = U + sg * fp->pu[k][0];
+    /* step k of the left side, then of the right side, as the SSE2 kernel
+     * sums them */
+    for (int k = 0; k < n; k++)
+        for (int side = 0; side < 2; side++) {
+            double u = U + fp->pu[k][side];
             u = u < w ? u : w;
             if (!(u > 0)) continue;
             size_t i = (size_t)u;
             I -= step_int(t + row[side][k] + i, t + row[side][k + 1] + i, w2, u - (double)i, f[side][k],
                           f[side][k + 1]);
         }
-    }
     return I;
 }
 #endif
