@@ -789,13 +789,12 @@ static inline double step2(const double *a, const double *b, size_t w2, __m128d 
  * the result is far below 2^53). */
 static inline double step_int(const double *a, const double *b, size_t w2, double fu, double f0, double f1)
 {
-    double ra0 = a[0] + f0 * ((double)a[w2] - a[0]), ra1 = a[1] + f0 * ((double)a[w2 + 1] - a[1]);
-    double rb0 = b[0] + f1 * ((double)b[w2] - b[0]), rb1 = b[1] + f1 * ((double)b[w2 + 1] - b[1]);
+    double ra0 = a[0] + f0 * (a[w2] - a[0]), ra1 = a[1] + f0 * (a[w2 + 1] - a[1]);
+    double rb0 = b[0] + f1 * (b[w2] - b[0]), rb1 = b[1] + f1 * (b[w2 + 1] - b[1]);
     double lo = rb0 - ra0, hi = rb1 - ra1;
     return lo + fu * (hi - lo);
 }
 #endif
-
 
 #if !defined(__SSE2__)
 /* The integral of the sprite's 255 x alpha (table t, rows of w2 = w + 2
