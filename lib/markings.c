@@ -932,8 +932,8 @@ static inline double kern_integral(const mk_kern *kn, double U, double V)
 #endif
 
 /* The sample at (U, V) (inside the support) blended over pixel o of a
- * planar row (row length w): sample() and the blend, with no branch on
- * a transparent sample (keep 1, colour 0: o unchanged). */
+ * planar row (row length w). An alpha-only type blends a transparent
+ * sample too, without a branch: keep 1, colour 0, o unchanged. */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
