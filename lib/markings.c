@@ -115,6 +115,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->m);
     rs__free(ctx, mk->pts);
     rs__free(ctx, mk->parts);
+    rs__free(ctx, mk->fps);
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
     rs__free(ctx, mk);
@@ -153,13 +154,13 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
      * stay below 2^31 for up to 8 M texels */
     if (uniform && n > ((size_t)1 << 23)) tx->nch = 4;
     double *S = rs__alloc_array(ctx, w1 * h1, sizeof *S);
-    if (tx->nch == 1) tx->isat = rs__alloc_array(ctx, (w1 + 1) * (h1 + 1), sizeof(int32_t));
+    if (tx->nch == 1) tx->isat = rs__alloc_array(ctx, (w1 + 1) * (h1 + 1), sizeof(double));
     else tx->sat = rs__alloc_array(ctx, 4 * w1 * h1, 4 * sizeof(double));
     if (!S || (!tx->isat && !tx->sat)) {
         rs__free(ctx, S);
         return RS_ERR_NOMEM;
     }
-    *bytes += tx->nch == 1 ? (w1 + 1) * (h1 + 1) * sizeof(int32_t) : 4 * w1 * h1 * 4 * sizeof(double);
+    *bytes += tx->nch == 1 ? (w1 + 1) * (h1 + 1) * sizeof(double) : 4 * w1 * h1 * 4 * sizeof(double);
     for (uint32_t c = 0; c < tx->nch; c++) {
         const int ch = tx->nch == 1 ? 3 : (int)c;
         for (size_t i = 0; i < w1; i++) S[i] = 0;
@@ -175,7 +176,7 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
         if (tx->nch == 1) {
             for (size_t j = 0; j <= h1; j++)
                 for (size_t i = 0; i <= w1; i++)
-                    tx->isat[j * (w1 + 1) + i] = (int32_t)S[(j < h1 ? j : h) * w1 + (i < w1 ? i : w)];
+                    tx->isat[j * (w1 + 1) + i] = S[(j < h1 ? j : h) * w1 + (i < w1 ? i : w)];
             continue;
         }
         for (size_t j = 0; j < h1; j++)
@@ -217,7 +218,7 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
     double bu = e1_first ? e2u : e1u, bv = e1_first ? e2v : e1v;
     if (av == 0) au = -fabs(au); /* along the bottom edge to its left end */
     double u = -0.5 * (au + bu), v = -0.5 * (av + bv);
-    fp->dv[0] = v;
+    fp->pv[0][0] = v;
     double area = 0;
     for (int e = 0; e < 2; e++) {
         double eu = e ? bu : au, ev = e ? bv : av;
@@ -227,10 +228,10 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
             int n = need < 1 ? 1 : need >= RS__MK_STEPS / 2 ? RS__MK_STEPS / 2 : (int)ceil(need);
             for (int k = 0; k < n; k++) {
                 double t1 = (double)(k + 1) / n, tm = (k + 0.5) / n;
-                fp->du[fp->n] = u + tm * eu;
-                fp->dv[fp->n + 1] = k + 1 == n ? v + ev : v + t1 * ev;
+                fp->pu[fp->n][0] = u + tm * eu;
+                fp->pv[fp->n + 1][0] = k + 1 == n ? v + ev : v + t1 * ev;
                 /* the band between this step and its mirror image */
-                area += -2 * fp->du[fp->n] * (fp->dv[fp->n + 1] - fp->dv[fp->n]);
+                area += -2 * fp->pu[fp->n][0] * (fp->pv[fp->n + 1][0] - fp->pv[fp->n][0]);
                 fp->n++;
             }
         }
@@ -238,6 +239,14 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp 
         v += ev;
     }
     fp->ia = area > 0 ? 1 / area : 0;
+    for (int k = 0; k <= fp->n; k++) fp->pv[k][1] = -fp->pv[k][0];
+    for (int k = 0; k < fp->n; k++) fp->pu[k][1] = -fp->pu[k][0];
+    /* the staircase polygon's reach from the centre (both sides) */
+    fp->hu = fp->hv = 0;
+    for (int k = 0; k < fp->n; k++) {
+        fp->hu = fmax(fp->hu, fabs(fp->pu[k][0]));
+        fp->hv = fmax(fp->hv, fmax(fabs(fp->pv[k][0]), fabs(fp->pv[k + 1][0])));
+    }
 }
 
 /* The road coordinates of local point (x, y) on a marking's stretch of
@@ -394,11 +403,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         m->bvy = m->sv * uy;
         m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
         footprint(m->bu, m->bv, m->buy * pix, m->bvy * pix, &m->fp);
-        double hu = 0, hv = 0;
-        for (int k = 0; k < m->fp.n; k++) {
-            hu = fmax(hu, fabs(m->fp.du[k]));
-            hv = fmax(hv, fmax(fabs(m->fp.dv[k]), fabs(m->fp.dv[k + 1])));
-        }
+        double hu = m->fp.hu, hv = m->fp.hv;
         m->ulo = fmax(m->ulo, m->tex->ax0 - hu);
         m->uhi = fmin(m->uhi, m->tex->ax1 + 1 + hu);
         m->vlo = fmax(m->vlo, m->tex->ay0 - hv);
@@ -685,11 +690,30 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__road_local_free(ctx, &rl);
         mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
                     mk->ntex * sizeof *mk->tex + tex_bytes;
-        size_t npart = 0, partcap = 0;
+        size_t npart = 0, partcap = 0, nfp = 0;
         for (size_t i = 0; i < mk->n && !r; i++)
-            if (mk->m[i].npt > 2 && build_parts(ctx, mk, &mk->m[i], &npart, &partcap))
-                r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+            if (mk->m[i].npt > 2) {
+                if (build_parts(ctx, mk, &mk->m[i], &npart, &partcap))
+                    r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+                nfp += mk->m[i].npt - 1;
+            }
         mk->bytes += partcap * RS__MK_PART * sizeof(double);
+        /* curved stretches: the footprint of each segment's direction */
+        if (!r && nfp) {
+            mk->fps = rs__alloc_array(ctx, nfp, sizeof *mk->fps);
+            if (!mk->fps) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+            mk->bytes += nfp * sizeof *mk->fps;
+        }
+        for (size_t i = 0, f = 0; i < mk->n && !r; i++) {
+            rs__mk *m = &mk->m[i];
+            if (m->npt <= 2) continue;
+            m->fpi = f;
+            for (size_t k = 0; k + 1 < m->npt; k++, f++) {
+                const double *A = mk->pts + RS__MK_PT * (m->first + k);
+                footprint(m->su * A[4] * mk->pix, m->sv * A[3] * mk->pix, -m->su * A[3] * mk->pix,
+                          m->sv * A[4] * mk->pix, &mk->fps[f]);
+            }
+        }
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
             double map_h = (double)(dem->height - 1) * dem->frame.cell_size;
@@ -713,7 +737,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
 static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, double w, double h, size_t w1,
                    size_t *ea, size_t *eb, double *fu, double *f0, double *f1)
 {
-    double u = U + sg * fp->du[k], v0 = V + sg * fp->dv[k], v1 = V + sg * fp->dv[k + 1];
+    double u = U + sg * fp->pu[k][0], v0 = V + sg * fp->pv[k][0], v1 = V + sg * fp->pv[k + 1][0];
     u = u < w ? u : w;
     v0 = v0 > 0 ? v0 : 0;
     v0 = v0 < h ? v0 : h;
@@ -729,94 +753,87 @@ static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, do
     return 1;
 }
 
-/* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
- * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows' fractions: bilinear in
- * doubles from the whole numbers (exact inputs; the result is far below
- * 2^53). */
-static inline double step_int(const int32_t *a, const int32_t *b, size_t w2, double fu, double f0, double f1)
-{
 #if defined(__SSE2__)
-    /* S(j, i), S(j, i + 1), S(j + 1, i), S(j + 1, i + 1) */
-    __m128i A = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)a),
-                                   _mm_loadl_epi64((const __m128i *)(const void *)(a + w2)));
-    __m128i B = _mm_unpacklo_epi64(_mm_loadl_epi64((const __m128i *)(const void *)b),
-                                   _mm_loadl_epi64((const __m128i *)(const void *)(b + w2)));
-    __m128d a0 = _mm_cvtepi32_pd(A), a1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(A, 0xEE));
-    __m128d b0 = _mm_cvtepi32_pd(B), b1 = _mm_cvtepi32_pd(_mm_shuffle_epi32(B, 0xEE));
-    __m128d ra = _mm_add_pd(a0, _mm_mul_pd(_mm_set1_pd(f0), _mm_sub_pd(a1, a0)));
-    __m128d rb = _mm_add_pd(b0, _mm_mul_pd(_mm_set1_pd(f1), _mm_sub_pd(b1, b0)));
-    __m128d d = _mm_sub_pd(rb, ra);
-    double lo = _mm_cvtsd_f64(d), hi = _mm_cvtsd_f64(_mm_unpackhi_pd(d, d));
-    return lo + fu * (hi - lo);
-#else
-    double ra0 = a[0] + f0 * ((double)a[w2] - a[0]), ra1 = a[1] + f0 * ((double)a[w2 + 1] - a[1]);
-    double rb0 = b[0] + f1 * ((double)b[w2] - b[0]), rb1 = b[1] + f1 * ((double)b[w2 + 1] - b[1]);
-    double lo = rb0 - ra0, hi = rb1 - ra1;
-    return lo + fu * (hi - lo);
-#endif
+/* Both sides' levels v (clamped to [0, h]; lane 0 the left side, lane 1
+ * the right): the table rows *pa, *pb and the fractions, each in both
+ * lanes. */
+static inline void level2(const double *t, size_t w2, __m128d v, const double **pa, const double **pb, __m128d *fa,
+                          __m128d *fb)
+{
+    __m128i j = _mm_cvttpd_epi32(v);
+    __m128d f = _mm_sub_pd(v, _mm_cvtepi32_pd(j));
+    *pa = t + (size_t)(uint32_t)_mm_cvtsi128_si32(j) * w2;
+    *pb = t + (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(j, 1)) * w2;
+    *fa = _mm_unpacklo_pd(f, f);
+    *fb = _mm_unpackhi_pd(f, f);
 }
 
+/* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
+ * v1) of column i (rows of w2 corners), fu = u - i in lane 0, the rows'
+ * fractions f0, f1 in both lanes: bilinear in doubles from the whole
+ * numbers (exact inputs; the result is far below 2^53), columns i and i
+ * + 1 in the two lanes. */
+static inline double step2(const double *a, const double *b, size_t w2, __m128d fu, __m128d f0, __m128d f1)
+{
+    __m128d a0 = _mm_loadu_pd(a), a1 = _mm_loadu_pd(a + w2), b0 = _mm_loadu_pd(b), b1 = _mm_loadu_pd(b + w2);
+    __m128d ra = _mm_add_pd(a0, _mm_mul_pd(f0, _mm_sub_pd(a1, a0)));
+    __m128d rb = _mm_add_pd(b0, _mm_mul_pd(f1, _mm_sub_pd(b1, b0)));
+    __m128d d = _mm_sub_pd(rb, ra);
+    __m128d dh = _mm_unpackhi_pd(d, d);
+    return _mm_cvtsd_f64(_mm_add_sd(d, _mm_mul_sd(fu, _mm_sub_sd(dh, d))));
+}
+#else
+/* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
+ * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows'
+ * fractions: bilinear in doubles from the whole numbers (exact inputs;
+ * the result is far below 2^53). */
+static inline double step_int(const double *a, const double *b, size_t w2, double fu, double f0, double f1)
+{
+    double ra0 = a[0] + f0 * (a[w2] - a[0]), ra1 = a[1] + f0 * (a[w2 + 1] - a[1]);
+    double rb0 = b[0] + f1 * (b[w2] - b[0]), rb1 = b[1] + f1 * (b[w2 + 1] - b[1]);
+    double lo = rb0 - ra0, hi = rb1 - ra1;
+    return lo + fu * (hi - lo);
+}
+#endif
+
+#if !defined(__SSE2__)
 /* The integral of the sprite's 255 x alpha (table t, rows of w2 = w + 2
  * corners, w x h texels) over footprint fp at (U, V): the line integral
  * of the summed-area table along the staircases, G(u, v1) - G(u, v0) per
- * step (both sides at once: the right side is the left one mirrored, V -
- * dv, U - du). The V levels are shared by consecutive steps; a step left
- * of the sprite adds nothing (G(0, v) = 0). */
-static double fp_integral_int(const int32_t *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
+ * step (both sides: the right side is the left one mirrored, V - dv, U -
+ * du). The V levels are shared by consecutive steps; a step left of the
+ * sprite adds nothing (G(0, v) = 0). kern_integral does the same with
+ * SSE2, in the same order: the same bits. */
+static double fp_integral_int(const double *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
                               double V)
 {
     double I = 0;
     const int n = fp->n;
     size_t row[2][RS__MK_STEPS + 1];
     double f[2][RS__MK_STEPS + 1];
-#if defined(__SSE2__)
-    const __m128d sg = _mm_set_pd(-1, 1), VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
-    const __m128d hh = _mm_set1_pd(h), ww = _mm_set1_pd(w);
-    for (int k = 0; k <= n; k++) {
-        __m128d v = _mm_add_pd(VV, _mm_mul_pd(sg, _mm_set1_pd(fp->dv[k])));
-        v = _mm_min_pd(_mm_max_pd(v, z), hh);
-        __m128i j = _mm_cvttpd_epi32(v);
-        __m128d fr = _mm_sub_pd(v, _mm_cvtepi32_pd(j));
-        _mm_storel_pd(&f[0][k], fr);
-        _mm_storeh_pd(&f[1][k], fr);
-        row[0][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(j) * w2;
-        row[1][k] = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(j, 1)) * w2;
-    }
-    for (int k = 0; k < n; k++) {
-        __m128d u = _mm_min_pd(_mm_add_pd(UU, _mm_mul_pd(sg, _mm_set1_pd(fp->du[k]))), ww);
-        __m128d uz = _mm_max_pd(u, z);
-        __m128i ii = _mm_cvttpd_epi32(uz);
-        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
-        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
-        if (_mm_cvtsd_f64(u) > 0)
-            I -= step_int(t + row[0][k] + i0, t + row[0][k + 1] + i0, w2, _mm_cvtsd_f64(fu), f[0][k], f[0][k + 1]);
-        if (_mm_cvtsd_f64(_mm_unpackhi_pd(u, u)) > 0)
-            I -= step_int(t + row[1][k] + i1, t + row[1][k + 1] + i1, w2, _mm_cvtsd_f64(_mm_unpackhi_pd(fu, fu)),
-                          f[1][k], f[1][k + 1]);
-    }
-#else
-    for (int side = 0; side < 2; side++) {
-        const double sg = side ? -1 : 1;
-        for (int k = 0; k <= n; k++) {
-            double v = V + sg * fp->dv[k];
+    for (int k = 0; k <= n; k++)
+        for (int side = 0; side < 2; side++) {
+            double v = V + fp->pv[k][side];
             v = v > 0 ? v : 0;
             v = v < h ? v : h;
             size_t j = (size_t)v;
             row[side][k] = j * w2;
             f[side][k] = v - (double)j;
         }
-        for (int k = 0; k < n; k++) {
-            double u = U + sg * fp->du[k];
+    /* step k of the left side, then of the right side, as the SSE2 kernel
+     * sums them */
+    for (int k = 0; k < n; k++)
+        for (int side = 0; side < 2; side++) {
+            double u = U + fp->pu[k][side];
             u = u < w ? u : w;
             if (!(u > 0)) continue;
             size_t i = (size_t)u;
             I -= step_int(t + row[side][k] + i, t + row[side][k + 1] + i, w2, u - (double)i, f[side][k],
                           f[side][k + 1]);
         }
-    }
-#endif
     return I;
 }
+#endif
 
 /* The same for one plane of a table of doubles (several colours). */
 static double fp_integral(const double *t, size_t w1, double w, double h, const rs__mk_fp *fp, double U, double V)
@@ -836,23 +853,14 @@ static double fp_integral(const double *t, size_t w1, double w, double h, const 
 }
 
 /* The sprite's mean premultiplied colour and alpha over footprint fp of
- * the pixel whose centre has level-0 texel coordinates (U, V): the exact
- * integral over the staircase polygon from the summed-area table. */
-static void sample(const rs__mk *m, const rs__mk_fp *fp, double U, double V, float out[4])
+ * the pixel whose centre has level-0 texel coordinates (U, V), for a type
+ * of several colours (four planes; alpha-only types: kern_put): the
+ * exact integral over the staircase polygon from the summed-area table. */
+static void sample4(const rs__mk *m, const rs__mk_fp *fp, double U, double V, float out[4])
 {
     const rs__mk_tex *tx = m->tex;
     const size_t w1 = (size_t)tx->w + 1;
     const double w = tx->w, h = tx->h;
-    if (tx->nch == 1) {
-        double a = fp_integral_int(tx->isat, w1 + 1, w, h, fp, U, V) * fp->ia * (1.0 / 255);
-        a = a > 0 ? a : 0;
-        a = a < 1 ? a : 1;
-        out[0] = (float)(tx->col[0] * a);
-        out[1] = (float)(tx->col[1] * a);
-        out[2] = (float)(tx->col[2] * a);
-        out[3] = (float)a;
-        return;
-    }
     const size_t plane = w1 * ((size_t)tx->h + 1) * 4;
     for (int c = 0; c < 4; c++) {
         double x = fp_integral(tx->sat + (size_t)c * plane, w1, w, h, fp, U, V) * fp->ia;
@@ -860,6 +868,99 @@ static void sample(const rs__mk *m, const rs__mk_fp *fp, double U, double V, flo
         x = x > 0 ? x : 0;
         out[c] = (float)(x < hi ? x : hi);
     }
+}
+
+/* What the paint reads per pixel of one marking and footprint, set up
+ * once per marking (or per segment on a curved stretch). */
+typedef struct mk_kern {
+    const rs__mk *m;
+    const rs__mk_fp *fp;
+    const double *t;       /* alpha-only table, NULL: the four-plane sample */
+    size_t w2;             /* its row length, w + 2 */
+    double w, h, ia;       /* texels; 1 / the staircase polygon's area */
+    double col[3];
+} mk_kern;
+
+static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
+{
+    const rs__mk_tex *tx = m->tex;
+    kn->m = m;
+    kn->fp = fp;
+    kn->t = tx->nch == 1 ? tx->isat : NULL;
+    kn->w2 = (size_t)tx->w + 2;
+    kn->w = tx->w;
+    kn->h = tx->h;
+    kn->ia = fp->ia;
+    for (int c = 0; c < 3; c++) kn->col[c] = tx->col[c];
+}
+
+#if defined(__SSE2__)
+/* fp_integral_int with SSE2, both sides at once (lane 0 the left side,
+ * lane 1 the right: the footprint's offset pairs): the same operations in
+ * the same order, so the same bits. A step left of the sprite is clamped
+ * onto column 0, where the table is 0, and adds exactly +0 (fu = 0): no
+ * branch. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline double kern_integral(const mk_kern *kn, double U, double V)
+{
+    const double *t = kn->t;
+    const size_t w2 = kn->w2;
+    const __m128d VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
+    const __m128d hh = _mm_set1_pd(kn->h), ww = _mm_set1_pd(kn->w);
+    const double *pa, *pb;
+    __m128d fa, fb;
+    double I = 0;
+    const rs__mk_fp *fp = kn->fp;
+    level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, _mm_loadu_pd(fp->pv[0])), z), hh), &pa, &pb, &fa, &fb);
+    for (int k = 0; k < fp->n; k++) {
+        const double *pa1, *pb1;
+        __m128d fa1, fb1;
+        level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, _mm_loadu_pd(fp->pv[k + 1])), z), hh), &pa1, &pb1, &fa1,
+               &fb1);
+        __m128d uz = _mm_max_pd(_mm_min_pd(_mm_add_pd(UU, _mm_loadu_pd(fp->pu[k])), ww), z);
+        __m128i ii = _mm_cvttpd_epi32(uz);
+        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
+        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
+        I -= step2(pa + i0, pa1 + i0, w2, fu, fa, fa1);
+        I -= step2(pb + i1, pb1 + i1, w2, _mm_unpackhi_pd(fu, fu), fb, fb1);
+        pa = pa1, pb = pb1, fa = fa1, fb = fb1;
+    }
+    return I;
+}
+#endif
+
+/* The sample at (U, V) (inside the support) blended over pixel o of a
+ * planar row (row length w). An alpha-only type blends a transparent
+ * sample too, without a branch: keep 1, colour 0, o unchanged. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void kern_put(const mk_kern *kn, double U, double V, float *o, size_t w, uint64_t *painted)
+{
+    float c4[4];
+    if (kn->t) {
+#if defined(__SSE2__)
+        double a = kern_integral(kn, U, V) * kn->ia * (1.0 / 255);
+#else
+        double a = fp_integral_int(kn->t, kn->w2, kn->w, kn->h, kn->fp, U, V) * kn->ia * (1.0 / 255);
+#endif
+        a = a > 0 ? a : 0;
+        a = a < 1 ? a : 1;
+        c4[0] = (float)(kn->col[0] * a);
+        c4[1] = (float)(kn->col[1] * a);
+        c4[2] = (float)(kn->col[2] * a);
+        c4[3] = (float)a;
+    } else {
+        sample4(kn->m, kn->fp, U, V, c4);
+        if (!(c4[3] > 0)) return;
+    }
+    *painted += c4[3] > 0;
+    float keep = 1.0f - c4[3];
+    o[0] = o[0] * keep + c4[0];
+    o[w] = o[w] * keep + c4[1];
+    o[2 * w] = o[2 * w] * keep + c4[2];
 }
 
 /* Row spans are widened by this many pixels: far above the rounding of
@@ -931,21 +1032,6 @@ static int curved_span(const rs__markings *mk, const rs__mk *m, double y, double
     return *k0 <= *k1;
 }
 
-/* Blend the sample at (u, v), inside the support, over pixel k of a row
- * of S (planar, row length w). */
-static void put(const rs__mk *m, const rs__mk_fp *fp, double u, double v, float *sc, size_t w, long k,
-                uint64_t *painted)
-{
-    float c4[4];
-    sample(m, fp, u, v, c4);
-    if (!(c4[3] > 0)) return;
-    ++*painted;
-    float keep = 1.0f - c4[3], *o = sc + (size_t)k;
-    o[0] = o[0] * keep + c4[0];
-    o[w] = o[w] * keep + c4[1];
-    o[2 * w] = o[2 * w] * keep + c4[2];
-}
-
 /* The piece's rows [*r0, *r1] whose centres the box holds; 0: none. */
 static int box_rows(const rs__mk *m, const rs__piece *p, double ipix, long *r0, long *r1)
 {
@@ -965,6 +1051,8 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
+    mk_kern kn;
+    kern_init(&kn, m, &m->fp);
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
         long k0 = 0, k1 = (long)w - 1;
@@ -990,7 +1078,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
             double gx = gx0 + (double)k + 0.5;
             double u = ur + bu * gx, v = vr + bv * gx;
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            put(m, &m->fp, u, v, sc, w, k, painted);
+            kern_put(&kn, u, v, sc + k, w, painted);
         }
     }
 }
@@ -1011,7 +1099,9 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
     double su0[MAX_ROW_SEG], su1[MAX_ROW_SEG], st0[MAX_ROW_SEG], st1[MAX_ROW_SEG];
     /* the footprint of the nearest segment's direction (kept while the
      * nearest segment stays the same) */
-    rs__mk_fp fp;
+    const rs__mk_fp *fps = mk->fps + m->fpi;
+    const double ax0 = m->tex->ax0, ax1 = m->tex->ax1 + 1, ay0 = m->tex->ay0, ay1 = m->tex->ay1 + 1;
+    mk_kern kn;
     size_t fp_seg = SIZE_MAX;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
@@ -1081,12 +1171,15 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
                 v = m->cv + m->sv * (s - m->s0);
             }
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            /* the support of this segment's footprint (ulo..vhi: of any
+             * direction): outside it the sample is 0 */
+            const rs__mk_fp *fp = fps + seg;
+            if (!(u >= ax0 - fp->hu && u < ax1 + fp->hu && v >= ay0 - fp->hv && v < ay1 + fp->hv)) continue;
             if (seg != fp_seg) {
-                const double *A = pts + RS__MK_PT * seg;
-                footprint(m->su * A[4] * pix, m->sv * A[3] * pix, -m->su * A[3] * pix, m->sv * A[4] * pix, &fp);
+                kern_init(&kn, m, fp);
                 fp_seg = seg;
             }
-            put(m, &fp, u, v, sc, w, k, painted);
+            kern_put(&kn, u, v, sc + k, w, painted);
         }
     }
 }
@@ -1143,6 +1236,23 @@ static void prefetch_mk(const rs__mk *m)
 #endif
 }
 
+/* A curved marking's stretch points, span parts and footprints (read per
+ * row and pixel; separate arrays, so not fetched with its record). */
+static void prefetch_stretch(const rs__markings *mk, const rs__mk *m)
+{
+#if defined(__GNUC__)
+    if (m->npt <= 2) return;
+    const char *a = (const char *)(mk->pts + RS__MK_PT * m->first), *b = (const char *)(mk->parts + RS__MK_PART * m->part);
+    const char *c = (const char *)(mk->fps + m->fpi);
+    for (size_t o = 0; o < m->npt * RS__MK_PT * sizeof(double); o += 64) __builtin_prefetch(a + o);
+    for (size_t o = 0; o < m->nparts * RS__MK_PART * sizeof(double); o += 64) __builtin_prefetch(b + o);
+    for (size_t o = 0; o < (m->npt - 1) * sizeof *mk->fps; o += 64) __builtin_prefetch(c + o);
+#else
+    (void)mk;
+    (void)m;
+#endif
+}
+
 void rs__markings_paint(const rs__markings *mk, rs__piece *p)
 {
     const double pix = mk->pix, cell = mk->cell;
@@ -1186,6 +1296,7 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
         for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
         for (size_t k = 0; k < n; k++) {
             if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
+            if (k + 2 < n) prefetch_stretch(mk, &mk->m[cand[k + 2]]);
             const rs__mk *m = &mk->m[cand[k]];
             if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
             else paint_curved(mk, m, p, &tests, &painted);

@@ -41,7 +41,7 @@ typedef struct rs__mk_tex {
     uint32_t w, h;             /* level-0 texels; w == 0: not built (type unused) */
     uint32_t nch;              /* 1: alpha only, colour = col x alpha; 4: r g b a */
     float col[3];              /* premultiplied colour per unit alpha (nch 1) */
-    int32_t *isat;             /* nch 1: (h + 2) x (w + 2), 255 x alpha */
+    double *isat;              /* nch 1: (h + 2) x (w + 2), 255 x alpha */
     double *sat;               /* nch 4: 4 planes of (h + 1) x (w + 1) x 4 */
     int32_t ax0, ay0, ax1, ay1; /* texels with alpha > 0 (ax0 > ax1: none) */
 } rs__mk_tex;
@@ -52,12 +52,14 @@ typedef struct rs__mk_tex {
  * the left one turned by 180 degrees about the centre (Uc, Vc). Each
  * parallelogram edge is cut into equal parts with a step at each part's
  * middle, so the staircases of neighbouring pixels fit together and the
- * footprints still tile the plane. */
+ * footprints still tile the plane. Kept as pairs for both sides at once:
+ * pv[k] = (dv[k], -dv[k]), pu[k] = (du[k], -du[k]). */
 #define RS__MK_STEPS 4
 typedef struct rs__mk_fp {
     int n;
     double ia; /* 1 / the staircase polygon's area */
-    double du[RS__MK_STEPS], dv[RS__MK_STEPS + 1];
+    double hu, hv; /* the polygon's reach from the centre in U and in V */
+    double pv[RS__MK_STEPS + 1][2], pu[RS__MK_STEPS][2];
 } rs__mk_fp;
 
 typedef struct rs__mk {
@@ -68,6 +70,7 @@ typedef struct rs__mk {
     int flat;                  /* one segment, and bu or bv is 0 */
     size_t first, npt;         /* its stretch of the road: points first..first+npt-1 of pts */
     size_t part, nparts;       /* curved: its span parts, parts[part..part+nparts-1] */
+    size_t fpi;                /* curved: its segments' footprints, fps[fpi..fpi+npt-2] */
     double by0, by1;           /* rows of the box */
     /* level-0 texel coordinates U (across), V (along), texel i covering
      * [i, i + 1): the sample is transparent outside [ulo, uhi) x [vlo, vhi) */
@@ -81,9 +84,9 @@ typedef struct rs__mk {
     /* a point (ds, dt) from the centre: U = cu + su dt, V = cv + sv ds */
     double cu, su, cv, sv;
     double s0, t0;             /* centre (road coordinates) */
-    double slo, shi, tlo, thi; /* the support in road coordinates (s, t) */
     /* the rest */
     const rs__atlas_type *ty;
+    double slo, shi, tlo, thi; /* the support in road coordinates (s, t) */
     int flip;
     double hl, hw;             /* half length and width (metres) */
     double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
@@ -118,6 +121,7 @@ typedef struct rs__markings {
     size_t n;
     double *pts;               /* RS__MK_PT doubles per point */
     double *parts;             /* RS__MK_PART doubles per span part of a curved marking */
+    rs__mk_fp *fps;            /* per segment of a curved marking's stretch: the footprint of its direction */
     double pix;                /* output pixel, metres */
     double cell;               /* index cell, metres */
     uint32_t gw, gh;
