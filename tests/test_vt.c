@@ -9,18 +9,17 @@
  * views give the same lists and the same bytes on two threads; updates and
  * made tiles allocate nothing. */
 #include "roadsplat.h"
+#include "fail_alloc.h"
 #include "harness.h"
 #include "scenes.h"
 
+#include <limits.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct counter { size_t calls; } counter;
-
-static void *count_malloc(void *u, size_t n) { ((counter *)u)->calls++; return malloc(n); }
-static void *count_realloc(void *u, void *p, size_t n) { ((counter *)u)->calls++; return realloc(p, n); }
-static void count_free(void *u, void *p) { (void)u; free(p); }
+/* Allocator calls so far (fail_alloc counts its countdown down from LONG_MAX). */
+static size_t calls(const fail_alloc *fa) { return (size_t)(LONG_MAX - fa->countdown); }
 
 static const char scene_text[] =
     "style k\n casing 0.4 #707070\n line 0 0.15 #FFFFFF dash 3 6\n line -2.6 0.2 #FFFFFF\nend\n"
@@ -114,14 +113,23 @@ static void reference_pixel(const uint8_t *src, uint32_t w, uint32_t h, uint32_t
     out[3] = (uint8_t)floor(a + 0.5);
 }
 
-static void test_tiles(rs_ctx *ctx, scene *sc, counter *cnt)
+/* A virtual texture over the scene with S-pixel tiles, border and budget
+ * as in rs_vt_options (0: defaults); NULL (a failed check) when refused. */
+static rs_vt *vt_make(rs_ctx *ctx, const scene *sc, uint32_t S, int32_t border, uint64_t budget)
 {
     rs_vt *vt = NULL;
     rs_vt_options vo;
     memset(&vo, 0, sizeof vo);
-    vo.tile_size = 32;
-    vo.border = 3;
+    vo.tile_size = S;
+    vo.border = border;
+    vo.budget_bytes = budget;
     CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK && vt);
+    return vt;
+}
+
+static void test_tiles(rs_ctx *ctx, scene *sc, fail_alloc *cnt)
+{
+    rs_vt *vt = vt_make(ctx, sc, 32, 3, 0);
     if (!vt) return;
     rs_vt_info in;
     rs_vt_get_info(vt, &in);
@@ -148,9 +156,9 @@ static void test_tiles(rs_ctx *ctx, scene *sc, counter *cnt)
         size_t same = 0, px = 0, off = 0;
         for (uint32_t ty = 0; ty * S < lh; ty++)
             for (uint32_t tx = 0; tx * S < lw; tx++) {
-                size_t before = cnt->calls;
+                size_t before = calls(cnt);
                 rs_result r = rs_vt_make_tile(ctx, vt, ws, k, tx, ty, tile, (size_t)n * 4);
-                allocs += cnt->calls - before;
+                allocs += calls(cnt) - before;
                 tiles++;
                 if (r != RS_OK) continue;
                 for (uint32_t j = 0; j < n; j++)
@@ -185,8 +193,7 @@ static void test_tiles(rs_ctx *ctx, scene *sc, counter *cnt)
     CHECK(rs_vt_make_tile(ctx, vt, ws, in.levels, 0, 0, tile, (size_t)n * 4) == RS_ERR_INVALID_ARG);
     CHECK(rs_vt_make_tile(ctx, vt, ws, 0, 15, 0, tile, (size_t)n * 4) == RS_ERR_INVALID_ARG);
     CHECK(rs_vt_make_tile(ctx, vt, ws, 0, 0, 0, tile, (size_t)n * 4 - 1) == RS_ERR_INVALID_ARG);
-    rs_vt *other = NULL;
-    CHECK(rs_vt_create(ctx, sc->s, &vo, &other) == RS_OK);
+    rs_vt *other = vt_make(ctx, sc, 32, 3, 0);
     CHECK(rs_vt_make_tile(ctx, other, ws, 0, 0, 0, tile, (size_t)n * 4) == RS_ERR_INVALID_ARG);
     rs_vt_free(ctx, other);
     free(tile);
@@ -274,11 +281,7 @@ static int point_level(double d, double fov, double hpx, double tp, int bias, in
 
 static void test_monotone(rs_ctx *ctx, scene *sc)
 {
-    rs_vt *vt = NULL;
-    rs_vt_options vo;
-    memset(&vo, 0, sizeof vo);
-    vo.tile_size = 16;
-    CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK);
+    rs_vt *vt = vt_make(ctx, sc, 16, 0, 0);
     if (!vt) return;
     rs_vt_info in;
     rs_vt_get_info(vt, &in);
@@ -356,15 +359,9 @@ static uint64_t hkey(const rs_vt_tile *t) { return (uint64_t)t->level << 58 | (u
  * down, with `budget` bytes; records every list into `log` (may be NULL)
  * and checks the host-side bookkeeping, the budget and the coverage. */
 static void flythrough(rs_ctx *ctx, scene *sc, uint64_t budget, uint32_t max_make, uint64_t *log, size_t *nlog,
-                       counter *cnt, int check_cover)
+                       fail_alloc *cnt, int check_cover)
 {
-    rs_vt *vt = NULL;
-    rs_vt_options vo;
-    memset(&vo, 0, sizeof vo);
-    vo.tile_size = 16;
-    vo.border = 2;
-    vo.budget_bytes = budget;
-    CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK);
+    rs_vt *vt = vt_make(ctx, sc, 16, 2, budget);
     if (!vt) return;
     rs_vt_info in;
     rs_vt_get_info(vt, &in);
@@ -388,12 +385,12 @@ static void flythrough(rs_ctx *ctx, scene *sc, uint64_t budget, uint32_t max_mak
         v.width = 320;
         v.height = 180;
         v.max_make = max_make;
-        size_t before = cnt->calls;
+        size_t before = calls(cnt);
         if (rs_vt_update(ctx, vt, &v) != RS_OK) {
             over++;
             continue;
         }
-        allocs += cnt->calls - before;
+        allocs += calls(cnt) - before;
         size_t nd, nm, nn;
         const rs_vt_tile *drop = rs_vt_to_drop(vt, &nd), *make = rs_vt_to_make(vt, &nm), *need = rs_vt_needed(vt, &nn);
         drops += nd;
@@ -489,7 +486,7 @@ static void *make_thread(void *arg)
     return NULL;
 }
 
-static void test_determinism(rs_ctx *ctx, scene *sc, counter *cnt)
+static void test_determinism(rs_ctx *ctx, scene *sc, fail_alloc *cnt)
 {
     size_t cap = 1 << 20, n1 = 0, n2 = 0;
     uint64_t *l1 = malloc(cap * sizeof *l1), *l2 = malloc(cap * sizeof *l2);
@@ -502,11 +499,7 @@ static void test_determinism(rs_ctx *ctx, scene *sc, counter *cnt)
     free(l1);
     free(l2);
     /* the same tiles made on two threads at once and on this one */
-    rs_vt *vt = NULL;
-    rs_vt_options vo;
-    memset(&vo, 0, sizeof vo);
-    vo.tile_size = 24;
-    CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK);
+    rs_vt *vt = vt_make(ctx, sc, 24, 0, 0);
     if (!vt) return;
     rs_vt_info in;
     rs_vt_get_info(vt, &in);
@@ -542,13 +535,40 @@ static void test_determinism(rs_ctx *ctx, scene *sc, counter *cnt)
     rs_vt_free(ctx, vt);
 }
 
-static void test_lookup_discard(rs_ctx *ctx, scene *sc)
+/* Every allocation of create, workspace, update and make failing in turn:
+ * RS_ERR_NOMEM and nothing left behind. */
+static rs_result sweep_try(rs_ctx *c, void *user, int *wrong)
 {
+    const scene *sc = user;
     rs_vt *vt = NULL;
+    rs_vt_workspace *ws = NULL;
     rs_vt_options vo;
     memset(&vo, 0, sizeof vo);
-    vo.tile_size = 16;
-    CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK);
+    vo.tile_size = 32;
+    rs_result r = rs_vt_create(c, sc->s, &vo, &vt);
+    if (r) {
+        *wrong = vt != NULL;
+        return r;
+    }
+    r = rs_vt_workspace_create(c, vt, &ws);
+    *wrong = r && ws != NULL;
+    rs_vt_view v;
+    memset(&v, 0, sizeof v);
+    v.eye[0] = 20;
+    v.eye[1] = 18;
+    v.eye[2] = 10;
+    v.dir[2] = -1;
+    if (!r) r = rs_vt_update(c, vt, &v);
+    uint8_t tile[40 * 40 * 4];
+    if (!r) r = rs_vt_make_tile(c, vt, ws, 4, 0, 0, tile, sizeof tile / 40);
+    rs_vt_workspace_free(c, ws);
+    rs_vt_free(c, vt);
+    return r;
+}
+
+static void test_lookup_discard(rs_ctx *ctx, scene *sc)
+{
+    rs_vt *vt = vt_make(ctx, sc, 16, 0, 0);
     if (!vt) return;
     rs_vt_view v;
     memset(&v, 0, sizeof v);
@@ -574,8 +594,8 @@ static void test_lookup_discard(rs_ctx *ctx, scene *sc)
 
 int main(void)
 {
-    counter cnt = { 0 };
-    rs_allocator al = { count_malloc, count_realloc, count_free, &cnt };
+    fail_alloc cnt = { LONG_MAX, 0 };
+    rs_allocator al = fail_alloc_hook(&cnt);
     rs_ctx *ctx = NULL;
     scene sc;
     if (rs_ctx_create(&al, NULL, &ctx) || scene_make(ctx, &sc)) {
@@ -592,6 +612,8 @@ int main(void)
     flythrough(ctx, &sc, 40 * 400 * 4, 3, NULL, &nlog, &cnt, 0);      /* at most 3 made per frame */
     test_determinism(ctx, &sc, &cnt);
     test_lookup_discard(ctx, &sc);
+    fail_sweep fs = fail_alloc_sweep(400, sweep_try, &sc);
+    CHECK_SWEEP(fs, 10);
     scene_free(ctx, &sc);
     rs_ctx_free(ctx);
     return th_finish("test_vt");
