@@ -380,6 +380,8 @@ static const char *shader_missing(rs_ctx *ctx, const render_args *a, const rs_ro
 
 int cli_render_main(int argc, char **argv)
 {
+    for (int i = 1; i < argc; i++) /* the flythrough through the virtual texture (cli/render_vt.c) */
+        if (!strcmp(argv[i], "--path") || !strncmp(argv[i], "--path=", 7)) return cli_render_path_main(argc, argv);
     render_args a;
     int pr = parse_render_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
