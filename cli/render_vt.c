@@ -149,14 +149,13 @@ static int read_path(const char *file, double **keys, size_t *nkeys)
         if (hash) *hash = '\0';
         double v[6];
         int got = 0;
-        char where[64];
-        snprintf(where, sizeof where, "line %zu", line);
+        char where[1100]; /* cli_parse_double's message names it: "FILE line N: 'x' is not a number" */
+        snprintf(where, sizeof where, "%.1000s line %zu", file, line);
         for (char *tok = strtok_r(ln, " \t\r", &save); tok && !bad; tok = strtok_r(NULL, " \t\r", &save)) {
             if (got == 6) {
                 cli_error("%s line %zu: more than 6 numbers (eye X Y Z, look-at X Y Z)", file, line);
                 bad = 1;
             } else if (cli_parse_double(where, tok, &v[got])) {
-                cli_error("%s line %zu: '%s' is not a number", file, line, tok);
                 bad = 1;
             } else if (fabs(v[got]) > 1e9) {
                 cli_error("%s line %zu: %s is beyond 1e9 metres", file, line, tok);
