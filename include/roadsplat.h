@@ -1346,7 +1346,8 @@ RS_API rs_result rs_vt_level_size(const rs_vt *vt, uint32_t level, uint32_t *wid
  * many as the new ones need room: the resident set never exceeds
  * rs_vt_info.slots tiles). The host drops, then makes, then draws the
  * needed tiles. Deterministic: the same views in the same order give the
- * same lists. Allocates nothing. */
+ * same lists. Takes nothing from the allocator (rs_vt_create sized
+ * everything). */
 RS_API rs_result rs_vt_update(rs_ctx *ctx, rs_vt *vt, const rs_vt_view *view);
 RS_API const rs_vt_tile *rs_vt_needed(const rs_vt *vt, size_t *count);
 RS_API const rs_vt_tile *rs_vt_to_make(const rs_vt *vt, size_t *count);
@@ -1373,7 +1374,10 @@ RS_API size_t rs_vt_workspace_bytes(const rs_vt_workspace *ws);
  * tile_side RGBA8 pixels, row r at rgba + r * stride bytes (stride >=
  * 4 * tile_side). Any tile of the quadtree may be made, resident or not.
  * Allocates nothing (except with the splatter's lighting on, whose normal
- * scratch rs_splat_window_ws takes per call). Thread rules above.
+ * scratch rs_splat_window_ws takes per call). Level 0 renders through `s`
+ * itself: its progress callback, if any, is called from the making thread
+ * as rs_splat_window_ws calls it (the vt's own splatters have none). Thread
+ * rules above.
  * RS_ERR_INVALID_ARG for a tile out of range, another vt's workspace or a
  * short stride. */
 RS_API rs_result rs_vt_make_tile(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, uint32_t level, uint32_t x,
