@@ -582,9 +582,12 @@ int rg_vt_upload(rg_renderer *r, uint32_t slot, const uint8_t *rgba, char *err, 
     if (slot >= r->vt_slots) { set_err(err, err_size, "tile slot out of range"); return 1; }
     glBindTexture(GL_TEXTURE_2D, r->vt_tex[slot]);
     if (!r->vt_made[slot]) { /* the slot's storage, on its first tile */
+        /* mip levels of the tile made by GL on every upload (GL 1.4): the vt's level is
+         * at least as fine as a screen pixel, the mips take what is finer */
+        glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, (GLsizei)r->vt_side, (GLsizei)r->vt_side, 0, GL_RGBA,
                      GL_UNSIGNED_BYTE, rgba);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
