@@ -273,10 +273,10 @@ int cli_render_path_main(int argc, char **argv)
     uint32_t *made_seq = NULL;
     uint8_t *stage = NULL, *frame = NULL;
     size_t stage_cap = 0;
-    float *vtx = NULL, *nrm = NULL;
-    uint32_t *idx = NULL;
+    cli_mesh_buf mesh;
+    memset(&mesh, 0, sizeof mesh);
     rg_vt_draw_tile *dt = NULL;
-    size_t cap_v = 0, cap_i = 0, nkeys = 0;
+    size_t nkeys = 0;
     char err[256];
     maker mk;
     memset(&mk, 0, sizeof mk);
@@ -428,28 +428,7 @@ int cli_render_path_main(int argc, char **argv)
         rv.far_dist = view.zfar;
         r = rs_roam_update(ctx, roam, &rv, 0);
         if (r && r != RS_ERR_POOL_EXHAUSTED) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
-        rs_roam_mesh_options mo;
-        memset(&mo, 0, sizeof mo);
-        mo.normals = 1;
-        size_t mv, mi, nv, ni;
-        rs_roam_mesh_bound(roam, &mo, &mv, &mi);
-        if (mv > cap_v) {
-            free(vtx); free(nrm);
-            vtx = malloc(mv * 5 * sizeof *vtx);
-            nrm = malloc(mv * 3 * sizeof *nrm);
-            cap_v = mv;
-            if (!vtx || !nrm) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
-        }
-        if (mi > cap_i) {
-            free(idx);
-            idx = malloc(mi * sizeof *idx);
-            cap_i = mi;
-            if (!idx) { cli_error("out of memory for a mesh of %zu indices", mi); goto done; }
-        }
-        if ((r = rs_roam_extract(ctx, roam, &mo, vtx, nrm, cap_v, idx, cap_i, &nv, &ni))) {
-            cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
-            goto done;
-        }
+        if (cli_mesh_extract(ctx, roam, a.dem, &mesh)) goto done;
         /* each needed tile, or while a capped make is pending its nearest resident ancestor */
         const rs_vt_tile *need = rs_vt_needed(vt, &nn);
         size_t nd = 0;
@@ -467,7 +446,7 @@ int cli_render_path_main(int argc, char **argv)
             d->ox = use.x * S - vi.border;
             d->oy = use.y * S - vi.border;
         }
-        if (rg_draw_vt(gl, &view, vtx, nrm, nv, idx, ni, tw, th, dt, nd, err, sizeof err)) {
+        if (rg_draw_vt(gl, &view, mesh.vtx, mesh.nrm, mesh.nv, mesh.idx, mesh.ni, tw, th, dt, nd, err, sizeof err)) {
             cli_error("render: %s", err);
             goto done;
         }
@@ -527,7 +506,7 @@ done:
     cli_out_abort(&so);
     rg_destroy(gl);
     free(frame); free(stage); free(dt);
-    free(vtx); free(nrm); free(idx);
+    cli_mesh_buf_free(&mesh);
     free(tex_ms); free(frame_ms); free(made_seq); free(keys);
     pthread_mutex_destroy(&mk.mu);
     rs_roam_free(ctx, roam);
