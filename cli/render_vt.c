@@ -239,6 +239,23 @@ static void *make_thread_main(void *arg)
     return NULL;
 }
 
+/* The frame's camera for the virtual texture and for the mesher: the same
+ * eye, direction, field of view, viewport and far distance. */
+static void cameras(const path_args *a, const rg_view *v, rs_vt_view *vv, rs_roam_view *rv)
+{
+    memset(vv, 0, sizeof *vv);
+    memset(rv, 0, sizeof *rv);
+    memcpy(vv->eye, v->eye, sizeof vv->eye);
+    memcpy(rv->eye, v->eye, sizeof rv->eye);
+    for (int k = 0; k < 3; k++) vv->dir[k] = rv->dir[k] = v->look[k] - v->eye[k];
+    vv->fov_y = rv->fov_y = a->fov;
+    vv->width = rv->width = a->width;
+    vv->height = rv->height = a->height;
+    vv->far_dist = rv->far_dist = v->zfar;
+    vv->max_make = a->max_make;
+    rv->pixel_error = a->pixel_error;
+}
+
 static int cmp_dbl(const void *x, const void *y)
 {
     double a = *(const double *)x, b = *(const double *)y;
@@ -375,18 +392,10 @@ int cli_render_path_main(int argc, char **argv)
         view.znear = fmax(view.zfar * 1e-5, 0.01);
         view.fog_start = 0.3 * view.zfar;
         view.fog_end = view.zfar;
-        /* the texture work: the cut, the tiles made on 2 threads, their upload */
         rs_vt_view vv;
-        memset(&vv, 0, sizeof vv);
-        for (int k = 0; k < 3; k++) {
-            vv.eye[k] = view.eye[k];
-            vv.dir[k] = view.look[k] - view.eye[k];
-        }
-        vv.fov_y = a.fov;
-        vv.width = a.width;
-        vv.height = a.height;
-        vv.far_dist = view.zfar;
-        vv.max_make = a.max_make;
+        rs_roam_view rv;
+        cameras(&a, &view, &vv, &rv);
+        /* the texture work: the cut, the tiles made on 2 threads, their upload */
         if ((r = rs_vt_update(ctx, vt, &vv))) { cli_error("render: %s", rs_ctx_message(ctx)); goto done; }
         size_t nm, nn;
         mk.tiles = rs_vt_to_make(vt, &nm);
@@ -415,17 +424,6 @@ int cli_render_path_main(int argc, char **argv)
             }
         double f1 = cli_now_ms();
         /* the mesh */
-        rs_roam_view rv;
-        memset(&rv, 0, sizeof rv);
-        for (int k = 0; k < 3; k++) {
-            rv.eye[k] = view.eye[k];
-            rv.dir[k] = view.look[k] - view.eye[k];
-        }
-        rv.fov_y = a.fov;
-        rv.width = a.width;
-        rv.height = a.height;
-        rv.pixel_error = a.pixel_error;
-        rv.far_dist = view.zfar;
         r = rs_roam_update(ctx, roam, &rv, 0);
         if (r && r != RS_ERR_POOL_EXHAUSTED) { cli_error("%s: %s", a.dem, rs_ctx_message(ctx)); goto done; }
         if (cli_mesh_extract(ctx, roam, a.dem, &mesh)) goto done;
