@@ -69,6 +69,7 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Ground height in metres at (x, y) metres, bilinear. */
 static double ground(const sc_scene *s, double x, double y)
 {
     double fx = x / s->cell_size, fy = y / s->cell_size;
@@ -79,7 +80,7 @@ static double ground(const sc_scene *s, double x, double y)
     uint32_t i = (uint32_t)fx, j = (uint32_t)fy;
     double u = fx - i, v = fy - j;
     const float *z = s->z + (size_t)j * s->w + i;
-    return (z[0] * (1 - u) + z[1] * u) * (1 - v) + (z[s->w] * (1 - u) + z[s->w + 1] * u) * v;
+    return ((z[0] * (1 - u) + z[1] * u) * (1 - v) + (z[s->w] * (1 - u) + z[s->w + 1] * u) * v) * 0.01;
 }
 
 typedef struct result {
@@ -99,7 +100,7 @@ static int fly(const char *name, const sc_scene *sc, uint32_t texels, int frames
     if (rs_ctx_create(NULL, &lim, &ctx) || rs_ctx_create(NULL, &lim, &wctx)) return 1;
     rs_roads *roads = ss_roads(ctx, sc);
     rs_dem *dem = NULL;
-    rs_dem_frame fr = { sc->cell_size, 1, 0, 0 };
+    rs_dem_frame fr = { sc->cell_size, 0.01, 0, 0 }; /* the scenes' heights are centimetres */
     if (!roads || rs_dem_create(ctx, sc->w, sc->h, sc->z, &dem) || rs_dem_set_frame(ctx, dem, &fr)) return 1;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
