@@ -253,6 +253,7 @@ static void cameras(const path_args *a, const rg_view *v, rs_vt_view *vv, rs_roa
     vv->height = rv->height = a->height;
     vv->far_dist = rv->far_dist = v->zfar;
     vv->max_make = a->max_make;
+    vv->anisotropy = 1; /* the tiles' GL sampler: trilinear, no anisotropic taps */
     rv->pixel_error = a->pixel_error;
 }
 

@@ -1265,8 +1265,9 @@ typedef struct rs_vt_view {
     double far_dist;      /* metres: tiles farther than this are not needed; 0 -> none */
     double texel_pixels;  /* a level is fine enough where its texel projects to at most this
                              many screen pixels; 0 -> 1; larger: coarser, less memory */
-    double anisotropy;    /* the host sampler's max anisotropy A; 0 -> 1 (isotropic: the view
-                             angle does not change the level); 1..64 */
+    double anisotropy;    /* the host sampler's max anisotropy A (1: isotropic), 1..64; 0: no
+                             limit (the view angle never coarsens the level: right for any
+                             sampler, the most tiles) */
     uint32_t max_make;    /* at most this many tiles to make per update (the nearest first);
                              0 -> no cap */
 } rs_vt_view;
@@ -1330,11 +1331,13 @@ RS_API rs_result rs_vt_level_size(const rs_vt *vt, uint32_t level, uint32_t *wid
  * (Cline and Egbert's projected size, seed 002 formula 1):
  *     P = p0 f / d                 screen pixels of a level-0 texel seen face on
  *     c = min(1, dz / d)           bound on the cosine of the view angle to the ground
- *     rho = max(P / A, P c)        the sampler's footprint (A: anisotropy)
+ *     rho = P min(1, c A)          the footprint the sampler picks its mip level by
+ *                                  (A: anisotropy; A = 0 means no limit: rho = P)
  *     L = floor(log2(texel_pixels / rho)), clamped to 0 .. levels-1
- * (all bounds taken towards finer levels: every texel of the chosen tile
- * projects to at most texel_pixels pixels on a GPU that picks its mip level
- * as EXT_texture_filter_anisotropic does). L never decreases when the box
+ * (all bounds taken towards finer levels: the chosen level is never coarser
+ * than the mip level a GPU picks for any texel of the tile, the
+ * EXT_texture_filter_anisotropic rule: with N = min(1/c, A) taps along the
+ * foreshortened axis, the level of its footprint divided by N). L never decreases when the box
  * moves away. Every visible point of the map is then under exactly one
  * needed tile, of a level at least as fine as its own L. When the cut's
  * tiles exceed the budget, L is raised by 1 everywhere until they fit

@@ -365,7 +365,7 @@ static rs_result make_cam(rs_ctx *ctx, const rs_vt_view *v, vt_cam *c)
     c->k = hpx / (2.0 * c->ty);
     c->far_dist = v->far_dist;
     c->tp = v->texel_pixels > 0 ? v->texel_pixels : 1.0;
-    c->aniso = v->anisotropy > 0 ? v->anisotropy : 1.0;
+    c->aniso = v->anisotropy; /* 0: no limit */
     return RS_OK;
 }
 
@@ -403,7 +403,8 @@ static uint32_t wanted_level(const rs_vt *vt, const vt_cam *c, double d, double 
     if (!(d > 1e-9)) return 0;
     double P = vt->lv[0].pixel_m * c->k / d;
     double cosb = dz / d < 1 ? dz / d : 1;
-    double rho = P / c->aniso > P * cosb ? P / c->aniso : P * cosb;
+    /* the GPU's footprint: P across the view, P cosb along it, N = min(1/cosb, A) taps */
+    double rho = c->aniso > 0 && cosb * c->aniso < 1 ? P * cosb * c->aniso : P;
     double L = floor(log2(c->tp / rho)) + c->bias;
     if (!(L > 0)) return 0;
     return L >= vt->nlev - 1 ? vt->nlev - 1 : (uint32_t)L;

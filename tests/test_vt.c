@@ -344,6 +344,24 @@ static void test_monotone(rs_ctx *ctx, scene *sc)
         rule += (int)need[i].level > want;
     }
     CHECKF(nn > 4 && rule == 0, "%d of %zu needed tiles coarser than their nearest distance allows", rule, nn);
+    /* the view angle: a grazing view needs no finer tiles for an isotropic
+     * sampler (A = 1) than for a 16-fold anisotropic one, nor for that than
+     * with the angle ignored (A = 0) */
+    size_t count[3];
+    double level_sum[3];
+    const double an[3] = { 1, 16, 0 };
+    v.eye[2] = 1.2;
+    v.dir[2] = -0.05;
+    for (int i = 0; i < 3; i++) {
+        v.anisotropy = an[i];
+        CHECK(rs_vt_update(ctx, vt, &v) == RS_OK);
+        need = rs_vt_needed(vt, &count[i]);
+        level_sum[i] = 0;
+        for (size_t k = 0; k < count[i]; k++) level_sum[i] += need[k].level;
+    }
+    CHECKF(count[0] < count[1] && count[1] <= count[2] && level_sum[0] / count[0] > level_sum[2] / count[2],
+           "grazing view: %zu tiles isotropic (mean level %.2f), %zu with 16x, %zu ignoring the angle (mean %.2f)",
+           count[0], level_sum[0] / count[0], count[1], count[2], level_sum[2] / count[2]);
     rs_vt_free(ctx, vt);
 }
 
