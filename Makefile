@@ -94,7 +94,7 @@ LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
 # (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
 # first use (docs/packaging.md).
-RENDER_SRC := cli/render.c cli/render_gl.c cli/render_shader.c
+RENDER_SRC := cli/render.c cli/render_gl.c cli/render_shader.c cli/render_vt.c
 GDAL_SRC  := cli/gdal.c cli/mercator_gdal.c
 MBTILES_SRC := cli/mbtiles.c
 GLTF_SRC  := cli/gltf.c

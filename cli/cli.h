@@ -319,6 +319,17 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
                          cli_splat_input *in);
 void cli_splat_input_free(rs_ctx *ctx, cli_splat_input *in);
 
+/* The current ROAM mesh with normals into buffers grown to
+ * rs_roam_mesh_bound as needed (cli/mesh.c; render's frame loops). 0, or 1
+ * after an error line naming `shown`. Free with cli_mesh_buf_free. */
+typedef struct cli_mesh_buf {
+    float *vtx, *nrm;   /* 5 and 3 floats a vertex (rs_roam_extract) */
+    uint32_t *idx;
+    size_t cap_v, cap_i, nv, ni;
+} cli_mesh_buf;
+int cli_mesh_extract(rs_ctx *ctx, rs_roam *roam, const char *shown, cli_mesh_buf *m);
+void cli_mesh_buf_free(cli_mesh_buf *m);
+
 /* The splat of `roadsplat` and `roadsplat render` (cli/splat_run.c).
  * cli_splatter_prepare: the road grid for the loaded input and s->o (with a
  * "roads" progress bar) and the splatter on it; the error is printed naming

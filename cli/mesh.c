@@ -518,3 +518,39 @@ done:
     cli_bigalloc_destroy(ba);
     return rc;
 }
+
+int cli_mesh_extract(rs_ctx *ctx, rs_roam *roam, const char *shown, cli_mesh_buf *m)
+{
+    rs_roam_mesh_options mo;
+    memset(&mo, 0, sizeof mo);
+    mo.normals = 1;
+    size_t mv, mi;
+    rs_roam_mesh_bound(roam, &mo, &mv, &mi);
+    if (mv > m->cap_v) {
+        free(m->vtx);
+        free(m->nrm);
+        m->vtx = malloc(mv * 5 * sizeof *m->vtx);
+        m->nrm = malloc(mv * 3 * sizeof *m->nrm);
+        m->cap_v = m->vtx && m->nrm ? mv : 0;
+        if (!m->cap_v) { cli_error("out of memory for a mesh of %zu vertices", mv); return 1; }
+    }
+    if (mi > m->cap_i) {
+        free(m->idx);
+        m->idx = malloc(mi * sizeof *m->idx);
+        m->cap_i = m->idx ? mi : 0;
+        if (!m->idx) { cli_error("out of memory for a mesh of %zu indices", mi); return 1; }
+    }
+    if (rs_roam_extract(ctx, roam, &mo, m->vtx, m->nrm, m->cap_v, m->idx, m->cap_i, &m->nv, &m->ni)) {
+        cli_error("%s: %s", shown, rs_ctx_message(ctx));
+        return 1;
+    }
+    return 0;
+}
+
+void cli_mesh_buf_free(cli_mesh_buf *m)
+{
+    free(m->vtx);
+    free(m->nrm);
+    free(m->idx);
+    memset(m, 0, sizeof *m);
+}

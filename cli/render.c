@@ -385,6 +385,8 @@ static const char *shader_missing(rs_ctx *ctx, const render_args *a, const rs_ro
 
 int cli_render_main(int argc, char **argv)
 {
+    for (int i = 1; i < argc; i++) /* the flythrough through the virtual texture (cli/render_vt.c) */
+        if (!strcmp(argv[i], "--path") || !strncmp(argv[i], "--path=", 7)) return cli_render_path_main(argc, argv);
     render_args a;
     int pr = parse_render_args(argc, argv, &a);
     if (pr) return pr == 2 ? 0 : 1;
@@ -403,11 +405,11 @@ int cli_render_main(int argc, char **argv)
     uint8_t *tex_road = NULL, *nmap = NULL;
     char err[256], miss[RS_STYLE_NAME_MAX + RS_STYLE_IMAGE_MAX + 64];
     uint8_t *tex = NULL, *frame = NULL;
-    float *vtx = NULL, *nrm = NULL;
-    uint32_t *idx = NULL;
+    cli_mesh_buf mesh;
+    memset(&mesh, 0, sizeof mesh);
     double *frame_ms = NULL, *mesh_ms = NULL, *draw_ms = NULL, *mesh_seq = NULL;
     uint32_t *tris_seq = NULL;
-    size_t cap_v = 0, cap_i = 0, nv = 0, ni = 0;
+    size_t nv = 0, ni = 0;
     rs_roam_stats rst;
     rg_tex_stats tst;
     int warned = 0;
@@ -639,31 +641,12 @@ int cli_render_main(int argc, char **argv)
             cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
             goto done;
         }
-        rs_roam_mesh_options mo;
-        memset(&mo, 0, sizeof mo);
-        mo.normals = 1;
-        size_t mv, mi;
-        rs_roam_mesh_bound(roam, &mo, &mv, &mi);
-        if (mv > cap_v) {
-            free(vtx); free(nrm);
-            vtx = malloc(mv * 5 * sizeof *vtx);
-            nrm = malloc(mv * 3 * sizeof *nrm);
-            cap_v = mv;
-            if (!vtx || !nrm) { cli_error("out of memory for a mesh of %zu vertices", mv); goto done; }
-        }
-        if (mi > cap_i) {
-            free(idx);
-            idx = malloc(mi * sizeof *idx);
-            cap_i = mi;
-            if (!idx) { cli_error("out of memory for a mesh of %zu indices", mi); goto done; }
-        }
-        if ((r = rs_roam_extract(ctx, roam, &mo, vtx, nrm, cap_v, idx, cap_i, &nv, &ni))) {
-            cli_error("%s: %s", a.dem, rs_ctx_message(ctx));
-            goto done;
-        }
+        if (cli_mesh_extract(ctx, roam, a.dem, &mesh)) goto done;
+        nv = mesh.nv;
+        ni = mesh.ni;
         double f1 = cli_now_ms();
-        if (sh ? rsh_draw(sh, &view, vtx, nrm, nv, idx, ni, err, sizeof err)
-               : rg_draw(gl, &view, vtx, nrm, nv, idx, ni, err, sizeof err)) {
+        if (sh ? rsh_draw(sh, &view, mesh.vtx, mesh.nrm, nv, mesh.idx, ni, err, sizeof err)
+               : rg_draw(gl, &view, mesh.vtx, mesh.nrm, nv, mesh.idx, ni, err, sizeof err)) {
             cli_error("render: %s", err);
             goto done;
         }
@@ -760,7 +743,7 @@ done:
     rsh_destroy(sh);
     rs_gpu_scene_free(ctx, scene);
     free(frame); free(tex); free(tex_road); free(nmap);
-    free(vtx); free(nrm); free(idx);
+    cli_mesh_buf_free(&mesh);
     free(frame_ms); free(mesh_ms); free(draw_ms); free(mesh_seq); free(tris_seq);
     rs_roam_free(ctx, roam);
     rs_splatter_free(ctx, sp);

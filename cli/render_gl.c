@@ -31,6 +31,10 @@ struct rg_renderer {
     size_t cap_v;
     float *clip;
     size_t clip_n, clip_cap;
+    /* rg_draw_vt's tile slots: a texture each, made on the slot's first upload */
+    GLuint *vt_tex;
+    uint8_t *vt_made;
+    uint32_t vt_slots, vt_side;
 };
 
 static void set_err(char *err, size_t n, const char *msg)
@@ -81,6 +85,11 @@ void rg_destroy(rg_renderer *r)
         glDeleteTextures((GLsizei)(r->ntx * r->nty), r->tex);
         free(r->tex);
     }
+    if (r->vt_tex) {
+        glDeleteTextures((GLsizei)r->vt_slots, r->vt_tex);
+        free(r->vt_tex);
+    }
+    free(r->vt_made);
     if (r->osm) OSMesaDestroyContext(r->osm);
     free(r->buf);
     free(r->pos); free(r->nrm); free(r->uv); free(r->clip);
@@ -420,8 +429,10 @@ static int clip_tile(rg_renderer *r, const uint32_t *idx, size_t ntri, double x0
     return 0;
 }
 
-int rg_draw(rg_renderer *r, const rg_view *v, const float *vertices, const float *normals, size_t nv,
-            const uint32_t *indices, size_t ni, char *err, size_t err_size)
+/* A frame up to the mesh: vertex arrays in the GL frame, sky, camera,
+ * lighting, fog, client arrays on (rg_draw and rg_draw_vt). */
+static int draw_begin(rg_renderer *r, const rg_view *v, const float *vertices, const float *normals, size_t nv,
+                      char *err, size_t err_size)
 {
     size_t c3 = r->cap_v, c3n = r->cap_v, c2 = r->cap_v;
     if (grow(&r->pos, &c3, 3 * nv + 3) || grow(&r->nrm, &c3n, 3 * nv + 3) || grow(&r->uv, &c2, 3 * nv + 3)) {
@@ -497,6 +508,29 @@ int rg_draw(rg_renderer *r, const rg_view *v, const float *vertices, const float
     glEnableClientState(GL_VERTEX_ARRAY);
     glEnableClientState(GL_NORMAL_ARRAY);
     glEnableClientState(GL_TEXTURE_COORD_ARRAY);
+    return 0;
+}
+
+/* The frame's end: state back, glFinish, GL errors. */
+static int draw_end(char *err, size_t err_size)
+{
+    glMatrixMode(GL_TEXTURE);
+    glLoadIdentity();
+    glDisableClientState(GL_VERTEX_ARRAY);
+    glDisableClientState(GL_NORMAL_ARRAY);
+    glDisableClientState(GL_TEXTURE_COORD_ARRAY);
+    glDisable(GL_LIGHTING);
+    glDisable(GL_FOG);
+    glDisable(GL_TEXTURE_2D);
+    glFinish();
+    if (glGetError() != GL_NO_ERROR) { set_err(err, err_size, "drawing failed (GL error)"); return 1; }
+    return 0;
+}
+
+int rg_draw(rg_renderer *r, const rg_view *v, const float *vertices, const float *normals, size_t nv,
+            const uint32_t *indices, size_t ni, char *err, size_t err_size)
+{
+    if (draw_begin(r, v, vertices, normals, nv, err, err_size)) return 1;
     size_t ntri = ni / 3;
     if (r->ntx * r->nty == 1) {
         glBindTexture(GL_TEXTURE_2D, r->tex[0]);
@@ -529,17 +563,70 @@ int rg_draw(rg_renderer *r, const rg_view *v, const float *vertices, const float
                 glDrawArrays(GL_TRIANGLES, 0, (GLsizei)r->clip_n);
             }
     }
-    glMatrixMode(GL_TEXTURE);
-    glLoadIdentity();
-    glDisableClientState(GL_VERTEX_ARRAY);
-    glDisableClientState(GL_NORMAL_ARRAY);
-    glDisableClientState(GL_TEXTURE_COORD_ARRAY);
-    glDisable(GL_LIGHTING);
-    glDisable(GL_FOG);
-    glDisable(GL_TEXTURE_2D);
-    glFinish();
-    if (glGetError() != GL_NO_ERROR) { set_err(err, err_size, "drawing failed (GL error)"); return 1; }
+    return draw_end(err, err_size);
+}
+
+int rg_vt_slots(rg_renderer *r, uint32_t slots, uint32_t side, char *err, size_t err_size)
+{
+    r->vt_tex = calloc(slots, sizeof *r->vt_tex);
+    r->vt_made = calloc(slots, 1);
+    if (!r->vt_tex || !r->vt_made) { set_err(err, err_size, "out of memory for the tile slots"); return 1; }
+    glGenTextures((GLsizei)slots, r->vt_tex);
+    r->vt_slots = slots;
+    r->vt_side = side;
     return 0;
+}
+
+int rg_vt_upload(rg_renderer *r, uint32_t slot, const uint8_t *rgba, char *err, size_t err_size)
+{
+    if (slot >= r->vt_slots) { set_err(err, err_size, "tile slot out of range"); return 1; }
+    glBindTexture(GL_TEXTURE_2D, r->vt_tex[slot]);
+    if (!r->vt_made[slot]) { /* the slot's storage, on its first tile */
+        /* mip levels of the tile made by GL on every upload (GL 1.4): the vt's level is
+         * at least as fine as a screen pixel, the mips take what is finer */
+        glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, (GLsizei)r->vt_side, (GLsizei)r->vt_side, 0, GL_RGBA,
+                     GL_UNSIGNED_BYTE, rgba);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        r->vt_made[slot] = 1;
+    } else
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)r->vt_side, (GLsizei)r->vt_side, GL_RGBA, GL_UNSIGNED_BYTE,
+                        rgba);
+    if (glGetError() != GL_NO_ERROR) { set_err(err, err_size, "tile upload failed (GL error)"); return 1; }
+    return 0;
+}
+
+int rg_draw_vt(rg_renderer *r, const rg_view *v, const float *vertices, const float *normals, size_t nv,
+               const uint32_t *indices, size_t ni, uint32_t tex_w, uint32_t tex_h, const rg_vt_draw_tile *tiles,
+               size_t ntiles, char *err, size_t err_size)
+{
+    if (draw_begin(r, v, vertices, normals, nv, err, err_size)) return 1;
+    r->tex_w = tex_w;
+    r->tex_h = tex_h;
+    for (size_t k = 0; k < ntiles; k++) {
+        const rg_vt_draw_tile *t = &tiles[k];
+        if (t->slot >= r->vt_slots || !r->vt_made[t->slot]) continue;
+        if (clip_tile(r, indices, ni / 3, t->x0, t->x1, t->y0, t->y1)) {
+            set_err(err, err_size, "out of memory clipping the mesh to texture tiles");
+            return 1;
+        }
+        if (!r->clip_n) continue;
+        /* finest texels -> the tile's [0,1]: (texel / scale - origin) / side */
+        glBindTexture(GL_TEXTURE_2D, r->vt_tex[t->slot]);
+        glMatrixMode(GL_TEXTURE);
+        glLoadIdentity();
+        glScaled(1.0 / r->vt_side, 1.0 / r->vt_side, 1.0);
+        glTranslated(-t->ox, -t->oy, 0.0);
+        glScaled(1.0 / t->scale, 1.0 / t->scale, 1.0);
+        glVertexPointer(3, GL_FLOAT, CV * sizeof(float), r->clip);
+        glNormalPointer(GL_FLOAT, CV * sizeof(float), r->clip + 3);
+        glTexCoordPointer(2, GL_FLOAT, CV * sizeof(float), r->clip + 6);
+        glDrawArrays(GL_TRIANGLES, 0, (GLsizei)r->clip_n);
+    }
+    return draw_end(err, err_size);
 }
 
 void rg_read_current(uint32_t w, uint32_t h, uint8_t *out)

@@ -76,4 +76,27 @@ void rg_read_rgba(rg_renderer *r, uint8_t *out);
 /* The same for the current context's w x h frame (also the shader mode's). */
 void rg_read_current(uint32_t w, uint32_t h, uint8_t *out);
 
+/* `render --path` (cli/render_vt.c): the virtual texture's tiles, one GL
+ * texture per rs_vt slot (side x side RGBA8, linear filtering, no mip
+ * levels: the vt picks the level per tile), drawn each over its own part of
+ * the mesh. rg_vt_slots once; rg_vt_upload whenever a tile is made into a
+ * slot. */
+typedef struct rg_vt_draw_tile {
+    uint32_t slot;
+    double x0, x1, y0, y1; /* the tile's core in finest-level texels */
+    double scale;          /* finest texels per texel of the tile's level (2^level) */
+    double ox, oy;         /* the tile's first texel (border included) in its level's texels */
+} rg_vt_draw_tile;
+int rg_vt_slots(rg_renderer *r, uint32_t slots, uint32_t side, char *err, size_t err_size);
+int rg_vt_upload(rg_renderer *r, uint32_t slot, const uint8_t *rgba, char *err, size_t err_size);
+/* rg_draw with the tiles instead of the uploaded texture; tex_w x tex_h:
+ * the finest level's size (the mesh's u, v times these are its texels). */
+int rg_draw_vt(rg_renderer *r, const rg_view *v, const float *vertices, const float *normals, size_t nv,
+               const uint32_t *indices, size_t ni, uint32_t tex_w, uint32_t tex_h, const rg_vt_draw_tile *tiles,
+               size_t ntiles, char *err, size_t err_size);
+
+/* `roadsplat render --path FILE ...` (cli/render_vt.c), called by
+ * cli_render_main when --path is given. */
+int cli_render_path_main(int argc, char **argv);
+
 #endif

@@ -1298,6 +1298,188 @@ enum { RS_ROAM_EDGE_TOP = 0, RS_ROAM_EDGE_BOTTOM = 1, RS_ROAM_EDGE_LEFT = 2, RS_
 RS_API rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b);
 /* == end ROAM mesher ===================================================== */
 
+/* == Virtual texture: streamed tiles around a moving camera (lib/vt.c) ===== */
+/*
+ * A quadtree of texture tiles over the whole splat image of a prepared
+ * splatter (issue 30, seed 002; docs/embedding.md "Streaming"). Level 0
+ * is the splatter's own image (T texels per DEM cell); level k has pixels
+ * 2^k times larger, (ceil(W/2^k) x ceil(H/2^k)) pixels for a W x H splat;
+ * its tile (x, y) is the level image's window [xS - B, (x+1)S + B) x
+ * [yS - B, (y+1)S + B) for tile size S and border B (pixels beyond the
+ * image transparent, 0,0,0,0). Tile (k, x, y) covers the same ground as
+ * tiles (k-1, 2x..2x+1, 2y..2y+1). Every tile is rendered on its own from
+ * the road grid, never from other tiles, so any tile can be made at any
+ * time, on any thread, in any order, with the same bytes:
+ * - level k where 2^k divides T: the splat at T / 2^k texels (a splatter
+ *   sharing the grid): byte-identical to rs_splat_window at those texels;
+ *   at level 0 to the splatter's own windows;
+ * - other levels: the splat at t = ceil(T / 2^k) texels (at least 1), area-
+ *   averaged onto the level's pixels (exact box weights, alpha-weighted
+ *   colour, rounded). Levels coarser than a DEM cell render t = 1 and
+ *   average ceil(2^k / T)^2 or so pixels each.
+ * Rendering coarse levels from their children instead would need every
+ * finest tile under them (the whole 4e10-pixel map for a far view).
+ * Needs analytic edges (RS_EDGES_ANALYTIC, the default): the other levels
+ * re-render the splatter's road grid at other texel counts, which an
+ * alpha-map grid does not allow (RS_ERR_UNSUPPORTED).
+ *
+ * Frame: as rs_roam_view: x = column * cell_size, y = row * cell_size
+ * metres from DEM sample (0,0) (y down the map), z = height in metres (the
+ * DEM's value times z_scale), z up.
+ *
+ * Threads: the library starts no threads. rs_vt_update, rs_vt_discard and
+ * the list and lookup calls use the rs_vt's mutable state: one thread at a
+ * time. rs_vt_make_tile reads only what rs_vt_create fixed (levels,
+ * splatters), so any number of host threads may make tiles at once, each
+ * with its own context and its own rs_vt_workspace, also while another
+ * thread runs rs_vt_update. The splatter (and its grid and DEM) must
+ * outlive the rs_vt.
+ */
+typedef struct rs_vt rs_vt;
+
+/* All-zero means defaults. */
+typedef struct rs_vt_options {
+    uint32_t tile_size;    /* S: core pixels per tile side; 0 -> 256, else 8..8192 */
+    int32_t border;        /* B: pixels of the level image around the core on each side
+                              (for bilinear/anisotropic filtering across tile edges);
+                              0 -> 4, -1 -> none, else 1..S/2 */
+    uint64_t budget_bytes; /* resident tiles at most this many bytes ((S+2B)^2 * 4 each);
+                              0 -> 256 MiB; must hold every tile of the coarsest level */
+    uint32_t levels;       /* 0 -> until the coarsest level fits one tile; else 1..that,
+                              at most 32 */
+} rs_vt_options;
+
+/* One frame's camera. All-zero fields take the default shown. */
+typedef struct rs_vt_view {
+    double eye[3];        /* camera position, metres (frame above) */
+    double dir[3];        /* view direction (need not be unit), not 0; up is +z */
+    double fov_y;         /* vertical field of view, degrees; 0 -> 60, else (0, 179) */
+    uint32_t width, height; /* viewport pixels; 0 -> 1280 x 720 */
+    double far_dist;      /* metres: tiles farther than this are not needed; 0 -> none */
+    double texel_pixels;  /* a level is fine enough where its texel projects to at most this
+                             many screen pixels; 0 -> 1; larger: coarser, less memory */
+    double anisotropy;    /* the host sampler's max anisotropy A (1: isotropic), 1..64; 0: no
+                             limit (the view angle never coarsens the level: right for any
+                             sampler, the most tiles) */
+    uint32_t max_make;    /* at most this many tiles to make per update (the nearest first);
+                             0 -> no cap */
+} rs_vt_view;
+
+/* A tile and where it lives. `slot` (0 .. rs_vt_info.slots - 1) is the
+ * tile's place in the host's cache or texture atlas while it is resident:
+ * given when the tile enters the make list, free again when it is dropped. */
+typedef struct rs_vt_tile {
+    uint32_t level, x, y;
+    uint32_t slot;           /* UINT32_MAX in the needed list: not resident (max_make cut it) */
+    double x0, y0, x1, y1;   /* the core's ground rectangle, metres (clipped to the map) */
+    double dist;             /* nearest distance from the eye to the tile's box, metres */
+} rs_vt_tile;
+
+typedef struct rs_vt_info {
+    uint32_t levels;       /* level count (0 finest) */
+    uint32_t tile_size;    /* S */
+    uint32_t border;       /* B */
+    uint32_t tile_side;    /* S + 2B: pixels per side of a made tile */
+    size_t tile_bytes;     /* (S + 2B)^2 * 4 */
+    uint32_t slots;        /* most tiles resident at once: budget_bytes / tile_bytes */
+    uint64_t budget_bytes; /* in use (default filled in) */
+    size_t bytes;          /* memory the rs_vt itself holds (tables, splatters' own memory excluded) */
+} rs_vt_info;
+
+/* Per-update counts (the last rs_vt_update). */
+typedef struct rs_vt_stats {
+    uint64_t frame;        /* updates so far */
+    uint32_t needed;       /* tiles of the view's cut (the needed list) */
+    uint32_t made;         /* tiles in the make list */
+    uint32_t dropped;      /* tiles in the drop list */
+    uint32_t resident;     /* resident tiles after the update */
+    uint64_t resident_bytes; /* resident * tile_bytes, <= budget_bytes */
+    uint32_t bias;         /* levels the whole cut was coarsened by to fit the budget (0: none) */
+    uint32_t visited;      /* quadtree nodes visited */
+} rs_vt_stats;
+
+/* Build the quadtree over the splatter's image: the levels, a splatter per
+ * texel count the levels need (sharing s's grid and options; progress
+ * callbacks off), the height range of every tile (from the DEM) and the
+ * bookkeeping for rs_vt_info.slots tiles, all allocated here (rs_vt_update
+ * then allocates nothing). The coarser splatters are checked against ctx's
+ * limits as any splatter is. RS_ERR_INVALID_ARG for bad options or a budget
+ * below the coarsest level's tiles, RS_ERR_UNSUPPORTED for alpha-map edges,
+ * RS_ERR_NOMEM. *out is the caller's (rs_vt_free, same context). */
+RS_API rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *opts, rs_vt **out);
+RS_API void rs_vt_free(rs_ctx *ctx, rs_vt *vt);
+RS_API void rs_vt_get_info(const rs_vt *vt, rs_vt_info *out);
+/* Level k's image size in pixels and its pixel size in metres. RS_ERR_INVALID_ARG
+ * for k out of range. */
+RS_API rs_result rs_vt_level_size(const rs_vt *vt, uint32_t level, uint32_t *width, uint32_t *height,
+                                  double *pixel_m);
+
+/* One frame. Finds the view's cut of the quadtree: starting from the
+ * coarsest level, a tile outside the view frustum (or beyond far_dist) is
+ * not needed; a tile at level k is needed when k <= L, the level its box
+ * asks for, else its children are examined. L for a box (ground rectangle
+ * times the DEM's height range there) is, with d the nearest distance from
+ * the eye to the box, dz the largest height difference between the eye and
+ * the box, f = height / (2 tan(fov_y / 2)) and p0 the finest pixel size
+ * (Cline and Egbert's projected size, seed 002 formula 1):
+ *     P = p0 f / d                 screen pixels of a level-0 texel seen face on
+ *     c = min(1, dz / d)           bound on the cosine of the view angle to the ground
+ *     rho = P min(1, c A)          the footprint the sampler picks its mip level by
+ *                                  (A: anisotropy; A = 0 means no limit: rho = P)
+ *     L = floor(log2(texel_pixels / rho)), clamped to 0 .. levels-1
+ * (all bounds taken towards finer levels: the chosen level is never coarser
+ * than the mip level a GPU picks for any texel of the tile, the
+ * EXT_texture_filter_anisotropic rule: with N = min(1/c, A) taps along the
+ * foreshortened axis, the level of its footprint divided by N). L never decreases when the box
+ * moves away. Every visible point of the map is then under exactly one
+ * needed tile, of a level at least as fine as its own L. When the cut's
+ * tiles exceed the budget, L is raised by 1 everywhere until they fit
+ * (stats.bias).
+ * Lists (rs_vt_needed, rs_vt_to_make, rs_vt_to_drop; valid until the next
+ * update): tiles to make (needed and not resident: they are resident from
+ * now on, in the slot given; nearest first, at most max_make) and tiles to
+ * drop (resident tiles not needed now, least recently needed first, only as
+ * many as the new ones need room: the resident set never exceeds
+ * rs_vt_info.slots tiles). The host drops, then makes, then draws the
+ * needed tiles. Deterministic: the same views in the same order give the
+ * same lists. Takes nothing from the allocator (rs_vt_create sized
+ * everything). */
+RS_API rs_result rs_vt_update(rs_ctx *ctx, rs_vt *vt, const rs_vt_view *view);
+RS_API const rs_vt_tile *rs_vt_needed(const rs_vt *vt, size_t *count);
+RS_API const rs_vt_tile *rs_vt_to_make(const rs_vt *vt, size_t *count);
+RS_API const rs_vt_tile *rs_vt_to_drop(const rs_vt *vt, size_t *count);
+RS_API void rs_vt_get_stats(const rs_vt *vt, rs_vt_stats *out);
+/* The resident tile that holds ground point of tile (level, x, y): that tile
+ * or its nearest resident ancestor (a host draws with it while a finer one
+ * is on its way). Returns 1 and fills *out, or 0 when none is resident. */
+RS_API int rs_vt_lookup(const rs_vt *vt, uint32_t level, uint32_t x, uint32_t y, rs_vt_tile *out);
+/* Forget a resident tile (the host could not make it, or wants the slot):
+ * its slot is free again and a later update lists it to make again.
+ * RS_ERR_INVALID_ARG when it is not resident. */
+RS_API rs_result rs_vt_discard(rs_ctx *ctx, rs_vt *vt, uint32_t level, uint32_t x, uint32_t y);
+
+/* Per-thread scratch of rs_vt_make_tile: a splat workspace per texel
+ * count and the averaging buffers, allocated once (rs_vt_workspace_bytes
+ * tells). Belongs to one rs_vt and serves one call at a time. */
+typedef struct rs_vt_workspace rs_vt_workspace;
+RS_API rs_result rs_vt_workspace_create(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace **out);
+RS_API void rs_vt_workspace_free(rs_ctx *ctx, rs_vt_workspace *ws);
+RS_API size_t rs_vt_workspace_bytes(const rs_vt_workspace *ws);
+
+/* Render tile (level, x, y) into the caller's `rgba`: tile_side rows of
+ * tile_side RGBA8 pixels, row r at rgba + r * stride bytes (stride >=
+ * 4 * tile_side). Any tile of the quadtree may be made, resident or not.
+ * Allocates nothing (except with the splatter's lighting on, whose normal
+ * scratch rs_splat_window_ws takes per call). Level 0 renders through `s`
+ * itself: its progress callback, if any, is called from the making thread
+ * as rs_splat_window_ws calls it (the vt's own splatters have none). Thread
+ * rules above.
+ * RS_ERR_INVALID_ARG for a tile out of range, another vt's workspace or a
+ * short stride. */
+RS_API rs_result rs_vt_make_tile(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, uint32_t level, uint32_t x,
+                                 uint32_t y, uint8_t *rgba, size_t stride);
+/* == end virtual texture ================================================== */
+
 #ifdef __cplusplus
 }
 #endif
