@@ -51,6 +51,8 @@ static const char render_usage[] =
     "  --max-image-pixels N, --max-field-work N, --max-atlas-mb N, --max-linesym-mb N\n"
     "  (budgets)\n"
     "Render options:\n"
+    "  --path FILE         a flythrough along camera key frames with streamed texture tiles\n"
+    "                      (docs/render.md \"Flythrough\"; its options: --path FILE --help)\n"
     "  --size WxH          image size (default 1280x960; with --ortho: the splat's size)\n"
     "  --camera X,Y,Z      eye position (default: oblique view of the whole map from the south)\n"
     "  --look-at X,Y,Z     point looked at (default: the map centre)\n"
