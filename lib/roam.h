@@ -103,9 +103,13 @@ struct rs_roam {
                                        gen when they last changed) */
     double *crecheck;               /* per node: odometer reading at which its subtree
                                        must be scanned again (-1: at the next update) */
+    struct roam_scan *cscan;        /* per node: the visibility side of its cached scan */
     unsigned char *ccls;            /* per node: its class against the view at its
-                                       last scan */
-    double odo, last_eye[3], last_k, last_tol, last_mtol; /* camera travel; the view of the last scan */
+                                       last scan (wholly in, wholly out, in between) */
+    unsigned char *pvis;            /* per patch: visible at the last update */
+    double odo, rot;                /* camera travel (metres) and turn (the sum of the
+                                       largest frustum normal change per update) */
+    double last_eye[3], last_n[5][3], last_k, last_tol, last_mtol; /* the view of the last scan */
     int full_next;                  /* the next update scans every cluster */
     uint32_t gen;                   /* generation counter (bumped per change) */
     uint32_t update_ops;            /* split/merge operations of the last update */

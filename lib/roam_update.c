@@ -83,6 +83,19 @@ static void q_heapify(struct roam_queue *q)
     for (size_t i = q->n / 2; i-- > 0;) sift_down(q, i);
 }
 
+/* The visibility side of a node's cached scan. A frustum plane's value at
+ * a fixed point c changes between two views by at most |d eye| +
+ * |d normal| |c - eye|, so after the eye has travelled T and the frustum
+ * normals have turned by R (L->odo and L->rot since the scan; R sums each
+ * update's largest normal change) an item whose sphere centre was within
+ * vd of the eye has moved by at most T + R (vd + T) against every plane:
+ * its visibility (its sphere against the five planes) can only have
+ * changed once that reaches vm, its distance from changing sides. */
+struct roam_scan {
+    double odo0, rot0;  /* L->odo, L->rot at the scan */
+    double vm, vd;      /* smallest side change, largest centre distance */
+};
+
 /* State of one update. */
 typedef struct upd {
     rs_ctx *ctx;
@@ -97,8 +110,45 @@ typedef struct upd {
     int track;          /* scanning: keep `slack` */
     double slack;       /* how far the eye may move before an item seen so far
                            in the node under scan crosses the tolerance (metres) */
+    double vm, vd;      /* the visibility bound (struct roam_scan) of the items
+                           seen so far in the node under scan, from now */
+    int vtrack;         /* scanning a node partly in view: keep vm, vd */
     int nomem;
 } upd;
+
+/* view_dist, and in a scan the item's visibility bound into u->vm, u->vd
+ * (items off the map or straddling its edge do not depend on the view; a
+ * culled patch's items are rescanned when it becomes visible). */
+static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
+{
+    const rs_roam *L = u->L;
+    const view_params *v = u->v;
+    int cls = tri_class(L, t);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
+    if (!u->vis[patch]) return 0;
+    double c[3], r;
+    tri_sphere(L, t, patch, c, &r);
+    int vis = 1;
+    double m = INFINITY, am = 0.0;
+    for (int p = 0; p < v->nplanes; p++) {
+        const double *pl = v->planes[p];
+        double a = pl[0] * c[0] + pl[1] * c[1] + pl[2] * c[2] + pl[3];
+        if (a < -r) vis = 0; /* sphere_visible's test */
+        if (a + r < m) { m = a + r; am = a; }
+    }
+    /* visible: the nearest plane must pass the sphere; culled: the plane it
+     * is furthest outside must come back (less a margin for the rounding) */
+    m = fabs(m) - 1e-9 * (fabs(am) + r + 1.0);
+    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+    double dc = sqrt(dx * dx + dy * dy + dz * dz);
+    if (m < u->vm) u->vm = m;
+    if (dc * (1.0 + 1e-9) > u->vd) u->vd = dc * (1.0 + 1e-9);
+    if (!vis) return 0;
+    double dst = dc - r;
+    double floor_d = 1e-3 * L->cs;
+    *dist = dst < floor_d ? floor_d : dst;
+    return 2;
+}
 
 /* Priority of (node, pos) as a leaf (view_prio), its triangle t given or
  * (NULL) worked out; in a scan, also how far its distance is from the one
@@ -114,7 +164,7 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
         slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
         patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
     } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
-    int k = view_dist(L, &t, patch, u->v, u->vis, &d);
+    int k = u->vtrack ? view_dist_track(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k != 2) return k ? INFINITY : 0.0;
     float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
@@ -224,6 +274,7 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
  * lifted triangle's corners are inside every plane or outside by less
  * than that half range, all culled when they are further outside one
  * than the cluster's radius (or the patch is culled). */
+#define CLS_UNKNOWN 3
 static int node_class(const upd *u, uint32_t i)
 {
     const rs_roam *L = u->L;
@@ -274,31 +325,69 @@ static double walk_items(upd *u, uint32_t i, int cls)
 }
 
 /* Depth-first over the tree under node i, skipping a subtree when nothing
- * in it can have crossed the tolerance since the last update (which
- * completed): nothing under it changed (a split or merge marks the node
- * and its ancestors), its class against the view is the same and not "in
- * between", and the eye has moved less than the smallest slack its items
- * had at their last scan (the odometer is below its recheck reading).
- * Returns the subtree's recheck reading (-1: scan it every update). A
- * child's triangle lies in its parent's, so it has the class of a parent
- * wholly in or out (pcls 0 or 1). */
+ * in it can have crossed the tolerance or changed sides of the frustum
+ * since the last update (which completed): nothing under it changed (a
+ * split or merge marks the node and its ancestors), the eye has moved less
+ * than the smallest slack its items had at their last scan (the odometer
+ * is below its recheck reading), and the frustum has moved less than its
+ * visibility bound (struct roam_scan). Returns the subtree's recheck
+ * reading (-1: scan it every update) and folds its visibility bound, from
+ * now, into u->vm, u->vd. */
 static double walk(upd *u, uint32_t i, int pcls)
 {
     rs_roam *L = u->L;
     if (u->all) { walk_items(u, i, 2); return -1.0; }
-    int cls = pcls == 2 ? node_class(u, i) : pcls;
     double rc = L->crecheck[i];
-    if (!u->full && rc >= 0.0 && cls != 2 && cls == L->ccls[i] && (cls == 0 || L->odo < rc)) return rc;
-    double save = u->slack;
+    struct roam_scan *cs = &L->cscan[i];
+    int cls = pcls; /* CLS_UNKNOWN until needed */
+    if (!u->full && rc >= 0.0) {
+        if (L->odo < rc) {
+            double T = L->odo - cs->odo0, R = L->rot - cs->rot0;
+            double used = T + R * (cs->vd + T);
+            if (used < cs->vm) {
+                /* from now: the margin left, and the distance the eye may
+                 * have gained (the bound keeps its form: T' + R' (vd + T + T')) */
+                double m = cs->vm - used, dd = cs->vd + T;
+                if (m < u->vm) u->vm = m;
+                if (dd > u->vd) u->vd = dd;
+                return rc;
+            }
+        }
+        /* the node wholly in view (or out of it) then and now: its items
+         * kept their sides whatever the frustum did */
+        if (L->ccls[i] != 2) {
+            if (cls == CLS_UNKNOWN) cls = node_class(u, i);
+            if (cls == L->ccls[i] && (cls == 0 || L->odo < rc)) {
+                u->vm = -INFINITY; /* the parent's bound is the class's */
+                return rc;
+            }
+        }
+    }
+    if (cls == CLS_UNKNOWN) cls = node_class(u, i);
+    double save = u->slack, svm = u->vm, svd = u->vd;
     u->slack = INFINITY;
-    double sub = walk_items(u, i, cls);
+    u->vm = INFINITY;
+    u->vd = 0.0;
+    /* a node wholly in or out of view relies on its class; the items of
+     * one in between keep a bound on their sides */
+    int svt = u->vtrack;
+    u->vtrack = cls == 2;
+    if (cls != 2) u->vm = -INFINITY;
+    double sub = walk_items(u, i, cls == 2 ? CLS_UNKNOWN : cls);
+    u->vtrack = svt;
     /* a margin for the rounding of the distances */
     rc = L->odo + u->slack * (1.0 - 1e-9) - 1e-9 * (1.0 + L->odo);
     if (sub < rc) rc = sub;
-    if (cls == 2 || rc < 0.0) rc = -1.0;
+    if (rc < 0.0) rc = -1.0;
     L->crecheck[i] = rc;
+    cs->odo0 = L->odo;
+    cs->rot0 = L->rot;
+    cs->vm = u->vm;
+    cs->vd = u->vd;
     L->ccls[i] = (unsigned char)cls;
     u->slack = save;
+    u->vm = u->vm < svm ? u->vm : svm;
+    u->vd = u->vd > svd ? u->vd : svd;
     return rc;
 }
 
@@ -308,7 +397,18 @@ static void scan_mesh(upd *u)
 {
     rs_roam *L = u->L;
     u->track = !u->all;
-    for (uint32_t i = 0; i < 2 * L->npx * L->npy; i++) walk(u, i, 2); /* the roots */
+    u->vm = INFINITY;
+    u->vd = 0.0;
+    int full = u->full;
+    for (uint32_t p = 0; p < L->npx * L->npy; p++) {
+        /* a patch that came into view or left it (its items were not
+         * tracked while it was culled) is looked at in full */
+        u->full = full || u->vis[p] != L->pvis[p];
+        L->pvis[p] = u->vis[p];
+        walk(u, 2 * p, CLS_UNKNOWN); /* the roots */
+        walk(u, 2 * p + 1, CLS_UNKNOWN);
+    }
+    u->full = full;
     u->track = 0;
     q_heapify(L->qs);
     q_heapify(L->qm);
@@ -389,18 +489,20 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
     if (!L->par) {
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
         double *rc = rs__alloc_array(ctx, L->cap, sizeof *rc);
-        unsigned char *cl = rs__alloc_array(ctx, L->cap, 1);
-        if (!par || !rc || !cl) {
-            rs__free(ctx, par); rs__free(ctx, rc); rs__free(ctx, cl);
+        struct roam_scan *cl = rs__alloc_array(ctx, L->cap, sizeof *cl);
+        unsigned char *cc = rs__alloc_array(ctx, L->cap, 1);
+        unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
+        if (!par || !rc || !cl || !cc || !pv) {
+            rs__free(ctx, par); rs__free(ctx, rc); rs__free(ctx, cl); rs__free(ctx, cc); rs__free(ctx, pv);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
         for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; rc[i] = -1.0; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
-        L->par = par; L->crecheck = rc; L->ccls = cl;
+        L->par = par; L->crecheck = rc; L->cscan = cl; L->ccls = cc; L->pvis = pv;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *rc + 1);
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *rc + sizeof *cl + 1) + (uint64_t)L->npx * L->npy;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -415,7 +517,9 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
     rs__free(ctx, L->crecheck);
+    rs__free(ctx, L->cscan);
     rs__free(ctx, L->ccls);
+    rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
     rs__free(ctx, L->qs);
@@ -522,6 +626,15 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
     u.full = L->full_next || v.k != L->last_k || u.tol != L->last_tol || u.mtol != L->last_mtol;
     double ex = v.eye[0] - L->last_eye[0], ey = v.eye[1] - L->last_eye[1], ez = v.eye[2] - L->last_eye[2];
     L->odo += sqrt(ex * ex + ey * ey + ez * ez);
+    double turn = 0.0;
+    for (int p = 0; p < 5; p++) {
+        double nx = v.planes[p][0] - L->last_n[p][0], ny = v.planes[p][1] - L->last_n[p][1];
+        double nz = v.planes[p][2] - L->last_n[p][2], d = sqrt(nx * nx + ny * ny + nz * nz);
+        if (d > turn) turn = d;
+        L->last_n[p][0] = v.planes[p][0]; L->last_n[p][1] = v.planes[p][1]; L->last_n[p][2] = v.planes[p][2];
+    }
+    L->rot += turn * (1.0 + 1e-9);
+
     L->gen++;
     L->exhausted = 0;
     uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
