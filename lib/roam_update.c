@@ -83,18 +83,16 @@ static void q_heapify(struct roam_queue *q)
     for (size_t i = q->n / 2; i-- > 0;) sift_down(q, i);
 }
 
-/* The visibility side of a node's cached scan. A frustum plane's value at
- * a fixed point c changes between two views by at most |d eye| +
+/* The visibility side of the scan cache. A frustum plane's value at a
+ * fixed point c changes between two views by at most |d eye| +
  * |d normal| |c - eye|, so after the eye has travelled T and the frustum
  * normals have turned by R (L->odo and L->rot since the scan; R sums each
  * update's largest normal change) an item whose sphere centre was within
- * vd of the eye has moved by at most T + R (vd + T) against every plane:
- * its visibility (its sphere against the five planes) can only have
- * changed once that reaches vm, its distance from changing sides. */
-struct roam_scan {
-    double odo0, rot0;  /* L->odo, L->rot at the scan */
-    double vm, vd;      /* smallest side change, largest centre distance */
-};
+ * vd of the eye has moved by at most T + R (vd + T) against every plane,
+ * and its visibility (its sphere against the five planes) cannot have
+ * changed while that is below vm, its distance from changing sides. Half
+ * of vm for each term makes two readings: T < vm / 2 (folded into the
+ * odometer's recheck reading) and R < vm / (2 vd + vm) (the turn's). */
 
 /* State of one update. */
 typedef struct upd {
@@ -110,8 +108,10 @@ typedef struct upd {
     int track;          /* scanning: keep `slack` */
     double slack;       /* how far the eye may move before an item seen so far
                            in the node under scan crosses the tolerance (metres) */
-    double vm, vd;      /* the visibility bound (struct roam_scan) of the items
-                           seen so far in the node under scan, from now */
+    double vm, vd;      /* the items seen so far in the node under scan: their
+                           smallest distance from changing sides of the frustum,
+                           largest sphere-centre distance from the eye */
+    double rrot;        /* smallest turn reading of the subtrees seen so far */
     int vtrack;         /* scanning a node partly in view: keep vm, vd */
     int nomem;
 } upd;
@@ -329,65 +329,62 @@ static double walk_items(upd *u, uint32_t i, int cls)
  * since the last update (which completed): nothing under it changed (a
  * split or merge marks the node and its ancestors), the eye has moved less
  * than the smallest slack its items had at their last scan (the odometer
- * is below its recheck reading), and the frustum has moved less than its
- * visibility bound (struct roam_scan). Returns the subtree's recheck
- * reading (-1: scan it every update) and folds its visibility bound, from
- * now, into u->vm, u->vd. */
+ * is below its recheck reading), and either the node is wholly in view
+ * (or out of it) now as then, or (a node partly in view) the frustum has
+ * moved too little for an item under it to change sides (the turn reading,
+ * above). Returns the subtree's recheck reading (-1: scan it every update)
+ * and folds its turn reading into u->rrot. A child's triangle lies in its
+ * parent's, so it has the class of a parent wholly in or out. */
 static double walk(upd *u, uint32_t i, int pcls)
 {
     rs_roam *L = u->L;
     if (u->all) { walk_items(u, i, 2); return -1.0; }
-    double rc = L->crecheck[i];
     struct roam_scan *cs = &L->cscan[i];
+    double rc = cs->rc, rr = cs->rot;
     int cls = pcls; /* CLS_UNKNOWN until needed */
     if (!u->full && rc >= 0.0) {
-        if (L->odo < rc) {
-            double T = L->odo - cs->odo0, R = L->rot - cs->rot0;
-            double used = T + R * (cs->vd + T);
-            if (used < cs->vm) {
-                /* from now: the margin left, and the distance the eye may
-                 * have gained (the bound keeps its form: T' + R' (vd + T + T')) */
-                double m = cs->vm - used, dd = cs->vd + T;
-                if (m < u->vm) u->vm = m;
-                if (dd > u->vd) u->vd = dd;
-                return rc;
-            }
+        if (L->odo < rc && L->rot < rr) {
+            if (rr < u->rrot) u->rrot = rr;
+            return rc;
         }
-        /* the node wholly in view (or out of it) then and now: its items
-         * kept their sides whatever the frustum did */
-        if (L->ccls[i] != 2) {
+        if (cs->cls != 2) {
             if (cls == CLS_UNKNOWN) cls = node_class(u, i);
-            if (cls == L->ccls[i] && (cls == 0 || L->odo < rc)) {
-                u->vm = -INFINITY; /* the parent's bound is the class's */
+            if (cls == cs->cls && (cls == 0 || L->odo < rc)) {
+                u->rrot = -INFINITY; /* the parent relies on its class too */
                 return rc;
             }
         }
     }
     if (cls == CLS_UNKNOWN) cls = node_class(u, i);
-    double save = u->slack, svm = u->vm, svd = u->vd;
+    double save = u->slack, svm = u->vm, svd = u->vd, srot = u->rrot;
+    int svt = u->vtrack;
     u->slack = INFINITY;
     u->vm = INFINITY;
     u->vd = 0.0;
     /* a node wholly in or out of view relies on its class; the items of
      * one in between keep a bound on their sides */
-    int svt = u->vtrack;
     u->vtrack = cls == 2;
-    if (cls != 2) u->vm = -INFINITY;
+    u->rrot = cls == 2 ? INFINITY : -INFINITY;
     double sub = walk_items(u, i, cls == 2 ? CLS_UNKNOWN : cls);
-    u->vtrack = svt;
     /* a margin for the rounding of the distances */
-    rc = L->odo + u->slack * (1.0 - 1e-9) - 1e-9 * (1.0 + L->odo);
+    double eps = 1e-9 * (1.0 + L->odo);
+    rc = L->odo + u->slack * (1.0 - 1e-9) - eps;
     if (sub < rc) rc = sub;
+    rr = u->rrot;
+    if (cls == 2 && u->vm < INFINITY) {
+        double m = u->vm * (1.0 - 1e-9);
+        double ro = L->odo + 0.5 * m - eps, rt = L->rot + m / (2.0 * u->vd + m) * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
+        if (ro < rc) rc = ro;
+        if (rt < rr) rr = rt;
+    }
     if (rc < 0.0) rc = -1.0;
-    L->crecheck[i] = rc;
-    cs->odo0 = L->odo;
-    cs->rot0 = L->rot;
-    cs->vm = u->vm;
-    cs->vd = u->vd;
-    L->ccls[i] = (unsigned char)cls;
-    u->slack = save;
-    u->vm = u->vm < svm ? u->vm : svm;
-    u->vd = u->vd > svd ? u->vd : svd;
+    cs->rc = rc;
+    float rf = (float)rr; /* rounded down: a reading too early is safe */
+    if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
+    cs->rot = rf;
+    cs->cls = (unsigned char)cls;
+    u->slack = save; u->vm = svm; u->vd = svd; u->vtrack = svt;
+    u->rrot = rr < srot ? rr : srot;
     return rc;
 }
 
@@ -397,8 +394,7 @@ static void scan_mesh(upd *u)
 {
     rs_roam *L = u->L;
     u->track = !u->all;
-    u->vm = INFINITY;
-    u->vd = 0.0;
+    u->rrot = INFINITY;
     int full = u->full;
     for (uint32_t p = 0; p < L->npx * L->npy; p++) {
         /* a patch that came into view or left it (its items were not
@@ -488,21 +484,19 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
     if (!L->par) {
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
-        double *rc = rs__alloc_array(ctx, L->cap, sizeof *rc);
-        struct roam_scan *cl = rs__alloc_array(ctx, L->cap, sizeof *cl);
-        unsigned char *cc = rs__alloc_array(ctx, L->cap, 1);
+        struct roam_scan *cs = rs__alloc_array(ctx, L->cap, sizeof *cs);
         unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
-        if (!par || !rc || !cl || !cc || !pv) {
-            rs__free(ctx, par); rs__free(ctx, rc); rs__free(ctx, cl); rs__free(ctx, cc); rs__free(ctx, pv);
+        if (!par || !cs || !pv) {
+            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; rc[i] = -1.0; }
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = -1.0; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
-        L->par = par; L->crecheck = rc; L->cscan = cl; L->ccls = cc; L->pvis = pv;
+        L->par = par; L->cscan = cs; L->pvis = pv;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *rc + sizeof *cl + 1) + (uint64_t)L->npx * L->npy;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs) + (uint64_t)L->npx * L->npy;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -516,9 +510,7 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
-    rs__free(ctx, L->crecheck);
     rs__free(ctx, L->cscan);
-    rs__free(ctx, L->ccls);
     rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
