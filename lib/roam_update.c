@@ -226,12 +226,26 @@ static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, cons
      * hold its parents may be scanned in different frames */
     if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
     u->thr = u->mtol;
-    double p = item_prio_t(u, node, pos, t);
+    double save = u->slack;
+    u->slack = INFINITY;
+    double p = item_prio_t(u, node, pos, t), sp = u->slack;
+    if (!u->all && p > u->mtol) {
+        /* it cannot merge until this parent's priority falls: the
+         * partner's does not matter (and is not worked out) */
+        u->slack = save < sp ? save : sp;
+        return;
+    }
     if (N != NIL) {
+        u->slack = INFINITY;
         double q = item_prio(u, N, pp);
+        if (!u->all && q > u->mtol) {
+            u->slack = save < u->slack ? save : u->slack;
+            return;
+        }
+        if (u->slack < sp) sp = u->slack;
         if (q > p) p = q;
     }
-    if (!u->all && p > u->mtol) return;
+    u->slack = save < sp ? save : sp;
     qent e;
     fill_ent(u->L, &e, p, node, pos);
     if (!(build ? q_append(u->ctx, u->L->qm, &e) : q_push(u->ctx, u->L->qm, &e))) u->nomem = 1;
