@@ -113,6 +113,7 @@ typedef struct upd {
                            largest sphere-centre distance from the eye */
     double rrot;        /* smallest turn reading of the subtrees seen so far */
     int vtrack;         /* scanning a node partly in view: keep vm, vd */
+    int inview;         /* scanning a node wholly in view: no item is culled */
     int nomem;
 } upd;
 
@@ -150,6 +151,23 @@ static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
     return 2;
 }
 
+/* view_dist for an item under a node wholly in view (node_class 1): its
+ * sphere is inside the frustum, only its distance is needed. */
+static int view_dist_inview(const upd *u, const tri *t, uint32_t patch, double *dist)
+{
+    const rs_roam *L = u->L;
+    const view_params *v = u->v;
+    int cls = tri_class(L, t);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
+    double c[3], r;
+    tri_sphere(L, t, patch, c, &r);
+    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+    double dst = sqrt(dx * dx + dy * dy + dz * dz) - r;
+    double floor_d = 1e-3 * L->cs;
+    *dist = dst < floor_d ? floor_d : dst;
+    return 2;
+}
+
 /* Priority of (node, pos) as a leaf (view_prio), its triangle t given or
  * (NULL) worked out; in a scan, also how far its distance is from the one
  * where it would cross the tolerance. */
@@ -164,7 +182,8 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
         slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
         patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
     } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
-    int k = u->vtrack ? view_dist_track(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
+    int k = u->vtrack ? view_dist_track(u, &t, patch, &d)
+          : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k != 2) return k ? INFINITY : 0.0;
     float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
@@ -301,16 +320,16 @@ static int node_class(const upd *u, uint32_t i)
     double c[3], r;
     tri_sphere(L, &t, patch, c, &r);
     double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
-    double cx[3] = { t.ax * L->cs, t.bx * L->cs, t.cx * L->cs }, cy[3] = { t.ay * L->cs, t.by * L->cs, t.cy * L->cs };
-    int part = 0;
-    for (int p = 0; p < u->v->nplanes; p++) {
+    double cs = L->cs;
+    double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
+    int part = 0, np = u->v->nplanes;
+    for (int p = 0; p < np; p++) {
         const double *pl = u->v->planes[p];
-        double lo = INFINITY, hi = -INFINITY;
-        for (int k = 0; k < 3; k++) {
-            double sd = pl[0] * cx[k] + pl[1] * cy[k] + pl[2] * c[2] + pl[3];
-            if (sd < lo) lo = sd;
-            if (sd > hi) hi = sd;
-        }
+        double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
+        double s0 = a * x0 + b * y0 + base, s1 = a * x1 + b * y1 + base, s2 = a * x2 + b * y2 + base;
+        double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
+        if (s2 < lo) lo = s2;
+        if (s2 > hi) hi = s2;
         if (hi < -r) return 0;
         if (lo < -hz) part = 1;
     }
@@ -371,13 +390,14 @@ static double walk(upd *u, uint32_t i, int pcls)
     }
     if (cls == CLS_UNKNOWN) cls = node_class(u, i);
     double save = u->slack, svm = u->vm, svd = u->vd, srot = u->rrot;
-    int svt = u->vtrack;
+    int svt = u->vtrack, siv = u->inview;
     u->slack = INFINITY;
     u->vm = INFINITY;
     u->vd = 0.0;
     /* a node wholly in or out of view relies on its class; the items of
      * one in between keep a bound on their sides */
     u->vtrack = cls == 2;
+    u->inview = cls == 1;
     u->rrot = cls == 2 ? INFINITY : -INFINITY;
     double sub = walk_items(u, i, cls == 2 ? CLS_UNKNOWN : cls);
     /* a margin for the rounding of the distances */
@@ -397,7 +417,7 @@ static double walk(upd *u, uint32_t i, int pcls)
     if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
     cs->rot = rf;
     cs->cls = (unsigned char)cls;
-    u->slack = save; u->vm = svm; u->vd = svd; u->vtrack = svt;
+    u->slack = save; u->vm = svm; u->vd = svd; u->vtrack = svt; u->inview = siv;
     u->rrot = rr < srot ? rr : srot;
     return rc;
 }
