@@ -90,9 +90,12 @@ static void q_heapify(struct roam_queue *q)
  * update's largest normal change) an item whose sphere centre was within
  * vd of the eye has moved by at most T + R (vd + T) against every plane,
  * and its visibility (its sphere against the five planes) cannot have
- * changed while that is below vm, its distance from changing sides. Half
- * of vm for each term makes two readings: T < vm / 2 (folded into the
- * odometer's recheck reading) and R < vm / (2 vd + vm) (the turn's). */
+ * changed while that is below m, its distance from changing sides. A
+ * share a of m for the travel makes two readings: T < a m (folded into
+ * the odometer's recheck reading) and R < (1 - a) m / (vd + a m) (the
+ * turn's). Any share is safe; the one that makes both readings come due
+ * together at the last update's pace (travel and turn per update) puts
+ * the next look furthest away. */
 
 /* State of one update. */
 typedef struct upd {
@@ -108,16 +111,17 @@ typedef struct upd {
     int track;          /* scanning: keep `slack` */
     double slack;       /* how far the eye may move before an item seen so far
                            in the node under scan crosses the tolerance (metres) */
-    double vm, vd;      /* the items seen so far in the node under scan: their
-                           smallest distance from changing sides of the frustum,
-                           largest sphere-centre distance from the eye */
+    double vtr, vrot;   /* the items seen so far in the node under scan: the
+                           smallest travel and turn allowances (above) */
+    double trate, rrate; /* travel and turn of this update (the pace) */
     double rrot;        /* smallest turn reading of the subtrees seen so far */
-    int vtrack;         /* scanning a node partly in view: keep vm, vd */
+    int vtrack;         /* scanning a node partly in view: keep vtr, vrot */
     int inview;         /* scanning a node wholly in view: no item is culled */
     int nomem;
 } upd;
 
-/* view_dist, and in a scan the item's visibility bound into u->vm, u->vd
+/* view_dist, and in a scan the item's visibility allowances into u->vtr,
+ * u->vrot
  * (items off the map or straddling its edge do not depend on the view; a
  * culled patch's items are rescanned when it becomes visible). */
 static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
@@ -142,8 +146,16 @@ static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
     m = fabs(m) - 1e-9 * (fabs(am) + r + 1.0);
     double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
     double dc = sqrt(dx * dx + dy * dy + dz * dz);
-    if (m < u->vm) u->vm = m;
-    if (dc * (1.0 + 1e-9) > u->vd) u->vd = dc * (1.0 + 1e-9);
+    /* travel below a m and turn below (1 - a) m / (vd + a m) keep
+     * T + R (vd + T) below m (vd = dc, rounded up) */
+    if (m < 0.0) m = 0.0;
+    double vd = dc * (1.0 + 1e-9) + 1e-9, pace = u->trate + u->rrate * vd;
+    double a = pace > 0.0 ? u->trate / pace : 0.5;
+    if (a < 0.05) a = 0.05;
+    if (a > 0.95) a = 0.95;
+    double tr = a * m, rt = (1.0 - a) * m / (vd + tr);
+    if (tr < u->vtr) u->vtr = tr;
+    if (rt < u->vrot) u->vrot = rt;
     if (!vis) return 0;
     double dst = dc - r;
     double floor_d = 1e-3 * L->cs;
@@ -389,11 +401,11 @@ static double walk(upd *u, uint32_t i, int pcls)
         }
     }
     if (cls == CLS_UNKNOWN) cls = node_class(u, i);
-    double save = u->slack, svm = u->vm, svd = u->vd, srot = u->rrot;
+    double save = u->slack, svtr = u->vtr, svrot = u->vrot, srot = u->rrot;
     int svt = u->vtrack, siv = u->inview;
     u->slack = INFINITY;
-    u->vm = INFINITY;
-    u->vd = 0.0;
+    u->vtr = INFINITY;
+    u->vrot = INFINITY;
     /* a node wholly in or out of view relies on its class; the items of
      * one in between keep a bound on their sides */
     u->vtrack = cls == 2;
@@ -405,9 +417,9 @@ static double walk(upd *u, uint32_t i, int pcls)
     rc = L->odo + u->slack * (1.0 - 1e-9) - eps;
     if (sub < rc) rc = sub;
     rr = u->rrot;
-    if (cls == 2 && u->vm < INFINITY) {
-        double m = u->vm * (1.0 - 1e-9);
-        double ro = L->odo + 0.5 * m - eps, rt = L->rot + m / (2.0 * u->vd + m) * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
+    if (cls == 2) {
+        double ro = L->odo + u->vtr * (1.0 - 1e-9) - eps;
+        double rt = L->rot + u->vrot * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
         if (ro < rc) rc = ro;
         if (rt < rr) rr = rt;
     }
@@ -417,7 +429,7 @@ static double walk(upd *u, uint32_t i, int pcls)
     if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
     cs->rot = rf;
     cs->cls = (unsigned char)cls;
-    u->slack = save; u->vm = svm; u->vd = svd; u->vtrack = svt; u->inview = siv;
+    u->slack = save; u->vtr = svtr; u->vrot = svrot; u->vtrack = svt; u->inview = siv;
     u->rrot = rr < srot ? rr : srot;
     return rc;
 }
@@ -660,6 +672,8 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
         L->last_n[p][0] = v.planes[p][0]; L->last_n[p][1] = v.planes[p][1]; L->last_n[p][2] = v.planes[p][2];
     }
     L->rot += turn * (1.0 + 1e-9);
+    u.trate = sqrt(ex * ex + ey * ey + ez * ez);
+    u.rrate = turn;
 
     L->gen++;
     L->exhausted = 0;
