@@ -121,9 +121,8 @@ typedef struct upd {
 } upd;
 
 /* view_dist, and in a scan the item's visibility allowances into u->vtr,
- * u->vrot
- * (items off the map or straddling its edge do not depend on the view; a
- * culled patch's items are rescanned when it becomes visible). */
+ * u->vrot (items off the map or straddling its edge do not depend on the
+ * view; a culled patch's items are scanned again when it comes into view). */
 static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
 {
     const rs_roam *L = u->L;
