@@ -31,6 +31,16 @@
 #define QUEUED 0x80000000u
 #define TAG 0x80000000u           /* stack entry: a block with untested implicit leaves */
 
+/* A node's cached scan (rs_roam_update): one record, so that looking at a
+ * node costs one cache line besides the node's. */
+struct roam_scan {
+    double rc;      /* odometer reading (L->odo) at which its subtree must be
+                       scanned again (-1: at the next update) */
+    float rot;      /* turn reading (L->rot, rounded down) at which an item
+                       under it may change sides of the frustum */
+    unsigned char cls; /* its class against the view at its last scan */
+};
+
 typedef struct roam_node {
     uint32_t lc, rc;                /* children (NIL for a leaf) */
     uint32_t base, left, right;     /* neighbours across base / left leg / right leg */
@@ -101,11 +111,11 @@ struct rs_roam {
     struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
     uint32_t *pgen;                 /* per patch: generation of its leaves (the value of
                                        gen when they last changed) */
-    double *crecheck;               /* per node: odometer reading at which its subtree
-                                       must be scanned again (-1: at the next update) */
-    unsigned char *ccls;            /* per node: its class against the view at its
-                                       last scan */
-    double odo, last_eye[3], last_k, last_tol, last_mtol; /* camera travel; the view of the last scan */
+    struct roam_scan *cscan;        /* per node: its cached scan (lib/roam_update.c) */
+    unsigned char *pvis;            /* per patch: visible at the last update */
+    double odo, rot;                /* camera travel (metres) and turn (the sum of the
+                                       largest frustum normal change per update) */
+    double last_eye[3], last_n[5][3], last_k, last_tol, last_mtol; /* the view of the last scan */
     int full_next;                  /* the next update scans every cluster */
     uint32_t gen;                   /* generation counter (bumped per change) */
     uint32_t update_ops;            /* split/merge operations of the last update */
@@ -121,7 +131,7 @@ static inline void touch_patch(rs_roam *L, uint32_t node)
     uint32_t e = L->nodes[node].e;
     L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
     if (L->par)
-        for (uint32_t c = node; c != NIL && L->crecheck[c] >= 0.0; c = L->par[c]) L->crecheck[c] = -1.0;
+        for (uint32_t c = node; c != NIL && L->cscan[c].rc >= 0.0; c = L->par[c]) L->cscan[c].rc = -1.0;
 }
 
 /* Nodes the pool can still give. */

@@ -83,6 +83,20 @@ static void q_heapify(struct roam_queue *q)
     for (size_t i = q->n / 2; i-- > 0;) sift_down(q, i);
 }
 
+/* The visibility side of the scan cache. A frustum plane's value at a
+ * fixed point c changes between two views by at most |d eye| +
+ * |d normal| |c - eye|, so after the eye has travelled T and the frustum
+ * normals have turned by R (L->odo and L->rot since the scan; R sums each
+ * update's largest normal change) an item whose sphere centre was within
+ * vd of the eye has moved by at most T + R (vd + T) against every plane,
+ * and its visibility (its sphere against the five planes) cannot have
+ * changed while that is below m, its distance from changing sides. A
+ * share a of m for the travel makes two readings: T < a m (folded into
+ * the odometer's recheck reading) and R < (1 - a) m / (vd + a m) (the
+ * turn's). Any share is safe; the one that makes both readings come due
+ * together at the last update's pace (travel and turn per update) puts
+ * the next look furthest away. */
+
 /* State of one update. */
 typedef struct upd {
     rs_ctx *ctx;
@@ -97,8 +111,73 @@ typedef struct upd {
     int track;          /* scanning: keep `slack` */
     double slack;       /* how far the eye may move before an item seen so far
                            in the node under scan crosses the tolerance (metres) */
+    double vtr, vrot;   /* the items seen so far in the node under scan: the
+                           smallest travel and turn allowances (above) */
+    double trate, rrate; /* travel and turn of this update (the pace) */
+    double rrot;        /* smallest turn reading of the subtrees seen so far */
+    int vtrack;         /* scanning a node partly in view: keep vtr, vrot */
+    int inview;         /* scanning a node wholly in view: no item is culled */
     int nomem;
 } upd;
+
+/* view_dist, and in a scan the item's visibility allowances into u->vtr,
+ * u->vrot (items off the map or straddling its edge do not depend on the
+ * view; a culled patch's items are scanned again when it comes into view). */
+static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
+{
+    const rs_roam *L = u->L;
+    const view_params *v = u->v;
+    int cls = tri_class(L, t);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
+    if (!u->vis[patch]) return 0;
+    double c[3], r;
+    tri_sphere(L, t, patch, c, &r);
+    int vis = 1;
+    double m = INFINITY, am = 0.0;
+    for (int p = 0; p < v->nplanes; p++) {
+        const double *pl = v->planes[p];
+        double a = pl[0] * c[0] + pl[1] * c[1] + pl[2] * c[2] + pl[3];
+        if (a < -r) vis = 0; /* sphere_visible's test */
+        if (a + r < m) { m = a + r; am = a; }
+    }
+    /* visible: the nearest plane must pass the sphere; culled: the plane it
+     * is furthest outside must come back (less a margin for the rounding) */
+    m = fabs(m) - 1e-9 * (fabs(am) + r + 1.0);
+    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+    double dc = sqrt(dx * dx + dy * dy + dz * dz);
+    /* travel below a m and turn below (1 - a) m / (vd + a m) keep
+     * T + R (vd + T) below m (vd = dc, rounded up) */
+    if (m < 0.0) m = 0.0;
+    double vd = dc * (1.0 + 1e-9) + 1e-9, pace = u->trate + u->rrate * vd;
+    double a = pace > 0.0 ? u->trate / pace : 0.5;
+    if (a < 0.05) a = 0.05;
+    if (a > 0.95) a = 0.95;
+    double tr = a * m, rt = (1.0 - a) * m / (vd + tr);
+    if (tr < u->vtr) u->vtr = tr;
+    if (rt < u->vrot) u->vrot = rt;
+    if (!vis) return 0;
+    double dst = dc - r;
+    double floor_d = 1e-3 * L->cs;
+    *dist = dst < floor_d ? floor_d : dst;
+    return 2;
+}
+
+/* view_dist for an item under a node wholly in view (node_class 1): its
+ * sphere is inside the frustum, only its distance is needed. */
+static int view_dist_inview(const upd *u, const tri *t, uint32_t patch, double *dist)
+{
+    const rs_roam *L = u->L;
+    const view_params *v = u->v;
+    int cls = tri_class(L, t);
+    if (cls != NODE_ON) return cls == NODE_STRADDLES;
+    double c[3], r;
+    tri_sphere(L, t, patch, c, &r);
+    double dx = c[0] - v->eye[0], dy = c[1] - v->eye[1], dz = c[2] - v->eye[2];
+    double dst = sqrt(dx * dx + dy * dy + dz * dz) - r;
+    double floor_d = 1e-3 * L->cs;
+    *dist = dst < floor_d ? floor_d : dst;
+    return 2;
+}
 
 /* Priority of (node, pos) as a leaf (view_prio), its triangle t given or
  * (NULL) worked out; in a scan, also how far its distance is from the one
@@ -114,7 +193,8 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
         slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
         patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
     } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
-    int k = view_dist(L, &t, patch, u->v, u->vis, &d);
+    int k = u->vtrack ? view_dist_track(u, &t, patch, &d)
+          : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k != 2) return k ? INFINITY : 0.0;
     float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
@@ -176,12 +256,26 @@ static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, cons
      * hold its parents may be scanned in different frames */
     if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
     u->thr = u->mtol;
-    double p = item_prio_t(u, node, pos, t);
+    double save = u->slack;
+    u->slack = INFINITY;
+    double p = item_prio_t(u, node, pos, t), sp = u->slack;
+    if (!u->all && p > u->mtol) {
+        /* it cannot merge until this parent's priority falls: the
+         * partner's does not matter (and is not worked out) */
+        u->slack = save < sp ? save : sp;
+        return;
+    }
     if (N != NIL) {
+        u->slack = INFINITY;
         double q = item_prio(u, N, pp);
+        if (!u->all && q > u->mtol) {
+            u->slack = save < u->slack ? save : u->slack;
+            return;
+        }
+        if (u->slack < sp) sp = u->slack;
         if (q > p) p = q;
     }
-    if (!u->all && p > u->mtol) return;
+    u->slack = save < sp ? save : sp;
     qent e;
     fill_ent(u->L, &e, p, node, pos);
     if (!(build ? q_append(u->ctx, u->L->qm, &e) : q_push(u->ctx, u->L->qm, &e))) u->nomem = 1;
@@ -224,6 +318,7 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
  * lifted triangle's corners are inside every plane or outside by less
  * than that half range, all culled when they are further outside one
  * than the cluster's radius (or the patch is culled). */
+#define CLS_UNKNOWN 3
 static int node_class(const upd *u, uint32_t i)
 {
     const rs_roam *L = u->L;
@@ -236,16 +331,16 @@ static int node_class(const upd *u, uint32_t i)
     double c[3], r;
     tri_sphere(L, &t, patch, c, &r);
     double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
-    double cx[3] = { t.ax * L->cs, t.bx * L->cs, t.cx * L->cs }, cy[3] = { t.ay * L->cs, t.by * L->cs, t.cy * L->cs };
-    int part = 0;
-    for (int p = 0; p < u->v->nplanes; p++) {
+    double cs = L->cs;
+    double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
+    int part = 0, np = u->v->nplanes;
+    for (int p = 0; p < np; p++) {
         const double *pl = u->v->planes[p];
-        double lo = INFINITY, hi = -INFINITY;
-        for (int k = 0; k < 3; k++) {
-            double sd = pl[0] * cx[k] + pl[1] * cy[k] + pl[2] * c[2] + pl[3];
-            if (sd < lo) lo = sd;
-            if (sd > hi) hi = sd;
-        }
+        double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
+        double s0 = a * x0 + b * y0 + base, s1 = a * x1 + b * y1 + base, s2 = a * x2 + b * y2 + base;
+        double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
+        if (s2 < lo) lo = s2;
+        if (s2 > hi) hi = s2;
         if (hi < -r) return 0;
         if (lo < -hz) part = 1;
     }
@@ -274,31 +369,67 @@ static double walk_items(upd *u, uint32_t i, int cls)
 }
 
 /* Depth-first over the tree under node i, skipping a subtree when nothing
- * in it can have crossed the tolerance since the last update (which
- * completed): nothing under it changed (a split or merge marks the node
- * and its ancestors), its class against the view is the same and not "in
- * between", and the eye has moved less than the smallest slack its items
- * had at their last scan (the odometer is below its recheck reading).
- * Returns the subtree's recheck reading (-1: scan it every update). A
- * child's triangle lies in its parent's, so it has the class of a parent
- * wholly in or out (pcls 0 or 1). */
+ * in it can have crossed the tolerance or changed sides of the frustum
+ * since the last update (which completed): nothing under it changed (a
+ * split or merge marks the node and its ancestors), the eye has moved less
+ * than the smallest slack its items had at their last scan (the odometer
+ * is below its recheck reading), and either the node is wholly in view
+ * (or out of it) now as then, or (a node partly in view) the frustum has
+ * moved too little for an item under it to change sides (the turn reading,
+ * above). Returns the subtree's recheck reading (-1: scan it every update)
+ * and folds its turn reading into u->rrot. A child's triangle lies in its
+ * parent's, so it has the class of a parent wholly in or out. */
 static double walk(upd *u, uint32_t i, int pcls)
 {
     rs_roam *L = u->L;
     if (u->all) { walk_items(u, i, 2); return -1.0; }
-    int cls = pcls == 2 ? node_class(u, i) : pcls;
-    double rc = L->crecheck[i];
-    if (!u->full && rc >= 0.0 && cls != 2 && cls == L->ccls[i] && (cls == 0 || L->odo < rc)) return rc;
-    double save = u->slack;
+    struct roam_scan *cs = &L->cscan[i];
+    double rc = cs->rc, rr = cs->rot;
+    int cls = pcls; /* CLS_UNKNOWN until needed */
+    if (!u->full && rc >= 0.0) {
+        if (L->odo < rc && L->rot < rr) {
+            if (rr < u->rrot) u->rrot = rr;
+            return rc;
+        }
+        if (cs->cls != 2) {
+            if (cls == CLS_UNKNOWN) cls = node_class(u, i);
+            if (cls == cs->cls && (cls == 0 || L->odo < rc)) {
+                u->rrot = -INFINITY; /* the parent relies on its class too */
+                return rc;
+            }
+        }
+    }
+    if (cls == CLS_UNKNOWN) cls = node_class(u, i);
+    double save = u->slack, svtr = u->vtr, svrot = u->vrot, srot = u->rrot;
+    int svt = u->vtrack, siv = u->inview;
     u->slack = INFINITY;
-    double sub = walk_items(u, i, cls);
+    u->vtr = INFINITY;
+    u->vrot = INFINITY;
+    /* a node wholly in or out of view relies on its class; the items of
+     * one in between keep a bound on their sides */
+    u->vtrack = cls == 2;
+    u->inview = cls == 1;
+    u->rrot = cls == 2 ? INFINITY : -INFINITY;
+    double sub = walk_items(u, i, cls == 2 ? CLS_UNKNOWN : cls);
     /* a margin for the rounding of the distances */
-    rc = L->odo + u->slack * (1.0 - 1e-9) - 1e-9 * (1.0 + L->odo);
+    double eps = 1e-9 * (1.0 + L->odo);
+    rc = L->odo + u->slack * (1.0 - 1e-9) - eps;
     if (sub < rc) rc = sub;
-    if (cls == 2 || rc < 0.0) rc = -1.0;
-    L->crecheck[i] = rc;
-    L->ccls[i] = (unsigned char)cls;
-    u->slack = save;
+    rr = u->rrot;
+    if (cls == 2) {
+        double ro = L->odo + u->vtr * (1.0 - 1e-9) - eps;
+        double rt = L->rot + u->vrot * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
+        if (ro < rc) rc = ro;
+        if (rt < rr) rr = rt;
+    }
+    if (rc < 0.0) rc = -1.0;
+    cs->rc = rc;
+    float rf = (float)rr; /* rounded down: a reading too early is safe */
+    if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
+    cs->rot = rf;
+    cs->cls = (unsigned char)cls;
+    u->slack = save; u->vtr = svtr; u->vrot = svrot; u->vtrack = svt; u->inview = siv;
+    u->rrot = rr < srot ? rr : srot;
     return rc;
 }
 
@@ -308,7 +439,17 @@ static void scan_mesh(upd *u)
 {
     rs_roam *L = u->L;
     u->track = !u->all;
-    for (uint32_t i = 0; i < 2 * L->npx * L->npy; i++) walk(u, i, 2); /* the roots */
+    u->rrot = INFINITY;
+    int full = u->full;
+    for (uint32_t p = 0; p < L->npx * L->npy; p++) {
+        /* a patch that came into view or left it (its items were not
+         * tracked while it was culled) is looked at in full */
+        u->full = full || u->vis[p] != L->pvis[p];
+        L->pvis[p] = u->vis[p];
+        walk(u, 2 * p, CLS_UNKNOWN); /* the roots */
+        walk(u, 2 * p + 1, CLS_UNKNOWN);
+    }
+    u->full = full;
     u->track = 0;
     q_heapify(L->qs);
     q_heapify(L->qm);
@@ -388,19 +529,19 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
     if (!L->par) {
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
-        double *rc = rs__alloc_array(ctx, L->cap, sizeof *rc);
-        unsigned char *cl = rs__alloc_array(ctx, L->cap, 1);
-        if (!par || !rc || !cl) {
-            rs__free(ctx, par); rs__free(ctx, rc); rs__free(ctx, cl);
+        struct roam_scan *cs = rs__alloc_array(ctx, L->cap, sizeof *cs);
+        unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
+        if (!par || !cs || !pv) {
+            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; rc[i] = -1.0; }
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = -1.0; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
-        L->par = par; L->crecheck = rc; L->ccls = cl;
+        L->par = par; L->cscan = cs; L->pvis = pv;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *rc + 1);
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs) + (uint64_t)L->npx * L->npy;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -414,8 +555,8 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
-    rs__free(ctx, L->crecheck);
-    rs__free(ctx, L->ccls);
+    rs__free(ctx, L->cscan);
+    rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
     rs__free(ctx, L->qs);
@@ -522,6 +663,17 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
     u.full = L->full_next || v.k != L->last_k || u.tol != L->last_tol || u.mtol != L->last_mtol;
     double ex = v.eye[0] - L->last_eye[0], ey = v.eye[1] - L->last_eye[1], ez = v.eye[2] - L->last_eye[2];
     L->odo += sqrt(ex * ex + ey * ey + ez * ez);
+    double turn = 0.0;
+    for (int p = 0; p < 5; p++) {
+        double nx = v.planes[p][0] - L->last_n[p][0], ny = v.planes[p][1] - L->last_n[p][1];
+        double nz = v.planes[p][2] - L->last_n[p][2], d = sqrt(nx * nx + ny * ny + nz * nz);
+        if (d > turn) turn = d;
+        L->last_n[p][0] = v.planes[p][0]; L->last_n[p][1] = v.planes[p][1]; L->last_n[p][2] = v.planes[p][2];
+    }
+    L->rot += turn * (1.0 + 1e-9);
+    u.trate = sqrt(ex * ex + ey * ey + ez * ez);
+    u.rrate = turn;
+
     L->gen++;
     L->exhausted = 0;
     uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;

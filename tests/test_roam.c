@@ -439,6 +439,70 @@ static void flight_view(int f, uint32_t W, double cs, rs_roam_view *v)
     v->fov_y = 60; v->width = 1024; v->height = 768;
 }
 
+/* 1 when every vertex of mesh a is a vertex of mesh b (both extracted with
+ * the same frame: equal samples give equal floats). */
+static int vertices_within(const mesh *a, const mesh *b)
+{
+    size_t j = 0;
+    /* both are numbered in row-major sample order: one merge pass */
+    for (size_t k = 0; k < a->nv; k++) {
+        float ax = a->v[5 * k], ay = a->v[5 * k + 1];
+        while (j < b->nv && (b->v[5 * j + 1] < ay || (b->v[5 * j + 1] == ay && b->v[5 * j] < ax))) j++;
+        if (j == b->nv || b->v[5 * j] != ax || b->v[5 * j + 1] != ay) return 0;
+    }
+    return 1;
+}
+
+/* Updates while the camera turns (in place, then sweeping sideways): items
+ * near the frustum's sides come into view and leave it, and the update
+ * skips subtrees by a bound on how far the frustum moved. After every
+ * update no leaf may be above the tolerance, which holds exactly when the
+ * mesh refines the rebuild's (the coarsest such mesh): the rebuild's
+ * vertices are all in the update's, over the whole frustum (the view
+ * check of test_update only looks inside a cone). */
+static void test_update_turning(rs_ctx *ctx, uint32_t patch)
+{
+    const uint32_t W = 257, H = 257;
+    const double cs = 10.0;
+    float *z = view_dem(W, H);
+    rs_dem *d = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.patch_size = patch;
+    rs_roam *up = make_f(ctx, z, W, H, cs, 0, &o, &d), *reb = NULL;
+    CHECK(up && rs_roam_create(ctx, d, &o, &reb) == RS_OK);
+    if (!up || !reb) goto out;
+    int refines = 1, ok = 1;
+    uint32_t skipped_frames = 0;
+    for (int f = 0; f < 150; f++) {
+        rs_roam_view v;
+        memset(&v, 0, sizeof v);
+        double a = f * 0.021, c = 0.5 * (W - 1) * cs;
+        double side = f < 75 ? 0.0 : (f - 75) * 1.3;
+        v.eye[0] = c + side * cos(a); v.eye[1] = c + 200.0 + side * sin(a); v.eye[2] = 60.0;
+        v.dir[0] = cos(a); v.dir[1] = sin(a); v.dir[2] = -0.2;
+        v.fov_y = 50; v.width = 1280; v.height = 720; v.pixel_error = 1.0;
+        if (rs_roam_update(ctx, up, &v, 0) != RS_OK || rs_roam_frame(ctx, reb, &v) != RS_OK) { ok = 0; break; }
+        mesh mu, mr;
+        if (extract(ctx, up, NULL, &mu) != RS_OK) { ok = 0; break; }
+        if (extract(ctx, reb, NULL, &mr) != RS_OK) { mesh_free(&mu); ok = 0; break; }
+        if (!vertices_within(&mr, &mu)) refines = 0;
+        rs_roam_stats st;
+        rs_roam_get_stats(up, &st);
+        if (st.update_ops == 0) skipped_frames++;
+        mesh_free(&mu);
+        mesh_free(&mr);
+    }
+    CHECK(ok);
+    CHECKF(refines, "update (patch %u), turning camera: the mesh refines the rebuild's on every frame", patch);
+    printf("update turning (patch %u): %u of 150 updates changed nothing\n", patch, skipped_frames);
+out:
+    rs_roam_free(ctx, up);
+    rs_roam_free(ctx, reb);
+    rs_dem_free(ctx, d);
+    free(z);
+}
+
 /* rs_roam_update over a flight: crack-free and within the tolerance after
  * every update, never fewer triangles than a rebuild at the same view
  * (the rebuild's mesh is the coarsest that meets the tolerance) and at
@@ -1213,6 +1277,8 @@ int main(void)
     test_update(ctx, 0);
     test_update(ctx, 16);
     test_update(ctx, 256);
+    test_update_turning(ctx, 0);
+    test_update_turning(ctx, 16);
     test_patches(ctx);
     test_seams(ctx, 1);
     test_seams(ctx, 0);

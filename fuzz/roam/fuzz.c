@@ -6,7 +6,8 @@
  * tolerance or triangle target and patch size from the body's bytes, in
  * reverse). Checks invariants after each mesh and traps on a violation (no
  * NaN vertex, indices in range, count == stats, the triangles tile the
- * map, no T-junction, the patches' triangles add up to the mesh's). */
+ * map, no T-junction, the patches' triangles add up to the mesh's; after an
+ * update at a tolerance, every vertex of a rebuild at that view). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -71,6 +72,27 @@ static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double c
     free(v); free(n); free(idx);
 }
 
+/* The samples that are vertices of r's mesh (W x H flags; NULL when
+ * memory runs out). */
+static unsigned char *vertex_set(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double cs)
+{
+    size_t mv, mi, nv, ni;
+    rs_roam_mesh_bound(r, NULL, &mv, &mi);
+    float *v = malloc((mv + 1) * 5 * sizeof *v);
+    uint32_t *idx = malloc((mi + 1) * sizeof *idx);
+    unsigned char *set = calloc((size_t)W * H, 1);
+    if (v && idx && set) {
+        REQUIRE(rs_roam_extract(ctx, r, NULL, v, NULL, mv, idx, mi, &nv, &ni) == RS_OK);
+        for (size_t k = 0; k < nv; k++)
+            set[(size_t)lround(v[5 * k + 1] / cs) * W + (size_t)lround(v[5 * k] / cs)] = 1;
+    } else {
+        free(set);
+        set = NULL;
+    }
+    free(v); free(idx);
+    return set;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 7) return 0;
@@ -88,7 +110,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     rs_ctx *ctx = NULL;
     rs_dem *dem = NULL;
-    rs_roam *r = NULL;
+    rs_roam *r = NULL, *rb = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { free(z); return 0; }
     if (rs_dem_create(ctx, W, H, z, &dem) != RS_OK) goto out;
     const double cs = 1.0 + (tail[3] >> 4);
@@ -129,10 +151,21 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             rs_result ru = rs_roam_update(ctx, r, &v, budget);
             REQUIRE(ru == RS_OK || ru == RS_ERR_POOL_EXHAUSTED);
             check_mesh(ctx, r, W, H, cs, (uint8_t)(tail[2] ^ q0));
+            /* a completed update at a tolerance leaves no leaf above it:
+             * its mesh refines the rebuild's (the coarsest such mesh),
+             * so every rebuild vertex is one of its vertices */
+            if (ru == RS_OK && !budget && !v.target_triangles && (rb || rs_roam_create(ctx, dem, &o, &rb) == RS_OK)
+                && rs_roam_frame(ctx, rb, &v) == RS_OK) {
+                unsigned char *a = vertex_set(ctx, r, W, H, cs), *b = vertex_set(ctx, rb, W, H, cs);
+                if (a && b)
+                    for (size_t s = 0; s < (size_t)W * H; s++) REQUIRE(a[s] || !b[s]);
+                free(a); free(b);
+            }
         }
     }
 out:
     rs_roam_free(ctx, r);
+    rs_roam_free(ctx, rb);
     rs_dem_free(ctx, dem);
     rs_ctx_free(ctx);
     free(z);

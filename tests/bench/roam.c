@@ -402,6 +402,7 @@ typedef struct drive_scene {
     float *z;           /* DEM units */
     double cs, zs;
     uint32_t target;    /* triangle target of the target-mode runs */
+    uint32_t patch;     /* patch size (0: automatic) */
 } drive_scene;
 
 /* Height (metres) at map point (x, y) metres, bilinear, clamped to the map. */
@@ -459,8 +460,10 @@ static double pct(const double *sorted, int n, double q)
 
 typedef struct drive_sum {
     double mean[4], p50[4], p99[4], max[4]; /* update, rebuild, target update, target rebuild */
+    double steady;      /* update / rebuild over frames 1.. (frame 0 builds the first mesh) */
     double worst, max_tri_ratio, max_tgt_dev, mean_tris, max_upload, mean_upload;
     int cracks, bad;
+    uint32_t patch;
 } drive_sum;
 
 static void drive_stats(const drive_frame *fr, int n, drive_sum *o)
@@ -475,6 +478,9 @@ static void drive_stats(const drive_frame *fr, int n, drive_sum *o)
         qsort(a, (size_t)n, sizeof *a, cmp_double);
         o->mean[c] = sum / n; o->p50[c] = pct(a, n, 0.5); o->p99[c] = pct(a, n, 0.99); o->max[c] = a[n - 1];
     }
+    double su = 0, sr = 0;
+    for (int f = 1; f < n; f++) { su += fr[f].upd_ms; sr += fr[f].reb_ms; }
+    o->steady = sr > 0 ? su / sr : 0;
     free(a);
 }
 
@@ -509,8 +515,11 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
     rs_dem_frame frm = { s->cs, s->zs, 0, 0 };
     if (rs_dem_create(ctx, s->W, s->H, s->z, &dem) != RS_OK || rs_dem_set_frame(ctx, dem, &frm) != RS_OK) return -1;
     rs_roam *L[4] = { NULL, NULL, NULL, NULL };
+    rs_roam_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.patch_size = s->patch;
     for (int k = 0; k < 4; k++)
-        if (rs_roam_create(ctx, dem, NULL, &L[k]) != RS_OK) { fprintf(stderr, "%s\n", rs_ctx_message(ctx)); return -1; }
+        if (rs_roam_create(ctx, dem, &ro, &L[k]) != RS_OK) { fprintf(stderr, "%s\n", rs_ctx_message(ctx)); return -1; }
     drive_frame *fr = calloc(DRIVE_FRAMES, sizeof *fr);
     float *zm = malloc((size_t)s->W * s->H * sizeof *zm);
     for (size_t i = 0; i < (size_t)s->W * s->H; i++) zm[i] = (float)((double)s->z[i] * s->zs);
@@ -519,6 +528,7 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
     rs_roam_stats st0;
     rs_roam_get_stats(L[0], &st0);
     uint32_t npatch = st0.patches_x * st0.patches_y;
+    o->patch = st0.patch_size;
     uint32_t *gens = calloc(npatch, sizeof *gens);
     for (int f = 0; f < DRIVE_FRAMES; f++) {
         rs_roam_view v;
@@ -612,13 +622,18 @@ static int run_drive(const char *outdir)
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     fprintf(csv, "scene,frame,update_ms,rebuild_ms,update_tris,rebuild_tris,update_ops,target_update_ms,"
                  "target_rebuild_ms,target_tris,worst_over_tol,upload_fraction\n");
-    drive_scene sc[2];
+    drive_scene sc[4];
+    memset(sc, 0, sizeof sc);
     sc[0].name = "fractal"; sc[0].W = sc[0].H = 1025; sc[0].cs = 1.0; sc[0].zs = DRIVE_FRACTAL_M / 65535.0; sc[0].target = 100000;
     sc[0].z = malloc((size_t)1025 * 1025 * sizeof(float));
     sc_dem_fractal(sc[0].z, 1025, 1025, 5, 0.5);
     sc_scene city;
     if (sc_city_default(&city, 1)) return 1;
     sc[1].name = "city"; sc[1].W = city.w; sc[1].H = city.h; sc[1].cs = city.cell_size; sc[1].zs = 0.01; sc[1].z = city.z; sc[1].target = 20000;
+    /* the same drives with 16-cell patches: finer upload units (and
+     * height ranges) against more roots and per-patch work */
+    sc[2] = sc[0]; sc[2].name = "fractal-p16"; sc[2].patch = 16;
+    sc[3] = sc[1]; sc[3].name = "city-p16"; sc[3].patch = 16;
     fprintf(md, "## ROAM drive: frame-coherent updates against per-frame rebuilds (tests/bench/roam.c)\n\n"
                 "%d frames at 1280x720 (60 degree vertical field of view), 1/3 m per frame (20 m/s at 60 fps) "
                 "along a 200 m S-curve through the map's middle, the eye 3 m above the ground, one core, times in thread CPU time (on a shared host wall time mostly measures preemption). Per frame: `rs_roam_update` "
@@ -628,18 +643,20 @@ static int run_drive(const char *outdir)
                 "`rc_view_worst` (true error over the distance to the nearest sample, triangles inside a 29 "
                 "degree cone) and every 25th frame for cracks by `rc_check`.\n\n"
                 "![per-frame mesh time over the drive](bench/roam_drive.png)\n\n"
-                "| scene | mean tris (rebuild) | update ms mean / p50 / p99 / max | rebuild ms mean / p50 / p99 / max "
-                "| update / rebuild (mean) | max tris update / rebuild | worst error / tolerance | cracked frames "
+                "Rows `-p16` use `patch_size` 16 (the automatic size is 64 on both maps). The steady ratio leaves out frame 0, "
+                "where the update builds the first mesh from the base mesh.\n\n"
+                "| scene | patch | mean tris (rebuild) | update ms mean / p50 / p99 / max | rebuild ms mean / p50 / p99 / max "
+                "| update / rebuild (mean) | update / rebuild, frames 1.. | max tris update / rebuild | worst error / tolerance | cracked frames "
                 "| target: update ms mean / p99 | target: rebuild ms mean / p99 | target: max deviation "
                 "| vertices re-uploaded per frame, mean / max |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|\n", DRIVE_FRAMES, DRIVE_TOL);
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n", DRIVE_FRAMES, DRIVE_TOL);
     int fail = 0;
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 4; k++) {
         drive_sum o;
         if (drive_scene_run(ctx, &sc[k], csv, &o) != 0) { fail = 1; continue; }
-        fprintf(md, "| %s %ux%u | %.0f | %.3f / %.3f / %.3f / %.3f | %.3f / %.3f / %.3f / %.3f | %.2f | %.4f | %.4f | %d "
-                    "| %.3f / %.3f | %.3f / %.3f | %.2f %% | %.1f %% / %.1f %% |\n", sc[k].name, sc[k].W, sc[k].H, o.mean_tris,
-                o.mean[0], o.p50[0], o.p99[0], o.max[0], o.mean[1], o.p50[1], o.p99[1], o.max[1], o.mean[0] / o.mean[1],
+        fprintf(md, "| %s %ux%u | %u | %.0f | %.3f / %.3f / %.3f / %.3f | %.3f / %.3f / %.3f / %.3f | %.2f | %.2f | %.4f | %.4f | %d "
+                    "| %.3f / %.3f | %.3f / %.3f | %.2f %% | %.1f %% / %.1f %% |\n", sc[k].name, sc[k].W, sc[k].H, o.patch, o.mean_tris,
+                o.mean[0], o.p50[0], o.p99[0], o.max[0], o.mean[1], o.p50[1], o.p99[1], o.max[1], o.mean[0] / o.mean[1], o.steady,
                 o.max_tri_ratio, o.worst, o.cracks, o.mean[2], o.p99[2], o.mean[3], o.p99[3], 100 * o.max_tgt_dev,
                 100 * o.mean_upload, 100 * o.max_upload);
         fflush(md);

@@ -16,10 +16,14 @@ set format y "%g"
 set ylabel "ms per frame (thread CPU)"
 set title "1025^2 fractal (500 m relief)"
 plot src("fractal") using 2:4 with lines lc rgb "#d62728" title "rebuild (rs\\_roam\\_frame)", \
-     src("fractal") using 2:3 with lines lc rgb "#1f77b4" title "update (rs\\_roam\\_update)"
+     src("fractal") using 2:3 with lines lc rgb "#1f77b4" title "update (rs\\_roam\\_update)", \
+     src("fractal-p16") using 2:4 with lines lc rgb "#ff9896" title "rebuild, 16-cell patches", \
+     src("fractal-p16") using 2:3 with lines lc rgb "#9ecae1" title "update, 16-cell patches"
 set title "city 400x350, 5 m cells"
 plot src("city") using 2:4 with lines lc rgb "#d62728" title "rebuild (rs\\_roam\\_frame)", \
-     src("city") using 2:3 with lines lc rgb "#1f77b4" title "update (rs\\_roam\\_update)"
+     src("city") using 2:3 with lines lc rgb "#1f77b4" title "update (rs\\_roam\\_update)", \
+     src("city-p16") using 2:4 with lines lc rgb "#ff9896" title "rebuild, 16-cell patches", \
+     src("city-p16") using 2:3 with lines lc rgb "#9ecae1" title "update, 16-cell patches"
 unset logscale y
 set title "triangles and split/merge operations per update"
 set ylabel "triangles"
