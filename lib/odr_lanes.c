@@ -158,6 +158,69 @@ static double curve_half(const curve *c, double s)
     return 0.5 * (bnd(c, c->left_b, s) - bnd(c, c->right_b, s));
 }
 
+static void line_point(const rs__odr_line *line, double s, double t, double *x, double *y)
+{
+    double h;
+    rs__odr_line_eval(line, s, x, y, &h);
+    *x -= t * sin(h);
+    *y += t * cos(h);
+}
+
+/* Distance from (mx, my) to edge b along the normal of the unit tangent
+ * (tx, ty), the edge point found by Newton from s: where the band's middle
+ * drifts across the road (a lane opening on one side), the edge point
+ * beside it is not the one at the same s. */
+static double edge_across(const rs__odr_line *line, const curve *c, int b, double s, double mx, double my, double tx,
+                          double ty)
+{
+    const double e = 1e-4;
+    double q = s, ex, ey;
+    for (int it = 0; it < 8; it++) { /* Newton on (E(q) - M) . tangent = 0 */
+        double e0x, e0y, e1x, e1y;
+        line_point(line, q, bnd(c, b, q), &ex, &ey);
+        line_point(line, q - e, bnd(c, b, q - e), &e0x, &e0y);
+        line_point(line, q + e, bnd(c, b, q + e), &e1x, &e1y);
+        double f = (ex - mx) * tx + (ey - my) * ty, df = ((e1x - e0x) * tx + (e1y - e0y) * ty) / (2 * e);
+        if (!(fabs(df) > 1e-9)) break;
+        double step = f / df;
+        if (step > 1) step = 1;
+        if (step < -1) step = -1;
+        q -= step;
+        if (fabs(step) < 1e-10) break;
+    }
+    line_point(line, q, bnd(c, b, q), &ex, &ey);
+    return (ex - mx) * -ty + (ey - my) * tx; /* + to the left */
+}
+
+/* The point of the band's middle at s that is as far from both edges
+ * (across the middle's own direction), and that distance. */
+static void medial(const rs__odr_line *line, const curve *c, double s, double *x, double *y, double *r)
+{
+    const double e = 1e-4;
+    double mx, my, ax, ay, bx, by;
+    line_point(line, s, curve_t(s, (void *)c), &mx, &my);
+    line_point(line, s - e, curve_t(s - e, (void *)c), &ax, &ay);
+    line_point(line, s + e, curve_t(s + e, (void *)c), &bx, &by);
+    double tx = bx - ax, ty = by - ay, tn = hypot(tx, ty);
+    *x = mx, *y = my;
+    if (!(tn > 0)) {
+        *r = fabs(curve_half(c, s));
+        return;
+    }
+    tx /= tn, ty /= tn;
+    double dl = edge_across(line, c, c->left_b, s, mx, my, tx, ty), dr = edge_across(line, c, c->right_b, s, mx, my, tx, ty);
+    double shift = 0.5 * (dl + dr); /* dl > 0 > dr: the middle moves towards the farther edge */
+    *x = mx - shift * ty, *y = my + shift * tx;
+    *r = 0.5 * (dl - dr);
+}
+
+static double half_across(const rs__odr_line *line, const curve *c, double s)
+{
+    double x, y, r;
+    medial(line, c, s, &x, &y, &r);
+    return r;
+}
+
 /* ---- conversion state ------------------------------------------------------------ */
 
 typedef struct style_key {
@@ -175,8 +238,11 @@ typedef struct conv {
     double ch, sh; /* header offset rotation */
     rs__odr_line line;
     const rs__odr_road *road;
+    size_t sec_idx;   /* the lane section being drawn ((size_t)-1: objects), for record names */
     double *bp; /* breakpoints scratch */
     size_t capbp;
+    double *rr; /* half width per sample of a surface band */
+    size_t caprr;
     double *xs; /* sample scratch: x, y, s */
     size_t nxs, capxs;
 } conv;
@@ -280,15 +346,17 @@ static rs_result sample_curve(conv *C, curve *cv, double a, double b)
 }
 
 /* One record of points xs[i0..i1] (x, y, s). */
-static void emit_record(conv *C, const char *kind, double width, const char *style, size_t i0, size_t i1)
+static void emit_record(conv *C, const char *kind, double width, const char *style, double dt, size_t i0, size_t i1)
 {
     tbuf *b = &C->roads;
     tb_put(b, "road ", 5);
     char name[600];
-    snprintf(name, sizeof name, "%.500s:%s", C->road->id, kind);
+    if (C->sec_idx == (size_t)-1) snprintf(name, sizeof name, "%.500s/obj/%s", C->road->id, kind);
+    else snprintf(name, sizeof name, "%.500s/%zu/%s", C->road->id, C->sec_idx, kind);
     tb_quoted(b, name);
     tb_printf(b, " width %.15g", width);
     if (style) tb_printf(b, " style=%s", style);
+    if (dt != 0) tb_printf(b, " t_offset=%.15g", dt);
     tb_put(b, " junction_cuts=no\n", 18);
     for (size_t i = i0; i <= i1; i++) {
         double x = C->xs[3 * i], y = C->xs[3 * i + 1];
@@ -317,7 +385,7 @@ static rs_result densify_width(conv *C, curve *cv)
     size_t i = 0;
     while (i + 1 < C->nxs) {
         double sa = C->xs[3 * i + 2], sb = C->xs[3 * i + 5];
-        double ha = curve_half(cv, sa), hb = curve_half(cv, sb), hm = curve_half(cv, 0.5 * (sa + sb));
+        double ha = half_across(&C->line, cv, sa), hb = half_across(&C->line, cv, sb), hm = half_across(&C->line, cv, 0.5 * (sa + sb));
         double lo = fmin(ha, fmin(hb, hm)), hi = fmax(ha, fmax(hb, hm));
         if (hi - lo <= TOL_W || sb - sa < 1e-4) {
             i++;
@@ -351,21 +419,41 @@ static rs_result band(conv *C, const rs__odr_section *sec, double a, double b, i
     rs_result r = sample_curve(C, &cv, a, b);
     if (!r) r = densify_width(C, &cv);
     if (r) return r;
+    /* the middle made medial, and its half width per sample */
+    if (C->caprr < C->nxs) {
+        double *q = rs__realloc(C->ctx, C->rr, C->nxs * sizeof *q);
+        if (!q) return nomem(C);
+        C->rr = q;
+        C->caprr = C->nxs;
+    }
+    for (size_t k = 0; k < C->nxs; k++)
+        medial(&C->line, &cv, C->xs[3 * k + 2], &C->xs[3 * k], &C->xs[3 * k + 1], &C->rr[k]);
     const char *style = kind == RS__ODR_SURF_SIDEWALK ? "odr-sidewalk" : kind == RS__ODR_SURF_BIKE ? "odr-bike" : NULL;
-    const char *what = kind == RS__ODR_SURF_SIDEWALK ? "sidewalk" : kind == RS__ODR_SURF_BIKE ? "bike" : "surface";
+    char what[64];
+    snprintf(what, sizeof what, "%s[%d,%d]",
+             kind == RS__ODR_SURF_SIDEWALK ? "sidewalk" : kind == RS__ODR_SURF_BIKE ? "bike" : "surface", left_b, right_b);
     size_t i = 0;
     while (i + 1 < C->nxs) {
-        double h0 = curve_half(&cv, C->xs[3 * i + 2]), h1 = curve_half(&cv, C->xs[3 * i + 5]);
-        double lo = fmin(h0, h1), hi = fmax(h0, h1);
+        double lo = C->rr[i], hi = C->rr[i];
         size_t j = i + 1;
+        lo = fmin(lo, C->rr[j]);
+        hi = fmax(hi, C->rr[j]);
         while (j + 1 < C->nxs) {
-            double hn = curve_half(&cv, C->xs[3 * (j + 1) + 2]);
-            if (fmax(hi, hn) - fmin(lo, hn) > 2 * TOL_W) break;
-            lo = fmin(lo, hn);
-            hi = fmax(hi, hn);
+            double rn = C->rr[j + 1];
+            if (fmax(hi, rn) - fmin(lo, rn) > 2 * TOL_W) break;
+            lo = fmin(lo, rn);
+            hi = fmax(hi, rn);
             j++;
         }
-        if (hi > 1e-3) emit_record(C, what, lo + hi, style, i, j);
+        /* a round cap where the band narrows beyond it (or widens before
+         * it) bulges m^2 r / 2 past the true edge (m: the half width's
+         * slope there); the piece gives up half of that */
+        double sa = C->xs[3 * i + 2], sb = C->xs[3 * j + 2], e = 1e-3;
+        double m_end = (half_across(&C->line, &cv, sb) - half_across(&C->line, &cv, sb - e)) / e;
+        double m_start = (half_across(&C->line, &cv, sa + e) - half_across(&C->line, &cv, sa)) / e;
+        double m = fmax(fmax(-m_end, 0), fmax(m_start, 0)), rad = 0.5 * (lo + hi);
+        rad -= 0.25 * m * m * rad;
+        if (rad > 1e-3) emit_record(C, what, 2 * rad, style, 0, i, j);
         i = j;
     }
     return check_points(C);
@@ -482,7 +570,7 @@ static rs_result draw_line(conv *C, const rs__odr_section *sec, int bid, const m
     if (!(l->on > 0) || !(l->off > 0)) {
         r = sample_curve(C, &cv, a, b);
         if (r) return r;
-        if (C->nxs >= 2) emit_record(C, what, l->width, sname, 0, C->nxs - 1);
+        if (C->nxs >= 2) emit_record(C, what, l->width, sname, l->dt, 0, C->nxs - 1);
         return check_points(C);
     }
     double P = l->on + l->off;
@@ -496,7 +584,7 @@ static rs_result draw_line(conv *C, const rs__odr_section *sec, int bid, const m
         if (!(s1 - s0 > 1e-6)) continue;
         r = sample_curve(C, &cv, s0, s1);
         if (r) return r;
-        if (C->nxs >= 2) emit_record(C, what, l->width, sname, 0, C->nxs - 1);
+        if (C->nxs >= 2) emit_record(C, what, l->width, sname, l->dt, 0, C->nxs - 1);
         r = check_points(C);
         if (r) return r;
     }
@@ -516,7 +604,7 @@ static rs_result section_marks(conv *C, const rs__odr_section *sec, double a, do
             mline ls[16];
             size_t n = mark_lines(doc, m, ln->id > 0 ? 1 : ln->id < 0 ? -1 : 0, ls, 16);
             char what[48];
-            snprintf(what, sizeof what, "lane%d:mark", ln->id);
+            snprintf(what, sizeof what, "lane%d", ln->id);
             for (size_t i = 0; i < n; i++) {
                 rs_result r = draw_line(C, sec, ln->id, &ls[i], ma, mb, what);
                 if (r) return r;
@@ -595,7 +683,7 @@ static rs_result road_objects(conv *C)
             C->xs[0] = x - t0 * sin(h), C->xs[1] = y + t0 * cos(h), C->xs[2] = 0;
             C->xs[3] = x - t1 * sin(h), C->xs[4] = y + t1 * cos(h), C->xs[5] = 0;
             C->nxs = 2;
-            emit_record(C, "stop_line", w, sname, 0, 1);
+            emit_record(C, "stop_line", w, sname, 0, 0, 1);
             r = check_points(C);
             if (r) return r;
         }
@@ -683,9 +771,12 @@ rs_result rs__odr_to_text(rs_ctx *ctx, const rs__odr_doc *doc, size_t max_points
             double a = S->s, b = k + 1 < C.road->nsec ? doc->sections[C.road->sec0 + k + 1].s : C.road->length;
             if (b > C.road->length) b = C.road->length;
             if (!(b - a > 1e-9)) continue;
+            C.sec_idx = k;
             r = section_surfaces(&C, S, a, b);
+            C.sec_idx = k;
             if (!r) r = section_marks(&C, S, a, b);
         }
+        C.sec_idx = (size_t)-1;
         if (!r) r = road_objects(&C);
     }
     tbuf out = { ctx, NULL, 0, 0, 0 };
@@ -710,6 +801,7 @@ rs_result rs__odr_to_text(rs_ctx *ctx, const rs__odr_doc *doc, size_t max_points
     rs__free(ctx, C.sk);
     rs__free(ctx, C.bp);
     rs__free(ctx, C.xs);
+    rs__free(ctx, C.rr);
     if (r) {
         rs__free(ctx, out.p);
         return r;
