@@ -24,6 +24,7 @@ import sys
 import xml.etree.ElementTree as ET
 
 TOL = 0.02
+OFFSET = (0.0, 0.0, 0.0)
 STEP = 0.01  # integration step, metres
 
 
@@ -173,7 +174,9 @@ class Road:
 
     def point(self, s, t):
         x, y, h = self.ref(s)
-        return x - t * math.sin(h), y + t * math.cos(h)
+        x, y = x - t * math.sin(h), y + t * math.cos(h)
+        ox, oy, oh = OFFSET  # header <offset>: local to georeferenced
+        return ox + math.cos(oh) * x - math.sin(oh) * y, oy + math.sin(oh) * x + math.cos(oh) * y
 
 
 def seg_dist(px, py, ax, ay, bx, by):
@@ -227,7 +230,11 @@ def nearest_s(road, t_of, p, s0, s1):
 
 def main():
     xodr, txt = sys.argv[1], sys.argv[2]
+    global OFFSET
     root = ET.parse(xodr).getroot()
+    off = root.find("header/offset")
+    if off is not None:
+        OFFSET = (fl(off, "x", 0.0), fl(off, "y", 0.0), fl(off, "hdg", 0.0))
     roads = {r.get("id"): Road(r) for r in root.findall("road")}
     recs = read_text(txt)
     fails, worst_mark, worst_surf, nmark, nsurf, ndash = 0, 0.0, 0.0, 0, 0, 0
