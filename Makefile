@@ -325,6 +325,11 @@ demo: deps
 	@$(MAKE) --no-print-directory all
 	$(CLI) --cell-size 5 --z-scale 0.01 --stats $(BUILD)/demo-stats.json docs/examples/dem.pgm docs/examples/roads.txt out.png
 	$(CLI) --cell-size 2 --z-scale 0.01 --texels 20 docs/examples/junction-dem.pgm docs/examples/junction.txt junction.png
+	@if [ -f $(ODR_MOD) ]; then \
+	  echo "$(CLI) --cell-size 2 --origin 0,100 --texels 20 --z-scale 0.01 docs/examples/crossing-dem.pgm docs/examples/crossing.xodr crossing.png"; \
+	  $(CLI) --cell-size 2 --origin 0,100 --texels 20 --z-scale 0.01 docs/examples/crossing-dem.pgm docs/examples/crossing.xodr crossing.png || exit 1; \
+	  echo "demo: wrote crossing.png (OpenDRIVE, docs/opendrive.md)"; \
+	else echo "demo: SKIP crossing.xodr: OpenDRIVE needs expat (make deps installs libexpat1-dev; then rebuild)"; fi
 	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json) and junction.png (road markings at 0.1 m per pixel)"
 
 # --- benchmarks ---------------------------------------------------------------
