@@ -693,6 +693,17 @@ static rs_result road_objects(conv *C)
 
 /* ---- checks and the driver ------------------------------------------------------------ */
 
+/* A bound of |p| over [p.s0, end]: within 1000 m (the road text's line
+ * offsets), so no boundary runs off to where sampling it costs millions
+ * of points. */
+static int poly_bounded(const rs__odr_poly *p, double end)
+{
+    double L = end - p->s0;
+    if (!(L >= 0)) L = 0;
+    double b = fabs(p->a) + L * (fabs(p->b) + L * (fabs(p->c) + L * fabs(p->d)));
+    return b <= 1000;
+}
+
 static rs_result road_check(conv *C)
 {
     const rs__odr_doc *doc = C->doc;
@@ -722,10 +733,17 @@ static rs_result road_check(conv *C)
                             "previous section", doc->name, S->xml_line, R->id, S->s, R->length);
         for (size_t k = 0; k < S->nlane; k++) {
             const rs__odr_lane *l = &doc->lanes[S->lane0 + k];
-            for (size_t w = 1; w < l->nwidth; w++)
-                if (!(doc->polys[l->width0 + w].s0 >= doc->polys[l->width0 + w - 1].s0))
+            double send = i + 1 < R->nsec ? doc->sections[R->sec0 + i + 1].s : R->length;
+            for (size_t w = 0; w < l->nwidth; w++) {
+                if (w && !(doc->polys[l->width0 + w].s0 >= doc->polys[l->width0 + w - 1].s0))
                     return rs__fail(C->ctx, RS_ERR_PARSE, "%s line %lu: road '%s' lane %d: width sOffsets must not "
                                     "decrease", doc->name, l->xml_line, R->id, l->id);
+                double end = w + 1 < l->nwidth ? doc->polys[l->width0 + w + 1].s0 : send;
+                if (!poly_bounded(&doc->polys[l->width0 + w], end))
+                    return rs__fail(C->ctx, RS_ERR_PARSE, "%s line %lu: road '%s' lane %d: width record %zu may reach "
+                                    "beyond 1000 m (|a| + |b| L + |c| L^2 + |d| L^3 over its %.15g m)", doc->name,
+                                    l->xml_line, R->id, l->id, w + 1, end - doc->polys[l->width0 + w].s0);
+            }
             for (size_t m = 1; m < l->nmark; m++)
                 if (!(doc->marks[l->mark0 + m].s >= doc->marks[l->mark0 + m - 1].s))
                     return rs__fail(C->ctx, RS_ERR_PARSE, "%s line %lu: road '%s' lane %d: roadMark sOffsets must not "
@@ -741,10 +759,15 @@ static rs_result road_check(conv *C)
             }
         }
     }
-    for (size_t i = 1; i < R->noff; i++)
-        if (!(doc->polys[R->off0 + i].s0 >= doc->polys[R->off0 + i - 1].s0))
+    for (size_t i = 0; i < R->noff; i++) {
+        if (i && !(doc->polys[R->off0 + i].s0 >= doc->polys[R->off0 + i - 1].s0))
             return rs__fail(C->ctx, RS_ERR_PARSE, "%s line %lu: road '%s': laneOffset s must not decrease", doc->name,
                             R->xml_line, R->id);
+        double end = i + 1 < R->noff ? doc->polys[R->off0 + i + 1].s0 : R->length;
+        if (!poly_bounded(&doc->polys[R->off0 + i], end))
+            return rs__fail(C->ctx, RS_ERR_PARSE, "%s line %lu: road '%s': laneOffset %zu may reach beyond 1000 m",
+                            doc->name, R->xml_line, R->id, i + 1);
+    }
     return RS_OK;
 }
 
