@@ -214,13 +214,6 @@ static void medial(const rs__odr_line *line, const curve *c, double s, double *x
     *r = 0.5 * (dl - dr);
 }
 
-static double half_across(const rs__odr_line *line, const curve *c, double s)
-{
-    double x, y, r;
-    medial(line, c, s, &x, &y, &r);
-    return r;
-}
-
 /* ---- conversion state ------------------------------------------------------------ */
 
 typedef struct style_key {
@@ -385,7 +378,7 @@ static rs_result densify_width(conv *C, curve *cv)
     size_t i = 0;
     while (i + 1 < C->nxs) {
         double sa = C->xs[3 * i + 2], sb = C->xs[3 * i + 5];
-        double ha = half_across(&C->line, cv, sa), hb = half_across(&C->line, cv, sb), hm = half_across(&C->line, cv, 0.5 * (sa + sb));
+        double ha = curve_half(cv, sa), hb = curve_half(cv, sb), hm = curve_half(cv, 0.5 * (sa + sb));
         double lo = fmin(ha, fmin(hb, hm)), hi = fmax(ha, fmax(hb, hm));
         if (hi - lo <= TOL_W || sb - sa < 1e-4) {
             i++;
@@ -449,8 +442,8 @@ static rs_result band(conv *C, const rs__odr_section *sec, double a, double b, i
          * it) bulges m^2 r / 2 past the true edge (m: the half width's
          * slope there); the piece gives up half of that */
         double sa = C->xs[3 * i + 2], sb = C->xs[3 * j + 2], e = 1e-3;
-        double m_end = (half_across(&C->line, &cv, sb) - half_across(&C->line, &cv, sb - e)) / e;
-        double m_start = (half_across(&C->line, &cv, sa + e) - half_across(&C->line, &cv, sa)) / e;
+        double m_end = (curve_half(&cv, sb) - curve_half(&cv, sb - e)) / e;
+        double m_start = (curve_half(&cv, sa + e) - curve_half(&cv, sa)) / e;
         double m = fmax(fmax(-m_end, 0), fmax(m_start, 0)), rad = 0.5 * (lo + hi);
         rad -= 0.25 * m * m * rad;
         if (rad > 1e-3) emit_record(C, what, 2 * rad, style, 0, i, j);
