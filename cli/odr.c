@@ -276,18 +276,27 @@ static int poly_attrs(rd *R, const char **a, const char *what, const char *sname
     return 0;
 }
 
+/* Appends a polynomial to the run *first, *count (a road's laneOffsets, a
+ * lane's widths), which must stand together in doc.polys. */
+static void add_poly(rd *R, const char **a, const char *what, const char *sname, double base, size_t *first,
+                     size_t *count)
+{
+    if (*count && *first + *count != R->doc.npolys) {
+        fail(R, "<%s> records must stand together (laneOffsets before the laneSections, a lane's widths in a row)",
+             what);
+        return;
+    }
+    rs__odr_poly *p = new_poly(R, what);
+    if (!p || poly_attrs(R, a, what, sname, base, p)) return;
+    if (!*count) *first = R->doc.npolys;
+    R->doc.npolys++;
+    (*count)++;
+}
+
 static void start_laneoffset(rd *R, const char **a)
 {
     rs__odr_road *r = cur_road(R);
-    if (r->noff && r->off0 + r->noff != R->doc.npolys) {
-        fail(R, "<laneOffset> after a <laneSection> (write the laneOffsets first)");
-        return;
-    }
-    rs__odr_poly *p = new_poly(R, "laneOffset");
-    if (!p || poly_attrs(R, a, "laneOffset", "s", 0, p)) return;
-    if (!r->noff) r->off0 = R->doc.npolys;
-    R->doc.npolys++;
-    r->noff++;
+    add_poly(R, a, "laneOffset", "s", 0, &r->off0, &r->noff);
 }
 
 static void start_section(rd *R, const char **a)
@@ -352,15 +361,7 @@ static rs__odr_lane *cur_lane(rd *R)
 static void start_width(rd *R, const char **a)
 {
     rs__odr_lane *l = cur_lane(R);
-    if (l->nwidth && l->width0 + l->nwidth != R->doc.npolys) {
-        fail(R, "<width> records of a lane must stand together");
-        return;
-    }
-    rs__odr_poly *p = new_poly(R, "width");
-    if (!p || poly_attrs(R, a, "width", "sOffset", R->doc.sections[R->doc.nsections - 1].s, p)) return;
-    if (!l->nwidth) l->width0 = R->doc.npolys;
-    R->doc.npolys++;
-    l->nwidth++;
+    add_poly(R, a, "width", "sOffset", R->doc.sections[R->doc.nsections - 1].s, &l->width0, &l->nwidth);
 }
 
 static void start_roadmark(rd *R, const char **a)
