@@ -38,6 +38,20 @@ R="--cell-size 2 --origin 0,100 --texels 20 --z-scale 0.01"
 "$BIN" --quiet --cell-size 2 "$T/dem.pgm" "$D/junction.xodr" "$T/x.png" 2>"$T/e" && bad "no --origin accepted" ||
     { grep -q "origin" "$T/e" && ok || bad "no --origin: $(cat "$T/e")"; }
 
+# the geoReference (a PROJ string, UTM 32N) on a GeoTIFF DEM in EPSG:32632: the road lands where its
+# header offset puts it (the same road weight as with --origin on a PGM; the asphalt follows the world grid)
+if [ -f "$B/roadsplat-gdal.so" ] && command -v gdal_translate >/dev/null 2>&1; then
+    python3 -c "
+import sys; open(sys.argv[1], 'wb').write(b'P5 61 41 255\n' + bytes([128]) * (61 * 41))" "$T/g.pgm"
+    gdal_translate -q -of GTiff -a_srs EPSG:32632 -a_ullr 499989 5400061 500111 5399979 "$T/g.pgm" "$T/g.tif" &&
+        "$BIN" --quiet --texels 10 --z-scale 0.01 --weight-out "$T/gw.pgm" "$T/g.tif" "$D/pattern.xodr" "$T/g.png" &&
+        "$BIN" --quiet --texels 10 --z-scale 0.01 --cell-size 2 --origin 499990,5400060 --weight-out "$T/pw.pgm" \
+            "$T/g.pgm" "$D/pattern.xodr" "$T/p.png" &&
+        cmp -s "$T/gw.pgm" "$T/pw.pgm" && ok || bad "pattern.xodr on a GeoTIFF in EPSG:32632: road weight differs from --origin on a PGM"
+else
+    echo "SKIP cli_odr: georeferenced DEM (no GDAL module or gdal_translate)"
+fi
+
 # bad input: one line "FILE line N: ...", exit 1, no output
 bad_case() { # name, expected text, xml
     printf '%s' "$3" >"$T/$1.xodr"
