@@ -87,6 +87,17 @@ bad_case manylines 'more than 16 <line>s' "$H<road id=\"1\" length=\"10\">$G<lan
 # huge counts: a 10^7 m road of 1 mm dots passes the point limit
 bad_case huge 'more than 10000000' "$H<road id=\"1\" length=\"1e7\"><planView><geometry s=\"0\" x=\"0\" y=\"0\" hdg=\"0\" length=\"1e7\"><line/></geometry></planView><lanes><laneSection s=\"0\">
 <center><lane id=\"0\" type=\"none\"><roadMark sOffset=\"0\" type=\"custom\"><type name=\"x\"><line length=\"0.5\" space=\"0.5\" tOffset=\"0\" sOffset=\"0\"/></type></roadMark></lane></center></laneSection></lanes></road></OpenDRIVE>"
+# huge counts: 10^6 + 1 laneOffset records (45 MB)
+python3 -c "
+import sys
+with open(sys.argv[1], 'w') as f:
+    f.write('<OpenDRIVE><header/><road id=\"1\" length=\"10\"><lanes>\n')
+    f.write('<laneOffset s=\"0\" a=\"0\" b=\"0\" c=\"0\" d=\"0\"/>\n' * 1000001)
+    f.write('</lanes></road></OpenDRIVE>\n')" "$T/many.xodr"
+"$BIN" convert "$T/many.xodr" "$T/many.out" 2>"$T/e"
+[ $? = 1 ] && grep -q "many.xodr line 1000002: more than 1000000 <laneOffset> elements" "$T/e" && [ ! -e "$T/many.out" ] && ok ||
+    bad "10^6 + 1 laneOffsets: $(cat "$T/e")"
+rm -f "$T/many.xodr"
 # entity expansion ("billion laughs") is refused by expat
 bad_case laughs 'XML: \|longer than 4096' '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;"><!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;"><!ENTITY d "&c;&c;&c;&c;&c;&c;&c;&c;&c;&c;"><!ENTITY e "&d;&d;&d;&d;&d;&d;&d;&d;&d;&d;"><!ENTITY f "&e;&e;&e;&e;&e;&e;&e;&e;&e;&e;"><!ENTITY g "&f;&f;&f;&f;&f;&f;&f;&f;&f;&f;"><!ENTITY h "&g;&g;&g;&g;&g;&g;&g;&g;&g;&g;">]><OpenDRIVE><header><geoReference>&h;</geoReference></header></OpenDRIVE>'
 
