@@ -566,7 +566,7 @@ static void XMLCALL on_end(void *user, const XML_Char *n)
         fail(R, "<geometry> has none of line, arc, spiral, poly3, paramPoly3");
     if (e == E_SECTION) { /* lanes left to right */
         rs__odr_section *S = &R->doc.sections[R->doc.nsections - 1];
-        qsort(R->doc.lanes + S->lane0, S->nlane, sizeof *R->doc.lanes, cmp_lane_desc);
+        if (S->nlane > 1) qsort(R->doc.lanes + S->lane0, S->nlane, sizeof *R->doc.lanes, cmp_lane_desc);
     }
 }
 
@@ -655,6 +655,14 @@ int cli_odr_text(const char *data, size_t n, const char *shown, size_t max_point
         snprintf(err, nerr, "%s: no <road> in this OpenDRIVE file", shown);
         R.failed = 1;
     }
+    /* the library indexes every array (a NULL one, even by 0, is undefined) */
+    void **arrs[] = { (void **)&R.doc.roads, (void **)&R.doc.geoms, (void **)&R.doc.polys, (void **)&R.doc.sections,
+                      (void **)&R.doc.lanes, (void **)&R.doc.marks, (void **)&R.doc.lines, (void **)&R.doc.objects };
+    for (size_t k = 0; k < sizeof arrs / sizeof arrs[0] && !R.failed; k++)
+        if (!*arrs[k] && !(*arrs[k] = malloc(64))) {
+            snprintf(err, nerr, "%s: out of memory", shown);
+            R.failed = 1;
+        }
     if (!R.failed) {
         R.doc.geo_reference = clean_georef(R.georef);
         rs_ctx *ctx = NULL;

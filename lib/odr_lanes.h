@@ -6,7 +6,7 @@
  * lanes' surfaces and road marks exactly (rs__odr_to_text), so the core
  * keeps depending on libc and libm only. Every s below is the road's own
  * arc length (absolute, not relative to a lane section). Arrays are owned
- * by whoever filled the document. */
+ * by whoever filled the document and are never NULL (also when empty). */
 #ifndef RS_ODR_LANES_H
 #define RS_ODR_LANES_H
 #include "odr_geom.h"

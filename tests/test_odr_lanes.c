@@ -24,6 +24,8 @@ typedef struct fixture {
     rs__odr_section secs[2];
     rs__odr_lane lanes[6];
     rs__odr_mark marks[3];
+    rs__odr_mark_line lines[1]; /* none used: the arrays are never NULL */
+    rs__odr_object objects[1];
 } fixture;
 
 static void fixture_init(fixture *F)
@@ -62,6 +64,8 @@ static void fixture_init(fixture *F)
     F->doc.nlanes = 6;
     F->doc.marks = F->marks;
     F->doc.nmarks = 3;
+    F->doc.lines = F->lines;
+    F->doc.objects = F->objects;
 }
 
 static void test_boundaries(void)
