@@ -89,6 +89,15 @@ MESHOPT_DEF  = -DRS_WITH_MESHOPT
 MESHOPT_LIBS = -lmeshoptimizer
 endif
 
+# Optional OpenDRIVE reader (module roadsplat-odr.so, cli/odr.c): expat, a
+# small streaming XML parser (docs/opendrive.md says why not libxml2);
+# auto-detected, or forced with WITH_EXPAT=1/0.
+WITH_EXPAT ?= $(shell $(PKG_CONFIG) --exists expat 2>/dev/null && echo 1 || echo 0)
+ifeq ($(WITH_EXPAT),1)
+EXPAT_DEF  = -DRS_WITH_EXPAT
+EXPAT_LIBS = $(or $(shell $(PKG_CONFIG) --libs expat 2>/dev/null),-lexpat)
+endif
+
 LIB_SRC   := $(sort $(wildcard lib/*.c))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
@@ -98,7 +107,8 @@ RENDER_SRC := cli/render.c cli/render_gl.c cli/render_shader.c cli/render_vt.c
 GDAL_SRC  := cli/gdal.c cli/mercator_gdal.c
 MBTILES_SRC := cli/mbtiles.c
 GLTF_SRC  := cli/gltf.c
-CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC) $(MBTILES_SRC) $(GLTF_SRC),$(sort $(wildcard cli/*.c)))
+ODR_SRC   := cli/odr.c
+CLI_CSRC  := $(filter-out $(RENDER_SRC) $(GDAL_SRC) $(MBTILES_SRC) $(GLTF_SRC) $(ODR_SRC),$(sort $(wildcard cli/*.c)))
 CLI_OBJ   := $(CLI_CSRC:%.c=$(BUILD)/%.o)
 RENDER_OBJ := $(RENDER_SRC:%.c=$(BUILD)/%.o)
 IMAGE_OBJ := $(BUILD)/cli/imageio.o
@@ -107,13 +117,18 @@ RENDER_MOD := $(BUILD)/roadsplat-render.so
 GDAL_MOD  := $(BUILD)/roadsplat-gdal.so
 MBTILES_MOD := $(BUILD)/roadsplat-mbtiles.so
 GLTF_MOD  := $(BUILD)/roadsplat-gltf.so
+ODR_MOD   := $(BUILD)/roadsplat-odr.so
 MODULES   := $(IMAGE_MOD) $(if $(filter 1,$(WITH_OSMESA)),$(RENDER_MOD)) $(if $(filter 1,$(WITH_GDAL)),$(GDAL_MOD)) \
-             $(if $(filter 1,$(WITH_SQLITE)),$(MBTILES_MOD)) $(if $(filter 1,$(WITH_MESHOPT)),$(GLTF_MOD))
+             $(if $(filter 1,$(WITH_SQLITE)),$(MBTILES_MOD)) $(if $(filter 1,$(WITH_MESHOPT)),$(GLTF_MOD)) \
+             $(if $(filter 1,$(WITH_EXPAT)),$(ODR_MOD))
 TEST_SRC  := $(sort $(wildcard tests/test_*.c))
 TEST_BIN  := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TESTLIB_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
 TESTLIB_OBJ := $(TESTLIB_SRC:%.c=$(BUILD)/%.o)
 FUZZ_TARGETS := $(notdir $(patsubst %/,%,$(sort $(dir $(wildcard fuzz/*/fuzz.c)))))
+ifneq ($(WITH_EXPAT),1)
+FUZZ_TARGETS := $(filter-out odr,$(FUZZ_TARGETS))
+endif
 FUZZ_REPLAY  := $(FUZZ_TARGETS:%=$(BUILD)/fuzz/%-replay)
 BENCH_SRC := $(sort $(wildcard tests/bench/*.c))
 BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/bench/%)
@@ -124,7 +139,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev libjs-leaflet
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev libjs-leaflet libexpat1-dev
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -158,7 +173,7 @@ help:
 	@echo "  make install-lib   install only the library, header and roadsplat.pc (no OpenImageIO needed)"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 WITH_MESHOPT=0|1 FUZZ_SECONDS"
+	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 WITH_MESHOPT=0|1 WITH_EXPAT=0|1 FUZZ_SECONDS"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
@@ -222,7 +237,7 @@ $(PCFILE): $(CONFIG)
 # CLI symbols keep default visibility: the executable exports them
 # (--export-dynamic) to the modules, which call back into it. The whole
 # library is linked in, since the render module uses parts the rest does not.
-CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF) $(SQLITE_DEF) $(MESHOPT_DEF)
+CLI_CFLAGS = $(ALL_CFLAGS) -fvisibility=default -D_POSIX_C_SOURCE=200809L $(OSMESA_CFLAGS) $(DEFLATE_CFLAGS) $(GDAL_DEF) $(SQLITE_DEF) $(MESHOPT_DEF) $(EXPAT_DEF)
 $(BUILD)/cli/%.o: cli/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CLI_CFLAGS) -c $< -o $@
@@ -258,6 +273,11 @@ $(MBTILES_MOD): $(BUILD)/cli/mbtiles.o
 $(GLTF_MOD): $(BUILD)/cli/gltf.o
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(MESHOPT_LIBS) $(LDLIBS_CORE)
 
+# The OpenDRIVE module carries the library parts it uses (lib/odr_*.c and
+# what they call), kept local to it (--exclude-libs).
+$(ODR_MOD): $(BUILD)/cli/odr.o $(STATIC_LIB)
+	$(CC) -shared $(SAN) $(LDFLAGS) -Wl,--exclude-libs,ALL -o $@ $(BUILD)/cli/odr.o $(STATIC_LIB) $(EXPAT_LIBS) $(LDLIBS_CORE)
+
 # --- tests --------------------------------------------------------------------
 $(BUILD)/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
@@ -272,6 +292,10 @@ $(BUILD)/fuzz/%.o: fuzz/%.c
 
 $(BUILD)/fuzz/%-replay: $(BUILD)/fuzz/%/fuzz.o $(BUILD)/fuzz/replay_main.o $(STATIC_LIB)
 	$(CC) $(SAN) $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
+
+# The odr target reads OpenDRIVE XML with the module's reader (cli/odr.c) and expat.
+$(BUILD)/fuzz/odr-replay: $(BUILD)/fuzz/odr/fuzz.o $(BUILD)/fuzz/replay_main.o $(BUILD)/cli/odr.o $(STATIC_LIB)
+	$(CC) $(SAN) $(LDFLAGS) -o $@ $^ $(EXPAT_LIBS) $(LDLIBS_CORE)
 
 # The demimage target drives the CLI's DEM loader: it also needs the CLI
 # objects that hold it and OpenImageIO, linked as C++.
@@ -301,6 +325,11 @@ demo: deps
 	@$(MAKE) --no-print-directory all
 	$(CLI) --cell-size 5 --z-scale 0.01 --stats $(BUILD)/demo-stats.json docs/examples/dem.pgm docs/examples/roads.txt out.png
 	$(CLI) --cell-size 2 --z-scale 0.01 --texels 20 docs/examples/junction-dem.pgm docs/examples/junction.txt junction.png
+	@if [ -f $(ODR_MOD) ]; then \
+	  echo "$(CLI) --cell-size 2 --origin 0,100 --texels 20 --z-scale 0.01 docs/examples/crossing-dem.pgm docs/examples/crossing.xodr crossing.png"; \
+	  $(CLI) --cell-size 2 --origin 0,100 --texels 20 --z-scale 0.01 docs/examples/crossing-dem.pgm docs/examples/crossing.xodr crossing.png || exit 1; \
+	  echo "demo: wrote crossing.png (OpenDRIVE, docs/opendrive.md)"; \
+	else echo "demo: SKIP crossing.xodr: OpenDRIVE needs expat (make deps installs libexpat1-dev; then rebuild)"; fi
 	@echo "demo: wrote out.png (stats in $(BUILD)/demo-stats.json) and junction.png (road markings at 0.1 m per pixel)"
 
 # --- benchmarks ---------------------------------------------------------------
@@ -330,7 +359,7 @@ FUZZ_SECONDS ?= 30
 FUZZ_OBJ    := $(BUILD)/fuzz-obj
 fuzz:
 	@mkdir -p $(BUILD)/fuzz-bin $(FUZZ_OBJ)
-	@for t in $(filter-out demimage,$(FUZZ_TARGETS)); do \
+	@for t in $(filter-out demimage odr,$(FUZZ_TARGETS)); do \
 	  echo "fuzz: $$t"; \
 	  case " $(FUZZ_NOCMP) " in *" $$t "*) nocmp="$(NOCMP_FLAG)" ;; *) nocmp= ;; esac; \
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $$nocmp -Iinclude fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
@@ -342,6 +371,9 @@ fuzz:
 	done; \
 	$(FUZZ_CXX) -std=c++17 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -Iinclude $(OIIO_CFLAGS) -c cli/imageio.cpp -o $(FUZZ_OBJ)/cli_imageio.cpp.o || exit 1; \
 	$(FUZZ_CXX) $(FUZZ_FLAGS) -o $(BUILD)/fuzz-bin/demimage $(FUZZ_OBJ)/*.o $(OIIO_LIBS) -lm || exit 1
+	@if [ "$(WITH_EXPAT)" = 1 ]; then echo "fuzz: odr (OpenDRIVE reader + expat)"; \
+	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -D_POSIX_C_SOURCE=200809L -Iinclude fuzz/odr/fuzz.c cli/odr.c $(LIB_SRC) $(EXPAT_LIBS) -lm \
+	    -o $(BUILD)/fuzz-bin/odr || exit 1; fi
 	@echo "fuzz: binaries in $(BUILD)/fuzz-bin/ (run e.g. fuzz/run.sh pgm 60, with BUILD=$(BUILD))"
 
 fuzz-smoke: fuzz
@@ -379,7 +411,7 @@ uninstall:
 	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1 \
 	  $(DESTDIR)$(MODULEDIR)/roadsplat-image.so $(DESTDIR)$(MODULEDIR)/roadsplat-render.so \
 	  $(DESTDIR)$(MODULEDIR)/roadsplat-gdal.so $(DESTDIR)$(MODULEDIR)/roadsplat-mbtiles.so \
-	  $(DESTDIR)$(MODULEDIR)/roadsplat-gltf.so
+	  $(DESTDIR)$(MODULEDIR)/roadsplat-gltf.so $(DESTDIR)$(MODULEDIR)/roadsplat-odr.so
 	-rmdir $(DESTDIR)$(MODULEDIR) 2>/dev/null
 
 clean:

@@ -4,6 +4,7 @@
 #include "png.h"
 #include "gis.h"
 #include "tiles.h"
+#include "odr.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -688,7 +689,9 @@ int main(int argc, char **argv)
     cli_signals_install();
     if (argc > 1 && !strcmp(argv[1], "mesh")) return cli_mesh_main(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "render")) return cli_render_main(argc - 1, argv + 1);
-    if (argc > 1 && !strcmp(argv[1], "convert")) return cli_convert_main(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "convert"))
+        return cli_odr_convert_wants(argc - 1, argv + 1) ? cli_odr_convert_main(argc - 1, argv + 1)
+                                                         : cli_convert_main(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "tiles")) return cli_tiles_main(argc - 1, argv + 1);
     return splat_main(argc, argv);
 }

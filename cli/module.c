@@ -8,7 +8,8 @@
  * - roadsplat-gdal.so: cli/gdal.c (GDAL: georeferenced DEMs, OGR roads,
  *   GeoTIFF output; cli/gis.h);
  * - roadsplat-mbtiles.so: cli/mbtiles.c (SQLite: `tiles --format mbtiles`);
- * - roadsplat-gltf.so: cli/gltf.c (meshoptimizer: `mesh OUT.glb`).
+ * - roadsplat-gltf.so: cli/gltf.c (meshoptimizer: `mesh OUT.glb`);
+ * - roadsplat-odr.so: cli/odr.c (expat: OpenDRIVE road sources).
  *
  * Search order: the folder of the running executable (/proc/self/exe: the
  * build folder, or a relocated install), then RS_MODULEDIR, the
@@ -46,6 +47,7 @@ static module modules[] = {
     { "gdal", "GDAL", NULL, 0, { 0 } },
     { "mbtiles", "SQLite", NULL, 0, { 0 } },
     { "gltf", "meshoptimizer", NULL, 0, { 0 } },
+    { "odr", "expat", NULL, 0, { 0 } },
 };
 
 /* Folder of the executable, with a trailing '/'; "" when unknown. */

@@ -1,5 +1,6 @@
 /* Splat options and inputs shared by `roadsplat` and `roadsplat render`. */
 #include "gis.h"
+#include "odr.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -608,7 +609,9 @@ int cli_splat_input_load(rs_ctx *ctx, const char *dem_path, const char *roads_pa
         }
     }
     size_t nfile = rs_styles_count(in->styles);
-    if (cli_geo_roads_text(roads_path, s, &in->geo, &text, &size, &in->source)) return 1;
+    if (cli_roads_are_odr(roads_path) ? cli_odr_roads_text(roads_path, &text, &size)
+                                      : cli_geo_roads_text(roads_path, s, &in->geo, &text, &size, &in->source))
+        return 1;
     rs_road_parse_options po;
     memset(&po, 0, sizeof po);
     po.profile = s->o.style.profile;

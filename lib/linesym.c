@@ -681,6 +681,7 @@ typedef struct ls_junc {
     const ls_ends *ends;
     uint64_t work, limit;  /* list entries visited by push_cut; rs_limits.max_field_work */
     const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
+    uint8_t *nocut;        /* per road: junction_cuts=no (its lines uncut, its surface cuts none) */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -798,7 +799,7 @@ static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, ui
  * (list entries visited) passes J->limit. */
 static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
-    if (!J || !J->nsf) return push_piece(ctx, L, P);
+    if (!J || !J->nsf || J->nocut[road]) return push_piece(ctx, L, P);
     /* the end of road's surfaces: the first with a larger road */
     size_t own_end = 0, hi_s = J->nsf;
     while (own_end < hi_s) {
@@ -1221,6 +1222,7 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
     rs__free(ctx, J->ids);
     rs__free(ctx, J->stamp);
     rs__free(ctx, (void *)J->ends);
+    rs__free(ctx, J->nocut);
     memset(J, 0, sizeof *J);
 }
 
@@ -1279,7 +1281,12 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     ls_ends *ends = rs__calloc(ctx, nroads ? nroads : 1, sizeof *ends);
     J->ends = ends;
-    if (!ends) return RS_ERR_NOMEM;
+    J->nocut = rs__calloc(ctx, nroads ? nroads : 1, 1);
+    if (!ends || !J->nocut) return RS_ERR_NOMEM;
+    for (size_t ri = 0; ri < nroads; ri++) {
+        const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
+        J->nocut[ri] = jc && !strcmp(jc, "no");
+    }
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
     if (rt) return rt;
@@ -1300,7 +1307,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         unit_dir(v[0].x, v[0].y, v[1].x, v[1].y, &ends[ri].dx[0], &ends[ri].dy[0]);
         unit_dir(v[m - 1].x, v[m - 1].y, v[m - 2].x, v[m - 2].y, &ends[ri].dx[1], &ends[ri].dy[1]);
         double hw = 0.5 * w;
-        if (!(hw > 0) || !(hw <= BAND_MAX_EXTENT)) continue; /* no surface to stop at */
+        if (!(hw > 0) || !(hw <= BAND_MAX_EXTENT) || J->nocut[ri]) continue; /* no surface to stop at */
         for (size_t i = 0; i + 1 < m; i++) {
             ls_surf Q;
             unit_dir(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, &Q.ux, &Q.uy);

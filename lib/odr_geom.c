@@ -105,9 +105,10 @@ static double complex phase_integral_fresnel(double k0, double c, double ds)
  * exact for this smooth integrand, is used instead. */
 static double complex spiral_integral(double k0, double c, double ds)
 {
-    double a = sqrt(fabs(c) / RS__PI);
-    double tmax = fabs(k0 / c) + ds;
-    if (c != 0 && a * tmax < 50 && 1 / a < 1e6) return phase_integral_fresnel(k0, c, ds);
+    if (c != 0) { /* a spiral of constant curvature is an arc: no 1/c */
+        double a = sqrt(fabs(c) / RS__PI), tmax = fabs(k0 / c) + ds;
+        if (a * tmax < 50 && 1 / a < 1e6) return phase_integral_fresnel(k0, c, ds);
+    }
     return phase_integral_gl(k0, c, ds);
 }
 

@@ -279,6 +279,25 @@ static void test_valid(void)
     CHECK(!rs__odr_geom_valid(&g));
 }
 
+/* A spiral whose curvature does not change is an arc (or a line): no
+ * division by its zero rate (UBSan's float-divide-by-zero, found by the odr
+ * fuzz target). */
+static void test_constant_spiral(void)
+{
+    const double ks[2] = { 0, 0.01 };
+    for (int i = 0; i < 2; i++) {
+        rs__odr_geom sp = { RS__ODR_SPIRAL, 0, 3, 4, 0.5, 60, 0, ks[i], ks[i], 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+        rs__odr_geom arc = { RS__ODR_ARC, 0, 3, 4, 0.5, 60, ks[i], 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 };
+        double x0, y0, h0, x1, y1, h1, worst = 0;
+        for (double ds = 0; ds <= 60; ds += 7.5) {
+            rs__odr_geom_eval(&sp, ds, &x0, &y0, &h0);
+            rs__odr_geom_eval(&arc, ds, &x1, &y1, &h1);
+            worst = fmax(worst, fmax(hypot(x0 - x1, y0 - y1), fabs(h0 - h1)));
+        }
+        CHECKF(worst < 1e-9, "curvature %g: spiral %g from the arc", ks[i], worst);
+    }
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -289,6 +308,7 @@ int main(void)
     test_parampoly3();
     test_sampling();
     test_valid();
+    test_constant_spiral();
     rs_ctx_free(ctx);
     return th_finish("test_odr_geom");
 }
