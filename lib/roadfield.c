@@ -78,6 +78,11 @@ struct rs__roadfield {
     uint32_t relscan;  /* cell lists up to this long are scanned for holders (rs__roadfield_params) */
 };
 
+/* fmax and fmin with glibc's values (x on a tie, the other one when one
+ * is NaN), inlined: the libm calls were ~7 % of an index build. */
+static inline double lm_max(double x, double y) { return x >= y || y != y ? x : y; }
+static inline double lm_min(double x, double y) { return x <= y || y != y ? x : y; }
+
 /* floor(v) clamped to [0, n-1]; NaN gives 0. Keeps every cast defined. */
 static uint32_t clamp_index(double v, uint32_t n)
 {
@@ -128,13 +133,13 @@ static double seg_dist(const rf_seg *s, double x, double y)
 /* Does the rectangle [x0,x1] x [y0,y1] come within R of the segment? */
 static int seg_touches_rect(const rf_seg *s, double x0, double y0, double x1, double y1, double R)
 {
-    if (fmin(s->ax, s->bx) - R > x1 || fmax(s->ax, s->bx) + R < x0 || fmin(s->ay, s->by) - R > y1 ||
-        fmax(s->ay, s->by) + R < y0)
+    if (lm_min(s->ax, s->bx) - R > x1 || lm_max(s->ax, s->bx) + R < x0 || lm_min(s->ay, s->by) - R > y1 ||
+        lm_max(s->ay, s->by) + R < y0)
         return 0;
     /* Intersection by separating axes: x and y passed above with R = 0
      * when the bounding boxes overlap; the last axis is the segment normal. */
-    int boxes = !(fmin(s->ax, s->bx) > x1 || fmax(s->ax, s->bx) < x0 || fmin(s->ay, s->by) > y1 ||
-                  fmax(s->ay, s->by) < y0);
+    int boxes = !(lm_min(s->ax, s->bx) > x1 || lm_max(s->ax, s->bx) < x0 || lm_min(s->ay, s->by) > y1 ||
+                  lm_max(s->ay, s->by) < y0);
     if (boxes) {
         double c[4] = { (x0 - s->ax) * s->uy - (y0 - s->ay) * s->ux, (x1 - s->ax) * s->uy - (y0 - s->ay) * s->ux,
                         (x0 - s->ax) * s->uy - (y1 - s->ay) * s->ux, (x1 - s->ax) * s->uy - (y1 - s->ay) * s->ux };
@@ -144,7 +149,7 @@ static int seg_touches_rect(const rf_seg *s, double x0, double y0, double x1, do
     /* Disjoint convex sets: the closest pair has a vertex of one of them. */
     const double px[2] = { s->ax, s->bx }, py[2] = { s->ay, s->by };
     for (int k = 0; k < 2; k++) {
-        double dx = fmax(fmax(x0 - px[k], px[k] - x1), 0), dy = fmax(fmax(y0 - py[k], py[k] - y1), 0);
+        double dx = lm_max(lm_max(x0 - px[k], px[k] - x1), 0), dy = lm_max(lm_max(y0 - py[k], py[k] - y1), 0);
         if (len2(dx, dy) <= R) return 1;
     }
     return seg_dist(s, x0, y0) <= R || seg_dist(s, x1, y0) <= R || seg_dist(s, x0, y1) <= R ||
@@ -159,7 +164,52 @@ typedef struct rf_builder {
     uint32_t *cell1; /* pass 2: per segment, a cell that lists it */
     uint64_t work_limit; /* seg_relations' work (rs_limits.max_field_work) */
     int work_over;       /* 1: seg_relations passed work_limit */
+    /* Pass 1 records the cells it visits (rec, segment after segment, in
+     * visiting order; recend[k] = end of segment k's run), so that pass 2
+     * only scatters them instead of doing the geometry again. When memory
+     * for the record runs out, norec = 1 and pass 2 recomputes. */
+    rs_ctx *ctx;
+    uint32_t *rec, *recend;
+    size_t nrec, caprec, caprecend;
+    int norec;
 } rf_builder;
+
+static void rec_drop(rf_builder *b)
+{
+    rs__free(b->ctx, b->rec);
+    rs__free(b->ctx, b->recend);
+    b->rec = b->recend = NULL;
+    b->nrec = b->caprec = b->caprecend = 0;
+    b->norec = 1;
+}
+
+/* Records one visited cell (pass 1). */
+static void rec_cell(rf_builder *b, size_t cell)
+{
+    if (b->norec) return;
+    if (b->nrec == b->caprec) {
+        size_t nc = b->caprec ? 2 * b->caprec : 4096, bytes;
+        uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->rec, bytes) : NULL;
+        if (!nr) { rec_drop(b); return; }
+        b->rec = nr;
+        b->caprec = nc;
+    }
+    b->rec[b->nrec++] = (uint32_t)cell;
+}
+
+/* Closes segment k's run of recorded cells (segments are numbered 0, 1, ...). */
+static void rec_end(rf_builder *b, size_t k)
+{
+    if (b->norec) return;
+    if (k >= b->caprecend) {
+        size_t nc = b->caprecend ? 2 * b->caprecend : 256, bytes;
+        uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->recend, bytes) : NULL;
+        if (!nr) { rec_drop(b); return; }
+        b->recend = nr;
+        b->caprecend = nc;
+    }
+    b->recend[k] = (uint32_t)b->nrec;
+}
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
  * segment. fill = 0: count (and flag full cells); fill = 1: write `id` into
@@ -173,8 +223,8 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
     double rin = s->r - f->margin - eps;   /* corners within rin: the cell is full */
     double hd = c * HALF_SQRT2 * (1 + 1e-9); /* half the cell diagonal */
     double gy1 = ((double)f->gh - 1) * c, gx1 = ((double)f->gw - 1) * c;
-    double ylo = fmax(fmin(s->ay, s->by) - R, -c), yhi = fmin(fmax(s->ay, s->by) + R, gy1);
-    double xlo = fmax(fmin(s->ax, s->bx) - R, -c), xhi = fmin(fmax(s->ax, s->bx) + R, gx1);
+    double ylo = lm_max(lm_min(s->ay, s->by) - R, -c), yhi = lm_min(lm_max(s->ay, s->by) + R, gy1);
+    double xlo = lm_max(lm_min(s->ax, s->bx) - R, -c), xhi = lm_min(lm_max(s->ax, s->bx) + R, gx1);
     if (!(ylo <= yhi && xlo <= xhi)) return 0;
     uint32_t j0 = clamp_index(ylo * f->inv_c + 1, f->gh), j1 = clamp_index(yhi * f->inv_c + 1, f->gh);
     int64_t visited = 0;
@@ -185,12 +235,12 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
         if (s->uy != 0) {
             double p0 = (sylo - s->ay) / s->uy, p1 = (syhi - s->ay) / s->uy;
             if (p0 > p1) { double tmp = p0; p0 = p1; p1 = tmp; }
-            plo = fmax(plo, p0);
-            phi = fmin(phi, p1);
+            plo = lm_max(plo, p0);
+            phi = lm_min(phi, p1);
             if (!(plo <= phi)) continue;
         } else if (!(s->ay >= sylo && s->ay <= syhi)) continue;
         double xa = s->ax + plo * s->ux, xb = plo == phi ? xa : phi >= s->len ? s->bx : s->ax + phi * s->ux;
-        double sxlo = fmax(fmin(xa, xb) - R, -c), sxhi = fmin(fmax(xa, xb) + R, gx1);
+        double sxlo = lm_max(lm_min(xa, xb) - R, -c), sxhi = lm_min(lm_max(xa, xb) + R, gx1);
         if (!(sxlo <= sxhi)) continue;
         uint32_t i0 = clamp_index(sxlo * f->inv_c + 1, f->gw), i1 = clamp_index(sxhi * f->inv_c + 1, f->gw);
         for (uint32_t i = i0; i <= i1; i++) {
@@ -206,6 +256,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
             } else {
                 if (++b->total > b->limit) return -1;
                 b->cnt[cell]++;
+                rec_cell(b, cell);
                 if (rin > 0 && !f->full[cell] &&
                     (dc + hd <= rin || (dc <= rin && seg_dist(s, x0, y0) <= rin && seg_dist(s, x1, y0) <= rin &&
                                         seg_dist(s, x0, y1) <= rin && seg_dist(s, x1, y1) <= rin)))
@@ -222,14 +273,14 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     /* halves: the difference of two finite coordinates cannot overflow */
     double dxh = 0.5 * bx - 0.5 * ax, dyh = 0.5 * by - 0.5 * ay, lh = hypot(dxh, dyh);
     s->ax = ax; s->ay = ay; s->bx = bx; s->by = by;
-    s->xmin = fmin(ax, bx); s->xmax = fmax(ax, bx);
-    s->ymin = fmin(ay, by); s->ymax = fmax(ay, by);
+    s->xmin = lm_min(ax, bx); s->xmax = lm_max(ax, bx);
+    s->ymin = lm_min(ay, by); s->ymax = lm_max(ay, by);
     s->ux = lh > 0 ? dxh / lh : 0;
     s->uy = lh > 0 ? dyh / lh : 0;
     s->len = 2 * lh;
     double aux = fabs(s->ux), auy = fabs(s->uy);
-    s->ga = fmax(aux, auy);
-    s->gb = fmin(aux, auy);
+    s->ga = lm_max(aux, auy);
+    s->gb = lm_min(aux, auy);
     if (s->gb < 1e-100) s->gb = 0;
     s->iga = s->ga > 0 ? 1 / s->ga : 0;
     s->igab = s->gb > 0 ? 1 / (s->ga * s->gb) : 0;
@@ -290,11 +341,11 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
     f->rstart = rs__alloc_array(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
     f->rspan = rs__calloc(ctx, f->gh, 1);
     if (!stamp || !f->rstart || !f->rspan) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
-    double ext = fmax((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
+    double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
     for (size_t k = 0; k < f->nseg; k++) {
         rf_seg *s = &f->seg[k];
-        double m = fmax(fmax(fmax(fabs(s->ax), fabs(s->ay)), fmax(fabs(s->bx), fabs(s->by))),
-                        fmax(fmax(s->len, s->r), ext));
+        double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
+                        lm_max(lm_max(s->len, s->r), ext));
         s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
     }
     uint64_t run = 0;
@@ -384,7 +435,7 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
                  double *along)
 {
     *along = 0;
-    if (fmin(*ax, *bx) >= -far && fmax(*ax, *bx) <= w + far && fmin(*ay, *by) >= -far && fmax(*ay, *by) <= h + far)
+    if (lm_min(*ax, *bx) >= -far && lm_max(*ax, *bx) <= w + far && lm_min(*ay, *by) >= -far && lm_max(*ay, *by) <= h + far)
         return 1;
     double dxh = 0.5 * *bx - 0.5 * *ax, dyh = 0.5 * *by - 0.5 * *ay, lh = hypot(dxh, dyh);
     if (!(lh > 0) || !isfinite(lh)) return fabs(*ax - 0.5 * w) <= 0.5 * w + pad && fabs(*ay - 0.5 * h) <= 0.5 * h + pad;
@@ -410,7 +461,7 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
  * within t's half width minus s's. */
 static int capsule_within(const rf_seg *s, const rf_seg *t)
 {
-    double m = fmax(fmax(fabs(t->ax), fabs(t->ay)), fmax(fabs(s->ax), fabs(s->ay)));
+    double m = lm_max(lm_max(fabs(t->ax), fabs(t->ay)), lm_max(fabs(s->ax), fabs(s->ay)));
     double room = t->r - s->r + 1e-9 * (1 + m + t->len + t->r);
     return room >= 0 && seg_dist(t, s->ax, s->ay) <= room && seg_dist(t, s->bx, s->by) <= room;
 }
@@ -433,7 +484,7 @@ typedef struct rf_box { double xlo, ylo, xhi, yhi; } rf_box;
  * M_k). The doubled slack covers rounding. */
 static double seg_mag(const rf_seg *s)
 {
-    return fmax(fmax(fabs(s->ax), fabs(s->ay)), fmax(fabs(s->bx), fabs(s->by)));
+    return lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by)));
 }
 
 static rf_box outer_box(const rf_seg *s)
@@ -539,16 +590,16 @@ static rs_result holders_build(rs_ctx *ctx, const rs__roadfield *f, rf_holders *
         rf_box u = { INFINITY, INFINITY, -INFINITY, -INFINITY };
         for (size_t i = l * HOLDER_LEAF; i < n && i < (l + 1) * HOLDER_LEAF; i++) {
             const rf_box *b = &h->box[i];
-            u.xlo = fmin(u.xlo, b->xlo);
-            u.ylo = fmin(u.ylo, b->ylo);
-            u.xhi = fmax(u.xhi, b->xhi);
-            u.yhi = fmax(u.yhi, b->yhi);
+            u.xlo = lm_min(u.xlo, b->xlo);
+            u.ylo = lm_min(u.ylo, b->ylo);
+            u.xhi = lm_max(u.xhi, b->xhi);
+            u.yhi = lm_max(u.yhi, b->yhi);
         }
         h->node[p2 + l] = u;
     }
     for (size_t i = p2; i-- > 1;) {
         const rf_box *a = &h->node[2 * i], *b = &h->node[2 * i + 1];
-        rf_box u = { fmin(a->xlo, b->xlo), fmin(a->ylo, b->ylo), fmax(a->xhi, b->xhi), fmax(a->yhi, b->yhi) };
+        rf_box u = { lm_min(a->xlo, b->xlo), lm_min(a->ylo, b->ylo), lm_max(a->xhi, b->xhi), lm_max(a->yhi, b->yhi) };
         h->node[i] = u;
     }
     return RS_OK;
@@ -676,7 +727,16 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     if (!f->ids) return RS_ERR_NOMEM;
     b->cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b->cell1);
     if (!b->cell1) return RS_ERR_NOMEM;
-    for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+    if (!b->norec && b->rec) {
+        for (size_t k = f->nseg; k-- > 0;) {
+            uint32_t a = k ? b->recend[k - 1] : 0, e = b->recend[k];
+            for (uint32_t i = a; i < e; i++) f->ids[--b->cnt[b->rec[i]]] = (uint32_t)k;
+            b->cell1[k] = e > a ? b->rec[e - 1] : 0;
+        }
+    } else {
+        for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+    }
+    rec_drop(b);
     rf_holders h;
     memset(&h, 0, sizeof h);
     h.limit = b->work_limit;
@@ -700,6 +760,7 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
 static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_result res)
 {
     rs__free(ctx, b->cell1);
+    rec_drop(b);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
     if (b->work_over)
@@ -732,9 +793,9 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
         for (size_t i = 0; i < nroads; i++) {
             double w = 0;
             rs_roads_get(roads, i, NULL, &w, NULL, NULL);
-            wsum += fmin(w, 1e12) / (double)nroads;
+            wsum += lm_min(w, 1e12) / (double)nroads;
         }
-        c = fmax(p->cell_size, 0.5 * wsum);
+        c = lm_max(p->cell_size, 0.5 * wsum);
         cap = GRID_AUTO_CELLS;
     }
     while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
@@ -750,7 +811,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->reach = p->reach_extra + f->margin;
     f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0 };
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0, ctx, NULL, NULL, 0, 0, 0, 0 };
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
@@ -782,7 +843,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             rf_seg sg;
             double cax = ax, cay = ay, cbx = bx, cby = by, along = 0;
             /* the reach of this capsule beyond the map, with room to spare */
-            double pad = 2 * (fmin(0.5 * w, 1e15) + f->reach) + c;
+            double pad = 2 * (lm_min(0.5 * w, 1e15) + f->reach) + c;
             /* Within a million map sizes the digits lost are below 1e-9 of a
              * pixel: such segments are kept as given (and the nearest-road
              * ties stay those of the exact geometry). */
@@ -793,7 +854,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                 s += sg.len;
             } else {
                 double sfull = 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
-                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, fmin(s + along, DBL_MAX), (uint32_t)ri, (uint32_t)k);
+                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, lm_min(s + along, DBL_MAX), (uint32_t)ri, (uint32_t)k);
                 s += sfull;
             }
             /* A road over 1.8e308 m long (points near +-1e308) has no finite
@@ -814,6 +875,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                 cap_seg = nc;
             }
             f->seg[f->nseg++] = sg;
+            rec_end(&b, f->nseg - 1);
         }
     }
     if ((res = index_finish(ctx, f, &b, cap_seg)) != RS_OK) goto fail;
@@ -847,7 +909,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     f->reach = src->reach;
     f->relscan = src->relscan;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0 };
+    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0, ctx, NULL, NULL, 0, 0, 0, 0 };
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     rs_result res = RS_OK;
     f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
@@ -866,6 +928,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
         sg->jpart = 0;
         sg->redundant = 0;
         if (seg_cells(&b, sg, 0, 0) < 0) { res = RS_ERR_LIMIT; goto fail; }
+        rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
     *out = f;
