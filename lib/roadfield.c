@@ -171,6 +171,10 @@ typedef struct rf_builder {
     rs_ctx *ctx;
     uint32_t *rec, *recend;
     size_t nrec, caprec, caprecend;
+    /* pass 1, per recorded segment: the first cell it visits whose column
+     * and row are even (else its last cell), its cell1 (the holder search
+     * then gathers about a quarter of the lists) */
+    uint32_t *pref, pcell;
     int norec;
 } rf_builder;
 
@@ -178,7 +182,8 @@ static void rec_drop(rf_builder *b)
 {
     rs__free(b->ctx, b->rec);
     rs__free(b->ctx, b->recend);
-    b->rec = b->recend = NULL;
+    rs__free(b->ctx, b->pref);
+    b->rec = b->recend = b->pref = NULL;
     b->nrec = b->caprec = b->caprecend = 0;
     b->norec = 1;
 }
@@ -204,11 +209,14 @@ static void rec_end(rf_builder *b, size_t k)
     if (k >= b->caprecend) {
         size_t nc = b->caprecend ? 2 * b->caprecend : 256, bytes;
         uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->recend, bytes) : NULL;
-        if (!nr) { rec_drop(b); return; }
-        b->recend = nr;
+        if (nr) b->recend = nr;
+        uint32_t *np = nr ? rs__realloc(b->ctx, b->pref, bytes) : NULL;
+        if (!np) { rec_drop(b); return; }
+        b->pref = np;
         b->caprecend = nc;
     }
     b->recend[k] = (uint32_t)b->nrec;
+    b->pref[k] = b->pcell;
 }
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
@@ -228,6 +236,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
     if (!(ylo <= yhi && xlo <= xhi)) return 0;
     uint32_t j0 = clamp_index(ylo * f->inv_c + 1, f->gh), j1 = clamp_index(yhi * f->inv_c + 1, f->gh);
     int64_t visited = 0;
+    b->pcell = UINT32_MAX;
     for (uint32_t j = j0; j <= j1; j++) {
         double y0 = ((double)j - 1) * c, y1 = (double)j * c;
         /* x extent of the segment within the strip grown by R, then grown by R */
@@ -243,6 +252,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
         double sxlo = lm_max(lm_min(xa, xb) - R, -c), sxhi = lm_min(lm_max(xa, xb) + R, gx1);
         if (!(sxlo <= sxhi)) continue;
         uint32_t i0 = clamp_index(sxlo * f->inv_c + 1, f->gw), i1 = clamp_index(sxhi * f->inv_c + 1, f->gw);
+        int64_t before = visited;
         for (uint32_t i = i0; i <= i1; i++) {
             double x0 = ((double)i - 1) * c, x1 = (double)i * c;
             /* the centre's distance settles most cells without the exact test */
@@ -257,12 +267,15 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
                 if (++b->total > b->limit) return -1;
                 b->cnt[cell]++;
                 rec_cell(b, cell);
+                if (b->pcell == UINT32_MAX || (b->pcell & 0x80000000u)) /* none even yet */
+                    b->pcell = (uint32_t)cell | (((i | j) & 1) ? 0x80000000u : 0);
                 if (rin > 0 && !f->full[cell] &&
                     (dc + hd <= rin || (dc <= rin && seg_dist(s, x0, y0) <= rin && seg_dist(s, x1, y0) <= rin &&
                                         seg_dist(s, x0, y1) <= rin && seg_dist(s, x1, y1) <= rin)))
                     f->full[cell] = 1;
             }
         }
+        if (!fill && visited > before) f->rstart[j]++; /* the segment is in row j's list */
     }
     return visited;
 }
@@ -313,10 +326,6 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
 
 static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
 
-/* Row lists for the coverage: per grid row, every segment of the row's cell
- * lists (each once, in the order first met), and whether the row's spans may be used: every segment
- * has coordinates, length and half width within 1e8 cells, so the spans'
- * rounding errors stay far below the slack `tol` (docs/roadfield.md). */
 /* A float <= v (NaN: -inf) and a float >= v (NaN: +inf); conversions
  * only of values within the float range. */
 static float float_down(double v)
@@ -335,53 +344,66 @@ static float float_up(double v)
     return (double)r < v ? nextafterf(r, INFINITY) : r;
 }
 
+/* Row lists for the coverage: per grid row, every segment of the row's cell
+ * lists (each once, in the order first met), and whether the row's spans may be used: every segment
+ * has coordinates, length and half width within 1e8 cells, so the spans'
+ * rounding errors stay far below the slack `tol` (docs/roadfield.md).
+ * Pass 1 counted each row's segments; one pass over the lists fills them,
+ * each entry's box copied from the segment's. */
 static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
 {
-    uint32_t *stamp = rs__calloc(ctx, f->nseg ? f->nseg : 1, sizeof *stamp);
-    f->rstart = rs__alloc_array(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
+    size_t ns = f->nseg ? f->nseg : 1;
+    uint32_t *stamp = rs__calloc(ctx, ns, sizeof *stamp);
+    float *sbox = rs__alloc_array(ctx, ns, 4 * sizeof *sbox);
     f->rspan = rs__calloc(ctx, f->gh, 1);
-    if (!stamp || !f->rstart || !f->rspan) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
+    if (!stamp || !sbox || !f->rspan) {
+        rs__free(ctx, stamp);
+        rs__free(ctx, sbox);
+        return RS_ERR_NOMEM;
+    }
     double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
     for (size_t k = 0; k < f->nseg; k++) {
         rf_seg *s = &f->seg[k];
         double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
                         lm_max(lm_max(s->len, s->r), ext));
         s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
+        double g = s->r + s->tol + f->margin;
+        sbox[4 * k] = float_down(s->xmin - g);
+        sbox[4 * k + 1] = float_up(s->xmax + g);
+        sbox[4 * k + 2] = float_down(s->ymin - g);
+        sbox[4 * k + 3] = float_up(s->ymax + g);
     }
+    /* pass 1 counted each row's segments (seg_cells) into rstart */
     uint64_t run = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        if (pass == 1) {
-            f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
-            f->rbox = rs__alloc_array(ctx, run ? (size_t)run : 1, 4 * sizeof *f->rbox);
-            if (!f->rids || !f->rbox) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
-            memset(stamp, 0, (f->nseg ? f->nseg : 1) * sizeof *stamp);
-            run = 0;
-        }
-        for (uint32_t j = 0; j < f->gh; j++) {
-            int ok = 1;
-            if (pass == 0) f->rstart[j] = (uint32_t)run;
-            for (size_t cell = (size_t)j * f->gw; cell < (size_t)(j + 1) * f->gw; cell++)
-                for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
-                    uint32_t id = f->ids[k];
-                    if (stamp[id] == j + 1) continue;
-                    stamp[id] = j + 1;
-                    if (pass == 1) {
-                        const rf_seg *s = &f->seg[id];
-                        double g = s->r + s->tol + f->margin;
-                        f->rids[run] = id;
-                        f->rbox[4 * run] = float_down(s->xmin - g);
-                        f->rbox[4 * run + 1] = float_up(s->xmax + g);
-                        f->rbox[4 * run + 2] = float_down(s->ymin - g);
-                        f->rbox[4 * run + 3] = float_up(s->ymax + g);
-                        ok &= s->tol > 0;
-                    }
-                    run++;
-                }
-            if (pass == 1) f->rspan[j] = (uint8_t)ok;
-        }
-        if (pass == 0) f->rstart[f->gh] = (uint32_t)run;
+    for (uint32_t j = 0; j <= f->gh; j++) {
+        uint32_t n = j < f->gh ? f->rstart[j] : 0;
+        f->rstart[j] = (uint32_t)run;
+        run += n;
+    }
+    f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
+    f->rbox = rs__alloc_array(ctx, run ? (size_t)run : 1, 4 * sizeof *f->rbox);
+    if (!f->rids || !f->rbox) {
+        rs__free(ctx, stamp);
+        rs__free(ctx, sbox);
+        return RS_ERR_NOMEM;
+    }
+    for (uint32_t j = 0; j < f->gh; j++) {
+        int ok = 1;
+        uint32_t pos = f->rstart[j];
+        for (size_t cell = (size_t)j * f->gw; cell < (size_t)(j + 1) * f->gw; cell++)
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                uint32_t id = f->ids[k];
+                if (stamp[id] == j + 1) continue;
+                stamp[id] = j + 1;
+                f->rids[pos] = id;
+                memcpy(f->rbox + 4 * (size_t)pos, sbox + 4 * (size_t)id, 4 * sizeof *sbox);
+                ok &= f->seg[id].tol > 0;
+                pos++;
+            }
+        f->rspan[j] = (uint8_t)ok;
     }
     rs__free(ctx, stamp);
+    rs__free(ctx, sbox);
     return RS_OK;
 }
 
@@ -471,7 +493,7 @@ static int capsule_within(const rf_seg *s, const rf_seg *t)
  * long lists instead, so many short segments sharing cells (10^6 points on
  * a 100 m road) cost n log n, not n times the list. Both ways find the same
  * holders. */
-#define RELATION_SCAN_AUTO 64
+#define RELATION_SCAN_AUTO 256
 #define HOLDER_LEAF 8
 
 typedef struct rf_box { double xlo, ylo, xhi, yhi; } rf_box;
@@ -505,6 +527,28 @@ static int box_holds(const rf_box *o, const rf_box *in)
 {
     return o->xlo <= in->xlo && o->ylo <= in->ylo && o->xhi >= in->xhi && o->yhi >= in->yhi;
 }
+
+/* The same boxes as floats for the list scan, outer ones rounded outwards
+ * and inner ones inwards (so "outer holds inner" can only pass more often
+ * than in doubles), stored (xlo, ylo, -xhi, -yhi): o holds q when o <= q
+ * in all four lanes, one SSE compare. NaN bounds become infinities that
+ * always pass; capsule_within then decides. */
+typedef struct rf_fbox { float v[4]; } rf_fbox;
+
+static rf_fbox fbox_outer(const rf_seg *s)
+{
+    rf_box b = outer_box(s);
+    rf_fbox r = { { float_down(b.xlo), float_down(b.ylo), -float_up(b.xhi), -float_up(b.yhi) } };
+    return r;
+}
+
+static rf_fbox fbox_inner(const rf_seg *s)
+{
+    rf_box b = inner_box(s);
+    rf_fbox r = { { float_up(b.xlo), float_up(b.ylo), -float_down(b.xhi), -float_down(b.yhi) } };
+    return r;
+}
+
 
 typedef struct rf_holders {
     uint32_t *ids;  /* segments of the long lists, in Morton order of their centres */
@@ -659,6 +703,87 @@ static int redundant_of(const rs__roadfield *f, rf_holders *h, size_t k, size_t 
     return 0;
 }
 
+/* Index of the first of the n gathered boxes (four float arrays, padded
+ * to a multiple of 4) from `from` on that holds q, or n when none. */
+static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
+{
+#if defined(__SSE2__)
+    __m128 q0 = _mm_set1_ps(q->v[0]), q1 = _mm_set1_ps(q->v[1]), q2 = _mm_set1_ps(q->v[2]),
+           q3 = _mm_set1_ps(q->v[3]);
+    uint32_t e = from & ~3u;
+    for (; e < n; e += 4) {
+        __m128 m = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(g[0] + e), q0), _mm_cmple_ps(_mm_loadu_ps(g[1] + e), q1)),
+                              _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(g[2] + e), q2), _mm_cmple_ps(_mm_loadu_ps(g[3] + e), q3)));
+        int bits = _mm_movemask_ps(m);
+        for (uint32_t t = 0; bits && t < 4; t++)
+            if (bits >> t & 1 && e + t >= from) return e + t < n ? e + t : n;
+    }
+    return n;
+#else
+    for (uint32_t e = from; e < n; e++)
+        if (g[0][e] <= q->v[0] && g[1][e] <= q->v[1] && g[2][e] <= q->v[2] && g[3][e] <= q->v[3]) return e;
+    return n;
+#endif
+}
+
+/* Redundancy of every segment (seg_relations): the segments are taken
+ * cell by cell (those whose cell1 is the cell), so a short list's float
+ * boxes are gathered once and scanned, four at a time, by every segment
+ * that asks that list; only boxes that hold the segment's inner box go on
+ * to capsule_within (the lists of a dense map hold ~60 segments: the scan
+ * loaded each one's 184 bytes before). Same flags and work units as asking
+ * redundant_of per segment. */
+static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h)
+{
+    size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + 4;
+    /* outer and inner boxes of every segment (ob[2k], ob[2k+1]): 32 bytes
+     * read where each segment's 184 were */
+    rf_fbox *ob = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 2 * sizeof *ob);
+    float *gb = rs__alloc_array(ctx, cap, 4 * sizeof *gb);
+    if (!ob || !gb) {
+        rs__free(ctx, ob);
+        rs__free(ctx, gb);
+        return RS_ERR_NOMEM;
+    }
+    const float *g[4] = { gb, gb + cap, gb + 2 * cap, gb + 3 * cap };
+    for (size_t k = 0; k < f->nseg; k++) {
+        ob[2 * k] = fbox_outer(&f->seg[k]);
+        ob[2 * k + 1] = fbox_inner(&f->seg[k]);
+    }
+    rs_result res = RS_OK;
+    for (size_t c = 0; c < ncell && res == RS_OK; c++) {
+        uint32_t a = f->start[c], b = f->start[c + 1], n = b - a;
+        int gathered = 0;
+        for (uint32_t i = a; i < b; i++) {
+            uint32_t k = f->ids[i];
+            if (cell1[k] != c) continue;
+            int red = 0;
+            if (n > f->relscan && h->node) {
+                red = redundant_of(f, h, k, c);
+            } else {
+                h->work += n;
+                if (h->work > h->limit) { res = RS_ERR_LIMIT; break; }
+                if (!gathered) {
+                    for (uint32_t e = 0; e < n; e++)
+                        for (int l = 0; l < 4; l++) gb[l * cap + e] = ob[2 * (size_t)f->ids[a + e]].v[l];
+                    for (uint32_t e = n; e < n + 4; e++)
+                        for (int l = 0; l < 4; l++) gb[l * cap + e] = INFINITY;
+                    gathered = 1;
+                }
+                const rf_fbox *q = &ob[2 * (size_t)k + 1];
+                for (uint32_t e = fbox_next(g, 0, n, q); e < n && !red; e = fbox_next(g, e + 1, n, q))
+                    red = holds(f, k, f->ids[a + e]);
+            }
+            if (red < 0) { res = RS_ERR_LIMIT; break; }
+            f->seg[k].redundant = (uint8_t)red;
+            f->nredundant += (size_t)red;
+        }
+    }
+    rs__free(ctx, ob);
+    rs__free(ctx, gb);
+    return res;
+}
+
 /* Per segment: its gentle-joint partner (the next segment of positive
  * length, past zero-length ones at the shared point: consecutive segments
  * of a road, or the first of the next road when it starts where this one
@@ -680,6 +805,9 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
         rs_result r = holders_build(ctx, f, h);
         if (r != RS_OK) return r;
     }
+    /* the holder is listed wherever this one is (its grown capsule is larger) */
+    rs_result r = holder_scan(ctx, f, cell1, h);
+    if (r != RS_OK) return r;
     size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
     for (size_t k = f->nseg; k-- > 0;) {
         rf_seg *sa = &f->seg[k];
@@ -692,11 +820,6 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
                         sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
             sa->jpart = (uint32_t)m;
         }
-        /* the holder is listed wherever this one is (its grown capsule is larger) */
-        int red = redundant_of(f, h, k, cell1[k]);
-        if (red < 0) return RS_ERR_LIMIT;
-        sa->redundant = (uint8_t)red;
-        f->nredundant += (size_t)red;
         if (sa->len > 0) after = k;
         else if (!(k + 1 < f->nseg && !(f->seg[k + 1].len > 0) && f->seg[k + 1].ax == sa->ax &&
                    f->seg[k + 1].ay == sa->ay))
@@ -731,7 +854,7 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
         for (size_t k = f->nseg; k-- > 0;) {
             uint32_t a = k ? b->recend[k - 1] : 0, e = b->recend[k];
             for (uint32_t i = a; i < e; i++) f->ids[--b->cnt[b->rec[i]]] = (uint32_t)k;
-            b->cell1[k] = e > a ? b->rec[e - 1] : 0;
+            b->cell1[k] = e > a ? b->pref[k] & 0x7FFFFFFFu : 0;
         }
     } else {
         for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
@@ -811,13 +934,19 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->reach = p->reach_extra + f->margin;
     f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0, ctx, NULL, NULL, 0, 0, 0, 0 };
+    rf_builder b;
+    memset(&b, 0, sizeof b);
+    b.f = f;
+    b.limit = UINT32_MAX - 1u;
+    b.work_limit = ctx->limits.max_field_work;
+    b.ctx = ctx;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
+    f->rstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
     rs_result res = RS_OK;
     size_t cap_seg = 0;
-    if (!f->start || !f->full) { res = RS_ERR_NOMEM; goto fail; }
+    if (!f->start || !f->full || !f->rstart) { res = RS_ERR_NOMEM; goto fail; }
     memset(f->start, 0, (ncell + 1) * sizeof *f->start);
     b.cnt = f->start;
 
@@ -909,13 +1038,19 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     f->reach = src->reach;
     f->relscan = src->relscan;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0, ctx, NULL, NULL, 0, 0, 0, 0 };
+    rf_builder b;
+    memset(&b, 0, sizeof b);
+    b.f = f;
+    b.limit = UINT32_MAX - 1u;
+    b.work_limit = ctx->limits.max_field_work;
+    b.ctx = ctx;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     rs_result res = RS_OK;
     f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
     f->seg = rs__alloc_array(ctx, src->nseg ? src->nseg : 1, sizeof *f->seg);
-    if (!f->start || !f->full || !f->seg) { res = RS_ERR_NOMEM; goto fail; }
+    f->rstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
+    if (!f->start || !f->full || !f->seg || !f->rstart) { res = RS_ERR_NOMEM; goto fail; }
     b.cnt = f->start;
     f->nseg = src->nseg;
     /* the same segments in the same order (the ids of both fields agree),
