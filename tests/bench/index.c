@@ -7,7 +7,7 @@
  * RUNS, the builds of a count interleaved.
  * Usage: index OUTDIR (writes OUTDIR/index.md);
  *        index --one N [REPS] (N roads, REPS road-field builds: for profilers);
- *        index --dump N FILE (N roads: the road field's stats, whole-image
+ *        index --dump N FILE [CELL] (N roads, index cell CELL m (0: automatic): the road field's stats, whole-image
  *        coverage doubles and a nearest query per 7th pixel into FILE, to
  *        compare two builds byte for byte with cmp). */
 #include "roadfield.h"
@@ -98,6 +98,7 @@ int main(int argc, char **argv)
         if (sc_city(&s, DEM_W, DEM_H, CELL, (size_t)atol(argv[2]), 1)) return 1;
         rs_roads *R = ss_roads(ctx, &s);
         rs__roadfield_params p = field_params();
+        if (argc > 4) p.index_cell = atof(argv[4]);
         rs__roadfield *f = NULL;
         FILE *fo = fopen(argv[3], "wb");
         if (!R || !fo || rs__roadfield_build(ctx, R, &p, &f)) return 1;
