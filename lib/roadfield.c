@@ -83,6 +83,19 @@ struct rs__roadfield {
 static inline double lm_max(double x, double y) { return x >= y || y != y ? x : y; }
 static inline double lm_min(double x, double y) { return x <= y || y != y ? x : y; }
 
+/* Reads of a segment's data by list order (row lists, holder boxes) jump
+ * over arrays of megabytes on a dense map: ask for them a few entries
+ * ahead (a hint; no effect on results). */
+#define PREFETCH_AHEAD 8
+static inline void rf_prefetch(const void *p)
+{
+#if defined(__SSE2__)
+    _mm_prefetch((const char *)p, _MM_HINT_T0);
+#else
+    (void)p;
+#endif
+}
+
 /* floor(v) clamped to [0, n-1]; NaN gives 0. Keeps every cast defined. */
 static uint32_t clamp_index(double v, uint32_t n)
 {
@@ -350,15 +363,17 @@ static float float_up(double v)
  * rounding errors stay far below the slack `tol` (docs/roadfield.md).
  * Pass 1 counted each row's segments; one pass over the lists fills them,
  * each entry's box copied from the segment's. */
-static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
+__attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
 {
     size_t ns = f->nseg ? f->nseg : 1;
     uint32_t *stamp = rs__calloc(ctx, ns, sizeof *stamp);
     float *sbox = rs__alloc_array(ctx, ns, 4 * sizeof *sbox);
+    uint8_t *sok = rs__alloc_array(ctx, ns, 1); /* tol > 0, beside the box (not the 184-byte segment) */
     f->rspan = rs__calloc(ctx, f->gh, 1);
-    if (!stamp || !sbox || !f->rspan) {
+    if (!stamp || !sbox || !sok || !f->rspan) {
         rs__free(ctx, stamp);
         rs__free(ctx, sbox);
+        rs__free(ctx, sok);
         return RS_ERR_NOMEM;
     }
     double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
@@ -367,6 +382,7 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
         double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
                         lm_max(lm_max(s->len, s->r), ext));
         s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
+        sok[k] = s->tol > 0;
         double g = s->r + s->tol + f->margin;
         sbox[4 * k] = float_down(s->xmin - g);
         sbox[4 * k + 1] = float_up(s->xmax + g);
@@ -385,25 +401,32 @@ static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
     if (!f->rids || !f->rbox) {
         rs__free(ctx, stamp);
         rs__free(ctx, sbox);
+        rs__free(ctx, sok);
         return RS_ERR_NOMEM;
     }
     for (uint32_t j = 0; j < f->gh; j++) {
         int ok = 1;
         uint32_t pos = f->rstart[j];
-        for (size_t cell = (size_t)j * f->gw; cell < (size_t)(j + 1) * f->gw; cell++)
-            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
-                uint32_t id = f->ids[k];
-                if (stamp[id] == j + 1) continue;
-                stamp[id] = j + 1;
-                f->rids[pos] = id;
-                memcpy(f->rbox + 4 * (size_t)pos, sbox + 4 * (size_t)id, 4 * sizeof *sbox);
-                ok &= f->seg[id].tol > 0;
-                pos++;
+        /* the row's cell lists are one run of ids, in cell order */
+        uint32_t k0 = f->start[(size_t)j * f->gw], k1 = f->start[(size_t)(j + 1) * f->gw];
+        for (uint32_t k = k0; k < k1; k++) {
+            uint32_t id = f->ids[k];
+            if (k + PREFETCH_AHEAD < k1) {
+                rf_prefetch(stamp + f->ids[k + PREFETCH_AHEAD]);
+                rf_prefetch(sbox + 4 * (size_t)f->ids[k + PREFETCH_AHEAD]);
             }
+            if (stamp[id] == j + 1) continue;
+            stamp[id] = j + 1;
+            f->rids[pos] = id;
+            memcpy(f->rbox + 4 * (size_t)pos, sbox + 4 * (size_t)id, 4 * sizeof *sbox);
+            ok &= sok[id];
+            pos++;
+        }
         f->rspan[j] = (uint8_t)ok;
     }
     rs__free(ctx, stamp);
     rs__free(ctx, sbox);
+    rs__free(ctx, sok);
     return RS_OK;
 }
 
@@ -733,18 +756,28 @@ static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, cons
  * to capsule_within (the lists of a dense map hold ~60 segments: the scan
  * loaded each one's 184 bytes before). Same flags and work units as asking
  * redundant_of per segment. */
-static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h)
+__attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h, uint8_t *redundant)
 {
     size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + 4;
     /* outer and inner boxes of every segment (ob[2k], ob[2k+1]): 32 bytes
      * read where each segment's 184 were */
     rf_fbox *ob = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 2 * sizeof *ob);
     float *gb = rs__alloc_array(ctx, cap, 4 * sizeof *gb);
-    if (!ob || !gb) {
+    /* the segments by cell1 (counting sort): who asks which list */
+    uint32_t *first = rs__calloc(ctx, ncell + 1, sizeof *first);
+    uint32_t *order = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *order);
+    if (!ob || !gb || !first || !order) {
         rs__free(ctx, ob);
         rs__free(ctx, gb);
+        rs__free(ctx, first);
+        rs__free(ctx, order);
         return RS_ERR_NOMEM;
     }
+    for (size_t k = 0; k < f->nseg; k++) first[cell1[k] + 1]++;
+    for (size_t c = 0; c < ncell; c++) first[c + 1] += first[c];
+    for (size_t k = 0; k < f->nseg; k++) order[first[cell1[k]]++] = (uint32_t)k;
+    for (size_t c = ncell; c > 0; c--) first[c] = first[c - 1];
+    first[0] = 0;
     const float *g[4] = { gb, gb + cap, gb + 2 * cap, gb + 3 * cap };
     for (size_t k = 0; k < f->nseg; k++) {
         ob[2 * k] = fbox_outer(&f->seg[k]);
@@ -754,9 +787,8 @@ static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell
     for (size_t c = 0; c < ncell && res == RS_OK; c++) {
         uint32_t a = f->start[c], b = f->start[c + 1], n = b - a;
         int gathered = 0;
-        for (uint32_t i = a; i < b; i++) {
-            uint32_t k = f->ids[i];
-            if (cell1[k] != c) continue;
+        for (uint32_t i = first[c]; i < first[c + 1]; i++) {
+            uint32_t k = order[i];
             int red = 0;
             if (n > f->relscan && h->node) {
                 red = redundant_of(f, h, k, c);
@@ -764,8 +796,10 @@ static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell
                 h->work += n;
                 if (h->work > h->limit) { res = RS_ERR_LIMIT; break; }
                 if (!gathered) {
-                    for (uint32_t e = 0; e < n; e++)
+                    for (uint32_t e = 0; e < n; e++) {
+                        if (e + PREFETCH_AHEAD < n) rf_prefetch(&ob[2 * (size_t)f->ids[a + e + PREFETCH_AHEAD]]);
                         for (int l = 0; l < 4; l++) gb[l * cap + e] = ob[2 * (size_t)f->ids[a + e]].v[l];
+                    }
                     for (uint32_t e = n; e < n + 4; e++)
                         for (int l = 0; l < 4; l++) gb[l * cap + e] = INFINITY;
                     gathered = 1;
@@ -775,12 +809,13 @@ static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell
                     red = holds(f, k, f->ids[a + e]);
             }
             if (red < 0) { res = RS_ERR_LIMIT; break; }
-            f->seg[k].redundant = (uint8_t)red;
-            f->nredundant += (size_t)red;
+            redundant[k] = (uint8_t)red;
         }
     }
     rs__free(ctx, ob);
     rs__free(ctx, gb);
+    rs__free(ctx, first);
+    rs__free(ctx, order);
     return res;
 }
 
@@ -805,14 +840,22 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
         rs_result r = holders_build(ctx, f, h);
         if (r != RS_OK) return r;
     }
-    /* the holder is listed wherever this one is (its grown capsule is larger) */
-    rs_result r = holder_scan(ctx, f, cell1, h);
-    if (r != RS_OK) return r;
+    /* the holder is listed wherever this one is (its grown capsule is larger);
+     * the flags land in the segments in the sequential pass below */
+    uint8_t *redundant = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 1);
+    if (!redundant) return RS_ERR_NOMEM;
+    rs_result r = holder_scan(ctx, f, cell1, h, redundant);
+    if (r != RS_OK) {
+        rs__free(ctx, redundant);
+        return r;
+    }
     size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
     for (size_t k = f->nseg; k-- > 0;) {
         rf_seg *sa = &f->seg[k];
         size_t m = k + 1;
         h->work++; /* the joint partner: one step */
+        sa->redundant = redundant[k];
+        f->nredundant += redundant[k];
         if (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m = after;
         if (m < f->nseg && m <= UINT32_MAX) {
             const rf_seg *sb = &f->seg[m];
@@ -825,6 +868,7 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
                    f->seg[k + 1].ay == sa->ay))
             after = k + 1;
     }
+    rs__free(ctx, redundant);
     return RS_OK;
 }
 
@@ -853,7 +897,10 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     if (!b->norec && b->rec) {
         for (size_t k = f->nseg; k-- > 0;) {
             uint32_t a = k ? b->recend[k - 1] : 0, e = b->recend[k];
-            for (uint32_t i = a; i < e; i++) f->ids[--b->cnt[b->rec[i]]] = (uint32_t)k;
+            for (uint32_t i = e; i-- > a;) {
+                if (i >= PREFETCH_AHEAD) rf_prefetch(f->ids + b->cnt[b->rec[i - PREFETCH_AHEAD]] - 1);
+                f->ids[--b->cnt[b->rec[i]]] = (uint32_t)k;
+            }
             b->cell1[k] = e > a ? b->pref[k] & 0x7FFFFFFFu : 0;
         }
     } else {
