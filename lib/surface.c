@@ -381,14 +381,21 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         /* Bilinear between the sample rows crow and crow + 1: the two
          * horizontal interpolants per column once per piece, then every row
          * of the piece (all pixels: a plain loop). */
-        const float *r0, *r1;
+        const float *r0 = NULL, *r1 = NULL;
         terrain_rows(s, p->tcache, p->crow, &r0, &r1);
         const uint32_t wc0 = p->tcache->c0;
         double *hx = p->hx;
         const size_t w = p->w;
-        for (uint32_t k = 0; k < p->w; k++) {
-            uint32_t px = p->x0 + k, ccol = px / T;
-            double fx = ((px - ccol * T) + 0.5) / T;
+        /* the column and its offset in the cell counted along (no integer
+         * division per column), the weight per offset from a table: the
+         * same doubles ((offset + 0.5) / T) */
+        double fxt[64];
+        const uint32_t nt = T < 64 ? T : 64;
+        for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
+        uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
+        for (uint32_t k = 0; k < p->w; k++, off++) {
+            if (off == T) { off = 0; ccol++; }
+            double fx = off < nt ? fxt[off] : (off + 0.5) / T;
             const float *a = r0 + 3 * (size_t)(ccol - wc0), *c = r1 + 3 * (size_t)(ccol - wc0);
             for (int ch = 0; ch < 3; ch++) {
                 hx[ch * w + k] = a[ch] * (1 - fx) + a[ch + 3] * fx;
