@@ -6,7 +6,8 @@
  * (rs_road_grid_build, which contains it), thread CPU time, fastest of
  * RUNS, the builds of a count interleaved.
  * Usage: index OUTDIR (writes OUTDIR/index.md);
- *        index --one N [REPS] (N roads, REPS road-field builds: for profilers);
+ *        index --one N [REPS [grid]] (N roads, REPS road-field builds, or
+ *        whole grid builds: for profilers);
  *        index --dump N FILE [CELL] (N roads, index cell CELL m (0: automatic): the road field's stats, whole-image
  *        coverage doubles and a nearest query per 7th pixel into FILE, to
  *        compare two builds byte for byte with cmp). */
@@ -79,8 +80,17 @@ int main(int argc, char **argv)
         double best = -1;
         rs__roadfield_stats st;
         memset(&st, 0, sizeof st);
+        rs_dem *d = NULL;
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = T;
+        int grid = argc > 4 && strcmp(argv[4], "grid") == 0;
+        if (grid) {
+            rs_dem_frame fr = { CELL, 1, 0, 0 };
+            if (rs_dem_create(ctx, s.w, s.h, s.z, &d) || rs_dem_set_frame(ctx, d, &fr)) return 1;
+        }
         for (int i = 0; i < reps && R; i++) {
-            double ms = field_once(ctx, R, &st);
+            double ms = grid ? grid_once(ctx, d, R, &o) : field_once(ctx, R, &st);
             if (ms < 0) return 1;
             if (best < 0 || ms < best) best = ms;
         }
@@ -88,6 +98,8 @@ int main(int argc, char **argv)
                "%zu redundant: road field %.2f ms (fastest of %d)\n",
                s.nroads, st.segments, st.entries, st.max_list,
                st.segments ? (double)st.relation_work / (double)st.segments : 0, st.redundant, best, reps);
+        if (grid) printf("  (whole road grid builds)\n");
+        rs_dem_free(ctx, d);
         rs_roads_free(ctx, R);
         sc_scene_free(&s);
         rs_ctx_free(ctx);
