@@ -133,10 +133,15 @@ static double seg_point(const rf_seg *s, double x, double y, double *pr, double 
     return len2(x - qx, y - qy);
 }
 
-static double seg_dist(const rf_seg *s, double x, double y)
+/* seg_point's distance alone (the same operations: the same double),
+ * inlined: the index build asks it for every cell a segment may touch. */
+static inline double seg_dist(const rf_seg *s, double x, double y)
 {
-    double pr, side;
-    return seg_point(s, x, y, &pr, &side);
+    double wx = x - s->ax, wy = y - s->ay, p = wx * s->ux + wy * s->uy, qx, qy;
+    if (!(p > 0)) { qx = s->ax; qy = s->ay; }
+    else if (p >= s->len) { qx = s->bx; qy = s->by; }
+    else { qx = s->ax + p * s->ux; qy = s->ay + p * s->uy; }
+    return len2(x - qx, y - qy);
 }
 
 /* ------------------------------------------------------------------------
@@ -188,6 +193,7 @@ typedef struct rf_builder {
      * and row are even (else its last cell), its cell1 (the holder search
      * then gathers about a quarter of the lists) */
     uint32_t *pref, pcell;
+    size_t seg0, rec0; /* first capacities of recend/pref and of the record (grown by doubling) */
     int norec;
 } rf_builder;
 
@@ -206,7 +212,7 @@ static void rec_cell(rf_builder *b, size_t cell)
 {
     if (b->norec) return;
     if (b->nrec == b->caprec) {
-        size_t nc = b->caprec ? 2 * b->caprec : 4096, bytes;
+        size_t nc = b->caprec ? 2 * b->caprec : b->rec0, bytes;
         uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->rec, bytes) : NULL;
         if (!nr) { rec_drop(b); return; }
         b->rec = nr;
@@ -220,7 +226,7 @@ static void rec_end(rf_builder *b, size_t k)
 {
     if (b->norec) return;
     if (k >= b->caprecend) {
-        size_t nc = b->caprecend ? 2 * b->caprecend : 256, bytes;
+        size_t nc = b->caprecend ? 2 * b->caprecend : b->seg0, bytes;
         uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->recend, bytes) : NULL;
         if (nr) b->recend = nr;
         uint32_t *np = nr ? rs__realloc(b->ctx, b->pref, bytes) : NULL;
@@ -1000,6 +1006,8 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     /* Pass 1: local coordinates, arc lengths, counts; keep the segments
      * that reach the grid. */
     double per_unit = rs__local_quantum(p->cell_size);
+    b.seg0 = 64;
+    b.rec0 = 4096;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         const double *xy = NULL;
@@ -1043,7 +1051,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             if (v < 0) { res = RS_ERR_LIMIT; goto fail; }
             if (v == 0) continue;
             if (f->nseg == cap_seg) {
-                size_t nc = cap_seg ? 2 * cap_seg : 64, bytes;
+                size_t nc = cap_seg ? 2 * cap_seg : b.seg0, bytes;
                 if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(rf_seg), &bytes)) { res = RS_ERR_LIMIT; goto fail; }
                 rf_seg *ns = rs__realloc(ctx, f->seg, bytes);
                 if (!ns) { res = RS_ERR_NOMEM; goto fail; }
@@ -1091,6 +1099,9 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     b.limit = UINT32_MAX - 1u;
     b.work_limit = ctx->limits.max_field_work;
     b.ctx = ctx;
+    /* the widened lists hold at least the source's entries */
+    b.seg0 = 64;
+    b.rec0 = src->nent + src->nent / 4 > 4096 ? src->nent + src->nent / 4 : 4096;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     rs_result res = RS_OK;
     f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
