@@ -932,6 +932,19 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     return RS_OK;
 }
 
+/* A builder for field f: the entry and work limits of ctx, an empty record. */
+static void builder_init(rf_builder *b, rs_ctx *ctx, rs__roadfield *f)
+{
+    memset(b, 0, sizeof *b);
+    b->f = f;
+    b->ctx = ctx;
+    b->limit = UINT32_MAX - 1u;
+    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b->limit) b->limit = ctx->limits.max_road_cells;
+    b->work_limit = ctx->limits.max_field_work;
+    b->seg0 = 64;
+    b->rec0 = 4096;
+}
+
 /* A failed build or widening: frees what was made, says why. */
 static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_result res)
 {
@@ -988,12 +1001,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
     size_t ncell = (size_t)f->gw * f->gh;
     rf_builder b;
-    memset(&b, 0, sizeof b);
-    b.f = f;
-    b.limit = UINT32_MAX - 1u;
-    b.work_limit = ctx->limits.max_field_work;
-    b.ctx = ctx;
-    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
+    builder_init(&b, ctx, f);
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
     f->rstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
@@ -1006,8 +1014,6 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     /* Pass 1: local coordinates, arc lengths, counts; keep the segments
      * that reach the grid. */
     double per_unit = rs__local_quantum(p->cell_size);
-    b.seg0 = 64;
-    b.rec0 = 4096;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         const double *xy = NULL;
@@ -1094,15 +1100,9 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     f->relscan = src->relscan;
     size_t ncell = (size_t)f->gw * f->gh;
     rf_builder b;
-    memset(&b, 0, sizeof b);
-    b.f = f;
-    b.limit = UINT32_MAX - 1u;
-    b.work_limit = ctx->limits.max_field_work;
-    b.ctx = ctx;
+    builder_init(&b, ctx, f);
     /* the widened lists hold at least the source's entries */
-    b.seg0 = 64;
     b.rec0 = src->nent + src->nent / 4 > 4096 ? src->nent + src->nent / 4 : 4096;
-    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
     rs_result res = RS_OK;
     f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);

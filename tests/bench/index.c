@@ -15,24 +15,17 @@
 #include "roadsplat.h"
 #include "scene_splat.h"
 #include "scenes.h"
+#include "timing.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #define RUNS 5
 #define DEM_W 400
 #define DEM_H 350
 #define CELL 5.0
 #define T 4
-
-static double cpu_ms(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return (double)t.tv_sec * 1e3 + (double)t.tv_nsec * 1e-6;
-}
 
 static rs__roadfield_params field_params(void)
 {
@@ -50,9 +43,9 @@ static double field_once(rs_ctx *ctx, const rs_roads *R, rs__roadfield_stats *st
 {
     rs__roadfield_params p = field_params();
     rs__roadfield *f = NULL;
-    double t0 = cpu_ms();
+    double t0 = tm_thread_cpu_ms();
     rs_result r = rs__roadfield_build(ctx, R, &p, &f);
-    double ms = cpu_ms() - t0;
+    double ms = tm_thread_cpu_ms() - t0;
     if (r == RS_OK && st) rs__roadfield_get_stats(f, st);
     rs__roadfield_free(ctx, f);
     return r ? -1 : ms;
@@ -61,9 +54,9 @@ static double field_once(rs_ctx *ctx, const rs_roads *R, rs__roadfield_stats *st
 static double grid_once(rs_ctx *ctx, const rs_dem *d, const rs_roads *R, const rs_splat_options *o)
 {
     rs_road_grid *g = NULL;
-    double t0 = cpu_ms();
+    double t0 = tm_thread_cpu_ms();
     rs_result r = rs_road_grid_build(ctx, d, R, o, &g);
-    double ms = cpu_ms() - t0;
+    double ms = tm_thread_cpu_ms() - t0;
     rs_road_grid_free(ctx, g);
     return r ? -1 : ms;
 }

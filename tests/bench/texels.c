@@ -9,6 +9,7 @@
  * Usage: texels OUTDIR (writes OUTDIR/texels.md);
  *        texels --one T [REPS] (T texels, REPS windows: for profilers). */
 #include "roadsplat.h"
+#include "scene_splat.h"
 #include "scenes.h"
 #include "timing.h"
 
@@ -16,10 +17,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #define RUNS 7
-#define DEM_N 1025
 #define MAXWIN 4096
 
 typedef struct job {
@@ -35,15 +34,6 @@ static double clock_ms(void *user)
 {
     (void)user;
     return tm_now_ms();
-}
-
-/* This thread's CPU time, ms: on the shared machine the wall clock of a
- * one-thread run mostly measures the other processes. */
-static double cpu_ms(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return (double)t.tv_sec * 1e3 + (double)t.tv_nsec * 1e-6;
 }
 
 static void *work(void *arg)
@@ -87,11 +77,11 @@ static double run(rs_ctx *const *ctx, const rs_splatter *s, uint8_t *rgba, uint3
         j[t].y1 = (uint32_t)((uint64_t)h * (t + 1) / nt);
         j[t].fill = fill;
     }
-    double t0 = cpu ? cpu_ms() : tm_now_ms();
+    double t0 = cpu ? tm_thread_cpu_ms() : tm_now_ms();
     if (nt > 1 && pthread_create(&th, NULL, work, &j[1])) return -1;
     work(&j[0]);
     if (nt > 1) pthread_join(th, NULL);
-    double ms = (cpu ? cpu_ms() : tm_now_ms()) - t0;
+    double ms = (cpu ? tm_thread_cpu_ms() : tm_now_ms()) - t0;
     for (int t = 0; t < nt; t++)
         if (j[t].rc) return -1;
     if (prof)
@@ -103,17 +93,9 @@ int main(int argc, char **argv)
 {
     rs_ctx *ctx[2] = { NULL, NULL };
     if (rs_ctx_create(NULL, NULL, &ctx[0]) || rs_ctx_create(NULL, NULL, &ctx[1])) return 1;
-    float *z = malloc(sizeof(float) * DEM_N * DEM_N);
-    if (!z) return 1;
-    sc_dem_fractal(z, DEM_N, DEM_N, 5, 0.5);
     rs_dem *dem;
     rs_roads *roads;
-    double xy[4] = { 500, 500, 550, 518.5 };
-    rs_dem_frame fr = { 0, 0.01, 0, 0 };
-    if (rs_dem_create(ctx[0], DEM_N, DEM_N, z, &dem) || rs_dem_set_frame(ctx[0], dem, &fr) ||
-        rs_roads_create(ctx[0], &roads) || rs_roads_add(ctx[0], roads, NULL, 6, xy, 2))
-        return 1;
-    free(z);
+    if (ss_fractal_road(ctx[0], &dem, &roads)) return 1;
     uint8_t *rgba = malloc((size_t)MAXWIN * MAXWIN * 4);
     if (!rgba) return 1;
     const uint32_t Ts[5] = { 1, 2, 4, 8, 16 };
