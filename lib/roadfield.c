@@ -133,15 +133,24 @@ static double seg_point(const rf_seg *s, double x, double y, double *pr, double 
     return len2(x - qx, y - qy);
 }
 
-/* seg_point's distance alone (the same operations: the same double),
- * inlined: the index build asks it for every cell a segment may touch. */
-static inline double seg_dist(const rf_seg *s, double x, double y)
+/* seg_point's distance alone (the same operations: the same double) and
+ * the nearest point, inlined: the index build asks it for every cell a
+ * segment may touch. */
+static inline double seg_near(const rf_seg *s, double x, double y, double *qxo, double *qyo)
 {
     double wx = x - s->ax, wy = y - s->ay, p = wx * s->ux + wy * s->uy, qx, qy;
     if (!(p > 0)) { qx = s->ax; qy = s->ay; }
     else if (p >= s->len) { qx = s->bx; qy = s->by; }
     else { qx = s->ax + p * s->ux; qy = s->ay + p * s->uy; }
+    *qxo = qx;
+    *qyo = qy;
     return len2(x - qx, y - qy);
+}
+
+static inline double seg_dist(const rf_seg *s, double x, double y)
+{
+    double qx, qy;
+    return seg_near(s, x, y, &qx, &qy);
 }
 
 /* ------------------------------------------------------------------------
@@ -242,6 +251,8 @@ static void rec_end(rf_builder *b, size_t k)
  * segment. fill = 0: count (and flag full cells); fill = 1: write `id` into
  * the lists (cursors count down). Returns the cells visited, or -1 when the
  * entry limit is passed. */
+static double seg_mag(const rf_seg *s);
+
 static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
 {
     rs__roadfield *f = b->f;
@@ -249,6 +260,9 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
     double R = s->r + f->reach + eps;      /* may be huge or inf: only compared */
     double rin = s->r - f->margin - eps;   /* corners within rin: the cell is full */
     double hd = c * HALF_SQRT2 * (1 + 1e-9); /* half the cell diagonal */
+    /* R less a slack of 1e-9 of every magnitude in play (NaN or -inf for a
+     * huge R: the shortcut then never applies) */
+    double Rsure = R - 1e-9 * (1 + seg_mag(s) + ((double)f->gw + (double)f->gh + 2) * c + R);
     double gy1 = ((double)f->gh - 1) * c, gx1 = ((double)f->gw - 1) * c;
     double ylo = lm_max(lm_min(s->ay, s->by) - R, -c), yhi = lm_min(lm_max(s->ay, s->by) + R, gy1);
     double xlo = lm_max(lm_min(s->ax, s->bx) - R, -c), xhi = lm_min(lm_max(s->ax, s->bx) + R, gx1);
@@ -274,9 +288,17 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
         int64_t before = visited;
         for (uint32_t i = i0; i <= i1; i++) {
             double x0 = ((double)i - 1) * c, x1 = (double)i * c;
-            /* the centre's distance settles most cells without the exact test */
-            double dc = seg_dist(s, x0 + 0.5 * c, y0 + 0.5 * c);
-            if (dc > R + hd || (dc > R && !seg_touches_rect(s, x0, y0, x1, y1, R))) continue;
+            /* the centre's distance settles most cells without the exact
+             * test; of the rest, a cell whose box comes within R - slack of
+             * the centre's nearest point certainly touches (the exact test
+             * would say so: slack is far above its rounding) */
+            double qx, qy, cx = x0 + 0.5 * c, cy = y0 + 0.5 * c, dc = seg_near(s, cx, cy, &qx, &qy);
+            if (dc > R + hd) continue;
+            if (dc > R) {
+                double ex = fabs(cx - qx) - 0.5 * c, ey = fabs(cy - qy) - 0.5 * c;
+                if (!(len2(ex > 0 ? ex : 0, ey > 0 ? ey : 0) <= Rsure) && !seg_touches_rect(s, x0, y0, x1, y1, R))
+                    continue;
+            }
             size_t cell = (size_t)j * f->gw + i;
             visited++;
             if (fill) {
