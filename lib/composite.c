@@ -45,6 +45,7 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
 #if defined(__SSE2__)
         const __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(),
                       top = _mm_set1_pd(255.0), full = _mm_set1_pd(65535.0), ka = _mm_set1_pd(p->cas_rgba[3]);
+        const __m128 halff = _mm_set1_ps(0.5f), zerof = _mm_setzero_ps(), topf = _mm_set1_ps(255.0f);
         for (; k + 4 <= w; k += 4) {
             uint64_t q4;
             memcpy(&q4, q + k, sizeof q4);
@@ -71,12 +72,16 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
                 const float *src = q4 ? sc : tc;
                 __m128i px = _mm_set1_epi32((int)0xFF000000u);
                 for (int ch = 0; ch < 3; ch++) {
-                    __m128 f = _mm_loadu_ps(src + ch * w + k);
-                    __m128d v0 = _mm_cvtps_pd(f), v1 = _mm_cvtps_pd(_mm_movehl_ps(f, f));
-                    v0 = _mm_min_pd(_mm_max_pd(_mm_add_pd(v0, half), zero), top);
-                    v1 = _mm_min_pd(_mm_max_pd(_mm_add_pd(v1, half), zero), top);
-                    __m128i c = _mm_unpacklo_epi64(_mm_cvttpd_epi32(v0), _mm_cvttpd_epi32(v1));
-                    px = _mm_or_si128(px, _mm_slli_epi32(c, 8 * ch));
+                    /* in float, four at a time, the same bytes as in double
+                     * (checked over all 2^32 floats): from 0.5 up, v + 0.5
+                     * is exact or rounds within its integer part, above 255
+                     * both clamp; below 0.5 (and NaN) the byte is 0, taken
+                     * as v = 0 (the float sum would round 0.49999997 + 0.5
+                     * up to 1) */
+                    __m128 v = _mm_loadu_ps(src + ch * w + k);
+                    v = _mm_and_ps(_mm_cmpge_ps(v, halff), v);
+                    v = _mm_min_ps(_mm_max_ps(_mm_add_ps(v, halff), zerof), topf);
+                    px = _mm_or_si128(px, _mm_slli_epi32(_mm_cvttps_epi32(v), 8 * ch));
                 }
                 _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), px);
                 continue;

@@ -78,6 +78,24 @@ struct rs__roadfield {
     uint32_t relscan;  /* cell lists up to this long are scanned for holders (rs__roadfield_params) */
 };
 
+/* fmax and fmin with glibc's values (x on a tie, the other one when one
+ * is NaN), inlined: the libm calls were ~7 % of an index build. */
+static inline double lm_max(double x, double y) { return x >= y || y != y ? x : y; }
+static inline double lm_min(double x, double y) { return x <= y || y != y ? x : y; }
+
+/* Reads of a segment's data by list order (row lists, holder boxes) jump
+ * over arrays of megabytes on a dense map: ask for them a few entries
+ * ahead (a hint; no effect on results). */
+#define PREFETCH_AHEAD 8
+static inline void rf_prefetch(const void *p)
+{
+#if defined(__SSE2__)
+    _mm_prefetch((const char *)p, _MM_HINT_T0);
+#else
+    (void)p;
+#endif
+}
+
 /* floor(v) clamped to [0, n-1]; NaN gives 0. Keeps every cast defined. */
 static uint32_t clamp_index(double v, uint32_t n)
 {
@@ -115,10 +133,24 @@ static double seg_point(const rf_seg *s, double x, double y, double *pr, double 
     return len2(x - qx, y - qy);
 }
 
-static double seg_dist(const rf_seg *s, double x, double y)
+/* seg_point's distance alone (the same operations: the same double) and
+ * the nearest point, inlined: the index build asks it for every cell a
+ * segment may touch. */
+static inline double seg_near(const rf_seg *s, double x, double y, double *qxo, double *qyo)
 {
-    double pr, side;
-    return seg_point(s, x, y, &pr, &side);
+    double wx = x - s->ax, wy = y - s->ay, p = wx * s->ux + wy * s->uy, qx, qy;
+    if (!(p > 0)) { qx = s->ax; qy = s->ay; }
+    else if (p >= s->len) { qx = s->bx; qy = s->by; }
+    else { qx = s->ax + p * s->ux; qy = s->ay + p * s->uy; }
+    *qxo = qx;
+    *qyo = qy;
+    return len2(x - qx, y - qy);
+}
+
+static inline double seg_dist(const rf_seg *s, double x, double y)
+{
+    double qx, qy;
+    return seg_near(s, x, y, &qx, &qy);
 }
 
 /* ------------------------------------------------------------------------
@@ -128,13 +160,13 @@ static double seg_dist(const rf_seg *s, double x, double y)
 /* Does the rectangle [x0,x1] x [y0,y1] come within R of the segment? */
 static int seg_touches_rect(const rf_seg *s, double x0, double y0, double x1, double y1, double R)
 {
-    if (fmin(s->ax, s->bx) - R > x1 || fmax(s->ax, s->bx) + R < x0 || fmin(s->ay, s->by) - R > y1 ||
-        fmax(s->ay, s->by) + R < y0)
+    if (lm_min(s->ax, s->bx) - R > x1 || lm_max(s->ax, s->bx) + R < x0 || lm_min(s->ay, s->by) - R > y1 ||
+        lm_max(s->ay, s->by) + R < y0)
         return 0;
     /* Intersection by separating axes: x and y passed above with R = 0
      * when the bounding boxes overlap; the last axis is the segment normal. */
-    int boxes = !(fmin(s->ax, s->bx) > x1 || fmax(s->ax, s->bx) < x0 || fmin(s->ay, s->by) > y1 ||
-                  fmax(s->ay, s->by) < y0);
+    int boxes = !(lm_min(s->ax, s->bx) > x1 || lm_max(s->ax, s->bx) < x0 || lm_min(s->ay, s->by) > y1 ||
+                  lm_max(s->ay, s->by) < y0);
     if (boxes) {
         double c[4] = { (x0 - s->ax) * s->uy - (y0 - s->ay) * s->ux, (x1 - s->ax) * s->uy - (y0 - s->ay) * s->ux,
                         (x0 - s->ax) * s->uy - (y1 - s->ay) * s->ux, (x1 - s->ax) * s->uy - (y1 - s->ay) * s->ux };
@@ -144,7 +176,7 @@ static int seg_touches_rect(const rf_seg *s, double x0, double y0, double x1, do
     /* Disjoint convex sets: the closest pair has a vertex of one of them. */
     const double px[2] = { s->ax, s->bx }, py[2] = { s->ay, s->by };
     for (int k = 0; k < 2; k++) {
-        double dx = fmax(fmax(x0 - px[k], px[k] - x1), 0), dy = fmax(fmax(y0 - py[k], py[k] - y1), 0);
+        double dx = lm_max(lm_max(x0 - px[k], px[k] - x1), 0), dy = lm_max(lm_max(y0 - py[k], py[k] - y1), 0);
         if (len2(dx, dy) <= R) return 1;
     }
     return seg_dist(s, x0, y0) <= R || seg_dist(s, x1, y0) <= R || seg_dist(s, x0, y1) <= R ||
@@ -159,12 +191,68 @@ typedef struct rf_builder {
     uint32_t *cell1; /* pass 2: per segment, a cell that lists it */
     uint64_t work_limit; /* seg_relations' work (rs_limits.max_field_work) */
     int work_over;       /* 1: seg_relations passed work_limit */
+    /* Pass 1 records the cells it visits (rec, segment after segment, in
+     * visiting order; recend[k] = end of segment k's run), so that pass 2
+     * only scatters them instead of doing the geometry again. When memory
+     * for the record runs out, norec = 1 and pass 2 recomputes. */
+    rs_ctx *ctx;
+    uint32_t *rec, *recend;
+    size_t nrec, caprec, caprecend;
+    /* pass 1, per recorded segment: the first cell it visits whose column
+     * and row are even (else its last cell), its cell1 (the holder search
+     * then gathers about a quarter of the lists) */
+    uint32_t *pref, pcell;
+    size_t seg0, rec0; /* first capacities of recend/pref and of the record (grown by doubling) */
+    int norec;
 } rf_builder;
+
+static void rec_drop(rf_builder *b)
+{
+    rs__free(b->ctx, b->rec);
+    rs__free(b->ctx, b->recend);
+    rs__free(b->ctx, b->pref);
+    b->rec = b->recend = b->pref = NULL;
+    b->nrec = b->caprec = b->caprecend = 0;
+    b->norec = 1;
+}
+
+/* Records one visited cell (pass 1). */
+static void rec_cell(rf_builder *b, size_t cell)
+{
+    if (b->norec) return;
+    if (b->nrec == b->caprec) {
+        size_t nc = b->caprec ? 2 * b->caprec : b->rec0, bytes;
+        uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->rec, bytes) : NULL;
+        if (!nr) { rec_drop(b); return; }
+        b->rec = nr;
+        b->caprec = nc;
+    }
+    b->rec[b->nrec++] = (uint32_t)cell;
+}
+
+/* Closes segment k's run of recorded cells (segments are numbered 0, 1, ...). */
+static void rec_end(rf_builder *b, size_t k)
+{
+    if (b->norec) return;
+    if (k >= b->caprecend) {
+        size_t nc = b->caprecend ? 2 * b->caprecend : b->seg0, bytes;
+        uint32_t *nr = rs__mul_size(nc, sizeof *nr, &bytes) ? rs__realloc(b->ctx, b->recend, bytes) : NULL;
+        if (nr) b->recend = nr;
+        uint32_t *np = nr ? rs__realloc(b->ctx, b->pref, bytes) : NULL;
+        if (!np) { rec_drop(b); return; }
+        b->pref = np;
+        b->caprecend = nc;
+    }
+    b->recend[k] = (uint32_t)b->nrec;
+    b->pref[k] = b->pcell;
+}
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
  * segment. fill = 0: count (and flag full cells); fill = 1: write `id` into
  * the lists (cursors count down). Returns the cells visited, or -1 when the
  * entry limit is passed. */
+static double seg_mag(const rf_seg *s);
+
 static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
 {
     rs__roadfield *f = b->f;
@@ -172,12 +260,16 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
     double R = s->r + f->reach + eps;      /* may be huge or inf: only compared */
     double rin = s->r - f->margin - eps;   /* corners within rin: the cell is full */
     double hd = c * HALF_SQRT2 * (1 + 1e-9); /* half the cell diagonal */
+    /* R less a slack of 1e-9 of every magnitude in play (NaN or -inf for a
+     * huge R: the shortcut then never applies) */
+    double Rsure = R - 1e-9 * (1 + seg_mag(s) + ((double)f->gw + (double)f->gh + 2) * c + R);
     double gy1 = ((double)f->gh - 1) * c, gx1 = ((double)f->gw - 1) * c;
-    double ylo = fmax(fmin(s->ay, s->by) - R, -c), yhi = fmin(fmax(s->ay, s->by) + R, gy1);
-    double xlo = fmax(fmin(s->ax, s->bx) - R, -c), xhi = fmin(fmax(s->ax, s->bx) + R, gx1);
+    double ylo = lm_max(lm_min(s->ay, s->by) - R, -c), yhi = lm_min(lm_max(s->ay, s->by) + R, gy1);
+    double xlo = lm_max(lm_min(s->ax, s->bx) - R, -c), xhi = lm_min(lm_max(s->ax, s->bx) + R, gx1);
     if (!(ylo <= yhi && xlo <= xhi)) return 0;
     uint32_t j0 = clamp_index(ylo * f->inv_c + 1, f->gh), j1 = clamp_index(yhi * f->inv_c + 1, f->gh);
     int64_t visited = 0;
+    b->pcell = UINT32_MAX;
     for (uint32_t j = j0; j <= j1; j++) {
         double y0 = ((double)j - 1) * c, y1 = (double)j * c;
         /* x extent of the segment within the strip grown by R, then grown by R */
@@ -185,19 +277,28 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
         if (s->uy != 0) {
             double p0 = (sylo - s->ay) / s->uy, p1 = (syhi - s->ay) / s->uy;
             if (p0 > p1) { double tmp = p0; p0 = p1; p1 = tmp; }
-            plo = fmax(plo, p0);
-            phi = fmin(phi, p1);
+            plo = lm_max(plo, p0);
+            phi = lm_min(phi, p1);
             if (!(plo <= phi)) continue;
         } else if (!(s->ay >= sylo && s->ay <= syhi)) continue;
         double xa = s->ax + plo * s->ux, xb = plo == phi ? xa : phi >= s->len ? s->bx : s->ax + phi * s->ux;
-        double sxlo = fmax(fmin(xa, xb) - R, -c), sxhi = fmin(fmax(xa, xb) + R, gx1);
+        double sxlo = lm_max(lm_min(xa, xb) - R, -c), sxhi = lm_min(lm_max(xa, xb) + R, gx1);
         if (!(sxlo <= sxhi)) continue;
         uint32_t i0 = clamp_index(sxlo * f->inv_c + 1, f->gw), i1 = clamp_index(sxhi * f->inv_c + 1, f->gw);
+        int64_t before = visited;
         for (uint32_t i = i0; i <= i1; i++) {
             double x0 = ((double)i - 1) * c, x1 = (double)i * c;
-            /* the centre's distance settles most cells without the exact test */
-            double dc = seg_dist(s, x0 + 0.5 * c, y0 + 0.5 * c);
-            if (dc > R + hd || (dc > R && !seg_touches_rect(s, x0, y0, x1, y1, R))) continue;
+            /* the centre's distance settles most cells without the exact
+             * test; of the rest, a cell whose box comes within R - slack of
+             * the centre's nearest point certainly touches (the exact test
+             * would say so: slack is far above its rounding) */
+            double qx, qy, cx = x0 + 0.5 * c, cy = y0 + 0.5 * c, dc = seg_near(s, cx, cy, &qx, &qy);
+            if (dc > R + hd) continue;
+            if (dc > R) {
+                double ex = fabs(cx - qx) - 0.5 * c, ey = fabs(cy - qy) - 0.5 * c;
+                if (!(len2(ex > 0 ? ex : 0, ey > 0 ? ey : 0) <= Rsure) && !seg_touches_rect(s, x0, y0, x1, y1, R))
+                    continue;
+            }
             size_t cell = (size_t)j * f->gw + i;
             visited++;
             if (fill) {
@@ -206,12 +307,16 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
             } else {
                 if (++b->total > b->limit) return -1;
                 b->cnt[cell]++;
+                rec_cell(b, cell);
+                if (b->pcell == UINT32_MAX || (b->pcell & 0x80000000u)) /* none even yet */
+                    b->pcell = (uint32_t)cell | (((i | j) & 1) ? 0x80000000u : 0);
                 if (rin > 0 && !f->full[cell] &&
                     (dc + hd <= rin || (dc <= rin && seg_dist(s, x0, y0) <= rin && seg_dist(s, x1, y0) <= rin &&
                                         seg_dist(s, x0, y1) <= rin && seg_dist(s, x1, y1) <= rin)))
                     f->full[cell] = 1;
             }
         }
+        if (!fill && visited > before) f->rstart[j]++; /* the segment is in row j's list */
     }
     return visited;
 }
@@ -222,14 +327,14 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     /* halves: the difference of two finite coordinates cannot overflow */
     double dxh = 0.5 * bx - 0.5 * ax, dyh = 0.5 * by - 0.5 * ay, lh = hypot(dxh, dyh);
     s->ax = ax; s->ay = ay; s->bx = bx; s->by = by;
-    s->xmin = fmin(ax, bx); s->xmax = fmax(ax, bx);
-    s->ymin = fmin(ay, by); s->ymax = fmax(ay, by);
+    s->xmin = lm_min(ax, bx); s->xmax = lm_max(ax, bx);
+    s->ymin = lm_min(ay, by); s->ymax = lm_max(ay, by);
     s->ux = lh > 0 ? dxh / lh : 0;
     s->uy = lh > 0 ? dyh / lh : 0;
     s->len = 2 * lh;
     double aux = fabs(s->ux), auy = fabs(s->uy);
-    s->ga = fmax(aux, auy);
-    s->gb = fmin(aux, auy);
+    s->ga = lm_max(aux, auy);
+    s->gb = lm_min(aux, auy);
     if (s->gb < 1e-100) s->gb = 0;
     s->iga = s->ga > 0 ? 1 / s->ga : 0;
     s->igab = s->gb > 0 ? 1 / (s->ga * s->gb) : 0;
@@ -262,10 +367,6 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
 
 static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
 
-/* Row lists for the coverage: per grid row, every segment of the row's cell
- * lists (each once, in the order first met), and whether the row's spans may be used: every segment
- * has coordinates, length and half width within 1e8 cells, so the spans'
- * rounding errors stay far below the slack `tol` (docs/roadfield.md). */
 /* A float <= v (NaN: -inf) and a float >= v (NaN: +inf); conversions
  * only of values within the float range. */
 static float float_down(double v)
@@ -284,53 +385,76 @@ static float float_up(double v)
     return (double)r < v ? nextafterf(r, INFINITY) : r;
 }
 
-static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
+/* Row lists for the coverage: per grid row, every segment of the row's cell
+ * lists (each once, in the order first met), and whether the row's spans may be used: every segment
+ * has coordinates, length and half width within 1e8 cells, so the spans'
+ * rounding errors stay far below the slack `tol` (docs/roadfield.md).
+ * Pass 1 counted each row's segments; one pass over the lists fills them,
+ * each entry's box copied from the segment's. */
+__attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f)
 {
-    uint32_t *stamp = rs__calloc(ctx, f->nseg ? f->nseg : 1, sizeof *stamp);
-    f->rstart = rs__alloc_array(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
+    size_t ns = f->nseg ? f->nseg : 1;
+    uint32_t *stamp = rs__calloc(ctx, ns, sizeof *stamp);
+    float *sbox = rs__alloc_array(ctx, ns, 4 * sizeof *sbox);
+    uint8_t *sok = rs__alloc_array(ctx, ns, 1); /* tol > 0, beside the box (not the 184-byte segment) */
     f->rspan = rs__calloc(ctx, f->gh, 1);
-    if (!stamp || !f->rstart || !f->rspan) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
-    double ext = fmax((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
+    if (!stamp || !sbox || !sok || !f->rspan) {
+        rs__free(ctx, stamp);
+        rs__free(ctx, sbox);
+        rs__free(ctx, sok);
+        return RS_ERR_NOMEM;
+    }
+    double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
     for (size_t k = 0; k < f->nseg; k++) {
         rf_seg *s = &f->seg[k];
-        double m = fmax(fmax(fmax(fabs(s->ax), fabs(s->ay)), fmax(fabs(s->bx), fabs(s->by))),
-                        fmax(fmax(s->len, s->r), ext));
+        double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
+                        lm_max(lm_max(s->len, s->r), ext));
         s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
+        sok[k] = s->tol > 0;
+        double g = s->r + s->tol + f->margin;
+        sbox[4 * k] = float_down(s->xmin - g);
+        sbox[4 * k + 1] = float_up(s->xmax + g);
+        sbox[4 * k + 2] = float_down(s->ymin - g);
+        sbox[4 * k + 3] = float_up(s->ymax + g);
     }
+    /* pass 1 counted each row's segments (seg_cells) into rstart */
     uint64_t run = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        if (pass == 1) {
-            f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
-            f->rbox = rs__alloc_array(ctx, run ? (size_t)run : 1, 4 * sizeof *f->rbox);
-            if (!f->rids || !f->rbox) { rs__free(ctx, stamp); return RS_ERR_NOMEM; }
-            memset(stamp, 0, (f->nseg ? f->nseg : 1) * sizeof *stamp);
-            run = 0;
+    for (uint32_t j = 0; j <= f->gh; j++) {
+        uint32_t n = j < f->gh ? f->rstart[j] : 0;
+        f->rstart[j] = (uint32_t)run;
+        run += n;
+    }
+    f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
+    f->rbox = rs__alloc_array(ctx, run ? (size_t)run : 1, 4 * sizeof *f->rbox);
+    if (!f->rids || !f->rbox) {
+        rs__free(ctx, stamp);
+        rs__free(ctx, sbox);
+        rs__free(ctx, sok);
+        return RS_ERR_NOMEM;
+    }
+    for (uint32_t j = 0; j < f->gh; j++) {
+        int ok = 1;
+        uint32_t pos = f->rstart[j];
+        /* the row's cell lists are one run of ids, in cell order */
+        uint32_t k0 = f->start[(size_t)j * f->gw], k1 = f->start[(size_t)(j + 1) * f->gw];
+        for (uint32_t k = k0; k < k1; k++) {
+            uint32_t id = f->ids[k];
+            if (k + PREFETCH_AHEAD < k1) {
+                rf_prefetch(stamp + f->ids[k + PREFETCH_AHEAD]);
+                rf_prefetch(sbox + 4 * (size_t)f->ids[k + PREFETCH_AHEAD]);
+            }
+            if (stamp[id] == j + 1) continue;
+            stamp[id] = j + 1;
+            f->rids[pos] = id;
+            memcpy(f->rbox + 4 * (size_t)pos, sbox + 4 * (size_t)id, 4 * sizeof *sbox);
+            ok &= sok[id];
+            pos++;
         }
-        for (uint32_t j = 0; j < f->gh; j++) {
-            int ok = 1;
-            if (pass == 0) f->rstart[j] = (uint32_t)run;
-            for (size_t cell = (size_t)j * f->gw; cell < (size_t)(j + 1) * f->gw; cell++)
-                for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
-                    uint32_t id = f->ids[k];
-                    if (stamp[id] == j + 1) continue;
-                    stamp[id] = j + 1;
-                    if (pass == 1) {
-                        const rf_seg *s = &f->seg[id];
-                        double g = s->r + s->tol + f->margin;
-                        f->rids[run] = id;
-                        f->rbox[4 * run] = float_down(s->xmin - g);
-                        f->rbox[4 * run + 1] = float_up(s->xmax + g);
-                        f->rbox[4 * run + 2] = float_down(s->ymin - g);
-                        f->rbox[4 * run + 3] = float_up(s->ymax + g);
-                        ok &= s->tol > 0;
-                    }
-                    run++;
-                }
-            if (pass == 1) f->rspan[j] = (uint8_t)ok;
-        }
-        if (pass == 0) f->rstart[f->gh] = (uint32_t)run;
+        f->rspan[j] = (uint8_t)ok;
     }
     rs__free(ctx, stamp);
+    rs__free(ctx, sbox);
+    rs__free(ctx, sok);
     return RS_OK;
 }
 
@@ -384,7 +508,7 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
                  double *along)
 {
     *along = 0;
-    if (fmin(*ax, *bx) >= -far && fmax(*ax, *bx) <= w + far && fmin(*ay, *by) >= -far && fmax(*ay, *by) <= h + far)
+    if (lm_min(*ax, *bx) >= -far && lm_max(*ax, *bx) <= w + far && lm_min(*ay, *by) >= -far && lm_max(*ay, *by) <= h + far)
         return 1;
     double dxh = 0.5 * *bx - 0.5 * *ax, dyh = 0.5 * *by - 0.5 * *ay, lh = hypot(dxh, dyh);
     if (!(lh > 0) || !isfinite(lh)) return fabs(*ax - 0.5 * w) <= 0.5 * w + pad && fabs(*ay - 0.5 * h) <= 0.5 * h + pad;
@@ -410,7 +534,7 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
  * within t's half width minus s's. */
 static int capsule_within(const rf_seg *s, const rf_seg *t)
 {
-    double m = fmax(fmax(fabs(t->ax), fabs(t->ay)), fmax(fabs(s->ax), fabs(s->ay)));
+    double m = lm_max(lm_max(fabs(t->ax), fabs(t->ay)), lm_max(fabs(s->ax), fabs(s->ay)));
     double room = t->r - s->r + 1e-9 * (1 + m + t->len + t->r);
     return room >= 0 && seg_dist(t, s->ax, s->ay) <= room && seg_dist(t, s->bx, s->by) <= room;
 }
@@ -420,7 +544,7 @@ static int capsule_within(const rf_seg *s, const rf_seg *t)
  * long lists instead, so many short segments sharing cells (10^6 points on
  * a 100 m road) cost n log n, not n times the list. Both ways find the same
  * holders. */
-#define RELATION_SCAN_AUTO 64
+#define RELATION_SCAN_AUTO 256
 #define HOLDER_LEAF 8
 
 typedef struct rf_box { double xlo, ylo, xhi, yhi; } rf_box;
@@ -433,7 +557,7 @@ typedef struct rf_box { double xlo, ylo, xhi, yhi; } rf_box;
  * M_k). The doubled slack covers rounding. */
 static double seg_mag(const rf_seg *s)
 {
-    return fmax(fmax(fabs(s->ax), fabs(s->ay)), fmax(fabs(s->bx), fabs(s->by)));
+    return lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by)));
 }
 
 static rf_box outer_box(const rf_seg *s)
@@ -454,6 +578,28 @@ static int box_holds(const rf_box *o, const rf_box *in)
 {
     return o->xlo <= in->xlo && o->ylo <= in->ylo && o->xhi >= in->xhi && o->yhi >= in->yhi;
 }
+
+/* The same boxes as floats for the list scan, outer ones rounded outwards
+ * and inner ones inwards (so "outer holds inner" can only pass more often
+ * than in doubles), stored (xlo, ylo, -xhi, -yhi): o holds q when o <= q
+ * in all four lanes, one SSE compare. NaN bounds become infinities that
+ * always pass; capsule_within then decides. */
+typedef struct rf_fbox { float v[4]; } rf_fbox;
+
+static rf_fbox fbox_outer(const rf_seg *s)
+{
+    rf_box b = outer_box(s);
+    rf_fbox r = { { float_down(b.xlo), float_down(b.ylo), -float_up(b.xhi), -float_up(b.yhi) } };
+    return r;
+}
+
+static rf_fbox fbox_inner(const rf_seg *s)
+{
+    rf_box b = inner_box(s);
+    rf_fbox r = { { float_up(b.xlo), float_up(b.ylo), -float_down(b.xhi), -float_down(b.yhi) } };
+    return r;
+}
+
 
 typedef struct rf_holders {
     uint32_t *ids;  /* segments of the long lists, in Morton order of their centres */
@@ -539,16 +685,16 @@ static rs_result holders_build(rs_ctx *ctx, const rs__roadfield *f, rf_holders *
         rf_box u = { INFINITY, INFINITY, -INFINITY, -INFINITY };
         for (size_t i = l * HOLDER_LEAF; i < n && i < (l + 1) * HOLDER_LEAF; i++) {
             const rf_box *b = &h->box[i];
-            u.xlo = fmin(u.xlo, b->xlo);
-            u.ylo = fmin(u.ylo, b->ylo);
-            u.xhi = fmax(u.xhi, b->xhi);
-            u.yhi = fmax(u.yhi, b->yhi);
+            u.xlo = lm_min(u.xlo, b->xlo);
+            u.ylo = lm_min(u.ylo, b->ylo);
+            u.xhi = lm_max(u.xhi, b->xhi);
+            u.yhi = lm_max(u.yhi, b->yhi);
         }
         h->node[p2 + l] = u;
     }
     for (size_t i = p2; i-- > 1;) {
         const rf_box *a = &h->node[2 * i], *b = &h->node[2 * i + 1];
-        rf_box u = { fmin(a->xlo, b->xlo), fmin(a->ylo, b->ylo), fmax(a->xhi, b->xhi), fmax(a->yhi, b->yhi) };
+        rf_box u = { lm_min(a->xlo, b->xlo), lm_min(a->ylo, b->ylo), lm_max(a->xhi, b->xhi), lm_max(a->yhi, b->yhi) };
         h->node[i] = u;
     }
     return RS_OK;
@@ -608,6 +754,99 @@ static int redundant_of(const rs__roadfield *f, rf_holders *h, size_t k, size_t 
     return 0;
 }
 
+/* Index of the first of the n gathered boxes (four float arrays, padded
+ * to a multiple of 4) from `from` on that holds q, or n when none. */
+static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
+{
+#if defined(__SSE2__)
+    __m128 q0 = _mm_set1_ps(q->v[0]), q1 = _mm_set1_ps(q->v[1]), q2 = _mm_set1_ps(q->v[2]),
+           q3 = _mm_set1_ps(q->v[3]);
+    uint32_t e = from & ~3u;
+    for (; e < n; e += 4) {
+        __m128 m = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(g[0] + e), q0), _mm_cmple_ps(_mm_loadu_ps(g[1] + e), q1)),
+                              _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(g[2] + e), q2), _mm_cmple_ps(_mm_loadu_ps(g[3] + e), q3)));
+        int bits = _mm_movemask_ps(m);
+        for (uint32_t t = 0; bits && t < 4; t++)
+            if (bits >> t & 1 && e + t >= from) return e + t < n ? e + t : n;
+    }
+    return n;
+#else
+    for (uint32_t e = from; e < n; e++)
+        if (g[0][e] <= q->v[0] && g[1][e] <= q->v[1] && g[2][e] <= q->v[2] && g[3][e] <= q->v[3]) return e;
+    return n;
+#endif
+}
+
+/* Redundancy of every segment (seg_relations): the segments are taken
+ * cell by cell (those whose cell1 is the cell), so a short list's float
+ * boxes are gathered once and scanned, four at a time, by every segment
+ * that asks that list; only boxes that hold the segment's inner box go on
+ * to capsule_within (the lists of a dense map hold ~60 segments: the scan
+ * loaded each one's 184 bytes before). Same flags and work units as asking
+ * redundant_of per segment. */
+__attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h, uint8_t *redundant)
+{
+    size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + 4;
+    /* outer and inner boxes of every segment (ob[2k], ob[2k+1]): 32 bytes
+     * read where each segment's 184 were */
+    rf_fbox *ob = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 2 * sizeof *ob);
+    float *gb = rs__alloc_array(ctx, cap, 4 * sizeof *gb);
+    /* the segments by cell1 (counting sort): who asks which list */
+    uint32_t *first = rs__calloc(ctx, ncell + 1, sizeof *first);
+    uint32_t *order = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *order);
+    if (!ob || !gb || !first || !order) {
+        rs__free(ctx, ob);
+        rs__free(ctx, gb);
+        rs__free(ctx, first);
+        rs__free(ctx, order);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t k = 0; k < f->nseg; k++) first[cell1[k] + 1]++;
+    for (size_t c = 0; c < ncell; c++) first[c + 1] += first[c];
+    for (size_t k = 0; k < f->nseg; k++) order[first[cell1[k]]++] = (uint32_t)k;
+    for (size_t c = ncell; c > 0; c--) first[c] = first[c - 1];
+    first[0] = 0;
+    const float *g[4] = { gb, gb + cap, gb + 2 * cap, gb + 3 * cap };
+    for (size_t k = 0; k < f->nseg; k++) {
+        ob[2 * k] = fbox_outer(&f->seg[k]);
+        ob[2 * k + 1] = fbox_inner(&f->seg[k]);
+    }
+    rs_result res = RS_OK;
+    for (size_t c = 0; c < ncell && res == RS_OK; c++) {
+        uint32_t a = f->start[c], b = f->start[c + 1], n = b - a;
+        int gathered = 0;
+        for (uint32_t i = first[c]; i < first[c + 1]; i++) {
+            uint32_t k = order[i];
+            int red = 0;
+            if (n > f->relscan && h->node) {
+                red = redundant_of(f, h, k, c);
+            } else {
+                h->work += n;
+                if (h->work > h->limit) { res = RS_ERR_LIMIT; break; }
+                if (!gathered) {
+                    for (uint32_t e = 0; e < n; e++) {
+                        if (e + PREFETCH_AHEAD < n) rf_prefetch(&ob[2 * (size_t)f->ids[a + e + PREFETCH_AHEAD]]);
+                        for (int l = 0; l < 4; l++) gb[l * cap + e] = ob[2 * (size_t)f->ids[a + e]].v[l];
+                    }
+                    for (uint32_t e = n; e < n + 4; e++)
+                        for (int l = 0; l < 4; l++) gb[l * cap + e] = INFINITY;
+                    gathered = 1;
+                }
+                const rf_fbox *q = &ob[2 * (size_t)k + 1];
+                for (uint32_t e = fbox_next(g, 0, n, q); e < n && !red; e = fbox_next(g, e + 1, n, q))
+                    red = holds(f, k, f->ids[a + e]);
+            }
+            if (red < 0) { res = RS_ERR_LIMIT; break; }
+            redundant[k] = (uint8_t)red;
+        }
+    }
+    rs__free(ctx, ob);
+    rs__free(ctx, gb);
+    rs__free(ctx, first);
+    rs__free(ctx, order);
+    return res;
+}
+
 /* Per segment: its gentle-joint partner (the next segment of positive
  * length, past zero-length ones at the shared point: consecutive segments
  * of a road, or the first of the next road when it starts where this one
@@ -629,11 +868,22 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
         rs_result r = holders_build(ctx, f, h);
         if (r != RS_OK) return r;
     }
+    /* the holder is listed wherever this one is (its grown capsule is larger);
+     * the flags land in the segments in the sequential pass below */
+    uint8_t *redundant = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 1);
+    if (!redundant) return RS_ERR_NOMEM;
+    rs_result r = holder_scan(ctx, f, cell1, h, redundant);
+    if (r != RS_OK) {
+        rs__free(ctx, redundant);
+        return r;
+    }
     size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
     for (size_t k = f->nseg; k-- > 0;) {
         rf_seg *sa = &f->seg[k];
         size_t m = k + 1;
         h->work++; /* the joint partner: one step */
+        sa->redundant = redundant[k];
+        f->nredundant += redundant[k];
         if (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m = after;
         if (m < f->nseg && m <= UINT32_MAX) {
             const rf_seg *sb = &f->seg[m];
@@ -641,16 +891,12 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
                         sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
             sa->jpart = (uint32_t)m;
         }
-        /* the holder is listed wherever this one is (its grown capsule is larger) */
-        int red = redundant_of(f, h, k, cell1[k]);
-        if (red < 0) return RS_ERR_LIMIT;
-        sa->redundant = (uint8_t)red;
-        f->nredundant += (size_t)red;
         if (sa->len > 0) after = k;
         else if (!(k + 1 < f->nseg && !(f->seg[k + 1].len > 0) && f->seg[k + 1].ax == sa->ax &&
                    f->seg[k + 1].ay == sa->ay))
             after = k + 1;
     }
+    rs__free(ctx, redundant);
     return RS_OK;
 }
 
@@ -676,7 +922,19 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     if (!f->ids) return RS_ERR_NOMEM;
     b->cell1 = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, sizeof *b->cell1);
     if (!b->cell1) return RS_ERR_NOMEM;
-    for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+    if (!b->norec && b->rec) {
+        for (size_t k = f->nseg; k-- > 0;) {
+            uint32_t a = k ? b->recend[k - 1] : 0, e = b->recend[k];
+            for (uint32_t i = e; i-- > a;) {
+                if (i >= PREFETCH_AHEAD) rf_prefetch(f->ids + b->cnt[b->rec[i - PREFETCH_AHEAD]] - 1);
+                f->ids[--b->cnt[b->rec[i]]] = (uint32_t)k;
+            }
+            b->cell1[k] = e > a ? b->pref[k] & 0x7FFFFFFFu : 0;
+        }
+    } else {
+        for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+    }
+    rec_drop(b);
     rf_holders h;
     memset(&h, 0, sizeof h);
     h.limit = b->work_limit;
@@ -696,10 +954,24 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     return RS_OK;
 }
 
+/* A builder for field f: the entry and work limits of ctx, an empty record. */
+static void builder_init(rf_builder *b, rs_ctx *ctx, rs__roadfield *f)
+{
+    memset(b, 0, sizeof *b);
+    b->f = f;
+    b->ctx = ctx;
+    b->limit = UINT32_MAX - 1u;
+    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b->limit) b->limit = ctx->limits.max_road_cells;
+    b->work_limit = ctx->limits.max_field_work;
+    b->seg0 = 64;
+    b->rec0 = 4096;
+}
+
 /* A failed build or widening: frees what was made, says why. */
 static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_result res)
 {
     rs__free(ctx, b->cell1);
+    rec_drop(b);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
     if (b->work_over)
@@ -732,9 +1004,9 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
         for (size_t i = 0; i < nroads; i++) {
             double w = 0;
             rs_roads_get(roads, i, NULL, &w, NULL, NULL);
-            wsum += fmin(w, 1e12) / (double)nroads;
+            wsum += lm_min(w, 1e12) / (double)nroads;
         }
-        c = fmax(p->cell_size, 0.5 * wsum);
+        c = lm_max(p->cell_size, 0.5 * wsum);
         cap = GRID_AUTO_CELLS;
     }
     while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
@@ -750,13 +1022,14 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->reach = p->reach_extra + f->margin;
     f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0 };
-    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
+    rf_builder b;
+    builder_init(&b, ctx, f);
     f->start = rs__alloc_array(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
+    f->rstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
     rs_result res = RS_OK;
     size_t cap_seg = 0;
-    if (!f->start || !f->full) { res = RS_ERR_NOMEM; goto fail; }
+    if (!f->start || !f->full || !f->rstart) { res = RS_ERR_NOMEM; goto fail; }
     memset(f->start, 0, (ncell + 1) * sizeof *f->start);
     b.cnt = f->start;
 
@@ -782,7 +1055,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             rf_seg sg;
             double cax = ax, cay = ay, cbx = bx, cby = by, along = 0;
             /* the reach of this capsule beyond the map, with room to spare */
-            double pad = 2 * (fmin(0.5 * w, 1e15) + f->reach) + c;
+            double pad = 2 * (lm_min(0.5 * w, 1e15) + f->reach) + c;
             /* Within a million map sizes the digits lost are below 1e-9 of a
              * pixel: such segments are kept as given (and the nearest-road
              * ties stay those of the exact geometry). */
@@ -793,7 +1066,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                 s += sg.len;
             } else {
                 double sfull = 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
-                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, fmin(s + along, DBL_MAX), (uint32_t)ri, (uint32_t)k);
+                seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, lm_min(s + along, DBL_MAX), (uint32_t)ri, (uint32_t)k);
                 s += sfull;
             }
             /* A road over 1.8e308 m long (points near +-1e308) has no finite
@@ -806,7 +1079,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             if (v < 0) { res = RS_ERR_LIMIT; goto fail; }
             if (v == 0) continue;
             if (f->nseg == cap_seg) {
-                size_t nc = cap_seg ? 2 * cap_seg : 64, bytes;
+                size_t nc = cap_seg ? 2 * cap_seg : b.seg0, bytes;
                 if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(rf_seg), &bytes)) { res = RS_ERR_LIMIT; goto fail; }
                 rf_seg *ns = rs__realloc(ctx, f->seg, bytes);
                 if (!ns) { res = RS_ERR_NOMEM; goto fail; }
@@ -814,6 +1087,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                 cap_seg = nc;
             }
             f->seg[f->nseg++] = sg;
+            rec_end(&b, f->nseg - 1);
         }
     }
     if ((res = index_finish(ctx, f, &b, cap_seg)) != RS_OK) goto fail;
@@ -847,13 +1121,16 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
     f->reach = src->reach;
     f->relscan = src->relscan;
     size_t ncell = (size_t)f->gw * f->gh;
-    rf_builder b = { f, NULL, 0, UINT32_MAX - 1u, NULL, ctx->limits.max_field_work, 0 };
-    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < b.limit) b.limit = ctx->limits.max_road_cells;
+    rf_builder b;
+    builder_init(&b, ctx, f);
+    /* the widened lists hold at least the source's entries */
+    b.rec0 = src->nent + src->nent / 4 > 4096 ? src->nent + src->nent / 4 : 4096;
     rs_result res = RS_OK;
     f->start = rs__calloc(ctx, ncell + 1, sizeof *f->start);
     f->full = rs__calloc(ctx, ncell, 1);
     f->seg = rs__alloc_array(ctx, src->nseg ? src->nseg : 1, sizeof *f->seg);
-    if (!f->start || !f->full || !f->seg) { res = RS_ERR_NOMEM; goto fail; }
+    f->rstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->rstart);
+    if (!f->start || !f->full || !f->seg || !f->rstart) { res = RS_ERR_NOMEM; goto fail; }
     b.cnt = f->start;
     f->nseg = src->nseg;
     /* the same segments in the same order (the ids of both fields agree),
@@ -866,6 +1143,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
         sg->jpart = 0;
         sg->redundant = 0;
         if (seg_cells(&b, sg, 0, 0) < 0) { res = RS_ERR_LIMIT; goto fail; }
+        rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
     *out = f;

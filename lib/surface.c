@@ -92,6 +92,81 @@ static void terrain_rgb(const float tint[3], double shade, float *out)
     }
 }
 
+/* The shade of one sample from its gradient, onto its tint in out (the
+ * scalar path; terrain_row). */
+static void shade_one(const rs_splatter *s, const double light[2], double dzdx, double dzdy, float *out)
+{
+    const double lx = light[0], ly = light[1], cz = s->cos_zen;
+    float tint[3] = { out[0], out[1], out[2] };
+    double g2 = dzdx * dzdx + dzdy * dzdy;
+    double hs = (cz + lx * dzdx + ly * dzdy) / sqrt(1 + g2);
+    if (!(hs > 0)) hs = 0;
+    double shade = 0.3 + 0.7 * hs / cz;
+    int tie = !(g2 < 1e200);
+    for (int ch = 0; ch < 3; ch++) {
+        double v = tint[ch] * shade;
+        v = v > 255 ? 255 : v;
+        tie |= (float)(v * (1 - 1e-12)) != (float)(v * (1 + 1e-12));
+    }
+    terrain_rgb(tint, tie ? shade_trig(s, dzdx, dzdy) : shade, out);
+}
+
+#if defined(__SSE2__)
+/* Two floats at p as doubles. */
+static __m128d load2f(const float *p)
+{
+    return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)p)));
+}
+
+/* shade_one for the two interior samples (i, j) and (i, j + 1), the same
+ * operations in the same order in each lane of a register (so the same
+ * doubles); a lane where the trigonometric formula must decide takes the
+ * scalar path. */
+static void shade_pair(const rs_splatter *s, const double light[2], const float *zrow, size_t W, double eight_cs,
+                       float *out)
+{
+    const double zs = s->dem->frame.z_scale;
+    const double lx = light[0], ly = light[1], cz = s->cos_zen;
+    const float *up = zrow - W, *mid = zrow, *dn = zrow + W;
+    const __m128d vzs = _mm_set1_pd(zs), two = _mm_set1_pd(2), v8 = _mm_set1_pd(eight_cs);
+    __m128d a = _mm_mul_pd(load2f(up - 1), vzs), b = _mm_mul_pd(load2f(up), vzs), c = _mm_mul_pd(load2f(up + 1), vzs);
+    __m128d d = _mm_mul_pd(load2f(mid - 1), vzs), f = _mm_mul_pd(load2f(mid + 1), vzs);
+    __m128d g = _mm_mul_pd(load2f(dn - 1), vzs), h = _mm_mul_pd(load2f(dn), vzs), k = _mm_mul_pd(load2f(dn + 1), vzs);
+    __m128d dzdx = _mm_div_pd(_mm_sub_pd(_mm_add_pd(_mm_add_pd(c, _mm_mul_pd(two, f)), k),
+                                         _mm_add_pd(_mm_add_pd(a, _mm_mul_pd(two, d)), g)), v8);
+    __m128d dzdy = _mm_div_pd(_mm_sub_pd(_mm_add_pd(_mm_add_pd(g, _mm_mul_pd(two, h)), k),
+                                         _mm_add_pd(_mm_add_pd(a, _mm_mul_pd(two, b)), c)), v8);
+    __m128d g2 = _mm_add_pd(_mm_mul_pd(dzdx, dzdx), _mm_mul_pd(dzdy, dzdy));
+    __m128d hs = _mm_div_pd(_mm_add_pd(_mm_add_pd(_mm_set1_pd(cz), _mm_mul_pd(_mm_set1_pd(lx), dzdx)),
+                                       _mm_mul_pd(_mm_set1_pd(ly), dzdy)),
+                            _mm_sqrt_pd(_mm_add_pd(_mm_set1_pd(1), g2)));
+    hs = _mm_and_pd(_mm_cmpgt_pd(hs, _mm_setzero_pd()), hs);
+    __m128d shade = _mm_add_pd(_mm_set1_pd(0.3), _mm_div_pd(_mm_mul_pd(_mm_set1_pd(0.7), hs), _mm_set1_pd(cz)));
+    __m128 tie = _mm_castpd_ps(_mm_cmpnlt_pd(g2, _mm_set1_pd(1e200)));
+    int tiebits = _mm_movemask_pd(_mm_castps_pd(tie));
+    const __m128d lo = _mm_set1_pd(1 - 1e-12), hi = _mm_set1_pd(1 + 1e-12), cap = _mm_set1_pd(255);
+    __m128 res[3];
+    for (int ch = 0; ch < 3; ch++) {
+        __m128d v = _mm_mul_pd(_mm_set_pd(out[3 + ch], out[ch]), shade);
+        __m128d over = _mm_cmpgt_pd(v, cap);
+        v = _mm_or_pd(_mm_and_pd(over, cap), _mm_andnot_pd(over, v));
+        res[ch] = _mm_cvtpd_ps(v);
+        tiebits |= _mm_movemask_ps(_mm_cmpneq_ps(_mm_cvtpd_ps(_mm_mul_pd(v, lo)), _mm_cvtpd_ps(_mm_mul_pd(v, hi)))) & 3;
+    }
+    float r[3][4];
+    for (int ch = 0; ch < 3; ch++) _mm_storeu_ps(r[ch], res[ch]);
+    double dx[2], dy[2];
+    _mm_storeu_pd(dx, dzdx);
+    _mm_storeu_pd(dy, dzdy);
+    for (int l = 0; l < 2; l++) {
+        float *o = out + 3 * l;
+        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o);
+        else
+            for (int ch = 0; ch < 3; ch++) o[ch] = r[ch][l];
+    }
+}
+#endif
+
 /* Terrain colour of DEM sample row i, columns [c0, c0 + n): tint times a
  * hillshade by Horn's gradient, light from azimuth 315, altitude 45
  * (gdaldem's defaults and formula), normalised so flat ground keeps its
@@ -105,41 +180,54 @@ static void terrain_rgb(const float tint[3], double shade, float *out)
  * colour channel rounds to could depend on those bits (the value within
  * 1e-12 of a float rounding boundary), the trigonometric formula decides,
  * so the colours are the same floats as gdaldem's formula gives
- * (tests/tools/splat_identity.sh). */
+ * (tests/tools/splat_identity.sh).
+ *
+ * Two passes: the tints of the row into rgb, then the shades, two interior
+ * samples per register (SSE2) and the border ones one by one. The five
+ * divisions and the square root of a sample were ~40 ns per sample in one
+ * dependent chain (docs/speed.md). */
 static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t n, float *rgb)
 {
     const rs_dem *d = s->dem;
     const double zs = d->frame.z_scale;
-    const double lx = -s->sin_zen * cos(s->sun_az), ly = s->sin_zen * sin(s->sun_az), cz = s->cos_zen;
     const uint32_t W = d->width, H = d->height;
     const float *z = s->z;
     const rs_surface_options *sf = &s->o.surface;
     for (uint32_t j = c0; j < c0 + n; j++) {
+        double zc = z[(size_t)i * W + j] * zs;
+        float *out = rgb + 3 * (size_t)(j - c0);
+        if (sf->tint == RS_TINT_ABSOLUTE) absolute_tint(sf, zc, out);
+        else if (sf->height_min != 0 || sf->height_max != 0)
+            hypsometric((zc - sf->height_min) / (sf->height_max - sf->height_min), out);
+        else hypsometric(s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5, out);
+        /* lit output: the relief is shaded once, by the lighting */
+        if (s->o.lighting.enable) {
+            float tint[3] = { out[0], out[1], out[2] };
+            terrain_rgb(tint, 1.0, out);
+        }
+    }
+    if (s->o.lighting.enable) return;
+    /* the light's horizontal components, once per row */
+    const double light[2] = { -s->sin_zen * cos(s->sun_az), s->sin_zen * sin(s->sun_az) };
+    uint32_t j = c0;
+#if defined(__SSE2__)
+    const double eight_cs = 8 * d->frame.cell_size;
+    if (i >= 1 && i + 1 < H)
+        for (; j + 2 <= c0 + n; j++) {
+            if (j >= 1 && j + 2 < W) {
+                shade_pair(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + 3 * (size_t)(j - c0));
+                j++;
+                continue;
+            }
+            double dzdx, dzdy;
+            rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
+            shade_one(s, light, dzdx, dzdy, rgb + 3 * (size_t)(j - c0));
+        }
+#endif
+    for (; j < c0 + n; j++) {
         double dzdx, dzdy;
         rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
-        double zc = z[(size_t)i * W + j] * zs;
-        float tint[3];
-        if (sf->tint == RS_TINT_ABSOLUTE) absolute_tint(sf, zc, tint);
-        else if (sf->height_min != 0 || sf->height_max != 0)
-            hypsometric((zc - sf->height_min) / (sf->height_max - sf->height_min), tint);
-        else hypsometric(s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5, tint);
-        float *out = rgb + 3 * (size_t)(j - c0);
-        if (s->o.lighting.enable) {
-            /* lit output: the relief is shaded once, by the lighting */
-            terrain_rgb(tint, 1.0, out);
-            continue;
-        }
-        double g2 = dzdx * dzdx + dzdy * dzdy;
-        double hs = (cz + lx * dzdx + ly * dzdy) / sqrt(1 + g2);
-        if (!(hs > 0)) hs = 0;
-        double shade = 0.3 + 0.7 * hs / cz;
-        int tie = !(g2 < 1e200);
-        for (int ch = 0; ch < 3; ch++) {
-            double v = tint[ch] * shade;
-            v = v > 255 ? 255 : v;
-            tie |= (float)(v * (1 - 1e-12)) != (float)(v * (1 + 1e-12));
-        }
-        terrain_rgb(tint, tie ? shade_trig(s, dzdx, dzdy) : shade, out);
+        shade_one(s, light, dzdx, dzdy, rgb + 3 * (size_t)(j - c0));
     }
 }
 
@@ -293,14 +381,21 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         /* Bilinear between the sample rows crow and crow + 1: the two
          * horizontal interpolants per column once per piece, then every row
          * of the piece (all pixels: a plain loop). */
-        const float *r0, *r1;
+        const float *r0 = NULL, *r1 = NULL;
         terrain_rows(s, p->tcache, p->crow, &r0, &r1);
         const uint32_t wc0 = p->tcache->c0;
         double *hx = p->hx;
         const size_t w = p->w;
-        for (uint32_t k = 0; k < p->w; k++) {
-            uint32_t px = p->x0 + k, ccol = px / T;
-            double fx = ((px - ccol * T) + 0.5) / T;
+        /* the column and its offset in the cell counted along (no integer
+         * division per column), the weight per offset from a table: the
+         * same doubles ((offset + 0.5) / T) */
+        double fxt[64];
+        const uint32_t nt = T < 64 ? T : 64;
+        for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
+        uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
+        for (uint32_t k = 0; k < p->w; k++, off++) {
+            if (off == T) { off = 0; ccol++; }
+            double fx = off < nt ? fxt[off] : (off + 0.5) / T;
             const float *a = r0 + 3 * (size_t)(ccol - wc0), *c = r1 + 3 * (size_t)(ccol - wc0);
             for (int ch = 0; ch < 3; ch++) {
                 hx[ch * w + k] = a[ch] * (1 - fx) + a[ch + 3] * fx;

@@ -29,6 +29,22 @@ rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls)
     return R;
 }
 
+int ss_fractal_road(rs_ctx *ctx, rs_dem **dem, rs_roads **roads)
+{
+    const uint32_t W = 1025;
+    float *z = malloc(sizeof(float) * W * W);
+    if (!z) return -1;
+    sc_dem_fractal(z, W, W, 5, 0.5);
+    double xy[4] = { 500, 500, 550, 518.5 };
+    rs_dem_frame fr = { 0, 0.01, 0, 0 };
+    *dem = NULL;
+    *roads = NULL;
+    int bad = rs_dem_create(ctx, W, W, z, dem) || rs_dem_set_frame(ctx, *dem, &fr) || rs_roads_create(ctx, roads) ||
+              rs_roads_add(ctx, *roads, NULL, 6, xy, 2);
+    free(z);
+    return bad ? -1 : 0;
+}
+
 void ss_image_free(ss_image *im)
 {
     free(im->rgba);

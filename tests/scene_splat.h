@@ -13,6 +13,12 @@ rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s);
  * library refuses it. */
 rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls);
 
+/* The kernel benchmarks' scene (tests/bench/kernel.c, texels.c): the
+ * 1025^2 fractal of tests/bench/sparse.c (sc_dem_fractal seed 5,
+ * roughness 0.5, 1 m cells, z-scale 0.01) and one 50 m road, 6 m wide.
+ * 0, or -1 when the library refuses it. */
+int ss_fractal_road(rs_ctx *ctx, rs_dem **dem, rs_roads **roads);
+
 typedef struct ss_image {
     uint32_t w, h;
     uint8_t *rgba;  /* w*h*4, malloc'd */

@@ -9,9 +9,11 @@
  * textures of power-of-two and other sizes, magnified and minified. */
 #include "harness.h"
 #include "roadsplat.h"
+#include "splatter.h"
 
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -162,10 +164,61 @@ static void test_textures_reference(void)
     rs_dem_free(ctx, dem);
 }
 
+/* The composite's byte of a pure terrain or road pixel (lib/composite.c
+ * takes four in float with SSE2) against the scalar rule in double,
+ * (uint8)(v + 0.5) clamped to 0..255 (NaN: 0), on the floats where a float
+ * sum could round differently (0.49999997 + 0.5 rounds to 1 in float),
+ * the clamps, NaN and infinities, and random values. */
+static void test_composite_bytes(void)
+{
+    enum { W = 64 };
+    float tc[3 * W], sc[3 * W];
+    uint16_t q[W];
+    double cov[W];
+    uint8_t rgba[4 * W];
+    const float special[] = { 0.0f, -0.0f, 0.49999997f, 0.5f, 0.50000006f, 1.4999999f, 1.5f, 2.4999998f, 127.49999f,
+                              127.5f, 254.49998f, 254.5f, 254.50002f, 255.0f, 255.49998f, 255.5f, 256.0f, 1e30f,
+                              -0.5f, -0.50000006f, -1e30f, (float)NAN, (float)INFINITY, -(float)INFINITY, 1e-30f,
+                              -1e-30f, 0.99999994f, 3.5f };
+    const size_t ns = sizeof special / sizeof special[0];
+    uint32_t rng = 12345;
+    int bad = 0;
+    for (int round = 0; round < 200; round++) {
+        for (size_t i = 0; i < 3 * W; i++) {
+            rng = rng * 1664525u + 1013904223u;
+            float v = round < 20 ? special[(i + (size_t)round) % ns] : (float)((rng >> 8) * (1.0 / 16777216.0) * 260.0 - 2.0);
+            tc[i] = v;
+            sc[i] = special[(i * 7 + (size_t)round) % ns];
+        }
+        for (size_t k = 0; k < W; k++) {
+            q[k] = (k / 8) % 2 ? 65535u : 0;
+            cov[k] = q[k] / 65535.0;
+        }
+        rs__piece p;
+        memset(&p, 0, sizeof p);
+        p.w = W;
+        p.rows = 1;
+        p.q = q;
+        p.cov = cov;
+        p.tc = tc;
+        p.sc = sc;
+        rs__composite(&p, rgba, sizeof rgba, NULL, 0);
+        for (size_t k = 0; k < W; k++)
+            for (int ch = 0; ch < 3; ch++) {
+                double v = q[k] ? sc[ch * W + k] : tc[ch * W + k];
+                uint8_t want = (uint8_t)(v >= 0 ? (v >= 255 ? 255 : v + 0.5) : 0);
+                if (rgba[4 * k + ch] != want && bad++ < 5)
+                    fprintf(stderr, "    composite of %.9g: %u, want %u\n", v, rgba[4 * k + ch], want);
+            }
+    }
+    CHECK_EQ_INT(bad, 0);
+}
+
 int main(void)
 {
     CHECK(rs_ctx_create(NULL, NULL, &ctx) == RS_OK);
     test_textures_reference();
+    test_composite_bytes();
     rs_ctx_free(ctx);
     return th_finish("test_surface");
 }

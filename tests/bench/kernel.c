@@ -9,6 +9,7 @@
  *        kernel OUTDIR once [CASE] (each case, or only case CASE 0..3, once,
  *                                   no files: for callgrind) */
 #include "roadsplat.h"
+#include "scene_splat.h"
 #include "scenes.h"
 #include "timing.h"
 
@@ -111,18 +112,9 @@ int main(int argc, char **argv)
     ks[3].name = "city scene, terrain texture";
 
     /* the fractal of tests/bench/sparse.c: one 50 m road, 6 m wide */
-    const uint32_t W = 1025;
-    float *z = malloc(sizeof(float) * W * W);
-    if (!z) return 1;
-    sc_dem_fractal(z, W, W, 5, 0.5);
     rs_dem *dem;
     rs_roads *roads;
-    double xy[4] = { 500, 500, 550, 518.5 };
-    rs_dem_frame fr = { 0, 0.01, 0, 0 };
-    if (rs_dem_create(ctx, W, W, z, &dem) || rs_dem_set_frame(ctx, dem, &fr) || rs_roads_create(ctx, &roads) ||
-        rs_roads_add(ctx, roads, NULL, 6, xy, 2))
-        return 1;
-    free(z);
+    if (ss_fractal_road(ctx, &dem, &roads)) return 1;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;

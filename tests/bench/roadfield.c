@@ -271,7 +271,14 @@ int main(int argc, char **argv)
                     "(fastest of %d fills, fill only, %d fills after each round of coverage runs). "
                     "Coverage (auto cell) / Cairo, fastest against fastest: whole image %.2f, row pieces %.2f.\n",
                 cairo, ROUNDS * CAIRO_FILLS, CAIRO_FILLS, rr[0].cover_ms / cairo, rr[0].rows_ms / cairo);
-    else
+    if (cairo >= 0) {
+        /* issue 29 target 2: the index is part of the work Cairo does in its fill */
+        double tot = rr[0].build_ms + rr[0].cover_ms;
+        fprintf(md, "\n| target (issue 29, 2) | measured | |\n|---|---|---|\n"
+                    "| plain coverage including the index build <= 1.0x Cairo | (%.2f + %.2f ms) / %.2f ms = %.2fx | "
+                    "%s |\n",
+                rr[0].build_ms, rr[0].cover_ms, cairo, tot / cairo, tot <= cairo ? "met" : "**missed**");
+    } else
         fprintf(md, "\nCairo comparison skipped (python3-cairo not available).\n");
     if (have_cerr)
         fprintf(md, "\nAccuracy on the same ruler (SPEC edge error against the exact ground truth): Cairo's antialiased "
@@ -282,7 +289,9 @@ int main(int argc, char **argv)
     printf("roadfield: auto cell %.3g m: build %.2f ms, coverage %.2f ms (row pieces %.2f ms), edge %.5f m, "
            "max pixel err %.4f; cairo %.2f ms",
            rr[0].st.index_cell, rr[0].build_ms, rr[0].cover_ms, rr[0].rows_ms, rr[0].edge, rr[0].maxpix, cairo);
-    if (cairo > 0) printf(" (ratio whole %.2f, rows %.2f)", rr[0].cover_ms / cairo, rr[0].rows_ms / cairo);
+    if (cairo > 0)
+        printf(" (ratio whole %.2f, rows %.2f; build + whole %.2f)", rr[0].cover_ms / cairo, rr[0].rows_ms / cairo,
+               (rr[0].build_ms + rr[0].cover_ms) / cairo);
     printf("\n");
     for (int i = 1; i < 3; i++)
         printf("  cell %g: build %.2f ms, coverage %.2f ms (row pieces %.2f ms), edge %.5f\n", rr[i].st.index_cell,

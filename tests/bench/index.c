@@ -1,0 +1,196 @@
+/* Road index build against the road count on a fixed map (issue 29 target
+ * 3): the city generator (tests/scenes.c sc_city) on the 400 x 350 DEM of
+ * 5 m cells with 100, 1,000, 10,000 and 100,000 roads, T = 4 (1596 x 1396
+ * pixels, 2.2 Mpx). Times the road field alone (rs__roadfield_build, the
+ * analytic edges' index) and the whole unstyled road grid build
+ * (rs_road_grid_build, which contains it), thread CPU time, fastest of
+ * RUNS, the builds of a count interleaved.
+ * Usage: index OUTDIR (writes OUTDIR/index.md);
+ *        index --one N [REPS [grid]] (N roads, REPS road-field builds, or
+ *        whole grid builds: for profilers);
+ *        index --dump N FILE [CELL] (N roads, index cell CELL m (0: automatic): the road field's stats, whole-image
+ *        coverage doubles and a nearest query per 7th pixel into FILE, to
+ *        compare two builds byte for byte with cmp). */
+#include "roadfield.h"
+#include "roadsplat.h"
+#include "scene_splat.h"
+#include "scenes.h"
+#include "timing.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RUNS 5
+#define DEM_W 400
+#define DEM_H 350
+#define CELL 5.0
+#define T 4
+
+static rs__roadfield_params field_params(void)
+{
+    rs__roadfield_params p;
+    memset(&p, 0, sizeof p);
+    p.cell_size = CELL;
+    p.width_m = (DEM_W - 1) * CELL;
+    p.height_m = (DEM_H - 1) * CELL;
+    p.pixel = CELL / T;
+    return p;
+}
+
+/* One road-field build, ms (< 0: failed); its stats into *st. */
+static double field_once(rs_ctx *ctx, const rs_roads *R, rs__roadfield_stats *st)
+{
+    rs__roadfield_params p = field_params();
+    rs__roadfield *f = NULL;
+    double t0 = tm_thread_cpu_ms();
+    rs_result r = rs__roadfield_build(ctx, R, &p, &f);
+    double ms = tm_thread_cpu_ms() - t0;
+    if (r == RS_OK && st) rs__roadfield_get_stats(f, st);
+    rs__roadfield_free(ctx, f);
+    return r ? -1 : ms;
+}
+
+static double grid_once(rs_ctx *ctx, const rs_dem *d, const rs_roads *R, const rs_splat_options *o)
+{
+    rs_road_grid *g = NULL;
+    double t0 = tm_thread_cpu_ms();
+    rs_result r = rs_road_grid_build(ctx, d, R, o, &g);
+    double ms = tm_thread_cpu_ms() - t0;
+    rs_road_grid_free(ctx, g);
+    return r ? -1 : ms;
+}
+
+int main(int argc, char **argv)
+{
+    rs_ctx *ctx = NULL;
+    if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
+    if (argc > 2 && strcmp(argv[1], "--one") == 0) {
+        sc_scene s;
+        if (sc_city(&s, DEM_W, DEM_H, CELL, (size_t)atol(argv[2]), 1)) return 1;
+        rs_roads *R = ss_roads(ctx, &s);
+        int reps = argc > 3 ? atoi(argv[3]) : 1;
+        double best = -1;
+        rs__roadfield_stats st;
+        memset(&st, 0, sizeof st);
+        rs_dem *d = NULL;
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = T;
+        int grid = argc > 4 && strcmp(argv[4], "grid") == 0;
+        if (grid) {
+            rs_dem_frame fr = { CELL, 1, 0, 0 };
+            if (rs_dem_create(ctx, s.w, s.h, s.z, &d) || rs_dem_set_frame(ctx, d, &fr)) return 1;
+        }
+        for (int i = 0; i < reps && R; i++) {
+            double ms = grid ? grid_once(ctx, d, R, &o) : field_once(ctx, R, &st);
+            if (ms < 0) return 1;
+            if (best < 0 || ms < best) best = ms;
+        }
+        printf("index: %zu roads, %zu segments, %zu entries, max list %zu, relation work %.1f per segment, "
+               "%zu redundant: road field %.2f ms (fastest of %d)\n",
+               s.nroads, st.segments, st.entries, st.max_list,
+               st.segments ? (double)st.relation_work / (double)st.segments : 0, st.redundant, best, reps);
+        if (grid) printf("  (whole road grid builds)\n");
+        rs_dem_free(ctx, d);
+        rs_roads_free(ctx, R);
+        sc_scene_free(&s);
+        rs_ctx_free(ctx);
+        return 0;
+    }
+    if (argc > 3 && strcmp(argv[1], "--dump") == 0) {
+        sc_scene s;
+        if (sc_city(&s, DEM_W, DEM_H, CELL, (size_t)atol(argv[2]), 1)) return 1;
+        rs_roads *R = ss_roads(ctx, &s);
+        rs__roadfield_params p = field_params();
+        if (argc > 4) p.index_cell = atof(argv[4]);
+        rs__roadfield *f = NULL;
+        FILE *fo = fopen(argv[3], "wb");
+        if (!R || !fo || rs__roadfield_build(ctx, R, &p, &f)) return 1;
+        rs__roadfield_stats st;
+        rs__roadfield_get_stats(f, &st);
+        fprintf(fo, "%zu %zu %zu %zu %zu %zu %llu\n", st.segments, st.entries, st.nonempty_cells, st.full_cells,
+                st.max_list, st.redundant, (unsigned long long)st.relation_work);
+        uint32_t w = (DEM_W - 1) * T, h = (DEM_H - 1) * T;
+        double *cov = malloc((size_t)w * h * sizeof *cov);
+        if (!cov) return 1;
+        rs__roadfield_coverage(f, 0, 0, w, h, p.pixel, cov, w);
+        fwrite(cov, sizeof *cov, (size_t)w * h, fo);
+        for (size_t i = 0; i < (size_t)w * h; i += 7) {
+            rs__road_point rp;
+            memset(&rp, 0, sizeof rp);
+            double x = ((double)(i % w) + 0.5) * p.pixel, y = ((double)(i / w) + 0.5) * p.pixel;
+            int got = rs__roadfield_nearest(f, x, y, i % 3 ? 0.5 : 6, &rp);
+            fprintf(fo, "%d %u %u %.17g %.17g\n", got, rp.road, rp.seg, rp.s, rp.t);
+        }
+        free(cov);
+        fclose(fo);
+        rs__roadfield_free(ctx, f);
+        rs_roads_free(ctx, R);
+        sc_scene_free(&s);
+        rs_ctx_free(ctx);
+        return 0;
+    }
+    const char *dir = argc > 1 ? argv[1] : ".";
+    char path[4096];
+    snprintf(path, sizeof path, "%s/index.md", dir);
+    FILE *md = fopen(path, "w");
+    if (!md) return 1;
+    size_t want[4] = { 100, 1000, 10000, 100000 };
+    size_t nroads[4], nseg[4], nent[4], maxl[4];
+    double fms[4], gms[4];
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = T;
+    for (int i = 0; i < 4; i++) {
+        sc_scene s;
+        if (sc_city(&s, DEM_W, DEM_H, CELL, want[i], 1)) return 1;
+        rs_roads *R = ss_roads(ctx, &s);
+        rs_dem *d = NULL;
+        if (!R || rs_dem_create(ctx, s.w, s.h, s.z, &d)) return 1;
+        rs_dem_frame fr;
+        rs_dem_get_frame(d, &fr);
+        fr.cell_size = CELL;
+        if (rs_dem_set_frame(ctx, d, &fr)) return 1;
+        rs__roadfield_stats st;
+        memset(&st, 0, sizeof st);
+        fms[i] = gms[i] = -1;
+        for (int k = 0; k < RUNS; k++) {
+            double a = field_once(ctx, R, &st), b = grid_once(ctx, d, R, &o);
+            if (a < 0 || b < 0) {
+                fprintf(stderr, "index: %s\n", rs_ctx_message(ctx));
+                return 1;
+            }
+            if (fms[i] < 0 || a < fms[i]) fms[i] = a;
+            if (gms[i] < 0 || b < gms[i]) gms[i] = b;
+        }
+        nroads[i] = s.nroads;
+        nseg[i] = st.segments;
+        nent[i] = st.entries;
+        maxl[i] = st.max_list;
+        printf("index: %zu roads: road field %.2f ms, road grid %.2f ms\n", s.nroads, fms[i], gms[i]);
+        rs_dem_free(ctx, d);
+        rs_roads_free(ctx, R);
+        sc_scene_free(&s);
+    }
+    fprintf(md, "## Road index build against the road count (tests/bench/index.c; issue 29 target 3)\n\n");
+    fprintf(md, "City generator (`sc_city`, tests/scenes.c) on one %u x %u DEM of %g m cells with 100 to 100,000 "
+                "roads, T = %d (%u x %u pixels of %g m); thread CPU time, fastest of %d, the two builds of a count "
+                "alternating. Road field = `rs__roadfield_build` (the analytic edges' index); road grid = the "
+                "whole unstyled `rs_road_grid_build` that contains it.\n\n",
+            DEM_W, DEM_H, CELL, T, (DEM_W - 1) * T, (DEM_H - 1) * T, CELL / T, RUNS);
+    fprintf(md, "| roads | segments | index entries | longest cell list | road field ms | ratio | road grid ms | ratio |\n");
+    fprintf(md, "|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (int i = 0; i < 4; i++)
+        fprintf(md, "| %zu | %zu | %zu | %zu | %.2f | %s%.1f | %.2f | %s%.1f |\n", nroads[i], nseg[i], nent[i], maxl[i],
+                fms[i], i ? "x" : "", i ? fms[i] / fms[i - 1] : 1.0, gms[i], i ? "x" : "",
+                i ? gms[i] / gms[i - 1] : 1.0);
+    double rf = fms[3] / fms[2], rg = gms[3] / gms[2];
+    fprintf(md, "\n| target (issue 29, 3) | measured | |\n|---|---|---|\n");
+    fprintf(md, "| road index build, 100k roads <= 12x the 10k case | road field %.1fx, road grid %.1fx | %s |\n", rf,
+            rg, rf <= 12 && rg <= 12 ? "met" : "**missed**");
+    fclose(md);
+    rs_ctx_free(ctx);
+    printf("index: wrote %s\n", path);
+    return 0;
+}
