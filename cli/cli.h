@@ -112,6 +112,7 @@ typedef struct cli_out {
 int cli_out_open(cli_out *o, const char *path);     /* opens o->f for binary writing */
 int cli_out_commit(cli_out *o);                       /* fflush+fsync+fclose+rename */
 void cli_out_abort(cli_out *o);
+int cli_out_write_file(const char *path, const void *data, size_t size); /* open, write, commit: 0 or 1 */
 /* fflush+fsync+fclose of o->f (when open), without renaming: 0 or 1 after a
  * "write failed" message. */
 int cli_out_finish(cli_out *o);

@@ -547,8 +547,6 @@ int cli_convert_main(int argc, char **argv)
     o.shown = pos[0];
     char *text = NULL;
     size_t size = 0;
-    cli_out out;
-    memset(&out, 0, sizeof out);
     int rc = 1;
     cli_input rin;
     if (cli_gdal_input_open(&rin, pos[0], 1)) goto done;
@@ -565,15 +563,9 @@ int cli_convert_main(int argc, char **argv)
         rs_ctx_free(ctx);
         if (r) goto done;
     }
-    if (cli_out_open(&out, pos[1])) goto done;
-    if (fwrite(text, 1, size, out.f) != size) {
-        cli_error("%s: write failed: %s", pos[1], strerror(errno ? errno : EIO));
-        goto done;
-    }
-    if (cli_out_commit(&out)) goto done;
+    if (cli_out_write_file(pos[1], text, size)) goto done;
     rc = 0;
 done:
-    cli_out_abort(&out);
     free(text);
     cli_geo_free(&geo);
     return rc;

@@ -86,8 +86,6 @@ int cli_odr_convert_main(int argc, char **argv)
     size_t size = 0;
     if (cli_odr_roads_text(pos[0], &text, &size)) return 1;
     int rc = 1;
-    cli_out out;
-    memset(&out, 0, sizeof out);
     /* what is written reads back, styles and all */
     rs_ctx *ctx = NULL;
     rs_roads *roads = NULL;
@@ -105,15 +103,9 @@ int cli_odr_convert_main(int argc, char **argv)
     } else {
         rs_ctx_free(ctx);
     }
-    if (cli_out_open(&out, pos[1])) goto done;
-    if (fwrite(text, 1, size, out.f) != size) {
-        cli_error("%s: write failed: %s", pos[1], strerror(errno ? errno : EIO));
-        goto done;
-    }
-    if (cli_out_commit(&out)) goto done;
+    if (cli_out_write_file(pos[1], text, size)) goto done;
     rc = 0;
 done:
-    cli_out_abort(&out);
     free(text);
     return rc;
 }

@@ -589,6 +589,19 @@ int cli_out_commit_all(cli_out *const *outs, size_t n)
     return bad;
 }
 
+int cli_out_write_file(const char *path, const void *data, size_t size)
+{
+    cli_out out;
+    memset(&out, 0, sizeof out);
+    if (cli_out_open(&out, path)) return 1;
+    if (fwrite(data, 1, size, out.f) != size) {
+        cli_error("%s: write failed: %s", path, strerror(errno ? errno : EIO));
+        cli_out_abort(&out);
+        return 1;
+    }
+    return cli_out_commit(&out);
+}
+
 int cli_out_commit(cli_out *o)
 {
     if (!o->f || !o->tmp) return 1;
