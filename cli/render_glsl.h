@@ -213,7 +213,7 @@ static const char *const rsh_fs_src[] = {
     "    float base = ef * cut;\n"
     "    if (!(base > 0.0)) return;\n"
     /* the road's line cuts (stop lines, zebras; lib/markings_auto.c) */
-    "    int nr = textureSize(u_roadt) / 6;\n"
+    "    int nr = textureSize(u_roadt) / 8;\n" /* 8 texels per road */
     "    vec4 cr = texelFetch(u_cut, road); int c0 = nr + 2 * int(cr.x), nc = int(cr.y);\n"
     "    for (int j = 0; j < nb; j++) {\n"
     "        int bi = 5 * (b0 + j);\n"

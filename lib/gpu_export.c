@@ -85,7 +85,7 @@ static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_network
             mixed = q.reversed != h.reversed;
         }
         if (mixed) {
-            if ((r = rs_road_style(ctx, roads, recs[0], o->style.styles, o->style.profile, sty)) != RS_OK) break;
+            if ((r = rs_road_style_ex(ctx, roads, recs[0], &o->style, sty)) != RS_OK) break;
             if (!ge_lines_mirror(sty)) continue; /* drawn record by record */
         }
         for (size_t j = 0; j < nrec; j++) {

@@ -137,8 +137,10 @@ static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size
 }
 
 /* The lane and centre lines of `road` stop over s in [s0, s1] within
- * `half` of its centre line: one rectangle per segment the range meets
- * (the first and last segments' reach past the road's ends). */
+ * `half` of its centre line: one rectangle per segment the range meets,
+ * none past the road's ends (the line symbols apply a stroke's cuts to all
+ * its records, docs/network.md: a cut reaching past this record's end
+ * would cut the lines of the record that continues it). */
 static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half)
 {
     if (!A->want_cuts || !(half > 0)) return RS_OK;
@@ -146,8 +148,8 @@ static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half
     for (size_t k = 0; k + 1 < r->n; k++) {
         double len = r->s[k + 1] - r->s[k], u0 = s0 - r->s[k], u1 = s1 - r->s[k];
         if (!(len > 0)) continue;
-        if (k > 0 && u0 < 0) u0 = 0;
-        if (k + 2 < r->n && u1 > len) u1 = len;
+        if (u0 < 0) u0 = 0;
+        if (u1 > len) u1 = len;
         if (!(u1 > u0)) continue;
         void *arr = A->cuts;
         if (!room_for_one(A->ctx, &arr, A->ncut, &A->capcut, sizeof *A->cuts, 16)) return RS_ERR_NOMEM;
