@@ -214,8 +214,12 @@ static rs_result repeat_across(const ctxa *A, const rs_atlas *atlas, long ti, si
     rs__placement p = sprite_at(atlas, ti, road, flip);
     double span = t1 - t0, period = p.width + gap;
     if (!(span >= p.width) || !(period > 0)) return RS_OK;
-    size_t m = (size_t)floor((span + gap) / period + 1e-9);
-    double run = m * period - gap, start = t0 + (span - run) / 2;
+    double fm = floor((span + gap) / period + 1e-9);
+    /* A row of more than 4096 elements is no real road (a 2 km zebra);
+     * it also keeps the cast below in range for any width. */
+    if (!(fm <= 4096)) return RS_OK;
+    size_t m = (size_t)fm;
+    double run = (double)m * period - gap, start = t0 + (span - run) / 2;
     p.s = s;
     for (size_t k = 0; k < m; k++) {
         p.t = start + k * period + p.width / 2;
