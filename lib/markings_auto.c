@@ -5,11 +5,14 @@
  *   centreline (B != A) is a junction of A at that end and of B at the
  *   nearest point's arc length. Its area on A is the stretch within B's
  *   half width + 0.5 m of the junction; on B, A's half width + 0.5 m.
- * - stop / give-way lines: where A ends at B and A's class ranks below B's
- *   (motorway > trunk > primary > secondary > tertiary > residential >
- *   service > track > path, footway, cycleway; no class ranks lowest), a
- *   give_way_line (stop_line with `control=stop`) across A's incoming half
- *   (the whole width when one-way), 0.5 m before A's junction area.
+ * - stop / give-way lines: where A ends at B and A's priority is below B's
+ *   (rs__road_priority: the class rank, motorway > trunk > primary >
+ *   secondary > tertiary > residential > service > track > path, footway,
+ *   cycleway, no class lowest; + 10 for priority_road, + 20 for a
+ *   roundabout's ring, so its arms give way), a give-way line (stop line
+ *   with `control=stop`) across A's incoming half (the whole width when
+ *   one-way), 0.5 m before A's junction area. A closed ring passes through
+ *   its own seam: an arm ending on its first point is a junction too.
  * - turn arrows: `turn:lanes=left|through;right|...` (OpenStreetMap, lanes
  *   from left to right) on a road whose end is a junction: one arrow per
  *   lane, its tip 6 m before the junction area; the lanes share the
@@ -53,11 +56,6 @@ typedef struct ctxa {
     jn *j;
     size_t nj, capj;
 } ctxa;
-
-static int rank_of(rs_road_class c)
-{
-    return rs__class_rank(c); /* shared with the network (lib/network.c) */
-}
 
 /* Classes for feet and bikes: no car markings (docs/road-format.md). */
 static int non_car(rs_road_class c)
@@ -338,9 +336,7 @@ int rs__markings_auto_possible(const rs_roads *roads)
     }
     /* stop lines need a road with a class */
     for (size_t i = 0; i < nr; i++) {
-        rs_road_info info;
-        rs_roads_get_info(roads, i, &info);
-        if (rank_of(info.road_class) > 0) return 1;
+        if (rs__road_priority(roads, i) > 0) return 1;
     }
     return 0;
 }
@@ -404,18 +400,26 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
                     if (nearest(&A.rl[j], x, y, &s) > wb / 2 + JUNCTION_TOL) continue;
                     double ha = wb / 2 + JUNCTION_TOL, hb = wa / 2 + JUNCTION_TOL;
+                    const rs__road_local *b_ = &A.rl[j];
+                    double total = b_->s[b_->n - 1];
+                    /* a closed ring (a roundabout drawn as one way) passes
+                     * through its own seam */
+                    int ring = b_->n > 2 && b_->x[0] == b_->x[b_->n - 1] && b_->y[0] == b_->y[b_->n - 1];
                     if (pass == 0) {
                         meet++;
-                        if (s > hb && s < A.rl[j].s[A.rl[j].n - 1] - hb) through = 1;
+                        if (ring || (s > hb && s < total - hb)) through = 1;
                         continue;
                     }
-                    rs_road_info ib;
-                    rs_roads_get_info(roads, j, &ib);
                     endj[i][e] = 1;
                     if (ha > endh[i][e]) endh[i][e] = ha;
-                    if (rank_of(ia.road_class) < rank_of(ib.road_class)) endj[i][2] |= 1 << e;
+                    /* the lower priority gives way: class rank, priority_road,
+                     * and a roundabout's ring over its arms (StVO 9a, MUTCD 2B.11) */
+                    if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) endj[i][2] |= 1 << e;
                     r = add_jn(&A, i, e ? a->s[a->n - 1] : 0, ha);
                     if (!r) r = add_jn(&A, j, s, hb);
+                    /* on a ring the area wraps round the seam */
+                    if (!r && ring && s < hb) r = add_jn(&A, j, s + total, hb);
+                    if (!r && ring && s > total - hb) r = add_jn(&A, j, s - total, hb);
                 }
             }
         }

@@ -43,6 +43,22 @@ int rs__class_rank(rs_road_class c)
     }
 }
 
+static int attr_is(const rs_roads *roads, size_t r, const char *key, const char *v1, const char *v2)
+{
+    const char *v = rs_roads_get_attr(roads, r, key);
+    return v && (strcmp(v, v1) == 0 || (v2 && strcmp(v, v2) == 0));
+}
+
+int rs__road_priority(const rs_roads *roads, size_t r)
+{
+    rs_road_info info;
+    int pr = rs_roads_get_info(roads, r, &info) == RS_OK ? rs__class_rank(info.road_class)
+                                                          : rs__class_rank(RS_CLASS_NONE);
+    if (attr_is(roads, r, "priority_road", "designated", "yes_unposted")) pr += 10;
+    if (attr_is(roads, r, "junction", "roundabout", NULL)) pr += 20;
+    return pr;
+}
+
 /* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
 
 typedef struct pt_hash {
@@ -322,12 +338,6 @@ static double leg_angle(const build *B, const double *c, uint32_t v, int dir)
     double dx = B->xy[2 * w] - c[0], dy = B->xy[2 * w + 1] - c[1];
     if (dx == 0 && dy == 0) return 0;
     return atan2(dy, dx);
-}
-
-static int attr_is(const rs_roads *roads, size_t r, const char *key, const char *v1, const char *v2)
-{
-    const char *v = rs_roads_get_attr(roads, r, key);
-    return v && (strcmp(v, v1) == 0 || (v2 && strcmp(v, v2) == 0));
 }
 
 static int str_eq(const char *a, const char *b) { return a == b || (a && b && strcmp(a, b) == 0); }
@@ -730,14 +740,8 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         for (j = i; j < np && B.ps[j].node == nd; j++) {
             const pass *p = &B.ps[j];
             size_t r = p->road, v0 = B.voff[r];
-            int pr = rs__class_rank(RS_CLASS_NONE);
-            rs_road_info info;
-            if (rs_roads_get_info(roads, r, &info) == RS_OK) pr = rs__class_rank(info.road_class);
-            if (attr_is(roads, r, "priority_road", "designated", "yes_unposted")) pr += 10;
-            if (attr_is(roads, r, "junction", "roundabout", NULL)) {
-                pr += 20;
-                N->node[nd].control |= RS_NODE_ROUNDABOUT;
-            }
+            int pr = rs__road_priority(roads, r);
+            if (attr_is(roads, r, "junction", "roundabout", NULL)) N->node[nd].control |= RS_NODE_ROUNDABOUT;
             rs_network_leg L;
             memset(&L, 0, sizeof L);
             L.road = (uint32_t)r;

@@ -35,6 +35,10 @@ struct rs_network {
 /* Class rank for priorities (motorway 9 .. path/footway/cycleway 1, none 0);
  * shared with the automatic markings. */
 int rs__class_rank(rs_road_class c);
+/* A road's priority at a junction: its class rank, + 10 for
+ * priority_road=designated|yes_unposted, + 20 for junction=roundabout
+ * (docs/network.md "Priorities"); shared with the automatic markings. */
+int rs__road_priority(const rs_roads *roads, size_t r);
 
 size_t rs__network_bytes(const rs_network *net);
 #endif

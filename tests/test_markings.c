@@ -681,6 +681,64 @@ static void test_auto(void)
     rs_dem_free(ctx, dem);
 }
 
+/* Roundabouts (issue 27 problem 5): arms give way to the ring (its
+ * junction=roundabout priority) whatever their class, also an arm ending on
+ * a closed ring's first point and one at the split of a ring drawn as two
+ * ways; the ring itself gets none. Counts give_way_block placements per
+ * road. */
+static void roundabout_case(const char *text, int nroads, const int *want)
+{
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK);
+    rs_dem *dem = flat_dem(101, 101, 1.0);
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
+    rs__placement *pl = NULL;
+    size_t n = 0, cap = 0;
+    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, &pl, &n, &cap) == RS_OK);
+    int got[8] = { 0 };
+    long gb = rs_atlas_find(atlas, "give_way_block");
+    for (size_t i = 0; i < n; i++)
+        if ((long)pl[i].type == gb && pl[i].road < 8) got[pl[i].road]++;
+    for (int r = 0; r < nroads; r++) {
+        if (want[r]) CHECK(got[r] > 0);
+        else CHECK_EQ_INT(got[r], 0);
+    }
+    rs__free(ctx, pl);
+    rs_atlas_free(ctx, atlas);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
+static void test_roundabout(void)
+{
+    /* one closed way from its east point; arms: east onto that first point,
+     * north onto an interior vertex, a tertiary from the west (outranking
+     * the residential ring by class) */
+    static const char one[] = "road ring width 7 class=residential junction=roundabout\n"
+                              "65 50\n60.6 60.6\n50 65\n39.4 60.6\n35 50\n39.4 39.4\n50 35\n60.6 39.4\n65 50\nend\n"
+                              "road east width 6 class=residential\n95 50\n65 50\nend\n"
+                              "road north width 6 class=residential\n50 95\n50 65\nend\n"
+                              "road west width 6 class=tertiary\n5 50\n35 50\nend\n";
+    static const int want_one[] = { 0, 1, 1, 1 };
+    roundabout_case(one, 4, want_one);
+    /* the ring as two ways meeting at both arms' ends */
+    static const char two[] = "road ring_n width 7 class=residential junction=roundabout\n"
+                              "65 50\n60.6 60.6\n50 65\n39.4 60.6\n35 50\nend\n"
+                              "road ring_s width 7 class=residential junction=roundabout\n"
+                              "35 50\n39.4 39.4\n50 35\n60.6 39.4\n65 50\nend\n"
+                              "road east width 6 class=residential\n95 50\n65 50\nend\n"
+                              "road west width 6 class=residential\n5 50\n35 50\nend\n";
+    static const int want_two[] = { 0, 0, 1, 1 };
+    roundabout_case(two, 4, want_two);
+    /* without junction=roundabout, equal classes: nobody gives way */
+    static const char plain[] = "road ring width 7 class=residential\n"
+                                "65 50\n60.6 60.6\n50 65\n39.4 60.6\n35 50\n39.4 39.4\n50 35\n60.6 39.4\n65 50\nend\n"
+                                "road north width 6 class=residential\n50 95\n50 65\nend\n";
+    static const int want_plain[] = { 0, 0 };
+    roundabout_case(plain, 2, want_plain);
+}
+
 typedef struct alloc_case {
     const char *text;
 } alloc_case;
@@ -731,6 +789,7 @@ int main(void)
     test_errors();
     test_parse();
     test_auto();
+    test_roundabout();
     test_alloc_failures();
     rs_ctx_free(ctx);
     return th_finish("test_markings");
