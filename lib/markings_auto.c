@@ -55,6 +55,11 @@ typedef struct ctxa {
     double *box;        /* per road: x0 y0 x1 y1 */
     jn *j;
     size_t nj, capj;
+    /* per road end (2 per road): the record that goes on there (the same
+     * street split into records, turning less than 30 degrees), + 1; 0:
+     * none. cont_end: that record meets it with its last point. */
+    size_t *cont;
+    uint8_t *cont_end;
 } ctxa;
 
 /* Classes for feet and bikes: no car markings (docs/road-format.md). */
@@ -121,17 +126,58 @@ static int in_junction(const ctxa *A, size_t road, double lo, double hi)
     return 0;
 }
 
-/* Push p unless it spills off its road or into a junction area. */
+/* A placement may reach d metres past end e of `road` into the record
+ * that goes on there (OSM splits a street anywhere: an arrow 6 m before a
+ * junction must not vanish because the way was split 8 m before it),
+ * unless that runs past the other record too or into its junction areas.
+ * The paint extends the end segment (lib/markings.c), which is the other
+ * record's own line on a straight split. */
+static int spill_ok(const ctxa *A, size_t road, int e, double d)
+{
+    size_t c = A->cont ? A->cont[2 * road + e] : 0;
+    if (!c) return 0;
+    const rs__road_local *o = &A->rl[c - 1];
+    double len = o->s[o->n - 1];
+    if (!(d <= len)) return 0;
+    return A->cont_end[2 * road + e] ? !in_junction(A, c - 1, len - d, len) : !in_junction(A, c - 1, 0, d);
+}
+
+/* Push p unless it spills off its road (and the record going on there) or
+ * into a junction area. */
 static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size_t *n, size_t *cap)
 {
-    double w;
-    rs_roads_get(A->roads, p->road, NULL, &w, NULL, NULL);
-    const rs__road_local *r = &A->rl[p->road];
-    if (r->n < 2) return RS_OK;
-    double lo = p->s - p->length / 2, hi = p->s + p->length / 2;
-    if (lo < 0 || hi > r->s[r->n - 1] || fabs(p->t) + p->width / 2 > w / 2 + 1e-9) return RS_OK;
-    if (in_junction(A, p->road, lo, hi)) return RS_OK;
-    return rs__placement_push(A->ctx, pl, n, cap, p);
+    rs__placement q = *p;
+    /* a centre past the record's end is on the record going on there
+     * (OSM splits a street anywhere): placed on that one, turned with it
+     * when it runs the other way (the paint draws a placement from the
+     * stretch of its own record around its centre); a few records at most */
+    for (int hop = 0;; hop++) {
+        const rs__road_local *r = &A->rl[q.road];
+        if (r->n < 2) return RS_OK;
+        double total = r->s[r->n - 1];
+        if (q.s >= 0 && q.s <= total) break;
+        int e = q.s > total;
+        size_t c = A->cont[2 * q.road + e];
+        if (!c || hop == 16) return RS_OK;
+        const rs__road_local *o = &A->rl[c - 1];
+        if (o->n < 2) return RS_OK;
+        double d = e ? q.s - total : -q.s, len = o->s[o->n - 1];
+        int same = A->cont_end[2 * q.road + e] != e; /* its end meets our start, or its start our end */
+        q.road = c - 1;
+        q.s = same ? (e ? d : len - d) : (e ? len - d : d);
+        if (!same) {
+            q.t = -q.t;
+            q.flip = !q.flip;
+        }
+    }
+    const rs__road_local *r = &A->rl[q.road];
+    double w, total = r->s[r->n - 1], lo = q.s - q.length / 2, hi = q.s + q.length / 2;
+    rs_roads_get(A->roads, q.road, NULL, &w, NULL, NULL);
+    if (fabs(q.t) + q.width / 2 > w / 2 + 1e-9) return RS_OK;
+    if (lo < 0 && !spill_ok(A, q.road, 0, -lo)) return RS_OK;
+    if (hi > total && !spill_ok(A, q.road, 1, hi - total)) return RS_OK;
+    if (in_junction(A, q.road, lo, hi)) return RS_OK;
+    return rs__placement_push(A->ctx, pl, n, cap, &q);
 }
 
 /* The lane and centre lines of `road` stop over s in [s0, s1] within
@@ -374,6 +420,12 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
     double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
     if (!r && (!endj || !endh)) r = RS_ERR_NOMEM;
+    /* which records are one street (docs/network.md "Strokes") */
+    rs_network *net = NULL;
+    if (!r) r = rs_network_build(ctx, roads, NULL, &net);
+    A.cont = r ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), sizeof *A.cont);
+    A.cont_end = r || !A.cont ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), 1);
+    if (!r && (!A.cont || !A.cont_end)) r = RS_ERR_NOMEM;
     for (size_t i = 0; i < nr && !r; i++) {
         const rs__road_local *a = &A.rl[i];
         if (a->n < 2) continue;
@@ -390,10 +442,22 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
              * same street going on), then record it */
             size_t meet = 0;
             int through = 0;
+            /* the record going on from this end (the network's link: the
+             * same street split into records, turning less than 30 degrees) */
+            uint32_t lk = net->link[2 * i + e];
+            size_t link_road = lk == UINT32_MAX ? SIZE_MAX : lk / 2;
+            if (lk != UINT32_MAX) {
+                A.cont[2 * i + e] = link_road + 1;
+                A.cont_end[2 * i + e] = (uint8_t)(lk & 1);
+            }
             for (int pass = 0; pass < 2 && !r; pass++) {
                 if (pass == 1 && !(through || meet >= 2)) break;
                 for (size_t j = 0; j < nr && !r; j++) {
                     if (j == i || A.rl[j].n < 2 || non_car(road_class_of(roads, j))) continue;
+                    /* the street's other records, except the one going on
+                     * here, are no junction (a short record of it may end
+                     * within the tolerance) */
+                    if (net->stroke_of[j] == net->stroke_of[i] && j != link_road) continue;
                     double wb, s = 0;
                     rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
                     const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;
@@ -477,6 +541,9 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     rs__free(ctx, A.rl);
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
+    rs__free(ctx, A.cont);
+    rs_network_free(ctx, net);
+    rs__free(ctx, A.cont_end);
     rs__free(ctx, endj);
     rs__free(ctx, endh);
     return r;

@@ -353,6 +353,71 @@ done:
     rs_atlas_free(ctx, atlas);
 }
 
+/* Markings across a split (issue 27 target 1): the side road of
+ * lanes_scene split into two records before the junction, at 7 m (its
+ * arrows wholly on the record before the short one that reaches the
+ * junction) and at 13 m from the main road's centre line (the arrows
+ * across the split), and in three records; every pixel within 8/255 of
+ * the unsplit road. Before, the arrows vanished (the automatic rules
+ * dropped a placement past its record's end). */
+static void test_markings_split(void)
+{
+    static const char *const split[] = {
+        "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+        "road side width 10.5 class=secondary area=rural lanes=3 lanes:forward=2 turn:lanes=through|through "
+        "control=stop\n30 40\n30 27\nend\n"
+        "road side width 10.5 class=secondary area=rural lanes=3 lanes:forward=2 turn:lanes=through|through "
+        "control=stop\n30 27\n30 20\nend\n",
+        "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+        "road side width 10.5 class=secondary area=rural lanes=3 lanes:forward=2 turn:lanes=through|through "
+        "control=stop\n30 40\n30 33\nend\n"
+        "road side width 10.5 class=secondary area=rural lanes=3 lanes:forward=2 turn:lanes=through|through "
+        "control=stop\n30 33\n30 20\nend\n",
+        /* three records of a two-way street with one lane each way, the
+         * middle one pointing the other way (its forward is the street's
+         * backward), the arrow across the short one */
+        "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+        "road side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right "
+        "control=stop\n30 40\n30 32\nend\n"
+        "road side width 7 class=secondary area=rural lanes=2 turn:lanes:backward=through;right "
+        "control=stop\n30 29\n30 32\nend\n"
+        "road side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right "
+        "control=stop\n30 29\n30 20\nend\n",
+    };
+    static const char two_way[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+                                  "road side width 7 class=secondary area=rural lanes=2 "
+                                  "turn:lanes:forward=through;right control=stop\n30 40\n30 20\nend\n";
+    for (size_t c = 0; c < sizeof split / sizeof *split; c++) {
+        const char *ref = c < 2 ? lanes_scene : two_way;
+        img one, none, sp;
+        CHECK(render(ref, 61, 41, RS_PROFILE_RMS, 1, 0, &one));
+        CHECK(render(ref, 61, 41, RS_PROFILE_RMS, 1, 1, &none));
+        /* the unsplit scene has its arrows: the automatic markings change pixels */
+        size_t differ = 0;
+        for (size_t i = 0; one.rgba && none.rgba && i < (size_t)one.w * one.h * 4; i++)
+            differ += one.rgba[i] != none.rgba[i];
+        CHECK(differ > 1000);
+        free(none.rgba);
+        CHECK(render(split[c], 61, 41, RS_PROFILE_RMS, 1, 0, &sp));
+        if (!one.rgba || !sp.rgba || sp.w != one.w || sp.h != one.h) {
+            free(sp.rgba);
+            free(one.rgba);
+            continue;
+        }
+        int worst = 0;
+        size_t at = 0;
+        for (size_t i = 0; i < (size_t)one.w * one.h * 4; i++) {
+            int d = abs((int)one.rgba[i] - (int)sp.rgba[i]);
+            if (d > worst) worst = d, at = i / 4;
+        }
+        CHECKF(worst <= 8, "split %zu: %d/255 at x %.1f y %.1f m", c, worst, (at % one.w + 0.5) * PIX,
+               (at / one.w + 0.5) * PIX);
+        printf("markings across a split %zu: max %d/255 against the unsplit road\n", c, worst);
+        free(sp.rgba);
+        free(one.rgba);
+    }
+}
+
 /* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
 static void mirror_turns(const char *in, char *out, size_t cap)
 {
@@ -669,6 +734,7 @@ int main(void)
     test_standard_sizes();
     test_line_ends(line_ends_one);
     test_line_ends(line_ends_split);
+    test_markings_split();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX
