@@ -1140,6 +1140,26 @@ static int bands_mirror(const rs__band *b, uint32_t n)
     return 1;
 }
 
+/* A run of a stroke's records drawn with the bands of record `rec`, from
+ * polyline point `at`. */
+typedef struct ls_run {
+    uint32_t rec;
+    size_t at;
+} ls_run;
+
+/* Two records' bands draw the same (band by band, offsets within 1e-9 m):
+ * a stroke's records look alike until its lanes change along it. */
+static int bands_equal(const rs__band *a, uint32_t na, const rs__band *b, uint32_t nb)
+{
+    if (na != nb) return 0;
+    for (uint32_t i = 0; i < na; i++)
+        if (!(fabs(a[i].t - b[i].t) <= 1e-9) || a[i].w != b[i].w || memcmp(a[i].rgba, b[i].rgba, sizeof a[i].rgba) ||
+            a[i].ndash != b[i].ndash || a[i].phase != b[i].phase ||
+            (a[i].ndash && memcmp(a[i].dash, b[i].dash, a[i].ndash * sizeof *a[i].dash)))
+            return 0;
+    return 1;
+}
+
 /* Append road ri's points to the *m_out points already in *pts (a stroke's
  * records one after the other: a point equal to the last is left out). */
 static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, int rev,
@@ -1470,6 +1490,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double *sv = NULL;
     uint32_t *sr = NULL; /* the record of each segment of pts */
     size_t srcap = 0;
+    ls_run *runs = NULL; /* a stroke's runs of records that look alike */
+    size_t runcap = 0;
     ls_junc J;
     memset(&J, 0, sizeof J);
     int over = 0; /* push_cut passed the work limit */
@@ -1526,13 +1548,20 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
             alone = net->rev[recs[q]] != net->rev[head] && !bands_mirror(bands + band_start[head], band_start[head + 1] - band_start[head]);
         for (size_t q0 = 0; q0 < nrec; q0 = alone ? q0 + 1 : nrec) {
             size_t m = 0, q1 = alone ? q0 + 1 : nrec;
-            uint32_t first = recs[q0];
+            /* runs of records that look alike: where the lanes change along
+             * the stroke the next run draws its own bands from the joint
+             * on (the joint is kept), the arc length running on */
+            size_t nrun = 0;
             for (size_t q = q0; q < q1; q++) {
                 size_t m0 = m;
                 int rev = net && !alone ? net->rev[recs[q]] : 0;
+                uint32_t lead = nrun ? runs[nrun - 1].rec : recs[q];
+                int starts = !nrun || !bands_equal(bands + band_start[lead], band_start[lead + 1] - band_start[lead],
+                                                   bands + band_start[recs[q]],
+                                                   band_start[recs[q] + 1] - band_start[recs[q]]);
                 if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK)
                     goto fail;
-                if (m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
+                if (!starts && m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
                 if (cap > srcap) {
                     uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
                     if (!ns) { res = RS_ERR_NOMEM; goto fail; }
@@ -1540,17 +1569,37 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                     srcap = cap;
                 }
                 for (size_t i = m0 ? m0 - 1 : 0; i + 1 < m; i++) sr[i] = recs[q];
+                if (starts) {
+                    if (nrun == runcap) {
+                        size_t nc = runcap ? 2 * runcap : 8;
+                        ls_run *nr = rs__realloc(ctx, runs, nc * sizeof *runs);
+                        if (!nr) { res = RS_ERR_NOMEM; goto fail; }
+                        runs = nr;
+                        runcap = nc;
+                    }
+                    runs[nrun].rec = recs[q];
+                    runs[nrun].at = m0 ? m0 - 1 : 0;
+                    nrun++;
+                }
             }
             if (m < 2) continue;
-            for (uint32_t b = band_start[first]; b < band_start[first + 1]; b++)
-                if ((res = road_band_pieces(ctx, L, &J, sr, pts, sv, m, &bands[b], b, wmap, hmap)) != RS_OK)
-                    goto fail;
+            for (size_t u = 0; u < nrun; u++) {
+                size_t i0 = runs[u].at, i1 = u + 1 < nrun ? runs[u + 1].at : m - 1;
+                uint32_t first = runs[u].rec;
+                if (i1 <= i0) continue;
+                for (uint32_t b = band_start[first]; b < band_start[first + 1]; b++)
+                    if ((res = road_band_pieces(ctx, L, &J, sr + i0, pts + i0, sv + i0, i1 - i0 + 1, &bands[b], b, wmap,
+                                                hmap)) != RS_OK)
+                        goto fail;
+            }
         }
     }
     rs__free(ctx, pts);
     rs__free(ctx, sv);
     rs__free(ctx, sr);
+    rs__free(ctx, runs);
     sr = NULL;
+    runs = NULL;
     junc_free(ctx, &J);
     pts = NULL;
     sv = NULL;
@@ -1609,6 +1658,7 @@ fail:
     rs__free(ctx, pts);
     rs__free(ctx, sv);
     rs__free(ctx, sr);
+    rs__free(ctx, runs);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");

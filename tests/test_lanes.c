@@ -418,6 +418,46 @@ static void test_markings_split(void)
     }
 }
 
+/* Lanes that change along a street split into records (issue 27): each
+ * record's lines are its own lane model's, the arc length running on. A
+ * 4-lane US road with 3 lanes forward, then 1 (the yellow centre line
+ * moves from t = +3.5 to -3.5 m at x = 30 m): left of the joint the
+ * picture is the first record's road drawn whole, right of it the second's
+ * (within 8/255, 1 m from the joint). Before, the stroke drew every record
+ * with its first record's lines (the yellow line ran on at +3.5 m). */
+static void test_lanes_change(void)
+{
+    static const char split[] = "road a width 14 class=secondary area=rural lanes=4 lanes:forward=3\n0 20\n30 20\nend\n"
+                                "road a width 14 class=secondary area=rural lanes=4 lanes:forward=1\n30 20\n60 20\nend\n";
+    static const char whole1[] = "road a width 14 class=secondary area=rural lanes=4 lanes:forward=3\n0 20\n60 20\nend\n";
+    static const char whole2[] = "road a width 14 class=secondary area=rural lanes=4 lanes:forward=1\n0 20\n60 20\nend\n";
+    img S, A, B;
+    CHECK(render(split, 61, 41, RS_PROFILE_MUTCD, 1, 0, &S));
+    CHECK(render(whole1, 61, 41, RS_PROFILE_MUTCD, 1, 0, &A));
+    CHECK(render(whole2, 61, 41, RS_PROFILE_MUTCD, 1, 0, &B));
+    if (S.rgba && A.rgba && B.rgba) {
+        int worst[2] = { 0, 0 }, differ = 0;
+        for (uint32_t y = 0; y < S.h; y++)
+            for (uint32_t x = 0; x < S.w; x++) {
+                double xm = (x + 0.5) * PIX;
+                if (fabs(xm - 30) < 1) continue;
+                const img *R = xm < 30 ? &A : &B;
+                for (int c = 0; c < 3; c++) {
+                    size_t i = ((size_t)y * S.w + x) * 4 + c;
+                    int d = abs((int)S.rgba[i] - (int)R->rgba[i]);
+                    if (d > worst[xm > 30]) worst[xm > 30] = d;
+                    differ += A.rgba[i] != B.rgba[i];
+                }
+            }
+        CHECK(differ > 1000); /* the two lane models draw differently */
+        CHECKF(worst[0] <= 8 && worst[1] <= 8, "before the joint %d/255, after %d/255", worst[0], worst[1]);
+        printf("lanes changing along a street: %d/255 before the joint, %d/255 after it\n", worst[0], worst[1]);
+    }
+    free(S.rgba);
+    free(A.rgba);
+    free(B.rgba);
+}
+
 /* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
 static void mirror_turns(const char *in, char *out, size_t cap)
 {
@@ -735,6 +775,7 @@ int main(void)
     test_line_ends(line_ends_one);
     test_line_ends(line_ends_split);
     test_markings_split();
+    test_lanes_change();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX
