@@ -6,6 +6,7 @@
  * pixel's footprint from a summed-area table (issue 25). */
 #include "markings.h"
 #include "splatter.h"
+#include "network.h"
 
 #include <float.h>
 #include <limits.h>
@@ -332,7 +333,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     if (r->n < 2) return 0;
     double total = r->s[r->n - 1];
     double lo = m->slo, hi = m->shi;
-    if (hi < 0 || lo > total) return 0;
+    if (hi < r->s[0] || lo > total) return 0; /* (s[0] < 0 on a stretch extended before the record) */
     /* segments [a, b] overlapping [lo, hi] */
     size_t a = 0, b = r->n - 2;
     {
@@ -607,6 +608,70 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
     return RS_OK;
 }
 
+/* Road ri's local points extended past its ends along the records that go
+ * on there (the network's links: the same street split into records), so
+ * a placement reaching past a split follows the street's own line, also on
+ * a bend: at least `before` metres before its first point (s < 0) and
+ * `after` past its last, as far as the links go (16 records at most each
+ * way). The joint points are shared; s runs on from the record's own. */
+static rs_result road_local_extended(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, size_t ri,
+                                     const rs_dem *dem, double before, double after, rs__road_local *out)
+{
+    rs_result r = rs__road_local_get(ctx, roads, ri, dem, out);
+    if (r || out->n < 2) return r;
+    for (int e = 0; e < 2; e++) {
+        double need = e ? after : before, have = 0;
+        size_t at = ri;
+        int at_end = e; /* the end of `at` the chain leaves from */
+        for (int hop = 0; hop < 16 && have < need; hop++) {
+            uint32_t lk = net->link[2 * at + (size_t)at_end];
+            if (lk == UINT32_MAX) break;
+            size_t q = lk / 2;
+            int qend = (int)(lk & 1); /* q meets us with its last point (1) or its first */
+            rs__road_local ql;
+            if ((r = rs__road_local_get(ctx, roads, q, dem, &ql)) != RS_OK) return r;
+            if (ql.n < 2) {
+                rs__road_local_free(ctx, &ql);
+                break;
+            }
+            /* q's points away from the joint (the joint itself is ours) */
+            size_t add = ql.n - 1, n0 = out->n;
+            double *nx = rs__realloc(ctx, out->x, (n0 + add) * sizeof *nx);
+            if (nx) out->x = nx;
+            double *ny = nx ? rs__realloc(ctx, out->y, (n0 + add) * sizeof *ny) : NULL;
+            if (ny) out->y = ny;
+            double *ns = ny ? rs__realloc(ctx, out->s, (n0 + add) * sizeof *ns) : NULL;
+            if (ns) out->s = ns;
+            if (!ns) {
+                rs__road_local_free(ctx, &ql);
+                return RS_ERR_NOMEM;
+            }
+            if (!e) { /* before our first point: make room at the front */
+                memmove(out->x + add, out->x, n0 * sizeof *out->x);
+                memmove(out->y + add, out->y, n0 * sizeof *out->y);
+                memmove(out->s + add, out->s, n0 * sizeof *out->s);
+            }
+            double len = ql.s[ql.n - 1];
+            for (size_t k = 1; k <= add; k++) {
+                /* the k-th point of q away from the joint, and its distance
+                 * from the joint along q */
+                size_t qi = qend ? ql.n - 1 - k : k;
+                double d = qend ? len - ql.s[qi] : ql.s[qi];
+                size_t o = e ? n0 + k - 1 : add - k;
+                out->x[o] = ql.x[qi];
+                out->y[o] = ql.y[qi];
+                out->s[o] = e ? out->s[n0 - 1] + d : out->s[add] - d;
+            }
+            out->n = n0 + add;
+            have += len;
+            at = q;
+            at_end = !qend; /* on along q: its other end */
+            rs__road_local_free(ctx, &ql);
+        }
+    }
+    return RS_OK;
+}
+
 rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                              rs__markings **out)
 {
@@ -642,6 +707,8 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
         size_t have_road = SIZE_MAX;
+        rs_network *net = NULL; /* built when a placement reaches past its record */
+        int net_tried = 0;
         /* placements road by road (a stable counting sort), so each road's
          * local points are made once however the marks alternate between
          * roads; kept[i]: placement i was placed into mk->m[i] */
@@ -669,8 +736,28 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                 break;
             }
             rs_result e = RS_OK;
+            size_t npts0 = npts;
             kept[i] = (uint8_t)place(&pl[i], &rl, &atlas->t[pl[i].type], tx, mk->pix, &mk->m[i], &mk->pts, &npts,
                                      &pcap, ctx, &e);
+            /* reaching past the record's end: along the records that go on
+             * there (a street split anywhere draws as the unsplit one) */
+            double total = rl.n >= 2 ? rl.s[rl.n - 1] : 0;
+            if (!e && rl.n >= 2 && tx->ax0 <= tx->ax1 && (mk->m[i].slo < 0 || mk->m[i].shi > total)) {
+                if (!net && !net_tried) {
+                    net_tried = 1;
+                    if ((e = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) net = NULL;
+                }
+                rs__road_local xl;
+                memset(&xl, 0, sizeof xl);
+                if (net && !e)
+                    e = road_local_extended(ctx, roads, net, pl[i].road, dem, -mk->m[i].slo, mk->m[i].shi - total, &xl);
+                if (!e && xl.n > rl.n) {
+                    npts = npts0;
+                    kept[i] = (uint8_t)place(&pl[i], &xl, &atlas->t[pl[i].type], tx, mk->pix, &mk->m[i], &mk->pts,
+                                             &npts, &pcap, ctx, &e);
+                }
+                rs__road_local_free(ctx, &xl);
+            }
             if (e == RS_ERR_LIMIT)
                 r = rs__fail(ctx, e, "markings: the marks' stretches of road hold more than %llu points together "
                              "(long marks on roads of many points; the budget is rs_limits.max_points)",
@@ -688,6 +775,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__free(ctx, first);
         rs__free(ctx, kept);
         rs__road_local_free(ctx, &rl);
+        rs_network_free(ctx, net);
         mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
                     mk->ntex * sizeof *mk->tex + tex_bytes;
         size_t npart = 0, partcap = 0, nfp = 0;

@@ -358,8 +358,11 @@ done:
  * arrows wholly on the record before the short one that reaches the
  * junction) and at 13 m from the main road's centre line (the arrows
  * across the split), and in three records; every pixel within 8/255 of
- * the unsplit road. Before, the arrows vanished (the automatic rules
- * dropped a placement past its record's end). */
+ * the unsplit road; and a side road on a 20 m arc split at 13.6 m from
+ * its end (the arrow across the split, on the bend; then with the first
+ * record pointing the other way). Before, the arrows vanished (the
+ * automatic rules dropped a placement past its record's end); then, on
+ * the bend, they ran on along the record's end tangent. */
 static void test_markings_split(void)
 {
     static const char *const split[] = {
@@ -384,11 +387,15 @@ static void test_markings_split(void)
         "road side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right "
         "control=stop\n30 29\n30 20\nend\n",
     };
+    static const char curved_whole[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\nroad side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right control=stop\n10.000000 40.000000\n11.046719 39.972591\n12.090569 39.890438\n13.128689 39.753767\n14.158234 39.562952\n15.176381 39.318517\n16.180340 39.021130\n17.167359 38.671609\n18.134733 38.270909\n19.079810 37.820130\n20.000000 37.320508\n20.892781 36.773411\n21.755705 36.180340\n22.586408 35.542919\n23.382612 34.862897\n24.142136 34.142136\n24.862897 33.382612\n25.542919 32.586408\n26.180340 31.755705\n26.773411 30.892781\n27.320508 30.000000\n27.820130 29.079810\n28.270909 28.134733\n28.671609 27.167359\n29.021130 26.180340\n29.318517 25.176381\n29.562952 24.158234\n29.753767 23.128689\n29.890438 22.090569\n29.972591 21.046719\n30.000000 20.000000\nend\n";
+    static const char *const curved[] = { "road main width 8 class=primary area=rural\n0 20\n60 20\nend\nroad side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right control=stop\n10.000000 40.000000\n11.046719 39.972591\n12.090569 39.890438\n13.128689 39.753767\n14.158234 39.562952\n15.176381 39.318517\n16.180340 39.021130\n17.167359 38.671609\n18.134733 38.270909\n19.079810 37.820130\n20.000000 37.320508\n20.892781 36.773411\n21.755705 36.180340\n22.586408 35.542919\n23.382612 34.862897\n24.142136 34.142136\n24.862897 33.382612\n25.542919 32.586408\nend\nroad side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right control=stop\n25.542919 32.586408\n26.180340 31.755705\n26.773411 30.892781\n27.320508 30.000000\n27.820130 29.079810\n28.270909 28.134733\n28.671609 27.167359\n29.021130 26.180340\n29.318517 25.176381\n29.562952 24.158234\n29.753767 23.128689\n29.890438 22.090569\n29.972591 21.046719\n30.000000 20.000000\nend\n", "road main width 8 class=primary area=rural\n0 20\n60 20\nend\nroad side width 7 class=secondary area=rural lanes=2 turn:lanes:backward=through;right control=stop\n25.542919 32.586408\n24.862897 33.382612\n24.142136 34.142136\n23.382612 34.862897\n22.586408 35.542919\n21.755705 36.180340\n20.892781 36.773411\n20.000000 37.320508\n19.079810 37.820130\n18.134733 38.270909\n17.167359 38.671609\n16.180340 39.021130\n15.176381 39.318517\n14.158234 39.562952\n13.128689 39.753767\n12.090569 39.890438\n11.046719 39.972591\n10.000000 40.000000\nend\nroad side width 7 class=secondary area=rural lanes=2 turn:lanes:forward=through;right control=stop\n25.542919 32.586408\n26.180340 31.755705\n26.773411 30.892781\n27.320508 30.000000\n27.820130 29.079810\n28.270909 28.134733\n28.671609 27.167359\n29.021130 26.180340\n29.318517 25.176381\n29.562952 24.158234\n29.753767 23.128689\n29.890438 22.090569\n29.972591 21.046719\n30.000000 20.000000\nend\n" };
     static const char two_way[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
                                   "road side width 7 class=secondary area=rural lanes=2 "
                                   "turn:lanes:forward=through;right control=stop\n30 40\n30 20\nend\n";
-    for (size_t c = 0; c < sizeof split / sizeof *split; c++) {
-        const char *ref = c < 2 ? lanes_scene : two_way;
+    const size_t nsplit = sizeof split / sizeof *split, ncase = nsplit + sizeof curved / sizeof *curved;
+    for (size_t c = 0; c < ncase; c++) {
+        const char *ref = c < 2 ? lanes_scene : c < nsplit ? two_way : curved_whole;
+        const char *text = c < nsplit ? split[c] : curved[c - nsplit];
         img one, none, sp;
         CHECK(render(ref, 61, 41, RS_PROFILE_RMS, 1, 0, &one));
         CHECK(render(ref, 61, 41, RS_PROFILE_RMS, 1, 1, &none));
@@ -398,7 +405,7 @@ static void test_markings_split(void)
             differ += one.rgba[i] != none.rgba[i];
         CHECK(differ > 1000);
         free(none.rgba);
-        CHECK(render(split[c], 61, 41, RS_PROFILE_RMS, 1, 0, &sp));
+        CHECK(render(text, 61, 41, RS_PROFILE_RMS, 1, 0, &sp));
         if (!one.rgba || !sp.rgba || sp.w != one.w || sp.h != one.h) {
             free(sp.rgba);
             free(one.rgba);
