@@ -682,6 +682,7 @@ typedef struct ls_junc {
     uint64_t work, limit;  /* list entries visited by push_cut; rs_limits.max_field_work */
     const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
     uint8_t *nocut;        /* per road: junction_cuts=no (its lines uncut, its surface cuts none) */
+    uint8_t *car;          /* per road: not a path, footway or cycleway */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -835,6 +836,10 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
                         continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr) || Q->skip == sr)
                         continue;
+                    /* a path, footway or cycleway crossing or meeting a car
+                     * road cuts none of its lines (issue 27: the road's lines
+                     * run on over a footway crossing, as over a zebra's) */
+                    if (J->car[road] && !J->car[Q->road]) continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
                     ls_piece next[QMAX];
@@ -1243,6 +1248,7 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
     rs__free(ctx, J->stamp);
     rs__free(ctx, (void *)J->ends);
     rs__free(ctx, J->nocut);
+    rs__free(ctx, J->car);
     memset(J, 0, sizeof *J);
 }
 
@@ -1302,10 +1308,14 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     ls_ends *ends = rs__calloc(ctx, nroads ? nroads : 1, sizeof *ends);
     J->ends = ends;
     J->nocut = rs__calloc(ctx, nroads ? nroads : 1, 1);
-    if (!ends || !J->nocut) return RS_ERR_NOMEM;
+    J->car = rs__calloc(ctx, nroads ? nroads : 1, 1);
+    if (!ends || !J->nocut || !J->car) return RS_ERR_NOMEM;
     for (size_t ri = 0; ri < nroads; ri++) {
         const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
         J->nocut[ri] = jc && !strcmp(jc, "no");
+        rs_road_info in;
+        J->car[ri] = rs_roads_get_info(roads, ri, &in) != RS_OK ||
+                     !(in.road_class == RS_CLASS_PATH || in.road_class == RS_CLASS_FOOTWAY || in.road_class == RS_CLASS_CYCLEWAY);
     }
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
