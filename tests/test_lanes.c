@@ -465,6 +465,36 @@ static void test_lanes_change(void)
     free(B.rgba);
 }
 
+/* A footway crossing a road (issue 27 problem 6): the road's edge and
+ * centre lines run on over it (a path, footway or cycleway cuts no car
+ * road's lines). Every pixel the road's lines paint white without the
+ * footway is still white with it. Before, the lines stopped at the
+ * footway's surface (a 3 m gap in each). */
+static void test_footway_crossing(void)
+{
+    static const char alone[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n";
+    static const char crossed[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+                                  "road walk width 3 class=footway\n25 0\n35 40\nend\n";
+    img A, B;
+    CHECK(render(alone, 61, 41, RS_PROFILE_RMS, 1, 0, &A));
+    CHECK(render(crossed, 61, 41, RS_PROFILE_RMS, 1, 0, &B));
+    if (A.rgba && B.rgba) {
+        int white = 0, lost = 0;
+        for (uint32_t y = 0; y < A.h; y++)
+            for (uint32_t x = 250; x < 350; x++) { /* the crossing's columns */
+                const uint8_t *a = A.rgba + ((size_t)y * A.w + x) * 4, *b = B.rgba + ((size_t)y * B.w + x) * 4;
+                if (a[0] < 230 || a[1] < 230 || a[2] < 230) continue;
+                white++;
+                lost += b[0] < 230 || b[1] < 230 || b[2] < 230;
+            }
+        CHECK(white >= 150); /* two edge lines over 10 m */
+        CHECKF(lost == 0, "%d of %d line pixels lost over the footway", lost, white);
+        printf("footway crossing: %d of %d line pixels lost\n", lost, white);
+    }
+    free(A.rgba);
+    free(B.rgba);
+}
+
 /* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
 static void mirror_turns(const char *in, char *out, size_t cap)
 {
@@ -783,6 +813,7 @@ int main(void)
     test_line_ends(line_ends_split);
     test_markings_split();
     test_lanes_change();
+    test_footway_crossing();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX
