@@ -86,6 +86,7 @@ static void split(rs_roam *L, uint32_t t)
         lc = L->used;
         L->used += 2;
     }
+    L->moved += 2;
     uint32_t rc = lc + 1;
     if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
         L->par[lc] = L->par[rc] = t;
