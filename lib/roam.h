@@ -108,7 +108,7 @@ struct rs_roam {
      * merges gave back, the two queues, and a generation per patch. */
     uint32_t *par;
     uint32_t free_head, nfree;      /* first free pair (NIL: none), free nodes */
-    uint32_t moved;                 /* nodes split() allocated since the last compaction
+    uint32_t moved;                 /* nodes split() took from the free list since the last compaction
                                        (compact_pool, lib/roam_update.c) */
     struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
     uint32_t *pgen;                 /* per patch: generation of its leaves (the value of

@@ -82,11 +82,11 @@ static void split(rs_roam *L, uint32_t t)
         lc = L->free_head;
         L->free_head = n[lc].rc;
         L->nfree -= 2;
+        L->moved += 2;
     } else {
         lc = L->used;
         L->used += 2;
     }
-    L->moved += 2;
     uint32_t rc = lc + 1;
     if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
         L->par[lc] = L->par[rc] = t;
