@@ -141,7 +141,7 @@ static void margin_split(const upd *u, double m, double dc, double *tr, double *
 /* view_dist, and in a scan the item's visibility allowances into u->vtr,
  * u->vrot (items off the map or straddling its edge do not depend on the
  * view; a culled patch's items are scanned again when it comes into view). */
-static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
+static int view_dist_track(const upd *u, const tri *t, uint32_t patch, double *dist, double *vtr, double *vrt)
 {
     const rs_roam *L = u->L;
     const view_params *v = u->v;
@@ -165,15 +165,11 @@ static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
     double dc = sqrt(dx * dx + dy * dy + dz * dz);
     /* travel below a m and turn below (1 - a) m / (vd + a m) keep
      * T + R (vd + T) below m (vd = dc, rounded up) */
-    double tr, rt;
-    margin_split(u, m, dc, &tr, &rt);
-    if (tr < u->vtr) u->vtr = tr;
-    if (rt < u->vrot) u->vrot = rt;
-    if (!vis) return 0;
+    margin_split(u, m, dc, vtr, vrt);
     double dst = dc - r;
     double floor_d = 1e-3 * L->cs;
     *dist = dst < floor_d ? floor_d : dst;
-    return 2;
+    return vis ? 2 : 3;
 }
 
 /* view_dist for an item under a node wholly in view (node_class 1): its
@@ -207,17 +203,28 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
         slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
         patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
     } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
-    int k = u->vtrack ? view_dist_track(u, &t, patch, &d)
+    double vtr = INFINITY, vrt = INFINITY;
+    int k = u->vtrack ? view_dist_track(u, &t, patch, &d, &vtr, &vrt)
           : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
-    if (k != 2) return k ? INFINITY : 0.0;
+    if (k < 2) return k ? INFINITY : 0.0;
     float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
     double ek = (double)e * L->zs * u->v->k;
     if (u->track) {
+        /* a culled item's too: the distance at which it would cross the
+         * threshold if it were visible */
         double sl = fabs(d - ek / u->thr);
         if (sl < u->slack) u->slack = sl;
+        /* its side of the frustum matters only while its priority in
+         * view is above the threshold: below it, culled (0) and visible
+         * decide alike (no split, and no bar to a merge), and the slack
+         * above says when that may change */
+        if (ek / d > u->thr) {
+            if (vtr < u->vtr) u->vtr = vtr;
+            if (vrt < u->vrot) u->vrot = vrt;
+        }
     }
-    return ek / d;
+    return k == 2 ? ek / d : 0.0;
 }
 
 static double item_prio(upd *u, uint32_t node, uint32_t pos)
