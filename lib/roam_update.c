@@ -4,6 +4,7 @@
  * first). See docs/roam.md, "Frame-coherent updates". */
 #include "roam.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 #ifdef ROAM_UPDATE_DEBUG
@@ -401,7 +402,8 @@ static float rot_reading(double rr)
 {
     /* rr (1 - 2^-22) rounded to float is at most rr (the float's half ulp
      * is 2^-24 of it); a millimetre in 4 km early */
-    if (rr > 0.0) return (float)(rr * (1.0 - 0x1p-22));
+    if (rr > 0.0) return rr < FLT_MAX ? (float)(rr * (1.0 - 0x1p-22)) : rr == INFINITY ? INFINITY : FLT_MAX;
+    if (rr <= -FLT_MAX) return -INFINITY;
     float rf = (float)rr;
     if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
     return rf;
@@ -620,7 +622,11 @@ static void do_merge(upd *u)
 
 /* ---- pool compaction ---- */
 
-#define COMPACT_SHARE 10u
+/* Compact once the nodes taken from the free list since the last time are
+ * 3/10 of the live ones: about every 60 updates on the fractal drive,
+ * each a few milliseconds cold (1/10 compacted 10 times as often for the
+ * same mean, with more frames above 2 ms). */
+#define COMPACT_TENTHS 3u
 #define ODO_REBASE 4096.0
 
 /* Give the pairs under node i the next indices, depth first, lc's subtree
@@ -837,9 +843,8 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
 
     L->gen++;
     L->exhausted = 0;
-    /* renumber once a tenth of the live nodes are new (docs/roam.md:
-     * 0.05 to 0.4 measured alike on the drives) */
-    if (L->moved > (L->used - L->base_count - L->nfree) / COMPACT_SHARE) compact_pool(L);
+    /* renumber once many live nodes came from the free list (docs/roam.md) */
+    if (L->moved > (L->used - L->base_count - L->nfree) / 10u * COMPACT_TENTHS) compact_pool(L);
     uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
     uint64_t ops = 0;
     scan_fresh(&u);
