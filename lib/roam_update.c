@@ -623,7 +623,7 @@ static void do_merge(upd *u)
 /* ---- pool compaction ---- */
 
 /* Compact once the nodes taken from the free list since the last time are
- * 3/10 of the live ones: about every 60 updates on the fractal drive,
+ * 3/10 of the live ones: 3 times in the 600 updates of either drive,
  * each a few milliseconds cold (1/10 compacted 10 times as often for the
  * same mean, with more frames above 2 ms). */
 #define COMPACT_TENTHS 3u
