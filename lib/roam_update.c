@@ -847,8 +847,26 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
     if (L->moved > (L->used - L->base_count - L->nfree) / 10u * COMPACT_TENTHS) compact_pool(L);
     uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
     uint64_t ops = 0;
-    scan_fresh(&u);
-    int done = tolerance_pass(&u, limit, &ops), fixed = done;
+    int done, fixed;
+    if (!vw->target_triangles && !budget && L->used == L->base_count) {
+        /* no pool node in use (the first update, or one after a rebuild
+         * of nothing): the tolerance pass would split the base mesh up to
+         * the rebuild's mesh (the coarsest within the tolerance, so none
+         * of its diamonds can merge) one heap operation at a time;
+         * rs_roam_frame's depth-first refinement makes the same mesh
+         * several times faster (40 -> 8 ms on the fractal drive). The
+         * next update scans everything. */
+        rs__roam_reset_mesh(L);
+        refine_params rp = { 0.0, 0, &v, vis, 0 };
+        rs__roam_refine(L, &rp);
+        ops = L->tris - L->base_tris; /* a split adds a triangle on the map */
+        done = !L->exhausted;
+        fixed = 0;
+    } else {
+        scan_fresh(&u);
+        done = tolerance_pass(&u, limit, &ops);
+        fixed = done;
+    }
     if (vw->target_triangles && done) {
         double target = vw->target_triangles;
         if (fabs((double)L->tris - target) > TARGET_BAND * target) {
