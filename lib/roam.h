@@ -34,8 +34,12 @@
 /* A node's cached scan (rs_roam_update): one record, so that looking at a
  * node costs one cache line besides the node's. */
 struct roam_scan {
-    double rc;      /* odometer reading (L->odo) at which its subtree must be
-                       scanned again (-1: at the next update) */
+    float rc;       /* odometer reading (L->odo - L->odo_base, rounded down) at
+                       which its subtree must be scanned again (-1: at the
+                       next update) */
+    float irc;      /* the same for its items alone, without the readings of
+                       its class (a node wholly in or out of view whose class
+                       is checked again is scanned only when this is due) */
     float rot;      /* turn reading (L->rot, rounded down) at which an item
                        under it may change sides of the frustum */
     unsigned char cls; /* its class against the view at its last scan */
@@ -108,11 +112,15 @@ struct rs_roam {
      * merges gave back, the two queues, and a generation per patch. */
     uint32_t *par;
     uint32_t free_head, nfree;      /* first free pair (NIL: none), free nodes */
+    uint32_t moved;                 /* nodes split() took from the free list since the last compaction
+                                       (compact_pool, lib/roam_update.c) */
     struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
     uint32_t *pgen;                 /* per patch: generation of its leaves (the value of
                                        gen when they last changed) */
     struct roam_scan *cscan;        /* per node: its cached scan (lib/roam_update.c) */
     unsigned char *pvis;            /* per patch: visible at the last update */
+    double odo_base;                /* odometer at which the scan records' readings start
+                                       (floats: rebased, with a full scan, every 4 km) */
     double odo, rot;                /* camera travel (metres) and turn (the sum of the
                                        largest frustum normal change per update) */
     double last_eye[3], last_n[5][3], last_k, last_tol, last_mtol; /* the view of the last scan */
@@ -131,7 +139,7 @@ static inline void touch_patch(rs_roam *L, uint32_t node)
     uint32_t e = L->nodes[node].e;
     L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
     if (L->par)
-        for (uint32_t c = node; c != NIL && L->cscan[c].rc >= 0.0; c = L->par[c]) L->cscan[c].rc = -1.0;
+        for (uint32_t c = node; c != NIL && L->cscan[c].rc >= 0.0f; c = L->par[c]) L->cscan[c].rc = -1.0f;
 }
 
 /* Nodes the pool can still give. */

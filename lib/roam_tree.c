@@ -82,6 +82,7 @@ static void split(rs_roam *L, uint32_t t)
         lc = L->free_head;
         L->free_head = n[lc].rc;
         L->nfree -= 2;
+        L->moved += 2;
     } else {
         lc = L->used;
         L->used += 2;
@@ -89,7 +90,7 @@ static void split(rs_roam *L, uint32_t t)
     uint32_t rc = lc + 1;
     if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
         L->par[lc] = L->par[rc] = t;
-        L->cscan[lc].rc = L->cscan[rc].rc = -1.0;
+        L->cscan[lc].rc = L->cscan[rc].rc = -1.0f;
     }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;

@@ -4,6 +4,7 @@
  * first). See docs/roam.md, "Frame-coherent updates". */
 #include "roam.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 #ifdef ROAM_UPDATE_DEBUG
@@ -116,14 +117,32 @@ typedef struct upd {
     double trate, rrate; /* travel and turn of this update (the pace) */
     double rrot;        /* smallest turn reading of the subtrees seen so far */
     int vtrack;         /* scanning a node partly in view: keep vtr, vrot */
+    double ctr, crt;    /* scanning a node wholly in or out of view: its class's
+                           travel and turn readings (node_class) */
+    double rctr;        /* smallest travel reading of the subtrees seen so far,
+                           their classes' included */
     int inview;         /* scanning a node wholly in view: no item is culled */
     int nomem;
 } upd;
 
+/* A margin m against every plane, of points within dc of the eye, as a
+ * travel allowance tr and a turn allowance rt (the share above; vd = dc
+ * rounded up). */
+static void margin_split(const upd *u, double m, double dc, double *tr, double *rt)
+{
+    if (m < 0.0) m = 0.0;
+    double vd = dc * (1.0 + 1e-9) + 1e-9, pace = u->trate + u->rrate * vd;
+    double a = pace > 0.0 ? u->trate / pace : 0.5;
+    if (a < 0.05) a = 0.05;
+    if (a > 0.95) a = 0.95;
+    *tr = a * m;
+    *rt = (1.0 - a) * m / (vd + *tr);
+}
+
 /* view_dist, and in a scan the item's visibility allowances into u->vtr,
  * u->vrot (items off the map or straddling its edge do not depend on the
  * view; a culled patch's items are scanned again when it comes into view). */
-static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
+static int view_dist_track(const upd *u, const tri *t, uint32_t patch, double *dist, double *vtr, double *vrt)
 {
     const rs_roam *L = u->L;
     const view_params *v = u->v;
@@ -147,19 +166,11 @@ static int view_dist_track(upd *u, const tri *t, uint32_t patch, double *dist)
     double dc = sqrt(dx * dx + dy * dy + dz * dz);
     /* travel below a m and turn below (1 - a) m / (vd + a m) keep
      * T + R (vd + T) below m (vd = dc, rounded up) */
-    if (m < 0.0) m = 0.0;
-    double vd = dc * (1.0 + 1e-9) + 1e-9, pace = u->trate + u->rrate * vd;
-    double a = pace > 0.0 ? u->trate / pace : 0.5;
-    if (a < 0.05) a = 0.05;
-    if (a > 0.95) a = 0.95;
-    double tr = a * m, rt = (1.0 - a) * m / (vd + tr);
-    if (tr < u->vtr) u->vtr = tr;
-    if (rt < u->vrot) u->vrot = rt;
-    if (!vis) return 0;
+    margin_split(u, m, dc, vtr, vrt);
     double dst = dc - r;
     double floor_d = 1e-3 * L->cs;
     *dist = dst < floor_d ? floor_d : dst;
-    return 2;
+    return vis ? 2 : 3;
 }
 
 /* view_dist for an item under a node wholly in view (node_class 1): its
@@ -193,17 +204,28 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
         slot = pos >= 2 ? rs__roam_imp_slot(L, &L->nodes[node], pos) : rs__roam_err_slot(L, &L->nodes[node]);
         patch = L->nodes[node].e == NIL ? 0 : L->nodes[node].e >> L->elog;
     } else rs__roam_item_tri(L, node, pos, &t, &slot, &patch);
-    int k = u->vtrack ? view_dist_track(u, &t, patch, &d)
+    double vtr = INFINITY, vrt = INFINITY;
+    int k = u->vtrack ? view_dist_track(u, &t, patch, &d, &vtr, &vrt)
           : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
-    if (k != 2) return k ? INFINITY : 0.0;
+    if (k < 2) return k ? INFINITY : 0.0;
     float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
     double ek = (double)e * L->zs * u->v->k;
     if (u->track) {
+        /* a culled item's too: the distance at which it would cross the
+         * threshold if it were visible */
         double sl = fabs(d - ek / u->thr);
         if (sl < u->slack) u->slack = sl;
+        /* its side of the frustum matters only while its priority in
+         * view is above the threshold: below it, culled (0) and visible
+         * decide alike (no split, and no bar to a merge), and the slack
+         * above says when that may change */
+        if (ek / d > u->thr) {
+            if (vtr < u->vtr) u->vtr = vtr;
+            if (vrt < u->vrot) u->vrot = vrt;
+        }
     }
-    return ek / d;
+    return k == 2 ? ek / d : 0.0;
 }
 
 static double item_prio(upd *u, uint32_t node, uint32_t pos)
@@ -319,10 +341,18 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
  * than that half range, all culled when they are further outside one
  * than the cluster's radius (or the patch is culled). */
 #define CLS_UNKNOWN 3
-static int node_class(const upd *u, uint32_t i)
+/* Also the class's own readings (issue 31, third session): the lifted
+ * corners' plane values move by at most T + R (vd + T) (above), so the
+ * class holds while the odometer stays below *ctr and the turn below
+ * *crt: for "all visible" the margin is the smallest lo + hz over the
+ * planes, for "all culled" -r - hi of the plane that culls. (+inf for
+ * a culled patch, which is scanned in full when it comes back, and for
+ * "in between", which has its items' readings.) */
+static int node_class(const upd *u, uint32_t i, double *ctr, double *crt)
 {
     const rs_roam *L = u->L;
     const roam_node *nd = &L->nodes[i];
+    *ctr = *crt = INFINITY;
     if (nd->e == NIL) return 2;
     uint32_t patch = nd->e >> L->elog;
     if (!u->vis[patch]) return 0;
@@ -333,7 +363,8 @@ static int node_class(const upd *u, uint32_t i)
     double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
     double cs = L->cs;
     double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
-    int part = 0, np = u->v->nplanes;
+    int part = 0, cls = 1, np = u->v->nplanes;
+    double m = INFINITY;
     for (int p = 0; p < np; p++) {
         const double *pl = u->v->planes[p];
         double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
@@ -341,13 +372,56 @@ static int node_class(const upd *u, uint32_t i)
         double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
         if (s2 < lo) lo = s2;
         if (s2 > hi) hi = s2;
-        if (hi < -r) return 0;
+        if (hi < -r) { cls = 0; m = -r - hi; break; }
         if (lo < -hz) part = 1;
+        if (lo + hz < m) m = lo + hz;
     }
-    return part ? 2 : 1;
+    if (cls == 1 && part) return 2;
+    /* the farthest lifted corner, and a margin for the rounding */
+    const double *e = u->v->eye;
+    double dz = c[2] - e[2], v2 = 0.0;
+    double xs[3] = { x0, x1, x2 }, ys[3] = { y0, y1, y2 };
+    for (int k = 0; k < 3; k++) {
+        double dx = xs[k] - e[0], dy = ys[k] - e[1], d = dx * dx + dy * dy + dz * dz;
+        if (d > v2) v2 = d;
+    }
+    double vd = sqrt(v2);
+    m -= 1e-9 * (vd + r + 1.0);
+    double tr, rt;
+    margin_split(u, m, vd, &tr, &rt);
+    double eps = 1e-9 * (1.0 + L->odo);
+    *ctr = L->odo + tr * (1.0 - 1e-9) - eps;
+    *crt = L->rot + rt * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
+    return cls;
 }
 
 static double walk(upd *u, uint32_t i, int pcls);
+
+/* A turn reading as stored: rounded down (a reading too early is safe). */
+static float rot_reading(double rr)
+{
+    /* rr (1 - 2^-22) rounded to float is at most rr (the float's half ulp
+     * is 2^-24 of it); a millimetre in 4 km early */
+    if (rr > 0.0) return rr < FLT_MAX ? (float)(rr * (1.0 - 0x1p-22)) : rr == INFINITY ? INFINITY : FLT_MAX;
+    if (rr <= -FLT_MAX) return -INFINITY;
+    float rf = (float)rr;
+    if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
+    return rf;
+}
+
+/* Odometer readings are stored as floats from L->odo_base, rounded down
+ * (-1: scan at the next update). */
+static float reading_put(const rs_roam *L, double r)
+{
+    if (r < 0.0) return -1.0f;
+    float f = rot_reading(r - L->odo_base);
+    return f < 0.0f ? 0.0f : f;
+}
+
+static double reading_get(const rs_roam *L, float f)
+{
+    return f < 0.0f ? -1.0 : L->odo_base + (double)f;
+}
 
 /* The items at and below node i: its leaves and its diamonds. Returns the
  * smallest recheck reading of the children's subtrees (+inf: none). */
@@ -384,53 +458,73 @@ static double walk(upd *u, uint32_t i, int pcls)
     rs_roam *L = u->L;
     if (u->all) { walk_items(u, i, 2); return -1.0; }
     struct roam_scan *cs = &L->cscan[i];
-    double rc = cs->rc, rr = cs->rot;
+    double rc = reading_get(L, cs->rc), irc, rr = cs->rot;
     int cls = pcls; /* CLS_UNKNOWN until needed */
+    /* the class's readings: an ancestor's when the class is inherited */
+    double ctr = INFINITY, crt = INFINITY;
+    if (cls != CLS_UNKNOWN) { ctr = u->ctr; crt = u->crt; }
     if (!u->full && rc >= 0.0) {
         if (L->odo < rc && L->rot < rr) {
             if (rr < u->rrot) u->rrot = rr;
-            return rc;
+            if (rc < u->rctr) u->rctr = rc;
+            return reading_get(L, cs->irc);
         }
         if (cs->cls != 2) {
-            if (cls == CLS_UNKNOWN) cls = node_class(u, i);
-            if (cls == cs->cls && (cls == 0 || L->odo < rc)) {
-                u->rrot = -INFINITY; /* the parent relies on its class too */
-                return rc;
+            irc = reading_get(L, cs->irc);
+            if (cls == CLS_UNKNOWN) cls = node_class(u, i, &ctr, &crt);
+            if (cls == cs->cls && (cls == 0 || L->odo < irc)) {
+                /* its items are as at their scan (culled ones have no
+                 * readings); the class holds until this view's readings */
+                rc = cls == 0 || ctr < irc ? ctr : irc;
+                cs->rc = reading_put(L, rc);
+                cs->rot = rot_reading(crt);
+                if (crt < u->rrot) u->rrot = crt;
+                if (rc < u->rctr) u->rctr = rc;
+                return irc;
             }
         }
     }
-    if (cls == CLS_UNKNOWN) cls = node_class(u, i);
-    double save = u->slack, svtr = u->vtr, svrot = u->vrot, srot = u->rrot;
+    if (cls == CLS_UNKNOWN) cls = node_class(u, i, &ctr, &crt);
+    double save = u->slack, svtr = u->vtr, svrot = u->vrot, srot = u->rrot, srctr = u->rctr;
+    double sctr = u->ctr, scrt = u->crt;
     int svt = u->vtrack, siv = u->inview;
     u->slack = INFINITY;
     u->vtr = INFINITY;
     u->vrot = INFINITY;
-    /* a node wholly in or out of view relies on its class; the items of
-     * one in between keep a bound on their sides */
+    /* a node wholly in or out of view relies on its class (its children
+     * inherit it, with its readings); the items of one in between keep a
+     * bound on their sides */
     u->vtrack = cls == 2;
     u->inview = cls == 1;
-    u->rrot = cls == 2 ? INFINITY : -INFINITY;
+    u->rrot = INFINITY;
+    u->rctr = INFINITY;
+    u->ctr = ctr; u->crt = crt;
     double sub = walk_items(u, i, cls == 2 ? CLS_UNKNOWN : cls);
+    u->ctr = sctr; u->crt = scrt;
     /* a margin for the rounding of the distances */
     double eps = 1e-9 * (1.0 + L->odo);
-    rc = L->odo + u->slack * (1.0 - 1e-9) - eps;
-    if (sub < rc) rc = sub;
+    irc = L->odo + u->slack * (1.0 - 1e-9) - eps;
+    if (sub < irc) irc = sub;
     rr = u->rrot;
+    double cf = u->rctr; /* the children's class readings */
     if (cls == 2) {
         double ro = L->odo + u->vtr * (1.0 - 1e-9) - eps;
         double rt = L->rot + u->vrot * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
-        if (ro < rc) rc = ro;
+        if (ro < irc) irc = ro;
         if (rt < rr) rr = rt;
+    } else {
+        if (ctr < cf) cf = ctr;
+        if (crt < rr) rr = crt;
     }
-    if (rc < 0.0) rc = -1.0;
-    cs->rc = rc;
-    float rf = (float)rr; /* rounded down: a reading too early is safe */
-    if ((double)rf > rr) rf = nextafterf(rf, -INFINITY);
-    cs->rot = rf;
+    rc = cf < irc ? cf : irc;
+    cs->rc = reading_put(L, rc);
+    cs->irc = reading_put(L, irc);
+    cs->rot = rot_reading(rr);
     cs->cls = (unsigned char)cls;
     u->slack = save; u->vtr = svtr; u->vrot = svrot; u->vtrack = svt; u->inview = siv;
     u->rrot = rr < srot ? rr : srot;
-    return rc;
+    u->rctr = rc < srctr ? rc : srctr;
+    return irc;
 }
 
 /* The leaves and diamonds of the current mesh that may have crossed the
@@ -440,6 +534,7 @@ static void scan_mesh(upd *u)
     rs_roam *L = u->L;
     u->track = !u->all;
     u->rrot = INFINITY;
+    u->rctr = INFINITY;
     int full = u->full;
     for (uint32_t p = 0; p < L->npx * L->npy; p++) {
         /* a patch that came into view or left it (its items were not
@@ -525,6 +620,75 @@ static void do_merge(upd *u)
     }
 }
 
+/* ---- pool compaction ---- */
+
+/* Compact once the nodes taken from the free list since the last time are
+ * 3/10 of the live ones: 3 times in the 600 updates of either drive,
+ * each a few milliseconds cold (1/10 compacted 10 times as often for the
+ * same mean, with more frames above 2 ms). */
+#define COMPACT_TENTHS 3u
+#define ODO_REBASE 4096.0
+
+/* Give the pairs under node i the next indices, depth first, lc's subtree
+ * before rc's: the order in which walk() visits them. The depth is at most
+ * the tree's (2 log2 P + 1 levels). */
+static void order_pairs(const rs_roam *L, uint32_t i, uint32_t *map, uint32_t *next)
+{
+    const roam_node *n = L->nodes;
+    uint32_t lc = n[i].lc, rc = n[i].rc;
+    if (lc == NIL || lc == IMPL || lc == FREE) return;
+    if (lc >= L->base_count) { map[lc] = *next; map[lc + 1] = *next + 1; *next += 2; }
+    order_pairs(L, lc, map, next);
+    order_pairs(L, rc, map, next);
+}
+
+static uint32_t remap(const rs_roam *L, const uint32_t *map, uint32_t x)
+{
+    return x == NIL || x < L->base_count ? x : map[x];
+}
+
+/* Renumber the pool's live nodes in the scan's order and drop the free
+ * list. Splits take nodes from wherever merges freed them, so after a few
+ * hundred updates the nodes one scan visits are scattered over the pool
+ * and every one is a cache miss; in walk order, a scan reads the node and
+ * scan arrays forwards and siblings share lines. Only node numbers change
+ * (links, parents and scan records move with their nodes; the base mesh
+ * keeps its numbers), so the mesh and every later decision are the same;
+ * extraction, which lists leaves in node order, lists them in this order.
+ * The refinement stack, empty between calls, holds the map. */
+static void compact_pool(rs_roam *L)
+{
+    roam_node *n = L->nodes;
+    uint32_t *map = L->stack, b = L->base_count, next = b;
+    for (uint32_t i = b; i < L->used; i++) map[i] = NIL;
+    for (uint32_t p = 0; p < 2 * L->npx * L->npy; p++) order_pairs(L, p, map, &next);
+    uint32_t live = next;
+    for (uint32_t i = b; i < L->used; i++)
+        if (map[i] == NIL) map[i] = next++; /* free nodes fill the rest */
+    for (uint32_t i = 0; i < L->used; i++) {
+        roam_node *nd = &n[i];
+        if (i >= b && nd->lc == FREE) continue;
+        if (nd->lc != NIL && nd->lc != IMPL) { nd->lc = remap(L, map, nd->lc); nd->rc = remap(L, map, nd->rc); }
+        nd->base = remap(L, map, nd->base);
+        nd->left = remap(L, map, nd->left);
+        nd->right = remap(L, map, nd->right);
+        L->par[i] = remap(L, map, L->par[i]);
+    }
+    /* move every node to its number, cycle by cycle */
+    for (uint32_t i = b; i < L->used; i++)
+        while (map[i] != i) {
+            uint32_t j = map[i];
+            roam_node tn = n[i]; n[i] = n[j]; n[j] = tn;
+            struct roam_scan ts = L->cscan[i]; L->cscan[i] = L->cscan[j]; L->cscan[j] = ts;
+            uint32_t tp = L->par[i]; L->par[i] = L->par[j]; L->par[j] = tp;
+            map[i] = map[j]; map[j] = j;
+        }
+    L->used = live;
+    L->free_head = NIL;
+    L->nfree = 0;
+    L->moved = 0;
+}
+
 static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
     if (!L->par) {
@@ -536,7 +700,7 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = -1.0; }
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
         L->par = par; L->cscan = cs; L->pvis = pv;
@@ -671,15 +835,38 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
         L->last_n[p][0] = v.planes[p][0]; L->last_n[p][1] = v.planes[p][1]; L->last_n[p][2] = v.planes[p][2];
     }
     L->rot += turn * (1.0 + 1e-9);
+    /* the scan records' float readings keep millimetres within 4 km of
+     * their base: past that, a new base and a full scan */
+    if (L->odo - L->odo_base > ODO_REBASE) { L->odo_base = L->odo; u.full = 1; }
     u.trate = sqrt(ex * ex + ey * ey + ez * ez);
     u.rrate = turn;
 
     L->gen++;
     L->exhausted = 0;
+    /* renumber once many live nodes came from the free list (docs/roam.md) */
+    if (L->moved > (L->used - L->base_count - L->nfree) / 10u * COMPACT_TENTHS) compact_pool(L);
     uint64_t limit = budget ? budget : (uint64_t)UNBOUNDED_OPS_PER_NODE * L->cap + 1024;
     uint64_t ops = 0;
-    scan_fresh(&u);
-    int done = tolerance_pass(&u, limit, &ops), fixed = done;
+    int done, fixed;
+    if (!vw->target_triangles && !budget && L->used == L->base_count) {
+        /* no pool node in use (the first update, or one after a rebuild
+         * of nothing): the tolerance pass would split the base mesh up to
+         * the rebuild's mesh (the coarsest within the tolerance, so none
+         * of its diamonds can merge) one heap operation at a time;
+         * rs_roam_frame's depth-first refinement makes the same mesh
+         * several times faster (40 -> 8 ms on the fractal drive). The
+         * next update scans everything. */
+        rs__roam_reset_mesh(L);
+        refine_params rp = { 0.0, 0, &v, vis, 0 };
+        rs__roam_refine(L, &rp);
+        ops = L->tris - L->base_tris; /* a split adds a triangle on the map */
+        done = !L->exhausted;
+        fixed = 0;
+    } else {
+        scan_fresh(&u);
+        done = tolerance_pass(&u, limit, &ops);
+        fixed = done;
+    }
     if (vw->target_triangles && done) {
         double target = vw->target_triangles;
         if (fabs((double)L->tris - target) > TARGET_BAND * target) {

@@ -453,14 +453,52 @@ static int vertices_within(const mesh *a, const mesh *b)
     return 1;
 }
 
-/* Updates while the camera turns (in place, then sweeping sideways): items
- * near the frustum's sides come into view and leave it, and the update
- * skips subtrees by a bound on how far the frustum moved. After every
- * update no leaf may be above the tolerance, which holds exactly when the
- * mesh refines the rebuild's (the coarsest such mesh): the rebuild's
- * vertices are all in the update's, over the whole frustum (the view
- * check of test_update only looks inside a cone). */
-static void test_update_turning(rs_ctx *ctx, uint32_t patch)
+/* Frame f of test_update_turning's flight: the camera turns in place, then
+ * sweeps sideways while turning. */
+static void turning_view(int f, uint32_t W, double cs, rs_roam_view *v)
+{
+    double a = f * 0.021, c = 0.5 * (W - 1) * cs;
+    double side = f < 75 ? 0.0 : (f - 75) * 1.3;
+    memset(v, 0, sizeof *v);
+    v->eye[0] = c + side * cos(a); v->eye[1] = c + 200.0 + side * sin(a); v->eye[2] = 60.0;
+    v->dir[0] = cos(a); v->dir[1] = sin(a); v->dir[2] = -0.2;
+    v->fov_y = 50; v->width = 1280; v->height = 720; v->pixel_error = 1.0;
+}
+
+/* Frame f of a shuttle: 31 m per frame back and forth along a 600 m line
+ * (150 frames, 4.6 km of travel: the scan records' odometer readings are
+ * floats from a base that moves every 4 km), looking along the line, with a
+ * slow turn so nodes partly in view come due by their turn readings too. */
+static void shuttle_view(int f, uint32_t W, double cs, rs_roam_view *v)
+{
+    double c = 0.5 * (W - 1) * cs, s = fmod(f * 31.0, 1200.0);
+    double x = s < 600.0 ? s : 1200.0 - s, dirx = s < 600.0 ? 1.0 : -1.0, a = f * 0.004;
+    memset(v, 0, sizeof *v);
+    v->eye[0] = c - 300.0 + x; v->eye[1] = c + 40.0 * sin(a); v->eye[2] = 45.0;
+    v->dir[0] = dirx * cos(a); v->dir[1] = sin(a); v->dir[2] = -0.2;
+    v->fov_y = 50; v->width = 1280; v->height = 720; v->pixel_error = 1.0;
+}
+
+/* Frame f of a strafe: the view direction fixed, the eye sliding sideways
+ * 9 m per frame and back, so whole subtrees cross the side planes by
+ * travel alone (the readings of a node's class). */
+static void strafe_view(int f, uint32_t W, double cs, rs_roam_view *v)
+{
+    double c = 0.5 * (W - 1) * cs, s = fmod(f * 9.0, 1200.0);
+    double y = s < 600.0 ? s : 1200.0 - s;
+    memset(v, 0, sizeof *v);
+    v->eye[0] = c - 500.0; v->eye[1] = c - 300.0 + y; v->eye[2] = 50.0;
+    v->dir[0] = 1.0; v->dir[1] = 0.35; v->dir[2] = -0.15;
+    v->fov_y = 40; v->width = 1280; v->height = 720; v->pixel_error = 1.0;
+}
+
+/* Updates along a flight (150 frames of `view`): after every update no
+ * leaf may be above the tolerance, which holds exactly when the mesh
+ * refines the rebuild's (the coarsest such mesh): the rebuild's vertices
+ * are all in the update's, over the whole frustum (the view check of
+ * test_update only looks inside a cone). */
+static void update_refines_flight(rs_ctx *ctx, uint32_t patch, const char *name,
+                                  void (*view)(int, uint32_t, double, rs_roam_view *))
 {
     const uint32_t W = 257, H = 257;
     const double cs = 10.0;
@@ -476,12 +514,7 @@ static void test_update_turning(rs_ctx *ctx, uint32_t patch)
     uint32_t skipped_frames = 0;
     for (int f = 0; f < 150; f++) {
         rs_roam_view v;
-        memset(&v, 0, sizeof v);
-        double a = f * 0.021, c = 0.5 * (W - 1) * cs;
-        double side = f < 75 ? 0.0 : (f - 75) * 1.3;
-        v.eye[0] = c + side * cos(a); v.eye[1] = c + 200.0 + side * sin(a); v.eye[2] = 60.0;
-        v.dir[0] = cos(a); v.dir[1] = sin(a); v.dir[2] = -0.2;
-        v.fov_y = 50; v.width = 1280; v.height = 720; v.pixel_error = 1.0;
+        view(f, W, cs, &v);
         if (rs_roam_update(ctx, up, &v, 0) != RS_OK || rs_roam_frame(ctx, reb, &v) != RS_OK) { ok = 0; break; }
         mesh mu, mr;
         if (extract(ctx, up, NULL, &mu) != RS_OK) { ok = 0; break; }
@@ -494,13 +527,33 @@ static void test_update_turning(rs_ctx *ctx, uint32_t patch)
         mesh_free(&mr);
     }
     CHECK(ok);
-    CHECKF(refines, "update (patch %u), turning camera: the mesh refines the rebuild's on every frame", patch);
-    printf("update turning (patch %u): %u of 150 updates changed nothing\n", patch, skipped_frames);
+    CHECKF(refines, "update (patch %u), %s: the mesh refines the rebuild's on every frame", patch, name);
+    printf("update %s (patch %u): %u of 150 updates changed nothing\n", name, patch, skipped_frames);
 out:
     rs_roam_free(ctx, up);
     rs_roam_free(ctx, reb);
     rs_dem_free(ctx, d);
     free(z);
+}
+
+/* Items near the frustum's sides come into view and leave it, and the
+ * update skips subtrees by a bound on how far the frustum moved. */
+static void test_update_turning(rs_ctx *ctx, uint32_t patch)
+{
+    update_refines_flight(ctx, patch, "turning", turning_view);
+}
+
+/* Sideways travel without a turn. */
+static void test_update_strafe(rs_ctx *ctx, uint32_t patch)
+{
+    update_refines_flight(ctx, patch, "strafe", strafe_view);
+}
+
+/* Kilometres of travel: the readings' base moves (and the scan is full)
+ * on the way. */
+static void test_update_shuttle(rs_ctx *ctx, uint32_t patch)
+{
+    update_refines_flight(ctx, patch, "shuttle", shuttle_view);
 }
 
 /* rs_roam_update over a flight: crack-free and within the tolerance after
@@ -1279,6 +1332,10 @@ int main(void)
     test_update(ctx, 256);
     test_update_turning(ctx, 0);
     test_update_turning(ctx, 16);
+    test_update_shuttle(ctx, 0);
+    test_update_shuttle(ctx, 16);
+    test_update_strafe(ctx, 0);
+    test_update_strafe(ctx, 16);
     test_patches(ctx);
     test_seams(ctx, 1);
     test_seams(ctx, 0);
