@@ -1107,7 +1107,7 @@ fail:
     return build_fail(ctx, f, &b, res);
 }
 
-static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src, const double *extra);
+static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src);
 
 rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
                               rs__roadfield **out)
@@ -1157,7 +1157,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
         rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
-    if ((res = tees_widen(ctx, f, src, extra)) != RS_OK) {
+    if ((res = tees_widen(ctx, f, src)) != RS_OK) {
         rs__roadfield_free(ctx, f);
         return rs__fail(ctx, res, "roadfield: out of memory");
     }
@@ -1238,10 +1238,10 @@ static int cells_around(const rs__roadfield *f, double x, double y, double d, rf
 #define TEE_IV_MAX 256
 
 typedef struct rf_tee {
-    uint32_t seg, through; /* the leg's end segment, the through road */
+    uint32_t seg;          /* the leg's end segment */
     int end;               /* 1: the segment's b is the T end, 0: its a */
     double nx, ny;         /* the through road's normal, from the leg across */
-    double cE, R;          /* n.E, the through road's half width (this field's) */
+    double cE, R;          /* n.E, the through road's half width */
     double c;              /* cE + R: keep n.p <= c */
     double box[4];         /* x0, x1, y0, y1 (local metres): where the trimmed shape and the capsule differ */
     uint32_t row0;         /* the first grid row of box */
@@ -1479,7 +1479,7 @@ static int tee_cmp(const void *a, const void *b)
     return p->end - q->end;
 }
 
-/* f->tee holds ntee entries (seg, through, end, n, cE, R): sorts them,
+/* f->tee holds ntee entries (seg, end, n, cE, R): sorts them,
  * drops a second clip of one segment end, flags the segments and builds
  * the boxes and row lists. */
 static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
@@ -1547,7 +1547,7 @@ static const rf_seg *road_end_seg(const rs__roadfield *f, const rs_roads *roads,
 }
 
 rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
-                                 size_t n, const double *extra)
+                                 size_t n)
 {
     if (!f || !n || f->ntee) return RS_OK;
     f->tee = rs__alloc_array(ctx, n, sizeof *f->tee);
@@ -1562,11 +1562,10 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
         if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
         rf_tee *T = &f->tee[m++];
         T->seg = (uint32_t)(s - f->seg);
-        T->through = t->through;
         T->end = t->end;
         T->nx = t->nx, T->ny = t->ny;
         T->cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
-        T->R = t->half_width + (extra ? extra[t->through] : 0);
+        T->R = t->half_width;
     }
     f->ntee = m;
     rs_result r = tees_finish(ctx, f);
@@ -1578,38 +1577,29 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
     return r;
 }
 
-/* widen: the source's tees, the through roads grown by their extra */
-static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src, const double *extra)
+/* widen: the source's tees; a casing stops at the through road's surface
+ * edge too (beyond it lies the through road's own casing) */
+static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src)
 {
     if (!src->ntee) return RS_OK;
     f->tee = rs__alloc_array(ctx, src->ntee, sizeof *f->tee);
     if (!f->tee) return RS_ERR_NOMEM;
     memcpy(f->tee, src->tee, src->ntee * sizeof *f->tee);
     f->ntee = src->ntee;
-    for (size_t i = 0; i < f->ntee; i++) f->tee[i].R += extra[f->tee[i].through];
     return tees_finish(ctx, f);
 }
 
-/* The nearest query at a T segment: a point beyond the clip line (by more
- * than reach) is not on it; a point of its trimmed strip past the end
- * normal is at its distance from the centre line, s at the end. Returns 0
- * to skip the segment. */
-static int tee_near(const rs__roadfield *f, const rf_seg *s, double x, double y, double reach, double *d,
-                    double *pr, double *side)
+/* The nearest query at a T segment: 0 when (x, y) lies beyond its clip
+ * line by more than reach (skip it), 2 when it lies within reach of the
+ * trimmed shape (take it even beyond the capsule: the strip's corners),
+ * else 1. Distances stay those to the centreline (the ranking as before). */
+static int tee_near(const rs__roadfield *f, const rf_seg *s, double x, double y, double reach)
 {
     size_t i0, i1;
     tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
-    double wx = x - s->ax, wy = y - s->ay, u = wx * s->ux + wy * s->uy;
-    for (size_t k = i0; k < i1; k++) {
-        const rf_tee *T = &f->tee[k];
-        if (!(x * T->nx + y * T->ny - T->c <= reach)) return 0;
-        if ((T->end && u > s->len) || (!T->end && u < 0)) {
-            *side = wx * s->uy - wy * s->ux;
-            *d = fabs(*side);
-            *pr = T->end ? s->len : 0;
-        }
-    }
-    return 1;
+    for (size_t k = i0; k < i1; k++)
+        if (!(x * f->tee[k].nx + y * f->tee[k].ny - f->tee[k].c <= reach)) return 0;
+    return tee_sd(f, s, x, y) <= reach ? 2 : 1;
 }
 
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out)
@@ -1627,8 +1617,8 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
             for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
                 const rf_seg *s = &f->seg[f->ids[k]];
                 double pr, side, d = seg_point(s, x, y, &pr, &side);
-                if (s->tee && !tee_near(f, s, x, y, reach, &d, &pr, &side)) continue;
-                if (!(d - s->r <= reach)) continue;
+                int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
+                if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
                 /* segments are numbered in (road, seg) order */
                 if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
             }
@@ -1639,7 +1629,8 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
         if (x < T->box[0] || x > T->box[1] || y < T->box[2] || y > T->box[3]) continue;
         const rf_seg *s = &f->seg[T->seg];
         double pr, side, d = seg_point(s, x, y, &pr, &side);
-        if (!tee_near(f, s, x, y, reach, &d, &pr, &side) || !(d - s->r <= reach)) continue;
+        int tn = tee_near(f, s, x, y, reach);
+        if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
         if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
     }
     if (!best) return 0;

@@ -59,11 +59,12 @@ typedef struct rs__tee_end {
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *n);
 /* Trims the round caps of the T ends of f's roads: such an end is a flat
  * strip up to the through road's far edge line (the line through the end
- * point along the through road, moved its half width, plus extra[through]
- * when extra is not NULL, across), clipped there; the coverage and the
- * nearest query use that shape. Part of building f (before any query). */
+ * point along the through road, moved its half width across), clipped
+ * there; the coverage and the nearest query use that shape (a widened
+ * field, rs__roadfield_widen, keeps the same lines: a casing stops at the
+ * through road's surface edge). Part of building f (before any query). */
 rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
-                                 size_t n, const double *extra);
+                                 size_t n);
 /* The index cell of f, metres. */
 double rs__roadfield_cell(const rs__roadfield *f);
 size_t rs__roadfield_bytes(const rs__roadfield *f);

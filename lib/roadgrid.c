@@ -680,7 +680,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__tee_end *tees = NULL;
         size_t ntees = 0;
         r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
-        if (!r) r = rs__roadfield_set_tees(ctx, g->field, roads, tees, ntees, NULL);
+        if (!r) r = rs__roadfield_set_tees(ctx, g->field, roads, tees, ntees);
         rs__free(ctx, tees);
     }
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, &g->styling);

@@ -18,6 +18,7 @@ enum { DW = 61, DH = 41, TEX = 10 }; /* 1 m cells: 600 x 400 pixels of 0.1 m */
 #define DEG (3.14159265358979323846 / 180)
 
 static rs_ctx *ctx;
+static const char *styles_text; /* NULL: the built-in styles; else named by class (style=CLASS) */
 
 typedef struct image {
     uint32_t w, h;
@@ -30,10 +31,13 @@ static int render(const rs_roads *roads, image *im)
     static float z[DW * DH];
     rs_dem *dem = NULL;
     rs_splatter *s = NULL;
+    rs_styles *styles = NULL;
     memset(im, 0, sizeof *im);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = TEX;
+    if (styles_text && rs_styles_parse(ctx, styles_text, strlen(styles_text), &styles) != RS_OK) return 0;
+    o.style.styles = styles;
     /* (automatic give-way lines still depend on where the ways are split:
      * issue 27 problem 5; the caps are what this test is about) */
     o.markings.disable = 1;
@@ -47,6 +51,7 @@ static int render(const rs_roads *roads, image *im)
     }
     rs_splatter_free(ctx, s);
     rs_dem_free(ctx, dem);
+    rs_styles_free(ctx, styles);
     return ok;
 }
 
@@ -61,6 +66,7 @@ static void add(rs_roads *roads, double w, const char *cls, double x0, double y0
     double xy[4] = { x0, y0, x1, y1 };
     CHECK(rs_roads_add(ctx, roads, "r", w, xy, 2) == RS_OK);
     CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, "class", cls) == RS_OK);
+    if (styles_text) CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, "style", cls) == RS_OK);
 }
 
 static int rgb_diff(const image *a, const image *b, size_t i)
@@ -144,7 +150,7 @@ static size_t strip_gaps(const image *im, double deg)
     return gaps;
 }
 
-static void test_tee_caps(void)
+static void test_tee_caps(const char *what)
 {
     static const double degs[3] = { 90, 60, 40 };
     rs_roads *alone = NULL;
@@ -167,8 +173,8 @@ static void test_tee_caps(void)
             }
             size_t wt, gaps = strip_gaps(&B, degs[k]);
             int worst = beyond_far_edge(&B, &A, &wt);
-            if (v == 0) printf("T at %.0f deg: beyond the far edge %zu road pixels, worst colour %d/255; %zu gaps in the strip\n",
-                               degs[k], wt, worst, gaps);
+            if (v == 0) printf("%s, T at %.0f deg: beyond the far edge %zu road pixels, worst colour %d/255; %zu gaps in the strip\n",
+                               what, degs[k], wt, worst, gaps);
             CHECKF(wt == 0, "T at %.0f deg (split %d): %zu pixels beyond the far edge have road weight", degs[k], v, wt);
             CHECKF(worst == 0, "T at %.0f deg (split %d): beyond the far edge the colour differs by %d/255 from the through road alone",
                    degs[k], v, worst);
@@ -221,7 +227,13 @@ static void test_dead_end_keeps_cap(void)
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
-    test_tee_caps();
+    test_tee_caps("built-in styles");
+    /* casings: the side road's (1 m) stops at the through road's casing's
+     * far edge (0.3 m beyond its surface) */
+    styles_text = "style residential\n  casing 0.3 #C8C8C8\n  fill #505050\nend\n"
+                  "style primary\n  casing 1.0 #E0A040\n  fill #404040\n  line 0 0.15 #FFFFFF dash 3 6\nend\n";
+    test_tee_caps("casings");
+    styles_text = NULL;
     test_dead_end_keeps_cap();
     rs_ctx_free(ctx);
     return th_finish("test_tee_caps");
