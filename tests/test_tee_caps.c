@@ -224,6 +224,45 @@ static void test_dead_end_keeps_cap(void)
     rs_roads_free(ctx, roads);
 }
 
+/* Windows of 37 x 23 pixels give the bytes of the whole image (the
+ * trimmed pixels depend on their own coordinates only). */
+static void test_windows(void)
+{
+    static float z[DW * DH];
+    rs_roads *roads = tee_scene(40, 2, 2);
+    rs_dem *dem = NULL;
+    rs_splatter *s = NULL;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = TEX;
+    CHECK(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK && rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK);
+    image A = { 0 };
+    if (s) {
+        rs_splatter_size(s, &A.w, &A.h);
+        A.rgba = malloc((size_t)A.w * A.h * 4);
+        A.wt = malloc((size_t)A.w * A.h * sizeof *A.wt);
+        CHECK(A.rgba && A.wt && rs_splat_window(ctx, s, 0, 0, A.w, A.h, A.rgba, (size_t)A.w * 4, A.wt, A.w, NULL) == RS_OK);
+    }
+    uint8_t win[37 * 23 * 4];
+    uint16_t wwt[37 * 23];
+    size_t bad = 0;
+    for (uint32_t y0 = 0; s && A.rgba && y0 < A.h; y0 += 23)
+        for (uint32_t x0 = 0; x0 < A.w; x0 += 37) {
+            uint32_t w = A.w - x0 < 37 ? A.w - x0 : 37, h = A.h - y0 < 23 ? A.h - y0 : 23;
+            CHECK(rs_splat_window(ctx, s, x0, y0, w, h, win, 37 * 4, wwt, 37, NULL) == RS_OK);
+            for (uint32_t y = 0; y < h; y++) {
+                size_t i = (size_t)(y0 + y) * A.w + x0;
+                bad += memcmp(win + 37 * 4 * y, A.rgba + 4 * i, 4 * w) != 0 ||
+                       memcmp(wwt + 37 * y, A.wt + i, w * sizeof *wwt) != 0;
+            }
+        }
+    CHECKF(bad == 0, "%zu window rows differ from the whole image at a trimmed T", bad);
+    image_free(&A);
+    rs_splatter_free(ctx, s);
+    rs_dem_free(ctx, dem);
+    rs_roads_free(ctx, roads);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -235,6 +274,7 @@ int main(void)
     test_tee_caps("casings");
     styles_text = NULL;
     test_dead_end_keeps_cap();
+    test_windows();
     rs_ctx_free(ctx);
     return th_finish("test_tee_caps");
 }
