@@ -1288,56 +1288,108 @@ static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y
     return lm_min(sd, lm_max(disc, hmax));
 }
 
-/* The shape of segment s on the row y, x relative to x0, clipped to
- * [0, pix], appended to iv (pairs); returns the new count. */
-static size_t shape_row(const rs__roadfield *f, const rf_seg *s, double y, double x0, double pix, double *iv,
-                        size_t n)
+/* A segment's shape for the rows, as bounds linear in the row's y: the
+ * strip's (its sides, the normals of untrimmed ends; for rows within
+ * [ylo, yhi]) and the clip lines' (on every piece), x >= a + b y (lo) or
+ * x <= a + b y (hi); the discs of untrimmed ends. */
+typedef struct rf_shape {
+    double sa[6], sb[6]; /* bounds: the strip's [0, nstrip), then the clip lines' */
+    int8_t shi[6];       /* 1: x <= a + b y, 0: x >= a + b y */
+    int nstrip, nclip, ndisc, strip;
+    double ylo, yhi;     /* the strip's rows */
+    double cyl, cyh;     /* every piece's rows (clip lines along x) */
+    double disc[2][3];   /* x, y, r */
+} rf_shape;
+
+/* The bound g.(p - o) <= v (g = (gx, gy)) on a row: x <= or >= a + b y;
+ * gx = 0 narrows the rows [ylo, yhi] instead. Returns 1 when it is a bound. */
+static int shape_bound(rf_shape *sh, int k, double gx, double gy, double ox, double oy, double v)
 {
-    double hs[2][3]; /* clip lines: a x + b y <= c */
-    int nh = 0, cut[2] = { 0, 0 };
+    if (gx == 0) {
+        /* gy (y - oy) <= v */
+        if (gy > 0) sh->yhi = lm_min(sh->yhi, oy + v / gy);
+        else if (gy < 0) sh->ylo = lm_max(sh->ylo, oy + v / gy);
+        else if (v < 0) sh->ylo = INFINITY;
+        return 0;
+    }
+    /* x = ox + (v - gy (y - oy)) / gx */
+    sh->sa[k] = ox + (v + gy * oy) / gx;
+    sh->sb[k] = -gy / gx;
+    sh->shi[k] = gx > 0;
+    return 1;
+}
+
+static void shape_of(const rs__roadfield *f, const rf_seg *s, rf_shape *sh)
+{
+    int cut[2] = { 0, 0 };
+    double cl[2][3];
+    int nh = 0;
     if (s->tee) {
         size_t i0, i1;
         tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
         for (size_t k = i0; k < i1 && nh < 2; k++) {
-            hs[nh][0] = f->tee[k].nx, hs[nh][1] = f->tee[k].ny, hs[nh][2] = f->tee[k].c;
+            cl[nh][0] = f->tee[k].nx, cl[nh][1] = f->tee[k].ny, cl[nh][2] = f->tee[k].c;
             cut[f->tee[k].end] = 1;
             nh++;
         }
     }
-    double lo[3], hi[3];
-    int np = 0;
-    /* the end discs at untrimmed ends */
-    for (int e = 0; e < 2; e++) {
-        if (cut[e] || (e && !(s->len > 0))) continue;
-        double cx = e ? s->bx : s->ax, cy = e ? s->by : s->ay, dy = y - cy, q = s->r * s->r - dy * dy;
-        if (!(q >= 0)) continue;
-        q = sqrt(q);
-        lo[np] = cx - q, hi[np] = cx + q;
-        np++;
-    }
-    /* the strip between the untrimmed end normals, cut by the clip lines */
-    if (s->len > 0) {
-        double l = -INFINITY, h = INFINITY;
-        /* half planes g.(p - a) <= v: the sides |t| <= r, u >= 0, u <= len */
+    sh->ylo = -INFINITY, sh->yhi = INFINITY;
+    sh->strip = s->len > 0;
+    sh->nstrip = 0;
+    if (sh->strip) {
+        /* g.(p - a) <= v: the sides |t| <= r, u >= 0, u <= len */
         double g[4][3] = { { s->uy, -s->ux, s->r }, { -s->uy, s->ux, s->r }, { -s->ux, -s->uy, 0 },
                            { s->ux, s->uy, s->len } };
         for (int k = 0; k < 4; k++) {
             if ((k == 2 && cut[0]) || (k == 3 && cut[1])) continue;
-            double gx = g[k][0], rest = g[k][2] - g[k][1] * (y - s->ay);
-            if (gx > 0) h = lm_min(h, s->ax + rest / gx);
-            else if (gx < 0) l = lm_max(l, s->ax + rest / gx);
-            else if (rest < 0) l = INFINITY;
+            sh->nstrip += shape_bound(sh, sh->nstrip, g[k][0], g[k][1], s->ax, s->ay, g[k][2]);
+        }
+    }
+    double ylo = sh->ylo, yhi = sh->yhi; /* the strip's rows; the clip lines' apply to every piece */
+    sh->nclip = 0;
+    sh->ylo = -INFINITY, sh->yhi = INFINITY;
+    for (int j = 0; j < nh; j++) sh->nclip += shape_bound(sh, sh->nstrip + sh->nclip, cl[j][0], cl[j][1], 0, 0, cl[j][2]);
+    /* the clip lines' rows (a clip line along x) narrow every piece */
+    sh->cyl = sh->ylo, sh->cyh = sh->yhi;
+    sh->ylo = lm_max(ylo, sh->cyl), sh->yhi = lm_min(yhi, sh->cyh);
+    sh->ndisc = 0;
+    for (int e = 0; e < 2; e++) {
+        if (cut[e] || (e && !(s->len > 0))) continue;
+        double *d = sh->disc[sh->ndisc++];
+        d[0] = e ? s->bx : s->ax, d[1] = e ? s->by : s->ay, d[2] = s->r;
+    }
+}
+
+/* The shape on the row y, x relative to x0, clipped to [0, pix], appended
+ * to iv (pairs); returns the new count. */
+static size_t shape_row(const rf_shape *sh, double y, double x0, double pix, double *iv, size_t n)
+{
+    double lo[3], hi[3];
+    int np = 0;
+    if (!(y >= sh->cyl && y <= sh->cyh)) return n;
+    for (int k = 0; k < sh->ndisc; k++) {
+        double dy = y - sh->disc[k][1], q = sh->disc[k][2] * sh->disc[k][2] - dy * dy;
+        if (!(q >= 0)) continue;
+        q = sqrt(q);
+        lo[np] = sh->disc[k][0] - q, hi[np] = sh->disc[k][0] + q;
+        np++;
+    }
+    if (sh->strip && y >= sh->ylo && y <= sh->yhi) {
+        double l = -INFINITY, h = INFINITY;
+        for (int k = 0; k < sh->nstrip; k++) {
+            double x = sh->sa[k] + sh->sb[k] * y;
+            if (sh->shi[k]) h = lm_min(h, x);
+            else l = lm_max(l, x);
         }
         lo[np] = l, hi[np] = h;
         np++;
     }
     for (int k = 0; k < np; k++) {
         double l = lo[k], h = hi[k];
-        for (int j = 0; j < nh; j++) {
-            double gx = hs[j][0], rest = hs[j][2] - hs[j][1] * y;
-            if (gx > 0) h = lm_min(h, rest / gx);
-            else if (gx < 0) l = lm_max(l, rest / gx);
-            else if (rest < 0) l = INFINITY;
+        for (int j = sh->nstrip; j < sh->nstrip + sh->nclip; j++) {
+            double x = sh->sa[j] + sh->sb[j] * y;
+            if (sh->shi[j]) h = lm_min(h, x);
+            else l = lm_max(l, x);
         }
         l = lm_max(l - x0, 0), h = lm_min(h - x0, pix);
         if (!(h > l)) continue;
@@ -1382,39 +1434,127 @@ static size_t union_compact(double *iv, size_t n)
     return m;
 }
 
-static size_t shape_add(const rs__roadfield *f, const rf_seg *s, double y, double x0, double pix, double *iv, size_t n)
+static size_t shape_add(const rf_shape *sh, double y, double x0, double pix, double *iv, size_t n)
 {
     if (n + 3 > TEE_IV_MAX) n = union_compact(iv, n);
     if (n + 3 > TEE_IV_MAX) return n; /* 250 disjoint pieces of roads in one pixel row: drops the rest */
-    return shape_row(f, s, y, x0, pix, iv, n);
+    return shape_row(sh, y, x0, pix, iv, n);
 }
 
-/* Coverage of pixel (px, py) of side pix from every shape near it. */
-static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double pix)
+static size_t seg_add(const rs__roadfield *f, const rf_seg *s, double y, double x0, double pix, double *iv, size_t n)
+{
+    rf_shape sh;
+    shape_of(f, s, &sh);
+    return shape_add(&sh, y, x0, pix, iv, n);
+}
+
+/* Coverage of pixel (px, py) of side pix from every shape near it: the
+ * segments of the cells the pixel meets and the T segments whose box it
+ * meets, those within the pixel's half diagonal of it (a T segment by the
+ * lower bound tee_sd) kept; one certainly holding the pixel gives 1. */
+#define TEE_NEAR_MAX 64
+/* tee_pixel's candidates: NULL (ncand 0): the lists of the cells and T
+ * boxes the pixel meets; else a superset of the segments near it (the
+ * same near set, so the same doubles) */
+static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double pix, const rf_seg *const *cand,
+                        size_t ncand)
 {
     double x0 = (double)px * pix, y0 = (double)py * pix, x1 = x0 + pix, y1 = y0 + pix;
+    double cx = x0 + 0.5 * pix, cy = y0 + 0.5 * pix, e = pix * HALF_SQRT2, slack = 1e-9 * (1 + fabs(cx) + fabs(cy));
     uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
     uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
+    rf_shape near[TEE_NEAR_MAX];
+    size_t nn = 0;
+    int all = 0; /* more than TEE_NEAR_MAX near: every listed segment takes part */
+    for (size_t k = 0; k < ncand; k++) {
+        const rf_seg *s = cand[k];
+        double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
+        if (sd <= -e - slack) return 1;
+        if (sd < e + slack) shape_of(f, s, &near[nn++]); /* ncand <= TEE_NEAR_MAX */
+    }
+    for (int pass = 0; pass < 2 && !cand; pass++)
+        for (uint32_t j = j0; j <= j1; j++) {
+            uint32_t a = pass ? f->tstart[j] : 0, b = pass ? f->tstart[j + 1] : 0;
+            for (uint32_t i = pass ? i1 : i0; i <= i1; i++) {
+                size_t cell = (size_t)j * f->gw + i;
+                if (!pass) a = f->start[cell], b = f->start[cell + 1];
+                for (uint32_t k = a; k < b; k++) {
+                    const rf_seg *s;
+                    if (pass) {
+                        const rf_tee *T = &f->tee[f->tids[k]];
+                        if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+                        s = &f->seg[T->seg];
+                    } else
+                        s = &f->seg[f->ids[k]];
+                    double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
+                    if (sd <= -e - slack) return 1;
+                    if (!(sd < e + slack)) continue;
+                    if (nn < TEE_NEAR_MAX) shape_of(f, s, &near[nn++]);
+                    else all = 1;
+                }
+            }
+        }
     double iv[2 * TEE_IV_MAX], acc = 0;
     for (int k = 0; k < TEE_ROWS; k++) {
         double y = y0 + ((double)k + 0.5) * (pix / TEE_ROWS);
         size_t n = 0;
-        for (uint32_t j = j0; j <= j1; j++)
-            for (uint32_t i = i0; i <= i1; i++) {
-                size_t cell = (size_t)j * f->gw + i;
-                for (uint32_t e = f->start[cell]; e < f->start[cell + 1]; e++)
-                    n = shape_add(f, &f->seg[f->ids[e]], y, x0, pix, iv, n);
-            }
-        /* a trimmed strip reaches past its capsule (and its cells' lists) */
-        for (uint32_t j = j0; j <= j1; j++)
-            for (uint32_t e = f->tstart[j]; e < f->tstart[j + 1]; e++) {
-                const rf_tee *T = &f->tee[f->tids[e]];
-                if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
-                n = shape_add(f, &f->seg[T->seg], y, x0, pix, iv, n);
-            }
+        if (!all)
+            for (size_t q = 0; q < nn; q++) n = shape_add(&near[q], y, x0, pix, iv, n);
+        else {
+            for (uint32_t j = j0; j <= j1; j++)
+                for (uint32_t i = i0; i <= i1; i++) {
+                    size_t cell = (size_t)j * f->gw + i;
+                    for (uint32_t e2 = f->start[cell]; e2 < f->start[cell + 1]; e2++)
+                        n = seg_add(f, &f->seg[f->ids[e2]], y, x0, pix, iv, n);
+                }
+            for (uint32_t j = j0; j <= j1; j++)
+                for (uint32_t e2 = f->tstart[j]; e2 < f->tstart[j + 1]; e2++) {
+                    const rf_tee *T = &f->tee[f->tids[e2]];
+                    if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+                    n = seg_add(f, &f->seg[T->seg], y, x0, pix, iv, n);
+                }
+        }
         acc += union_len(iv, n) / pix;
     }
     return acc / TEE_ROWS;
+}
+
+/* The segments whose shape may come within e of the box [x0, x1] x [y0,
+ * y1] (by their centreline boxes grown by r + e, a T segment's by its T
+ * box), each once, into cand; 0 when more than TEE_NEAR_MAX (the pixels
+ * then read the lists themselves). */
+static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, double x1, double y1, double e,
+                             const rf_seg **cand)
+{
+    uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
+    uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
+    size_t n = 0;
+    for (uint32_t j = j0; j <= j1; j++) {
+        for (uint32_t i = i0; i <= i1; i++) {
+            size_t cell = (size_t)j * f->gw + i;
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                const rf_seg *s = &f->seg[f->ids[k]];
+                double g = s->r + e + s->tol;
+                if (!s->tee && (s->xmax + g < x0 || s->xmin - g > x1 || s->ymax + g < y0 || s->ymin - g > y1)) continue;
+                size_t q = 0;
+                while (q < n && cand[q] != s) q++;
+                if (q < n) continue;
+                if (n == TEE_NEAR_MAX) return 0;
+                cand[n++] = s;
+            }
+        }
+        for (uint32_t k = f->tstart[j]; k < f->tstart[j + 1]; k++) {
+            const rf_tee *T = &f->tee[f->tids[k]];
+            if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+            const rf_seg *s = &f->seg[T->seg];
+            size_t q = 0;
+            while (q < n && cand[q] != s) q++;
+            if (q < n) continue;
+            if (n == TEE_NEAR_MAX) return 0;
+            cand[n++] = s;
+        }
+    }
+    return n;
 }
 
 /* The pixels of [px0, px0+w) x [py0, py0+h) where a T segment's trimmed
@@ -1424,6 +1564,7 @@ static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_
                      double *out, size_t stride)
 {
     if (!f || !f->ntee) return;
+    const rf_seg *cand[TEE_NEAR_MAX];
     double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
     double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
     uint32_t j0 = clamp_index(floor(by0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(by1 * f->inv_c) + 1, f->gh);
@@ -1438,12 +1579,16 @@ static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_
             if (!(xa <= xb && ya <= yb)) continue;
             uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
             const rf_seg *s = &f->seg[T->seg];
+            /* the segments that can come near a pixel of the box here, once */
+            double qx0 = lm_max(T->box[0], bx0) - pix, qx1 = lm_min(T->box[1], bx1) + pix;
+            double qy0 = lm_max(T->box[2], by0) - pix, qy1 = lm_min(T->box[3], by1) + pix;
+            size_t nc = tee_candidates(f, qx0, qy0, qx1, qy1, e, cand);
             for (uint32_t r = ra; r <= rb; r++)
                 for (uint32_t k = ka; k <= kb; k++) {
                     double cx = ((double)px0 + k + 0.5) * pix, cy = ((double)py0 + r + 0.5) * pix;
                     double dc = seg_dist(s, cx, cy) - s->r, dt = tee_sd(f, s, cx, cy);
                     if ((dc >= e && dt >= e) || (dc <= -e && dt <= -e)) continue;
-                    out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix);
+                    out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix, nc ? cand : NULL, nc);
                 }
         }
 }

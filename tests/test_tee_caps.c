@@ -61,8 +61,20 @@ static void image_free(image *im)
     free(im->wt);
 }
 
+/* The scenes turn by rot (radians) about (30, 20): clip lines at any angle. */
+static double rot;
+
+static void turn(double *x, double *y, double a)
+{
+    double dx = *x - 30, dy = *y - 20;
+    *x = 30 + dx * cos(a) - dy * sin(a);
+    *y = 20 + dx * sin(a) + dy * cos(a);
+}
+
 static void add(rs_roads *roads, double w, const char *cls, double x0, double y0, double x1, double y1)
 {
+    turn(&x0, &y0, rot);
+    turn(&x1, &y1, rot);
     double xy[4] = { x0, y0, x1, y1 };
     CHECK(rs_roads_add(ctx, roads, "r", w, xy, 2) == RS_OK);
     CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, "class", cls) == RS_OK);
@@ -124,7 +136,9 @@ static int beyond_far_edge(const image *tee, const image *alone, size_t *wt)
     for (uint32_t py = 0; py < tee->h; py++)
         for (uint32_t px = 0; px < tee->w; px++) {
             double x = (px + 0.5) * PIX, y = (py + 0.5) * PIX;
-            if (!(y > TY + TR + 0.5 * PIX) || fabs(x - 30) > 25) continue;
+            turn(&x, &y, -rot);
+            /* (a turned edge: half a pixel diagonal) */
+            if (!(y > TY + TR + (rot != 0 ? 0.70710678 : 0.5) * PIX) || fabs(x - 30) > 25) continue;
             size_t i = (size_t)py * tee->w + px;
             *wt += tee->wt[i] != 0;
             int d = rgb_diff(tee, alone, i);
@@ -142,7 +156,9 @@ static size_t strip_gaps(const image *im, double deg)
     size_t gaps = 0;
     for (uint32_t py = 0; py < im->h; py++)
         for (uint32_t px = 0; px < im->w; px++) {
-            double x = (px + 0.5) * PIX - 30, y = (py + 0.5) * PIX - TY;
+            double x = (px + 0.5) * PIX, y = (py + 0.5) * PIX;
+            turn(&x, &y, -rot);
+            x -= 30, y -= TY;
             double u = x * ux + y * uy, t = x * uy - y * ux; /* along the side road (towards the T), across */
             if (fabs(t) > SR - e || u < -12 || y > TR - e) continue;
             gaps += im->wt[(size_t)py * im->w + px] != 65535;
@@ -176,7 +192,10 @@ static void test_tee_caps(const char *what)
             if (v == 0) printf("%s, T at %.0f deg: beyond the far edge %zu road pixels, worst colour %d/255; %zu gaps in the strip\n",
                                what, degs[k], wt, worst, gaps);
             CHECKF(wt == 0, "T at %.0f deg (split %d): %zu pixels beyond the far edge have road weight", degs[k], v, wt);
-            CHECKF(worst == 0, "T at %.0f deg (split %d): beyond the far edge the colour differs by %d/255 from the through road alone",
+            /* turned: the through road's casing edge inside a T's box comes
+             * from 16 sub-rows (roadfield.c tee_pixel), within 0.002 of exact */
+            CHECKF(worst <= (rot != 0 ? 1 : 0),
+                   "T at %.0f deg (split %d): beyond the far edge the colour differs by %d/255 from the through road alone",
                    degs[k], v, worst);
             CHECKF(gaps == 0, "T at %.0f deg (split %d): %zu pixels of the side road's strip are not whole road", degs[k], v, gaps);
             if (v == 0) ref = B;
@@ -273,6 +292,11 @@ int main(void)
                   "style primary\n  casing 1.0 #E0A040\n  fill #404040\n  line 0 0.15 #FFFFFF dash 3 6\nend\n";
     test_tee_caps("casings");
     styles_text = NULL;
+    rot = 25 * DEG;
+    test_tee_caps("built-in styles, turned 25 degrees");
+    rot = -110 * DEG;
+    test_tee_caps("built-in styles, turned -110 degrees");
+    rot = 0;
     test_dead_end_keeps_cap();
     test_windows();
     rs_ctx_free(ctx);
