@@ -977,7 +977,8 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   stroke's arc length, and a record running against its stroke has its
  *   points last to first, its t and markings mirrored to match), road
  *   index, flags (RS_GPU_SEG_FIRST: the road's first segment, its start is
- *   a flat road end; RS_GPU_SEG_LAST: its last); the road's casing width,
+ *   a flat road end; RS_GPU_SEG_LAST: its last; RS_GPU_SEG_CLIP: it reaches past
+ *   a line of its road's trimmed ends at a T, which clip it); the road's casing width,
  *   the segment's length and unit direction (1, 0 for length 0), so a
  *   shader needs neither a division nor a second lookup. A road of one
  *   point is one segment of length 0. Ascending segment index = ascending
@@ -1033,6 +1034,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_SEG_FLOATS 12
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
+#define RS_GPU_SEG_CLIP 4u /* clipped by its road's trimmed T end lines (road floats 32..37) */
 #define RS_GPU_ROAD_FLOATS 40
 #define RS_GPU_BAND_FLOATS 20
 #define RS_GPU_MARK_FLOATS 12

@@ -509,7 +509,17 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         if (tee_of) ge_tee_clips(rd, &rl, tees, tee_of + 2 * i, hw, sty->casing_width, srev[i]);
         if (soff[i] >= 0) ge_local_to_stroke(&rl, soff[i], srev[i]);
         double pad = 2 * (hw + sty->casing_width + lines_reach + g->reach) + g->cell;
+        size_t seg0 = g->nseg;
         r = road_segments(ctx, g, &rl, i, hw, sty->casing_width, pad, &segcap);
+        /* a segment reaching past a trimmed end's line is clipped by it (the road field's rule) */
+        for (size_t k = seg0; !r && k < g->nseg; k++)
+            for (int e = 0; e < 2; e++) {
+                float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
+                const float *c = rd + 32 + 3 * e;
+                if (c[0] == 0 && c[1] == 0) continue;
+                double fa = (double)c[0] * sg[0] + (double)c[1] * sg[1], fb = (double)c[0] * sg[2] + (double)c[1] * sg[3];
+                if (fmax(fa, fb) + hw + sty->casing_width > c[2]) sg[7] = (float)((uint32_t)sg[7] | RS_GPU_SEG_CLIP);
+            }
         size_t m = rl.n;
         if (!r && m >= 2) {
             for (int e = 0; e < 2; e++) {

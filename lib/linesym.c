@@ -1357,8 +1357,18 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             for (int e = 0; tend_of && e < 2; e++) {
                 int here = e ? i + 2 == m && hi == len : i == 0 && lo == 0;
                 size_t ti = tend_of[2 * ri + (size_t)e];
-                if (!here || ti == SIZE_MAX) continue;
+                if (ti == SIZE_MAX) continue;
                 const rs__tee_end *te = &tend[ti];
+                if (!here) {
+                    /* another segment of the record reaching past the line
+                     * (its surface is clipped there too) */
+                    double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
+                    double cc = te->nx * ex + te->ny * ey + te->half_width;
+                    double fa = te->nx * Q.ax + te->ny * Q.ay, fb = fa + (Q.len + hw) * (te->nx * Q.ux + te->ny * Q.uy);
+                    fa -= hw * (te->nx * Q.ux + te->ny * Q.uy);
+                    if (!Q.clip && fmax(fa, fb) + hw > cc) Q.clip = 1, Q.cx = te->nx, Q.cy = te->ny, Q.cc = cc;
+                    continue;
+                }
                 double dx = e ? Q.ux : -Q.ux, dy = e ? Q.uy : -Q.uy; /* towards the end */
                 double sn = te->nx * dx + te->ny * dy, cs = fabs(te->nx * dy - te->ny * dx);
                 if (!(sn > 0.1)) continue;

@@ -51,7 +51,8 @@ typedef struct rf_seg {
      * (near_keep) */
     uint32_t jpart;
     uint8_t jnext, redundant;
-    uint8_t tee; /* bit 0: its start a is a trimmed T end, bit 1: its end b (rs__roadfield_set_tees) */
+    uint8_t tee; /* bit 0: its start a is a trimmed T end, bit 1: its end b, bit 2: clipped by its
+                    record's T end's line (rs__roadfield_set_tees) */
 } rf_seg;
 
 struct rs__roadfield {
@@ -1239,7 +1240,8 @@ static int cells_around(const rs__roadfield *f, double x, double y, double d, rf
 
 typedef struct rf_tee {
     uint32_t seg;          /* the leg's end segment */
-    int end;               /* 1: the segment's b is the T end, 0: its a */
+    int end;               /* 1: the segment's b is the T end, 0: its a; 2: no end of it, only the
+                              clip line (another segment of the record reaching past it) */
     double nx, ny;         /* the through road's normal, from the leg across */
     double cE, R;          /* n.E, the through road's half width */
     double c;              /* cE + R: keep n.p <= c */
@@ -1274,7 +1276,7 @@ static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y
     for (size_t k = i0; k < i1; k++) {
         const rf_tee *T = &f->tee[k];
         hmax = lm_max(hmax, x * T->nx + y * T->ny - T->c);
-        cut[T->end] = 1;
+        if (T->end < 2) cut[T->end] = 1;
     }
     sd = lm_max(sd, hmax);
     if (!cut[0]) {
@@ -1329,7 +1331,7 @@ static void shape_of(const rs__roadfield *f, const rf_seg *s, rf_shape *sh)
         tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
         for (size_t k = i0; k < i1 && nh < 2; k++) {
             cl[nh][0] = f->tee[k].nx, cl[nh][1] = f->tee[k].ny, cl[nh][2] = f->tee[k].c;
-            cut[f->tee[k].end] = 1;
+            if (f->tee[k].end < 2) cut[f->tee[k].end] = 1;
             nh++;
         }
     }
@@ -1600,6 +1602,20 @@ static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_
 static void tee_box(const rs__roadfield *f, rf_tee *T)
 {
     const rf_seg *s = &f->seg[T->seg];
+    if (T->end == 2) {
+        /* the capsule's part beyond the line: its centreline where n.p >= c - r, grown by r */
+        double fa = T->nx * s->ax + T->ny * s->ay, fb = T->nx * s->bx + T->ny * s->by, lo = T->c - s->r;
+        double t0 = 0, t1 = 1;
+        if (fa < lo && fb < lo) t0 = t1 = fa >= fb ? 0 : 1; /* (not reaching: a point) */
+        else if (fa < lo) t0 = (lo - fa) / (fb - fa);
+        else if (fb < lo) t1 = (lo - fa) / (fb - fa);
+        double xa = s->ax + t0 * (s->bx - s->ax), ya = s->ay + t0 * (s->by - s->ay);
+        double xb = s->ax + t1 * (s->bx - s->ax), yb = s->ay + t1 * (s->by - s->ay);
+        double m = f->margin + s->r + 1e-9 * (1 + fabs(xa) + fabs(ya) + fabs(xb) + fabs(yb) + s->r);
+        T->box[0] = lm_min(xa, xb) - m, T->box[1] = lm_max(xa, xb) + m;
+        T->box[2] = lm_min(ya, yb) - m, T->box[3] = lm_max(ya, yb) + m;
+        return;
+    }
     double ex = T->end ? s->bx : s->ax, ey = T->end ? s->by : s->ay;
     double dx = T->end ? s->ux : -s->ux, dy = T->end ? s->uy : -s->uy; /* towards the end */
     double sn = T->nx * dx + T->ny * dy, cs = fabs(T->nx * dy - T->ny * dx), r = s->r;
@@ -1624,15 +1640,17 @@ static int tee_cmp(const void *a, const void *b)
     return p->end - q->end;
 }
 
-/* f->tee holds ntee entries (seg, end, n, cE, R): sorts them,
- * drops a second clip of one segment end, flags the segments and builds
- * the boxes and row lists. */
+/* f->tee holds ntee entries (seg, end, n, cE, R): sorts them, drops a
+ * second clip of one segment end (and repeated clip-only entries), flags
+ * the segments and builds the boxes and row lists. */
 static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
 {
     qsort(f->tee, f->ntee, sizeof *f->tee, tee_cmp);
     size_t m = 0;
     for (size_t i = 0; i < f->ntee; i++) {
-        if (m && f->tee[m - 1].seg == f->tee[i].seg && f->tee[m - 1].end == f->tee[i].end) continue;
+        const rf_tee *a = &f->tee[m ? m - 1 : 0], *b = &f->tee[i];
+        if (m && a->seg == b->seg && a->end == b->end && (a->end < 2 || (a->nx == b->nx && a->ny == b->ny && a->cE == b->cE)))
+            continue;
         f->tee[m++] = f->tee[i];
     }
     f->ntee = m;
@@ -1642,7 +1660,7 @@ static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
     for (size_t i = 0; i < m; i++) {
         rf_tee *T = &f->tee[i];
         T->c = T->cE + T->R;
-        f->seg[T->seg].tee |= (uint8_t)(T->end ? 2 : 1);
+        f->seg[T->seg].tee |= (uint8_t)(T->end == 2 ? 4 : T->end ? 2 : 1);
         tee_box(f, T);
         uint32_t r0 = clamp_index(floor(T->box[2] * f->inv_c) + 1, f->gh), r1 = clamp_index(floor(T->box[3] * f->inv_c) + 1, f->gh);
         T->row0 = r0;
@@ -1695,9 +1713,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
                                  size_t n)
 {
     if (!f || !n || f->ntee) return RS_OK;
-    f->tee = rs__alloc_array(ctx, n, sizeof *f->tee);
-    if (!f->tee) return RS_ERR_NOMEM;
-    size_t m = 0;
+    size_t m = 0, cap = 0;
     for (size_t i = 0; i < n; i++) {
         const rs__tee_end *t = &tees[i];
         const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
@@ -1705,12 +1721,42 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
         /* the strip must reach the clip line going along the segment */
         double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
         if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
-        rf_tee *T = &f->tee[m++];
-        T->seg = (uint32_t)(s - f->seg);
-        T->end = t->end;
-        T->nx = t->nx, T->ny = t->ny;
-        T->cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
-        T->R = t->half_width;
+        double cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
+        /* the record's segments: its end segment trimmed, every other one
+         * whose capsule (grown by up to an index cell: a casing, widen)
+         * reaches past the line clipped */
+        size_t k0 = (size_t)(s - f->seg), k1 = k0 + 1;
+        while (k0 > 0 && f->seg[k0 - 1].road == t->road) k0--;
+        while (k1 < f->nseg && f->seg[k1].road == t->road) k1++;
+        for (size_t k = k0; k < k1; k++) {
+            const rf_seg *q = &f->seg[k];
+            int end = q == s ? t->end : 2;
+            if (end == 2 && !(lm_max(t->nx * q->ax + t->ny * q->ay, t->nx * q->bx + t->ny * q->by) + q->r + f->c >
+                              cE + t->half_width))
+                continue;
+            if (m == cap) {
+                size_t nc = cap ? 2 * cap : n + 8, bytes;
+                rf_tee *nt = rs__mul_size(nc, sizeof *f->tee, &bytes) ? rs__realloc(ctx, f->tee, bytes) : NULL;
+                if (!nt) {
+                    rs__free(ctx, f->tee);
+                    f->tee = NULL;
+                    return RS_ERR_NOMEM;
+                }
+                f->tee = nt;
+                cap = nc;
+            }
+            rf_tee *T = &f->tee[m++];
+            T->seg = (uint32_t)k;
+            T->end = end;
+            T->nx = t->nx, T->ny = t->ny;
+            T->cE = cE;
+            T->R = t->half_width;
+        }
+    }
+    if (!m) {
+        rs__free(ctx, f->tee);
+        f->tee = NULL;
+        return RS_OK;
     }
     f->ntee = m;
     rs_result r = tees_finish(ctx, f);

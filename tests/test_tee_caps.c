@@ -235,6 +235,41 @@ static void test_tee_caps(const char *what)
     rs_roads_free(ctx, alone);
 }
 
+/* A side road whose last segment is short (2 m, after a 10 degree bend):
+ * the segment before it reaches past the far edge line too and is clipped
+ * by it (its joint disc would bulge out 4 m). */
+static void test_short_end_segment(void)
+{
+    rs_roads *alone = NULL;
+    CHECK(rs_roads_create(ctx, &alone) == RS_OK);
+    add(alone, 2 * TR, "residential", 2, TY, 58, TY);
+    image A;
+    CHECK(render(alone, &A));
+    for (int k = 0; k < 2; k++) {
+        double deg = k ? 60 : 90, ux = cos(deg * DEG), uy = sin(deg * DEG), b = (deg - 10) * DEG;
+        double vx = 30 - 2 * ux, vy = TY - 2 * uy, sx = vx - 16 * cos(b), sy = vy - 16 * sin(b);
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        add(roads, 2 * TR, "residential", 2, TY, 58, TY);
+        double xy[6] = { sx, sy, vx, vy, 30, TY };
+        for (int j = 0; j < 3; j++) turn(&xy[2 * j], &xy[2 * j + 1], rot);
+        CHECK(rs_roads_add(ctx, roads, "s", 2 * SR, xy, 3) == RS_OK);
+        CHECK(rs_roads_set_attr(ctx, roads, 1, "class", "primary") == RS_OK);
+        image B;
+        CHECK(render(roads, &B));
+        size_t wt = 0;
+        int worst = B.rgba && A.rgba ? beyond_far_edge(&B, &A, &wt) : 255;
+        printf("short end segment, T at %.0f deg: beyond the far edge %zu pixels of other weight, worst colour %d/255\n",
+               deg, wt, worst);
+        CHECKF(wt == 0 && worst == 0, "short end segment at %.0f deg: %zu pixels of road weight, colour %d/255 beyond the far edge",
+               deg, wt, worst);
+        image_free(&B);
+        rs_roads_free(ctx, roads);
+    }
+    image_free(&A);
+    rs_roads_free(ctx, alone);
+}
+
 /* A dead end (the side road stops 5 m short of the through road) keeps its
  * round cap: the disc beyond its end point is road. */
 static void test_dead_end_keeps_cap(void)
@@ -324,6 +359,7 @@ int main(void)
     test_tee_caps("built-in styles, turned -110 degrees");
     rot = 0;
     test_dead_end_keeps_cap();
+    test_short_end_segment();
     test_windows();
     rs_ctx_free(ctx);
     return th_finish("test_tee_caps");
