@@ -40,7 +40,7 @@ static const char *const rsh_fs_src[] = {
     "uniform samplerBuffer u_seg;\n"   /* 2 texels per segment */
     "uniform usamplerBuffer u_cstart;\n"
     "uniform usamplerBuffer u_cseg;\n"
-    "uniform samplerBuffer u_roadt;\n" /* 8 texels per road */
+    "uniform samplerBuffer u_roadt;\n" /* 10 texels per road */
     "uniform samplerBuffer u_band;\n"  /* 5 texels per band */
     "uniform samplerBuffer u_mark;\n"  /* 3 texels per marking */
     "uniform usamplerBuffer u_mstart;\n"
@@ -107,8 +107,33 @@ static const char *const rsh_fs_src[] = {
     "    if ((s.flags & 1) != 0) ef *= cdf(u, s.dir);\n"
     "    if ((s.flags & 2) != 0) ef *= cdf(s.len - u, s.dir);\n"
     "}\n"
-    /* segment k at p: distance d, signed distance to its capsule sd, the
-     * normal n there, u along and side (+ left) */
+    /* a road end at a T (lib/roadfield.c, docs/network.md "Ends at a T"):
+     * the segment's strip, grown by `grow`, runs on flat to the clip line
+     * n.p = c of a trimmed first or last end and stops there; an untrimmed
+     * end keeps its normal and disc. Signed distance (the largest of the
+     * sides' inside, exact at straight edges) and its normal; dflt when
+     * neither end of the segment is trimmed */
+    "float tee_trim(Seg s, vec2 p, float u, float side, float grow, inout vec2 n, float dflt) {\n"
+    "    vec4 c0 = texelFetch(u_roadt, 10 * s.road + 8), c1 = texelFetch(u_roadt, 10 * s.road + 9);\n"
+    "    vec2 n0 = c0.xy, n1 = vec2(c0.w, c1.x);\n"
+    "    bool h0 = dot(n0, n0) > 0.0, h1 = dot(n1, n1) > 0.0, cl = (s.flags & 4) != 0;\n"
+    "    bool cut0 = (s.flags & 1) != 0 && h0, cut1 = (s.flags & 2) != 0 && h1;\n"
+    "    if (!cut0 && !cut1 && !cl) return dflt;\n"
+    "    float r = s.r + grow, best = abs(side) - r, hmax = -1e30, disc = 1e30;\n"
+    "    vec2 bn = (side >= 0.0 ? 1.0 : -1.0) * vec2(s.dir.y, -s.dir.x), hn = n0, dn = n0;\n"
+    "    if (cut0 || (cl && h0)) { hmax = dot(n0, p) - c0.z; hn = n0; }\n"
+    "    if (!cut0) { if (-u > best) { best = -u; bn = -s.dir; } vec2 w = p - s.a; float l = length(w); disc = l - r; dn = l > 0.0 ? w / l : -s.dir; }\n"
+    "    if (cut1 || (cl && h1)) { float h = dot(n1, p) - c1.y; if (h > hmax) { hmax = h; hn = n1; } }\n"
+    "    if (!cut1) { if (u - s.len > best) { best = u - s.len; bn = s.dir; } vec2 w = p - s.a - s.len * s.dir; float l = length(w); if (l - r < disc) { disc = l - r; dn = l > 0.0 ? w / l : s.dir; } }\n"
+    "    if (hmax > best) { best = hmax; bn = hn; }\n"
+    "    if (hmax > disc) { disc = hmax; dn = hn; }\n"
+    "    if (disc < best) { best = disc; bn = dn; }\n"
+    "    n = bn;\n"
+    "    return best;\n"
+    "}\n",
+    /* segment k at p: distance d, signed distance to its surface sd (a
+     * capsule; a trimmed T end: tee_trim), the normal n there, u along
+     * and side (+ left) */
     "Seg seg_at(vec2 p, int k, out float d, out float sd, out vec2 n, out float u, out float side) {\n"
     "    Seg s = seg_load(k);\n"
     "    vec2 w = p - s.a;\n"
@@ -116,6 +141,7 @@ static const char *const rsh_fs_src[] = {
     "    vec2 pq = w - clamp(u, 0.0, s.len) * s.dir; d = length(pq);\n"
     "    n = d > 0.0 ? pq / d : vec2(s.dir.y, -s.dir.x);\n"
     "    sd = d - s.r;\n"
+    "    if ((s.flags & 7) != 0) sd = tee_trim(s, p, u, side, 0.0, n, sd);\n"
     "    return s;\n"
     "}\n"
     /* 1 - the coverage of road `road`'s surface from its segments in list
@@ -185,7 +211,7 @@ static const char *const rsh_fs_src[] = {
      * cuts them (its surface's coverage, product `prod` with `zeros` zero
      * factors over the whole list) except the roads continuing this one */
     "void paint_lines(vec2 p, int road, int k, float d, float fo, float prod, int zeros, int e0, int e1, inout vec3 S) {\n"
-    "    vec4 r0 = texelFetch(u_roadt, 8 * road), r1 = texelFetch(u_roadt, 8 * road + 1);\n"
+    "    vec4 r0 = texelFetch(u_roadt, 10 * road), r1 = texelFetch(u_roadt, 10 * road + 1);\n"
     "    int b0 = int(r0.w), nb = int(r1.x);\n"
     /* a road whose lines cannot reach the pixel is skipped */
     "    if (nb == 0 || d > r1.w + foot) return;\n"
@@ -196,16 +222,16 @@ static const char *const rsh_fs_src[] = {
     "    road_coords(p, k, s, t, nt, tg, ef);\n"
     /* side roads ending on this road's stroke at a T cut its lines only
      * with their cut-back ends (the list is grouped by road) */
-    "    if (texelFetch(u_roadt, 8 * road + 7).y > 0.0) {\n"
-    "        float st = texelFetch(u_roadt, 8 * road + 6).x; int lr = -1;\n"
+    "    if (texelFetch(u_roadt, 10 * road + 7).y > 0.0) {\n"
+    "        float st = texelFetch(u_roadt, 10 * road + 6).x; int lr = -1;\n"
     "        for (int e = e0; e < e1; e++) {\n"
     "            int b = int(texelFetch(u_seg, 3 * int(texelFetch(u_cseg, e).r) + 1).z);\n"
     "            if (b == lr || b == road) continue;\n"
     "            lr = b;\n"
-    "            vec4 b6 = texelFetch(u_roadt, 8 * b + 6);\n"
+    "            vec4 b6 = texelFetch(u_roadt, 10 * b + 6);\n"
     "            if (b6.y != st && b6.z != st) continue;\n"
     "            cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0);\n"
-    "            cut_add(road_free_tee(p, b, e0, e1, st, b6, texelFetch(u_roadt, 8 * b + 7).x, tg), prod, zeros, 1.0);\n"
+    "            cut_add(road_free_tee(p, b, e0, e1, st, b6, texelFetch(u_roadt, 10 * b + 7).x, tg), prod, zeros, 1.0);\n"
     "        }\n"
     "    }\n"
     "    float cut = zeros > 0 ? 0.0 : min(prod, 1.0);\n"
@@ -213,7 +239,7 @@ static const char *const rsh_fs_src[] = {
     "    float base = ef * cut;\n"
     "    if (!(base > 0.0)) return;\n"
     /* the road's line cuts (stop lines, zebras; lib/markings_auto.c) */
-    "    int nr = textureSize(u_roadt) / 8;\n" /* 8 texels per road */
+    "    int nr = textureSize(u_roadt) / 10;\n" /* 10 texels per road */
     "    vec4 cr = texelFetch(u_cut, road); int c0 = nr + 2 * int(cr.x), nc = int(cr.y);\n"
     "    for (int j = 0; j < nb; j++) {\n"
     "        int bi = 5 * (b0 + j);\n"
@@ -332,6 +358,8 @@ static const char *const rsh_fs_src[] = {
     "            float d = 0.0, sd = 1e30, u = 0.0, side = 0.0; vec2 n = vec2(1.0, 0.0);\n"
     "            Seg s; s.road = -2; s.cw = 0.0; s.len = 0.0;\n"
     "            if (e < e1) s = seg_at(p, int(texelFetch(u_cseg, e).r), d, sd, n, u, side);\n"
+    "            float sdc = sd - s.cw; vec2 nc = n;\n" /* the casing: a T end's too stops at the clip line */
+    "            if (e < e1 && (s.flags & 7) != 0) sdc = tee_trim(s, p, u, side, s.cw, nc, d - s.r - s.cw);\n"
     "            if (s.road != cr) {\n"
     "                if (cr >= 0) {\n"
     "                    float c = cdf(-csd, cn);\n"
@@ -339,17 +367,17 @@ static const char *const rsh_fs_src[] = {
     "                    union_add(UR, NR, c, cn);\n"
     "                    union_add(UC, NC, cdf(-ccd, ccn), ccn);\n"
     "                }\n"
-    "                cr = s.road; csd = sd; cn = n; ccd = sd - s.cw; ccn = n;\n"
+    "                cr = s.road; csd = sd; cn = n; ccd = sdc; ccn = nc;\n"
     "            } else {\n"
     "                if (sd < csd) { csd = sd; cn = n; }\n"
-    "                if (sd - s.cw < ccd) { ccd = sd - s.cw; ccn = n; }\n"
+    "                if (sdc < ccd) { ccd = sdc; ccn = nc; }\n"
     "            }\n"
     "            if (e == e1) break;\n"
     "            float cw = s.cw;\n"
     "            if (sd < sdR) { sdR = sd; nR = n; }\n"
-    "            if (sd - cw < sdC) { sdC = sd - cw; nC = n; }\n"
+    "            if (sdc < sdC) { sdC = sdc; nC = nc; }\n"
     "            if (sd <= near_reach && d < dS) { dS = d; roadS = s.road; tS = u >= 0.0 && u <= s.len ? side : sign(side) * d; }\n"
-    "            if (cw > 0.0 && sd - cw <= near_reach && d < dC) { dC = d; roadC = s.road; }\n"
+    "            if (cw > 0.0 && sdc <= near_reach && d < dC) { dC = d; roadC = s.road; }\n"
     "        }\n",
     "        R = min(UR, 1.0);\n"
     "        R = floor(R * 65535.0 + 0.5) / 65535.0;\n"
@@ -357,19 +385,19 @@ static const char *const rsh_fs_src[] = {
     /* casings onto T */
     "        float C = max(min(UC, 1.0), R);\n"
     "        if (C > R && R < 1.0 && roadC >= 0) {\n"
-    "            vec4 cc = texelFetch(u_roadt, 8 * roadC + 5);\n"
+    "            vec4 cc = texelFetch(u_roadt, 10 * roadC + 5);\n"
     "            float a = clamp((min(C, 1.0) - R) / (1.0 - R), 0.0, 1.0) * cc.a;\n"
     "            T = T * (1.0 - a) + cc.rgb * a;\n"
     "        }\n"
     /* fill and gradient surfaces onto S */
     "        if (R > 0.0 && roadS >= 0) {\n"
-    "            vec4 r0 = texelFetch(u_roadt, 8 * roadS);\n"
+    "            vec4 r0 = texelFetch(u_roadt, 10 * roadS);\n"
     "            int kind = int(r0.x);\n"
     "            if (kind != 0) {\n"
-    "                vec4 c = texelFetch(u_roadt, 8 * roadS + 2);\n"
+    "                vec4 c = texelFetch(u_roadt, 10 * roadS + 2);\n"
     "                if (kind == 2) {\n"
     "                    float g = r0.y > 0.0 ? min(abs(tS) / r0.y, 1.0) : 1.0;\n"
-    "                    vec4 c0 = texelFetch(u_roadt, 8 * roadS + 3), c1 = texelFetch(u_roadt, 8 * roadS + 4);\n"
+    "                    vec4 c0 = texelFetch(u_roadt, 10 * roadS + 3), c1 = texelFetch(u_roadt, 10 * roadS + 4);\n"
     "                    c = c0 + (c1 - c0) * g;\n"
     "                }\n"
     "                S = S * (1.0 - c.a) + c.rgb * c.a;\n"

@@ -977,7 +977,8 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   stroke's arc length, and a record running against its stroke has its
  *   points last to first, its t and markings mirrored to match), road
  *   index, flags (RS_GPU_SEG_FIRST: the road's first segment, its start is
- *   a flat road end; RS_GPU_SEG_LAST: its last); the road's casing width,
+ *   a flat road end; RS_GPU_SEG_LAST: its last; RS_GPU_SEG_CLIP: it reaches past
+ *   a line of its road's trimmed ends at a T, which clip it); the road's casing width,
  *   the segment's length and unit direction (1, 0 for length 0), so a
  *   shader needs neither a division nor a second lookup. A road of one
  *   point is one segment of length 0. Ascending segment index = ascending
@@ -1003,7 +1004,12 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   docs/network.md: the road's stroke (-1: no network), the through
  *   stroke its start and its end meet at a T (-1: none), how far from
  *   that stroke's centre line each of those ends keeps cutting its lines
- *   (metres), 1 when some road end meets this road's stroke at a T, 0, 0.
+ *   (metres), 1 when some road end meets this road's stroke at a T, 0, 0;
+ *   its trimmed ends at a T (docs/network.md "Ends at a T": no round cap,
+ *   the strip runs on to the through road's far edge line n.p = c and
+ *   stops there, casing too): nx, ny, c for its start, then for its end
+ *   (0, 0, 0: a round cap), and how far such a strip reaches beyond the
+ *   road's capsule (the index lists the road that much further), 0.
  * - band: RS_GPU_BAND_FLOATS per line of a style (paint order): offset T,
  *   width W, phase, period (0: solid); r, g, b (0..255), a (0..1); dash
  *   count, 0, 0, 0; dash[0..7] (on, off, ... metres).
@@ -1028,7 +1034,8 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_SEG_FLOATS 12
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
-#define RS_GPU_ROAD_FLOATS 32
+#define RS_GPU_SEG_CLIP 4u /* clipped by its road's trimmed T end lines (road floats 32..37) */
+#define RS_GPU_ROAD_FLOATS 40
 #define RS_GPU_BAND_FLOATS 20
 #define RS_GPU_MARK_FLOATS 12
 #define RS_GPU_TYPE_INTS 2

@@ -142,6 +142,34 @@ static rs_result ge_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *n
     return RS_OK;
 }
 
+/* The clip lines of a record's trimmed T ends (lib/roadfield.c, the same
+ * rule): per exported end (the record's last point first when it runs
+ * against its stroke) n and c of n.p <= c, the end point's n plus the
+ * through road's half width, in floats 32..37; float 38: how far the
+ * trimmed strip (and casing) reaches beyond the capsule, for the index. */
+static void ge_tee_clips(float *rd, const rs__road_local *rl, const rs__tee_end *tees, const size_t *tix, double hw,
+                         double casing, int rev)
+{
+    size_t m = rl->n;
+    if (m < 2 || !(hw > 0)) return;
+    for (int e = 0; e < 2; e++) {
+        if (tix[e] == SIZE_MAX) continue;
+        const rs__tee_end *t = &tees[tix[e]];
+        size_t a = e ? m - 1 : 0, b = e ? m - 2 : 1;
+        double dx = rl->x[a] - rl->x[b], dy = rl->y[a] - rl->y[b], l = hypot(dx, dy);
+        double sn = (t->nx * dx + t->ny * dy) / l, cs = fabs(t->nx * dy - t->ny * dx) / l;
+        if (!(sn > 0.1)) continue;
+        int ge = rev ? !e : e;
+        rd[32 + 3 * ge] = (float)t->nx;
+        rd[33 + 3 * ge] = (float)t->ny;
+        rd[34 + 3 * ge] = ge_float(t->nx * rl->x[a] + t->ny * rl->y[a] + t->half_width);
+        for (int k = 0; k < 2; k++) {
+            double r = hw + (k ? casing : 0), ub = (t->half_width + r * cs) / sn;
+            rd[38] = fmaxf(rd[38], ge_float(hypot(ub, r) - r));
+        }
+    }
+}
+
 /* A record's local points in the stroke's terms (see ge_strokes). */
 static void ge_local_to_stroke(rs__road_local *rl, double off, int rev)
 {
@@ -220,7 +248,8 @@ typedef struct ge_items {
 
 static double item_reach(const rs_gpu_scene *g, const float *s)
 {
-    return (double)s[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)s[6] + 2] + g->reach;
+    const float *rd = g->road + RS_GPU_ROAD_FLOATS * (size_t)s[6];
+    return (double)s[4] + rd[2] + rd[38] + g->reach;
 }
 
 static void item_cells(const rs_gpu_scene *g, const ge_items *it, size_t k, uint32_t b[4])
@@ -389,6 +418,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     double *soff = NULL;
     unsigned char *srev = NULL;
     rs_network *net = NULL;
+    rs__tee_end *tees = NULL;
+    size_t ntees = 0, *tee_of = NULL;
     const double cs = dem->frame.cell_size;
     g->map_w = (double)(dem->width - 1) * cs;
     g->map_h = (double)(dem->height - 1) * cs;
@@ -432,6 +463,11 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!g->band || !ends || !soff || !srev) { r = RS_ERR_NOMEM; goto fail; }
     if (!o.style.disable && n > 0 && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto fail_msg;
     if ((r = ge_strokes(ctx, roads, net, &o, sty, soff, srev)) != RS_OK) goto fail_msg;
+    /* record ends at a T: trimmed as the road field trims them */
+    if ((r = rs__tee_ends(ctx, roads, net, &tees, &ntees)) != RS_OK) goto fail;
+    if (ntees && !(tee_of = rs__alloc_array(ctx, 2 * n, sizeof *tee_of))) { r = RS_ERR_NOMEM; goto fail; }
+    for (size_t i = 0; tee_of && i < 2 * n; i++) tee_of[i] = SIZE_MAX;
+    for (size_t i = 0; i < ntees; i++) tee_of[2 * (size_t)tees[i].road + (tees[i].end != 0)] = i;
     size_t nends = 0;
     for (size_t i = 0, b = 0; i < n; i++) {
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
@@ -470,9 +506,20 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         rd[7] = ge_float(lines_reach);
         rs__road_local rl;
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) { r = RS_ERR_NOMEM; goto fail; }
+        if (tee_of) ge_tee_clips(rd, &rl, tees, tee_of + 2 * i, hw, sty->casing_width, srev[i]);
         if (soff[i] >= 0) ge_local_to_stroke(&rl, soff[i], srev[i]);
         double pad = 2 * (hw + sty->casing_width + lines_reach + g->reach) + g->cell;
+        size_t seg0 = g->nseg;
         r = road_segments(ctx, g, &rl, i, hw, sty->casing_width, pad, &segcap);
+        /* a segment reaching past a trimmed end's line is clipped by it (the road field's rule) */
+        for (size_t k = seg0; !r && k < g->nseg; k++)
+            for (int e = 0; e < 2; e++) {
+                float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
+                const float *c = rd + 32 + 3 * e;
+                if (c[0] == 0 && c[1] == 0) continue;
+                double fa = (double)c[0] * sg[0] + (double)c[1] * sg[1], fb = (double)c[0] * sg[2] + (double)c[1] * sg[3];
+                if (fmax(fa, fb) + hw + sty->casing_width > c[2]) sg[7] = (float)((uint32_t)sg[7] | RS_GPU_SEG_CLIP);
+            }
         size_t m = rl.n;
         if (!r && m >= 2) {
             for (int e = 0; e < 2; e++) {
@@ -664,6 +711,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     rs__free(ctx, ends);
     rs__free(ctx, soff);
     rs__free(ctx, srev);
+    rs__free(ctx, tees);
+    rs__free(ctx, tee_of);
     rs_network_free(ctx, net);
     rs__free(ctx, sty);
     rs_atlas_free(ctx, atlas_own);
@@ -677,6 +726,8 @@ fail_msg:
     rs__free(ctx, ends);
     rs__free(ctx, soff);
     rs__free(ctx, srev);
+    rs__free(ctx, tees);
+    rs__free(ctx, tee_of);
     rs_network_free(ctx, net);
     rs__free(ctx, sty);
     rs_atlas_free(ctx, atlas_own);

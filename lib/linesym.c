@@ -3,6 +3,7 @@
 #include "linesym.h"
 #include "network.h"
 #include "lanes.h"
+#include "roadfield.h"
 
 #include <float.h>
 #include <math.h>
@@ -658,6 +659,9 @@ typedef struct ls_surf {
     double u0, u1;        /* the rectangle along u: -r .. len + r, or shorter at a T (below) */
     uint32_t road;
     uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
+    int clip;             /* 1: only its part with cx x + cy y <= cc (a trimmed end at a T,
+                             docs/network.md "Ends at a T": the surface stops at the far edge line) */
+    double cx, cy, cc;
 } ls_surf;
 
 #define NO_STROKE RS__NO_STROKE
@@ -736,9 +740,10 @@ static int add_hp(ls_piece *P, double c0, double cu, double cv)
     return 1;
 }
 
-/* P minus surface rectangle Q: up to 4 disjoint pieces into out; returns
- * their count, or -1 when Q misses P (P stays whole) or a piece would need
- * more half-planes than it holds (P is then kept whole: lines run on). */
+/* P minus surface rectangle Q (cut by its clip line): up to 5 disjoint
+ * pieces into out; returns their count, or -1 when Q misses P (P stays
+ * whole) or a piece would need more half-planes than it holds (P is then
+ * kept whole: lines run on). */
 static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
 {
     double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
@@ -751,15 +756,19 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     double x[POLY_MAX], y[POLY_MAX];
     uint32_t n = piece_poly(P, x, y);
     if (n < 3) return -1;
-    int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1;
+    /* the clip line in P's frame: n.(p - Q.a) = cn0 + u fnu + v fnv <= cq */
+    double cn0 = ox * Q->cx + oy * Q->cy, fnu = P->ux * Q->cx + P->uy * Q->cy, fnv = npx * Q->cx + npy * Q->cy;
+    double cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
+    int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip;
     for (uint32_t k = 0; k < n; k++) {
         double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
         out_v_hi &= v >= r;
         out_v_lo &= v <= -r;
         out_u_lo &= u <= lo;
         out_u_hi &= u >= hi;
+        out_clip &= cn0 + x[k] * fnu + y[k] * fnv >= cq;
     }
-    if (out_v_hi || out_v_lo || out_u_lo || out_u_hi) return -1;
+    if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip) return -1;
     int m = 0;
     ls_piece A = *P;
     if (!add_hp(&A, cv0 - r, fvu, fvv)) return -1;                      /* v' >= r */
@@ -773,6 +782,13 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
         int ok = side == 0 ? add_hp(&A, lo - cu0, -fuu, -fuv)            /* u' <= u0 */
                            : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= u1 */
         if (!ok) return -1;
+        if (piece_nonempty(&A)) out[m++] = A;
+    }
+    if (Q->clip) { /* the rectangle's part beyond the clip line stays */
+        A = *P;
+        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
+            !add_hp(&A, hi - cu0, -fuu, -fuv) || !add_hp(&A, cn0 - cq, fnu, fnv))
+            return -1;
         if (piece_nonempty(&A)) out[m++] = A;
     }
     return m;
@@ -812,7 +828,7 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
     const ls_grid *G = &J->grid;
     double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
     enum { QMAX = 16 };
-    ls_piece q[QMAX], tmp[4];
+    ls_piece q[QMAX], tmp[5];
     uint32_t nq = 1;
     q[0] = *P;
     if (!(fx1 < 0 || fy1 < 0 || fx0 >= G->gw || fy0 >= G->gh)) {
@@ -882,7 +898,7 @@ static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_pie
     uint32_t key = L->cut_start ? cut_key(L, road) : 0;
     if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road);
     enum { QMAX = 16 };
-    ls_piece q[QMAX], next[QMAX], tmp[4];
+    ls_piece q[QMAX], next[QMAX], tmp[5];
     uint32_t nq = 1;
     q[0] = *P;
     for (uint32_t e = L->cut_start[key]; e < L->cut_start[key + 1]; e++) {
@@ -1320,6 +1336,17 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
     if (rt) return rt;
+    /* trimmed ends (lib/tee_ends.c): per road end the index of its T end */
+    rs__tee_end *tend = NULL;
+    size_t ntend = 0, *tend_of = NULL;
+    if ((rt = rs__tee_ends(ctx, roads, p->net, &tend, &ntend)) != RS_OK ||
+        (ntend && !(tend_of = rs__alloc_array(ctx, 2 * nroads, sizeof *tend_of)))) {
+        rs__free(ctx, tees);
+        rs__free(ctx, tend);
+        return rt ? rt : RS_ERR_NOMEM;
+    }
+    for (size_t i = 0; tend_of && i < 2 * nroads; i++) tend_of[i] = SIZE_MAX;
+    for (size_t i = 0; i < ntend; i++) tend_of[2 * (size_t)tend[i].road + (tend[i].end != 0)] = i;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         size_t m = 0;
@@ -1327,6 +1354,8 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         rs_result r = road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
         if (r) {
             rs__free(ctx, tees);
+            rs__free(ctx, tend);
+            rs__free(ctx, tend_of);
             return r;
         }
         if (m < 2) continue;
@@ -1351,6 +1380,35 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
             Q.only = Q.skip = NO_STROKE;
+            Q.clip = 0;
+            Q.cx = Q.cy = Q.cc = 0;
+            /* a trimmed end at a T: the rectangle reaches as far as the
+             * strip does and is cut by the far edge line */
+            for (int e = 0; tend_of && e < 2; e++) {
+                int here = e ? i + 2 == m && hi == len : i == 0 && lo == 0;
+                size_t ti = tend_of[2 * ri + (size_t)e];
+                if (ti == SIZE_MAX) continue;
+                const rs__tee_end *te = &tend[ti];
+                if (!here) {
+                    /* another segment of the record reaching past the line
+                     * (its surface is clipped there too) */
+                    double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
+                    double cc = te->nx * ex + te->ny * ey + te->half_width;
+                    double fa = te->nx * Q.ax + te->ny * Q.ay, fb = fa + (Q.len + hw) * (te->nx * Q.ux + te->ny * Q.uy);
+                    fa -= hw * (te->nx * Q.ux + te->ny * Q.uy);
+                    if (!Q.clip && fmax(fa, fb) + hw > cc) Q.clip = 1, Q.cx = te->nx, Q.cy = te->ny, Q.cc = cc;
+                    continue;
+                }
+                double dx = e ? Q.ux : -Q.ux, dy = e ? Q.uy : -Q.uy; /* towards the end */
+                double sn = te->nx * dx + te->ny * dy, cs = fabs(te->nx * dy - te->ny * dx);
+                if (!(sn > 0.1)) continue;
+                double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
+                double reach = fmax((te->half_width + hw * cs) / sn, hw);
+                if (e) Q.u1 = Q.len + reach;
+                else Q.u0 = -reach;
+                Q.clip = 1;
+                Q.cx = te->nx, Q.cy = te->ny, Q.cc = te->nx * ex + te->ny * ey + te->half_width;
+            }
             /* an end segment at a T: the through stroke gets a copy that
              * stops `keep` short of its centre line (no extension) */
             int at_end = i + 2 == m && hi == len, at_start = i == 0 && lo == 0;
@@ -1374,6 +1432,8 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                                       ? NULL : rs__realloc(ctx, J->sf, bytes);
                     if (!ns) {
                         rs__free(ctx, tees);
+                        rs__free(ctx, tend);
+                        rs__free(ctx, tend_of);
                         return nc > UINT32_MAX ? RS_ERR_LIMIT : RS_ERR_NOMEM;
                     }
                     J->sf = ns;
@@ -1384,6 +1444,8 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         }
     }
     rs__free(ctx, tees);
+    rs__free(ctx, tend);
+    rs__free(ctx, tend_of);
     /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
     uint32_t jpx = CELL_PX;
     for (;;) {

@@ -51,6 +51,8 @@ typedef struct rf_seg {
      * (near_keep) */
     uint32_t jpart;
     uint8_t jnext, redundant;
+    uint8_t tee; /* bit 0: its start a is a trimmed T end, bit 1: its end b, bit 2: clipped by its
+                    record's T end's line (rs__roadfield_set_tees) */
 } rf_seg;
 
 struct rs__roadfield {
@@ -76,6 +78,10 @@ struct rs__roadfield {
     size_t nredundant; /* segments with redundant = 1 */
     uint64_t relwork;  /* seg_relations' work units */
     uint32_t relscan;  /* cell lists up to this long are scanned for holders (rs__roadfield_params) */
+    /* T ends (rs__roadfield_set_tees): ascending by (segment, end) */
+    struct rf_tee *tee;
+    size_t ntee;
+    uint32_t *tstart, *tids; /* per grid row (gh + 1 offsets): the tees whose box meets the row */
 };
 
 /* fmax and fmin with glibc's values (x on a tie, the other one when one
@@ -348,6 +354,7 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     s->jnext = 0;
     s->redundant = 0;
     s->jpart = 0;
+    s->tee = 0;
 }
 
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
@@ -362,6 +369,9 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
     rs__free(ctx, f->colpix);
     rs__free(ctx, f->rspan);
     rs__free(ctx, f->seg);
+    rs__free(ctx, f->tee);
+    rs__free(ctx, f->tstart);
+    rs__free(ctx, f->tids);
     rs__free(ctx, f);
 }
 
@@ -1098,6 +1108,8 @@ fail:
     return build_fail(ctx, f, &b, res);
 }
 
+static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src);
+
 rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
                               rs__roadfield **out)
 {
@@ -1146,6 +1158,10 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
         rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
+    if ((res = tees_widen(ctx, f, src)) != RS_OK) {
+        rs__roadfield_free(ctx, f);
+        return rs__fail(ctx, res, "roadfield: out of memory");
+    }
     *out = f;
     rs__ok(ctx);
     return RS_OK;
@@ -1208,6 +1224,575 @@ static int cells_around(const rs__roadfield *f, double x, double y, double d, rf
     return 1;
 }
 
+/* ---- T ends (docs/network.md "Ends at a T") ----
+ * A record end on a road passing through its node has no round cap: its
+ * end segment's strip runs on, flat, to the through road's far edge line
+ * n.p = c and stops there (c = n.E + R: E the end point, R the through
+ * road's half width, n its normal pointing across from the leg). The
+ * normal coverage pass computes the union of the capsules; every pixel
+ * where the trimmed shape and the capsule of a T segment may differ
+ * (neither both certainly outside nor both certainly inside) is then
+ * computed again from the shapes of all segments near it: per sub-row
+ * the exact union of their intervals on the row (each shape is at most
+ * three convex pieces), TEE_ROWS rows (midpoint rule across). */
+#define TEE_ROWS 16
+#define TEE_IV_MAX 256
+
+typedef struct rf_tee {
+    uint32_t seg;          /* the leg's end segment */
+    int end;               /* 1: the segment's b is the T end, 0: its a; 2: no end of it, only the
+                              clip line (another segment of the record reaching past it) */
+    double nx, ny;         /* the through road's normal, from the leg across */
+    double cE, R;          /* n.E, the through road's half width */
+    double c;              /* cE + R: keep n.p <= c */
+    double box[4];         /* x0, x1, y0, y1 (local metres): where the trimmed shape and the capsule differ */
+    uint32_t row0;         /* the first grid row of box */
+} rf_tee;
+
+/* The tees of segment s (those of f->tee with seg == id): [*i0, *i1). */
+static void tees_of(const rs__roadfield *f, uint32_t id, size_t *i0, size_t *i1)
+{
+    size_t lo = 0, hi = f->ntee;
+    while (lo < hi) {
+        size_t m = lo + (hi - lo) / 2;
+        if (f->tee[m].seg < id) lo = m + 1;
+        else hi = m;
+    }
+    *i0 = lo;
+    while (lo < f->ntee && f->tee[lo].seg == id) lo++;
+    *i1 = lo;
+}
+
+/* The trimmed shape of segment s as a lower bound of its signed distance
+ * (exact depth inside): the strip cut by its clip lines, an end normal at
+ * an untrimmed end, and the end disc there. */
+static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y)
+{
+    size_t i0, i1;
+    tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
+    double wx = x - s->ax, wy = y - s->ay, u = wx * s->ux + wy * s->uy, t = wx * s->uy - wy * s->ux;
+    double sd = fabs(t) - s->r, disc = INFINITY, hmax = -INFINITY;
+    int cut[2] = { 0, 0 };
+    for (size_t k = i0; k < i1; k++) {
+        const rf_tee *T = &f->tee[k];
+        hmax = lm_max(hmax, x * T->nx + y * T->ny - T->c);
+        if (T->end < 2) cut[T->end] = 1;
+    }
+    sd = lm_max(sd, hmax);
+    if (!cut[0]) {
+        sd = lm_max(sd, -u);
+        disc = lm_min(disc, len2(wx, wy) - s->r);
+    }
+    if (!cut[1]) {
+        sd = lm_max(sd, u - s->len);
+        disc = lm_min(disc, len2(x - s->bx, y - s->by) - s->r);
+    }
+    return lm_min(sd, lm_max(disc, hmax));
+}
+
+/* A segment's shape for the rows, as bounds linear in the row's y: the
+ * strip's (its sides, the normals of untrimmed ends; for rows within
+ * [ylo, yhi]) and the clip lines' (on every piece), x >= a + b y (lo) or
+ * x <= a + b y (hi); the discs of untrimmed ends. */
+typedef struct rf_shape {
+    double sa[6], sb[6]; /* bounds: the strip's [0, nstrip), then the clip lines' */
+    int8_t shi[6];       /* 1: x <= a + b y, 0: x >= a + b y */
+    int nstrip, nclip, ndisc, strip;
+    double ylo, yhi;     /* the strip's rows */
+    double cyl, cyh;     /* every piece's rows (clip lines along x) */
+    double disc[2][3];   /* x, y, r */
+} rf_shape;
+
+/* The bound g.(p - o) <= v (g = (gx, gy)) on a row: x <= or >= a + b y;
+ * gx = 0 narrows the rows [ylo, yhi] instead. Returns 1 when it is a bound. */
+static int shape_bound(rf_shape *sh, int k, double gx, double gy, double ox, double oy, double v)
+{
+    if (gx == 0) {
+        /* gy (y - oy) <= v */
+        if (gy > 0) sh->yhi = lm_min(sh->yhi, oy + v / gy);
+        else if (gy < 0) sh->ylo = lm_max(sh->ylo, oy + v / gy);
+        else if (v < 0) sh->ylo = INFINITY;
+        return 0;
+    }
+    /* x = ox + (v - gy (y - oy)) / gx */
+    sh->sa[k] = ox + (v + gy * oy) / gx;
+    sh->sb[k] = -gy / gx;
+    sh->shi[k] = gx > 0;
+    return 1;
+}
+
+static void shape_of(const rs__roadfield *f, const rf_seg *s, rf_shape *sh)
+{
+    int cut[2] = { 0, 0 };
+    double cl[2][3];
+    int nh = 0;
+    if (s->tee) {
+        size_t i0, i1;
+        tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
+        for (size_t k = i0; k < i1 && nh < 2; k++) {
+            cl[nh][0] = f->tee[k].nx, cl[nh][1] = f->tee[k].ny, cl[nh][2] = f->tee[k].c;
+            if (f->tee[k].end < 2) cut[f->tee[k].end] = 1;
+            nh++;
+        }
+    }
+    sh->ylo = -INFINITY, sh->yhi = INFINITY;
+    sh->strip = s->len > 0;
+    sh->nstrip = 0;
+    if (sh->strip) {
+        /* g.(p - a) <= v: the sides |t| <= r, u >= 0, u <= len */
+        double g[4][3] = { { s->uy, -s->ux, s->r }, { -s->uy, s->ux, s->r }, { -s->ux, -s->uy, 0 },
+                           { s->ux, s->uy, s->len } };
+        for (int k = 0; k < 4; k++) {
+            if ((k == 2 && cut[0]) || (k == 3 && cut[1])) continue;
+            sh->nstrip += shape_bound(sh, sh->nstrip, g[k][0], g[k][1], s->ax, s->ay, g[k][2]);
+        }
+    }
+    double ylo = sh->ylo, yhi = sh->yhi; /* the strip's rows; the clip lines' apply to every piece */
+    sh->nclip = 0;
+    sh->ylo = -INFINITY, sh->yhi = INFINITY;
+    for (int j = 0; j < nh; j++) sh->nclip += shape_bound(sh, sh->nstrip + sh->nclip, cl[j][0], cl[j][1], 0, 0, cl[j][2]);
+    /* the clip lines' rows (a clip line along x) narrow every piece */
+    sh->cyl = sh->ylo, sh->cyh = sh->yhi;
+    sh->ylo = lm_max(ylo, sh->cyl), sh->yhi = lm_min(yhi, sh->cyh);
+    sh->ndisc = 0;
+    for (int e = 0; e < 2; e++) {
+        if (cut[e] || (e && !(s->len > 0))) continue;
+        double *d = sh->disc[sh->ndisc++];
+        d[0] = e ? s->bx : s->ax, d[1] = e ? s->by : s->ay, d[2] = s->r;
+    }
+}
+
+/* The shape on the row y, x relative to x0, clipped to [0, pix], appended
+ * to iv (pairs); returns the new count. */
+static size_t shape_row(const rf_shape *sh, double y, double x0, double pix, double *iv, size_t n)
+{
+    double lo[3], hi[3];
+    int np = 0;
+    if (!(y >= sh->cyl && y <= sh->cyh)) return n;
+    for (int k = 0; k < sh->ndisc; k++) {
+        double dy = y - sh->disc[k][1], q = sh->disc[k][2] * sh->disc[k][2] - dy * dy;
+        if (!(q >= 0)) continue;
+        q = sqrt(q);
+        lo[np] = sh->disc[k][0] - q, hi[np] = sh->disc[k][0] + q;
+        np++;
+    }
+    if (sh->strip && y >= sh->ylo && y <= sh->yhi) {
+        double l = -INFINITY, h = INFINITY;
+        for (int k = 0; k < sh->nstrip; k++) {
+            double x = sh->sa[k] + sh->sb[k] * y;
+            if (sh->shi[k]) h = lm_min(h, x);
+            else l = lm_max(l, x);
+        }
+        lo[np] = l, hi[np] = h;
+        np++;
+    }
+    for (int k = 0; k < np; k++) {
+        double l = lo[k], h = hi[k];
+        for (int j = sh->nstrip; j < sh->nstrip + sh->nclip; j++) {
+            double x = sh->sa[j] + sh->sb[j] * y;
+            if (sh->shi[j]) h = lm_min(h, x);
+            else l = lm_max(l, x);
+        }
+        l = lm_max(l - x0, 0), h = lm_min(h - x0, pix);
+        if (!(h > l)) continue;
+        iv[2 * n] = l, iv[2 * n + 1] = h;
+        n++;
+    }
+    return n;
+}
+
+/* Length of the union of n intervals (sorted here). */
+static double union_len(double *iv, size_t n)
+{
+    for (size_t i = 1; i < n; i++) {
+        double l = iv[2 * i], h = iv[2 * i + 1];
+        size_t j = i;
+        while (j > 0 && (iv[2 * j - 2] > l || (iv[2 * j - 2] == l && iv[2 * j - 1] > h))) {
+            iv[2 * j] = iv[2 * j - 2], iv[2 * j + 1] = iv[2 * j - 1];
+            j--;
+        }
+        iv[2 * j] = l, iv[2 * j + 1] = h;
+    }
+    double sum = 0, cl = 0, ch = -1;
+    for (size_t i = 0; i < n; i++) {
+        if (iv[2 * i] > ch) {
+            if (ch > cl) sum += ch - cl;
+            cl = iv[2 * i], ch = iv[2 * i + 1];
+        } else ch = lm_max(ch, iv[2 * i + 1]);
+    }
+    if (ch > cl) sum += ch - cl;
+    return sum;
+}
+
+/* Merges iv into disjoint intervals (when the buffer fills). */
+static size_t union_compact(double *iv, size_t n)
+{
+    union_len(iv, n); /* sorts */
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (m && iv[2 * i] <= iv[2 * m - 1]) iv[2 * m - 1] = lm_max(iv[2 * m - 1], iv[2 * i + 1]);
+        else iv[2 * m] = iv[2 * i], iv[2 * m + 1] = iv[2 * i + 1], m++;
+    }
+    return m;
+}
+
+static size_t shape_add(const rf_shape *sh, double y, double x0, double pix, double *iv, size_t n)
+{
+    if (n + 3 > TEE_IV_MAX) n = union_compact(iv, n);
+    if (n + 3 > TEE_IV_MAX) return n; /* 250 disjoint pieces of roads in one pixel row: drops the rest */
+    return shape_row(sh, y, x0, pix, iv, n);
+}
+
+static size_t seg_add(const rs__roadfield *f, const rf_seg *s, double y, double x0, double pix, double *iv, size_t n)
+{
+    rf_shape sh;
+    shape_of(f, s, &sh);
+    return shape_add(&sh, y, x0, pix, iv, n);
+}
+
+/* Coverage of pixel (px, py) of side pix from every shape near it: the
+ * segments of the cells the pixel meets and the T segments whose box it
+ * meets, those within the pixel's half diagonal of it (a T segment by the
+ * lower bound tee_sd) kept; one certainly holding the pixel gives 1. */
+#define TEE_NEAR_MAX 64
+/* tee_pixel's candidates: NULL (ncand 0): the lists of the cells and T
+ * boxes the pixel meets; else a superset of the segments near it (the
+ * same near set, so the same doubles) */
+static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double pix, const rf_seg *const *cand,
+                        size_t ncand)
+{
+    double x0 = (double)px * pix, y0 = (double)py * pix, x1 = x0 + pix, y1 = y0 + pix;
+    double cx = x0 + 0.5 * pix, cy = y0 + 0.5 * pix, e = pix * HALF_SQRT2, slack = 1e-9 * (1 + fabs(cx) + fabs(cy));
+    uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
+    uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
+    rf_shape near[TEE_NEAR_MAX];
+    size_t nn = 0;
+    int all = 0; /* more than TEE_NEAR_MAX near: every listed segment takes part */
+    for (size_t k = 0; k < ncand; k++) {
+        const rf_seg *s = cand[k];
+        double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
+        if (sd <= -e - slack) return 1;
+        if (sd < e + slack) shape_of(f, s, &near[nn++]); /* ncand <= TEE_NEAR_MAX */
+    }
+    for (int pass = 0; pass < 2 && !cand; pass++)
+        for (uint32_t j = j0; j <= j1; j++) {
+            uint32_t a = pass ? f->tstart[j] : 0, b = pass ? f->tstart[j + 1] : 0;
+            for (uint32_t i = pass ? i1 : i0; i <= i1; i++) {
+                size_t cell = (size_t)j * f->gw + i;
+                if (!pass) a = f->start[cell], b = f->start[cell + 1];
+                for (uint32_t k = a; k < b; k++) {
+                    const rf_seg *s;
+                    if (pass) {
+                        const rf_tee *T = &f->tee[f->tids[k]];
+                        if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+                        s = &f->seg[T->seg];
+                    } else
+                        s = &f->seg[f->ids[k]];
+                    double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
+                    if (sd <= -e - slack) return 1;
+                    if (!(sd < e + slack)) continue;
+                    if (nn < TEE_NEAR_MAX) shape_of(f, s, &near[nn++]);
+                    else all = 1;
+                }
+            }
+        }
+    double iv[2 * TEE_IV_MAX], acc = 0;
+    for (int k = 0; k < TEE_ROWS; k++) {
+        double y = y0 + ((double)k + 0.5) * (pix / TEE_ROWS);
+        size_t n = 0;
+        if (!all)
+            for (size_t q = 0; q < nn; q++) n = shape_add(&near[q], y, x0, pix, iv, n);
+        else {
+            for (uint32_t j = j0; j <= j1; j++)
+                for (uint32_t i = i0; i <= i1; i++) {
+                    size_t cell = (size_t)j * f->gw + i;
+                    for (uint32_t e2 = f->start[cell]; e2 < f->start[cell + 1]; e2++)
+                        n = seg_add(f, &f->seg[f->ids[e2]], y, x0, pix, iv, n);
+                }
+            for (uint32_t j = j0; j <= j1; j++)
+                for (uint32_t e2 = f->tstart[j]; e2 < f->tstart[j + 1]; e2++) {
+                    const rf_tee *T = &f->tee[f->tids[e2]];
+                    if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+                    n = seg_add(f, &f->seg[T->seg], y, x0, pix, iv, n);
+                }
+        }
+        acc += union_len(iv, n) / pix;
+    }
+    return acc / TEE_ROWS;
+}
+
+/* The segments whose shape may come within e of the box [x0, x1] x [y0,
+ * y1] (by their centreline boxes grown by r + e, a T segment's by its T
+ * box), each once, into cand; 0 when more than TEE_NEAR_MAX (the pixels
+ * then read the lists themselves). */
+static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, double x1, double y1, double e,
+                             const rf_seg **cand)
+{
+    uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
+    uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
+    size_t n = 0;
+    for (uint32_t j = j0; j <= j1; j++) {
+        for (uint32_t i = i0; i <= i1; i++) {
+            size_t cell = (size_t)j * f->gw + i;
+            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+                const rf_seg *s = &f->seg[f->ids[k]];
+                double g = s->r + e + s->tol;
+                if (!s->tee && (s->xmax + g < x0 || s->xmin - g > x1 || s->ymax + g < y0 || s->ymin - g > y1)) continue;
+                size_t q = 0;
+                while (q < n && cand[q] != s) q++;
+                if (q < n) continue;
+                if (n == TEE_NEAR_MAX) return 0;
+                cand[n++] = s;
+            }
+        }
+        for (uint32_t k = f->tstart[j]; k < f->tstart[j + 1]; k++) {
+            const rf_tee *T = &f->tee[f->tids[k]];
+            if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+            const rf_seg *s = &f->seg[T->seg];
+            size_t q = 0;
+            while (q < n && cand[q] != s) q++;
+            if (q < n) continue;
+            if (n == TEE_NEAR_MAX) return 0;
+            cand[n++] = s;
+        }
+    }
+    return n;
+}
+
+/* The pixels of [px0, px0+w) x [py0, py0+h) where a T segment's trimmed
+ * shape and its capsule may differ, computed again (tee_pixel). Depends
+ * only on the pixel: any block gives the same doubles. */
+static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, double pix,
+                     double *out, size_t stride)
+{
+    if (!f || !f->ntee) return;
+    const rf_seg *cand[TEE_NEAR_MAX];
+    double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
+    double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
+    uint32_t j0 = clamp_index(floor(by0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(by1 * f->inv_c) + 1, f->gh);
+    for (uint32_t j = j0; j <= j1; j++)
+        for (uint32_t m = f->tstart[j]; m < f->tstart[j + 1]; m++) {
+            const rf_tee *T = &f->tee[f->tids[m]];
+            if (T->row0 != j && j != j0) continue; /* once per call */
+            if (T->box[1] < bx0 || T->box[0] > bx1 || T->box[3] < by0 || T->box[2] > by1) continue;
+            /* the pixels whose square meets the box */
+            double xa = lm_max(floor(T->box[0] / pix) - (double)px0, 0), xb = lm_min(floor(T->box[1] / pix) - (double)px0, (double)w - 1);
+            double ya = lm_max(floor(T->box[2] / pix) - (double)py0, 0), yb = lm_min(floor(T->box[3] / pix) - (double)py0, (double)h - 1);
+            if (!(xa <= xb && ya <= yb)) continue;
+            uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
+            const rf_seg *s = &f->seg[T->seg];
+            /* the segments that can come near a pixel of the box here, once */
+            double qx0 = lm_max(T->box[0], bx0) - pix, qx1 = lm_min(T->box[1], bx1) + pix;
+            double qy0 = lm_max(T->box[2], by0) - pix, qy1 = lm_min(T->box[3], by1) + pix;
+            size_t nc = tee_candidates(f, qx0, qy0, qx1, qy1, e, cand);
+            for (uint32_t r = ra; r <= rb; r++)
+                for (uint32_t k = ka; k <= kb; k++) {
+                    double cx = ((double)px0 + k + 0.5) * pix, cy = ((double)py0 + r + 0.5) * pix;
+                    double dc = seg_dist(s, cx, cy) - s->r, dt = tee_sd(f, s, cx, cy);
+                    if ((dc >= e && dt >= e) || (dc <= -e && dt <= -e)) continue;
+                    out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix, nc ? cand : NULL, nc);
+                }
+        }
+}
+
+/* Box where the trimmed shape of T's segment and its capsule differ: the
+ * end disc and the strip from where the clip line cuts its near side to
+ * where it cuts its far side (u along the segment towards the end,
+ * measured from the end point). */
+static void tee_box(const rs__roadfield *f, rf_tee *T)
+{
+    const rf_seg *s = &f->seg[T->seg];
+    if (T->end == 2) {
+        /* the capsule's part beyond the line: its centreline where n.p >= c - r, grown by r */
+        double fa = T->nx * s->ax + T->ny * s->ay, fb = T->nx * s->bx + T->ny * s->by, lo = T->c - s->r;
+        double t0 = 0, t1 = 1;
+        if (fa < lo && fb < lo) t0 = t1 = fa >= fb ? 0 : 1; /* (not reaching: a point) */
+        else if (fa < lo) t0 = (lo - fa) / (fb - fa);
+        else if (fb < lo) t1 = (lo - fa) / (fb - fa);
+        double xa = s->ax + t0 * (s->bx - s->ax), ya = s->ay + t0 * (s->by - s->ay);
+        double xb = s->ax + t1 * (s->bx - s->ax), yb = s->ay + t1 * (s->by - s->ay);
+        double m = f->margin + s->r + 1e-9 * (1 + fabs(xa) + fabs(ya) + fabs(xb) + fabs(yb) + s->r);
+        T->box[0] = lm_min(xa, xb) - m, T->box[1] = lm_max(xa, xb) + m;
+        T->box[2] = lm_min(ya, yb) - m, T->box[3] = lm_max(ya, yb) + m;
+        return;
+    }
+    double ex = T->end ? s->bx : s->ax, ey = T->end ? s->by : s->ay;
+    double dx = T->end ? s->ux : -s->ux, dy = T->end ? s->uy : -s->uy; /* towards the end */
+    double sn = T->nx * dx + T->ny * dy, cs = fabs(T->nx * dy - T->ny * dx), r = s->r;
+    double reach = T->c - (T->nx * ex + T->ny * ey); /* the clip line's distance beyond E */
+    double ua = (reach - r * cs) / sn, ub = (reach + r * cs) / sn;
+    ua = lm_max(lm_min(ua, 0), -s->len);
+    ub = lm_max(ub, 0);
+    double b[4] = { ex - r, ex + r, ey - r, ey + r };
+    for (int k = 0; k < 4; k++) {
+        double u = k & 1 ? ub : ua, t = k & 2 ? r : -r;
+        double x = ex + u * dx + t * dy, y = ey + u * dy - t * dx;
+        b[0] = lm_min(b[0], x), b[1] = lm_max(b[1], x), b[2] = lm_min(b[2], y), b[3] = lm_max(b[3], y);
+    }
+    double m = f->margin + 1e-9 * (1 + fabs(ex) + fabs(ey) + r + fabs(ub));
+    T->box[0] = b[0] - m, T->box[1] = b[1] + m, T->box[2] = b[2] - m, T->box[3] = b[3] + m;
+}
+
+static int tee_cmp(const void *a, const void *b)
+{
+    const rf_tee *p = a, *q = b;
+    if (p->seg != q->seg) return p->seg < q->seg ? -1 : 1;
+    return p->end - q->end;
+}
+
+/* f->tee holds ntee entries (seg, end, n, cE, R): sorts them, drops a
+ * second clip of one segment end (and repeated clip-only entries), flags
+ * the segments and builds the boxes and row lists. */
+static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
+{
+    qsort(f->tee, f->ntee, sizeof *f->tee, tee_cmp);
+    size_t m = 0;
+    for (size_t i = 0; i < f->ntee; i++) {
+        const rf_tee *a = &f->tee[m ? m - 1 : 0], *b = &f->tee[i];
+        if (m && a->seg == b->seg && a->end == b->end && (a->end < 2 || (a->nx == b->nx && a->ny == b->ny && a->cE == b->cE)))
+            continue;
+        f->tee[m++] = f->tee[i];
+    }
+    f->ntee = m;
+    size_t total = 0;
+    f->tstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->tstart);
+    if (!f->tstart) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < m; i++) {
+        rf_tee *T = &f->tee[i];
+        T->c = T->cE + T->R;
+        f->seg[T->seg].tee |= (uint8_t)(T->end == 2 ? 4 : T->end ? 2 : 1);
+        tee_box(f, T);
+        uint32_t r0 = clamp_index(floor(T->box[2] * f->inv_c) + 1, f->gh), r1 = clamp_index(floor(T->box[3] * f->inv_c) + 1, f->gh);
+        T->row0 = r0;
+        for (uint32_t r = r0; r <= r1; r++) f->tstart[r + 1]++;
+        total += r1 - r0 + 1;
+    }
+    for (uint32_t r = 0; r < f->gh; r++) f->tstart[r + 1] += f->tstart[r];
+    f->tids = rs__alloc_array(ctx, total ? total : 1, sizeof *f->tids);
+    uint32_t *pos = rs__alloc_array(ctx, f->gh ? f->gh : 1, sizeof *pos);
+    if (!f->tids || !pos) {
+        rs__free(ctx, pos);
+        return RS_ERR_NOMEM;
+    }
+    memcpy(pos, f->tstart, f->gh * sizeof *pos);
+    for (size_t i = 0; i < m; i++) {
+        uint32_t r1 = clamp_index(floor(f->tee[i].box[3] * f->inv_c) + 1, f->gh);
+        for (uint32_t r = f->tee[i].row0; r <= r1; r++) f->tids[pos[r]++] = (uint32_t)i;
+    }
+    rs__free(ctx, pos);
+    f->bytes += m * sizeof *f->tee + ((size_t)f->gh + 1 + total) * sizeof *f->tids;
+    return RS_OK;
+}
+
+/* The field segment of road `road` at its first (end 0) or last (end 1)
+ * segment of positive length; NULL when that one is not in the field. */
+static const rf_seg *road_end_seg(const rs__roadfield *f, const rs_roads *roads, uint32_t road, int end)
+{
+    const double *xy = NULL;
+    size_t np = 0;
+    rs_roads_get(roads, road, NULL, NULL, &xy, &np);
+    if (np < 2) return NULL;
+    size_t k = end ? np - 2 : 0;
+    /* past repeated points (a zero-length segment at the end) */
+    while (xy[2 * k] == xy[2 * k + 2] && xy[2 * k + 1] == xy[2 * k + 3]) {
+        if (end ? k == 0 : k + 2 >= np) return NULL;
+        k = end ? k - 1 : k + 1;
+    }
+    size_t lo = 0, hi = f->nseg;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        const rf_seg *s = &f->seg[mid];
+        if (s->road < road || (s->road == road && s->seg < k)) lo = mid + 1;
+        else hi = mid;
+    }
+    if (lo == f->nseg || f->seg[lo].road != road || f->seg[lo].seg != k || !(f->seg[lo].len > 0)) return NULL;
+    return &f->seg[lo];
+}
+
+rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
+                                 size_t n)
+{
+    if (!f || !n || f->ntee) return RS_OK;
+    size_t m = 0, cap = 0;
+    for (size_t i = 0; i < n; i++) {
+        const rs__tee_end *t = &tees[i];
+        const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
+        if (!s || !(s->r > 0)) continue;
+        /* the strip must reach the clip line going along the segment */
+        double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
+        if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
+        double cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
+        /* the record's segments: its end segment trimmed, every other one
+         * whose capsule (grown by up to an index cell: a casing, widen)
+         * reaches past the line clipped */
+        size_t k0 = (size_t)(s - f->seg), k1 = k0 + 1;
+        while (k0 > 0 && f->seg[k0 - 1].road == t->road) k0--;
+        while (k1 < f->nseg && f->seg[k1].road == t->road) k1++;
+        for (size_t k = k0; k < k1; k++) {
+            const rf_seg *q = &f->seg[k];
+            int end = q == s ? t->end : 2;
+            if (end == 2 && !(lm_max(t->nx * q->ax + t->ny * q->ay, t->nx * q->bx + t->ny * q->by) + q->r + f->c >
+                              cE + t->half_width))
+                continue;
+            if (m == cap) {
+                size_t nc = cap ? 2 * cap : n + 8, bytes;
+                rf_tee *nt = rs__mul_size(nc, sizeof *f->tee, &bytes) ? rs__realloc(ctx, f->tee, bytes) : NULL;
+                if (!nt) {
+                    rs__free(ctx, f->tee);
+                    f->tee = NULL;
+                    return RS_ERR_NOMEM;
+                }
+                f->tee = nt;
+                cap = nc;
+            }
+            rf_tee *T = &f->tee[m++];
+            T->seg = (uint32_t)k;
+            T->end = end;
+            T->nx = t->nx, T->ny = t->ny;
+            T->cE = cE;
+            T->R = t->half_width;
+        }
+    }
+    if (!m) {
+        rs__free(ctx, f->tee);
+        f->tee = NULL;
+        return RS_OK;
+    }
+    f->ntee = m;
+    rs_result r = tees_finish(ctx, f);
+    if (r != RS_OK) {
+        rs__free(ctx, f->tee), rs__free(ctx, f->tstart), rs__free(ctx, f->tids);
+        f->tee = NULL, f->tstart = f->tids = NULL, f->ntee = 0;
+        for (size_t k = 0; k < f->nseg; k++) f->seg[k].tee = 0;
+    }
+    return r;
+}
+
+/* widen: the source's tees; a casing stops at the through road's surface
+ * edge too (beyond it lies the through road's own casing) */
+static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src)
+{
+    if (!src->ntee) return RS_OK;
+    f->tee = rs__alloc_array(ctx, src->ntee, sizeof *f->tee);
+    if (!f->tee) return RS_ERR_NOMEM;
+    memcpy(f->tee, src->tee, src->ntee * sizeof *f->tee);
+    f->ntee = src->ntee;
+    return tees_finish(ctx, f);
+}
+
+/* The nearest query at a T segment: 0 when (x, y) lies beyond its clip
+ * line by more than reach (skip it), 2 when it lies within reach of the
+ * trimmed shape (take it even beyond the capsule: the strip's corners),
+ * else 1. Distances stay those to the centreline (the ranking as before). */
+static int tee_near(const rs__roadfield *f, const rf_seg *s, double x, double y, double reach)
+{
+    size_t i0, i1;
+    tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
+    for (size_t k = i0; k < i1; k++)
+        if (!(x * f->tee[k].nx + y * f->tee[k].ny - f->tee[k].c <= reach)) return 0;
+    return tee_sd(f, s, x, y) <= reach ? 2 : 1;
+}
+
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out)
 {
     if (!f || !out || !(reach >= 0)) return 0;
@@ -1223,11 +1808,22 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
             for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
                 const rf_seg *s = &f->seg[f->ids[k]];
                 double pr, side, d = seg_point(s, x, y, &pr, &side);
-                if (!(d - s->r <= reach)) continue;
+                int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
+                if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
                 /* segments are numbered in (road, seg) order */
                 if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
             }
         }
+    /* a trimmed strip reaches past its capsule, so past its cells' lists */
+    for (uint32_t m = f->ntee ? f->tstart[cj] : 0; f->ntee && m < f->tstart[cj + 1]; m++) {
+        const rf_tee *T = &f->tee[f->tids[m]];
+        if (x < T->box[0] || x > T->box[1] || y < T->box[2] || y > T->box[3]) continue;
+        const rf_seg *s = &f->seg[T->seg];
+        double pr, side, d = seg_point(s, x, y, &pr, &side);
+        int tn = tee_near(f, s, x, y, reach);
+        if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
+        if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
+    }
     if (!best) return 0;
     out->road = best->road;
     out->seg = best->seg;
@@ -2425,6 +3021,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
 {
     if (!f || !out || !w || !h) return;
     coverage(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
+    tee_pass(f, px0, py0, w, h, pix, out, stride);
 }
 
 void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0,
@@ -2433,7 +3030,10 @@ void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uin
     if (!f || !out || !w || !h) return;
     if (!g || !outg) {
         coverage(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
+        tee_pass(f, px0, py0, w, h, pix, out, stride);
         return;
     }
     coverage(f, g, px0, py0, w, h, pix, out, outg, stride);
+    tee_pass(f, px0, py0, w, h, pix, out, stride);
+    tee_pass(g, px0, py0, w, h, pix, outg, stride);
 }

@@ -42,6 +42,29 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
  * beside src in one pass (casings). */
 rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
                               rs__roadfield **out);
+/* A record end at a T (docs/network.md "Ends at a T"): it ends on road
+ * `through`, which passes through the node; (nx, ny) is the through road's
+ * unit normal there, pointing from the leg across it (road set frame). */
+typedef struct rs__tee_end {
+    uint32_t road;
+    int end;           /* 0: the record's first point, 1: its last */
+    uint32_t through;
+    double nx, ny;
+    double half_width; /* the through road's */
+} rs__tee_end;
+/* The T ends of a network of `roads` (lib/tee_ends.c): one through road
+ * passing once through a junction node, every other record ending there
+ * free (not continued by its stroke) at a sine above 0.2 with it. *out is
+ * the caller's (rs__free), NULL with *n = 0 when there are none. */
+rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *n);
+/* Trims the round caps of the T ends of f's roads: such an end is a flat
+ * strip up to the through road's far edge line (the line through the end
+ * point along the through road, moved its half width across), clipped
+ * there; the coverage and the nearest query use that shape (a widened
+ * field, rs__roadfield_widen, keeps the same lines: a casing stops at the
+ * through road's surface edge). Part of building f (before any query). */
+rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
+                                 size_t n);
 /* The index cell of f, metres. */
 double rs__roadfield_cell(const rs__roadfield *f);
 size_t rs__roadfield_bytes(const rs__roadfield *f);

@@ -675,6 +675,14 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
      * the styles only */
     rs_network *net = NULL;
     if (!r && !o.style.disable && rs_roads_count(roads) > 0) r = rs_network_build(ctx, roads, NULL, &net);
+    /* record ends at a T lose their round caps (docs/network.md "Ends at a T") */
+    if (!r && net && g->field) {
+        rs__tee_end *tees = NULL;
+        size_t ntees = 0;
+        r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+        if (!r) r = rs__roadfield_set_tees(ctx, g->field, roads, tees, ntees);
+        rs__free(ctx, tees);
+    }
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, &g->styling);
     if (!r) r = rs__markings_build(ctx, dem, roads, &o, &g->markings);
     rs_network_free(ctx, net);

@@ -115,6 +115,18 @@ static void put_colour(float *dst, rs_colour c)
     dst[3] = (float)c.a / 255.0f;
 }
 
+/* A field of the styles gets the road grid's T ends (docs/network.md
+ * "Ends at a T"). */
+static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__roadfield *f)
+{
+    rs__tee_end *tees = NULL;
+    size_t ntees = 0;
+    rs_result r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+    if (!r) r = rs__roadfield_set_tees(ctx, f, roads, tees, ntees);
+    rs__free(ctx, tees);
+    return r;
+}
+
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                             const rs__roadfield *field, const rs_network *net, rs__styling **out)
 {
@@ -266,6 +278,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                 if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np)) != RS_OK) goto fail_dash;
             }
             if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->casing)) != RS_OK) goto fail_dash;
         }
         st->bytes += rs__roadfield_bytes(st->casing);
     }
@@ -284,6 +297,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->near = field;
         if (!field) {
             if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near_own)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->near_own)) != RS_OK) goto fail_dash;
             st->near = st->near_own;
             st->bytes += rs__roadfield_bytes(st->near_own);
         }

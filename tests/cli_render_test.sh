@@ -138,6 +138,11 @@ check "shader: T junction close up equals the CPU splat (max <= 8/255)" sh -c "'
 # cut table's stride and the cuts' reach were fixed
 N="--cell-size 2 --z-scale 0.01 --texels 20"
 check "shader: junction at 0.1 m equals the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$EX/junction-dem.pgm' '$EX/junction.txt' '$T/jc2.png' && '$BIN' render $N --quiet --ortho --lighting off '$EX/junction-dem.pgm' '$EX/junction.txt' '$T/js2.png' && python3 '$DIFF' '$T/js2.png' '$T/jc2.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
+# ends at a T (docs/network.md "Ends at a T"): 15 m roads ending on a 3 m
+# street at 90 and 60 degrees, no round cap beyond its far edge; the shader
+# trims them as the CPU does (max 182/255 on db31fd7)
+awk 'BEGIN { print "P2"; print 51, 16; print 100; for (i = 0; i < 16; i++) { l = ""; for (j = 0; j < 51; j++) l = l " 50"; print l } }' > "$T/caps-dem.pgm"
+check "shader: trimmed T ends at 0.1 m equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$T/caps-dem.pgm' '$EX/network_caps.txt' '$T/kc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$EX/network_caps.txt' '$T/ks.png' && python3 '$DIFF' '$T/ks.png' '$T/kc.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
 C="--cell-size 5 --z-scale 0.01 --texels 4"
 check "shader: city CPU splat" "$BIN" $C --quiet "$EX/dem.pgm" "$EX/roads.txt" "$T/cc.png"
 check "shader: city ortho render" "$BIN" render $C --quiet --ortho --lighting off "$EX/dem.pgm" "$EX/roads.txt" "$T/cs.png"

@@ -46,7 +46,7 @@ static const char *gpu_scene_check(const rs_gpu_scene *g)
         const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
         if (!gsc_finite(s, RS_GPU_SEG_FLOATS)) return "segment float not finite";
         if (!gsc_index(s[6], 0, (double)g->nroads)) return "segment road index";
-        if (!gsc_index(s[7], 0, 4)) return "segment flags";
+        if (!gsc_index(s[7], 0, 8)) return "segment flags";
         if (k > 0 && s[6] < s[6 - RS_GPU_SEG_FLOATS]) return "segments not in road order";
         if (!(s[4] >= 0 && s[8] >= 0 && s[9] >= 0)) return "segment width or length negative";
     }
