@@ -220,6 +220,19 @@ static const char *const rsh_fs_src[] = {
     "    if (r1.z >= 0.0 && r1.z != r1.y) cut_add(road_free(p, int(r1.z), e0, e1), prod, zeros, -1.0);\n"
     "    float s, t, ef; vec2 nt, tg;\n"
     "    road_coords(p, k, s, t, nt, tg, ef);\n"
+    /* a path, footway or cycleway cuts no car road's lines (lib/linesym.c;
+     * the list is grouped by road) */
+    "    bool car = texelFetch(u_roadt, 10 * road + 7).w > 0.0;\n"
+    "    if (car) {\n"
+    "        int lr = -1;\n"
+    "        for (int e = e0; e < e1; e++) {\n"
+    "            int b = int(texelFetch(u_seg, 3 * int(texelFetch(u_cseg, e).r) + 1).z);\n"
+    "            if (b == lr || b == road) continue;\n"
+    "            lr = b;\n"
+    "            if (texelFetch(u_roadt, 10 * b + 7).w > 0.0 || float(b) == r1.y || float(b) == r1.z) continue;\n"
+    "            cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0);\n"
+    "        }\n"
+    "    }\n"
     /* side roads ending on this road's stroke at a T cut its lines only
      * with their cut-back ends (the list is grouped by road) */
     "    if (texelFetch(u_roadt, 10 * road + 7).y > 0.0) {\n"
@@ -228,6 +241,7 @@ static const char *const rsh_fs_src[] = {
     "            int b = int(texelFetch(u_seg, 3 * int(texelFetch(u_cseg, e).r) + 1).z);\n"
     "            if (b == lr || b == road) continue;\n"
     "            lr = b;\n"
+    "            if (car && !(texelFetch(u_roadt, 10 * b + 7).w > 0.0)) continue;\n"
     "            vec4 b6 = texelFetch(u_roadt, 10 * b + 6);\n"
     "            if (b6.y != st && b6.z != st) continue;\n"
     "            cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0);\n"
@@ -347,7 +361,7 @@ static const char *const rsh_fs_src[] = {
     "    if (e1 > e0) {\n"
     "        float sdR = 1e30, sdC = 1e30, dS = 1e30, dC = 1e30;\n"
     "        vec2 nR = vec2(1.0, 0.0), nC = vec2(1.0, 0.0);\n"
-    "        int roadS = -1, roadC = -1; float tS = 0.0;\n"
+    "        int roadS = -1, roadC = -1; float tS = 0.0, pS = -3e9;\n"
     /* the cell's list (ascending: grouped by road): R, casings, the
      * nearest surface, and each road's surface coverage as a factor of the
      * junction cuts (a product and a count of zero factors, so any number
@@ -376,7 +390,14 @@ static const char *const rsh_fs_src[] = {
     "            float cw = s.cw;\n"
     "            if (sd < sdR) { sdR = sd; nR = n; }\n"
     "            if (sdc < sdC) { sdC = sdc; nC = nc; }\n"
-    "            if (sd <= near_reach && d < dS) { dS = d; roadS = s.road; tS = u >= 0.0 && u <= s.len ? side : sign(side) * d; }\n"
+    /* the fill: among the surfaces holding p the highest priority, then
+     * the nearest (lib/roadfield.c rs__roadfield_nearest_ranked; all -1e9
+     * when equal) */
+    "            if (sd <= near_reach) {\n"
+    "                float kp = sd <= 0.0 ? texelFetch(u_roadt, 10 * s.road + 7).z : -2e9;\n"
+    "                if (kp < -1e8) kp = -2e9;\n"
+    "                if (kp > pS || (kp == pS && d < dS)) { pS = kp; dS = d; roadS = s.road; tS = u >= 0.0 && u <= s.len ? side : sign(side) * d; }\n"
+    "            }\n"
     "            if (cw > 0.0 && sdc <= near_reach && d < dC) { dC = d; roadC = s.road; }\n"
     "        }\n",
     "        R = min(UR, 1.0);\n"

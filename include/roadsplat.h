@@ -1004,7 +1004,11 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   docs/network.md: the road's stroke (-1: no network), the through
  *   stroke its start and its end meet at a T (-1: none), how far from
  *   that stroke's centre line each of those ends keeps cutting its lines
- *   (metres), 1 when some road end meets this road's stroke at a T, 0, 0;
+ *   (metres), 1 when some road end meets this road's stroke at a T, the
+ *   road's priority for the fill (docs/network.md "Crossings": among the
+ *   surfaces holding a pixel the highest wins, then the nearest; -1e9 for
+ *   every road when all are equal), 1 for a car road (0: path, footway,
+ *   cycleway: its surface cuts no car road's lines);
  *   its trimmed ends at a T (docs/network.md "Ends at a T": no round cap,
  *   the strip runs on to the through road's far edge line n.p = c and
  *   stops there, casing too): nx, ny, c for its start, then for its end

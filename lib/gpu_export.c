@@ -9,6 +9,7 @@
 #include "markings.h"
 #include "lanes.h"
 #include "roadfield.h"
+#include "network.h"
 
 #include <float.h>
 #include <math.h>
@@ -504,6 +505,14 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             for (uint32_t d = 0; d < ln->dash_count && d < 8; d++) bd[12 + d] = (float)ln->dash[d];
         }
         rd[7] = ge_float(lines_reach);
+        /* the fill's priority (lib/styling.c: -1e9 for all when all are equal) */
+        rd[30] = (float)rs__road_priority(roads, i);
+        /* a car road: a path, footway or cycleway cuts none of its lines (lib/linesym.c) */
+        {
+            rs_road_info in;
+            rd[31] = rs_roads_get_info(roads, i, &in) != RS_OK || !(in.road_class == RS_CLASS_PATH ||
+                     in.road_class == RS_CLASS_FOOTWAY || in.road_class == RS_CLASS_CYCLEWAY) ? 1.0f : 0.0f;
+        }
         rs__road_local rl;
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) { r = RS_ERR_NOMEM; goto fail; }
         if (tee_of) ge_tee_clips(rd, &rl, tees, tee_of + 2 * i, hw, sty->casing_width, srev[i]);
@@ -534,6 +543,13 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         }
         rs__road_local_free(ctx, &rl);
         if (r) goto fail;
+    }
+    {
+        /* equal priorities: the fill takes the nearest road, as the CPU's
+         * lookups without priorities */
+        int differ = 0;
+        for (size_t i = 1; i < n && !differ; i++) differ = g->road[RS_GPU_ROAD_FLOATS * i + 30] != g->road[30];
+        for (size_t i = 0; i < n && !differ; i++) g->road[RS_GPU_ROAD_FLOATS * i + 30] = -1e9f;
     }
     if (!g->seg && !(g->seg = rs__calloc(ctx, 1, RS_GPU_SEG_FLOATS * sizeof(float)))) { r = RS_ERR_NOMEM; goto fail; }
     nseg = g->nseg;

@@ -99,7 +99,7 @@ static double image_luminance(const rs__styling *st, double pix, int64_t px, int
 {
     rs__road_point rp;
     double x = ((double)px + 0.5) * pix, y = ((double)py + 0.5) * pix, im[4];
-    if (!st->near || !rs__roadfield_nearest(st->near, x, y, 2 * pix, &rp)) return base;
+    if (!st->near || !rs__roadfield_nearest_ranked(st->near, x, y, 2 * pix, st->prio, &rp)) return base;
     if (!rs__styling_image(st, rp.road, rp.s, rp.t, im)) return base;
     return (0.2126 * im[0] + 0.7152 * im[1] + 0.0722 * im[2]) / 255.0 + (1 - im[3]) * base;
 }

@@ -82,7 +82,7 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
             if (p->q[(size_t)r * w + k] == 0) continue;
             rs__road_point rp;
             double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
-            if (!rs__roadfield_nearest(st->near, x, y, pix * HALF_SQRT2, &rp)) continue;
+            if (!rs__roadfield_nearest_ranked(st->near, x, y, pix * HALF_SQRT2, st->prio, &rp)) continue;
             /* the surface image replaces the base surface, blended by its
              * alpha (premultiplied); fill or gradient go on top */
             double im[4];

@@ -10,6 +10,7 @@
 #include "roadfield.h"
 
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 #if defined(__SSE2__)
@@ -1795,6 +1796,12 @@ static int tee_near(const rs__roadfield *f, const rf_seg *s, double x, double y,
 
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out)
 {
+    return rs__roadfield_nearest_ranked(f, x, y, reach, NULL, out);
+}
+
+int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
+                                 rs__road_point *out)
+{
     if (!f || !out || !(reach >= 0)) return 0;
     int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
     if (ci < 0 || cj < 0) return 0;
@@ -1802,6 +1809,7 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
     if (reach > f->reach && !cells_around(f, x, y, reach - f->reach + 1e-6 * f->c, &cr)) return 0;
     const rf_seg *best = NULL;
     double bd = 0, bpr = 0, bside = 0;
+    int bk = INT_MIN; /* with priorities: the best one's priority when (x, y) is on its surface */
     for (uint32_t j = cr.j0; j <= cr.j1; j++)
         for (uint32_t i = cr.i0; i <= cr.i1; i++) {
             size_t cell = (size_t)j * f->gw + i;
@@ -1810,8 +1818,11 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
                 double pr, side, d = seg_point(s, x, y, &pr, &side);
                 int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
                 if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
+                int key = !prio ? INT_MIN : (s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r) ? prio[s->road] : INT_MIN;
                 /* segments are numbered in (road, seg) order */
-                if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
+                if (!best || key > bk || (key == bk && (d < bd || (d == bd && s < best)))) {
+                    best = s; bd = d; bpr = pr; bside = side; bk = key;
+                }
             }
         }
     /* a trimmed strip reaches past its capsule, so past its cells' lists */
@@ -1822,7 +1833,10 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
         double pr, side, d = seg_point(s, x, y, &pr, &side);
         int tn = tee_near(f, s, x, y, reach);
         if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
-        if (!best || d < bd || (d == bd && s < best)) { best = s; bd = d; bpr = pr; bside = side; }
+        int key = !prio ? INT_MIN : tee_sd(f, s, x, y) <= 0 ? prio[s->road] : INT_MIN;
+        if (!best || key > bk || (key == bk && (d < bd || (d == bd && s < best)))) {
+            best = s; bd = d; bpr = pr; bside = side; bk = key;
+        }
     }
     if (!best) return 0;
     out->road = best->road;

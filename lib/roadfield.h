@@ -84,6 +84,12 @@ typedef struct rs__road_point {
  * cell; reach <= reach_extra + pixel*sqrt(2)/2 needs one cell's list, larger
  * reach scans the cells around. Ties: lowest road, then lowest segment. */
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out);
+/* The same with priorities (per road, NULL: as rs__roadfield_nearest):
+ * among the segments whose surface holds (x, y) the highest priority
+ * wins, then the nearest; a point on no surface takes the nearest. The
+ * fill of a crossing is the higher road's (issue 27 problem 6). */
+int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
+                                 rs__road_point *out);
 
 /* Coverage of pixels [px0, px0+w) x [py0, py0+h), pixel side `pix` metres:
  * out[(py-py0)*stride + (px-px0)] = area fraction of the pixel inside the

@@ -6,6 +6,7 @@
 #include "surfimg.h"
 #include "style.h"
 #include "lanes.h"
+#include "network.h"
 
 #include <math.h>
 #include <string.h>
@@ -16,6 +17,7 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__linesym_free(ctx, st->lines);
     rs__roadfield_free(ctx, st->casing);
     rs__roadfield_free(ctx, st->near_own);
+    rs__free(ctx, st->prio);
     rs__free(ctx, st->surface);
     rs__free(ctx, st->colour);
     rs__free(ctx, st->half_width);
@@ -291,6 +293,17 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             rs_network_road_stroke(net, i, &k);
             st->img_s0[i] = k.s_offset;
             st->img_rev[i] = (uint8_t)k.reversed;
+        }
+    }
+    if (st->any_surface || st->img_of) {
+        /* priorities for the fill lookups, when they differ */
+        int differ = 0;
+        for (size_t i = 1; i < n && !differ; i++) differ = rs__road_priority(roads, i) != rs__road_priority(roads, 0);
+        if (differ) {
+            st->prio = rs__alloc_array(ctx, n, sizeof *st->prio);
+            if (!st->prio) { r = RS_ERR_NOMEM; goto fail_dash; }
+            for (size_t i = 0; i < n; i++) st->prio[i] = rs__road_priority(roads, i);
+            st->bytes += n * sizeof *st->prio;
         }
     }
     if (st->any_surface) {

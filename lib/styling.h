@@ -18,6 +18,8 @@ typedef struct rs__styling {
     float casing_rgba[4];
     const struct rs__roadfield *near; /* field for fill / gradient lookups: the grid's, else near_own */
     struct rs__roadfield *near_own;
+    int *prio;                        /* per road: rs__road_priority, for the fill lookups (the higher road's fill
+                                         at a crossing); NULL: all equal */
     uint8_t *surface;                 /* per road: rs_surface */
     float *colour;                    /* per road: fill rgba, gradient centre rgba, edge rgba, casing rgba (16 floats;
                                          rgb 0..255, a 0..1) */

@@ -133,6 +133,9 @@ check "shader: junction (styles, markings) equals the CPU splat" xcheck junction
 # centre line across the T as the CPU does (max 89/255 before)
 N="--cell-size 2 --z-scale 0.01 --texels 16"
 check "shader: T junction close up equals the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$EX/junction-dem.pgm' '$EX/network_tee.txt' '$T/tc.png' && '$BIN' render $N --quiet --ortho --lighting off '$EX/junction-dem.pgm' '$EX/network_tee.txt' '$T/ts.png' && python3 '$DIFF' '$T/ts.png' '$T/tc.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
+# crossings of different classes (issue 27 problem 6): the higher road's
+# surface, and a footway cuts no car road's lines, in both renders
+check "shader: crossings of different classes equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$EX/junction-dem.pgm' '$EX/network_crossing.txt' '$T/xc.png' && '$BIN' render $N --quiet --ortho --lighting off '$EX/junction-dem.pgm' '$EX/network_crossing.txt' '$T/xs.png' && python3 '$DIFF' '$T/xs.png' '$T/xc.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
 # the junction example close up (0.1 m: lanes, stop and give-way lines, the
 # zebra's line cuts, strokes through the crossing): max 149/255 before the
 # cut table's stride and the cuts' reach were fixed

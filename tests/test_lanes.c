@@ -467,9 +467,12 @@ static void test_lanes_change(void)
 
 /* A footway crossing a road (issue 27 problem 6): the road's edge and
  * centre lines run on over it (a path, footway or cycleway cuts no car
- * road's lines). Every pixel the road's lines paint white without the
- * footway is still white with it. Before, the lines stopped at the
- * footway's surface (a 3 m gap in each). */
+ * road's lines), and the crossing takes the road's surface (the fill of
+ * the highest priority among the surfaces holding a pixel). Every pixel
+ * the road's lines paint white without the footway is still white with
+ * it, and inside the road nothing changes. Before, the lines stopped at
+ * the footway's surface (a 3 m gap in each) and each pixel took the fill
+ * of the nearest centre line (a jagged X of the two fills). */
 static void test_footway_crossing(void)
 {
     static const char alone[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n";
@@ -490,6 +493,19 @@ static void test_footway_crossing(void)
         CHECK(white >= 150); /* two edge lines over 10 m */
         CHECKF(lost == 0, "%d of %d line pixels lost over the footway", lost, white);
         printf("footway crossing: %d of %d line pixels lost\n", lost, white);
+        /* the crossing takes the road's surface: inside the road (|y - 20|
+         * <= 3.9 m) every pixel as without the footway (no X split of the
+         * two fills) */
+        int worst = 0;
+        for (uint32_t y = 161; y < 239; y++)
+            for (uint32_t x = 200; x < 400; x++)
+                for (int c = 0; c < 3; c++) {
+                    size_t i = ((size_t)y * A.w + x) * 4 + c;
+                    int d = abs((int)A.rgba[i] - (int)B.rgba[i]);
+                    if (d > worst) worst = d;
+                }
+        CHECKF(worst <= 8, "inside the road %d/255 from the road alone", worst);
+        printf("footway crossing: inside the road max %d/255 from the road alone\n", worst);
     }
     free(A.rgba);
     free(B.rgba);
