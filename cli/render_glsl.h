@@ -189,6 +189,18 @@ static const char *const rsh_fs_src[] = {
     "    }\n"
     "    return kb;\n"
     "}\n"
+    /* the nearest segment in list [e0, e1) of the roads of stroke st
+     * (-1: absent): a marking past its record's end follows the records
+     * going on there (lib/markings.c) */
+    "int stroke_nearest(vec2 p, float st, int e0, int e1) {\n"
+    "    float best = 1e30, d, sd, u, side; vec2 n; int kb = -1;\n"
+    "    for (int e = e0; e < e1; e++) {\n"
+    "        int k = int(texelFetch(u_cseg, e).r);\n"
+    "        Seg s = seg_at(p, k, d, sd, n, u, side);\n"
+    "        if (texelFetch(u_roadt, 10 * s.road + 6).x == st && d < best) { best = d; kb = k; }\n"
+    "    }\n"
+    "    return kb;\n"
+    "}\n"
     /* the union of coverage U (its dominant edge's outward normal N) and
      * one more road's c (normal n) within the pixel: the larger where the
      * edges face the same way, the sum where they face each other (a gap
@@ -447,7 +459,7 @@ static const char *const rsh_fs_src[] = {
     "            for (int e = m0; e < m1; e++) {\n"
     "                int mi = int(texelFetch(u_mids, e).r);\n"
     "                vec4 M0 = texelFetch(u_mark, 3 * mi), M1 = texelFetch(u_mark, 3 * mi + 1), M2 = texelFetch(u_mark, 3 * mi + 2);\n",
-    "                int mk = road_nearest(p, int(M0.x), e0, e1);\n"
+    "                int mk = M2.y >= 0.0 ? stroke_nearest(p, M2.y, e0, e1) : road_nearest(p, int(M0.x), e0, e1);\n"
     "                if (mk < 0) continue;\n"
     "                float sgn = M1.z != 0.0 ? -1.0 : 1.0;\n"
     "                float ms, mt, mef; vec2 mnt, mtg;\n"

@@ -1019,7 +1019,9 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   count, 0, 0, 0; dash[0..7] (on, off, ... metres).
  * - mark: RS_GPU_MARK_FLOATS per marking (record order: explicit, then
  *   automatic): road, atlas type, s, t (centre), half length, half width,
- *   flip (0/1), kx, ky (level-0 texels per metre across and along), 0, 0, 0;
+ *   flip (0/1), kx, ky (level-0 texels per metre across and along), the
+ *   stroke whose segments it follows (its road is in the stroke's terms:
+ *   s, t and flip are then the stroke's; -1: its road's segments only), 0, 0;
  *   and the same grid's cells listing the markings whose support box
  *   touches them (mark_start, mark_ids).
  * - atlas: per type RS_GPU_TYPE_INTS: first level record, level count;

@@ -627,6 +627,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         }
         double *box = rs__alloc_array(ctx, npl ? npl : 1, 4 * sizeof *box);
         if (!box) { rs__free(ctx, first_seg); r = RS_ERR_NOMEM; goto fail; }
+        uint32_t net_one;
         size_t nm = 0;
         for (size_t i = 0; i < npl; i++) { /* in the segments' terms (ge_strokes) */
             rs__placement *p = &pl[i];
@@ -643,10 +644,25 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             double pad = 2.0 * g->reach + 2.0 / fmin(kx, ky);
             double slo = p->s - hl - pad, shi = p->s + hl + pad, grow = fabs(p->t) + hw + pad;
             double bx0 = HUGE_VAL, by0 = HUGE_VAL, bx1 = -HUGE_VAL, by1 = -HUGE_VAL;
-            for (size_t k = first_seg[p->road]; k < first_seg[p->road + 1]; k++) {
+            /* a record in its stroke's terms: the marking follows the
+             * stroke's segments past the record's ends, as the CPU paints it
+             * along the records that go on there (lib/markings.c) */
+            const uint32_t *recs = &net_one;
+            size_t nrec = 1;
+            int stroke = -1;
+            net_one = (uint32_t)p->road;
+            if (soff[p->road] >= 0 && net) {
+                uint32_t k = net->stroke_of[p->road];
+                recs = net->stroke_roads + net->stroke_start[k];
+                nrec = net->stroke_start[k + 1] - net->stroke_start[k];
+                stroke = (int)k;
+            }
+            for (size_t q = 0; q < nrec; q++)
+            for (size_t k = first_seg[recs[q]]; k < first_seg[recs[q] + 1]; k++) {
                 const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
                 double len = hypot((double)s[2] - s[0], (double)s[3] - s[1]);
-                int firstseg = k == first_seg[p->road], lastseg = k + 1 == first_seg[p->road + 1];
+                int firstseg = q == 0 && k == first_seg[recs[q]], lastseg = q + 1 == nrec && k + 1 == first_seg[recs[q] + 1];
+                if (stroke >= 0 && net->closed[stroke]) firstseg = lastseg = 0;
                 if (!((s[5] + len >= slo || lastseg) && (s[5] <= shi || firstseg))) continue;
                 bx0 = fmin(bx0, fmin(s[0], s[2])); bx1 = fmax(bx1, fmax(s[0], s[2]));
                 by0 = fmin(by0, fmin(s[1], s[3])); by1 = fmax(by1, fmax(s[1], s[3]));
@@ -666,6 +682,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             mk[4] = ge_float(hl); mk[5] = ge_float(hw);
             mk[6] = p->flip ? 1.0f : 0.0f;
             mk[7] = ge_float(kx); mk[8] = ge_float(ky);
+            mk[9] = (float)stroke;
             nm++;
         }
         rs__free(ctx, first_seg);
