@@ -35,7 +35,13 @@ CPPFLAGS ?=
 LDFLAGS ?=
 SAN     ?=
 DEPFLAGS := -MMD -MP
-ALL_CFLAGS := -std=c99 $(OPT) $(WARN) $(SAN) -Iinclude -fvisibility=hidden -fPIC $(DEPFLAGS) $(CPPFLAGS) $(CFLAGS)
+# lib/ (docs/design.md "Layout"): input/ parsers and the atlas, scene/ the
+# prepared roads (network, road field, styles, line symbols, markings),
+# splat/ the splatter and its stages, roam/ the mesher, gpu/ the GPU export;
+# the context, options and DEM at the top. Private headers by bare name.
+LIB_DIRS  := lib lib/input lib/scene lib/splat lib/roam lib/gpu
+LIB_INC   := $(addprefix -I,$(LIB_DIRS))
+ALL_CFLAGS := -std=c99 $(OPT) $(WARN) $(SAN) -Iinclude $(LIB_INC) -fvisibility=hidden -fPIC $(DEPFLAGS) $(CPPFLAGS) $(CFLAGS)
 ALL_CXXFLAGS := -std=c++17 $(OPT) $(SAN) -Wall -Wextra -Iinclude -fPIC $(DEPFLAGS) $(CPPFLAGS) $(CXXFLAGS)
 LDLIBS_CORE := -lm
 
@@ -98,7 +104,7 @@ EXPAT_DEF  = -DRS_WITH_EXPAT
 EXPAT_LIBS = $(or $(shell $(PKG_CONFIG) --libs expat 2>/dev/null),-lexpat)
 endif
 
-LIB_SRC   := $(sort $(wildcard lib/*.c))
+LIB_SRC   := $(sort $(wildcard $(addsuffix /*.c,$(LIB_DIRS))))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
 # (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
@@ -273,7 +279,7 @@ $(MBTILES_MOD): $(BUILD)/cli/mbtiles.o
 $(GLTF_MOD): $(BUILD)/cli/gltf.o
 	$(CC) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(MESHOPT_LIBS) $(LDLIBS_CORE)
 
-# The OpenDRIVE module carries the library parts it uses (lib/odr_*.c and
+# The OpenDRIVE module carries the library parts it uses (lib/input/odr_*.c and
 # what they call), kept local to it (--exclude-libs).
 $(ODR_MOD): $(BUILD)/cli/odr.o $(STATIC_LIB)
 	$(CC) -shared $(SAN) $(LDFLAGS) -Wl,--exclude-libs,ALL -o $@ $(BUILD)/cli/odr.o $(STATIC_LIB) $(EXPAT_LIBS) $(LDLIBS_CORE)
@@ -350,7 +356,7 @@ FUZZ_CXX    ?= clang++
 FUZZ_FLAGS  := -g -O1 -fsanitize=fuzzer,address,undefined,float-cast-overflow,float-divide-by-zero -fno-sanitize-recover=all
 # Compare tracing costs 3-4x the executions. roam and splat take numbers
 # modulo ranges (no magic values or keywords to find); demimage's parsers are
-# OpenImageIO's (not instrumented) and lib/pgm.c, which the pgm target fuzzes
+# OpenImageIO's (not instrumented) and lib/input/pgm.c, which the pgm target fuzzes
 # with compare tracing. These three skip it; pgm and roads keep it.
 FUZZ_NOCMP  := roam splat demimage options
 NOCMP_FLAG  := -fno-sanitize-coverage=trace-cmp
@@ -362,17 +368,17 @@ fuzz:
 	@for t in $(filter-out demimage odr,$(FUZZ_TARGETS)); do \
 	  echo "fuzz: $$t"; \
 	  case " $(FUZZ_NOCMP) " in *" $$t "*) nocmp="$(NOCMP_FLAG)" ;; *) nocmp= ;; esac; \
-	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $$nocmp -Iinclude fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
+	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $$nocmp -Iinclude $(LIB_INC) fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
 	done
 	@echo "fuzz: demimage (CLI DEM loader + OpenImageIO)"; \
 	for f in $(LIB_SRC) cli/util.c cli/bigalloc.c fuzz/demimage/fuzz.c; do \
 	  o=$(FUZZ_OBJ)/$$(echo $$f | tr / _).o; \
-	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -D_POSIX_C_SOURCE=200809L -Iinclude -c $$f -o $$o || exit 1; \
+	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -D_POSIX_C_SOURCE=200809L -Iinclude $(LIB_INC) -c $$f -o $$o || exit 1; \
 	done; \
 	$(FUZZ_CXX) -std=c++17 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -Iinclude $(OIIO_CFLAGS) -c cli/imageio.cpp -o $(FUZZ_OBJ)/cli_imageio.cpp.o || exit 1; \
 	$(FUZZ_CXX) $(FUZZ_FLAGS) -o $(BUILD)/fuzz-bin/demimage $(FUZZ_OBJ)/*.o $(OIIO_LIBS) -lm || exit 1
 	@if [ "$(WITH_EXPAT)" = 1 ]; then echo "fuzz: odr (OpenDRIVE reader + expat)"; \
-	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -D_POSIX_C_SOURCE=200809L -Iinclude fuzz/odr/fuzz.c cli/odr.c $(LIB_SRC) $(EXPAT_LIBS) -lm \
+	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -D_POSIX_C_SOURCE=200809L -Iinclude $(LIB_INC) fuzz/odr/fuzz.c cli/odr.c $(LIB_SRC) $(EXPAT_LIBS) -lm \
 	    -o $(BUILD)/fuzz-bin/odr || exit 1; fi
 	@echo "fuzz: binaries in $(BUILD)/fuzz-bin/ (run e.g. fuzz/run.sh pgm 60, with BUILD=$(BUILD))"
 
@@ -418,10 +424,10 @@ clean:
 	rm -rf $(BUILD)
 
 # Header dependencies written by the compiler (-MMD -MP).
--include $(wildcard $(BUILD)/lib/*.d $(BUILD)/cli/*.d $(BUILD)/tests/*.d $(BUILD)/tests/*/*.d $(BUILD)/fuzz/*.d $(BUILD)/fuzz/*/*.d)
+-include $(wildcard $(BUILD)/lib/*.d $(BUILD)/lib/*/*.d $(BUILD)/cli/*.d $(BUILD)/tests/*.d $(BUILD)/tests/*/*.d $(BUILD)/fuzz/*.d $(BUILD)/fuzz/*/*.d)
 
 # --- the built-in marking atlas -----------------------------------------------
-# lib/atlas_default.c is generated and committed; `make atlas` regenerates it
+# lib/input/atlas_default.c is generated and committed; `make atlas` regenerates it
 # (and $(BUILD)/markings/atlas.png + atlas-index.txt, the same atlas as the
 # files `roadsplat --atlas IMG --atlas-index FILE` reads).
 $(BUILD)/atlasgen: tests/tools/atlasgen.c
@@ -439,4 +445,4 @@ strip: $(BUILD)/tools/stripgen
 
 atlas: $(BUILD)/atlasgen
 	@mkdir -p $(BUILD)/markings
-	$(BUILD)/atlasgen lib/atlas_default.c $(BUILD)/markings/atlas.png $(BUILD)/markings/atlas-index.txt
+	$(BUILD)/atlasgen lib/input/atlas_default.c $(BUILD)/markings/atlas.png $(BUILD)/markings/atlas-index.txt

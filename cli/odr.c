@@ -1,6 +1,6 @@
 /* The OpenDRIVE reader (module roadsplat-odr.so, issue 32,
  * docs/opendrive.md): expat's streaming parser fills the library's plain
- * document (lib/odr_lanes.h), which the library turns into road text.
+ * document (lib/input/odr_lanes.h), which the library turns into road text.
  *
  * Expat rather than libxml2: a small, streaming (SAX) parser with line
  * numbers for every element, no DOM of a 100 MB network in memory, and
@@ -10,7 +10,7 @@
  * Self-contained (no cli_* helpers): the fuzz target links this file with
  * the library and expat alone. */
 #include "odr.h"
-#include "../lib/odr_lanes.h"
+#include "../lib/input/odr_lanes.h"
 
 #include <expat.h>
 #include <math.h>

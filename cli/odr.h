@@ -2,7 +2,7 @@
  *
  * The XML reader lives in the module roadsplat-odr.so (cli/odr.c, linked
  * with expat): it fills the library's plain OpenDRIVE document
- * (lib/odr_lanes.h) and has the library turn it into road text. The
+ * (lib/input/odr_lanes.h) and has the library turn it into road text. The
  * executable calls it through cli/odr_run.c, so a run on road text never
  * loads expat. */
 #ifndef RS_CLI_ODR_H

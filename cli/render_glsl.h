@@ -2,7 +2,7 @@
  * docs/render.md "Shader mode"). Included by cli/render_shader.c only. The
  * fragment shader evaluates the roads per screen pixel from the buffer
  * textures of rs_gpu_scene (include/roadsplat.h "GPU export"), in the CPU's
- * layer order (lib/overlays.c, lib/composite.c): casings onto the terrain
+ * layer order (lib/splat/overlays.c, lib/splat/composite.c): casings onto the terrain
  * colour T, fill / gradient surfaces, lines, markings onto the road colour
  * S, then C = (1 - R) T + R S. Coverage is the box filter of the pixel's
  * footprint (the parallelogram of dFdx, dFdy of the map position) across
@@ -107,7 +107,7 @@ static const char *const rsh_fs_src[] = {
     "    if ((s.flags & 1) != 0) ef *= cdf(u, s.dir);\n"
     "    if ((s.flags & 2) != 0) ef *= cdf(s.len - u, s.dir);\n"
     "}\n"
-    /* a road end at a T (lib/roadfield.c, docs/network.md "Ends at a T"):
+    /* a road end at a T (lib/scene/roadfield.c, docs/network.md "Ends at a T"):
      * the segment's strip, grown by `grow`, runs on flat to the clip line
      * n.p = c of a trimmed first or last end and stops there; an untrimmed
      * end keeps its normal and disc. Signed distance (the largest of the
@@ -155,7 +155,7 @@ static const char *const rsh_fs_src[] = {
     "    return best < 1e29 ? 1.0 - cdf(-best, bn) : 1.0;\n"
     "}\n"
     /* road_free for the lines of the through stroke st at a T
-     * (lib/linesym.c, docs/network.md): an end segment of `road` that meets
+     * (lib/scene/linesym.c, docs/network.md): an end segment of `road` that meets
      * st (b6: the road's stroke, the strokes its start and end meet, the
      * start's depth; keepE the end's) is a rectangle stopping depth / sine
      * short of st's centre line, without its round end */
@@ -191,7 +191,7 @@ static const char *const rsh_fs_src[] = {
     "}\n"
     /* the nearest segment in list [e0, e1) of the roads of stroke st
      * (-1: absent): a marking past its record's end follows the records
-     * going on there (lib/markings.c) */
+     * going on there (lib/scene/markings.c) */
     "int stroke_nearest(vec2 p, float st, int e0, int e1) {\n"
     "    float best = 1e30, d, sd, u, side; vec2 n; int kb = -1;\n"
     "    for (int e = e0; e < e1; e++) {\n"
@@ -232,7 +232,7 @@ static const char *const rsh_fs_src[] = {
     "    if (r1.z >= 0.0 && r1.z != r1.y) cut_add(road_free(p, int(r1.z), e0, e1), prod, zeros, -1.0);\n"
     "    float s, t, ef; vec2 nt, tg;\n"
     "    road_coords(p, k, s, t, nt, tg, ef);\n"
-    /* a path, footway or cycleway cuts no car road's lines (lib/linesym.c;
+    /* a path, footway or cycleway cuts no car road's lines (lib/scene/linesym.c;
      * the list is grouped by road) */
     "    bool car = texelFetch(u_roadt, 10 * road + 7).w > 0.0;\n"
     "    if (car) {\n"
@@ -264,7 +264,7 @@ static const char *const rsh_fs_src[] = {
     "    vec4 Ft = fp(nt), Fs = fp(tg);\n"
     "    float base = ef * cut;\n"
     "    if (!(base > 0.0)) return;\n"
-    /* the road's line cuts (stop lines, zebras; lib/markings_auto.c) */
+    /* the road's line cuts (stop lines, zebras; lib/scene/markings_auto.c) */
     "    int nr = textureSize(u_roadt) / 10;\n" /* 10 texels per road */
     "    vec4 cr = texelFetch(u_cut, road); int c0 = nr + 2 * int(cr.x), nc = int(cr.y);\n"
     "    for (int j = 0; j < nb; j++) {\n"
@@ -310,7 +310,7 @@ static const char *const rsh_fs_src[] = {
     /* markings (issue 25, docs/markings.md): the sprite's exact mean over
      * the pixel's footprint (e1, e2: the pixel's steps in level-0 texels),
      * its slanted sides as staircases, from the summed-area table; the
-     * same footprint and steps as lib/markings.c */
+     * same footprint and steps as lib/scene/markings.c */
     "ivec4 sat_at(int off, int w1, int j, int i) { return texelFetch(u_atlas, off + j * w1 + i); }\n"
     "vec4 sat_step(int off, int w, int h, float u, float v0, float v1) {\n"
     "    u = min(u, float(w)); if (!(u > 0.0)) return vec4(0.0);\n"
@@ -403,7 +403,7 @@ static const char *const rsh_fs_src[] = {
     "            if (sd < sdR) { sdR = sd; nR = n; }\n"
     "            if (sdc < sdC) { sdC = sdc; nC = nc; }\n"
     /* the fill: among the surfaces holding p the highest priority, then
-     * the nearest (lib/roadfield.c rs__roadfield_nearest_ranked; all -1e9
+     * the nearest (lib/scene/roadfield.c rs__roadfield_nearest_ranked; all -1e9
      * when equal) */
     "            if (sd <= near_reach) {\n"
     "                float kp = sd <= 0.0 ? texelFetch(u_roadt, 10 * s.road + 7).z : -2e9;\n"

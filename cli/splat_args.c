@@ -357,7 +357,7 @@ static int load_used_surfaces(cli_splat_args *s, const char *roads_path, size_t 
 }
 
 /* A custom atlas without a type the automatic markings place
- * (lib/markings_auto.c) silently loses those markings: say which. */
+ * (lib/scene/markings_auto.c) silently loses those markings: say which. */
 static void warn_atlas_types(const cli_splat_args *s, const rs_atlas *atlas)
 {
     static const char *const auto_types[] = { "stop_line", "give_way_line", "zebra", "arrow_left", "arrow_right",

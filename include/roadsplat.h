@@ -964,7 +964,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
                               rs_road_point *out);
 
 /* ---------------------------------------------------------------------------
- * GPU export (lib/gpu_export.c, docs/render.md "Shader mode"): everything a
+ * GPU export (lib/gpu/gpu_export.c, docs/render.md "Shader mode"): everything a
  * fragment shader needs to evaluate the roads, their styles and markings per
  * screen pixel, as flat arrays in the local frame (SPEC: metres from DEM
  * sample (0,0), y down), float32 where a GPU reads them. No GL in here: a
@@ -1112,7 +1112,7 @@ RS_API rs_result rs_alpha_map(rs_tile_type type, uint32_t res, double transition
                               uint32_t jitter_seed, double jitter_amount,
                               uint8_t *out, size_t out_size);
 
-/* == ROAM mesher (lib/roam.c) ============================================ */
+/* == ROAM mesher (lib/roam/roam.c) ============================================ */
 /*
  * A Landscape of square patches (two root triangles each) covers any W x H
  * DEM; bintree nodes come from a fixed pool sized by the caller and are
@@ -1311,7 +1311,7 @@ enum { RS_ROAM_EDGE_TOP = 0, RS_ROAM_EDGE_BOTTOM = 1, RS_ROAM_EDGE_LEFT = 2, RS_
 RS_API rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b);
 /* == end ROAM mesher ===================================================== */
 
-/* == Virtual texture: streamed tiles around a moving camera (lib/vt.c) ===== */
+/* == Virtual texture: streamed tiles around a moving camera (lib/splat/vt.c) ===== */
 /*
  * A quadtree of texture tiles over the whole splat image of a prepared
  * splatter (issue 30, seed 002; docs/embedding.md "Streaming"). Level 0

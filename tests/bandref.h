@@ -1,4 +1,4 @@
-/* An independent reference for line-symbol bands (lib/linesym.c): the
+/* An independent reference for line-symbol bands (lib/scene/linesym.c): the
  * SPEC's definition evaluated point by point with a brute-force nearest
  * point of the polyline, for tests/test_linesym.c and tests/bench/styles.c. */
 #ifndef RS_TESTS_BANDREF_H

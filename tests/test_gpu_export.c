@@ -1,4 +1,4 @@
-/* GPU export (lib/gpu_export.c, docs/render.md "Shader mode"): segments with
+/* GPU export (lib/gpu/gpu_export.c, docs/render.md "Shader mode"): segments with
  * their arc length and flags, the index grid (every segment near a cell is
  * listed there, ascending), styles and bands as rs_road_style gives them,
  * continuations, markings in road coordinates with the atlas's mip chains,

@@ -686,7 +686,7 @@ static void test_lane_queries(void)
                      sl.line[j].dash_count == sr.line[k].dash_count;
         CHECK(found);
     }
-    /* the built-in sizes the line cuts assume (lib/markings_auto.c
+    /* the built-in sizes the line cuts assume (lib/scene/markings_auto.c
      * default_sizes) are the built-in atlas's */
     rs_atlas *at = NULL;
     CHECK(rs_atlas_default(ctx, &at) == RS_OK);

@@ -1,4 +1,4 @@
-/* Line symbols (lib/linesym.c): band coverage against an independent
+/* Line symbols (lib/scene/linesym.c): band coverage against an independent
  * supersampled reference built from the SPEC's definition (nearest point of
  * the centreline, s and t), on straight roads at several angles, bends of
  * 30-170 degrees and a curve; dashed area along a curve; tiling and

@@ -1,4 +1,4 @@
-/* OpenDRIVE reference-line geometry (lib/odr_geom.c, issue 32) against an
+/* OpenDRIVE reference-line geometry (lib/input/odr_geom.c, issue 32) against an
  * independent evaluator: composite Simpson integration of the heading with
  * 2*10^5 steps (no Fresnel integrals, no Gauss-Legendre), circles in closed
  * form, poly3 arc length by Simpson and bisection. Positions must agree to

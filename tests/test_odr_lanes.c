@@ -1,4 +1,4 @@
-/* OpenDRIVE lanes to road text (lib/odr_lanes.c, docs/opendrive.md) on
+/* OpenDRIVE lanes to road text (lib/input/odr_lanes.c, docs/opendrive.md) on
  * documents built in C: lane boundaries, dash phase through lane sections,
  * error messages, every allocation failing in turn, and the road attribute
  * junction_cuts=no that keeps explicit marks from being cut by the surface

@@ -1,4 +1,4 @@
-/* Road field (lib/roadfield.c): nearest-centreline queries against a brute
+/* Road field (lib/scene/roadfield.c): nearest-centreline queries against a brute
  * force over every segment, coverage against the exact ground truth
  * (tests/groundtruth.c), translation and tiling invariance, extreme input,
  * allocation failures. */
@@ -12,7 +12,7 @@
 
 static rs_ctx *ctx;
 
-/* --- brute force (independent of lib/roadfield.c) ---------------------------- */
+/* --- brute force (independent of lib/scene/roadfield.c) ---------------------------- */
 typedef struct bf_hit {
     int found;
     size_t road, seg;

@@ -1,7 +1,7 @@
 /* Surface stage: tiled textures against a plain per-pixel reference.
  *
  * The textured surface path works two pixels at a time and keeps the
- * texture's column coordinates for the whole window (lib/surface.c); this
+ * texture's column coordinates for the whole window (lib/splat/surface.c); this
  * test recomputes the pixels one at a time from the documented sampler -
  * wrapped bilinear, doubles in the order below, rounded to float, blended
  * by the road weight, rounded to a byte -
@@ -164,7 +164,7 @@ static void test_textures_reference(void)
     rs_dem_free(ctx, dem);
 }
 
-/* The composite's byte of a pure terrain or road pixel (lib/composite.c
+/* The composite's byte of a pure terrain or road pixel (lib/splat/composite.c
  * takes four in float with SSE2) against the scalar rule in double,
  * (uint8)(v + 0.5) clamped to 0..255 (NaN: 0), on the floats where a float
  * sum could round differently (0.49999997 + 0.5 rounds to 1 in float),

@@ -343,7 +343,7 @@ int main(void)
     test_tee_caps("casings");
     styles_text = NULL;
     /* a footway beyond the far edge keeps its dashes (the side road's
-     * surface cuts lines only up to the far edge line, lib/linesym.c) */
+     * surface cuts lines only up to the far edge line, lib/scene/linesym.c) */
     styles_text = "style residential\n  fill #505050\n  line 1.35 0.12 #FFFFFF\n  line -1.35 0.12 #FFFFFF\nend\n"
                   "style primary\n  fill #404040\n  line 0 0.15 #FFFFFF dash 3 6\nend\n"
                   "style footway\n  fill #9A9A90\n  line 0 0.3 #FFFFFF dash 1 1\nend\n";

@@ -1,5 +1,5 @@
 /* Fuzz target: the OpenDRIVE reader (cli/odr.c with expat) and the
- * conversion to road text (lib/odr_lanes.c). Every input either fails with
+ * conversion to road text (lib/input/odr_lanes.c). Every input either fails with
  * one message line naming the input, or gives road text that the road
  * parser reads back with its styles. */
 #include "../../cli/odr.h"

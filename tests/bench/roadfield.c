@@ -1,4 +1,4 @@
-/* Road field benchmark: analytic coverage (lib/roadfield.c) of the city
+/* Road field benchmark: analytic coverage (lib/scene/roadfield.c) of the city
  * scene at T = 4 against the exact ground truth: edge error (SPEC), max
  * pixel error, build time, coverage time as one whole-image call and as
  * the splatter calls it (pieces of one DEM row: T rows x the full width,
@@ -251,7 +251,7 @@ int main(int argc, char **argv)
     fprintf(md, "## Road field: analytic coverage (tests/bench/roadfield.c)\n\n");
     fprintf(md, "City scene (`sc_city_default(1)`: %zu roads, %ux%u samples, %g m cells) at T = %u: %ux%u pixels of "
                 "%g m. Coverage = area fraction of each pixel inside the union of the roads "
-                "(lib/roadfield.c, one thread); error against the exact ground truth (tests/groundtruth.c). "
+                "(lib/scene/roadfield.c, one thread); error against the exact ground truth (tests/groundtruth.c). "
                 "Coverage is timed as one whole-image call and as the splatter calls it: pieces of one "
                 "DEM row (%u pixel rows x the full width; same doubles). Times are minima (the fastest run) of %d runs "
                 "(auto cell: %d rounds of %d, alternating with Cairo), not medians: on a shared machine the "

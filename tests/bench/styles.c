@@ -4,7 +4,7 @@
  *  2. a dashed line's cost against a solid one (the same lines with and
  *     without dashes; overlays stage and whole splat; target <= 1.2x);
  *  3. exact against Hermite anti-aliasing: error against a supersampled
- *     reference (lib/linesym.c coverage, straight and curved lines of real
+ *     reference (lib/scene/linesym.c coverage, straight and curved lines of real
  *     marking widths at two pixel sizes) and the overlays time on the city.
  * Times: fastest of RUNS whole-image rs_splat_window calls on a prepared
  * splatter, the cases interleaved run by run.
@@ -225,7 +225,7 @@ int main(int argc, char **argv)
     }
     fprintf(md,
             "\nLine anti-aliasing against a supersampled reference (%d x %d point samples per pixel of the SPEC "
-            "band; lib/linesym.c coverage of three lines 0.12-0.30 m wide, one dashed 3/6 m, on a curve and a "
+            "band; lib/scene/linesym.c coverage of three lines 0.12-0.30 m wide, one dashed 3/6 m, on a curve and a "
             "straight road at 23 degrees); errors over the pixels where either value is strictly between 0 and 1 "
             "(the reference's own error is up to 1/%d):\n\n"
             "| pixel | exact: mean / max error | Hermite: mean / max error | pixels |\n|---|---|---|---|\n",

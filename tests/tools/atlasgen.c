@@ -2,7 +2,7 @@
  * from vector shapes: polygons, strokes (capsules) and rings, drawn in each
  * sprite's own frame in metres and rasterised with 8x8 supersampling.
  *
- *   atlasgen lib/atlas_default.c [atlas.png atlas-index.txt]
+ *   atlasgen lib/input/atlas_default.c [atlas.png atlas-index.txt]
  *
  * writes the atlas as C source (alpha run-length coded, white markings, and
  * the index text) and optionally as an RGBA PNG plus its index file, the

@@ -1,5 +1,5 @@
 /* Before/after comparison of road grids (issue 19: the row-sweep marker of
- * lib/roadgrid.c must give byte-identical grids). Prints, per grid, the
+ * lib/scene/roadgrid.c must give byte-identical grids). Prints, per grid, the
  * build result, k, road-cell count and an FNV-1a hash of every classified
  * tile and the stats, over the tests/scenes.c cities (both buffer modes,
  * automatic and explicit road cells) and 150 random scenes (thin to wide

@@ -1,0 +1,49 @@
+/* Lanes per direction (issue 27, docs/road-format.md "Lanes"): the
+ * cross-section of one road record, shared by the default styles
+ * (lib/input/style.c), the automatic markings (lib/scene/markings_auto.c) and the
+ * public queries rs_road_lanes_get / rs_network_lanes_at. */
+#ifndef RS_LANES_H
+#define RS_LANES_H
+#include "internal.h"
+
+/* What a cross-section is made from: the decoded attributes (strings may
+ * be NULL: absent). */
+typedef struct rs__lanes_in {
+    rs_road_class road_class;
+    rs_profile profile;
+    rs_oneway oneway;
+    rs_driving_side side;
+    uint32_t lanes, forward, backward; /* 0: absent */
+    double width;                      /* 0: the nominal width */
+    const char *turn, *turn_forward, *turn_backward, *width_lanes;
+} rs__lanes_in;
+
+/* Lay out the lanes (never fails: bad attributes fall back to defaults).
+ * strip (may be NULL): the paved strips beyond the outer lanes, [0] on
+ * the +t side, [1] on the -t side, metres. */
+void rs__lanes_layout(const rs__lanes_in *in, rs_road_lanes *out, double strip[2]);
+/* The attributes of road i into *in (profile and default side given). */
+void rs__lanes_input(const rs_roads *roads, size_t i, rs_profile profile, rs_driving_side side_default,
+                     rs__lanes_in *in);
+/* 1: the road runs one way (-1: against its points), 0: two-way. */
+int rs__lanes_oneway(rs_road_class c, rs_oneway o);
+/* The class cross-section of a profile (lib/input/style.c's table): default
+ * lanes (0: none given), lane width, strips left and right of travel. */
+void rs__section(rs_profile p, rs_road_class c, uint32_t *lanes, double *lane, double *strip_left,
+                 double *strip_right);
+/* `driving_side=` of road i, or the default. */
+rs_driving_side rs__driving_side(const rs_roads *roads, size_t i, rs_driving_side side_default);
+
+/* Where the automatic markings interrupt their road's lane and centre
+ * lines (lib/scene/markings_auto.c): between a stop or give-way line and the
+ * junction, and across a zebra. A rectangle in the local frame of the
+ * road field: u in [u0, u1] along (ux, uy) from (ax, ay), |v| <= r. */
+typedef struct rs__line_cut {
+    uint32_t road;
+    double ax, ay, ux, uy, u0, u1, r;
+} rs__line_cut;
+/* The cuts of the automatic markings the splat options place (none when
+ * they place none); *out is the caller's (rs__free). */
+rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                 rs__line_cut **out, size_t *n);
+#endif

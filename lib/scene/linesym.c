@@ -1,0 +1,2065 @@
+/* Line symbols: convex band pieces, a pixel-cell index, exact per-pixel
+ * areas (lib/scene/linesym.h; docs/linesym.md). */
+#include "linesym.h"
+#include "network.h"
+#include "lanes.h"
+#include "roadfield.h"
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#define HALF_SQRT2 0.70710678118654752440
+/* Offsets and widths beyond this are refused: a style is about a road. */
+#define BAND_MAX_EXTENT 1e4
+/* Index cells: CELL_PX columns x CELL_ROWS rows of pixels (both doubled
+ * until there are at most MAX_CELLS): as tall as the splat's pieces of
+ * rows (texels), so painting a piece reads only the entries it needs. */
+#define CELL_PX 32u
+#define CELL_ROWS 4u
+#define MAX_CELLS ((uint64_t)1 << 22)
+#define POLY_MAX 24
+/* Half-planes per piece: 6 of its own, 3 per junction cut (two cuts). */
+#define HP_MAX 12
+
+enum { PIECE_SLAB = 0, PIECE_WEDGE = 1 };
+
+/* One convex piece of one band, in its own frame: u along the segment
+ * (unit vector (ux, uy)) from (ox, oy), v = left normal offset, so a
+ * point's (u, v) = ((p-o).u, (p-o).(uy, -ux)). The piece is the set where
+ * every half-plane c0 + cu u + cv v >= 0 holds; a wedge is further cut to
+ * the annulus r0 <= |p-o| <= r1. A slab's first two half-planes are its
+ * v limits (v >= a, v <= b). */
+typedef struct ls_piece {
+    /* what every visited pixel reads first */
+    double ox, oy, ux, uy;
+    uint32_t nhp;
+    uint32_t kind;
+    uint32_t band;
+    uint32_t dashed;     /* slab: cut by the band's dash pattern along u */
+    double a, b;         /* slab: v range */
+    double uin0, uin1;   /* slab: centre u range where no half-plane but the v limits can cut a pixel (push_piece) */
+    double su;           /* half the pixel's extent along u (and v) (push_piece) */
+    double st_lo, st_e, st_q, st_h; /* slab: the strip's ramp (strip_below), in pixel areas (push_piece) */
+    double s0;           /* slab: s at u = 0 */
+    double r0, r1;       /* wedge radii */
+    double wx0, wy0, wx1, wy1; /* wedge: box of the sector relative to (ox, oy), padded */
+    double warea;              /* wedge: the sector's area in pixel areas */
+    double sup[HP_MAX];  /* half the pixel square's extent along each half-plane's normal (push_piece) */
+    double hp[HP_MAX][3];
+    /* rows and columns to visit (push_piece) */
+    double gx0, gx1, gy0, gy1; /* pixels to visit: their columns and rows */
+    double ru0, ru1, rv0, rv1; /* slab: the piece's u and v ranges grown by su */
+    /* build only */
+    uint32_t nlim;       /* half-planes counted against HP_MAX (a dropped redundant one still counts) */
+    double len;          /* slab: u range [0, len] of its box */
+    double x0, y0, x1, y1; /* local box, grown by the pixel margin */
+} ls_piece;
+
+/* An index entry: a piece listed in a cell, with what the painter reads
+ * before its pixels (its band, the rows and columns of its pixels), so a
+ * cell's list is read in one sweep. */
+typedef struct ls_pbox {
+    double gx0, gx1, gy0, gy1;
+    uint32_t id, band;
+} ls_pbox;
+
+/* A piece as the painter reads it (built from ls_piece): the fields a
+ * pixel reads first come first; the half-planes live in one pool,
+ * L->hpp[4 (hp0 + k) ..] = c0, cu, cv, sup of half-plane k. */
+typedef struct ls_ppc {
+    double ox, oy, ux, uy, a, b, su, uin0, uin1, st_lo, st_e, st_q, st_h, s0;
+    double ru0, ru1, rv0, rv1;
+    double iku, ikv, cbase; /* 1 / (ux pix), 1 / (uy pix) (0 when below 1e-12 / pix), ox / pix - 0.5 */
+    double r0, r1, wx0, wy0, wx1, wy1, warea;
+    uint32_t nhp, kind, band, dashed, hp0;
+} ls_ppc;
+
+#define HPP(L, P, k) ((L)->hpp + 4 * ((size_t)(P)->hp0 + (k)))
+
+/* What the index build reads of a piece besides its ls_ppc (kept while
+ * building only; a whole ls_piece per piece was ~700 bytes). */
+typedef struct ls_pbuild {
+    double len;                /* slab: u range [0, len] */
+    double x0, y0, x1, y1;     /* local box, grown by the pixel margin */
+    double gx0, gx1, gy0, gy1; /* pixels to visit */
+} ls_pbuild;
+
+typedef struct ls_band {
+    float rgba[4];
+    uint32_t dash0, ndash; /* into L->dash */
+    double period, phase;
+} ls_band;
+
+/* A grid of index cells: gw x gh cells of cmx x cmy metres. */
+typedef struct ls_grid {
+    uint32_t gw, gh;
+    double cmx, cmy;
+} ls_grid;
+
+struct rs__linesym {
+    double pixel, margin;
+    rs__band_aa aa;
+    uint32_t out_w, out_h;
+    uint32_t cpx, cpy;     /* pixels per index cell: columns, rows */
+    ls_grid grid;          /* the same in metres */
+    uint32_t gw, gh;
+    uint32_t *start, *ids; /* CSR: pieces per cell, ascending (ids while building) */
+    ls_pbox *ent;          /* the entries of ids */
+    ls_pbuild *pb;         /* while building */
+    ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
+    double *hpp;
+    size_t npc, cap, nhpp, hcap; /* pieces (pp, pb) and half-planes (hpp) held and allocated */
+    uint64_t budget;       /* rs_limits.max_linesym_bytes: pieces, half-planes and index entries */
+    int over_budget;       /* the build stopped at it */
+    ls_band *band;
+    uint32_t nband;
+    double *dash;
+    size_t bytes;
+    /* while building: the cuts of each road (p->cuts[cut_ord[cut_start[r] ..
+     * cut_start[r + 1])]) */
+    const rs__line_cut *cuts;
+    const uint32_t *cut_stroke; /* per road its stroke (NULL: every road its own) */
+    uint32_t *cut_start, *cut_ord;
+};
+
+/* ------------------------------------------------------------------------
+ * Geometry
+ * ---------------------------------------------------------------------- */
+
+/* Keep the part of polygon (x, y)[n] where c0 + cu x + cv y >= 0. */
+static uint32_t clip_poly(const double *x, const double *y, uint32_t n, double c0, double cu, double cv, double *ox,
+                          double *oy)
+{
+    uint32_t m = 0;
+    if (n == 0) return 0;
+    double px = x[n - 1], py = y[n - 1], pd = c0 + cu * px + cv * py;
+    for (uint32_t i = 0; i < n; i++) {
+        double cx = x[i], cy = y[i], cd = c0 + cu * cx + cv * cy;
+        if ((pd >= 0) != (cd >= 0)) {
+            double f = pd / (pd - cd);
+            ox[m] = px + f * (cx - px);
+            oy[m] = py + f * (cy - py);
+            m++;
+        }
+        if (cd >= 0) {
+            ox[m] = cx;
+            oy[m] = cy;
+            m++;
+        }
+        px = cx;
+        py = cy;
+        pd = cd;
+    }
+    return m;
+}
+
+static double poly_area(const double *x, const double *y, uint32_t n)
+{
+    double a = 0;
+    for (uint32_t i = 0, j = n ? n - 1 : 0; i < n; j = i++) a += x[j] * y[i] - x[i] * y[j];
+    return 0.5 * fabs(a);
+}
+
+/* Area of polygon (x, y)[n] (either orientation) where a <= y <= b: the
+ * integral of x dy round its edges cut to the strip (Green's theorem; the
+ * strip's own edges, dy = 0, add nothing), so nothing is clipped. */
+static double strip_area(const double *x, const double *y, uint32_t n, double a, double b)
+{
+    double s = 0;
+    for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+        double y0 = y[j], y1 = y[i];
+        double c0 = y0 < a ? a : (y0 > b ? b : y0), c1 = y1 < a ? a : (y1 > b ? b : y1);
+        if (c0 == c1) continue;
+        double t = (0.5 * (c0 + c1) - y0) / (y1 - y0);
+        s += (c1 - c0) * (x[j] + t * (x[i] - x[j]));
+    }
+    return fabs(s);
+}
+
+/* Signed area of triangle (origin, p, q) inside the disc of radius r. */
+static double tri_disc(double px, double py, double qx, double qy, double r)
+{
+    double dx = qx - px, dy = qy - py, A = dx * dx + dy * dy, B = px * dx + py * dy, C = px * px + py * py - r * r;
+    double ts[4] = { 0, 0, 0, 1 };
+    int nt = 1;
+    if (A > 0) {
+        double disc = B * B - A * C;
+        if (disc > 0) {
+            double sq = sqrt(disc), t1 = (-B - sq) / A, t2 = (-B + sq) / A;
+            if (t1 > 0 && t1 < 1) ts[nt++] = t1;
+            if (t2 > 0 && t2 < 1) ts[nt++] = t2;
+        }
+    }
+    ts[nt++] = 1;
+    double area = 0, ax = px, ay = py;
+    for (int k = 1; k < nt; k++) {
+        double bx = px + ts[k] * dx, by = py + ts[k] * dy;
+        double mx = 0.5 * (ax + bx), my = 0.5 * (ay + by), cr = ax * by - ay * bx;
+        if (mx * mx + my * my <= r * r) area += 0.5 * cr;
+        else area += 0.5 * r * r * atan2(cr, ax * bx + ay * by);
+        ax = bx;
+        ay = by;
+    }
+    return area;
+}
+
+/* Area of the convex polygon inside the disc of radius r around the origin. */
+static double poly_disc(const double *x, const double *y, uint32_t n, double r)
+{
+    if (!(r > 0) || n < 3) return 0;
+    double a = 0;
+    for (uint32_t i = 0, j = n - 1; i < n; j = i++) a += tri_disc(x[j], y[j], x[i], y[i], r);
+    return fabs(a);
+}
+
+/* Dash pattern: is arc length s "on"? (pattern repeats both ways from phase) */
+static int dash_on(const rs__linesym *L, const ls_band *B, double s)
+{
+    double x = s - B->phase, m = x - floor(x / B->period) * B->period;
+    const double *d = L->dash + B->dash0;
+    for (uint32_t j = 0; j < B->ndash; j += 2) {
+        if (m < d[j]) return 1;
+        m -= d[j];
+        if (m < d[j + 1]) return 0;
+        m -= d[j + 1];
+    }
+    return 0;
+}
+
+static double hermite(double x)
+{
+    x = x < 0 ? 0 : (x > 1 ? 1 : x);
+    return x * x * (3 - 2 * x);
+}
+
+/* Fraction of the pixel square (centred at v = 0 of slab P's frame) where
+ * v <= x: a ramp, a plateau and a ramp along the normal (constants from
+ * push_piece). */
+static inline double strip_below(const ls_ppc *P, double x)
+{
+    double e = P->st_e, t = x + e;
+    if (t <= 0) return 0;
+    if (t >= 2 * e) return 1;
+    int flip = t > e;
+    if (flip) t = 2 * e - t;
+    double a = t <= P->st_lo ? t * t * P->st_q : (0.5 * P->st_lo + (t - P->st_lo)) * P->st_h;
+    return flip ? 1 - a : a;
+}
+
+/* Keep the part of polygon (*sx, *sy)[n] inside the half-planes of P whose
+ * bits are set in `cut`, swapping the buffers; returns the vertex count. */
+static uint32_t clip_cut(const rs__linesym *L, const ls_ppc *P, uint32_t cut, double **sx, double **sy, double **tx,
+                         double **ty, uint32_t n)
+{
+    for (uint32_t k = 0; cut && n; k++, cut >>= 1) {
+        if (!(cut & 1u)) continue;
+        const double *h = HPP(L, P, k), *x = *sx, *y = *sy;
+        double d[POLY_MAX], *ox = *tx, *oy = *ty;
+        uint32_t out = 0, m = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            d[i] = h[0] + h[1] * x[i] + h[2] * y[i];
+            out += d[i] < 0;
+        }
+        if (out == 0) continue; /* the plane misses the polygon */
+        if (out == n) return 0;
+        for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+            if ((d[j] >= 0) != (d[i] >= 0)) {
+                double f = d[j] / (d[j] - d[i]);
+                ox[m] = x[j] + f * (x[i] - x[j]);
+                oy[m] = y[j] + f * (y[i] - y[j]);
+                m++;
+            }
+            if (d[i] >= 0) {
+                ox[m] = x[i];
+                oy[m] = y[i];
+                m++;
+            }
+        }
+        n = m;
+        double *t;
+        t = *sx; *sx = *tx; *tx = t;
+        t = *sy; *sy = *ty; *ty = t;
+    }
+    return n;
+}
+
+/* Is s - phase (mod period) "on" over the whole of [m - eu, m + eu]?
+ * 1 on, 0 off, -1 a dash end lies in it. */
+static int dash_span(const rs__linesym *L, const ls_band *B, double x, double eu)
+{
+    const double *d = L->dash + B->dash0;
+    double m = x - floor(x / B->period) * B->period, acc = 0;
+    for (uint32_t j = 0; j < B->ndash; j++) {
+        double hi = acc + d[j];
+        if (m - eu >= acc && m + eu <= hi) return (j & 1) == 0;
+        acc = hi;
+    }
+    return -1;
+}
+
+/* Area fraction of pixel (px, py) inside piece P (exact mode). */
+static double piece_area(const rs__linesym *L, const ls_ppc *P, uint32_t px, uint32_t py)
+{
+    double pix = L->pixel, x0 = (double)px * pix - P->ox, y0 = (double)py * pix - P->oy, x1 = x0 + pix,
+           y1 = y0 + pix;
+    double ux = P->ux, uy = P->uy;
+    /* which half-planes cut the pixel (its centre against each, by the
+     * square's exact extent along the normal), before any corner */
+    double xc = x0 + 0.5 * pix, yc = y0 + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+    uint32_t cut = 0, k0 = 0;
+    if (P->kind == PIECE_SLAB) {
+        /* the v limits; then, well inside the ends, nothing else */
+        double d0 = cv - P->a, d1 = P->b - cv;
+        if (d0 <= -P->su || d1 <= -P->su) return 0;
+        cut = (uint32_t)(d0 < P->su) | (uint32_t)(d1 < P->su) << 1;
+        k0 = cu >= P->uin0 && cu <= P->uin1 ? P->nhp : 2;
+    }
+    for (uint32_t k = k0; k < P->nhp; k++) {
+        const double *h = HPP(L, P, k);
+        double d = h[0] + h[1] * cu + h[2] * cv;
+        if (d <= -h[3]) return 0;
+        if (d < h[3]) cut |= 1u << k;
+    }
+    if (P->kind == PIECE_SLAB && !(cut & ~3u)) {
+        /* the pixel crosses the band's edges only (half-planes 0, 1): the
+         * strip's area in closed form (most line pixels), unless a dash
+         * end is in it */
+        int on = 1;
+        if (P->dashed) {
+            const ls_band *B = &L->band[P->band];
+            on = dash_span(L, B, P->s0 + cu - B->phase, P->su);
+        }
+        if (on == 0) return 0;
+        if (on > 0) return cut ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+    }
+    double hm = L->margin, far = 0;
+    if (P->kind == PIECE_WEDGE) {
+        /* outside the sector's box, or holding it all */
+        if (x1 <= P->wx0 || x0 >= P->wx1 || y1 <= P->wy0 || y0 >= P->wy1) return 0;
+        if (P->nhp == 2 && x0 <= P->wx0 && x1 >= P->wx1 && y0 <= P->wy0 && y1 >= P->wy1) return P->warea;
+        far = sqrt(cu * cu + cv * cv);
+        if (far - hm >= P->r1 || far + hm <= P->r0) return 0;
+    }
+    double bx[POLY_MAX], by[POLY_MAX], cx[POLY_MAX], cy[POLY_MAX];
+    /* corners in (u, v) */
+    const double X[4] = { x0, x1, x1, x0 }, Y[4] = { y0, y0, y1, y1 };
+    for (int k = 0; k < 4; k++) {
+        bx[k] = X[k] * ux + Y[k] * uy;
+        by[k] = X[k] * uy - Y[k] * ux;
+    }
+    double *sx = bx, *sy = by, *tx = cx, *ty = cy;
+    double pa = pix * pix;
+    if (P->kind == PIECE_SLAB && !P->dashed) {
+        /* the ends and cuts by clipping, the band's edges by the strip's
+         * area in v */
+        uint32_t n = clip_cut(L, P, cut & ~3u, &sx, &sy, &tx, &ty, 4);
+        return n < 3 ? 0 : strip_area(sx, sy, n, P->a, P->b) / pa;
+    }
+    uint32_t n = clip_cut(L, P, cut, &sx, &sy, &tx, &ty, 4);
+    if (n < 3) return 0;
+    if (P->kind == PIECE_WEDGE) {
+        double a1 = far + hm <= P->r1 ? poly_area(sx, sy, n) : poly_disc(sx, sy, n, P->r1);
+        double a0 = P->r0 > 0 && far - hm < P->r0 ? poly_disc(sx, sy, n, P->r0) : 0;
+        return (a1 - a0) / pa;
+    }
+    /* dashes: the on-intervals of s over the polygon's u range */
+    const ls_band *B = &L->band[P->band];
+    const double *d = L->dash + B->dash0;
+    double umin = sx[0], umax = sx[0];
+    for (uint32_t k = 1; k < n; k++) {
+        umin = sx[k] < umin ? sx[k] : umin;
+        umax = sx[k] > umax ? sx[k] : umax;
+    }
+    double s_lo = P->s0 + umin - B->phase, s_hi = P->s0 + umax - B->phase;
+    double base = floor(s_lo / B->period) * B->period, area = 0;
+    double whole = -1;
+    for (; base <= s_hi; base += B->period) {
+        double on0 = base;
+        for (uint32_t j = 0; j < B->ndash; j += 2) {
+            double on1 = on0 + d[j];
+            if (on1 > s_lo && on0 < s_hi) {
+                double lo = on0 + B->phase - P->s0, hi = on1 + B->phase - P->s0;
+                if (lo <= umin && hi >= umax) {
+                    if (whole < 0) whole = cut ? poly_area(sx, sy, n) : pa;
+                    area += whole;
+                } else {
+                    area += strip_area(sy, sx, n, lo, hi); /* the part with u in [lo, hi] */
+                }
+            }
+            on0 = on1 + d[j + 1];
+        }
+        if (base + B->period == base) break; /* s too large for the period: stop */
+    }
+    return area / pa;
+}
+
+/* Hermite mode: smoothstep of the pixel centre's distance to each edge. */
+static double piece_hermite(const rs__linesym *L, const ls_ppc *P, uint32_t px, uint32_t py)
+{
+    double pix = L->pixel, x = ((double)px + 0.5) * pix - P->ox, y = ((double)py + 0.5) * pix - P->oy;
+    double u = x * P->ux + y * P->uy, v = x * P->uy - y * P->ux;
+    if (P->kind == PIECE_WEDGE) {
+        /* the centre picks the piece; radial smoothing across the band */
+        const double *h0 = HPP(L, P, 0), *h1 = HPP(L, P, 1);
+        if (h0[1] * u + h0[2] * v < 0 || h1[1] * u + h1[2] * v < 0) return 0;
+        double r = sqrt(u * u + v * v);
+        double c = hermite(0.5 + (P->r1 - r) / pix) + (P->r0 > 0 ? hermite(0.5 + (r - P->r0) / pix) : 1.0) - 1.0;
+        return c > 0 ? c : 0;
+    }
+    /* the other half-planes (ends, bisectors, junctions) by the centre */
+    for (uint32_t k = 0; k < P->nhp; k++) {
+        const double *h = HPP(L, P, k);
+        if (k < 2) continue; /* the v limits: smoothed below */
+        if (h[0] + h[1] * u + h[2] * v < 0) return 0;
+    }
+    double c = hermite(0.5 + (v - P->a) / pix) + hermite(0.5 + (P->b - v) / pix) - 1.0;
+    if (!(c > 0)) return 0;
+    if (P->dashed) {
+        const ls_band *B = &L->band[P->band];
+        const double *d = L->dash + B->dash0;
+        double sx = P->s0 + u - B->phase, m = sx - floor(sx / B->period) * B->period, on0 = 0, best = 0;
+        /* distance into the nearest on-interval, smoothed at both ends */
+        for (uint32_t j = 0; j < B->ndash; j += 2) {
+            for (int wrap = -1; wrap <= 1; wrap++) {
+                double lo = on0 + wrap * B->period, hi = lo + d[j];
+                double e = hermite(0.5 + (m - lo) / pix) + hermite(0.5 + (hi - m) / pix) - 1.0;
+                if (e > best) best = e;
+            }
+            on0 += d[j] + d[j + 1];
+        }
+        c *= best;
+    }
+    return c;
+}
+
+/* ------------------------------------------------------------------------
+ * Build
+ * ---------------------------------------------------------------------- */
+
+static uint32_t piece_poly(const ls_piece *P, double *x, double *y);
+
+static void piece_finish(const rs__linesym *L, ls_piece *Q);
+
+/* Append piece P, finished (piece_finish), as the painter's record (pp,
+ * its half-planes in hpp) and the index build's (pb). */
+/* Bytes of a piece while building (painter's record and index build's). */
+#define PIECE_BYTES (sizeof(ls_ppc) + sizeof(ls_pbuild))
+#define HP_BYTES (4 * sizeof(double))
+
+/* Room for at most the budget: capacity `want`, cut to what the bytes left
+ * after `other` hold of items of `item` bytes (at least `need`). */
+static size_t budget_cap(const rs__linesym *L, size_t want, size_t need, uint64_t other, size_t item)
+{
+    if (!L->budget || other >= L->budget) return want;
+    uint64_t fit = (L->budget - other) / item;
+    if (fit < need) fit = need;
+    return fit < want ? (size_t)fit : want;
+}
+
+static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
+{
+    /* all roads' pieces together (rs_limits.max_linesym_bytes) */
+    if (L->budget &&
+        (uint64_t)(L->npc + 1) * PIECE_BYTES + (uint64_t)(L->nhpp + HP_MAX) * HP_BYTES > L->budget) {
+        L->over_budget = 1;
+        return RS_ERR_LIMIT;
+    }
+    if (L->npc == L->cap) {
+        size_t nc = budget_cap(L, L->cap ? 2 * L->cap : 256, L->npc + 1, (uint64_t)L->hcap * HP_BYTES,
+                               PIECE_BYTES), b1, b2;
+        if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_ppc), &b1) || !rs__mul_size(nc, sizeof(ls_pbuild), &b2))
+            return RS_ERR_LIMIT;
+        ls_ppc *np = rs__realloc(ctx, L->pp, b1);
+        if (!np) return RS_ERR_NOMEM;
+        L->pp = np;
+        ls_pbuild *nb = rs__realloc(ctx, L->pb, b2);
+        if (!nb) return RS_ERR_NOMEM;
+        L->pb = nb;
+        L->cap = nc;
+    }
+    if (L->hcap - L->nhpp < HP_MAX) {
+        size_t nc = budget_cap(L, L->hcap ? 2 * L->hcap : 1024, L->nhpp + HP_MAX, (uint64_t)L->cap * PIECE_BYTES,
+                               HP_BYTES), bytes;
+        if (nc > UINT32_MAX || !rs__mul_size(nc, 4 * sizeof(double), &bytes)) return RS_ERR_LIMIT;
+        double *nh = rs__realloc(ctx, L->hpp, bytes);
+        if (!nh) return RS_ERR_NOMEM;
+        L->hpp = nh;
+        L->hcap = nc;
+    }
+    ls_piece Q = *P;
+    piece_finish(L, &Q);
+    ls_ppc *C = &L->pp[L->npc];
+    ls_pbuild *B = &L->pb[L->npc++];
+    C->ox = Q.ox, C->oy = Q.oy, C->ux = Q.ux, C->uy = Q.uy, C->a = Q.a, C->b = Q.b, C->su = Q.su;
+    C->uin0 = Q.uin0, C->uin1 = Q.uin1, C->st_lo = Q.st_lo, C->st_e = Q.st_e, C->st_q = Q.st_q;
+    C->st_h = Q.st_h, C->s0 = Q.s0, C->ru0 = Q.ru0, C->ru1 = Q.ru1, C->rv0 = Q.rv0, C->rv1 = Q.rv1;
+    C->r0 = Q.r0, C->r1 = Q.r1, C->wx0 = Q.wx0, C->wy0 = Q.wy0, C->wx1 = Q.wx1, C->wy1 = Q.wy1;
+    C->warea = Q.warea, C->nhp = Q.nhp, C->kind = Q.kind, C->band = Q.band, C->dashed = Q.dashed;
+    C->hp0 = (uint32_t)L->nhpp;
+    double du = Q.ux * L->pixel, dv = Q.uy * L->pixel; /* 0 for a subnormal pixel */
+    C->iku = fabs(Q.ux) < 1e-12 || du == 0 ? 0 : 1 / du;
+    C->ikv = fabs(Q.uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
+    C->cbase = Q.ox / L->pixel - 0.5;
+    for (uint32_t j = 0; j < Q.nhp; j++, L->nhpp++) {
+        memcpy(L->hpp + 4 * L->nhpp, Q.hp[j], 3 * sizeof *L->hpp);
+        L->hpp[4 * L->nhpp + 3] = Q.sup[j];
+    }
+    B->len = Q.len, B->x0 = Q.x0, B->y0 = Q.y0, B->x1 = Q.x1, B->y1 = Q.y1;
+    B->gx0 = Q.gx0, B->gx1 = Q.gx1, B->gy0 = Q.gy0, B->gy1 = Q.gy1;
+    return RS_OK;
+}
+
+/* The painter's constants of a piece: half-plane extents, box, pixel
+ * rows and columns, the slab's safe u range. */
+static void piece_finish(const rs__linesym *L, ls_piece *Q)
+{
+    double pix = L->pixel, hp = 0.5 * pix, ax = fabs(Q->ux), ay = fabs(Q->uy);
+    /* half-plane c0 + cu u + cv v in local (x, y): normal (cu ux + cv uy, cu uy - cv ux) */
+    for (uint32_t k = 0; k < Q->nhp; k++) {
+        double cu = Q->hp[k][1], cv = Q->hp[k][2];
+        Q->sup[k] = hp * (fabs(cu * Q->ux + cv * Q->uy) + fabs(cu * Q->uy - cv * Q->ux));
+    }
+    Q->su = hp * (ax + ay);
+    /* the piece's polygon (a wedge's: its box cut by the two radii):
+     * its box and ranges, a little wider against rounding */
+    double px[POLY_MAX], py[POLY_MAX], bx0 = DBL_MAX, bx1 = -DBL_MAX, by0 = DBL_MAX, by1 = -DBL_MAX;
+    double pu0 = DBL_MAX, pu1 = -DBL_MAX, pv0 = DBL_MAX, pv1 = -DBL_MAX;
+    int herm = L->aa == RS__AA_HERMITE;
+    uint32_t n;
+    if (herm && Q->kind == PIECE_SLAB) {
+        /* Hermite: the centres that pick the piece, with v half a pixel
+         * beyond the band (its smoothing) */
+        ls_piece G = *Q;
+        G.hp[0][0] += hp;
+        G.hp[1][0] += hp;
+        n = piece_poly(&G, px, py);
+    } else {
+        n = piece_poly(Q, px, py);
+    }
+    for (uint32_t k = 0; k < n; k++) {
+        double x = Q->ox + px[k] * Q->ux + py[k] * Q->uy, y = Q->oy + px[k] * Q->uy - py[k] * Q->ux;
+        bx0 = fmin(bx0, x), bx1 = fmax(bx1, x), by0 = fmin(by0, y), by1 = fmax(by1, y);
+        pu0 = fmin(pu0, px[k]), pu1 = fmax(pu1, px[k]), pv0 = fmin(pv0, py[k]), pv1 = fmax(pv1, py[k]);
+    }
+    if (n < 3) { /* nothing left of it (the inner side of a sharp bend): never visited */
+        Q->gx0 = Q->gy0 = 1;
+        Q->gx1 = Q->gy1 = 0;
+        Q->ru0 = Q->rv0 = 1;
+        Q->ru1 = Q->rv1 = 0;
+        return;
+    }
+    double eb = 1e-9 * (1 + fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
+    if (Q->kind == PIECE_WEDGE && herm) {
+        /* Hermite: the centre in the sector's angle, within half a pixel of its radii */
+        bx0 = Q->ox + Q->wx0, bx1 = Q->ox + Q->wx1, by0 = Q->oy + Q->wy0, by1 = Q->oy + Q->wy1;
+    } else if (Q->kind == PIECE_WEDGE) {
+        bx0 = fmax(bx0, Q->ox + Q->wx0), bx1 = fmin(bx1, Q->ox + Q->wx1);
+        by0 = fmax(by0, Q->oy + Q->wy0), by1 = fmin(by1, Q->oy + Q->wy1);
+    }
+    /* pixels that overlap the box */
+    Q->gx0 = ceil((bx0 - eb) / pix - 1);
+    Q->gx1 = floor((bx1 + eb) / pix);
+    Q->gy0 = ceil((by0 - eb) / pix - 1);
+    Q->gy1 = floor((by1 + eb) / pix);
+    if (Q->kind == PIECE_SLAB) {
+        double p1 = pix * ax, p2 = pix * ay, lo = p1 < p2 ? p1 : p2, hi = p1 < p2 ? p2 : p1;
+        Q->st_lo = lo;
+        Q->st_e = 0.5 * (lo + hi);
+        /* a subnormal pixel (fuzzed options) may make hi or hi lo 0: e is
+         * then 0 or the ramp below lo too thin to matter */
+        Q->st_h = hi > 0 ? 1 / hi : 0;
+        Q->st_q = hi * lo > 0 ? 0.5 / (hi * lo) : 0;
+        Q->ru0 = pu0 - Q->su - eb;
+        Q->ru1 = pu1 + Q->su + eb;
+        Q->rv0 = pv0 - Q->su - eb;
+        Q->rv1 = pv1 + Q->su + eb;
+        /* A centre that passes the v limits has v in (a - su, b + su);
+         * there half-plane k >= 2 holds with the square's extent to spare
+         * where cu u >= sup - c0 - min over v of cv v (by a margin). */
+        double ulo = -DBL_MAX, uhi = DBL_MAX, va = Q->a - Q->su, vb = Q->b + Q->su;
+        for (uint32_t k = 2; k < Q->nhp; k++) {
+            double c0 = Q->hp[k][0], cu = Q->hp[k][1], cv = Q->hp[k][2];
+            double need = Q->sup[k] - c0 - fmin(cv * va, cv * vb) + eb * (1 + fabs(cu) + fabs(cv));
+            if (cu > 0) ulo = fmax(ulo, need / cu);
+            else if (cu < 0) uhi = fmin(uhi, need / cu);
+            else if (need > 0) uhi = -DBL_MAX; /* never safe */
+        }
+        Q->uin0 = ulo;
+        Q->uin1 = uhi;
+    }
+}
+
+/* Local box of a piece's polygon outline, grown by the pixel margin. */
+static void piece_box(const rs__linesym *L, ls_piece *P, double len, double a, double b)
+{
+    double m = L->margin;
+    if (P->kind == PIECE_WEDGE) { /* the disc's (the junction cuts test against it; the painter uses the sector's) */
+        P->x0 = P->ox - P->r1 - m;
+        P->x1 = P->ox + P->r1 + m;
+        P->y0 = P->oy - P->r1 - m;
+        P->y1 = P->oy + P->r1 + m;
+        return;
+    }
+    const double U[4] = { -m, len + m, len + m, -m }, V[4] = { a - m, a - m, b + m, b + m };
+    P->x0 = P->y0 = DBL_MAX;
+    P->x1 = P->y1 = -DBL_MAX;
+    for (int k = 0; k < 4; k++) {
+        /* inverse of (u, v) = (d.u, d.(uy, -ux)) */
+        double x = P->ox + U[k] * P->ux + V[k] * P->uy, y = P->oy + U[k] * P->uy - V[k] * P->ux;
+        P->x0 = fmin(P->x0, x);
+        P->x1 = fmax(P->x1, x);
+        P->y0 = fmin(P->y0, y);
+        P->y1 = fmax(P->y1, y);
+    }
+}
+
+typedef struct ls_vtx {
+    double x, y;
+} ls_vtx;
+
+/* Segment i's direction d (unit) in the frame of segment j: (d.u_j, d.n_j). */
+static void in_frame(double dx, double dy, double ux, double uy, double *fu, double *fv)
+{
+    *fu = dx * ux + dy * uy;
+    *fv = dx * uy - dy * ux;
+}
+
+/* Cut the line (ox, oy) + u (ux, uy), u in [0, len], to the map grown by
+ * ext: [*lo, *hi]; 0 when nothing is left. */
+static int cut_to_map(double ox, double oy, double ux, double uy, double len, double ext, double wmap, double hmap,
+                      double *lo, double *hi)
+{
+    const double d[2] = { ux, uy }, o[2] = { ox, oy }, b0[2] = { -ext, -ext }, b1[2] = { wmap + ext, hmap + ext };
+    *lo = 0;
+    *hi = len;
+    for (int k = 0; k < 2; k++) {
+        if (d[k] == 0) {
+            if (o[k] < b0[k] || o[k] > b1[k]) return 0;
+            continue;
+        }
+        double t0 = (b0[k] - o[k]) / d[k], t1 = (b1[k] - o[k]) / d[k];
+        if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+        *lo = fmax(*lo, t0);
+        *hi = fmin(*hi, t1);
+    }
+    return *lo <= *hi;
+}
+
+/* ------------------------------------------------------------------------
+ * Junctions: a road's lines stop at the edge of every other road's surface
+ * (docs/linesym.md "Junctions").
+ * ---------------------------------------------------------------------- */
+
+/* One segment of a road surface: the rectangle u in [-r, len + r],
+ * |v| <= r of its frame (square ends: a superset of the round caps and
+ * joins). */
+typedef struct ls_surf {
+    double ax, ay, ux, uy, len, r;
+    double u0, u1;        /* the rectangle along u: -r .. len + r, or shorter at a T (below) */
+    uint32_t road;
+    uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
+    int clip;             /* 1: only its part with cx x + cy y <= cc (a trimmed end at a T,
+                             docs/network.md "Ends at a T": the surface stops at the far edge line) */
+    double cx, cy, cc;
+} ls_surf;
+
+#define NO_STROKE RS__NO_STROKE
+#define TEE_EDGE_ZONE 2.0 /* metres inside a through road's edge where its lines stop at a side road's mouth */
+typedef rs__tee ls_tee;
+
+/* Road end points and the unit directions pointing away from them along
+ * the road (to tell a road that continues another from one that meets it). */
+typedef struct ls_ends {
+    double x[2], y[2], dx[2], dy[2];
+    int valid;
+} ls_ends;
+
+typedef struct ls_junc {
+    ls_grid grid;          /* its own cells, square */
+    ls_surf *sf;
+    size_t nsf;
+    uint32_t *start, *ids; /* CSR per index cell, like the pieces */
+    uint32_t *stamp;       /* per surface: last query that saw it */
+    uint32_t query;
+    const ls_ends *ends;
+    uint64_t work, limit;  /* list entries visited by push_cut; rs_limits.max_field_work */
+    const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
+    uint8_t *nocut;        /* per road: junction_cuts=no (its lines uncut, its surface cuts none) */
+    uint8_t *car;          /* per road: not a path, footway or cycleway */
+} ls_junc;
+
+/* Roads r and q continue each other: they share an end point and leave it
+ * in opposite directions (within 30 degrees of straight). */
+static int continues(const ls_junc *J, uint32_t r, uint32_t q)
+{
+    const ls_ends *a = &J->ends[r], *b = &J->ends[q];
+    if (!a->valid || !b->valid) return 0;
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2; j++)
+            if (a->x[i] == b->x[j] && a->y[i] == b->y[j] && a->dx[i] * b->dx[j] + a->dy[i] * b->dy[j] < -0.866)
+                return 1;
+    return 0;
+}
+
+/* Polygon of a piece (its box cut by its half-planes), in its frame. */
+static uint32_t piece_poly(const ls_piece *P, double *x, double *y)
+{
+    double bx[POLY_MAX], by[POLY_MAX];
+    const double X[4] = { P->x0, P->x1, P->x1, P->x0 }, Y[4] = { P->y0, P->y0, P->y1, P->y1 };
+    for (int k = 0; k < 4; k++) {
+        double dx = X[k] - P->ox, dy = Y[k] - P->oy;
+        x[k] = dx * P->ux + dy * P->uy;
+        y[k] = dx * P->uy - dy * P->ux;
+    }
+    uint32_t n = 4;
+    for (uint32_t k = 0; k < P->nhp && n; k++) {
+        n = clip_poly(x, y, n, P->hp[k][0], P->hp[k][1], P->hp[k][2], bx, by);
+        memcpy(x, bx, n * sizeof *x);
+        memcpy(y, by, n * sizeof *y);
+    }
+    return n;
+}
+
+/* Does piece P (its box cut by its half-planes) keep any area? */
+static int piece_nonempty(const ls_piece *P)
+{
+    double x[POLY_MAX], y[POLY_MAX];
+    uint32_t n = piece_poly(P, x, y);
+    return n >= 3 && poly_area(x, y, n) > 1e-12;
+}
+
+static int add_hp(ls_piece *P, double c0, double cu, double cv)
+{
+    if (P->nlim >= HP_MAX) return 0;
+    P->nlim++;
+    P->hp[P->nhp][0] = c0;
+    P->hp[P->nhp][1] = cu;
+    P->hp[P->nhp][2] = cv;
+    P->nhp++;
+    return 1;
+}
+
+/* P minus surface rectangle Q (cut by its clip line): up to 5 disjoint
+ * pieces into out; returns their count, or -1 when Q misses P (P stays
+ * whole) or a piece would need more half-planes than it holds (P is then
+ * kept whole: lines run on). */
+static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
+{
+    double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
+    double nqx = Q->uy, nqy = -Q->ux;      /* Q's left normal */
+    double npx = P->uy, npy = -P->ux;      /* P's left normal */
+    /* v' = cv0 + u fvu + v fvv, u' = cu0 + u fuu + v fuv in P's frame */
+    double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
+    double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
+    double r = Q->r, lo = Q->u0, hi = Q->u1;
+    double x[POLY_MAX], y[POLY_MAX];
+    uint32_t n = piece_poly(P, x, y);
+    if (n < 3) return -1;
+    /* the clip line in P's frame: n.(p - Q.a) = cn0 + u fnu + v fnv <= cq */
+    double cn0 = ox * Q->cx + oy * Q->cy, fnu = P->ux * Q->cx + P->uy * Q->cy, fnv = npx * Q->cx + npy * Q->cy;
+    double cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
+    int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip;
+    for (uint32_t k = 0; k < n; k++) {
+        double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
+        out_v_hi &= v >= r;
+        out_v_lo &= v <= -r;
+        out_u_lo &= u <= lo;
+        out_u_hi &= u >= hi;
+        out_clip &= cn0 + x[k] * fnu + y[k] * fnv >= cq;
+    }
+    if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip) return -1;
+    int m = 0;
+    ls_piece A = *P;
+    if (!add_hp(&A, cv0 - r, fvu, fvv)) return -1;                      /* v' >= r */
+    if (piece_nonempty(&A)) out[m++] = A;
+    A = *P;
+    if (!add_hp(&A, -cv0 - r, -fvu, -fvv)) return -1;                   /* v' <= -r */
+    if (piece_nonempty(&A)) out[m++] = A;
+    for (int side = 0; side < 2; side++) {
+        A = *P;
+        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv)) return -1;
+        int ok = side == 0 ? add_hp(&A, lo - cu0, -fuu, -fuv)            /* u' <= u0 */
+                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= u1 */
+        if (!ok) return -1;
+        if (piece_nonempty(&A)) out[m++] = A;
+    }
+    if (Q->clip) { /* the rectangle's part beyond the clip line stays */
+        A = *P;
+        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
+            !add_hp(&A, hi - cu0, -fuu, -fuv) || !add_hp(&A, cn0 - cq, fnu, fnv))
+            return -1;
+        if (piece_nonempty(&A)) out[m++] = A;
+    }
+    return m;
+}
+
+/* Work units of one cut_piece call in push_cut's budget (rs_limits.max_field_work):
+ * measured against a list step, so that the budget bounds time. */
+#define CUT_WORK 32
+
+/* First index in [lo, hi) of the ascending ids whose value is >= v. */
+static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, uint32_t v)
+{
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (ids[mid] < v) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Surfaces are stored road by road and listed in ascending order, so a
+ * piece steps over its own road's run of a cell list in one binary search
+ * (a road of 10^6 tiny segments would otherwise test each piece against
+ * every surface of its own road in the cell). RS_ERR_LIMIT when the work
+ * (list entries visited) passes J->limit. */
+static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
+{
+    if (!J || !J->nsf || J->nocut[road]) return push_piece(ctx, L, P);
+    /* the end of road's surfaces: the first with a larger road */
+    size_t own_end = 0, hi_s = J->nsf;
+    while (own_end < hi_s) {
+        size_t mid = own_end + (hi_s - own_end) / 2;
+        if (J->sf[mid].road <= road) own_end = mid + 1;
+        else hi_s = mid;
+    }
+    /* candidate surfaces: those listed in the cells of P's box */
+    const ls_grid *G = &J->grid;
+    double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
+    enum { QMAX = 16 };
+    ls_piece q[QMAX], tmp[5];
+    uint32_t nq = 1;
+    q[0] = *P;
+    if (!(fx1 < 0 || fy1 < 0 || fx0 >= G->gw || fy0 >= G->gh)) {
+        uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
+        uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
+        J->query++;
+        for (uint32_t j = j0; j <= j1; j++)
+            for (uint32_t i = i0; i <= i1; i++) {
+                size_t c = (size_t)j * G->gw + i;
+                for (uint32_t e = J->start[c]; e < J->start[c + 1]; e++) {
+                    uint32_t k = J->ids[e];
+                    if (++J->work > J->limit) return RS_ERR_LIMIT;
+                    if (J->sf[k].road == road) { /* skip the rest of the own road's run */
+                        e = first_at_least(J->ids, e, J->start[c + 1], (uint32_t)own_end) - 1;
+                        continue;
+                    }
+                    if (J->stamp[k] == J->query) continue;
+                    J->stamp[k] = J->query;
+                    const ls_surf *Q = &J->sf[k];
+                    uint32_t sr = J->stroke_of ? J->stroke_of[road] : road;
+                    if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
+                        continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr) || Q->skip == sr)
+                        continue;
+                    /* a path, footway or cycleway crossing or meeting a car
+                     * road cuts none of its lines (issue 27: the road's lines
+                     * run on over a footway crossing, as over a zebra's) */
+                    if (J->car[road] && !J->car[Q->road]) continue;
+                    /* cut every piece so far; a piece that cannot be cut stays */
+                    uint32_t nn = 0;
+                    ls_piece next[QMAX];
+                    int full = 0;
+                    for (uint32_t a = 0; a < nq; a++) {
+                        J->work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
+                        int m = cut_piece(&q[a], Q, tmp);
+                        if (m < 0) {
+                            if (nn < QMAX) next[nn++] = q[a];
+                            else full = 1;
+                            continue;
+                        }
+                        if (nn + (uint32_t)m > QMAX) { full = 1; break; }
+                        for (int b = 0; b < m; b++) next[nn++] = tmp[b];
+                    }
+                    if (full) continue; /* too many pieces: this surface does not cut */
+                    memcpy(q, next, nn * sizeof *q);
+                    nq = nn;
+                }
+            }
+    }
+    for (uint32_t a = 0; a < nq; a++) {
+        rs_result r = push_piece(ctx, L, &q[a]);
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
+/* Push P less the cuts of its road (lib/scene/lanes.h: its lane and centre
+ * lines stop at a stop line, across a zebra), then cut at the junctions.
+ * Like a junction cut, a cut that would split P into too many pieces
+ * leaves it whole. */
+static uint32_t cut_key(const rs__linesym *L, uint32_t road)
+{
+    return L->cut_stroke ? L->cut_stroke[road] : road;
+}
+
+static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
+{
+    uint32_t key = L->cut_start ? cut_key(L, road) : 0;
+    if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road);
+    enum { QMAX = 16 };
+    ls_piece q[QMAX], next[QMAX], tmp[5];
+    uint32_t nq = 1;
+    q[0] = *P;
+    for (uint32_t e = L->cut_start[key]; e < L->cut_start[key + 1]; e++) {
+        const rs__line_cut *c = &L->cuts[L->cut_ord[e]];
+        ls_surf Q;
+        memset(&Q, 0, sizeof Q);
+        Q.ax = c->ax, Q.ay = c->ay, Q.ux = c->ux, Q.uy = c->uy, Q.u0 = c->u0, Q.u1 = c->u1, Q.r = c->r;
+        uint32_t nn = 0;
+        int full = 0;
+        for (uint32_t a = 0; a < nq && !full; a++) {
+            int m = cut_piece(&q[a], &Q, tmp);
+            if (m < 0) {
+                if (nn < QMAX) next[nn++] = q[a];
+                else full = 1;
+            } else if (nn + (uint32_t)m > QMAX) full = 1;
+            else
+                for (int b = 0; b < m; b++) next[nn++] = tmp[b];
+        }
+        if (full) continue;
+        memcpy(q, next, nn * sizeof *q);
+        nq = nn;
+    }
+    for (uint32_t a = 0; a < nq; a++) {
+        rs_result r = push_cut(ctx, L, J, &q[a], road);
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
+/* Pieces of one band along one road or stroke. pts: n distinct
+ * consecutive local points, s: arc length at each, seg_road: the record
+ * of each segment (for the junction cuts). */
+static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const uint32_t *seg_road,
+                                  const ls_vtx *pts, const double *s, size_t n, const rs__band *bd, uint32_t band,
+                                  double wmap, double hmap)
+{
+    double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = fmax(fabs(a), fabs(b)) + L->margin;
+    const ls_band *B = &L->band[band];
+    for (size_t i = 0; i + 1 < n; i++) {
+        double dx = 0.5 * pts[i + 1].x - 0.5 * pts[i].x, dy = 0.5 * pts[i + 1].y - 0.5 * pts[i].y, lh = hypot(dx, dy);
+        double ux = dx / lh, uy = dy / lh, len = 2 * lh;
+        ls_piece P;
+        memset(&P, 0, sizeof P);
+        P.kind = PIECE_SLAB;
+        P.band = band;
+        P.ox = pts[i].x;
+        P.oy = pts[i].y;
+        P.ux = ux;
+        P.uy = uy;
+        P.s0 = s[i];
+        P.a = a;
+        P.b = b;
+        P.dashed = B->ndash > 0;
+        /* Far segments: cut the centreline to the map grown by the band's
+         * reach, so the box and s stay finite and small. */
+        double lo, hi;
+        if (!cut_to_map(P.ox, P.oy, ux, uy, len, ext, wmap, hmap, &lo, &hi)) continue;
+        P.hp[P.nhp][0] = -a, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = 1;         /* v >= a */
+        P.hp[P.nhp][0] = b, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = -1;         /* v <= b */
+        /* Each end: the end perpendicular and the bisector with the
+         * neighbouring segment. Over v in [a, b] one of the two lies wholly
+         * beyond the other when the band is on one side of the centreline
+         * (the perpendicular on the inner side of the bend, the bisector
+         * on the outer): that one cuts nothing and is left out. */
+        double bm[2][2];
+        int has_bis[2] = { 0, 0 };
+        if (i > 0) { /* bisector with the previous segment: m.(p - A) >= 0 */
+            double pdx = 0.5 * pts[i].x - 0.5 * pts[i - 1].x, pdy = 0.5 * pts[i].y - 0.5 * pts[i - 1].y, pl = hypot(pdx, pdy);
+            double mx = pdx / pl + ux, my = pdy / pl + uy, ml = hypot(mx, my);
+            if (ml > 1e-9) {
+                in_frame(mx / ml, my / ml, ux, uy, &bm[0][0], &bm[0][1]);
+                has_bis[0] = 1;
+            }
+        }
+        if (i + 2 < n) { /* with the next: m.(p - B) <= 0 */
+            double ndx = 0.5 * pts[i + 2].x - 0.5 * pts[i + 1].x, ndy = 0.5 * pts[i + 2].y - 0.5 * pts[i + 1].y,
+                   nl = hypot(ndx, ndy);
+            double mx = ndx / nl + ux, my = ndy / nl + uy, ml = hypot(mx, my);
+            if (ml > 1e-9) {
+                in_frame(mx / ml, my / ml, ux, uy, &bm[1][0], &bm[1][1]);
+                has_bis[1] = 1;
+            }
+        }
+        for (int end = 0; end < 2; end++) {
+            /* the start: mu u + mv v >= 0 (mu > 0) against u >= 0; the end:
+             * mu (len - u) - mv v >= 0 against u <= len */
+            int keep_perp = 1, keep_bis = has_bis[end];
+            P.nlim += 1 + (uint32_t)has_bis[end];
+            if (has_bis[end] && L->aa == RS__AA_EXACT) { /* (Hermite smooths beyond [a, b]: keep both) */
+                double mv = end ? -bm[end][1] : bm[end][1];
+                if (mv * a >= 0 && mv * b >= 0) keep_bis = 0;       /* the bisector holds wherever the perpendicular does */
+                else if (mv * a <= 0 && mv * b <= 0) keep_perp = 0; /* and conversely */
+            }
+            if (keep_perp) {
+                if (end == 0) P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = 1, P.hp[P.nhp++][2] = 0;  /* u >= 0 */
+                else P.hp[P.nhp][0] = len, P.hp[P.nhp][1] = -1, P.hp[P.nhp++][2] = 0;       /* u <= len */
+            }
+            if (keep_bis) {
+                double mu = bm[end][0], mv = bm[end][1];
+                if (end == 0) P.hp[P.nhp][0] = 0, P.hp[P.nhp][1] = mu, P.hp[P.nhp++][2] = mv;
+                else P.hp[P.nhp][0] = mu * len, P.hp[P.nhp][1] = -mu, P.hp[P.nhp++][2] = -mv;
+            }
+        }
+        P.nlim += 2;
+        if (lo > 0) {
+            /* Re-anchor at the cut start (only u shifts; the half-planes
+             * keep the exact piece). The cut-off parts lie more than a
+             * pixel margin outside the map, so the box may leave them out. */
+            P.ox += lo * ux;
+            P.oy += lo * uy;
+            P.s0 += lo;
+            for (uint32_t k = 0; k < P.nhp; k++) P.hp[k][0] += P.hp[k][1] * lo;
+        }
+        P.len = hi - lo;
+        piece_box(L, &P, P.len, a, b);
+        rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
+        if (r) return r;
+    }
+    /* Round joins: the outer side of each interior vertex. */
+    for (size_t i = 1; i + 1 < n; i++) {
+        double pdx = 0.5 * pts[i].x - 0.5 * pts[i - 1].x, pdy = 0.5 * pts[i].y - 0.5 * pts[i - 1].y, pl = hypot(pdx, pdy);
+        double ndx = 0.5 * pts[i + 1].x - 0.5 * pts[i].x, ndy = 0.5 * pts[i + 1].y - 0.5 * pts[i].y, nl = hypot(ndx, ndy);
+        double px = pdx / pl, py = pdy / pl, nx = ndx / nl, ny = ndy / nl;
+        /* turn: next direction against the previous left normal (py, -px) */
+        double turn = nx * py - ny * px;
+        if (turn == 0) continue;
+        double out = turn > 0 ? -1.0 : 1.0; /* left turn: outer side is the right (t < 0) */
+        double r0 = out > 0 ? fmax(a, 0) : fmax(-b, 0), r1 = out > 0 ? b : -a;
+        if (!(r1 > r0)) continue;
+        if (B->ndash && !dash_on(L, B, s[i])) continue;
+        double vx = pts[i].x, vy = pts[i].y;
+        if (vx < -r1 - L->margin || vx > wmap + r1 + L->margin || vy < -r1 - L->margin || vy > hmap + r1 + L->margin)
+            continue;
+        ls_piece P;
+        memset(&P, 0, sizeof P);
+        P.kind = PIECE_WEDGE;
+        P.band = band;
+        P.ox = vx;
+        P.oy = vy;
+        P.ux = nx;
+        P.uy = ny;
+        P.s0 = s[i];
+        P.r0 = r0;
+        P.r1 = r1;
+        double mu, mv;
+        in_frame(px, py, nx, ny, &mu, &mv);
+        P.hp[0][0] = 0, P.hp[0][1] = mu, P.hp[0][2] = mv; /* (p - V).u_prev >= 0 */
+        P.hp[1][0] = 0, P.hp[1][1] = -1, P.hp[1][2] = 0;  /* (p - V).u_next <= 0 */
+        P.nhp = P.nlim = 2;
+        /* the sector's box: its four corners and the axis directions
+         * inside it at r1; padded against rounding */
+        double c0x = out * py, c0y = -out * px, c1x = out * ny, c1y = -out * nx; /* outer normals */
+        double bxs[8] = { r0 * c0x, r1 * c0x, r0 * c1x, r1 * c1x }, bys[8] = { r0 * c0y, r1 * c0y, r0 * c1y, r1 * c1y };
+        int nb = 4;
+        static const double AX[4] = { 1, -1, 0, 0 }, AY[4] = { 0, 0, 1, -1 };
+        for (int q = 0; q < 4; q++)
+            if (AX[q] * px + AY[q] * py > 0 && AX[q] * nx + AY[q] * ny < 0) bxs[nb] = r1 * AX[q], bys[nb++] = r1 * AY[q];
+        P.wx0 = P.wx1 = bxs[0];
+        P.wy0 = P.wy1 = bys[0];
+        for (int q = 1; q < nb; q++) {
+            P.wx0 = fmin(P.wx0, bxs[q]), P.wx1 = fmax(P.wx1, bxs[q]);
+            P.wy0 = fmin(P.wy0, bys[q]), P.wy1 = fmax(P.wy1, bys[q]);
+        }
+        double pad = 1e-9 * (1 + r1);
+        P.wx0 -= pad, P.wy0 -= pad, P.wx1 += pad, P.wy1 += pad;
+        double pp = L->pixel * L->pixel; /* 0 only for a subnormal pixel: no shortcut then */
+        P.warea = pp > 0 ? 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / pp : 0;
+        piece_box(L, &P, 0, 0, 0);
+        rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
+        if (r) return r;
+    }
+    return RS_OK;
+}
+
+/* Index cells reached by the rectangle u in [u0, u1], v in [v0, v1] of the
+ * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
+ * row, the x extent of the rectangle cut to that row); pass 0 counts into
+ * start[], pass 1 fills ids[] from the ends, item k. */
+static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double uy, double u0, double u1,
+                       double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
+                       uint32_t *ids, uint32_t k, int fill)
+{
+    double cm = G->cmx, cmy = G->cmy;
+    double fy0 = floor(y0 / cmy), fy1 = floor(y1 / cmy);
+    if (!(fy1 >= 0) || !(fy0 < G->gh)) return;
+    uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
+    double fx0 = floor(x0 / cm), fx1 = floor(x1 / cm);
+    if (!(fx1 >= 0) || !(fx0 < G->gw)) return;
+    uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
+    for (uint32_t j = j0; j <= j1; j++) {
+        uint32_t a = i0, b = i1;
+        if (i1 > i0) {
+            double U[4] = { u0, u1, u1, u0 }, V[4] = { v0, v0, v1, v1 };
+            double xs[POLY_MAX], ys[POLY_MAX], tx[POLY_MAX], ty[POLY_MAX];
+            for (int q = 0; q < 4; q++) {
+                xs[q] = ox + U[q] * ux + V[q] * uy;
+                ys[q] = oy + U[q] * uy - V[q] * ux;
+            }
+            uint32_t nn = clip_poly(xs, ys, 4, -(double)j * cmy, 0, 1, tx, ty);
+            nn = clip_poly(tx, ty, nn, (double)(j + 1) * cmy, 0, -1, xs, ys);
+            if (nn == 0) continue;
+            double lo = xs[0], hi = xs[0];
+            for (uint32_t q = 1; q < nn; q++) {
+                lo = fmin(lo, xs[q]);
+                hi = fmax(hi, xs[q]);
+            }
+            double ga = floor(lo / cm), gb = floor(hi / cm);
+            if (gb < (double)i0 || ga > (double)i1) continue;
+            a = ga > (double)i0 ? (uint32_t)ga : i0;
+            b = gb < (double)i1 ? (uint32_t)gb : i1;
+        }
+        for (uint32_t i = a; i <= b; i++) {
+            size_t c = (size_t)j * G->gw + i;
+            if (fill) ids[--start[c]] = k;
+            else start[c]++;
+        }
+    }
+}
+
+static void piece_cells(rs__linesym *L, uint32_t k, int fill)
+{
+    const ls_ppc *P = &L->pp[k];
+    const ls_pbuild *B = &L->pb[k];
+    double m = L->margin;
+    if (P->kind == PIECE_SLAB)
+        rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, B->len + m, P->a - m, P->b + m, B->x0, B->y0, B->x1, B->y1,
+                   L->start, L->ids, k, fill);
+    else /* the sector's box grown by the margin, as an axis-aligned rectangle */
+        rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
+                   P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, L->ids, k, fill);
+}
+
+/* Counts to CSR end offsets (a list is then filled from its end). */
+static int csr_close(uint32_t *start, size_t ncell, uint64_t lim, size_t *total)
+{
+    uint64_t run = 0;
+    for (size_t c = 0; c < ncell; c++) {
+        run += start[c];
+        if (run > lim) return 0;
+        start[c] = (uint32_t)run;
+    }
+    start[ncell] = (uint32_t)run;
+    *total = (size_t)run;
+    return 1;
+}
+
+/* The bands look the same drawn either way: each has its mirror image
+ * (offset -t within 1e-9 m, all else equal) among them: a centre line
+ * computed at 1e-15 m is at 0. */
+static int bands_mirror(const rs__band *b, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        int found = 0;
+        for (uint32_t j = 0; j < n && !found; j++)
+            found = fabs(b[j].t + b[i].t) <= 1e-9 && b[j].w == b[i].w && !memcmp(b[j].rgba, b[i].rgba, sizeof b[i].rgba) &&
+                    b[j].ndash == b[i].ndash && b[j].phase == b[i].phase &&
+                    (b[i].ndash == 0 || !memcmp(b[j].dash, b[i].dash, b[i].ndash * sizeof *b[i].dash));
+        if (!found) return 0;
+    }
+    return 1;
+}
+
+/* A run of a stroke's records drawn with the bands of record `rec`, from
+ * polyline point `at`. */
+typedef struct ls_run {
+    uint32_t rec;
+    size_t at;
+} ls_run;
+
+/* Two records' bands draw the same (band by band, offsets within 1e-9 m):
+ * a stroke's records look alike until its lanes change along it. */
+static int bands_equal(const rs__band *a, uint32_t na, const rs__band *b, uint32_t nb)
+{
+    if (na != nb) return 0;
+    for (uint32_t i = 0; i < na; i++)
+        if (!(fabs(a[i].t - b[i].t) <= 1e-9) || a[i].w != b[i].w || memcmp(a[i].rgba, b[i].rgba, sizeof a[i].rgba) ||
+            a[i].ndash != b[i].ndash || a[i].phase != b[i].phase ||
+            (a[i].ndash && memcmp(a[i].dash, b[i].dash, a[i].ndash * sizeof *a[i].dash)))
+            return 0;
+    return 1;
+}
+
+/* Append road ri's points to the *m_out points already in *pts (a stroke's
+ * records one after the other: a point equal to the last is left out). */
+static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, int rev,
+                                   const rs__linesym_params *p, double per_unit, ls_vtx **pts, double **sv,
+                                   size_t *cap, size_t *m_out)
+{
+    const double *xy = NULL;
+    size_t n = 0, m0 = *m_out;
+    rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
+    if (n > *cap - m0) {
+        size_t b1, b2, want = m0 + n;
+        if (want < 2 * *cap) want = 2 * *cap;
+        if (!rs__mul_size(want, sizeof **pts, &b1) || !rs__mul_size(want, sizeof **sv, &b2)) return RS_ERR_LIMIT;
+        ls_vtx *np = rs__realloc(ctx, *pts, b1);
+        if (!np) return RS_ERR_NOMEM;
+        *pts = np;
+        double *ns = rs__realloc(ctx, *sv, b2);
+        if (!ns) return RS_ERR_NOMEM;
+        *sv = ns;
+        *cap = want;
+    }
+    size_t m = m0;
+    double s = m0 ? (*sv)[m0 - 1] : 0;
+    for (size_t i = 0; i < n; i++) {
+        size_t k = rev ? n - 1 - i : i; /* (a record drawn against its points: last to first) */
+        double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
+        if (m > 0) {
+            if (x == (*pts)[m - 1].x && y == (*pts)[m - 1].y) continue;
+            s += 2 * hypot(0.5 * x - 0.5 * (*pts)[m - 1].x, 0.5 * y - 0.5 * (*pts)[m - 1].y);
+            if (!(s <= DBL_MAX)) s = DBL_MAX;
+        }
+        (*pts)[m].x = x;
+        (*pts)[m].y = y;
+        (*sv)[m] = s;
+        m++;
+    }
+    *m_out = m;
+    return RS_OK;
+}
+
+/* Records split a road anywhere, also inside a straight stretch: the
+ * joint point j of two records (points j-1, j, j+1 of the stroke) is left
+ * out when it lies on the segment j-1 .. j+1 within eps (a few local
+ * quanta), so the stroke has the unsplit road's points and arc lengths (a
+ * collinear point would bend the mitres of a band on the inner side of a
+ * nearby bend). Returns 1 when it was left out (points j.. move down). */
+static int drop_straight_joint(ls_vtx *pts, double *sv, size_t j, size_t m, double eps)
+{
+    double ax = pts[j - 1].x, ay = pts[j - 1].y, dx = pts[j + 1].x - ax, dy = pts[j + 1].y - ay;
+    double px = pts[j].x - ax, py = pts[j].y - ay, l2 = dx * dx + dy * dy, dot = px * dx + py * dy;
+    if (!(l2 > 0) || !(dot > 0) || !(dot < l2) || !(fabs(px * dy - py * dx) <= eps * sqrt(l2))) return 0;
+    for (size_t k = j; k + 1 < m; k++) {
+        pts[k] = pts[k + 1];
+        double s = sv[k - 1] + 2 * hypot(0.5 * pts[k].x - 0.5 * pts[k - 1].x, 0.5 * pts[k].y - 0.5 * pts[k - 1].y);
+        sv[k] = s <= DBL_MAX ? s : DBL_MAX;
+    }
+    return 1;
+}
+
+/* One road in local coordinates: distinct consecutive points and their arc
+ * lengths (summed as lib/scene/roadfield.c sums them). */
+static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs__linesym_params *p,
+                            double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
+{
+    *m_out = 0;
+    return road_local_append(ctx, roads, ri, 0, p, per_unit, pts, sv, cap, m_out);
+}
+
+static void unit_dir(double ax, double ay, double bx, double by, double *dx, double *dy)
+{
+    double hx = 0.5 * bx - 0.5 * ax, hy = 0.5 * by - 0.5 * ay, l = hypot(hx, hy);
+    *dx = hx / l;
+    *dy = hy / l;
+}
+
+static void junc_free(rs_ctx *ctx, ls_junc *J)
+{
+    rs__free(ctx, J->sf);
+    rs__free(ctx, J->start);
+    rs__free(ctx, J->ids);
+    rs__free(ctx, J->stamp);
+    rs__free(ctx, (void *)J->ends);
+    rs__free(ctx, J->nocut);
+    rs__free(ctx, J->car);
+    memset(J, 0, sizeof *J);
+}
+
+/* The road ends that meet a through road with the right of way at a T
+ * (per road two entries, start and end; stroke NO_STROKE: none): at a
+ * junction node, the strokes that pass through it (a road through a shared
+ * point or a T, or two records of one stroke); when exactly one of them
+ * has the highest priority there, every other road ending there is a side
+ * road of it. NULL (and RS_OK) without a network. */
+rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee **out)
+{
+    *out = NULL;
+    size_t n = rs_roads_count(roads);
+    if (!net || rs_network_road_count(net) != n) return RS_OK;
+    ls_tee *T = rs__alloc_array(ctx, n ? 2 * n : 1, sizeof *T);
+    if (!T) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = NO_STROKE;
+    for (size_t nd = 0; nd < net->nnodes; nd++) {
+        const rs_network_leg *L = net->leg + net->leg_start[nd];
+        uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
+        const rs_network_leg *tl = NULL;
+        if (d < 3) continue;
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road, st = net->stroke_of[r];
+            /* a road through the node, or a road end that its stroke continues */
+            int passes = L[k].kind == RS_LEG_FORWARD || (L[k].kind == RS_LEG_START && net->link[2 * r] != UINT32_MAX) ||
+                         (L[k].kind == RS_LEG_END && net->link[2 * r + 1] != UINT32_MAX);
+            if (!passes || !L[k].major || st == through) continue;
+            through = st, tl = &L[k];
+            nthrough++;
+        }
+        if (nthrough != 1) continue;
+        double w = 0;
+        rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road;
+            if ((L[k].kind != RS_LEG_START && L[k].kind != RS_LEG_END) || net->stroke_of[r] == through) continue;
+            ls_tee *t = &T[2 * r + (L[k].kind == RS_LEG_END)];
+            t->stroke = through;
+            /* lines within 2 m of the through road's edges are edge lines:
+             * they stop at the side road's mouth; the rest run on */
+            t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
+            t->dx = cos(tl->angle), t->dy = sin(tl->angle);
+        }
+    }
+    *out = T;
+    return RS_OK;
+}
+
+/* Surfaces of every road with a width, their index, and the road ends. */
+static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
+                            ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
+{
+    size_t nroads = rs_roads_count(roads), ncap = 0;
+    double per_unit = rs__local_quantum(p->cell_size);
+    double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
+    ls_ends *ends = rs__calloc(ctx, nroads ? nroads : 1, sizeof *ends);
+    J->ends = ends;
+    J->nocut = rs__calloc(ctx, nroads ? nroads : 1, 1);
+    J->car = rs__calloc(ctx, nroads ? nroads : 1, 1);
+    if (!ends || !J->nocut || !J->car) return RS_ERR_NOMEM;
+    for (size_t ri = 0; ri < nroads; ri++) {
+        const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
+        J->nocut[ri] = jc && !strcmp(jc, "no");
+        rs_road_info in;
+        J->car[ri] = rs_roads_get_info(roads, ri, &in) != RS_OK ||
+                     !(in.road_class == RS_CLASS_PATH || in.road_class == RS_CLASS_FOOTWAY || in.road_class == RS_CLASS_CYCLEWAY);
+    }
+    ls_tee *tees = NULL;
+    rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
+    if (rt) return rt;
+    /* trimmed ends (lib/scene/tee_ends.c): per road end the index of its T end */
+    rs__tee_end *tend = NULL;
+    size_t ntend = 0, *tend_of = NULL;
+    if ((rt = rs__tee_ends(ctx, roads, p->net, &tend, &ntend)) != RS_OK ||
+        (ntend && !(tend_of = rs__alloc_array(ctx, 2 * nroads, sizeof *tend_of)))) {
+        rs__free(ctx, tees);
+        rs__free(ctx, tend);
+        return rt ? rt : RS_ERR_NOMEM;
+    }
+    for (size_t i = 0; tend_of && i < 2 * nroads; i++) tend_of[i] = SIZE_MAX;
+    for (size_t i = 0; i < ntend; i++) tend_of[2 * (size_t)tend[i].road + (tend[i].end != 0)] = i;
+    for (size_t ri = 0; ri < nroads; ri++) {
+        double w = 0;
+        size_t m = 0;
+        rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
+        rs_result r = road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
+        if (r) {
+            rs__free(ctx, tees);
+            rs__free(ctx, tend);
+            rs__free(ctx, tend_of);
+            return r;
+        }
+        if (m < 2) continue;
+        const ls_vtx *v = *pts;
+        ends[ri].valid = 1;
+        ends[ri].x[0] = v[0].x, ends[ri].y[0] = v[0].y;
+        ends[ri].x[1] = v[m - 1].x, ends[ri].y[1] = v[m - 1].y;
+        unit_dir(v[0].x, v[0].y, v[1].x, v[1].y, &ends[ri].dx[0], &ends[ri].dy[0]);
+        unit_dir(v[m - 1].x, v[m - 1].y, v[m - 2].x, v[m - 2].y, &ends[ri].dx[1], &ends[ri].dy[1]);
+        double hw = 0.5 * w;
+        if (!(hw > 0) || !(hw <= BAND_MAX_EXTENT) || J->nocut[ri]) continue; /* no surface to stop at */
+        for (size_t i = 0; i + 1 < m; i++) {
+            ls_surf Q;
+            unit_dir(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, &Q.ux, &Q.uy);
+            double len = 2 * hypot(0.5 * v[i + 1].x - 0.5 * v[i].x, 0.5 * v[i + 1].y - 0.5 * v[i].y), lo, hi;
+            if (!cut_to_map(v[i].x, v[i].y, Q.ux, Q.uy, len, 2 * hw + L->margin, wmap, hmap, &lo, &hi)) continue;
+            Q.ax = v[i].x + lo * Q.ux;
+            Q.ay = v[i].y + lo * Q.uy;
+            Q.len = hi - lo;
+            Q.r = hw;
+            Q.u0 = -hw;
+            Q.u1 = Q.len + hw;
+            Q.road = (uint32_t)ri;
+            Q.only = Q.skip = NO_STROKE;
+            Q.clip = 0;
+            Q.cx = Q.cy = Q.cc = 0;
+            /* a trimmed end at a T: the rectangle reaches as far as the
+             * strip does and is cut by the far edge line */
+            for (int e = 0; tend_of && e < 2; e++) {
+                int here = e ? i + 2 == m && hi == len : i == 0 && lo == 0;
+                size_t ti = tend_of[2 * ri + (size_t)e];
+                if (ti == SIZE_MAX) continue;
+                const rs__tee_end *te = &tend[ti];
+                if (!here) {
+                    /* another segment of the record reaching past the line
+                     * (its surface is clipped there too) */
+                    double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
+                    double cc = te->nx * ex + te->ny * ey + te->half_width;
+                    double fa = te->nx * Q.ax + te->ny * Q.ay, fb = fa + (Q.len + hw) * (te->nx * Q.ux + te->ny * Q.uy);
+                    fa -= hw * (te->nx * Q.ux + te->ny * Q.uy);
+                    if (!Q.clip && fmax(fa, fb) + hw > cc) Q.clip = 1, Q.cx = te->nx, Q.cy = te->ny, Q.cc = cc;
+                    continue;
+                }
+                double dx = e ? Q.ux : -Q.ux, dy = e ? Q.uy : -Q.uy; /* towards the end */
+                double sn = te->nx * dx + te->ny * dy, cs = fabs(te->nx * dy - te->ny * dx);
+                if (!(sn > 0.1)) continue;
+                double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
+                double reach = fmax((te->half_width + hw * cs) / sn, hw);
+                if (e) Q.u1 = Q.len + reach;
+                else Q.u0 = -reach;
+                Q.clip = 1;
+                Q.cx = te->nx, Q.cy = te->ny, Q.cc = te->nx * ex + te->ny * ey + te->half_width;
+            }
+            /* an end segment at a T: the through stroke gets a copy that
+             * stops `keep` short of its centre line (no extension) */
+            int at_end = i + 2 == m && hi == len, at_start = i == 0 && lo == 0;
+            const ls_tee *T = tees ? &tees[2 * ri + (at_end ? 1 : 0)] : NULL;
+            ls_surf Qt = Q;
+            int tee = 0;
+            if (T && (at_end || at_start) && T->stroke != NO_STROKE) {
+                double sn = fabs(Q.ux * T->dy - Q.uy * T->dx); /* sine of the angle between the roads */
+                if (sn > 0.2) {
+                    double back = T->keep / sn;
+                    if (at_end) Qt.u1 = fmax(Q.len - back, Qt.u0);
+                    else Qt.u0 = fmin(back, Qt.u1);
+                    Qt.only = Q.skip = T->stroke;
+                    tee = 1;
+                }
+            }
+            for (int c = 0; c <= tee; c++) {
+                if (J->nsf == ncap) {
+                    size_t nc = ncap ? 2 * ncap : 256, bytes;
+                    ls_surf *ns = nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)
+                                      ? NULL : rs__realloc(ctx, J->sf, bytes);
+                    if (!ns) {
+                        rs__free(ctx, tees);
+                        rs__free(ctx, tend);
+                        rs__free(ctx, tend_of);
+                        return nc > UINT32_MAX ? RS_ERR_LIMIT : RS_ERR_NOMEM;
+                    }
+                    J->sf = ns;
+                    ncap = nc;
+                }
+                J->sf[J->nsf++] = c ? Qt : Q;
+            }
+        }
+    }
+    rs__free(ctx, tees);
+    rs__free(ctx, tend);
+    rs__free(ctx, tend_of);
+    /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
+    uint32_t jpx = CELL_PX;
+    for (;;) {
+        uint64_t gw = ((uint64_t)p->out_w + jpx - 1) / jpx, gh = ((uint64_t)p->out_h + jpx - 1) / jpx;
+        if (gw * gh <= MAX_CELLS || jpx >= (1u << 30)) {
+            J->grid.gw = (uint32_t)gw;
+            J->grid.gh = (uint32_t)gh;
+            break;
+        }
+        jpx *= 2;
+    }
+    J->grid.cmx = J->grid.cmy = (double)jpx * p->pixel;
+    size_t ncell = (size_t)J->grid.gw * J->grid.gh, total = 0;
+    J->start = rs__calloc(ctx, ncell + 1, sizeof *J->start);
+    J->stamp = rs__calloc(ctx, J->nsf ? J->nsf : 1, sizeof *J->stamp);
+    if (!J->start || !J->stamp) return RS_ERR_NOMEM;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 1) {
+            uint64_t lim = UINT32_MAX - 1u;
+            if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
+            if (!csr_close(J->start, ncell, lim, &total)) return RS_ERR_LIMIT;
+            J->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *J->ids);
+            if (!J->ids) return RS_ERR_NOMEM;
+        }
+        for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
+            const ls_surf *Q = &J->sf[k];
+            double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
+            const double U[4] = { Q->u0, Q->u1, Q->u1, Q->u0 }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
+            for (int c = 0; c < 4; c++) {
+                double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
+                x0 = fmin(x0, x), x1 = fmax(x1, x), y0 = fmin(y0, y), y1 = fmax(y1, y);
+            }
+            rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
+                       J->ids, (uint32_t)k, pass);
+        }
+    }
+    return RS_OK;
+}
+
+void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
+{
+    if (!L) return;
+    rs__free(ctx, L->start);
+    rs__free(ctx, L->ids);
+    rs__free(ctx, L->pb);
+    rs__free(ctx, L->pp);
+    rs__free(ctx, L->ent);
+    rs__free(ctx, L->hpp);
+    rs__free(ctx, L->band);
+    rs__free(ctx, L->dash);
+    rs__free(ctx, L->cut_start);
+    rs__free(ctx, L->cut_ord);
+    rs__free(ctx, L);
+}
+
+size_t rs__linesym_bytes(const rs__linesym *L) { return L ? L->bytes : 0; }
+
+rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesym_params *p,
+                            const uint32_t *band_start, const rs__band *bands, rs__linesym **out)
+{
+    *out = NULL;
+    if (!roads || !p || !band_start || !(p->pixel > 0) || !isfinite(p->pixel) || !(p->cell_size > 0) ||
+        !isfinite(p->origin_x) || !isfinite(p->origin_y) || p->out_w == 0 || p->out_h == 0)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "line symbols: bad parameters");
+    size_t nroads = rs_roads_count(roads);
+    uint32_t nband = band_start[nroads];
+    size_t ndash = 0;
+    for (uint32_t k = 0; k < nband; k++) {
+        const rs__band *b = &bands[k];
+        if (!(b->w > 0) || !(fabs(b->t) + 0.5 * b->w <= BAND_MAX_EXTENT) || (b->ndash & 1) || (b->ndash && !b->dash) ||
+            !isfinite(b->phase) || fabs(b->phase) > 1e15)
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "line symbols: band %u: bad offset, width, dash or phase", k);
+        double per = 0;
+        for (uint32_t j = 0; j < b->ndash; j++) {
+            if (!(b->dash[j] >= 0) || !(b->dash[j] <= 1e6))
+                return rs__fail(ctx, RS_ERR_INVALID_ARG, "line symbols: band %u: bad dash length", k);
+            per += b->dash[j];
+        }
+        /* a shorter period only makes grey: refuse it rather than loop per pixel over thousands of dashes */
+        if (b->ndash && !(per >= 1e-3))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "line symbols: band %u: dash period below 1 mm", k);
+        ndash += b->ndash;
+    }
+    rs__linesym *L = rs__calloc(ctx, 1, sizeof *L);
+    if (!L) return rs__fail(ctx, RS_ERR_NOMEM, "line symbols: out of memory");
+    rs_result res = RS_OK;
+    L->pixel = p->pixel;
+    L->budget = ctx->limits.max_linesym_bytes;
+    L->margin = p->pixel * HALF_SQRT2;
+    L->aa = p->aa;
+    L->out_w = p->out_w;
+    L->out_h = p->out_h;
+    L->cpx = CELL_PX;
+    L->cpy = CELL_ROWS;
+    for (;;) {
+        uint64_t gw = ((uint64_t)p->out_w + L->cpx - 1) / L->cpx, gh = ((uint64_t)p->out_h + L->cpy - 1) / L->cpy;
+        if (gw * gh <= MAX_CELLS || L->cpx >= (1u << 30)) {
+            L->gw = (uint32_t)gw;
+            L->gh = (uint32_t)gh;
+            break;
+        }
+        L->cpx *= 2;
+        L->cpy *= 2;
+    }
+    L->grid.gw = L->gw;
+    L->grid.gh = L->gh;
+    L->grid.cmx = (double)L->cpx * p->pixel;
+    L->grid.cmy = (double)L->cpy * p->pixel;
+    L->band = rs__alloc_array(ctx, nband ? nband : 1, sizeof *L->band);
+    L->dash = rs__alloc_array(ctx, ndash ? ndash : 1, sizeof *L->dash);
+    size_t ncell = (size_t)L->gw * L->gh;
+    L->start = rs__calloc(ctx, ncell + 1, sizeof *L->start);
+    ls_vtx *pts = NULL;
+    double *sv = NULL;
+    uint32_t *sr = NULL; /* the record of each segment of pts */
+    size_t srcap = 0;
+    ls_run *runs = NULL; /* a stroke's runs of records that look alike */
+    size_t runcap = 0;
+    ls_junc J;
+    memset(&J, 0, sizeof J);
+    int over = 0; /* push_cut passed the work limit */
+    if (!L->band || !L->dash || !L->start) { res = RS_ERR_NOMEM; goto fail; }
+    L->nband = nband;
+    for (uint32_t k = 0, d0 = 0; k < nband; k++) {
+        ls_band *B = &L->band[k];
+        memcpy(B->rgba, bands[k].rgba, sizeof B->rgba);
+        B->dash0 = d0;
+        B->ndash = bands[k].ndash;
+        B->phase = bands[k].phase;
+        B->period = 0;
+        for (uint32_t j = 0; j < B->ndash; j++) {
+            L->dash[d0 + j] = bands[k].dash[j];
+            B->period += bands[k].dash[j];
+        }
+        d0 += B->ndash;
+    }
+    double per_unit = rs__local_quantum(p->cell_size);
+    double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
+    size_t cap = 0, total = 0;
+    if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
+    J.limit = ctx->limits.max_field_work;
+    /* road by road, or stroke by stroke: the stroke's records as one polyline */
+    const rs_network *net = p->net && rs_network_road_count(p->net) == nroads ? p->net : NULL;
+    J.stroke_of = net ? net->stroke_of : NULL;
+    /* the cuts by stroke (a counting sort): a stroke's polyline leaves out
+     * the points where its records meet in a straight line, so a piece
+     * cannot tell which record it lies on; the cuts are places, so every
+     * cut of the stroke applies to each of its pieces */
+    if (p->ncuts) {
+        L->cuts = p->cuts;
+        L->cut_stroke = J.stroke_of;
+        L->cut_start = rs__calloc(ctx, nroads + 2, sizeof *L->cut_start);
+        L->cut_ord = rs__alloc_array(ctx, p->ncuts, sizeof *L->cut_ord);
+        if (!L->cut_start || !L->cut_ord) { res = RS_ERR_NOMEM; goto fail; }
+        for (size_t k = 0; k < p->ncuts; k++)
+            if (p->cuts[k].road < nroads) L->cut_start[cut_key(L, p->cuts[k].road) + 2]++;
+        for (size_t r = 0; r < nroads; r++) L->cut_start[r + 2] += L->cut_start[r + 1];
+        for (size_t k = 0; k < p->ncuts; k++)
+            if (p->cuts[k].road < nroads) L->cut_ord[L->cut_start[cut_key(L, p->cuts[k].road) + 1]++] = (uint32_t)k;
+    }
+    size_t nstroke = net ? net->nstrokes : nroads;
+    for (size_t k = 0; k < nstroke; k++) {
+        uint32_t one = (uint32_t)k;
+        const uint32_t *recs = net ? net->stroke_roads + net->stroke_start[k] : &one;
+        size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1;
+        uint32_t head = recs[0];
+        if (band_start[head + 1] == band_start[head]) continue;
+        /* records drawn both ways need lines that look the same both ways;
+         * else each record is drawn alone */
+        int alone = 0;
+        for (size_t q = 1; net && q < nrec && !alone; q++)
+            alone = net->rev[recs[q]] != net->rev[head] && !bands_mirror(bands + band_start[head], band_start[head + 1] - band_start[head]);
+        for (size_t q0 = 0; q0 < nrec; q0 = alone ? q0 + 1 : nrec) {
+            size_t m = 0, q1 = alone ? q0 + 1 : nrec;
+            /* runs of records that look alike: where the lanes change along
+             * the stroke the next run draws its own bands from the joint
+             * on (the joint is kept), the arc length running on */
+            size_t nrun = 0;
+            for (size_t q = q0; q < q1; q++) {
+                size_t m0 = m;
+                int rev = net && !alone ? net->rev[recs[q]] : 0;
+                uint32_t lead = nrun ? runs[nrun - 1].rec : recs[q];
+                int starts = !nrun || !bands_equal(bands + band_start[lead], band_start[lead + 1] - band_start[lead],
+                                                   bands + band_start[recs[q]],
+                                                   band_start[recs[q] + 1] - band_start[recs[q]]);
+                if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK)
+                    goto fail;
+                if (!starts && m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
+                if (cap > srcap) {
+                    uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
+                    if (!ns) { res = RS_ERR_NOMEM; goto fail; }
+                    sr = ns;
+                    srcap = cap;
+                }
+                for (size_t i = m0 ? m0 - 1 : 0; i + 1 < m; i++) sr[i] = recs[q];
+                if (starts) {
+                    if (nrun == runcap) {
+                        size_t nc = runcap ? 2 * runcap : 8;
+                        ls_run *nr = rs__realloc(ctx, runs, nc * sizeof *runs);
+                        if (!nr) { res = RS_ERR_NOMEM; goto fail; }
+                        runs = nr;
+                        runcap = nc;
+                    }
+                    runs[nrun].rec = recs[q];
+                    runs[nrun].at = m0 ? m0 - 1 : 0;
+                    nrun++;
+                }
+            }
+            if (m < 2) continue;
+            for (size_t u = 0; u < nrun; u++) {
+                size_t i0 = runs[u].at, i1 = u + 1 < nrun ? runs[u + 1].at : m - 1;
+                uint32_t first = runs[u].rec;
+                if (i1 <= i0) continue;
+                for (uint32_t b = band_start[first]; b < band_start[first + 1]; b++)
+                    if ((res = road_band_pieces(ctx, L, &J, sr + i0, pts + i0, sv + i0, i1 - i0 + 1, &bands[b], b, wmap,
+                                                hmap)) != RS_OK)
+                        goto fail;
+            }
+        }
+    }
+    rs__free(ctx, pts);
+    rs__free(ctx, sv);
+    rs__free(ctx, sr);
+    rs__free(ctx, runs);
+    sr = NULL;
+    runs = NULL;
+    junc_free(ctx, &J);
+    pts = NULL;
+    sv = NULL;
+    /* the painter's records were made piece by piece: hand back the spare room */
+    size_t nhpp = L->nhpp;
+    if (L->npc && L->npc < L->cap) {
+        ls_ppc *np = rs__realloc(ctx, L->pp, L->npc * sizeof *L->pp);
+        if (np) L->pp = np;
+    }
+    if (nhpp && nhpp < L->hcap) {
+        double *nh = rs__realloc(ctx, L->hpp, 4 * nhpp * sizeof *L->hpp);
+        if (nh) L->hpp = nh;
+    }
+    for (size_t k = 0; k < L->npc; k++) piece_cells(L, (uint32_t)k, 0);
+    uint64_t lim = UINT32_MAX - 1u;
+    if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
+    if (!csr_close(L->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; goto fail; }
+    /* the index entries count too: a piece is listed in every cell it covers */
+    if (L->budget && (uint64_t)total * (sizeof *L->ids + sizeof *L->ent) >
+                         L->budget - ((uint64_t)L->npc * PIECE_BYTES + (uint64_t)nhpp * HP_BYTES)) {
+        L->over_budget = 1;
+        res = RS_ERR_LIMIT;
+        goto fail;
+    }
+    L->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ids);
+    if (!L->ids) { res = RS_ERR_NOMEM; goto fail; }
+    for (size_t k = L->npc; k-- > 0;) piece_cells(L, (uint32_t)k, 1);
+    L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
+    if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
+    for (size_t e = 0; e < total; e++) {
+        const ls_pbuild *P = &L->pb[L->ids[e]];
+        ls_pbox *B = &L->ent[e];
+        B->gx0 = P->gx0, B->gx1 = P->gx1, B->gy0 = P->gy0, B->gy1 = P->gy1;
+        B->id = L->ids[e];
+        B->band = L->pp[L->ids[e]].band;
+    }
+    rs__free(ctx, L->pb); /* built */
+    rs__free(ctx, L->ids);
+    rs__free(ctx, L->cut_start);
+    rs__free(ctx, L->cut_ord);
+    L->pb = NULL;
+    L->ids = NULL;
+    L->cut_start = L->cut_ord = NULL;
+    L->cuts = NULL;
+    L->cut_stroke = NULL;
+    L->cap = 0;
+    L->bytes = sizeof *L + (ncell + 1) * sizeof *L->start + total * sizeof *L->ent + L->npc * sizeof *L->pp +
+               4 * nhpp * sizeof *L->hpp + nband * sizeof *L->band +
+               ndash * sizeof *L->dash;
+    *out = L;
+    rs__ok(ctx);
+    return RS_OK;
+fail:
+    over = J.limit && J.work > J.limit;
+    int over_bytes = L->over_budget;
+    rs__free(ctx, pts);
+    rs__free(ctx, sv);
+    rs__free(ctx, sr);
+    rs__free(ctx, runs);
+    junc_free(ctx, &J);
+    rs__linesym_free(ctx, L);
+    if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");
+    if (over_bytes)
+        return rs__fail(ctx, res,
+                        "line symbols: the pieces of the roads' lines and dashes and their index take more than "
+                        "%llu bytes together (many styled lines, dashes or points; the budget is "
+                        "rs_limits.max_linesym_bytes)", (unsigned long long)ctx->limits.max_linesym_bytes);
+    if (over)
+        return rs__fail(ctx, res,
+                        "line symbols: cutting lines at the other roads' surfaces takes more than %llu steps "
+                        "(too many roads in one place; the budget is rs_limits.max_field_work)",
+                        (unsigned long long)ctx->limits.max_field_work);
+    return rs__fail(ctx, res, "line symbols: too many pieces or index entries");
+}
+
+/* ------------------------------------------------------------------------
+ * Painting
+ * ---------------------------------------------------------------------- */
+
+/* floor and ceil by a conversion (the painter's hot loops) */
+static double fast_floor(double x)
+{
+    if (!(x > -1e15 && x < 1e15)) return floor(x);
+    double t = (double)(long long)x;
+    return t > x ? t - 1 : t;
+}
+
+static double fast_ceil(double x)
+{
+    if (!(x > -1e15 && x < 1e15)) return ceil(x);
+    double t = (double)(long long)x;
+    return t < x ? t + 1 : t;
+}
+
+/* Pixel columns [*lo, *hi] whose centres' u lies in [ua, ub] on the row
+ * at yc (relative to P's origin; a superset by a little slack for
+ * rounding). Narrows *lo, *hi. */
+static inline void u_cols(const ls_ppc *P, double yc, double ua, double ub, double *lo, double *hi)
+{
+    /* u = xr ux + yc uy; xr = x - ox; pixel centres (x + 0.5) pix = xr + ox */
+    double c = yc * P->uy;
+    if (P->iku == 0) {
+        if (c < ua - 1e-9 || c > ub + 1e-9) *hi = *lo - 1;
+        return;
+    }
+    double t0 = (ua - c) * P->iku + P->cbase, t1 = (ub - c) * P->iku + P->cbase;
+    if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+    double plo = fast_ceil(t0 - 1e-6), phi = fast_floor(t1 + 1e-6);
+    if (plo > *lo) *lo = plo;
+    if (phi < *hi) *hi = phi;
+}
+
+/* Pixel columns [*lo, *hi] of row y whose squares can touch slab P: their
+ * centres lie in its u and v ranges grown by the square's extent along u
+ * and v (a superset is harmless: its cover is 0). Narrows *lo, *hi. */
+static void slab_row(const rs__linesym *L, const ls_ppc *P, uint32_t y, double *lo, double *hi)
+{
+    double yc = ((double)y + 0.5) * L->pixel - P->oy;
+    /* v = xr uy - yc ux: the u formula in the frame turned by 90 degrees */
+    double c = -yc * P->ux;
+    if (P->ikv == 0) {
+        if (c < P->rv0 - 1e-9 || c > P->rv1 + 1e-9) { *hi = *lo - 1; return; }
+    } else {
+        double t0 = (P->rv0 - c) * P->ikv + P->cbase, t1 = (P->rv1 - c) * P->ikv + P->cbase;
+        if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+        double plo = fast_ceil(t0 - 1e-6), phi = fast_floor(t1 + 1e-6);
+        if (plo > *lo) *lo = plo;
+        if (phi < *hi) *hi = phi;
+    }
+    u_cols(P, yc, P->ru0, P->ru1, lo, hi);
+}
+
+/* Visit the block cell by cell; per cell, each run of pieces of one band:
+ * sum their covers into scratch, then hand the run to `emit`. Each pixel
+ * belongs to the one cell that holds it, whose list is in painting order,
+ * so a pixel sees the same sums in the same order in every block. */
+typedef void (*ls_emit)(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t y0, uint32_t y1, const uint32_t *rlo,
+                        const uint32_t *rhi, const double *cov, size_t cstride, void *user);
+
+/* A run's scratch rows: row y - y0 holds columns [x0, x1) (cs of them),
+ * zeroed when first touched; [x0 + rlo, x0 + rhi) are the touched ones
+ * (rhi 0: none). */
+typedef struct ls_rows {
+    uint32_t x0, x1, y0;
+    size_t cs;
+    double *scratch;
+    uint32_t *rlo, *rhi;
+} ls_rows;
+
+/* Add piece P's cover of row y, columns [lo, hi] cut to the run's, into its scratch row. */
+static void cover_cols(const rs__linesym *L, const ls_ppc *P, uint32_t y, double lo, double hi, const ls_rows *R)
+{
+    uint32_t x0 = R->x0, x1 = R->x1;
+    uint32_t qa = lo > (double)x0 ? (lo < (double)x1 ? (uint32_t)lo : x1) : x0;
+    uint32_t qb = hi + 1 < (double)x1 ? (hi + 1 > (double)qa ? (uint32_t)(hi + 1) : qa) : x1;
+    if (qa >= qb) return;
+    uint32_t r = y - R->y0;
+    double *row = R->scratch + r * R->cs; /* column x at row[x - x0] */
+    if (R->rhi[r] == 0) {
+        for (size_t x = 0; x < R->cs; x++) row[x] = 0;
+        R->rlo[r] = qa - x0;
+        R->rhi[r] = qb - x0;
+    } else {
+        if (qa - x0 < R->rlo[r]) R->rlo[r] = qa - x0;
+        if (qb - x0 > R->rhi[r]) R->rhi[r] = qb - x0;
+    }
+    if (L->aa == RS__AA_HERMITE) {
+        for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_hermite(L, P, x, y);
+    } else if (P->kind == PIECE_SLAB && !P->dashed) {
+        /* piece_area's first steps inline: outside the band, or crossing
+         * only its edges well inside its ends (the same arithmetic) */
+        double pix = L->pixel, yc = ((double)y * pix - P->oy) + 0.5 * pix, ux = P->ux, uy = P->uy, su = P->su;
+        for (uint32_t x = qa; x < qb; x++) {
+            double xc = ((double)x * pix - P->ox) + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+            double d0 = cv - P->a, d1 = P->b - cv;
+            if (d0 <= -su || d1 <= -su) continue;
+            if (cu >= P->uin0 && cu <= P->uin1)
+                row[x - x0] += d0 < su || d1 < su ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+            else
+                row[x - x0] += piece_area(L, P, x, y);
+        }
+    } else if (P->kind == PIECE_SLAB) {
+        /* the same for a dashed slab, with the dash test */
+        const ls_band *B = &L->band[P->band];
+        double pix = L->pixel, yc = ((double)y * pix - P->oy) + 0.5 * pix, ux = P->ux, uy = P->uy, su = P->su;
+        for (uint32_t x = qa; x < qb; x++) {
+            double xc = ((double)x * pix - P->ox) + 0.5 * pix, cu = xc * ux + yc * uy, cv = xc * uy - yc * ux;
+            double d0 = cv - P->a, d1 = P->b - cv;
+            if (d0 <= -su || d1 <= -su) continue;
+            if (cu >= P->uin0 && cu <= P->uin1) {
+                int on = dash_span(L, B, P->s0 + cu - B->phase, su);
+                if (on == 0) continue;
+                if (on > 0) {
+                    row[x - x0] += d0 < su || d1 < su ? strip_below(P, P->b - cv) - strip_below(P, P->a - cv) : 1.0;
+                    continue;
+                }
+            }
+            row[x - x0] += piece_area(L, P, x, y);
+        }
+    } else {
+        for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_area(L, P, x, y);
+    }
+}
+
+/* Row y of dashed slab P over columns [lo, hi]: only the pixels that can
+ * touch a dash (centre u within the square's extent of an on-interval), in
+ * increasing column order, each once. */
+static void dashed_row(const rs__linesym *L, const ls_ppc *P, uint32_t y, double lo, double hi, const ls_rows *R)
+{
+    const ls_band *B = &L->band[P->band];
+    const double *d = L->dash + B->dash0;
+    double pix = L->pixel, yc = ((double)y + 0.5) * pix - P->oy, m = P->su;
+    /* the u range of the row's centres */
+    double ua = (((lo + 0.5) * pix) - P->ox) * P->ux + yc * P->uy, ub = (((hi + 0.5) * pix) - P->ox) * P->ux + yc * P->uy;
+    if (ua > ub) { double t = ua; ua = ub; ub = t; }
+    double s_lo = P->s0 + ua - m - B->phase, s_hi = P->s0 + ub + m - B->phase;
+    /* more periods than columns, or s too coarse for the period: every column */
+    if (!((s_hi - s_lo) / B->period <= hi - lo + 1) || s_lo + B->period == s_lo) {
+        cover_cols(L, P, y, lo, hi, R);
+        return;
+    }
+    double done_lo = hi + 1, done_hi = lo - 1; /* columns covered so far (a run, growing at one end) */
+    int asc = P->ux >= 0;
+    for (double base = floor(s_lo / B->period) * B->period; base <= s_hi; base += B->period) {
+        double on0 = base;
+        for (uint32_t j = 0; j < B->ndash; j += 2) {
+            double on1 = on0 + d[j];
+            if (on1 + m >= s_lo && on0 - m <= s_hi && d[j] > 0) {
+                double ca = lo, cb = hi, e = 1e-9 * (1 + fabs(on0) + fabs(P->s0));
+                u_cols(P, yc, on0 + B->phase - P->s0 - m - e, on1 + B->phase - P->s0 + m + e, &ca, &cb);
+                if (done_lo <= done_hi) { /* the pixels already visited lie before (asc) or after these */
+                    if (asc && ca <= done_hi) ca = done_hi + 1;
+                    if (!asc && cb >= done_lo) cb = done_lo - 1;
+                }
+                if (ca <= cb) {
+                    cover_cols(L, P, y, ca, cb, R);
+                    if (done_lo > done_hi) done_lo = ca, done_hi = cb;
+                    else if (asc) done_hi = cb;
+                    else done_lo = ca;
+                }
+            }
+            on0 = on1 + d[j + 1];
+        }
+    }
+}
+
+static void visit(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, double *scratch,
+                  ls_emit emit, void *user, uint32_t only_band)
+{
+    if (!L || w == 0 || h == 0) return;
+    uint32_t cx0 = px0 / L->cpx, cx1 = (px0 + w - 1) / L->cpx, cy0 = py0 / L->cpy, cy1 = (py0 + h - 1) / L->cpy;
+    if (cx1 >= L->gw) cx1 = L->gw - 1;
+    if (cy1 >= L->gh) cy1 = L->gh - 1;
+    for (uint32_t cy = cy0; cy <= cy1 && cy < L->gh; cy++) {
+        uint32_t ya0 = cy * L->cpy, yb0 = ya0 + L->cpy;
+        if (ya0 < py0) ya0 = py0;
+        if (yb0 > py0 + h) yb0 = py0 + h;
+        /* (a cell larger than CELL_PX rows is walked CELL_PX rows at a time) */
+        for (uint32_t ya = ya0; ya < yb0; ya += CELL_PX)
+        for (uint32_t cx = cx0; cx <= cx1 && cx < L->gw; cx++) {
+            uint32_t yb = yb0 - ya > CELL_PX ? ya + CELL_PX : yb0;
+            uint32_t xa = cx * L->cpx, xb = xa + L->cpx;
+            if (xa < px0) xa = px0;
+            if (xb > px0 + w) xb = px0 + w;
+            size_t c = (size_t)cy * L->gw + cx;
+            uint32_t e0 = L->start[c], e1 = L->start[c + 1];
+#if defined(__GNUC__)
+            /* ask for the pieces this block of the cell will read, before reading them */
+            for (uint32_t e = e0; e < e1; e++) {
+                const ls_pbox *B = &L->ent[e];
+                if (B->gy1 < (double)ya || B->gy0 >= (double)yb || B->gx1 < (double)xa || B->gx0 >= (double)xb) continue;
+                const char *q = (const char *)&L->pp[B->id];
+                __builtin_prefetch(q);
+                __builtin_prefetch(q + 64);
+                __builtin_prefetch(q + 128);
+                __builtin_prefetch(q + sizeof(ls_ppc) - 1);
+            }
+#endif
+            for (uint32_t e = e0; e < e1;) {
+                const ls_pbox *PB = L->ent;
+                uint32_t band = PB[e].band, f = e;
+                while (f < e1 && PB[f].band == band) f++;
+                if (only_band != UINT32_MAX && band != only_band) { e = f; continue; }
+                /* the run's rows are the block's part of the cell: [xa, xb) x [ya, yb) */
+                uint32_t rlo[CELL_PX], rhi[CELL_PX];
+                ls_rows R = { xa, xb, ya, xb - xa, scratch, rlo, rhi };
+                for (uint32_t r = 0; r < yb - ya; r++) rhi[r] = 0;
+                for (uint32_t g = e; g < f; g++) {
+                    const ls_pbox *Q = &PB[g];
+                    if (Q->gy1 < (double)ya || Q->gy0 >= (double)yb || Q->gx1 < (double)xa || Q->gx0 >= (double)xb) continue;
+                    uint32_t ry0 = Q->gy0 > (double)ya ? (uint32_t)Q->gy0 : ya;
+                    uint32_t ry1 = Q->gy1 + 1 < (double)yb ? (uint32_t)(Q->gy1 + 1) : yb;
+                    const ls_ppc *P = &L->pp[Q->id];
+                    for (uint32_t y = ry0; y < ry1; y++) {
+                        double lo = Q->gx0, hi = Q->gx1;
+                        if (P->kind == PIECE_SLAB) {
+                            slab_row(L, P, y, &lo, &hi);
+                            if (lo > hi) continue;
+                            if (P->dashed) {
+                                /* cut to the block first: fewer dashes to walk */
+                                if (lo < (double)xa) lo = (double)xa;
+                                if (hi > (double)xb - 1) hi = (double)xb - 1;
+                                if (lo <= hi) dashed_row(L, P, y, lo, hi, &R);
+                                continue;
+                            }
+                        }
+                        cover_cols(L, P, y, lo, hi, &R);
+                    }
+                }
+                emit(L, band, xa, ya, yb, rlo, rhi, scratch, R.cs, user);
+                e = f;
+            }
+        }
+    }
+}
+
+typedef struct paint_ctx {
+    uint32_t px0, py0, w;
+    float *rgb;
+    size_t stride;
+} paint_ctx;
+
+static void emit_paint(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t y0, uint32_t y1, const uint32_t *rlo,
+                       const uint32_t *rhi, const double *cov, size_t cs, void *user)
+{
+    const paint_ctx *pc = user;
+    const ls_band *B = &L->band[band];
+    const float c0 = B->rgba[0], c1 = B->rgba[1], c2 = B->rgba[2];
+    const double op = B->rgba[3];
+    for (uint32_t y = y0; y < y1; y++) {
+        if (rhi[y - y0] == 0) continue;
+        /* the block's row and the run's, both from column x0 */
+        float *r0 = pc->rgb + (size_t)(y - pc->py0) * pc->stride + (x0 - pc->px0), *r1 = r0 + pc->w, *r2 = r1 + pc->w;
+        const double *cr = cov + (size_t)(y - y0) * cs;
+        for (uint32_t i = rlo[y - y0]; i < rhi[y - y0]; i++) {
+            double c = cr[i];
+            if (!(c > 0)) continue;
+            if (c > 1) c = 1;
+            float a = (float)(c * op), k = 1.0f - a;
+            r0[i] = r0[i] * k + c0 * a;
+            r1[i] = r1[i] * k + c1 * a;
+            r2[i] = r2[i] * k + c2 * a;
+        }
+    }
+}
+
+/* visit's runs are at most one cell block: at most CELL_PX rows of at most w columns */
+size_t rs__linesym_scratch_len(uint32_t w)
+{
+    return (size_t)(w ? w : 1) * CELL_PX;
+}
+
+void rs__linesym_paint(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, float *rgb,
+                       size_t row_stride, double *scratch)
+{
+    paint_ctx pc = { px0, py0, w, rgb, row_stride };
+    visit(L, px0, py0, w, h, scratch, emit_paint, &pc, UINT32_MAX);
+}
+
+typedef struct cov_ctx {
+    uint32_t px0, py0;
+    double *out;
+    size_t stride;
+} cov_ctx;
+
+static void emit_cov(const rs__linesym *L, uint32_t band, uint32_t x0, uint32_t y0, uint32_t y1, const uint32_t *rlo,
+                     const uint32_t *rhi, const double *cov, size_t cs, void *user)
+{
+    (void)L;
+    (void)band;
+    const cov_ctx *cc = user;
+    for (uint32_t y = y0; y < y1; y++) {
+        if (rhi[y - y0] == 0) continue;
+        for (uint32_t x = x0 + rlo[y - y0]; x < x0 + rhi[y - y0]; x++) {
+            double c = cov[(size_t)(y - y0) * cs + (x - x0)];
+            cc->out[(size_t)(y - cc->py0) * cc->stride + (x - cc->px0)] = c > 1 ? 1 : c;
+        }
+    }
+}
+
+void rs__linesym_coverage(const rs__linesym *L, uint32_t band, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
+                          double *out, size_t stride)
+{
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) out[(size_t)y * stride + x] = 0;
+    /* scratch: one cell at most */
+    double scratch[CELL_PX * CELL_PX];
+    if (!L || L->cpx > CELL_PX || L->cpy > CELL_PX) return;
+    cov_ctx cc = { px0, py0, out, stride };
+    visit(L, px0, py0, w, h, scratch, emit_cov, &cc, band);
+}

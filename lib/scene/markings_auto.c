@@ -1,0 +1,603 @@
+/* Automatic marking placement (issue 14, docs/markings.md "Automatic
+ * placement"):
+ *
+ * - junctions: an end of road A within B's half width (+ 0.5 m) of road B's
+ *   centreline (B != A) is a junction of A at that end and of B at the
+ *   nearest point's arc length. Its area on A is the stretch within B's
+ *   half width + 0.5 m of the junction; on B, A's half width + 0.5 m.
+ * - stop / give-way lines: where A ends at B and A's priority is below B's
+ *   (rs__road_priority: the class rank, motorway > trunk > primary >
+ *   secondary > tertiary > residential > service > track > path, footway,
+ *   cycleway, no class lowest; + 10 for priority_road, + 20 for a
+ *   roundabout's ring, so its arms give way), a give-way line (stop line
+ *   with `control=stop`) across A's incoming half (the whole width when
+ *   one-way), 0.5 m before A's junction area. A closed ring passes through
+ *   its own seam: an arm ending on its first point is a junction too.
+ * - turn arrows: `turn:lanes=left|through;right|...` (OpenStreetMap, lanes
+ *   from left to right) on a road whose end is a junction: one arrow per
+ *   lane, its tip 6 m before the junction area; the lanes share the
+ *   incoming half (the whole width when one-way).
+ * - zebra crossings: a `X Y crossing=zebra` point attribute puts a zebra
+ *   across the road there (width = road width - 0.4 m).
+ *
+ * - non-car classes (path, footway, cycleway) get no stop or give-way
+ *   lines and no arrows, and make no junctions with other roads: a
+ *   footway meeting a street neither gives way nor cuts the street's
+ *   markings (issue 28).
+ *
+ * A placement is dropped when it would spill off its road (|t| + width/2
+ * beyond the half width, or past either end) or overlap a junction area. */
+#include "markings.h"
+#include "network.h"
+#include "lanes.h"
+#include "atlas.h"
+
+#include <math.h>
+#include <string.h>
+
+#define JUNCTION_TOL 0.5   /* metres beyond the other road's half width */
+#define LINE_GAP 0.5       /* stop line to junction area */
+#define ARROW_GAP 6.0      /* arrow tip to junction area */
+
+typedef struct jn {
+    size_t road;
+    double s, half; /* centre and half extent of the junction area along the road */
+} jn;
+
+typedef struct ctxa {
+    rs_ctx *ctx;
+    const rs_roads *roads;
+    const rs_style_options *so; /* profile, default driving side (may be NULL) */
+    rs__line_cut *cuts;         /* where the markings interrupt their road's lines (NULL: not asked) */
+    size_t ncut, capcut;
+    int want_cuts;
+    rs__road_local *rl; /* per road */
+    double *box;        /* per road: x0 y0 x1 y1 */
+    jn *j;
+    size_t nj, capj;
+    /* per road end (2 per road): the record that goes on there (the same
+     * street split into records, turning less than 30 degrees), + 1; 0:
+     * none. cont_end: that record meets it with its last point. */
+    size_t *cont;
+    uint8_t *cont_end;
+} ctxa;
+
+/* Classes for feet and bikes: no car markings (docs/road-format.md). */
+static int non_car(rs_road_class c)
+{
+    return c == RS_CLASS_PATH || c == RS_CLASS_FOOTWAY || c == RS_CLASS_CYCLEWAY;
+}
+
+static rs_road_class road_class_of(const rs_roads *roads, size_t i)
+{
+    rs_road_info info;
+    rs_roads_get_info(roads, i, &info);
+    return info.road_class;
+}
+
+/* Room for one more of `n` items of `size` bytes in *arr (capacity *cap,
+ * doubled, first `first`); 0 when out of memory. */
+static int room_for_one(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first)
+{
+    if (n < *cap) return 1;
+    size_t nc = *cap ? 2 * *cap : first;
+    void *q = rs__realloc(ctx, *arr, nc * size);
+    if (!q) return 0;
+    *arr = q;
+    *cap = nc;
+    return 1;
+}
+
+static rs_result add_jn(ctxa *A, size_t road, double s, double half)
+{
+    void *arr = A->j;
+    if (!room_for_one(A->ctx, &arr, A->nj, &A->capj, sizeof *A->j, 64)) return RS_ERR_NOMEM;
+    A->j = arr;
+    A->j[A->nj].road = road;
+    A->j[A->nj].s = s;
+    A->j[A->nj].half = half;
+    A->nj++;
+    return RS_OK;
+}
+
+/* Nearest point of road r to (x, y): distance and arc length. */
+static double nearest(const rs__road_local *r, double x, double y, double *s_out)
+{
+    double best = INFINITY;
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], len = r->s[k + 1] - r->s[k];
+        if (!(len > 0)) continue;
+        double u = ((x - r->x[k]) * dx + (y - r->y[k]) * dy) / len;
+        if (u < 0) u = 0;
+        if (u > len) u = len;
+        double ex = x - r->x[k] - u * dx / len, ey = y - r->y[k] - u * dy / len, d = hypot(ex, ey);
+        if (d < best) {
+            best = d;
+            *s_out = r->s[k] + u;
+        }
+    }
+    return best;
+}
+
+static int in_junction(const ctxa *A, size_t road, double lo, double hi)
+{
+    for (size_t i = 0; i < A->nj; i++)
+        if (A->j[i].road == road && hi > A->j[i].s - A->j[i].half && lo < A->j[i].s + A->j[i].half) return 1;
+    return 0;
+}
+
+/* A placement may reach d metres past end e of `road` into the record
+ * that goes on there (OSM splits a street anywhere: an arrow 6 m before a
+ * junction must not vanish because the way was split 8 m before it),
+ * unless that runs past the other record too or into its junction areas.
+ * The paint extends the end segment (lib/scene/markings.c), which is the other
+ * record's own line on a straight split. */
+static int spill_ok(const ctxa *A, size_t road, int e, double d)
+{
+    size_t c = A->cont ? A->cont[2 * road + e] : 0;
+    if (!c) return 0;
+    const rs__road_local *o = &A->rl[c - 1];
+    double len = o->s[o->n - 1];
+    if (!(d <= len)) return 0;
+    return A->cont_end[2 * road + e] ? !in_junction(A, c - 1, len - d, len) : !in_junction(A, c - 1, 0, d);
+}
+
+/* Push p unless it spills off its road (and the record going on there) or
+ * into a junction area. */
+static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size_t *n, size_t *cap)
+{
+    rs__placement q = *p;
+    /* a centre past the record's end is on the record going on there
+     * (OSM splits a street anywhere): placed on that one, turned with it
+     * when it runs the other way (the paint draws a placement from the
+     * stretch of its own record around its centre); a few records at most */
+    for (int hop = 0;; hop++) {
+        const rs__road_local *r = &A->rl[q.road];
+        if (r->n < 2) return RS_OK;
+        double total = r->s[r->n - 1];
+        if (q.s >= 0 && q.s <= total) break;
+        int e = q.s > total;
+        size_t c = A->cont[2 * q.road + e];
+        if (!c || hop == 16) return RS_OK;
+        const rs__road_local *o = &A->rl[c - 1];
+        if (o->n < 2) return RS_OK;
+        double d = e ? q.s - total : -q.s, len = o->s[o->n - 1];
+        int same = A->cont_end[2 * q.road + e] != e; /* its end meets our start, or its start our end */
+        q.road = c - 1;
+        q.s = same ? (e ? d : len - d) : (e ? len - d : d);
+        if (!same) {
+            q.t = -q.t;
+            q.flip = !q.flip;
+        }
+    }
+    const rs__road_local *r = &A->rl[q.road];
+    double w, total = r->s[r->n - 1], lo = q.s - q.length / 2, hi = q.s + q.length / 2;
+    rs_roads_get(A->roads, q.road, NULL, &w, NULL, NULL);
+    if (fabs(q.t) + q.width / 2 > w / 2 + 1e-9) return RS_OK;
+    if (lo < 0 && !spill_ok(A, q.road, 0, -lo)) return RS_OK;
+    if (hi > total && !spill_ok(A, q.road, 1, hi - total)) return RS_OK;
+    if (in_junction(A, q.road, lo, hi)) return RS_OK;
+    return rs__placement_push(A->ctx, pl, n, cap, &q);
+}
+
+/* The lane and centre lines of `road` stop over s in [s0, s1] within
+ * `half` of its centre line: one rectangle per segment the range meets,
+ * none past the road's ends (the line symbols apply a stroke's cuts to all
+ * its records, docs/network.md: a cut reaching past this record's end
+ * would cut the lines of the record that continues it). */
+static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half)
+{
+    if (!A->want_cuts || !(half > 0)) return RS_OK;
+    const rs__road_local *r = &A->rl[road];
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        double len = r->s[k + 1] - r->s[k], u0 = s0 - r->s[k], u1 = s1 - r->s[k];
+        if (!(len > 0)) continue;
+        if (u0 < 0) u0 = 0;
+        if (u1 > len) u1 = len;
+        if (!(u1 > u0)) continue;
+        void *arr = A->cuts;
+        if (!room_for_one(A->ctx, &arr, A->ncut, &A->capcut, sizeof *A->cuts, 16)) return RS_ERR_NOMEM;
+        A->cuts = arr;
+        double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], d = hypot(dx, dy);
+        rs__line_cut *c = &A->cuts[A->ncut++];
+        c->road = (uint32_t)road;
+        c->ax = r->x[k];
+        c->ay = r->y[k];
+        c->ux = dx / d;
+        c->uy = dy / d;
+        c->u0 = u0;
+        c->u1 = u1;
+        c->r = half;
+    }
+    return RS_OK;
+}
+
+/* Half the width the cuts take: clear of the outer lanes' edges, where the
+ * edge lines lie. */
+#define CUT_EDGE_CLEAR 0.3
+
+static double cut_half(const rs_road_lanes *L)
+{
+    double a = L->lane[0].t_left, b = -L->lane[L->count - 1].t_right;
+    return (a < b ? a : b) - CUT_EDGE_CLEAR;
+}
+
+/* RS_TURN_* flags to an arrow type name, or NULL (none). Left-hand
+ * traffic turns back to the right. */
+static const char *arrow_for(uint32_t f, int left_hand)
+{
+    int left = !!(f & RS_TURN_LEFT), right = !!(f & RS_TURN_RIGHT), through = !!(f & RS_TURN_THROUGH);
+    if (f & RS_TURN_REVERSE) return left_hand ? "arrow_uturn_right" : "arrow_uturn";
+    if (through && left && !right) return "arrow_straight_left";
+    if (through && right && !left) return "arrow_straight_right";
+    if (through && !left && !right) return "arrow_straight";
+    if (left && !right && !through) return "arrow_left";
+    if (right && !left && !through) return "arrow_right";
+    return NULL;
+}
+
+/* A placement of atlas type ti on road `road` at the type's own size
+ * (s, t to be set by the caller). */
+static rs__placement sprite_at(const rs_atlas *atlas, long ti, size_t road, int flip)
+{
+    rs__placement p;
+    memset(&p, 0, sizeof p);
+    p.type = (uint32_t)ti;
+    p.road = road;
+    p.length = atlas->t[ti].length;
+    p.width = atlas->t[ti].width;
+    p.flip = flip;
+    return p;
+}
+
+/* Elements of atlas type ti (own size), repeated across [t0, t1] with
+ * `gap` between them: as many as fit, the run centred in the span. */
+static rs_result repeat_across(const ctxa *A, const rs_atlas *atlas, long ti, size_t road, int flip, double s,
+                               double t0, double t1, double gap, rs__placement **pl, size_t *n, size_t *cap)
+{
+    rs__placement p = sprite_at(atlas, ti, road, flip);
+    double span = t1 - t0, period = p.width + gap;
+    if (!(span >= p.width) || !(period > 0)) return RS_OK;
+    double fm = floor((span + gap) / period + 1e-9);
+    /* A row of more than 4096 elements is no real road (a 2 km zebra);
+     * it also keeps the cast below in range for any width. */
+    if (!(fm <= 4096)) return RS_OK;
+    size_t m = (size_t)fm;
+    double run = (double)m * period - gap, start = t0 + (span - run) / 2;
+    p.s = s;
+    for (size_t k = 0; k < m; k++) {
+        p.t = start + k * period + p.width / 2;
+        if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
+    }
+    return RS_OK;
+}
+
+/* Standard sizes (docs/road-format.md "Marking elements"). */
+#define RMS_BLOCK_GAP 0.25   /* Wartelinie: 0.50 m blocks, 0.25 m gaps */
+#define MUTCD_TOOTH_GAP 0.1524 /* 3B.16: 6 in between 18 in teeth */
+#define ZEBRA_GAP 0.5        /* Fussgaengerueberweg: 0.50 m bars, 0.50 m gaps */
+#define ZEBRA_MARGIN 0.2     /* zebra bars stay this far inside the road edges */
+
+static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
+                            const double end_half[2], const int end_minor[2], rs__placement **pl, size_t *n,
+                            size_t *cap)
+{
+    const rs__road_local *r = &A->rl[i];
+    if (r->n < 2) return RS_OK;
+    double total = r->s[r->n - 1];
+    rs_road_lanes L;
+    rs_road_lanes_get(A->roads, i, A->so, &L);
+    const double hw = L.width / 2;
+    const int left_hand = L.side == RS_DRIVING_LEFT, us = A->so && A->so->profile == RS_PROFILE_MUTCD;
+    const char *ctrl = rs_roads_get_attr(A->roads, i, "control");
+    for (int e = 0; e < 2; e++) {
+        if (!end_junction[e]) continue;
+        /* traffic arriving at end e: at the last point (e = 1) it travels
+         * with the points (lanes of direction +1, flip 0) */
+        int arrive = e == 1 ? 1 : -1, flip = e == 0;
+        /* the approach: its lanes, out to the kerb on the outer side and to
+         * the centre line on the inner side */
+        double t0 = INFINITY, t1 = -INFINITY;
+        for (uint32_t k = 0; k < L.count; k++) {
+            const rs_lane *ln = &L.lane[k];
+            double a = ln->t_right, b = ln->t_left;
+            if (ln->direction == 0) { /* one lane both ways: its approach half */
+                int plus = (arrive > 0) == left_hand;
+                a = plus ? 0 : -hw;
+                b = plus ? hw : 0;
+            } else if (ln->direction != arrive) continue;
+            else {
+                if (k == 0) b = hw;
+                if (k + 1 == L.count) a = -hw;
+            }
+            if (a < t0) t0 = a;
+            if (b > t1) t1 = b;
+        }
+        if (!(t1 > t0)) continue; /* a one-way road leaving here */
+        double edge = e == 1 ? total - end_half[e] : end_half[e]; /* the junction area's near side */
+        double dir = e == 1 ? -1 : 1;                             /* towards the road's inside */
+        if (end_minor[e]) {
+            size_t before = *n;
+            double lead = 0; /* the line's extent along the road */
+            int stop = ctrl && !strcmp(ctrl, "stop");
+            long ti = rs_atlas_find(atlas, stop ? "stop_line" : us ? "yield_tooth" : "give_way_block");
+            if (ti >= 0 && !stop) {
+                /* repeated at its standard size, never stretched */
+                double len = atlas->t[ti].length, s = edge + dir * (LINE_GAP + len / 2);
+                lead = len;
+                if (repeat_across(A, atlas, ti, i, flip, s, t0, t1, us ? MUTCD_TOOTH_GAP : RMS_BLOCK_GAP, pl, n, cap))
+                    return RS_ERR_NOMEM;
+            } else {
+                /* a stop line, or an atlas without the elements: one line across */
+                if (ti < 0) ti = rs_atlas_find(atlas, stop ? "stop_line" : "give_way_line");
+                if (ti >= 0) {
+                    rs__placement p = sprite_at(atlas, ti, i, flip);
+                    p.width = t1 - t0;
+                    p.s = edge + dir * (LINE_GAP + p.length / 2);
+                    p.t = (t0 + t1) / 2;
+                    lead = p.length;
+                    if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
+                }
+            }
+            /* the lane and centre lines end at the line's far side from the
+             * junction and do not run on into it */
+            if (*n > before) {
+                double near = edge + dir * (LINE_GAP + lead), reach = end_half[e] + L.width;
+                if (add_cut(A, i, e == 1 ? near : -reach, e == 1 ? total + reach : near, cut_half(&L)))
+                    return RS_ERR_NOMEM;
+            }
+        }
+        /* turn arrows, centred in their lanes */
+        for (uint32_t k = 0; k < L.count; k++) {
+            const rs_lane *ln = &L.lane[k];
+            if (ln->direction != arrive || !ln->turn) continue;
+            const char *type = arrow_for(ln->turn, left_hand);
+            long ti = type ? rs_atlas_find(atlas, type) : -1;
+            if (ti < 0) continue;
+            double lw = ln->t_left - ln->t_right;
+            rs__placement p = sprite_at(atlas, ti, i, flip);
+            if (p.width > 0.8 * lw) {
+                p.length *= 0.8 * lw / p.width;
+                p.width = 0.8 * lw;
+            }
+            p.s = edge + dir * (ARROW_GAP + p.length / 2);
+            p.t = (ln->t_left + ln->t_right) / 2;
+            if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
+        }
+    }
+    return RS_OK;
+}
+
+int rs__markings_auto_possible(const rs_roads *roads)
+{
+    size_t nr = rs_roads_count(roads);
+    for (size_t i = 0; i < nr; i++)
+        if (rs_roads_get_attr(roads, i, "turn:lanes") || rs_roads_get_attr(roads, i, "turn:lanes:forward") ||
+            rs_roads_get_attr(roads, i, "turn:lanes:backward"))
+            return 1;
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads); k++) {
+        const char *key, *v;
+        rs_roads_point_attr_at(roads, k, NULL, NULL, &key, &v);
+        if (!strcmp(key, "crossing") && !strcmp(v, "zebra")) return 1;
+    }
+    /* stop lines need a road with a class */
+    for (size_t i = 0; i < nr; i++) {
+        if (rs__road_priority(roads, i) > 0) return 1;
+    }
+    return 0;
+}
+
+static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                           const rs_style_options *so, rs__line_cut **cuts, size_t *ncut, rs__placement **pl,
+                           size_t *n, size_t *cap)
+{
+    size_t nr = rs_roads_count(roads);
+    if (!rs__markings_auto_possible(roads)) return RS_OK;
+    ctxa A;
+    memset(&A, 0, sizeof A);
+    A.ctx = ctx;
+    A.roads = roads;
+    A.so = so;
+    A.want_cuts = cuts != NULL;
+    A.rl = rs__calloc(ctx, nr ? nr : 1, sizeof *A.rl);
+    if (!A.rl) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory placing markings");
+    rs_result r = RS_OK;
+    for (size_t i = 0; i < nr && !r; i++) r = rs__road_local_get(ctx, roads, i, dem, &A.rl[i]);
+    A.box = r ? NULL : rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof(double));
+    if (!r && !A.box) r = RS_ERR_NOMEM;
+    for (size_t i = 0; i < nr && !r; i++) {
+        double *b = A.box + 4 * i;
+        b[0] = b[1] = INFINITY;
+        b[2] = b[3] = -INFINITY;
+        for (size_t k = 0; k < A.rl[i].n; k++) {
+            if (A.rl[i].x[k] < b[0]) b[0] = A.rl[i].x[k];
+            if (A.rl[i].y[k] < b[1]) b[1] = A.rl[i].y[k];
+            if (A.rl[i].x[k] > b[2]) b[2] = A.rl[i].x[k];
+            if (A.rl[i].y[k] > b[3]) b[3] = A.rl[i].y[k];
+        }
+    }
+    /* per road end: junction, its half extent, minor */
+    int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
+    double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
+    if (!r && (!endj || !endh)) r = RS_ERR_NOMEM;
+    /* which records are one street (docs/network.md "Strokes") */
+    rs_network *net = NULL;
+    if (!r) r = rs_network_build(ctx, roads, NULL, &net);
+    A.cont = r ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), sizeof *A.cont);
+    A.cont_end = r || !A.cont ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), 1);
+    if (!r && (!A.cont || !A.cont_end)) r = RS_ERR_NOMEM;
+    for (size_t i = 0; i < nr && !r; i++) {
+        const rs__road_local *a = &A.rl[i];
+        if (a->n < 2) continue;
+        double wa;
+        rs_road_info ia;
+        rs_roads_get(roads, i, NULL, &wa, NULL, NULL);
+        rs_roads_get_info(roads, i, &ia);
+        if (non_car(ia.road_class)) continue;
+        for (int e = 0; e < 2 && !r; e++) {
+            size_t pi = e ? a->n - 1 : 0;
+            double x = a->x[pi], y = a->y[pi];
+            /* two passes: is it a junction (another road passes through, or
+             * two or more others end here; one other road ending here is the
+             * same street going on), then record it */
+            size_t meet = 0;
+            int through = 0;
+            /* the record going on from this end (the network's link: the
+             * same street split into records, turning less than 30 degrees) */
+            uint32_t lk = net->link[2 * i + e];
+            size_t link_road = lk == UINT32_MAX ? SIZE_MAX : lk / 2;
+            if (lk != UINT32_MAX) {
+                A.cont[2 * i + e] = link_road + 1;
+                A.cont_end[2 * i + e] = (uint8_t)(lk & 1);
+            }
+            for (int pass = 0; pass < 2 && !r; pass++) {
+                if (pass == 1 && !(through || meet >= 2)) break;
+                for (size_t j = 0; j < nr && !r; j++) {
+                    if (j == i || A.rl[j].n < 2 || non_car(road_class_of(roads, j))) continue;
+                    /* the street's other records, except the one going on
+                     * here, are no junction (a short record of it may end
+                     * within the tolerance) */
+                    if (net->stroke_of[j] == net->stroke_of[i] && j != link_road) continue;
+                    double wb, s = 0;
+                    rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
+                    const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;
+                    if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
+                    if (nearest(&A.rl[j], x, y, &s) > wb / 2 + JUNCTION_TOL) continue;
+                    double ha = wb / 2 + JUNCTION_TOL, hb = wa / 2 + JUNCTION_TOL;
+                    const rs__road_local *b_ = &A.rl[j];
+                    double total = b_->s[b_->n - 1];
+                    /* a closed ring (a roundabout drawn as one way) passes
+                     * through its own seam */
+                    int ring = b_->n > 2 && b_->x[0] == b_->x[b_->n - 1] && b_->y[0] == b_->y[b_->n - 1];
+                    if (pass == 0) {
+                        meet++;
+                        if (ring || (s > hb && s < total - hb)) through = 1;
+                        continue;
+                    }
+                    endj[i][e] = 1;
+                    if (ha > endh[i][e]) endh[i][e] = ha;
+                    /* the lower priority gives way: class rank, priority_road,
+                     * and a roundabout's ring over its arms (StVO 9a, MUTCD 2B.11) */
+                    if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) endj[i][2] |= 1 << e;
+                    r = add_jn(&A, i, e ? a->s[a->n - 1] : 0, ha);
+                    if (!r) r = add_jn(&A, j, s, hb);
+                    /* on a ring the area wraps round the seam */
+                    if (!r && ring && s < hb) r = add_jn(&A, j, s + total, hb);
+                    if (!r && ring && s > total - hb) r = add_jn(&A, j, s - total, hb);
+                }
+            }
+        }
+    }
+    for (size_t i = 0; i < nr && !r; i++) {
+        int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
+        r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
+    }
+    /* zebras: bars of their standard size repeated across the road (the
+     * whole `zebra` sprite stretched to the road when the atlas has no bars) */
+    long zb = rs_atlas_find(atlas, "zebra_bar"), zt = rs_atlas_find(atlas, "zebra");
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !r && (zt >= 0 || zb >= 0); k++) {
+        const char *key, *v;
+        size_t ri, pt;
+        rs_roads_point_attr_at(roads, k, &ri, &pt, &key, &v);
+        if (strcmp(key, "crossing") || strcmp(v, "zebra") || ri >= nr) continue;
+        /* the point's arc length: its local position on the road */
+        const double *xy;
+        size_t np;
+        double w;
+        rs_roads_get(roads, ri, NULL, &w, &xy, &np);
+        if (pt >= np) continue;
+        double per_unit = rs__local_quantum(dem->frame.cell_size), s = 0;
+        double x = rs__local_coord(xy[2 * pt], dem->frame.origin_x, per_unit);
+        double y = rs__local_coord(xy[2 * pt + 1], dem->frame.origin_y, per_unit);
+        nearest(&A.rl[ri], x, y, &s);
+        if (zb >= 0) {
+            double m = w / 2 - ZEBRA_MARGIN, len = atlas->t[zb].length;
+            size_t before = *n;
+            r = repeat_across(&A, atlas, zb, ri, 0, s, -m, m, ZEBRA_GAP, pl, n, cap);
+            if (!r && *n > before && A.want_cuts) { /* lane lines are interrupted at the zebra */
+                rs_road_lanes L;
+                rs_road_lanes_get(roads, ri, so, &L);
+                r = add_cut(&A, ri, s - len / 2, s + len / 2, cut_half(&L));
+            }
+            continue;
+        }
+        rs__placement p;
+        memset(&p, 0, sizeof p);
+        p.type = (uint32_t)zt;
+        p.road = ri;
+        p.s = s;
+        p.length = atlas->t[zt].length;
+        p.width = w - 0.4;
+        if (p.width > 0) r = offer(&A, &p, pl, n, cap);
+    }
+    if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory placing markings");
+    if (cuts && !r) {
+        *cuts = A.cuts;
+        *ncut = A.ncut;
+        A.cuts = NULL;
+    }
+    rs__free(ctx, A.cuts);
+    for (size_t i = 0; i < nr; i++) rs__road_local_free(ctx, &A.rl[i]);
+    rs__free(ctx, A.rl);
+    rs__free(ctx, A.box);
+    rs__free(ctx, A.j);
+    rs__free(ctx, A.cont);
+    rs_network_free(ctx, net);
+    rs__free(ctx, A.cont_end);
+    rs__free(ctx, endj);
+    rs__free(ctx, endh);
+    return r;
+}
+
+rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap)
+{
+    return auto_core(ctx, dem, roads, atlas, so, NULL, NULL, pl, n, cap);
+}
+
+/* The sizes of the built-in atlas's line and crossing types (tests/tools/
+ * atlasgen.c; test_lanes checks them against rs_atlas_default): where the
+ * automatic lines go depends on sizes alone, not on the sprites' pixels,
+ * so the cuts need no atlas images. */
+static const struct {
+    const char *name;
+    double length, width;
+} default_sizes[] = { { "stop_line", 0.5, 3.5 },       { "give_way_line", 0.5, 3.5 }, { "give_way_block", 0.5, 0.5 },
+                      { "yield_tooth", 0.6858, 0.4572 }, { "zebra_bar", 4.0, 0.5 },    { "zebra", 4.0, 6.0 } };
+
+static rs_result sizes_atlas(rs_ctx *ctx, rs_atlas *a)
+{
+    size_t n = sizeof default_sizes / sizeof default_sizes[0];
+    a->t = rs__calloc(ctx, n, sizeof *a->t);
+    if (!a->t) return RS_ERR_NOMEM;
+    for (size_t k = 0; k < n; k++) {
+        memcpy(a->t[k].name, default_sizes[k].name, strlen(default_sizes[k].name) + 1);
+        a->t[k].length = default_sizes[k].length;
+        a->t[k].width = default_sizes[k].width;
+    }
+    a->n = n;
+    return RS_OK;
+}
+
+rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                 rs__line_cut **out, size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    if (o->markings.disable || o->markings.no_auto || !rs__markings_auto_possible(roads)) return RS_OK;
+    rs_atlas own;
+    memset(&own, 0, sizeof own);
+    const rs_atlas *atlas = o->markings.atlas;
+    rs_result r = RS_OK;
+    if (!atlas) {
+        r = sizes_atlas(ctx, &own);
+        atlas = &own;
+    }
+    rs__placement *pl = NULL;
+    size_t n = 0, cap = 0;
+    if (!r) r = auto_core(ctx, dem, roads, atlas, &o->style, out, nout, &pl, &n, &cap);
+    rs__free(ctx, pl);
+    rs__free(ctx, own.t);
+    if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
+    return r;
+}

@@ -1,0 +1,124 @@
+/* Road field (SPEC "Road field", seed 003): an index grid over the map that
+ * lists, per cell, the road segments whose capsule reaches the cell; nearest
+ * centreline queries (road, segment, s, t) and exact-where-it-matters box
+ * coverage of output pixels. Private to the library; docs/roadfield.md. */
+#ifndef RS_ROADFIELD_H
+#define RS_ROADFIELD_H
+#include "internal.h"
+
+typedef struct rs__roadfield rs__roadfield; /* immutable after build; safe to query from many threads */
+
+typedef struct rs__roadfield_params {
+    double origin_x, origin_y; /* world coords of DEM sample (0,0) */
+    double cell_size;          /* DEM cell, metres (for rs__local_quantum) */
+    double width_m, height_m;  /* map extent in local metres: [0,width_m] x [0,height_m] */
+    double reach_extra;        /* metres beyond each road's half width that queries must still find; >= 0 */
+    double index_cell;         /* index grid cell size in metres; 0 -> automatic (docs/roadfield.md) */
+    double pixel;              /* largest output pixel the coverage will be asked for, metres;
+                                  0 -> cell_size. Larger pixels still work, only slower. */
+    uint32_t relation_scan;    /* holder search (docs/roadfield.md): cell lists up to this long are
+                                  scanned, longer ones use the box tree; 0 -> 64. Same result either
+                                  way (tests force each: 1 = always the tree, UINT32_MAX = never) */
+} rs__roadfield_params;
+
+/* Parameters of a road field over the whole map of `dem` for output pixels
+ * of cell_size / texels (the road grid's field, the styles' fields). */
+rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t texels);
+
+rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
+                              rs__roadfield **out);
+void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);
+
+/* Cut segment A-B, if it reaches beyond `far` from the w x h map, to the
+ * disc around the map that a capsule of reach `pad` can touch from it
+ * (full precision however far A and B are); *along = the new A's distance
+ * from the old one. Returns 0 when nothing can reach the map. */
+int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, double h, double pad, double far,
+                 double *along);
+
+/* A field of the same segments as src (the same ids, grid and pixel), each
+ * road's half width grown by extra[road] (nroads entries, each 0..the
+ * index cell: rs__roadfield_cell): what rs__roadfield_coverage2 computes
+ * beside src in one pass (casings). */
+rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
+                              rs__roadfield **out);
+/* A record end at a T (docs/network.md "Ends at a T"): it ends on road
+ * `through`, which passes through the node; (nx, ny) is the through road's
+ * unit normal there, pointing from the leg across it (road set frame). */
+typedef struct rs__tee_end {
+    uint32_t road;
+    int end;           /* 0: the record's first point, 1: its last */
+    uint32_t through;
+    double nx, ny;
+    double half_width; /* the through road's */
+} rs__tee_end;
+/* The T ends of a network of `roads` (lib/scene/tee_ends.c): one through road
+ * passing once through a junction node, every other record ending there
+ * free (not continued by its stroke) at a sine above 0.2 with it. *out is
+ * the caller's (rs__free), NULL with *n = 0 when there are none. */
+rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *n);
+/* Trims the round caps of the T ends of f's roads: such an end is a flat
+ * strip up to the through road's far edge line (the line through the end
+ * point along the through road, moved its half width across), clipped
+ * there; the coverage and the nearest query use that shape (a widened
+ * field, rs__roadfield_widen, keeps the same lines: a casing stops at the
+ * through road's surface edge). Part of building f (before any query). */
+rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
+                                 size_t n);
+/* The index cell of f, metres. */
+double rs__roadfield_cell(const rs__roadfield *f);
+size_t rs__roadfield_bytes(const rs__roadfield *f);
+
+typedef struct rs__road_point {
+    uint32_t road;     /* index in rs_roads */
+    uint32_t seg;      /* segment index within that road (points seg..seg+1) */
+    double s;          /* arc length from the road's first point to the nearest point q, metres */
+    double t;          /* signed lateral offset, + = left of travel; |t| = dist */
+    double dist;       /* |p - q| */
+    double half_width;
+} rs__road_point;
+
+/* Nearest road centreline to local point (x, y) among segments with
+ * dist - half_width <= reach. Returns 1 and fills *out, or 0 when none or
+ * (x, y) is more than one index cell outside the map. O(1) for an empty
+ * cell; reach <= reach_extra + pixel*sqrt(2)/2 needs one cell's list, larger
+ * reach scans the cells around. Ties: lowest road, then lowest segment. */
+int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out);
+/* The same with priorities (per road, NULL: as rs__roadfield_nearest):
+ * among the segments whose surface holds (x, y) the highest priority
+ * wins, then the nearest; a point on no surface takes the nearest. The
+ * fill of a crossing is the higher road's (issue 27 problem 6). */
+int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
+                                 rs__road_point *out);
+
+/* Coverage of pixels [px0, px0+w) x [py0, py0+h), pixel side `pix` metres:
+ * out[(py-py0)*stride + (px-px0)] = area fraction of the pixel inside the
+ * union of the roads (round caps and joins). A pixel's value depends only on
+ * (px, py, pix) and the field, never on the block. */
+void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,
+                            double pix, double *out, size_t stride);
+
+/* rs__roadfield_coverage of f into out and of g into outg (same stride),
+ * in one pass: g must be rs__roadfield_widen of f (or NULL: f alone).
+ * out equals f's own rs__roadfield_coverage; outg equals g's, except that
+ * a pixel whose cover by f is within 2^-10 of 1 and is not one straight
+ * edge may get f's cover (g is for casings: what they add to such a pixel
+ * cannot show in 8 bits). */
+void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0,
+                             uint32_t w, uint32_t h, double pix, double *out, double *outg, size_t stride);
+
+/* Index statistics (tests, benchmarks, docs). */
+typedef struct rs__roadfield_stats {
+    double index_cell;     /* cell size actually used, metres */
+    uint32_t gw, gh;       /* grid cells (the map plus one cell on every side) */
+    size_t segments;       /* segments that reach the grid */
+    size_t entries;        /* (cell, segment) pairs */
+    size_t nonempty_cells, full_cells;
+    size_t max_list;       /* longest cell list */
+    size_t redundant;      /* segments whose capsule lies within another one */
+    uint64_t relation_work; /* work units of the segment relations (list entries scanned, holder-tree
+                               nodes and items visited): near-linear in the segments, capped by
+                               rs_limits.max_field_work */
+} rs__roadfield_stats;
+void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out);
+#endif

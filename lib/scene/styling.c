@@ -1,0 +1,342 @@
+/* Road styles on the splat: per-road style resolution, the casing field,
+ * the surface lookup field and the line symbols (lib/scene/styling.h). */
+#include "styling.h"
+#include "linesym.h"
+#include "roadfield.h"
+#include "surfimg.h"
+#include "style.h"
+#include "lanes.h"
+#include "network.h"
+
+#include <math.h>
+#include <string.h>
+
+void rs__styling_free(rs_ctx *ctx, rs__styling *st)
+{
+    if (!st) return;
+    rs__linesym_free(ctx, st->lines);
+    rs__roadfield_free(ctx, st->casing);
+    rs__roadfield_free(ctx, st->near_own);
+    rs__free(ctx, st->prio);
+    rs__free(ctx, st->surface);
+    rs__free(ctx, st->colour);
+    rs__free(ctx, st->half_width);
+    rs__free(ctx, st->img_of);
+    rs__free(ctx, st->img_len);
+    rs__free(ctx, st->img_lev);
+    rs__free(ctx, st->img_f);
+    rs__free(ctx, st->img_s0);
+    rs__free(ctx, st->img_rev);
+    if (st->imgs)
+        for (size_t i = 0; i < st->nimgs; i++) rs__surfimg_free(ctx, st->imgs[i]);
+    rs__free(ctx, st->imgs);
+    rs__free(ctx, st);
+}
+
+int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, double out[4])
+{
+    if (!st->img_of || st->img_of[road] < 0) return 0;
+    const rs__surfimg *m = st->imgs[st->img_of[road]];
+    double hw = st->half_width[road];
+    /* along the stroke (a record drawn against its points: s and t turn) */
+    if (st->img_s0 && st->img_rev[road]) s = st->img_s0[road] - s, t = -t;
+    else if (st->img_s0) s += st->img_s0[road];
+    /* the image's left edge at t = +hw (left of travel), right edge at -hw */
+    double u = hw > 0 ? (hw - t) / (2 * hw) : 0.5;
+    rs__surfimg_sample(m, u, s / st->img_len[road], st->img_lev[road], st->img_f[road], out);
+    return 1;
+}
+
+/* Road i's surface image: find its name in the options' table, mipmap it
+ * once, and the road's length per image height and level of detail. */
+static rs_result road_image(rs_ctx *ctx, rs__styling *st, const rs_style *sty, size_t i, const rs_roads *roads,
+                            const rs_splat_options *o, double pix)
+{
+    char q[64], q2[64], q3[64];
+    const rs_style_options *so = &o->style;
+    size_t k = 0;
+    while (k < so->surface_image_count &&
+           !(so->surface_images[k].name && strcmp(so->surface_images[k].name, sty->surface_image) == 0))
+        k++;
+    if (k == so->surface_image_count) {
+        const char *name = NULL;
+        rs_roads_get(roads, i, &name, NULL, NULL, NULL);
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "road %zu (%s): style %s: surface image %s was not given", i,
+                        rs__quote(q, sizeof q, name, strlen(name)),
+                        rs__quote(q2, sizeof q2, sty->name, strlen(sty->name)),
+                        rs__quote(q3, sizeof q3, sty->surface_image, strlen(sty->surface_image)));
+    }
+    if (!st->imgs) {
+        st->imgs = rs__calloc(ctx, so->surface_image_count, sizeof *st->imgs);
+        st->img_of = rs__alloc_array(ctx, rs_roads_count(roads), sizeof *st->img_of);
+        st->img_len = rs__calloc(ctx, rs_roads_count(roads), sizeof *st->img_len);
+        st->img_lev = rs__calloc(ctx, rs_roads_count(roads), sizeof *st->img_lev);
+        st->img_f = rs__calloc(ctx, rs_roads_count(roads), sizeof *st->img_f);
+        if (!st->imgs || !st->img_of || !st->img_len || !st->img_lev || !st->img_f)
+            return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road styles");
+        st->nimgs = so->surface_image_count;
+        for (size_t r = 0; r < rs_roads_count(roads); r++) st->img_of[r] = -1;
+    }
+    if (!st->imgs[k]) {
+        /* every image the styles use is copied and mipmapped: their pixels
+         * together stay within the texture limit, as one texture's do */
+        const rs_image *im = &so->surface_images[k].image;
+        uint64_t px = (uint64_t)im->width * im->height;
+        if (px > ctx->limits.max_texture_pixels - st->img_pixels)
+            return rs__fail(ctx, RS_ERR_LIMIT,
+                            "style %s: surface image %s (%u x %u) brings the surface images in use to %llu pixels, "
+                            "over the limit of %llu for all of them together (rs_limits.max_texture_pixels)",
+                            rs__quote(q2, sizeof q2, sty->name, strlen(sty->name)),
+                            rs__quote(q3, sizeof q3, sty->surface_image, strlen(sty->surface_image)), im->width,
+                            im->height, (unsigned long long)(st->img_pixels + px),
+                            (unsigned long long)ctx->limits.max_texture_pixels);
+        rs_result r = rs__surfimg_build(ctx, &so->surface_images[k].image,
+                                        rs__quote(q, sizeof q, sty->surface_image, strlen(sty->surface_image)),
+                                        &st->imgs[k]);
+        if (r) return r;
+        st->bytes += st->imgs[k]->bytes;
+        st->img_pixels += px;
+    }
+    const rs__surfimg *m = st->imgs[k];
+    double w = 2 * st->half_width[i];
+    double len = sty->surface_length > 0 ? sty->surface_length : w * m->h[0] / m->w[0];
+    if (!(len >= 1e-9)) len = 1e-9; /* a road of width ~0 */
+    st->img_of[i] = (int32_t)k;
+    st->img_len[i] = len;
+    /* footprint of one output pixel in level-0 texels, the larger axis */
+    double across = w > 0 ? pix * m->w[0] / w : 0, along = pix * m->h[0] / len;
+    rs__surfimg_lod(m, across > along ? across : along, &st->img_lev[i], &st->img_f[i]);
+    return RS_OK;
+}
+
+static void put_colour(float *dst, rs_colour c)
+{
+    dst[0] = c.r;
+    dst[1] = c.g;
+    dst[2] = c.b;
+    dst[3] = (float)c.a / 255.0f;
+}
+
+/* A field of the styles gets the road grid's T ends (docs/network.md
+ * "Ends at a T"). */
+static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__roadfield *f)
+{
+    rs__tee_end *tees = NULL;
+    size_t ntees = 0;
+    rs_result r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+    if (!r) r = rs__roadfield_set_tees(ctx, f, roads, tees, ntees);
+    rs__free(ctx, tees);
+    return r;
+}
+
+rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                            const rs__roadfield *field, const rs_network *net, rs__styling **out)
+{
+    *out = NULL;
+    if (o->style.disable) return RS_OK;
+    size_t n = rs_roads_count(roads);
+    if (n == 0) return RS_OK;
+    rs_result r = RS_OK;
+    rs__styling *st = rs__calloc(ctx, 1, sizeof *st);
+    rs_style *sty = NULL;
+    uint32_t *band_start = NULL;
+    rs__band *bands = NULL;
+    rs_roads *casing_roads = NULL;
+    double *extra = NULL;
+    if (!st) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road styles");
+    st->surface = rs__calloc(ctx, n, 1);
+    st->colour = rs__alloc_array(ctx, n, 16 * sizeof *st->colour);
+    st->half_width = rs__alloc_array(ctx, n, sizeof *st->half_width);
+    band_start = rs__alloc_array(ctx, n + 1, sizeof *band_start);
+    sty = rs__malloc(ctx, sizeof *sty);
+    if (!st->surface || !st->colour || !st->half_width || !band_start || !sty) { r = RS_ERR_NOMEM; goto fail; }
+    /* pass 1: styles, counts */
+    size_t nbands = 0, ncasing = 0;
+    int styled = 0;
+    for (size_t i = 0; i < n; i++) {
+        if ((r = rs_road_style_ex(ctx, roads, i, &o->style, sty)) != RS_OK) goto fail_msg;
+        double w = 0;
+        rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+        st->half_width[i] = 0.5 * w;
+        st->surface[i] = (uint8_t)sty->surface;
+        float *c = st->colour + 16 * i;
+        put_colour(c, sty->surface == RS_SURFACE_GRADIENT ? sty->gradient_centre : sty->fill);
+        put_colour(c + 4, sty->gradient_centre);
+        put_colour(c + 8, sty->gradient_edge);
+        put_colour(c + 12, sty->casing);
+        if (sty->surface != RS_SURFACE_DEFAULT) st->any_surface = 1;
+        if (sty->surface_image[0]) {
+            if ((r = road_image(ctx, st, sty, i, roads, o, dem->frame.cell_size / o->texels)) != RS_OK) goto fail_msg;
+            st->any_surface = 1;
+        }
+        band_start[i] = (uint32_t)nbands;
+        nbands += sty->line_count;
+        if (sty->casing_width > 0) ncasing++;
+        styled |= sty->surface != RS_SURFACE_DEFAULT || sty->line_count || sty->casing_width > 0 ||
+                  sty->surface_image[0];
+    }
+    band_start[n] = (uint32_t)nbands;
+    if (!styled) {
+        rs__free(ctx, sty);
+        rs__free(ctx, band_start);
+        rs__styling_free(ctx, st);
+        rs__ok(ctx);
+        return RS_OK;
+    }
+    rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
+    /* pass 2: bands and casing roads (styles resolved again: each is small) */
+    /* every road's lines with room for their dashes: part of the line
+     * symbols' total (rs_limits.max_linesym_bytes; the pieces add to it) */
+    if (nbands && ctx->limits.max_linesym_bytes &&
+        (uint64_t)nbands > ctx->limits.max_linesym_bytes / (sizeof *bands + RS_STYLE_MAX_DASH * sizeof(double))) {
+        r = rs__fail(ctx, RS_ERR_LIMIT,
+                     "line symbols: the roads' %llu styled lines take more than %llu bytes together (many "
+                     "styled lines; the budget is rs_limits.max_linesym_bytes)",
+                     (unsigned long long)nbands, (unsigned long long)ctx->limits.max_linesym_bytes);
+        goto fail_msg;
+    }
+    if (nbands) {
+        bands = rs__alloc_array(ctx, nbands, sizeof *bands);
+        if (!bands) { r = RS_ERR_NOMEM; goto fail; }
+    }
+    /* dash arrays must outlive the build: one style per road is too many
+     * to keep, so copy the dashes into one array */
+    double *dash = NULL;
+    size_t ndash = 0;
+    if (nbands) {
+        dash = rs__alloc_array(ctx, nbands, RS_STYLE_MAX_DASH * sizeof *dash);
+        if (!dash) { r = RS_ERR_NOMEM; goto fail; }
+    }
+    if (ncasing) {
+        extra = rs__calloc(ctx, n, sizeof *extra);
+        if (!extra) { r = RS_ERR_NOMEM; goto fail_dash; }
+    }
+    for (size_t i = 0, k = 0, cr = 0; i < n; i++) {
+        if ((r = rs_road_style_ex(ctx, roads, i, &o->style, sty)) != RS_OK) goto fail_dash;
+        for (uint32_t j = 0; j < sty->line_count; j++, k++) {
+            const rs_style_line *ln = &sty->line[j];
+            rs__band *b = &bands[k];
+            b->t = ln->offset;
+            b->w = ln->width;
+            put_colour(b->rgba, ln->colour);
+            b->ndash = ln->dash_count;
+            b->dash = dash + ndash;
+            memcpy(dash + ndash, ln->dash, ln->dash_count * sizeof *dash);
+            ndash += ln->dash_count;
+            b->phase = ln->phase;
+        }
+        if (sty->casing_width > 0) {
+            extra[i] = sty->casing_width;
+            const float *c = st->colour + 16 * i + 12;
+            if (cr == 0) {
+                memcpy(st->casing_rgba, c, sizeof st->casing_rgba);
+                st->casing_uniform = 1;
+            } else if (memcmp(st->casing_rgba, c, sizeof st->casing_rgba)) {
+                st->casing_uniform = 0;
+            }
+            cr++;
+        }
+    }
+    if (nbands) {
+        rs__linesym_params lp;
+        memset(&lp, 0, sizeof lp);
+        lp.origin_x = dem->frame.origin_x;
+        lp.origin_y = dem->frame.origin_y;
+        lp.cell_size = dem->frame.cell_size;
+        lp.out_w = (dem->width - 1) * o->texels;
+        lp.out_h = (dem->height - 1) * o->texels;
+        lp.pixel = fp.pixel;
+        lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
+        lp.net = net;
+        /* lane and centre lines stop at the automatic stop lines and zebras */
+        rs__line_cut *cuts = NULL;
+        size_t ncuts = 0;
+        if ((r = rs__markings_line_cuts(ctx, dem, roads, o, &cuts, &ncuts)) != RS_OK) goto fail_dash;
+        lp.cuts = cuts;
+        lp.ncuts = ncuts;
+        r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
+        rs__free(ctx, cuts);
+        if (r != RS_OK) goto fail_dash;
+        st->bytes += rs__linesym_bytes(st->lines);
+    }
+    if (ncasing) {
+        /* The casing field: every road, those with a casing widened by it
+         * (C holds R). From the grid's field when the casings are at most
+         * an index cell wide: the same segments, so the coverage stage
+         * computes C beside R in one pass (docs/linesym.md). */
+        double widest = 0;
+        for (size_t i = 0; i < n; i++) widest = fmax(widest, extra[i]);
+        if (field && widest <= rs__roadfield_cell(field)) {
+            if ((r = rs__roadfield_widen(ctx, field, extra, n, &st->casing)) != RS_OK) goto fail_dash;
+            st->casing_merged = 1;
+        } else {
+            if ((r = rs_roads_create(ctx, &casing_roads)) != RS_OK) goto fail_dash;
+            for (size_t i = 0; i < n; i++) {
+                const char *name = NULL;
+                const double *xy = NULL;
+                size_t np = 0;
+                double w = 0;
+                rs_roads_get(roads, i, &name, &w, &xy, &np);
+                if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np)) != RS_OK) goto fail_dash;
+            }
+            if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->casing)) != RS_OK) goto fail_dash;
+        }
+        st->bytes += rs__roadfield_bytes(st->casing);
+    }
+    if (st->img_of && net && rs_network_road_count(net) == n) {
+        st->img_s0 = rs__alloc_array(ctx, n, sizeof *st->img_s0);
+        st->img_rev = rs__alloc_array(ctx, n, 1);
+        if (!st->img_s0 || !st->img_rev) { r = RS_ERR_NOMEM; goto fail_dash; }
+        for (size_t i = 0; i < n; i++) {
+            rs_road_stroke k;
+            rs_network_road_stroke(net, i, &k);
+            st->img_s0[i] = k.s_offset;
+            st->img_rev[i] = (uint8_t)k.reversed;
+        }
+    }
+    if (st->any_surface || st->img_of) {
+        /* priorities for the fill lookups, when they differ */
+        int differ = 0;
+        for (size_t i = 1; i < n && !differ; i++) differ = rs__road_priority(roads, i) != rs__road_priority(roads, 0);
+        if (differ) {
+            st->prio = rs__alloc_array(ctx, n, sizeof *st->prio);
+            if (!st->prio) { r = RS_ERR_NOMEM; goto fail_dash; }
+            for (size_t i = 0; i < n; i++) st->prio[i] = rs__road_priority(roads, i);
+            st->bytes += n * sizeof *st->prio;
+        }
+    }
+    if (st->any_surface) {
+        st->near = field;
+        if (!field) {
+            if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near_own)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->near_own)) != RS_OK) goto fail_dash;
+            st->near = st->near_own;
+            st->bytes += rs__roadfield_bytes(st->near_own);
+        }
+    }
+    st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double));
+    if (st->img_of) st->bytes += n * (sizeof *st->img_of + sizeof *st->img_len + sizeof *st->img_lev + sizeof *st->img_f);
+    if (st->img_s0) st->bytes += n * (sizeof *st->img_s0 + 1);
+    rs__free(ctx, dash);
+    rs__free(ctx, extra);
+    rs__free(ctx, bands);
+    rs__free(ctx, band_start);
+    rs__free(ctx, sty);
+    rs_roads_free(ctx, casing_roads);
+    *out = st;
+    rs__ok(ctx);
+    return RS_OK;
+fail_dash:
+    rs__free(ctx, dash);
+    rs__free(ctx, extra);
+fail:
+    if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory for road styles");
+fail_msg:
+    rs__free(ctx, bands);
+    rs__free(ctx, band_start);
+    rs__free(ctx, sty);
+    rs_roads_free(ctx, casing_roads);
+    rs__styling_free(ctx, st);
+    return r;
+}

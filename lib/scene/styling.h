@@ -1,0 +1,59 @@
+/* Road styles on the splat (issue 13; docs/linesym.md "In the splat"):
+ * casings under every road surface, fill and gradient surfaces, and line
+ * symbols, prepared with the road grid and drawn by the overlays stage. */
+#ifndef RS_STYLING_H
+#define RS_STYLING_H
+#include "internal.h"
+
+struct rs__roadfield;
+struct rs__linesym;
+
+typedef struct rs__styling {
+    struct rs__linesym *lines;        /* NULL: no road has lines */
+    struct rs__roadfield *casing;     /* every road, those with a casing widened by it on both sides (road
+                                         ids as in rs_roads); NULL: no casing */
+    int casing_merged;                /* casing is rs__roadfield_widen of the grid's field: the analytic
+                                         coverage stage computes its coverage into rs__piece.ov */
+    int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */
+    float casing_rgba[4];
+    const struct rs__roadfield *near; /* field for fill / gradient lookups: the grid's, else near_own */
+    struct rs__roadfield *near_own;
+    int *prio;                        /* per road: rs__road_priority, for the fill lookups (the higher road's fill
+                                         at a crossing); NULL: all equal */
+    uint8_t *surface;                 /* per road: rs_surface */
+    float *colour;                    /* per road: fill rgba, gradient centre rgba, edge rgba, casing rgba (16 floats;
+                                         rgb 0..255, a 0..1) */
+    double *half_width;               /* per road */
+    int any_surface;                  /* some road has a fill, gradient or surface image */
+    /* Surface images (`surface IMG`, lib/scene/surfimg.h): per road the image
+     * (index into imgs, -1: none), its metres per image height, width and
+     * level of detail; NULL when no road has one. */
+    int32_t *img_of;
+    double *img_len;
+    uint32_t *img_lev;
+    double *img_f;
+    double *img_s0;                   /* per road: the stroke arc length at its first point (images run on
+                                         along a stroke); NULL: 0 */
+    uint8_t *img_rev;                 /* per road: drawn against its points in its stroke (s and t turn) */
+    struct rs__surfimg **imgs;        /* one per rs_style_options.surface_images entry in use (NULL: unused) */
+    size_t nimgs;
+    uint64_t img_pixels; /* pixels of the surface images in imgs[], all together */
+    size_t bytes;
+} rs__styling;
+
+/* Resolve every road's style (rs_road_style with o->style) and prepare what
+ * the overlays stage draws. `field` is the grid's road field of the same
+ * roads (borrowed; it must outlive the styling) or NULL: then one is built
+ * when a fill or gradient needs it. `net` (NULL: every road alone) is the
+ * roads' network, read during the build only: a stroke's records share
+ * one arc length for dashes and surface images (docs/network.md). *out stays NULL when no road is styled
+ * (or o->style.disable): the splat is then the unstyled one. */
+rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                            const struct rs__roadfield *field, const rs_network *net, rs__styling **out);
+void rs__styling_free(rs_ctx *ctx, rs__styling *st);
+
+/* The surface image colour of road `road` at (s, t) (s of the road, as
+ * the road field gives it), premultiplied (rgb
+ * 0..255, a 0..1); 0 when the road has no surface image. */
+int rs__styling_image(const rs__styling *st, uint32_t road, double s, double t, double out[4]);
+#endif

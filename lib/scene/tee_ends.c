@@ -1,0 +1,80 @@
+/* Road ends at a T (issue 27 target 3, docs/network.md "Ends at a T"):
+ * which record ends lie on a road passing through their node, and that
+ * road's normal there. The road field trims such ends (lib/scene/roadfield.c,
+ * rs__roadfield_set_tees); the GPU export gives them to the shader. */
+#include "roadfield.h"
+#include "network.h"
+
+#include <math.h>
+
+/* An end with the strip this close to the through road's direction keeps
+ * its round cap (the flat end would reach 1 / sine half widths along it) */
+#define TEE_MIN_SINE 0.2
+
+rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    size_t n = rs_roads_count(roads);
+    if (!net || rs_network_road_count(net) != n || n < 2) return RS_OK;
+    size_t cap = 0, cnt = 0;
+    rs__tee_end *T = NULL;
+    for (size_t nd = 0; nd < net->nnodes; nd++) {
+        const rs_network_leg *L = net->leg + net->leg_start[nd];
+        uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = UINT32_MAX;
+        const rs_network_leg *tl[2] = { NULL, NULL };
+        int ntl = 0, several = 0;
+        if (d < 3) continue;
+        /* the strokes passing through the node: a road through a shared
+         * point or a T, or a record end its stroke continues */
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road;
+            int passes = L[k].kind == RS_LEG_FORWARD || L[k].kind == RS_LEG_BACKWARD ||
+                         (L[k].kind == RS_LEG_START && net->link[2 * r] != UINT32_MAX) ||
+                         (L[k].kind == RS_LEG_END && net->link[2 * r + 1] != UINT32_MAX);
+            if (!passes) continue;
+            if (through != UINT32_MAX && net->stroke_of[r] != through) several = 1;
+            through = net->stroke_of[r];
+            if (ntl < 2) tl[ntl] = &L[k];
+            ntl++;
+        }
+        /* one through road, passing once (two legs); else every end keeps its cap */
+        if (several || ntl != 2) continue;
+        double tx = cos(tl[0]->angle) - cos(tl[1]->angle), ty = sin(tl[0]->angle) - sin(tl[1]->angle);
+        double tn = hypot(tx, ty);
+        if (!(tn > 1e-6)) continue;
+        tx /= tn, ty /= tn;
+        double R = 0;
+        rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
+        for (uint32_t k = 0; k < d; k++) {
+            uint32_t r = L[k].road;
+            int e = L[k].kind == RS_LEG_END;
+            if ((L[k].kind != RS_LEG_START && !e) || net->link[2 * r + e] != UINT32_MAX || net->stroke_of[r] == through)
+                continue;
+            /* the normal (-ty, tx), turned to point from the leg across the road */
+            double wx = cos(L[k].angle), wy = sin(L[k].angle), nx = -ty, ny = tx, dn = -(nx * wx + ny * wy);
+            if (!(fabs(dn) > TEE_MIN_SINE)) continue;
+            if (dn < 0) nx = -nx, ny = -ny;
+            if (cnt == cap) {
+                size_t nc = cap ? 2 * cap : 16, bytes;
+                rs__tee_end *nt = rs__mul_size(nc, sizeof *T, &bytes) ? rs__realloc(ctx, T, bytes) : NULL;
+                if (!nt) {
+                    rs__free(ctx, T);
+                    return RS_ERR_NOMEM;
+                }
+                T = nt;
+                cap = nc;
+            }
+            rs__tee_end *t = &T[cnt++];
+            t->road = r;
+            t->end = e;
+            t->through = tl[0]->road;
+            t->nx = nx;
+            t->ny = ny;
+            t->half_width = 0.5 * R;
+        }
+    }
+    *out = T;
+    *nout = cnt;
+    return RS_OK;
+}

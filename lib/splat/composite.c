@@ -1,0 +1,131 @@
+/* Composite stage (rgba and weight point at the piece's first pixel): C = a*T + (1-a)*S per pixel (seed 000, formula 4) with
+ * a = 1 - R; pure terrain and pure road pixels take one colour, no blend.
+ *
+ * Casings of one colour (p->cas, lib/splat/overlays.c) are blended into T here
+ * first: T' = T + (K - T) b with b = alpha_K min(1, (min(C, 1) - R) / (1 - R))
+ * where the casing field's coverage C exceeds R < 1 (else b = 0): the
+ * composite then shows T' over 1 - R of the pixel, so the casing takes
+ * C - R of it (docs/linesym.md, "Casings").
+ *
+ * T and S are planar per piece row (lib/splat/splatter.h). With SSE2 four pixels
+ * at a time without branches: the blend for every pixel, then the pure
+ * colours selected by mask, the same double arithmetic and rounding as the
+ * scalar loop (which does the rest of a row and all of it without SSE2);
+ * four pure pixels in a row skip the blend. */
+#include "splatter.h"
+
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+static uint8_t to_byte(double v)
+{
+    /* NaN, negative and large values all land in 0..255 */
+    return (uint8_t)(v >= 0 ? (v >= 255 ? 255 : v + 0.5) : 0);
+}
+
+/* The casing share b of one pixel (scalar; see above). */
+static double casing_share(double c, double r, double alpha)
+{
+    if (!(c > r && r < 1)) return 0;
+    double b = ((c > 1 ? 1 : c) - r) / (1 - r);
+    return (b > 1 ? 1 : b) * alpha;
+}
+
+void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride)
+{
+    const size_t w = p->w;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        const uint16_t *q = p->q + (size_t)r * w;
+        const float *tc = p->tc + (size_t)r * w * 3, *sc = p->sc + (size_t)r * w * 3;
+        const double *cas = p->cas ? p->cas + (size_t)r * w : NULL, *cov = p->cov + (size_t)r * w;
+        uint8_t *out = rgba + (size_t)r * rgba_stride;
+        size_t k = 0;
+#if defined(__SSE2__)
+        const __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(),
+                      top = _mm_set1_pd(255.0), full = _mm_set1_pd(65535.0), ka = _mm_set1_pd(p->cas_rgba[3]);
+        const __m128 halff = _mm_set1_ps(0.5f), zerof = _mm_setzero_ps(), topf = _mm_set1_ps(255.0f);
+        for (; k + 4 <= w; k += 4) {
+            uint64_t q4;
+            memcpy(&q4, q + k, sizeof q4);
+            /* casing shares b (zero without casings) */
+            __m128d cb[2] = { zero, zero };
+            int anyc = 0;
+            __m128d c4[2];
+            if (cas && q4 != UINT64_MAX &&
+                (c4[0] = _mm_loadu_pd(cas + k), c4[1] = _mm_loadu_pd(cas + k + 2),
+                 _mm_movemask_pd(_mm_cmpneq_pd(_mm_or_pd(c4[0], c4[1]), zero)))) {
+                /* some C != 0 (most pixels have none) */
+                for (int h = 0; h < 2; h++) {
+                    __m128d c = c4[h], rw = _mm_loadu_pd(cov + k + 2 * h);
+                    __m128d m = _mm_and_pd(_mm_cmpgt_pd(c, rw), _mm_cmplt_pd(rw, one));
+                    /* lanes outside m may divide by zero: masked off (b = 0
+                     * leaves T as it is: T + (K - T) 0 = T) */
+                    __m128d b = _mm_div_pd(_mm_sub_pd(_mm_min_pd(c, one), rw), _mm_sub_pd(one, rw));
+                    cb[h] = _mm_and_pd(m, _mm_mul_pd(_mm_min_pd(b, one), ka));
+                }
+                anyc = 1;
+            }
+            if ((q4 == 0 && !anyc) || q4 == UINT64_MAX) {
+                /* four pure terrain or four pure road pixels: one colour */
+                const float *src = q4 ? sc : tc;
+                __m128i px = _mm_set1_epi32((int)0xFF000000u);
+                for (int ch = 0; ch < 3; ch++) {
+                    /* in float, four at a time, the same bytes as in double
+                     * (checked over all 2^32 floats): from 0.5 up, v + 0.5
+                     * is exact or rounds within its integer part, above 255
+                     * both clamp; below 0.5 (and NaN) the byte is 0, taken
+                     * as v = 0 (the float sum would round 0.49999997 + 0.5
+                     * up to 1) */
+                    __m128 v = _mm_loadu_ps(src + ch * w + k);
+                    v = _mm_and_ps(_mm_cmpge_ps(v, halff), v);
+                    v = _mm_min_ps(_mm_max_ps(_mm_add_ps(v, halff), zerof), topf);
+                    px = _mm_or_si128(px, _mm_slli_epi32(_mm_cvttps_epi32(v), 8 * ch));
+                }
+                _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), px);
+                continue;
+            }
+            __m128d qv[2] = { _mm_set_pd(q[k + 1], q[k]), _mm_set_pd(q[k + 3], q[k + 2]) };
+            __m128d rr[2], ir[2], m0[2], m1[2];
+            for (int h = 0; h < 2; h++) {
+                rr[h] = _mm_div_pd(qv[h], full);
+                ir[h] = _mm_sub_pd(one, rr[h]);
+                m0[h] = _mm_cmpeq_pd(qv[h], zero);
+                m1[h] = _mm_cmpeq_pd(qv[h], full);
+            }
+            __m128i px = _mm_set1_epi32((int)0xFF000000u);
+            for (int ch = 0; ch < 3; ch++) {
+                __m128i c[2];
+                const __m128d kc = _mm_set1_pd(p->cas_rgba[ch]);
+                for (int h = 0; h < 2; h++) {
+                    const float *tp = tc + ch * w + k + 2 * h, *sp = sc + ch * w + k + 2 * h;
+                    __m128d t = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)tp)));
+                    __m128d s = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)sp)));
+                    if (anyc) t = _mm_add_pd(t, _mm_mul_pd(_mm_sub_pd(kc, t), cb[h]));
+                    __m128d v = _mm_add_pd(_mm_mul_pd(ir[h], t), _mm_mul_pd(rr[h], s));
+                    v = _mm_or_pd(_mm_and_pd(m0[h], t), _mm_andnot_pd(m0[h], v));
+                    v = _mm_or_pd(_mm_and_pd(m1[h], s), _mm_andnot_pd(m1[h], v));
+                    /* to_byte: max returns its second operand (0) for NaN */
+                    v = _mm_min_pd(_mm_max_pd(_mm_add_pd(v, half), zero), top);
+                    c[h] = _mm_cvttpd_epi32(v);
+                }
+                px = _mm_or_si128(px, _mm_slli_epi32(_mm_unpacklo_epi64(c[0], c[1]), 8 * ch));
+            }
+            _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), px);
+        }
+#endif
+        for (; k < w; k++) {
+            uint32_t qq = q[k];
+            double rr = qq / 65535.0, b = cas && qq != 65535u ? casing_share(cas[k], cov[k], p->cas_rgba[3]) : 0;
+            for (size_t ch = 0; ch < 3; ch++) {
+                double t = tc[ch * w + k], s = sc[ch * w + k];
+                if (b > 0) t += (p->cas_rgba[ch] - t) * b;
+                double v = qq == 0 ? t : (qq == 65535u ? s : (1 - rr) * t + rr * s);
+                out[4 * k + ch] = to_byte(v);
+            }
+            out[4 * k + 3] = 255;
+        }
+        if (weight) memcpy(weight + (size_t)r * weight_stride, q, w * sizeof *q);
+    }
+}

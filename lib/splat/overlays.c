@@ -1,0 +1,122 @@
+/* Overlays stage: road styles drawn between the surface and the composite
+ * (issue 13; docs/linesym.md "In the splat"), in layer order: casings onto
+ * the terrain colour T (under every road surface, so the composite's road
+ * weight covers them wherever a road is), fill and gradient surfaces onto
+ * the road colour S, then the line symbols onto S. Markings (issue 14)
+ * come next, onto S (SPEC: markings are composited onto S). */
+#include "splatter.h"
+#include "linesym.h"
+#include "roadfield.h"
+#include "styling.h"
+#include "markings.h"
+
+#include <math.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#define HALF_SQRT2 0.70710678118654752440
+
+/* Casing colour into terrain pixel k of row r (share of the pixel > 0),
+ * casings of several colours (one colour: the composite blends it). */
+static void casing_pixel(const rs__styling *st, double pix, const rs__piece *p, uint32_t r, size_t k, double c,
+                         double R)
+{
+    /* The composite shows T' over 1 - R of the pixel; the casing's own
+     * share of the pixel is C - R (the casing field holds the roads), so
+     * T' takes (C - R) / (1 - R) of casing colour. */
+    double share = ((c > 1 ? 1 : c) - R) / (1 - R);
+    if (!(share > 0)) return;
+    /* the colour of the nearest road's casing (none: a road without one
+     * is nearest) */
+    rs__road_point rp;
+    double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+    if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) return;
+    const float *col = st->colour + 16 * (size_t)rp.road + 12;
+    float a = (float)(share > 1 ? 1 : share) * col[3], *tc = p->tc + (size_t)r * p->w * 3;
+    for (int ch = 0; ch < 3; ch++) {
+        float *v = tc + (size_t)ch * p->w + k;
+        *v = *v * (1.0f - a) + col[ch] * a;
+    }
+}
+
+static void casings(const rs_splatter *s, const rs__styling *st, double pix, rs__piece *p)
+{
+    const size_t w = p->w;
+    /* the analytic coverage stage has C in ov already when merged */
+    if (!(st->casing_merged && s->o.coverage.edges == RS_EDGES_ANALYTIC))
+        rs__roadfield_coverage(st->casing, p->x0, p->y0, p->w, p->rows, pix, p->ov, w);
+    if (st->casing_uniform) {
+        /* one colour: the composite blends it (lib/splat/composite.c) */
+        p->cas = p->ov;
+        memcpy(p->cas_rgba, st->casing_rgba, sizeof p->cas_rgba);
+        return;
+    }
+    for (uint32_t r = 0; r < p->rows; r++) {
+        const double *cr = p->ov + (size_t)r * w, *rr = p->cov + (size_t)r * w;
+        size_t k = 0;
+        /* casing pixels are few: C > R and R < 1 (a whole road pixel shows
+         * no terrain, hence no casing); two at a time to skip the rest */
+#if defined(__SSE2__)
+        const __m128d one = _mm_set1_pd(1);
+        for (; k + 1 < w; k += 2) {
+            __m128d c = _mm_loadu_pd(cr + k), R = _mm_loadu_pd(rr + k);
+            int m = _mm_movemask_pd(_mm_and_pd(_mm_cmpgt_pd(c, R), _mm_cmplt_pd(R, one)));
+            if (!m) continue;
+            if (m & 1) casing_pixel(st, pix, p, r, k, cr[k], rr[k]);
+            if (m & 2) casing_pixel(st, pix, p, r, k + 1, cr[k + 1], rr[k + 1]);
+        }
+#endif
+        for (; k < w; k++)
+            if (cr[k] > rr[k] && rr[k] < 1) casing_pixel(st, pix, p, r, k, cr[k], rr[k]);
+    }
+}
+
+static void surfaces(const rs__styling *st, double pix, rs__piece *p)
+{
+    const size_t w = p->w;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        float *sc = p->sc + (size_t)r * w * 3;
+        for (size_t k = 0; k < w; k++) {
+            if (p->q[(size_t)r * w + k] == 0) continue;
+            rs__road_point rp;
+            double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+            if (!rs__roadfield_nearest_ranked(st->near, x, y, pix * HALF_SQRT2, st->prio, &rp)) continue;
+            /* the surface image replaces the base surface, blended by its
+             * alpha (premultiplied); fill or gradient go on top */
+            double im[4];
+            if (rs__styling_image(st, rp.road, rp.s, rp.t, im))
+                for (int ch = 0; ch < 3; ch++) {
+                    float *v = sc + (size_t)ch * w + k;
+                    *v = (float)(*v * (1 - im[3]) + im[ch]);
+                }
+            uint8_t kind = st->surface[rp.road];
+            if (kind == RS_SURFACE_DEFAULT) continue;
+            const float *col = st->colour + 16 * (size_t)rp.road;
+            float c[4];
+            if (kind == RS_SURFACE_GRADIENT) {
+                double hw = st->half_width[rp.road], f = hw > 0 ? fabs(rp.t) / hw : 1;
+                float g = (float)(f > 1 ? 1 : f);
+                for (int ch = 0; ch < 4; ch++) c[ch] = col[4 + ch] + (col[8 + ch] - col[4 + ch]) * g;
+            } else {
+                for (int ch = 0; ch < 4; ch++) c[ch] = col[ch];
+            }
+            for (int ch = 0; ch < 3; ch++) {
+                float *v = sc + (size_t)ch * w + k;
+                *v = *v * (1.0f - c[3]) + c[ch] * c[3];
+            }
+        }
+    }
+}
+
+void rs__overlays(const rs_splatter *s, rs__piece *p)
+{
+    const rs__styling *st = s->grid->styling;
+    p->cas = NULL;
+    if (p->w == 0 || p->rows == 0) return;
+    if (st && st->casing) casings(s, st, s->texel_m, p);
+    if (st && st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);
+    if (st && st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ls);
+    if (s->grid->markings && p->road_pixels) rs__markings_paint(s->grid->markings, p);
+}

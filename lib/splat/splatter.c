@@ -1,0 +1,424 @@
+/* The splatter: validation and the per-splatter tables once, then any
+ * window of the output in pieces, each through the four stages
+ * (lib/splat/splatter.h; docs/design.md "Stages"). */
+#include "splatter.h"
+#include "dem.h"
+#include "linesym.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Output size for options already checked by rs__splat_defaults. */
+static rs_result output_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *o, uint32_t *width,
+                             uint32_t *height)
+{
+    uint64_t w = (uint64_t)(dem->width - 1) * o->texels, h = (uint64_t)(dem->height - 1) * o->texels, px;
+    if (!rs__mul_u64(w, h, &px) || px > ctx->limits.max_pixels || w > UINT32_MAX || h > UINT32_MAX)
+        return rs__fail(ctx, RS_ERR_LIMIT, "output of %llu x %llu pixels exceeds the limit of %llu pixels",
+                        (unsigned long long)w, (unsigned long long)h, (unsigned long long)ctx->limits.max_pixels);
+    *width = (uint32_t)w;
+    *height = (uint32_t)h;
+    return RS_OK;
+}
+
+rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, uint32_t *width,
+                        uint32_t *height)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !width || !height) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_size");
+    rs_splat_options o;
+    rs_result r = rs__splat_defaults(ctx, opts, &o);
+    if (!r) r = output_size(ctx, dem, &o, width, height);
+    if (!r) rs__ok(ctx);
+    return r;
+}
+
+/* A grid is only valid for the DEM, frame and options it was built with. */
+static rs_result check_grid(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *g, const rs_splat_options *o)
+{
+    const char *what = NULL;
+    if (g->dem_w != dem->width || g->dem_h != dem->height) what = "another DEM size";
+    else if (g->frame.cell_size != dem->frame.cell_size) what = "another cell size";
+    else if (g->frame.origin_x != dem->frame.origin_x || g->frame.origin_y != dem->frame.origin_y)
+        what = "another origin";
+    else if (g->edges != o->coverage.edges) what = "another edge mode";
+    else if (g->style.profile != o->style.profile || g->style.aa != o->style.aa ||
+             (g->style.disable != 0) != (o->style.disable != 0))
+        what = "other style options";
+    else if (g->marks.atlas != o->markings.atlas || (g->marks.no_auto != 0) != (o->markings.no_auto != 0) ||
+             (g->marks.disable != 0) != (o->markings.disable != 0))
+        what = "other marking options";
+    else if (g->edges == RS_EDGES_ALPHAMAP &&
+             (g->texels != o->texels || g->opts.buffer != o->grid.buffer || g->opts.road_cell != o->grid.road_cell))
+        what = "other texels or grid options";
+    if (what) return rs__fail(ctx, RS_ERR_INVALID_ARG, "road grid was built for %s", what);
+    return RS_OK;
+}
+
+void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
+{
+    if (!ctx || !s) return;
+    rs__alphamap_tables_free(ctx, s);
+    rs__free(ctx, s->z_own);
+    rs__free(ctx, s->ramp_own);
+    rs_road_grid_free(ctx, s->grid_own);
+    rs__free(ctx, s);
+}
+
+rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
+                             const rs_splat_options *opts, rs_splatter **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splatter_create: out is NULL");
+    *out = NULL;
+    if (!dem || (!roads) == (!grid))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splatter_create: needs a DEM and exactly one of roads and grid");
+    rs_splat_options o;
+    rs_result r = rs__splat_defaults(ctx, opts, &o);
+    uint32_t w = 0, h = 0;
+    if (!r) r = output_size(ctx, dem, &o, &w, &h);
+    if (!r && grid) r = check_grid(ctx, dem, grid, &o);
+    if (!r && o.lighting.enable) r = rs__lighting_check(ctx, &o.lighting);
+    if (r) return r;
+    rs_splatter *s = rs__calloc(ctx, 1, sizeof *s);
+    if (!s) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the splatter");
+    s->dem = dem;
+    s->o = o;
+    s->out_w = w;
+    s->out_h = h;
+    s->texel_m = dem->frame.cell_size / o.texels;
+    if (roads) {
+        /* the grid's progress is the caller's: it is the slow part */
+        r = rs_road_grid_build(ctx, dem, roads, &o, &s->grid_own);
+        s->grid = s->grid_own;
+    } else s->grid = grid;
+    rs__mask_table_build(&s->mt);
+    if (!r && o.coverage.edges == RS_EDGES_ALPHAMAP) r = rs__alphamap_tables_build(ctx, s);
+    int nodata = 0;
+    rs_dem_height_range(dem, &s->zmin, &s->zrange, &nodata);
+    s->zrange -= s->zmin;
+    if (!r && o.surface.ramp) {
+        s->ramp_own = rs__alloc_array(ctx, o.surface.ramp_count, sizeof *s->ramp_own);
+        if (!s->ramp_own) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the colour ramp");
+        else memcpy(s->ramp_own, o.surface.ramp, o.surface.ramp_count * sizeof *s->ramp_own);
+        s->o.surface.ramp = s->ramp_own;
+    }
+    s->z = dem->z;
+    if (!r && nodata) {
+        r = rs__dem_fill_nodata(ctx, dem, &s->z_own);
+        s->z = s->z_own;
+    }
+    if (r) {
+        rs_splatter_free(ctx, s);
+        return r;
+    }
+    double zen = (90.0 - 45.0) * RS__PI / 180.0;
+    s->sun_az = fmod(360.0 - 315.0 + 90.0, 360.0) * RS__PI / 180.0;
+    s->cos_zen = cos(zen);
+    s->sin_zen = sin(zen);
+    if (o.lighting.enable) {
+        double az = (o.lighting.sun_given ? o.lighting.sun_azimuth : 315.0) * RS__PI / 180.0;
+        double alt = (o.lighting.sun_given ? o.lighting.sun_altitude : 45.0) * RS__PI / 180.0;
+        s->light[0] = sin(az) * cos(alt); /* east */
+        s->light[1] = cos(az) * cos(alt); /* north */
+        s->light[2] = sin(alt);
+        double hz = s->light[2] + 1, hl = sqrt(s->light[0] * s->light[0] + s->light[1] * s->light[1] + hz * hz);
+        s->half[0] = s->light[0] / hl;
+        s->half[1] = s->light[1] / hl;
+        s->half[2] = hz / hl;
+        s->ambient = o.lighting.ambient > 0 ? o.lighting.ambient : 0.3;
+        s->specular = o.lighting.specular;
+    }
+    *out = s;
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+void rs_splatter_size(const rs_splatter *s, uint32_t *width, uint32_t *height)
+{
+    if (width) *width = s ? s->out_w : 0;
+    if (height) *height = s ? s->out_h : 0;
+}
+
+const rs_road_grid *rs_splatter_grid(const rs_splatter *s) { return s ? s->grid : NULL; }
+
+/* Piece size: about 2^18 pixels of scratch (9 MB) whatever the window; per
+ * window column, the terrain colour rows and each texture's column
+ * coordinates add a few dozen bytes. A workspace (rs_splat_workspace_create)
+ * holds the same scratch for every window up to its width, so a window
+ * through it allocates nothing. */
+#define PIECE_COLS 2048u
+#define PIECE_PIXELS (1u << 18)
+
+typedef struct scratch {
+    double *cov, *hx, *tf, *ov, *ls;
+    uint16_t *q;
+    uint32_t *ti;
+    float *tc, *sc, *trow0, *trow1;
+} scratch;
+
+/* Element counts of a scratch set: for one window (w, h), or for every
+ * window at most max_w wide (a workspace: h = UINT32_MAX). */
+typedef struct scratch_size {
+    size_t npx, cols, nax, ncol;
+} scratch_size;
+
+static scratch_size scratch_size_of(const rs_splatter *s, uint32_t w, uint32_t h)
+{
+    const uint32_t T = s->o.texels;
+    const size_t ntex = (s->o.surface.terrain_texture != NULL) + (s->o.surface.road_texture != NULL);
+    scratch_size z;
+    z.cols = w < PIECE_COLS ? w : PIECE_COLS;
+    size_t rows = PIECE_PIXELS / z.cols;
+    if (rows > T) rows = T;
+    if (rows > h) rows = h;
+    /* a narrower window may take more rows of fewer columns: never more
+     * than PIECE_PIXELS, nor more than cols x T */
+    z.npx = z.cols * (size_t)T < PIECE_PIXELS ? z.cols * (size_t)T : PIECE_PIXELS;
+    if (h != UINT32_MAX) z.npx = z.cols * rows;
+    z.nax = (h != UINT32_MAX ? rows : (T < PIECE_PIXELS ? T : PIECE_PIXELS)) + (size_t)w * ntex;
+    z.ncol = (size_t)w / T + 3;
+    return z;
+}
+
+static void scratch_free(rs_ctx *ctx, scratch *b)
+{
+    rs__free(ctx, b->cov);
+    rs__free(ctx, b->ov);
+    rs__free(ctx, b->ls);
+    rs__free(ctx, b->hx);
+    rs__free(ctx, b->tf);
+    rs__free(ctx, b->q);
+    rs__free(ctx, b->ti);
+    rs__free(ctx, b->tc);
+    rs__free(ctx, b->sc);
+    rs__free(ctx, b->trow0);
+    rs__free(ctx, b->trow1);
+}
+
+static rs_result scratch_alloc(rs_ctx *ctx, const rs_splatter *s, const scratch_size *z, scratch *b)
+{
+    const int styled = s->grid->styling != NULL;
+    b->cov = rs__alloc_array(ctx, z->npx, sizeof *b->cov);
+    b->ov = styled ? rs__alloc_array(ctx, z->npx, sizeof *b->ov) : NULL;
+    b->ls = styled ? rs__alloc_array(ctx, rs__linesym_scratch_len((uint32_t)z->cols), sizeof *b->ls) : NULL;
+    b->hx = rs__alloc_array(ctx, z->cols * 6, sizeof *b->hx);
+    b->tf = rs__alloc_array(ctx, z->nax * 2, sizeof *b->tf);
+    b->q = rs__alloc_array(ctx, z->npx, sizeof *b->q);
+    b->ti = rs__alloc_array(ctx, z->nax * 2, sizeof *b->ti);
+    /* zeroed: the composite reads both colours of every pixel, selecting one */
+    b->tc = rs__calloc(ctx, z->npx * 3, sizeof *b->tc);
+    b->sc = rs__calloc(ctx, z->npx * 3, sizeof *b->sc);
+    b->trow0 = rs__alloc_array(ctx, z->ncol * 3, sizeof *b->trow0);
+    b->trow1 = rs__alloc_array(ctx, z->ncol * 3, sizeof *b->trow1);
+    if (!b->cov || (styled && (!b->ov || !b->ls)) || !b->hx || !b->tf || !b->q || !b->ti || !b->tc || !b->sc ||
+        !b->trow0 || !b->trow1) {
+        scratch_free(ctx, b);
+        memset(b, 0, sizeof *b);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for splat scratch (%zu pixels)", z->npx);
+    }
+    return RS_OK;
+}
+
+struct rs_splat_workspace {
+    const rs_splatter *s;
+    uint32_t max_w;
+    scratch b;
+    size_t bytes;
+};
+
+static double now(const rs_splat_profile *pf)
+{
+    return pf && pf->clock_ms ? pf->clock_ms(pf->clock_user) : 0;
+}
+
+/* The window through the stages with scratch b, which holds at least
+ * scratch_size_of(s, w, h) of everything. */
+static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint32_t x0, uint32_t y0, uint32_t w,
+                           uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
+                           rs_splat_profile *profile)
+{
+    const scratch b = *bp;
+    const uint32_t T = s->o.texels;
+    uint32_t cols = w < PIECE_COLS ? w : PIECE_COLS;
+    uint32_t max_rows = PIECE_PIXELS / cols;
+    if (max_rows > T) max_rows = T;
+    if (max_rows > h) max_rows = h;
+    /* terrain colour rows: the window's sample columns */
+    rs__terrain_cache tcache;
+    tcache.c0 = x0 / T;
+    tcache.ncol = (x0 + w - 1) / T + 2 - tcache.c0;
+    tcache.row_of[0] = tcache.row_of[1] = UINT32_MAX;
+    /* texture coordinates: the window's columns per texture, a piece's rows */
+    const int has_tex[2] = { s->o.surface.terrain_texture != NULL, s->o.surface.road_texture != NULL };
+    rs__piece p;
+    memset(&p, 0, sizeof p);
+    p.cov = b.cov;
+    p.ov = b.ov;
+    p.ls = b.ls;
+    p.q = b.q;
+    p.tc = b.tc;
+    p.sc = b.sc;
+    p.hx = b.hx;
+    p.win_x0 = x0;
+    p.win_w = w;
+    p.tiy = b.ti;
+    p.twy = b.tf;
+    size_t at = 2 * (size_t)max_rows;
+    for (int t = 0; t < 2; t++) {
+        p.tix[t] = has_tex[t] ? b.ti + at : NULL;
+        p.twx[t] = has_tex[t] ? b.tf + at : NULL;
+        at += has_tex[t] ? 2 * (size_t)w : 0;
+    }
+    tcache.rgb[0] = b.trow0;
+    tcache.rgb[1] = b.trow1;
+    p.tcache = &tcache;
+    const int analytic = s->o.coverage.edges == RS_EDGES_ANALYTIC;
+    for (uint32_t y = y0; y < y0 + h;) {
+        p.crow = y / T;
+        uint32_t row_end = (p.crow + 1) * T;
+        if (row_end > y0 + h) row_end = y0 + h;
+        p.y0 = y;
+        p.rows = row_end - y < max_rows ? row_end - y : max_rows;
+        for (uint32_t x = x0; x < x0 + w; x += cols) {
+            p.x0 = x;
+            p.w = x0 + w - x < cols ? x0 + w - x : cols;
+            double t0 = now(profile);
+            if (analytic) rs__coverage_analytic(s, &p);
+            else rs__coverage_alphamap(s, &p);
+            rs__coverage_quantise(&p);
+            double t1 = now(profile);
+            rs__surface(s, &p);
+            double t2 = now(profile);
+            rs__overlays(s, &p);
+            double t3 = now(profile);
+            rs__composite(&p, rgba + (size_t)(p.y0 - y0) * rgba_stride + (size_t)(p.x0 - x0) * 4, rgba_stride,
+                          weight ? weight + (size_t)(p.y0 - y0) * weight_stride + (p.x0 - x0) : NULL,
+                          weight_stride);
+            if (profile) {
+                double t4 = now(profile);
+                profile->coverage_ms += t1 - t0;
+                profile->surface_ms += t2 - t1;
+                profile->overlays_ms += t3 - t2;
+                profile->composite_ms += t4 - t3;
+                profile->pixels += (uint64_t)p.rows * p.w;
+                profile->road_pixels += p.road_pixels;
+                profile->mark_tests += p.mark_tests;
+                profile->mark_pixels += p.mark_pixels;
+            }
+            p.mark_tests = p.mark_pixels = 0;
+        }
+        if (s->o.lighting.enable) {
+            /* these rows of the window, lit by their normals (the normals of
+             * a pixel do not depend on the window: same bytes for any cut) */
+            rs_result lr = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
+                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride);
+            if (lr) return lr;
+        }
+        y += p.rows;
+        if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h))
+            return rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
+    }
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+static rs_result check_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                              size_t rgba_stride, const uint16_t *weight, size_t weight_stride)
+{
+    if (w == 0 || h == 0 || x0 >= s->out_w || y0 >= s->out_h || w > s->out_w - x0 || h > s->out_h - y0)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "window %u,%u %ux%u is empty or outside the %ux%u image", x0, y0, w,
+                        h, s->out_w, s->out_h);
+    if (rgba_stride / 4 < w)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA row stride %zu bytes, need %zu", rgba_stride,
+                        (size_t)w * 4);
+    if (weight && weight_stride < w)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight row stride %zu values, need %u", weight_stride, w);
+    return RS_OK;
+}
+
+rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                          uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
+                          rs_splat_profile *profile)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!s || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_window");
+    rs_result r = check_window(ctx, s, x0, y0, w, h, rgba_stride, weight, weight_stride);
+    if (r) return r;
+    scratch_size z = scratch_size_of(s, w, h);
+    scratch b;
+    if ((r = scratch_alloc(ctx, s, &z, &b)) != RS_OK) return r;
+    r = splat_run(ctx, s, &b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, profile);
+    scratch_free(ctx, &b);
+    return r;
+}
+
+rs_result rs_splat_workspace_create(rs_ctx *ctx, const rs_splatter *s, uint32_t max_width, rs_splat_workspace **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splat_workspace_create: out is NULL");
+    *out = NULL;
+    if (!s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splat_workspace_create: NULL splatter");
+    if (max_width == 0 || max_width > s->out_w)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "workspace width %u must be 1..%u (the image width)", max_width,
+                        s->out_w);
+    rs_splat_workspace *ws = rs__calloc(ctx, 1, sizeof *ws);
+    if (!ws) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a splat workspace");
+    scratch_size z = scratch_size_of(s, max_width, UINT32_MAX);
+    rs_result r = scratch_alloc(ctx, s, &z, &ws->b);
+    if (r) {
+        rs__free(ctx, ws);
+        return r;
+    }
+    ws->s = s;
+    ws->max_w = max_width;
+    ws->bytes = sizeof *ws + z.npx * (sizeof(double) * (s->grid->styling ? 2 : 1) + sizeof(uint16_t) + 6 * sizeof(float)) +
+                z.cols * 6 * sizeof(double) + z.nax * 2 * (sizeof(double) + sizeof(uint32_t)) +
+                z.ncol * 6 * sizeof(float) +
+                (s->grid->styling ? rs__linesym_scratch_len((uint32_t)z.cols) * sizeof(double) : 0);
+    *out = ws;
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+void rs_splat_workspace_free(rs_ctx *ctx, rs_splat_workspace *ws)
+{
+    if (!ctx || !ws) return;
+    scratch_free(ctx, &ws->b);
+    rs__free(ctx, ws);
+}
+
+size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws) { return ws ? ws->bytes : 0; }
+
+rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0, uint32_t y0,
+                             uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight,
+                             size_t weight_stride, rs_splat_profile *profile)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!s || !ws || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_window_ws");
+    if (ws->s != s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "the workspace was made for another splatter");
+    rs_result r = check_window(ctx, s, x0, y0, w, h, rgba_stride, weight, weight_stride);
+    if (r) return r;
+    if (w > ws->max_w)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
+    return splat_run(ctx, s, &ws->b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, profile);
+}
+
+rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,
+                   uint8_t *rgba, size_t rgba_size, uint16_t *weight, size_t weight_count)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !grid || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat");
+    rs_splatter *s;
+    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, opts, &s);
+    if (r) return r;
+    size_t npx = (size_t)s->out_w * s->out_h;
+    if (rgba_size / 4 < npx)
+        r = rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA buffer of %zu bytes, need %zu", rgba_size, npx * 4);
+    else if (weight && weight_count < npx)
+        r = rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "weight buffer of %zu values, need %zu", weight_count, npx);
+    else
+        r = rs_splat_window(ctx, s, 0, 0, s->out_w, s->out_h, rgba, (size_t)s->out_w * 4, weight, s->out_w, NULL);
+    rs_splatter_free(ctx, s);
+    return r;
+}

@@ -1,0 +1,99 @@
+/* Private: the splatter and its stages (docs/design.md, "Stages").
+ *
+ * rs_splat_window (lib/splat/splatter.c) cuts its window into pieces of at most a
+ * few hundred thousand pixels, each inside one DEM-cell row, and runs the
+ * four stages on each piece in order. A stage reads what the earlier ones
+ * wrote into the piece and never recomputes it. A pixel's value depends
+ * only on its own coordinates, so any cut gives the same bytes. */
+#ifndef RS_SPLATTER_H
+#define RS_SPLATTER_H
+#include "internal.h"
+#include "mask.h"
+#include "roadgrid.h"
+
+/* Integral tables of one alpha-map (lib/splat/coverage_alphamap.c). */
+typedef struct rs__alpha_table {
+    uint32_t n;    /* res + 1 samples per side */
+    double h2;     /* area of one alpha-map pixel in cell units */
+    float *f;      /* samples */
+    double *s;     /* S[i][j]: integral over [0,j]x[0,i] (pixel units) */
+    double *col;   /* integral of f(j, .) over [0,i] */
+    double *row;   /* integral of f(., i) over [0,j] */
+} rs__alpha_table;
+
+struct rs_splatter {
+    const rs_dem *dem;
+    rs_splat_options o;        /* validated, defaults filled */
+    uint32_t out_w, out_h;
+    const rs_road_grid *grid;  /* in use */
+    rs_road_grid *grid_own;    /* when built here */
+    rs__mask_table mt;
+    rs__alpha_table tab[3];    /* EDGE, INNER, OUTER (alpha-map edges) */
+    const float *z;            /* heights, nodata filled (lib/dem.c policy) */
+    float *z_own;
+    double zmin, zrange;       /* DEM units, valid samples (RS_TINT_RELATIVE without a range) */
+    rs_colour_stop *ramp_own;  /* the absolute tint's ramp: a copy of o.surface.ramp */
+    double cos_zen, sin_zen, sun_az; /* light: azimuth 315, altitude 45 */
+    double texel_m;            /* cell_size / texels */
+    /* lighting (o.lighting.enable): unit vector towards the sun and the
+     * Blinn half vector (tangent space: X east, Y north, Z up) */
+    double light[3], half[3], ambient, specular;
+};
+
+/* Terrain colours (3 floats per sample) of the window's sample columns
+ * [c0, c0 + ncol), for the two DEM sample rows last needed: computed once
+ * per sample row per rs_splat_window call, reused by every piece of the
+ * DEM-cell rows above and below it (lib/splat/surface.c). */
+typedef struct rs__terrain_cache {
+    uint32_t c0, ncol;
+    uint32_t row_of[2]; /* DEM sample row held by rgb[i], UINT32_MAX: none */
+    float *rgb[2];
+} rs__terrain_cache;
+
+/* One piece of a window: columns [x0, x0+w), image rows [y0, y0+rows), all
+ * inside DEM-cell row crow. Buffers are rows x w, row-major. */
+typedef struct rs__piece {
+    uint32_t x0, w, y0, rows, crow;
+    double *cov;      /* coverage: road weight R in [0,1] */
+    uint16_t *q;      /* coverage: R quantised to 0..65535 (the weight output) */
+    double *ov;       /* overlays: the casing field's coverage, rows x w (only when the grid has styles) */
+    double *ls;       /* overlays: the line symbols' scratch, rs__linesym_scratch_len(w) (only with styles);
+                       * apart from ov, which the composite still reads (issue 25) */
+    float *tc, *sc;   /* surface: terrain and road colour; each row planar: w R, w G, w B */
+    rs__terrain_cache *tcache; /* surface: the window's terrain colour rows */
+    double *hx;       /* surface: two horizontal interpolants, 6 planes of w */
+    /* surface: bilinear texture coordinates, planar (texel i0 then i1,
+     * weight 1 - f then f). Columns of the whole window [win_x0, win_x0 +
+     * win_w) per texture (terrain [0], road [1]; NULL: no such texture),
+     * computed by the window's first piece that needs them (tx_ready);
+     * rows per piece. */
+    uint32_t win_x0, win_w;
+    uint32_t *tix[2], *tiy;
+    double *twx[2], *twy;
+    int tx_ready[2];
+    uint64_t road_pixels;
+    uint64_t mark_tests, mark_pixels; /* markings stage counts (added to) */
+    /* overlays -> composite: casings of one colour are blended by the
+     * composite (one pass over the pixels instead of two): the casing field's
+     * coverage C (rows x w, NULL: none) and the colour */
+    const double *cas;
+    float cas_rgba[4];
+} rs__piece;
+
+/* Stages. */
+rs_result rs__alphamap_tables_build(rs_ctx *ctx, rs_splatter *s);
+void rs__alphamap_tables_free(rs_ctx *ctx, rs_splatter *s);
+void rs__coverage_alphamap(const rs_splatter *s, rs__piece *p);
+void rs__coverage_analytic(const rs_splatter *s, rs__piece *p);
+void rs__coverage_quantise(rs__piece *p);
+void rs__surface(const rs_splatter *s, rs__piece *p);
+void rs__overlays(const rs_splatter *s, rs__piece *p);
+/* Normal maps (lib/splat/normals.c): the normals of a window (options checked),
+ * encoded into rgb (RGB8) or, when rgba is not NULL, lighting the colours
+ * already there (o.lighting). */
+rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                          const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
+                          size_t rgba_stride);
+rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l);
+void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride);
+#endif

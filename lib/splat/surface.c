@@ -1,0 +1,437 @@
+/* Surface stage: the terrain colour T (hypsometric tint times Horn's
+ * hillshade, or a tiled texture) where a pixel has terrain, and the road
+ * colour S (procedural asphalt or a tiled texture) where it has road. */
+#include "splatter.h"
+#include "dem.h"
+
+#include <math.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+static uint32_t hash2(uint32_t x, uint32_t y)
+{
+    uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u;
+    h ^= h >> 15; h *= 0x2c1b3c6dU;
+    h ^= h >> 12; h *= 0x297a2d39U;
+    h ^= h >> 15;
+    return h;
+}
+
+/* The palette: lowland green, olive, brown, grey rock, snow. Relative
+ * tints place its stops at these fractions of the height range; the
+ * absolute default ramp at fixed heights (docs/surface.md "Terrain
+ * colour"), so a hill of 88 m is green wherever it stands. */
+static const double palette[6][4] = {
+    { 0.00, 74, 112, 62 }, { 0.25, 104, 138, 72 }, { 0.50, 158, 156, 96 },
+    { 0.70, 160, 132, 96 }, { 0.88, 150, 140, 132 }, { 1.00, 236, 236, 236 },
+};
+static const double default_heights[6] = { 0, 300, 800, 1500, 2400, 3500 }; /* metres */
+
+static void hypsometric(double t, float rgb[3])
+{
+    const double (*stops)[4] = palette;
+    if (!(t > 0)) t = 0;
+    if (t > 1) t = 1;
+    int i = 0;
+    while (i < 4 && t > stops[i + 1][0]) i++;
+    double f = (t - stops[i][0]) / (stops[i + 1][0] - stops[i][0]);
+    for (int c = 0; c < 3; c++) rgb[c] = (float)(stops[i][c + 1] + f * (stops[i + 1][c + 1] - stops[i][c + 1]));
+}
+
+/* The absolute tint of height zm (metres): the ramp's colour, linear
+ * between stops, the end colours beyond them. */
+static void absolute_tint(const rs_surface_options *f, double zm, float rgb[3])
+{
+    if (!f->ramp) {
+        int i = 0;
+        if (!(zm > default_heights[0])) zm = default_heights[0];
+        if (zm > default_heights[5]) zm = default_heights[5];
+        while (i < 4 && zm > default_heights[i + 1]) i++;
+        double u = (zm - default_heights[i]) / (default_heights[i + 1] - default_heights[i]);
+        for (int c = 0; c < 3; c++)
+            rgb[c] = (float)(palette[i][c + 1] + u * (palette[i + 1][c + 1] - palette[i][c + 1]));
+        return;
+    }
+    const rs_colour_stop *r = f->ramp;
+    size_t n = f->ramp_count, i = 0;
+    if (!(zm > r[0].height)) zm = r[0].height;
+    if (zm > r[n - 1].height) zm = r[n - 1].height;
+    while (i + 2 < n && zm > r[i + 1].height) i++;
+    double u = (zm - r[i].height) / (r[i + 1].height - r[i].height);
+    const rs_colour a = r[i].colour, b = r[i + 1].colour;
+    rgb[0] = (float)(a.r + u * (b.r - a.r));
+    rgb[1] = (float)(a.g + u * (b.g - a.g));
+    rgb[2] = (float)(a.b + u * (b.b - a.b));
+}
+
+/* Hillshade factor by the trigonometric formula (gdaldem's): slope and
+ * aspect angles, then the cosine of the angle to the light. */
+static double shade_trig(const rs_splatter *s, double dzdx, double dzdy)
+{
+    double slope = atan(sqrt(dzdx * dzdx + dzdy * dzdy));
+    double aspect = 0;
+    if (dzdx != 0) {
+        aspect = atan2(dzdy, -dzdx);
+        if (aspect < 0) aspect += 2 * RS__PI;
+    } else if (dzdy > 0) aspect = RS__PI / 2;
+    else if (dzdy < 0) aspect = 1.5 * RS__PI;
+    double hs = s->cos_zen * cos(slope) + s->sin_zen * sin(slope) * cos(s->sun_az - aspect);
+    if (!(hs > 0)) hs = 0;
+    return 0.3 + 0.7 * hs / s->cos_zen;
+}
+
+/* Terrain colour of one sample from its gradient: tint times the shade,
+ * clamped to 255, as float. */
+static void terrain_rgb(const float tint[3], double shade, float *out)
+{
+    for (int ch = 0; ch < 3; ch++) {
+        double v = tint[ch] * shade;
+        out[ch] = (float)(v > 255 ? 255 : v);
+    }
+}
+
+/* The shade of one sample from its gradient, onto its tint in out (the
+ * scalar path; terrain_row). */
+static void shade_one(const rs_splatter *s, const double light[2], double dzdx, double dzdy, float *out)
+{
+    const double lx = light[0], ly = light[1], cz = s->cos_zen;
+    float tint[3] = { out[0], out[1], out[2] };
+    double g2 = dzdx * dzdx + dzdy * dzdy;
+    double hs = (cz + lx * dzdx + ly * dzdy) / sqrt(1 + g2);
+    if (!(hs > 0)) hs = 0;
+    double shade = 0.3 + 0.7 * hs / cz;
+    int tie = !(g2 < 1e200);
+    for (int ch = 0; ch < 3; ch++) {
+        double v = tint[ch] * shade;
+        v = v > 255 ? 255 : v;
+        tie |= (float)(v * (1 - 1e-12)) != (float)(v * (1 + 1e-12));
+    }
+    terrain_rgb(tint, tie ? shade_trig(s, dzdx, dzdy) : shade, out);
+}
+
+#if defined(__SSE2__)
+/* Two floats at p as doubles. */
+static __m128d load2f(const float *p)
+{
+    return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)p)));
+}
+
+/* shade_one for the two interior samples (i, j) and (i, j + 1), the same
+ * operations in the same order in each lane of a register (so the same
+ * doubles); a lane where the trigonometric formula must decide takes the
+ * scalar path. */
+static void shade_pair(const rs_splatter *s, const double light[2], const float *zrow, size_t W, double eight_cs,
+                       float *out)
+{
+    const double zs = s->dem->frame.z_scale;
+    const double lx = light[0], ly = light[1], cz = s->cos_zen;
+    const float *up = zrow - W, *mid = zrow, *dn = zrow + W;
+    const __m128d vzs = _mm_set1_pd(zs), two = _mm_set1_pd(2), v8 = _mm_set1_pd(eight_cs);
+    __m128d a = _mm_mul_pd(load2f(up - 1), vzs), b = _mm_mul_pd(load2f(up), vzs), c = _mm_mul_pd(load2f(up + 1), vzs);
+    __m128d d = _mm_mul_pd(load2f(mid - 1), vzs), f = _mm_mul_pd(load2f(mid + 1), vzs);
+    __m128d g = _mm_mul_pd(load2f(dn - 1), vzs), h = _mm_mul_pd(load2f(dn), vzs), k = _mm_mul_pd(load2f(dn + 1), vzs);
+    __m128d dzdx = _mm_div_pd(_mm_sub_pd(_mm_add_pd(_mm_add_pd(c, _mm_mul_pd(two, f)), k),
+                                         _mm_add_pd(_mm_add_pd(a, _mm_mul_pd(two, d)), g)), v8);
+    __m128d dzdy = _mm_div_pd(_mm_sub_pd(_mm_add_pd(_mm_add_pd(g, _mm_mul_pd(two, h)), k),
+                                         _mm_add_pd(_mm_add_pd(a, _mm_mul_pd(two, b)), c)), v8);
+    __m128d g2 = _mm_add_pd(_mm_mul_pd(dzdx, dzdx), _mm_mul_pd(dzdy, dzdy));
+    __m128d hs = _mm_div_pd(_mm_add_pd(_mm_add_pd(_mm_set1_pd(cz), _mm_mul_pd(_mm_set1_pd(lx), dzdx)),
+                                       _mm_mul_pd(_mm_set1_pd(ly), dzdy)),
+                            _mm_sqrt_pd(_mm_add_pd(_mm_set1_pd(1), g2)));
+    hs = _mm_and_pd(_mm_cmpgt_pd(hs, _mm_setzero_pd()), hs);
+    __m128d shade = _mm_add_pd(_mm_set1_pd(0.3), _mm_div_pd(_mm_mul_pd(_mm_set1_pd(0.7), hs), _mm_set1_pd(cz)));
+    __m128 tie = _mm_castpd_ps(_mm_cmpnlt_pd(g2, _mm_set1_pd(1e200)));
+    int tiebits = _mm_movemask_pd(_mm_castps_pd(tie));
+    const __m128d lo = _mm_set1_pd(1 - 1e-12), hi = _mm_set1_pd(1 + 1e-12), cap = _mm_set1_pd(255);
+    __m128 res[3];
+    for (int ch = 0; ch < 3; ch++) {
+        __m128d v = _mm_mul_pd(_mm_set_pd(out[3 + ch], out[ch]), shade);
+        __m128d over = _mm_cmpgt_pd(v, cap);
+        v = _mm_or_pd(_mm_and_pd(over, cap), _mm_andnot_pd(over, v));
+        res[ch] = _mm_cvtpd_ps(v);
+        tiebits |= _mm_movemask_ps(_mm_cmpneq_ps(_mm_cvtpd_ps(_mm_mul_pd(v, lo)), _mm_cvtpd_ps(_mm_mul_pd(v, hi)))) & 3;
+    }
+    float r[3][4];
+    for (int ch = 0; ch < 3; ch++) _mm_storeu_ps(r[ch], res[ch]);
+    double dx[2], dy[2];
+    _mm_storeu_pd(dx, dzdx);
+    _mm_storeu_pd(dy, dzdy);
+    for (int l = 0; l < 2; l++) {
+        float *o = out + 3 * l;
+        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o);
+        else
+            for (int ch = 0; ch < 3; ch++) o[ch] = r[ch][l];
+    }
+}
+#endif
+
+/* Terrain colour of DEM sample row i, columns [c0, c0 + n): tint times a
+ * hillshade by Horn's gradient, light from azimuth 315, altitude 45
+ * (gdaldem's defaults and formula), normalised so flat ground keeps its
+ * tint.
+ *
+ * Without trigonometry: with g = |grad|, cos(atan g) = 1/sqrt(1+g^2),
+ * sin(atan g) = g/sqrt(1+g^2), and the aspect's unit vector is
+ * (-dzdx, dzdy)/g, so the shade is (cos_zen - sin_zen cos(az) dzdx +
+ * sin_zen sin(az) dzdy) / sqrt(1+g^2). It differs from the trigonometric
+ * value in the last bits only (relative 1e-14); where either float that a
+ * colour channel rounds to could depend on those bits (the value within
+ * 1e-12 of a float rounding boundary), the trigonometric formula decides,
+ * so the colours are the same floats as gdaldem's formula gives
+ * (tests/tools/splat_identity.sh).
+ *
+ * Two passes: the tints of the row into rgb, then the shades, two interior
+ * samples per register (SSE2) and the border ones one by one. The five
+ * divisions and the square root of a sample were ~40 ns per sample in one
+ * dependent chain (docs/speed.md). */
+static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t n, float *rgb)
+{
+    const rs_dem *d = s->dem;
+    const double zs = d->frame.z_scale;
+    const uint32_t W = d->width, H = d->height;
+    const float *z = s->z;
+    const rs_surface_options *sf = &s->o.surface;
+    for (uint32_t j = c0; j < c0 + n; j++) {
+        double zc = z[(size_t)i * W + j] * zs;
+        float *out = rgb + 3 * (size_t)(j - c0);
+        if (sf->tint == RS_TINT_ABSOLUTE) absolute_tint(sf, zc, out);
+        else if (sf->height_min != 0 || sf->height_max != 0)
+            hypsometric((zc - sf->height_min) / (sf->height_max - sf->height_min), out);
+        else hypsometric(s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5, out);
+        /* lit output: the relief is shaded once, by the lighting */
+        if (s->o.lighting.enable) {
+            float tint[3] = { out[0], out[1], out[2] };
+            terrain_rgb(tint, 1.0, out);
+        }
+    }
+    if (s->o.lighting.enable) return;
+    /* the light's horizontal components, once per row */
+    const double light[2] = { -s->sin_zen * cos(s->sun_az), s->sin_zen * sin(s->sun_az) };
+    uint32_t j = c0;
+#if defined(__SSE2__)
+    const double eight_cs = 8 * d->frame.cell_size;
+    if (i >= 1 && i + 1 < H)
+        for (; j + 2 <= c0 + n; j++) {
+            if (j >= 1 && j + 2 < W) {
+                shade_pair(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + 3 * (size_t)(j - c0));
+                j++;
+                continue;
+            }
+            double dzdx, dzdy;
+            rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
+            shade_one(s, light, dzdx, dzdy, rgb + 3 * (size_t)(j - c0));
+        }
+#endif
+    for (; j < c0 + n; j++) {
+        double dzdx, dzdy;
+        rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
+        shade_one(s, light, dzdx, dzdy, rgb + 3 * (size_t)(j - c0));
+    }
+}
+
+/* The window's terrain colours of sample rows i and i + 1 (lib/splat/splatter.h). */
+static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i, const float **r0, const float **r1)
+{
+    for (uint32_t k = 0; k < 2; k++) {
+        uint32_t want = i + k;
+        int slot = c->row_of[0] == want ? 0 : (c->row_of[1] == want ? 1 : -1);
+        if (slot < 0) {
+            /* the slot not holding the other row wanted */
+            slot = c->row_of[0] == i + 1 - k ? 1 : 0;
+            terrain_row(s, want, c->c0, c->ncol, c->rgb[slot]);
+            c->row_of[slot] = want;
+        }
+        if (k) *r1 = c->rgb[slot];
+        else *r0 = c->rgb[slot];
+    }
+}
+
+/* Texture coordinate tables along one axis: for n pixels starting at pixel
+ * p0, the texel pair (i0[k], i1[k] = i0[n + k]) and the weights (1 - f in
+ * wt[k], f in wt[n + k]) of the bilinear sample of an image of `size`
+ * texels per repeat. */
+static void texture_axis(int64_t p0, uint32_t n, double texel_m, double scale, uint32_t size, uint32_t *idx,
+                         double *wt)
+{
+    const int64_t S = size;
+    for (uint32_t k = 0; k < n; k++) {
+        double u = ((double)(p0 + k) + 0.5) * texel_m / scale;
+        u = (u - floor(u)) * S - 0.5;
+        double fu = floor(u), au = u - fu;
+        int64_t x0 = (int64_t)fu;
+        int64_t a = x0 >= 0 && x0 < S ? x0 : ((x0 % S) + S) % S;
+        idx[k] = (uint32_t)a;
+        idx[n + k] = (uint32_t)(a + 1 == S ? 0 : a + 1);
+        wt[k] = 1 - au;
+        wt[n + k] = au;
+    }
+}
+
+#if defined(__SSE2__)
+static __m128i load32(const uint8_t *p)
+{
+    int32_t v;
+    memcpy(&v, p, 4);
+    return _mm_cvtsi32_si128(v);
+}
+
+/* Texel a (one pixel) and texel b (the next pixel) widened to 32 bits:
+ * lo = R R' G G', hi = B B' A A'. */
+static void texel_pair(const uint8_t *a, const uint8_t *b, __m128i *lo, __m128i *hi)
+{
+    const __m128i z = _mm_setzero_si128();
+    __m128i x = _mm_unpacklo_epi8(_mm_unpacklo_epi8(load32(a), load32(b)), z);
+    *lo = _mm_unpacklo_epi16(x, z);
+    *hi = _mm_unpackhi_epi16(x, z);
+}
+
+/* One channel of two pixels: the bilinear sample as float, in the scalar
+ * loop's order of operations; i selects the channel's 32-bit pair. */
+#define TEX_CHANNEL(i00, i01, i10, i11)                                                                         \
+    _mm_cvtpd_ps(_mm_add_pd(                                                                                   \
+        _mm_mul_pd(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(i00), vbu), _mm_mul_pd(_mm_cvtepi32_pd(i01), vau)), vbv), \
+        _mm_mul_pd(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(i10), vbu), _mm_mul_pd(_mm_cvtepi32_pd(i11), vau)), vav)))
+#endif
+
+/* A tiled texture into dst over the piece's pixels with terrain (road = 0)
+ * or with road (road = 1); the other pixels may get colours too, which the
+ * composite never reads. Column coordinates once per run of pieces with
+ * the same columns, row coordinates per piece. */
+static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *img, int road, float *dst)
+{
+    const size_t w = p->w, ww = p->win_w, off = p->x0 - p->win_x0;
+    uint32_t *ry = p->tiy;
+    double *wy = p->twy;
+    double scale = s->o.surface.texture_scale;
+    if (!p->tx_ready[road]) {
+        texture_axis(p->win_x0 + s->o.surface.texel_offset_x, p->win_w, s->texel_m, scale, img->width, p->tix[road],
+                     p->twx[road]);
+        p->tx_ready[road] = 1;
+    }
+    texture_axis(p->y0 + s->o.surface.texel_offset_y, p->rows, s->texel_m, scale, img->height, ry, wy);
+    const uint32_t *cx = p->tix[road] + off, *cx1 = cx + ww;
+    const double *bu = p->twx[road] + off, *au = bu + ww;
+    /* pixels of no interest: pure road for the terrain, pure terrain for
+     * the road; skipped two at a time */
+    const uint16_t skip = road ? 0 : 65535u;
+    const size_t W4 = 4 * (size_t)img->width;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        const uint16_t *q = p->q + (size_t)r * w;
+        float *out = dst + (size_t)r * w * 3;
+        const uint8_t *ra = img->rgba + ry[r] * W4, *rb = img->rgba + ry[p->rows + r] * W4;
+        const double bv = wy[r], av = wy[p->rows + r];
+        size_t k = 0;
+#if defined(__SSE2__)
+        /* two pixels per channel in a register, the scalar arithmetic */
+        const __m128d vbv = _mm_set1_pd(bv), vav = _mm_set1_pd(av);
+        for (; k + 2 <= w; k += 2) {
+            if (q[k] == skip && q[k + 1] == skip) continue;
+            __m128i l00, h00, l01, h01, l10, h10, l11, h11;
+            texel_pair(ra + 4 * (size_t)cx[k], ra + 4 * (size_t)cx[k + 1], &l00, &h00);
+            texel_pair(ra + 4 * (size_t)cx1[k], ra + 4 * (size_t)cx1[k + 1], &l01, &h01);
+            texel_pair(rb + 4 * (size_t)cx[k], rb + 4 * (size_t)cx[k + 1], &l10, &h10);
+            texel_pair(rb + 4 * (size_t)cx1[k], rb + 4 * (size_t)cx1[k + 1], &l11, &h11);
+            const __m128d vbu = _mm_loadu_pd(bu + k), vau = _mm_loadu_pd(au + k);
+            __m128 fr = TEX_CHANNEL(l00, l01, l10, l11);
+            __m128 fg = TEX_CHANNEL(_mm_srli_si128(l00, 8), _mm_srli_si128(l01, 8), _mm_srli_si128(l10, 8),
+                                    _mm_srli_si128(l11, 8));
+            __m128 fb = TEX_CHANNEL(h00, h01, h10, h11);
+            _mm_storel_epi64((__m128i *)(void *)(out + k), _mm_castps_si128(fr));
+            _mm_storel_epi64((__m128i *)(void *)(out + w + k), _mm_castps_si128(fg));
+            _mm_storel_epi64((__m128i *)(void *)(out + 2 * w + k), _mm_castps_si128(fb));
+        }
+#endif
+        for (; k < w; k++) {
+            if (q[k] == skip) continue;
+            const uint8_t *p00 = ra + 4 * (size_t)cx[k], *p01 = ra + 4 * (size_t)cx1[k];
+            const uint8_t *p10 = rb + 4 * (size_t)cx[k], *p11 = rb + 4 * (size_t)cx1[k];
+            for (int c = 0; c < 3; c++)
+                out[c * w + k] = (float)((p00[c] * bu[k] + p01[c] * au[k]) * bv + (p10[c] * bu[k] + p11[c] * au[k]) * av);
+        }
+    }
+}
+
+/* Procedural asphalt: dark grey, fine grain per texel plus a soft mottle on
+ * a 4-texel lattice; keyed to texel indices, so deterministic. */
+static void asphalt(uint32_t px, uint32_t py, float *rgb, size_t plane)
+{
+    double grain = (double)(hash2(px, py) & 0xFFFF) / 65535.0 - 0.5;
+    uint32_t lx = px >> 2, ly = py >> 2;
+    double fx = (px & 3) / 4.0, fy = (py & 3) / 4.0;
+    double n00 = (hash2(lx, ly + 7919u) & 0xFF) / 255.0, n01 = (hash2(lx + 1, ly + 7919u) & 0xFF) / 255.0;
+    double n10 = (hash2(lx, ly + 7920u) & 0xFF) / 255.0, n11 = (hash2(lx + 1, ly + 7920u) & 0xFF) / 255.0;
+    double mottle = (n00 * (1 - fx) + n01 * fx) * (1 - fy) + (n10 * (1 - fx) + n11 * fx) * fy - 0.5;
+    double v = 70 + 18 * grain + 10 * mottle;
+    rgb[0] = (float)v;
+    rgb[plane] = (float)v;
+    rgb[2 * plane] = (float)(v + 3);
+}
+
+void rs__surface(const rs_splatter *s, rs__piece *p)
+{
+    const uint32_t T = s->o.texels;
+    const rs_surface_options *f = &s->o.surface;
+    const size_t n = (size_t)p->rows * p->w;
+    int need_terrain = 0, need_road = p->road_pixels != 0;
+    for (size_t i = 0; i < n && !need_terrain; i++) need_terrain = p->q[i] < 65535u;
+    if (need_terrain && f->terrain_texture) texture_piece(s, p, f->terrain_texture, 0, p->tc);
+    else if (need_terrain) {
+        /* Bilinear between the sample rows crow and crow + 1: the two
+         * horizontal interpolants per column once per piece, then every row
+         * of the piece (all pixels: a plain loop). */
+        const float *r0 = NULL, *r1 = NULL;
+        terrain_rows(s, p->tcache, p->crow, &r0, &r1);
+        const uint32_t wc0 = p->tcache->c0;
+        double *hx = p->hx;
+        const size_t w = p->w;
+        /* the column and its offset in the cell counted along (no integer
+         * division per column), the weight per offset from a table: the
+         * same doubles ((offset + 0.5) / T) */
+        double fxt[64];
+        const uint32_t nt = T < 64 ? T : 64;
+        for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
+        uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
+        for (uint32_t k = 0; k < p->w; k++, off++) {
+            if (off == T) { off = 0; ccol++; }
+            double fx = off < nt ? fxt[off] : (off + 0.5) / T;
+            const float *a = r0 + 3 * (size_t)(ccol - wc0), *c = r1 + 3 * (size_t)(ccol - wc0);
+            for (int ch = 0; ch < 3; ch++) {
+                hx[ch * w + k] = a[ch] * (1 - fx) + a[ch + 3] * fx;
+                hx[(3 + ch) * w + k] = c[ch] * (1 - fx) + c[ch + 3] * fx;
+            }
+        }
+        for (uint32_t r = 0; r < p->rows; r++) {
+            uint32_t ty = p->y0 + r - p->crow * T;
+            double fy = (ty + 0.5) / T, gy = 1 - fy;
+            for (size_t ch = 0; ch < 3; ch++) {
+                const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
+                float *tc = p->tc + (size_t)r * w * 3 + ch * w;
+                size_t k = 0;
+#if defined(__SSE2__)
+                const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
+                for (; k + 2 <= w; k += 2) {
+                    __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + k), vg), _mm_mul_pd(_mm_loadu_pd(h1 + k), vf));
+                    _mm_storel_epi64((__m128i *)(void *)(tc + k), _mm_castps_si128(_mm_cvtpd_ps(v)));
+                }
+#endif
+                for (; k < w; k++) tc[k] = (float)(h0[k] * gy + h1[k] * fy);
+            }
+        }
+    }
+    if (!need_road) return;
+    if (f->road_texture) {
+        texture_piece(s, p, f->road_texture, 1, p->sc);
+        return;
+    }
+    /* the grain keyed to the map's pixel grid: (uint32) wraps the same in every tile */
+    const uint32_t ox = (uint32_t)(uint64_t)f->texel_offset_x, oy = (uint32_t)(uint64_t)f->texel_offset_y;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        uint32_t py = p->y0 + r + oy;
+        const uint16_t *q = p->q + (size_t)r * p->w;
+        float *sc = p->sc + (size_t)r * p->w * 3;
+        for (uint32_t k = 0; k < p->w; k++)
+            if (q[k] > 0) asphalt(p->x0 + k + ox, py, sc + k, p->w);
+    }
+}
