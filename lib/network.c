@@ -45,12 +45,20 @@ int rs__class_rank(rs_road_class c)
 
 /* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
 
+/* A hashed point with what the pair tests read of it, so a candidate costs
+ * one cache line, not one per array (the buckets are visited in random
+ * order of the points' ids). */
+typedef struct pt_entry {
+    double x, y, s;
+    uint32_t id, road;
+} pt_entry;
+
 typedef struct pt_hash {
     double cell;
     uint64_t mask;
-    uint32_t *start, *ids;
-    double *pxy; /* the points' coordinates in bucket order (beside ids) */
-    uint64_t *occ; /* a bit per bucket: not empty (small enough to stay in cache) */
+    uint32_t *start;
+    pt_entry *ent;  /* the points in bucket order */
+    uint64_t *occ;  /* a bit per bucket: not empty (small enough to stay in cache) */
 } pt_hash;
 
 static int64_t cell_of(double x, double cell)
@@ -76,47 +84,117 @@ static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
     return ((h << 4) | sub) & H->mask;
 }
 
-/* Hash the points xy[2 id] of the ids for which keep[id] (NULL: all). */
-static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uint8_t *keep, size_t n, double cell)
+static uint64_t bucket_of_point(const pt_hash *H, const double *p)
+{
+    return bucket_of(H, cell_of(p[0], H->cell), cell_of(p[1], H->cell));
+}
+
+#define GROUP_BITS 13 /* buckets per group of the fill: 2^13 starts (32 KiB) stay in cache */
+
+/* Hash the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
+ * for which keep[id] (NULL: all). Filled in two streaming passes, not by
+ * writing each point to a random bucket (a cache miss per point once the
+ * table outgrows the cache): the points to groups of 2^13 buckets in id
+ * order, then each group's points to their buckets (through a scratch
+ * array of the largest group). Both passes keep id order, so ids ascend
+ * within a bucket. */
+static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const double *s, const uint32_t *vroad,
+                            const uint8_t *keep, size_t n, double cell)
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
     uint64_t nb = 64; /* (a word of occupancy bits at least) */
-    while (nb < 4 * (uint64_t)count) nb *= 2; /* mostly empty buckets: the occupancy bits answer */
+    while (nb < 2 * (uint64_t)count && nb < (1ull << 31)) nb *= 2; /* mostly empty buckets: the occupancy bits answer */
+    unsigned shift = 0;
+    while ((nb >> shift) > 1 && (1ull << shift) < (1ull << GROUP_BITS)) shift++;
+    size_t ng = (size_t)(nb >> shift), gsize = (size_t)1 << shift;
     H->cell = cell;
     H->mask = nb - 1;
-    H->start = rs__calloc(ctx, (size_t)nb + 1, sizeof *H->start);
-    H->ids = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ids);
-    H->pxy = rs__alloc_array(ctx, count ? count : 1, 2 * sizeof *H->pxy);
+    H->start = rs__alloc_array(ctx, (size_t)nb + 1, sizeof *H->start);
+    H->ent = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ent);
     H->occ = rs__calloc(ctx, (size_t)(nb / 64), sizeof *H->occ);
-    if (!H->start || !H->ids || !H->pxy || !H->occ) return RS_ERR_NOMEM;
+    uint32_t *gstart = rs__calloc(ctx, ng + 1, sizeof *gstart), *cur = rs__alloc_array(ctx, gsize, sizeof *cur);
+    uint32_t *tkey = rs__alloc_array(ctx, count ? count : 1, sizeof *tkey);
+    pt_entry *tent = NULL;
+    rs_result res = RS_ERR_NOMEM;
+    if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey) goto done;
     for (size_t i = 0; i < n; i++)
-        if (!keep || keep[i]) H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell)) + 1]++;
-    for (uint64_t b = 0; b < nb; b++) H->start[b + 1] += H->start[b];
-    for (size_t i = 0; i < n; i++) { /* (start[b] runs ahead while filling, then is restored below) */
+        if (!keep || keep[i]) gstart[(bucket_of_point(H, xy + 2 * i) >> shift) + 1]++;
+    for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
+    for (size_t i = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
         if (keep && !keep[i]) continue;
-        uint32_t q = H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell))]++;
-        H->ids[q] = (uint32_t)i;
-        H->pxy[2 * (size_t)q] = xy[2 * i];
-        H->pxy[2 * (size_t)q + 1] = xy[2 * i + 1];
+        uint64_t b = bucket_of_point(H, xy + 2 * i);
+        uint32_t q = gstart[b >> shift]++;
+        tkey[q] = (uint32_t)b;
+        pt_entry *e = &H->ent[q];
+        e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
+        e->id = (uint32_t)i, e->road = vroad[i];
     }
-    for (uint64_t b = nb; b > 0; b--) H->start[b] = H->start[b - 1];
-    H->start[0] = 0;
-    for (uint64_t b = 0; b < nb; b++)
-        if (H->start[b + 1] > H->start[b]) H->occ[b >> 6] |= 1ull << (b & 63);
-    return RS_OK;
+    for (size_t g = ng; g > 0; g--) gstart[g] = gstart[g - 1];
+    gstart[0] = 0;
+    uint32_t most = 0;
+    for (size_t g = 0; g < ng; g++) most = gstart[g + 1] - gstart[g] > most ? gstart[g + 1] - gstart[g] : most;
+    if (!(tent = rs__alloc_array(ctx, most ? most : 1, sizeof *tent))) goto done;
+    for (size_t g = 0; g < ng; g++) {
+        uint64_t b0 = (uint64_t)g << shift;
+        memset(cur, 0, gsize * sizeof *cur);
+        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) cur[tkey[q] - b0]++;
+        uint32_t at = 0;
+        for (size_t j = 0; j < gsize; j++) {
+            uint32_t c = cur[j];
+            H->start[b0 + j] = gstart[g] + at;
+            cur[j] = at;
+            at += c;
+            if (c) H->occ[(b0 + j) >> 6] |= 1ull << ((b0 + j) & 63);
+        }
+        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) tent[cur[tkey[q] - b0]++] = H->ent[q];
+        if (at) memcpy(H->ent + gstart[g], tent, at * sizeof *tent);
+    }
+    H->start[nb] = (uint32_t)count;
+    res = RS_OK;
+done:
+    rs__free(ctx, gstart);
+    rs__free(ctx, cur);
+    rs__free(ctx, tkey);
+    rs__free(ctx, tent);
+    return res;
 }
 
 static void hash_free(rs_ctx *ctx, pt_hash *H)
 {
     rs__free(ctx, H->start);
-    rs__free(ctx, H->ids);
-    rs__free(ctx, H->pxy);
+    rs__free(ctx, H->ent);
     rs__free(ctx, H->occ);
     memset(H, 0, sizeof *H);
 }
 
+/* The cells of H that a disc of radius r around p can reach: x cells
+ * c[0] .. c[1], y cells c[2] .. c[3]. The radius grows by the rounding of
+ * p's coordinates so the cells of all points within r are in (cell_of is
+ * monotone). */
+static void disc_cells(const pt_hash *H, const double *p, double r, int64_t c[4])
+{
+    for (int k = 0; k < 2; k++) {
+        double m = r * (1 + 1e-9) + fabs(p[k]) * 4 * DBL_EPSILON;
+        c[2 * k] = cell_of(p[k] - m, H->cell);
+        c[2 * k + 1] = cell_of(p[k] + m, H->cell);
+    }
+}
+
 /* ---- build state ---- */
+
+/* What a road's legs and stroke links read of it, gathered once in road
+ * order: the nodes visit roads in random order, and the road set's records,
+ * attributes and strings are several cache lines apart. */
+typedef struct road_look {
+    double width;
+    const char *style, *junction;
+    uint32_t lanes;
+    int16_t priority;     /* class rank + 10 priority_road + 20 roundabout */
+    uint8_t road_class, link, oneway, area;
+    uint8_t two_way;      /* a record drawn against its points is the same road */
+    uint8_t roundabout;
+} road_look;
 
 typedef struct pass {
     uint32_t road, v0, v1; /* first and last point (global ids) of the road at the node */
@@ -138,6 +216,7 @@ typedef struct build {
     uint32_t *rep;     /* per point: the first of its run of equal consecutive points */
     uint32_t *parent;  /* union-find over points */
     uint8_t *live;     /* per road: longer than twice the tolerance */
+    road_look *look;   /* per road */
     uint8_t *inhash;   /* per point: a live road's point that starts its run */
     uint32_t *nodeof;  /* per point (a root): its node, or NONE */
     pass *ps;
@@ -162,12 +241,6 @@ static void unite(uint32_t *parent, uint32_t a, uint32_t b)
     b = find(parent, b);
     if (a < b) parent[b] = a; /* the root is the lowest point: deterministic */
     else if (b < a) parent[a] = b;
-}
-
-/* Points v and w are the same place of one road (no node between them). */
-static int same_place(const build *B, uint32_t v, uint32_t w)
-{
-    return B->vroad[v] == B->vroad[w] && fabs(B->s[v] - B->s[w]) <= 2 * B->tol;
 }
 
 static int near2(const double *a, const double *b, double tol)
@@ -211,7 +284,7 @@ static rs_result find_tees(build *B)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
     pt_hash H;
     memset(&H, 0, sizeof H);
-    rs_result res = hash_build(B->ctx, &H, B->xy, isend, B->nv, g);
+    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -241,8 +314,8 @@ static rs_result find_tees(build *B)
                     uint64_t b = bucket_of(&H, cx, cy);
                     if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                     for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
-                        uint32_t e = H.ids[q];
-                        const double *pe = H.pxy + 2 * (size_t)q; /* (maybe of another cell: a T found twice merges) */
+                        uint32_t e = H.ent[q].id;
+                        const double *pe = &H.ent[q].x; /* (maybe of another cell: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
@@ -332,17 +405,33 @@ static int attr_is(const rs_roads *roads, size_t r, const char *key, const char 
 
 static int str_eq(const char *a, const char *b) { return a == b || (a && b && strcmp(a, b) == 0); }
 
-/* Roads a and b draw alike: one may continue the other in a stroke. */
-static int draw_alike(const rs_roads *roads, size_t a, size_t b)
+/* Road r's look (the record exists: r < the road count). */
+static void look_of(const rs_roads *roads, size_t r, road_look *L)
 {
-    rs_road_info ia, ib;
-    double wa = 0, wb = 0;
-    if (rs_roads_get_info(roads, a, &ia) || rs_roads_get_info(roads, b, &ib)) return 0;
-    rs_roads_get(roads, a, NULL, &wa, NULL, NULL);
-    rs_roads_get(roads, b, NULL, &wb, NULL, NULL);
-    return wa == wb && ia.road_class == ib.road_class && ia.link == ib.link && ia.lanes == ib.lanes &&
-           ia.oneway == ib.oneway && ia.area == ib.area && str_eq(ia.style, ib.style) &&
-           str_eq(rs_roads_get_attr(roads, a, "junction"), rs_roads_get_attr(roads, b, "junction"));
+    rs_road_info in;
+    memset(L, 0, sizeof *L);
+    rs_roads_get(roads, r, NULL, &L->width, NULL, NULL);
+    if (rs_roads_get_info(roads, r, &in) != RS_OK) in.road_class = RS_CLASS_NONE, in.oneway = RS_ONEWAY_NONE;
+    L->style = in.style;
+    L->junction = rs_roads_get_attr(roads, r, "junction");
+    L->lanes = in.lanes;
+    L->road_class = (uint8_t)in.road_class;
+    L->link = (uint8_t)in.link;
+    L->oneway = (uint8_t)in.oneway;
+    L->area = (uint8_t)in.area;
+    L->two_way = in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
+    L->roundabout = attr_is(roads, r, "junction", "roundabout", NULL);
+    int pr = rs__class_rank(in.road_class);
+    if (attr_is(roads, r, "priority_road", "designated", "yes_unposted")) pr += 10;
+    if (L->roundabout) pr += 20;
+    L->priority = (int16_t)pr;
+}
+
+/* Roads a and b draw alike: one may continue the other in a stroke. */
+static int draw_alike(const road_look *a, const road_look *b)
+{
+    return a->width == b->width && a->road_class == b->road_class && a->link == b->link && a->lanes == b->lanes &&
+           a->oneway == b->oneway && a->area == b->area && str_eq(a->style, b->style) && str_eq(a->junction, b->junction);
 }
 
 static double wrap_angle(double a)
@@ -352,21 +441,13 @@ static double wrap_angle(double a)
     return a;
 }
 
-/* A two-way road: a record drawn against its points is the same road. */
-static int two_way(const rs_roads *roads, size_t r)
-{
-    rs_road_info in;
-    if (rs_roads_get_info(roads, r, &in)) return 0;
-    return in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
-}
-
 /* Can road ends a and b (start or end legs, other roads) continue each
  * other: they draw alike and keep the direction of travel (an end meets a
  * start), or both roads are two-way. */
 static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_leg *b)
 {
-    if (a->road == b->road || !draw_alike(B->roads, a->road, b->road)) return 0;
-    return a->kind != b->kind || two_way(B->roads, a->road);
+    if (a->road == b->road || !draw_alike(&B->look[a->road], &B->look[b->road])) return 0;
+    return a->kind != b->kind || B->look[a->road].two_way;
 }
 
 static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
@@ -494,6 +575,7 @@ static void build_free(build *B)
     rs__free(ctx, B->rep);
     rs__free(ctx, B->parent);
     rs__free(ctx, B->live);
+    rs__free(ctx, B->look);
     rs__free(ctx, B->inhash);
     rs__free(ctx, B->nodeof);
     rs__free(ctx, B->ps);
@@ -524,10 +606,12 @@ static rs_result load_points(build *B)
     size_t n = B->nroads, nv = 0;
     B->voff = rs__alloc_array(B->ctx, n + 1, sizeof *B->voff);
     B->live = rs__calloc(B->ctx, n ? n : 1, 1);
-    if (!B->voff || !B->live) return RS_ERR_NOMEM;
+    B->look = rs__alloc_array(B->ctx, n ? n : 1, sizeof *B->look);
+    if (!B->voff || !B->live || !B->look) return RS_ERR_NOMEM;
     for (size_t r = 0; r < n; r++) {
         size_t np = 0;
         rs_roads_get(B->roads, r, NULL, NULL, NULL, &np);
+        look_of(B->roads, r, &B->look[r]);
         B->voff[r] = nv;
         nv += np;
     }
@@ -584,32 +668,30 @@ static rs_result cluster_points(build *B)
 {
     pt_hash H;
     memset(&H, 0, sizeof H);
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->inhash, B->nv, B->tol);
+    /* cells of 8 tolerances: a point's disc mostly stays in its own cell
+     * (a neighbour cell is a random bucket: a cache miss when it holds
+     * points, if only of other cells) */
+    double tol = B->tol;
+    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, 8 * tol);
     if (res) {
         hash_free(B->ctx, &H);
         return res;
     }
-    /* points in bucket order: the buckets around one are mostly in the
-     * cache lines just read (the union does not depend on the order) */
+    /* points in bucket order: their own bucket is the one being read (the
+     * union does not depend on the order) */
     for (size_t i = 0; i < H.start[H.mask + 1]; i++) {
-        uint32_t v = H.ids[i];
-        size_t vend = 0;
-        const double *p = H.pxy + 2 * i;
-        int64_t cx = cell_of(p[0], B->tol), cy = cell_of(p[1], B->tol);
-        /* the disc of radius tol around p meets its cell and the neighbours
-         * on the nearer side in x and in y: 2 x 2 cells */
-        int sx = p[0] - (double)cx * B->tol < 0.5 * B->tol ? -1 : 1, sy = p[1] - (double)cy * B->tol < 0.5 * B->tol ? -1 : 1;
-        for (int dy = 0; dy < 2; dy++)
-            for (int dx = 0; dx < 2; dx++) {
-                uint64_t b = bucket_of(&H, cx + dx * sx, cy + dy * sy);
+        const pt_entry *e = &H.ent[i];
+        int64_t c[4];
+        disc_cells(&H, &e->x, tol, c);
+        for (int64_t cy = c[2]; cy <= c[3]; cy++)
+            for (int64_t cx = c[0]; cx <= c[1]; cx++) {
+                uint64_t b = bucket_of(&H, cx, cy);
                 if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
-                    uint32_t w = H.ids[q];
-                    if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol)) continue;
-                    /* points are numbered road by road: w (> v) is of v's road when below its end */
-                    if (vend == 0) vend = B->voff[B->vroad[v] + 1];
-                    if (w < vend && fabs(B->s[v] - B->s[w]) <= 2 * B->tol) continue; /* same_place */
-                    unite(B->parent, v, w);
+                    const pt_entry *f = &H.ent[q];
+                    if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
+                    if (f->road == e->road && fabs(e->s - f->s) <= 2 * tol) continue; /* one place of one road: no node */
+                    unite(B->parent, e->id, f->id);
                 }
             }
     }
@@ -640,32 +722,33 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     size_t n = B.nroads, m = n ? n : 1;
     if ((res = load_points(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK) goto fail;
 
-    /* nodes: clusters holding a road end or two places of roads */
-    uint8_t *qual = rs__calloc(ctx, B.nv ? B.nv : 1, 1);
-    if (!qual) { res = RS_ERR_NOMEM; goto fail; }
+    /* flatten the union-find: a root is the lowest point of its group, so
+     * parent[v] < v already points at its root when v is reached (no
+     * find() after this: one read per point, not a chain) */
+    for (size_t v = 0; v < B.nv; v++) B.parent[v] = B.parent[B.parent[v]];
+    /* nodes: groups holding a road end or two places of roads. Every union
+     * joined two places, so a group of two or more points is one; a group
+     * of one is when it is a road's end. */
+    for (size_t v = 0; v < B.nv; v++)
+        if (B.parent[v] != v) B.nodeof[B.parent[v]] = 0;
     for (size_t r = 0; r < n; r++) {
         if (!B.live[r]) continue;
-        qual[find(B.parent, (uint32_t)B.voff[r])] = 1;
-        qual[find(B.parent, B.rep[B.voff[r + 1] - 1])] = 1;
+        B.nodeof[B.parent[B.voff[r]]] = 0;
+        B.nodeof[B.parent[B.rep[B.voff[r + 1] - 1]]] = 0;
     }
+    size_t nn = 0, npass = 0;
     for (size_t v = 0; v < B.nv; v++) {
-        if (!B.inhash[v]) continue;
-        uint32_t root = find(B.parent, (uint32_t)v);
-        if (root != v && !same_place(&B, root, (uint32_t)v)) qual[root] = 1;
+        if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] == 0) B.nodeof[v] = (uint32_t)nn++;
+        else if (B.parent[v] == v) B.nodeof[v] = NONE;
+        npass += B.inhash[v] && (B.parent[v] != v || B.nodeof[v] != NONE);
     }
-    size_t nn = 0;
-    for (size_t v = 0; v < B.nv; v++)
-        if (B.inhash[v] && B.parent[v] == v && qual[v]) B.nodeof[v] = (uint32_t)nn++;
-    rs__free(ctx, qual);
     N->nnodes = nn;
-    size_t npass = 0;
-    for (size_t v = 0; v < B.nv; v++) npass += B.inhash[v] && B.nodeof[find(B.parent, (uint32_t)v)] != NONE;
     if (npass && !(B.ps = rs__alloc_array(ctx, npass, sizeof *B.ps))) { res = RS_ERR_NOMEM; goto fail; }
     B.cps = npass;
     /* passes through points: a node's points by road, runs along the road */
     for (size_t v = 0; v < B.nv; v++) {
         if (!B.inhash[v]) continue;
-        uint32_t nd = B.nodeof[find(B.parent, (uint32_t)v)];
+        uint32_t nd = B.nodeof[B.parent[v]];
         if (nd == NONE) continue;
         pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], 0, nd };
         if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
@@ -730,14 +813,8 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         for (j = i; j < np && B.ps[j].node == nd; j++) {
             const pass *p = &B.ps[j];
             size_t r = p->road, v0 = B.voff[r];
-            int pr = rs__class_rank(RS_CLASS_NONE);
-            rs_road_info info;
-            if (rs_roads_get_info(roads, r, &info) == RS_OK) pr = rs__class_rank(info.road_class);
-            if (attr_is(roads, r, "priority_road", "designated", "yes_unposted")) pr += 10;
-            if (attr_is(roads, r, "junction", "roundabout", NULL)) {
-                pr += 20;
-                N->node[nd].control |= RS_NODE_ROUNDABOUT;
-            }
+            int pr = B.look[r].priority;
+            if (B.look[r].roundabout) N->node[nd].control |= RS_NODE_ROUNDABOUT;
             rs_network_leg L;
             memset(&L, 0, sizeof L);
             L.road = (uint32_t)r;
