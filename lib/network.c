@@ -194,14 +194,19 @@ typedef struct road_look {
     uint8_t road_class, link, oneway, area;
     uint8_t two_way;      /* a record drawn against its points is the same road */
     uint8_t roundabout;
+    uint32_t first, last; /* its first and last point (global ids) */
+    double length;        /* arc length at its last point */
 } road_look;
 
 typedef struct pass {
     uint32_t road, v0, v1; /* first and last point (global ids) of the road at the node */
     uint32_t seg;          /* a T: the segment; NONE for a pass through points */
-    double s;              /* a T: the arc length of the nearest point */
+    double s;              /* a T: the arc length of the nearest point; else of v0 */
+    double s1;             /* the arc length at v1 (a T: s) */
     double dist;           /* a T: its distance */
     uint32_t node;
+    uint32_t k0;           /* v0's index in its road */
+    uint8_t first, last;   /* v0 is the road's first point, v1 its last (not a T) */
 } pass;
 
 typedef struct build {
@@ -325,7 +330,7 @@ static rs_result find_tees(build *B)
                         if (find(B->parent, a) == root || find(B->parent, (uint32_t)k1) == root) continue;
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
                         if (B->vroad[e] == r && fabs(s - B->s[e]) <= 2 * tol) continue;
-                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, dist, B->nodeof[root] };
+                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, s, dist, B->nodeof[root], 0, 0, 0 };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
                 }
@@ -383,10 +388,9 @@ static int leg_cmp(const void *pa, const void *pb)
 
 /* Direction away from node position c along road r from point v, forward
  * (+1) or backward (-1): towards the first point beyond the tolerance. */
-static double leg_angle(const build *B, const double *c, uint32_t v, int dir)
+static double leg_angle(const build *B, const road_look *lk, const double *c, uint32_t v, int dir)
 {
-    uint32_t r = B->vroad[v];
-    size_t lo = B->voff[r], hi = B->voff[r + 1] - 1, w = v;
+    size_t lo = lk->first, hi = lk->last, w = v;
     for (;;) {
         if (dir > 0 ? w >= hi : w <= lo) break;
         w = dir > 0 ? w + 1 : w - 1;
@@ -452,47 +456,44 @@ static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_le
 
 static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
 
-/* Pair road ends into strokes at every node: link[2 r + e] is the road end
- * (2 q + f; e, f: 0 start, 1 end) that road r's end e continues into. */
-static void link_strokes(const build *B, const rs_network *N, uint32_t *link)
+/* Pair the road ends at a node (its d legs L, sorted) into strokes:
+ * link[2 r + e] is the road end (2 q + f; e, f: 0 start, 1 end) that road
+ * r's end e continues into. */
+static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint32_t *link)
 {
-    for (size_t i = 0; i < N->nnodes; i++) {
-        const rs_network_leg *L = N->leg + N->leg_start[i];
-        uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
-        if (d == 2) {
-            /* two ends: one stroke when they continue each other (a ring's
-             * own two ends at any angle; two records only with a small
-             * deflection, as the issue's rule and the GPU export's have it:
-             * a corner is where a line's pattern may start anew) */
-            if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
-                (L[0].road == L[1].road ? L[0].kind != L[1].kind
-                                        : ends_fit(B, &L[0], &L[1]) &&
-                                              fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION)) {
-                uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
-                link[ea] = eb;
-                link[eb] = ea;
-            }
-            continue;
-        }
-        /* a junction: pairs that deflect little, taken when neither end has another */
-        for (uint32_t a = 0; a < d; a++) {
-            if (!is_end_leg(&L[a])) continue;
-            uint32_t match = NONE, count = 0;
-            for (uint32_t b = 0; b < d; b++)
-                if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
-                    ends_fit(B, &L[a], &L[b]))
-                    match = b, count++;
-            if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
-            uint32_t back = 0;
-            for (uint32_t c = 0; c < d; c++)
-                if (c != match && is_end_leg(&L[c]) &&
-                    fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
-                    back++;
-            if (back != 1) continue;
-            uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+    if (d == 2) {
+        /* two ends: one stroke when they continue each other (a ring's
+         * own two ends at any angle; two records only with a small
+         * deflection, as the issue's rule and the GPU export's have it:
+         * a corner is where a line's pattern may start anew) */
+        if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
+            (L[0].road == L[1].road ? L[0].kind != L[1].kind
+                                    : ends_fit(B, &L[0], &L[1]) &&
+                                          fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION)) {
+            uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
             link[ea] = eb;
             link[eb] = ea;
         }
+        return;
+    }
+    /* a junction: pairs that deflect little, taken when neither end has another */
+    for (uint32_t a = 0; a < d; a++) {
+        if (!is_end_leg(&L[a])) continue;
+        uint32_t match = NONE, count = 0;
+        for (uint32_t b = 0; b < d; b++)
+            if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
+                ends_fit(B, &L[a], &L[b]))
+                match = b, count++;
+        if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
+        uint32_t back = 0;
+        for (uint32_t c = 0; c < d; c++)
+            if (c != match && is_end_leg(&L[c]) &&
+                fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
+                back++;
+        if (back != 1) continue;
+        uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+        link[ea] = eb;
+        link[eb] = ea;
     }
 }
 
@@ -658,6 +659,9 @@ static rs_result load_points(build *B)
             B->s[v] = s;
         }
         B->live[r] = np >= 2 && s > 2 * B->tol;
+        B->look[r].first = (uint32_t)v0;
+        B->look[r].last = (uint32_t)(np ? v0 + np - 1 : v0);
+        B->look[r].length = s;
         for (size_t k = 0; k < np; k++) B->inhash[v0 + k] = B->live[r] && B->rep[v0 + k] == v0 + k;
     }
     return RS_OK;
@@ -750,7 +754,9 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         if (!B.inhash[v]) continue;
         uint32_t nd = B.nodeof[B.parent[v]];
         if (nd == NONE) continue;
-        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], 0, nd };
+        const road_look *lk = &B.look[B.vroad[v]];
+        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], B.s[v], 0, nd, (uint32_t)(v - lk->first),
+                   v == lk->first, v == B.rep[lk->last] };
         if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
     }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
@@ -762,9 +768,8 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         pass *p = &B.ps[i];
         if (np > 0) {
             pass *q = &B.ps[np - 1];
-            double qs = q->seg != NONE ? q->s : B.s[q->v1];
-            if (q->node == p->node && q->road == p->road && p->s - qs <= 2 * tol) {
-                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1;
+            if (q->node == p->node && q->road == p->road && p->s - q->s1 <= 2 * tol) {
+                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->s1 = p->s1, q->last = p->last;
                 else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
                 else if (q->seg != NONE && p->dist < q->dist) *q = *p;
                 continue;
@@ -777,7 +782,7 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     size_t nl = 0;
     for (size_t i = 0; i < np; i++) {
         const pass *p = &B.ps[i];
-        int st = p->seg == NONE && p->v0 == B.voff[p->road], en = p->seg == NONE && p->v1 == B.rep[B.voff[p->road + 1] - 1];
+        int st = p->seg == NONE && p->first, en = p->seg == NONE && p->last;
         nl += st || en ? (size_t)st + (size_t)en : 2;
     }
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
@@ -799,6 +804,7 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         goto fail;
     }
     N->nlegs = nl;
+    for (size_t e = 0; e < 2 * n; e++) N->link[e] = NONE;
     for (size_t v = 0; v < B.nv; v++)
         if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] != NONE) {
             rs_network_node *d = &N->node[B.nodeof[v]];
@@ -812,9 +818,10 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         N->leg_start[nd] = (uint32_t)nl;
         for (j = i; j < np && B.ps[j].node == nd; j++) {
             const pass *p = &B.ps[j];
-            size_t r = p->road, v0 = B.voff[r];
-            int pr = B.look[r].priority;
-            if (B.look[r].roundabout) N->node[nd].control |= RS_NODE_ROUNDABOUT;
+            size_t r = p->road;
+            const road_look *lk = &B.look[r];
+            int pr = lk->priority;
+            if (lk->roundabout) N->node[nd].control |= RS_NODE_ROUNDABOUT;
             rs_network_leg L;
             memset(&L, 0, sizeof L);
             L.road = (uint32_t)r;
@@ -831,37 +838,37 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
                 N->leg[nl++] = L;
                 continue;
             }
-            int st = p->v0 == v0, en = p->v1 == B.rep[B.voff[r + 1] - 1];
-            if (st) {
-                L.kind = RS_LEG_START, L.segment = 0, L.s = 0, L.angle = leg_angle(&B, c, p->v1, 1);
+            if (p->first) {
+                L.kind = RS_LEG_START, L.segment = 0, L.s = 0, L.angle = leg_angle(&B, lk, c, p->v1, 1);
                 N->leg[nl++] = L;
             }
-            if (en) {
-                L.kind = RS_LEG_END, L.segment = (uint32_t)(B.voff[r + 1] - 1 - v0), L.s = B.s[B.voff[r + 1] - 1];
-                L.angle = leg_angle(&B, c, p->v0, -1);
+            if (p->last) {
+                L.kind = RS_LEG_END, L.segment = lk->last - lk->first, L.s = lk->length;
+                L.angle = leg_angle(&B, lk, c, p->v0, -1);
                 N->leg[nl++] = L;
             }
-            if (!st && !en) {
-                L.segment = (uint32_t)(p->v0 - v0), L.s = B.s[p->v0];
-                L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, c, p->v1, 1);
+            if (!p->first && !p->last) {
+                L.segment = p->k0, L.s = p->s;
+                L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, lk, c, p->v1, 1);
                 N->leg[nl++] = L;
-                L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, c, p->v0, -1);
+                L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, lk, c, p->v0, -1);
                 N->leg[nl++] = L;
             }
         }
-    }
-    /* every qualifying node got legs (it holds a live road's point) */
-    N->leg_start[nn] = (uint32_t)nl;
-    for (size_t i = 0; i < nn; i++) {
-        rs_network_leg *L = N->leg + N->leg_start[i];
-        uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
+        /* the node's legs by angle, its major legs and its stroke pairs,
+         * while its legs are in the cache */
+        rs_network_leg *L = N->leg + N->leg_start[nd];
+        uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
         if (d > 1) qsort(L, d, sizeof *L, leg_cmp);
         int best = -1;
         for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
         for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
-        N->node[i].degree = d;
-        N->node[i].kind = d <= 1 ? RS_NODE_END : d == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
+        N->node[nd].degree = d;
+        N->node[nd].kind = d <= 1 ? RS_NODE_END : d == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
+        link_node(&B, L, d, N->link);
     }
+    /* every qualifying node got legs (it holds a live road's point) */
+    N->leg_start[nn] = (uint32_t)nl;
     /* controls from point attributes at a node's points */
     for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
         size_t r = 0, pt = 0;
@@ -879,13 +886,11 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
             f = RS_NODE_CROSSING;
         N->node[nd].control |= f;
     }
-    /* strokes */
+    /* strokes (their links are made above, node by node) */
     for (size_t r = 0; r < n; r++) {
         N->prev[r] = N->next[r] = NONE;
-        N->link[2 * r] = N->link[2 * r + 1] = NONE;
         N->length[r] = B.voff[r + 1] > B.voff[r] ? B.s[B.voff[r + 1] - 1] : 0;
     }
-    link_strokes(&B, N, N->link);
     number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
     N->bytes = sizeof *N + nn * sizeof *N->node + (nn + 1) * sizeof *N->leg_start + N->nlegs * sizeof *N->leg +
                n * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev + sizeof *N->next +
