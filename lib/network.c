@@ -58,7 +58,10 @@ typedef struct pt_hash {
     uint64_t mask;
     uint32_t *start;
     pt_entry *ent;  /* the points in bucket order */
-    uint64_t *occ;  /* a bit per bucket: not empty (small enough to stay in cache) */
+    uint64_t *occ;  /* a bit per hashed cell (8 per point, small enough to stay in cache): a
+                       clear bit says the cell is empty, where a bucket may also hold other
+                       cells (a bucket read is a cache miss) */
+    uint64_t omask;
 } pt_hash;
 
 static int64_t cell_of(double x, double cell)
@@ -89,6 +92,21 @@ static uint64_t bucket_of_point(const pt_hash *H, const double *p)
     return bucket_of(H, cell_of(p[0], H->cell), cell_of(p[1], H->cell));
 }
 
+/* The cell's bit in H->occ (another hash of the cell than its bucket's). */
+static uint64_t occ_bit(const pt_hash *H, int64_t cx, int64_t cy)
+{
+    uint64_t h = (uint64_t)cx * 0xD6E8FEB86659FD93ull ^ (uint64_t)cy * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 31;
+    h *= 0x94D049BB133111EBull;
+    return (h >> 20) & H->omask;
+}
+
+static int occupied(const pt_hash *H, int64_t cx, int64_t cy)
+{
+    uint64_t o = occ_bit(H, cx, cy);
+    return (int)(H->occ[o >> 6] >> (o & 63) & 1);
+}
+
 #define GROUP_BITS 13 /* buckets per group of the fill: 2^13 starts (32 KiB) stay in cache */
 
 /* Hash the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
@@ -103,8 +121,9 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
-    uint64_t nb = 64; /* (a word of occupancy bits at least) */
-    while (nb < 2 * (uint64_t)count && nb < (1ull << 31)) nb *= 2; /* mostly empty buckets: the occupancy bits answer */
+    uint64_t nb = 64, no = 64;
+    while (nb < 2 * (uint64_t)count && nb < (1ull << 31)) nb *= 2;
+    while (no < 8 * (uint64_t)count && no < (1ull << 40)) no *= 2;
     unsigned shift = 0;
     while ((nb >> shift) > 1 && (1ull << shift) < (1ull << GROUP_BITS)) shift++;
     size_t ng = (size_t)(nb >> shift), gsize = (size_t)1 << shift;
@@ -112,7 +131,8 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
     H->mask = nb - 1;
     H->start = rs__alloc_array(ctx, (size_t)nb + 1, sizeof *H->start);
     H->ent = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ent);
-    H->occ = rs__calloc(ctx, (size_t)(nb / 64), sizeof *H->occ);
+    H->omask = no - 1;
+    H->occ = rs__calloc(ctx, (size_t)(no / 64), sizeof *H->occ);
     uint32_t *gstart = rs__calloc(ctx, ng + 1, sizeof *gstart), *cur = rs__alloc_array(ctx, gsize, sizeof *cur);
     uint32_t *tkey = rs__alloc_array(ctx, count ? count : 1, sizeof *tkey);
     pt_entry *tent = NULL;
@@ -123,7 +143,9 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
     for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
     for (size_t i = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
         if (keep && !keep[i]) continue;
-        uint64_t b = bucket_of_point(H, xy + 2 * i);
+        int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
+        uint64_t b = bucket_of(H, cx, cy), o = occ_bit(H, cx, cy);
+        H->occ[o >> 6] |= 1ull << (o & 63);
         uint32_t q = gstart[b >> shift]++;
         tkey[q] = (uint32_t)b;
         pt_entry *e = &H->ent[q];
@@ -145,7 +167,6 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
             H->start[b0 + j] = gstart[g] + at;
             cur[j] = at;
             at += c;
-            if (c) H->occ[(b0 + j) >> 6] |= 1ull << ((b0 + j) & 63);
         }
         for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) tent[cur[tkey[q] - b0]++] = H->ent[q];
         if (at) memcpy(H->ent + gstart[g], tent, at * sizeof *tent);
@@ -316,8 +337,8 @@ static rs_result find_tees(build *B)
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 int64_t c0 = cell_of(fmin(xa, xb) - tol, g), c1 = cell_of(fmax(xa, xb) + tol, g);
                 for (int64_t cx = c0; cx <= c1 && !res; cx++) {
+                    if (!occupied(&H, cx, cy)) continue;
                     uint64_t b = bucket_of(&H, cx, cy);
-                    if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                     for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                         uint32_t e = H.ent[q].id;
                         const double *pe = &H.ent[q].x; /* (maybe of another cell: a T found twice merges) */
@@ -689,8 +710,8 @@ static rs_result cluster_points(build *B)
         disc_cells(&H, &e->x, tol, c);
         for (int64_t cy = c[2]; cy <= c[3]; cy++)
             for (int64_t cx = c[0]; cx <= c[1]; cx++) {
+                if (!occupied(&H, cx, cy)) continue;
                 uint64_t b = bucket_of(&H, cx, cy);
-                if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                     const pt_entry *f = &H.ent[q];
                     if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
