@@ -87,11 +87,6 @@ static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
     return ((h << 4) | sub) & H->mask;
 }
 
-static uint64_t bucket_of_point(const pt_hash *H, const double *p)
-{
-    return bucket_of(H, cell_of(p[0], H->cell), cell_of(p[1], H->cell));
-}
-
 /* The cell's bit in H->occ (another hash of the cell than its bucket's). */
 static uint64_t occ_bit(const pt_hash *H, int64_t cx, int64_t cy)
 {
@@ -135,19 +130,23 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
     H->occ = rs__calloc(ctx, (size_t)(no / 64), sizeof *H->occ);
     uint32_t *gstart = rs__calloc(ctx, ng + 1, sizeof *gstart), *cur = rs__alloc_array(ctx, gsize, sizeof *cur);
     uint32_t *tkey = rs__alloc_array(ctx, count ? count : 1, sizeof *tkey);
+    uint32_t *ikey = rs__alloc_array(ctx, count ? count : 1, sizeof *ikey); /* buckets in id order */
     pt_entry *tent = NULL;
     rs_result res = RS_ERR_NOMEM;
-    if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey) goto done;
-    for (size_t i = 0; i < n; i++)
-        if (!keep || keep[i]) gstart[(bucket_of_point(H, xy + 2 * i) >> shift) + 1]++;
-    for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
-    for (size_t i = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
+    if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey || !ikey) goto done;
+    for (size_t i = 0, k = 0; i < n; i++) {
         if (keep && !keep[i]) continue;
         int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
         uint64_t b = bucket_of(H, cx, cy), o = occ_bit(H, cx, cy);
         H->occ[o >> 6] |= 1ull << (o & 63);
-        uint32_t q = gstart[b >> shift]++;
-        tkey[q] = (uint32_t)b;
+        ikey[k++] = (uint32_t)b;
+        gstart[(b >> shift) + 1]++;
+    }
+    for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
+    for (size_t i = 0, k = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
+        if (keep && !keep[i]) continue;
+        uint32_t b = ikey[k++], q = gstart[b >> shift]++;
+        tkey[q] = b;
         pt_entry *e = &H->ent[q];
         e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
         e->id = (uint32_t)i, e->road = vroad[i];
@@ -177,6 +176,7 @@ done:
     rs__free(ctx, gstart);
     rs__free(ctx, cur);
     rs__free(ctx, tkey);
+    rs__free(ctx, ikey);
     rs__free(ctx, tent);
     return res;
 }
