@@ -688,7 +688,11 @@ static rs_result load_points(build *B)
     return RS_OK;
 }
 
-/* Union the hashed points within the tolerance of each other. */
+/* Union the hashed points within the tolerance of each other: B->parent
+ * of every point is then the lowest point of its group (flat). The pairs
+ * are joined by their places in the hash (mostly one bucket: in the
+ * cache), not by point (ids far apart: a cache miss per step), then each
+ * point is given its group's lowest id. */
 static rs_result cluster_points(build *B)
 {
     pt_hash H;
@@ -698,28 +702,44 @@ static rs_result cluster_points(build *B)
      * points, if only of other cells) */
     double tol = B->tol;
     rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, 8 * tol);
-    if (res) {
+    size_t count = H.start ? H.start[H.mask + 1] : 0;
+    uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
+    uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
+    if (!up || !low) {
         hash_free(B->ctx, &H);
-        return res;
+        rs__free(B->ctx, up);
+        rs__free(B->ctx, low);
+        return RS_ERR_NOMEM;
     }
+    for (size_t i = 0; i < count; i++) up[i] = (uint32_t)i, low[i] = H.ent[i].id;
     /* points in bucket order: their own bucket is the one being read (the
      * union does not depend on the order) */
-    for (size_t i = 0; i < H.start[H.mask + 1]; i++) {
+    for (size_t i = 0; i < count; i++) {
         const pt_entry *e = &H.ent[i];
-        int64_t c[4];
+        int64_t c[4], ox = cell_of(e->x, H.cell), oy = cell_of(e->y, H.cell);
         disc_cells(&H, &e->x, tol, c);
         for (int64_t cy = c[2]; cy <= c[3]; cy++)
             for (int64_t cx = c[0]; cx <= c[1]; cx++) {
-                if (!occupied(&H, cx, cy)) continue;
+                if ((cx != ox || cy != oy) && !occupied(&H, cx, cy)) continue; /* (its own cell holds it) */
                 uint64_t b = bucket_of(&H, cx, cy);
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
                     const pt_entry *f = &H.ent[q];
                     if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
                     if (f->road == e->road && fabs(e->s - f->s) <= 2 * tol) continue; /* one place of one road: no node */
-                    unite(B->parent, e->id, f->id);
+                    unite(up, (uint32_t)i, q);
                 }
             }
     }
+    for (size_t i = 0; i < count; i++) {
+        uint32_t r = find(up, (uint32_t)i);
+        if (H.ent[i].id < low[r]) low[r] = H.ent[i].id;
+    }
+    for (size_t i = 0; i < count; i++) {
+        uint32_t v = H.ent[i].id, l = low[up[i]]; /* (up is flat after the finds above) */
+        if (l != v) B->parent[v] = l;
+    }
+    rs__free(B->ctx, up);
+    rs__free(B->ctx, low);
     hash_free(B->ctx, &H);
     return RS_OK;
 }
@@ -747,10 +767,7 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     size_t n = B.nroads, m = n ? n : 1;
     if ((res = load_points(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK) goto fail;
 
-    /* flatten the union-find: a root is the lowest point of its group, so
-     * parent[v] < v already points at its root when v is reached (no
-     * find() after this: one read per point, not a chain) */
-    for (size_t v = 0; v < B.nv; v++) B.parent[v] = B.parent[B.parent[v]];
+    /* (the union-find is flat: parent[v] is the lowest point of v's group) */
     /* nodes: groups holding a road end or two places of roads. Every union
      * joined two places, so a group of two or more points is one; a group
      * of one is when it is a road's end. */
