@@ -52,7 +52,18 @@ typedef struct ctxa {
     double *box;        /* per road: x0 y0 x1 y1 */
     jn *j;
     size_t nj, capj;
+    uint32_t *jstart, *jidx; /* the junctions of road i: jidx[jstart[i] .. jstart[i+1]) (NULL: scan all) */
 } ctxa;
+
+/* Roads whose boxes (grown by their half width + JUNCTION_TOL) meet a grid
+ * cell, ascending, per cell: a road end looks only at the roads of its
+ * cell, not at every road (the loop stays in road order, so the result is
+ * the one of the scan over all roads). */
+typedef struct road_cells {
+    double x0, y0, cw, ch;
+    size_t gx, gy;
+    uint32_t *start, *ids; /* start: gx * gy + 1 */
+} road_cells;
 
 static int rank_of(rs_road_class c)
 {
@@ -118,9 +129,110 @@ static double nearest(const rs__road_local *r, double x, double y, double *s_out
 
 static int in_junction(const ctxa *A, size_t road, double lo, double hi)
 {
+    if (A->jstart) {
+        for (uint32_t k = A->jstart[road]; k < A->jstart[road + 1]; k++) {
+            const jn *J = &A->j[A->jidx[k]];
+            if (hi > J->s - J->half && lo < J->s + J->half) return 1;
+        }
+        return 0;
+    }
     for (size_t i = 0; i < A->nj; i++)
         if (A->j[i].road == road && hi > A->j[i].s - A->j[i].half && lo < A->j[i].s + A->j[i].half) return 1;
     return 0;
+}
+
+/* Index the junctions by road (in_junction then reads one road's). Out of
+ * memory leaves the scan over all. */
+static void index_junctions(ctxa *A, size_t nr)
+{
+    if (A->nj >= UINT32_MAX) return;
+    A->jstart = rs__calloc(A->ctx, nr + 2, sizeof *A->jstart);
+    A->jidx = rs__alloc_array(A->ctx, A->nj ? A->nj : 1, sizeof *A->jidx);
+    if (!A->jstart || !A->jidx) {
+        rs__free(A->ctx, A->jstart);
+        rs__free(A->ctx, A->jidx);
+        A->jstart = A->jidx = NULL;
+        return;
+    }
+    for (size_t i = 0; i < A->nj; i++) A->jstart[A->j[i].road + 2]++;
+    for (size_t i = 0; i < nr; i++) A->jstart[i + 2] += A->jstart[i + 1];
+    for (size_t i = 0; i < A->nj; i++) A->jidx[A->jstart[A->j[i].road + 1]++] = (uint32_t)i;
+}
+
+/* The grid cell range of [a, b] along one axis (clamped to the grid). */
+static void cell_range(double a, double b, double o, double c, size_t g, size_t *lo, size_t *hi)
+{
+    double qa = (a - o) / c, qb = (b - o) / c;
+    *lo = qa > 0 ? (qa < (double)g ? (size_t)qa : g - 1) : 0;
+    *hi = qb > 0 ? (qb < (double)g ? (size_t)qb : g - 1) : 0;
+}
+
+/* Build the cells of the roads with two or more points (boxes in A->box).
+ * Returns 0 (no grid: scan every road) when a box is not finite, the roads
+ * cover too many cells, or memory runs out. */
+static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
+{
+    memset(G, 0, sizeof *G);
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    size_t m = 0;
+    for (size_t j = 0; j < nr; j++) {
+        if (A->rl[j].n < 2) continue;
+        double w = 0;
+        rs_roads_get(A->roads, j, NULL, &w, NULL, NULL);
+        const double *b = A->box + 4 * j, reach = w / 2 + JUNCTION_TOL;
+        if (!isfinite(b[0] - reach) || !isfinite(b[1] - reach) || !isfinite(b[2] + reach) || !isfinite(b[3] + reach))
+            return 0;
+        x0 = fmin(x0, b[0] - reach), y0 = fmin(y0, b[1] - reach);
+        x1 = fmax(x1, b[2] + reach), y1 = fmax(y1, b[3] + reach);
+        m++;
+    }
+    if (m < 64 || nr >= UINT32_MAX) return 0; /* (few roads: the scan is as fast) */
+    size_t g = 1;
+    while (g * g < m && g < 2048) g++;
+    G->gx = G->gy = g;
+    G->x0 = x0, G->y0 = y0;
+    G->cw = (x1 - x0) / (double)g, G->ch = (y1 - y0) / (double)g;
+    if (!(G->cw > 0) || !(G->ch > 0) || !isfinite(G->cw) || !isfinite(G->ch)) return 0;
+    G->start = rs__calloc(A->ctx, g * g + 1, sizeof *G->start);
+    if (!G->start) return 0;
+    size_t total = 0;
+    for (int fill = 0; fill < 2; fill++) {
+        for (size_t j = 0; j < nr; j++) {
+            if (A->rl[j].n < 2) continue;
+            double w = 0;
+            rs_roads_get(A->roads, j, NULL, &w, NULL, NULL);
+            const double *b = A->box + 4 * j, reach = w / 2 + JUNCTION_TOL;
+            size_t cx0, cx1, cy0, cy1;
+            cell_range(b[0] - reach, b[2] + reach, G->x0, G->cw, g, &cx0, &cx1);
+            cell_range(b[1] - reach, b[3] + reach, G->y0, G->ch, g, &cy0, &cy1);
+            if (!fill) {
+                total += (cx1 - cx0 + 1) * (cy1 - cy0 + 1);
+                if (total > 64 * m + (1u << 20)) { /* (a few huge boxes over everything: scan) */
+                    rs__free(A->ctx, G->start);
+                    G->start = NULL;
+                    return 0;
+                }
+            }
+            for (size_t cy = cy0; cy <= cy1; cy++)
+                for (size_t cx = cx0; cx <= cx1; cx++) {
+                    if (fill) G->ids[G->start[cy * g + cx]++] = (uint32_t)j;
+                    else G->start[cy * g + cx + 1]++;
+                }
+        }
+        if (!fill) {
+            for (size_t c = 0; c < g * g; c++) G->start[c + 1] += G->start[c];
+            G->ids = rs__alloc_array(A->ctx, total ? total : 1, sizeof *G->ids);
+            if (!G->ids) {
+                rs__free(A->ctx, G->start);
+                G->start = NULL;
+                return 0;
+            }
+        }
+    }
+    /* (the fill ran each cell's start to its end: step back) */
+    for (size_t c = g * g; c > 0; c--) G->start[c] = G->start[c - 1];
+    G->start[0] = 0;
+    return 1;
 }
 
 /* Push p unless it spills off its road or into a junction area. */
@@ -374,6 +486,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             if (A.rl[i].y[k] > b[3]) b[3] = A.rl[i].y[k];
         }
     }
+    road_cells G;
+    int grid = !r && road_cells_build(&A, nr, &G);
     /* per road end: junction, its half extent, minor */
     int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
     double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
@@ -394,9 +508,19 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
              * same street going on), then record it */
             size_t meet = 0;
             int through = 0;
+            const uint32_t *cand = NULL;
+            size_t ncand = nr;
+            if (grid && isfinite(x) && isfinite(y)) { /* (x, y) is inside every box it could meet: its cell lists them */
+                size_t cx, cy, unused;
+                cell_range(x, x, G.x0, G.cw, G.gx, &cx, &unused);
+                cell_range(y, y, G.y0, G.ch, G.gy, &cy, &unused);
+                cand = G.ids + G.start[cy * G.gx + cx];
+                ncand = G.start[cy * G.gx + cx + 1] - G.start[cy * G.gx + cx];
+            }
             for (int pass = 0; pass < 2 && !r; pass++) {
                 if (pass == 1 && !(through || meet >= 2)) break;
-                for (size_t j = 0; j < nr && !r; j++) {
+                for (size_t c = 0; c < ncand && !r; c++) {
+                    size_t j = cand ? cand[c] : c;
                     if (j == i || A.rl[j].n < 2 || non_car(road_class_of(roads, j))) continue;
                     double wb, s = 0;
                     rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
@@ -420,6 +544,11 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             }
         }
     }
+    if (grid) {
+        rs__free(ctx, G.start);
+        rs__free(ctx, G.ids);
+    }
+    if (!r) index_junctions(&A, nr);
     for (size_t i = 0; i < nr && !r; i++) {
         int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
         r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
@@ -473,6 +602,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     rs__free(ctx, A.rl);
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
+    rs__free(ctx, A.jstart);
+    rs__free(ctx, A.jidx);
     rs__free(ctx, endj);
     rs__free(ctx, endh);
     return r;
