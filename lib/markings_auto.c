@@ -55,10 +55,12 @@ typedef struct ctxa {
     uint32_t *jstart, *jidx; /* the junctions of road i: jidx[jstart[i] .. jstart[i+1]) (NULL: scan all) */
 } ctxa;
 
-/* Roads whose boxes (grown by their half width + JUNCTION_TOL) meet a grid
- * cell, ascending, per cell: a road end looks only at the roads of its
- * cell, not at every road (the loop stays in road order, so the result is
- * the one of the scan over all roads). */
+/* Roads with a segment whose box (grown by the road's half width +
+ * JUNCTION_TOL) meets a grid cell, ascending, once, per cell: a road end
+ * looks only at the roads of its cell, not at every road (the loop stays
+ * in road order and keeps its tests, so the result is the one of the scan
+ * over all roads). Segments, not whole roads: a long road's box would put
+ * it in the lists of many cells far from it. */
 typedef struct road_cells {
     double x0, y0, cw, ch;
     size_t gx, gy;
@@ -167,67 +169,77 @@ static void cell_range(double a, double b, double o, double c, size_t g, size_t 
     *hi = qb > 0 ? (qb < (double)g ? (size_t)qb : g - 1) : 0;
 }
 
-/* Build the cells of the roads with two or more points (boxes in A->box).
- * Returns 0 (no grid: scan every road) when a box is not finite, the roads
- * cover too many cells, or memory runs out. */
+/* Build the cells of the roads with two or more points. Returns 0 (no
+ * grid: scan every road) when a point is not finite, the segments cover
+ * too many cells, or memory runs out. */
 static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
 {
     memset(G, 0, sizeof *G);
     double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-    size_t m = 0;
+    size_t m = 0, nseg = 0;
     for (size_t j = 0; j < nr; j++) {
-        if (A->rl[j].n < 2) continue;
-        double w = 0;
-        rs_roads_get(A->roads, j, NULL, &w, NULL, NULL);
-        const double *b = A->box + 4 * j, reach = w / 2 + JUNCTION_TOL;
-        if (!isfinite(b[0] - reach) || !isfinite(b[1] - reach) || !isfinite(b[2] + reach) || !isfinite(b[3] + reach))
-            return 0;
-        x0 = fmin(x0, b[0] - reach), y0 = fmin(y0, b[1] - reach);
-        x1 = fmax(x1, b[2] + reach), y1 = fmax(y1, b[3] + reach);
+        const rs__road_local *rl = &A->rl[j];
+        if (rl->n < 2) continue;
+        for (size_t k = 0; k < rl->n; k++)
+            if (!isfinite(rl->x[k]) || !isfinite(rl->y[k])) return 0;
+        const double *b = A->box + 4 * j;
+        x0 = fmin(x0, b[0]), y0 = fmin(y0, b[1]), x1 = fmax(x1, b[2]), y1 = fmax(y1, b[3]);
         m++;
+        nseg += rl->n - 1;
     }
     if (m < 64 || nr >= UINT32_MAX) return 0; /* (few roads: the scan is as fast) */
     size_t g = 1;
-    while (g * g < m && g < 2048) g++;
+    while (g * g < nseg && g < 2048) g++;
     G->gx = G->gy = g;
     G->x0 = x0, G->y0 = y0;
     G->cw = (x1 - x0) / (double)g, G->ch = (y1 - y0) / (double)g;
     if (!(G->cw > 0) || !(G->ch > 0) || !isfinite(G->cw) || !isfinite(G->ch)) return 0;
     G->start = rs__calloc(A->ctx, g * g + 1, sizeof *G->start);
-    if (!G->start) return 0;
+    uint32_t *last = rs__alloc_array(A->ctx, g * g, sizeof *last); /* the last road listed per cell */
     size_t total = 0;
-    for (int fill = 0; fill < 2; fill++) {
-        for (size_t j = 0; j < nr; j++) {
-            if (A->rl[j].n < 2) continue;
+    int ok = G->start && last;
+    for (int fill = 0; fill < 2 && ok; fill++) {
+        for (size_t c = 0; c < g * g; c++) last[c] = UINT32_MAX;
+        for (size_t j = 0; j < nr && ok; j++) {
+            const rs__road_local *rl = &A->rl[j];
+            if (rl->n < 2) continue;
             double w = 0;
             rs_roads_get(A->roads, j, NULL, &w, NULL, NULL);
-            const double *b = A->box + 4 * j, reach = w / 2 + JUNCTION_TOL;
-            size_t cx0, cx1, cy0, cy1;
-            cell_range(b[0] - reach, b[2] + reach, G->x0, G->cw, g, &cx0, &cx1);
-            cell_range(b[1] - reach, b[3] + reach, G->y0, G->ch, g, &cy0, &cy1);
-            if (!fill) {
-                total += (cx1 - cx0 + 1) * (cy1 - cy0 + 1);
-                if (total > 64 * m + (1u << 20)) { /* (a few huge boxes over everything: scan) */
-                    rs__free(A->ctx, G->start);
-                    G->start = NULL;
-                    return 0;
-                }
+            /* (grown a little more: the distance test's rounding must not
+             * find a road its cell does not list) */
+            double reach = (w / 2 + JUNCTION_TOL) * (1 + 1e-9) + 1e-6;
+            for (size_t k = 0; k + 1 < rl->n && ok; k++) {
+                size_t cx0, cx1, cy0, cy1;
+                cell_range(fmin(rl->x[k], rl->x[k + 1]) - reach, fmax(rl->x[k], rl->x[k + 1]) + reach, G->x0, G->cw, g,
+                           &cx0, &cx1);
+                cell_range(fmin(rl->y[k], rl->y[k + 1]) - reach, fmax(rl->y[k], rl->y[k + 1]) + reach, G->y0, G->ch, g,
+                           &cy0, &cy1);
+                for (size_t cy = cy0; cy <= cy1 && ok; cy++)
+                    for (size_t cx = cx0; cx <= cx1; cx++) {
+                        size_t c = cy * g + cx;
+                        if (last[c] == (uint32_t)j) continue;
+                        last[c] = (uint32_t)j;
+                        if (fill) {
+                            G->ids[G->start[c]++] = (uint32_t)j;
+                        } else {
+                            G->start[c + 1]++;
+                            if (++total > 64 * nseg + (1u << 20)) ok = 0; /* (huge segments over everything: scan) */
+                        }
+                    }
             }
-            for (size_t cy = cy0; cy <= cy1; cy++)
-                for (size_t cx = cx0; cx <= cx1; cx++) {
-                    if (fill) G->ids[G->start[cy * g + cx]++] = (uint32_t)j;
-                    else G->start[cy * g + cx + 1]++;
-                }
         }
-        if (!fill) {
+        if (!fill && ok) {
             for (size_t c = 0; c < g * g; c++) G->start[c + 1] += G->start[c];
             G->ids = rs__alloc_array(A->ctx, total ? total : 1, sizeof *G->ids);
-            if (!G->ids) {
-                rs__free(A->ctx, G->start);
-                G->start = NULL;
-                return 0;
-            }
+            ok = G->ids != NULL;
         }
+    }
+    rs__free(A->ctx, last);
+    if (!ok) {
+        rs__free(A->ctx, G->start);
+        rs__free(A->ctx, G->ids);
+        G->start = G->ids = NULL;
+        return 0;
     }
     /* (the fill ran each cell's start to its end: step back) */
     for (size_t c = g * g; c > 0; c--) G->start[c] = G->start[c - 1];
