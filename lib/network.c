@@ -435,6 +435,7 @@ static int str_eq(const char *a, const char *b) { return a == b || (a && b && st
 static void look_of(const rs_roads *roads, size_t r, road_look *L)
 {
     rs_road_info in;
+    memset(&in, 0, sizeof in);
     memset(L, 0, sizeof *L);
     rs_roads_get(roads, r, NULL, &L->width, NULL, NULL);
     if (rs_roads_get_info(roads, r, &in) != RS_OK) in.road_class = RS_CLASS_NONE, in.oneway = RS_ONEWAY_NONE;
