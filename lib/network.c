@@ -196,7 +196,8 @@ static void hash_free(rs_ctx *ctx, pt_hash *H)
 static void disc_cells(const pt_hash *H, const double *p, double r, int64_t c[4])
 {
     for (int k = 0; k < 2; k++) {
-        double m = r * (1 + 1e-9) + fabs(p[k]) * 4 * DBL_EPSILON;
+        double m = r * (1 + 1e-9) + fabs(p[k]) * (4 * DBL_EPSILON); /* (not 4 fabs(p): overflow) */
+        if (!isfinite(p[k])) m = 0; /* (its own clamped cell) */
         c[2 * k] = cell_of(p[k] - m, H->cell);
         c[2 * k + 1] = cell_of(p[k] + m, H->cell);
     }
@@ -701,9 +702,18 @@ static rs_result cluster_points(build *B)
     memset(&H, 0, sizeof H);
     /* cells of 8 tolerances: a point's disc mostly stays in its own cell
      * (a neighbour cell is a random bucket: a cache miss when it holds
-     * points, if only of other cells) */
-    double tol = B->tol;
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, 8 * tol);
+     * points, if only of other cells); at least 2^-40 of the largest
+     * coordinate, so a disc's rounding margin spans at most 2 cells a side
+     * (else 1e18 m coordinates made a point probe millions of cells) */
+    double tol = B->tol, big = 0;
+    for (size_t v = 0; v < B->nv; v++)
+        if (B->inhash[v]) {
+            double ax = fabs(B->xy[2 * v]), ay = fabs(B->xy[2 * v + 1]);
+            if (ax > big && ax <= DBL_MAX) big = ax;
+            if (ay > big && ay <= DBL_MAX) big = ay;
+        }
+    double cell = fmax(8 * tol, big * 0x1p-40);
+    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
     size_t count = H.start ? H.start[H.mask + 1] : 0;
     uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
     uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
