@@ -270,6 +270,44 @@ static void test_tee_tolerance(void)
     rs_roads_free(ctx, roads);
 }
 
+/* Two records meeting end to start with a gap of 0.9 tolerances are one
+ * node and one stroke (1.1: two ends), wherever the gap lies among the
+ * hash's cells and whichever way it points. On db31fd7 the cells were one
+ * tolerance wide and only 2 x 2 were searched: a gap across a cell edge
+ * from a point 0.3 tolerances into its cell was missed. */
+static void test_end_tolerance(void)
+{
+    const double tols[2] = { 0.05, 0.7 };
+    const double dirs[4][2] = { { 1, 0 }, { 0, 1 }, { -0.6, 0.8 }, { 0.8, -0.6 } };
+    int missed = 0, joined_far = 0, cases = 0;
+    for (int t = 0; t < 2; t++)
+        for (int d = 0; d < 4; d++)
+            for (int k = 0; k < 40; k++)
+                for (int inside = 0; inside < 2; inside++) {
+                    double tol = tols[t], gap = (inside ? 0.9 : 1.1) * tol, ux = dirs[d][0], uy = dirs[d][1];
+                    double x0 = 3 + 0.05 * k * tol, y0 = 7 + 0.0371 * k * tol; /* across the cells */
+                    double a[4] = { x0 - 20 * ux, y0 - 20 * uy, x0, y0 };
+                    double b[4] = { x0 + gap * ux, y0 + gap * uy, x0 + gap * ux + 20 * ux, y0 + gap * uy + 20 * uy };
+                    rs_roads *roads = NULL;
+                    rs_network *net = NULL;
+                    rs_network_options o = { tol };
+                    if (rs_roads_create(ctx, &roads) || rs_roads_add(ctx, roads, "r", 5, a, 2) ||
+                        rs_roads_add(ctx, roads, "r", 5, b, 2) || rs_network_build(ctx, roads, &o, &net)) {
+                        CHECK(0);
+                        rs_roads_free(ctx, roads);
+                        continue;
+                    }
+                    size_t nodes = rs_network_node_count(net), strokes = rs_network_stroke_count(net);
+                    cases++;
+                    if (inside && (nodes != 3 || strokes != 1)) missed++;
+                    if (!inside && (nodes != 4 || strokes != 2)) joined_far++;
+                    rs_network_free(ctx, net);
+                    rs_roads_free(ctx, roads);
+                }
+    CHECKF(missed == 0 && joined_far == 0, "%d of %d gaps of 0.9 tol not joined, %d of 1.1 tol joined", missed,
+           cases / 2, joined_far);
+}
+
 /* Random polylines, each split at random places: the same junctions and
  * ends, and one stroke per polyline whose records lie at the cuts. */
 static void test_random_splits(void)
@@ -865,6 +903,7 @@ int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_tee_tolerance();
+    test_end_tolerance();
     test_random_splits();
     test_roundabout();
     test_self_touch();

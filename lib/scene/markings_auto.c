@@ -60,7 +60,20 @@ typedef struct ctxa {
      * none. cont_end: that record meets it with its last point. */
     size_t *cont;
     uint8_t *cont_end;
+    uint32_t *jstart, *jidx; /* the junctions of road i: jidx[jstart[i] .. jstart[i+1]) (NULL: scan all) */
 } ctxa;
+
+/* Roads with a segment whose box (grown by the road's half width +
+ * JUNCTION_TOL) meets a grid cell, ascending, once, per cell: a road end
+ * looks only at the roads of its cell, not at every road (the loop stays
+ * in road order and keeps its tests, so the result is the one of the scan
+ * over all roads). Segments, not whole roads: a long road's box would put
+ * it in the lists of many cells far from it. */
+typedef struct road_cells {
+    double x0, y0, cw, ch;
+    size_t gx, gy;
+    uint32_t *start, *ids; /* start: gx * gy + 1 */
+} road_cells;
 
 /* Classes for feet and bikes: no car markings (docs/road-format.md). */
 static int non_car(rs_road_class c)
@@ -121,9 +134,120 @@ static double nearest(const rs__road_local *r, double x, double y, double *s_out
 
 static int in_junction(const ctxa *A, size_t road, double lo, double hi)
 {
+    if (A->jstart) {
+        for (uint32_t k = A->jstart[road]; k < A->jstart[road + 1]; k++) {
+            const jn *J = &A->j[A->jidx[k]];
+            if (hi > J->s - J->half && lo < J->s + J->half) return 1;
+        }
+        return 0;
+    }
     for (size_t i = 0; i < A->nj; i++)
         if (A->j[i].road == road && hi > A->j[i].s - A->j[i].half && lo < A->j[i].s + A->j[i].half) return 1;
     return 0;
+}
+
+/* Index the junctions by road (in_junction then reads one road's). Out of
+ * memory leaves the scan over all. */
+static void index_junctions(ctxa *A, size_t nr)
+{
+    if (A->nj >= UINT32_MAX) return;
+    A->jstart = rs__calloc(A->ctx, nr + 2, sizeof *A->jstart);
+    A->jidx = rs__alloc_array(A->ctx, A->nj ? A->nj : 1, sizeof *A->jidx);
+    if (!A->jstart || !A->jidx) {
+        rs__free(A->ctx, A->jstart);
+        rs__free(A->ctx, A->jidx);
+        A->jstart = A->jidx = NULL;
+        return;
+    }
+    for (size_t i = 0; i < A->nj; i++) A->jstart[A->j[i].road + 2]++;
+    for (size_t i = 0; i < nr; i++) A->jstart[i + 2] += A->jstart[i + 1];
+    for (size_t i = 0; i < A->nj; i++) A->jidx[A->jstart[A->j[i].road + 1]++] = (uint32_t)i;
+}
+
+/* The grid cell range of [a, b] along one axis (clamped to the grid). */
+static void cell_range(double a, double b, double o, double c, size_t g, size_t *lo, size_t *hi)
+{
+    double qa = (a - o) / c, qb = (b - o) / c;
+    *lo = qa > 0 ? (qa < (double)g ? (size_t)qa : g - 1) : 0;
+    *hi = qb > 0 ? (qb < (double)g ? (size_t)qb : g - 1) : 0;
+}
+
+/* Build the cells of the roads with two or more points. Returns 0 (no
+ * grid: scan every road) when a point is not finite, the segments cover
+ * too many cells, or memory runs out. */
+static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
+{
+    memset(G, 0, sizeof *G);
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    size_t m = 0, nseg = 0;
+    for (size_t j = 0; j < nr; j++) {
+        const rs__road_local *rl = &A->rl[j];
+        if (rl->n < 2) continue;
+        for (size_t k = 0; k < rl->n; k++)
+            if (!isfinite(rl->x[k]) || !isfinite(rl->y[k])) return 0;
+        const double *b = A->box + 4 * j;
+        x0 = fmin(x0, b[0]), y0 = fmin(y0, b[1]), x1 = fmax(x1, b[2]), y1 = fmax(y1, b[3]);
+        m++;
+        nseg += rl->n - 1;
+    }
+    if (m < 64 || nr >= UINT32_MAX) return 0; /* (few roads: the scan is as fast) */
+    size_t g = 1;
+    while (g * g < nseg && g < 2048) g++;
+    G->gx = G->gy = g;
+    G->x0 = x0, G->y0 = y0;
+    G->cw = (x1 - x0) / (double)g, G->ch = (y1 - y0) / (double)g;
+    if (!(G->cw > 0) || !(G->ch > 0) || !isfinite(G->cw) || !isfinite(G->ch)) return 0;
+    G->start = rs__calloc(A->ctx, g * g + 1, sizeof *G->start);
+    uint32_t *last = rs__alloc_array(A->ctx, g * g, sizeof *last); /* the last road listed per cell */
+    size_t total = 0;
+    int ok = G->start && last;
+    for (int fill = 0; fill < 2 && ok; fill++) {
+        for (size_t c = 0; c < g * g; c++) last[c] = UINT32_MAX;
+        for (size_t j = 0; j < nr && ok; j++) {
+            const rs__road_local *rl = &A->rl[j];
+            if (rl->n < 2) continue;
+            double w = 0;
+            rs_roads_get(A->roads, j, NULL, &w, NULL, NULL);
+            /* (grown a little more: the distance test's rounding must not
+             * find a road its cell does not list) */
+            double reach = (w / 2 + JUNCTION_TOL) * (1 + 1e-9) + 1e-6;
+            for (size_t k = 0; k + 1 < rl->n && ok; k++) {
+                size_t cx0, cx1, cy0, cy1;
+                cell_range(fmin(rl->x[k], rl->x[k + 1]) - reach, fmax(rl->x[k], rl->x[k + 1]) + reach, G->x0, G->cw, g,
+                           &cx0, &cx1);
+                cell_range(fmin(rl->y[k], rl->y[k + 1]) - reach, fmax(rl->y[k], rl->y[k + 1]) + reach, G->y0, G->ch, g,
+                           &cy0, &cy1);
+                for (size_t cy = cy0; cy <= cy1 && ok; cy++)
+                    for (size_t cx = cx0; cx <= cx1; cx++) {
+                        size_t c = cy * g + cx;
+                        if (last[c] == (uint32_t)j) continue;
+                        last[c] = (uint32_t)j;
+                        if (fill) {
+                            G->ids[G->start[c]++] = (uint32_t)j;
+                        } else {
+                            G->start[c + 1]++;
+                            if (++total > 64 * nseg + (1u << 20)) ok = 0; /* (huge segments over everything: scan) */
+                        }
+                    }
+            }
+        }
+        if (!fill && ok) {
+            for (size_t c = 0; c < g * g; c++) G->start[c + 1] += G->start[c];
+            G->ids = rs__alloc_array(A->ctx, total ? total : 1, sizeof *G->ids);
+            ok = G->ids != NULL;
+        }
+    }
+    rs__free(A->ctx, last);
+    if (!ok) {
+        rs__free(A->ctx, G->start);
+        rs__free(A->ctx, G->ids);
+        G->start = G->ids = NULL;
+        return 0;
+    }
+    /* (the fill ran each cell's start to its end: step back) */
+    for (size_t c = g * g; c > 0; c--) G->start[c] = G->start[c - 1];
+    G->start[0] = 0;
+    return 1;
 }
 
 /* A placement may reach d metres past end e of `road` into the record
@@ -416,6 +540,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             if (A.rl[i].y[k] > b[3]) b[3] = A.rl[i].y[k];
         }
     }
+    road_cells G;
+    int grid = !r && road_cells_build(&A, nr, &G);
     /* per road end: junction, its half extent, minor */
     int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
     double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
@@ -450,9 +576,19 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 A.cont[2 * i + e] = link_road + 1;
                 A.cont_end[2 * i + e] = (uint8_t)(lk & 1);
             }
+            const uint32_t *cand = NULL;
+            size_t ncand = nr;
+            if (grid && isfinite(x) && isfinite(y)) { /* (x, y) is inside every box it could meet: its cell lists them */
+                size_t cx, cy, unused;
+                cell_range(x, x, G.x0, G.cw, G.gx, &cx, &unused);
+                cell_range(y, y, G.y0, G.ch, G.gy, &cy, &unused);
+                cand = G.ids + G.start[cy * G.gx + cx];
+                ncand = G.start[cy * G.gx + cx + 1] - G.start[cy * G.gx + cx];
+            }
             for (int pass = 0; pass < 2 && !r; pass++) {
                 if (pass == 1 && !(through || meet >= 2)) break;
-                for (size_t j = 0; j < nr && !r; j++) {
+                for (size_t c = 0; c < ncand && !r; c++) {
+                    size_t j = cand ? cand[c] : c;
                     if (j == i || A.rl[j].n < 2 || non_car(road_class_of(roads, j))) continue;
                     /* the street's other records, except the one going on
                      * here, are no junction (a short record of it may end
@@ -488,6 +624,11 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             }
         }
     }
+    if (grid) {
+        rs__free(ctx, G.start);
+        rs__free(ctx, G.ids);
+    }
+    if (!r) index_junctions(&A, nr);
     for (size_t i = 0; i < nr && !r; i++) {
         int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
         r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
@@ -544,6 +685,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     rs__free(ctx, A.cont);
     rs_network_free(ctx, net);
     rs__free(ctx, A.cont_end);
+    rs__free(ctx, A.jstart);
+    rs__free(ctx, A.jidx);
     rs__free(ctx, endj);
     rs__free(ctx, endh);
     return r;

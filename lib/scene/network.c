@@ -61,12 +61,23 @@ int rs__road_priority(const rs_roads *roads, size_t r)
 
 /* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
 
+/* A hashed point with what the pair tests read of it, so a candidate costs
+ * one cache line, not one per array (the buckets are visited in random
+ * order of the points' ids). */
+typedef struct pt_entry {
+    double x, y, s;
+    uint32_t id, road;
+} pt_entry;
+
 typedef struct pt_hash {
     double cell;
     uint64_t mask;
-    uint32_t *start, *ids;
-    double *pxy; /* the points' coordinates in bucket order (beside ids) */
-    uint64_t *occ; /* a bit per bucket: not empty (small enough to stay in cache) */
+    uint32_t *start;
+    pt_entry *ent;  /* the points in bucket order */
+    uint64_t *occ;  /* a bit per hashed cell (8 per point, small enough to stay in cache): a
+                       clear bit says the cell is empty, where a bucket may also hold other
+                       cells (a bucket read is a cache miss) */
+    uint64_t omask;
 } pt_hash;
 
 static int64_t cell_of(double x, double cell)
@@ -92,54 +103,148 @@ static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
     return ((h << 4) | sub) & H->mask;
 }
 
-/* Hash the points xy[2 id] of the ids for which keep[id] (NULL: all). */
-static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const uint8_t *keep, size_t n, double cell)
+/* The cell's bit in H->occ (another hash of the cell than its bucket's). */
+static uint64_t occ_bit(const pt_hash *H, int64_t cx, int64_t cy)
+{
+    uint64_t h = (uint64_t)cx * 0xD6E8FEB86659FD93ull ^ (uint64_t)cy * 0x9E3779B97F4A7C15ull;
+    h ^= h >> 31;
+    h *= 0x94D049BB133111EBull;
+    return (h >> 20) & H->omask;
+}
+
+static int occupied(const pt_hash *H, int64_t cx, int64_t cy)
+{
+    uint64_t o = occ_bit(H, cx, cy);
+    return (int)(H->occ[o >> 6] >> (o & 63) & 1);
+}
+
+#define GROUP_BITS 13 /* buckets per group of the fill: 2^13 starts (32 KiB) stay in cache */
+
+/* Hash the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
+ * for which keep[id] (NULL: all). Filled in two streaming passes, not by
+ * writing each point to a random bucket (a cache miss per point once the
+ * table outgrows the cache): the points to groups of 2^13 buckets in id
+ * order, then each group's points to their buckets (through a scratch
+ * array of the largest group). Both passes keep id order, so ids ascend
+ * within a bucket. */
+static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const double *s, const uint32_t *vroad,
+                            const uint8_t *keep, size_t n, double cell)
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
-    uint64_t nb = 64; /* (a word of occupancy bits at least) */
-    while (nb < 4 * (uint64_t)count) nb *= 2; /* mostly empty buckets: the occupancy bits answer */
+    uint64_t nb = 64, no = 64;
+    while (nb < 2 * (uint64_t)count && nb < (1ull << 31)) nb *= 2;
+    while (no < 8 * (uint64_t)count && no < (1ull << 40)) no *= 2;
+    unsigned shift = 0;
+    while ((nb >> shift) > 1 && (1ull << shift) < (1ull << GROUP_BITS)) shift++;
+    size_t ng = (size_t)(nb >> shift), gsize = (size_t)1 << shift;
     H->cell = cell;
     H->mask = nb - 1;
-    H->start = rs__calloc(ctx, (size_t)nb + 1, sizeof *H->start);
-    H->ids = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ids);
-    H->pxy = rs__alloc_array(ctx, count ? count : 1, 2 * sizeof *H->pxy);
-    H->occ = rs__calloc(ctx, (size_t)(nb / 64), sizeof *H->occ);
-    if (!H->start || !H->ids || !H->pxy || !H->occ) return RS_ERR_NOMEM;
-    for (size_t i = 0; i < n; i++)
-        if (!keep || keep[i]) H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell)) + 1]++;
-    for (uint64_t b = 0; b < nb; b++) H->start[b + 1] += H->start[b];
-    for (size_t i = 0; i < n; i++) { /* (start[b] runs ahead while filling, then is restored below) */
+    H->start = rs__alloc_array(ctx, (size_t)nb + 1, sizeof *H->start);
+    H->ent = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ent);
+    H->omask = no - 1;
+    H->occ = rs__calloc(ctx, (size_t)(no / 64), sizeof *H->occ);
+    uint32_t *gstart = rs__calloc(ctx, ng + 1, sizeof *gstart), *cur = rs__alloc_array(ctx, gsize, sizeof *cur);
+    uint32_t *tkey = rs__alloc_array(ctx, count ? count : 1, sizeof *tkey);
+    uint32_t *ikey = rs__alloc_array(ctx, count ? count : 1, sizeof *ikey); /* buckets in id order */
+    pt_entry *tent = NULL;
+    rs_result res = RS_ERR_NOMEM;
+    if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey || !ikey) goto done;
+    for (size_t i = 0, k = 0; i < n; i++) {
         if (keep && !keep[i]) continue;
-        uint32_t q = H->start[bucket_of(H, cell_of(xy[2 * i], cell), cell_of(xy[2 * i + 1], cell))]++;
-        H->ids[q] = (uint32_t)i;
-        H->pxy[2 * (size_t)q] = xy[2 * i];
-        H->pxy[2 * (size_t)q + 1] = xy[2 * i + 1];
+        int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
+        uint64_t b = bucket_of(H, cx, cy), o = occ_bit(H, cx, cy);
+        H->occ[o >> 6] |= 1ull << (o & 63);
+        ikey[k++] = (uint32_t)b;
+        gstart[(b >> shift) + 1]++;
     }
-    for (uint64_t b = nb; b > 0; b--) H->start[b] = H->start[b - 1];
-    H->start[0] = 0;
-    for (uint64_t b = 0; b < nb; b++)
-        if (H->start[b + 1] > H->start[b]) H->occ[b >> 6] |= 1ull << (b & 63);
-    return RS_OK;
+    for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
+    for (size_t i = 0, k = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
+        if (keep && !keep[i]) continue;
+        uint32_t b = ikey[k++], q = gstart[b >> shift]++;
+        tkey[q] = b;
+        pt_entry *e = &H->ent[q];
+        e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
+        e->id = (uint32_t)i, e->road = vroad[i];
+    }
+    for (size_t g = ng; g > 0; g--) gstart[g] = gstart[g - 1];
+    gstart[0] = 0;
+    uint32_t most = 0;
+    for (size_t g = 0; g < ng; g++) most = gstart[g + 1] - gstart[g] > most ? gstart[g + 1] - gstart[g] : most;
+    if (!(tent = rs__alloc_array(ctx, most ? most : 1, sizeof *tent))) goto done;
+    for (size_t g = 0; g < ng; g++) {
+        uint64_t b0 = (uint64_t)g << shift;
+        memset(cur, 0, gsize * sizeof *cur);
+        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) cur[tkey[q] - b0]++;
+        uint32_t at = 0;
+        for (size_t j = 0; j < gsize; j++) {
+            uint32_t c = cur[j];
+            H->start[b0 + j] = gstart[g] + at;
+            cur[j] = at;
+            at += c;
+        }
+        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) tent[cur[tkey[q] - b0]++] = H->ent[q];
+        if (at) memcpy(H->ent + gstart[g], tent, at * sizeof *tent);
+    }
+    H->start[nb] = (uint32_t)count;
+    res = RS_OK;
+done:
+    rs__free(ctx, gstart);
+    rs__free(ctx, cur);
+    rs__free(ctx, tkey);
+    rs__free(ctx, ikey);
+    rs__free(ctx, tent);
+    return res;
 }
 
 static void hash_free(rs_ctx *ctx, pt_hash *H)
 {
     rs__free(ctx, H->start);
-    rs__free(ctx, H->ids);
-    rs__free(ctx, H->pxy);
+    rs__free(ctx, H->ent);
     rs__free(ctx, H->occ);
     memset(H, 0, sizeof *H);
 }
 
+/* The cells of H that a disc of radius r around p can reach: x cells
+ * c[0] .. c[1], y cells c[2] .. c[3]. The radius grows by the rounding of
+ * p's coordinates so the cells of all points within r are in (cell_of is
+ * monotone). */
+static void disc_cells(const pt_hash *H, const double *p, double r, int64_t c[4])
+{
+    for (int k = 0; k < 2; k++) {
+        double m = r * (1 + 1e-9) + fabs(p[k]) * (4 * DBL_EPSILON); /* (not 4 fabs(p): overflow) */
+        if (!isfinite(p[k])) m = 0; /* (its own clamped cell) */
+        c[2 * k] = cell_of(p[k] - m, H->cell);
+        c[2 * k + 1] = cell_of(p[k] + m, H->cell);
+    }
+}
+
 /* ---- build state ---- */
+
+/* What a road's legs and stroke links read of it, gathered once in road
+ * order: the nodes visit roads in random order, and the road set's records,
+ * attributes and strings are several cache lines apart. */
+typedef struct road_look {
+    double width;
+    const char *style, *junction;
+    uint32_t lanes;
+    int16_t priority;     /* class rank + 10 priority_road + 20 roundabout */
+    uint8_t road_class, link, oneway, area;
+    uint8_t two_way;      /* a record drawn against its points is the same road */
+    uint8_t roundabout;
+    uint32_t first, last; /* its first and last point (global ids) */
+    double length;        /* arc length at its last point */
+} road_look;
 
 typedef struct pass {
     uint32_t road, v0, v1; /* first and last point (global ids) of the road at the node */
     uint32_t seg;          /* a T: the segment; NONE for a pass through points */
-    double s;              /* a T: the arc length of the nearest point */
+    double s;              /* a T: the arc length of the nearest point; else of v0 */
+    double s1;             /* the arc length at v1 (a T: s) */
     double dist;           /* a T: its distance */
     uint32_t node;
+    uint32_t k0;           /* v0's index in its road */
+    uint8_t first, last;   /* v0 is the road's first point, v1 its last (not a T) */
 } pass;
 
 typedef struct build {
@@ -154,6 +259,7 @@ typedef struct build {
     uint32_t *rep;     /* per point: the first of its run of equal consecutive points */
     uint32_t *parent;  /* union-find over points */
     uint8_t *live;     /* per road: longer than twice the tolerance */
+    road_look *look;   /* per road */
     uint8_t *inhash;   /* per point: a live road's point that starts its run */
     uint32_t *nodeof;  /* per point (a root): its node, or NONE */
     pass *ps;
@@ -178,12 +284,6 @@ static void unite(uint32_t *parent, uint32_t a, uint32_t b)
     b = find(parent, b);
     if (a < b) parent[b] = a; /* the root is the lowest point: deterministic */
     else if (b < a) parent[a] = b;
-}
-
-/* Points v and w are the same place of one road (no node between them). */
-static int same_place(const build *B, uint32_t v, uint32_t w)
-{
-    return B->vroad[v] == B->vroad[w] && fabs(B->s[v] - B->s[w]) <= 2 * B->tol;
 }
 
 static int near2(const double *a, const double *b, double tol)
@@ -216,9 +316,10 @@ static rs_result find_tees(build *B)
             nseg += B->voff[r + 1] - B->voff[r] - 1;
             total += B->s[B->voff[r + 1] - 1];
         }
-    /* end points hashed in cells a quarter of a mean segment (at least 4
-     * tolerances): walking every segment's cells stays linear */
-    double g = nseg ? total / (2.0 * (double)nseg) : 1;
+    /* end points hashed in cells of a mean segment (at least 4
+     * tolerances): walking every segment's cells stays linear (half or
+     * twice that measured within 5 % on the 10^5 lattice) */
+    double g = nseg ? total / (double)nseg : 1;
     if (!(g >= 4 * B->tol)) g = 4 * B->tol;
     if (!(g <= 1e300)) g = 1e300;
     uint8_t *isend = rs__calloc(B->ctx, B->nv ? B->nv : 1, 1);
@@ -227,7 +328,7 @@ static rs_result find_tees(build *B)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
     pt_hash H;
     memset(&H, 0, sizeof H);
-    rs_result res = hash_build(B->ctx, &H, B->xy, isend, B->nv, g);
+    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -254,11 +355,11 @@ static rs_result find_tees(build *B)
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 int64_t c0 = cell_of(fmin(xa, xb) - tol, g), c1 = cell_of(fmax(xa, xb) + tol, g);
                 for (int64_t cx = c0; cx <= c1 && !res; cx++) {
+                    if (!occupied(&H, cx, cy)) continue;
                     uint64_t b = bucket_of(&H, cx, cy);
-                    if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
                     for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
-                        uint32_t e = H.ids[q];
-                        const double *pe = H.pxy + 2 * (size_t)q; /* (maybe of another cell: a T found twice merges) */
+                        uint32_t e = H.ent[q].id;
+                        const double *pe = &H.ent[q].x; /* (maybe of another cell: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
@@ -268,7 +369,7 @@ static rs_result find_tees(build *B)
                         if (find(B->parent, a) == root || find(B->parent, (uint32_t)k1) == root) continue;
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
                         if (B->vroad[e] == r && fabs(s - B->s[e]) <= 2 * tol) continue;
-                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, dist, B->nodeof[root] };
+                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, s, dist, B->nodeof[root], 0, 0, 0 };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
                 }
@@ -326,10 +427,9 @@ static int leg_cmp(const void *pa, const void *pb)
 
 /* Direction away from node position c along road r from point v, forward
  * (+1) or backward (-1): towards the first point beyond the tolerance. */
-static double leg_angle(const build *B, const double *c, uint32_t v, int dir)
+static double leg_angle(const build *B, const road_look *lk, const double *c, uint32_t v, int dir)
 {
-    uint32_t r = B->vroad[v];
-    size_t lo = B->voff[r], hi = B->voff[r + 1] - 1, w = v;
+    size_t lo = lk->first, hi = lk->last, w = v;
     for (;;) {
         if (dir > 0 ? w >= hi : w <= lo) break;
         w = dir > 0 ? w + 1 : w - 1;
@@ -342,17 +442,31 @@ static double leg_angle(const build *B, const double *c, uint32_t v, int dir)
 
 static int str_eq(const char *a, const char *b) { return a == b || (a && b && strcmp(a, b) == 0); }
 
-/* Roads a and b draw alike: one may continue the other in a stroke. */
-static int draw_alike(const rs_roads *roads, size_t a, size_t b)
+/* Road r's look (the record exists: r < the road count). */
+static void look_of(const rs_roads *roads, size_t r, road_look *L)
 {
-    rs_road_info ia, ib;
-    double wa = 0, wb = 0;
-    if (rs_roads_get_info(roads, a, &ia) || rs_roads_get_info(roads, b, &ib)) return 0;
-    rs_roads_get(roads, a, NULL, &wa, NULL, NULL);
-    rs_roads_get(roads, b, NULL, &wb, NULL, NULL);
-    return wa == wb && ia.road_class == ib.road_class && ia.link == ib.link && ia.lanes == ib.lanes &&
-           ia.oneway == ib.oneway && ia.area == ib.area && str_eq(ia.style, ib.style) &&
-           str_eq(rs_roads_get_attr(roads, a, "junction"), rs_roads_get_attr(roads, b, "junction"));
+    rs_road_info in;
+    memset(&in, 0, sizeof in);
+    memset(L, 0, sizeof *L);
+    rs_roads_get(roads, r, NULL, &L->width, NULL, NULL);
+    if (rs_roads_get_info(roads, r, &in) != RS_OK) in.road_class = RS_CLASS_NONE, in.oneway = RS_ONEWAY_NONE;
+    L->style = in.style;
+    L->junction = rs_roads_get_attr(roads, r, "junction");
+    L->lanes = in.lanes;
+    L->road_class = (uint8_t)in.road_class;
+    L->link = (uint8_t)in.link;
+    L->oneway = (uint8_t)in.oneway;
+    L->area = (uint8_t)in.area;
+    L->two_way = in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
+    L->roundabout = attr_is(roads, r, "junction", "roundabout", NULL);
+    L->priority = (int16_t)rs__road_priority(roads, r);
+}
+
+/* Roads a and b draw alike: one may continue the other in a stroke. */
+static int draw_alike(const road_look *a, const road_look *b)
+{
+    return a->width == b->width && a->road_class == b->road_class && a->link == b->link && a->lanes == b->lanes &&
+           a->oneway == b->oneway && a->area == b->area && str_eq(a->style, b->style) && str_eq(a->junction, b->junction);
 }
 
 static double wrap_angle(double a)
@@ -362,66 +476,55 @@ static double wrap_angle(double a)
     return a;
 }
 
-/* A two-way road: a record drawn against its points is the same road. */
-static int two_way(const rs_roads *roads, size_t r)
-{
-    rs_road_info in;
-    if (rs_roads_get_info(roads, r, &in)) return 0;
-    return in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
-}
-
 /* Can road ends a and b (start or end legs, other roads) continue each
  * other: they draw alike and keep the direction of travel (an end meets a
  * start), or both roads are two-way. */
 static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_leg *b)
 {
-    if (a->road == b->road || !draw_alike(B->roads, a->road, b->road)) return 0;
-    return a->kind != b->kind || two_way(B->roads, a->road);
+    if (a->road == b->road || !draw_alike(&B->look[a->road], &B->look[b->road])) return 0;
+    return a->kind != b->kind || B->look[a->road].two_way;
 }
 
 static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
 
-/* Pair road ends into strokes at every node: link[2 r + e] is the road end
- * (2 q + f; e, f: 0 start, 1 end) that road r's end e continues into. */
-static void link_strokes(const build *B, const rs_network *N, uint32_t *link)
+/* Pair the road ends at a node (its d legs L, sorted) into strokes:
+ * link[2 r + e] is the road end (2 q + f; e, f: 0 start, 1 end) that road
+ * r's end e continues into. */
+static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint32_t *link)
 {
-    for (size_t i = 0; i < N->nnodes; i++) {
-        const rs_network_leg *L = N->leg + N->leg_start[i];
-        uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
-        if (d == 2) {
-            /* two ends: one stroke when they continue each other (a ring's
-             * own two ends at any angle; two records only with a small
-             * deflection, as the issue's rule and the GPU export's have it:
-             * a corner is where a line's pattern may start anew) */
-            if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
-                (L[0].road == L[1].road ? L[0].kind != L[1].kind
-                                        : ends_fit(B, &L[0], &L[1]) &&
-                                              fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION)) {
-                uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
-                link[ea] = eb;
-                link[eb] = ea;
-            }
-            continue;
-        }
-        /* a junction: pairs that deflect little, taken when neither end has another */
-        for (uint32_t a = 0; a < d; a++) {
-            if (!is_end_leg(&L[a])) continue;
-            uint32_t match = NONE, count = 0;
-            for (uint32_t b = 0; b < d; b++)
-                if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
-                    ends_fit(B, &L[a], &L[b]))
-                    match = b, count++;
-            if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
-            uint32_t back = 0;
-            for (uint32_t c = 0; c < d; c++)
-                if (c != match && is_end_leg(&L[c]) &&
-                    fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
-                    back++;
-            if (back != 1) continue;
-            uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+    if (d == 2) {
+        /* two ends: one stroke when they continue each other (a ring's
+         * own two ends at any angle; two records only with a small
+         * deflection, as the issue's rule and the GPU export's have it:
+         * a corner is where a line's pattern may start anew) */
+        if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
+            (L[0].road == L[1].road ? L[0].kind != L[1].kind
+                                    : ends_fit(B, &L[0], &L[1]) &&
+                                          fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION)) {
+            uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
             link[ea] = eb;
             link[eb] = ea;
         }
+        return;
+    }
+    /* a junction: pairs that deflect little, taken when neither end has another */
+    for (uint32_t a = 0; a < d; a++) {
+        if (!is_end_leg(&L[a])) continue;
+        uint32_t match = NONE, count = 0;
+        for (uint32_t b = 0; b < d; b++)
+            if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
+                ends_fit(B, &L[a], &L[b]))
+                match = b, count++;
+        if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
+        uint32_t back = 0;
+        for (uint32_t c = 0; c < d; c++)
+            if (c != match && is_end_leg(&L[c]) &&
+                fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
+                back++;
+        if (back != 1) continue;
+        uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+        link[ea] = eb;
+        link[eb] = ea;
     }
 }
 
@@ -504,6 +607,7 @@ static void build_free(build *B)
     rs__free(ctx, B->rep);
     rs__free(ctx, B->parent);
     rs__free(ctx, B->live);
+    rs__free(ctx, B->look);
     rs__free(ctx, B->inhash);
     rs__free(ctx, B->nodeof);
     rs__free(ctx, B->ps);
@@ -534,10 +638,12 @@ static rs_result load_points(build *B)
     size_t n = B->nroads, nv = 0;
     B->voff = rs__alloc_array(B->ctx, n + 1, sizeof *B->voff);
     B->live = rs__calloc(B->ctx, n ? n : 1, 1);
-    if (!B->voff || !B->live) return RS_ERR_NOMEM;
+    B->look = rs__alloc_array(B->ctx, n ? n : 1, sizeof *B->look);
+    if (!B->voff || !B->live || !B->look) return RS_ERR_NOMEM;
     for (size_t r = 0; r < n; r++) {
         size_t np = 0;
         rs_roads_get(B->roads, r, NULL, NULL, NULL, &np);
+        look_of(B->roads, r, &B->look[r]);
         B->voff[r] = nv;
         nv += np;
     }
@@ -584,45 +690,75 @@ static rs_result load_points(build *B)
             B->s[v] = s;
         }
         B->live[r] = np >= 2 && s > 2 * B->tol;
+        B->look[r].first = (uint32_t)v0;
+        B->look[r].last = (uint32_t)(np ? v0 + np - 1 : v0);
+        B->look[r].length = s;
         for (size_t k = 0; k < np; k++) B->inhash[v0 + k] = B->live[r] && B->rep[v0 + k] == v0 + k;
     }
     return RS_OK;
 }
 
-/* Union the hashed points within the tolerance of each other. */
+/* Union the hashed points within the tolerance of each other: B->parent
+ * of every point is then the lowest point of its group (flat). The pairs
+ * are joined by their places in the hash (mostly one bucket: in the
+ * cache), not by point (ids far apart: a cache miss per step), then each
+ * point is given its group's lowest id. */
 static rs_result cluster_points(build *B)
 {
     pt_hash H;
     memset(&H, 0, sizeof H);
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->inhash, B->nv, B->tol);
-    if (res) {
+    /* cells of 8 tolerances: a point's disc mostly stays in its own cell
+     * (a neighbour cell is a random bucket: a cache miss when it holds
+     * points, if only of other cells); at least 2^-40 of the largest
+     * coordinate, so a disc's rounding margin spans at most 2 cells a side
+     * (else 1e18 m coordinates made a point probe millions of cells) */
+    double tol = B->tol, big = 0;
+    for (size_t v = 0; v < B->nv; v++)
+        if (B->inhash[v]) {
+            double ax = fabs(B->xy[2 * v]), ay = fabs(B->xy[2 * v + 1]);
+            if (ax > big && ax <= DBL_MAX) big = ax;
+            if (ay > big && ay <= DBL_MAX) big = ay;
+        }
+    double cell = fmax(8 * tol, big * 0x1p-40);
+    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
+    size_t count = H.start ? H.start[H.mask + 1] : 0;
+    uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
+    uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
+    if (!up || !low) {
         hash_free(B->ctx, &H);
-        return res;
+        rs__free(B->ctx, up);
+        rs__free(B->ctx, low);
+        return RS_ERR_NOMEM;
     }
-    /* points in bucket order: the buckets around one are mostly in the
-     * cache lines just read (the union does not depend on the order) */
-    for (size_t i = 0; i < H.start[H.mask + 1]; i++) {
-        uint32_t v = H.ids[i];
-        size_t vend = 0;
-        const double *p = H.pxy + 2 * i;
-        int64_t cx = cell_of(p[0], B->tol), cy = cell_of(p[1], B->tol);
-        /* the disc of radius tol around p meets its cell and the neighbours
-         * on the nearer side in x and in y: 2 x 2 cells */
-        int sx = p[0] - (double)cx * B->tol < 0.5 * B->tol ? -1 : 1, sy = p[1] - (double)cy * B->tol < 0.5 * B->tol ? -1 : 1;
-        for (int dy = 0; dy < 2; dy++)
-            for (int dx = 0; dx < 2; dx++) {
-                uint64_t b = bucket_of(&H, cx + dx * sx, cy + dy * sy);
-                if (!(H.occ[b >> 6] >> (b & 63) & 1)) continue;
+    for (size_t i = 0; i < count; i++) up[i] = (uint32_t)i, low[i] = H.ent[i].id;
+    /* points in bucket order: their own bucket is the one being read (the
+     * union does not depend on the order) */
+    for (size_t i = 0; i < count; i++) {
+        const pt_entry *e = &H.ent[i];
+        int64_t c[4], ox = cell_of(e->x, H.cell), oy = cell_of(e->y, H.cell);
+        disc_cells(&H, &e->x, tol, c);
+        for (int64_t cy = c[2]; cy <= c[3]; cy++)
+            for (int64_t cx = c[0]; cx <= c[1]; cx++) {
+                if ((cx != ox || cy != oy) && !occupied(&H, cx, cy)) continue; /* (its own cell holds it) */
+                uint64_t b = bucket_of(&H, cx, cy);
                 for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
-                    uint32_t w = H.ids[q];
-                    if (w <= v || !near2(p, H.pxy + 2 * (size_t)q, B->tol)) continue;
-                    /* points are numbered road by road: w (> v) is of v's road when below its end */
-                    if (vend == 0) vend = B->voff[B->vroad[v] + 1];
-                    if (w < vend && fabs(B->s[v] - B->s[w]) <= 2 * B->tol) continue; /* same_place */
-                    unite(B->parent, v, w);
+                    const pt_entry *f = &H.ent[q];
+                    if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
+                    if (f->road == e->road && fabs(e->s - f->s) <= 2 * tol) continue; /* one place of one road: no node */
+                    unite(up, (uint32_t)i, q);
                 }
             }
     }
+    for (size_t i = 0; i < count; i++) {
+        uint32_t r = find(up, (uint32_t)i);
+        if (H.ent[i].id < low[r]) low[r] = H.ent[i].id;
+    }
+    for (size_t i = 0; i < count; i++) {
+        uint32_t v = H.ent[i].id, l = low[up[i]]; /* (up is flat after the finds above) */
+        if (l != v) B->parent[v] = l;
+    }
+    rs__free(B->ctx, up);
+    rs__free(B->ctx, low);
     hash_free(B->ctx, &H);
     return RS_OK;
 }
@@ -650,34 +786,34 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     size_t n = B.nroads, m = n ? n : 1;
     if ((res = load_points(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK) goto fail;
 
-    /* nodes: clusters holding a road end or two places of roads */
-    uint8_t *qual = rs__calloc(ctx, B.nv ? B.nv : 1, 1);
-    if (!qual) { res = RS_ERR_NOMEM; goto fail; }
+    /* (the union-find is flat: parent[v] is the lowest point of v's group) */
+    /* nodes: groups holding a road end or two places of roads. Every union
+     * joined two places, so a group of two or more points is one; a group
+     * of one is when it is a road's end. */
+    for (size_t v = 0; v < B.nv; v++)
+        if (B.parent[v] != v) B.nodeof[B.parent[v]] = 0;
     for (size_t r = 0; r < n; r++) {
         if (!B.live[r]) continue;
-        qual[find(B.parent, (uint32_t)B.voff[r])] = 1;
-        qual[find(B.parent, B.rep[B.voff[r + 1] - 1])] = 1;
+        B.nodeof[B.parent[B.voff[r]]] = 0;
+        B.nodeof[B.parent[B.rep[B.voff[r + 1] - 1]]] = 0;
     }
+    size_t nn = 0, npass = 0;
     for (size_t v = 0; v < B.nv; v++) {
-        if (!B.inhash[v]) continue;
-        uint32_t root = find(B.parent, (uint32_t)v);
-        if (root != v && !same_place(&B, root, (uint32_t)v)) qual[root] = 1;
+        if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] == 0) B.nodeof[v] = (uint32_t)nn++;
+        else if (B.parent[v] == v) B.nodeof[v] = NONE;
+        npass += B.inhash[v] && (B.parent[v] != v || B.nodeof[v] != NONE);
     }
-    size_t nn = 0;
-    for (size_t v = 0; v < B.nv; v++)
-        if (B.inhash[v] && B.parent[v] == v && qual[v]) B.nodeof[v] = (uint32_t)nn++;
-    rs__free(ctx, qual);
     N->nnodes = nn;
-    size_t npass = 0;
-    for (size_t v = 0; v < B.nv; v++) npass += B.inhash[v] && B.nodeof[find(B.parent, (uint32_t)v)] != NONE;
     if (npass && !(B.ps = rs__alloc_array(ctx, npass, sizeof *B.ps))) { res = RS_ERR_NOMEM; goto fail; }
     B.cps = npass;
     /* passes through points: a node's points by road, runs along the road */
     for (size_t v = 0; v < B.nv; v++) {
         if (!B.inhash[v]) continue;
-        uint32_t nd = B.nodeof[find(B.parent, (uint32_t)v)];
+        uint32_t nd = B.nodeof[B.parent[v]];
         if (nd == NONE) continue;
-        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], 0, nd };
+        const road_look *lk = &B.look[B.vroad[v]];
+        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], B.s[v], 0, nd, (uint32_t)(v - lk->first),
+                   v == lk->first, v == B.rep[lk->last] };
         if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
     }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
@@ -689,9 +825,8 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         pass *p = &B.ps[i];
         if (np > 0) {
             pass *q = &B.ps[np - 1];
-            double qs = q->seg != NONE ? q->s : B.s[q->v1];
-            if (q->node == p->node && q->road == p->road && p->s - qs <= 2 * tol) {
-                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1;
+            if (q->node == p->node && q->road == p->road && p->s - q->s1 <= 2 * tol) {
+                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->s1 = p->s1, q->last = p->last;
                 else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
                 else if (q->seg != NONE && p->dist < q->dist) *q = *p;
                 continue;
@@ -704,7 +839,7 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     size_t nl = 0;
     for (size_t i = 0; i < np; i++) {
         const pass *p = &B.ps[i];
-        int st = p->seg == NONE && p->v0 == B.voff[p->road], en = p->seg == NONE && p->v1 == B.rep[B.voff[p->road + 1] - 1];
+        int st = p->seg == NONE && p->first, en = p->seg == NONE && p->last;
         nl += st || en ? (size_t)st + (size_t)en : 2;
     }
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
@@ -726,6 +861,7 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         goto fail;
     }
     N->nlegs = nl;
+    for (size_t e = 0; e < 2 * n; e++) N->link[e] = NONE;
     for (size_t v = 0; v < B.nv; v++)
         if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] != NONE) {
             rs_network_node *d = &N->node[B.nodeof[v]];
@@ -739,9 +875,10 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
         N->leg_start[nd] = (uint32_t)nl;
         for (j = i; j < np && B.ps[j].node == nd; j++) {
             const pass *p = &B.ps[j];
-            size_t r = p->road, v0 = B.voff[r];
-            int pr = rs__road_priority(roads, r);
-            if (attr_is(roads, r, "junction", "roundabout", NULL)) N->node[nd].control |= RS_NODE_ROUNDABOUT;
+            size_t r = p->road;
+            const road_look *lk = &B.look[r];
+            int pr = lk->priority;
+            if (lk->roundabout) N->node[nd].control |= RS_NODE_ROUNDABOUT;
             rs_network_leg L;
             memset(&L, 0, sizeof L);
             L.road = (uint32_t)r;
@@ -758,37 +895,37 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
                 N->leg[nl++] = L;
                 continue;
             }
-            int st = p->v0 == v0, en = p->v1 == B.rep[B.voff[r + 1] - 1];
-            if (st) {
-                L.kind = RS_LEG_START, L.segment = 0, L.s = 0, L.angle = leg_angle(&B, c, p->v1, 1);
+            if (p->first) {
+                L.kind = RS_LEG_START, L.segment = 0, L.s = 0, L.angle = leg_angle(&B, lk, c, p->v1, 1);
                 N->leg[nl++] = L;
             }
-            if (en) {
-                L.kind = RS_LEG_END, L.segment = (uint32_t)(B.voff[r + 1] - 1 - v0), L.s = B.s[B.voff[r + 1] - 1];
-                L.angle = leg_angle(&B, c, p->v0, -1);
+            if (p->last) {
+                L.kind = RS_LEG_END, L.segment = lk->last - lk->first, L.s = lk->length;
+                L.angle = leg_angle(&B, lk, c, p->v0, -1);
                 N->leg[nl++] = L;
             }
-            if (!st && !en) {
-                L.segment = (uint32_t)(p->v0 - v0), L.s = B.s[p->v0];
-                L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, c, p->v1, 1);
+            if (!p->first && !p->last) {
+                L.segment = p->k0, L.s = p->s;
+                L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, lk, c, p->v1, 1);
                 N->leg[nl++] = L;
-                L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, c, p->v0, -1);
+                L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, lk, c, p->v0, -1);
                 N->leg[nl++] = L;
             }
         }
-    }
-    /* every qualifying node got legs (it holds a live road's point) */
-    N->leg_start[nn] = (uint32_t)nl;
-    for (size_t i = 0; i < nn; i++) {
-        rs_network_leg *L = N->leg + N->leg_start[i];
-        uint32_t d = N->leg_start[i + 1] - N->leg_start[i];
+        /* the node's legs by angle, its major legs and its stroke pairs,
+         * while its legs are in the cache */
+        rs_network_leg *L = N->leg + N->leg_start[nd];
+        uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
         if (d > 1) qsort(L, d, sizeof *L, leg_cmp);
         int best = -1;
         for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
         for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
-        N->node[i].degree = d;
-        N->node[i].kind = d <= 1 ? RS_NODE_END : d == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
+        N->node[nd].degree = d;
+        N->node[nd].kind = d <= 1 ? RS_NODE_END : d == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
+        link_node(&B, L, d, N->link);
     }
+    /* every qualifying node got legs (it holds a live road's point) */
+    N->leg_start[nn] = (uint32_t)nl;
     /* controls from point attributes at a node's points */
     for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
         size_t r = 0, pt = 0;
@@ -806,13 +943,11 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
             f = RS_NODE_CROSSING;
         N->node[nd].control |= f;
     }
-    /* strokes */
+    /* strokes (their links are made above, node by node) */
     for (size_t r = 0; r < n; r++) {
         N->prev[r] = N->next[r] = NONE;
-        N->link[2 * r] = N->link[2 * r + 1] = NONE;
         N->length[r] = B.voff[r + 1] > B.voff[r] ? B.s[B.voff[r + 1] - 1] : 0;
     }
-    link_strokes(&B, N, N->link);
     number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
     N->bytes = sizeof *N + nn * sizeof *N->node + (nn + 1) * sizeof *N->leg_start + N->nlegs * sizeof *N->leg +
                n * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev + sizeof *N->next +
