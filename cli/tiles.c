@@ -201,6 +201,10 @@ typedef struct run {
     uint32_t P, side;   /* halo, and a written tile's side S + 2P */
     int layers;         /* 1, or 2 with --normals (layer 1: the normal map) */
     unsigned threads;   /* the splat's thread count (the normal map's too) */
+    /* workers run: a tile's colour is rendered on the main thread alone (in
+     * bands the render took 2-3x as long on a busy 2-core machine: its threads wait
+     * for cores the workers hold, and the workers wait for the render) */
+    int one_band;
     /* Terrain-only subtrees (docs/tiles.md, "Sparse levels"): a level-zd tile
      * whose area holds no road's reach is rendered directly by dsp, the same
      * splat at T >> (zmax - zd) texels, and its subtree is never rendered. */
@@ -474,6 +478,7 @@ static int splat_rect(run *r, int direct, int layer, int64_t X0, int64_t Y0, uin
     if (layer == 0) {
         cli_splat_job job;
         cli_splat_job_init(&job, sp, &r->a->s, 1);
+        if (r->one_band) job.threads = 1;
         if (direct) job.texels = r->T >> (r->zmax - r->zd);
         job.x0 = (uint32_t)x0, job.y0 = (uint32_t)y0, job.w = cw, job.h = chh;
         job.rgba = r->scratch;
@@ -2289,6 +2294,7 @@ int cli_tiles_main(int argc, char **argv)
     }
     cli_progress_init(&r.prog, "tiles", a.quiet);
     if (pool_start(&r, r.threads > 1 ? r.threads : 0)) goto done;
+    r.one_band = r.pl->nth > 0;
     int bad = visit(&r, 0, 0, 0, 0) || pool_commit(&r, 1);
     cli_progress_done(&r.prog);
     pool_stop(&r, bad);
