@@ -887,8 +887,9 @@ static int pool_start(run *r, unsigned n)
     for (unsigned i = 0; i < n; i++) {
         pl->wa[i].pl = pl;
         pl->wa[i].i = (int)i;
-        if (pthread_create(&pl->th[i], NULL, worker_main, &pl->wa[i]) != 0) {
-            cli_error("cannot start a worker thread: %s", strerror(errno ? errno : EAGAIN));
+        int e = pthread_create(&pl->th[i], NULL, worker_main, &pl->wa[i]);
+        if (e) {
+            cli_error("cannot start a worker thread: %s", strerror(e));
             return 1;
         }
         pl->nth++;
