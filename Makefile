@@ -371,12 +371,12 @@ fuzz:
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $$nocmp -Iinclude $(LIB_INC) fuzz/$$t/fuzz.c $(LIB_SRC) -lm -o $(BUILD)/fuzz-bin/$$t || exit 1; \
 	done
 	@echo "fuzz: demimage (CLI DEM loader + OpenImageIO)"; \
-	for f in $(LIB_SRC) cli/util.c cli/bigalloc.c fuzz/demimage/fuzz.c; do \
-	  o=$(FUZZ_OBJ)/$$(echo $$f | tr / _).o; \
+	objs=; for f in $(LIB_SRC) cli/util.c cli/bigalloc.c fuzz/demimage/fuzz.c; do \
+	  o=$(FUZZ_OBJ)/$$(echo $$f | tr / _).o; objs="$$objs $$o"; \
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -D_POSIX_C_SOURCE=200809L -Iinclude $(LIB_INC) -c $$f -o $$o || exit 1; \
 	done; \
 	$(FUZZ_CXX) -std=c++17 $(FUZZ_FLAGS) $(call fuzz_cmp,demimage) -Iinclude $(OIIO_CFLAGS) -c cli/imageio.cpp -o $(FUZZ_OBJ)/cli_imageio.cpp.o || exit 1; \
-	$(FUZZ_CXX) $(FUZZ_FLAGS) -o $(BUILD)/fuzz-bin/demimage $(FUZZ_OBJ)/*.o $(OIIO_LIBS) -lm || exit 1
+	$(FUZZ_CXX) $(FUZZ_FLAGS) -o $(BUILD)/fuzz-bin/demimage $$objs $(FUZZ_OBJ)/cli_imageio.cpp.o $(OIIO_LIBS) -lm || exit 1
 	@if [ "$(WITH_EXPAT)" = 1 ]; then echo "fuzz: odr (OpenDRIVE reader + expat)"; \
 	  $(FUZZ_CC) -std=c99 $(FUZZ_FLAGS) -D_POSIX_C_SOURCE=200809L -Iinclude $(LIB_INC) fuzz/odr/fuzz.c cli/odr.c $(LIB_SRC) $(EXPAT_LIBS) -lm \
 	    -o $(BUILD)/fuzz-bin/odr || exit 1; fi
