@@ -85,9 +85,17 @@ static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_network
             rs_network_road_stroke(net, recs[j], &q);
             mixed = q.reversed != h.reversed;
         }
-        if (mixed) {
+        if (mixed) { /* every record drawn against another needs lines that look the same both ways */
             if ((r = rs_road_style_ex(ctx, roads, recs[0], &o->style, sty)) != RS_OK) break;
-            if (!ge_lines_mirror(sty)) continue; /* drawn record by record */
+            int alone = !ge_lines_mirror(sty);
+            for (size_t j = 1; j < nrec && !alone && !r; j++) {
+                rs_network_road_stroke(net, recs[j], &q);
+                if (q.reversed == h.reversed) continue;
+                if ((r = rs_road_style_ex(ctx, roads, recs[j], &o->style, sty)) != RS_OK) break;
+                alone = !ge_lines_mirror(sty);
+            }
+            if (r) break;
+            if (alone) continue; /* drawn record by record */
         }
         for (size_t j = 0; j < nrec; j++) {
             rs_network_road_stroke(net, recs[j], &q);

@@ -1617,7 +1617,9 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
          * else each record is drawn alone */
         int alone = 0;
         for (size_t q = 1; net && q < nrec && !alone; q++)
-            alone = net->rev[recs[q]] != net->rev[head] && !bands_mirror(bands + band_start[head], band_start[head + 1] - band_start[head]);
+            alone = net->rev[recs[q]] != net->rev[head] &&
+                    (!bands_mirror(bands + band_start[head], band_start[head + 1] - band_start[head]) ||
+                     !bands_mirror(bands + band_start[recs[q]], band_start[recs[q] + 1] - band_start[recs[q]]));
         for (size_t q0 = 0; q0 < nrec; q0 = alone ? q0 + 1 : nrec) {
             size_t m = 0, q1 = alone ? q0 + 1 : nrec;
             /* runs of records that look alike: where the lanes change along
