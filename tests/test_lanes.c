@@ -463,6 +463,30 @@ static void test_lanes_change(void)
     free(S.rgba);
     free(A.rgba);
     free(B.rgba);
+    /* a two-way record (one lane each way: its lines the same both ways)
+     * going on as a record pointing the other way with 2 of its 3 lanes
+     * backward: the second's lines are its own, not mirrored (each drawn
+     * alone when the records pointing the other way have lines that are
+     * not the same both ways) */
+    static const char rsplit[] = "road a width 10.5 class=secondary area=rural lanes=2\n0 20\n20 20\nend\n"
+                                 "road a width 10.5 class=secondary area=rural lanes=3 lanes:backward=2\n40 20\n20 20\nend\n";
+    static const char rwhole[] = "road a width 10.5 class=secondary area=rural lanes=3 lanes:backward=2\n40 20\n-20 20\nend\n";
+    CHECK(render(rsplit, 61, 41, RS_PROFILE_MUTCD, 1, 0, &S));
+    CHECK(render(rwhole, 61, 41, RS_PROFILE_MUTCD, 1, 0, &B));
+    if (S.rgba && B.rgba) {
+        int worst = 0;
+        for (uint32_t y = 0; y < S.h; y++)
+            for (uint32_t x = 210; x < 390; x++) /* x 21 .. 39 m: the second record */
+                for (int c = 0; c < 3; c++) {
+                    size_t i = ((size_t)y * S.w + x) * 4 + c;
+                    int d = abs((int)S.rgba[i] - (int)B.rgba[i]);
+                    if (d > worst) worst = d;
+                }
+        CHECKF(worst <= 8, "the reversed record's lines %d/255 from its road drawn whole", worst);
+        printf("a reversed record after a two-way one: %d/255 from its road drawn whole\n", worst);
+    }
+    free(S.rgba);
+    free(B.rgba);
 }
 
 /* A footway crossing a road (issue 27 problem 6): the road's edge and
