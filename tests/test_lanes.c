@@ -463,14 +463,14 @@ static void test_lanes_change(void)
     free(S.rgba);
     free(A.rgba);
     free(B.rgba);
-    /* a two-way record (one lane each way: its lines the same both ways)
-     * going on as a record pointing the other way with 2 of its 3 lanes
-     * backward: the second's lines are its own, not mirrored (each drawn
+    /* a two-way record (two lanes each way: its lines the same both ways)
+     * going on as a record pointing the other way with 3 of its 4 lanes
+     * backward (one stroke: the same lane total): the second's lines are its own, not mirrored (each drawn
      * alone when the records pointing the other way have lines that are
      * not the same both ways) */
-    static const char rsplit[] = "road a width 10.5 class=secondary area=rural lanes=2\n0 20\n20 20\nend\n"
-                                 "road a width 10.5 class=secondary area=rural lanes=3 lanes:backward=2\n40 20\n20 20\nend\n";
-    static const char rwhole[] = "road a width 10.5 class=secondary area=rural lanes=3 lanes:backward=2\n40 20\n-20 20\nend\n";
+    static const char rsplit[] = "road a width 14 class=secondary area=rural lanes=4\n0 20\n20 20\nend\n"
+                                 "road a width 14 class=secondary area=rural lanes=4 lanes:backward=3\n40 20\n20 20\nend\n";
+    static const char rwhole[] = "road a width 14 class=secondary area=rural lanes=4 lanes:backward=3\n40 20\n-20 20\nend\n";
     CHECK(render(rsplit, 61, 41, RS_PROFILE_MUTCD, 1, 0, &S));
     CHECK(render(rwhole, 61, 41, RS_PROFILE_MUTCD, 1, 0, &B));
     if (S.rgba && B.rgba) {
