@@ -214,8 +214,16 @@ static void disc_cells(const pt_hash *H, const double *p, double r, int64_t c[4]
     for (int k = 0; k < 2; k++) {
         double m = r * (1 + 1e-9) + fabs(p[k]) * (4 * DBL_EPSILON); /* (not 4 fabs(p): overflow) */
         if (!isfinite(p[k])) m = 0; /* (its own clamped cell) */
-        c[2 * k] = cell_of(p[k] - m, H->cell);
-        c[2 * k + 1] = cell_of(p[k] + m, H->cell);
+        /* a margin past +-DBL_MAX would give an infinite end: clamped to
+         * the largest finite coordinate, not to the last cell (4.6e18
+         * cells to probe from a point at -1.8e308) */
+        double lo = p[k] - m, hi = p[k] + m;
+        if (isfinite(p[k])) {
+            lo = lo >= -DBL_MAX ? lo : -DBL_MAX;
+            hi = hi <= DBL_MAX ? hi : DBL_MAX;
+        }
+        c[2 * k] = cell_of(lo, H->cell);
+        c[2 * k + 1] = cell_of(hi, H->cell);
     }
 }
 
