@@ -204,7 +204,9 @@ rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l)
     if (r) return r;
     if (l->sun_given && !(l->sun_azimuth >= -1e6 && l->sun_azimuth <= 1e6))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "lighting: sun azimuth %g must be finite (degrees)", l->sun_azimuth);
-    if (l->sun_given && !(l->sun_altitude > 0 && l->sun_altitude <= 90))
+    /* (an altitude so small that its sine rounds to 0 is the horizon: the
+     * shading divides by that sine) */
+    if (l->sun_given && !(l->sun_altitude > 0 && l->sun_altitude <= 90 && sin(l->sun_altitude * RS__PI / 180.0) > 0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "lighting: sun altitude %g must be in (0, 90] degrees",
                         l->sun_altitude);
     if (!(l->ambient >= 0 && l->ambient <= 1))
