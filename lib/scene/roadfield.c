@@ -1582,6 +1582,12 @@ static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_
             if (!(xa <= xb && ya <= yb)) continue;
             uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
             const rf_seg *s = &f->seg[T->seg];
+            /* a capsule that stays on the near side of the clip line
+             * (a side road no wider than the road it ends on, near square)
+             * loses nothing there; the flat strip's corners it gains lie on
+             * the through road's own surface, so the union is the same:
+             * nothing to compute again (most T ends of a city) */
+            if (lm_max(T->nx * s->ax + T->ny * s->ay, T->nx * s->bx + T->ny * s->by) + s->r - T->c <= -e) continue;
             /* the segments that can come near a pixel of the box here, once */
             double qx0 = lm_max(T->box[0], bx0) - pix, qx1 = lm_min(T->box[1], bx1) + pix;
             double qy0 = lm_max(T->box[2], by0) - pix, qy1 = lm_min(T->box[3], by1) + pix;
