@@ -96,7 +96,7 @@ int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out)
     o.texels = T;
     o.markings.atlas = atlas;
     o.markings.no_auto = 1;
-    if (rs__markings_build(ctx, dem, roads, &o, &mk) || !mk) goto done;
+    if (rs__markings_build(ctx, dem, roads, &o, NULL, &mk) || !mk) goto done;
     const uint32_t W = (n - 1) * T, H = (n - 1) * T;
     a = calloc((size_t)W * H, sizeof *a);
     err = malloc((size_t)W * H * sizeof *err);

@@ -77,7 +77,7 @@ static int split_equal(const rs__markings *mk, uint32_t W, uint32_t y, const flo
 static int paint_alpha(const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, amap *m)
 {
     rs__markings *mk = NULL;
-    if (rs__markings_build(ctx, dem, roads, o, &mk) != RS_OK || !mk) return -1;
+    if (rs__markings_build(ctx, dem, roads, o, NULL, &mk) != RS_OK || !mk) return -1;
     m->w = (dem->width - 1) * o->texels;
     m->h = (dem->height - 1) * o->texels;
     m->pix = dem->frame.cell_size / o->texels;
@@ -329,7 +329,7 @@ static void test_two_colours(void)
     o.markings.atlas = atlas;
     o.markings.no_auto = 1;
     rs__markings *mk = NULL;
-    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk);
+    CHECK(rs__markings_build(ctx, dem, roads, &o, NULL, &mk) == RS_OK && mk);
     if (!mk) return;
     CHECK_EQ_INT(mk->m[0].tex->nch, 4);
     const uint32_t W = 200;
@@ -628,7 +628,7 @@ static void test_auto(void)
     memset(&o, 0, sizeof o);
     o.texels = 4;
     rs__markings *mk = NULL;
-    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk);
+    CHECK(rs__markings_build(ctx, dem, roads, &o, NULL, &mk) == RS_OK && mk);
     int give = 0, stop = 0, left = 0, right = 0, zebra = 0;
     for (size_t i = 0; mk && i < mk->n; i++) {
         const rs__mk *m = &mk->m[i];
@@ -670,12 +670,12 @@ static void test_auto(void)
     rs_roads *r2 = NULL;
     CHECK(rs_roads_parse(ctx, text2, sizeof text2 - 1, &r2) == RS_OK);
     mk = NULL;
-    CHECK(rs__markings_build(ctx, dem, r2, &o, &mk) == RS_OK && mk);
+    CHECK(rs__markings_build(ctx, dem, r2, &o, NULL, &mk) == RS_OK && mk);
     for (size_t i = 0; mk && i < mk->n; i++) CHECK(strncmp(mk->m[i].ty->name, "zebra", 5) != 0);
     rs__markings_free(ctx, mk);
     o.markings.no_auto = 1;
     mk = (rs__markings *)1;
-    CHECK(rs__markings_build(ctx, dem, roads, &o, &mk) == RS_OK && mk == NULL);
+    CHECK(rs__markings_build(ctx, dem, roads, &o, NULL, &mk) == RS_OK && mk == NULL);
     rs_roads_free(ctx, r2);
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
@@ -695,7 +695,7 @@ static void roundabout_case(const char *text, int nroads, const int *want)
     CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
     rs__placement *pl = NULL;
     size_t n = 0, cap = 0;
-    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, &pl, &n, &cap) == RS_OK);
+    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, NULL, &pl, &n, &cap) == RS_OK);
     int got[8] = { 0 };
     long gb = rs_atlas_find(atlas, "give_way_block");
     for (size_t i = 0; i < n; i++)

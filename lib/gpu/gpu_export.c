@@ -390,7 +390,7 @@ static rs_result road_segments(rs_ctx *ctx, rs_gpu_scene *g, const rs__road_loca
 /* Placements as the road grid makes them (lib/scene/markings.c): the explicit
  * records, then the automatic rules. */
 static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const rs_atlas *atlas, rs__placement **pl, size_t *npl)
+                            const rs_atlas *atlas, const rs_network *net, rs__placement **pl, size_t *npl)
 {
     size_t cap = 0;
     *pl = NULL;
@@ -398,7 +398,7 @@ static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     rs_result r = rs__markings_explicit(ctx, roads, atlas, pl, npl, &cap);
     if (r) return r;
     if (!o->markings.no_auto && rs__markings_auto_possible(roads))
-        return rs__markings_auto(ctx, dem, roads, atlas, &o->style, pl, npl, &cap);
+        return rs__markings_auto(ctx, dem, roads, atlas, &o->style, net, pl, npl, &cap);
     return RS_OK;
 }
 
@@ -516,11 +516,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         /* the fill's priority (lib/scene/styling.c: -1e9 for all when all are equal) */
         rd[30] = (float)rs__road_priority(roads, i);
         /* a car road: a path, footway or cycleway cuts none of its lines (lib/scene/linesym.c) */
-        {
-            rs_road_info in;
-            rd[31] = rs_roads_get_info(roads, i, &in) != RS_OK || !(in.road_class == RS_CLASS_PATH ||
-                     in.road_class == RS_CLASS_FOOTWAY || in.road_class == RS_CLASS_CYCLEWAY) ? 1.0f : 0.0f;
-        }
+        rd[31] = rs__road_non_car(roads, i) ? 0.0f : 1.0f;
         rs__road_local rl;
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) { r = RS_ERR_NOMEM; goto fail; }
         if (tee_of) ge_tee_clips(rd, &rl, tees, tee_of + 2 * i, hw, sty->casing_width, srev[i]);
@@ -591,7 +587,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             atlas = atlas_own;
         }
         size_t npl = 0;
-        if ((r = placements(ctx, dem, roads, &o, atlas, &pl, &npl)) != RS_OK) goto fail_msg;
+        if ((r = placements(ctx, dem, roads, &o, atlas, net, &pl, &npl)) != RS_OK) goto fail_msg;
         g->mark = rs__calloc(ctx, npl ? npl : 1, RS_GPU_MARK_FLOATS * sizeof(float));
         g->ntypes = atlas->n;
         g->types = rs__calloc(ctx, atlas->n ? atlas->n : 1, RS_GPU_TYPE_INTS * sizeof(uint32_t));
@@ -709,7 +705,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!o.style.disable) {
         rs__line_cut *cuts = NULL;
         size_t nc = 0;
-        if ((r = rs__markings_line_cuts(ctx, dem, roads, &o, &cuts, &nc)) != RS_OK) goto fail_msg;
+        if ((r = rs__markings_line_cuts(ctx, dem, roads, &o, net, &cuts, &nc)) != RS_OK) goto fail_msg;
         g->cut = rs__calloc(ctx, 4 * (n ? n : 1) + RS_GPU_CUT_FLOATS * nc, sizeof(float));
         if (!g->cut) {
             rs__free(ctx, cuts);

@@ -43,7 +43,9 @@ typedef struct rs__line_cut {
     double ax, ay, ux, uy, u0, u1, r;
 } rs__line_cut;
 /* The cuts of the automatic markings the splat options place (none when
- * they place none); *out is the caller's (rs__free). */
+ * they place none); *out is the caller's (rs__free). `net`: the network of these roads
+ * (rs_network_build with default options) when the caller has it, else NULL
+ * (built here when needed). */
 rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                                 rs__line_cut **out, size_t *n);
+                                 const rs_network *net, rs__line_cut **out, size_t *n);
 #endif

@@ -1329,9 +1329,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     for (size_t ri = 0; ri < nroads; ri++) {
         const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
         J->nocut[ri] = jc && !strcmp(jc, "no");
-        rs_road_info in;
-        J->car[ri] = rs_roads_get_info(roads, ri, &in) != RS_OK ||
-                     !(in.road_class == RS_CLASS_PATH || in.road_class == RS_CLASS_FOOTWAY || in.road_class == RS_CLASS_CYCLEWAY);
+        J->car[ri] = !rs__road_non_car(roads, ri);
     }
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);

@@ -673,7 +673,7 @@ static rs_result road_local_extended(rs_ctx *ctx, const rs_roads *roads, const r
 }
 
 rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                             rs__markings **out)
+                             const rs_network *net_in, rs__markings **out)
 {
     *out = NULL;
     if (o->markings.disable) return RS_OK;
@@ -692,7 +692,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     size_t npl = 0, cap = 0;
     if (!r) r = rs__markings_explicit(ctx, roads, atlas, &pl, &npl, &cap);
     size_t n_explicit = npl;
-    if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &o->style, &pl, &npl, &cap);
+    if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &o->style, net_in, &pl, &npl, &cap);
     if (!r && npl > ctx->limits.max_points) /* ~0.5 KB each: a total, as for road points */
         r = rs__fail(ctx, RS_ERR_LIMIT, "markings: more than %llu markings (explicit and automatic; the budget is "
                      "rs_limits.max_points)", (unsigned long long)ctx->limits.max_points);
@@ -707,8 +707,10 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
         size_t have_road = SIZE_MAX;
-        rs_network *net = NULL; /* built when a placement reaches past its record */
-        int net_tried = 0;
+        /* the caller's network, else one built when a placement reaches past its record */
+        rs_network *own = NULL;
+        const rs_network *net = net_in && rs_network_road_count(net_in) == rs_roads_count(roads) ? net_in : NULL;
+        int net_tried = net != NULL;
         /* placements road by road (a stable counting sort), so each road's
          * local points are made once however the marks alternate between
          * roads; kept[i]: placement i was placed into mk->m[i] */
@@ -745,7 +747,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
             if (!e && rl.n >= 2 && tx->ax0 <= tx->ax1 && (mk->m[i].slo < 0 || mk->m[i].shi > total)) {
                 if (!net && !net_tried) {
                     net_tried = 1;
-                    if ((e = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) net = NULL;
+                    if ((e = rs_network_build(ctx, roads, NULL, &own)) == RS_OK) net = own;
                 }
                 rs__road_local xl;
                 memset(&xl, 0, sizeof xl);
@@ -775,7 +777,7 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__free(ctx, first);
         rs__free(ctx, kept);
         rs__road_local_free(ctx, &rl);
-        rs_network_free(ctx, net);
+        rs_network_free(ctx, own);
         mk->bytes = sizeof *mk + npl * sizeof *mk->m + pcap * RS__MK_PT * sizeof(double) +
                     mk->ntex * sizeof *mk->tex + tex_bytes;
         size_t npart = 0, partcap = 0, nfp = 0;

@@ -133,9 +133,11 @@ typedef struct rs__markings {
 
 /* Place the road set's `mark` records and (unless o->markings.no_auto) the
  * automatic ones. *out stays NULL when there is nothing to draw or
- * o->markings.disable. */
+ * o->markings.disable. `net`: the network of these roads
+ * (rs_network_build with default options) when the caller has it, else NULL
+ * (built here when needed). */
 rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                             rs__markings **out);
+                             const rs_network *net, rs__markings **out);
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
 
 /* Whether the automatic rules can place anything on these roads (a road
@@ -144,9 +146,12 @@ int rs__markings_auto_possible(const rs_roads *roads);
 
 /* Automatic placement (lib/scene/markings_auto.c): appends to *pl (capacity
  * *cap, count *n). `so`: the style options (profile, default driving
- * side; NULL: defaults). */
+ * side; NULL: defaults). `net`: the network of these roads
+ * (rs_network_build with default options) when the caller has it, else NULL
+ * (built here when needed). */
 rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
-                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap);
+                            const rs_style_options *so, const rs_network *net, rs__placement **pl, size_t *n,
+                            size_t *cap);
 rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t *cap, const rs__placement *p);
 /* The road file's `mark` records as placements (appended to *pl; atlas
  * sizes where a record gives none); a type missing from the atlas is an

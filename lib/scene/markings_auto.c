@@ -75,19 +75,6 @@ typedef struct road_cells {
     uint32_t *start, *ids; /* start: gx * gy + 1 */
 } road_cells;
 
-/* Classes for feet and bikes: no car markings (docs/road-format.md). */
-static int non_car(rs_road_class c)
-{
-    return c == RS_CLASS_PATH || c == RS_CLASS_FOOTWAY || c == RS_CLASS_CYCLEWAY;
-}
-
-static rs_road_class road_class_of(const rs_roads *roads, size_t i)
-{
-    rs_road_info info;
-    rs_roads_get_info(roads, i, &info);
-    return info.road_class;
-}
-
 /* Room for one more of `n` items of `size` bytes in *arr (capacity *cap,
  * doubled, first `first`); 0 when out of memory. */
 static int room_for_one(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first)
@@ -512,8 +499,8 @@ int rs__markings_auto_possible(const rs_roads *roads)
 }
 
 static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
-                           const rs_style_options *so, rs__line_cut **cuts, size_t *ncut, rs__placement **pl,
-                           size_t *n, size_t *cap)
+                           const rs_style_options *so, const rs_network *net_in, rs__line_cut **cuts, size_t *ncut,
+                           rs__placement **pl, size_t *n, size_t *cap)
 {
     size_t nr = rs_roads_count(roads);
     if (!rs__markings_auto_possible(roads)) return RS_OK;
@@ -546,9 +533,11 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
     double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
     if (!r && (!endj || !endh)) r = RS_ERR_NOMEM;
-    /* which records are one street (docs/network.md "Strokes") */
-    rs_network *net = NULL;
-    if (!r) r = rs_network_build(ctx, roads, NULL, &net);
+    /* which records are one street (docs/network.md "Strokes"): the
+     * caller's network, else one of our own */
+    rs_network *own = NULL;
+    const rs_network *net = net_in && rs_network_road_count(net_in) == nr ? net_in : NULL;
+    if (!r && !net && (r = rs_network_build(ctx, roads, NULL, &own)) == RS_OK) net = own;
     A.cont = r ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), sizeof *A.cont);
     A.cont_end = r || !A.cont ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), 1);
     if (!r && (!A.cont || !A.cont_end)) r = RS_ERR_NOMEM;
@@ -559,7 +548,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         rs_road_info ia;
         rs_roads_get(roads, i, NULL, &wa, NULL, NULL);
         rs_roads_get_info(roads, i, &ia);
-        if (non_car(ia.road_class)) continue;
+        if (rs__class_non_car(ia.road_class)) continue; /* no car markings (docs/road-format.md) */
         for (int e = 0; e < 2 && !r; e++) {
             size_t pi = e ? a->n - 1 : 0;
             double x = a->x[pi], y = a->y[pi];
@@ -589,7 +578,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 if (pass == 1 && !(through || meet >= 2)) break;
                 for (size_t c = 0; c < ncand && !r; c++) {
                     size_t j = cand ? cand[c] : c;
-                    if (j == i || A.rl[j].n < 2 || non_car(road_class_of(roads, j))) continue;
+                    if (j == i || A.rl[j].n < 2 || rs__road_non_car(roads, j)) continue;
                     /* the street's other records, except the one going on
                      * here, are no junction (a short record of it may end
                      * within the tolerance) */
@@ -683,7 +672,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
     rs__free(ctx, A.cont);
-    rs_network_free(ctx, net);
+    rs_network_free(ctx, own);
     rs__free(ctx, A.cont_end);
     rs__free(ctx, A.jstart);
     rs__free(ctx, A.jidx);
@@ -693,9 +682,10 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
 }
 
 rs_result rs__markings_auto(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
-                            const rs_style_options *so, rs__placement **pl, size_t *n, size_t *cap)
+                            const rs_style_options *so, const rs_network *net, rs__placement **pl, size_t *n,
+                            size_t *cap)
 {
-    return auto_core(ctx, dem, roads, atlas, so, NULL, NULL, pl, n, cap);
+    return auto_core(ctx, dem, roads, atlas, so, net, NULL, NULL, pl, n, cap);
 }
 
 /* The sizes of the built-in atlas's line and crossing types (tests/tools/
@@ -723,7 +713,7 @@ static rs_result sizes_atlas(rs_ctx *ctx, rs_atlas *a)
 }
 
 rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                                 rs__line_cut **out, size_t *nout)
+                                 const rs_network *net, rs__line_cut **out, size_t *nout)
 {
     *out = NULL;
     *nout = 0;
@@ -738,7 +728,7 @@ rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
     }
     rs__placement *pl = NULL;
     size_t n = 0, cap = 0;
-    if (!r) r = auto_core(ctx, dem, roads, atlas, &o->style, out, nout, &pl, &n, &cap);
+    if (!r) r = auto_core(ctx, dem, roads, atlas, &o->style, net, out, nout, &pl, &n, &cap);
     rs__free(ctx, pl);
     rs__free(ctx, own.t);
     if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");

@@ -59,6 +59,17 @@ int rs__road_priority(const rs_roads *roads, size_t r)
     return pr;
 }
 
+int rs__class_non_car(rs_road_class c)
+{
+    return c == RS_CLASS_PATH || c == RS_CLASS_FOOTWAY || c == RS_CLASS_CYCLEWAY;
+}
+
+int rs__road_non_car(const rs_roads *roads, size_t r)
+{
+    rs_road_info info;
+    return rs_roads_get_info(roads, r, &info) == RS_OK && rs__class_non_car(info.road_class);
+}
+
 /* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
 
 /* A hashed point with what the pair tests read of it, so a candidate costs

@@ -39,6 +39,12 @@ int rs__class_rank(rs_road_class c);
  * priority_road=designated|yes_unposted, + 20 for junction=roundabout
  * (docs/network.md "Priorities"); shared with the automatic markings. */
 int rs__road_priority(const rs_roads *roads, size_t r);
+/* Classes for feet and bikes (path, footway, cycleway): no car markings,
+ * and their surfaces cut no car road's lines; shared with the automatic
+ * markings, the line symbols and the GPU export. rs__road_non_car: road
+ * r's class is one (0 when it has none). */
+int rs__class_non_car(rs_road_class c);
+int rs__road_non_car(const rs_roads *roads, size_t r);
 
 size_t rs__network_bytes(const rs_network *net);
 #endif

@@ -672,7 +672,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     /* the styles look pixels' roads up in the grid's field when it has one */
     /* the network (docs/network.md): strokes carry dashes and surface
      * images across the records a road is split into; read while building
-     * the styles only */
+     * the styles and the markings only */
     rs_network *net = NULL;
     if (!r && !o.style.disable && rs_roads_count(roads) > 0) r = rs_network_build(ctx, roads, NULL, &net);
     /* record ends at a T lose their round caps (docs/network.md "Ends at a T") */
@@ -684,7 +684,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         rs__free(ctx, tees);
     }
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, &g->styling);
-    if (!r) r = rs__markings_build(ctx, dem, roads, &o, &g->markings);
+    if (!r) r = rs__markings_build(ctx, dem, roads, &o, net, &g->markings);
     rs_network_free(ctx, net);
     if (r) {
         rs_road_grid_free(ctx, g);

@@ -251,7 +251,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         /* lane and centre lines stop at the automatic stop lines and zebras */
         rs__line_cut *cuts = NULL;
         size_t ncuts = 0;
-        if ((r = rs__markings_line_cuts(ctx, dem, roads, o, &cuts, &ncuts)) != RS_OK) goto fail_dash;
+        if ((r = rs__markings_line_cuts(ctx, dem, roads, o, net, &cuts, &ncuts)) != RS_OK) goto fail_dash;
         lp.cuts = cuts;
         lp.ncuts = ncuts;
         r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
@@ -296,14 +296,19 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         }
     }
     if (st->any_surface || st->img_of) {
-        /* priorities for the fill lookups, when they differ */
+        /* priorities for the fill lookups, kept when they differ */
+        st->prio = rs__alloc_array(ctx, n ? n : 1, sizeof *st->prio);
+        if (!st->prio) { r = RS_ERR_NOMEM; goto fail_dash; }
         int differ = 0;
-        for (size_t i = 1; i < n && !differ; i++) differ = rs__road_priority(roads, i) != rs__road_priority(roads, 0);
+        for (size_t i = 0; i < n; i++) {
+            st->prio[i] = rs__road_priority(roads, i);
+            differ |= st->prio[i] != st->prio[0];
+        }
         if (differ) {
-            st->prio = rs__alloc_array(ctx, n, sizeof *st->prio);
-            if (!st->prio) { r = RS_ERR_NOMEM; goto fail_dash; }
-            for (size_t i = 0; i < n; i++) st->prio[i] = rs__road_priority(roads, i);
             st->bytes += n * sizeof *st->prio;
+        } else {
+            rs__free(ctx, st->prio);
+            st->prio = NULL;
         }
     }
     if (st->any_surface) {
