@@ -1109,7 +1109,8 @@ fail:
     return build_fail(ctx, f, &b, res);
 }
 
-static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src);
+static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src, const double *extra,
+                           size_t nroads);
 
 rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
                               rs__roadfield **out)
@@ -1159,7 +1160,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
         rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
-    if ((res = tees_widen(ctx, f, src)) != RS_OK) {
+    if ((res = tees_widen(ctx, f, src, extra, nroads)) != RS_OK) {
         rs__roadfield_free(ctx, f);
         return rs__fail(ctx, res, "roadfield: out of memory");
     }
@@ -1246,6 +1247,9 @@ typedef struct rf_tee {
     double nx, ny;         /* the through road's normal, from the leg across */
     double cE, R;          /* n.E, the through road's half width */
     double c;              /* cE + R: keep n.p <= c */
+    uint32_t through;      /* the road it ends on */
+    double G;              /* how far that road's shape in this field reaches past c
+                              (a widened field: its casing's width; else 0) */
     double box[4];         /* x0, x1, y0, y1 (local metres): where the trimmed shape and the capsule differ */
     uint32_t row0;         /* the first grid row of box */
 } rf_tee;
@@ -1586,8 +1590,11 @@ static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_
              * (a side road no wider than the road it ends on, near square)
              * loses nothing there; the flat strip's corners it gains lie on
              * the through road's own surface, so the union is the same:
-             * nothing to compute again (most T ends of a city) */
-            if (lm_max(T->nx * s->ax + T->ny * s->ay, T->nx * s->bx + T->ny * s->by) + s->r - T->c <= -e) continue;
+             * nothing to compute again (most T ends of a city). In a
+             * casing field the through road's shape reaches G past the
+             * line: what the trimming cuts off within G is still covered */
+            if (lm_max(T->nx * s->ax + T->ny * s->ay, T->nx * s->bx + T->ny * s->by) + s->r - T->c <= T->G - e)
+                continue;
             /* the segments that can come near a pixel of the box here, once */
             double qx0 = lm_max(T->box[0], bx0) - pix, qx1 = lm_min(T->box[1], bx1) + pix;
             double qy0 = lm_max(T->box[2], by0) - pix, qy1 = lm_min(T->box[3], by1) + pix;
@@ -1758,6 +1765,8 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
             T->nx = t->nx, T->ny = t->ny;
             T->cE = cE;
             T->R = t->half_width;
+            T->through = t->through;
+            T->G = t->grow >= 0 && t->grow <= 1e300 ? t->grow : 0; /* NaN, inf: 0 */
         }
     }
     if (!m) {
@@ -1776,14 +1785,20 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
 }
 
 /* widen: the source's tees; a casing stops at the through road's surface
- * edge too (beyond it lies the through road's own casing) */
-static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src)
+ * edge too (beyond it lies the through road's own casing, extra[through]
+ * wide: G) */
+static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src, const double *extra,
+                           size_t nroads)
 {
     if (!src->ntee) return RS_OK;
     f->tee = rs__alloc_array(ctx, src->ntee, sizeof *f->tee);
     if (!f->tee) return RS_ERR_NOMEM;
     memcpy(f->tee, src->tee, src->ntee * sizeof *f->tee);
     f->ntee = src->ntee;
+    for (size_t i = 0; i < f->ntee; i++) {
+        rf_tee *T = &f->tee[i];
+        T->G = T->through < nroads ? src->tee[i].G + extra[T->through] : src->tee[i].G;
+    }
     return tees_finish(ctx, f);
 }
 

@@ -51,6 +51,9 @@ typedef struct rs__tee_end {
     uint32_t through;
     double nx, ny;
     double half_width; /* the through road's */
+    double grow;       /* how far the through road's shape in the field given the
+                          ends reaches past its surface edge (its casing's width
+                          in a casing field; 0 when it does not) */
 } rs__tee_end;
 /* The T ends of a network of `roads` (lib/scene/tee_ends.c): one through road
  * passing once through a junction node, every other record ending there

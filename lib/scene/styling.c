@@ -118,12 +118,15 @@ static void put_colour(float *dst, rs_colour c)
 }
 
 /* A field of the styles gets the road grid's T ends (docs/network.md
- * "Ends at a T"). */
-static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__roadfield *f)
+ * "Ends at a T"); extra: the roads' widening in f (a casing field), or
+ * NULL. */
+static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__roadfield *f,
+                            const double *extra)
 {
     rs__tee_end *tees = NULL;
     size_t ntees = 0;
     rs_result r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+    for (size_t i = 0; !r && extra && i < ntees; i++) tees[i].grow = extra[tees[i].through];
     if (!r) r = rs__roadfield_set_tees(ctx, f, roads, tees, ntees);
     rs__free(ctx, tees);
     return r;
@@ -280,7 +283,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                 if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np)) != RS_OK) goto fail_dash;
             }
             if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
-            if ((r = field_tees(ctx, roads, net, st->casing)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->casing, extra)) != RS_OK) goto fail_dash;
         }
         st->bytes += rs__roadfield_bytes(st->casing);
     }
@@ -315,7 +318,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->near = field;
         if (!field) {
             if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near_own)) != RS_OK) goto fail_dash;
-            if ((r = field_tees(ctx, roads, net, st->near_own)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->near_own, NULL)) != RS_OK) goto fail_dash;
             st->near = st->near_own;
             st->bytes += rs__roadfield_bytes(st->near_own);
         }

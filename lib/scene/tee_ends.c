@@ -72,6 +72,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             t->nx = nx;
             t->ny = ny;
             t->half_width = 0.5 * R;
+            t->grow = 0;
         }
     }
     *out = T;
