@@ -232,19 +232,28 @@ static const char *const rsh_fs_src[] = {
     "    if (r1.z >= 0.0 && r1.z != r1.y) cut_add(road_free(p, int(r1.z), e0, e1), prod, zeros, -1.0);\n"
     "    float s, t, ef; vec2 nt, tg;\n"
     "    road_coords(p, k, s, t, nt, tg, ef);\n"
-    /* a path, footway or cycleway cuts no car road's lines (lib/scene/linesym.c;
-     * the list is grouped by road) */
-    "    bool car = texelFetch(u_roadt, 10 * road + 7).w > 0.0;\n"
+    /* a path, footway or cycleway cuts no car road's lines; a car road of
+     * lower rank crossing this one (not a side road of this stroke at a T)
+     * cuts only its lines more than keep from its centre line: its factors
+     * are kept apart (prodL, zerosL) and left out for the inner lines
+     * (lib/scene/linesym.c; the list is grouped by road) */
+    "    vec4 r7 = texelFetch(u_roadt, 10 * road + 7);\n"
+    "    bool car = r7.w > 0.0;\n"
+    "    float prodL = 1.0, keep = max(r0.y - 2.0, 0.0); int zerosL = 0;\n"
     "    if (car) {\n"
-    "        int lr = -1;\n"
+    "        int lr = -1; float st = texelFetch(u_roadt, 10 * road + 6).x;\n"
     "        for (int e = e0; e < e1; e++) {\n"
     "            int b = int(texelFetch(u_seg, 3 * int(texelFetch(u_cseg, e).r) + 1).z);\n"
     "            if (b == lr || b == road) continue;\n"
     "            lr = b;\n"
-    "            if (texelFetch(u_roadt, 10 * b + 7).w > 0.0 || float(b) == r1.y || float(b) == r1.z) continue;\n"
-    "            cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0);\n"
+    "            if (float(b) == r1.y || float(b) == r1.z) continue;\n"
+    "            vec4 b7 = texelFetch(u_roadt, 10 * b + 7);\n"
+    "            if (!(b7.w > 0.0)) { cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0); continue; }\n"
+    "            if (!(b7.z < r7.z)) continue;\n"
+    "            if (r7.y > 0.0) { vec4 b6 = texelFetch(u_roadt, 10 * b + 6); if (b6.y == st || b6.z == st) continue; }\n"
+    "            cut_add(road_free(p, b, e0, e1), prodL, zerosL, 1.0);\n"
     "        }\n"
-    "    }\n"
+    "    }\n",
     /* side roads ending on this road's stroke at a T cut its lines only
      * with their cut-back ends (the list is grouped by road) */
     "    if (texelFetch(u_roadt, 10 * road + 7).y > 0.0) {\n"
@@ -260,10 +269,9 @@ static const char *const rsh_fs_src[] = {
     "            cut_add(road_free_tee(p, b, e0, e1, st, b6, texelFetch(u_roadt, 10 * b + 7).x, tg), prod, zeros, 1.0);\n"
     "        }\n"
     "    }\n"
-    "    float cut = zeros > 0 ? 0.0 : min(prod, 1.0);\n"
+    "    float cut = zeros > 0 ? 0.0 : min(prod, 1.0), cutI = zeros - zerosL > 0 ? 0.0 : min(prod / prodL, 1.0);\n"
     "    vec4 Ft = fp(nt), Fs = fp(tg);\n"
-    "    float base = ef * cut;\n"
-    "    if (!(base > 0.0)) return;\n"
+    "    if (!(ef * max(cut, cutI) > 0.0)) return;\n"
     /* the road's line cuts (stop lines, zebras; lib/scene/markings_auto.c) */
     "    int nr = textureSize(u_roadt) / 10;\n" /* 10 texels per road */
     "    vec4 cr = texelFetch(u_cut, road); int c0 = nr + 2 * int(cr.x), nc = int(cr.y);\n"
@@ -303,7 +311,7 @@ static const char *const rsh_fs_src[] = {
     "            }\n"
     "            cov *= along;\n"
     "        }\n"
-    "        float a = clamp(cov * base, 0.0, 1.0) * col.a;\n"
+    "        float a = clamp(cov * ef * (abs(B0.x) <= keep ? cutI : cut), 0.0, 1.0) * col.a;\n"
     "        S = S * (1.0 - a) + col.rgb * a;\n"
     "    }\n"
     "}\n",

@@ -535,6 +535,70 @@ static void test_footway_crossing(void)
     free(B.rgba);
 }
 
+/* Line paint at pixel (x, y): every channel >= 110 (the road is grey 60,
+ * the grass below 110 in red and blue; a 0.12 m line covers about half
+ * of the pixels it touches). */
+static int is_paint(const img *m, uint32_t x, uint32_t y)
+{
+    const uint8_t *p = m->rgba + ((size_t)y * m->w + x) * 4;
+    return p[0] >= 110 && p[1] >= 110 && p[2] >= 110;
+}
+
+/* A secondary road crossing a rural primary (issue 27 problem 6), with a
+ * shared vertex and without one: the primary keeps its centre line through
+ * the crossing (as drawn alone), its edge lines stop at the two mouths,
+ * and the secondary's centre line stops at the primary's edge. */
+static void test_class_crossing(void)
+{
+    static const char alone[] = "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n";
+    static const char *const crossed[2] = {
+        "road main width 8 class=primary area=rural\n0 20\n39 20\n60 20\nend\n"
+        "road side width 6 class=secondary area=rural\n39 0\n39 20\n39 40\nend\n",
+        "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
+        "road side width 6 class=secondary area=rural\n39 0\n39 40\nend\n",
+    };
+    img A;
+    CHECK(render(alone, 61, 41, RS_PROFILE_RMS, 1, 1, &A));
+    for (int v = 0; v < 2 && A.rgba; v++) {
+        img B;
+        CHECK(render(crossed[v], 61, 41, RS_PROFILE_RMS, 1, 1, &B));
+        if (!B.rgba) continue;
+        /* the primary's centre line over the crossing (x 36..42 m: a dash) */
+        int white = 0, lost = 0, worst = 0;
+        for (uint32_t y = 194; y < 207; y++)
+            for (uint32_t x = 360; x < 420; x++) {
+                if (is_paint(&A, x, y)) white++, lost += !is_paint(&B, x, y);
+                for (int c = 0; c < 3; c++) {
+                    size_t i = ((size_t)y * A.w + x) * 4 + c;
+                    int d = abs((int)A.rgba[i] - (int)B.rgba[i]);
+                    worst = d > worst ? d : worst;
+                }
+            }
+        CHECKF(white >= 80, "variant %d: the centre line alone has %d white pixels in the crossing", v, white);
+        CHECKF(lost == 0 && worst <= 8, "variant %d: centre line %d of %d pixels lost, max %d/255 from alone", v, lost,
+               white, worst);
+        /* the primary's edge lines (|y - 20| in 3.6..4 m) within the mouths
+         * (|x - 39| <= 2.5 m), and the secondary's centre line inside the
+         * primary off its centre line (0.6 <= |y - 20| <= 3.4 m) */
+        int mouth = 0, side = 0, side_out = 0;
+        for (uint32_t x = 365; x < 415; x++)
+            for (uint32_t y = 160; y < 240; y++) {
+                double dy = fabs(((double)y + 0.5) / 10 - 20);
+                if (dy >= 3.6 && is_paint(&B, x, y)) mouth++;
+                if (dy >= 0.6 && dy <= 3.4 && is_paint(&B, x, y)) side++;
+            }
+        for (uint32_t y = 0; y < 150; y++)
+            for (uint32_t x = 380; x < 400; x++) side_out += is_paint(&B, x, y);
+        CHECKF(mouth == 0, "variant %d: %d edge-line pixels across the mouths", v, mouth);
+        CHECKF(side == 0, "variant %d: %d pixels of the secondary's lines inside the primary", v, side);
+        CHECKF(side_out > 30, "variant %d: the secondary's centre line is drawn outside (%d pixels)", v, side_out);
+        printf("class crossing %d: centre line %d/%d kept (max %d/255 from alone), mouths %d, side lines inside %d\n", v,
+               white - lost, white, worst, mouth, side);
+        free(B.rgba);
+    }
+    free(A.rgba);
+}
+
 /* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
 static void mirror_turns(const char *in, char *out, size_t cap)
 {
@@ -854,6 +918,7 @@ int main(void)
     test_markings_split();
     test_lanes_change();
     test_footway_crossing();
+    test_class_crossing();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX

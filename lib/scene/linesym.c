@@ -89,6 +89,7 @@ typedef struct ls_band {
     float rgba[4];
     uint32_t dash0, ndash; /* into L->dash */
     double period, phase;
+    double t;              /* the centre's lateral offset (rs__band) */
 } ls_band;
 
 /* A grid of index cells: gw x gh cells of cmx x cmy metres. */
@@ -687,6 +688,9 @@ typedef struct ls_junc {
     const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
     uint8_t *nocut;        /* per road: junction_cuts=no (its lines uncut, its surface cuts none) */
     uint8_t *car;          /* per road: not a path, footway or cycleway */
+    int *prio;             /* per road: rs__road_priority (NULL: all equal) */
+    double *keep;          /* per road: its lines within this of its centre line run on over
+                              the surface of a lower-ranked car road crossing it */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -856,6 +860,13 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                      * road cuts none of its lines (issue 27: the road's lines
                      * run on over a footway crossing, as over a zebra's) */
                     if (J->car[road] && !J->car[Q->road]) continue;
+                    /* a car road of lower rank crossing this one (not a
+                     * side road at a T: its cut-back copy does that) cuts
+                     * only its lines near its edges, its mouths; the
+                     * centre and lane lines run on (issue 27) */
+                    if (J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
+                        J->prio[Q->road] < J->prio[road] && fabs(L->band[P->band].t) <= J->keep[road])
+                        continue;
                     /* cut every piece so far; a piece that cannot be cut stays */
                     uint32_t nn = 0;
                     ls_piece next[QMAX];
@@ -1265,6 +1276,8 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
     rs__free(ctx, (void *)J->ends);
     rs__free(ctx, J->nocut);
     rs__free(ctx, J->car);
+    rs__free(ctx, J->prio);
+    rs__free(ctx, J->keep);
     memset(J, 0, sizeof *J);
 }
 
@@ -1326,10 +1339,23 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     J->nocut = rs__calloc(ctx, nroads ? nroads : 1, 1);
     J->car = rs__calloc(ctx, nroads ? nroads : 1, 1);
     if (!ends || !J->nocut || !J->car) return RS_ERR_NOMEM;
+    J->prio = rs__alloc_array(ctx, nroads ? nroads : 1, sizeof *J->prio);
+    J->keep = rs__alloc_array(ctx, nroads ? nroads : 1, sizeof *J->keep);
+    if (!J->prio || !J->keep) return RS_ERR_NOMEM;
+    int differ = 0;
     for (size_t ri = 0; ri < nroads; ri++) {
         const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
+        double w = 0;
+        rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
         J->nocut[ri] = jc && !strcmp(jc, "no");
         J->car[ri] = !rs__road_non_car(roads, ri);
+        J->prio[ri] = rs__road_priority(roads, ri);
+        J->keep[ri] = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
+        differ |= J->prio[ri] != J->prio[0];
+    }
+    if (!differ) {
+        rs__free(ctx, J->prio);
+        J->prio = NULL;
     }
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
@@ -1573,6 +1599,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         B->dash0 = d0;
         B->ndash = bands[k].ndash;
         B->phase = bands[k].phase;
+        B->t = bands[k].t;
         B->period = 0;
         for (uint32_t j = 0; j < B->ndash; j++) {
             L->dash[d0 + j] = bands[k].dash[j];
