@@ -1,6 +1,6 @@
 /* Shader render mode (render_shader.h, docs/render.md "Shader mode"):
  * OSMesa core-profile context, the scene in buffer textures, one draw call
- * for the terrain mesh whose fragment shader (cli/render_glsl.h) evaluates
+ * for the terrain mesh whose fragment shader (lib/gpu/glsl.c) evaluates
  * roads, styles and markings per pixel. Built only with -DRS_WITH_OSMESA. */
 #include "render_shader.h"
 
@@ -15,7 +15,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render_glsl.h"
 
 #define RSH_PI 3.14159265358979323846
 
@@ -164,9 +163,19 @@ rsh_renderer *rsh_create(uint32_t width, uint32_t height, char *err, size_t err_
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &r->max_tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    const char *sky_fs = rsh_sky_fs_src;
-    if (!(r->prog = link(r, rsh_vs_src, rsh_fs_src, (int)(sizeof rsh_fs_src / sizeof rsh_fs_src[0]), err, err_size)) ||
-        !(r->sky_prog = link(r, rsh_sky_vs_src, &sky_fs, 1, err, err_size))) {
+    /* the library's GLSL (rs_gpu_glsl): what an embedding host compiles too */
+    size_t nvs = 0, nfs = 0, nsv = 0, nsf = 0;
+    const char *const *vs = rs_gpu_glsl(330, RS_GPU_SHADER_TERRAIN_VERTEX, &nvs);
+    const char *const *fs = rs_gpu_glsl(330, RS_GPU_SHADER_TERRAIN_FRAGMENT, &nfs);
+    const char *const *sv = rs_gpu_glsl(330, RS_GPU_SHADER_SKY_VERTEX, &nsv);
+    const char *const *sf = rs_gpu_glsl(330, RS_GPU_SHADER_SKY_FRAGMENT, &nsf);
+    if (!vs || !fs || !sv || !sf || nvs != 1 || nsv != 1) {
+        set_err(err, err_size, "the library has no GLSL 330 sources");
+        rsh_destroy(r);
+        return NULL;
+    }
+    if (!(r->prog = link(r, vs[0], fs, (int)nfs, err, err_size)) ||
+        !(r->sky_prog = link(r, sv[0], sf, (int)nsf, err, err_size))) {
         rsh_destroy(r);
         return NULL;
     }

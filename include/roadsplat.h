@@ -1079,6 +1079,29 @@ RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_ro
                                      rs_gpu_scene **out);
 RS_API void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *scene);
 
+/* GLSL sources that draw an rs_gpu_scene (docs/embedding.md "The GPU
+ * side", docs/render.md "Shader mode"): the terrain vertex shader (attributes
+ * a_pos at location 0: map frame x east, y down the map, z up, metres; a_nrm
+ * at 1; uniforms u_mvp, u_eye), the terrain fragment shader (the roads per
+ * screen pixel from the scene's arrays bound as buffer textures u_seg,
+ * u_cstart, u_cseg, u_roadt, u_band, u_mark, u_mstart, u_mids, u_types,
+ * u_levels, u_atlas, u_cut; terrain and road colour images u_terrain,
+ * u_road; the uniforms listed at the top of the source), and a sky pair for
+ * perspective views. cli/render_shader.c is a complete host. */
+typedef enum rs_gpu_shader {
+    RS_GPU_SHADER_TERRAIN_VERTEX = 0,
+    RS_GPU_SHADER_TERRAIN_FRAGMENT = 1,
+    RS_GPU_SHADER_SKY_VERTEX = 2,
+    RS_GPU_SHADER_SKY_FRAGMENT = 3
+} rs_gpu_shader;
+/* The source of `which` for GLSL `version` (330: "#version 330 core", the
+ * only one so far) as *count strings, to hand to glShaderSource as they are
+ * (count, strings, NULL lengths: each is NUL-terminated); C compilers need
+ * not take longer literals. Returns NULL with *count = 0 for another
+ * version or shader. Static storage owned by the library: never free it;
+ * safe from any thread. `count` may be NULL. */
+RS_API const char *const *rs_gpu_glsl(uint32_t version, rs_gpu_shader which, size_t *count);
+
 /* ---------------------------------------------------------------------------
  * The classification table (exposed for tests and for renderers that want
  * to do their own blending with the same alpha-maps).

@@ -352,8 +352,46 @@ static void test_repeated_points(void)
     rs_ctx_free(ctx);
 }
 
+/* The library's GLSL (rs_gpu_glsl): every shader of version 330 in parts a
+ * C99 compiler takes, the fragment shader reading every buffer the GPU
+ * export fills; other versions none. (The CLI's shader render compiles and
+ * draws with them: tests/cli_render_test.sh.) */
+static void test_glsl(void)
+{
+    static const char *const bufs[] = { "u_seg", "u_cstart", "u_cseg", "u_roadt", "u_band", "u_mark",
+                                        "u_mstart", "u_mids", "u_types", "u_levels", "u_atlas", "u_cut",
+                                        "u_terrain", "u_road" };
+    for (int w = 0; w < 4; w++) {
+        size_t n = 99, total = 0;
+        const char *const *src = rs_gpu_glsl(330, (rs_gpu_shader)w, &n);
+        CHECK(src != NULL && n >= 1);
+        if (!src) continue;
+        CHECK(!strncmp(src[0], "#version 330 core\n", 18));
+        int has_main = 0;
+        for (size_t k = 0; k < n; k++) {
+            CHECK(src[k] != NULL && strlen(src[k]) > 0 && strlen(src[k]) <= 4095);
+            total += strlen(src[k]);
+            has_main |= strstr(src[k], "void main()") != NULL;
+        }
+        CHECK(has_main);
+        CHECK(total > 100);
+        if (w == RS_GPU_SHADER_TERRAIN_FRAGMENT)
+            for (size_t b = 0; b < sizeof bufs / sizeof bufs[0]; b++) {
+                int found = 0;
+                for (size_t k = 0; k < n; k++) found |= strstr(src[k], bufs[b]) != NULL;
+                CHECKF(found, "the fragment shader never names %s", bufs[b]);
+            }
+    }
+    size_t n = 7;
+    CHECK(rs_gpu_glsl(300, RS_GPU_SHADER_TERRAIN_FRAGMENT, &n) == NULL && n == 0);
+    n = 7;
+    CHECK(rs_gpu_glsl(330, (rs_gpu_shader)4, &n) == NULL && n == 0);
+    CHECK(rs_gpu_glsl(330, RS_GPU_SHADER_TERRAIN_VERTEX, NULL) != NULL);
+}
+
 int main(void)
 {
+    test_glsl();
     test_far_points();
     test_repeated_points();
     test_tee_fields();

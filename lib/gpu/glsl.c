@@ -1,14 +1,14 @@
-/* GLSL 3.30 core sources of the shader render mode (cli/render_shader.c,
- * docs/render.md "Shader mode"). Included by cli/render_shader.c only. The
- * fragment shader evaluates the roads per screen pixel from the buffer
- * textures of rs_gpu_scene (include/roadsplat.h "GPU export"), in the CPU's
- * layer order (lib/splat/overlays.c, lib/splat/composite.c): casings onto the terrain
- * colour T, fill / gradient surfaces, lines, markings onto the road colour
- * S, then C = (1 - R) T + R S. Coverage is the box filter of the pixel's
- * footprint (the parallelogram of dFdx, dFdy of the map position) across
- * each edge: exact for a straight edge, as the CPU's analytic mode. */
-#ifndef RS_RENDER_GLSL_H
-#define RS_RENDER_GLSL_H
+/* GLSL 3.30 core sources of the shader render (rs_gpu_glsl; cli/render_shader.c
+ * is their host, docs/render.md "Shader mode", docs/embedding.md "The GPU
+ * side"). The fragment shader evaluates the roads per screen pixel from the
+ * buffer textures of rs_gpu_scene (include/roadsplat.h "GPU export"), in the
+ * CPU's layer order (lib/splat/overlays.c, lib/splat/composite.c): casings
+ * onto the terrain colour T, fill / gradient surfaces, lines, markings onto
+ * the road colour S, then C = (1 - R) T + R S. Coverage is the box filter of
+ * the pixel's footprint (the parallelogram of dFdx, dFdy of the map
+ * position) across each edge: exact for a straight edge, as the CPU's
+ * analytic mode. Constant data only. */
+#include "internal.h"
 
 static const char rsh_vs_src[] =
     "#version 330 core\n"
@@ -521,4 +521,24 @@ static const char rsh_sky_fs_src[] =
     "    else c = mix(horizon, zenith, sqrt(min(1.0, d.y / 0.7)));\n"
     "    o_col = vec4(c, 1.0);\n"
     "}\n";
-#endif
+
+static const char *const rsh_vs[] = { rsh_vs_src };
+static const char *const rsh_sky_vs[] = { rsh_sky_vs_src };
+static const char *const rsh_sky_fs[] = { rsh_sky_fs_src };
+
+const char *const *rs_gpu_glsl(uint32_t version, rs_gpu_shader which, size_t *count)
+{
+    size_t n = 0;
+    const char *const *src = NULL;
+    if (version == 330) {
+        switch (which) {
+        case RS_GPU_SHADER_TERRAIN_VERTEX: src = rsh_vs, n = 1; break;
+        case RS_GPU_SHADER_TERRAIN_FRAGMENT: src = rsh_fs_src, n = sizeof rsh_fs_src / sizeof rsh_fs_src[0]; break;
+        case RS_GPU_SHADER_SKY_VERTEX: src = rsh_sky_vs, n = 1; break;
+        case RS_GPU_SHADER_SKY_FRAGMENT: src = rsh_sky_fs, n = 1; break;
+        default: break;
+        }
+    }
+    if (count) *count = n;
+    return src;
+}
