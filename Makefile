@@ -398,6 +398,7 @@ sanitize-test:
 install-lib: lib
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR) $(DESTDIR)$(PKGCONFIGDIR)
 	install -m 644 include/roadsplat.h $(DESTDIR)$(INCDIR)/roadsplat.h
+	install -m 644 include/roadsplat_experimental.h $(DESTDIR)$(INCDIR)/roadsplat_experimental.h
 	install -m 644 $(STATIC_LIB) $(DESTDIR)$(LIBDIR)/libroadsplat.a
 	install -m 755 $(SHARED_LIB) $(DESTDIR)$(LIBDIR)/libroadsplat.so.$(VERSION)
 	ln -sf libroadsplat.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME)
@@ -411,7 +412,7 @@ install: install-lib cli
 	install -m 644 docs/roadsplat.1 $(DESTDIR)$(MANDIR)/man1/roadsplat.1
 
 uninstall:
-	rm -f $(DESTDIR)$(INCDIR)/roadsplat.h $(DESTDIR)$(LIBDIR)/libroadsplat.a \
+	rm -f $(DESTDIR)$(INCDIR)/roadsplat.h $(DESTDIR)$(INCDIR)/roadsplat_experimental.h $(DESTDIR)$(LIBDIR)/libroadsplat.a \
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so.$(VERSION) $(DESTDIR)$(LIBDIR)/$(SONAME) \
 	  $(DESTDIR)$(LIBDIR)/libroadsplat.so $(DESTDIR)$(PKGCONFIGDIR)/roadsplat.pc \
 	  $(DESTDIR)$(BINDIR)/roadsplat $(DESTDIR)$(MANDIR)/man1/roadsplat.1 \

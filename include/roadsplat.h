@@ -1102,10 +1102,11 @@ typedef enum rs_gpu_shader {
  * safe from any thread. `count` may be NULL. */
 RS_API const char *const *rs_gpu_glsl(uint32_t version, rs_gpu_shader which, size_t *count);
 
-/* ---------------------------------------------------------------------------
- * The classification table (exposed for tests and for renderers that want
- * to do their own blending with the same alpha-maps).
- * ------------------------------------------------------------------------- */
+/* The tile types of the 8-neighbour mask classification (seed 000's alpha-map
+ * types; the grid statistics count cells by them). The classification table
+ * itself (rs_mask_classify, rs_tile_alpha, rs_alpha_map: for tests and for
+ * renderers that do their own blending with the same alpha-maps) is declared
+ * in roadsplat_experimental.h. */
 typedef enum rs_tile_type {
     RS_TILE_INTERIOR = 0, /* all road (alpha 0) */
     RS_TILE_EDGE = 1,     /* paper type 1: terrain along one side */
@@ -1114,26 +1115,6 @@ typedef enum rs_tile_type {
     RS_TILE_SADDLE = 4,   /* two opposite inner corners (type 2 at rot r and r+2) */
     RS_TILE_TERRAIN = 5   /* road cell too thin to show: all terrain (alpha 1) */
 } rs_tile_type;
-
-/* Mask bit order (SPEC): bit0 N, bit1 NE, bit2 E, bit3 SE, bit4 S, bit5 SW,
- * bit6 W, bit7 NW; set = road. Returns the tile type and its rotation in
- * 90-degree clockwise turns of the canonical tile (0..3). */
-RS_API void rs_mask_classify(uint8_t mask, rs_tile_type *type, int *rotation);
-
-/* Alpha (terrain weight, 0..1) of the tile for `mask` at cell-local point
- * (u, v) in [0,1]^2, u right, v down, for a transition band
- * `transition_cells` wide (a fraction of the cell, not alpha-map pixels;
- * 0 = hard edge). Exact, not sampled from a raster. */
-RS_API double rs_tile_alpha(uint8_t mask, double u, double v, double transition_cells);
-
-/* Alpha-map rasters: (res+1) x (res+1) vertex-centred samples of the
- * canonical tile of `type` (EDGE, INNER or OUTER), as bytes 0..255, with a
- * transition band `transition_px` alpha-map pixels wide (0 = hard edge; at
- * most res/2) and, when jitter_amount > 0 (at most 1), jitter seeded by
- * jitter_seed (any value). `out` holds (res+1)^2 bytes. */
-RS_API rs_result rs_alpha_map(rs_tile_type type, uint32_t res, double transition_px,
-                              uint32_t jitter_seed, double jitter_amount,
-                              uint8_t *out, size_t out_size);
 
 /* == ROAM mesher (lib/roam/roam.c) ============================================ */
 /*

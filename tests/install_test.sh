@@ -33,12 +33,20 @@ check "pkg-config --modversion is the header's version ($ver)" [ "$(pkg-config -
 
 cat > "$T/app.c" <<'C'
 #include <roadsplat.h>
+#include <roadsplat_experimental.h>
 #include <stdio.h>
 int main(void)
 {
     rs_ctx *ctx;
     rs_dem *dem;
     float z[4 * 3] = { 0 };
+    rs_tile_type type;
+    int rot;
+    size_t nfs = 0;
+    /* the GLSL the library ships, and the second header's table */
+    if (!rs_gpu_glsl(330, RS_GPU_SHADER_TERRAIN_FRAGMENT, &nfs) || nfs < 1) return 1;
+    rs_mask_classify(0xFF, &type, &rot);
+    if (type != RS_TILE_INTERIOR) return 1;
     if (rs_ctx_create(NULL, NULL, &ctx) || rs_dem_create(ctx, 4, 3, z, &dem)) return 1;
     printf("%s %u\n", rs_version_string(), rs_dem_width(dem));
     rs_dem_free(ctx, dem);
@@ -47,6 +55,15 @@ int main(void)
 }
 C
 cp "$T/app.c" "$T/app.cpp"
+# both installed headers alone, pedantic, in every C and C++ standard a host may use
+printf '#include <roadsplat.h>\n#include <roadsplat_experimental.h>\nint main(void) { return 0; }\n' >"$T/hdr.c"
+cp "$T/hdr.c" "$T/hdr.cpp"
+for std in c89 c99 c11; do
+    check "headers compile alone: -std=$std -pedantic -Werror" $CC -std=$std -pedantic -Wall -Wextra -Werror -I"$P/include" -c "$T/hdr.c" -o "$T/hdr.o"
+done
+for std in c++11 c++20; do
+    check "headers compile alone: -std=$std -pedantic -Werror" $CXX -std=$std -pedantic -Wall -Wextra -Werror -I"$P/include" -c "$T/hdr.cpp" -o "$T/hdr.o"
+done
 # shellcheck disable=SC2046
 if $CC $SAN -std=c99 -Wall -Werror -o "$T/app_c" "$T/app.c" $(pkg-config --cflags --libs roadsplat) -Wl,-rpath,"$P/lib" \
     2>"$T/cc.log"; then
@@ -87,7 +104,7 @@ mv "$P/lib/roadsplat.off" "$P/lib/roadsplat"
 L=$T/libonly
 if $MAKE --no-print-directory install-lib BUILD="$B" PREFIX="$L" DESTDIR= PKG_CONFIG=false SAN="$SAN" \
     ${OPT:+OPT="$OPT"} >"$T/il.log" 2>&1; then
-    check "install-lib: header, libraries, .pc" sh -c "[ -f '$L/include/roadsplat.h' ] && [ -f '$L/lib/libroadsplat.a' ] &&
+    check "install-lib: headers, libraries, .pc" sh -c "[ -f '$L/include/roadsplat.h' ] && [ -f '$L/include/roadsplat_experimental.h' ] && [ -f '$L/lib/libroadsplat.a' ] &&
         [ -f '$L/lib/libroadsplat.so' ] && grep -qx 'prefix=$L' '$L/lib/pkgconfig/roadsplat.pc'"
     check "install-lib: no CLI" [ ! -e "$L/bin/roadsplat" ]
 else cat "$T/il.log"; bad "make install-lib without OpenImageIO"; fi

@@ -9,7 +9,7 @@
  *   division by zero); work follows the covered area (one 1e9 m wide road of
  *   1,001 vertices, a dilated road on a 10^4 x 10^4 road grid); cancellation
  *   is checked within a road. */
-#include "roadsplat.h"
+#include "roadsplat_experimental.h"
 #include "harness.h"
 #include "timing.h"
 

@@ -1,7 +1,7 @@
 /* The classification table: paper masks, D4 equivariance, seams, monotonicity,
  * for both the exact tile function and the alpha-map rasters the splat uses. */
 #include "harness.h"
-#include "roadsplat.h"
+#include "roadsplat_experimental.h"
 
 #include <stdint.h>
 #include <stdlib.h>

@@ -11,7 +11,7 @@
  * zero bytes) consumed in a fixed order, see next_d() calls below.
  * Findings (abort): an unknown result code, success with a non-finite
  * output value, an object returned on failure, or a sanitizer report. */
-#include "roadsplat.h"
+#include "roadsplat_experimental.h"
 
 #include <math.h>
 #include <stdint.h>

@@ -2,7 +2,7 @@
  * lib/splat.c. */
 #ifndef RS_MASK_H
 #define RS_MASK_H
-#include "roadsplat.h"
+#include "roadsplat_experimental.h"
 
 #define RS__MAX_ALPHA_RES 1024u
 

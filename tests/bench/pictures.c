@@ -3,7 +3,7 @@
  * on a crop of the city scene. Writes uncompressed PNGs itself so that the
  * benchmarks need no image library.  Usage: pictures OUTDIR [IMAGEDIR] */
 #include "groundtruth.h"
-#include "roadsplat.h"
+#include "roadsplat_experimental.h"
 #include "scene_splat.h"
 #include "scenes.h"
 
