@@ -130,6 +130,25 @@ rs_result rs__fail(rs_ctx *ctx, rs_result code, const char *fmt, ...)
     return code;
 }
 
+int rs__tick(rs_ctx *ctx, uint64_t units)
+{
+    rs__progress *p = ctx ? ctx->pg : NULL;
+    if (!p || !p->fn) return 0;
+    if (p->cancelled) return 1;
+    p->done += units;
+    if (p->done < p->next && ++p->polls < RS__TICK_POLLS) return 0;
+    p->polls = 0;
+    p->next = p->done + (p->step ? p->step : 1);
+    if (p->fn(p->user, p->done < p->total ? p->done : p->total, p->total)) p->cancelled = 1;
+    return p->cancelled;
+}
+
+int rs__poll(rs_ctx *ctx)
+{
+    if (ctx && ctx->pg) ctx->pg->polls = RS__TICK_POLLS;
+    return rs__tick(ctx, 0);
+}
+
 void rs__ok(rs_ctx *ctx)
 {
     if (ctx) ctx->message[0] = '\0';

@@ -12,11 +12,37 @@
 #define RS__PRINTF(a, b)
 #endif
 
+/* The progress of the call running on a context (rs__tick): set by a long
+ * call for its duration, so that its inner loops can report and be cancelled
+ * without a parameter through every function. A context serves one thread
+ * at a time, so this is the call's own state, not shared. */
+typedef struct rs__progress {
+    rs_progress_fn fn;
+    void *user;
+    uint64_t done, total, next; /* units done, expected, when to call fn next */
+    uint64_t step;              /* units between calls */
+    uint32_t polls;             /* rs__tick calls since the last callback */
+    int cancelled;
+} rs__progress;
+
 struct rs_ctx {
     rs_allocator alloc;
     rs_limits limits;
     char message[256];
+    rs__progress *pg; /* the running call's progress, or NULL */
 };
+
+/* `units` more of the running call's work done: calls its progress
+ * callback every pg->step units (with done clamped to total), and every
+ * RS__TICK_POLLS calls however few units they add, so that a loop whose
+ * iterations are no units of their own (ticking 0) can still be
+ * cancelled. Returns 1 once the callback asked to stop (the caller then
+ * returns RS_ERR_CANCELLED), else 0; 0 when no call reports. */
+#define RS__TICK_POLLS 256u
+int rs__tick(rs_ctx *ctx, uint64_t units);
+/* rs__tick(ctx, 0) that always calls the callback: between the stages of
+ * a long call. */
+int rs__poll(rs_ctx *ctx);
 
 struct rs_dem {
     uint32_t width, height;

@@ -949,6 +949,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
     double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
     for (size_t i = 0; i + 1 < n; i++) {
+        if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
         double dx = 0.5 * pts[i + 1].x - 0.5 * pts[i].x, dy = 0.5 * pts[i + 1].y - 0.5 * pts[i].y, lh = hypot(dx, dy);
         double ux = dx / lh, uy = dy / lh, len = 2 * lh;
         ls_piece P;
@@ -1375,7 +1376,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         double w = 0;
         size_t m = 0;
         rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
-        rs_result r = road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
+        rs_result r = rs__tick(ctx, 0) ? RS_ERR_CANCELLED : road_local(ctx, roads, ri, p, per_unit, pts, sv, cap, &m);
         if (r) {
             rs__free(ctx, tees);
             rs__free(ctx, tend);
@@ -1496,6 +1497,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         }
         for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
             const ls_surf *Q = &J->sf[k];
+            if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
             double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
             const double U[4] = { Q->u0, Q->u1, Q->u1, Q->u0 }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
             for (int c = 0; c < 4; c++) {
@@ -1637,6 +1639,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         const uint32_t *recs = net ? net->stroke_roads + net->stroke_start[k] : &one;
         size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1;
         uint32_t head = recs[0];
+        if (rs__tick(ctx, nrec)) { res = RS_ERR_CANCELLED; goto fail; }
         if (band_start[head + 1] == band_start[head]) continue;
         /* records drawn both ways need lines that look the same both ways;
          * else each record is drawn alone */
@@ -1761,6 +1764,7 @@ fail:
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");
+    if (res == RS_ERR_CANCELLED) return rs__fail(ctx, res, "cancelled");
     if (over_bytes)
         return rs__fail(ctx, res,
                         "line symbols: the pieces of the roads' lines and dashes and their index take more than "

@@ -724,6 +724,10 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         for (size_t q = 0; q < npl && !r; q++) {
             size_t i = order[q];
             if (pl[i].road != have_road) {
+                if (rs__tick(ctx, 1)) {
+                    r = RS_ERR_CANCELLED;
+                    break;
+                }
                 rs__road_local_free(ctx, &rl);
                 have_road = SIZE_MAX;
                 if (rs__road_local_get(ctx, roads, pl[i].road, dem, &rl)) {

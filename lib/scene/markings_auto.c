@@ -513,7 +513,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     A.rl = rs__calloc(ctx, nr ? nr : 1, sizeof *A.rl);
     if (!A.rl) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory placing markings");
     rs_result r = RS_OK;
-    for (size_t i = 0; i < nr && !r; i++) r = rs__road_local_get(ctx, roads, i, dem, &A.rl[i]);
+    for (size_t i = 0; i < nr && !r; i++)
+        r = rs__tick(ctx, 0) ? RS_ERR_CANCELLED : rs__road_local_get(ctx, roads, i, dem, &A.rl[i]);
     A.box = r ? NULL : rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof(double));
     if (!r && !A.box) r = RS_ERR_NOMEM;
     for (size_t i = 0; i < nr && !r; i++) {
@@ -528,6 +529,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         }
     }
     road_cells G;
+    if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     int grid = !r && road_cells_build(&A, nr, &G);
     /* per road end: junction, its half extent, minor */
     int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
@@ -543,6 +545,10 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     if (!r && (!A.cont || !A.cont_end)) r = RS_ERR_NOMEM;
     for (size_t i = 0; i < nr && !r; i++) {
         const rs__road_local *a = &A.rl[i];
+        if (rs__tick(ctx, 1)) {
+            r = RS_ERR_CANCELLED;
+            break;
+        }
         if (a->n < 2) continue;
         double wa;
         rs_road_info ia;

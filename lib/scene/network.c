@@ -803,7 +803,9 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
     N->nroads = B.nroads;
     N->tol = tol;
     size_t n = B.nroads, m = n ? n : 1;
-    if ((res = load_points(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK) goto fail;
+    if ((res = load_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK ||
+        (res = cluster_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
+        goto fail;
 
     /* (the union-find is flat: parent[v] is the lowest point of v's group) */
     /* nodes: groups holding a road end or two places of roads. Every union
@@ -835,8 +837,11 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
                    v == lk->first, v == B.rep[lk->last] };
         if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
     }
+    if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
+    if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = sort_passes(&B, nn)) != RS_OK) goto fail;
+    if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     /* merge: points of one road in one run; a T beside a pass of its road, or
      * found twice, is dropped */
     size_t np = 0;
@@ -979,6 +984,7 @@ fail:
     build_free(&B);
     rs_network_free(ctx, N);
     if (res == RS_ERR_LIMIT) return rs__fail(ctx, res, "network: more than 2^32 points");
+    if (res == RS_ERR_CANCELLED) return rs__fail(ctx, res, "cancelled");
     return rs__fail(ctx, RS_ERR_NOMEM, "network: out of memory");
 }
 

@@ -883,7 +883,7 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
      * the flags land in the segments in the sequential pass below */
     uint8_t *redundant = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 1);
     if (!redundant) return RS_ERR_NOMEM;
-    rs_result r = holder_scan(ctx, f, cell1, h, redundant);
+    rs_result r = rs__poll(ctx) ? RS_ERR_CANCELLED : holder_scan(ctx, f, cell1, h, redundant);
     if (r != RS_OK) {
         rs__free(ctx, redundant);
         return r;
@@ -946,6 +946,7 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
         for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
     }
     rec_drop(b);
+    if (rs__poll(ctx)) return RS_ERR_CANCELLED;
     rf_holders h;
     memset(&h, 0, sizeof h);
     h.limit = b->work_limit;
@@ -956,7 +957,9 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     b->cell1 = NULL;
     if (res == RS_ERR_LIMIT) b->work_over = 1;
     if (res != RS_OK) return res;
+    if (rs__poll(ctx)) return RS_ERR_CANCELLED;
     if ((res = build_rows(ctx, f)) != RS_OK) return res;
+    if (rs__poll(ctx)) return RS_ERR_CANCELLED;
     build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
                cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
@@ -985,6 +988,7 @@ static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_res
     rec_drop(b);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
+    if (res == RS_ERR_CANCELLED) return rs__fail(ctx, res, "cancelled");
     if (b->work_over)
         return rs__fail(ctx, res,
                         "road field: comparing the segments that share index cells takes more than %llu steps "
@@ -1052,6 +1056,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
         const double *xy = NULL;
         size_t n = 0;
         rs_roads_get(roads, ri, NULL, &w, &xy, &n);
+        if (rs__tick(ctx, 1)) { res = RS_ERR_CANCELLED; goto fail; }
         if (n == 0) continue;
         if (n - 1 > UINT32_MAX) { res = RS_ERR_LIMIT; goto fail; }
         double ax = rs__local_coord(xy[0], p->origin_x, per_unit), ay = rs__local_coord(xy[1], p->origin_y, per_unit);

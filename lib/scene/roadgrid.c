@@ -81,6 +81,7 @@ static void row_range(const rs_road_grid *g, double y0, double y1, int64_t *i0, 
 
 #define PRIM_BATCH 8192
 #define CANCEL_ROWS 256 /* rows between progress calls within a road */
+#define PROGRESS_STEP 64 /* roads between progress calls of the analytic build's stages */
 
 enum { PRIM_CAP, PRIM_BAND, PRIM_DILATE };
 
@@ -668,6 +669,21 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     g->style.styles = NULL; /* borrowed only while building */
     g->marks = o.markings;
     g->stats.bytes = sizeof *g;
+    /* progress of the analytic build's stages, a road per unit each: the
+     * field, the network, the line symbols, the automatic markings' line
+     * cuts and placements (rs__tick in their loops; more than total when
+     * a stage runs twice, fewer when styles are off: the last call says
+     * total) */
+    size_t nroads = rs_roads_count(roads);
+    rs__progress pg;
+    memset(&pg, 0, sizeof pg);
+    pg.fn = o.progress;
+    pg.user = o.progress_user;
+    pg.total = 5 * (uint64_t)nroads + 1;
+    pg.step = PROGRESS_STEP;
+    pg.next = pg.step;
+    rs__progress *pg_outer = ctx->pg;
+    if (o.coverage.edges == RS_EDGES_ANALYTIC) ctx->pg = &pg;
     if (o.coverage.edges == RS_EDGES_ANALYTIC) r = build_field(ctx, dem, roads, o.texels, g);
     /* the styles look pixels' roads up in the grid's field when it has one */
     /* the network (docs/network.md): strokes carry dashes and surface
@@ -675,6 +691,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
      * the styles and the markings only */
     rs_network *net = NULL;
     if (!r && !o.style.disable && rs_roads_count(roads) > 0) r = rs_network_build(ctx, roads, NULL, &net);
+    if (!r && rs__tick(ctx, nroads)) r = RS_ERR_CANCELLED;
     /* record ends at a T lose their round caps (docs/network.md "Ends at a T") */
     if (!r && net && g->field) {
         rs__tee_end *tees = NULL;
@@ -686,8 +703,11 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, &g->styling);
     if (!r) r = rs__markings_build(ctx, dem, roads, &o, net, &g->markings);
     rs_network_free(ctx, net);
+    if (!r && pg.fn && ctx->pg == &pg && pg.fn(pg.user, pg.total, pg.total)) r = RS_ERR_CANCELLED;
+    ctx->pg = pg_outer;
     if (r) {
         rs_road_grid_free(ctx, g);
+        if (r == RS_ERR_CANCELLED) return rs__fail(ctx, r, "cancelled");
         return r;
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;
