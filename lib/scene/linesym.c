@@ -1715,7 +1715,10 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         double *nh = rs__realloc(ctx, L->hpp, 4 * nhpp * sizeof *L->hpp);
         if (nh) L->hpp = nh;
     }
-    for (size_t k = 0; k < L->npc; k++) piece_cells(L, (uint32_t)k, 0);
+    for (size_t k = 0; k < L->npc; k++) {
+        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
+        piece_cells(L, (uint32_t)k, 0);
+    }
     uint64_t lim = UINT32_MAX - 1u;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
     if (!csr_close(L->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; goto fail; }
@@ -1728,7 +1731,10 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     }
     L->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ids);
     if (!L->ids) { res = RS_ERR_NOMEM; goto fail; }
-    for (size_t k = L->npc; k-- > 0;) piece_cells(L, (uint32_t)k, 1);
+    for (size_t k = L->npc; k-- > 0;) {
+        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
+        piece_cells(L, (uint32_t)k, 1);
+    }
     L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
     if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t e = 0; e < total; e++) {

@@ -1156,6 +1156,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
      * each grown by its road's extra half width; the index anew */
     for (size_t k = 0; k < f->nseg; k++) {
         rf_seg *sg = &f->seg[k];
+        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
         *sg = src->seg[k];
         sg->r += extra[sg->road];
         sg->jnext = 0;
