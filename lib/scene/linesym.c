@@ -4,6 +4,7 @@
 #include "network.h"
 #include "lanes.h"
 #include "roadfield.h"
+#include "road_local.h"
 
 #include <float.h>
 #include <math.h>
@@ -618,6 +619,8 @@ static void piece_box(const rs__linesym *L, ls_piece *P, double len, double a, d
 typedef struct ls_vtx {
     double x, y;
 } ls_vtx;
+/* rs__road_local_walk writes them as an array of doubles, stride 2 */
+typedef char ls_vtx_is_two_doubles[sizeof(ls_vtx) == 2 * sizeof(double) ? 1 : -1];
 
 /* Segment i's direction d (unit) in the frame of segment j: (d.u_j, d.n_j). */
 static void in_frame(double dx, double dy, double ux, double uy, double *fu, double *fv)
@@ -1214,22 +1217,10 @@ static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri
         *sv = ns;
         *cap = want;
     }
-    size_t m = m0;
-    double s = m0 ? (*sv)[m0 - 1] : 0;
-    for (size_t i = 0; i < n; i++) {
-        size_t k = rev ? n - 1 - i : i; /* (a record drawn against its points: last to first) */
-        double x = rs__local_coord(xy[2 * k], p->origin_x, per_unit), y = rs__local_coord(xy[2 * k + 1], p->origin_y, per_unit);
-        if (m > 0) {
-            if (x == (*pts)[m - 1].x && y == (*pts)[m - 1].y) continue;
-            s += 2 * hypot(0.5 * x - 0.5 * (*pts)[m - 1].x, 0.5 * y - 0.5 * (*pts)[m - 1].y);
-            if (!(s <= DBL_MAX)) s = DBL_MAX;
-        }
-        (*pts)[m].x = x;
-        (*pts)[m].y = y;
-        (*sv)[m] = s;
-        m++;
-    }
-    *m_out = m;
+    /* (a record drawn against its points: last to first) */
+    rs__local_frame F = { p->origin_x, p->origin_y, per_unit };
+    double *d = (double *)(void *)*pts; /* (x, y) pairs: ls_vtx is two doubles */
+    rs__road_local_walk(roads, ri, rev, &F, d, d + 1, 2, *sv, m_out);
     return RS_OK;
 }
 
@@ -1246,8 +1237,7 @@ static int drop_straight_joint(ls_vtx *pts, double *sv, size_t j, size_t m, doub
     if (!(l2 > 0) || !(dot > 0) || !(dot < l2) || !(fabs(px * dy - py * dx) <= eps * sqrt(l2))) return 0;
     for (size_t k = j; k + 1 < m; k++) {
         pts[k] = pts[k + 1];
-        double s = sv[k - 1] + 2 * hypot(0.5 * pts[k].x - 0.5 * pts[k - 1].x, 0.5 * pts[k].y - 0.5 * pts[k - 1].y);
-        sv[k] = s <= DBL_MAX ? s : DBL_MAX;
+        sv[k] = rs__arc_add(sv[k - 1], rs__arc_len(pts[k - 1].x, pts[k - 1].y, pts[k].x, pts[k].y));
     }
     return 1;
 }
@@ -1395,7 +1385,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         for (size_t i = 0; i + 1 < m; i++) {
             ls_surf Q;
             unit_dir(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, &Q.ux, &Q.uy);
-            double len = 2 * hypot(0.5 * v[i + 1].x - 0.5 * v[i].x, 0.5 * v[i + 1].y - 0.5 * v[i].y), lo, hi;
+            double len = rs__arc_len(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y), lo, hi;
             if (!cut_to_map(v[i].x, v[i].y, Q.ux, Q.uy, len, 2 * hw + L->margin, wmap, hmap, &lo, &hi)) continue;
             Q.ax = v[i].x + lo * Q.ux;
             Q.ay = v[i].y + lo * Q.uy;

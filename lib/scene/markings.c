@@ -21,47 +21,6 @@
 #define MAX_INDEX_ENTRIES (1u << 26)
 #define MAX_INDEX_CELLS (1u << 22)
 
-void rs__road_local_free(rs_ctx *ctx, rs__road_local *r)
-{
-    rs__free(ctx, r->x);
-    rs__free(ctx, r->y);
-    rs__free(ctx, r->s);
-    memset(r, 0, sizeof *r);
-}
-
-rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out)
-{
-    const double *xy = NULL;
-    size_t n = 0;
-    memset(out, 0, sizeof *out);
-    rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
-    double per_unit = rs__local_quantum(dem->frame.cell_size);
-    out->x = rs__alloc_array(ctx, n ? n : 1, sizeof(double));
-    out->y = rs__alloc_array(ctx, n ? n : 1, sizeof(double));
-    out->s = rs__alloc_array(ctx, n ? n : 1, sizeof(double));
-    if (!out->x || !out->y || !out->s) {
-        rs__road_local_free(ctx, out);
-        return RS_ERR_NOMEM;
-    }
-    size_t m = 0;
-    double s = 0;
-    for (size_t k = 0; k < n; k++) {
-        double x = rs__local_coord(xy[2 * k], dem->frame.origin_x, per_unit);
-        double y = rs__local_coord(xy[2 * k + 1], dem->frame.origin_y, per_unit);
-        if (m > 0) {
-            if (x == out->x[m - 1] && y == out->y[m - 1]) continue;
-            s += 2 * hypot(0.5 * x - 0.5 * out->x[m - 1], 0.5 * y - 0.5 * out->y[m - 1]);
-            if (!(s <= DBL_MAX)) s = DBL_MAX;
-        }
-        out->x[m] = x;
-        out->y[m] = y;
-        out->s[m] = s;
-        m++;
-    }
-    out->n = m;
-    return RS_OK;
-}
-
 rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t *cap, const rs__placement *p)
 {
     if (*n == *cap) {

@@ -5,6 +5,7 @@
 #define RS_MARKINGS_H
 #include "internal.h"
 #include "atlas.h"
+#include "road_local.h"
 
 struct rs__piece;
 
@@ -18,14 +19,6 @@ typedef struct rs__placement {
     uint64_t line;         /* road-file line, 0: none */
 } rs__placement;
 
-/* One road in local coordinates: distinct consecutive points and their arc
- * lengths (s summed in double as the road field sums it). */
-typedef struct rs__road_local {
-    double *x, *y, *s;
-    size_t n;
-} rs__road_local;
-rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out);
-void rs__road_local_free(rs_ctx *ctx, rs__road_local *r);
 
 /* Paint-time table of a type (issue 25): the summed-area table S of its
  * level-0 texels (S(j, i) = the sum over texels [0, i) x [0, j)), so that

@@ -519,14 +519,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     if (!r && !A.box) r = RS_ERR_NOMEM;
     for (size_t i = 0; i < nr && !r; i++) {
         double *b = A.box + 4 * i;
-        b[0] = b[1] = INFINITY;
-        b[2] = b[3] = -INFINITY;
-        for (size_t k = 0; k < A.rl[i].n; k++) {
-            if (A.rl[i].x[k] < b[0]) b[0] = A.rl[i].x[k];
-            if (A.rl[i].y[k] < b[1]) b[1] = A.rl[i].y[k];
-            if (A.rl[i].x[k] > b[2]) b[2] = A.rl[i].x[k];
-            if (A.rl[i].y[k] > b[3]) b[3] = A.rl[i].y[k];
-        }
+        b[0] = A.rl[i].x0, b[1] = A.rl[i].y0, b[2] = A.rl[i].x1, b[3] = A.rl[i].y1;
     }
     road_cells G;
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
@@ -642,9 +635,9 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         double w;
         rs_roads_get(roads, ri, NULL, &w, &xy, &np);
         if (pt >= np) continue;
-        double per_unit = rs__local_quantum(dem->frame.cell_size), s = 0;
-        double x = rs__local_coord(xy[2 * pt], dem->frame.origin_x, per_unit);
-        double y = rs__local_coord(xy[2 * pt + 1], dem->frame.origin_y, per_unit);
+        rs__local_frame F = rs__local_frame_of(dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size);
+        double x, y, s = 0;
+        rs__local_point(&F, xy, pt, &x, &y);
         nearest(&A.rl[ri], x, y, &s);
         if (zb >= 0) {
             double m = w / 2 - ZEBRA_MARGIN, len = atlas->t[zb].length;

@@ -18,6 +18,7 @@
  * Everything is ordered by road and point index, so the result does not
  * depend on the hash or on memory addresses. */
 #include "network.h"
+#include "road_local.h"
 
 #include <float.h>
 #include <math.h>
@@ -702,10 +703,8 @@ static rs_result load_points(build *B)
             B->nodeof[v] = NONE;
             int repeat = k > 0 && xy[2 * k] == xy[2 * k - 2] && xy[2 * k + 1] == xy[2 * k - 1];
             B->rep[v] = repeat ? B->rep[v - 1] : (uint32_t)v;
-            if (k > 0) { /* summed as the road field and the line symbols sum it */
-                s += 2 * hypot(0.5 * xy[2 * k] - 0.5 * xy[2 * k - 2], 0.5 * xy[2 * k + 1] - 0.5 * xy[2 * k - 1]);
-                if (!(s <= DBL_MAX)) s = DBL_MAX;
-            }
+            if (k > 0) /* summed as the road field and the line symbols sum it */
+                s = rs__arc_add(s, rs__arc_len(xy[2 * k - 2], xy[2 * k - 1], xy[2 * k], xy[2 * k + 1]));
             B->s[v] = s;
         }
         B->live[r] = np >= 2 && s > 2 * B->tol;

@@ -8,6 +8,7 @@
  * ascending segment order. A query at a point then needs exactly one cell's
  * list: an empty list answers "no road" in O(1). */
 #include "roadfield.h"
+#include "road_local.h"
 
 #include <float.h>
 #include <limits.h>
@@ -332,7 +333,7 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
                     uint32_t seg)
 {
     /* halves: the difference of two finite coordinates cannot overflow */
-    double dxh = 0.5 * bx - 0.5 * ax, dyh = 0.5 * by - 0.5 * ay, lh = hypot(dxh, dyh);
+    double dxh = 0.5 * bx - 0.5 * ax, dyh = 0.5 * by - 0.5 * ay, lh = hypot(dxh, dyh); /* 2 lh: rs__arc_len */
     s->ax = ax; s->ay = ay; s->bx = bx; s->by = by;
     s->xmin = lm_min(ax, bx); s->xmax = lm_max(ax, bx);
     s->ymin = lm_min(ay, by); s->ymax = lm_max(ay, by);
@@ -1050,7 +1051,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
 
     /* Pass 1: local coordinates, arc lengths, counts; keep the segments
      * that reach the grid. */
-    double per_unit = rs__local_quantum(p->cell_size);
+    rs__local_frame F = rs__local_frame_of(p->origin_x, p->origin_y, p->cell_size);
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         const double *xy = NULL;
@@ -1059,15 +1060,13 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
         if (rs__tick(ctx, 1)) { res = RS_ERR_CANCELLED; goto fail; }
         if (n == 0) continue;
         if (n - 1 > UINT32_MAX) { res = RS_ERR_LIMIT; goto fail; }
-        double ax = rs__local_coord(xy[0], p->origin_x, per_unit), ay = rs__local_coord(xy[1], p->origin_y, per_unit);
+        double ax, ay;
+        rs__local_point(&F, xy, 0, &ax, &ay);
         double s = 0;
         size_t nseg = n > 1 ? n - 1 : 1; /* a single point is one zero-length segment */
         for (size_t k = 0; k < nseg; k++) {
             double bx = ax, by = ay;
-            if (n > 1) {
-                bx = rs__local_coord(xy[2 * k + 2], p->origin_x, per_unit);
-                by = rs__local_coord(xy[2 * k + 3], p->origin_y, per_unit);
-            }
+            if (n > 1) rs__local_point(&F, xy, k + 1, &bx, &by);
             rf_seg sg;
             double cax = ax, cay = ay, cbx = bx, cby = by, along = 0;
             /* the reach of this capsule beyond the map, with room to spare */
@@ -1079,15 +1078,11 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
                                     1e6 * (p->width_m + p->height_m + 2 * pad), &along);
             if (along == 0 && cax == ax && cay == ay && cbx == bx && cby == by) {
                 seg_set(&sg, ax, ay, bx, by, 0.5 * w, s, (uint32_t)ri, (uint32_t)k);
-                s += sg.len;
+                s = rs__arc_add(s, sg.len); /* (sg.len is rs__arc_len of the segment) */
             } else {
-                double sfull = 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
                 seg_set(&sg, cax, cay, cbx, cby, 0.5 * w, lm_min(s + along, DBL_MAX), (uint32_t)ri, (uint32_t)k);
-                s += sfull;
+                s = rs__arc_add(s, rs__arc_len(ax, ay, bx, by));
             }
-            /* A road over 1.8e308 m long (points near +-1e308) has no finite
-             * arc length: s saturates at DBL_MAX instead of becoming inf. */
-            if (!(s <= DBL_MAX)) s = DBL_MAX;
             ax = bx;
             ay = by;
             if (!keep) continue;

@@ -6,6 +6,7 @@
 #include "roadgrid.h"
 #include "mask.h"
 #include "roadfield.h"
+#include "road_local.h"
 #include "styling.h"
 #include "markings.h"
 
@@ -446,11 +447,8 @@ static rs_result mark_road(sweep *sw, const double *pts, size_t n, double width,
                            double ox, double oy, double *scratch)
 {
     const rs_road_grid *g = sw->m->g;
-    double per_unit = rs__local_quantum(g->frame.cell_size);
-    for (size_t i = 0; i < n; i++) {
-        scratch[2 * i] = rs__local_coord(pts[2 * i], ox, per_unit);
-        scratch[2 * i + 1] = rs__local_coord(pts[2 * i + 1], oy, per_unit);
-    }
+    rs__local_frame F = rs__local_frame_of(ox, oy, g->frame.cell_size);
+    for (size_t i = 0; i < n; i++) rs__local_point(&F, pts, i, &scratch[2 * i], &scratch[2 * i + 1]);
     const double *xy = scratch;
     double inv = 1.0 / g->c, h = 0.5 * width * inv;
     double hmax = (double)g->gw + (double)g->gh + 2; /* wider covers the whole grid anyway */

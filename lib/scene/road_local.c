@@ -1,0 +1,61 @@
+/* One road's geometry in the local frame (lib/scene/road_local.h). */
+#include "road_local.h"
+
+#include <string.h>
+
+void rs__road_local_walk(const rs_roads *roads, size_t ri, int rev, const rs__local_frame *F, double *x, double *y,
+                         size_t stride, double *s, size_t *m_io)
+{
+    const double *xy = NULL;
+    size_t n = 0, m = *m_io;
+    rs_roads_get(roads, ri, NULL, NULL, &xy, &n);
+    double sv = m ? s[m - 1] : 0;
+    for (size_t i = 0; i < n; i++) {
+        size_t k = rev ? n - 1 - i : i;
+        double px, py;
+        rs__local_point(F, xy, k, &px, &py);
+        if (m > 0) {
+            double qx = x[(m - 1) * stride], qy = y[(m - 1) * stride];
+            if (px == qx && py == qy) continue;
+            sv = rs__arc_add(sv, rs__arc_len(qx, qy, px, py));
+        }
+        x[m * stride] = px;
+        y[m * stride] = py;
+        s[m] = sv;
+        m++;
+    }
+    *m_io = m;
+}
+
+void rs__road_local_free(rs_ctx *ctx, rs__road_local *r)
+{
+    rs__free(ctx, r->x);
+    rs__free(ctx, r->y);
+    rs__free(ctx, r->s);
+    memset(r, 0, sizeof *r);
+}
+
+rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out)
+{
+    size_t n = 0;
+    memset(out, 0, sizeof *out);
+    rs_roads_get(roads, ri, NULL, NULL, NULL, &n);
+    out->x = rs__alloc_array(ctx, n ? n : 1, sizeof(double));
+    out->y = rs__alloc_array(ctx, n ? n : 1, sizeof(double));
+    out->s = rs__alloc_array(ctx, n ? n : 1, sizeof(double));
+    if (!out->x || !out->y || !out->s) {
+        rs__road_local_free(ctx, out);
+        return RS_ERR_NOMEM;
+    }
+    rs__local_frame F = rs__local_frame_of(dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size);
+    rs__road_local_walk(roads, ri, 0, &F, out->x, out->y, 1, out->s, &out->n);
+    out->x0 = out->y0 = INFINITY;
+    out->x1 = out->y1 = -INFINITY;
+    for (size_t k = 0; k < out->n; k++) {
+        if (out->x[k] < out->x0) out->x0 = out->x[k];
+        if (out->y[k] < out->y0) out->y0 = out->y[k];
+        if (out->x[k] > out->x1) out->x1 = out->x[k];
+        if (out->y[k] > out->y1) out->y1 = out->y[k];
+    }
+    return RS_OK;
+}

@@ -1,0 +1,73 @@
+/* Private: one road's geometry in the local frame (docs/design.md "Frames"),
+ * the one place its points, arc lengths and box are made: the road field,
+ * the road grid, the network, the line symbols, the markings, the automatic
+ * markings and the GPU export all read a road through these (issue 27: they
+ * were five copies of the same loop). */
+#ifndef RS_ROAD_LOCAL_H
+#define RS_ROAD_LOCAL_H
+#include "internal.h"
+
+#include <float.h>
+#include <math.h>
+
+/* The local frame of a map: its origin (world coordinates of DEM sample
+ * (0, 0)) and the quantum that local coordinates are rounded to
+ * (rs__local_quantum of its cell size). */
+typedef struct rs__local_frame {
+    double ox, oy, per_unit;
+} rs__local_frame;
+
+static inline rs__local_frame rs__local_frame_of(double origin_x, double origin_y, double cell_size)
+{
+    rs__local_frame F;
+    F.ox = origin_x;
+    F.oy = origin_y;
+    F.per_unit = rs__local_quantum(cell_size);
+    return F;
+}
+
+/* Point k of a road's world points xy (x, y pairs) in local metres. */
+static inline void rs__local_point(const rs__local_frame *F, const double *xy, size_t k, double *x, double *y)
+{
+    *x = rs__local_coord(xy[2 * k], F->ox, F->per_unit);
+    *y = rs__local_coord(xy[2 * k + 1], F->oy, F->per_unit);
+}
+
+/* The length of segment a-b as every part measures it: twice the length of
+ * the halves (the difference of two finite coordinates cannot overflow
+ * then). */
+static inline double rs__arc_len(double ax, double ay, double bx, double by)
+{
+    return 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
+}
+
+/* s + len, at most DBL_MAX (a road over 1.8e308 m long has no finite arc
+ * length: s saturates instead of becoming inf). */
+static inline double rs__arc_add(double s, double len)
+{
+    s += len;
+    return s <= DBL_MAX ? s : DBL_MAX;
+}
+
+/* Road ri's points from local point *m on: a point equal to the one before
+ * it is left out (also the first, when it equals point *m - 1: a stroke's
+ * records one after the other), s running on from s[*m - 1] (0 for the
+ * first point); rev: the road's points last to first. Point i goes to
+ * x[i * stride], y[i * stride] (stride in doubles: separate arrays or an
+ * array of (x, y) pairs) and s[i]; the arrays hold *m + the road's point
+ * count. *m becomes the count. */
+void rs__road_local_walk(const rs_roads *roads, size_t ri, int rev, const rs__local_frame *F, double *x, double *y,
+                         size_t stride, double *s, size_t *m);
+
+/* One road in local coordinates: distinct consecutive points, their arc
+ * lengths and the box of the points (x0 > x1 when there are none). */
+typedef struct rs__road_local {
+    double *x, *y, *s;
+    size_t n;
+    double x0, y0, x1, y1;
+} rs__road_local;
+/* Road ri over dem's frame into *out (the caller's: rs__road_local_free). */
+rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out);
+void rs__road_local_free(rs_ctx *ctx, rs__road_local *r);
+
+#endif
