@@ -361,6 +361,7 @@ void rs__roam_reset_mesh(rs_roam *L)
     L->full_next = 1;
     L->gen++;
     for (uint32_t p = 0; p < L->npx * L->npy; p++) L->pgen[p] = L->gen;
+    for (size_t u = 0; u < (size_t)L->npx * L->npy * L->upp; u++) L->ugen[u] = L->gen;
 }
 
 /* ---- refinement ------------------------------------------------------------ */
