@@ -124,6 +124,9 @@ struct rs_roam {
     uint32_t udepth, upp, usize;    /* depth, units per patch, unit square side (cells) */
     uint32_t *ugen;                 /* per unit: generation of its leaves */
     struct roam_scan *cscan;        /* per node: its cached scan (lib/roam/roam_update.c) */
+    float *c2read;                  /* per node, 2 floats: while partly in view at its last
+                                       scan, the odometer and turn readings until which it
+                                       stays so (node_class, lib/roam/roam_update.c) */
     unsigned char *pvis;            /* per patch: visible at the last update */
     double odo_base;                /* odometer at which the scan records' readings start
                                        (floats: rebased, with a full scan, every 4 km) */

@@ -331,72 +331,6 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
     if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1]);
 }
 
-/* A node's place against the view: 0 when its items are all
- * culled, 1 when they are all in the frustum, 2 in between. An item's
- * bounding sphere (tri_sphere) is centred on its centroid at the middle
- * of the patch's height range, so its centre lies in the cluster's
- * triangle lifted to that height, and its radius is at most the cluster's
- * and at least half the height range: all items are visible when the
- * lifted triangle's corners are inside every plane or outside by less
- * than that half range, all culled when they are further outside one
- * than the cluster's radius (or the patch is culled). */
-#define CLS_UNKNOWN 3
-/* Also the class's own readings (issue 31, third session): the lifted
- * corners' plane values move by at most T + R (vd + T) (above), so the
- * class holds while the odometer stays below *ctr and the turn below
- * *crt: for "all visible" the margin is the smallest lo + hz over the
- * planes, for "all culled" -r - hi of the plane that culls. (+inf for
- * a culled patch, which is scanned in full when it comes back, and for
- * "in between", which has its items' readings.) */
-static int node_class(const upd *u, uint32_t i, double *ctr, double *crt)
-{
-    const rs_roam *L = u->L;
-    const roam_node *nd = &L->nodes[i];
-    *ctr = *crt = INFINITY;
-    if (nd->e == NIL) return 2;
-    uint32_t patch = nd->e >> L->elog;
-    if (!u->vis[patch]) return 0;
-    tri t;
-    node_tri(L, nd, &t);
-    double c[3], r;
-    tri_sphere(L, &t, patch, c, &r);
-    double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
-    double cs = L->cs;
-    double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
-    int part = 0, cls = 1, np = u->v->nplanes;
-    double m = INFINITY;
-    for (int p = 0; p < np; p++) {
-        const double *pl = u->v->planes[p];
-        double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
-        double s0 = a * x0 + b * y0 + base, s1 = a * x1 + b * y1 + base, s2 = a * x2 + b * y2 + base;
-        double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
-        if (s2 < lo) lo = s2;
-        if (s2 > hi) hi = s2;
-        if (hi < -r) { cls = 0; m = -r - hi; break; }
-        if (lo < -hz) part = 1;
-        if (lo + hz < m) m = lo + hz;
-    }
-    if (cls == 1 && part) return 2;
-    /* the farthest lifted corner, and a margin for the rounding */
-    const double *e = u->v->eye;
-    double dz = c[2] - e[2], v2 = 0.0;
-    double xs[3] = { x0, x1, x2 }, ys[3] = { y0, y1, y2 };
-    for (int k = 0; k < 3; k++) {
-        double dx = xs[k] - e[0], dy = ys[k] - e[1], d = dx * dx + dy * dy + dz * dz;
-        if (d > v2) v2 = d;
-    }
-    double vd = sqrt(v2);
-    m -= 1e-9 * (vd + r + 1.0);
-    double tr, rt;
-    margin_split(u, m, vd, &tr, &rt);
-    double eps = 1e-9 * (1.0 + L->odo);
-    *ctr = L->odo + tr * (1.0 - 1e-9) - eps;
-    *crt = L->rot + rt * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
-    return cls;
-}
-
-static double walk(upd *u, uint32_t i, int pcls);
-
 /* A turn reading as stored: rounded down (a reading too early is safe). */
 static float rot_reading(double rr)
 {
@@ -422,6 +356,91 @@ static double reading_get(const rs_roam *L, float f)
 {
     return f < 0.0f ? -1.0 : L->odo_base + (double)f;
 }
+
+/* A node's place against the view: 0 when its items are all
+ * culled, 1 when they are all in the frustum, 2 in between. An item's
+ * bounding sphere (tri_sphere) is centred on its centroid at the middle
+ * of the patch's height range, so its centre lies in the cluster's
+ * triangle lifted to that height, and its radius is at most the cluster's
+ * and at least half the height range: all items are visible when the
+ * lifted triangle's corners are inside every plane or outside by less
+ * than that half range, all culled when they are further outside one
+ * than the cluster's radius (or the patch is culled). */
+#define CLS_UNKNOWN 3
+/* Also the class's own readings (issue 31, third session): the lifted
+ * corners' plane values move by at most T + R (vd + T) (above), so the
+ * class holds while the odometer stays below *ctr and the turn below
+ * *crt: for "all visible" the margin is the smallest lo + hz over the
+ * planes, for "all culled" -r - hi of the plane that culls. (+inf for
+ * a culled patch, which is scanned in full when it comes back, and for
+ * "in between", which has its items' readings.) */
+static int node_class(upd *u, uint32_t i, double *ctr, double *crt)
+{
+    rs_roam *L = u->L;
+    const roam_node *nd = &L->nodes[i];
+    *ctr = *crt = INFINITY;
+    if (nd->e == NIL) { /* no class readings: looked at again every time */
+        L->c2read[2 * (size_t)i] = -1.0f;
+        return 2;
+    }
+    uint32_t patch = nd->e >> L->elog;
+    if (!u->vis[patch]) return 0;
+    tri t;
+    node_tri(L, nd, &t);
+    double c[3], r;
+    tri_sphere(L, &t, patch, c, &r);
+    double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
+    double cs = L->cs;
+    double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
+    int part = 0, cls = 1, np = u->v->nplanes;
+    double m = INFINITY, mout = -INFINITY, mkeep = INFINITY;
+    for (int p = 0; p < np; p++) {
+        const double *pl = u->v->planes[p];
+        double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
+        double s0 = a * x0 + b * y0 + base, s1 = a * x1 + b * y1 + base, s2 = a * x2 + b * y2 + base;
+        double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
+        if (s2 < lo) lo = s2;
+        if (s2 > hi) hi = s2;
+        if (hi < -r) { cls = 0; m = -r - hi; break; }
+        if (lo < -hz) part = 1;
+        if (lo + hz < m) m = lo + hz;
+        /* in between: a corner stays further out than hz of the plane it is
+         * furthest out of, and no plane culls it */
+        if (-hz - lo > mout) mout = -hz - lo;
+        if (hi + r < mkeep) mkeep = hi + r;
+    }
+    if (cls == 1 && part) {
+        cls = 2;
+        m = mout < mkeep ? mout : mkeep;
+    }
+    /* the farthest lifted corner, and a margin for the rounding */
+    const double *e = u->v->eye;
+    double dz = c[2] - e[2], v2 = 0.0;
+    double xs[3] = { x0, x1, x2 }, ys[3] = { y0, y1, y2 };
+    for (int k = 0; k < 3; k++) {
+        double dx = xs[k] - e[0], dy = ys[k] - e[1], d = dx * dx + dy * dy + dz * dz;
+        if (d > v2) v2 = d;
+    }
+    double vd = sqrt(v2);
+    m -= 1e-9 * (vd + r + 1.0);
+    double tr, rt;
+    margin_split(u, m, vd, &tr, &rt);
+    double eps = 1e-9 * (1.0 + L->odo);
+    double ct = L->odo + tr * (1.0 - 1e-9) - eps, cr = L->rot + rt * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
+    if (cls == 2) {
+        /* kept apart: a node in between has its items' readings, and its
+         * children their own classes; these only spare node_class when
+         * its items are due (walk) */
+        L->c2read[2 * (size_t)i] = reading_put(L, ct);
+        L->c2read[2 * (size_t)i + 1] = rot_reading(cr);
+        return 2;
+    }
+    *ctr = ct;
+    *crt = cr;
+    return cls;
+}
+
+static double walk(upd *u, uint32_t i, int pcls);
 
 /* The items at and below node i: its leaves and its diamonds. Returns the
  * smallest recheck reading of the children's subtrees (+inf: none). */
@@ -469,7 +488,12 @@ static double walk(upd *u, uint32_t i, int pcls)
             if (rc < u->rctr) u->rctr = rc;
             return reading_get(L, cs->irc);
         }
-        if (cs->cls != 2) {
+        if (cs->cls == 2) {
+            /* still in between while its class's readings hold */
+            if (cls == CLS_UNKNOWN && L->odo < reading_get(L, L->c2read[2 * (size_t)i])
+                && L->rot < (double)L->c2read[2 * (size_t)i + 1])
+                cls = 2;
+        } else {
             irc = reading_get(L, cs->irc);
             if (cls == CLS_UNKNOWN) cls = node_class(u, i, &ctr, &crt);
             if (cls == cs->cls && (cls == 0 || L->odo < irc)) {
@@ -680,6 +704,8 @@ static void compact_pool(rs_roam *L)
             uint32_t j = map[i];
             roam_node tn = n[i]; n[i] = n[j]; n[j] = tn;
             struct roam_scan ts = L->cscan[i]; L->cscan[i] = L->cscan[j]; L->cscan[j] = ts;
+            float *ci = L->c2read + 2 * (size_t)i, *cj = L->c2read + 2 * (size_t)j, t0 = ci[0], t1 = ci[1];
+            ci[0] = cj[0]; ci[1] = cj[1]; cj[0] = t0; cj[1] = t1;
             uint32_t tp = L->par[i]; L->par[i] = L->par[j]; L->par[j] = tp;
             map[i] = map[j]; map[j] = j;
         }
@@ -695,17 +721,18 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
         struct roam_scan *cs = rs__alloc_array(ctx, L->cap, sizeof *cs);
         unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
-        if (!par || !cs || !pv) {
-            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv);
+        float *c2 = rs__alloc_array(ctx, 2 * (size_t)L->cap, sizeof *c2);
+        if (!par || !cs || !pv || !c2) {
+            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv); rs__free(ctx, c2);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
         for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
-        L->par = par; L->cscan = cs; L->pvis = pv;
+        L->par = par; L->cscan = cs; L->pvis = pv; L->c2read = c2;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs) + (uint64_t)L->npx * L->npy;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs + 2 * sizeof *c2) + (uint64_t)L->npx * L->npy;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -720,6 +747,7 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
     rs__free(ctx, L->cscan);
+    rs__free(ctx, L->c2read);
     rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
