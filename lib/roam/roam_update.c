@@ -228,11 +228,6 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
     return k == 2 ? ek / d : 0.0;
 }
 
-static double item_prio(upd *u, uint32_t node, uint32_t pos)
-{
-    return item_prio_t(u, node, pos, NULL);
-}
-
 static void fill_ent(const rs_roam *L, qent *e, double p, uint32_t node, uint32_t pos)
 {
     const roam_node *nd = &L->nodes[node];
@@ -268,15 +263,19 @@ static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const t
 }
 
 /* Queue the diamond of (node, pos) for a merge when it can merge and its
- * priority (the larger of its two parents': the error once merged) allows. */
-static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
+ * priority (the larger of its two parents': the error once merged) allows.
+ * blk: when (node, pos) is an implicit position of a block being scanned
+ * whole (offer_block), the triangles of its positions in the mesh. */
+static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t, const tri *blk)
 {
     uint32_t N, pp;
     if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
     /* a full scan of a triangle target sees each diamond once; the
      * tolerance's scans see it from both sides, as the two clusters that
-     * hold its parents may be scanned in different frames */
-    if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
+     * hold its parents may be scanned in different frames, but once when
+     * both parents are in the block under scan */
+    if (build && N == node && pp < pos && (u->all || blk)) return;
+    if (build && u->all && N != NIL && N < node) return;
     u->thr = u->mtol;
     double save = u->slack;
     u->slack = INFINITY;
@@ -289,7 +288,7 @@ static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, cons
     }
     if (N != NIL) {
         u->slack = INFINITY;
-        double q = item_prio(u, N, pp);
+        double q = item_prio_t(u, N, pp, blk && N == node ? &blk[pp] : NULL);
         if (!u->all && q > u->mtol) {
             u->slack = save < u->slack ? save : u->slack;
             return;
@@ -310,7 +309,7 @@ static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
 
 static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
 {
-    offer_diamond_t(u, node, pos, build, NULL);
+    offer_diamond_t(u, node, pos, build, NULL, NULL);
 }
 
 /* The leaves of block r below its split positions (cell halves excluded),
@@ -325,10 +324,13 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
     for (uint32_t pos = 2; pos < L->ncut; pos++) {
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
         child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
-        if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
-        else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos]);
     }
-    if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1]);
+    for (uint32_t pos = 2; pos < L->ncut; pos++) {
+        if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue;
+        if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
+        else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos], pt);
+    }
+    if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1], NULL);
 }
 
 /* A turn reading as stored: rounded down (a reading too early is safe). */
@@ -948,18 +950,18 @@ int rs__roam_debug_check(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
         uint32_t N, pp, lc = n[i].lc;
         if (lc == FREE) continue;
         if (lc == NIL) {
-            if (n[i].e != NIL && item_prio(&u, i, 0) > u.tol) { fprintf(stderr, "leaf %u wants split\n", i); bad++; }
+            if (n[i].e != NIL && item_prio_t(&u, i, 0, NULL) > u.tol) { fprintf(stderr, "leaf %u wants split\n", i); bad++; }
             continue;
         }
         if (lc == IMPL) {
             uint32_t rc = n[i].rc;
             for (uint32_t pos = 2; pos < L->ncut; pos++)
-                if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u))) && item_prio(&u, i, pos) > u.tol) {
+                if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u))) && item_prio_t(&u, i, pos, NULL) > u.tol) {
                     fprintf(stderr, "imp leaf %u/%u wants split\n", i, pos); bad++; }
         }
         for (uint32_t pos = lc == IMPL ? 1u : 0u; pos < (lc == IMPL ? L->ncut : 1u); pos++) {
             if (!rs__roam_mergeable(L, i, pos, &N, &pp)) continue;
-            double p = item_prio(&u, i, pos), q = N != NIL ? item_prio(&u, N, pp) : 0;
+            double p = item_prio_t(&u, i, pos, NULL), q = N != NIL ? item_prio_t(&u, N, pp, NULL) : 0;
             if (!(p > u.tol) && !(q > u.tol)) { fprintf(stderr, "missed merge node %u pos %u (lc %u) partner %u/%u prio %g %g\n", i, pos, lc, N, pp, p, q); bad++; }
         }
     }
