@@ -42,8 +42,10 @@ struct roam_scan {
                        is checked again is scanned only when this is due) */
     float rot;      /* turn reading (L->rot, rounded down) at which an item
                        under it may change sides of the frustum */
-    unsigned char cls; /* its class against the view at its last scan */
+    unsigned char cls; /* its class against the view at its last scan
+                          (SCAN_NO_CLASS: none yet) */
 };
+#define SCAN_NO_CLASS 3
 
 typedef struct roam_node {
     uint32_t lc, rc;                /* children (NIL for a leaf) */

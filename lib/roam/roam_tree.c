@@ -91,6 +91,7 @@ static void split(rs_roam *L, uint32_t t)
     if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
         L->par[lc] = L->par[rc] = t;
         L->cscan[lc].rc = L->cscan[rc].rc = -1.0f;
+        L->cscan[lc].cls = L->cscan[rc].cls = SCAN_NO_CLASS;
     }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;

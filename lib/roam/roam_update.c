@@ -368,7 +368,7 @@ static double reading_get(const rs_roam *L, float f)
  * lifted triangle's corners are inside every plane or outside by less
  * than that half range, all culled when they are further outside one
  * than the cluster's radius (or the patch is culled). */
-#define CLS_UNKNOWN 3
+#define CLS_UNKNOWN SCAN_NO_CLASS
 /* Also the class's own readings (issue 31, third session): the lifted
  * corners' plane values move by at most T + R (vd + T) (above), so the
  * class holds while the odometer stays below *ctr and the turn below
@@ -490,12 +490,7 @@ static double walk(upd *u, uint32_t i, int pcls)
             if (rc < u->rctr) u->rctr = rc;
             return reading_get(L, cs->irc);
         }
-        if (cs->cls == 2) {
-            /* still in between while its class's readings hold */
-            if (cls == CLS_UNKNOWN && L->odo < reading_get(L, L->c2read[2 * (size_t)i])
-                && L->rot < (double)L->c2read[2 * (size_t)i + 1])
-                cls = 2;
-        } else {
+        if (cs->cls != 2) {
             irc = reading_get(L, cs->irc);
             if (cls == CLS_UNKNOWN) cls = node_class(u, i, &ctr, &crt);
             if (cls == cs->cls && (cls == 0 || L->odo < irc)) {
@@ -510,6 +505,12 @@ static double walk(upd *u, uint32_t i, int pcls)
             }
         }
     }
+    /* in between while its class's readings hold (they do not depend on
+     * what changed under it: a split or merge only marks the node's
+     * subtree readings; a new node has no class) */
+    if (!u->full && cls == CLS_UNKNOWN && cs->cls == 2 && L->odo < reading_get(L, L->c2read[2 * (size_t)i])
+        && L->rot < (double)L->c2read[2 * (size_t)i + 1])
+        cls = 2;
     if (cls == CLS_UNKNOWN) cls = node_class(u, i, &ctr, &crt);
     double save = u->slack, svtr = u->vtr, svrot = u->vrot, srot = u->rrot, srctr = u->rctr;
     double sctr = u->ctr, scrt = u->crt;
@@ -729,7 +730,7 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; }
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; cs[i].cls = SCAN_NO_CLASS; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
         L->par = par; L->cscan = cs; L->pvis = pv; L->c2read = c2;
