@@ -325,6 +325,19 @@ static float *view_dem(uint32_t W, uint32_t H)
     return z;
 }
 
+/* A landscape on view_dem with VIEW_CS-metre cells, options *o (patch and
+ * unit size); *z and *d for the caller to free. */
+#define VIEW_CS 10.0
+static rs_roam *make_view_roam(rs_ctx *ctx, uint32_t W, uint32_t H, uint32_t patch, uint32_t unit, float **z,
+                               rs_dem **d, rs_roam_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->patch_size = patch;
+    o->unit_size = unit;
+    *z = view_dem(W, H);
+    return *z ? make_f(ctx, *z, W, H, VIEW_CS, 0, o, d) : NULL;
+}
+
 static void test_view(rs_ctx *ctx)
 {
     const uint32_t W = 257, H = 257;
@@ -501,13 +514,11 @@ static void update_refines_flight(rs_ctx *ctx, uint32_t patch, const char *name,
                                   void (*view)(int, uint32_t, double, rs_roam_view *))
 {
     const uint32_t W = 257, H = 257;
-    const double cs = 10.0;
-    float *z = view_dem(W, H);
+    const double cs = VIEW_CS;
+    float *z = NULL;
     rs_dem *d = NULL;
     rs_roam_options o;
-    memset(&o, 0, sizeof o);
-    o.patch_size = patch;
-    rs_roam *up = make_f(ctx, z, W, H, cs, 0, &o, &d), *reb = NULL;
+    rs_roam *up = make_view_roam(ctx, W, H, patch, 0, &z, &d, &o), *reb = NULL;
     CHECK(up && rs_roam_create(ctx, d, &o, &reb) == RS_OK);
     if (!up || !reb) goto out;
     int refines = 1, ok = 1;
@@ -676,17 +687,7 @@ static uint64_t *part_keys(rs_ctx *ctx, rs_roam *r, int unit, uint32_t p, uint32
     *nvert = nv;
     for (size_t t = 0; rr == RS_OK && t < ni; t++)
         if (ix[t] >= nv) rr = RS_ERR_INVALID_ARG; /* an index past the part's vertices */
-    uint64_t *k = rr == RS_OK ? malloc((ni / 3 + 1) * sizeof *k) : NULL;
-    for (size_t t = 0; k && t < ni / 3; t++) {
-        uint64_t s[3];
-        for (int c = 0; c < 3; c++) {
-            const float *q = v + 5 * (size_t)ix[3 * t + (size_t)c];
-            s[c] = (uint64_t)lround(q[1] / cs) * W + (uint64_t)lround(q[0] / cs);
-        }
-        int m = s[0] < s[1] ? (s[0] < s[2] ? 0 : 2) : (s[1] < s[2] ? 1 : 2);
-        k[t] = s[m] << 42 | s[(m + 1) % 3] << 21 | s[(m + 2) % 3];
-    }
-    if (k) qsort(k, ni / 3, sizeof *k, rc_cmp_u64);
+    uint64_t *k = rr == RS_OK ? rc_tri_keys(v, ix, ni / 3, W, cs) : NULL;
     *n = ni / 3;
     free(v); free(ix);
     return k;
@@ -735,14 +736,11 @@ static int keys_conform(const uint64_t *k, size_t n, uint32_t W, uint32_t H)
  * rebuild changes every unit's generation. */
 static void test_units(rs_ctx *ctx, uint32_t W, uint32_t H, uint32_t patch, uint32_t unit, uint32_t want_size)
 {
-    const double cs = 10.0;
-    float *z = view_dem(W, H);
+    const double cs = VIEW_CS;
+    float *z = NULL;
     rs_dem *d = NULL;
     rs_roam_options o;
-    memset(&o, 0, sizeof o);
-    o.patch_size = patch;
-    o.unit_size = unit;
-    rs_roam *r = make_f(ctx, z, W, H, cs, 0, &o, &d);
+    rs_roam *r = make_view_roam(ctx, W, H, patch, unit, &z, &d, &o);
     CHECK(r != NULL);
     if (!r) { free(z); return; }
     rs_roam_stats st;

@@ -15,35 +15,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include "roadsplat.h"
+#include "../../tests/roam_check.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #define REQUIRE(c) do { if (!(c)) __builtin_trap(); } while (0)
 
-
-static int cmp_u64(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return x < y ? -1 : x > y;
-}
-
-/* n triangles as sorted keys of their corner samples, rotated to start at
- * the smallest (NULL: no memory). */
-static uint64_t *tri_keys(const float *v, const uint32_t *idx, size_t n, uint32_t W, double cs)
-{
-    uint64_t *k = malloc((n + 1) * sizeof *k);
-    for (size_t t = 0; k && t < n; t++) {
-        uint64_t q[3];
-        for (int c = 0; c < 3; c++) {
-            const float *p = v + 5 * (size_t)idx[3 * t + (size_t)c];
-            q[c] = (uint64_t)lround(p[1] / cs) * W + (uint64_t)lround(p[0] / cs);
-        }
-        int m = q[0] < q[1] ? (q[0] < q[2] ? 0 : 2) : (q[1] < q[2] ? 1 : 2);
-        k[t] = q[m] << 42 | q[(m + 1) % 3] << 21 | q[(m + 2) % 3];
-    }
-    if (k) qsort(k, n, sizeof *k, cmp_u64);
-    return k;
-}
 
 /* Extract r's mesh (whole, per patch and per upload unit) and check it. */
 static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double cs, uint8_t opt)
@@ -96,21 +73,21 @@ static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double c
         REQUIRE(sum == st.triangles);
         /* the upload units' triangles are exactly the mesh's */
         REQUIRE(rs_roam_extract(ctx, r, NULL, v, NULL, mv, idx, mi, &nv, &ni) == RS_OK);
-        uint64_t *all = tri_keys(v, idx, ni / 3, W, cs), *cat = malloc((ni / 3 + 1) * sizeof *cat);
+        uint64_t *all = rc_tri_keys(v, idx, ni / 3, W, cs), *cat = malloc((ni / 3 + 1) * sizeof *cat);
         size_t nu = 0;
         for (uint32_t u = 0; all && cat && u < st.units; u++) {
             size_t uv, ui;
             REQUIRE(rs_roam_extract_unit(ctx, r, u, NULL, v, NULL, mv, idx, mi, &uv, &ui) == RS_OK);
             for (size_t k = 0; k < ui; k++) REQUIRE(idx[k] < uv);
             REQUIRE(nu + ui / 3 <= ni / 3);
-            uint64_t *k = tri_keys(v, idx, ui / 3, W, cs);
+            uint64_t *k = rc_tri_keys(v, idx, ui / 3, W, cs);
             if (k) memcpy(cat + nu, k, ui / 3 * sizeof *k);
             nu += ui / 3;
             free(k);
         }
         if (all && cat) {
             REQUIRE(nu == ni / 3);
-            qsort(cat, nu, sizeof *cat, cmp_u64);
+            qsort(cat, nu, sizeof *cat, rc_cmp_u64);
             REQUIRE(memcmp(cat, all, nu * sizeof *cat) == 0);
         }
         REQUIRE(rs_roam_unit_generation(r, st.units) == 0);

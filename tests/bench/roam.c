@@ -504,25 +504,6 @@ static long drive_extract(rs_ctx *ctx, rs_roam *L, const drive_scene *s, int32_t
     return (long)(ni / 3);
 }
 
-/* Triangles (n, indices into 5-float vertices) as sorted keys of their
- * corner samples, rotated to start at the smallest (NULL: no memory). */
-static uint64_t *drive_tri_keys(const float *v, const uint32_t *idx, size_t n, const drive_scene *s, size_t *nk)
-{
-    uint64_t *k = malloc((n + 1) * sizeof *k);
-    *nk = n;
-    for (size_t t = 0; k && t < n; t++) {
-        uint64_t q[3];
-        for (int c = 0; c < 3; c++) {
-            const float *p = v + 5 * (size_t)idx[3 * t + (size_t)c];
-            q[c] = (uint64_t)lround(p[1] / s->cs) * s->W + (uint64_t)lround(p[0] / s->cs);
-        }
-        int m = q[0] < q[1] ? (q[0] < q[2] ? 0 : 2) : (q[1] < q[2] ? 1 : 2);
-        k[t] = q[m] << 42 | q[(m + 1) % 3] << 21 | q[(m + 2) % 3];
-    }
-    if (k) qsort(k, n, sizeof *k, rc_cmp_u64);
-    return k;
-}
-
 /* One scene's drive: landscape A updated frame to frame (pixel tolerance),
  * B rebuilt every frame at the same view (rs_roam_frame), C updated with a
  * triangle target and D rebuilt with it. A's mesh is checked every frame
@@ -630,7 +611,7 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
             if (every) {
                 size_t ni;
                 if (rs_roam_extract(ctx, L[0], NULL, pv, NULL, mv, pi, mi, &nvp, &ni) != RS_OK) o->bad = 1;
-                else wkeys = drive_tri_keys(pv, pi, ni / 3, s, &nwk);
+                else wkeys = rc_tri_keys(pv, pi, nwk = ni / 3, s->W, s->cs);
                 ukeys = malloc((mi / 3 + 1) * sizeof *ukeys);
             }
             all = changed = 0;
@@ -640,8 +621,8 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
                     if (rs_roam_extract_unit(ctx, L[0], u, NULL, pv, NULL, mv, pi, mi, &nvp, &nip) != RS_OK) { o->bad = 1; break; }
                     if (g == ugens[u] && nvp != uverts[u]) o->unit_mismatch++;
                     if (ukeys) {
-                        size_t nk;
-                        uint64_t *k = drive_tri_keys(pv, pi, nip / 3, s, &nk);
+                        size_t nk = nip / 3;
+                        uint64_t *k = rc_tri_keys(pv, pi, nk, s->W, s->cs);
                         if (k && nuk + nk <= mi / 3) memcpy(ukeys + nuk, k, nk * sizeof *k);
                         nuk += nk;
                         free(k);
