@@ -1136,6 +1136,10 @@ typedef struct rs_roam_options {
     uint32_t pool_nodes;  /* node pool size; 0 -> pool_bytes, else automatic */
     uint64_t pool_bytes;  /* pool size in bytes (used when pool_nodes is 0) */
     uint32_t patch_size;  /* patch side in cells, a power of two; 0 -> automatic */
+    uint32_t unit_size;   /* upload units (rs_roam_extract_unit) are the two halves of
+                             squares of this many cells, a power of two; 0 -> 16;
+                             clamped to [4, patch side] (to the patch for patches
+                             of 2 cells or less) */
 } rs_roam_options;
 
 /* Bytes of one pool node (for sizing pool_bytes). */
@@ -1249,6 +1253,8 @@ typedef struct rs_roam_stats {
     uint32_t update_ops;        /* split/merge operations of the last rs_roam_update */
     int update_done;            /* the last rs_roam_update reached its goal (budget not hit) */
     uint64_t bytes;             /* memory held by the landscape */
+    uint32_t unit_size;         /* side of an upload unit's square, cells (rs_roam_options) */
+    uint32_t units;             /* upload units of the landscape (rs_roam_extract_unit) */
 } rs_roam_stats;
 RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
 
@@ -1297,6 +1303,30 @@ RS_API rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *roam, uint32_t patc
                                        const rs_roam_mesh_options *opts, float *vertices, float *normals,
                                        size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
                                        size_t *vertex_count, size_t *index_count);
+/* Upload units: a finer unit than the patch for hosts that re-upload what
+ * changed (the patch stays the unit of meshing and culling). A patch of P
+ * cells is cut into squares of U = stats.unit_size cells; each square's two
+ * halves (the bintree's triangles at depth 2 log2(P / U) below the patch's
+ * roots) are units, 2 (P / U)^2 per patch, stats.units in all, numbered
+ * patch by patch (unit / (2 (P / U)^2) is its patch). A unit holds the
+ * triangles inside its half square, and each triangle larger than a unit
+ * belongs to exactly one unit (the one holding its first corner in the
+ * bintree's order: its leftmost descendant at the units' depth), so the
+ * units' triangles together are exactly rs_roam_extract's; many units are
+ * empty on a coarse mesh. Generation of unit u's triangles: as
+ * rs_roam_patch_generation (a split or merge of a leaf in it changes it;
+ * rs_roam_frame, rs_roam_refine_* and rs_roam_set_dem change every unit's);
+ * 0 for a unit out of range. */
+RS_API uint32_t rs_roam_unit_generation(const rs_roam *roam, uint32_t unit);
+/* rs_roam_extract for the triangles of one unit: its own vertex numbering
+ * (vertices on a unit's edge appear in the buffers of every unit that has
+ * them), the same options, order rules and errors; rs_roam_mesh_bound's
+ * counts hold for any unit. RS_ERR_INVALID_ARG for a unit out of range.
+ * The buffers are the caller's, written only up to the returned counts. */
+RS_API rs_result rs_roam_extract_unit(rs_ctx *ctx, rs_roam *roam, uint32_t unit,
+                                      const rs_roam_mesh_options *opts, float *vertices, float *normals,
+                                      size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
+                                      size_t *vertex_count, size_t *index_count);
 /* Seams between DEM tiles. Two landscapes on tiles that share an edge
  * row or column (the same samples on both sides, e.g. columns 0..1024 and
  * 1024..2048 of a larger map) mesh it independently, so their vertices on

@@ -1,5 +1,5 @@
 /* Independent checker for terrain meshes over a W x H grid (used by
- * tests/test_roam.c and tests/bench/roam.c, for roadsplat's meshes and for
+ * tests/test_roam.c, tests/bench/roam.c and fuzz/roam, for roadsplat's meshes and for
  * martini's alike). Vertices are given as grid coordinates plus a height;
  * everything is recomputed here in double, nothing is taken from the mesher. */
 #ifndef RS_ROAM_CHECK_H
@@ -25,6 +25,26 @@ static inline int rc_cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return x < y ? -1 : x > y;
+}
+
+/* n triangles (indices into vertices of 5 floats, x and y in metres, cells
+ * of cs metres, a map W samples wide) as sorted keys of their corner
+ * samples, each rotated to start at the smallest so the winding is kept
+ * (21 bits per sample); NULL when out of memory. The caller frees it. */
+static inline uint64_t *rc_tri_keys(const float *v, const uint32_t *idx, size_t n, uint32_t W, double cs)
+{
+    uint64_t *k = (uint64_t *)malloc((n + 1) * sizeof *k);
+    for (size_t t = 0; k && t < n; t++) {
+        uint64_t q[3];
+        for (int c = 0; c < 3; c++) {
+            const float *p = v + 5 * (size_t)idx[3 * t + (size_t)c];
+            q[c] = (uint64_t)lround(p[1] / cs) * W + (uint64_t)lround(p[0] / cs);
+        }
+        int m = q[0] < q[1] ? (q[0] < q[2] ? 0 : 2) : (q[1] < q[2] ? 1 : 2);
+        k[t] = q[m] << 42 | q[(m + 1) % 3] << 21 | q[(m + 2) % 3];
+    }
+    if (k) qsort(k, n, sizeof *k, rc_cmp_u64);
+    return k;
 }
 
 /* Bounding box of a triangle's three lattice corners. */

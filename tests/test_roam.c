@@ -325,6 +325,19 @@ static float *view_dem(uint32_t W, uint32_t H)
     return z;
 }
 
+/* A landscape on view_dem with VIEW_CS-metre cells, options *o (patch and
+ * unit size); *z and *d for the caller to free. */
+#define VIEW_CS 10.0
+static rs_roam *make_view_roam(rs_ctx *ctx, uint32_t W, uint32_t H, uint32_t patch, uint32_t unit, float **z,
+                               rs_dem **d, rs_roam_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->patch_size = patch;
+    o->unit_size = unit;
+    *z = view_dem(W, H);
+    return *z ? make_f(ctx, *z, W, H, VIEW_CS, 0, o, d) : NULL;
+}
+
 static void test_view(rs_ctx *ctx)
 {
     const uint32_t W = 257, H = 257;
@@ -501,13 +514,11 @@ static void update_refines_flight(rs_ctx *ctx, uint32_t patch, const char *name,
                                   void (*view)(int, uint32_t, double, rs_roam_view *))
 {
     const uint32_t W = 257, H = 257;
-    const double cs = 10.0;
-    float *z = view_dem(W, H);
+    const double cs = VIEW_CS;
+    float *z = NULL;
     rs_dem *d = NULL;
     rs_roam_options o;
-    memset(&o, 0, sizeof o);
-    o.patch_size = patch;
-    rs_roam *up = make_f(ctx, z, W, H, cs, 0, &o, &d), *reb = NULL;
+    rs_roam *up = make_view_roam(ctx, W, H, patch, 0, &z, &d, &o), *reb = NULL;
     CHECK(up && rs_roam_create(ctx, d, &o, &reb) == RS_OK);
     if (!up || !reb) goto out;
     int refines = 1, ok = 1;
@@ -659,31 +670,156 @@ out:
     free(z);
 }
 
-/* Triangles of patch p (or of the whole mesh, p = UINT32_MAX) as sorted
- * keys of their corner samples (rotated to start at the smallest, so the
- * winding is kept); NULL on failure. */
-static uint64_t *tri_keys(rs_ctx *ctx, rs_roam *r, uint32_t p, uint32_t W, double cs, size_t *n)
+/* Triangles of patch p, or with `unit` of upload unit p (or of the whole
+ * mesh, p = UINT32_MAX) as sorted keys of their corner samples (rotated to
+ * start at the smallest, so the winding is kept); NULL on failure. *nvert:
+ * the vertices written. */
+static uint64_t *part_keys(rs_ctx *ctx, rs_roam *r, int unit, uint32_t p, uint32_t W, double cs, size_t *n,
+                           size_t *nvert)
 {
-    size_t mv, mi, nv, ni;
+    size_t mv, mi, nv = 0, ni = 0;
     rs_roam_mesh_bound(r, NULL, &mv, &mi);
     float *v = malloc((mv + 1) * 5 * sizeof *v);
     uint32_t *ix = malloc((mi + 1) * sizeof *ix);
     rs_result rr = p == UINT32_MAX ? rs_roam_extract(ctx, r, NULL, v, NULL, mv, ix, mi, &nv, &ni)
-                                   : rs_roam_extract_patch(ctx, r, p, NULL, v, NULL, mv, ix, mi, &nv, &ni);
-    uint64_t *k = rr == RS_OK ? malloc((ni / 3 + 1) * sizeof *k) : NULL;
-    for (size_t t = 0; k && t < ni / 3; t++) {
-        uint64_t s[3];
-        for (int c = 0; c < 3; c++) {
-            const float *q = v + 5 * (size_t)ix[3 * t + (size_t)c];
-            s[c] = (uint64_t)lround(q[1] / cs) * W + (uint64_t)lround(q[0] / cs);
-        }
-        int m = s[0] < s[1] ? (s[0] < s[2] ? 0 : 2) : (s[1] < s[2] ? 1 : 2);
-        k[t] = s[m] << 42 | s[(m + 1) % 3] << 21 | s[(m + 2) % 3];
-    }
-    if (k) qsort(k, ni / 3, sizeof *k, rc_cmp_u64);
+                   : unit ? rs_roam_extract_unit(ctx, r, p, NULL, v, NULL, mv, ix, mi, &nv, &ni)
+                          : rs_roam_extract_patch(ctx, r, p, NULL, v, NULL, mv, ix, mi, &nv, &ni);
+    *nvert = nv;
+    for (size_t t = 0; rr == RS_OK && t < ni; t++)
+        if (ix[t] >= nv) rr = RS_ERR_INVALID_ARG; /* an index past the part's vertices */
+    uint64_t *k = rr == RS_OK ? rc_tri_keys(v, ix, ni / 3, W, cs) : NULL;
     *n = ni / 3;
     free(v); free(ix);
     return k;
+}
+
+static uint64_t *tri_keys(rs_ctx *ctx, rs_roam *r, uint32_t p, uint32_t W, double cs, size_t *n)
+{
+    size_t nv;
+    return part_keys(ctx, r, 0, p, W, cs, n, &nv);
+}
+
+/* Sorted triangle keys (part_keys) of a W x H map: conforming (no corner
+ * strictly inside another triangle's edge) and covering the map (the
+ * areas add up to it, every triangle counter-clockwise). */
+static int keys_conform(const uint64_t *k, size_t n, uint32_t W, uint32_t H)
+{
+    unsigned char *isv = calloc((size_t)W * H, 1);
+    if (!isv) return 0;
+    const uint64_t m21 = (1u << 21) - 1u;
+    for (size_t t = 0; t < n; t++)
+        for (int c = 0; c < 3; c++) isv[(k[t] >> (21 * c)) & m21] = 1;
+    int ok = 1;
+    double area2 = 0;
+    for (size_t t = 0; t < n && ok; t++) {
+        long x[3], y[3];
+        for (int c = 0; c < 3; c++) {
+            uint64_t s = (k[t] >> (42 - 21 * c)) & m21;
+            x[c] = (long)(s % W); y[c] = (long)(s / W);
+        }
+        area2 += (double)((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+        for (int c = 0; c < 3 && ok; c++) {
+            long ex = x[(c + 1) % 3] - x[c], ey = y[(c + 1) % 3] - y[c];
+            long g = labs(ex) > labs(ey) ? labs(ex) : labs(ey);
+            for (long s = 1; s < g && ok; s++)
+                if (isv[(size_t)(y[c] + ey / g * s) * W + (size_t)(x[c] + ex / g * s)]) ok = 0;
+        }
+    }
+    free(isv);
+    return ok && fabs(fabs(area2) - 2.0 * (W - 1) * (H - 1)) < 0.5;
+}
+
+/* Upload units over a flight (issue 31, target 4): the units' triangles
+ * together are exactly the mesh's (and so conform and cover the map), an
+ * unchanged unit generation means unchanged triangles, a changed one is
+ * reported for fewer vertices than the patches' generations report, and a
+ * rebuild changes every unit's generation. */
+static void test_units(rs_ctx *ctx, uint32_t W, uint32_t H, uint32_t patch, uint32_t unit, uint32_t want_size)
+{
+    const double cs = VIEW_CS;
+    float *z = NULL;
+    rs_dem *d = NULL;
+    rs_roam_options o;
+    rs_roam *r = make_view_roam(ctx, W, H, patch, unit, &z, &d, &o);
+    CHECK(r != NULL);
+    if (!r) { free(z); return; }
+    rs_roam_stats st;
+    rs_roam_get_stats(r, &st);
+    uint32_t np = st.patches_x * st.patches_y, nu = st.units, upp = nu / np;
+    CHECKF(st.unit_size == want_size && upp == 2 * (st.patch_size / want_size) * (st.patch_size / want_size)
+           && nu == np * upp, "units: patch %u unit_size %u -> %u (%u per patch)", st.patch_size, unit, st.unit_size, upp);
+    uint64_t **prev = calloc(nu, sizeof *prev);
+    size_t *nprev = calloc(nu, sizeof *nprev), *vcount = calloc(nu, sizeof *vcount);
+    uint32_t *gen = calloc(nu, sizeof *gen), *pgen = calloc(np, sizeof *pgen);
+    int union_ok = 1, kept_ok = 1, conform_ok = 1, kept = 0, changed = 0;
+    double unit_up = 0, patch_up = 0;
+    for (int f = 0; prev && f < 30; f++) {
+        rs_roam_view v;
+        flight_view(f, W, cs, &v);
+        v.pixel_error = 1.5;
+        CHECK_EQ_INT(rs_roam_update(ctx, r, &v, 0), RS_OK);
+        size_t nall, sum = 0, vall = 0, vchanged = 0, vpatch = 0;
+        uint64_t *all = tri_keys(ctx, r, UINT32_MAX, W, cs, &nall), *cat = malloc((nall + 1) * sizeof *cat);
+        for (uint32_t u = 0; u < nu; u++) {
+            size_t n = 0, nv = 0;
+            uint64_t *k = part_keys(ctx, r, 1, u, W, cs, &n, &nv);
+            if (!k) { union_ok = 0; continue; }
+            if (sum + n <= nall) memcpy(cat + sum, k, n * sizeof *k);
+            sum += n;
+            vall += nv;
+            uint32_t g = rs_roam_unit_generation(r, u);
+            if (f > 0 && g == gen[u]) {
+                kept++;
+                if (n != nprev[u] || memcmp(k, prev[u], n * sizeof *k) != 0) kept_ok = 0;
+            } else if (f > 0) { changed++; vchanged += nv; }
+            if (f > 0 && rs_roam_patch_generation(r, u / upp) != pgen[u / upp]) vpatch += nv;
+            free(prev[u]);
+            prev[u] = k; nprev[u] = n; gen[u] = g; vcount[u] = nv;
+        }
+        for (uint32_t p = 0; p < np; p++) pgen[p] = rs_roam_patch_generation(r, p);
+        if (f > 0 && vall) { unit_up += (double)vchanged / vall; patch_up += (double)vpatch / vall; }
+        if (sum != nall || !all) union_ok = 0;
+        else {
+            qsort(cat, sum, sizeof *cat, rc_cmp_u64);
+            if (memcmp(cat, all, sum * sizeof *cat) != 0) union_ok = 0;
+            else if (!keys_conform(cat, sum, W, H)) conform_ok = 0;
+        }
+        free(all); free(cat);
+    }
+    CHECKF(union_ok, "units (patch %u, unit %u): their triangles together are exactly the mesh's", st.patch_size, st.unit_size);
+    CHECKF(conform_ok, "units (patch %u, unit %u): together crack-free and covering the map", st.patch_size, st.unit_size);
+    CHECKF(kept_ok, "units (patch %u, unit %u): an unchanged generation means unchanged triangles", st.patch_size, st.unit_size);
+    /* (patches of 1 or 2 cells use no pool node: every update rebuilds from
+     * the base mesh, and every generation changes) */
+    CHECKF(changed > 0 && (kept > 0 || st.patch_size <= 2), "units: %d kept and %d changed over the flight", kept, changed);
+    if (st.unit_size < st.patch_size)
+        CHECKF(unit_up < patch_up, "units (patch %u, unit %u): re-upload %.3f below the patches' %.3f", st.patch_size,
+               st.unit_size, unit_up / 29, patch_up / 29);
+    /* out of range */
+    CHECK_EQ_INT(rs_roam_unit_generation(r, nu), 0);
+    CHECK_EQ_INT(rs_roam_unit_generation(NULL, 0), 0);
+    {
+        size_t nv = 7, ni = 7;
+        float vb[5];
+        uint32_t ib[3];
+        CHECK_EQ_INT(rs_roam_extract_unit(ctx, r, nu, NULL, vb, NULL, 1, ib, 3, &nv, &ni), RS_ERR_INVALID_ARG);
+        CHECK(nv == 0 && ni == 0);
+        CHECK_EQ_INT(rs_roam_extract_unit(ctx, NULL, 0, NULL, vb, NULL, 1, ib, 3, &nv, &ni), RS_ERR_INVALID_ARG);
+    }
+    /* a rebuild changes every unit's generation */
+    int all_changed = 1;
+    rs_roam_refine_error(ctx, r, 1.0);
+    for (uint32_t u = 0; u < nu; u++) all_changed &= rs_roam_unit_generation(r, u) != gen[u];
+    CHECKF(all_changed, "units: a rebuild changes every unit's generation");
+    /* unit_size must be a power of two */
+    o.unit_size = 12;
+    rs_roam *bad = NULL;
+    CHECK_EQ_INT(rs_roam_create(ctx, d, &o, &bad), RS_ERR_INVALID_ARG);
+    for (uint32_t u = 0; prev && u < nu; u++) free(prev[u]);
+    free(prev); free(nprev); free(vcount); free(gen); free(pgen);
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+    free(z);
 }
 
 /* Per-patch output over a flight: the patches' triangles together are the
@@ -1337,6 +1473,12 @@ int main(void)
     test_update_strafe(ctx, 0);
     test_update_strafe(ctx, 16);
     test_patches(ctx);
+    test_units(ctx, 257, 201, 0, 0, 16);   /* automatic 64-cell patches, the default units */
+    test_units(ctx, 257, 201, 64, 4, 4);   /* the smallest: one block */
+    test_units(ctx, 200, 257, 32, 8, 8);
+    test_units(ctx, 257, 201, 16, 64, 16); /* larger than the patch: the patch */
+    test_units(ctx, 41, 37, 2, 0, 2);      /* blocks are the roots */
+    test_units(ctx, 21, 17, 1, 0, 1);
     test_seams(ctx, 1);
     test_seams(ctx, 0);
     test_extract_options(ctx);

@@ -6,20 +6,23 @@
  * tolerance or triangle target and patch size from the body's bytes, in
  * reverse). Checks invariants after each mesh and traps on a violation (no
  * NaN vertex, indices in range, count == stats, the triangles tile the
- * map, no T-junction, the patches' triangles add up to the mesh's; after an
+ * map, no T-junction, the patches' triangles add up to the mesh's and the
+ * upload units' are exactly its (unit_size from the top bits of the pool's
+ * high byte); after an
  * update at a tolerance, every vertex of a rebuild at that view). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include "roadsplat.h"
+#include "../../tests/roam_check.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #define REQUIRE(c) do { if (!(c)) __builtin_trap(); } while (0)
 
 
-/* Extract r's mesh (whole and per patch) and check it. */
+/* Extract r's mesh (whole, per patch and per upload unit) and check it. */
 static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double cs, uint8_t opt)
 {
     rs_roam_stats st;
@@ -68,6 +71,27 @@ static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double c
             sum += pi / 3;
         }
         REQUIRE(sum == st.triangles);
+        /* the upload units' triangles are exactly the mesh's */
+        REQUIRE(rs_roam_extract(ctx, r, NULL, v, NULL, mv, idx, mi, &nv, &ni) == RS_OK);
+        uint64_t *all = rc_tri_keys(v, idx, ni / 3, W, cs), *cat = malloc((ni / 3 + 1) * sizeof *cat);
+        size_t nu = 0;
+        for (uint32_t u = 0; all && cat && u < st.units; u++) {
+            size_t uv, ui;
+            REQUIRE(rs_roam_extract_unit(ctx, r, u, NULL, v, NULL, mv, idx, mi, &uv, &ui) == RS_OK);
+            for (size_t k = 0; k < ui; k++) REQUIRE(idx[k] < uv);
+            REQUIRE(nu + ui / 3 <= ni / 3);
+            uint64_t *k = rc_tri_keys(v, idx, ui / 3, W, cs);
+            if (k) memcpy(cat + nu, k, ui / 3 * sizeof *k);
+            nu += ui / 3;
+            free(k);
+        }
+        if (all && cat) {
+            REQUIRE(nu == ni / 3);
+            qsort(cat, nu, sizeof *cat, rc_cmp_u64);
+            REQUIRE(memcmp(cat, all, nu * sizeof *cat) == 0);
+        }
+        REQUIRE(rs_roam_unit_generation(r, st.units) == 0);
+        free(all); free(cat);
     }
     free(v); free(n); free(idx);
 }
@@ -119,6 +143,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_roam_options o;
     memset(&o, 0, sizeof o);
     o.pool_nodes = pool;
+    o.unit_size = (tail[1] & 0xC0) ? 1u << (2 * (tail[1] >> 6)) : 0u; /* 4, 16, 64 or the default */
     if (rs_roam_create(ctx, dem, &o, &r) != RS_OK) goto out;
     rs_result rr;
     if (mode == 0) rr = rs_roam_refine_error(ctx, r, E);

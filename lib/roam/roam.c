@@ -17,6 +17,9 @@
 #define AUTO_PATCH_LOG 6
 #define MAX_SIDE 32768u           /* node coordinates are uint16 */
 #define AUTO_POOL_CAP (1u << 21)
+/* Upload units: halves of 16-cell squares (32 per 64-cell patch; on the
+ * drives about a tenth of the vertices change per frame, docs/roam.md) */
+#define DEFAULT_UNIT_SIZE 16u
 
 size_t rs_roam_node_bytes(void) { return sizeof(roam_node); }
 
@@ -220,6 +223,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->pzmax);
     rs__free(ctx, L->pin);
     rs__free(ctx, L->pgen);
+    rs__free(ctx, L->ugen);
     rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
     rs__free(ctx, L->stack);
@@ -240,6 +244,7 @@ typedef struct roam_size {
     uint32_t W, H;                  /* samples */
     uint32_t plog, P, npx, npy;     /* patch side 2^plog cells, patches per row and column */
     uint32_t dq;                    /* implicit levels below a block node */
+    uint32_t usize, udepth;         /* upload unit: square side (cells), depth below the roots */
     uint64_t npatch, epp, nerr;     /* patches, heap indices per patch, all of them */
     uint64_t pool;                  /* pool nodes */
 } roam_size;
@@ -277,6 +282,16 @@ static rs_result size_landscape(rs_ctx *ctx, const rs_dem *dem, const rs_roam_op
     uint32_t npx = (W - 1 + P - 1) / P, npy = (H - 1 + P - 1) / P;
     if ((uint64_t)npx * P > 65535u || (uint64_t)npy * P > 65535u)
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: patch size %u too large for a %ux%u DEM", P, W, H);
+    /* upload units: halves of usize-cell squares, from the block level
+     * (units hold whole blocks) to the patch */
+    uint32_t usize = o.unit_size ? o.unit_size : DEFAULT_UNIT_SIZE;
+    if (usize & (usize - 1))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: unit_size %u must be a power of two", o.unit_size);
+    uint32_t dq0 = 2 * plog < IMPL_DEPTH ? 2 * plog : IMPL_DEPTH, ublock = 1u << (dq0 / 2);
+    if (usize > P) usize = P;
+    if (usize < ublock) usize = ublock;
+    uint32_t ulog = 0;
+    while ((1u << ulog) < usize) ulog++;
     uint64_t npatch = (uint64_t)npx * npy;
     uint64_t epp = (uint64_t)P * P; /* heap indices down to the R level: < P^2 */
     uint64_t nerr;
@@ -300,6 +315,7 @@ static rs_result size_landscape(rs_ctx *ctx, const rs_dem *dem, const rs_roam_op
                         (unsigned long long)pool, ctx->limits.max_pool_nodes);
     s->cs = cs; s->zs = zs; s->W = W; s->H = H;
     s->plog = plog; s->P = P; s->npx = npx; s->npy = npy; s->dq = dq;
+    s->usize = usize; s->udepth = 2 * (plog - ulog);
     s->npatch = npatch; s->epp = epp; s->nerr = nerr; s->pool = pool;
     return RS_OK;
 }
@@ -315,6 +331,7 @@ static rs_roam *new_landscape(rs_ctx *ctx, const roam_size *s)
     L->plog = s->plog; L->P = s->P; L->npx = s->npx; L->npy = s->npy; L->epp = (size_t)s->epp;
     L->elog = 2 * s->plog;
     L->dq = s->dq; L->ncut = 1u << s->dq;
+    L->usize = s->usize; L->udepth = s->udepth; L->upp = 2u << s->udepth;
     L->scan = NIL;
     L->free_head = NIL;
     rs__roam_build_partner_table(L);
@@ -336,6 +353,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->pzmax = rs__alloc_array(ctx, npatch, sizeof(float));
     L->pin = rs__alloc_array(ctx, npatch, 1);
     L->pgen = rs__alloc_array(ctx, npatch, sizeof(uint32_t));
+    L->ugen = rs__alloc_array(ctx, npatch * L->upp, sizeof(uint32_t));
     L->wpr = (W + 63) / 64;
     L->nwords = (size_t)L->wpr * H;
     L->nsum = (L->nwords + 63) / 64;
@@ -345,7 +363,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     L->ucol = rs__alloc_array(ctx, W, sizeof(float));
     L->vrow = rs__alloc_array(ctx, H, sizeof(float));
     L->smap = rs__alloc_array(ctx, 2 * ((size_t)W + H), sizeof(uint32_t));
-    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->pgen || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
+    if (!L->err || !L->eready || !L->pzmin || !L->pzmax || !L->pin || !L->pgen || !L->ugen || !L->vbits || !L->vsum || !L->vrank || !L->smap || !L->ucol || !L->vrow)
         return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the error tree (%llu entries)",
                         (unsigned long long)nerr);
     memset(L->vbits, 0, L->nwords * sizeof(uint64_t));
@@ -355,6 +373,7 @@ static rs_result alloc_tables(rs_ctx *ctx, rs_roam *L, const roam_size *s)
     memset(L->smap, 0xFF, 2 * ((size_t)W + H) * sizeof(uint32_t));
     L->gen = 1;
     for (size_t p = 0; p < npatch; p++) L->pgen[p] = 1;
+    for (size_t u = 0; u < npatch * L->upp; u++) L->ugen[u] = 1;
     for (uint32_t py = 0; py < s->npy; py++)
         for (uint32_t px = 0; px < s->npx; px++)
             L->pin[py * s->npx + px] = (unsigned char)(px * P + P <= L->cw && py * P + P <= L->ch);
@@ -414,7 +433,7 @@ static rs_result alloc_pool(rs_ctx *ctx, rs_roam *L, uint64_t pool)
 static uint64_t landscape_bytes(const rs_roam *L)
 {
     uint64_t W = L->w, H = L->hgt, npatch = (uint64_t)L->npx * L->npy;
-    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1 + sizeof(uint32_t))
+    return sizeof *L + (uint64_t)L->nerr * sizeof(float) + (L->nerr + ERR_CHUNK - 1) / ERR_CHUNK + npatch * (2 * sizeof(float) + 1 + sizeof(uint32_t) + L->upp * sizeof(uint32_t))
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)
@@ -458,6 +477,7 @@ void rs_roam_get_stats(const rs_roam *L, rs_roam_stats *o)
     if (!L) return;
     o->width = L->w; o->height = L->hgt;
     o->patch_size = L->P; o->patches_x = L->npx; o->patches_y = L->npy;
+    o->unit_size = L->usize; o->units = L->npx * L->npy * L->upp;
     o->base_nodes = L->base_count;
     o->pool_nodes = L->cap - L->base_count;
     o->pool_used = L->used - L->base_count - L->nfree;

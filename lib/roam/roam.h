@@ -42,8 +42,10 @@ struct roam_scan {
                        is checked again is scanned only when this is due) */
     float rot;      /* turn reading (L->rot, rounded down) at which an item
                        under it may change sides of the frustum */
-    unsigned char cls; /* its class against the view at its last scan */
+    unsigned char cls; /* its class against the view at its last scan
+                          (SCAN_NO_CLASS: none yet) */
 };
+#define SCAN_NO_CLASS 3
 
 typedef struct roam_node {
     uint32_t lc, rc;                /* children (NIL for a leaf) */
@@ -117,7 +119,16 @@ struct rs_roam {
     struct roam_queue *qs, *qm;     /* split queue (max-heap), merge queue (min-heap) */
     uint32_t *pgen;                 /* per patch: generation of its leaves (the value of
                                        gen when they last changed) */
+    /* Upload units (docs/roam.md, "Upload units"): the subtrees of each
+     * patch at depth udepth below its roots, upp = 2^(udepth + 1) per patch,
+     * unit = patch * upp + (heap index at depth udepth) - upp; a leaf above
+     * that depth belongs to the unit of its leftmost descendant. */
+    uint32_t udepth, upp, usize;    /* depth, units per patch, unit square side (cells) */
+    uint32_t *ugen;                 /* per unit: generation of its leaves */
     struct roam_scan *cscan;        /* per node: its cached scan (lib/roam/roam_update.c) */
+    float *c2read;                  /* per node, 2 floats: while partly in view at its last
+                                       scan, the odometer and turn readings until which it
+                                       stays so (node_class, lib/roam/roam_update.c) */
     unsigned char *pvis;            /* per patch: visible at the last update */
     double odo_base;                /* odometer at which the scan records' readings start
                                        (floats: rebased, with a full scan, every 4 km) */
@@ -130,14 +141,40 @@ struct rs_roam {
     int update_done;                /* the last update reached its goal (not cut by the budget) */
 };
 
-/* Record that the leaves under node changed: its patch's generation
- * (rs_roam_patch_generation), and the cached scans of the node and its
- * ancestors (lib/roam/roam_update.c; an ancestor of a node to scan is marked
- * already, so the walk up stops there). */
+static inline uint32_t pos_depth(uint32_t pos) /* pos >= 1 */
+{
+#if defined(__GNUC__)
+    return 31u - (uint32_t)__builtin_clz(pos);
+#else
+    uint32_t d = 0;
+    while (pos >> (d + 1)) d++;
+    return d;
+#endif
+}
+
+/* Record that the leaves of node changed (it was split, or merged): the
+ * generations of its patch (rs_roam_patch_generation) and of its upload
+ * units (rs_roam_unit_generation: its own unit, or for a node above the
+ * units' depth the units of its leftmost descendants through either child,
+ * where it and its two children belong), and the cached scans of the node
+ * and its ancestors (lib/roam/roam_update.c; an ancestor of a node to scan
+ * is marked already, so the walk up stops there). */
 static inline void touch_patch(rs_roam *L, uint32_t node)
 {
     uint32_t e = L->nodes[node].e;
-    L->pgen[e == NIL ? 0 : e >> L->elog] = L->gen;
+    if (e == NIL) { /* cell halves of 1-cell patches: never split */
+        L->pgen[0] = L->ugen[0] = L->gen;
+    } else {
+        uint32_t patch = e >> L->elog, h = e & (uint32_t)(L->epp - 1), d = pos_depth(h) - 1u;
+        uint32_t *ug = L->ugen + (size_t)patch * L->upp; /* heap index upp + k: ug[k] */
+        L->pgen[patch] = L->gen;
+        if (d >= L->udepth) ug[(h >> (d - L->udepth)) - L->upp] = L->gen;
+        else {
+            uint32_t sh = L->udepth - d;
+            ug[(h << sh) - L->upp] = L->gen;
+            ug[((2u * h + 1u) << (sh - 1u)) - L->upp] = L->gen;
+        }
+    }
     if (L->par)
         for (uint32_t c = node; c != NIL && L->cscan[c].rc >= 0.0f; c = L->par[c]) L->cscan[c].rc = -1.0f;
 }
@@ -195,17 +232,6 @@ static inline void child_tri(const tri *t, int k, tri *o)
     o->ax = mx; o->ay = my; o->on = t->on;
     if (k == 0) { o->bx = t->ax; o->by = t->ay; o->cx = t->bx; o->cy = t->by; }
     else { o->bx = t->cx; o->by = t->cy; o->cx = t->ax; o->cy = t->ay; }
-}
-
-static inline uint32_t pos_depth(uint32_t pos) /* pos >= 1 */
-{
-#if defined(__GNUC__)
-    return 31u - (uint32_t)__builtin_clz(pos);
-#else
-    uint32_t d = 0;
-    while (pos >> (d + 1)) d++;
-    return d;
-#endif
 }
 
 static inline int inside_xy(const rs_roam *L, int ax, int ay, int bx, int by, int cx, int cy)

@@ -171,15 +171,14 @@ static void emit_leaves(extract_state *s)
     }
 }
 
-/* The leaves of one patch, depth first from its two roots (the order is
- * deterministic); the refinement stack is free between calls. */
-static void emit_patch_leaves(extract_state *s, uint32_t patch)
+/* The leaves under roots[0..n), depth first, left child first (the order
+ * is deterministic); the refinement stack is free between calls. */
+static void emit_subtree_leaves(extract_state *s, const uint32_t *roots, int n)
 {
     rs_roam *L = s->L;
     const roam_node *nodes = L->nodes;
     uint32_t *st = L->stack, sp = 0;
-    st[sp++] = 2 * patch + 1;
-    st[sp++] = 2 * patch;
+    while (n > 0) st[sp++] = roots[--n];
     while (sp) {
         const roam_node *nd = &nodes[st[--sp]];
         if (nd->lc != NIL && nd->lc != IMPL) {
@@ -189,15 +188,63 @@ static void emit_patch_leaves(extract_state *s, uint32_t patch)
     }
 }
 
+/* The leaves of one patch. */
+static void emit_patch_leaves(extract_state *s, uint32_t patch)
+{
+    uint32_t roots[2] = { 2 * patch, 2 * patch + 1 };
+    emit_subtree_leaves(s, roots, 2);
+}
+
+/* The leaves of upload unit `unit` (docs/roam.md, "Upload units"): the
+ * subtree at heap index h (depth udepth below the patch's roots), found by
+ * walking down h's bits; a leaf met above that depth belongs to the unit of
+ * its leftmost descendant (h's remaining bits all 0). *y0, *y1: the rows
+ * the unit's triangle spans (its vertices lie there). */
+static void emit_unit_leaves(extract_state *s, uint32_t unit, int *y0, int *y1)
+{
+    rs_roam *L = s->L;
+    const roam_node *nodes = L->nodes;
+    uint32_t patch = unit >> (L->udepth + 1u), h = L->upp + (unit & (L->upp - 1u));
+    uint32_t i = 2 * patch + ((h >> L->udepth) - 2u);
+    tri t;
+    node_tri(L, &nodes[i], &t);
+    uint32_t at = NIL; /* the subtree root, or the coarser leaf */
+    for (uint32_t k = L->udepth; k-- > 0;) {
+        tri c;
+        child_tri(&t, (int)((h >> k) & 1u), &c);
+        t = c;
+        if (at == NIL) {
+            const roam_node *nd = &nodes[i];
+            if (nd->lc == NIL || nd->lc == IMPL) at = (h & ((2u << k) - 1u)) ? NIL - 1u : i;
+            else i = (h >> k) & 1u ? nd->rc : nd->lc;
+        }
+    }
+    int lo = t.ay < t.by ? t.ay : t.by, hi = t.ay > t.by ? t.ay : t.by;
+    if (t.cy < lo) lo = t.cy;
+    if (t.cy > hi) hi = t.cy;
+    if (at == NIL - 1u) { *y0 = 0; *y1 = -1; return; } /* a coarser leaf in another unit */
+    if (at != NIL) {
+        /* a leaf coarser than the unit: its rows, not the unit's */
+        node_tri(L, &nodes[at], &t);
+        lo = t.ay < t.by ? t.ay : t.by; hi = t.ay > t.by ? t.ay : t.by;
+        if (t.cy < lo) lo = t.cy;
+        if (t.cy > hi) hi = t.cy;
+        i = at;
+    }
+    *y0 = lo < 0 ? 0 : lo;
+    *y1 = hi > (int)L->ch ? (int)L->ch : hi;
+    emit_subtree_leaves(s, &i, 1);
+}
+
 /* Pass 2: number the vertex set in row-major order (the rank of each word)
  * and write the vertices, reading the DEM in order. Only words flagged in
  * the summary are visited, so a sparse mesh on a huge map stays cheap.
  * Returns the vertex count; writes nothing when it exceeds vcap. */
-static size_t emit_vertices(extract_state *s)
+static size_t emit_vertices(extract_state *s, size_t g0, size_t g1)
 {
     rs_roam *L = s->L;
     size_t n = 0;
-    for (size_t g = 0; g < L->nsum; g++)
+    for (size_t g = g0; g < g1; g++)
         for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) {
             size_t k = g * 64 + lowest_bit(sm);
             L->vrank[k] = (uint32_t)n;
@@ -205,7 +252,7 @@ static size_t emit_vertices(extract_state *s)
         }
     if (n > s->vcap) return n;
     size_t v = 0;
-    for (size_t g = 0; g < L->nsum; g++)
+    for (size_t g = g0; g < g1; g++)
         for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) {
             size_t k = g * 64 + lowest_bit(sm);
             int y = (int)(k / L->wpr), x0 = (int)(k % L->wpr) * 64;
@@ -263,10 +310,11 @@ static void number_indices(const extract_state *s, size_t n)
     for (size_t i = 0; i < n; i++) ix[i] = key_vertex(s->L, ix[i]);
 }
 
-/* Empty the vertex set for the next extraction: only the flagged words. */
-static void clear_vertex_set(rs_roam *L)
+/* Empty the vertex set for the next extraction: only the flagged words
+ * (of the summary words g0..g1, which hold every set bit). */
+static void clear_vertex_set(rs_roam *L, size_t g0, size_t g1)
 {
-    for (size_t g = 0; g < L->nsum; g++) {
+    for (size_t g = g0; g < g1; g++) {
         for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) L->vbits[g * 64 + lowest_bit(sm)] = 0;
         L->vsum[g] = 0;
     }
@@ -308,8 +356,12 @@ static uint32_t skirt_vertex(extract_state *s, uint32_t top, int x, int y, doubl
     return (uint32_t)s->nv++;
 }
 
-/* rs_roam_extract (patch NIL) and rs_roam_extract_patch. */
-static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_roam_mesh_options *opts,
+/* What extract_mesh writes: the whole mesh, one patch or one upload unit. */
+enum { EXTRACT_ALL, EXTRACT_PATCH, EXTRACT_UNIT };
+
+/* rs_roam_extract, rs_roam_extract_patch (part = the patch) and
+ * rs_roam_extract_unit (part = the unit). */
+static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, int what, uint32_t part, const rs_roam_mesh_options *opts,
                               float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
                               size_t index_capacity, size_t *vertex_count, size_t *index_count)
 {
@@ -318,8 +370,11 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_
     if (index_count) *index_count = 0;
     if (!L || (!vertices && vertex_capacity) || (!indices && index_capacity))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: roam and buffers must not be NULL");
-    if (patch != NIL && patch >= L->npx * L->npy)
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract_patch: patch %u of %u", patch, L->npx * L->npy);
+    if (what == EXTRACT_PATCH && part >= L->npx * L->npy)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract_patch: patch %u of %u", part, L->npx * L->npy);
+    if (what == EXTRACT_UNIT && part / L->upp >= L->npx * L->npy)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract_unit: unit %u of %llu", part,
+                        (unsigned long long)L->npx * L->npy * L->upp);
     rs_roam_mesh_options o;
     if (opts) o = *opts; else memset(&o, 0, sizeof o);
     if (o.normals && !normals)
@@ -335,10 +390,21 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
     s.samples = o.samples;
-    if (patch == NIL) emit_leaves(&s);
-    else emit_patch_leaves(&s, patch);
+    /* the rows that can hold vertices, as summary words */
+    int y0 = 0, y1 = (int)L->ch;
+    if (what == EXTRACT_ALL) emit_leaves(&s);
+    else if (what == EXTRACT_PATCH) {
+        emit_patch_leaves(&s, part);
+        y0 = (int)((part / L->npx) * L->P);
+        if (y0 + (int)L->P < y1) y1 = y0 + (int)L->P;
+    } else emit_unit_leaves(&s, part, &y0, &y1);
+    size_t g0 = 0, g1 = 0;
+    if (y1 >= y0) {
+        g0 = ((size_t)y0 * L->wpr) >> 6;
+        g1 = ((((size_t)y1 + 1) * L->wpr - 1) >> 6) + 1;
+    }
     if (!s.overflow) {
-        s.nv = emit_vertices(&s);
+        s.nv = emit_vertices(&s, g0, g1);
         if (s.nv > s.vcap) s.overflow = 1;
     }
     size_t top_indices = s.ni;
@@ -362,7 +428,7 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_
         memset(L->smap, 0xFF, 2 * ((size_t)L->w + L->hgt) * sizeof(uint32_t));
     }
     if (top_ok) number_indices(&s, top_indices); /* as before skirts existed, even when they overflowed */
-    clear_vertex_set(L);
+    clear_vertex_set(L, g0, g1);
     if (s.overflow) {
         size_t mv, mi;
         rs_roam_mesh_bound(L, &o, &mv, &mi);
@@ -380,17 +446,30 @@ rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *o
                           float *normals, size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
                           size_t *vertex_count, size_t *index_count)
 {
-    return extract_mesh(ctx, L, NIL, opts, vertices, normals, vertex_capacity, indices, index_capacity, vertex_count,
-                        index_count);
+    return extract_mesh(ctx, L, EXTRACT_ALL, 0, opts, vertices, normals, vertex_capacity, indices, index_capacity,
+                        vertex_count, index_count);
 }
 
 rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *L, uint32_t patch, const rs_roam_mesh_options *opts,
                                 float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
                                 size_t index_capacity, size_t *vertex_count, size_t *index_count)
 {
-    if (patch == NIL) patch = NIL - 1; /* refused as out of range */
-    return extract_mesh(ctx, L, patch, opts, vertices, normals, vertex_capacity, indices, index_capacity,
-                        vertex_count, index_count);
+    return extract_mesh(ctx, L, EXTRACT_PATCH, patch, opts, vertices, normals, vertex_capacity, indices,
+                        index_capacity, vertex_count, index_count);
+}
+
+rs_result rs_roam_extract_unit(rs_ctx *ctx, rs_roam *L, uint32_t unit, const rs_roam_mesh_options *opts,
+                               float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
+                               size_t index_capacity, size_t *vertex_count, size_t *index_count)
+{
+    return extract_mesh(ctx, L, EXTRACT_UNIT, unit, opts, vertices, normals, vertex_capacity, indices,
+                        index_capacity, vertex_count, index_count);
+}
+
+uint32_t rs_roam_unit_generation(const rs_roam *L, uint32_t unit)
+{
+    if (!L || unit / L->upp >= L->npx * L->npy) return 0;
+    return L->ugen[unit];
 }
 
 uint32_t rs_roam_patch_generation(const rs_roam *L, uint32_t patch)

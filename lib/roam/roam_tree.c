@@ -91,6 +91,7 @@ static void split(rs_roam *L, uint32_t t)
     if (L->par) { /* frame-coherent updates: parents, and new clusters unscanned */
         L->par[lc] = L->par[rc] = t;
         L->cscan[lc].rc = L->cscan[rc].rc = -1.0f;
+        L->cscan[lc].cls = L->cscan[rc].cls = SCAN_NO_CLASS;
     }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
@@ -361,6 +362,7 @@ void rs__roam_reset_mesh(rs_roam *L)
     L->full_next = 1;
     L->gen++;
     for (uint32_t p = 0; p < L->npx * L->npy; p++) L->pgen[p] = L->gen;
+    for (size_t u = 0; u < (size_t)L->npx * L->npy * L->upp; u++) L->ugen[u] = L->gen;
 }
 
 /* ---- refinement ------------------------------------------------------------ */

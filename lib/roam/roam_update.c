@@ -228,11 +228,6 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
     return k == 2 ? ek / d : 0.0;
 }
 
-static double item_prio(upd *u, uint32_t node, uint32_t pos)
-{
-    return item_prio_t(u, node, pos, NULL);
-}
-
 static void fill_ent(const rs_roam *L, qent *e, double p, uint32_t node, uint32_t pos)
 {
     const roam_node *nd = &L->nodes[node];
@@ -268,15 +263,19 @@ static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const t
 }
 
 /* Queue the diamond of (node, pos) for a merge when it can merge and its
- * priority (the larger of its two parents': the error once merged) allows. */
-static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t)
+ * priority (the larger of its two parents': the error once merged) allows.
+ * blk: when (node, pos) is an implicit position of a block being scanned
+ * whole (offer_block), the triangles of its positions in the mesh. */
+static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t, const tri *blk)
 {
     uint32_t N, pp;
     if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
     /* a full scan of a triangle target sees each diamond once; the
      * tolerance's scans see it from both sides, as the two clusters that
-     * hold its parents may be scanned in different frames */
-    if (build && u->all && N != NIL && (N < node || (N == node && pp < pos))) return;
+     * hold its parents may be scanned in different frames, but once when
+     * both parents are in the block under scan */
+    if (build && N == node && pp < pos && (u->all || blk)) return;
+    if (build && u->all && N != NIL && N < node) return;
     u->thr = u->mtol;
     double save = u->slack;
     u->slack = INFINITY;
@@ -289,7 +288,7 @@ static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, cons
     }
     if (N != NIL) {
         u->slack = INFINITY;
-        double q = item_prio(u, N, pp);
+        double q = item_prio_t(u, N, pp, blk && N == node ? &blk[pp] : NULL);
         if (!u->all && q > u->mtol) {
             u->slack = save < u->slack ? save : u->slack;
             return;
@@ -310,7 +309,7 @@ static void offer_leaf(upd *u, uint32_t node, uint32_t pos, int build)
 
 static void offer_diamond(upd *u, uint32_t node, uint32_t pos, int build)
 {
-    offer_diamond_t(u, node, pos, build, NULL);
+    offer_diamond_t(u, node, pos, build, NULL, NULL);
 }
 
 /* The leaves of block r below its split positions (cell halves excluded),
@@ -325,77 +324,14 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
     for (uint32_t pos = 2; pos < L->ncut; pos++) {
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
         child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
+    }
+    for (uint32_t pos = 2; pos < L->ncut; pos++) {
+        if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue;
         if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
-        else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos]);
+        else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos], pt);
     }
-    if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1]);
+    if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1], NULL);
 }
-
-/* A node's place against the view: 0 when its items are all
- * culled, 1 when they are all in the frustum, 2 in between. An item's
- * bounding sphere (tri_sphere) is centred on its centroid at the middle
- * of the patch's height range, so its centre lies in the cluster's
- * triangle lifted to that height, and its radius is at most the cluster's
- * and at least half the height range: all items are visible when the
- * lifted triangle's corners are inside every plane or outside by less
- * than that half range, all culled when they are further outside one
- * than the cluster's radius (or the patch is culled). */
-#define CLS_UNKNOWN 3
-/* Also the class's own readings (issue 31, third session): the lifted
- * corners' plane values move by at most T + R (vd + T) (above), so the
- * class holds while the odometer stays below *ctr and the turn below
- * *crt: for "all visible" the margin is the smallest lo + hz over the
- * planes, for "all culled" -r - hi of the plane that culls. (+inf for
- * a culled patch, which is scanned in full when it comes back, and for
- * "in between", which has its items' readings.) */
-static int node_class(const upd *u, uint32_t i, double *ctr, double *crt)
-{
-    const rs_roam *L = u->L;
-    const roam_node *nd = &L->nodes[i];
-    *ctr = *crt = INFINITY;
-    if (nd->e == NIL) return 2;
-    uint32_t patch = nd->e >> L->elog;
-    if (!u->vis[patch]) return 0;
-    tri t;
-    node_tri(L, nd, &t);
-    double c[3], r;
-    tri_sphere(L, &t, patch, c, &r);
-    double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
-    double cs = L->cs;
-    double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
-    int part = 0, cls = 1, np = u->v->nplanes;
-    double m = INFINITY;
-    for (int p = 0; p < np; p++) {
-        const double *pl = u->v->planes[p];
-        double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
-        double s0 = a * x0 + b * y0 + base, s1 = a * x1 + b * y1 + base, s2 = a * x2 + b * y2 + base;
-        double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
-        if (s2 < lo) lo = s2;
-        if (s2 > hi) hi = s2;
-        if (hi < -r) { cls = 0; m = -r - hi; break; }
-        if (lo < -hz) part = 1;
-        if (lo + hz < m) m = lo + hz;
-    }
-    if (cls == 1 && part) return 2;
-    /* the farthest lifted corner, and a margin for the rounding */
-    const double *e = u->v->eye;
-    double dz = c[2] - e[2], v2 = 0.0;
-    double xs[3] = { x0, x1, x2 }, ys[3] = { y0, y1, y2 };
-    for (int k = 0; k < 3; k++) {
-        double dx = xs[k] - e[0], dy = ys[k] - e[1], d = dx * dx + dy * dy + dz * dz;
-        if (d > v2) v2 = d;
-    }
-    double vd = sqrt(v2);
-    m -= 1e-9 * (vd + r + 1.0);
-    double tr, rt;
-    margin_split(u, m, vd, &tr, &rt);
-    double eps = 1e-9 * (1.0 + L->odo);
-    *ctr = L->odo + tr * (1.0 - 1e-9) - eps;
-    *crt = L->rot + rt * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
-    return cls;
-}
-
-static double walk(upd *u, uint32_t i, int pcls);
 
 /* A turn reading as stored: rounded down (a reading too early is safe). */
 static float rot_reading(double rr)
@@ -422,6 +358,91 @@ static double reading_get(const rs_roam *L, float f)
 {
     return f < 0.0f ? -1.0 : L->odo_base + (double)f;
 }
+
+/* A node's place against the view: 0 when its items are all
+ * culled, 1 when they are all in the frustum, 2 in between. An item's
+ * bounding sphere (tri_sphere) is centred on its centroid at the middle
+ * of the patch's height range, so its centre lies in the cluster's
+ * triangle lifted to that height, and its radius is at most the cluster's
+ * and at least half the height range: all items are visible when the
+ * lifted triangle's corners are inside every plane or outside by less
+ * than that half range, all culled when they are further outside one
+ * than the cluster's radius (or the patch is culled). */
+#define CLS_UNKNOWN SCAN_NO_CLASS
+/* Also the class's own readings (issue 31, third session): the lifted
+ * corners' plane values move by at most T + R (vd + T) (above), so the
+ * class holds while the odometer stays below *ctr and the turn below
+ * *crt: for "all visible" the margin is the smallest lo + hz over the
+ * planes, for "all culled" -r - hi of the plane that culls. (+inf for
+ * a culled patch, which is scanned in full when it comes back, and for
+ * "in between", which has its items' readings.) */
+static int node_class(upd *u, uint32_t i, double *ctr, double *crt)
+{
+    rs_roam *L = u->L;
+    const roam_node *nd = &L->nodes[i];
+    *ctr = *crt = INFINITY;
+    if (nd->e == NIL) { /* no class readings: looked at again every time */
+        L->c2read[2 * (size_t)i] = -1.0f;
+        return 2;
+    }
+    uint32_t patch = nd->e >> L->elog;
+    if (!u->vis[patch]) return 0;
+    tri t;
+    node_tri(L, nd, &t);
+    double c[3], r;
+    tri_sphere(L, &t, patch, c, &r);
+    double hz = 0.5 * ((double)L->pzmax[patch] - (double)L->pzmin[patch]) * L->zs;
+    double cs = L->cs;
+    double x0 = t.ax * cs, x1 = t.bx * cs, x2 = t.cx * cs, y0 = t.ay * cs, y1 = t.by * cs, y2 = t.cy * cs;
+    int part = 0, cls = 1, np = u->v->nplanes;
+    double m = INFINITY, mout = -INFINITY, mkeep = INFINITY;
+    for (int p = 0; p < np; p++) {
+        const double *pl = u->v->planes[p];
+        double a = pl[0], b = pl[1], base = pl[2] * c[2] + pl[3];
+        double s0 = a * x0 + b * y0 + base, s1 = a * x1 + b * y1 + base, s2 = a * x2 + b * y2 + base;
+        double lo = s0 < s1 ? s0 : s1, hi = s0 < s1 ? s1 : s0;
+        if (s2 < lo) lo = s2;
+        if (s2 > hi) hi = s2;
+        if (hi < -r) { cls = 0; m = -r - hi; break; }
+        if (lo < -hz) part = 1;
+        if (lo + hz < m) m = lo + hz;
+        /* in between: a corner stays further out than hz of the plane it is
+         * furthest out of, and no plane culls it */
+        if (-hz - lo > mout) mout = -hz - lo;
+        if (hi + r < mkeep) mkeep = hi + r;
+    }
+    if (cls == 1 && part) {
+        cls = 2;
+        m = mout < mkeep ? mout : mkeep;
+    }
+    /* the farthest lifted corner, and a margin for the rounding */
+    const double *e = u->v->eye;
+    double dz = c[2] - e[2], v2 = 0.0;
+    double xs[3] = { x0, x1, x2 }, ys[3] = { y0, y1, y2 };
+    for (int k = 0; k < 3; k++) {
+        double dx = xs[k] - e[0], dy = ys[k] - e[1], d = dx * dx + dy * dy + dz * dz;
+        if (d > v2) v2 = d;
+    }
+    double vd = sqrt(v2);
+    m -= 1e-9 * (vd + r + 1.0);
+    double tr, rt;
+    margin_split(u, m, vd, &tr, &rt);
+    double eps = 1e-9 * (1.0 + L->odo);
+    double ct = L->odo + tr * (1.0 - 1e-9) - eps, cr = L->rot + rt * (1.0 - 1e-9) - 1e-9 * (1.0 + L->rot);
+    if (cls == 2) {
+        /* kept apart: a node in between has its items' readings, and its
+         * children their own classes; these only spare node_class when
+         * its items are due (walk) */
+        L->c2read[2 * (size_t)i] = reading_put(L, ct);
+        L->c2read[2 * (size_t)i + 1] = rot_reading(cr);
+        return 2;
+    }
+    *ctr = ct;
+    *crt = cr;
+    return cls;
+}
+
+static double walk(upd *u, uint32_t i, int pcls);
 
 /* The items at and below node i: its leaves and its diamonds. Returns the
  * smallest recheck reading of the children's subtrees (+inf: none). */
@@ -484,6 +505,12 @@ static double walk(upd *u, uint32_t i, int pcls)
             }
         }
     }
+    /* in between while its class's readings hold (they do not depend on
+     * what changed under it: a split or merge only marks the node's
+     * subtree readings; a new node has no class) */
+    if (!u->full && cls == CLS_UNKNOWN && cs->cls == 2 && L->odo < reading_get(L, L->c2read[2 * (size_t)i])
+        && L->rot < (double)L->c2read[2 * (size_t)i + 1])
+        cls = 2;
     if (cls == CLS_UNKNOWN) cls = node_class(u, i, &ctr, &crt);
     double save = u->slack, svtr = u->vtr, svrot = u->vrot, srot = u->rrot, srctr = u->rctr;
     double sctr = u->ctr, scrt = u->crt;
@@ -680,6 +707,8 @@ static void compact_pool(rs_roam *L)
             uint32_t j = map[i];
             roam_node tn = n[i]; n[i] = n[j]; n[j] = tn;
             struct roam_scan ts = L->cscan[i]; L->cscan[i] = L->cscan[j]; L->cscan[j] = ts;
+            float *ci = L->c2read + 2 * (size_t)i, *cj = L->c2read + 2 * (size_t)j, t0 = ci[0], t1 = ci[1];
+            ci[0] = cj[0]; ci[1] = cj[1]; cj[0] = t0; cj[1] = t1;
             uint32_t tp = L->par[i]; L->par[i] = L->par[j]; L->par[j] = tp;
             map[i] = map[j]; map[j] = j;
         }
@@ -695,17 +724,18 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
         struct roam_scan *cs = rs__alloc_array(ctx, L->cap, sizeof *cs);
         unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
-        if (!par || !cs || !pv) {
-            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv);
+        float *c2 = rs__alloc_array(ctx, 2 * (size_t)L->cap, sizeof *c2);
+        if (!par || !cs || !pv || !c2) {
+            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv); rs__free(ctx, c2);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; }
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; cs[i].cls = SCAN_NO_CLASS; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
-        L->par = par; L->cscan = cs; L->pvis = pv;
+        L->par = par; L->cscan = cs; L->pvis = pv; L->c2read = c2;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs) + (uint64_t)L->npx * L->npy;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs + 2 * sizeof *c2) + (uint64_t)L->npx * L->npy;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -720,6 +750,7 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
     rs__free(ctx, L->cscan);
+    rs__free(ctx, L->c2read);
     rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
@@ -920,18 +951,18 @@ int rs__roam_debug_check(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
         uint32_t N, pp, lc = n[i].lc;
         if (lc == FREE) continue;
         if (lc == NIL) {
-            if (n[i].e != NIL && item_prio(&u, i, 0) > u.tol) { fprintf(stderr, "leaf %u wants split\n", i); bad++; }
+            if (n[i].e != NIL && item_prio_t(&u, i, 0, NULL) > u.tol) { fprintf(stderr, "leaf %u wants split\n", i); bad++; }
             continue;
         }
         if (lc == IMPL) {
             uint32_t rc = n[i].rc;
             for (uint32_t pos = 2; pos < L->ncut; pos++)
-                if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u))) && item_prio(&u, i, pos) > u.tol) {
+                if (!(rc & SPLIT_BIT(pos)) && (pos < 4 || (rc & SPLIT_BIT(pos >> 1u))) && item_prio_t(&u, i, pos, NULL) > u.tol) {
                     fprintf(stderr, "imp leaf %u/%u wants split\n", i, pos); bad++; }
         }
         for (uint32_t pos = lc == IMPL ? 1u : 0u; pos < (lc == IMPL ? L->ncut : 1u); pos++) {
             if (!rs__roam_mergeable(L, i, pos, &N, &pp)) continue;
-            double p = item_prio(&u, i, pos), q = N != NIL ? item_prio(&u, N, pp) : 0;
+            double p = item_prio_t(&u, i, pos, NULL), q = N != NIL ? item_prio_t(&u, N, pp, NULL) : 0;
             if (!(p > u.tol) && !(q > u.tol)) { fprintf(stderr, "missed merge node %u pos %u (lc %u) partner %u/%u prio %g %g\n", i, pos, lc, N, pp, p, q); bad++; }
         }
     }

@@ -442,7 +442,7 @@ static void drive_view(const drive_scene *s, int f, rs_roam_view *v)
 }
 
 typedef struct drive_frame {
-    double upd_ms, reb_ms, tgt_ms, tgt_reb_ms, worst, upload;
+    double upd_ms, reb_ms, tgt_ms, tgt_reb_ms, worst, upload, patch_upload;
     uint32_t upd_tris, reb_tris, tgt_tris, ops;
 } drive_frame;
 
@@ -461,9 +461,9 @@ static double pct(const double *sorted, int n, double q)
 typedef struct drive_sum {
     double mean[4], p50[4], p99[4], max[4]; /* update, rebuild, target update, target rebuild */
     double steady;      /* update / rebuild over frames 1.. (frame 0 builds the first mesh) */
-    double worst, max_tri_ratio, max_tgt_dev, mean_tris, max_upload, mean_upload;
-    int cracks, bad;
-    uint32_t patch;
+    double worst, max_tri_ratio, max_tgt_dev, mean_tris, max_upload, mean_upload, mean_patch_upload;
+    int cracks, bad, unit_mismatch;
+    uint32_t patch, unit;
 } drive_sum;
 
 static void drive_stats(const drive_frame *fr, int n, drive_sum *o)
@@ -530,6 +530,11 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
     uint32_t npatch = st0.patches_x * st0.patches_y;
     o->patch = st0.patch_size;
     uint32_t *gens = calloc(npatch, sizeof *gens);
+    uint32_t nunit = st0.units;
+    o->unit = st0.unit_size;
+    uint32_t *ugens = calloc(nunit, sizeof *ugens);
+    size_t *uverts = calloc(nunit, sizeof *uverts);
+    double patch_upload_sum = 0;
     for (int f = 0; f < DRIVE_FRAMES; f++) {
         rs_roam_view v;
         drive_view(s, f, &v);
@@ -580,8 +585,9 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
             }
         }
         free(gx); free(gy); free(vz); free(idx);
-        /* per-patch upload: the vertices of the patches whose generation
-         * changed, against those of all patches */
+        /* re-upload: what a host keeping one buffer per unit (per patch)
+         * sends, the vertices of the units (patches) whose generation
+         * changed, against those of all units (patches) */
         {
             size_t mv, mi, nvp, nip, all = 0, changed = 0;
             rs_roam_mesh_bound(L[0], NULL, &mv, &mi);
@@ -594,21 +600,61 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
                 if (g != gens[p]) changed += nvp;
                 gens[p] = g;
             }
+            fr[f].patch_upload = all ? (double)changed / (double)all : 0.0;
+            /* units: the changed ones extracted (as the host would), the
+             * others counted as at their last extraction; every 25th frame
+             * all of them, checked against those counts and, together,
+             * against the whole mesh's triangles */
+            int every = f % 25 == 0;
+            uint64_t *ukeys = NULL, *wkeys = NULL;
+            size_t nuk = 0, nwk = 0;
+            if (every) {
+                size_t ni;
+                if (rs_roam_extract(ctx, L[0], NULL, pv, NULL, mv, pi, mi, &nvp, &ni) != RS_OK) o->bad = 1;
+                else wkeys = rc_tri_keys(pv, pi, nwk = ni / 3, s->W, s->cs);
+                ukeys = malloc((mi / 3 + 1) * sizeof *ukeys);
+            }
+            all = changed = 0;
+            for (uint32_t u = 0; pv && pi && u < nunit; u++) {
+                uint32_t g = rs_roam_unit_generation(L[0], u);
+                if (g != ugens[u] || every) {
+                    if (rs_roam_extract_unit(ctx, L[0], u, NULL, pv, NULL, mv, pi, mi, &nvp, &nip) != RS_OK) { o->bad = 1; break; }
+                    if (g == ugens[u] && nvp != uverts[u]) o->unit_mismatch++;
+                    if (ukeys) {
+                        size_t nk = nip / 3;
+                        uint64_t *k = rc_tri_keys(pv, pi, nk, s->W, s->cs);
+                        if (k && nuk + nk <= mi / 3) memcpy(ukeys + nuk, k, nk * sizeof *k);
+                        nuk += nk;
+                        free(k);
+                    }
+                    if (g != ugens[u]) changed += nvp;
+                    uverts[u] = nvp;
+                    ugens[u] = g;
+                }
+                all += uverts[u];
+            }
+            if (every) {
+                if (ukeys) qsort(ukeys, nuk, sizeof *ukeys, rc_cmp_u64);
+                if (!ukeys || !wkeys || nuk != nwk || memcmp(ukeys, wkeys, nuk * sizeof *ukeys)) o->unit_mismatch++;
+            }
+            free(ukeys); free(wkeys);
             free(pv); free(pi);
             fr[f].upload = all ? (double)changed / (double)all : 0.0;
             if (f > 0) {
                 upload_sum += fr[f].upload;
+                patch_upload_sum += fr[f].patch_upload;
                 if (fr[f].upload > o->max_upload) o->max_upload = fr[f].upload;
             }
         }
-        fprintf(csv, "%s,%d,%.4f,%.4f,%u,%u,%u,%.4f,%.4f,%u,%.5f,%.5f\n", s->name, f, fr[f].upd_ms, fr[f].reb_ms,
+        fprintf(csv, "%s,%d,%.4f,%.4f,%u,%u,%u,%.4f,%.4f,%u,%.5f,%.5f,%.5f\n", s->name, f, fr[f].upd_ms, fr[f].reb_ms,
                 fr[f].upd_tris, fr[f].reb_tris, fr[f].ops, fr[f].tgt_ms, fr[f].tgt_reb_ms, fr[f].tgt_tris, fr[f].worst,
-                fr[f].upload);
+                fr[f].upload, fr[f].patch_upload);
     }
     drive_stats(fr, DRIVE_FRAMES, o);
     o->mean_tris = tris_sum / DRIVE_FRAMES;
     o->mean_upload = upload_sum / (DRIVE_FRAMES - 1);
-    free(fr); free(zm); free(gens);
+    o->mean_patch_upload = patch_upload_sum / (DRIVE_FRAMES - 1);
+    free(fr); free(zm); free(gens); free(ugens); free(uverts);
     for (int k = 0; k < 4; k++) rs_roam_free(ctx, L[k]);
     rs_dem_free(ctx, dem);
     return 0;
@@ -621,7 +667,7 @@ static int run_drive(const char *outdir)
     rs_ctx *ctx = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     fprintf(csv, "scene,frame,update_ms,rebuild_ms,update_tris,rebuild_tris,update_ops,target_update_ms,"
-                 "target_rebuild_ms,target_tris,worst_over_tol,upload_fraction\n");
+                 "target_rebuild_ms,target_tris,worst_over_tol,upload_fraction,patch_upload_fraction\n");
     drive_scene sc[4];
     memset(sc, 0, sizeof sc);
     sc[0].name = "fractal"; sc[0].W = sc[0].H = 1025; sc[0].cs = 1.0; sc[0].zs = DRIVE_FRACTAL_M / 65535.0; sc[0].target = 100000;
@@ -644,23 +690,32 @@ static int run_drive(const char *outdir)
                 "degree cone) and every 25th frame for cracks by `rc_check`.\n\n"
                 "![per-frame mesh time over the drive](bench/roam_drive.png)\n\n"
                 "Rows `-p16` use `patch_size` 16 (the automatic size is 64 on both maps). The steady ratio leaves out frame 0, "
-                "where the update builds the first mesh from the base mesh.\n\n"
+                "where the update builds the first mesh from the base mesh. *Re-uploaded*: what a host that keeps one buffer "
+                "per upload unit (`rs_roam_extract_unit`, the halves of `unit` x `unit` cell squares, the default) re-sends, "
+                "the vertices of the units whose `rs_roam_unit_generation` changed over the vertices of all units (each "
+                "unit's own count, so shared edge vertices count once per unit), frames 1..; every 25th frame all units are "
+                "extracted and their triangles together compared with `rs_roam_extract`'s. *By patch*: the same with one "
+                "buffer per patch.\n\n"
                 "| scene | patch | mean tris (rebuild) | update ms mean / p50 / p99 / max | rebuild ms mean / p50 / p99 / max "
                 "| update / rebuild (mean) | update / rebuild, frames 1.. | max tris update / rebuild | worst error / tolerance | cracked frames "
                 "| target: update ms mean / p99 | target: rebuild ms mean / p99 | target: max deviation "
-                "| vertices re-uploaded per frame, mean / max |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n", DRIVE_FRAMES, DRIVE_TOL);
+                "| unit | vertices re-uploaded per frame, mean / max | the same by patch, mean |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n", DRIVE_FRAMES, DRIVE_TOL);
     int fail = 0;
+    /* ROAM_DRIVE_ONLY=NAME runs that scene alone (profiling) */
+    const char *only = getenv("ROAM_DRIVE_ONLY");
     for (int k = 0; k < 4; k++) {
         drive_sum o;
+        if (only && *only && strcmp(only, sc[k].name)) continue;
         if (drive_scene_run(ctx, &sc[k], csv, &o) != 0) { fail = 1; continue; }
         fprintf(md, "| %s %ux%u | %u | %.0f | %.3f / %.3f / %.3f / %.3f | %.3f / %.3f / %.3f / %.3f | %.2f | %.2f | %.4f | %.4f | %d "
-                    "| %.3f / %.3f | %.3f / %.3f | %.2f %% | %.1f %% / %.1f %% |\n", sc[k].name, sc[k].W, sc[k].H, o.patch, o.mean_tris,
+                    "| %.3f / %.3f | %.3f / %.3f | %.2f %% | %u | %.1f %% / %.1f %% | %.1f %% |\n", sc[k].name, sc[k].W, sc[k].H, o.patch, o.mean_tris,
                 o.mean[0], o.p50[0], o.p99[0], o.max[0], o.mean[1], o.p50[1], o.p99[1], o.max[1], o.mean[0] / o.mean[1], o.steady,
                 o.max_tri_ratio, o.worst, o.cracks, o.mean[2], o.p99[2], o.mean[3], o.p99[3], 100 * o.max_tgt_dev,
-                100 * o.mean_upload, 100 * o.max_upload);
+                o.unit, 100 * o.mean_upload, 100 * o.max_upload, 100 * o.mean_patch_upload);
         fflush(md);
-        if (o.bad || o.cracks || o.worst > 1.0 + 1e-9 || o.max_tri_ratio > 1.05) fail = 1;
+        if (o.unit_mismatch) fprintf(stderr, "roam bench: %s: upload units disagree with the whole mesh (%d)\n", sc[k].name, o.unit_mismatch);
+        if (o.bad || o.cracks || o.unit_mismatch || o.worst > 1.0 + 1e-9 || o.max_tri_ratio > 1.05) fail = 1;
     }
     fprintf(md, "\n");
     free(sc[0].z);
