@@ -1137,7 +1137,7 @@ typedef struct rs_roam_options {
     uint64_t pool_bytes;  /* pool size in bytes (used when pool_nodes is 0) */
     uint32_t patch_size;  /* patch side in cells, a power of two; 0 -> automatic */
     uint32_t unit_size;   /* upload units (rs_roam_extract_unit) are the two halves of
-                             squares of this many cells, a power of two; 0 -> 16;
+                             squares of this many cells, a power of two; 0 -> 8;
                              clamped to [4, patch side] (to the patch for patches
                              of 2 cells or less) */
 } rs_roam_options;

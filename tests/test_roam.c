@@ -1473,7 +1473,8 @@ int main(void)
     test_update_strafe(ctx, 0);
     test_update_strafe(ctx, 16);
     test_patches(ctx);
-    test_units(ctx, 257, 201, 0, 0, 16);   /* automatic 64-cell patches, the default units */
+    test_units(ctx, 257, 201, 0, 0, 8);    /* automatic 64-cell patches, the default units */
+    test_units(ctx, 257, 201, 64, 16, 16);
     test_units(ctx, 257, 201, 64, 4, 4);   /* the smallest: one block */
     test_units(ctx, 200, 257, 32, 8, 8);
     test_units(ctx, 257, 201, 16, 64, 16); /* larger than the patch: the patch */

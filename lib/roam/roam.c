@@ -17,9 +17,10 @@
 #define AUTO_PATCH_LOG 6
 #define MAX_SIDE 32768u           /* node coordinates are uint16 */
 #define AUTO_POOL_CAP (1u << 21)
-/* Upload units: halves of 16-cell squares (32 per 64-cell patch; on the
- * drives about a tenth of the vertices change per frame, docs/roam.md) */
-#define DEFAULT_UNIT_SIZE 16u
+/* Upload units: halves of 8-cell squares (128 per 64-cell patch; on the
+ * drives 1-3 % of the vertices change per frame on average, at most a
+ * tenth; with 16-cell squares up to a quarter: docs/roam.md) */
+#define DEFAULT_UNIT_SIZE 8u
 
 size_t rs_roam_node_bytes(void) { return sizeof(roam_node); }
 
