@@ -100,6 +100,12 @@ int cli_load_texture(const char *path, const char *role, uint32_t *w, uint32_t *
 /* A context for the next cli_error lines ("FILE line N: surface image"),
  * printed before their message; NULL: none. */
 void cli_error_context(const char *context);
+/* cli_error on this thread writes its first line (no newline) into buf
+ * (CLI_ERROR_CAP bytes, emptied here) instead of stderr, until called with
+ * NULL: a worker thread's error is printed by the thread that reports it
+ * (cli/tiles.c), so a run still says one line. 0, or 1 when it cannot. */
+#define CLI_ERROR_CAP 512
+int cli_error_capture(char *buf);
 
 /* Atomic output: write into a temporary file in the same folder, then
  * rename over `path` on commit. Abort (or a failed commit) removes the
