@@ -184,6 +184,10 @@ typedef struct cli_png_options {
     int level;                 /* -1: CLI_PNG_LEVEL_DEFAULT */
     rs_progress_fn progress;   /* may be NULL; called with total 1000 */
     void *progress_user;
+    /* 1: level 1 by libdeflate, never ISA-L: ISA-L's level-1 stream for the
+     * same bytes was seen to differ between processes (docs/tiles.md,
+     * "Threads"), and tiles are compared byte for byte */
+    int no_isal;
 } cli_png_options;
 /* Encode the PNG into an open file (flushed, not closed). opt may be NULL. */
 int cli_png_encode(FILE *f, const char *shown, const cli_png_image *img, const cli_png_options *opt);

@@ -321,7 +321,7 @@ static int encode_tile(const run *r, uint8_t *rgb, const uint8_t *rgba, uint32_t
     if (opaque)
         for (size_t i = 0; i < n; i++) memcpy(rgb + 3 * i, rgba + 4 * i, 3);
     cli_png_image img = { side, side, opaque ? 3 : 4, 8, opaque ? (const void *)rgb : (const void *)rgba };
-    cli_png_options po = { r->a->s.png_level_given ? r->a->s.png_level : -1, NULL, NULL };
+    cli_png_options po = { r->a->s.png_level_given ? r->a->s.png_level : -1, NULL, NULL, 1 };
     *png = NULL;
     *size = 0;
     FILE *f = open_memstream(png, size);
