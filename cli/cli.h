@@ -100,6 +100,12 @@ int cli_load_texture(const char *path, const char *role, uint32_t *w, uint32_t *
 /* A context for the next cli_error lines ("FILE line N: surface image"),
  * printed before their message; NULL: none. */
 void cli_error_context(const char *context);
+/* cli_error on this thread writes its first line (no newline) into buf
+ * (CLI_ERROR_CAP bytes, emptied here) instead of stderr, until called with
+ * NULL: a worker thread's error is printed by the thread that reports it
+ * (cli/tiles.c), so a run still says one line. 0, or 1 when it cannot. */
+#define CLI_ERROR_CAP 512
+int cli_error_capture(char *buf);
 
 /* Atomic output: write into a temporary file in the same folder, then
  * rename over `path` on commit. Abort (or a failed commit) removes the
@@ -178,6 +184,10 @@ typedef struct cli_png_options {
     int level;                 /* -1: CLI_PNG_LEVEL_DEFAULT */
     rs_progress_fn progress;   /* may be NULL; called with total 1000 */
     void *progress_user;
+    /* 1: level 1 by libdeflate, never ISA-L: ISA-L's level-1 stream for the
+     * same bytes was seen to differ between processes (docs/tiles.md,
+     * "Threads"), and tiles are compared byte for byte */
+    int no_isal;
 } cli_png_options;
 /* Encode the PNG into an open file (flushed, not closed). opt may be NULL. */
 int cli_png_encode(FILE *f, const char *shown, const cli_png_image *img, const cli_png_options *opt);

@@ -99,7 +99,7 @@ int cli_normal_png(const rs_splatter *s, const rs_normal_options *o, uint32_t x0
         rc = 1;
     } else {
         cli_png_image img = { w, h, 3, 8, rgb };
-        cli_png_options po = { png_level, NULL, NULL };
+        cli_png_options po = { png_level, NULL, NULL, 0 };
         rc = cli_png_encode(f, path, &img, &po);
     }
     free(rgb);

@@ -572,6 +572,7 @@ int cli_png_encode(FILE *f, const char *shown, const cli_png_image *img, const c
     cli_png_layout l;
     if (cli_png_layout_init(&l, shown, img->width, img->height, img->channels, img->bits, opt ? opt->level : -1))
         return 1;
+    if (opt && opt->no_isal) l.isal = 0;
     if (!img->data) {
         cli_error("%s: no pixels to write", shown);
         return 1;

@@ -672,7 +672,7 @@ int cli_render_main(int argc, char **argv)
     {
         /* into OUT's temporary, opened before the work; renamed with --stats */
         cli_png_image img = { a.width, a.height, 3, 8, frame };
-        cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL };
+        cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL, 0 };
         if (cli_png_encode(out.f, out.path, &img, &po) || cli_out_finish(&out)) goto done;
         if (!cli_png_file_complete(out.tmp)) {
             cli_error("%s: write failed: the PNG did not reach the disk whole", out.path);

@@ -465,7 +465,7 @@ int cli_render_path_main(int argc, char **argv)
     for (size_t k = 0; k < (size_t)a.width * a.height; k++) memmove(frame + 3 * k, frame + 4 * k, 3);
     {
         cli_png_image img = { a.width, a.height, 3, 8, frame };
-        cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL };
+        cli_png_options po = { a.s.png_level_given ? a.s.png_level : -1, NULL, NULL, 0 };
         if (cli_png_encode(out.f, out.path, &img, &po) || cli_out_finish(&out)) goto done;
     }
     double tp[3], fp[3];

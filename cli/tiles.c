@@ -38,6 +38,7 @@
 #include "tiles.h"
 
 #include <dirent.h>
+#include <pthread.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -94,7 +95,8 @@ static const char tiles_usage[] =
     "  --from-children    build the coarser levels from the shards' tiles on disk\n"
     "                     and write tiles.json\n"
     "  --resume           keep tiles whose file matches its logged SHA-256\n"
-    "  --threads N        splat threads (default: all cores; same tiles for any N)\n"
+    "  --threads N        splat threads and tile workers (box filter, PNG, SHA-256,\n"
+    "                     writes; default: all cores; the same bytes for any N)\n"
     "  --png-level N      PNG compression 0..12 (default 1)\n"
     "  --viewer           also OUTDIR/index.html: the pyramid on a Leaflet map\n"
     "                     (Leaflet copied from libjs-leaflet into OUTDIR/leaflet/)\n"
@@ -199,6 +201,10 @@ typedef struct run {
     uint32_t P, side;   /* halo, and a written tile's side S + 2P */
     int layers;         /* 1, or 2 with --normals (layer 1: the normal map) */
     unsigned threads;   /* the splat's thread count (the normal map's too) */
+    /* workers run: a tile's colour is rendered on the main thread alone (in
+     * bands the render took 2-3x as long on a busy 2-core machine: its threads wait
+     * for cores the workers hold, and the workers wait for the render) */
+    int one_band;
     /* Terrain-only subtrees (docs/tiles.md, "Sparse levels"): a level-zd tile
      * whose area holds no road's reach is rendered directly by dsp, the same
      * splat at T >> (zmax - zd) texels, and its subtree is never rendered. */
@@ -222,12 +228,11 @@ typedef struct run {
     int n_old;
     const cli_mbtiles_api *mb;
     void *db;
-    uint8_t *bufs[2][MAX_ZOOM + 2]; /* per layer, one S x S RGBA tile per depth */
+    struct pool *pl;                /* the workers (below; none with --threads 1) */
     uint8_t *lbuf[2][MAX_ZOOM + 2]; /* --halo: per layer, one S x S block per level (level_rect) */
     uint8_t *full;               /* a written tile, side x side RGBA (halo) or a decoded one */
     uint8_t *scratch;            /* a finest render, side x side RGBA */
     uint8_t *nrgb;               /* a finest normal render, side x side RGB */
-    uint8_t *rgb;                /* packing scratch, side x side RGB */
     char *path;                  /* tile path scratch */
     size_t path_cap;
     uint64_t rendered, written, road_free, kept, done_finest, total_finest;
@@ -276,39 +281,47 @@ static int own_folder(const char *path)
 
 /* "OUTDIR/z/x/y.png" (layer 1: "y_n.png") in r->path; with mk, its
  * folders are made. */
-static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk, int layer)
+static int tile_path_in(const run *r, char **path, size_t *cap, uint32_t z, uint64_t x, uint64_t y, int mk, int layer)
 {
     size_t need = strlen(r->a->out) + 80;
-    if (need > r->path_cap) {
-        free(r->path);
-        if (!(r->path = malloc(need))) {
-            r->path_cap = 0;
+    if (need > *cap) {
+        free(*path);
+        if (!(*path = malloc(need))) {
+            *cap = 0;
             cli_error("out of memory");
             return 1;
         }
-        r->path_cap = need;
+        *cap = need;
     }
-    int n = snprintf(r->path, need, "%s/%u", r->a->out, z);
-    if (mk && own_folder(r->path)) return 1;
-    n += snprintf(r->path + n, need - n, "/%llu", (unsigned long long)x);
-    if (mk && own_folder(r->path)) return 1;
-    snprintf(r->path + n, need - n, "/%llu%s.png", (unsigned long long)file_y(r, z, y), layer ? "_n" : "");
+    char *p = *path;
+    int n = snprintf(p, need, "%s/%u", r->a->out, z);
+    if (mk && own_folder(p)) return 1;
+    n += snprintf(p + n, need - n, "/%llu", (unsigned long long)x);
+    if (mk && own_folder(p)) return 1;
+    snprintf(p + n, need - n, "/%llu%s.png", (unsigned long long)file_y(r, z, y), layer ? "_n" : "");
     return 0;
+}
+
+/* The same in r->path (the main thread's). */
+static int tile_path(run *r, uint32_t z, uint64_t x, uint64_t y, int mk, int layer)
+{
+    return tile_path_in(r, &r->path, &r->path_cap, z, x, y, mk, layer);
 }
 
 /* ---- PNG bytes: encode into memory, decode our own tiles ------------------------ */
 
 /* The side x side tile as a PNG in memory (*png malloc'd): RGB when every
  * pixel is opaque, else RGBA. */
-static int encode_tile(run *r, const uint8_t *rgba, uint32_t side, const char *shown, char **png, size_t *size)
+static int encode_tile(const run *r, uint8_t *rgb, const uint8_t *rgba, uint32_t side, const char *shown, char **png,
+                       size_t *size)
 {
     size_t n = (size_t)side * side;
     int opaque = 1;
     for (size_t i = 0; i < n && opaque; i++) opaque = rgba[4 * i + 3] == 255;
     if (opaque)
-        for (size_t i = 0; i < n; i++) memcpy(r->rgb + 3 * i, rgba + 4 * i, 3);
-    cli_png_image img = { side, side, opaque ? 3 : 4, 8, opaque ? (const void *)r->rgb : (const void *)rgba };
-    cli_png_options po = { r->a->s.png_level_given ? r->a->s.png_level : -1, NULL, NULL };
+        for (size_t i = 0; i < n; i++) memcpy(rgb + 3 * i, rgba + 4 * i, 3);
+    cli_png_image img = { side, side, opaque ? 3 : 4, 8, opaque ? (const void *)rgb : (const void *)rgba };
+    cli_png_options po = { r->a->s.png_level_given ? r->a->s.png_level : -1, NULL, NULL, 1 };
     *png = NULL;
     *size = 0;
     FILE *f = open_memstream(png, size);
@@ -465,6 +478,7 @@ static int splat_rect(run *r, int direct, int layer, int64_t X0, int64_t Y0, uin
     if (layer == 0) {
         cli_splat_job job;
         cli_splat_job_init(&job, sp, &r->a->s, 1);
+        if (r->one_band) job.threads = 1;
         if (direct) job.texels = r->T >> (r->zmax - r->zd);
         job.x0 = (uint32_t)x0, job.y0 = (uint32_t)y0, job.w = cw, job.h = chh;
         job.rgba = r->scratch;
@@ -624,72 +638,395 @@ static int log_line(run *r, uint32_t z, uint64_t x, uint64_t y, int flag, const 
     return tput(&r->tab, tkey(z, x, y), flag, hash, nhash) ? 0 : (cli_error("out of memory"), 1);
 }
 
-/* Encode, hash and store one layer of a finished tile (a file renamed
- * into place, or a row of the MBTiles file). */
-static int store_layer(run *r, uint32_t z, uint64_t x, uint64_t y, int layer, const uint8_t *core, uint8_t hash[32])
+/* Every pixel transparent: a mercator tile off the DEM is not written. */
+static int all_clear(const uint8_t *rgba, uint32_t S)
+{
+    for (size_t i = 0, n = (size_t)S * S; i < n; i++)
+        if (rgba[4 * i + 3]) return 0;
+    return 1;
+}
+
+/* ---- the workers ------------------------------------------------------------------
+ *
+ * With --threads N > 1, N worker threads take the work after a tile's
+ * pixels exist: the 2x2 box filter into its parent, PNG compression, the
+ * SHA-256 and the file write (docs/tiles.md, "Threads"). The main thread
+ * walks the quadtree as before and renders the finest tiles; each tile it
+ * finishes becomes a job with a sequence number, and the jobs' results (log
+ * lines, MBTiles rows, counters, an error) are committed by the main thread
+ * in that order, so every byte of the output is that of one thread. With
+ * --threads 1 the main thread runs each job itself when it is queued. */
+
+/* A tile's pixels, S x S RGBA per layer. A parent's are the box filter of
+ * its children: each child's job boxes it into its quadrant, and the
+ * parent is ready when `pending` (children not yet boxed, +1 while build()
+ * adds them) is 0. refs and pending change under the pool's mutex. */
+typedef struct pix {
+    uint8_t *px[2];
+    int refs, pending;
+    struct pix *parent;
+    int q;
+} pix;
+
+typedef struct job {
+    pix *p;
+    uint32_t z;
+    uint64_t x, y;
+    /* 0: box into the parent only; 'r', 'w', 'd': store with that flag;
+     * 'c': store as 'w' unless every pixel is clear (mercator: then 'e');
+     * 'e': log road-free, not written */
+    int mode;
+    uint8_t *written[2]; /* --halo: the side x side pixels to write (owned); else p's */
+    /* results, read by the commit once done */
+    int done, bad, flag;
+    uint8_t hash[2][32];
+    char *png[2]; /* MBTiles: the tile's PNG, put in order by the commit */
+    size_t size[2];
+    char err[CLI_ERROR_CAP];
+} job;
+
+typedef struct wscratch { /* a thread's own scratch for storing tiles */
+    uint8_t *rgb;
+    char *path;
+    size_t cap;
+} wscratch;
+
+typedef struct pool {
+    run *r;
+    pthread_mutex_t mu, tmu; /* tmu: the CLI's temporary-file registry */
+    pthread_cond_t cv;       /* any change: a job queued or done, a pix ready */
+    job *ring;               /* jobs by sequence number modulo cap */
+    uint64_t cap, head, next, tail; /* [head, tail) queued; head: next to commit; next: next to hand out */
+    int nth, stop, abort;
+    pthread_t th[64];
+    wscratch ws[65];         /* one per worker; ws[nth] the main thread's */
+    struct warg { struct pool *pl; int i; } wa[64];
+} pool;
+
+static pix *pix_new(const run *r, int pending)
+{
+    pix *p = calloc(1, sizeof *p);
+    size_t n = (size_t)r->S * r->S * 4;
+    if (!p) return NULL;
+    p->refs = 1;
+    p->pending = pending;
+    for (int l = 0; l < r->layers; l++)
+        if (!(p->px[l] = pending ? calloc(n, 1) : malloc(n))) {
+            free(p->px[0]);
+            free(p);
+            return NULL;
+        }
+    return p;
+}
+
+static void pix_release(pool *pl, pix *p)
+{
+    if (!p) return;
+    pthread_mutex_lock(&pl->mu);
+    int last = --p->refs == 0;
+    pthread_mutex_unlock(&pl->mu);
+    if (last) {
+        free(p->px[0]);
+        free(p->px[1]);
+        free(p);
+    }
+}
+
+/* Wait until p's children are all boxed into it. */
+static void pix_wait(pool *pl, pix *p)
+{
+    pthread_mutex_lock(&pl->mu);
+    while (p->pending > 0) pthread_cond_wait(&pl->cv, &pl->mu);
+    pthread_mutex_unlock(&pl->mu);
+}
+
+/* One fewer child to wait for (or build() done adding them). */
+static void pix_unhold(pool *pl, pix *p)
+{
+    pthread_mutex_lock(&pl->mu);
+    if (--p->pending == 0) pthread_cond_broadcast(&pl->cv);
+    pthread_mutex_unlock(&pl->mu);
+}
+
+/* Encode, hash and store one layer of a finished tile: a file renamed into
+ * place, or (MBTiles) the PNG kept in *keep for the commit to put. */
+static int store_layer(const run *r, pool *pl, wscratch *w, uint32_t z, uint64_t x, uint64_t y, int layer,
+                       const uint8_t *px, uint8_t hash[32], char **keep, size_t *keep_size)
 {
     char shown[96], *png = NULL;
     size_t size = 0;
     snprintf(shown, sizeof shown, "tile %u/%llu/%llu%s", z, (unsigned long long)x, (unsigned long long)file_y(r, z, y),
              layer ? "_n" : "");
-    const uint8_t *px = with_halo(r, layer, z, x, y, core);
-    if (!px || encode_tile(r, px, r->side, shown, &png, &size)) return 1;
+    if (encode_tile(r, w->rgb, px, r->side, shown, &png, &size)) return 1;
     cli_sha256(png, size, hash);
-    int bad = 0;
     if (r->db) {
-        bad = r->mb->put(r->db, layer, z, (uint32_t)x, (uint32_t)((((uint64_t)1 << z) - 1 - y)), png, size);
-    } else {
-        char *tmp = NULL;
-        int fd = -1;
-        bad = tile_path(r, z, x, y, 1, layer);
-        if (!bad) { /* "DIR/.NAME.RUNID.part": this run's own, made with O_EXCL | O_NOFOLLOW */
-            const char *base = strrchr(r->path, '/') + 1;
-            size_t dl = (size_t)(base - r->path), cap = strlen(r->path) + 32;
-            if (!(tmp = malloc(cap))) {
-                cli_error("out of memory");
-                bad = 1;
-            } else {
-                /* a temporary an earlier, killed run of this log left for this tile */
-                for (int k = 0; k < r->n_old; k++) {
-                    struct stat ls;
-                    snprintf(tmp, cap, "%.*s.%s.%s.part", (int)dl, r->path, base, r->old_ids[k]);
-                    if (lstat(tmp, &ls) == 0 && S_ISREG(ls.st_mode)) unlink(tmp);
-                }
-                snprintf(tmp, cap, "%.*s.%s.%s.part", (int)dl, r->path, base, r->runid);
-                if ((fd = cli_temp_create_named(tmp)) < 0) {
-                    cli_error("%s: cannot create a temporary file next to it: %s", r->path, strerror(errno));
-                    bad = 1;
-                }
-            }
-        }
-        if (!bad) {
-            int e = 0;
-            if (write_all(fd, png, size)) e = errno ? errno : EIO;
-            if (close(fd) != 0 && !e) e = errno;
-            int clash = !e && cli_inputs_check_output(r->path, "a tile");
-            if (!e && !clash && rename(tmp, r->path) != 0) e = errno;
-            if (e || clash) {
-                if (e) cli_error("%s: write failed: %s", r->path, strerror(e));
-                cli_temp_remove(tmp);
-                bad = 1;
-            } else {
-                cli_temp_forget(tmp);
-            }
-        }
-        free(tmp);
+        *keep = png;
+        *keep_size = size;
+        return 0;
     }
+    char *tmp = NULL;
+    int fd = -1, bad = tile_path_in(r, &w->path, &w->cap, z, x, y, 1, layer);
+    const char *path = w->path;
+    if (!bad) { /* "DIR/.NAME.RUNID.part": this run's own, made with O_EXCL | O_NOFOLLOW */
+        const char *base = strrchr(path, '/') + 1;
+        size_t dl = (size_t)(base - path), cap = strlen(path) + 32;
+        if (!(tmp = malloc(cap))) {
+            cli_error("out of memory");
+            bad = 1;
+        } else {
+            /* a temporary an earlier, killed run of this log left for this tile */
+            for (int k = 0; k < r->n_old; k++) {
+                struct stat ls;
+                snprintf(tmp, cap, "%.*s.%s.%s.part", (int)dl, path, base, r->old_ids[k]);
+                if (lstat(tmp, &ls) == 0 && S_ISREG(ls.st_mode)) unlink(tmp);
+            }
+            snprintf(tmp, cap, "%.*s.%s.%s.part", (int)dl, path, base, r->runid);
+            pthread_mutex_lock(&pl->tmu);
+            fd = cli_temp_create_named(tmp);
+            int e = errno;
+            pthread_mutex_unlock(&pl->tmu);
+            if (fd < 0) {
+                cli_error("%s: cannot create a temporary file next to it: %s", path, strerror(e));
+                bad = 1;
+            }
+        }
+    }
+    if (!bad) {
+        int e = 0;
+        if (write_all(fd, png, size)) e = errno ? errno : EIO;
+        if (close(fd) != 0 && !e) e = errno;
+        int clash = !e && cli_inputs_check_output(path, "a tile");
+        if (!e && !clash && rename(tmp, path) != 0) e = errno;
+        pthread_mutex_lock(&pl->tmu);
+        if (e || clash)
+            cli_temp_remove(tmp);
+        else
+            cli_temp_forget(tmp);
+        pthread_mutex_unlock(&pl->tmu);
+        if (e) cli_error("%s: write failed: %s", path, strerror(e));
+        bad = e || clash;
+    }
+    free(tmp);
     free(png);
     return bad;
 }
 
-/* Store every layer of a finished tile, then log it. */
-static int store_tile(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *core, int flag)
+/* A job's work on the thread that took it: wait for its pixels, box them
+ * into the parent, store the tile. Errors are captured into j->err. */
+static void job_run(pool *pl, wscratch *w, job *j, int skip)
 {
-    uint8_t hash[32], nhash[32];
-    if (store_layer(r, z, x, y, 0, core[0], hash)) return 1;
-    if (r->layers > 1 && store_layer(r, z, x, y, 1, core[1], nhash)) return 1;
-    r->written++;
-    return log_line(r, z, x, y, flag, hash, r->layers > 1 ? nhash : NULL);
+    const run *r = pl->r;
+    pix *p = j->p;
+    if (!skip) pix_wait(pl, p);
+    if (p->parent) {
+        if (!skip)
+            for (int l = 0; l < r->layers; l++) box_down(l, p->px[l], p->parent->px[l], r->S, p->q & 1, p->q >> 1);
+        pix_unhold(pl, p->parent);
+        pix_release(pl, p->parent);
+    }
+    j->flag = j->mode;
+    if (skip) {
+        j->bad = 1;
+    } else if (j->mode && j->mode != 'e') {
+        if (j->mode == 'c') j->flag = all_clear(p->px[0], r->S) ? 'e' : 'w';
+        if (j->flag != 'e') {
+            cli_error_capture(j->err);
+            for (int l = 0; l < r->layers && !j->bad; l++)
+                j->bad = store_layer(r, pl, w, j->z, j->x, j->y, l, j->written[l] ? j->written[l] : p->px[l], j->hash[l],
+                                     &j->png[l], &j->size[l]);
+            cli_error_capture(NULL);
+            if (j->bad && !j->err[0]) snprintf(j->err, sizeof j->err, "roadsplat: tile %u/%llu/%llu: cannot store it",
+                                               j->z, (unsigned long long)j->x, (unsigned long long)file_y(r, j->z, j->y));
+        }
+    }
+    free(j->written[0]);
+    free(j->written[1]);
+    j->written[0] = j->written[1] = NULL;
+    j->p = NULL;
+    pix_release(pl, p);
+}
+
+static void *worker_main(void *arg)
+{
+    struct warg *wa = arg;
+    pool *pl = wa->pl;
+    pthread_mutex_lock(&pl->mu);
+    for (;;) {
+        while (pl->next == pl->tail && !pl->stop) pthread_cond_wait(&pl->cv, &pl->mu);
+        if (pl->next == pl->tail) break;
+        job *j = &pl->ring[pl->next++ % pl->cap];
+        int skip = pl->abort; /* decided when taken: every job before a failed one runs in full */
+        pthread_mutex_unlock(&pl->mu);
+        job_run(pl, &pl->ws[wa->i], j, skip);
+        pthread_mutex_lock(&pl->mu);
+        j->done = 1;
+        if (j->bad) pl->abort = 1;
+        pthread_cond_broadcast(&pl->cv);
+    }
+    pthread_mutex_unlock(&pl->mu);
+    return NULL;
+}
+
+/* The pool: n workers (0: the main thread runs each job as it is queued). */
+static int pool_start(run *r, unsigned n)
+{
+    pool *pl = calloc(1, sizeof *pl);
+    if (!pl) return cli_error("out of memory"), 1;
+    r->pl = pl;
+    pl->r = r;
+    if (n > 64) n = 64;
+    pl->cap = n ? 4 * (uint64_t)n : 1;
+    size_t side2 = (size_t)r->side * r->side;
+    pthread_mutex_init(&pl->mu, NULL);
+    pthread_mutex_init(&pl->tmu, NULL);
+    pthread_cond_init(&pl->cv, NULL);
+    cli_error_capture(NULL); /* the capture key made before any worker runs */
+    if (!(pl->ring = calloc(pl->cap, sizeof *pl->ring))) return cli_error("out of memory"), 1;
+    for (unsigned i = 0; i <= n; i++)
+        if (!(pl->ws[i].rgb = malloc(side2 * 3))) return cli_error("out of memory for the tile buffers"), 1;
+    for (unsigned i = 0; i < n; i++) {
+        pl->wa[i].pl = pl;
+        pl->wa[i].i = (int)i;
+        int e = pthread_create(&pl->th[i], NULL, worker_main, &pl->wa[i]);
+        if (e) {
+            cli_error("cannot start a worker thread: %s", strerror(e));
+            return 1;
+        }
+        pl->nth++;
+    }
+    return 0;
+}
+
+/* Stop the workers after the jobs they hold (with abort, the jobs not yet
+ * taken are skipped) and free the pool. */
+static void pool_stop(run *r, int abort)
+{
+    pool *pl = r->pl;
+    if (!pl) return;
+    pthread_mutex_lock(&pl->mu);
+    pl->stop = 1;
+    if (abort) pl->abort = 1;
+    pthread_cond_broadcast(&pl->cv);
+    pthread_mutex_unlock(&pl->mu);
+    for (int i = 0; i < pl->nth; i++) pthread_join(pl->th[i], NULL);
+    if (pl->ring) /* jobs never run (an error on the main thread with --threads 1 cannot leave any) */
+        for (uint64_t s = pl->head; s < pl->tail; s++) {
+            job *j = &pl->ring[s % pl->cap];
+            if (!j->done && j->p) job_run(pl, &pl->ws[pl->nth], j, 1);
+            free(j->png[0]);
+            free(j->png[1]);
+        }
+    for (int i = 0; i < 65; i++) free(pl->ws[i].rgb), free(pl->ws[i].path);
+    pthread_mutex_destroy(&pl->mu);
+    pthread_mutex_destroy(&pl->tmu);
+    pthread_cond_destroy(&pl->cv);
+    free(pl->ring);
+    free(pl);
+    r->pl = NULL;
+}
+
+/* Commit a done job on the main thread: its MBTiles rows and log line, the
+ * counters; a failed job's captured line is printed here. */
+static int commit(run *r, job *j)
+{
+    int bad = j->bad;
+    if (bad) {
+        if (j->err[0]) fprintf(stderr, "%s\n", j->err);
+    } else if (j->flag == 'e') {
+        r->road_free++;
+        bad = log_line(r, j->z, j->x, j->y, 'e', NULL, NULL);
+    } else if (j->flag) {
+        for (int l = 0; l < r->layers && !bad && r->db; l++)
+            bad = r->mb->put(r->db, l, j->z, (uint32_t)j->x, (uint32_t)((((uint64_t)1 << j->z) - 1 - j->y)), j->png[l],
+                             j->size[l]);
+        if (!bad) {
+            r->written++;
+            bad = log_line(r, j->z, j->x, j->y, j->flag, j->hash[0], r->layers > 1 ? j->hash[1] : NULL);
+        }
+    }
+    free(j->png[0]);
+    free(j->png[1]);
+    j->png[0] = j->png[1] = NULL;
+    return bad;
+}
+
+/* Commit the done jobs in sequence order; wait for the next one while the
+ * queue is full, after a failure, or (all) until every job is committed. */
+static int pool_commit(run *r, int all)
+{
+    pool *pl = r->pl;
+    int bad = 0;
+    pthread_mutex_lock(&pl->mu);
+    while (!bad && pl->head < pl->tail) {
+        job *j = &pl->ring[pl->head % pl->cap];
+        if (!j->done) {
+            if (!all && !pl->abort && pl->tail - pl->head < pl->cap) break;
+            pthread_cond_wait(&pl->cv, &pl->mu);
+            continue;
+        }
+        pthread_mutex_unlock(&pl->mu);
+        bad = commit(r, j);
+        pthread_mutex_lock(&pl->mu);
+        pl->head++;
+        if (bad) pl->abort = 1;
+    }
+    pthread_mutex_unlock(&pl->mu);
+    return bad;
+}
+
+/* Tile (z, x, y) is finished on the main thread with its pixels in p (the
+ * caller's reference is passed on): queue its job, which boxes p into
+ * quadrant q of parent (when not NULL) and stores it by `mode` (job). */
+static int finish(run *r, pix *p, pix *parent, int q, uint32_t z, uint64_t x, uint64_t y, int mode)
+{
+    pool *pl = r->pl;
+    uint8_t *written[2] = { NULL, NULL };
+    if (!parent && !mode) {
+        pix_release(pl, p);
+        return 0;
+    }
+    if (r->P && mode && mode != 'e') { /* --halo: the ring is made here, where level_rect may render */
+        pix_wait(pl, p);
+        size_t n = (size_t)r->side * r->side * 4;
+        for (int l = 0; l < r->layers; l++) {
+            const uint8_t *f = with_halo(r, l, z, x, y, p->px[l]);
+            if (f && !(written[l] = malloc(n))) cli_error("out of memory");
+            if (!written[l]) {
+                free(written[0]);
+                pix_release(pl, p);
+                return 1;
+            }
+            memcpy(written[l], f, n);
+        }
+    }
+    if (pool_commit(r, 0)) { /* room in the queue */
+        free(written[0]);
+        free(written[1]);
+        pix_release(pl, p);
+        return 1;
+    }
+    pthread_mutex_lock(&pl->mu);
+    if (parent) {
+        parent->pending++;
+        parent->refs++;
+        p->parent = parent;
+        p->q = q;
+    }
+    job *j = &pl->ring[pl->tail % pl->cap];
+    memset(j, 0, sizeof *j);
+    j->p = p;
+    j->z = z, j->x = x, j->y = y;
+    j->mode = mode;
+    j->written[0] = written[0], j->written[1] = written[1];
+    pl->tail++;
+    pthread_cond_broadcast(&pl->cv);
+    pthread_mutex_unlock(&pl->mu);
+    if (!pl->nth) { /* --threads 1: run here */
+        job_run(pl, &pl->ws[0], j, 0);
+        j->done = 1;
+        pl->next = pl->tail;
+    }
+    return pool_commit(r, 0);
 }
 
 /* A tile file read back, quietly: 0, or 1 (missing, unreadable, not a
@@ -760,29 +1097,21 @@ static int logged_file_ok(run *r, uint32_t z, uint64_t x, uint64_t y, entry *e, 
 
 /* ---- the quadtree ---------------------------------------------------------------- */
 
-/* Every pixel transparent: a mercator tile off the DEM is not written. */
-static int all_clear(const uint8_t *rgba, uint32_t S)
+/* Tile (z, x, y), its pixels boxed into quadrant q of parent when the
+ * caller needs them (parent not NULL: a tile already done is then read back
+ * from its files, or recomputed when it was road-free and not written).
+ * record 0: compute only (a road-free tile recomputed for its parent).
+ * *has_road: some pixel of the tile holds a road. */
+static int build(run *r, uint32_t z, uint64_t x, uint64_t y, pix *parent, int q, int record, int *has_road)
 {
-    for (size_t i = 0, n = (size_t)S * S; i < n; i++)
-        if (rgba[4 * i + 3]) return 0;
-    return 1;
-}
-
-/* Tile (z, x, y) into out[layer] (S x S RGBA, r->bufs[layer][depth] of
- * the caller). need: the caller needs the pixels (a tile already done is
- * then read back from its files, or recomputed when it was road-free and
- * not written). record 0: compute only (a road-free tile recomputed for
- * its parent). *has_road: some pixel of the tile holds a road. */
-static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out, int need, int record, int *has_road)
-{
+    int need = parent != NULL;
+    pix *p = NULL;
     if (z < r->zmin) { /* --tiling mercator: a level not written, whose pixels nothing needs */
-        uint32_t d = r->zmax - z - 1;
-        uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
         int any = 0;
-        for (int q = 0; q < 4; q++) {
-            uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+        for (int k = 0; k < 4; k++) {
+            uint64_t cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
             int cr = 0;
-            if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, child, 0, record, &cr)) return 1;
+            if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, NULL, 0, record, &cr)) return 1;
             any |= cr;
         }
         *has_road = any;
@@ -790,26 +1119,30 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
     }
     entry *e = tfind(&r->tab, tkey(z, x, y));
     if (e && record && (e->flag == 'r' || e->flag == 'w' || e->flag == 'd')) {
-        int ok = logged_file_ok(r, z, x, y, e, need ? out : NULL);
-        if (ok < 0) return 1;
+        if (need && !(p = pix_new(r, 0))) return cli_error("out of memory for the tile buffers"), 1;
+        int ok = logged_file_ok(r, z, x, y, e, need ? p->px : NULL);
+        if (ok < 0) {
+            pix_release(r->pl, p);
+            return 1;
+        }
         if (ok) {
             *has_road = e->flag == 'r';
             r->kept++;
             if (!need && r->a->resume && z < r->zmax && e->flag != 'd') {
                 /* --resume: a kept tile's subtree is checked too (a child lost
                  * under an intact parent is made again) */
-                uint32_t d = r->zmax - z - 1;
-                uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
-                for (int q = 0; q < 4; q++) {
-                    uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+                for (int k = 0; k < 4; k++) {
+                    uint64_t cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
                     int cr = 0;
-                    if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, child, 0, 1, &cr)) return 1;
+                    if (exists(r, z + 1, cx, cy) && build(r, z + 1, cx, cy, NULL, 0, 1, &cr)) return 1;
                 }
                 return 0;
             }
             r->done_finest += finest_count(r, z, x, y);
-            return 0;
+            return finish(r, p, parent, q, z, x, y, 0);
         }
+        pix_release(r->pl, p);
+        p = NULL;
         e = NULL; /* missing or changed: made again */
     }
     if (e && record && e->flag == 'e') {
@@ -822,16 +1155,20 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
     }
     if (r->route && z == r->zd && zone_free(r, x, y)) {
         /* terrain only: this level's pixels rendered directly, no subtree */
+        if (!(p = pix_new(r, 0))) return cli_error("out of memory for the tile buffers"), 1;
         for (int l = 0; l < r->layers; l++)
-            if (splat_rect(r, 1, l, (int64_t)(x * r->S), (int64_t)(y * r->S), r->S, r->S, out[l], r->S, NULL)) return 1;
+            if (splat_rect(r, 1, l, (int64_t)(x * r->S), (int64_t)(y * r->S), r->S, r->S, p->px[l], r->S, NULL)) {
+                pix_release(r->pl, p);
+                return 1;
+            }
         *has_road = 0;
         r->direct++;
         if (record) {
             r->done_finest += finest_count(r, z, x, y);
             cli_progress_cb(&r->prog, r->done_finest, r->total_finest);
-            return store_tile(r, z, x, y, out, 'd');
+            return finish(r, p, parent, q, z, x, y, 'd');
         }
-        return 0;
+        return finish(r, p, parent, q, z, x, y, 0);
     } else if (z == r->zmax) {
         if (record && r->a->from_children && !e) {
             if (tile_path(r, z, x, y, 0, 0)) return 1;
@@ -839,38 +1176,43 @@ static int build(run *r, uint32_t z, uint64_t x, uint64_t y, uint8_t *const *out
                       r->path);
             return 1;
         }
-        if (render_tile(r, x, y, out, has_road)) return 1;
+        if (!(p = pix_new(r, 0))) return cli_error("out of memory for the tile buffers"), 1;
+        if (render_tile(r, x, y, p->px, has_road)) {
+            pix_release(r->pl, p);
+            return 1;
+        }
         if (record) {
             r->done_finest++;
             cli_progress_cb(&r->prog, r->done_finest, r->total_finest);
         }
     } else {
-        uint32_t d = r->zmax - z - 1;
-        uint8_t *child[2] = { r->bufs[0][d], r->bufs[1][d] };
+        /* the children's jobs box them into p; held (pending 1) until all are queued */
+        if (!(p = pix_new(r, 1))) return cli_error("out of memory for the tile buffers"), 1;
         int any = 0;
-        for (int l = 0; l < r->layers; l++) memset(out[l], 0, (size_t)r->S * r->S * 4);
-        for (int q = 0; q < 4; q++) {
-            uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
+        for (int k = 0; k < 4; k++) {
+            uint64_t cx = 2 * x + (k & 1), cy = 2 * y + (k >> 1);
             if (!exists(r, z + 1, cx, cy)) continue;
             int cr = 0;
-            if (build(r, z + 1, cx, cy, child, 1, record, &cr)) return 1;
-            for (int l = 0; l < r->layers; l++) box_down(l, child[l], out[l], r->S, q & 1, q >> 1);
+            if (build(r, z + 1, cx, cy, p, k, record, &cr)) {
+                pix_release(r->pl, p);
+                return 1;
+            }
             any |= cr;
         }
+        pix_unhold(r->pl, p);
         *has_road = any;
     }
     if (!record) {
         if (*has_road) {
             cli_error("tile %u/%llu/%llu: logged as road-free but holds a road (logs of other inputs?)", z,
                       (unsigned long long)x, (unsigned long long)file_y(r, z, y));
+            pix_release(r->pl, p);
             return 1;
         }
-        return 0;
+        return finish(r, p, parent, q, z, x, y, 0);
     }
-    if (*has_road || (z <= r->zd && !(r->merc && all_clear(out[0], r->S))))
-        return store_tile(r, z, x, y, out, *has_road ? 'r' : 'w');
-    r->road_free++;
-    return log_line(r, z, x, y, 'e', NULL, NULL);
+    if (*has_road || z <= r->zd) return finish(r, p, parent, q, z, x, y, *has_road ? 'r' : r->merc ? 'c' : 'w');
+    return finish(r, p, parent, q, z, x, y, 'e');
 }
 
 /* The tiles of this run under (z, x, y), whose finest tiles have the
@@ -884,8 +1226,7 @@ static int visit(run *r, uint32_t z, uint64_t x, uint64_t y, uint64_t rank)
         return 0; /* a terrain-only tile across shards: --from-children renders it */
     if (rank >= r->lo && rank + cnt <= r->hi) {
         int hr;
-        uint8_t *out[2] = { r->bufs[0][r->zmax - z], r->bufs[1][r->zmax - z] };
-        return build(r, z, x, y, out, 0, 1, &hr);
+        return build(r, z, x, y, NULL, 0, 1, &hr);
     }
     for (int q = 0; q < 4; q++) {
         uint64_t cx = 2 * x + (q & 1), cy = 2 * y + (q >> 1);
@@ -1942,20 +2283,22 @@ int cli_tiles_main(int argc, char **argv)
     }
     for (int l = 0; l < r.layers; l++)
         for (uint32_t d = 0; d <= r.zmax; d++)
-            if (!(r.bufs[l][d] = malloc((size_t)r.S * r.S * 4)) ||
-                (r.P && !(r.lbuf[l][d] = malloc((size_t)r.S * r.S * 4)))) {
+            if (r.P && !(r.lbuf[l][d] = malloc((size_t)r.S * r.S * 4))) {
                 cli_error("out of memory for the tile buffers");
                 goto done;
             }
     size_t side2 = (size_t)r.side * r.side;
-    if (!(r.rgb = malloc(side2 * 3)) || !(r.full = malloc(side2 * 4)) || !(r.scratch = malloc(side2 * 4)) ||
+    if (!(r.full = malloc(side2 * 4)) || !(r.scratch = malloc(side2 * 4)) ||
         (r.layers > 1 && !(r.nrgb = malloc(side2 * 3)))) {
         cli_error("out of memory for the tile buffers");
         goto done;
     }
     cli_progress_init(&r.prog, "tiles", a.quiet);
-    int bad = visit(&r, 0, 0, 0, 0);
+    if (pool_start(&r, r.threads > 1 ? r.threads : 0)) goto done;
+    r.one_band = r.pl->nth > 0;
+    int bad = visit(&r, 0, 0, 0, 0) || pool_commit(&r, 1);
     cli_progress_done(&r.prog);
+    pool_stop(&r, bad);
     if (bad) goto done;
     if (fflush(r.log) != 0 || ferror(r.log)) {
         cli_error("%s: write failed: %s", r.log_path, strerror(errno ? errno : EIO));
@@ -2024,13 +2367,13 @@ int cli_tiles_main(int argc, char **argv)
                 a.sharded ? "; run --from-children once every shard is done" : "");
     rc = 0;
 done:
+    pool_stop(&r, 1);
     if (r.db) r.mb->close(r.db, 0);
     cli_out_abort(&mout);
     cli_out_abort(&mani);
     if (r.log) fclose(r.log);
     for (int l = 0; l < 2; l++)
-        for (uint32_t d = 0; d <= MAX_ZOOM + 1; d++) free(r.bufs[l][d]), free(r.lbuf[l][d]);
-    free(r.rgb);
+        for (uint32_t d = 0; d <= MAX_ZOOM + 1; d++) free(r.lbuf[l][d]);
     free(r.full);
     free(r.scratch);
     free(r.nrgb);

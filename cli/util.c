@@ -14,6 +14,7 @@
 #include <limits.h>
 #include <math.h>
 #include <poll.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -26,9 +27,35 @@ static const char *error_context;
 
 void cli_error_context(const char *context) { error_context = context; }
 
+/* A thread's captured error line (cli_error_capture): the key made once. */
+static pthread_key_t capture_key;
+static pthread_once_t capture_once = PTHREAD_ONCE_INIT;
+static int capture_ok;
+static void capture_init(void) { capture_ok = pthread_key_create(&capture_key, NULL) == 0; }
+
+int cli_error_capture(char *buf)
+{
+    pthread_once(&capture_once, capture_init);
+    if (!capture_ok || pthread_setspecific(capture_key, buf) != 0) return 1;
+    if (buf) buf[0] = 0;
+    return 0;
+}
+
 void cli_error(const char *fmt, ...)
 {
     va_list ap;
+    char *cap = NULL;
+    if (capture_ok) cap = pthread_getspecific(capture_key);
+    if (cap) { /* the first line only: it is the cause */
+        if (!cap[0]) {
+            int n = snprintf(cap, CLI_ERROR_CAP, "roadsplat: %s%s", error_context ? error_context : "",
+                             error_context ? ": " : "");
+            va_start(ap, fmt);
+            if (n >= 0 && n < CLI_ERROR_CAP) vsnprintf(cap + n, CLI_ERROR_CAP - (size_t)n, fmt, ap);
+            va_end(ap);
+        }
+        return;
+    }
     fputs("roadsplat: ", stderr);
     if (error_context) {
         fputs(error_context, stderr);

@@ -16,7 +16,7 @@ check "dense: levels 0..3" grep -q '"levels": {"min": 0, "max": 3, "dense_max": 
 for xy in 0,0 1,0 3,1 2,2; do
     x=${xy%,*} y=${xy#*,}
     "$BIN" --quiet $O --window $((x * 256)),$((y * 256)),256,256 "$T/dem.pgm" "$T/roads.txt" "$T/w$x$y.png"
-    check "finest tile $x,$y byte-identical to the window PNG" cmp -s "$T/w$x$y.png" "$T/dense/3/$x/$y.png"
+    check "finest tile $x,$y: the window PNG's pixels" $PY same "$T/w$x$y.png" "$T/dense/3/$x/$y.png"
 done
 "$BIN" --quiet $O --window 1024,768,176,32 "$T/dem.pgm" "$T/roads.txt" "$T/wedge.png"
 check "edge tile 4,3 = window + transparent padding" $PY window "$T/dense/3/4/3.png" "$T/wedge.png"
@@ -99,7 +99,7 @@ check "--normals: the colour tiles are unchanged" sh -c "cd '$T/dense' && for f 
 for xy in 1,0 2,2; do
     x=${xy%,*} y=${xy#*,}
     "$BIN" --quiet $O --window $((x * 256)),$((y * 256)),256,256 --normal-out "$T/n$x$y.png" "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
-    check "finest normal tile $x,$y byte-identical to --normal-out of its window" cmp -s "$T/n$x$y.png" "$T/nd/3/$x/${y}_n.png"
+    check "finest normal tile $x,$y: the pixels of --normal-out of its window" $PY same "$T/n$x$y.png" "$T/nd/3/$x/${y}_n.png"
 done
 "$BIN" --quiet $O --window 1024,768,176,32 --normal-out "$T/nedge.png" "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
 check "edge normal tile 4,3 = --normal-out window + alpha 0 beyond" $PY normal_window "$T/nd/3/4/3_n.png" "$T/nedge.png"
@@ -110,12 +110,12 @@ check "normal parent 2/2/1 (edge) = renormalised mean of its children" $PY paren
 check "normal parent 0/0/0 = renormalised mean of its children" $PY parent "$T/nd" 0 0 0 n
 "$BIN" tiles --quiet --dense $N --normal-convention dx --normal-strength 3 "$T/dem.pgm" "$T/roads.txt" "$T/ndx"
 "$BIN" --quiet $O --window 256,0,256,256 --normal-out "$T/ndx.png" --normal-convention dx --normal-strength 3 "$T/dem.pgm" "$T/roads.txt" "$T/w.png"
-check "--normal-convention dx --normal-strength 3: finest tile = --normal-out" cmp -s "$T/ndx.png" "$T/ndx/3/1/0_n.png"
+check "--normal-convention dx --normal-strength 3: finest tile = --normal-out" $PY same "$T/ndx.png" "$T/ndx/3/1/0_n.png"
 H="$N --halo 5"
 check "sparse --normals --halo 5 run exits 0" "$BIN" tiles --quiet $H "$T/dem.pgm" "$T/roads.txt" "$T/ha"
 "$BIN" --quiet $O --window 251,251,266,266 --normal-out "$T/hn.png" "$T/dem.pgm" "$T/roads.txt" "$T/hc.png"
-check "halo: finest tile 1,1 = the 266^2 window (colour)" cmp -s "$T/hc.png" "$T/ha/3/1/1.png"
-check "halo: finest tile 1,1 = the 266^2 window (normal)" cmp -s "$T/hn.png" "$T/ha/3/1/1_n.png"
+check "halo: finest tile 1,1 = the 266^2 window (colour)" $PY same "$T/hc.png" "$T/ha/3/1/1.png"
+check "halo: finest tile 1,1 = the 266^2 window (normal)" $PY same "$T/hn.png" "$T/ha/3/1/1_n.png"
 check "halo: every halo pixel = the neighbour tile's pixel, all levels, both layers" $PY halo "$T/ha"
 check "halo: parent 1/0/0 = box filter of its children's cores" $PY parent "$T/ha" 1 0 0
 check "halo: normal parent 2/0/0 = mean of its children's cores" $PY parent "$T/ha" 2 0 0 n
@@ -144,7 +144,7 @@ R="--texels 4"
 check "terrain-only run exits 0" sh -c "'$BIN' tiles $R '$T/r.pgm' '$T/r.txt' '$T/rt' 2>'$T/e' && grep -q ', 3 terrain-only rendered at level 1' '$T/e'"
 "$BIN" tiles --quiet --dense $R "$T/r.pgm" "$T/r.txt" "$T/rd"
 "$BIN" --quiet --texels 1 --window 256,0,256,256 "$T/r.pgm" "$T/r.txt" "$T/r1.png"
-check "terrain-only tile 1/1/0 = the 1-texel splat's window" cmp -s "$T/r1.png" "$T/rt/1/1/0.png"
+check "terrain-only tile 1/1/0 = the 1-texel splat's window" $PY same "$T/r1.png" "$T/rt/1/1/0.png"
 "$BIN" --quiet $R --weight-out "$T/rw.pgm" "$T/r.pgm" "$T/r.txt" "$T/r.png"
 check "terrain-only: written iff dense level or holds a road" $PY sparse "$T/rt" "$T/rw.pgm"
 check "terrain-only: finer tiles = the dense run's" sh -c "cd '$T/rt' && for f in 2/*/*.png 3/*/*.png; do cmp -s \$f '$T/rd/'\$f || exit 1; done"
@@ -158,7 +158,7 @@ check "terrain-only: 3 shards + merge = one run" sh -c "'$BIN' tiles --quiet --f
 L="--texels 1 --lighting --sun 200,30"
 check "lit run exits 0" "$BIN" tiles --quiet $L "$T/r.pgm" "$T/r.txt" "$T/lit"
 "$BIN" --quiet $L --window 256,0,256,256 "$T/r.pgm" "$T/r.txt" "$T/l1.png"
-check "lit tile 1/1/0 = the lit splat's window" cmp -s "$T/l1.png" "$T/lit/1/1/0.png"
+check "lit tile 1/1/0 = the lit splat's window" $PY same "$T/l1.png" "$T/lit/1/1/0.png"
 "$BIN" tiles --quiet --texels 1 "$T/r.pgm" "$T/r.txt" "$T/unlit"
 check "lit tiles differ from unlit ones" sh -c "! cmp -s '$T/lit/1/1/0.png' '$T/unlit/1/1/0.png'"
 check "lit: the manifest records --lighting and --sun" grep -q '"--lighting", "--sun", "200,30"' "$T/lit/tiles.json"

@@ -10,6 +10,8 @@ Python; PNGs through tests/png_read.py, independent of cli/png.c).
   tiles_check.py normal_window TILE WIN.png  normal TILE = WIN, alpha 0 beyond it
   tiles_check.py sparse OUTDIR WEIGHT.pgm tiles finer than dense_max exist iff they hold a road
   tiles_check.py mbtiles FILE OUTDIR      the MBTiles rows (TMS) = the folder's tiles (normal_tiles: the _n ones)
+  tiles_check.py same A.png B.png          the same pixels (RGBA; the main command's PNG and a tile are
+                                          compressed by different libraries: docs/tiles.md)
 """
 import hashlib, json, math, os, sqlite3, sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -230,6 +232,13 @@ def mbtiles(f, d):
     assert n == len(m['tiles']), (n, len(m['tiles']))
 
 
+def same(a, b):
+    wa, ha, pa = rgba(a)
+    wb, hb, pb = rgba(b)
+    assert (wa, ha) == (wb, hb), (a, wa, ha, b, wb, hb)
+    assert pa == pb, '%s and %s: %d bytes differ' % (a, b, sum(x != y for x, y in zip(pa, pb)))
+
+
 if __name__ == '__main__':
     c, a = sys.argv[1], sys.argv[2:]
     if c == 'manifest': manifest(a[0])
@@ -240,4 +249,5 @@ if __name__ == '__main__':
     elif c == 'normal_window': normal_window(a[0], a[1])
     elif c == 'sparse': sparse(a[0], a[1])
     elif c == 'mbtiles': mbtiles(a[0], a[1])
+    elif c == 'same': same(a[0], a[1])
     else: sys.exit('unknown check ' + c)

@@ -7,7 +7,10 @@
 # finest tile rendered; against --dense: files, bytes, time), the fixed
 # cost of one process (a shard of one finest tile), and 1 against 2
 # processes (--shard 0/2 and 1/2 side by side, then --from-children; wall
-# and CPU seconds of each step, the same run's ratios). Writes OUT/tiles.md.
+# and CPU seconds of each step, the same run's ratios), and 1 against 2
+# threads in one process on the city and the 1025^2 fractal (wall, CPU, and
+# a cmp of the two outputs). Writes OUT/tiles.md. Needs build/tools/citygen
+# and build/tools/demgen (`make bench` builds them).
 set -e
 OUT=${1:-build/bench}
 B=${BUILD:-build}
@@ -83,6 +86,57 @@ k_wall=$(calc "$(now) - $t0"); k_c0=$(cpu "$W/k0"); k_c1=$(cpu "$W/k1")
 set -- $(two --dense); d_pair=$1 d_merge=$2 d_c0=$3 d_c1=$4 d_cm=$5 d_c=$6
 set -- $(two --render-all); f_pair=$1 f_merge=$2 f_c0=$3 f_c1=$4 f_cm=$5 f_c=$6
 set -- $(two ""); s_pair=$1 s_merge=$2 s_c0=$3 s_c1=$4 s_cm=$5 s_c=$6
+# 1 against 2 threads in one process (worker threads: box filters, PNG
+# compression, SHA-256, file writes; docs/tiles.md "Threads"): the city
+# scene (tests/tools/citygen) at 16 texels and the 1025^2 fractal
+# (tests/tools/demgen, one road) at 8 texels --dense; the runs of 1 and 2
+# threads interleaved, fastest wall of 5 each with its CPU seconds (user +
+# system), whether the two outputs are the same bytes (tiles, tiles.json,
+# the logs but their run id line), and a control: two 1-thread runs at once
+# (fastest of 3), 2 x one run's wall over theirs: what the machine gave a
+# second thread then (2.00 on two free cores)
+"$B/tools/citygen" "$W/city.pgm" "$W/city_roads.txt"
+"$B/tools/demgen" 1025 "$W/frac.pgm"
+printf 'road main width 6\n300 300\n700 450\n900 980\nend\n' >"$W/frac_roads.txt"
+same_out() { # two output folders: "yes" when every byte is the same (but the logs' run ids)
+    diff -r -x .tiles-log "$1" "$2" >/dev/null || { echo "**no**"; return; }
+    for f in "$1"/.tiles-log/*.log; do
+        grep -v '^run ' "$f" >"$W/la"; grep -v '^run ' "$2/.tiles-log/$(basename "$f")" >"$W/lb" 2>/dev/null
+        cmp -s "$W/la" "$W/lb" || { echo "**no**"; return; }
+    done
+    echo yes
+}
+threads_row() { # name, options, inputs...: "| name | wall 1 | wall 2 | ratio | cpu 1 | cpu 2 | same |"
+    name=$1 opts=$2; shift 2
+    w1=; w2=
+    for k in 1 2 3 4 5; do
+        for t in 1 2; do
+            o=$(fresh)
+            t0=$(now)
+            /usr/bin/time -f "%U %S" -o "$W/ct" "$BIN" tiles --quiet $opts --threads $t "$@" "$o"
+            w=$(calc "$(now) - $t0"); c=$(cpu "$W/ct")
+            eval "b=\$w$t"
+            if [ -z "$b" ] || [ "$(calc "$w < $b")" = 1 ]; then eval "w$t=$w; c$t=$c; o$t=$o"; fi
+        done
+    done
+    # control: two 1-thread runs at once, what this machine gives a second thread now
+    wp=
+    for k in 1 2 3; do
+        oa=$(fresh); ob=$(fresh); t0=$(now)
+        "$BIN" tiles --quiet $opts --threads 1 "$@" "$oa" & p=$!
+        "$BIN" tiles --quiet $opts --threads 1 "$@" "$ob"; wait $p
+        w=$(calc "$(now) - $t0")
+        if [ -z "$wp" ] || [ "$(calc "$w < $wp")" = 1 ]; then wp=$w; fi
+    done
+    echo "| $name | $(fmt "$w1") | $(fmt "$w2") | $(fmt "$(calc "$w1 / $w2")") | $(fmt "$c1") | $(fmt "$c2") | $(same_out "$o1" "$o2") | $(fmt "$(calc "2 * $w1 / $wp")") |"
+}
+load0=$(cut -d' ' -f1-3 /proc/loadavg)
+t_city=$(threads_row "city (\`sc_city_default\`, 400 x 350 cells of 5 m, 1000 roads), 16 texels: 550 finest tiles" \
+    "--cell-size 5 --z-scale 0.01 --texels 16" "$W/city.pgm" "$W/city_roads.txt")
+t_frac=$(threads_row "1025^2 fractal, one road, 8 texels, --dense: 1089 finest tiles" \
+    "--cell-size 5 --z-scale 0.01 --texels 8 --dense" "$W/frac.pgm" "$W/frac_roads.txt")
+load1=$(cut -d' ' -f1-3 /proc/loadavg)
+
 cores=$(nproc)
 finest=4225
 load=$(cut -d' ' -f1-3 /proc/loadavg)
@@ -120,5 +174,15 @@ row() { # name one_wall pair merge c0 c1 cm c
     echo
     echo "Control, no sharding: two whole --dense runs at once took $(fmt "$k_wall") s (CPU $(fmt "$k_c0") and $(fmt "$k_c1") s;"
     echo "alone $(fmt "$k_c") s CPU, $(fmt "$dense") s): this machine ran 2 processes $(fmt "$(calc "2 * $dense / $k_wall")")x as fast as 1 (ideal 2.00)."
+    echo
+    echo "1 against 2 threads in one process (\`--threads\`; the workers box-filter, compress, hash and write"
+    echo "the tiles): the runs interleaved, fastest wall of 5 each, CPU = user + system seconds of that run;"
+    echo "control = two 1-thread runs at once against one after the other (what this machine gave a second"
+    echo "thread; 2.00 on two free cores); load average $load0 before and $load1 after these runs."
+    echo
+    echo "| run | 1 thread s | 2 threads s | speed-up | CPU s, 1 thread | CPU s, 2 threads | same bytes | control |"
+    echo "|---|---|---|---|---|---|---|---|"
+    echo "$t_city"
+    echo "$t_frac"
 } >"$OUT/tiles.md"
 cat "$OUT/tiles.md"
