@@ -1610,6 +1610,82 @@ static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_
         }
 }
 
+/* Does pixel centre (cx, cy), within e of it, lie where T's trimmed shape
+ * and its capsule may differ? They differ only beyond the clip line (the
+ * capsule's part there) and past the record's end (the flat strip's
+ * corners): not for a pixel square on the near side of the line and before
+ * the end (T->end's side only: another clip of the segment is its own
+ * entry). The same for a field and its widening (same line, same end). */
+static int tee_may_differ(const rf_tee *T, const rf_seg *s, double cx, double cy, double e)
+{
+    if (T->nx * cx + T->ny * cy > T->c - e - 1e-9 * (1 + fabs(T->c))) return 1;
+    double u = (cx - s->ax) * s->ux + (cy - s->ay) * s->uy, m = e + 1e-9 * (1 + s->len);
+    if (T->end == 2) return 0;
+    return T->end == 1 ? u > s->len - m : u < m;
+}
+
+/* tee_pass for a field f and its widening g (rs__roadfield_widen: the
+ * same T ends in the same order) together: a pixel is computed again in
+ * both when either needs it, so R and C come from the same rule (the
+ * casing's share of a pixel divides by 1 - R: an exact R beside a
+ * midpoint C, or the reverse, would show). Pixels where neither shape
+ * differs keep their first, exact values. */
+static void tee_pass2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0, uint32_t w,
+                      uint32_t h, double pix, double *out, double *outg, size_t stride)
+{
+    const rf_seg *cand[TEE_NEAR_MAX], *candg[TEE_NEAR_MAX];
+    double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
+    double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
+    uint32_t j0 = clamp_index(floor(by0 * g->inv_c) + 1, g->gh), j1 = clamp_index(floor(by1 * g->inv_c) + 1, g->gh);
+    for (uint32_t j = j0; j <= j1; j++)
+        for (uint32_t m = g->tstart[j]; m < g->tstart[j + 1]; m++) {
+            const uint32_t ti = g->tids[m];
+            const rf_tee *Tg = &g->tee[ti], *Tf = &f->tee[ti];
+            if (Tg->row0 != j && j != j0) continue; /* once per call */
+            /* the union of both boxes */
+            double box[4] = { lm_min(Tf->box[0], Tg->box[0]), lm_max(Tf->box[1], Tg->box[1]),
+                              lm_min(Tf->box[2], Tg->box[2]), lm_max(Tf->box[3], Tg->box[3]) };
+            if (box[1] < bx0 || box[0] > bx1 || box[3] < by0 || box[2] > by1) continue;
+            double xa = lm_max(floor(box[0] / pix) - (double)px0, 0), xb = lm_min(floor(box[1] / pix) - (double)px0, (double)w - 1);
+            double ya = lm_max(floor(box[2] / pix) - (double)py0, 0), yb = lm_min(floor(box[3] / pix) - (double)py0, (double)h - 1);
+            if (!(xa <= xb && ya <= yb)) continue;
+            uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
+            const rf_seg *sf = &f->seg[Tf->seg], *sg = &g->seg[Tg->seg];
+            /* (the single passes' whole-end skips, each for its own field) */
+            int need_f = !(lm_max(Tf->nx * sf->ax + Tf->ny * sf->ay, Tf->nx * sf->bx + Tf->ny * sf->by) + sf->r - Tf->c <=
+                           Tf->G - e);
+            int need_g = !(lm_max(Tg->nx * sg->ax + Tg->ny * sg->ay, Tg->nx * sg->bx + Tg->ny * sg->by) + sg->r - Tg->c <=
+                           Tg->G - e);
+            if (!need_f && !need_g) continue;
+            double qx0 = lm_max(box[0], bx0) - pix, qx1 = lm_min(box[1], bx1) + pix;
+            double qy0 = lm_max(box[2], by0) - pix, qy1 = lm_min(box[3], by1) + pix;
+            size_t nc = 0, ncg = 0;
+            int have = 0;
+            for (uint32_t r = ra; r <= rb; r++)
+                for (uint32_t k = ka; k <= kb; k++) {
+                    double cx = ((double)px0 + k + 0.5) * pix, cy = ((double)py0 + r + 0.5) * pix;
+                    if (!tee_may_differ(Tf, sf, cx, cy, e)) continue;
+                    int again = 0;
+                    if (need_f) {
+                        double dc = seg_dist(sf, cx, cy) - sf->r, dt = tee_sd(f, sf, cx, cy);
+                        again = !((dc >= e && dt >= e) || (dc <= -e && dt <= -e));
+                    }
+                    if (!again && need_g) {
+                        double dc = seg_dist(sg, cx, cy) - sg->r, dt = tee_sd(g, sg, cx, cy);
+                        again = !((dc >= e && dt >= e) || (dc <= -e && dt <= -e));
+                    }
+                    if (!again) continue;
+                    if (!have) { /* the segments that can come near a pixel of the box here, once */
+                        nc = tee_candidates(f, qx0, qy0, qx1, qy1, e, cand);
+                        ncg = tee_candidates(g, qx0, qy0, qx1, qy1, e, candg);
+                        have = 1;
+                    }
+                    out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix, nc ? cand : NULL, nc);
+                    outg[(size_t)r * stride + k] = tee_pixel(g, px0 + k, py0 + r, pix, ncg ? candg : NULL, ncg);
+                }
+        }
+}
+
 /* Box where the trimmed shape of T's segment and its capsule differ: the
  * end disc and the strip from where the clip line cuts its near side to
  * where it cuts its far side (u along the segment towards the end,
@@ -3070,6 +3146,10 @@ void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uin
         return;
     }
     coverage(f, g, px0, py0, w, h, pix, out, outg, stride);
+    if (f->ntee && g->ntee == f->ntee) {
+        tee_pass2(f, g, px0, py0, w, h, pix, out, outg, stride);
+        return;
+    }
     tee_pass(f, px0, py0, w, h, pix, out, stride);
     tee_pass(g, px0, py0, w, h, pix, outg, stride);
 }
