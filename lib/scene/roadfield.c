@@ -1565,49 +1565,24 @@ static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, doubl
     return n;
 }
 
-/* The pixels of [px0, px0+w) x [py0, py0+h) where a T segment's trimmed
- * shape and its capsule may differ, computed again (tee_pixel). Depends
- * only on the pixel: any block gives the same doubles. */
-static void tee_pass(const rs__roadfield *f, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, double pix,
-                     double *out, size_t stride)
+/* A capsule that stays on the near side of T's clip line (a side road no
+ * wider than the road it ends on, near square) loses nothing there; the
+ * flat strip's corners it gains lie on the through road's own surface, so
+ * the union is the same: nothing to compute again (most T ends of a city).
+ * In a casing field the through road's shape reaches G past the line: what
+ * the trimming cuts off within G is still covered. */
+static int tee_end_unchanged(const rf_tee *T, const rf_seg *s, double e)
 {
-    if (!f || !f->ntee) return;
-    const rf_seg *cand[TEE_NEAR_MAX];
-    double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
-    double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
-    uint32_t j0 = clamp_index(floor(by0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(by1 * f->inv_c) + 1, f->gh);
-    for (uint32_t j = j0; j <= j1; j++)
-        for (uint32_t m = f->tstart[j]; m < f->tstart[j + 1]; m++) {
-            const rf_tee *T = &f->tee[f->tids[m]];
-            if (T->row0 != j && j != j0) continue; /* once per call */
-            if (T->box[1] < bx0 || T->box[0] > bx1 || T->box[3] < by0 || T->box[2] > by1) continue;
-            /* the pixels whose square meets the box */
-            double xa = lm_max(floor(T->box[0] / pix) - (double)px0, 0), xb = lm_min(floor(T->box[1] / pix) - (double)px0, (double)w - 1);
-            double ya = lm_max(floor(T->box[2] / pix) - (double)py0, 0), yb = lm_min(floor(T->box[3] / pix) - (double)py0, (double)h - 1);
-            if (!(xa <= xb && ya <= yb)) continue;
-            uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
-            const rf_seg *s = &f->seg[T->seg];
-            /* a capsule that stays on the near side of the clip line
-             * (a side road no wider than the road it ends on, near square)
-             * loses nothing there; the flat strip's corners it gains lie on
-             * the through road's own surface, so the union is the same:
-             * nothing to compute again (most T ends of a city). In a
-             * casing field the through road's shape reaches G past the
-             * line: what the trimming cuts off within G is still covered */
-            if (lm_max(T->nx * s->ax + T->ny * s->ay, T->nx * s->bx + T->ny * s->by) + s->r - T->c <= T->G - e)
-                continue;
-            /* the segments that can come near a pixel of the box here, once */
-            double qx0 = lm_max(T->box[0], bx0) - pix, qx1 = lm_min(T->box[1], bx1) + pix;
-            double qy0 = lm_max(T->box[2], by0) - pix, qy1 = lm_min(T->box[3], by1) + pix;
-            size_t nc = tee_candidates(f, qx0, qy0, qx1, qy1, e, cand);
-            for (uint32_t r = ra; r <= rb; r++)
-                for (uint32_t k = ka; k <= kb; k++) {
-                    double cx = ((double)px0 + k + 0.5) * pix, cy = ((double)py0 + r + 0.5) * pix;
-                    double dc = seg_dist(s, cx, cy) - s->r, dt = tee_sd(f, s, cx, cy);
-                    if ((dc >= e && dt >= e) || (dc <= -e && dt <= -e)) continue;
-                    out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix, nc ? cand : NULL, nc);
-                }
-        }
+    return lm_max(T->nx * s->ax + T->ny * s->ay, T->nx * s->bx + T->ny * s->by) + s->r - T->c <= T->G - e;
+}
+
+/* Is the pixel centred at (cx, cy) (half diagonal e) within e of the edge
+ * of s's capsule or of its trimmed shape (certainly inside or outside both
+ * otherwise)? */
+static int tee_near_edge(const rs__roadfield *f, const rf_seg *s, double cx, double cy, double e)
+{
+    double dc = seg_dist(s, cx, cy) - s->r, dt = tee_sd(f, s, cx, cy);
+    return !((dc >= e && dt >= e) || (dc <= -e && dt <= -e));
 }
 
 /* Does pixel centre (cx, cy), within e of it, lie where T's trimmed shape
@@ -1624,38 +1599,44 @@ static int tee_may_differ(const rf_tee *T, const rf_seg *s, double cx, double cy
     return T->end == 1 ? u > s->len - m : u < m;
 }
 
-/* tee_pass for a field f and its widening g (rs__roadfield_widen: the
- * same T ends in the same order) together: a pixel is computed again in
- * both when either needs it, so R and C come from the same rule (the
- * casing's share of a pixel divides by 1 - R: an exact R beside a
- * midpoint C, or the reverse, would show). Pixels where neither shape
- * differs keep their first, exact values. */
-static void tee_pass2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0, uint32_t w,
-                      uint32_t h, double pix, double *out, double *outg, size_t stride)
+/* The pixels of [px0, px0+w) x [py0, py0+h) where a T segment's trimmed
+ * shape and its capsule may differ, computed again (tee_pixel) into out.
+ * Depends only on the pixel: any block gives the same doubles.
+ *
+ * With g (f's widening, rs__roadfield_widen: the same T ends in the same
+ * order; NULL: f alone) both fields are done together, into out and outg:
+ * a pixel is computed again in both when either needs it, so R and C come
+ * from the same rule (the casing's share of a pixel divides by 1 - R: an
+ * exact R beside a midpoint C, or the reverse, would show), and pixels
+ * where the shapes cannot differ (tee_may_differ) keep their first, exact
+ * values. */
+static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0, uint32_t w,
+                     uint32_t h, double pix, double *out, double *outg, size_t stride)
 {
+    if (!f || !f->ntee) return;
+    const rs__roadfield *lists = g ? g : f; /* g's boxes hold f's */
     const rf_seg *cand[TEE_NEAR_MAX], *candg[TEE_NEAR_MAX];
     double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
     double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
-    uint32_t j0 = clamp_index(floor(by0 * g->inv_c) + 1, g->gh), j1 = clamp_index(floor(by1 * g->inv_c) + 1, g->gh);
+    uint32_t j0 = clamp_index(floor(by0 * lists->inv_c) + 1, lists->gh);
+    uint32_t j1 = clamp_index(floor(by1 * lists->inv_c) + 1, lists->gh);
     for (uint32_t j = j0; j <= j1; j++)
-        for (uint32_t m = g->tstart[j]; m < g->tstart[j + 1]; m++) {
-            const uint32_t ti = g->tids[m];
-            const rf_tee *Tg = &g->tee[ti], *Tf = &f->tee[ti];
-            if (Tg->row0 != j && j != j0) continue; /* once per call */
-            /* the union of both boxes */
-            double box[4] = { lm_min(Tf->box[0], Tg->box[0]), lm_max(Tf->box[1], Tg->box[1]),
-                              lm_min(Tf->box[2], Tg->box[2]), lm_max(Tf->box[3], Tg->box[3]) };
+        for (uint32_t m = lists->tstart[j]; m < lists->tstart[j + 1]; m++) {
+            const uint32_t ti = lists->tids[m];
+            const rf_tee *Tf = &f->tee[ti], *Tg = g ? &g->tee[ti] : NULL;
+            if (lists->tee[ti].row0 != j && j != j0) continue; /* once per call */
+            double box[4] = { Tf->box[0], Tf->box[1], Tf->box[2], Tf->box[3] };
+            if (Tg) /* the union of both boxes */
+                box[0] = lm_min(box[0], Tg->box[0]), box[1] = lm_max(box[1], Tg->box[1]),
+                box[2] = lm_min(box[2], Tg->box[2]), box[3] = lm_max(box[3], Tg->box[3]);
             if (box[1] < bx0 || box[0] > bx1 || box[3] < by0 || box[2] > by1) continue;
+            /* the pixels whose square meets the box */
             double xa = lm_max(floor(box[0] / pix) - (double)px0, 0), xb = lm_min(floor(box[1] / pix) - (double)px0, (double)w - 1);
             double ya = lm_max(floor(box[2] / pix) - (double)py0, 0), yb = lm_min(floor(box[3] / pix) - (double)py0, (double)h - 1);
             if (!(xa <= xb && ya <= yb)) continue;
             uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
-            const rf_seg *sf = &f->seg[Tf->seg], *sg = &g->seg[Tg->seg];
-            /* (the single passes' whole-end skips, each for its own field) */
-            int need_f = !(lm_max(Tf->nx * sf->ax + Tf->ny * sf->ay, Tf->nx * sf->bx + Tf->ny * sf->by) + sf->r - Tf->c <=
-                           Tf->G - e);
-            int need_g = !(lm_max(Tg->nx * sg->ax + Tg->ny * sg->ay, Tg->nx * sg->bx + Tg->ny * sg->by) + sg->r - Tg->c <=
-                           Tg->G - e);
+            const rf_seg *sf = &f->seg[Tf->seg], *sg = Tg ? &g->seg[Tg->seg] : NULL;
+            int need_f = !tee_end_unchanged(Tf, sf, e), need_g = Tg && !tee_end_unchanged(Tg, sg, e);
             if (!need_f && !need_g) continue;
             double qx0 = lm_max(box[0], bx0) - pix, qx1 = lm_min(box[1], bx1) + pix;
             double qy0 = lm_max(box[2], by0) - pix, qy1 = lm_min(box[3], by1) + pix;
@@ -1664,24 +1645,16 @@ static void tee_pass2(const rs__roadfield *f, const rs__roadfield *g, uint32_t p
             for (uint32_t r = ra; r <= rb; r++)
                 for (uint32_t k = ka; k <= kb; k++) {
                     double cx = ((double)px0 + k + 0.5) * pix, cy = ((double)py0 + r + 0.5) * pix;
-                    if (!tee_may_differ(Tf, sf, cx, cy, e)) continue;
-                    int again = 0;
-                    if (need_f) {
-                        double dc = seg_dist(sf, cx, cy) - sf->r, dt = tee_sd(f, sf, cx, cy);
-                        again = !((dc >= e && dt >= e) || (dc <= -e && dt <= -e));
-                    }
-                    if (!again && need_g) {
-                        double dc = seg_dist(sg, cx, cy) - sg->r, dt = tee_sd(g, sg, cx, cy);
-                        again = !((dc >= e && dt >= e) || (dc <= -e && dt <= -e));
-                    }
-                    if (!again) continue;
+                    if (g && !tee_may_differ(Tf, sf, cx, cy, e)) continue;
+                    if (!(need_f && tee_near_edge(f, sf, cx, cy, e)) && !(need_g && tee_near_edge(g, sg, cx, cy, e)))
+                        continue;
                     if (!have) { /* the segments that can come near a pixel of the box here, once */
                         nc = tee_candidates(f, qx0, qy0, qx1, qy1, e, cand);
-                        ncg = tee_candidates(g, qx0, qy0, qx1, qy1, e, candg);
+                        if (g) ncg = tee_candidates(g, qx0, qy0, qx1, qy1, e, candg);
                         have = 1;
                     }
                     out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix, nc ? cand : NULL, nc);
-                    outg[(size_t)r * stride + k] = tee_pixel(g, px0 + k, py0 + r, pix, ncg ? candg : NULL, ncg);
+                    if (g) outg[(size_t)r * stride + k] = tee_pixel(g, px0 + k, py0 + r, pix, ncg ? candg : NULL, ncg);
                 }
         }
 }
@@ -3133,7 +3106,7 @@ void rs__roadfield_coverage(const rs__roadfield *f, uint32_t px0, uint32_t py0, 
 {
     if (!f || !out || !w || !h) return;
     coverage(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
-    tee_pass(f, px0, py0, w, h, pix, out, stride);
+    tee_pass(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
 }
 
 void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0,
@@ -3142,14 +3115,14 @@ void rs__roadfield_coverage2(const rs__roadfield *f, const rs__roadfield *g, uin
     if (!f || !out || !w || !h) return;
     if (!g || !outg) {
         coverage(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
-        tee_pass(f, px0, py0, w, h, pix, out, stride);
+        tee_pass(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
         return;
     }
     coverage(f, g, px0, py0, w, h, pix, out, outg, stride);
     if (f->ntee && g->ntee == f->ntee) {
-        tee_pass2(f, g, px0, py0, w, h, pix, out, outg, stride);
+        tee_pass(f, g, px0, py0, w, h, pix, out, outg, stride);
         return;
     }
-    tee_pass(f, px0, py0, w, h, pix, out, stride);
-    tee_pass(g, px0, py0, w, h, pix, outg, stride);
+    tee_pass(f, NULL, px0, py0, w, h, pix, out, NULL, stride);
+    tee_pass(g, NULL, px0, py0, w, h, pix, outg, NULL, stride);
 }
