@@ -691,7 +691,8 @@ typedef struct ls_junc {
     const uint32_t *stroke_of; /* per road (NULL: every road its own stroke) */
     uint8_t *nocut;        /* per road: junction_cuts=no (its lines uncut, its surface cuts none) */
     uint8_t *car;          /* per road: not a path, footway or cycleway */
-    int *prio;             /* per road: rs__road_priority (NULL: all equal) */
+    const int *prio;       /* per road: rs__road_priority (NULL: all equal) */
+    int *prio_own;         /* prio when worked out here */
     double *keep;          /* per road: its lines within this of its centre line run on over
                               the surface of a lower-ranked car road crossing it */
 } ls_junc;
@@ -1267,7 +1268,7 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
     rs__free(ctx, (void *)J->ends);
     rs__free(ctx, J->nocut);
     rs__free(ctx, J->car);
-    rs__free(ctx, J->prio);
+    rs__free(ctx, J->prio_own);
     rs__free(ctx, J->keep);
     memset(J, 0, sizeof *J);
 }
@@ -1330,23 +1331,18 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     J->nocut = rs__calloc(ctx, nroads ? nroads : 1, 1);
     J->car = rs__calloc(ctx, nroads ? nroads : 1, 1);
     if (!ends || !J->nocut || !J->car) return RS_ERR_NOMEM;
-    J->prio = rs__alloc_array(ctx, nroads ? nroads : 1, sizeof *J->prio);
     J->keep = rs__alloc_array(ctx, nroads ? nroads : 1, sizeof *J->keep);
-    if (!J->prio || !J->keep) return RS_ERR_NOMEM;
-    int differ = 0;
+    if (!J->keep) return RS_ERR_NOMEM;
+    if (p->prio_given) J->prio = p->prio;
+    else if (rs__road_priorities(ctx, roads, &J->prio_own) != RS_OK) return RS_ERR_NOMEM;
+    else J->prio = J->prio_own;
     for (size_t ri = 0; ri < nroads; ri++) {
         const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
         double w = 0;
         rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
         J->nocut[ri] = jc && !strcmp(jc, "no");
         J->car[ri] = !rs__road_non_car(roads, ri);
-        J->prio[ri] = rs__road_priority(roads, ri);
         J->keep[ri] = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
-        differ |= J->prio[ri] != J->prio[0];
-    }
-    if (!differ) {
-        rs__free(ctx, J->prio);
-        J->prio = NULL;
     }
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);

@@ -55,6 +55,9 @@ typedef struct rs__linesym_params {
     const struct rs__line_cut *cuts; /* where a road's lane and centre lines stop (lib/scene/lanes.h: stop lines,
                                         zebras); read while building */
     size_t ncuts;
+    int prio_given;            /* 1: prio holds the roads' priorities (rs__road_priorities; NULL: all
+                                  equal), read while building; 0: worked out here */
+    const int *prio;
 } rs__linesym_params;
 
 typedef struct rs__linesym rs__linesym; /* immutable after build; safe to read from many threads */

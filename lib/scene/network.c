@@ -60,6 +60,21 @@ int rs__road_priority(const rs_roads *roads, size_t r)
     return pr;
 }
 
+rs_result rs__road_priorities(rs_ctx *ctx, const rs_roads *roads, int **out)
+{
+    size_t n = rs_roads_count(roads);
+    int *p = rs__alloc_array(ctx, n ? n : 1, sizeof *p), differ = 0;
+    *out = NULL;
+    if (!p) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < n; i++) {
+        p[i] = rs__road_priority(roads, i);
+        differ |= p[i] != p[0];
+    }
+    if (differ) *out = p;
+    else rs__free(ctx, p);
+    return RS_OK;
+}
+
 int rs__class_non_car(rs_road_class c)
 {
     return c == RS_CLASS_PATH || c == RS_CLASS_FOOTWAY || c == RS_CLASS_CYCLEWAY;

@@ -681,14 +681,16 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     pg.step = PROGRESS_STEP;
     pg.next = pg.step;
     rs__progress *pg_outer = ctx->pg;
-    if (o.coverage.edges == RS_EDGES_ANALYTIC) ctx->pg = &pg;
-    if (o.coverage.edges == RS_EDGES_ANALYTIC) r = build_field(ctx, dem, roads, o.texels, g);
+    if (o.coverage.edges == RS_EDGES_ANALYTIC) {
+        ctx->pg = &pg;
+        r = build_field(ctx, dem, roads, o.texels, g);
+    }
     /* the styles look pixels' roads up in the grid's field when it has one */
     /* the network (docs/network.md): strokes carry dashes and surface
      * images across the records a road is split into; read while building
      * the styles and the markings only */
     rs_network *net = NULL;
-    if (!r && !o.style.disable && rs_roads_count(roads) > 0) r = rs_network_build(ctx, roads, NULL, &net);
+    if (!r && !o.style.disable && nroads > 0) r = rs_network_build(ctx, roads, NULL, &net);
     if (!r && rs__tick(ctx, nroads)) r = RS_ERR_CANCELLED;
     /* record ends at a T lose their round caps (docs/network.md "Ends at a T") */
     if (!r && net && g->field) {

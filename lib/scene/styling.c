@@ -240,6 +240,10 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             cr++;
         }
     }
+    /* the roads' priorities (NULL: all equal): the line symbols' crossings
+     * read them, and the fill lookups keep them (below) */
+    if ((nbands || st->any_surface || st->img_of) && (r = rs__road_priorities(ctx, roads, &st->prio)) != RS_OK)
+        goto fail_dash;
     if (nbands) {
         rs__linesym_params lp;
         memset(&lp, 0, sizeof lp);
@@ -257,6 +261,8 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         if ((r = rs__markings_line_cuts(ctx, dem, roads, o, net, &cuts, &ncuts)) != RS_OK) goto fail_dash;
         lp.cuts = cuts;
         lp.ncuts = ncuts;
+        lp.prio_given = 1;
+        lp.prio = st->prio;
         r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
         rs__free(ctx, cuts);
         if (r != RS_OK) goto fail_dash;
@@ -298,22 +304,11 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             st->img_rev[i] = (uint8_t)k.reversed;
         }
     }
-    if (st->any_surface || st->img_of) {
-        /* priorities for the fill lookups, kept when they differ */
-        st->prio = rs__alloc_array(ctx, n ? n : 1, sizeof *st->prio);
-        if (!st->prio) { r = RS_ERR_NOMEM; goto fail_dash; }
-        int differ = 0;
-        for (size_t i = 0; i < n; i++) {
-            st->prio[i] = rs__road_priority(roads, i);
-            differ |= st->prio[i] != st->prio[0];
-        }
-        if (differ) {
-            st->bytes += n * sizeof *st->prio;
-        } else {
-            rs__free(ctx, st->prio);
-            st->prio = NULL;
-        }
+    if (st->prio && !(st->any_surface || st->img_of)) { /* the fill lookups need none */
+        rs__free(ctx, st->prio);
+        st->prio = NULL;
     }
+    if (st->prio) st->bytes += n * sizeof *st->prio;
     if (st->any_surface) {
         st->near = field;
         if (!field) {
