@@ -65,6 +65,21 @@ static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile
     return ok;
 }
 
+/* The largest difference of an RGB channel between a and b (the same size)
+ * over columns [x0, x1) and rows [y0, y1). */
+static int max_diff(const img *a, const img *b, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1)
+{
+    int worst = 0;
+    for (uint32_t y = y0; y < y1; y++)
+        for (uint32_t x = x0; x < x1; x++)
+            for (int c = 0; c < 3; c++) {
+                size_t i = ((size_t)y * a->w + x) * 4 + c;
+                int d = abs((int)a->rgba[i] - (int)b->rgba[i]);
+                if (d > worst) worst = d;
+            }
+    return worst;
+}
+
 /* Paint alpha per pixel: `a` drawn with paint, `b` without. */
 static double *paint_alpha(const img *a, const img *b)
 {
@@ -474,14 +489,7 @@ static void test_lanes_change(void)
     CHECK(render(rsplit, 61, 41, RS_PROFILE_MUTCD, 1, 0, &S));
     CHECK(render(rwhole, 61, 41, RS_PROFILE_MUTCD, 1, 0, &B));
     if (S.rgba && B.rgba) {
-        int worst = 0;
-        for (uint32_t y = 0; y < S.h; y++)
-            for (uint32_t x = 210; x < 390; x++) /* x 21 .. 39 m: the second record */
-                for (int c = 0; c < 3; c++) {
-                    size_t i = ((size_t)y * S.w + x) * 4 + c;
-                    int d = abs((int)S.rgba[i] - (int)B.rgba[i]);
-                    if (d > worst) worst = d;
-                }
+        int worst = max_diff(&S, &B, 210, 390, 0, S.h); /* x 21 .. 39 m: the second record */
         CHECKF(worst <= 8, "the reversed record's lines %d/255 from its road drawn whole", worst);
         printf("a reversed record after a two-way one: %d/255 from its road drawn whole\n", worst);
     }
@@ -520,14 +528,7 @@ static void test_footway_crossing(void)
         /* the crossing takes the road's surface: inside the road (|y - 20|
          * <= 3.9 m) every pixel as without the footway (no X split of the
          * two fills) */
-        int worst = 0;
-        for (uint32_t y = 161; y < 239; y++)
-            for (uint32_t x = 200; x < 400; x++)
-                for (int c = 0; c < 3; c++) {
-                    size_t i = ((size_t)y * A.w + x) * 4 + c;
-                    int d = abs((int)A.rgba[i] - (int)B.rgba[i]);
-                    if (d > worst) worst = d;
-                }
+        int worst = max_diff(&A, &B, 200, 400, 161, 239);
         CHECKF(worst <= 8, "inside the road %d/255 from the road alone", worst);
         printf("footway crossing: inside the road max %d/255 from the road alone\n", worst);
     }
@@ -564,16 +565,10 @@ static void test_class_crossing(void)
         CHECK(render(crossed[v], 61, 41, RS_PROFILE_RMS, 1, 1, &B));
         if (!B.rgba) continue;
         /* the primary's centre line over the crossing (x 36..42 m: a dash) */
-        int white = 0, lost = 0, worst = 0;
+        int white = 0, lost = 0, worst = max_diff(&A, &B, 360, 420, 194, 207);
         for (uint32_t y = 194; y < 207; y++)
-            for (uint32_t x = 360; x < 420; x++) {
+            for (uint32_t x = 360; x < 420; x++)
                 if (is_paint(&A, x, y)) white++, lost += !is_paint(&B, x, y);
-                for (int c = 0; c < 3; c++) {
-                    size_t i = ((size_t)y * A.w + x) * 4 + c;
-                    int d = abs((int)A.rgba[i] - (int)B.rgba[i]);
-                    worst = d > worst ? d : worst;
-                }
-            }
         CHECKF(white >= 80, "variant %d: the centre line alone has %d white pixels in the crossing", v, white);
         CHECKF(lost == 0 && worst <= 8, "variant %d: centre line %d of %d pixels lost, max %d/255 from alone", v, lost,
                white, worst);

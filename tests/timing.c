@@ -1,5 +1,6 @@
 #include "timing.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
@@ -27,4 +28,19 @@ double tm_median(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, cmp_d);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+int tm_open_section(const char *dir, const char *name, FILE **md, FILE **csv)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s.md", dir, name);
+    *md = fopen(path, "w");
+    snprintf(path, sizeof path, "%s/%s.csv", dir, name);
+    *csv = fopen(path, "w");
+    if (*md && *csv) return 0;
+    fprintf(stderr, "%s bench: cannot write to %s\n", name, dir);
+    if (*md) fclose(*md);
+    if (*csv) fclose(*csv);
+    *md = *csv = NULL;
+    return 1;
 }

@@ -1,6 +1,7 @@
-/* Timing helpers shared by the benchmarks. */
+/* Timing and output helpers shared by the benchmarks. */
 #ifndef RS_TESTS_TIMING_H
 #define RS_TESTS_TIMING_H
+#include <stdio.h>
 /* Monotonic clock in milliseconds. */
 double tm_now_ms(void);
 /* This thread's CPU time in milliseconds (one-thread benchmarks on a
@@ -8,4 +9,7 @@ double tm_now_ms(void);
 double tm_thread_cpu_ms(void);
 /* Median of n values (sorts v in place; mean of the middle two for even n). */
 double tm_median(double *v, int n);
+/* A benchmark's section, DIR/NAME.md and DIR/NAME.csv, opened for writing:
+ * 0, or 1 (with a line on stderr, neither left open). */
+int tm_open_section(const char *dir, const char *name, FILE **md, FILE **csv);
 #endif

@@ -88,12 +88,8 @@ int main(int argc, char **argv)
     static const size_t counts[2] = { 10000, 100000 };
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
-    char path[1024];
-    snprintf(path, sizeof path, "%s/cancel.md", dir);
-    FILE *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/cancel.csv", dir);
-    FILE *csv = fopen(path, "w");
-    if (!md || !csv) return 1;
+    FILE *md, *csv;
+    if (tm_open_section(dir, "cancel", &md, &csv)) return 1;
     fprintf(md, "## Progress and cancel of the grid build (tests/bench/cancel.c)\n\n"
                 "`rs_road_grid_build` (the default analytic build) of the generated city (`sc_city`, 400 x 350 "
                 "samples of 5 m, 4 texels) with the default class styles (lines, casings, automatic markings) "

@@ -140,12 +140,8 @@ int main(int argc, char **argv)
     rs_ctx_free(ctx);
     if (once) return 0;
 
-    char path[1024];
-    snprintf(path, sizeof path, "%s/kernel.md", dir);
-    FILE *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/kernel.csv", dir);
-    FILE *csv = fopen(path, "w");
-    if (!md || !csv) return 1;
+    FILE *md, *csv;
+    if (tm_open_section(dir, "kernel", &md, &csv)) return 1;
     fprintf(md, "## Splat kernel, one thread (tests/bench/kernel.c)\n\n"
                 "`rs_splat_window` over the whole image on a prepared splatter (road grid built once, not timed), RGBA "
                 "only, one thread; fastest of %d runs, the procedural and textured runs of a scene alternating. \"Ratio to fill\" = time of a plain RGBA fill of the same buffer "

@@ -132,12 +132,8 @@ int main(int argc, char **argv)
      * below a pixel: the coarse mip levels) and a window at 50 texels
      * (0.1 m pixels, markings legible) */
     static const uint32_t texels[2] = { 4, 50 };
-    char path[1024];
-    snprintf(path, sizeof path, "%s/markings.md", dir);
-    FILE *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/markings.csv", dir);
-    FILE *csv = fopen(path, "w");
-    if (!md || !csv) return 1;
+    FILE *md, *csv;
+    if (tm_open_section(dir, "markings", &md, &csv)) return 1;
     fprintf(md, "## Road markings (tests/bench/markings.c)\n\n"
                 "City scene `sc_city_default(1)` (%zu roads, z-scale 0.01), unstyled, with 0, 1,000 and 10,000 "
                 "markings of the built-in atlas (every type in turn, random road by length, random s, t on the "

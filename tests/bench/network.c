@@ -139,12 +139,8 @@ int main(int argc, char **argv)
         nodes[i] = rs_network_node_count(net);
         rs_network_free(ctx, net);
     }
-    char path[1024];
-    snprintf(path, sizeof path, "%s/network.md", dir);
-    FILE *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/network.csv", dir);
-    FILE *csv = fopen(path, "w");
-    if (!md || !csv) return 1;
+    FILE *md, *csv;
+    if (tm_open_section(dir, "network", &md, &csv)) return 1;
     fprintf(md,
             "## Road network (tests/bench/network.c)\n\n"
             "`rs_network_build` (topology and strokes, docs/network.md) against the road grid build that "

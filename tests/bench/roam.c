@@ -367,19 +367,6 @@ static int run_cold(const char *outdir)
 
 
 /* OUTDIR/NAME.md and OUTDIR/NAME.csv opened for writing; 1 on failure. */
-static int open_section(const char *outdir, const char *name, FILE **md, FILE **csv)
-{
-    char path[600];
-    snprintf(path, sizeof path, "%s/%s.md", outdir, name);
-    *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/%s.csv", outdir, name);
-    *csv = fopen(path, "w");
-    if (*md && *csv) return 0;
-    fprintf(stderr, "roam bench: cannot write to %s\n", outdir);
-    if (*md) fclose(*md);
-    if (*csv) fclose(*csv);
-    return 1;
-}
 
 /* ---- drive: frame-coherent updates against per-frame rebuilds (issue 31) ---- */
 
@@ -663,7 +650,7 @@ static int drive_scene_run(rs_ctx *ctx, const drive_scene *s, FILE *csv, drive_s
 static int run_drive(const char *outdir)
 {
     FILE *md, *csv;
-    if (open_section(outdir, "roam_drive", &md, &csv)) return 1;
+    if (tm_open_section(outdir, "roam_drive", &md, &csv)) return 1;
     rs_ctx *ctx = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     fprintf(csv, "scene,frame,update_ms,rebuild_ms,update_tris,rebuild_tris,update_ops,target_update_ms,"
@@ -734,7 +721,7 @@ int main(int argc, char **argv)
     if (argc > 2 && !strcmp(argv[2], "cold")) return run_cold(outdir); /* that section alone */
     if (argc > 2 && !strcmp(argv[2], "drive")) return run_drive(outdir);
     FILE *md, *csv;
-    if (open_section(outdir, "roam", &md, &csv)) return 1;
+    if (tm_open_section(outdir, "roam", &md, &csv)) return 1;
     rs_ctx *ctx = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     fprintf(csv, "dem,mesher,requested_error,triangles,max_error,rms_error,build_ms,extract_ms,total_ms\n");

@@ -196,12 +196,8 @@ int main(int argc, char **argv)
     for (int i = 0; i < 2; i++)
         if (accuracy(ctx, RS__AA_EXACT, pixes[i], &ex[i]) || accuracy(ctx, RS__AA_HERMITE, pixes[i], &he[i])) return 1;
 
-    char path[1024];
-    snprintf(path, sizeof path, "%s/styles.md", dir);
-    FILE *md = fopen(path, "w");
-    snprintf(path, sizeof path, "%s/styles.csv", dir);
-    FILE *csv = fopen(path, "w");
-    if (!md || !csv) return 1;
+    FILE *md, *csv;
+    if (tm_open_section(dir, "styles", &md, &csv)) return 1;
     double ratio_city = k[C_CLASSED].ms / k[C_PLAIN].ms, ratio_dash_ov = k[C_DASHED].ov_ms / k[C_SOLID].ov_ms,
            ratio_dash = k[C_DASHED].ms / k[C_SOLID].ms;
     fprintf(md,
