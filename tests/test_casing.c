@@ -155,10 +155,43 @@ static void test_casing_colour(void)
     rs_dem_free(ctx, dem);
 }
 
+/* When every road has one fill colour the overlays stage paints it without
+ * looking up the nearest road (docs/linesym.md "Fills"): the same bytes as
+ * the lookup. Roads A and B with fills that differ only in blue take the
+ * lookup; red and green must then equal the one-colour render everywhere. */
+static void test_fill_uniform(void)
+{
+    float z[DW * DH];
+    for (int i = 0; i < DW * DH; i++) z[i] = 10.0f;
+    rs_dem *dem = NULL;
+    CHECK(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK);
+    rs_dem_frame fr = { CELL, 1, 0, 0 };
+    CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    static const char styles[] = "style f1\n fill #E03820\n line 0 0.1 #FFFFFF\nend\n"
+                                 "style f2\n fill #E03821\n line 0 0.1 #FFFFFF\nend\n";
+    image one = { 0 }, two = { 0 };
+    CHECK(render(dem, styles, "f1", "f1", &one));
+    CHECK(render(dem, styles, "f1", "f2", &two));
+    CHECK(one.w == two.w && one.h == two.h && one.w > 90);
+    size_t diff = 0, painted = 0;
+    for (size_t i = 0; one.rgba && two.rgba && i < (size_t)one.w * one.h; i++) {
+        diff += one.rgba[4 * i] != two.rgba[4 * i] || one.rgba[4 * i + 1] != two.rgba[4 * i + 1];
+        painted += one.rgba[4 * i] > 150; /* the fill's red, not the grey terrain's */
+    }
+    CHECKF(diff == 0, "%zu pixels differ in red or green", diff);
+    CHECKF(painted > 500, "only %zu pixels painted with the fill", painted);
+    free(one.rgba);
+    free(one.wt);
+    free(two.rgba);
+    free(two.wt);
+    rs_dem_free(ctx, dem);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_casing_colour();
+    test_fill_uniform();
     rs_ctx_free(ctx);
     return th_finish("test_casing");
 }

@@ -99,6 +99,8 @@ typedef struct ls_grid {
     double cmx, cmy;
 } ls_grid;
 
+struct ls_cutset;
+
 struct rs__linesym {
     double pixel, margin;
     rs__band_aa aa;
@@ -122,6 +124,7 @@ struct rs__linesym {
      * cut_start[r + 1])]) */
     const rs__line_cut *cuts;
     const uint32_t *cut_stroke; /* per road its stroke (NULL: every road its own) */
+    struct ls_cutset *cs;       /* while building: the piece sets of push_trim [0] and push_cut [1] */
     uint32_t *cut_start, *cut_ord;
 };
 
@@ -441,6 +444,13 @@ static double piece_hermite(const rs__linesym *L, const ls_ppc *P, uint32_t px, 
 
 static uint32_t piece_poly(const ls_piece *P, double *x, double *y);
 
+/* A piece's polygon (piece_poly), kept beside the piece while surfaces cut
+ * it, so a surface that misses it costs no clipping. */
+typedef struct ls_poly {
+    uint32_t n;
+    double x[POLY_MAX], y[POLY_MAX];
+} ls_poly;
+
 static void piece_finish(const rs__linesym *L, ls_piece *Q);
 
 /* Append piece P, finished (piece_finish), as the painter's record (pp,
@@ -729,12 +739,22 @@ static uint32_t piece_poly(const ls_piece *P, double *x, double *y)
     return n;
 }
 
-/* Does piece P (its box cut by its half-planes) keep any area? */
-static int piece_nonempty(const ls_piece *P)
+/* Does piece A (its box cut by its half-planes) keep any area, given the
+ * polygon (x, y)[n] of its first k0 half-planes (the piece it was made
+ * from)? The same clips in the same order as piece_poly(A), so the same
+ * doubles, without redoing the first k0. A's polygon goes to g. */
+static int nonempty_from(const double *x, const double *y, uint32_t n, const ls_piece *A, uint32_t k0, ls_poly *g)
 {
-    double x[POLY_MAX], y[POLY_MAX];
-    uint32_t n = piece_poly(P, x, y);
-    return n >= 3 && poly_area(x, y, n) > 1e-12;
+    double bx[POLY_MAX], by[POLY_MAX];
+    memcpy(g->x, x, n * sizeof *x);
+    memcpy(g->y, y, n * sizeof *y);
+    for (uint32_t k = k0; k < A->nhp && n; k++) {
+        n = clip_poly(g->x, g->y, n, A->hp[k][0], A->hp[k][1], A->hp[k][2], bx, by);
+        memcpy(g->x, bx, n * sizeof *bx);
+        memcpy(g->y, by, n * sizeof *by);
+    }
+    g->n = n;
+    return n >= 3 && poly_area(g->x, g->y, n) > 1e-12;
 }
 
 static int add_hp(ls_piece *P, double c0, double cu, double cv)
@@ -752,7 +772,7 @@ static int add_hp(ls_piece *P, double c0, double cu, double cv)
  * pieces into out; returns their count, or -1 when Q misses P (P stays
  * whole) or a piece would need more half-planes than it holds (P is then
  * kept whole: lines run on). */
-static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
+static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg)
 {
     double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
     double nqx = Q->uy, nqy = -Q->ux;      /* Q's left normal */
@@ -761,8 +781,8 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
     double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
     double r = Q->r, lo = Q->u0, hi = Q->u1;
-    double x[POLY_MAX], y[POLY_MAX];
-    uint32_t n = piece_poly(P, x, y);
+    const double *x = G->x, *y = G->y;
+    uint32_t n = G->n;
     if (n < 3) return -1;
     /* the clip line in P's frame: n.(p - Q.a) = cn0 + u fnu + v fnv <= cq */
     double cn0 = ox * Q->cx + oy * Q->cy, fnu = P->ux * Q->cx + P->uy * Q->cy, fnv = npx * Q->cx + npy * Q->cy;
@@ -780,24 +800,24 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
     int m = 0;
     ls_piece A = *P;
     if (!add_hp(&A, cv0 - r, fvu, fvv)) return -1;                      /* v' >= r */
-    if (piece_nonempty(&A)) out[m++] = A;
+    if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
     A = *P;
     if (!add_hp(&A, -cv0 - r, -fvu, -fvv)) return -1;                   /* v' <= -r */
-    if (piece_nonempty(&A)) out[m++] = A;
+    if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
     for (int side = 0; side < 2; side++) {
         A = *P;
         if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv)) return -1;
         int ok = side == 0 ? add_hp(&A, lo - cu0, -fuu, -fuv)            /* u' <= u0 */
                            : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= u1 */
         if (!ok) return -1;
-        if (piece_nonempty(&A)) out[m++] = A;
+        if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
     }
     if (Q->clip) { /* the rectangle's part beyond the clip line stays */
         A = *P;
         if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
             !add_hp(&A, hi - cu0, -fuu, -fuv) || !add_hp(&A, cn0 - cq, fnu, fnv))
             return -1;
-        if (piece_nonempty(&A)) out[m++] = A;
+        if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
     }
     return m;
 }
@@ -805,6 +825,64 @@ static int cut_piece(const ls_piece *P, const ls_surf *Q, ls_piece *out)
 /* Work units of one cut_piece call in push_cut's budget (rs_limits.max_field_work):
  * measured against a list step, so that the budget bounds time. */
 #define CUT_WORK 32
+
+/* The pieces a piece is cut into, with their polygons (two buffers: the
+ * pieces so far and those after the next cut). */
+enum { QMAX = 16 };
+typedef struct ls_cutset {
+    uint32_t n, cur;
+    ls_piece p[2][QMAX];
+    ls_poly g[2][QMAX];
+} ls_cutset;
+
+static void cutset_init(ls_cutset *S, const ls_piece *P)
+{
+    S->n = 1;
+    S->cur = 0;
+    S->p[0][0] = *P;
+    S->g[0][0].n = piece_poly(P, S->g[0][0].x, S->g[0][0].y);
+}
+
+/* Cut every piece so far by Q; a piece Q misses, or that cannot be cut,
+ * stays. When the pieces would be more than QMAX, Q cuts nothing. work
+ * (or NULL) counts CUT_WORK per piece tried. */
+static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
+{
+    ls_piece tmp[5];
+    ls_poly tg[5];
+    uint32_t c = S->cur, o = 1 - c, nn = 0;
+    int full = 0, moved = 0; /* (pieces are copied to the other buffer once Q cuts one: mostly it cuts none) */
+    for (uint32_t a = 0; a < S->n; a++) {
+        if (work) *work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
+        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, tmp, tg);
+        if (m < 0) {
+            if (!moved) {
+                nn++;
+            } else if (nn < QMAX) {
+                S->p[o][nn] = S->p[c][a];
+                S->g[o][nn++] = S->g[c][a];
+            } else {
+                full = 1;
+            }
+            continue;
+        }
+        if (!moved) {
+            for (uint32_t b = 0; b < nn; b++) {
+                S->p[o][b] = S->p[c][b];
+                S->g[o][b] = S->g[c][b];
+            }
+            moved = 1;
+        }
+        if (nn + (uint32_t)m > QMAX) { full = 1; break; }
+        for (int b = 0; b < m; b++) {
+            S->p[o][nn] = tmp[b];
+            S->g[o][nn++] = tg[b];
+        }
+    }
+    if (full || !moved) return; /* too many pieces: this surface does not cut; or it cut none */
+    S->cur = o;
+    S->n = nn;
+}
 
 /* First index in [lo, hi) of the ascending ids whose value is >= v. */
 static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, uint32_t v)
@@ -835,10 +913,8 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
     /* candidate surfaces: those listed in the cells of P's box */
     const ls_grid *G = &J->grid;
     double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
-    enum { QMAX = 16 };
-    ls_piece q[QMAX], tmp[5];
-    uint32_t nq = 1;
-    q[0] = *P;
+    ls_cutset *S = &L->cs[1];
+    cutset_init(S, P);
     if (!(fx1 < 0 || fy1 < 0 || fx0 >= G->gw || fy0 >= G->gh)) {
         uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
         uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
@@ -871,29 +947,12 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
                         J->prio[Q->road] < J->prio[road] && fabs(L->band[P->band].t) <= J->keep[road])
                         continue;
-                    /* cut every piece so far; a piece that cannot be cut stays */
-                    uint32_t nn = 0;
-                    ls_piece next[QMAX];
-                    int full = 0;
-                    for (uint32_t a = 0; a < nq; a++) {
-                        J->work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
-                        int m = cut_piece(&q[a], Q, tmp);
-                        if (m < 0) {
-                            if (nn < QMAX) next[nn++] = q[a];
-                            else full = 1;
-                            continue;
-                        }
-                        if (nn + (uint32_t)m > QMAX) { full = 1; break; }
-                        for (int b = 0; b < m; b++) next[nn++] = tmp[b];
-                    }
-                    if (full) continue; /* too many pieces: this surface does not cut */
-                    memcpy(q, next, nn * sizeof *q);
-                    nq = nn;
+                    cutset_cut(S, Q, &J->work);
                 }
             }
     }
-    for (uint32_t a = 0; a < nq; a++) {
-        rs_result r = push_piece(ctx, L, &q[a]);
+    for (uint32_t a = 0; a < S->n; a++) {
+        rs_result r = push_piece(ctx, L, &S->p[S->cur][a]);
         if (r) return r;
     }
     return RS_OK;
@@ -912,32 +971,17 @@ static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_pie
 {
     uint32_t key = L->cut_start ? cut_key(L, road) : 0;
     if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road);
-    enum { QMAX = 16 };
-    ls_piece q[QMAX], next[QMAX], tmp[5];
-    uint32_t nq = 1;
-    q[0] = *P;
+    ls_cutset *S = &L->cs[0];
+    cutset_init(S, P);
     for (uint32_t e = L->cut_start[key]; e < L->cut_start[key + 1]; e++) {
         const rs__line_cut *c = &L->cuts[L->cut_ord[e]];
         ls_surf Q;
         memset(&Q, 0, sizeof Q);
         Q.ax = c->ax, Q.ay = c->ay, Q.ux = c->ux, Q.uy = c->uy, Q.u0 = c->u0, Q.u1 = c->u1, Q.r = c->r;
-        uint32_t nn = 0;
-        int full = 0;
-        for (uint32_t a = 0; a < nq && !full; a++) {
-            int m = cut_piece(&q[a], &Q, tmp);
-            if (m < 0) {
-                if (nn < QMAX) next[nn++] = q[a];
-                else full = 1;
-            } else if (nn + (uint32_t)m > QMAX) full = 1;
-            else
-                for (int b = 0; b < m; b++) next[nn++] = tmp[b];
-        }
-        if (full) continue;
-        memcpy(q, next, nn * sizeof *q);
-        nq = nn;
+        cutset_cut(S, &Q, NULL);
     }
-    for (uint32_t a = 0; a < nq; a++) {
-        rs_result r = push_cut(ctx, L, J, &q[a], road);
+    for (uint32_t a = 0; a < S->n; a++) {
+        rs_result r = push_cut(ctx, L, J, &S->p[S->cur][a], road);
         if (r) return r;
     }
     return RS_OK;
@@ -1510,6 +1554,7 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
     rs__free(ctx, L->dash);
     rs__free(ctx, L->cut_start);
     rs__free(ctx, L->cut_ord);
+    rs__free(ctx, L->cs);
     rs__free(ctx, L);
 }
 
@@ -1600,6 +1645,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     size_t cap = 0, total = 0;
     if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
     J.limit = ctx->limits.max_field_work;
+    if (nband && !(L->cs = rs__alloc_array(ctx, 2, sizeof *L->cs))) { res = RS_ERR_NOMEM; goto fail; }
     /* road by road, or stroke by stroke: the stroke's records as one polyline */
     const rs_network *net = p->net && rs_network_road_count(p->net) == nroads ? p->net : NULL;
     J.stroke_of = net ? net->stroke_of : NULL;
@@ -1686,6 +1732,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     rs__free(ctx, sv);
     rs__free(ctx, sr);
     rs__free(ctx, runs);
+    rs__free(ctx, L->cs);
+    L->cs = NULL;
     sr = NULL;
     runs = NULL;
     junc_free(ctx, &J);

@@ -93,6 +93,9 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
  * fill of a crossing is the higher road's (issue 27 problem 6). */
 int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
                                  rs__road_point *out);
+/* 1 when rs__roadfield_nearest(f, x, y, reach) would find a road, else 0
+ * (stops at the first: for fills that are the same on every road). */
+int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach);
 
 /* Coverage of pixels [px0, px0+w) x [py0, py0+h), pixel side `pix` metres:
  * out[(py-py0)*stride + (px-px0)] = area fraction of the pixel inside the

@@ -168,7 +168,14 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         put_colour(c + 8, sty->gradient_edge);
         put_colour(c + 12, sty->casing);
         if (sty->surface != RS_SURFACE_DEFAULT) st->any_surface = 1;
+        if (i == 0) {
+            st->fill_uniform = sty->surface == RS_SURFACE_FILL;
+            memcpy(st->fill_rgba, c, sizeof st->fill_rgba);
+        } else if (sty->surface != RS_SURFACE_FILL || memcmp(st->fill_rgba, c, sizeof st->fill_rgba)) {
+            st->fill_uniform = 0;
+        }
         if (sty->surface_image[0]) {
+            st->fill_uniform = 0;
             if ((r = road_image(ctx, st, sty, i, roads, o, dem->frame.cell_size / o->texels)) != RS_OK) goto fail_msg;
             st->any_surface = 1;
         }

@@ -25,6 +25,9 @@ typedef struct rs__styling {
                                          rgb 0..255, a 0..1) */
     double *half_width;               /* per road */
     int any_surface;                  /* some road has a fill, gradient or surface image */
+    int fill_uniform;                 /* every road has a fill, all of one colour (fill_rgba), and no road a
+                                         surface image: a whole road pixel needs no lookup */
+    float fill_rgba[4];
     /* Surface images (`surface IMG`, lib/scene/surfimg.h): per road the image
      * (index into imgs, -1: none), its metres per image height, width and
      * level of detail; NULL when no road has one. */

@@ -79,7 +79,23 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
     for (uint32_t r = 0; r < p->rows; r++) {
         float *sc = p->sc + (size_t)r * w * 3;
         for (size_t k = 0; k < w; k++) {
-            if (p->q[(size_t)r * w + k] == 0) continue;
+            uint16_t q = p->q[(size_t)r * w + k];
+            if (q == 0) continue;
+            if (st->fill_uniform) {
+                /* every road has this fill: which road the lookup below
+                 * finds does not matter, only whether it finds one (it
+                 * does on a whole road pixel); the same floats as there */
+                if (q != 65535) {
+                    double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+                    if (!rs__roadfield_any_near(st->near, x, y, pix * HALF_SQRT2)) continue;
+                }
+                const float *c = st->fill_rgba;
+                for (int ch = 0; ch < 3; ch++) {
+                    float *v = sc + (size_t)ch * w + k;
+                    *v = *v * (1.0f - c[3]) + c[ch] * c[3];
+                }
+                continue;
+            }
             rs__road_point rp;
             double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
             if (!rs__roadfield_nearest_ranked(st->near, x, y, pix * HALF_SQRT2, st->prio, &rp)) continue;

@@ -113,6 +113,126 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
     return 0;
 }
 
+/* --- issue 29 target 1: styled city against Cairo ------------------------ */
+
+/* The target's styling on every road: a 0.5 m casing, solid edge lines
+ * 0.12 m wide 0.25 m inside the road edges, a dashed centre line (0.15 m,
+ * 6/12 m) and a flat asphalt fill; one style per distinct width (the edge
+ * lines' offsets follow the width). tests/bench/styles_cairo.py draws the
+ * same with Cairo: keep the constants equal. */
+#define T1_CASING 0.5
+#define T1_EDGE_IN 0.25
+#define T1_EDGE_W 0.12
+
+typedef struct t1_result {
+    double build_ms, splat_ms, cairo_ms;
+    size_t nstyles;
+} t1_result;
+
+/* The fastest of N Cairo drawings (the script prints it), or < 0 when
+ * python3-cairo is missing. */
+static double t1_cairo_ms(const char *roads_path)
+{
+    const char *py[2] = { "python3", "/usr/bin/python3" };
+    for (int i = 0; i < 2; i++) {
+        char cmd[2048];
+        snprintf(cmd, sizeof cmd, "%s tests/bench/styles_cairo.py '%s' 4 10 2>/dev/null", py[i], roads_path);
+        FILE *p = popen(cmd, "r");
+        if (!p) continue;
+        double ms = -1;
+        if (fscanf(p, "%lf", &ms) != 1) ms = -1;
+        if (pclose(p) == 0 && ms >= 0) return ms;
+    }
+    return -1;
+}
+
+static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem *dem, const rs_splat_options *base,
+                  t1_result *out)
+{
+    size_t cap = 1 << 16, len = 0, nst = 0;
+    char *text = malloc(cap);
+    double *wid = malloc(sc->nroads * sizeof *wid);
+    rs_roads *roads = NULL;
+    rs_styles *styles = NULL;
+    int rc = -1;
+    if (!text || !wid || rs_roads_create(ctx, &roads)) goto done;
+    for (size_t i = 0; i < sc->nroads; i++) {
+        const sc_road *r = &sc->roads[i];
+        size_t k = 0;
+        while (k < nst && wid[k] != r->width) k++;
+        if (k == nst) {
+            double x = r->width / 2 - T1_EDGE_IN;
+            if (len + 512 > cap) {
+                char *t = realloc(text, cap *= 2);
+                if (!t) goto done;
+                text = t;
+            }
+            len += (size_t)snprintf(text + len, cap - len,
+                                    "style w%zu\n fill #383838\n casing %.17g #A0A0A0\n"
+                                    " line 0 0.15 #FFFFFF dash 6 12\n line %.17g %.17g #FFFFFF\n"
+                                    " line %.17g %.17g #FFFFFF\nend\n",
+                                    k, T1_CASING, x, T1_EDGE_W, -x, T1_EDGE_W);
+            wid[nst++] = r->width;
+        }
+        char name[32];
+        snprintf(name, sizeof name, "w%zu", k);
+        if (rs_roads_add(ctx, roads, NULL, r->width, r->xy, r->n) ||
+            rs_roads_set_attr(ctx, roads, i, "style", name))
+            goto done;
+    }
+    if (rs_styles_parse(ctx, text, len, &styles)) goto done;
+    rs_splat_options o = *base;
+    o.style.styles = styles;
+    out->build_ms = out->splat_ms = 1e300;
+    out->nstyles = nst;
+    uint32_t w = 0, h = 0;
+    uint8_t *rgba = NULL;
+    for (int run = 0; run < 5; run++) {
+        rs_splatter *s = NULL;
+        double t0 = tm_now_ms();
+        if (rs_splatter_create(ctx, dem, roads, NULL, &o, &s)) goto done;
+        double b = tm_now_ms() - t0;
+        out->build_ms = b < out->build_ms ? b : out->build_ms;
+        rs_splatter_size(s, &w, &h);
+        if (!rgba && !(rgba = malloc((size_t)w * h * 4))) {
+            rs_splatter_free(ctx, s);
+            goto done;
+        }
+        for (int k = 0; k < 3; k++) {
+            t0 = tm_now_ms();
+            if (rs_splat_window(ctx, s, 0, 0, w, h, rgba, (size_t)w * 4, NULL, 0, NULL)) {
+                rs_splatter_free(ctx, s);
+                free(rgba);
+                goto done;
+            }
+            double t = tm_now_ms() - t0;
+            out->splat_ms = t < out->splat_ms ? t : out->splat_ms;
+        }
+        rs_splatter_free(ctx, s);
+    }
+    free(rgba);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/styles_roads.txt", dir);
+    FILE *f = fopen(path, "w");
+    if (!f) goto done;
+    fprintf(f, "%u %u %.17g\n", sc->w, sc->h, sc->cell_size);
+    for (size_t i = 0; i < sc->nroads; i++) {
+        fprintf(f, "%.17g %zu", sc->roads[i].width, sc->roads[i].n);
+        for (size_t k = 0; k < 2 * sc->roads[i].n; k++) fprintf(f, " %.17g", sc->roads[i].xy[k]);
+        fputc('\n', f);
+    }
+    if (fclose(f)) goto done;
+    out->cairo_ms = t1_cairo_ms(path);
+    rc = 0;
+done:
+    if (rc) fprintf(stderr, "styles: target 1: %s\n", rs_ctx_message(ctx));
+    rs_styles_free(ctx, styles);
+    rs_roads_free(ctx, roads);
+    free(wid);
+    free(text);
+    return rc;
+}
+
 /* --- scenes ------------------------------------------------------------------ */
 
 int main(int argc, char **argv)
@@ -196,6 +316,9 @@ int main(int argc, char **argv)
     for (int i = 0; i < 2; i++)
         if (accuracy(ctx, RS__AA_EXACT, pixes[i], &ex[i]) || accuracy(ctx, RS__AA_HERMITE, pixes[i], &he[i])) return 1;
 
+    t1_result t1;
+    if (t1_run(ctx, dir, &sc, dem, &o, &t1)) return 1;
+
     FILE *md, *csv;
     if (tm_open_section(dir, "styles", &md, &csv)) return 1;
     double ratio_city = k[C_CLASSED].ms / k[C_PLAIN].ms, ratio_dash_ov = k[C_DASHED].ov_ms / k[C_SOLID].ov_ms,
@@ -242,6 +365,29 @@ int main(int argc, char **argv)
                     fmax(ex[0].max, ex[1].max) <= 2.0 / 255
                 ? "met"
                 : "**missed**");
+    double t1_ours = t1.build_ms + t1.splat_ms, t1_ratio = t1.cairo_ms > 0 ? t1_ours / t1.cairo_ms : -1;
+    char cairo_cell[64], measured[96];
+    if (t1_ratio < 0) {
+        snprintf(cairo_cell, sizeof cairo_cell, "not run (no python3-cairo)");
+        snprintf(measured, sizeof measured, "-");
+    } else {
+        snprintf(cairo_cell, sizeof cairo_cell, "%.1f", t1.cairo_ms);
+        snprintf(measured, sizeof measured, "%.1f / %.1f ms = %.2fx", t1_ours, t1.cairo_ms, t1_ratio);
+    }
+    fprintf(md,
+            "\nIssue 29 target 1, the styled city against Cairo: every road gets a %.2g m casing, solid edge lines "
+            "%.2g m wide %.2g m inside its edges, a dashed centre line (0.15 m, 6/12 m) and a flat fill (%zu styles, "
+            "one per road width). roadsplat: style build (`rs_splatter_create`, fastest of 5) + `rs_splat_window` "
+            "of the whole texture, terrain included (fastest of 15), one thread. Cairo (python3-cairo, "
+            "tests/bench/styles_cairo.py): the same roads and styling into an ARGB32 image of the same pixels, "
+            "strokes only (casings, surfaces, edge lines as a white and an asphalt stroke, dashed centre lines; "
+            "layer by layer over all roads), fastest of 10, same run.\n\n"
+            "| | ms |\n|---|---|\n| roadsplat style build | %.1f |\n| roadsplat splat | %.1f |\n"
+            "| roadsplat build + splat | %.1f |\n| Cairo | %s |\n\n"
+            "| target (issue 29) | measured | |\n|---|---|---|\n"
+            "| 1. styled city, style build + splat, 1 thread <= 1.0x Cairo | %s | %s |\n",
+            T1_CASING, T1_EDGE_W, T1_EDGE_IN, t1.nstyles, t1.build_ms, t1.splat_ms, t1_ours, cairo_cell, measured,
+            t1_ratio < 0 ? "not measured" : t1_ratio <= 1.0 ? "met" : "**missed**");
     fclose(md);
     fclose(csv);
     for (int i = 0; i < NC; i++) rs_splatter_free(ctx, k[i].s);
@@ -254,7 +400,7 @@ int main(int argc, char **argv)
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
     rs_ctx_free(ctx);
-    printf("styles: city styled/unstyled %.2f, dashed/solid overlays %.2f (splat %.2f)\n", ratio_city, ratio_dash_ov,
-           ratio_dash);
+    printf("styles: city styled/unstyled %.2f, dashed/solid overlays %.2f (splat %.2f); target 1 styled city %s\n",
+           ratio_city, ratio_dash_ov, ratio_dash, measured);
     return 0;
 }
