@@ -914,7 +914,7 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
     const ls_grid *G = &J->grid;
     double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
     ls_cutset *S = &L->cs[1];
-    cutset_init(S, P);
+    int cut = 0; /* S holds P's pieces: set up at the first surface that may cut it */
     if (!(fx1 < 0 || fy1 < 0 || fx0 >= G->gw || fy0 >= G->gh)) {
         uint32_t i0 = fx0 < 0 ? 0 : (uint32_t)fx0, i1 = fx1 >= G->gw ? G->gw - 1 : (uint32_t)fx1;
         uint32_t j0 = fy0 < 0 ? 0 : (uint32_t)fy0, j1 = fy1 >= G->gh ? G->gh - 1 : (uint32_t)fy1;
@@ -947,10 +947,12 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
                         J->prio[Q->road] < J->prio[road] && fabs(L->band[P->band].t) <= J->keep[road])
                         continue;
+                    if (!cut) cutset_init(S, P), cut = 1;
                     cutset_cut(S, Q, &J->work);
                 }
             }
     }
+    if (!cut) return push_piece(ctx, L, P);
     for (uint32_t a = 0; a < S->n; a++) {
         rs_result r = push_piece(ctx, L, &S->p[S->cur][a]);
         if (r) return r;
