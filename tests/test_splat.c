@@ -6,6 +6,7 @@
 #include "seams.h"
 #include "scenes.h"
 #include "groundtruth.h"
+#include "scene_splat.h"
 
 #include <pthread.h>
 #include <stdlib.h>
@@ -611,9 +612,54 @@ static void test_bad_options(void)
     rs_dem_free(ctx, dem);
 }
 
+/* A grid built for finer pixels drawn at coarser ones (as the virtual
+ * texture's levels do): the splatter indexes the grid's road field anew
+ * for its pixel size (rs__roadfield_repixel) instead of searching the
+ * cells around each pixel; the bytes are those of a grid built for the
+ * coarse pixels, on the city (T ends, crossings, 1000 roads). */
+static void test_grid_other_texels(void)
+{
+    sc_scene sc;
+    CHECK(sc_city_default(&sc, 1) == 0);
+    rs_roads *roads = ss_roads(ctx, &sc);
+    rs_dem *dem = NULL;
+    rs_dem_frame fr = { sc.cell_size, 0.01, 0, 0 };
+    CHECK(roads && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 8;
+    rs_road_grid *fine = NULL;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &fine) == RS_OK);
+    for (uint32_t t = 1; t <= 2 && fine; t++) {
+        o.texels = t;
+        image want, got;
+        CHECK(splat(ctx, dem, roads, &o, &want) == RS_OK);
+        memset(&got, 0, sizeof got);
+        got.w = want.w, got.h = want.h;
+        size_t n = (size_t)got.w * got.h;
+        got.rgba = malloc(n * 4);
+        got.wt = malloc(n * 2);
+        CHECK(got.rgba && got.wt && rs_splat(ctx, dem, fine, &o, got.rgba, n * 4, got.wt, n) == RS_OK);
+        size_t diff = 0, road = 0;
+        for (size_t i = 0; got.rgba && want.rgba && i < n; i++) {
+            diff += memcmp(got.rgba + 4 * i, want.rgba + 4 * i, 4) != 0 || got.wt[i] != want.wt[i];
+            road += want.wt[i] > 0;
+        }
+        CHECKF(diff == 0 && road > n / 20, "%u texels on a grid for 8: %zu of %zu pixels differ (%zu road pixels)", t,
+               diff, n, road);
+        image_free(&want);
+        image_free(&got);
+    }
+    rs_road_grid_free(ctx, fine);
+    rs_dem_free(ctx, dem);
+    rs_roads_free(ctx, roads);
+    sc_scene_free(&sc);
+}
+
 int main(void)
 {
     CHECK(rs_ctx_create(NULL, NULL, &ctx) == RS_OK);
+    test_grid_other_texels();
     test_straight_roads();
     test_determinism_and_sparsity();
     test_road_leaving_map();

@@ -12,6 +12,7 @@
 #include "fail_alloc.h"
 #include "harness.h"
 #include "scenes.h"
+#include "scene_splat.h"
 
 #include <limits.h>
 #include <pthread.h>
@@ -610,6 +611,56 @@ static void test_lookup_discard(rs_ctx *ctx, scene *sc)
     rs_vt_free(ctx, vt);
 }
 
+/* A direct level's tile on the city (1000 roads) against a splatter built
+ * from the roads at that level's texels: byte for byte. The level's
+ * splatter shares the grid made for 100 texels; until its road field was
+ * indexed anew for the coarser pixels (rs__roadfield_repixel), the cells-
+ * around search gave 4 bytes of this tile a different rounding. */
+static void test_city_direct_level(void)
+{
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_pixels = (uint64_t)1 << 40;
+    rs_ctx *ctx = NULL;
+    sc_scene sc;
+    if (!CHECK(rs_ctx_create(NULL, &lim, &ctx) == RS_OK && sc_city_default(&sc, 1) == 0)) return;
+    rs_roads *roads = ss_roads(ctx, &sc);
+    rs_dem *dem = NULL;
+    rs_dem_frame fr = { sc.cell_size, 0.01, 0, 0 };
+    CHECK(roads && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 100;
+    rs_splatter *s = NULL, *f = NULL;
+    rs_vt *vt = NULL;
+    rs_vt_workspace *ws = NULL;
+    rs_vt_options vo;
+    memset(&vo, 0, sizeof vo);
+    vo.tile_size = 256;
+    int ok = CHECK(rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK && rs_vt_create(ctx, s, &vo, &vt) == RS_OK &&
+                   rs_vt_workspace_create(ctx, vt, &ws) == RS_OK);
+    o.texels = 50;
+    ok = ok && CHECK(rs_splatter_create(ctx, dem, roads, NULL, &o, &f) == RS_OK);
+    uint8_t *tile = malloc(264 * 264 * 4), *ref = malloc(264 * 264 * 4);
+    if (ok && tile && ref) {
+        CHECK(rs_vt_make_tile(ctx, vt, ws, 1, 48, 38, tile, 264 * 4) == RS_OK);
+        CHECK(rs_splat_window(ctx, f, 48 * 256 - 4, 38 * 256 - 4, 264, 264, ref, 264 * 4, NULL, 0, NULL) == RS_OK);
+        size_t d = 0;
+        for (size_t i = 0; i < 264 * 264 * 4; i++) d += tile[i] != ref[i];
+        CHECKF(d == 0, "city level 1 tile (48, 38): %zu bytes differ from the 50-texel splatter's window", d);
+    }
+    free(tile);
+    free(ref);
+    rs_splatter_free(ctx, f);
+    rs_vt_workspace_free(ctx, ws);
+    rs_vt_free(ctx, vt);
+    rs_splatter_free(ctx, s);
+    rs_dem_free(ctx, dem);
+    rs_roads_free(ctx, roads);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
     fail_alloc cnt = { LONG_MAX, 0 };
@@ -630,6 +681,7 @@ int main(void)
     flythrough(ctx, &sc, 40 * 400 * 4, 3, NULL, &nlog, &cnt, 0);      /* at most 3 made per frame */
     test_determinism(ctx, &sc, &cnt);
     test_lookup_discard(ctx, &sc);
+    test_city_direct_level();
     fail_sweep fs = fail_alloc_sweep(400, sweep_try, &sc);
     CHECK_SWEEP(fs, 10);
     scene_free(ctx, &sc);

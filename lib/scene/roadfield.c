@@ -63,6 +63,7 @@ struct rs__roadfield {
     double pixel;      /* largest pixel the one-cell paths are valid for */
     double margin;     /* pixel * sqrt(2)/2 */
     double reach;      /* reach_extra + margin: list reach beyond a half width */
+    double reach_extra;
     uint32_t *start;   /* gw*gh + 1 offsets into ids */
     uint32_t *ids;     /* segment indices, ascending per cell */
     uint8_t *full;     /* 1: every pixel whose centre is in the cell is fully road */
@@ -1035,6 +1036,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->gh = (uint32_t)(ceil(p->height_m / c) + 2);
     f->pixel = p->pixel > 0 ? p->pixel : p->cell_size;
     f->margin = f->pixel * HALF_SQRT2;
+    f->reach_extra = p->reach_extra;
     f->reach = p->reach_extra + f->margin;
     f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
     size_t ncell = (size_t)f->gw * f->gh;
@@ -1112,27 +1114,22 @@ fail:
 static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *src, const double *extra,
                            size_t nroads);
 
-rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
-                              rs__roadfield **out)
+/* src's segments (the same ids) widened by extra[road] (NULL: none) and
+ * indexed for pixels up to `pixel` (0: src's). */
+static rs_result derive(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads, double pixel,
+                        rs__roadfield **out)
 {
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!out || !src || !extra) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
     *out = NULL;
-    for (size_t k = 0; k < src->nseg; k++) {
-        uint32_t road = src->seg[k].road;
-        if (road >= nroads || !(extra[road] >= 0 && extra[road] <= src->c))
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: widening of road %lu must be 0..%g m",
-                            (unsigned long)road, src->c);
-    }
     rs__roadfield *f = rs__calloc(ctx, 1, sizeof *f);
     if (!f) return rs__fail(ctx, RS_ERR_NOMEM, "roadfield: out of memory");
     f->c = src->c;
     f->inv_c = src->inv_c;
     f->gw = src->gw;
     f->gh = src->gh;
-    f->pixel = src->pixel;
-    f->margin = src->margin;
-    f->reach = src->reach;
+    f->pixel = pixel > 0 ? pixel : src->pixel;
+    f->margin = pixel > 0 ? f->pixel * HALF_SQRT2 : src->margin;
+    f->reach_extra = src->reach_extra;
+    f->reach = pixel > 0 ? f->reach_extra + f->margin : src->reach;
     f->relscan = src->relscan;
     size_t ncell = (size_t)f->gw * f->gh;
     rf_builder b;
@@ -1153,7 +1150,7 @@ rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const doubl
         rf_seg *sg = &f->seg[k];
         if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
         *sg = src->seg[k];
-        sg->r += extra[sg->road];
+        if (extra) sg->r += extra[sg->road];
         sg->jnext = 0;
         sg->jpart = 0;
         sg->redundant = 0;
@@ -1172,9 +1169,35 @@ fail:
     return build_fail(ctx, f, &b, res);
 }
 
+rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
+                              rs__roadfield **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out || !src || !extra) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
+    *out = NULL;
+    for (size_t k = 0; k < src->nseg; k++) {
+        uint32_t road = src->seg[k].road;
+        if (road >= nroads || !(extra[road] >= 0 && extra[road] <= src->c))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: widening of road %lu must be 0..%g m",
+                            (unsigned long)road, src->c);
+    }
+    return derive(ctx, src, extra, nroads, 0, out);
+}
+
+rs_result rs__roadfield_repixel(rs_ctx *ctx, const rs__roadfield *src, double pixel, rs__roadfield **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out || !src) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
+    *out = NULL;
+    if (!(pixel > 0) || !isfinite(pixel)) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: bad pixel %g", pixel);
+    return derive(ctx, src, NULL, 0, pixel, out);
+}
+
 size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
 
 double rs__roadfield_cell(const rs__roadfield *f) { return f ? f->c : 0; }
+
+double rs__roadfield_pixel(const rs__roadfield *f) { return f ? f->pixel : 0; }
 
 rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t texels)
 {
@@ -1845,7 +1868,7 @@ static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *
     if (!f->tee) return RS_ERR_NOMEM;
     memcpy(f->tee, src->tee, src->ntee * sizeof *f->tee);
     f->ntee = src->ntee;
-    for (size_t i = 0; i < f->ntee; i++) {
+    for (size_t i = 0; i < f->ntee && extra; i++) {
         rf_tee *T = &f->tee[i];
         T->G = T->through < nroads ? src->tee[i].G + extra[T->through] : src->tee[i].G;
     }

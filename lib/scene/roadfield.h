@@ -42,6 +42,12 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
  * beside src in one pass (casings). */
 rs_result rs__roadfield_widen(rs_ctx *ctx, const rs__roadfield *src, const double *extra, size_t nroads,
                               rs__roadfield **out);
+/* A field of src's segments (the same ids and grid) whose one-cell paths
+ * hold for pixels up to `pixel` metres: a splatter drawing coarser pixels
+ * than src was built for (rs__roadfield_coverage falls back to a search of
+ * the cells around every pixel otherwise). The same field as one built
+ * from the roads for that pixel. */
+rs_result rs__roadfield_repixel(rs_ctx *ctx, const rs__roadfield *src, double pixel, rs__roadfield **out);
 /* A record end at a T (docs/network.md "Ends at a T"): it ends on road
  * `through`, which passes through the node; (nx, ny) is the through road's
  * unit normal there, pointing from the leg across it (road set frame). */
@@ -70,6 +76,8 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
                                  size_t n);
 /* The index cell of f, metres. */
 double rs__roadfield_cell(const rs__roadfield *f);
+/* The largest pixel its one-cell coverage paths hold for, metres. */
+double rs__roadfield_pixel(const rs__roadfield *f);
 size_t rs__roadfield_bytes(const rs__roadfield *f);
 
 typedef struct rs__road_point {

@@ -14,7 +14,7 @@ void rs__coverage_analytic(const rs_splatter *s, rs__piece *p)
      * the same pass (the overlays stage reads it there) */
     const rs__styling *st = s->grid->styling;
     const rs__roadfield *g = st && st->casing_merged ? st->casing : NULL;
-    rs__roadfield_coverage2(s->grid->field, g, p->x0, p->y0, p->w, p->rows, s->texel_m, p->cov, p->ov, p->w);
+    rs__roadfield_coverage2(s->field, g, p->x0, p->y0, p->w, p->rows, s->texel_m, p->cov, p->ov, p->w);
 }
 
 /* Shared end of both coverage modes: R to 16 bits, the value the weight

@@ -2,6 +2,7 @@
  * window of the output in pieces, each through the four stages
  * (lib/splat/splatter.h; docs/design.md "Stages"). */
 #include "splatter.h"
+#include "roadfield.h"
 #include "dem.h"
 #include "linesym.h"
 
@@ -60,6 +61,7 @@ void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
     if (!ctx || !s) return;
     rs__alphamap_tables_free(ctx, s);
     rs__free(ctx, s->z_own);
+    rs__roadfield_free(ctx, s->field_own);
     rs__free(ctx, s->ramp_own);
     rs_road_grid_free(ctx, s->grid_own);
     rs__free(ctx, s);
@@ -92,6 +94,13 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         r = rs_road_grid_build(ctx, dem, roads, &o, &s->grid_own);
         s->grid = s->grid_own;
     } else s->grid = grid;
+    /* a grid made for finer pixels (more texels) is indexed anew for these:
+     * its coverage would otherwise search the cells around every pixel.
+     * Not with styles: their fields (casings, fills) pair with the grid's. */
+    if (!r && s->grid->field && !s->grid->styling && o.coverage.edges == RS_EDGES_ANALYTIC &&
+        s->texel_m > rs__roadfield_pixel(s->grid->field))
+        r = rs__roadfield_repixel(ctx, s->grid->field, s->texel_m, &s->field_own);
+    if (!r) s->field = s->field_own ? s->field_own : s->grid->field;
     rs__mask_table_build(&s->mt);
     if (!r && o.coverage.edges == RS_EDGES_ALPHAMAP) r = rs__alphamap_tables_build(ctx, s);
     int nodata = 0;

@@ -27,6 +27,9 @@ struct rs_splatter {
     uint32_t out_w, out_h;
     const rs_road_grid *grid;  /* in use */
     rs_road_grid *grid_own;    /* when built here */
+    const struct rs__roadfield *field; /* the road field the coverage reads: the grid's, or field_own */
+    struct rs__roadfield *field_own;   /* the grid's indexed for this splatter's coarser pixels (a grid
+                                          built for more texels, as the virtual texture's levels share) */
     rs__mask_table mt;
     rs__alpha_table tab[3];    /* EDGE, INNER, OUTER (alpha-map edges) */
     const float *z;            /* heights, nodata filled (lib/dem.c policy) */

@@ -69,6 +69,10 @@ struct rs_vt_workspace {
     rs_splat_workspace *sw[VT_MAX_LEVELS + 1];
     uint8_t *src;  /* a band of source pixels */
     double *hsum;  /* a band's rows, averaged across: n columns x 4 sums */
+    size_t span;   /* source pixels one level pixel can overlap along an axis, at most */
+    double *cw;    /* per level column: its source columns' overlaps (span each), then one row's */
+    int64_t *cja;  /* per level column: its first source column */
+    uint32_t *cnq; /* per level column: how many */
     size_t bytes;
 };
 
@@ -681,6 +685,9 @@ void rs_vt_workspace_free(rs_ctx *ctx, rs_vt_workspace *ws)
     if (!ctx || !ws) return;
     for (uint32_t i = 0; i < VT_MAX_LEVELS + 1; i++) rs_splat_workspace_free(ctx, ws->sw[i]);
     rs__free(ctx, ws->src);
+    rs__free(ctx, ws->cw);
+    rs__free(ctx, ws->cja);
+    rs__free(ctx, ws->cnq);
     rs__free(ctx, ws->hsum);
     rs__free(ctx, ws);
 }
@@ -697,7 +704,7 @@ rs_result rs_vt_workspace_create(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *
     if (!ws) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a virtual texture workspace");
     ws->vt = vt;
     uint32_t width[VT_MAX_LEVELS + 1] = { 0 };
-    size_t src_px = 0, hrows = 0;
+    size_t src_px = 0, hrows = 0, span = 0;
     for (uint32_t k = 0; k < vt->nlev; k++) {
         const vt_level *L = &vt->lv[k];
         uint32_t wk = vt->n;
@@ -707,6 +714,8 @@ rs_result rs_vt_workspace_create(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *
             wk = cols;
             if ((size_t)cols * rows > src_px) src_px = (size_t)cols * rows;
             if (rows > hrows) hrows = rows;
+            size_t sk = (size_t)((L->D + vt->T - 1) / vt->T) + 1;
+            if (sk > span) span = sk;
         }
         if (wk > width[L->src]) width[L->src] = wk;
     }
@@ -722,8 +731,14 @@ rs_result rs_vt_workspace_create(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *
     if (!r && src_px) {
         ws->src = rs__alloc_array(ctx, src_px, 4);
         ws->hsum = rs__alloc_array(ctx, hrows * vt->n * 4, sizeof *ws->hsum);
-        if (!ws->src || !ws->hsum) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a virtual texture workspace");
-        ws->bytes += src_px * 4 + hrows * vt->n * 4 * sizeof *ws->hsum;
+        ws->span = span;
+        ws->cw = rs__alloc_array(ctx, (vt->n + 1) * span, sizeof *ws->cw);
+        ws->cja = rs__alloc_array(ctx, vt->n, sizeof *ws->cja);
+        ws->cnq = rs__alloc_array(ctx, vt->n, sizeof *ws->cnq);
+        if (!ws->src || !ws->hsum || !ws->cw || !ws->cja || !ws->cnq)
+            r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a virtual texture workspace");
+        ws->bytes += src_px * 4 + hrows * vt->n * 4 * sizeof *ws->hsum +
+                     vt->n * (span * sizeof *ws->cw + sizeof *ws->cja + sizeof *ws->cnq) + span * sizeof *ws->cw;
     }
     if (r) {
         rs_vt_workspace_free(ctx, ws);
@@ -751,6 +766,22 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
     if (sa < 0) sa = 0;
     if (sb > (int64_t)Ws - 1) sb = (int64_t)Ws - 1;
     const double area = (double)D * (double)D;
+    /* each level column's source columns and overlaps, the same for every
+     * source row (the weights as the sums below take them) */
+    const size_t span = ws->span;
+    double *cw = ws->cw, *rw = ws->cw + (size_t)n * span;
+    for (int64_t i = 0; i < n; i++) {
+        int64_t u0 = (X0 + i) * D, u1 = u0 + D;
+        int64_t ja = floordiv(u0, T), jb = floordiv(u1 - 1, T);
+        if (ja < sa) ja = sa;
+        if (jb > sb) jb = sb;
+        ws->cja[i] = ja;
+        ws->cnq[i] = jb >= ja ? (uint32_t)(jb - ja + 1) : 0;
+        for (int64_t q = ja; q <= jb; q++) {
+            int64_t lo = q * T > u0 ? q * T : u0, hi = (q + 1) * T < u1 ? (q + 1) * T : u1;
+            cw[(size_t)i * span + (size_t)(q - ja)] = (double)(hi - lo);
+        }
+    }
     for (int64_t r0 = 0; r0 < n; r0 += band) {
         int64_t r1 = r0 + band < n ? r0 + band : n;
         int64_t ya = floordiv((Y0 + r0) * D, T), yb = floordiv((Y0 + r1) * D - 1, T);
@@ -768,15 +799,11 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
             const uint8_t *row = ws->src + (size_t)j * sw * 4;
             double *hs = ws->hsum + (size_t)j * n * 4;
             for (int64_t i = 0; i < n; i++) {
-                int64_t u0 = (X0 + i) * D, u1 = u0 + D;
-                int64_t ja = floordiv(u0, T), jb = floordiv(u1 - 1, T);
-                if (ja < sa) ja = sa;
-                if (jb > sb) jb = sb;
+                const uint8_t *p = row + (size_t)(ws->cja[i] - sa) * 4;
+                const double *w = cw + (size_t)i * span;
                 double acc[4] = { 0, 0, 0, 0 };
-                for (int64_t q = ja; q <= jb; q++) {
-                    int64_t lo = q * T > u0 ? q * T : u0, hi = (q + 1) * T < u1 ? (q + 1) * T : u1;
-                    const uint8_t *p = row + (size_t)(q - sa) * 4;
-                    double wa = (double)(hi - lo) * p[3];
+                for (uint32_t m = 0; m < ws->cnq[i]; m++, p += 4) {
+                    double wa = w[m] * p[3];
                     acc[0] += wa * p[0];
                     acc[1] += wa * p[1];
                     acc[2] += wa * p[2];
@@ -791,12 +818,15 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
             if (ja < ya) ja = ya;
             if (jb > yb) jb = yb;
             uint8_t *o = rgba + (size_t)i * stride;
+            for (int64_t q = ja; q <= jb; q++) {
+                int64_t lo = q * T > v0 ? q * T : v0, hi = (q + 1) * T < v1 ? (q + 1) * T : v1;
+                rw[q - ja] = (double)(hi - lo);
+            }
             for (int64_t x = 0; x < n; x++) {
                 double acc[4] = { 0, 0, 0, 0 };
                 for (int64_t q = ja; q <= jb; q++) {
-                    int64_t lo = q * T > v0 ? q * T : v0, hi = (q + 1) * T < v1 ? (q + 1) * T : v1;
                     const double *h = ws->hsum + ((size_t)(q - ya) * n + x) * 4;
-                    double wv = (double)(hi - lo);
+                    double wv = rw[q - ja];
                     acc[0] += wv * h[0];
                     acc[1] += wv * h[1];
                     acc[2] += wv * h[2];
