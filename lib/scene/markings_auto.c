@@ -167,6 +167,7 @@ static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
     memset(G, 0, sizeof *G);
     double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
     size_t m = 0, nseg = 0;
+    double wsum = 0;
     for (size_t j = 0; j < nr; j++) {
         const rs__road_local *rl = &A->rl[j];
         if (rl->n < 2) continue;
@@ -176,10 +177,22 @@ static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
         x0 = fmin(x0, b[0]), y0 = fmin(y0, b[1]), x1 = fmax(x1, b[2]), y1 = fmax(y1, b[3]);
         m++;
         nseg += rl->n - 1;
+        double w = 0;
+        rs_roads_get(A->roads, j, NULL, &w, NULL, NULL);
+        wsum += fmin(w, 1e6);
     }
     if (m < 64 || nr >= UINT32_MAX) return 0; /* (few roads: the scan is as fast) */
     size_t g = 1;
     while (g * g < nseg && g < 2048) g++;
+    /* cells no smaller than four mean reaches: smaller ones list every
+     * segment in dozens of cells (10^5 city roads: 0.2 s). A query reads
+     * its point's cell only and keeps what passes the exact tests, in road
+     * order, so the cell size changes the work, never the result. */
+    double mreach = wsum / (double)m / 2 + JUNCTION_TOL, side = fmax(x1 - x0, y1 - y0);
+    if (mreach > 0 && side / (double)g < 4 * mreach) {
+        double q = ceil(side / (4 * mreach));
+        g = q < 1 ? 1 : q < (double)g ? (size_t)q : g;
+    }
     G->gx = G->gy = g;
     G->x0 = x0, G->y0 = y0;
     G->cw = (x1 - x0) / (double)g, G->ch = (y1 - y0) / (double)g;
@@ -617,7 +630,12 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         rs__free(ctx, G.ids);
     }
     if (!r) index_junctions(&A, nr);
+    if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     for (size_t i = 0; i < nr && !r; i++) {
+        if (rs__tick(ctx, 0)) {
+            r = RS_ERR_CANCELLED;
+            break;
+        }
         int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
         r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
     }

@@ -178,6 +178,7 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
     rs_result res = RS_ERR_NOMEM;
     if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey || !ikey) goto done;
     for (size_t i = 0, k = 0; i < n; i++) {
+        if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         if (keep && !keep[i]) continue;
         int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
         uint64_t b = bucket_of(H, cx, cy), o = occ_bit(H, cx, cy);
@@ -187,6 +188,7 @@ static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const dou
     }
     for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
     for (size_t i = 0, k = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
+        if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         if (keep && !keep[i]) continue;
         uint32_t b = ikey[k++], q = gstart[b >> shift]++;
         tkey[q] = b;
@@ -367,6 +369,10 @@ static rs_result find_tees(build *B)
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
+        if ((r & 1023) == 0 && rs__poll(B->ctx)) { /* (10^5 roads: ~0.2 s) */
+            res = RS_ERR_CANCELLED;
+            break;
+        }
         if (!B->live[r]) continue;
         for (size_t k = B->voff[r]; k + 1 < B->voff[r + 1] && !res; k++) {
             size_t k1 = k + 1;
@@ -761,12 +767,18 @@ static rs_result cluster_points(build *B)
         hash_free(B->ctx, &H);
         rs__free(B->ctx, up);
         rs__free(B->ctx, low);
-        return RS_ERR_NOMEM;
+        return res ? res : RS_ERR_NOMEM;
     }
     for (size_t i = 0; i < count; i++) up[i] = (uint32_t)i, low[i] = H.ent[i].id;
     /* points in bucket order: their own bucket is the one being read (the
      * union does not depend on the order) */
     for (size_t i = 0; i < count; i++) {
+        if ((i & 16383) == 0 && rs__poll(B->ctx)) { /* (10^6 points: ~0.1 s) */
+            hash_free(B->ctx, &H);
+            rs__free(B->ctx, up);
+            rs__free(B->ctx, low);
+            return RS_ERR_CANCELLED;
+        }
         const pt_entry *e = &H.ent[i];
         int64_t c[4], ox = cell_of(e->x, H.cell), oy = cell_of(e->y, H.cell);
         disc_cells(&H, &e->x, tol, c);
@@ -907,7 +919,11 @@ rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_
             d->y = B.xy[2 * v + 1];
         }
     nl = 0;
-    for (size_t i = 0, j; i < np; i = j) {
+    for (size_t i = 0, j, poll_at = 0; i < np; i = j) {
+        if (i >= poll_at) {
+            if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
+            poll_at = i + 4096;
+        }
         uint32_t nd = B.ps[i].node;
         const double *c = &N->node[nd].x;
         N->leg_start[nd] = (uint32_t)nl;

@@ -419,6 +419,12 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
     }
     double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
     for (size_t k = 0; k < f->nseg; k++) {
+        if ((k & 16383) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, stamp);
+            rs__free(ctx, sbox);
+            rs__free(ctx, sok);
+            return RS_ERR_CANCELLED;
+        }
         rf_seg *s = &f->seg[k];
         double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
                         lm_max(lm_max(s->len, s->r), ext));
@@ -446,6 +452,12 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
         return RS_ERR_NOMEM;
     }
     for (uint32_t j = 0; j < f->gh; j++) {
+        if ((j & 7) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, stamp);
+            rs__free(ctx, sbox);
+            rs__free(ctx, sok);
+            return RS_ERR_CANCELLED;
+        }
         int ok = 1;
         uint32_t pos = f->rstart[j];
         /* the row's cell lists are one run of ids, in cell order */
@@ -679,6 +691,11 @@ static rs_result holders_build(rs_ctx *ctx, const rs__roadfield *f, rf_holders *
     double lo = -f->c, spanx = ((double)f->gw + 1) * f->c, spany = ((double)f->gh + 1) * f->c;
     size_t m = 0;
     for (size_t k = 0; k < f->nseg; k++) {
+        if ((k & 16383) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, in);
+            rs__free(ctx, keys);
+            return RS_ERR_CANCELLED;
+        }
         if (!in[k]) continue;
         const rf_seg *s = &f->seg[k];
         keys[m].key = morton(morton_coord(0.5 * s->xmin + 0.5 * s->xmax, lo, spanx),
@@ -820,14 +837,16 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
     for (size_t c = ncell; c > 0; c--) first[c] = first[c - 1];
     first[0] = 0;
     const float *g[4] = { gb, gb + cap, gb + 2 * cap, gb + 3 * cap };
+    rs_result res = RS_OK;
     for (size_t k = 0; k < f->nseg; k++) {
+        if ((k & 16383) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; break; }
         ob[2 * k] = fbox_outer(&f->seg[k]);
         ob[2 * k + 1] = fbox_inner(&f->seg[k]);
     }
-    rs_result res = RS_OK;
     for (size_t c = 0; c < ncell && res == RS_OK; c++) {
         uint32_t a = f->start[c], b = f->start[c + 1], n = b - a;
         int gathered = 0;
+        if ((c & 63) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; break; } /* (10^5 roads: ~0.1 s in all) */
         for (uint32_t i = first[c]; i < first[c + 1]; i++) {
             uint32_t k = order[i];
             int red = 0;
@@ -892,6 +911,10 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
     }
     size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
     for (size_t k = f->nseg; k-- > 0;) {
+        if ((k & 16383) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, redundant);
+            return RS_ERR_CANCELLED;
+        }
         rf_seg *sa = &f->seg[k];
         size_t m = k + 1;
         h->work++; /* the joint partner: one step */
@@ -937,6 +960,7 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     if (!b->cell1) return RS_ERR_NOMEM;
     if (!b->norec && b->rec) {
         for (size_t k = f->nseg; k-- > 0;) {
+            if ((k & 16383) == 0 && rs__poll(ctx)) return RS_ERR_CANCELLED;
             uint32_t a = k ? b->recend[k - 1] : 0, e = b->recend[k];
             for (uint32_t i = e; i-- > a;) {
                 if (i >= PREFETCH_AHEAD) rf_prefetch(f->ids + b->cnt[b->rec[i - PREFETCH_AHEAD]] - 1);
@@ -945,7 +969,10 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
             b->cell1[k] = e > a ? b->pref[k] & 0x7FFFFFFFu : 0;
         }
     } else {
-        for (size_t k = f->nseg; k-- > 0;) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+        for (size_t k = f->nseg; k-- > 0;) {
+            if ((k & 16383) == 0 && rs__poll(ctx)) return RS_ERR_CANCELLED;
+            seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+        }
     }
     rec_drop(b);
     if (rs__poll(ctx)) return RS_ERR_CANCELLED;
@@ -1802,6 +1829,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
     if (!f || !n || f->ntee) return RS_OK;
     size_t m = 0, cap = 0;
     for (size_t i = 0; i < n; i++) {
+        if ((i & 4095) == 0 && rs__poll(ctx)) return RS_ERR_CANCELLED;
         const rs__tee_end *t = &tees[i];
         const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
         if (!s || !(s->r > 0)) continue;

@@ -157,6 +157,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     size_t nbands = 0, ncasing = 0;
     int styled = 0;
     for (size_t i = 0; i < n; i++) {
+        if (rs__tick(ctx, 0)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         if ((r = rs_road_style_ex(ctx, roads, i, &o->style, sty)) != RS_OK) goto fail_msg;
         double w = 0;
         rs_roads_get(roads, i, NULL, &w, NULL, NULL);

@@ -20,6 +20,10 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
     size_t cap = 0, cnt = 0;
     rs__tee_end *T = NULL;
     for (size_t nd = 0; nd < net->nnodes; nd++) {
+        if ((nd & 4095) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, T);
+            return RS_ERR_CANCELLED;
+        }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = UINT32_MAX;
         const rs_network_leg *tl[2] = { NULL, NULL };
