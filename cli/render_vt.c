@@ -334,6 +334,7 @@ int cli_render_path_main(int argc, char **argv)
     memset(&vo, 0, sizeof vo);
     vo.tile_size = a.tile_size;
     vo.budget_bytes = (uint64_t)(a.budget_mb * 1048576.0);
+    vo.roads = in.roads; /* coarser levels of a styled grid build their own grids */
     rs_result r;
     if ((r = rs_vt_create(ctx, sp, &vo, &vt)) || (r = rs_vt_workspace_create(ctx, vt, &ws[0])) ||
         (r = rs_vt_workspace_create(ctx2, vt, &ws[1]))) {

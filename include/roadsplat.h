@@ -858,7 +858,11 @@ typedef struct rs_splatter rs_splatter;
  * the DEM's nodata-filled heights, height range and light vector once.
  * Give exactly one of `roads` (the splatter builds and owns its grid) and
  * `grid` (from rs_road_grid_build with the same dem and options; borrowed:
- * it must outlive the splatter). `dem` and the option textures are
+ * it must outlive the splatter). An analytic grid without styles and
+ * markings may have been built for more texels (the splatter indexes its
+ * road field for its own pixels: the same bytes as a grid built for them);
+ * one with styles or markings must match the texels (RS_ERR_INVALID_ARG:
+ * they are laid out in its pixels). `dem` and the option textures are
  * borrowed too. The splatter is immutable: rs_splat_window may be called on
  * it from several threads at once, each with its own context. */
 RS_API rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
@@ -1394,6 +1398,12 @@ typedef struct rs_vt_options {
                               0 -> 256 MiB; must hold every tile of the coarsest level */
     uint32_t levels;       /* 0 -> until the coarsest level fits one tile; else 1..that,
                               at most 32 */
+    const rs_roads *roads; /* the roads s was made from: needed when s's grid has styles or
+                              markings (line symbols, casings and markings are laid out in the
+                              grid's pixels, so each coarser texel count gets a grid of its own,
+                              built from these with s's options; s's styles and surface images
+                              must then still be valid). Borrowed during rs_vt_create only.
+                              NULL: share s's grid (without styles and markings only) */
 } rs_vt_options;
 
 /* One frame's camera. All-zero fields take the default shown. */
@@ -1446,13 +1456,15 @@ typedef struct rs_vt_stats {
 } rs_vt_stats;
 
 /* Build the quadtree over the splatter's image: the levels, a splatter per
- * texel count the levels need (sharing s's grid and options; progress
- * callbacks off), the height range of every tile (from the DEM) and the
- * bookkeeping for rs_vt_info.slots tiles, all allocated here (rs_vt_update
- * then allocates nothing). The coarser splatters are checked against ctx's
- * limits as any splatter is. RS_ERR_INVALID_ARG for bad options or a budget
- * below the coarsest level's tiles, RS_ERR_UNSUPPORTED for alpha-map edges,
- * RS_ERR_NOMEM. *out is the caller's (rs_vt_free, same context). */
+ * texel count the levels need (sharing s's grid, or with styles or markings
+ * a grid of its own from opts->roads; s's options; progress callbacks off),
+ * the height range of every tile (from the DEM) and the bookkeeping for
+ * rs_vt_info.slots tiles, all allocated here (rs_vt_update then allocates
+ * nothing). The coarser splatters are checked against ctx's limits as any
+ * splatter is. RS_ERR_INVALID_ARG for bad options, a budget below the
+ * coarsest level's tiles, or a grid with styles or markings and no
+ * opts->roads; RS_ERR_UNSUPPORTED for alpha-map edges, RS_ERR_NOMEM. *out
+ * is the caller's (rs_vt_free, same context). */
 RS_API rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *opts, rs_vt **out);
 RS_API void rs_vt_free(rs_ctx *ctx, rs_vt *vt);
 RS_API void rs_vt_get_info(const rs_vt *vt, rs_vt_info *out);

@@ -651,6 +651,23 @@ static void test_grid_other_texels(void)
         image_free(&got);
     }
     rs_road_grid_free(ctx, fine);
+    /* with styles the grid's line symbols, casings and markings are laid out
+     * in its pixels: another texel count is refused, not drawn wrong */
+    size_t bad = 0;
+    for (size_t i = 0; roads && i < rs_roads_count(roads); i++)
+        bad += rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) != RS_OK;
+    CHECK(bad == 0);
+    o.texels = 8;
+    fine = NULL;
+    CHECK(rs_road_grid_build(ctx, dem, roads, &o, &fine) == RS_OK);
+    o.texels = 2;
+    rs_splatter *sp = NULL;
+    CHECK(rs_splatter_create(ctx, dem, NULL, fine, &o, &sp) == RS_ERR_INVALID_ARG && !sp &&
+          strstr(rs_ctx_message(ctx), "built for 8 texels, not 2") != NULL);
+    o.texels = 8;
+    CHECK(rs_splatter_create(ctx, dem, NULL, fine, &o, &sp) == RS_OK && sp);
+    rs_splatter_free(ctx, sp);
+    rs_road_grid_free(ctx, fine);
     rs_dem_free(ctx, dem);
     rs_roads_free(ctx, roads);
     sc_scene_free(&sc);

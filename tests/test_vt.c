@@ -77,7 +77,8 @@ static uint8_t *whole(rs_ctx *ctx, scene *sc, uint32_t t, uint32_t *w, uint32_t 
     rs_splat_options o = sc->o;
     o.texels = t;
     rs_splatter *s;
-    if (rs_splatter_create(ctx, sc->dem, NULL, sc->grid, &o, &s)) return NULL;
+    /* a grid of its own (the scene is styled: its lines are laid out in the grid's pixels) */
+    if (rs_splatter_create(ctx, sc->dem, t == TEX ? NULL : sc->roads, t == TEX ? sc->grid : NULL, &o, &s)) return NULL;
     rs_splatter_size(s, w, h);
     uint8_t *px = malloc((size_t)*w * *h * 4);
     if (px && rs_splat_window(ctx, s, 0, 0, *w, *h, px, (size_t)*w * 4, NULL, 0, NULL)) {
@@ -124,6 +125,7 @@ static rs_vt *vt_make(rs_ctx *ctx, const scene *sc, uint32_t S, int32_t border, 
     vo.tile_size = S;
     vo.border = border;
     vo.budget_bytes = budget;
+    vo.roads = sc->roads; /* the scene is styled: coarser levels build their own grids */
     CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK && vt);
     return vt;
 }
@@ -216,6 +218,11 @@ static void test_options(rs_ctx *ctx, scene *sc)
     vo.levels = 6;
     CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_ERR_INVALID_ARG && !vt);
     vo.levels = 2; /* the coarsest level then has 8 x 7 tiles of 4 KiB */
+    vo.budget_bytes = 56 * 4096;
+    /* a styled grid's coarser level needs the roads for a grid of its own */
+    CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_ERR_INVALID_ARG && !vt &&
+          strstr(rs_ctx_message(ctx), "rs_vt_options.roads") != NULL);
+    vo.roads = sc->roads;
     vo.budget_bytes = 55 * 4096;
     CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_ERR_INVALID_ARG && !vt);
     vo.budget_bytes = 56 * 4096;
@@ -232,8 +239,10 @@ static void test_options(rs_ctx *ctx, scene *sc)
     CHECK(rs_splatter_create(ctx, sc->dem, sc->roads, NULL, &o, &s) == RS_OK);
     CHECK(rs_vt_create(ctx, s, NULL, &vt) == RS_ERR_UNSUPPORTED && !vt);
     rs_splatter_free(ctx, s);
-    /* defaults */
-    CHECK(rs_vt_create(ctx, sc->s, NULL, &vt) == RS_OK);
+    /* defaults (but the roads) */
+    memset(&vo, 0, sizeof vo);
+    vo.roads = sc->roads;
+    CHECK(rs_vt_create(ctx, sc->s, &vo, &vt) == RS_OK);
     rs_vt_get_info(vt, &in);
     CHECK(in.tile_size == 256 && in.border == 4 && in.budget_bytes == (uint64_t)256 << 20 && in.levels == 2);
     rs_vt_view v;
@@ -564,6 +573,7 @@ static rs_result sweep_try(rs_ctx *c, void *user, int *wrong)
     rs_vt_options vo;
     memset(&vo, 0, sizeof vo);
     vo.tile_size = 32;
+    vo.roads = sc->roads;
     rs_result r = rs_vt_create(c, sc->s, &vo, &vt);
     if (r) {
         *wrong = vt != NULL;
@@ -682,7 +692,7 @@ int main(void)
     test_determinism(ctx, &sc, &cnt);
     test_lookup_discard(ctx, &sc);
     test_city_direct_level();
-    fail_sweep fs = fail_alloc_sweep(400, sweep_try, &sc);
+    fail_sweep fs = fail_alloc_sweep(6000, sweep_try, &sc);
     CHECK_SWEEP(fs, 10);
     scene_free(ctx, &sc);
     rs_ctx_free(ctx);

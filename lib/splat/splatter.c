@@ -52,6 +52,11 @@ static rs_result check_grid(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *
     else if (g->edges == RS_EDGES_ALPHAMAP &&
              (g->texels != o->texels || g->opts.buffer != o->grid.buffer || g->opts.road_cell != o->grid.road_cell))
         what = "other texels or grid options";
+    else if ((g->styling || g->markings) && g->texels != o->texels)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "road grid with styles or markings was built for %u texels, not %u (its line symbols, "
+                        "casings and markings are laid out in its pixels)",
+                        g->texels, o->texels);
     if (what) return rs__fail(ctx, RS_ERR_INVALID_ARG, "road grid was built for %s", what);
     return RS_OK;
 }
@@ -96,7 +101,8 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     } else s->grid = grid;
     /* a grid made for finer pixels (more texels) is indexed anew for these:
      * its coverage would otherwise search the cells around every pixel.
-     * Not with styles: their fields (casings, fills) pair with the grid's. */
+     * (A grid with styles or markings is drawn at its own texels only:
+     * check_grid.) */
     if (!r && s->grid->field && !s->grid->styling && o.coverage.edges == RS_EDGES_ANALYTIC &&
         s->texel_m > rs__roadfield_pixel(s->grid->field))
         r = rs__roadfield_repixel(ctx, s->grid->field, s->texel_m, &s->field_own);

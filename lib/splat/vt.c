@@ -103,8 +103,11 @@ void rs_vt_free(rs_ctx *ctx, rs_vt *vt)
     rs__free(ctx, vt);
 }
 
-/* The splatter rendering texel count t (made once per count). */
-static rs_result splatter_for(rs_ctx *ctx, rs_vt *vt, const rs_splatter *s, uint32_t t, uint32_t *index)
+/* The splatter rendering texel count t (made once per count): on s's grid,
+ * or with styles or markings on a grid of its own from roads (NULL: an
+ * error). */
+static rs_result splatter_for(rs_ctx *ctx, rs_vt *vt, const rs_splatter *s, const rs_roads *roads, uint32_t t,
+                              uint32_t *index)
 {
     for (uint32_t i = 0; i < vt->nsp; i++)
         if (vt->sp_tex[i] == t) {
@@ -115,14 +118,23 @@ static rs_result splatter_for(rs_ctx *ctx, rs_vt *vt, const rs_splatter *s, uint
     o.texels = t;
     o.progress = NULL;
     o.progress_user = NULL;
-    /* read only while the grid was built (the host may have freed them since) */
-    o.style.styles = NULL;
-    o.style.surface_images = NULL;
-    o.style.surface_image_count = 0;
     /* the grain and tiled textures are indexed by output pixel: scale the offset to t */
     o.surface.texel_offset_x = (int64_t)floor((double)s->o.surface.texel_offset_x * t / vt->T);
     o.surface.texel_offset_y = (int64_t)floor((double)s->o.surface.texel_offset_y * t / vt->T);
-    rs_result r = rs_splatter_create(ctx, s->dem, NULL, s->grid, &o, &vt->own[vt->nsp]);
+    /* line symbols, casings and markings are laid out in the grid's pixels */
+    int own_grid = (s->grid->styling || s->grid->markings) && t != vt->T;
+    if (own_grid && !roads)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "virtual texture: the splatter's grid has styles or markings, so its %u-texel level needs "
+                        "a grid of its own: give rs_vt_options.roads",
+                        t);
+    if (!own_grid) { /* read only while the grid was built (the host may have freed them since) */
+        o.style.styles = NULL;
+        o.style.surface_images = NULL;
+        o.style.surface_image_count = 0;
+    }
+    rs_result r = rs_splatter_create(ctx, s->dem, own_grid ? roads : NULL, own_grid ? NULL : s->grid, &o,
+                                     &vt->own[vt->nsp]);
     if (r) return r;
     vt->sp[vt->nsp] = vt->own[vt->nsp];
     vt->sp_tex[vt->nsp] = t;
@@ -249,7 +261,7 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
         uint32_t t = vt->T % m == 0 ? (uint32_t)(vt->T / m) : (uint32_t)((vt->T + m - 1) / m);
         if (t < 1) t = 1;
         L->D = (uint64_t)t * m;
-        r = splatter_for(ctx, vt, s, t, &L->src);
+        r = splatter_for(ctx, vt, s, o.roads, t, &L->src);
     }
     const vt_level *top = &vt->lv[vt->nlev - 1];
     if (!r && (uint64_t)top->tx * top->ty > vt->slots)
