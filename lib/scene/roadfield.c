@@ -1040,17 +1040,27 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     size_t nroads = rs_roads_count(roads);
     if (nroads > UINT32_MAX) return rs__fail(ctx, RS_ERR_LIMIT, "roadfield: too many roads");
 
-    /* Index cell: the DEM cell, or half the mean road width when roads are
-     * wider (fewer cells per segment), doubled until the grid is small. */
+    /* Index cell: about one segment per cell over the map (short lists, few
+     * cells per segment), at least the DEM cell and half the mean road
+     * width, at most the mean width (wider cells are rarely whole inside a
+     * road: their pixels lose the full-cell path); doubled until the grid
+     * is small. A pixel's coverage does not depend on the cell (the lists
+     * only narrow the candidates): the city's 1000 roads take 7.7 m cells,
+     * build and coverage 17 % faster than the 5 m DEM cell (docs/roadfield.md
+     * "Index"). */
     double c = p->index_cell, cap = GRID_MAX_CELLS;
     if (c == 0) {
-        double wsum = 0;
+        double wsum = 0, nseg = 0;
         for (size_t i = 0; i < nroads; i++) {
             double w = 0;
-            rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+            size_t np = 0;
+            rs_roads_get(roads, i, NULL, &w, NULL, &np);
             wsum += lm_min(w, 1e12) / (double)nroads;
+            nseg += np > 1 ? (double)(np - 1) : 0;
         }
-        c = lm_max(p->cell_size, 0.5 * wsum);
+        double lo = lm_max(p->cell_size, 0.5 * wsum), hi = lm_max(lo, wsum);
+        double even = nseg > 0 ? sqrt(p->width_m * p->height_m / nseg) : hi;
+        c = even < lo || !(even == even) ? lo : even > hi ? hi : even;
         cap = GRID_AUTO_CELLS;
     }
     while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
