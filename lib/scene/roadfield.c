@@ -1931,39 +1931,12 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
     return rs__roadfield_nearest_ranked(f, x, y, reach, NULL, out);
 }
 
-int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach)
+/* The nearest query; out NULL: whether any segment passes its tests (the
+ * first one ends the scan). */
+static int nearest_scan(const rs__roadfield *f, double x, double y, double reach, const int *prio,
+                        rs__road_point *out)
 {
     if (!f || !(reach >= 0)) return 0;
-    int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
-    if (ci < 0 || cj < 0) return 0;
-    rf_cells cr = { (uint32_t)ci, (uint32_t)ci, (uint32_t)cj, (uint32_t)cj };
-    if (reach > f->reach && !cells_around(f, x, y, reach - f->reach + 1e-6 * f->c, &cr)) return 0;
-    /* the tests of rs__roadfield_nearest_ranked, to the first that passes */
-    for (uint32_t j = cr.j0; j <= cr.j1; j++)
-        for (uint32_t i = cr.i0; i <= cr.i1; i++) {
-            size_t cell = (size_t)j * f->gw + i;
-            for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
-                const rf_seg *s = &f->seg[f->ids[k]];
-                double pr, side, d = seg_point(s, x, y, &pr, &side);
-                int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
-                if (tn == 2 || (tn == 1 && d - s->r <= reach)) return 1;
-            }
-        }
-    for (uint32_t m = f->ntee ? f->tstart[cj] : 0; f->ntee && m < f->tstart[cj + 1]; m++) {
-        const rf_tee *T = &f->tee[f->tids[m]];
-        if (x < T->box[0] || x > T->box[1] || y < T->box[2] || y > T->box[3]) continue;
-        const rf_seg *s = &f->seg[T->seg];
-        double pr, side, d = seg_point(s, x, y, &pr, &side);
-        int tn = tee_near(f, s, x, y, reach);
-        if (tn == 2 || (tn == 1 && d - s->r <= reach)) return 1;
-    }
-    return 0;
-}
-
-int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
-                                 rs__road_point *out)
-{
-    if (!f || !out || !(reach >= 0)) return 0;
     int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
     if (ci < 0 || cj < 0) return 0;
     rf_cells cr = { (uint32_t)ci, (uint32_t)ci, (uint32_t)cj, (uint32_t)cj };
@@ -1979,6 +1952,7 @@ int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, dou
                 double pr, side, d = seg_point(s, x, y, &pr, &side);
                 int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
                 if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
+                if (!out) return 1;
                 int key = !prio ? INT_MIN : (s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r) ? prio[s->road] : INT_MIN;
                 /* segments are numbered in (road, seg) order */
                 if (!best || key > bk || (key == bk && (d < bd || (d == bd && s < best)))) {
@@ -1994,6 +1968,7 @@ int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, dou
         double pr, side, d = seg_point(s, x, y, &pr, &side);
         int tn = tee_near(f, s, x, y, reach);
         if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
+        if (!out) return 1;
         int key = !prio ? INT_MIN : tee_sd(f, s, x, y) <= 0 ? prio[s->road] : INT_MIN;
         if (!best || key > bk || (key == bk && (d < bd || (d == bd && s < best)))) {
             best = s; bd = d; bpr = pr; bside = side; bk = key;
@@ -2008,6 +1983,17 @@ int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, dou
     out->dist = bd;
     out->half_width = best->r;
     return 1;
+}
+
+int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
+                                 rs__road_point *out)
+{
+    return out ? nearest_scan(f, x, y, reach, prio, out) : 0;
+}
+
+int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach)
+{
+    return nearest_scan(f, x, y, reach, NULL, NULL);
 }
 
 /* Fraction of a square of side `side` centred at the origin where
