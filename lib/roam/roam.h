@@ -44,6 +44,10 @@ struct roam_scan {
                        under it may change sides of the frustum */
     unsigned char cls; /* its class against the view at its last scan
                           (SCAN_NO_CLASS: none yet) */
+    unsigned char kl;  /* 1: split into two explicit pool leaves (its diamond
+                          side of rs__roam_mergeable), kept by every split and
+                          merge (note_kids), so that the scan tests it from
+                          this record instead of loading both children */
 };
 #define SCAN_NO_CLASS 3
 
@@ -56,6 +60,11 @@ typedef struct roam_node {
                                        is apex + rot90(left - apex) */
 } roam_node;
 
+/* Where the diamond partner of an implicit position lies (rs_roam.pwhere):
+ * in its own block, or across the block's left leg, right leg or
+ * hypotenuse (rs__roam_build_partner_table). */
+enum { PW_SELF = 0, PW_LEFT = 1, PW_RIGHT = 2, PW_BASE = 3 };
+
 struct rs_roam {
     uint32_t w, hgt, cw, ch;        /* samples and cells */
     double cs, zs;
@@ -64,7 +73,7 @@ struct rs_roam {
     float *zown;                    /* owned copy when the DEM had nodata */
     uint32_t plog, P, npx, npy;
     uint32_t dq, ncut;              /* implicit levels below a block node; 2^dq */
-    unsigned char pwhere[1 << IMPL_DEPTH], ppos[2][1 << IMPL_DEPTH]; /* rs__roam_build_partner_table */
+    unsigned char pwhere[1 << IMPL_DEPTH], ppos[2][1 << IMPL_DEPTH]; /* rs__roam_build_partner_table (PW_*) */
     uint32_t below[1 << IMPL_DEPTH]; /* SPLIT_BITs of the positions under each position */
     /* Corners (apex, left, right) and hypotenuse midpoint of every position
      * down to the cell halves, in units of block leg / 2^(dq/2) along the
@@ -88,6 +97,7 @@ struct rs_roam {
     int zrange_ok;                  /* pzmin / pzmax are those of z */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
     roam_node *nodes, *base_copy;
+    void *nodes_mem;                /* the block nodes lies in (rs__roam_pair_align) */
     uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
                                        pushed at most once per pass as a leaf and once
                                        tagged, for its implicit children) */
@@ -129,6 +139,7 @@ struct rs_roam {
     float *c2read;                  /* per node, 2 floats: while partly in view at its last
                                        scan, the odometer and turn readings until which it
                                        stays so (node_class, lib/roam/roam_update.c) */
+    void *cscan_mem, *c2read_mem;   /* the blocks cscan and c2read lie in */
     unsigned char *pvis;            /* per patch: visible at the last update */
     double odo_base;                /* odometer at which the scan records' readings start
                                        (floats: rebased, with a full scan, every 4 km) */
@@ -177,6 +188,37 @@ static inline void touch_patch(rs_roam *L, uint32_t node)
     }
     if (L->par)
         for (uint32_t c = node; c != NIL && L->cscan[c].rc >= 0.0f; c = L->par[c]) L->cscan[c].rc = -1.0f;
+}
+
+/* Is explicit node p split into two pool leaves? (roam_scan.kl) */
+static inline unsigned char kids_are_leaves(const rs_roam *L, uint32_t p)
+{
+    const roam_node *n = L->nodes;
+    uint32_t lc = n[p].lc;
+    if (lc == NIL || lc == IMPL || lc == FREE || lc < L->base_count) return 0;
+    return n[lc].lc == NIL && n[n[p].rc].lc == NIL;
+}
+
+/* Node t was split or merged: its kl and its parent's (frame-coherent
+ * updates only). */
+static inline void note_kids(rs_roam *L, uint32_t t)
+{
+    if (!L->par) return;
+    L->cscan[t].kl = kids_are_leaves(L, t);
+    uint32_t p = L->par[t];
+    if (p != NIL) L->cscan[p].kl = kids_are_leaves(L, p);
+}
+
+/* Pool nodes come in pairs (the two children of a split) at base_count +
+ * 2k. The per-node arrays (nodes, scan records) are placed so that element
+ * base_count starts a 64-byte line: a pair of nodes is then one cache line
+ * and a pair of scan records half of one, instead of straddling two (an
+ * allocator block starts 16 bytes into a line). mem: a block of
+ * count * size + 64 bytes; returns the array's start inside it. */
+static inline void *rs__roam_pair_align(void *mem, size_t size, uint32_t base_count)
+{
+    uintptr_t a = (uintptr_t)mem, first = a + (uintptr_t)base_count * size;
+    return (void *)(a + ((64u - (first & 63u)) & 63u));
 }
 
 /* Nodes the pool can still give. */
@@ -398,6 +440,9 @@ int rs__roam_split_leaf(rs_roam *L, uint32_t node, uint32_t pos);
  * can merge: both split into two leaves each, pool nodes (not the base
  * mesh)? *partner / *ppos name the partner (NIL at the border). */
 int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos);
+/* Its first half: is (node, pos) split into two leaves, pool nodes? (No
+ * read of the partner's side.) */
+int rs__roam_split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos);
 /* Merge the diamond of (node, pos) (rs__roam_mergeable said yes). */
 void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos);
 /* Triangle, cache slot and patch of (node, pos). */

@@ -71,6 +71,7 @@ static void split(rs_roam *L, uint32_t t)
         tri tt;
         node_tri(L, &n[t], &tt);
         n[t].lc = IMPL; n[t].rc = 0;
+        note_kids(L, t);
         L->tris += (uint32_t)tris_delta(L, &tt);
         if (L->dq > 1) queue_block(L, t);
         uint32_t b = n[t].base;
@@ -92,6 +93,7 @@ static void split(rs_roam *L, uint32_t t)
         L->par[lc] = L->par[rc] = t;
         L->cscan[lc].rc = L->cscan[rc].rc = -1.0f;
         L->cscan[lc].cls = L->cscan[rc].cls = SCAN_NO_CLASS;
+        L->cscan[lc].kl = L->cscan[rc].kl = 0;
     }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
@@ -110,6 +112,7 @@ static void split(rs_roam *L, uint32_t t)
     Lc->ax = mx; Lc->ay = my; Lc->bx = T->ax; Lc->by = T->ay;
     Rc->ax = mx; Rc->ay = my; Rc->bx = (uint16_t)cx; Rc->by = (uint16_t)cy;
     T->lc = lc; T->rc = rc;
+    note_kids(L, t);
     L->stack[L->sp++] = rc;
     L->stack[L->sp++] = lc;
     if (T->left != NIL) relink(n, T->left, t, lc);
@@ -183,7 +186,6 @@ static void ref_tri(int ax, int ay, int bx, int by, tri *t)
  * a patch) under the reflection across the edge's line, which swaps the
  * roles of the legs. ppos[1][pos] is the partner's position in the first
  * case, ppos[0][pos] in the second (and for PW_SELF, PW_BASE). */
-enum { PW_SELF = 0, PW_LEFT = 1, PW_RIGHT = 2, PW_BASE = 3 };
 
 static uint32_t descend_toward(tri N, const tri *t, uint32_t d)
 {
@@ -358,6 +360,9 @@ void rs__roam_reset_mesh(rs_roam *L)
     L->nfree = 0;
     L->tris = L->base_tris;
     L->exhausted = 0;
+    /* base nodes have base children (roam_scan.kl) */
+    if (L->cscan)
+        for (uint32_t i = 0; i < L->base_count; i++) L->cscan[i].kl = 0;
     /* every patch may have changed */
     L->full_next = 1;
     L->gen++;
@@ -634,7 +639,7 @@ int rs__roam_split_leaf(rs_roam *L, uint32_t node, uint32_t pos)
 }
 
 /* Is (node, pos) split into two leaves? */
-static int split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
+int rs__roam_split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
 {
     const roam_node *n = L->nodes;
     const roam_node *nd = &n[node];
@@ -647,21 +652,26 @@ static int split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
     if (pos == 1) /* a block whose subtree is just its two children */
         return nd->lc == IMPL && !(nd->rc & (SPLIT_BIT(L->ncut) - 1u))
                && !(node < L->base_count && L->base_copy[node].lc == IMPL);
-    if (nd->lc == NIL || nd->lc == IMPL || nd->lc == FREE) return 0;
-    return nd->lc >= L->base_count && n[nd->lc].lc == NIL && n[nd->rc].lc == NIL;
+#ifdef ROAM_KL_CHECK
+    if (L->cscan && L->cscan[node].kl != kids_are_leaves(L, node)) __builtin_trap();
+#endif
+    /* the scan record says so without loading the children (cache misses
+     * in the update's scan) */
+    if (L->cscan) return L->cscan[node].kl;
+    return kids_are_leaves(L, node);
 }
 
 int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos)
 {
     const roam_node *n = L->nodes;
-    if (!split_into_leaves(L, node, pos)) return 0;
+    if (!rs__roam_split_into_leaves(L, node, pos)) return 0;
     uint32_t N, pp;
     if (pos >= 2) N = partner_node(L, node, pos, &pp);
     else { N = n[node].base; pp = pos; }
     *partner = N;
     *ppos = pp;
     if (N == NIL || (N == node && pp == pos)) return 1;
-    return split_into_leaves(L, N, pp);
+    return rs__roam_split_into_leaves(L, N, pp);
 }
 
 static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
@@ -676,7 +686,7 @@ static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
         n[node].rc &= ~SPLIT_BIT(pos);
         return;
     }
-    if (pos == 1) { n[node].lc = n[node].rc = NIL; return; }
+    if (pos == 1) { n[node].lc = n[node].rc = NIL; note_kids(L, node); return; }
     uint32_t lc = n[node].lc, rc = n[node].rc;
     /* the children's base neighbours are this node's leg neighbours again */
     uint32_t nl = n[lc].base, nr = n[rc].base;
@@ -689,6 +699,7 @@ static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
     n[lc].rc = L->free_head;
     L->free_head = lc;
     L->nfree += 2;
+    note_kids(L, node);
 }
 
 void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos)

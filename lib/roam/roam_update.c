@@ -269,6 +269,41 @@ static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const t
 static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t, const tri *blk)
 {
     uint32_t N, pp;
+    if (build && !u->all) {
+        /* a tolerance's scan looks at this side first and at the partner
+         * (another node or block, mostly not in cache) only when this
+         * parent's priority allows the merge; this parent's slack is then
+         * kept even when the partner is not split into leaves (a reading a
+         * little early: safe) */
+        const rs_roam *L = u->L;
+        if (!rs__roam_split_into_leaves(L, node, pos)) return;
+        if (blk && pos >= 2 && L->pwhere[pos] == PW_SELF && L->ppos[0][pos] < pos) return; /* offered from pp */
+        u->thr = u->mtol;
+        double save = u->slack;
+        u->slack = INFINITY;
+        double p = item_prio_t(u, node, pos, t), sp = u->slack;
+        if (p > u->mtol) {
+            u->slack = save < sp ? save : sp;
+            return;
+        }
+        u->slack = save;
+        if (!rs__roam_mergeable(L, node, pos, &N, &pp)) return;
+        if (N != NIL) {
+            u->slack = INFINITY;
+            double q = item_prio_t(u, N, pp, blk && N == node ? &blk[pp] : NULL);
+            if (q > u->mtol) {
+                u->slack = save < u->slack ? save : u->slack;
+                return;
+            }
+            if (u->slack < sp) sp = u->slack;
+            if (q > p) p = q;
+        }
+        u->slack = save < sp ? save : sp;
+        qent e;
+        fill_ent(L, &e, p, node, pos);
+        if (!q_append(u->ctx, L->qm, &e)) u->nomem = 1;
+        return;
+    }
     if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
     /* a full scan of a triangle target sees each diamond once; the
      * tolerance's scans see it from both sides, as the two clusters that
@@ -722,15 +757,25 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
     if (!L->par) {
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
-        struct roam_scan *cs = rs__alloc_array(ctx, L->cap, sizeof *cs);
+        /* pairs of scan records in one cache line (rs__roam_pair_align) */
+        void *csm = rs__alloc_array(ctx, (size_t)L->cap + 4, sizeof(struct roam_scan));
         unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
-        float *c2 = rs__alloc_array(ctx, 2 * (size_t)L->cap, sizeof *c2);
-        if (!par || !cs || !pv || !c2) {
-            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv); rs__free(ctx, c2);
+        void *c2m = rs__alloc_array(ctx, 2 * (size_t)L->cap + 16, sizeof(float));
+        if (!par || !csm || !pv || !c2m) {
+            rs__free(ctx, par); rs__free(ctx, csm); rs__free(ctx, pv); rs__free(ctx, c2m);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
+        struct roam_scan *cs = rs__roam_pair_align(csm, sizeof *cs, L->base_count);
+        float *c2 = rs__roam_pair_align(c2m, 2 * sizeof *c2, L->base_count);
+        L->cscan_mem = csm;
+        L->c2read_mem = c2m;
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; cs[i].cls = SCAN_NO_CLASS; }
+        for (uint32_t i = 0; i < L->used; i++) {
+            par[i] = NIL;
+            cs[i].rc = cs[i].irc = -1.0f;
+            cs[i].cls = SCAN_NO_CLASS;
+            cs[i].kl = n[i].lc == FREE ? 0 : kids_are_leaves(L, i);
+        }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
         L->par = par; L->cscan = cs; L->pvis = pv; L->c2read = c2;
@@ -749,8 +794,8 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
-    rs__free(ctx, L->cscan);
-    rs__free(ctx, L->c2read);
+    rs__free(ctx, L->cscan_mem);
+    rs__free(ctx, L->c2read_mem);
     rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
