@@ -60,11 +60,6 @@ typedef struct roam_node {
                                        is apex + rot90(left - apex) */
 } roam_node;
 
-/* Where the diamond partner of an implicit position lies (rs_roam.pwhere):
- * in its own block, or across the block's left leg, right leg or
- * hypotenuse (rs__roam_build_partner_table). */
-enum { PW_SELF = 0, PW_LEFT = 1, PW_RIGHT = 2, PW_BASE = 3 };
-
 struct rs_roam {
     uint32_t w, hgt, cw, ch;        /* samples and cells */
     double cs, zs;
@@ -73,7 +68,7 @@ struct rs_roam {
     float *zown;                    /* owned copy when the DEM had nodata */
     uint32_t plog, P, npx, npy;
     uint32_t dq, ncut;              /* implicit levels below a block node; 2^dq */
-    unsigned char pwhere[1 << IMPL_DEPTH], ppos[2][1 << IMPL_DEPTH]; /* rs__roam_build_partner_table (PW_*) */
+    unsigned char pwhere[1 << IMPL_DEPTH], ppos[2][1 << IMPL_DEPTH]; /* rs__roam_build_partner_table */
     uint32_t below[1 << IMPL_DEPTH]; /* SPLIT_BITs of the positions under each position */
     /* Corners (apex, left, right) and hypotenuse midpoint of every position
      * down to the cell halves, in units of block leg / 2^(dq/2) along the

@@ -186,6 +186,7 @@ static void ref_tri(int ax, int ay, int bx, int by, tri *t)
  * a patch) under the reflection across the edge's line, which swaps the
  * roles of the legs. ppos[1][pos] is the partner's position in the first
  * case, ppos[0][pos] in the second (and for PW_SELF, PW_BASE). */
+enum { PW_SELF = 0, PW_LEFT = 1, PW_RIGHT = 2, PW_BASE = 3 };
 
 static uint32_t descend_toward(tri N, const tri *t, uint32_t d)
 {

@@ -122,6 +122,8 @@ typedef struct upd {
     double rctr;        /* smallest travel reading of the subtrees seen so far,
                            their classes' included */
     int inview;         /* scanning a node wholly in view: no item is culled */
+    const float *perr;  /* offer_block: the block's errors by position (NaN: not
+                           worked out), for the positions without a cache slot */
     int nomem;
 } upd;
 
@@ -208,7 +210,8 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
     int k = u->vtrack ? view_dist_track(u, &t, patch, &d, &vtr, &vrt)
           : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k < 2) return k ? INFINITY : 0.0;
-    float e = rs__roam_slot_err(u->L, slot, &t);
+    float e = tk && slot == NIL && u->perr && pos >= 2 && u->perr[pos] == u->perr[pos] ? u->perr[pos]
+            : rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
     double ek = (double)e * L->zs * u->v->k;
     if (u->track) {
@@ -269,41 +272,6 @@ static void offer_leaf_t(upd *u, uint32_t node, uint32_t pos, int build, const t
 static void offer_diamond_t(upd *u, uint32_t node, uint32_t pos, int build, const tri *t, const tri *blk)
 {
     uint32_t N, pp;
-    if (build && !u->all) {
-        /* a tolerance's scan looks at this side first and at the partner
-         * (another node or block, mostly not in cache) only when this
-         * parent's priority allows the merge; this parent's slack is then
-         * kept even when the partner is not split into leaves (a reading a
-         * little early: safe) */
-        const rs_roam *L = u->L;
-        if (!rs__roam_split_into_leaves(L, node, pos)) return;
-        if (blk && pos >= 2 && L->pwhere[pos] == PW_SELF && L->ppos[0][pos] < pos) return; /* offered from pp */
-        u->thr = u->mtol;
-        double save = u->slack;
-        u->slack = INFINITY;
-        double p = item_prio_t(u, node, pos, t), sp = u->slack;
-        if (p > u->mtol) {
-            u->slack = save < sp ? save : sp;
-            return;
-        }
-        u->slack = save;
-        if (!rs__roam_mergeable(L, node, pos, &N, &pp)) return;
-        if (N != NIL) {
-            u->slack = INFINITY;
-            double q = item_prio_t(u, N, pp, blk && N == node ? &blk[pp] : NULL);
-            if (q > u->mtol) {
-                u->slack = save < u->slack ? save : u->slack;
-                return;
-            }
-            if (u->slack < sp) sp = u->slack;
-            if (q > p) p = q;
-        }
-        u->slack = save < sp ? save : sp;
-        qent e;
-        fill_ent(L, &e, p, node, pos);
-        if (!q_append(u->ctx, L->qm, &e)) u->nomem = 1;
-        return;
-    }
     if (!rs__roam_mergeable(u->L, node, pos, &N, &pp)) return;
     /* a full scan of a triangle target sees each diamond once; the
      * tolerance's scans see it from both sides, as the two clusters that
@@ -360,12 +328,31 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
         child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
     }
+    /* The bounds of the positions below 2 and 3 (no cache slot: legs 2 and
+     * sqrt 2) from the nine samples of each (rs__roam_load_s_terms, the
+     * same values as rs__roam_on_map_err's) instead of one computation per
+     * position. */
+    float perr[1 << IMPL_DEPTH];
+    const float *sperr = u->perr;
+    for (uint32_t pos = 0; pos < (1u << IMPL_DEPTH); pos++) perr[pos] = NAN;
+    if (L->dq == IMPL_DEPTH)
+        for (uint32_t sp = 2; sp < 4; sp++) {
+            if (!(rc & SPLIT_BIT(sp)) || tri_class(L, &pt[sp]) != NODE_ON) continue;
+            s_terms st;
+            st.S = pt[sp];
+            rs__roam_load_s_terms(L, &st);
+            perr[2 * sp] = st.r[0]; perr[2 * sp + 1] = st.r[1];
+            perr[4 * sp] = st.q[0][0]; perr[4 * sp + 1] = st.q[0][1];
+            perr[4 * sp + 2] = st.q[1][0]; perr[4 * sp + 3] = st.q[1][1];
+        }
+    u->perr = perr;
     for (uint32_t pos = 2; pos < L->ncut; pos++) {
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue;
         if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
         else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos], pt);
     }
     if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1], NULL);
+    u->perr = sperr;
 }
 
 /* A turn reading as stored: rounded down (a reading too early is safe). */
@@ -930,14 +917,22 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
          * the rebuild's mesh (the coarsest within the tolerance, so none
          * of its diamonds can merge) one heap operation at a time;
          * rs_roam_frame's depth-first refinement makes the same mesh
-         * several times faster (40 -> 8 ms on the fractal drive). The
-         * next update scans everything. */
+         * several times faster (40 -> 8 ms on the fractal drive). Then
+         * the scan of every cluster at this view, which fills the scan
+         * records (and finds nothing to split or merge), so that the
+         * next update is incremental: the work of the first full scan
+         * belongs to the update that built the mesh, not to the next. */
         rs__roam_reset_mesh(L);
         refine_params rp = { 0.0, 0, &v, vis, 0 };
         rs__roam_refine(L, &rp);
         ops = L->tris - L->base_tris; /* a split adds a triangle on the map */
-        done = !L->exhausted;
-        fixed = 0;
+        done = fixed = 0;
+        if (!L->exhausted) {
+            u.full = 1;
+            scan_fresh(&u);
+            done = tolerance_pass(&u, limit, &ops);
+            fixed = done;
+        }
     } else {
         scan_fresh(&u);
         done = tolerance_pass(&u, limit, &ops);
