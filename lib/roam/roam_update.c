@@ -123,7 +123,7 @@ typedef struct upd {
                            their classes' included */
     int inview;         /* scanning a node wholly in view: no item is culled */
     const float *perr;  /* offer_block: the block's errors by position (NaN: not
-                           worked out), for the positions without a cache slot */
+                           worked out) */
     int nomem;
 } upd;
 
@@ -210,7 +210,7 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
     int k = u->vtrack ? view_dist_track(u, &t, patch, &d, &vtr, &vrt)
           : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k < 2) return k ? INFINITY : 0.0;
-    float e = tk && slot == NIL && u->perr && pos >= 2 && u->perr[pos] == u->perr[pos] ? u->perr[pos]
+    float e = tk && u->perr && pos >= 2 && u->perr[pos] == u->perr[pos] ? u->perr[pos]
             : rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
     double ek = (double)e * L->zs * u->v->k;
@@ -328,10 +328,10 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
         child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
     }
-    /* The bounds of the positions below 2 and 3 (no cache slot: legs 2 and
-     * sqrt 2) from the nine samples of each (rs__roam_load_s_terms, the
-     * same values as rs__roam_on_map_err's) instead of one computation per
-     * position. */
+    /* The bounds of split positions 2 and 3 and of the positions below
+     * them (legs 2 and sqrt 2: no cache slot) from the nine samples of
+     * each (rs__roam_load_s_terms, the same values as rs__roam_on_map_err's
+     * and the cache's) instead of one computation per position. */
     float perr[1 << IMPL_DEPTH];
     const float *sperr = u->perr;
     for (uint32_t pos = 0; pos < (1u << IMPL_DEPTH); pos++) perr[pos] = NAN;
@@ -341,6 +341,7 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
             s_terms st;
             st.S = pt[sp];
             rs__roam_load_s_terms(L, &st);
+            perr[sp] = st.s; /* what the cache holds for it (spares that line) */
             perr[2 * sp] = st.r[0]; perr[2 * sp + 1] = st.r[1];
             perr[4 * sp] = st.q[0][0]; perr[4 * sp + 1] = st.q[0][1];
             perr[4 * sp + 2] = st.q[1][0]; perr[4 * sp + 3] = st.q[1][1];
