@@ -447,7 +447,7 @@ static uint64_t landscape_bytes(const rs_roam *L)
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)
-           + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node)
+           + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node) + 64 /* rs__roam_pair_align */
            + 2 * (uint64_t)L->cap * sizeof(uint32_t) + (W + H) * sizeof(float);
 }
 

@@ -92,7 +92,7 @@ struct rs_roam {
     int zrange_ok;                  /* pzmin / pzmax are those of z */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
     roam_node *nodes, *base_copy;
-    void *nodes_mem;                /* the block nodes lies in (rs__roam_pair_align) */
+    void *nodes_mem;                /* the allocation `nodes` points into (rs__roam_pair_align) */
     uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
                                        pushed at most once per pass as a leaf and once
                                        tagged, for its implicit children) */
@@ -134,7 +134,7 @@ struct rs_roam {
     float *c2read;                  /* per node, 2 floats: while partly in view at its last
                                        scan, the odometer and turn readings until which it
                                        stays so (node_class, lib/roam/roam_update.c) */
-    void *cscan_mem, *c2read_mem;   /* the blocks cscan and c2read lie in */
+    void *cscan_mem, *c2read_mem;   /* the allocations cscan and c2read point into */
     unsigned char *pvis;            /* per patch: visible at the last update */
     double odo_base;                /* odometer at which the scan records' readings start
                                        (floats: rebased, with a full scan, every 4 km) */
@@ -435,9 +435,6 @@ int rs__roam_split_leaf(rs_roam *L, uint32_t node, uint32_t pos);
  * can merge: both split into two leaves each, pool nodes (not the base
  * mesh)? *partner / *ppos name the partner (NIL at the border). */
 int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos);
-/* Its first half: is (node, pos) split into two leaves, pool nodes? (No
- * read of the partner's side.) */
-int rs__roam_split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos);
 /* Merge the diamond of (node, pos) (rs__roam_mergeable said yes). */
 void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos);
 /* Triangle, cache slot and patch of (node, pos). */

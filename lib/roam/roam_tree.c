@@ -640,7 +640,7 @@ int rs__roam_split_leaf(rs_roam *L, uint32_t node, uint32_t pos)
 }
 
 /* Is (node, pos) split into two leaves? */
-int rs__roam_split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
+static int split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
 {
     const roam_node *n = L->nodes;
     const roam_node *nd = &n[node];
@@ -665,14 +665,14 @@ int rs__roam_split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
 int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos)
 {
     const roam_node *n = L->nodes;
-    if (!rs__roam_split_into_leaves(L, node, pos)) return 0;
+    if (!split_into_leaves(L, node, pos)) return 0;
     uint32_t N, pp;
     if (pos >= 2) N = partner_node(L, node, pos, &pp);
     else { N = n[node].base; pp = pos; }
     *partner = N;
     *ppos = pp;
     if (N == NIL || (N == node && pp == pos)) return 1;
-    return rs__roam_split_into_leaves(L, N, pp);
+    return split_into_leaves(L, N, pp);
 }
 
 static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)

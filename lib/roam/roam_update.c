@@ -768,7 +768,7 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
         L->par = par; L->cscan = cs; L->pvis = pv; L->c2read = c2;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs + 2 * sizeof *c2) + (uint64_t)L->npx * L->npy;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs + 2 * sizeof *c2) + (uint64_t)L->npx * L->npy + 128;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
