@@ -194,14 +194,19 @@ static inline unsigned char kids_are_leaves(const rs_roam *L, uint32_t p)
     return n[lc].lc == NIL && n[n[p].rc].lc == NIL;
 }
 
-/* Node t was split or merged: its kl and its parent's (frame-coherent
- * updates only). */
-static inline void note_kids(rs_roam *L, uint32_t t)
+/* Node t was split (into two pool leaves when explicit) or merged: its kl
+ * and its parent's (frame-coherent updates only). Without loading the
+ * parent: a split t is no leaf; a merged pool node's sibling is the other
+ * node of its pair, on t's cache line (base nodes have base siblings). */
+static inline void note_kids(rs_roam *L, uint32_t t, int merged)
 {
     if (!L->par) return;
-    L->cscan[t].kl = kids_are_leaves(L, t);
+    L->cscan[t].kl = (unsigned char)(!merged && L->nodes[t].lc != IMPL);
     uint32_t p = L->par[t];
-    if (p != NIL) L->cscan[p].kl = kids_are_leaves(L, p);
+    if (p == NIL) return;
+    if (!merged || t < L->base_count) { L->cscan[p].kl = 0; return; }
+    uint32_t sib = ((t - L->base_count) ^ 1u) + L->base_count;
+    L->cscan[p].kl = L->nodes[sib].lc == NIL;
 }
 
 /* Pool nodes come in pairs (the two children of a split) at base_count +

@@ -71,7 +71,7 @@ static void split(rs_roam *L, uint32_t t)
         tri tt;
         node_tri(L, &n[t], &tt);
         n[t].lc = IMPL; n[t].rc = 0;
-        note_kids(L, t);
+        note_kids(L, t, 0);
         L->tris += (uint32_t)tris_delta(L, &tt);
         if (L->dq > 1) queue_block(L, t);
         uint32_t b = n[t].base;
@@ -112,7 +112,7 @@ static void split(rs_roam *L, uint32_t t)
     Lc->ax = mx; Lc->ay = my; Lc->bx = T->ax; Lc->by = T->ay;
     Rc->ax = mx; Rc->ay = my; Rc->bx = (uint16_t)cx; Rc->by = (uint16_t)cy;
     T->lc = lc; T->rc = rc;
-    note_kids(L, t);
+    note_kids(L, t, 0);
     L->stack[L->sp++] = rc;
     L->stack[L->sp++] = lc;
     if (T->left != NIL) relink(n, T->left, t, lc);
@@ -687,7 +687,7 @@ static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
         n[node].rc &= ~SPLIT_BIT(pos);
         return;
     }
-    if (pos == 1) { n[node].lc = n[node].rc = NIL; note_kids(L, node); return; }
+    if (pos == 1) { n[node].lc = n[node].rc = NIL; note_kids(L, node, 1); return; }
     uint32_t lc = n[node].lc, rc = n[node].rc;
     /* the children's base neighbours are this node's leg neighbours again */
     uint32_t nl = n[lc].base, nr = n[rc].base;
@@ -700,7 +700,7 @@ static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
     n[lc].rc = L->free_head;
     L->free_head = lc;
     L->nfree += 2;
-    note_kids(L, node);
+    note_kids(L, node, 1);
 }
 
 void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos)
