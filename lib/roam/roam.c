@@ -225,7 +225,7 @@ void rs_roam_free(rs_ctx *ctx, rs_roam *L)
     rs__free(ctx, L->pin);
     rs__free(ctx, L->pgen);
     rs__free(ctx, L->ugen);
-    rs__free(ctx, L->nodes_mem ? L->nodes_mem : (void *)L->nodes);
+    rs__free(ctx, L->nodes);
     rs__free(ctx, L->base_copy);
     rs__free(ctx, L->stack);
     rs__free(ctx, L->vrank);
@@ -416,17 +416,8 @@ static rs_result alloc_pool(rs_ctx *ctx, rs_roam *L, uint64_t pool)
     size_t total;
     if (!rs__mul_size((size_t)L->base_count + (size_t)pool, sizeof(roam_node), &total))
         return rs__fail(ctx, RS_ERR_LIMIT, "ROAM: pool too large");
-    /* the base mesh moves to a block where the pool's pairs start cache
-     * lines (rs__roam_pair_align) */
-    void *mem = total <= SIZE_MAX - 64 ? rs__malloc(ctx, total + 64) : NULL;
-    roam_node *nn = NULL;
-    if (mem) {
-        nn = rs__roam_pair_align(mem, sizeof(roam_node), L->base_count);
-        memcpy(nn, L->nodes, (size_t)L->base_count * sizeof(roam_node));
-        rs__free(ctx, L->nodes);
-        L->nodes = nn;
-        L->nodes_mem = mem;
-    }
+    roam_node *nn = rs__realloc(ctx, L->nodes, total);
+    if (nn) L->nodes = nn;
     uint32_t *ns = nn ? rs__realloc(ctx, L->stack, 2 * (total / sizeof(roam_node)) * sizeof(uint32_t)) : NULL;
     if (ns) L->stack = ns;
     L->base_copy = rs__alloc_array(ctx, L->base_count, sizeof(roam_node));
@@ -447,7 +438,7 @@ static uint64_t landscape_bytes(const rs_roam *L)
            + W * H * sizeof(float) * (L->zown ? 1 : 0)
            + (uint64_t)L->nwords * (sizeof(uint64_t) + sizeof(uint32_t)) + (uint64_t)L->nsum * sizeof(uint64_t)
            + 2 * (W + H) * sizeof(uint32_t)
-           + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node) + 64 /* rs__roam_pair_align */
+           + ((uint64_t)L->cap + L->base_count) * sizeof(roam_node)
            + 2 * (uint64_t)L->cap * sizeof(uint32_t) + (W + H) * sizeof(float);
 }
 

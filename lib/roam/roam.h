@@ -44,10 +44,6 @@ struct roam_scan {
                        under it may change sides of the frustum */
     unsigned char cls; /* its class against the view at its last scan
                           (SCAN_NO_CLASS: none yet) */
-    unsigned char kl;  /* 1: split into two explicit pool leaves (its diamond
-                          side of rs__roam_mergeable), kept by every split and
-                          merge (note_kids), so that the scan tests it from
-                          this record instead of loading both children */
 };
 #define SCAN_NO_CLASS 3
 
@@ -92,7 +88,6 @@ struct rs_roam {
     int zrange_ok;                  /* pzmin / pzmax are those of z */
     unsigned char *pin;             /* per patch: 1 when it lies wholly on the map */
     roam_node *nodes, *base_copy;
-    void *nodes_mem;                /* the allocation `nodes` points into (rs__roam_pair_align) */
     uint32_t *stack, sp;            /* refinement stack (2 cap entries: each node is
                                        pushed at most once per pass as a leaf and once
                                        tagged, for its implicit children) */
@@ -134,7 +129,6 @@ struct rs_roam {
     float *c2read;                  /* per node, 2 floats: while partly in view at its last
                                        scan, the odometer and turn readings until which it
                                        stays so (node_class, lib/roam/roam_update.c) */
-    void *cscan_mem, *c2read_mem;   /* the allocations cscan and c2read point into */
     unsigned char *pvis;            /* per patch: visible at the last update */
     double odo_base;                /* odometer at which the scan records' readings start
                                        (floats: rebased, with a full scan, every 4 km) */
@@ -183,42 +177,6 @@ static inline void touch_patch(rs_roam *L, uint32_t node)
     }
     if (L->par)
         for (uint32_t c = node; c != NIL && L->cscan[c].rc >= 0.0f; c = L->par[c]) L->cscan[c].rc = -1.0f;
-}
-
-/* Is explicit node p split into two pool leaves? (roam_scan.kl) */
-static inline unsigned char kids_are_leaves(const rs_roam *L, uint32_t p)
-{
-    const roam_node *n = L->nodes;
-    uint32_t lc = n[p].lc;
-    if (lc == NIL || lc == IMPL || lc == FREE || lc < L->base_count) return 0;
-    return n[lc].lc == NIL && n[n[p].rc].lc == NIL;
-}
-
-/* Node t was split (into two pool leaves when explicit) or merged: its kl
- * and its parent's (frame-coherent updates only). Without loading the
- * parent: a split t is no leaf; a merged pool node's sibling is the other
- * node of its pair, on t's cache line (base nodes have base siblings). */
-static inline void note_kids(rs_roam *L, uint32_t t, int merged)
-{
-    if (!L->par) return;
-    L->cscan[t].kl = (unsigned char)(!merged && L->nodes[t].lc != IMPL);
-    uint32_t p = L->par[t];
-    if (p == NIL) return;
-    if (!merged || t < L->base_count) { L->cscan[p].kl = 0; return; }
-    uint32_t sib = ((t - L->base_count) ^ 1u) + L->base_count;
-    L->cscan[p].kl = L->nodes[sib].lc == NIL;
-}
-
-/* Pool nodes come in pairs (the two children of a split) at base_count +
- * 2k. The per-node arrays (nodes, scan records) are placed so that element
- * base_count starts a 64-byte line: a pair of nodes is then one cache line
- * and a pair of scan records half of one, instead of straddling two (an
- * allocator block starts 16 bytes into a line). mem: a block of
- * count * size + 64 bytes; returns the array's start inside it. */
-static inline void *rs__roam_pair_align(void *mem, size_t size, uint32_t base_count)
-{
-    uintptr_t a = (uintptr_t)mem, first = a + (uintptr_t)base_count * size;
-    return (void *)(a + ((64u - (first & 63u)) & 63u));
 }
 
 /* Nodes the pool can still give. */

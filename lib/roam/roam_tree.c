@@ -71,7 +71,6 @@ static void split(rs_roam *L, uint32_t t)
         tri tt;
         node_tri(L, &n[t], &tt);
         n[t].lc = IMPL; n[t].rc = 0;
-        note_kids(L, t, 0);
         L->tris += (uint32_t)tris_delta(L, &tt);
         if (L->dq > 1) queue_block(L, t);
         uint32_t b = n[t].base;
@@ -93,7 +92,6 @@ static void split(rs_roam *L, uint32_t t)
         L->par[lc] = L->par[rc] = t;
         L->cscan[lc].rc = L->cscan[rc].rc = -1.0f;
         L->cscan[lc].cls = L->cscan[rc].cls = SCAN_NO_CLASS;
-        L->cscan[lc].kl = L->cscan[rc].kl = 0;
     }
     roam_node *T = &n[t];
     int ax = T->ax, ay = T->ay, bx = T->bx, by = T->by, cx, cy;
@@ -112,7 +110,6 @@ static void split(rs_roam *L, uint32_t t)
     Lc->ax = mx; Lc->ay = my; Lc->bx = T->ax; Lc->by = T->ay;
     Rc->ax = mx; Rc->ay = my; Rc->bx = (uint16_t)cx; Rc->by = (uint16_t)cy;
     T->lc = lc; T->rc = rc;
-    note_kids(L, t, 0);
     L->stack[L->sp++] = rc;
     L->stack[L->sp++] = lc;
     if (T->left != NIL) relink(n, T->left, t, lc);
@@ -361,9 +358,6 @@ void rs__roam_reset_mesh(rs_roam *L)
     L->nfree = 0;
     L->tris = L->base_tris;
     L->exhausted = 0;
-    /* base nodes have base children (roam_scan.kl) */
-    if (L->cscan)
-        for (uint32_t i = 0; i < L->base_count; i++) L->cscan[i].kl = 0;
     /* every patch may have changed */
     L->full_next = 1;
     L->gen++;
@@ -653,13 +647,8 @@ static int split_into_leaves(const rs_roam *L, uint32_t node, uint32_t pos)
     if (pos == 1) /* a block whose subtree is just its two children */
         return nd->lc == IMPL && !(nd->rc & (SPLIT_BIT(L->ncut) - 1u))
                && !(node < L->base_count && L->base_copy[node].lc == IMPL);
-#ifdef ROAM_KL_CHECK
-    if (L->cscan && L->cscan[node].kl != kids_are_leaves(L, node)) __builtin_trap();
-#endif
-    /* the scan record says so without loading the children (cache misses
-     * in the update's scan) */
-    if (L->cscan) return L->cscan[node].kl;
-    return kids_are_leaves(L, node);
+    if (nd->lc == NIL || nd->lc == IMPL || nd->lc == FREE) return 0;
+    return nd->lc >= L->base_count && n[nd->lc].lc == NIL && n[nd->rc].lc == NIL;
 }
 
 int rs__roam_mergeable(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t *partner, uint32_t *ppos)
@@ -687,7 +676,7 @@ static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
         n[node].rc &= ~SPLIT_BIT(pos);
         return;
     }
-    if (pos == 1) { n[node].lc = n[node].rc = NIL; note_kids(L, node, 1); return; }
+    if (pos == 1) { n[node].lc = n[node].rc = NIL; return; }
     uint32_t lc = n[node].lc, rc = n[node].rc;
     /* the children's base neighbours are this node's leg neighbours again */
     uint32_t nl = n[lc].base, nr = n[rc].base;
@@ -700,7 +689,6 @@ static void merge_one(rs_roam *L, uint32_t node, uint32_t pos)
     n[lc].rc = L->free_head;
     L->free_head = lc;
     L->nfree += 2;
-    note_kids(L, node, 1);
 }
 
 void rs__roam_merge(rs_roam *L, uint32_t node, uint32_t pos)

@@ -122,8 +122,6 @@ typedef struct upd {
     double rctr;        /* smallest travel reading of the subtrees seen so far,
                            their classes' included */
     int inview;         /* scanning a node wholly in view: no item is culled */
-    const float *perr;  /* offer_block: the block's errors by position (NaN: not
-                           worked out) */
     int nomem;
 } upd;
 
@@ -210,8 +208,7 @@ static double item_prio_t(upd *u, uint32_t node, uint32_t pos, const tri *tk)
     int k = u->vtrack ? view_dist_track(u, &t, patch, &d, &vtr, &vrt)
           : u->inview ? view_dist_inview(u, &t, patch, &d) : view_dist(L, &t, patch, u->v, u->vis, &d);
     if (k < 2) return k ? INFINITY : 0.0;
-    float e = tk && u->perr && pos >= 2 && u->perr[pos] == u->perr[pos] ? u->perr[pos]
-            : rs__roam_slot_err(u->L, slot, &t);
+    float e = rs__roam_slot_err(u->L, slot, &t);
     if (!(e > 0.0f)) return 0.0; /* flat: never splits, whatever the distance */
     double ek = (double)e * L->zs * u->v->k;
     if (u->track) {
@@ -328,32 +325,12 @@ static void offer_block(upd *u, uint32_t r, int build, int diamonds)
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue; /* not in the mesh */
         child_tri(&pt[pos >> 1u], (int)(pos & 1u), &pt[pos]);
     }
-    /* The bounds of split positions 2 and 3 and of the positions below
-     * them (legs 2 and sqrt 2: no cache slot) from the nine samples of
-     * each (rs__roam_load_s_terms, the same values as rs__roam_on_map_err's
-     * and the cache's) instead of one computation per position. */
-    float perr[1 << IMPL_DEPTH];
-    const float *sperr = u->perr;
-    for (uint32_t pos = 0; pos < (1u << IMPL_DEPTH); pos++) perr[pos] = NAN;
-    if (L->dq == IMPL_DEPTH)
-        for (uint32_t sp = 2; sp < 4; sp++) {
-            if (!(rc & SPLIT_BIT(sp)) || tri_class(L, &pt[sp]) != NODE_ON) continue;
-            s_terms st;
-            st.S = pt[sp];
-            rs__roam_load_s_terms(L, &st);
-            perr[sp] = st.s; /* what the cache holds for it (spares that line) */
-            perr[2 * sp] = st.r[0]; perr[2 * sp + 1] = st.r[1];
-            perr[4 * sp] = st.q[0][0]; perr[4 * sp + 1] = st.q[0][1];
-            perr[4 * sp + 2] = st.q[1][0]; perr[4 * sp + 3] = st.q[1][1];
-        }
-    u->perr = perr;
     for (uint32_t pos = 2; pos < L->ncut; pos++) {
         if (pos >= 4 && !(rc & SPLIT_BIT(pos >> 1u))) continue;
         if (!(rc & SPLIT_BIT(pos))) offer_leaf_t(u, r, pos, build, &pt[pos]);
         else if (diamonds) offer_diamond_t(u, r, pos, build, &pt[pos], pt);
     }
     if (diamonds) offer_diamond_t(u, r, 1, build, &pt[1], NULL);
-    u->perr = sperr;
 }
 
 /* A turn reading as stored: rounded down (a reading too early is safe). */
@@ -745,30 +722,20 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 {
     if (!L->par) {
         uint32_t *par = rs__alloc_array(ctx, L->cap, sizeof *par);
-        /* pairs of scan records in one cache line (rs__roam_pair_align) */
-        void *csm = rs__alloc_array(ctx, (size_t)L->cap + 4, sizeof(struct roam_scan));
+        struct roam_scan *cs = rs__alloc_array(ctx, L->cap, sizeof *cs);
         unsigned char *pv = rs__calloc(ctx, (size_t)L->npx * L->npy, 1);
-        void *c2m = rs__alloc_array(ctx, 2 * (size_t)L->cap + 16, sizeof(float));
-        if (!par || !csm || !pv || !c2m) {
-            rs__free(ctx, par); rs__free(ctx, csm); rs__free(ctx, pv); rs__free(ctx, c2m);
+        float *c2 = rs__alloc_array(ctx, 2 * (size_t)L->cap, sizeof *c2);
+        if (!par || !cs || !pv || !c2) {
+            rs__free(ctx, par); rs__free(ctx, cs); rs__free(ctx, pv); rs__free(ctx, c2);
             return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory for the parent links of %u nodes", L->cap);
         }
-        struct roam_scan *cs = rs__roam_pair_align(csm, sizeof *cs, L->base_count);
-        float *c2 = rs__roam_pair_align(c2m, 2 * sizeof *c2, L->base_count);
-        L->cscan_mem = csm;
-        L->c2read_mem = c2m;
         roam_node *n = L->nodes;
-        for (uint32_t i = 0; i < L->used; i++) {
-            par[i] = NIL;
-            cs[i].rc = cs[i].irc = -1.0f;
-            cs[i].cls = SCAN_NO_CLASS;
-            cs[i].kl = n[i].lc == FREE ? 0 : kids_are_leaves(L, i);
-        }
+        for (uint32_t i = 0; i < L->used; i++) { par[i] = NIL; cs[i].rc = cs[i].irc = -1.0f; cs[i].cls = SCAN_NO_CLASS; }
         for (uint32_t i = 0; i < L->used; i++)
             if (n[i].lc != NIL && n[i].lc != IMPL && n[i].lc != FREE) par[n[i].lc] = par[n[i].rc] = i;
         L->par = par; L->cscan = cs; L->pvis = pv; L->c2read = c2;
         L->full_next = 1;
-        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs + 2 * sizeof *c2) + (uint64_t)L->npx * L->npy + 128;
+        L->bytes += (uint64_t)L->cap * (sizeof *par + sizeof *cs + 2 * sizeof *c2) + (uint64_t)L->npx * L->npy;
     }
     if (!L->qs) {
         L->qs = rs__calloc(ctx, 1, sizeof *L->qs);
@@ -782,8 +749,8 @@ static rs_result ensure_state(rs_ctx *ctx, rs_roam *L)
 void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
 {
     rs__free(ctx, L->par);
-    rs__free(ctx, L->cscan_mem);
-    rs__free(ctx, L->c2read_mem);
+    rs__free(ctx, L->cscan);
+    rs__free(ctx, L->c2read);
     rs__free(ctx, L->pvis);
     if (L->qs) rs__free(ctx, L->qs->a);
     if (L->qm) rs__free(ctx, L->qm->a);
