@@ -885,14 +885,22 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
          * the rebuild's mesh (the coarsest within the tolerance, so none
          * of its diamonds can merge) one heap operation at a time;
          * rs_roam_frame's depth-first refinement makes the same mesh
-         * several times faster (40 -> 8 ms on the fractal drive). The
-         * next update scans everything. */
+         * several times faster (40 -> 8 ms on the fractal drive). Then
+         * the scan of every cluster at this view, which fills the scan
+         * records (and finds nothing to split or merge), so that the
+         * next update is incremental: the work of the first full scan
+         * belongs to the update that built the mesh, not to the next. */
         rs__roam_reset_mesh(L);
         refine_params rp = { 0.0, 0, &v, vis, 0 };
         rs__roam_refine(L, &rp);
         ops = L->tris - L->base_tris; /* a split adds a triangle on the map */
-        done = !L->exhausted;
-        fixed = 0;
+        done = fixed = 0;
+        if (!L->exhausted) {
+            u.full = 1;
+            scan_fresh(&u);
+            done = tolerance_pass(&u, limit, &ops);
+            fixed = done;
+        }
     } else {
         scan_fresh(&u);
         done = tolerance_pass(&u, limit, &ops);
