@@ -1200,7 +1200,7 @@ typedef struct rs_roam_view {
     double far_dist;      /* far plane, metres; 0 -> none */
     double merge_hysteresis; /* rs_roam_update with a fixed pixel_error: merge a
                                 diamond only when both parents are within
-                                pixel_error / this (>= 1; 0 -> 1.1; 1: none) */
+                                pixel_error / this (>= 1; 0 -> 1.25; 1: none) */
 } rs_roam_view;
 
 /* Per-frame reset and split-only re-tessellation (rs_roam_update keeps
@@ -1221,7 +1221,7 @@ RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *v
  * merge, lowest first. With a fixed pixel_error, when the update completes
  * every leaf is within the tolerance (the bound rs_roam_frame gives) and
  * the mesh is crack-free, with at least rs_roam_frame's triangles and a
- * few more where the hysteresis kept splits (0.7 % on the drive of
+ * few more where the hysteresis kept splits (0.8 % on the drive of
  * docs/roam.md; none beyond the bounds' own slack with merge_hysteresis 1). With target_triangles it starts at the tolerance the last
  * update ended at and, when the count is off by more than 1.5 %, runs the
  * seed's loop over all leaves and diamonds (merge while above, split while

@@ -651,8 +651,11 @@ static void test_update(rs_ctx *ctx, uint32_t patch)
         rs_roam_get_stats(bud, &a);
         CHECK_EQ_INT(rs_roam_frame(ctx, reb, &v), RS_OK);
         rs_roam_get_stats(reb, &b);
+        /* a mesh another mode left finer keeps what lies between the merge
+         * and split thresholds (tol / 1.25 .. tol): up to 7 % more here
+         * (4 % with a hysteresis of 1.1); on a drive 0.8 % (target 3) */
         CHECK(view_mesh_ok(ctx, bud, z, W, H, cs, &v, tol, &w) && w <= 1.0 && a.triangles >= b.triangles
-              && a.triangles <= b.triangles * 1.05);
+              && a.triangles <= b.triangles * 1.10);
     }
     /* bad arguments */
     CHECK_EQ_INT(rs_roam_update(ctx, NULL, NULL, 0), RS_ERR_INVALID_ARG);

@@ -670,7 +670,7 @@ static int run_drive(const char *outdir)
     fprintf(md, "## ROAM drive: frame-coherent updates against per-frame rebuilds (tests/bench/roam.c)\n\n"
                 "%d frames at 1280x720 (60 degree vertical field of view), 1/3 m per frame (20 m/s at 60 fps) "
                 "along a 200 m S-curve through the map's middle, the eye 3 m above the ground, one core, times in thread CPU time (on a shared host wall time mostly measures preemption). Per frame: `rs_roam_update` "
-                "(split and merge queues, tolerance %.0f px, merge hysteresis 1.1 (the default), no budget) on one landscape and `rs_roam_frame` "
+                "(split and merge queues, tolerance %.0f px, merge hysteresis 1.25 (the default), no budget) on one landscape and `rs_roam_frame` "
                 "(from scratch) on another at the same view, alternating which goes first; then the same with "
                 "a triangle target (100,000 on the fractal, 20,000 on the city). The updated mesh is checked every frame against the tolerance by "
                 "`rc_view_worst` (true error over the distance to the nearest sample, triangles inside a 29 "
