@@ -107,13 +107,20 @@ typedef struct pt_hash {
     uint64_t omask;
 } pt_hash;
 
+/* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
+ * integer conversion (floor is a libm call: a tenth of a small build) */
 static int64_t cell_of(double x, double cell)
 {
-    double q = floor(x / cell);
-    if (!(q > -4.6e18)) q = -4.6e18; /* (also catches -inf) */
-    if (!(q < 4.6e18)) q = 4.6e18;
-    return (int64_t)q;
+    double t = x / cell;
+    if (!(t > -4.6e18)) return (int64_t)-4.6e18; /* (also catches -inf) */
+    if (!(t < 4.6e18)) return (int64_t)4.6e18;
+    int64_t i = (int64_t)t; /* (toward zero) */
+    return i - (t < (double)i);
 }
+
+/* fmin and fmax (NaN: the other), inline */
+static double nmin(double a, double b) { return a < b || b != b ? a : b; }
+static double nmax(double a, double b) { return a > b || b != b ? a : b; }
 
 /* Blocks of 4 x 4 cells hash to 16 consecutive buckets (one cache line of
  * starts): the cells around a point mostly share a block. The cell's place
@@ -381,20 +388,20 @@ static rs_result find_tees(build *B)
             const double *pa = B->xy + 2 * a, *pb = B->xy + 2 * k1;
             double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
             if (!(dd > 0) || !isfinite(dd)) continue;
-            double ymin = fmin(pa[1], pb[1]) - tol, ymax = fmax(pa[1], pb[1]) + tol;
+            double ymin = nmin(pa[1], pb[1]) - tol, ymax = nmax(pa[1], pb[1]) + tol;
             int64_t r0 = cell_of(ymin, g), r1 = cell_of(ymax, g);
             for (int64_t cy = r0; cy <= r1 && !res; cy++) {
-                double y0 = fmax((double)cy * g, ymin) - tol, y1 = fmin((double)(cy + 1) * g, ymax) + tol;
+                double y0 = nmax((double)cy * g, ymin) - tol, y1 = nmin((double)(cy + 1) * g, ymax) + tol;
                 double t0 = 0, t1 = 1;
                 if (dy != 0) {
                     t0 = (y0 - pa[1]) / dy;
                     t1 = (y1 - pa[1]) / dy;
                     if (t0 > t1) { double q = t0; t0 = t1; t1 = q; }
-                    t0 = fmax(t0, 0), t1 = fmin(t1, 1);
+                    t0 = nmax(t0, 0), t1 = nmin(t1, 1);
                     if (t0 > t1) continue;
                 }
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
-                int64_t c0 = cell_of(fmin(xa, xb) - tol, g), c1 = cell_of(fmax(xa, xb) + tol, g);
+                int64_t c0 = cell_of(nmin(xa, xb) - tol, g), c1 = cell_of(nmax(xa, xb) + tol, g);
                 for (int64_t cx = c0; cx <= c1 && !res; cx++) {
                     if (!occupied(&H, cx, cy)) continue;
                     uint64_t b = bucket_of(&H, cx, cy);
