@@ -16,6 +16,17 @@ rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s)
     return roads;
 }
 
+int ss_city(rs_ctx *ctx, sc_scene *sc, rs_dem **dem, rs_roads **roads)
+{
+    *dem = NULL;
+    *roads = NULL;
+    if (sc_city_default(sc, 1)) return -1;
+    rs_dem_frame fr = { sc->cell_size, 0.01, 0, 0 };
+    *roads = ss_roads(ctx, sc);
+    if (!*roads || rs_dem_create(ctx, sc->w, sc->h, sc->z, dem) || rs_dem_set_frame(ctx, *dem, &fr)) return -1;
+    return 0;
+}
+
 rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls)
 {
     sc_scene sc;

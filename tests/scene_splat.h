@@ -8,6 +8,10 @@
 
 /* The scene's roads (unnamed), or NULL when the library refuses one. */
 rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s);
+/* The city (sc_city_default(sc, 1)) as a DEM (z-scale 0.01: its heights
+ * are centimetres) and its roads: 0, or -1 when a step fails (the caller
+ * frees what is not NULL, and sc with sc_scene_free). */
+int ss_city(rs_ctx *ctx, sc_scene *sc, rs_dem **dem, rs_roads **roads);
 /* One crowded road (sc_road_crowded): n points from (10, 16) over `length`
  * metres along x, 6 m wide, of class `cls` (NULL: unstyled); NULL when the
  * library refuses it. */

@@ -633,3 +633,16 @@ int sc_write_roads(const char *path, const sc_scene *s, const char *header)
     if (fclose(f) != 0) ok = 0;
     return ok ? 0 : -1;
 }
+
+int sc_write_plain(const char *path, const sc_scene *s)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return -1;
+    fprintf(f, "%u %u %.17g\n", s->w, s->h, s->cell_size);
+    for (size_t i = 0; i < s->nroads; i++) {
+        fprintf(f, "%.17g %zu", s->roads[i].width, s->roads[i].n);
+        for (size_t k = 0; k < 2 * s->roads[i].n; k++) fprintf(f, " %.17g", s->roads[i].xy[k]);
+        fputc('\n', f);
+    }
+    return fclose(f) ? -1 : 0;
+}

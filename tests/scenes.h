@@ -107,4 +107,7 @@ int sc_write_pgm16(const char *path, uint32_t w, uint32_t h, const float *z);
  * form that reads back to the same double. Names: arterialN (>= 12 m),
  * streetN (>= 6 m) or laneN, N = road index. */
 int sc_write_roads(const char *path, const sc_scene *s, const char *header);
+/* The scene for the Cairo scripts (roadfield_cairo.py, styles_cairo.py): "W H cell",
+ * then one road per line "width n x0 y0 x1 y1 ..." (%.17g). 0 or -1. */
+int sc_write_plain(const char *path, const sc_scene *s);
 #endif

@@ -89,14 +89,21 @@ static int render(const rs_dem *dem, const char *styles_text, const char *sa, co
     return ok;
 }
 
-static void test_casing_colour(void)
+/* A flat DW x DH DEM of CELL m cells (NULL after a failed check). */
+static rs_dem *flat_dem(void)
 {
     float z[DW * DH];
     for (int i = 0; i < DW * DH; i++) z[i] = 10.0f;
     rs_dem *dem = NULL;
     CHECK(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK);
     rs_dem_frame fr = { CELL, 1, 0, 0 };
-    CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    return dem;
+}
+
+static void test_casing_colour(void)
+{
+    rs_dem *dem = flat_dem();
     static const char styles[] = "style red\n casing 0.5 #FF0000\nend\n"
                                  "style green\n casing 0.5 #00FF00\nend\n"
                                  "style plain\n fill #404040\nend\n";
@@ -156,17 +163,12 @@ static void test_casing_colour(void)
 }
 
 /* When every road has one fill colour the overlays stage paints it without
- * looking up the nearest road (docs/linesym.md "Fills"): the same bytes as
+ * looking up the nearest road (docs/linesym.md "In the splat"): the same bytes as
  * the lookup. Roads A and B with fills that differ only in blue take the
  * lookup; red and green must then equal the one-colour render everywhere. */
 static void test_fill_uniform(void)
 {
-    float z[DW * DH];
-    for (int i = 0; i < DW * DH; i++) z[i] = 10.0f;
-    rs_dem *dem = NULL;
-    CHECK(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK);
-    rs_dem_frame fr = { CELL, 1, 0, 0 };
-    CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_dem *dem = flat_dem();
     static const char styles[] = "style f1\n fill #E03820\n line 0 0.1 #FFFFFF\nend\n"
                                  "style f2\n fill #E03821\n line 0 0.1 #FFFFFF\nend\n";
     image one = { 0 }, two = { 0 };

@@ -620,11 +620,9 @@ static void test_bad_options(void)
 static void test_grid_other_texels(void)
 {
     sc_scene sc;
-    CHECK(sc_city_default(&sc, 1) == 0);
-    rs_roads *roads = ss_roads(ctx, &sc);
     rs_dem *dem = NULL;
-    rs_dem_frame fr = { sc.cell_size, 0.01, 0, 0 };
-    CHECK(roads && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_roads *roads = NULL;
+    CHECK(ss_city(ctx, &sc, &dem, &roads) == 0);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 8;

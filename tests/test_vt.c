@@ -633,11 +633,10 @@ static void test_city_direct_level(void)
     lim.max_pixels = (uint64_t)1 << 40;
     rs_ctx *ctx = NULL;
     sc_scene sc;
-    if (!CHECK(rs_ctx_create(NULL, &lim, &ctx) == RS_OK && sc_city_default(&sc, 1) == 0)) return;
-    rs_roads *roads = ss_roads(ctx, &sc);
+    if (!CHECK(rs_ctx_create(NULL, &lim, &ctx) == RS_OK)) return;
     rs_dem *dem = NULL;
-    rs_dem_frame fr = { sc.cell_size, 0.01, 0, 0 };
-    CHECK(roads && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_roads *roads = NULL;
+    CHECK(ss_city(ctx, &sc, &dem, &roads) == 0);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 100;

@@ -27,36 +27,12 @@
 #define ROUNDS 4
 #define CAIRO_FILLS 5
 
-/* Scene roads as "W n x0 y0 x1 y1 ..." lines for the Cairo script. */
-static int write_plain(const char *path, const sc_scene *s)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) return -1;
-    fprintf(f, "%u %u %.17g\n", s->w, s->h, s->cell_size);
-    for (size_t i = 0; i < s->nroads; i++) {
-        fprintf(f, "%.17g %zu", s->roads[i].width, s->roads[i].n);
-        for (size_t k = 0; k < 2 * s->roads[i].n; k++) fprintf(f, " %.17g", s->roads[i].xy[k]);
-        fputc('\n', f);
-    }
-    return fclose(f) ? -1 : 0;
-}
-
 /* Fastest ms of CAIRO_FILLS Cairo fills (the script prints it), or < 0 when unavailable. */
 static double cairo_ms(const char *roads_path)
 {
-    /* the first python3 on PATH may lack cairo (pyenv): try the system one too */
-    const char *py[2] = { "python3", "/usr/bin/python3" };
-    for (int i = 0; i < 2; i++) {
-        char cmd[2048];
-        snprintf(cmd, sizeof cmd, "%s tests/bench/roadfield_cairo.py '%s' 4 - %d 2>/dev/null", py[i], roads_path,
-                 CAIRO_FILLS);
-        FILE *p = popen(cmd, "r");
-        if (!p) continue;
-        double ms = -1;
-        if (fscanf(p, "%lf", &ms) != 1) ms = -1;
-        if (pclose(p) == 0 && ms >= 0) return ms;
-    }
-    return -1;
+    char args[2048];
+    snprintf(args, sizeof args, "tests/bench/roadfield_cairo.py '%s' 4 - %d", roads_path, CAIRO_FILLS);
+    return tm_python_ms(args);
 }
 
 /* Cairo's own coverage image of the same roads (one fill, written as float32
@@ -224,7 +200,7 @@ int main(int argc, char **argv)
     for (int i = 1; i < 3; i++)
         if (measure(ctx, roads, &sc, T, cells[i], G, L, cov, rowcov, R, &rr[i])) return 1;
     snprintf(path, sizeof path, "%s/roadfield_roads.txt", dir);
-    int have_roads = write_plain(path, &sc) == 0;
+    int have_roads = sc_write_plain(path, &sc) == 0;
     double cairo = -1;
     for (int round = 0; round < ROUNDS; round++) {
         run_result r0;

@@ -12,17 +12,32 @@ import time
 import cairo
 
 
-def main():
-    path, T = sys.argv[1], int(sys.argv[2])
+def read_roads(path, T):
+    """The roads file: (image width, height at T texels, cell size, [(width, [x0, y0, ...])])."""
     with open(path) as f:
         w, h, cs = f.readline().split()
         roads = []
         for line in f:
             v = line.split()
             width, n = float(v[0]), int(v[1])
-            pts = [float(x) for x in v[2:2 + 2 * n]]
-            roads.append((width, pts))
-    W, H, cs = (int(w) - 1) * T, (int(h) - 1) * T, float(cs)
+            roads.append((width, [float(x) for x in v[2:2 + 2 * n]]))
+    return (int(w) - 1) * T, (int(h) - 1) * T, float(cs), roads
+
+
+def timed_stroke(cr, pts, width):
+    """Build the path (not timed: Python-side work), stroke it; the stroke's seconds."""
+    cr.move_to(pts[0], pts[1])
+    for k in range(1, len(pts) // 2):
+        cr.line_to(pts[2 * k], pts[2 * k + 1])
+    cr.set_line_width(width)
+    t0 = time.perf_counter()
+    cr.stroke()
+    return time.perf_counter() - t0
+
+
+def main():
+    path, T = sys.argv[1], int(sys.argv[2])
+    W, H, cs, roads = read_roads(path, T)
     scale = T / cs
     runs = int(sys.argv[4]) if len(sys.argv) > 4 else 15
     times = []
@@ -32,17 +47,9 @@ def main():
         cr.set_line_cap(cairo.LINE_CAP_ROUND)
         cr.set_line_join(cairo.LINE_JOIN_ROUND)
         cr.scale(scale, scale)
-        # path construction is Python-side work: only the stroke is timed
-        t0 = None
         el = 0.0
         for width, pts in roads:
-            cr.move_to(pts[0], pts[1])
-            for k in range(1, len(pts) // 2):
-                cr.line_to(pts[2 * k], pts[2 * k + 1])
-            cr.set_line_width(width)
-            t0 = time.perf_counter()
-            cr.stroke()
-            el += time.perf_counter() - t0
+            el += timed_stroke(cr, pts, width)
         surf.flush()
         times.append(el * 1000.0)
     print("%.3f" % min(times))

@@ -133,17 +133,9 @@ typedef struct t1_result {
  * python3-cairo is missing. */
 static double t1_cairo_ms(const char *roads_path)
 {
-    const char *py[2] = { "python3", "/usr/bin/python3" };
-    for (int i = 0; i < 2; i++) {
-        char cmd[2048];
-        snprintf(cmd, sizeof cmd, "%s tests/bench/styles_cairo.py '%s' 4 10 2>/dev/null", py[i], roads_path);
-        FILE *p = popen(cmd, "r");
-        if (!p) continue;
-        double ms = -1;
-        if (fscanf(p, "%lf", &ms) != 1) ms = -1;
-        if (pclose(p) == 0 && ms >= 0) return ms;
-    }
-    return -1;
+    char args[2048];
+    snprintf(args, sizeof args, "tests/bench/styles_cairo.py '%s' 4 10", roads_path);
+    return tm_python_ms(args);
 }
 
 static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem *dem, const rs_splat_options *base,
@@ -213,15 +205,7 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
     free(rgba);
     char path[1024];
     snprintf(path, sizeof path, "%s/styles_roads.txt", dir);
-    FILE *f = fopen(path, "w");
-    if (!f) goto done;
-    fprintf(f, "%u %u %.17g\n", sc->w, sc->h, sc->cell_size);
-    for (size_t i = 0; i < sc->nroads; i++) {
-        fprintf(f, "%.17g %zu", sc->roads[i].width, sc->roads[i].n);
-        for (size_t k = 0; k < 2 * sc->roads[i].n; k++) fprintf(f, " %.17g", sc->roads[i].xy[k]);
-        fputc('\n', f);
-    }
-    if (fclose(f)) goto done;
+    if (sc_write_plain(path, sc)) goto done;
     out->cairo_ms = t1_cairo_ms(path);
     rc = 0;
 done:

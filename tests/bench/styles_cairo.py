@@ -17,9 +17,10 @@ Usage: styles_cairo.py ROADS.txt T [N [out.png]]
 ROADS.txt: first line "W H cell", then one road per line "width n x0 y0 ...".
 Constants (metres) must match styles.c: CASING, EDGE_IN, EDGE_W, CENTRE_W, DASH."""
 import sys
-import time
 
 import cairo
+
+from roadfield_cairo import read_roads, timed_stroke  # (this folder: the script's own)
 
 CASING = 0.5      # casing band outside each road edge
 EDGE_IN = 0.25    # edge line centre this far inside the road edge
@@ -32,14 +33,7 @@ def main():
     path, T = sys.argv[1], int(sys.argv[2])
     runs = int(sys.argv[3]) if len(sys.argv) > 3 else 10
     out = sys.argv[4] if len(sys.argv) > 4 else None
-    with open(path) as f:
-        w, h, cs = f.readline().split()
-        roads = []
-        for line in f:
-            v = line.split()
-            width, n = float(v[0]), int(v[1])
-            roads.append((width, [float(x) for x in v[2:2 + 2 * n]]))
-    W, H, cs = (int(w) - 1) * T, (int(h) - 1) * T, float(cs)
+    W, H, cs, roads = read_roads(path, T)
     scale = T / cs
     # (layer colour, width of a road of width wd, dashed)
     layers = [((0.63, 0.63, 0.63), lambda wd: wd + 2 * CASING, False),
@@ -62,13 +56,7 @@ def main():
             cr.set_dash(DASH if dashed else [])
             cr.set_line_cap(cairo.LINE_CAP_BUTT if dashed else cairo.LINE_CAP_ROUND)
             for width, pts in roads:
-                cr.move_to(pts[0], pts[1])
-                for k in range(1, len(pts) // 2):
-                    cr.line_to(pts[2 * k], pts[2 * k + 1])
-                cr.set_line_width(max(lw(width), 0.01))
-                t0 = time.perf_counter()
-                cr.stroke()
-                el += time.perf_counter() - t0
+                el += timed_stroke(cr, pts, max(lw(width), 0.01))
         surf.flush()
         times.append(el * 1000.0)
     print("%.3f" % min(times))
