@@ -1401,8 +1401,9 @@ typedef struct rs_vt_options {
     const rs_roads *roads; /* the roads s was made from: needed when s's grid has styles or
                               markings (line symbols, casings and markings are laid out in the
                               grid's pixels, so each coarser texel count gets a grid of its own,
-                              built from these with s's options; s's styles and surface images
-                              must then still be valid). Borrowed during rs_vt_create only.
+                              built from these with s's options; s's styles, surface images and
+                              marking atlas must then still be valid). Borrowed during
+                              rs_vt_create only.
                               NULL: share s's grid (without styles and markings only) */
 } rs_vt_options;
 
