@@ -411,20 +411,11 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
     float *sbox = rs__alloc_array(ctx, ns, 4 * sizeof *sbox);
     uint8_t *sok = rs__alloc_array(ctx, ns, 1); /* tol > 0, beside the box (not the 184-byte segment) */
     f->rspan = rs__calloc(ctx, f->gh, 1);
-    if (!stamp || !sbox || !sok || !f->rspan) {
-        rs__free(ctx, stamp);
-        rs__free(ctx, sbox);
-        rs__free(ctx, sok);
-        return RS_ERR_NOMEM;
-    }
+    rs_result res = RS_ERR_NOMEM;
+    if (!stamp || !sbox || !sok || !f->rspan) goto done;
     double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
     for (size_t k = 0; k < f->nseg; k++) {
-        if ((k & 16383) == 0 && rs__poll(ctx)) {
-            rs__free(ctx, stamp);
-            rs__free(ctx, sbox);
-            rs__free(ctx, sok);
-            return RS_ERR_CANCELLED;
-        }
+        if ((k & 16383) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         rf_seg *s = &f->seg[k];
         double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
                         lm_max(lm_max(s->len, s->r), ext));
@@ -445,19 +436,9 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
     }
     f->rids = rs__alloc_array(ctx, run ? (size_t)run : 1, sizeof *f->rids);
     f->rbox = rs__alloc_array(ctx, run ? (size_t)run : 1, 4 * sizeof *f->rbox);
-    if (!f->rids || !f->rbox) {
-        rs__free(ctx, stamp);
-        rs__free(ctx, sbox);
-        rs__free(ctx, sok);
-        return RS_ERR_NOMEM;
-    }
+    if (!f->rids || !f->rbox) goto done;
     for (uint32_t j = 0; j < f->gh; j++) {
-        if ((j & 7) == 0 && rs__poll(ctx)) {
-            rs__free(ctx, stamp);
-            rs__free(ctx, sbox);
-            rs__free(ctx, sok);
-            return RS_ERR_CANCELLED;
-        }
+        if ((j & 7) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         int ok = 1;
         uint32_t pos = f->rstart[j];
         /* the row's cell lists are one run of ids, in cell order */
@@ -477,10 +458,12 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
         }
         f->rspan[j] = (uint8_t)ok;
     }
+    res = RS_OK;
+done:
     rs__free(ctx, stamp);
     rs__free(ctx, sbox);
     rs__free(ctx, sok);
-    return RS_OK;
+    return res;
 }
 
 /* Column of the centre of pixel p (pixels of f->pixel), as the coverage

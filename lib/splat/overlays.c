@@ -81,42 +81,35 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
         for (size_t k = 0; k < w; k++) {
             uint16_t q = p->q[(size_t)r * w + k];
             if (q == 0) continue;
+            double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+            float c[4];
             if (st->fill_uniform) {
                 /* every road has this fill: which road the lookup below
                  * finds does not matter, only whether it finds one (it
-                 * does on a whole road pixel); the same floats as there */
-                if (q != 65535) {
-                    double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
-                    if (!rs__roadfield_any_near(st->near, x, y, pix * HALF_SQRT2)) continue;
-                }
-                const float *c = st->fill_rgba;
-                for (int ch = 0; ch < 3; ch++) {
-                    float *v = sc + (size_t)ch * w + k;
-                    *v = *v * (1.0f - c[3]) + c[ch] * c[3];
-                }
-                continue;
-            }
-            rs__road_point rp;
-            double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
-            if (!rs__roadfield_nearest_ranked(st->near, x, y, pix * HALF_SQRT2, st->prio, &rp)) continue;
-            /* the surface image replaces the base surface, blended by its
-             * alpha (premultiplied); fill or gradient go on top */
-            double im[4];
-            if (rs__styling_image(st, rp.road, rp.s, rp.t, im))
-                for (int ch = 0; ch < 3; ch++) {
-                    float *v = sc + (size_t)ch * w + k;
-                    *v = (float)(*v * (1 - im[3]) + im[ch]);
-                }
-            uint8_t kind = st->surface[rp.road];
-            if (kind == RS_SURFACE_DEFAULT) continue;
-            const float *col = st->colour + 16 * (size_t)rp.road;
-            float c[4];
-            if (kind == RS_SURFACE_GRADIENT) {
-                double hw = st->half_width[rp.road], f = hw > 0 ? fabs(rp.t) / hw : 1;
-                float g = (float)(f > 1 ? 1 : f);
-                for (int ch = 0; ch < 4; ch++) c[ch] = col[4 + ch] + (col[8 + ch] - col[4 + ch]) * g;
+                 * does on a whole road pixel) */
+                if (q != 65535 && !rs__roadfield_any_near(st->near, x, y, pix * HALF_SQRT2)) continue;
+                memcpy(c, st->fill_rgba, sizeof c);
             } else {
-                for (int ch = 0; ch < 4; ch++) c[ch] = col[ch];
+                rs__road_point rp;
+                if (!rs__roadfield_nearest_ranked(st->near, x, y, pix * HALF_SQRT2, st->prio, &rp)) continue;
+                /* the surface image replaces the base surface, blended by its
+                 * alpha (premultiplied); fill or gradient go on top */
+                double im[4];
+                if (rs__styling_image(st, rp.road, rp.s, rp.t, im))
+                    for (int ch = 0; ch < 3; ch++) {
+                        float *v = sc + (size_t)ch * w + k;
+                        *v = (float)(*v * (1 - im[3]) + im[ch]);
+                    }
+                uint8_t kind = st->surface[rp.road];
+                if (kind == RS_SURFACE_DEFAULT) continue;
+                const float *col = st->colour + 16 * (size_t)rp.road;
+                if (kind == RS_SURFACE_GRADIENT) {
+                    double hw = st->half_width[rp.road], f = hw > 0 ? fabs(rp.t) / hw : 1;
+                    float g = (float)(f > 1 ? 1 : f);
+                    for (int ch = 0; ch < 4; ch++) c[ch] = col[4 + ch] + (col[8 + ch] - col[4 + ch]) * g;
+                } else {
+                    for (int ch = 0; ch < 4; ch++) c[ch] = col[ch];
+                }
             }
             for (int ch = 0; ch < 3; ch++) {
                 float *v = sc + (size_t)ch * w + k;

@@ -103,7 +103,7 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
      * its coverage would otherwise search the cells around every pixel.
      * (A grid with styles or markings is drawn at its own texels only:
      * check_grid.) */
-    if (!r && s->grid->field && !s->grid->styling && o.coverage.edges == RS_EDGES_ANALYTIC &&
+    if (!r && s->grid->field && o.coverage.edges == RS_EDGES_ANALYTIC &&
         s->texel_m > rs__roadfield_pixel(s->grid->field))
         r = rs__roadfield_repixel(ctx, s->grid->field, s->texel_m, &s->field_own);
     if (!r) s->field = s->field_own ? s->field_own : s->grid->field;

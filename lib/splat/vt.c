@@ -766,6 +766,22 @@ rs_result rs_vt_workspace_create(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *
  * into the level's columns (hsum), then the band's source rows summed
  * down. Weights are the exact overlaps in units; colour is alpha-weighted;
  * beyond the source image is transparent. */
+/* The source pixels [first, first + count) that level pixel [u0, u0 + D)
+ * (in units; a source pixel is T units) overlaps within [lo, hi], and
+ * each one's overlap in units into w. */
+static uint32_t box_weights(int64_t u0, int64_t D, int64_t T, int64_t lo, int64_t hi, int64_t *first, double *w)
+{
+    int64_t u1 = u0 + D, ja = floordiv(u0, T), jb = floordiv(u1 - 1, T);
+    if (ja < lo) ja = lo;
+    if (jb > hi) jb = hi;
+    for (int64_t q = ja; q <= jb; q++) {
+        int64_t a = q * T > u0 ? q * T : u0, b = (q + 1) * T < u1 ? (q + 1) * T : u1;
+        w[q - ja] = (double)(b - a);
+    }
+    *first = ja;
+    return jb >= ja ? (uint32_t)(jb - ja + 1) : 0;
+}
+
 static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, const vt_level *L, int64_t X0, int64_t Y0,
                           uint8_t *rgba, size_t stride)
 {
@@ -782,18 +798,7 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
      * source row (the weights as the sums below take them) */
     const size_t span = ws->span;
     double *cw = ws->cw, *rw = ws->cw + (size_t)n * span;
-    for (int64_t i = 0; i < n; i++) {
-        int64_t u0 = (X0 + i) * D, u1 = u0 + D;
-        int64_t ja = floordiv(u0, T), jb = floordiv(u1 - 1, T);
-        if (ja < sa) ja = sa;
-        if (jb > sb) jb = sb;
-        ws->cja[i] = ja;
-        ws->cnq[i] = jb >= ja ? (uint32_t)(jb - ja + 1) : 0;
-        for (int64_t q = ja; q <= jb; q++) {
-            int64_t lo = q * T > u0 ? q * T : u0, hi = (q + 1) * T < u1 ? (q + 1) * T : u1;
-            cw[(size_t)i * span + (size_t)(q - ja)] = (double)(hi - lo);
-        }
-    }
+    for (int64_t i = 0; i < n; i++) ws->cnq[i] = box_weights((X0 + i) * D, D, T, sa, sb, &ws->cja[i], cw + (size_t)i * span);
     for (int64_t r0 = 0; r0 < n; r0 += band) {
         int64_t r1 = r0 + band < n ? r0 + band : n;
         int64_t ya = floordiv((Y0 + r0) * D, T), yb = floordiv((Y0 + r1) * D - 1, T);
@@ -825,20 +830,14 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
             }
         }
         for (int64_t i = r0; i < r1; i++) {
-            int64_t v0 = (Y0 + i) * D, v1 = v0 + D;
-            int64_t ja = floordiv(v0, T), jb = floordiv(v1 - 1, T);
-            if (ja < ya) ja = ya;
-            if (jb > yb) jb = yb;
+            int64_t ja;
+            uint32_t nq = box_weights((Y0 + i) * D, D, T, ya, yb, &ja, rw);
             uint8_t *o = rgba + (size_t)i * stride;
-            for (int64_t q = ja; q <= jb; q++) {
-                int64_t lo = q * T > v0 ? q * T : v0, hi = (q + 1) * T < v1 ? (q + 1) * T : v1;
-                rw[q - ja] = (double)(hi - lo);
-            }
             for (int64_t x = 0; x < n; x++) {
                 double acc[4] = { 0, 0, 0, 0 };
-                for (int64_t q = ja; q <= jb; q++) {
-                    const double *h = ws->hsum + ((size_t)(q - ya) * n + x) * 4;
-                    double wv = rw[q - ja];
+                for (uint32_t m = 0; m < nq; m++) {
+                    const double *h = ws->hsum + ((size_t)(ja + m - ya) * n + x) * 4;
+                    double wv = rw[m];
                     acc[0] += wv * h[0];
                     acc[1] += wv * h[1];
                     acc[2] += wv * h[2];
