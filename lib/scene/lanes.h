@@ -48,4 +48,23 @@ typedef struct rs__line_cut {
  * (built here when needed). */
 rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                                  const rs_network *net, rs__line_cut **out, size_t *n);
+/* The automatic markings of one grid build, placed once for their two
+ * readers: the placements (rs__markings_build) and the line cuts
+ * (rs__styling_build: lane and centre lines stop there). Empty (all zero)
+ * when the splat options place no automatic markings on these roads. */
+struct rs__placement;
+typedef struct rs__auto_plan {
+    rs_atlas *atlas;            /* the built-in atlas when the options give none; taken by the markings */
+    struct rs__placement *pl;   /* the automatic placements, in rule order */
+    size_t npl, cap;
+    rs__line_cut *cuts;
+    size_t ncuts;
+} rs__auto_plan;
+/* Fill *plan (zeroed first). `net`: the network of these roads
+ * (rs_network_build with default options) when the caller has it, else
+ * NULL (built here when needed). Ticks the context's progress by one unit
+ * per road for each of its two readers. */
+rs_result rs__auto_plan_make(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                             const rs_network *net, rs__auto_plan *plan);
+void rs__auto_plan_free(rs_ctx *ctx, rs__auto_plan *plan);
 #endif

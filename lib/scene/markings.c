@@ -5,6 +5,7 @@
  * its road instead of a rigid box, and the sprite's exact mean over the
  * pixel's footprint from a summed-area table (issue 25). */
 #include "markings.h"
+#include "lanes.h"
 #include "splatter.h"
 #include "network.h"
 
@@ -634,6 +635,13 @@ static rs_result road_local_extended(rs_ctx *ctx, const rs_roads *roads, const r
 rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                              const rs_network *net_in, rs__markings **out)
 {
+    return rs__markings_build_planned(ctx, dem, roads, o, net_in, NULL, out);
+}
+
+rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                     const rs_splat_options *o, const rs_network *net_in, rs__auto_plan *plan,
+                                     rs__markings **out)
+{
     *out = NULL;
     if (o->markings.disable) return RS_OK;
     size_t nexp = rs_roads_mark_count(roads);
@@ -643,15 +651,22 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!mk) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
     rs_result r = RS_OK;
     const rs_atlas *atlas = o->markings.atlas;
-    if (!atlas) {
-        r = rs_atlas_default(ctx, &mk->atlas_own);
-        atlas = mk->atlas_own;
+    if (!atlas && plan && plan->atlas) {
+        mk->atlas_own = plan->atlas; /* the plan's placements index it */
+        plan->atlas = NULL;
     }
+    if (!atlas && !mk->atlas_own) r = rs_atlas_default(ctx, &mk->atlas_own);
+    if (!atlas) atlas = mk->atlas_own;
     rs__placement *pl = NULL;
     size_t npl = 0, cap = 0;
     if (!r) r = rs__markings_explicit(ctx, roads, atlas, &pl, &npl, &cap);
     size_t n_explicit = npl;
-    if (!r && !o->markings.no_auto) r = rs__markings_auto(ctx, dem, roads, atlas, &o->style, net_in, &pl, &npl, &cap);
+    if (!r && !o->markings.no_auto && plan) {
+        for (size_t i = 0; i < plan->npl && !r; i++)
+            if (rs__placement_push(ctx, &pl, &npl, &cap, &plan->pl[i])) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+    } else if (!r && !o->markings.no_auto) {
+        r = rs__markings_auto(ctx, dem, roads, atlas, &o->style, net_in, &pl, &npl, &cap);
+    }
     if (!r && npl > ctx->limits.max_points) /* ~0.5 KB each: a total, as for road points */
         r = rs__fail(ctx, RS_ERR_LIMIT, "markings: more than %llu markings (explicit and automatic; the budget is "
                      "rs_limits.max_points)", (unsigned long long)ctx->limits.max_points);

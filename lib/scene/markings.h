@@ -131,6 +131,13 @@ typedef struct rs__markings {
  * (built here when needed). */
 rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                              const rs_network *net, rs__markings **out);
+/* The same with the automatic placements already made (rs__auto_plan_make
+ * with the same roads and options; NULL: made here). Takes the plan's
+ * atlas; the plan is left for rs__auto_plan_free. */
+struct rs__auto_plan;
+rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                     const rs_splat_options *o, const rs_network *net, struct rs__auto_plan *plan,
+                                     rs__markings **out);
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
 
 /* Whether the automatic rules can place anything on these roads (a road

@@ -751,3 +751,37 @@ rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
     if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
     return r;
 }
+
+rs_result rs__auto_plan_make(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                             const rs_network *net, rs__auto_plan *plan)
+{
+    memset(plan, 0, sizeof *plan);
+    if (o->markings.disable || o->markings.no_auto || !rs__markings_auto_possible(roads)) return RS_OK;
+    /* the atlas the markings will place from (the built-in one is loaded
+     * once, here, and handed on to them) */
+    const rs_atlas *atlas = o->markings.atlas;
+    rs_result r = RS_OK;
+    if (!atlas) {
+        r = rs_atlas_default(ctx, &plan->atlas);
+        atlas = plan->atlas;
+    }
+    if (!r)
+        r = auto_core(ctx, dem, roads, atlas, &o->style, net, &plan->cuts, &plan->ncuts, &plan->pl, &plan->npl,
+                      &plan->cap);
+    /* the progress units of the second reader, which no longer runs the rules */
+    if (!r && rs__tick(ctx, rs_roads_count(roads))) r = RS_ERR_CANCELLED;
+    if (r) {
+        rs__auto_plan_free(ctx, plan);
+        if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
+    }
+    return r;
+}
+
+void rs__auto_plan_free(rs_ctx *ctx, rs__auto_plan *plan)
+{
+    if (!plan) return;
+    rs_atlas_free(ctx, plan->atlas);
+    rs__free(ctx, plan->pl);
+    rs__free(ctx, plan->cuts);
+    memset(plan, 0, sizeof *plan);
+}

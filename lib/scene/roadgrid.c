@@ -4,6 +4,7 @@
  * centres of the outermost road cells, seed 000 section 2.2) at the road's
  * true half-width; docs/design.md derives the offsets used here. */
 #include "roadgrid.h"
+#include "lanes.h"
 #include "mask.h"
 #include "roadfield.h"
 #include "road_local.h"
@@ -700,8 +701,13 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         if (!r) r = rs__roadfield_set_tees(ctx, g->field, roads, tees, ntees);
         rs__free(ctx, tees);
     }
-    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, &g->styling);
-    if (!r) r = rs__markings_build(ctx, dem, roads, &o, net, &g->markings);
+    /* the automatic markings, placed once: the styles' lines stop at them */
+    rs__auto_plan plan;
+    memset(&plan, 0, sizeof plan);
+    if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
+    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, &g->styling);
+    if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
+    rs__auto_plan_free(ctx, &plan);
     rs_network_free(ctx, net);
     if (!r && pg.fn && ctx->pg == &pg && pg.fn(pg.user, pg.total, pg.total)) r = RS_ERR_CANCELLED;
     ctx->pg = pg_outer;

@@ -133,7 +133,8 @@ static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network
 }
 
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const rs__roadfield *field, const rs_network *net, rs__styling **out)
+                            const rs__roadfield *field, const rs_network *net, const rs__line_cut *cuts,
+                            size_t ncuts, rs__styling **out)
 {
     *out = NULL;
     if (o->style.disable) return RS_OK;
@@ -264,15 +265,11 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
         lp.net = net;
         /* lane and centre lines stop at the automatic stop lines and zebras */
-        rs__line_cut *cuts = NULL;
-        size_t ncuts = 0;
-        if ((r = rs__markings_line_cuts(ctx, dem, roads, o, net, &cuts, &ncuts)) != RS_OK) goto fail_dash;
         lp.cuts = cuts;
         lp.ncuts = ncuts;
         lp.prio_given = 1;
         lp.prio = st->prio;
         r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
-        rs__free(ctx, cuts);
         if (r != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }

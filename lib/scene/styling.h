@@ -49,10 +49,14 @@ typedef struct rs__styling {
  * roads (borrowed; it must outlive the styling) or NULL: then one is built
  * when a fill or gradient needs it. `net` (NULL: every road alone) is the
  * roads' network, read during the build only: a stroke's records share
- * one arc length for dashes and surface images (docs/network.md). *out stays NULL when no road is styled
+ * one arc length for dashes and surface images (docs/network.md). `cuts`
+ * (ncuts, borrowed for the call): where the automatic markings stop lane
+ * and centre lines (rs__auto_plan). *out stays NULL when no road is styled
  * (or o->style.disable): the splat is then the unstyled one. */
+struct rs__line_cut;
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const struct rs__roadfield *field, const rs_network *net, rs__styling **out);
+                            const struct rs__roadfield *field, const rs_network *net, const struct rs__line_cut *cuts,
+                            size_t ncuts, rs__styling **out);
 void rs__styling_free(rs_ctx *ctx, rs__styling *st);
 
 /* The surface image colour of road `road` at (s, t) (s of the road, as
