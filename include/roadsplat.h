@@ -920,6 +920,73 @@ RS_API rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_
                                     uint32_t y0, uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
                                     uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
 
+/* Layers (docs/embedding.md "Layers"): the parts rs_splat_window blends,
+ * as separate planes, for a host that lights or blends itself. Each plane
+ * is optional (NULL: not written); row r of the window at plane + r*stride
+ * (strides in bytes for the 8-bit planes, in values for coverage; at least
+ * 4*w, 3*w or w). The caller owns every plane; nothing is kept.
+ *
+ *   terrain   RGBA8, A = 255: the terrain colour with no roads at every
+ *             pixel (tint times hillshade, or the terrain texture; with
+ *             opts->lighting.enable the tint alone, unshaded: the lighting
+ *             shades the relief)
+ *   casing    RGBA8 premultiplied: road casings (styles' borders, drawn
+ *             on the ground beside a road) over the terrain; 0 elsewhere
+ *   surface   RGBA8, A = 255: the road colour before paint at every pixel:
+ *             the material (procedural asphalt or the road texture),
+ *             under roads with their styles' fills, gradients and surface
+ *             images (surface_unstyled: the material alone, what
+ *             rs_gpu_scene's shader reads as its road texture)
+ *   coverage  uint16: the road weight R, 0..65535, rs_splat_window's weight
+ *   paint     RGBA8 premultiplied: line symbols and markings as painted on
+ *             the road surface, 0 where R = 0
+ *   normal    RGB8: rs_normal_window's bytes with normal_options (NULL:
+ *             the splatter's opts->lighting.normal; all zero: defaults)
+ *
+ * With t = terrain/255, c = casing/255, s = surface/255, p = paint/255
+ * (premultiplied: ca, pa their alphas) and R = coverage/65535, per channel:
+ *
+ *   ground = t (1 - ca) + c        road = s (1 - pa) + p
+ *   colour = ground (1 - R) + road R
+ *
+ * which is rs_splat_window's colour (before lighting: a lit splatter's
+ * colour is this colour times its lighting, rs_lighting_options) within
+ * 1/255 per channel: 255 * colour rounds to the output byte or a
+ * neighbour (the layers are rounded to bytes; the casing and paint colours
+ * take up the rounding of the planes under them). Exact where R = 0 with no
+ * casing, and where R = 65535 with no paint.
+ *
+ * The planes of one call come from one pass over the window (one coverage
+ * and surface per piece; the paint is painted twice, over black and over
+ * white, for its colour and alpha). Any window gives the bytes of the same
+ * pixels of the whole image. All-zero (no plane) is RS_ERR_INVALID_ARG. */
+typedef struct rs_splat_layers {
+    uint8_t *terrain;
+    size_t terrain_stride;
+    uint8_t *casing;
+    size_t casing_stride;
+    uint8_t *surface;
+    size_t surface_stride;
+    uint16_t *coverage;
+    size_t coverage_stride; /* values */
+    uint8_t *paint;
+    size_t paint_stride;
+    uint8_t *normal;
+    size_t normal_stride;
+    const rs_normal_options *normal_options; /* NULL: the splatter's opts->lighting.normal */
+    int surface_unstyled;                    /* non-zero: the surface plane without the styles' surfaces */
+} rs_splat_layers;
+
+/* The layers of the window [x0, x0+w) x [y0, y0+h) (inside the image,
+ * RS_ERR_INVALID_ARG otherwise). `ws` may be NULL (scratch from ctx's
+ * allocator, as rs_splat_window) or a workspace of `s` at least w wide:
+ * then nothing is allocated, except the normal plane's scratch (as
+ * rs_normal_window's) when `normal` is asked for. Progress and profile
+ * as rs_splat_window (the layer writing counts as composite time). */
+RS_API rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0,
+                                        uint32_t y0, uint32_t w, uint32_t h, const rs_splat_layers *layers,
+                                        rs_splat_profile *profile);
+
 /* Whole-image convenience: a splatter on `grid` (built with the same dem
  * and opts), one window covering the image, tightly packed buffers:
  * width*height*4 bytes of RGBA (rgba_size available) and, when `weight` is

@@ -197,6 +197,12 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
     return res;
 }
 
+rs_result rs__normal_check(rs_ctx *ctx, const rs_normal_options *o)
+{
+    rs_normal_options d;
+    return nm_defaults(ctx, o, &d);
+}
+
 rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l)
 {
     rs_normal_options o;

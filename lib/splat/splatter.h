@@ -81,6 +81,13 @@ typedef struct rs__piece {
      * coverage C (rows x w, NULL: none) and the colour */
     const double *cas;
     float cas_rgba[4];
+    /* layers (rs_splat_layers_window): `all` makes the surface stage colour
+     * every pixel with both T and S (the planes hold them everywhere);
+     * `lcas`, when not NULL, takes casings of several colours instead of
+     * T (each row 4 planes of w: premultiplied R, G, B and alpha; the
+     * caller zeroes the alphas), so T stays the bare terrain */
+    int all;
+    float *lcas;
 } rs__piece;
 
 /* Stages. */
@@ -91,6 +98,13 @@ void rs__coverage_analytic(const rs_splatter *s, rs__piece *p);
 void rs__coverage_quantise(rs__piece *p);
 void rs__surface(const rs_splatter *s, rs__piece *p);
 void rs__overlays(const rs_splatter *s, rs__piece *p);
+/* rs__overlays in its three parts: casings (onto T, or p->cas for the
+ * composite, or p->lcas), the styles' surfaces (onto S), then the paint of
+ * line symbols and markings onto `rgb` (planar rows as S; S itself for
+ * rs__overlays). */
+void rs__overlays_casings(const rs_splatter *s, rs__piece *p);
+void rs__overlays_surfaces(const rs_splatter *s, rs__piece *p);
+void rs__overlays_paint(const rs_splatter *s, rs__piece *p, float *rgb);
 /* Normal maps (lib/splat/normals.c): the normals of a window (options checked),
  * encoded into rgb (RGB8) or, when rgba is not NULL, lighting the colours
  * already there (o.lighting). */
@@ -98,5 +112,16 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                           const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
                           size_t rgba_stride);
 rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l);
+rs_result rs__normal_check(rs_ctx *ctx, const rs_normal_options *o);
 void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride);
+/* The layers of a piece (lib/splat/composite.c; `at` = the piece's offset
+ * in the window, pixels): rs__layers_ground after the casings and
+ * surfaces (terrain, casing, coverage; the surface plane unless
+ * `surface_early`, which writes it from S before the styles' surfaces),
+ * rs__layers_paint after painting over 0 into p0 and over 1 into p1 (S in
+ * p->sc is the surface under the paint). */
+void rs__layers_surface(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay);
+void rs__layers_ground(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay);
+void rs__layers_paint(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay, const float *p0,
+                      const float *p1);
 #endif

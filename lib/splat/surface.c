@@ -314,8 +314,8 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
     const uint32_t *cx = p->tix[road] + off, *cx1 = cx + ww;
     const double *bu = p->twx[road] + off, *au = bu + ww;
     /* pixels of no interest: pure road for the terrain, pure terrain for
-     * the road; skipped two at a time */
-    const uint16_t skip = road ? 0 : 65535u;
+     * the road; skipped two at a time (none for the layers: p->all) */
+    const int32_t skip = p->all ? -1 : (road ? 0 : 65535);
     const size_t W4 = 4 * (size_t)img->width;
     for (uint32_t r = 0; r < p->rows; r++) {
         const uint16_t *q = p->q + (size_t)r * w;
@@ -374,7 +374,7 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     const uint32_t T = s->o.texels;
     const rs_surface_options *f = &s->o.surface;
     const size_t n = (size_t)p->rows * p->w;
-    int need_terrain = 0, need_road = p->road_pixels != 0;
+    int need_terrain = p->all, need_road = p->all || p->road_pixels != 0;
     for (size_t i = 0; i < n && !need_terrain; i++) need_terrain = p->q[i] < 65535u;
     if (need_terrain && f->terrain_texture) texture_piece(s, p, f->terrain_texture, 0, p->tc);
     else if (need_terrain) {
@@ -432,6 +432,6 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         const uint16_t *q = p->q + (size_t)r * p->w;
         float *sc = p->sc + (size_t)r * p->w * 3;
         for (uint32_t k = 0; k < p->w; k++)
-            if (q[k] > 0) asphalt(p->x0 + k + ox, py, sc + k, p->w);
+            if (q[k] > 0 || p->all) asphalt(p->x0 + k + ox, py, sc + k, p->w);
     }
 }
