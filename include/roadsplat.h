@@ -904,9 +904,10 @@ RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0,
  * most `max_width` pixels wide (any height) of splatter `s`, allocated once
  * from ctx's allocator (about 10 MB at most, whatever the window;
  * rs_splat_workspace_bytes tells). rs_splat_window_ws then renders a window
- * with no allocation at all (except with opts->lighting.enable, whose
- * normal-map scratch is still taken per call) and the same bytes as
- * rs_splat_window. A workspace belongs to one splatter and serves one call
+ * with no allocation at all and the same bytes as rs_splat_window (with
+ * opts->lighting.enable, or a normal plane of rs_splat_layers_window, the
+ * first such call adds the normal map's scratch to the workspace, as
+ * rs_normal_window's for max_width columns: later calls allocate nothing). A workspace belongs to one splatter and serves one call
  * at a time: give each thread its own. max_width: 1..image width
  * (RS_ERR_INVALID_ARG otherwise). Free it before the splatter. */
 typedef struct rs_splat_workspace rs_splat_workspace;
@@ -980,9 +981,11 @@ typedef struct rs_splat_layers {
 /* The layers of the window [x0, x0+w) x [y0, y0+h) (inside the image,
  * RS_ERR_INVALID_ARG otherwise). `ws` may be NULL (scratch from ctx's
  * allocator, as rs_splat_window) or a workspace of `s` at least w wide:
- * then nothing is allocated, except the normal plane's scratch (as
- * rs_normal_window's) when `normal` is asked for. Progress and profile
- * as rs_splat_window (the layer writing counts as composite time). */
+ * then nothing is allocated (but the normal scratch by the workspace's
+ * first call with normals, as above). A workspace made for a splatter
+ * with styles or markings holds the layers' two extra planes (16 bytes a
+ * piece pixel; rs_splat_workspace_bytes). Progress and profile as
+ * rs_splat_window (the layer writing counts as composite time). */
 RS_API rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0,
                                         uint32_t y0, uint32_t w, uint32_t h, const rs_splat_layers *layers,
                                         rs_splat_profile *profile);
@@ -1596,8 +1599,9 @@ RS_API size_t rs_vt_workspace_bytes(const rs_vt_workspace *ws);
 /* Render tile (level, x, y) into the caller's `rgba`: tile_side rows of
  * tile_side RGBA8 pixels, row r at rgba + r * stride bytes (stride >=
  * 4 * tile_side). Any tile of the quadtree may be made, resident or not.
- * Allocates nothing (except with the splatter's lighting on, whose normal
- * scratch rs_splat_window_ws takes per call). Level 0 renders through `s`
+ * Allocates nothing (with the splatter's lighting on, the first tile of
+ * each texel count adds the normal scratch to the workspace: see
+ * rs_splat_workspace_create). Level 0 renders through `s`
  * itself: its progress callback, if any, is called from the making thread
  * as rs_splat_window_ws calls it (the vt's own splatters have none). Thread
  * rules above.

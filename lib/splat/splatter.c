@@ -250,6 +250,7 @@ struct rs_splat_workspace {
     const rs_splatter *s;
     uint32_t max_w;
     scratch b;
+    rs__nm_scratch nm; /* the normals' (lit windows, normal planes): from the first call that needs them */
     size_t bytes;
 };
 
@@ -294,7 +295,7 @@ static void layers_piece(const rs_splatter *s, const scratch *b, rs__piece *p, c
  * weight), or the layers L (rgba NULL). */
 static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint32_t x0, uint32_t y0, uint32_t w,
                            uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
-                           const rs_splat_layers *L, rs_splat_profile *profile)
+                           const rs_splat_layers *L, rs__nm_scratch *nm, rs_splat_profile *profile)
 {
     const scratch b = *bp;
     const uint32_t T = s->o.texels;
@@ -381,14 +382,14 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
         if (L && L->normal) {
             rs_result nr = rs__normals_run(ctx, s, x0, y, w, p.rows,
                                            L->normal_options ? L->normal_options : &s->o.lighting.normal,
-                                           L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0);
+                                           L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0, nm);
             if (nr) return nr;
         }
         if (!L && s->o.lighting.enable) {
             /* these rows of the window, lit by their normals (the normals of
              * a pixel do not depend on the window: same bytes for any cut) */
             rs_result lr = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
-                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride);
+                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride, nm);
             if (lr) return lr;
         }
         y += p.rows;
@@ -424,7 +425,7 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     scratch_size z = scratch_size_of(s, w, h);
     scratch b;
     if ((r = scratch_alloc(ctx, s, &z, 0, &b)) != RS_OK) return r;
-    r = splat_run(ctx, s, &b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, NULL, profile);
+    r = splat_run(ctx, s, &b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, NULL, NULL, profile);
     scratch_free(ctx, &b);
     return r;
 }
@@ -462,10 +463,26 @@ void rs_splat_workspace_free(rs_ctx *ctx, rs_splat_workspace *ws)
 {
     if (!ctx || !ws) return;
     scratch_free(ctx, &ws->b);
+    rs__nm_scratch_free(ctx, &ws->nm);
     rs__free(ctx, ws);
 }
 
-size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws) { return ws ? ws->bytes : 0; }
+size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws)
+{
+    if (!ws) return 0;
+    const rs__nm_scratch *n = &ws->nm;
+    return ws->bytes + n->npx * (4 * sizeof(double) + sizeof(uint16_t) + 3 * sizeof(float)) + n->ncol * 4 * sizeof(double);
+}
+
+/* The workspace's normal scratch, reserved when this call needs normals. */
+static rs_result ws_normals(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, int need, rs__nm_scratch **nm)
+{
+    *nm = NULL;
+    if (!need) return RS_OK;
+    rs_result r = rs__nm_scratch_reserve(ctx, s, ws->max_w, &ws->nm);
+    if (!r) *nm = &ws->nm;
+    return r;
+}
 
 rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0, uint32_t y0,
                              uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight,
@@ -478,7 +495,9 @@ rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspa
     if (r) return r;
     if (w > ws->max_w)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
-    return splat_run(ctx, s, &ws->b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, NULL, profile);
+    rs__nm_scratch *nm;
+    if ((r = ws_normals(ctx, s, ws, s->o.lighting.enable, &nm)) != RS_OK) return r;
+    return splat_run(ctx, s, &ws->b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, NULL, nm, profile);
 }
 
 static rs_result check_plane(rs_ctx *ctx, const void *plane, size_t stride, size_t need, const char *what)
@@ -508,12 +527,14 @@ rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_wor
     if (ws) {
         if (w > ws->max_w)
             return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
-        return splat_run(ctx, s, &ws->b, x0, y0, w, h, NULL, 0, NULL, 0, L, profile);
+        rs__nm_scratch *nm;
+        if ((r = ws_normals(ctx, s, ws, L->normal != NULL, &nm)) != RS_OK) return r;
+        return splat_run(ctx, s, &ws->b, x0, y0, w, h, NULL, 0, NULL, 0, L, nm, profile);
     }
     scratch_size z = scratch_size_of(s, w, h);
     scratch b;
     if ((r = scratch_alloc(ctx, s, &z, 1, &b)) != RS_OK) return r;
-    r = splat_run(ctx, s, &b, x0, y0, w, h, NULL, 0, NULL, 0, L, profile);
+    r = splat_run(ctx, s, &b, x0, y0, w, h, NULL, 0, NULL, 0, L, NULL, profile);
     scratch_free(ctx, &b);
     return r;
 }
