@@ -11,28 +11,24 @@
 #include "roadsplat.h"
 #include "harness.h"
 #include "scenes.h"
+#include "scene_splat.h"
+#include "fail_alloc.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct counter { size_t calls; } counter;
-
-static void *count_malloc(void *u, size_t n) { ((counter *)u)->calls++; return malloc(n); }
-static void *count_realloc(void *u, void *p, size_t n) { ((counter *)u)->calls++; return realloc(p, n); }
-static void count_free(void *u, void *p) { (void)u; free(p); }
-
-static counter cnt;
+static size_t allocs_made; /* the context's allocation calls */
 static rs_ctx *ctx;
 
 /* casings of one colour (the composite blends them) */
 static const char styled_one[] =
-    "style k\n casing 0.4 #707070\n line 0 0.15 #FFFFFF dash 3 6\n line -2.6 0.2 #FFFFFF\nend\n"
-    "road a width 7 style=k\n0.5 11.3\n39.1 14.8\nend\n"
-    "road b width 6 class=primary\n20.2 0.4\n23.9 39.5\nend\n"
-    "road c width 4 class=residential\n3 35\n18 22\n36 38\nend\n"
-    "mark arrow_left road=a s=12 t=-1.7\n"
-    "mark word_bus road=b s=9 t=1.5 length=3 width=2\n";
+    "style k\n casing 0.5 #606060\n line 0 0.2 #FFFFFF dash 2 5\n line 2.4 0.15 #FFFFFF\nend\n"
+    "road a width 8 style=k\n1.5 9.3\n38.1 16.8\nend\n"
+    "road b width 6 class=primary\n18.2 1.4\n25.9 38.5\nend\n"
+    "road c width 4 class=residential\n2 33\n17 24\n37 36\nend\n"
+    "mark arrow_right road=a s=14 t=-2\n"
+    "mark word_bus road=b s=10 t=1.5 length=3 width=2\n";
 
 /* casings of several colours (blended per pixel into the terrain), a
  * translucent fill, a gradient, a surface image under a translucent fill */
@@ -281,11 +277,11 @@ static void run_scene(const rs_dem *dem, const scene_opts *so)
         CHECK(rs_splat_workspace_bytes(ws) > bytes0);
         if (so->lit) {
             /* and a lit window through the same workspace: nothing more */
-            size_t before = cnt.calls;
+            size_t before = allocs_made;
             CHECK(rs_splat_window_ws(ctx, s, ws, 0, 0, MW, H, win.terrain, (size_t)MW * 4, NULL, 0, NULL) == RS_OK);
             CHECK(!memcmp(win.terrain, ref, (size_t)MW * 4));
-            CHECKF(cnt.calls == before, "%s: %zu allocations in a lit window through a workspace", so->name,
-                   cnt.calls - before);
+            CHECKF(allocs_made == before, "%s: %zu allocations in a lit window through a workspace", so->name,
+                   allocs_made - before);
         }
         sc_rng rng;
         sc_rng_seed(&rng, 31);
@@ -300,9 +296,9 @@ static void run_scene(const rs_dem *dem, const scene_opts *so)
             win.w = w;
             win.h = h;
             rs_splat_layers Lw = layers_of(&win, 1);
-            size_t before = cnt.calls;
+            size_t before = allocs_made;
             rs_result r = rs_splat_layers_window(ctx, s, k & 1 ? ws : NULL, x, y, w, h, &Lw, NULL);
-            if (k & 1) allocs += cnt.calls - before;
+            if (k & 1) allocs += allocs_made - before;
             if (r != RS_OK) continue;
             tries++;
             same += same_crop(&full, &win, x, y);
@@ -358,15 +354,11 @@ out:
 
 int main(void)
 {
-    rs_allocator al = { count_malloc, count_realloc, count_free, &cnt };
+    rs_allocator al = count_alloc_hook(&allocs_made);
     if (rs_ctx_create(&al, NULL, &ctx) != RS_OK) return 1;
     images();
-    enum { DW = 21, DH = 21 };
-    float z[DW * DH];
-    sc_dem_fractal(z, DW, DH, 5, 0.5);
-    rs_dem *dem = NULL;
-    rs_dem_frame fr = { 2.0, 0.05, 0, 0 };
-    CHECK(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_dem *dem = ss_fractal_dem(ctx, 21, 21, 5, 2.0, 0.05);
+    CHECK(dem != NULL);
     const scene_opts scenes[] = {
         { "plain", styled_one, RS_EDGES_ANALYTIC, 1, 0, 0 },
         { "styled, one casing colour", styled_one, RS_EDGES_ANALYTIC, 0, 0, 0 },
