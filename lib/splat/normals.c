@@ -22,6 +22,7 @@
 
 #define NM_COLS 1024u      /* columns of one piece */
 #define NM_PAINT 0.003     /* default paint height, metres */
+#define NM_FXT 64          /* column weights kept in a table: texels up to this */
 
 typedef rs__nm_scratch nm_scratch;
 
@@ -308,6 +309,8 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
         keep = NULL;
         if ((res = nm_alloc(ctx, &b, npx, ncol, paint, relief)) != RS_OK) return res;
     }
+    double fxt[NM_FXT];
+    for (uint32_t t = 0; t < NM_FXT && t < T; t++) fxt[t] = (t + 0.5) / T;
     for (uint32_t y = y0; y < y0 + h;) {
         uint32_t crow = y / T, end = (crow + 1) * T;
         if (end > y0 + h) end = y0 + h;
@@ -343,9 +346,16 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                 double fy = ((py - crow * T) + 0.5) / T, gy_ = 1 - fy;
                 uint8_t *out = rgba ? rgba + (size_t)(py - y0) * rgba_stride + (size_t)(x - x0) * 4
                                     : rgb + (size_t)(py - y0) * rgb_stride + (size_t)(x - x0) * 3;
-                for (uint32_t k = 0; k < pw; k++) {
-                    uint32_t px = x + k, cc = px / T - c0;
-                    double fx = ((px - (px / T) * T) + 0.5) / T, gx_ = 1 - fx;
+                /* the column's cell and offset in it counted along (no
+                 * division per pixel), its weight from the table: the same
+                 * doubles as ((px mod T) + 0.5) / T */
+                uint32_t cc = x / T - c0, off = x % T;
+                for (uint32_t k = 0; k < pw; k++, off++) {
+                    if (off == T) {
+                        off = 0;
+                        cc++;
+                    }
+                    double fx = off < NM_FXT ? fxt[off] : (off + 0.5) / T, gx_ = 1 - fx;
                     double gx = (gx0[cc] * gx_ + gx0[cc + 1] * fx) * gy_ + (gx1[cc] * gx_ + gx1[cc + 1] * fx) * fy;
                     double gy = (gy0[cc] * gx_ + gy0[cc + 1] * fx) * gy_ + (gy1[cc] * gx_ + gy1[cc + 1] * fx) * fy;
                     size_t at = (size_t)(r + oy) * rw + k + ox;
@@ -370,8 +380,9 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                      * height field's normal is (-dz/dx, -dz/dy, 1) in
                      * the map frame, so Y = +dz/dy (y down) */
                     double m = fabs(gx) > fabs(gy) ? fabs(gx) : fabs(gy);
-                    if (!(m > 1)) m = 1;
-                    double nx = -gx / m, ny = gy / m, nz = 1 / m;
+                    /* (x / 1 is x: no division for the slopes up to 45 degrees) */
+                    double nx = -gx, ny = gy, nz = 1;
+                    if (m > 1) nx = -gx / m, ny = gy / m, nz = 1 / m;
                     double len = sqrt(nx * nx + ny * ny + nz * nz);
                     if (!(len > 0 && len < HUGE_VAL)) nx = 0, ny = 0, nz = len = 1;
                     if (rgba) {
