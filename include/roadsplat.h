@@ -907,7 +907,9 @@ RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0,
  * with no allocation at all and the same bytes as rs_splat_window (with
  * opts->lighting.enable, or a normal plane of rs_splat_layers_window, the
  * first such call adds the normal map's scratch to the workspace, as
- * rs_normal_window's for max_width columns: later calls allocate nothing). A workspace belongs to one splatter and serves one call
+ * rs_normal_window's for max_width columns; the first rs_splat_layers_window
+ * of a splatter with styles or markings adds the layers' two planes, 16
+ * bytes a pixel of a piece: later calls allocate nothing). A workspace belongs to one splatter and serves one call
  * at a time: give each thread its own. max_width: 1..image width
  * (RS_ERR_INVALID_ARG otherwise). Free it before the splatter. */
 typedef struct rs_splat_workspace rs_splat_workspace;
@@ -981,11 +983,10 @@ typedef struct rs_splat_layers {
 /* The layers of the window [x0, x0+w) x [y0, y0+h) (inside the image,
  * RS_ERR_INVALID_ARG otherwise). `ws` may be NULL (scratch from ctx's
  * allocator, as rs_splat_window) or a workspace of `s` at least w wide:
- * then nothing is allocated (but the normal scratch by the workspace's
- * first call with normals, as above). A workspace made for a splatter
- * with styles or markings holds the layers' two extra planes (16 bytes a
- * piece pixel; rs_splat_workspace_bytes). Progress and profile as
- * rs_splat_window (the layer writing counts as composite time). */
+ * then nothing is allocated (but by the workspace's first call with
+ * normals or with layers, as above; rs_splat_workspace_bytes counts them).
+ * Progress and profile as rs_splat_window (the layer writing counts as
+ * composite time). */
 RS_API rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0,
                                         uint32_t y0, uint32_t w, uint32_t h, const rs_splat_layers *layers,
                                         rs_splat_profile *profile);

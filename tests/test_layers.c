@@ -266,8 +266,8 @@ static void run_scene(const rs_dem *dem, const scene_opts *so)
     CHECK(rs_splat_workspace_create(ctx, s, MW, &ws) == RS_OK);
     planes win;
     if (ws && planes_alloc(&win, MW, H)) {
-        /* the first call with normals reserves their scratch in the
-         * workspace (rs_splat_workspace_bytes grows) */
+        /* the first call with normals and layers reserves their scratch
+         * in the workspace (rs_splat_workspace_bytes grows) */
         size_t bytes0 = rs_splat_workspace_bytes(ws);
         rs_splat_layers Ln;
         memset(&Ln, 0, sizeof Ln);

@@ -251,7 +251,8 @@ struct rs_splat_workspace {
     uint32_t max_w;
     scratch b;
     rs__nm_scratch nm; /* the normals' (lit windows, normal planes): from the first call that needs them */
-    size_t bytes;
+    size_t npx;        /* pixels of a piece */
+    size_t bytes;      /* of b (but b.lx, the layers', from the first call with layers) */
 };
 
 static double now(const rs_splat_profile *pf)
@@ -442,18 +443,18 @@ rs_result rs_splat_workspace_create(rs_ctx *ctx, const rs_splatter *s, uint32_t 
     rs_splat_workspace *ws = rs__calloc(ctx, 1, sizeof *ws);
     if (!ws) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a splat workspace");
     scratch_size z = scratch_size_of(s, max_width, UINT32_MAX);
-    rs_result r = scratch_alloc(ctx, s, &z, 1, &ws->b);
+    rs_result r = scratch_alloc(ctx, s, &z, 0, &ws->b);
     if (r) {
         rs__free(ctx, ws);
         return r;
     }
     ws->s = s;
     ws->max_w = max_width;
+    ws->npx = z.npx;
     ws->bytes = sizeof *ws + z.npx * (sizeof(double) * (s->grid->styling ? 2 : 1) + sizeof(uint16_t) + 6 * sizeof(float)) +
                 z.cols * 6 * sizeof(double) + z.nax * 2 * (sizeof(double) + sizeof(uint32_t)) +
                 z.ncol * 6 * sizeof(float) +
-                (s->grid->styling ? rs__linesym_scratch_len((uint32_t)z.cols) * sizeof(double) : 0) +
-                (layer_planes(s) ? z.npx * 4 * sizeof(float) : 0);
+                (s->grid->styling ? rs__linesym_scratch_len((uint32_t)z.cols) * sizeof(double) : 0);
     *out = ws;
     rs__ok(ctx);
     return RS_OK;
@@ -471,7 +472,8 @@ size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws)
 {
     if (!ws) return 0;
     const rs__nm_scratch *n = &ws->nm;
-    return ws->bytes + n->npx * (4 * sizeof(double) + sizeof(uint16_t) + 3 * sizeof(float)) + n->ncol * 4 * sizeof(double);
+    return ws->bytes + (ws->b.lx ? ws->npx * 4 * sizeof(float) : 0) +
+           n->npx * (4 * sizeof(double) + sizeof(uint16_t) + 3 * sizeof(float)) + n->ncol * 4 * sizeof(double);
 }
 
 /* The workspace's normal scratch, reserved when this call needs normals. */
@@ -529,6 +531,12 @@ rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_wor
             return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
         rs__nm_scratch *nm;
         if ((r = ws_normals(ctx, s, ws, L->normal != NULL, &nm)) != RS_OK) return r;
+        if (layer_planes(s) && !ws->b.lx) {
+            /* the layers' planes, once (a workspace that never serves
+             * layers does without) */
+            ws->b.lx = rs__alloc_array(ctx, ws->npx * 4, sizeof *ws->b.lx);
+            if (!ws->b.lx) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the layers' scratch");
+        }
         return splat_run(ctx, s, &ws->b, x0, y0, w, h, NULL, 0, NULL, 0, L, nm, profile);
     }
     scratch_size z = scratch_size_of(s, w, h);
