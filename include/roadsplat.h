@@ -961,8 +961,10 @@ RS_API rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_
  *
  * The planes of one call come from one pass over the window (one coverage
  * and surface per piece; the paint is painted twice, over black and over
- * white, for its colour and alpha). Any window gives the bytes of the same
- * pixels of the whole image. All-zero (no plane) is RS_ERR_INVALID_ARG. */
+ * white, for its colour and alpha; the normal plane, rs_normal_window's
+ * code band by band, computes coverage and paint again over its one-pixel
+ * halo). Any window gives the bytes of the same pixels of the whole image.
+ * All-zero (no plane) is RS_ERR_INVALID_ARG. */
 typedef struct rs_splat_layers {
     uint8_t *terrain;
     size_t terrain_stride;
