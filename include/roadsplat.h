@@ -953,7 +953,8 @@ RS_API rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_
  *   colour = ground (1 - R) + road R
  *
  * which is rs_splat_window's colour (before lighting: a lit splatter's
- * colour is this colour times its lighting, rs_lighting_options) within
+ * output is this colour lit as rs_lighting_options says, with the
+ * unrounded normals) within
  * 1/255 per channel: 255 * colour rounds to the output byte or a
  * neighbour (the layers are rounded to bytes; the casing and paint colours
  * take up the rounding of the planes under them). Exact where R = 0 with no
@@ -983,7 +984,9 @@ typedef struct rs_splat_layers {
 } rs_splat_layers;
 
 /* The layers of the window [x0, x0+w) x [y0, y0+h) (inside the image,
- * RS_ERR_INVALID_ARG otherwise). `ws` may be NULL (scratch from ctx's
+ * RS_ERR_INVALID_ARG otherwise, as for no plane, bad normal_options or
+ * another splatter's workspace; a short stride: RS_ERR_BUFFER_TOO_SMALL).
+ * `ws` may be NULL (scratch from ctx's
  * allocator, as rs_splat_window) or a workspace of `s` at least w wide:
  * then nothing is allocated (but by the workspace's first call with
  * normals or with layers, as above; rs_splat_workspace_bytes counts them).
