@@ -365,6 +365,7 @@ typedef struct cli_splat_job {
     const uint8_t *nodata; /* the input's nodata mask (alpha 0 there), or NULL */
     uint32_t dem_w, dem_h;
     int alpha;             /* cli_splat_png_run: keep the alpha channel although every pixel is opaque */
+    const rs_splat_layers *layers; /* cli_splat_run: these planes of the window instead of rgba */
 } cli_splat_job;
 void cli_splat_job_init(cli_splat_job *job, const rs_splatter *sp, const cli_splat_args *s, int quiet);
 int cli_splat_run(cli_splat_job *job);

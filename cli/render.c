@@ -299,70 +299,54 @@ static void view_warnings(const render_args *a, const rg_view *v, const rs_dem *
                 out[0] ? "the map is behind the camera" : "the map lies outside the field of view");
 }
 
-/* One splat of `roads` (styles and markings off) into a new tw x th RGBA
- * buffer; the error is printed. */
-static int splat_plain(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, const rs_roads *roads,
-                       const char *what, uint32_t tw, uint32_t th, uint8_t **out)
+/* The shader mode's textures, from one pass of the splatter's layers
+ * (rs_splat_layers_window, on the splat's threads): the terrain colour T
+ * with no roads (lit by the renderer: the tint alone, unshaded, as a lit
+ * splat's terrain), the road material S under no style (the shader draws
+ * the styles) and, lit, the normal map (rs_normal_window's defaults, which
+ * need the roads: their paint and surfaces). Unlit, T and S do not depend
+ * on the roads: a splatter on none. The error is printed. */
+static int bake_layers(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, uint32_t tw, uint32_t th,
+                       rs_road_grid **grid, rs_splatter **sp, uint8_t **terrain, uint8_t **road, uint8_t **nmap)
 {
-    rs_splat_options o = a->s.o;
-    o.style.disable = 1;
-    o.markings.disable = 1;
-    o.progress = NULL;
-    o.progress_user = NULL;
-    rs_road_grid *grid = NULL;
-    rs_splatter *sp = NULL;
+    cli_splat_args s = a->s;
+    cli_splat_input on = *in;
+    rs_roads *none = NULL;
     int rc = 1;
-    rs_result r = rs_road_grid_build(ctx, in->dem, roads, &o, &grid);
-    if (!r) r = rs_splatter_create(ctx, in->dem, NULL, grid, &o, &sp);
-    if (r) {
-        char m[512];
-        cli_error("render: %s: %s", what, cli_lib_message(ctx, r, m, sizeof m));
+    s.o.lighting.enable = a->lighting;
+    if (!a->lighting) {
+        rs_result r = rs_roads_create(ctx, &none);
+        if (r) { cli_error("render: %s", rs_strerror(r)); return 1; }
+        on.roads = none;
+        s.o.style.disable = 1;
+        s.o.markings.disable = 1;
+    }
+    if (cli_splatter_prepare(ctx, &on, a->roads, &s, 1, grid, sp)) goto done;
+    *terrain = malloc((size_t)tw * th * 4);
+    *road = malloc((size_t)tw * th * 4);
+    if (a->lighting) *nmap = malloc((size_t)tw * th * 3);
+    if (!*terrain || !*road || (a->lighting && !*nmap)) {
+        cli_error("%s: out of memory for the %u x %u terrain and road textures", a->out, tw, th);
         goto done;
     }
-    *out = malloc((size_t)tw * th * 4);
-    if (!*out) { cli_error("render: out of memory for a %u x %u %s", tw, th, what); goto done; }
+    static const rs_normal_options normal_defaults;
+    rs_splat_layers L;
+    memset(&L, 0, sizeof L);
+    L.terrain = *terrain;
+    L.terrain_stride = (size_t)tw * 4;
+    L.surface = *road;
+    L.surface_stride = (size_t)tw * 4;
+    L.surface_unstyled = 1;
+    L.normal = a->lighting ? *nmap : NULL;
+    L.normal_stride = (size_t)tw * 3;
+    L.normal_options = &normal_defaults;
     cli_splat_job job;
-    cli_splat_job_init(&job, sp, &a->s, 1);
-    job.rgba = *out;
+    cli_splat_job_init(&job, *sp, &a->s, 1);
+    job.layers = &L;
     if (cli_splat_run(&job)) goto done;
     rc = 0;
 done:
-    rs_splatter_free(ctx, sp);
-    rs_road_grid_free(ctx, grid);
-    return rc;
-}
-
-/* The shader mode's textures: the terrain colour T (the splat with no
- * roads) and the unstyled road surface S (the splat under one road wider
- * than the map: procedural asphalt or --road-texture, exactly the CPU's S). */
-static int bake_surfaces(rs_ctx *ctx, const cli_splat_input *in, const render_args *a, uint32_t tw, uint32_t th,
-                         int unshaded, uint8_t **terrain, uint8_t **road)
-{
-    rs_roads *none = NULL, *all = NULL;
-    int rc = 1;
-    rs_dem_frame fr;
-    rs_dem_get_frame(in->dem, &fr);
-    double w = (rs_dem_width(in->dem) - 1) * fr.cell_size, h = (rs_dem_height(in->dem) - 1) * fr.cell_size;
-    double xy[4] = { fr.origin_x - w - 1, fr.origin_y + h / 2, fr.origin_x + 2 * w + 1, fr.origin_y + h / 2 };
-    rs_result r = rs_roads_create(ctx, &none);
-    if (!r) r = rs_roads_create(ctx, &all);
-    if (!r) r = rs_roads_add(ctx, all, "surface", 2 * (w + h) + 4, xy, 2);
-    if (r) { cli_error("render: %s", rs_ctx_message(ctx)[0] ? rs_ctx_message(ctx) : rs_strerror(r)); goto done; }
-    if (unshaded) {
-        /* lit by the renderer: the tint without the splat's hillshade
-         * (heights scaled to nothing flatten the gradient, shade = 1; the
-         * tint reads heights in DEM units, unchanged) */
-        rs_dem_frame flat = fr;
-        flat.z_scale = fr.z_scale < 0 ? -1e-12 : 1e-12;
-        if ((r = rs_dem_set_frame(ctx, in->dem, &flat))) { cli_error("render: %s", rs_ctx_message(ctx)); goto done; }
-    }
-    int bad = splat_plain(ctx, in, a, none, "terrain texture", tw, th, terrain);
-    if (unshaded) rs_dem_set_frame(ctx, in->dem, &fr);
-    if (bad || splat_plain(ctx, in, a, all, "road surface texture", tw, th, road)) goto done;
-    rc = 0;
-done:
     rs_roads_free(ctx, none);
-    rs_roads_free(ctx, all);
     return rc;
 }
 
@@ -557,18 +541,7 @@ int cli_render_main(int argc, char **argv)
         /* terrain colour T and road surface S baked on the CPU, the roads
          * exported for the fragment shader */
         t1 = cli_now_ms();
-        if (bake_surfaces(ctx, &in, &a, tw, th, a.lighting, &tex, &tex_road)) goto done;
-        if (a.lighting) {
-            /* the normal map: Horn's gradient of the DEM per texel and the
-             * road surface's relief (docs/normals.md) */
-            if (cli_splatter_prepare(ctx, &in, a.roads, &a.s, 1, &grid, &sp)) goto done;
-            nmap = malloc((size_t)tw * th * 3);
-            if (!nmap) { cli_error("%s: out of memory for a %u x %u normal map", a.out, tw, th); goto done; }
-            if ((r = rs_normal_window(ctx, sp, 0, 0, tw, th, nmap, (size_t)tw * 3, NULL))) {
-                cli_error("render: normal map: %s", rs_ctx_message(ctx));
-                goto done;
-            }
-        }
+        if (bake_layers(ctx, &in, &a, tw, th, &grid, &sp, &tex, &tex_road, &nmap)) goto done;
         t_splat = cli_now_ms() - t1;
         t1 = cli_now_ms();
         if ((r = rs_gpu_scene_create(ctx, dem, in.roads, &a.s.o, NULL, &scene))) {

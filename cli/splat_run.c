@@ -94,9 +94,20 @@ static void *work(void *arg)
         pthread_mutex_unlock(&sh->mu);
         if (b >= sh->nbands) break;
         uint32_t y = b * sh->band_rows, rows = job->h - y < sh->band_rows ? job->h - y : sh->band_rows;
-        r = rs_splat_window(ctx, job->s, job->x0, job->y0 + y, job->w, rows, job->rgba + (size_t)y * job->w * 4,
-                            (size_t)job->w * 4, job->weight ? job->weight + (size_t)y * job->w : NULL, job->w,
-                            &wk->prof);
+        if (job->layers) {
+            /* the band's rows of each plane asked for */
+            rs_splat_layers L = *job->layers;
+            if (L.terrain) L.terrain += (size_t)y * L.terrain_stride;
+            if (L.casing) L.casing += (size_t)y * L.casing_stride;
+            if (L.surface) L.surface += (size_t)y * L.surface_stride;
+            if (L.coverage) L.coverage += (size_t)y * L.coverage_stride;
+            if (L.paint) L.paint += (size_t)y * L.paint_stride;
+            if (L.normal) L.normal += (size_t)y * L.normal_stride;
+            r = rs_splat_layers_window(ctx, job->s, NULL, job->x0, job->y0 + y, job->w, rows, &L, &wk->prof);
+        } else
+            r = rs_splat_window(ctx, job->s, job->x0, job->y0 + y, job->w, rows, job->rgba + (size_t)y * job->w * 4,
+                                (size_t)job->w * 4, job->weight ? job->weight + (size_t)y * job->w : NULL, job->w,
+                                &wk->prof);
         if (!r && job->nodata)
             cli_nodata_alpha(job->nodata, job->dem_w, job->dem_h, job->texels, job->x0, job->y0 + y, job->w, rows,
                              job->rgba + (size_t)y * job->w * 4, (size_t)job->w * 4);

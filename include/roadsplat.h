@@ -904,9 +904,12 @@ RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0,
  * most `max_width` pixels wide (any height) of splatter `s`, allocated once
  * from ctx's allocator (about 10 MB at most, whatever the window;
  * rs_splat_workspace_bytes tells). rs_splat_window_ws then renders a window
- * with no allocation at all (except with opts->lighting.enable, whose
- * normal-map scratch is still taken per call) and the same bytes as
- * rs_splat_window. A workspace belongs to one splatter and serves one call
+ * with no allocation at all and the same bytes as rs_splat_window (with
+ * opts->lighting.enable, or a normal plane of rs_splat_layers_window, the
+ * first such call adds the normal map's scratch to the workspace, as
+ * rs_normal_window's for max_width columns; the first rs_splat_layers_window
+ * of a splatter with styles or markings adds the layers' two planes, 16
+ * bytes a pixel of a piece: later calls allocate nothing). A workspace belongs to one splatter and serves one call
  * at a time: give each thread its own. max_width: 1..image width
  * (RS_ERR_INVALID_ARG otherwise). Free it before the splatter. */
 typedef struct rs_splat_workspace rs_splat_workspace;
@@ -919,6 +922,79 @@ RS_API size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws);
 RS_API rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0,
                                     uint32_t y0, uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride,
                                     uint16_t *weight, size_t weight_stride, rs_splat_profile *profile);
+
+/* Layers (docs/embedding.md "Layers"): the parts rs_splat_window blends,
+ * as separate planes, for a host that lights or blends itself. Each plane
+ * is optional (NULL: not written); row r of the window at plane + r*stride
+ * (strides in bytes for the 8-bit planes, in values for coverage; at least
+ * 4*w, 3*w or w). The caller owns every plane; nothing is kept.
+ *
+ *   terrain   RGBA8, A = 255: the terrain colour with no roads at every
+ *             pixel (tint times hillshade, or the terrain texture; with
+ *             opts->lighting.enable the tint alone, unshaded: the lighting
+ *             shades the relief)
+ *   casing    RGBA8 premultiplied: road casings (styles' borders, drawn
+ *             on the ground beside a road) over the terrain; 0 elsewhere
+ *   surface   RGBA8, A = 255: the road colour before paint at every pixel:
+ *             the material (procedural asphalt or the road texture),
+ *             under roads with their styles' fills, gradients and surface
+ *             images (surface_unstyled: the material alone, what
+ *             rs_gpu_scene's shader reads as its road texture)
+ *   coverage  uint16: the road weight R, 0..65535, rs_splat_window's weight
+ *   paint     RGBA8 premultiplied: line symbols and markings as painted on
+ *             the road surface, 0 where R = 0
+ *   normal    RGB8: rs_normal_window's bytes with normal_options (NULL:
+ *             the splatter's opts->lighting.normal; all zero: defaults)
+ *
+ * With t = terrain/255, c = casing/255, s = surface/255, p = paint/255
+ * (premultiplied: ca, pa their alphas) and R = coverage/65535, per channel:
+ *
+ *   ground = t (1 - ca) + c        road = s (1 - pa) + p
+ *   colour = ground (1 - R) + road R
+ *
+ * which is rs_splat_window's colour (before lighting: a lit splatter's
+ * output is this colour lit as rs_lighting_options says, with the
+ * unrounded normals) within
+ * 1/255 per channel: 255 * colour rounds to the output byte or a
+ * neighbour (the layers are rounded to bytes; the casing and paint colours
+ * take up the rounding of the planes under them). Exact where R = 0 with no
+ * casing, and where R = 65535 with no paint.
+ *
+ * The planes of one call come from one pass over the window (one coverage
+ * and surface per piece; the paint is painted twice, over black and over
+ * white, for its colour and alpha; the normal plane, rs_normal_window's
+ * code band by band, computes coverage and paint again over its one-pixel
+ * halo). Any window gives the bytes of the same pixels of the whole image.
+ * All-zero (no plane) is RS_ERR_INVALID_ARG. */
+typedef struct rs_splat_layers {
+    uint8_t *terrain;
+    size_t terrain_stride;
+    uint8_t *casing;
+    size_t casing_stride;
+    uint8_t *surface;
+    size_t surface_stride;
+    uint16_t *coverage;
+    size_t coverage_stride; /* values */
+    uint8_t *paint;
+    size_t paint_stride;
+    uint8_t *normal;
+    size_t normal_stride;
+    const rs_normal_options *normal_options; /* NULL: the splatter's opts->lighting.normal */
+    int surface_unstyled;                    /* non-zero: the surface plane without the styles' surfaces */
+} rs_splat_layers;
+
+/* The layers of the window [x0, x0+w) x [y0, y0+h) (inside the image,
+ * RS_ERR_INVALID_ARG otherwise, as for no plane, bad normal_options or
+ * another splatter's workspace; a short stride: RS_ERR_BUFFER_TOO_SMALL).
+ * `ws` may be NULL (scratch from ctx's
+ * allocator, as rs_splat_window) or a workspace of `s` at least w wide:
+ * then nothing is allocated (but by the workspace's first call with
+ * normals or with layers, as above; rs_splat_workspace_bytes counts them).
+ * Progress and profile as rs_splat_window (the layer writing counts as
+ * composite time). */
+RS_API rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0,
+                                        uint32_t y0, uint32_t w, uint32_t h, const rs_splat_layers *layers,
+                                        rs_splat_profile *profile);
 
 /* Whole-image convenience: a splatter on `grid` (built with the same dem
  * and opts), one window covering the image, tightly packed buffers:
@@ -1529,8 +1605,9 @@ RS_API size_t rs_vt_workspace_bytes(const rs_vt_workspace *ws);
 /* Render tile (level, x, y) into the caller's `rgba`: tile_side rows of
  * tile_side RGBA8 pixels, row r at rgba + r * stride bytes (stride >=
  * 4 * tile_side). Any tile of the quadtree may be made, resident or not.
- * Allocates nothing (except with the splatter's lighting on, whose normal
- * scratch rs_splat_window_ws takes per call). Level 0 renders through `s`
+ * Allocates nothing (with the splatter's lighting on, the first tile of
+ * each texel count adds the normal scratch to the workspace: see
+ * rs_splat_workspace_create). Level 0 renders through `s`
  * itself: its progress callback, if any, is called from the making thread
  * as rs_splat_window_ws calls it (the vt's own splatters have none). Thread
  * rules above.

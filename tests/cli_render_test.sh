@@ -148,6 +148,15 @@ awk 'BEGIN { print "P2"; print 51, 16; print 100; for (i = 0; i < 16; i++) { l =
 check "shader: trimmed T ends at 0.1 m equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$T/caps-dem.pgm' '$EX/network_caps.txt' '$T/kc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$EX/network_caps.txt' '$T/ks.png' && python3 '$DIFF' '$T/ks.png' '$T/kc.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
 C="--cell-size 5 --z-scale 0.01 --texels 4"
 check "shader: city CPU splat" "$BIN" $C --quiet "$EX/dem.pgm" "$EX/roads.txt" "$T/cc.png"
+# Lit shader mode: the terrain colour comes from the splatter's layers
+# (rs_splat_layers_window: the tint alone, at the real heights). Before, the
+# bake scaled heights by 1e-12 to drop the hillshade, and the absolute tint
+# painted 3000 m ground the colour of 0 m (mean 58 levels from the CPU
+# splat here; now 12: the shader's sun is ambient 0.42 + diffuse 0.70).
+awk 'BEGIN { print "P2"; print 33, 33; print 3000; for (i = 0; i < 33; i++) { l = ""; for (j = 0; j < 33; j++) l = l " " (j < 16 ? 0 : 3000); print l } }' > "$T/step.pgm"
+printf 'road r width 6\n4 40\n60 40\nend\n' > "$T/step.txt"
+SO="--cell-size 2 --z-scale 1 --texels 4"
+check "shader, lit: the terrain tint follows the heights as the CPU splat's (mean <= 20/255)" sh -c "'$BIN' $SO --quiet --lighting '$T/step.pgm' '$T/step.txt' '$T/stc.png' && '$BIN' render $SO --quiet --ortho '$T/step.pgm' '$T/step.txt' '$T/sts.png' && python3 '$DIFF' '$T/sts.png' '$T/stc.png' | awk '{ split(\$1, m, \"=\"); exit !(m[2] <= 20) }'"
 check "shader: city ortho render" "$BIN" render $C --quiet --ortho --lighting off "$EX/dem.pgm" "$EX/roads.txt" "$T/cs.png"
 check "shader: city (90 styled roads, casings, joins, crossings) equals the CPU splat" xcheck city "$T/cs.png" "$T/cc.png"
 check "shader: --roads texture still reproduces the splat" sh -c "'$BIN' render $J --quiet --roads texture --ortho --lighting off --stats '$T/jt.json' '$EX/junction-dem.pgm' '$EX/junction.txt' '$T/jt.png' && grep -q '\"roads\": \"texture\"' '$T/jt.json' && python3 '$T/png.py' mad '$T/jt.png' '$T/jc.png' 2"

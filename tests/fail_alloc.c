@@ -35,6 +35,30 @@ rs_allocator fail_alloc_hook(fail_alloc *f)
     return a;
 }
 
+static void *ca_malloc(void *u, size_t n)
+{
+    ++*(size_t *)u;
+    return malloc(n);
+}
+
+static void *ca_realloc(void *u, void *p, size_t n)
+{
+    ++*(size_t *)u;
+    return realloc(p, n);
+}
+
+static void ca_free(void *u, void *p)
+{
+    (void)u;
+    free(p);
+}
+
+rs_allocator count_alloc_hook(size_t *calls)
+{
+    rs_allocator a = { ca_malloc, ca_realloc, ca_free, calls };
+    return a;
+}
+
 fail_sweep fail_alloc_sweep(long max_tries, fail_try_fn fn, void *user)
 {
     fail_sweep fs = { 0, 0, 0, 0 };

@@ -12,6 +12,9 @@ typedef struct fail_alloc {
 
 /* An rs_allocator whose user is `f`. */
 rs_allocator fail_alloc_hook(fail_alloc *f);
+/* An rs_allocator that never fails and adds its allocation calls (malloc
+ * and realloc) to *calls: a test of allocation-free calls. */
+rs_allocator count_alloc_hook(size_t *calls);
 
 /* One try of a failure sweep: make what is tested on context c, free it,
  * return the result; set *wrong when a failure left an object behind. */

@@ -111,3 +111,17 @@ rs_result ss_splat_window(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
     rs_splatter_free(ctx, s);
     return r;
 }
+
+rs_dem *ss_fractal_dem(rs_ctx *ctx, uint32_t w, uint32_t h, uint64_t seed, double cs, double zs)
+{
+    float *z = malloc(sizeof(float) * w * h);
+    rs_dem *dem = NULL;
+    rs_dem_frame fr = { cs, zs, 0, 0 };
+    if (z) sc_dem_fractal(z, w, h, seed, 0.5);
+    if (!z || rs_dem_create(ctx, w, h, z, &dem) || rs_dem_set_frame(ctx, dem, &fr)) {
+        rs_dem_free(ctx, dem);
+        dem = NULL;
+    }
+    free(z);
+    return dem;
+}

@@ -23,6 +23,10 @@ rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls)
  * 0, or -1 when the library refuses it. */
 int ss_fractal_road(rs_ctx *ctx, rs_dem **dem, rs_roads **roads);
 
+/* A w x h DEM of sc_dem_fractal(seed, roughness 0.5) with cell size cs
+ * and z-scale zs; NULL when a step fails. */
+rs_dem *ss_fractal_dem(rs_ctx *ctx, uint32_t w, uint32_t h, uint64_t seed, double cs, double zs);
+
 typedef struct ss_image {
     uint32_t w, h;
     uint8_t *rgba;  /* w*h*4, malloc'd */

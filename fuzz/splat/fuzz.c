@@ -19,7 +19,9 @@
  *         [points-1 mod 8][width/8][coordinate mode] then 2 bytes per point.
  * Cell size, z-scale and origin are the DEM's frame (rs_dem_set_frame).
  * Findings (abort): an unknown result code, success after an invalid option,
- * a window that differs from the crop of the whole image,
+ * a window that differs from the crop of the whole image, layers of the
+ * window (rs_splat_layers_window) that recompose to more than 1/255 from it
+ * or whose coverage is not its weight,
  * a write outside the buffers sized by rs_splat_size, non-zero weight with no
  * roads, a non-deterministic second splat, an object returned on failure. */
 #include "roadsplat.h"
@@ -101,6 +103,43 @@ static int corrupt(rs_splat_options *o, rs_dem_frame *f, uint8_t which)
     return 1;
 }
 
+/* The window's layers recompose to the whole image's colour within 1/255
+ * (include/roadsplat.h, rs_splat_layers), their coverage is the weight. */
+static void check_layers(rs_ctx *ctx, const rs_splatter *sp, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                         const uint8_t *whole, const uint16_t *wwhole, uint32_t ow)
+{
+    const size_t n = (size_t)w * h;
+    uint8_t *pl = malloc(n * 16);
+    uint16_t *cv = malloc(n * sizeof *cv);
+    rs_splat_layers L;
+    memset(&L, 0, sizeof L);
+    if (pl && cv) {
+        L.terrain = pl;
+        L.casing = pl + n * 4;
+        L.surface = pl + n * 8;
+        L.paint = pl + n * 12;
+        L.terrain_stride = L.casing_stride = L.surface_stride = L.paint_stride = (size_t)w * 4;
+        L.coverage = cv;
+        L.coverage_stride = w;
+        rs_result r = rs_splat_layers_window(ctx, sp, NULL, x0, y0, w, h, &L, NULL);
+        REQUIRE(r == RS_OK || r == RS_ERR_NOMEM);
+        for (size_t i = 0; r == RS_OK && i < n; i++) {
+            size_t at = (y0 + i / w) * (size_t)ow + x0 + i % w;
+            const uint8_t *out = whole + at * 4, *t = pl + 4 * i, *c = t + n * 4, *s = t + n * 8, *p = t + n * 12;
+            if (wwhole) REQUIRE(cv[i] == wwhole[at]);
+            double R = cv[i] / 65535.0;
+            for (int ch = 0; ch < 3; ch++) {
+                double g = t[ch] * (1 - c[3] / 255.0) + c[ch], road = s[ch] * (1 - p[3] / 255.0) + p[ch];
+                double v = g * (1 - R) + road * R + 0.5;
+                int b = v >= 255 ? 255 : (int)v;
+                REQUIRE(b - out[ch] <= 1 && out[ch] - b <= 1);
+            }
+        }
+    }
+    free(pl);
+    free(cv);
+}
+
 /* Window [x0,x0+w) x [y0,y0+h) rendered alone equals the crop of the whole. */
 static void check_window(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *o,
                          reader *rd, const uint8_t *whole, const uint16_t *wwhole, uint32_t ow, uint32_t oh)
@@ -128,6 +167,7 @@ static void check_window(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gri
                     REQUIRE(memcmp(wt + (size_t)y * (w + 3), wwhole + (size_t)(y0 + y) * ow + x0,
                                    (size_t)w * sizeof *wt) == 0);
             }
+        if (r == RS_OK) check_layers(ctx, sp, x0, y0, w, h, whole, wwhole, ow);
         /* outside the image, empty: refused */
         REQUIRE(rs_splat_window(ctx, sp, x0, y0, w + (ow - x0), h, px, stride, NULL, 0, NULL) == RS_ERR_INVALID_ARG);
         REQUIRE(rs_splat_window(ctx, sp, x0, y0, 0, h, px, stride, NULL, 0, NULL) == RS_ERR_INVALID_ARG);

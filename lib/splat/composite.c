@@ -25,6 +25,40 @@ static uint8_t to_byte(double v)
     return (uint8_t)(v >= 0 ? (v >= 255 ? 255 : v + 0.5) : 0);
 }
 
+#if defined(__SSE2__)
+/* Four pixels of the planar colour at src (planes w apart) as RGBA8 with
+ * A = 255: in float, four at a time, the same bytes as to_byte in double
+ * (checked over all 2^32 floats): from 0.5 up, v + 0.5 is exact or rounds
+ * within its integer part, above 255 both clamp; below 0.5 (and NaN) the
+ * byte is 0, taken as v = 0 (the float sum would round 0.49999997 + 0.5 up
+ * to 1). */
+static __m128i pack4(const float *src, size_t w)
+{
+    const __m128 halff = _mm_set1_ps(0.5f), zerof = _mm_setzero_ps(), topf = _mm_set1_ps(255.0f);
+    __m128i px = _mm_set1_epi32((int)0xFF000000u);
+    for (int ch = 0; ch < 3; ch++) {
+        __m128 v = _mm_loadu_ps(src + ch * w);
+        v = _mm_and_ps(_mm_cmpge_ps(v, halff), v);
+        v = _mm_min_ps(_mm_max_ps(_mm_add_ps(v, halff), zerof), topf);
+        px = _mm_or_si128(px, _mm_slli_epi32(_mm_cvttps_epi32(v), 8 * ch));
+    }
+    return px;
+}
+#endif
+
+/* A row of w pixels of planar colour (3 planes of w floats) as RGBA8, A = 255. */
+static void row_bytes(const float *src, size_t w, uint8_t *out)
+{
+    size_t k = 0;
+#if defined(__SSE2__)
+    for (; k + 4 <= w; k += 4) _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), pack4(src + k, w));
+#endif
+    for (; k < w; k++) {
+        for (size_t ch = 0; ch < 3; ch++) out[4 * k + ch] = to_byte(src[ch * w + k]);
+        out[4 * k + 3] = 255;
+    }
+}
+
 /* The casing share b of one pixel (scalar; see above). */
 static double casing_share(double c, double r, double alpha)
 {
@@ -45,7 +79,6 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
 #if defined(__SSE2__)
         const __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(),
                       top = _mm_set1_pd(255.0), full = _mm_set1_pd(65535.0), ka = _mm_set1_pd(p->cas_rgba[3]);
-        const __m128 halff = _mm_set1_ps(0.5f), zerof = _mm_setzero_ps(), topf = _mm_set1_ps(255.0f);
         for (; k + 4 <= w; k += 4) {
             uint64_t q4;
             memcpy(&q4, q + k, sizeof q4);
@@ -69,21 +102,7 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
             }
             if ((q4 == 0 && !anyc) || q4 == UINT64_MAX) {
                 /* four pure terrain or four pure road pixels: one colour */
-                const float *src = q4 ? sc : tc;
-                __m128i px = _mm_set1_epi32((int)0xFF000000u);
-                for (int ch = 0; ch < 3; ch++) {
-                    /* in float, four at a time, the same bytes as in double
-                     * (checked over all 2^32 floats): from 0.5 up, v + 0.5
-                     * is exact or rounds within its integer part, above 255
-                     * both clamp; below 0.5 (and NaN) the byte is 0, taken
-                     * as v = 0 (the float sum would round 0.49999997 + 0.5
-                     * up to 1) */
-                    __m128 v = _mm_loadu_ps(src + ch * w + k);
-                    v = _mm_and_ps(_mm_cmpge_ps(v, halff), v);
-                    v = _mm_min_ps(_mm_max_ps(_mm_add_ps(v, halff), zerof), topf);
-                    px = _mm_or_si128(px, _mm_slli_epi32(_mm_cvttps_epi32(v), 8 * ch));
-                }
-                _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), px);
+                _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), pack4((q4 ? sc : tc) + k, w));
                 continue;
             }
             __m128d qv[2] = { _mm_set_pd(q[k + 1], q[k]), _mm_set_pd(q[k + 3], q[k + 2]) };
@@ -127,5 +146,104 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
             out[4 * k + 3] = 255;
         }
         if (weight) memcpy(weight + (size_t)r * weight_stride, q, w * sizeof *q);
+    }
+}
+
+/* Layers (rs_splat_layers_window; docs/embedding.md "Layers"). A layer's
+ * bytes are rounded as the composite rounds (to_byte); the premultiplied
+ * planes over another (casing over terrain, paint over surface) take up
+ * that plane's rounding: alpha a8 first, then the colour byte that brings
+ * under * (1 - a8/255) + colour nearest to the true blend, so each blend
+ * recomposes within half a level plus the alpha's clamp (docs). */
+static uint8_t premul_byte(double truth, double under8, uint8_t a8)
+{
+    double v = truth - under8 * (1 - a8 / 255.0);
+    uint8_t c = to_byte(v);
+    return c > a8 ? a8 : c;
+}
+
+static uint8_t *plane_at(uint8_t *base, size_t stride, size_t bpp, uint32_t r, uint32_t ax, uint32_t ay)
+{
+    return base + (size_t)(ay + r) * stride + (size_t)ax * bpp;
+}
+
+void rs__layers_surface(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay)
+{
+    const size_t w = p->w;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        row_bytes(p->sc + (size_t)r * w * 3, w, plane_at(L->surface, L->surface_stride, 4, r, ax, ay));
+    }
+}
+
+void rs__layers_ground(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay)
+{
+    const size_t w = p->w;
+    if (L->surface && !L->surface_unstyled) rs__layers_surface(p, L, ax, ay);
+    for (uint32_t r = 0; r < p->rows; r++) {
+        const uint16_t *q = p->q + (size_t)r * w;
+        const float *tc = p->tc + (size_t)r * w * 3;
+        if (L->coverage) memcpy(L->coverage + (size_t)(ay + r) * L->coverage_stride + ax, q, w * sizeof *q);
+        if (L->terrain) row_bytes(tc, w, plane_at(L->terrain, L->terrain_stride, 4, r, ax, ay));
+        if (!L->casing) continue;
+        uint8_t *o = plane_at(L->casing, L->casing_stride, 4, r, ax, ay);
+        const double *cas = p->cas ? p->cas + (size_t)r * w : NULL, *cov = p->cov + (size_t)r * w;
+        const float *lc = p->lcas ? p->lcas + (size_t)r * w * 4 : NULL;
+        if (!cas && !lc) {
+            memset(o, 0, w * 4);
+            continue;
+        }
+        for (size_t k = 0; k < w; k++) {
+            /* the casing's alpha and the ground T' the composite shows
+             * (none under a whole road pixel, as the composite) */
+            double a = 0, g[3];
+            if (q[k] != 65535u && cas) {
+                a = casing_share(cas[k], cov[k], p->cas_rgba[3]);
+                for (size_t ch = 0; ch < 3; ch++) {
+                    double t = tc[ch * w + k];
+                    g[ch] = t + (p->cas_rgba[ch] - t) * a;
+                }
+            } else if (q[k] != 65535u && lc && lc[3 * w + k] > 0) {
+                a = lc[3 * w + k];
+                for (size_t ch = 0; ch < 3; ch++) g[ch] = tc[ch * w + k] * (1.0f - lc[3 * w + k]) + lc[ch * w + k];
+            }
+            uint8_t a8 = to_byte(a * 255);
+            if (!(a > 0)) {
+                memset(o + 4 * k, 0, 4);
+                continue;
+            }
+            for (size_t ch = 0; ch < 3; ch++) o[4 * k + ch] = premul_byte(g[ch], to_byte(tc[ch * w + k]), a8);
+            o[4 * k + 3] = a8;
+        }
+    }
+}
+
+void rs__layers_paint(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay, const float *p0,
+                      const float *p1)
+{
+    const size_t w = p->w;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        const uint16_t *q = p->q + (size_t)r * w;
+        const float *sc = p->sc + (size_t)r * w * 3, *z = p0 + (size_t)r * w * 3, *o1 = p1 + (size_t)r * w * 3;
+        uint8_t *o = plane_at(L->paint, L->paint_stride, 4, r, ax, ay);
+        for (size_t k = 0; k < w; k++) {
+            /* painted over 0: the premultiplied colour; over 1: plus the
+             * transmittance (one per pixel: each layer blends all channels
+             * by one alpha; the mean of the three roundings) */
+            double tr = 0;
+            if (q[k] != 0)
+                for (size_t ch = 0; ch < 3; ch++) tr += (double)o1[ch * w + k] - z[ch * w + k];
+            tr /= 3;
+            double a = 1 - tr;
+            if (q[k] == 0 || !(a > 0)) {
+                memset(o + 4 * k, 0, 4);
+                continue;
+            }
+            uint8_t a8 = to_byte(a * 255);
+            for (size_t ch = 0; ch < 3; ch++) {
+                double s = sc[ch * w + k];
+                o[4 * k + ch] = premul_byte(s * tr + z[ch * w + k], to_byte(s), a8);
+            }
+            o[4 * k + 3] = a8;
+        }
     }
 }

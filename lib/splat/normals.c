@@ -22,15 +22,11 @@
 
 #define NM_COLS 1024u      /* columns of one piece */
 #define NM_PAINT 0.003     /* default paint height, metres */
+#define NM_FXT 64          /* column weights kept in a table: texels up to this */
 
-typedef struct nm_scratch {
-    double *cov, *ov, *paint, *lum; /* halo region: (rows + 2) x (cols + 2) */
-    uint16_t *q;
-    float *sc;                      /* halo region, 3 planes per row */
-    double *g;                      /* Horn gradients: 4 planes of ncol (x, y at rows crow, crow + 1) */
-} nm_scratch;
+typedef rs__nm_scratch nm_scratch;
 
-static void nm_free(rs_ctx *ctx, nm_scratch *b)
+void rs__nm_scratch_free(rs_ctx *ctx, rs__nm_scratch *b)
 {
     rs__free(ctx, b->cov);
     rs__free(ctx, b->ov);
@@ -39,6 +35,46 @@ static void nm_free(rs_ctx *ctx, nm_scratch *b)
     rs__free(ctx, b->q);
     rs__free(ctx, b->sc);
     rs__free(ctx, b->g);
+    memset(b, 0, sizeof *b);
+}
+
+/* The scratch of a piece of the normals of a window `cols` wide (at most
+ * NM_COLS used) and rows high: the halo region's pixels and the gradient
+ * columns. */
+static void nm_size(uint32_t cols, uint32_t rows, uint32_t T, size_t *npx, size_t *ncol)
+{
+    if (cols > NM_COLS) cols = NM_COLS;
+    *npx = ((size_t)cols + 2) * ((size_t)rows + 2);
+    *ncol = (size_t)cols / T + 3;
+}
+
+/* Allocate b (empty) for npx pixels and ncol columns; `paint`, `relief`:
+ * those planes too. */
+static rs_result nm_alloc(rs_ctx *ctx, nm_scratch *b, size_t npx, size_t ncol, int paint, int relief)
+{
+    b->cov = rs__alloc_array(ctx, npx, sizeof *b->cov);
+    b->ov = rs__alloc_array(ctx, npx, sizeof *b->ov);
+    b->q = rs__alloc_array(ctx, npx, sizeof *b->q);
+    b->sc = rs__alloc_array(ctx, npx * 3, sizeof *b->sc);
+    b->paint = paint ? rs__alloc_array(ctx, npx, sizeof *b->paint) : NULL;
+    b->lum = relief ? rs__alloc_array(ctx, npx, sizeof *b->lum) : NULL;
+    b->g = rs__alloc_array(ctx, ncol * 4, sizeof *b->g);
+    b->npx = npx;
+    b->ncol = ncol;
+    if (!b->cov || !b->ov || !b->q || !b->sc || (paint && !b->paint) || (relief && !b->lum) || !b->g) {
+        rs__nm_scratch_free(ctx, b);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for normal-map scratch (%zu pixels)", npx);
+    }
+    return RS_OK;
+}
+
+rs_result rs__nm_scratch_reserve(rs_ctx *ctx, const rs_splatter *s, uint32_t max_w, rs__nm_scratch *b)
+{
+    size_t npx, ncol;
+    nm_size(max_w, s->o.texels, s->o.texels, &npx, &ncol);
+    if (b->npx >= npx && b->ncol >= ncol) return RS_OK;
+    rs__nm_scratch_free(ctx, b);
+    return nm_alloc(ctx, b, npx, ncol, 1, 1);
 }
 
 /* Options with the defaults filled in, or RS_ERR_INVALID_ARG. */
@@ -192,9 +228,15 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
     if (rgb_stride / 3 < w)
         return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGB row stride %zu bytes, need %zu", rgb_stride,
                         (size_t)w * 3);
-    res = rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0);
+    res = rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0, NULL);
     if (!res) rs__ok(ctx);
     return res;
+}
+
+rs_result rs__normal_check(rs_ctx *ctx, const rs_normal_options *o)
+{
+    rs_normal_options d;
+    return nm_defaults(ctx, o, &d);
 }
 
 rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l)
@@ -240,7 +282,7 @@ static void light_pixel(const rs_splatter *s, const double n[3], double R, uint8
 
 rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
                           const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
-                          size_t rgba_stride)
+                          size_t rgba_stride, rs__nm_scratch *keep)
 {
     rs_normal_options o;
     rs_result res = nm_defaults(ctx, opts, &o);
@@ -255,20 +297,20 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     const double pix = s->texel_m;
     uint32_t cols = w < NM_COLS ? w : NM_COLS;
     uint32_t max_rows = T < h ? T : h;
-    size_t hw = (size_t)cols + 2, npx = hw * ((size_t)max_rows + 2), ncol = (size_t)cols / T + 3;
+    size_t npx, ncol;
+    nm_size(cols, max_rows, T, &npx, &ncol);
     nm_scratch b;
     memset(&b, 0, sizeof b);
-    b.cov = rs__alloc_array(ctx, npx, sizeof *b.cov);
-    b.ov = rs__alloc_array(ctx, npx, sizeof *b.ov);
-    b.q = rs__alloc_array(ctx, npx, sizeof *b.q);
-    b.sc = rs__alloc_array(ctx, npx * 3, sizeof *b.sc);
-    b.paint = paint ? rs__alloc_array(ctx, npx, sizeof *b.paint) : NULL;
-    b.lum = relief ? rs__alloc_array(ctx, npx, sizeof *b.lum) : NULL;
-    b.g = rs__alloc_array(ctx, ncol * 4, sizeof *b.g);
-    if (!b.cov || !b.ov || !b.q || !b.sc || (paint && !b.paint) || (relief && !b.lum) || !b.g) {
-        nm_free(ctx, &b);
-        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for normal-map scratch (%zu pixels)", npx);
+    if (keep && keep->npx >= npx && keep->ncol >= ncol) {
+        /* a workspace's (rs__nm_scratch_reserve: every plane) */
+        b = *keep;
+        ncol = b.ncol;
+    } else {
+        keep = NULL;
+        if ((res = nm_alloc(ctx, &b, npx, ncol, paint, relief)) != RS_OK) return res;
     }
+    double fxt[NM_FXT];
+    for (uint32_t t = 0; t < NM_FXT && t < T; t++) fxt[t] = (t + 0.5) / T;
     for (uint32_t y = y0; y < y0 + h;) {
         uint32_t crow = y / T, end = (crow + 1) * T;
         if (end > y0 + h) end = y0 + h;
@@ -304,9 +346,16 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                 double fy = ((py - crow * T) + 0.5) / T, gy_ = 1 - fy;
                 uint8_t *out = rgba ? rgba + (size_t)(py - y0) * rgba_stride + (size_t)(x - x0) * 4
                                     : rgb + (size_t)(py - y0) * rgb_stride + (size_t)(x - x0) * 3;
-                for (uint32_t k = 0; k < pw; k++) {
-                    uint32_t px = x + k, cc = px / T - c0;
-                    double fx = ((px - (px / T) * T) + 0.5) / T, gx_ = 1 - fx;
+                /* the column's cell and offset in it counted along (no
+                 * division per pixel), its weight from the table: the same
+                 * doubles as ((px mod T) + 0.5) / T */
+                uint32_t cc = x / T - c0, off = x % T;
+                for (uint32_t k = 0; k < pw; k++, off++) {
+                    if (off == T) {
+                        off = 0;
+                        cc++;
+                    }
+                    double fx = off < NM_FXT ? fxt[off] : (off + 0.5) / T, gx_ = 1 - fx;
                     double gx = (gx0[cc] * gx_ + gx0[cc + 1] * fx) * gy_ + (gx1[cc] * gx_ + gx1[cc + 1] * fx) * fy;
                     double gy = (gy0[cc] * gx_ + gy0[cc + 1] * fx) * gy_ + (gy1[cc] * gx_ + gy1[cc + 1] * fx) * fy;
                     size_t at = (size_t)(r + oy) * rw + k + ox;
@@ -331,8 +380,9 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
                      * height field's normal is (-dz/dx, -dz/dy, 1) in
                      * the map frame, so Y = +dz/dy (y down) */
                     double m = fabs(gx) > fabs(gy) ? fabs(gx) : fabs(gy);
-                    if (!(m > 1)) m = 1;
-                    double nx = -gx / m, ny = gy / m, nz = 1 / m;
+                    /* (x / 1 is x: no division for the slopes up to 45 degrees) */
+                    double nx = -gx, ny = gy, nz = 1;
+                    if (m > 1) nx = -gx / m, ny = gy / m, nz = 1 / m;
                     double len = sqrt(nx * nx + ny * ny + nz * nz);
                     if (!(len > 0 && len < HUGE_VAL)) nx = 0, ny = 0, nz = len = 1;
                     if (rgba) {
@@ -349,6 +399,6 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
         }
         y = end;
     }
-    nm_free(ctx, &b);
+    if (!keep) rs__nm_scratch_free(ctx, &b);
     return RS_OK;
 }

@@ -35,6 +35,13 @@ static void casing_pixel(const rs__styling *st, double pix, const rs__piece *p, 
     if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) return;
     const float *col = st->colour + 16 * (size_t)rp.road + 12;
     float a = (float)(share > 1 ? 1 : share) * col[3], *tc = p->tc + (size_t)r * p->w * 3;
+    if (p->lcas) {
+        /* layers: premultiplied, T left bare (T' = T (1 - a) + col a) */
+        float *lc = p->lcas + (size_t)r * p->w * 4 + k;
+        for (int ch = 0; ch < 3; ch++) lc[(size_t)ch * p->w] = col[ch] * a;
+        lc[3 * (size_t)p->w] = a;
+        return;
+    }
     for (int ch = 0; ch < 3; ch++) {
         float *v = tc + (size_t)ch * p->w + k;
         *v = *v * (1.0f - a) + col[ch] * a;
@@ -119,13 +126,37 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
     }
 }
 
-void rs__overlays(const rs_splatter *s, rs__piece *p)
+void rs__overlays_casings(const rs_splatter *s, rs__piece *p)
 {
     const rs__styling *st = s->grid->styling;
     p->cas = NULL;
     if (p->w == 0 || p->rows == 0) return;
     if (st && st->casing) casings(s, st, s->texel_m, p);
-    if (st && st->any_surface && p->road_pixels) surfaces(st, s->texel_m, p);
-    if (st && st->lines && p->road_pixels) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, p->sc, (size_t)p->w * 3, p->ls);
-    if (s->grid->markings && p->road_pixels) rs__markings_paint(s->grid->markings, p);
+}
+
+void rs__overlays_surfaces(const rs_splatter *s, rs__piece *p)
+{
+    const rs__styling *st = s->grid->styling;
+    if (st && st->any_surface && p->road_pixels && p->w && p->rows) surfaces(st, s->texel_m, p);
+}
+
+void rs__overlays_paint(const rs_splatter *s, rs__piece *p, float *rgb)
+{
+    const rs__styling *st = s->grid->styling;
+    if (!p->road_pixels || p->w == 0 || p->rows == 0) return;
+    if (st && st->lines) rs__linesym_paint(st->lines, p->x0, p->y0, p->w, p->rows, rgb, (size_t)p->w * 3, p->ls);
+    if (s->grid->markings) {
+        /* the markings paint p->sc */
+        float *sc = p->sc;
+        p->sc = rgb;
+        rs__markings_paint(s->grid->markings, p);
+        p->sc = sc;
+    }
+}
+
+void rs__overlays(const rs_splatter *s, rs__piece *p)
+{
+    rs__overlays_casings(s, p);
+    rs__overlays_surfaces(s, p);
+    rs__overlays_paint(s, p, p->sc);
 }

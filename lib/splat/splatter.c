@@ -170,6 +170,8 @@ typedef struct scratch {
     uint16_t *q;
     uint32_t *ti;
     float *tc, *sc, *trow0, *trow1;
+    float *lx; /* layers, when the grid has styles or markings: casings of several colours
+                  (4 planes), then the paint over 1 (3 planes); npx x 4 */
 } scratch;
 
 /* Element counts of a scratch set: for one window (w, h), or for every
@@ -209,9 +211,16 @@ static void scratch_free(rs_ctx *ctx, scratch *b)
     rs__free(ctx, b->sc);
     rs__free(ctx, b->trow0);
     rs__free(ctx, b->trow1);
+    rs__free(ctx, b->lx);
 }
 
-static rs_result scratch_alloc(rs_ctx *ctx, const rs_splatter *s, const scratch_size *z, scratch *b)
+/* The layers need the extra planes (casings, paint) only where there are any. */
+static int layer_planes(const rs_splatter *s)
+{
+    return s->grid->styling != NULL || s->grid->markings != NULL;
+}
+
+static rs_result scratch_alloc(rs_ctx *ctx, const rs_splatter *s, const scratch_size *z, int layers, scratch *b)
 {
     const int styled = s->grid->styling != NULL;
     b->cov = rs__alloc_array(ctx, z->npx, sizeof *b->cov);
@@ -226,7 +235,9 @@ static rs_result scratch_alloc(rs_ctx *ctx, const rs_splatter *s, const scratch_
     b->sc = rs__calloc(ctx, z->npx * 3, sizeof *b->sc);
     b->trow0 = rs__alloc_array(ctx, z->ncol * 3, sizeof *b->trow0);
     b->trow1 = rs__alloc_array(ctx, z->ncol * 3, sizeof *b->trow1);
-    if (!b->cov || (styled && (!b->ov || !b->ls)) || !b->hx || !b->tf || !b->q || !b->ti || !b->tc || !b->sc ||
+    layers = layers && layer_planes(s);
+    b->lx = layers ? rs__alloc_array(ctx, z->npx * 4, sizeof *b->lx) : NULL;
+    if ((layers && !b->lx) || !b->cov || (styled && (!b->ov || !b->ls)) || !b->hx || !b->tf || !b->q || !b->ti || !b->tc || !b->sc ||
         !b->trow0 || !b->trow1) {
         scratch_free(ctx, b);
         memset(b, 0, sizeof *b);
@@ -239,7 +250,9 @@ struct rs_splat_workspace {
     const rs_splatter *s;
     uint32_t max_w;
     scratch b;
-    size_t bytes;
+    rs__nm_scratch nm; /* the normals' (lit windows, normal planes): from the first call that needs them */
+    size_t npx;        /* pixels of a piece */
+    size_t bytes;      /* of b (but b.lx, the layers', from the first call with layers) */
 };
 
 static double now(const rs_splat_profile *pf)
@@ -247,11 +260,43 @@ static double now(const rs_splat_profile *pf)
     return pf && pf->clock_ms ? pf->clock_ms(pf->clock_user) : 0;
 }
 
+/* The layers of one piece (rs_splat_layers_window): the stages up to the
+ * paint, with T kept bare (casings apart) and both colours everywhere,
+ * then the planes; the paint painted over 0 (into T's scratch, written
+ * by then) and over 1 (lx). */
+static void layers_piece(const rs_splatter *s, const scratch *b, rs__piece *p, const rs_splat_layers *L, uint32_t ax,
+                         uint32_t ay)
+{
+    const size_t w = p->w, n = (size_t)p->rows * w;
+    p->all = 1;
+    p->lcas = b->lx;
+    rs__surface(s, p);
+    if (b->lx)
+        for (uint32_t r = 0; r < p->rows; r++) memset(b->lx + (size_t)r * w * 4 + 3 * w, 0, w * sizeof *b->lx);
+    rs__overlays_casings(s, p);
+    if (L->surface && L->surface_unstyled) rs__layers_surface(p, L, ax, ay);
+    rs__overlays_surfaces(s, p);
+    rs__layers_ground(p, L, ax, ay);
+    if (!L->paint) return;
+    if (b->lx && p->road_pixels) {
+        for (size_t i = 0; i < 3 * n; i++) {
+            p->tc[i] = 0;
+            b->lx[i] = 1;
+        }
+        rs__overlays_paint(s, p, p->tc);
+        rs__overlays_paint(s, p, b->lx);
+        rs__layers_paint(p, L, ax, ay, p->tc, b->lx);
+    } else {
+        for (uint32_t r = 0; r < p->rows; r++) memset(L->paint + (size_t)(ay + r) * L->paint_stride + (size_t)ax * 4, 0, w * 4);
+    }
+}
+
 /* The window through the stages with scratch b, which holds at least
- * scratch_size_of(s, w, h) of everything. */
+ * scratch_size_of(s, w, h) of everything: the colour into rgba (and
+ * weight), or the layers L (rgba NULL). */
 static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint32_t x0, uint32_t y0, uint32_t w,
                            uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
-                           rs_splat_profile *profile)
+                           const rs_splat_layers *L, rs__nm_scratch *nm, rs_splat_profile *profile)
 {
     const scratch b = *bp;
     const uint32_t T = s->o.texels;
@@ -303,6 +348,18 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
             else rs__coverage_alphamap(s, &p);
             rs__coverage_quantise(&p);
             double t1 = now(profile);
+            if (L) {
+                layers_piece(s, &b, &p, L, p.x0 - x0, p.y0 - y0);
+                if (profile) {
+                    profile->composite_ms += now(profile) - t1;
+                    profile->pixels += (uint64_t)p.rows * p.w;
+                    profile->road_pixels += p.road_pixels;
+                    profile->mark_tests += p.mark_tests;
+                    profile->mark_pixels += p.mark_pixels;
+                }
+                p.mark_tests = p.mark_pixels = 0;
+                continue;
+            }
             rs__surface(s, &p);
             double t2 = now(profile);
             rs__overlays(s, &p);
@@ -323,11 +380,17 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
             }
             p.mark_tests = p.mark_pixels = 0;
         }
-        if (s->o.lighting.enable) {
+        if (L && L->normal) {
+            rs_result nr = rs__normals_run(ctx, s, x0, y, w, p.rows,
+                                           L->normal_options ? L->normal_options : &s->o.lighting.normal,
+                                           L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0, nm);
+            if (nr) return nr;
+        }
+        if (!L && s->o.lighting.enable) {
             /* these rows of the window, lit by their normals (the normals of
              * a pixel do not depend on the window: same bytes for any cut) */
             rs_result lr = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
-                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride);
+                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride, nm);
             if (lr) return lr;
         }
         y += p.rows;
@@ -362,8 +425,8 @@ rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     if (r) return r;
     scratch_size z = scratch_size_of(s, w, h);
     scratch b;
-    if ((r = scratch_alloc(ctx, s, &z, &b)) != RS_OK) return r;
-    r = splat_run(ctx, s, &b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, profile);
+    if ((r = scratch_alloc(ctx, s, &z, 0, &b)) != RS_OK) return r;
+    r = splat_run(ctx, s, &b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, NULL, NULL, profile);
     scratch_free(ctx, &b);
     return r;
 }
@@ -380,13 +443,14 @@ rs_result rs_splat_workspace_create(rs_ctx *ctx, const rs_splatter *s, uint32_t 
     rs_splat_workspace *ws = rs__calloc(ctx, 1, sizeof *ws);
     if (!ws) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for a splat workspace");
     scratch_size z = scratch_size_of(s, max_width, UINT32_MAX);
-    rs_result r = scratch_alloc(ctx, s, &z, &ws->b);
+    rs_result r = scratch_alloc(ctx, s, &z, 0, &ws->b);
     if (r) {
         rs__free(ctx, ws);
         return r;
     }
     ws->s = s;
     ws->max_w = max_width;
+    ws->npx = z.npx;
     ws->bytes = sizeof *ws + z.npx * (sizeof(double) * (s->grid->styling ? 2 : 1) + sizeof(uint16_t) + 6 * sizeof(float)) +
                 z.cols * 6 * sizeof(double) + z.nax * 2 * (sizeof(double) + sizeof(uint32_t)) +
                 z.ncol * 6 * sizeof(float) +
@@ -400,10 +464,27 @@ void rs_splat_workspace_free(rs_ctx *ctx, rs_splat_workspace *ws)
 {
     if (!ctx || !ws) return;
     scratch_free(ctx, &ws->b);
+    rs__nm_scratch_free(ctx, &ws->nm);
     rs__free(ctx, ws);
 }
 
-size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws) { return ws ? ws->bytes : 0; }
+size_t rs_splat_workspace_bytes(const rs_splat_workspace *ws)
+{
+    if (!ws) return 0;
+    const rs__nm_scratch *n = &ws->nm;
+    return ws->bytes + (ws->b.lx ? ws->npx * 4 * sizeof(float) : 0) +
+           n->npx * (4 * sizeof(double) + sizeof(uint16_t) + 3 * sizeof(float)) + n->ncol * 4 * sizeof(double);
+}
+
+/* The workspace's normal scratch, reserved when this call needs normals. */
+static rs_result ws_normals(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, int need, rs__nm_scratch **nm)
+{
+    *nm = NULL;
+    if (!need) return RS_OK;
+    rs_result r = rs__nm_scratch_reserve(ctx, s, ws->max_w, &ws->nm);
+    if (!r) *nm = &ws->nm;
+    return r;
+}
 
 rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0, uint32_t y0,
                              uint32_t w, uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight,
@@ -416,7 +497,54 @@ rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspa
     if (r) return r;
     if (w > ws->max_w)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
-    return splat_run(ctx, s, &ws->b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, profile);
+    rs__nm_scratch *nm;
+    if ((r = ws_normals(ctx, s, ws, s->o.lighting.enable, &nm)) != RS_OK) return r;
+    return splat_run(ctx, s, &ws->b, x0, y0, w, h, rgba, rgba_stride, weight, weight_stride, NULL, nm, profile);
+}
+
+static rs_result check_plane(rs_ctx *ctx, const void *plane, size_t stride, size_t need, const char *what)
+{
+    if (plane && stride < need)
+        return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "%s row stride %zu, need %zu", what, stride, need);
+    return RS_OK;
+}
+
+rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0, uint32_t y0,
+                                 uint32_t w, uint32_t h, const rs_splat_layers *L, rs_splat_profile *profile)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!s || !L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_layers_window");
+    if (ws && ws->s != s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "the workspace was made for another splatter");
+    if (!L->terrain && !L->casing && !L->surface && !L->coverage && !L->paint && !L->normal)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splat_layers_window: no output plane");
+    rs_result r = check_window(ctx, s, x0, y0, w, h, (size_t)w * 4, NULL, 0);
+    if (!r) r = check_plane(ctx, L->terrain, L->terrain_stride, (size_t)w * 4, "terrain plane");
+    if (!r) r = check_plane(ctx, L->casing, L->casing_stride, (size_t)w * 4, "casing plane");
+    if (!r) r = check_plane(ctx, L->surface, L->surface_stride, (size_t)w * 4, "surface plane");
+    if (!r) r = check_plane(ctx, L->coverage, L->coverage_stride, w, "coverage plane (values)");
+    if (!r) r = check_plane(ctx, L->paint, L->paint_stride, (size_t)w * 4, "paint plane");
+    if (!r) r = check_plane(ctx, L->normal, L->normal_stride, (size_t)w * 3, "normal plane");
+    if (!r && L->normal) r = rs__normal_check(ctx, L->normal_options ? L->normal_options : &s->o.lighting.normal);
+    if (r) return r;
+    if (ws) {
+        if (w > ws->max_w)
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "window width %u exceeds the workspace's %u", w, ws->max_w);
+        rs__nm_scratch *nm;
+        if ((r = ws_normals(ctx, s, ws, L->normal != NULL, &nm)) != RS_OK) return r;
+        if (layer_planes(s) && !ws->b.lx) {
+            /* the layers' planes, once (a workspace that never serves
+             * layers does without) */
+            ws->b.lx = rs__alloc_array(ctx, ws->npx * 4, sizeof *ws->b.lx);
+            if (!ws->b.lx) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the layers' scratch");
+        }
+        return splat_run(ctx, s, &ws->b, x0, y0, w, h, NULL, 0, NULL, 0, L, nm, profile);
+    }
+    scratch_size z = scratch_size_of(s, w, h);
+    scratch b;
+    if ((r = scratch_alloc(ctx, s, &z, 1, &b)) != RS_OK) return r;
+    r = splat_run(ctx, s, &b, x0, y0, w, h, NULL, 0, NULL, 0, L, NULL, profile);
+    scratch_free(ctx, &b);
+    return r;
 }
 
 rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,

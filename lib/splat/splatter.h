@@ -81,6 +81,13 @@ typedef struct rs__piece {
      * coverage C (rows x w, NULL: none) and the colour */
     const double *cas;
     float cas_rgba[4];
+    /* layers (rs_splat_layers_window): `all` makes the surface stage colour
+     * every pixel with both T and S (the planes hold them everywhere);
+     * `lcas`, when not NULL, takes casings of several colours instead of
+     * T (each row 4 planes of w: premultiplied R, G, B and alpha; the
+     * caller zeroes the alphas), so T stays the bare terrain */
+    int all;
+    float *lcas;
 } rs__piece;
 
 /* Stages. */
@@ -91,12 +98,43 @@ void rs__coverage_analytic(const rs_splatter *s, rs__piece *p);
 void rs__coverage_quantise(rs__piece *p);
 void rs__surface(const rs_splatter *s, rs__piece *p);
 void rs__overlays(const rs_splatter *s, rs__piece *p);
+/* rs__overlays in its three parts: casings (onto T, or p->cas for the
+ * composite, or p->lcas), the styles' surfaces (onto S), then the paint of
+ * line symbols and markings onto `rgb` (planar rows as S; S itself for
+ * rs__overlays). */
+void rs__overlays_casings(const rs_splatter *s, rs__piece *p);
+void rs__overlays_surfaces(const rs_splatter *s, rs__piece *p);
+void rs__overlays_paint(const rs_splatter *s, rs__piece *p, float *rgb);
+/* The normals' scratch (lib/splat/normals.c): a workspace keeps one,
+ * reserved (rs__nm_scratch_reserve: for windows up to max_w wide) by its
+ * first call that needs normals, so later calls allocate nothing. */
+typedef struct rs__nm_scratch {
+    double *cov, *ov, *paint, *lum; /* halo region: (rows + 2) x (cols + 2) */
+    uint16_t *q;
+    float *sc;                      /* halo region, 3 planes per row */
+    double *g;                      /* Horn gradients: 4 planes of ncol (x, y at rows crow, crow + 1) */
+    size_t npx, ncol;               /* capacity */
+} rs__nm_scratch;
+rs_result rs__nm_scratch_reserve(rs_ctx *ctx, const rs_splatter *s, uint32_t max_w, rs__nm_scratch *b);
+void rs__nm_scratch_free(rs_ctx *ctx, rs__nm_scratch *b);
 /* Normal maps (lib/splat/normals.c): the normals of a window (options checked),
  * encoded into rgb (RGB8) or, when rgba is not NULL, lighting the colours
- * already there (o.lighting). */
+ * already there (o.lighting); scratch from `keep` when it holds enough
+ * (NULL: allocated for the call). */
 rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
                           const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
-                          size_t rgba_stride);
+                          size_t rgba_stride, rs__nm_scratch *keep);
 rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l);
+rs_result rs__normal_check(rs_ctx *ctx, const rs_normal_options *o);
 void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride);
+/* The layers of a piece (lib/splat/composite.c; `at` = the piece's offset
+ * in the window, pixels): rs__layers_ground after the casings and
+ * surfaces (terrain, casing, coverage; the surface plane unless
+ * `surface_early`, which writes it from S before the styles' surfaces),
+ * rs__layers_paint after painting over 0 into p0 and over 1 into p1 (S in
+ * p->sc is the surface under the paint). */
+void rs__layers_surface(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay);
+void rs__layers_ground(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay);
+void rs__layers_paint(const rs__piece *p, const rs_splat_layers *L, uint32_t ax, uint32_t ay, const float *p0,
+                      const float *p1);
 #endif

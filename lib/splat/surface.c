@@ -314,8 +314,8 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
     const uint32_t *cx = p->tix[road] + off, *cx1 = cx + ww;
     const double *bu = p->twx[road] + off, *au = bu + ww;
     /* pixels of no interest: pure road for the terrain, pure terrain for
-     * the road; skipped two at a time */
-    const uint16_t skip = road ? 0 : 65535u;
+     * the road; skipped two at a time (none for the layers: p->all) */
+    const int32_t skip = p->all ? -1 : (road ? 0 : 65535);
     const size_t W4 = 4 * (size_t)img->width;
     for (uint32_t r = 0; r < p->rows; r++) {
         const uint16_t *q = p->q + (size_t)r * w;
@@ -354,19 +354,35 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
 }
 
 /* Procedural asphalt: dark grey, fine grain per texel plus a soft mottle on
- * a 4-texel lattice; keyed to texel indices, so deterministic. */
-static void asphalt(uint32_t px, uint32_t py, float *rgb, size_t plane)
+ * a 4-texel lattice; keyed to texel indices, so deterministic. One row of
+ * n pixels from column px0 (wrapping as uint32), those with road (q > 0)
+ * or all; the lattice's four hashes once per lattice column. */
+static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, uint32_t n, float *rgb, size_t plane)
 {
-    double grain = (double)(hash2(px, py) & 0xFFFF) / 65535.0 - 0.5;
-    uint32_t lx = px >> 2, ly = py >> 2;
-    double fx = (px & 3) / 4.0, fy = (py & 3) / 4.0;
-    double n00 = (hash2(lx, ly + 7919u) & 0xFF) / 255.0, n01 = (hash2(lx + 1, ly + 7919u) & 0xFF) / 255.0;
-    double n10 = (hash2(lx, ly + 7920u) & 0xFF) / 255.0, n11 = (hash2(lx + 1, ly + 7920u) & 0xFF) / 255.0;
-    double mottle = (n00 * (1 - fx) + n01 * fx) * (1 - fy) + (n10 * (1 - fx) + n11 * fx) * fy - 0.5;
-    double v = 70 + 18 * grain + 10 * mottle;
-    rgb[0] = (float)v;
-    rgb[plane] = (float)v;
-    rgb[2 * plane] = (float)(v + 3);
+    const uint32_t ly = py >> 2;
+    const double fy = (py & 3) / 4.0;
+    uint32_t at = 0;
+    double n00 = 0, n01 = 0, n10 = 0, n11 = 0;
+    int have = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        if (!all && q[k] == 0) continue;
+        const uint32_t px = px0 + k, lx = px >> 2;
+        if (!have || lx != at) {
+            n00 = (hash2(lx, ly + 7919u) & 0xFF) / 255.0;
+            n01 = (hash2(lx + 1, ly + 7919u) & 0xFF) / 255.0;
+            n10 = (hash2(lx, ly + 7920u) & 0xFF) / 255.0;
+            n11 = (hash2(lx + 1, ly + 7920u) & 0xFF) / 255.0;
+            at = lx;
+            have = 1;
+        }
+        double grain = (double)(hash2(px, py) & 0xFFFF) / 65535.0 - 0.5;
+        double fx = (px & 3) / 4.0;
+        double mottle = (n00 * (1 - fx) + n01 * fx) * (1 - fy) + (n10 * (1 - fx) + n11 * fx) * fy - 0.5;
+        double v = 70 + 18 * grain + 10 * mottle;
+        rgb[k] = (float)v;
+        rgb[plane + k] = (float)v;
+        rgb[2 * plane + k] = (float)(v + 3);
+    }
 }
 
 void rs__surface(const rs_splatter *s, rs__piece *p)
@@ -374,7 +390,7 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     const uint32_t T = s->o.texels;
     const rs_surface_options *f = &s->o.surface;
     const size_t n = (size_t)p->rows * p->w;
-    int need_terrain = 0, need_road = p->road_pixels != 0;
+    int need_terrain = p->all, need_road = p->all || p->road_pixels != 0;
     for (size_t i = 0; i < n && !need_terrain; i++) need_terrain = p->q[i] < 65535u;
     if (need_terrain && f->terrain_texture) texture_piece(s, p, f->terrain_texture, 0, p->tc);
     else if (need_terrain) {
@@ -427,11 +443,7 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     }
     /* the grain keyed to the map's pixel grid: (uint32) wraps the same in every tile */
     const uint32_t ox = (uint32_t)(uint64_t)f->texel_offset_x, oy = (uint32_t)(uint64_t)f->texel_offset_y;
-    for (uint32_t r = 0; r < p->rows; r++) {
-        uint32_t py = p->y0 + r + oy;
-        const uint16_t *q = p->q + (size_t)r * p->w;
-        float *sc = p->sc + (size_t)r * p->w * 3;
-        for (uint32_t k = 0; k < p->w; k++)
-            if (q[k] > 0) asphalt(p->x0 + k + ox, py, sc + k, p->w);
-    }
+    for (uint32_t r = 0; r < p->rows; r++)
+        asphalt_row(p->x0 + ox, p->y0 + r + oy, p->q + (size_t)r * p->w, p->all, p->w, p->sc + (size_t)r * p->w * 3,
+                    p->w);
 }
