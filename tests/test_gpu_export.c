@@ -54,54 +54,54 @@ static void test_scene(void)
     rs_gpu_scene *g = NULL;
     CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
     if (!g) { rs_roads_free(ctx, roads); rs_dem_free(ctx, dem); rs_ctx_free(ctx); return; }
-    CHECK_EQ_INT(g->nroads, 4);
-    CHECK_EQ_INT(g->nseg, 2 + 1 + 1 + 2);
-    CHECK_NEAR(g->map_w, 80, 0);
-    CHECK_NEAR(g->cell, 2, 0);
-    CHECK(g->gw == 42 && g->gh == 42);
+    CHECK_EQ_INT(gsv_of(g).nroads, 4);
+    CHECK_EQ_INT(gsv_of(g).nseg, 2 + 1 + 1 + 2);
+    CHECK_NEAR(gsv_of(g).map_w, 80, 0);
+    CHECK_NEAR(gsv_of(g).cell, 2, 0);
+    CHECK(gsv_of(g).gw == 42 && gsv_of(g).gh == 42);
     /* segments: end points, s, road, flags */
-    const float *s = g->seg;
+    const float *s = gsv_of(g).seg;
     CHECK(s[0] == 0 && s[1] == 40 && s[2] == 20 && s[3] == 40 && s[4] == 5 && s[5] == 0 && s[6] == 0 &&
           s[7] == RS_GPU_SEG_FIRST);
     s += RS_GPU_SEG_FLOATS;
     CHECK(s[0] == 20 && s[5] == 20 && s[6] == 0 && s[7] == RS_GPU_SEG_LAST);
-    s = g->seg + 4 * RS_GPU_SEG_FLOATS;
+    s = gsv_of(g).seg + 4 * RS_GPU_SEG_FLOATS;
     CHECK(s[6] == 3 && s[4] == 1.5f && s[7] == RS_GPU_SEG_FIRST);
     CHECK_NEAR(s[RS_GPU_SEG_FLOATS + 5], hypot(10, 7), 1e-5);
     CHECK_NEAR(s[9], hypot(10, 7), 1e-5);
     CHECK_NEAR(s[10], 10 / hypot(10, 7), 1e-6);
     CHECK(s[8] == 0);
-    CHECK(g->seg[8] == (float)g->road[2]);
+    CHECK(gsv_of(g).seg[8] == (float)gsv_of(g).road[2]);
     /* the index: per cell ascending, and complete: a segment within its half
      * width + casing + reach of a cell's centre is listed there */
     int complete = 1, ascending = 1;
-    for (uint32_t j = 0; j < g->gh; j++)
-        for (uint32_t i = 0; i < g->gw; i++) {
-            size_t c = (size_t)j * g->gw + i;
-            double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
-            for (uint32_t e = g->cell_start[c]; e + 1 < g->cell_start[c + 1]; e++)
-                ascending &= g->cell_seg[e] < g->cell_seg[e + 1];
-            for (size_t k = 0; k < g->nseg; k++) {
-                const float *q = g->seg + RS_GPU_SEG_FLOATS * k;
-                double R = q[4] + g->road[RS_GPU_ROAD_FLOATS * (size_t)q[6] + 2] + g->reach;
+    for (uint32_t j = 0; j < gsv_of(g).gh; j++)
+        for (uint32_t i = 0; i < gsv_of(g).gw; i++) {
+            size_t c = (size_t)j * gsv_of(g).gw + i;
+            double cx = gsv_of(g).x0 + (i + 0.5) * gsv_of(g).cell, cy = gsv_of(g).y0 + (j + 0.5) * gsv_of(g).cell;
+            for (uint32_t e = gsv_of(g).cell_start[c]; e + 1 < gsv_of(g).cell_start[c + 1]; e++)
+                ascending &= gsv_of(g).cell_seg[e] < gsv_of(g).cell_seg[e + 1];
+            for (size_t k = 0; k < gsv_of(g).nseg; k++) {
+                const float *q = gsv_of(g).seg + RS_GPU_SEG_FLOATS * k;
+                double R = q[4] + gsv_of(g).road[RS_GPU_ROAD_FLOATS * (size_t)q[6] + 2] + gsv_of(g).reach;
                 if (seg_dist(q, cx, cy) > R) continue;
                 int found = 0;
-                for (uint32_t e = g->cell_start[c]; e < g->cell_start[c + 1]; e++) found |= g->cell_seg[e] == k;
+                for (uint32_t e = gsv_of(g).cell_start[c]; e < gsv_of(g).cell_start[c + 1]; e++) found |= gsv_of(g).cell_seg[e] == k;
                 complete &= found;
             }
         }
     CHECK(complete && ascending);
     CHECK(gpu_scene_check(g) == NULL);
-    CHECK(g->nseg_entries == g->cell_start[(size_t)g->gw * g->gh]);
+    CHECK(gsv_of(g).nseg_entries == gsv_of(g).cell_start[(size_t)gsv_of(g).gw * gsv_of(g).gh]);
     /* styles: as rs_road_style resolves them */
     for (size_t i = 0; i < 4; i++) {
         rs_style st;
         CHECK(rs_road_style(ctx, roads, i, NULL, RS_PROFILE_RMS, &st) == RS_OK);
-        const float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+        const float *rd = gsv_of(g).road + RS_GPU_ROAD_FLOATS * i;
         CHECK(rd[0] == (float)st.surface && rd[2] == (float)st.casing_width && rd[4] == (float)st.line_count);
         CHECK(rd[20] == st.casing.r && rd[23] == st.casing.a / 255.0f);
         for (uint32_t j = 0; j < st.line_count; j++) {
-            const float *b = g->band + RS_GPU_BAND_FLOATS * ((size_t)rd[3] + j);
+            const float *b = gsv_of(g).band + RS_GPU_BAND_FLOATS * ((size_t)rd[3] + j);
             double period = 0;
             for (uint32_t d = 0; d < st.line[j].dash_count; d++) period += st.line[j].dash[d];
             CHECK(b[0] == (float)st.line[j].offset && b[1] == (float)st.line[j].width &&
@@ -109,52 +109,52 @@ static void test_scene(void)
             CHECK_NEAR(b[3], period, 1e-5);
         }
     }
-    CHECK(g->road[4] > 0); /* a primary road has lines */
+    CHECK(gsv_of(g).road[4] > 0); /* a primary road has lines */
     {
         rs_style st;
         rs_road_style(ctx, roads, 0, NULL, RS_PROFILE_RMS, &st);
         double reach = 0;
         for (uint32_t j = 0; j < st.line_count; j++)
             reach = fmax(reach, fabs(st.line[j].offset) + 0.5 * st.line[j].width);
-        CHECK_NEAR(g->road[7], reach, 1e-5);
-        CHECK(g->road[3 * RS_GPU_ROAD_FLOATS + 7] == 0);
+        CHECK_NEAR(gsv_of(g).road[7], reach, 1e-5);
+        CHECK(gsv_of(g).road[3 * RS_GPU_ROAD_FLOATS + 7] == 0);
     }
-    CHECK(g->road[3 * RS_GPU_ROAD_FLOATS + 4] == 0 && g->road[3 * RS_GPU_ROAD_FLOATS + 0] == 0); /* unstyled */
+    CHECK(gsv_of(g).road[3 * RS_GPU_ROAD_FLOATS + 4] == 0 && gsv_of(g).road[3 * RS_GPU_ROAD_FLOATS + 0] == 0); /* unstyled */
     /* continuations: main_w's end and main_e's end meet head on; north meets them at right angles.
      * main_e runs against the stroke it forms with main_w: its points are exported last to first
      * with the stroke's arc length (40 .. 80), so its start is where main_w ends */
-    CHECK(g->road[6] == 1 && g->road[RS_GPU_ROAD_FLOATS + 5] == 0 && g->road[RS_GPU_ROAD_FLOATS + 6] == -1);
-    CHECK(g->road[5] == -1 && g->road[2 * RS_GPU_ROAD_FLOATS + 6] == -1);
+    CHECK(gsv_of(g).road[6] == 1 && gsv_of(g).road[RS_GPU_ROAD_FLOATS + 5] == 0 && gsv_of(g).road[RS_GPU_ROAD_FLOATS + 6] == -1);
+    CHECK(gsv_of(g).road[5] == -1 && gsv_of(g).road[2 * RS_GPU_ROAD_FLOATS + 6] == -1);
     {
-        const float *e = g->seg + 2 * RS_GPU_SEG_FLOATS;
+        const float *e = gsv_of(g).seg + 2 * RS_GPU_SEG_FLOATS;
         CHECK(e[6] == 1 && e[0] == 40 && e[2] == 80 && e[5] == 40 && e[10] == 1);
     }
     /* markings: the two explicit ones first, then the automatic ones */
-    CHECK(g->nmarks >= 3);
-    CHECK(g->mark[0] == 0 && g->mark[2] == 8 && g->mark[3] == -2.5f && g->mark[4] == 1.5f && g->mark[5] == 1 &&
-          g->mark[6] == 0);
-    CHECK(g->mark[RS_GPU_MARK_FLOATS] == 2 && g->mark[RS_GPU_MARK_FLOATS + 6] == 1);
+    CHECK(gsv_of(g).nmarks >= 3);
+    CHECK(gsv_of(g).mark[0] == 0 && gsv_of(g).mark[2] == 8 && gsv_of(g).mark[3] == -2.5f && gsv_of(g).mark[4] == 1.5f && gsv_of(g).mark[5] == 1 &&
+          gsv_of(g).mark[6] == 0);
+    CHECK(gsv_of(g).mark[RS_GPU_MARK_FLOATS] == 2 && gsv_of(g).mark[RS_GPU_MARK_FLOATS + 6] == 1);
     /* the marking's cells include the cell at its centre: main_w runs along y = 40 eastwards, t = -2.5 is south */
     {
-        uint32_t i = (uint32_t)floor((8 - g->x0) / g->cell), j = (uint32_t)floor((42.5 - g->y0) / g->cell);
-        size_t c = (size_t)j * g->gw + i;
+        uint32_t i = (uint32_t)floor((8 - gsv_of(g).x0) / gsv_of(g).cell), j = (uint32_t)floor((42.5 - gsv_of(g).y0) / gsv_of(g).cell);
+        size_t c = (size_t)j * gsv_of(g).gw + i;
         int found = 0;
-        for (uint32_t e = g->mark_start[c]; e < g->mark_start[c + 1]; e++) found |= g->mark_ids[e] == 0;
+        for (uint32_t e = gsv_of(g).mark_start[c]; e < gsv_of(g).mark_start[c + 1]; e++) found |= gsv_of(g).mark_ids[e] == 0;
         CHECK(found);
     }
     /* the atlas: every type's levels halve, texels inside atlas_px */
     rs_atlas *atlas = NULL;
     CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
-    CHECK_EQ_INT(g->ntypes, rs_atlas_count(atlas));
+    CHECK_EQ_INT(gsv_of(g).ntypes, rs_atlas_count(atlas));
     int levels_ok = 1;
-    for (size_t t = 0; t < g->ntypes; t++) {
+    for (size_t t = 0; t < gsv_of(g).ntypes; t++) {
         uint32_t w, h;
         rs_atlas_get(atlas, t, NULL, NULL, NULL, &w, &h);
-        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
-        levels_ok &= L[1] == w && L[2] == h && g->types[RS_GPU_TYPE_INTS * t + 1] >= 1;
-        for (uint32_t l = 0; l < g->types[RS_GPU_TYPE_INTS * t + 1]; l++) {
+        const uint32_t *L = gsv_of(g).levels + RS_GPU_LEVEL_INTS * gsv_of(g).types[RS_GPU_TYPE_INTS * t];
+        levels_ok &= L[1] == w && L[2] == h && gsv_of(g).types[RS_GPU_TYPE_INTS * t + 1] >= 1;
+        for (uint32_t l = 0; l < gsv_of(g).types[RS_GPU_TYPE_INTS * t + 1]; l++) {
             const uint32_t *M = L + RS_GPU_LEVEL_INTS * l;
-            levels_ok &= (size_t)M[0] + (size_t)M[1] * M[2] <= g->atlas_texels;
+            levels_ok &= (size_t)M[0] + (size_t)M[1] * M[2] <= gsv_of(g).atlas_texels;
         }
     }
     CHECK(levels_ok);
@@ -163,8 +163,8 @@ static void test_scene(void)
         uint32_t w;
         long ti = rs_atlas_find(atlas, "word_bus");
         rs_atlas_get(atlas, (size_t)ti, NULL, NULL, NULL, &w, NULL);
-        CHECK(g->mark[1] == (float)ti);
-        CHECK_NEAR(g->mark[7], w / 2.0, 1e-4);
+        CHECK(gsv_of(g).mark[1] == (float)ti);
+        CHECK_NEAR(gsv_of(g).mark[7], w / 2.0, 1e-4);
     }
     rs_atlas_free(ctx, atlas);
     rs_gpu_scene_free(ctx, g);
@@ -175,12 +175,12 @@ static void test_scene(void)
     o.style.disable = 1;
     o.markings.disable = 1;
     CHECK(rs_gpu_scene_create(ctx, dem, roads, &o, NULL, &g) == RS_OK);
-    CHECK(g && g->nbands == 0 && g->nmarks == 0 && g->road[0] == 0 && g->nmark_entries == 0);
+    CHECK(g && gsv_of(g).nbands == 0 && gsv_of(g).nmarks == 0 && gsv_of(g).road[0] == 0 && gsv_of(g).nmark_entries == 0);
     rs_gpu_scene_free(ctx, g);
     /* a given cell and reach */
     rs_gpu_options go = { 8, 3 };
     CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, &go, &g) == RS_OK);
-    CHECK(g && g->cell == 8 && g->reach == 3 && g->gw == 12);
+    CHECK(g && gsv_of(g).cell == 8 && gsv_of(g).reach == 3 && gsv_of(g).gw == 12);
     rs_gpu_scene_free(ctx, g);
     go.cell = -1;
     g = (rs_gpu_scene *)1;
@@ -233,9 +233,9 @@ static void test_alloc_failures(void)
 /* A segment of road `road` is listed in the cell holding (x, y). */
 static int listed_at(const rs_gpu_scene *g, double road, double x, double y)
 {
-    size_t c = (size_t)floor((y - g->y0) / g->cell) * g->gw + (size_t)floor((x - g->x0) / g->cell);
-    for (uint32_t e = g->cell_start[c]; e < g->cell_start[c + 1]; e++)
-        if (g->seg[RS_GPU_SEG_FLOATS * (size_t)g->cell_seg[e] + 6] == road) return 1;
+    size_t c = (size_t)floor((y - gsv_of(g).y0) / gsv_of(g).cell) * gsv_of(g).gw + (size_t)floor((x - gsv_of(g).x0) / gsv_of(g).cell);
+    for (uint32_t e = gsv_of(g).cell_start[c]; e < gsv_of(g).cell_start[c + 1]; e++)
+        if (gsv_of(g).seg[RS_GPU_SEG_FLOATS * (size_t)gsv_of(g).cell_seg[e] + 6] == road) return 1;
     return 0;
 }
 
@@ -278,8 +278,8 @@ static void test_far_points(void)
         CHECK(listed_at(g, 3, 45, 70));
         /* the far segments' near parts keep their line */
         int along = 0;
-        for (size_t k = 0; k < g->nseg; k++) {
-            const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+        for (size_t k = 0; k < gsv_of(g).nseg; k++) {
+            const float *s = gsv_of(g).seg + RS_GPU_SEG_FLOATS * k;
             if (s[6] == 0 && s[0] == 10 && s[1] == 10 && s[3] == 10 && s[2] > 80 && s[2] < 1e6) along = 1;
         }
         CHECK(along);
@@ -305,7 +305,7 @@ static void test_tee_fields(void)
     rs_roads *roads = NULL;
     rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
     if (g) {
-        const float *m = g->road, *sd = g->road + RS_GPU_ROAD_FLOATS, *aw = g->road + 2 * RS_GPU_ROAD_FLOATS;
+        const float *m = gsv_of(g).road, *sd = gsv_of(g).road + RS_GPU_ROAD_FLOATS, *aw = gsv_of(g).road + 2 * RS_GPU_ROAD_FLOATS;
         CHECK(m[24] >= 0 && sd[24] >= 0 && m[24] != sd[24]);
         CHECK(sd[25] == -1 && sd[26] == m[24]); /* its end meets main at a T */
         CHECK_NEAR(sd[28], 0.5 * 9 - 2, 1e-6);
@@ -335,8 +335,8 @@ static void test_repeated_points(void)
     rs_roads *roads = NULL;
     rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
     if (g) {
-        CHECK_EQ_INT(g->nseg, 2 + 1 + 1);
-        const float *s = g->seg;
+        CHECK_EQ_INT(gsv_of(g).nseg, 2 + 1 + 1);
+        const float *s = gsv_of(g).seg;
         CHECK(s[0] == 10 && s[2] == 30 && s[5] == 0 && s[7] == RS_GPU_SEG_FIRST);
         s += RS_GPU_SEG_FLOATS;
         CHECK(s[0] == 30 && s[3] == 30 && s[5] == 20 && s[7] == RS_GPU_SEG_LAST);

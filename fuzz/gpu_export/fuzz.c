@@ -29,8 +29,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 #define REQUIRE(c) do { if (!(c)) abort(); } while (0)
 
 /* every segment within its reach of a cell's centre is listed there */
-static int complete(const rs_gpu_scene *g)
+static int complete(const rs_gpu_scene *scene)
 {
+    const gsv view = gsv_of(scene), *g = &view;
     for (uint32_t j = 0; j < g->gh; j++)
         for (uint32_t i = 0; i < g->gw; i++) {
             size_t c = (size_t)j * g->gw + i, e = g->cell_start[c];
@@ -121,7 +122,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fprintf(stderr, "gpu_export: %s\n", bad);
         abort();
     }
-    REQUIRE((size_t)g->gw * g->gh * g->nseg > 20000 || complete(g));
+    gsv v = gsv_of(g);
+    REQUIRE((size_t)v.gw * v.gh * v.nseg > 20000 || complete(g));
     rs_gpu_scene_free(ctx, g);
 done:
     rs_dem_free(ctx, dem);
