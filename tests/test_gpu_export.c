@@ -7,8 +7,10 @@
 #include "fail_alloc.h"
 #include "gpu_scene_check.h"
 #include "roadsplat.h"
+#include "scene_splat.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -389,8 +391,243 @@ static void test_glsl(void)
     CHECK(rs_gpu_glsl(330, RS_GPU_SHADER_TERRAIN_VERTEX, NULL) != NULL);
 }
 
+/* Two scenes are the same: every scalar and every array byte for byte. */
+static int same_scene(const rs_gpu_scene *a, const rs_gpu_scene *b, char *why, size_t n)
+{
+    rs_gpu_scene_info ia, ib;
+    rs_gpu_scene_get_info(a, &ia);
+    rs_gpu_scene_get_info(b, &ib);
+    if (memcmp(&ia, &ib, sizeof ia)) { snprintf(why, n, "info differs (segments %zu / %zu, bytes %zu / %zu)", ia.nseg, ib.nseg, ia.bytes, ib.bytes); return 0; }
+    for (int k = 0; k < RS_GPU_ARRAY_COUNT; k++) {
+        size_t na = 0, nb = 0;
+        const void *pa = rs_gpu_scene_array(a, (rs_gpu_array)k, &na), *pb = rs_gpu_scene_array(b, (rs_gpu_array)k, &nb);
+        if (!pa || !pb || na != nb || (na && memcmp(pa, pb, na * 4))) {
+            snprintf(why, n, "array %d differs (%zu / %zu values)", k, na, nb);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* rs_gpu_scene_from_grid gives rs_gpu_scene_create's bytes with the
+ * grid's options; the style table may be gone by then. */
+static void from_grid_case(rs_ctx *ctx, const char *what, const rs_dem *dem, const rs_roads *roads,
+                           const rs_splat_options *o, rs_styles *styles_to_free)
+{
+    rs_gpu_scene *a = NULL, *b = NULL;
+    rs_road_grid *grid = NULL;
+    rs_result ra = rs_gpu_scene_create(ctx, dem, roads, o, NULL, &a);
+    CHECKF(ra == RS_OK, "%s: create: %s", what, rs_ctx_message(ctx));
+    rs_result rg = rs_road_grid_build(ctx, dem, roads, o, &grid);
+    CHECKF(rg == RS_OK, "%s: grid: %s", what, rs_ctx_message(ctx));
+    if (styles_to_free) rs_styles_free(ctx, styles_to_free); /* the grid keeps what it resolved */
+    if (grid) {
+        rs_result rb = rs_gpu_scene_from_grid(ctx, dem, roads, grid, NULL, &b);
+        CHECKF(rb == RS_OK, "%s: from grid: %s", what, rs_ctx_message(ctx));
+    }
+    if (a && b) {
+        char why[160] = "";
+        CHECKF(same_scene(a, b, why, sizeof why), "%s: %s", what, why);
+        const char *bad = gpu_scene_check(b);
+        CHECKF(bad == NULL, "%s: %s", what, bad ? bad : "");
+    }
+    rs_gpu_scene_free(ctx, a);
+    rs_gpu_scene_free(ctx, b);
+    rs_road_grid_free(ctx, grid);
+}
+
+static const char *styled_text =
+    "style town\n  fill #808080\n  casing 0.5 #FFffFF80\n  line 0 0.12 #fafafa dash 3 6 phase 1.5\n"
+    "  line -3.1 0.25 #ffffff\n  line 2.5 0.1 #FFD700 dash 1 2 3 4\nend\n"
+    "style big\n  gradient #202020 #404040c0\n  line 0.2 0.1 #ffffff phase 2 dash 5 5\nend\n"
+    "style bare\nend\n";
+static const char *styled_roads =
+    "road a width 7 style=town\n2 30\n40 30\nend\n"
+    "road b width 7 style=town\n40 30\n78 31\nend\n"
+    "road c width 9 style=big\n40 2\n40 30\nend\n"
+    "road d width 5 style=bare class=residential\n5 70\n70 70\nend\n"
+    "road e width 6 class=primary lanes=4 turn:lanes=left|through|through|right\n10 50\n75 50 crossing=zebra\nend\n"
+    "mark word_bus road=a s=8 t=-2 length=3 width=2\n";
+
+static void test_from_grid(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, scene_text, strlen(scene_text), &roads) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    from_grid_case(ctx, "defaults", dem, roads, NULL, NULL);
+    o.style.driving_side = RS_DRIVING_LEFT;
+    o.style.profile = RS_PROFILE_MUTCD;
+    from_grid_case(ctx, "left, MUTCD", dem, roads, &o, NULL);
+    memset(&o, 0, sizeof o);
+    o.markings.no_auto = 1;
+    from_grid_case(ctx, "explicit markings only", dem, roads, &o, NULL);
+    memset(&o, 0, sizeof o);
+    o.style.disable = 1;
+    o.markings.disable = 1;
+    from_grid_case(ctx, "styles and markings off", dem, roads, &o, NULL);
+    memset(&o, 0, sizeof o);
+    o.coverage.edges = RS_EDGES_ALPHAMAP;
+    o.texels = 2;
+    from_grid_case(ctx, "alpha-map edges, 2 texels", dem, roads, &o, NULL);
+    rs_roads_free(ctx, roads);
+
+    /* named styles (casing, gradient, dashes, an empty style), the table
+     * freed before the export from the grid */
+    rs_styles *styles = NULL;
+    roads = NULL;
+    CHECK(rs_styles_parse(ctx, styled_text, strlen(styled_text), &styles) == RS_OK);
+    CHECK(rs_roads_parse(ctx, styled_roads, strlen(styled_roads), &roads) == RS_OK);
+    memset(&o, 0, sizeof o);
+    o.style.styles = styles;
+    if (styles && roads) from_grid_case(ctx, "named styles", dem, roads, &o, styles);
+    rs_roads_free(ctx, roads);
+
+    /* no road styled (the grid keeps no styles) */
+    const char *plain = "road p width 4\n5 5\n70 60\nend\nroad q width 3\n70 5\n5 60\nend\n";
+    CHECK(rs_roads_parse(ctx, plain, strlen(plain), &roads) == RS_OK);
+    from_grid_case(ctx, "unstyled", dem, roads, NULL, NULL);
+
+    /* wrong uses */
+    rs_road_grid *grid = NULL;
+    rs_gpu_scene *g = (rs_gpu_scene *)1;
+    CHECK(rs_road_grid_build(ctx, dem, roads, NULL, &grid) == RS_OK);
+    CHECK(rs_gpu_scene_from_grid(ctx, dem, roads, NULL, NULL, &g) == RS_ERR_INVALID_ARG && g == NULL);
+    rs_dem *other = NULL;
+    float z[9] = { 0 };
+    CHECK(rs_dem_create(ctx, 3, 3, z, &other) == RS_OK);
+    g = (rs_gpu_scene *)1;
+    CHECK(rs_gpu_scene_from_grid(ctx, other, roads, grid, NULL, &g) == RS_ERR_INVALID_ARG && g == NULL);
+    CHECK(strstr(rs_ctx_message(ctx), "another DEM") != NULL);
+    CHECK(rs_gpu_scene_from_grid(NULL, dem, roads, grid, NULL, &g) == RS_ERR_INVALID_ARG);
+    rs_gpu_options go = { -1, 0 };
+    CHECK(rs_gpu_scene_from_grid(ctx, dem, roads, grid, &go, &g) == RS_ERR_INVALID_ARG && g == NULL);
+    rs_dem_free(ctx, other);
+    rs_road_grid_free(ctx, grid);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
+/* The city (985 roads, class styles, automatic markings): the same bytes
+ * from the grid. */
+static void test_from_grid_city(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    CHECK(ss_city(ctx, &sc, &dem, &roads) == 0);
+    CHECK(roads && rs_roads_count(roads) > 900);
+    if (dem && roads) from_grid_case(ctx, "city", dem, roads, NULL, NULL);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
+typedef struct grid_in {
+    const rs_dem *dem;
+    const rs_roads *roads;
+    const rs_road_grid *grid;
+} grid_in;
+
+static rs_result try_from_grid(rs_ctx *c, void *user, int *wrong)
+{
+    const grid_in *in = user;
+    rs_gpu_scene *g = (rs_gpu_scene *)1;
+    rs_result r = rs_gpu_scene_from_grid(c, in->dem, in->roads, in->grid, NULL, &g);
+    if (r != RS_OK && g != NULL) *wrong = 1;
+    rs_gpu_scene_free(c, r == RS_OK ? g : NULL);
+    return r;
+}
+
+static void test_from_grid_alloc_failures(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    rs_roads *roads = NULL;
+    rs_road_grid *grid = NULL;
+    rs_roads_parse(ctx, scene_text, strlen(scene_text), &roads);
+    CHECK(rs_road_grid_build(ctx, dem, roads, NULL, &grid) == RS_OK);
+    grid_in in = { dem, roads, grid };
+    fail_sweep fs = fail_alloc_sweep(4000, try_from_grid, &in);
+    CHECKF(fs.succeeded && fs.wrong == 0 && fs.leaks == 0, "tries %ld wrong %ld leaks %ld", fs.tries, fs.wrong,
+           fs.leaks);
+    rs_road_grid_free(ctx, grid);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
+/* The marking tables the shader samples (RS_GPU_ARRAY_MARK_LEVELS and
+ * MARK_SAT): per type, its level-0 texels (times 255, rounded) are the
+ * second differences of its summed-area corners, and the corners start
+ * with a row and a column of zeros; the level records are LEVELS but for
+ * each type's level-0 fourth int, its first corner. */
+static void test_mark_tables(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = export_text(ctx, dem, scene_text, &roads);
+    if (g) {
+        gsv v = gsv_of(g);
+        size_t nl = 0, ns = 0;
+        CHECK(rs_gpu_scene_array(g, RS_GPU_ARRAY_MARK_LEVELS, &nl) == v.mark_levels && nl == v.nlevels * RS_GPU_LEVEL_INTS);
+        CHECK(rs_gpu_scene_array(g, RS_GPU_ARRAY_MARK_SAT, &ns) == v.mark_sat && ns == 4 * v.sat_corners);
+        CHECK(v.ntypes > 0 && v.sat_corners > 0);
+        long bad = 0;
+        for (size_t l = 0; l < v.nlevels; l++)
+            for (int k = 0; k < 3; k++) bad += v.mark_levels[4 * l + k] != v.levels[4 * l + k];
+        for (size_t t = 0; t < v.ntypes; t++) {
+            const uint32_t *L = v.mark_levels + RS_GPU_LEVEL_INTS * v.types[RS_GPU_TYPE_INTS * t];
+            size_t w = L[1], h = L[2], w1 = w + 1, first = L[3];
+            if (!v.types[RS_GPU_TYPE_INTS * t + 1]) continue;
+            CHECK(first + w1 * (h + 1) <= v.sat_corners);
+            if (first + w1 * (h + 1) > v.sat_corners) break;
+            const int32_t *S = v.mark_sat + 4 * first;
+            const float *px = v.atlas_px + 4 * (size_t)L[0];
+            for (size_t i = 0; i < 4 * w1; i++) bad += S[i] != 0;
+            for (size_t j = 0; j < h; j++) {
+                for (int c = 0; c < 4; c++) bad += S[4 * (j + 1) * w1 + (size_t)c] != 0;
+                for (size_t i = 0; i < w; i++)
+                    for (int c = 0; c < 4; c++) {
+                        int64_t d = (int64_t)S[4 * ((j + 1) * w1 + i + 1) + c] - S[4 * (j * w1 + i + 1) + c] -
+                                    S[4 * ((j + 1) * w1 + i) + c] + S[4 * (j * w1 + i) + c];
+                        bad += d != (int64_t)lrintf(px[4 * (j * w + i) + c] * 255.0f);
+                    }
+            }
+        }
+        CHECK_EQ_INT(bad, 0);
+        /* the samplers: names the fragment shader uses, and their formats */
+        uint32_t ch = 9, kind = 9;
+        CHECK(!strcmp(rs_gpu_array_sampler(RS_GPU_ARRAY_MARK_SAT, &ch, &kind), "u_atlas") && ch == 4 && kind == 2);
+        CHECK(!strcmp(rs_gpu_array_sampler(RS_GPU_ARRAY_CELL_SEG, &ch, &kind), "u_cseg") && ch == 1 && kind == 1);
+        CHECK(rs_gpu_array_sampler(RS_GPU_ARRAY_ATLAS_PX, NULL, NULL) == NULL);
+        CHECK(rs_gpu_array_sampler(RS_GPU_ARRAY_COUNT, &ch, &kind) == NULL && ch == 0);
+        size_t n = 5;
+        CHECK(rs_gpu_scene_array(g, RS_GPU_ARRAY_COUNT, &n) == NULL && n == 0);
+        CHECK(rs_gpu_scene_array(NULL, RS_GPU_ARRAY_SEG, &n) == NULL && n == 0);
+        rs_gpu_scene_free(ctx, g);
+    }
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
+    test_from_grid();
+    test_from_grid_city();
+    test_from_grid_alloc_failures();
+    test_mark_tables();
     test_glsl();
     test_far_points();
     test_repeated_points();

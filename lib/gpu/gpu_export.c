@@ -887,10 +887,10 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
 rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
                                  const rs_gpu_options *gopts, rs_gpu_scene **out)
 {
+    if (out) *out = NULL;
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!dem || !roads || !grid || !out)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: NULL argument");
-    *out = NULL;
     if (grid->dem_w != dem->width || grid->dem_h != dem->height ||
         memcmp(&grid->frame, &dem->frame, sizeof grid->frame) != 0)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built for another DEM");
