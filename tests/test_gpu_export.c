@@ -512,8 +512,8 @@ static void test_from_grid(void)
     rs_ctx_free(ctx);
 }
 
-/* The city (985 roads, class styles, automatic markings): the same bytes
- * from the grid. */
+/* The city (1000 roads) unstyled, and with classes (styles, casings,
+ * automatic markings): the same bytes from the grid. */
 static void test_from_grid_city(void)
 {
     rs_ctx *ctx;
@@ -523,7 +523,20 @@ static void test_from_grid_city(void)
     rs_roads *roads = NULL;
     CHECK(ss_city(ctx, &sc, &dem, &roads) == 0);
     CHECK(roads && rs_roads_count(roads) > 900);
-    if (dem && roads) from_grid_case(ctx, "city", dem, roads, NULL, NULL);
+    if (dem && roads) from_grid_case(ctx, "city, unstyled", dem, roads, NULL, NULL);
+    /* the benchmarks' styled city: OSM classes by width (lines, casings,
+     * automatic markings) */
+    int classed = roads != NULL;
+    for (size_t i = 0; classed && i < sc.nroads; i++)
+        classed = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    CHECK(classed);
+    if (dem && classed) {
+        rs_gpu_scene *g = NULL;
+        CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
+        CHECK(g && gsv_of(g).nbands > 100 && gsv_of(g).nmarks > 1000 && gsv_of(g).ncuts > 100);
+        rs_gpu_scene_free(ctx, g);
+        from_grid_case(ctx, "city, styled", dem, roads, NULL, NULL);
+    }
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
