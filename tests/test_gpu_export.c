@@ -204,13 +204,15 @@ static void test_scene(void)
 typedef struct sweep_in {
     const rs_dem *dem;
     const rs_roads *roads;
+    const rs_road_grid *grid; /* NULL: rs_gpu_scene_create, else rs_gpu_scene_from_grid */
 } sweep_in;
 
 static rs_result try_export(rs_ctx *c, void *user, int *wrong)
 {
     const sweep_in *in = user;
     rs_gpu_scene *g = (rs_gpu_scene *)1;
-    rs_result r = rs_gpu_scene_create(c, in->dem, in->roads, NULL, NULL, &g);
+    rs_result r = in->grid ? rs_gpu_scene_from_grid(c, in->dem, in->roads, in->grid, NULL, &g)
+                           : rs_gpu_scene_create(c, in->dem, in->roads, NULL, NULL, &g);
     if (r != RS_OK && g != NULL) *wrong = 1;
     rs_gpu_scene_free(c, r == RS_OK ? g : NULL);
     return r;
@@ -223,7 +225,7 @@ static void test_alloc_failures(void)
     rs_dem *dem = make_dem(ctx);
     rs_roads *roads = NULL;
     rs_roads_parse(ctx, scene_text, strlen(scene_text), &roads);
-    sweep_in in = { dem, roads };
+    sweep_in in = { dem, roads, NULL };
     fail_sweep fs = fail_alloc_sweep(4000, try_export, &in);
     CHECKF(fs.succeeded && fs.wrong == 0 && fs.leaks == 0, "tries %ld wrong %ld leaks %ld", fs.tries, fs.wrong,
            fs.leaks);
@@ -543,22 +545,6 @@ static void test_from_grid_city(void)
     rs_ctx_free(ctx);
 }
 
-typedef struct grid_in {
-    const rs_dem *dem;
-    const rs_roads *roads;
-    const rs_road_grid *grid;
-} grid_in;
-
-static rs_result try_from_grid(rs_ctx *c, void *user, int *wrong)
-{
-    const grid_in *in = user;
-    rs_gpu_scene *g = (rs_gpu_scene *)1;
-    rs_result r = rs_gpu_scene_from_grid(c, in->dem, in->roads, in->grid, NULL, &g);
-    if (r != RS_OK && g != NULL) *wrong = 1;
-    rs_gpu_scene_free(c, r == RS_OK ? g : NULL);
-    return r;
-}
-
 static void test_from_grid_alloc_failures(void)
 {
     rs_ctx *ctx;
@@ -568,8 +554,8 @@ static void test_from_grid_alloc_failures(void)
     rs_road_grid *grid = NULL;
     rs_roads_parse(ctx, scene_text, strlen(scene_text), &roads);
     CHECK(rs_road_grid_build(ctx, dem, roads, NULL, &grid) == RS_OK);
-    grid_in in = { dem, roads, grid };
-    fail_sweep fs = fail_alloc_sweep(4000, try_from_grid, &in);
+    sweep_in in = { dem, roads, grid };
+    fail_sweep fs = fail_alloc_sweep(4000, try_export, &in);
     CHECKF(fs.succeeded && fs.wrong == 0 && fs.leaks == 0, "tries %ld wrong %ld leaks %ld", fs.tries, fs.wrong,
            fs.leaks);
     rs_road_grid_free(ctx, grid);

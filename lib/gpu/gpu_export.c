@@ -910,6 +910,17 @@ rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
     return ge_export(ctx, src, dem, roads, &o, gopts, out);
 }
 
+/* Type t has levels and is the first with its level 0 (a type sharing an
+ * earlier type's rectangle shares its table). */
+static int ge_table_of(const rs_gpu_scene *g, size_t t)
+{
+    const uint32_t *ty = g->types + RS_GPU_TYPE_INTS * t;
+    if (!ty[1]) return 0;
+    for (size_t u = 0; u < t; u++)
+        if (g->types[RS_GPU_TYPE_INTS * u + 1] && g->types[RS_GPU_TYPE_INTS * u] == ty[0]) return 0;
+    return 1;
+}
+
 /* The markings' summed-area tables (issue 25, docs/markings.md) from each
  * type's level 0: per type (h + 1) x (w + 1) corners of the sums of
  * round(255 x premultiplied r g b) and round(255 x alpha) (whole numbers,
@@ -920,12 +931,8 @@ static rs_result ge_mark_tables(rs_ctx *ctx, rs_gpu_scene *g)
 {
     size_t n = 0;
     for (size_t t = 0; t < g->ntypes; t++) {
-        const uint32_t *ty = g->types + RS_GPU_TYPE_INTS * t;
-        if (!ty[1]) continue;
-        int seen = 0; /* an earlier type with the same levels has the table */
-        for (size_t u = 0; u < t && !seen; u++) seen = g->types[RS_GPU_TYPE_INTS * u + 1] && g->types[RS_GPU_TYPE_INTS * u] == ty[0];
-        if (seen) continue;
-        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * ty[0];
+        if (!ge_table_of(g, t)) continue;
+        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
         n += (size_t)(L[1] + 1) * (L[2] + 1);
     }
     g->mark_sat = rs__calloc(ctx, n ? n : 1, 4 * sizeof *g->mark_sat);
@@ -934,12 +941,8 @@ static rs_result ge_mark_tables(rs_ctx *ctx, rs_gpu_scene *g)
     if (g->nlevels) memcpy(g->mark_levels, g->levels, g->nlevels * RS_GPU_LEVEL_INTS * sizeof *g->mark_levels);
     size_t off = 0;
     for (size_t t = 0; t < g->ntypes; t++) {
-        const uint32_t *ty = g->types + RS_GPU_TYPE_INTS * t;
-        if (!ty[1]) continue;
-        int seen = 0;
-        for (size_t u = 0; u < t && !seen; u++) seen = g->types[RS_GPU_TYPE_INTS * u + 1] && g->types[RS_GPU_TYPE_INTS * u] == ty[0];
-        if (seen) continue;
-        uint32_t *L = g->mark_levels + RS_GPU_LEVEL_INTS * ty[0];
+        if (!ge_table_of(g, t)) continue;
+        uint32_t *L = g->mark_levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
         const size_t w = L[1], h = L[2], w1 = w + 1;
         const float *px = g->atlas_px + 4 * (size_t)L[0];
         int32_t *S = g->mark_sat + 4 * off;
