@@ -1076,15 +1076,17 @@ RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_ro
                                      rs_gpu_scene **out);
 /* The same export from a prepared road grid: `grid` from rs_road_grid_build
  * of `roads` over `dem` (the same roads, unchanged since: the grid keeps
- * no pointer to them; RS_ERR_INVALID_ARG for another DEM). The styles, the lines' cuts and the markings' placements are read from the
- * grid (as resolved when it was built, with its options; the named style
- * table and surface images need not be alive any more), the marking atlas
- * is the grid's (the options' atlas must still be valid, as for the grid
- * itself). The arrays are byte for byte those of rs_gpu_scene_create with
- * the options the grid was built with (tests/test_gpu_export.c), but for
- * the colour floats of a road drawn unstyled when no road of the grid is
- * styled (not read by the shader; docs/embedding.md). Ownership as
- * rs_gpu_scene_create; the grid is only read (borrowed for the call). */
+ * no pointer to them). The styles, the lines' cuts and the markings'
+ * placements are read from the grid, as resolved when it was built with
+ * its options (the named style table need not be alive any more); the
+ * marking atlas is the grid's (the options' atlas must still be valid, as
+ * for the grid itself). The arrays are byte for byte those of
+ * rs_gpu_scene_create with the options the grid was built with
+ * (tests/test_gpu_export.c, fuzz/gpu_export), but for the colour floats of
+ * a road drawn unstyled when no road of the grid is styled (not read by the
+ * shader; docs/embedding.md). RS_ERR_INVALID_ARG for a grid of another DEM
+ * or with a marking on a road `roads` lacks. Ownership as
+ * rs_gpu_scene_create; the grid is only read during the call. */
 RS_API rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                         const rs_road_grid *grid, const rs_gpu_options *gopts,
                                         rs_gpu_scene **out);
@@ -1121,10 +1123,11 @@ typedef enum rs_gpu_array {
     RS_GPU_ARRAY_TYPES = 8,      /* u_types  uint32 R32UI    ntypes * RS_GPU_TYPE_INTS */
     RS_GPU_ARRAY_MARK_LEVELS = 9, /* u_levels uint32 RGBA32UI nlevels * RS_GPU_LEVEL_INTS: LEVELS with
                                     each type's first summed-area corner in its level 0's fourth int */
-    RS_GPU_ARRAY_MARK_SAT = 10,  /* u_atlas  int32  RGBA32I  sat_corners * 4: per type, after that
-                                    first corner, the (h + 1) x (w + 1) corners (row-major, row 0
-                                    the sprite's top) of the sums over texels [0, i) x [0, j) of
-                                    round(255 x premultiplied r, g, b, a) of its level 0 */
+    RS_GPU_ARRAY_MARK_SAT = 10,  /* u_atlas  int32  RGBA32I  sat_corners * 4: per type (types of
+                                    one rectangle share one), from the corner its MARK_LEVELS
+                                    level 0 names, (h + 1) x (w + 1) corners (row-major, row 0
+                                    the sprite's top): at (j, i) the sums over its level-0 texels
+                                    [0, i) x [0, j) of round(255 x premultiplied r, g, b, a) */
     RS_GPU_ARRAY_CUT = 11,       /* u_cut    float  RGBA32F  4 * max(nroads, 1) + ncuts * RS_GPU_CUT_FLOATS */
     RS_GPU_ARRAY_LEVELS = 12,    /* (not a sampler) uint32  nlevels * RS_GPU_LEVEL_INTS: the mip levels */
     RS_GPU_ARRAY_ATLAS_PX = 13,  /* (not a sampler) float   atlas_texels * 4: the mip chains' texels */
