@@ -1084,8 +1084,9 @@ RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_ro
  * rs_gpu_scene_create with the options the grid was built with
  * (tests/test_gpu_export.c, fuzz/gpu_export), but for the colour floats of
  * a road drawn unstyled when no road of the grid is styled (not read by the
- * shader; docs/embedding.md). RS_ERR_INVALID_ARG for a grid of another DEM
- * or with a marking on a road `roads` lacks. Ownership as
+ * shader; docs/embedding.md). RS_ERR_INVALID_ARG for a grid of another DEM,
+ * with styles of another number of roads or a marking on a road `roads`
+ * lacks. Ownership as
  * rs_gpu_scene_create; the grid is only read during the call. */
 RS_API rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                         const rs_road_grid *grid, const rs_gpu_options *gopts,

@@ -505,6 +505,21 @@ static void test_from_grid(void)
     CHECK(rs_gpu_scene_from_grid(ctx, other, roads, grid, NULL, &g) == RS_ERR_INVALID_ARG && g == NULL);
     CHECK(strstr(rs_ctx_message(ctx), "another DEM") != NULL);
     CHECK(rs_gpu_scene_from_grid(NULL, dem, roads, grid, NULL, &g) == RS_ERR_INVALID_ARG);
+    /* a styled grid and other roads: refused, never read past its tables */
+    {
+        rs_roads *styled = NULL, *more = NULL;
+        rs_road_grid *sg = NULL;
+        const char *one = "road a width 6 class=primary\n5 40\n75 40\nend\n";
+        const char *two = "road a width 6 class=primary\n5 40\n75 40\nend\nroad b width 6 class=primary\n40 5\n40 75\nend\n";
+        CHECK(rs_roads_parse(ctx, one, strlen(one), &styled) == RS_OK && rs_roads_parse(ctx, two, strlen(two), &more) == RS_OK);
+        CHECK(styled && rs_road_grid_build(ctx, dem, styled, NULL, &sg) == RS_OK);
+        g = (rs_gpu_scene *)1;
+        CHECK(sg && more && rs_gpu_scene_from_grid(ctx, dem, more, sg, NULL, &g) == RS_ERR_INVALID_ARG && g == NULL);
+        CHECK(strstr(rs_ctx_message(ctx), "other roads") != NULL);
+        rs_road_grid_free(ctx, sg);
+        rs_roads_free(ctx, styled);
+        rs_roads_free(ctx, more);
+    }
     rs_gpu_options go = { -1, 0 };
     CHECK(rs_gpu_scene_from_grid(ctx, dem, roads, grid, &go, &g) == RS_ERR_INVALID_ARG && g == NULL);
     rs_dem_free(ctx, other);

@@ -905,7 +905,7 @@ rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built for another DEM");
     /* the grid's per-road tables must be of these roads */
     const size_t n = rs_roads_count(roads);
-    int other = 0;
+    int other = grid->styling && grid->styling->nroads != n;
     for (size_t k = 0; grid->markings && k < grid->markings->npl && !other; k++) other = grid->markings->pl[k].road >= n;
     if (other)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built from other roads");

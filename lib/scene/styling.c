@@ -336,6 +336,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     if (st->img_of) st->bytes += n * (sizeof *st->img_of + sizeof *st->img_len + sizeof *st->img_lev + sizeof *st->img_f);
     if (st->img_s0) st->bytes += n * (sizeof *st->img_s0 + 1);
     /* what the GPU export reads (rs_gpu_scene_from_grid): kept, not freed */
+    st->nroads = n;
     st->band_start = band_start;
     st->bands = bands;
     st->dash = dash;

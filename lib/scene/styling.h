@@ -48,6 +48,7 @@ typedef struct rs__styling {
      * bands[band_start[i] .. band_start[i + 1]) (dashes in `dash`), its
      * casing width casing_width[i] (NULL: no casing anywhere), and the
      * lines' cuts at stop lines and zebras (NULL when no road has lines). */
+    size_t nroads;                    /* the roads the per-road tables hold */
     uint32_t *band_start;
     struct rs__band *bands;
     double *dash;
