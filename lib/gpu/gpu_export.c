@@ -316,7 +316,6 @@ static void box_cells(const rs_gpu_scene *g, double xa, double ya, double xb, do
     *i0 = u[0]; *j0 = u[1]; *i1 = u[2]; *j1 = u[3];
 }
 
-/* Distance from point (x, y) to segment a-b. */
 /* Whether point (x, y) is within r of segment a-b: hypot(e) <= r for e
  * from the point to its nearest point of the segment. The squares decide
  * unless they are within a 1e-9 fraction of each other (far more than
