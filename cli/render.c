@@ -674,11 +674,13 @@ int cli_render_main(int argc, char **argv)
                 a.fov);
         fprintf(so.f, "  \"lighting\": %s,\n  \"fog\": %s,\n", a.lighting ? "true" : "false", a.fog ? "true" : "false");
         fprintf(so.f, "  \"roads\": \"%s\",\n", sh ? "shader" : "texture");
-        if (scene)
+        if (scene) {
+            rs_gpu_scene_info si;
+            rs_gpu_scene_get_info(scene, &si);
             fprintf(so.f, "  \"scene\": {\"segments\": %zu, \"index_cell\": %.9g, \"index_cells\": %zu, "
                           "\"index_entries\": %zu, \"bands\": %zu, \"markings\": %zu, \"bytes\": %zu},\n",
-                    scene->nseg, scene->cell, (size_t)scene->gw * scene->gh, scene->nseg_entries, scene->nbands,
-                    scene->nmarks, scene->bytes);
+                    si.nseg, si.cell, (size_t)si.gw * si.gh, si.nseg_entries, si.nbands, si.nmarks, si.bytes);
+        }
         if (a.triangles) fprintf(so.f, "  \"triangle_budget\": %u,\n", a.triangles);
         else fprintf(so.f, "  \"pixel_error\": %.9g,\n", a.pixel_error);
         fprintf(so.f, "  \"triangles\": %u,\n  \"vertices\": %zu,\n  \"roam_threshold\": %.9g,\n"

@@ -59,8 +59,8 @@ typedef struct rsh_gl {
 #undef RSH_DECL
 } rsh_gl;
 
-enum { BUF_SEG, BUF_CSTART, BUF_CSEG, BUF_ROAD, BUF_BAND, BUF_MARK, BUF_MSTART, BUF_MIDS, BUF_TYPES, BUF_LEVELS,
-       BUF_ATLAS, BUF_CUT, NBUF };
+/* the scene's buffer textures: rs_gpu_array 0 .. RS_GPU_ARRAY_CUT, bound to units 2 .. */
+enum { NBUF = RS_GPU_ARRAY_CUT + 1 };
 
 struct rsh_renderer {
     OSMesaContext osm;
@@ -257,59 +257,6 @@ static void tex2d(rsh_renderer *r, GLuint *t, const uint8_t *px, uint32_t w, uin
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
-/* The markings' summed-area tables (issue 25, docs/markings.md) from each
- * type's level 0 in the export: per type (h + 1) x (w + 1) corners of the
- * sums of 255 x premultiplied r g b and 255 x alpha (whole numbers, so the
- * shader's differences are exact), and a copy of the level records whose
- * level-0 .w is the type's first corner. */
-static int marking_tables(const rs_gpu_scene *g, int32_t **sat_out, uint32_t **lev_out, char *err, size_t err_size)
-{
-    size_t n = 0;
-    for (size_t t = 0; t < g->ntypes; t++) {
-        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
-        n += (size_t)(L[1] + 1) * (L[2] + 1);
-    }
-    int32_t *sat = malloc((n ? n : 1) * 4 * sizeof *sat);
-    uint32_t *lev = malloc((g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof *lev);
-    if (!sat || !lev) {
-        free(sat);
-        free(lev);
-        set_err(err, err_size, "out of memory for the marking tables");
-        return 1;
-    }
-    memset(lev, 0, (g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof *lev);
-    if (g->nlevels) memcpy(lev, g->levels, g->nlevels * RS_GPU_LEVEL_INTS * sizeof *lev);
-    size_t off = 0;
-    for (size_t t = 0; t < g->ntypes; t++) {
-        uint32_t *L = lev + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
-        const size_t w = L[1], h = L[2], w1 = w + 1;
-        const float *px = g->atlas_px + 4 * (size_t)L[0];
-        int32_t *S = sat + 4 * off;
-        L[3] = (uint32_t)off;
-        for (size_t i = 0; i < 4 * w1; i++) S[i] = 0;
-        for (size_t j = 0; j < h; j++) {
-            int64_t row[4] = { 0, 0, 0, 0 };
-            for (int c = 0; c < 4; c++) S[4 * (j + 1) * w1 + (size_t)c] = 0;
-            for (size_t i = 0; i < w; i++)
-                for (int c = 0; c < 4; c++) {
-                    row[c] += (int64_t)lrintf(px[4 * (j * w + i) + (size_t)c] * 255.0f);
-                    int64_t v = S[4 * (j * w1 + i + 1) + (size_t)c] + row[c];
-                    if (v > INT32_MAX) {
-                        free(sat);
-                        free(lev);
-                        set_err(err, err_size, "a marking sprite is too large for the shader's tables");
-                        return 1;
-                    }
-                    S[4 * ((j + 1) * w1 + i + 1) + (size_t)c] = (int32_t)v;
-                }
-        }
-        off += w1 * (h + 1);
-    }
-    *sat_out = sat;
-    *lev_out = lev;
-    return 0;
-}
-
 int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, const uint8_t *road,
                const uint8_t *normals, uint32_t tex_w, uint32_t tex_h, char *err, size_t err_size)
 {
@@ -320,63 +267,41 @@ int rsh_upload(rsh_renderer *r, const rs_gpu_scene *g, const uint8_t *terrain, c
     tex2d(r, &r->tex_terrain, terrain, tex_w, tex_h, GL_RGBA);
     tex2d(r, &r->tex_road, road ? road : terrain, tex_w, tex_h, GL_RGBA);
     if (normals) tex2d(r, &r->tex_normal, normals, tex_w, tex_h, GL_RGB);
-    int32_t *sat = NULL;
-    uint32_t *lev = NULL;
-    if (g && marking_tables(g, &sat, &lev, err, err_size)) return 1;
     if (g) {
-        size_t sat_n = 0;
-        for (size_t t = 0; t < g->ntypes; t++) {
-            const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
-            sat_n += (size_t)(L[1] + 1) * (L[2] + 1);
-        }
-        const struct {
-            const void *data;
-            size_t bytes;
-            GLenum fmt;
-        } src[NBUF] = {
-            { g->seg, g->nseg * RS_GPU_SEG_FLOATS * sizeof(float), GL_RGBA32F },
-            { g->cell_start, ((size_t)g->gw * g->gh + 1) * sizeof(uint32_t), GL_R32UI },
-            { g->cell_seg, (g->nseg_entries ? g->nseg_entries : 1) * sizeof(uint32_t), GL_R32UI },
-            { g->road, (g->nroads ? g->nroads : 1) * RS_GPU_ROAD_FLOATS * sizeof(float), GL_RGBA32F },
-            { g->band, (g->nbands ? g->nbands : 1) * RS_GPU_BAND_FLOATS * sizeof(float), GL_RGBA32F },
-            { g->mark, (g->nmarks ? g->nmarks : 1) * RS_GPU_MARK_FLOATS * sizeof(float), GL_RGBA32F },
-            { g->mark_start, ((size_t)g->gw * g->gh + 1) * sizeof(uint32_t), GL_R32UI },
-            { g->mark_ids, (g->nmark_entries ? g->nmark_entries : 1) * sizeof(uint32_t), GL_R32UI },
-            { g->types, (g->ntypes ? g->ntypes : 1) * RS_GPU_TYPE_INTS * sizeof(uint32_t), GL_R32UI },
-            { lev, (g->nlevels ? g->nlevels : 1) * RS_GPU_LEVEL_INTS * sizeof(uint32_t), GL_RGBA32UI },
-            { sat, (sat_n ? sat_n : 1) * 4 * sizeof(int32_t), GL_RGBA32I },
-            { g->cut, (4 * (g->nroads ? g->nroads : 1) + RS_GPU_CUT_FLOATS * g->ncuts) * sizeof(float), GL_RGBA32F },
-        };
+        /* every array the fragment shader samples, ready to upload (the
+         * marking tables included: rs_gpu_scene_array) */
         GLint maxbuf = 0;
         glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &maxbuf);
         r->gl.GenBuffers(NBUF, r->bufs);
         glGenTextures(NBUF, r->btex);
         r->have_scene = 1;
         for (int k = 0; k < NBUF; k++) {
-            size_t texel = src[k].fmt == GL_R32UI ? 4 : 16;
-            size_t bytes = src[k].bytes ? src[k].bytes : texel;
+            static const GLenum fmt[2][3] = { { GL_R32F, GL_R32UI, GL_R32I }, { GL_RGBA32F, GL_RGBA32UI, GL_RGBA32I } };
+            uint32_t ch = 0, kind = 0;
+            rs_gpu_array_sampler((rs_gpu_array)k, &ch, &kind);
+            size_t n = 0;
+            const void *data = rs_gpu_scene_array(g, (rs_gpu_array)k, &n);
+            size_t texel = 4 * ch, bytes = n ? n * 4 : texel; /* an empty array: one zero texel */
             if (bytes / texel > (size_t)maxbuf) {
                 set_err(err, err_size, "the road scene exceeds GL_MAX_TEXTURE_BUFFER_SIZE");
-                free(sat);
-                free(lev);
                 return 1;
             }
             r->gl.BindBuffer(GL_TEXTURE_BUFFER, r->bufs[k]);
-            r->gl.BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)bytes, src[k].bytes ? src[k].data : NULL, GL_STATIC_DRAW);
+            r->gl.BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)bytes, n ? data : NULL, GL_STATIC_DRAW);
             glBindTexture(GL_TEXTURE_BUFFER, r->btex[k]);
-            r->gl.TexBuffer(GL_TEXTURE_BUFFER, src[k].fmt, r->bufs[k]);
+            r->gl.TexBuffer(GL_TEXTURE_BUFFER, fmt[ch == 4][kind], r->bufs[k]);
         }
         r->gl.BindBuffer(GL_TEXTURE_BUFFER, 0);
-        free(sat);
-        free(lev);
-        r->grid[0] = (float)g->x0;
-        r->grid[1] = (float)g->y0;
-        r->grid[2] = (float)(1.0 / g->cell);
-        r->grid[3] = (float)g->reach;
-        r->gdim[0] = (int)g->gw;
-        r->gdim[1] = (int)g->gh;
-        r->map_w = g->map_w;
-        r->map_h = g->map_h;
+        rs_gpu_scene_info si;
+        rs_gpu_scene_get_info(g, &si);
+        r->grid[0] = (float)si.x0;
+        r->grid[1] = (float)si.y0;
+        r->grid[2] = (float)(1.0 / si.cell);
+        r->grid[3] = (float)si.reach;
+        r->gdim[0] = (int)si.gw;
+        r->gdim[1] = (int)si.gh;
+        r->map_w = si.map_w;
+        r->map_h = si.map_h;
     }
     if (glGetError() != GL_NO_ERROR) { set_err(err, err_size, "upload failed (GL error)"); return 1; }
     return 0;
@@ -470,8 +395,6 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
     r->gl.Uniform1i(r->gl.GetUniformLocation(p, "u_fog"), v->fog && !v->ortho);
     r->gl.Uniform2f(r->gl.GetUniformLocation(p, "u_fogr"), (float)v->fog_start, (float)v->fog_end);
     r->gl.Uniform3f(r->gl.GetUniformLocation(p, "u_fogc"), 0.78f, 0.85f, 0.93f);
-    static const char *const names[NBUF] = { "u_seg", "u_cstart", "u_cseg", "u_roadt", "u_band", "u_mark",
-                                             "u_mstart", "u_mids", "u_types", "u_levels", "u_atlas", "u_cut" };
     r->gl.ActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, r->tex_terrain);
     r->gl.Uniform1i(r->gl.GetUniformLocation(p, "u_terrain"), 0);
@@ -485,7 +408,7 @@ int rsh_draw(rsh_renderer *r, const rg_view *v, const float *vertices, const flo
     for (int k = 0; k < NBUF; k++) {
         r->gl.ActiveTexture(GL_TEXTURE2 + k);
         if (r->have_scene) glBindTexture(GL_TEXTURE_BUFFER, r->btex[k]);
-        r->gl.Uniform1i(r->gl.GetUniformLocation(p, names[k]), 2 + k);
+        r->gl.Uniform1i(r->gl.GetUniformLocation(p, rs_gpu_array_sampler((rs_gpu_array)k, NULL, NULL)), 2 + k);
     }
     r->gl.ActiveTexture(GL_TEXTURE0);
     r->gl.BindVertexArray(r->vao);

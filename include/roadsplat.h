@@ -1134,30 +1134,95 @@ typedef struct rs_gpu_options {
                       anti-aliasing footprint served exactly; 0 -> half the index cell */
 } rs_gpu_options;
 
-typedef struct rs_gpu_scene {
-    double cell, x0, y0, reach;
-    uint32_t gw, gh;
-    double map_w, map_h;           /* map extent, metres */
-    size_t nseg, nroads, nbands, nmarks, ntypes, nlevels;
-    size_t nseg_entries, nmark_entries, atlas_texels;
-    float *seg, *road, *band, *mark;
-    uint32_t *cell_start, *cell_seg;   /* gw*gh + 1, nseg_entries */
-    uint32_t *mark_start, *mark_ids;   /* gw*gh + 1, nmark_entries */
-    uint32_t *types, *levels;          /* ntypes * RS_GPU_TYPE_INTS, nlevels * RS_GPU_LEVEL_INTS */
-    float *atlas_px;                   /* atlas_texels * 4 */
-    size_t bytes;
-    size_t ncuts;                      /* line cuts (issue 27) */
-    float *cut;                        /* 4 * max(nroads, 1) + ncuts * RS_GPU_CUT_FLOATS */
-} rs_gpu_scene;
+/* The exported scene: opaque (read it through rs_gpu_scene_get_info and
+ * rs_gpu_scene_array); immutable after creation, so any number of threads
+ * may read one scene. */
+typedef struct rs_gpu_scene rs_gpu_scene;
 
 /* Export `roads` over `dem` with the styles and markings that the splat
  * with `opts` (may be NULL) draws: opts->style and opts->markings are read
- * as rs_road_grid_build reads them. *out belongs to the caller: free it
- * with rs_gpu_scene_free and the same context. `gopts` may be NULL. */
+ * as rs_road_grid_build reads them (the styles, network, line cuts and
+ * markings are worked out again here; rs_gpu_scene_from_grid reads them
+ * from a grid that has them). *out belongs to the caller: free it with
+ * rs_gpu_scene_free and the same context. `gopts` may be NULL.
+ * RS_ERR_LIMIT also for a marking sprite whose summed-area table
+ * (RS_GPU_ARRAY_MARK_SAT) would pass 2^31 - 1. */
 RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_gpu_options *gopts,
                                      rs_gpu_scene **out);
+/* The same export from a prepared road grid: `grid` from rs_road_grid_build
+ * of `roads` over `dem` (the same roads, unchanged since: the grid keeps
+ * no pointer to them). The styles, the lines' cuts and the markings'
+ * placements are read from the grid, as resolved when it was built with
+ * its options (the named style table need not be alive any more); the
+ * marking atlas is the grid's (the options' atlas must still be valid, as
+ * for the grid itself). The arrays are byte for byte those of
+ * rs_gpu_scene_create with the options the grid was built with
+ * (tests/test_gpu_export.c, fuzz/gpu_export), but for the colour floats of
+ * a road drawn unstyled when no road of the grid is styled (not read by the
+ * shader; docs/embedding.md). RS_ERR_INVALID_ARG for a grid of another DEM,
+ * with styles of another number of roads or a marking on a road `roads`
+ * lacks. Ownership as
+ * rs_gpu_scene_create; the grid is only read during the call. */
+RS_API rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                        const rs_road_grid *grid, const rs_gpu_options *gopts,
+                                        rs_gpu_scene **out);
 RS_API void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *scene);
+
+/* The scene's scalars: the index grid (cell (i, j) spans [x0 + i cell,
+ * x0 + (i+1) cell) x [y0 + j cell, ...), gw x gh cells), the map extent and
+ * the item counts. What a shader takes as uniforms (the fragment source's
+ * u_grid = (x0, y0, 1 / cell, reach), u_gdim = (gw, gh), u_map = (map_w,
+ * map_h)). */
+typedef struct rs_gpu_scene_info {
+    double cell, x0, y0;   /* index cell and origin, metres */
+    double reach;          /* metres beyond each capsule a cell still lists it */
+    uint32_t gw, gh;       /* index cells */
+    double map_w, map_h;   /* map extent, metres */
+    size_t nseg, nroads, nbands, nmarks, ntypes, nlevels, ncuts;
+    size_t nseg_entries, nmark_entries; /* index list entries */
+    size_t atlas_texels;   /* level texels of every type's mip chain */
+    size_t sat_corners;    /* summed-area corners (RS_GPU_ARRAY_MARK_SAT: 4 ints each) */
+    size_t bytes;          /* memory the scene holds */
+} rs_gpu_scene_info;
+RS_API void rs_gpu_scene_get_info(const rs_gpu_scene *scene, rs_gpu_scene_info *out);
+
+/* The scene's arrays, each a buffer texture of the fragment shader. */
+typedef enum rs_gpu_array {
+    RS_GPU_ARRAY_SEG = 0,        /* u_seg    float  RGBA32F  nseg * RS_GPU_SEG_FLOATS */
+    RS_GPU_ARRAY_CELL_START = 1, /* u_cstart uint32 R32UI    gw * gh + 1 */
+    RS_GPU_ARRAY_CELL_SEG = 2,   /* u_cseg   uint32 R32UI    nseg_entries */
+    RS_GPU_ARRAY_ROAD = 3,       /* u_roadt  float  RGBA32F  nroads * RS_GPU_ROAD_FLOATS */
+    RS_GPU_ARRAY_BAND = 4,       /* u_band   float  RGBA32F  nbands * RS_GPU_BAND_FLOATS */
+    RS_GPU_ARRAY_MARK = 5,       /* u_mark   float  RGBA32F  nmarks * RS_GPU_MARK_FLOATS */
+    RS_GPU_ARRAY_MARK_START = 6, /* u_mstart uint32 R32UI    gw * gh + 1 */
+    RS_GPU_ARRAY_MARK_IDS = 7,   /* u_mids   uint32 R32UI    nmark_entries */
+    RS_GPU_ARRAY_TYPES = 8,      /* u_types  uint32 R32UI    ntypes * RS_GPU_TYPE_INTS */
+    RS_GPU_ARRAY_MARK_LEVELS = 9, /* u_levels uint32 RGBA32UI nlevels * RS_GPU_LEVEL_INTS: LEVELS with
+                                    each type's first summed-area corner in its level 0's fourth int */
+    RS_GPU_ARRAY_MARK_SAT = 10,  /* u_atlas  int32  RGBA32I  sat_corners * 4: per type (types of
+                                    one rectangle share one), from the corner its MARK_LEVELS
+                                    level 0 names, (h + 1) x (w + 1) corners (row-major, row 0
+                                    the sprite's top): at (j, i) the sums over its level-0 texels
+                                    [0, i) x [0, j) of round(255 x premultiplied r, g, b, a) */
+    RS_GPU_ARRAY_CUT = 11,       /* u_cut    float  RGBA32F  4 * max(nroads, 1) + ncuts * RS_GPU_CUT_FLOATS */
+    RS_GPU_ARRAY_LEVELS = 12,    /* (not a sampler) uint32  nlevels * RS_GPU_LEVEL_INTS: the mip levels */
+    RS_GPU_ARRAY_ATLAS_PX = 13,  /* (not a sampler) float   atlas_texels * 4: the mip chains' texels */
+    RS_GPU_ARRAY_COUNT = 14
+} rs_gpu_array;
+/* Array `which` of the scene: its first value, and in *count (may be NULL)
+ * how many 32-bit values it holds (the sizes above). The pointer is never
+ * NULL for a scene and a valid `which` (NULL with *count 0 otherwise), also
+ * when *count is 0: a GL host then uploads one zero texel instead, as
+ * buffer textures cannot be empty. Owned by the scene: valid until
+ * rs_gpu_scene_free. The shader reads the samplers 0 ..
+ * RS_GPU_ARRAY_CUT; rs_gpu_array_sampler names them. */
+RS_API const void *rs_gpu_scene_array(const rs_gpu_scene *scene, rs_gpu_array which, size_t *count);
+/* The fragment shader's sampler of `which` ("u_seg", ...; NULL for
+ * RS_GPU_ARRAY_LEVELS, RS_GPU_ARRAY_ATLAS_PX and values out of range), with
+ * its texel format: *channels 1 or 4 values a texel, *kind 0 float, 1
+ * uint32, 2 int32 (either pointer may be NULL). Static strings. */
+RS_API const char *rs_gpu_array_sampler(rs_gpu_array which, uint32_t *channels, uint32_t *kind);
 
 /* GLSL sources that draw an rs_gpu_scene (docs/embedding.md "The GPU
  * side", docs/render.md "Shader mode"): the terrain vertex shader (attributes

@@ -6,9 +6,11 @@
 #ifndef RS_TESTS_GPU_SCENE_CHECK_H
 #define RS_TESTS_GPU_SCENE_CHECK_H
 #include "roadsplat.h"
+#include "gpu_scene_view.h"
 
 #include <math.h>
 #include <stddef.h>
+
 
 static int gsc_finite(const float *v, size_t n)
 {
@@ -35,9 +37,10 @@ static int gsc_lists(const uint32_t *start, const uint32_t *ids, size_t n, size_
     return 1;
 }
 
-static const char *gpu_scene_check(const rs_gpu_scene *g)
+static const char *gpu_scene_check(const rs_gpu_scene *scene)
 {
-    if (!g) return "no scene";
+    if (!scene) return "no scene";
+    const gsv view = gsv_of(scene), *g = &view;
     if (!(g->cell > 0) || !isfinite(g->x0) || !isfinite(g->y0) || g->gw == 0 || g->gh == 0) return "grid";
     const size_t ncell = (size_t)g->gw * g->gh;
     if (!g->seg || !g->road || !g->band || !g->mark || !g->types || !g->levels || !g->atlas_px)

@@ -80,6 +80,31 @@ if $CC $SAN -std=c99 -o "$T/app_static" "$T/app.c" $(pkg-config --cflags roadspl
     check "C consumer (static) runs" [ "$("$T/app_static")" = "$ver 4" ]
 else cat "$T/st.log"; bad "C consumer builds against libroadsplat.a"; fi
 
+# The example hosts (docs/examples/host.c, host.cpp; docs/embedding.md "An
+# example host"): built from the installed library through pkg-config, each
+# draws on its own OSMesa context and compares its frame with the CPU splat
+# (exit 1 past mean 1/255 or p99 8/255). Without OSMesa's pkg-config file they
+# are skipped with a line saying so.
+EX=$(cd "$(dirname "$0")/../docs/examples" && pwd)
+if pkg-config --exists osmesa 2>/dev/null; then
+    if [ -n "$SAN" ]; then LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}use_tls=0"; export LSAN_OPTIONS; fi # as cli_render_test.sh
+    # shellcheck disable=SC2046
+    if $CC $SAN -std=c99 -pedantic -Wall -Wextra -Werror -o "$T/host" "$EX/host.c" $(pkg-config --cflags --libs roadsplat osmesa) \
+        -lm -Wl,-rpath,"$P/lib" 2>"$T/host.log"; then
+        check "example host (C): junction frame equals the CPU splat" sh -c "'$T/host' '$EX/junction-dem.pgm' '$EX/junction.txt' 2 0.01 5 >'$T/host.out' && grep -q 'GPU - CPU mean' '$T/host.out'"
+        check "example host (C): city frame equals the CPU splat" "$T/host" "$EX/dem.pgm" "$EX/roads.txt" 5 0.01 4
+        sed 's/^/     /' "$T/host.out"
+    else cat "$T/host.log"; bad "example host (C) builds from the installed library"; fi
+    # shellcheck disable=SC2046
+    if $CXX $SAN -std=c++11 -pedantic -Wall -Wextra -Werror -o "$T/host_cpp" "$EX/host.cpp" \
+        $(pkg-config --cflags --libs roadsplat osmesa) -Wl,-rpath,"$P/lib" 2>"$T/hostxx.log"; then
+        check "example host (C++): T junction frame equals the CPU splat" sh -c "'$T/host_cpp' '$EX/network_tee.txt' 41 21 2 16 >'$T/hostxx.out'"
+        sed 's/^/     /' "$T/hostxx.out"
+    else cat "$T/hostxx.log"; bad "example host (C++) builds from the installed library"; fi
+else
+    echo "SKIP install: no osmesa.pc (pkg-config): the example hosts docs/examples/host.c and host.cpp are not built"
+fi
+
 # The installed CLI and its modules.
 R=$P/bin/roadsplat
 check "installed roadsplat --version" sh -c "'$R' --version | grep -q '$ver'"

@@ -21,6 +21,7 @@
  *   copy, and the markings themselves, count against rs_limits.max_points. */
 #include "roadsplat.h"
 #include "harness.h"
+#include "gpu_scene_view.h"
 #include "roadfield.h"
 #include "scene_splat.h"
 
@@ -362,9 +363,9 @@ static void test_atlas_gpu(void)
     CHECK(a && d && rs_gpu_scene_create(ctx, d, R, &o, NULL, &gs) == RS_OK);
     if (gs) {
         /* 64 x 64 and 32 x 64 chains: 5461 + 2731 texels (levels down to 1 x 1) */
-        CHECK_EQ_INT(gs->ntypes, 4);
-        CHECK_EQ_INT(gs->atlas_texels, 5461 + 2731);
-        CHECK(gs->types[2] == gs->types[0] && gs->types[4] == gs->types[0] && gs->types[6] != gs->types[0]);
+        CHECK_EQ_INT(gsv_of(gs).ntypes, 4);
+        CHECK_EQ_INT(gsv_of(gs).atlas_texels, 5461 + 2731);
+        CHECK(gsv_of(gs).types[2] == gsv_of(gs).types[0] && gsv_of(gs).types[4] == gsv_of(gs).types[0] && gsv_of(gs).types[6] != gsv_of(gs).types[0]);
     }
     rs_gpu_scene_free(ctx, gs);
     rs_dem_free(ctx, d);

@@ -17,6 +17,7 @@
  * road attribute), so they build there and fail; the queries are new. */
 #include "roadsplat.h"
 #include "harness.h"
+#include "gpu_scene_view.h"
 #include "scene_splat.h"
 
 #include <math.h>
@@ -809,19 +810,19 @@ static void test_gpu_cuts(void)
     CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK);
     CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
     if (g) {
-        CHECK(g->ncuts >= 2 && g->cut);
+        CHECK(gsv_of(g).ncuts >= 2 && gsv_of(g).cut);
         size_t total = 0;
-        for (size_t r = 0; r < g->nroads; r++) {
-            size_t first = (size_t)g->cut[4 * r], n = (size_t)g->cut[4 * r + 1];
+        for (size_t r = 0; r < gsv_of(g).nroads; r++) {
+            size_t first = (size_t)gsv_of(g).cut[4 * r], n = (size_t)gsv_of(g).cut[4 * r + 1];
             CHECK(n == 0 || first == total);
             total += n;
             CHECK(n >= 1); /* main: the zebra; side: the stop line */
-            for (size_t k = first; k < first + n && k < g->ncuts; k++) {
-                const float *c = g->cut + 4 * g->nroads + RS_GPU_CUT_FLOATS * k;
+            for (size_t k = first; k < first + n && k < gsv_of(g).ncuts; k++) {
+                const float *c = gsv_of(g).cut + 4 * gsv_of(g).nroads + RS_GPU_CUT_FLOATS * k;
                 CHECK(fabs(hypot(c[2], c[3]) - 1) < 1e-5 && c[5] > c[4] && c[6] > 0);
             }
         }
-        CHECK_EQ_INT(total, g->ncuts);
+        CHECK_EQ_INT(total, gsv_of(g).ncuts);
     }
     rs_gpu_scene_free(ctx, g);
     rs_roads_free(ctx, roads);

@@ -10,6 +10,8 @@
 #include "lanes.h"
 #include "roadfield.h"
 #include "network.h"
+#include "roadgrid.h"
+#include "styling.h"
 
 #include <float.h>
 #include <math.h>
@@ -19,6 +21,85 @@
 
 #define GE_COS30 0.866
 #define GE_MAX_CELLS ((double)(1u << 22))
+
+/* The scene (include/roadsplat.h "GPU export"; opaque to hosts, who read
+ * it through rs_gpu_scene_get_info and rs_gpu_scene_array). */
+struct rs_gpu_scene {
+    double cell, x0, y0, reach;
+    uint32_t gw, gh;
+    double map_w, map_h;           /* map extent, metres */
+    size_t nseg, nroads, nbands, nmarks, ntypes, nlevels;
+    size_t nseg_entries, nmark_entries, atlas_texels;
+    float *seg, *road, *band, *mark;
+    uint32_t *cell_start, *cell_seg;   /* gw*gh + 1, nseg_entries */
+    uint32_t *mark_start, *mark_ids;   /* gw*gh + 1, nmark_entries */
+    uint32_t *types, *levels;          /* ntypes * RS_GPU_TYPE_INTS, nlevels * RS_GPU_LEVEL_INTS */
+    float *atlas_px;                   /* atlas_texels * 4 */
+    size_t bytes;
+    size_t ncuts;                      /* line cuts (issue 27) */
+    float *cut;                        /* 4 * max(nroads, 1) + ncuts * RS_GPU_CUT_FLOATS */
+    /* the markings' summed-area tables the shader samples (ge_mark_tables) */
+    uint32_t *mark_levels;             /* nlevels * RS_GPU_LEVEL_INTS */
+    int32_t *mark_sat;                 /* sat_corners * 4 */
+    size_t sat_corners;
+};
+
+/* Where the export takes the styles, line cuts and placements from: the
+ * road grid prepared for these roads (rs_gpu_scene_from_grid), or NULL:
+ * worked out from the roads (rs_gpu_scene_create). */
+typedef struct ge_src {
+    const rs_road_grid *grid;
+} ge_src;
+
+static void colour_of(rs_colour *c, const float *f)
+{
+    c->r = (uint8_t)f[0];
+    c->g = (uint8_t)f[1];
+    c->b = (uint8_t)f[2];
+    c->a = (uint8_t)lrintf(f[3] * 255.0f);
+}
+
+/* Road i's style as the export reads it (surface, colours, casing, lines):
+ * resolved from the roads, or rebuilt from what the grid's styling kept
+ * (the colours as put_colour stored them: r, g, b whole, a / 255, both
+ * exact both ways). A grid with no styled road kept none: its roads are
+ * drawn unstyled, and their colours (not read by the shader) are what the
+ * style options without the named table give, else 0. */
+static rs_result ge_style(rs_ctx *ctx, const ge_src *src, const rs_roads *roads, size_t i, const rs_style_options *so,
+                          rs_style *sty)
+{
+    if (!src->grid) return rs_road_style_ex(ctx, roads, i, so, sty);
+    const rs__styling *st = src->grid->styling;
+    memset(sty, 0, sizeof *sty);
+    if (!st) {
+        if (rs_road_style_ex(ctx, roads, i, so, sty) != RS_OK) memset(sty, 0, sizeof *sty);
+        sty->surface = RS_SURFACE_DEFAULT;
+        sty->casing_width = 0;
+        sty->line_count = 0;
+        rs__ok(ctx);
+        return RS_OK;
+    }
+    const float *c = st->colour + 16 * i;
+    sty->surface = (rs_surface)st->surface[i];
+    colour_of(&sty->fill, c);
+    colour_of(&sty->gradient_centre, c + 4);
+    colour_of(&sty->gradient_edge, c + 8);
+    colour_of(&sty->casing, c + 12);
+    sty->casing_width = st->casing_width ? st->casing_width[i] : 0;
+    uint32_t b0 = st->band_start ? st->band_start[i] : 0, b1 = st->band_start ? st->band_start[i + 1] : 0;
+    sty->line_count = b1 - b0;
+    for (uint32_t j = 0; j < sty->line_count; j++) {
+        const rs__band *b = &st->bands[b0 + j];
+        rs_style_line *ln = &sty->line[j];
+        ln->offset = b->t;
+        ln->width = b->w;
+        colour_of(&ln->colour, b->rgba);
+        ln->dash_count = b->ndash;
+        if (b->ndash) memcpy(ln->dash, b->dash, b->ndash * sizeof *b->dash);
+        ln->phase = b->phase;
+    }
+    return RS_OK;
+}
 
 typedef struct ge_end {
     double x, y, dx, dy; /* end point and the direction the road leaves it */
@@ -65,8 +146,8 @@ static int ge_lines_mirror(const rs_style *st)
  * the stroke's arc length, and a record drawn against the stroke its
  * points last to first: dashes then run on across the splits in the
  * shader as on the CPU. soff[i] < 0: the record keeps its own s. */
-static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs_splat_options *o,
-                            rs_style *sty, double *soff, unsigned char *srev)
+static rs_result ge_strokes(rs_ctx *ctx, const ge_src *src, const rs_roads *roads, const rs_network *net,
+                            const rs_splat_options *o, rs_style *sty, double *soff, unsigned char *srev)
 {
     size_t n = rs_roads_count(roads);
     for (size_t i = 0; i < n; i++) soff[i] = -1, srev[i] = 0;
@@ -86,12 +167,12 @@ static rs_result ge_strokes(rs_ctx *ctx, const rs_roads *roads, const rs_network
             mixed = q.reversed != h.reversed;
         }
         if (mixed) { /* every record drawn against another needs lines that look the same both ways */
-            if ((r = rs_road_style_ex(ctx, roads, recs[0], &o->style, sty)) != RS_OK) break;
+            if ((r = ge_style(ctx, src, roads, recs[0], &o->style, sty)) != RS_OK) break;
             int alone = !ge_lines_mirror(sty);
             for (size_t j = 1; j < nrec && !alone && !r; j++) {
                 rs_network_road_stroke(net, recs[j], &q);
                 if (q.reversed == h.reversed) continue;
-                if ((r = rs_road_style_ex(ctx, roads, recs[j], &o->style, sty)) != RS_OK) break;
+                if ((r = ge_style(ctx, src, roads, recs[j], &o->style, sty)) != RS_OK) break;
                 alone = !ge_lines_mirror(sty);
             }
             if (r) break;
@@ -207,6 +288,8 @@ void rs_gpu_scene_free(rs_ctx *ctx, rs_gpu_scene *g)
     rs__free(ctx, g->levels);
     rs__free(ctx, g->atlas_px);
     rs__free(ctx, g->cut);
+    rs__free(ctx, g->mark_levels);
+    rs__free(ctx, g->mark_sat);
     rs__free(ctx, g);
 }
 
@@ -233,15 +316,23 @@ static void box_cells(const rs_gpu_scene *g, double xa, double ya, double xb, do
     *i0 = u[0]; *j0 = u[1]; *i1 = u[2]; *j1 = u[3];
 }
 
-/* Distance from point (x, y) to segment a-b. */
-static double seg_dist(double ax, double ay, double bx, double by, double x, double y)
+/* Whether point (x, y) is within r of segment a-b: hypot(e) <= r for e
+ * from the point to its nearest point of the segment. The squares decide
+ * unless they are within a 1e-9 fraction of each other (far more than
+ * their rounding), where hypot decides: the same answers as hypot alone,
+ * at a fraction of its cost (the index fill asks this of every cell near
+ * every segment: it was two thirds of the export). */
+static int seg_within(double ax, double ay, double bx, double by, double x, double y, double r)
 {
     double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy, u = 0;
     if (l2 > 0) {
         u = ((x - ax) * dx + (y - ay) * dy) / l2;
         u = u < 0 ? 0 : u > 1 ? 1 : u;
     }
-    return hypot(x - ax - u * dx, y - ay - u * dy);
+    double ex = x - ax - u * dx, ey = y - ay - u * dy, e2 = ex * ex + ey * ey, r2 = r * r;
+    if (e2 < r2 * (1 - 1e-9)) return 1;
+    if (e2 > r2 * (1 + 1e-9)) return 0;
+    return hypot(ex, ey) <= r;
 }
 
 /* The items an index grid lists: segments (listed in every cell whose
@@ -279,7 +370,7 @@ static int item_in_cell(const rs_gpu_scene *g, const ge_items *it, size_t k, uin
     if (!it->seg) return 1;
     const float *s = it->seg + RS_GPU_SEG_FLOATS * k;
     double cx = g->x0 + (i + 0.5) * g->cell, cy = g->y0 + (j + 0.5) * g->cell;
-    return seg_dist(s[0], s[1], s[2], s[3], cx, cy) <= item_reach(g, s) + g->cell * 0.70710678118654752440;
+    return seg_within(s[0], s[1], s[2], s[3], cx, cy, item_reach(g, s) + g->cell * 0.70710678118654752440);
 }
 
 #define GE_MAX_ENTRIES ((size_t)1 << 28)
@@ -402,12 +493,13 @@ static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     return RS_OK;
 }
 
-rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
-                              const rs_gpu_options *gopts, rs_gpu_scene **out)
+static rs_result ge_mark_tables(rs_ctx *ctx, rs_gpu_scene *g);
+
+/* The export of either entry point: o are the options the styles and
+ * markings follow (the grid's own with src.grid). */
+static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                           const rs_gpu_options *gopts, rs_gpu_scene **out)
 {
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_create: NULL argument");
-    *out = NULL;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     if (opts) o = *opts;
@@ -462,7 +554,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
         if (o.style.disable) continue;
-        if ((r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
+        if ((r = ge_style(ctx, &src, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
     g->band = rs__calloc(ctx, nbands ? nbands : 1, RS_GPU_BAND_FLOATS * sizeof(float));
@@ -471,7 +563,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     srev = rs__alloc_array(ctx, n ? n : 1, sizeof *srev);
     if (!g->band || !ends || !soff || !srev) { r = RS_ERR_NOMEM; goto fail; }
     if (!o.style.disable && n > 0 && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto fail_msg;
-    if ((r = ge_strokes(ctx, roads, net, &o, sty, soff, srev)) != RS_OK) goto fail_msg;
+    if ((r = ge_strokes(ctx, &src, roads, net, &o, sty, soff, srev)) != RS_OK) goto fail_msg;
     /* record ends at a T: trimmed as the road field trims them */
     if ((r = rs__tee_ends(ctx, roads, net, &tees, &ntees)) != RS_OK) goto fail;
     if (ntees && !(tee_of = rs__alloc_array(ctx, 2 * n, sizeof *tee_of))) { r = RS_ERR_NOMEM; goto fail; }
@@ -485,7 +577,7 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         /* wider than 2e15 m covers any map; the cap keeps it a float */
         double hw = fmin(0.5 * w, 1e15);
         memset(sty, 0, sizeof *sty);
-        if (!o.style.disable && (r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK)
+        if (!o.style.disable && (r = ge_style(ctx, &src, roads, i, &o.style, sty)) != RS_OK)
             goto fail_msg;
         rd[0] = (float)sty->surface;
         rd[1] = ge_float(hw);
@@ -582,12 +674,20 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!o.markings.disable &&
         (rs_roads_mark_count(roads) || (!o.markings.no_auto && rs__markings_auto_possible(roads)))) {
         const rs_atlas *atlas = o.markings.atlas;
+        const rs__markings *kept = src.grid ? src.grid->markings : NULL;
+        if (!atlas && kept) atlas = kept->atlas_own;
         if (!atlas) {
             if ((r = rs_atlas_default(ctx, &atlas_own)) != RS_OK) goto fail_msg;
             atlas = atlas_own;
         }
         size_t npl = 0;
-        if ((r = placements(ctx, dem, roads, &o, atlas, net, &pl, &npl)) != RS_OK) goto fail_msg;
+        if (kept) { /* the grid's placements (a copy: turned into the strokes' terms below) */
+            npl = kept->npl;
+            if (!(pl = rs__alloc_array(ctx, npl ? npl : 1, sizeof *pl))) { r = RS_ERR_NOMEM; goto fail; }
+            if (npl) memcpy(pl, kept->pl, npl * sizeof *pl);
+        } else if ((r = placements(ctx, dem, roads, &o, atlas, net, &pl, &npl)) != RS_OK) {
+            goto fail_msg;
+        }
         g->mark = rs__calloc(ctx, npl ? npl : 1, RS_GPU_MARK_FLOATS * sizeof(float));
         g->ntypes = atlas->n;
         g->types = rs__calloc(ctx, atlas->n ? atlas->n : 1, RS_GPU_TYPE_INTS * sizeof(uint32_t));
@@ -705,7 +805,14 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!o.style.disable) {
         rs__line_cut *cuts = NULL;
         size_t nc = 0;
-        if ((r = rs__markings_line_cuts(ctx, dem, roads, &o, net, &cuts, &nc)) != RS_OK) goto fail_msg;
+        const rs__styling *st = src.grid ? src.grid->styling : NULL;
+        if (st && st->lines) { /* the grid's (kept where some road has lines) */
+            nc = st->ncuts;
+            if (!(cuts = rs__alloc_array(ctx, nc ? nc : 1, sizeof *cuts))) { r = RS_ERR_NOMEM; goto fail; }
+            if (nc) memcpy(cuts, st->cuts, nc * sizeof *cuts);
+        } else if ((r = rs__markings_line_cuts(ctx, dem, roads, &o, net, &cuts, &nc)) != RS_OK) {
+            goto fail_msg;
+        }
         g->cut = rs__calloc(ctx, 4 * (n ? n : 1) + RS_GPU_CUT_FLOATS * nc, sizeof(float));
         if (!g->cut) {
             rs__free(ctx, cuts);
@@ -744,6 +851,8 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                                sizeof(float) +
                (2 * (ncell + 1) + g->nseg_entries + g->nmark_entries + g->ntypes * RS_GPU_TYPE_INTS +
                 g->nlevels * RS_GPU_LEVEL_INTS) * sizeof(uint32_t);
+    if ((r = ge_mark_tables(ctx, g)) != RS_OK) goto fail_msg;
+    g->bytes += (g->nlevels * RS_GPU_LEVEL_INTS + g->sat_corners * 4) * sizeof(uint32_t);
     rs__free(ctx, pl);
     rs__free(ctx, ends);
     rs__free(ctx, soff);
@@ -770,4 +879,168 @@ fail_msg:
     rs_atlas_free(ctx, atlas_own);
     rs_gpu_scene_free(ctx, g);
     return r;
+}
+
+
+rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                              const rs_gpu_options *gopts, rs_gpu_scene **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_create: NULL argument");
+    *out = NULL;
+    ge_src src = { NULL };
+    return ge_export(ctx, src, dem, roads, opts, gopts, out);
+}
+
+rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
+                                 const rs_gpu_options *gopts, rs_gpu_scene **out)
+{
+    if (out) *out = NULL;
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!dem || !roads || !grid || !out)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: NULL argument");
+    if (grid->dem_w != dem->width || grid->dem_h != dem->height ||
+        memcmp(&grid->frame, &dem->frame, sizeof grid->frame) != 0)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built for another DEM");
+    /* the grid's per-road tables must be of these roads */
+    const size_t n = rs_roads_count(roads);
+    int other = grid->styling && grid->styling->nroads != n;
+    for (size_t k = 0; grid->markings && k < grid->markings->npl && !other; k++) other = grid->markings->pl[k].road >= n;
+    if (other)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built from other roads");
+    /* the options the grid was built with, as far as the export reads them */
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = grid->texels;
+    o.style = grid->style;
+    o.markings = grid->marks;
+    ge_src src = { grid };
+    return ge_export(ctx, src, dem, roads, &o, gopts, out);
+}
+
+/* Type t has levels and is the first with its level 0 (a type sharing an
+ * earlier type's rectangle shares its table). */
+static int ge_table_of(const rs_gpu_scene *g, size_t t)
+{
+    const uint32_t *ty = g->types + RS_GPU_TYPE_INTS * t;
+    if (!ty[1]) return 0;
+    for (size_t u = 0; u < t; u++)
+        if (g->types[RS_GPU_TYPE_INTS * u + 1] && g->types[RS_GPU_TYPE_INTS * u] == ty[0]) return 0;
+    return 1;
+}
+
+/* The markings' summed-area tables (issue 25, docs/markings.md) from each
+ * type's level 0: per type (h + 1) x (w + 1) corners of the sums of
+ * round(255 x premultiplied r g b) and round(255 x alpha) (whole numbers,
+ * so the shader's differences are exact), and a copy of the level records
+ * whose level-0 fourth int is the type's first corner. Types sharing a
+ * rectangle (the same first level) share their table. */
+static rs_result ge_mark_tables(rs_ctx *ctx, rs_gpu_scene *g)
+{
+    size_t n = 0;
+    for (size_t t = 0; t < g->ntypes; t++) {
+        if (!ge_table_of(g, t)) continue;
+        const uint32_t *L = g->levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
+        n += (size_t)(L[1] + 1) * (L[2] + 1);
+    }
+    g->mark_sat = rs__calloc(ctx, n ? n : 1, 4 * sizeof *g->mark_sat);
+    g->mark_levels = rs__calloc(ctx, g->nlevels ? g->nlevels : 1, RS_GPU_LEVEL_INTS * sizeof *g->mark_levels);
+    if (!g->mark_sat || !g->mark_levels) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the GPU export");
+    if (g->nlevels) memcpy(g->mark_levels, g->levels, g->nlevels * RS_GPU_LEVEL_INTS * sizeof *g->mark_levels);
+    size_t off = 0;
+    for (size_t t = 0; t < g->ntypes; t++) {
+        if (!ge_table_of(g, t)) continue;
+        uint32_t *L = g->mark_levels + RS_GPU_LEVEL_INTS * g->types[RS_GPU_TYPE_INTS * t];
+        const size_t w = L[1], h = L[2], w1 = w + 1;
+        const float *px = g->atlas_px + 4 * (size_t)L[0];
+        int32_t *S = g->mark_sat + 4 * off;
+        L[3] = (uint32_t)off;
+        for (size_t j = 0; j < h; j++) {
+            int64_t row[4] = { 0, 0, 0, 0 };
+            for (size_t i = 0; i < w; i++)
+                for (int c = 0; c < 4; c++) {
+                    row[c] += (int64_t)lrintf(px[4 * (j * w + i) + (size_t)c] * 255.0f);
+                    int64_t v = S[4 * (j * w1 + i + 1) + (size_t)c] + row[c];
+                    if (v > INT32_MAX)
+                        return rs__fail(ctx, RS_ERR_LIMIT, "GPU export: marking type %zu (%zu x %zu texels) is too "
+                                        "large for the shader's summed-area table", t, w, h);
+                    S[4 * ((j + 1) * w1 + i + 1) + (size_t)c] = (int32_t)v;
+                }
+        }
+        off += w1 * (h + 1);
+    }
+    g->sat_corners = n;
+    return RS_OK;
+}
+
+void rs_gpu_scene_get_info(const rs_gpu_scene *g, rs_gpu_scene_info *out)
+{
+    if (!out) return;
+    memset(out, 0, sizeof *out);
+    if (!g) return;
+    out->cell = g->cell;
+    out->x0 = g->x0;
+    out->y0 = g->y0;
+    out->reach = g->reach;
+    out->gw = g->gw;
+    out->gh = g->gh;
+    out->map_w = g->map_w;
+    out->map_h = g->map_h;
+    out->nseg = g->nseg;
+    out->nroads = g->nroads;
+    out->nbands = g->nbands;
+    out->nmarks = g->nmarks;
+    out->ntypes = g->ntypes;
+    out->nlevels = g->nlevels;
+    out->ncuts = g->ncuts;
+    out->nseg_entries = g->nseg_entries;
+    out->nmark_entries = g->nmark_entries;
+    out->atlas_texels = g->atlas_texels;
+    out->sat_corners = g->sat_corners;
+    out->bytes = g->bytes;
+}
+
+const void *rs_gpu_scene_array(const rs_gpu_scene *g, rs_gpu_array which, size_t *count)
+{
+    size_t n = 0;
+    const void *p = NULL;
+    const size_t ncell1 = g ? (size_t)g->gw * g->gh + 1 : 0;
+    if (g) switch (which) {
+    case RS_GPU_ARRAY_SEG: p = g->seg, n = g->nseg * RS_GPU_SEG_FLOATS; break;
+    case RS_GPU_ARRAY_CELL_START: p = g->cell_start, n = ncell1; break;
+    case RS_GPU_ARRAY_CELL_SEG: p = g->cell_seg, n = g->nseg_entries; break;
+    case RS_GPU_ARRAY_ROAD: p = g->road, n = g->nroads * RS_GPU_ROAD_FLOATS; break;
+    case RS_GPU_ARRAY_BAND: p = g->band, n = g->nbands * RS_GPU_BAND_FLOATS; break;
+    case RS_GPU_ARRAY_MARK: p = g->mark, n = g->nmarks * RS_GPU_MARK_FLOATS; break;
+    case RS_GPU_ARRAY_MARK_START: p = g->mark_start, n = ncell1; break;
+    case RS_GPU_ARRAY_MARK_IDS: p = g->mark_ids, n = g->nmark_entries; break;
+    case RS_GPU_ARRAY_TYPES: p = g->types, n = g->ntypes * RS_GPU_TYPE_INTS; break;
+    case RS_GPU_ARRAY_MARK_LEVELS: p = g->mark_levels, n = g->nlevels * RS_GPU_LEVEL_INTS; break;
+    case RS_GPU_ARRAY_MARK_SAT: p = g->mark_sat, n = g->sat_corners * 4; break;
+    case RS_GPU_ARRAY_CUT: p = g->cut, n = 4 * (g->nroads ? g->nroads : 1) + RS_GPU_CUT_FLOATS * g->ncuts; break;
+    case RS_GPU_ARRAY_LEVELS: p = g->levels, n = g->nlevels * RS_GPU_LEVEL_INTS; break;
+    case RS_GPU_ARRAY_ATLAS_PX: p = g->atlas_px, n = g->atlas_texels * 4; break;
+    default: break;
+    }
+    if (count) *count = p ? n : 0;
+    return p;
+}
+
+const char *rs_gpu_array_sampler(rs_gpu_array which, uint32_t *channels, uint32_t *kind)
+{
+    /* in rs_gpu_array order; kind 0 float, 1 uint32, 2 int32 */
+    static const struct { const char *name; uint32_t ch, kind; } tab[RS_GPU_ARRAY_COUNT] = {
+        { "u_seg", 4, 0 },   { "u_cstart", 1, 1 }, { "u_cseg", 1, 1 },  { "u_roadt", 4, 0 },
+        { "u_band", 4, 0 },  { "u_mark", 4, 0 },   { "u_mstart", 1, 1 }, { "u_mids", 1, 1 },
+        { "u_types", 1, 1 }, { "u_levels", 4, 1 }, { "u_atlas", 4, 2 }, { "u_cut", 4, 0 },
+        { NULL, 1, 1 },      { NULL, 4, 0 },
+    };
+    if ((unsigned)which >= RS_GPU_ARRAY_COUNT) {
+        if (channels) *channels = 0;
+        if (kind) *kind = 0;
+        return NULL;
+    }
+    if (channels) *channels = tab[which].ch;
+    if (kind) *kind = tab[which].kind;
+    return tab[which].name;
 }

@@ -79,6 +79,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->fps);
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
+    rs__free(ctx, mk->pl);
     rs__free(ctx, mk);
 }
 
@@ -789,11 +790,14 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
             if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory for the markings index");
         }
     }
-    rs__free(ctx, pl);
     if (r || mk->n == 0) {
+        rs__free(ctx, pl);
         rs__markings_free(ctx, mk);
         return r;
     }
+    mk->pl = pl; /* kept for the GPU export */
+    mk->npl = npl;
+    mk->bytes += npl * sizeof *pl;
     *out = mk;
     return RS_OK;
 }

@@ -121,6 +121,11 @@ typedef struct rs__markings {
     uint32_t *start;           /* gw*gh + 1 offsets into list */
     struct rs__mk_ref *list;   /* per cell, ascending marking index: the index and its box */
     uint64_t n_explicit, n_auto;
+    /* Every placement as placed (record order: explicit, then automatic),
+     * also those drawing nothing here: what the GPU export reads
+     * (rs_gpu_scene_from_grid, lib/gpu/gpu_export.c). */
+    rs__placement *pl;
+    size_t npl;
     size_t bytes;
 } rs__markings;
 

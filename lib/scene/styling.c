@@ -27,6 +27,11 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__free(ctx, st->img_f);
     rs__free(ctx, st->img_s0);
     rs__free(ctx, st->img_rev);
+    rs__free(ctx, st->band_start);
+    rs__free(ctx, st->bands);
+    rs__free(ctx, st->dash);
+    rs__free(ctx, st->casing_width);
+    rs__free(ctx, st->cuts);
     if (st->imgs)
         for (size_t i = 0; i < st->nimgs; i++) rs__surfimg_free(ctx, st->imgs[i]);
     rs__free(ctx, st->imgs);
@@ -270,6 +275,14 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.prio_given = 1;
         lp.prio = st->prio;
         r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
+        if (r == RS_OK && ncuts) { /* kept for the GPU export (the plan's are freed after the build) */
+            st->cuts = rs__alloc_array(ctx, ncuts, sizeof *st->cuts);
+            if (!st->cuts) r = RS_ERR_NOMEM;
+            else {
+                memcpy(st->cuts, cuts, ncuts * sizeof *cuts);
+                st->ncuts = ncuts;
+            }
+        }
         if (r != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }
@@ -326,10 +339,14 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     st->bytes += sizeof *st + n * (1 + 16 * sizeof(float) + sizeof(double));
     if (st->img_of) st->bytes += n * (sizeof *st->img_of + sizeof *st->img_len + sizeof *st->img_lev + sizeof *st->img_f);
     if (st->img_s0) st->bytes += n * (sizeof *st->img_s0 + 1);
-    rs__free(ctx, dash);
-    rs__free(ctx, extra);
-    rs__free(ctx, bands);
-    rs__free(ctx, band_start);
+    /* what the GPU export reads (rs_gpu_scene_from_grid): kept, not freed */
+    st->nroads = n;
+    st->band_start = band_start;
+    st->bands = bands;
+    st->dash = dash;
+    st->casing_width = extra;
+    st->bytes += (n + 1) * sizeof *band_start + nbands * (sizeof *bands + RS_STYLE_MAX_DASH * sizeof *dash) +
+                 (extra ? n * sizeof *extra : 0) + st->ncuts * sizeof *st->cuts;
     rs__free(ctx, sty);
     rs_roads_free(ctx, casing_roads);
     *out = st;

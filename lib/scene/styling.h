@@ -7,6 +7,8 @@
 
 struct rs__roadfield;
 struct rs__linesym;
+struct rs__band;
+struct rs__line_cut;
 
 typedef struct rs__styling {
     struct rs__linesym *lines;        /* NULL: no road has lines */
@@ -41,6 +43,18 @@ typedef struct rs__styling {
     struct rs__surfimg **imgs;        /* one per rs_style_options.surface_images entry in use (NULL: unused) */
     size_t nimgs;
     uint64_t img_pixels; /* pixels of the surface images in imgs[], all together */
+    /* The resolved lines and casings as the GPU export reads them
+     * (rs_gpu_scene_from_grid, lib/gpu/gpu_export.c): road i's lines are
+     * bands[band_start[i] .. band_start[i + 1]) (dashes in `dash`), its
+     * casing width casing_width[i] (NULL: no casing anywhere), and the
+     * lines' cuts at stop lines and zebras (NULL when no road has lines). */
+    size_t nroads;                    /* the roads the per-road tables hold */
+    uint32_t *band_start;
+    struct rs__band *bands;
+    double *dash;
+    double *casing_width;
+    struct rs__line_cut *cuts;
+    size_t ncuts;
     size_t bytes;
 } rs__styling;
 
