@@ -49,40 +49,22 @@ static char *read_file(const char *path, size_t *size)
     return buf;
 }
 
-/* The splat of `roads` over the whole map (a splatter of its own). */
-static uint8_t *splat_all(const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, uint32_t w, uint32_t h)
+/* The fragment shader's two colour images, from one layers pass of the
+ * splatter: the terrain colour T (no roads) and the unstyled road surface
+ * S (the road material alone: the shader adds styles and paint). */
+static rs_result surfaces(const rs_splatter *sp, uint32_t w, uint32_t h, uint8_t **t, uint8_t **s)
 {
-    rs_splatter *sp = NULL;
-    uint8_t *px = malloc((size_t)w * h * 4);
-    if (!px || rs_splatter_create(ctx, dem, roads, NULL, o, &sp) != RS_OK ||
-        rs_splat_window(ctx, sp, 0, 0, w, h, px, (size_t)w * 4, NULL, 0, NULL) != RS_OK) {
-        free(px);
-        px = NULL;
-    }
-    rs_splatter_free(ctx, sp);
-    return px;
-}
-
-/* The fragment shader's two colour images: the terrain colour T (the splat
- * without roads) and the unstyled road surface S (the splat under one road
- * wider than the map). */
-static int surfaces(const rs_dem *dem, const rs_splat_options *o, uint32_t w, uint32_t h, uint8_t **t, uint8_t **s)
-{
-    rs_dem_frame fr;
-    rs_roads *none = NULL, *wide = NULL;
-    rs_dem_get_frame(dem, &fr);
-    double mw = (rs_dem_width(dem) - 1) * fr.cell_size, mh = (rs_dem_height(dem) - 1) * fr.cell_size;
-    double xy[4];
-    xy[0] = fr.origin_x - mw - 1, xy[1] = fr.origin_y + mh / 2, xy[2] = fr.origin_x + 2 * mw + 1, xy[3] = xy[1];
-    *t = *s = NULL;
-    if (rs_roads_create(ctx, &none) == RS_OK && rs_roads_create(ctx, &wide) == RS_OK &&
-        rs_roads_add(ctx, wide, "surface", 2 * (mw + mh) + 4, xy, 2) == RS_OK) {
-        *t = splat_all(dem, none, o, w, h);
-        *s = splat_all(dem, wide, o, w, h);
-    }
-    rs_roads_free(ctx, none);
-    rs_roads_free(ctx, wide);
-    return *t && *s ? 0 : -1;
+    rs_splat_layers L;
+    memset(&L, 0, sizeof L);
+    *t = malloc((size_t)w * h * 4);
+    *s = malloc((size_t)w * h * 4);
+    if (!*t || !*s) return RS_ERR_NOMEM;
+    L.terrain = *t;
+    L.terrain_stride = (size_t)w * 4;
+    L.surface = *s;
+    L.surface_stride = (size_t)w * 4;
+    L.surface_unstyled = 1;
+    return rs_splat_layers_window(ctx, sp, NULL, 0, 0, w, h, &L, NULL);
 }
 
 static GLuint shader(GLenum type, rs_gpu_shader which)
@@ -182,7 +164,7 @@ int main(int argc, char **argv)
     gpu = malloc((size_t)w * h * 4);
     if (!cpu || !gpu) return 2;
     if ((r = rs_splat_window(ctx, sp, 0, 0, w, h, cpu, (size_t)w * 4, NULL, 0, NULL))) return fail("CPU splat", r);
-    if (surfaces(dem, &o, w, h, &terrain, &road)) return fail("terrain and road images", RS_ERR_NOMEM);
+    if ((r = surfaces(sp, w, h, &terrain, &road))) return fail("terrain and road layers", r);
 
     {
         /* the host's own GL context: 3.3 core, drawing into `gpu` */

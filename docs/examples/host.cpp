@@ -58,18 +58,33 @@ struct Image {
     std::vector<uint8_t> rgba;
 };
 
-// The whole splat of `roads` (the splatter prepares its own grid).
-Image splat(const rs_dem *dem, const rs_roads *roads, const rs_splat_options &o)
+// The whole splat of `roads` (the splatter prepares its own grid) and, from
+// one layers pass of the same splatter, the shader's two colour images: the
+// terrain colour (no roads) and the unstyled road surface (the material alone).
+struct Splats {
+    Image colour, terrain, surface;
+};
+Splats splat(const rs_dem *dem, const rs_roads *roads, const rs_splat_options &o)
 {
     rs_splatter *raw = nullptr;
     check(rs_splatter_create(g_ctx, dem, roads, nullptr, &o, &raw), "splatter");
     Splatter sp(raw);
-    Image im;
-    rs_splatter_size(sp.get(), &im.w, &im.h);
-    im.rgba.resize(size_t(im.w) * im.h * 4);
-    check(rs_splat_window(g_ctx, sp.get(), 0, 0, im.w, im.h, im.rgba.data(), size_t(im.w) * 4, nullptr, 0, nullptr),
+    Splats out;
+    for (Image *im : { &out.colour, &out.terrain, &out.surface }) {
+        rs_splatter_size(sp.get(), &im->w, &im->h);
+        im->rgba.resize(size_t(im->w) * im->h * 4);
+    }
+    const uint32_t w = out.colour.w, h = out.colour.h;
+    check(rs_splat_window(g_ctx, sp.get(), 0, 0, w, h, out.colour.rgba.data(), size_t(w) * 4, nullptr, 0, nullptr),
           "splat");
-    return im;
+    rs_splat_layers layers{};
+    layers.terrain = out.terrain.rgba.data();
+    layers.terrain_stride = size_t(w) * 4;
+    layers.surface = out.surface.rgba.data();
+    layers.surface_stride = size_t(w) * 4;
+    layers.surface_unstyled = 1;
+    check(rs_splat_layers_window(g_ctx, sp.get(), nullptr, 0, 0, w, h, &layers, nullptr), "layers");
+    return out;
 }
 
 GLuint compile(GLenum type, rs_gpu_shader which)
@@ -152,16 +167,8 @@ int run(int argc, char **argv)
     Roads roads(raw_roads);
 
     // the CPU splat, the shader's two colour images, the GPU scene
-    const Image cpu = splat(dem.get(), roads.get(), opts);
-    rs_roads *raw_none = nullptr, *raw_wide = nullptr;
-    check(rs_roads_create(g_ctx, &raw_none), "roads");
-    Roads none(raw_none);
-    check(rs_roads_create(g_ctx, &raw_wide), "roads");
-    Roads wide(raw_wide);
-    const double mw = (dw - 1) * cell, mh = (dh - 1) * cell;
-    const double across[4] = { -mw - 1, mh / 2, 2 * mw + 1, mh / 2 };
-    check(rs_roads_add(g_ctx, wide.get(), "surface", 2 * (mw + mh) + 4, across, 2), "roads");
-    const Image terrain = splat(dem.get(), none.get(), opts), surface = splat(dem.get(), wide.get(), opts);
+    const Splats splats = splat(dem.get(), roads.get(), opts);
+    const Image &cpu = splats.colour, &terrain = splats.terrain, &surface = splats.surface;
     rs_gpu_scene *raw_scene = nullptr;
     check(rs_gpu_scene_create(g_ctx, dem.get(), roads.get(), &opts, nullptr, &raw_scene), "GPU scene");
     Scene scene(raw_scene);
