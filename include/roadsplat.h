@@ -50,6 +50,46 @@ RS_API const char *rs_version_string(void);
 RS_API uint32_t rs_version_number(void);
 
 /* ---------------------------------------------------------------------------
+ * ABI of the option structs (docs/embedding.md "ABI")
+ *
+ * Every option struct the library reads through a pointer (rs_limits,
+ * rs_road_parse_options, rs_style_request, rs_style_options,
+ * rs_normal_options, rs_network_options, rs_splat_options, rs_gpu_options,
+ * rs_roam_options, rs_roam_view, rs_roam_mesh_options, rs_vt_options,
+ * rs_vt_view) starts with `size_t size`, and all-zero still means
+ * defaults:
+ * - size 0: the layout of this header; right when the host was built
+ *   against the header of the library it runs with (rs_version_number);
+ * - size = sizeof the struct (`o.size = sizeof o;`): safe with any later
+ *   library of the same major version. A library whose struct is larger
+ *   reads the host's first `size` bytes and takes the rest as zero (the
+ *   defaults of the fields the host did not know);
+ * - a size larger than the library's struct (a host built against a newer
+ *   header) is accepted when the extra bytes are all zero (the host left
+ *   the new fields at their defaults) and refused otherwise with
+ *   RS_ERR_UNSUPPORTED, rs_ctx_message naming the struct and the byte;
+ *   a size below sizeof(size_t) is RS_ERR_INVALID_ARG.
+ * rs_roam_mesh_bound, which returns nothing, says what it does with a
+ * refused struct. Getters that fill one
+ * (rs_ctx_limits) write at most out->size bytes (0: all) and set out->size
+ * to what they wrote, so zero the struct or set its size before the call.
+ * Structs held by value inside another (rs_splat_options' grid, coverage,
+ * surface, style, markings and lighting; the lighting's normal) are
+ * covered by the outer struct's size: their own `size`, where they have
+ * one, is ignored there.
+ * Rules for the library (how a struct may change without a new major
+ * version): members are only appended, at offsets at or beyond the old
+ * sizeof (an old host's tail padding is not read as a new field), zero
+ * keeps meaning "default", and a struct nested by value never grows
+ * (new settings of a nested struct go at the end of the outer one).
+ * Plain data records (rs_dem_frame, rs_style, rs_style_line, rs_mark,
+ * rs_image, rs_colour, rs_colour_stop, rs_surface_image, rs_allocator) and
+ * the structs the library fills for the host (statistics, info, network
+ * nodes, lanes, tiles) carry no size: their layout is fixed for a minor
+ * version before 1.0 and a major one after.
+ * ------------------------------------------------------------------------- */
+
+/* ---------------------------------------------------------------------------
  * Results
  * ------------------------------------------------------------------------- */
 typedef enum rs_result {
@@ -84,6 +124,7 @@ typedef struct rs_allocator {
 /* Input limits, checked before anything is allocated. A zero field means
  * the default shown. Callers may tighten them (or loosen, at their risk). */
 typedef struct rs_limits {
+    size_t size;            /* 0, or sizeof (rs_limits) of the host\'s header: "ABI" above */
     uint32_t max_dem_side;     /* 16384: max DEM width or height (samples)  */
     uint64_t max_pixels;       /* 2^28: max output pixels (splat texture)   */
     uint64_t max_points;       /* 10^7: max road points over all roads; also
@@ -121,7 +162,8 @@ typedef struct rs_ctx rs_ctx;
 RS_API rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out);
 RS_API void rs_ctx_free(rs_ctx *ctx);
 
-/* Effective limits (defaults filled in). */
+/* Effective limits (defaults filled in): at most out->size bytes of them
+ * (0: the whole struct; "ABI" above), so zero *out or set its size first. */
 RS_API void rs_ctx_limits(const rs_ctx *ctx, rs_limits *out);
 
 /* Detail of the last failure on this context ("line 12: width must be > 0"),
@@ -285,6 +327,7 @@ typedef struct rs_styles rs_styles;
 
 /* Options of rs_roads_parse_ex. All-zero means defaults. */
 typedef struct rs_road_parse_options {
+    size_t size;            /* 0, or sizeof (rs_road_parse_options) of the host\'s header: "ABI" above */
     rs_profile profile;  /* lane widths for roads without `width` */
     rs_styles *styles;   /* non-NULL: the text's style blocks are added to this
                             set (nothing is added when parsing fails) */
@@ -407,6 +450,7 @@ typedef enum rs_driving_side {
 /* What a built-in default style is made for. All-zero fields take the
  * defaults shown. */
 typedef struct rs_style_request {
+    size_t size;            /* 0, or sizeof (rs_style_request) of the host\'s header: "ABI" above */
     rs_road_class road_class; /* NONE: the unstyled road (no lines) */
     uint32_t lanes;           /* 0 -> the class's default; else 1..16 */
     rs_oneway oneway;         /* NONE -> the class's default */
@@ -545,6 +589,7 @@ typedef enum rs_line_aa {
  * means defaults. The grid build resolves the styles; a splatter checks
  * that its grid was built with the same style options. */
 typedef struct rs_style_options {
+    size_t size;            /* 0, or sizeof (rs_style_options) of the host\'s header: "ABI" above */
     const rs_styles *styles; /* named styles for style= and per-class overrides (borrowed while
                                 the grid is built); NULL -> built-in styles only */
     rs_profile profile;      /* built-in styles' standard: RS_PROFILE_RMS (0) or RS_PROFILE_MUTCD */
@@ -571,6 +616,7 @@ typedef struct rs_surface_image {
 
 /* Normal-map options (rs_normal_window, below; docs/normals.md). */
 typedef struct rs_normal_options {
+    size_t size;            /* 0, or sizeof (rs_normal_options) of the host\'s header: "ABI" above */
     int directx;          /* non-zero: G = -Y, south / image down (DirectX engines) */
     double strength;      /* road-texture and surface-image relief: slope per unit of luminance change per pixel;
                              0 -> 1, else (0, 1e6] */
@@ -646,6 +692,7 @@ typedef struct rs_network rs_network;
 
 /* Options of rs_network_build. All-zero means defaults. */
 typedef struct rs_network_options {
+    size_t size;            /* 0, or sizeof (rs_network_options) of the host\'s header: "ABI" above */
     double tolerance; /* metres: points closer than this are one node, an end point
                          this near another road's centreline is a T; 0 -> 0.05,
                          else 1e-9 .. 1000 */
@@ -807,6 +854,7 @@ typedef struct rs_marking_options {
 
 /* All-zero means defaults. The frame (cell size, z-scale, origin) is the DEM's. */
 typedef struct rs_splat_options {
+    size_t size;            /* 0, or sizeof (rs_splat_options) of the host\'s header: "ABI" above */
     uint32_t texels;                /* output texels per DEM cell side; 0 -> 8, else 1..1024 */
     rs_grid_options grid;
     rs_coverage_options coverage;
@@ -1053,6 +1101,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_CUT_FLOATS 8
 
 typedef struct rs_gpu_options {
+    size_t size;            /* 0, or sizeof (rs_gpu_options) of the host\'s header: "ABI" above */
     double cell;   /* index cell, metres; 0 -> automatic (the DEM cell, grown to at most 2^22 cells) */
     double reach;  /* metres beyond each capsule (and casing) a cell still lists it: the widest
                       anti-aliasing footprint served exactly; 0 -> half the index cell */
@@ -1137,6 +1186,7 @@ typedef struct rs_roam rs_roam;
 /* All-zero means defaults. Cell size and z-scale are the DEM's frame
  * (rs_dem_set_frame); the mesher needs z_scale > 0. */
 typedef struct rs_roam_options {
+    size_t size;            /* 0, or sizeof (rs_roam_options) of the host\'s header: "ABI" above */
     uint32_t pool_nodes;  /* node pool size; 0 -> pool_bytes, else automatic */
     uint64_t pool_bytes;  /* pool size in bytes (used when pool_nodes is 0) */
     uint32_t patch_size;  /* patch side in cells, a power of two; 0 -> automatic */
@@ -1190,6 +1240,7 @@ RS_API rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *roam, uint32_t max_t
 
 /* View-dependent mode: one frame. All-zero fields take the default shown. */
 typedef struct rs_roam_view {
+    size_t size;            /* 0, or sizeof (rs_roam_view) of the host\'s header: "ABI" above */
     double eye[3];        /* camera position, metres (x, y map frame, z up) */
     double dir[3];        /* view direction (need not be unit); must not be 0 */
     double fov_y;         /* vertical field of view, degrees; 0 -> 60 */
@@ -1264,6 +1315,7 @@ RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
 
 /* Mesh extraction. All-zero means: no normals, no skirts. */
 typedef struct rs_roam_mesh_options {
+    size_t size;            /* 0, or sizeof (rs_roam_mesh_options) of the host\'s header: "ABI" above */
     int normals;          /* non-zero: write unit normals (Horn's gradient, as the hillshade) */
     double skirt_depth;   /* > 0: add a skirt this many metres deep on the map border */
     uint32_t *samples;    /* NULL, or vertex_capacity entries: the DEM sample of each vertex,
@@ -1271,7 +1323,8 @@ typedef struct rs_roam_mesh_options {
 } rs_roam_mesh_options;
 
 /* Upper bounds on the vertex and index counts of rs_roam_extract for the
- * current mesh and `opts` (may be NULL). */
+ * current mesh and `opts` (may be NULL; one the ABI rule refuses is bounded
+ * as with a skirt, and rs_roam_extract then refuses it). */
 RS_API void rs_roam_mesh_bound(const rs_roam *roam, const rs_roam_mesh_options *opts,
                                size_t *max_vertices, size_t *max_indices);
 
@@ -1390,6 +1443,7 @@ typedef struct rs_vt rs_vt;
 
 /* All-zero means defaults. */
 typedef struct rs_vt_options {
+    size_t size;            /* 0, or sizeof (rs_vt_options) of the host\'s header: "ABI" above */
     uint32_t tile_size;    /* S: core pixels per tile side; 0 -> 256, else 8..8192 */
     int32_t border;        /* B: pixels of the level image around the core on each side
                               (for bilinear/anisotropic filtering across tile edges);
@@ -1409,6 +1463,7 @@ typedef struct rs_vt_options {
 
 /* One frame's camera. All-zero fields take the default shown. */
 typedef struct rs_vt_view {
+    size_t size;            /* 0, or sizeof (rs_vt_view) of the host\'s header: "ABI" above */
     double eye[3];        /* camera position, metres (frame above) */
     double dir[3];        /* view direction (need not be unit), not 0; up is +z */
     double fov_y;         /* vertical field of view, degrees; 0 -> 60, else (0, 179) */

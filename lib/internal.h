@@ -85,6 +85,21 @@ double rs__local_coord(double world, double origin, double per_unit);
 
 #define RS__PI 3.14159265358979323846
 
+/* The ABI rule for option structs (include/roadsplat.h "ABI"): copy the
+ * host's struct `in` (NULL: all defaults) of type `name` into `out`, this
+ * header's layout of `full` bytes, by its first member `size_t size`: 0 is
+ * this layout; a smaller size (a host built against an older header) has
+ * its first `size` bytes read and the rest zero (defaults); a larger one
+ * (a newer header) is refused with RS_ERR_UNSUPPORTED unless the bytes
+ * beyond `full` are all zero. out->size is then `full`. ctx may be NULL
+ * (no message). */
+rs_result rs__opts_in(rs_ctx *ctx, const void *in, void *out, size_t full, const char *name);
+#define RS__OPTS_IN(ctx, in, out, type) rs__opts_in((ctx), (in), (out), sizeof(type), #type)
+/* The other way, for getters of such a struct (rs_ctx_limits,
+ * ...): write `full` bytes of `src` into `out` up to out->size (0: all of
+ * them); out->size becomes the bytes written. */
+void rs__opts_out(const void *src, void *out, size_t full);
+
 /* Validate splat options and fill in defaults (lib/options.c). */
 rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out);
 #endif

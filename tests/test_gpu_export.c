@@ -178,7 +178,7 @@ static void test_scene(void)
     CHECK(g && g->nbands == 0 && g->nmarks == 0 && g->road[0] == 0 && g->nmark_entries == 0);
     rs_gpu_scene_free(ctx, g);
     /* a given cell and reach */
-    rs_gpu_options go = { 8, 3 };
+    rs_gpu_options go = { 0, 8, 3 };
     CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, &go, &g) == RS_OK);
     CHECK(g && g->cell == 8 && g->reach == 3 && g->gw == 12);
     rs_gpu_scene_free(ctx, g);

@@ -409,11 +409,10 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_create: NULL argument");
     *out = NULL;
     rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    if (opts) o = *opts;
+    rs_result ro = RS__OPTS_IN(ctx, opts, &o, rs_splat_options);
+    if (ro) return ro;
     rs_gpu_options go;
-    memset(&go, 0, sizeof go);
-    if (gopts) go = *gopts;
+    if ((ro = RS__OPTS_IN(ctx, gopts, &go, rs_gpu_options)) != RS_OK) return ro;
     if (!(go.cell >= 0 && go.cell <= 1e9) || !(go.reach >= 0 && go.reach <= 1e9))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_options: cell and reach must be 0..1e9 metres");
 

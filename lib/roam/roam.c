@@ -255,7 +255,8 @@ typedef struct roam_size {
 static rs_result size_landscape(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts, roam_size *s)
 {
     rs_roam_options o;
-    if (opts) o = *opts; else memset(&o, 0, sizeof o);
+    rs_result rc = RS__OPTS_IN(ctx, opts, &o, rs_roam_options);
+    if (rc) return rc;
     double cs = dem->frame.cell_size, zs = dem->frame.z_scale;
     if (!(zs > 0.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: the DEM's z-scale %g must be > 0 (z is up)", zs);

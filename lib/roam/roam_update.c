@@ -840,11 +840,15 @@ static void scan_fresh(upd *u)
     scan_mesh(u);
 }
 
-rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget)
+rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw_in, uint32_t budget)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_update: roam and view must not be NULL");
-    rs_result r = ensure_state(ctx, L);
+    if (!L || !vw_in) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_update: roam and view must not be NULL");
+    rs_roam_view vwc;
+    rs_result r = RS__OPTS_IN(ctx, vw_in, &vwc, rs_roam_view);
+    if (r != RS_OK) return r;
+    const rs_roam_view *vw = &vwc;
+    r = ensure_state(ctx, L);
     if (r != RS_OK) return r;
     view_params v;
     unsigned char visbuf[256], *vis;

@@ -103,13 +103,17 @@ rs_result rs__roam_view_begin(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, v
     return RS_OK;
 }
 
-rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
+rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw_in)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_frame: roam and view must not be NULL");
+    if (!L || !vw_in) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_frame: roam and view must not be NULL");
+    rs_roam_view vwc;
+    rs_result r = RS__OPTS_IN(ctx, vw_in, &vwc, rs_roam_view);
+    if (r != RS_OK) return r;
+    const rs_roam_view *vw = &vwc;
     view_params v;
     unsigned char visbuf[256], *vis;
-    rs_result r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
+    r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
     if (r != RS_OK) return r;
     int own = vis != visbuf;
     double tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;

@@ -44,8 +44,8 @@ static void nm_free(rs_ctx *ctx, nm_scratch *b)
 /* Options with the defaults filled in, or RS_ERR_INVALID_ARG. */
 static rs_result nm_defaults(rs_ctx *ctx, const rs_normal_options *in, rs_normal_options *o)
 {
-    memset(o, 0, sizeof *o);
-    if (in) *o = *in;
+    rs_result r = RS__OPTS_IN(ctx, in, o, rs_normal_options);
+    if (r) return r;
     if (o->strength == 0) o->strength = 1;
     if (o->paint_height == 0) o->paint_height = NM_PAINT;
     if (!(o->strength > 0 && o->strength <= 1e6))

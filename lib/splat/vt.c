@@ -214,8 +214,8 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
     *out = NULL;
     if (!s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_vt_create: NULL splatter");
     rs_vt_options o;
-    memset(&o, 0, sizeof o);
-    if (opts) o = *opts;
+    rs_result rc = RS__OPTS_IN(ctx, opts, &o, rs_vt_options);
+    if (rc) return rc;
     uint32_t S = o.tile_size ? o.tile_size : 256;
     if (S < 8 || S > 8192) return rs__fail(ctx, RS_ERR_INVALID_ARG, "virtual texture: tile_size %u must be 8..8192", S);
     if (o.border < -1 || o.border > (int32_t)(S / 2))
@@ -344,9 +344,13 @@ typedef struct vt_cam {
     uint32_t bias;
 } vt_cam;
 
-static rs_result make_cam(rs_ctx *ctx, const rs_vt_view *v, vt_cam *c)
+static rs_result make_cam(rs_ctx *ctx, const rs_vt_view *v_in, vt_cam *c)
 {
     memset(c, 0, sizeof *c);
+    rs_vt_view vv;
+    rs_result rc = RS__OPTS_IN(ctx, v_in, &vv, rs_vt_view);
+    if (rc) return rc;
+    const rs_vt_view *v = &vv;
     double fov = v->fov_y == 0.0 ? 60.0 : v->fov_y;
     double wpx = v->width ? v->width : 1280, hpx = v->height ? v->height : 720;
     for (int i = 0; i < 3; i++)
