@@ -174,6 +174,26 @@ RS_API const char *rs_ctx_message(const rs_ctx *ctx);
  * (the call then returns RS_ERR_CANCELLED). Called from the calling thread. */
 typedef int (*rs_progress_fn)(void *user, uint64_t done, uint64_t total);
 
+/* Progress and cancel of the long calls made with this context
+ * (docs/embedding.md "Progress and cancel"): rs_road_grid_build,
+ * rs_splatter_create, rs_splat_window(_ws), rs_splat, rs_normal_window,
+ * rs_network_build, rs_gpu_scene_create, rs_roam_create, rs_roam_set_dem,
+ * rs_roam_refine_error, rs_roam_refine_count, rs_roam_frame,
+ * rs_roam_update, rs_vt_create and rs_vt_make_tile call `fn` from the
+ * calling thread at least every few milliseconds of work (the longest
+ * gaps measured are in docs/embedding.md), with `done` of `total` units
+ * (per call, below; done never goes back, the last call of a completed
+ * call has done == total). A call whose options carry their own callback
+ * (rs_splat_options.progress: the grid build, the splatter, its windows)
+ * calls that one instead. A call made inside another (the grid build of
+ * rs_splatter_create, the windows of rs_vt_make_tile) reports as part of
+ * the outer one. Non-zero from `fn` stops the call: it returns
+ * RS_ERR_CANCELLED ("cancelled"), frees what it made, and leaves its
+ * objects usable (what each call leaves is documented with it). `fn` NULL:
+ * none (the default). A callback changes no output byte. The context
+ * keeps the pointers; one thread uses a context at a time. */
+RS_API void rs_ctx_set_progress(rs_ctx *ctx, rs_progress_fn fn, void *user);
+
 /* ---------------------------------------------------------------------------
  * DEM (lib/dem.c): W x H height samples at grid vertices, row-major, stored
  * as float in file units (metres = value * z_scale). NaN marks nodata. The

@@ -169,6 +169,13 @@ void rs__opts_out(const void *src, void *out, size_t full)
     memcpy(out, &size, sizeof size);
 }
 
+void rs_ctx_set_progress(rs_ctx *ctx, rs_progress_fn fn, void *user)
+{
+    if (!ctx) return;
+    ctx->progress = fn;
+    ctx->progress_user = fn ? user : NULL;
+}
+
 int rs__tick(rs_ctx *ctx, uint64_t units)
 {
     rs__progress *p = ctx ? ctx->pg : NULL;
@@ -178,14 +185,57 @@ int rs__tick(rs_ctx *ctx, uint64_t units)
     if (p->done < p->next && ++p->polls < RS__TICK_POLLS) return 0;
     p->polls = 0;
     p->next = p->done + (p->step ? p->step : 1);
-    if (p->fn(p->user, p->done < p->total ? p->done : p->total, p->total)) p->cancelled = 1;
+    p->said = p->done < p->total ? p->done : p->total;
+    if (p->fn(p->user, p->said, p->total)) p->cancelled = 1;
     return p->cancelled;
+}
+
+int rs__report(rs_ctx *ctx, uint64_t units)
+{
+    if (ctx && ctx->pg) ctx->pg->polls = RS__TICK_POLLS;
+    return rs__tick(ctx, units);
 }
 
 int rs__poll(rs_ctx *ctx)
 {
-    if (ctx && ctx->pg) ctx->pg->polls = RS__TICK_POLLS;
-    return rs__tick(ctx, 0);
+    return rs__report(ctx, 0);
+}
+
+void rs__progress_begin(rs_ctx *ctx, rs__progress *pg, rs_progress_fn fn, void *user, uint64_t total,
+                        uint64_t step)
+{
+    memset(pg, 0, sizeof *pg);
+    pg->outer = ctx->pg;
+    pg->said = UINT64_MAX;
+    if (!fn) {
+        fn = ctx->progress;
+        user = ctx->progress_user;
+    }
+    /* inside a call that reports, or nothing to report to: ticks go to
+     * ctx->pg as it is */
+    if ((ctx->pg && ctx->pg->fn) || !fn) {
+        pg->nested = 1;
+        return;
+    }
+    pg->fn = fn;
+    pg->user = user;
+    pg->total = total;
+    pg->step = step ? step : 1;
+    pg->next = pg->step;
+    ctx->pg = pg;
+}
+
+rs_result rs__progress_end(rs_ctx *ctx, rs__progress *pg, rs_result r)
+{
+    if (pg->nested) return r; /* the outer call ends it (and names a cancel) */
+    ctx->pg = pg->outer;
+    if (!r && pg->fn && !pg->cancelled && pg->said != pg->total) {
+        pg->said = pg->total;
+        if (pg->fn(pg->user, pg->total, pg->total)) pg->cancelled = 1;
+    }
+    if (!r && pg->cancelled) r = RS_ERR_CANCELLED;
+    if (r == RS_ERR_CANCELLED) return rs__fail(ctx, r, "cancelled");
+    return r;
 }
 
 void rs__ok(rs_ctx *ctx)

@@ -402,8 +402,22 @@ static rs_result placements(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     return RS_OK;
 }
 
+static rs_result gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                                  const rs_gpu_options *gopts, rs_gpu_scene **out);
+
+/* Progress: the context's callback (the options' progress is the grid
+ * build's); polls in the network, markings and per-road passes. */
 rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
                               const rs_gpu_options *gopts, rs_gpu_scene **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, gpu_scene_create(ctx, dem, roads, opts, gopts, out));
+}
+
+static rs_result gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                                  const rs_gpu_options *gopts, rs_gpu_scene **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_create: NULL argument");

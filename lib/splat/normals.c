@@ -192,7 +192,9 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
     if (rgb_stride / 3 < w)
         return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGB row stride %zu bytes, need %zu", rgb_stride,
                         (size_t)w * 3);
-    res = rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0);
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, h, 1);
+    res = rs__progress_end(ctx, &pg, rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0));
     if (!res) rs__ok(ctx);
     return res;
 }
@@ -269,11 +271,19 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
         nm_free(ctx, &b);
         return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for normal-map scratch (%zu pixels)", npx);
     }
-    for (uint32_t y = y0; y < y0 + h;) {
+    /* progress (rs__progress_begin: rs_normal_window's, or the splat
+     * window's when lighting it): a poll every few pieces, rows at the end
+     * of a band (the splat window counts its own) */
+    uint32_t pieces = 0;
+    for (uint32_t y = y0; y < y0 + h && !res;) {
         uint32_t crow = y / T, end = (crow + 1) * T;
         if (end > y0 + h) end = y0 + h;
         uint32_t rows = end - y;
         for (uint32_t x = x0; x < x0 + w; x += cols) {
+            if ((++pieces & 7) == 0 && rs__poll(ctx)) {
+                res = RS_ERR_CANCELLED;
+                break;
+            }
             uint32_t pw = x0 + w - x < cols ? x0 + w - x : cols;
             /* Horn's gradient at the samples around the piece */
             uint32_t c0 = x / T, c1 = (x + pw - 1) / T + 1;
@@ -348,7 +358,8 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
             }
         }
         y = end;
+        if (!res && rgb && rs__tick(ctx, rows)) res = RS_ERR_CANCELLED;
     }
     nm_free(ctx, &b);
-    return RS_OK;
+    return res;
 }
