@@ -296,6 +296,10 @@ static rs_result index_build(rs_ctx *ctx, const rs_gpu_scene *g, const ge_items 
     if (!start) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the GPU export");
     size_t total = 0;
     for (size_t k = 0; k < it->n; k++) {
+        if ((k & 1023) == 1023 && rs__poll(ctx)) {
+            rs__free(ctx, start);
+            return RS_ERR_CANCELLED;
+        }
         uint32_t b[4];
         item_cells(g, it, k, b);
         for (uint32_t j = b[1]; j <= b[3]; j++)
@@ -321,6 +325,12 @@ static rs_result index_build(rs_ctx *ctx, const rs_gpu_scene *g, const ge_items 
     memcpy(pos, start, ncell * sizeof *pos);
     int full = 1;
     for (size_t k = 0; k < it->n; k++) {
+        if ((k & 1023) == 1023 && rs__poll(ctx)) {
+            rs__free(ctx, start);
+            rs__free(ctx, ids);
+            rs__free(ctx, pos);
+            return RS_ERR_CANCELLED;
+        }
         uint32_t b[4];
         item_cells(g, it, k, b);
         for (uint32_t j = b[1]; j <= b[3]; j++)
@@ -475,6 +485,7 @@ static rs_result gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
         if (o.style.disable) continue;
+        if ((i & 255) == 255 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         if ((r = rs_road_style_ex(ctx, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
@@ -492,6 +503,7 @@ static rs_result gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     for (size_t i = 0; i < ntees; i++) tee_of[2 * (size_t)tees[i].road + (tees[i].end != 0)] = i;
     size_t nends = 0;
     for (size_t i = 0, b = 0; i < n; i++) {
+        if ((i & 255) == 255 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
         double w = 0;
         rs_roads_get(roads, i, NULL, &w, NULL, NULL);
