@@ -775,7 +775,9 @@ typedef struct rs_road_stroke {
 
 /* Build the network of `roads` (opts may be NULL). RS_ERR_INVALID_ARG for
  * a bad tolerance, RS_ERR_NOMEM; *out is the caller's (rs_network_free).
- * Cost: near-linear in the number of points (spatial hashing). */
+ * Cost: near-linear in the number of points (spatial hashing). Progress
+ * (the context's callback): polls between and within the stages, done 0
+ * of 1 until the end; a cancel makes nothing. */
 RS_API rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts,
                                   rs_network **out);
 RS_API void rs_network_free(rs_ctx *ctx, rs_network *net);
@@ -932,7 +934,10 @@ typedef struct rs_splatter rs_splatter;
  * one with styles or markings must match the texels (RS_ERR_INVALID_ARG:
  * they are laid out in its pixels). `dem` and the option textures are
  * borrowed too. The splatter is immutable: rs_splat_window may be called on
- * it from several threads at once, each with its own context. */
+ * it from several threads at once, each with its own context. Progress:
+ * opts->progress (else the context's), the grid build's units and one
+ * more (analytic edges; alpha-map edges report only their grid's sweep);
+ * a cancel makes nothing. */
 RS_API rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                     const rs_road_grid *grid, const rs_splat_options *opts,
                                     rs_splatter **out);
@@ -960,8 +965,10 @@ typedef struct rs_splat_profile {
  * uint16 0..65535 (row r at weight + r*weight_stride values). The window
  * must lie inside the image (RS_ERR_INVALID_ARG). Scratch memory (a few
  * rows of the window) comes from ctx's allocator. Progress: the splatter's
- * progress callback gets (rows done, h) from this thread; with several
- * threads it must be thread-safe. `profile` may be NULL. With
+ * progress callback (else the context's) gets (rows done, h) from this
+ * thread after each band of rows and, within a band, after each piece of
+ * 2^18 pixels; with several threads the splatter's must be thread-safe. A
+ * cancel leaves the window's rows partly written. `profile` may be NULL. With
  * opts->lighting.enable, each band of rows is lit by its normals as soon as
  * it is splatted (scratch as rs_normal_window's; docs/surface.md). */
 RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0,
@@ -1015,7 +1022,8 @@ RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gr
  * same pixels of the whole image; the splatter may be shared by several
  * threads as for rs_splat_window. Scratch (about 60 bytes per pixel of a
  * piece of at most 1026 x (texels + 2) pixels) comes from ctx's
- * allocator; no progress calls. `opts` may be NULL. */
+ * allocator. Progress: the context's callback (rs_ctx_set_progress), rows
+ * done of h. `opts` may be NULL. */
 RS_API rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w,
                                   uint32_t h, uint8_t *rgb, size_t rgb_stride, const rs_normal_options *opts);
 
@@ -1146,7 +1154,9 @@ typedef struct rs_gpu_scene {
 /* Export `roads` over `dem` with the styles and markings that the splat
  * with `opts` (may be NULL) draws: opts->style and opts->markings are read
  * as rs_road_grid_build reads them. *out belongs to the caller: free it
- * with rs_gpu_scene_free and the same context. `gopts` may be NULL. */
+ * with rs_gpu_scene_free and the same context. `gopts` may be NULL.
+ * Progress: the context's callback (rs_ctx_set_progress; not
+ * opts->progress), polls in every stage; a cancel makes nothing. */
 RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_gpu_options *gopts,
                                      rs_gpu_scene **out);
@@ -1228,7 +1238,8 @@ RS_API size_t rs_roam_node_bytes(void);
  * max_pool_nodes (RS_ERR_LIMIT if a requested pool exceeds that). `dem` is
  * copied where it holds nodata, otherwise referenced: it must outlive *out.
  * Nodata (NaN) samples get the lowest valid 8-neighbour height, spreading
- * inwards (all-nodata -> 0); they never produce NaN vertices. */
+ * inwards (all-nodata -> 0); they never produce NaN vertices. Progress: a
+ * unit per stage (5); a cancel makes nothing. */
 RS_API rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts,
                                 rs_roam **out);
 RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
@@ -1239,7 +1250,8 @@ RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
  * cached error bounds are dropped and the mesh is reset to the base mesh.
  * `dem` must outlive the landscape's use of it, as for rs_roam_create. On
  * failure (size or frame mismatch: the cell size and z-scale must be the
- * landscape's, RS_ERR_INVALID_ARG; RS_ERR_NOMEM) the landscape keeps its
+ * landscape's, RS_ERR_INVALID_ARG; RS_ERR_NOMEM; a cancel at its one
+ * progress call, once the new DEM is checked) the landscape keeps its
  * previous DEM. */
 RS_API rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *roam, const rs_dem *dem);
 
@@ -1249,13 +1261,16 @@ RS_API rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *roam, const rs_dem *dem);
  * vertical error over all DEM samples is <= max_error. Returns
  * RS_ERR_POOL_EXHAUSTED when the pool ran out: the mesh is then still valid,
  * crack-free and complete, only coarser (and a larger pool never gives a
- * coarser mesh). */
+ * coarser mesh). Progress (rs_ctx_set_progress): pool nodes taken of the
+ * pool; a cancel leaves the mesh refined so far, valid and crack-free as
+ * when the pool runs out. */
 RS_API rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *roam, double max_error);
 
 /* The finest mesh of the error-bounded family with at most `max_triangles`
  * triangles (binary search on the error; stats.threshold tells the error
  * reached). If even the base mesh has more, the base mesh is kept and
- * RS_ERR_LIMIT returned. */
+ * RS_ERR_LIMIT returned. Progress: the pool nodes of each search pass (of
+ * at most 33); a cancel leaves the base mesh. */
 RS_API rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *roam, uint32_t max_triangles);
 
 /* View-dependent mode: one frame. All-zero fields take the default shown. */
@@ -1280,7 +1295,9 @@ typedef struct rs_roam_view {
  * triangles outside the view frustum are not refined. With
  * target_triangles, the tolerance is carried from frame to frame and
  * corrected within the frame (a few re-tessellations at most) so the count
- * lands within +-5 % whenever the target is reachable. */
+ * lands within +-5 % whenever the target is reachable. Progress: the pool
+ * nodes of each pass; a cancel leaves the mesh of the pass under way (valid,
+ * crack-free, coarser) and the target's tolerance as it was. */
 RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view);
 
 /* Frame-coherent view mode (seed 004's split and merge queues): start
@@ -1309,7 +1326,9 @@ RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *v
  * queues, which grow with the mesh (RS_ERR_NOMEM: the mesh stays valid).
  * Like every rs_roam call it mutates the landscape: one thread per
  * landscape at a time; landscapes are independent. RS_ERR_POOL_EXHAUSTED
- * as for rs_roam_frame. */
+ * as for rs_roam_frame. Progress: pool nodes taken; a cancel stops the
+ * update as a spent budget does (mesh valid and crack-free, update_done
+ * 0, the next update goes on). */
 RS_API rs_result rs_roam_update(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view, uint32_t budget);
 
 typedef struct rs_roam_stats {
@@ -1533,7 +1552,8 @@ typedef struct rs_vt_stats {
 
 /* Build the quadtree over the splatter's image: the levels, a splatter per
  * texel count the levels need (sharing s's grid, or with styles or markings
- * a grid of its own from opts->roads; s's options; progress callbacks off),
+ * a grid of its own from opts->roads; s's options; their grid builds report
+ * as parts of this call to the context's callback, rs_ctx_set_progress),
  * the height range of every tile (from the DEM) and the bookkeeping for
  * rs_vt_info.slots tiles, all allocated here (rs_vt_update then allocates
  * nothing). The coarser splatters are checked against ctx's limits as any
@@ -1607,7 +1627,9 @@ RS_API size_t rs_vt_workspace_bytes(const rs_vt_workspace *ws);
  * Allocates nothing (except with the splatter's lighting on, whose normal
  * scratch rs_splat_window_ws takes per call). Level 0 renders through `s`
  * itself: its progress callback, if any, is called from the making thread
- * as rs_splat_window_ws calls it (the vt's own splatters have none). Thread
+ * as rs_splat_window_ws calls it (the vt's own splatters have none), else
+ * the context's: source rows rendered (polls between the bands of a
+ * resampled tile); a cancel leaves the tile's bytes unspecified. Thread
  * rules above.
  * RS_ERR_INVALID_ARG for a tile out of range, another vt's workspace or a
  * short stride. */

@@ -583,9 +583,12 @@ static rs_result gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     if (!g->seg && !(g->seg = rs__calloc(ctx, 1, RS_GPU_SEG_FLOATS * sizeof(float)))) { r = RS_ERR_NOMEM; goto fail; }
     nseg = g->nseg;
     g->nbands = nbands;
+    if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     if ((r = ge_tees(ctx, roads, net, g, srev)) != RS_OK) goto fail;
+    if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     /* continuations: equal end points, leaving within 30 degrees of opposite */
     qsort(ends, nends, sizeof *ends, ge_end_cmp);
+    if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     for (size_t a = 0; a < nends; a++)
         for (size_t c = a + 1; c < nends && ends[c].x == ends[a].x && ends[c].y == ends[a].y; c++) {
             const ge_end *A = &ends[a], *C = &ends[c];

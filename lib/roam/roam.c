@@ -148,10 +148,10 @@ rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
                         dem->frame.cell_size, dem->frame.z_scale, L->cs, L->zs);
     int has_nodata;
     float zabs;
-    /* progress: checked, then loaded; a stop after the check keeps the
-     * previous DEM (after the load the landscape holds the new one) */
+    /* progress: one call, once the new DEM is checked (a stop there keeps
+     * the previous DEM; the load after it takes a few ms) */
     rs__progress pg;
-    rs__progress_begin(ctx, &pg, NULL, NULL, 2, 1);
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
     rs_result r = check_heights(ctx, L, dem, &has_nodata, &zabs);
     if (r == RS_OK && rs__report(ctx, 1)) r = RS_ERR_CANCELLED;
     if (r == RS_OK) r = load_heights(ctx, L, dem, has_nodata);
@@ -162,7 +162,7 @@ rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
     L->tol = 0.0;
     L->frame_passes = 0;
     L->culled = 0;
-    if ((r = rs__progress_end(ctx, &pg, r)) != RS_OK) return r; /* (the new DEM is in) */
+    if ((r = rs__progress_end(ctx, &pg, r)) != RS_OK) return r; /* (never: the one call said done) */
     rs__ok(ctx);
     return RS_OK;
 }

@@ -564,6 +564,9 @@ static void scan_mesh(upd *u)
     u->rctr = INFINITY;
     int full = u->full;
     for (uint32_t p = 0; p < L->npx * L->npy; p++) {
+        /* a stop leaves the scan partial: the update then ends undone,
+         * and the next one scans in full (full_next) */
+        if ((p & 15) == 15 && rs__roam_poll(L)) break;
         /* a patch that came into view or left it (its items were not
          * tracked while it was culled) is looked at in full */
         u->full = full || u->vis[p] != L->pvis[p];

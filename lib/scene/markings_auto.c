@@ -639,6 +639,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
         r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
     }
+    if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     /* zebras: bars of their standard size repeated across the road (the
      * whole `zebra` sprite stretched to the road when the atlas has no bars) */
     long zb = rs_atlas_find(atlas, "zebra_bar"), zt = rs_atlas_find(atlas, "zebra");
@@ -684,7 +685,12 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         A.cuts = NULL;
     }
     rs__free(ctx, A.cuts);
-    for (size_t i = 0; i < nr; i++) rs__road_local_free(ctx, &A.rl[i]);
+    /* (freeing 10^5 roads' local copies takes a while: a cancel asked
+     * meanwhile is seen by the next tick) */
+    for (size_t i = 0; i < nr; i++) {
+        if ((i & 4095) == 4095) (void)rs__poll(ctx);
+        rs__road_local_free(ctx, &A.rl[i]);
+    }
     rs__free(ctx, A.rl);
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
