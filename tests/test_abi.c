@@ -36,16 +36,19 @@ static rs_result splat_hash(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     return r;
 }
 
-/* A host built against a newer header: the struct and one more field. */
-typedef struct newer_view {
-    rs_roam_view v;
-    double added;
-} newer_view;
-
-typedef struct newer_splat {
-    rs_splat_options o;
-    uint64_t added[2];
-} newer_splat;
+/* `opts` (`size` bytes) as a host built against a newer header passes it:
+ * 16 bytes more, zero but for byte `set` of them (-1: none), its size
+ * field saying so. free() it. */
+static void *newer(const void *opts, size_t size, int set)
+{
+    unsigned char *p = calloc(1, size + 16);
+    size_t n = size + 16;
+    if (!p) return NULL;
+    memcpy(p, opts, size);
+    memcpy(p, &n, sizeof n);
+    if (set >= 0) p[size + (size_t)set] = 1;
+    return p;
+}
 
 static void test_roam_view(rs_ctx *ctx)
 {
@@ -83,17 +86,18 @@ static void test_roam_view(rs_ctx *ctx)
     v.far_dist = 0;
     v.merge_hysteresis = 0;
     /* a newer header: zero extra bytes accepted, set ones refused */
-    newer_view nv;
-    memset(&nv, 0, sizeof nv);
-    nv.v = v;
-    nv.v.size = sizeof nv;
-    CHECK_EQ_INT(rs_roam_frame(ctx, roam, &nv.v), RS_OK);
-    rs_roam_get_stats(roam, &st);
-    CHECK_EQ_INT(st.triangles, tris);
-    nv.added = 1.0;
-    CHECK_EQ_INT(rs_roam_frame(ctx, roam, &nv.v), RS_ERR_UNSUPPORTED);
-    CHECKF(strstr(rs_ctx_message(ctx), "rs_roam_view.size") != NULL, "%s", rs_ctx_message(ctx));
-    CHECK_EQ_INT(rs_roam_update(ctx, roam, &nv.v, 0), RS_ERR_UNSUPPORTED);
+    rs_roam_view *nv = newer(&v, sizeof v, -1), *nv1 = newer(&v, sizeof v, 7);
+    CHECK(nv && nv1);
+    if (nv && nv1) {
+        CHECK_EQ_INT(rs_roam_frame(ctx, roam, nv), RS_OK);
+        rs_roam_get_stats(roam, &st);
+        CHECK_EQ_INT(st.triangles, tris);
+        CHECK_EQ_INT(rs_roam_frame(ctx, roam, nv1), RS_ERR_UNSUPPORTED);
+        CHECKF(strstr(rs_ctx_message(ctx), "rs_roam_view.size") != NULL, "%s", rs_ctx_message(ctx));
+        CHECK_EQ_INT(rs_roam_update(ctx, roam, nv1, 0), RS_ERR_UNSUPPORTED);
+    }
+    free(nv);
+    free(nv1);
     /* a size that cannot even hold itself */
     v.size = 3;
     CHECK_EQ_INT(rs_roam_frame(ctx, roam, &v), RS_ERR_INVALID_ARG);
@@ -157,23 +161,24 @@ static void test_splat(rs_ctx *ctx)
     CHECK(h1 == h0);
     o.style.size = o.lighting.normal.size = 0;
     /* a newer header */
-    newer_splat ns;
-    memset(&ns, 0, sizeof ns);
-    ns.o = o;
-    ns.o.size = sizeof ns;
-    h1 = 1;
-    CHECK_EQ_INT(splat_hash(ctx, dem, roads, &ns.o, &h1), RS_OK);
-    CHECK(h1 == h0);
-    ns.added[1] = 1u << 20;
-    rs_road_grid *g = NULL;
-    CHECK_EQ_INT(rs_road_grid_build(ctx, dem, roads, &ns.o, &g), RS_ERR_UNSUPPORTED);
-    CHECK(g == NULL);
-    CHECKF(strstr(rs_ctx_message(ctx), "rs_splat_options.size") != NULL, "%s", rs_ctx_message(ctx));
-    rs_gpu_scene *gs = NULL;
-    CHECK_EQ_INT(rs_gpu_scene_create(ctx, dem, roads, &ns.o, NULL, &gs), RS_ERR_UNSUPPORTED);
-    CHECK(gs == NULL);
-    uint32_t sw, sh;
-    CHECK_EQ_INT(rs_splat_size(ctx, dem, &ns.o, &sw, &sh), RS_ERR_UNSUPPORTED);
+    rs_splat_options *ns = newer(&o, sizeof o, -1), *ns1 = newer(&o, sizeof o, 10);
+    CHECK(ns && ns1);
+    if (ns && ns1) {
+        h1 = 1;
+        CHECK_EQ_INT(splat_hash(ctx, dem, roads, ns, &h1), RS_OK);
+        CHECK(h1 == h0);
+        rs_road_grid *g = NULL;
+        CHECK_EQ_INT(rs_road_grid_build(ctx, dem, roads, ns1, &g), RS_ERR_UNSUPPORTED);
+        CHECK(g == NULL);
+        CHECKF(strstr(rs_ctx_message(ctx), "rs_splat_options.size") != NULL, "%s", rs_ctx_message(ctx));
+        rs_gpu_scene *gs = NULL;
+        CHECK_EQ_INT(rs_gpu_scene_create(ctx, dem, roads, ns1, NULL, &gs), RS_ERR_UNSUPPORTED);
+        CHECK(gs == NULL);
+        uint32_t sw, sh;
+        CHECK_EQ_INT(rs_splat_size(ctx, dem, ns1, &sw, &sh), RS_ERR_UNSUPPORTED);
+    }
+    free(ns);
+    free(ns1);
     /* the standalone style options, a struct without a context */
     rs_style_options so[2];
     memset(so, 0, sizeof so);
@@ -216,37 +221,29 @@ static void test_limits(void)
     CHECK(got.max_atlas_bytes == 0xABABABABABABABABull && got.max_linesym_bytes == 0xABABABABABABABABull);
     rs_ctx_free(ctx);
     /* newer: refused when the extra bytes are set (no context yet: no message) */
-    struct {
-        rs_limits l;
-        uint32_t added;
-    } nl;
-    memset(&nl, 0, sizeof nl);
-    nl.l.size = sizeof nl;
+    memset(&lim, 0, sizeof lim);
+    rs_limits *nl = newer(&lim, sizeof lim, -1), *nl1 = newer(&lim, sizeof lim, 3);
     ctx = NULL;
-    CHECK_EQ_INT(rs_ctx_create(NULL, &nl.l, &ctx), RS_OK);
+    CHECK(nl && nl1 && rs_ctx_create(NULL, nl, &ctx) == RS_OK);
     rs_ctx_free(ctx);
-    nl.added = 5;
     ctx = NULL;
-    CHECK_EQ_INT(rs_ctx_create(NULL, &nl.l, &ctx), RS_ERR_UNSUPPORTED);
+    CHECK(nl1 && rs_ctx_create(NULL, nl1, &ctx) == RS_ERR_UNSUPPORTED);
     CHECK(ctx == NULL);
+    free(nl);
+    free(nl1);
     /* rs_style_request: no context either */
-    struct {
-        rs_style_request q;
-        uint32_t added;
-    } nq;
-    memset(&nq, 0, sizeof nq);
-    nq.q.size = sizeof nq;
-    nq.q.road_class = RS_CLASS_PRIMARY;
-    double w0 = 0, w1 = 0;
-    CHECK_EQ_INT(rs_style_default_width(&nq.q, &w0), RS_OK);
-    nq.added = 1;
-    CHECK_EQ_INT(rs_style_default_width(&nq.q, &w1), RS_ERR_UNSUPPORTED);
-    rs_style st;
-    CHECK_EQ_INT(rs_style_default(&nq.q, &st), RS_ERR_UNSUPPORTED);
-    /* an older request without the per-direction lanes and the side */
     rs_style_request q;
     memset(&q, 0, sizeof q);
     q.road_class = RS_CLASS_PRIMARY;
+    rs_style_request *nq = newer(&q, sizeof q, -1), *nq1 = newer(&q, sizeof q, 0);
+    double w0 = 0, w1 = 0;
+    rs_style st;
+    CHECK(nq && nq1 && rs_style_default_width(nq, &w0) == RS_OK);
+    CHECK(nq1 && rs_style_default_width(nq1, &w1) == RS_ERR_UNSUPPORTED);
+    CHECK(nq1 && rs_style_default(nq1, &st) == RS_ERR_UNSUPPORTED);
+    free(nq);
+    free(nq1);
+    /* an older request without the per-direction lanes and the side */
     q.size = offsetof(rs_style_request, lanes_forward);
     q.lanes_forward = 99; /* out of range if read */
     CHECK_EQ_INT(rs_style_default_width(&q, &w1), RS_OK);
@@ -258,34 +255,29 @@ static void test_others(rs_ctx *ctx)
     rs_roads *roads = NULL;
     const double a[] = { 0, 0, 10, 0 };
     CHECK(rs_roads_create(ctx, &roads) == RS_OK && rs_roads_add(ctx, roads, "a", 2, a, 2) == RS_OK);
-    struct {
-        rs_network_options n;
-        uint32_t added;
-    } nn;
-    memset(&nn, 0, sizeof nn);
-    nn.n.size = sizeof nn;
+    rs_network_options no;
+    memset(&no, 0, sizeof no);
+    rs_network_options *nn = newer(&no, sizeof no, -1), *nn1 = newer(&no, sizeof no, 15);
     rs_network *net = NULL;
-    CHECK_EQ_INT(rs_network_build(ctx, roads, &nn.n, &net), RS_OK);
+    CHECK(nn && nn1 && rs_network_build(ctx, roads, nn, &net) == RS_OK);
     rs_network_free(ctx, net);
     net = NULL;
-    nn.added = 1;
-    CHECK_EQ_INT(rs_network_build(ctx, roads, &nn.n, &net), RS_ERR_UNSUPPORTED);
+    CHECK(nn1 && rs_network_build(ctx, roads, nn1, &net) == RS_ERR_UNSUPPORTED);
     CHECK(net == NULL);
+    free(nn);
+    free(nn1);
     /* an older network options struct with only its size */
-    nn.n.size = sizeof(size_t);
-    nn.n.tolerance = -1; /* invalid if read */
-    CHECK_EQ_INT(rs_network_build(ctx, roads, &nn.n, &net), RS_OK);
+    no.size = sizeof(size_t);
+    no.tolerance = -1; /* invalid if read */
+    CHECK_EQ_INT(rs_network_build(ctx, roads, &no, &net), RS_OK);
     rs_network_free(ctx, net);
-    struct {
-        rs_road_parse_options p;
-        uint32_t added;
-    } np;
-    memset(&np, 0, sizeof np);
-    np.p.size = sizeof np;
-    np.added = 1;
+    rs_road_parse_options po;
+    memset(&po, 0, sizeof po);
+    rs_road_parse_options *np = newer(&po, sizeof po, 1);
     rs_roads *r2 = NULL;
-    CHECK_EQ_INT(rs_roads_parse_ex(ctx, "road a width 2\n0 0\n1 1\n", 24, &np.p, &r2), RS_ERR_UNSUPPORTED);
+    CHECK(np && rs_roads_parse_ex(ctx, "road a width 2\n0 0\n1 1\n", 24, np, &r2) == RS_ERR_UNSUPPORTED);
     CHECK(r2 == NULL);
+    free(np);
     rs_roads_free(ctx, roads);
 }
 

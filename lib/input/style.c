@@ -669,14 +669,23 @@ static double nominal(const rs_style_request *req, double *left, double *lane, d
     return *left + n * *lane + *right;
 }
 
+/* The host's request in this header's layout (the ABI rule; no context:
+ * no message), RS_ERR_INVALID_ARG when NULL or out of range. */
+static rs_result request_in(const rs_style_request *req_in, rs_style_request *rq)
+{
+    if (!req_in) return RS_ERR_INVALID_ARG;
+    rs_result r = RS__OPTS_IN(NULL, req_in, rq, rs_style_request);
+    if (r) return r;
+    return request_ok(rq) ? RS_OK : RS_ERR_INVALID_ARG;
+}
+
 rs_result rs_style_default_width(const rs_style_request *req_in, double *width)
 {
     rs_style_request rq;
-    if (!req_in) return RS_ERR_INVALID_ARG;
-    rs_result ro = RS__OPTS_IN(NULL, req_in, &rq, rs_style_request);
+    rs_result ro = request_in(req_in, &rq);
     if (ro) return ro;
     const rs_style_request *req = &rq;
-    if (!request_ok(req) || !width) return RS_ERR_INVALID_ARG;
+    if (!width) return RS_ERR_INVALID_ARG;
     double l, ln, r;
     *width = nominal(req, &l, &ln, &r);
     return RS_OK;
@@ -784,11 +793,10 @@ static void request_input(const rs_style_request *req, rs__lanes_in *in)
 rs_result rs_style_default(const rs_style_request *req_in, rs_style *out)
 {
     rs_style_request rq;
-    if (!req_in) return RS_ERR_INVALID_ARG;
-    rs_result r = RS__OPTS_IN(NULL, req_in, &rq, rs_style_request);
+    rs_result r = request_in(req_in, &rq);
     if (r) return r;
     const rs_style_request *req = &rq;
-    if (!request_ok(req) || !out) return RS_ERR_INVALID_ARG;
+    if (!out) return RS_ERR_INVALID_ARG;
     rs__lanes_in in;
     request_input(req, &in);
     default_style(req, &in, out);

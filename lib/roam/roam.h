@@ -415,6 +415,10 @@ int rs__roam_item_parent(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t
 /* The view of a frame (lib/roam/roam_view.c): projection and frustum planes,
  * the patch height ranges, and per patch 1 when visible (*vis is visbuf
  * when nbuf is enough, else allocated: the caller frees it). */
+/* A ROAM call's view (rs_roam_frame, rs_roam_update) in this header's
+ * layout (the ABI rule), RS_ERR_INVALID_ARG naming `call` for NULLs. */
+rs_result rs__roam_view_in(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw_in, const char *call,
+                           rs_roam_view *vw);
 rs_result rs__roam_view_begin(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, view_params *v,
                               unsigned char *visbuf, size_t nbuf, unsigned char **vis);
 /* Free what the first rs_roam_update allocated (lib/roam/roam_update.c). */

@@ -860,9 +860,8 @@ static rs_result update_run(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uin
 rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw_in, uint32_t budget)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!L || !vw_in) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_update: roam and view must not be NULL");
     rs_roam_view vw;
-    rs_result r = RS__OPTS_IN(ctx, vw_in, &vw, rs_roam_view);
+    rs_result r = rs__roam_view_in(ctx, L, vw_in, "rs_roam_update", &vw);
     if (r != RS_OK) return r;
     rs__progress pg;
     rs_ctx *saved;

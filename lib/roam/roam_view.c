@@ -109,12 +109,18 @@ static rs_result frame_run(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw);
  * FRAME_MAX_PASSES + 1 passes with a target). A cancelled frame leaves the
  * mesh of the pass under way: valid and crack-free, coarser; the
  * tolerance feedback is not updated. */
+rs_result rs__roam_view_in(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw_in, const char *call,
+                           rs_roam_view *vw)
+{
+    if (!L || !vw_in) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: roam and view must not be NULL", call);
+    return RS__OPTS_IN(ctx, vw_in, vw, rs_roam_view);
+}
+
 rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw_in)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!L || !vw_in) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_frame: roam and view must not be NULL");
     rs_roam_view vw;
-    rs_result r = RS__OPTS_IN(ctx, vw_in, &vw, rs_roam_view);
+    rs_result r = rs__roam_view_in(ctx, L, vw_in, "rs_roam_frame", &vw);
     if (r != RS_OK) return r;
     rs__progress pg;
     rs_ctx *saved;
