@@ -682,12 +682,10 @@ static rs_result request_in(const rs_style_request *req_in, rs_style_request *rq
 rs_result rs_style_default_width(const rs_style_request *req_in, double *width)
 {
     rs_style_request rq;
-    rs_result ro = request_in(req_in, &rq);
-    if (ro) return ro;
-    const rs_style_request *req = &rq;
-    if (!width) return RS_ERR_INVALID_ARG;
-    double l, ln, r;
-    *width = nominal(req, &l, &ln, &r);
+    rs_result r = request_in(req_in, &rq);
+    if (r || !width) return r ? r : RS_ERR_INVALID_ARG;
+    double l, ln, rt;
+    *width = nominal(&rq, &l, &ln, &rt);
     return RS_OK;
 }
 
@@ -794,12 +792,10 @@ rs_result rs_style_default(const rs_style_request *req_in, rs_style *out)
 {
     rs_style_request rq;
     rs_result r = request_in(req_in, &rq);
-    if (r) return r;
-    const rs_style_request *req = &rq;
-    if (!out) return RS_ERR_INVALID_ARG;
+    if (r || !out) return r ? r : RS_ERR_INVALID_ARG;
     rs__lanes_in in;
-    request_input(req, &in);
-    default_style(req, &in, out);
+    request_input(&rq, &in);
+    default_style(&rq, &in, out);
     return RS_OK;
 }
 
