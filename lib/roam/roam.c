@@ -182,6 +182,7 @@ rs_result rs__roam_progress_end(rs_ctx *ctx, rs_roam *L, rs__progress *pg, rs_re
 {
     L->pctx = saved;
     if (L->cancelled && (r == RS_OK || r == RS_ERR_POOL_EXHAUSTED)) r = RS_ERR_CANCELLED;
+    if (!saved) L->cancelled = 0; /* the outermost call is over */
     return rs__progress_end(ctx, pg, r);
 }
 

@@ -622,8 +622,8 @@ rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *L, uint32_t max_triangles)
         int over = rs__roam_refine(L, &rp);
         if (!over && L->tris <= max_triangles) hi = mid; else lo = mid + 1;
     }
-    if (L->cancelled) rs__roam_reset_mesh(L); /* a trial's mesh may be over the budget */
     rs_result r = L->cancelled ? RS_OK : rs_roam_refine_error(ctx, L, (double)bits_float(lo) * L->zs);
+    if (L->cancelled) rs__roam_reset_mesh(L); /* a trial's mesh may be over the budget */
     return rs__roam_progress_end(ctx, L, &pg, r, saved);
 }
 
