@@ -80,7 +80,7 @@ rs_dem *cli_geo_load_dem(rs_ctx *ctx, const char *path, cli_geo *geo)
     cli_input in;
     if (cli_gdal_input_open(&in, path, 0)) return NULL;
     if (in.fd >= 0 && (is_pgm(&in) || !cli_gdal_loadable())) return cli_load_dem_input(ctx, &in);
-    rs_limits lim;
+    rs_limits lim = { 0 };
     rs_ctx_limits(ctx, &lim);
     uint32_t w = 0, h = 0;
     float *z = NULL;

@@ -1078,7 +1078,7 @@ rs_dem *cli_load_dem_input(rs_ctx *ctx, cli_input *inp)
     }
     uint32_t w, h;
     float *z;
-    rs_limits lim;
+    rs_limits lim = { 0 };
     rs_ctx_limits(ctx, &lim);
     image_read r = { p, path, lim.max_dem_side, 0, &w, &h, &z, NULL };
     int bad = read_image_quietly(&r);

@@ -50,6 +50,46 @@ RS_API const char *rs_version_string(void);
 RS_API uint32_t rs_version_number(void);
 
 /* ---------------------------------------------------------------------------
+ * ABI of the option structs (docs/embedding.md "ABI")
+ *
+ * Every option struct the library reads through a pointer (rs_limits,
+ * rs_road_parse_options, rs_style_request, rs_style_options,
+ * rs_normal_options, rs_network_options, rs_splat_options, rs_gpu_options,
+ * rs_roam_options, rs_roam_view, rs_roam_mesh_options, rs_vt_options,
+ * rs_vt_view, and the plane set rs_splat_layers) starts with `size_t size`, and all-zero still means
+ * defaults:
+ * - size 0: the layout of this header; right when the host was built
+ *   against the header of the library it runs with (rs_version_number);
+ * - size = sizeof the struct (`o.size = sizeof o;`): safe with any later
+ *   library of the same major version. A library whose struct is larger
+ *   reads the host's first `size` bytes and takes the rest as zero (the
+ *   defaults of the fields the host did not know);
+ * - a size larger than the library's struct (a host built against a newer
+ *   header) is accepted when the extra bytes are all zero (the host left
+ *   the new fields at their defaults) and refused otherwise with
+ *   RS_ERR_UNSUPPORTED, rs_ctx_message naming the struct and the byte;
+ *   a size below sizeof(size_t) is RS_ERR_INVALID_ARG.
+ * rs_roam_mesh_bound, which returns nothing, says what it does with a
+ * refused struct. Getters that fill one
+ * (rs_ctx_limits) write at most out->size bytes (0: all) and set out->size
+ * to what they wrote, so zero the struct or set its size before the call.
+ * Structs held by value inside another (rs_splat_options' grid, coverage,
+ * surface, style, markings and lighting; the lighting's normal) are
+ * covered by the outer struct's size: their own `size`, where they have
+ * one, is ignored there.
+ * Rules for the library (how a struct may change without a new major
+ * version): members are only appended, at offsets at or beyond the old
+ * sizeof (an old host's tail padding is not read as a new field), zero
+ * keeps meaning "default", and a struct nested by value never grows
+ * (new settings of a nested struct go at the end of the outer one).
+ * Plain data records (rs_dem_frame, rs_style, rs_style_line, rs_mark,
+ * rs_image, rs_colour, rs_colour_stop, rs_surface_image, rs_allocator) and
+ * the structs the library fills for the host (statistics, info, network
+ * nodes, lanes, tiles) carry no size: their layout is fixed for a minor
+ * version before 1.0 and a major one after.
+ * ------------------------------------------------------------------------- */
+
+/* ---------------------------------------------------------------------------
  * Results
  * ------------------------------------------------------------------------- */
 typedef enum rs_result {
@@ -84,6 +124,7 @@ typedef struct rs_allocator {
 /* Input limits, checked before anything is allocated. A zero field means
  * the default shown. Callers may tighten them (or loosen, at their risk). */
 typedef struct rs_limits {
+    size_t size;            /* 0, or sizeof (rs_limits) of the host's header: "ABI" above */
     uint32_t max_dem_side;     /* 16384: max DEM width or height (samples)  */
     uint64_t max_pixels;       /* 2^28: max output pixels (splat texture)   */
     uint64_t max_points;       /* 10^7: max road points over all roads; also
@@ -121,7 +162,8 @@ typedef struct rs_ctx rs_ctx;
 RS_API rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out);
 RS_API void rs_ctx_free(rs_ctx *ctx);
 
-/* Effective limits (defaults filled in). */
+/* Effective limits (defaults filled in): at most out->size bytes of them
+ * (0: the whole struct; "ABI" above), so zero *out or set its size first. */
 RS_API void rs_ctx_limits(const rs_ctx *ctx, rs_limits *out);
 
 /* Detail of the last failure on this context ("line 12: width must be > 0"),
@@ -131,6 +173,26 @@ RS_API const char *rs_ctx_message(const rs_ctx *ctx);
 /* Progress callback: `done` of `total` work units. Return non-zero to cancel
  * (the call then returns RS_ERR_CANCELLED). Called from the calling thread. */
 typedef int (*rs_progress_fn)(void *user, uint64_t done, uint64_t total);
+
+/* Progress and cancel of the long calls made with this context
+ * (docs/embedding.md "Progress and cancel"): rs_road_grid_build,
+ * rs_splatter_create, rs_splat_window(_ws), rs_splat, rs_normal_window,
+ * rs_network_build, rs_gpu_scene_create, rs_roam_create, rs_roam_set_dem,
+ * rs_roam_refine_error, rs_roam_refine_count, rs_roam_frame,
+ * rs_roam_update, rs_vt_create and rs_vt_make_tile call `fn` from the
+ * calling thread at least every few milliseconds of work (the longest
+ * gaps measured are in docs/embedding.md), with `done` of `total` units
+ * (per call, below; done never goes back, the last call of a completed
+ * call has done == total). A call whose options carry their own callback
+ * (rs_splat_options.progress: the grid build, the splatter, its windows)
+ * calls that one instead. A call made inside another (the grid build of
+ * rs_splatter_create, the windows of rs_vt_make_tile) reports as part of
+ * the outer one. Non-zero from `fn` stops the call: it returns
+ * RS_ERR_CANCELLED ("cancelled"), frees what it made, and leaves its
+ * objects usable (what each call leaves is documented with it). `fn` NULL:
+ * none (the default). A callback changes no output byte. The context
+ * keeps the pointers; one thread uses a context at a time. */
+RS_API void rs_ctx_set_progress(rs_ctx *ctx, rs_progress_fn fn, void *user);
 
 /* ---------------------------------------------------------------------------
  * DEM (lib/dem.c): W x H height samples at grid vertices, row-major, stored
@@ -285,6 +347,7 @@ typedef struct rs_styles rs_styles;
 
 /* Options of rs_roads_parse_ex. All-zero means defaults. */
 typedef struct rs_road_parse_options {
+    size_t size;            /* 0, or sizeof (rs_road_parse_options) of the host's header: "ABI" above */
     rs_profile profile;  /* lane widths for roads without `width` */
     rs_styles *styles;   /* non-NULL: the text's style blocks are added to this
                             set (nothing is added when parsing fails) */
@@ -407,6 +470,7 @@ typedef enum rs_driving_side {
 /* What a built-in default style is made for. All-zero fields take the
  * defaults shown. */
 typedef struct rs_style_request {
+    size_t size;            /* 0, or sizeof (rs_style_request) of the host's header: "ABI" above */
     rs_road_class road_class; /* NONE: the unstyled road (no lines) */
     uint32_t lanes;           /* 0 -> the class's default; else 1..16 */
     rs_oneway oneway;         /* NONE -> the class's default */
@@ -545,6 +609,7 @@ typedef enum rs_line_aa {
  * means defaults. The grid build resolves the styles; a splatter checks
  * that its grid was built with the same style options. */
 typedef struct rs_style_options {
+    size_t size;            /* 0, or sizeof (rs_style_options) of the host's header: "ABI" above */
     const rs_styles *styles; /* named styles for style= and per-class overrides (borrowed while
                                 the grid is built); NULL -> built-in styles only */
     rs_profile profile;      /* built-in styles' standard: RS_PROFILE_RMS (0) or RS_PROFILE_MUTCD */
@@ -571,6 +636,7 @@ typedef struct rs_surface_image {
 
 /* Normal-map options (rs_normal_window, below; docs/normals.md). */
 typedef struct rs_normal_options {
+    size_t size;            /* 0, or sizeof (rs_normal_options) of the host's header: "ABI" above */
     int directx;          /* non-zero: G = -Y, south / image down (DirectX engines) */
     double strength;      /* road-texture and surface-image relief: slope per unit of luminance change per pixel;
                              0 -> 1, else (0, 1e6] */
@@ -646,6 +712,7 @@ typedef struct rs_network rs_network;
 
 /* Options of rs_network_build. All-zero means defaults. */
 typedef struct rs_network_options {
+    size_t size;            /* 0, or sizeof (rs_network_options) of the host's header: "ABI" above */
     double tolerance; /* metres: points closer than this are one node, an end point
                          this near another road's centreline is a T; 0 -> 0.05,
                          else 1e-9 .. 1000 */
@@ -708,7 +775,9 @@ typedef struct rs_road_stroke {
 
 /* Build the network of `roads` (opts may be NULL). RS_ERR_INVALID_ARG for
  * a bad tolerance, RS_ERR_NOMEM; *out is the caller's (rs_network_free).
- * Cost: near-linear in the number of points (spatial hashing). */
+ * Cost: near-linear in the number of points (spatial hashing). Progress
+ * (the context's callback): polls between and within the stages, done 0
+ * of 1 until the end; a cancel makes nothing. */
 RS_API rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts,
                                   rs_network **out);
 RS_API void rs_network_free(rs_ctx *ctx, rs_network *net);
@@ -807,6 +876,7 @@ typedef struct rs_marking_options {
 
 /* All-zero means defaults. The frame (cell size, z-scale, origin) is the DEM's. */
 typedef struct rs_splat_options {
+    size_t size;            /* 0, or sizeof (rs_splat_options) of the host's header: "ABI" above */
     uint32_t texels;                /* output texels per DEM cell side; 0 -> 8, else 1..1024 */
     rs_grid_options grid;
     rs_coverage_options coverage;
@@ -864,7 +934,10 @@ typedef struct rs_splatter rs_splatter;
  * one with styles or markings must match the texels (RS_ERR_INVALID_ARG:
  * they are laid out in its pixels). `dem` and the option textures are
  * borrowed too. The splatter is immutable: rs_splat_window may be called on
- * it from several threads at once, each with its own context. */
+ * it from several threads at once, each with its own context. Progress:
+ * opts->progress (else the context's), the grid build's units and one
+ * more (analytic edges; alpha-map edges report only their grid's sweep);
+ * a cancel makes nothing. */
 RS_API rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                     const rs_road_grid *grid, const rs_splat_options *opts,
                                     rs_splatter **out);
@@ -892,8 +965,10 @@ typedef struct rs_splat_profile {
  * uint16 0..65535 (row r at weight + r*weight_stride values). The window
  * must lie inside the image (RS_ERR_INVALID_ARG). Scratch memory (a few
  * rows of the window) comes from ctx's allocator. Progress: the splatter's
- * progress callback gets (rows done, h) from this thread; with several
- * threads it must be thread-safe. `profile` may be NULL. With
+ * progress callback (else the context's) gets (rows done, h) from this
+ * thread after each band of rows and, within a band, after each piece of
+ * 2^18 pixels; with several threads the splatter's must be thread-safe. A
+ * cancel leaves the window's rows partly written. `profile` may be NULL. With
  * opts->lighting.enable, each band of rows is lit by its normals as soon as
  * it is splatted (scratch as rs_normal_window's; docs/surface.md). */
 RS_API rs_result rs_splat_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0,
@@ -967,6 +1042,7 @@ RS_API rs_result rs_splat_window_ws(rs_ctx *ctx, const rs_splatter *s, rs_splat_
  * halo). Any window gives the bytes of the same pixels of the whole image.
  * All-zero (no plane) is RS_ERR_INVALID_ARG. */
 typedef struct rs_splat_layers {
+    size_t size;            /* 0, or sizeof (rs_splat_layers) of the host's header: "ABI" above */
     uint8_t *terrain;
     size_t terrain_stride;
     uint8_t *casing;
@@ -1023,7 +1099,8 @@ RS_API rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *gr
  * same pixels of the whole image; the splatter may be shared by several
  * threads as for rs_splat_window. Scratch (about 60 bytes per pixel of a
  * piece of at most 1026 x (texels + 2) pixels) comes from ctx's
- * allocator; no progress calls. `opts` may be NULL. */
+ * allocator. Progress: the context's callback (rs_ctx_set_progress), rows
+ * done of h. `opts` may be NULL. */
 RS_API rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w,
                                   uint32_t h, uint8_t *rgb, size_t rgb_stride, const rs_normal_options *opts);
 
@@ -1129,6 +1206,7 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_CUT_FLOATS 8
 
 typedef struct rs_gpu_options {
+    size_t size;            /* 0, or sizeof (rs_gpu_options) of the host's header: "ABI" above */
     double cell;   /* index cell, metres; 0 -> automatic (the DEM cell, grown to at most 2^22 cells) */
     double reach;  /* metres beyond each capsule (and casing) a cell still lists it: the widest
                       anti-aliasing footprint served exactly; 0 -> half the index cell */
@@ -1146,7 +1224,9 @@ typedef struct rs_gpu_scene rs_gpu_scene;
  * from a grid that has them). *out belongs to the caller: free it with
  * rs_gpu_scene_free and the same context. `gopts` may be NULL.
  * RS_ERR_LIMIT also for a marking sprite whose summed-area table
- * (RS_GPU_ARRAY_MARK_SAT) would pass 2^31 - 1. */
+ * (RS_GPU_ARRAY_MARK_SAT) would pass 2^31 - 1. Progress (this and
+ * rs_gpu_scene_from_grid): the context's callback (rs_ctx_set_progress;
+ * not opts->progress), polls in every stage; a cancel makes nothing. */
 RS_API rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_gpu_options *gopts,
                                      rs_gpu_scene **out);
@@ -1278,6 +1358,7 @@ typedef struct rs_roam rs_roam;
 /* All-zero means defaults. Cell size and z-scale are the DEM's frame
  * (rs_dem_set_frame); the mesher needs z_scale > 0. */
 typedef struct rs_roam_options {
+    size_t size;            /* 0, or sizeof (rs_roam_options) of the host's header: "ABI" above */
     uint32_t pool_nodes;  /* node pool size; 0 -> pool_bytes, else automatic */
     uint64_t pool_bytes;  /* pool size in bytes (used when pool_nodes is 0) */
     uint32_t patch_size;  /* patch side in cells, a power of two; 0 -> automatic */
@@ -1299,7 +1380,8 @@ RS_API size_t rs_roam_node_bytes(void);
  * max_pool_nodes (RS_ERR_LIMIT if a requested pool exceeds that). `dem` is
  * copied where it holds nodata, otherwise referenced: it must outlive *out.
  * Nodata (NaN) samples get the lowest valid 8-neighbour height, spreading
- * inwards (all-nodata -> 0); they never produce NaN vertices. */
+ * inwards (all-nodata -> 0); they never produce NaN vertices. Progress: a
+ * unit per stage (5); a cancel makes nothing. */
 RS_API rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts,
                                 rs_roam **out);
 RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
@@ -1310,7 +1392,8 @@ RS_API void rs_roam_free(rs_ctx *ctx, rs_roam *roam);
  * cached error bounds are dropped and the mesh is reset to the base mesh.
  * `dem` must outlive the landscape's use of it, as for rs_roam_create. On
  * failure (size or frame mismatch: the cell size and z-scale must be the
- * landscape's, RS_ERR_INVALID_ARG; RS_ERR_NOMEM) the landscape keeps its
+ * landscape's, RS_ERR_INVALID_ARG; RS_ERR_NOMEM; a cancel at its one
+ * progress call, once the new DEM is checked) the landscape keeps its
  * previous DEM. */
 RS_API rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *roam, const rs_dem *dem);
 
@@ -1320,17 +1403,21 @@ RS_API rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *roam, const rs_dem *dem);
  * vertical error over all DEM samples is <= max_error. Returns
  * RS_ERR_POOL_EXHAUSTED when the pool ran out: the mesh is then still valid,
  * crack-free and complete, only coarser (and a larger pool never gives a
- * coarser mesh). */
+ * coarser mesh). Progress (rs_ctx_set_progress): pool nodes taken of the
+ * pool; a cancel leaves the mesh refined so far, valid and crack-free as
+ * when the pool runs out. */
 RS_API rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *roam, double max_error);
 
 /* The finest mesh of the error-bounded family with at most `max_triangles`
  * triangles (binary search on the error; stats.threshold tells the error
  * reached). If even the base mesh has more, the base mesh is kept and
- * RS_ERR_LIMIT returned. */
+ * RS_ERR_LIMIT returned. Progress: the pool nodes of each search pass (of
+ * at most 33); a cancel leaves the base mesh. */
 RS_API rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *roam, uint32_t max_triangles);
 
 /* View-dependent mode: one frame. All-zero fields take the default shown. */
 typedef struct rs_roam_view {
+    size_t size;            /* 0, or sizeof (rs_roam_view) of the host's header: "ABI" above */
     double eye[3];        /* camera position, metres (x, y map frame, z up) */
     double dir[3];        /* view direction (need not be unit); must not be 0 */
     double fov_y;         /* vertical field of view, degrees; 0 -> 60 */
@@ -1350,7 +1437,9 @@ typedef struct rs_roam_view {
  * triangles outside the view frustum are not refined. With
  * target_triangles, the tolerance is carried from frame to frame and
  * corrected within the frame (a few re-tessellations at most) so the count
- * lands within +-5 % whenever the target is reachable. */
+ * lands within +-5 % whenever the target is reachable. Progress: the pool
+ * nodes of each pass; a cancel leaves the mesh of the pass under way (valid,
+ * crack-free, coarser) and the target's tolerance as it was. */
 RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view);
 
 /* Frame-coherent view mode (seed 004's split and merge queues): start
@@ -1379,7 +1468,9 @@ RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *v
  * queues, which grow with the mesh (RS_ERR_NOMEM: the mesh stays valid).
  * Like every rs_roam call it mutates the landscape: one thread per
  * landscape at a time; landscapes are independent. RS_ERR_POOL_EXHAUSTED
- * as for rs_roam_frame. */
+ * as for rs_roam_frame. Progress: pool nodes taken; a cancel stops the
+ * update as a spent budget does (mesh valid and crack-free, update_done
+ * 0, the next update goes on). */
 RS_API rs_result rs_roam_update(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *view, uint32_t budget);
 
 typedef struct rs_roam_stats {
@@ -1405,6 +1496,7 @@ RS_API void rs_roam_get_stats(const rs_roam *roam, rs_roam_stats *out);
 
 /* Mesh extraction. All-zero means: no normals, no skirts. */
 typedef struct rs_roam_mesh_options {
+    size_t size;            /* 0, or sizeof (rs_roam_mesh_options) of the host's header: "ABI" above */
     int normals;          /* non-zero: write unit normals (Horn's gradient, as the hillshade) */
     double skirt_depth;   /* > 0: add a skirt this many metres deep on the map border */
     uint32_t *samples;    /* NULL, or vertex_capacity entries: the DEM sample of each vertex,
@@ -1412,7 +1504,8 @@ typedef struct rs_roam_mesh_options {
 } rs_roam_mesh_options;
 
 /* Upper bounds on the vertex and index counts of rs_roam_extract for the
- * current mesh and `opts` (may be NULL). */
+ * current mesh and `opts` (may be NULL; one the ABI rule refuses is bounded
+ * as with a skirt, and rs_roam_extract then refuses it). */
 RS_API void rs_roam_mesh_bound(const rs_roam *roam, const rs_roam_mesh_options *opts,
                                size_t *max_vertices, size_t *max_indices);
 
@@ -1531,6 +1624,7 @@ typedef struct rs_vt rs_vt;
 
 /* All-zero means defaults. */
 typedef struct rs_vt_options {
+    size_t size;            /* 0, or sizeof (rs_vt_options) of the host's header: "ABI" above */
     uint32_t tile_size;    /* S: core pixels per tile side; 0 -> 256, else 8..8192 */
     int32_t border;        /* B: pixels of the level image around the core on each side
                               (for bilinear/anisotropic filtering across tile edges);
@@ -1550,6 +1644,7 @@ typedef struct rs_vt_options {
 
 /* One frame's camera. All-zero fields take the default shown. */
 typedef struct rs_vt_view {
+    size_t size;            /* 0, or sizeof (rs_vt_view) of the host's header: "ABI" above */
     double eye[3];        /* camera position, metres (frame above) */
     double dir[3];        /* view direction (need not be unit), not 0; up is +z */
     double fov_y;         /* vertical field of view, degrees; 0 -> 60, else (0, 179) */
@@ -1599,7 +1694,8 @@ typedef struct rs_vt_stats {
 
 /* Build the quadtree over the splatter's image: the levels, a splatter per
  * texel count the levels need (sharing s's grid, or with styles or markings
- * a grid of its own from opts->roads; s's options; progress callbacks off),
+ * a grid of its own from opts->roads; s's options; their grid builds report
+ * as parts of this call to the context's callback, rs_ctx_set_progress),
  * the height range of every tile (from the DEM) and the bookkeeping for
  * rs_vt_info.slots tiles, all allocated here (rs_vt_update then allocates
  * nothing). The coarser splatters are checked against ctx's limits as any
@@ -1674,7 +1770,9 @@ RS_API size_t rs_vt_workspace_bytes(const rs_vt_workspace *ws);
  * each texel count adds the normal scratch to the workspace: see
  * rs_splat_workspace_create). Level 0 renders through `s`
  * itself: its progress callback, if any, is called from the making thread
- * as rs_splat_window_ws calls it (the vt's own splatters have none). Thread
+ * as rs_splat_window_ws calls it (the vt's own splatters have none), else
+ * the context's: source rows rendered (polls between the bands of a
+ * resampled tile); a cancel leaves the tile's bytes unspecified. Thread
  * rules above.
  * RS_ERR_INVALID_ARG for a tile out of range, another vt's workspace or a
  * short stride. */

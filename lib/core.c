@@ -63,11 +63,13 @@ rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_c
         if (!alloc->malloc_fn || !alloc->realloc_fn || !alloc->free_fn) return RS_ERR_INVALID_ARG;
         a = *alloc;
     }
+    rs_limits lim;
+    if (RS__OPTS_IN(NULL, limits, &lim, rs_limits)) return limits->size < sizeof(size_t) ? RS_ERR_INVALID_ARG : RS_ERR_UNSUPPORTED;
     rs_ctx *ctx = a.malloc_fn(a.user, sizeof *ctx);
     if (!ctx) return RS_ERR_NOMEM;
     memset(ctx, 0, sizeof *ctx);
     ctx->alloc = a;
-    if (limits) ctx->limits = *limits;
+    ctx->limits = lim;
     fill_limits(&ctx->limits);
     *out = ctx;
     return RS_OK;
@@ -80,7 +82,7 @@ void rs_ctx_free(rs_ctx *ctx)
 
 void rs_ctx_limits(const rs_ctx *ctx, rs_limits *out)
 {
-    if (ctx && out) *out = ctx->limits;
+    if (ctx && out) rs__opts_out(&ctx->limits, out, sizeof *out);
 }
 
 const char *rs_ctx_message(const rs_ctx *ctx)
@@ -130,6 +132,50 @@ rs_result rs__fail(rs_ctx *ctx, rs_result code, const char *fmt, ...)
     return code;
 }
 
+rs_result rs__opts_in(rs_ctx *ctx, const void *in, void *out, size_t full, const char *name)
+{
+    size_t size = 0;
+    memset(out, 0, full);
+    if (!in) {
+        memcpy(out, &full, sizeof full);
+        return RS_OK;
+    }
+    memcpy(&size, in, sizeof size);
+    if (size == 0) size = full;
+    if (size < sizeof size)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s.size %zu is smaller than the size field itself", name, size);
+    if (size > full) {
+        const unsigned char *tail = (const unsigned char *)in + full;
+        for (size_t k = 0; k < size - full; k++)
+            if (tail[k])
+                return rs__fail(ctx, RS_ERR_UNSUPPORTED,
+                                "%s.size %zu: byte %zu is set, but this roadsplat %s knows only %zu bytes "
+                                "(options of a newer header)",
+                                name, size, full + k, rs_version_string(), full);
+        size = full;
+    }
+    memcpy(out, in, size);
+    memcpy(out, &full, sizeof full);
+    return RS_OK;
+}
+
+void rs__opts_out(const void *src, void *out, size_t full)
+{
+    size_t size;
+    memcpy(&size, out, sizeof size);
+    if (size == 0 || size > full) size = full;
+    if (size < sizeof size) return; /* nothing but part of the size field: leave it */
+    memcpy(out, src, size);
+    memcpy(out, &size, sizeof size);
+}
+
+void rs_ctx_set_progress(rs_ctx *ctx, rs_progress_fn fn, void *user)
+{
+    if (!ctx) return;
+    ctx->progress = fn;
+    ctx->progress_user = fn ? user : NULL;
+}
+
 int rs__tick(rs_ctx *ctx, uint64_t units)
 {
     rs__progress *p = ctx ? ctx->pg : NULL;
@@ -139,14 +185,57 @@ int rs__tick(rs_ctx *ctx, uint64_t units)
     if (p->done < p->next && ++p->polls < RS__TICK_POLLS) return 0;
     p->polls = 0;
     p->next = p->done + (p->step ? p->step : 1);
-    if (p->fn(p->user, p->done < p->total ? p->done : p->total, p->total)) p->cancelled = 1;
+    p->said = p->done < p->total ? p->done : p->total;
+    if (p->fn(p->user, p->said, p->total)) p->cancelled = 1;
     return p->cancelled;
+}
+
+int rs__report(rs_ctx *ctx, uint64_t units)
+{
+    if (ctx && ctx->pg) ctx->pg->polls = RS__TICK_POLLS;
+    return rs__tick(ctx, units);
 }
 
 int rs__poll(rs_ctx *ctx)
 {
-    if (ctx && ctx->pg) ctx->pg->polls = RS__TICK_POLLS;
-    return rs__tick(ctx, 0);
+    return rs__report(ctx, 0);
+}
+
+void rs__progress_begin(rs_ctx *ctx, rs__progress *pg, rs_progress_fn fn, void *user, uint64_t total,
+                        uint64_t step)
+{
+    memset(pg, 0, sizeof *pg);
+    pg->outer = ctx->pg;
+    pg->said = UINT64_MAX;
+    if (!fn) {
+        fn = ctx->progress;
+        user = ctx->progress_user;
+    }
+    /* inside a call that reports, or nothing to report to: ticks go to
+     * ctx->pg as it is */
+    if ((ctx->pg && ctx->pg->fn) || !fn) {
+        pg->nested = 1;
+        return;
+    }
+    pg->fn = fn;
+    pg->user = user;
+    pg->total = total;
+    pg->step = step ? step : 1;
+    pg->next = pg->step;
+    ctx->pg = pg;
+}
+
+rs_result rs__progress_end(rs_ctx *ctx, rs__progress *pg, rs_result r)
+{
+    if (pg->nested) return r; /* the outer call ends it (and names a cancel) */
+    ctx->pg = pg->outer;
+    if (!r && pg->fn && !pg->cancelled && pg->said != pg->total) {
+        pg->said = pg->total;
+        if (pg->fn(pg->user, pg->total, pg->total)) pg->cancelled = 1;
+    }
+    if (!r && pg->cancelled) r = RS_ERR_CANCELLED;
+    if (r == RS_ERR_CANCELLED) return rs__fail(ctx, r, "cancelled");
+    return r;
 }
 
 void rs__ok(rs_ctx *ctx)

@@ -21,8 +21,11 @@ typedef struct rs__progress {
     void *user;
     uint64_t done, total, next; /* units done, expected, when to call fn next */
     uint64_t step;              /* units between calls */
+    uint64_t said;              /* `done` of the last call (UINT64_MAX: none yet) */
     uint32_t polls;             /* rs__tick calls since the last callback */
     int cancelled;
+    int nested;                 /* begun inside another call's progress: reports to it */
+    struct rs__progress *outer; /* ctx->pg before this call */
 } rs__progress;
 
 struct rs_ctx {
@@ -30,7 +33,24 @@ struct rs_ctx {
     rs_limits limits;
     char message[256];
     rs__progress *pg; /* the running call's progress, or NULL */
+    rs_progress_fn progress; /* rs_ctx_set_progress */
+    void *progress_user;
 };
+
+/* A long call's progress (docs/embedding.md "Progress and cancel"): begin
+ * puts `pg` on the context for the call's duration, with `fn` (the call's
+ * own callback: an options' field; NULL: the context's, rs_ctx_set_progress)
+ * and `total` units, a callback every `step` units. A call begun while
+ * another runs on the context (a grid build inside rs_splatter_create,
+ * a splat window inside rs_vt_make_tile) reports to that one instead: its
+ * ticks add to the outer call's units, and a cancel there stops it. end
+ * takes the call's result: makes the last call (done == total) when the
+ * call succeeded and no call said total yet, returns RS_ERR_CANCELLED
+ * ("cancelled") once a callback asked to stop, and takes pg off the
+ * context. */
+void rs__progress_begin(rs_ctx *ctx, rs__progress *pg, rs_progress_fn fn, void *user, uint64_t total,
+                        uint64_t step);
+rs_result rs__progress_end(rs_ctx *ctx, rs__progress *pg, rs_result r);
 
 /* `units` more of the running call's work done: calls its progress
  * callback every pg->step units (with done clamped to total), and every
@@ -43,6 +63,9 @@ int rs__tick(rs_ctx *ctx, uint64_t units);
 /* rs__tick(ctx, 0) that always calls the callback: between the stages of
  * a long call. */
 int rs__poll(rs_ctx *ctx);
+/* rs__tick(ctx, units) that always calls the callback: from loops that
+ * count their own time (every few thousand items). */
+int rs__report(rs_ctx *ctx, uint64_t units);
 
 struct rs_dem {
     uint32_t width, height;
@@ -84,6 +107,21 @@ double rs__local_quantum(double cell_size);
 double rs__local_coord(double world, double origin, double per_unit);
 
 #define RS__PI 3.14159265358979323846
+
+/* The ABI rule for option structs (include/roadsplat.h "ABI"): copy the
+ * host's struct `in` (NULL: all defaults) of type `name` into `out`, this
+ * header's layout of `full` bytes, by its first member `size_t size`: 0 is
+ * this layout; a smaller size (a host built against an older header) has
+ * its first `size` bytes read and the rest zero (defaults); a larger one
+ * (a newer header) is refused with RS_ERR_UNSUPPORTED unless the bytes
+ * beyond `full` are all zero. out->size is then `full`. ctx may be NULL
+ * (no message). */
+rs_result rs__opts_in(rs_ctx *ctx, const void *in, void *out, size_t full, const char *name);
+#define RS__OPTS_IN(ctx, in, out, type) rs__opts_in((ctx), (in), (out), sizeof(type), #type)
+/* The other way, for getters of such a struct (rs_ctx_limits,
+ * ...): write `full` bytes of `src` into `out` up to out->size (0: all of
+ * them); out->size becomes the bytes written. */
+void rs__opts_out(const void *src, void *out, size_t full);
 
 /* Validate splat options and fill in defaults (lib/options.c). */
 rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out);

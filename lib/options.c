@@ -9,8 +9,13 @@
 rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out)
 {
     rs_splat_options o;
-    if (in) o = *in;
-    else memset(&o, 0, sizeof o);
+    rs_result r = RS__OPTS_IN(ctx, in, &o, rs_splat_options);
+    if (r) return r;
+    /* the nested structs' own sizes mean nothing here (the outer size
+     * covers them): make them this layout's for the calls that take them
+     * alone (rs_road_style_ex, rs_normal_window) */
+    o.style.size = sizeof o.style;
+    o.lighting.normal.size = sizeof o.lighting.normal;
     rs_coverage_options *c = &o.coverage;
     rs_surface_options *f = &o.surface;
     if (o.texels == 0) o.texels = 8;

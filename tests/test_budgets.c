@@ -187,7 +187,7 @@ static void test_linesym_bytes(void)
     CHECKF(crowded_build(n, "motorway", 0, m, sizeof m) == RS_OK, "%s", m);
     /* an unstyled road makes no line symbols: any budget */
     CHECKF(crowded_build_ex(n, NULL, 0, 1, m, sizeof m) == RS_OK, "%s", m);
-    rs_limits lim;
+    rs_limits lim = { 0 };
     rs_ctx_limits(ctx, &lim);
     CHECK(lim.max_linesym_bytes == (uint64_t)1 << 32);
     /* the lines (with room for their dashes) of many styled roads count

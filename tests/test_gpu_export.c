@@ -180,7 +180,7 @@ static void test_scene(void)
     CHECK(g && gsv_of(g).nbands == 0 && gsv_of(g).nmarks == 0 && gsv_of(g).road[0] == 0 && gsv_of(g).nmark_entries == 0);
     rs_gpu_scene_free(ctx, g);
     /* a given cell and reach */
-    rs_gpu_options go = { 8, 3 };
+    rs_gpu_options go = { 0, 8, 3 };
     CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, &go, &g) == RS_OK);
     CHECK(g && gsv_of(g).cell == 8 && gsv_of(g).reach == 3 && gsv_of(g).gw == 12);
     rs_gpu_scene_free(ctx, g);

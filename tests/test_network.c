@@ -219,7 +219,7 @@ static void test_tee_tolerance(void)
         CHECK(rs_roads_add(ctx, roads, "main", 7, main_xy, 3) == RS_OK);
         CHECK(rs_roads_add(ctx, roads, "side", 5, side_xy, 2) == RS_OK);
         rs_network *net = NULL;
-        rs_network_options o = { tol };
+        rs_network_options o = { 0, tol };
         CHECK(rs_network_build(ctx, roads, &o, &net) == RS_OK);
         CHECK(net_consistent(net, roads));
         size_t junctions = 0;
@@ -259,7 +259,7 @@ static void test_tee_tolerance(void)
     rs_roads *roads = NULL;
     rs_network *net = NULL;
     CHECK(rs_roads_create(ctx, &roads) == RS_OK);
-    rs_network_options bad = { -1 };
+    rs_network_options bad = { 0, -1 };
     CHECK(rs_network_build(ctx, roads, &bad, &net) == RS_ERR_INVALID_ARG && net == NULL);
     bad.tolerance = NAN;
     CHECK(rs_network_build(ctx, roads, &bad, &net) == RS_ERR_INVALID_ARG && net == NULL);
@@ -290,7 +290,7 @@ static void test_end_tolerance(void)
                     double b[4] = { x0 + gap * ux, y0 + gap * uy, x0 + gap * ux + 20 * ux, y0 + gap * uy + 20 * uy };
                     rs_roads *roads = NULL;
                     rs_network *net = NULL;
-                    rs_network_options o = { tol };
+                    rs_network_options o = { 0, tol };
                     if (rs_roads_create(ctx, &roads) || rs_roads_add(ctx, roads, "r", 5, a, 2) ||
                         rs_roads_add(ctx, roads, "r", 5, b, 2) || rs_network_build(ctx, roads, &o, &net)) {
                         CHECK(0);

@@ -1,10 +1,18 @@
-/* Progress and cancel of the road grid build (issue 30): the default
- * (analytic) build of a styled scene reports through the options' progress
- * callback, done never goes back and ends at total, a callback that asks
- * to stop at its k-th call makes the build return RS_ERR_CANCELLED
- * ("cancelled", no grid, nothing leaked: the sanitizer build checks that)
- * at every stage, and a callback changes nothing in the output. */
+/* Progress and cancel (issue 30 target 4). The road grid build of a
+ * styled scene reports through the options' progress callback, done never
+ * goes back and ends at total, a callback that asks to stop at its k-th
+ * call makes the build return RS_ERR_CANCELLED ("cancelled", no grid,
+ * nothing leaked: the sanitizer build checks that) at every stage, and a
+ * callback changes nothing in the output. Then every other long call with
+ * the context's callback (rs_ctx_set_progress): the splat window (several
+ * pieces a band), the normal map, the splatter, rs_splat, the network,
+ * the GPU scene, the virtual texture's creation and its tiles, and ROAM's
+ * creation, refinements, frames and updates: the same rules, stopped at
+ * each call point in turn (every few for the calls that build grids),
+ * each leaving its objects usable (a ROAM mesh cancelled half way is
+ * checked crack-free, and the call run again gives the same output). */
 #include "roadsplat.h"
+#include "roam_check.h"
 #include "scenes.h"
 #include "harness.h"
 
@@ -65,6 +73,316 @@ static rs_result build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, wa
     return r;
 }
 
+/* ---- every long call with the context's callback ------------------------------ */
+
+typedef struct fixture {
+    rs_dem *dem;          /* the styled city's DEM */
+    rs_roads *roads;
+    rs_splatter *sp;      /* a 10-texel splatter on a small part: bands of two pieces */
+    rs_dem *small;
+    rs_vt *vt;
+    rs_vt_workspace *vws;
+    uint8_t *px;
+    size_t px_bytes;
+    rs_dem *fractal;      /* ROAM */
+    const float *fz;
+    uint32_t fw;
+    rs_roam *roam;
+} fixture;
+
+enum {
+    K_WINDOW, K_NORMALS, K_SPLATTER, K_SPLAT, K_NETWORK, K_GPU, K_VT_CREATE, K_VT_TILE, K_ROAM_CREATE,
+    K_ROAM_ERROR, K_ROAM_COUNT, K_ROAM_FRAME, K_ROAM_UPDATE, K_COUNT
+};
+static const char *const kname[K_COUNT] = { "rs_splat_window", "rs_normal_window", "rs_splatter_create",
+                                            "rs_splat", "rs_network_build", "rs_gpu_scene_create",
+                                            "rs_vt_create", "rs_vt_make_tile", "rs_roam_create",
+                                            "rs_roam_refine_error", "rs_roam_refine_count", "rs_roam_frame",
+                                            "rs_roam_update" };
+
+static int roam_call(int k) { return k >= K_ROAM_CREATE; }
+
+static rs_roam_view roam_view(void)
+{
+    rs_roam_view v;
+    memset(&v, 0, sizeof v);
+    v.eye[0] = 20; v.eye[1] = 30; v.eye[2] = 150;
+    v.dir[0] = 1; v.dir[1] = 0.7; v.dir[2] = -0.5;
+    v.pixel_error = 0.7;
+    return v;
+}
+
+/* The current ROAM mesh: its hash, and whether the independent checker
+ * finds it crack-free and covering the map (*ok). */
+static uint64_t roam_mesh(rs_ctx *ctx, const fixture *f, int *ok)
+{
+    size_t mv, mi, nv = 0, ni = 0;
+    rs_roam_mesh_bound(f->roam, NULL, &mv, &mi);
+    float *v = malloc(mv * 5 * sizeof *v);
+    uint32_t *ix = malloc(mi * sizeof *ix);
+    int32_t *gx = malloc(mv * sizeof *gx), *gy = malloc(mv * sizeof *gy);
+    double *vz = malloc(mv * sizeof *vz);
+    uint64_t h = 0;
+    *ok = 0;
+    if (v && ix && gx && gy && vz && rs_roam_extract(ctx, f->roam, NULL, v, NULL, mv, ix, mi, &nv, &ni) == RS_OK) {
+        h = hash_rgba((const uint8_t *)v, nv * 5 * sizeof *v) ^ hash_rgba((const uint8_t *)ix, ni * sizeof *ix);
+        for (size_t k = 0; k < nv; k++) {
+            gx[k] = (int32_t)v[5 * k];
+            gy[k] = (int32_t)v[5 * k + 1];
+            vz[k] = v[5 * k + 2];
+        }
+        rc_result res;
+        *ok = rc_check(f->fw, f->fw, f->fz, 1.0, gx, gy, vz, nv, ix, ni / 3, &res) && res.ok_grid &&
+              res.ok_winding && res.ok_area && res.ok_edges && res.ok_tjunction && res.ok_coverage;
+    }
+    free(v); free(ix); free(gx); free(gy); free(vz);
+    return h;
+}
+
+/* What the call needs, outside the measured part. */
+static int prepare(rs_ctx *ctx, fixture *f, int k)
+{
+    if (k == K_ROAM_CREATE || !roam_call(k)) return 0;
+    rs_roam_free(ctx, f->roam); /* a fresh landscape: a frame's target starts from the last tolerance */
+    f->roam = NULL;
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    if (rs_roam_create(ctx, f->fractal, &o, &f->roam) != RS_OK) return 1;
+    rs_roam_view v = roam_view();
+    /* an update goes on from the last one's mesh: measure the second */
+    return k == K_ROAM_UPDATE && rs_roam_update(ctx, f->roam, &v, 0) != RS_OK;
+}
+
+/* Run call k; *hash: its output (0: none). Whatever it made is freed. */
+static rs_result run_call(rs_ctx *ctx, fixture *f, int k, uint64_t *hash)
+{
+    rs_result r = RS_OK;
+    uint32_t W, H;
+    rs_splatter_size(f->sp, &W, &H);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 2;
+    *hash = 0;
+    memset(f->px, 0, f->px_bytes);
+    switch (k) {
+    case K_WINDOW:
+        r = rs_splat_window(ctx, f->sp, 0, 0, W, H, f->px, (size_t)W * 4, NULL, 0, NULL);
+        if (!r) *hash = hash_rgba(f->px, (size_t)W * H * 4);
+        break;
+    case K_NORMALS:
+        r = rs_normal_window(ctx, f->sp, 0, 0, W, H, f->px, (size_t)W * 3, NULL);
+        if (!r) *hash = hash_rgba(f->px, (size_t)W * H * 3);
+        break;
+    case K_SPLATTER: {
+        rs_splatter *s = NULL;
+        r = rs_splatter_create(ctx, f->dem, f->roads, NULL, &o, &s);
+        if (!r) { /* (its image would be another call's progress) */
+            rs_road_grid_stats st;
+            rs_road_grid_get_stats(rs_splatter_grid(s), &st);
+            *hash = hash_rgba((const uint8_t *)&st, sizeof st);
+        }
+        rs_splatter_free(ctx, s);
+        break;
+    }
+    case K_SPLAT: {
+        o.texels = 10;
+        r = rs_splat(ctx, f->small, rs_splatter_grid(f->sp), &o, f->px, f->px_bytes, NULL, 0);
+        if (!r) *hash = hash_rgba(f->px, (size_t)W * H * 4);
+        break;
+    }
+    case K_NETWORK: {
+        rs_network *n = NULL;
+        r = rs_network_build(ctx, f->roads, NULL, &n);
+        if (!r) *hash = rs_network_node_count(n) * 1000003u + rs_network_stroke_count(n);
+        rs_network_free(ctx, n);
+        break;
+    }
+    case K_GPU: {
+        rs_gpu_scene *g = NULL;
+        r = rs_gpu_scene_create(ctx, f->dem, f->roads, &o, NULL, &g);
+        if (!r) {
+            size_t ns = 0, nm = 0;
+            const void *seg = rs_gpu_scene_array(g, RS_GPU_ARRAY_SEG, &ns);
+            const void *mark = rs_gpu_scene_array(g, RS_GPU_ARRAY_MARK, &nm);
+            *hash = hash_rgba((const uint8_t *)seg, ns * sizeof(float)) ^
+                    hash_rgba((const uint8_t *)mark, nm * sizeof(float));
+        }
+        rs_gpu_scene_free(ctx, g);
+        break;
+    }
+    case K_VT_CREATE:
+    case K_VT_TILE: {
+        rs_vt_options vo;
+        memset(&vo, 0, sizeof vo);
+        vo.roads = f->roads;
+        vo.tile_size = 64;
+        rs_vt *vt = f->vt;
+        if (k == K_VT_CREATE) r = rs_vt_create(ctx, f->sp, &vo, &vt);
+        rs_vt_info in;
+        if (!r) rs_vt_get_info(vt, &in);
+        /* the coarsest level (2 at 2 texels): averaged from the 1-texel image */
+        if (!r && k == K_VT_TILE)
+            r = rs_vt_make_tile(ctx, vt, f->vws, in.levels - 1, 0, 0, f->px, (size_t)in.tile_side * 4);
+        if (!r) *hash = k == K_VT_TILE ? hash_rgba(f->px, (size_t)in.tile_side * in.tile_side * 4) : in.levels;
+        if (k == K_VT_CREATE) rs_vt_free(ctx, vt);
+        break;
+    }
+    case K_ROAM_CREATE: {
+        rs_roam *L = NULL;
+        r = rs_roam_create(ctx, f->fractal, NULL, &L);
+        rs_roam_stats st;
+        if (!r) rs_roam_get_stats(L, &st);
+        if (!r) *hash = st.base_nodes;
+        rs_roam_free(ctx, L);
+        break;
+    }
+    case K_ROAM_ERROR: r = rs_roam_refine_error(ctx, f->roam, 0.02); break;
+    case K_ROAM_COUNT: r = rs_roam_refine_count(ctx, f->roam, 30000); break;
+    case K_ROAM_FRAME: {
+        rs_roam_view v = roam_view();
+        v.target_triangles = 20000;
+        r = rs_roam_frame(ctx, f->roam, &v);
+        break;
+    }
+    case K_ROAM_UPDATE: {
+        rs_roam_view v = roam_view(); /* (prepare made the first update's mesh) */
+        v.eye[0] += 60;
+        v.dir[1] = -0.2;
+        v.pixel_error = 0.4;
+        r = rs_roam_update(ctx, f->roam, &v, 0);
+        break;
+    }
+    }
+    if (!r && roam_call(k) && k != K_ROAM_CREATE) {
+        int ok;
+        *hash = roam_mesh(ctx, f, &ok);
+        CHECKF(ok, "%s: the mesh fails the checker", kname[k]);
+    }
+    return r;
+}
+
+static void test_call(rs_ctx *ctx, fixture *f, int k)
+{
+    watch w;
+    uint64_t h0 = 0, h1 = 1;
+    rs_ctx_set_progress(ctx, NULL, NULL);
+    CHECK(prepare(ctx, f, k) == 0);
+    CHECKF(run_call(ctx, f, k, &h0) == RS_OK, "%s: %s", kname[k], rs_ctx_message(ctx));
+    memset(&w, 0, sizeof w);
+    CHECK(prepare(ctx, f, k) == 0);
+    rs_ctx_set_progress(ctx, on_progress, &w);
+    CHECKF(run_call(ctx, f, k, &h1) == RS_OK, "%s: %s", kname[k], rs_ctx_message(ctx));
+    CHECKF(h0 == h1, "%s: a progress callback changed the output", kname[k]);
+    CHECKF(w.calls >= 2, "%s: %llu progress calls", kname[k], (unsigned long long)w.calls);
+    CHECKF(!w.went_back && !w.over && w.last_total > 0 && w.last_done == w.last_total,
+           "%s: back %d, over %d, last %llu of %llu", kname[k], w.went_back, w.over, (unsigned long long)w.last_done,
+           (unsigned long long)w.last_total);
+    /* stop at each call (every few for the calls that build grids) */
+    uint64_t all = w.calls, stride = k == K_SPLATTER || k == K_VT_CREATE || k == K_GPU ? 7 : 1, stopped = 0;
+    for (uint64_t at = 1; at <= all; at += at + stride > all && at != all ? all - at : stride) {
+        watch c;
+        memset(&c, 0, sizeof c);
+        c.stop_at = at;
+        rs_ctx_set_progress(ctx, NULL, NULL);
+        CHECK(prepare(ctx, f, k) == 0);
+        rs_ctx_set_progress(ctx, on_progress, &c);
+        uint64_t h;
+        rs_result r = run_call(ctx, f, k, &h);
+        CHECKF(r == RS_ERR_CANCELLED, "%s: stop at call %llu of %llu: %s", kname[k], (unsigned long long)at,
+               (unsigned long long)all, rs_strerror(r));
+        CHECKF(c.calls == at, "%s: stop at call %llu: called on %llu times", kname[k], (unsigned long long)at,
+               (unsigned long long)c.calls);
+        CHECK(strcmp(rs_ctx_message(ctx), "cancelled") == 0);
+        if (roam_call(k) && k != K_ROAM_CREATE) { /* the landscape's mesh is still valid */
+            int ok;
+            roam_mesh(ctx, f, &ok);
+            CHECKF(ok, "%s: stopped at call %llu, the mesh fails the checker", kname[k], (unsigned long long)at);
+        }
+        stopped++;
+    }
+    /* the objects work on: the same call, uninterrupted, gives the same output */
+    rs_ctx_set_progress(ctx, NULL, NULL);
+    if (k == K_ROAM_ERROR || k == K_ROAM_COUNT || k == K_ROAM_UPDATE) {
+        /* on the landscape the last stop left */
+        CHECKF(run_call(ctx, f, k, &h1) == RS_OK, "%s after a cancel: %s", kname[k], rs_ctx_message(ctx));
+        if (k != K_ROAM_UPDATE) CHECKF(h1 == h0, "%s after a cancel: another mesh", kname[k]);
+    }
+    CHECK(prepare(ctx, f, k) == 0);
+    CHECK(run_call(ctx, f, k, &h1) == RS_OK && h1 == h0);
+    printf("%s: %llu progress calls, cancelled at %llu of them\n", kname[k], (unsigned long long)all,
+           (unsigned long long)stopped);
+}
+
+static void test_calls(rs_ctx *ctx, const sc_scene *sc, rs_dem *dem, rs_roads *roads)
+{
+    fixture f;
+    memset(&f, 0, sizeof f);
+    f.dem = dem;
+    f.roads = roads;
+    /* a strip of the city's DEM at 10 texels, wider than a piece (2048
+     * columns): two pieces a band */
+    uint32_t sw = 206, sh = 12;
+    float *z = malloc((size_t)sw * sh * sizeof *z);
+    rs_roads *sr = NULL;
+    CHECK(z && rs_roads_create(ctx, &sr) == RS_OK);
+    if (!z || !sr) return;
+    for (uint32_t i = 0; i < sw * sh; i++) z[i] = sc->z[(i / sw) * sc->w + i % sw];
+    CHECK(rs_dem_create(ctx, sw, sh, z, &f.small) == RS_OK);
+    free(z);
+    rs_dem_frame fr = { sc->cell_size, 0.01, 0, 0 };
+    CHECK(f.small && rs_dem_set_frame(ctx, f.small, &fr) == RS_OK);
+    double a[] = { 3, 20, 500, 35, 1000, 28 }, b[] = { 40, 2, 45, 60 };
+    CHECK(rs_roads_add(ctx, sr, "a", 6, a, 3) == RS_OK && rs_roads_add(ctx, sr, "b", 4, b, 2) == RS_OK);
+    CHECK(rs_roads_set_attr(ctx, sr, 0, "class", "primary") == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 10;
+    CHECK(rs_splatter_create(ctx, f.small, sr, NULL, &o, &f.sp) == RS_OK);
+    uint32_t W, H;
+    rs_splatter_size(f.sp, &W, &H);
+    CHECK(W > 2048);
+    f.px_bytes = (size_t)W * H * 4;
+    f.px = malloc(f.px_bytes);
+    /* the virtual texture of the styled city at 2 texels (its tiles) */
+    rs_splatter *city = NULL;
+    o.texels = 2;
+    CHECK(rs_splatter_create(ctx, dem, roads, NULL, &o, &city) == RS_OK);
+    rs_vt_options vo;
+    memset(&vo, 0, sizeof vo);
+    vo.roads = roads;
+    vo.tile_size = 64;
+    CHECK(city && rs_vt_create(ctx, city, &vo, &f.vt) == RS_OK && rs_vt_workspace_create(ctx, f.vt, &f.vws) == RS_OK);
+    /* ROAM: a 257^2 fractal */
+    f.fw = 257;
+    float *fz = malloc((size_t)f.fw * f.fw * sizeof *fz);
+    CHECK(fz != NULL);
+    if (!fz || !f.px || !f.vws) return;
+    rc_dem_fractal(fz, f.fw, f.fw, 77, 128.0, 60.0, 0.5);
+    f.fz = fz;
+    CHECK(rs_dem_create(ctx, f.fw, f.fw, fz, &f.fractal) == RS_OK);
+    for (int k = 0; k < K_COUNT; k++) {
+        if (k == K_VT_CREATE) { /* its splatter is the city's */
+            rs_splatter *t = f.sp;
+            f.sp = city;
+            test_call(ctx, &f, k);
+            f.sp = t;
+            continue;
+        }
+        test_call(ctx, &f, k);
+    }
+    rs_ctx_set_progress(ctx, NULL, NULL);
+    rs_roam_free(ctx, f.roam);
+    rs_dem_free(ctx, f.fractal);
+    free(fz);
+    rs_vt_workspace_free(ctx, f.vws);
+    rs_vt_free(ctx, f.vt);
+    rs_splatter_free(ctx, city);
+    rs_splatter_free(ctx, f.sp);
+    rs_roads_free(ctx, sr);
+    rs_dem_free(ctx, f.small);
+    free(f.px);
+}
+
 int main(void)
 {
     rs_ctx *ctx;
@@ -114,6 +432,8 @@ int main(void)
     memset(&w, 0, sizeof w);
     h1 = 1;
     CHECK(build(ctx, dem, roads, &w, &h1) == RS_OK && h1 == h0);
+
+    test_calls(ctx, &sc, dem, roads);
 
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);

@@ -258,7 +258,7 @@ static void test_scaling_and_determinism(rs_ctx *ctx)
     rs_roam *r4 = ctx2 ? make(ctx2, z, W, H, NULL, &d3) : NULL;
     CHECK(r4 != NULL);
     if (r4 && r1) {
-        rs_roam_mesh_options mo = { 1, 5.0, NULL };
+        rs_roam_mesh_options mo = { sizeof(rs_roam_mesh_options), 1, 5.0, NULL };
         mesh a, b;
         rs_roam_refine_error(ctx, r1, 0.7);
         rs_roam_refine_error(ctx2, r4, 0.7);
@@ -989,7 +989,7 @@ static void test_extract_options(rs_ctx *ctx)
     CHECK_EQ_INT(rs_roam_refine_error(ctx, r, 0.5), RS_OK);
     rs_roam_stats st;
     rs_roam_get_stats(r, &st);
-    rs_roam_mesh_options mo = { 1, 7.5, NULL };
+    rs_roam_mesh_options mo = { sizeof(rs_roam_mesh_options), 1, 7.5, NULL };
     mesh m;
     CHECK_EQ_INT(extract(ctx, r, &mo, &m), RS_OK);
     int finite = 1, unit = 1, uv = 1;

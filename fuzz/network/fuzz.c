@@ -103,7 +103,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         /* tolerances 0 (default), then 2^-20 .. 2^5 metres from the first byte */
         double tols[2] = { 0, size ? ldexp(1, (int)(data[0] % 26) - 20) : 1 };
         for (int t = 0; t < 2; t++) {
-            rs_network_options o = { tols[t] };
+            rs_network_options o = { 0, tols[t] };
             rs_network *a = NULL, *b = NULL;
             if (rs_network_build(ctx, roads, &o, &a) != RS_OK || rs_network_build(ctx, roads, &o, &b) != RS_OK) abort();
             check(a, rs_roads_count(roads));

@@ -28,7 +28,7 @@ static void check_mesh(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H, double c
     rs_roam_stats st;
     rs_roam_get_stats(r, &st);
     REQUIRE(st.pool_used <= st.pool_nodes);
-    rs_roam_mesh_options mo = { opt & 1, (opt & 2) ? 3.0 : 0.0, NULL };
+    rs_roam_mesh_options mo = { 0, opt & 1, (opt & 2) ? 3.0 : 0.0, NULL };
     size_t mv, mi, nv, ni;
     rs_roam_mesh_bound(r, &mo, &mv, &mi);
     float *v = malloc((mv + 1) * 5 * sizeof *v), *n = malloc((mv + 1) * 3 * sizeof *n);

@@ -387,6 +387,10 @@ static rs_result index_build(rs_ctx *ctx, const rs_gpu_scene *g, const ge_items 
     if (!start) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the GPU export");
     size_t total = 0;
     for (size_t k = 0; k < it->n; k++) {
+        if ((k & 1023) == 1023 && rs__poll(ctx)) {
+            rs__free(ctx, start);
+            return RS_ERR_CANCELLED;
+        }
         uint32_t b[4];
         item_cells(g, it, k, b);
         for (uint32_t j = b[1]; j <= b[3]; j++)
@@ -412,6 +416,12 @@ static rs_result index_build(rs_ctx *ctx, const rs_gpu_scene *g, const ge_items 
     memcpy(pos, start, ncell * sizeof *pos);
     int full = 1;
     for (size_t k = 0; k < it->n; k++) {
+        if ((k & 1023) == 1023 && rs__poll(ctx)) {
+            rs__free(ctx, start);
+            rs__free(ctx, ids);
+            rs__free(ctx, pos);
+            return RS_ERR_CANCELLED;
+        }
         uint32_t b[4];
         item_cells(g, it, k, b);
         for (uint32_t j = b[1]; j <= b[3]; j++)
@@ -501,11 +511,10 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
                            const rs_gpu_options *gopts, rs_gpu_scene **out)
 {
     rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    if (opts) o = *opts;
+    rs_result ro = RS__OPTS_IN(ctx, opts, &o, rs_splat_options);
+    if (ro) return ro;
     rs_gpu_options go;
-    memset(&go, 0, sizeof go);
-    if (gopts) go = *gopts;
+    if ((ro = RS__OPTS_IN(ctx, gopts, &go, rs_gpu_options)) != RS_OK) return ro;
     if (!(go.cell >= 0 && go.cell <= 1e9) || !(go.reach >= 0 && go.reach <= 1e9))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_options: cell and reach must be 0..1e9 metres");
 
@@ -554,6 +563,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
         if (o.style.disable) continue;
+        if ((i & 255) == 255 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         if ((r = ge_style(ctx, &src, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
@@ -571,6 +581,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     for (size_t i = 0; i < ntees; i++) tee_of[2 * (size_t)tees[i].road + (tees[i].end != 0)] = i;
     size_t nends = 0;
     for (size_t i = 0, b = 0; i < n; i++) {
+        if ((i & 255) == 255 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
         double w = 0;
         rs_roads_get(roads, i, NULL, &w, NULL, NULL);
@@ -650,9 +661,12 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     if (!g->seg && !(g->seg = rs__calloc(ctx, 1, RS_GPU_SEG_FLOATS * sizeof(float)))) { r = RS_ERR_NOMEM; goto fail; }
     nseg = g->nseg;
     g->nbands = nbands;
+    if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     if ((r = ge_tees(ctx, roads, net, g, srev)) != RS_OK) goto fail;
+    if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     /* continuations: equal end points, leaving within 30 degrees of opposite */
     qsort(ends, nends, sizeof *ends, ge_end_cmp);
+    if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     for (size_t a = 0; a < nends; a++)
         for (size_t c = a + 1; c < nends && ends[c].x == ends[a].x && ends[c].y == ends[a].y; c++) {
             const ge_end *A = &ends[a], *C = &ends[c];
@@ -882,6 +896,9 @@ fail_msg:
 }
 
 
+/* Progress (both entry points): the context's callback (the options'
+ * progress is the grid build's); polls in the network, markings and
+ * per-road passes. */
 rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
                               const rs_gpu_options *gopts, rs_gpu_scene **out)
 {
@@ -889,7 +906,9 @@ rs_result rs_gpu_scene_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     if (!dem || !roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_create: NULL argument");
     *out = NULL;
     ge_src src = { NULL };
-    return ge_export(ctx, src, dem, roads, opts, gopts, out);
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, ge_export(ctx, src, dem, roads, opts, gopts, out));
 }
 
 rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
@@ -915,7 +934,9 @@ rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
     o.style = grid->style;
     o.markings = grid->marks;
     ge_src src = { grid };
-    return ge_export(ctx, src, dem, roads, &o, gopts, out);
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, ge_export(ctx, src, dem, roads, &o, gopts, out));
 }
 
 /* Type t has levels and is the first with its level 0 (a type sharing an

@@ -1322,13 +1322,16 @@ rs_result rs_roads_parse_ex(rs_ctx *ctx, const char *text, size_t size, const rs
     *out = NULL;
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!text && size) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_parse: text is NULL");
-    rs_profile profile = opts ? opts->profile : RS_PROFILE_RMS;
+    rs_road_parse_options po;
+    rs_result rc = RS__OPTS_IN(ctx, opts, &po, rs_road_parse_options);
+    if (rc) return rc;
+    rs_profile profile = po.profile;
     if (profile != RS_PROFILE_RMS && profile != RS_PROFILE_MUTCD)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_parse_ex: unknown profile %d", (int)profile);
     rs_roads *roads;
-    rs_result rc = rs_roads_create(ctx, &roads);
+    rc = rs_roads_create(ctx, &roads);
     if (rc != RS_OK) return rc;
-    rc = rs__text_parse(ctx, text, size, profile, roads, opts ? opts->styles : NULL);
+    rc = rs__text_parse(ctx, text, size, profile, roads, po.styles);
     if (rc != RS_OK) {
         rs_roads_free(ctx, roads);
         return rc;

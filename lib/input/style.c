@@ -669,11 +669,23 @@ static double nominal(const rs_style_request *req, double *left, double *lane, d
     return *left + n * *lane + *right;
 }
 
-rs_result rs_style_default_width(const rs_style_request *req, double *width)
+/* The host's request in this header's layout (the ABI rule; no context:
+ * no message), RS_ERR_INVALID_ARG when NULL or out of range. */
+static rs_result request_in(const rs_style_request *req_in, rs_style_request *rq)
 {
-    if (!request_ok(req) || !width) return RS_ERR_INVALID_ARG;
-    double l, ln, r;
-    *width = nominal(req, &l, &ln, &r);
+    if (!req_in) return RS_ERR_INVALID_ARG;
+    rs_result r = RS__OPTS_IN(NULL, req_in, rq, rs_style_request);
+    if (r) return r;
+    return request_ok(rq) ? RS_OK : RS_ERR_INVALID_ARG;
+}
+
+rs_result rs_style_default_width(const rs_style_request *req_in, double *width)
+{
+    rs_style_request rq;
+    rs_result r = request_in(req_in, &rq);
+    if (r || !width) return r ? r : RS_ERR_INVALID_ARG;
+    double l, ln, rt;
+    *width = nominal(&rq, &l, &ln, &rt);
     return RS_OK;
 }
 
@@ -776,12 +788,14 @@ static void request_input(const rs_style_request *req, rs__lanes_in *in)
     in->width = req->width;
 }
 
-rs_result rs_style_default(const rs_style_request *req, rs_style *out)
+rs_result rs_style_default(const rs_style_request *req_in, rs_style *out)
 {
-    if (!request_ok(req) || !out) return RS_ERR_INVALID_ARG;
+    rs_style_request rq;
+    rs_result r = request_in(req_in, &rq);
+    if (r || !out) return r ? r : RS_ERR_INVALID_ARG;
     rs__lanes_in in;
-    request_input(req, &in);
-    default_style(req, &in, out);
+    request_input(&rq, &in);
+    default_style(&rq, &in, out);
     return RS_OK;
 }
 
@@ -844,10 +858,14 @@ rs_result rs_road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_s
     return road_style(ctx, roads, i, styles, profile, RS_DRIVING_RIGHT, out);
 }
 
-rs_result rs_road_style_ex(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_style_options *opts,
+rs_result rs_road_style_ex(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_style_options *opts_in,
                            rs_style *out)
 {
-    if (!opts) return road_style(ctx, roads, i, NULL, RS_PROFILE_RMS, RS_DRIVING_RIGHT, out);
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    rs_style_options so;
+    rs_result r = RS__OPTS_IN(ctx, opts_in, &so, rs_style_options);
+    if (r) return r;
+    const rs_style_options *opts = &so;
     if ((unsigned)opts->driving_side > RS_DRIVING_LEFT) {
         if (!ctx) return RS_ERR_INVALID_ARG;
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_road_style_ex: unknown driving side %d",

@@ -148,17 +148,51 @@ rs_result rs_roam_set_dem(rs_ctx *ctx, rs_roam *L, const rs_dem *dem)
                         dem->frame.cell_size, dem->frame.z_scale, L->cs, L->zs);
     int has_nodata;
     float zabs;
+    /* progress: one call, once the new DEM is checked (a stop there keeps
+     * the previous DEM; the load after it takes a few ms) */
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
     rs_result r = check_heights(ctx, L, dem, &has_nodata, &zabs);
+    if (r == RS_OK && rs__report(ctx, 1)) r = RS_ERR_CANCELLED;
     if (r == RS_OK) r = load_heights(ctx, L, dem, has_nodata);
-    if (r != RS_OK) return r;
+    if (r != RS_OK) return rs__progress_end(ctx, &pg, r);
     L->zabs = zabs;
     rs__roam_reset_mesh(L);
     L->threshold = INFINITY;
     L->tol = 0.0;
     L->frame_passes = 0;
     L->culled = 0;
+    if ((r = rs__progress_end(ctx, &pg, r)) != RS_OK) return r; /* (never: the one call said done) */
     rs__ok(ctx);
     return RS_OK;
+}
+
+/* ---- progress ---------------------------------------------------------------- */
+
+void rs__roam_progress_begin(rs_ctx *ctx, rs_roam *L, rs__progress *pg, uint64_t total, rs_ctx **saved)
+{
+    rs__progress_begin(ctx, pg, NULL, NULL, total, total / 1024 + 1);
+    *saved = L->pctx;
+    L->pctx = ctx;
+    if (!*saved) L->cancelled = 0;
+    L->polled_used = L->used;
+}
+
+rs_result rs__roam_progress_end(rs_ctx *ctx, rs_roam *L, rs__progress *pg, rs_result r, rs_ctx *saved)
+{
+    L->pctx = saved;
+    if (L->cancelled && (r == RS_OK || r == RS_ERR_POOL_EXHAUSTED)) r = RS_ERR_CANCELLED;
+    if (!saved) L->cancelled = 0; /* the outermost call is over */
+    return rs__progress_end(ctx, pg, r);
+}
+
+int rs__roam_poll(rs_roam *L)
+{
+    if (!L->pctx || L->cancelled) return L->cancelled;
+    uint32_t u = L->used, d = u > L->polled_used ? u - L->polled_used : 0;
+    L->polled_used = u;
+    if (rs__report(L->pctx, d)) L->cancelled = 1;
+    return L->cancelled;
 }
 
 /* ---- creation --------------------------------------------------------------- */
@@ -255,7 +289,8 @@ typedef struct roam_size {
 static rs_result size_landscape(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts, roam_size *s)
 {
     rs_roam_options o;
-    if (opts) o = *opts; else memset(&o, 0, sizeof o);
+    rs_result rc = RS__OPTS_IN(ctx, opts, &o, rs_roam_options);
+    if (rc) return rc;
     double cs = dem->frame.cell_size, zs = dem->frame.z_scale;
     if (!(zs > 0.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: the DEM's z-scale %g must be > 0 (z is up)", zs);
@@ -442,6 +477,12 @@ static uint64_t landscape_bytes(const rs_roam *L)
            + 2 * (uint64_t)L->cap * sizeof(uint32_t) + (W + H) * sizeof(float);
 }
 
+/* A stage of rs_roam_create done: RS_ERR_CANCELLED when the callback says stop. */
+static rs_result create_poll(rs_ctx *ctx)
+{
+    return rs__report(ctx, 1) ? RS_ERR_CANCELLED : RS_OK;
+}
+
 rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *opts, rs_roam **out)
 {
     if (out) *out = NULL;
@@ -453,12 +494,23 @@ rs_result rs_roam_create(rs_ctx *ctx, const rs_dem *dem, const rs_roam_options *
     if (r != RS_OK) return r;
     rs_roam *L = new_landscape(ctx, &s);
     if (!L) return rs__fail(ctx, RS_ERR_NOMEM, "ROAM: out of memory");
+    /* progress: a unit per stage, polls between them (the base mesh's
+     * refinement polls within) */
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 5, 1);
+    L->pctx = ctx;
     int has_nodata;
-    if ((r = check_heights(ctx, L, dem, &has_nodata, &L->zabs)) != RS_OK
-        || (r = alloc_tables(ctx, L, &s)) != RS_OK
-        || (r = load_heights(ctx, L, dem, has_nodata)) != RS_OK
-        || (r = build_base_mesh(ctx, L, &s)) != RS_OK
+    if ((r = check_heights(ctx, L, dem, &has_nodata, &L->zabs)) != RS_OK || (r = create_poll(ctx)) != RS_OK
+        || (r = alloc_tables(ctx, L, &s)) != RS_OK || (r = create_poll(ctx)) != RS_OK
+        || (r = load_heights(ctx, L, dem, has_nodata)) != RS_OK || (r = create_poll(ctx)) != RS_OK
+        || (r = build_base_mesh(ctx, L, &s)) != RS_OK || (r = L->cancelled ? RS_ERR_CANCELLED : create_poll(ctx)) != RS_OK
         || (r = alloc_pool(ctx, L, s.pool)) != RS_OK) {
+        L->pctx = NULL;
+        rs_roam_free(ctx, L);
+        return rs__progress_end(ctx, &pg, r);
+    }
+    L->pctx = NULL;
+    if ((r = rs__progress_end(ctx, &pg, RS_OK)) != RS_OK) {
         rs_roam_free(ctx, L);
         return r;
     }

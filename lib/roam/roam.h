@@ -94,6 +94,13 @@ struct rs_roam {
     uint32_t base_count, cap, used; /* cap = base_count + pool */
     uint32_t base_tris, tris;
     int exhausted;
+    /* progress (rs__roam_progress_begin): the running call's context, to
+     * poll from the refinement and update loops (NULL: none); a poll asked
+     * to stop (the mesh is left valid, as when the pool runs out); the
+     * nodes in use at the last poll */
+    rs_ctx *pctx;
+    int cancelled;
+    uint32_t polled_used;
     /* Extraction's vertex set: one bit per sample, rows padded to whole
      * 64-bit words (wpr words per row); a summary bit per word that has a
      * bit set; the set bits before each word (vertex numbering by rank). */
@@ -408,10 +415,25 @@ int rs__roam_item_parent(const rs_roam *L, uint32_t node, uint32_t pos, uint32_t
 /* The view of a frame (lib/roam/roam_view.c): projection and frustum planes,
  * the patch height ranges, and per patch 1 when visible (*vis is visbuf
  * when nbuf is enough, else allocated: the caller frees it). */
+/* A ROAM call's view (rs_roam_frame, rs_roam_update) in this header's
+ * layout (the ABI rule), RS_ERR_INVALID_ARG naming `call` for NULLs. */
+rs_result rs__roam_view_in(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw_in, const char *call,
+                           rs_roam_view *vw);
 rs_result rs__roam_view_begin(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, view_params *v,
                               unsigned char *visbuf, size_t nbuf, unsigned char **vis);
 /* Free what the first rs_roam_update allocated (lib/roam/roam_update.c). */
 void rs__roam_update_free(rs_ctx *ctx, rs_roam *L);
+/* A ROAM call's progress (rs__progress_begin with the context's callback,
+ * `total` units: pool nodes taken by splits): the loops poll through
+ * L->pctx (rs__roam_poll) every few thousand steps. end: RS_ERR_CANCELLED
+ * when a poll asked to stop (the mesh valid and crack-free, as the loop
+ * left it), else r. *saved keeps an enclosing call's pctx. */
+void rs__roam_progress_begin(rs_ctx *ctx, rs_roam *L, rs__progress *pg, uint64_t total, rs_ctx **saved);
+rs_result rs__roam_progress_end(rs_ctx *ctx, rs_roam *L, rs__progress *pg, rs_result r, rs_ctx *saved);
+/* From a loop, every ROAM_POLL_STEPS steps: 1 when the call is to stop
+ * (L->cancelled set). */
+#define ROAM_POLL_STEPS 8192u
+int rs__roam_poll(rs_roam *L);
 
 /* Largest error bound over the leaves on the map (metres). */
 double rs__roam_leaves_max_bound(const rs_roam *L);

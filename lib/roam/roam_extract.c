@@ -36,7 +36,10 @@ void rs_roam_mesh_bound(const rs_roam *L, const rs_roam_mesh_options *opts, size
         v = t + 2;
         if (v > (size_t)L->w * L->hgt) v = (size_t)L->w * L->hgt;
         i = 3 * t;
-        if (opts && opts->skirt_depth > 0.0) {
+        /* a struct the ABI rule refuses is bounded as with a skirt (the
+         * extraction then refuses it) */
+        rs_roam_mesh_options o;
+        if (RS__OPTS_IN(NULL, opts, &o, rs_roam_mesh_options) || o.skirt_depth > 0.0) {
             size_t border = 2 * ((size_t)L->cw + L->ch);
             v += border;
             i += 6 * border;
@@ -376,7 +379,8 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, int what, uint32_t part, 
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract_unit: unit %u of %llu", part,
                         (unsigned long long)L->npx * L->npy * L->upp);
     rs_roam_mesh_options o;
-    if (opts) o = *opts; else memset(&o, 0, sizeof o);
+    rs_result rc = RS__OPTS_IN(ctx, opts, &o, rs_roam_mesh_options);
+    if (rc) return rc;
     if (o.normals && !normals)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_extract: normals requested but buffer is NULL");
     if (!(o.skirt_depth >= 0.0) || !isfinite(o.skirt_depth))

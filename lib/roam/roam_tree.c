@@ -451,12 +451,25 @@ int rs__roam_refine(rs_roam *L, const refine_params *rp)
     return res;
 }
 
-/* rs__roam_refine's loop over the stack. */
+/* rs__roam_refine's loop over the stack. A poll that asks to stop leaves
+ * the mesh as it is (every split is complete with its forced splits: valid
+ * and crack-free, as when the pool runs out) and unqueues what the stack
+ * still held. */
 static int refine_loop(rs_roam *L, const refine_params *rp)
 {
     roam_node *n = L->nodes;
     uint32_t *st = L->stack;
+    uint32_t steps = 0;
     while (L->sp) {
+        if (++steps == ROAM_POLL_STEPS) {
+            steps = 0;
+            if (rs__roam_poll(L)) {
+                for (uint32_t k = 0; k < L->sp; k++)
+                    if (st[k] & TAG) n[st[k] & ~TAG].rc &= ~QUEUED;
+                L->sp = 0;
+                return 0;
+            }
+        }
         uint32_t i = st[--L->sp];
         tri t;
         if (i & TAG) {
@@ -546,15 +559,20 @@ rs_result rs_roam_refine_error(rs_ctx *ctx, rs_roam *L, double max_error)
     if (!L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_refine_error: roam is NULL");
     if (!(max_error >= 0.0))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "ROAM: max_error %g must be >= 0", max_error);
+    rs__progress pg;
+    rs_ctx *saved;
+    rs__roam_progress_begin(ctx, L, &pg, L->cap - L->base_count, &saved);
     rs__roam_reset_mesh(L);
     refine_params rp = { max_error, 0, NULL, NULL, 0 };
     rs__roam_refine(L, &rp);
     L->threshold = max_error;
+    rs_result r = RS_OK;
     if (L->exhausted)
-        return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out at max error %g m "
-                        "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, max_error, L->tris);
-    rs__ok(ctx);
-    return RS_OK;
+        r = rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "ROAM: pool of %u nodes ran out at max error %g m "
+                     "(mesh valid but coarser: %u triangles)", L->cap - L->base_count, max_error, L->tris);
+    r = rs__roam_progress_end(ctx, L, &pg, r, saved);
+    if (!r) rs__ok(ctx);
+    return r;
 }
 
 /* Largest error of a base-mesh leaf: at that threshold nothing splits. */
@@ -562,6 +580,7 @@ static float base_max_error(rs_roam *L)
 {
     float m = 0.0f;
     for (uint32_t i = 0; i < L->base_count; i++) {
+        if ((i & 15) == 15 && rs__roam_poll(L)) return 0.0f; /* the first bounds of the map: ~50 ms at 1025^2 */
         const roam_node *nd = &L->base_copy[i];
         tri t;
         node_tri(L, nd, &t);
@@ -591,15 +610,21 @@ rs_result rs_roam_refine_count(rs_ctx *ctx, rs_roam *L, uint32_t max_triangles)
     /* The count is monotone in the threshold and the base mesh (<= budget)
      * is what any threshold >= hi gives, so the search finds the smallest
      * threshold that fits. */
+    /* progress: each pass's nodes (at most 32 passes and the last one) */
+    rs__progress pg;
+    rs_ctx *saved;
+    rs__roam_progress_begin(ctx, L, &pg, (uint64_t)33 * (L->cap - L->base_count), &saved);
     uint32_t lo = 0, hi = float_bits(base_max_error(L));
-    while (lo < hi) {
+    while (lo < hi && !L->cancelled) {
         uint32_t mid = lo + (hi - lo) / 2;
         rs__roam_reset_mesh(L);
         refine_params rp = { (double)bits_float(mid) * L->zs, 0, NULL, NULL, max_triangles };
         int over = rs__roam_refine(L, &rp);
         if (!over && L->tris <= max_triangles) hi = mid; else lo = mid + 1;
     }
-    return rs_roam_refine_error(ctx, L, (double)bits_float(lo) * L->zs);
+    rs_result r = L->cancelled ? RS_OK : rs_roam_refine_error(ctx, L, (double)bits_float(lo) * L->zs);
+    if (L->cancelled) rs__roam_reset_mesh(L); /* a trial's mesh may be over the budget */
+    return rs__roam_progress_end(ctx, L, &pg, r, saved);
 }
 
 

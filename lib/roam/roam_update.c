@@ -564,6 +564,9 @@ static void scan_mesh(upd *u)
     u->rctr = INFINITY;
     int full = u->full;
     for (uint32_t p = 0; p < L->npx * L->npy; p++) {
+        /* a stop leaves the scan partial: the update then ends undone,
+         * and the next one scans in full (full_next) */
+        if ((p & 15) == 15 && rs__roam_poll(L)) break;
         /* a patch that came into view or left it (its items were not
          * tracked while it was culled) is looked at in full */
         u->full = full || u->vis[p] != L->pvis[p];
@@ -783,18 +786,26 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
  * parents are within it merges (docs/roam.md: the rebuild's mesh, but for
  * a split node whose own bound exceeds the tolerance under an ancestor
  * whose bound does not). 1 when complete. */
+/* A poll every 2048 steps of the passes (rs__roam_poll): a stop ends the
+ * pass as a spent budget does. */
+static int stop_now(rs_roam *L, uint32_t *steps)
+{
+    return L->cancelled || ((++*steps & 2047u) == 0 && rs__roam_poll(L));
+}
+
 static int tolerance_pass(upd *u, uint64_t limit, uint64_t *ops)
 {
     rs_roam *L = u->L;
-    while (!u->nomem && *ops < limit && top_split(L) != NULL) {
+    uint32_t steps = 0;
+    while (!u->nomem && *ops < limit && !stop_now(L, &steps) && top_split(L) != NULL) {
         if (!do_split(u)) break;
         ++*ops;
     }
-    while (!u->nomem && *ops < limit && top_merge(L) != NULL) {
+    while (!u->nomem && *ops < limit && !stop_now(L, &steps) && top_merge(L) != NULL) {
         do_merge(u);
         ++*ops;
     }
-    return *ops < limit && !u->nomem && !L->exhausted;
+    return *ops < limit && !u->nomem && !L->exhausted && !L->cancelled;
 }
 
 /* The seed's loop over every leaf and diamond: merge while above the
@@ -807,8 +818,9 @@ static int target_pass(upd *u, double target, uint64_t limit, uint64_t *ops)
     rs_roam *L = u->L;
     double lo = target - target / 100.0, hi = target + target / 100.0;
     int reached = 0;
+    uint32_t steps = 0;
     for (;;) {
-        if (u->nomem || *ops >= limit) return 0;
+        if (u->nomem || *ops >= limit || stop_now(L, &steps)) return 0;
         const qent *s = top_split(L), *m = top_merge(L);
         if (!reached && L->tris > target) {
             if (!m) return 1;
@@ -840,10 +852,25 @@ static void scan_fresh(upd *u)
     scan_mesh(u);
 }
 
-rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget)
+static rs_result update_run(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget);
+
+/* Progress: pool nodes taken by splits (polls every few thousand split and
+ * merge operations). A cancelled update stops as a spent budget does: the
+ * mesh valid and crack-free, stats.update_done 0, the next update goes on. */
+rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw_in, uint32_t budget)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_update: roam and view must not be NULL");
+    rs_roam_view vw;
+    rs_result r = rs__roam_view_in(ctx, L, vw_in, "rs_roam_update", &vw);
+    if (r != RS_OK) return r;
+    rs__progress pg;
+    rs_ctx *saved;
+    rs__roam_progress_begin(ctx, L, &pg, L->cap - L->base_count, &saved);
+    return rs__roam_progress_end(ctx, L, &pg, update_run(ctx, L, &vw, budget), saved);
+}
+
+static rs_result update_run(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32_t budget)
+{
     rs_result r = ensure_state(ctx, L);
     if (r != RS_OK) return r;
     view_params v;
@@ -898,7 +925,7 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
         rs__roam_refine(L, &rp);
         ops = L->tris - L->base_tris; /* a split adds a triangle on the map */
         done = fixed = 0;
-        if (!L->exhausted) {
+        if (!L->exhausted && !L->cancelled) {
             u.full = 1;
             scan_fresh(&u);
             done = tolerance_pass(&u, limit, &ops);
@@ -909,7 +936,7 @@ rs_result rs_roam_update(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, uint32
         done = tolerance_pass(&u, limit, &ops);
         fixed = done;
     }
-    if (vw->target_triangles && done) {
+    if (vw->target_triangles && done && !L->cancelled) {
         double target = vw->target_triangles;
         if (fabs((double)L->tris - target) > TARGET_BAND * target) {
             /* off the target: every leaf and diamond into the queues */

@@ -103,13 +103,38 @@ rs_result rs__roam_view_begin(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw, v
     return RS_OK;
 }
 
-rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
+static rs_result frame_run(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw);
+
+/* Progress: pool nodes taken by each pass's splits (at most
+ * FRAME_MAX_PASSES + 1 passes with a target). A cancelled frame leaves the
+ * mesh of the pass under way: valid and crack-free, coarser; the
+ * tolerance feedback is not updated. */
+rs_result rs__roam_view_in(rs_ctx *ctx, const rs_roam *L, const rs_roam_view *vw_in, const char *call,
+                           rs_roam_view *vw)
+{
+    if (!L || !vw_in) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: roam and view must not be NULL", call);
+    return RS__OPTS_IN(ctx, vw_in, vw, rs_roam_view);
+}
+
+rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw_in)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!L || !vw) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_frame: roam and view must not be NULL");
+    rs_roam_view vw;
+    rs_result r = rs__roam_view_in(ctx, L, vw_in, "rs_roam_frame", &vw);
+    if (r != RS_OK) return r;
+    rs__progress pg;
+    rs_ctx *saved;
+    uint64_t passes = vw.target_triangles ? FRAME_MAX_PASSES + 1 : 1;
+    rs__roam_progress_begin(ctx, L, &pg, passes * (L->cap - L->base_count), &saved);
+    return rs__roam_progress_end(ctx, L, &pg, frame_run(ctx, L, &vw), saved);
+}
+
+static rs_result frame_run(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
+{
+    rs_result r;
     view_params v;
     unsigned char visbuf[256], *vis;
-    rs_result r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
+    r = rs__roam_view_begin(ctx, L, vw, &v, visbuf, sizeof visbuf, &vis);
     if (r != RS_OK) return r;
     int own = vis != visbuf;
     double tol = vw->pixel_error > 0.0 ? vw->pixel_error : 1.0;
@@ -124,8 +149,9 @@ rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
         double lo_c = 0.0, hi_c = 0.0;
         double best_tol = tol;
         double best_dev = INFINITY;
-        for (passes = 1; passes <= FRAME_MAX_PASSES; passes++) {
+        for (passes = 1; passes <= FRAME_MAX_PASSES && !L->cancelled; passes++) {
             frame_pass(L, &v, tol, vis);
+            if (L->cancelled) break;
             double c = L->tris, dev = fabs(c - target) / target;
             if (dev < best_dev) { best_dev = dev; best_tol = tol; }
             if (dev <= 0.03) break;
@@ -148,12 +174,12 @@ rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *L, const rs_roam_view *vw)
             if (!(nt > 0.0) || !isfinite(nt)) break;
             tol = nt;
         }
-        if (passes > FRAME_MAX_PASSES) {
+        if (passes > FRAME_MAX_PASSES && !L->cancelled) {
             passes = FRAME_MAX_PASSES + 1;
             frame_pass(L, &v, best_tol, vis);
             tol = best_tol;
         }
-        L->tol = tol;
+        if (!L->cancelled) L->tol = tol;
     }
     if (own) rs__free(ctx, vis);
     L->frame_passes = passes;

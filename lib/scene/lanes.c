@@ -232,9 +232,11 @@ void rs__lanes_layout(const rs__lanes_in *in, rs_road_lanes *out, double strip[2
 rs_result rs_road_lanes_get(const rs_roads *roads, size_t i, const rs_style_options *opts, rs_road_lanes *out)
 {
     if (!roads || !out || i >= rs_roads_count(roads)) return RS_ERR_INVALID_ARG;
+    rs_style_options so;
+    rs_result r = RS__OPTS_IN(NULL, opts, &so, rs_style_options);
+    if (r) return r;
     rs__lanes_in in;
-    rs__lanes_input(roads, i, opts ? opts->profile : RS_PROFILE_RMS, opts ? opts->driving_side : RS_DRIVING_RIGHT,
-                    &in);
+    rs__lanes_input(roads, i, so.profile, so.driving_side, &in);
     rs__lanes_layout(&in, out, NULL);
     return RS_OK;
 }

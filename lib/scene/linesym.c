@@ -1645,6 +1645,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     double per_unit = rs__local_quantum(p->cell_size);
     double wmap = (double)p->out_w * p->pixel, hmap = (double)p->out_h * p->pixel;
     size_t cap = 0, total = 0;
+    if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if (nband && (res = junc_build(ctx, L, roads, p, &J, &pts, &sv, &cap)) != RS_OK) goto fail;
     J.limit = ctx->limits.max_field_work;
     if (nband && !(L->cs = rs__alloc_array(ctx, 2, sizeof *L->cs))) { res = RS_ERR_NOMEM; goto fail; }

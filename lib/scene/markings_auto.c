@@ -204,6 +204,8 @@ static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
     for (int fill = 0; fill < 2 && ok; fill++) {
         for (size_t c = 0; c < g * g; c++) last[c] = UINT32_MAX;
         for (size_t j = 0; j < nr && ok; j++) {
+            /* (polls only: a stop is seen by the caller's next tick) */
+            if ((j & 4095) == 4095) (void)rs__poll(A->ctx);
             const rs__road_local *rl = &A->rl[j];
             if (rl->n < 2) continue;
             double w = 0;
@@ -639,6 +641,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
         r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
     }
+    if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     /* zebras: bars of their standard size repeated across the road (the
      * whole `zebra` sprite stretched to the road when the atlas has no bars) */
     long zb = rs_atlas_find(atlas, "zebra_bar"), zt = rs_atlas_find(atlas, "zebra");
@@ -684,7 +687,13 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         A.cuts = NULL;
     }
     rs__free(ctx, A.cuts);
-    for (size_t i = 0; i < nr; i++) rs__road_local_free(ctx, &A.rl[i]);
+    /* (freeing 10^5 roads' local copies takes a while: a cancel asked
+     * meanwhile is seen by the next tick) */
+    for (size_t i = 0; i < nr; i++) {
+        if ((i & 4095) == 4095) (void)rs__poll(ctx);
+        rs__road_local_free(ctx, &A.rl[i]);
+    }
+    (void)rs__poll(ctx);
     rs__free(ctx, A.rl);
     rs__free(ctx, A.box);
     rs__free(ctx, A.j);
@@ -695,6 +704,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     rs__free(ctx, A.jidx);
     rs__free(ctx, endj);
     rs__free(ctx, endh);
+    (void)rs__poll(ctx); /* (a stop here is seen by the next tick) */
     return r;
 }
 
@@ -748,6 +758,7 @@ rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
     if (!r) r = auto_core(ctx, dem, roads, atlas, &o->style, net, out, nout, &pl, &n, &cap);
     rs__free(ctx, pl);
     rs__free(ctx, own.t);
+    (void)rs__poll(ctx); /* (freeing the placements takes a while at 10^5 roads; the next tick sees a stop) */
     if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
     return r;
 }

@@ -815,12 +815,26 @@ static rs_result cluster_points(build *B)
     return RS_OK;
 }
 
+static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out);
+
+/* Progress: the stages poll (rs__poll); done is 0 of 1 until the end. */
 rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out)
+{
+    if (!ctx) return network_build(ctx, roads, opts, out);
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, network_build(ctx, roads, opts, out));
+}
+
+static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out)
 {
     if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: out is NULL");
     *out = NULL;
     if (!roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: roads is NULL");
-    double tol = opts && opts->tolerance != 0 ? opts->tolerance : RS__NETWORK_TOL;
+    rs_network_options no;
+    rs_result rc = RS__OPTS_IN(ctx, opts, &no, rs_network_options);
+    if (rc) return rc;
+    double tol = no.tolerance != 0 ? no.tolerance : RS__NETWORK_TOL;
     if (!(tol >= 1e-9 && tol <= 1000))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: tolerance %g must be 1e-9..1000 metres (0: 0.05)", tol);
     build B;

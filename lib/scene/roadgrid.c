@@ -676,14 +676,9 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     size_t nroads = rs_roads_count(roads);
     rs__progress pg;
     memset(&pg, 0, sizeof pg);
-    pg.fn = o.progress;
-    pg.user = o.progress_user;
-    pg.total = 5 * (uint64_t)nroads + 1;
-    pg.step = PROGRESS_STEP;
-    pg.next = pg.step;
-    rs__progress *pg_outer = ctx->pg;
+    pg.nested = 1; /* alpha-map edges: their sweep below reports itself (the options' callback) */
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
-        ctx->pg = &pg;
+        rs__progress_begin(ctx, &pg, o.progress, o.progress_user, 5 * (uint64_t)nroads + 1, PROGRESS_STEP);
         r = build_field(ctx, dem, roads, o.texels, g);
     }
     /* the styles look pixels' roads up in the grid's field when it has one */
@@ -709,11 +704,9 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
     rs__auto_plan_free(ctx, &plan);
     rs_network_free(ctx, net);
-    if (!r && pg.fn && ctx->pg == &pg && pg.fn(pg.user, pg.total, pg.total)) r = RS_ERR_CANCELLED;
-    ctx->pg = pg_outer;
+    r = rs__progress_end(ctx, &pg, r);
     if (r) {
         rs_road_grid_free(ctx, g);
-        if (r == RS_ERR_CANCELLED) return rs__fail(ctx, r, "cancelled");
         return r;
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;

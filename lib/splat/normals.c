@@ -80,8 +80,8 @@ rs_result rs__nm_scratch_reserve(rs_ctx *ctx, const rs_splatter *s, uint32_t max
 /* Options with the defaults filled in, or RS_ERR_INVALID_ARG. */
 static rs_result nm_defaults(rs_ctx *ctx, const rs_normal_options *in, rs_normal_options *o)
 {
-    memset(o, 0, sizeof *o);
-    if (in) *o = *in;
+    rs_result r = RS__OPTS_IN(ctx, in, o, rs_normal_options);
+    if (r) return r;
     if (o->strength == 0) o->strength = 1;
     if (o->paint_height == 0) o->paint_height = NM_PAINT;
     if (!(o->strength > 0 && o->strength <= 1e6))
@@ -228,7 +228,9 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
     if (rgb_stride / 3 < w)
         return rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGB row stride %zu bytes, need %zu", rgb_stride,
                         (size_t)w * 3);
-    res = rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0, NULL);
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, h, 1);
+    res = rs__progress_end(ctx, &pg, rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0, NULL));
     if (!res) rs__ok(ctx);
     return res;
 }
@@ -311,11 +313,19 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
     }
     double fxt[NM_FXT];
     for (uint32_t t = 0; t < NM_FXT && t < T; t++) fxt[t] = (t + 0.5) / T;
-    for (uint32_t y = y0; y < y0 + h;) {
+    /* progress (rs__progress_begin: rs_normal_window's, or the splat
+     * window's when lighting it): a poll every few pieces, rows at the end
+     * of a band (the splat window counts its own) */
+    uint32_t pieces = 0;
+    for (uint32_t y = y0; y < y0 + h && !res;) {
         uint32_t crow = y / T, end = (crow + 1) * T;
         if (end > y0 + h) end = y0 + h;
         uint32_t rows = end - y;
         for (uint32_t x = x0; x < x0 + w; x += cols) {
+            if ((++pieces & 7) == 0 && rs__poll(ctx)) {
+                res = RS_ERR_CANCELLED;
+                break;
+            }
             uint32_t pw = x0 + w - x < cols ? x0 + w - x : cols;
             /* Horn's gradient at the samples around the piece */
             uint32_t c0 = x / T, c1 = (x + pw - 1) / T + 1;
@@ -398,7 +408,8 @@ rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32
             }
         }
         y = end;
+        if (!res && rgb && rs__tick(ctx, rows)) res = RS_ERR_CANCELLED;
     }
     if (!keep) rs__nm_scratch_free(ctx, &b);
-    return RS_OK;
+    return res;
 }

@@ -94,11 +94,22 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     s->out_w = w;
     s->out_h = h;
     s->texel_m = dem->frame.cell_size / o.texels;
+    /* progress: the grid build's units (a road per unit in each of its
+     * five stages) and one for the rest; polls between the parts (the road
+     * field indexed anew polls within). Alpha-map edges: their grid's
+     * sweep reports itself, as rs_road_grid_build does. */
+    rs__progress pg;
+    memset(&pg, 0, sizeof pg);
+    pg.nested = 1;
+    if (o.coverage.edges == RS_EDGES_ANALYTIC)
+        rs__progress_begin(ctx, &pg, o.progress, o.progress_user, (roads ? 5 * (uint64_t)rs_roads_count(roads) + 1 : 0) + 1,
+                           64);
     if (roads) {
         /* the grid's progress is the caller's: it is the slow part */
         r = rs_road_grid_build(ctx, dem, roads, &o, &s->grid_own);
         s->grid = s->grid_own;
     } else s->grid = grid;
+    if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     /* a grid made for finer pixels (more texels) is indexed anew for these:
      * its coverage would otherwise search the cells around every pixel.
      * (A grid with styles or markings is drawn at its own texels only:
@@ -119,10 +130,12 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         s->o.surface.ramp = s->ramp_own;
     }
     s->z = dem->z;
+    if (!r && nodata && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     if (!r && nodata) {
         r = rs__dem_fill_nodata(ctx, dem, &s->z_own);
         s->z = s->z_own;
     }
+    r = rs__progress_end(ctx, &pg, r);
     if (r) {
         rs_splatter_free(ctx, s);
         return r;
@@ -334,7 +347,12 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
     tcache.rgb[1] = b.trow1;
     p.tcache = &tcache;
     const int analytic = s->o.coverage.edges == RS_EDGES_ANALYTIC;
-    for (uint32_t y = y0; y < y0 + h;) {
+    /* progress: rows done of h, and a poll after every piece (a band of a
+     * wide window is many pieces) */
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, s->o.progress, s->o.progress_user, h, 1);
+    rs_result r = RS_OK;
+    for (uint32_t y = y0; y < y0 + h && !r;) {
         p.crow = y / T;
         uint32_t row_end = (p.crow + 1) * T;
         if (row_end > y0 + h) row_end = y0 + h;
@@ -358,47 +376,46 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
                     profile->mark_pixels += p.mark_pixels;
                 }
                 p.mark_tests = p.mark_pixels = 0;
-                continue;
+            } else {
+                rs__surface(s, &p);
+                double t2 = now(profile);
+                rs__overlays(s, &p);
+                double t3 = now(profile);
+                rs__composite(&p, rgba + (size_t)(p.y0 - y0) * rgba_stride + (size_t)(p.x0 - x0) * 4, rgba_stride,
+                              weight ? weight + (size_t)(p.y0 - y0) * weight_stride + (p.x0 - x0) : NULL,
+                              weight_stride);
+                if (profile) {
+                    double t4 = now(profile);
+                    profile->coverage_ms += t1 - t0;
+                    profile->surface_ms += t2 - t1;
+                    profile->overlays_ms += t3 - t2;
+                    profile->composite_ms += t4 - t3;
+                    profile->pixels += (uint64_t)p.rows * p.w;
+                    profile->road_pixels += p.road_pixels;
+                    profile->mark_tests += p.mark_tests;
+                    profile->mark_pixels += p.mark_pixels;
+                }
+                p.mark_tests = p.mark_pixels = 0;
             }
-            rs__surface(s, &p);
-            double t2 = now(profile);
-            rs__overlays(s, &p);
-            double t3 = now(profile);
-            rs__composite(&p, rgba + (size_t)(p.y0 - y0) * rgba_stride + (size_t)(p.x0 - x0) * 4, rgba_stride,
-                          weight ? weight + (size_t)(p.y0 - y0) * weight_stride + (p.x0 - x0) : NULL,
-                          weight_stride);
-            if (profile) {
-                double t4 = now(profile);
-                profile->coverage_ms += t1 - t0;
-                profile->surface_ms += t2 - t1;
-                profile->overlays_ms += t3 - t2;
-                profile->composite_ms += t4 - t3;
-                profile->pixels += (uint64_t)p.rows * p.w;
-                profile->road_pixels += p.road_pixels;
-                profile->mark_tests += p.mark_tests;
-                profile->mark_pixels += p.mark_pixels;
+            if (x + cols < x0 + w && rs__poll(ctx)) {
+                r = RS_ERR_CANCELLED;
+                break;
             }
-            p.mark_tests = p.mark_pixels = 0;
         }
-        if (L && L->normal) {
-            rs_result nr = rs__normals_run(ctx, s, x0, y, w, p.rows,
-                                           L->normal_options ? L->normal_options : &s->o.lighting.normal,
-                                           L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0, nm);
-            if (nr) return nr;
-        }
-        if (!L && s->o.lighting.enable) {
+        if (!r && L && L->normal)
+            r = rs__normals_run(ctx, s, x0, y, w, p.rows, L->normal_options ? L->normal_options : &s->o.lighting.normal,
+                                L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0, nm);
+        if (!r && !L && s->o.lighting.enable)
             /* these rows of the window, lit by their normals (the normals of
              * a pixel do not depend on the window: same bytes for any cut) */
-            rs_result lr = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
-                                           rgba + (size_t)(y - y0) * rgba_stride, rgba_stride, nm);
-            if (lr) return lr;
-        }
+            r = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
+                                rgba + (size_t)(y - y0) * rgba_stride, rgba_stride, nm);
         y += p.rows;
-        if (s->o.progress && s->o.progress(s->o.progress_user, y - y0, h))
-            return rs__fail(ctx, RS_ERR_CANCELLED, "cancelled");
+        if (!r && rs__tick(ctx, p.rows)) r = RS_ERR_CANCELLED;
     }
-    rs__ok(ctx);
-    return RS_OK;
+    r = rs__progress_end(ctx, &pg, r);
+    if (!r) rs__ok(ctx);
+    return r;
 }
 
 static rs_result check_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
@@ -510,10 +527,14 @@ static rs_result check_plane(rs_ctx *ctx, const void *plane, size_t stride, size
 }
 
 rs_result rs_splat_layers_window(rs_ctx *ctx, const rs_splatter *s, rs_splat_workspace *ws, uint32_t x0, uint32_t y0,
-                                 uint32_t w, uint32_t h, const rs_splat_layers *L, rs_splat_profile *profile)
+                                 uint32_t w, uint32_t h, const rs_splat_layers *layers, rs_splat_profile *profile)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!s || !L) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_layers_window");
+    if (!s || !layers) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat_layers_window");
+    rs_splat_layers Lin;
+    rs_result ro = RS__OPTS_IN(ctx, layers, &Lin, rs_splat_layers);
+    if (ro) return ro;
+    const rs_splat_layers *L = &Lin;
     if (ws && ws->s != s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "the workspace was made for another splatter");
     if (!L->terrain && !L->casing && !L->surface && !L->coverage && !L->paint && !L->normal)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splat_layers_window: no output plane");
@@ -552,9 +573,17 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!dem || !grid || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_splat");
-    rs_splatter *s;
-    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, opts, &s);
+    /* progress: one sequence, the splatter (a unit) and the window's rows */
+    uint32_t W, H;
+    rs_result r = rs_splat_size(ctx, dem, opts, &W, &H);
     if (r) return r;
+    rs_splat_options o;
+    if ((r = RS__OPTS_IN(ctx, opts, &o, rs_splat_options)) != RS_OK) return r; /* (checked: a prefix is read) */
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, o.progress, o.progress_user, (uint64_t)H + 1, 1);
+    rs_splatter *s;
+    r = rs_splatter_create(ctx, dem, NULL, grid, opts, &s);
+    if (r) return rs__progress_end(ctx, &pg, r);
     size_t npx = (size_t)s->out_w * s->out_h;
     if (rgba_size / 4 < npx)
         r = rs__fail(ctx, RS_ERR_BUFFER_TOO_SMALL, "RGBA buffer of %zu bytes, need %zu", rgba_size, npx * 4);
@@ -563,5 +592,5 @@ rs_result rs_splat(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, con
     else
         r = rs_splat_window(ctx, s, 0, 0, s->out_w, s->out_h, rgba, (size_t)s->out_w * 4, weight, s->out_w, NULL);
     rs_splatter_free(ctx, s);
-    return r;
+    return rs__progress_end(ctx, &pg, r);
 }

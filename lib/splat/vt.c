@@ -214,8 +214,8 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
     *out = NULL;
     if (!s) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_vt_create: NULL splatter");
     rs_vt_options o;
-    memset(&o, 0, sizeof o);
-    if (opts) o = *opts;
+    rs_result rc = RS__OPTS_IN(ctx, opts, &o, rs_vt_options);
+    if (rc) return rc;
     uint32_t S = o.tile_size ? o.tile_size : 256;
     if (S < 8 || S > 8192) return rs__fail(ctx, RS_ERR_INVALID_ARG, "virtual texture: tile_size %u must be 8..8192", S);
     if (o.border < -1 || o.border > (int32_t)(S / 2))
@@ -250,6 +250,12 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
     vt->sp[0] = s;
     vt->sp_tex[0] = vt->T;
     vt->nsp = 1;
+    /* progress (the context's callback): the grid builds and splatters of
+     * the levels report as parts of this call (a road per unit in each of
+     * a build's five stages), a unit per level, polls between levels */
+    rs__progress pg;
+    size_t nroads = o.roads ? rs_roads_count(o.roads) : 0;
+    rs__progress_begin(ctx, &pg, NULL, NULL, (uint64_t)vt->nlev * (5 * (uint64_t)nroads + 3) + 1, 64);
     for (uint32_t k = 0; !r && k < vt->nlev; k++) {
         vt_level *L = &vt->lv[k];
         uint64_t m = (uint64_t)1 << k;
@@ -262,6 +268,7 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
         if (t < 1) t = 1;
         L->D = (uint64_t)t * m;
         r = splatter_for(ctx, vt, s, o.roads, t, &L->src);
+        if (!r && rs__report(ctx, 1)) r = RS_ERR_CANCELLED;
     }
     const vt_level *top = &vt->lv[vt->nlev - 1];
     if (!r && (uint64_t)top->tx * top->ty > vt->slots)
@@ -270,6 +277,7 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
                      "coarsest level",
                      (unsigned long long)vt->budget, vt->slots, vt->tile_bytes, top->tx * top->ty);
     if (!r) r = height_ranges(ctx, vt, s);
+    if (!r && rs__report(ctx, 1)) r = RS_ERR_CANCELLED;
     if (!r) {
         uint32_t hcap = 1;
         while (hcap < 2 * vt->slots) hcap <<= 1;
@@ -294,6 +302,7 @@ rs_result rs_vt_create(rs_ctx *ctx, const rs_splatter *s, const rs_vt_options *o
                 vt->bytes += (size_t)vt->lv[k].tx * vt->lv[k].ty * 2 * sizeof(float);
         }
     }
+    r = rs__progress_end(ctx, &pg, r);
     if (r) {
         rs_vt_free(ctx, vt);
         return r;
@@ -344,9 +353,13 @@ typedef struct vt_cam {
     uint32_t bias;
 } vt_cam;
 
-static rs_result make_cam(rs_ctx *ctx, const rs_vt_view *v, vt_cam *c)
+static rs_result make_cam(rs_ctx *ctx, const rs_vt_view *v_in, vt_cam *c)
 {
     memset(c, 0, sizeof *c);
+    rs_vt_view vv;
+    rs_result rc = RS__OPTS_IN(ctx, v_in, &vv, rs_vt_view);
+    if (rc) return rc;
+    const rs_vt_view *v = &vv;
     double fov = v->fov_y == 0.0 ? 60.0 : v->fov_y;
     double wpx = v->width ? v->width : 1280, hpx = v->height ? v->height : 720;
     for (int i = 0; i < 3; i++)
@@ -811,6 +824,7 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
         uint32_t sw = (uint32_t)(sb - sa + 1), sh = (uint32_t)(yb - ya + 1);
         rs_result r = rs_splat_window_ws(ctx, sp, ws->sw[L->src], (uint32_t)sa, (uint32_t)ya, sw, sh, ws->src,
                                          (size_t)sw * 4, NULL, 0, NULL);
+        if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED; /* (the sums below: a few ms at most) */
         if (r) return r;
         for (uint32_t j = 0; j < sh; j++) {
             const uint8_t *row = ws->src + (size_t)j * sw * 4;
@@ -864,8 +878,26 @@ static rs_result resample(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, con
     return RS_OK;
 }
 
+static rs_result make_tile(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, uint32_t level, uint32_t x, uint32_t y,
+                           uint8_t *rgba, size_t stride);
+
+/* Progress: the level-0 splatter's callback, else the context's; the
+ * source rows its windows render (about tile_side * 2^k / T of them at
+ * level k), polls between a resampled tile's bands. */
 rs_result rs_vt_make_tile(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, uint32_t level, uint32_t x, uint32_t y,
                           uint8_t *rgba, size_t stride)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!vt || level >= vt->nlev) return make_tile(ctx, vt, ws, level, x, y, rgba, stride);
+    const rs_splatter *s = vt->sp[0];
+    uint64_t rows = ((uint64_t)vt->n * vt->lv[level].D + vt->T - 1) / vt->T + 1;
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, s->o.progress, s->o.progress_user, rows, 1);
+    return rs__progress_end(ctx, &pg, make_tile(ctx, vt, ws, level, x, y, rgba, stride));
+}
+
+static rs_result make_tile(rs_ctx *ctx, const rs_vt *vt, rs_vt_workspace *ws, uint32_t level, uint32_t x, uint32_t y,
+                           uint8_t *rgba, size_t stride)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!vt || !ws || !rgba) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_vt_make_tile");
