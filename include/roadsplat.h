@@ -210,7 +210,9 @@ typedef struct rs_dem rs_dem;
 /* Parse a PGM (P2 ASCII or P5 binary, maxval 1..65535, 16-bit samples big
  * endian, '#' comments wherever whitespace is allowed) from memory.
  * `data` is not retained. Width and height must be >= 2. The frame is the
- * default one (cell size 1, z-scale 1, origin 0,0). */
+ * default one (cell size 1, z-scale 1, origin 0,0). Progress: the
+ * context's callback (rs_ctx_set_progress), bytes of samples read of
+ * `size`; a cancel makes nothing. */
 RS_API rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **out);
 
 /* Make a DEM from `width*height` floats (row-major, copied). NaN = nodata;
@@ -249,7 +251,9 @@ RS_API void rs_dem_height_range(const rs_dem *dem, double *zmin, double *zmax, i
 typedef struct rs_roads rs_roads;
 
 /* Parse the road text format from memory (need not be NUL-terminated).
- * On RS_ERR_PARSE, rs_ctx_message() names the line and the problem. */
+ * On RS_ERR_PARSE, rs_ctx_message() names the line and the problem.
+ * Progress (this and rs_roads_parse_ex): the context's callback
+ * (rs_ctx_set_progress), bytes read of `size`; a cancel makes nothing. */
 RS_API rs_result rs_roads_parse(rs_ctx *ctx, const char *text, size_t size, rs_roads **out);
 /* Empty road set, to fill with rs_roads_add(). */
 RS_API rs_result rs_roads_create(rs_ctx *ctx, rs_roads **out);

@@ -520,7 +520,9 @@ static void test_from_grid(void)
         rs_roads_free(ctx, styled);
         rs_roads_free(ctx, more);
     }
-    rs_gpu_options go = { -1, 0 };
+    rs_gpu_options go;
+    memset(&go, 0, sizeof go);
+    go.cell = -1;
     CHECK(rs_gpu_scene_from_grid(ctx, dem, roads, grid, &go, &g) == RS_ERR_INVALID_ARG && g == NULL);
     rs_dem_free(ctx, other);
     rs_road_grid_free(ctx, grid);

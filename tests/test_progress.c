@@ -88,15 +88,21 @@ typedef struct fixture {
     const float *fz;
     uint32_t fw;
     rs_roam *roam;
+    char *roads_text;     /* the city's roads as a road file */
+    size_t roads_len;
+    char *pgm[2];         /* a 600 x 600 DEM as P2 and as 16-bit P5 */
+    size_t pgm_len[2];
 } fixture;
 
 enum {
-    K_WINDOW, K_NORMALS, K_SPLATTER, K_SPLAT, K_NETWORK, K_GPU, K_VT_CREATE, K_VT_TILE, K_ROAM_CREATE,
+    K_WINDOW, K_NORMALS, K_SPLATTER, K_SPLAT, K_NETWORK, K_GPU, K_VT_CREATE, K_VT_TILE, K_PARSE_ROADS,
+    K_PARSE_P2, K_PARSE_P5, K_ROAM_CREATE,
     K_ROAM_ERROR, K_ROAM_COUNT, K_ROAM_FRAME, K_ROAM_UPDATE, K_COUNT
 };
 static const char *const kname[K_COUNT] = { "rs_splat_window", "rs_normal_window", "rs_splatter_create",
                                             "rs_splat", "rs_network_build", "rs_gpu_scene_create",
-                                            "rs_vt_create", "rs_vt_make_tile", "rs_roam_create",
+                                            "rs_vt_create", "rs_vt_make_tile", "rs_roads_parse",
+                                            "rs_dem_parse_pgm (P2)", "rs_dem_parse_pgm (P5)", "rs_roam_create",
                                             "rs_roam_refine_error", "rs_roam_refine_count", "rs_roam_frame",
                                             "rs_roam_update" };
 
@@ -227,6 +233,32 @@ static rs_result run_call(rs_ctx *ctx, fixture *f, int k, uint64_t *hash)
         if (k == K_VT_CREATE) rs_vt_free(ctx, vt);
         break;
     }
+    case K_PARSE_ROADS: {
+        rs_roads *R = NULL;
+        r = rs_roads_parse(ctx, f->roads_text, f->roads_len, &R);
+        if (!r) {
+            *hash = rs_roads_count(R);
+            for (size_t i = 0; i < rs_roads_count(R); i++) {
+                const double *xy = NULL;
+                size_t np = 0;
+                rs_roads_get(R, i, NULL, NULL, &xy, &np);
+                *hash ^= hash_rgba((const uint8_t *)xy, np * 2 * sizeof *xy) + i;
+            }
+        }
+        rs_roads_free(ctx, R);
+        break;
+    }
+    case K_PARSE_P2:
+    case K_PARSE_P5: {
+        rs_dem *d = NULL;
+        int b = k == K_PARSE_P5;
+        r = rs_dem_parse_pgm(ctx, f->pgm[b], f->pgm_len[b], &d);
+        if (!r)
+            *hash = hash_rgba((const uint8_t *)rs_dem_samples(d),
+                              (size_t)rs_dem_width(d) * rs_dem_height(d) * sizeof(float));
+        rs_dem_free(ctx, d);
+        break;
+    }
     case K_ROAM_CREATE: {
         rs_roam *L = NULL;
         r = rs_roam_create(ctx, f->fractal, NULL, &L);
@@ -343,6 +375,39 @@ static void test_calls(rs_ctx *ctx, const sc_scene *sc, rs_dem *dem, rs_roads *r
     CHECK(W > 2048);
     f.px_bytes = (size_t)W * H * 4;
     f.px = malloc(f.px_bytes);
+    /* the city's roads as text, a 600 x 600 DEM as P2 and 16-bit P5 (both
+     * beyond one poll's 65536 samples) */
+    {
+        size_t cap = 64, len = 0;
+        for (size_t i = 0; i < sc->nroads; i++) cap += 64 + 48 * sc->roads[i].n;
+        char *t = malloc(cap);
+        for (size_t i = 0; t && i < sc->nroads; i++) {
+            len += (size_t)snprintf(t + len, cap - len, "road r%zu width %.17g\n", i, sc->roads[i].width);
+            for (size_t q = 0; q < sc->roads[i].n; q++)
+                len += (size_t)snprintf(t + len, cap - len, "%.17g %.17g\n", sc->roads[i].xy[2 * q],
+                                        sc->roads[i].xy[2 * q + 1]);
+            len += (size_t)snprintf(t + len, cap - len, "end\n");
+        }
+        f.roads_text = t;
+        f.roads_len = len;
+        const uint32_t side = 600;
+        size_t n = (size_t)side * side;
+        f.pgm[0] = malloc(32 + 6 * n);
+        f.pgm[1] = malloc(32 + 2 * n);
+        if (f.pgm[0] && f.pgm[1]) {
+            size_t pa = (size_t)sprintf(f.pgm[0], "P2\n%u %u\n4000\n", side, side);
+            size_t pb = (size_t)sprintf(f.pgm[1], "P5\n%u %u\n4000\n", side, side);
+            for (size_t i = 0; i < n; i++) {
+                unsigned v = (unsigned)((i * 2654435761u) % 4001u);
+                pa += (size_t)sprintf(f.pgm[0] + pa, "%u\n", v);
+                f.pgm[1][pb++] = (char)(v >> 8);
+                f.pgm[1][pb++] = (char)(v & 255);
+            }
+            f.pgm_len[0] = pa;
+            f.pgm_len[1] = pb;
+        }
+        CHECK(t && f.pgm[0] && f.pgm[1]);
+    }
     /* the virtual texture of the styled city at 2 texels (its tiles) */
     rs_splatter *city = NULL;
     o.texels = 2;
@@ -381,6 +446,9 @@ static void test_calls(rs_ctx *ctx, const sc_scene *sc, rs_dem *dem, rs_roads *r
     rs_roads_free(ctx, sr);
     rs_dem_free(ctx, f.small);
     free(f.px);
+    free(f.roads_text);
+    free(f.pgm[0]);
+    free(f.pgm[1]);
 }
 
 int main(void)

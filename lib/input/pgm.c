@@ -121,12 +121,11 @@ static rs_result dem_check_size(rs_ctx *ctx, uint64_t w, uint64_t h, const char 
     return RS_OK;
 }
 
-rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **out)
+/* Samples between two progress polls of the sample loops. */
+#define PGM_POLL 65536u
+
+static rs_result pgm_parse(rs_ctx *ctx, const void *data, size_t size, rs_dem **out)
 {
-    if (!out) return ctx ? rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_parse_pgm: out is NULL") : RS_ERR_INVALID_ARG;
-    *out = NULL;
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!data && size) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_parse_pgm: data is NULL");
 
     pgm_reader r;
     r.start = r.p = data;
@@ -176,6 +175,7 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
         const unsigned char *s = r.p;
         if (maxval != 255 && maxval != 65535) {
             for (size_t i = 0; i < n; i++) {
+                if ((i & (PGM_POLL - 1)) == PGM_POLL - 1 && rs__poll(ctx)) return RS_ERR_CANCELLED;
                 unsigned v = bps == 2 ? ((unsigned)s[2 * i] << 8) | s[2 * i + 1] : s[i];
                 if (v > maxval)
                     return rs__fail(ctx, RS_ERR_PARSE,
@@ -190,8 +190,13 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
                                 (size_t)(r.end - (s + need)), (size_t)(t - r.start));
         rs_dem *dem;
         if ((rc = rs__dem_alloc(ctx, (uint32_t)w, (uint32_t)h, &dem)) != RS_OK) return rc;
-        for (size_t i = 0; i < n; i++)
+        for (size_t i = 0; i < n; i++) {
+            if ((i & (PGM_POLL - 1)) == PGM_POLL - 1 && rs__report(ctx, PGM_POLL * bps)) {
+                rs_dem_free(ctx, dem);
+                return RS_ERR_CANCELLED;
+            }
             dem->z[i] = (float)(bps == 2 ? ((unsigned)s[2 * i] << 8) | s[2 * i + 1] : s[i]);
+        }
         *out = dem;
         rs__ok(ctx);
         return RS_OK;
@@ -206,7 +211,15 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
     rs_dem *dem;
     if ((rc = rs__dem_alloc(ctx, (uint32_t)w, (uint32_t)h, &dem)) != RS_OK) return rc;
     char what[16];
+    const unsigned char *said = r.p;
     for (size_t i = 0; i < n; i++) {
+        if ((i & (PGM_POLL - 1)) == PGM_POLL - 1) {
+            if (rs__report(ctx, (uint64_t)(r.p - said))) {
+                rc = RS_ERR_CANCELLED;
+                goto fail;
+            }
+            said = r.p;
+        }
         pgm_skip(&r);
         uint64_t v;
         int k = pgm_number(&r, &v);
@@ -249,4 +262,17 @@ rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **
 fail:
     rs_dem_free(ctx, dem);
     return rc;
+}
+
+/* Progress: the context's callback (rs_ctx_set_progress), bytes of samples
+ * read of the file's size; a poll every PGM_POLL samples. */
+rs_result rs_dem_parse_pgm(rs_ctx *ctx, const void *data, size_t size, rs_dem **out)
+{
+    if (!out) return ctx ? rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_parse_pgm: out is NULL") : RS_ERR_INVALID_ARG;
+    *out = NULL;
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!data && size) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_parse_pgm: data is NULL");
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, size ? size : 1, PGM_POLL);
+    return rs__progress_end(ctx, &pg, pgm_parse(ctx, data, size, out));
 }

@@ -1278,6 +1278,11 @@ rs_result rs__text_parse(rs_ctx *ctx, const char *text, size_t size, rs_profile 
             goto done;
         }
         if ((rc = check_bytes(&P, (const unsigned char *)ls, len)) != RS_OK) goto done;
+        /* progress of rs_roads_parse(_ex): bytes read */
+        if (rs__tick(ctx, len + 1)) {
+            rc = RS_ERR_CANCELLED;
+            goto done;
+        }
         rs__lex L;
         memset(&L, 0, sizeof L);
         L.s = ls;
@@ -1331,7 +1336,10 @@ rs_result rs_roads_parse_ex(rs_ctx *ctx, const char *text, size_t size, const rs
     rs_roads *roads;
     rc = rs_roads_create(ctx, &roads);
     if (rc != RS_OK) return rc;
-    rc = rs__text_parse(ctx, text, size, profile, roads, po.styles);
+    /* progress: the context's callback (rs_ctx_set_progress), bytes of the text */
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, size ? size : 1, (uint64_t)1 << 20);
+    rc = rs__progress_end(ctx, &pg, rs__text_parse(ctx, text, size, profile, roads, po.styles));
     if (rc != RS_OK) {
         rs_roads_free(ctx, roads);
         return rc;

@@ -54,17 +54,23 @@ typedef struct bench {
     uint8_t *px;         /* a whole image */
     rs_roam *roam;
     uint32_t W, H;
+    char *text;          /* the city's roads as a road file */
+    size_t text_len;
+    char *pgm[2];        /* a 2049^2 P2 and an 8193^2 16-bit P5 DEM */
+    size_t pgm_len[2];
 } bench;
 
 enum {
     C_GRID, C_GRID_PLAIN, C_NETWORK, C_GPU, C_WINDOW, C_NORMALS, C_VT_CREATE, C_VT_TILE,
-    C_ROAM_CREATE, C_ROAM_SETDEM, C_ROAM_ERROR, C_ROAM_COUNT, C_ROAM_FRAME, C_ROAM_UPDATE, C_COUNT
+    C_ROAM_CREATE, C_ROAM_SETDEM, C_ROAM_ERROR, C_ROAM_COUNT, C_ROAM_FRAME, C_ROAM_UPDATE, C_PARSE_ROADS,
+    C_PARSE_P2, C_PARSE_P5, C_COUNT
 };
 static const char *const call_name[C_COUNT] = {
     "rs_road_grid_build (classes)", "rs_road_grid_build (no styles)", "rs_network_build", "rs_gpu_scene_create",
     "rs_splat_window (whole image)", "rs_normal_window (whole image)", "rs_vt_create (with roads)",
     "rs_vt_make_tile (coarsest level)", "rs_roam_create", "rs_roam_set_dem", "rs_roam_refine_error (0.05 m)",
-    "rs_roam_refine_count (10^6)", "rs_roam_frame (target 10^5)", "rs_roam_update (from the base mesh)"
+    "rs_roam_refine_count (10^6)", "rs_roam_frame (target 10^5)", "rs_roam_update (from the base mesh)",
+    "rs_roads_parse", "rs_dem_parse_pgm (P2)", "rs_dem_parse_pgm (P5)"
 };
 
 static rs_roam_view view(void)
@@ -162,6 +168,19 @@ static rs_result run(bench *b, int c)
         r = rs_roam_update(ctx, b->roam, &v, 0);
         break;
     }
+    case C_PARSE_ROADS: {
+        rs_roads *R = NULL;
+        r = rs_roads_parse(ctx, b->text, b->text_len, &R);
+        rs_roads_free(ctx, R);
+        break;
+    }
+    case C_PARSE_P2:
+    case C_PARSE_P5: {
+        rs_dem *d = NULL;
+        r = rs_dem_parse_pgm(ctx, b->pgm[c == C_PARSE_P5], b->pgm_len[c == C_PARSE_P5], &d);
+        rs_dem_free(ctx, d);
+        break;
+    }
     }
     return r == RS_ERR_POOL_EXHAUSTED ? RS_OK : r;
 }
@@ -229,6 +248,52 @@ static int city(rs_ctx *ctx, size_t n, rs_dem **dem, rs_roads **roads)
     return bad;
 }
 
+/* Roads as the road file format (%.17g: the same doubles back). */
+static char *roads_text(const rs_roads *roads, size_t *len)
+{
+    size_t n = rs_roads_count(roads), cap = 64;
+    for (size_t i = 0; i < n; i++) {
+        size_t np = 0;
+        rs_roads_get(roads, i, NULL, NULL, NULL, &np);
+        cap += 96 + 52 * np;
+    }
+    char *t = malloc(cap);
+    size_t at = 0;
+    for (size_t i = 0; t && i < n; i++) {
+        const double *xy = NULL;
+        double w = 0;
+        size_t np = 0;
+        rs_roads_get(roads, i, NULL, &w, &xy, &np);
+        at += (size_t)snprintf(t + at, cap - at, "road r%zu width %.17g class=%s lanes=2\n", i, w,
+                               rs_roads_get_attr(roads, i, "class"));
+        for (size_t k = 0; k < np; k++)
+            at += (size_t)snprintf(t + at, cap - at, "%.17g %.17g\n", xy[2 * k], xy[2 * k + 1]);
+        at += (size_t)snprintf(t + at, cap - at, "end\n");
+    }
+    *len = at;
+    return t;
+}
+
+/* A side x side PGM of pseudo-random heights 0..4000: P2 text or 16-bit P5. */
+static char *pgm_file(uint32_t side, int binary, size_t *len)
+{
+    size_t n = (size_t)side * side;
+    char *p = malloc(32 + (binary ? 2 : 6) * n);
+    if (!p) return NULL;
+    size_t at = (size_t)sprintf(p, "%s\n%u %u\n4000\n", binary ? "P5" : "P2", side, side);
+    for (size_t i = 0; i < n; i++) {
+        unsigned v = (unsigned)((i * 2654435761u) % 4001u);
+        if (binary) {
+            p[at++] = (char)(v >> 8);
+            p[at++] = (char)(v & 255);
+        } else {
+            at += (size_t)sprintf(p + at, "%u\n", v);
+        }
+    }
+    *len = at;
+    return p;
+}
+
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
@@ -250,6 +315,8 @@ int main(int argc, char **argv)
     if (rs_dem_create(ctx, S, S, z, &b.fractal) || rs_dem_set_frame(ctx, b.fractal, &ff)) return 1;
     free(z);
 
+    if (!(b.pgm[0] = pgm_file(2049, 0, &b.pgm_len[0])) || !(b.pgm[1] = pgm_file(8193, 1, &b.pgm_len[1]))) return 1;
+
     FILE *md, *csv;
     if (tm_open_section(dir, "cancel", &md, &csv)) return 1;
     fprintf(md, "## Progress and cancel of the long calls (tests/bench/cancel.c)\n\n"
@@ -259,7 +326,9 @@ int main(int argc, char **argv)
                 "the slowest): the largest time from the stopping call to the return. The city: `sc_city`, 400 x "
                 "350 samples of 5 m, default class styles (lines, casings, automatic markings), grids at 4 "
                 "texels; the window, normal map and virtual texture on its 8-texel splatter (10^4 roads, a "
-                "3192 x 2792 image); ROAM on the 1025^2 fractal (1 m cells, 400 m relief, pool 2^21 nodes). "
+                "3192 x 2792 image); ROAM on the 1025^2 fractal (1 m cells, 400 m relief, pool 2^21 nodes); the "
+                "parsers on the city's roads as a road file and on PGM files of pseudo-random heights (a 2049^2 "
+                "P2, an 8193^2 16-bit P5 with maxval 4000, which is checked sample by sample). "
                 "Wall clock, one thread. Issue 30 target 4: cancel returns within 50 ms.\n\n"
                 "| call | input | ms | progress calls | longest gap ms | stop to return ms (max) |\n"
                 "|---|---|---|---|---|---|\n");
@@ -276,6 +345,8 @@ int main(int argc, char **argv)
         calls[nc++] = C_GRID_PLAIN;
         calls[nc++] = C_NETWORK;
         calls[nc++] = C_GPU;
+        if (!(b.text = roads_text(b.roads, &b.text_len))) return 1;
+        calls[nc++] = C_PARSE_ROADS;
         if (ci == 0) {
             rs_splat_options o;
             memset(&o, 0, sizeof o);
@@ -298,15 +369,18 @@ int main(int argc, char **argv)
             calls[nc++] = C_ROAM_COUNT;
             calls[nc++] = C_ROAM_FRAME;
             calls[nc++] = C_ROAM_UPDATE;
+            calls[nc++] = C_PARSE_P2;
+            calls[nc++] = C_PARSE_P5;
         }
         for (int k = 0; k < nc; k++) {
             int c = calls[k];
             if (argc > 2 && !strstr(call_name[c], argv[2])) continue;
             result r;
-            int roam = c >= C_ROAM_CREATE;
+            int roam = c >= C_ROAM_CREATE && c <= C_ROAM_UPDATE;
             if (measure(&b, c, ci || c == C_VT_CREATE ? 3 : 7, &r)) return 1;
             const char *in = roam ? "fractal 1025^2" : c == C_WINDOW || c == C_NORMALS ? "city 10^4, 3192 x 2792 px"
-                           : c == C_VT_CREATE || c == C_VT_TILE ? "city 10^4, 8 texels" : input;
+                           : c == C_VT_CREATE || c == C_VT_TILE ? "city 10^4, 8 texels"
+                           : c == C_PARSE_P2 ? "PGM 2049^2, text" : c == C_PARSE_P5 ? "PGM 8193^2, 16-bit" : input;
             double m = r.gap_ms > r.cancel_ms ? r.gap_ms : r.cancel_ms;
             if (m > worst) worst = m, worst_call = call_name[c];
             fprintf(md, "| %s | %s | %.0f | %llu | %.1f | %.1f |\n", call_name[c], in, r.ms,
@@ -323,6 +397,8 @@ int main(int argc, char **argv)
         b.vws = NULL, b.vt = NULL, b.sp = NULL;
         rs_roads_free(ctx, b.roads);
         rs_dem_free(ctx, b.dem);
+        free(b.text);
+        b.text = NULL;
     }
     fprintf(md, "\n| target (issue 30, 4) | measured | |\n|---|---|---|\n"
                 "| every call above: cancel within 50 ms (longest gap, stop to return) | %.1f ms (%s) | %s |\n",
@@ -330,6 +406,8 @@ int main(int argc, char **argv)
     fclose(md);
     fclose(csv);
     free(b.px);
+    free(b.pgm[0]);
+    free(b.pgm[1]);
     rs_roam_free(ctx, b.roam);
     rs_dem_free(ctx, b.fractal);
     rs_ctx_free(ctx);
