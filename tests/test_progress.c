@@ -12,6 +12,7 @@
  * each leaving its objects usable (a ROAM mesh cancelled half way is
  * checked crack-free, and the call run again gives the same output). */
 #include "roadsplat.h"
+#include "atlas.h"
 #include "roam_check.h"
 #include "scenes.h"
 #include "harness.h"
@@ -96,15 +97,16 @@ typedef struct fixture {
 
 enum {
     K_WINDOW, K_NORMALS, K_SPLATTER, K_SPLAT, K_NETWORK, K_GPU, K_VT_CREATE, K_VT_TILE, K_PARSE_ROADS,
-    K_PARSE_P2, K_PARSE_P5, K_ROAM_CREATE,
-    K_ROAM_ERROR, K_ROAM_COUNT, K_ROAM_FRAME, K_ROAM_UPDATE, K_COUNT
+    K_PARSE_P2, K_PARSE_P5, K_ATLAS, K_ROAM_CREATE,
+    K_ROAM_ERROR, K_ROAM_COUNT, K_ROAM_FRAME, K_ROAM_UPDATE, K_ROAM_EXTRACT, K_COUNT
 };
 static const char *const kname[K_COUNT] = { "rs_splat_window", "rs_normal_window", "rs_splatter_create",
                                             "rs_splat", "rs_network_build", "rs_gpu_scene_create",
                                             "rs_vt_create", "rs_vt_make_tile", "rs_roads_parse",
-                                            "rs_dem_parse_pgm (P2)", "rs_dem_parse_pgm (P5)", "rs_roam_create",
+                                            "rs_dem_parse_pgm (P2)", "rs_dem_parse_pgm (P5)", "rs_atlas_create",
+                                            "rs_roam_create",
                                             "rs_roam_refine_error", "rs_roam_refine_count", "rs_roam_frame",
-                                            "rs_roam_update" };
+                                            "rs_roam_update", "rs_roam_extract" };
 
 static int roam_call(int k) { return k >= K_ROAM_CREATE; }
 
@@ -130,7 +132,12 @@ static uint64_t roam_mesh(rs_ctx *ctx, const fixture *f, int *ok)
     double *vz = malloc(mv * sizeof *vz);
     uint64_t h = 0;
     *ok = 0;
-    if (v && ix && gx && gy && vz && rs_roam_extract(ctx, f->roam, NULL, v, NULL, mv, ix, mi, &nv, &ni) == RS_OK) {
+    /* on a context of its own: the extraction reports to its context's
+     * callback, and the call under test is the one to stop */
+    rs_ctx *quiet = NULL;
+    (void)ctx;
+    if (rs_ctx_create(NULL, NULL, &quiet) == RS_OK && v && ix && gx && gy && vz &&
+        rs_roam_extract(quiet, f->roam, NULL, v, NULL, mv, ix, mi, &nv, &ni) == RS_OK) {
         h = hash_rgba((const uint8_t *)v, nv * 5 * sizeof *v) ^ hash_rgba((const uint8_t *)ix, ni * sizeof *ix);
         for (size_t k = 0; k < nv; k++) {
             gx[k] = (int32_t)v[5 * k];
@@ -142,6 +149,7 @@ static uint64_t roam_mesh(rs_ctx *ctx, const fixture *f, int *ok)
               res.ok_winding && res.ok_area && res.ok_edges && res.ok_tjunction && res.ok_coverage;
     }
     free(v); free(ix); free(gx); free(gy); free(vz);
+    rs_ctx_free(quiet);
     return h;
 }
 
@@ -155,6 +163,8 @@ static int prepare(rs_ctx *ctx, fixture *f, int k)
     memset(&o, 0, sizeof o);
     if (rs_roam_create(ctx, f->fractal, &o, &f->roam) != RS_OK) return 1;
     rs_roam_view v = roam_view();
+    /* an extraction of a mesh of 2 10^5 triangles (several polls a pass) */
+    if (k == K_ROAM_EXTRACT) return rs_roam_refine_count(ctx, f->roam, 200000) != RS_OK;
     /* an update goes on from the last one's mesh: measure the second */
     return k == K_ROAM_UPDATE && rs_roam_update(ctx, f->roam, &v, 0) != RS_OK;
 }
@@ -259,6 +269,23 @@ static rs_result run_call(rs_ctx *ctx, fixture *f, int k, uint64_t *hash)
         rs_dem_free(ctx, d);
         break;
     }
+    case K_ATLAS: {
+        /* one 2048 x 2048 sprite: 2048 rows of level 0, then its mip levels */
+        const uint32_t side = 2048;
+        uint8_t *px = malloc((size_t)side * side * 4);
+        if (!px) return RS_ERR_NOMEM;
+        for (size_t i = 0; i < (size_t)side * side * 4; i++) px[i] = (uint8_t)(i * 2654435761u >> 24);
+        rs_image im = { side, side, px };
+        const char *index = "big 0 0 2048 2048 2 2\n";
+        rs_atlas *a = NULL;
+        r = rs_atlas_create(ctx, &im, index, strlen(index), &a);
+        for (uint32_t l = 0; !r && l < a->t[0].nlev; l++) /* every mip level's texels */
+            *hash ^= hash_rgba((const uint8_t *)a->t[0].lev[l].px,
+                               (size_t)a->t[0].lev[l].w * a->t[0].lev[l].h * 4 * sizeof(float)) + l;
+        rs_atlas_free(ctx, a);
+        free(px);
+        break;
+    }
     case K_ROAM_CREATE: {
         rs_roam *L = NULL;
         r = rs_roam_create(ctx, f->fractal, NULL, &L);
@@ -285,7 +312,23 @@ static rs_result run_call(rs_ctx *ctx, fixture *f, int k, uint64_t *hash)
         break;
     }
     }
-    if (!r && roam_call(k) && k != K_ROAM_CREATE) {
+    if (k == K_ROAM_EXTRACT) {
+        size_t mv, mi, nv = 0, ni = 0;
+        rs_roam_mesh_options mo;
+        memset(&mo, 0, sizeof mo);
+        mo.normals = 1;
+        rs_roam_mesh_bound(f->roam, &mo, &mv, &mi);
+        float *v = malloc(mv * 5 * sizeof *v), *nr = malloc(mv * 3 * sizeof *nr);
+        uint32_t *ix = malloc(mi * sizeof *ix);
+        r = v && nr && ix ? rs_roam_extract(ctx, f->roam, &mo, v, nr, mv, ix, mi, &nv, &ni) : RS_ERR_NOMEM;
+        if (!r)
+            *hash = hash_rgba((const uint8_t *)v, nv * 5 * sizeof *v) ^ hash_rgba((const uint8_t *)nr, nv * 3 * sizeof *nr) ^
+                    hash_rgba((const uint8_t *)ix, ni * sizeof *ix);
+        free(v);
+        free(nr);
+        free(ix);
+    }
+    if (!r && roam_call(k) && k != K_ROAM_CREATE && k != K_ROAM_EXTRACT) {
         int ok;
         *hash = roam_mesh(ctx, f, &ok);
         CHECKF(ok, "%s: the mesh fails the checker", kname[k]);

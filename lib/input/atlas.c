@@ -72,7 +72,8 @@ static rs_result build_levels(rs_ctx *ctx, rs__atlas_type *t, const rs_image *im
         t->nlev = l + 1;
         *bytes += (size_t)L->w * L->h * 4 * sizeof(float);
         if (l == 0) {
-            for (uint32_t j = 0; j < h; j++)
+            for (uint32_t j = 0; j < h; j++) {
+                if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED; /* (a callback every 256 rows) */
                 for (uint32_t i = 0; i < w; i++) {
                     const uint8_t *p = img->rgba + ((size_t)(y0 + j) * img->width + (x0 + i)) * 4;
                     float *o = L->px + ((size_t)j * w + i) * 4;
@@ -82,9 +83,11 @@ static rs_result build_levels(rs_ctx *ctx, rs__atlas_type *t, const rs_image *im
                     o[2] = p[2] * a;
                     o[3] = a;
                 }
+            }
         } else {
             const rs__atlas_level *U = &t->lev[l - 1];
-            for (uint32_t j = 0; j < L->h; j++)
+            for (uint32_t j = 0; j < L->h; j++) {
+                if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
                 for (uint32_t i = 0; i < L->w; i++) {
                     float s[4] = { 0, 0, 0, 0 };
                     for (uint32_t b = 0; b < 2; b++)
@@ -97,6 +100,7 @@ static rs_result build_levels(rs_ctx *ctx, rs__atlas_type *t, const rs_image *im
                     float *o = L->px + ((size_t)j * L->w + i) * 4;
                     for (int c = 0; c < 4; c++) o[c] = s[c] * 0.25f;
                 }
+            }
         }
         if (L->w == 1 && L->h == 1) break;
     }
@@ -249,8 +253,9 @@ static rs_result create(rs_ctx *ctx, const rs_image *img, const char *index, siz
             memcpy(t->lev, a->t[same].lev, sizeof t->lev);
             t->nlev = a->t[same].nlev;
             t->shared = 1;
-        } else if (build_levels(ctx, t, img, rx, ry, rw, rh, &a->bytes))
+        } else if ((r = build_levels(ctx, t, img, rx, ry, rw, rh, &a->bytes)) == RS_ERR_NOMEM) {
             r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the atlas mip levels");
+        }
     }
     if (!r && a->n == 0) r = rs__fail(ctx, RS_ERR_PARSE, "atlas index line %llu: the index names no marking type", line);
     if (r) {
@@ -262,9 +267,14 @@ static rs_result create(rs_ctx *ctx, const rs_image *img, const char *index, siz
     return RS_OK;
 }
 
+/* Progress: the context's callback (rs_ctx_set_progress), polls in the
+ * mip levels' rows; a cancel makes nothing. */
 rs_result rs_atlas_create(rs_ctx *ctx, const rs_image *img, const char *index, size_t size, rs_atlas **out)
 {
-    return create(ctx, img, index, size, 0, out);
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, create(ctx, img, index, size, 0, out));
 }
 
 /* The built-in atlas is not the caller's texture: no texture limit. */

@@ -66,7 +66,20 @@ typedef struct extract_state {
     uint32_t *idx;
     uint32_t *samples;  /* optional: sample (row * width + column) of each vertex */
     int overflow;
+    rs_ctx *ctx;        /* progress (rs_ctx_set_progress): polls in the long passes */
+    int cancelled;      /* a poll said stop (overflow is set too: the passes stop) */
 } extract_state;
+
+/* Items (nodes, vertex words, indices) between two polls of a pass. */
+#define EXTRACT_POLL 65536u
+
+/* A poll: 1 (and the state stopped) when the host's callback said stop. */
+static int extract_stop(extract_state *s)
+{
+    if (!rs__poll(s->ctx)) return 0;
+    s->cancelled = s->overflow = 1;
+    return 1;
+}
 
 /* Pass 1 of extraction: a corner by its padded sample index (row * 64 wpr +
  * column), recorded in the vertex set. Indices are written as these keys
@@ -168,6 +181,7 @@ static void emit_leaves(extract_state *s)
     rs_roam *L = s->L;
     const roam_node *nodes = L->nodes;
     for (uint32_t t = 0; t < L->used; t++) {
+        if ((t & (EXTRACT_POLL - 1)) == EXTRACT_POLL - 1 && extract_stop(s)) return;
         uint32_t lc = nodes[t].lc;
         if (lc != NIL && lc != IMPL) continue; /* inner node or free */
         if (emit_node(s, &nodes[t])) return;
@@ -247,15 +261,18 @@ static size_t emit_vertices(extract_state *s, size_t g0, size_t g1)
 {
     rs_roam *L = s->L;
     size_t n = 0;
-    for (size_t g = g0; g < g1; g++)
+    for (size_t g = g0; g < g1; g++) {
+        if (((g - g0) & (EXTRACT_POLL / 64 - 1)) == EXTRACT_POLL / 64 - 1 && extract_stop(s)) return 0;
         for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) {
             size_t k = g * 64 + lowest_bit(sm);
             L->vrank[k] = (uint32_t)n;
             n += popcount64(L->vbits[k]);
         }
+    }
     if (n > s->vcap) return n;
     size_t v = 0;
-    for (size_t g = g0; g < g1; g++)
+    for (size_t g = g0; g < g1; g++) {
+        if (((g - g0) & (EXTRACT_POLL / 64 - 1)) == EXTRACT_POLL / 64 - 1 && extract_stop(s)) return 0;
         for (uint64_t sm = L->vsum[g]; sm; sm &= sm - 1) {
             size_t k = g * 64 + lowest_bit(sm);
             int y = (int)(k / L->wpr), x0 = (int)(k % L->wpr) * 64;
@@ -273,6 +290,7 @@ static size_t emit_vertices(extract_state *s, size_t g0, size_t g1)
                 if (s->normals) vertex_normal(L, x, y, s->nrm + 3 * v);
             }
         }
+    }
     return n;
 }
 
@@ -288,11 +306,11 @@ static uint32_t key_vertex(const rs_roam *L, uint32_t p)
  * x86-64 made since about 2009; the baseline target does not assume it):
  * one instruction instead of twelve per index, a third of the pass. */
 #define RS_POPCNT_DISPATCH 1
-__attribute__((target("popcnt"))) static void number_indices_popcnt(const extract_state *s, size_t n)
+__attribute__((target("popcnt"))) static void number_indices_popcnt(const extract_state *s, size_t i0, size_t n)
 {
     const rs_roam *L = s->L;
     uint32_t *ix = s->idx;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = i0; i < n; i++) {
         uint32_t p = ix[i];
         uint64_t below = ((uint64_t)1 << (p & 63u)) - 1u;
         ix[i] = L->vrank[p >> 6] + (uint32_t)__builtin_popcountll(L->vbits[p >> 6] & below);
@@ -300,17 +318,26 @@ __attribute__((target("popcnt"))) static void number_indices_popcnt(const extrac
 }
 #endif
 
-/* Pass 3: sample keys in the first n entries of the index buffer -> vertex numbers. */
-static void number_indices(const extract_state *s, size_t n)
+/* Pass 3: sample keys in entries i0..n of the index buffer -> vertex numbers. */
+static void number_range(const extract_state *s, size_t i0, size_t n)
 {
 #ifdef RS_POPCNT_DISPATCH
     if (__builtin_cpu_supports("popcnt")) {
-        number_indices_popcnt(s, n);
+        number_indices_popcnt(s, i0, n);
         return;
     }
 #endif
     uint32_t *ix = s->idx;
-    for (size_t i = 0; i < n; i++) ix[i] = key_vertex(s->L, ix[i]);
+    for (size_t i = i0; i < n; i++) ix[i] = key_vertex(s->L, ix[i]);
+}
+
+/* Pass 3 over the first n entries, a poll every EXTRACT_POLL of them. */
+static void number_indices(extract_state *s, size_t n)
+{
+    for (size_t i0 = 0; i0 < n; i0 += EXTRACT_POLL) {
+        if (i0 && extract_stop(s)) return;
+        number_range(s, i0, n - i0 < EXTRACT_POLL ? n : i0 + EXTRACT_POLL);
+    }
 }
 
 /* Empty the vertex set for the next extraction: only the flagged words
@@ -394,6 +421,7 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, int what, uint32_t part, 
     s.L = L; s.vtx = vertices; s.nrm = normals; s.normals = o.normals != 0;
     s.vcap = vertex_capacity; s.icap = index_capacity; s.idx = indices;
     s.samples = o.samples;
+    s.ctx = ctx;
     /* the rows that can hold vertices, as summary words */
     int y0 = 0, y1 = (int)L->ch;
     if (what == EXTRACT_ALL) emit_leaves(&s);
@@ -433,6 +461,7 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, int what, uint32_t part, 
     }
     if (top_ok) number_indices(&s, top_indices); /* as before skirts existed, even when they overflowed */
     clear_vertex_set(L, g0, g1);
+    if (s.cancelled) return RS_ERR_CANCELLED; /* (the message: rs__progress_end) */
     if (s.overflow) {
         size_t mv, mi;
         rs_roam_mesh_bound(L, &o, &mv, &mi);
@@ -446,11 +475,25 @@ static rs_result extract_mesh(rs_ctx *ctx, rs_roam *L, int what, uint32_t part, 
     return RS_OK;
 }
 
+/* Progress: the context's callback (rs_ctx_set_progress), polls in the
+ * passes; a cancel writes no counts (the buffers' contents are then
+ * undefined) and leaves the landscape as it was. */
+static rs_result extract_run(rs_ctx *ctx, rs_roam *L, int what, uint32_t part, const rs_roam_mesh_options *opts,
+                             float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
+                             size_t index_capacity, size_t *vertex_count, size_t *index_count)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, extract_mesh(ctx, L, what, part, opts, vertices, normals, vertex_capacity,
+                                                   indices, index_capacity, vertex_count, index_count));
+}
+
 rs_result rs_roam_extract(rs_ctx *ctx, rs_roam *L, const rs_roam_mesh_options *opts, float *vertices,
                           float *normals, size_t vertex_capacity, uint32_t *indices, size_t index_capacity,
                           size_t *vertex_count, size_t *index_count)
 {
-    return extract_mesh(ctx, L, EXTRACT_ALL, 0, opts, vertices, normals, vertex_capacity, indices, index_capacity,
+    return extract_run(ctx, L, EXTRACT_ALL, 0, opts, vertices, normals, vertex_capacity, indices, index_capacity,
                         vertex_count, index_count);
 }
 
@@ -458,7 +501,7 @@ rs_result rs_roam_extract_patch(rs_ctx *ctx, rs_roam *L, uint32_t patch, const r
                                 float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
                                 size_t index_capacity, size_t *vertex_count, size_t *index_count)
 {
-    return extract_mesh(ctx, L, EXTRACT_PATCH, patch, opts, vertices, normals, vertex_capacity, indices,
+    return extract_run(ctx, L, EXTRACT_PATCH, patch, opts, vertices, normals, vertex_capacity, indices,
                         index_capacity, vertex_count, index_count);
 }
 
@@ -466,7 +509,7 @@ rs_result rs_roam_extract_unit(rs_ctx *ctx, rs_roam *L, uint32_t unit, const rs_
                                float *vertices, float *normals, size_t vertex_capacity, uint32_t *indices,
                                size_t index_capacity, size_t *vertex_count, size_t *index_count)
 {
-    return extract_mesh(ctx, L, EXTRACT_UNIT, unit, opts, vertices, normals, vertex_capacity, indices,
+    return extract_run(ctx, L, EXTRACT_UNIT, unit, opts, vertices, normals, vertex_capacity, indices,
                         index_capacity, vertex_count, index_count);
 }
 

@@ -66,11 +66,13 @@ static int walk_edge(const rs_roam *L, const edge_line *e, uint32_t node, uint32
     return 0;
 }
 
-static int walk_patches(const rs_roam *L, const edge_line *e, unsigned char *mark, int find, uint32_t *fn,
-                        uint32_t *fp)
+/* walk_edge over the patches k0..k1 along the edge (clamped). */
+static int walk_patch_range(const rs_roam *L, const edge_line *e, uint32_t k0, uint32_t k1, unsigned char *mark,
+                            int find, uint32_t *fn, uint32_t *fp)
 {
     uint32_t np = e->vertical ? L->npy : L->npx;
-    for (uint32_t k = 0; k < np; k++) {
+    if (k1 >= np) k1 = np - 1;
+    for (uint32_t k = k0; k <= k1; k++) {
         uint32_t p = edge_patch(L, e, k);
         for (uint32_t r = 2 * p; r < 2 * p + 2; r++) {
             tri t;
@@ -79,6 +81,12 @@ static int walk_patches(const rs_roam *L, const edge_line *e, unsigned char *mar
         }
     }
     return 0;
+}
+
+static int walk_patches(const rs_roam *L, const edge_line *e, unsigned char *mark, int find, uint32_t *fn,
+                        uint32_t *fp)
+{
+    return walk_patch_range(L, e, 0, UINT32_MAX, mark, find, fn, fp);
 }
 
 static int edge_of(const rs_roam *L, int which, edge_line *e)
@@ -93,15 +101,22 @@ static int edge_of(const rs_roam *L, int which, edge_line *e)
 }
 
 /* Split L's leaves on edge e until every point marked in `want` is a
- * vertex; 0 when the pool ran short. */
-static int add_vertices(rs_roam *L, const edge_line *e, const unsigned char *want, unsigned char *have)
+ * vertex; 0 when the pool ran short, -1 when a progress poll said stop
+ * (the meshes valid, the seam open). The leaf holding point s lies in the
+ * patch of s (its neighbours are walked too, for a point on a patch
+ * corner); after its splits only those patches' marks are made again (a
+ * forced split further away only adds vertices: a later point already a
+ * vertex is found in no leaf). */
+static int add_vertices(rs_ctx *ctx, rs_roam *L, const edge_line *e, const unsigned char *want, unsigned char *have)
 {
     memset(have, 0, e->len + 1u);
     walk_patches(L, e, have, -1, NULL, NULL);
+    uint32_t done = 0;
     for (uint32_t s = 0; s <= e->len; s++) {
         if (!want[s] || have[s]) continue;
-        uint32_t fn, fp;
-        while (walk_patches(L, e, NULL, (int)s, &fn, &fp)) {
+        if ((++done & 63u) == 0 && rs__poll(ctx)) return -1;
+        uint32_t fn, fp, k = s / L->P, k0 = k ? k - 1 : 0;
+        while (walk_patch_range(L, e, k0, k + 1, NULL, (int)s, &fn, &fp)) {
             L->sp = 0;
             if (rs__roam_split_leaf(L, fn, fp) != 0) { L->sp = 0; return 0; }
             /* the split's new leaves are not queued for anything here */
@@ -109,15 +124,13 @@ static int add_vertices(rs_roam *L, const edge_line *e, const unsigned char *wan
                 if (L->stack[i] & TAG) L->nodes[L->stack[i] & ~TAG].rc &= ~QUEUED;
             L->sp = 0;
         }
-        memset(have, 0, e->len + 1u);
-        walk_patches(L, e, have, -1, NULL, NULL);
+        walk_patch_range(L, e, k0, k + 1, have, -1, NULL, NULL);
     }
     return 1;
 }
 
-rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b)
+static rs_result stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b)
 {
-    if (!ctx) return RS_ERR_INVALID_ARG;
     if (!a || !b || a == b) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_stitch: two landscapes needed");
     edge_line ea, eb;
     if (!edge_of(a, edge_a, &ea) || !edge_of(b, edge_b, &eb))
@@ -138,12 +151,30 @@ rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int ed
     memset(mb, 0, ea.len + 1u);
     walk_patches(a, &ea, ma, -1, NULL, NULL);
     walk_patches(b, &eb, mb, -1, NULL, NULL);
-    ok = add_vertices(b, &eb, ma, hb) && add_vertices(a, &ea, hb, ha);
-    int same = ok && memcmp(ha, hb, ea.len + 1u) == 0;
+    ok = add_vertices(ctx, b, &eb, ma, hb);
+    if (ok == 1) ok = add_vertices(ctx, a, &ea, hb, ha);
+    if (ok == 1) { /* the marks as a whole (the splits' marks were made again patch by patch) */
+        memset(ha, 0, ea.len + 1u);
+        memset(hb, 0, ea.len + 1u);
+        walk_patches(a, &ea, ha, -1, NULL, NULL);
+        walk_patches(b, &eb, hb, -1, NULL, NULL);
+    }
+    int same = ok == 1 && memcmp(ha, hb, ea.len + 1u) == 0;
     rs__free(ctx, buf);
+    if (ok < 0) return RS_ERR_CANCELLED; /* (the message: rs__progress_end) */
     if (!ok)
         return rs__fail(ctx, RS_ERR_POOL_EXHAUSTED, "rs_roam_stitch: the pool ran out (meshes valid, seam open)");
     if (!same) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roam_stitch: the edges do not share a subdivision");
     rs__ok(ctx);
     return RS_OK;
+}
+
+/* Progress: the context's callback (rs_ctx_set_progress), a poll every 64
+ * points split in; a stop leaves both meshes valid and the seam open. */
+rs_result rs_roam_stitch(rs_ctx *ctx, rs_roam *a, int edge_a, rs_roam *b, int edge_b)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
+    return rs__progress_end(ctx, &pg, stitch(ctx, a, edge_a, b, edge_b));
 }

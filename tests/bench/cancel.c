@@ -58,19 +58,24 @@ typedef struct bench {
     size_t text_len;
     char *pgm[2];        /* a 2049^2 P2 and an 8193^2 16-bit P5 DEM */
     size_t pgm_len[2];
+    rs_image atlas;      /* a 4096 x 2048 atlas image of one sprite */
+    float *mesh;         /* rs_roam_extract's buffers */
+    uint32_t *mesh_ix;
+    size_t mesh_v, mesh_i;
 } bench;
 
 enum {
     C_GRID, C_GRID_PLAIN, C_NETWORK, C_GPU, C_WINDOW, C_NORMALS, C_VT_CREATE, C_VT_TILE,
     C_ROAM_CREATE, C_ROAM_SETDEM, C_ROAM_ERROR, C_ROAM_COUNT, C_ROAM_FRAME, C_ROAM_UPDATE, C_PARSE_ROADS,
-    C_PARSE_P2, C_PARSE_P5, C_COUNT
+    C_PARSE_P2, C_PARSE_P5, C_ROAM_EXTRACT, C_ATLAS, C_COUNT
 };
 static const char *const call_name[C_COUNT] = {
     "rs_road_grid_build (classes)", "rs_road_grid_build (no styles)", "rs_network_build", "rs_gpu_scene_create",
     "rs_splat_window (whole image)", "rs_normal_window (whole image)", "rs_vt_create (with roads)",
     "rs_vt_make_tile (coarsest level)", "rs_roam_create", "rs_roam_set_dem", "rs_roam_refine_error (0.05 m)",
     "rs_roam_refine_count (10^6)", "rs_roam_frame (target 10^5)", "rs_roam_update (from the base mesh)",
-    "rs_roads_parse", "rs_dem_parse_pgm (P2)", "rs_dem_parse_pgm (P5)"
+    "rs_roads_parse", "rs_dem_parse_pgm (P2)", "rs_dem_parse_pgm (P5)", "rs_roam_extract (with normals)",
+    "rs_atlas_create"
 };
 
 static rs_roam_view view(void)
@@ -87,12 +92,29 @@ static rs_result prepare(bench *b, int c)
 {
     /* (a frame with a target starts from the last one's tolerance) */
     if ((c == C_ROAM_UPDATE || c == C_ROAM_FRAME) && b->roam) rs_roam_free(b->ctx, b->roam), b->roam = NULL;
-    if ((c == C_ROAM_SETDEM || c == C_ROAM_ERROR || c == C_ROAM_COUNT || c == C_ROAM_FRAME || c == C_ROAM_UPDATE) &&
+    if ((c == C_ROAM_SETDEM || c == C_ROAM_ERROR || c == C_ROAM_COUNT || c == C_ROAM_FRAME || c == C_ROAM_UPDATE ||
+         c == C_ROAM_EXTRACT) &&
         !b->roam) {
         rs_roam_options o;
         memset(&o, 0, sizeof o);
         o.pool_nodes = 1u << 21;
-        return rs_roam_create(b->ctx, b->fractal, &o, &b->roam);
+        rs_result r = rs_roam_create(b->ctx, b->fractal, &o, &b->roam);
+        if (r) return r;
+    }
+    if (c == C_ROAM_EXTRACT && !b->mesh) {
+        /* the mesh of refine_count(10^6), without the progress callback */
+        rs_ctx *quiet = NULL;
+        rs_result r = rs_ctx_create(NULL, NULL, &quiet);
+        if (!r) r = rs_roam_refine_count(quiet, b->roam, 1000000);
+        rs_ctx_free(quiet);
+        if (r && r != RS_ERR_POOL_EXHAUSTED) return r;
+        rs_roam_mesh_options mo;
+        memset(&mo, 0, sizeof mo);
+        mo.normals = 1;
+        rs_roam_mesh_bound(b->roam, &mo, &b->mesh_v, &b->mesh_i);
+        b->mesh = malloc(b->mesh_v * 8 * sizeof *b->mesh);
+        b->mesh_ix = malloc(b->mesh_i * sizeof *b->mesh_ix);
+        if (!b->mesh || !b->mesh_ix) return RS_ERR_NOMEM;
     }
     return RS_OK;
 }
@@ -166,6 +188,22 @@ static rs_result run(bench *b, int c)
         rs_roam_view v = view();
         v.pixel_error = 0.5;
         r = rs_roam_update(ctx, b->roam, &v, 0);
+        break;
+    }
+    case C_ROAM_EXTRACT: {
+        rs_roam_mesh_options mo;
+        memset(&mo, 0, sizeof mo);
+        mo.normals = 1;
+        size_t nv, ni;
+        r = rs_roam_extract(ctx, b->roam, &mo, b->mesh, b->mesh + 5 * b->mesh_v, b->mesh_v, b->mesh_ix, b->mesh_i, &nv,
+                            &ni);
+        break;
+    }
+    case C_ATLAS: {
+        static const char index[] = "big 0 0 4096 2048 2 1\n";
+        rs_atlas *a = NULL;
+        r = rs_atlas_create(ctx, &b->atlas, index, sizeof index - 1, &a);
+        rs_atlas_free(ctx, a);
         break;
     }
     case C_PARSE_ROADS: {
@@ -316,6 +354,12 @@ int main(int argc, char **argv)
     free(z);
 
     if (!(b.pgm[0] = pgm_file(2049, 0, &b.pgm_len[0])) || !(b.pgm[1] = pgm_file(8193, 1, &b.pgm_len[1]))) return 1;
+    b.atlas.width = 4096;
+    b.atlas.height = 2048;
+    uint8_t *apx = malloc((size_t)4096 * 2048 * 4);
+    if (!apx) return 1;
+    for (size_t i = 0; i < (size_t)4096 * 2048 * 4; i++) apx[i] = (uint8_t)(i * 2654435761u >> 24);
+    b.atlas.rgba = apx;
 
     FILE *md, *csv;
     if (tm_open_section(dir, "cancel", &md, &csv)) return 1;
@@ -328,7 +372,8 @@ int main(int argc, char **argv)
                 "texels; the window, normal map and virtual texture on its 8-texel splatter (10^4 roads, a "
                 "3192 x 2792 image); ROAM on the 1025^2 fractal (1 m cells, 400 m relief, pool 2^21 nodes); the "
                 "parsers on the city's roads as a road file and on PGM files of pseudo-random heights (a 2049^2 "
-                "P2, an 8193^2 16-bit P5 with maxval 4000, which is checked sample by sample). "
+                "P2, an 8193^2 16-bit P5 with maxval 4000, which is checked sample by sample); the extraction "
+                "(with normals) of the fractal's refine_count(10^6) mesh; an atlas of one 4096 x 2048 sprite. "
                 "Wall clock, one thread. Issue 30 target 4: cancel returns within 50 ms.\n\n"
                 "| call | input | ms | progress calls | longest gap ms | stop to return ms (max) |\n"
                 "|---|---|---|---|---|---|\n");
@@ -369,8 +414,10 @@ int main(int argc, char **argv)
             calls[nc++] = C_ROAM_COUNT;
             calls[nc++] = C_ROAM_FRAME;
             calls[nc++] = C_ROAM_UPDATE;
+            calls[nc++] = C_ROAM_EXTRACT;
             calls[nc++] = C_PARSE_P2;
             calls[nc++] = C_PARSE_P5;
+            calls[nc++] = C_ATLAS;
         }
         for (int k = 0; k < nc; k++) {
             int c = calls[k];
@@ -380,7 +427,9 @@ int main(int argc, char **argv)
             if (measure(&b, c, ci || c == C_VT_CREATE ? 3 : 7, &r)) return 1;
             const char *in = roam ? "fractal 1025^2" : c == C_WINDOW || c == C_NORMALS ? "city 10^4, 3192 x 2792 px"
                            : c == C_VT_CREATE || c == C_VT_TILE ? "city 10^4, 8 texels"
-                           : c == C_PARSE_P2 ? "PGM 2049^2, text" : c == C_PARSE_P5 ? "PGM 8193^2, 16-bit" : input;
+                           : c == C_PARSE_P2 ? "PGM 2049^2, text" : c == C_PARSE_P5 ? "PGM 8193^2, 16-bit"
+                           : c == C_ROAM_EXTRACT ? "fractal 1025^2, refine_count(10^6)"
+                           : c == C_ATLAS ? "one 4096 x 2048 sprite" : input;
             double m = r.gap_ms > r.cancel_ms ? r.gap_ms : r.cancel_ms;
             if (m > worst) worst = m, worst_call = call_name[c];
             fprintf(md, "| %s | %s | %.0f | %llu | %.1f | %.1f |\n", call_name[c], in, r.ms,
@@ -408,6 +457,9 @@ int main(int argc, char **argv)
     free(b.px);
     free(b.pgm[0]);
     free(b.pgm[1]);
+    free(apx);
+    free(b.mesh);
+    free(b.mesh_ix);
     rs_roam_free(ctx, b.roam);
     rs_dem_free(ctx, b.fractal);
     rs_ctx_free(ctx);
