@@ -9,6 +9,13 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+/* AVX-512 paths, chosen per call by the CPU (__builtin_cpu_supports); a
+ * build with -DRS_NO_AVX512 has only the portable ones (the test that
+ * compares the two: tests/cli_surface_paths_test.sh). */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
+#include <immintrin.h>
+#define RS_AVX512_DISPATCH 1
+#endif
 
 static uint32_t hash2(uint32_t x, uint32_t y)
 {
@@ -167,6 +174,7 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
 }
 #endif
 
+#ifdef RS_AVX512_DISPATCH
 /* The tint of a sample as a piecewise linear ramp of x (the height, or
  * its fraction of the range): x clamped to [H[0], H[n-1]] (NaN to H[0]),
  * stop i = the number of H[1..n-2] below x, u = (x - H[i]) / (H[i+1] -
@@ -215,10 +223,9 @@ static void tint_ramp_init(const rs_splatter *s, tint_ramp *t)
         for (int c = 0; c < 3; c++) t->CD[c][k] = t->C[c][k + 1] - t->C[c][k];
     }
 }
+#endif
 
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
-#include <immintrin.h>
-#define RS_AVX512_DISPATCH 1
+#ifdef RS_AVX512_DISPATCH
 #define RS_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2")))
 
 /* Eight floats at p as doubles. */
@@ -397,8 +404,8 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
             const float *src = (row ? r1 : r0) + base;
             for (int ch = 0; ch < 3; ch++) {
                 const float *pl = src + (size_t)ch * tplane;
-                __m256 A = _mm256_permutexvar_ps(vrel, _mm256_maskz_loadu_ps(ma, pl));
-                __m256 B = _mm256_permutexvar_ps(vrel, _mm256_maskz_loadu_ps(mb, pl + 1));
+                __m256 A = _mm256_maskz_loadu_ps(ma, pl), B = _mm256_maskz_loadu_ps(mb, pl + 1);
+                if (T > 1) A = _mm256_permutexvar_ps(vrel, A), B = _mm256_permutexvar_ps(vrel, B);
                 h[row][ch] = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(A), vgx), _mm512_mul_pd(_mm512_cvtps_pd(B), vfx));
                 if (!fused) _mm512_mask_storeu_pd(hx + (size_t)(3 * row + ch) * w + k, ms, h[row][ch]);
             }

@@ -164,6 +164,11 @@ int main(int argc, char **argv)
             char name[32];
             snprintf(name, sizeof name, "syn%d_%d", k, j);
             if (dump(name, dem, r, &(rs_splat_options){ .texels = 5 })) return 1;
+            /* small windows at 1 and 3 texels: rows narrower than a vector */
+            snprintf(name, sizeof name, "syn%d_%d_T1", k, j);
+            if (dump(name, dem, r, &(rs_splat_options){ .texels = 1 })) return 1;
+            snprintf(name, sizeof name, "syn%d_%d_T3", k, j);
+            if (dump(name, dem, r, &(rs_splat_options){ .texels = 3, .surface.tint = RS_TINT_RELATIVE })) return 1;
             rs_roads_free(ctx, r);
             rs_dem_free(ctx, dem);
         }
