@@ -9,6 +9,13 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+/* AVX-512 paths, chosen per call by the CPU (__builtin_cpu_supports); a
+ * build with -DRS_NO_AVX512 has only the portable ones (the test that
+ * compares the two: tests/cli_surface_paths_test.sh). */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
+#include <immintrin.h>
+#define RS_AVX512_DISPATCH 1
+#endif
 
 static uint32_t hash2(uint32_t x, uint32_t y)
 {
@@ -84,20 +91,20 @@ static double shade_trig(const rs_splatter *s, double dzdx, double dzdy)
 
 /* Terrain colour of one sample from its gradient: tint times the shade,
  * clamped to 255, as float. */
-static void terrain_rgb(const float tint[3], double shade, float *out)
+static void terrain_rgb(const float tint[3], double shade, float *out, size_t plane)
 {
     for (int ch = 0; ch < 3; ch++) {
         double v = tint[ch] * shade;
-        out[ch] = (float)(v > 255 ? 255 : v);
+        out[(size_t)ch * plane] = (float)(v > 255 ? 255 : v);
     }
 }
 
 /* The shade of one sample from its gradient, onto its tint in out (the
- * scalar path; terrain_row). */
-static void shade_one(const rs_splatter *s, const double light[2], double dzdx, double dzdy, float *out)
+ * scalar path; terrain_row). The three channels lie `plane` floats apart. */
+static void shade_one(const rs_splatter *s, const double light[2], double dzdx, double dzdy, float *out, size_t plane)
 {
     const double lx = light[0], ly = light[1], cz = s->cos_zen;
-    float tint[3] = { out[0], out[1], out[2] };
+    float tint[3] = { out[0], out[plane], out[2 * plane] };
     double g2 = dzdx * dzdx + dzdy * dzdy;
     double hs = (cz + lx * dzdx + ly * dzdy) / sqrt(1 + g2);
     if (!(hs > 0)) hs = 0;
@@ -108,7 +115,7 @@ static void shade_one(const rs_splatter *s, const double light[2], double dzdx, 
         v = v > 255 ? 255 : v;
         tie |= (float)(v * (1 - 1e-12)) != (float)(v * (1 + 1e-12));
     }
-    terrain_rgb(tint, tie ? shade_trig(s, dzdx, dzdy) : shade, out);
+    terrain_rgb(tint, tie ? shade_trig(s, dzdx, dzdy) : shade, out, plane);
 }
 
 #if defined(__SSE2__)
@@ -123,7 +130,7 @@ static __m128d load2f(const float *p)
  * doubles); a lane where the trigonometric formula must decide takes the
  * scalar path. */
 static void shade_pair(const rs_splatter *s, const double light[2], const float *zrow, size_t W, double eight_cs,
-                       float *out)
+                       float *out, size_t plane)
 {
     const double zs = s->dem->frame.z_scale;
     const double lx = light[0], ly = light[1], cz = s->cos_zen;
@@ -147,7 +154,7 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
     const __m128d lo = _mm_set1_pd(1 - 1e-12), hi = _mm_set1_pd(1 + 1e-12), cap = _mm_set1_pd(255);
     __m128 res[3];
     for (int ch = 0; ch < 3; ch++) {
-        __m128d v = _mm_mul_pd(_mm_set_pd(out[3 + ch], out[ch]), shade);
+        __m128d v = _mm_mul_pd(load2f(out + (size_t)ch * plane), shade);
         __m128d over = _mm_cmpgt_pd(v, cap);
         v = _mm_or_pd(_mm_and_pd(over, cap), _mm_andnot_pd(over, v));
         res[ch] = _mm_cvtpd_ps(v);
@@ -159,18 +166,293 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
     _mm_storeu_pd(dx, dzdx);
     _mm_storeu_pd(dy, dzdy);
     for (int l = 0; l < 2; l++) {
-        float *o = out + 3 * l;
-        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o);
+        float *o = out + l;
+        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o, plane);
         else
-            for (int ch = 0; ch < 3; ch++) o[ch] = r[ch][l];
+            for (int ch = 0; ch < 3; ch++) o[(size_t)ch * plane] = r[ch][l];
     }
+}
+#endif
+
+#ifdef RS_AVX512_DISPATCH
+/* The tint of a sample as a piecewise linear ramp of x (the height, or
+ * its fraction of the range): x clamped to [H[0], H[n-1]] (NaN to H[0]),
+ * stop i = the number of H[1..n-2] below x, u = (x - H[i]) / (H[i+1] -
+ * H[i]), colour C[i] + u (C[i+1] - C[i]): the operations of
+ * hypsometric() and absolute_tint(), as tables, for the vector paths. */
+typedef struct tint_ramp {
+    int n;                       /* stops, 2..8 (0: no table; the scalar path) */
+    int mode;                    /* x: 0 zc, 1 (zc - hmin) / (hmax - hmin), 2 (zc / zs - zmin) / zrange, 3 0.5 */
+    double H[8], HD[8], C[3][8], CD[3][8];
+} tint_ramp;
+
+static void tint_ramp_init(const rs_splatter *s, tint_ramp *t)
+{
+    const rs_surface_options *sf = &s->o.surface;
+    memset(t, 0, sizeof *t);
+    if (s->o.lighting.enable) return; /* the tint alone: the scalar path */
+    if (sf->tint == RS_TINT_ABSOLUTE) {
+        if (sf->ramp && sf->ramp_count > 8) return;
+        t->mode = 0;
+        if (!sf->ramp) {
+            t->n = 6;
+            for (int k = 0; k < 6; k++) {
+                t->H[k] = default_heights[k];
+                for (int c = 0; c < 3; c++) t->C[c][k] = palette[k][c + 1];
+            }
+        } else {
+            t->n = (int)sf->ramp_count;
+            for (int k = 0; k < t->n; k++) {
+                const rs_colour col = sf->ramp[k].colour;
+                t->H[k] = sf->ramp[k].height;
+                t->C[0][k] = col.r, t->C[1][k] = col.g, t->C[2][k] = col.b;
+            }
+        }
+    } else {
+        t->mode = sf->height_min != 0 || sf->height_max != 0 ? 1 : s->zrange > 0 ? 2 : 3;
+        t->n = 6;
+        for (int k = 0; k < 6; k++) {
+            t->H[k] = palette[k][0];
+            for (int c = 0; c < 3; c++) t->C[c][k] = palette[k][c + 1];
+        }
+    }
+    /* the differences as the scalar code forms them (for integer colours
+     * the int difference converted: the same double) */
+    for (int k = 0; k + 1 < t->n; k++) {
+        t->HD[k] = t->H[k + 1] - t->H[k];
+        for (int c = 0; c < 3; c++) t->CD[c][k] = t->C[c][k + 1] - t->C[c][k];
+    }
+}
+#endif
+
+#ifdef RS_AVX512_DISPATCH
+#define RS_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2")))
+
+/* Eight floats at p as doubles. */
+RS_AVX512 static inline __m512d load8f(const float *p)
+{
+    return _mm512_cvtps_pd(_mm256_loadu_ps(p));
+}
+
+/* The tints of n samples of row zrow into the planes of out (8 a step,
+ * the rest by the same lanes on a padded copy): tint_ramp's operations in
+ * every lane, the same doubles as the scalar path. */
+RS_AVX512 static void tint_row8(const rs_splatter *s, const tint_ramp *t, const float *zrow, uint32_t n, float *out,
+                                size_t plane)
+{
+    const rs_surface_options *sf = &s->o.surface;
+    const double zs = s->dem->frame.z_scale;
+    const __m512d vzs = _mm512_set1_pd(zs), lo = _mm512_set1_pd(t->H[0]), hi = _mm512_set1_pd(t->H[t->n - 1]);
+    const __m512d Hv = _mm512_loadu_pd(t->H), HDv = _mm512_loadu_pd(t->HD);
+    const __m512i one = _mm512_set1_epi64(1);
+    __m512d Cv[3], CDv[3];
+    for (int c = 0; c < 3; c++) Cv[c] = _mm512_loadu_pd(t->C[c]), CDv[c] = _mm512_loadu_pd(t->CD[c]);
+    const __m512d hmin = _mm512_set1_pd(sf->height_min), hrange = _mm512_set1_pd(sf->height_max - sf->height_min);
+    const __m512d zmin = _mm512_set1_pd(s->zmin), zrange = _mm512_set1_pd(s->zrange);
+    for (uint32_t j = 0; j < n; j += 8) {
+        float zb[8];
+        const float *zp = zrow + j;
+        uint32_t m = n - j < 8 ? n - j : 8;
+        if (m < 8) {
+            for (uint32_t l = 0; l < 8; l++) zb[l] = zrow[j + (l < m ? l : m - 1)];
+            zp = zb;
+        }
+        __m512d x = _mm512_mul_pd(load8f(zp), vzs);
+        if (t->mode == 1) x = _mm512_div_pd(_mm512_sub_pd(x, hmin), hrange);
+        else if (t->mode == 2) x = _mm512_div_pd(_mm512_sub_pd(_mm512_div_pd(x, vzs), zmin), zrange);
+        else if (t->mode == 3) x = _mm512_set1_pd(0.5);
+        x = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(x, lo, _CMP_GT_OQ), lo, x);
+        x = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(x, hi, _CMP_GT_OQ), x, hi);
+        __m512i idx = _mm512_setzero_si512();
+        for (int k = 1; k + 1 < t->n; k++)
+            idx = _mm512_mask_add_epi64(idx, _mm512_cmp_pd_mask(x, _mm512_set1_pd(t->H[k]), _CMP_GT_OQ), idx, one);
+        __m512d u = _mm512_div_pd(_mm512_sub_pd(x, _mm512_permutexvar_pd(idx, Hv)), _mm512_permutexvar_pd(idx, HDv));
+        for (int c = 0; c < 3; c++) {
+            __m512d v = _mm512_add_pd(_mm512_permutexvar_pd(idx, Cv[c]), _mm512_mul_pd(u, _mm512_permutexvar_pd(idx, CDv[c])));
+            __m256 f = _mm512_cvtpd_ps(v);
+            float *o = out + (size_t)c * plane + j;
+            if (m == 8) _mm256_storeu_ps(o, f);
+            else {
+                float fb[8];
+                _mm256_storeu_ps(fb, f);
+                memcpy(o, fb, m * sizeof *o);
+            }
+        }
+    }
+}
+
+/* shade_pair for the eight interior samples (i, j .. j + 7), without a
+ * division: the gradient times 1 / (8 cs), 1 / sqrt(1 + g^2) from the
+ * 14-bit estimate and two Newton steps, the shade's 0.7 / cos_zen as one
+ * factor. The shade then differs from the divided one by a few units in
+ * the last place (relative 1e-15), far inside the 1e-12 that decides a
+ * tie, so every colour is the same float: a lane whose float is not
+ * decided within 1e-12 takes the scalar path with the gradient divided as
+ * before (rs__dem_horn), as shade_pair's ties do. */
+RS_AVX512 static void shade8(const rs_splatter *s, const double light[2], const float *zrow, size_t W,
+                             double inv_8cs, float *out, size_t plane, uint32_t i, uint32_t j)
+{
+    const double lx = light[0], ly = light[1], cz = s->cos_zen;
+    const float *up = zrow - W, *mid = zrow, *dn = zrow + W;
+    const __m512d vzs = _mm512_set1_pd(s->dem->frame.z_scale), two = _mm512_set1_pd(2), v8 = _mm512_set1_pd(inv_8cs);
+    __m512d a = _mm512_mul_pd(load8f(up - 1), vzs), b = _mm512_mul_pd(load8f(up), vzs),
+            c = _mm512_mul_pd(load8f(up + 1), vzs);
+    __m512d d = _mm512_mul_pd(load8f(mid - 1), vzs), f = _mm512_mul_pd(load8f(mid + 1), vzs);
+    __m512d g = _mm512_mul_pd(load8f(dn - 1), vzs), h = _mm512_mul_pd(load8f(dn), vzs),
+            k = _mm512_mul_pd(load8f(dn + 1), vzs);
+    __m512d dzdx = _mm512_mul_pd(_mm512_sub_pd(_mm512_add_pd(_mm512_add_pd(c, _mm512_mul_pd(two, f)), k),
+                                               _mm512_add_pd(_mm512_add_pd(a, _mm512_mul_pd(two, d)), g)), v8);
+    __m512d dzdy = _mm512_mul_pd(_mm512_sub_pd(_mm512_add_pd(_mm512_add_pd(g, _mm512_mul_pd(two, h)), k),
+                                               _mm512_add_pd(_mm512_add_pd(a, _mm512_mul_pd(two, b)), c)), v8);
+    __m512d g2 = _mm512_add_pd(_mm512_mul_pd(dzdx, dzdx), _mm512_mul_pd(dzdy, dzdy));
+    __m512d x = _mm512_add_pd(_mm512_set1_pd(1), g2);
+    /* y ~ 1/sqrt(x): 2^-14, then y (1.5 - x/2 y^2) twice (2^-28, 2^-52 and rounding) */
+    const __m512d half = _mm512_set1_pd(0.5), th = _mm512_set1_pd(1.5);
+    __m512d xh = _mm512_mul_pd(half, x), y = _mm512_rsqrt14_pd(x);
+    y = _mm512_mul_pd(y, _mm512_sub_pd(th, _mm512_mul_pd(xh, _mm512_mul_pd(y, y))));
+    y = _mm512_mul_pd(y, _mm512_sub_pd(th, _mm512_mul_pd(xh, _mm512_mul_pd(y, y))));
+    __m512d hs = _mm512_mul_pd(_mm512_add_pd(_mm512_add_pd(_mm512_set1_pd(cz), _mm512_mul_pd(_mm512_set1_pd(lx), dzdx)),
+                                             _mm512_mul_pd(_mm512_set1_pd(ly), dzdy)), y);
+    hs = _mm512_maskz_mov_pd(_mm512_cmp_pd_mask(hs, _mm512_setzero_pd(), _CMP_GT_OQ), hs);
+    __m512d shade = _mm512_add_pd(_mm512_set1_pd(0.3), _mm512_mul_pd(_mm512_set1_pd(0.7 / cz), hs));
+    /* huge gradients (g2 >= 1e200, where x overflows the estimate's range)
+     * and NaN take the scalar path */
+    unsigned tiebits = _mm512_cmp_pd_mask(g2, _mm512_set1_pd(1e200), _CMP_NLT_UQ);
+    const __m512d lo = _mm512_set1_pd(1 - 1e-12), hi = _mm512_set1_pd(1 + 1e-12), cap = _mm512_set1_pd(255);
+    __m256 res[3];
+    for (int ch = 0; ch < 3; ch++) {
+        __m512d v = _mm512_mul_pd(load8f(out + (size_t)ch * plane), shade);
+        v = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(v, cap, _CMP_GT_OQ), v, cap);
+        res[ch] = _mm512_cvtpd_ps(v);
+        tiebits |= _mm256_cmp_ps_mask(_mm512_cvtpd_ps(_mm512_mul_pd(v, lo)), _mm512_cvtpd_ps(_mm512_mul_pd(v, hi)),
+                                      _CMP_NEQ_UQ);
+    }
+    if (!tiebits) {
+        for (int ch = 0; ch < 3; ch++) _mm256_storeu_ps(out + (size_t)ch * plane, res[ch]);
+        return;
+    }
+    float r[3][8];
+    for (int ch = 0; ch < 3; ch++) _mm256_storeu_ps(r[ch], res[ch]);
+    const rs_dem *dm = s->dem;
+    for (int l = 0; l < 8; l++) {
+        float *o = out + l;
+        if (tiebits >> l & 1) {
+            double dx, dy;
+            rs__dem_horn(s->z, dm->width, dm->height, dm->frame.cell_size, dm->frame.z_scale, i, j + (uint32_t)l, &dx,
+                         &dy);
+            shade_one(s, light, dx, dy, o, plane);
+        } else
+            for (int ch = 0; ch < 3; ch++) o[(size_t)ch * plane] = r[ch][l];
+    }
+}
+
+/* The interior shades of row i from column j on, 8 a step; the column reached. */
+RS_AVX512 static uint32_t shade_row8(const rs_splatter *s, const double light[2], uint32_t i, uint32_t j,
+                                     uint32_t c0, uint32_t n, float *rgb, size_t plane)
+{
+    const rs_dem *dm = s->dem;
+    const uint32_t W = dm->width;
+    const double inv_8cs = 1 / (8 * dm->frame.cell_size);
+    for (; j + 8 <= c0 + n && j + 8 < W; j += 8)
+        shade8(s, light, s->z + (size_t)i * W + j, W, inv_8cs, rgb + (j - c0), plane, i, j);
+    return j;
+}
+#endif
+
+#ifdef RS_AVX512_DISPATCH
+/* rs__surface's bilinear terrain colours of piece p (every row) with
+ * eight columns a register: per column the two horizontal interpolants
+ * of the sample rows r0 and r1, then each pixel row's vertical step; the
+ * operations and their order of the plain loops there, so the same
+ * floats. A piece of one or two rows keeps the interpolants in registers;
+ * taller ones store them (p->hx) and then go row by row, so that the
+ * colour rows are written in order. T <= 64 (the lanes' columns and
+ * weights from a table per offset in the cell). */
+RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const float *r0, const float *r1,
+                                        uint32_t wc0, size_t tplane, const double *fxt)
+{
+    const uint32_t w = p->w;
+    /* for a group starting at offset o in its cell: lane l's column after
+     * the group's first (o + l) / T and its weight fxt[(o + l) % T]; the
+     * next group's offset and column step */
+    int32_t rel[64][8];
+    double fxg[64][8];
+    uint32_t next[64], step[64];
+    for (uint32_t o = 0; o < T; o++) {
+        for (uint32_t l = 0; l < 8; l++) {
+            rel[o][l] = (int32_t)((o + l) / T);
+            fxg[o][l] = fxt[(o + l) % T];
+        }
+        next[o] = (o + 8) % T;
+        step[o] = (o + 8) / T;
+    }
+    const int fused = p->rows <= 2;
+    double *hx = p->hx;
+    const __m512d one = _mm512_set1_pd(1);
+    uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
+    for (uint32_t k = 0; k < w; k += 8) {
+        const uint32_t m = w - k < 8 ? w - k : 8;
+        const size_t base = ccol - wc0;
+        const uint32_t na = tplane - base >= 8 ? 8 : (uint32_t)(tplane - base);
+        const uint32_t nb = tplane - base - 1 >= 8 ? 8 : (uint32_t)(tplane - base - 1);
+        const __mmask8 ma = (__mmask8)((1u << na) - 1), mb = (__mmask8)((1u << nb) - 1);
+        const __mmask8 ms = (__mmask8)((1u << m) - 1);
+        const __m256i vrel = _mm256_loadu_si256((const __m256i *)(const void *)rel[off]);
+        const __m512d vfx = _mm512_loadu_pd(fxg[off]), vgx = _mm512_sub_pd(one, vfx);
+        __m512d h[2][3];
+        for (int row = 0; row < 2; row++) {
+            const float *src = (row ? r1 : r0) + base;
+            for (int ch = 0; ch < 3; ch++) {
+                const float *pl = src + (size_t)ch * tplane;
+                __m256 A = _mm256_maskz_loadu_ps(ma, pl), B = _mm256_maskz_loadu_ps(mb, pl + 1);
+                if (T > 1) A = _mm256_permutexvar_ps(vrel, A), B = _mm256_permutexvar_ps(vrel, B);
+                h[row][ch] = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(A), vgx), _mm512_mul_pd(_mm512_cvtps_pd(B), vfx));
+                if (!fused) _mm512_mask_storeu_pd(hx + (size_t)(3 * row + ch) * w + k, ms, h[row][ch]);
+            }
+        }
+        if (fused)
+            for (uint32_t r = 0; r < p->rows; r++) {
+                uint32_t ty = p->y0 + r - p->crow * T;
+                double fy = (ty + 0.5) / T, gy = 1 - fy;
+                const __m512d vg = _mm512_set1_pd(gy), vf = _mm512_set1_pd(fy);
+                for (int ch = 0; ch < 3; ch++) {
+                    __m256 v = _mm512_cvtpd_ps(_mm512_add_pd(_mm512_mul_pd(h[0][ch], vg), _mm512_mul_pd(h[1][ch], vf)));
+                    _mm256_mask_storeu_ps(p->tc + (size_t)r * w * 3 + (size_t)ch * w + k, ms, v);
+                }
+            }
+        ccol += step[off];
+        off = next[off];
+    }
+    if (fused) return;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        uint32_t ty = p->y0 + r - p->crow * T;
+        double fy = (ty + 0.5) / T, gy = 1 - fy;
+        const __m512d vg = _mm512_set1_pd(gy), vf = _mm512_set1_pd(fy);
+        for (int ch = 0; ch < 3; ch++) {
+            const double *h0 = hx + (size_t)ch * w, *h1 = hx + (size_t)(3 + ch) * w;
+            float *tc = p->tc + (size_t)r * w * 3 + (size_t)ch * w;
+            for (uint32_t k = 0; k < w; k += 8) {
+                const uint32_t m = w - k < 8 ? w - k : 8;
+                const __mmask8 ms = (__mmask8)((1u << m) - 1);
+                __m512d v = _mm512_add_pd(_mm512_mul_pd(_mm512_maskz_loadu_pd(ms, h0 + k), vg),
+                                          _mm512_mul_pd(_mm512_maskz_loadu_pd(ms, h1 + k), vf));
+                _mm256_mask_storeu_ps(tc + k, ms, _mm512_cvtpd_ps(v));
+            }
+        }
+    }
+}
+
+static int avx512_ok(void)
+{
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+           __builtin_cpu_supports("avx512vl");
 }
 #endif
 
 /* Terrain colour of DEM sample row i, columns [c0, c0 + n): tint times a
  * hillshade by Horn's gradient, light from azimuth 315, altitude 45
  * (gdaldem's defaults and formula), normalised so flat ground keeps its
- * tint.
+ * tint. Planar: R of the n columns, then G, then B.
  *
  * Without trigonometry: with g = |grad|, cos(atan g) = 1/sqrt(1+g^2),
  * sin(atan g) = g/sqrt(1+g^2), and the aspect's unit vector is
@@ -182,10 +464,12 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
  * so the colours are the same floats as gdaldem's formula gives
  * (tests/tools/splat_identity.sh).
  *
- * Two passes: the tints of the row into rgb, then the shades, two interior
- * samples per register (SSE2) and the border ones one by one. The five
- * divisions and the square root of a sample were ~40 ns per sample in one
- * dependent chain (docs/speed.md). */
+ * Two passes: the tints of the row, then the shades, eight interior
+ * samples per register (AVX-512, where the CPU has it), else two (SSE2),
+ * and the border ones one by one. Divisions and square roots are
+ * correctly rounded in every lane width, so each path gives the same
+ * floats. The five divisions and the square root of a sample were ~40
+ * ns per sample in one dependent chain (docs/speed.md). */
 static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t n, float *rgb)
 {
     const rs_dem *d = s->dem;
@@ -193,18 +477,23 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
     const uint32_t W = d->width, H = d->height;
     const float *z = s->z;
     const rs_surface_options *sf = &s->o.surface;
+    const size_t plane = n;
+#ifdef RS_AVX512_DISPATCH
+    const int wide = avx512_ok();
+    tint_ramp tr;
+    if (wide) tint_ramp_init(s, &tr);
+    if (wide && tr.n) tint_row8(s, &tr, z + (size_t)i * W + c0, n, rgb, plane);
+    else
+#endif
     for (uint32_t j = c0; j < c0 + n; j++) {
         double zc = z[(size_t)i * W + j] * zs;
-        float *out = rgb + 3 * (size_t)(j - c0);
-        if (sf->tint == RS_TINT_ABSOLUTE) absolute_tint(sf, zc, out);
+        float tint[3];
+        if (sf->tint == RS_TINT_ABSOLUTE) absolute_tint(sf, zc, tint);
         else if (sf->height_min != 0 || sf->height_max != 0)
-            hypsometric((zc - sf->height_min) / (sf->height_max - sf->height_min), out);
-        else hypsometric(s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5, out);
+            hypsometric((zc - sf->height_min) / (sf->height_max - sf->height_min), tint);
+        else hypsometric(s->zrange > 0 ? (zc / zs - s->zmin) / s->zrange : 0.5, tint);
         /* lit output: the relief is shaded once, by the lighting */
-        if (s->o.lighting.enable) {
-            float tint[3] = { out[0], out[1], out[2] };
-            terrain_rgb(tint, 1.0, out);
-        }
+        terrain_rgb(tint, 1.0, rgb + (j - c0), plane);
     }
     if (s->o.lighting.enable) return;
     /* the light's horizontal components, once per row */
@@ -212,22 +501,32 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
     uint32_t j = c0;
 #if defined(__SSE2__)
     const double eight_cs = 8 * d->frame.cell_size;
-    if (i >= 1 && i + 1 < H)
+    if (i >= 1 && i + 1 < H) {
+        if (j < 1 && j < c0 + n) {
+            double dzdx, dzdy;
+            rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
+            shade_one(s, light, dzdx, dzdy, rgb + (j - c0), plane);
+            j++;
+        }
+#ifdef RS_AVX512_DISPATCH
+        if (wide) j = shade_row8(s, light, i, j, c0, n, rgb, plane);
+#endif
         for (; j + 2 <= c0 + n; j++) {
             if (j >= 1 && j + 2 < W) {
-                shade_pair(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + 3 * (size_t)(j - c0));
+                shade_pair(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + (j - c0), plane);
                 j++;
                 continue;
             }
             double dzdx, dzdy;
             rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
-            shade_one(s, light, dzdx, dzdy, rgb + 3 * (size_t)(j - c0));
+            shade_one(s, light, dzdx, dzdy, rgb + (j - c0), plane);
         }
+    }
 #endif
     for (; j < c0 + n; j++) {
         double dzdx, dzdy;
         rs__dem_horn(z, W, H, d->frame.cell_size, zs, i, j, &dzdx, &dzdy);
-        shade_one(s, light, dzdx, dzdy, rgb + 3 * (size_t)(j - c0));
+        shade_one(s, light, dzdx, dzdy, rgb + (j - c0), plane);
     }
 }
 
@@ -400,6 +699,7 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         const float *r0 = NULL, *r1 = NULL;
         terrain_rows(s, p->tcache, p->crow, &r0, &r1);
         const uint32_t wc0 = p->tcache->c0;
+        const size_t tplane = p->tcache->ncol;
         double *hx = p->hx;
         const size_t w = p->w;
         /* the column and its offset in the cell counted along (no integer
@@ -408,14 +708,20 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         double fxt[64];
         const uint32_t nt = T < 64 ? T : 64;
         for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
+#ifdef RS_AVX512_DISPATCH
+        if (T <= 64 && avx512_ok()) {
+            terrain_bilinear8(p, T, r0, r1, wc0, tplane, fxt);
+            goto road;
+        }
+#endif
         uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
         for (uint32_t k = 0; k < p->w; k++, off++) {
             if (off == T) { off = 0; ccol++; }
             double fx = off < nt ? fxt[off] : (off + 0.5) / T;
-            const float *a = r0 + 3 * (size_t)(ccol - wc0), *c = r1 + 3 * (size_t)(ccol - wc0);
+            const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
             for (int ch = 0; ch < 3; ch++) {
-                hx[ch * w + k] = a[ch] * (1 - fx) + a[ch + 3] * fx;
-                hx[(3 + ch) * w + k] = c[ch] * (1 - fx) + c[ch + 3] * fx;
+                hx[ch * w + k] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
+                hx[(3 + ch) * w + k] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
             }
         }
         for (uint32_t r = 0; r < p->rows; r++) {
@@ -436,6 +742,9 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
             }
         }
     }
+#ifdef RS_AVX512_DISPATCH
+road:
+#endif
     if (!need_road) return;
     if (f->road_texture) {
         texture_piece(s, p, f->road_texture, 1, p->sc);

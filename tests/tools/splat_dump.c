@@ -60,9 +60,17 @@ static int groups(const char *scene, const rs_dem *dem, const rs_roads *roads, u
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = T;
-    for (int v = 0; v < 12; v++) {
+    static const rs_colour_stop ramp3[3] = { { -50, { 10, 60, 20, 255 } }, { 40, { 200, 180, 90, 255 } },
+                                             { 300, { 250, 250, 250, 255 } } };
+    rs_colour_stop ramp12[12];
+    for (int k = 0; k < 12; k++) {
+        ramp12[k].height = -20 + 17.5 * k + (k & 1) * 0.37;
+        ramp12[k].colour = (rs_colour){ (uint8_t)(20 * k + 7), (uint8_t)(250 - 19 * k), (uint8_t)(90 + 13 * k), 255 };
+    }
+    for (int v = 0; v < 18; v++) {
         static const char *what[] = { "default", "tex_terrain", "tex_road", "tex_both", "jitter", "dilate",
-                                      "hard", "analytic", "analytic_tex", "texscale", "T3", "T1" };
+                                      "hard", "analytic", "analytic_tex", "texscale", "T3", "T1",
+                                      "relative", "relative_range", "ramp3", "ramp12", "lit", "T2_ramp8" };
         rs_splat_options q = o;
         if (v == 1 || v == 3 || v == 8) q.surface.terrain_texture = &tex_a;
         if (v == 2 || v == 3 || v == 8) q.surface.road_texture = &tex_b;
@@ -73,6 +81,13 @@ static int groups(const char *scene, const rs_dem *dem, const rs_roads *roads, u
         if (v == 9) { q.surface.terrain_texture = &tex_b; q.surface.road_texture = &tex_a; q.surface.texture_scale = 3.7; }
         if (v == 10) q.texels = 3;
         if (v == 11) q.texels = 1;
+        /* the terrain tints (each a path of lib/splat/surface.c) */
+        if (v == 12) q.surface.tint = RS_TINT_RELATIVE;
+        if (v == 13) { q.surface.tint = RS_TINT_RELATIVE; q.surface.height_min = -3; q.surface.height_max = 41.5; }
+        if (v == 14) { q.surface.ramp = ramp3; q.surface.ramp_count = 3; q.texels = 1; }
+        if (v == 15) { q.surface.ramp = ramp12; q.surface.ramp_count = 12; }
+        if (v == 16) q.lighting.enable = 1;
+        if (v == 17) { q.surface.ramp = ramp12; q.surface.ramp_count = 8; q.texels = 2; }
         snprintf(name, sizeof name, "%s_%s", scene, what[v]);
         if (dump(name, dem, roads, &q)) return -1;
     }
@@ -149,6 +164,11 @@ int main(int argc, char **argv)
             char name[32];
             snprintf(name, sizeof name, "syn%d_%d", k, j);
             if (dump(name, dem, r, &(rs_splat_options){ .texels = 5 })) return 1;
+            /* small windows at 1 and 3 texels: rows narrower than a vector */
+            snprintf(name, sizeof name, "syn%d_%d_T1", k, j);
+            if (dump(name, dem, r, &(rs_splat_options){ .texels = 1 })) return 1;
+            snprintf(name, sizeof name, "syn%d_%d_T3", k, j);
+            if (dump(name, dem, r, &(rs_splat_options){ .texels = 3, .surface.tint = RS_TINT_RELATIVE })) return 1;
             rs_roads_free(ctx, r);
             rs_dem_free(ctx, dem);
         }

@@ -1,0 +1,33 @@
+#!/bin/sh
+# The AVX-512 paths of lib/splat/surface.c (tints, shades, bilinear step)
+# give the bytes of the portable ones: build/tools/splat_dump (the library
+# as built) against splat_dump_portable (surface.c built with
+# -DRS_NO_AVX512), every output of tests/tools/splat_dump.c (city, nodata,
+# synthetic and fractal DEMs at 1 to 5 texels, every option group and tint
+# mode). Usage: cli_surface_paths_test.sh BUILD/roadsplat (as tests/run.sh
+# calls the CLI tests; the tools are found beside it).
+B=$(dirname "$1")
+pass=0 fail=0
+for t in splat_dump splat_dump_portable; do
+    [ -x "$B/tools/$t" ] || { echo "missing $B/tools/$t (make test builds it)"; echo "0 passed, 1 failed"; exit 1; }
+done
+if ! grep -qw avx512f /proc/cpuinfo 2>/dev/null || ! grep -qw avx512dq /proc/cpuinfo || ! grep -qw avx512vl /proc/cpuinfo; then
+    echo "SKIP: this CPU has no AVX-512 (F, DQ, VL): both builds take the portable path"
+fi
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+mkdir -p "$W/a" "$W/b"
+"$B/tools/splat_dump" "$W/a" >/dev/null || { echo "splat_dump failed"; fail=$((fail + 1)); }
+"$B/tools/splat_dump_portable" "$W/b" >/dev/null || { echo "splat_dump_portable failed"; fail=$((fail + 1)); }
+n=0
+for f in "$W"/a/*; do
+    g="$W/b/$(basename "$f")"
+    n=$((n + 1))
+    if cmp -s "$f" "$g"; then pass=$((pass + 1)); else
+        echo "differs: $(basename "$f") ($(cmp -l "$f" "$g" 2>/dev/null | wc -l) bytes)"
+        fail=$((fail + 1))
+    fi
+done
+[ "$n" -ge 100 ] || { echo "only $n outputs compared"; fail=$((fail + 1)); }
+echo "$pass passed, $fail failed"
+[ "$fail" = 0 ]
