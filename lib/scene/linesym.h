@@ -80,6 +80,15 @@ size_t rs__linesym_scratch_len(uint32_t w);
 void rs__linesym_paint(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, float *rgb,
                        size_t row_stride, double *scratch);
 
+/* For edits (lib/scene/grid_edit.c): the pieces the build made (after
+ * every cut), and piece k's fingerprint, of everything its paint reads
+ * (its frame, half-planes, band colour and dashes), with a region holding
+ * every pixel it paints: reg = (ax, ay, bx, by, r), the capsule of that
+ * segment (a slab), or r < 0 and the box [ax, bx] x [ay, by] (a wedge);
+ * local metres. An empty piece gives reg[4] = -1 and ax > bx. */
+size_t rs__linesym_piece_count(const rs__linesym *L);
+uint64_t rs__linesym_piece_fp(const rs__linesym *L, size_t k, double reg[5]);
+
 /* Tests: coverage of band number `band` (global index into the build's
  * bands array) alone, in [0,1], into out[y*stride + x]. */
 void rs__linesym_coverage(const rs__linesym *L, uint32_t band, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,

@@ -1,0 +1,817 @@
+/* Edits with dirty rectangles (issue 30; docs/embedding.md "Edits and dirty
+ * rectangles"): rs_road_grid_update, rs_road_grid_dirty,
+ * rs_road_grid_rect_has_roads.
+ *
+ * Every grid keeps its pieces (lib/scene/grid_edit.h): each road cut into
+ * chunks of about 10 m, a disc at each of its vertices where the square
+ * ends of its surface (what cuts other roads' lines) reach past its
+ * chunks, each line cut and each marking. A piece has a fingerprint of
+ * everything the build made that decides how it is drawn (the road's width,
+ * attributes and point attributes, its resolved style and lines, the
+ * stroke's arc length and direction where dashes or surface images read
+ * them, the chunk's points, at a road end the record it continues into
+ * and the T it ends at; a cut's or marking's own geometry) and a region
+ * holding every pixel its paint reaches. A pixel's colour is made from the
+ * pieces whose regions hold it, so the pixels an edit can change lie in
+ * the regions of the pieces found in only one of the two grids: the
+ * fingerprints are compared as multisets (by content, never by road index,
+ * so a removal's renumbering changes nothing), and the regions of the
+ * unmatched ones are rasterised row by row into rectangles. */
+#include "grid_edit.h"
+#include "roadgrid.h"
+#include "styling.h"
+#include "linesym.h"
+#include "markings.h"
+#include "network.h"
+#include "roadfield.h"
+#include "lanes.h"
+#include "road_local.h"
+#include "dem.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CHUNK_M 10.0   /* metres of road per chunk ... */
+#define CHUNK_PX 16.0  /* ... and at least this many pixels */
+#define NO_LINK UINT32_MAX
+#define MAX_BIN_ENTRIES (1u << 26)
+#define MAX_BINS (1u << 22)
+
+/* ---- fingerprints ---------------------------------------------------------- */
+
+#define mix rs__fp_mix
+#define mixd rs__fp_mixd
+
+static uint64_t mixs(uint64_t h, const char *s)
+{
+    uint64_t f = 1469598103934665603ull;
+    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
+    return mix(h, f);
+}
+
+/* A road as a neighbour sees it: width, attributes, first and last points. */
+static uint64_t road_sig(const rs_roads *roads, size_t q)
+{
+    const double *xy;
+    size_t n = 0;
+    double w = 0;
+    rs_roads_get(roads, q, NULL, &w, &xy, &n);
+    uint64_t h = mixd(0x5167, w);
+    size_t na = rs_roads_attr_count(roads, q);
+    for (size_t k = 0; k < na; k++) {
+        const char *key, *val;
+        rs_roads_attr_at(roads, q, k, &key, &val);
+        h = mixs(mixs(h, key), val);
+    }
+    if (n >= 2) {
+        const size_t at[4] = { 0, 1, n - 2, n - 1 };
+        for (int k = 0; k < 4; k++) h = mixd(mixd(h, xy[2 * at[k]]), xy[2 * at[k] + 1]);
+    }
+    return h;
+}
+
+/* What a road's surface draws everywhere along it (not its points, not its
+ * lines and markings, which are pieces of their own, nor its attributes,
+ * which act through what they resolve to): width, resolved surface, casing,
+ * priority, surface image and, for an image, the stroke's arc length and
+ * direction.
+ * Also its paint reach from the centre line and whether s matters. */
+static uint64_t road_hash(const rs_roads *roads, size_t i, const rs__styling *st, const rs_network *net,
+                          double *reach, int *s_matters)
+{
+    double w = 0;
+    rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+    uint64_t h = mixd(0x5a4f, w);
+    double hw = 0.5 * w, r = hw;
+    int image = 0;
+    if (st && i < st->nroads) {
+        h = mix(h, st->surface ? st->surface[i] : 0);
+        if (st->colour)
+            for (int c = 0; c < 16; c++) h = mixd(h, (double)st->colour[16 * i + (size_t)c]);
+        if (st->half_width) h = mixd(h, st->half_width[i]);
+        if (st->casing_width) {
+            h = mixd(h, st->casing_width[i]);
+            if (hw + st->casing_width[i] > r) r = hw + st->casing_width[i];
+        }
+        if (st->prio) h = mix(h, (uint64_t)(int64_t)st->prio[i]);
+        if (st->img_of) {
+            image = st->img_of[i] >= 0;
+            h = mix(h, (uint64_t)(int64_t)st->img_of[i]);
+            h = mixd(mixd(h, st->img_len[i]), st->img_f[i]);
+            h = mix(h, st->img_lev[i]);
+        }
+        if (st->img_s0) h = mixd(h, st->img_s0[i]);
+        if (st->img_rev) h = mix(h, st->img_rev[i]);
+    }
+    *s_matters = image;
+    if (image && net && i < net->nroads) h = mix(mixd(h, net->s_off[i]), net->rev[i]);
+    *reach = r;
+    return h;
+}
+
+/* ---- the pieces ------------------------------------------------------------ */
+
+typedef struct builder {
+    rs_ctx *ctx;
+    rs__grid_edit *e;
+    double pix, chunk, devmax;
+    double mx0, my0, mx1, my1; /* the map, grown by what any pad can add */
+} builder;
+
+static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, double by, double r)
+{
+    rs__grid_edit *e = b->e;
+    if (e->n == e->cap) {
+        size_t nc = e->cap ? 2 * e->cap : 256, bytes;
+        if (nc < e->cap || !rs__mul_size(nc, sizeof *e->it, &bytes))
+            return rs__fail(b->ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
+        rs__edit_item *it = rs__realloc(b->ctx, e->it, bytes);
+        if (!it) return rs__fail(b->ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
+        e->it = it;
+        e->cap = nc;
+    }
+    rs__edit_item *it = &e->it[e->n++];
+    it->h = h;
+    it->ax = ax, it->ay = ay, it->bx = bx, it->by = by, it->r = r;
+    return RS_OK;
+}
+
+/* Per road end: what it continues into and the T it ends at. */
+typedef struct road_ends {
+    uint64_t h[2];
+    double reach[2]; /* the end's paint reach */
+    double tee[2];   /* a trimmed end at a T: how far past the end point the through road's far
+                        edge lies across it (0: no T), and the through road's normal */
+    double tnx[2], tny[2];
+} road_ends;
+
+static void end_info(const rs_roads *roads, size_t i, const rs_network *net, const rs__tee_end *tees,
+                     const size_t *tee_of, double reach, road_ends *E)
+{
+    memset(E, 0, sizeof *E);
+    for (int e = 0; e < 2; e++) {
+        uint64_t h = mix(0xe0d, (uint64_t)e);
+        double r = reach, far = 0;
+        if (net && i < net->nroads) {
+            uint32_t l = net->link[2 * i + (size_t)e];
+            h = l == NO_LINK ? mix(h, 0xdead) : mix(mix(h, road_sig(roads, l / 2)), l & 1);
+        }
+        if (tee_of && tee_of[2 * i + (size_t)e] != SIZE_MAX) {
+            const rs__tee_end *t = &tees[tee_of[2 * i + (size_t)e]];
+            h = mixd(mixd(mixd(mixd(h, t->nx), t->ny), t->half_width), t->grow);
+            h = mix(h, road_sig(roads, t->through));
+            far = t->half_width + t->grow + 2 * RS__NETWORK_TOL;
+            E->tnx[e] = t->nx, E->tny[e] = t->ny;
+        }
+        E->h[e] = h;
+        E->reach[e] = r;
+        E->tee[e] = far;
+    }
+}
+
+/* Cut segment (ax, ay)-(bx, by) to the box: fractions [*t0, *t1]; 0 when
+ * it misses. */
+static int clip_box(const builder *b, double ax, double ay, double bx, double by, double grow, double *t0, double *t1)
+{
+    double p[4] = { -(bx - ax), bx - ax, -(by - ay), by - ay };
+    double q[4] = { ax - (b->mx0 - grow), (b->mx1 + grow) - ax, ay - (b->my0 - grow), (b->my1 + grow) - ay };
+    double lo = 0, hi = 1;
+    for (int k = 0; k < 4; k++) {
+        if (p[k] == 0) {
+            if (q[k] < 0) return 0;
+            continue;
+        }
+        double t = q[k] / p[k];
+        if (p[k] < 0) {
+            if (t > lo) lo = t;
+        } else if (t < hi) hi = t;
+    }
+    *t0 = lo, *t1 = hi;
+    return lo <= hi;
+}
+
+/* The chunk of points k0..k1 (arc: its length along the road). */
+static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k1, double arc, uint64_t rh,
+                       double reach, int s_matters, const road_ends *E)
+{
+    const double *x = rl->x, *y = rl->y, *s = rl->s;
+    double ch = hypot(x[k1] - x[k0], y[k1] - y[k0]), dev = 0.5 * sqrt(fmax(0, arc * arc - ch * ch));
+    uint64_t h = mix(rh, 0xc4c);
+    for (size_t j = k0; j <= k1; j++) {
+        h = mixd(mixd(h, x[j]), y[j]);
+        if (s_matters) h = mixd(h, s[j]);
+    }
+    double rr = reach;
+    if (k0 == 0) h = mix(h, E->h[0]), rr = fmax(rr, E->reach[0]);
+    if (k1 + 1 == rl->n) h = mix(h, E->h[1]), rr = fmax(rr, E->reach[1]);
+    return push(b, h, x[k0], y[k0], x[k1], y[k1], rr + dev);
+}
+
+/* A segment longer than a chunk, cut to the map and split evenly. */
+static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, uint64_t rh, double reach,
+                            int s_matters, const road_ends *E)
+{
+    const double *x = rl->x, *y = rl->y;
+    double len = rl->s[k + 1] - rl->s[k], t0, t1, rr = fmax(reach, fmax(E->reach[0], E->reach[1]));
+    if (!clip_box(b, x[k], y[k], x[k + 1], y[k + 1], rr, &t0, &t1)) return RS_OK;
+    double m = ceil((t1 - t0) * len / b->chunk);
+    if (m < 1) m = 1;
+    double dx = x[k + 1] - x[k], dy = y[k + 1] - y[k];
+    rs_result r = RS_OK;
+    for (double j = 0; j < m && !r; j++) {
+        double ua = t0 + (t1 - t0) * j / m, ub = j + 1 == m ? t1 : t0 + (t1 - t0) * (j + 1) / m;
+        uint64_t h = mix(rh, 0x5e9);
+        h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[k + 1]), y[k + 1]);
+        h = mixd(mixd(h, ua), ub);
+        if (s_matters) h = mixd(h, rl->s[k]);
+        double pr = reach;
+        if (k == 0) h = mix(h, E->h[0]), pr = fmax(pr, E->reach[0]);
+        if (k + 2 == rl->n) h = mix(h, E->h[1]), pr = fmax(pr, E->reach[1]);
+        r = push(b, h, x[k] + ua * dx, y[k] + ua * dy, x[k] + ub * dx, y[k] + ub * dy, pr);
+    }
+    return r;
+}
+
+static rs_result road_pieces(builder *b, const rs__road_local *rl, uint64_t rh, double reach, double hw,
+                             int s_matters, const road_ends *E)
+{
+    size_t n = rl->n;
+    const double *x = rl->x, *y = rl->y, *s = rl->s;
+    rs_result r = RS_OK;
+    if (n == 1) { /* one point: its round dot and square */
+        double sq = hw * 1.4142135623730951 + 1e-9;
+        uint64_t h = mix(mix(mix(rh, 0xd07), E->h[0]), E->h[1]);
+        h = mixd(mixd(h, x[0]), y[0]);
+        return push(b, h, x[0], y[0], x[0], y[0], fmax(fmax(sq, reach), fmax(E->reach[0], E->reach[1])));
+    }
+    /* a trimmed end at a T: the strip runs on to the through road's far
+     * edge line (its corners included) */
+    for (int e = 0; e < 2 && !r; e++) {
+        if (!(E->tee[e] > 0)) continue;
+        size_t k = e ? n - 1 : 0, q = e ? n - 2 : 1;
+        double dx = x[k] - x[q], dy = y[k] - y[q], l = hypot(dx, dy);
+        if (!(l > 0)) continue;
+        dx /= l, dy /= l;
+        double sn = fmax(0.2, fabs(dx * E->tnx[e] + dy * E->tny[e]));
+        double far = (E->tee[e] + hw * sqrt(fmax(0, 1 - sn * sn))) / sn;
+        uint64_t h = mix(mix(mix(rh, 0x7ee), E->h[e]), (uint64_t)e);
+        h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
+        r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, reach);
+    }
+    /* chunks: runs of short segments up to a chunk of arc staying near
+     * their chord; long segments cut to the map and split */
+    size_t k0 = 0;
+    double arc = 0;
+    for (size_t k = 0; k + 1 < n && !r; k++) {
+        double len = s[k + 1] - s[k];
+        if (len > b->chunk) {
+            if (k > k0) r = flush(b, rl, k0, k, arc, rh, reach, s_matters, E);
+            if (!r) r = split_long(b, rl, k, rh, reach, s_matters, E);
+            k0 = k + 1;
+            arc = 0;
+            continue;
+        }
+        double na = arc + len, ch = hypot(x[k + 1] - x[k0], y[k + 1] - y[k0]);
+        double dev = 0.5 * sqrt(fmax(0, na * na - ch * ch));
+        if (k > k0 && (na > b->chunk || dev > b->devmax)) {
+            r = flush(b, rl, k0, k, arc, rh, reach, s_matters, E);
+            k0 = k;
+            na = len;
+        }
+        arc = na;
+    }
+    if (!r && n >= 2 && k0 + 1 < n) r = flush(b, rl, k0, n - 1, arc, rh, reach, s_matters, E);
+    return r;
+}
+
+/* ---- building ---------------------------------------------------------------- */
+
+static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
+{
+    rs_result r = RS_OK;
+    const rs__linesym *L = g->styling ? g->styling->lines : NULL;
+    size_t np = rs__linesym_piece_count(L);
+    for (size_t k = 0; k < np && !r; k++) {
+        double reg[5];
+        uint64_t h = rs__linesym_piece_fp(L, k, reg);
+        if (reg[4] < 0 && reg[0] > reg[2]) continue; /* empty */
+        r = push(b, h, reg[0], reg[1], reg[2], reg[3], reg[4]);
+    }
+    const rs__markings *mk = g->markings;
+    for (size_t k = 0; mk && k < mk->n && !r; k++) {
+        const rs__mk *m = &mk->m[k];
+        uint64_t h = mixs(0x3a2c, m->ty ? m->ty->name : "");
+        const double f[] = { m->s0, m->t0, m->hl, m->hw, m->kx, m->ky, m->ulo, m->uhi, m->vlo, m->vhi,
+                             m->slo, m->shi, m->tlo, m->thi, m->bx0, m->by0, m->bx1, m->by1 };
+        for (size_t j = 0; j < sizeof f / sizeof f[0]; j++) h = mixd(h, f[j]);
+        h = mix(h, (uint64_t)m->flip);
+        for (size_t j = 0; j < m->npt * RS__MK_PT; j++) h = mixd(h, mk->pts[RS__MK_PT * m->first + j]);
+        r = push(b, h, m->bx0, m->by0, m->bx1, m->by1, -1);
+    }
+    return r;
+}
+
+/* An item's box, grown by pad. */
+static void item_box(const rs__edit_item *it, double pad, double *x0, double *y0, double *x1, double *y1)
+{
+    double r = (it->r < 0 ? 0 : it->r) + pad;
+    *x0 = fmin(it->ax, it->bx) - r;
+    *x1 = fmax(it->ax, it->bx) + r;
+    *y0 = fmin(it->ay, it->by) - r;
+    *y1 = fmax(it->ay, it->by) + r;
+}
+
+static uint32_t bin_of(double v, double bin, uint32_t nb)
+{
+    double q = floor(v / bin);
+    if (!(q > 0)) return 0;
+    if (q >= nb) return nb - 1;
+    return (uint32_t)q;
+}
+
+static rs_result build_bins(rs_ctx *ctx, rs__grid_edit *e, double wm, double hm, double chunk)
+{
+    double bin = sqrt(wm * hm / (double)(e->n + 1));
+    if (!(bin >= 2 * chunk)) bin = 2 * chunk;
+    for (;;) {
+        double bw = ceil(wm / bin), bh = ceil(hm / bin);
+        if (bw < 1) bw = 1;
+        if (bh < 1) bh = 1;
+        if (bw * bh > MAX_BINS) {
+            bin *= 2;
+            continue;
+        }
+        e->bin = bin;
+        e->bw = (uint32_t)bw;
+        e->bh = (uint32_t)bh;
+        uint64_t total = 0;
+        for (size_t i = 0; i < e->n; i++) {
+            double x0, y0, x1, y1;
+            item_box(&e->it[i], 0, &x0, &y0, &x1, &y1);
+            total += (uint64_t)(bin_of(x1, bin, e->bw) - bin_of(x0, bin, e->bw) + 1) *
+                     (bin_of(y1, bin, e->bh) - bin_of(y0, bin, e->bh) + 1);
+        }
+        if (total > MAX_BIN_ENTRIES) {
+            bin *= 2;
+            continue;
+        }
+        size_t nb = (size_t)e->bw * e->bh;
+        e->bstart = rs__calloc(ctx, nb + 1, sizeof *e->bstart);
+        e->bitem = rs__alloc_array(ctx, total ? (size_t)total : 1, sizeof *e->bitem);
+        if (!e->bstart || !e->bitem) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit index");
+        for (int pass = 0; pass < 2; pass++) {
+            for (size_t i = 0; i < e->n; i++) {
+                double x0, y0, x1, y1;
+                item_box(&e->it[i], 0, &x0, &y0, &x1, &y1);
+                uint32_t i0 = bin_of(x0, bin, e->bw), i1 = bin_of(x1, bin, e->bw);
+                uint32_t j0 = bin_of(y0, bin, e->bh), j1 = bin_of(y1, bin, e->bh);
+                for (uint32_t j = j0; j <= j1; j++)
+                    for (uint32_t k = i0; k <= i1; k++) {
+                        size_t c = (size_t)j * e->bw + k;
+                        if (pass == 0) e->bstart[c + 1]++;
+                        else e->bitem[e->bstart[c]++] = (uint32_t)i;
+                    }
+            }
+            if (pass == 0)
+                for (size_t c = 0; c < nb; c++) e->bstart[c + 1] += e->bstart[c];
+            else {
+                for (size_t c = nb; c > 0; c--) e->bstart[c] = e->bstart[c - 1];
+                e->bstart[0] = 0;
+            }
+        }
+        e->bytes += (nb + 1) * sizeof *e->bstart + (size_t)total * sizeof *e->bitem;
+        return RS_OK;
+    }
+}
+
+void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e)
+{
+    if (!e) return;
+    rs__free(ctx, e->it);
+    rs__free(ctx, e->bstart);
+    rs__free(ctx, e->bitem);
+    rs__free(ctx, e->dirty);
+    rs__free(ctx, e);
+}
+
+rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                              const rs_network *net, rs_road_grid *g)
+{
+    size_t nr = rs_roads_count(roads);
+    const rs__styling *st = g->styling;
+    double cs = dem->frame.cell_size, pix = cs / o->texels;
+    double wm = (double)(dem->width - 1) * cs, hm = (double)(dem->height - 1) * cs;
+    rs__grid_edit *e = rs__calloc(ctx, 1, sizeof *e);
+    uint64_t *rh = rs__alloc_array(ctx, nr ? nr : 1, sizeof *rh);
+    double *reach = rs__alloc_array(ctx, nr ? nr : 1, sizeof *reach);
+    int *sm = rs__alloc_array(ctx, nr ? nr : 1, sizeof *sm);
+    size_t *tee_of = NULL;
+    rs__tee_end *tees = NULL;
+    size_t ntees = 0;
+    rs_result r = RS_OK;
+    if (!e || !rh || !reach || !sm) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
+    if (!r && net && nr) {
+        r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+        if (!r && ntees) {
+            tee_of = rs__alloc_array(ctx, 2 * nr, sizeof *tee_of);
+            if (!tee_of) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
+            for (size_t k = 0; !r && k < 2 * nr; k++) tee_of[k] = SIZE_MAX;
+            for (size_t k = 0; !r && k < ntees; k++)
+                if (tees[k].road < nr) tee_of[2 * (size_t)tees[k].road + (tees[k].end ? 1 : 0)] = k;
+        }
+    }
+    for (size_t i = 0; !r && i < nr; i++) rh[i] = road_hash(roads, i, st, net, &reach[i], &sm[i]);
+    builder b;
+    memset(&b, 0, sizeof b);
+    b.ctx = ctx;
+    b.e = e;
+    b.pix = pix;
+    b.chunk = fmax(CHUNK_M, CHUNK_PX * pix);
+    b.devmax = fmax(0.25, 0.5 * pix);
+    /* long segments are cut to the map grown by the largest pad (an
+     * alpha-map road cell is at most a DEM cell) */
+    double grow = 4 * cs + 4 * pix + 1;
+    b.mx0 = -grow, b.my0 = -grow, b.mx1 = wm + grow, b.my1 = hm + grow;
+    for (size_t i = 0; !r && i < nr; i++) {
+        rs__road_local rl;
+        memset(&rl, 0, sizeof rl);
+        if (rs__road_local_get(ctx, roads, i, dem, &rl)) {
+            r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
+            break;
+        }
+        double w = 0;
+        rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+        road_ends E;
+        end_info(roads, i, net, tees, tee_of, reach[i], &E);
+        r = road_pieces(&b, &rl, rh[i], reach[i], 0.5 * w, sm[i], &E);
+        rs__road_local_free(ctx, &rl);
+    }
+    if (!r) r = line_and_mark_pieces(&b, g);
+    if (!r) r = build_bins(ctx, e, wm, hm, b.chunk);
+    rs__free(ctx, rh);
+    rs__free(ctx, reach);
+    rs__free(ctx, sm);
+    rs__free(ctx, tee_of);
+    rs__free(ctx, tees);
+    if (r) {
+        rs__grid_edit_free(ctx, e);
+        return r;
+    }
+    e->bytes += sizeof *e + e->cap * sizeof *e->it;
+    g->edit = e;
+    return RS_OK;
+}
+
+/* ---- regions in pixels ------------------------------------------------------------ */
+
+/* What the grid adds to every region: the pixel reached by anti-aliasing,
+ * and with alpha-map edges the road cells' marking offset and the
+ * neighbour they are classified by (docs/design.md). */
+static double grid_pad(const rs_road_grid *g)
+{
+    double pix = g->frame.cell_size / g->texels;
+    return 0.75 * pix + 0.01 + (g->tiles ? 4 * g->c : 0);
+}
+
+/* x extent of the capsule (a)-(b), radius r, on the line y = c. */
+static int capsule_slice(double ax, double ay, double bx, double by, double r, double c, double *lo, double *hi)
+{
+    double l = INFINITY, h = -INFINITY;
+    const double px[2] = { ax, bx }, py[2] = { ay, by };
+    for (int k = 0; k < 2; k++) {
+        double dy = c - py[k];
+        if (fabs(dy) <= r) {
+            double w = sqrt(r * r - dy * dy);
+            l = fmin(l, px[k] - w);
+            h = fmax(h, px[k] + w);
+        }
+    }
+    double dx = bx - ax, dy = by - ay, len = hypot(dx, dy);
+    if (len > 0) {
+        double nx = -dy / len * r, ny = dx / len * r;
+        const double cx[4] = { ax + nx, bx + nx, bx - nx, ax - nx }, cy[4] = { ay + ny, by + ny, by - ny, ay - ny };
+        for (int k = 0; k < 4; k++) {
+            double x0 = cx[k], y0 = cy[k], x1 = cx[(k + 1) & 3], y1 = cy[(k + 1) & 3];
+            if ((y0 - c) * (y1 - c) > 0) continue;
+            if (y0 == y1) {
+                l = fmin(l, fmin(x0, x1));
+                h = fmax(h, fmax(x0, x1));
+            } else {
+                double x = x0 + (c - y0) * (x1 - x0) / (y1 - y0);
+                l = fmin(l, x);
+                h = fmax(h, x);
+            }
+        }
+    }
+    *lo = l, *hi = h;
+    return l <= h;
+}
+
+/* x extent of the region of `it` grown by pad over rows y in [ya, yb]. */
+static int item_xrange(const rs__edit_item *it, double pad, double ya, double yb, double *lo, double *hi)
+{
+    double x0, y0, x1, y1;
+    item_box(it, pad, &x0, &y0, &x1, &y1);
+    if (yb < y0 || ya > y1) return 0;
+    if (it->r < 0) {
+        *lo = x0, *hi = x1;
+        return 1;
+    }
+    if (ya < y0) ya = y0;
+    if (yb > y1) yb = y1;
+    double r = it->r + pad, l = INFINITY, h = -INFINITY, a, c;
+    if (capsule_slice(it->ax, it->ay, it->bx, it->by, r, ya, &a, &c)) l = fmin(l, a), h = fmax(h, c);
+    if (capsule_slice(it->ax, it->ay, it->bx, it->by, r, yb, &a, &c)) l = fmin(l, a), h = fmax(h, c);
+    /* the leftmost and rightmost points of the capsule, when in the rows */
+    double ylo = fmin(it->ay, it->by), yhi = fmax(it->ay, it->by);
+    if (it->ax == it->bx) {
+        if (!(yhi < ya || ylo > yb)) l = fmin(l, it->ax - r), h = fmax(h, it->ax + r);
+    } else {
+        double yl = it->ax < it->bx ? it->ay : it->by, yr = it->ax < it->bx ? it->by : it->ay;
+        if (yl >= ya && yl <= yb) l = fmin(l, fmin(it->ax, it->bx) - r);
+        if (yr >= ya && yr <= yb) h = fmax(h, fmax(it->ax, it->bx) + r);
+    }
+    *lo = l, *hi = h;
+    return l <= h;
+}
+
+typedef struct span3 {
+    uint32_t y, x0, x1;
+} span3;
+
+typedef struct spans {
+    span3 *v;
+    size_t n, cap;
+} spans;
+
+static int span_push(rs_ctx *ctx, spans *S, uint32_t y, uint32_t x0, uint32_t x1)
+{
+    if (S->n == S->cap) {
+        size_t nc = S->cap ? 2 * S->cap : 1024, bytes;
+        if (nc < S->cap || !rs__mul_size(nc, sizeof *S->v, &bytes)) return 0;
+        span3 *v = rs__realloc(ctx, S->v, bytes);
+        if (!v) return 0;
+        S->v = v;
+        S->cap = nc;
+    }
+    S->v[S->n].y = y, S->v[S->n].x0 = x0, S->v[S->n].x1 = x1;
+    S->n++;
+    return 1;
+}
+
+static uint32_t to_px(double v, uint32_t lim)
+{
+    if (!(v > 0)) return 0;
+    if (v >= (double)lim) return lim;
+    return (uint32_t)v;
+}
+
+/* The rows of item it's region (grown by pad) in a W x H image of pix metres. */
+static int item_spans(rs_ctx *ctx, spans *S, const rs__edit_item *it, double pad, double pix, uint32_t W, uint32_t H)
+{
+    double x0, y0, x1, y1;
+    item_box(it, pad, &x0, &y0, &x1, &y1);
+    uint32_t r0 = to_px(floor(y0 / pix), H), r1 = to_px(floor(y1 / pix) + 1, H);
+    for (uint32_t y = r0; y < r1; y++) {
+        double lo, hi;
+        if (!item_xrange(it, pad, y * pix, (y + 1) * pix, &lo, &hi)) continue;
+        uint32_t a = to_px(floor(lo / pix), W), b = to_px(floor(hi / pix) + 1, W);
+        if (a < b && !span_push(ctx, S, y, a, b)) return 0;
+    }
+    return 1;
+}
+
+static int cmp_span(const void *pa, const void *pb)
+{
+    const span3 *a = pa, *b = pb;
+    if (a->y != b->y) return a->y < b->y ? -1 : 1;
+    if (a->x0 != b->x0) return a->x0 < b->x0 ? -1 : 1;
+    return (a->x1 > b->x1) - (a->x1 < b->x1);
+}
+
+/* Spans to rectangles: a row's overlapping or touching spans merged, a
+ * rectangle grown down while the next row has the same span. */
+static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    if (!S->n) return RS_OK;
+    qsort(S->v, S->n, sizeof *S->v, cmp_span);
+    size_t m = 0;
+    for (size_t k = 0; k < S->n; k++) {
+        if (m && S->v[m - 1].y == S->v[k].y && S->v[k].x0 <= S->v[m - 1].x1) {
+            if (S->v[k].x1 > S->v[m - 1].x1) S->v[m - 1].x1 = S->v[k].x1;
+        } else S->v[m++] = S->v[k];
+    }
+    rs_pixel_rect *R = rs__alloc_array(ctx, m, sizeof *R);
+    size_t *open = rs__alloc_array(ctx, m, sizeof *open); /* rectangles ending at the previous row, by x0 */
+    size_t *next = rs__alloc_array(ctx, m, sizeof *next);
+    if (!R || !open || !next) {
+        rs__free(ctx, R);
+        rs__free(ctx, open);
+        rs__free(ctx, next);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+    }
+    size_t nr = 0, nopen = 0;
+    for (size_t k = 0; k < m;) {
+        uint32_t y = S->v[k].y;
+        size_t nn = 0, o = 0;
+        for (; k < m && S->v[k].y == y; k++) {
+            const span3 *sp = &S->v[k];
+            while (o < nopen && R[open[o]].x0 < sp->x0) o++;
+            if (o < nopen && R[open[o]].y1 == y && R[open[o]].x0 == sp->x0 && R[open[o]].x1 == sp->x1) {
+                R[open[o]].y1 = y + 1;
+                next[nn++] = open[o++];
+            } else {
+                R[nr].x0 = sp->x0, R[nr].x1 = sp->x1, R[nr].y0 = y, R[nr].y1 = y + 1;
+                next[nn++] = nr++;
+            }
+        }
+        memcpy(open, next, nn * sizeof *open);
+        nopen = nn;
+    }
+    rs__free(ctx, open);
+    rs__free(ctx, next);
+    *out = R;
+    *nout = nr;
+    return RS_OK;
+}
+
+/* ---- the public calls ------------------------------------------------------------ */
+
+typedef struct keyed {
+    uint64_t h;
+    uint32_t i;
+} keyed;
+
+static int cmp_keyed(const void *pa, const void *pb)
+{
+    const keyed *a = pa, *b = pb;
+    if (a->h != b->h) return a->h < b->h ? -1 : 1;
+    return (a->i > b->i) - (a->i < b->i);
+}
+
+static keyed *sorted_keys(rs_ctx *ctx, const rs__grid_edit *e)
+{
+    keyed *k = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *k);
+    if (!k) return NULL;
+    for (size_t i = 0; i < e->n; i++) k[i].h = e->it[i].h, k[i].i = (uint32_t)i;
+    qsort(k, e->n, sizeof *k, cmp_keyed);
+    return k;
+}
+
+/* The dirty rectangles between grids a (old) and b (new). */
+static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b, rs_pixel_rect **out, size_t *nout)
+{
+    double pix = b->frame.cell_size / b->texels;
+    uint64_t W64 = (uint64_t)(b->dem_w - 1) * b->texels, H64 = (uint64_t)(b->dem_h - 1) * b->texels;
+    uint32_t W = W64 > UINT32_MAX ? UINT32_MAX : (uint32_t)W64, H = H64 > UINT32_MAX ? UINT32_MAX : (uint32_t)H64;
+    *out = NULL;
+    *nout = 0;
+    if (!W || !H) return RS_OK;
+    if (!a->edit || !b->edit || a->k != b->k || a->c != b->c) {
+        rs_pixel_rect *R = rs__alloc_array(ctx, 1, sizeof *R);
+        if (!R) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+        R->x0 = 0, R->y0 = 0, R->x1 = W, R->y1 = H;
+        *out = R;
+        *nout = 1;
+        return RS_OK;
+    }
+    const rs__grid_edit *ea = a->edit, *eb = b->edit;
+    keyed *ka = sorted_keys(ctx, ea), *kb = sorted_keys(ctx, eb);
+    spans S;
+    memset(&S, 0, sizeof S);
+    rs_result r = ka && kb ? RS_OK : rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+    double pa = grid_pad(a), pb = grid_pad(b);
+    size_t i = 0, j = 0;
+    while (!r && (i < ea->n || j < eb->n)) {
+        int ok = 1;
+        if (i < ea->n && j < eb->n && ka[i].h == kb[j].h) {
+            i++, j++;
+            continue;
+        }
+#ifdef RS_EDIT_DEBUG
+        {
+            const rs__edit_item *q = (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) ? &ea->it[ka[i].i] : &eb->it[kb[j].i];
+            fprintf(stderr, "  %s item %g,%g - %g,%g r %g\n", q == &ea->it[ka[i < ea->n ? i : 0].i] ? "old" : "new", q->ax, q->ay, q->bx, q->by, q->r);
+        }
+#endif
+        if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) ok = item_spans(ctx, &S, &ea->it[ka[i++].i], pa, pix, W, H);
+        else ok = item_spans(ctx, &S, &eb->it[kb[j++].i], pb, pix, W, H);
+        if (!ok) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+    }
+    rs__free(ctx, ka);
+    rs__free(ctx, kb);
+    if (!r) r = spans_to_rects(ctx, &S, out, nout);
+    rs__free(ctx, S.v);
+    return r;
+}
+
+rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                              const rs_road_grid *old, rs_road_grid **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_road_grid_update: out is NULL");
+    *out = NULL;
+    if (!dem || !roads || !old)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_road_grid_update: %s is NULL",
+                        !dem ? "dem" : !roads ? "roads" : "old");
+    rs_splat_options o;
+    rs_result r = rs__splat_defaults(ctx, opts, &o);
+    if (r) return r;
+    if (old->dem_w != dem->width || old->dem_h != dem->height)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_update: the old grid is for a %u x %u DEM, this one is %u x %u", old->dem_w,
+                        old->dem_h, dem->width, dem->height);
+    if (old->frame.cell_size != dem->frame.cell_size || old->frame.origin_x != dem->frame.origin_x ||
+        old->frame.origin_y != dem->frame.origin_y)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_update: the old grid's frame (cell size %g, origin %g, %g) is not the DEM's "
+                        "(%g, %g, %g)", old->frame.cell_size, old->frame.origin_x, old->frame.origin_y,
+                        dem->frame.cell_size, dem->frame.origin_x, dem->frame.origin_y);
+    if (old->texels != o.texels)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_road_grid_update: the old grid has %u texels, the options %u",
+                        old->texels, o.texels);
+    if (old->edges != o.coverage.edges || old->opts.buffer != o.grid.buffer || old->opts.road_cell != o.grid.road_cell)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_update: the old grid's edges %d, buffer %d, road cell %g are not the options' "
+                        "(%d, %d, %g)", (int)old->edges, (int)old->opts.buffer, old->opts.road_cell,
+                        (int)o.coverage.edges, (int)o.grid.buffer, o.grid.road_cell);
+    rs_road_grid *g = NULL;
+    r = rs_road_grid_build(ctx, dem, roads, opts, &g);
+    if (r) return r;
+    r = diff(ctx, old, g, &g->edit->dirty, &g->edit->ndirty);
+    if (r) {
+        rs_road_grid_free(ctx, g);
+        return r;
+    }
+    size_t extra = g->edit->ndirty * sizeof *g->edit->dirty;
+    g->edit->bytes += extra;
+    g->stats.bytes += extra;
+    *out = g;
+    rs__ok(ctx);
+    return RS_OK;
+}
+
+size_t rs_road_grid_dirty(const rs_road_grid *grid, rs_pixel_rect *rects, size_t cap)
+{
+    if (!grid || !grid->edit) return 0;
+    const rs__grid_edit *e = grid->edit;
+    if (rects)
+        for (size_t k = 0; k < e->ndirty && k < cap; k++) rects[k] = e->dirty[k];
+    return e->ndirty;
+}
+
+/* Distance from point (px, py) to the box. */
+static double box_dist(double px, double py, double x0, double y0, double x1, double y1)
+{
+    double dx = px < x0 ? x0 - px : px > x1 ? px - x1 : 0, dy = py < y0 ? y0 - py : py > y1 ? py - y1 : 0;
+    return hypot(dx, dy);
+}
+
+static double seg_dist(double px, double py, double ax, double ay, double bx, double by)
+{
+    double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy, t = 0;
+    if (l2 > 0) t = fmax(0, fmin(1, ((px - ax) * dx + (py - ay) * dy) / l2));
+    return hypot(px - (ax + t * dx), py - (ay + t * dy));
+}
+
+/* Whether the item's region meets the box [x0, x1] x [y0, y1]. */
+static int item_meets(const rs__edit_item *it, double x0, double y0, double x1, double y1)
+{
+    double bx0, by0, bx1, by1;
+    item_box(it, 0, &bx0, &by0, &bx1, &by1);
+    if (bx1 < x0 || bx0 > x1 || by1 < y0 || by0 > y1) return 0;
+    if (it->r < 0) return 1;
+    /* the segment crosses the box, or one of them comes within r */
+    double t0, t1;
+    builder b;
+    memset(&b, 0, sizeof b);
+    b.mx0 = x0, b.my0 = y0, b.mx1 = x1, b.my1 = y1;
+    if (clip_box(&b, it->ax, it->ay, it->bx, it->by, 0, &t0, &t1)) return 1;
+    double d = fmin(box_dist(it->ax, it->ay, x0, y0, x1, y1), box_dist(it->bx, it->by, x0, y0, x1, y1));
+    const double cx[4] = { x0, x1, x1, x0 }, cy[4] = { y0, y0, y1, y1 };
+    for (int k = 0; k < 4; k++) d = fmin(d, seg_dist(cx[k], cy[k], it->ax, it->ay, it->bx, it->by));
+    return d <= it->r;
+}
+
+int rs_road_grid_rect_has_roads(const rs_road_grid *grid, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1)
+{
+    if (!grid) return 0;
+    if (x0 >= x1 || y0 >= y1) return 0;
+    const rs__grid_edit *e = grid->edit;
+    if (!e || !e->bstart) return 1;
+    double pix = grid->frame.cell_size / grid->texels, pad = grid_pad(grid);
+    double X0 = x0 * pix - pad, Y0 = y0 * pix - pad, X1 = x1 * pix + pad, Y1 = y1 * pix + pad;
+    uint32_t i0 = bin_of(X0, e->bin, e->bw), i1 = bin_of(X1, e->bin, e->bw);
+    uint32_t j0 = bin_of(Y0, e->bin, e->bh), j1 = bin_of(Y1, e->bin, e->bh);
+    for (uint32_t j = j0; j <= j1; j++)
+        for (uint32_t i = i0; i <= i1; i++) {
+            size_t c = (size_t)j * e->bw + i;
+            for (uint32_t k = e->bstart[c]; k < e->bstart[c + 1]; k++)
+                if (item_meets(&e->it[e->bitem[k]], X0, Y0, X1, Y1)) return 1;
+        }
+    return 0;
+}
