@@ -29,7 +29,6 @@
 #include "dem.h"
 
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -72,43 +71,73 @@ static uint64_t road_sig(const rs_roads *roads, size_t q)
     return h;
 }
 
-/* What a road's surface draws everywhere along it (not its points, not its
- * lines and markings, which are pieces of their own, nor its attributes,
- * which act through what they resolve to): width, resolved surface, casing,
- * priority, surface image and, for an image, the stroke's arc length and
- * direction.
- * Also its paint reach from the centre line and whether s matters. */
-static uint64_t road_hash(const rs_roads *roads, size_t i, const rs__styling *st, const rs_network *net,
-                          double *reach, int *s_matters)
+/* Per road end: what it continues into and the T it ends at. */
+typedef struct road_ends {
+    uint64_t h[2];
+    double tee[2]; /* a trimmed end at a T: how far past the end point the through road's far edge lies
+                      across it (0: no T), and the through road's normal */
+    double tnx[2], tny[2];
+} road_ends;
+
+/* What a road's surface draws (not its lines and markings, which are
+ * pieces of their own, nor its attributes, which act through what they
+ * resolve to), in two parts: the core, pixels within rc of the centre line
+ * (wholly road whatever the width and casing: the fill, gradient, surface
+ * image and priority decide them), and the rim out to the paint reach
+ * (width, casing and everything of the core). */
+typedef struct road_fp {
+    uint64_t core, rim;
+    double hw, reach, rc; /* rc < 0: no core */
+    int s_matters;
+    road_ends E;
+} road_fp;
+
+static void road_prints(const rs_roads *roads, size_t i, const rs__styling *st, const rs_network *net,
+                        double core_in, road_fp *F)
 {
     double w = 0;
     rs_roads_get(roads, i, NULL, &w, NULL, NULL);
-    uint64_t h = mixd(0x5a4f, w);
+    uint64_t c = 0xc0e, m = mixd(0x5a4f, w);
     double hw = 0.5 * w, r = hw;
-    int image = 0;
+    int image = 0, shade = 0;
+    /* only what differs from an unstyled road: a road draws alike in a
+     * grid with styles and in one without */
     if (st && i < st->nroads) {
-        h = mix(h, st->surface ? st->surface[i] : 0);
-        if (st->colour)
-            for (int c = 0; c < 16; c++) h = mixd(h, (double)st->colour[16 * i + (size_t)c]);
-        if (st->half_width) h = mixd(h, st->half_width[i]);
-        if (st->casing_width) {
-            h = mixd(h, st->casing_width[i]);
+        uint64_t sf = st->surface ? st->surface[i] : 0;
+        shade = sf == RS_SURFACE_GRADIENT;
+        if (sf != RS_SURFACE_DEFAULT && st->colour) {
+            c = mix(c, sf);
+            for (int k = 0; k < 12; k++) c = mixd(c, (double)st->colour[16 * i + (size_t)k]); /* fill, gradient */
+        }
+        if (st->half_width && st->half_width[i] != hw) m = mixd(m, st->half_width[i]);
+        if (st->casing_width && st->casing_width[i] > 0) {
+            m = mixd(m, st->casing_width[i]);
+            if (st->colour)
+                for (int k = 12; k < 16; k++) m = mixd(m, (double)st->colour[16 * i + (size_t)k]); /* casing */
             if (hw + st->casing_width[i] > r) r = hw + st->casing_width[i];
         }
-        if (st->prio) h = mix(h, (uint64_t)(int64_t)st->prio[i]);
-        if (st->img_of) {
-            image = st->img_of[i] >= 0;
-            h = mix(h, (uint64_t)(int64_t)st->img_of[i]);
-            h = mixd(mixd(h, st->img_len[i]), st->img_f[i]);
-            h = mix(h, st->img_lev[i]);
+        /* the priority picks the fill where surfaces overlap; with no
+         * fill, gradient or image anywhere it draws nothing (line cuts by
+         * priority are in the line pieces) */
+        if (st->prio && st->any_surface) c = mix(mix(c, 0x9e10), (uint64_t)(int64_t)st->prio[i]);
+        if (st->img_of && st->img_of[i] >= 0) {
+            image = 1;
+            c = mix(c, (uint64_t)(int64_t)st->img_of[i]);
+            c = mixd(mixd(c, st->img_len[i]), st->img_f[i]);
+            c = mix(c, st->img_lev[i]);
+            if (st->img_s0) c = mixd(c, st->img_s0[i]);
+            if (st->img_rev) c = mix(c, st->img_rev[i]);
         }
-        if (st->img_s0) h = mixd(h, st->img_s0[i]);
-        if (st->img_rev) h = mix(h, st->img_rev[i]);
     }
-    *s_matters = image;
-    if (image && net && i < net->nroads) h = mix(mixd(h, net->s_off[i]), net->rev[i]);
-    *reach = r;
-    return h;
+    if (image && net && i < net->nroads) c = mix(mixd(c, net->s_off[i]), net->rev[i]);
+    if (image || shade) c = mixd(c, hw); /* mapped across the width */
+    F->hw = hw;
+    F->reach = r;
+    F->rc = hw - core_in;
+    if (!(F->rc > 0)) F->rc = -1;
+    F->core = mixd(c, F->rc);
+    F->rim = mix(m, c);
+    F->s_matters = image;
 }
 
 /* ---- the pieces ------------------------------------------------------------ */
@@ -138,22 +167,12 @@ static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, d
     return RS_OK;
 }
 
-/* Per road end: what it continues into and the T it ends at. */
-typedef struct road_ends {
-    uint64_t h[2];
-    double reach[2]; /* the end's paint reach */
-    double tee[2];   /* a trimmed end at a T: how far past the end point the through road's far
-                        edge lies across it (0: no T), and the through road's normal */
-    double tnx[2], tny[2];
-} road_ends;
-
 static void end_info(const rs_roads *roads, size_t i, const rs_network *net, const rs__tee_end *tees,
-                     const size_t *tee_of, double reach, road_ends *E)
+                     const size_t *tee_of, road_ends *E)
 {
     memset(E, 0, sizeof *E);
     for (int e = 0; e < 2; e++) {
         uint64_t h = mix(0xe0d, (uint64_t)e);
-        double r = reach, far = 0;
         if (net && i < net->nroads) {
             uint32_t l = net->link[2 * i + (size_t)e];
             h = l == NO_LINK ? mix(h, 0xdead) : mix(mix(h, road_sig(roads, l / 2)), l & 1);
@@ -162,12 +181,10 @@ static void end_info(const rs_roads *roads, size_t i, const rs_network *net, con
             const rs__tee_end *t = &tees[tee_of[2 * i + (size_t)e]];
             h = mixd(mixd(mixd(mixd(h, t->nx), t->ny), t->half_width), t->grow);
             h = mix(h, road_sig(roads, t->through));
-            far = t->half_width + t->grow + 2 * RS__NETWORK_TOL;
+            E->tee[e] = t->half_width + t->grow + 2 * RS__NETWORK_TOL;
             E->tnx[e] = t->nx, E->tny[e] = t->ny;
         }
         E->h[e] = h;
-        E->reach[e] = r;
-        E->tee[e] = far;
     }
 }
 
@@ -192,101 +209,151 @@ static int clip_box(const builder *b, double ax, double ay, double bx, double by
     return lo <= hi;
 }
 
+/* A stretch of road from a to b (straight within dev, its directions
+ * within angle th of the chord): the core capsule and the rims on both
+ * sides as capsules of the chord moved sideways. hc, hr: the stretch's
+ * core and rim fingerprints. */
+static rs_result stretch(builder *b, const road_fp *F, uint64_t hc, uint64_t hr, double ax, double ay, double bx,
+                         double by, double dev, double th)
+{
+    rs_result r = RS_OK;
+    if (F->rc > 0) r = push(b, hc, ax, ay, bx, by, F->rc + dev);
+    double lo = F->rc > 0 ? F->rc : 0, mid = 0.5 * (lo + F->reach), half = 0.5 * (F->reach - lo);
+    double dx = bx - ax, dy = by - ay, l = hypot(dx, dy);
+    if (!(l > 0) || !(F->rc > 0)) return r ? r : push(b, hr, ax, ay, bx, by, F->reach + dev);
+    double nx = dy / l * mid, ny = -dx / l * mid, rr = half + dev + F->reach * th;
+    for (int side = -1; side <= 1 && !r; side += 2)
+        r = push(b, mix(hr, (uint64_t)(side + 1)), ax + side * nx, ay + side * ny, bx + side * nx, by + side * ny, rr);
+    return r;
+}
+
 /* The chunk of points k0..k1 (arc: its length along the road). */
-static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k1, double arc, uint64_t rh,
-                       double reach, int s_matters, const road_ends *E)
+static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k1, double arc, const road_fp *F)
 {
     const double *x = rl->x, *y = rl->y, *s = rl->s;
-    double ch = hypot(x[k1] - x[k0], y[k1] - y[k0]), dev = 0.5 * sqrt(fmax(0, arc * arc - ch * ch));
-    uint64_t h = mix(rh, 0xc4c);
+    double cx = x[k1] - x[k0], cy = y[k1] - y[k0], ch = hypot(cx, cy);
+    double dev = 0.5 * sqrt(fmax(0, arc * arc - ch * ch)), th = 0;
+    uint64_t h = 0xc4c;
     for (size_t j = k0; j <= k1; j++) {
         h = mixd(mixd(h, x[j]), y[j]);
-        if (s_matters) h = mixd(h, s[j]);
+        if (F->s_matters) h = mixd(h, s[j]);
+        if (j > k0 && ch > 0) { /* the segment's angle to the chord */
+            double ux = x[j] - x[j - 1], uy = y[j] - y[j - 1], lu = hypot(ux, uy);
+            if (lu > 0) {
+                double c = (ux * cx + uy * cy) / (lu * ch);
+                th = fmax(th, c <= 0 ? 2 : fabs(ux * cy - uy * cx) / (lu * ch) * 1.5708);
+            }
+        }
     }
-    double rr = reach;
-    if (k0 == 0) h = mix(h, E->h[0]), rr = fmax(rr, E->reach[0]);
-    if (k1 + 1 == rl->n) h = mix(h, E->h[1]), rr = fmax(rr, E->reach[1]);
-    return push(b, h, x[k0], y[k0], x[k1], y[k1], rr + dev);
+    if (k0 == 0) h = mix(h, F->E.h[0]);
+    if (k1 + 1 == rl->n) h = mix(h, F->E.h[1]);
+    return stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k0], y[k0], x[k1], y[k1], dev, th);
 }
 
 /* A segment longer than a chunk, cut to the map and split evenly. */
-static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, uint64_t rh, double reach,
-                            int s_matters, const road_ends *E)
+static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, const road_fp *F)
 {
     const double *x = rl->x, *y = rl->y;
-    double len = rl->s[k + 1] - rl->s[k], t0, t1, rr = fmax(reach, fmax(E->reach[0], E->reach[1]));
-    if (!clip_box(b, x[k], y[k], x[k + 1], y[k + 1], rr, &t0, &t1)) return RS_OK;
+    double len = rl->s[k + 1] - rl->s[k], t0, t1;
+    if (!clip_box(b, x[k], y[k], x[k + 1], y[k + 1], F->reach, &t0, &t1)) return RS_OK;
     double m = ceil((t1 - t0) * len / b->chunk);
     if (m < 1) m = 1;
     double dx = x[k + 1] - x[k], dy = y[k + 1] - y[k];
     rs_result r = RS_OK;
     for (double j = 0; j < m && !r; j++) {
         double ua = t0 + (t1 - t0) * j / m, ub = j + 1 == m ? t1 : t0 + (t1 - t0) * (j + 1) / m;
-        uint64_t h = mix(rh, 0x5e9);
+        uint64_t h = 0x5e9;
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[k + 1]), y[k + 1]);
         h = mixd(mixd(h, ua), ub);
-        if (s_matters) h = mixd(h, rl->s[k]);
-        double pr = reach;
-        if (k == 0) h = mix(h, E->h[0]), pr = fmax(pr, E->reach[0]);
-        if (k + 2 == rl->n) h = mix(h, E->h[1]), pr = fmax(pr, E->reach[1]);
-        r = push(b, h, x[k] + ua * dx, y[k] + ua * dy, x[k] + ub * dx, y[k] + ub * dy, pr);
+        if (F->s_matters) h = mixd(h, rl->s[k]);
+        if (k == 0) h = mix(h, F->E.h[0]);
+        if (k + 2 == rl->n) h = mix(h, F->E.h[1]);
+        r = stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k] + ua * dx, y[k] + ua * dy, x[k] + ub * dx,
+                    y[k] + ub * dy, 0, 0);
     }
     return r;
 }
 
-static rs_result road_pieces(builder *b, const rs__road_local *rl, uint64_t rh, double reach, double hw,
-                             int s_matters, const road_ends *E)
+/* A disc of the rim around point k (a road end's cap, a bend's join). */
+static rs_result joint(builder *b, const rs__road_local *rl, size_t k, const road_fp *F)
+{
+    uint64_t h = mix(F->rim, 0x7015);
+    for (size_t j = k ? k - 1 : k; j <= k + 1 && j < rl->n; j++) h = mixd(mixd(h, rl->x[j]), rl->y[j]);
+    if (k == 0) h = mix(h, F->E.h[0]);
+    if (k + 1 == rl->n) h = mix(h, F->E.h[1]);
+    return push(b, h, rl->x[k], rl->y[k], rl->x[k], rl->y[k], F->reach);
+}
+
+/* Whether a chunk boundary at point k needs a joint: the outer side of the
+ * bend opens further than the rims' round ends reach. */
+static int bends(const rs__road_local *rl, size_t k, const road_fp *F)
+{
+    const double *x = rl->x, *y = rl->y;
+    double ux = x[k] - x[k - 1], uy = y[k] - y[k - 1], vx = x[k + 1] - x[k], vy = y[k + 1] - y[k];
+    double lu = hypot(ux, uy), lv = hypot(vx, vy);
+    if (!(lu > 0 && lv > 0)) return 1;
+    double c = (ux * vx + uy * vy) / (lu * lv), sn = fabs(ux * vy - uy * vx) / (lu * lv);
+    double lo = F->rc > 0 ? F->rc : 0;
+    return c <= 0 || F->reach * sn > 0.25 * (F->reach - lo);
+}
+
+static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp *F)
 {
     size_t n = rl->n;
     const double *x = rl->x, *y = rl->y, *s = rl->s;
     rs_result r = RS_OK;
-    if (n == 1) { /* one point: its round dot and square */
-        double sq = hw * 1.4142135623730951 + 1e-9;
-        uint64_t h = mix(mix(mix(rh, 0xd07), E->h[0]), E->h[1]);
-        h = mixd(mixd(h, x[0]), y[0]);
-        return push(b, h, x[0], y[0], x[0], y[0], fmax(fmax(sq, reach), fmax(E->reach[0], E->reach[1])));
-    }
+    if (n == 0) return RS_OK;
+    r = joint(b, rl, 0, F);
+    if (n == 1) return r;
+    if (!r) r = joint(b, rl, n - 1, F);
     /* a trimmed end at a T: the strip runs on to the through road's far
      * edge line (its corners included) */
     for (int e = 0; e < 2 && !r; e++) {
-        if (!(E->tee[e] > 0)) continue;
+        if (!(F->E.tee[e] > 0)) continue;
         size_t k = e ? n - 1 : 0, q = e ? n - 2 : 1;
         double dx = x[k] - x[q], dy = y[k] - y[q], l = hypot(dx, dy);
         if (!(l > 0)) continue;
         dx /= l, dy /= l;
-        double sn = fmax(0.2, fabs(dx * E->tnx[e] + dy * E->tny[e]));
-        double far = (E->tee[e] + hw * sqrt(fmax(0, 1 - sn * sn))) / sn;
-        uint64_t h = mix(mix(mix(rh, 0x7ee), E->h[e]), (uint64_t)e);
+        double sn = fmax(0.2, fabs(dx * F->E.tnx[e] + dy * F->E.tny[e]));
+        double far = (F->E.tee[e] + F->hw * sqrt(fmax(0, 1 - sn * sn))) / sn;
+        uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
-        r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, reach);
+        r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
     }
     /* chunks: runs of short segments up to a chunk of arc staying near
-     * their chord; long segments cut to the map and split */
+     * their chord; long segments cut to the map and split; a joint where
+     * a chunk ends at a bend */
     size_t k0 = 0;
     double arc = 0;
     for (size_t k = 0; k + 1 < n && !r; k++) {
         double len = s[k + 1] - s[k];
         if (len > b->chunk) {
-            if (k > k0) r = flush(b, rl, k0, k, arc, rh, reach, s_matters, E);
-            if (!r) r = split_long(b, rl, k, rh, reach, s_matters, E);
+            if (k > k0) r = flush(b, rl, k0, k, arc, F);
+            if (!r && k > 0 && bends(rl, k, F)) r = joint(b, rl, k, F);
+            if (!r) r = split_long(b, rl, k, F);
+            if (!r && k + 2 < n && bends(rl, k + 1, F)) r = joint(b, rl, k + 1, F);
             k0 = k + 1;
             arc = 0;
             continue;
         }
         double na = arc + len, ch = hypot(x[k + 1] - x[k0], y[k + 1] - y[k0]);
-        double dev = 0.5 * sqrt(fmax(0, na * na - ch * ch));
-        if (k > k0 && (na > b->chunk || dev > b->devmax)) {
-            r = flush(b, rl, k0, k, arc, rh, reach, s_matters, E);
+        double dev = 0.5 * sqrt(fmax(0, na * na - ch * ch)), th = 0;
+        if (k > k0 && ch > 0) {
+            double ux = x[k + 1] - x[k], uy = y[k + 1] - y[k], cx = x[k + 1] - x[k0], cy = y[k + 1] - y[k0];
+            th = fabs(ux * cy - uy * cx) / (hypot(ux, uy) * ch);
+            if (ux * cx + uy * cy <= 0) th = 1;
+        }
+        if (k > k0 && (na > b->chunk || dev > b->devmax || th > 0.1 || k - k0 >= 64)) {
+            r = flush(b, rl, k0, k, arc, F);
+            if (!r && bends(rl, k, F)) r = joint(b, rl, k, F);
             k0 = k;
             na = len;
         }
         arc = na;
     }
-    if (!r && n >= 2 && k0 + 1 < n) r = flush(b, rl, k0, n - 1, arc, rh, reach, s_matters, E);
+    if (!r && k0 + 1 < n) r = flush(b, rl, k0, n - 1, arc, F);
     return r;
 }
-
-/* ---- building ---------------------------------------------------------------- */
 
 static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
 {
@@ -308,6 +375,20 @@ static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
         for (size_t j = 0; j < sizeof f / sizeof f[0]; j++) h = mixd(h, f[j]);
         h = mix(h, (uint64_t)m->flip);
         for (size_t j = 0; j < m->npt * RS__MK_PT; j++) h = mixd(h, mk->pts[RS__MK_PT * m->first + j]);
+        if (m->npt == 2) { /* one segment: the support is a rectangle in (s, t); its capsule along its longer side */
+            const double *A = mk->pts + RS__MK_PT * m->first;
+            double sl = m->shi - m->slo, tl = m->thi - m->tlo, sm = 0.5 * (m->slo + m->shi), tm = 0.5 * (m->tlo + m->thi);
+            double s0 = sl >= tl ? m->slo : sm, s1 = sl >= tl ? m->shi : sm, t0 = sl >= tl ? tm : m->tlo,
+                   t1 = sl >= tl ? tm : m->thi;
+            double px0 = A[0] + (s0 - A[2]) * A[3] + t0 * A[4], py0 = A[1] + (s0 - A[2]) * A[4] - t0 * A[3];
+            double px1 = A[0] + (s1 - A[2]) * A[3] + t1 * A[4], py1 = A[1] + (s1 - A[2]) * A[4] - t1 * A[3];
+            double rad = 0.5 * (sl >= tl ? tl : sl) + 1e-9 * (1 + fabs(px0) + fabs(py0) + sl + tl);
+            double area = (fabs(px1 - px0) + 2 * rad) * (fabs(py1 - py0) + 2 * rad);
+            if (area < (m->bx1 - m->bx0) * (m->by1 - m->by0)) {
+                r = push(b, h, px0, py0, px1, py1, rad);
+                continue;
+            }
+        }
         r = push(b, h, m->bx0, m->by0, m->bx1, m->by1, -1);
     }
     return r;
@@ -404,14 +485,11 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     double cs = dem->frame.cell_size, pix = cs / o->texels;
     double wm = (double)(dem->width - 1) * cs, hm = (double)(dem->height - 1) * cs;
     rs__grid_edit *e = rs__calloc(ctx, 1, sizeof *e);
-    uint64_t *rh = rs__alloc_array(ctx, nr ? nr : 1, sizeof *rh);
-    double *reach = rs__alloc_array(ctx, nr ? nr : 1, sizeof *reach);
-    int *sm = rs__alloc_array(ctx, nr ? nr : 1, sizeof *sm);
     size_t *tee_of = NULL;
     rs__tee_end *tees = NULL;
     size_t ntees = 0;
     rs_result r = RS_OK;
-    if (!e || !rh || !reach || !sm) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
+    if (!e) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
     if (!r && net && nr) {
         r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
         if (!r && ntees) {
@@ -422,7 +500,11 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                 if (tees[k].road < nr) tee_of[2 * (size_t)tees[k].road + (tees[k].end ? 1 : 0)] = k;
         }
     }
-    for (size_t i = 0; !r && i < nr; i++) rh[i] = road_hash(roads, i, st, net, &reach[i], &sm[i]);
+    /* the core: pixels whose square lies inside the surface (with
+     * alpha-map edges, also the road cells around them: at most 2 road
+     * cells of the automatic K a texel, 2 forced road cells) */
+    double core_in = pix + 1e-6 * (1 + fmax(wm, hm));
+    if (o->coverage.edges == RS_EDGES_ALPHAMAP) core_in += 4 * (o->grid.road_cell > 0 ? 2 * o->grid.road_cell : 0.5 * pix);
     builder b;
     memset(&b, 0, sizeof b);
     b.ctx = ctx;
@@ -441,18 +523,14 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
             break;
         }
-        double w = 0;
-        rs_roads_get(roads, i, NULL, &w, NULL, NULL);
-        road_ends E;
-        end_info(roads, i, net, tees, tee_of, reach[i], &E);
-        r = road_pieces(&b, &rl, rh[i], reach[i], 0.5 * w, sm[i], &E);
+        road_fp F;
+        road_prints(roads, i, st, net, core_in, &F);
+        end_info(roads, i, net, tees, tee_of, &F.E);
+        r = road_pieces(&b, &rl, &F);
         rs__road_local_free(ctx, &rl);
     }
     if (!r) r = line_and_mark_pieces(&b, g);
     if (!r) r = build_bins(ctx, e, wm, hm, b.chunk);
-    rs__free(ctx, rh);
-    rs__free(ctx, reach);
-    rs__free(ctx, sm);
     rs__free(ctx, tee_of);
     rs__free(ctx, tees);
     if (r) {
@@ -466,13 +544,17 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
 
 /* ---- regions in pixels ------------------------------------------------------------ */
 
-/* What the grid adds to every region: the pixel reached by anti-aliasing,
- * and with alpha-map edges the road cells' marking offset and the
- * neighbour they are classified by (docs/design.md). */
+/* What the grid adds to every region (whose pixels are those whose square
+ * meets it): the road field's coverage treats a capsule whose boundary
+ * comes within half a pixel diagonal of a pixel centre as near, which may
+ * change the pixel's rounding (docs/roadfield.md "Coverage"), a little
+ * beyond the pixels the capsule meets; with alpha-map edges the road
+ * cells' marking offset and the neighbour they are classified by
+ * (docs/design.md). */
 static double grid_pad(const rs_road_grid *g)
 {
     double pix = g->frame.cell_size / g->texels;
-    return 0.75 * pix + 0.01 + (g->tiles ? 4 * g->c : 0);
+    return 0.2072 * pix + 0.01 + (g->tiles ? 4 * g->c : 0);
 }
 
 /* x extent of the capsule (a)-(b), radius r, on the line y = c. */
@@ -692,12 +774,6 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
             i++, j++;
             continue;
         }
-#ifdef RS_EDIT_DEBUG
-        {
-            const rs__edit_item *q = (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) ? &ea->it[ka[i].i] : &eb->it[kb[j].i];
-            fprintf(stderr, "  %s item %g,%g - %g,%g r %g\n", q == &ea->it[ka[i < ea->n ? i : 0].i] ? "old" : "new", q->ax, q->ay, q->bx, q->by, q->r);
-        }
-#endif
         if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) ok = item_spans(ctx, &S, &ea->it[ka[i++].i], pa, pix, W, H);
         else ok = item_spans(ctx, &S, &eb->it[kb[j++].i], pb, pix, W, H);
         if (!ok) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
