@@ -147,6 +147,7 @@ typedef struct builder {
     rs__grid_edit *e;
     double pix, chunk, devmax;
     double mx0, my0, mx1, my1; /* the map, grown by what any pad can add */
+    uint32_t kind;             /* RS__EI_* of the pieces pushed */
 } builder;
 
 static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, double by, double r)
@@ -164,6 +165,8 @@ static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, d
     rs__edit_item *it = &e->it[e->n++];
     it->h = h;
     it->ax = ax, it->ay = ay, it->bx = bx, it->by = by, it->r = r;
+    it->dev = 0;
+    it->kind = b->kind;
     return RS_OK;
 }
 
@@ -217,7 +220,12 @@ static rs_result stretch(builder *b, const road_fp *F, uint64_t hc, uint64_t hr,
                          double by, double dev, double th)
 {
     rs_result r = RS_OK;
-    if (F->rc > 0) r = push(b, hc, ax, ay, bx, by, F->rc + dev);
+    if (F->rc > 0) {
+        b->kind = RS__EI_CORE;
+        r = push(b, hc, ax, ay, bx, by, F->rc + dev);
+        if (!r) b->e->it[b->e->n - 1].dev = nextafterf((float)dev, INFINITY);
+        b->kind = RS__EI_SURFACE;
+    }
     double lo = F->rc > 0 ? F->rc : 0, mid = 0.5 * (lo + F->reach), half = 0.5 * (F->reach - lo);
     double dx = bx - ax, dy = by - ay, l = hypot(dx, dy);
     if (!(l > 0) || !(F->rc > 0)) return r ? r : push(b, hr, ax, ay, bx, by, F->reach + dev);
@@ -358,6 +366,7 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
 static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
 {
     rs_result r = RS_OK;
+    b->kind = RS__EI_PAINT;
     const rs__linesym *L = g->styling ? g->styling->lines : NULL;
     size_t np = rs__linesym_piece_count(L);
     for (size_t k = 0; k < np && !r; k++) {
@@ -512,6 +521,8 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     b.pix = pix;
     b.chunk = fmax(CHUNK_M, CHUNK_PX * pix);
     b.devmax = fmax(0.25, 0.5 * pix);
+    b.kind = RS__EI_SURFACE;
+    if (e) e->fills = st && (st->any_surface || st->img_of);
     /* long segments are cut to the map grown by the largest pad (an
      * alpha-map road cell is at most a DEM cell) */
     double grow = 4 * cs + 4 * pix + 1;
@@ -673,13 +684,9 @@ static int cmp_span(const void *pa, const void *pb)
     return (a->x1 > b->x1) - (a->x1 < b->x1);
 }
 
-/* Spans to rectangles: a row's overlapping or touching spans merged, a
- * rectangle grown down while the next row has the same span. */
-static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size_t *nout)
+/* Sorted by rows, a row's overlapping or touching spans merged. */
+static void spans_norm(spans *S)
 {
-    *out = NULL;
-    *nout = 0;
-    if (!S->n) return RS_OK;
     qsort(S->v, S->n, sizeof *S->v, cmp_span);
     size_t m = 0;
     for (size_t k = 0; k < S->n; k++) {
@@ -687,6 +694,53 @@ static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size
             if (S->v[k].x1 > S->v[m - 1].x1) S->v[m - 1].x1 = S->v[k].x1;
         } else S->v[m++] = S->v[k];
     }
+    S->n = m;
+}
+
+/* Append to out the spans of A (normalised) less those of C (normalised). */
+static int spans_minus(rs_ctx *ctx, const spans *A, const spans *C, spans *out)
+{
+    size_t c = 0;
+    for (size_t k = 0; k < A->n; k++) {
+        span3 a = A->v[k];
+        while (c < C->n && (C->v[c].y < a.y || (C->v[c].y == a.y && C->v[c].x1 <= a.x0))) c++;
+        uint32_t x = a.x0;
+        for (size_t d = c; d < C->n && C->v[d].y == a.y && C->v[d].x0 < a.x1; d++) {
+            if (C->v[d].x0 > x && !span_push(ctx, out, a.y, x, C->v[d].x0)) return 0;
+            if (C->v[d].x1 > x) x = C->v[d].x1;
+        }
+        if (x < a.x1 && !span_push(ctx, out, a.y, x, a.x1)) return 0;
+    }
+    return 1;
+}
+
+/* The pixels whose centre is certainly in core item `it` (within its
+ * radius less its centre line's stray of the segment). */
+static int core_spans(rs_ctx *ctx, spans *S, const rs__edit_item *it, double pix, uint32_t W, uint32_t H)
+{
+    double rin = it->r - 2 * (double)it->dev;
+    rin -= 1e-9 * (1 + fabs(it->ax) + fabs(it->ay) + rin);
+    if (!(rin > 0)) return 1;
+    double y0 = fmin(it->ay, it->by) - rin, y1 = fmax(it->ay, it->by) + rin;
+    uint32_t r0 = to_px(ceil(y0 / pix - 0.5), H), r1 = to_px(floor(y1 / pix - 0.5) + 1, H);
+    for (uint32_t y = r0; y < r1; y++) {
+        double lo, hi;
+        if (!capsule_slice(it->ax, it->ay, it->bx, it->by, rin, (y + 0.5) * pix, &lo, &hi)) continue;
+        uint32_t a = to_px(ceil(lo / pix - 0.5), W), b = to_px(floor(hi / pix - 0.5) + 1, W);
+        if (a < b && !span_push(ctx, S, y, a, b)) return 0;
+    }
+    return 1;
+}
+
+/* Spans to rectangles: a row's overlapping or touching spans merged, a
+ * rectangle grown down while the next row has the same span. */
+static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    if (!S->n) return RS_OK;
+    spans_norm(S);
+    size_t m = S->n;
     rs_pixel_rect *R = rs__alloc_array(ctx, m, sizeof *R);
     size_t *open = rs__alloc_array(ctx, m, sizeof *open); /* rectangles ending at the previous row, by x0 */
     size_t *next = rs__alloc_array(ctx, m, sizeof *next);
@@ -744,6 +798,18 @@ static keyed *sorted_keys(rs_ctx *ctx, const rs__grid_edit *e)
     return k;
 }
 
+/* Whether fingerprint h is missing from the sorted keys (binary search). */
+static int item_changed(const keyed *k, size_t n, uint64_t h)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (k[mid].h < h) lo = mid + 1;
+        else hi = mid;
+    }
+    return !(lo < n && k[lo].h == h);
+}
+
 /* The dirty rectangles between grids a (old) and b (new). */
 static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b, rs_pixel_rect **out, size_t *nout)
 {
@@ -763,25 +829,66 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     }
     const rs__grid_edit *ea = a->edit, *eb = b->edit;
     keyed *ka = sorted_keys(ctx, ea), *kb = sorted_keys(ctx, eb);
-    spans S;
+    uint8_t *kept = rs__calloc(ctx, eb->n ? eb->n : 1, 1); /* b's pieces found in a too (1), and seen (2) */
+    spans S, Ssf, C;
     memset(&S, 0, sizeof S);
-    rs_result r = ka && kb ? RS_OK : rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+    memset(&Ssf, 0, sizeof Ssf);
+    memset(&C, 0, sizeof C);
+    rs_result r = ka && kb && kept ? RS_OK : rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
     double pa = grid_pad(a), pb = grid_pad(b);
+    int ok = 1;
     size_t i = 0, j = 0;
-    while (!r && (i < ea->n || j < eb->n)) {
-        int ok = 1;
+    while (!r && ok && (i < ea->n || j < eb->n)) {
         if (i < ea->n && j < eb->n && ka[i].h == kb[j].h) {
+            kept[kb[j].i] = 1;
             i++, j++;
             continue;
         }
-        if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) ok = item_spans(ctx, &S, &ea->it[ka[i++].i], pa, pix, W, H);
-        else ok = item_spans(ctx, &S, &eb->it[kb[j++].i], pb, pix, W, H);
-        if (!ok) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+        const rs__edit_item *q;
+        double pad;
+        if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) q = &ea->it[ka[i++].i], pad = pa;
+        else q = &eb->it[kb[j++].i], pad = pb;
+        ok = item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
     }
+    /* where an unchanged road's core lies under a changed surface, the
+     * pixels stay wholly road of the same colour (no fills: which road is
+     * on top does not show): those pixels are not dirty */
+    if (!r && ok && Ssf.n && !ea->fills && !eb->fills) {
+        for (size_t k = 0; ok && k < ea->n + eb->n; k++) {
+            const rs__edit_item *q = k < ea->n ? &ea->it[k] : &eb->it[k - ea->n];
+            if (q->kind == RS__EI_PAINT || (k >= ea->n && kept[k - ea->n])) continue;
+            if (k < ea->n && !item_changed(kb, eb->n, q->h)) continue;
+            double x0, y0, x1, y1;
+            item_box(q, k < ea->n ? pa : pb, &x0, &y0, &x1, &y1);
+            uint32_t i0 = bin_of(x0, eb->bin, eb->bw), i1 = bin_of(x1, eb->bin, eb->bw);
+            uint32_t j0 = bin_of(y0, eb->bin, eb->bh), j1 = bin_of(y1, eb->bin, eb->bh);
+            for (uint32_t by = j0; ok && by <= j1; by++)
+                for (uint32_t bx = i0; ok && bx <= i1; bx++) {
+                    size_t c = (size_t)by * eb->bw + bx;
+                    for (uint32_t e = eb->bstart[c]; ok && e < eb->bstart[c + 1]; e++) {
+                        uint32_t t = eb->bitem[e];
+                        if (kept[t] != 1 || eb->it[t].kind != RS__EI_CORE) continue;
+                        kept[t] = 2;
+                        ok = core_spans(ctx, &C, &eb->it[t], pix, W, H);
+                    }
+                }
+        }
+        if (ok) {
+            spans_norm(&Ssf);
+            spans_norm(&C);
+            ok = spans_minus(ctx, &Ssf, &C, &S);
+        }
+    } else if (ok) {
+        for (size_t k = 0; ok && k < Ssf.n; k++) ok = span_push(ctx, &S, Ssf.v[k].y, Ssf.v[k].x0, Ssf.v[k].x1);
+    }
+    if (!r && !ok) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
     rs__free(ctx, ka);
     rs__free(ctx, kb);
+    rs__free(ctx, kept);
     if (!r) r = spans_to_rects(ctx, &S, out, nout);
     rs__free(ctx, S.v);
+    rs__free(ctx, Ssf.v);
+    rs__free(ctx, C.v);
     return r;
 }
 

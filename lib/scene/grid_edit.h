@@ -35,14 +35,22 @@ static inline uint64_t rs__fp_mixd(uint64_t h, double d)
  * box [ax, bx] x [ay, by]; local metres. `h` hashes everything the build
  * made that decides how the piece is drawn (never a road index: roads
  * renumbered by a removal keep their fingerprints). */
+enum {
+    RS__EI_CORE,    /* a road's core: its pixels are wholly road */
+    RS__EI_SURFACE, /* the rest of a road's surface and casing */
+    RS__EI_PAINT    /* line symbols and markings, painted over the surfaces */
+};
 typedef struct rs__edit_item {
     uint64_t h;
     double ax, ay, bx, by, r;
+    float dev;     /* a core: the centre line strays this far from the segment (rounded up) */
+    uint32_t kind; /* RS__EI_* */
 } rs__edit_item;
 
 typedef struct rs__grid_edit {
     rs__edit_item *it;
     size_t n, cap;
+    int fills; /* some road has a fill, gradient or surface image: which road is on top shows */
     /* the items by bins of `bin` metres over the map (bw x bh; an item
      * listed in every bin its box meets), for rect_has_roads */
     double bin;
