@@ -163,7 +163,7 @@ static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, d
         e->cap = nc;
     }
     rs__edit_item *it = &e->it[e->n++];
-    it->h = h;
+    it->h = rs__fp_final(h);
     it->ax = ax, it->ay = ay, it->bx = bx, it->by = by, it->r = r;
     it->dev = 0;
     it->kind = b->kind;
@@ -370,6 +370,10 @@ static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
     const rs__linesym *L = g->styling ? g->styling->lines : NULL;
     size_t np = rs__linesym_piece_count(L);
     for (size_t k = 0; k < np && !r; k++) {
+        if (rs__tick(b->ctx, 0)) {
+            r = RS_ERR_CANCELLED;
+            break;
+        }
         double reg[5];
         uint64_t h = rs__linesym_piece_fp(L, k, reg);
         if (reg[4] < 0 && reg[0] > reg[2]) continue; /* empty */
@@ -528,6 +532,10 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     double grow = 4 * cs + 4 * pix + 1;
     b.mx0 = -grow, b.my0 = -grow, b.mx1 = wm + grow, b.my1 = hm + grow;
     for (size_t i = 0; !r && i < nr; i++) {
+        if (rs__tick(ctx, 0)) { /* a poll every RS__TICK_POLLS roads: the build's cancel */
+            r = RS_ERR_CANCELLED;
+            break;
+        }
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) {

@@ -8,16 +8,21 @@
 
 #include <string.h>
 
-/* Fingerprint mixing (64 bits): a value into a running hash. */
+/* Fingerprint mixing (64 bits): a value into a running hash (one multiply
+ * and a rotation; rs__fp_final mixes a finished fingerprint well). */
 static inline uint64_t rs__fp_mix(uint64_t h, uint64_t v)
 {
-    h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+    h = (h ^ v) * 0x9e3779b97f4a7c15ull;
+    return (h << 27) | (h >> 37);
+}
+
+static inline uint64_t rs__fp_final(uint64_t h)
+{
     h ^= h >> 31;
     h *= 0xbf58476d1ce4e5b9ull;
     h ^= h >> 29;
     h *= 0x94d049bb133111ebull;
-    h ^= h >> 32;
-    return h;
+    return h ^ (h >> 32);
 }
 
 static inline uint64_t rs__fp_mixd(uint64_t h, double d)
