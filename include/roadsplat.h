@@ -944,7 +944,7 @@ typedef struct rs_road_grid_stats {
     uint64_t segments;          /* road segments in the road field (0: none built) */
     uint64_t marks_explicit;    /* markings placed from the road set's records */
     uint64_t marks_auto;        /* markings placed by the automatic rules */
-    uint64_t bytes;             /* memory held by the grid */
+    uint64_t bytes;             /* memory held by the grid (its edit pieces included: rs_road_grid_update) */
 } rs_road_grid_stats;
 
 /* Prepare `roads` over `dem` (its frame included). `opts` may be NULL. Reads
@@ -970,17 +970,19 @@ typedef struct rs_pixel_rect {
  * and stays the caller's. *out is a new grid, splatting to the same bytes
  * as rs_road_grid_build(ctx, dem, roads, opts) would, that also holds the
  * dirty rectangles (rs_road_grid_dirty): their union covers every pixel
- * whose colour, weight, layers or normal may differ between splats of
- * `old` and of *out. The rectangles do not overlap, are sorted by rows
- * and then columns, and are tight (rows of the pieces that changed: for
- * one road moved, added, removed or restyled, at most about twice the
- * pixels that really change, docs/embedding.md). The roads are matched by
- * what they draw, not by index: a removal's renumbering dirties nothing
- * else. A grid for other DEM dimensions, frame, texels, edge or buffer
- * mode than `opts` give is RS_ERR_INVALID_ARG naming the value; when the
- * edit changes the alpha-map road cell (the narrowest road decides it) the
- * whole image is one dirty rectangle. Cost: a full rs_road_grid_build plus
- * the comparison (a few % of it); progress and cancel as
+ * whose colour or weight (rs_splat_window) may differ between splats of
+ * `old` and of *out (the normal map and lit output read one pixel around:
+ * grow them by one pixel; rs_splat_layers_window's planes are not
+ * covered). The rectangles do not overlap, are sorted by rows and then
+ * columns, and follow the pieces that changed row by row (for one road
+ * moved, added or removed about 1.2 to 2.2 times the pixels that really
+ * change, docs/embedding.md). The roads are matched by what they draw,
+ * not by index: a removal's renumbering dirties nothing else. A grid for
+ * other DEM dimensions, frame, texels, edge or buffer mode than `opts`
+ * give is RS_ERR_INVALID_ARG naming the value; when the edit changes the
+ * alpha-map road cell (the narrowest road decides it) the whole image is
+ * one dirty rectangle. Cost: a full rs_road_grid_build plus the
+ * comparison (about a tenth of a build); progress and cancel as
  * rs_road_grid_build. Errors leave *out NULL. */
 RS_API rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_road_grid *old, rs_road_grid **out);

@@ -37,6 +37,10 @@
 #define NO_LINK UINT32_MAX
 #define MAX_BIN_ENTRIES (1u << 26)
 #define MAX_BINS (1u << 22)
+#define MAX_SPLIT 4096          /* pieces of one long segment */
+#define MAX_PIECES (1u << 21)   /* pieces of a grid: beyond, it keeps none (every edit dirties the whole
+                                   image, every rectangle may have roads) */
+#define MAX_SPANS (1u << 22)    /* pixel runs of an update: beyond, the whole image is dirty */
 
 /* ---- fingerprints ---------------------------------------------------------- */
 
@@ -153,6 +157,10 @@ typedef struct builder {
 static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, double by, double r)
 {
     rs__grid_edit *e = b->e;
+    if (e->n >= MAX_PIECES) {
+        e->over = 1;
+        return RS_OK;
+    }
     if (e->n == e->cap) {
         size_t nc = e->cap ? 2 * e->cap : 256, bytes;
         if (nc < e->cap || !rs__mul_size(nc, sizeof *e->it, &bytes))
@@ -264,8 +272,11 @@ static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, cons
     const double *x = rl->x, *y = rl->y;
     double len = rl->s[k + 1] - rl->s[k], t0, t1;
     if (!clip_box(b, x[k], y[k], x[k + 1], y[k + 1], F->reach, &t0, &t1)) return RS_OK;
-    double m = ceil((t1 - t0) * len / b->chunk);
-    if (m < 1) m = 1;
+    /* pieces of a chunk, or of the road's reach when that is wider (its
+     * region is then mostly reach), at most MAX_SPLIT */
+    double m = ceil((t1 - t0) * len / fmax(b->chunk, F->reach));
+    if (!(m >= 1)) m = 1;
+    if (m > MAX_SPLIT) m = MAX_SPLIT;
     double dx = x[k + 1] - x[k], dy = y[k + 1] - y[k];
     rs_result r = RS_OK;
     for (double j = 0; j < m && !r; j++) {
@@ -549,6 +560,15 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         rs__road_local_free(ctx, &rl);
     }
     if (!r) r = line_and_mark_pieces(&b, g);
+    if (!r && e->over) {
+        rs__free(ctx, e->it);
+        e->it = NULL;
+        e->n = e->cap = 0;
+    }
+    if (!r && e->n && e->n < e->cap) { /* to size: the grid keeps them */
+        rs__edit_item *it = rs__realloc(ctx, e->it, e->n * sizeof *e->it);
+        if (it) e->it = it, e->cap = e->n;
+    }
     if (!r) r = build_bins(ctx, e, wm, hm, b.chunk);
     rs__free(ctx, tee_of);
     rs__free(ctx, tees);
@@ -645,10 +665,15 @@ typedef struct span3 {
 typedef struct spans {
     span3 *v;
     size_t n, cap;
+    int over; /* MAX_SPANS reached: the runs are incomplete */
 } spans;
 
 static int span_push(rs_ctx *ctx, spans *S, uint32_t y, uint32_t x0, uint32_t x1)
 {
+    if (S->n >= MAX_SPANS) {
+        S->over = 1;
+        return 1;
+    }
     if (S->n == S->cap) {
         size_t nc = S->cap ? 2 * S->cap : 1024, bytes;
         if (nc < S->cap || !rs__mul_size(nc, sizeof *S->v, &bytes)) return 0;
@@ -818,6 +843,16 @@ static int item_changed(const keyed *k, size_t n, uint64_t h)
     return !(lo < n && k[lo].h == h);
 }
 
+static rs_result whole_image(rs_ctx *ctx, uint32_t W, uint32_t H, rs_pixel_rect **out, size_t *nout)
+{
+    rs_pixel_rect *R = rs__alloc_array(ctx, 1, sizeof *R);
+    if (!R) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+    R->x0 = 0, R->y0 = 0, R->x1 = W, R->y1 = H;
+    *out = R;
+    *nout = 1;
+    return RS_OK;
+}
+
 /* The dirty rectangles between grids a (old) and b (new). */
 static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b, rs_pixel_rect **out, size_t *nout)
 {
@@ -827,14 +862,8 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     *out = NULL;
     *nout = 0;
     if (!W || !H) return RS_OK;
-    if (!a->edit || !b->edit || a->k != b->k || a->c != b->c) {
-        rs_pixel_rect *R = rs__alloc_array(ctx, 1, sizeof *R);
-        if (!R) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
-        R->x0 = 0, R->y0 = 0, R->x1 = W, R->y1 = H;
-        *out = R;
-        *nout = 1;
-        return RS_OK;
-    }
+    if (!a->edit || !b->edit || a->edit->over || b->edit->over || a->k != b->k || a->c != b->c)
+        return whole_image(ctx, W, H, out, nout);
     const rs__grid_edit *ea = a->edit, *eb = b->edit;
     keyed *ka = sorted_keys(ctx, ea), *kb = sorted_keys(ctx, eb);
     uint8_t *kept = rs__calloc(ctx, eb->n ? eb->n : 1, 1); /* b's pieces found in a too (1), and seen (2) */
@@ -893,7 +922,7 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     rs__free(ctx, ka);
     rs__free(ctx, kb);
     rs__free(ctx, kept);
-    if (!r) r = spans_to_rects(ctx, &S, out, nout);
+    if (!r) r = S.over || Ssf.over ? whole_image(ctx, W, H, out, nout) : spans_to_rects(ctx, &S, out, nout);
     rs__free(ctx, S.v);
     rs__free(ctx, Ssf.v);
     rs__free(ctx, C.v);
@@ -993,7 +1022,7 @@ int rs_road_grid_rect_has_roads(const rs_road_grid *grid, uint32_t x0, uint32_t 
     if (!grid) return 0;
     if (x0 >= x1 || y0 >= y1) return 0;
     const rs__grid_edit *e = grid->edit;
-    if (!e || !e->bstart) return 1;
+    if (!e || e->over || !e->bstart) return 1;
     double pix = grid->frame.cell_size / grid->texels, pad = grid_pad(grid);
     double X0 = x0 * pix - pad, Y0 = y0 * pix - pad, X1 = x1 * pix + pad, Y1 = y1 * pix + pad;
     uint32_t i0 = bin_of(X0, e->bin, e->bw), i1 = bin_of(X1, e->bin, e->bw);
