@@ -18,31 +18,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct image {
-    uint32_t w, h;
-    uint8_t *rgba;
-    uint16_t *wt;
-} image;
-
-static void image_free(image *im)
-{
-    free(im->rgba);
-    free(im->wt);
-    memset(im, 0, sizeof *im);
-}
+typedef ss_image image;
+#define image_free ss_image_free
 
 static int render(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *g, const rs_splat_options *o, image *im)
 {
-    rs_splatter *sp = NULL;
-    memset(im, 0, sizeof *im);
-    if (rs_splatter_create(ctx, dem, NULL, g, o, &sp) != RS_OK) return -1;
-    rs_splatter_size(sp, &im->w, &im->h);
-    im->rgba = malloc((size_t)im->w * im->h * 4);
-    im->wt = malloc((size_t)im->w * im->h * 2);
-    int bad = !im->rgba || !im->wt ||
-              rs_splat_window(ctx, sp, 0, 0, im->w, im->h, im->rgba, (size_t)im->w * 4, im->wt, im->w, NULL) != RS_OK;
-    rs_splatter_free(ctx, sp);
-    return bad ? -1 : 0;
+    return ss_grid_image(ctx, dem, g, o, im) == RS_OK ? 0 : -1;
 }
 
 static int pixel_differs(const image *a, const image *b, size_t p)
@@ -203,7 +184,13 @@ typedef struct config {
     int styled;
     rs_edge_mode edges;
     uint64_t seed;
+    int fills;   /* every third road a named style with a fill or a gradient (priorities show) */
+    int hermite; /* the seed's Hermite line anti-aliasing */
 } config;
+
+static const char fill_styles[] = "style red\nfill #b04030\ncasing 0.4 #303030\nline 0 0.2 #ffffff dash 3 3\nend\n"
+                                  "style grad\ngradient #202020 #707070\nend\n";
+static const char *const fill_names[] = { "red", "grad" };
 
 static void run_config(const config *cf, tally *T)
 {
@@ -219,11 +206,17 @@ static void run_config(const config *cf, tally *T)
     ok = ok && (roads = ss_roads(ctx, &sc)) != NULL && rs_roads_create(ctx, &none) == RS_OK;
     for (size_t i = 0; ok && cf->styled && i < sc.nroads; i++)
         ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    rs_styles *S = NULL;
+    if (ok && cf->fills) ok = rs_styles_parse(ctx, fill_styles, sizeof fill_styles - 1, &S) == RS_OK;
+    for (size_t i = 0; ok && cf->fills && i < sc.nroads; i += 3)
+        ok = rs_roads_set_attr(ctx, roads, i, "style", fill_names[(i / 3) % 2]) == RS_OK;
     CHECK(ok);
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = cf->texels;
     o.coverage.edges = cf->edges;
+    o.style.styles = S;
+    if (cf->hermite) o.style.aa = RS_LINE_AA_HERMITE;
     rs_road_grid *g0 = NULL, *gt = NULL;
     image a, t;
     memset(&a, 0, sizeof a);
@@ -238,7 +231,11 @@ static void run_config(const config *cf, tally *T)
     for (uint32_t e = 0; ok && e < cf->edits; e++) {
         int kind = (int)(e % E_KINDS);
         if (kind == E_ZEBRA && !cf->styled) kind = E_MOVE;
-        if (edit(ctx, roads, kind, cf->styled, &rng, W, H)) {
+        int refused = kind == E_RECLASS && cf->fills && e % 2
+                          ? rs_roads_set_attr(ctx, roads, (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads)),
+                                              "style", fill_names[e % 4 == 1]) != RS_OK
+                          : edit(ctx, roads, kind, cf->styled, &rng, W, H) != 0;
+        if (refused) {
             CHECKF(0, "%s: edit %s refused: %s", cf->name, kind_name[kind], rs_ctx_message(ctx));
             break;
         }
@@ -266,6 +263,7 @@ static void run_config(const config *cf, tally *T)
     rs_road_grid_free(ctx, gt);
     rs_roads_free(ctx, roads);
     rs_roads_free(ctx, none);
+    rs_styles_free(ctx, S);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
     rs_ctx_free(ctx);
@@ -293,11 +291,13 @@ static void report(const char *name, const tally *T, int check_ratio)
 static void test_random_edits(void)
 {
     static const config cfs[] = {
-        { "styled", 121, 101, 200, 4, 20, 1, RS_EDGES_ANALYTIC, 11 },
-        { "unstyled", 121, 101, 200, 4, 20, 0, RS_EDGES_ANALYTIC, 12 },
-        { "styled fine", 61, 51, 60, 16, 10, 1, RS_EDGES_ANALYTIC, 13 },
-        { "alpha-map", 121, 101, 200, 4, 10, 0, RS_EDGES_ALPHAMAP, 14 },
-        { "alpha-map styled", 121, 101, 200, 4, 10, 1, RS_EDGES_ALPHAMAP, 15 },
+        { "styled", 121, 101, 200, 4, 20, 1, RS_EDGES_ANALYTIC, 11, 0, 0 },
+        { "unstyled", 121, 101, 200, 4, 20, 0, RS_EDGES_ANALYTIC, 12, 0, 0 },
+        { "styled fine", 61, 51, 60, 16, 10, 1, RS_EDGES_ANALYTIC, 13, 0, 0 },
+        { "alpha-map", 121, 101, 200, 4, 10, 0, RS_EDGES_ALPHAMAP, 14, 0, 0 },
+        { "alpha-map styled", 121, 101, 200, 4, 10, 1, RS_EDGES_ALPHAMAP, 15, 0, 0 },
+        { "fills", 121, 101, 200, 4, 15, 1, RS_EDGES_ANALYTIC, 16, 1, 0 },
+        { "styled hermite", 81, 61, 80, 8, 10, 1, RS_EDGES_ANALYTIC, 17, 0, 1 },
     };
     for (size_t k = 0; k < sizeof cfs / sizeof cfs[0]; k++) {
         tally T;

@@ -192,19 +192,26 @@ static int commit_road(rs_ctx *ctx, rs_roads *roads, const rs_road_rec *rec, siz
     return 1;
 }
 
+rs_result rs__roads_check_geometry(rs_ctx *ctx, const char *fn, double width, const double *xy, size_t n)
+{
+    if (!(width > 0) || !isfinite(width))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: width %g must be finite and > 0", fn, width);
+    if (n < 2) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: %zu points; a road needs at least 2", fn, n);
+    if (!xy) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: xy is NULL", fn);
+    for (size_t i = 0; i < 2 * n; i++)
+        if (!isfinite(xy[i]))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: point %zu has a non-finite %c", fn, i / 2,
+                            (i & 1) ? 'y' : 'x');
+    return RS_OK;
+}
+
 rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, double width,
                        const double *xy, size_t n)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: roads is NULL");
-    if (!(width > 0) || !isfinite(width))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: width %g must be finite and > 0", width);
-    if (n < 2) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: %zu points; a road needs at least 2", n);
-    if (!xy) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: xy is NULL");
-    for (size_t i = 0; i < 2 * n; i++)
-        if (!isfinite(xy[i]))
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: point %zu has a non-finite %c", i / 2,
-                            (i & 1) ? 'y' : 'x');
+    rs_result g = rs__roads_check_geometry(ctx, "rs_roads_add", width, xy, n);
+    if (g) return g;
     if (n > ctx->limits.max_points || roads->points > ctx->limits.max_points - n)
         return rs__fail(ctx, RS_ERR_LIMIT, "rs_roads_add: more than %llu road points in total",
                         (unsigned long long)ctx->limits.max_points);

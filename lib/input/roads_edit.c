@@ -53,14 +53,8 @@ rs_result rs_roads_replace(rs_ctx *ctx, rs_roads *roads, size_t i, const char *n
     if (i >= roads->count)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_replace: road %zu out of range (%zu roads)", i,
                         roads->count);
-    if (!(width > 0) || !isfinite(width))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_replace: width %g must be finite and > 0", width);
-    if (n < 2) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_replace: %zu points; a road needs at least 2", n);
-    if (!xy) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_replace: xy is NULL");
-    for (size_t k = 0; k < 2 * n; k++)
-        if (!isfinite(xy[k]))
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_replace: point %zu has a non-finite %c", k / 2,
-                            (k & 1) ? 'y' : 'x');
+    rs_result g = rs__roads_check_geometry(ctx, "rs_roads_replace", width, xy, n);
+    if (g) return g;
     rs_road_rec *rec = &roads->roads[i];
     size_t others = roads->points - rec->n;
     if (n > ctx->limits.max_points || others > ctx->limits.max_points - n)

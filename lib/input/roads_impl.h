@@ -67,4 +67,7 @@ int rs__roads_key_ok(const char *k, size_t n);
 /* An attribute value of vn bytes: valid UTF-8 without control characters
  * (tab allowed); else RS_ERR_INVALID_ARG, the message starting with fn. */
 rs_result rs__roads_value_check(rs_ctx *ctx, const char *fn, const char *value, size_t vn);
+/* A road's width (> 0, finite), n >= 2 points, xy not NULL and finite;
+ * else RS_ERR_INVALID_ARG naming the value, the message starting with fn. */
+rs_result rs__roads_check_geometry(rs_ctx *ctx, const char *fn, double width, const double *xy, size_t n);
 #endif

@@ -27,25 +27,6 @@
 enum { MOVE, ADD, REMOVE, RECLASS, KINDS };
 static const char *const kind_name[KINDS] = { "move 15 m", "add", "remove", "reclass" };
 
-typedef struct image {
-    uint32_t w, h;
-    uint8_t *rgba;
-    uint16_t *wt;
-} image;
-
-static int render(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *g, const rs_splat_options *o, image *im)
-{
-    rs_splatter *sp = NULL;
-    if (rs_splatter_create(ctx, dem, NULL, g, o, &sp)) return -1;
-    rs_splatter_size(sp, &im->w, &im->h);
-    if (!im->rgba) im->rgba = malloc((size_t)im->w * im->h * 4);
-    if (!im->wt) im->wt = malloc((size_t)im->w * im->h * 2);
-    int bad = !im->rgba || !im->wt ||
-              rs_splat_window(ctx, sp, 0, 0, im->w, im->h, im->rgba, (size_t)im->w * 4, im->wt, im->w, NULL);
-    rs_splatter_free(ctx, sp);
-    return bad ? -1 : 0;
-}
-
 static int apply(rs_ctx *ctx, rs_roads *roads, int kind, sc_rng *rng, double W, double H)
 {
     size_t n = rs_roads_count(roads), i = (size_t)(sc_rng_unit(rng) * (double)n);
@@ -93,10 +74,10 @@ int main(int argc, char **argv)
     memset(&o, 0, sizeof o);
     o.texels = 4;
     rs_road_grid *g0 = NULL;
-    image a, b;
+    ss_image a, b;
     memset(&a, 0, sizeof a);
     memset(&b, 0, sizeof b);
-    if (!bad) bad = rs_road_grid_build(ctx, dem, roads, &o, &g0) || render(ctx, dem, g0, &o, &a);
+    if (!bad) bad = rs_road_grid_build(ctx, dem, roads, &o, &g0) || ss_grid_image(ctx, dem, g0, &o, &a);
     double upd[KINDS][PER_KIND * RUNS], full[KINDS][PER_KIND * RUNS], dirty[KINDS], changed[KINDS];
     long uncovered = 0;
     size_t rects[KINDS];
@@ -124,7 +105,8 @@ int main(int argc, char **argv)
             if (!g1) g1 = u;
             else rs_road_grid_free(ctx, u);
         }
-        if (bad || render(ctx, dem, g1, &o, &b)) {
+        ss_image_free(&b);
+        if (bad || ss_grid_image(ctx, dem, g1, &o, &b)) {
             bad = 1;
             rs_road_grid_free(ctx, g1);
             break;
@@ -153,7 +135,7 @@ int main(int argc, char **argv)
         free(R);
         rs_road_grid_free(ctx, g0);
         g0 = g1;
-        image t = a;
+        ss_image t = a;
         a = b;
         b = t;
     }
@@ -206,10 +188,8 @@ int main(int argc, char **argv)
         bad |= fclose(csv) != 0;
     }
     free(mask);
-    free(a.rgba);
-    free(a.wt);
-    free(b.rgba);
-    free(b.wt);
+    ss_image_free(&a);
+    ss_image_free(&b);
     rs_road_grid_free(ctx, g0);
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
