@@ -54,7 +54,9 @@ static uint64_t mixs(uint64_t h, const char *s)
     return mix(h, f);
 }
 
-/* A road as a neighbour sees it: width, attributes, first and last points. */
+/* A road as a neighbour's end sees it: width, first and last points (its
+ * attributes act through what they resolve to: the links and T ends,
+ * hashed where they are used). */
 static uint64_t road_sig(const rs_roads *roads, size_t q)
 {
     const double *xy;
@@ -62,12 +64,6 @@ static uint64_t road_sig(const rs_roads *roads, size_t q)
     double w = 0;
     rs_roads_get(roads, q, NULL, &w, &xy, &n);
     uint64_t h = mixd(0x5167, w);
-    size_t na = rs_roads_attr_count(roads, q);
-    for (size_t k = 0; k < na; k++) {
-        const char *key, *val;
-        rs_roads_attr_at(roads, q, k, &key, &val);
-        h = mixs(mixs(h, key), val);
-    }
     if (n >= 2) {
         const size_t at[4] = { 0, 1, n - 2, n - 1 };
         for (int k = 0; k < 4; k++) h = mixd(mixd(h, xy[2 * at[k]]), xy[2 * at[k] + 1]);
