@@ -219,13 +219,15 @@ static int clip_box(const builder *b, double ax, double ay, double bx, double by
 /* A stretch of road from a to b (straight within dev, its directions
  * within angle th of the chord): the core capsule and the rims on both
  * sides as capsules of the chord moved sideways. hc, hr: the stretch's
- * core and rim fingerprints. */
+ * core and rim fingerprints. tee: the stretch ends at a trimmed end at a T,
+ * past which its core capsule may reach off the road (it is then no core
+ * for the updates' subtraction). */
 static rs_result stretch(builder *b, const road_fp *F, uint64_t hc, uint64_t hr, double ax, double ay, double bx,
-                         double by, double dev, double th)
+                         double by, double dev, double th, int tee)
 {
     rs_result r = RS_OK;
     if (F->rc > 0) {
-        b->kind = RS__EI_CORE;
+        b->kind = tee ? RS__EI_SURFACE : RS__EI_CORE;
         r = push(b, hc, ax, ay, bx, by, F->rc + dev);
         if (!r) b->e->it[b->e->n - 1].dev = nextafterf((float)dev, INFINITY);
         b->kind = RS__EI_SURFACE;
@@ -259,7 +261,8 @@ static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k
     }
     if (k0 == 0) h = mix(h, F->E.h[0]);
     if (k1 + 1 == rl->n) h = mix(h, F->E.h[1]);
-    return stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k0], y[k0], x[k1], y[k1], dev, th);
+    int tee = (k0 == 0 && F->E.tee[0] > 0) || (k1 + 1 == rl->n && F->E.tee[1] > 0);
+    return stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k0], y[k0], x[k1], y[k1], dev, th, tee);
 }
 
 /* A segment longer than a chunk, cut to the map and split evenly. */
@@ -284,7 +287,7 @@ static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, cons
         if (k == 0) h = mix(h, F->E.h[0]);
         if (k + 2 == rl->n) h = mix(h, F->E.h[1]);
         r = stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k] + ua * dx, y[k] + ua * dy, x[k] + ub * dx,
-                    y[k] + ub * dy, 0, 0);
+                    y[k] + ub * dy, 0, 0, (k == 0 && F->E.tee[0] > 0) || (k + 2 == rl->n && F->E.tee[1] > 0));
     }
     return r;
 }
@@ -520,10 +523,12 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                 if (tees[k].road < nr) tee_of[2 * (size_t)tees[k].road + (tees[k].end ? 1 : 0)] = k;
         }
     }
-    /* the core: pixels whose square lies inside the surface (with
-     * alpha-map edges, also the road cells around them: at most 2 road
-     * cells of the automatic K a texel, 2 forced road cells) */
-    double core_in = pix + 1e-6 * (1 + fmax(wm, hm));
+    /* the core: pixels whose centre lies half a pixel diagonal inside the
+     * surface, which the road field's coverage takes as wholly road at
+     * once (docs/roadfield.md "Coverage"; with alpha-map edges, also the
+     * road cells around them: at most 2 road cells of the automatic K a
+     * texel, 2 forced road cells) */
+    double core_in = 0.7072 * pix + 1e-6 * (1 + fmax(wm, hm));
     if (o->coverage.edges == RS_EDGES_ALPHAMAP) core_in += 4 * (o->grid.road_cell > 0 ? 2 * o->grid.road_cell : 0.5 * pix);
     builder b;
     memset(&b, 0, sizeof b);

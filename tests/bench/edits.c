@@ -21,7 +21,7 @@
 #include <string.h>
 
 #define RUNS 3
-#define PER_KIND 4
+#define PER_KIND 6
 #define ROADS 10000
 
 enum { MOVE, ADD, REMOVE, RECLASS, KINDS };
