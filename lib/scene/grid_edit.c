@@ -373,6 +373,37 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
     return r;
 }
 
+/* A slab of the line symbols in stretches of a chunk along u, anchored at
+ * its frame's origin (the same stretches whatever cuts its ends): each
+ * with the slab's fingerprint, its part of the u range and the
+ * half-planes that cut a pixel centre in it (all of them with Hermite
+ * smoothing, which reads further), so that a cut far along the road
+ * leaves the stretches away from it unchanged. */
+static rs_result slab_pieces(builder *b, const rs__linesym_piece_view *V, int all)
+{
+    if (!(V->ru0 <= V->ru1 && V->rv0 <= V->rv1)) return RS_OK;
+    double len = fmax(b->chunk, (V->ru1 - V->ru0) / MAX_SPLIT);
+    double j0 = floor(V->ru0 / len), j1 = floor(V->ru1 / len);
+    double vm = 0.5 * (V->rv0 + V->rv1), nx = V->uy, ny = -V->ux, rad = 0.5 * (V->rv1 - V->rv0);
+    rs_result r = RS_OK;
+    for (double j = j0; j <= j1 && !r; j++) {
+        double ua = fmax(V->ru0, j * len), ub = fmin(V->ru1, (j + 1) * len);
+        if (ua > ub) continue;
+        uint64_t h = mixd(mixd(mix(V->h, 0x51ab), ua), ub);
+        for (uint32_t q = 0; q < V->nhp; q++) {
+            const double *hp = V->hp + 4 * (size_t)q;
+            double lo = hp[0] + fmin(hp[1] * ua, hp[1] * ub) + fmin(hp[2] * V->rv0, hp[2] * V->rv1);
+            double eps = 1e-9 * (1 + fabs(hp[0]) + fabs(hp[1]) * fmax(fabs(ua), fabs(ub)) +
+                                 fabs(hp[2]) * fmax(fabs(V->rv0), fabs(V->rv1)) + hp[3]);
+            if (!all && lo >= hp[3] + eps) continue; /* cuts no pixel centre here */
+            h = mixd(mixd(mixd(mixd(h, hp[0]), hp[1]), hp[2]), hp[3]);
+        }
+        r = push(b, h, V->ox + ua * V->ux + vm * nx, V->oy + ua * V->uy + vm * ny, V->ox + ub * V->ux + vm * nx,
+                 V->oy + ub * V->uy + vm * ny, rad);
+    }
+    return r;
+}
+
 static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
 {
     rs_result r = RS_OK;
@@ -384,10 +415,13 @@ static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
             r = RS_ERR_CANCELLED;
             break;
         }
-        double reg[5];
-        uint64_t h = rs__linesym_piece_fp(L, k, reg);
-        if (reg[4] < 0 && reg[0] > reg[2]) continue; /* empty */
-        r = push(b, h, reg[0], reg[1], reg[2], reg[3], reg[4]);
+        rs__linesym_piece_view V;
+        rs__linesym_piece_get(L, k, &V);
+        if (!V.slab) {
+            if (V.reg[0] <= V.reg[2]) r = push(b, V.h, V.reg[0], V.reg[1], V.reg[2], V.reg[3], V.reg[4]);
+            continue;
+        }
+        r = slab_pieces(b, &V, g->style.aa == RS_LINE_AA_HERMITE);
     }
     const rs__markings *mk = g->markings;
     for (size_t k = 0; mk && k < mk->n && !r; k++) {
