@@ -2,13 +2,24 @@
  * rs_roads_replace, rs_roads_set_point_attr, rs_styles_replace,
  * rs_road_grid_update, rs_road_grid_dirty, rs_road_grid_rect_has_roads.
  *
- * Property tests on random edits of generated cities (styled by class with
- * automatic markings, unstyled, alpha-map edges, fine pixels): the whole
- * image before and after each edit through rs_splatter_create +
- * rs_splat_window; every pixel that differs (colour or weight) lies in a
- * dirty rectangle; the updated grid splats to the bytes of a fresh build;
- * a tile rect_has_roads calls road-free is the terrain alone. Then the
- * edit functions' semantics, their errors and allocation failures. */
+ * test_random_edits: random edits (moves by up to 25 m, new roads,
+ * removals, class or width changes, zebra points, named fill styles) of
+ * generated cities in seven configurations (styled by class with automatic
+ * markings, unstyled, 0.31 m pixels, alpha-map edges unstyled and styled,
+ * fills and gradients, Hermite lines), chained (each update's grid is the
+ * next one's old grid). For every edit: the whole image before and after
+ * through rs_splatter_create + rs_splat_window; every pixel whose colour
+ * or weight differs lies in a dirty rectangle; the rectangles lie in the
+ * image and never overlap; the updated grid splats to the bytes of a fresh
+ * build; a 32-pixel tile rect_has_roads calls road-free equals the splat
+ * without roads; moves, additions and removals dirty at most 2.5x the
+ * changed pixels (printed per kind). Then the edit functions' semantics
+ * (renumbering, markings and point attributes dropped or kept), a named
+ * style redefined (only its roads dirty), no edit (nothing dirty), a
+ * removal (the renumbered roads dirty nothing), errors naming the value,
+ * and allocation failures (every allocation failed in turn: no leak, no
+ * object on failure) of the update and the three road edits.
+ * EDITS_DEBUG=1 prints the first pixels a rectangle misses. */
 #include "harness.h"
 #include "fail_alloc.h"
 #include "scene_splat.h"

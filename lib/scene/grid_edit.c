@@ -3,20 +3,19 @@
  * rs_road_grid_rect_has_roads.
  *
  * Every grid keeps its pieces (lib/scene/grid_edit.h): each road cut into
- * chunks of about 10 m, a disc at each of its vertices where the square
- * ends of its surface (what cuts other roads' lines) reach past its
- * chunks, each line cut and each marking. A piece has a fingerprint of
- * everything the build made that decides how it is drawn (the road's width,
- * attributes and point attributes, its resolved style and lines, the
- * stroke's arc length and direction where dashes or surface images read
- * them, the chunk's points, at a road end the record it continues into
- * and the T it ends at; a cut's or marking's own geometry) and a region
- * holding every pixel its paint reaches. A pixel's colour is made from the
- * pieces whose regions hold it, so the pixels an edit can change lie in
- * the regions of the pieces found in only one of the two grids: the
- * fingerprints are compared as multisets (by content, never by road index,
- * so a removal's renumbering changes nothing), and the regions of the
- * unmatched ones are rasterised row by row into rectangles. */
+ * chunks of about 10 m, each chunk as a core (pixels wholly road whatever
+ * the width and casing) and two rims; discs at the road's ends and bends;
+ * the strip of a trimmed end at a T; the line symbols' convex pieces
+ * (straight ones in stretches along their segment, with the cuts that
+ * reach each stretch); the markings. A piece has a fingerprint of what
+ * the build made that decides how it is drawn (never a road index: a
+ * removal's renumbering changes nothing) and a region holding every pixel
+ * its paint reaches. A pixel's colour is made from the pieces whose
+ * regions hold it, so the pixels an edit can change lie in the regions of
+ * the pieces found in only one of the two grids: the fingerprints are
+ * compared as multisets, the regions of the unmatched ones rasterised
+ * row by row (less the cores of unchanged roads where no fill shows which
+ * road is on top), and the runs stacked into rectangles. */
 #include "grid_edit.h"
 #include "roadgrid.h"
 #include "styling.h"
