@@ -285,6 +285,35 @@ RS_API rs_result rs_roads_negate_y(rs_ctx *ctx, rs_roads *roads);
 RS_API rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name, double *width,
                               const double **xy, size_t *n);
 
+/* Edits (issue 30; docs/embedding.md "Edits and dirty rectangles"). Each
+ * invalidates the pointers from rs_roads_get* (like rs_roads_add) and
+ * leaves the set unchanged when it fails; errors are RS_ERR_INVALID_ARG
+ * naming the bad value (index, width, point), RS_ERR_LIMIT past
+ * rs_limits.max_points, RS_ERR_NOMEM. A set is edited by one thread, and
+ * not while a call reads it (a grid build, a network build).
+ *
+ * rs_roads_remove: road i goes, with its explicit markings (rs_roads_add_mark,
+ * `mark` lines) and its point attributes; the roads after it move down by
+ * one, and so do the road indices of their markings and point attributes
+ * (road j > i becomes j - 1 everywhere). */
+RS_API rs_result rs_roads_remove(rs_ctx *ctx, rs_roads *roads, size_t i);
+/* Road i gets new points (n >= 2 finite x,y pairs, copied; xy may point
+ * into this set), width (> 0, finite; the width counts as given) and name
+ * (copied; NULL keeps the name). Its attributes, explicit markings (their
+ * s now measured along the new points) and index stay; its point
+ * attributes stay on the same point indices, those at index n or later are
+ * dropped. */
+RS_API rs_result rs_roads_replace(rs_ctx *ctx, rs_roads *roads, size_t i, const char *name, double width,
+                                  const double *xy, size_t n);
+/* Set (or replace) point attribute `key` of point `point` of road i
+ * (`X Y key=value` in the road text; crossing=zebra places a zebra),
+ * with the parser's rules: key 1..64 characters of A-Z a-z 0-9 _ : . -,
+ * value non-empty, valid UTF-8 without control characters. Copied. A
+ * new attribute goes last in rs_roads_point_attr_at's order. value NULL
+ * removes the attribute (nothing to remove is not an error). */
+RS_API rs_result rs_roads_set_point_attr(rs_ctx *ctx, rs_roads *roads, size_t i, size_t point, const char *key,
+                                         const char *value);
+
 /* ---------------------------------------------------------------------------
  * Road attributes (docs/road-format.md): `key=value` words on a road's
  * header line, `road NAME width W class=residential lanes=2 style=NAME
@@ -455,10 +484,15 @@ RS_API rs_result rs_styles_add_text(rs_ctx *ctx, rs_styles *styles, const char *
 /* Add one style (copied), checked against the limits documented on
  * rs_style; RS_ERR_INVALID_ARG naming the field otherwise. */
 RS_API rs_result rs_styles_add(rs_ctx *ctx, rs_styles *styles, const rs_style *style);
+/* Redefine the style of style->name (checked as rs_styles_add checks it,
+ * copied): it takes the old one's place (rs_styles_get index), or is added
+ * when the set has no style of that name. Roads naming it draw with the
+ * new one in grids built (or updated: rs_road_grid_update) afterwards. */
+RS_API rs_result rs_styles_replace(rs_ctx *ctx, rs_styles *styles, const rs_style *style);
 RS_API void rs_styles_free(rs_ctx *ctx, rs_styles *styles);
 RS_API size_t rs_styles_count(const rs_styles *styles);
 /* Style i in the order added, or NULL. Owned by the set; valid until the
- * next add to it or rs_styles_free. */
+ * next add or replace on it, or rs_styles_free. */
 RS_API const rs_style *rs_styles_get(const rs_styles *styles, size_t i);
 /* The style called `name`, or NULL. Same lifetime as rs_styles_get. */
 RS_API const rs_style *rs_styles_find(const rs_styles *styles, const char *name);
@@ -910,7 +944,7 @@ typedef struct rs_road_grid_stats {
     uint64_t segments;          /* road segments in the road field (0: none built) */
     uint64_t marks_explicit;    /* markings placed from the road set's records */
     uint64_t marks_auto;        /* markings placed by the automatic rules */
-    uint64_t bytes;             /* memory held by the grid */
+    uint64_t bytes;             /* memory held by the grid (its edit pieces included: rs_road_grid_update) */
 } rs_road_grid_stats;
 
 /* Prepare `roads` over `dem` (its frame included). `opts` may be NULL. Reads
@@ -920,6 +954,54 @@ RS_API rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roa
                                     const rs_splat_options *opts, rs_road_grid **out);
 RS_API void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid);
 RS_API void rs_road_grid_get_stats(const rs_road_grid *grid, rs_road_grid_stats *out);
+
+/* Edits with dirty rectangles (issue 30; docs/embedding.md "Edits and
+ * dirty rectangles"). A rectangle of output pixels: columns [x0, x1),
+ * rows [y0, y1), in the pixels of the grid's texels (the splatter's image). */
+typedef struct rs_pixel_rect {
+    uint32_t x0, y0, x1, y1;
+} rs_pixel_rect;
+
+/* The grid of the edited `roads`, and which pixels the edit may change.
+ * `old` is a grid rs_road_grid_build (or this call) made for the same
+ * `dem` and `opts` from the roads before the edit (any number of edits:
+ * rs_roads_add, _remove, _replace, _set_attr, _set_point_attr,
+ * _add_mark, rs_styles_replace on the opts' style table); it is only read
+ * and stays the caller's (splatters on it may go on rendering from other
+ * threads meanwhile). *out is a new grid (the caller's: rs_road_grid_free),
+ * splatting to the same bytes
+ * as rs_road_grid_build(ctx, dem, roads, opts) would, that also holds the
+ * dirty rectangles (rs_road_grid_dirty): their union covers every pixel
+ * whose colour or weight (rs_splat_window) may differ between splats of
+ * `old` and of *out (the normal map and lit output read one pixel around:
+ * grow them by one pixel; rs_splat_layers_window's planes are not
+ * covered). The rectangles do not overlap, are sorted by rows and then
+ * columns, and follow the pieces that changed row by row (for one road
+ * moved, added or removed 1.3 to 1.9 times the pixels that really change
+ * on the 10k-road city, docs/embedding.md). The roads are matched by what
+ * they draw, not by index: a removal's renumbering dirties nothing else.
+ * Every grid keeps the pieces this compares (counted in its stats'
+ * bytes; about a tenth of rs_road_grid_build's time). A grid for
+ * other DEM dimensions, frame, texels, edge or buffer mode than `opts`
+ * give is RS_ERR_INVALID_ARG naming the value; when the edit changes the
+ * alpha-map road cell (the narrowest road decides it) the whole image is
+ * one dirty rectangle. Cost: a full rs_road_grid_build plus the
+ * comparison (about a tenth of a build); progress and cancel as
+ * rs_road_grid_build. Errors leave *out NULL. */
+RS_API rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                     const rs_splat_options *opts, const rs_road_grid *old, rs_road_grid **out);
+/* The grid's dirty rectangles (none for a grid from rs_road_grid_build):
+ * returns their count and copies the first min(count, cap) into rects
+ * (NULL with cap 0: the count alone). Read-only: any thread. */
+RS_API size_t rs_road_grid_dirty(const rs_road_grid *grid, rs_pixel_rect *rects, size_t cap);
+/* 0 when no road paint of the grid (surface, casing, lines, markings, and
+ * the anti-aliased pixel around them) can reach output pixels [x0, x1) x
+ * [y0, y1), so a host may skip that tile and draw the terrain alone; 1
+ * when some may (conservative: a 1 may still find no road pixel; never 0
+ * where a road pixel is). An empty rectangle gives 0. O(pieces near the
+ * rectangle); read-only: any thread. */
+RS_API int rs_road_grid_rect_has_roads(const rs_road_grid *grid, uint32_t x0, uint32_t y0, uint32_t x1,
+                                       uint32_t y1);
 
 /* Output size for `dem` and `opts`: (W-1)*T x (H-1)*T. Fails with
  * RS_ERR_LIMIT when it exceeds the context's max_pixels. */

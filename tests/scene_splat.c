@@ -112,6 +112,25 @@ rs_result ss_splat_window(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
     return r;
 }
 
+rs_result ss_grid_image(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,
+                        ss_image *out)
+{
+    rs_splatter *s = NULL;
+    memset(out, 0, sizeof *out);
+    rs_result r = rs_splatter_create(ctx, dem, NULL, grid, opts, &s);
+    if (!r) {
+        rs_splatter_size(s, &out->w, &out->h);
+        out->rgba = malloc((size_t)out->w * out->h * 4);
+        out->wt = malloc((size_t)out->w * out->h * 2);
+        r = out->rgba && out->wt ? rs_splat_window(ctx, s, 0, 0, out->w, out->h, out->rgba, (size_t)out->w * 4,
+                                                   out->wt, out->w, NULL)
+                                 : RS_ERR_NOMEM;
+    }
+    rs_splatter_free(ctx, s);
+    if (r) ss_image_free(out);
+    return r;
+}
+
 rs_dem *ss_fractal_dem(rs_ctx *ctx, uint32_t w, uint32_t h, uint64_t seed, double cs, double zs)
 {
     float *z = malloc(sizeof(float) * w * h);

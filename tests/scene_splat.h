@@ -45,4 +45,8 @@ void ss_image_free(ss_image *im);
  * *rgba malloc'd, w x h pixels; on failure *rgba may be NULL or partial. */
 rs_result ss_splat_window(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
                           uint32_t *w, uint32_t *h, uint8_t **rgba);
+/* The whole splat (RGBA and weights) of a prepared grid through a
+ * splatter (one window); on failure *out is zeroed. */
+rs_result ss_grid_image(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,
+                        ss_image *out);
 #endif

@@ -16,59 +16,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#define MAX_ATTRS 64   /* attributes per road */
-#define MAX_KEY 64     /* bytes of an attribute key */
-#define MAX_LANES 16
-
-typedef struct rs_road_rec {
-    size_t name;  /* offset into names */
-    double width;
-    size_t first; /* index of the first point */
-    size_t n;     /* point count */
-    size_t attr_first;   /* index into attrs */
-    uint32_t attr_count;
-    uint32_t lanes;      /* 0: not given */
-    size_t style;        /* offset into names of the style= value; SIZE_MAX: none */
-    uint8_t road_class;  /* rs_road_class */
-    uint8_t link, oneway, area, width_given;
-} rs_road_rec;
-
-typedef struct rs_attr {
-    size_t key, value; /* offsets into names */
-} rs_attr;
-
-/* An explicit marking (issue 14): a `mark` line or rs_roads_add_mark. */
-typedef struct rs_mark_rec {
-    size_t type;      /* offset into names */
-    size_t road;      /* road index; SIZE_MAX while the parser resolves road_name */
-    size_t road_name; /* offset into names (parser) */
-    double s, t, length, width;
-    int flip;
-    uint64_t line;
-} rs_mark_rec;
-
-/* A point attribute (`X Y crossing=zebra`). */
-typedef struct rs_point_attr {
-    size_t road, point; /* road index, point index within it */
-    size_t key, value;  /* offsets into names */
-} rs_point_attr;
-
-struct rs_roads {
-    rs_road_rec *roads;
-    size_t count, cap;
-    double *xy; /* x0 y0 x1 y1 ... */
-    size_t points, points_cap;
-    char *names; /* string pool: names, attribute keys and values */
-    size_t names_len, names_cap;
-    rs_attr *attrs;
-    size_t attrs_len, attrs_cap;
-    rs_mark_rec *marks;
-    size_t marks_len, marks_cap;
-    rs_point_attr *pattrs;
-    size_t pattrs_len, pattrs_cap;
-    int frame;        /* rs_road_frame: the `frame` header line (RS_FRAME_NONE: none) */
-    size_t frame_crs; /* offset into names of its CRS; SIZE_MAX: none */
-};
+#include "roads_impl.h"
 
 /* Make room for `need` (>= 1) elements of `elem` bytes: capacity doubles
  * (at least 16), every product checked. Returns the (possibly moved)
@@ -244,19 +192,26 @@ static int commit_road(rs_ctx *ctx, rs_roads *roads, const rs_road_rec *rec, siz
     return 1;
 }
 
+rs_result rs__roads_check_geometry(rs_ctx *ctx, const char *fn, double width, const double *xy, size_t n)
+{
+    if (!(width > 0) || !isfinite(width))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: width %g must be finite and > 0", fn, width);
+    if (n < 2) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: %zu points; a road needs at least 2", fn, n);
+    if (!xy) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: xy is NULL", fn);
+    for (size_t i = 0; i < 2 * n; i++)
+        if (!isfinite(xy[i]))
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: point %zu has a non-finite %c", fn, i / 2,
+                            (i & 1) ? 'y' : 'x');
+    return RS_OK;
+}
+
 rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, double width,
                        const double *xy, size_t n)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: roads is NULL");
-    if (!(width > 0) || !isfinite(width))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: width %g must be finite and > 0", width);
-    if (n < 2) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: %zu points; a road needs at least 2", n);
-    if (!xy) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: xy is NULL");
-    for (size_t i = 0; i < 2 * n; i++)
-        if (!isfinite(xy[i]))
-            return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_add: point %zu has a non-finite %c", i / 2,
-                            (i & 1) ? 'y' : 'x');
+    rs_result g = rs__roads_check_geometry(ctx, "rs_roads_add", width, xy, n);
+    if (g) return g;
     if (n > ctx->limits.max_points || roads->points > ctx->limits.max_points - n)
         return rs__fail(ctx, RS_ERR_LIMIT, "rs_roads_add: more than %llu road points in total",
                         (unsigned long long)ctx->limits.max_points);
@@ -506,6 +461,24 @@ static int attr_slot(rs_ctx *ctx, rs_roads *roads, rs_road_rec *rec)
     return 1;
 }
 
+/* An attribute value: valid UTF-8 without control characters (tab allowed). */
+rs_result rs__roads_value_check(rs_ctx *ctx, const char *fn, const char *value, size_t vn)
+{
+    for (size_t k = 0; k < vn;) {
+        unsigned char c = (unsigned char)value[k];
+        if (c < 0x80) {
+            if ((c < 0x20 && c != '\t') || c == 0x7F)
+                return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: value has control character 0x%02x", fn, c);
+            k++;
+            continue;
+        }
+        size_t len = rs__utf8_len((const unsigned char *)value + k, vn - k);
+        if (!len) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: value is not valid UTF-8", fn);
+        k += len;
+    }
+    return RS_OK;
+}
+
 rs_result rs_roads_set_attr(rs_ctx *ctx, rs_roads *roads, size_t i, const char *key, const char *value)
 {
     char why[200], q[64];
@@ -517,18 +490,8 @@ rs_result rs_roads_set_attr(rs_ctx *ctx, rs_roads *roads, size_t i, const char *
         return rs__fail(ctx, RS_ERR_INVALID_ARG,
                         "rs_roads_set_attr: key %s must be 1..%d characters of A-Z a-z 0-9 _ : . -",
                         rs__quote(q, sizeof q, key, kn), MAX_KEY);
-    for (size_t k = 0; k < vn;) {
-        unsigned char c = (unsigned char)value[k];
-        if (c < 0x80) {
-            if ((c < 0x20 && c != '\t') || c == 0x7F)
-                return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_set_attr: value has control character 0x%02x", c);
-            k++;
-            continue;
-        }
-        size_t len = rs__utf8_len((const unsigned char *)value + k, vn - k);
-        if (!len) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_set_attr: value is not valid UTF-8");
-        k += len;
-    }
+    rs_result vr = rs__roads_value_check(ctx, "rs_roads_set_attr", value, vn);
+    if (vr) return vr;
     rs_road_rec *rec = &roads->roads[i];
     rs_road_rec next = *rec;
     if (!apply_known(&next, key, kn, value, vn, roads->names_len, why, sizeof why))
@@ -1353,3 +1316,16 @@ rs_result rs_roads_parse(rs_ctx *ctx, const char *text, size_t size, rs_roads **
 {
     return rs_roads_parse_ex(ctx, text, size, NULL, out);
 }
+
+/* For lib/input/roads_edit.c (lib/input/roads_impl.h). */
+void *rs__roads_grow(rs_ctx *ctx, void *buf, size_t *cap, size_t need, size_t elem)
+{
+    return grow(ctx, buf, cap, need, elem);
+}
+
+size_t rs__roads_pool_add(rs_ctx *ctx, rs_roads *roads, const char *s, size_t n)
+{
+    return pool_add(ctx, roads, s, n);
+}
+
+int rs__roads_key_ok(const char *k, size_t n) { return key_ok(k, n); }

@@ -243,6 +243,21 @@ rs_result rs_styles_add(rs_ctx *ctx, rs_styles *styles, const rs_style *style)
     return append(ctx, styles, style, "rs_styles_add", 0);
 }
 
+rs_result rs_styles_replace(rs_ctx *ctx, rs_styles *styles, const rs_style *style)
+{
+    char why[200];
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!styles || !style) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_styles_replace: styles or style is NULL");
+    if (!style_ok(style, why, sizeof why))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_styles_replace: %s", why);
+    rs_style *have = (rs_style *)rs_styles_find(styles, style->name);
+    if (!have) return append(ctx, styles, style, "rs_styles_replace", 0);
+    *have = *style; /* same name: same place, the index stays */
+    have->name[RS_STYLE_NAME_MAX] = '\0';
+    rs__ok(ctx);
+    return RS_OK;
+}
+
 rs_result rs_styles_add_text(rs_ctx *ctx, rs_styles *styles, const char *text, size_t size)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;

@@ -5,6 +5,7 @@
 #include "lanes.h"
 #include "roadfield.h"
 #include "road_local.h"
+#include "grid_edit.h"
 
 #include <float.h>
 #include <math.h>
@@ -1561,6 +1562,39 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
 }
 
 size_t rs__linesym_bytes(const rs__linesym *L) { return L ? L->bytes : 0; }
+
+size_t rs__linesym_piece_count(const rs__linesym *L) { return L ? L->npc : 0; }
+
+void rs__linesym_piece_get(const rs__linesym *L, size_t k, rs__linesym_piece_view *out)
+{
+    const ls_ppc *P = &L->pp[k];
+    const ls_band *B = &L->band[P->band];
+    const double *hp = L->hpp + 4 * (size_t)P->hp0;
+    int slab = P->kind == PIECE_SLAB;
+    const double f[] = { P->ox, P->oy, P->ux, P->uy, P->a, P->b, P->s0, P->su, B->period, B->phase, B->t };
+    uint64_t h = rs__fp_mix(rs__fp_mix(0x11e5, P->kind), P->dashed);
+    for (size_t j = 0; j < sizeof f / sizeof f[0]; j++) h = rs__fp_mixd(h, f[j]);
+    for (int c = 0; c < 4; c++) h = rs__fp_mixd(h, (double)B->rgba[c]);
+    for (uint32_t j = 0; j < B->ndash; j++) h = rs__fp_mixd(h, L->dash[B->dash0 + j]);
+    /* a slab's first two half-planes are its v limits; a wedge's all count */
+    uint32_t own = slab && P->nhp >= 2 ? 2 : P->nhp;
+    for (size_t j = 0; j < 4 * (size_t)own; j++) h = rs__fp_mixd(h, hp[j]);
+    memset(out, 0, sizeof *out);
+    out->slab = slab;
+    out->ox = P->ox, out->oy = P->oy, out->ux = P->ux, out->uy = P->uy;
+    if (slab) {
+        out->ru0 = P->ru0, out->ru1 = P->ru1, out->rv0 = P->rv0, out->rv1 = P->rv1;
+        out->hp = hp + 4 * (size_t)own;
+        out->nhp = P->nhp - own;
+    } else {
+        const double w[] = { P->r0, P->r1, P->wx0, P->wy0, P->wx1, P->wy1, P->warea };
+        for (size_t j = 0; j < sizeof w / sizeof w[0]; j++) h = rs__fp_mixd(h, w[j]);
+        out->reg[0] = P->ox + P->wx0, out->reg[1] = P->oy + P->wy0, out->reg[2] = P->ox + P->wx1;
+        out->reg[3] = P->oy + P->wy1, out->reg[4] = -1;
+        if (!(P->wx0 <= P->wx1 && P->wy0 <= P->wy1)) out->reg[0] = 1, out->reg[2] = 0;
+    }
+    out->h = h;
+}
 
 rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesym_params *p,
                             const uint32_t *band_start, const rs__band *bands, rs__linesym **out)

@@ -80,6 +80,29 @@ size_t rs__linesym_scratch_len(uint32_t w);
 void rs__linesym_paint(const rs__linesym *L, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h, float *rgb,
                        size_t row_stride, double *scratch);
 
+/* For edits (lib/scene/grid_edit.c): the pieces the build made (after
+ * every cut), and piece k as an edit compares it. A slab (a band along a
+ * segment, in its frame: u along (ux, uy) from (ox, oy), v to the left)
+ * paints the pixels whose centre has u in [ru0, ru1] and v in [rv0, rv1]
+ * (ru0 > ru1: none); a pixel there depends on the fingerprint h (band,
+ * colour, dashes, arc length, frame, v limits) and on the half-planes
+ * c0 + cu u + cv v >= 0 (hp: c0, cu, cv and the pixel's half extent
+ * along the normal, sup, per half-plane; nhp of them) whose value at its
+ * centre is below sup: a half-plane at least sup everywhere in a stretch
+ * of u cuts no pixel of it. A wedge (a round join) has h of everything
+ * and the region reg = (ax, ay, bx, by, -1), the box [ax, bx] x [ay, by]
+ * (ax > bx: empty); local metres. */
+typedef struct rs__linesym_piece_view {
+    int slab;
+    uint64_t h;
+    double ox, oy, ux, uy, ru0, ru1, rv0, rv1;
+    const double *hp;
+    uint32_t nhp;
+    double reg[5];
+} rs__linesym_piece_view;
+size_t rs__linesym_piece_count(const rs__linesym *L);
+void rs__linesym_piece_get(const rs__linesym *L, size_t k, rs__linesym_piece_view *out);
+
 /* Tests: coverage of band number `band` (global index into the build's
  * bands array) alone, in [0,1], into out[y*stride + x]. */
 void rs__linesym_coverage(const rs__linesym *L, uint32_t band, uint32_t px0, uint32_t py0, uint32_t w, uint32_t h,

@@ -10,6 +10,7 @@
 #include "road_local.h"
 #include "styling.h"
 #include "markings.h"
+#include "grid_edit.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -588,6 +589,7 @@ void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
     rs__roadfield_free(ctx, grid->field);
     rs__styling_free(ctx, grid->styling);
     rs__markings_free(ctx, grid->markings);
+    rs__grid_edit_free(ctx, grid->edit);
     if (grid->tiles) {
         for (size_t i = 0; i < (size_t)grid->tw * grid->th; i++) rs__free(ctx, grid->tiles[i]);
         rs__free(ctx, grid->tiles);
@@ -702,6 +704,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
+    if (!r) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
     rs__auto_plan_free(ctx, &plan);
     rs_network_free(ctx, net);
     r = rs__progress_end(ctx, &pg, r);
@@ -710,6 +713,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         return r;
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;
+    g->stats.bytes += g->edit->bytes;
     if (g->markings) {
         g->stats.bytes += g->markings->bytes;
         g->stats.marks_explicit = g->markings->n_explicit;
@@ -787,7 +791,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         return r;
     }
     g->stats.bytes = sizeof *g + (uint64_t)g->tw * g->th * sizeof *g->tiles +
-                     g->stats.tiles_allocated * RS__TILE * RS__TILE;
+                     g->stats.tiles_allocated * RS__TILE * RS__TILE + g->edit->bytes;
     *out = g;
     rs__ok(ctx);
     return RS_OK;

@@ -34,6 +34,8 @@ struct rs_road_grid {
      * options they were placed with. */
     struct rs__markings *markings;
     rs_marking_options marks;
+    /* What rs_road_grid_update compares (lib/scene/grid_edit.h). */
+    struct rs__grid_edit *edit;
     rs_road_grid_stats stats;
 };
 

@@ -1,0 +1,672 @@
+/* Road edits and dirty rectangles (issue 30): rs_roads_remove,
+ * rs_roads_replace, rs_roads_set_point_attr, rs_styles_replace,
+ * rs_road_grid_update, rs_road_grid_dirty, rs_road_grid_rect_has_roads.
+ *
+ * test_random_edits: random edits (moves by up to 25 m, new roads,
+ * removals, class or width changes, zebra points, named fill styles) of
+ * generated cities in seven configurations (styled by class with automatic
+ * markings, unstyled, 0.31 m pixels, alpha-map edges unstyled and styled,
+ * fills and gradients, Hermite lines), chained (each update's grid is the
+ * next one's old grid). For every edit: the whole image before and after
+ * through rs_splatter_create + rs_splat_window; every pixel whose colour
+ * or weight differs lies in a dirty rectangle; the rectangles lie in the
+ * image and never overlap; the updated grid splats to the bytes of a fresh
+ * build; a 32-pixel tile rect_has_roads calls road-free equals the splat
+ * without roads; moves, additions and removals dirty at most 2.5x the
+ * changed pixels (printed per kind). Then the edit functions' semantics
+ * (renumbering, markings and point attributes dropped or kept), a named
+ * style redefined (only its roads dirty), no edit (nothing dirty), a
+ * removal (the renumbered roads dirty nothing), errors naming the value,
+ * and allocation failures (every allocation failed in turn: no leak, no
+ * object on failure) of the update and the three road edits.
+ * EDITS_DEBUG=1 prints the first pixels a rectangle misses. */
+#include "harness.h"
+#include "fail_alloc.h"
+#include "scene_splat.h"
+#include "scenes.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef ss_image image;
+#define image_free ss_image_free
+
+static int render(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *g, const rs_splat_options *o, image *im)
+{
+    return ss_grid_image(ctx, dem, g, o, im) == RS_OK ? 0 : -1;
+}
+
+static int pixel_differs(const image *a, const image *b, size_t p)
+{
+    return memcmp(a->rgba + 4 * p, b->rgba + 4 * p, 4) != 0 || a->wt[p] != b->wt[p];
+}
+
+static int same_image(const image *a, const image *b)
+{
+    return a->w == b->w && a->h == b->h && memcmp(a->rgba, b->rgba, (size_t)a->w * a->h * 4) == 0 &&
+           memcmp(a->wt, b->wt, (size_t)a->w * a->h * 2) == 0;
+}
+
+enum { E_MOVE, E_ADD, E_REMOVE, E_RECLASS, E_ZEBRA, E_KINDS };
+static const char *const kind_name[E_KINDS] = { "move", "add", "remove", "reclass/width", "zebra point" };
+
+typedef struct tally {
+    double dirty[E_KINDS], changed[E_KINDS];
+    int edits[E_KINDS];
+    long uncovered, not_identical, bad_free, overlaps;
+} tally;
+
+static const char *const classes[] = { "primary", "secondary", "residential", "service", "tertiary" };
+
+static void random_road(sc_rng *rng, double W, double H, double *xy, size_t *n, double *width)
+{
+    *n = 2 + (size_t)(sc_rng_unit(rng) * 3);
+    double x = sc_rng_range(rng, 0.1 * W, 0.9 * W), y = sc_rng_range(rng, 0.1 * H, 0.9 * H);
+    double a = sc_rng_range(rng, 0, 6.283185307179586);
+    for (size_t k = 0; k < *n; k++) {
+        xy[2 * k] = x, xy[2 * k + 1] = y;
+        double len = sc_rng_range(rng, 20, 80);
+        x += len * cos(a), y += len * sin(a);
+        a += sc_rng_range(rng, -0.6, 0.6);
+    }
+    *width = 4 + 0.5 * floor(sc_rng_range(rng, 0, 16));
+}
+
+/* One edit of `roads` of the given kind; 0, or -1 when the library refused it. */
+static int edit(rs_ctx *ctx, rs_roads *roads, int kind, int styled, sc_rng *rng, double W, double H)
+{
+    size_t n = rs_roads_count(roads), i = n ? (size_t)(sc_rng_unit(rng) * (double)n) : 0;
+    double xy[16], w;
+    size_t np;
+    if (kind == E_ADD || n == 0) {
+        random_road(rng, W, H, xy, &np, &w);
+        if (rs_roads_add(ctx, roads, "new", w, xy, np)) return -1;
+        if (styled && rs_roads_set_attr(ctx, roads, n, "class", classes[(size_t)(sc_rng_unit(rng) * 5)])) return -1;
+        return 0;
+    }
+    if (kind == E_REMOVE) return rs_roads_remove(ctx, roads, i) ? -1 : 0;
+    const double *p;
+    rs_roads_get(roads, i, NULL, &w, &p, &np);
+    if (kind == E_MOVE) {
+        double dx = sc_rng_range(rng, -25, 25), dy = sc_rng_range(rng, -25, 25);
+        if (getenv("EDITS_DEBUG")) {
+            fprintf(stderr, "    move road %zu by %g %g, w %g:", i, dx, dy, w);
+            for (size_t k = 0; k < np; k++) fprintf(stderr, " %g,%g", p[2 * k], p[2 * k + 1]);
+            fprintf(stderr, " class %s\n", rs_roads_get_attr(roads, i, "class"));
+        }
+        double *q = malloc(2 * np * sizeof *q);
+        if (!q) return -1;
+        for (size_t k = 0; k < np; k++) q[2 * k] = p[2 * k] + dx, q[2 * k + 1] = p[2 * k + 1] + dy;
+        int r = rs_roads_replace(ctx, roads, i, NULL, w, q, np) ? -1 : 0;
+        free(q);
+        return r;
+    }
+    if (kind == E_RECLASS) {
+        if (styled) {
+            const char *c = rs_roads_get_attr(roads, i, "class"), *to;
+            do to = classes[(size_t)(sc_rng_unit(rng) * 5)];
+            while (c && strcmp(c, to) == 0);
+            return rs_roads_set_attr(ctx, roads, i, "class", to) ? -1 : 0;
+        }
+        double *q = malloc(2 * np * sizeof *q);
+        if (!q) return -1;
+        memcpy(q, p, 2 * np * sizeof *q);
+        int r = rs_roads_replace(ctx, roads, i, NULL, w + 2, q, np) ? -1 : 0;
+        free(q);
+        return r;
+    }
+    /* a zebra at an inner point (or the first) */
+    return rs_roads_set_point_attr(ctx, roads, i, np > 2 ? np / 2 : 0, "crossing", "zebra") ? -1 : 0;
+}
+
+/* Check one update: old image a, updated grid g1 (image b), fresh grid
+ * image c, the no-road image t. */
+static const rs_road_grid *dbg_g0;
+static double dbg_pix;
+static void check_update(const rs_road_grid *g1, const image *a, const image *b, const image *c, const image *t,
+                         int kind, tally *T)
+{
+    if (!same_image(b, c)) T->not_identical++;
+    size_t nr = rs_road_grid_dirty(g1, NULL, 0);
+    rs_pixel_rect *R = malloc((nr ? nr : 1) * sizeof *R);
+    uint8_t *mask = calloc((size_t)a->w * a->h, 1);
+    if (!R || !mask) {
+        free(R);
+        free(mask);
+        T->uncovered++;
+        return;
+    }
+    CHECK_EQ_INT(rs_road_grid_dirty(g1, R, nr), nr);
+    double dirty = 0, changed = 0;
+    for (size_t k = 0; k < nr; k++) {
+        if (R[k].x1 > a->w || R[k].y1 > a->h || R[k].x0 >= R[k].x1 || R[k].y0 >= R[k].y1) {
+            T->uncovered++;
+            continue;
+        }
+        for (uint32_t y = R[k].y0; y < R[k].y1; y++)
+            for (uint32_t x = R[k].x0; x < R[k].x1; x++) {
+                uint8_t *m = &mask[(size_t)y * a->w + x];
+                if (*m) T->overlaps++;
+                *m = 1;
+            }
+        dirty += (double)(R[k].x1 - R[k].x0) * (R[k].y1 - R[k].y0);
+    }
+    long unc = 0;
+    for (size_t p = 0; p < (size_t)a->w * a->h; p++)
+        if (pixel_differs(a, c, p)) {
+            changed++;
+            if (!mask[p]) {
+                if (unc < 20 && getenv("EDITS_DEBUG"))
+                    fprintf(stderr, "    uncovered (%zu, %zu): %d %d %d w %d -> %d %d %d w %d\n", p % a->w, p / a->w,
+                            a->rgba[4 * p], a->rgba[4 * p + 1], a->rgba[4 * p + 2], a->wt[p], c->rgba[4 * p],
+                            c->rgba[4 * p + 1], c->rgba[4 * p + 2], c->wt[p]);
+                if (unc == 0 && getenv("EDITS_DEBUG")) {
+                    rs_road_point q0, q1;
+                    double X = (p % a->w + 0.5) * dbg_pix, Y = (p / a->w + 0.5) * dbg_pix;
+                    int h0 = rs_road_grid_query(dbg_g0, X, Y, 20, &q0), h1 = rs_road_grid_query(g1, X, Y, 20, &q1);
+                    fprintf(stderr, "    at %g %g old road %d %u s %g t %g; new road %d %u s %g t %g\n", X, Y, h0,
+                            q0.road, q0.s, q0.t, h1, q1.road, q1.s, q1.t);
+                }
+                unc++;
+            }
+        }
+    if (unc) fprintf(stderr, "    %s: %ld changed pixels outside the %zu dirty rectangles\n", kind_name[kind], unc, nr);
+    T->uncovered += unc;
+    T->dirty[kind] += dirty;
+    T->changed[kind] += changed;
+    T->edits[kind]++;
+    /* road-free tiles of 32 px are the terrain alone */
+    for (uint32_t ty = 0; ty < c->h; ty += 32)
+        for (uint32_t tx = 0; tx < c->w; tx += 32) {
+            uint32_t x1 = tx + 32 < c->w ? tx + 32 : c->w, y1 = ty + 32 < c->h ? ty + 32 : c->h;
+            if (rs_road_grid_rect_has_roads(g1, tx, ty, x1, y1)) continue;
+            for (uint32_t y = ty; y < y1; y++)
+                for (uint32_t x = tx; x < x1; x++)
+                    if (pixel_differs(c, t, (size_t)y * c->w + x)) T->bad_free++;
+        }
+    free(R);
+    free(mask);
+}
+
+typedef struct config {
+    const char *name;
+    uint32_t w, h, roads, texels, edits;
+    int styled;
+    rs_edge_mode edges;
+    uint64_t seed;
+    int fills;   /* every third road a named style with a fill or a gradient (priorities show) */
+    int hermite; /* the seed's Hermite line anti-aliasing */
+} config;
+
+static const char fill_styles[] = "style red\nfill #b04030\ncasing 0.4 #303030\nline 0 0.2 #ffffff dash 3 3\nend\n"
+                                  "style grad\ngradient #202020 #707070\nend\n";
+static const char *const fill_names[] = { "red", "grad" };
+
+static void run_config(const config *cf, tally *T)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL, *none = NULL;
+    int ok = sc_city(&sc, cf->w, cf->h, 5.0, cf->roads, cf->seed) == 0;
+    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
+    ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
+    ok = ok && (roads = ss_roads(ctx, &sc)) != NULL && rs_roads_create(ctx, &none) == RS_OK;
+    for (size_t i = 0; ok && cf->styled && i < sc.nroads; i++)
+        ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    rs_styles *S = NULL;
+    if (ok && cf->fills) ok = rs_styles_parse(ctx, fill_styles, sizeof fill_styles - 1, &S) == RS_OK;
+    for (size_t i = 0; ok && cf->fills && i < sc.nroads; i += 3)
+        ok = rs_roads_set_attr(ctx, roads, i, "style", fill_names[(i / 3) % 2]) == RS_OK;
+    CHECK(ok);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = cf->texels;
+    o.coverage.edges = cf->edges;
+    o.style.styles = S;
+    if (cf->hermite) o.style.aa = RS_LINE_AA_HERMITE;
+    rs_road_grid *g0 = NULL, *gt = NULL;
+    image a, t;
+    memset(&a, 0, sizeof a);
+    memset(&t, 0, sizeof t);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0 &&
+         rs_road_grid_build(ctx, dem, none, &o, &gt) == RS_OK && render(ctx, dem, gt, &o, &t) == 0;
+    CHECK(ok);
+    CHECK_EQ_INT(rs_road_grid_dirty(g0, NULL, 0), 0);
+    sc_rng rng;
+    sc_rng_seed(&rng, cf->seed * 7919 + 3);
+    double W = sc_extent_x(&sc), H = sc_extent_y(&sc);
+    for (uint32_t e = 0; ok && e < cf->edits; e++) {
+        int kind = (int)(e % E_KINDS);
+        if (kind == E_ZEBRA && !cf->styled) kind = E_MOVE;
+        int refused = kind == E_RECLASS && cf->fills && e % 2
+                          ? rs_roads_set_attr(ctx, roads, (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads)),
+                                              "style", fill_names[e % 4 == 1]) != RS_OK
+                          : edit(ctx, roads, kind, cf->styled, &rng, W, H) != 0;
+        if (refused) {
+            CHECKF(0, "%s: edit %s refused: %s", cf->name, kind_name[kind], rs_ctx_message(ctx));
+            break;
+        }
+        rs_road_grid *g1 = NULL, *gf = NULL;
+        image b, c;
+        memset(&b, 0, sizeof b);
+        memset(&c, 0, sizeof c);
+        ok = rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
+             rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
+        CHECKF(ok, "%s: %s", cf->name, rs_ctx_message(ctx));
+        dbg_g0 = g0;
+        dbg_pix = 5.0 / cf->texels;
+        if (getenv("EDITS_DEBUG")) fprintf(stderr, "  edit %u %s\n", e, kind_name[kind]);
+        if (ok) check_update(g1, &a, &b, &c, &t, kind, T);
+        rs_road_grid_free(ctx, gf);
+        rs_road_grid_free(ctx, g0);
+        g0 = g1;
+        image_free(&a);
+        image_free(&c);
+        a = b;
+    }
+    image_free(&a);
+    image_free(&t);
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, gt);
+    rs_roads_free(ctx, roads);
+    rs_roads_free(ctx, none);
+    rs_styles_free(ctx, S);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
+static void report(const char *name, const tally *T, int check_ratio)
+{
+    double d = 0, c = 0;
+    for (int k = 0; k < E_KINDS; k++) {
+        if (!T->edits[k]) continue;
+        printf("  %s %-14s %2d edits: dirty / changed pixels %.2f (%.0f / %.0f)\n", name, kind_name[k], T->edits[k],
+               T->changed[k] > 0 ? T->dirty[k] / T->changed[k] : 0, T->dirty[k], T->changed[k]);
+        if (k == E_MOVE || k == E_ADD || k == E_REMOVE) d += T->dirty[k], c += T->changed[k];
+    }
+    CHECKF(T->uncovered == 0, "%s: %ld changed pixels not covered", name, T->uncovered);
+    CHECKF(T->not_identical == 0, "%s: %ld updated grids not the fresh build's bytes", name, T->not_identical);
+    CHECKF(T->bad_free == 0, "%s: %ld road pixels in tiles called road-free", name, T->bad_free);
+    CHECKF(T->overlaps == 0, "%s: %ld pixels in two dirty rectangles", name, T->overlaps);
+    /* moves, additions and removals: the dirty area within 2.5x of the
+     * pixels that change (at 1.25 m pixels a road's edge pixels weigh
+     * more; the bench measures the 10k-road city) */
+    if (check_ratio) CHECKF(c > 0 && d <= 2.5 * c, "%s: dirty %.0f > 2.5 x changed %.0f", name, d, c);
+}
+
+static void test_random_edits(void)
+{
+    static const config cfs[] = {
+        { "styled", 121, 101, 200, 4, 20, 1, RS_EDGES_ANALYTIC, 11, 0, 0 },
+        { "unstyled", 121, 101, 200, 4, 20, 0, RS_EDGES_ANALYTIC, 12, 0, 0 },
+        { "styled fine", 61, 51, 60, 16, 10, 1, RS_EDGES_ANALYTIC, 13, 0, 0 },
+        { "alpha-map", 121, 101, 200, 4, 10, 0, RS_EDGES_ALPHAMAP, 14, 0, 0 },
+        { "alpha-map styled", 121, 101, 200, 4, 10, 1, RS_EDGES_ALPHAMAP, 15, 0, 0 },
+        { "fills", 121, 101, 200, 4, 15, 1, RS_EDGES_ANALYTIC, 16, 1, 0 },
+        { "styled hermite", 81, 61, 80, 8, 10, 1, RS_EDGES_ANALYTIC, 17, 0, 1 },
+    };
+    for (size_t k = 0; k < sizeof cfs / sizeof cfs[0]; k++) {
+        tally T;
+        memset(&T, 0, sizeof T);
+        run_config(&cfs[k], &T);
+        report(cfs[k].name, &T, cfs[k].edges == RS_EDGES_ANALYTIC);
+    }
+}
+
+/* ---- the edit functions ---------------------------------------------------- */
+
+static const char two_roads[] =
+    "road a width 6 class=residential\n0 0\n50 0 crossing=zebra\n100 0\nend\n"
+    "road b width 8\n50 -40\n50 40\nend\n"
+    "road c width 4\n0 20\n100 20 crossing=zebra\nend\n"
+    "mark arrow_straight road=a s=20 t=-1.5\n"
+    "mark arrow_straight road=c s=30 t=0\n";
+
+static int has_msg(rs_ctx *ctx, const char *what)
+{
+    const char *m = rs_ctx_message(ctx);
+    int ok = m && strstr(m, what) != NULL;
+    if (!ok) fprintf(stderr, "    message \"%s\" lacks \"%s\"\n", m ? m : "(null)", what);
+    return ok;
+}
+
+static void test_remove(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_roads *R = NULL;
+    CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
+    CHECK_EQ_INT(rs_roads_count(R), 3);
+    CHECK_EQ_INT(rs_roads_mark_count(R), 2);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
+    CHECK(rs_roads_remove(ctx, R, 0) == RS_OK);
+    CHECK_EQ_INT(rs_roads_count(R), 2);
+    const char *name;
+    const double *xy;
+    size_t n;
+    double w;
+    CHECK(rs_roads_get(R, 0, &name, &w, &xy, &n) == RS_OK && strcmp(name, "b") == 0 && w == 8 && n == 2 &&
+          xy[0] == 50 && xy[3] == 40);
+    CHECK(rs_roads_get(R, 1, &name, &w, &xy, &n) == RS_OK && strcmp(name, "c") == 0 && n == 2 && xy[1] == 20);
+    /* road a's marking and point attribute went; c's moved down to 1 */
+    CHECK_EQ_INT(rs_roads_mark_count(R), 1);
+    rs_mark m;
+    CHECK(rs_roads_get_mark(R, 0, &m) == RS_OK && m.road == 1 && m.s == 30);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 1);
+    size_t road, point;
+    const char *k, *v;
+    CHECK(rs_roads_point_attr_at(R, 0, &road, &point, &k, &v) == RS_OK && road == 1 && point == 1 &&
+          strcmp(k, "crossing") == 0);
+    CHECK(rs_roads_get_attr(R, 0, "class") == NULL);
+    /* errors name the value */
+    CHECK(rs_roads_remove(ctx, R, 7) == RS_ERR_INVALID_ARG && has_msg(ctx, "road 7"));
+    CHECK(rs_roads_remove(ctx, NULL, 0) == RS_ERR_INVALID_ARG);
+    CHECK(rs_roads_remove(NULL, R, 0) == RS_ERR_INVALID_ARG);
+    CHECK(rs_roads_remove(ctx, R, 1) == RS_OK && rs_roads_remove(ctx, R, 0) == RS_OK);
+    CHECK_EQ_INT(rs_roads_count(R), 0);
+    CHECK_EQ_INT(rs_roads_mark_count(R), 0);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 0);
+    rs_roads_free(ctx, R);
+    rs_ctx_free(ctx);
+}
+
+static void test_replace(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_roads *R = NULL;
+    CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
+    const double pts[] = { 0, 5, 30, 5, 60, 10, 90, 5 };
+    CHECK(rs_roads_replace(ctx, R, 0, NULL, 7, pts, 4) == RS_OK);
+    const char *name;
+    const double *xy;
+    size_t n;
+    double w;
+    CHECK(rs_roads_get(R, 0, &name, &w, &xy, &n) == RS_OK && strcmp(name, "a") == 0 && w == 7 && n == 4 &&
+          xy[5] == 10);
+    CHECK(rs_roads_get(R, 1, &name, &w, &xy, &n) == RS_OK && strcmp(name, "b") == 0 && n == 2 && xy[3] == 40);
+    CHECK(rs_roads_get_attr(R, 0, "class") && strcmp(rs_roads_get_attr(R, 0, "class"), "residential") == 0);
+    rs_road_info info;
+    CHECK(rs_roads_get_info(R, 0, &info) == RS_OK && info.width_given == 1);
+    /* shorter: the point attribute on point 1 stays, a name is set */
+    CHECK(rs_roads_replace(ctx, R, 2, "cc", 5, pts, 2) == RS_OK);
+    CHECK(rs_roads_get(R, 2, &name, &w, &xy, &n) == RS_OK && strcmp(name, "cc") == 0 && n == 2);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
+    CHECK(rs_roads_replace(ctx, R, 2, NULL, 5, pts + 2, 1) == RS_ERR_INVALID_ARG && has_msg(ctx, "1 points"));
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
+    /* a road's own points as the source */
+    CHECK(rs_roads_get(R, 1, NULL, NULL, &xy, &n) == RS_OK);
+    CHECK(rs_roads_replace(ctx, R, 0, NULL, 3, xy, n) == RS_OK);
+    CHECK(rs_roads_get(R, 0, NULL, &w, &xy, &n) == RS_OK && n == 2 && xy[0] == 50 && xy[1] == -40 && w == 3);
+    /* the first point's attribute (point 1 of road 0) went with the shorter road? no: n = 2 keeps point 1 */
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
+    CHECK(rs_roads_replace(ctx, R, 9, NULL, 3, pts, 2) == RS_ERR_INVALID_ARG && has_msg(ctx, "road 9"));
+    CHECK(rs_roads_replace(ctx, R, 0, NULL, -2, pts, 2) == RS_ERR_INVALID_ARG && has_msg(ctx, "width -2"));
+    CHECK(rs_roads_replace(ctx, R, 0, NULL, 2, NULL, 2) == RS_ERR_INVALID_ARG);
+    const double bad[] = { 0, 0, NAN, 1 };
+    CHECK(rs_roads_replace(ctx, R, 0, NULL, 2, bad, 2) == RS_ERR_INVALID_ARG && has_msg(ctx, "point 1"));
+    rs_roads_free(ctx, R);
+    rs_ctx_free(ctx);
+}
+
+static void test_point_attr(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_roads *R = NULL;
+    CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
+    CHECK(rs_roads_set_point_attr(ctx, R, 1, 1, "crossing", "zebra") == RS_OK);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 3);
+    size_t road, point;
+    const char *k, *v;
+    CHECK(rs_roads_point_attr_at(R, 2, &road, &point, &k, &v) == RS_OK && road == 1 && point == 1 &&
+          strcmp(v, "zebra") == 0);
+    /* replace in place, then remove */
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 1, "crossing", "traffic_signals") == RS_OK);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 3);
+    CHECK(rs_roads_point_attr_at(R, 0, &road, &point, &k, &v) == RS_OK && strcmp(v, "traffic_signals") == 0);
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 1, "crossing", NULL) == RS_OK);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 1, "crossing", NULL) == RS_OK);
+    /* the parser's checks, each naming the value */
+    CHECK(rs_roads_set_point_attr(ctx, R, 5, 0, "crossing", "zebra") == RS_ERR_INVALID_ARG && has_msg(ctx, "road 5"));
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 3, "crossing", "zebra") == RS_ERR_INVALID_ARG && has_msg(ctx, "point 3"));
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, "bad key", "zebra") == RS_ERR_INVALID_ARG && has_msg(ctx, "bad key"));
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, "", "zebra") == RS_ERR_INVALID_ARG);
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, "crossing", "") == RS_ERR_INVALID_ARG && has_msg(ctx, "crossing"));
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, "crossing", "a\x01") == RS_ERR_INVALID_ARG && has_msg(ctx, "0x01"));
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, "crossing", "\xff") == RS_ERR_INVALID_ARG && has_msg(ctx, "UTF-8"));
+    CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, NULL, "zebra") == RS_ERR_INVALID_ARG);
+    CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
+    rs_roads_free(ctx, R);
+    rs_ctx_free(ctx);
+}
+
+static void test_styles_replace(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_styles *S = NULL;
+    static const char text[] = "style red\nfill #ff0000\nend\nstyle blue\nfill #0000ff\nend\n";
+    CHECK(rs_styles_parse(ctx, text, sizeof text - 1, &S) == RS_OK);
+    rs_style st = *rs_styles_find(S, "red");
+    CHECK(rs_styles_add(ctx, S, &st) == RS_ERR_INVALID_ARG); /* unchanged: a name in the set is an error */
+    st.fill.g = 200;
+    CHECK(rs_styles_replace(ctx, S, &st) == RS_OK);
+    CHECK_EQ_INT(rs_styles_count(S), 2);
+    CHECK(rs_styles_get(S, 0)->fill.g == 200 && strcmp(rs_styles_get(S, 0)->name, "red") == 0);
+    CHECK(rs_styles_find(S, "blue") == rs_styles_get(S, 1));
+    rs_style nw = st;
+    strcpy(nw.name, "green");
+    CHECK(rs_styles_replace(ctx, S, &nw) == RS_OK);
+    CHECK_EQ_INT(rs_styles_count(S), 3);
+    CHECK(rs_styles_find(S, "green") == rs_styles_get(S, 2));
+    nw.casing_width = -1;
+    CHECK(rs_styles_replace(ctx, S, &nw) == RS_ERR_INVALID_ARG && has_msg(ctx, "casing"));
+    CHECK(rs_styles_find(S, "green")->casing_width == st.casing_width);
+    CHECK(rs_styles_replace(ctx, NULL, &nw) == RS_ERR_INVALID_ARG);
+    rs_styles_free(ctx, S);
+    rs_ctx_free(ctx);
+}
+
+static rs_dem *flat_dem(rs_ctx *ctx, uint32_t w, uint32_t h, double cs)
+{
+    float *z = calloc((size_t)w * h, sizeof *z);
+    rs_dem *dem = NULL;
+    rs_dem_frame fr = { cs, 1, 0, 0 };
+    if (z && (rs_dem_create(ctx, w, h, z, &dem) || rs_dem_set_frame(ctx, dem, &fr))) {
+        rs_dem_free(ctx, dem);
+        dem = NULL;
+    }
+    free(z);
+    return dem;
+}
+
+/* A named style redefined: the roads naming it change, the others not. */
+static void test_style_edit_grid(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = flat_dem(ctx, 41, 31, 2);
+    rs_styles *S = NULL;
+    static const char text[] = "style red\nfill #ff0000\ncasing 0.5 #202020\nend\n"
+                               "road a width 6 style=red\n5 10\n75 12\nend\n"
+                               "road b width 6 class=residential\n10 40\n70 50\nend\n";
+    rs_roads *R = NULL;
+    CHECK(rs_styles_create(ctx, &S) == RS_OK);
+    rs_road_parse_options po;
+    memset(&po, 0, sizeof po);
+    po.styles = S;
+    CHECK(rs_roads_parse_ex(ctx, text, sizeof text - 1, &po, &R) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 8;
+    o.style.styles = S;
+    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
+    image a, b, c;
+    CHECK(rs_road_grid_build(ctx, dem, R, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0);
+    rs_style st = *rs_styles_find(S, "red");
+    st.fill.r = 0, st.fill.g = 160;
+    CHECK(rs_styles_replace(ctx, S, &st) == RS_OK);
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0);
+    CHECK(rs_road_grid_build(ctx, dem, R, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0);
+    CHECK(same_image(&b, &c));
+    size_t nr = rs_road_grid_dirty(g1, NULL, 0);
+    rs_pixel_rect rr[4096];
+    CHECK(nr > 0 && nr <= 4096);
+    rs_road_grid_dirty(g1, rr, 4096);
+    /* every changed pixel inside, and road b's pixels (rows below 30 m) clean */
+    long out = 0, low = 0;
+    for (uint32_t y = 0; y < a.h; y++)
+        for (uint32_t x = 0; x < a.w; x++) {
+            int in = 0;
+            for (size_t k = 0; k < nr && k < 4096; k++)
+                in |= x >= rr[k].x0 && x < rr[k].x1 && y >= rr[k].y0 && y < rr[k].y1;
+            if (pixel_differs(&a, &c, (size_t)y * a.w + x) && !in) out++;
+            if (in && y * 0.25 > 30) low++;
+        }
+    CHECK_EQ_INT(out, 0);
+    CHECK_EQ_INT(low, 0);
+    /* a count smaller than the rectangles: the first cap of them */
+    rs_pixel_rect one;
+    CHECK(rs_road_grid_dirty(g1, &one, 1) == nr && one.x0 == rr[0].x0 && one.y1 == rr[0].y1);
+    image_free(&a);
+    image_free(&b);
+    image_free(&c);
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, gf);
+    rs_roads_free(ctx, R);
+    rs_styles_free(ctx, S);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
+static void test_update_errors(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = flat_dem(ctx, 21, 21, 2), *other = flat_dem(ctx, 23, 21, 2);
+    rs_roads *R = NULL;
+    CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    rs_road_grid *g0 = NULL, *g1 = (rs_road_grid *)1;
+    CHECK(rs_road_grid_build(ctx, dem, R, &o, &g0) == RS_OK);
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, NULL, &g1) == RS_ERR_INVALID_ARG && g1 == NULL && has_msg(ctx, "old"));
+    CHECK(rs_road_grid_update(ctx, dem, NULL, &o, g0, &g1) == RS_ERR_INVALID_ARG && has_msg(ctx, "roads"));
+    CHECK(rs_road_grid_update(ctx, NULL, R, &o, g0, &g1) == RS_ERR_INVALID_ARG && has_msg(ctx, "dem"));
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, NULL) == RS_ERR_INVALID_ARG);
+    CHECK(rs_road_grid_update(NULL, dem, R, &o, g0, &g1) == RS_ERR_INVALID_ARG);
+    CHECK(rs_road_grid_update(ctx, other, R, &o, g0, &g1) == RS_ERR_INVALID_ARG && has_msg(ctx, "23 x 21"));
+    o.texels = 8;
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_ERR_INVALID_ARG && has_msg(ctx, "8"));
+    o.texels = 4;
+    o.coverage.edges = RS_EDGES_ALPHAMAP;
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_ERR_INVALID_ARG && has_msg(ctx, "edges"));
+    o.coverage.edges = RS_EDGES_ANALYTIC;
+    /* no edit: nothing dirty */
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_OK);
+    CHECK_EQ_INT(rs_road_grid_dirty(g1, NULL, 0), 0);
+    rs_road_grid_stats s0, s1;
+    rs_road_grid_get_stats(g0, &s0);
+    rs_road_grid_get_stats(g1, &s1);
+    CHECK(s0.bytes == s1.bytes);
+    /* rect_has_roads: empty, far from the roads, on them */
+    CHECK(rs_road_grid_rect_has_roads(g1, 5, 5, 5, 9) == 0);
+    CHECK(rs_road_grid_rect_has_roads(NULL, 0, 0, 9, 9) == 0);
+    CHECK(rs_road_grid_rect_has_roads(g1, 0, 0, 80, 80) == 1);
+    rs_road_grid_free(ctx, g1);
+    /* a road removed: renumbered roads dirty nothing of their own */
+    CHECK(rs_roads_remove(ctx, R, 0) == RS_OK);
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_OK);
+    size_t nr = rs_road_grid_dirty(g1, NULL, 0);
+    rs_pixel_rect rr[512];
+    CHECK(nr > 0 && nr <= 512);
+    rs_road_grid_dirty(g1, rr, 512);
+    int beyond = 0; /* road a ran along y = 0 (rows 0..~4 at 0.5 m, up to its reach) */
+    for (size_t k = 0; k < nr && k < 512; k++) {
+        if (rr[k].y1 > 12) fprintf(stderr, "    rect %u %u %u %u\n", rr[k].x0, rr[k].y0, rr[k].x1, rr[k].y1);
+        beyond |= rr[k].y1 > 12;
+    }
+    CHECK(!beyond);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, g0);
+    rs_roads_free(ctx, R);
+    rs_dem_free(ctx, dem);
+    rs_dem_free(ctx, other);
+    rs_ctx_free(ctx);
+}
+
+typedef struct sweep_in {
+    const rs_dem *dem;
+    const char *text;
+    int what; /* 0: update, 1: remove, 2: replace, 3: point attribute */
+} sweep_in;
+
+static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
+{
+    const sweep_in *in = user;
+    rs_roads *R = NULL;
+    rs_result r = rs_roads_parse(c, in->text, strlen(in->text), &R);
+    if (r) return r;
+    const double pts[] = { 0, 3, 40, 8, 80, 3, 100, 9, 110, 20 };
+    if (in->what == 0) {
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = 4;
+        rs_road_grid *g0 = NULL, *g1 = (rs_road_grid *)1;
+        r = rs_road_grid_build(c, in->dem, R, &o, &g0);
+        if (!r) r = rs_roads_replace(c, R, 1, NULL, 5, pts, 3);
+        if (!r) {
+            r = rs_road_grid_update(c, in->dem, R, &o, g0, &g1);
+            if (r != RS_OK && g1 != NULL) *wrong = 1;
+            if (r == RS_OK) rs_road_grid_free(c, g1);
+        }
+        rs_road_grid_free(c, g0);
+    } else if (in->what == 1) {
+        r = rs_roads_remove(c, R, 1);
+    } else if (in->what == 2) {
+        size_t before = rs_roads_point_attr_count(R);
+        r = rs_roads_replace(c, R, 0, "longer name for the pool", 5, pts, 5);
+        if (r && rs_roads_point_attr_count(R) != before) *wrong = 1;
+    } else {
+        for (int k = 0; k < 40 && !r; k++) r = rs_roads_set_point_attr(c, R, 0, (size_t)(k % 3), k & 1 ? "x" : "y", "v");
+    }
+    rs_roads_free(c, R);
+    return r;
+}
+
+static void test_alloc_failures(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = flat_dem(ctx, 31, 21, 4);
+    for (int what = 0; what < 4; what++) {
+        sweep_in in = { dem, two_roads, what };
+        fail_sweep fs = fail_alloc_sweep(20000, try_edit, &in);
+        CHECKF(fs.succeeded && fs.wrong == 0 && fs.leaks == 0, "sweep %d: tries %ld wrong %ld leaks %ld", what,
+               fs.tries, fs.wrong, fs.leaks);
+    }
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
+int main(void)
+{
+    test_remove();
+    test_replace();
+    test_point_attr();
+    test_styles_replace();
+    test_style_edit_grid();
+    test_update_errors();
+    test_alloc_failures();
+    test_random_edits();
+    return th_finish("test_edits");
+}
