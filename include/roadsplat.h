@@ -582,6 +582,9 @@ typedef struct rs_grid_options {
     rs_buffer_mode buffer; /* how road cells are chosen */
     double road_cell;      /* road-grid cell size, metres; 0 -> automatic
                               (narrowest road >= 4 cells, cell <= half a texel) */
+    int edits;             /* non-zero: the grid keeps the pieces rs_road_grid_update compares
+                              and rs_road_grid_rect_has_roads reads (about a tenth more build
+                              time and memory); 0: it keeps none */
 } rs_grid_options;
 
 /* Coverage stage. All-zero means defaults. */
@@ -980,8 +983,10 @@ typedef struct rs_pixel_rect {
  * moved, added or removed 1.3 to 1.9 times the pixels that really change
  * on the 10k-road city, docs/embedding.md). The roads are matched by what
  * they draw, not by index: a removal's renumbering dirties nothing else.
- * Every grid keeps the pieces this compares (counted in its stats'
- * bytes; about a tenth of rs_road_grid_build's time). A grid for
+ * `old` must have been built with opts->grid.edits set (else
+ * RS_ERR_INVALID_ARG): only such a grid keeps the pieces this compares
+ * (counted in its stats' bytes; about a tenth of rs_road_grid_build's
+ * time); *out keeps them too, whatever opts->grid.edits says. A grid for
  * other DEM dimensions, frame, texels, edge or buffer mode than `opts`
  * give is RS_ERR_INVALID_ARG naming the value; when the edit changes the
  * alpha-map road cell (the narrowest road decides it) the whole image is
@@ -998,7 +1003,8 @@ RS_API size_t rs_road_grid_dirty(const rs_road_grid *grid, rs_pixel_rect *rects,
  * the anti-aliased pixel around them) can reach output pixels [x0, x1) x
  * [y0, y1), so a host may skip that tile and draw the terrain alone; 1
  * when some may (conservative: a 1 may still find no road pixel; never 0
- * where a road pixel is). An empty rectangle gives 0. O(pieces near the
+ * where a road pixel is). An empty rectangle gives 0. It reads the pieces
+ * of a grid built with opts->grid.edits: without them the answer is 1. O(pieces near the
  * rectangle); read-only: any thread. */
 RS_API int rs_road_grid_rect_has_roads(const rs_road_grid *grid, uint32_t x0, uint32_t y0, uint32_t x1,
                                        uint32_t y1);

@@ -225,6 +225,7 @@ static void run_config(const config *cf, tally *T)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = cf->texels;
+    o.grid.edits = 1;
     o.coverage.edges = cf->edges;
     o.style.styles = S;
     if (cf->hermite) o.style.aa = RS_LINE_AA_HERMITE;
@@ -506,6 +507,7 @@ static void test_style_edit_grid(void)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 8;
+    o.grid.edits = 1;
     o.style.styles = S;
     rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
     image a, b, c;
@@ -557,6 +559,7 @@ static void test_update_errors(void)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
+    o.grid.edits = 1;
     rs_road_grid *g0 = NULL, *g1 = (rs_road_grid *)1;
     CHECK(rs_road_grid_build(ctx, dem, R, &o, &g0) == RS_OK);
     CHECK(rs_road_grid_update(ctx, dem, R, &o, NULL, &g1) == RS_ERR_INVALID_ARG && g1 == NULL && has_msg(ctx, "old"));
@@ -571,6 +574,33 @@ static void test_update_errors(void)
     o.coverage.edges = RS_EDGES_ALPHAMAP;
     CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_ERR_INVALID_ARG && has_msg(ctx, "edges"));
     o.coverage.edges = RS_EDGES_ANALYTIC;
+    /* a grid built without opts->grid.edits keeps no pieces: the update
+     * refuses it, rect_has_roads says "may" everywhere, its bytes are the
+     * same, and its splat too */
+    {
+        rs_splat_options p = o;
+        p.grid.edits = 0;
+        rs_road_grid *gp = NULL;
+        CHECK(rs_road_grid_build(ctx, dem, R, &p, &gp) == RS_OK);
+        CHECK(rs_road_grid_update(ctx, dem, R, &o, gp, &g1) == RS_ERR_INVALID_ARG && g1 == NULL &&
+              has_msg(ctx, "grid.edits"));
+        CHECK(rs_road_grid_rect_has_roads(gp, 70, 70, 80, 80) == 1);
+        CHECK(rs_road_grid_dirty(gp, NULL, 0) == 0);
+        rs_road_grid_stats sp, s0b;
+        rs_road_grid_get_stats(gp, &sp);
+        rs_road_grid_get_stats(g0, &s0b);
+        CHECK(sp.bytes < s0b.bytes);
+        ss_image a, b;
+        CHECK(ss_grid_image(ctx, dem, gp, &p, &a) == 0 && ss_grid_image(ctx, dem, g0, &o, &b) == 0 &&
+              a.w == b.w && a.h == b.h && memcmp(a.rgba, b.rgba, (size_t)a.w * a.h * 4) == 0);
+        ss_image_free(&a);
+        ss_image_free(&b);
+        /* the update's grid keeps pieces even when the options say 0 */
+        CHECK(rs_road_grid_update(ctx, dem, R, &p, g0, &g1) == RS_OK);
+        CHECK(rs_road_grid_rect_has_roads(g1, 70, 70, 80, 80) == 0);
+        rs_road_grid_free(ctx, g1);
+        rs_road_grid_free(ctx, gp);
+    }
     /* no edit: nothing dirty */
     CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_OK);
     CHECK_EQ_INT(rs_road_grid_dirty(g1, NULL, 0), 0);
@@ -621,6 +651,7 @@ static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
         rs_splat_options o;
         memset(&o, 0, sizeof o);
         o.texels = 4;
+        o.grid.edits = 1;
         rs_road_grid *g0 = NULL, *g1 = (rs_road_grid *)1;
         r = rs_road_grid_build(c, in->dem, R, &o, &g0);
         if (!r) r = rs_roads_replace(c, R, 1, NULL, 5, pts, 3);

@@ -133,6 +133,8 @@ static void fuzz_splat(rs_ctx *ctx, rs_dem *dem, reader *rd)
     o.surface.height_max = next_d(rd);
     o.surface.texel_offset_x = ((int64_t)next_u(rd, 0xFFFFFFFFu) - 0x7FFFFFFF) * (int64_t)(1 + next_u(rd, 1u << 21));
     o.surface.texel_offset_y = ((int64_t)next_u(rd, 0xFFFFFFFFu) - 0x7FFFFFFF) * (int64_t)(1 + next_u(rd, 1u << 21));
+    /* issue 30: the grid's edit pieces (their budgets: huge widths and coordinates) */
+    o.grid.edits = (int)next_u(rd, 2);
     rs_splatter *s = (rs_splatter *)&o;
     rs_result r = rs_splatter_create(ctx, dem, roads, NULL, &o, &s);
     REQUIRE(known(r));
@@ -151,6 +153,7 @@ static void fuzz_splat(rs_ctx *ctx, rs_dem *dem, reader *rd)
         }
         free(px);
         free(wt);
+        REQUIRE(rs_road_grid_rect_has_roads(rs_splatter_grid(s), x0, y0, x0 + ww, y0 + hh) <= 1);
         rs_road_point p;
         double qx = next_d(rd), qy = next_d(rd), reach = next_d(rd);
         if (rs_road_grid_query(rs_splatter_grid(s), qx, qy, reach, &p))

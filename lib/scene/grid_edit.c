@@ -993,8 +993,12 @@ rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                         "rs_road_grid_update: the old grid's edges %d, buffer %d, road cell %g are not the options' "
                         "(%d, %d, %g)", (int)old->edges, (int)old->opts.buffer, old->opts.road_cell,
                         (int)o.coverage.edges, (int)o.grid.buffer, o.grid.road_cell);
+    if (!old->edit)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_update: the old grid keeps no edit pieces (build it with opts->grid.edits = 1)");
     rs_road_grid *g = NULL;
-    r = rs_road_grid_build(ctx, dem, roads, opts, &g);
+    o.grid.edits = 1;
+    r = rs_road_grid_build(ctx, dem, roads, &o, &g);
     if (r) return r;
     r = diff(ctx, old, g, &g->edit->dirty, &g->edit->ndirty);
     if (r) {

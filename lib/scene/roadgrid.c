@@ -704,7 +704,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
-    if (!r) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
+    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
     rs__auto_plan_free(ctx, &plan);
     rs_network_free(ctx, net);
     r = rs__progress_end(ctx, &pg, r);
@@ -713,7 +713,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         return r;
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;
-    g->stats.bytes += g->edit->bytes;
+    if (g->edit) g->stats.bytes += g->edit->bytes;
     if (g->markings) {
         g->stats.bytes += g->markings->bytes;
         g->stats.marks_explicit = g->markings->n_explicit;
@@ -791,7 +791,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         return r;
     }
     g->stats.bytes = sizeof *g + (uint64_t)g->tw * g->th * sizeof *g->tiles +
-                     g->stats.tiles_allocated * RS__TILE * RS__TILE + g->edit->bytes;
+                     g->stats.tiles_allocated * RS__TILE * RS__TILE + (g->edit ? g->edit->bytes : 0);
     *out = g;
     rs__ok(ctx);
     return RS_OK;

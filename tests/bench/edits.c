@@ -73,6 +73,7 @@ int main(int argc, char **argv)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
+    o.grid.edits = 1;
     rs_road_grid *g0 = NULL;
     ss_image a, b;
     memset(&a, 0, sizeof a);
