@@ -200,7 +200,7 @@ static void test_exact(void)
         for (size_t pi = 0; pi < sizeof pixes / sizeof pixes[0]; pi++)
             for (size_t ai = 0; ai < sizeof angles / sizeof angles[0]; ai++)
                 for (size_t oi = 0; oi < sizeof offs / sizeof offs[0]; oi++) {
-                    me_case c = { angles[ai], offs[oi][0], offs[oi][1], pixes[pi], 2, 1, tex[ti][0], tex[ti][1] };
+                    me_case c = { angles[ai], offs[oi][0], offs[oi][1], pixes[pi], 2, 1, tex[ti][0], tex[ti][1], 0 };
                     me_stats st;
                     CHECK(me_measure(ctx, &c, &st) == 0);
                     CHECKF(st.mean <= (pixes[pi] > 1 ? 0.03 : 0.02) && st.p99 <= 0.15 && fabs(st.area) <= 0.005 && st.centroid <= 0.1,
