@@ -182,12 +182,8 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, double w, 
     if (av == 0) au = -fabs(au); /* along the bottom edge to its left end */
     double u = -0.5 * (au + bu), v = -0.5 * (av + bv);
     const double qu[3] = { u, u + au, -u }, qv[3] = { v, v + av, -v };
-    for (int k = 0; k < 3; k++) {
-        fp->qu[k][0] = qu[k];
-        fp->qu[k][1] = -qu[k];
-        fp->qv[k][0] = qv[k];
-        fp->qv[k][1] = -qv[k];
-    }
+    memcpy(fp->qu, qu, sizeof qu);
+    memcpy(fp->qv, qv, sizeof qv);
     for (int e = 0; e < 2; e++) {
         double eu = qu[e + 1] - qu[e], ev = qv[e + 1] - qv[e];
         rs__mk_edge *E = &fp->e[e];
@@ -199,13 +195,11 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, double w, 
         double need = hin * sqrt(fabs(eu) / (ev * 8 * FP_EPS * A));
         E->n = need < 1 ? 1 : need >= MK_PARTS ? MK_PARTS : (int)ceil(need);
         E->in = 1.0 / E->n;
-        double iu = eu != 0 ? 1 / eu : 1e300;
-        E->iu[0] = iu;
-        E->iu[1] = eu != 0 ? -iu : iu;
-        E->iv[0] = 1 / ev;
-        E->iv[1] = -1 / ev;
-        E->lm[0] = E->iu[0] > 0 ? INFINITY : -INFINITY;
-        E->lm[1] = E->iu[1] > 0 ? INFINITY : -INFINITY;
+        /* du = 0: 1e300 on the left side, -1e300 on the right (each side
+         * then clips a vertical edge as it should, through infinities) */
+        E->iu = eu != 0 ? 1 / eu : 1e300;
+        E->iv = 1 / ev;
+        E->lm = E->iu > 0 ? INFINITY : -INFINITY;
     }
     fp->ia = 1 / A;
     fp->hu = 0.5 * (fabs(au) + fabs(bu));
@@ -408,6 +402,32 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         if (V[0] + far > m->bx1) m->bx1 = V[0] + far;
         if (V[1] - far < m->by0) m->by0 = V[1] - far;
         if (V[1] + far > m->by1) m->by1 = V[1] + far;
+    }
+    if (np == 2) {
+        /* one segment: a pixel's square meets the texels with alpha > 0
+         * only if its centre is within half a pixel of their rectangle's
+         * bounding box (the other two separating axes of the square and
+         * that rectangle are the support's U and V bounds): the box is
+         * narrowed to that, so the row spans leave out the corners of the
+         * support where the footprint misses the sprite (its sample is 0) */
+        const double *A = c0;
+        double ux = A[3], uy = A[4], x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+        for (int k = 0; k < 4; k++) {
+            double U = k & 1 ? tx->ax1 + 1 : tx->ax0, V = k & 2 ? tx->ay1 + 1 : tx->ay0;
+            double tt = m->t0 + (U - m->cu) / m->su, ss = m->s0 + (V - m->cv) / m->sv - A[2];
+            double x = A[0] + ss * ux + tt * uy, y = A[1] + ss * uy - tt * ux;
+            x0 = x < x0 ? x : x0;
+            x1 = x > x1 ? x : x1;
+            y0 = y < y0 ? y : y0;
+            y1 = y > y1 ? y : y1;
+        }
+        /* half a pixel, and a margin far above rounding */
+        double mg = 0.5 * pix + 1e-6 + 1e-12 * (fabs(x0) + fabs(x1) + fabs(y0) + fabs(y1));
+        m->bx0 = fmax(m->bx0, x0 - mg);
+        m->bx1 = fmin(m->bx1, x1 + mg);
+        m->by0 = fmax(m->by0, y0 - mg);
+        m->by1 = fmin(m->by1, y1 + mg);
+        if (!(m->bx0 <= m->bx1 && m->by0 <= m->by1)) return 0;
     }
     *npts += np;
     return 1;
@@ -830,15 +850,16 @@ static int fp_walk(const rs__mk_fp *fp, double U, double V, double w, double h, 
         if (!E->n) continue;
         double u0[2], u1[2], v0[2], v1[2], ta[2], tb[2], dt[2], vp[2];
         for (int l = 0; l < 2; l++) {
-            u0[l] = U + fp->qu[e][l];
-            u1[l] = U + fp->qu[e + 1][l];
-            v0[l] = V + fp->qv[e][l];
-            v1[l] = V + fp->qv[e + 1][l];
-            double t0 = (0 - u0[l]) * E->iu[l], tw = (w - u0[l]) * E->iu[l];
-            double s0 = (0 - v0[l]) * E->iv[l], sh = (h - v0[l]) * E->iv[l];
+            const double sg = l ? -1 : 1, iu = sg * E->iu, iv = sg * E->iv, lm = sg * E->lm;
+            u0[l] = U + sg * fp->qu[e];
+            u1[l] = U + sg * fp->qu[e + 1];
+            v0[l] = V + sg * fp->qv[e];
+            v1[l] = V + sg * fp->qv[e + 1];
+            double t0 = (0 - u0[l]) * iu, tw = (w - u0[l]) * iu;
+            double s0 = (0 - v0[l]) * iv, sh = (h - v0[l]) * iv;
             ta[l] = mn(mx(mx(mn(t0, tw), mn(s0, sh)), 0), 1);
             tb[l] = mx(mn(mn(mx(t0, tw), mx(s0, sh)), 1), ta[l]);
-            double ra = mx(mn(tw, E->lm[l]), 0), rb = mx(mn(mx(tw, E->lm[l]), 1), ra);
+            double ra = mx(mn(tw, lm), 0), rb = mx(mn(mx(tw, lm), 1), ra);
             st[ns].u = w;
             st[ns].v0 = mn(mx((1 - ra) * v0[l] + ra * v1[l], 0), h);
             st[ns].v1 = mn(mx((1 - rb) * v0[l] + rb * v1[l], 0), h);
@@ -998,15 +1019,17 @@ static inline double kern_integral(const mk_kern *kn, double U, double V)
     const double *t = kn->t;
     const size_t w2 = kn->w2, wi = (size_t)kn->w;
     const __m128d z = _mm_setzero_pd(), one = _mm_set1_pd(1), hh = _mm_set1_pd(kn->h), ww = _mm_set1_pd(kn->w);
-    const __m128d UU = _mm_set1_pd(U), VV = _mm_set1_pd(V);
+    const __m128d UU = _mm_set1_pd(U), VV = _mm_set1_pd(V), sgn = _mm_set_pd(-0.0, 0.0);
     const rs__mk_fp *fp = kn->fp;
     double I = 0;
     for (int e = 0; e < 2; e++) {
         const rs__mk_edge *E = &fp->e[e];
         if (!E->n) continue;
-        const __m128d u0 = _mm_add_pd(UU, _mm_loadu_pd(fp->qu[e])), u1 = _mm_add_pd(UU, _mm_loadu_pd(fp->qu[e + 1]));
-        const __m128d v0 = _mm_add_pd(VV, _mm_loadu_pd(fp->qv[e])), v1 = _mm_add_pd(VV, _mm_loadu_pd(fp->qv[e + 1]));
-        const __m128d iu = _mm_loadu_pd(E->iu), iv = _mm_loadu_pd(E->iv), lm = _mm_loadu_pd(E->lm);
+#define MK_PAIR(x) _mm_xor_pd(_mm_set1_pd(x), sgn)
+        const __m128d u0 = _mm_add_pd(UU, MK_PAIR(fp->qu[e])), u1 = _mm_add_pd(UU, MK_PAIR(fp->qu[e + 1]));
+        const __m128d v0 = _mm_add_pd(VV, MK_PAIR(fp->qv[e])), v1 = _mm_add_pd(VV, MK_PAIR(fp->qv[e + 1]));
+        const __m128d iu = MK_PAIR(E->iu), iv = MK_PAIR(E->iv), lm = MK_PAIR(E->lm);
+#undef MK_PAIR
         __m128d t0 = _mm_mul_pd(_mm_sub_pd(z, u0), iu), tw = _mm_mul_pd(_mm_sub_pd(ww, u0), iu);
         __m128d s0 = _mm_mul_pd(_mm_sub_pd(z, v0), iv), sh = _mm_mul_pd(_mm_sub_pd(hh, v0), iv);
         __m128d ta = _mm_min_pd(_mm_max_pd(_mm_max_pd(_mm_min_pd(t0, tw), _mm_min_pd(s0, sh)), z), one);
@@ -1171,11 +1194,13 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
+    /* the box's columns (see place) */
+    const long c0 = span_lo(m->bx0 / pix - 0.5 - gx0, wd), c1 = span_hi(m->bx1 / pix - 0.5 - gx0, wd);
     mk_kern kn;
     kern_init(&kn, m, &m->fp);
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
-        long k0 = 0, k1 = (long)w - 1;
+        long k0 = c0 > 0 ? c0 : 0, k1 = c1 < (long)w - 1 ? c1 : (long)w - 1;
         double ur = m->au + m->buy * y, vr = m->av + m->bvy * y;
         if (m->flat) {
             if (!slab(ur, bu, m->ibu, ulo, uhi, gx0, wd, &k0, &k1) || !slab(vr, bv, m->ibv, vlo, vhi, gx0, wd, &k0, &k1))
@@ -1186,7 +1211,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
             double b0 = (m->va - vr) * m->ibv, b1 = (m->vb - vr) * m->ibv;
             double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
             long l0 = span_lo(e0 - 0.5 - gx0, wd), l1 = span_hi(e1 - 0.5 - gx0, wd);
-            k0 = l0 > 0 ? l0 : 0;
+            k0 = l0 > k0 ? l0 : k0;
             k1 = l1 < k1 ? l1 : k1;
             if (k0 > k1) continue;
         }

@@ -46,20 +46,19 @@ typedef struct rs__mk_tex {
  * -q[2]). Each slanted edge is clipped to the sprite's rectangle [0, w] x
  * [0, h]: the piece inside becomes a staircase of n parts (a vertical step
  * at each part's middle), the piece right of the sprite one vertical step
- * at u = w (exact), the rest adds nothing. Kept as pairs for both sides at
- * once: (x, -x). Points on an edge are (1 - t) p0 + t p1, so its ends are
+ * at u = w (exact), the rest adds nothing. Points on an edge are (1 - t) p0 + t p1, so its ends are
  * its vertices exactly and the steps of a footprint outside the sprite
  * cancel to 0. */
 typedef struct rs__mk_edge {
     int n;                     /* parts of the piece inside; 0: a horizontal edge (adds nothing) */
     double in;                 /* 1 / n */
-    double iu[2], iv[2];       /* 1 / du (du = 0: 1e300, as if du > 0), 1 / dv */
-    double lm[2];              /* +inf where iu > 0, else -inf */
+    double iu, iv;             /* 1 / du (du = 0: 1e300), 1 / dv (the left side; the right side's are their negatives) */
+    double lm;                 /* +inf where iu > 0, else -inf */
 } rs__mk_edge;
 typedef struct rs__mk_fp {
     double ia;                 /* 1 / the footprint's area; 0: none */
     double hu, hv;             /* its reach from the centre in U and in V */
-    double qu[3][2], qv[3][2]; /* the vertices from the centre (left side, right side) */
+    double qu[3], qv[3];       /* the left side's vertices from the centre (the right side's: their negatives) */
     rs__mk_edge e[2];
 } rs__mk_fp;
 
