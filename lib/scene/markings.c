@@ -155,20 +155,19 @@ static rs_result build_tex(rs_ctx *ctx, const rs__atlas_type *ty, rs__mk_tex *tx
     return RS_OK;
 }
 
-/* Parts per clipped edge: enough that a sprite edge crossing one part's
- * slanted end costs at most FP_EPS of the pixel's coverage (the triangle
- * between the slant and the step, h^2 |slope| / 8 of area for a part of
- * height h), at most MK_PARTS. */
-#define FP_EPS 0.016
-#define MK_PARTS 2
+/* Parts per parallelogram edge: enough that a sprite edge crossing one
+ * part's slanted end costs at most FP_EPS of the pixel's coverage (the
+ * triangle between the slant and the step, h^2 |slope| / 8 of area for a
+ * part of height h), at most RS__MK_STEPS / 2. */
+#define FP_EPS 0.010
 
 /* The footprint of a pixel whose steps in x and y move the texel
- * coordinates by (e1u, e1v) and (e2u, e2v) (rs__mk_fp), on a sprite of w x
- * h texels. */
-static void footprint(double e1u, double e1v, double e2u, double e2v, double w, double h, rs__mk_fp *fp)
+ * coordinates by (e1u, e1v) and (e2u, e2v) (rs__mk_fp). */
+static void footprint(double e1u, double e1v, double e2u, double e2v, rs__mk_fp *fp)
 {
     double A = fabs(e1u * e2v - e1v * e2u);
-    memset(fp, 0, sizeof *fp);
+    fp->n = 0;
+    fp->ia = 0;
     if (!(A > 0)) return;
     /* both steps pointing to +V; the bottom vertex, then the left path to
      * the top one: along a then b (a, b: the two steps in some order) */
@@ -181,29 +180,35 @@ static void footprint(double e1u, double e1v, double e2u, double e2v, double w, 
     double bu = e1_first ? e2u : e1u, bv = e1_first ? e2v : e1v;
     if (av == 0) au = -fabs(au); /* along the bottom edge to its left end */
     double u = -0.5 * (au + bu), v = -0.5 * (av + bv);
-    const double qu[3] = { u, u + au, -u }, qv[3] = { v, v + av, -v };
-    memcpy(fp->qu, qu, sizeof qu);
-    memcpy(fp->qv, qv, sizeof qv);
+    fp->pv[0][0] = v;
+    double area = 0;
     for (int e = 0; e < 2; e++) {
-        double eu = qu[e + 1] - qu[e], ev = qv[e + 1] - qv[e];
-        rs__mk_edge *E = &fp->e[e];
-        if (!(ev > 0)) continue;
-        /* the piece inside the sprite is at most hin high: a part of
-         * height hin / n, h^2 |eu / ev| / 8 <= FP_EPS A */
-        double hin = ev < h ? ev : h;
-        if (eu != 0 && w * ev / fabs(eu) < hin) hin = w * ev / fabs(eu);
-        double need = hin * sqrt(fabs(eu) / (ev * 8 * FP_EPS * A));
-        E->n = need < 1 ? 1 : need >= MK_PARTS ? MK_PARTS : (int)ceil(need);
-        E->in = 1.0 / E->n;
-        /* du = 0: 1e300 on the left side, -1e300 on the right (each side
-         * then clips a vertical edge as it should, through infinities) */
-        E->iu = eu != 0 ? 1 / eu : 1e300;
-        E->iv = 1 / ev;
-        E->lm = E->iu > 0 ? INFINITY : -INFINITY;
+        double eu = e ? bu : au, ev = e ? bv : av;
+        if (ev > 0) {
+            /* a part of height h = ev / n: h^2 |eu / ev| / 8 <= FP_EPS A */
+            double need = sqrt(ev * fabs(eu) / (8 * FP_EPS * A));
+            int n = need < 1 ? 1 : need >= RS__MK_STEPS / 2 ? RS__MK_STEPS / 2 : (int)ceil(need);
+            for (int k = 0; k < n; k++) {
+                double t1 = (double)(k + 1) / n, tm = (k + 0.5) / n;
+                fp->pu[fp->n][0] = u + tm * eu;
+                fp->pv[fp->n + 1][0] = k + 1 == n ? v + ev : v + t1 * ev;
+                /* the band between this step and its mirror image */
+                area += -2 * fp->pu[fp->n][0] * (fp->pv[fp->n + 1][0] - fp->pv[fp->n][0]);
+                fp->n++;
+            }
+        }
+        u += eu;
+        v += ev;
     }
-    fp->ia = 1 / A;
-    fp->hu = 0.5 * (fabs(au) + fabs(bu));
-    fp->hv = 0.5 * (av + bv);
+    fp->ia = area > 0 ? 1 / area : 0;
+    for (int k = 0; k <= fp->n; k++) fp->pv[k][1] = -fp->pv[k][0];
+    for (int k = 0; k < fp->n; k++) fp->pu[k][1] = -fp->pu[k][0];
+    /* the staircase polygon's reach from the centre (both sides) */
+    fp->hu = fp->hv = 0;
+    for (int k = 0; k < fp->n; k++) {
+        fp->hu = fmax(fp->hu, fabs(fp->pu[k][0]));
+        fp->hv = fmax(fp->hv, fmax(fabs(fp->pv[k][0]), fabs(fp->pv[k + 1][0])));
+    }
 }
 
 /* The road coordinates of local point (x, y) on a marking's stretch of
@@ -359,7 +364,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         m->ibv = m->bv != 0 ? 1 / m->bv : 0;
         m->bvy = m->sv * uy;
         m->av = m->cv + m->sv * (A[2] - m->s0 - A[0] * ux - A[1] * uy);
-        footprint(m->bu, m->bv, m->buy * pix, m->bvy * pix, tx->w, tx->h, &m->fp);
+        footprint(m->bu, m->bv, m->buy * pix, m->bvy * pix, &m->fp);
         double hu = m->fp.hu, hv = m->fp.hv;
         m->ulo = fmax(m->ulo, m->tex->ax0 - hu);
         m->uhi = fmin(m->uhi, m->tex->ax1 + 1 + hu);
@@ -402,32 +407,6 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         if (V[0] + far > m->bx1) m->bx1 = V[0] + far;
         if (V[1] - far < m->by0) m->by0 = V[1] - far;
         if (V[1] + far > m->by1) m->by1 = V[1] + far;
-    }
-    if (np == 2) {
-        /* one segment: a pixel's square meets the texels with alpha > 0
-         * only if its centre is within half a pixel of their rectangle's
-         * bounding box (the other two separating axes of the square and
-         * that rectangle are the support's U and V bounds): the box is
-         * narrowed to that, so the row spans leave out the corners of the
-         * support where the footprint misses the sprite (its sample is 0) */
-        const double *A = c0;
-        double ux = A[3], uy = A[4], x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-        for (int k = 0; k < 4; k++) {
-            double U = k & 1 ? tx->ax1 + 1 : tx->ax0, V = k & 2 ? tx->ay1 + 1 : tx->ay0;
-            double tt = m->t0 + (U - m->cu) / m->su, ss = m->s0 + (V - m->cv) / m->sv - A[2];
-            double x = A[0] + ss * ux + tt * uy, y = A[1] + ss * uy - tt * ux;
-            x0 = x < x0 ? x : x0;
-            x1 = x > x1 ? x : x1;
-            y0 = y < y0 ? y : y0;
-            y1 = y > y1 ? y : y1;
-        }
-        /* half a pixel, and a margin far above rounding */
-        double mg = 0.5 * pix + 1e-6 + 1e-12 * (fabs(x0) + fabs(x1) + fabs(y0) + fabs(y1));
-        m->bx0 = fmax(m->bx0, x0 - mg);
-        m->bx1 = fmin(m->bx1, x1 + mg);
-        m->by0 = fmax(m->by0, y0 - mg);
-        m->by1 = fmin(m->by1, y1 + mg);
-        if (!(m->bx0 <= m->bx1 && m->by0 <= m->by1)) return 0;
     }
     *npts += np;
     return 1;
@@ -801,7 +780,7 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
             for (size_t k = 0; k + 1 < m->npt; k++, f++) {
                 const double *A = mk->pts + RS__MK_PT * (m->first + k);
                 footprint(m->su * A[4] * mk->pix, m->sv * A[3] * mk->pix, -m->su * A[3] * mk->pix,
-                          m->sv * A[4] * mk->pix, m->tex->w, m->tex->h, &mk->fps[f]);
+                          m->sv * A[4] * mk->pix, &mk->fps[f]);
             }
         }
         if (!r && mk->n) {
@@ -823,63 +802,27 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
     return RS_OK;
 }
 
-/* max and min as SSE2's maxpd and minpd compute them (the second operand
- * when they compare equal or unordered), so that the scalar walk gives
- * the kernel's bits. */
-static inline double mx(double a, double b) { return a > b ? a : b; }
-static inline double mn(double a, double b) { return a < b ? a : b; }
-
-/* One vertical step of a footprint's boundary: u, and v from v0 to v1
- * (each in [0, w] x [0, h]). */
-typedef struct mk_step {
-    double u, v0, v1;
-} mk_step;
-#define MK_MAX_STEPS (2 * 2 * (MK_PARTS + 1))
-
-/* The steps of footprint fp at (U, V) on a w x h sprite, in the order the
- * kernel sums them: per edge the piece right of the sprite (u = w), then
- * the inside piece's parts, each of the left side and then of the right
- * side. The integral of the sprite over the footprint is minus the sum
- * of G(u, v1) - G(u, v0) over them (Green's theorem, G the summed-area
- * table's bilinear interpolation: a vertical step is exact). */
-static int fp_walk(const rs__mk_fp *fp, double U, double V, double w, double h, mk_step *st)
+/* Clamps one step of footprint fp (side: +1 left, -1 the right side,
+ * the left turned by 180 degrees) at (U, V) to the sprite (w x h; no
+ * alpha outside); 0 when it adds nothing (left of the sprite, or its V
+ * range outside). */
+static int fp_step(const rs__mk_fp *fp, int k, double sg, double U, double V, double w, double h, size_t w1,
+                   size_t *ea, size_t *eb, double *fu, double *f0, double *f1)
 {
-    int ns = 0;
-    for (int e = 0; e < 2; e++) {
-        const rs__mk_edge *E = &fp->e[e];
-        if (!E->n) continue;
-        double u0[2], u1[2], v0[2], v1[2], ta[2], tb[2], dt[2], vp[2];
-        for (int l = 0; l < 2; l++) {
-            const double sg = l ? -1 : 1, iu = sg * E->iu, iv = sg * E->iv, lm = sg * E->lm;
-            u0[l] = U + sg * fp->qu[e];
-            u1[l] = U + sg * fp->qu[e + 1];
-            v0[l] = V + sg * fp->qv[e];
-            v1[l] = V + sg * fp->qv[e + 1];
-            double t0 = (0 - u0[l]) * iu, tw = (w - u0[l]) * iu;
-            double s0 = (0 - v0[l]) * iv, sh = (h - v0[l]) * iv;
-            ta[l] = mn(mx(mx(mn(t0, tw), mn(s0, sh)), 0), 1);
-            tb[l] = mx(mn(mn(mx(t0, tw), mx(s0, sh)), 1), ta[l]);
-            double ra = mx(mn(tw, lm), 0), rb = mx(mn(mx(tw, lm), 1), ra);
-            st[ns].u = w;
-            st[ns].v0 = mn(mx((1 - ra) * v0[l] + ra * v1[l], 0), h);
-            st[ns].v1 = mn(mx((1 - rb) * v0[l] + rb * v1[l], 0), h);
-            ns++;
-            dt[l] = (tb[l] - ta[l]) * E->in;
-            vp[l] = mn(mx((1 - ta[l]) * v0[l] + ta[l] * v1[l], 0), h);
-        }
-        for (int k = 0; k < E->n; k++)
-            for (int l = 0; l < 2; l++) {
-                double t1 = k + 1 == E->n ? tb[l] : ta[l] + (k + 1) * dt[l];
-                double tm = ta[l] + (k + 0.5) * dt[l];
-                double v = mn(mx((1 - t1) * v0[l] + t1 * v1[l], 0), h);
-                st[ns].u = mx(mn((1 - tm) * u0[l] + tm * u1[l], w), 0);
-                st[ns].v0 = vp[l];
-                st[ns].v1 = v;
-                vp[l] = v;
-                ns++;
-            }
-    }
-    return ns;
+    double u = U + sg * fp->pu[k][0], v0 = V + sg * fp->pv[k][0], v1 = V + sg * fp->pv[k + 1][0];
+    u = u < w ? u : w;
+    v0 = v0 > 0 ? v0 : 0;
+    v0 = v0 < h ? v0 : h;
+    v1 = v1 > 0 ? v1 : 0;
+    v1 = v1 < h ? v1 : h;
+    if (!(u > 0) || v0 == v1) return 0;
+    size_t i = (size_t)u, j0 = (size_t)v0, j1 = (size_t)v1;
+    *fu = u - (double)i;
+    *f0 = v0 - (double)j0;
+    *f1 = v1 - (double)j1;
+    *ea = j0 * w1 + i;
+    *eb = j1 * w1 + i;
+    return 1;
 }
 
 #if defined(__SSE2__)
@@ -911,8 +854,7 @@ static inline double step2(const double *a, const double *b, size_t w2, __m128d 
     __m128d dh = _mm_unpackhi_pd(d, d);
     return _mm_cvtsd_f64(_mm_add_sd(d, _mm_mul_sd(fu, _mm_sub_sd(dh, d))));
 }
-#endif
-
+#else
 /* G(u, v1) - G(u, v0) for the table corners a (row of v0) and b (row of
  * v1) of column i (rows of w2 corners), fu = u - i, f0, f1 the rows'
  * fractions: bilinear in doubles from the whole numbers (exact inputs;
@@ -924,59 +866,76 @@ static inline double step_int(const double *a, const double *b, size_t w2, doubl
     double lo = rb0 - ra0, hi = rb1 - ra1;
     return lo + fu * (hi - lo);
 }
-
-/* The same on one column (u = i): the step right of the sprite. */
-static inline double step_col(const double *a, const double *b, size_t w2, double f0, double f1)
-{
-    return (b[0] + f1 * (b[w2] - b[0])) - (a[0] + f0 * (a[w2] - a[0]));
-}
+#endif
 
 #if !defined(__SSE2__)
 /* The integral of the sprite's 255 x alpha (table t, rows of w2 = w + 2
- * corners, w x h texels) over footprint fp at (U, V): fp_walk's steps,
- * summed as kern_integral sums them: the same bits. */
+ * corners, w x h texels) over footprint fp at (U, V): the line integral
+ * of the summed-area table along the staircases, G(u, v1) - G(u, v0) per
+ * step (both sides: the right side is the left one mirrored, V - dv, U -
+ * du). The V levels are shared by consecutive steps; a step left of the
+ * sprite adds nothing (G(0, v) = 0). kern_integral does the same with
+ * SSE2, in the same order: the same bits. */
 static double fp_integral_int(const double *t, size_t w2, double w, double h, const rs__mk_fp *fp, double U,
                               double V)
 {
-    mk_step st[MK_MAX_STEPS];
-    int ns = fp_walk(fp, U, V, w, h, st);
     double I = 0;
-    for (int k = 0; k < ns; k++) {
-        size_t i = (size_t)st[k].u, j0 = (size_t)st[k].v0, j1 = (size_t)st[k].v1;
-        double f0 = st[k].v0 - (double)j0, f1 = st[k].v1 - (double)j1;
-        if (st[k].u == w) I -= step_col(t + j0 * w2 + i, t + j1 * w2 + i, w2, f0, f1);
-        else I -= step_int(t + j0 * w2 + i, t + j1 * w2 + i, w2, st[k].u - (double)i, f0, f1);
-    }
+    const int n = fp->n;
+    size_t row[2][RS__MK_STEPS + 1];
+    double f[2][RS__MK_STEPS + 1];
+    for (int k = 0; k <= n; k++)
+        for (int side = 0; side < 2; side++) {
+            double v = V + fp->pv[k][side];
+            v = v > 0 ? v : 0;
+            v = v < h ? v : h;
+            size_t j = (size_t)v;
+            row[side][k] = j * w2;
+            f[side][k] = v - (double)j;
+        }
+    /* step k of the left side, then of the right side, as the SSE2 kernel
+     * sums them */
+    for (int k = 0; k < n; k++)
+        for (int side = 0; side < 2; side++) {
+            double u = U + fp->pu[k][side];
+            u = u < w ? u : w;
+            if (!(u > 0)) continue;
+            size_t i = (size_t)u;
+            I -= step_int(t + row[side][k] + i, t + row[side][k + 1] + i, w2, u - (double)i, f[side][k],
+                          f[side][k + 1]);
+        }
     return I;
 }
 #endif
 
 /* The same for one plane of a table of doubles (several colours). */
-static double fp_integral(const double *t, size_t w1, const mk_step *st, int ns)
+static double fp_integral(const double *t, size_t w1, double w, double h, const rs__mk_fp *fp, double U, double V)
 {
     double I = 0;
-    for (int k = 0; k < ns; k++) {
-        if (!(st[k].u > 0) || st[k].v0 == st[k].v1) continue;
-        size_t i = (size_t)st[k].u, j0 = (size_t)st[k].v0, j1 = (size_t)st[k].v1;
-        double fu = st[k].u - (double)i, f0 = st[k].v0 - (double)j0, f1 = st[k].v1 - (double)j1;
-        const double *a = t + 4 * (j0 * w1 + i), *b = t + 4 * (j1 * w1 + i);
-        I -= (b[0] - a[0]) + fu * (b[1] - a[1]) + (f1 * b[2] - f0 * a[2]) + fu * (f1 * b[3] - f0 * a[3]);
+    for (int side = 0; side < 2; side++) {
+        const double sg = side ? -1 : 1;
+        for (int k = 0; k < fp->n; k++) {
+            size_t ea, eb;
+            double fu, f0, f1;
+            if (!fp_step(fp, k, sg, U, V, w, h, w1, &ea, &eb, &fu, &f0, &f1)) continue;
+            const double *a = t + 4 * ea, *b = t + 4 * eb;
+            I -= (b[0] - a[0]) + fu * (b[1] - a[1]) + (f1 * b[2] - f0 * a[2]) + fu * (f1 * b[3] - f0 * a[3]);
+        }
     }
     return I;
 }
 
 /* The sprite's mean premultiplied colour and alpha over footprint fp of
  * the pixel whose centre has level-0 texel coordinates (U, V), for a type
- * of several colours (four planes; alpha-only types: kern_put). */
+ * of several colours (four planes; alpha-only types: kern_put): the
+ * exact integral over the staircase polygon from the summed-area table. */
 static void sample4(const rs__mk *m, const rs__mk_fp *fp, double U, double V, float out[4])
 {
     const rs__mk_tex *tx = m->tex;
     const size_t w1 = (size_t)tx->w + 1;
+    const double w = tx->w, h = tx->h;
     const size_t plane = w1 * ((size_t)tx->h + 1) * 4;
-    mk_step st[MK_MAX_STEPS];
-    int ns = fp_walk(fp, U, V, tx->w, tx->h, st);
     for (int c = 0; c < 4; c++) {
-        double x = fp_integral(tx->sat + (size_t)c * plane, w1, st, ns) * fp->ia;
+        double x = fp_integral(tx->sat + (size_t)c * plane, w1, w, h, fp, U, V) * fp->ia;
         double hi = c == 3 ? 1 : 255;
         x = x > 0 ? x : 0;
         out[c] = (float)(x < hi ? x : hi);
@@ -990,7 +949,7 @@ typedef struct mk_kern {
     const rs__mk_fp *fp;
     const double *t;       /* alpha-only table, NULL: the four-plane sample */
     size_t w2;             /* its row length, w + 2 */
-    double w, h, ia;       /* texels; 1 / the footprint's area */
+    double w, h, ia;       /* texels; 1 / the staircase polygon's area */
     double col[3];
 } mk_kern;
 
@@ -1009,66 +968,36 @@ static void kern_init(mk_kern *kn, const rs__mk *m, const rs__mk_fp *fp)
 
 #if defined(__SSE2__)
 /* fp_integral_int with SSE2, both sides at once (lane 0 the left side,
- * lane 1 the right: the footprint's pairs): fp_walk's arithmetic in the
- * same order, so the same bits. */
+ * lane 1 the right: the footprint's offset pairs): the same operations in
+ * the same order, so the same bits. A step left of the sprite is clamped
+ * onto column 0, where the table is 0, and adds exactly +0 (fu = 0): no
+ * branch. */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 static inline double kern_integral(const mk_kern *kn, double U, double V)
 {
     const double *t = kn->t;
-    const size_t w2 = kn->w2, wi = (size_t)kn->w;
-    const __m128d z = _mm_setzero_pd(), one = _mm_set1_pd(1), hh = _mm_set1_pd(kn->h), ww = _mm_set1_pd(kn->w);
-    const __m128d UU = _mm_set1_pd(U), VV = _mm_set1_pd(V), sgn = _mm_set_pd(-0.0, 0.0);
-    const rs__mk_fp *fp = kn->fp;
+    const size_t w2 = kn->w2;
+    const __m128d VV = _mm_set1_pd(V), UU = _mm_set1_pd(U), z = _mm_setzero_pd();
+    const __m128d hh = _mm_set1_pd(kn->h), ww = _mm_set1_pd(kn->w);
+    const double *pa, *pb;
+    __m128d fa, fb;
     double I = 0;
-    for (int e = 0; e < 2; e++) {
-        const rs__mk_edge *E = &fp->e[e];
-        if (!E->n) continue;
-#define MK_PAIR(x) _mm_xor_pd(_mm_set1_pd(x), sgn)
-        const __m128d u0 = _mm_add_pd(UU, MK_PAIR(fp->qu[e])), u1 = _mm_add_pd(UU, MK_PAIR(fp->qu[e + 1]));
-        const __m128d v0 = _mm_add_pd(VV, MK_PAIR(fp->qv[e])), v1 = _mm_add_pd(VV, MK_PAIR(fp->qv[e + 1]));
-        const __m128d iu = MK_PAIR(E->iu), iv = MK_PAIR(E->iv), lm = MK_PAIR(E->lm);
-#undef MK_PAIR
-        __m128d t0 = _mm_mul_pd(_mm_sub_pd(z, u0), iu), tw = _mm_mul_pd(_mm_sub_pd(ww, u0), iu);
-        __m128d s0 = _mm_mul_pd(_mm_sub_pd(z, v0), iv), sh = _mm_mul_pd(_mm_sub_pd(hh, v0), iv);
-        __m128d ta = _mm_min_pd(_mm_max_pd(_mm_max_pd(_mm_min_pd(t0, tw), _mm_min_pd(s0, sh)), z), one);
-        __m128d tb = _mm_max_pd(_mm_min_pd(_mm_min_pd(_mm_max_pd(t0, tw), _mm_max_pd(s0, sh)), one), ta);
-        __m128d ra = _mm_max_pd(_mm_min_pd(tw, lm), z);
-        __m128d rb = _mm_max_pd(_mm_min_pd(_mm_max_pd(tw, lm), one), ra);
-        const double *pa, *pb, *pa1, *pb1;
-        __m128d fa, fb, fa1, fb1;
-#define MK_LERP(t, a, b) _mm_add_pd(_mm_mul_pd(_mm_sub_pd(one, t), a), _mm_mul_pd(t, b))
-#define MK_LEVEL(t, pa, pb, fa, fb) level2(tab, w2, _mm_min_pd(_mm_max_pd(MK_LERP(t, v0, v1), z), hh), pa, pb, fa, fb)
-        const double *tab = t;
-        /* right of the sprite: u = w (skipped when empty on both sides: it
-         * adds exactly 0) */
-        if (_mm_movemask_pd(_mm_cmplt_pd(ra, rb))) {
-            MK_LEVEL(ra, &pa, &pb, &fa, &fb);
-            MK_LEVEL(rb, &pa1, &pb1, &fa1, &fb1);
-            I -= step_col(pa + wi, pa1 + wi, w2, _mm_cvtsd_f64(fa), _mm_cvtsd_f64(fa1));
-            I -= step_col(pb + wi, pb1 + wi, w2, _mm_cvtsd_f64(fb), _mm_cvtsd_f64(fb1));
-        }
-        /* inside: n parts (skipped alike) */
-        if (_mm_movemask_pd(_mm_cmplt_pd(ta, tb))) {
-            const __m128d dt = _mm_mul_pd(_mm_sub_pd(tb, ta), _mm_set1_pd(E->in));
-            MK_LEVEL(ta, &pa, &pb, &fa, &fb);
-            for (int k = 0; k < E->n; k++) {
-                __m128d t1 = k + 1 == E->n ? tb : _mm_add_pd(ta, _mm_mul_pd(_mm_set1_pd(k + 1), dt));
-                __m128d tm = _mm_add_pd(ta, _mm_mul_pd(_mm_set1_pd(k + 0.5), dt));
-                MK_LEVEL(t1, &pa1, &pb1, &fa1, &fb1);
-                __m128d uz = _mm_max_pd(_mm_min_pd(MK_LERP(tm, u0, u1), ww), z);
-                __m128i ii = _mm_cvttpd_epi32(uz);
-                __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
-                size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii),
-                       i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
-                I -= step2(pa + i0, pa1 + i0, w2, fu, fa, fa1);
-                I -= step2(pb + i1, pb1 + i1, w2, _mm_unpackhi_pd(fu, fu), fb, fb1);
-                pa = pa1, pb = pb1, fa = fa1, fb = fb1;
-            }
-        }
-#undef MK_LEVEL
-#undef MK_LERP
+    const rs__mk_fp *fp = kn->fp;
+    level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, _mm_loadu_pd(fp->pv[0])), z), hh), &pa, &pb, &fa, &fb);
+    for (int k = 0; k < fp->n; k++) {
+        const double *pa1, *pb1;
+        __m128d fa1, fb1;
+        level2(t, w2, _mm_min_pd(_mm_max_pd(_mm_add_pd(VV, _mm_loadu_pd(fp->pv[k + 1])), z), hh), &pa1, &pb1, &fa1,
+               &fb1);
+        __m128d uz = _mm_max_pd(_mm_min_pd(_mm_add_pd(UU, _mm_loadu_pd(fp->pu[k])), ww), z);
+        __m128i ii = _mm_cvttpd_epi32(uz);
+        __m128d fu = _mm_sub_pd(uz, _mm_cvtepi32_pd(ii));
+        size_t i0 = (size_t)(uint32_t)_mm_cvtsi128_si32(ii), i1 = (size_t)(uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ii, 1));
+        I -= step2(pa + i0, pa1 + i0, w2, fu, fa, fa1);
+        I -= step2(pb + i1, pb1 + i1, w2, _mm_unpackhi_pd(fu, fu), fb, fb1);
+        pa = pa1, pb = pb1, fa = fa1, fb = fb1;
     }
     return I;
 }
@@ -1194,13 +1123,11 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
     const double ulo = m->ulo, uhi = m->uhi, vlo = m->vlo, vhi = m->vhi, bu = m->bu, bv = m->bv;
     long r0, r1;
     if (!box_rows(m, p, 1 / pix, &r0, &r1)) return;
-    /* the box's columns (see place) */
-    const long c0 = span_lo(m->bx0 / pix - 0.5 - gx0, wd), c1 = span_hi(m->bx1 / pix - 0.5 - gx0, wd);
     mk_kern kn;
     kern_init(&kn, m, &m->fp);
     for (long r = r0; r <= r1; r++) {
         double y = ((double)p->y0 + (double)r + 0.5) * pix;
-        long k0 = c0 > 0 ? c0 : 0, k1 = c1 < (long)w - 1 ? c1 : (long)w - 1;
+        long k0 = 0, k1 = (long)w - 1;
         double ur = m->au + m->buy * y, vr = m->av + m->bvy * y;
         if (m->flat) {
             if (!slab(ur, bu, m->ibu, ulo, uhi, gx0, wd, &k0, &k1) || !slab(vr, bv, m->ibv, vlo, vhi, gx0, wd, &k0, &k1))
@@ -1211,7 +1138,7 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
             double b0 = (m->va - vr) * m->ibv, b1 = (m->vb - vr) * m->ibv;
             double e0 = a0 > b0 ? a0 : b0, e1 = a1 < b1 ? a1 : b1;
             long l0 = span_lo(e0 - 0.5 - gx0, wd), l1 = span_hi(e1 - 0.5 - gx0, wd);
-            k0 = l0 > k0 ? l0 : k0;
+            k0 = l0 > 0 ? l0 : 0;
             k1 = l1 < k1 ? l1 : k1;
             if (k0 > k1) continue;
         }

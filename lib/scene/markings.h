@@ -39,27 +39,20 @@ typedef struct rs__mk_tex {
     int32_t ax0, ay0, ax1, ay1; /* texels with alpha > 0 (ax0 > ax1: none) */
 } rs__mk_tex;
 
-/* The pixel's footprint in texel coordinates (docs/markings.md): a
- * parallelogram, its left side the path from the bottom vertex q[0] (from
- * the centre) to q[1] and on to the top vertex q[2] = -q[0]; the right side
- * is the left one turned by 180 degrees about the centre (-q[0], -q[1],
- * -q[2]). Each slanted edge is clipped to the sprite's rectangle [0, w] x
- * [0, h]: the piece inside becomes a staircase of n parts (a vertical step
- * at each part's middle), the piece right of the sprite one vertical step
- * at u = w (exact), the rest adds nothing. Points on an edge are (1 - t) p0 + t p1, so its ends are
- * its vertices exactly and the steps of a footprint outside the sprite
- * cancel to 0. */
-typedef struct rs__mk_edge {
-    int n;                     /* parts of the piece inside; 0: a horizontal edge (adds nothing) */
-    double in;                 /* 1 / n */
-    double iu, iv;             /* 1 / du (du = 0: 1e300), 1 / dv (the left side; the right side's are their negatives) */
-    double lm;                 /* +inf where iu > 0, else -inf */
-} rs__mk_edge;
+/* The pixel's footprint in texel coordinates, its two slanted sides each
+ * replaced by a staircase (docs/markings.md): on the left, for V - Vc in
+ * [dv[k], dv[k + 1]], the boundary is at U - Uc = du[k]; the right side is
+ * the left one turned by 180 degrees about the centre (Uc, Vc). Each
+ * parallelogram edge is cut into equal parts with a step at each part's
+ * middle, so the staircases of neighbouring pixels fit together and the
+ * footprints still tile the plane. Kept as pairs for both sides at once:
+ * pv[k] = (dv[k], -dv[k]), pu[k] = (du[k], -du[k]). */
+#define RS__MK_STEPS 6
 typedef struct rs__mk_fp {
-    double ia;                 /* 1 / the footprint's area; 0: none */
-    double hu, hv;             /* its reach from the centre in U and in V */
-    double qu[3], qv[3];       /* the left side's vertices from the centre (the right side's: their negatives) */
-    rs__mk_edge e[2];
+    int n;
+    double ia; /* 1 / the staircase polygon's area */
+    double hu, hv; /* the polygon's reach from the centre in U and in V */
+    double pv[RS__MK_STEPS + 1][2], pu[RS__MK_STEPS][2];
 } rs__mk_fp;
 
 typedef struct rs__mk {
