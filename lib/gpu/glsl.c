@@ -347,7 +347,7 @@ static const char *const rsh_fs_src[] = {
     "    for (int e = 0; e < 2; e++) {\n"
     "        vec2 ed = e == 0 ? a : b;\n"
     "        if (ed.y > 0.0) {\n"
-    "            float need = sqrt(ed.y * abs(ed.x) / (8.0 * 0.010 * A));\n"
+    "            float need = sqrt(ed.y * abs(ed.x) / (8.0 * 0.0125 * A));\n"
     "            int n = need < 1.0 ? 1 : need >= 3.0 ? 3 : int(ceil(need));\n"
     "            for (int k = 0; k < n; k++) {\n"
     "                float du = o.x + (float(k) + 0.5) / float(n) * ed.x;\n"
