@@ -51,6 +51,14 @@ double me_pixel_area(double x0, double y0, double p, double cx, double cy, doubl
     return fabs(0.5 * s);
 }
 
+int me_opaque(int shape, uint32_t tw, uint32_t th, uint32_t i, uint32_t j)
+{
+    if (shape == 0) return 1;
+    double x = fabs(i + 0.5 - 0.5 * tw), head = 0.4 * th;
+    if (j + 0.5 < head) return x <= 0.5 * tw * (j + 0.5) / head;
+    return x < 0.25 * tw;
+}
+
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -77,6 +85,13 @@ int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out)
     memset(&p, 0, sizeof p);
     if (!z || !img) goto done;
     memset(img, 255, (size_t)c->tw * c->th * 4);
+    size_t nop = 0;
+    for (uint32_t j = 0; j < c->th; j++)
+        for (uint32_t i = 0; i < c->tw; i++) {
+            int on = me_opaque(c->shape, c->tw, c->th, i, j);
+            img[((size_t)j * c->tw + i) * 4 + 3] = on ? 255 : 0;
+            nop += (size_t)on;
+        }
     rs_image im = { c->tw, c->th, img };
     char idx[128];
     snprintf(idx, sizeof idx, "box 0 0 %u %u %.17g %.17g\n", (unsigned)c->tw, (unsigned)c->th, c->length, c->width);
@@ -121,7 +136,21 @@ int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out)
         for (uint32_t x = 0; x < W; x++) {
             double px = x * pix, py = y * pix, v = a[(size_t)y * W + x], e = 0;
             int near = fabs(px + 0.5 * pix - cx) <= r && fabs(py + 0.5 * pix - cy) <= r;
-            if (near) e = me_pixel_area(px, py, pix, cx, cy, dx, dy, hl, hw) / (pix * pix);
+            if (near && c->shape == 0) e = me_pixel_area(px, py, pix, cx, cy, dx, dy, hl, hw) / (pix * pix);
+            else if (near) {
+                /* each opaque texel's square: its centre at t = t0 + W/2 - (i + 1/2) W/tw, s = s0 + L/2 - (j
+                 * + 1/2) L/th */
+                double kw = c->width / c->tw, kl = c->length / c->th, reach = 0.75 * pix + kw + kl;
+                for (uint32_t j = 0; j < c->th; j++)
+                    for (uint32_t i = 0; i < c->tw; i++) {
+                        double tt = t0 + hw - (i + 0.5) * kw, ss = s0 + hl - (j + 0.5) * kl;
+                        double qx = xy[0] + ss * dx + tt * dy, qy = xy[1] + ss * dy - tt * dx;
+                        if (fabs(qx - px - 0.5 * pix) > reach || fabs(qy - py - 0.5 * pix) > reach) continue;
+                        if (!me_opaque(c->shape, c->tw, c->th, i, j)) continue;
+                        e += me_pixel_area(px, py, pix, qx, qy, dx, dy, 0.5 * kl, 0.5 * kw);
+                    }
+                e /= pix * pix;
+            }
             if (v == 0 && e == 0) continue;
             err[ne++] = fabs(v - e);
             sum += v;
@@ -137,7 +166,7 @@ int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out)
     qsort(err, (size_t)ne, sizeof *err, cmp_double);
     out->mean = tot / ne;
     out->p99 = err[(size_t)floor(0.99 * (double)(ne - 1))];
-    out->area = sum * pix * pix / (c->length * c->width) - 1;
+    out->area = sum * pix * pix / (c->length * c->width * (double)nop / ((double)c->tw * c->th)) - 1;
     out->centroid = hypot(sx / sum - ex / esum, sy / sum - ey / esum) / pix;
     out->pixels = ne;
     rc = 0;

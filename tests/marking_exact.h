@@ -21,7 +21,13 @@ typedef struct me_case {
     double pix;           /* pixel, metres (1 / texels per DEM cell of 1 m) */
     double length, width; /* the sprite, metres */
     uint32_t tw, th;      /* its texels across, along */
+    int shape;            /* 0: every texel opaque; 1: a hard-edged arrow (a triangular head of
+                           * texel steps over a shaft half as wide), opaque texels or none */
 } me_case;
+
+/* Whether texel (i, j) (across, along; row 0 the sprite's front) of a tw x
+ * th sprite of shape `shape` is opaque. */
+int me_opaque(int shape, uint32_t tw, uint32_t th, uint32_t i, uint32_t j);
 
 /* Paint case c and measure it; 0 on success. */
 int me_measure(rs_ctx *ctx, const me_case *c, me_stats *out);

@@ -24,9 +24,9 @@ typedef struct rs__placement {
  * level-0 texels (S(j, i) = the sum over texels [0, i) x [0, j)), so that
  * the integral of the sprite (each texel a square of constant colour)
  * over [0, u] x [0, v] is the bilinear interpolation of S. Alpha-only
- * types (one colour): 255 x alpha, whole numbers, in int32 (4 bytes a
- * corner: the table stays in cache), (h + 2) x (w + 2) corners, the last
- * row and column repeated. Types of
+ * types (one colour): 255 x alpha, whole numbers, stored as doubles
+ * (exact; read two columns at a time without converting), (h + 2) x (w +
+ * 2) corners, the last row and column repeated. Types of
  * several colours: per r g b a plane and corner (j, i), j in [0, h], i in
  * [0, w], the doubles S, R = S(j, i + 1) - S(j, i), D = S(j + 1, i) -
  * S(j, i), X = the texel (j, i) (0 past the last column or row). */
@@ -47,7 +47,7 @@ typedef struct rs__mk_tex {
  * middle, so the staircases of neighbouring pixels fit together and the
  * footprints still tile the plane. Kept as pairs for both sides at once:
  * pv[k] = (dv[k], -dv[k]), pu[k] = (du[k], -du[k]). */
-#define RS__MK_STEPS 4
+#define RS__MK_STEPS 6
 typedef struct rs__mk_fp {
     int n;
     double ia; /* 1 / the staircase polygon's area */

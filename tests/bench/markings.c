@@ -219,7 +219,7 @@ int main(int argc, char **argv)
         for (size_t ai = 0; ai < sizeof angles / sizeof angles[0]; ai++) {
             fprintf(md, "| %g |", angles[ai]);
             for (size_t oi = 0; oi < 4; oi++) {
-                me_case c = { angles[ai], offs[oi][0], offs[oi][1], 0.1, 2, 1, 20, 40 };
+                me_case c = { angles[ai], offs[oi][0], offs[oi][1], 0.1, 2, 1, 20, 40, 0 };
                 me_stats st;
                 if (me_measure(ctx, &c, &st)) return 1;
                 fprintf(md, " %.4f / %.3f / %+.3f %% |", st.mean, st.p99, 100 * st.area);
@@ -233,7 +233,7 @@ int main(int argc, char **argv)
             for (size_t ai = 0; ai < sizeof angles / sizeof angles[0] + 2; ai++)
                 for (size_t oi = 0; oi < 4; oi++) {
                     double ang = ai < 7 ? angles[ai] : ai == 7 ? 137 : 200;
-                    me_case c = { ang, offs[oi][0], offs[oi][1], pixes[pi], 2, 1, 20, 40 };
+                    me_case c = { ang, offs[oi][0], offs[oi][1], pixes[pi], 2, 1, 20, 40, 0 };
                     me_stats st;
                     if (me_measure(ctx, &c, &st)) return 1;
                     wm = st.mean > wm ? st.mean : wm;
