@@ -86,26 +86,34 @@ int rs__road_non_car(const rs_roads *roads, size_t r)
     return rs_roads_get_info(roads, r, &info) == RS_OK && rs__class_non_car(info.road_class);
 }
 
-/* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
+/* ---- points sorted by cell in Z order: a cell's points are one run ---- */
 
-/* A hashed point with what the pair tests read of it, so a candidate costs
- * one cache line, not one per array (the buckets are visited in random
- * order of the points' ids). */
+/* A point with what the pair tests read of it, so a candidate costs one
+ * cache line, not one per array. */
 typedef struct pt_entry {
     double x, y, s;
     uint32_t id, road;
 } pt_entry;
 
-typedef struct pt_hash {
+/* The points sorted by the Z-order (Morton) key of their cell, so the
+ * points of a cell are one run and the runs of neighbouring cells lie
+ * close together in memory: the build reads them in space order, where
+ * hash buckets (until this) put neighbouring cells at random places, a
+ * cache miss per probe once the table outgrows the cache. A key cell is
+ * 2^extra cells a side (extra > 0 only when the points span more than 2^32
+ * cells: huge coordinates; the pair tests are exact, so a coarser cell
+ * only adds candidates). A directory of 2^k blocks of keys (about one
+ * point each) finds a cell's run: its block, then a short search. */
+typedef struct pt_cells {
     double cell;
-    uint64_t mask;
-    uint32_t *start;
-    pt_entry *ent;  /* the points in bucket order */
-    uint64_t *occ;  /* a bit per hashed cell (8 per point, small enough to stay in cache): a
-                       clear bit says the cell is empty, where a bucket may also hold other
-                       cells (a bucket read is a cache miss) */
-    uint64_t omask;
-} pt_hash;
+    int64_t lo[2], hi[2]; /* the lowest and highest cell of the points, x and y */
+    unsigned extra;       /* a key cell is 2^extra cells a side */
+    unsigned dshift;      /* a key's directory block: key >> dshift */
+    size_t count;
+    uint64_t *key;        /* per entry, ascending */
+    pt_entry *ent;        /* the points in key order (ids ascending within a key) */
+    uint32_t *dir;        /* the first entry of each directory block, and count */
+} pt_cells;
 
 /* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
  * integer conversion (floor is a libm call: a tenth of a small build) */
@@ -122,122 +130,148 @@ static int64_t cell_of(double x, double cell)
 static double nmin(double a, double b) { return a < b || b != b ? a : b; }
 static double nmax(double a, double b) { return a > b || b != b ? a : b; }
 
-/* Blocks of 4 x 4 cells hash to 16 consecutive buckets (one cache line of
- * starts): the cells around a point mostly share a block. The cell's place
- * in the block is offset by the block's hash, so points on a regular grid
- * (all at one place in their blocks) still spread over all buckets. */
-static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
+/* The low 32 bits of v, spread to the even bits. */
+static uint64_t spread32(uint64_t v)
 {
-    uint64_t bx = (uint64_t)cx >> 2, by = (uint64_t)cy >> 2;
-    uint64_t h = bx * 0x9E3779B97F4A7C15ull ^ (by + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
-    h ^= h >> 29;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 32;
-    uint64_t sub = ((((uint64_t)cx & 3) << 2 | ((uint64_t)cy & 3)) + (h >> 40)) & 15;
-    return ((h << 4) | sub) & H->mask;
+    v &= 0xFFFFFFFFull;
+    v = (v | v << 16) & 0x0000FFFF0000FFFFull;
+    v = (v | v << 8) & 0x00FF00FF00FF00FFull;
+    v = (v | v << 4) & 0x0F0F0F0F0F0F0F0Full;
+    v = (v | v << 2) & 0x3333333333333333ull;
+    v = (v | v << 1) & 0x5555555555555555ull;
+    return v;
 }
 
-/* The cell's bit in H->occ (another hash of the cell than its bucket's). */
-static uint64_t occ_bit(const pt_hash *H, int64_t cx, int64_t cy)
+static uint64_t zkey(uint64_t kx, uint64_t ky) { return spread32(kx) | spread32(ky) << 1; }
+
+/* The key cells (axis 0: x, 1: y) of the cells a .. b: *ka .. *kb; 0 when
+ * none holds a point. */
+static int key_range(const pt_cells *H, int axis, int64_t a, int64_t b, uint64_t *ka, uint64_t *kb)
 {
-    uint64_t h = (uint64_t)cx * 0xD6E8FEB86659FD93ull ^ (uint64_t)cy * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 31;
-    h *= 0x94D049BB133111EBull;
-    return (h >> 20) & H->omask;
+    if (!H->count || b < H->lo[axis] || a > H->hi[axis]) return 0;
+    if (a < H->lo[axis]) a = H->lo[axis];
+    if (b > H->hi[axis]) b = H->hi[axis];
+    *ka = ((uint64_t)a - (uint64_t)H->lo[axis]) >> H->extra;
+    *kb = ((uint64_t)b - (uint64_t)H->lo[axis]) >> H->extra;
+    return 1;
 }
 
-static int occupied(const pt_hash *H, int64_t cx, int64_t cy)
+/* The run of entries of key cell (kx, ky): *a .. *b - 1. */
+static void run_of(const pt_cells *H, uint64_t kx, uint64_t ky, uint32_t *a, uint32_t *b)
 {
-    uint64_t o = occ_bit(H, cx, cy);
-    return (int)(H->occ[o >> 6] >> (o & 63) & 1);
+    uint64_t k = zkey(kx, ky), blk = k >> H->dshift;
+    uint32_t l = H->dir[blk], r = H->dir[blk + 1], e = r;
+    if (l == r) {
+        *a = *b = l;
+        return;
+    }
+    while (r - l > 8) { /* (a crowded block: a binary search) */
+        uint32_t m = l + (r - l) / 2;
+        if (H->key[m] < k) l = m + 1;
+        else r = m;
+    }
+    while (l < e && H->key[l] < k) l++;
+    *a = l;
+    while (l < e && H->key[l] == k) l++;
+    *b = l;
 }
 
-#define GROUP_BITS 13 /* buckets per group of the fill: 2^13 starts (32 KiB) stay in cache */
+#define RADIX_BITS 11
+#define RADIX_DIGITS 6 /* 66 bits */
 
-/* Hash the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
- * for which keep[id] (NULL: all). Filled in two streaming passes, not by
- * writing each point to a random bucket (a cache miss per point once the
- * table outgrows the cache): the points to groups of 2^13 buckets in id
- * order, then each group's points to their buckets (through a scratch
- * array of the largest group). Both passes keep id order, so ids ascend
- * within a bucket. */
-static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const double *s, const uint32_t *vroad,
-                            const uint8_t *keep, size_t n, double cell)
+/* Sort the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
+ * for which keep[id] (NULL: all) by their cells' keys: a stable LSD radix
+ * sort (digits that all keys share are skipped), so ids ascend within a
+ * cell; linear in the points, every pass a stream. */
+static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const double *s, const uint32_t *vroad,
+                             const uint8_t *keep, size_t n, double cell)
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
-    uint64_t nb = 64, no = 64;
-    while (nb < 2 * (uint64_t)count && nb < (1ull << 31)) nb *= 2;
-    while (no < 8 * (uint64_t)count && no < (1ull << 40)) no *= 2;
-    unsigned shift = 0;
-    while ((nb >> shift) > 1 && (1ull << shift) < (1ull << GROUP_BITS)) shift++;
-    size_t ng = (size_t)(nb >> shift), gsize = (size_t)1 << shift;
+    memset(H, 0, sizeof *H);
     H->cell = cell;
-    H->mask = nb - 1;
-    H->start = rs__alloc_array(ctx, (size_t)nb + 1, sizeof *H->start);
-    H->ent = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ent);
-    H->omask = no - 1;
-    H->occ = rs__calloc(ctx, (size_t)(no / 64), sizeof *H->occ);
-    uint32_t *gstart = rs__calloc(ctx, ng + 1, sizeof *gstart), *cur = rs__alloc_array(ctx, gsize, sizeof *cur);
-    uint32_t *tkey = rs__alloc_array(ctx, count ? count : 1, sizeof *tkey);
-    uint32_t *ikey = rs__alloc_array(ctx, count ? count : 1, sizeof *ikey); /* buckets in id order */
-    pt_entry *tent = NULL;
+    H->count = count;
+    size_t m = count ? count : 1;
+    uint64_t ndir = 1;
+    while (ndir < (uint64_t)count && ndir < (1ull << 31)) ndir *= 2;
+    H->key = rs__alloc_array(ctx, m, sizeof *H->key);
+    H->ent = rs__alloc_array(ctx, m, sizeof *H->ent);
+    H->dir = rs__alloc_array(ctx, (size_t)ndir + 1, sizeof *H->dir);
+    uint64_t *k2 = rs__alloc_array(ctx, m, sizeof *k2);
+    uint32_t *ia = rs__alloc_array(ctx, m, sizeof *ia), *ib = rs__alloc_array(ctx, m, sizeof *ib);
+    uint32_t *hist = rs__calloc(ctx, (size_t)RADIX_DIGITS << RADIX_BITS, sizeof *hist);
     rs_result res = RS_ERR_NOMEM;
-    if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey || !ikey) goto done;
+    if (!H->key || !H->ent || !H->dir || !k2 || !ia || !ib || !hist) goto done;
+    /* cells (x in key, y in k2) and their bounds */
+    int64_t lo[2] = { INT64_MAX, INT64_MAX }, hi[2] = { INT64_MIN, INT64_MIN };
     for (size_t i = 0, k = 0; i < n; i++) {
         if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         if (keep && !keep[i]) continue;
         int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
-        uint64_t b = bucket_of(H, cx, cy), o = occ_bit(H, cx, cy);
-        H->occ[o >> 6] |= 1ull << (o & 63);
-        ikey[k++] = (uint32_t)b;
-        gstart[(b >> shift) + 1]++;
+        lo[0] = cx < lo[0] ? cx : lo[0], hi[0] = cx > hi[0] ? cx : hi[0];
+        lo[1] = cy < lo[1] ? cy : lo[1], hi[1] = cy > hi[1] ? cy : hi[1];
+        H->key[k] = (uint64_t)cx, k2[k] = (uint64_t)cy, ia[k++] = (uint32_t)i;
     }
-    for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
-    for (size_t i = 0, k = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
-        if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
-        if (keep && !keep[i]) continue;
-        uint32_t b = ikey[k++], q = gstart[b >> shift]++;
-        tkey[q] = b;
-        pt_entry *e = &H->ent[q];
-        e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
-        e->id = (uint32_t)i, e->road = vroad[i];
+    if (count) {
+        uint64_t span = (uint64_t)hi[0] - (uint64_t)lo[0], sy = (uint64_t)hi[1] - (uint64_t)lo[1];
+        span = sy > span ? sy : span;
+        while ((span >> H->extra) > 0xFFFFFFFFull) H->extra++;
+        memcpy(H->lo, lo, sizeof lo);
+        memcpy(H->hi, hi, sizeof hi);
     }
-    for (size_t g = ng; g > 0; g--) gstart[g] = gstart[g - 1];
-    gstart[0] = 0;
-    uint32_t most = 0;
-    for (size_t g = 0; g < ng; g++) most = gstart[g + 1] - gstart[g] > most ? gstart[g + 1] - gstart[g] : most;
-    if (!(tent = rs__alloc_array(ctx, most ? most : 1, sizeof *tent))) goto done;
-    for (size_t g = 0; g < ng; g++) {
-        uint64_t b0 = (uint64_t)g << shift;
-        memset(cur, 0, gsize * sizeof *cur);
-        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) cur[tkey[q] - b0]++;
+    uint64_t *ka = H->key, *kb = k2;
+    for (size_t k = 0; k < count; k++) {
+        uint64_t key = zkey((H->key[k] - (uint64_t)lo[0]) >> H->extra, (k2[k] - (uint64_t)lo[1]) >> H->extra);
+        ka[k] = key;
+        for (int d = 0; d < RADIX_DIGITS; d++) hist[((size_t)d << RADIX_BITS) + (key >> (d * RADIX_BITS) & ((1u << RADIX_BITS) - 1))]++;
+    }
+    for (int d = 0; d < RADIX_DIGITS && count; d++) {
+        uint32_t *h = hist + ((size_t)d << RADIX_BITS);
+        unsigned sh = (unsigned)(d * RADIX_BITS);
+        if (h[ka[0] >> sh & ((1u << RADIX_BITS) - 1)] == count) continue; /* all keys share this digit */
         uint32_t at = 0;
-        for (size_t j = 0; j < gsize; j++) {
-            uint32_t c = cur[j];
-            H->start[b0 + j] = gstart[g] + at;
-            cur[j] = at;
+        for (size_t j = 0; j < (1u << RADIX_BITS); j++) {
+            uint32_t c = h[j];
+            h[j] = at;
             at += c;
         }
-        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) tent[cur[tkey[q] - b0]++] = H->ent[q];
-        if (at) memcpy(H->ent + gstart[g], tent, at * sizeof *tent);
+        for (size_t k = 0; k < count; k++) {
+            uint32_t q = h[ka[k] >> sh & ((1u << RADIX_BITS) - 1)]++;
+            kb[q] = ka[k], ib[q] = ia[k];
+        }
+        uint64_t *tk = ka;
+        ka = kb, kb = tk;
+        uint32_t *ti = ia;
+        ia = ib, ib = ti;
     }
-    H->start[nb] = (uint32_t)count;
+    if (ka != H->key) memcpy(H->key, ka, count * sizeof *ka);
+    for (size_t k = 0; k < count; k++) {
+        uint32_t i = ia[k];
+        pt_entry *e = &H->ent[k];
+        e->x = xy[2 * (size_t)i], e->y = xy[2 * (size_t)i + 1], e->s = s[i];
+        e->id = i, e->road = vroad[i];
+    }
+    /* the directory: blocks of keys, about one point each */
+    uint64_t top = count ? H->key[count - 1] : 0;
+    while ((top >> H->dshift) >= ndir) H->dshift++;
+    for (uint64_t b = 0, k = 0; b <= ndir; b++) {
+        while (k < count && (H->key[k] >> H->dshift) < b) k++;
+        H->dir[b] = (uint32_t)k;
+    }
     res = RS_OK;
 done:
-    rs__free(ctx, gstart);
-    rs__free(ctx, cur);
-    rs__free(ctx, tkey);
-    rs__free(ctx, ikey);
-    rs__free(ctx, tent);
+    rs__free(ctx, k2);
+    rs__free(ctx, ia);
+    rs__free(ctx, ib);
+    rs__free(ctx, hist);
     return res;
 }
 
-static void hash_free(rs_ctx *ctx, pt_hash *H)
+static void cells_free(rs_ctx *ctx, pt_cells *H)
 {
-    rs__free(ctx, H->start);
+    rs__free(ctx, H->key);
     rs__free(ctx, H->ent);
-    rs__free(ctx, H->occ);
+    rs__free(ctx, H->dir);
     memset(H, 0, sizeof *H);
 }
 
@@ -245,7 +279,7 @@ static void hash_free(rs_ctx *ctx, pt_hash *H)
  * c[0] .. c[1], y cells c[2] .. c[3]. The radius grows by the rounding of
  * p's coordinates so the cells of all points within r are in (cell_of is
  * monotone). */
-static void disc_cells(const pt_hash *H, const double *p, double r, int64_t c[4])
+static void disc_cells(const pt_cells *H, const double *p, double r, int64_t c[4])
 {
     for (int k = 0; k < 2; k++) {
         double m = r * (1 + 1e-9) + fabs(p[k]) * (4 * DBL_EPSILON); /* (not 4 fabs(p): overflow) */
@@ -370,9 +404,8 @@ static rs_result find_tees(build *B)
     if (!isend) return RS_ERR_NOMEM;
     for (size_t r = 0; r < B->nroads; r++)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
-    pt_hash H;
-    memset(&H, 0, sizeof H);
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
+    pt_cells H;
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -402,12 +435,14 @@ static rs_result find_tees(build *B)
                 }
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 int64_t c0 = cell_of(nmin(xa, xb) - tol, g), c1 = cell_of(nmax(xa, xb) + tol, g);
-                for (int64_t cx = c0; cx <= c1 && !res; cx++) {
-                    if (!occupied(&H, cx, cy)) continue;
-                    uint64_t b = bucket_of(&H, cx, cy);
-                    for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
+                uint64_t kx0, kx1, ky, ky1;
+                if (!key_range(&H, 1, cy, cy, &ky, &ky1) || !key_range(&H, 0, c0, c1, &kx0, &kx1)) continue;
+                for (uint64_t kx = kx0; kx <= kx1 && !res; kx++) {
+                    uint32_t qa, qb;
+                    run_of(&H, kx, ky, &qa, &qb);
+                    for (uint32_t q = qa; q < qb; q++) {
                         uint32_t e = H.ent[q].id;
-                        const double *pe = &H.ent[q].x; /* (maybe of another cell: a T found twice merges) */
+                        const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
@@ -425,7 +460,7 @@ static rs_result find_tees(build *B)
         }
     }
 done:
-    hash_free(B->ctx, &H);
+    cells_free(B->ctx, &H);
     rs__free(B->ctx, isend);
     return res;
 }
@@ -441,25 +476,52 @@ static int pass_cmp(const void *pa, const void *pb)
     return 0;
 }
 
-/* Passes by node (a counting sort), then by pass_cmp within each node. */
+/* The pass of point v through its node (a hashed point at a node): 0
+ * when it has none. */
+static int point_pass(const build *B, size_t v, pass *p)
+{
+    if (!B->inhash[v]) return 0;
+    uint32_t nd = B->nodeof[B->parent[v]];
+    if (nd == NONE) return 0;
+    const road_look *lk = &B->look[B->vroad[v]];
+    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, B->s[v], B->s[v], 0, nd, (uint32_t)(v - lk->first),
+               v == lk->first, v == B->rep[lk->last] };
+    *p = q;
+    return 1;
+}
+
+/* The passes by node (a counting sort), then by pass_cmp within each
+ * node: the passes through points (made here, in point order, straight
+ * into their node's place: no array of them in point order), then the T
+ * passes (B->ps), as a stable sort of the two in that order would. */
 static rs_result sort_passes(build *B, size_t nn)
 {
+    size_t total = B->nps;
     uint32_t *start = rs__calloc(B->ctx, nn + 2, sizeof *start);
-    pass *out = rs__alloc_array(B->ctx, B->nps ? B->nps : 1, sizeof *out);
-    if (!start || !out) {
+    if (!start) return RS_ERR_NOMEM;
+    for (size_t v = 0; v < B->nv; v++)
+        if (B->inhash[v]) {
+            uint32_t nd = B->nodeof[B->parent[v]];
+            if (nd != NONE) start[nd + 2]++, total++;
+        }
+    pass *out = rs__alloc_array(B->ctx, total ? total : 1, sizeof *out);
+    if (!out) {
         rs__free(B->ctx, start);
-        rs__free(B->ctx, out);
         return RS_ERR_NOMEM;
     }
     for (size_t i = 0; i < B->nps; i++) start[B->ps[i].node + 2]++;
     for (size_t i = 0; i < nn; i++) start[i + 2] += start[i + 1];
+    for (size_t v = 0; v < B->nv; v++) {
+        pass p;
+        if (point_pass(B, v, &p)) out[start[p.node + 1]++] = p;
+    }
     for (size_t i = 0; i < B->nps; i++) out[start[B->ps[i].node + 1]++] = B->ps[i];
     for (size_t i = 0; i < nn; i++)
         if (start[i + 1] - start[i] > 1) qsort(out + start[i], start[i + 1] - start[i], sizeof *out, pass_cmp);
     rs__free(B->ctx, start);
     rs__free(B->ctx, B->ps);
     B->ps = out;
-    B->cps = B->nps ? B->nps : 1;
+    B->nps = B->cps = total;
     return RS_OK;
 }
 
@@ -751,13 +813,10 @@ static rs_result load_points(build *B)
  * point is given its group's lowest id. */
 static rs_result cluster_points(build *B)
 {
-    pt_hash H;
-    memset(&H, 0, sizeof H);
-    /* cells of 8 tolerances: a point's disc mostly stays in its own cell
-     * (a neighbour cell is a random bucket: a cache miss when it holds
-     * points, if only of other cells); at least 2^-40 of the largest
-     * coordinate, so a disc's rounding margin spans at most 2 cells a side
-     * (else 1e18 m coordinates made a point probe millions of cells) */
+    /* cells of 8 tolerances: a point's disc mostly stays in its own cell;
+     * at least 2^-40 of the largest coordinate, so a disc's rounding
+     * margin spans at most 2 cells a side (else 1e18 m coordinates made a
+     * point probe millions of cells) */
     double tol = B->tol, big = 0;
     for (size_t v = 0; v < B->nv; v++)
         if (B->inhash[v]) {
@@ -766,34 +825,41 @@ static rs_result cluster_points(build *B)
             if (ay > big && ay <= DBL_MAX) big = ay;
         }
     double cell = fmax(8 * tol, big * 0x1p-40);
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
-    size_t count = H.start ? H.start[H.mask + 1] : 0;
+    pt_cells H;
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
+    size_t count = H.count;
     uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
     uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
     if (!up || !low) {
-        hash_free(B->ctx, &H);
+        cells_free(B->ctx, &H);
         rs__free(B->ctx, up);
         rs__free(B->ctx, low);
         return res ? res : RS_ERR_NOMEM;
     }
     for (size_t i = 0; i < count; i++) up[i] = (uint32_t)i, low[i] = H.ent[i].id;
-    /* points in bucket order: their own bucket is the one being read (the
-     * union does not depend on the order) */
+    /* points in key order: the cells they probe are mostly their own run,
+     * else close by (the union does not depend on the order) */
     for (size_t i = 0; i < count; i++) {
         if ((i & 16383) == 0 && rs__poll(B->ctx)) { /* (10^6 points: ~0.1 s) */
-            hash_free(B->ctx, &H);
+            cells_free(B->ctx, &H);
             rs__free(B->ctx, up);
             rs__free(B->ctx, low);
             return RS_ERR_CANCELLED;
         }
         const pt_entry *e = &H.ent[i];
-        int64_t c[4], ox = cell_of(e->x, H.cell), oy = cell_of(e->y, H.cell);
+        int64_t c[4];
+        uint64_t kx0, kx1, ky0, ky1, own = H.key[i];
         disc_cells(&H, &e->x, tol, c);
-        for (int64_t cy = c[2]; cy <= c[3]; cy++)
-            for (int64_t cx = c[0]; cx <= c[1]; cx++) {
-                if ((cx != ox || cy != oy) && !occupied(&H, cx, cy)) continue; /* (its own cell holds it) */
-                uint64_t b = bucket_of(&H, cx, cy);
-                for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
+        if (!key_range(&H, 0, c[0], c[1], &kx0, &kx1) || !key_range(&H, 1, c[2], c[3], &ky0, &ky1)) continue;
+        for (uint64_t ky = ky0; ky <= ky1; ky++)
+            for (uint64_t kx = kx0; kx <= kx1; kx++) {
+                uint32_t qa, qb;
+                if (zkey(kx, ky) == own) { /* its own run: from i on (lower entries have lower ids) */
+                    qa = (uint32_t)i + 1;
+                    for (qb = qa; qb < count && H.key[qb] == own; qb++) {}
+                } else
+                    run_of(&H, kx, ky, &qa, &qb);
+                for (uint32_t q = qa; q < qb; q++) {
                     const pt_entry *f = &H.ent[q];
                     if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
                     if (f->road == e->road && fabs(e->s - f->s) <= 2 * tol) continue; /* one place of one road: no node */
@@ -811,7 +877,7 @@ static rs_result cluster_points(build *B)
     }
     rs__free(B->ctx, up);
     rs__free(B->ctx, low);
-    hash_free(B->ctx, &H);
+    cells_free(B->ctx, &H);
     return RS_OK;
 }
 
@@ -865,25 +931,12 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         B.nodeof[B.parent[B.voff[r]]] = 0;
         B.nodeof[B.parent[B.rep[B.voff[r + 1] - 1]]] = 0;
     }
-    size_t nn = 0, npass = 0;
+    size_t nn = 0;
     for (size_t v = 0; v < B.nv; v++) {
         if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] == 0) B.nodeof[v] = (uint32_t)nn++;
         else if (B.parent[v] == v) B.nodeof[v] = NONE;
-        npass += B.inhash[v] && (B.parent[v] != v || B.nodeof[v] != NONE);
     }
     N->nnodes = nn;
-    if (npass && !(B.ps = rs__alloc_array(ctx, npass, sizeof *B.ps))) { res = RS_ERR_NOMEM; goto fail; }
-    B.cps = npass;
-    /* passes through points: a node's points by road, runs along the road */
-    for (size_t v = 0; v < B.nv; v++) {
-        if (!B.inhash[v]) continue;
-        uint32_t nd = B.nodeof[B.parent[v]];
-        if (nd == NONE) continue;
-        const road_look *lk = &B.look[B.vroad[v]];
-        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], B.s[v], 0, nd, (uint32_t)(v - lk->first),
-                   v == lk->first, v == B.rep[lk->last] };
-        if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
-    }
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
