@@ -314,16 +314,19 @@ typedef struct road_look {
     double length;        /* arc length at its last point */
 } road_look;
 
+/* (40 bytes: at 10^5 records the passes are tens of megabytes, sorted
+ * by a scatter) */
 typedef struct pass {
     uint32_t road, v0, v1; /* first and last point (global ids) of the road at the node */
     uint32_t seg;          /* a T: the segment; NONE for a pass through points */
-    double s;              /* a T: the arc length of the nearest point; else of v0 */
-    double s1;             /* the arc length at v1 (a T: s) */
-    double dist;           /* a T: its distance */
     uint32_t node;
-    uint32_t k0;           /* v0's index in its road */
     uint8_t first, last;   /* v0 is the road's first point, v1 its last (not a T) */
+    double s;              /* a T: the arc length of the nearest point; else of v0 */
+    double x;              /* a pass through points: the arc length at v1; a T: its distance */
 } pass;
+
+/* A pass's arc length at v1 (a T: s) and a T's distance (points: 0). */
+static double pass_s1(const pass *p) { return p->seg == NONE ? p->x : p->s; }
 
 typedef struct build {
     rs_ctx *ctx;
@@ -452,7 +455,7 @@ static rs_result find_tees(build *B)
                         if (find(B->parent, a) == root || find(B->parent, (uint32_t)k1) == root) continue;
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
                         if (B->vroad[e] == r && fabs(s - B->s[e]) <= 2 * tol) continue;
-                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, s, dist, B->nodeof[root], 0, 0, 0 };
+                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), B->nodeof[root], 0, 0, s, dist };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
                 }
@@ -472,7 +475,7 @@ static int pass_cmp(const void *pa, const void *pb)
     if (a->road != b->road) return a->road < b->road ? -1 : 1;
     if (a->s != b->s) return a->s < b->s ? -1 : 1;
     if (a->seg != b->seg) return a->seg < b->seg ? -1 : 1; /* (a pass through points has seg NONE: last) */
-    if (a->dist != b->dist) return a->dist < b->dist ? -1 : 1;
+    if (a->x != b->x) return a->x < b->x ? -1 : 1; /* (a T: its distance; points: s1 = s here) */
     return 0;
 }
 
@@ -484,8 +487,7 @@ static int point_pass(const build *B, size_t v, pass *p)
     uint32_t nd = B->nodeof[B->parent[v]];
     if (nd == NONE) return 0;
     const road_look *lk = &B->look[B->vroad[v]];
-    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, B->s[v], B->s[v], 0, nd, (uint32_t)(v - lk->first),
-               v == lk->first, v == B->rep[lk->last] };
+    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == B->rep[lk->last], B->s[v], B->s[v] };
     *p = q;
     return 1;
 }
@@ -949,10 +951,10 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         pass *p = &B.ps[i];
         if (np > 0) {
             pass *q = &B.ps[np - 1];
-            if (q->node == p->node && q->road == p->road && p->s - q->s1 <= 2 * tol) {
-                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->s1 = p->s1, q->last = p->last;
+            if (q->node == p->node && q->road == p->road && p->s - pass_s1(q) <= 2 * tol) {
+                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->x = p->x, q->last = p->last;
                 else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
-                else if (q->seg != NONE && p->dist < q->dist) *q = *p;
+                else if (q->seg != NONE && p->x < q->x) *q = *p; /* (two T: the nearer) */
                 continue;
             }
         }
@@ -1033,7 +1035,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
                 N->leg[nl++] = L;
             }
             if (!p->first && !p->last) {
-                L.segment = p->k0, L.s = p->s;
+                L.segment = p->v0 - lk->first, L.s = p->s;
                 L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, lk, c, p->v1, 1);
                 N->leg[nl++] = L;
                 L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, lk, c, p->v0, -1);
