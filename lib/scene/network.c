@@ -343,8 +343,11 @@ typedef struct build {
     road_look *look;   /* per road */
     uint8_t *inhash;   /* per point: a live road's point that starts its run */
     uint32_t *nodeof;  /* per point (a root): its node, or NONE */
-    pass *ps;
+    pass *ps;          /* the T passes (by node after node_lists) */
     size_t nps, cps;
+    uint32_t *pstart, *pids, *tstart; /* node_lists */
+    pass *buf;         /* one node's passes */
+    size_t cbuf;
 } build;
 
 static uint32_t find(uint32_t *parent, uint32_t v)
@@ -479,52 +482,85 @@ static int pass_cmp(const void *pa, const void *pb)
     return 0;
 }
 
-/* The pass of point v through its node (a hashed point at a node): 0
- * when it has none. */
-static int point_pass(const build *B, size_t v, pass *p)
+/* The pass of point v (a hashed point) through its node nd. */
+static void point_pass(const build *B, size_t v, uint32_t nd, pass *p)
 {
-    if (!B->inhash[v]) return 0;
-    uint32_t nd = B->nodeof[B->parent[v]];
-    if (nd == NONE) return 0;
     const road_look *lk = &B->look[B->vroad[v]];
     pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == B->rep[lk->last], B->s[v], B->s[v] };
     *p = q;
-    return 1;
 }
 
-/* The passes by node (a counting sort), then by pass_cmp within each
- * node: the passes through points (made here, in point order, straight
- * into their node's place: no array of them in point order), then the T
- * passes (B->ps), as a stable sort of the two in that order would. */
-static rs_result sort_passes(build *B, size_t nn)
+/* Each node's points (ascending: B->pstart, B->pids) and its T passes (in
+ * the order found: B->ps by node, B->tstart), by two counting sorts. The
+ * passes through points are made node by node from these (no array of
+ * them: 40 bytes a point at a node, tens of megabytes at 10^5 records). */
+static rs_result node_lists(build *B, size_t nn)
 {
-    size_t total = B->nps;
-    uint32_t *start = rs__calloc(B->ctx, nn + 2, sizeof *start);
-    if (!start) return RS_ERR_NOMEM;
+    size_t np = 0;
+    B->pstart = rs__calloc(B->ctx, nn + 2, sizeof *B->pstart);
+    B->tstart = rs__calloc(B->ctx, nn + 2, sizeof *B->tstart);
+    if (!B->pstart || !B->tstart) return RS_ERR_NOMEM;
     for (size_t v = 0; v < B->nv; v++)
         if (B->inhash[v]) {
             uint32_t nd = B->nodeof[B->parent[v]];
-            if (nd != NONE) start[nd + 2]++, total++;
+            if (nd != NONE) B->pstart[nd + 2]++, np++;
         }
-    pass *out = rs__alloc_array(B->ctx, total ? total : 1, sizeof *out);
-    if (!out) {
-        rs__free(B->ctx, start);
+    pass *tp = B->nps ? rs__alloc_array(B->ctx, B->nps, sizeof *tp) : NULL;
+    B->pids = rs__alloc_array(B->ctx, np ? np : 1, sizeof *B->pids);
+    if ((B->nps && !tp) || !B->pids) {
+        rs__free(B->ctx, tp);
         return RS_ERR_NOMEM;
     }
-    for (size_t i = 0; i < B->nps; i++) start[B->ps[i].node + 2]++;
-    for (size_t i = 0; i < nn; i++) start[i + 2] += start[i + 1];
-    for (size_t v = 0; v < B->nv; v++) {
-        pass p;
-        if (point_pass(B, v, &p)) out[start[p.node + 1]++] = p;
-    }
-    for (size_t i = 0; i < B->nps; i++) out[start[B->ps[i].node + 1]++] = B->ps[i];
-    for (size_t i = 0; i < nn; i++)
-        if (start[i + 1] - start[i] > 1) qsort(out + start[i], start[i + 1] - start[i], sizeof *out, pass_cmp);
-    rs__free(B->ctx, start);
+    for (size_t i = 0; i < nn; i++) B->pstart[i + 2] += B->pstart[i + 1];
+    for (size_t v = 0; v < B->nv; v++)
+        if (B->inhash[v]) {
+            uint32_t nd = B->nodeof[B->parent[v]];
+            if (nd != NONE) B->pids[B->pstart[nd + 1]++] = (uint32_t)v;
+        }
+    for (size_t i = 0; i < B->nps; i++) B->tstart[B->ps[i].node + 2]++;
+    for (size_t i = 0; i < nn; i++) B->tstart[i + 2] += B->tstart[i + 1];
+    for (size_t i = 0; i < B->nps; i++) tp[B->tstart[B->ps[i].node + 1]++] = B->ps[i];
     rs__free(B->ctx, B->ps);
-    B->ps = out;
-    B->nps = B->cps = total;
+    B->ps = tp;
     return RS_OK;
+}
+
+/* Node nd's passes in B->buf, sorted by pass_cmp (the passes through its
+ * points in point order, then its T passes in the order found, as a stable
+ * sort of all passes by node would give them to qsort), then merged:
+ * points of one road in one run; a T beside a pass of its road, or found
+ * twice, is dropped. Returns their count (RS_ERR_NOMEM: (size_t)-1). */
+static size_t node_passes(build *B, uint32_t nd)
+{
+    size_t a = B->pstart[nd], b = B->pstart[nd + 1], ta = B->tstart[nd], tb = B->tstart[nd + 1];
+    size_t k = b - a + tb - ta, bytes;
+    if (k > B->cbuf) {
+        size_t nc = k > 2 * B->cbuf ? k : 2 * B->cbuf;
+        pass *nb = rs__mul_size(nc, sizeof *nb, &bytes) ? rs__realloc(B->ctx, B->buf, bytes) : NULL;
+        if (!nb) return (size_t)-1;
+        B->buf = nb;
+        B->cbuf = nc;
+    }
+    pass *P = B->buf;
+    for (size_t i = a; i < b; i++) point_pass(B, B->pids[i], nd, &P[i - a]);
+    if (tb > ta) memcpy(P + (b - a), B->ps + ta, (tb - ta) * sizeof *P);
+    if (k > 1) qsort(P, k, sizeof *P, pass_cmp);
+    size_t np = 0;
+    double tol = B->tol;
+    for (size_t i = 0; i < k; i++) {
+        pass *p = &P[i];
+        if (np > 0) {
+            pass *q = &P[np - 1];
+            if (q->road == p->road && p->s - pass_s1(q) <= 2 * tol) {
+                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->x = p->x, q->last = p->last;
+                else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
+                else if (q->seg != NONE && p->x < q->x) *q = *p; /* (two T: the nearer) */
+                continue;
+            }
+        }
+        P[np++] = *p;
+    }
+    return np;
 }
 
 static int leg_cmp(const void *pa, const void *pb)
@@ -723,6 +759,10 @@ static void build_free(build *B)
     rs__free(ctx, B->inhash);
     rs__free(ctx, B->nodeof);
     rs__free(ctx, B->ps);
+    rs__free(ctx, B->pstart);
+    rs__free(ctx, B->pids);
+    rs__free(ctx, B->tstart);
+    rs__free(ctx, B->buf);
 }
 
 void rs_network_free(rs_ctx *ctx, rs_network *net)
@@ -942,32 +982,10 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-    if ((res = sort_passes(&B, nn)) != RS_OK) goto fail;
+    if ((res = node_lists(&B, nn)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-    /* merge: points of one road in one run; a T beside a pass of its road, or
-     * found twice, is dropped */
-    size_t np = 0;
-    for (size_t i = 0; i < B.nps; i++) {
-        pass *p = &B.ps[i];
-        if (np > 0) {
-            pass *q = &B.ps[np - 1];
-            if (q->node == p->node && q->road == p->road && p->s - pass_s1(q) <= 2 * tol) {
-                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->x = p->x, q->last = p->last;
-                else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
-                else if (q->seg != NONE && p->x < q->x) *q = *p; /* (two T: the nearer) */
-                continue;
-            }
-        }
-        B.ps[np++] = *p;
-    }
-    B.nps = np;
-    /* legs */
-    size_t nl = 0;
-    for (size_t i = 0; i < np; i++) {
-        const pass *p = &B.ps[i];
-        int st = p->seg == NONE && p->first, en = p->seg == NONE && p->last;
-        nl += st || en ? (size_t)st + (size_t)en : 2;
-    }
+    /* legs: at most two a pass (the array shrinks to its count below) */
+    size_t nl = 2 * ((size_t)B.pstart[nn + 1] + B.nps);
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
     N->leg_start = rs__calloc(ctx, nn + 1, sizeof *N->leg_start);
     N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
@@ -986,25 +1004,19 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         res = RS_ERR_NOMEM;
         goto fail;
     }
-    N->nlegs = nl;
     for (size_t e = 0; e < 2 * n; e++) N->link[e] = NONE;
-    for (size_t v = 0; v < B.nv; v++)
-        if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] != NONE) {
-            rs_network_node *d = &N->node[B.nodeof[v]];
-            d->x = B.xy[2 * v];
-            d->y = B.xy[2 * v + 1];
-        }
     nl = 0;
-    for (size_t i = 0, j, poll_at = 0; i < np; i = j) {
-        if (i >= poll_at) {
-            if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-            poll_at = i + 4096;
-        }
-        uint32_t nd = B.ps[i].node;
+    for (uint32_t nd = 0; nd < nn; nd++) {
+        if ((nd & 4095) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
+        size_t np = node_passes(&B, nd);
+        if (np == (size_t)-1) { res = RS_ERR_NOMEM; goto fail; }
+        uint32_t v = B.pids[B.pstart[nd]]; /* its lowest point (a node holds a point) */
+        N->node[nd].x = B.xy[2 * (size_t)v];
+        N->node[nd].y = B.xy[2 * (size_t)v + 1];
         const double *c = &N->node[nd].x;
         N->leg_start[nd] = (uint32_t)nl;
-        for (j = i; j < np && B.ps[j].node == nd; j++) {
-            const pass *p = &B.ps[j];
+        for (size_t j = 0; j < np; j++) {
+            const pass *p = &B.buf[j];
             size_t r = p->road;
             const road_look *lk = &B.look[r];
             int pr = lk->priority;
@@ -1056,6 +1068,11 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     }
     /* every qualifying node got legs (it holds a live road's point) */
     N->leg_start[nn] = (uint32_t)nl;
+    N->nlegs = nl;
+    if (nl) { /* (shrinking: cannot fail but may) */
+        rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
+        if (lg) N->leg = lg;
+    }
     /* controls from point attributes at a node's points */
     for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
         size_t r = 0, pt = 0;
