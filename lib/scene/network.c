@@ -24,6 +24,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define NONE UINT32_MAX
 #define MAX_DEFLECTION (RS__PI / 6) /* a stroke through a junction turns less than this */
@@ -130,6 +133,19 @@ static int64_t cell_of(double x, double cell)
 static double nmin(double a, double b) { return a < b || b != b ? a : b; }
 static double nmax(double a, double b) { return a > b || b != b ? a : b; }
 
+/* A read a few steps ahead at a random place (a hint; no effect on
+ * results): at 10^5 records the arrays are beyond the cache, and a gather
+ * by id waits on memory for each point otherwise. */
+#define AHEAD 8
+static inline void prefetch(const void *p)
+{
+#if defined(__SSE2__)
+    _mm_prefetch((const char *)p, _MM_HINT_T0);
+#else
+    (void)p;
+#endif
+}
+
 /* The low 32 bits of v, spread to the even bits. */
 static uint64_t spread32(uint64_t v)
 {
@@ -176,8 +192,8 @@ static void run_of(const pt_cells *H, uint64_t kx, uint64_t ky, uint32_t *a, uin
     *b = l;
 }
 
-#define RADIX_BITS 11
-#define RADIX_DIGITS 6 /* 66 bits */
+#define RADIX_BITS 8
+#define RADIX_DIGITS 8
 
 /* Sort the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
  * for which keep[id] (NULL: all) by their cells' keys: a stable LSD radix
@@ -220,12 +236,17 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
         memcpy(H->hi, hi, sizeof hi);
     }
     uint64_t *ka = H->key, *kb = k2;
+    unsigned bits = 0; /* key bits: twice those of the largest key cell */
+    while (bits < 32 && ((uint64_t)(count ? (uint64_t)hi[0] - (uint64_t)lo[0] : 0) >> H->extra >> bits ||
+                         (uint64_t)(count ? (uint64_t)hi[1] - (uint64_t)lo[1] : 0) >> H->extra >> bits))
+        bits++;
+    int ndig = (int)((2 * bits + RADIX_BITS - 1) / RADIX_BITS);
     for (size_t k = 0; k < count; k++) {
         uint64_t key = zkey((H->key[k] - (uint64_t)lo[0]) >> H->extra, (k2[k] - (uint64_t)lo[1]) >> H->extra);
         ka[k] = key;
-        for (int d = 0; d < RADIX_DIGITS; d++) hist[((size_t)d << RADIX_BITS) + (key >> (d * RADIX_BITS) & ((1u << RADIX_BITS) - 1))]++;
+        for (int d = 0; d < ndig; d++) hist[((size_t)d << RADIX_BITS) + (key >> (d * RADIX_BITS) & ((1u << RADIX_BITS) - 1))]++;
     }
-    for (int d = 0; d < RADIX_DIGITS && count; d++) {
+    for (int d = 0; d < ndig && count; d++) {
         uint32_t *h = hist + ((size_t)d << RADIX_BITS);
         unsigned sh = (unsigned)(d * RADIX_BITS);
         if (h[ka[0] >> sh & ((1u << RADIX_BITS) - 1)] == count) continue; /* all keys share this digit */
@@ -247,6 +268,12 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     if (ka != H->key) memcpy(H->key, ka, count * sizeof *ka);
     for (size_t k = 0; k < count; k++) {
         uint32_t i = ia[k];
+        if (k + AHEAD < count) {
+            uint32_t f = ia[k + AHEAD];
+            prefetch(xy + 2 * (size_t)f);
+            prefetch(s + f);
+            prefetch(vroad + f);
+        }
         pt_entry *e = &H->ent[k];
         e->x = xy[2 * (size_t)i], e->y = xy[2 * (size_t)i + 1], e->s = s[i];
         e->id = i, e->road = vroad[i];
@@ -1008,6 +1035,17 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     nl = 0;
     for (uint32_t nd = 0; nd < nn; nd++) {
         if ((nd & 4095) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
+        if (nd + AHEAD < nn) /* (the points of a node a few ahead: by id, at random places) */
+            for (uint32_t q = B.pstart[nd + AHEAD], qe = B.pstart[nd + AHEAD + 1]; q < qe && q < B.pstart[nd + AHEAD] + 4; q++) {
+                uint32_t v = B.pids[q];
+                prefetch(B.vroad + v);
+                prefetch(B.s + v);
+                prefetch(B.xy + 2 * (size_t)v);
+                prefetch(B.rep + v);
+            }
+        if (nd + AHEAD / 2 < nn) /* (their roads, half as far ahead: the ids are in the cache by now) */
+            for (uint32_t q = B.pstart[nd + AHEAD / 2], qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
+                prefetch(B.look + B.vroad[B.pids[q]]);
         size_t np = node_passes(&B, nd);
         if (np == (size_t)-1) { res = RS_ERR_NOMEM; goto fail; }
         uint32_t v = B.pids[B.pstart[nd]]; /* its lowest point (a node holds a point) */
