@@ -2,8 +2,8 @@
  * a road set.
  *
  * - Points of different roads (or of one road far apart along it) within
- *   the tolerance are one node: a spatial hash of the points with cells of
- *   the tolerance, union-find over the pairs it finds. A node needs a road
+ *   the tolerance are one node: the points sorted by the Z-order key of
+ *   their cells (8 tolerances), union-find over the pairs they give. A node needs a road
  *   end or two such points; the node's points of one road within twice the
  *   tolerance along it are one pass of that road through the node.
  * - A road end within the tolerance of another road's segment (away from
@@ -16,7 +16,7 @@
  *   deflects less than 30 degrees and neither leg has another such pair.
  *
  * Everything is ordered by road and point index, so the result does not
- * depend on the hash or on memory addresses. */
+ * depend on the cells or on memory addresses. */
 #include "network.h"
 #include "road_local.h"
 
@@ -201,9 +201,10 @@ static void run_of(const pt_cells *H, uint64_t kx, uint64_t ky, uint32_t *a, uin
     *b = l;
 }
 
-/* Digits of 11 bits up to 2^16 points, else of 8: a scatter to 2048
- * places outruns the TLB once the arrays are megabytes (measured: 8-bit
- * digits 5 % faster at 5 10^5 points, 11-bit ones faster below 10^5). */
+/* Digits of 11 bits up to 2^18 points, else of 8: a scatter to 2048
+ * places outruns the TLB once the arrays are several megabytes (measured:
+ * 8-bit digits 5 % faster at 5 10^5 points, 11-bit ones faster at 10^5
+ * and below: one pass fewer). */
 #define RADIX_MAXBITS 11
 #define RADIX_DIGITS 8
 
@@ -253,7 +254,7 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     while (bits < 32 && ((uint64_t)(count ? (uint64_t)hi[0] - (uint64_t)lo[0] : 0) >> H->extra >> bits ||
                          (uint64_t)(count ? (uint64_t)hi[1] - (uint64_t)lo[1] : 0) >> H->extra >> bits))
         bits++;
-    unsigned rb = count <= 65536 ? 11 : 8;
+    unsigned rb = count <= 262144 ? 11 : 8;
     int ndig = (int)((2 * bits + rb - 1) / rb);
     for (size_t k = 0; k < count; k++) {
         uint64_t key = zkey((H->key[k] - (uint64_t)lo[0]) >> H->extra, (k2[k] - (uint64_t)lo[1]) >> H->extra);
@@ -447,7 +448,7 @@ static rs_result find_tees(build *B)
             nseg += B->voff[r + 1] - B->voff[r] - 1;
             total += B->s[B->voff[r + 1] - 1];
         }
-    /* end points hashed in cells of a mean segment (at least 4
+    /* end points sorted in cells of a mean segment (at least 4
      * tolerances): walking every segment's cells stays linear (half or
      * twice that measured within 5 % on the 10^5 lattice) */
     double g = nseg ? total / (double)nseg : 1;
@@ -895,11 +896,12 @@ static rs_result load_points(build *B)
     return RS_OK;
 }
 
-/* Union the hashed points within the tolerance of each other: B->parent
- * of every point is then the lowest point of its group (flat). The pairs
- * are joined by their places in the hash (mostly one bucket: in the
- * cache), not by point (ids far apart: a cache miss per step), then each
- * point is given its group's lowest id. */
+/* Union the hashed points (B->inhash: the run starts of live roads)
+ * within the tolerance of each other: B->parent of every point is then the
+ * lowest point of its group (flat). The pairs are joined by their places
+ * in the sorted cells (mostly one run: in the cache), not by point (ids
+ * far apart: a cache miss per step), then each point is given its group's
+ * lowest id. */
 static rs_result cluster_points(build *B)
 {
     /* cells of 8 tolerances: a point's disc mostly stays in its own cell;
