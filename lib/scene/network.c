@@ -24,9 +24,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #define NONE UINT32_MAX
 #define MAX_DEFLECTION (RS__PI / 6) /* a stroke through a junction turns less than this */
@@ -137,18 +134,10 @@ static int64_t cell_of(double x, double cell)
 static double nmin(double a, double b) { return a < b || b != b ? a : b; }
 static double nmax(double a, double b) { return a > b || b != b ? a : b; }
 
-/* A read a few steps ahead at a random place (a hint; no effect on
- * results): at 10^5 records the arrays are beyond the cache, and a gather
- * by id waits on memory for each point otherwise. */
+/* Reads by id at random places are asked for this many steps ahead
+ * (rs__prefetch): at 10^5 records the arrays are beyond the cache, and a
+ * gather by id waits on memory for each point otherwise. */
 #define AHEAD 8
-static inline void prefetch(const void *p)
-{
-#if defined(__SSE2__)
-    _mm_prefetch((const char *)p, _MM_HINT_T0);
-#else
-    (void)p;
-#endif
-}
 
 /* The low 32 bits of v, spread to the even bits. */
 static uint64_t spread32(uint64_t v)
@@ -285,9 +274,9 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
         uint32_t i = ia[k];
         if (k + AHEAD < count) {
             uint32_t f = ia[k + AHEAD];
-            prefetch(xy + 2 * (size_t)f);
-            prefetch(s + f);
-            prefetch(vroad + f);
+            rs__prefetch(xy + 2 * (size_t)f);
+            rs__prefetch(s + f);
+            rs__prefetch(vroad + f);
         }
         pt_entry *e = &H->ent[k];
         e->x = xy[2 * (size_t)i], e->y = xy[2 * (size_t)i + 1], e->s = s[i];
@@ -1060,14 +1049,14 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         if (nd + AHEAD < nn) /* (the points of a node a few ahead: by id, at random places) */
             for (uint32_t q = B.pstart[nd + AHEAD], qe = B.pstart[nd + AHEAD + 1]; q < qe && q < B.pstart[nd + AHEAD] + 4; q++) {
                 uint32_t v = B.pids[q];
-                prefetch(B.vroad + v);
-                prefetch(B.s + v);
-                prefetch(B.xy + 2 * (size_t)v);
-                prefetch(B.rep + v);
+                rs__prefetch(B.vroad + v);
+                rs__prefetch(B.s + v);
+                rs__prefetch(B.xy + 2 * (size_t)v);
+                rs__prefetch(B.rep + v);
             }
         if (nd + AHEAD / 2 < nn) /* (their roads, half as far ahead: the ids are in the cache by now) */
             for (uint32_t q = B.pstart[nd + AHEAD / 2], qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
-                prefetch(B.look + B.vroad[B.pids[q]]);
+                rs__prefetch(B.look + B.vroad[B.pids[q]]);
         size_t np = node_passes(&B, nd);
         if (np == (size_t)-1) { res = RS_ERR_NOMEM; goto fail; }
         uint32_t v = B.pids[B.pstart[nd]]; /* its lowest point (a node holds a point) */
