@@ -2,8 +2,8 @@
  * a road set.
  *
  * - Points of different roads (or of one road far apart along it) within
- *   the tolerance are one node: a spatial hash of the points with cells of
- *   the tolerance, union-find over the pairs it finds. A node needs a road
+ *   the tolerance are one node: the points sorted by the Z-order key of
+ *   their cells (8 tolerances), union-find over the pairs they give. A node needs a road
  *   end or two such points; the node's points of one road within twice the
  *   tolerance along it are one pass of that road through the node.
  * - A road end within the tolerance of another road's segment (away from
@@ -16,7 +16,7 @@
  *   deflects less than 30 degrees and neither leg has another such pair.
  *
  * Everything is ordered by road and point index, so the result does not
- * depend on the hash or on memory addresses. */
+ * depend on the cells or on memory addresses. */
 #include "network.h"
 #include "road_local.h"
 
@@ -86,26 +86,38 @@ int rs__road_non_car(const rs_roads *roads, size_t r)
     return rs_roads_get_info(roads, r, &info) == RS_OK && rs__class_non_car(info.road_class);
 }
 
-/* ---- a hash of points by grid cell (CSR buckets, ids ascending) ---- */
+/* ---- points sorted by cell in Z order: a cell's points are one run ---- */
 
-/* A hashed point with what the pair tests read of it, so a candidate costs
- * one cache line, not one per array (the buckets are visited in random
- * order of the points' ids). */
+/* A point with what the pair tests read of it, so a candidate costs one
+ * cache line, not one per array. */
 typedef struct pt_entry {
     double x, y, s;
     uint32_t id, road;
 } pt_entry;
 
-typedef struct pt_hash {
+/* The points sorted by the Z-order (Morton) key of their cell, so the
+ * points of a cell are one run and the runs of neighbouring cells lie
+ * close together in memory: the build reads them in space order, where
+ * hash buckets (until this) put neighbouring cells at random places, a
+ * cache miss per probe once the table outgrows the cache. A key cell is
+ * 2^extra cells a side (extra > 0 only when the points span more than 2^32
+ * cells: huge coordinates; the pair tests are exact, so a coarser cell
+ * only adds candidates). A directory of 2^k blocks of keys (about one
+ * point each) finds a cell's run: its block, then a short search. */
+typedef struct pt_cells {
     double cell;
-    uint64_t mask;
-    uint32_t *start;
-    pt_entry *ent;  /* the points in bucket order */
-    uint64_t *occ;  /* a bit per hashed cell (8 per point, small enough to stay in cache): a
-                       clear bit says the cell is empty, where a bucket may also hold other
-                       cells (a bucket read is a cache miss) */
-    uint64_t omask;
-} pt_hash;
+    int64_t lo[2], hi[2]; /* the lowest and highest cell of the points, x and y */
+    unsigned extra;       /* a key cell is 2^extra cells a side */
+    unsigned dshift;      /* a key's directory block: key >> dshift */
+    size_t count;
+    uint64_t *key;        /* per entry, ascending */
+    pt_entry *ent;        /* the points in key order (ids ascending within a key) */
+    uint32_t *dir;        /* the first entry of each directory block, and count */
+    uint64_t *occ;        /* a bit per eighth of a directory block (8 per point: in the cache,
+                             and in space order): a clear bit says the cell is empty, before
+                             its block is read */
+    unsigned oshift;      /* a key's bit: key >> oshift */
+} pt_cells;
 
 /* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
  * integer conversion (floor is a libm call: a tenth of a small build) */
@@ -122,121 +134,180 @@ static int64_t cell_of(double x, double cell)
 static double nmin(double a, double b) { return a < b || b != b ? a : b; }
 static double nmax(double a, double b) { return a > b || b != b ? a : b; }
 
-/* Blocks of 4 x 4 cells hash to 16 consecutive buckets (one cache line of
- * starts): the cells around a point mostly share a block. The cell's place
- * in the block is offset by the block's hash, so points on a regular grid
- * (all at one place in their blocks) still spread over all buckets. */
-static uint64_t bucket_of(const pt_hash *H, int64_t cx, int64_t cy)
+/* Reads by id at random places are asked for this many steps ahead
+ * (rs__prefetch): at 10^5 records the arrays are beyond the cache, and a
+ * gather by id waits on memory for each point otherwise. */
+#define AHEAD 8
+
+/* The low 32 bits of v, spread to the even bits. */
+static uint64_t spread32(uint64_t v)
 {
-    uint64_t bx = (uint64_t)cx >> 2, by = (uint64_t)cy >> 2;
-    uint64_t h = bx * 0x9E3779B97F4A7C15ull ^ (by + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
-    h ^= h >> 29;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 32;
-    uint64_t sub = ((((uint64_t)cx & 3) << 2 | ((uint64_t)cy & 3)) + (h >> 40)) & 15;
-    return ((h << 4) | sub) & H->mask;
+    v &= 0xFFFFFFFFull;
+    v = (v | v << 16) & 0x0000FFFF0000FFFFull;
+    v = (v | v << 8) & 0x00FF00FF00FF00FFull;
+    v = (v | v << 4) & 0x0F0F0F0F0F0F0F0Full;
+    v = (v | v << 2) & 0x3333333333333333ull;
+    v = (v | v << 1) & 0x5555555555555555ull;
+    return v;
 }
 
-/* The cell's bit in H->occ (another hash of the cell than its bucket's). */
-static uint64_t occ_bit(const pt_hash *H, int64_t cx, int64_t cy)
+static uint64_t zkey(uint64_t kx, uint64_t ky) { return spread32(kx) | spread32(ky) << 1; }
+
+/* The key cells (axis 0: x, 1: y) of the cells a .. b: *ka .. *kb; 0 when
+ * none holds a point. */
+static int key_range(const pt_cells *H, int axis, int64_t a, int64_t b, uint64_t *ka, uint64_t *kb)
 {
-    uint64_t h = (uint64_t)cx * 0xD6E8FEB86659FD93ull ^ (uint64_t)cy * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 31;
-    h *= 0x94D049BB133111EBull;
-    return (h >> 20) & H->omask;
+    if (!H->count || b < H->lo[axis] || a > H->hi[axis]) return 0;
+    if (a < H->lo[axis]) a = H->lo[axis];
+    if (b > H->hi[axis]) b = H->hi[axis];
+    *ka = ((uint64_t)a - (uint64_t)H->lo[axis]) >> H->extra;
+    *kb = ((uint64_t)b - (uint64_t)H->lo[axis]) >> H->extra;
+    return 1;
 }
 
-static int occupied(const pt_hash *H, int64_t cx, int64_t cy)
+
+/* The run of entries of key cell (kx, ky): *a .. *b - 1. */
+static void run_of(const pt_cells *H, uint64_t kx, uint64_t ky, uint32_t *a, uint32_t *b)
 {
-    uint64_t o = occ_bit(H, cx, cy);
-    return (int)(H->occ[o >> 6] >> (o & 63) & 1);
+    uint64_t k = zkey(kx, ky), blk = k >> H->dshift, o = k >> H->oshift;
+    if (!(H->occ[o >> 6] >> (o & 63) & 1)) {
+        *a = *b = 0;
+        return;
+    }
+    uint32_t l = H->dir[blk], r = H->dir[blk + 1], e = r;
+    if (l == r) {
+        *a = *b = l;
+        return;
+    }
+    while (r - l > 8) { /* (a crowded block: a binary search) */
+        uint32_t m = l + (r - l) / 2;
+        if (H->key[m] < k) l = m + 1;
+        else r = m;
+    }
+    while (l < e && H->key[l] < k) l++;
+    *a = l;
+    while (l < e && H->key[l] == k) l++;
+    *b = l;
 }
 
-#define GROUP_BITS 13 /* buckets per group of the fill: 2^13 starts (32 KiB) stay in cache */
+/* Digits of 11 bits up to 2^18 points, else of 8: a scatter to 2048
+ * places outruns the TLB once the arrays are several megabytes (measured:
+ * 8-bit digits 5 % faster at 5 10^5 points, 11-bit ones faster at 10^5
+ * and below: one pass fewer). */
+#define RADIX_MAXBITS 11
+#define RADIX_DIGITS 8
 
-/* Hash the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
- * for which keep[id] (NULL: all). Filled in two streaming passes, not by
- * writing each point to a random bucket (a cache miss per point once the
- * table outgrows the cache): the points to groups of 2^13 buckets in id
- * order, then each group's points to their buckets (through a scratch
- * array of the largest group). Both passes keep id order, so ids ascend
- * within a bucket. */
-static rs_result hash_build(rs_ctx *ctx, pt_hash *H, const double *xy, const double *s, const uint32_t *vroad,
-                            const uint8_t *keep, size_t n, double cell)
+/* Sort the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
+ * for which keep[id] (NULL: all) by their cells' keys: a stable LSD radix
+ * sort (digits that all keys share are skipped), so ids ascend within a
+ * cell; linear in the points, every pass a stream. */
+static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const double *s, const uint32_t *vroad,
+                             const uint8_t *keep, size_t n, double cell)
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
-    uint64_t nb = 64, no = 64;
-    while (nb < 2 * (uint64_t)count && nb < (1ull << 31)) nb *= 2;
-    while (no < 8 * (uint64_t)count && no < (1ull << 40)) no *= 2;
-    unsigned shift = 0;
-    while ((nb >> shift) > 1 && (1ull << shift) < (1ull << GROUP_BITS)) shift++;
-    size_t ng = (size_t)(nb >> shift), gsize = (size_t)1 << shift;
+    memset(H, 0, sizeof *H);
     H->cell = cell;
-    H->mask = nb - 1;
-    H->start = rs__alloc_array(ctx, (size_t)nb + 1, sizeof *H->start);
-    H->ent = rs__alloc_array(ctx, count ? count : 1, sizeof *H->ent);
-    H->omask = no - 1;
-    H->occ = rs__calloc(ctx, (size_t)(no / 64), sizeof *H->occ);
-    uint32_t *gstart = rs__calloc(ctx, ng + 1, sizeof *gstart), *cur = rs__alloc_array(ctx, gsize, sizeof *cur);
-    uint32_t *tkey = rs__alloc_array(ctx, count ? count : 1, sizeof *tkey);
-    uint32_t *ikey = rs__alloc_array(ctx, count ? count : 1, sizeof *ikey); /* buckets in id order */
-    pt_entry *tent = NULL;
+    H->count = count;
+    size_t m = count ? count : 1;
+    uint64_t ndir = 1;
+    while (ndir < (uint64_t)count && ndir < (1ull << 31)) ndir *= 2;
+    H->key = rs__alloc_array(ctx, m, sizeof *H->key);
+    H->ent = rs__alloc_array(ctx, m, sizeof *H->ent);
+    H->dir = rs__alloc_array(ctx, (size_t)ndir + 1, sizeof *H->dir);
+    H->occ = rs__calloc(ctx, (size_t)(ndir / 8 + 1), sizeof *H->occ); /* (8 ndir bits) */
+    uint64_t *k2 = rs__alloc_array(ctx, m, sizeof *k2);
+    uint32_t *ia = rs__alloc_array(ctx, m, sizeof *ia), *ib = rs__alloc_array(ctx, m, sizeof *ib);
+    uint32_t *hist = rs__calloc(ctx, (size_t)RADIX_DIGITS << RADIX_MAXBITS, sizeof *hist);
     rs_result res = RS_ERR_NOMEM;
-    if (!H->start || !H->ent || !H->occ || !gstart || !cur || !tkey || !ikey) goto done;
+    if (!H->key || !H->ent || !H->dir || !H->occ || !k2 || !ia || !ib || !hist) goto done;
+    /* cells (x in key, y in k2) and their bounds */
+    int64_t lo[2] = { INT64_MAX, INT64_MAX }, hi[2] = { INT64_MIN, INT64_MIN };
     for (size_t i = 0, k = 0; i < n; i++) {
         if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         if (keep && !keep[i]) continue;
         int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
-        uint64_t b = bucket_of(H, cx, cy), o = occ_bit(H, cx, cy);
-        H->occ[o >> 6] |= 1ull << (o & 63);
-        ikey[k++] = (uint32_t)b;
-        gstart[(b >> shift) + 1]++;
+        lo[0] = cx < lo[0] ? cx : lo[0], hi[0] = cx > hi[0] ? cx : hi[0];
+        lo[1] = cy < lo[1] ? cy : lo[1], hi[1] = cy > hi[1] ? cy : hi[1];
+        H->key[k] = (uint64_t)cx, k2[k] = (uint64_t)cy, ia[k++] = (uint32_t)i;
     }
-    for (size_t g = 0; g < ng; g++) gstart[g + 1] += gstart[g];
-    for (size_t i = 0, k = 0; i < n; i++) { /* (gstart[g] runs ahead while filling, then steps back below) */
-        if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
-        if (keep && !keep[i]) continue;
-        uint32_t b = ikey[k++], q = gstart[b >> shift]++;
-        tkey[q] = b;
-        pt_entry *e = &H->ent[q];
-        e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
-        e->id = (uint32_t)i, e->road = vroad[i];
+    if (count) {
+        uint64_t span = (uint64_t)hi[0] - (uint64_t)lo[0], sy = (uint64_t)hi[1] - (uint64_t)lo[1];
+        span = sy > span ? sy : span;
+        while ((span >> H->extra) > 0xFFFFFFFFull) H->extra++;
+        memcpy(H->lo, lo, sizeof lo);
+        memcpy(H->hi, hi, sizeof hi);
     }
-    for (size_t g = ng; g > 0; g--) gstart[g] = gstart[g - 1];
-    gstart[0] = 0;
-    uint32_t most = 0;
-    for (size_t g = 0; g < ng; g++) most = gstart[g + 1] - gstart[g] > most ? gstart[g + 1] - gstart[g] : most;
-    if (!(tent = rs__alloc_array(ctx, most ? most : 1, sizeof *tent))) goto done;
-    for (size_t g = 0; g < ng; g++) {
-        uint64_t b0 = (uint64_t)g << shift;
-        memset(cur, 0, gsize * sizeof *cur);
-        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) cur[tkey[q] - b0]++;
+    uint64_t *ka = H->key, *kb = k2;
+    unsigned bits = 0; /* key bits: twice those of the largest key cell */
+    while (bits < 32 && ((uint64_t)(count ? (uint64_t)hi[0] - (uint64_t)lo[0] : 0) >> H->extra >> bits ||
+                         (uint64_t)(count ? (uint64_t)hi[1] - (uint64_t)lo[1] : 0) >> H->extra >> bits))
+        bits++;
+    unsigned rb = count <= 262144 ? 11 : 8;
+    int ndig = (int)((2 * bits + rb - 1) / rb);
+    for (size_t k = 0; k < count; k++) {
+        uint64_t key = zkey((H->key[k] - (uint64_t)lo[0]) >> H->extra, (k2[k] - (uint64_t)lo[1]) >> H->extra);
+        ka[k] = key;
+        for (int d = 0; d < ndig; d++) hist[((size_t)d << RADIX_MAXBITS) + (key >> (d * rb) & ((1u << rb) - 1))]++;
+    }
+    for (int d = 0; d < ndig && count; d++) {
+        uint32_t *h = hist + ((size_t)d << RADIX_MAXBITS);
+        unsigned sh = (unsigned)d * rb;
+        if (h[ka[0] >> sh & ((1u << rb) - 1)] == count) continue; /* all keys share this digit */
         uint32_t at = 0;
-        for (size_t j = 0; j < gsize; j++) {
-            uint32_t c = cur[j];
-            H->start[b0 + j] = gstart[g] + at;
-            cur[j] = at;
+        for (size_t j = 0; j < (1u << rb); j++) {
+            uint32_t c = h[j];
+            h[j] = at;
             at += c;
         }
-        for (uint32_t q = gstart[g]; q < gstart[g + 1]; q++) tent[cur[tkey[q] - b0]++] = H->ent[q];
-        if (at) memcpy(H->ent + gstart[g], tent, at * sizeof *tent);
+        for (size_t k = 0; k < count; k++) {
+            uint32_t q = h[ka[k] >> sh & ((1u << rb) - 1)]++;
+            kb[q] = ka[k], ib[q] = ia[k];
+        }
+        uint64_t *tk = ka;
+        ka = kb, kb = tk;
+        uint32_t *ti = ia;
+        ia = ib, ib = ti;
     }
-    H->start[nb] = (uint32_t)count;
+    if (ka != H->key) memcpy(H->key, ka, count * sizeof *ka);
+    for (size_t k = 0; k < count; k++) {
+        uint32_t i = ia[k];
+        if (k + AHEAD < count) {
+            uint32_t f = ia[k + AHEAD];
+            rs__prefetch(xy + 2 * (size_t)f);
+            rs__prefetch(s + f);
+            rs__prefetch(vroad + f);
+        }
+        pt_entry *e = &H->ent[k];
+        e->x = xy[2 * (size_t)i], e->y = xy[2 * (size_t)i + 1], e->s = s[i];
+        e->id = i, e->road = vroad[i];
+    }
+    /* the directory: blocks of keys, about one point each */
+    uint64_t top = count ? H->key[count - 1] : 0;
+    while ((top >> H->dshift) >= ndir) H->dshift++;
+    H->oshift = H->dshift >= 3 ? H->dshift - 3 : 0;
+    for (size_t k = 0; k < count; k++) {
+        uint64_t o = H->key[k] >> H->oshift;
+        H->occ[o >> 6] |= 1ull << (o & 63);
+    }
+    for (uint64_t b = 0, k = 0; b <= ndir; b++) {
+        while (k < count && (H->key[k] >> H->dshift) < b) k++;
+        H->dir[b] = (uint32_t)k;
+    }
     res = RS_OK;
 done:
-    rs__free(ctx, gstart);
-    rs__free(ctx, cur);
-    rs__free(ctx, tkey);
-    rs__free(ctx, ikey);
-    rs__free(ctx, tent);
+    rs__free(ctx, k2);
+    rs__free(ctx, ia);
+    rs__free(ctx, ib);
+    rs__free(ctx, hist);
     return res;
 }
 
-static void hash_free(rs_ctx *ctx, pt_hash *H)
+static void cells_free(rs_ctx *ctx, pt_cells *H)
 {
-    rs__free(ctx, H->start);
+    rs__free(ctx, H->key);
     rs__free(ctx, H->ent);
+    rs__free(ctx, H->dir);
     rs__free(ctx, H->occ);
     memset(H, 0, sizeof *H);
 }
@@ -245,7 +316,7 @@ static void hash_free(rs_ctx *ctx, pt_hash *H)
  * c[0] .. c[1], y cells c[2] .. c[3]. The radius grows by the rounding of
  * p's coordinates so the cells of all points within r are in (cell_of is
  * monotone). */
-static void disc_cells(const pt_hash *H, const double *p, double r, int64_t c[4])
+static void disc_cells(const pt_cells *H, const double *p, double r, int64_t c[4])
 {
     for (int k = 0; k < 2; k++) {
         double m = r * (1 + 1e-9) + fabs(p[k]) * (4 * DBL_EPSILON); /* (not 4 fabs(p): overflow) */
@@ -280,16 +351,19 @@ typedef struct road_look {
     double length;        /* arc length at its last point */
 } road_look;
 
+/* (40 bytes: at 10^5 records the passes are tens of megabytes, sorted
+ * by a scatter) */
 typedef struct pass {
     uint32_t road, v0, v1; /* first and last point (global ids) of the road at the node */
     uint32_t seg;          /* a T: the segment; NONE for a pass through points */
-    double s;              /* a T: the arc length of the nearest point; else of v0 */
-    double s1;             /* the arc length at v1 (a T: s) */
-    double dist;           /* a T: its distance */
     uint32_t node;
-    uint32_t k0;           /* v0's index in its road */
     uint8_t first, last;   /* v0 is the road's first point, v1 its last (not a T) */
+    double s;              /* a T: the arc length of the nearest point; else of v0 */
+    double x;              /* a pass through points: the arc length at v1; a T: its distance */
 } pass;
+
+/* A pass's arc length at v1 (a T: s) and a T's distance (points: 0). */
+static double pass_s1(const pass *p) { return p->seg == NONE ? p->x : p->s; }
 
 typedef struct build {
     rs_ctx *ctx;
@@ -306,8 +380,11 @@ typedef struct build {
     road_look *look;   /* per road */
     uint8_t *inhash;   /* per point: a live road's point that starts its run */
     uint32_t *nodeof;  /* per point (a root): its node, or NONE */
-    pass *ps;
+    pass *ps;          /* the T passes (by node after node_lists) */
     size_t nps, cps;
+    uint32_t *pstart, *pids, *tstart; /* node_lists */
+    pass *buf;         /* one node's passes */
+    size_t cbuf;
 } build;
 
 static uint32_t find(uint32_t *parent, uint32_t v)
@@ -360,7 +437,7 @@ static rs_result find_tees(build *B)
             nseg += B->voff[r + 1] - B->voff[r] - 1;
             total += B->s[B->voff[r + 1] - 1];
         }
-    /* end points hashed in cells of a mean segment (at least 4
+    /* end points sorted in cells of a mean segment (at least 4
      * tolerances): walking every segment's cells stays linear (half or
      * twice that measured within 5 % on the 10^5 lattice) */
     double g = nseg ? total / (double)nseg : 1;
@@ -370,9 +447,8 @@ static rs_result find_tees(build *B)
     if (!isend) return RS_ERR_NOMEM;
     for (size_t r = 0; r < B->nroads; r++)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
-    pt_hash H;
-    memset(&H, 0, sizeof H);
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
+    pt_cells H;
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -402,12 +478,14 @@ static rs_result find_tees(build *B)
                 }
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 int64_t c0 = cell_of(nmin(xa, xb) - tol, g), c1 = cell_of(nmax(xa, xb) + tol, g);
-                for (int64_t cx = c0; cx <= c1 && !res; cx++) {
-                    if (!occupied(&H, cx, cy)) continue;
-                    uint64_t b = bucket_of(&H, cx, cy);
-                    for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
+                uint64_t kx0, kx1, ky, ky1;
+                if (!key_range(&H, 1, cy, cy, &ky, &ky1) || !key_range(&H, 0, c0, c1, &kx0, &kx1)) continue;
+                for (uint64_t kx = kx0; kx <= kx1 && !res; kx++) {
+                    uint32_t qa, qb;
+                    run_of(&H, kx, ky, &qa, &qb);
+                    for (uint32_t q = qa; q < qb; q++) {
                         uint32_t e = H.ent[q].id;
-                        const double *pe = &H.ent[q].x; /* (maybe of another cell: a T found twice merges) */
+                        const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
@@ -417,7 +495,7 @@ static rs_result find_tees(build *B)
                         if (find(B->parent, a) == root || find(B->parent, (uint32_t)k1) == root) continue;
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
                         if (B->vroad[e] == r && fabs(s - B->s[e]) <= 2 * tol) continue;
-                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), s, s, dist, B->nodeof[root], 0, 0, 0 };
+                        pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), B->nodeof[root], 0, 0, s, dist };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
                 }
@@ -425,7 +503,7 @@ static rs_result find_tees(build *B)
         }
     }
 done:
-    hash_free(B->ctx, &H);
+    cells_free(B->ctx, &H);
     rs__free(B->ctx, isend);
     return res;
 }
@@ -437,30 +515,89 @@ static int pass_cmp(const void *pa, const void *pb)
     if (a->road != b->road) return a->road < b->road ? -1 : 1;
     if (a->s != b->s) return a->s < b->s ? -1 : 1;
     if (a->seg != b->seg) return a->seg < b->seg ? -1 : 1; /* (a pass through points has seg NONE: last) */
-    if (a->dist != b->dist) return a->dist < b->dist ? -1 : 1;
+    if (a->x != b->x) return a->x < b->x ? -1 : 1; /* (a T: its distance; points: s1 = s here) */
     return 0;
 }
 
-/* Passes by node (a counting sort), then by pass_cmp within each node. */
-static rs_result sort_passes(build *B, size_t nn)
+/* The pass of point v (a hashed point) through its node nd. */
+static void point_pass(const build *B, size_t v, uint32_t nd, pass *p)
 {
-    uint32_t *start = rs__calloc(B->ctx, nn + 2, sizeof *start);
-    pass *out = rs__alloc_array(B->ctx, B->nps ? B->nps : 1, sizeof *out);
-    if (!start || !out) {
-        rs__free(B->ctx, start);
-        rs__free(B->ctx, out);
+    const road_look *lk = &B->look[B->vroad[v]];
+    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == B->rep[lk->last], B->s[v], B->s[v] };
+    *p = q;
+}
+
+/* Each node's points (ascending: B->pstart, B->pids) and its T passes (in
+ * the order found: B->ps by node, B->tstart), by two counting sorts. The
+ * passes through points are made node by node from these (no array of
+ * them: 40 bytes a point at a node, tens of megabytes at 10^5 records). */
+static rs_result node_lists(build *B, size_t nn)
+{
+    size_t np = 0;
+    B->pstart = rs__calloc(B->ctx, nn + 2, sizeof *B->pstart);
+    B->tstart = rs__calloc(B->ctx, nn + 2, sizeof *B->tstart);
+    if (!B->pstart || !B->tstart) return RS_ERR_NOMEM;
+    for (size_t v = 0; v < B->nv; v++)
+        if (B->inhash[v]) {
+            uint32_t nd = B->nodeof[B->parent[v]];
+            if (nd != NONE) B->pstart[nd + 2]++, np++;
+        }
+    pass *tp = B->nps ? rs__alloc_array(B->ctx, B->nps, sizeof *tp) : NULL;
+    B->pids = rs__alloc_array(B->ctx, np ? np : 1, sizeof *B->pids);
+    if ((B->nps && !tp) || !B->pids) {
+        rs__free(B->ctx, tp);
         return RS_ERR_NOMEM;
     }
-    for (size_t i = 0; i < B->nps; i++) start[B->ps[i].node + 2]++;
-    for (size_t i = 0; i < nn; i++) start[i + 2] += start[i + 1];
-    for (size_t i = 0; i < B->nps; i++) out[start[B->ps[i].node + 1]++] = B->ps[i];
-    for (size_t i = 0; i < nn; i++)
-        if (start[i + 1] - start[i] > 1) qsort(out + start[i], start[i + 1] - start[i], sizeof *out, pass_cmp);
-    rs__free(B->ctx, start);
+    for (size_t i = 0; i < nn; i++) B->pstart[i + 2] += B->pstart[i + 1];
+    for (size_t v = 0; v < B->nv; v++)
+        if (B->inhash[v]) {
+            uint32_t nd = B->nodeof[B->parent[v]];
+            if (nd != NONE) B->pids[B->pstart[nd + 1]++] = (uint32_t)v;
+        }
+    for (size_t i = 0; i < B->nps; i++) B->tstart[B->ps[i].node + 2]++;
+    for (size_t i = 0; i < nn; i++) B->tstart[i + 2] += B->tstart[i + 1];
+    for (size_t i = 0; i < B->nps; i++) tp[B->tstart[B->ps[i].node + 1]++] = B->ps[i];
     rs__free(B->ctx, B->ps);
-    B->ps = out;
-    B->cps = B->nps ? B->nps : 1;
+    B->ps = tp;
     return RS_OK;
+}
+
+/* Node nd's passes in B->buf, sorted by pass_cmp (the passes through its
+ * points in point order, then its T passes in the order found, as a stable
+ * sort of all passes by node would give them to qsort), then merged:
+ * points of one road in one run; a T beside a pass of its road, or found
+ * twice, is dropped. Returns their count (RS_ERR_NOMEM: (size_t)-1). */
+static size_t node_passes(build *B, uint32_t nd)
+{
+    size_t a = B->pstart[nd], b = B->pstart[nd + 1], ta = B->tstart[nd], tb = B->tstart[nd + 1];
+    size_t k = b - a + tb - ta, bytes;
+    if (k > B->cbuf) {
+        size_t nc = k > 2 * B->cbuf ? k : 2 * B->cbuf;
+        pass *nb = rs__mul_size(nc, sizeof *nb, &bytes) ? rs__realloc(B->ctx, B->buf, bytes) : NULL;
+        if (!nb) return (size_t)-1;
+        B->buf = nb;
+        B->cbuf = nc;
+    }
+    pass *P = B->buf;
+    for (size_t i = a; i < b; i++) point_pass(B, B->pids[i], nd, &P[i - a]);
+    if (tb > ta) memcpy(P + (b - a), B->ps + ta, (tb - ta) * sizeof *P);
+    if (k > 1) qsort(P, k, sizeof *P, pass_cmp);
+    size_t np = 0;
+    double tol = B->tol;
+    for (size_t i = 0; i < k; i++) {
+        pass *p = &P[i];
+        if (np > 0) {
+            pass *q = &P[np - 1];
+            if (q->road == p->road && p->s - pass_s1(q) <= 2 * tol) {
+                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->x = p->x, q->last = p->last;
+                else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
+                else if (q->seg != NONE && p->x < q->x) *q = *p; /* (two T: the nearer) */
+                continue;
+            }
+        }
+        P[np++] = *p;
+    }
+    return np;
 }
 
 static int leg_cmp(const void *pa, const void *pb)
@@ -659,6 +796,10 @@ static void build_free(build *B)
     rs__free(ctx, B->inhash);
     rs__free(ctx, B->nodeof);
     rs__free(ctx, B->ps);
+    rs__free(ctx, B->pstart);
+    rs__free(ctx, B->pids);
+    rs__free(ctx, B->tstart);
+    rs__free(ctx, B->buf);
 }
 
 void rs_network_free(rs_ctx *ctx, rs_network *net)
@@ -744,20 +885,18 @@ static rs_result load_points(build *B)
     return RS_OK;
 }
 
-/* Union the hashed points within the tolerance of each other: B->parent
- * of every point is then the lowest point of its group (flat). The pairs
- * are joined by their places in the hash (mostly one bucket: in the
- * cache), not by point (ids far apart: a cache miss per step), then each
- * point is given its group's lowest id. */
+/* Union the hashed points (B->inhash: the run starts of live roads)
+ * within the tolerance of each other: B->parent of every point is then the
+ * lowest point of its group (flat). The pairs are joined by their places
+ * in the sorted cells (mostly one run: in the cache), not by point (ids
+ * far apart: a cache miss per step), then each point is given its group's
+ * lowest id. */
 static rs_result cluster_points(build *B)
 {
-    pt_hash H;
-    memset(&H, 0, sizeof H);
-    /* cells of 8 tolerances: a point's disc mostly stays in its own cell
-     * (a neighbour cell is a random bucket: a cache miss when it holds
-     * points, if only of other cells); at least 2^-40 of the largest
-     * coordinate, so a disc's rounding margin spans at most 2 cells a side
-     * (else 1e18 m coordinates made a point probe millions of cells) */
+    /* cells of 8 tolerances: a point's disc mostly stays in its own cell;
+     * at least 2^-40 of the largest coordinate, so a disc's rounding
+     * margin spans at most 2 cells a side (else 1e18 m coordinates made a
+     * point probe millions of cells) */
     double tol = B->tol, big = 0;
     for (size_t v = 0; v < B->nv; v++)
         if (B->inhash[v]) {
@@ -766,34 +905,41 @@ static rs_result cluster_points(build *B)
             if (ay > big && ay <= DBL_MAX) big = ay;
         }
     double cell = fmax(8 * tol, big * 0x1p-40);
-    rs_result res = hash_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
-    size_t count = H.start ? H.start[H.mask + 1] : 0;
+    pt_cells H;
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
+    size_t count = H.count;
     uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
     uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
     if (!up || !low) {
-        hash_free(B->ctx, &H);
+        cells_free(B->ctx, &H);
         rs__free(B->ctx, up);
         rs__free(B->ctx, low);
         return res ? res : RS_ERR_NOMEM;
     }
     for (size_t i = 0; i < count; i++) up[i] = (uint32_t)i, low[i] = H.ent[i].id;
-    /* points in bucket order: their own bucket is the one being read (the
-     * union does not depend on the order) */
+    /* points in key order: the cells they probe are mostly their own run,
+     * else close by (the union does not depend on the order) */
     for (size_t i = 0; i < count; i++) {
         if ((i & 16383) == 0 && rs__poll(B->ctx)) { /* (10^6 points: ~0.1 s) */
-            hash_free(B->ctx, &H);
+            cells_free(B->ctx, &H);
             rs__free(B->ctx, up);
             rs__free(B->ctx, low);
             return RS_ERR_CANCELLED;
         }
         const pt_entry *e = &H.ent[i];
-        int64_t c[4], ox = cell_of(e->x, H.cell), oy = cell_of(e->y, H.cell);
+        int64_t c[4];
+        uint64_t kx0, kx1, ky0, ky1, own = H.key[i];
         disc_cells(&H, &e->x, tol, c);
-        for (int64_t cy = c[2]; cy <= c[3]; cy++)
-            for (int64_t cx = c[0]; cx <= c[1]; cx++) {
-                if ((cx != ox || cy != oy) && !occupied(&H, cx, cy)) continue; /* (its own cell holds it) */
-                uint64_t b = bucket_of(&H, cx, cy);
-                for (uint32_t q = H.start[b]; q < H.start[b + 1]; q++) {
+        if (!key_range(&H, 0, c[0], c[1], &kx0, &kx1) || !key_range(&H, 1, c[2], c[3], &ky0, &ky1)) continue;
+        for (uint64_t ky = ky0; ky <= ky1; ky++)
+            for (uint64_t kx = kx0; kx <= kx1; kx++) {
+                uint32_t qa, qb;
+                if (zkey(kx, ky) == own) { /* its own run: from i on (lower entries have lower ids) */
+                    qa = (uint32_t)i + 1;
+                    for (qb = qa; qb < count && H.key[qb] == own; qb++) {}
+                } else
+                    run_of(&H, kx, ky, &qa, &qb);
+                for (uint32_t q = qa; q < qb; q++) {
                     const pt_entry *f = &H.ent[q];
                     if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
                     if (f->road == e->road && fabs(e->s - f->s) <= 2 * tol) continue; /* one place of one road: no node */
@@ -811,7 +957,7 @@ static rs_result cluster_points(build *B)
     }
     rs__free(B->ctx, up);
     rs__free(B->ctx, low);
-    hash_free(B->ctx, &H);
+    cells_free(B->ctx, &H);
     return RS_OK;
 }
 
@@ -865,54 +1011,19 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         B.nodeof[B.parent[B.voff[r]]] = 0;
         B.nodeof[B.parent[B.rep[B.voff[r + 1] - 1]]] = 0;
     }
-    size_t nn = 0, npass = 0;
+    size_t nn = 0;
     for (size_t v = 0; v < B.nv; v++) {
         if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] == 0) B.nodeof[v] = (uint32_t)nn++;
         else if (B.parent[v] == v) B.nodeof[v] = NONE;
-        npass += B.inhash[v] && (B.parent[v] != v || B.nodeof[v] != NONE);
     }
     N->nnodes = nn;
-    if (npass && !(B.ps = rs__alloc_array(ctx, npass, sizeof *B.ps))) { res = RS_ERR_NOMEM; goto fail; }
-    B.cps = npass;
-    /* passes through points: a node's points by road, runs along the road */
-    for (size_t v = 0; v < B.nv; v++) {
-        if (!B.inhash[v]) continue;
-        uint32_t nd = B.nodeof[B.parent[v]];
-        if (nd == NONE) continue;
-        const road_look *lk = &B.look[B.vroad[v]];
-        pass p = { B.vroad[v], (uint32_t)v, (uint32_t)v, NONE, B.s[v], B.s[v], 0, nd, (uint32_t)(v - lk->first),
-                   v == lk->first, v == B.rep[lk->last] };
-        if ((res = push_pass(&B, &p)) != RS_OK) goto fail;
-    }
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = find_tees(&B)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-    if ((res = sort_passes(&B, nn)) != RS_OK) goto fail;
+    if ((res = node_lists(&B, nn)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-    /* merge: points of one road in one run; a T beside a pass of its road, or
-     * found twice, is dropped */
-    size_t np = 0;
-    for (size_t i = 0; i < B.nps; i++) {
-        pass *p = &B.ps[i];
-        if (np > 0) {
-            pass *q = &B.ps[np - 1];
-            if (q->node == p->node && q->road == p->road && p->s - q->s1 <= 2 * tol) {
-                if (p->seg == NONE && q->seg == NONE) q->v1 = p->v1, q->s1 = p->s1, q->last = p->last;
-                else if (q->seg != NONE && p->seg == NONE) *q = *p; /* points win over a T */
-                else if (q->seg != NONE && p->dist < q->dist) *q = *p;
-                continue;
-            }
-        }
-        B.ps[np++] = *p;
-    }
-    B.nps = np;
-    /* legs */
-    size_t nl = 0;
-    for (size_t i = 0; i < np; i++) {
-        const pass *p = &B.ps[i];
-        int st = p->seg == NONE && p->first, en = p->seg == NONE && p->last;
-        nl += st || en ? (size_t)st + (size_t)en : 2;
-    }
+    /* legs: at most two a pass (the array shrinks to its count below) */
+    size_t nl = 2 * ((size_t)B.pstart[nn + 1] + B.nps);
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
     N->leg_start = rs__calloc(ctx, nn + 1, sizeof *N->leg_start);
     N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
@@ -931,25 +1042,30 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         res = RS_ERR_NOMEM;
         goto fail;
     }
-    N->nlegs = nl;
     for (size_t e = 0; e < 2 * n; e++) N->link[e] = NONE;
-    for (size_t v = 0; v < B.nv; v++)
-        if (B.inhash[v] && B.parent[v] == v && B.nodeof[v] != NONE) {
-            rs_network_node *d = &N->node[B.nodeof[v]];
-            d->x = B.xy[2 * v];
-            d->y = B.xy[2 * v + 1];
-        }
     nl = 0;
-    for (size_t i = 0, j, poll_at = 0; i < np; i = j) {
-        if (i >= poll_at) {
-            if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-            poll_at = i + 4096;
-        }
-        uint32_t nd = B.ps[i].node;
+    for (uint32_t nd = 0; nd < nn; nd++) {
+        if ((nd & 4095) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
+        if (nd + AHEAD < nn) /* (the points of a node a few ahead: by id, at random places) */
+            for (uint32_t q = B.pstart[nd + AHEAD], qe = B.pstart[nd + AHEAD + 1]; q < qe && q < B.pstart[nd + AHEAD] + 4; q++) {
+                uint32_t v = B.pids[q];
+                rs__prefetch(B.vroad + v);
+                rs__prefetch(B.s + v);
+                rs__prefetch(B.xy + 2 * (size_t)v);
+                rs__prefetch(B.rep + v);
+            }
+        if (nd + AHEAD / 2 < nn) /* (their roads, half as far ahead: the ids are in the cache by now) */
+            for (uint32_t q = B.pstart[nd + AHEAD / 2], qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
+                rs__prefetch(B.look + B.vroad[B.pids[q]]);
+        size_t np = node_passes(&B, nd);
+        if (np == (size_t)-1) { res = RS_ERR_NOMEM; goto fail; }
+        uint32_t v = B.pids[B.pstart[nd]]; /* its lowest point (a node holds a point) */
+        N->node[nd].x = B.xy[2 * (size_t)v];
+        N->node[nd].y = B.xy[2 * (size_t)v + 1];
         const double *c = &N->node[nd].x;
         N->leg_start[nd] = (uint32_t)nl;
-        for (j = i; j < np && B.ps[j].node == nd; j++) {
-            const pass *p = &B.ps[j];
+        for (size_t j = 0; j < np; j++) {
+            const pass *p = &B.buf[j];
             size_t r = p->road;
             const road_look *lk = &B.look[r];
             int pr = lk->priority;
@@ -980,7 +1096,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
                 N->leg[nl++] = L;
             }
             if (!p->first && !p->last) {
-                L.segment = p->k0, L.s = p->s;
+                L.segment = p->v0 - lk->first, L.s = p->s;
                 L.kind = RS_LEG_FORWARD, L.angle = leg_angle(&B, lk, c, p->v1, 1);
                 N->leg[nl++] = L;
                 L.kind = RS_LEG_BACKWARD, L.angle = leg_angle(&B, lk, c, p->v0, -1);
@@ -1001,6 +1117,11 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     }
     /* every qualifying node got legs (it holds a live road's point) */
     N->leg_start[nn] = (uint32_t)nl;
+    N->nlegs = nl;
+    if (nl) { /* (shrinking: cannot fail but may) */
+        rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
+        if (lg) N->leg = lg;
+    }
     /* controls from point attributes at a node's points */
     for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
         size_t r = 0, pt = 0;

@@ -9,6 +9,9 @@
 
 #include <float.h>
 #include <math.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 /* The local frame of a map: its origin (world coordinates of DEM sample
  * (0, 0)) and the quantum that local coordinates are rounded to
@@ -69,5 +72,17 @@ typedef struct rs__road_local {
 /* Road ri over dem's frame into *out (the caller's: rs__road_local_free). */
 rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out);
 void rs__road_local_free(rs_ctx *ctx, rs__road_local *r);
+
+/* Ask for the cache line at p ahead of its read (a hint; no effect on
+ * results): the builds that read by id or list order at random places in
+ * arrays of megabytes (the road field's lists, the network's gathers). */
+static inline void rs__prefetch(const void *p)
+{
+#if defined(__SSE2__)
+    _mm_prefetch((const char *)p, _MM_HINT_T0);
+#else
+    (void)p;
+#endif
+}
 
 #endif

@@ -13,6 +13,7 @@
 #include <float.h>
 #include <limits.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -96,14 +97,6 @@ static inline double lm_min(double x, double y) { return x <= y || y != y ? x : 
  * over arrays of megabytes on a dense map: ask for them a few entries
  * ahead (a hint; no effect on results). */
 #define PREFETCH_AHEAD 8
-static inline void rf_prefetch(const void *p)
-{
-#if defined(__SSE2__)
-    _mm_prefetch((const char *)p, _MM_HINT_T0);
-#else
-    (void)p;
-#endif
-}
 
 /* floor(v) clamped to [0, n-1]; NaN gives 0. Keeps every cast defined. */
 static uint32_t clamp_index(double v, uint32_t n)
@@ -446,8 +439,8 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
         for (uint32_t k = k0; k < k1; k++) {
             uint32_t id = f->ids[k];
             if (k + PREFETCH_AHEAD < k1) {
-                rf_prefetch(stamp + f->ids[k + PREFETCH_AHEAD]);
-                rf_prefetch(sbox + 4 * (size_t)f->ids[k + PREFETCH_AHEAD]);
+                rs__prefetch(stamp + f->ids[k + PREFETCH_AHEAD]);
+                rs__prefetch(sbox + 4 * (size_t)f->ids[k + PREFETCH_AHEAD]);
             }
             if (stamp[id] == j + 1) continue;
             stamp[id] = j + 1;
@@ -840,7 +833,7 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
                 if (h->work > h->limit) { res = RS_ERR_LIMIT; break; }
                 if (!gathered) {
                     for (uint32_t e = 0; e < n; e++) {
-                        if (e + PREFETCH_AHEAD < n) rf_prefetch(&ob[2 * (size_t)f->ids[a + e + PREFETCH_AHEAD]]);
+                        if (e + PREFETCH_AHEAD < n) rs__prefetch(&ob[2 * (size_t)f->ids[a + e + PREFETCH_AHEAD]]);
                         for (int l = 0; l < 4; l++) gb[l * cap + e] = ob[2 * (size_t)f->ids[a + e]].v[l];
                     }
                     for (uint32_t e = n; e < n + 4; e++)
@@ -946,7 +939,7 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
             if ((k & 16383) == 0 && rs__poll(ctx)) return RS_ERR_CANCELLED;
             uint32_t a = k ? b->recend[k - 1] : 0, e = b->recend[k];
             for (uint32_t i = e; i-- > a;) {
-                if (i >= PREFETCH_AHEAD) rf_prefetch(f->ids + b->cnt[b->rec[i - PREFETCH_AHEAD]] - 1);
+                if (i >= PREFETCH_AHEAD) rs__prefetch(f->ids + b->cnt[b->rec[i - PREFETCH_AHEAD]] - 1);
                 f->ids[--b->cnt[b->rec[i]]] = (uint32_t)k;
             }
             b->cell1[k] = e > a ? b->pref[k] & 0x7FFFFFFFu : 0;

@@ -9,7 +9,13 @@
  *     points; target: 100k within 12x of 10k in process CPU time, wall
  *     time beside it).
  * Times: fastest of RUNS, cases interleaved.
- * Usage: network OUTDIR   (writes OUTDIR/network.md and network.csv) */
+ * Usage: network OUTDIR   (writes OUTDIR/network.md and network.csv);
+ *        network --one N REPS [city] (a lattice of N records, or the
+ *        generated city of N roads on the index bench's map: REPS builds,
+ *        the fastest in thread CPU time; for profilers and A/B runs);
+ *        network --dump (an FNV-1a hash of every node, leg and stroke of
+ *        lattices and cities of 100 to 10^5 records, plain and split, at
+ *        three tolerances: to compare two builds with diff). */
 #include "roadsplat.h"
 #include "scenes.h"
 #include "timing.h"
@@ -24,6 +30,7 @@
 /* The city's roads with classes; split: every two segments a new record. */
 static int city_roads(rs_ctx *ctx, const sc_scene *sc, int split, rs_roads **out)
 {
+    *out = NULL;
     if (rs_roads_create(ctx, out)) return 1;
     for (size_t i = 0; i < sc->nroads; i++) {
         const sc_road *r = &sc->roads[i];
@@ -88,6 +95,101 @@ static double time_network(rs_ctx *ctx, const rs_roads *roads, double *cpu)
     return t;
 }
 
+static uint64_t fnv(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *c = p;
+    for (size_t i = 0; i < n; i++) h = (h ^ c[i]) * 1099511628211ull;
+    return h;
+}
+
+/* Everything the network says, hashed field by field. */
+static uint64_t network_hash(const rs_network *N)
+{
+    uint64_t h = 1469598103934665603ull;
+    for (size_t i = 0; i < rs_network_node_count(N); i++) {
+        rs_network_node d;
+        rs_network_get_node(N, i, &d);
+        int kind = (int)d.kind;
+        h = fnv(fnv(fnv(fnv(fnv(h, &d.x, 8), &d.y, 8), &d.degree, 4), &kind, sizeof kind), &d.control, 4);
+        for (size_t k = 0; k < d.degree; k++) {
+            rs_network_leg L;
+            rs_network_get_leg(N, i, k, &L);
+            int lk = (int)L.kind;
+            h = fnv(fnv(fnv(fnv(h, &L.road, 4), &lk, sizeof lk), &L.segment, 4), &L.s, 8);
+            h = fnv(fnv(fnv(h, &L.angle, 8), &L.priority, sizeof L.priority), &L.major, sizeof L.major);
+        }
+    }
+    for (size_t r = 0; r < rs_network_road_count(N); r++) {
+        rs_road_stroke st;
+        rs_network_road_stroke(N, r, &st);
+        h = fnv(fnv(fnv(fnv(h, &st.stroke, 4), &st.s_offset, 8), &st.length, 8), &st.prev, 4);
+        h = fnv(fnv(fnv(h, &st.next, 4), &st.closed, sizeof st.closed), &st.reversed, sizeof st.reversed);
+    }
+    for (size_t k = 0; k < rs_network_stroke_count(N); k++) {
+        uint32_t buf[256];
+        size_t c = rs_network_stroke_roads(N, k, buf, 256);
+        h = fnv(fnv(h, &c, sizeof c), buf, (c < 256 ? c : 256) * sizeof *buf);
+    }
+    return h;
+}
+
+/* The road set of --one and --dump: a lattice of n records, or the city
+ * generator's n roads on the index bench's 400 x 350 map of 5 m cells. */
+static int scene_roads(rs_ctx *ctx, size_t n, int city, int split, rs_roads **out)
+{
+    if (!city) return lattice(ctx, n, out);
+    sc_scene sc;
+    if (sc_city(&sc, 400, 350, 5.0, n, 1)) return 1;
+    int r = city_roads(ctx, &sc, split, out);
+    sc_scene_free(&sc);
+    return r;
+}
+
+static int one(rs_ctx *ctx, int argc, char **argv)
+{
+    size_t n = (size_t)atol(argv[2]);
+    int reps = argc > 3 ? atoi(argv[3]) : 1, city = argc > 4 && strcmp(argv[4], "city") == 0;
+    rs_roads *R = NULL;
+    if (scene_roads(ctx, n, city, 0, &R)) return 1;
+    double best = -1;
+    for (int i = 0; i < reps; i++) {
+        rs_network *net = NULL;
+        double t0 = tm_thread_cpu_ms();
+        if (rs_network_build(ctx, R, NULL, &net)) return 1;
+        double ms = tm_thread_cpu_ms() - t0;
+        rs_network_free(ctx, net);
+        best = best < 0 || ms < best ? ms : best;
+    }
+    printf("network: %s of %zu records: %.3f ms (thread CPU, fastest of %d)\n", city ? "city" : "lattice",
+           rs_roads_count(R), best, reps);
+    rs_roads_free(ctx, R);
+    return 0;
+}
+
+static int dump(rs_ctx *ctx)
+{
+    const double tols[3] = { 0, 0.5, 3 };
+    for (int kind = 0; kind < 3; kind++)
+        for (size_t n = 100; n <= 100000; n *= 10) {
+            rs_roads *R = NULL;
+            if (scene_roads(ctx, n, kind > 0, kind == 2, &R)) return 1;
+            for (int t = 0; t < (kind && n >= 100000 ? 2 : 3); t++) { /* (3 m on the dense city: huge nodes) */
+                rs_network_options o;
+                memset(&o, 0, sizeof o);
+                o.tolerance = tols[t];
+                rs_network *net = NULL;
+                if (rs_network_build(ctx, R, &o, &net)) return 1;
+                printf("%s %zu records, tolerance %g: %zu nodes, %zu strokes, hash %016llx\n",
+                       kind == 0 ? "lattice" : kind == 1 ? "city" : "split city", rs_roads_count(R), o.tolerance,
+                       rs_network_node_count(net), rs_network_stroke_count(net),
+                       (unsigned long long)network_hash(net));
+                rs_network_free(ctx, net);
+            }
+            rs_roads_free(ctx, R);
+        }
+    return 0;
+}
+
 static double time_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o)
 {
     rs_road_grid *g = NULL;
@@ -103,6 +205,16 @@ int main(int argc, char **argv)
     const char *dir = argc > 1 ? argv[1] : "build/bench";
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
+    if (argc > 2 && strcmp(argv[1], "--one") == 0) {
+        int r = one(ctx, argc, argv);
+        rs_ctx_free(ctx);
+        return r;
+    }
+    if (argc > 1 && strcmp(argv[1], "--dump") == 0) {
+        int r = dump(ctx);
+        rs_ctx_free(ctx);
+        return r;
+    }
     sc_scene sc;
     rs_dem *dem;
     rs_roads *city[2], *lat[2];
