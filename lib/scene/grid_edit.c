@@ -2,7 +2,7 @@
  * rectangles"): rs_road_grid_update, rs_road_grid_dirty,
  * rs_road_grid_rect_has_roads.
  *
- * Every grid keeps its pieces (lib/scene/grid_edit.h): each road cut into
+ * A grid built with opts->grid.edits keeps its pieces (lib/scene/grid_edit.h): each road cut into
  * chunks of about 10 m, each chunk as a core (pixels wholly road whatever
  * the width and casing) and two rims; discs at the road's ends and bends;
  * the strip of a trimmed end at a T; the line symbols' convex pieces

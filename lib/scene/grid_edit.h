@@ -71,7 +71,7 @@ typedef struct rs__grid_edit {
 
 struct rs_road_grid;
 /* The pieces of grid g, built by rs_road_grid_build from `roads` with
- * options o, after its styles and markings and while `net` (the grid's
+ * options o (when o->grid.edits is set), after its styles and markings and while `net` (the grid's
  * network, NULL when it built none) is at hand. Sets g->edit. */
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                               const rs_network *net, struct rs_road_grid *g);
