@@ -246,6 +246,7 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     unsigned rb = count <= 262144 ? 11 : 8;
     int ndig = (int)((2 * bits + rb - 1) / rb);
     for (size_t k = 0; k < count; k++) {
+        if ((k & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         uint64_t key = zkey((H->key[k] - (uint64_t)lo[0]) >> H->extra, (k2[k] - (uint64_t)lo[1]) >> H->extra);
         ka[k] = key;
         for (int d = 0; d < ndig; d++) hist[((size_t)d << RADIX_MAXBITS) + (key >> (d * rb) & ((1u << rb) - 1))]++;
@@ -254,6 +255,7 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
         uint32_t *h = hist + ((size_t)d << RADIX_MAXBITS);
         unsigned sh = (unsigned)d * rb;
         if (h[ka[0] >> sh & ((1u << rb) - 1)] == count) continue; /* all keys share this digit */
+        if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; } /* (a pass: ~5 ms at 10^6 points) */
         uint32_t at = 0;
         for (size_t j = 0; j < (1u << rb); j++) {
             uint32_t c = h[j];
@@ -271,6 +273,7 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     }
     if (ka != H->key) memcpy(H->key, ka, count * sizeof *ka);
     for (size_t k = 0; k < count; k++) {
+        if ((k & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         uint32_t i = ia[k];
         if (k + AHEAD < count) {
             uint32_t f = ia[k + AHEAD];
