@@ -466,10 +466,11 @@ static int avx512_ok(void)
  *
  * Two passes: the tints of the row, then the shades, eight interior
  * samples per register (AVX-512, where the CPU has it), else two (SSE2),
- * and the border ones one by one. Divisions and square roots are
- * correctly rounded in every lane width, so each path gives the same
- * floats. The five divisions and the square root of a sample were ~40
- * ns per sample in one dependent chain (docs/speed.md). */
+ * and the border ones one by one. Every path gives the same floats: the
+ * tints divide as the scalar code does, and the AVX-512 shades (shade8,
+ * without divisions) stay within the tie test's 1e-12. The five
+ * divisions and the square root of a sample were ~40 ns per sample in
+ * one dependent chain (docs/speed.md). */
 static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t n, float *rgb)
 {
     const rs_dem *d = s->dem;
@@ -684,6 +685,45 @@ static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, u
     }
 }
 
+/* rs__surface's bilinear terrain colours of piece p (every row): the two
+ * horizontal interpolants per column once per piece (p->hx), then every
+ * row of the piece (all pixels: a plain loop). The column and its offset
+ * in the cell are counted along (no integer division per column); fxt
+ * holds the weights of the first nt offsets. */
+static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, const float *r1, uint32_t wc0,
+                             size_t tplane, const double *fxt, uint32_t nt)
+{
+    double *hx = p->hx;
+    const size_t w = p->w;
+    uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
+    for (uint32_t k = 0; k < p->w; k++, off++) {
+        if (off == T) { off = 0; ccol++; }
+        double fx = off < nt ? fxt[off] : (off + 0.5) / T;
+        const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
+        for (int ch = 0; ch < 3; ch++) {
+            hx[ch * w + k] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
+            hx[(3 + ch) * w + k] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
+        }
+    }
+    for (uint32_t r = 0; r < p->rows; r++) {
+        uint32_t ty = p->y0 + r - p->crow * T;
+        double fy = (ty + 0.5) / T, gy = 1 - fy;
+        for (size_t ch = 0; ch < 3; ch++) {
+            const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
+            float *tc = p->tc + (size_t)r * w * 3 + ch * w;
+            size_t k = 0;
+#if defined(__SSE2__)
+            const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
+            for (; k + 2 <= w; k += 2) {
+                __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + k), vg), _mm_mul_pd(_mm_loadu_pd(h1 + k), vf));
+                _mm_storel_epi64((__m128i *)(void *)(tc + k), _mm_castps_si128(_mm_cvtpd_ps(v)));
+            }
+#endif
+            for (; k < w; k++) tc[k] = (float)(h0[k] * gy + h1[k] * fy);
+        }
+    }
+}
+
 void rs__surface(const rs_splatter *s, rs__piece *p)
 {
     const uint32_t T = s->o.texels;
@@ -693,58 +733,20 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     for (size_t i = 0; i < n && !need_terrain; i++) need_terrain = p->q[i] < 65535u;
     if (need_terrain && f->terrain_texture) texture_piece(s, p, f->terrain_texture, 0, p->tc);
     else if (need_terrain) {
-        /* Bilinear between the sample rows crow and crow + 1: the two
-         * horizontal interpolants per column once per piece, then every row
-         * of the piece (all pixels: a plain loop). */
+        /* Bilinear between the sample rows crow and crow + 1 */
         const float *r0 = NULL, *r1 = NULL;
         terrain_rows(s, p->tcache, p->crow, &r0, &r1);
-        const uint32_t wc0 = p->tcache->c0;
-        const size_t tplane = p->tcache->ncol;
-        double *hx = p->hx;
-        const size_t w = p->w;
-        /* the column and its offset in the cell counted along (no integer
-         * division per column), the weight per offset from a table: the
-         * same doubles ((offset + 0.5) / T) */
+        /* the weight per offset in the cell from a table: the same doubles
+         * as (offset + 0.5) / T */
         double fxt[64];
         const uint32_t nt = T < 64 ? T : 64;
         for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
 #ifdef RS_AVX512_DISPATCH
-        if (T <= 64 && avx512_ok()) {
-            terrain_bilinear8(p, T, r0, r1, wc0, tplane, fxt);
-            goto road;
-        }
+        if (T <= 64 && avx512_ok()) terrain_bilinear8(p, T, r0, r1, p->tcache->c0, p->tcache->ncol, fxt);
+        else
 #endif
-        uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
-        for (uint32_t k = 0; k < p->w; k++, off++) {
-            if (off == T) { off = 0; ccol++; }
-            double fx = off < nt ? fxt[off] : (off + 0.5) / T;
-            const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
-            for (int ch = 0; ch < 3; ch++) {
-                hx[ch * w + k] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
-                hx[(3 + ch) * w + k] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
-            }
-        }
-        for (uint32_t r = 0; r < p->rows; r++) {
-            uint32_t ty = p->y0 + r - p->crow * T;
-            double fy = (ty + 0.5) / T, gy = 1 - fy;
-            for (size_t ch = 0; ch < 3; ch++) {
-                const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
-                float *tc = p->tc + (size_t)r * w * 3 + ch * w;
-                size_t k = 0;
-#if defined(__SSE2__)
-                const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
-                for (; k + 2 <= w; k += 2) {
-                    __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + k), vg), _mm_mul_pd(_mm_loadu_pd(h1 + k), vf));
-                    _mm_storel_epi64((__m128i *)(void *)(tc + k), _mm_castps_si128(_mm_cvtpd_ps(v)));
-                }
-#endif
-                for (; k < w; k++) tc[k] = (float)(h0[k] * gy + h1[k] * fy);
-            }
-        }
+            terrain_bilinear(p, T, r0, r1, p->tcache->c0, p->tcache->ncol, fxt, nt);
     }
-#ifdef RS_AVX512_DISPATCH
-road:
-#endif
     if (!need_road) return;
     if (f->road_texture) {
         texture_piece(s, p, f->road_texture, 1, p->sc);
