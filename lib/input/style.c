@@ -233,23 +233,26 @@ nomem:
     return rs__fail(ctx, RS_ERR_NOMEM, "%s: out of memory", who);
 }
 
-rs_result rs_styles_add(rs_ctx *ctx, rs_styles *styles, const rs_style *style)
+/* The arguments of rs_styles_add / _replace (`who`) checked. */
+static rs_result style_args(rs_ctx *ctx, const rs_styles *styles, const rs_style *style, const char *who)
 {
     char why[200];
     if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!styles || !style) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_styles_add: styles or style is NULL");
-    if (!style_ok(style, why, sizeof why))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_styles_add: %s", why);
-    return append(ctx, styles, style, "rs_styles_add", 0);
+    if (!styles || !style) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: styles or style is NULL", who);
+    if (!style_ok(style, why, sizeof why)) return rs__fail(ctx, RS_ERR_INVALID_ARG, "%s: %s", who, why);
+    return RS_OK;
+}
+
+rs_result rs_styles_add(rs_ctx *ctx, rs_styles *styles, const rs_style *style)
+{
+    rs_result r = style_args(ctx, styles, style, "rs_styles_add");
+    return r ? r : append(ctx, styles, style, "rs_styles_add", 0);
 }
 
 rs_result rs_styles_replace(rs_ctx *ctx, rs_styles *styles, const rs_style *style)
 {
-    char why[200];
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!styles || !style) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_styles_replace: styles or style is NULL");
-    if (!style_ok(style, why, sizeof why))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_styles_replace: %s", why);
+    rs_result r = style_args(ctx, styles, style, "rs_styles_replace");
+    if (r) return r;
     rs_style *have = (rs_style *)rs_styles_find(styles, style->name);
     if (!have) return append(ctx, styles, style, "rs_styles_replace", 0);
     *have = *style; /* same name: same place, the index stays */
