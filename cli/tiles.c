@@ -677,6 +677,7 @@ typedef struct job {
      * 'e': log road-free, not written */
     int mode;
     uint8_t *written[2]; /* --halo: the side x side pixels to write (owned); else p's */
+    int taken; /* by a worker (they take ready jobs out of order) */
     /* results, read by the commit once done */
     int done, bad, flag;
     uint8_t hash[2][32];
@@ -696,7 +697,8 @@ typedef struct pool {
     pthread_mutex_t mu, tmu; /* tmu: the CLI's temporary-file registry */
     pthread_cond_t cv;       /* any change: a job queued or done, a pix ready */
     job *ring;               /* jobs by sequence number modulo cap */
-    uint64_t cap, head, next, tail; /* [head, tail) queued; head: next to commit; next: next to hand out */
+    uint64_t cap, head, next, tail; /* [head, tail) queued; head: next to commit; every job before next taken */
+    uint64_t fail_seq;       /* the first job that failed (UINT64_MAX: none) */
     int nth, stop, abort;
     pthread_t th[64];
     wscratch ws[65];         /* one per worker; ws[nth] the main thread's */
@@ -846,21 +848,47 @@ static void job_run(pool *pl, wscratch *w, job *j, int skip)
     pix_release(pl, p);
 }
 
+/* The first job a worker may take (under pl->mu): not taken, and either
+ * its pixels are complete or it is to be skipped. A parent's job waits for
+ * its children's, which come before it; a worker that took it in order sat
+ * idle while the other boxed the last child (on two cores about a tenth of
+ * the run), so workers take any ready job and the commit keeps the order.
+ * Skipped: after an abort, and the jobs after a failed one (those before it
+ * run in full, so the first failure in order is the one reported, as with
+ * one thread). Returns pl->tail when none. */
+static uint64_t pool_pick(pool *pl, int *skip)
+{
+    while (pl->next < pl->tail && pl->ring[pl->next % pl->cap].taken) pl->next++;
+    for (uint64_t s = pl->next; s < pl->tail; s++) {
+        const job *j = &pl->ring[s % pl->cap];
+        if (j->taken) continue;
+        int k = pl->abort || s > pl->fail_seq;
+        if (k || j->p->pending == 0) {
+            *skip = k;
+            return s;
+        }
+    }
+    return pl->tail;
+}
+
 static void *worker_main(void *arg)
 {
     struct warg *wa = arg;
     pool *pl = wa->pl;
     pthread_mutex_lock(&pl->mu);
     for (;;) {
-        while (pl->next == pl->tail && !pl->stop) pthread_cond_wait(&pl->cv, &pl->mu);
-        if (pl->next == pl->tail) break;
-        job *j = &pl->ring[pl->next++ % pl->cap];
-        int skip = pl->abort; /* decided when taken: every job before a failed one runs in full */
+        int skip = 0;
+        uint64_t s;
+        while ((s = pool_pick(pl, &skip)) == pl->tail && !(pl->stop && pl->next == pl->tail))
+            pthread_cond_wait(&pl->cv, &pl->mu);
+        if (s == pl->tail) break;
+        job *j = &pl->ring[s % pl->cap];
+        j->taken = 1;
         pthread_mutex_unlock(&pl->mu);
         job_run(pl, &pl->ws[wa->i], j, skip);
         pthread_mutex_lock(&pl->mu);
         j->done = 1;
-        if (j->bad) pl->abort = 1;
+        if (j->bad && s < pl->fail_seq) pl->fail_seq = s;
         pthread_cond_broadcast(&pl->cv);
     }
     pthread_mutex_unlock(&pl->mu);
@@ -876,6 +904,7 @@ static int pool_start(run *r, unsigned n)
     pl->r = r;
     if (n > 64) n = 64;
     pl->cap = n ? 4 * (uint64_t)n : 1;
+    pl->fail_seq = UINT64_MAX;
     size_t side2 = (size_t)r->side * r->side;
     pthread_mutex_init(&pl->mu, NULL);
     pthread_mutex_init(&pl->tmu, NULL);
@@ -960,7 +989,7 @@ static int pool_commit(run *r, int all)
     while (!bad && pl->head < pl->tail) {
         job *j = &pl->ring[pl->head % pl->cap];
         if (!j->done) {
-            if (!all && !pl->abort && pl->tail - pl->head < pl->cap) break;
+            if (!all && !pl->abort && pl->fail_seq == UINT64_MAX && pl->tail - pl->head < pl->cap) break;
             pthread_cond_wait(&pl->cv, &pl->mu);
             continue;
         }
@@ -1022,6 +1051,7 @@ static int finish(run *r, pix *p, pix *parent, int q, uint32_t z, uint64_t x, ui
     pthread_cond_broadcast(&pl->cv);
     pthread_mutex_unlock(&pl->mu);
     if (!pl->nth) { /* --threads 1: run here */
+        j->taken = 1;
         job_run(pl, &pl->ws[0], j, 0);
         j->done = 1;
         pl->next = pl->tail;

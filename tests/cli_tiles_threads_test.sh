@@ -75,5 +75,18 @@ for t in 1 2 3; do
     check "a planted link, $t threads: no temporary, no manifest" sh -c "test -z \"\$(find '$T/er$t' -name '*.part')\" && test ! -e '$T/er$t/tiles.json'"
 done
 
+# 7. several failing tiles (links at levels 2-4): the workers take ready jobs
+# out of order, yet the one line is the first failure in the walk's order,
+# the line one thread prints
+for t in 1 2 3; do
+    for d in 4/1 4/3 3/0 3/1 2/0; do mkdir -p "$T/em$t/${d%/*}" && ln -s "$T" "$T/em$t/$d"; done
+    "$BIN" tiles --quiet --dense --threads $t $O $IN "$T/em$t" 2>"$T/f$t"
+    rc=$?
+    check "several planted links, $t threads: exit 1, one line" sh -c "test $rc = 1 && test \$(wc -l <'$T/f$t') = 1"
+    sed "s|em$t/|emN/|" "$T/f$t" >"$T/g$t"
+    [ $t = 1 ] || check "several planted links, $t threads: the 1-thread line" cmp -s "$T/g1" "$T/g$t"
+    check "several planted links, $t threads: no temporary, no manifest" sh -c "test -z \"\$(find '$T/em$t' -name '*.part')\" && test ! -e '$T/em$t/tiles.json'"
+done
+
 echo "$pass passed, $fail failed"
 [ "$fail" = 0 ]
