@@ -53,6 +53,8 @@ OIIO_LIBS   = $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null)
 DEFLATE_CFLAGS = $(shell $(PKG_CONFIG) --cflags libdeflate zlib 2>/dev/null)
 DEFLATE_LIBS   = $(or $(shell $(PKG_CONFIG) --libs libdeflate 2>/dev/null),-ldeflate) \
                  $(or $(shell $(PKG_CONFIG) --libs zlib 2>/dev/null),-lz)
+# SHA-256 of the tiles and the manifest (cli/sha256.c): Nettle.
+NETTLE_LIBS    = $(or $(shell $(PKG_CONFIG) --libs nettle 2>/dev/null),-lnettle)
 # The default PNG level 1 by ISA-L's igzip (libisal-dev), 2.5x faster than
 # libdeflate's level 1 here: auto-detected, or forced with WITH_ISAL=1/0.
 WITH_ISAL ?= $(shell [ -f /usr/include/isa-l/igzip_lib.h ] && echo 1 || echo 0)
@@ -106,7 +108,7 @@ endif
 
 LIB_SRC   := $(sort $(wildcard $(addsuffix /*.c,$(LIB_DIRS))))
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
-# The executable links only libc, libm, libdl, libdeflate and zlib; OpenImageIO
+# The executable links only libc, libm, libdl, libdeflate, zlib, ISA-L and Nettle; OpenImageIO
 # (cli/imageio.cpp) and OSMesa (cli/render*.c) live in modules it dlopens on
 # first use (docs/packaging.md).
 RENDER_SRC := cli/render.c cli/render_gl.c cli/render_shader.c cli/render_vt.c
@@ -145,7 +147,7 @@ SHARED_LIB := $(BUILD)/libroadsplat.so.$(VERSION)
 CLI        := $(BUILD)/roadsplat
 PCFILE     := $(BUILD)/roadsplat.pc
 
-DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev libjs-leaflet libexpat1-dev
+DEPS_PKGS := libopenimageio-dev libdeflate-dev zlib1g-dev libisal-dev nettle-dev pkg-config clang libosmesa6-dev gnuplot-nox libclang-rt-14-dev locales python3-cairo libgdal-dev gdal-bin libsqlite3-dev parallel time bc libmeshoptimizer-dev libjs-leaflet libexpat1-dev
 
 # Settings baked into generated files ($(PCFILE), the module folder in
 # cli/module.o): $(CONFIG) is rewritten whenever they change, e.g. by
@@ -212,6 +214,8 @@ check-deps:
 	  echo "roadsplat CLI needs libdeflate: run 'make deps' (or: apt-get install -y libdeflate-dev)"; exit 1; }
 	@$(PKG_CONFIG) --exists zlib 2>/dev/null || [ -f /usr/include/zlib.h ] || { \
 	  echo "roadsplat CLI needs zlib: run 'make deps' (or: apt-get install -y zlib1g-dev)"; exit 1; }
+	@$(PKG_CONFIG) --exists nettle 2>/dev/null || [ -f /usr/include/nettle/sha2.h ] || { \
+	  echo "roadsplat CLI needs Nettle: run 'make deps' (or: apt-get install -y nettle-dev)"; exit 1; }
 
 $(CONFIG): FORCE
 	@mkdir -p $(dir $@)
@@ -262,7 +266,7 @@ $(BUILD)/cli/%.o: cli/%.cpp
 
 $(CLI): $(CLI_OBJ) $(STATIC_LIB)
 	$(CC) $(SAN) $(LDFLAGS) -Wl,--export-dynamic -o $@ $(CLI_OBJ) -Wl,--whole-archive $(STATIC_LIB) -Wl,--no-whole-archive \
-	  $(DEFLATE_LIBS) -ldl $(LDLIBS_CORE) -lpthread
+	  $(DEFLATE_LIBS) $(NETTLE_LIBS) -ldl $(LDLIBS_CORE) -lpthread
 
 $(IMAGE_MOD): $(IMAGE_OBJ)
 	$(CXX) -shared $(SAN) $(LDFLAGS) -o $@ $^ $(OIIO_LIBS)
