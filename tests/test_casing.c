@@ -10,6 +10,7 @@
 #include <string.h>
 
 static rs_ctx *ctx;
+static rs_edge_mode edges; /* of render() */
 
 enum { DW = 26, DH = 22, TEX = 4 };
 #define CELL 1.0
@@ -63,6 +64,7 @@ static int render(const rs_dem *dem, const char *styles_text, const char *sa, co
     memset(&o, 0, sizeof o);
     o.texels = TEX;
     o.style.styles = styles;
+    o.coverage.edges = edges;
     if (ok) ok = rs_splatter_create(ctx, dem, roads, NULL, &o, &s) == RS_OK;
     if (ok) {
         rs_splatter_size(s, &im->w, &im->h);
@@ -189,11 +191,50 @@ static void test_fill_uniform(void)
     rs_dem_free(ctx, dem);
 }
 
+/* A casing on road b must not touch road a, which has none: every pixel
+ * clear of b's casing is the same whether b has a casing or not, with
+ * either edge mode. With alpha-map edges road a's edge pixels took casing
+ * colour (up to 11/255; the casing field held a's analytic coverage, the
+ * composite compared it with the alpha map's: found by fuzz/edits). */
+static void test_uncased_untouched(void)
+{
+    rs_dem *dem = flat_dem();
+    if (!dem) return;
+    static const char sty[] = "style k\ncasing 0.5 #a0a0a0\nend\nstyle n\nfill #383838\nend\n";
+    for (int e = 0; e < 2; e++) {
+        image cased = { 0 }, bare = { 0 };
+        edges = e ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
+        int ok = render(dem, sty, "", "k", &cased) && render(dem, sty, "", "n", &bare);
+        CHECK(ok);
+        long differ = 0, near_b = 0;
+        for (uint32_t y = 0; ok && y < cased.h; y++)
+            for (uint32_t x = 0; x < cased.w; x++) {
+                size_t p = (size_t)y * cased.w + x;
+                /* b's half width, its casing and a pixel's diagonal */
+                if (seg_dist(road_b, (x + 0.5) * PIX, (y + 0.5) * PIX) < 0.75 + CW + PIX) {
+                    near_b += memcmp(cased.rgba + 4 * p, bare.rgba + 4 * p, 3) != 0;
+                    continue;
+                }
+                differ += memcmp(cased.rgba + 4 * p, bare.rgba + 4 * p, 3) != 0;
+            }
+        CHECKF(differ == 0, "%s edges: %ld pixels away from road b change when b gets a casing", e ? "alpha-map" : "analytic",
+               differ);
+        CHECKF(near_b > 0, "%s edges: the casing shows (%ld pixels)", e ? "alpha-map" : "analytic", near_b);
+        free(cased.rgba);
+        free(cased.wt);
+        free(bare.rgba);
+        free(bare.wt);
+    }
+    edges = RS_EDGES_ANALYTIC;
+    rs_dem_free(ctx, dem);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_casing_colour();
     test_fill_uniform();
+    test_uncased_untouched();
     rs_ctx_free(ctx);
     return th_finish("test_casing");
 }

@@ -665,7 +665,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     if ((r = ge_tees(ctx, roads, net, g, srev)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     /* continuations: equal end points, leaving within 30 degrees of opposite */
-    qsort(ends, nends, sizeof *ends, ge_end_cmp);
+    if (nends > 1) qsort(ends, nends, sizeof *ends, ge_end_cmp);
     if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     for (size_t a = 0; a < nends; a++)
         for (size_t c = a + 1; c < nends && ends[c].x == ends[a].x && ends[c].y == ends[a].y; c++) {

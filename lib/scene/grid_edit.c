@@ -76,6 +76,7 @@ typedef struct road_ends {
     double tee[2]; /* a trimmed end at a T: how far past the end point the through road's far edge lies
                       across it (0: no T), and the through road's normal */
     double tnx[2], tny[2];
+    double thw[2]; /* the through road's half width */
 } road_ends;
 
 /* What a road's surface draws (not its lines and markings, which are
@@ -89,6 +90,7 @@ typedef struct road_fp {
     double hw, reach, rc; /* rc < 0: no core */
     int s_matters;
     road_ends E;
+    size_t clip0, clip1; /* segments [0, clip0) and [clip1, n - 1) may be clipped at a T (tee_run) */
 } road_fp;
 
 static void road_prints(const rs_roads *roads, size_t i, const rs__styling *st, const rs_network *net,
@@ -146,6 +148,7 @@ typedef struct builder {
     rs__grid_edit *e;
     double pix, chunk, devmax;
     double mx0, my0, mx1, my1; /* the map, grown by what any pad can add */
+    double cell;               /* the largest index cell of the fields that trim ends at T's */
     uint32_t kind;             /* RS__EI_* of the pieces pushed */
 } builder;
 
@@ -189,6 +192,7 @@ static void end_info(const rs_roads *roads, size_t i, const rs_network *net, con
             h = mix(h, road_sig(roads, t->through));
             E->tee[e] = t->half_width + t->grow + 2 * RS__NETWORK_TOL;
             E->tnx[e] = t->nx, E->tny[e] = t->ny;
+            E->thw[e] = t->half_width;
         }
         E->h[e] = h;
     }
@@ -260,7 +264,11 @@ static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k
     }
     if (k0 == 0) h = mix(h, F->E.h[0]);
     if (k1 + 1 == rl->n) h = mix(h, F->E.h[1]);
-    int tee = (k0 == 0 && F->E.tee[0] > 0) || (k1 + 1 == rl->n && F->E.tee[1] > 0);
+    /* a segment of it may be clipped at a T: no core, and the T's print
+     * (a core in one grid is never the same piece as a clipped one) */
+    int tee = k0 < F->clip0 || k1 > F->clip1;
+    if (k0 < F->clip0) h = mix(mix(h, 0xc1f), F->E.h[0]);
+    if (k1 > F->clip1) h = mix(mix(h, 0xc1f), F->E.h[1]);
     return stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k0], y[k0], x[k1], y[k1], dev, th, tee);
 }
 
@@ -285,8 +293,10 @@ static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, cons
         if (F->s_matters) h = mixd(h, rl->s[k]);
         if (k == 0) h = mix(h, F->E.h[0]);
         if (k + 2 == rl->n) h = mix(h, F->E.h[1]);
+        if (k < F->clip0) h = mix(mix(h, 0xc1f), F->E.h[0]);
+        if (k >= F->clip1) h = mix(mix(h, 0xc1f), F->E.h[1]);
         r = stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k] + ua * dx, y[k] + ua * dy, x[k] + ub * dx,
-                    y[k] + ub * dy, 0, 0, (k == 0 && F->E.tee[0] > 0) || (k + 2 == rl->n && F->E.tee[1] > 0));
+                    y[k] + ub * dy, 0, 0, k < F->clip0 || k >= F->clip1);
     }
     return r;
 }
@@ -314,12 +324,37 @@ static int bends(const rs__road_local *rl, size_t k, const road_fp *F)
     return c <= 0 || F->reach * sn > 0.25 * (F->reach - lo);
 }
 
+/* How many segments from end e on the fields may clip at its T
+ * (rs__roadfield_set_tees: the end segment, then along the record while
+ * a segment's capsule reaches past the through road's far edge line; the
+ * test here looser: reach >= a segment's half width, cell >= a field's
+ * index cell). A slanting leg loses one edge over many metres: found by
+ * fuzz/edits, a T's removal dirtied the end alone. 0: no T there. */
+static size_t tee_run(const rs__road_local *rl, const road_fp *F, double cell, int e)
+{
+    size_t n = rl->n, run = 0;
+    if (n < 2 || !(F->E.tee[e] > 0)) return 0;
+    const double *x = rl->x, *y = rl->y, nx = F->E.tnx[e], ny = F->E.tny[e];
+    size_t k = e ? n - 1 : 0;
+    double cE = nx * x[k] + ny * y[k];
+    double lim = cE + F->E.thw[e] - 1e-6 * (1 + fabs(cE)), rad = F->reach + cell;
+    for (size_t j = k; e ? j > 0 : j + 1 < n; j = e ? j - 1 : j + 1, run++) {
+        size_t i2 = e ? j - 1 : j + 1;
+        if (j != k && !(fmax(nx * x[j] + ny * y[j], nx * x[i2] + ny * y[i2]) + rad > lim)) break;
+    }
+    return run;
+}
+
 static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp *F)
 {
     size_t n = rl->n;
     const double *x = rl->x, *y = rl->y, *s = rl->s;
     rs_result r = RS_OK;
     if (n == 0) return RS_OK;
+    road_fp G = *F;
+    G.clip0 = tee_run(rl, F, b->cell, 0);
+    G.clip1 = n - 1 - tee_run(rl, F, b->cell, 1);
+    F = &G;
     r = joint(b, rl, 0, F);
     if (n == 1) return r;
     if (!r) r = joint(b, rl, n - 1, F);
@@ -336,6 +371,12 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
         r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
+        /* and the segments a field may clip (tee_run) */
+        size_t run = tee_run(rl, F, b->cell, e);
+        for (size_t i = 0; i < run && !r; i++) {
+            size_t j = e ? n - 1 - i : i, i2 = e ? j - 1 : j + 1;
+            r = push(b, mix(h, 0xbac + (uint64_t)i), x[j], y[j], x[i2], y[i2], F->reach);
+        }
     }
     /* chunks: runs of short segments up to a chunk of arc staying near
      * their chord; long segments cut to the map and split; a joint where
@@ -571,6 +612,8 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     b.chunk = fmax(CHUNK_M, CHUNK_PX * pix);
     b.devmax = fmax(0.25, 0.5 * pix);
     b.kind = RS__EI_SURFACE;
+    if (g->field) b.cell = rs__roadfield_cell(g->field);
+    if (st && st->casing) b.cell = fmax(b.cell, rs__roadfield_cell(st->casing));
     if (e) e->fills = st && (st->any_surface || st->img_of);
     /* long segments are cut to the map grown by the largest pad (an
      * alpha-map road cell is at most a DEM cell) */
@@ -754,7 +797,7 @@ static int cmp_span(const void *pa, const void *pb)
 /* Sorted by rows, a row's overlapping or touching spans merged. */
 static void spans_norm(spans *S)
 {
-    qsort(S->v, S->n, sizeof *S->v, cmp_span);
+    if (S->n > 1) qsort(S->v, S->n, sizeof *S->v, cmp_span); /* (none: S->v may be NULL) */
     size_t m = 0;
     for (size_t k = 0; k < S->n; k++) {
         if (m && S->v[m - 1].y == S->v[k].y && S->v[k].x0 <= S->v[m - 1].x1) {
@@ -861,7 +904,7 @@ static keyed *sorted_keys(rs_ctx *ctx, const rs__grid_edit *e)
     keyed *k = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *k);
     if (!k) return NULL;
     for (size_t i = 0; i < e->n; i++) k[i].h = e->it[i].h, k[i].i = (uint32_t)i;
-    qsort(k, e->n, sizeof *k, cmp_keyed);
+    if (e->n > 1) qsort(k, e->n, sizeof *k, cmp_keyed);
     return k;
 }
 

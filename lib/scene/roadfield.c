@@ -679,7 +679,7 @@ static rs_result holders_build(rs_ctx *ctx, const rs__roadfield *f, rf_holders *
         keys[m++].id = (uint32_t)k;
     }
     rs__free(ctx, in);
-    qsort(keys, n, sizeof *keys, cmp_key);
+    if (n > 1) qsort(keys, n, sizeof *keys, cmp_key);
     for (size_t i = 0; i < n; i++) {
         h->ids[i] = keys[i].id;
         h->box[i] = outer_box(&f->seg[keys[i].id]);
@@ -1681,7 +1681,10 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
             for (uint32_t r = ra; r <= rb; r++)
                 for (uint32_t k = ka; k <= kb; k++) {
                     double cx = ((double)px0 + k + 0.5) * pix, cy = ((double)py0 + r + 0.5) * pix;
-                    if (g && !tee_may_differ(Tf, sf, cx, cy, e)) continue;
+                    /* (f alone too: a pixel computed again there took
+                     * tee_pixel's value for the exact one, so R was not
+                     * the same with and without a casing field: fuzz/edits) */
+                    if (!tee_may_differ(Tf, sf, cx, cy, e)) continue;
                     if (!(need_f && tee_near_edge(f, sf, cx, cy, e)) && !(need_g && tee_near_edge(g, sg, cx, cy, e)))
                         continue;
                     if (!have) { /* the segments that can come near a pixel of the box here, once */
@@ -1745,7 +1748,7 @@ static int tee_cmp(const void *a, const void *b)
  * the segments and builds the boxes and row lists. */
 static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
 {
-    qsort(f->tee, f->ntee, sizeof *f->tee, tee_cmp);
+    if (f->ntee > 1) qsort(f->tee, f->ntee, sizeof *f->tee, tee_cmp);
     size_t m = 0;
     for (size_t i = 0; i < f->ntee; i++) {
         const rf_tee *a = &f->tee[m ? m - 1 : 0], *b = &f->tee[i];
@@ -1823,18 +1826,30 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
         double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
         if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
         double cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
-        /* the record's segments: its end segment trimmed, every other one
-         * whose capsule (grown by up to an index cell: a casing, widen)
-         * reaches past the line clipped */
-        size_t k0 = (size_t)(s - f->seg), k1 = k0 + 1;
+        /* the record's segments: its end segment trimmed, and clipped
+         * those whose capsule (grown by up to an index cell: a casing,
+         * widen) reaches past the line: the zero-length ones at the end,
+         * and from the end along the record up to the first that does not
+         * reach it. (Every such segment of the record once: a record that
+         * left the T and crossed the through road again further on lost
+         * all of itself beyond the line there; fuzz/edits.) */
+        const size_t ks = (size_t)(s - f->seg);
+        size_t k0 = ks, k1 = ks + 1;
         while (k0 > 0 && f->seg[k0 - 1].road == t->road) k0--;
         while (k1 < f->nseg && f->seg[k1].road == t->road) k1++;
-        for (size_t k = k0; k < k1; k++) {
+        const size_t nout = t->end ? k1 - ks - 1 : ks - k0, nin = t->end ? ks - k0 + 1 : k1 - ks;
+        for (size_t step = 0; step < nout + nin; step++) {
+            /* first the segments past the end segment (beyond the end
+             * point: zero-length), then the end segment and inwards */
+            size_t k = step < nout ? (t->end ? ks + 1 + step : ks - 1 - step)
+                                   : (t->end ? ks - (step - nout) : ks + (step - nout));
             const rf_seg *q = &f->seg[k];
             int end = q == s ? t->end : 2;
             if (end == 2 && !(lm_max(t->nx * q->ax + t->ny * q->ay, t->nx * q->bx + t->ny * q->by) + q->r + f->c >
-                              cE + t->half_width))
-                continue;
+                              cE + t->half_width)) {
+                if (step < nout) continue;
+                break;
+            }
             if (m == cap) {
                 size_t nc = cap ? 2 * cap : n + 8, bytes;
                 rf_tee *nt = rs__mul_size(nc, sizeof *f->tee, &bytes) ? rs__realloc(ctx, f->tee, bytes) : NULL;

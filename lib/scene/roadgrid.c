@@ -284,7 +284,7 @@ static rs_result sweep_batch(sweep *sw)
 {
     if (!sw->np) return RS_OK;
     marker *m = sw->m;
-    qsort(sw->p, sw->np, sizeof *sw->p, cmp_prim);
+    if (sw->np > 1) qsort(sw->p, sw->np, sizeof *sw->p, cmp_prim);
     size_t next = 0, na = 0;
     int64_t row = sw->p[0].i0;
     while (next < sw->np || na) {

@@ -31,6 +31,7 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__free(ctx, st->bands);
     rs__free(ctx, st->dash);
     rs__free(ctx, st->casing_width);
+    rs__free(ctx, st->casing_road);
     rs__free(ctx, st->cuts);
     if (st->imgs)
         for (size_t i = 0; i < st->nimgs; i++) rs__surfimg_free(ctx, st->imgs[i]);
@@ -126,13 +127,24 @@ static void put_colour(float *dst, rs_colour c)
  * "Ends at a T"); extra: the roads' widening in f (a casing field), or
  * NULL. */
 static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__roadfield *f,
-                            const double *extra)
+                            const double *extra, const rs_roads *froads, const uint32_t *sub)
 {
     rs__tee_end *tees = NULL;
-    size_t ntees = 0;
+    size_t ntees = 0, m = 0;
     rs_result r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
     for (size_t i = 0; !r && extra && i < ntees; i++) tees[i].grow = extra[tees[i].through];
-    if (!r) r = rs__roadfield_set_tees(ctx, f, roads, tees, ntees);
+    /* a field of some of the roads (sub: an id there or UINT32_MAX): the
+     * ends of its roads, by its ids */
+    for (size_t i = 0; !r && i < ntees; i++) {
+        rs__tee_end t = tees[i];
+        if (sub) {
+            if (sub[t.road] == UINT32_MAX) continue;
+            t.road = sub[t.road];
+            t.through = sub[t.through];
+        }
+        tees[m++] = t;
+    }
+    if (!r) r = rs__roadfield_set_tees(ctx, f, froads, tees, m);
     rs__free(ctx, tees);
     return r;
 }
@@ -297,17 +309,43 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             if ((r = rs__roadfield_widen(ctx, field, extra, n, &st->casing)) != RS_OK) goto fail_dash;
             st->casing_merged = 1;
         } else {
-            if ((r = rs_roads_create(ctx, &casing_roads)) != RS_OK) goto fail_dash;
-            for (size_t i = 0; i < n; i++) {
+            /* With alpha-map edges R is the alpha map's coverage, not the
+             * analytic one an uncased road's part of C holds: where the
+             * two differ (its edge pixels) C > R gave every road without a
+             * casing a tint of casing colour (up to 11/255) once any road
+             * had one. There C holds the cased roads alone. */
+            uint32_t *sub = NULL;
+            if (o->coverage.edges == RS_EDGES_ALPHAMAP) {
+                sub = rs__alloc_array(ctx, n, sizeof *sub);
+                st->casing_road = rs__alloc_array(ctx, ncasing, sizeof *st->casing_road);
+                if (!sub || !st->casing_road) {
+                    rs__free(ctx, sub);
+                    r = RS_ERR_NOMEM;
+                    goto fail_dash;
+                }
+            }
+            if ((r = rs_roads_create(ctx, &casing_roads)) != RS_OK) {
+                rs__free(ctx, sub);
+                goto fail_dash;
+            }
+            uint32_t m = 0;
+            for (size_t i = 0; i < n && !r; i++) {
                 const char *name = NULL;
                 const double *xy = NULL;
                 size_t np = 0;
                 double w = 0;
+                if (sub && (!(extra[i] > 0) || m == ncasing)) { /* (pass 1 counted them) */
+                    sub[i] = UINT32_MAX;
+                    continue;
+                }
+                if (sub) sub[i] = m, st->casing_road[m++] = (uint32_t)i;
                 rs_roads_get(roads, i, &name, &w, &xy, &np);
-                if ((r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np)) != RS_OK) goto fail_dash;
+                r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np);
             }
-            if ((r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing)) != RS_OK) goto fail_dash;
-            if ((r = field_tees(ctx, roads, net, st->casing, extra)) != RS_OK) goto fail_dash;
+            if (!r) r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing);
+            if (!r) r = field_tees(ctx, roads, net, st->casing, extra, casing_roads, sub);
+            rs__free(ctx, sub);
+            if (r != RS_OK) goto fail_dash;
         }
         st->bytes += rs__roadfield_bytes(st->casing);
     }
@@ -331,7 +369,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->near = field;
         if (!field) {
             if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near_own)) != RS_OK) goto fail_dash;
-            if ((r = field_tees(ctx, roads, net, st->near_own, NULL)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, st->near_own, NULL, roads, NULL)) != RS_OK) goto fail_dash;
             st->near = st->near_own;
             st->bytes += rs__roadfield_bytes(st->near_own);
         }

@@ -13,7 +13,9 @@ struct rs__line_cut;
 typedef struct rs__styling {
     struct rs__linesym *lines;        /* NULL: no road has lines */
     struct rs__roadfield *casing;     /* every road, those with a casing widened by it on both sides (road
-                                         ids as in rs_roads); NULL: no casing */
+                                         ids as in rs_roads); with alpha-map edges the cased roads
+                                         alone (casing_road); NULL: no casing */
+    uint32_t *casing_road;            /* the rs_roads id of each road of casing (NULL: the same ids) */
     int casing_merged;                /* casing is rs__roadfield_widen of the grid's field: the analytic
                                          coverage stage computes its coverage into rs__piece.ov */
     int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */

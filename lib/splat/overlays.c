@@ -29,11 +29,12 @@ static void casing_pixel(const rs__styling *st, double pix, const rs__piece *p, 
     double share = ((c > 1 ? 1 : c) - R) / (1 - R);
     if (!(share > 0)) return;
     /* the colour of the nearest road's casing (none: a road without one
-     * is nearest) */
+     * is nearest; with alpha-map edges the field holds the cased roads
+     * alone) */
     rs__road_point rp;
     double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
     if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) return;
-    const float *col = st->colour + 16 * (size_t)rp.road + 12;
+    const float *col = st->colour + 16 * (size_t)(st->casing_road ? st->casing_road[rp.road] : rp.road) + 12;
     float a = (float)(share > 1 ? 1 : share) * col[3], *tc = p->tc + (size_t)r * p->w * 3;
     if (p->lcas) {
         /* layers: premultiplied, T left bare (T' = T (1 - a) + col a) */

@@ -594,7 +594,7 @@ rs_result rs_vt_update(rs_ctx *ctx, rs_vt *vt, const rs_vt_view *view)
             vt->need[i].slot = e->slot;
         } else vt->make[vt->nmake++] = vt->need[i];
     }
-    qsort(vt->make, vt->nmake, sizeof *vt->make, cmp_make);
+    if (vt->nmake > 1) qsort(vt->make, vt->nmake, sizeof *vt->make, cmp_make);
     if (view->max_make && vt->nmake > view->max_make) vt->nmake = view->max_make;
     /* room: drop the least recently needed tiles not needed now */
     vt->ndrop = 0;
@@ -608,7 +608,7 @@ rs_result rs_vt_update(rs_ctx *ctx, rs_vt *vt, const rs_vt_view *view)
                 items[nc].index = i;
                 nc++;
             }
-        qsort(items, nc, sizeof *items, cmp_lru);
+        if (nc > 1) qsort(items, nc, sizeof *items, cmp_lru);
         /* nc >= want: the needed tiles fit the slots */
         uint32_t nd = want < nc ? want : nc;
         for (uint32_t i = 0; i < nd; i++) {
