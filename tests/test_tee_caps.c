@@ -293,6 +293,40 @@ static void test_dead_end_keeps_cap(void)
     rs_roads_free(ctx, roads);
 }
 
+/* A record whose start is a T on a street and which crosses that street
+ * again further on keeps the crossing: only the segments from its T end on
+ * up to the first that does not reach the far edge line are clipped.
+ * (Every segment of the record reaching past the line was clipped: the
+ * loop lost all of itself beyond the street at its second crossing; found
+ * by fuzz/edits.) */
+static void test_loop_crosses_again(void)
+{
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    add(roads, 2 * TR, "residential", 2, TY, 58, TY); /* the street, y = TY */
+    /* the loop: starts on the street at x = 10, runs 12 m south, east, and
+     * back north across the street at x = 45, up to 12 m beyond it */
+    const double xy[10] = { 10, TY, 10, TY - 12, 45, TY - 12, 45, TY + 12, 45, TY + 12.5 };
+    CHECK(rs_roads_add(ctx, roads, "loop", 3, xy, 5) == RS_OK);
+    CHECK(rs_roads_set_attr(ctx, roads, 1, "class", "residential") == RS_OK);
+    image B;
+    CHECK(render(roads, &B));
+    size_t miss = 0, in = 0, beyond = 0;
+    for (uint32_t py = 0; B.wt && py < B.h; py++)
+        for (uint32_t px = 0; px < B.w; px++) {
+            double x = (px + 0.5) * PIX, y = (py + 0.5) * PIX;
+            uint16_t w = B.wt[(size_t)py * B.w + px];
+            /* the loop's leg beyond the street's far side (y > TY + TR) */
+            if (fabs(x - 45) < 1.3 && y > TY + TR + 0.3 && y < TY + 12) in++, miss += w != 65535;
+            /* the T end itself: nothing beyond the far edge line there */
+            if (fabs(x - 10) < 1.3 && y > TY + TR + 0.2) beyond += w != 0;
+        }
+    CHECKF(in > 2000 && miss == 0, "the loop's second crossing lost %zu of %zu pixels beyond the street", miss, in);
+    CHECKF(beyond == 0, "%zu road pixels beyond the far edge at the loop's T end", beyond);
+    image_free(&B);
+    rs_roads_free(ctx, roads);
+}
+
 /* Windows of 37 x 23 pixels give the bytes of the whole image (the
  * trimmed pixels depend on their own coordinates only). */
 static void test_windows(void)
@@ -335,6 +369,7 @@ static void test_windows(void)
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
+    test_loop_crosses_again();
     test_tee_caps("built-in styles");
     /* casings: the side road's (1 m) stops at the through road's casing's
      * far edge (0.3 m beyond its surface) */
