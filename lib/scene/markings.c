@@ -610,7 +610,7 @@ static rs_result storage_order(rs_ctx *ctx, rs__markings *mk, size_t npart, size
         return RS_ERR_NOMEM;
     }
     for (size_t i = 0; i < n; i++) {
-        key[i].y = mk->m[i].by0;
+        key[i].y = isnan(mk->m[i].by0) ? INFINITY : mk->m[i].by0; /* a total order for qsort */
         key[i].i = (uint32_t)i;
     }
     qsort(key, n, sizeof *key, cmp_key);
@@ -824,7 +824,7 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
             else if (e)
                 r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
         }
-        for (size_t i = 0; i < npl && !r; i++) /* back to record order */
+        for (size_t i = 0; i < npl && !r; i++) /* back to record order (storage_order then stores them by box) */
             if (kept[i]) {
                 mk->m[mk->n++] = mk->m[i];
                 if (i < n_explicit) mk->n_explicit++;
