@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdlib.h>
 #include <string.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -74,6 +75,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->tex);
     rs_atlas_free(ctx, mk->atlas_own);
     rs__free(ctx, mk->m);
+    rs__free(ctx, mk->at);
     rs__free(ctx, mk->pts);
     rs__free(ctx, mk->parts);
     rs__free(ctx, mk->fps);
@@ -537,7 +539,7 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
             e.y0 = nextafterf((float)m->by0, -INFINITY);
             e.x1 = nextafterf((float)m->bx1, INFINITY);
             e.y1 = nextafterf((float)m->by1, INFINITY);
-            e.i = (uint32_t)i;
+            e.i = m->rec;
             if (!(e.x1 >= 0 && e.y1 >= 0 && e.x0 < map_w + cell && e.y0 < map_h + cell)) continue;
             uint32_t x0 = cell_of(e.x0, cell, mk->gw), y0 = cell_of(e.y0, cell, mk->gh);
             uint32_t x1 = cell_of(e.x1, cell, mk->gw), y1 = cell_of(e.y1, cell, mk->gh);
@@ -569,6 +571,79 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
         }
     }
     mk->bytes += (ncell + 1) * sizeof *mk->start + (size_t)total * sizeof *mk->list;
+    return RS_OK;
+}
+
+/* Stores the records by the top of their box (rs__markings.m), each
+ * curved one's stretch points, span parts and footprints in the same
+ * order, and makes mk->at. */
+typedef struct mk_key {
+    double y;
+    uint32_t i;
+} mk_key;
+
+static int cmp_key(const void *pa, const void *pb)
+{
+    const mk_key *a = pa, *b = pb;
+    if (a->y != b->y) return a->y < b->y ? -1 : 1;
+    return (a->i > b->i) - (a->i < b->i);
+}
+
+static rs_result storage_order(rs_ctx *ctx, rs__markings *mk, size_t npart, size_t nfp)
+{
+    const size_t n = mk->n;
+    size_t npt = 0;
+    for (size_t i = 0; i < n; i++) npt += mk->m[i].npt;
+    mk_key *key = rs__alloc_array(ctx, n, sizeof *key);
+    rs__mk *m2 = rs__alloc_array(ctx, n, sizeof *m2);
+    double *pts2 = rs__alloc_array(ctx, npt ? npt : 1, RS__MK_PT * sizeof(double));
+    double *parts2 = npart ? rs__alloc_array(ctx, npart, RS__MK_PART * sizeof(double)) : NULL;
+    rs__mk_fp *fps2 = nfp ? rs__alloc_array(ctx, nfp, sizeof *fps2) : NULL;
+    uint32_t *at = rs__alloc_array(ctx, n, sizeof *at);
+    if (!key || !m2 || !pts2 || (npart && !parts2) || (nfp && !fps2) || !at) {
+        rs__free(ctx, key);
+        rs__free(ctx, m2);
+        rs__free(ctx, pts2);
+        rs__free(ctx, parts2);
+        rs__free(ctx, fps2);
+        rs__free(ctx, at);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++) {
+        key[i].y = isnan(mk->m[i].by0) ? INFINITY : mk->m[i].by0; /* a total order for qsort */
+        key[i].i = (uint32_t)i;
+    }
+    qsort(key, n, sizeof *key, cmp_key);
+    size_t pa = 0, qa = 0, fa = 0;
+    for (size_t j = 0; j < n; j++) {
+        const rs__mk *src = &mk->m[key[j].i];
+        rs__mk *d = &m2[j];
+        *d = *src;
+        d->rec = key[j].i;
+        at[key[j].i] = (uint32_t)j;
+        memcpy(pts2 + RS__MK_PT * pa, mk->pts + RS__MK_PT * src->first, src->npt * RS__MK_PT * sizeof(double));
+        d->first = pa;
+        pa += src->npt;
+        if (src->npt > 2) {
+            memcpy(parts2 + RS__MK_PART * qa, mk->parts + RS__MK_PART * src->part,
+                   src->nparts * RS__MK_PART * sizeof(double));
+            d->part = qa;
+            qa += src->nparts;
+            memcpy(fps2 + fa, mk->fps + src->fpi, (src->npt - 1) * sizeof *fps2);
+            d->fpi = fa;
+            fa += src->npt - 1;
+        }
+    }
+    rs__free(ctx, key);
+    rs__free(ctx, mk->m);
+    rs__free(ctx, mk->pts);
+    rs__free(ctx, mk->parts);
+    rs__free(ctx, mk->fps);
+    mk->m = m2;
+    mk->pts = pts2;
+    mk->parts = parts2;
+    mk->fps = fps2;
+    mk->at = at;
     return RS_OK;
 }
 
@@ -749,7 +824,7 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
             else if (e)
                 r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
         }
-        for (size_t i = 0; i < npl && !r; i++) /* back to record order */
+        for (size_t i = 0; i < npl && !r; i++) /* back to record order (storage_order then stores them by box) */
             if (kept[i]) {
                 mk->m[mk->n++] = mk->m[i];
                 if (i < n_explicit) mk->n_explicit++;
@@ -785,6 +860,15 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
                 footprint(m->su * A[4] * mk->pix, m->sv * A[3] * mk->pix, -m->su * A[3] * mk->pix,
                           m->sv * A[4] * mk->pix, &mk->fps[f]);
             }
+        }
+        if (!r && mk->n && storage_order(ctx, mk, npart, nfp)) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+        if (!r && mk->n) {
+            /* as stored: the records kept, the points, parts and footprints they use */
+            size_t npt = 0;
+            for (size_t i = 0; i < mk->n; i++) npt += mk->m[i].npt;
+            mk->bytes = sizeof *mk + mk->n * (sizeof *mk->m + sizeof *mk->at) + npt * RS__MK_PT * sizeof(double) +
+                        npart * RS__MK_PART * sizeof(double) + nfp * sizeof *mk->fps + mk->ntex * sizeof *mk->tex +
+                        tex_bytes;
         }
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
@@ -1372,11 +1456,11 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
             continue;
         }
         sort_u32(cand, n, tmp);
-        for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[cand[k]]);
+        for (size_t k = 0; k < n && k < PREFETCH_AHEAD; k++) prefetch_mk(&mk->m[mk->at[cand[k]]]);
         for (size_t k = 0; k < n; k++) {
-            if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[cand[k + PREFETCH_AHEAD]]);
-            if (k + 2 < n) prefetch_stretch(mk, &mk->m[cand[k + 2]]);
-            const rs__mk *m = &mk->m[cand[k]];
+            if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[mk->at[cand[k + PREFETCH_AHEAD]]]);
+            if (k + 2 < n) prefetch_stretch(mk, &mk->m[mk->at[cand[k + 2]]]);
+            const rs__mk *m = &mk->m[mk->at[cand[k]]];
             if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
             else paint_curved(mk, m, p, &tests, &painted);
         }

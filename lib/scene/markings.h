@@ -84,6 +84,7 @@ typedef struct rs__mk {
     double hl, hw;             /* half length and width (metres) */
     double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
     double bx0, bx1;           /* columns of the box (metres) */
+    uint32_t rec;              /* its place in record order (mk->at[rec] is this record) */
 } rs__mk;
 
 typedef struct rs__mk_ref {
@@ -110,8 +111,14 @@ typedef struct rs__markings {
     rs_atlas *atlas_own;       /* the built-in atlas when none was given */
     rs__mk_tex *tex;           /* per atlas type, built for the types placed */
     size_t ntex;
+    /* the records kept, stored by the top of their box (so the markings a
+     * piece paints, and the next piece, lie close together in memory, as
+     * do their stretches' points, span parts and footprints); at[i]: the
+     * record of the i-th marking in record order. The index and the
+     * paint keep record order. */
     rs__mk *m;
     size_t n;
+    uint32_t *at;
     double *pts;               /* RS__MK_PT doubles per point */
     double *parts;             /* RS__MK_PART doubles per span part of a curved marking */
     rs__mk_fp *fps;            /* per segment of a curved marking's stretch: the footprint of its direction */
