@@ -219,6 +219,21 @@ static int clip_box(const builder *b, double ax, double ay, double bx, double by
     return lo <= hi;
 }
 
+/* Segment (ax, ay)-(bx, by) cut to the map grown by `grow`, measured from
+ * its end nearer the origin (a point at 1e52 m would otherwise swamp the
+ * cut's position: ua near 1 rounds to it): o = that end, d = the other
+ * minus it, [*t0, *t1] the part kept; 0 when it misses. */
+static int clip_near(const builder *b, double ax, double ay, double bx, double by, double grow, double o[2], double d[2],
+                     double *t0, double *t1)
+{
+    if (fabs(ax) + fabs(ay) > fabs(bx) + fabs(by)) {
+        double tx = ax, ty = ay;
+        ax = bx, ay = by, bx = tx, by = ty;
+    }
+    o[0] = ax, o[1] = ay, d[0] = bx - ax, d[1] = by - ay;
+    return clip_box(b, ax, ay, bx, by, grow, t0, t1);
+}
+
 /* A stretch of road from a to b (straight within dev, its directions
  * within angle th of the chord): the core capsule and the rims on both
  * sides as capsules of the chord moved sideways. hc, hr: the stretch's
@@ -276,14 +291,13 @@ static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k
 static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, const road_fp *F)
 {
     const double *x = rl->x, *y = rl->y;
-    double len = rl->s[k + 1] - rl->s[k], t0, t1;
-    if (!clip_box(b, x[k], y[k], x[k + 1], y[k + 1], F->reach, &t0, &t1)) return RS_OK;
+    double len = rl->s[k + 1] - rl->s[k], t0, t1, o[2], d[2];
+    if (!clip_near(b, x[k], y[k], x[k + 1], y[k + 1], F->reach, o, d, &t0, &t1)) return RS_OK;
     /* pieces of a chunk, or of the road's reach when that is wider (its
      * region is then mostly reach), at most MAX_SPLIT */
     double m = ceil((t1 - t0) * len / fmax(b->chunk, F->reach));
     if (!(m >= 1)) m = 1;
     if (m > MAX_SPLIT) m = MAX_SPLIT;
-    double dx = x[k + 1] - x[k], dy = y[k + 1] - y[k];
     rs_result r = RS_OK;
     for (double j = 0; j < m && !r; j++) {
         double ua = t0 + (t1 - t0) * j / m, ub = j + 1 == m ? t1 : t0 + (t1 - t0) * (j + 1) / m;
@@ -295,8 +309,8 @@ static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, cons
         if (k + 2 == rl->n) h = mix(h, F->E.h[1]);
         if (k < F->clip0) h = mix(mix(h, 0xc1f), F->E.h[0]);
         if (k >= F->clip1) h = mix(mix(h, 0xc1f), F->E.h[1]);
-        r = stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k] + ua * dx, y[k] + ua * dy, x[k] + ub * dx,
-                    y[k] + ub * dy, 0, 0, k < F->clip0 || k >= F->clip1);
+        r = stretch(b, F, mix(F->core, h), mix(F->rim, h), o[0] + ua * d[0], o[1] + ua * d[1], o[0] + ub * d[0],
+                    o[1] + ub * d[1], 0, 0, k < F->clip0 || k >= F->clip1);
     }
     return r;
 }
@@ -375,7 +389,10 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         size_t run = tee_run(rl, F, b->cell, e);
         for (size_t i = 0; i < run && !r; i++) {
             size_t j = e ? n - 1 - i : i, i2 = e ? j - 1 : j + 1;
-            r = push(b, mix(h, 0xbac + (uint64_t)i), x[j], y[j], x[i2], y[i2], F->reach);
+            double o[2], d[2], t0, t1;
+            if (clip_near(b, x[j], y[j], x[i2], y[i2], F->reach, o, d, &t0, &t1))
+                r = push(b, mix(h, 0xbac + (uint64_t)i), o[0] + t0 * d[0], o[1] + t0 * d[1], o[0] + t1 * d[0],
+                         o[1] + t1 * d[1], F->reach);
         }
     }
     /* chunks: runs of short segments up to a chunk of arc staying near
