@@ -899,6 +899,29 @@ static void test_corner_rule(void)
     }
 }
 
+/* A record cut within the tolerance of a sharp vertex (past it, inside the
+ * next segment) still continues into the next: the cut is no corner
+ * although the legs' angles, taken beyond the tolerance, see one (they
+ * made two strokes, and the lines of a wide road were cut at the split:
+ * fuzz/split). Cut exactly at the vertex, it is the corner rule's. */
+static void test_cut_near_corner(void)
+{
+    const double a = 150 * 3.14159265358979323846 / 180;
+    const double ux = cos(a), uy = sin(a);
+    for (int k = 0; k < 4; k++) {
+        double d = k == 0 ? 0 : k == 1 ? 0.01 : k == 2 ? 0.04 : 0.2; /* metres past the vertex */
+        double p0[6] = { 0, 0, 10, 0, 10 + d * ux, d * uy }, p1[4] = { 10 + d * ux, d * uy, 10 + 10 * ux, 10 * uy };
+        rs_roads *r = NULL;
+        rs_network *n = NULL;
+        CHECK(rs_roads_create(ctx, &r) == RS_OK && rs_roads_add(ctx, r, "a", 4, k ? p0 : p0, k ? 3 : 2) == RS_OK &&
+              rs_roads_add(ctx, r, "b", 4, p1, 2) == RS_OK && rs_network_build(ctx, r, NULL, &n) == RS_OK);
+        if (n) CHECKF((rs_network_stroke_count(n) == 1) == (k > 0), "cut %g m past a 150 degree corner: %zu strokes", d,
+                      rs_network_stroke_count(n));
+        rs_network_free(ctx, n);
+        rs_roads_free(ctx, r);
+    }
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -913,6 +936,7 @@ int main(void)
     test_tee_lines();
     test_reversed_records();
     test_corner_rule();
+    test_cut_near_corner();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

@@ -675,6 +675,23 @@ static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_le
 
 static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
 
+/* The direction of a road end's own segment away from the node (its
+ * first or last point to the nearest point of another place; a road end
+ * of one place: the leg's angle). */
+static double end_angle(const build *B, const rs_network_leg *L)
+{
+    size_t v0 = B->voff[L->road], v1 = B->voff[L->road + 1];
+    if (v1 - v0 < 2) return L->angle;
+    int start = L->kind == RS_LEG_START;
+    size_t e = start ? v0 : v1 - 1;
+    const double *p = B->xy + 2 * e;
+    for (size_t k = 1; k < v1 - v0; k++) {
+        const double *q = B->xy + 2 * (start ? e + k : e - k);
+        if (q[0] != p[0] || q[1] != p[1]) return atan2(q[1] - p[1], q[0] - p[0]);
+    }
+    return L->angle;
+}
+
 /* Pair the road ends at a node (its d legs L, sorted) into strokes:
  * link[2 r + e] is the road end (2 q + f; e, f: 0 start, 1 end) that road
  * r's end e continues into. */
@@ -684,11 +701,16 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
         /* two ends: one stroke when they continue each other (a ring's
          * own two ends at any angle; two records only with a small
          * deflection, as the issue's rule and the GPU export's have it:
-         * a corner is where a line's pattern may start anew) */
+         * a corner is where a line's pattern may start anew). The legs'
+         * angles look past the tolerance, so a record cut within it of a
+         * sharp vertex had the corner's deflection there: the end
+         * segments' own directions count too (fuzz/split) */
         if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
-            (L[0].road == L[1].road ? L[0].kind != L[1].kind
-                                    : ends_fit(B, &L[0], &L[1]) &&
-                                          fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION)) {
+            (L[0].road == L[1].road
+                 ? L[0].kind != L[1].kind
+                 : ends_fit(B, &L[0], &L[1]) &&
+                       (fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION ||
+                        fabs(wrap_angle(end_angle(B, &L[1]) - end_angle(B, &L[0]) - RS__PI)) < MAX_DEFLECTION))) {
             uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
             link[ea] = eb;
             link[eb] = ea;
