@@ -922,6 +922,40 @@ static void test_cut_near_corner(void)
     }
 }
 
+/* A record no longer than twice the tolerance between two others: they
+ * continue each other across it (one stroke), it has no legs (its
+ * neighbours left a gap in their lines as wide as it: fuzz/split). */
+static void test_short_record_between(void)
+{
+    const double a[4] = { 0, 0, 10, 0 }, d[4] = { 10, 0, 10.08, 0 }, b[4] = { 10.08, 0, 20, 0 };
+    rs_roads *r = NULL;
+    rs_network *n = NULL;
+    CHECK(rs_roads_create(ctx, &r) == RS_OK && rs_roads_add(ctx, r, "a", 4, a, 2) == RS_OK &&
+          rs_roads_add(ctx, r, "d", 4, d, 2) == RS_OK && rs_roads_add(ctx, r, "b", 4, b, 2) == RS_OK &&
+          rs_network_build(ctx, r, NULL, &n) == RS_OK);
+    if (n) {
+        rs_road_stroke sa, sd, sb;
+        CHECK(rs_network_road_stroke(n, 0, &sa) == RS_OK && rs_network_road_stroke(n, 1, &sd) == RS_OK &&
+              rs_network_road_stroke(n, 2, &sb) == RS_OK);
+        CHECKF(sa.stroke == sb.stroke && sa.next == 2 && sb.prev == 0, "a and b: strokes %u, %u", sa.stroke, sb.stroke);
+        CHECK(sd.stroke != sa.stroke && sd.prev == UINT32_MAX && sd.next == UINT32_MAX);
+        /* three nodes: the two ends and the joint (degree 2) */
+        CHECK_EQ_INT(rs_network_node_count(n), 3);
+        for (size_t i = 0; i < rs_network_node_count(n); i++) {
+            rs_network_node nd;
+            CHECK(rs_network_get_node(n, i, &nd) == RS_OK && nd.degree <= 2);
+        }
+    }
+    rs_network_free(ctx, n);
+    rs_roads_free(ctx, r);
+    /* alone, it is no node */
+    CHECK(rs_roads_create(ctx, &r) == RS_OK && rs_roads_add(ctx, r, "d", 4, d, 2) == RS_OK &&
+          rs_network_build(ctx, r, NULL, &n) == RS_OK);
+    if (n) CHECK_EQ_INT(rs_network_node_count(n), 0);
+    rs_network_free(ctx, n);
+    rs_roads_free(ctx, r);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -937,6 +971,7 @@ int main(void)
     test_reversed_records();
     test_corner_rule();
     test_cut_near_corner();
+    test_short_record_between();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

@@ -1367,6 +1367,16 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
 }
 
 /* Surfaces of every road with a width, their index, and the road ends. */
+/* A record the network takes for a point (no longer than twice its
+ * tolerance: the records on either side continue each other across it,
+ * lib/scene/network.c bridge_short): its surface cuts no line and it draws
+ * none (under its neighbours' surfaces it left a gap in their lines as
+ * wide as itself, and its own lines stray bits of pattern). */
+static int short_record(const rs_network *net, size_t nroads, size_t r)
+{
+    return net && rs_network_road_count(net) == nroads && net->length[r] <= 2 * net->tol;
+}
+
 static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
                             ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
 {
@@ -1416,7 +1426,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             rs__free(ctx, tend_of);
             return r;
         }
-        if (m < 2) continue;
+        if (m < 2 || short_record(p->net, nroads, ri)) continue;
         const ls_vtx *v = *pts;
         ends[ri].valid = 1;
         ends[ri].x[0] = v[0].x, ends[ri].y[0] = v[0].y;
@@ -1709,7 +1719,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1;
         uint32_t head = recs[0];
         if (rs__tick(ctx, nrec)) { res = RS_ERR_CANCELLED; goto fail; }
-        if (band_start[head + 1] == band_start[head]) continue;
+        if (band_start[head + 1] == band_start[head] || (nrec == 1 && short_record(net, nroads, head))) continue;
         /* records drawn both ways need lines that look the same both ways;
          * else each record is drawn alone */
         int alone = 0;

@@ -906,6 +906,8 @@ static rs_result load_points(build *B)
         B->look[r].last = (uint32_t)(np ? v0 + np - 1 : v0);
         B->look[r].length = s;
         for (size_t k = 0; k < np; k++) B->inhash[v0 + k] = B->live[r] && B->rep[v0 + k] == v0 + k;
+        /* a short record's two ends join the places they meet (bridge_short) */
+        if (!B->live[r] && np >= 2 && B->rep[v0 + np - 1] != v0) B->inhash[v0] = B->inhash[B->rep[v0 + np - 1]] = 1;
     }
     return RS_OK;
 }
@@ -988,6 +990,41 @@ static rs_result cluster_points(build *B)
 
 static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out);
 
+/* A record no longer than twice the tolerance (no legs: docs/network.md
+ * "Degenerate records") is a point of the network: the places at its two
+ * ends are one, so the records it sits between meet there and may continue
+ * each other across it (a road split 0.08 m apart broke its stroke there:
+ * its lines stopped short on both sides; fuzz/split). After
+ * cluster_points, whose hash held its two ends: join them, take them out
+ * of the hash (they make no node and no leg), and root every group at its
+ * lowest point of a live record (nodes are numbered by those). */
+static rs_result bridge_short(build *B)
+{
+    int any = 0;
+    for (size_t r = 0; r < B->nroads; r++) {
+        size_t v0 = B->voff[r], v1 = B->voff[r + 1];
+        if (B->live[r] || v1 - v0 < 2 || B->rep[v1 - 1] == v0) continue;
+        unite(B->parent, (uint32_t)v0, B->rep[v1 - 1]);
+        B->inhash[v0] = B->inhash[B->rep[v1 - 1]] = 0;
+        any = 1;
+    }
+    if (!any) return RS_OK;
+    size_t m = B->nv ? B->nv : 1;
+    uint32_t *root = rs__alloc_array(B->ctx, m, sizeof *root), *low = rs__alloc_array(B->ctx, m, sizeof *low);
+    if (!root || !low) {
+        rs__free(B->ctx, root);
+        rs__free(B->ctx, low);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t v = 0; v < B->nv; v++) root[v] = find(B->parent, (uint32_t)v), low[v] = NONE;
+    for (size_t v = 0; v < B->nv; v++) /* ascending: the first live one is the lowest */
+        if (B->inhash[v] && low[root[v]] == NONE) low[root[v]] = (uint32_t)v;
+    for (size_t v = 0; v < B->nv; v++) B->parent[v] = low[root[v]] != NONE ? low[root[v]] : root[v];
+    rs__free(B->ctx, root);
+    rs__free(B->ctx, low);
+    return RS_OK;
+}
+
 /* Progress: the stages poll (rs__poll); done is 0 of 1 until the end. */
 rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out)
 {
@@ -1022,7 +1059,8 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     N->tol = tol;
     size_t n = B.nroads, m = n ? n : 1;
     if ((res = load_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK ||
-        (res = cluster_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
+        (res = cluster_points(&B)) != RS_OK || (res = bridge_short(&B)) != RS_OK ||
+        (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
         goto fail;
 
     /* (the union-find is flat: parent[v] is the lowest point of v's group) */
