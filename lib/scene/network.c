@@ -386,6 +386,7 @@ typedef struct build {
     pass *ps;          /* the T passes (by node after node_lists) */
     size_t nps, cps;
     uint32_t *pstart, *pids, *tstart; /* node_lists */
+    size_t nlegs;      /* node_lists: at most this many legs (two a point, one at a road end, two a T) */
     pass *buf;         /* one node's passes */
     size_t cbuf;
 } build;
@@ -522,6 +523,24 @@ static int pass_cmp(const void *pa, const void *pb)
     return 0;
 }
 
+/* Sort k passes by pass_cmp: an insertion sort (stable) for the few of
+ * most nodes, where qsort's call and comparisons through a pointer cost
+ * more than the sorting; qsort beyond, as before (glibc's is a merge sort:
+ * stable, so the order is the same either way). */
+static void sort_passes(pass *P, size_t k)
+{
+    if (k > 16) {
+        qsort(P, k, sizeof *P, pass_cmp);
+        return;
+    }
+    for (size_t i = 1; i < k; i++) {
+        pass t = P[i];
+        size_t j = i;
+        for (; j > 0 && pass_cmp(&P[j - 1], &t) > 0; j--) P[j] = P[j - 1];
+        P[j] = t;
+    }
+}
+
 /* The pass of point v (a hashed point) through its node nd. */
 static void point_pass(const build *B, size_t v, uint32_t nd, pass *p)
 {
@@ -540,11 +559,18 @@ static rs_result node_lists(build *B, size_t nn)
     B->pstart = rs__calloc(B->ctx, nn + 2, sizeof *B->pstart);
     B->tstart = rs__calloc(B->ctx, nn + 2, sizeof *B->tstart);
     if (!B->pstart || !B->tstart) return RS_ERR_NOMEM;
+    size_t nlegs = 2 * B->nps;
     for (size_t v = 0; v < B->nv; v++)
         if (B->inhash[v]) {
             uint32_t nd = B->nodeof[B->parent[v]];
-            if (nd != NONE) B->pstart[nd + 2]++, np++;
+            if (nd != NONE) {
+                const road_look *lk = &B->look[B->vroad[v]];
+                unsigned f = v == lk->first, l = v == B->rep[lk->last];
+                B->pstart[nd + 2]++, np++;
+                nlegs += f || l ? f + l : 2; /* (as the legs below; a merged pass has no more) */
+            }
         }
+    B->nlegs = nlegs;
     pass *tp = B->nps ? rs__alloc_array(B->ctx, B->nps, sizeof *tp) : NULL;
     B->pids = rs__alloc_array(B->ctx, np ? np : 1, sizeof *B->pids);
     if ((B->nps && !tp) || !B->pids) {
@@ -584,7 +610,7 @@ static size_t node_passes(build *B, uint32_t nd)
     pass *P = B->buf;
     for (size_t i = a; i < b; i++) point_pass(B, B->pids[i], nd, &P[i - a]);
     if (tb > ta) memcpy(P + (b - a), B->ps + ta, (tb - ta) * sizeof *P);
-    if (k > 1) qsort(P, k, sizeof *P, pass_cmp);
+    if (k > 1) sort_passes(P, k);
     size_t np = 0;
     double tol = B->tol;
     for (size_t i = 0; i < k; i++) {
@@ -611,6 +637,21 @@ static int leg_cmp(const void *pa, const void *pb)
     if (a->kind != b->kind) return a->kind < b->kind ? -1 : 1;
     if (a->s != b->s) return a->s < b->s ? -1 : 1;
     return 0;
+}
+
+/* The legs of a node sorted by leg_cmp, as sort_passes. */
+static void sort_legs(rs_network_leg *L, size_t k)
+{
+    if (k > 16) {
+        qsort(L, k, sizeof *L, leg_cmp);
+        return;
+    }
+    for (size_t i = 1; i < k; i++) {
+        rs_network_leg t = L[i];
+        size_t j = i;
+        for (; j > 0 && leg_cmp(&L[j - 1], &t) > 0; j--) L[j] = L[j - 1];
+        L[j] = t;
+    }
 }
 
 /* Direction away from node position c along road r from point v, forward
@@ -1026,7 +1067,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     if ((res = node_lists(&B, nn)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     /* legs: at most two a pass (the array shrinks to its count below) */
-    size_t nl = 2 * ((size_t)B.pstart[nn + 1] + B.nps);
+    size_t nl = B.nlegs;
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
     N->leg_start = rs__calloc(ctx, nn + 1, sizeof *N->leg_start);
     N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
@@ -1110,7 +1151,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
          * while its legs are in the cache */
         rs_network_leg *L = N->leg + N->leg_start[nd];
         uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
-        if (d > 1) qsort(L, d, sizeof *L, leg_cmp);
+        if (d > 1) sort_legs(L, d);
         int best = -1;
         for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
         for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;

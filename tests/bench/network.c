@@ -10,9 +10,10 @@
  *     time beside it).
  * Times: fastest of RUNS, cases interleaved.
  * Usage: network OUTDIR   (writes OUTDIR/network.md and network.csv);
- *        network --one N REPS [city] (a lattice of N records, or the
- *        generated city of N roads on the index bench's map: REPS builds,
- *        the fastest in thread CPU time; for profilers and A/B runs);
+ *        network --one N REPS [city|default|default_split] (a lattice of N
+ *        records, the generated city of N roads on the index bench's map,
+ *        or the bench's city as given or split (N unused): REPS builds, the
+ *        fastest in thread CPU time; for profilers and A/B runs);
  *        network --dump (an FNV-1a hash of every node, leg and stroke of
  *        lattices and cities of 100 to 10^5 records, plain and split, at
  *        three tolerances: to compare two builds with diff). */
@@ -150,7 +151,12 @@ static int one(rs_ctx *ctx, int argc, char **argv)
     size_t n = (size_t)atol(argv[2]);
     int reps = argc > 3 ? atoi(argv[3]) : 1, city = argc > 4 && strcmp(argv[4], "city") == 0;
     rs_roads *R = NULL;
-    if (scene_roads(ctx, n, city, 0, &R)) return 1;
+    if (argc > 4 && strncmp(argv[4], "default", 7) == 0) { /* the bench's city, [split] */
+        sc_scene sc;
+        if (sc_city_default(&sc, 1) || city_roads(ctx, &sc, strcmp(argv[4], "default_split") == 0, &R)) return 1;
+        sc_scene_free(&sc);
+        city = 1;
+    } else if (scene_roads(ctx, n, city, 0, &R)) return 1;
     double best = -1;
     for (int i = 0; i < reps; i++) {
         rs_network *net = NULL;
