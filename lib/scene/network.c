@@ -117,6 +117,12 @@ typedef struct pt_cells {
                              and in space order): a clear bit says the cell is empty, before
                              its block is read */
     unsigned oshift;      /* a key's bit: key >> oshift */
+    /* dense (cells_dense): a grid of nx x ny cells from lo, row by row; the
+     * points of cell (x, y) are ent[start[y nx + x] .. start[y nx + x + 1]),
+     * so the cells x0 .. x1 of a row are one run (key, dir, occ unused) */
+    int dense;
+    uint64_t nx;
+    uint32_t *start;      /* nx ny + 2 */
 } pt_cells;
 
 /* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
@@ -201,14 +207,103 @@ static void run_of(const pt_cells *H, uint64_t kx, uint64_t ky, uint32_t *a, uin
  * for which keep[id] (NULL: all) by their cells' keys: a stable LSD radix
  * sort (digits that all keys share are skipped), so ids ascend within a
  * cell; linear in the points, every pass a stream. */
+/* The dense grid (H->dense) when it is small: a counting sort by cell,
+ * two passes over the points in id order (no random gather, no radix
+ * passes, a run found by two reads). The cells are `cell` wide, or with
+ * coarsen as wide as it takes for about two cells a point (the points'
+ * cells: a disc of the tolerance still reaches few cells, and the pair
+ * tests are exact, so a coarser cell only adds candidates), unless the
+ * points crowd: then, or when the box would take too many cells (sparse
+ * points, huge or non-finite coordinates), 0 (*res RS_OK) and nothing is
+ * made. */
+static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double *s, const uint32_t *vroad,
+                       const uint8_t *keep, size_t n, double cell, int coarsen, rs_result *res)
+{
+    size_t count = H->count;
+    *res = RS_OK;
+    if (!count || count >= (1u << 30)) return 0;
+    double x0 = DBL_MAX, x1 = -DBL_MAX, y0 = DBL_MAX, y1 = -DBL_MAX;
+    for (size_t i = 0; i < n; i++) {
+        if (keep && !keep[i]) continue;
+        double x = xy[2 * i], y = xy[2 * i + 1];
+        if (!(x >= -DBL_MAX && x <= DBL_MAX && y >= -DBL_MAX && y <= DBL_MAX)) return 0; /* (NaN, inf) */
+        x0 = x < x0 ? x : x0, x1 = x > x1 ? x : x1;
+        y0 = y < y0 ? y : y0, y1 = y > y1 ? y : y1;
+    }
+    double most = coarsen ? 2.0 * (double)count + 16 : 8.0 * (double)count + 4096, c = cell;
+    if (coarsen) {
+        double a = (x1 - x0) * (y1 - y0) / most, l = ((x1 - x0) + (y1 - y0)) / most;
+        if (a > c * c) c = sqrt(a);
+        if (l > c) c = l;
+        if (!(c >= cell)) c = cell;
+    }
+    int64_t lx = 0, ly = 0;
+    double nx = 0, ny = 0;
+    for (int tries = 0;; tries++) {
+        lx = cell_of(x0, c), ly = cell_of(y0, c);
+        nx = (double)(cell_of(x1, c) - lx) + 1, ny = (double)(cell_of(y1, c) - ly) + 1;
+        if (nx * ny <= most) break;
+        if (!coarsen || tries > 60 || !(c * 1.25 <= 1e300)) return 0;
+        c *= 1.25;
+    }
+    size_t cells = (size_t)(nx * ny);
+    H->start = rs__calloc(ctx, cells + 2, sizeof *H->start);
+    H->ent = rs__alloc_array(ctx, count, sizeof *H->ent);
+    uint32_t *cid = rs__alloc_array(ctx, count, sizeof *cid);
+    if (!H->start || !H->ent || !cid) {
+        rs__free(ctx, cid);
+        *res = RS_ERR_NOMEM;
+        return 0;
+    }
+    uint64_t w = (uint64_t)nx;
+    for (size_t i = 0, k = 0; i < n; i++) {
+        if ((i & 65535) == 0 && rs__poll(ctx)) { *res = RS_ERR_CANCELLED; break; }
+        if (keep && !keep[i]) continue;
+        uint64_t cx = (uint64_t)(cell_of(xy[2 * i], c) - lx), cy = (uint64_t)(cell_of(xy[2 * i + 1], c) - ly);
+        uint32_t q = (uint32_t)(cy * w + cx);
+        cid[k++] = q;
+        H->start[q + 2]++;
+    }
+    /* crowded points (many in few cells: a pair test for every two in a
+     * cell) take the Z-order cells of the given size instead */
+    double pairs = 0;
+    for (size_t j = 2; j < cells + 2; j++) {
+        pairs += (double)H->start[j] * H->start[j];
+        H->start[j] += H->start[j - 1];
+    }
+    if (!*res && coarsen && pairs > 16.0 * (double)count + 1024) {
+        rs__free(ctx, cid);
+        rs__free(ctx, H->start);
+        rs__free(ctx, H->ent);
+        H->start = NULL, H->ent = NULL;
+        return 0;
+    }
+    for (size_t i = 0, k = 0; i < n && !*res; i++) {
+        if ((i & 65535) == 0 && rs__poll(ctx)) { *res = RS_ERR_CANCELLED; break; }
+        if (keep && !keep[i]) continue;
+        pt_entry *e = &H->ent[H->start[cid[k++] + 1]++];
+        e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
+        e->id = (uint32_t)i, e->road = vroad[i];
+    }
+    rs__free(ctx, cid);
+    H->dense = 1;
+    H->cell = c;
+    H->nx = w;
+    H->lo[0] = lx, H->lo[1] = ly;
+    H->hi[0] = lx + (int64_t)w - 1, H->hi[1] = ly + (int64_t)ny - 1;
+    return 1;
+}
+
 static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const double *s, const uint32_t *vroad,
-                             const uint8_t *keep, size_t n, double cell)
+                             const uint8_t *keep, size_t n, double cell, int coarsen)
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
     memset(H, 0, sizeof *H);
     H->cell = cell;
     H->count = count;
+    rs_result dres;
+    if (cells_dense(ctx, H, xy, s, vroad, keep, n, cell, coarsen, &dres) || dres) return dres;
     size_t m = count ? count : 1;
     uint64_t ndir = 1;
     while (ndir < (uint64_t)count && ndir < (1ull << 31)) ndir *= 2;
@@ -312,6 +407,7 @@ static void cells_free(rs_ctx *ctx, pt_cells *H)
     rs__free(ctx, H->ent);
     rs__free(ctx, H->dir);
     rs__free(ctx, H->occ);
+    rs__free(ctx, H->start);
     memset(H, 0, sizeof *H);
 }
 
@@ -452,7 +548,7 @@ static rs_result find_tees(build *B)
     for (size_t r = 0; r < B->nroads; r++)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
     pt_cells H;
-    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g, 0);
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -486,7 +582,11 @@ static rs_result find_tees(build *B)
                 if (!key_range(&H, 1, cy, cy, &ky, &ky1) || !key_range(&H, 0, c0, c1, &kx0, &kx1)) continue;
                 for (uint64_t kx = kx0; kx <= kx1 && !res; kx++) {
                     uint32_t qa, qb;
-                    run_of(&H, kx, ky, &qa, &qb);
+                    if (H.dense) { /* (the row's cells kx0 .. kx1: one run) */
+                        qa = H.start[ky * H.nx + kx0], qb = H.start[ky * H.nx + kx1 + 1];
+                        kx = kx1;
+                    } else
+                        run_of(&H, kx, ky, &qa, &qb);
                     for (uint32_t q = qa; q < qb; q++) {
                         uint32_t e = H.ent[q].id;
                         const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
@@ -950,7 +1050,7 @@ static rs_result cluster_points(build *B)
         }
     double cell = fmax(8 * tol, big * 0x1p-40);
     pt_cells H;
-    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell, 1);
     size_t count = H.count;
     uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
     uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
@@ -972,13 +1072,16 @@ static rs_result cluster_points(build *B)
         }
         const pt_entry *e = &H.ent[i];
         int64_t c[4];
-        uint64_t kx0, kx1, ky0, ky1, own = H.key[i];
+        uint64_t kx0, kx1, ky0, ky1, own = H.dense ? 0 : H.key[i];
         disc_cells(&H, &e->x, tol, c);
         if (!key_range(&H, 0, c[0], c[1], &kx0, &kx1) || !key_range(&H, 1, c[2], c[3], &ky0, &ky1)) continue;
         for (uint64_t ky = ky0; ky <= ky1; ky++)
             for (uint64_t kx = kx0; kx <= kx1; kx++) {
                 uint32_t qa, qb;
-                if (zkey(kx, ky) == own) { /* its own run: from i on (lower entries have lower ids) */
+                if (H.dense) { /* (the row's cells: one run; ids below e's are skipped below) */
+                    qa = H.start[ky * H.nx + kx0], qb = H.start[ky * H.nx + kx1 + 1];
+                    kx = kx1;
+                } else if (zkey(kx, ky) == own) { /* its own run: from i on (lower entries have lower ids) */
                     qa = (uint32_t)i + 1;
                     for (qb = qa; qb < count && H.key[qb] == own; qb++) {}
                 } else
