@@ -1169,23 +1169,43 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = node_lists(&B, nn)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-    /* legs: at most two a pass (the array shrinks to its count below) */
+    /* legs: at most B.nlegs (the array shrinks to its count below). The
+     * build's arrays are freed as soon as they are done with and the
+     * stroke arrays made after the legs, so the legs (the largest array,
+     * 40 bytes each) are written beside few others: at 10^5 records the
+     * peak heap of the build 68 -> 5x MB. A smaller peak is less memory
+     * to fault in: the allocator hands back a heap top above its trim
+     * threshold on free, and the next build faults it in again, page by page
+     * (glibc: twice the largest block freed, at most 64 MB). */
     size_t nl = B.nlegs;
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
     N->leg_start = rs__calloc(ctx, nn + 1, sizeof *N->leg_start);
+    if (!N->node || !N->leg_start) {
+        res = RS_ERR_NOMEM;
+        goto fail;
+    }
+    /* controls from point attributes at a node's points */
+    for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
+        size_t r = 0, pt = 0;
+        const char *key = NULL, *val = NULL;
+        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r] ||
+            pt >= B.voff[r + 1] - B.voff[r])
+            continue;
+        uint32_t nd = B.nodeof[find(B.parent, B.rep[B.voff[r] + pt])];
+        if (nd == NONE) continue;
+        uint32_t f = 0;
+        if (strcmp(key, "highway") == 0)
+            f = strcmp(val, "stop") == 0 ? RS_NODE_STOP : strcmp(val, "give_way") == 0 ? RS_NODE_GIVE_WAY
+                : strcmp(val, "traffic_signals") == 0 ? RS_NODE_SIGNALS : 0;
+        else if (strcmp(key, "crossing") == 0)
+            f = RS_NODE_CROSSING;
+        N->node[nd].control |= f;
+    }
+    rs__free(ctx, B.parent), rs__free(ctx, B.nodeof), rs__free(ctx, B.inhash);
+    B.parent = B.nodeof = NULL, B.inhash = NULL;
     N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
-    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
-    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
-    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
-    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
-    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
-    N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
-    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
-    N->closed = rs__calloc(ctx, m, 1);
-    N->rev = rs__calloc(ctx, m, 1);
     N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
-    if (!N->node || !N->leg_start || !N->leg || !N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next ||
-        !N->stroke_start || !N->stroke_roads || !N->closed || !N->rev || !N->link) {
+    if (!N->leg || !N->link) {
         res = RS_ERR_NOMEM;
         goto fail;
     }
@@ -1269,22 +1289,22 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
         if (lg) N->leg = lg;
     }
-    /* controls from point attributes at a node's points */
-    for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
-        size_t r = 0, pt = 0;
-        const char *key = NULL, *val = NULL;
-        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r] ||
-            pt >= B.voff[r + 1] - B.voff[r])
-            continue;
-        uint32_t nd = B.nodeof[find(B.parent, B.rep[B.voff[r] + pt])];
-        if (nd == NONE) continue;
-        uint32_t f = 0;
-        if (strcmp(key, "highway") == 0)
-            f = strcmp(val, "stop") == 0 ? RS_NODE_STOP : strcmp(val, "give_way") == 0 ? RS_NODE_GIVE_WAY
-                : strcmp(val, "traffic_signals") == 0 ? RS_NODE_SIGNALS : 0;
-        else if (strcmp(key, "crossing") == 0)
-            f = RS_NODE_CROSSING;
-        N->node[nd].control |= f;
+    rs__free(ctx, B.pids), rs__free(ctx, B.pstart), rs__free(ctx, B.tstart), rs__free(ctx, B.ps);
+    rs__free(ctx, B.buf), rs__free(ctx, B.look), rs__free(ctx, B.rep), rs__free(ctx, B.vroad);
+    B.pids = B.pstart = B.tstart = B.rep = B.vroad = NULL, B.ps = B.buf = NULL, B.look = NULL;
+    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
+    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
+    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
+    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
+    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
+    N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
+    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
+    N->closed = rs__calloc(ctx, m, 1);
+    N->rev = rs__calloc(ctx, m, 1);
+    if (!N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next || !N->stroke_start || !N->stroke_roads ||
+        !N->closed || !N->rev) {
+        res = RS_ERR_NOMEM;
+        goto fail;
     }
     /* strokes (their links are made above, node by node) */
     for (size_t r = 0; r < n; r++) {
