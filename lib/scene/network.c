@@ -230,7 +230,7 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
         x0 = x < x0 ? x : x0, x1 = x > x1 ? x : x1;
         y0 = y < y0 ? y : y0, y1 = y > y1 ? y : y1;
     }
-    double most = coarsen ? 2.0 * (double)count + 16 : 8.0 * (double)count + 4096, c = cell;
+    double most = coarsen == 1 ? 2.0 * (double)count + 16 : 8.0 * (double)count + 4096, c = cell;
     if (coarsen) {
         double a = (x1 - x0) * (y1 - y0) / most, l = ((x1 - x0) + (y1 - y0)) / most;
         if (a > c * c) c = sqrt(a);
@@ -271,7 +271,7 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
         pairs += (double)H->start[j] * H->start[j];
         H->start[j] += H->start[j - 1];
     }
-    if (!*res && coarsen && pairs > 16.0 * (double)count + 1024) {
+    if (!*res && c > cell && pairs > 16.0 * (double)count + 1024) {
         rs__free(ctx, cid);
         rs__free(ctx, H->start);
         rs__free(ctx, H->ent);
@@ -548,7 +548,8 @@ static rs_result find_tees(build *B)
     for (size_t r = 0; r < B->nroads; r++)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
     pt_cells H;
-    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g, 0);
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g, 2);
+    g = H.cell; /* (dense cells may be wider) */
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -781,14 +782,19 @@ static void look_of(const rs_roads *roads, size_t r, road_look *L)
     if (rs_roads_get_info(roads, r, &in) != RS_OK) in.road_class = RS_CLASS_NONE, in.oneway = RS_ONEWAY_NONE;
     L->style = in.style;
     L->junction = rs_roads_get_attr(roads, r, "junction");
+    const char *pv = rs_roads_get_attr(roads, r, "priority_road");
     L->lanes = in.lanes;
     L->road_class = (uint8_t)in.road_class;
     L->link = (uint8_t)in.link;
     L->oneway = (uint8_t)in.oneway;
     L->area = (uint8_t)in.area;
     L->two_way = in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
-    L->roundabout = attr_is(roads, r, "junction", "roundabout", NULL);
-    L->priority = (int16_t)rs__road_priority(roads, r);
+    /* rs__road_priority from what is read above (it reads the record's
+     * info and attributes again: a tenth of a small build's loading) */
+    L->roundabout = L->junction && strcmp(L->junction, "roundabout") == 0;
+    L->priority = (int16_t)(rs__class_rank(in.road_class) +
+                            (pv && (strcmp(pv, "designated") == 0 || strcmp(pv, "yes_unposted") == 0) ? 10 : 0) +
+                            (L->roundabout ? 20 : 0));
 }
 
 /* Roads a and b draw alike: one may continue the other in a stroke. */
