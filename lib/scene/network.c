@@ -447,6 +447,8 @@ typedef struct road_look {
     uint8_t two_way;      /* a record drawn against its points is the same road */
     uint8_t roundabout;
     uint32_t first, last; /* its first and last point (global ids) */
+    uint32_t last_run;    /* the first point of its last point's run (rep[last]: in the look, where
+                             the passes read it, not at a random place of rep) */
     double length;        /* arc length at its last point */
 } road_look;
 
@@ -646,7 +648,7 @@ static void sort_passes(pass *P, size_t k)
 static void point_pass(const build *B, size_t v, uint32_t nd, pass *p)
 {
     const road_look *lk = &B->look[B->vroad[v]];
-    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == B->rep[lk->last], B->s[v], B->s[v] };
+    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == lk->last_run, B->s[v], B->s[v] };
     *p = q;
 }
 
@@ -666,7 +668,7 @@ static rs_result node_lists(build *B, size_t nn)
             uint32_t nd = B->nodeof[B->parent[v]];
             if (nd != NONE) {
                 const road_look *lk = &B->look[B->vroad[v]];
-                unsigned f = v == lk->first, l = v == B->rep[lk->last];
+                unsigned f = v == lk->first, l = v == lk->last_run;
                 B->pstart[nd + 2]++, np++;
                 nlegs += f || l ? f + l : 2; /* (as the legs below; a merged pass has no more) */
             }
@@ -1029,6 +1031,7 @@ static rs_result load_points(build *B)
         B->live[r] = np >= 2 && s > 2 * B->tol;
         B->look[r].first = (uint32_t)v0;
         B->look[r].last = (uint32_t)(np ? v0 + np - 1 : v0);
+        B->look[r].last_run = np ? B->rep[B->look[r].last] : (uint32_t)v0;
         B->look[r].length = s;
         for (size_t k = 0; k < np; k++) B->inhash[v0 + k] = B->live[r] && B->rep[v0 + k] == v0 + k;
     }
@@ -1225,7 +1228,6 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
                 rs__prefetch(B.vroad + v);
                 rs__prefetch(B.s + v);
                 rs__prefetch(B.xy + 2 * (size_t)v);
-                rs__prefetch(B.rep + v);
             }
         if (nd + AHEAD / 2 < nn) /* (their roads, half as far ahead: the ids are in the cache by now) */
             for (uint32_t q = B.pstart[nd + AHEAD / 2], qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
