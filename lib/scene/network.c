@@ -231,6 +231,7 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
         y0 = y < y0 ? y : y0, y1 = y > y1 ? y : y1;
     }
     double most = coarsen == 1 ? 2.0 * (double)count + 16 : 8.0 * (double)count + 4096, c = cell;
+    if (most > 2147483647.0) most = 2147483647.0; /* (cell numbers are 32-bit) */
     if (coarsen) {
         double a = (x1 - x0) * (y1 - y0) / most, l = ((x1 - x0) + (y1 - y0)) / most;
         if (a > c * c) c = sqrt(a);
