@@ -123,17 +123,29 @@ typedef struct pt_cells {
     int dense;
     uint64_t nx;
     uint32_t *start;      /* nx ny + 2 */
+    int mul;              /* the points' cells: cell numbers by x * inv (cell_mul), not x / cell */
+    double inv;           /* 1 / cell */
 } pt_cells;
 
 /* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
  * integer conversion (floor is a libm call: a tenth of a small build) */
-static int64_t cell_of(double x, double cell)
+static int64_t cell_clamp(double t)
 {
-    double t = x / cell;
     if (!(t > -4.6e18)) return (int64_t)-4.6e18; /* (also catches -inf) */
     if (!(t < 4.6e18)) return (int64_t)4.6e18;
     int64_t i = (int64_t)t; /* (toward zero) */
     return i - (t < (double)i);
+}
+
+static int64_t cell_of(double x, double cell) { return cell_clamp(x / cell); }
+
+/* The cell of x in H: for the points' cells x * (1 / cell), a multiply for
+ * a divide (the points' cells, their bounds and the discs' reach all take
+ * this one function, and any monotone one finds every pair: the tests are
+ * exact); the road ends' cells divide, as the T walk's rows do. */
+static int64_t hcell(const pt_cells *H, double x)
+{
+    return H->mul ? cell_clamp(x * H->inv) : cell_clamp(x / H->cell);
 }
 
 /* fmin and fmax (NaN: the other), inline */
@@ -237,10 +249,14 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
     int64_t lx = 0, ly = 0;
     double nx = 0, ny = 0;
     for (int tries = 0;; tries++) {
-        lx = cell_of(x0, c), ly = cell_of(y0, c);
-        nx = (double)(cell_of(x1, c) - lx) + 1, ny = (double)(cell_of(y1, c) - ly) + 1;
+        H->cell = c, H->inv = 1 / c;
+        lx = hcell(H, x0), ly = hcell(H, y0);
+        nx = (double)(hcell(H, x1) - lx) + 1, ny = (double)(hcell(H, y1) - ly) + 1;
         if (nx * ny <= most) break;
-        if (!coarsen || tries > 60 || !(c * 1.25 <= 1e300)) return 0;
+        if (!coarsen || tries > 60 || !(c * 1.25 <= 1e300)) {
+            H->cell = cell, H->inv = 1 / cell;
+            return 0;
+        }
         c *= 1.25;
     }
     size_t cells = (size_t)(nx * ny);
@@ -249,6 +265,7 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
     uint32_t *cid = rs__alloc_array(ctx, count, sizeof *cid);
     if (!H->start || !H->ent || !cid) {
         rs__free(ctx, cid);
+        H->cell = cell, H->inv = 1 / cell;
         *res = RS_ERR_NOMEM;
         return 0;
     }
@@ -256,7 +273,7 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
     for (size_t i = 0, k = 0; i < n; i++) {
         if ((i & 65535) == 0 && rs__poll(ctx)) { *res = RS_ERR_CANCELLED; break; }
         if (keep && !keep[i]) continue;
-        uint64_t cx = (uint64_t)(cell_of(xy[2 * i], c) - lx), cy = (uint64_t)(cell_of(xy[2 * i + 1], c) - ly);
+        uint64_t cx = (uint64_t)(hcell(H, xy[2 * i]) - lx), cy = (uint64_t)(hcell(H, xy[2 * i + 1]) - ly);
         uint32_t q = (uint32_t)(cy * w + cx);
         cid[k++] = q;
         H->start[q + 2]++;
@@ -269,6 +286,7 @@ static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double 
         H->start[j] += H->start[j - 1];
     }
     if (!*res && c > cell && pairs > 16.0 * (double)count + 1024) {
+        H->cell = cell, H->inv = 1 / cell;
         rs__free(ctx, cid);
         rs__free(ctx, H->start);
         rs__free(ctx, H->ent);
@@ -304,6 +322,8 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
     memset(H, 0, sizeof *H);
     H->cell = cell;
+    H->inv = 1 / cell;
+    H->mul = coarsen == 1;
     H->count = count;
     rs_result dres;
     if (cells_dense(ctx, H, xy, s, vroad, keep, n, cell, coarsen, &dres) || dres) return dres;
@@ -324,7 +344,7 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     for (size_t i = 0, k = 0; i < n; i++) {
         if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         if (keep && !keep[i]) continue;
-        int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
+        int64_t cx = hcell(H, xy[2 * i]), cy = hcell(H, xy[2 * i + 1]);
         lo[0] = cx < lo[0] ? cx : lo[0], hi[0] = cx > hi[0] ? cx : hi[0];
         lo[1] = cy < lo[1] ? cy : lo[1], hi[1] = cy > hi[1] ? cy : hi[1];
         H->key[k] = (uint64_t)cx, k2[k] = (uint64_t)cy, ia[k++] = (uint32_t)i;
@@ -431,8 +451,8 @@ static void disc_cells(const pt_cells *H, const double *p, double r, int64_t c[4
             lo = lo >= -DBL_MAX ? lo : -DBL_MAX;
             hi = hi <= DBL_MAX ? hi : DBL_MAX;
         }
-        c[2 * k] = cell_of(lo, H->cell);
-        c[2 * k + 1] = cell_of(hi, H->cell);
+        c[2 * k] = hcell(H, lo);
+        c[2 * k + 1] = hcell(H, hi);
     }
 }
 
