@@ -117,17 +117,35 @@ typedef struct pt_cells {
                              and in space order): a clear bit says the cell is empty, before
                              its block is read */
     unsigned oshift;      /* a key's bit: key >> oshift */
+    /* dense (cells_dense): a grid of nx x ny cells from lo, row by row; the
+     * points of cell (x, y) are ent[start[y nx + x] .. start[y nx + x + 1]),
+     * so the cells x0 .. x1 of a row are one run (key, dir, occ unused) */
+    int dense;
+    uint64_t nx;
+    uint32_t *start;      /* nx ny + 2 */
+    int mul;              /* the points' cells: cell numbers by x * inv (cell_mul), not x / cell */
+    double inv;           /* 1 / cell */
 } pt_cells;
 
 /* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
  * integer conversion (floor is a libm call: a tenth of a small build) */
-static int64_t cell_of(double x, double cell)
+static int64_t cell_clamp(double t)
 {
-    double t = x / cell;
     if (!(t > -4.6e18)) return (int64_t)-4.6e18; /* (also catches -inf) */
     if (!(t < 4.6e18)) return (int64_t)4.6e18;
     int64_t i = (int64_t)t; /* (toward zero) */
     return i - (t < (double)i);
+}
+
+static int64_t cell_of(double x, double cell) { return cell_clamp(x / cell); }
+
+/* The cell of x in H: for the points' cells x * (1 / cell), a multiply for
+ * a divide (the points' cells, their bounds and the discs' reach all take
+ * this one function, and any monotone one finds every pair: the tests are
+ * exact); the road ends' cells divide, as the T walk's rows do. */
+static int64_t hcell(const pt_cells *H, double x)
+{
+    return H->mul ? cell_clamp(x * H->inv) : cell_clamp(x / H->cell);
 }
 
 /* fmin and fmax (NaN: the other), inline */
@@ -197,18 +215,118 @@ static void run_of(const pt_cells *H, uint64_t kx, uint64_t ky, uint32_t *a, uin
 #define RADIX_MAXBITS 11
 #define RADIX_DIGITS 8
 
+/* The dense grid (H->dense) when it is small: a counting sort by cell,
+ * two passes over the points in id order (no random gather, no radix
+ * passes, a run found by two reads). The cells are `cell` wide, or with
+ * coarsen as wide as it takes for about two cells a point (the points'
+ * cells: a disc of the tolerance still reaches few cells, and the pair
+ * tests are exact, so a coarser cell only adds candidates), unless the
+ * points crowd: then, or when the box would take too many cells (sparse
+ * points, huge or non-finite coordinates), 0 (*res RS_OK) and nothing is
+ * made. */
+static int cells_dense(rs_ctx *ctx, pt_cells *H, const double *xy, const double *s, const uint32_t *vroad,
+                       const uint8_t *keep, size_t n, double cell, int coarsen, rs_result *res)
+{
+    size_t count = H->count;
+    *res = RS_OK;
+    if (!count || count >= (1u << 30)) return 0;
+    double x0 = DBL_MAX, x1 = -DBL_MAX, y0 = DBL_MAX, y1 = -DBL_MAX;
+    for (size_t i = 0; i < n; i++) {
+        if (keep && !keep[i]) continue;
+        double x = xy[2 * i], y = xy[2 * i + 1];
+        if (!(x >= -DBL_MAX && x <= DBL_MAX && y >= -DBL_MAX && y <= DBL_MAX)) return 0; /* (NaN, inf) */
+        x0 = x < x0 ? x : x0, x1 = x > x1 ? x : x1;
+        y0 = y < y0 ? y : y0, y1 = y > y1 ? y : y1;
+    }
+    double most = coarsen == 1 ? 2.0 * (double)count + 16 : 8.0 * (double)count + 4096, c = cell;
+    if (most > 2147483647.0) most = 2147483647.0; /* (cell numbers are 32-bit) */
+    if (coarsen) {
+        double a = (x1 - x0) * (y1 - y0) / most, l = ((x1 - x0) + (y1 - y0)) / most;
+        if (a > c * c) c = sqrt(a);
+        if (l > c) c = l;
+        if (!(c >= cell)) c = cell;
+    }
+    int64_t lx = 0, ly = 0;
+    double nx = 0, ny = 0;
+    for (int tries = 0;; tries++) {
+        H->cell = c, H->inv = 1 / c;
+        lx = hcell(H, x0), ly = hcell(H, y0);
+        nx = (double)(hcell(H, x1) - lx) + 1, ny = (double)(hcell(H, y1) - ly) + 1;
+        if (nx * ny <= most) break;
+        if (!coarsen || tries > 60 || !(c * 1.25 <= 1e300)) {
+            H->cell = cell, H->inv = 1 / cell;
+            return 0;
+        }
+        c *= 1.25;
+    }
+    size_t cells = (size_t)(nx * ny);
+    H->start = rs__calloc(ctx, cells + 2, sizeof *H->start);
+    H->ent = rs__alloc_array(ctx, count, sizeof *H->ent);
+    uint32_t *cid = rs__alloc_array(ctx, count, sizeof *cid);
+    if (!H->start || !H->ent || !cid) {
+        rs__free(ctx, cid);
+        H->cell = cell, H->inv = 1 / cell;
+        *res = RS_ERR_NOMEM;
+        return 0;
+    }
+    uint64_t w = (uint64_t)nx;
+    for (size_t i = 0, k = 0; i < n; i++) {
+        if ((i & 65535) == 0 && rs__poll(ctx)) { *res = RS_ERR_CANCELLED; break; }
+        if (keep && !keep[i]) continue;
+        uint64_t cx = (uint64_t)(hcell(H, xy[2 * i]) - lx), cy = (uint64_t)(hcell(H, xy[2 * i + 1]) - ly);
+        uint32_t q = (uint32_t)(cy * w + cx);
+        cid[k++] = q;
+        H->start[q + 2]++;
+    }
+    /* crowded points (many in few cells: a pair test for every two in a
+     * cell) take the Z-order cells of the given size instead */
+    double pairs = 0;
+    for (size_t j = 2; j < cells + 2; j++) {
+        pairs += (double)H->start[j] * H->start[j];
+        H->start[j] += H->start[j - 1];
+    }
+    if (!*res && c > cell && pairs > 16.0 * (double)count + 1024) {
+        H->cell = cell, H->inv = 1 / cell;
+        rs__free(ctx, cid);
+        rs__free(ctx, H->start);
+        rs__free(ctx, H->ent);
+        H->start = NULL, H->ent = NULL;
+        return 0;
+    }
+    for (size_t i = 0, k = 0; i < n && !*res; i++) {
+        if ((i & 65535) == 0 && rs__poll(ctx)) { *res = RS_ERR_CANCELLED; break; }
+        if (keep && !keep[i]) continue;
+        pt_entry *e = &H->ent[H->start[cid[k++] + 1]++];
+        e->x = xy[2 * i], e->y = xy[2 * i + 1], e->s = s[i];
+        e->id = (uint32_t)i, e->road = vroad[i];
+    }
+    rs__free(ctx, cid);
+    H->dense = 1;
+    H->cell = c;
+    H->nx = w;
+    H->lo[0] = lx, H->lo[1] = ly;
+    H->hi[0] = lx + (int64_t)w - 1, H->hi[1] = ly + (int64_t)ny - 1;
+    return 1;
+}
+
 /* Sort the points xy[2 id] (arc length s[id], road vroad[id]) of the ids
- * for which keep[id] (NULL: all) by their cells' keys: a stable LSD radix
- * sort (digits that all keys share are skipped), so ids ascend within a
+ * for which keep[id] (NULL: all) by their cells: the dense grid when it
+ * can be made (cells_dense; coarsen: 1 the points' cells, 2 the road ends'
+ * ones may be wider), else by their cells' keys: a stable LSD radix sort
+ * (digits that all keys share are skipped). Either way ids ascend within a
  * cell; linear in the points, every pass a stream. */
 static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const double *s, const uint32_t *vroad,
-                             const uint8_t *keep, size_t n, double cell)
+                             const uint8_t *keep, size_t n, double cell, int coarsen)
 {
     size_t count = 0;
     for (size_t i = 0; i < n; i++) count += !keep || keep[i];
     memset(H, 0, sizeof *H);
     H->cell = cell;
+    H->inv = 1 / cell;
+    H->mul = coarsen == 1;
     H->count = count;
+    rs_result dres;
+    if (cells_dense(ctx, H, xy, s, vroad, keep, n, cell, coarsen, &dres) || dres) return dres;
     size_t m = count ? count : 1;
     uint64_t ndir = 1;
     while (ndir < (uint64_t)count && ndir < (1ull << 31)) ndir *= 2;
@@ -226,7 +344,7 @@ static rs_result cells_build(rs_ctx *ctx, pt_cells *H, const double *xy, const d
     for (size_t i = 0, k = 0; i < n; i++) {
         if ((i & 65535) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         if (keep && !keep[i]) continue;
-        int64_t cx = cell_of(xy[2 * i], cell), cy = cell_of(xy[2 * i + 1], cell);
+        int64_t cx = hcell(H, xy[2 * i]), cy = hcell(H, xy[2 * i + 1]);
         lo[0] = cx < lo[0] ? cx : lo[0], hi[0] = cx > hi[0] ? cx : hi[0];
         lo[1] = cy < lo[1] ? cy : lo[1], hi[1] = cy > hi[1] ? cy : hi[1];
         H->key[k] = (uint64_t)cx, k2[k] = (uint64_t)cy, ia[k++] = (uint32_t)i;
@@ -312,6 +430,7 @@ static void cells_free(rs_ctx *ctx, pt_cells *H)
     rs__free(ctx, H->ent);
     rs__free(ctx, H->dir);
     rs__free(ctx, H->occ);
+    rs__free(ctx, H->start);
     memset(H, 0, sizeof *H);
 }
 
@@ -332,8 +451,8 @@ static void disc_cells(const pt_cells *H, const double *p, double r, int64_t c[4
             lo = lo >= -DBL_MAX ? lo : -DBL_MAX;
             hi = hi <= DBL_MAX ? hi : DBL_MAX;
         }
-        c[2 * k] = cell_of(lo, H->cell);
-        c[2 * k + 1] = cell_of(hi, H->cell);
+        c[2 * k] = hcell(H, lo);
+        c[2 * k + 1] = hcell(H, hi);
     }
 }
 
@@ -351,6 +470,8 @@ typedef struct road_look {
     uint8_t two_way;      /* a record drawn against its points is the same road */
     uint8_t roundabout;
     uint32_t first, last; /* its first and last point (global ids) */
+    uint32_t last_run;    /* the first point of its last point's run (rep[last]: in the look, where
+                             the passes read it, not at a random place of rep) */
     double length;        /* arc length at its last point */
 } road_look;
 
@@ -386,6 +507,7 @@ typedef struct build {
     pass *ps;          /* the T passes (by node after node_lists) */
     size_t nps, cps;
     uint32_t *pstart, *pids, *tstart; /* node_lists */
+    size_t nlegs;      /* node_lists: at most this many legs (two a point, one at a road end, two a T) */
     pass *buf;         /* one node's passes */
     size_t cbuf;
 } build;
@@ -451,7 +573,8 @@ static rs_result find_tees(build *B)
     for (size_t r = 0; r < B->nroads; r++)
         if (B->live[r]) isend[B->voff[r]] = isend[B->rep[B->voff[r + 1] - 1]] = 1;
     pt_cells H;
-    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g);
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, isend, B->nv, g, 2);
+    g = H.cell; /* (dense cells may be wider) */
     if (res) goto done;
     double tol = B->tol;
     for (size_t r = 0; r < B->nroads && !res; r++) {
@@ -485,7 +608,11 @@ static rs_result find_tees(build *B)
                 if (!key_range(&H, 1, cy, cy, &ky, &ky1) || !key_range(&H, 0, c0, c1, &kx0, &kx1)) continue;
                 for (uint64_t kx = kx0; kx <= kx1 && !res; kx++) {
                     uint32_t qa, qb;
-                    run_of(&H, kx, ky, &qa, &qb);
+                    if (H.dense) { /* (the row's cells kx0 .. kx1: one run) */
+                        qa = H.start[ky * H.nx + kx0], qb = H.start[ky * H.nx + kx1 + 1];
+                        kx = kx1;
+                    } else
+                        run_of(&H, kx, ky, &qa, &qb);
                     for (uint32_t q = qa; q < qb; q++) {
                         uint32_t e = H.ent[q].id;
                         const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
@@ -522,11 +649,29 @@ static int pass_cmp(const void *pa, const void *pb)
     return 0;
 }
 
+/* Sort k passes by pass_cmp: an insertion sort (stable) for the few of
+ * most nodes, where qsort's call and comparisons through a pointer cost
+ * more than the sorting; qsort beyond, as before (glibc's is a merge sort:
+ * stable, so the order is the same either way). */
+static void sort_passes(pass *P, size_t k)
+{
+    if (k > 16) {
+        qsort(P, k, sizeof *P, pass_cmp);
+        return;
+    }
+    for (size_t i = 1; i < k; i++) {
+        pass t = P[i];
+        size_t j = i;
+        for (; j > 0 && pass_cmp(&P[j - 1], &t) > 0; j--) P[j] = P[j - 1];
+        P[j] = t;
+    }
+}
+
 /* The pass of point v (a hashed point) through its node nd. */
 static void point_pass(const build *B, size_t v, uint32_t nd, pass *p)
 {
     const road_look *lk = &B->look[B->vroad[v]];
-    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == B->rep[lk->last], B->s[v], B->s[v] };
+    pass q = { B->vroad[v], (uint32_t)v, (uint32_t)v, NONE, nd, v == lk->first, v == lk->last_run, B->s[v], B->s[v] };
     *p = q;
 }
 
@@ -540,11 +685,18 @@ static rs_result node_lists(build *B, size_t nn)
     B->pstart = rs__calloc(B->ctx, nn + 2, sizeof *B->pstart);
     B->tstart = rs__calloc(B->ctx, nn + 2, sizeof *B->tstart);
     if (!B->pstart || !B->tstart) return RS_ERR_NOMEM;
+    size_t nlegs = 2 * B->nps;
     for (size_t v = 0; v < B->nv; v++)
         if (B->inhash[v]) {
             uint32_t nd = B->nodeof[B->parent[v]];
-            if (nd != NONE) B->pstart[nd + 2]++, np++;
+            if (nd != NONE) {
+                const road_look *lk = &B->look[B->vroad[v]];
+                unsigned f = v == lk->first, l = v == lk->last_run;
+                B->pstart[nd + 2]++, np++;
+                nlegs += f || l ? f + l : 2; /* (as the legs below; a merged pass has no more) */
+            }
         }
+    B->nlegs = nlegs;
     pass *tp = B->nps ? rs__alloc_array(B->ctx, B->nps, sizeof *tp) : NULL;
     B->pids = rs__alloc_array(B->ctx, np ? np : 1, sizeof *B->pids);
     if ((B->nps && !tp) || !B->pids) {
@@ -584,7 +736,7 @@ static size_t node_passes(build *B, uint32_t nd)
     pass *P = B->buf;
     for (size_t i = a; i < b; i++) point_pass(B, B->pids[i], nd, &P[i - a]);
     if (tb > ta) memcpy(P + (b - a), B->ps + ta, (tb - ta) * sizeof *P);
-    if (k > 1) qsort(P, k, sizeof *P, pass_cmp);
+    if (k > 1) sort_passes(P, k);
     size_t np = 0;
     double tol = B->tol;
     for (size_t i = 0; i < k; i++) {
@@ -611,6 +763,21 @@ static int leg_cmp(const void *pa, const void *pb)
     if (a->kind != b->kind) return a->kind < b->kind ? -1 : 1;
     if (a->s != b->s) return a->s < b->s ? -1 : 1;
     return 0;
+}
+
+/* The legs of a node sorted by leg_cmp, as sort_passes. */
+static void sort_legs(rs_network_leg *L, size_t k)
+{
+    if (k > 16) {
+        qsort(L, k, sizeof *L, leg_cmp);
+        return;
+    }
+    for (size_t i = 1; i < k; i++) {
+        rs_network_leg t = L[i];
+        size_t j = i;
+        for (; j > 0 && leg_cmp(&L[j - 1], &t) > 0; j--) L[j] = L[j - 1];
+        L[j] = t;
+    }
 }
 
 /* Direction away from node position c along road r from point v, forward
@@ -640,14 +807,19 @@ static void look_of(const rs_roads *roads, size_t r, road_look *L)
     if (rs_roads_get_info(roads, r, &in) != RS_OK) in.road_class = RS_CLASS_NONE, in.oneway = RS_ONEWAY_NONE;
     L->style = in.style;
     L->junction = rs_roads_get_attr(roads, r, "junction");
+    const char *pv = rs_roads_get_attr(roads, r, "priority_road");
     L->lanes = in.lanes;
     L->road_class = (uint8_t)in.road_class;
     L->link = (uint8_t)in.link;
     L->oneway = (uint8_t)in.oneway;
     L->area = (uint8_t)in.area;
     L->two_way = in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
-    L->roundabout = attr_is(roads, r, "junction", "roundabout", NULL);
-    L->priority = (int16_t)rs__road_priority(roads, r);
+    /* rs__road_priority from what is read above (it reads the record's
+     * info and attributes again: a tenth of a small build's loading) */
+    L->roundabout = L->junction && strcmp(L->junction, "roundabout") == 0;
+    L->priority = (int16_t)(rs__class_rank(in.road_class) +
+                            (pv && (strcmp(pv, "designated") == 0 || strcmp(pv, "yes_unposted") == 0) ? 10 : 0) +
+                            (L->roundabout ? 20 : 0));
 }
 
 /* Roads a and b draw alike: one may continue the other in a stroke. */
@@ -904,6 +1076,7 @@ static rs_result load_points(build *B)
         B->live[r] = np >= 2 && s > 2 * B->tol;
         B->look[r].first = (uint32_t)v0;
         B->look[r].last = (uint32_t)(np ? v0 + np - 1 : v0);
+        B->look[r].last_run = np ? B->rep[B->look[r].last] : (uint32_t)v0;
         B->look[r].length = s;
         for (size_t k = 0; k < np; k++) B->inhash[v0 + k] = B->live[r] && B->rep[v0 + k] == v0 + k;
         /* a short record's two ends join the places they meet (bridge_short) */
@@ -933,7 +1106,7 @@ static rs_result cluster_points(build *B)
         }
     double cell = fmax(8 * tol, big * 0x1p-40);
     pt_cells H;
-    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell);
+    rs_result res = cells_build(B->ctx, &H, B->xy, B->s, B->vroad, B->inhash, B->nv, cell, 1);
     size_t count = H.count;
     uint32_t *up = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *up);  /* union-find of places */
     uint32_t *low = res ? NULL : rs__alloc_array(B->ctx, count ? count : 1, sizeof *low); /* per root place */
@@ -955,13 +1128,16 @@ static rs_result cluster_points(build *B)
         }
         const pt_entry *e = &H.ent[i];
         int64_t c[4];
-        uint64_t kx0, kx1, ky0, ky1, own = H.key[i];
+        uint64_t kx0, kx1, ky0, ky1, own = H.dense ? 0 : H.key[i];
         disc_cells(&H, &e->x, tol, c);
         if (!key_range(&H, 0, c[0], c[1], &kx0, &kx1) || !key_range(&H, 1, c[2], c[3], &ky0, &ky1)) continue;
         for (uint64_t ky = ky0; ky <= ky1; ky++)
             for (uint64_t kx = kx0; kx <= kx1; kx++) {
                 uint32_t qa, qb;
-                if (zkey(kx, ky) == own) { /* its own run: from i on (lower entries have lower ids) */
+                if (H.dense) { /* (the row's cells: one run; ids below e's are skipped below) */
+                    qa = H.start[ky * H.nx + kx0], qb = H.start[ky * H.nx + kx1 + 1];
+                    kx = kx1;
+                } else if (zkey(kx, ky) == own) { /* its own run: from i on (lower entries have lower ids) */
                     qa = (uint32_t)i + 1;
                     for (qb = qa; qb < count && H.key[qb] == own; qb++) {}
                 } else
@@ -1085,23 +1261,44 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
     if ((res = node_lists(&B, nn)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
-    /* legs: at most two a pass (the array shrinks to its count below) */
-    size_t nl = 2 * ((size_t)B.pstart[nn + 1] + B.nps);
+    /* legs: at most B.nlegs (the array shrinks to its count below). The
+     * build's arrays are freed as soon as they are done with (the point
+     * groups after the controls, which are read here, before the legs) and
+     * the stroke arrays made after the legs, so the legs (the largest
+     * array, 40 bytes each) are written beside few others: the peak heap of
+     * the 10^5-record lattice 67.6 -> 59.3 MB. A smaller peak is less memory
+     * to fault in again: the allocator hands back a heap top above its trim
+     * threshold on free, and the next build faults it in page by page
+     * (glibc: twice the largest block freed, at most 64 MB). */
+    size_t nl = B.nlegs;
     N->node = rs__calloc(ctx, nn ? nn : 1, sizeof *N->node);
     N->leg_start = rs__calloc(ctx, nn + 1, sizeof *N->leg_start);
+    if (!N->node || !N->leg_start) {
+        res = RS_ERR_NOMEM;
+        goto fail;
+    }
+    /* controls from point attributes at a node's points */
+    for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
+        size_t r = 0, pt = 0;
+        const char *key = NULL, *val = NULL;
+        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r] ||
+            pt >= B.voff[r + 1] - B.voff[r])
+            continue;
+        uint32_t nd = B.nodeof[find(B.parent, B.rep[B.voff[r] + pt])];
+        if (nd == NONE) continue;
+        uint32_t f = 0;
+        if (strcmp(key, "highway") == 0)
+            f = strcmp(val, "stop") == 0 ? RS_NODE_STOP : strcmp(val, "give_way") == 0 ? RS_NODE_GIVE_WAY
+                : strcmp(val, "traffic_signals") == 0 ? RS_NODE_SIGNALS : 0;
+        else if (strcmp(key, "crossing") == 0)
+            f = RS_NODE_CROSSING;
+        N->node[nd].control |= f;
+    }
+    rs__free(ctx, B.parent), rs__free(ctx, B.nodeof), rs__free(ctx, B.inhash);
+    B.parent = B.nodeof = NULL, B.inhash = NULL;
     N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
-    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
-    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
-    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
-    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
-    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
-    N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
-    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
-    N->closed = rs__calloc(ctx, m, 1);
-    N->rev = rs__calloc(ctx, m, 1);
     N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
-    if (!N->node || !N->leg_start || !N->leg || !N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next ||
-        !N->stroke_start || !N->stroke_roads || !N->closed || !N->rev || !N->link) {
+    if (!N->leg || !N->link) {
         res = RS_ERR_NOMEM;
         goto fail;
     }
@@ -1115,7 +1312,6 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
                 rs__prefetch(B.vroad + v);
                 rs__prefetch(B.s + v);
                 rs__prefetch(B.xy + 2 * (size_t)v);
-                rs__prefetch(B.rep + v);
             }
         if (nd + AHEAD / 2 < nn) /* (their roads, half as far ahead: the ids are in the cache by now) */
             for (uint32_t q = B.pstart[nd + AHEAD / 2], qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
@@ -1170,7 +1366,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
          * while its legs are in the cache */
         rs_network_leg *L = N->leg + N->leg_start[nd];
         uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
-        if (d > 1) qsort(L, d, sizeof *L, leg_cmp);
+        if (d > 1) sort_legs(L, d);
         int best = -1;
         for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
         for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
@@ -1185,22 +1381,22 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
         if (lg) N->leg = lg;
     }
-    /* controls from point attributes at a node's points */
-    for (size_t k = 0, na = rs_roads_point_attr_count(roads); k < na; k++) {
-        size_t r = 0, pt = 0;
-        const char *key = NULL, *val = NULL;
-        if (rs_roads_point_attr_at(roads, k, &r, &pt, &key, &val) != RS_OK || r >= n || !B.live[r] ||
-            pt >= B.voff[r + 1] - B.voff[r])
-            continue;
-        uint32_t nd = B.nodeof[find(B.parent, B.rep[B.voff[r] + pt])];
-        if (nd == NONE) continue;
-        uint32_t f = 0;
-        if (strcmp(key, "highway") == 0)
-            f = strcmp(val, "stop") == 0 ? RS_NODE_STOP : strcmp(val, "give_way") == 0 ? RS_NODE_GIVE_WAY
-                : strcmp(val, "traffic_signals") == 0 ? RS_NODE_SIGNALS : 0;
-        else if (strcmp(key, "crossing") == 0)
-            f = RS_NODE_CROSSING;
-        N->node[nd].control |= f;
+    rs__free(ctx, B.pids), rs__free(ctx, B.pstart), rs__free(ctx, B.tstart), rs__free(ctx, B.ps);
+    rs__free(ctx, B.buf), rs__free(ctx, B.look), rs__free(ctx, B.rep), rs__free(ctx, B.vroad);
+    B.pids = B.pstart = B.tstart = B.rep = B.vroad = NULL, B.ps = B.buf = NULL, B.look = NULL;
+    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
+    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
+    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
+    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
+    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
+    N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
+    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
+    N->closed = rs__calloc(ctx, m, 1);
+    N->rev = rs__calloc(ctx, m, 1);
+    if (!N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next || !N->stroke_start || !N->stroke_roads ||
+        !N->closed || !N->rev) {
+        res = RS_ERR_NOMEM;
+        goto fail;
     }
     /* strokes (their links are made above, node by node) */
     for (size_t r = 0; r < n; r++) {
