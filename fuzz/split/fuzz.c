@@ -1,7 +1,9 @@
 /* libFuzzer target: a road split into records draws as the road whole
  * (issue 27 target 1: lines, dashes, strips, markings, caps; no pixel off
- * by more than 8/255). One road of 2..6 points on a 31 x 23 m map of 1 m
- * cells at 8 texels (0.125 m pixels), with a class, lanes and optionally
+ * by more than 8/255). One road of 2..6 points (turning at most 60 degrees
+ * at a vertex, never within its width of itself: a road, not a knot) on a
+ * 31 x 23 m map of 1 m cells at 8 texels (0.125 m pixels), with a class,
+ * lanes and optionally
  * one-way (its attributes on every record), drawn as one record and as
  * records split at 1..4 points inside its segments (every other record
  * reversed when it is two-way with an even lane count), analytic edges,
@@ -39,6 +41,26 @@ typedef struct reader {
 static uint8_t next(reader *r)
 {
     return r->i < r->n ? r->p[r->i++] : 0;
+}
+
+static double pt_seg(const double *p, const double *s)
+{
+    double dx = s[2] - s[0], dy = s[3] - s[1], l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((p[0] - s[0]) * dx + (p[1] - s[1]) * dy) / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return hypot(p[0] - s[0] - t * dx, p[1] - s[1] - t * dy);
+}
+
+/* Distance between segments a (a[0..3]) and b (b[0..3]); 0 when they cross. */
+static double seg_seg_dist(const double *a, const double *b)
+{
+    double d1 = (a[2] - a[0]) * (b[1] - a[1]) - (a[3] - a[1]) * (b[0] - a[0]);
+    double d2 = (a[2] - a[0]) * (b[3] - a[1]) - (a[3] - a[1]) * (b[2] - a[0]);
+    double d3 = (b[2] - b[0]) * (a[1] - b[1]) - (b[3] - b[1]) * (a[0] - b[0]);
+    double d4 = (b[2] - b[0]) * (a[3] - b[1]) - (b[3] - b[1]) * (a[2] - b[0]);
+    if (((d1 < 0) != (d2 < 0)) && ((d3 < 0) != (d4 < 0))) return 0;
+    double m = fmin(pt_seg(a, b), pt_seg(a + 2, b));
+    return fmin(m, fmin(pt_seg(b, a), pt_seg(b + 2, a)));
 }
 
 static const char *const classes[8] = { "primary",     "secondary", "tertiary", "residential",
@@ -138,6 +160,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* a segment of zero length has nowhere to cut */
     for (size_t c = 0; c < ncut; c++)
         if (xy[2 * seg[c]] == xy[2 * seg[c] + 2] && xy[2 * seg[c] + 1] == xy[2 * seg[c] + 3]) return 0;
+    /* A road, not a knot: turns of at most 60 degrees at its vertices and
+     * no part of it within its width of a part two or more segments away
+     * (a road folded over itself has lines that cross its own surface,
+     * where which stroke a piece belongs to decides; issue 27 target 1 is
+     * about straight and curved roads) */
+    for (size_t k = 1; k + 1 < n; k++) {
+        double ux = xy[2 * k] - xy[2 * k - 2], uy = xy[2 * k + 1] - xy[2 * k - 1];
+        double vx = xy[2 * k + 2] - xy[2 * k], vy = xy[2 * k + 3] - xy[2 * k + 1];
+        double lu = hypot(ux, uy), lv = hypot(vx, vy);
+        if (!(lu > 0 && lv > 0) || (ux * vx + uy * vy) < 0.5 * lu * lv) return 0;
+    }
+    for (size_t a = 0; a + 1 < n; a++)
+        for (size_t b = a + 2; b + 1 < n; b++)
+            if (seg_seg_dist(xy + 2 * a, xy + 2 * b) < width) return 0;
     /* Known limit (docs/network.md "Degenerate records"): a record no
      * longer than twice the network's tolerance (0.1 m) at the road's free
      * end has no direction and is left out of the stroke, whose lines then
