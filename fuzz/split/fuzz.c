@@ -66,6 +66,24 @@ static double seg_seg_dist(const double *a, const double *b)
 static const char *const classes[8] = { "primary",     "secondary", "tertiary", "residential",
                                         "unclassified", "service",   "living_street", "trunk" };
 
+/* One record of np points pts (reversed when rev) with the road's
+ * attributes. */
+static rs_result add_one(rs_ctx *ctx, rs_roads *roads, const double *pts, size_t np, int rev, double width,
+                         const char *cls, const char *lanes, int oneway)
+{
+    double q[2 * 16];
+    for (size_t i = 0; i < np; i++) {
+        size_t j = rev ? np - 1 - i : i;
+        q[2 * i] = pts[2 * j], q[2 * i + 1] = pts[2 * j + 1];
+    }
+    rs_result r = rs_roads_add(ctx, roads, "r", width, q, np);
+    size_t id = rs_roads_count(roads) - 1;
+    if (!r) r = rs_roads_set_attr(ctx, roads, id, "class", cls);
+    if (!r) r = rs_roads_set_attr(ctx, roads, id, "lanes", lanes);
+    if (!r && oneway) r = rs_roads_set_attr(ctx, roads, id, "oneway", "yes");
+    return r;
+}
+
 /* The road's records into `roads`: cut points (segment seg[k], fraction
  * f[k], sorted along the road) split it; rev reverses every other record. */
 static rs_result add_records(rs_ctx *ctx, rs_roads *roads, const double *xy, size_t n, double width,
@@ -80,17 +98,7 @@ static rs_result add_records(rs_ctx *ctx, rs_roads *roads, const double *xy, siz
             double x = xy[2 * k] + f[c] * (xy[2 * k + 2] - xy[2 * k]), y = xy[2 * k + 1] + f[c] * (xy[2 * k + 3] - xy[2 * k + 1]);
             pts[m++] = x, pts[m++] = y;
             /* a record ends here; the next starts here */
-            double q[2 * 16];
-            size_t np = m / 2;
-            for (size_t i = 0; i < np; i++) {
-                size_t j = rev && (rec & 1) ? np - 1 - i : i;
-                q[2 * i] = pts[2 * j], q[2 * i + 1] = pts[2 * j + 1];
-            }
-            rs_result r = rs_roads_add(ctx, roads, "r", width, q, np);
-            size_t id = rs_roads_count(roads) - 1;
-            if (!r) r = rs_roads_set_attr(ctx, roads, id, "class", cls);
-            if (!r) r = rs_roads_set_attr(ctx, roads, id, "lanes", lanes);
-            if (!r && oneway) r = rs_roads_set_attr(ctx, roads, id, "oneway", "yes");
+            rs_result r = add_one(ctx, roads, pts, m / 2, rev && (rec & 1), width, cls, lanes, oneway);
             if (r) return r;
             rec++;
             m = 0;
@@ -98,18 +106,7 @@ static rs_result add_records(rs_ctx *ctx, rs_roads *roads, const double *xy, siz
         }
         pts[m++] = xy[2 * k + 2], pts[m++] = xy[2 * k + 3];
     }
-    double q[2 * 16];
-    size_t np = m / 2;
-    for (size_t i = 0; i < np; i++) {
-        size_t j = rev && (rec & 1) ? np - 1 - i : i;
-        q[2 * i] = pts[2 * j], q[2 * i + 1] = pts[2 * j + 1];
-    }
-    rs_result r = rs_roads_add(ctx, roads, "r", width, q, np);
-    size_t id = rs_roads_count(roads) - 1;
-    if (!r) r = rs_roads_set_attr(ctx, roads, id, "class", cls);
-    if (!r) r = rs_roads_set_attr(ctx, roads, id, "lanes", lanes);
-    if (!r && oneway) r = rs_roads_set_attr(ctx, roads, id, "oneway", "yes");
-    return r;
+    return add_one(ctx, roads, pts, m / 2, rev && (rec & 1), width, cls, lanes, oneway);
 }
 
 static rs_result draw(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, int us, uint8_t **rgba, uint32_t *w,
