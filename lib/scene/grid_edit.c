@@ -385,8 +385,8 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
         r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
-        /* and the segments a field may clip (tee_run) */
-        size_t run = tee_run(rl, F, b->cell, e);
+        /* and the segments a field may clip (tee_run, counted above) */
+        size_t run = e ? n - 1 - F->clip1 : F->clip0;
         for (size_t i = 0; i < run && !r; i++) {
             size_t j = e ? n - 1 - i : i, i2 = e ? j - 1 : j + 1;
             double o[2], d[2], t0, t1;

@@ -1639,13 +1639,13 @@ static int tee_may_differ(const rf_tee *T, const rf_seg *s, double cx, double cy
  * shape and its capsule may differ, computed again (tee_pixel) into out.
  * Depends only on the pixel: any block gives the same doubles.
  *
- * With g (f's widening, rs__roadfield_widen: the same T ends in the same
- * order; NULL: f alone) both fields are done together, into out and outg:
- * a pixel is computed again in both when either needs it, so R and C come
- * from the same rule (the casing's share of a pixel divides by 1 - R: an
- * exact R beside a midpoint C, or the reverse, would show), and pixels
- * where the shapes cannot differ (tee_may_differ) keep their first, exact
- * values. */
+ * Pixels where the shapes cannot differ (tee_may_differ) keep their
+ * first, exact values. With g (f's widening, rs__roadfield_widen: the same
+ * T ends in the same order; NULL: f alone) both fields are done together,
+ * into out and outg: a pixel is computed again in both when either needs
+ * it, so R and C come from the same rule (the casing's share of a pixel
+ * divides by 1 - R: an exact R beside a midpoint C, or the reverse, would
+ * show). */
 static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px0, uint32_t py0, uint32_t w,
                      uint32_t h, double pix, double *out, double *outg, size_t stride)
 {
