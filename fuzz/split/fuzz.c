@@ -171,19 +171,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     for (size_t a = 0; a + 1 < n; a++)
         for (size_t b = a + 2; b + 1 < n; b++)
             if (seg_seg_dist(xy + 2 * a, xy + 2 * b) < width) return 0;
-    /* Known limit (docs/network.md "Degenerate records"): a record no
-     * longer than twice the network's tolerance (0.1 m) at the road's free
-     * end has no direction and is left out of the stroke, whose lines then
-     * end that much short, their pattern shifted by as much. Cuts that close
-     * to an end are not tested. */
-    double total = 0, at[4];
+    /* Known limit (docs/network.md "Degenerate records"): a road cut into
+     * records none longer than twice the network's tolerance (0.1 m) is
+     * points only, and draws no lines; at least one record must be longer */
+    double total = 0, at[4], longest = 0;
     for (size_t k = 0, c = 0; k + 1 < n; k++) {
         double l = hypot(xy[2 * k + 2] - xy[2 * k], xy[2 * k + 3] - xy[2 * k + 1]);
         for (; c < ncut && seg[c] == k; c++) at[c] = total + f[c] * l;
         total += l;
     }
-    for (size_t c = 0; c < ncut; c++)
-        if (at[c] <= 0.1 || total - at[c] <= 0.1) return 0;
+    for (size_t c = 0; c <= ncut; c++) {
+        double l = (c < ncut ? at[c] : total) - (c ? at[c - 1] : 0);
+        longest = l > longest ? l : longest;
+    }
+    if (longest <= 0.1 * (1 + 1e-9)) return 0;
     const char *cls = classes[flags & 7];
     const char lanes[2] = { (char)('1' + ((flags >> 4) & 3)), 0 };
     /* a reversed record of a one-way road, or of an odd lane count (which

@@ -1000,7 +1000,10 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
     double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
     for (size_t i = 0; i + 1 < n; i++) {
-        if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
+        /* a segment's junction cuts can take 0.1 ms (10^5 city roads): a
+         * poll every 32, not every 256 ticks (issue 30 target 4: cancel
+         * within 50 ms) */
+        if ((i & 31) == 31 ? rs__poll(ctx) : rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
         double dx = 0.5 * pts[i + 1].x - 0.5 * pts[i].x, dy = 0.5 * pts[i + 1].y - 0.5 * pts[i].y, lh = hypot(dx, dy);
         double ux = dx / lh, uy = dy / lh, len = 2 * lh;
         ls_piece P;
@@ -1248,7 +1251,7 @@ static int bands_equal(const rs__band *a, uint32_t na, const rs__band *b, uint32
  * records one after the other: a point equal to the last is left out). */
 static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri, int rev,
                                    const rs__linesym_params *p, double per_unit, ls_vtx **pts, double **sv,
-                                   size_t *cap, size_t *m_out)
+                                   size_t *cap, size_t *m_out, int *gap)
 {
     const double *xy = NULL;
     size_t n = 0, m0 = *m_out;
@@ -1268,6 +1271,13 @@ static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri
     /* (a record drawn against its points: last to first) */
     rs__local_frame F = { p->origin_x, p->origin_y, per_unit };
     double *d = (double *)(void *)*pts; /* (x, y) pairs: ls_vtx is two doubles */
+    if (gap) {
+        /* the record does not start where the last one ended: a short
+         * record between them was bridged (lib/scene/network.c bridge_short) */
+        double fx = 0, fy = 0;
+        if (n) rs__local_point(&F, xy, rev ? n - 1 : 0, &fx, &fy);
+        *gap = m0 > 0 && n > 0 && !((*pts)[m0 - 1].x == fx && (*pts)[m0 - 1].y == fy);
+    }
     rs__road_local_walk(roads, ri, rev, &F, d, d + 1, 2, *sv, m_out);
     return RS_OK;
 }
@@ -1296,7 +1306,7 @@ static rs_result road_local(rs_ctx *ctx, const rs_roads *roads, size_t ri, const
                             double per_unit, ls_vtx **pts, double **sv, size_t *cap, size_t *m_out)
 {
     *m_out = 0;
-    return road_local_append(ctx, roads, ri, 0, p, per_unit, pts, sv, cap, m_out);
+    return road_local_append(ctx, roads, ri, 0, p, per_unit, pts, sv, cap, m_out, NULL);
 }
 
 static void unit_dir(double ax, double ay, double bx, double by, double *dx, double *dy)
@@ -1740,8 +1750,14 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                 int starts = !nrun || !bands_equal(bands + band_start[lead], band_start[lead + 1] - band_start[lead],
                                                    bands + band_start[recs[q]],
                                                    band_start[recs[q] + 1] - band_start[recs[q]]);
-                if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m)) != RS_OK)
+                int gap = 0;
+                if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m, &gap)) !=
+                    RS_OK)
                     goto fail;
+                /* across a bridged short record both ends of the gap are
+                 * joints: either left standing in a straight line would stop
+                 * the mitre of a nearby bend (fuzz/split) */
+                if (!starts && gap && m0 >= 1 && m > m0 + 1 && drop_straight_joint(pts, sv, m0, m, 4 / per_unit)) m--;
                 if (!starts && m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
                 if (cap > srcap) {
                     uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);

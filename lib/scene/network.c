@@ -910,6 +910,108 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
     }
 }
 
+/* Short records (bridge_short) go into the strokes they lie on, so a
+ * stroke's points are the unsplit road's, its vertices inside them too.
+ * At a node whose one leg is a record's free end, or whose two legs are
+ * record ends linked to each other, a chain of short records is walked
+ * from the first end: each step takes the short record (drawing alike,
+ * keeping the direction of travel unless two-way; the lowest of several)
+ * with an end exactly at the last one's far end, and enters it there. At
+ * a free end the chain goes as far as it runs; between two ends only a
+ * chain that arrives exactly at the second end's point is put between
+ * them. Without it, the lines stopped up to 0.1 m short of a road's end,
+ * and a bend inside short records was cut off (a 14.75 m road's edge line
+ * moved by 0.1 m: docs/network.md "Degenerate records"; fuzz/split). At
+ * most SHORT_CHAIN records a chain (each step scans the node's short
+ * records). short_at: pairs (record, node). */
+#define SHORT_CHAIN 16
+
+static int cmp_short(const void *pa, const void *pb)
+{
+    const uint32_t *a = pa, *b = pb;
+    if (a[1] != b[1]) return a[1] < b[1] ? -1 : 1;
+    return (a[0] > b[0]) - (a[0] < b[0]);
+}
+
+/* Road end e's point (2 r: its first, 2 r + 1: its last). */
+static const double *end_point(const build *B, uint32_t e)
+{
+    uint32_t r = e / 2;
+    return B->xy + 2 * (size_t)(e & 1 ? B->voff[r + 1] - 1 : B->voff[r]);
+}
+
+/* The chain from road end `from` (of record q) over the short records
+ * short_at[a..b) into chain[] (the ends entered); its length. */
+static size_t short_chain(const build *B, const rs_network *N, const uint32_t *short_at, size_t a, size_t b,
+                          uint32_t q, uint32_t from, uint32_t *chain)
+{
+    size_t m = 0;
+    uint32_t at = from;
+    while (m < SHORT_CHAIN) {
+        const double *p = end_point(B, at);
+        int leaving_end = at & 1;
+        uint32_t best = NONE;
+        for (size_t k = a; k < b && best == NONE; k++) {
+            uint32_t r = short_at[2 * k];
+            if (r == q || N->link[2 * r] != NONE || N->link[2 * r + 1] != NONE || !draw_alike(&B->look[q], &B->look[r]))
+                continue;
+            int used = 0;
+            for (size_t j = 0; j < m; j++) used |= chain[j] / 2 == r;
+            if (used) continue;
+            for (uint32_t f = 0; f < 2 && best == NONE; f++) {
+                const double *e = end_point(B, 2 * r + f);
+                if (e[0] != p[0] || e[1] != p[1]) continue;
+                if (leaving_end == (int)f && !B->look[q].two_way) continue; /* an end meets a start */
+                best = 2 * r + f;
+            }
+        }
+        if (best == NONE) break;
+        chain[m++] = best;
+        at = best ^ 1; /* leaves by its other end */
+    }
+    return m;
+}
+
+static void link_short_ends(const build *B, rs_network *N, uint32_t *short_at, size_t nshort)
+{
+    if (nshort > 1) qsort(short_at, nshort, 2 * sizeof *short_at, cmp_short);
+    uint32_t chain[SHORT_CHAIN];
+    for (size_t a = 0, b; a < nshort; a = b) {
+        uint32_t nd = short_at[2 * a + 1];
+        for (b = a + 1; b < nshort && short_at[2 * b + 1] == nd; b++) {}
+        uint32_t d = N->leg_start[nd + 1] - N->leg_start[nd];
+        const rs_network_leg *L = &N->leg[N->leg_start[nd]];
+        if (d < 1 || d > 2 || !is_end_leg(&L[0]) || (d == 2 && !is_end_leg(&L[1]))) continue;
+        uint32_t e0 = 2 * L[0].road + (L[0].kind == RS_LEG_END), e1 = NONE;
+        if (d == 2) {
+            e1 = 2 * L[1].road + (L[1].kind == RS_LEG_END);
+            if (N->link[e0] != e1) continue;
+        } else if (N->link[e0] != NONE)
+            continue;
+        size_t m = short_chain(B, N, short_at, a, b, L[0].road, e0, chain);
+        if (d == 2) {
+            /* it must arrive at e1, which it then meets as e1's road meets it */
+            while (m > 0) {
+                uint32_t out = chain[m - 1] ^ 1;
+                const double *p = end_point(B, out), *t = end_point(B, e1);
+                if (p[0] == t[0] && p[1] == t[1] && ((out & 1) != (e1 & 1) || B->look[L[0].road].two_way)) break;
+                m--;
+            }
+            if (m == 0) continue;
+        }
+        uint32_t at = e0;
+        for (size_t k = 0; k < m; k++) {
+            N->link[at] = chain[k];
+            N->link[chain[k]] = at;
+            at = chain[k] ^ 1;
+        }
+        if (d == 2) {
+            N->link[at] = e1;
+            N->link[e1] = at;
+        }
+    }
+}
+
 /* Walk a stroke from road r entered at its end e (0: start, 1: end): the
  * roads in order, each with its direction; returns the last road and the
  * end it leaves by (*out_end). Stops at a free end or back at `stop`. */
@@ -1294,18 +1396,39 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
             f = RS_NODE_CROSSING;
         N->node[nd].control |= f;
     }
+    /* short records and the node their (joined) ends are at, for link_short_ends */
+    size_t nshort = 0;
+    uint32_t *short_at = NULL;
+    for (size_t r = 0; r < n; r++)
+        if (!B.live[r] && B.voff[r + 1] - B.voff[r] >= 2 && B.nodeof[B.parent[B.voff[r]]] != NONE) nshort++;
+    if (nshort) {
+        if (!(short_at = rs__alloc_array(ctx, 2 * nshort, sizeof *short_at))) {
+            res = RS_ERR_NOMEM;
+            goto fail;
+        }
+        nshort = 0;
+        for (size_t r = 0; r < n; r++) {
+            uint32_t nd = B.voff[r + 1] - B.voff[r] >= 2 ? B.nodeof[B.parent[B.voff[r]]] : NONE;
+            if (!B.live[r] && nd != NONE) short_at[2 * nshort] = (uint32_t)r, short_at[2 * nshort + 1] = nd, nshort++;
+        }
+    }
     rs__free(ctx, B.parent), rs__free(ctx, B.nodeof), rs__free(ctx, B.inhash);
     B.parent = B.nodeof = NULL, B.inhash = NULL;
     N->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *N->leg);
     N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
     if (!N->leg || !N->link) {
+        rs__free(ctx, short_at);
         res = RS_ERR_NOMEM;
         goto fail;
     }
     for (size_t e = 0; e < 2 * n; e++) N->link[e] = NONE;
     nl = 0;
     for (uint32_t nd = 0; nd < nn; nd++) {
-        if ((nd & 4095) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
+        if ((nd & 4095) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, short_at);
+            res = RS_ERR_CANCELLED;
+            goto fail;
+        }
         if (nd + AHEAD < nn) /* (the points of a node a few ahead: by id, at random places) */
             for (uint32_t q = B.pstart[nd + AHEAD], qe = B.pstart[nd + AHEAD + 1]; q < qe && q < B.pstart[nd + AHEAD] + 4; q++) {
                 uint32_t v = B.pids[q];
@@ -1317,7 +1440,11 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
             for (uint32_t q = B.pstart[nd + AHEAD / 2], qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
                 rs__prefetch(B.look + B.vroad[B.pids[q]]);
         size_t np = node_passes(&B, nd);
-        if (np == (size_t)-1) { res = RS_ERR_NOMEM; goto fail; }
+        if (np == (size_t)-1) {
+            rs__free(ctx, short_at);
+            res = RS_ERR_NOMEM;
+            goto fail;
+        }
         uint32_t v = B.pids[B.pstart[nd]]; /* its lowest point (a node holds a point) */
         N->node[nd].x = B.xy[2 * (size_t)v];
         N->node[nd].y = B.xy[2 * (size_t)v + 1];
@@ -1377,6 +1504,8 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     /* every qualifying node got legs (it holds a live road's point) */
     N->leg_start[nn] = (uint32_t)nl;
     N->nlegs = nl;
+    link_short_ends(&B, N, short_at, nshort);
+    rs__free(ctx, short_at);
     if (nl) { /* (shrinking: cannot fail but may) */
         rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
         if (lg) N->leg = lg;
