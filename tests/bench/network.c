@@ -16,6 +16,10 @@
  *        records, the generated city of N roads on the index bench's map,
  *        or the bench's city as given or split (N unused): REPS builds, the
  *        fastest in thread CPU time; for profilers and A/B runs);
+ *        network --one N REPS warm (a lattice, after one build of the 10^5
+ *        lattice: the heap as warm as in the bench's runs, no page faults);
+ *        network --pair REPS (the bench's two lattices by turns, fastest of
+ *        REPS each in process CPU time, and their ratio: for A/B runs);
  *        network --dump (an FNV-1a hash of every node, leg and stroke of
  *        lattices and cities of 100 to 10^5 records, plain and split, at
  *        three tolerances: to compare two builds with diff). */
@@ -159,6 +163,12 @@ static int one(rs_ctx *ctx, int argc, char **argv)
         sc_scene_free(&sc);
         city = 1;
     } else if (scene_roads(ctx, n, city, 0, &R)) return 1;
+    if (argc > 4 && strcmp(argv[4], "warm") == 0) { /* (the heap grown as in the bench's runs) */
+        rs_roads *W = NULL;
+        double c;
+        if (lattice(ctx, 100000, &W) || time_network(ctx, W, &c) < 0) return 1;
+        rs_roads_free(ctx, W);
+    }
     double best = -1;
     for (int i = 0; i < reps; i++) {
         rs_network *net = NULL;
@@ -171,6 +181,24 @@ static int one(rs_ctx *ctx, int argc, char **argv)
     printf("network: %s of %zu records: %.3f ms (thread CPU, fastest of %d)\n", city ? "city" : "lattice",
            rs_roads_count(R), best, reps);
     rs_roads_free(ctx, R);
+    return 0;
+}
+
+static int pair(rs_ctx *ctx, int reps)
+{
+    rs_roads *lat[2];
+    double best[2] = { 1e300, 1e300 };
+    if (lattice(ctx, 10000, &lat[0]) || lattice(ctx, 100000, &lat[1])) return 1;
+    for (int run = 0; run < reps; run++)
+        for (int i = 0; i < 2; i++) {
+            double c;
+            if (time_network(ctx, lat[i], &c) < 0) return 1;
+            best[i] = c < best[i] ? c : best[i];
+        }
+    printf("network: lattice %zu / %zu records: %.3f / %.3f ms (process CPU, fastest of %d): %.2fx, %.2fx per record\n",
+           rs_roads_count(lat[0]), rs_roads_count(lat[1]), best[0], best[1], reps, best[1] / best[0],
+           best[1] / best[0] * (double)rs_roads_count(lat[0]) / (double)rs_roads_count(lat[1]));
+    for (int i = 0; i < 2; i++) rs_roads_free(ctx, lat[i]);
     return 0;
 }
 
@@ -216,6 +244,11 @@ int main(int argc, char **argv)
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
     if (argc > 2 && strcmp(argv[1], "--one") == 0) {
         int r = one(ctx, argc, argv);
+        rs_ctx_free(ctx);
+        return r;
+    }
+    if (argc > 2 && strcmp(argv[1], "--pair") == 0) {
+        int r = pair(ctx, atoi(argv[2]));
         rs_ctx_free(ctx);
         return r;
     }
