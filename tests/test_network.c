@@ -987,32 +987,39 @@ static void test_short_record_at_end(void)
      * cut 6 mm, 0.59 m and 0.637 m past the vertex (a short record between) */
     static const char *const primary[] = { "class", "primary", NULL };
     static const char *const oneway4[] = { "class", "primary", "oneway", "yes", "lanes", "4", NULL };
-    poly shapes[2];
+    poly shapes[3];
     shapes[0].n = 2;
     shapes[0].xy[0] = 3.3, shapes[0].xy[1] = 41.7, shapes[0].xy[2] = 117.1, shapes[0].xy[3] = 37.9;
+    /* a 45-degree bend inside a record of 0.025 m (cut 0.01 m before it and
+     * 0.015 m past it): no corner of the stroke, as unsplit */
+    shapes[2].n = 3;
+    shapes[2].xy[0] = 10, shapes[2].xy[1] = 20, shapes[2].xy[2] = 50, shapes[2].xy[3] = 20;
+    shapes[2].xy[4] = 80, shapes[2].xy[5] = 50;
     shapes[1].n = 3;
     shapes[1].xy[0] = 20, shapes[1].xy[1] = 30, shapes[1].xy[2] = 81.3, shapes[1].xy[3] = 48;
     shapes[1].xy[4] = 81.3 + 1.5 * cos(-0.06), shapes[1].xy[5] = 48 + 1.5 * sin(-0.06);
     double len1 = poly_len(&shapes[1]), vx = len1 - 1.5;
     const double len0 = poly_len(&shapes[0]), cuts0[4] = { 0.03, 0.07, len0 - 0.09, len0 - 0.04 };
     const double cuts1[4] = { 30, vx + 0.006, vx + 0.59, vx + 0.637 };
+    const double cuts2[4] = { 12, 39.99, 40.015, 60 };
     for (int prof = 0; prof < 2; prof++)
-        for (int shape = 0; shape < 2; shape++) {
+        for (int shape = 0; shape < 3; shape++) {
             render_profile = prof ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
-            double wd = shape ? 10.4375 : 7.5;
-            const char *const *at = shape ? oneway4 : primary;
+            double wd = shape == 1 ? 10.4375 : 7.5;
+            const char *const *at = shape == 1 ? oneway4 : primary;
             rs_roads *whole = NULL, *split = NULL;
             CHECK(rs_roads_create(ctx, &whole) == RS_OK && rs_roads_create(ctx, &split) == RS_OK);
             add_split(whole, "r", wd, &shapes[shape], NULL, 0, at);
-            size_t nrec = add_split(split, "r", wd, &shapes[shape], shape ? cuts1 : cuts0, 4, at);
+            size_t nrec = add_split(split, "r", wd, &shapes[shape], shape == 2 ? cuts2 : shape ? cuts1 : cuts0, 4, at);
             CHECK_EQ_INT(nrec, 5);
             image w = { 0 }, sp = { 0 };
             CHECK(render(whole, NULL, &w) && render(split, NULL, &sp));
             uint32_t wx = 0, wy = 0;
             int dd = w.rgba && sp.rgba ? max_diff(&w, &sp, &wx, &wy) : 255;
             CHECKF(dd <= 8, "%s (%s): a pixel off by %d/255 at (%u, %u)",
-                   shape ? "short records past a bend" : "two short records at either end", prof ? "MUTCD" : "RMS", dd,
-                   wx, wy);
+                   shape == 2 ? "a bend inside a short record" : shape ? "short records past a bend"
+                                                                     : "two short records at either end",
+                   prof ? "MUTCD" : "RMS", dd, wx, wy);
             free(w.rgba);
             free(sp.rgba);
             rs_roads_free(ctx, whole);
