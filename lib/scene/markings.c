@@ -600,28 +600,23 @@ static rs_result storage_order(rs_ctx *ctx, rs__markings *mk, size_t npart, size
     double *parts2 = npart ? rs__alloc_array(ctx, npart, RS__MK_PART * sizeof(double)) : NULL;
     rs__mk_fp *fps2 = nfp ? rs__alloc_array(ctx, nfp, sizeof *fps2) : NULL;
     uint32_t *at = rs__alloc_array(ctx, n, sizeof *at);
-    if (!key || !m2 || !pts2 || (npart && !parts2) || (nfp && !fps2) || !at) {
+    rs_result r = !key || !m2 || !pts2 || (npart && !parts2) || (nfp && !fps2) || !at ? RS_ERR_NOMEM : RS_OK;
+    if (!r) {
+        for (size_t i = 0; i < n; i++) {
+            key[i].y = isnan(mk->m[i].by0) ? INFINITY : mk->m[i].by0; /* a total order for qsort */
+            key[i].i = (uint32_t)i;
+        }
+        qsort(key, n, sizeof *key, cmp_key);
+        if (rs__poll(ctx)) r = RS_ERR_CANCELLED; /* (the sort and the copies below: ~30 ms at 10^5 roads) */
+    }
+    if (r) {
         rs__free(ctx, key);
         rs__free(ctx, m2);
         rs__free(ctx, pts2);
         rs__free(ctx, parts2);
         rs__free(ctx, fps2);
         rs__free(ctx, at);
-        return RS_ERR_NOMEM;
-    }
-    for (size_t i = 0; i < n; i++) {
-        key[i].y = isnan(mk->m[i].by0) ? INFINITY : mk->m[i].by0; /* a total order for qsort */
-        key[i].i = (uint32_t)i;
-    }
-    qsort(key, n, sizeof *key, cmp_key);
-    if (rs__poll(ctx)) { /* (the sort and the copies below: ~30 ms at 10^5 roads) */
-        rs__free(ctx, key);
-        rs__free(ctx, m2);
-        rs__free(ctx, pts2);
-        rs__free(ctx, parts2);
-        rs__free(ctx, fps2);
-        rs__free(ctx, at);
-        return RS_ERR_CANCELLED;
+        return r;
     }
     size_t pa = 0, qa = 0, fa = 0;
     for (size_t j = 0; j < n; j++) {
