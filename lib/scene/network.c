@@ -539,6 +539,8 @@ typedef struct build {
     pass *buf;         /* one node's passes */
     size_t cbuf;
     uint32_t *ctl;     /* per node: its controls from point attributes (NULL: none) */
+    uint32_t *short_at; /* pairs (short record, the node its ends are at), for link_short_ends */
+    size_t nshort;
 } build;
 
 static uint32_t find(uint32_t *parent, uint32_t v)
@@ -920,21 +922,40 @@ static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_le
 
 static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
 
+/* The road end (2 r: its start, 2 r + 1: its end) of an end leg. */
+static uint32_t leg_end(const rs_network_leg *L) { return 2 * L->road + (L->kind == RS_LEG_END); }
+
+/* Road end e's point (2 r: its first, 2 r + 1: its last). */
+static const double *end_point(const build *B, uint32_t e)
+{
+    uint32_t r = e / 2;
+    return B->xy + 2 * (size_t)(e & 1 ? B->voff[r + 1] - 1 : B->voff[r]);
+}
+
+/* The direction of road end e's own segment away from its end point (the
+ * first point that differs); 0 when the record has none (all one point). */
+static int end_dir(const build *B, uint32_t e, double *ang)
+{
+    uint32_t r = e / 2;
+    size_t v0 = B->voff[r], v1 = B->voff[r + 1];
+    const double *p = end_point(B, e);
+    for (size_t k = 1; k < v1 - v0; k++) {
+        const double *q = B->xy + 2 * (e & 1 ? v1 - 1 - k : v0 + k);
+        if (q[0] != p[0] || q[1] != p[1]) {
+            *ang = atan2(q[1] - p[1], q[0] - p[0]);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* The direction of a road end's own segment away from the node (its
  * first or last point to the nearest point of another place; a road end
  * of one place: the leg's angle). */
 static double end_angle(const build *B, const rs_network_leg *L)
 {
-    size_t v0 = B->voff[L->road], v1 = B->voff[L->road + 1];
-    if (v1 - v0 < 2) return L->angle;
-    int start = L->kind == RS_LEG_START;
-    size_t e = start ? v0 : v1 - 1;
-    const double *p = B->xy + 2 * e;
-    for (size_t k = 1; k < v1 - v0; k++) {
-        const double *q = B->xy + 2 * (start ? e + k : e - k);
-        if (q[0] != p[0] || q[1] != p[1]) return atan2(q[1] - p[1], q[0] - p[0]);
-    }
-    return L->angle;
+    double a;
+    return end_dir(B, leg_end(L), &a) ? a : L->angle;
 }
 
 /* Pair the road ends at a node (its d legs L, sorted) into strokes:
@@ -956,7 +977,7 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
                  : ends_fit(B, &L[0], &L[1]) &&
                        (fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION ||
                         fabs(wrap_angle(end_angle(B, &L[1]) - end_angle(B, &L[0]) - RS__PI)) < MAX_DEFLECTION))) {
-            uint32_t ea = 2 * L[0].road + (L[0].kind == RS_LEG_END), eb = 2 * L[1].road + (L[1].kind == RS_LEG_END);
+            uint32_t ea = leg_end(&L[0]), eb = leg_end(&L[1]);
             link[ea] = eb;
             link[eb] = ea;
         }
@@ -977,7 +998,7 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
                 fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
                 back++;
         if (back != 1) continue;
-        uint32_t ea = 2 * L[a].road + (L[a].kind == RS_LEG_END), eb = 2 * L[match].road + (L[match].kind == RS_LEG_END);
+        uint32_t ea = leg_end(&L[a]), eb = leg_end(&L[match]);
         link[ea] = eb;
         link[eb] = ea;
     }
@@ -1006,13 +1027,6 @@ static int cmp_short(const void *pa, const void *pb)
     return (a[0] > b[0]) - (a[0] < b[0]);
 }
 
-/* Road end e's point (2 r: its first, 2 r + 1: its last). */
-static const double *end_point(const build *B, uint32_t e)
-{
-    uint32_t r = e / 2;
-    return B->xy + 2 * (size_t)(e & 1 ? B->voff[r + 1] - 1 : B->voff[r]);
-}
-
 /* The chain from road end `from` (of record q) over the short records
  * short_at[a..b) into chain[] (the ends entered); its length. */
 static size_t short_chain(const build *B, const rs_network *N, const uint32_t *short_at, size_t a, size_t b,
@@ -1026,7 +1040,7 @@ static size_t short_chain(const build *B, const rs_network *N, const uint32_t *s
         uint32_t best = NONE;
         for (size_t k = a; k < b && best == NONE; k++) {
             uint32_t r = short_at[2 * k];
-            if (r == q || N->link[2 * r] != NONE || N->link[2 * r + 1] != NONE || !draw_alike(&B->look[q], &B->look[r]))
+            if (N->link[2 * r] != NONE || N->link[2 * r + 1] != NONE || !draw_alike(&B->look[q], &B->look[r]))
                 continue;
             int used = 0;
             for (size_t j = 0; j < m; j++) used |= chain[j] / 2 == r;
@@ -1043,23 +1057,6 @@ static size_t short_chain(const build *B, const rs_network *N, const uint32_t *s
         at = best ^ 1; /* leaves by its other end */
     }
     return m;
-}
-
-/* The direction of road end e's own segment away from its end point (the
- * first point that differs); 0 when the record has none (all one point). */
-static int end_dir(const build *B, uint32_t e, double *ang)
-{
-    uint32_t r = e / 2;
-    size_t v0 = B->voff[r], v1 = B->voff[r + 1];
-    const double *p = end_point(B, e);
-    for (size_t k = 1; k < v1 - v0; k++) {
-        const double *q = B->xy + 2 * (e & 1 ? v1 - 1 - k : v0 + k);
-        if (q[0] != p[0] || q[1] != p[1]) {
-            *ang = atan2(q[1] - p[1], q[0] - p[0]);
-            return 1;
-        }
-    }
-    return 0;
 }
 
 /* Road ends a and b, meeting at one point, go on straight enough there
@@ -1081,14 +1078,14 @@ static void link_short_ends(const build *B, rs_network *N, uint32_t *short_at, s
         uint32_t d = N->leg_start[nd + 1] - N->leg_start[nd];
         const rs_network_leg *L = &N->leg[N->leg_start[nd]];
         if (d < 1 || d > 2 || !is_end_leg(&L[0]) || (d == 2 && !is_end_leg(&L[1]))) continue;
-        uint32_t e0 = 2 * L[0].road + (L[0].kind == RS_LEG_END), e1 = NONE;
+        uint32_t e0 = leg_end(&L[0]), e1 = NONE;
         /* two ends link_node left apart (the legs' angles see the corner a
          * short record holds): they go on through the chain when every
          * joint of it is straight, as the road unsplit has no corner at its
          * own vertex (a 39-degree bend inside a record of 0.02 m: fuzz/split) */
         int through = 0;
         if (d == 2) {
-            e1 = 2 * L[1].road + (L[1].kind == RS_LEG_END);
+            e1 = leg_end(&L[1]);
             if (N->link[e0] != e1) {
                 if (N->link[e0] != NONE || N->link[e1] != NONE || !ends_fit(B, &L[0], &L[1])) continue;
                 through = 1;
@@ -1211,6 +1208,7 @@ static void build_free(build *B)
     rs__free(ctx, B->tstart);
     rs__free(ctx, B->buf);
     rs__free(ctx, B->ctl);
+    rs__free(ctx, B->short_at);
 }
 
 void rs_network_free(rs_ctx *ctx, rs_network *net)
@@ -1517,19 +1515,19 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         B.ctl[nd] |= f;
     }
     /* short records and the node their (joined) ends are at, for link_short_ends */
-    size_t nshort = 0;
-    uint32_t *short_at = NULL;
-    for (size_t r = 0; r < n; r++)
-        if (!B.live[r] && B.voff[r + 1] - B.voff[r] >= 2 && B.nodeof[B.voff[r]] != NONE) nshort++;
-    if (nshort) {
-        if (!(short_at = rs__alloc_array(ctx, 2 * nshort, sizeof *short_at))) {
+    for (int fill = 0; fill < 2; fill++) { /* (count, then fill) */
+        size_t k = 0;
+        for (size_t r = 0; r < n; r++) {
+            uint32_t nd = !B.live[r] && B.voff[r + 1] - B.voff[r] >= 2 ? B.nodeof[B.voff[r]] : NONE;
+            if (nd == NONE) continue;
+            if (fill) B.short_at[2 * k] = (uint32_t)r, B.short_at[2 * k + 1] = nd;
+            k++;
+        }
+        B.nshort = k;
+        if (fill || !k) break;
+        if (!(B.short_at = rs__alloc_array(ctx, 2 * k, sizeof *B.short_at))) {
             res = RS_ERR_NOMEM;
             goto fail;
-        }
-        nshort = 0;
-        for (size_t r = 0; r < n; r++) {
-            uint32_t nd = B.voff[r + 1] - B.voff[r] >= 2 ? B.nodeof[B.voff[r]] : NONE;
-            if (!B.live[r] && nd != NONE) short_at[2 * nshort] = (uint32_t)r, short_at[2 * nshort + 1] = nd, nshort++;
         }
     }
     rs__free(ctx, B.nodeof), rs__free(ctx, B.inhash), rs__free(ctx, B.rep);
@@ -1545,18 +1543,13 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     N->leg_start = rs__alloc_array(ctx, nn + 1, sizeof *N->leg_start);
     N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
     if (!N->leg || !N->node || !N->leg_start || !N->link) {
-        rs__free(ctx, short_at);
         res = RS_ERR_NOMEM;
         goto fail;
     }
     for (size_t e = 0; e < 2 * n; e++) N->link[e] = NONE;
     nl = 0;
     for (uint32_t nd = 0; nd < nn; nd++) {
-        if ((nd & 4095) == 0 && rs__poll(ctx)) {
-            rs__free(ctx, short_at);
-            res = RS_ERR_CANCELLED;
-            goto fail;
-        }
+        if ((nd & 4095) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto fail; }
         /* (the points of a node a few ahead: by id, at random places, but for
          * its lowest: the nodes' lowest points ascend, read in order) */
         if (nd + AHEAD < nn)
@@ -1573,11 +1566,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
             for (uint32_t q = B.pstart[nd + AHEAD / 2] + 1, qe = B.pstart[nd + AHEAD / 2 + 1]; q < qe && q < B.pstart[nd + AHEAD / 2] + 4; q++)
                 rs__prefetch(B.look + B.vroad[B.pids[q]]);
         size_t np = node_passes(&B, nd);
-        if (np == (size_t)-1) {
-            rs__free(ctx, short_at);
-            res = RS_ERR_NOMEM;
-            goto fail;
-        }
+        if (np == (size_t)-1) { res = RS_ERR_NOMEM; goto fail; }
         uint32_t v = B.pids[B.pstart[nd]]; /* its lowest point (a node holds a point) */
         rs_network_node ndo;
         memset(&ndo, 0, sizeof ndo);
@@ -1641,8 +1630,9 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     /* every qualifying node got legs (it holds a live road's point) */
     N->leg_start[nn] = (uint32_t)nl;
     N->nlegs = nl;
-    link_short_ends(&B, N, short_at, nshort);
-    rs__free(ctx, short_at);
+    link_short_ends(&B, N, B.short_at, B.nshort);
+    rs__free(ctx, B.short_at);
+    B.short_at = NULL;
     if (nl) { /* (shrinking: cannot fail but may) */
         rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
         if (lg) N->leg = lg;
