@@ -1064,6 +1064,29 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     memset(f->start, 0, (ncell + 1) * sizeof *f->start);
     b.cnt = f->start;
 
+    /* The segments' array sized once from the roads' segment count (an
+     * upper bound: off-map segments are dropped, and the array shrinks at
+     * the end). Growing it by doubling copied up to ~200 MB at a time on
+     * big scenes, a stall no progress call could break. */
+    {
+        size_t want = 0;
+        for (size_t ri = 0; ri < nroads; ri++) {
+            size_t n = 0;
+            rs_roads_get(roads, ri, NULL, NULL, NULL, &n);
+            want += n > 1 ? n - 1 : n;
+            if (want > UINT32_MAX) break;
+        }
+        if (want > UINT32_MAX) want = UINT32_MAX;
+        if (want > 0) {
+            if (!(f->seg = rs__alloc_array(ctx, want, sizeof(rf_seg)))) {
+                res = RS_ERR_NOMEM;
+                goto fail;
+            }
+            cap_seg = want;
+            if (want > b.seg0) b.seg0 = want;
+        }
+    }
+
     /* Pass 1: local coordinates, arc lengths, counts; keep the segments
      * that reach the grid. */
     rs__local_frame F = rs__local_frame_of(p->origin_x, p->origin_y, p->cell_size);
@@ -1114,6 +1137,14 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             }
             f->seg[f->nseg++] = sg;
             rec_end(&b, f->nseg - 1);
+        }
+    }
+    if (f->nseg < cap_seg / 2) {
+        /* most segments lay off the map: give the rest back */
+        rf_seg *ns = rs__realloc(ctx, f->seg, (f->nseg ? f->nseg : 1) * sizeof(rf_seg));
+        if (ns) {
+            f->seg = ns;
+            cap_seg = f->nseg ? f->nseg : 1;
         }
     }
     if ((res = index_finish(ctx, f, &b, cap_seg)) != RS_OK) goto fail;
