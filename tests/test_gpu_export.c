@@ -552,7 +552,9 @@ static void test_from_grid_city(void)
     if (dem && classed) {
         rs_gpu_scene *g = NULL;
         CHECK(rs_gpu_scene_create(ctx, dem, roads, NULL, NULL, &g) == RS_OK);
-        CHECK(g && gsv_of(g).nbands > 100 && gsv_of(g).nmarks > 1000 && gsv_of(g).ncuts > 100);
+        CHECKF(g && gsv_of(g).nbands > 100 && gsv_of(g).nmarks > 1000 && gsv_of(g).ncuts > 100,
+               "bands %zu, marks %zu, cuts %zu", g ? (size_t)gsv_of(g).nbands : 0, g ? (size_t)gsv_of(g).nmarks : 0,
+               g ? (size_t)gsv_of(g).ncuts : 0);
         rs_gpu_scene_free(ctx, g);
         from_grid_case(ctx, "city, styled", dem, roads, NULL, NULL);
     }

@@ -706,7 +706,7 @@ static void roundabout_case(const char *text, int nroads, const int *want)
     for (size_t i = 0; i < n; i++)
         if ((long)pl[i].type == gb && pl[i].road < 8) got[pl[i].road]++;
     for (int r = 0; r < nroads; r++) {
-        if (want[r]) CHECK(got[r] > 0);
+        if (want[r]) CHECKF(got[r] > 0, "road %d: %d blocks", r, got[r]);
         else CHECK_EQ_INT(got[r], 0);
     }
     rs__free(ctx, pl);
@@ -742,6 +742,68 @@ static void test_roundabout(void)
                                 "road north width 6 class=residential\n50 95\n50 65\nend\n";
     static const int want_plain[] = { 0, 0 };
     roundabout_case(plain, 2, want_plain);
+}
+
+/* Give-way blocks on roads road .. road_hi (rs__markings_auto, built-in
+ * atlas), and the least and greatest arc length of them. */
+static int blocks_of(const char *text, size_t road, size_t road_hi, double *s_lo, double *s_hi)
+{
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK);
+    rs_dem *dem = flat_dem(121, 81, 1.0);
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
+    rs__placement *pl = NULL;
+    size_t n = 0, cap = 0;
+    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, NULL, &pl, &n, &cap) == RS_OK);
+    long gb = rs_atlas_find(atlas, "give_way_block");
+    int got = 0;
+    *s_lo = INFINITY, *s_hi = -INFINITY;
+    for (size_t i = 0; i < n; i++)
+        if ((long)pl[i].type == gb && pl[i].road >= road && pl[i].road <= road_hi) {
+            got++;
+            *s_lo = fmin(*s_lo, pl[i].s), *s_hi = fmax(*s_hi, pl[i].s);
+        }
+    rs__free(ctx, pl);
+    rs_atlas_free(ctx, atlas);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    return got;
+}
+
+/* Junctions from the network, not from where the ways happen to end
+ * (issue 27 problem 5): a residential street crossing a primary through a
+ * shared point gives way on both approaches, whole or split at the
+ * crossing; a side road split 4 m before the road it ends on, and a
+ * through road split 2 m from the T, change nothing (the split ends made
+ * a junction of their own, whose area hid the give-way line). */
+static void test_junctions_from_network(void)
+{
+    static const char x_whole[] = "road main width 9 class=primary\n0 40\n60 40\n120 40\nend\n"
+                                  "road minor width 7 class=residential\n60 80\n60 40\n60 0\nend\n";
+    static const char x_split[] = "road main width 9 class=primary\n0 40\n60 40\n120 40\nend\n"
+                                  "road minor_n width 7 class=residential\n60 80\n60 40\nend\n"
+                                  "road minor_s width 7 class=residential\n60 40\n60 0\nend\n";
+    double lo, hi, lo2, hi2;
+    int whole = blocks_of(x_whole, 1, 1, &lo, &hi);
+    CHECKF(whole == 10, "a street through a crossing: %d give-way blocks (5 a side)", whole);
+    CHECK(lo < 40 - 5 && hi > 40 + 5); /* (s along the street from its north end: both sides) */
+    int a = blocks_of(x_split, 1, 1, &lo2, &hi2), b = blocks_of(x_split, 2, 2, &lo, &hi);
+    CHECKF(a == 5 && b == 5, "the street split at the crossing: %d and %d blocks", a, b);
+    CHECK_NEAR(lo2, 40 - 5 - 0.5 - 0.25, 1e-9); /* (area: 4.5 + 0.5 m; gap 0.5 m; half a block) */
+    CHECK_NEAR(lo, 5 + 0.5 + 0.25, 1e-9);
+    /* a T: the side road split 4 m before main's centre line, main split 2 m from it */
+    static const char t_whole[] = "road main width 9 class=primary\n0 40\n120 40\nend\n"
+                                  "road side width 7 class=residential\n60 80\n60 40\nend\n";
+    static const char t_split[] = "road main_w width 9 class=primary\n0 40\n58 40\nend\n"
+                                  "road main_e width 9 class=primary\n58 40\n120 40\nend\n"
+                                  "road side_n width 7 class=residential\n60 80\n60 44\nend\n"
+                                  "road side_s width 7 class=residential\n60 44\n60 40\nend\n";
+    int tw = blocks_of(t_whole, 1, 1, &lo, &hi), ts = blocks_of(t_split, 2, 3, &lo2, &hi2);
+    CHECKF(tw == 5 && ts == 5, "a T: %d give-way blocks whole, %d split", tw, ts);
+    /* (the same place: 0.75 m before main's area, on side_n, which starts where side does) */
+    CHECK_NEAR(lo, 40 - 5 - 0.5 - 0.25, 1e-9);
+    CHECK_NEAR(lo2, lo, 1e-9);
 }
 
 typedef struct alloc_case {
@@ -795,6 +857,7 @@ int main(void)
     test_parse();
     test_auto();
     test_roundabout();
+    test_junctions_from_network();
     test_alloc_failures();
     rs_ctx_free(ctx);
     return th_finish("test_markings");

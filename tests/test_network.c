@@ -80,7 +80,7 @@ static size_t add_split_rev(rs_roads *roads, const char *name, double width, con
             double x = f >= 1 ? bx : ax + f * (bx - ax), y = f >= 1 ? by : ay + f * (by - ay);
             if (!(x == buf[m - 2] && y == buf[m - 1])) buf[m++] = x, buf[m++] = y;
             if (m >= 4) {
-                add_record(roads, name, width, buf, m, (rev_mask >> added) & 1, attr);
+                add_record(roads, name, width, buf, m, added < 32 && ((rev_mask >> added) & 1), attr);
                 added++;
                 buf[0] = x, buf[1] = y;
                 m = 2;
@@ -91,7 +91,7 @@ static size_t add_split_rev(rs_roads *roads, const char *name, double width, con
         s += l;
     }
     if (m >= 4) {
-        add_record(roads, name, width, buf, m, (rev_mask >> added) & 1, attr);
+        add_record(roads, name, width, buf, m, added < 32 && ((rev_mask >> added) & 1), attr);
         added++;
     }
     return added;
@@ -1028,6 +1028,127 @@ static void test_short_record_at_end(void)
     render_profile = RS_PROFILE_RMS;
 }
 
+/* A road cut into crumbs: records of at most twice the tolerance (0.1 m),
+ * hundreds of them, which bridge_short joined into one point until a run
+ * of them longer than 0.1 m became live records of a chain: each such
+ * road is one stroke and draws as unsplit (it drew no lines: 186/255). */
+static void test_crumbs_road(void)
+{
+    static const char *const primary[] = { "class", "primary", NULL };
+    static poly shapes[3];
+    /* an arc of 24 m (radius 20), a 45-degree bend, a ring of radius 6 m */
+    shapes[0].n = 25;
+    for (size_t k = 0; k < 25; k++) {
+        double a = -0.6 + 1.2 * (double)k / 24;
+        shapes[0].xy[2 * k] = 60 + 20 * sin(a), shapes[0].xy[2 * k + 1] = 20 + 20 * cos(a);
+    }
+    shapes[1].n = 3;
+    shapes[1].xy[0] = 20, shapes[1].xy[1] = 20, shapes[1].xy[2] = 32, shapes[1].xy[3] = 20;
+    shapes[1].xy[4] = 32 + 12 * cos(0.7853981633974483), shapes[1].xy[5] = 20 + 12 * sin(0.7853981633974483);
+    shapes[2].n = 41;
+    for (size_t k = 0; k < 41; k++) {
+        double a = 2 * 3.14159265358979323846 * (double)(k % 40) / 40;
+        shapes[2].xy[2 * k] = 90 + 6 * cos(a), shapes[2].xy[2 * k + 1] = 55 + 6 * sin(a);
+    }
+    static double cuts[1200];
+    for (int shape = 0; shape < 3; shape++)
+        for (int kind = 0; kind < 3; kind++) {
+            double len = poly_len(&shapes[shape]), s = 0;
+            size_t nc = 0;
+            rng_state = 0x9E3779B97F4A7C15u + (uint64_t)(3 * shape + kind);
+            while (nc < 1200) {
+                /* 0: crumbs of 0.08 m; 1: of 0.005 .. 0.1 m; 2: 4 m records with
+                 * 30 crumbs of 0.02 m between them */
+                double step = kind == 0 ? 0.08 : kind == 1 ? 0.005 + 0.095 * rnd() : (nc % 31 == 0 ? 4 : 0.02);
+                if (s + step >= len - 0.01) break;
+                s += step;
+                cuts[nc++] = s;
+            }
+            rs_roads *whole = NULL, *split = NULL;
+            rs_network *n = NULL;
+            CHECK(rs_roads_create(ctx, &whole) == RS_OK && rs_roads_create(ctx, &split) == RS_OK);
+            add_split(whole, "r", 7.5, &shapes[shape], NULL, 0, primary);
+            size_t nrec = add_split(split, "r", 7.5, &shapes[shape], cuts, nc, primary);
+            CHECK(nrec > 100);
+            CHECK(rs_network_build(ctx, split, NULL, &n) == RS_OK);
+            if (n) {
+                rs_road_stroke st;
+                size_t other = 0;
+                CHECK_EQ_INT(rs_network_stroke_count(n), 1);
+                for (size_t r = 0; r < nrec; r++)
+                    if (rs_network_road_stroke(n, r, &st) != RS_OK || st.stroke != 0) other++;
+                CHECKF(other == 0, "shape %d, cuts %d: %zu of %zu records not in the one stroke", shape, kind, other,
+                       nrec);
+                CHECK(rs_network_road_stroke(n, 0, &st) == RS_OK && st.closed == (shape == 2));
+            }
+            rs_network_free(ctx, n);
+            for (int prof = 0; prof < 2; prof++) {
+                render_profile = prof ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
+                image w = { 0 }, sp = { 0 };
+                CHECK(render(whole, NULL, &w) && render(split, NULL, &sp));
+                uint32_t wx = 0, wy = 0;
+                int dd = w.rgba && sp.rgba ? max_diff(&w, &sp, &wx, &wy) : 255;
+                CHECKF(dd <= 8, "shape %d cut into %zu records (%s): a pixel off by %d/255 at (%u, %u)", shape, nrec,
+                       prof ? "MUTCD" : "RMS", dd, wx, wy);
+                free(w.rgba);
+                free(sp.rgba);
+            }
+            rs_roads_free(ctx, whole);
+            rs_roads_free(ctx, split);
+        }
+    render_profile = RS_PROFILE_RMS;
+}
+
+/* A T drawn with its roads split near it (the through road 2 m from the
+ * side road's end, the side road 4 m before the through road's centre
+ * line, or both cut into many records, 0.03 m crumbs included) draws as
+ * unsplit, automatic give-way lines included: split ends near a junction
+ * made a junction of their own (its area hid the give-way line, 196/255),
+ * and a side road's end near a road cut into crumbs met several of its
+ * joints (issue 27 target 1). */
+static void test_tee_splits(void)
+{
+    static const char *const primary[] = { "class", "primary", NULL };
+    static const char *const residential[] = { "class", "residential", NULL };
+    static poly main_road, side;
+    main_road.n = 2;
+    main_road.xy[0] = 5, main_road.xy[1] = 30, main_road.xy[2] = 115, main_road.xy[3] = 33;
+    double tx = 60.3, ty = 30 + 3 * (tx - 5) / 110; /* on the centre line */
+    side.n = 2;
+    side.xy[0] = tx - 8, side.xy[1] = ty + 40, side.xy[2] = tx, side.xy[3] = ty;
+    double lm = poly_len(&main_road), ls = poly_len(&side), tm = hypot(tx - 5, ty - 30);
+    static double cuts[2000];
+    for (int kind = 0; kind < 4; kind++)
+        for (int prof = 0; prof < 2; prof++) {
+            rs_roads *whole = NULL, *split = NULL;
+            CHECK(rs_roads_create(ctx, &whole) == RS_OK && rs_roads_create(ctx, &split) == RS_OK);
+            add_split(whole, "main", 9, &main_road, NULL, 0, primary);
+            add_split(whole, "side", 7, &side, NULL, 0, residential);
+            size_t nc = 0;
+            if (kind == 0) cuts[nc++] = tm - 2;
+            else if (kind == 2) {
+                rng_state = 0x5DEECE66Du;
+                for (double at = 0.5 + rnd(); at < lm - 0.5 && nc < 30; at += 0.5 + 3 * rnd()) cuts[nc++] = at;
+            } else if (kind == 3)
+                for (double at = 0.03; at < lm - 0.03 && nc < 2000; at += 0.03 + 0.004 * (double)(nc % 3)) cuts[nc++] = at;
+            add_split(split, "main", 9, &main_road, cuts, nc, primary);
+            double sc[1] = { ls - 4 };
+            add_split(split, "side", 7, &side, kind == 1 || kind == 2 ? sc : NULL, kind == 1 || kind == 2, residential);
+            render_profile = prof ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
+            image w = { 0 }, sp = { 0 };
+            CHECK(render(whole, NULL, &w) && render(split, NULL, &sp));
+            uint32_t wx = 0, wy = 0;
+            int dd = w.rgba && sp.rgba ? max_diff(&w, &sp, &wx, &wy) : 255;
+            CHECKF(dd <= 8, "T, splits %d (%s, %zu records): a pixel off by %d/255 at (%u, %u)", kind,
+                   prof ? "MUTCD" : "RMS", rs_roads_count(split), dd, wx, wy);
+            free(w.rgba);
+            free(sp.rgba);
+            rs_roads_free(ctx, whole);
+            rs_roads_free(ctx, split);
+        }
+    render_profile = RS_PROFILE_RMS;
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -1045,6 +1166,8 @@ int main(void)
     test_cut_near_corner();
     test_short_record_between();
     test_short_record_at_end();
+    test_crumbs_road();
+    test_tee_splits();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

@@ -16,6 +16,9 @@
  *   then  2 bytes a point (x: b * 30 / 255 m, y: b * 22 / 255 m)
  *   then  splits - 1 (mod 4), and 2 bytes a split: its segment (mod the
  *         count) and where in it ((b + 1) / 257 of its length)
+ *   then  crumbs: 0 none, else b * 4 more cuts every (b' + 1) / 2560 m
+ *         from (b'' / 256) m on (records of at most 0.1 m: a road cut into
+ *         crumbs, docs/network.md "Degenerate records")
  * Findings (abort): a pixel of the split drawing more than 8/255 from the
  * whole one in a colour channel, or a result code other than RS_OK for
  * the whole road when the split one succeeds (or the reverse). */
@@ -135,13 +138,28 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     size_t n = 2 + next(&rd) % 5;
     double width = 2 + next(&rd) / 16.0, xy[12];
     for (size_t k = 0; k < n; k++) xy[2 * k] = next(&rd) * 30.0 / 255, xy[2 * k + 1] = next(&rd) * 22.0 / 255;
-    size_t ncut = 1 + next(&rd) % 4, seg[4];
-    double f[4];
+    size_t ncut = 1 + next(&rd) % 4, seg[4 + 1020];
+    double f[4 + 1020];
     for (size_t c = 0; c < ncut; c++) {
         seg[c] = next(&rd) % (n - 1);
         f[c] = (next(&rd) + 1) / 257.0;
     }
-    /* sorted along the road (insertion sort of at most 4) */
+    /* crumbs: evenly spaced cuts by arc length (inside segments) */
+    size_t ncrumb = 4 * (size_t)next(&rd);
+    double step = (next(&rd) + 1) / 2560.0, at0 = next(&rd) / 256.0;
+    for (size_t c = 0, k = 0; c < ncrumb; c++) {
+        double at = at0 + (double)(c + 1) * step, acc = 0;
+        for (k = 0; k + 1 < n; k++) {
+            double l = hypot(xy[2 * k + 2] - xy[2 * k], xy[2 * k + 3] - xy[2 * k + 1]);
+            if (at < acc + l) break;
+            acc += l;
+        }
+        if (k + 1 >= n) break;
+        double l = hypot(xy[2 * k + 2] - xy[2 * k], xy[2 * k + 3] - xy[2 * k + 1]), fr = (at - acc) / l;
+        if (!(fr > 0 && fr < 1)) continue;
+        seg[ncut] = k, f[ncut] = fr, ncut++;
+    }
+    /* sorted along the road (insertion sort) */
     for (size_t a = 1; a < ncut; a++)
         for (size_t b = a; b > 0 && (seg[b] < seg[b - 1] || (seg[b] == seg[b - 1] && f[b] < f[b - 1])); b--) {
             size_t ts = seg[b];
@@ -171,20 +189,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     for (size_t a = 0; a + 1 < n; a++)
         for (size_t b = a + 2; b + 1 < n; b++)
             if (seg_seg_dist(xy + 2 * a, xy + 2 * b) < width) return 0;
-    /* Known limit (docs/network.md "Degenerate records"): a road cut into
-     * records none longer than twice the network's tolerance (0.1 m) is
-     * points only, and draws no lines; at least one record must be longer */
-    double total = 0, at[4], longest = 0;
-    for (size_t k = 0, c = 0; k + 1 < n; k++) {
-        double l = hypot(xy[2 * k + 2] - xy[2 * k], xy[2 * k + 3] - xy[2 * k + 1]);
-        for (; c < ncut && seg[c] == k; c++) at[c] = total + f[c] * l;
-        total += l;
-    }
-    for (size_t c = 0; c <= ncut; c++) {
-        double l = (c < ncut ? at[c] : total) - (c ? at[c - 1] : 0);
-        longest = l > longest ? l : longest;
-    }
-    if (longest <= 0.1 * (1 + 1e-9)) return 0;
     const char *cls = classes[flags & 7];
     const char lanes[2] = { (char)('1' + ((flags >> 4) & 3)), 0 };
     /* a reversed record of a one-way road, or of an odd lane count (which

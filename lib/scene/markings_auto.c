@@ -61,7 +61,22 @@ typedef struct ctxa {
     size_t *cont;
     uint8_t *cont_end;
     uint32_t *jstart, *jidx; /* the junctions of road i: jidx[jstart[i] .. jstart[i+1]) (NULL: scan all) */
+    const rs_network *net;   /* strokes: the areas and cuts run on across a street's records */
+    double *slen;            /* per stroke: its length */
 } ctxa;
+
+/* Where traffic arrives at a junction along a road: at a free end of its
+ * street (the street's last record ends there) or where the street
+ * passes through (a node of the network where another street meets it;
+ * a street split there passes through too). */
+typedef struct approach {
+    size_t road;
+    double s, half;  /* the junction's arc length on the road, its area's half extent along it */
+    int8_t arrive;   /* +1: traffic arrives travelling with the road's points, -1: against them */
+    uint8_t minor;   /* it gives way */
+    uint8_t end;     /* a free end (the lines' cut runs on beyond it) */
+    uint8_t arrows;  /* at a record's end: its turn:lanes arrows (OSM: the turns at the end of the way) */
+} approach;
 
 /* Roads with a segment whose box (grown by the road's half width +
  * JUNCTION_TOL) meets a grid cell, ascending, once, per cell: a road end
@@ -131,6 +146,70 @@ static int in_junction(const ctxa *A, size_t road, double lo, double hi)
     for (size_t i = 0; i < A->nj; i++)
         if (A->j[i].road == road && hi > A->j[i].s - A->j[i].half && lo < A->j[i].s + A->j[i].half) return 1;
     return 0;
+}
+
+/* Road j is a ring of its own (its first point is its last): it passes
+ * through its seam, even where the network left the seam a corner. */
+static int ring_record(const ctxa *A, size_t j)
+{
+    const rs__road_local *b = &A->rl[j];
+    return b->n > 2 && b->x[0] == b->x[b->n - 1] && b->y[0] == b->y[b->n - 1];
+}
+
+/* Road j's street is a ring (passes through every point of it). */
+static int ring_street(const ctxa *A, size_t j)
+{
+    const rs_network *N = A->net;
+    uint32_t k = N->stroke_of[j];
+    return N->closed[k] || (N->stroke_start[k + 1] - N->stroke_start[k] == 1 && ring_record(A, j));
+}
+
+/* Road r's arc length s along its stroke (no network: its own). */
+static double stroke_s(const ctxa *A, size_t r, double s)
+{
+    const rs_network *N = A->net;
+    return !N ? s : N->rev[r] ? N->s_off[r] - s : N->s_off[r] + s;
+}
+
+static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half);
+
+/* A junction area (op 0: centre (s0 + s1) / 2, half extent (s1 - s0) / 2)
+ * or a cut of the lines (op 1, `half` across) over [s0, s1] of road's arc
+ * length, on every record of its street that the span reaches, in each
+ * one's own arc length (a street split near a junction has its area and
+ * cuts on both records: they stopped at the split). A ring's span wraps
+ * round its seam. */
+static rs_result on_stroke(ctxa *A, size_t road, double s0, double s1, int op, double half)
+{
+    const rs_network *N = A->net;
+    if (!N) return op ? add_cut(A, road, s0, s1, half) : add_jn(A, road, (s0 + s1) / 2, (s1 - s0) / 2);
+    double a = stroke_s(A, road, s0), b = stroke_s(A, road, s1);
+    if (a > b) { double t = a; a = b; b = t; }
+    uint32_t k = N->stroke_of[road];
+    double L = A->slen[k];
+    int wraps = ring_street(A, road) && L > 0;
+    for (int turn = -1; turn <= 1; turn++) {
+        if (turn && !wraps) continue;
+        double lo = a + turn * L, hi = b + turn * L;
+        if (turn && (hi < 0 || lo > L)) continue;
+        /* from the road (a wrapped span: from the stroke's last or first
+         * record) back while records end at or after lo, on while they
+         * start at or before hi (the records' spans follow each other) */
+        uint32_t from = turn == 0 ? (uint32_t)road
+                        : turn > 0 ? N->stroke_roads[N->stroke_start[k + 1] - 1] : N->stroke_roads[N->stroke_start[k]];
+        for (int way = 0; way < 2; way++)
+            for (uint32_t q = way ? N->next[from] : from, steps = 0; q != UINT32_MAX && steps <= N->nroads;
+                 q = way ? N->next[q] : N->prev[q], steps++) {
+                double ql = N->length[q], q0 = N->rev[q] ? N->s_off[q] - ql : N->s_off[q], q1 = q0 + ql;
+                if (way ? q0 > hi : q1 < lo) break;
+                if (hi < q0 || lo > q1) continue;
+                double u0 = N->rev[q] ? N->s_off[q] - hi : lo - N->s_off[q];
+                double u1 = N->rev[q] ? N->s_off[q] - lo : hi - N->s_off[q];
+                rs_result r = op ? add_cut(A, q, u0, u1, half) : add_jn(A, q, (u0 + u1) / 2, (u1 - u0) / 2);
+                if (r) return r;
+            }
+    }
+    return RS_OK;
 }
 
 /* Index the junctions by road (in_junction then reads one road's). Out of
@@ -404,23 +483,22 @@ static rs_result repeat_across(const ctxa *A, const rs_atlas *atlas, long ti, si
 #define ZEBRA_GAP 0.5        /* Fussgaengerueberweg: 0.50 m bars, 0.50 m gaps */
 #define ZEBRA_MARGIN 0.2     /* zebra bars stay this far inside the road edges */
 
-static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int end_junction[2],
-                            const double end_half[2], const int end_minor[2], rs__placement **pl, size_t *n,
-                            size_t *cap)
+/* The lines, arrows and stop or give-way line of one approach. */
+static rs_result place_approach(ctxa *A, const rs_atlas *atlas, const approach *ap, rs__placement **pl, size_t *n,
+                                size_t *cap)
 {
+    size_t i = ap->road;
     const rs__road_local *r = &A->rl[i];
     if (r->n < 2) return RS_OK;
-    double total = r->s[r->n - 1];
     rs_road_lanes L;
     rs_road_lanes_get(A->roads, i, A->so, &L);
     const double hw = L.width / 2;
     const int left_hand = L.side == RS_DRIVING_LEFT, us = A->so && A->so->profile == RS_PROFILE_MUTCD;
     const char *ctrl = rs_roads_get_attr(A->roads, i, "control");
-    for (int e = 0; e < 2; e++) {
-        if (!end_junction[e]) continue;
-        /* traffic arriving at end e: at the last point (e = 1) it travels
-         * with the points (lanes of direction +1, flip 0) */
-        int arrive = e == 1 ? 1 : -1, flip = e == 0;
+    do {
+        /* traffic arriving with the points (at a road's last point) has the
+         * lanes of direction +1, flip 0 */
+        int arrive = ap->arrive, flip = arrive < 0;
         /* the approach: its lanes, out to the kerb on the outer side and to
          * the centre line on the inner side */
         double t0 = INFINITY, t1 = -INFINITY;
@@ -439,10 +517,10 @@ static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int 
             if (a < t0) t0 = a;
             if (b > t1) t1 = b;
         }
-        if (!(t1 > t0)) continue; /* a one-way road leaving here */
-        double edge = e == 1 ? total - end_half[e] : end_half[e]; /* the junction area's near side */
-        double dir = e == 1 ? -1 : 1;                             /* towards the road's inside */
-        if (end_minor[e]) {
+        if (!(t1 > t0)) break; /* a one-way road leaving here */
+        double edge = ap->s - arrive * ap->half; /* the junction area's near side */
+        double dir = -arrive;                    /* away from the junction */
+        if (ap->minor) {
             size_t before = *n;
             double lead = 0; /* the line's extent along the road */
             int stop = ctrl && !strcmp(ctrl, "stop");
@@ -468,13 +546,15 @@ static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int 
             /* the lane and centre lines end at the line's far side from the
              * junction and do not run on into it */
             if (*n > before) {
-                double near = edge + dir * (LINE_GAP + lead), reach = end_half[e] + L.width;
-                if (add_cut(A, i, e == 1 ? near : -reach, e == 1 ? total + reach : near, cut_half(&L)))
+                /* (past a free end: over the other road too) */
+                double near = edge + dir * (LINE_GAP + lead), reach = ap->end ? ap->half + L.width : 0;
+                if (on_stroke(A, i, arrive > 0 ? near : ap->s - reach, arrive > 0 ? ap->s + reach : near, 1,
+                              cut_half(&L)))
                     return RS_ERR_NOMEM;
             }
         }
         /* turn arrows, centred in their lanes */
-        for (uint32_t k = 0; k < L.count; k++) {
+        for (uint32_t k = 0; k < L.count && ap->arrows; k++) {
             const rs_lane *ln = &L.lane[k];
             if (ln->direction != arrive || !ln->turn) continue;
             const char *type = arrow_for(ln->turn, left_hand);
@@ -490,7 +570,7 @@ static rs_result place_road(ctxa *A, const rs_atlas *atlas, size_t i, const int 
             p.t = (ln->t_left + ln->t_right) / 2;
             if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
         }
-    }
+    } while (0);
     return RS_OK;
 }
 
@@ -511,6 +591,18 @@ int rs__markings_auto_possible(const rs_roads *roads)
         if (rs__road_priority(roads, i) > 0) return 1;
     }
     return 0;
+}
+
+static int approach_cmp(const void *pa, const void *pb)
+{
+    const approach *a = pa, *b = pb;
+    if (a->road != b->road) return a->road < b->road ? -1 : 1;
+    if (a->s != b->s) return a->s < b->s ? -1 : 1;
+    if (a->arrive != b->arrive) return a->arrive < b->arrive ? -1 : 1;
+    if (a->half != b->half) return a->half < b->half ? -1 : 1;
+    if (a->minor != b->minor) return a->minor < b->minor ? -1 : 1;
+    if (a->arrows != b->arrows) return a->arrows < b->arrows ? -1 : 1;
+    return (int)a->end - (int)b->end;
 }
 
 static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
@@ -539,18 +631,65 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     road_cells G;
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     int grid = !r && road_cells_build(&A, nr, &G);
-    /* per road end: junction, its half extent, minor */
-    int (*endj)[3] = r ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endj);
-    double (*endh)[2] = r || !endj ? NULL : rs__calloc(ctx, nr ? nr : 1, sizeof *endh);
-    if (!r && (!endj || !endh)) r = RS_ERR_NOMEM;
     /* which records are one street (docs/network.md "Strokes"): the
      * caller's network, else one of our own */
     rs_network *own = NULL;
     const rs_network *net = net_in && rs_network_road_count(net_in) == nr ? net_in : NULL;
     if (!r && !net && (r = rs_network_build(ctx, roads, NULL, &own)) == RS_OK) net = own;
+    A.net = r ? NULL : net;
     A.cont = r ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), sizeof *A.cont);
     A.cont_end = r || !A.cont ? NULL : rs__calloc(ctx, 2 * (nr ? nr : 1), 1);
-    if (!r && (!A.cont || !A.cont_end)) r = RS_ERR_NOMEM;
+    A.slen = r ? NULL : rs__calloc(ctx, net->nstrokes ? net->nstrokes : 1, sizeof *A.slen);
+    if (!r && (!A.cont || !A.cont_end || !A.slen)) r = RS_ERR_NOMEM;
+    for (size_t i = 0; i < nr && !r; i++) {
+        /* the record going on from each end (the network's link: the same
+         * street split into records, turning less than 30 degrees) */
+        for (int e = 0; e < 2; e++) {
+            uint32_t lk = net->link[2 * i + e];
+            if (lk == UINT32_MAX) continue;
+            A.cont[2 * i + e] = lk / 2 + 1;
+            A.cont_end[2 * i + e] = (uint8_t)(lk & 1);
+        }
+        double hi = net->rev[i] ? net->s_off[i] : net->s_off[i] + net->length[i];
+        if (hi > A.slen[net->stroke_of[i]]) A.slen[net->stroke_of[i]] = hi;
+    }
+    /* per road end: its node (NONE: none); per stroke: its free ends'
+     * points (local; NaN: none) */
+    uint32_t *endnode = r ? NULL : rs__alloc_array(ctx, 2 * (nr ? nr : 1), sizeof *endnode);
+    double *sends = r ? NULL : rs__alloc_array(ctx, net->nstrokes ? net->nstrokes : 1, 4 * sizeof *sends);
+    if (!r && (!endnode || !sends)) r = RS_ERR_NOMEM;
+    for (size_t k = 0; !r && k < 2 * nr; k++) endnode[k] = UINT32_MAX;
+    for (size_t nd = 0; !r && nd < net->nnodes; nd++)
+        for (uint32_t k = net->leg_start[nd]; k < net->leg_start[nd + 1]; k++) {
+            const rs_network_leg *L = &net->leg[k];
+            if (L->kind == RS_LEG_START || L->kind == RS_LEG_END) endnode[2 * L->road + (L->kind == RS_LEG_END)] = (uint32_t)nd;
+        }
+    for (size_t k = 0; !r && k < net->nstrokes; k++) {
+        double *q = sends + 4 * k;
+        q[0] = q[1] = q[2] = q[3] = NAN;
+        if (net->closed[k]) continue;
+        for (int side = 0; side < 2; side++) {
+            uint32_t rr = net->stroke_roads[side ? net->stroke_start[k + 1] - 1 : net->stroke_start[k]];
+            const rs__road_local *b = &A.rl[rr];
+            if (b->n < 1) continue;
+            /* the stroke's start is its first record's start (its end when reversed) */
+            size_t pi = (side != 0) != (net->rev[rr] != 0) ? b->n - 1 : 0;
+            q[2 * side] = b->x[pi], q[2 * side + 1] = b->y[pi];
+        }
+    }
+    approach *ap = NULL;
+    size_t nap = 0, capap = 0;
+    struct met {
+        size_t road;
+        double d, s;
+    } *mt = NULL;
+    size_t nmt = 0, capmt = 0;
+    /* Free ends of streets: an end of road A within B's half width (+ 0.5 m)
+     * of B's centreline is a junction when a street passes through there
+     * or two or more streets meet it; one other street ending there is
+     * that street going on at a corner. Each street met counts once, at the
+     * nearest point of its records, and its extent is the street's (a
+     * street split near the junction had the area end at the split). */
     for (size_t i = 0; i < nr && !r; i++) {
         const rs__road_local *a = &A.rl[i];
         if (rs__tick(ctx, 1)) {
@@ -563,22 +702,16 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         rs_roads_get(roads, i, NULL, &wa, NULL, NULL);
         rs_roads_get_info(roads, i, &ia);
         if (rs__class_non_car(ia.road_class)) continue; /* no car markings (docs/road-format.md) */
+        uint32_t si = net->stroke_of[i];
         for (int e = 0; e < 2 && !r; e++) {
+            /* a record end its street goes on from: only streets crossing
+             * it there that the network did not join (no shared point,
+             * no leg at its node; a side road split before it reaches the
+             * street it ends on meets that one at its free end) */
+            int linked = net->link[2 * i + e] != UINT32_MAX;
+            uint32_t nd = endnode[2 * i + e];
             size_t pi = e ? a->n - 1 : 0;
-            double x = a->x[pi], y = a->y[pi];
-            /* two passes: is it a junction (another road passes through, or
-             * two or more others end here; one other road ending here is the
-             * same street going on), then record it */
-            size_t meet = 0;
-            int through = 0;
-            /* the record going on from this end (the network's link: the
-             * same street split into records, turning less than 30 degrees) */
-            uint32_t lk = net->link[2 * i + e];
-            size_t link_road = lk == UINT32_MAX ? SIZE_MAX : lk / 2;
-            if (lk != UINT32_MAX) {
-                A.cont[2 * i + e] = link_road + 1;
-                A.cont_end[2 * i + e] = (uint8_t)(lk & 1);
-            }
+            double x = a->x[pi], y = a->y[pi], se = e ? a->s[a->n - 1] : 0;
             const uint32_t *cand = NULL;
             size_t ncand = nr;
             if (grid && isfinite(x) && isfinite(y)) { /* (x, y) is inside every box it could meet: its cell lists them */
@@ -588,45 +721,131 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 cand = G.ids + G.start[cy * G.gx + cx];
                 ncand = G.start[cy * G.gx + cx + 1] - G.start[cy * G.gx + cx];
             }
-            for (int pass = 0; pass < 2 && !r; pass++) {
-                if (pass == 1 && !(through || meet >= 2)) break;
-                for (size_t c = 0; c < ncand && !r; c++) {
-                    size_t j = cand ? cand[c] : c;
-                    if (j == i || A.rl[j].n < 2 || rs__road_non_car(roads, j)) continue;
-                    /* the street's other records, except the one going on
-                     * here, are no junction (a short record of it may end
-                     * within the tolerance) */
-                    if (net->stroke_of[j] == net->stroke_of[i] && j != link_road) continue;
-                    double wb, s = 0;
-                    rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
-                    const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;
-                    if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
-                    if (nearest(&A.rl[j], x, y, &s) > wb / 2 + JUNCTION_TOL) continue;
-                    double ha = wb / 2 + JUNCTION_TOL, hb = wa / 2 + JUNCTION_TOL;
-                    const rs__road_local *b_ = &A.rl[j];
-                    double total = b_->s[b_->n - 1];
-                    /* a closed ring (a roundabout drawn as one way) passes
-                     * through its own seam */
-                    int ring = b_->n > 2 && b_->x[0] == b_->x[b_->n - 1] && b_->y[0] == b_->y[b_->n - 1];
-                    if (pass == 0) {
-                        meet++;
-                        if (ring || (s > hb && s < total - hb)) through = 1;
-                        continue;
-                    }
-                    endj[i][e] = 1;
-                    if (ha > endh[i][e]) endh[i][e] = ha;
-                    /* the lower priority gives way: class rank, priority_road,
-                     * and a roundabout's ring over its arms (StVO 9a, MUTCD 2B.11) */
-                    if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) endj[i][2] |= 1 << e;
-                    r = add_jn(&A, i, e ? a->s[a->n - 1] : 0, ha);
-                    if (!r) r = add_jn(&A, j, s, hb);
-                    /* on a ring the area wraps round the seam */
-                    if (!r && ring && s < hb) r = add_jn(&A, j, s + total, hb);
-                    if (!r && ring && s > total - hb) r = add_jn(&A, j, s - total, hb);
+            nmt = 0;
+            for (size_t c = 0; c < ncand; c++) {
+                size_t j = cand ? cand[c] : c;
+                /* (the street's own records are no junction) */
+                if (j == i || A.rl[j].n < 2 || net->stroke_of[j] == si || rs__road_non_car(roads, j)) continue;
+                double wb, s = 0;
+                rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
+                const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;
+                if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
+                double d = nearest(&A.rl[j], x, y, &s);
+                if (d > reach) continue;
+                if (linked) {
+                    int joined = 0;
+                    for (uint32_t k = nd == UINT32_MAX ? 0 : net->leg_start[nd]; nd != UINT32_MAX && k < net->leg_start[nd + 1]; k++)
+                        joined |= net->stroke_of[net->leg[k].road] == net->stroke_of[j];
+                    const double *fe = sends + 4 * si;
+                    double unused_s;
+                    for (int side = 0; side < 2 && !joined; side++)
+                        joined = !isnan(fe[2 * side]) && nearest(&A.rl[j], fe[2 * side], fe[2 * side + 1], &unused_s) <= reach;
+                    if (joined) continue;
                 }
+                void *arr = mt;
+                if (!room_for_one(ctx, &arr, nmt, &capmt, sizeof *mt, 16)) {
+                    r = RS_ERR_NOMEM;
+                    break;
+                }
+                mt = arr;
+                mt[nmt].road = j, mt[nmt].d = d, mt[nmt].s = s;
+                nmt++;
             }
+            /* per street met, its nearest record (the first of equals) */
+            size_t meet = 0;
+            int through = 0;
+            double hb = wa / 2 + JUNCTION_TOL;
+            for (size_t c = 0; c < nmt && !r; c++) {
+                uint32_t k = net->stroke_of[mt[c].road];
+                size_t best = c;
+                for (size_t c2 = 0; c2 < nmt; c2++)
+                    if (net->stroke_of[mt[c2].road] == k && (mt[c2].d < mt[best].d || (mt[c2].d == mt[best].d && c2 < best)))
+                        best = c2;
+                if (best != c) {
+                    mt[c].road = SIZE_MAX; /* (not this street's nearest) */
+                    continue;
+                }
+                double sg = stroke_s(&A, mt[c].road, mt[c].s);
+                int passes = ring_street(&A, mt[c].road) || (sg > hb && sg < A.slen[k] - hb);
+                if (linked && !passes) {
+                    mt[c].road = SIZE_MAX; /* (a street ending here: its own end's business) */
+                    continue;
+                }
+                meet++;
+                through |= passes;
+            }
+            if (r || !(through || (!linked && meet >= 2))) continue;
+            approach q = { i, se, 0, (int8_t)(e ? 1 : -1), 0, (uint8_t)!linked, 1 };
+            for (size_t c = 0; c < nmt && !r; c++) {
+                size_t j = mt[c].road;
+                if (j == SIZE_MAX) continue;
+                double wb;
+                rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
+                double ha = wb / 2 + JUNCTION_TOL;
+                if (ha > q.half) q.half = ha;
+                /* the lower priority gives way: class rank, priority_road,
+                 * and a roundabout's ring over its arms (StVO 9a, MUTCD 2B.11) */
+                if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) q.minor = 1;
+                r = on_stroke(&A, i, se - ha, se + ha, 0, 0);
+                if (!r) r = on_stroke(&A, j, mt[c].s - hb, mt[c].s + hb, 0, 0);
+            }
+            void *arr = ap;
+            if (!r && !room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64)) r = RS_ERR_NOMEM;
+            if (r) break;
+            ap = arr;
+            ap[nap++] = q;
         }
     }
+    /* Streets passing through a node of the network where another street
+     * meets them (a T on the through road, an X, a street split at a
+     * junction): an approach from either side, the area as wide as the
+     * widest other street there (+ 0.5 m), giving way to a higher one.
+     * The whole street and the street split anywhere are the same. */
+    for (size_t nd = 0; nd < net->nnodes && !r; nd++) {
+        if ((nd & 4095) == 0 && rs__poll(ctx)) {
+            r = RS_ERR_CANCELLED;
+            break;
+        }
+        const rs_network_leg *lg = net->leg + net->leg_start[nd];
+        uint32_t deg = net->leg_start[nd + 1] - net->leg_start[nd];
+        if (deg < 3) continue;
+        for (uint32_t a = 0; a < deg && !r; a++) {
+            const rs_network_leg *L = &lg[a];
+            int endleg = L->kind == RS_LEG_START || L->kind == RS_LEG_END;
+            if (endleg && net->link[2 * L->road + (L->kind == RS_LEG_END)] == UINT32_MAX) continue; /* (a free end) */
+            if (A.rl[L->road].n < 2 || rs__road_non_car(roads, L->road)) continue;
+            uint32_t k = net->stroke_of[L->road];
+            double h = 0;
+            int pmax = -1, first = 1;
+            for (uint32_t b = 0; b < deg; b++) {
+                const rs_network_leg *M = &lg[b];
+                if (net->stroke_of[M->road] == k) {
+                    if (b < a) first = 0; /* (the street's area once a node) */
+                    continue;
+                }
+                if (A.rl[M->road].n < 2 || rs__road_non_car(roads, M->road)) continue;
+                double wb;
+                rs_roads_get(roads, M->road, NULL, &wb, NULL, NULL);
+                if (wb / 2 + JUNCTION_TOL > h) h = wb / 2 + JUNCTION_TOL;
+                if (M->priority > pmax) pmax = M->priority;
+            }
+            if (pmax < 0) continue; /* no other street */
+            const rs__road_local *rl = &A.rl[L->road];
+            double total = rl->s[rl->n - 1];
+            double sl = L->kind == RS_LEG_START ? 0 : L->kind == RS_LEG_END ? total : L->s < 0 ? 0 : L->s > total ? total : L->s;
+            approach q = { L->road, sl, h, (int8_t)(L->kind == RS_LEG_END || L->kind == RS_LEG_BACKWARD ? 1 : -1),
+                           (uint8_t)(L->priority < pmax), 0, (uint8_t)endleg };
+            if (first) r = on_stroke(&A, L->road, sl - h, sl + h, 0, 0);
+            void *arr = ap;
+            if (!r && !room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64)) r = RS_ERR_NOMEM;
+            if (r) break;
+            ap = arr;
+            ap[nap++] = q;
+        }
+    }
+    rs__free(ctx, mt);
+    rs__free(ctx, endnode);
+    rs__free(ctx, sends);
     if (grid) {
         rs__free(ctx, G.start);
         rs__free(ctx, G.ids);
@@ -634,14 +853,16 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED; /* (index_junctions: ~10 ms at 10^5 roads) */
     if (!r) index_junctions(&A, nr);
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
-    for (size_t i = 0; i < nr && !r; i++) {
+    /* placed road by road, along each (a road's ends first to last) */
+    if (!r && nap > 1) qsort(ap, nap, sizeof *ap, approach_cmp);
+    for (size_t k = 0; k < nap && !r; k++) {
         if (rs__tick(ctx, 0)) {
             r = RS_ERR_CANCELLED;
             break;
         }
-        int ej[2] = { endj[i][0], endj[i][1] }, em[2] = { endj[i][2] & 1, (endj[i][2] >> 1) & 1 };
-        r = place_road(&A, atlas, i, ej, endh[i], em, pl, n, cap);
+        r = place_approach(&A, atlas, &ap[k], pl, n, cap);
     }
+    rs__free(ctx, ap);
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
     /* zebras: bars of their standard size repeated across the road (the
      * whole `zebra` sprite stretched to the road when the atlas has no bars) */
@@ -703,8 +924,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     rs__free(ctx, A.cont_end);
     rs__free(ctx, A.jstart);
     rs__free(ctx, A.jidx);
-    rs__free(ctx, endj);
-    rs__free(ctx, endh);
+    rs__free(ctx, A.slen);
     (void)rs__poll(ctx); /* (a stop here is seen by the next tick) */
     return r;
 }

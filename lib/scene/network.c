@@ -541,6 +541,15 @@ typedef struct build {
     uint32_t *ctl;     /* per node: its controls from point attributes (NULL: none) */
     uint32_t *short_at; /* pairs (short record, the node its ends are at), for link_short_ends */
     size_t nshort;
+    /* chains (chain_short_runs; NULL when no run of short records is
+     * longer than twice the tolerance): per road, its chain (the id of a
+     * record in it; a road in none: itself), the chain's arc length at the
+     * road's first point when crev is 0, at its last when 1 */
+    uint32_t *cid;
+    double *cs0, *ctot; /* ctot: per chain id, a ring's length (0: the chain has two ends) */
+    uint8_t *crev;
+    uint8_t *jend;      /* per road of a chain: bit 0, its first point is a joint of the chain (two
+                           records' ends exactly there, no other), bit 1 its last */
 } build;
 
 static uint32_t find(uint32_t *parent, uint32_t v)
@@ -578,6 +587,36 @@ static int near2(const double *a, const double *b, double tol)
 {
     double dx = a[0] - b[0], dy = a[1] - b[1];
     return dx * dx + dy * dy <= tol * tol;
+}
+
+/* Road r's arc length s as the arc length along its chain. */
+static double chain_pos(const build *B, uint32_t r, double s)
+{
+    return B->crev[r] ? B->cs0[r] + (B->look[r].length - s) : B->cs0[r] + s;
+}
+
+/* Places at arc length sa of road ra and sb of rb are one place of one
+ * road (no node joins them): within twice the tolerance along the road,
+ * or with chains along the chain (around a ring the shorter way), except
+ * where two records' ends are the same point (`same`), which their chain
+ * joins there. */
+static int one_place(const build *B, uint32_t ra, double sa, uint32_t rb, double sb, int same)
+{
+    if (!B->cid) return ra == rb && fabs(sa - sb) <= 2 * B->tol;
+    uint32_t c = B->cid[ra];
+    if (c != B->cid[rb] || (ra != rb && same)) return 0;
+    double d = fabs(chain_pos(B, ra, sa) - chain_pos(B, rb, sb));
+    if (B->ctot[c] > 0 && B->ctot[c] - d < d) d = B->ctot[c] - d;
+    return d <= 2 * B->tol;
+}
+
+/* Point v is a joint of a chain (chain_short_runs): one record's end
+ * where the next one starts, no node of other streets. */
+static int chain_joint(const build *B, uint32_t v)
+{
+    uint32_t r = B->vroad[v];
+    if (!B->jend[r]) return 0;
+    return ((B->jend[r] & 1) && v == B->voff[r]) || ((B->jend[r] & 2) && v == B->rep[B->voff[r + 1] - 1]);
 }
 
 static rs_result push_pass(build *B, const pass *p)
@@ -686,6 +725,7 @@ static rs_result find_tees(build *B)
                         run_of(&H, kx, ky, &qa, &qb);
                     for (uint32_t q = qa; q < qb; q++) {
                         uint32_t e = H.ent[q].id;
+                        if (B->cid && chain_joint(B, e)) continue; /* (inside its street: no end on another) */
                         const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
@@ -695,7 +735,8 @@ static rs_result find_tees(build *B)
                         uint32_t nd = B->nodeof[e]; /* (an end: its group is a node) */
                         if (B->nodeof[a] == nd || B->nodeof[k1] == nd) continue; /* (one group: one node) */
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
-                        if (B->vroad[e] == r && fabs(s - B->s[e]) <= 2 * tol) continue;
+                        if ((B->cid || B->vroad[e] == r) && one_place(B, (uint32_t)r, s, B->vroad[e], B->s[e], 0))
+                            continue;
                         pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), nd, 0, 0, s, dist };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
@@ -826,6 +867,29 @@ static size_t node_passes(build *B, uint32_t nd)
             }
         }
         P[np++] = *p;
+    }
+    /* A chain (chain_short_runs) that has a record end here goes on from
+     * it: its other passes within twice the tolerance along it (its points
+     * near the end, a T on its segments) are that one place (a road cut
+     * where a side road ends, 0.046 m past one of its vertices: the side
+     * road's end joined the vertex too, a pass of another record) */
+    if (B->cid && np > 2) {
+        size_t m = 0;
+        for (size_t i = 0; i < np; i++) {
+            const pass *p = &P[i];
+            int drop = 0;
+            if (p->seg != NONE || (!p->first && !p->last))
+                for (size_t j = 0; j < np && !drop; j++) {
+                    const pass *q = &P[j];
+                    if (q->road == p->road || q->seg != NONE || !(q->first || q->last) ||
+                        B->cid[q->road] != B->cid[p->road])
+                        continue;
+                    double at = chain_pos(B, q->road, q->first ? 0 : B->look[q->road].length);
+                    drop = fabs(chain_pos(B, p->road, p->s) - at) <= 2 * tol;
+                }
+            if (!drop) P[m++] = *p;
+        }
+        np = m;
     }
     return np;
 }
@@ -1209,6 +1273,11 @@ static void build_free(build *B)
     rs__free(ctx, B->buf);
     rs__free(ctx, B->ctl);
     rs__free(ctx, B->short_at);
+    rs__free(ctx, B->cid);
+    rs__free(ctx, B->cs0);
+    rs__free(ctx, B->ctot);
+    rs__free(ctx, B->crev);
+    rs__free(ctx, B->jend);
 }
 
 void rs_network_free(rs_ctx *ctx, rs_network *net)
@@ -1358,7 +1427,11 @@ static rs_result cluster_points(build *B)
                 for (uint32_t q = qa; q < qb; q++) {
                     const pt_entry *f = &H.ent[q];
                     if (f->id <= e->id || !near2(&e->x, &f->x, tol)) continue;
-                    if (f->road == e->road && fabs(B->s[e->id] - B->s[f->id]) <= 2 * tol) continue; /* one place of one road: no node */
+                    if ((B->cid || f->road == e->road) &&
+                        one_place(B, e->road, B->s[e->id], f->road, B->s[f->id], e->x == f->x && e->y == f->y))
+                        continue; /* one place of one road: no node */
+                    if (B->cid && B->cid[e->road] != B->cid[f->road] && (chain_joint(B, e->id) || chain_joint(B, f->id)))
+                        continue; /* (a joint of a chain is inside its street, as its points are) */
                     unite_places(up, H.ent, (uint32_t)i, q);
                 }
             }
@@ -1374,6 +1447,158 @@ static rs_result cluster_points(build *B)
 }
 
 static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out);
+
+/* Record r is short (no legs: bridge_short joins its two ends), of two
+ * places. */
+static int short_record(const build *B, size_t r)
+{
+    size_t v0 = B->voff[r], v1 = B->voff[r + 1];
+    return !B->live[r] && v1 - v0 >= 2 && B->rep[v1 - 1] != v0;
+}
+
+static uint64_t end_hash(const double *p)
+{
+    double x = p[0] == 0 ? 0.0 : p[0], y = p[1] == 0 ? 0.0 : p[1]; /* (-0 is 0) */
+    uint64_t a, b;
+    memcpy(&a, &x, sizeof a);
+    memcpy(&b, &y, sizeof b);
+    uint64_t h = a * 0x9E3779B97F4A7C15u ^ (b + 0x632BE59BD9B4E019u) * 0xC2B2AE3D27D4EB4Fu;
+    return h ^ h >> 29;
+}
+
+/* Runs of short records longer than twice the tolerance (or of more than
+ * SHORT_CHAIN records): a road cut into
+ * crumbs (every record at most 0.1 m; 240 records on a 24 m road) had all
+ * its ends joined into one point by bridge_short, so it was points only and
+ * drew no lines. Such a run's records are live (legs at each end, strokes
+ * through them), and the records chained to them (two records' ends at
+ * exactly one point, no other end there, drawing alike and keeping the
+ * direction of travel) are one road for the rule that two places of one
+ * road within twice the tolerance are no node (one_place): along the
+ * chain. A record's own two ends 0.02 m apart, and the ends of the records
+ * beside it, are then no node; each shared end is one. Runs of at most
+ * twice the tolerance keep bridge_short (a point of the network). No short
+ * record, or no long run: nothing is made (B->cid stays NULL). */
+static rs_result chain_short_runs(build *B)
+{
+    size_t n = B->nroads, nshort = 0;
+    for (size_t r = 0; r < n && nshort < 2; r++) nshort += short_record(B, r);
+    if (nshort < 2) return RS_OK; /* (one short record is no longer than twice the tolerance) */
+    size_t ne = 2 * n, cap = 16;
+    while (cap < 2 * ne) cap *= 2;
+    uint32_t *tab = rs__alloc_array(B->ctx, cap, sizeof *tab), *next = rs__alloc_array(B->ctx, ne, sizeof *next);
+    uint32_t *partner = rs__alloc_array(B->ctx, ne, sizeof *partner), *run = rs__alloc_array(B->ctx, n, sizeof *run);
+    uint8_t *mark = rs__calloc(B->ctx, n, 1);
+    rs_result res = RS_OK;
+    if (!tab || !next || !partner || !run || !mark) {
+        res = RS_ERR_NOMEM;
+        goto done;
+    }
+    /* the record ends at each exact point: lists by hash slot */
+    for (size_t i = 0; i < cap; i++) tab[i] = NONE;
+    for (size_t e = 0; e < ne; e++) {
+        size_t r = e / 2, v0 = B->voff[r], v1 = B->voff[r + 1];
+        next[e] = partner[e] = NONE;
+        if (v1 - v0 < 2 || B->rep[v1 - 1] == v0) continue;
+        const double *p = end_point(B, (uint32_t)e);
+        if (!isfinite(p[0]) || !isfinite(p[1])) continue;
+        size_t h = (size_t)(end_hash(p) & (cap - 1));
+        next[e] = tab[h];
+        tab[h] = (uint32_t)e;
+    }
+    /* partners: exactly two ends at a point (of a slot's list, the ends at
+     * that point), of two records that continue each other */
+    for (size_t h = 0; h < cap; h++)
+        for (uint32_t e = tab[h]; e != NONE; e = next[e]) {
+            const double *p = end_point(B, e);
+            uint32_t other = NONE, count = 0;
+            for (uint32_t f = tab[h]; f != NONE && count < 3; f = next[f]) {
+                const double *q = end_point(B, f);
+                if (q[0] != p[0] || q[1] != p[1]) continue;
+                count++;
+                if (f != e) other = f;
+            }
+            if (count != 2 || other / 2 == e / 2) continue;
+            const road_look *a = &B->look[e / 2], *b = &B->look[other / 2];
+            if (draw_alike(a, b) && ((e & 1) != (other & 1) || a->two_way)) partner[e] = other;
+        }
+    /* the runs of short records; mark 2: a record of a long run */
+    int any = 0;
+    for (size_t r = 0; r < n; r++) {
+        if (mark[r] || !short_record(B, r)) continue;
+        size_t cnt = 0;
+        double len = B->look[r].length;
+        mark[r] = 1;
+        run[cnt++] = (uint32_t)r;
+        for (uint32_t side = 0; side < 2; side++)
+            for (uint32_t e = 2 * (uint32_t)r + side, f; (f = partner[e]) != NONE; e = f ^ 1) {
+                uint32_t q = f / 2;
+                if (mark[q] || !short_record(B, q)) break;
+                mark[q] = 1;
+                run[cnt++] = q;
+                len += B->look[q].length;
+            }
+        if (len > 2 * B->tol || cnt > SHORT_CHAIN) { /* (more than link_short_ends walks: live too) */
+            for (size_t i = 0; i < cnt; i++) mark[run[i]] = 2;
+            any = 1;
+        }
+    }
+    if (!any) goto done;
+    B->cid = rs__alloc_array(B->ctx, n, sizeof *B->cid);
+    B->cs0 = rs__calloc(B->ctx, n, sizeof *B->cs0);
+    B->ctot = rs__calloc(B->ctx, n, sizeof *B->ctot);
+    B->crev = rs__calloc(B->ctx, n, 1);
+    B->jend = rs__calloc(B->ctx, n, 1);
+    if (!B->cid || !B->cs0 || !B->ctot || !B->crev || !B->jend) {
+        res = RS_ERR_NOMEM;
+        goto done;
+    }
+    for (size_t r = 0; r < n; r++) B->cid[r] = (uint32_t)r;
+    /* the chains through long runs, from their first record (a ring: from
+     * the run's record met first), numbered by it */
+    for (size_t r = 0; r < n; r++) {
+        if ((mark[r] & 3) != 2 || (mark[r] & 4)) continue;
+        uint32_t c = (uint32_t)r, ein = 2 * (uint32_t)r; /* (the record, the end it is entered by) */
+        int ring = 0;
+        for (size_t steps = 0; steps < n; steps++) {
+            uint32_t f = partner[ein];
+            if (f == NONE) break;
+            if (f / 2 == r) {
+                ring = 1;
+                c = (uint32_t)r, ein = 2 * (uint32_t)r;
+                break;
+            }
+            c = f / 2, ein = f ^ 1;
+        }
+        double acc = 0;
+        uint32_t id = c;
+        for (uint32_t cur = c, e = ein;;) {
+            B->cid[cur] = id;
+            B->jend[cur] = (uint8_t)((partner[2 * cur] != NONE) | (partner[2 * cur + 1] != NONE) << 1);
+            B->crev[cur] = (uint8_t)(e & 1);
+            B->cs0[cur] = acc;
+            mark[cur] |= 4;
+            acc += B->look[cur].length;
+            uint32_t f = partner[e ^ 1];
+            if (f == NONE || (mark[f / 2] & 4)) break;
+            cur = f / 2, e = f;
+        }
+        B->ctot[id] = ring ? acc : 0;
+    }
+    /* the long runs' records are live, every place of them in the hash */
+    for (size_t r = 0; r < n; r++) {
+        if ((mark[r] & 3) != 2) continue;
+        B->live[r] = 1;
+        for (size_t v = B->voff[r]; v < B->voff[r + 1]; v++) B->inhash[v] = B->rep[v] == v;
+    }
+done:
+    rs__free(B->ctx, tab);
+    rs__free(B->ctx, next);
+    rs__free(B->ctx, partner);
+    rs__free(B->ctx, run);
+    rs__free(B->ctx, mark);
+    return res;
+}
 
 /* A record no longer than twice the tolerance (no legs: docs/network.md
  * "Degenerate records") is a point of the network: the places at its two
@@ -1444,7 +1669,8 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     N->tol = tol;
     size_t n = B.nroads, m = n ? n : 1;
     if ((res = load_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK ||
-        (res = cluster_points(&B)) != RS_OK || (res = bridge_short(&B)) != RS_OK ||
+        (res = chain_short_runs(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK ||
+        (res = bridge_short(&B)) != RS_OK ||
         (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
         goto fail;
 
