@@ -1,10 +1,14 @@
 /* Automatic marking placement (issue 14, docs/markings.md "Automatic
  * placement"):
  *
- * - junctions: an end of road A within B's half width (+ 0.5 m) of road B's
- *   centreline (B != A) is a junction of A at that end and of B at the
- *   nearest point's arc length. Its area on A is the stretch within B's
- *   half width + 0.5 m of the junction; on B, A's half width + 0.5 m.
+ * - junctions, per street (the network's strokes: a street whole or split
+ *   anywhere has the same ones): a free end of street A within B's half
+ *   width (+ 0.5 m) of street B's centreline (B's nearest record); a street
+ *   passing through a node of the network where another meets it (both
+ *   sides approach); a record end its street goes on from, crossed there by
+ *   a street the network did not join. Its area on A is the stretch within
+ *   B's half width + 0.5 m of the junction; on B, A's half width + 0.5 m;
+ *   both on every record of the street they reach.
  * - stop / give-way lines: where A ends at B and A's priority is below B's
  *   (rs__road_priority: the class rank, motorway > trunk > primary >
  *   secondary > tertiary > residential > service > track > path, footway,
@@ -14,7 +18,8 @@
  *   one-way), 0.5 m before A's junction area. A closed ring passes through
  *   its own seam: an arm ending on its first point is a junction too.
  * - turn arrows: `turn:lanes=left|through;right|...` (OpenStreetMap, lanes
- *   from left to right) on a road whose end is a junction: one arrow per
+ *   from left to right) on a road whose end is a junction (OSM: the turns
+ *   at the end of the way; none where a way passes through): one arrow per
  *   lane, its tip 6 m before the junction area; the lanes share the
  *   incoming half (the whole width when one-way).
  * - zebra crossings: a `X Y crossing=zebra` point attribute puts a zebra
@@ -495,7 +500,7 @@ static rs_result place_approach(ctxa *A, const rs_atlas *atlas, const approach *
     const double hw = L.width / 2;
     const int left_hand = L.side == RS_DRIVING_LEFT, us = A->so && A->so->profile == RS_PROFILE_MUTCD;
     const char *ctrl = rs_roads_get_attr(A->roads, i, "control");
-    do {
+    {
         /* traffic arriving with the points (at a road's last point) has the
          * lanes of direction +1, flip 0 */
         int arrive = ap->arrive, flip = arrive < 0;
@@ -517,7 +522,7 @@ static rs_result place_approach(ctxa *A, const rs_atlas *atlas, const approach *
             if (a < t0) t0 = a;
             if (b > t1) t1 = b;
         }
-        if (!(t1 > t0)) break; /* a one-way road leaving here */
+        if (!(t1 > t0)) return RS_OK; /* a one-way road leaving here */
         double edge = ap->s - arrive * ap->half; /* the junction area's near side */
         double dir = -arrive;                    /* away from the junction */
         if (ap->minor) {
@@ -570,7 +575,7 @@ static rs_result place_approach(ctxa *A, const rs_atlas *atlas, const approach *
             p.t = (ln->t_left + ln->t_right) / 2;
             if (offer(A, &p, pl, n, cap)) return RS_ERR_NOMEM;
         }
-    } while (0);
+    }
     return RS_OK;
 }
 
