@@ -686,6 +686,33 @@ static void test_auto(void)
     rs_dem_free(ctx, dem);
 }
 
+/* Give-way blocks on roads road .. road_hi (rs__markings_auto, built-in
+ * atlas), and the least and greatest arc length of them. */
+static int blocks_of(const char *text, size_t road, size_t road_hi, double *s_lo, double *s_hi)
+{
+    rs_roads *roads = NULL;
+    CHECK(rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK);
+    rs_dem *dem = flat_dem(121, 121, 1.0);
+    rs_atlas *atlas = NULL;
+    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
+    rs__placement *pl = NULL;
+    size_t n = 0, cap = 0;
+    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, NULL, &pl, &n, &cap) == RS_OK);
+    long gb = rs_atlas_find(atlas, "give_way_block");
+    int got = 0;
+    *s_lo = INFINITY, *s_hi = -INFINITY;
+    for (size_t i = 0; i < n; i++)
+        if ((long)pl[i].type == gb && pl[i].road >= road && pl[i].road <= road_hi) {
+            got++;
+            *s_lo = fmin(*s_lo, pl[i].s), *s_hi = fmax(*s_hi, pl[i].s);
+        }
+    rs__free(ctx, pl);
+    rs_atlas_free(ctx, atlas);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    return got;
+}
+
 /* Roundabouts (issue 27 problem 5): arms give way to the ring (its
  * junction=roundabout priority) whatever their class, also an arm ending on
  * a closed ring's first point and one at the split of a ring drawn as two
@@ -693,26 +720,12 @@ static void test_auto(void)
  * road. */
 static void roundabout_case(const char *text, int nroads, const int *want)
 {
-    rs_roads *roads = NULL;
-    CHECK(rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK);
-    rs_dem *dem = flat_dem(101, 101, 1.0);
-    rs_atlas *atlas = NULL;
-    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
-    rs__placement *pl = NULL;
-    size_t n = 0, cap = 0;
-    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, NULL, &pl, &n, &cap) == RS_OK);
-    int got[8] = { 0 };
-    long gb = rs_atlas_find(atlas, "give_way_block");
-    for (size_t i = 0; i < n; i++)
-        if ((long)pl[i].type == gb && pl[i].road < 8) got[pl[i].road]++;
     for (int r = 0; r < nroads; r++) {
-        if (want[r]) CHECKF(got[r] > 0, "road %d: %d blocks", r, got[r]);
-        else CHECK_EQ_INT(got[r], 0);
+        double lo, hi;
+        int got = blocks_of(text, (size_t)r, (size_t)r, &lo, &hi);
+        if (want[r]) CHECKF(got > 0, "road %d: %d blocks", r, got);
+        else CHECK_EQ_INT(got, 0);
     }
-    rs__free(ctx, pl);
-    rs_atlas_free(ctx, atlas);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
 }
 
 static void test_roundabout(void)
@@ -744,32 +757,6 @@ static void test_roundabout(void)
     roundabout_case(plain, 2, want_plain);
 }
 
-/* Give-way blocks on roads road .. road_hi (rs__markings_auto, built-in
- * atlas), and the least and greatest arc length of them. */
-static int blocks_of(const char *text, size_t road, size_t road_hi, double *s_lo, double *s_hi)
-{
-    rs_roads *roads = NULL;
-    CHECK(rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK);
-    rs_dem *dem = flat_dem(121, 81, 1.0);
-    rs_atlas *atlas = NULL;
-    CHECK(rs_atlas_default(ctx, &atlas) == RS_OK);
-    rs__placement *pl = NULL;
-    size_t n = 0, cap = 0;
-    CHECK(rs__markings_auto(ctx, dem, roads, atlas, NULL, NULL, &pl, &n, &cap) == RS_OK);
-    long gb = rs_atlas_find(atlas, "give_way_block");
-    int got = 0;
-    *s_lo = INFINITY, *s_hi = -INFINITY;
-    for (size_t i = 0; i < n; i++)
-        if ((long)pl[i].type == gb && pl[i].road >= road && pl[i].road <= road_hi) {
-            got++;
-            *s_lo = fmin(*s_lo, pl[i].s), *s_hi = fmax(*s_hi, pl[i].s);
-        }
-    rs__free(ctx, pl);
-    rs_atlas_free(ctx, atlas);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
-    return got;
-}
 
 /* Junctions from the network, not from where the ways happen to end
  * (issue 27 problem 5): a residential street crossing a primary through a

@@ -640,6 +640,18 @@ static int max_diff(const image *a, const image *b, uint32_t *wx, uint32_t *wy)
     return worst;
 }
 
+/* The worst channel difference between whole and split drawn (render; 255
+ * when either fails), and where. */
+static int draw_diff(const rs_roads *whole, const rs_roads *split, uint32_t *wx, uint32_t *wy)
+{
+    image w = { 0 }, sp = { 0 };
+    int ok = render(whole, NULL, &w) && render(split, NULL, &sp);
+    int dd = ok && w.rgba && sp.rgba ? max_diff(&w, &sp, wx, wy) : 255;
+    free(w.rgba);
+    free(sp.rgba);
+    return dd;
+}
+
 static void save_ppm(const char *path, const image *im)
 {
     FILE *f = getenv("RS_NETWORK_PPM") ? fopen(path, "wb") : NULL;
@@ -1012,16 +1024,12 @@ static void test_short_record_at_end(void)
             add_split(whole, "r", wd, &shapes[shape], NULL, 0, at);
             size_t nrec = add_split(split, "r", wd, &shapes[shape], shape == 2 ? cuts2 : shape ? cuts1 : cuts0, 4, at);
             CHECK_EQ_INT(nrec, 5);
-            image w = { 0 }, sp = { 0 };
-            CHECK(render(whole, NULL, &w) && render(split, NULL, &sp));
             uint32_t wx = 0, wy = 0;
-            int dd = w.rgba && sp.rgba ? max_diff(&w, &sp, &wx, &wy) : 255;
+            int dd = draw_diff(whole, split, &wx, &wy);
             CHECKF(dd <= 8, "%s (%s): a pixel off by %d/255 at (%u, %u)",
                    shape == 2 ? "a bend inside a short record" : shape ? "short records past a bend"
                                                                      : "two short records at either end",
                    prof ? "MUTCD" : "RMS", dd, wx, wy);
-            free(w.rgba);
-            free(sp.rgba);
             rs_roads_free(ctx, whole);
             rs_roads_free(ctx, split);
         }
@@ -1084,14 +1092,10 @@ static void test_crumbs_road(void)
             rs_network_free(ctx, n);
             for (int prof = 0; prof < 2; prof++) {
                 render_profile = prof ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
-                image w = { 0 }, sp = { 0 };
-                CHECK(render(whole, NULL, &w) && render(split, NULL, &sp));
                 uint32_t wx = 0, wy = 0;
-                int dd = w.rgba && sp.rgba ? max_diff(&w, &sp, &wx, &wy) : 255;
+                int dd = draw_diff(whole, split, &wx, &wy);
                 CHECKF(dd <= 8, "shape %d cut into %zu records (%s): a pixel off by %d/255 at (%u, %u)", shape, nrec,
                        prof ? "MUTCD" : "RMS", dd, wx, wy);
-                free(w.rgba);
-                free(sp.rgba);
             }
             rs_roads_free(ctx, whole);
             rs_roads_free(ctx, split);
@@ -1135,14 +1139,10 @@ static void test_tee_splits(void)
             double sc[1] = { ls - 4 };
             add_split(split, "side", 7, &side, kind == 1 || kind == 2 ? sc : NULL, kind == 1 || kind == 2, residential);
             render_profile = prof ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
-            image w = { 0 }, sp = { 0 };
-            CHECK(render(whole, NULL, &w) && render(split, NULL, &sp));
             uint32_t wx = 0, wy = 0;
-            int dd = w.rgba && sp.rgba ? max_diff(&w, &sp, &wx, &wy) : 255;
+            int dd = draw_diff(whole, split, &wx, &wy);
             CHECKF(dd <= 8, "T, splits %d (%s, %zu records): a pixel off by %d/255 at (%u, %u)", kind,
                    prof ? "MUTCD" : "RMS", rs_roads_count(split), dd, wx, wy);
-            free(w.rgba);
-            free(sp.rgba);
             rs_roads_free(ctx, whole);
             rs_roads_free(ctx, split);
         }
