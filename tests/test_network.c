@@ -936,8 +936,9 @@ static void test_cut_near_corner(void)
 
 /* A record no longer than twice the tolerance between two others: they
  * continue each other across it, and it lies in their stroke between
- * them (its points are the road's: a bend inside it stays); it has no legs
- * (its neighbours left a gap in their lines as wide as it: fuzz/split). */
+ * them (its points are the road's: a bend inside it stays; its neighbours
+ * left a gap in their lines as wide as it: fuzz/split). Its ends meet
+ * theirs exactly: a chain, whose joints are nodes of degree 2. */
 static void test_short_record_between(void)
 {
     const double a[4] = { 0, 0, 10, 0 }, d[4] = { 10, 0, 10.08, 0 }, b[4] = { 10.08, 0, 20, 0 };
@@ -953,8 +954,8 @@ static void test_short_record_between(void)
         CHECKF(sa.stroke == sb.stroke && sa.next == 1 && sb.prev == 1, "a and b: strokes %u, %u", sa.stroke, sb.stroke);
         CHECK(sd.stroke == sa.stroke && sd.prev == 0 && sd.next == 2 && !sd.reversed);
         CHECK(fabs(sd.s_offset - 10) < 1e-9 && fabs(sb.s_offset - 10.08) < 1e-9);
-        /* three nodes: the two ends and the joint (degree 2) */
-        CHECK_EQ_INT(rs_network_node_count(n), 3);
+        /* four nodes: the two ends and the two joints (degree 2) */
+        CHECK_EQ_INT(rs_network_node_count(n), 4);
         for (size_t i = 0; i < rs_network_node_count(n); i++) {
             rs_network_node nd;
             CHECK(rs_network_get_node(n, i, &nd) == RS_OK && nd.degree <= 2);

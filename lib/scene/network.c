@@ -27,6 +27,7 @@
 
 #define NONE UINT32_MAX
 #define MAX_DEFLECTION (RS__PI / 6) /* a stroke through a junction turns less than this */
+#define SHORT_CHAIN 16
 
 int rs__class_rank(rs_road_class c)
 {
@@ -548,6 +549,7 @@ typedef struct build {
     uint32_t *cid;
     double *cs0, *ctot; /* ctot: per chain id, a ring's length (0: the chain has two ends) */
     uint8_t *crev;
+    uint32_t *cpart;    /* with chains: per road end, the end of the chain's next record there, or NONE */
     uint8_t *jend;      /* per road of a chain: bit 0, its first point is a joint of the chain (two
                            records' ends exactly there, no other), bit 1 its last */
 } build;
@@ -924,8 +926,19 @@ static void sort_legs(rs_network_leg *L, size_t k)
 static double leg_angle(const build *B, const road_look *lk, const double *c, uint32_t v, int dir)
 {
     size_t lo = lk->first, hi = lk->last, w = v;
-    for (;;) {
-        if (dir > 0 ? w >= hi : w <= lo) break;
+    for (int hops = 0;;) {
+        if (dir > 0 ? w >= hi : w <= lo) {
+            /* a chain's record ends within the tolerance: on along the
+             * chain (a record of a few millimetres seen from a node at a
+             * vertex 0.046 m away pointed the wrong way) */
+            uint32_t r = B->vroad[w], f = B->cpart ? B->cpart[2 * r + (dir > 0)] : NONE;
+            if (f == NONE || hops++ == SHORT_CHAIN) break;
+            const road_look *q = &B->look[f / 2];
+            lo = q->first, hi = q->last;
+            w = f & 1 ? hi : lo;
+            dir = f & 1 ? -1 : 1;
+            continue;
+        }
         w = dir > 0 ? w + 1 : w - 1;
         if (!near2(B->xy + 2 * w, c, B->tol)) break;
     }
@@ -1082,7 +1095,6 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
  * moved by 0.1 m: docs/network.md "Degenerate records"; fuzz/split). At
  * most SHORT_CHAIN records a chain (each step scans the node's short
  * records). short_at: pairs (record, node). */
-#define SHORT_CHAIN 16
 
 static int cmp_short(const void *pa, const void *pb)
 {
@@ -1278,6 +1290,7 @@ static void build_free(build *B)
     rs__free(ctx, B->ctot);
     rs__free(ctx, B->crev);
     rs__free(ctx, B->jend);
+    rs__free(ctx, B->cpart);
 }
 
 void rs_network_free(rs_ctx *ctx, rs_network *net)
@@ -1466,24 +1479,28 @@ static uint64_t end_hash(const double *p)
     return h ^ h >> 29;
 }
 
-/* Runs of short records longer than twice the tolerance (or of more than
- * SHORT_CHAIN records): a road cut into
- * crumbs (every record at most 0.1 m; 240 records on a 24 m road) had all
- * its ends joined into one point by bridge_short, so it was points only and
- * drew no lines. Such a run's records are live (legs at each end, strokes
+/* Runs of short records (each at most twice the tolerance) that a longer
+ * record goes on from, or longer than twice the tolerance in all, or of
+ * more than SHORT_CHAIN records: a road cut into crumbs (every record at
+ * most 0.1 m; 240 records on a 24 m road) had all its ends joined into one
+ * point by bridge_short, so it was points only and drew no lines; a short
+ * record between a T's through records near the side road's end joined
+ * the T's node and made a loop of its neighbour (184/255, fuzz/split
+ * matrix). Such a run's records are live (legs at each end, strokes
  * through them), and the records chained to them (two records' ends at
  * exactly one point, no other end there, drawing alike and keeping the
  * direction of travel) are one road for the rule that two places of one
  * road within twice the tolerance are no node (one_place): along the
  * chain. A record's own two ends 0.02 m apart, and the ends of the records
- * beside it, are then no node; each shared end is one. Runs of at most
- * twice the tolerance keep bridge_short (a point of the network). No short
- * record, or no long run: nothing is made (B->cid stays NULL). */
+ * beside it, are then no node; each shared end is one. A run alone and
+ * no longer than twice the tolerance is a road of that length: points
+ * only, as the road whole (bridge_short). No short record, or no such
+ * run: nothing is made (B->cid stays NULL). */
 static rs_result chain_short_runs(build *B)
 {
     size_t n = B->nroads, nshort = 0;
-    for (size_t r = 0; r < n && nshort < 2; r++) nshort += short_record(B, r);
-    if (nshort < 2) return RS_OK; /* (one short record is no longer than twice the tolerance) */
+    for (size_t r = 0; r < n && !nshort; r++) nshort += short_record(B, r);
+    if (!nshort) return RS_OK;
     size_t ne = 2 * n, cap = 16;
     while (cap < 2 * ne) cap *= 2;
     uint32_t *tab = rs__alloc_array(B->ctx, cap, sizeof *tab), *next = rs__alloc_array(B->ctx, ne, sizeof *next);
@@ -1528,17 +1545,19 @@ static rs_result chain_short_runs(build *B)
         if (mark[r] || !short_record(B, r)) continue;
         size_t cnt = 0;
         double len = B->look[r].length;
+        int beside_long = 0; /* (a record of more than 2 tol goes on from the run) */
         mark[r] = 1;
         run[cnt++] = (uint32_t)r;
         for (uint32_t side = 0; side < 2; side++)
             for (uint32_t e = 2 * (uint32_t)r + side, f; (f = partner[e]) != NONE; e = f ^ 1) {
                 uint32_t q = f / 2;
+                if (!short_record(B, q)) beside_long |= B->live[q];
                 if (mark[q] || !short_record(B, q)) break;
                 mark[q] = 1;
                 run[cnt++] = q;
                 len += B->look[q].length;
             }
-        if (len > 2 * B->tol || cnt > SHORT_CHAIN) { /* (more than link_short_ends walks: live too) */
+        if (beside_long || len > 2 * B->tol || cnt > SHORT_CHAIN) {
             for (size_t i = 0; i < cnt; i++) mark[run[i]] = 2;
             any = 1;
         }
@@ -1594,7 +1613,8 @@ static rs_result chain_short_runs(build *B)
 done:
     rs__free(B->ctx, tab);
     rs__free(B->ctx, next);
-    rs__free(B->ctx, partner);
+    if (B->cid) B->cpart = partner; /* (kept for leg_angle) */
+    else rs__free(B->ctx, partner);
     rs__free(B->ctx, run);
     rs__free(B->ctx, mark);
     return res;
