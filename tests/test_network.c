@@ -1106,11 +1106,15 @@ static void test_crumbs_road(void)
 
 /* A T drawn with its roads split near it (the through road 2 m from the
  * side road's end, the side road 4 m before the through road's centre
- * line, or both cut into many records, 0.03 m crumbs included) draws as
- * unsplit, automatic give-way lines included: split ends near a junction
- * made a junction of their own (its area hid the give-way line, 196/255),
- * and a side road's end near a road cut into crumbs met several of its
- * joints (issue 27 target 1). */
+ * line, or both cut into many records, 0.03 m crumbs included, also
+ * exactly at the T 0.046 m past a vertex; a one-way road with a 0.12 m
+ * record at the T) draws as unsplit, automatic give-way lines included:
+ * split ends near a junction made a junction of their own (its area hid
+ * the give-way line, 196/255), a side road's end near a road cut into
+ * crumbs met several of its joints, a 3 mm record's leg pointed the wrong
+ * way (issue 27 target 1). Kind 5 is the straight cousin of a curved case
+ * where a bridged record made a loop at the T (184/255); straight, it drew
+ * alike on the earlier rule too. */
 static void test_tee_splits(void)
 {
     static const char *const primary[] = { "class", "primary", NULL };
@@ -1123,22 +1127,49 @@ static void test_tee_splits(void)
     side.xy[0] = tx - 8, side.xy[1] = ty + 40, side.xy[2] = tx, side.xy[3] = ty;
     double lm = poly_len(&main_road), ls = poly_len(&side), tm = hypot(tx - 5, ty - 30);
     static double cuts[2000];
-    for (int kind = 0; kind < 4; kind++)
+    /* kind 4: main with a vertex 0.046 m before the T, cut into crumbs and
+     * exactly at the T (the node is at the vertex, the records ending at
+     * the T lie between it and the vertex) */
+    static poly bent;
+    double ux = (115 - 5) / lm, uy = (33 - 30) / lm;
+    bent.n = 3;
+    bent.xy[0] = 5, bent.xy[1] = 30, bent.xy[2] = 5 + (tm - 0.046) * ux, bent.xy[3] = 30 + (tm - 0.046) * uy + 0.002;
+    bent.xy[4] = 115, bent.xy[5] = 33;
+    double s1 = hypot(bent.xy[2] - 5, bent.xy[3] - 30), l2 = hypot(115 - bent.xy[2], 33 - bent.xy[3]);
+    double fT = (tm - s1) / l2; /* (where add_split puts a cut at tm: the side road ends exactly there) */
+    double bx = bent.xy[2] + fT * (115 - bent.xy[2]), by = bent.xy[3] + fT * (33 - bent.xy[3]);
+    static const char *const oneway[] = { "class", "primary", "oneway", "yes", NULL };
+    for (int kind = 0; kind < 6; kind++)
         for (int prof = 0; prof < 2; prof++) {
+            const poly *mr = kind == 4 ? &bent : &main_road;
+            const char *const *mat = kind == 5 ? oneway : primary;
+            static poly sd;
+            sd = side;
+            if (kind == 4) sd.xy[2] = bx, sd.xy[3] = by;
             rs_roads *whole = NULL, *split = NULL;
             CHECK(rs_roads_create(ctx, &whole) == RS_OK && rs_roads_create(ctx, &split) == RS_OK);
-            add_split(whole, "main", 9, &main_road, NULL, 0, primary);
-            add_split(whole, "side", 7, &side, NULL, 0, residential);
+            add_split(whole, "main", 9, mr, NULL, 0, mat);
+            add_split(whole, "side", 7, &sd, NULL, 0, residential);
             size_t nc = 0;
             if (kind == 0) cuts[nc++] = tm - 2;
             else if (kind == 2) {
                 rng_state = 0x5DEECE66Du;
                 for (double at = 0.5 + rnd(); at < lm - 0.5 && nc < 30; at += 0.5 + 3 * rnd()) cuts[nc++] = at;
-            } else if (kind == 3)
-                for (double at = 0.03; at < lm - 0.03 && nc < 2000; at += 0.03 + 0.004 * (double)(nc % 3)) cuts[nc++] = at;
-            add_split(split, "main", 9, &main_road, cuts, nc, primary);
+            } else if (kind == 3 || kind == 4) {
+                int at_t = kind == 4;
+                for (double at = 0.03; at < lm - 0.03 && nc < 2000; at += 0.03 + 0.004 * (double)(nc % 3)) {
+                    if (at_t && at >= tm) cuts[nc++] = tm, at_t = 0;
+                    if (at != tm) cuts[nc++] = at;
+                }
+            } else if (kind == 5) {
+                /* a one-way road: a 0.12 m record from just before the T, a
+                 * 0.05 m one after it */
+                cuts[nc++] = tm - 2.5, cuts[nc++] = tm - 0.037, cuts[nc++] = tm + 0.0817, cuts[nc++] = tm + 0.1317;
+                cuts[nc++] = tm + 3;
+            }
+            add_split(split, "main", 9, mr, cuts, nc, mat);
             double sc[1] = { ls - 4 };
-            add_split(split, "side", 7, &side, kind == 1 || kind == 2 ? sc : NULL, kind == 1 || kind == 2, residential);
+            add_split(split, "side", 7, &sd, kind == 1 || kind == 2 ? sc : NULL, kind == 1 || kind == 2, residential);
             render_profile = prof ? RS_PROFILE_MUTCD : RS_PROFILE_RMS;
             uint32_t wx = 0, wy = 0;
             int dd = draw_diff(whole, split, &wx, &wy);
