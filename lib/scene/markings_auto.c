@@ -687,6 +687,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     struct met {
         size_t road;
         double d, s;
+        int out; /* not the street's nearest record, or a street that only ends here */
     } *mt = NULL;
     size_t nmt = 0, capmt = 0;
     /* Free ends of streets: an end of road A within B's half width (+ 0.5 m)
@@ -753,7 +754,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     break;
                 }
                 mt = arr;
-                mt[nmt].road = j, mt[nmt].d = d, mt[nmt].s = s;
+                mt[nmt].road = j, mt[nmt].d = d, mt[nmt].s = s, mt[nmt].out = 0;
                 nmt++;
             }
             /* per street met, its nearest record (the first of equals) */
@@ -767,13 +768,13 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     if (net->stroke_of[mt[c2].road] == k && (mt[c2].d < mt[best].d || (mt[c2].d == mt[best].d && c2 < best)))
                         best = c2;
                 if (best != c) {
-                    mt[c].road = SIZE_MAX; /* (not this street's nearest) */
+                    mt[c].out = 1;
                     continue;
                 }
                 double sg = stroke_s(&A, mt[c].road, mt[c].s);
                 int passes = ring_street(&A, mt[c].road) || (sg > hb && sg < A.slen[k] - hb);
                 if (linked && !passes) {
-                    mt[c].road = SIZE_MAX; /* (a street ending here: its own end's business) */
+                    mt[c].out = 1; /* (a street ending here: its own end's business) */
                     continue;
                 }
                 meet++;
@@ -782,8 +783,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             if (r || !(through || (!linked && meet >= 2))) continue;
             approach q = { i, se, 0, (int8_t)(e ? 1 : -1), 0, (uint8_t)!linked, 1 };
             for (size_t c = 0; c < nmt && !r; c++) {
+                if (mt[c].out) continue;
                 size_t j = mt[c].road;
-                if (j == SIZE_MAX) continue;
                 double wb;
                 rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
                 double ha = wb / 2 + JUNCTION_TOL;
