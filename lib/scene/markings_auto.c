@@ -610,6 +610,38 @@ static int approach_cmp(const void *pa, const void *pb)
     return (int)a->end - (int)b->end;
 }
 
+/* ap[0 .. n) in approach_cmp's order (*ap replaced), polling as it goes. */
+static rs_result sort_approaches(rs_ctx *ctx, approach **ap, size_t n, size_t nr)
+{
+    size_t *start = rs__calloc(ctx, nr + 2, sizeof *start);
+    approach *out = rs__alloc_array(ctx, n, sizeof *out);
+    if (!start || !out) {
+        rs__free(ctx, start);
+        rs__free(ctx, out);
+        return RS_ERR_NOMEM;
+    }
+    const approach *in = *ap;
+    for (size_t k = 0; k < n; k++) start[in[k].road + 2]++;
+    for (size_t i = 0; i < nr; i++) start[i + 2] += start[i + 1];
+    for (size_t k = 0; k < n; k++) out[start[in[k].road + 1]++] = in[k];
+    rs_result r = RS_OK;
+    for (size_t i = 0; i < nr && !r; i++) {
+        if ((i & 4095) == 4095 && rs__poll(ctx)) r = RS_ERR_CANCELLED;
+        approach *a = out + start[i];
+        size_t m = start[i + 1] - start[i];
+        for (size_t x = 1; x < m; x++) /* (insertion: a road has a few) */
+            for (size_t y = x; y > 0 && approach_cmp(&a[y - 1], &a[y]) > 0; y--) {
+                approach t = a[y];
+                a[y] = a[y - 1];
+                a[y - 1] = t;
+            }
+    }
+    rs__free(ctx, start);
+    rs__free(ctx, *ap);
+    *ap = out;
+    return r;
+}
+
 static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
                            const rs_style_options *so, const rs_network *net_in, rs__line_cut **cuts, size_t *ncut,
                            rs__placement **pl, size_t *n, size_t *cap)
@@ -859,8 +891,11 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED; /* (index_junctions: ~10 ms at 10^5 roads) */
     if (!r) index_junctions(&A, nr);
     if (!r && rs__poll(ctx)) r = RS_ERR_CANCELLED;
-    /* placed road by road, along each (a road's ends first to last) */
-    if (!r && nap > 1) qsort(ap, nap, sizeof *ap, approach_cmp);
+    /* placed road by road, along each (a road's ends first to last): a
+     * counting sort by road, then each road's few by approach_cmp (one
+     * qsort of the approaches of the 10^5-road city took 85 ms
+     * without a progress call) */
+    if (!r && nap > 1) r = sort_approaches(ctx, &ap, nap, nr);
     for (size_t k = 0; k < nap && !r; k++) {
         if (rs__tick(ctx, 0)) {
             r = RS_ERR_CANCELLED;

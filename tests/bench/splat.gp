@@ -21,6 +21,8 @@ plot dir.'/splat_pareto.csv' using 2:3 skip 1 with steps lw 2 lc rgb "#999999" t
      f using 6:(sel("transition")) skip 1 with points pt 11 ps 1.3 lc rgb "#9467bd" title "transition hard..16 px", \
      f using 6:(sel("texels")) skip 1 with linespoints pt 13 ps 1.3 lc rgb "#8c564b" title "texels per cell 1, 2, 4, 8", \
      f using 6:(sel("baseline")) skip 1 with points pt 3 ps 2.0 lc rgb "#d62728" title "baseline: 5 m cell buffer (nearest / bilinear)", \
+     f using 6:(sel("edges")) skip 1 with points pt 15 ps 1.8 lc rgb "#17becf" title "analytic edges", \
+     f using 6:(sel("edges")):2 skip 1 with labels offset 0,-1 font "sans,9" notitle, \
      f using 6:(sel("distance")):2 skip 1 with labels offset 0,-1 font "sans,9" notitle, \
      f using 6:(sel("dilate")):2 skip 1 with labels offset 0,1 font "sans,9" notitle, \
      f using 6:(sel("texels")):2 skip 1 with labels offset 1.5,0 font "sans,9" notitle, \
