@@ -1352,9 +1352,7 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road, st = net->stroke_of[r];
             /* a road through the node, or a road end that its stroke continues */
-            int passes = L[k].kind == RS_LEG_FORWARD || (L[k].kind == RS_LEG_START && net->link[2 * r] != UINT32_MAX) ||
-                         (L[k].kind == RS_LEG_END && net->link[2 * r + 1] != UINT32_MAX);
-            if (!passes || !L[k].major || st == through) continue;
+            if (!rs__leg_passes(net, &L[k]) || !L[k].major || st == through) continue;
             through = st, tl = &L[k];
             nthrough++;
         }
@@ -1363,8 +1361,8 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
-            if ((L[k].kind != RS_LEG_START && L[k].kind != RS_LEG_END) || net->stroke_of[r] == through) continue;
-            ls_tee *t = &T[2 * r + (L[k].kind == RS_LEG_END)];
+            if (!rs__is_end_leg(&L[k]) || net->stroke_of[r] == through) continue;
+            ls_tee *t = &T[rs__leg_end(&L[k])];
             t->stroke = through;
             /* lines within 2 m of the through road's edges are edge lines:
              * they stop at the side road's mouth; the rest run on */

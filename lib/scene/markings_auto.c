@@ -66,7 +66,8 @@ typedef struct ctxa {
     size_t *cont;
     uint8_t *cont_end;
     uint32_t *jstart, *jidx; /* the junctions of road i: jidx[jstart[i] .. jstart[i+1]) (NULL: scan all) */
-    const rs_network *net;   /* strokes: the areas and cuts run on across a street's records */
+    const rs_network *net;   /* strokes: the areas and cuts run on across a street's records (set
+                                before any junction is looked for) */
     double *slen;            /* per stroke: its length */
 } ctxa;
 
@@ -169,11 +170,11 @@ static int ring_street(const ctxa *A, size_t j)
     return N->closed[k] || (N->stroke_start[k + 1] - N->stroke_start[k] == 1 && ring_record(A, j));
 }
 
-/* Road r's arc length s along its stroke (no network: its own). */
+/* Road r's arc length s along its stroke. */
 static double stroke_s(const ctxa *A, size_t r, double s)
 {
     const rs_network *N = A->net;
-    return !N ? s : N->rev[r] ? N->s_off[r] - s : N->s_off[r] + s;
+    return N->rev[r] ? N->s_off[r] - s : N->s_off[r] + s;
 }
 
 static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half);
@@ -187,7 +188,6 @@ static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half
 static rs_result on_stroke(ctxa *A, size_t road, double s0, double s1, int op, double half)
 {
     const rs_network *N = A->net;
-    if (!N) return op ? add_cut(A, road, s0, s1, half) : add_jn(A, road, (s0 + s1) / 2, (s1 - s0) / 2);
     double a = stroke_s(A, road, s0), b = stroke_s(A, road, s1);
     if (a > b) { double t = a; a = b; b = t; }
     uint32_t k = N->stroke_of[road];
@@ -699,7 +699,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     for (size_t nd = 0; !r && nd < net->nnodes; nd++)
         for (uint32_t k = net->leg_start[nd]; k < net->leg_start[nd + 1]; k++) {
             const rs_network_leg *L = &net->leg[k];
-            if (L->kind == RS_LEG_START || L->kind == RS_LEG_END) endnode[2 * L->road + (L->kind == RS_LEG_END)] = (uint32_t)nd;
+            if (rs__is_end_leg(L)) endnode[rs__leg_end(L)] = (uint32_t)nd;
         }
     for (size_t k = 0; !r && k < net->nstrokes; k++) {
         double *q = sends + 4 * k;
@@ -849,8 +849,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         if (deg < 3) continue;
         for (uint32_t a = 0; a < deg && !r; a++) {
             const rs_network_leg *L = &lg[a];
-            int endleg = L->kind == RS_LEG_START || L->kind == RS_LEG_END;
-            if (endleg && net->link[2 * L->road + (L->kind == RS_LEG_END)] == UINT32_MAX) continue; /* (a free end) */
+            if (!rs__leg_passes(net, L)) continue; /* (a free end) */
             if (A.rl[L->road].n < 2 || rs__road_non_car(roads, L->road)) continue;
             uint32_t k = net->stroke_of[L->road];
             double h = 0;
@@ -872,7 +871,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             double total = rl->s[rl->n - 1];
             double sl = L->kind == RS_LEG_START ? 0 : L->kind == RS_LEG_END ? total : L->s < 0 ? 0 : L->s > total ? total : L->s;
             approach q = { L->road, sl, h, (int8_t)(L->kind == RS_LEG_END || L->kind == RS_LEG_BACKWARD ? 1 : -1),
-                           (uint8_t)(L->priority < pmax), 0, (uint8_t)endleg };
+                           (uint8_t)(L->priority < pmax), 0, (uint8_t)rs__is_end_leg(L) };
             if (first) r = on_stroke(&A, L->road, sl - h, sl + h, 0, 0);
             void *arr = ap;
             if (!r && !room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64)) r = RS_ERR_NOMEM;

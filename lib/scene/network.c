@@ -543,7 +543,7 @@ typedef struct build {
     uint32_t *short_at; /* pairs (short record, the node its ends are at), for link_short_ends */
     size_t nshort;
     /* chains (chain_short_runs; NULL when no run of short records is
-     * longer than twice the tolerance): per road, its chain (the id of a
+     * made live there): per road, its chain (the id of a
      * record in it; a road in none: itself), the chain's arc length at the
      * road's first point when crev is 0, at its last when 1 */
     uint32_t *cid;
@@ -997,11 +997,6 @@ static int ends_fit(const build *B, const rs_network_leg *a, const rs_network_le
     return a->kind != b->kind || B->look[a->road].two_way;
 }
 
-static int is_end_leg(const rs_network_leg *L) { return L->kind == RS_LEG_START || L->kind == RS_LEG_END; }
-
-/* The road end (2 r: its start, 2 r + 1: its end) of an end leg. */
-static uint32_t leg_end(const rs_network_leg *L) { return 2 * L->road + (L->kind == RS_LEG_END); }
-
 /* Road end e's point (2 r: its first, 2 r + 1: its last). */
 static const double *end_point(const build *B, uint32_t e)
 {
@@ -1032,7 +1027,7 @@ static int end_dir(const build *B, uint32_t e, double *ang)
 static double end_angle(const build *B, const rs_network_leg *L)
 {
     double a;
-    return end_dir(B, leg_end(L), &a) ? a : L->angle;
+    return end_dir(B, rs__leg_end(L), &a) ? a : L->angle;
 }
 
 /* Pair the road ends at a node (its d legs L, sorted) into strokes:
@@ -1048,13 +1043,13 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
          * angles look past the tolerance, so a record cut within it of a
          * sharp vertex had the corner's deflection there: the end
          * segments' own directions count too (fuzz/split) */
-        if (is_end_leg(&L[0]) && is_end_leg(&L[1]) &&
+        if (rs__is_end_leg(&L[0]) && rs__is_end_leg(&L[1]) &&
             (L[0].road == L[1].road
                  ? L[0].kind != L[1].kind
                  : ends_fit(B, &L[0], &L[1]) &&
                        (fabs(wrap_angle(L[1].angle - L[0].angle - RS__PI)) < MAX_DEFLECTION ||
                         fabs(wrap_angle(end_angle(B, &L[1]) - end_angle(B, &L[0]) - RS__PI)) < MAX_DEFLECTION))) {
-            uint32_t ea = leg_end(&L[0]), eb = leg_end(&L[1]);
+            uint32_t ea = rs__leg_end(&L[0]), eb = rs__leg_end(&L[1]);
             link[ea] = eb;
             link[eb] = ea;
         }
@@ -1062,20 +1057,20 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
     }
     /* a junction: pairs that deflect little, taken when neither end has another */
     for (uint32_t a = 0; a < d; a++) {
-        if (!is_end_leg(&L[a])) continue;
+        if (!rs__is_end_leg(&L[a])) continue;
         uint32_t match = NONE, count = 0;
         for (uint32_t b = 0; b < d; b++)
-            if (b != a && is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
+            if (b != a && rs__is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
                 ends_fit(B, &L[a], &L[b]))
                 match = b, count++;
         if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
         uint32_t back = 0;
         for (uint32_t c = 0; c < d; c++)
-            if (c != match && is_end_leg(&L[c]) &&
+            if (c != match && rs__is_end_leg(&L[c]) &&
                 fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
                 back++;
         if (back != 1) continue;
-        uint32_t ea = leg_end(&L[a]), eb = leg_end(&L[match]);
+        uint32_t ea = rs__leg_end(&L[a]), eb = rs__leg_end(&L[match]);
         link[ea] = eb;
         link[eb] = ea;
     }
@@ -1153,15 +1148,15 @@ static void link_short_ends(const build *B, rs_network *N, uint32_t *short_at, s
         for (b = a + 1; b < nshort && short_at[2 * b + 1] == nd; b++) {}
         uint32_t d = N->leg_start[nd + 1] - N->leg_start[nd];
         const rs_network_leg *L = &N->leg[N->leg_start[nd]];
-        if (d < 1 || d > 2 || !is_end_leg(&L[0]) || (d == 2 && !is_end_leg(&L[1]))) continue;
-        uint32_t e0 = leg_end(&L[0]), e1 = NONE;
+        if (d < 1 || d > 2 || !rs__is_end_leg(&L[0]) || (d == 2 && !rs__is_end_leg(&L[1]))) continue;
+        uint32_t e0 = rs__leg_end(&L[0]), e1 = NONE;
         /* two ends link_node left apart (the legs' angles see the corner a
          * short record holds): they go on through the chain when every
          * joint of it is straight, as the road unsplit has no corner at its
          * own vertex (a 39-degree bend inside a record of 0.02 m: fuzz/split) */
         int through = 0;
         if (d == 2) {
-            e1 = leg_end(&L[1]);
+            e1 = rs__leg_end(&L[1]);
             if (N->link[e0] != e1) {
                 if (N->link[e0] != NONE || N->link[e1] != NONE || !ends_fit(B, &L[0], &L[1])) continue;
                 through = 1;
@@ -1551,8 +1546,9 @@ static rs_result chain_short_runs(build *B)
         for (uint32_t side = 0; side < 2; side++)
             for (uint32_t e = 2 * (uint32_t)r + side, f; (f = partner[e]) != NONE; e = f ^ 1) {
                 uint32_t q = f / 2;
-                if (!short_record(B, q)) beside_long |= B->live[q];
-                if (mark[q] || !short_record(B, q)) break;
+                int sq = short_record(B, q);
+                if (!sq) beside_long |= B->live[q];
+                if (mark[q] || !sq) break;
                 mark[q] = 1;
                 run[cnt++] = q;
                 len += B->look[q].length;

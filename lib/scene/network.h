@@ -50,4 +50,24 @@ int rs__class_non_car(rs_road_class c);
 int rs__road_non_car(const rs_roads *roads, size_t r);
 
 size_t rs__network_bytes(const rs_network *net);
+/* Leg L is at a road's end (RS_LEG_START or RS_LEG_END). */
+static inline int rs__is_end_leg(const rs_network_leg *L)
+{
+    return L->kind == RS_LEG_START || L->kind == RS_LEG_END;
+}
+
+/* The road end of an end leg: 2 r its start, 2 r + 1 its end (the index
+ * of net->link). */
+static inline uint32_t rs__leg_end(const rs_network_leg *L)
+{
+    return 2 * L->road + (L->kind == RS_LEG_END);
+}
+
+/* Leg L's street passes through its node: the road goes through it, or
+ * the road ends there and its stroke goes on. */
+static inline int rs__leg_passes(const rs_network *net, const rs_network_leg *L)
+{
+    return !rs__is_end_leg(L) || net->link[rs__leg_end(L)] != UINT32_MAX;
+}
+
 #endif

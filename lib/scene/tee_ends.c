@@ -33,10 +33,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
          * point or a T, or a record end its stroke continues */
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
-            int passes = L[k].kind == RS_LEG_FORWARD || L[k].kind == RS_LEG_BACKWARD ||
-                         (L[k].kind == RS_LEG_START && net->link[2 * r] != UINT32_MAX) ||
-                         (L[k].kind == RS_LEG_END && net->link[2 * r + 1] != UINT32_MAX);
-            if (!passes) continue;
+            if (!rs__leg_passes(net, &L[k])) continue;
             if (through != UINT32_MAX && net->stroke_of[r] != through) several = 1;
             through = net->stroke_of[r];
             if (ntl < 2) tl[ntl] = &L[k];
@@ -52,9 +49,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
         rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
-            int e = L[k].kind == RS_LEG_END;
-            if ((L[k].kind != RS_LEG_START && !e) || net->link[2 * r + e] != UINT32_MAX || net->stroke_of[r] == through)
-                continue;
+            if (!rs__is_end_leg(&L[k]) || rs__leg_passes(net, &L[k]) || net->stroke_of[r] == through) continue;
             /* the normal (-ty, tx), turned to point from the leg across the road */
             double wx = cos(L[k].angle), wy = sin(L[k].angle), nx = -ty, ny = tx, dn = -(nx * wx + ny * wy);
             if (!(fabs(dn) > TEE_MIN_SINE)) continue;
@@ -71,7 +66,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             }
             rs__tee_end *t = &T[cnt++];
             t->road = r;
-            t->end = e;
+            t->end = L[k].kind == RS_LEG_END;
             t->through = tl[0]->road;
             t->nx = nx;
             t->ny = ny;
