@@ -782,8 +782,9 @@ typedef struct rs_network_node {
 typedef enum rs_leg_kind {
     RS_LEG_START = 0,   /* the road's first point is at the node; the leg leaves along the road */
     RS_LEG_END = 1,     /* the road's last point; the leg runs back along the road */
-    RS_LEG_FORWARD = 2, /* the road passes through the node (a shared interior point or a T on a
-                           segment): the part after it ... */
+    RS_LEG_FORWARD = 2, /* the road passes through the node (a shared interior point, a T on a
+                           segment, or an end inside its surface: docs/network.md): the part
+                           after it ... */
     RS_LEG_BACKWARD = 3 /* ... and the part before it */
 } rs_leg_kind;
 

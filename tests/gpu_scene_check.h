@@ -64,7 +64,11 @@ static const char *gpu_scene_check(const rs_gpu_scene *scene)
             if (rd[e] != -1 && !gsc_index(rd[e], 0, (double)g->nroads)) return "road continuation";
         for (int e = 24; e <= 26; e++) /* strokes: at most one per road */
             if (rd[e] != -1 && !gsc_index(rd[e], 0, (double)g->nroads)) return "road stroke";
-        if (!(rd[27] >= 0 && rd[28] >= 0) || (rd[29] != 0 && rd[29] != 1)) return "road T fields";
+        /* (the depths: negative for an end short of the through road's
+         * centre line by more than its kept lines, docs/network.md "Ends
+         * inside a surface") */
+        if (rd[27] != rd[27] || rd[28] != rd[28] || (rd[29] != 0 && rd[29] != 1)) /* (huge widths: huge depths) */
+            return "road T fields";
     }
     for (size_t b = 0; b < g->nbands; b++) {
         const float *bd = g->band + RS_GPU_BAND_FLOATS * b;

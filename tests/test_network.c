@@ -210,13 +210,17 @@ static int net_consistent(const rs_network *net, const rs_roads *roads)
 static void test_tee_tolerance(void)
 {
     const double tol = 0.05;
-    for (int inside = 0; inside < 2; inside++) {
-        double d = inside ? 0.9 * tol : 1.1 * tol;
+    /* (a main road 0.08 m wide: its surface holds no end beyond the
+     * tolerance; 7 m wide, an end 1.1 tolerances off is inside it, a T
+     * too: docs/network.md "Ends inside a surface") */
+    for (int inside = 0; inside < 4; inside++) {
+        int wide = inside >= 2;
+        double d = inside & 1 ? 0.9 * tol : 1.1 * tol;
         rs_roads *roads = NULL;
         CHECK(rs_roads_create(ctx, &roads) == RS_OK);
         const double main_xy[6] = { 0, 0, 40, 0.001, 100, 0 };
         const double side_xy[4] = { 57.3, 30, 57.3, d };
-        CHECK(rs_roads_add(ctx, roads, "main", 7, main_xy, 3) == RS_OK);
+        CHECK(rs_roads_add(ctx, roads, "main", wide ? 7 : 0.08, main_xy, 3) == RS_OK);
         CHECK(rs_roads_add(ctx, roads, "side", 5, side_xy, 2) == RS_OK);
         rs_network *net = NULL;
         rs_network_options o = { 0, tol };
@@ -246,7 +250,8 @@ static void test_tee_tolerance(void)
             }
             CHECK(fwd == 1 && back == 1 && end == 1);
         }
-        CHECKF(junctions == (size_t)inside, "T at %g x tolerance: %zu junctions", d / tol, junctions);
+        CHECKF(junctions == (size_t)((inside & 1) || wide), "T at %g x tolerance (main %s): %zu junctions", d / tol,
+               wide ? "7 m" : "0.08 m", junctions);
         /* the same at the default tolerance (0.05) */
         rs_network *net2 = NULL;
         CHECK(rs_network_build(ctx, roads, NULL, &net2) == RS_OK);
@@ -806,6 +811,132 @@ static void test_tee_lines(void)
     }
 }
 
+/* A road ending inside another street's surface, not on its centre line
+ * (docs/network.md "Ends inside a surface"): a T at the nearest point of
+ * the centre line. Topology: the node has the through record's two legs
+ * there; an end outside the surface, on its own street, or a car road's
+ * end in a footway's surface is none. Drawn: the same picture as the side
+ * road ending on the centre line (caps trimmed at the far edge, the
+ * through road's lines, the give-way line at its edge), which before this
+ * had a round cap bulging past a narrow road's far edge, a centre line cut
+ * by an equal road's surface and a give-way line up to a half width early. */
+static void add_cls(rs_roads *roads, double w, const char *cls, const double *xy, size_t n)
+{
+    CHECK(rs_roads_add(ctx, roads, "r", w, xy, n) == RS_OK);
+    CHECK(rs_roads_set_attr(ctx, roads, rs_roads_count(roads) - 1, "class", cls) == RS_OK);
+}
+
+static void test_end_inside_surface(void)
+{
+    static const struct {
+        double ey, tw;
+        const char *tcls, *scls;
+        int split, junction;
+    } C[] = {
+        { -3, 12, "primary", "secondary", 0, 1 },   /* between the near edge and the centre line */
+        { 2, 12, "primary", "secondary", 0, 1 },    /* past the centre line */
+        { -6, 12, "primary", "secondary", 0, 1 },   /* on the edge */
+        { -3, 12, "primary", "secondary", 1, 1 },   /* the through road split at the foot */
+        { -6.2, 12, "primary", "secondary", 0, 0 }, /* outside it */
+        { -1, 3, "footway", "residential", 0, 0 },  /* a footway holds no car road's end */
+        { -1, 3, "residential", "footway", 0, 1 },  /* a footway's end on a street */
+    };
+    for (size_t c = 0; c < sizeof C / sizeof C[0]; c++) {
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        const double t_xy[4] = { 0, 0, 100, 0 }, ta[4] = { 0, 0, 50, 0 }, tb[4] = { 50, 0, 100, 0 };
+        const double s_xy[4] = { 50, -30, 50, C[c].ey };
+        if (C[c].split) {
+            add_cls(roads, C[c].tw, C[c].tcls, ta, 2);
+            add_cls(roads, C[c].tw, C[c].tcls, tb, 2);
+        } else
+            add_cls(roads, C[c].tw, C[c].tcls, t_xy, 2);
+        add_cls(roads, 6, C[c].scls, s_xy, 2);
+        rs_network *net = NULL;
+        CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK);
+        CHECK(net_consistent(net, roads));
+        size_t junctions = 0;
+        for (size_t i = 0; net && i < rs_network_node_count(net); i++) {
+            rs_network_node nd;
+            rs_network_get_node(net, i, &nd);
+            if (nd.kind != RS_NODE_JUNCTION) continue;
+            junctions++;
+            CHECK_EQ_INT(nd.degree, 3);
+            CHECK_NEAR(nd.x, 50, 1e-12); /* (the end point) */
+            CHECK_NEAR(nd.y, C[c].ey, 1e-12);
+            int fwd = 0, back = 0, end = 0;
+            for (size_t k = 0; k < nd.degree; k++) {
+                rs_network_leg L;
+                rs_network_get_leg(net, i, k, &L);
+                if (L.kind == RS_LEG_FORWARD || L.kind == RS_LEG_BACKWARD) {
+                    CHECK(L.road == 0); /* (split at the foot: the first of equals) */
+                    CHECK_NEAR(L.s, 50, 1e-9);
+                    CHECK_NEAR(fabs(L.angle), L.kind == RS_LEG_FORWARD ? 0 : 3.14159265358979323846, 1e-12);
+                    fwd += L.kind == RS_LEG_FORWARD, back += L.kind == RS_LEG_BACKWARD;
+                }
+                if (L.kind == RS_LEG_END) end++;
+            }
+            CHECK(fwd == 1 && back == 1 && end == 1);
+        }
+        CHECKF(junctions == (size_t)C[c].junction, "end at y = %g in a %s's surface (%s): %zu junctions", C[c].ey,
+               C[c].tcls, C[c].scls, junctions);
+        rs_network_free(ctx, net);
+        rs_roads_free(ctx, roads);
+    }
+    /* its own street: a road folding back into its own surface, whole
+     * and split where it goes straight on */
+    for (int split = 0; split < 2; split++) {
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        const double whole[8] = { 0, 0, 50, 0, 60, 0, 55, -3 }, a[4] = { 0, 0, 50, 0 }, b[6] = { 50, 0, 60, 0, 55, -3 };
+        if (split) {
+            add_cls(roads, 12, "primary", a, 2);
+            add_cls(roads, 12, "primary", b, 3);
+        } else
+            add_cls(roads, 12, "primary", whole, 4);
+        rs_network *net = NULL;
+        CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK);
+        for (size_t i = 0; net && i < rs_network_node_count(net); i++) {
+            rs_network_node nd;
+            rs_network_get_node(net, i, &nd);
+            CHECKF(nd.kind != RS_NODE_JUNCTION, "a road ending in its own surface (%s) made a junction",
+                   split ? "split" : "whole");
+        }
+        rs_network_free(ctx, net);
+        rs_roads_free(ctx, roads);
+    }
+    /* drawn: the side road coming from y = 78 and ending `off` short of
+     * the through road's centre line (y = 40; negative: past it) against
+     * the same road ending on it (a side road without the right of way) */
+    static const struct {
+        const char *tcls, *scls;
+        double tw, sw, off;
+    } D[] = {
+        { "primary", "secondary", 12, 9, 3 },        /* give-way line, the through road's lines */
+        { "primary", "secondary", 12, 9, 6 },        /* at the edge */
+        { "primary", "secondary", 12, 9, -2.5 },     /* past the centre line */
+        { "secondary", "secondary", 9, 9, 3 },       /* an equal road's surface cut the centre line */
+        /* (a side road with the right of way draws its lines to its own
+         * end point: test_tee_caps checks its cap) */
+    };
+    for (size_t c = 0; c < sizeof D / sizeof D[0]; c++) {
+        rs_roads *on = NULL, *in = NULL;
+        CHECK(rs_roads_create(ctx, &on) == RS_OK && rs_roads_create(ctx, &in) == RS_OK);
+        const double t_xy[4] = { 2, 40, 118, 40 }, s_on[4] = { 41.3, 78, 41.3, 40 };
+        const double s_in[4] = { 41.3, 78, 41.3, 40 + D[c].off };
+        add_cls(on, D[c].tw, D[c].tcls, t_xy, 2);
+        add_cls(on, D[c].sw, D[c].scls, s_on, 2);
+        add_cls(in, D[c].tw, D[c].tcls, t_xy, 2);
+        add_cls(in, D[c].sw, D[c].scls, s_in, 2);
+        uint32_t wx = 0, wy = 0;
+        int d = draw_diff(on, in, &wx, &wy);
+        CHECKF(d <= 8, "%s ending %g m short of a %s's centre line: %d/255 from it ending there, at (%u, %u)",
+               D[c].scls, D[c].off, D[c].tcls, d, wx, wy);
+        rs_roads_free(ctx, on);
+        rs_roads_free(ctx, in);
+    }
+}
+
 /* Two-way records pointing either way (OSM ways need not agree): one
  * stroke in the order along the road, the reversed ones flagged, offsets
  * at their first points; a one-way road's reversed record is not joined;
@@ -1193,6 +1324,7 @@ int main(void)
     test_alloc_failures();
     test_split_draws_alike();
     test_tee_lines();
+    test_end_inside_surface();
     test_reversed_records();
     test_corner_rule();
     test_cut_near_corner();

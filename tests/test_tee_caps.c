@@ -115,6 +115,11 @@ static void add_walk(rs_roads *roads)
     if (with_walk) add(roads, 2, "footway", 2, TY + TR + 1.5, 58, TY + TR + 1.5);
 }
 
+/* How far past (30, TY) along its direction the side road ends (negative:
+ * short of the through road's centre line): an end inside the through
+ * road's surface is a T too (docs/network.md "Ends inside a surface") */
+static double end_shift;
+
 static rs_roads *tee_scene(double deg, int tsplit, int ssplit)
 {
     rs_roads *roads = NULL;
@@ -125,14 +130,14 @@ static rs_roads *tee_scene(double deg, int tsplit, int ssplit)
         add(roads, 2 * TR, "residential", 30, TY, 58, TY);
     } else
         add(roads, 2 * TR, "residential", 2, TY, 58, TY);
-    double x0, y0;
+    double x0, y0, ex = 30 + end_shift * cos(deg * DEG), ey = TY + end_shift * sin(deg * DEG);
     side_end(deg, 18 / sin(deg * DEG), &x0, &y0);
     if (ssplit == 2) {
         double xm = x0 + 0.37 * (30 - x0), ym = y0 + 0.37 * (TY - y0);
         add(roads, 2 * SR, "primary", x0, y0, xm, ym);
-        add(roads, 2 * SR, "primary", xm, ym, 30, TY);
+        add(roads, 2 * SR, "primary", xm, ym, ex, ey);
     } else
-        add(roads, 2 * SR, "primary", x0, y0, 30, TY);
+        add(roads, 2 * SR, "primary", x0, y0, ex, ey);
     return roads;
 }
 
@@ -393,6 +398,19 @@ int main(void)
     rot = -110 * DEG;
     test_tee_caps("built-in styles, turned -110 degrees");
     rot = 0;
+    /* ends inside the 3 m street, 1 m short of its centre line or 0.9 m
+     * past it (before, their 7.5 m round caps bulged up to 7 m past the
+     * far edge) */
+    end_shift = -1.0;
+    test_tee_caps("built-in styles, the side road ending 1 m short of the centre line");
+    end_shift = 0.9;
+    test_tee_caps("built-in styles, the side road ending 0.9 m past the centre line");
+    styles_text = "style residential\n  casing 0.3 #C8C8C8\n  fill #505050\nend\n"
+                  "style primary\n  casing 1.0 #E0A040\n  fill #404040\n  line 0 0.15 #FFFFFF dash 3 6\nend\n";
+    end_shift = -1.0;
+    test_tee_caps("casings, the side road ending 1 m short of the centre line");
+    styles_text = NULL;
+    end_shift = 0;
     test_dead_end_keeps_cap();
     test_short_end_segment();
     test_windows();

@@ -220,7 +220,7 @@ static rs_result ge_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *n
             int ge = srev[i] ? !e : e;
             float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
             rd[25 + ge] = (float)t->stroke;
-            rd[27 + ge] = ge_float(t->keep);
+            rd[27 + ge] = ge_float(t->keep + t->off); /* (the depth the cut stops short of the end: the T rule) */
             if (t->stroke < nk) met[t->stroke] = 1;
         }
     for (size_t i = 0; i < n; i++) {
@@ -252,9 +252,9 @@ static void ge_tee_clips(float *rd, const rs__road_local *rl, const rs__tee_end 
         int ge = rev ? !e : e;
         rd[32 + 3 * ge] = (float)t->nx;
         rd[33 + 3 * ge] = (float)t->ny;
-        rd[34 + 3 * ge] = ge_float(t->nx * rl->x[a] + t->ny * rl->y[a] + t->half_width);
+        rd[34 + 3 * ge] = ge_float(t->nx * rl->x[a] + t->ny * rl->y[a] + t->far);
         for (int k = 0; k < 2; k++) {
-            double r = hw + (k ? casing : 0), ub = (t->half_width + r * cs) / sn;
+            double r = hw + (k ? casing : 0), ub = (t->far + r * cs) / sn;
             rd[38] = fmaxf(rd[38], ge_float(hypot(ub, r) - r));
         }
     }

@@ -76,7 +76,7 @@ typedef struct road_ends {
     double tee[2]; /* a trimmed end at a T: how far past the end point the through road's far edge lies
                       across it (0: no T), and the through road's normal */
     double tnx[2], tny[2];
-    double thw[2]; /* the through road's half width */
+    double thw[2]; /* rs__tee_end.far: the far edge line lies this far past the end point along n */
 } road_ends;
 
 /* What a road's surface draws (not its lines and markings, which are
@@ -188,11 +188,11 @@ static void end_info(const rs_roads *roads, size_t i, const rs_network *net, con
         }
         if (tee_of && tee_of[2 * i + (size_t)e] != SIZE_MAX) {
             const rs__tee_end *t = &tees[tee_of[2 * i + (size_t)e]];
-            h = mixd(mixd(mixd(mixd(h, t->nx), t->ny), t->half_width), t->grow);
+            h = mixd(mixd(mixd(mixd(h, t->nx), t->ny), t->far), t->grow);
             h = mix(h, road_sig(roads, t->through));
-            E->tee[e] = t->half_width + t->grow + 2 * RS__NETWORK_TOL;
+            E->tee[e] = t->far + t->grow + 2 * RS__NETWORK_TOL;
             E->tnx[e] = t->nx, E->tny[e] = t->ny;
-            E->thw[e] = t->half_width;
+            E->thw[e] = t->far;
         }
         E->h[e] = h;
     }
@@ -381,7 +381,8 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         if (!(l > 0)) continue;
         dx /= l, dy /= l;
         double sn = fmax(0.2, fabs(dx * F->E.tnx[e] + dy * F->E.tny[e]));
-        double far = (F->E.tee[e] + F->hw * sqrt(fmax(0, 1 - sn * sn))) / sn;
+        /* (the widest shape: a casing strip's corner reaches further along) */
+        double far = (F->E.tee[e] + F->reach * sqrt(fmax(0, 1 - sn * sn))) / sn;
         uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
         r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
@@ -612,6 +613,11 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             for (size_t k = 0; !r && k < 2 * nr; k++) tee_of[k] = SIZE_MAX;
             for (size_t k = 0; !r && k < ntees; k++)
                 if (tees[k].road < nr) tee_of[2 * (size_t)tees[k].road + (tees[k].end ? 1 : 0)] = k;
+            /* a casing strip stops at the through road's casing edge
+             * (lib/scene/styling.c): its corners reach that much further */
+            for (size_t k = 0; !r && st && st->casing_width && k < ntees; k++)
+                if (tees[k].through < st->nroads && st->casing_width[tees[k].through] > 0)
+                    tees[k].grow = st->casing_width[tees[k].through];
         }
     }
     /* the core: pixels whose centre lies half a pixel diagonal inside the

@@ -1343,7 +1343,7 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
     if (!net || rs_network_road_count(net) != n) return RS_OK;
     ls_tee *T = rs__alloc_array(ctx, n ? 2 * n : 1, sizeof *T);
     if (!T) return RS_ERR_NOMEM;
-    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = NO_STROKE;
+    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = NO_STROKE, T[i].off = 0;
     for (size_t nd = 0; nd < net->nnodes; nd++) {
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
@@ -1368,6 +1368,10 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
              * they stop at the side road's mouth; the rest run on */
             t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
             t->dx = cos(tl->angle), t->dy = sin(tl->angle);
+            /* an end inside the surface, short of the centre line or past it */
+            double nx = -t->dy, ny = t->dx;
+            if (nx * cos(L[k].angle) + ny * sin(L[k].angle) > 0) nx = -nx, ny = -ny;
+            t->off = rs__tee_offset(roads, r, L[k].kind == RS_LEG_END, tl, nx, ny, net->tol);
         }
     }
     *out = T;
@@ -1469,7 +1473,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                     /* another segment of the record reaching past the line
                      * (its surface is clipped there too) */
                     double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
-                    double cc = te->nx * ex + te->ny * ey + te->half_width;
+                    double cc = te->nx * ex + te->ny * ey + te->far;
                     double fa = te->nx * Q.ax + te->ny * Q.ay, fb = fa + (Q.len + hw) * (te->nx * Q.ux + te->ny * Q.uy);
                     fa -= hw * (te->nx * Q.ux + te->ny * Q.uy);
                     if (!Q.clip && fmax(fa, fb) + hw > cc) Q.clip = 1, Q.cx = te->nx, Q.cy = te->ny, Q.cc = cc;
@@ -1479,11 +1483,11 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 double sn = te->nx * dx + te->ny * dy, cs = fabs(te->nx * dy - te->ny * dx);
                 if (!(sn > 0.1)) continue;
                 double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
-                double reach = fmax((te->half_width + hw * cs) / sn, hw);
+                double reach = fmax((te->far + hw * cs) / sn, hw);
                 if (e) Q.u1 = Q.len + reach;
                 else Q.u0 = -reach;
                 Q.clip = 1;
-                Q.cx = te->nx, Q.cy = te->ny, Q.cc = te->nx * ex + te->ny * ey + te->half_width;
+                Q.cx = te->nx, Q.cy = te->ny, Q.cc = te->nx * ex + te->ny * ey + te->far;
             }
             /* an end segment at a T: the through stroke gets a copy that
              * stops `keep` short of its centre line (no extension) */
@@ -1494,7 +1498,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             if (T && (at_end || at_start) && T->stroke != NO_STROKE) {
                 double sn = fabs(Q.ux * T->dy - Q.uy * T->dx); /* sine of the angle between the roads */
                 if (sn > 0.2) {
-                    double back = T->keep / sn;
+                    double back = (T->keep + T->off) / sn;
                     if (at_end) Qt.u1 = fmax(Q.len - back, Qt.u0);
                     else Qt.u0 = fmin(back, Qt.u1);
                     Qt.only = Q.skip = T->stroke;

@@ -37,6 +37,8 @@ typedef enum rs__band_aa {
 typedef struct rs__tee {
     uint32_t stroke;
     double keep, dx, dy;
+    double off; /* how far the end lies past the through road's centre line (negative:
+                   short of it; rs__tee_offset): the cut stops keep + off before the end */
 } rs__tee;
 /* Per road two entries (start, end) into *out (the caller's, rs__free);
  * *out NULL without a network or when it is not of these roads. The GPU

@@ -122,9 +122,11 @@ static rs_result add_jn(ctxa *A, size_t road, double s, double half)
 }
 
 /* Nearest point of road r to (x, y): distance and arc length. */
-static double nearest(const rs__road_local *r, double x, double y, double *s_out)
+/* nearest, and the nearest point itself (*fx, *fy) */
+static double nearest_foot(const rs__road_local *r, double x, double y, double *s_out, double *fx, double *fy)
 {
     double best = INFINITY;
+    *fx = x, *fy = y;
     for (size_t k = 0; k + 1 < r->n; k++) {
         double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], len = r->s[k + 1] - r->s[k];
         if (!(len > 0)) continue;
@@ -135,9 +137,16 @@ static double nearest(const rs__road_local *r, double x, double y, double *s_out
         if (d < best) {
             best = d;
             *s_out = r->s[k] + u;
+            *fx = x - ex, *fy = y - ey;
         }
     }
     return best;
+}
+
+static double nearest(const rs__road_local *r, double x, double y, double *s_out)
+{
+    double fx, fy;
+    return nearest_foot(r, x, y, s_out, &fx, &fy);
 }
 
 static int in_junction(const ctxa *A, size_t road, double lo, double hi)
@@ -813,7 +822,27 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 through |= passes;
             }
             if (r || !(through || (!linked && meet >= 2))) continue;
-            approach q = { i, se, 0, (int8_t)(e ? 1 : -1), 0, (uint8_t)!linked, 1 };
+            /* the junction's centre on A: where A's line meets the
+             * nearest street's centre line (an end inside a surface,
+             * short of the centre line or past it: docs/network.md "Ends
+             * inside a surface"); an end within the tolerance is on it */
+            double sc = se;
+            size_t near = SIZE_MAX;
+            for (size_t c = 0; c < nmt; c++)
+                if (!mt[c].out && (near == SIZE_MAX || mt[c].d < mt[near].d)) near = c;
+            if (near != SIZE_MAX && mt[near].d > net->tol && a->n >= 2) {
+                size_t p0 = e ? a->n - 2 : 1;
+                double ux = x - a->x[p0], uy = y - a->y[p0], ul = hypot(ux, uy), fx, fy, unused;
+                nearest_foot(&A.rl[mt[near].road], x, y, &unused, &fx, &fy);
+                double d = mt[near].d, along = ul > 0 ? ((fx - x) * ux + (fy - y) * uy) / ul : 0;
+                if (fabs(along) >= 0.2 * d && d > 0) { /* (at a sine below 0.2: the end itself) */
+                    double t = d * d / along, lim = 0;
+                    rs_roads_get(roads, mt[near].road, NULL, &lim, NULL, NULL);
+                    lim = lim / 2 + JUNCTION_TOL;
+                    sc = se + (e ? 1 : -1) * (t > lim ? lim : t < -lim ? -lim : t);
+                }
+            }
+            approach q = { i, sc, 0, (int8_t)(e ? 1 : -1), 0, (uint8_t)!linked, 1 };
             for (size_t c = 0; c < nmt && !r; c++) {
                 if (mt[c].out) continue;
                 size_t j = mt[c].road;
@@ -824,7 +853,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 /* the lower priority gives way: class rank, priority_road,
                  * and a roundabout's ring over its arms (StVO 9a, MUTCD 2B.11) */
                 if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) q.minor = 1;
-                r = on_stroke(&A, i, se - ha, se + ha, 0, 0);
+                r = on_stroke(&A, i, sc - ha, sc + ha, 0, 0);
                 if (!r) r = on_stroke(&A, j, mt[c].s - hb, mt[c].s + hb, 0, 0);
             }
             void *arr = ap;

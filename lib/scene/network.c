@@ -1260,6 +1260,205 @@ static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
     N->nstrokes = k;
 }
 
+/* ---- road ends inside another road's surface ---- */
+
+/* A free end (its node has no other leg) inside another street's surface:
+ * within its half width (plus the tolerance) of its centreline, further
+ * than the tolerance (between its edge and its centre line, or past the
+ * centre line short of the far edge). Hand-drawn roads end at the kerb or
+ * inside a lane as often as on the centre line; as free ends their round
+ * caps bulged past the far edge, their surfaces cut the through road's
+ * centre line and their give-way lines stood up to a half width early.
+ * Such an end meets the street in a T at the nearest point of its
+ * centreline (docs/network.md "Ends inside a surface"): its node gets the
+ * through record's two legs there, as a T within the tolerance has, and
+ * keeps the end point as its position. Found after the strokes, so a
+ * street's own records never hold its end (whole or split anywhere, the
+ * same), and a footway, path or cycleway holds no car road's end. */
+typedef struct surf_end {
+    uint32_t node, road;
+    int non_car;
+    double x, y;   /* the end point */
+    uint32_t q, k; /* the nearest: record q's segment k (NONE: none) */
+    double u, d;   /* the point's parameter on it (0 .. 1) and distance */
+} surf_end;
+
+static size_t surf_cell(double v, double v0, double c, size_t n)
+{
+    double t = (v - v0) / c;
+    if (!(t >= 0)) return 0;
+    if (t >= (double)(n - 1)) return n - 1;
+    return (size_t)t;
+}
+
+/* Candidate end f against segment k (points a, a + 1) of record q (half width hw). */
+static void surf_test(const build *B, const rs_network *N, surf_end *f, uint32_t q, uint32_t k, double hw,
+                      int q_non_car)
+{
+    if (N->stroke_of[f->road] == N->stroke_of[q] || (q_non_car && !f->non_car)) return;
+    size_t a = B->voff[q] + k;
+    const double *pa = B->xy + 2 * a, *pb = pa + 2;
+    double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
+    double u = ((f->x - pa[0]) * dx + (f->y - pa[1]) * dy) / dd;
+    u = u > 0 ? (u < 1 ? u : 1) : 0;
+    /* (the record's own end, where its street does not go on: the end
+     * lies beyond the street, two ends near each other, no T; a ring's
+     * seam is no end) */
+    const double *first = B->xy + 2 * B->voff[q], *last = B->xy + 2 * (B->voff[q + 1] - 1);
+    int ring = N->closed[N->stroke_of[q]];
+    if (u == 0 && pa[0] == first[0] && pa[1] == first[1] && N->link[2 * q] == NONE && !ring) return;
+    if (u == 1 && pb[0] == last[0] && pb[1] == last[1] && N->link[2 * q + 1] == NONE && !ring) return;
+    double d = hypot(f->x - (pa[0] + u * dx), f->y - (pa[1] + u * dy));
+    if (!(d <= hw + B->tol) || !(d < f->d)) return; /* (the first of equals: the lowest record and segment) */
+    f->q = q, f->k = k, f->u = u, f->d = d;
+}
+
+/* Direction of road q's segment k, or of its nearest non-empty one
+ * towards `step` (+1, -1) when that side is asked for and exists. */
+static double surf_angle(const build *B, uint32_t q, uint32_t k, int step, int reverse)
+{
+    size_t a0 = B->voff[q], nseg = B->voff[q + 1] - a0 - 1;
+    for (size_t j = k;;) {
+        const double *pa = B->xy + 2 * (a0 + j), *pb = pa + 2;
+        double dx = pb[0] - pa[0], dy = pb[1] - pa[1];
+        if (dx != 0 || dy != 0) return reverse ? atan2(-dy, -dx) : atan2(dy, dx);
+        if (step > 0 ? j + 1 >= nseg : j == 0) break;
+        j = step > 0 ? j + 1 : j - 1;
+    }
+    return 0;
+}
+
+static rs_result surface_tees(build *B, rs_network *N)
+{
+    rs_ctx *ctx = B->ctx;
+    const double tol = B->tol;
+    size_t nf = 0;
+    for (size_t nd = 0; nd < N->nnodes; nd++) {
+        const rs_network_leg *L = N->leg + N->leg_start[nd];
+        nf += N->leg_start[nd + 1] - N->leg_start[nd] == 1 && rs__is_end_leg(L) && N->length[L->road] > 2 * tol;
+    }
+    if (!nf) return RS_OK;
+    surf_end *fe = rs__alloc_array(ctx, nf, sizeof *fe);
+    if (!fe) return RS_ERR_NOMEM;
+    double bx0 = INFINITY, by0 = INFINITY, bx1 = -INFINITY, by1 = -INFINITY;
+    size_t m = 0;
+    for (size_t nd = 0; nd < N->nnodes; nd++) {
+        const rs_network_leg *L = N->leg + N->leg_start[nd];
+        if (N->leg_start[nd + 1] - N->leg_start[nd] != 1 || !rs__is_end_leg(L) || !(N->length[L->road] > 2 * tol))
+            continue;
+        const double *p = B->xy + 2 * (L->kind == RS_LEG_START ? B->voff[L->road] : B->voff[L->road + 1] - 1);
+        if (!isfinite(p[0]) || !isfinite(p[1])) continue;
+        surf_end *f = &fe[m++];
+        f->node = (uint32_t)nd, f->road = L->road, f->non_car = rs__road_non_car(B->roads, L->road);
+        f->x = p[0], f->y = p[1], f->q = f->k = NONE, f->u = 0, f->d = INFINITY;
+        bx0 = fmin(bx0, p[0]), by0 = fmin(by0, p[1]), bx1 = fmax(bx1, p[0]), by1 = fmax(by1, p[1]);
+    }
+    /* the ends in a grid of about one a cell (at most 4 a cell more cells), counting sorted */
+    size_t nx = 1, ny = 1;
+    double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (double)(m ? m : 1));
+    if (!(c > 0)) c = fmax(wx, wy) / (double)(m ? m : 1);
+    if (!(c > 0) || !isfinite(c) || !isfinite(wx) || !isfinite(wy)) c = INFINITY;
+    while (isfinite(c)) {
+        double fx = floor(wx / c) + 1, fy = floor(wy / c) + 1;
+        if (fx * fy <= 4.0 * (double)m + 4) {
+            nx = (size_t)fx, ny = (size_t)fy;
+            break;
+        }
+        c *= 2;
+    }
+    uint32_t *start = rs__calloc(ctx, nx * ny + 2, sizeof *start), *ids = rs__alloc_array(ctx, m ? m : 1, sizeof *ids);
+    rs_result res = start && ids ? RS_OK : RS_ERR_NOMEM;
+    for (size_t i = 0; i < m && !res; i++) start[surf_cell(fe[i].y, by0, c, ny) * nx + surf_cell(fe[i].x, bx0, c, nx) + 2]++;
+    for (size_t i = 0; i < nx * ny && !res; i++) start[i + 2] += start[i + 1];
+    for (size_t i = 0; i < m && !res; i++)
+        ids[start[surf_cell(fe[i].y, by0, c, ny) * nx + surf_cell(fe[i].x, bx0, c, nx) + 1]++] = (uint32_t)i;
+    /* every segment of every record with a surface, over the cells its
+     * capsule reaches, row by row */
+    for (size_t q = 0; q < B->nroads && !res && m; q++) {
+        if ((q & 4095) == 0 && rs__poll(ctx)) {
+            res = RS_ERR_CANCELLED;
+            break;
+        }
+        double w = 0;
+        rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
+        double hw = 0.5 * w;
+        if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
+        int qnc = rs__road_non_car(B->roads, q);
+        size_t nseg = B->voff[q + 1] - B->voff[q] - 1;
+        for (size_t k = 0; k < nseg; k++) {
+            const double *pa = B->xy + 2 * (B->voff[q] + k), *pb = pa + 2;
+            double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
+            if (!(dd > 0) || !isfinite(dd)) continue;
+            double ymin = fmin(pa[1], pb[1]) - hw, ymax = fmax(pa[1], pb[1]) + hw;
+            if (fmax(pa[0], pb[0]) + hw < bx0 || fmin(pa[0], pb[0]) - hw > bx1 || ymax < by0 || ymin > by1) continue;
+            size_t r0 = surf_cell(ymin, by0, c, ny), r1 = surf_cell(ymax, by0, c, ny);
+            for (size_t cy = r0; cy <= r1; cy++) {
+                /* the segment's part within hw of the row (the outer rows reach on) */
+                double lo = cy == 0 ? -INFINITY : by0 + (double)cy * c, hi = cy + 1 == ny ? INFINITY : by0 + (double)(cy + 1) * c;
+                double t0 = 0, t1 = 1;
+                if (dy != 0) {
+                    t0 = (fmax(lo, ymin + hw) - hw - pa[1]) / dy, t1 = (fmin(hi, ymax - hw) + hw - pa[1]) / dy;
+                    if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
+                    t0 = fmax(t0, 0), t1 = fmin(t1, 1);
+                    if (t0 > t1) continue;
+                }
+                double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
+                size_t c0 = surf_cell(fmin(xa, xb) - hw, bx0, c, nx), c1 = surf_cell(fmax(xa, xb) + hw, bx0, c, nx);
+                for (uint32_t i = start[cy * nx + c0]; i < start[cy * nx + c1 + 1]; i++)
+                    surf_test(B, N, &fe[ids[i]], (uint32_t)q, (uint32_t)k, hw, qnc);
+            }
+        }
+    }
+    size_t add = 0;
+    for (size_t i = 0; i < m; i++) add += fe[i].q != NONE;
+    rs_network_leg *leg = NULL;
+    if (!res && add && !(leg = rs__alloc_array(ctx, N->nlegs + 2 * add, sizeof *leg))) res = RS_ERR_NOMEM;
+    if (!res && add) {
+        /* the nodes' legs again, the two through legs added at theirs (fe is in node order) */
+        size_t nl = 0, j = 0;
+        for (size_t nd = 0; nd < N->nnodes; nd++) {
+            uint32_t a = N->leg_start[nd], b = N->leg_start[nd + 1];
+            N->leg_start[nd] = (uint32_t)nl;
+            memcpy(leg + nl, N->leg + a, (b - a) * sizeof *leg);
+            nl += b - a;
+            while (j < m && fe[j].node < nd) j++;
+            if (j == m || fe[j].node != nd || fe[j].q == NONE) continue;
+            const surf_end *f = &fe[j];
+            size_t pa = B->voff[f->q] + f->k;
+            rs_network_leg T;
+            memset(&T, 0, sizeof T);
+            T.road = f->q;
+            T.segment = f->k;
+            T.s = B->s[pa] + f->u * (B->s[pa + 1] - B->s[pa]);
+            T.priority = rs__road_priority(B->roads, f->q);
+            T.kind = RS_LEG_FORWARD;
+            T.angle = surf_angle(B, f->q, f->u == 1 && f->k + 1 < B->voff[f->q + 1] - B->voff[f->q] - 1 ? f->k + 1 : f->k, 1, 0);
+            leg[nl++] = T;
+            T.kind = RS_LEG_BACKWARD;
+            T.angle = surf_angle(B, f->q, f->u == 0 && f->k > 0 ? f->k - 1 : f->k, -1, 1);
+            leg[nl++] = T;
+            rs_network_leg *L = leg + N->leg_start[nd];
+            uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
+            sort_legs(L, d);
+            int best = -1;
+            for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
+            for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
+            N->node[nd].degree = d;
+            N->node[nd].kind = RS_NODE_JUNCTION;
+            const char *jc = rs_roads_get_attr(B->roads, f->q, "junction");
+            if (jc && strcmp(jc, "roundabout") == 0) N->node[nd].control |= RS_NODE_ROUNDABOUT;
+        }
+        N->leg_start[N->nnodes] = (uint32_t)nl;
+        rs__free(ctx, N->leg);
+        N->leg = leg;
+        N->nlegs = nl;
+    }
+    rs__free(ctx, start);
+    rs__free(ctx, ids);
+    rs__free(ctx, fe);
+    return res;
+}
+
 static void build_free(build *B)
 {
     rs_ctx *ctx = B->ctx;
@@ -1902,6 +2101,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         N->length[r] = B.voff[r + 1] > B.voff[r] ? B.s[B.voff[r + 1] - 1] : 0;
     }
     number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
+    if ((res = surface_tees(&B, N)) != RS_OK) goto fail;
     N->bytes = sizeof *N + nn * sizeof *N->node + (nn + 1) * sizeof *N->leg_start + N->nlegs * sizeof *N->leg +
                n * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev + sizeof *N->next +
                     sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);

@@ -1877,7 +1877,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
             const rf_seg *q = &f->seg[k];
             int end = q == s ? t->end : 2;
             if (end == 2 && !(lm_max(t->nx * q->ax + t->ny * q->ay, t->nx * q->bx + t->ny * q->by) + q->r + f->c >
-                              cE + t->half_width)) {
+                              cE + t->far)) {
                 if (step < nout) continue;
                 break;
             }
@@ -1897,7 +1897,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
             T->end = end;
             T->nx = t->nx, T->ny = t->ny;
             T->cE = cE;
-            T->R = t->half_width;
+            T->R = t->far;
             T->through = t->through;
             T->G = t->grow >= 0 && t->grow <= 1e300 ? t->grow : 0; /* NaN, inf: 0 */
         }

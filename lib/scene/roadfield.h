@@ -56,7 +56,10 @@ typedef struct rs__tee_end {
     int end;           /* 0: the record's first point, 1: its last */
     uint32_t through;
     double nx, ny;
-    double half_width; /* the through road's */
+    double far;        /* the far edge line is n . p = n . E + far (E: the end point): the
+                          through road's half width, less how far E lies past its centre
+                          line along n (an end inside its surface, docs/network.md "Ends
+                          inside a surface"; a T within the tolerance: E on it) */
     double grow;       /* how far the through road's shape in the field given the
                           ends reaches past its surface edge (its casing's width
                           in a casing field; 0 when it does not) */
@@ -66,9 +69,17 @@ typedef struct rs__tee_end {
  * free (not continued by its stroke) at a sine above 0.2 with it. *out is
  * the caller's (rs__free), NULL with *n = 0 when there are none. */
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *n);
+/* How far road r's end (end 0: its first point, 1: its last) lies past
+ * the centre line of the road of through leg tl along the unit normal
+ * (nx, ny) (negative: short of it), metres: the end point against the
+ * nearest point of tl's segment. 0 for an end within tol of it (a T found
+ * there: the end is taken to be on the centre line) and where the through
+ * road passes by points (a shared point or a joint of its records). */
+double rs__tee_offset(const rs_roads *roads, uint32_t r, int end, const rs_network_leg *tl, double nx, double ny,
+                      double tol);
 /* Trims the round caps of the T ends of f's roads: such an end is a flat
- * strip up to the through road's far edge line (the line through the end
- * point along the through road, moved its half width across), clipped
+ * strip up to the through road's far edge line (n . p = n . E + far, E
+ * the end point), clipped
  * there; the coverage and the nearest query use that shape (a widened
  * field, rs__roadfield_widen, keeps the same lines: a casing stops at the
  * through road's surface edge). Part of building f (before any query). */

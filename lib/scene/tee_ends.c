@@ -11,6 +11,25 @@
  * its round cap (the flat end would reach 1 / sine half widths along it) */
 #define TEE_MIN_SINE 0.2
 
+double rs__tee_offset(const rs_roads *roads, uint32_t r, int end, const rs_network_leg *tl, double nx, double ny,
+                      double tol)
+{
+    const double *xy = NULL, *txy = NULL;
+    size_t np = 0, tn = 0;
+    if (rs__is_end_leg(tl)) return 0;
+    rs_roads_get(roads, r, NULL, NULL, &xy, &np);
+    rs_roads_get(roads, tl->road, NULL, NULL, &txy, &tn);
+    if (np < 1 || (size_t)tl->segment + 1 >= tn) return 0;
+    const double *e = xy + 2 * (end ? np - 1 : 0), *a = txy + 2 * (size_t)tl->segment, *b = a + 2;
+    double dx = b[0] - a[0], dy = b[1] - a[1], dd = dx * dx + dy * dy;
+    double u = dd > 0 ? ((e[0] - a[0]) * dx + (e[1] - a[1]) * dy) / dd : 0;
+    u = u > 0 ? (u < 1 ? u : 1) : 0;
+    double fx = e[0] - (a[0] + u * dx), fy = e[1] - (a[1] + u * dy);
+    if (!(hypot(fx, fy) > tol)) return 0;
+    double off = nx * fx + ny * fy;
+    return isfinite(off) ? off : 0;
+}
+
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *nout)
 {
     *out = NULL;
@@ -70,7 +89,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             t->through = tl[0]->road;
             t->nx = nx;
             t->ny = ny;
-            t->half_width = 0.5 * R;
+            t->far = 0.5 * R - rs__tee_offset(roads, r, L[k].kind == RS_LEG_END, tl[0], nx, ny, net->tol);
             t->grow = 0;
         }
     }
