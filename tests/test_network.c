@@ -937,6 +937,51 @@ static void test_end_inside_surface(void)
     }
 }
 
+/* A T on a street whose records there do not draw alike (lanes=2 west of
+ * the T, lanes=4 east: no stroke passes) and a side road of its class: the
+ * two record ends going straight on are the through road. Its inner lines
+ * run on and its far edge line stays (the image there is the street's
+ * alone), its near edge line stops at the mouth; before, the side road's
+ * surface cut them all as at a crossing. */
+static void test_tee_two_looks(void)
+{
+    static const double west[4] = { 2, 40, 41.3, 40 }, east[4] = { 41.3, 40, 118, 40 }, side[4] = { 41.3, 78, 41.3, 40 };
+    rs_roads *alone = NULL, *tee = NULL;
+    CHECK(rs_roads_create(ctx, &alone) == RS_OK && rs_roads_create(ctx, &tee) == RS_OK);
+    for (int k = 0; k < 2; k++) {
+        rs_roads *r = k ? tee : alone;
+        add_cls(r, 9, "secondary", west, 2);
+        CHECK(rs_roads_set_attr(ctx, r, rs_roads_count(r) - 1, "lanes", "2") == RS_OK);
+        add_cls(r, 9, "secondary", east, 2);
+        CHECK(rs_roads_set_attr(ctx, r, rs_roads_count(r) - 1, "lanes", "4") == RS_OK);
+    }
+    add_cls(tee, 7, "secondary", side, 2);
+    image a = { 0 }, b = { 0 };
+    CHECK(render(alone, NULL, &a) && render(tee, NULL, &b));
+    int inner = 0, mouth = 0, far_edge = 0;
+    double hw = 4.5, keep = hw - 2.0;
+    for (uint32_t py = 0; a.rgba && b.rgba && py < a.h; py++)
+        for (uint32_t px = 0; px < a.w; px++) {
+            double x = (px + 0.5) / TEX, y = (py + 0.5) / TEX;
+            if (fabs(x - 41.3) > 6) continue;
+            const uint8_t *p = a.rgba + 4 * ((size_t)py * a.w + px), *q = b.rgba + 4 * ((size_t)py * a.w + px);
+            int d = 0;
+            for (int c = 0; c < 3; c++) d = abs(p[c] - q[c]) > d ? abs(p[c] - q[c]) : d;
+            if (fabs(y - 40) <= keep - 0.5) inner = d > inner ? d : inner;
+            if (y < 40 - hw + 0.5 && y > 40 - hw - 0.5) far_edge = d > far_edge ? d : far_edge;
+            if (y > 40 + hw - 0.6 && y < 40 + hw && fabs(x - 41.3) < 2) mouth = d > mouth ? d : mouth;
+        }
+    printf("T on a street of two looks: inner lines %d/255, far edge %d/255 off the street alone; mouth %d/255\n", inner,
+           far_edge, mouth);
+    CHECKF(inner <= 8, "T on a street of two looks: its inner lines differ by %d/255 from the street alone", inner);
+    CHECKF(far_edge <= 8, "T on a street of two looks: the far edge line changed (%d/255)", far_edge);
+    CHECKF(mouth > 60, "T on a street of two looks: the near edge line is not interrupted at the mouth (%d/255)", mouth);
+    free(a.rgba);
+    free(b.rgba);
+    rs_roads_free(ctx, alone);
+    rs_roads_free(ctx, tee);
+}
+
 /* Two-way records pointing either way (OSM ways need not agree): one
  * stroke in the order along the road, the reversed ones flagged, offsets
  * at their first points; a one-way road's reversed record is not joined;
@@ -1325,6 +1370,7 @@ int main(void)
     test_split_draws_alike();
     test_tee_lines();
     test_end_inside_surface();
+    test_tee_two_looks();
     test_reversed_records();
     test_corner_rule();
     test_cut_near_corner();

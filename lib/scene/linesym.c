@@ -674,6 +674,7 @@ typedef struct ls_surf {
     double u0, u1;        /* the rectangle along u: -r .. len + r, or shorter at a T (below) */
     uint32_t road;
     uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
+    uint32_t only2, skip2; /* and a second one (a through road of two strokes, rs__network_tees) */
     int clip;             /* 1: only its part with cx x + cy y <= cc (a trimmed end at a T,
                              docs/network.md "Ends at a T": the surface stops at the far edge line) */
     double cx, cy, cc;
@@ -935,7 +936,8 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     const ls_surf *Q = &J->sf[k];
                     uint32_t sr = J->stroke_of ? J->stroke_of[road] : road;
                     if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
-                        continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr) || Q->skip == sr)
+                        continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr && Q->only2 != sr) ||
+                        Q->skip == sr || Q->skip2 == sr)
                         continue;
                     /* a path, footway or cycleway crossing or meeting a car
                      * road cuts none of its lines (issue 27: the road's lines
@@ -1343,7 +1345,7 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
     if (!net || rs_network_road_count(net) != n) return RS_OK;
     ls_tee *T = rs__alloc_array(ctx, n ? 2 * n : 1, sizeof *T);
     if (!T) return RS_ERR_NOMEM;
-    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = NO_STROKE, T[i].off = 0;
+    for (size_t i = 0; i < 2 * n; i++) T[i].stroke = T[i].stroke2 = NO_STROKE, T[i].off = 0;
     for (size_t nd = 0; nd < net->nnodes; nd++) {
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
@@ -1356,14 +1358,39 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
             through = st, tl = &L[k];
             nthrough++;
         }
-        if (nthrough != 1) continue;
+        /* none passing: two record ends going straight on, of the highest
+         * priority there, that do not draw alike (a street whose lanes or
+         * width change where a side road ends on it), as lib/scene/tee_ends.c */
+        uint32_t through2 = NO_STROKE;
         double w = 0;
-        rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
+        if (nthrough == 0) {
+            const rs_network_leg *pa = NULL, *pb = NULL;
+            int pairs = 0, top = -1;
+            for (uint32_t k = 0; k < d; k++) top = L[k].priority > top ? L[k].priority : top;
+            for (uint32_t a = 0; a < d; a++)
+                for (uint32_t b = a + 1; b < d; b++) {
+                    if (!rs__is_end_leg(&L[a]) || !rs__is_end_leg(&L[b]) || L[a].road == L[b].road) continue;
+                    if (cos(L[a].angle) * cos(L[b].angle) + sin(L[a].angle) * sin(L[b].angle) >= -RS__STRAIGHT_COS) continue;
+                    pairs++;
+                    pa = &L[a], pb = &L[b];
+                }
+            if (pairs != 1 || pa->priority != top || pb->priority != top) continue;
+            tl = pa;
+            through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
+            double w2 = 0;
+            rs_roads_get(roads, pb->road, NULL, &w2, NULL, NULL);
+            rs_roads_get(roads, pa->road, NULL, &w, NULL, NULL);
+            if (w2 < w) w = w2;
+        } else if (nthrough != 1)
+            continue;
+        else
+            rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
-            if (!rs__is_end_leg(&L[k]) || net->stroke_of[r] == through) continue;
+            if (!rs__is_end_leg(&L[k]) || net->stroke_of[r] == through || net->stroke_of[r] == through2) continue;
             ls_tee *t = &T[rs__leg_end(&L[k])];
             t->stroke = through;
+            t->stroke2 = through2;
             /* lines within 2 m of the through road's edges are edge lines:
              * they stop at the side road's mouth; the rest run on */
             t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
@@ -1459,7 +1486,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.u0 = -hw;
             Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
-            Q.only = Q.skip = NO_STROKE;
+            Q.only = Q.skip = Q.only2 = Q.skip2 = NO_STROKE;
             Q.clip = 0;
             Q.cx = Q.cy = Q.cc = 0;
             /* a trimmed end at a T: the rectangle reaches as far as the
@@ -1502,6 +1529,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                     if (at_end) Qt.u1 = fmax(Q.len - back, Qt.u0);
                     else Qt.u0 = fmin(back, Qt.u1);
                     Qt.only = Q.skip = T->stroke;
+                    Qt.only2 = Q.skip2 = T->stroke2;
                     tee = 1;
                 }
             }

@@ -36,6 +36,8 @@ typedef enum rs__band_aa {
 #define RS__NO_STROKE UINT32_MAX
 typedef struct rs__tee {
     uint32_t stroke;
+    uint32_t stroke2; /* a through road of two strokes (two record ends going straight on that
+                         do not draw alike), else RS__NO_STROKE */
     double keep, dx, dy;
     double off; /* how far the end lies past the through road's centre line (negative:
                    short of it; rs__tee_offset): the cut stops keep + off before the end */

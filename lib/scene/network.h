@@ -50,6 +50,11 @@ int rs__class_non_car(rs_road_class c);
 int rs__road_non_car(const rs_roads *roads, size_t r);
 
 size_t rs__network_bytes(const rs_network *net);
+/* Two record ends at a node going on within 30 degrees of straight (the
+ * cosine of their angle below -cos 30 degrees) that do not make a stroke
+ * (they do not draw alike) are the through road of a T when no stroke
+ * passes there (lib/scene/tee_ends.c, the line symbols) */
+#define RS__STRAIGHT_COS 0.8660254037844386
 /* Leg L is at a road's end (RS_LEG_START or RS_LEG_END). */
 static inline int rs__is_end_leg(const rs_network_leg *L)
 {

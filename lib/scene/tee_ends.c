@@ -58,17 +58,41 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             if (ntl < 2) tl[ntl] = &L[k];
             ntl++;
         }
+        /* none passing: two record ends going straight on that do not
+         * draw alike (a street whose width, lanes or class change where
+         * a side road ends on it): the through road, as wide as the
+         * narrower (the wider one's surface fills the rest) */
+        uint32_t through2 = UINT32_MAX;
+        if (!several && ntl == 0) {
+            const rs_network_leg *pa = NULL, *pb = NULL;
+            int pairs = 0;
+            for (uint32_t a = 0; a < d; a++)
+                for (uint32_t b = a + 1; b < d; b++) {
+                    if (!rs__is_end_leg(&L[a]) || !rs__is_end_leg(&L[b]) || L[a].road == L[b].road) continue;
+                    double c = cos(L[a].angle) * cos(L[b].angle) + sin(L[a].angle) * sin(L[b].angle);
+                    if (!(c < -RS__STRAIGHT_COS)) continue;
+                    pairs++;
+                    pa = &L[a], pb = &L[b];
+                }
+            if (pairs != 1) continue;
+            tl[0] = pa, tl[1] = pb, ntl = 2;
+            through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
+        }
         /* one through road, passing once (two legs); else every end keeps its cap */
         if (several || ntl != 2) continue;
         double tx = cos(tl[0]->angle) - cos(tl[1]->angle), ty = sin(tl[0]->angle) - sin(tl[1]->angle);
         double tn = hypot(tx, ty);
         if (!(tn > 1e-6)) continue;
         tx /= tn, ty /= tn;
-        double R = 0;
+        double R = 0, R2 = 0;
         rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
+        rs_roads_get(roads, tl[1]->road, NULL, &R2, NULL, NULL);
+        if (R2 < R) R = R2;
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
-            if (!rs__is_end_leg(&L[k]) || rs__leg_passes(net, &L[k]) || net->stroke_of[r] == through) continue;
+            if (!rs__is_end_leg(&L[k]) || rs__leg_passes(net, &L[k]) || net->stroke_of[r] == through ||
+                net->stroke_of[r] == through2)
+                continue;
             /* the normal (-ty, tx), turned to point from the leg across the road */
             double wx = cos(L[k].angle), wy = sin(L[k].angle), nx = -ty, ny = tx, dn = -(nx * wx + ny * wy);
             if (!(fabs(dn) > TEE_MIN_SINE)) continue;
