@@ -1276,41 +1276,44 @@ static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
  * street's own records never hold its end (whole or split anywhere, the
  * same), and a footway, path or cycleway holds no car road's end. */
 typedef struct surf_end {
-    uint32_t node, road;
+    uint32_t node, road, stroke;
     int non_car;
     double x, y;   /* the end point */
     uint32_t q, k; /* the nearest: record q's segment k (NONE: none) */
-    double u, d;   /* the point's parameter on it (0 .. 1) and distance */
+    double u, d;   /* the point's parameter on it (0 .. 1) and squared distance */
 } surf_end;
 
-static size_t surf_cell(double v, double v0, double c, size_t n)
+static size_t surf_cell(double v, double v0, double ic, size_t n)
 {
-    double t = (v - v0) / c;
+    double t = (v - v0) * ic; /* (ic = 1 / the cell: any monotone map finds the same candidates) */
     if (!(t >= 0)) return 0;
     if (t >= (double)(n - 1)) return n - 1;
     return (size_t)t;
 }
 
-/* Candidate end f against segment k (points a, a + 1) of record q (half width hw). */
-static void surf_test(const build *B, const rs_network *N, surf_end *f, uint32_t q, uint32_t k, double hw,
-                      int q_non_car)
+/* Candidate end f against segment k (points pa, pb = pa + 2) of record q
+ * of stroke sq, half width hw: its nearest point first (most candidates
+ * lie beyond the reach: a multiply-add test before anything is read) */
+static void surf_test(const build *B, const rs_network *N, surf_end *f, uint32_t q, uint32_t sq, uint32_t k,
+                      const double *pa, double dx, double dy, double dd, double reach2, int *q_non_car)
 {
-    if (N->stroke_of[f->road] == N->stroke_of[q] || (q_non_car && !f->non_car)) return;
-    size_t a = B->voff[q] + k;
-    const double *pa = B->xy + 2 * a, *pb = pa + 2;
-    double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
     double u = ((f->x - pa[0]) * dx + (f->y - pa[1]) * dy) / dd;
     u = u > 0 ? (u < 1 ? u : 1) : 0;
+    double ex = f->x - (pa[0] + u * dx), ey = f->y - (pa[1] + u * dy), d2 = ex * ex + ey * ey;
+    if (!(d2 <= reach2) || !(d2 < f->d)) return; /* (the first of equals: the lowest record and segment) */
+    if (f->stroke == sq) return;
+    if (!f->non_car) { /* (read only here: a record's info is tens of ns of attribute lookups) */
+        if (*q_non_car < 0) *q_non_car = rs__road_non_car(B->roads, q);
+        if (*q_non_car) return;
+    }
     /* (the record's own end, where its street does not go on: the end
      * lies beyond the street, two ends near each other, no T; a ring's
      * seam is no end) */
-    const double *first = B->xy + 2 * B->voff[q], *last = B->xy + 2 * (B->voff[q + 1] - 1);
-    int ring = N->closed[N->stroke_of[q]];
+    const double *first = B->xy + 2 * B->voff[q], *last = B->xy + 2 * (B->voff[q + 1] - 1), *pb = pa + 2;
+    int ring = N->closed[sq];
     if (u == 0 && pa[0] == first[0] && pa[1] == first[1] && N->link[2 * q] == NONE && !ring) return;
     if (u == 1 && pb[0] == last[0] && pb[1] == last[1] && N->link[2 * q + 1] == NONE && !ring) return;
-    double d = hypot(f->x - (pa[0] + u * dx), f->y - (pa[1] + u * dy));
-    if (!(d <= hw + B->tol) || !(d < f->d)) return; /* (the first of equals: the lowest record and segment) */
-    f->q = q, f->k = k, f->u = u, f->d = d;
+    f->q = q, f->k = k, f->u = u, f->d = d2;
 }
 
 /* Direction of road q's segment k, or of its nearest non-empty one
@@ -1349,18 +1352,19 @@ static rs_result surface_tees(build *B, rs_network *N)
         const double *p = B->xy + 2 * (L->kind == RS_LEG_START ? B->voff[L->road] : B->voff[L->road + 1] - 1);
         if (!isfinite(p[0]) || !isfinite(p[1])) continue;
         surf_end *f = &fe[m++];
-        f->node = (uint32_t)nd, f->road = L->road, f->non_car = rs__road_non_car(B->roads, L->road);
+        f->node = (uint32_t)nd, f->road = L->road, f->stroke = N->stroke_of[L->road];
+        f->non_car = rs__road_non_car(B->roads, L->road);
         f->x = p[0], f->y = p[1], f->q = f->k = NONE, f->u = 0, f->d = INFINITY;
         bx0 = fmin(bx0, p[0]), by0 = fmin(by0, p[1]), bx1 = fmax(bx1, p[0]), by1 = fmax(by1, p[1]);
     }
     /* the ends in a grid of about one a cell (at most 4 a cell more cells), counting sorted */
     size_t nx = 1, ny = 1;
-    double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (double)(m ? m : 1));
+    double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (4.0 * (double)(m ? m : 1)));
     if (!(c > 0)) c = fmax(wx, wy) / (double)(m ? m : 1);
     if (!(c > 0) || !isfinite(c) || !isfinite(wx) || !isfinite(wy)) c = INFINITY;
     while (isfinite(c)) {
         double fx = floor(wx / c) + 1, fy = floor(wy / c) + 1;
-        if (fx * fy <= 4.0 * (double)m + 4) {
+        if (fx * fy <= 4.0 * 4 * (double)m + 4) {
             nx = (size_t)fx, ny = (size_t)fy;
             break;
         }
@@ -1368,10 +1372,11 @@ static rs_result surface_tees(build *B, rs_network *N)
     }
     uint32_t *start = rs__calloc(ctx, nx * ny + 2, sizeof *start), *ids = rs__alloc_array(ctx, m ? m : 1, sizeof *ids);
     rs_result res = start && ids ? RS_OK : RS_ERR_NOMEM;
-    for (size_t i = 0; i < m && !res; i++) start[surf_cell(fe[i].y, by0, c, ny) * nx + surf_cell(fe[i].x, bx0, c, nx) + 2]++;
+    const double ic = 1 / c;
+    for (size_t i = 0; i < m && !res; i++) start[surf_cell(fe[i].y, by0, ic, ny) * nx + surf_cell(fe[i].x, bx0, ic, nx) + 2]++;
     for (size_t i = 0; i < nx * ny && !res; i++) start[i + 2] += start[i + 1];
     for (size_t i = 0; i < m && !res; i++)
-        ids[start[surf_cell(fe[i].y, by0, c, ny) * nx + surf_cell(fe[i].x, bx0, c, nx) + 1]++] = (uint32_t)i;
+        ids[start[surf_cell(fe[i].y, by0, ic, ny) * nx + surf_cell(fe[i].x, bx0, ic, nx) + 1]++] = (uint32_t)i;
     /* every segment of every record with a surface, over the cells its
      * capsule reaches, row by row */
     for (size_t q = 0; q < B->nroads && !res && m; q++) {
@@ -1383,29 +1388,42 @@ static rs_result surface_tees(build *B, rs_network *N)
         rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
         double hw = 0.5 * w;
         if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
-        int qnc = rs__road_non_car(B->roads, q);
+        int qnc = -1; /* (not read yet) */
+        uint32_t sq = N->stroke_of[q];
+        double rq = hw + tol, reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
         size_t nseg = B->voff[q + 1] - B->voff[q] - 1;
         for (size_t k = 0; k < nseg; k++) {
             const double *pa = B->xy + 2 * (B->voff[q] + k), *pb = pa + 2;
+            /* (ternaries, not fmin / fmax: library calls, most of a
+             * segment's cost; a NaN fails the box test) */
+            double xmin = pa[0] < pb[0] ? pa[0] : pb[0], xmax = pa[0] < pb[0] ? pb[0] : pa[0];
+            double ymin = pa[1] < pb[1] ? pa[1] : pb[1], ymax = pa[1] < pb[1] ? pb[1] : pa[1];
+            xmin -= rq, xmax += rq, ymin -= rq, ymax += rq;
+            if (!(xmax >= bx0 && xmin <= bx1 && ymax >= by0 && ymin <= by1)) continue;
+            size_t r0 = surf_cell(ymin, by0, ic, ny), r1 = surf_cell(ymax, by0, ic, ny);
+            size_t b0 = surf_cell(xmin, bx0, ic, nx), b1 = surf_cell(xmax, bx0, ic, nx);
             double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
-            if (!(dd > 0) || !isfinite(dd)) continue;
-            double ymin = fmin(pa[1], pb[1]) - hw, ymax = fmax(pa[1], pb[1]) + hw;
-            if (fmax(pa[0], pb[0]) + hw < bx0 || fmin(pa[0], pb[0]) - hw > bx1 || ymax < by0 || ymin > by1) continue;
-            size_t r0 = surf_cell(ymin, by0, c, ny), r1 = surf_cell(ymax, by0, c, ny);
+            if (!(dd > 0) || !(dd <= DBL_MAX)) continue;
+            if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 4) { /* (a box of at most 2 x 2 cells: all of it) */
+                for (size_t cy = r0; cy <= r1; cy++)
+                    for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)
+                        surf_test(B, N, &fe[ids[i]], (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+                continue;
+            }
             for (size_t cy = r0; cy <= r1; cy++) {
-                /* the segment's part within hw of the row (the outer rows reach on) */
+                /* the segment's part within the reach of the row (the outer rows reach on) */
                 double lo = cy == 0 ? -INFINITY : by0 + (double)cy * c, hi = cy + 1 == ny ? INFINITY : by0 + (double)(cy + 1) * c;
                 double t0 = 0, t1 = 1;
                 if (dy != 0) {
-                    t0 = (fmax(lo, ymin + hw) - hw - pa[1]) / dy, t1 = (fmin(hi, ymax - hw) + hw - pa[1]) / dy;
+                    t0 = (nmax(lo, ymin + rq) - rq - pa[1]) / dy, t1 = (nmin(hi, ymax - rq) + rq - pa[1]) / dy;
                     if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
-                    t0 = fmax(t0, 0), t1 = fmin(t1, 1);
+                    t0 = nmax(t0, 0), t1 = nmin(t1, 1);
                     if (t0 > t1) continue;
                 }
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
-                size_t c0 = surf_cell(fmin(xa, xb) - hw, bx0, c, nx), c1 = surf_cell(fmax(xa, xb) + hw, bx0, c, nx);
-                for (uint32_t i = start[cy * nx + c0]; i < start[cy * nx + c1 + 1]; i++)
-                    surf_test(B, N, &fe[ids[i]], (uint32_t)q, (uint32_t)k, hw, qnc);
+                size_t c0 = surf_cell(nmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(nmax(xa, xb) + rq, bx0, ic, nx);
+                for (uint32_t i = start[cy * nx + c0], ie = start[cy * nx + c1 + 1]; i < ie; i++)
+                    surf_test(B, N, &fe[ids[i]], (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
             }
         }
     }
