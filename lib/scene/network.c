@@ -1268,7 +1268,7 @@ static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
  * centre line short of the far edge). Hand-drawn roads end at the kerb or
  * inside a lane as often as on the centre line; as free ends their round
  * caps bulged past the far edge, their surfaces cut the through road's
- * centre line and their give-way lines stood up to a half width early.
+ * centre line and their give-way lines stood up to a half width early or late.
  * Such an end meets the street in a T at the nearest point of its
  * centreline (docs/network.md "Ends inside a surface"): its node gets the
  * through record's two legs there, as a T within the tolerance has, and
