@@ -748,6 +748,28 @@ static void test_split_draws_alike(void)
     printf("split roads: worst pixel %d/255 against the unsplit road\n", worst_all);
 }
 
+/* A T at x = 41.3 on a through road along y = 40 (half width hw), the side
+ * road coming from +y: the worst channel difference between a (the
+ * through road alone) and b (with the side road) within 6 m of the T in
+ * its inner part (within hw - 2.5 m of the centre line), along the far edge
+ * line (+-0.5 m) and at the mouth (the near edge's last 0.6 m, 2 m either
+ * side of the T). */
+static void tee_zones(const image *a, const image *b, double hw, int *inner, int *far_edge, int *mouth)
+{
+    double keep = hw - 2.0;
+    for (uint32_t py = 0; a->rgba && b->rgba && py < a->h; py++)
+        for (uint32_t px = 0; px < a->w; px++) {
+            double x = (px + 0.5) / TEX, y = (py + 0.5) / TEX;
+            if (fabs(x - 41.3) > 6) continue;
+            const uint8_t *p = a->rgba + 4 * ((size_t)py * a->w + px), *q = b->rgba + 4 * ((size_t)py * a->w + px);
+            int d = 0;
+            for (int c = 0; c < 3; c++) d = abs(p[c] - q[c]) > d ? abs(p[c] - q[c]) : d;
+            if (fabs(y - 40) <= keep - 0.5) *inner = d > *inner ? d : *inner;
+            if (y < 40 - hw + 0.5 && y > 40 - hw - 0.5) *far_edge = d > *far_edge ? d : *far_edge;
+            if (y > 40 + hw - 0.6 && y < 40 + hw && fabs(x - 41.3) < 2) *mouth = d > *mouth ? d : *mouth;
+        }
+}
+
 /* A side road ending on a through road's centre line (a T): the through
  * road's centre line runs on across the junction (the image inside its
  * inner part is the through road's alone), its edge line stops at the side
@@ -783,18 +805,7 @@ static void test_tee_lines(void)
             save_ppm("network_tee.ppm", &b);
         }
         int inner = 0, mouth = 0, far_edge = 0;
-        double hw = tw / 2, keep = hw - 2.0;
-        for (uint32_t py = 0; a.rgba && b.rgba && py < a.h; py++)
-            for (uint32_t px = 0; px < a.w; px++) {
-                double x = (px + 0.5) / TEX, y = (py + 0.5) / TEX;
-                if (fabs(x - 41.3) > 6) continue;
-                const uint8_t *p = a.rgba + 4 * ((size_t)py * a.w + px), *q = b.rgba + 4 * ((size_t)py * a.w + px);
-                int d = 0;
-                for (int c = 0; c < 3; c++) d = abs(p[c] - q[c]) > d ? abs(p[c] - q[c]) : d;
-                if (fabs(y - 40) <= keep - 0.5) inner = d > inner ? d : inner;
-                if (y < 40 - hw + 0.5 && y > 40 - hw - 0.5) far_edge = d > far_edge ? d : far_edge;
-                if (y > 40 + hw - 0.6 && y < 40 + hw && fabs(x - 41.3) < 2) mouth = d > mouth ? d : mouth;
-            }
+        tee_zones(&a, &b, tw / 2, &inner, &far_edge, &mouth);
         if (variant < 2) {
             CHECKF(inner <= 8, "T (%s): the through road's inner lines differ by %d/255 from the road alone",
                    variant ? "split at the T" : "one record", inner);
@@ -959,18 +970,7 @@ static void test_tee_two_looks(void)
     image a = { 0 }, b = { 0 };
     CHECK(render(alone, NULL, &a) && render(tee, NULL, &b));
     int inner = 0, mouth = 0, far_edge = 0;
-    double hw = 4.5, keep = hw - 2.0;
-    for (uint32_t py = 0; a.rgba && b.rgba && py < a.h; py++)
-        for (uint32_t px = 0; px < a.w; px++) {
-            double x = (px + 0.5) / TEX, y = (py + 0.5) / TEX;
-            if (fabs(x - 41.3) > 6) continue;
-            const uint8_t *p = a.rgba + 4 * ((size_t)py * a.w + px), *q = b.rgba + 4 * ((size_t)py * a.w + px);
-            int d = 0;
-            for (int c = 0; c < 3; c++) d = abs(p[c] - q[c]) > d ? abs(p[c] - q[c]) : d;
-            if (fabs(y - 40) <= keep - 0.5) inner = d > inner ? d : inner;
-            if (y < 40 - hw + 0.5 && y > 40 - hw - 0.5) far_edge = d > far_edge ? d : far_edge;
-            if (y > 40 + hw - 0.6 && y < 40 + hw && fabs(x - 41.3) < 2) mouth = d > mouth ? d : mouth;
-        }
+    tee_zones(&a, &b, 4.5, &inner, &far_edge, &mouth);
     printf("T on a street of two looks: inner lines %d/255, far edge %d/255 off the street alone; mouth %d/255\n", inner,
            far_edge, mouth);
     CHECKF(inner <= 8, "T on a street of two looks: its inner lines differ by %d/255 from the street alone", inner);
