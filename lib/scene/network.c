@@ -1336,6 +1336,7 @@ static rs_result surface_tees(build *B, rs_network *N)
     rs_ctx *ctx = B->ctx;
     const double tol = B->tol;
     size_t nf = 0;
+    if (rs__poll(ctx)) return RS_ERR_CANCELLED;
     for (size_t nd = 0; nd < N->nnodes; nd++) {
         const rs_network_leg *L = N->leg + N->leg_start[nd];
         nf += N->leg_start[nd + 1] - N->leg_start[nd] == 1 && rs__is_end_leg(L) && N->length[L->road] > 2 * tol;
@@ -1435,6 +1436,11 @@ static rs_result surface_tees(build *B, rs_network *N)
         /* the nodes' legs again, the two through legs added at theirs (fe is in node order) */
         size_t nl = 0, j = 0;
         for (size_t nd = 0; nd < N->nnodes; nd++) {
+            if ((nd & 4095) == 0 && rs__poll(ctx)) { /* (the network is dropped: leg_start half made is no matter) */
+                rs__free(ctx, leg);
+                res = RS_ERR_CANCELLED;
+                break;
+            }
             uint32_t a = N->leg_start[nd], b = N->leg_start[nd + 1];
             N->leg_start[nd] = (uint32_t)nl;
             memcpy(leg + nl, N->leg + a, (b - a) * sizeof *leg);
@@ -1466,10 +1472,12 @@ static rs_result surface_tees(build *B, rs_network *N)
             const char *jc = rs_roads_get_attr(B->roads, f->q, "junction");
             if (jc && strcmp(jc, "roundabout") == 0) N->node[nd].control |= RS_NODE_ROUNDABOUT;
         }
-        N->leg_start[N->nnodes] = (uint32_t)nl;
-        rs__free(ctx, N->leg);
-        N->leg = leg;
-        N->nlegs = nl;
+        if (!res) {
+            N->leg_start[N->nnodes] = (uint32_t)nl;
+            rs__free(ctx, N->leg);
+            N->leg = leg;
+            N->nlegs = nl;
+        }
     }
     rs__free(ctx, start);
     rs__free(ctx, ids);
