@@ -1365,16 +1365,7 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         double w = 0;
         if (nthrough == 0) {
             const rs_network_leg *pa = NULL, *pb = NULL;
-            int pairs = 0, top = -1;
-            for (uint32_t k = 0; k < d; k++) top = L[k].priority > top ? L[k].priority : top;
-            for (uint32_t a = 0; a < d; a++)
-                for (uint32_t b = a + 1; b < d; b++) {
-                    if (!rs__is_end_leg(&L[a]) || !rs__is_end_leg(&L[b]) || L[a].road == L[b].road) continue;
-                    if (cos(L[a].angle) * cos(L[b].angle) + sin(L[a].angle) * sin(L[b].angle) >= -RS__STRAIGHT_COS) continue;
-                    pairs++;
-                    pa = &L[a], pb = &L[b];
-                }
-            if (pairs != 1 || pa->priority != top || pb->priority != top) continue;
+            if (!rs__straight_pair(L, d, &pa, &pb) || !pa->major || !pb->major) continue;
             tl = pa;
             through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
             double w2 = 0;

@@ -921,6 +921,31 @@ static void sort_legs(rs_network_leg *L, size_t k)
     }
 }
 
+/* A node's d legs: major = of the highest priority there. */
+static void mark_major(rs_network_leg *L, uint32_t d)
+{
+    int best = -1;
+    for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
+    for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
+}
+
+/* The one pair of record-end legs among a node's d legs going on within
+ * 30 degrees of straight (RS__STRAIGHT_COS), of two records: 1 with *a, *b
+ * when there is exactly one such pair, else 0. */
+int rs__straight_pair(const rs_network_leg *L, uint32_t d, const rs_network_leg **a, const rs_network_leg **b)
+{
+    int pairs = 0;
+    for (uint32_t i = 0; i < d; i++)
+        for (uint32_t j = i + 1; j < d; j++) {
+            if (!rs__is_end_leg(&L[i]) || !rs__is_end_leg(&L[j]) || L[i].road == L[j].road) continue;
+            double c = cos(L[i].angle) * cos(L[j].angle) + sin(L[i].angle) * sin(L[j].angle);
+            if (!(c < -RS__STRAIGHT_COS)) continue;
+            pairs++;
+            *a = &L[i], *b = &L[j];
+        }
+    return pairs == 1;
+}
+
 /* Direction away from node position c along road r from point v, forward
  * (+1) or backward (-1): towards the first point beyond the tolerance. */
 static double leg_angle(const build *B, const road_look *lk, const double *c, uint32_t v, int dir)
@@ -1464,9 +1489,7 @@ static rs_result surface_tees(build *B, rs_network *N)
             rs_network_leg *L = leg + N->leg_start[nd];
             uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
             sort_legs(L, d);
-            int best = -1;
-            for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
-            for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
+            mark_major(L, d);
             N->node[nd].degree = d;
             N->node[nd].kind = RS_NODE_JUNCTION;
             const char *jc = rs_roads_get_attr(B->roads, f->q, "junction");
@@ -2086,9 +2109,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         rs_network_leg *L = N->leg + N->leg_start[nd];
         uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
         if (d > 1) sort_legs(L, d);
-        int best = -1;
-        for (uint32_t k = 0; k < d; k++) best = L[k].priority > best ? L[k].priority : best;
-        for (uint32_t k = 0; k < d; k++) L[k].major = L[k].priority == best;
+        mark_major(L, d);
         ndo.degree = d;
         ndo.kind = d <= 1 ? RS_NODE_END : d == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
         memcpy(&N->node[nd], &ndo, sizeof ndo);

@@ -55,6 +55,10 @@ size_t rs__network_bytes(const rs_network *net);
  * (they do not draw alike) are the through road of a T when no stroke
  * passes there (lib/scene/tee_ends.c, the line symbols) */
 #define RS__STRAIGHT_COS 0.8660254037844386
+/* That pair among a node's d legs L (end legs of two records, their
+ * directions' cosine below -RS__STRAIGHT_COS): 1 with *a, *b when there is
+ * exactly one, else 0 (lib/scene/network.c). */
+int rs__straight_pair(const rs_network_leg *L, uint32_t d, const rs_network_leg **a, const rs_network_leg **b);
 /* Leg L is at a road's end (RS_LEG_START or RS_LEG_END). */
 static inline int rs__is_end_leg(const rs_network_leg *L)
 {

@@ -65,16 +65,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
         uint32_t through2 = UINT32_MAX;
         if (!several && ntl == 0) {
             const rs_network_leg *pa = NULL, *pb = NULL;
-            int pairs = 0;
-            for (uint32_t a = 0; a < d; a++)
-                for (uint32_t b = a + 1; b < d; b++) {
-                    if (!rs__is_end_leg(&L[a]) || !rs__is_end_leg(&L[b]) || L[a].road == L[b].road) continue;
-                    double c = cos(L[a].angle) * cos(L[b].angle) + sin(L[a].angle) * sin(L[b].angle);
-                    if (!(c < -RS__STRAIGHT_COS)) continue;
-                    pairs++;
-                    pa = &L[a], pb = &L[b];
-                }
-            if (pairs != 1) continue;
+            if (!rs__straight_pair(L, d, &pa, &pb)) continue;
             tl[0] = pa, tl[1] = pb, ntl = 2;
             through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
         }
