@@ -66,6 +66,13 @@ int rs__poll(rs_ctx *ctx);
 /* rs__tick(ctx, units) that always calls the callback: from loops that
  * count their own time (every few thousand items). */
 int rs__report(rs_ctx *ctx, uint64_t units);
+/* Sort n elements of `size` bytes at base by cmp, stably (equal elements
+ * keep their order: the same result on every C library), polling for
+ * cancel (lib/sort.c). Scratch: 8 n bytes plus one element. Returns
+ * RS_OK; RS_ERR_NOMEM or RS_ERR_CANCELLED (base unchanged: the elements
+ * move only after the last poll that stops); RS_ERR_LIMIT for n >= 2^32.
+ * No message set. */
+rs_result rs__sort(rs_ctx *ctx, void *base, size_t n, size_t size, int (*cmp)(const void *, const void *));
 
 struct rs_dem {
     uint32_t width, height;

@@ -13,6 +13,7 @@
  * checked crack-free, and the call run again gives the same output). */
 #include "roadsplat.h"
 #include "atlas.h"
+#include "internal.h"
 #include "roam_check.h"
 #include "scenes.h"
 #include "harness.h"
@@ -494,6 +495,97 @@ static void test_calls(rs_ctx *ctx, const sc_scene *sc, rs_dem *dem, rs_roads *r
     free(f.pgm[1]);
 }
 
+/* rs__sort (lib/sort.c): stable, the same order as a reference insertion
+ * sort, for small and large elements and many ties; a stop leaves the
+ * array as it was; out of memory too. */
+typedef struct sort_item {
+    uint32_t key, at;
+    unsigned char pad[32];
+} sort_item;
+static int sort_item_cmp(const void *a, const void *b)
+{
+    const sort_item *x = a, *y = b;
+    return (x->key > y->key) - (x->key < y->key);
+}
+static int sort_u32_cmp(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a >> 8, y = *(const uint32_t *)b >> 8; /* low byte: the tie breaker */
+    return (x > y) - (x < y);
+}
+static int stop_second(void *user, uint64_t done, uint64_t total)
+{
+    (void)done, (void)total;
+    return ++*(int *)user >= 2;
+}
+static void *small_malloc(void *user, size_t size) { (void)user; return size > 4096 ? NULL : malloc(size); }
+static void *small_realloc(void *user, void *p, size_t size) { (void)user; return size > 4096 ? NULL : realloc(p, size); }
+static void small_free(void *user, void *p) { (void)user; free(p); }
+
+static void test_sort(rs_ctx *ctx)
+{
+    static const size_t sizes[] = { 0, 1, 2, 15, 16, 17, 33, 100, 1000, 40000 };
+    int bad = 0;
+    uint32_t seed = 12345;
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; si++) {
+        size_t n = sizes[si];
+        for (uint32_t range = 1; range <= 1000000; range *= 100) {
+            sort_item *v = calloc(n ? n : 1, sizeof *v);
+            uint32_t *u = calloc(n ? n : 1, sizeof *u);
+            for (size_t i = 0; i < n; i++) {
+                seed = seed * 1103515245u + 12345u;
+                v[i].key = (seed >> 8) % range;
+                v[i].at = (uint32_t)i;
+                v[i].pad[i % 32] = (unsigned char)i;
+                u[i] = (v[i].key << 8) | (uint32_t)(i & 255);
+            }
+            CHECK(rs__sort(ctx, v, n, sizeof *v, sort_item_cmp) == RS_OK);
+            for (size_t i = 1; i < n; i++)
+                bad += v[i - 1].key > v[i].key || (v[i - 1].key == v[i].key && v[i - 1].at >= v[i].at);
+            for (size_t i = 0; i < n; i++) bad += v[i].pad[v[i].at % 32] != (unsigned char)v[i].at;
+            /* 4-byte elements against an insertion sort by the high bits */
+            uint32_t *ref = malloc((n ? n : 1) * sizeof *ref);
+            memcpy(ref, u, n * sizeof *u);
+            if (n <= 1000)
+                for (size_t i = 1; i < n; i++)
+                    for (size_t j = i; j > 0 && sort_u32_cmp(&ref[j - 1], &ref[j]) > 0; j--) {
+                        uint32_t t = ref[j];
+                        ref[j] = ref[j - 1];
+                        ref[j - 1] = t;
+                    }
+            CHECK(rs__sort(ctx, u, n, sizeof *u, sort_u32_cmp) == RS_OK);
+            if (n <= 1000) bad += n && memcmp(ref, u, n * sizeof *u) != 0;
+            free(ref);
+            free(v);
+            free(u);
+        }
+    }
+    CHECKF(bad == 0, "%d elements out of order or unstable", bad);
+
+    /* a stop: RS_ERR_CANCELLED, the array untouched */
+    size_t n = 200000;
+    uint32_t *u = malloc(n * sizeof *u), *keep = malloc(n * sizeof *u);
+    for (size_t i = 0; i < n; i++) u[i] = (uint32_t)((i * 2654435761u) >> 4);
+    memcpy(keep, u, n * sizeof *u);
+    rs_ctx *c2 = NULL;
+    int calls = 0;
+    CHECK(rs_ctx_create(NULL, NULL, &c2) == RS_OK);
+    rs_ctx_set_progress(c2, stop_second, &calls);
+    rs__progress pg;
+    rs__progress_begin(c2, &pg, NULL, NULL, 1, 1);
+    CHECK(rs__sort(c2, u, n, sizeof *u, sort_u32_cmp) == RS_ERR_CANCELLED);
+    CHECK(rs__progress_end(c2, &pg, RS_ERR_CANCELLED) == RS_ERR_CANCELLED);
+    CHECK(calls == 2 && memcmp(u, keep, n * sizeof *u) == 0);
+    rs_ctx_free(c2);
+    /* no memory for the indices: RS_ERR_NOMEM, untouched */
+    rs_allocator al = { small_malloc, small_realloc, small_free, NULL };
+    CHECK(rs_ctx_create(&al, NULL, &c2) == RS_OK);
+    CHECK(rs__sort(c2, u, n, sizeof *u, sort_u32_cmp) == RS_ERR_NOMEM);
+    CHECK(memcmp(u, keep, n * sizeof *u) == 0);
+    rs_ctx_free(c2);
+    free(u);
+    free(keep);
+}
+
 int main(void)
 {
     rs_ctx *ctx;
@@ -545,6 +637,7 @@ int main(void)
     CHECK(build(ctx, dem, roads, &w, &h1) == RS_OK && h1 == h0);
 
     test_calls(ctx, &sc, dem, roads);
+    test_sort(ctx);
 
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);

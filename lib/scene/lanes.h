@@ -48,6 +48,15 @@ typedef struct rs__line_cut {
  * (built here when needed). */
 rs_result rs__markings_line_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                                  const rs_network *net, rs__line_cut **out, size_t *n);
+/* rs__markings_auto (lib/scene/markings.h) that also returns the line cuts
+ * (*cuts the caller's, rs__free; NULL on failure): the placements and the
+ * cuts of one run of the rules, for the GPU export, which needs both (the
+ * cuts depend on the atlas's sizes alone, the same for the built-in
+ * atlas and the sizes rs__markings_line_cuts uses without one). */
+struct rs__placement;
+rs_result rs__markings_auto_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_atlas *atlas,
+                                 const rs_style_options *so, const rs_network *net, struct rs__placement **pl,
+                                 size_t *n, size_t *cap, rs__line_cut **cuts, size_t *ncut);
 /* The automatic markings of one grid build, placed once for their two
  * readers: the placements (rs__markings_build) and the line cuts
  * (rs__styling_build: lane and centre lines stop there). Empty (all zero)

@@ -1347,6 +1347,10 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
     if (!T) return RS_ERR_NOMEM;
     for (size_t i = 0; i < 2 * n; i++) T[i].stroke = T[i].stroke2 = NO_STROKE, T[i].off = 0;
     for (size_t nd = 0; nd < net->nnodes; nd++) {
+        if ((nd & 4095) == 4095 && rs__poll(ctx)) { /* (10^5 roads: ~40 ms) */
+            rs__free(ctx, T);
+            return RS_ERR_CANCELLED;
+        }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
         const rs_network_leg *tl = NULL;
@@ -1421,9 +1425,13 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     J->keep = rs__alloc_array(ctx, nroads ? nroads : 1, sizeof *J->keep);
     if (!J->keep) return RS_ERR_NOMEM;
     if (p->prio_given) J->prio = p->prio;
-    else if (rs__road_priorities(ctx, roads, &J->prio_own) != RS_OK) return RS_ERR_NOMEM;
-    else J->prio = J->prio_own;
+    else {
+        rs_result rp = rs__road_priorities(ctx, roads, &J->prio_own);
+        if (rp) return rp;
+        J->prio = J->prio_own;
+    }
     for (size_t ri = 0; ri < nroads; ri++) {
+        if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
         const char *jc = rs_roads_get_attr(roads, ri, "junction_cuts");
         double w = 0;
         rs_roads_get(roads, ri, NULL, &w, NULL, NULL);

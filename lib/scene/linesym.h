@@ -44,7 +44,8 @@ typedef struct rs__tee {
 } rs__tee;
 /* Per road two entries (start, end) into *out (the caller's, rs__free);
  * *out NULL without a network or when it is not of these roads. The GPU
- * export applies the same rule (lib/gpu/gpu_export.c). */
+ * export applies the same rule (lib/gpu/gpu_export.c). RS_ERR_NOMEM,
+ * RS_ERR_CANCELLED (polls every 4096 nodes). */
 rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee **out);
 
 typedef struct rs__linesym_params {

@@ -603,23 +603,18 @@ static rs_result storage_order(rs_ctx *ctx, rs__markings *mk, size_t npart, size
     rs_result r = !key || !m2 || !pts2 || (npart && !parts2) || (nfp && !fps2) || !at ? RS_ERR_NOMEM : RS_OK;
     if (!r) {
         for (size_t i = 0; i < n; i++) {
-            key[i].y = isnan(mk->m[i].by0) ? INFINITY : mk->m[i].by0; /* a total order for qsort */
+            key[i].y = isnan(mk->m[i].by0) ? INFINITY : mk->m[i].by0; /* a total order */
             key[i].i = (uint32_t)i;
         }
-        qsort(key, n, sizeof *key, cmp_key);
-        if (rs__poll(ctx)) r = RS_ERR_CANCELLED; /* (the sort and the copies below: ~30 ms at 10^5 roads) */
+        r = rs__sort(ctx, key, n, sizeof *key, cmp_key);
     }
-    if (r) {
-        rs__free(ctx, key);
-        rs__free(ctx, m2);
-        rs__free(ctx, pts2);
-        rs__free(ctx, parts2);
-        rs__free(ctx, fps2);
-        rs__free(ctx, at);
-        return r;
-    }
+    if (r) goto fail;
     size_t pa = 0, qa = 0, fa = 0;
     for (size_t j = 0; j < n; j++) {
+        if ((j & 1023) == 1023 && rs__poll(ctx)) { /* (the copies fault fresh pages in: ~30 ms per 8192) */
+            r = RS_ERR_CANCELLED;
+            goto fail;
+        }
         const rs__mk *src = &mk->m[key[j].i];
         rs__mk *d = &m2[j];
         *d = *src;
@@ -649,6 +644,14 @@ static rs_result storage_order(rs_ctx *ctx, rs__markings *mk, size_t npart, size
     mk->fps = fps2;
     mk->at = at;
     return RS_OK;
+fail:
+    rs__free(ctx, key);
+    rs__free(ctx, m2);
+    rs__free(ctx, pts2);
+    rs__free(ctx, parts2);
+    rs__free(ctx, fps2);
+    rs__free(ctx, at);
+    return r;
 }
 
 /* Road ri's local points extended past its ends along the records that go

@@ -68,6 +68,10 @@ rs_result rs__road_priorities(rs_ctx *ctx, const rs_roads *roads, int **out)
     *out = NULL;
     if (!p) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++) {
+        if (rs__tick(ctx, 0)) {
+            rs__free(ctx, p);
+            return RS_ERR_CANCELLED;
+        }
         p[i] = rs__road_priority(roads, i);
         differ |= p[i] != p[0];
     }
@@ -1564,6 +1568,7 @@ static rs_result load_points(build *B)
     B->look = rs__alloc_array(B->ctx, n ? n : 1, sizeof *B->look);
     if (!B->voff || !B->live || !B->look) return RS_ERR_NOMEM;
     for (size_t r = 0; r < n; r++) {
+        if (rs__tick(B->ctx, 0)) return RS_ERR_CANCELLED; /* (10^5 roads' looks: ~20 ms) */
         size_t np = 0;
         rs_roads_get(B->roads, r, NULL, NULL, NULL, &np);
         look_of(B->roads, r, &B->look[r]);
@@ -1594,6 +1599,7 @@ static rs_result load_points(build *B)
     B->nodeof = rs__alloc_array(B->ctx, m, sizeof *B->nodeof);
     if (!B->vroad || !B->s || !B->rep || !B->parent || !B->inhash || !B->nodeof) return RS_ERR_NOMEM;
     for (size_t r = 0; r < n; r++) {
+        if (rs__tick(B->ctx, 0)) return RS_ERR_CANCELLED;
         const double *xy = NULL;
         size_t np = 0, v0 = B->voff[r];
         rs_roads_get(B->roads, r, NULL, NULL, &xy, &np);

@@ -40,7 +40,8 @@ int rs__class_rank(rs_road_class c);
  * (docs/network.md "Priorities"); shared with the automatic markings. */
 int rs__road_priority(const rs_roads *roads, size_t r);
 /* rs__road_priority of every road into *out (the caller's: rs__free), or
- * *out = NULL when all are equal (nothing to rank). RS_ERR_NOMEM. */
+ * *out = NULL when all are equal (nothing to rank). RS_ERR_NOMEM,
+ * RS_ERR_CANCELLED (ticks per road). */
 rs_result rs__road_priorities(rs_ctx *ctx, const rs_roads *roads, int **out);
 /* Classes for feet and bikes (path, footway, cycleway): no car markings,
  * and their surfaces cut no car road's lines; shared with the automatic

@@ -59,3 +59,51 @@ rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, cons
     }
     return RS_OK;
 }
+
+rs_result rs__road_local_all(rs_ctx *ctx, const rs_roads *roads, const rs_dem *dem, rs__road_local **rl_out,
+                             double **block_out)
+{
+    size_t nr = rs_roads_count(roads), total = 0;
+    *rl_out = NULL;
+    *block_out = NULL;
+    for (size_t i = 0; i < nr; i++) {
+        size_t n = 0;
+        rs_roads_get(roads, i, NULL, NULL, NULL, &n);
+        total += n; /* (each road's points are held: no overflow in 3 doubles each) */
+    }
+    rs__road_local *rl = rs__calloc(ctx, nr ? nr : 1, sizeof *rl);
+    double *block = rs__alloc_array(ctx, total ? total : 1, 3 * sizeof(double));
+    if (!rl || !block) {
+        rs__free(ctx, rl);
+        rs__free(ctx, block);
+        return RS_ERR_NOMEM;
+    }
+    rs__local_frame F = rs__local_frame_of(dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size);
+    double *at = block;
+    for (size_t i = 0; i < nr; i++) {
+        if (rs__tick(ctx, 0)) {
+            rs__free(ctx, rl);
+            rs__free(ctx, block);
+            return RS_ERR_CANCELLED;
+        }
+        size_t n = 0;
+        rs_roads_get(roads, i, NULL, NULL, NULL, &n);
+        rs__road_local *o = &rl[i];
+        o->x = at;
+        o->y = at + n;
+        o->s = at + 2 * n;
+        at += 3 * n;
+        rs__road_local_walk(roads, i, 0, &F, o->x, o->y, 1, o->s, &o->n);
+        o->x0 = o->y0 = INFINITY;
+        o->x1 = o->y1 = -INFINITY;
+        for (size_t k = 0; k < o->n; k++) {
+            if (o->x[k] < o->x0) o->x0 = o->x[k];
+            if (o->y[k] < o->y0) o->y0 = o->y[k];
+            if (o->x[k] > o->x1) o->x1 = o->x[k];
+            if (o->y[k] > o->y1) o->y1 = o->y[k];
+        }
+    }
+    *rl_out = rl;
+    *block_out = block;
+    return RS_OK;
+}

@@ -72,6 +72,14 @@ typedef struct rs__road_local {
 /* Road ri over dem's frame into *out (the caller's: rs__road_local_free). */
 rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, const rs_dem *dem, rs__road_local *out);
 void rs__road_local_free(rs_ctx *ctx, rs__road_local *r);
+/* Every road of roads into *rl (rs_roads_count entries), their points in
+ * one block *block (both the caller's: rs__free each; not
+ * rs__road_local_free). One allocation instead of three per road: freeing
+ * 3 x 10^5 small blocks cost ~30 ms of allocator consolidation on the
+ * 10^5-road city, all of it after a cancel. Ticks per road;
+ * RS_ERR_CANCELLED or RS_ERR_NOMEM (nothing held). */
+rs_result rs__road_local_all(rs_ctx *ctx, const rs_roads *roads, const rs_dem *dem, rs__road_local **rl,
+                             double **block);
 
 /* Ask for the cache line at p ahead of its read (a hint; no effect on
  * results): the builds that read by id or list order at random places in
