@@ -27,6 +27,19 @@ void rs__road_local_walk(const rs_roads *roads, size_t ri, int rev, const rs__lo
     *m_io = m;
 }
 
+/* r's bounding box from its points. */
+static void local_box(rs__road_local *r)
+{
+    r->x0 = r->y0 = INFINITY;
+    r->x1 = r->y1 = -INFINITY;
+    for (size_t k = 0; k < r->n; k++) {
+        if (r->x[k] < r->x0) r->x0 = r->x[k];
+        if (r->y[k] < r->y0) r->y0 = r->y[k];
+        if (r->x[k] > r->x1) r->x1 = r->x[k];
+        if (r->y[k] > r->y1) r->y1 = r->y[k];
+    }
+}
+
 void rs__road_local_free(rs_ctx *ctx, rs__road_local *r)
 {
     rs__free(ctx, r->x);
@@ -49,14 +62,7 @@ rs_result rs__road_local_get(rs_ctx *ctx, const rs_roads *roads, size_t ri, cons
     }
     rs__local_frame F = rs__local_frame_of(dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size);
     rs__road_local_walk(roads, ri, 0, &F, out->x, out->y, 1, out->s, &out->n);
-    out->x0 = out->y0 = INFINITY;
-    out->x1 = out->y1 = -INFINITY;
-    for (size_t k = 0; k < out->n; k++) {
-        if (out->x[k] < out->x0) out->x0 = out->x[k];
-        if (out->y[k] < out->y0) out->y0 = out->y[k];
-        if (out->x[k] > out->x1) out->x1 = out->x[k];
-        if (out->y[k] > out->y1) out->y1 = out->y[k];
-    }
+    local_box(out);
     return RS_OK;
 }
 
@@ -94,14 +100,7 @@ rs_result rs__road_local_all(rs_ctx *ctx, const rs_roads *roads, const rs_dem *d
         o->s = at + 2 * n;
         at += 3 * n;
         rs__road_local_walk(roads, i, 0, &F, o->x, o->y, 1, o->s, &o->n);
-        o->x0 = o->y0 = INFINITY;
-        o->x1 = o->y1 = -INFINITY;
-        for (size_t k = 0; k < o->n; k++) {
-            if (o->x[k] < o->x0) o->x0 = o->x[k];
-            if (o->y[k] < o->y0) o->y0 = o->y[k];
-            if (o->x[k] > o->x1) o->x1 = o->x[k];
-            if (o->y[k] > o->y1) o->y1 = o->y[k];
-        }
+        local_box(o);
     }
     *rl_out = rl;
     *block_out = block;
