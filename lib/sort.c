@@ -3,9 +3,9 @@
  * Why not qsort: one qsort of 10^5 T clips or 2 x 10^5 road ends took 45-80
  * ms on the test host with no way to stop it (issue 30: cancel within 50
  * ms), and qsort's order of equal elements is the C library's choice
- * (glibc 2.36 is stable, musl and glibc 2.37 are not). This sort is stable
- * everywhere, so ties keep their input order on every platform; on glibc
- * 2.36 it gives qsort's exact order.
+ * (glibc 2.36's merge sort is stable, musl's smoothsort is not). This sort
+ * is stable everywhere, so ties keep their input order on every platform;
+ * on glibc 2.36 it gives qsort's exact order.
  *
  * It sorts 32-bit indices (elements are often large structs), runs of
  * RUN by insertion, then merges bottom-up, and moves each element once at

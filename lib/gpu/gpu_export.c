@@ -670,16 +670,10 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     nseg = g->nseg;
     g->nbands = nbands;
     if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
-    if ((r = ge_tees(ctx, roads, net, g, srev)) != RS_OK) {
-        if (r == RS_ERR_NOMEM) goto fail;
-        goto fail_msg;
-    }
+    if ((r = ge_tees(ctx, roads, net, g, srev)) != RS_OK) goto fail;
     if (rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
     /* continuations: equal end points, leaving within 30 degrees of opposite */
-    if ((r = rs__sort(ctx, ends, nends, sizeof *ends, ge_end_cmp)) != RS_OK) {
-        if (r == RS_ERR_NOMEM) goto fail;
-        goto fail_msg;
-    }
+    if ((r = rs__sort(ctx, ends, nends, sizeof *ends, ge_end_cmp)) != RS_OK) goto fail;
     for (size_t a = 0; a < nends; a++)
         for (size_t c = a + 1; c < nends && ends[c].x == ends[a].x && ends[c].y == ends[a].y; c++) {
             const ge_end *A = &ends[a], *C = &ends[c];
@@ -907,8 +901,8 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     *out = g;
     rs__ok(ctx);
     return RS_OK;
-fail:
-    r = rs__fail(ctx, r ? r : RS_ERR_NOMEM, "out of memory for the GPU export");
+fail: /* out of memory, or a stage's cancel (rs__progress_end says "cancelled") */
+    if (r != RS_ERR_CANCELLED) r = rs__fail(ctx, r ? r : RS_ERR_NOMEM, "out of memory for the GPU export");
 fail_msg:
     rs__free(ctx, pl);
     rs__free(ctx, ends);

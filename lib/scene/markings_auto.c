@@ -698,7 +698,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
     if (r == RS_ERR_NOMEM) return rs__fail(ctx, r, "out of memory placing markings");
     if (r) return r;
     A.box = rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof(double));
-    if (!r && !A.box) r = RS_ERR_NOMEM;
+    if (!A.box) r = RS_ERR_NOMEM;
     for (size_t i = 0; i < nr && !r; i++) {
         double *b = A.box + 4 * i;
         b[0] = A.rl[i].x0, b[1] = A.rl[i].y0, b[2] = A.rl[i].x1, b[3] = A.rl[i].y1;
@@ -1033,15 +1033,9 @@ rs_result rs__markings_auto_cuts(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
                                  const rs_style_options *so, const rs_network *net, rs__placement **pl, size_t *n,
                                  size_t *cap, rs__line_cut **cuts, size_t *ncut)
 {
-    *cuts = NULL;
+    *cuts = NULL; /* (auto_core sets them on success only) */
     *ncut = 0;
-    rs_result r = auto_core(ctx, dem, roads, atlas, so, net, cuts, ncut, pl, n, cap);
-    if (r) {
-        rs__free(ctx, *cuts);
-        *cuts = NULL;
-        *ncut = 0;
-    }
-    return r;
+    return auto_core(ctx, dem, roads, atlas, so, net, cuts, ncut, pl, n, cap);
 }
 
 /* The sizes of the built-in atlas's line and crossing types (tests/tools/
