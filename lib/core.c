@@ -121,6 +121,46 @@ void rs__free(rs_ctx *ctx, void *ptr)
     if (ptr) ctx->alloc.free_fn(ctx->alloc.user, ptr);
 }
 
+/* Copied in pieces between these sizes; below, a copy is short; from 32 MB
+ * up glibc serves blocks with mmap and grows them with mremap (no copy). */
+#define GROW_PIECE ((size_t)1 << 20)
+#define GROW_PIECES_BELOW ((size_t)32 << 20)
+
+rs_result rs__resize(rs_ctx *ctx, void **arr, size_t old, size_t bytes)
+{
+    void *q;
+    if (old < 2 * GROW_PIECE || old >= GROW_PIECES_BELOW || bytes < old) {
+        q = rs__realloc(ctx, *arr, bytes);
+        if (!q) return RS_ERR_NOMEM;
+    } else {
+        q = rs__malloc(ctx, bytes);
+        if (!q) return RS_ERR_NOMEM;
+        const unsigned char *from = *arr;
+        for (size_t at = 0; at < old; at += GROW_PIECE) {
+            if (rs__report(ctx, 0)) {
+                rs__free(ctx, q);
+                return RS_ERR_CANCELLED;
+            }
+            memcpy((unsigned char *)q + at, from + at, old - at < GROW_PIECE ? old - at : GROW_PIECE);
+        }
+        rs__free(ctx, *arr);
+    }
+    *arr = q;
+    return RS_OK;
+}
+
+rs_result rs__grow(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first, size_t max)
+{
+    if (n < *cap) return RS_OK;
+    size_t nc = *cap ? 2 * *cap : first, bytes;
+    if (nc > max) nc = max;
+    if (nc <= n) return RS_ERR_LIMIT;
+    if (!rs__mul_size(nc, size, &bytes)) return RS_ERR_NOMEM;
+    rs_result r = rs__resize(ctx, arr, *cap * size, bytes);
+    if (!r) *cap = nc;
+    return r;
+}
+
 rs_result rs__fail(rs_ctx *ctx, rs_result code, const char *fmt, ...)
 {
     if (ctx) {

@@ -586,6 +586,63 @@ static void test_sort(rs_ctx *ctx)
     free(keep);
 }
 
+/* rs__grow / rs__resize: doubling keeps the elements; a block copied in
+ * polled pieces (2 MB to 32 MB) can be stopped, leaving it as it was. */
+static void test_grow(void)
+{
+    rs_ctx *c2 = NULL;
+    CHECK(rs_ctx_create(NULL, NULL, &c2) == RS_OK);
+    void *arr = NULL;
+    size_t cap = 0, n = 0, bad = 0;
+    for (; n < ((size_t)9 << 20) / sizeof(uint32_t); n++) {
+        if (rs__grow(c2, &arr, n, &cap, sizeof(uint32_t), 16, SIZE_MAX) != RS_OK) break;
+        ((uint32_t *)arr)[n] = (uint32_t)(n * 2654435761u);
+    }
+    CHECK(n == ((size_t)9 << 20) / sizeof(uint32_t) && cap >= n);
+    for (size_t i = 0; i < n; i++) bad += ((uint32_t *)arr)[i] != (uint32_t)(i * 2654435761u);
+    CHECKF(bad == 0, "%zu elements changed by growth", bad);
+    /* the capacity is capped at max: RS_ERR_LIMIT past it, unchanged */
+    size_t cap2 = 16;
+    void *a2 = malloc(16 * sizeof(uint32_t));
+    CHECK(rs__grow(c2, &a2, 16, &cap2, sizeof(uint32_t), 16, 16) == RS_ERR_LIMIT && cap2 == 16);
+    CHECK(rs__grow(c2, &a2, 16, &cap2, sizeof(uint32_t), 16, 20) == RS_OK && cap2 == 20);
+    free(a2);
+    /* a stop during the piecewise copy of the full 16 MB block */
+    int calls = 0;
+    rs_ctx_set_progress(c2, stop_second, &calls);
+    rs__progress pg;
+    rs__progress_begin(c2, &pg, NULL, NULL, 1, 1);
+    n = cap;
+    void *before = arr;
+    for (size_t i = ((size_t)9 << 20) / sizeof(uint32_t); i < n; i++) ((uint32_t *)arr)[i] = (uint32_t)(i * 2654435761u);
+    size_t cap_before = cap;
+    CHECK(rs__grow(c2, &arr, n, &cap, sizeof(uint32_t), 16, SIZE_MAX) == RS_ERR_CANCELLED);
+    CHECK(rs__progress_end(c2, &pg, RS_ERR_CANCELLED) == RS_ERR_CANCELLED);
+    CHECK(arr == before && cap == cap_before && calls == 2);
+    bad = 0;
+    for (size_t i = 0; i < n; i++) bad += ((uint32_t *)arr)[i] != (uint32_t)(i * 2654435761u);
+    CHECKF(bad == 0, "%zu elements changed by a stopped growth", bad);
+    free(arr);
+    rs_ctx_free(c2);
+    /* no memory: RS_ERR_NOMEM, the block kept */
+    rs_allocator al = { small_malloc, small_realloc, small_free, NULL };
+    CHECK(rs_ctx_create(&al, NULL, &c2) == RS_OK);
+    arr = NULL, cap = 0;
+    for (n = 0; n < 2048; n++) {
+        rs_result r = rs__grow(c2, &arr, n, &cap, sizeof(uint32_t), 16, SIZE_MAX);
+        if (r) {
+            CHECK(r == RS_ERR_NOMEM && cap == 1024 && n == 1024);
+            break;
+        }
+        ((uint32_t *)arr)[n] = (uint32_t)n;
+    }
+    bad = 0;
+    for (size_t i = 0; i < n; i++) bad += ((uint32_t *)arr)[i] != (uint32_t)i;
+    CHECK(bad == 0);
+    small_free(NULL, arr);
+    rs_ctx_free(c2);
+}
+
 int main(void)
 {
     rs_ctx *ctx;
@@ -638,6 +695,7 @@ int main(void)
 
     test_calls(ctx, &sc, dem, roads);
     test_sort(ctx);
+    test_grow();
 
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);

@@ -483,20 +483,21 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
                                PIECE_BYTES), b1, b2;
         if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_ppc), &b1) || !rs__mul_size(nc, sizeof(ls_pbuild), &b2))
             return RS_ERR_LIMIT;
-        ls_ppc *np = rs__realloc(ctx, L->pp, b1);
-        if (!np) return RS_ERR_NOMEM;
+        void *np = L->pp, *nb = L->pb;
+        rs_result g = rs__resize(ctx, &np, L->cap * sizeof(ls_ppc), b1);
         L->pp = np;
-        ls_pbuild *nb = rs__realloc(ctx, L->pb, b2);
-        if (!nb) return RS_ERR_NOMEM;
+        if (!g) g = rs__resize(ctx, &nb, L->cap * sizeof(ls_pbuild), b2);
         L->pb = nb;
+        if (g) return g;
         L->cap = nc;
     }
     if (L->hcap - L->nhpp < HP_MAX) {
         size_t nc = budget_cap(L, L->hcap ? 2 * L->hcap : 1024, L->nhpp + HP_MAX, (uint64_t)L->cap * PIECE_BYTES,
                                HP_BYTES), bytes;
         if (nc > UINT32_MAX || !rs__mul_size(nc, 4 * sizeof(double), &bytes)) return RS_ERR_LIMIT;
-        double *nh = rs__realloc(ctx, L->hpp, bytes);
-        if (!nh) return RS_ERR_NOMEM;
+        void *nh = L->hpp;
+        rs_result g = rs__resize(ctx, &nh, L->hcap * 4 * sizeof(double), bytes);
+        if (g) return g;
         L->hpp = nh;
         L->hcap = nc;
     }
@@ -1533,19 +1534,15 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 }
             }
             for (int c = 0; c <= tee; c++) {
-                if (J->nsf == ncap) {
-                    size_t nc = ncap ? 2 * ncap : 256, bytes;
-                    ls_surf *ns = nc > UINT32_MAX || !rs__mul_size(nc, sizeof *J->sf, &bytes)
-                                      ? NULL : rs__realloc(ctx, J->sf, bytes);
-                    if (!ns) {
-                        rs__free(ctx, tees);
-                        rs__free(ctx, tend);
-                        rs__free(ctx, tend_of);
-                        return nc > UINT32_MAX ? RS_ERR_LIMIT : RS_ERR_NOMEM;
-                    }
-                    J->sf = ns;
-                    ncap = nc;
+                void *arr = J->sf;
+                rs_result g = rs__grow(ctx, &arr, J->nsf, &ncap, sizeof *J->sf, 256, UINT32_MAX);
+                if (g) {
+                    rs__free(ctx, tees);
+                    rs__free(ctx, tend);
+                    rs__free(ctx, tend_of);
+                    return g;
                 }
+                J->sf = arr;
                 J->sf[J->nsf++] = c ? Qt : Q;
             }
         }

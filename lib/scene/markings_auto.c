@@ -100,16 +100,10 @@ typedef struct road_cells {
 } road_cells;
 
 /* Room for one more of `n` items of `size` bytes in *arr (capacity *cap,
- * doubled, first `first`); 0 when out of memory. */
-static int room_for_one(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first)
+ * doubled, first `first`; big steps copied in polled pieces: rs__grow). */
+static rs_result room_for_one(rs_ctx *ctx, void **arr, size_t n, size_t *cap, size_t size, size_t first)
 {
-    if (n < *cap) return 1;
-    size_t nc = *cap ? 2 * *cap : first;
-    void *q = rs__realloc(ctx, *arr, nc * size);
-    if (!q) return 0;
-    *arr = q;
-    *cap = nc;
-    return 1;
+    return rs__grow(ctx, arr, n, cap, size, first, SIZE_MAX / size);
 }
 
 #define JN_BITS 14
@@ -126,7 +120,8 @@ static rs_result add_jn(ctxa *A, size_t road, double s, double half)
     if ((A->nj & (JN_CHUNK - 1)) == 0) {
         size_t k = A->nj >> JN_BITS;
         void *arr = A->jc;
-        if (!room_for_one(A->ctx, &arr, k, &A->capjc, sizeof *A->jc, 16)) return RS_ERR_NOMEM;
+        rs_result g = room_for_one(A->ctx, &arr, k, &A->capjc, sizeof *A->jc, 16);
+        if (g) return g;
         A->jc = arr;
         if (!(A->jc[k] = rs__alloc_array(A->ctx, JN_CHUNK, sizeof **A->jc))) return RS_ERR_NOMEM;
     }
@@ -442,7 +437,8 @@ static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half
         if (u1 > len) u1 = len;
         if (!(u1 > u0)) continue;
         void *arr = A->cuts;
-        if (!room_for_one(A->ctx, &arr, A->ncut, &A->capcut, sizeof *A->cuts, 16)) return RS_ERR_NOMEM;
+        rs_result g = room_for_one(A->ctx, &arr, A->ncut, &A->capcut, sizeof *A->cuts, 16);
+        if (g) return g;
         A->cuts = arr;
         double dx = r->x[k + 1] - r->x[k], dy = r->y[k + 1] - r->y[k], d = hypot(dx, dy);
         rs__line_cut *c = &A->cuts[A->ncut++];
@@ -819,10 +815,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     if (joined) continue;
                 }
                 void *arr = mt;
-                if (!room_for_one(ctx, &arr, nmt, &capmt, sizeof *mt, 16)) {
-                    r = RS_ERR_NOMEM;
-                    break;
-                }
+                if ((r = room_for_one(ctx, &arr, nmt, &capmt, sizeof *mt, 16)) != RS_OK) break;
                 mt = arr;
                 mt[nmt].road = j, mt[nmt].d = d, mt[nmt].s = s, mt[nmt].out = 0;
                 nmt++;
@@ -886,7 +879,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 if (!r) r = on_stroke(&A, j, mt[c].s - hb, mt[c].s + hb, 0, 0);
             }
             void *arr = ap;
-            if (!r && !room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64)) r = RS_ERR_NOMEM;
+            if (!r) r = room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64);
             if (r) break;
             ap = arr;
             ap[nap++] = q;
@@ -932,7 +925,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                            (uint8_t)(L->priority < pmax), 0, (uint8_t)rs__is_end_leg(L) };
             if (first) r = on_stroke(&A, L->road, sl - h, sl + h, 0, 0);
             void *arr = ap;
-            if (!r && !room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64)) r = RS_ERR_NOMEM;
+            if (!r) r = room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64);
             if (r) break;
             ap = arr;
             ap[nap++] = q;

@@ -66,6 +66,7 @@ void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
     if (!ctx || !s) return;
     rs__alphamap_tables_free(ctx, s);
     rs__free(ctx, s->z_own);
+    rs__free(ctx, s->tcol);
     rs__roadfield_free(ctx, s->field_own);
     rs__free(ctx, s->ramp_own);
     rs_road_grid_free(ctx, s->grid_own);
@@ -135,11 +136,6 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         r = rs__dem_fill_nodata(ctx, dem, &s->z_own);
         s->z = s->z_own;
     }
-    r = rs__progress_end(ctx, &pg, r);
-    if (r) {
-        rs_splatter_free(ctx, s);
-        return r;
-    }
     double zen = (90.0 - 45.0) * RS__PI / 180.0;
     s->sun_az = fmod(360.0 - 315.0 + 90.0, 360.0) * RS__PI / 180.0;
     s->cos_zen = cos(zen);
@@ -156,6 +152,14 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         s->half[2] = hz / hl;
         s->ambient = o.lighting.ambient > 0 ? o.lighting.ambient : 0.3;
         s->specular = o.lighting.specular;
+    }
+    /* per-sample terrain colours where they would dominate the splat */
+    if (!r) r = rs__surface_colours(ctx, s);
+    if (r == RS_ERR_NOMEM) r = rs__fail(ctx, r, "out of memory for the terrain colours");
+    r = rs__progress_end(ctx, &pg, r);
+    if (r) {
+        rs_splatter_free(ctx, s);
+        return r;
     }
     *out = s;
     rs__ok(ctx);

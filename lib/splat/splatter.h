@@ -41,6 +41,11 @@ struct rs_splatter {
     /* lighting (o.lighting.enable): unit vector towards the sun and the
      * Blinn half vector (tangent space: X east, Y north, Z up) */
     double light[3], half[3], ambient, specular;
+    /* the terrain colour of every DEM sample (rs__surface_colours), when
+     * per-sample work would dominate the splat (few texels a cell):
+     * per sample row three planes of `width` floats; NULL: computed per
+     * window */
+    float *tcol;
 };
 
 /* Terrain colours (3 floats per sample) of the window's sample columns
@@ -97,6 +102,13 @@ void rs__coverage_alphamap(const rs_splatter *s, rs__piece *p);
 void rs__coverage_analytic(const rs_splatter *s, rs__piece *p);
 void rs__coverage_quantise(rs__piece *p);
 void rs__surface(const rs_splatter *s, rs__piece *p);
+/* s->tcol for splatters of at most RS__TCOL_TEXELS texels a cell on DEMs
+ * of at most RS__TCOL_SAMPLES samples without a terrain texture (else
+ * nothing): the colours rs__surface would compute per window, the same
+ * floats. RS_OK, RS_ERR_NOMEM or RS_ERR_CANCELLED (no message). */
+#define RS__TCOL_TEXELS 2u
+#define RS__TCOL_SAMPLES ((uint64_t)1 << 22)
+rs_result rs__surface_colours(rs_ctx *ctx, rs_splatter *s);
 void rs__overlays(const rs_splatter *s, rs__piece *p);
 /* rs__overlays in its three parts: casings (onto T, or p->cas for the
  * composite, or p->lcas), the styles' surfaces (onto S), then the paint of

@@ -531,6 +531,23 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
     }
 }
 
+rs_result rs__surface_colours(rs_ctx *ctx, rs_splatter *s)
+{
+    const uint64_t W = s->dem->width, H = s->dem->height;
+    if (s->o.texels > RS__TCOL_TEXELS || s->o.surface.terrain_texture || W * H > RS__TCOL_SAMPLES) return RS_OK;
+    float *t = rs__alloc_array(ctx, (size_t)(W * H), 3 * sizeof *t);
+    if (!t) return RS_ERR_NOMEM;
+    for (uint32_t i = 0; i < H; i++) {
+        if (rs__tick(ctx, 0)) {
+            rs__free(ctx, t);
+            return RS_ERR_CANCELLED;
+        }
+        terrain_row(s, i, 0, (uint32_t)W, t + (size_t)i * 3 * W);
+    }
+    s->tcol = t;
+    return RS_OK;
+}
+
 /* The window's terrain colours of sample rows i and i + 1 (lib/splat/splatter.h). */
 static void terrain_rows(const rs_splatter *s, rs__terrain_cache *c, uint32_t i, const float **r0, const float **r1)
 {
@@ -696,7 +713,59 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
     double *hx = p->hx;
     const size_t w = p->w;
     uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
-    for (uint32_t k = 0; k < p->w; k++, off++) {
+    uint32_t k = 0;
+#if defined(__SSE2__)
+    /* one or two texels a cell (where this is most of the splat): the
+     * same products and sums two pixels at a time, channel by channel */
+    if (T == 1 && p->rows == 1) {
+        /* one row: both steps in registers, straight into the colours */
+        const __m128d g = _mm_set1_pd(1 - fxt[0]), f = _mm_set1_pd(fxt[0]);
+        const double fy = (p->y0 - p->crow * T + 0.5) / T, gy = 1 - fy;
+        const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
+        for (int ch = 0; ch < 3; ch++) {
+            const float *a = r0 + (size_t)ch * tplane + (ccol - wc0), *c = r1 + (size_t)ch * tplane + (ccol - wc0);
+            float *tc = p->tc + (size_t)ch * w;
+            size_t j = 0;
+            for (; j + 2 <= w; j += 2) {
+                __m128d a0 = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(a + j))));
+                __m128d a1 = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(a + j + 1))));
+                __m128d c0 = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(c + j))));
+                __m128d c1 = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(c + j + 1))));
+                __m128d h0 = _mm_add_pd(_mm_mul_pd(a0, g), _mm_mul_pd(a1, f));
+                __m128d h1 = _mm_add_pd(_mm_mul_pd(c0, g), _mm_mul_pd(c1, f));
+                __m128d v = _mm_add_pd(_mm_mul_pd(h0, vg), _mm_mul_pd(h1, vf));
+                _mm_storel_epi64((__m128i *)(void *)(tc + j), _mm_castps_si128(_mm_cvtpd_ps(v)));
+            }
+            for (; j < w; j++) {
+                double h0 = a[j] * (1 - fxt[0]) + a[j + 1] * fxt[0], h1 = c[j] * (1 - fxt[0]) + c[j + 1] * fxt[0];
+                tc[j] = (float)(h0 * gy + h1 * fy);
+            }
+        }
+        return;
+    } else if (T == 2) {
+        /* a pair of pixels in one cell: offsets 0 and 1 */
+        const __m128d g = _mm_set_pd(1 - fxt[1], 1 - fxt[0]), f = _mm_set_pd(fxt[1], fxt[0]);
+        if (off == 1 && w > 0) {
+            /* the first pixel alone (below), then pairs from the next cell */
+            k = 0;
+        } else {
+            for (int rw = 0; rw < 2; rw++)
+                for (int ch = 0; ch < 3; ch++) {
+                    const float *a = (rw ? r1 : r0) + (size_t)ch * tplane + (ccol - wc0);
+                    double *h = hx + (size_t)(3 * rw + ch) * w;
+                    uint32_t kk = 0;
+                    for (; kk + 2 <= w; kk += 2, a++) {
+                        __m128d v0 = _mm_set1_pd(a[0]), v1 = _mm_set1_pd(a[1]);
+                        _mm_storeu_pd(h + kk, _mm_add_pd(_mm_mul_pd(v0, g), _mm_mul_pd(v1, f)));
+                    }
+                    k = kk;
+                }
+            ccol += k / 2;
+            off = 0;
+        }
+    }
+#endif
+    for (; k < p->w; k++, off++) {
         if (off == T) { off = 0; ccol++; }
         double fx = off < nt ? fxt[off] : (off + 0.5) / T;
         const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
@@ -711,15 +780,15 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
         for (size_t ch = 0; ch < 3; ch++) {
             const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
             float *tc = p->tc + (size_t)r * w * 3 + ch * w;
-            size_t k = 0;
+            size_t j = 0;
 #if defined(__SSE2__)
             const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
-            for (; k + 2 <= w; k += 2) {
-                __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + k), vg), _mm_mul_pd(_mm_loadu_pd(h1 + k), vf));
-                _mm_storel_epi64((__m128i *)(void *)(tc + k), _mm_castps_si128(_mm_cvtpd_ps(v)));
+            for (; j + 2 <= w; j += 2) {
+                __m128d v = _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(h0 + j), vg), _mm_mul_pd(_mm_loadu_pd(h1 + j), vf));
+                _mm_storel_epi64((__m128i *)(void *)(tc + j), _mm_castps_si128(_mm_cvtpd_ps(v)));
             }
 #endif
-            for (; k < w; k++) tc[k] = (float)(h0[k] * gy + h1[k] * fy);
+            for (; j < w; j++) tc[j] = (float)(h0[j] * gy + h1[j] * fy);
         }
     }
 }
@@ -735,17 +804,25 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     else if (need_terrain) {
         /* Bilinear between the sample rows crow and crow + 1 */
         const float *r0 = NULL, *r1 = NULL;
-        terrain_rows(s, p->tcache, p->crow, &r0, &r1);
+        uint32_t wc0 = p->tcache->c0;
+        size_t tplane = p->tcache->ncol;
+        if (s->tcol) {
+            /* (the rows as terrain_row makes them for columns 0 .. W - 1) */
+            tplane = s->dem->width;
+            wc0 = 0;
+            r0 = s->tcol + (size_t)p->crow * 3 * tplane;
+            r1 = r0 + 3 * tplane;
+        } else terrain_rows(s, p->tcache, p->crow, &r0, &r1);
         /* the weight per offset in the cell from a table: the same doubles
          * as (offset + 0.5) / T */
         double fxt[64];
         const uint32_t nt = T < 64 ? T : 64;
         for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
 #ifdef RS_AVX512_DISPATCH
-        if (T <= 64 && avx512_ok()) terrain_bilinear8(p, T, r0, r1, p->tcache->c0, p->tcache->ncol, fxt);
+        if (T <= 64 && avx512_ok()) terrain_bilinear8(p, T, r0, r1, wc0, tplane, fxt);
         else
 #endif
-            terrain_bilinear(p, T, r0, r1, p->tcache->c0, p->tcache->ncol, fxt, nt);
+            terrain_bilinear(p, T, r0, r1, wc0, tplane, fxt, nt);
     }
     if (!need_road) return;
     if (f->road_texture) {

@@ -34,6 +34,11 @@ done <<OPTS
 --texels 3 --edges analytic --terrain-texture $W/tex.png
 --texels 5 --alpha-res 16 --threads 1
 --texels 4 --window 33,17,301,257 --z-scale 1
+--texels 1
+--texels 2
+--texels 2 --window 33,17,151,101 --z-scale 1
+--texels 1 --window 7,5,101,80 --lighting
+--texels 2 --edges analytic --window 1,2,203,101
 OPTS
 bad=0 n=0
 for f in "$W"/a/*; do
