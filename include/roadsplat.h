@@ -1018,7 +1018,10 @@ RS_API rs_result rs_splat_size(rs_ctx *ctx, const rs_dem *dem, const rs_splat_op
 typedef struct rs_splatter rs_splatter;
 
 /* Prepare a splatter: validate once, build the alpha-map integral tables,
- * the DEM's nodata-filled heights, height range and light vector once.
+ * the DEM's nodata-filled heights, height range and light vector once; at
+ * 1 or 2 texels a cell on a DEM of at most 2^22 samples without a terrain
+ * texture also every sample's terrain colour (12 bytes a sample, held by
+ * the splatter), which windows otherwise compute for their own samples.
  * Give exactly one of `roads` (the splatter builds and owns its grid) and
  * `grid` (from rs_road_grid_build with the same dem and options; borrowed:
  * it must outlive the splatter). An analytic grid without styles and
