@@ -586,6 +586,65 @@ static void test_sort(rs_ctx *ctx)
     free(keep);
 }
 
+/* A splatter at 1 texel computes every sample's terrain colour
+ * (rs__surface_colours, a poll a row): stopped at each of its callbacks it
+ * returns RS_ERR_CANCELLED and makes nothing (the sanitizer build checks
+ * that nothing leaks); run through, it splats the bytes of a run without
+ * a callback. */
+static void test_colour_table(void)
+{
+    rs_ctx *c2 = NULL;
+    CHECK(rs_ctx_create(NULL, NULL, &c2) == RS_OK);
+    enum { SIDE = 700 };
+    float *z = malloc((size_t)SIDE * SIDE * sizeof *z);
+    for (size_t i = 0; z && i < (size_t)SIDE * SIDE; i++) z[i] = (float)((i * 2654435761u) % 997u) * 0.1f;
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    CHECK(z && rs_dem_create(c2, SIDE, SIDE, z, &dem) == RS_OK && rs_roads_create(c2, &roads) == RS_OK);
+    static const double xy[4] = { 10, 10, 600, 500 };
+    CHECK(roads && rs_roads_add(c2, roads, NULL, 8, xy, 2) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 1;
+    o.coverage.edges = RS_EDGES_ANALYTIC;
+    watch w;
+    memset(&w, 0, sizeof w);
+    o.progress = on_progress;
+    o.progress_user = &w;
+    rs_splatter *s = NULL;
+    uint64_t h0 = 0, h1 = 1;
+    CHECK(dem && rs_splatter_create(c2, dem, roads, NULL, &o, &s) == RS_OK);
+    uint64_t calls = w.calls;
+    uint8_t *px = malloc((size_t)(SIDE - 1) * (SIDE - 1) * 4);
+    if (s && px && !rs_splat_window(c2, s, 0, 0, SIDE - 1, SIDE - 1, px, (size_t)(SIDE - 1) * 4, NULL, 0, NULL))
+        h0 = hash_rgba(px, (size_t)(SIDE - 1) * (SIDE - 1) * 4);
+    rs_splatter_free(c2, s);
+    /* the table's rows poll: more callbacks than the grid build's alone */
+    CHECKF(calls >= 3, "%llu callbacks", (unsigned long long)calls);
+    int bad = 0;
+    for (uint64_t k = 1; k < calls; k++) {
+        memset(&w, 0, sizeof w);
+        w.stop_at = k;
+        s = NULL;
+        rs_result r = rs_splatter_create(c2, dem, roads, NULL, &o, &s);
+        bad += r != RS_ERR_CANCELLED || s != NULL || w.calls != k;
+        rs_splatter_free(c2, s);
+    }
+    CHECKF(bad == 0, "%d of %llu stops did not cancel cleanly", bad, (unsigned long long)(calls - 1));
+    o.progress = NULL;
+    s = NULL;
+    if (rs_splatter_create(c2, dem, roads, NULL, &o, &s) == RS_OK && px &&
+        !rs_splat_window(c2, s, 0, 0, SIDE - 1, SIDE - 1, px, (size_t)(SIDE - 1) * 4, NULL, 0, NULL))
+        h1 = hash_rgba(px, (size_t)(SIDE - 1) * (SIDE - 1) * 4);
+    CHECK(h0 == h1);
+    rs_splatter_free(c2, s);
+    free(px);
+    rs_roads_free(c2, roads);
+    rs_dem_free(c2, dem);
+    free(z);
+    rs_ctx_free(c2);
+}
+
 /* rs__grow / rs__resize: doubling keeps the elements; a block copied in
  * polled pieces (2 MB to 32 MB) can be stopped, leaving it as it was. */
 static void test_grow(void)
@@ -696,6 +755,7 @@ int main(void)
     test_calls(ctx, &sc, dem, roads);
     test_sort(ctx);
     test_grow();
+    test_colour_table();
 
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
