@@ -745,8 +745,9 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
     } else if (T == 2) {
         /* a pair of pixels in one cell: offsets 0 and 1 */
         const __m128d g = _mm_set_pd(1 - fxt[1], 1 - fxt[0]), f = _mm_set_pd(fxt[1], fxt[0]);
-        if (off == 1 && w > 0) {
-            /* the first pixel alone (below), then pairs from the next cell */
+        if (off == 1) {
+            /* a piece starting at an odd column (a window's choice; pieces
+             * of a whole image start at even ones): the loop below */
             k = 0;
         } else {
             for (int rw = 0; rw < 2; rw++)
