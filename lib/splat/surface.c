@@ -742,28 +742,22 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
             }
         }
         return;
-    } else if (T == 2) {
-        /* a pair of pixels in one cell: offsets 0 and 1 */
+    } else if (T == 2 && off == 0) {
+        /* a pair of pixels in one cell: offsets 0 and 1 (a piece starting
+         * at an odd column, a window's choice, takes the loop below) */
         const __m128d g = _mm_set_pd(1 - fxt[1], 1 - fxt[0]), f = _mm_set_pd(fxt[1], fxt[0]);
-        if (off == 1) {
-            /* a piece starting at an odd column (a window's choice; pieces
-             * of a whole image start at even ones): the loop below */
-            k = 0;
-        } else {
-            for (int rw = 0; rw < 2; rw++)
-                for (int ch = 0; ch < 3; ch++) {
-                    const float *a = (rw ? r1 : r0) + (size_t)ch * tplane + (ccol - wc0);
-                    double *h = hx + (size_t)(3 * rw + ch) * w;
-                    uint32_t kk = 0;
-                    for (; kk + 2 <= w; kk += 2, a++) {
-                        __m128d v0 = _mm_set1_pd(a[0]), v1 = _mm_set1_pd(a[1]);
-                        _mm_storeu_pd(h + kk, _mm_add_pd(_mm_mul_pd(v0, g), _mm_mul_pd(v1, f)));
-                    }
-                    k = kk;
+        for (int rw = 0; rw < 2; rw++)
+            for (int ch = 0; ch < 3; ch++) {
+                const float *a = (rw ? r1 : r0) + (size_t)ch * tplane + (ccol - wc0);
+                double *h = hx + (size_t)(3 * rw + ch) * w;
+                uint32_t kk = 0;
+                for (; kk + 2 <= w; kk += 2, a++) {
+                    __m128d v0 = _mm_set1_pd(a[0]), v1 = _mm_set1_pd(a[1]);
+                    _mm_storeu_pd(h + kk, _mm_add_pd(_mm_mul_pd(v0, g), _mm_mul_pd(v1, f)));
                 }
-            ccol += k / 2;
-            off = 0;
-        }
+                k = kk;
+            }
+        ccol += k / 2;
     }
 #endif
     for (; k < p->w; k++, off++) {
