@@ -838,6 +838,24 @@ RS_API rs_result rs_network_road_stroke(const rs_network *net, size_t road, rs_r
  * stroke's record count (0 for k out of range). */
 RS_API size_t rs_network_stroke_roads(const rs_network *net, size_t k, uint32_t *roads, size_t cap);
 
+/* The junction area of node `node` (docs/network.md "Junction areas"):
+ * the polygon where its legs' surfaces meet, as osm2streets draws an
+ * intersection. Each leg's road (half its width each side) is cut square
+ * at its trim: the farthest point along the leg where its left edge meets
+ * the next leg's right edge, or its right edge the previous leg's left
+ * edge (legs counter-clockwise; neighbours at 180 degrees or more apart
+ * add nothing), at most as far as the record runs from the node. The
+ * polygon is the cut ends' corners, right then left of each leg in the
+ * legs' order: counter-clockwise, x y pairs in the road set's frame,
+ * corners of neighbouring legs that coincide given once. Writes up to
+ * `cap` points into xy (2 cap doubles; may be NULL when cap is 0) and
+ * each leg's trim (metres from the node) into trim[0 .. degree-1] (may be
+ * NULL); returns the polygon's point count, at most 2 x degree (0: a node
+ * of degree below 3, node out of range, or roads not the network's). No
+ * allocation; safe from several threads. */
+RS_API size_t rs_network_junction_area(const rs_network *net, const rs_roads *roads, size_t node, double *xy,
+                                       size_t cap, double *trim);
+
 /* Lanes (issue 27; docs/road-format.md "Lanes"): the cross-section of a
  * road record from `lanes`, `lanes:forward`, `lanes:backward`, `oneway`,
  * `turn:lanes(:forward|:backward)`, `width:lanes(:forward|:backward)`,

@@ -7,7 +7,9 @@
 #include "harness.h"
 #include "scene_splat.h"
 
+#include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -1357,6 +1359,158 @@ static void test_tee_splits(void)
     render_profile = RS_PROFILE_RMS;
 }
 
+/* ---- junction areas (rs_network_junction_area) ---- */
+
+/* The junction node of roads (the one of degree >= 3), or SIZE_MAX. */
+static size_t junction_node(const rs_network *net)
+{
+    for (size_t i = 0; i < rs_network_node_count(net); i++) {
+        rs_network_node nd;
+        if (rs_network_get_node(net, i, &nd) == RS_OK && nd.degree >= 3) return i;
+    }
+    return SIZE_MAX;
+}
+
+static double shoelace(const double *xy, size_t n)
+{
+    double a = 0;
+    for (size_t k = 0; k < n; k++) {
+        size_t j = (k + 1) % n;
+        a += xy[2 * k] * xy[2 * j + 1] - xy[2 * j] * xy[2 * k + 1];
+    }
+    return 0.5 * a;
+}
+
+/* Does the polygon hold point (x, y) among its corners (within 1e-7:
+ * neighbouring legs' corners within 1e-6 of the tolerance are merged)? */
+static int has_corner(const double *xy, size_t n, double x, double y)
+{
+    for (size_t k = 0; k < n; k++)
+        if (fabs(xy[2 * k] - x) < 1e-7 && fabs(xy[2 * k + 1] - y) < 1e-7) return 1;
+    return 0;
+}
+
+static void test_junction_area(void)
+{
+    /* an X through a shared point: 6 m along x, 4 m along y: the square
+     * where the two surfaces overlap, each leg trimmed by the other's half
+     * width */
+    for (int tee = 0; tee < 2; tee++) {
+        rs_roads *roads = NULL;
+        rs_network *net = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        double a[6] = { -40, 0, 0, 0, 40, 0 }, b[6] = { 0, -40, 0, 0, 0, 40 };
+        add_record(roads, "a", 6, a, 6, 0, NULL);
+        /* tee: the 4 m road ends on a's centre line from the south (a T on
+         * a segment: a has no point there) */
+        double a2[4] = { -40, 0, 40, 0 };
+        if (tee) {
+            rs_roads_free(ctx, roads);
+            CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+            add_record(roads, "a", 6, a2, 4, 0, NULL);
+        }
+        add_record(roads, "b", 4, b, tee ? 4 : 6, 0, NULL);
+        CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK);
+        size_t nd = net ? junction_node(net) : SIZE_MAX;
+        CHECK(nd != SIZE_MAX);
+        if (nd == SIZE_MAX) {
+            rs_network_free(ctx, net);
+            rs_roads_free(ctx, roads);
+            continue;
+        }
+        double xy[2 * 8], trim[4] = { -1, -1, -1, -1 };
+        size_t n = rs_network_junction_area(net, roads, nd, xy, 8, trim);
+        CHECKF(n == 4, "%s: %zu corners (want the 4 of a rectangle)", tee ? "T" : "X", n);
+        CHECK(rs_network_junction_area(net, roads, nd, NULL, 0, NULL) == n);
+        CHECKF(fabs(shoelace(xy, n < 8 ? n : 8) - 24) < 1e-9, "%s: area %.12g (want 24, counter-clockwise)",
+               tee ? "T" : "X", shoelace(xy, n < 8 ? n : 8));
+        /* the T: the side road's mouth spans the through road's width, as
+         * its trimmed end does (docs/network.md "Ends at a T") */
+        CHECK(has_corner(xy, n, 2, -3) && has_corner(xy, n, 2, 3) && has_corner(xy, n, -2, 3) &&
+              has_corner(xy, n, -2, -3));
+        rs_network_node node;
+        CHECK(rs_network_get_node(net, nd, &node) == RS_OK);
+        for (uint32_t k = 0; k < node.degree && k < 4; k++) {
+            rs_network_leg L;
+            CHECK(rs_network_get_leg(net, nd, k, &L) == RS_OK);
+            CHECKF(fabs(trim[k] - (L.road == 0 ? 2 : 3)) < 1e-9, "leg %u of road %u: trim %.12g", k, L.road, trim[k]);
+        }
+        /* a short cap: the count, and only cap points written */
+        double few[4] = { 7, 7, 7, 7 };
+        CHECK(rs_network_junction_area(net, roads, nd, few, 1, NULL) == n && few[2] == 7 && few[3] == 7);
+        /* not a junction, out of range, another road set */
+        CHECK(rs_network_junction_area(net, roads, rs_network_node_count(net), xy, 8, NULL) == 0);
+        rs_roads *other = NULL;
+        CHECK(rs_roads_create(ctx, &other) == RS_OK);
+        CHECK(rs_network_junction_area(net, other, nd, xy, 8, NULL) == 0);
+        rs_roads_free(ctx, other);
+        for (size_t i = 0; i < rs_network_node_count(net); i++) {
+            rs_network_node q;
+            CHECK(rs_network_get_node(net, i, &q) == RS_OK);
+            if (q.degree < 3) CHECK(rs_network_junction_area(net, roads, i, xy, 8, NULL) == 0);
+        }
+        rs_network_free(ctx, net);
+        rs_roads_free(ctx, roads);
+    }
+    /* random star junctions: 3 to 7 roads ending at the origin at random
+     * angles and widths, 60 m long (or, one case in three, 1 to 7 m: then
+     * far ends inside other surfaces make more nodes). At every junction
+     * node each leg's two corners lie on its edges at its trim, within
+     * the length its record runs from the node; at the origin of long
+     * roads the polygon turns counter-clockwise (no negative area), has at
+     * most twice the degree in corners, and turning the scene turns it */
+    size_t bad = 0, cases = 0, nodes = 0;
+    for (int it = 0; it < 300; it++) {
+        int d = 3 + (int)(rnd() * 5), longs = it % 3 != 0;
+        double ang[8], wd[8], len[8], turn = rnd() * 6.283185307179586;
+        for (int k = 0; k < d; k++) ang[k] = rnd() * 6.283185307179586, wd[k] = 1 + 14 * rnd(), len[k] = longs ? 60 : 1 + 6 * rnd();
+        double area[2] = { 0, 0 };
+        size_t cnt[2] = { 0, 0 };
+        for (int rot = 0; rot < 2; rot++) {
+            rs_roads *roads = NULL;
+            rs_network *net = NULL;
+            CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+            for (int k = 0; k < d; k++) {
+                double a = ang[k] + (rot ? turn : 0), xy[4] = { len[k] * cos(a), len[k] * sin(a), 0, 0 };
+                add_record(roads, "r", wd[k], xy, 4, 0, NULL);
+            }
+            CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK);
+            for (size_t nd = 0; net && nd < rs_network_node_count(net); nd++) {
+                rs_network_node node;
+                CHECK(rs_network_get_node(net, nd, &node) == RS_OK);
+                if (node.degree < 3 || node.degree > 16) continue;
+                double xy[2 * 32], trim[16];
+                size_t n = rs_network_junction_area(net, roads, nd, xy, 32, trim);
+                nodes++;
+                bad += n > 2 * (size_t)node.degree;
+                for (uint32_t k = 0; k < node.degree; k++) {
+                    rs_network_leg L;
+                    CHECK(rs_network_get_leg(net, nd, k, &L) == RS_OK);
+                    double h = 0.5 * wd[L.road], ux = cos(L.angle), uy = sin(L.angle);
+                    double room = L.kind == RS_LEG_BACKWARD ? L.s : L.kind == RS_LEG_FORWARD ? len[L.road] - L.s : len[L.road];
+                    bad += !(trim[k] >= 0 && trim[k] <= room + 1e-9);
+                    for (int c = 0; c < 2; c++) {
+                        double sg = c ? 1 : -1, cx = node.x + trim[k] * ux - sg * h * uy, cy = node.y + trim[k] * uy + sg * h * ux;
+                        bad += !has_corner(xy, n, cx, cy);
+                    }
+                }
+                if (longs && node.x == 0 && node.y == 0 && node.degree == (uint32_t)d) {
+                    cnt[rot] = n;
+                    area[rot] = shoelace(xy, n);
+                    bad += n < 3 || area[rot] < -1e-9;
+                }
+            }
+            rs_network_free(ctx, net);
+            rs_roads_free(ctx, roads);
+        }
+        if (!longs || cnt[0] == 0) continue;
+        cases++;
+        bad += cnt[0] != cnt[1] || fabs(area[0] - area[1]) > 1e-6 * (1 + fabs(area[0]));
+    }
+    printf("junction areas: %zu random stars of long roads, %zu junction nodes in all, %zu bad\n", cases, nodes, bad);
+    CHECKF(cases > 150 && bad == 0, "junction areas: %zu rules broken (%zu stars, %zu nodes)", bad, cases, nodes);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -1378,6 +1532,7 @@ int main(void)
     test_short_record_at_end();
     test_crumbs_road();
     test_tee_splits();
+    test_junction_area();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

@@ -338,6 +338,90 @@ static void test_through_of_two_looks(void)
     rs_roads_free(ctx, roads);
 }
 
+/* A side road ending where two streets cross (an X through a shared
+ * point, both streets passing): its strip runs flat to the far edge line
+ * of the street it meets most squarely (the first of two at 45 degrees)
+ * and stops there. Before, a node with two through roads kept the round
+ * cap: the 15 m primary bulged 6 m past the far edge. */
+static void test_x_node(double deg)
+{
+    rs_roads *alone = NULL, *roads = NULL;
+    CHECK(rs_roads_create(ctx, &alone) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK);
+    for (int k = 0; k < 2; k++) {
+        rs_roads *r = k ? roads : alone;
+        const double a[6] = { 2, TY, 30, TY, 58, TY }, b[6] = { 30, 2, 30, TY, 30, 38 };
+        CHECK(rs_roads_add(ctx, r, "A", 2 * TR, a, 3) == RS_OK && rs_roads_add(ctx, r, "B", 2 * TR, b, 3) == RS_OK);
+        CHECK(rs_roads_set_attr(ctx, r, 0, "class", "residential") == RS_OK &&
+              rs_roads_set_attr(ctx, r, 1, "class", "residential") == RS_OK);
+    }
+    double x0, y0;
+    side_end(deg, 18 / sin(deg * DEG), &x0, &y0);
+    add(roads, 2 * SR, "primary", x0, y0, 30, TY);
+    image A, B;
+    CHECK(render(alone, &A) && render(roads, &B));
+    size_t wt = 0;
+    int worst = A.rgba && B.rgba ? beyond_far_edge(&B, &A, &wt) : 255;
+    size_t gaps = B.wt ? strip_gaps(&B, deg) : 1;
+    printf("side road at %.0f degrees ending on an X: beyond the far edge %zu pixels of other weight, worst colour "
+           "%d/255; %zu gaps\n",
+           deg, wt, worst, gaps);
+    CHECKF(wt == 0 && worst <= 1, "a T at an X (%.0f degrees): %zu pixels beyond the far edge differ (worst %d/255)", deg,
+           wt, worst);
+    CHECKF(gaps == 0, "a T at an X (%.0f degrees): %zu pixels of the side road's strip are not whole road", deg, gaps);
+    image_free(&A);
+    image_free(&B);
+    rs_roads_free(ctx, alone);
+    rs_roads_free(ctx, roads);
+}
+
+/* The lines at an X with a road ending on its shared point: the road the
+ * end meets most squarely keeps its centre line through the end's mouth,
+ * as a through road does at a T (lib/scene/linesym.c rs__network_tees).
+ * Three 8 m primaries: A and B cross, C ends there at 30 degrees to A (60
+ * to B; B starts 24 m before A, so a dash of its 6/12 m centre line
+ * reaches A's near edge). B's centre line before A equals B's in the X
+ * without C but for 2 pixels of its end (36/255); before, a node with two
+ * through roads had no T and C's surface cut the line's last 0.6 m (12
+ * pixels, up to 107/255). */
+static void test_x_lines(void)
+{
+    rs_roads *alone = NULL, *roads = NULL;
+    CHECK(rs_roads_create(ctx, &alone) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK);
+    for (int k = 0; k < 2; k++) {
+        rs_roads *r = k ? roads : alone;
+        const double a[6] = { 2, TY, 30, TY, 58, TY }, b[6] = { 30, TY - 24, 30, TY, 30, 38 };
+        CHECK(rs_roads_add(ctx, r, "A", 8, a, 3) == RS_OK && rs_roads_add(ctx, r, "B", 8, b, 3) == RS_OK);
+        CHECK(rs_roads_set_attr(ctx, r, 0, "class", "primary") == RS_OK &&
+              rs_roads_set_attr(ctx, r, 1, "class", "primary") == RS_OK);
+    }
+    double x0, y0;
+    side_end(30, 30, &x0, &y0);
+    add(roads, 8, "primary", x0, y0, 30, TY);
+    image A, B;
+    CHECK(render(alone, &A) && render(roads, &B));
+    size_t diff = 0, n = 0;
+    int worst = 0;
+    for (uint32_t py = 0; A.rgba && B.rgba && py < B.h; py++)
+        for (uint32_t px = 0; px < B.w; px++) {
+            double x = (px + 0.5) * PIX, y = (py + 0.5) * PIX;
+            if (fabs(x - 30) > 0.3 || y < TY - 12 || y > TY - 4 - 0.1) continue;
+            n++;
+            int d = rgb_diff(&A, &B, (size_t)py * B.w + px);
+            diff += d != 0;
+            worst = d > worst ? d : worst;
+        }
+    printf("X with a road ending: %zu of %zu centre line pixels differ from the X alone, worst %d/255\n", diff, n, worst);
+    /* (the mouth's slanted cut of the edge zone, 2 m from the centre
+     * line, crosses the line's last half pixel column: 2 pixels, 36/255) */
+    CHECKF(n > 400 && diff <= 2 && worst <= 40,
+           "at an X, %zu of %zu pixels of the centre line the side road meets most squarely differ from the X alone "
+           "(worst %d/255): the line is cut", diff, n, worst);
+    image_free(&A);
+    image_free(&B);
+    rs_roads_free(ctx, alone);
+    rs_roads_free(ctx, roads);
+}
+
 /* A record whose start is a T on a street and which crosses that street
  * again further on keeps the crossing: only the segments from its T end on
  * up to the first that does not reach the far edge line are clipped.
@@ -415,6 +499,9 @@ int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
     test_loop_crosses_again();
+    test_x_node(45);
+    test_x_node(60);
+    test_x_lines();
     test_tee_caps("built-in styles");
     /* casings: the side road's (1 m) stops at the through road's casing's
      * far edge (0.3 m beyond its surface) */

@@ -3,7 +3,9 @@
  * network's invariants: every leg names a valid road and is sorted by
  * angle, degrees and kinds agree, strokes partition the records with
  * consistent prev/next links and s offsets that add up the records'
- * lengths, and a second build gives the same network (determinism). */
+ * lengths, a second build gives the same network (determinism), and
+ * every junction area has at most two corners a leg, none NaN, its trims
+ * within the legs' lengths, the same count with and without a buffer. */
 #include "roadsplat.h"
 
 #include <math.h>
@@ -61,6 +63,28 @@ static void check(const rs_network *net, size_t n)
     free(seen);
 }
 
+static void check_areas(const rs_network *net, const rs_roads *roads)
+{
+    double xy[2 * 64], trim[32];
+    for (size_t i = 0; i < rs_network_node_count(net); i++) {
+        rs_network_node nd;
+        if (rs_network_get_node(net, i, &nd) != RS_OK) abort();
+        size_t n0 = rs_network_junction_area(net, roads, i, NULL, 0, NULL);
+        if (nd.degree < 3 ? n0 != 0 : n0 > 2 * (size_t)nd.degree) abort();
+        if (nd.degree < 3 || nd.degree > 32) continue;
+        size_t n = rs_network_junction_area(net, roads, i, xy, 64, trim);
+        if (n != n0) abort();
+        for (size_t k = 0; k < n; k++)
+            if (xy[2 * k] != xy[2 * k] || xy[2 * k + 1] != xy[2 * k + 1]) abort();
+        for (uint32_t k = 0; k < nd.degree; k++) {
+            rs_network_leg L;
+            rs_road_stroke st;
+            if (rs_network_get_leg(net, i, k, &L) != RS_OK || rs_network_road_stroke(net, L.road, &st) != RS_OK) abort();
+            if (!(trim[k] >= 0) || !(trim[k] <= st.length)) abort();
+        }
+    }
+}
+
 static int same(const rs_network *a, const rs_network *b)
 {
     if (rs_network_node_count(a) != rs_network_node_count(b) || rs_network_stroke_count(a) != rs_network_stroke_count(b))
@@ -107,6 +131,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             rs_network *a = NULL, *b = NULL;
             if (rs_network_build(ctx, roads, &o, &a) != RS_OK || rs_network_build(ctx, roads, &o, &b) != RS_OK) abort();
             check(a, rs_roads_count(roads));
+            check_areas(a, roads);
             if (!same(a, b)) abort();
             rs_network_free(ctx, a);
             rs_network_free(ctx, b);

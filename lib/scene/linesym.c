@@ -1339,6 +1339,9 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
  * point or a T, or two records of one stroke); when exactly one of them
  * has the highest priority there, every other road ending there is a side
  * road of it. NULL (and RS_OK) without a network. */
+/* Major roads passing one node looked at (more: no T there) */
+#define TEE_MAX_THROUGH 4
+
 rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee **out)
 {
     *out = NULL;
@@ -1354,12 +1357,16 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
-        const rs_network_leg *tl = NULL;
+        const rs_network_leg *tl = NULL, *tls[TEE_MAX_THROUGH];
         if (d < 3) continue;
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road, st = net->stroke_of[r];
             /* a road through the node, or a road end that its stroke continues */
-            if (!rs__leg_passes(net, &L[k]) || !L[k].major || st == through) continue;
+            if (!rs__leg_passes(net, &L[k]) || !L[k].major) continue;
+            int seen = 0;
+            for (uint32_t j = 0; j < nthrough && j < TEE_MAX_THROUGH; j++) seen |= net->stroke_of[tls[j]->road] == st;
+            if (seen) continue;
+            if (nthrough < TEE_MAX_THROUGH) tls[nthrough] = &L[k];
             through = st, tl = &L[k];
             nthrough++;
         }
@@ -1377,13 +1384,27 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
             rs_roads_get(roads, pb->road, NULL, &w2, NULL, NULL);
             rs_roads_get(roads, pa->road, NULL, &w, NULL, NULL);
             if (w2 < w) w = w2;
-        } else if (nthrough != 1)
+        } else if (nthrough > TEE_MAX_THROUGH)
             continue;
-        else
-            rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
             if (!rs__is_end_leg(&L[k]) || net->stroke_of[r] == through || net->stroke_of[r] == through2) continue;
+            if (nthrough > 1) {
+                /* several major roads pass (an X with a road ending on
+                 * its shared point): the end's through road is the one it
+                 * meets most squarely, the first of equals, as in
+                 * lib/scene/tee_ends.c */
+                int own = 0;
+                double best = -1, wx = cos(L[k].angle), wy = sin(L[k].angle);
+                for (uint32_t j = 0; j < nthrough; j++) {
+                    double sn = fabs(wx * sin(tls[j]->angle) - wy * cos(tls[j]->angle));
+                    own |= net->stroke_of[tls[j]->road] == net->stroke_of[r];
+                    if (sn > best) best = sn, tl = tls[j];
+                }
+                if (own) continue;
+                through = net->stroke_of[tl->road];
+            }
+            if (nthrough > 0) rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
             ls_tee *t = &T[rs__leg_end(&L[k])];
             t->stroke = through;
             t->stroke2 = through2;

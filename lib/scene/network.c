@@ -2213,3 +2213,71 @@ size_t rs_network_stroke_roads(const rs_network *net, size_t k, uint32_t *roads,
     for (size_t i = a; i < b && i - a < cap && roads; i++) roads[i - a] = net->stroke_roads[i];
     return b - a;
 }
+
+/* Where leg k's left edge meets the next leg's right edge (gap g from k to
+ * the next, counter-clockwise): the distances along the two legs from the
+ * node, from P + hk Lk + t uk = P - hn Ln + s un (L: the left normal);
+ * none (0) unless 0 < g < pi, where the edges diverge or run parallel. */
+static void area_corner(double hk, double hn, double g, double *t, double *s)
+{
+    double sg = sin(g), cg = cos(g);
+    *t = *s = 0;
+    if (!(sg > 1e-9) || !(g < 3.14159265358979323846)) return;
+    *t = (hn + hk * cg) / sg;
+    *s = (hk + hn * cg) / sg;
+}
+
+/* The half width of leg L's road (finite, >= 0) and how far it runs from
+ * the node (its record's length before or after the node). */
+static double area_leg(const rs_network *net, const rs_roads *roads, const rs_network_leg *L, double *room)
+{
+    double w = 0, len = net->length[L->road];
+    rs_roads_get(roads, L->road, NULL, &w, NULL, NULL);
+    *room = L->kind == RS_LEG_BACKWARD ? L->s : L->kind == RS_LEG_FORWARD ? len - L->s : len;
+    if (!(*room > 0)) *room = 0;
+    double h = 0.5 * w;
+    return h > 0 && h < 1e15 ? h : 0;
+}
+
+size_t rs_network_junction_area(const rs_network *net, const rs_roads *roads, size_t node, double *xy, size_t cap,
+                                double *trim)
+{
+    if (!net || !roads || node >= net->nnodes || rs_roads_count(roads) != net->nroads) return 0;
+    const rs_network_leg *L = net->leg + net->leg_start[node];
+    const size_t d = net->leg_start[node + 1] - net->leg_start[node];
+    if (d < 3) return 0;
+    const double two_pi = 2 * 3.14159265358979323846, px = net->node[node].x, py = net->node[node].y;
+    size_t n = 0;
+    double lx = 0, ly = 0, fx = 0, fy = 0; /* the last and the first point */
+    /* corners of neighbouring legs that coincide (an edge meeting the
+     * next one where both legs end) are one point, within rounding */
+    const double eps = 1e-9 * (1 + fabs(px) + fabs(py)) + 1e-6 * net->tol;
+    for (size_t k = 0; k < d; k++) {
+        size_t kp = k ? k - 1 : d - 1, kn = k + 1 < d ? k + 1 : 0;
+        double room, rp, rn;
+        double h = area_leg(net, roads, &L[k], &room), hp = area_leg(net, roads, &L[kp], &rp),
+               hn = area_leg(net, roads, &L[kn], &rn);
+        /* gaps to the neighbours, counter-clockwise (legs are sorted by angle) */
+        double gp = L[k].angle - L[kp].angle, gn = L[kn].angle - L[k].angle;
+        if (k == 0) gp += two_pi;
+        if (k + 1 == d) gn += two_pi;
+        double t_next, s_next, t_prev, s_prev;
+        area_corner(h, hn, gn, &t_next, &s_next);  /* this leg's left corner */
+        area_corner(hp, h, gp, &t_prev, &s_prev);  /* this leg's right corner */
+        double tr = t_next > s_prev ? t_next : s_prev;
+        tr = tr > 0 ? (tr < room ? tr : room) : 0;
+        if (trim) trim[k] = tr;
+        double ux = cos(L[k].angle), uy = sin(L[k].angle), cx = px + tr * ux, cy = py + tr * uy;
+        /* the right corner, then the left one (counter-clockwise) */
+        double pt[2][2] = { { cx + h * uy, cy - h * ux }, { cx - h * uy, cy + h * ux } };
+        for (int c = 0; c < 2; c++) {
+            if (n > 0 && fabs(pt[c][0] - lx) <= eps && fabs(pt[c][1] - ly) <= eps) continue;
+            if (k + 1 == d && c == 1 && n > 0 && fabs(pt[c][0] - fx) <= eps && fabs(pt[c][1] - fy) <= eps) continue;
+            if (xy && n < cap) xy[2 * n] = pt[c][0], xy[2 * n + 1] = pt[c][1];
+            if (n == 0) fx = pt[c][0], fy = pt[c][1];
+            lx = pt[c][0], ly = pt[c][1];
+            n++;
+        }
+    }
+    return n;
+}

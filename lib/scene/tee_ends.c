@@ -11,6 +11,19 @@
  * its round cap (the flat end would reach 1 / sine half widths along it) */
 #define TEE_MIN_SINE 0.2
 
+/* Through roads at one node looked at (more: every end there keeps its cap) */
+#define MAX_THROUGH 4
+
+/* A road passing through a node: its stroke (stroke2: the second record's,
+ * for two ends going straight on), its two legs, its direction there and
+ * the narrower of its two widths. */
+typedef struct tee_through {
+    uint32_t stroke, stroke2;
+    const rs_network_leg *leg[2];
+    int n, live;
+    double tx, ty, R;
+} tee_through;
+
 double rs__tee_offset(const rs_roads *roads, uint32_t r, int end, const rs_network_leg *tl, double nx, double ny,
                       double tol)
 {
@@ -44,48 +57,71 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             return RS_ERR_CANCELLED;
         }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
-        uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = UINT32_MAX;
-        const rs_network_leg *tl[2] = { NULL, NULL };
-        int ntl = 0, several = 0;
+        uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd];
         if (d < 3) continue;
-        /* the strokes passing through the node: a road through a shared
-         * point or a T, or a record end its stroke continues */
-        for (uint32_t k = 0; k < d; k++) {
-            uint32_t r = L[k].road;
+        /* the strokes passing through the node (a road through a shared
+         * point or a T, or a record end its stroke continues), each with
+         * its two legs: at most MAX_THROUGH of them, each passing once */
+        tee_through th[MAX_THROUGH];
+        int nth = 0, ok = 1;
+        for (uint32_t k = 0; k < d && ok; k++) {
             if (!rs__leg_passes(net, &L[k])) continue;
-            if (through != UINT32_MAX && net->stroke_of[r] != through) several = 1;
-            through = net->stroke_of[r];
-            if (ntl < 2) tl[ntl] = &L[k];
-            ntl++;
+            uint32_t st = net->stroke_of[L[k].road];
+            int j = 0;
+            while (j < nth && th[j].stroke != st) j++;
+            if (j == nth) {
+                if (nth == MAX_THROUGH) { ok = 0; break; }
+                th[nth].stroke = st, th[nth].stroke2 = st, th[nth].n = 0;
+                nth++;
+            }
+            if (th[j].n == 2) ok = 0; /* passing twice: a loop through its own node */
+            else th[j].leg[th[j].n++] = &L[k];
         }
+        for (int j = 0; j < nth; j++) ok &= th[j].n == 2;
         /* none passing: two record ends going straight on that do not
          * draw alike (a street whose width, lanes or class change where
          * a side road ends on it): the through road, as wide as the
          * narrower (the wider one's surface fills the rest) */
-        uint32_t through2 = UINT32_MAX;
-        if (!several && ntl == 0) {
+        if (ok && nth == 0) {
             const rs_network_leg *pa = NULL, *pb = NULL;
             if (!rs__straight_pair(L, d, &pa, &pb)) continue;
-            tl[0] = pa, tl[1] = pb, ntl = 2;
-            through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
+            th[0].leg[0] = pa, th[0].leg[1] = pb, th[0].n = 2;
+            th[0].stroke = net->stroke_of[pa->road], th[0].stroke2 = net->stroke_of[pb->road];
+            nth = 1;
         }
-        /* one through road, passing once (two legs); else every end keeps its cap */
-        if (several || ntl != 2) continue;
-        double tx = cos(tl[0]->angle) - cos(tl[1]->angle), ty = sin(tl[0]->angle) - sin(tl[1]->angle);
-        double tn = hypot(tx, ty);
-        if (!(tn > 1e-6)) continue;
-        tx /= tn, ty /= tn;
-        double R = 0, R2 = 0;
-        rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
-        rs_roads_get(roads, tl[1]->road, NULL, &R2, NULL, NULL);
-        if (R2 < R) R = R2;
+        /* every through road passing once (two legs); else every end keeps its cap */
+        if (!ok || nth == 0) continue;
+        int live = 0;
+        for (int j = 0; j < nth; j++) {
+            const rs_network_leg *const *tl = th[j].leg;
+            double tx = cos(tl[0]->angle) - cos(tl[1]->angle), ty = sin(tl[0]->angle) - sin(tl[1]->angle);
+            double tn = hypot(tx, ty);
+            th[j].live = tn > 1e-6;
+            if (!th[j].live) continue;
+            live++;
+            th[j].tx = tx / tn, th[j].ty = ty / tn;
+            double R = 0, R2 = 0;
+            rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
+            rs_roads_get(roads, tl[1]->road, NULL, &R2, NULL, NULL);
+            th[j].R = R2 < R ? R2 : R;
+        }
+        if (!live) continue;
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
-            if (!rs__is_end_leg(&L[k]) || rs__leg_passes(net, &L[k]) || net->stroke_of[r] == through ||
-                net->stroke_of[r] == through2)
-                continue;
-            /* the normal (-ty, tx), turned to point from the leg across the road */
-            double wx = cos(L[k].angle), wy = sin(L[k].angle), nx = -ty, ny = tx, dn = -(nx * wx + ny * wy);
+            if (!rs__is_end_leg(&L[k]) || rs__leg_passes(net, &L[k])) continue;
+            int own = 0;
+            for (int j = 0; j < nth; j++) own |= net->stroke_of[r] == th[j].stroke || net->stroke_of[r] == th[j].stroke2;
+            if (own) continue;
+            /* the through road the leg meets most squarely (the first of
+             * equals): its far edge line is the nearest one across */
+            double wx = cos(L[k].angle), wy = sin(L[k].angle), best = 0, nx = 0, ny = 0, dn = 0;
+            int bj = -1;
+            for (int j = 0; j < nth; j++) {
+                if (!th[j].live) continue;
+                /* the normal (-ty, tx), turned to point from the leg across the road */
+                double cx = -th[j].ty, cy = th[j].tx, c = -(cx * wx + cy * wy);
+                if (bj < 0 || fabs(c) > best) bj = j, best = fabs(c), nx = cx, ny = cy, dn = c;
+            }
             if (!(fabs(dn) > TEE_MIN_SINE)) continue;
             if (dn < 0) nx = -nx, ny = -ny;
             if (cnt == cap) {
@@ -101,10 +137,10 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             rs__tee_end *t = &T[cnt++];
             t->road = r;
             t->end = L[k].kind == RS_LEG_END;
-            t->through = tl[0]->road;
+            t->through = th[bj].leg[0]->road;
             t->nx = nx;
             t->ny = ny;
-            t->far = 0.5 * R - rs__tee_offset(roads, r, L[k].kind == RS_LEG_END, tl[0], nx, ny, net->tol);
+            t->far = 0.5 * th[bj].R - rs__tee_offset(roads, r, L[k].kind == RS_LEG_END, th[bj].leg[0], nx, ny, net->tol);
             t->grow = 0;
         }
     }
