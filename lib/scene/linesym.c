@@ -1336,9 +1336,9 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
 /* The road ends that meet a through road with the right of way at a T
  * (per road two entries, start and end; stroke NO_STROKE: none): at a
  * junction node, the strokes that pass through it (a road through a shared
- * point or a T, or two records of one stroke); when exactly one of them
- * has the highest priority there, every other road ending there is a side
- * road of it. NULL (and RS_OK) without a network. */
+ * point or a T, or two records of one stroke) with the highest priority
+ * there; every other road ending there is a side road of the one it meets
+ * most squarely. NULL (and RS_OK) without a network. */
 /* Major roads passing one node looked at (more: no T there) */
 #define TEE_MAX_THROUGH 4
 
