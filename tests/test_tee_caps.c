@@ -338,6 +338,16 @@ static void test_through_of_two_looks(void)
     rs_roads_free(ctx, roads);
 }
 
+/* Two roads of width w and class cls crossing at (30, TY) through a shared
+ * point: A along y = TY from x = 2 to 58, B along x = 30 from y = b0 to 38. */
+static void add_cross(rs_roads *r, double w, const char *cls, double b0)
+{
+    const double a[6] = { 2, TY, 30, TY, 58, TY }, b[6] = { 30, b0, 30, TY, 30, 38 };
+    size_t n0 = rs_roads_count(r);
+    CHECK(rs_roads_add(ctx, r, "A", w, a, 3) == RS_OK && rs_roads_add(ctx, r, "B", w, b, 3) == RS_OK);
+    CHECK(rs_roads_set_attr(ctx, r, n0, "class", cls) == RS_OK && rs_roads_set_attr(ctx, r, n0 + 1, "class", cls) == RS_OK);
+}
+
 /* A side road ending where two streets cross (an X through a shared
  * point, both streets passing): its strip runs flat to the far edge line
  * of the street it meets most squarely (the first of two at 45 degrees)
@@ -347,13 +357,7 @@ static void test_x_node(double deg)
 {
     rs_roads *alone = NULL, *roads = NULL;
     CHECK(rs_roads_create(ctx, &alone) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK);
-    for (int k = 0; k < 2; k++) {
-        rs_roads *r = k ? roads : alone;
-        const double a[6] = { 2, TY, 30, TY, 58, TY }, b[6] = { 30, 2, 30, TY, 30, 38 };
-        CHECK(rs_roads_add(ctx, r, "A", 2 * TR, a, 3) == RS_OK && rs_roads_add(ctx, r, "B", 2 * TR, b, 3) == RS_OK);
-        CHECK(rs_roads_set_attr(ctx, r, 0, "class", "residential") == RS_OK &&
-              rs_roads_set_attr(ctx, r, 1, "class", "residential") == RS_OK);
-    }
+    for (int k = 0; k < 2; k++) add_cross(k ? roads : alone, 2 * TR, "residential", 2);
     double x0, y0;
     side_end(deg, 18 / sin(deg * DEG), &x0, &y0);
     add(roads, 2 * SR, "primary", x0, y0, 30, TY);
@@ -387,13 +391,7 @@ static void test_x_lines(void)
 {
     rs_roads *alone = NULL, *roads = NULL;
     CHECK(rs_roads_create(ctx, &alone) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK);
-    for (int k = 0; k < 2; k++) {
-        rs_roads *r = k ? roads : alone;
-        const double a[6] = { 2, TY, 30, TY, 58, TY }, b[6] = { 30, TY - 24, 30, TY, 30, 38 };
-        CHECK(rs_roads_add(ctx, r, "A", 8, a, 3) == RS_OK && rs_roads_add(ctx, r, "B", 8, b, 3) == RS_OK);
-        CHECK(rs_roads_set_attr(ctx, r, 0, "class", "primary") == RS_OK &&
-              rs_roads_set_attr(ctx, r, 1, "class", "primary") == RS_OK);
-    }
+    for (int k = 0; k < 2; k++) add_cross(k ? roads : alone, 8, "primary", TY - 24);
     double x0, y0;
     side_end(30, 30, &x0, &y0);
     add(roads, 8, "primary", x0, y0, 30, TY);
