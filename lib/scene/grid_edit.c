@@ -386,6 +386,26 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
         r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
+        /* the road field computes the pixels of the T's box again
+         * (lib/scene/roadfield.c tee_box, tee_pass), whatever road they
+         * lie on: a neighbour's edge there comes from 16 sub-rows and may
+         * round otherwise (found by fuzz/edits: a through road's edge
+         * pixel 5 m from a new T end, 3/65535 in weight). The box: the
+         * flat strip's corners (u from where the clip line crosses the far
+         * side to where it crosses the near side, t = +-reach) and the end
+         * disc, grown by the field's margin of half a pixel diagonal. */
+        if (!r) {
+            double cs = fabs(F->E.tnx[e] * dy - F->E.tny[e] * dx), R = F->reach;
+            double ua = fmin((F->E.tee[e] - R * cs) / sn, 0), ub = fmax((F->E.tee[e] + R * cs) / sn, 0);
+            double bx0 = x[k] - R, bx1 = x[k] + R, by0 = y[k] - R, by1 = y[k] + R;
+            for (int c = 0; c < 4; c++) {
+                double u = c & 1 ? ub : ua, t = c & 2 ? R : -R;
+                double px = x[k] + u * dx + t * dy, py = y[k] + u * dy - t * dx;
+                bx0 = fmin(bx0, px), bx1 = fmax(bx1, px), by0 = fmin(by0, py), by1 = fmax(by1, py);
+            }
+            double mg = 0.7072 * b->pix + 1e-9 * (1 + fabs(x[k]) + fabs(y[k]) + R + ub - ua);
+            r = push(b, mix(h, 0xb0c5), bx0 - mg, by0 - mg, bx1 + mg, by1 + mg, -1);
+        }
         /* and the segments a field may clip (tee_run, counted above) */
         size_t run = e ? n - 1 - F->clip1 : F->clip0;
         for (size_t i = 0; i < run && !r; i++) {
