@@ -1386,6 +1386,8 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
             if (w2 < w) w = w2;
         } else if (nthrough > TEE_MAX_THROUGH)
             continue;
+        else if (nthrough == 1)
+            rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
             if (!rs__is_end_leg(&L[k]) || net->stroke_of[r] == through || net->stroke_of[r] == through2) continue;
@@ -1403,8 +1405,8 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
                 }
                 if (own) continue;
                 through = net->stroke_of[tl->road];
+                rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
             }
-            if (nthrough > 0) rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
             ls_tee *t = &T[rs__leg_end(&L[k])];
             t->stroke = through;
             t->stroke2 = through2;

@@ -2227,14 +2227,11 @@ static void area_corner(double hk, double hn, double g, double *t, double *s)
     *s = (hk + hn * cg) / sg;
 }
 
-/* The half width of leg L's road (finite, >= 0) and how far it runs from
- * the node (its record's length before or after the node). */
-static double area_leg(const rs_network *net, const rs_roads *roads, const rs_network_leg *L, double *room)
+/* The half width of leg L's road (finite, >= 0). */
+static double area_half_width(const rs_roads *roads, const rs_network_leg *L)
 {
-    double w = 0, len = net->length[L->road];
+    double w = 0;
     rs_roads_get(roads, L->road, NULL, &w, NULL, NULL);
-    *room = L->kind == RS_LEG_BACKWARD ? L->s : L->kind == RS_LEG_FORWARD ? len - L->s : len;
-    if (!(*room > 0)) *room = 0;
     double h = 0.5 * w;
     return h > 0 && h < 1e15 ? h : 0;
 }
@@ -2254,9 +2251,11 @@ size_t rs_network_junction_area(const rs_network *net, const rs_roads *roads, si
     const double eps = 1e-9 * (1 + fabs(px) + fabs(py)) + 1e-6 * net->tol;
     for (size_t k = 0; k < d; k++) {
         size_t kp = k ? k - 1 : d - 1, kn = k + 1 < d ? k + 1 : 0;
-        double room, rp, rn;
-        double h = area_leg(net, roads, &L[k], &room), hp = area_leg(net, roads, &L[kp], &rp),
-               hn = area_leg(net, roads, &L[kn], &rn);
+        double h = area_half_width(roads, &L[k]), hp = area_half_width(roads, &L[kp]),
+               hn = area_half_width(roads, &L[kn]);
+        /* how far the leg runs from the node: its record's length before or after it */
+        double len = net->length[L[k].road];
+        double room = L[k].kind == RS_LEG_BACKWARD ? L[k].s : L[k].kind == RS_LEG_FORWARD ? len - L[k].s : len;
         /* gaps to the neighbours, counter-clockwise (legs are sorted by angle) */
         double gp = L[k].angle - L[kp].angle, gn = L[kn].angle - L[k].angle;
         if (k == 0) gp += two_pi;
@@ -2265,7 +2264,7 @@ size_t rs_network_junction_area(const rs_network *net, const rs_roads *roads, si
         area_corner(h, hn, gn, &t_next, &s_next);  /* this leg's left corner */
         area_corner(hp, h, gp, &t_prev, &s_prev);  /* this leg's right corner */
         double tr = t_next > s_prev ? t_next : s_prev;
-        tr = tr > 0 ? (tr < room ? tr : room) : 0;
+        tr = tr > 0 && room > 0 ? (tr < room ? tr : room) : 0;
         if (trim) trim[k] = tr;
         double ux = cos(L[k].angle), uy = sin(L[k].angle), cx = px + tr * ux, cy = py + tr * uy;
         /* the right corner, then the left one (counter-clockwise) */
