@@ -14,10 +14,13 @@
 #include "fail_alloc.h"
 #include "bandref.h"
 #include "linesym.h"
+#include "network.h"
+#include "roadfield.h"
 
 #include <stdlib.h>
 
 #define REF_N 96
+#define RS_TEST_PI 3.14159265358979323846
 
 static rs_ctx *ctx;
 
@@ -493,6 +496,66 @@ static void test_alloc_failures(void)
     rs_roads_free(ctx, roads);
 }
 
+/* Where several streets pass a node and a road ends there, the trim of
+ * its end (rs__tee_ends) and its line rule (rs__network_tees) take the
+ * street it meets most squarely. On a bent street the two measured that
+ * differently (the direction from both legs, against one leg's angle), so
+ * near a tie the surface stopped at one street's far edge while the lines
+ * treated the other as the through road. Random nodes: two primaries
+ * passing, each bent by up to 40 degrees, a third ending there. */
+static void test_tee_pick_agrees(void)
+{
+    uint64_t st = 0x9E3779B97F4A7C15ull;
+    int compared = 0, differ = 0;
+    for (int it = 0; it < 400; it++) {
+        double ang[5];
+        int ok = 1;
+        for (int k = 0; k < 5; k++) {
+            st = st * 6364136223846793005ull + 1442695040888963407ull;
+            ang[k] = (double)(st >> 11) / 9007199254740992.0;
+        }
+        double a0 = 2 * RS_TEST_PI * ang[0], a1 = a0 + RS_TEST_PI + (ang[1] - 0.5) * 80 * RS_TEST_PI / 180;
+        double b0 = 2 * RS_TEST_PI * ang[2], b1 = b0 + RS_TEST_PI + (ang[3] - 0.5) * 80 * RS_TEST_PI / 180;
+        double c0 = 2 * RS_TEST_PI * ang[4], all[5] = { a0, a1, b0, b1, c0 };
+        for (int i = 0; i < 5; i++)
+            for (int j = i + 1; j < 5; j++) {
+                double d = fmod(fabs(all[i] - all[j]), 2 * RS_TEST_PI);
+                ok &= fmin(d, 2 * RS_TEST_PI - d) > 20 * RS_TEST_PI / 180;
+            }
+        if (!ok) continue;
+        const double cx = 60, cy = 60, L = 40;
+        double A[6] = { cx + L * cos(a0), cy + L * sin(a0), cx, cy, cx + L * cos(a1), cy + L * sin(a1) };
+        double B[6] = { cx + L * cos(b0), cy + L * sin(b0), cx, cy, cx + L * cos(b1), cy + L * sin(b1) };
+        double C[4] = { cx + L * cos(c0), cy + L * sin(c0), cx, cy };
+        rs_roads *R = NULL;
+        rs_network *net = NULL;
+        rs__tee_end *te = NULL;
+        rs__tee *lt = NULL;
+        size_t nte = 0;
+        CHECK(rs_roads_create(ctx, &R) == RS_OK);
+        if (!R) return;
+        CHECK(rs_roads_add(ctx, R, "A", 8, A, 3) == RS_OK && rs_roads_add(ctx, R, "B", 8, B, 3) == RS_OK &&
+              rs_roads_add(ctx, R, "C", 8, C, 2) == RS_OK);
+        for (size_t r = 0; r < 3; r++) CHECK(rs_roads_set_attr(ctx, R, r, "class", "primary") == RS_OK);
+        CHECK(rs_network_build(ctx, R, NULL, &net) == RS_OK);
+        CHECK(net && rs__tee_ends(ctx, R, net, &te, &nte) == RS_OK && rs__network_tees(ctx, R, net, &lt) == RS_OK);
+        for (size_t i = 0; net && lt && i < nte; i++) {
+            if (te[i].road != 2 || !te[i].end) continue;
+            compared++;
+            differ += lt[rs__leg_end(&(rs_network_leg){ .road = 2, .kind = RS_LEG_END })].stroke !=
+                      net->stroke_of[te[i].through];
+        }
+        rs__free(ctx, te);
+        rs__free(ctx, lt);
+        rs_network_free(ctx, net);
+        rs_roads_free(ctx, R);
+    }
+    printf("T ends at two bent streets: %d compared, %d with another through street for the lines\n", compared,
+           differ);
+    CHECKF(compared >= 100 && differ == 0, "%d of %d T ends at two streets: trim and lines pick different streets",
+           differ, compared);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -502,6 +565,7 @@ int main(void)
     test_tiling_translation();
     test_paint_formula();
     test_junctions();
+    test_tee_pick_agrees();
     test_bad_input();
     test_alloc_failures();
     rs_ctx_free(ctx);

@@ -1357,16 +1357,20 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
-        const rs_network_leg *tl = NULL, *tls[TEE_MAX_THROUGH];
+        const rs_network_leg *tl = NULL, *tls[TEE_MAX_THROUGH], *tls2[TEE_MAX_THROUGH];
         if (d < 3) continue;
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road, st = net->stroke_of[r];
             /* a road through the node, or a road end that its stroke continues */
             if (!rs__leg_passes(net, &L[k]) || !L[k].major) continue;
-            int seen = 0;
-            for (uint32_t j = 0; j < nthrough && j < TEE_MAX_THROUGH; j++) seen |= net->stroke_of[tls[j]->road] == st;
-            if (seen) continue;
-            if (nthrough < TEE_MAX_THROUGH) tls[nthrough] = &L[k];
+            uint32_t seen = TEE_MAX_THROUGH;
+            for (uint32_t j = 0; j < nthrough && j < TEE_MAX_THROUGH; j++)
+                if (net->stroke_of[tls[j]->road] == st) seen = j;
+            if (seen < TEE_MAX_THROUGH) {
+                if (!tls2[seen]) tls2[seen] = &L[k]; /* its second leg */
+                continue;
+            }
+            if (nthrough < TEE_MAX_THROUGH) tls[nthrough] = &L[k], tls2[nthrough] = NULL;
             through = st, tl = &L[k];
             nthrough++;
         }
@@ -1399,7 +1403,11 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
                 int own = 0;
                 double best = -1, wx = cos(L[k].angle), wy = sin(L[k].angle);
                 for (uint32_t j = 0; j < nthrough; j++) {
-                    double sn = fabs(wx * sin(tls[j]->angle) - wy * cos(tls[j]->angle));
+                    /* the street's direction from its two legs, as the
+                     * trim's (a bent street: one leg's angle could pick
+                     * another street than the trim at a near-tie) */
+                    double tx = cos(tls[j]->angle), ty = sin(tls[j]->angle), sn = -1;
+                    if (!tls2[j] || rs__through_dir(tls[j], tls2[j], &tx, &ty)) sn = rs__meet_sine(wx, wy, tx, ty);
                     own |= net->stroke_of[tls[j]->road] == net->stroke_of[r];
                     if (sn > best) best = sn, tl = tls[j];
                 }

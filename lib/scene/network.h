@@ -5,6 +5,7 @@
 #ifndef RS_NETWORK_H
 #define RS_NETWORK_H
 #include "internal.h"
+#include <math.h>
 
 struct rs_network {
     size_t nroads;
@@ -60,6 +61,27 @@ size_t rs__network_bytes(const rs_network *net);
  * directions' cosine below -RS__STRAIGHT_COS): 1 with *a, *b when there is
  * exactly one, else 0 (lib/scene/network.c). */
 int rs__straight_pair(const rs_network_leg *L, uint32_t d, const rs_network_leg **a, const rs_network_leg **b);
+/* The direction of a street passing a node on legs a and b: the unit
+ * chord from b's direction to a's (a bent street's mean direction) into
+ * *tx, *ty; 0 when a and b leave the same way (no direction). */
+static inline int rs__through_dir(const rs_network_leg *a, const rs_network_leg *b, double *tx, double *ty)
+{
+    double x = cos(a->angle) - cos(b->angle), y = sin(a->angle) - sin(b->angle), n = hypot(x, y);
+    if (!(n > 1e-6)) return 0;
+    *tx = x / n, *ty = y / n;
+    return 1;
+}
+
+/* How squarely a road end leaving its node in direction (wx, wy) meets a
+ * street through it in direction (tx, ty): the sine of their angle. Where
+ * several streets pass, the T end's trim (lib/scene/tee_ends.c) and its
+ * line rule (lib/scene/linesym.c) both take the largest, the first of
+ * equals, so they pick the same street. */
+static inline double rs__meet_sine(double wx, double wy, double tx, double ty)
+{
+    return fabs(ty * wx - tx * wy);
+}
+
 /* Leg L is at a road's end (RS_LEG_START or RS_LEG_END). */
 static inline int rs__is_end_leg(const rs_network_leg *L)
 {

@@ -94,12 +94,9 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
         int live = 0;
         for (int j = 0; j < nth; j++) {
             const rs_network_leg *const *tl = th[j].leg;
-            double tx = cos(tl[0]->angle) - cos(tl[1]->angle), ty = sin(tl[0]->angle) - sin(tl[1]->angle);
-            double tn = hypot(tx, ty);
-            th[j].live = tn > 1e-6;
+            th[j].live = rs__through_dir(tl[0], tl[1], &th[j].tx, &th[j].ty);
             if (!th[j].live) continue;
             live++;
-            th[j].tx = tx / tn, th[j].ty = ty / tn;
             double R = 0, R2 = 0;
             rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
             rs_roads_get(roads, tl[1]->road, NULL, &R2, NULL, NULL);
@@ -120,7 +117,8 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
                 if (!th[j].live) continue;
                 /* the normal (-ty, tx), turned to point from the leg across the road */
                 double cx = -th[j].ty, cy = th[j].tx, c = -(cx * wx + cy * wy);
-                if (bj < 0 || fabs(c) > best) bj = j, best = fabs(c), nx = cx, ny = cy, dn = c;
+                double sn = rs__meet_sine(wx, wy, th[j].tx, th[j].ty); /* (= |c|) */
+                if (bj < 0 || sn > best) bj = j, best = sn, nx = cx, ny = cy, dn = c;
             }
             if (!(fabs(dn) > TEE_MIN_SINE)) continue;
             if (dn < 0) nx = -nx, ny = -ny;
