@@ -41,6 +41,12 @@ if cmd == 'mad':  # a b limit: mean absolute RGB difference <= limit/255
     if A[:2] != B[:2]: print('sizes differ', A[:2], B[:2]); sys.exit(1)
     s = sum(abs(p - q) for a, b in zip(A[2], B[2]) for p, q in zip(a, b)) / (3.0 * len(A[2]))
     print('mean abs diff %.4f / 255' % s); sys.exit(0 if s <= float(sys.argv[4]) else 1)
+if cmd == 'band':  # a b y0 y1 limit: rows [y0, y1) of a and b within limit/255 on RGB
+    A, B = read(sys.argv[2]), read(sys.argv[3]); y0, y1 = int(sys.argv[4]), int(sys.argv[5])
+    if A[:2] != B[:2]: print('sizes differ', A[:2], B[:2]); sys.exit(1)
+    w = A[0]; m = max(abs(p - q) for y in range(y0, y1) for x in range(w)
+                      for p, q in zip(A[2][y * w + x], B[2][y * w + x]))
+    print('rows %d..%d: max diff %d / 255' % (y0, y1 - 1, m)); sys.exit(0 if m <= int(sys.argv[6]) else 1)
 if cmd == 'sky':  # the top rows are sky blue; the bottom centre (or row fraction argv[3]) is terrain
     img = read(sys.argv[2]); w, h = img[:2]
     top = [px(img, x, y) for y in range(3) for x in range(0, w, 7)]
@@ -146,6 +152,18 @@ check "shader: junction at 0.1 m equals the CPU splat (max <= 8/255)" sh -c "'$B
 # trims them as the CPU does (max 182/255 on db31fd7)
 awk 'BEGIN { print "P2"; print 51, 16; print 100; for (i = 0; i < 16; i++) { l = ""; for (j = 0; j < 51; j++) l = l " 50"; print l } }' > "$T/caps-dem.pgm"
 check "shader: trimmed T ends at 0.1 m equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$T/caps-dem.pgm' '$EX/network_caps.txt' '$T/kc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$EX/network_caps.txt' '$T/ks.png' && python3 '$DIFF' '$T/ks.png' '$T/kc.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
+# side roads ending on a primary at 30 and 45 degrees (docs/network.md "The
+# through road at a T"): the primary's centre line and the band within
+# keep of it (rows 138..161 of 300 at 0.1 m) are those of the primary
+# alone, in both renders (before 3 December 2026 the side road's cut copy
+# ended square to it and its acute corner cut the centre line, max 111/255
+# in the shader, and the give-way line stood inside the primary)
+head -7 "$EX/network_oblique.txt" | tail -4 > "$T/ob-main.txt"
+check "oblique T: CPU splat" sh -c "'$BIN' $N --quiet '$T/caps-dem.pgm' '$EX/network_oblique.txt' '$T/oc.png' && '$BIN' $N --quiet '$T/caps-dem.pgm' '$T/ob-main.txt' '$T/om.png'"
+check "oblique T: shader render" sh -c "'$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$EX/network_oblique.txt' '$T/os.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$T/ob-main.txt' '$T/oms.png'"
+check "oblique T: the CPU splat keeps the primary's inner band (max <= 8/255)" py band "$T/oc.png" "$T/om.png" 138 162 8
+check "oblique T: the shader keeps the primary's inner band (max <= 8/255)" py band "$T/os.png" "$T/oms.png" 138 162 8
+check "oblique T: the shader equals the CPU splat" xcheck oblique "$T/os.png" "$T/oc.png"
 C="--cell-size 5 --z-scale 0.01 --texels 4"
 check "shader: city CPU splat" "$BIN" $C --quiet "$EX/dem.pgm" "$EX/roads.txt" "$T/cc.png"
 # Lit shader mode: the terrain colour comes from the splatter's layers

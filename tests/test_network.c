@@ -1511,6 +1511,75 @@ static void test_junction_area(void)
     CHECKF(cases > 150 && bad == 0, "junction areas: %zu rules broken (%zu stars, %zu nodes)", bad, cases, nodes);
 }
 
+/* Distance from (x, y) to the segment (ax, ay)-(bx, by). */
+static double seg_d(double x, double y, double ax, double ay, double bx, double by)
+{
+    double dx = bx - ax, dy = by - ay, u = ((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy);
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    return hypot(x - ax - u * dx, y - ay - u * dy);
+}
+
+/* A T on a bent street: a side road ending where the through road turns
+ * by 15 to 40 degrees. The through road's lines within its inner part
+ * (hw - 2.5 m of the centre line) run on across the mouth as on a straight
+ * one: the image there is the through road's alone. */
+static void test_bent_tee_lines(void)
+{
+    int worst_all = 0;
+    for (int bi = 0; bi < 8; bi++)
+        for (int rev = 0; rev < 2; rev++) {
+            static const double bend[8] = { 15, 40, -20, -35, 0, 0, 0, 0 }, side_deg[8] = { 90, 90, 90, 90, 45, 60, 135, 30 };
+            double beta = bend[bi] * 3.14159265358979323846 / 180, sd = side_deg[bi] * 3.14159265358979323846 / 180;
+            double side_xy[4] = { 41.3 + 38 * cos(sd), 40 + 38 * sin(sd), 41.3, 40 };
+            double xy[6] = { 2, 40, 41.3, 40, 41.3 + 40 * cos(beta), 40 - 40 * sin(beta) };
+            if (rev)
+                for (int k = 0; k < 2; k++) {
+                    double t = xy[k], u = xy[4 + k];
+                    xy[k] = u, xy[4 + k] = t;
+                }
+            rs_roads *alone = NULL, *tee = NULL;
+            CHECK(rs_roads_create(ctx, &alone) == RS_OK && rs_roads_create(ctx, &tee) == RS_OK);
+            add_cls(alone, 7.5, "primary", xy, 3);
+            add_cls(tee, 7.5, "primary", xy, 3);
+            add_cls(tee, 6.5, "secondary", side_xy, 2);
+            image a = { 0 }, b = { 0 };
+            CHECK(render(alone, NULL, &a) && render(tee, NULL, &b));
+            int inner = 0, mouth = 0;
+            double keep = 7.5 / 2 - 2.0;
+            for (uint32_t py = 0; a.rgba && b.rgba && py < a.h; py++)
+                for (uint32_t px = 0; px < a.w; px++) {
+                    double x = (px + 0.5) / TEX, y = (py + 0.5) / TEX;
+                    if (hypot(x - 41.3, y - 40) > 6) continue;
+                    double d = fmin(seg_d(x, y, xy[0], xy[1], xy[2], xy[3]), seg_d(x, y, xy[2], xy[3], xy[4], xy[5]));
+                    const uint8_t *p = a.rgba + 4 * ((size_t)py * a.w + px), *q = b.rgba + 4 * ((size_t)py * a.w + px);
+                    int dd = 0;
+                    for (int c = 0; c < 3; c++) dd = abs(p[c] - q[c]) > dd ? abs(p[c] - q[c]) : dd;
+                    /* the edge line in the side road's mouth (away from its corners) */
+                    if (d > 7.5 / 2 - 0.5 && d < 7.5 / 2 - 0.1 &&
+                        seg_d(x, y, side_xy[0], side_xy[1], side_xy[2], side_xy[3]) < 6.5 / 2 - 0.75)
+                        mouth = dd > mouth ? dd : mouth;
+                    if (d > keep - 0.5) continue;
+                    inner = dd > inner ? dd : inner;
+                }
+            printf("T on a street bent by %.0f degrees, side road at %.0f (%s): inner lines differ by %d/255, the "
+                   "edge line in the mouth by %d/255\n",
+                   bend[bi], side_deg[bi], rev ? "reversed" : "forward", inner, mouth);
+            worst_all = inner > worst_all ? inner : worst_all;
+            if (bi == 3 || bi == 7) { /* (RS_NETWORK_PPM: pictures of two of them) */
+                char nm[64];
+                snprintf(nm, sizeof nm, "network_bent_tee_%d%s.ppm", bi, rev ? "r" : "");
+                save_ppm(nm, &b);
+            }
+            CHECKF(mouth > 60, "T on a bent street (%.0f, side at %.0f): the edge line runs on over the mouth (%d/255)",
+                   bend[bi], side_deg[bi], mouth);
+            free(a.rgba);
+            free(b.rgba);
+            rs_roads_free(ctx, alone);
+            rs_roads_free(ctx, tee);
+        }
+    CHECKF(worst_all <= 8, "T on a bent street: the through road's inner lines differ by %d/255", worst_all);
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -1533,6 +1602,7 @@ int main(void)
     test_crumbs_road();
     test_tee_splits();
     test_junction_area();
+    test_bent_tee_lines();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

@@ -157,8 +157,11 @@ static const char *const rsh_fs_src[] = {
     /* road_free for the lines of the through stroke st at a T
      * (lib/scene/linesym.c, docs/network.md): an end segment of `road` that meets
      * st (b6: the road's stroke, the strokes its start and end meet, the
-     * start's depth; keepE the end's) is a rectangle stopping depth / sine
-     * short of st's centre line, without its round end */
+     * start's depth; keepE the end's) is its rectangle on the side road's
+     * side of the line `depth` from st's centre line, parallel to st there
+     * (tg), without its round end (as lib/scene/linesym.c: until 3 December
+     * 2026 it stopped depth / sine back, square to the side road, and at an
+     * oblique T its acute corner cut st's centre line) */
     "float road_free_tee(vec2 p, int road, int e0, int e1, float st, vec4 b6, float keepE, vec2 tg) {\n",
     "    float best = 1e30, d, sd, u, side; vec2 bn = vec2(1.0, 0.0), n;\n"
     "    for (int e = e0; e < e1; e++) {\n"
@@ -168,12 +171,21 @@ static const char *const rsh_fs_src[] = {
     "        float sn = abs(s.dir.x * tg.y - s.dir.y * tg.x);\n"
     "        if ((ts || te) && sn > 0.2) {\n"
     "            float u0 = -s.r, u1 = s.len + s.r;\n"
-    "            if (te) u1 = max(s.len - keepE / sn, u0);\n"
-    "            if (ts) u0 = min(b6.w / sn, u1);\n"
     "            float qx = max(u0 - u, u - u1), qy = abs(side) - s.r;\n"
-    "            vec2 q = max(vec2(qx, qy), 0.0);\n"
-    "            sd = u1 > u0 ? (q.x > 0.0 || q.y > 0.0 ? length(q) : max(qx, qy)) : 1e30;\n"
-    "            n = qy >= qx ? (side >= 0.0 ? 1.0 : -1.0) * vec2(s.dir.y, -s.dir.x) : (u - u1 > u0 - u ? 1.0 : -1.0) * s.dir;\n"
+    "            vec2 q = max(vec2(qx, qy), 0.0), pr = vec2(s.dir.y, -s.dir.x);\n"
+    "            sd = q.x > 0.0 || q.y > 0.0 ? length(q) : max(qx, qy);\n"
+    "            n = qy >= qx ? (side >= 0.0 ? 1.0 : -1.0) * pr : (u - u1 > u0 - u ? 1.0 : -1.0) * s.dir;\n"
+    "            vec2 nc = vec2(-tg.y, tg.x);\n"
+    "            if (te) {\n" /* the keep line at the end: nc towards the side road */
+    "                vec2 m = dot(nc, s.dir) > 0.0 ? -nc : nc;\n"
+    "                float h = keepE - ((u - s.len) * dot(m, s.dir) + side * dot(m, pr));\n"
+    "                if (h > sd) { sd = h; n = -m; }\n"
+    "            }\n"
+    "            if (ts) {\n"
+    "                vec2 m = dot(nc, s.dir) < 0.0 ? -nc : nc;\n"
+    "                float h = b6.w - (u * dot(m, s.dir) + side * dot(m, pr));\n"
+    "                if (h > sd) { sd = h; n = -m; }\n"
+    "            }\n"
     "        }\n"
     "        if (sd < best) { best = sd; bn = n; }\n"
     "    }\n"

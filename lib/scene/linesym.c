@@ -679,6 +679,9 @@ typedef struct ls_surf {
     int clip;             /* 1: only its part with cx x + cy y <= cc (a trimmed end at a T,
                              docs/network.md "Ends at a T": the surface stops at the far edge line) */
     double cx, cy, cc;
+    int clip2;            /* 1: and only its part with cx2 x + cy2 y <= cc2 (the cut-back copy at a T
+                             on the inner side of a bent street: one keep line per leg) */
+    double cx2, cy2, cc2;
 } ls_surf;
 
 #define NO_STROKE RS__NO_STROKE
@@ -771,7 +774,7 @@ static int add_hp(ls_piece *P, double c0, double cu, double cv)
     return 1;
 }
 
-/* P minus surface rectangle Q (cut by its clip line): up to 5 disjoint
+/* P minus surface rectangle Q (cut by its clip lines): up to 6 disjoint
  * pieces into out; returns their count, or -1 when Q misses P (P stays
  * whole) or a piece would need more half-planes than it holds (P is then
  * kept whole: lines run on). */
@@ -790,7 +793,9 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     /* the clip line in P's frame: n.(p - Q.a) = cn0 + u fnu + v fnv <= cq */
     double cn0 = ox * Q->cx + oy * Q->cy, fnu = P->ux * Q->cx + P->uy * Q->cy, fnv = npx * Q->cx + npy * Q->cy;
     double cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
-    int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip;
+    double dn0 = ox * Q->cx2 + oy * Q->cy2, gnu = P->ux * Q->cx2 + P->uy * Q->cy2, gnv = npx * Q->cx2 + npy * Q->cy2;
+    double dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
+    int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip, out_clip2 = Q->clip2;
     for (uint32_t k = 0; k < n; k++) {
         double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
         out_v_hi &= v >= r;
@@ -798,8 +803,9 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
         out_u_lo &= u <= lo;
         out_u_hi &= u >= hi;
         out_clip &= cn0 + x[k] * fnu + y[k] * fnv >= cq;
+        out_clip2 &= dn0 + x[k] * gnu + y[k] * gnv >= dq;
     }
-    if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip) return -1;
+    if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip || out_clip2) return -1;
     int m = 0;
     ls_piece A = *P;
     if (!add_hp(&A, cv0 - r, fvu, fvv)) return -1;                      /* v' >= r */
@@ -819,6 +825,14 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
         A = *P;
         if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
             !add_hp(&A, hi - cu0, -fuu, -fuv) || !add_hp(&A, cn0 - cq, fnu, fnv))
+            return -1;
+        if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
+    }
+    if (Q->clip2) { /* and its part within the first clip line beyond the second */
+        A = *P;
+        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
+            !add_hp(&A, hi - cu0, -fuu, -fuv) || (Q->clip && !add_hp(&A, cq - cn0, -fnu, -fnv)) ||
+            !add_hp(&A, dn0 - dq, gnu, gnv))
             return -1;
         if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
     }
@@ -851,8 +865,8 @@ static void cutset_init(ls_cutset *S, const ls_piece *P)
  * (or NULL) counts CUT_WORK per piece tried. */
 static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
 {
-    ls_piece tmp[5];
-    ls_poly tg[5];
+    ls_piece tmp[6];
+    ls_poly tg[6];
     uint32_t c = S->cur, o = 1 - c, nn = 0;
     int full = 0, moved = 0; /* (pieces are copied to the other buffer once Q cuts one: mostly it cuts none) */
     for (uint32_t a = 0; a < S->n; a++) {
@@ -1378,11 +1392,12 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
          * priority there, that do not draw alike (a street whose lanes or
          * width change where a side road ends on it), as lib/scene/tee_ends.c */
         uint32_t through2 = NO_STROKE;
+        const rs_network_leg *pb2 = NULL; /* the straight pair's second leg */
         double w = 0;
         if (nthrough == 0) {
             const rs_network_leg *pa = NULL, *pb = NULL;
             if (!rs__straight_pair(L, d, &pa, &pb) || !pa->major || !pb->major) continue;
-            tl = pa;
+            tl = pa, pb2 = pb;
             through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
             double w2 = 0;
             rs_roads_get(roads, pb->road, NULL, &w2, NULL, NULL);
@@ -1422,6 +1437,18 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
              * they stop at the side road's mouth; the rest run on */
             t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
             t->dx = cos(tl->angle), t->dy = sin(tl->angle);
+            {
+                /* a bent street: its direction from both legs, as the trim's */
+                const rs_network_leg *tl2 = NULL;
+                for (uint32_t j = 0; j < nthrough && j < TEE_MAX_THROUGH; j++)
+                    if (tls[j] == tl) tl2 = tls2[j];
+                if (nthrough == 0) tl2 = pb2;
+                double cx, cy;
+                if (tl2 && rs__through_dir(tl, tl2, &cx, &cy)) t->dx = cx, t->dy = cy;
+                t->lx[0] = cos(tl->angle), t->ly[0] = sin(tl->angle);
+                if (tl2) t->lx[1] = cos(tl2->angle), t->ly[1] = sin(tl2->angle);
+                else t->lx[1] = -t->lx[0], t->ly[1] = -t->ly[0];
+            }
             /* an end inside the surface, short of the centre line or past it */
             double nx = -t->dy, ny = t->dx;
             if (nx * cos(L[k].angle) + ny * sin(L[k].angle) > 0) nx = -nx, ny = -ny;
@@ -1430,6 +1457,35 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
     }
     *out = T;
     return RS_OK;
+}
+
+/* The clip lines of a side road's cut-back copy at a T (T: the end's
+ * tee, (wx, wy): the side road's direction from the node, (ex, ey): its
+ * end point): the copy cuts the through road's lines only beyond `keep`
+ * from its centre line, on the side road's side. The centre line passes
+ * C = end + off n (n: the through road's normal towards the side road).
+ * A straight street, or one bending away from the side road: one line
+ * parallel to its direction from both legs (away from the side road the
+ * legs only draw further from it); bending towards the side road: one line
+ * per leg (the band of both legs there ends where the two meet). */
+static void tee_keep_lines(const ls_tee *T, double wx, double wy, double ex, double ey, ls_surf *Qt)
+{
+    double nx = -T->dy, ny = T->dx;
+    if (nx * wx + ny * wy < 0) nx = -nx, ny = -ny;
+    double cx = ex + T->off * nx, cy = ey + T->off * ny;
+    double bx = T->lx[0] + T->lx[1], by = T->ly[0] + T->ly[1];
+    Qt->clip = 1;
+    Qt->cx = -nx, Qt->cy = -ny, Qt->cc = -(nx * cx + ny * cy + T->keep);
+    Qt->clip2 = 0;
+    Qt->cx2 = Qt->cy2 = Qt->cc2 = 0;
+    if (!(bx * wx + by * wy > 1e-6)) return;
+    for (int k = 0; k < 2; k++) {
+        double mx = -T->ly[k], my = T->lx[k];
+        if (mx * wx + my * wy < 0) mx = -mx, my = -my;
+        double c = -(mx * cx + my * cy + T->keep);
+        if (k == 0) Qt->cx = -mx, Qt->cy = -my, Qt->cc = c;
+        else Qt->clip2 = 1, Qt->cx2 = -mx, Qt->cy2 = -my, Qt->cc2 = c;
+    }
 }
 
 /* Surfaces of every road with a width, their index, and the road ends. */
@@ -1518,8 +1574,8 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
             Q.only = Q.skip = Q.only2 = Q.skip2 = NO_STROKE;
-            Q.clip = 0;
-            Q.cx = Q.cy = Q.cc = 0;
+            Q.clip = Q.clip2 = 0;
+            Q.cx = Q.cy = Q.cc = Q.cx2 = Q.cy2 = Q.cc2 = 0;
             /* a trimmed end at a T: the rectangle reaches as far as the
              * strip does and is cut by the far edge line */
             for (int e = 0; tend_of && e < 2; e++) {
@@ -1556,9 +1612,15 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             if (T && (at_end || at_start) && T->stroke != NO_STROKE) {
                 double sn = fabs(Q.ux * T->dy - Q.uy * T->dx); /* sine of the angle between the roads */
                 if (sn > 0.2) {
-                    double back = (T->keep + T->off) / sn;
-                    if (at_end) Qt.u1 = fmax(Q.len - back, Qt.u0);
-                    else Qt.u0 = fmin(back, Qt.u1);
+                    /* the copy keeps to the side road's side of the line
+                     * `keep` from the through road's centre line, parallel
+                     * to it (docs/network.md "The through road at a T"):
+                     * until 3 December 2026 it stopped (keep + off) / sine
+                     * back along the side road, square to it, so at an
+                     * oblique T its acute corner cut the centre line */
+                    double wx = at_end ? -Q.ux : Q.ux, wy = at_end ? -Q.uy : Q.uy; /* the side road, from the node */
+                    double ex = at_end ? v[m - 1].x : v[0].x, ey = at_end ? v[m - 1].y : v[0].y;
+                    tee_keep_lines(T, wx, wy, ex, ey, &Qt);
                     Qt.only = Q.skip = T->stroke;
                     Qt.only2 = Q.skip2 = T->stroke2;
                     tee = 1;

@@ -38,7 +38,8 @@ typedef struct rs__tee {
     uint32_t stroke;
     uint32_t stroke2; /* a through road of two strokes (two record ends going straight on that
                          do not draw alike), else RS__NO_STROKE */
-    double keep, dx, dy;
+    double keep, dx, dy;  /* (dx, dy): its direction from both legs (a bent street's chord) */
+    double lx[2], ly[2];  /* the through road's two legs' directions from the node */
     double off; /* how far the end lies past the through road's centre line (negative:
                    short of it; rs__tee_offset): the cut stops keep + off before the end */
 } rs__tee;

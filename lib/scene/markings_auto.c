@@ -85,7 +85,44 @@ typedef struct approach {
     uint8_t minor;   /* it gives way */
     uint8_t end;     /* a free end (the lines' cut runs on beyond it) */
     uint8_t arrows;  /* at a record's end: its turn:lanes arrows (OSM: the turns at the end of the way) */
+    double yu[3];    /* how far from the crossing along the road a point at lateral offset -ha, 0, +ha
+                        (ha: its half width) clears the streets it gives way to (yield_add; 0: none) */
 } approach;
+
+/* A street of half width hb that the approach gives way to, crossing it at
+ * the junction: its centre line along (mx, my); the approach leaves the
+ * crossing along (wx, wy), its lateral axis (t, + left of the points'
+ * direction) is (nx, ny), its half width ha. A point u along and t across
+ * clears the street's near edge when u |m x w| >= hb + c t (c: how the
+ * offset leans towards the street), so yu samples u + JUNCTION_TOL at t =
+ * -ha, 0, ha (the largest of the streets'; the sine no smaller than 0.2).
+ * Until 3 December 2026 the stop and give-way lines stood hb +
+ * JUNCTION_TOL from the crossing at every angle: at an oblique junction
+ * their acute corner stood inside the street, at 30 degrees across its
+ * centre line. */
+#define YIELD_MIN_SINE 0.2
+static void yield_add(approach *q, double ha, double hb, double mx, double my, double wx, double wy, double nx,
+                      double ny)
+{
+    double cw = mx * wy - my * wx, cn = mx * ny - my * nx, sn = fabs(cw);
+    if (!(sn >= YIELD_MIN_SINE)) sn = YIELD_MIN_SINE; /* (NaN too) */
+    double c = cw >= 0 ? -cn : cn;
+    for (int k = 0; k < 3; k++) {
+        double t = (k - 1) * ha, u = (hb + c * t) / sn + JUNCTION_TOL;
+        if (u > q->yu[k]) q->yu[k] = u;
+    }
+}
+
+/* yu at lateral offset t (between the samples: their chord, at least the
+ * convex largest of lines it samples) */
+static double yield_at(const approach *q, double ha, double t)
+{
+    if (!(ha > 0)) return q->yu[1];
+    double f = t / ha;
+    if (f < -1) f = -1;
+    if (f > 1) f = 1;
+    return f < 0 ? q->yu[1] + (q->yu[1] - q->yu[0]) * f : q->yu[1] + (q->yu[2] - q->yu[1]) * f;
+}
 
 /* Roads with a segment whose box (grown by the road's half width +
  * JUNCTION_TOL) meets a grid cell, ascending, once, per cell: a road end
@@ -159,6 +196,24 @@ static double nearest(const rs__road_local *r, double x, double y, double *s_out
 {
     double fx, fy;
     return nearest_foot(r, x, y, s_out, &fx, &fy);
+}
+
+/* Unit direction of road r at arc length s (its segment there, else the
+ * nearest of positive length); 0 when it has none. */
+static int dir_at(const rs__road_local *r, double s, double *dx, double *dy)
+{
+    size_t best = SIZE_MAX;
+    double bd = INFINITY;
+    for (size_t k = 0; k + 1 < r->n; k++) {
+        if (!(r->s[k + 1] > r->s[k])) continue;
+        double d = s < r->s[k] ? r->s[k] - s : s > r->s[k + 1] ? s - r->s[k + 1] : 0;
+        if (d < bd) bd = d, best = k;
+    }
+    if (best == SIZE_MAX) return 0;
+    double ex = r->x[best + 1] - r->x[best], ey = r->y[best + 1] - r->y[best], l = hypot(ex, ey);
+    if (!(l > 0)) return 0;
+    *dx = ex / l, *dy = ey / l;
+    return 1;
 }
 
 static int in_junction(const ctxa *A, size_t road, double lo, double hi)
@@ -555,7 +610,11 @@ static rs_result place_approach(ctxa *A, const rs_atlas *atlas, const approach *
             if (b > t1) t1 = b;
         }
         if (!(t1 > t0)) return RS_OK; /* a one-way road leaving here */
-        double edge = ap->s - arrive * ap->half; /* the junction area's near side */
+        /* the junction area's near side; at an oblique junction the stop or
+         * give-way line and the arrows stand back until the line's corner
+         * clears the streets the approach gives way to */
+        double need = fmax(yield_at(ap, hw, t0), yield_at(ap, hw, t1));
+        double edge = ap->s - arrive * (need > ap->half + 1e-9 ? need : ap->half);
         double dir = -arrive;                    /* away from the junction */
         if (ap->minor) {
             size_t before = *n;
@@ -864,7 +923,15 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     sc = se + (e ? 1 : -1) * (t > lim ? lim : t < -lim ? -lim : t);
                 }
             }
-            approach q = { i, sc, 0, (int8_t)(e ? 1 : -1), 0, (uint8_t)!linked, 1 };
+            approach q = { i, sc, 0, (int8_t)(e ? 1 : -1), 0, (uint8_t)!linked, 1, { 0, 0, 0 } };
+            /* A's direction from the junction and its lateral axis there */
+            double awx = 0, awy = 0;
+            {
+                size_t p0 = e ? a->n - 2 : 1;
+                double ul = hypot(a->x[p0] - x, a->y[p0] - y);
+                if (ul > 0) awx = (a->x[p0] - x) / ul, awy = (a->y[p0] - y) / ul;
+            }
+            double adx = e ? -awx : awx, ady = e ? -awy : awy; /* the points' direction */
             for (size_t c = 0; c < nmt && !r; c++) {
                 if (mt[c].out) continue;
                 size_t j = mt[c].road;
@@ -874,7 +941,12 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 if (ha > q.half) q.half = ha;
                 /* the lower priority gives way: class rank, priority_road,
                  * and a roundabout's ring over its arms (StVO 9a, MUTCD 2B.11) */
-                if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) q.minor = 1;
+                if (rs__road_priority(roads, i) < rs__road_priority(roads, j)) {
+                    double mx, my;
+                    q.minor = 1;
+                    if ((awx != 0 || awy != 0) && dir_at(&A.rl[j], mt[c].s, &mx, &my))
+                        yield_add(&q, wa / 2, wb / 2, mx, my, awx, awy, ady, -adx);
+                }
                 r = on_stroke(&A, i, sc - ha, sc + ha, 0, 0);
                 if (!r) r = on_stroke(&A, j, mt[c].s - hb, mt[c].s + hb, 0, 0);
             }
@@ -903,8 +975,13 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             if (!rs__leg_passes(net, L)) continue; /* (a free end) */
             if (A.rl[L->road].n < 2 || rs__road_non_car(roads, L->road)) continue;
             uint32_t k = net->stroke_of[L->road];
-            double h = 0;
+            double h = 0, wl = 0;
             int pmax = -1, first = 1;
+            rs_roads_get(roads, L->road, NULL, &wl, NULL, NULL);
+            int8_t arrive = (int8_t)(L->kind == RS_LEG_END || L->kind == RS_LEG_BACKWARD ? 1 : -1);
+            double lwx = cos(L->angle), lwy = sin(L->angle);
+            double ldx = arrive > 0 ? -lwx : lwx, ldy = arrive > 0 ? -lwy : lwy; /* the points' direction */
+            approach q = { L->road, 0, 0, arrive, 0, 0, (uint8_t)rs__is_end_leg(L), { 0, 0, 0 } };
             for (uint32_t b = 0; b < deg; b++) {
                 const rs_network_leg *M = &lg[b];
                 if (net->stroke_of[M->road] == k) {
@@ -916,13 +993,14 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 rs_roads_get(roads, M->road, NULL, &wb, NULL, NULL);
                 if (wb / 2 + JUNCTION_TOL > h) h = wb / 2 + JUNCTION_TOL;
                 if (M->priority > pmax) pmax = M->priority;
+                if (M->priority > L->priority)
+                    yield_add(&q, wl / 2, wb / 2, cos(M->angle), sin(M->angle), lwx, lwy, ldy, -ldx);
             }
             if (pmax < 0) continue; /* no other street */
             const rs__road_local *rl = &A.rl[L->road];
             double total = rl->s[rl->n - 1];
             double sl = L->kind == RS_LEG_START ? 0 : L->kind == RS_LEG_END ? total : L->s < 0 ? 0 : L->s > total ? total : L->s;
-            approach q = { L->road, sl, h, (int8_t)(L->kind == RS_LEG_END || L->kind == RS_LEG_BACKWARD ? 1 : -1),
-                           (uint8_t)(L->priority < pmax), 0, (uint8_t)rs__is_end_leg(L) };
+            q.s = sl, q.half = h, q.minor = (uint8_t)(L->priority < pmax);
             if (first) r = on_stroke(&A, L->road, sl - h, sl + h, 0, 0);
             void *arr = ap;
             if (!r) r = room_for_one(ctx, &arr, nap, &capap, sizeof *ap, 64);
