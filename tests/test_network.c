@@ -1544,7 +1544,7 @@ static void test_bent_tee_lines(void)
             add_cls(tee, 6.5, "secondary", side_xy, 2);
             image a = { 0 }, b = { 0 };
             CHECK(render(alone, NULL, &a) && render(tee, NULL, &b));
-            int inner = 0, mouth = 0;
+            int inner = 0, mouth = 0, beyond = 0;
             double keep = 7.5 / 2 - 2.0;
             for (uint32_t py = 0; a.rgba && b.rgba && py < a.h; py++)
                 for (uint32_t px = 0; px < a.w; px++) {
@@ -1554,6 +1554,9 @@ static void test_bent_tee_lines(void)
                     const uint8_t *p = a.rgba + 4 * ((size_t)py * a.w + px), *q = b.rgba + 4 * ((size_t)py * a.w + px);
                     int dd = 0;
                     for (int c = 0; c < 3; c++) dd = abs(p[c] - q[c]) > dd ? abs(p[c] - q[c]) : dd;
+                    /* outside both roads (the side road's strip trimmed at the far edge) */
+                    if (d > 7.5 / 2 + 0.25 && seg_d(x, y, side_xy[0], side_xy[1], side_xy[2], side_xy[3]) > 6.5 / 2 + 0.25)
+                        beyond = dd > beyond ? dd : beyond;
                     /* the edge line in the side road's mouth (away from its corners) */
                     if (d > 7.5 / 2 - 0.5 && d < 7.5 / 2 - 0.1 &&
                         seg_d(x, y, side_xy[0], side_xy[1], side_xy[2], side_xy[3]) < 6.5 / 2 - 0.75)
@@ -1562,14 +1565,16 @@ static void test_bent_tee_lines(void)
                     inner = dd > inner ? dd : inner;
                 }
             printf("T on a street bent by %.0f degrees, side road at %.0f (%s): inner lines differ by %d/255, the "
-                   "edge line in the mouth by %d/255\n",
-                   bend[bi], side_deg[bi], rev ? "reversed" : "forward", inner, mouth);
+                   "edge line in the mouth by %d/255, beyond both roads by %d/255\n",
+                   bend[bi], side_deg[bi], rev ? "reversed" : "forward", inner, mouth, beyond);
             worst_all = inner > worst_all ? inner : worst_all;
             if (bi == 3 || bi == 7) { /* (RS_NETWORK_PPM: pictures of two of them) */
                 char nm[64];
                 snprintf(nm, sizeof nm, "network_bent_tee_%d%s.ppm", bi, rev ? "r" : "");
                 save_ppm(nm, &b);
             }
+            CHECKF(beyond <= 8, "T on a bent street (%.0f, side at %.0f): %d/255 outside both roads", bend[bi],
+                   side_deg[bi], beyond);
             CHECKF(mouth > 60, "T on a bent street (%.0f, side at %.0f): the edge line runs on over the mouth (%d/255)",
                    bend[bi], side_deg[bi], mouth);
             free(a.rgba);
