@@ -1283,7 +1283,9 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   its trimmed ends at a T (docs/network.md "Ends at a T": no round cap,
  *   the strip runs on to the through road's far edge line n.p = c and
  *   stops there, casing too): nx, ny, c for its start, then for its end
- *   (0, 0, 0: a round cap), and how far such a strip reaches beyond the
+ *   (0, 0, 0: a round cap, also where every capsule of the road, casing
+ *   included, stays short of the line, as in the CPU splat), and how far
+ *   such a strip reaches beyond the
  *   road's capsule (the index lists the road that much further), 0.
  * - band: RS_GPU_BAND_FLOATS per line of a style (paint order): offset T,
  *   width W, phase, period (0: solid); r, g, b (0..255), a (0..1); dash

@@ -164,6 +164,14 @@ check "oblique T: shader render" sh -c "'$BIN' render $N --quiet --ortho --light
 check "oblique T: the CPU splat keeps the primary's inner band (max <= 8/255)" py band "$T/oc.png" "$T/om.png" 138 162 8
 check "oblique T: the shader keeps the primary's inner band (max <= 8/255)" py band "$T/os.png" "$T/oms.png" 138 162 8
 check "oblique T: the shader equals the CPU splat" xcheck oblique "$T/os.png" "$T/oc.png"
+# a side road ending where the primary bends (35 degrees): nothing north of
+# the primary's far edge (rows 0..59, y < 6 m) in either render (before 3
+# December 2026 the shader ran the side road's flat strip on to the line
+# parallel to the bend's chord: asphalt up to 1.2 m past the far edge, 53/255)
+printf 'road Hauptstr width 7.5 class=primary\n2 10\n45 10\n77.8 33\nend\nroad Nebenstr width 6.5 class=secondary\n45 29\n45 10\nend\n' > "$T/bent.txt"
+check "bent T: CPU splat and shader render" sh -c "'$BIN' $N --quiet '$T/caps-dem.pgm' '$T/bent.txt' '$T/bc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$T/bent.txt' '$T/bs.png'"
+check "bent T: no paint past the primary's far edge in the shader (max <= 8/255)" py band "$T/bs.png" "$T/bc.png" 0 60 8
+check "bent T: the shader equals the CPU splat" xcheck bent "$T/bs.png" "$T/bc.png"
 C="--cell-size 5 --z-scale 0.01 --texels 4"
 check "shader: city CPU splat" "$BIN" $C --quiet "$EX/dem.pgm" "$EX/roads.txt" "$T/cc.png"
 # Lit shader mode: the terrain colour comes from the splatter's layers

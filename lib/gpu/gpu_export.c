@@ -249,6 +249,14 @@ static void ge_tee_clips(float *rd, const rs__road_local *rl, const rs__tee_end 
         double dx = rl->x[a] - rl->x[b], dy = rl->y[a] - rl->y[b], l = hypot(dx, dy);
         double sn = (t->nx * dx + t->ny * dy) / l, cs = fabs(t->nx * dy - t->ny * dx) / l;
         if (!(sn > 0.1)) continue;
+        /* a record whose capsules (casing included) all stay short of the
+         * line keeps its round cap, as the CPU's field does
+         * (tee_end_unchanged): where the through street bends, the flat
+         * strip run on to the line (parallel to the street's chord) reached
+         * up to 1.2 m past its far edge on the outer side */
+        double cl = t->nx * rl->x[a] + t->ny * rl->y[a] + t->far, reach = -INFINITY;
+        for (size_t k = 0; k < m; k++) reach = fmax(reach, t->nx * rl->x[k] + t->ny * rl->y[k]);
+        if (reach + hw + casing <= cl) continue;
         int ge = rev ? !e : e;
         rd[32 + 3 * ge] = (float)t->nx;
         rd[33 + 3 * ge] = (float)t->ny;
