@@ -260,7 +260,7 @@ static void ge_tee_clips(float *rd, const rs__road_local *rl, const rs__tee_end 
         int ge = rev ? !e : e;
         rd[32 + 3 * ge] = (float)t->nx;
         rd[33 + 3 * ge] = (float)t->ny;
-        rd[34 + 3 * ge] = ge_float(t->nx * rl->x[a] + t->ny * rl->y[a] + t->far);
+        rd[34 + 3 * ge] = ge_float(cl);
         for (int k = 0; k < 2; k++) {
             double r = hw + (k ? casing : 0), ub = (t->far + r * cs) / sn;
             rd[38] = fmaxf(rd[38], ge_float(hypot(ub, r) - r));

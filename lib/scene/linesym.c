@@ -1356,6 +1356,15 @@ static void junc_free(rs_ctx *ctx, ls_junc *J)
 /* Major roads passing one node looked at (more: no T there) */
 #define TEE_MAX_THROUGH 4
 
+/* The direction of the street passing on leg a (and b, its second leg
+ * there, or NULL) into *tx, *ty: the chord of both legs (rs__through_dir),
+ * else a's own direction; 0 when both legs leave the same way. */
+static int street_dir(const rs_network_leg *a, const rs_network_leg *b, double *tx, double *ty)
+{
+    *tx = cos(a->angle), *ty = sin(a->angle);
+    return !b || rs__through_dir(a, b, tx, ty);
+}
+
 rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee **out)
 {
     *out = NULL;
@@ -1371,7 +1380,7 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
         }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd], through = NO_STROKE, nthrough = 0;
-        const rs_network_leg *tl = NULL, *tls[TEE_MAX_THROUGH], *tls2[TEE_MAX_THROUGH];
+        const rs_network_leg *tl = NULL, *tl2 = NULL, *tls[TEE_MAX_THROUGH], *tls2[TEE_MAX_THROUGH];
         if (d < 3) continue;
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road, st = net->stroke_of[r];
@@ -1392,12 +1401,11 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
          * priority there, that do not draw alike (a street whose lanes or
          * width change where a side road ends on it), as lib/scene/tee_ends.c */
         uint32_t through2 = NO_STROKE;
-        const rs_network_leg *pb2 = NULL; /* the straight pair's second leg */
         double w = 0;
         if (nthrough == 0) {
             const rs_network_leg *pa = NULL, *pb = NULL;
             if (!rs__straight_pair(L, d, &pa, &pb) || !pa->major || !pb->major) continue;
-            tl = pa, pb2 = pb;
+            tl = pa, tl2 = pb;
             through = net->stroke_of[pa->road], through2 = net->stroke_of[pb->road];
             double w2 = 0;
             rs_roads_get(roads, pb->road, NULL, &w2, NULL, NULL);
@@ -1405,8 +1413,10 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
             if (w2 < w) w = w2;
         } else if (nthrough > TEE_MAX_THROUGH)
             continue;
-        else if (nthrough == 1)
+        else if (nthrough == 1) {
+            tl2 = tls2[0]; /* (tl is tls[0]) */
             rs_roads_get(roads, tl->road, NULL, &w, NULL, NULL);
+        }
         for (uint32_t k = 0; k < d; k++) {
             uint32_t r = L[k].road;
             if (!rs__is_end_leg(&L[k]) || net->stroke_of[r] == through || net->stroke_of[r] == through2) continue;
@@ -1421,10 +1431,9 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
                     /* the street's direction from its two legs, as the
                      * trim's (a bent street: one leg's angle could pick
                      * another street than the trim at a near-tie) */
-                    double tx = cos(tls[j]->angle), ty = sin(tls[j]->angle), sn = -1;
-                    if (!tls2[j] || rs__through_dir(tls[j], tls2[j], &tx, &ty)) sn = rs__meet_sine(wx, wy, tx, ty);
+                    double tx, ty, sn = street_dir(tls[j], tls2[j], &tx, &ty) ? rs__meet_sine(wx, wy, tx, ty) : -1;
                     own |= net->stroke_of[tls[j]->road] == net->stroke_of[r];
-                    if (sn > best) best = sn, tl = tls[j];
+                    if (sn > best) best = sn, tl = tls[j], tl2 = tls2[j];
                 }
                 if (own) continue;
                 through = net->stroke_of[tl->road];
@@ -1436,19 +1445,11 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
             /* lines within 2 m of the through road's edges are edge lines:
              * they stop at the side road's mouth; the rest run on */
             t->keep = fmax(0.5 * w - TEE_EDGE_ZONE, 0);
-            t->dx = cos(tl->angle), t->dy = sin(tl->angle);
-            {
-                /* a bent street: its direction from both legs, as the trim's */
-                const rs_network_leg *tl2 = NULL;
-                for (uint32_t j = 0; j < nthrough && j < TEE_MAX_THROUGH; j++)
-                    if (tls[j] == tl) tl2 = tls2[j];
-                if (nthrough == 0) tl2 = pb2;
-                double cx, cy;
-                if (tl2 && rs__through_dir(tl, tl2, &cx, &cy)) t->dx = cx, t->dy = cy;
-                t->lx[0] = cos(tl->angle), t->ly[0] = sin(tl->angle);
-                if (tl2) t->lx[1] = cos(tl2->angle), t->ly[1] = sin(tl2->angle);
-                else t->lx[1] = -t->lx[0], t->ly[1] = -t->ly[0];
-            }
+            /* a bent street: its direction from both legs, as the trim's */
+            street_dir(tl, tl2, &t->dx, &t->dy);
+            t->lx[0] = cos(tl->angle), t->ly[0] = sin(tl->angle);
+            if (tl2) t->lx[1] = cos(tl2->angle), t->ly[1] = sin(tl2->angle);
+            else t->lx[1] = -t->lx[0], t->ly[1] = -t->ly[0];
             /* an end inside the surface, short of the centre line or past it */
             double nx = -t->dy, ny = t->dx;
             if (nx * cos(L[k].angle) + ny * sin(L[k].angle) > 0) nx = -nx, ny = -ny;
