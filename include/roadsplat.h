@@ -1069,7 +1069,9 @@ typedef struct rs_splat_profile {
     double coverage_ms, surface_ms, overlays_ms, composite_ms;
     uint64_t pixels;       /* pixels rendered */
     uint64_t road_pixels;  /* pixels with some road (weight > 0) */
-    uint64_t mark_tests;   /* road pixels inside the markings' row spans (pixel, marking pairs examined) */
+    uint64_t mark_tests;   /* road pixels inside the markings' row spans (pixel, marking pairs examined);
+                              for a small marking whose blends the grid made (docs/markings.md): its
+                              blends on road pixels */
     uint64_t mark_pixels;  /* blends: a pixel under two markings counts twice */
 } rs_splat_profile;
 

@@ -368,6 +368,157 @@ static void test_two_colours(void)
     rs_atlas_free(ctx, atlas);
 }
 
+/* Every pixel of rows [0, H) of an image W wide painted by the markings
+ * stage, in pieces `pw` wide and `rows` high, over a base of 0 with every
+ * pixel road except where (x + 3 y) % 7 == 0; planar rows as the stage
+ * writes them, the whole image's planes concatenated. */
+static float *paint_all(const rs__markings *mk, uint32_t W, uint32_t H, uint32_t pw, uint32_t rows)
+{
+    float *out = calloc((size_t)W * H * 3, sizeof *out), *sc = malloc((size_t)pw * rows * 3 * sizeof *sc);
+    uint16_t *q = malloc((size_t)pw * rows * sizeof *q);
+    if (!out || !sc || !q) {
+        free(out);
+        free(sc);
+        free(q);
+        return NULL;
+    }
+    for (uint32_t y = 0; y < H; y += rows)
+        for (uint32_t x = 0; x < W; x += pw) {
+            rs__piece p;
+            memset(&p, 0, sizeof p);
+            p.x0 = x;
+            p.y0 = y;
+            p.w = W - x < pw ? W - x : pw;
+            p.rows = H - y < rows ? H - y : rows;
+            p.q = q;
+            p.sc = sc;
+            for (uint32_t r = 0; r < p.rows; r++)
+                for (uint32_t k = 0; k < p.w; k++) q[r * p.w + k] = (x + k + 3 * (y + r)) % 7 ? 65535 : 0;
+            memset(sc, 0, (size_t)p.w * p.rows * 3 * sizeof *sc);
+            rs__markings_paint(mk, &p);
+            for (uint32_t r = 0; r < p.rows; r++)
+                for (int c = 0; c < 3; c++)
+                    memcpy(out + ((size_t)(y + r) * 3 + (size_t)c) * W + x, sc + ((size_t)r * 3 + (size_t)c) * p.w,
+                           p.w * sizeof *sc);
+        }
+    free(sc);
+    free(q);
+    return out;
+}
+
+/* Small markings keep their blends from the build (docs/markings.md
+ * "Small markings"): at 1.25 m pixels every marking of the built-in atlas
+ * and a two-colour one, on straight and curved roads at many angles, paints
+ * the same bits from its kept blends as painted per piece, in pieces of
+ * odd sizes (1-pixel columns, pieces that cut a marking), with pixels that
+ * are not road left alone; at 0.1 m the same scene keeps no blends of its
+ * larger markings. */
+static void test_kept_blends(void)
+{
+    static uint8_t px[16 * 16 * 4];
+    for (int j = 0; j < 16; j++)
+        for (int i = 0; i < 16; i++) {
+            uint8_t *q = px + (j * 16 + i) * 4;
+            q[0] = i < 8 ? 255 : 0;
+            q[1] = i < 8 ? 0 : 255;
+            q[2] = (uint8_t)(16 * j);
+            q[3] = (uint8_t)(i < 4 ? 0 : 255);
+        }
+    rs_image img = { 16, 16, px };
+    const char *idx = "two 0 0 16 16 2.5 1.2\n";
+    rs_atlas *two = NULL;
+    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &two) == RS_OK);
+    rs_atlas *def = NULL;
+    CHECK(rs_atlas_default(ctx, &def) == RS_OK);
+    if (!two || !def) return;
+    rs_dem *dem = flat_dem(121, 101, 1.0);
+    for (int pass = 0; pass < 2; pass++) {
+        const rs_atlas *atlas = pass ? two : def;
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        size_t nr = 0;
+        for (int k = 0; k < 9; k++) { /* straight roads through the middle */
+            double th = 0.37 * k + 0.05, xy[4] = { 60 - 55 * cos(th), 50 - 45 * sin(th), 60 + 55 * cos(th), 50 + 45 * sin(th) };
+            CHECK(rs_roads_add(ctx, roads, "s", 8, xy, 2) == RS_OK);
+            nr++;
+        }
+        double arc[2 * 13];
+        for (int k = 0; k < 13; k++) {
+            double a = PI * k / 12;
+            arc[2 * k] = 60 + 30 * cos(a);
+            arc[2 * k + 1] = 50 - 30 * sin(a);
+        }
+        CHECK(rs_roads_add(ctx, roads, "c", 8, arc, 13) == RS_OK);
+        nr++;
+        size_t nt = rs_atlas_count(atlas);
+        for (int k = 0; k < 160; k++) {
+            const char *name = NULL;
+            CHECK(rs_atlas_get(atlas, (size_t)k % nt, &name, NULL, NULL, NULL, NULL) == RS_OK);
+            rs_mark m = { name, (size_t)k % nr, 6.0 + 0.61 * k, (k % 5 - 2) * 0.9, 0, 0, k % 2, 0 };
+            CHECK(rs_roads_add_mark(ctx, roads, &m) == RS_OK);
+        }
+        for (int fine = 0; fine < 2; fine++) {
+            rs_splat_options o;
+            memset(&o, 0, sizeof o);
+            o.texels = fine ? 10 : 1; /* 0.1 m or 1 m pixels */
+            if (!fine) {
+                /* 1.25 m: a DEM of 5 m cells and 4 texels */
+                rs_dem_frame fr = { 5.0, 1, 0, 0 };
+                CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+                o.texels = 4;
+            } else {
+                rs_dem_frame fr = { 1.0, 1, 0, 0 };
+                CHECK(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+            }
+            o.markings.atlas = atlas;
+            o.markings.no_auto = 1;
+            rs__markings *mk = NULL;
+            CHECK(rs__markings_build(ctx, dem, roads, &o, NULL, &mk) == RS_OK && mk);
+            if (!mk) continue;
+            size_t kept = 0, live = 0;
+            for (size_t i = 0; i < mk->n; i++) {
+                if (mk->m[i].pre0 == SIZE_MAX) live++;
+                else kept++;
+            }
+            const uint32_t W = 120 * o.texels, H = 100 * o.texels;
+            if (!fine) {
+                CHECKF(kept == mk->n && mk->npre > 100, "%s atlas: %zu of %zu markings keep %zu blends", pass ? "two-colour" : "built-in",
+                       kept, mk->n, mk->npre);
+                float *a = paint_all(mk, W, H, W, 4);
+                float *b = paint_all(mk, W, H, 1, 1);
+                float *c = paint_all(mk, W, H, 37, 3);
+                /* the same markings painted per piece */
+                size_t *keep0 = malloc(mk->n * sizeof *keep0);
+                for (size_t i = 0; keep0 && i < mk->n; i++) {
+                    keep0[i] = mk->m[i].pre0;
+                    mk->m[i].pre0 = SIZE_MAX;
+                }
+                float *d = paint_all(mk, W, H, W, 4);
+                for (size_t i = 0; keep0 && i < mk->n; i++) mk->m[i].pre0 = keep0[i];
+                size_t n = (size_t)W * H * 3, nz = 0;
+                for (size_t i = 0; d && i < n; i++) nz += d[i] != 0;
+                CHECK(a && b && c && d && nz > 100);
+                CHECKF(a && d && memcmp(a, d, n * sizeof *a) == 0, "%s atlas: kept blends differ from the paint",
+                       pass ? "two-colour" : "built-in");
+                CHECK(a && b && memcmp(a, b, n * sizeof *a) == 0);
+                CHECK(a && c && memcmp(a, c, n * sizeof *a) == 0);
+                free(a);
+                free(b);
+                free(c);
+                free(d);
+                free(keep0);
+            } else {
+                CHECKF(live > 0, "0.1 m: %zu of %zu markings painted per piece", live, mk->n);
+            }
+            rs__markings_free(ctx, mk);
+        }
+        rs_roads_free(ctx, roads);
+    }
+    rs_atlas_free(ctx, two);
+    rs_atlas_free(ctx, def);
+    rs_dem_free(ctx, dem);
+}
+
 /* Per-pixel work does not grow with the number of markings elsewhere: a
  * window around one marking of a long road examines the same (pixel,
  * marking) pairs and paints the same bytes whether the road carries that
@@ -838,6 +989,7 @@ int main(void)
     test_exact();
     test_word_shift();
     test_two_colours();
+    test_kept_blends();
     test_curve();
     test_local_work();
     test_errors();

@@ -23,6 +23,8 @@
 #define MAX_INDEX_ENTRIES (1u << 26)
 #define MAX_INDEX_CELLS (1u << 22)
 
+static rs_result pre_build(rs_ctx *ctx, rs__markings *mk);
+
 rs_result rs__placement_push(rs_ctx *ctx, rs__placement **pl, size_t *n, size_t *cap, const rs__placement *p)
 {
     if (*n == *cap) {
@@ -79,6 +81,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->pts);
     rs__free(ctx, mk->parts);
     rs__free(ctx, mk->fps);
+    rs__free(ctx, mk->pre);
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
     rs__free(ctx, mk->pl);
@@ -893,6 +896,12 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
             r = build_index(ctx, mk, map_w, map_h);
             if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory for the markings index");
         }
+        if (!r && mk->n) {
+            uint64_t iw = (uint64_t)(dem->width - 1) * o->texels, ih = (uint64_t)(dem->height - 1) * o->texels;
+            mk->img_w = iw <= UINT32_MAX ? (uint32_t)iw : 0; /* 0: none kept */
+            mk->img_h = ih <= UINT32_MAX ? (uint32_t)ih : 0;
+            r = pre_build(ctx, mk);
+        }
     }
     if (r || mk->n == 0) {
         rs__free(ctx, pl);
@@ -1111,15 +1120,14 @@ static inline double kern_integral(const mk_kern *kn, double U, double V)
 }
 #endif
 
-/* The sample at (U, V) (inside the support) blended over pixel o of a
- * planar row (row length w). An alpha-only type blends a transparent
- * sample too, without a branch: keep 1, colour 0, o unchanged. */
+/* The sample at (U, V) (inside the support) as the paint blends it: c4
+ * premultiplied; 0 when it blends nothing for sure. An alpha-only type
+ * gives a transparent sample too, without a branch: keep 1, colour 0. */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void kern_put(const mk_kern *kn, double U, double V, float *o, size_t w, uint64_t *painted)
+static inline int kern_sample(const mk_kern *kn, double U, double V, float c4[4])
 {
-    float c4[4];
     if (kn->t) {
 #if defined(__SSE2__)
         double a = kern_integral(kn, U, V) * kn->ia * (1.0 / 255);
@@ -1132,15 +1140,64 @@ static inline void kern_put(const mk_kern *kn, double U, double V, float *o, siz
         c4[1] = (float)(kn->col[1] * a);
         c4[2] = (float)(kn->col[2] * a);
         c4[3] = (float)a;
-    } else {
-        sample4(kn->m, kn->fp, U, V, c4);
-        if (!(c4[3] > 0)) return;
+        return 1;
     }
+    sample4(kn->m, kn->fp, U, V, c4);
+    return c4[3] > 0;
+}
+
+/* c4 blended over pixel o of a planar row (row length w). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void blend(const float c4[4], float *o, size_t w, uint64_t *painted)
+{
     *painted += c4[3] > 0;
     float keep = 1.0f - c4[3];
     o[0] = o[0] * keep + c4[0];
     o[w] = o[w] * keep + c4[1];
     o[2 * w] = o[2 * w] * keep + c4[2];
+}
+
+/* What a marking's pixels go to: blended over the piece, or (rc) kept as
+ * the marking's blends made in the build. */
+typedef struct mk_rec {
+    rs_ctx *ctx;
+    rs__mk_pre *e;
+    size_t n, cap, max;
+    int full; /* out of memory or past max: the marking stays painted per piece */
+} mk_rec;
+
+static void rec_put(mk_rec *rc, const mk_kern *kn, double U, double V, long x, long y)
+{
+    float c4[4];
+    if (!kern_sample(kn, U, V, c4)) return;
+    /* o (1 - 0) + 0 = o: nothing to keep */
+    if (!(c4[3] != 0 || c4[0] != 0 || c4[1] != 0 || c4[2] != 0)) return;
+    if (rc->n == rc->cap) {
+        size_t nc = rc->cap ? 2 * rc->cap : 4096, bytes;
+        if (nc > rc->max) nc = rc->max;
+        rs__mk_pre *ne = nc > rc->n && rs__mul_size(nc, sizeof *ne, &bytes) ? rs__realloc(rc->ctx, rc->e, bytes) : NULL;
+        if (!ne) {
+            rc->full = 1;
+            return;
+        }
+        rc->e = ne;
+        rc->cap = nc;
+    }
+    rs__mk_pre *e = &rc->e[rc->n++];
+    e->x = (uint32_t)x;
+    e->y = (uint32_t)y;
+    memcpy(e->c, c4, sizeof e->c);
+}
+
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void kern_put(const mk_kern *kn, double U, double V, float *o, size_t w, uint64_t *painted)
+{
+    float c4[4];
+    if (kern_sample(kn, U, V, c4)) blend(c4, o, w, painted);
 }
 
 /* Row spans are widened by this many pixels: far above the rounding of
@@ -1223,8 +1280,13 @@ static int box_rows(const rs__mk *m, const rs__piece *p, double ipix, long *r0, 
     return *r0 <= *r1;
 }
 
-/* A marking on a one-segment stretch: U, V affine in the pixel centre. */
-static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+/* A marking on a one-segment stretch: U, V affine in the pixel centre.
+ * rc: its pixels kept (the piece is the whole image; no q, no sc). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void each_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests,
+                                 uint64_t *painted, mk_rec *rc)
 {
     const size_t w = p->w;
     const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
@@ -1250,23 +1312,34 @@ static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p
             k1 = l1 < k1 ? l1 : k1;
             if (k0 > k1) continue;
         }
-        float *sc = p->sc + (size_t)r * w * 3;
-        const uint16_t *q = p->q + (size_t)r * w;
+        float *sc = rc ? NULL : p->sc + (size_t)r * w * 3;
+        const uint16_t *q = rc ? NULL : p->q + (size_t)r * w;
         for (long k = k0; k <= k1; k++) {
-            if (q[k] == 0) continue;
+            if (!rc && q[k] == 0) continue;
             ++*tests;
             double gx = gx0 + (double)k + 0.5;
             double u = ur + bu * gx, v = vr + bv * gx;
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            kern_put(&kn, u, v, sc + k, w, painted);
+            if (rc) rec_put(rc, &kn, u, v, (long)p->x0 + k, (long)p->y0 + r);
+            else kern_put(&kn, u, v, sc + k, w, painted);
         }
     }
 }
 
+static void paint_straight(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+{
+    each_straight(mk, m, p, tests, painted, NULL);
+}
+
 #define MAX_ROW_SEG 8
 
-/* A marking on a curved stretch: the nearest point per pixel. */
-static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+/* A marking on a curved stretch: the nearest point per pixel (rc: as
+ * each_straight). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void each_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests,
+                               uint64_t *painted, mk_rec *rc)
 {
     const size_t w = p->w;
     const double pix = mk->pix, gx0 = (double)p->x0, wd = (double)w;
@@ -1297,10 +1370,10 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
             st0[k] = -A[0] * A[4] - dy * A[3];
             st1[k] = A[4] * pix;
         }
-        float *sc = p->sc + (size_t)r * w * 3;
-        const uint16_t *q = p->q + (size_t)r * w;
+        float *sc = rc ? NULL : p->sc + (size_t)r * w * 3;
+        const uint16_t *q = rc ? NULL : p->q + (size_t)r * w;
         for (long k = k0; k <= k1; k++) {
-            if (q[k] == 0) continue;
+            if (!rc && q[k] == 0) continue;
             ++*tests;
             double gx = gx0 + (double)k + 0.5, u, v;
             size_t seg;
@@ -1359,10 +1432,84 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
                 kern_init(&kn, m, fp);
                 fp_seg = seg;
             }
-            kern_put(&kn, u, v, sc + k, w, painted);
+            if (rc) rec_put(rc, &kn, u, v, (long)p->x0 + k, (long)p->y0 + r);
+            else kern_put(&kn, u, v, sc + k, w, painted);
         }
     }
 }
+
+static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+{
+    each_curved(mk, m, p, tests, painted, NULL);
+}
+
+/* A marking's blends made in the build, over the piece's road pixels. */
+static void paint_pre(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
+{
+    const rs__mk_pre *e = mk->pre + m->pre0, *end = e + m->npre;
+    const uint32_t y0 = p->y0, y1 = p->y0 + p->rows, x0 = p->x0;
+    const size_t w = p->w;
+    while (e < end && e->y < y0) e++;
+    for (; e < end && e->y < y1; e++) {
+        size_t k = (size_t)(uint32_t)(e->x - x0); /* left of the piece: wraps past w */
+        if (k >= w) continue;
+        size_t at = (size_t)(e->y - y0) * w;
+        if (p->q[at + k] == 0) continue;
+        ++*tests;
+        blend(e->c, p->sc + 3 * at + k, w, painted);
+    }
+}
+
+/* Small markings (a box of at most PRE_MAX_PX pixels) keep their blends
+ * from the build, up to PRE_MAX entries in all (24 bytes each): the
+ * sprite's integral is the paint's main cost at coarse pixels, where a
+ * marking covers a few pixels, and a prepared splatter paints many
+ * windows and tiles. The same function makes them as the paint does, so
+ * the bytes are the same. */
+#define PRE_MAX_PX 256.0
+#define PRE_MAX ((size_t)1 << 20)
+
+static rs_result pre_build(rs_ctx *ctx, rs__markings *mk)
+{
+    rs__piece P;
+    memset(&P, 0, sizeof P);
+    P.w = mk->img_w;
+    P.rows = mk->img_h;
+    mk_rec rc = { ctx, NULL, 0, 0, PRE_MAX, 0 };
+    const double ipix = 1 / mk->pix;
+    for (size_t i = 0; i < mk->n; i++) {
+        rs__mk *m = &mk->m[i];
+        m->pre0 = SIZE_MAX;
+        m->npre = 0;
+        if ((i & 1023) == 1023 && rs__poll(ctx)) {
+            rs__free(ctx, rc.e);
+            for (size_t k = 0; k < mk->n; k++) mk->m[k].pre0 = SIZE_MAX;
+            return RS_ERR_CANCELLED;
+        }
+        if (rc.full || P.w == 0 || P.rows == 0) continue;
+        double area = ((m->by1 - m->by0) * ipix + 2) * ((m->bx1 - m->bx0) * ipix + 2);
+        if (!(area <= PRE_MAX_PX) || (double)(rc.n) + area > (double)PRE_MAX) continue;
+        size_t n0 = rc.n;
+        uint64_t t = 0, pt = 0;
+        if (m->npt == 2) each_straight(mk, m, &P, &t, &pt, &rc);
+        else each_curved(mk, m, &P, &t, &pt, &rc);
+        if (rc.full) {
+            rc.n = n0;
+            continue;
+        }
+        m->pre0 = n0;
+        m->npre = rc.n - n0;
+    }
+    if (rc.n < rc.cap) {
+        rs__mk_pre *ne = rs__realloc(ctx, rc.e, (rc.n ? rc.n : 1) * sizeof *ne);
+        if (ne) rc.e = ne;
+    }
+    mk->pre = rc.e;
+    mk->npre = rc.n;
+    mk->bytes += rc.n * sizeof *rc.e;
+    return RS_OK;
+}
+
 
 static void sort_u32(uint32_t *a, size_t n, uint32_t *tmp)
 {
@@ -1478,7 +1625,8 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
             if (k + PREFETCH_AHEAD < n) prefetch_mk(&mk->m[mk->at[cand[k + PREFETCH_AHEAD]]]);
             if (k + 2 < n) prefetch_stretch(mk, &mk->m[mk->at[cand[k + 2]]]);
             const rs__mk *m = &mk->m[mk->at[cand[k]]];
-            if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
+            if (m->pre0 != SIZE_MAX) paint_pre(mk, m, p, &tests, &painted);
+            else if (m->npt == 2) paint_straight(mk, m, p, &tests, &painted);
             else paint_curved(mk, m, p, &tests, &painted);
         }
         if (hi == UINT32_MAX) break;

@@ -65,6 +65,9 @@ typedef struct rs__mk {
     size_t part, nparts;       /* curved: its span parts, parts[part..part+nparts-1] */
     size_t fpi;                /* curved: its segments' footprints, fps[fpi..fpi+npt-2] */
     double by0, by1;           /* rows of the box */
+    /* its blends made in the build (mk->pre[pre0 .. pre0 + npre), by row,
+     * then column); pre0 == SIZE_MAX: painted per piece */
+    size_t pre0, npre;
     /* level-0 texel coordinates U (across), V (along), texel i covering
      * [i, i + 1): the sample is transparent outside [ulo, uhi) x [vlo, vhi) */
     double ulo, uhi, vlo, vhi;
@@ -86,6 +89,15 @@ typedef struct rs__mk {
     double bx0, bx1;           /* columns of the box (metres) */
     uint32_t rec;              /* its place in record order (mk->at[rec] is this record) */
 } rs__mk;
+
+/* One pixel of a small marking, as the paint blends it (o = o (1 - a) +
+ * c): made once in the build, so a splat of many windows or tiles does
+ * not integrate the sprite again for each (docs/markings.md "Small
+ * markings"). */
+typedef struct rs__mk_pre {
+    uint32_t x, y;             /* pixel of the whole image */
+    float c[4];                /* premultiplied colour, alpha */
+} rs__mk_pre;
 
 typedef struct rs__mk_ref {
     float x0, y0, x1, y1; /* the marking's box, rounded outwards */
@@ -122,6 +134,9 @@ typedef struct rs__markings {
     double *pts;               /* RS__MK_PT doubles per point */
     double *parts;             /* RS__MK_PART doubles per span part of a curved marking */
     rs__mk_fp *fps;            /* per segment of a curved marking's stretch: the footprint of its direction */
+    rs__mk_pre *pre;           /* the small markings' blends (rs__mk.pre0) */
+    size_t npre;
+    uint32_t img_w, img_h;     /* the whole image, pixels */
     double pix;                /* output pixel, metres */
     double cell;               /* index cell, metres */
     uint32_t gw, gh;

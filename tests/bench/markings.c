@@ -17,6 +17,7 @@
 #include <time.h>
 
 #define RUNS 15
+#define BUILDS 3
 
 static double clock_ms(void *user)
 {
@@ -140,12 +141,15 @@ int main(int argc, char **argv)
                 "road, half of them flipped; explicit, no automatic ones). `rs_splat_window` on a prepared "
                 "splatter, one thread, fastest of %d runs, the cases interleaved run by run. Tests = (road "
                 "pixel, marking) pairs in the marking's row spans; blends = those it painted (alpha > 0; a "
-                "pixel under two markings counts twice).\n\n"
+                "pixel under two markings counts twice). Small markings (a box of at most 256 pixels: all of "
+                "them at 1.25 m) keep their blends from the build (docs/markings.md \"Small markings\"): for "
+                "them, tests = kept blends on road pixels. Build = `rs_splatter_create`, fastest of %d, which "
+                "makes those blends; build + splat = one of each against the same without markings.\n\n"
                 "| pixels | markings | splat ms | overlays ms | / no markings | the same in CPU time | tests per road "
-                "pixel | blends | build ms |\n|---|---|---|---|---|---|---|---|---|\n",
-            sc.nroads, RUNS);
+                "pixel | blends | build ms | build + splat / no markings |\n|---|---|---|---|---|---|---|---|---|---|\n",
+            sc.nroads, RUNS, BUILDS);
     fprintf(csv, "texels,markings,splat_ms,overlays_ms,tests,painted,road_pixels,build_ms\n");
-    double ratio10k[2] = { 0, 0 }, tpp[2][3];
+    double ratio10k[2] = { 0, 0 }, whole10k[2] = { 0, 0 }, build10k[2][2] = { { 0, 0 }, { 0, 0 } }, tpp[2][3];
     for (int ti = 0; ti < 2; ti++) {
         rs_splat_options o;
         memset(&o, 0, sizeof o);
@@ -158,12 +162,17 @@ int main(int argc, char **argv)
             memset(&k[c], 0, sizeof k[c]);
             k[c].ms = k[c].cpu = k[c].ov_ms = 1e300;
             k[c].marks = counts[c];
-            double t0 = tm_now_ms();
-            if (rs_splatter_create(ctx, dem, rs[c], NULL, &o, &k[c].s)) {
-                fprintf(stderr, "markings: %s\n", rs_ctx_message(ctx));
-                return 1;
+            k[c].build_ms = 1e300;
+            for (int b = 0; b < BUILDS; b++) { /* fastest of BUILDS; the last one kept */
+                if (b) rs_splatter_free(ctx, k[c].s);
+                double t0 = tm_now_ms();
+                if (rs_splatter_create(ctx, dem, rs[c], NULL, &o, &k[c].s)) {
+                    fprintf(stderr, "markings: %s\n", rs_ctx_message(ctx));
+                    return 1;
+                }
+                double t = tm_now_ms() - t0;
+                if (t < k[c].build_ms) k[c].build_ms = t;
             }
-            k[c].build_ms = tm_now_ms() - t0;
         }
         uint32_t W, H, x0 = 0, y0 = 0, w, h;
         rs_splatter_size(k[0].s, &W, &H);
@@ -182,15 +191,18 @@ int main(int argc, char **argv)
                 if (run_once(ctx, &k[c], rgba, x0, y0, w, h)) return 1;
         for (int c = 0; c < 3; c++) {
             tpp[ti][c] = k[c].road_px ? (double)k[c].tests / (double)k[c].road_px : 0;
-            fprintf(md, "| %u x %u of %.2f m%s | %llu | %.1f | %.1f | %.2f | %.2f | %.3f | %llu | %.1f |\n", w, h,
-                    sc.cell_size / texels[ti], ti ? " (window)" : "", (unsigned long long)k[c].marks, k[c].ms,
+            fprintf(md, "| %u x %u of %.2f m%s | %llu | %.1f | %.1f | %.2f | %.2f | %.3f | %llu | %.1f | %.2f |\n", w,
+                    h, sc.cell_size / texels[ti], ti ? " (window)" : "", (unsigned long long)k[c].marks, k[c].ms,
                     k[c].ov_ms, k[c].ms / k[0].ms, k[c].cpu / k[0].cpu, tpp[ti][c], (unsigned long long)k[c].painted,
-                    k[c].build_ms);
+                    k[c].build_ms, (k[c].build_ms + k[c].ms) / (k[0].build_ms + k[0].ms));
             fprintf(csv, "%u,%llu,%.3f,%.3f,%llu,%llu,%llu,%.3f\n", texels[ti], (unsigned long long)k[c].marks,
                     k[c].ms, k[c].ov_ms, (unsigned long long)k[c].tests, (unsigned long long)k[c].painted,
                     (unsigned long long)k[c].road_px, k[c].build_ms);
         }
         ratio10k[ti] = k[2].ms / k[0].ms;
+        whole10k[ti] = (k[2].build_ms + k[2].ms) / (k[0].build_ms + k[0].ms);
+        build10k[ti][0] = k[0].build_ms;
+        build10k[ti][1] = k[2].build_ms;
         for (int c = 0; c < 3; c++) rs_splatter_free(ctx, k[c].s);
         free(rgba);
     }
@@ -198,11 +210,12 @@ int main(int argc, char **argv)
             "\nPer-pixel work grows with the markings' density on the road (10x the markings: about 10x the "
             "tests per road pixel), not with their number: a piece of the image takes from the index only "
             "the markings whose box meets it, and each is painted over the row spans of its own support.\n\n"
-            "| target (issue 14) | measured | |\n|---|---|---|\n"
-            "| 10,000 markings / no markings, city at 1.25 m <= 1.2x | %.2fx | %s |\n"
+            "| target (issues 14, 25: the splat on a prepared splatter) | measured | |\n|---|---|---|\n"
+            "| 10,000 markings / no markings, city at 1.25 m <= 1.2x | %.2fx (build + one splat: %.2fx, "
+            "build %.1f against %.1f ms) | %s |\n"
             "| the same, 0.1 m window | %.2fx | %s |\n",
-            ratio10k[0], ratio10k[0] <= 1.2 ? "met" : "**missed**", ratio10k[1],
-            ratio10k[1] <= 1.2 ? "met" : "**missed**");
+            ratio10k[0], whole10k[0], build10k[0][1], build10k[0][0], ratio10k[0] <= 1.2 ? "met" : "**missed**",
+            ratio10k[1], ratio10k[1] <= 1.2 ? "met" : "**missed**");
     /* how exactly a hard-edged sprite is drawn (issue 25) */
     {
         static const double angles[] = { 0, 15, 30, 45, 60, 75, 90 };
