@@ -839,6 +839,35 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     return m;
 }
 
+/* Does surface Q surely miss the box [x0, x1] x [y0, y1] (which holds
+ * piece P's polygon: piece_poly starts from it)? The separating axes
+ * cut_piece tests on the polygon, on the box, with a slack far above
+ * the roundings of both: where this says so, cut_piece would find Q
+ * missing every piece cut from P, so the piece's polygon need not be made
+ * for it. */
+static int surf_misses_box(const ls_surf *Q, double x0, double y0, double x1, double y1)
+{
+    double cx = 0.5 * (x0 + x1) - Q->ax, cy = 0.5 * (y0 + y1) - Q->ay, hx = 0.5 * (x1 - x0), hy = 0.5 * (y1 - y0);
+    double mag = fabs(x0) + fabs(x1) + fabs(y0) + fabs(y1) + fabs(Q->ax) + fabs(Q->ay) + fabs(Q->u0) + fabs(Q->u1) +
+                 Q->r;
+    double slack = 1e-9 * (1 + mag);
+    if (!(slack < 1e300)) return 0;
+    double v = cx * Q->uy - cy * Q->ux, ev = hx * fabs(Q->uy) + hy * fabs(Q->ux);
+    if (v - ev >= Q->r + slack || v + ev <= -Q->r - slack) return 1;
+    double u = cx * Q->ux + cy * Q->uy, eu = hx * fabs(Q->ux) + hy * fabs(Q->uy);
+    if (u + eu <= Q->u0 - slack || u - eu >= Q->u1 + slack) return 1;
+    /* the clip lines: n.p >= cc on the whole box */
+    if (Q->clip) {
+        double n = (cx + Q->ax) * Q->cx + (cy + Q->ay) * Q->cy - hx * fabs(Q->cx) - hy * fabs(Q->cy);
+        if (n >= Q->cc + slack * (1 + fabs(Q->cc))) return 1;
+    }
+    if (Q->clip2) {
+        double n = (cx + Q->ax) * Q->cx2 + (cy + Q->ay) * Q->cy2 - hx * fabs(Q->cx2) - hy * fabs(Q->cy2);
+        if (n >= Q->cc2 + slack * (1 + fabs(Q->cc2))) return 1;
+    }
+    return 0;
+}
+
 /* Work units of one cut_piece call in push_cut's budget (rs_limits.max_field_work):
  * measured against a list step, so that the budget bounds time. */
 #define CUT_WORK 32
@@ -965,6 +994,7 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
                         J->prio[Q->road] < J->prio[road] && fabs(L->band[P->band].t) <= J->keep[road])
                         continue;
+                    if (surf_misses_box(Q, P->x0, P->y0, P->x1, P->y1)) continue;
                     if (!cut) cutset_init(S, P), cut = 1;
                     cutset_cut(S, Q, &J->work);
                 }
