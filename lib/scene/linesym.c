@@ -115,6 +115,7 @@ struct rs__linesym {
     ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
     double *hpp;
     size_t npc, cap, nhpp, hcap; /* pieces (pp, pb) and half-planes (hpp) held and allocated */
+    size_t cap0;           /* the first capacity: about the pieces the roads' bands make */
     uint64_t budget;       /* rs_limits.max_linesym_bytes: pieces, half-planes and index entries */
     int over_budget;       /* the build stopped at it */
     ls_band *band;
@@ -479,7 +480,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         return RS_ERR_LIMIT;
     }
     if (L->npc == L->cap) {
-        size_t nc = budget_cap(L, L->cap ? 2 * L->cap : 256, L->npc + 1, (uint64_t)L->hcap * HP_BYTES,
+        size_t nc = budget_cap(L, L->cap ? 2 * L->cap : L->cap0, L->npc + 1, (uint64_t)L->hcap * HP_BYTES,
                                PIECE_BYTES), b1, b2;
         if (nc > UINT32_MAX || !rs__mul_size(nc, sizeof(ls_ppc), &b1) || !rs__mul_size(nc, sizeof(ls_pbuild), &b2))
             return RS_ERR_LIMIT;
@@ -492,7 +493,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         L->cap = nc;
     }
     if (L->hcap - L->nhpp < HP_MAX) {
-        size_t nc = budget_cap(L, L->hcap ? 2 * L->hcap : 1024, L->nhpp + HP_MAX, (uint64_t)L->cap * PIECE_BYTES,
+        size_t nc = budget_cap(L, L->hcap ? 2 * L->hcap : 4 * L->cap0, L->nhpp + HP_MAX, (uint64_t)L->cap * PIECE_BYTES,
                                HP_BYTES), bytes;
         if (nc > UINT32_MAX || !rs__mul_size(nc, 4 * sizeof(double), &bytes)) return RS_ERR_LIMIT;
         void *nh = L->hpp;
@@ -1797,6 +1798,20 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     rs_result res = RS_OK;
     L->pixel = p->pixel;
     L->budget = ctx->limits.max_linesym_bytes;
+    /* A slab per band and segment and a wedge per joint, about, as the
+     * first capacity: growing by doubling from a small one wrote (and
+     * faulted in) the arrays twice over and copied them (15 % of the styled
+     * city's style build). At most 2^18 pieces at first: unwritten room
+     * costs address space only, and the arrays shrink to what was made. */
+    {
+        uint64_t est = 0;
+        for (size_t ri = 0; ri < nroads && est < (1u << 18); ri++) {
+            size_t n = 0;
+            rs_roads_get(roads, ri, NULL, NULL, NULL, &n);
+            est += (uint64_t)(band_start[ri + 1] - band_start[ri]) * (2 * (uint64_t)n + 1);
+        }
+        L->cap0 = est < 256 ? 256 : est > (1u << 18) ? (1u << 18) : (size_t)est;
+    }
     L->margin = p->pixel * HALF_SQRT2;
     L->aa = p->aa;
     L->out_w = p->out_w;
