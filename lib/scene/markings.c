@@ -1446,6 +1446,7 @@ static void paint_curved(const rs__markings *mk, const rs__mk *m, rs__piece *p, 
 /* A marking's blends made in the build, over the piece's road pixels. */
 static void paint_pre(const rs__markings *mk, const rs__mk *m, rs__piece *p, uint64_t *tests, uint64_t *painted)
 {
+    if (m->npre == 0) return; /* (mk->pre may be NULL) */
     const rs__mk_pre *e = mk->pre + m->pre0, *end = e + m->npre;
     const uint32_t y0 = p->y0, y1 = p->y0 + p->rows, x0 = p->x0;
     const size_t w = p->w;
