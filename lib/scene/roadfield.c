@@ -271,13 +271,14 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
     double hd = c * HALF_SQRT2 * (1 + 1e-9); /* half the cell diagonal */
     /* R less a slack of 1e-9 of every magnitude in play (NaN or -inf for a
      * huge R: the shortcut then never applies) */
-    double Rsure = R - 1e-9 * (1 + seg_mag(s) + ((double)f->gw + (double)f->gh + 2) * c + R);
+    const double mag = 1 + seg_mag(s) + ((double)f->gw + (double)f->gh + 2) * c;
+    double Rsure = R - 1e-9 * (mag + R);
     double gy1 = ((double)f->gh - 1) * c, gx1 = ((double)f->gw - 1) * c;
     /* A cell is whole inside the road only if its centre is within rin -
      * c / 2 (the corner farthest across the nearest point's normal is c /
      * 2 further): the corners are not measured beyond that (plus a slack
      * above the roundings: the same cells come out full). */
-    double rfull = rin - 0.5 * c + 1e-9 * (1 + seg_mag(s) + ((double)f->gw + (double)f->gh + 2) * c + fabs(rin));
+    double rfull = rin - 0.5 * c + 1e-9 * (mag + fabs(rin));
     double ylo = lm_max(lm_min(s->ay, s->by) - R, -c), yhi = lm_min(lm_max(s->ay, s->by) + R, gy1);
     double xlo = lm_max(lm_min(s->ax, s->bx) - R, -c), xhi = lm_min(lm_max(s->ax, s->bx) + R, gx1);
     if (!(ylo <= yhi && xlo <= xhi)) return 0;
