@@ -104,7 +104,8 @@ static void test_nearest_brute(void)
 {
     sc_rng g;
     sc_rng_seed(&g, 7);
-    int queries = 0, bad_found = 0, bad_road = 0, bad_val = 0, found = 0;
+    int queries = 0, bad_found = 0, bad_road = 0, bad_val = 0, found = 0, bad_any = 0;
+    uint32_t last_hint = UINT32_MAX;
     for (int scene = 0; scene < 12; scene++) {
         double W = 120, H = 90, cs = 2, ox = scene % 3 == 2 ? 5e6 : 0, oy = scene % 3 == 2 ? -3e6 : 0;
         rs_roads *roads = random_roads(&g, W, H, 12, ox, oy, NULL);
@@ -126,6 +127,19 @@ static void test_nearest_brute(void)
             rs__road_point rp;
             int got = rs__roadfield_nearest(f, x, y, reach, &rp);
             queries++;
+            /* the any-road lookups say the same, whatever segment is tried first */
+            {
+                rs__roadfield_stats st;
+                rs__roadfield_get_stats(f, &st);
+                uint32_t hs[4] = { UINT32_MAX, last_hint, (uint32_t)sc_rng_range(&g, 0, (double)st.segments + 2),
+                                   (uint32_t)st.segments };
+                if (rs__roadfield_any_near(f, x, y, reach) != got) bad_any++;
+                for (int k = 0; k < 4; k++) {
+                    uint32_t h = hs[k];
+                    if (rs__roadfield_any_near_hint(f, x, y, reach, &h) != got) bad_any++;
+                    if (k == 1) last_hint = h;
+                }
+            }
             if (got != b.found) { bad_found++; continue; }
             if (!got) continue;
             found++;
@@ -143,6 +157,7 @@ static void test_nearest_brute(void)
     printf("nearest: %d queries, %d found a road\n", queries, found);
     CHECK(found > queries / 10);
     CHECK_EQ_INT(bad_found, 0);
+    CHECK_EQ_INT(bad_any, 0);
     CHECK_EQ_INT(bad_road, 0);
     CHECK_EQ_INT(bad_val, 0);
 }

@@ -1982,7 +1982,7 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
 /* The nearest query; out NULL: whether any segment passes its tests (the
  * first one ends the scan). */
 static int nearest_scan(const rs__roadfield *f, double x, double y, double reach, const int *prio,
-                        rs__road_point *out)
+                        rs__road_point *out, uint32_t *hit)
 {
     if (!f || !(reach >= 0)) return 0;
     int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
@@ -2000,7 +2000,10 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
                 double pr, side, d = seg_point(s, x, y, &pr, &side);
                 int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
                 if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
-                if (!out) return 1;
+                if (!out) {
+                    if (hit) *hit = f->ids[k];
+                    return 1;
+                }
                 int key = !prio ? INT_MIN : (s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r) ? prio[s->road] : INT_MIN;
                 /* segments are numbered in (road, seg) order */
                 if (!best || key > bk || (key == bk && (d < bd || (d == bd && s < best)))) {
@@ -2036,12 +2039,32 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
 int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
                                  rs__road_point *out)
 {
-    return out ? nearest_scan(f, x, y, reach, prio, out) : 0;
+    return out ? nearest_scan(f, x, y, reach, prio, out, NULL) : 0;
 }
 
 int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach)
 {
-    return nearest_scan(f, x, y, reach, NULL, NULL);
+    return nearest_scan(f, x, y, reach, NULL, NULL, NULL);
+}
+
+int rs__roadfield_any_near_hint(const rs__roadfield *f, double x, double y, double reach, uint32_t *hint)
+{
+    if (!f || !(reach >= 0) || cell_of(f, x, f->gw) < 0 || cell_of(f, y, f->gh) < 0) return 0;
+    /* A segment without a T trim whose surface is within reach of (x, y)
+     * is in the lists nearest_scan reads (its capsule grown by the
+     * lists' reach, with their slack, meets the cells it scans): the
+     * answer is the same whichever one is found first. */
+    if (*hint < f->nseg && !f->seg[*hint].tee) {
+        const rf_seg *s = &f->seg[*hint];
+        double qx, qy;
+        (void)seg_near(s, x, y, &qx, &qy);
+        /* seg_point's distance d - r <= reach, decided on the square where
+         * 1e-14 of it settles it (far above the roundings), else as it is */
+        double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, t = s->r + reach, t2 = t * t;
+        if (t >= 0 && t2 < 1e300 && d2 < t2 * (1 - 1e-14)) return 1;
+        if (!(t >= 0 && t2 < 1e300 && d2 > t2 * (1 + 1e-14)) && len2(dx, dy) - s->r <= reach) return 1;
+    }
+    return nearest_scan(f, x, y, reach, NULL, NULL, hint);
 }
 
 /* Fraction of a square of side `side` centred at the origin where

@@ -115,6 +115,10 @@ int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, dou
 /* 1 when rs__roadfield_nearest(f, x, y, reach) would find a road, else 0
  * (stops at the first: for fills that are the same on every road). */
 int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach);
+/* The same, trying segment *hint first (UINT32_MAX: none) and leaving in
+ * *hint the one a scan found: neighbouring pixels mostly find the same
+ * road. */
+int rs__roadfield_any_near_hint(const rs__roadfield *f, double x, double y, double reach, uint32_t *hint);
 
 /* Coverage of pixels [px0, px0+w) x [py0, py0+h), pixel side `pix` metres:
  * out[(py-py0)*stride + (px-px0)] = area fraction of the pixel inside the

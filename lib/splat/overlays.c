@@ -84,6 +84,7 @@ static void casings(const rs_splatter *s, const rs__styling *st, double pix, rs_
 static void surfaces(const rs__styling *st, double pix, rs__piece *p)
 {
     const size_t w = p->w;
+    uint32_t hint = UINT32_MAX; /* the segment the last lookup found */
     for (uint32_t r = 0; r < p->rows; r++) {
         float *sc = p->sc + (size_t)r * w * 3;
         for (size_t k = 0; k < w; k++) {
@@ -95,7 +96,7 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
                 /* every road has this fill: which road the lookup below
                  * finds does not matter, only whether it finds one (it
                  * does on a whole road pixel) */
-                if (q != 65535 && !rs__roadfield_any_near(st->near, x, y, pix * HALF_SQRT2)) continue;
+                if (q != 65535 && !rs__roadfield_any_near_hint(st->near, x, y, pix * HALF_SQRT2, &hint)) continue;
                 memcpy(c, st->fill_rgba, sizeof c);
             } else {
                 rs__road_point rp;
