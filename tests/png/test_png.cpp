@@ -187,7 +187,7 @@ static void round_trip(uint32_t w, uint32_t h, int channels, int bits, int kind,
     std::string path = dir + "/rt.png", why;
     cli_png_image img = { w, h, channels, bits, im.data() };
     progress_log pl;
-    cli_png_options opt = { level, log_progress, &pl };
+    cli_png_options opt = { level, log_progress, &pl, 0 };
     char name[160];
     std::snprintf(name, sizeof name, "%ux%u, %d channels, %d bits, kind %d, level %d%s", w, h, channels, bits, kind,
                   level, isal ? "" : " (libdeflate)");
@@ -262,7 +262,7 @@ static int time_writer(int argc, char **argv)
             }
         } else {
             cli_png_image img = { w, h, ch, 8, px.data() };
-            cli_png_options opt = { level, nullptr, nullptr };
+            cli_png_options opt = { level, nullptr, nullptr, 0 };
             if (cli_png_write(out, nullptr, &img, &opt)) return 1;
         }
         ms.push_back(cli_now_ms() - t0);
@@ -363,7 +363,7 @@ int main(int argc, char **argv)
     CHECK(cli_png_write(target.c_str(), nullptr, &bad, nullptr) != 0, "5 channels");
     bad = { 50, 40, 4, 12, im.data() };
     CHECK(cli_png_write(target.c_str(), nullptr, &bad, nullptr) != 0, "12 bits");
-    cli_png_options lv = { 13, nullptr, nullptr };
+    cli_png_options lv = { 13, nullptr, nullptr, 0 };
     CHECK(cli_png_write(target.c_str(), nullptr, &img, &lv) != 0, "level 13");
     CHECK(read_oiio(target, im, why) && entries(sub) == 1, "old file kept after refusals");
     CHECK(cli_png_write(sub.c_str(), nullptr, &img, nullptr) != 0, "folder as target");
