@@ -302,11 +302,10 @@ static void test_word_shift(void)
     rs_dem_free(ctx, dem);
 }
 
-/* A sprite of two colours (left half red, right half green, opaque) takes
- * the four-channel tables: each colour covers its half of the rectangle
- * (area within 0.5 %), and the two sum to the whole at every pixel as an
- * all-white sprite's alpha does. */
-static void test_two_colours(void)
+/* A 16 x 16 sprite "two", length x width metres: left half red, right
+ * half green, opaque; `varied`: blue rising down the rows and the left
+ * quarter transparent. */
+static rs_atlas *two_colour_atlas(double length, double width, int varied)
 {
     static uint8_t px[16 * 16 * 4];
     for (int j = 0; j < 16; j++)
@@ -314,13 +313,24 @@ static void test_two_colours(void)
             uint8_t *q = px + (j * 16 + i) * 4;
             q[0] = i < 8 ? 255 : 0;
             q[1] = i < 8 ? 0 : 255;
-            q[2] = 0;
-            q[3] = 255;
+            q[2] = (uint8_t)(varied ? 16 * j : 0);
+            q[3] = (uint8_t)(varied && i < 4 ? 0 : 255);
         }
     rs_image img = { 16, 16, px };
-    const char *idx = "two 0 0 16 16 3 1.2\n";
-    rs_atlas *atlas = NULL;
-    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &atlas) == RS_OK);
+    char idx[64];
+    snprintf(idx, sizeof idx, "two 0 0 16 16 %g %g\n", length, width);
+    rs_atlas *a = NULL;
+    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &a) == RS_OK);
+    return a;
+}
+
+/* A sprite of two colours (left half red, right half green, opaque) takes
+ * the four-channel tables: each colour covers its half of the rectangle
+ * (area within 0.5 %), and the two sum to the whole at every pixel as an
+ * all-white sprite's alpha does. */
+static void test_two_colours(void)
+{
+    rs_atlas *atlas = two_colour_atlas(3, 1.2, 0);
     rs_dem *dem = flat_dem(21, 21, 1.0);
     double th = 0.5, xy[4] = { 10 - 8 * cos(th), 10 - 8 * sin(th), 10 + 8 * cos(th), 10 + 8 * sin(th) };
     rs_roads *roads = NULL;
@@ -415,19 +425,7 @@ static float *paint_all(const rs__markings *mk, uint32_t W, uint32_t H, uint32_t
  * larger markings. */
 static void test_kept_blends(void)
 {
-    static uint8_t px[16 * 16 * 4];
-    for (int j = 0; j < 16; j++)
-        for (int i = 0; i < 16; i++) {
-            uint8_t *q = px + (j * 16 + i) * 4;
-            q[0] = i < 8 ? 255 : 0;
-            q[1] = i < 8 ? 0 : 255;
-            q[2] = (uint8_t)(16 * j);
-            q[3] = (uint8_t)(i < 4 ? 0 : 255);
-        }
-    rs_image img = { 16, 16, px };
-    const char *idx = "two 0 0 16 16 2.5 1.2\n";
-    rs_atlas *two = NULL;
-    CHECK(rs_atlas_create(ctx, &img, idx, strlen(idx), &two) == RS_OK);
+    rs_atlas *two = two_colour_atlas(2.5, 1.2, 1);
     rs_atlas *def = NULL;
     CHECK(rs_atlas_default(ctx, &def) == RS_OK);
     if (!two || !def) return;
