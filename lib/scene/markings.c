@@ -1482,9 +1482,8 @@ static rs_result pre_build(rs_ctx *ctx, rs__markings *mk)
         rs__mk *m = &mk->m[i];
         m->pre0 = SIZE_MAX;
         m->npre = 0;
-        if ((i & 1023) == 1023 && rs__poll(ctx)) {
+        if ((i & 1023) == 1023 && rs__poll(ctx)) { /* (the caller frees mk) */
             rs__free(ctx, rc.e);
-            for (size_t k = 0; k < mk->n; k++) mk->m[k].pre0 = SIZE_MAX;
             return RS_ERR_CANCELLED;
         }
         if (rc.full || P.w == 0 || P.rows == 0) continue;
@@ -1510,7 +1509,6 @@ static rs_result pre_build(rs_ctx *ctx, rs__markings *mk)
     mk->bytes += rc.n * sizeof *rc.e;
     return RS_OK;
 }
-
 
 static void sort_u32(uint32_t *a, size_t n, uint32_t *tmp)
 {

@@ -2054,16 +2054,8 @@ int rs__roadfield_any_near_hint(const rs__roadfield *f, double x, double y, doub
      * is in the lists nearest_scan reads (its capsule grown by the
      * lists' reach, with their slack, meets the cells it scans): the
      * answer is the same whichever one is found first. */
-    if (*hint < f->nseg && !f->seg[*hint].tee) {
-        const rf_seg *s = &f->seg[*hint];
-        double qx, qy;
-        (void)seg_near(s, x, y, &qx, &qy);
-        /* seg_point's distance d - r <= reach, decided on the square where
-         * 1e-14 of it settles it (far above the roundings), else as it is */
-        double dx = x - qx, dy = y - qy, d2 = dx * dx + dy * dy, t = s->r + reach, t2 = t * t;
-        if (t >= 0 && t2 < 1e300 && d2 < t2 * (1 - 1e-14)) return 1;
-        if (!(t >= 0 && t2 < 1e300 && d2 > t2 * (1 + 1e-14)) && len2(dx, dy) - s->r <= reach) return 1;
-    }
+    const rf_seg *s = *hint < f->nseg ? &f->seg[*hint] : NULL;
+    if (s && !s->tee && seg_dist(s, x, y) - s->r <= reach) return 1; /* seg_point's distance: the scan's test */
     return nearest_scan(f, x, y, reach, NULL, NULL, hint);
 }
 
