@@ -459,7 +459,7 @@ typedef struct ls_poly {
     double x[POLY_MAX], y[POLY_MAX];
 } ls_poly;
 
-static void piece_finish(const rs__linesym *L, ls_piece *Q);
+static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly);
 
 /* Append piece P, finished (piece_finish), as the painter's record (pp,
  * its half-planes in hpp) and the index build's (pb). */
@@ -477,7 +477,8 @@ static size_t budget_cap(const rs__linesym *L, size_t want, size_t need, uint64_
     return fit < want ? (size_t)fit : want;
 }
 
-static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
+/* poly: P's polygon (piece_poly's doubles) when the caller has it, else NULL. */
+static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P, const ls_poly *poly)
 {
     /* all roads' pieces together (rs_limits.max_linesym_bytes) */
     if (L->budget &&
@@ -509,7 +510,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
         L->hcap = nc;
     }
     ls_piece Q = *P;
-    piece_finish(L, &Q);
+    piece_finish(L, &Q, poly);
     ls_ppc *C = &L->pp[L->npc];
     ls_pbuild *B = &L->pb[L->npc++];
     C->ox = Q.ox, C->oy = Q.oy, C->ux = Q.ux, C->uy = Q.uy, C->a = Q.a, C->b = Q.b, C->su = Q.su;
@@ -532,8 +533,9 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P)
 }
 
 /* The painter's constants of a piece: half-plane extents, box, pixel
- * rows and columns, the slab's safe u range. */
-static void piece_finish(const rs__linesym *L, ls_piece *Q)
+ * rows and columns, the slab's safe u range. G: Q's polygon if known
+ * (the cuts made it: the same clips in the same order as piece_poly). */
+static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
 {
     double pix = L->pixel, hp = 0.5 * pix, ax = fabs(Q->ux), ay = fabs(Q->uy);
     /* half-plane c0 + cu u + cv v in local (x, y): normal (cu ux + cv uy, cu uy - cv ux) */
@@ -555,6 +557,10 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q)
         G.hp[0][0] += hp;
         G.hp[1][0] += hp;
         n = piece_poly(&G, px, py);
+    } else if (poly) {
+        n = poly->n;
+        memcpy(px, poly->x, n * sizeof *px);
+        memcpy(py, poly->y, n * sizeof *py);
     } else {
         n = piece_poly(Q, px, py);
     }
@@ -955,7 +961,7 @@ static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, ui
  * (list entries visited) passes J->limit. */
 static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
-    if (!J || !J->nsf || J->nocut[road]) return push_piece(ctx, L, P);
+    if (!J || !J->nsf || J->nocut[road]) return push_piece(ctx, L, P, NULL);
     /* the end of road's surfaces: the first with a larger road */
     size_t own_end = 0, hi_s = J->nsf;
     while (own_end < hi_s) {
@@ -987,8 +993,7 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     const ls_surf *Q = &J->sf[k];
                     uint32_t sr = J->stroke_of ? J->stroke_of[road] : road;
                     if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
-                        continues(J, road, Q->road) || (Q->only != NO_STROKE && Q->only != sr && Q->only2 != sr) ||
-                        Q->skip == sr || Q->skip2 == sr)
+                        (Q->only != NO_STROKE && Q->only != sr && Q->only2 != sr) || Q->skip == sr || Q->skip2 == sr)
                         continue;
                     /* a path, footway or cycleway crossing or meeting a car
                      * road cuts none of its lines (issue 27: the road's lines
@@ -1001,15 +1006,16 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     if (J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
                         J->prio[Q->road] < J->prio[road] && fabs(L->band[P->band].t) <= J->keep[road])
                         continue;
-                    if (surf_misses_box(Q, P->x0, P->y0, P->x1, P->y1)) continue;
+                    /* (the box test before the end points': it passes over most surfaces) */
+                    if (surf_misses_box(Q, P->x0, P->y0, P->x1, P->y1) || continues(J, road, Q->road)) continue;
                     if (!cut) cutset_init(S, P), cut = 1;
                     cutset_cut(S, Q, &J->work);
                 }
             }
     }
-    if (!cut) return push_piece(ctx, L, P);
+    if (!cut) return push_piece(ctx, L, P, NULL);
     for (uint32_t a = 0; a < S->n; a++) {
-        rs_result r = push_piece(ctx, L, &S->p[S->cur][a]);
+        rs_result r = push_piece(ctx, L, &S->p[S->cur][a], &S->g[S->cur][a]);
         if (r) return r;
     }
     return RS_OK;
