@@ -124,7 +124,8 @@ static size_t find_attr(const rs_roads *roads, const rs_road_rec *rec, const cha
 {
     for (uint32_t k = 0; k < rec->attr_count; k++) {
         const char *have = roads->names + roads->attrs[rec->attr_first + k].key;
-        if (strncmp(have, key, kn) == 0 && have[kn] == '\0') return rec->attr_first + k;
+        /* (the first byte settles most keys without a call) */
+        if ((kn == 0 || have[0] == key[0]) && strncmp(have, key, kn) == 0 && have[kn] == '\0') return rec->attr_first + k;
     }
     return SIZE_MAX;
 }

@@ -731,13 +731,15 @@ static rs_result find_tees(build *B)
                         run_of(&H, kx, ky, &qa, &qb);
                     for (uint32_t q = qa; q < qb; q++) {
                         uint32_t e = H.ent[q].id;
-                        if (B->cid && chain_joint(B, e)) continue; /* (inside its street: no end on another) */
+                        /* (the entry's own point first: it passes over most ends
+                         * without reading the end's road at a random place) */
                         const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
                         double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
                         double dist = sqrt(ex * ex + ey * ey);
                         if (!(dist <= tol)) continue;
+                        if (B->cid && chain_joint(B, e)) continue; /* (inside its street: no end on another) */
                         uint32_t nd = B->nodeof[e]; /* (an end: its group is a node) */
                         if (B->nodeof[a] == nd || B->nodeof[k1] == nd) continue; /* (one group: one node) */
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
