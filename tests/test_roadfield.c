@@ -8,6 +8,7 @@
 #include "roadfield.h"
 #include "scenes.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 static rs_ctx *ctx;
@@ -714,6 +715,39 @@ static void test_record_fallback(void)
     rs_roads_free(ctx, roads);
 }
 
+/* The automatic index cell (docs/roadfield.md "Index"): about one segment
+ * per cell, between max(DEM cell, half the mean width) and max(that, twice
+ * the mean width). n parallel roads of width 8 m, each of `per` segments,
+ * across a W x W map of 1 m DEM cells. */
+static double auto_cell(int n, int per, double W)
+{
+    rs_roads *roads = NULL;
+    if (rs_roads_create(ctx, &roads) != RS_OK) return -1;
+    double xy[2 * 65];
+    for (int i = 0; i < n; i++) {
+        double y = W * (i + 0.5) / n;
+        for (int k = 0; k <= per; k++) xy[2 * k] = W * k / per, xy[2 * k + 1] = y;
+        if (rs_roads_add(ctx, roads, NULL, 8, xy, (size_t)per + 1) != RS_OK) {
+            rs_roads_free(ctx, roads);
+            return -1;
+        }
+    }
+    rs__roadfield_params p = params(0, 0, 1, W, W, 0, 0.25);
+    rs__roadfield *f = NULL;
+    double c = -1;
+    if (rs__roadfield_build(ctx, roads, &p, &f) == RS_OK) c = rs__roadfield_cell(f);
+    rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, roads);
+    return c;
+}
+
+static void test_auto_cell(void)
+{
+    CHECK_NEAR(auto_cell(4, 1, 400), 16, 1e-12);                        /* sparse: twice the width */
+    CHECK_NEAR(auto_cell(100, 10, 400), sqrt(400.0 * 400 / 1000), 1e-9); /* one segment a cell: 12.6 m */
+    CHECK_NEAR(auto_cell(200, 64, 100), 4, 1e-12);                      /* dense: half the width */
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -727,6 +761,7 @@ int main(void)
     test_extreme();
     test_alloc_failures();
     test_record_fallback();
+    test_auto_cell();
     rs_ctx_free(ctx);
     return th_finish("test_roadfield");
 }
