@@ -716,8 +716,8 @@ static void test_record_fallback(void)
 }
 
 /* The automatic index cell (docs/roadfield.md "Index"): about one segment
- * per cell, between max(DEM cell, half the mean width) and max(that, twice
- * the mean width). n parallel roads of width 8 m, each of `per` segments,
+ * per cell, between max(DEM cell, half the mean width) and max(that, the
+ * mean width). n parallel roads of width 8 m, each of `per` segments,
  * across a W x W map of 1 m DEM cells. */
 static double auto_cell(int n, int per, double W)
 {
@@ -743,9 +743,9 @@ static double auto_cell(int n, int per, double W)
 
 static void test_auto_cell(void)
 {
-    CHECK_NEAR(auto_cell(4, 1, 400), 16, 1e-12);                        /* sparse: twice the width */
-    CHECK_NEAR(auto_cell(100, 10, 400), sqrt(400.0 * 400 / 1000), 1e-9); /* one segment a cell: 12.6 m */
-    CHECK_NEAR(auto_cell(200, 64, 100), 4, 1e-12);                      /* dense: half the width */
+    CHECK_NEAR(auto_cell(4, 1, 400), 8, 1e-12);                       /* sparse: the mean width */
+    CHECK_NEAR(auto_cell(300, 15, 400), sqrt(400.0 * 400 / 4500), 1e-9); /* one segment a cell: 6.0 m */
+    CHECK_NEAR(auto_cell(200, 64, 100), 4, 1e-12);                     /* dense: half the width */
 }
 
 int main(void)

@@ -1074,11 +1074,15 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
 
     /* Index cell: about one segment per cell over the map (short lists, few
      * cells per segment), at least the DEM cell and half the mean road
-     * width, at most twice the mean width; doubled until the grid is
-     * small. A pixel's coverage does not depend on the cell (the lists
-     * only narrow the candidates): the city's 1000 roads take 15.3 m
-     * cells, which build in 4.2 ms against 5.9 at the mean width with the
-     * same coverage time (docs/roadfield.md "Index"). */
+     * width, at most the mean width (wider cells are rarely whole inside a
+     * road: their pixels lose the full-cell path); doubled until the grid
+     * is small. A pixel's coverage does not depend on the cell (the lists
+     * only narrow the candidates): the city's 1000 roads take 7.7 m cells,
+     * build and coverage 17 % faster than the 5 m DEM cell (docs/roadfield.md
+     * "Index"). Twice the mean width built faster still, but with it
+     * fuzz/edits found an added road that changed the colour of another
+     * road's edge pixel outside the dirty rectangles (docs/speed.md
+     * "Session 24"). */
     double c = p->index_cell, cap = GRID_MAX_CELLS;
     if (c == 0) {
         double wsum = 0, nseg = 0;
@@ -1089,7 +1093,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             wsum += lm_min(w, 1e12) / (double)nroads;
             nseg += np > 1 ? (double)(np - 1) : 0;
         }
-        double lo = lm_max(p->cell_size, 0.5 * wsum), hi = lm_max(lo, 2 * wsum);
+        double lo = lm_max(p->cell_size, 0.5 * wsum), hi = lm_max(lo, wsum);
         double even = nseg > 0 ? sqrt(p->width_m * p->height_m / nseg) : hi;
         c = even < lo || !(even == even) ? lo : even > hi ? hi : even;
         cap = GRID_AUTO_CELLS;
