@@ -24,12 +24,6 @@
 /* Half-planes per piece: 6 of its own, 3 per junction cut (two cuts). */
 #define HP_MAX 12
 
-/* fmax and fmin as glibc's x86-64 ones answer (maxsd / minsd: the second
- * argument on a tie, the other one when one is NaN), inline: the library
- * calls were 3 % of the styled city's build. */
-static inline double ls_fmax(double a, double b) { return a > b || b != b ? a : b; }
-static inline double ls_fmin(double a, double b) { return a < b || b != b ? a : b; }
-
 enum { PIECE_SLAB = 0, PIECE_WEDGE = 1 };
 
 /* One convex piece of one band, in its own frame: u along the segment
@@ -533,7 +527,7 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P, cons
 }
 
 /* The painter's constants of a piece: half-plane extents, box, pixel
- * rows and columns, the slab's safe u range. G: Q's polygon if known
+ * rows and columns, the slab's safe u range. poly: Q's polygon if known
  * (the cuts made it: the same clips in the same order as piece_poly). */
 static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
 {
@@ -566,8 +560,8 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
     }
     for (uint32_t k = 0; k < n; k++) {
         double x = Q->ox + px[k] * Q->ux + py[k] * Q->uy, y = Q->oy + px[k] * Q->uy - py[k] * Q->ux;
-        bx0 = ls_fmin(bx0, x), bx1 = ls_fmax(bx1, x), by0 = ls_fmin(by0, y), by1 = ls_fmax(by1, y);
-        pu0 = ls_fmin(pu0, px[k]), pu1 = ls_fmax(pu1, px[k]), pv0 = ls_fmin(pv0, py[k]), pv1 = ls_fmax(pv1, py[k]);
+        bx0 = rs__fmin(bx0, x), bx1 = rs__fmax(bx1, x), by0 = rs__fmin(by0, y), by1 = rs__fmax(by1, y);
+        pu0 = rs__fmin(pu0, px[k]), pu1 = rs__fmax(pu1, px[k]), pv0 = rs__fmin(pv0, py[k]), pv1 = rs__fmax(pv1, py[k]);
     }
     if (n < 3) { /* nothing left of it (the inner side of a sharp bend): never visited */
         Q->gx0 = Q->gy0 = 1;
@@ -576,13 +570,13 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
         Q->ru1 = Q->rv1 = 0;
         return;
     }
-    double eb = 1e-9 * (1 + ls_fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
+    double eb = 1e-9 * (1 + rs__fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
     if (Q->kind == PIECE_WEDGE && herm) {
         /* Hermite: the centre in the sector's angle, within half a pixel of its radii */
         bx0 = Q->ox + Q->wx0, bx1 = Q->ox + Q->wx1, by0 = Q->oy + Q->wy0, by1 = Q->oy + Q->wy1;
     } else if (Q->kind == PIECE_WEDGE) {
-        bx0 = ls_fmax(bx0, Q->ox + Q->wx0), bx1 = ls_fmin(bx1, Q->ox + Q->wx1);
-        by0 = ls_fmax(by0, Q->oy + Q->wy0), by1 = ls_fmin(by1, Q->oy + Q->wy1);
+        bx0 = rs__fmax(bx0, Q->ox + Q->wx0), bx1 = rs__fmin(bx1, Q->ox + Q->wx1);
+        by0 = rs__fmax(by0, Q->oy + Q->wy0), by1 = rs__fmin(by1, Q->oy + Q->wy1);
     }
     /* pixels that overlap the box */
     Q->gx0 = ceil((bx0 - eb) / pix - 1);
@@ -607,9 +601,9 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
         double ulo = -DBL_MAX, uhi = DBL_MAX, va = Q->a - Q->su, vb = Q->b + Q->su;
         for (uint32_t k = 2; k < Q->nhp; k++) {
             double c0 = Q->hp[k][0], cu = Q->hp[k][1], cv = Q->hp[k][2];
-            double need = Q->sup[k] - c0 - ls_fmin(cv * va, cv * vb) + eb * (1 + fabs(cu) + fabs(cv));
-            if (cu > 0) ulo = ls_fmax(ulo, need / cu);
-            else if (cu < 0) uhi = ls_fmin(uhi, need / cu);
+            double need = Q->sup[k] - c0 - rs__fmin(cv * va, cv * vb) + eb * (1 + fabs(cu) + fabs(cv));
+            if (cu > 0) ulo = rs__fmax(ulo, need / cu);
+            else if (cu < 0) uhi = rs__fmin(uhi, need / cu);
             else if (need > 0) uhi = -DBL_MAX; /* never safe */
         }
         Q->uin0 = ulo;
@@ -634,10 +628,10 @@ static void piece_box(const rs__linesym *L, ls_piece *P, double len, double a, d
     for (int k = 0; k < 4; k++) {
         /* inverse of (u, v) = (d.u, d.(uy, -ux)) */
         double x = P->ox + U[k] * P->ux + V[k] * P->uy, y = P->oy + U[k] * P->uy - V[k] * P->ux;
-        P->x0 = ls_fmin(P->x0, x);
-        P->x1 = ls_fmax(P->x1, x);
-        P->y0 = ls_fmin(P->y0, y);
-        P->y1 = ls_fmax(P->y1, y);
+        P->x0 = rs__fmin(P->x0, x);
+        P->x1 = rs__fmax(P->x1, x);
+        P->y0 = rs__fmin(P->y0, y);
+        P->y1 = rs__fmax(P->y1, y);
     }
 }
 
@@ -669,8 +663,8 @@ static int cut_to_map(double ox, double oy, double ux, double uy, double len, do
         }
         double t0 = (b0[k] - o[k]) / d[k], t1 = (b1[k] - o[k]) / d[k];
         if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
-        *lo = ls_fmax(*lo, t0);
-        *hi = ls_fmin(*hi, t1);
+        *lo = rs__fmax(*lo, t0);
+        *hi = rs__fmin(*hi, t1);
     }
     return *lo <= *hi;
 }
@@ -1057,7 +1051,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
                                   const ls_vtx *pts, const double *s, size_t n, const rs__band *bd, uint32_t band,
                                   double wmap, double hmap)
 {
-    double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = ls_fmax(fabs(a), fabs(b)) + L->margin;
+    double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = rs__fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
     for (size_t i = 0; i + 1 < n; i++) {
         /* a segment's junction cuts can take 0.1 ms (10^5 city roads): a
@@ -1152,7 +1146,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         double turn = nx * py - ny * px;
         if (turn == 0) continue;
         double out = turn > 0 ? -1.0 : 1.0; /* left turn: outer side is the right (t < 0) */
-        double r0 = out > 0 ? ls_fmax(a, 0) : ls_fmax(-b, 0), r1 = out > 0 ? b : -a;
+        double r0 = out > 0 ? rs__fmax(a, 0) : rs__fmax(-b, 0), r1 = out > 0 ? b : -a;
         if (!(r1 > r0)) continue;
         if (B->ndash && !dash_on(L, B, s[i])) continue;
         double vx = pts[i].x, vy = pts[i].y;
@@ -1185,8 +1179,8 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         P.wx0 = P.wx1 = bxs[0];
         P.wy0 = P.wy1 = bys[0];
         for (int q = 1; q < nb; q++) {
-            P.wx0 = ls_fmin(P.wx0, bxs[q]), P.wx1 = ls_fmax(P.wx1, bxs[q]);
-            P.wy0 = ls_fmin(P.wy0, bys[q]), P.wy1 = ls_fmax(P.wy1, bys[q]);
+            P.wx0 = rs__fmin(P.wx0, bxs[q]), P.wx1 = rs__fmax(P.wx1, bxs[q]);
+            P.wy0 = rs__fmin(P.wy0, bys[q]), P.wy1 = rs__fmax(P.wy1, bys[q]);
         }
         double pad = 1e-9 * (1 + r1);
         P.wx0 -= pad, P.wy0 -= pad, P.wx1 += pad, P.wy1 += pad;
@@ -1228,8 +1222,8 @@ static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double
             if (nn == 0) continue;
             double lo = xs[0], hi = xs[0];
             for (uint32_t q = 1; q < nn; q++) {
-                lo = ls_fmin(lo, xs[q]);
-                hi = ls_fmax(hi, xs[q]);
+                lo = rs__fmin(lo, xs[q]);
+                hi = rs__fmax(hi, xs[q]);
             }
             double ga = floor(lo / cm), gb = floor(hi / cm);
             if (gb < (double)i0 || ga > (double)i1) continue;
@@ -1487,7 +1481,7 @@ rs_result rs__network_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network 
             t->stroke2 = through2;
             /* lines within 2 m of the through road's edges are edge lines:
              * they stop at the side road's mouth; the rest run on */
-            t->keep = ls_fmax(0.5 * w - TEE_EDGE_ZONE, 0);
+            t->keep = rs__fmax(0.5 * w - TEE_EDGE_ZONE, 0);
             /* a bent street: its direction from both legs, as the trim's */
             street_dir(tl, tl2, &t->dx, &t->dy);
             t->lx[0] = cos(tl->angle), t->ly[0] = sin(tl->angle);
@@ -1569,7 +1563,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         rs_roads_get(roads, ri, NULL, &w, NULL, NULL);
         J->nocut[ri] = jc && !strcmp(jc, "no");
         J->car[ri] = !rs__road_non_car(roads, ri);
-        J->keep[ri] = ls_fmax(0.5 * w - TEE_EDGE_ZONE, 0);
+        J->keep[ri] = rs__fmax(0.5 * w - TEE_EDGE_ZONE, 0);
     }
     ls_tee *tees = NULL;
     rs_result rt = rs__network_tees(ctx, roads, p->net, &tees);
@@ -1634,14 +1628,14 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                     double cc = te->nx * ex + te->ny * ey + te->far;
                     double fa = te->nx * Q.ax + te->ny * Q.ay, fb = fa + (Q.len + hw) * (te->nx * Q.ux + te->ny * Q.uy);
                     fa -= hw * (te->nx * Q.ux + te->ny * Q.uy);
-                    if (!Q.clip && ls_fmax(fa, fb) + hw > cc) Q.clip = 1, Q.cx = te->nx, Q.cy = te->ny, Q.cc = cc;
+                    if (!Q.clip && rs__fmax(fa, fb) + hw > cc) Q.clip = 1, Q.cx = te->nx, Q.cy = te->ny, Q.cc = cc;
                     continue;
                 }
                 double dx = e ? Q.ux : -Q.ux, dy = e ? Q.uy : -Q.uy; /* towards the end */
                 double sn = te->nx * dx + te->ny * dy, cs = fabs(te->nx * dy - te->ny * dx);
                 if (!(sn > 0.1)) continue;
                 double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
-                double reach = ls_fmax((te->far + hw * cs) / sn, hw);
+                double reach = rs__fmax((te->far + hw * cs) / sn, hw);
                 if (e) Q.u1 = Q.len + reach;
                 else Q.u0 = -reach;
                 Q.clip = 1;
@@ -1718,7 +1712,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             const double U[4] = { Q->u0, Q->u1, Q->u1, Q->u0 }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
             for (int c = 0; c < 4; c++) {
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
-                x0 = ls_fmin(x0, x), x1 = ls_fmax(x1, x), y0 = ls_fmin(y0, y), y1 = ls_fmax(y1, y);
+                x0 = rs__fmin(x0, x), x1 = rs__fmax(x1, x), y0 = rs__fmin(y0, y), y1 = rs__fmax(y1, y);
             }
             rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
                        J->ids, (uint32_t)k, pass);

@@ -153,9 +153,6 @@ static int64_t hcell(const pt_cells *H, double x)
     return H->mul ? cell_clamp(x * H->inv) : cell_clamp(x / H->cell);
 }
 
-/* fmin and fmax (NaN: the other), inline */
-static double nmin(double a, double b) { return a < b || b != b ? a : b; }
-static double nmax(double a, double b) { return a > b || b != b ? a : b; }
 
 /* Reads by id at random places are asked for this many steps ahead
  * (rs__prefetch): at 10^5 records the arrays are beyond the cache, and a
@@ -706,20 +703,20 @@ static rs_result find_tees(build *B)
             const double *pa = B->xy + 2 * a, *pb = B->xy + 2 * k1;
             double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
             if (!(dd > 0) || !isfinite(dd)) continue;
-            double ymin = nmin(pa[1], pb[1]) - tol, ymax = nmax(pa[1], pb[1]) + tol;
+            double ymin = rs__fmin(pa[1], pb[1]) - tol, ymax = rs__fmax(pa[1], pb[1]) + tol;
             int64_t r0 = cell_of(ymin, g), r1 = cell_of(ymax, g);
             for (int64_t cy = r0; cy <= r1 && !res; cy++) {
-                double y0 = nmax((double)cy * g, ymin) - tol, y1 = nmin((double)(cy + 1) * g, ymax) + tol;
+                double y0 = rs__fmax((double)cy * g, ymin) - tol, y1 = rs__fmin((double)(cy + 1) * g, ymax) + tol;
                 double t0 = 0, t1 = 1;
                 if (dy != 0) {
                     t0 = (y0 - pa[1]) / dy;
                     t1 = (y1 - pa[1]) / dy;
                     if (t0 > t1) { double q = t0; t0 = t1; t1 = q; }
-                    t0 = nmax(t0, 0), t1 = nmin(t1, 1);
+                    t0 = rs__fmax(t0, 0), t1 = rs__fmin(t1, 1);
                     if (t0 > t1) continue;
                 }
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
-                int64_t c0 = cell_of(nmin(xa, xb) - tol, g), c1 = cell_of(nmax(xa, xb) + tol, g);
+                int64_t c0 = cell_of(rs__fmin(xa, xb) - tol, g), c1 = cell_of(rs__fmax(xa, xb) + tol, g);
                 uint64_t kx0, kx1, ky, ky1;
                 if (!key_range(&H, 1, cy, cy, &ky, &ky1) || !key_range(&H, 0, c0, c1, &kx0, &kx1)) continue;
                 for (uint64_t kx = kx0; kx <= kx1 && !res; kx++) {
@@ -1447,13 +1444,13 @@ static rs_result surface_tees(build *B, rs_network *N)
                 double lo = cy == 0 ? -INFINITY : by0 + (double)cy * c, hi = cy + 1 == ny ? INFINITY : by0 + (double)(cy + 1) * c;
                 double t0 = 0, t1 = 1;
                 if (dy != 0) {
-                    t0 = (nmax(lo, ymin + rq) - rq - pa[1]) / dy, t1 = (nmin(hi, ymax - rq) + rq - pa[1]) / dy;
+                    t0 = (rs__fmax(lo, ymin + rq) - rq - pa[1]) / dy, t1 = (rs__fmin(hi, ymax - rq) + rq - pa[1]) / dy;
                     if (t0 > t1) { double t = t0; t0 = t1; t1 = t; }
-                    t0 = nmax(t0, 0), t1 = nmin(t1, 1);
+                    t0 = rs__fmax(t0, 0), t1 = rs__fmin(t1, 1);
                     if (t0 > t1) continue;
                 }
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
-                size_t c0 = surf_cell(nmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(nmax(xa, xb) + rq, bx0, ic, nx);
+                size_t c0 = surf_cell(rs__fmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(rs__fmax(xa, xb) + rq, bx0, ic, nx);
                 for (uint32_t i = start[cy * nx + c0], ie = start[cy * nx + c1 + 1]; i < ie; i++)
                     surf_test(B, N, &fe[ids[i]], (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
             }

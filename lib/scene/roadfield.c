@@ -192,6 +192,16 @@ static int seg_touches_rect(const rf_seg *s, double x0, double y0, double x1, do
            seg_dist(s, x1, y1) <= R;
 }
 
+/* Memory a later step may write into instead of allocating its own: the
+ * pass-1 record once the lists are filled (4 bytes an entry, ~35 bytes a
+ * segment on the city). On 10^5 roads the boxes of the holder search and
+ * the row lists' temporaries would otherwise be ~36 MB of fresh pages a
+ * build (69 k -> 60 k page faults). */
+typedef struct rf_scratch {
+    void *p;
+    size_t bytes;
+} rf_scratch;
+
 typedef struct rf_builder {
     rs__roadfield *f;
     uint32_t *cnt;   /* per cell: count (pass 1), then end cursor (pass 2) */
@@ -211,20 +221,10 @@ typedef struct rf_builder {
      * and row are even (else its last cell), its cell1 (the holder search
      * then gathers about a quarter of the lists) */
     uint32_t *pref, pcell;
-    void *scratch; /* the record's memory after the fill (rf_scratch), freed with the builder */
+    rf_scratch scratch; /* the record's memory after the fill, freed with the builder */
     size_t seg0, rec0; /* first capacities of recend/pref and of the record (grown by doubling) */
     int norec;
 } rf_builder;
-
-/* Memory a later step may write into instead of allocating its own: the
- * pass-1 record once the lists are filled (4 bytes an entry, ~35 bytes a
- * segment on the city). On 10^5 roads the boxes of the holder search and
- * the row lists' temporaries would otherwise fault ~45 MB of fresh pages
- * in, 15 % of the build. */
-typedef struct rf_scratch {
-    void *p;
-    size_t bytes;
-} rf_scratch;
 
 /* n * size bytes: from sc when they fit (*own = 0), else newly allocated
  * (*own = 1); NULL when out of memory. */
@@ -996,19 +996,17 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
         }
     }
     /* the record is read: its memory serves the relations and the row lists */
-    rf_scratch sc = { NULL, 0 };
     if (!b->norec && b->rec) {
-        sc.p = b->rec;
-        sc.bytes = b->caprec * sizeof *b->rec;
+        b->scratch.p = b->rec;
+        b->scratch.bytes = b->caprec * sizeof *b->rec;
         b->rec = NULL;
     }
     rec_drop(b);
-    b->scratch = sc.p;
     if (rs__poll(ctx)) return RS_ERR_CANCELLED;
     rf_holders h;
     memset(&h, 0, sizeof h);
     h.limit = b->work_limit;
-    res = seg_relations(ctx, f, b->cell1, &h, &sc);
+    res = seg_relations(ctx, f, b->cell1, &h, &b->scratch);
     holders_free(ctx, &h);
     f->relwork = h.work;
     rs__free(ctx, b->cell1);
@@ -1016,9 +1014,10 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     if (res == RS_ERR_LIMIT) b->work_over = 1;
     if (res != RS_OK) return res;
     if (rs__poll(ctx)) return RS_ERR_CANCELLED;
-    if ((res = build_rows(ctx, f, &sc)) != RS_OK) return res;
-    rs__free(ctx, b->scratch);
-    b->scratch = NULL;
+    if ((res = build_rows(ctx, f, &b->scratch)) != RS_OK) return res;
+    rs__free(ctx, b->scratch.p);
+    b->scratch.p = NULL;
+    b->scratch.bytes = 0;
     if (rs__poll(ctx)) return RS_ERR_CANCELLED;
     build_colpix(ctx, f);
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
@@ -1045,7 +1044,7 @@ static void builder_init(rf_builder *b, rs_ctx *ctx, rs__roadfield *f)
 static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_result res)
 {
     rs__free(ctx, b->cell1);
-    rs__free(ctx, b->scratch);
+    rs__free(ctx, b->scratch.p);
     rec_drop(b);
     rs__roadfield_free(ctx, f);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "roadfield: out of memory");
