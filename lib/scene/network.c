@@ -134,7 +134,7 @@ typedef struct pt_cells {
 
 /* floor(x / cell) clamped to +-4.6e18 (NaN: the low end); floor by the
  * integer conversion (floor is a libm call: a tenth of a small build) */
-static int64_t cell_clamp(double t)
+static inline int64_t cell_clamp(double t)
 {
     if (!(t > -4.6e18)) return (int64_t)-4.6e18; /* (also catches -inf) */
     if (!(t < 4.6e18)) return (int64_t)4.6e18;
@@ -148,7 +148,7 @@ static int64_t cell_of(double x, double cell) { return cell_clamp(x / cell); }
  * a divide (the points' cells, their bounds and the discs' reach all take
  * this one function, and any monotone one finds every pair: the tests are
  * exact); the road ends' cells divide, as the T walk's rows do. */
-static int64_t hcell(const pt_cells *H, double x)
+static inline int64_t hcell(const pt_cells *H, double x)
 {
     return H->mul ? cell_clamp(x * H->inv) : cell_clamp(x / H->cell);
 }
@@ -731,10 +731,16 @@ static rs_result find_tees(build *B)
                         /* (the entry's own point first: it passes over most ends
                          * without reading the end's road at a random place) */
                         const double *pe = &H.ent[q].x; /* (a key cell of 2^extra cells: a T found twice merges) */
-                        double u = ((pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy) / dd;
+                        double num = (pe[0] - pa[0]) * dx + (pe[1] - pa[1]) * dy;
+                        /* (num <= 0 or >= dd gives u <= 0 or >= 1 after rounding too: most
+                         * candidates, a segment's own and joined ends, go without a divide) */
+                        if (!(num > 0 && num < dd)) continue;
+                        double u = num / dd;
                         if (!(u > 0 && u < 1)) continue; /* beyond the segment: the points' business */
                         double qx = pa[0] + u * dx, qy = pa[1] + u * dy, ex = pe[0] - qx, ey = pe[1] - qy;
-                        double dist = sqrt(ex * ex + ey * ey);
+                        double e2 = ex * ex + ey * ey;
+                        if (!(e2 <= 4 * tol * tol)) continue; /* (sqrt(e2) > tol: no sqrt) */
+                        double dist = sqrt(e2);
                         if (!(dist <= tol)) continue;
                         if (B->cid && chain_joint(B, e)) continue; /* (inside its street: no end on another) */
                         uint32_t nd = B->nodeof[e]; /* (an end: its group is a node) */
