@@ -153,6 +153,11 @@ typedef struct rs_limits {
                                   line) with its half-planes, and the index
                                   entries over the pieces (docs/ROBUSTNESS.md);
                                   RS_ERR_LIMIT beyond */
+    uint64_t max_dirty_compare; /* 2^20: candidate pixels rs_road_grid_update
+                                  renders under the old and the new grid to
+                                  report only those that change (~0.25 s at
+                                  most); beyond, it reports the candidates,
+                                  a superset (docs/embedding.md) */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;
@@ -998,9 +1003,12 @@ typedef struct rs_pixel_rect {
  * `old` and of *out (the normal map and lit output read one pixel around:
  * grow them by one pixel; rs_splat_layers_window's planes are not
  * covered). The rectangles do not overlap, are sorted by rows and then
- * columns, and follow the pieces that changed row by row (for one road
- * moved, added or removed 1.3 to 1.9 times the pixels that really change
- * on the 10k-road city, docs/embedding.md). The roads are matched by what
+ * columns. They hold exactly the pixels whose unlit colour or weight
+ * differ when the pieces that changed reach at most
+ * rs_limits.max_dirty_compare pixels (2^20): those candidates are rendered
+ * under both grids and compared; beyond, the rectangles are the candidates
+ * (for one road moved, added or removed on the 10k-road city 1.9 to 2.4
+ * times the pixels that change, docs/embedding.md). The roads are matched by what
  * they draw, not by index: a removal's renumbering dirties nothing else.
  * `old` must have been built with opts->grid.edits set (else
  * RS_ERR_INVALID_ARG): only such a grid keeps the pieces this compares
@@ -1010,8 +1018,9 @@ typedef struct rs_pixel_rect {
  * give is RS_ERR_INVALID_ARG naming the value; when the edit changes the
  * alpha-map road cell (the narrowest road decides it) the whole image is
  * one dirty rectangle. Cost: a full rs_road_grid_build plus the
- * comparison (about a tenth of a build); progress and cancel as
- * rs_road_grid_build. Errors leave *out NULL. */
+ * comparison (about a tenth of a build) and the candidates' renders;
+ * progress and cancel: rs_road_grid_build's, then the renders' (2 units a
+ * candidate pixel). Errors leave *out NULL. */
 RS_API rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_road_grid *old, rs_road_grid **out);
 /* The grid's dirty rectangles (none for a grid from rs_road_grid_build):

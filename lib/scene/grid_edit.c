@@ -26,6 +26,7 @@
 #include "lanes.h"
 #include "road_local.h"
 #include "dem.h"
+#include "splatter.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -53,9 +54,8 @@ static uint64_t mixs(uint64_t h, const char *s)
     return mix(h, f);
 }
 
-/* A road as a neighbour's end sees it: width, first and last points (its
- * attributes act through what they resolve to: the links and T ends,
- * hashed where they are used). */
+/* A through road as a T end sees it: width, first and last points (its
+ * attributes act through what they resolve to: the T's edge lines). */
 static uint64_t road_sig(const rs_roads *roads, size_t q)
 {
     const double *xy;
@@ -70,7 +70,9 @@ static uint64_t road_sig(const rs_roads *roads, size_t q)
     return h;
 }
 
-/* Per road end: what it continues into and the T it ends at. */
+/* Per road end: the T it ends at, for the T's own pieces (the road the
+ * end continues into changes no pixel of the surface: the fields join
+ * capsules by geometry alone; its lines are pieces of their own). */
 typedef struct road_ends {
     uint64_t h[2];
     double tee[2]; /* a trimmed end at a T: how far past the end point the through road's far edge lies
@@ -104,6 +106,14 @@ static void road_prints(const rs_roads *roads, size_t i, const rs__styling *st, 
     /* only what differs from an unstyled road: a road draws alike in a
      * grid with styles and in one without */
     if (st && i < st->nroads) {
+        /* how the casings are drawn: the grid's field widened or a field
+         * of their own (wider than an index cell), and one colour for all
+         * (C - R blended) or each pixel the colour of its nearest road's
+         * casing, none when that road has none. The ways differ at a
+         * side road's edge in a T mouth, and an edit of any road's casing
+         * may switch them (fuzz/edits: a far road's new casing colour took
+         * the casing off a pixel where a road without one meets one with) */
+        if (st->casing) m = mix(mix(m, st->casing_merged ? 0xca51 : 0xca52), st->casing_uniform ? 0xca53 : 0xca54);
         uint64_t sf = st->surface ? st->surface[i] : 0;
         shade = sf == RS_SURFACE_GRADIENT;
         if (sf != RS_SURFACE_DEFAULT && st->colour) {
@@ -176,16 +186,11 @@ static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, d
     return RS_OK;
 }
 
-static void end_info(const rs_roads *roads, size_t i, const rs_network *net, const rs__tee_end *tees,
-                     const size_t *tee_of, road_ends *E)
+static void end_info(const rs_roads *roads, size_t i, const rs__tee_end *tees, const size_t *tee_of, road_ends *E)
 {
     memset(E, 0, sizeof *E);
     for (int e = 0; e < 2; e++) {
         uint64_t h = mix(0xe0d, (uint64_t)e);
-        if (net && i < net->nroads) {
-            uint32_t l = net->link[2 * i + (size_t)e];
-            h = l == NO_LINK ? mix(h, 0xdead) : mix(mix(h, road_sig(roads, l / 2)), l & 1);
-        }
         if (tee_of && tee_of[2 * i + (size_t)e] != SIZE_MAX) {
             const rs__tee_end *t = &tees[tee_of[2 * i + (size_t)e]];
             h = mixd(mixd(mixd(mixd(h, t->nx), t->ny), t->far), t->grow);
@@ -277,13 +282,12 @@ static rs_result flush(builder *b, const rs__road_local *rl, size_t k0, size_t k
             }
         }
     }
-    if (k0 == 0) h = mix(h, F->E.h[0]);
-    if (k1 + 1 == rl->n) h = mix(h, F->E.h[1]);
-    /* a segment of it may be clipped at a T: no core, and the T's print
-     * (a core in one grid is never the same piece as a clipped one) */
+    /* a segment of it may be clipped at a T: no core (diff matches a core
+     * only with a core). What the T changes lies in its own pieces (strip,
+     * box, the segments it may clip: road_pieces), so the chunk's print
+     * leaves it out, and a T made or lost by an edit elsewhere (a class
+     * change of the through road) dirties the T, not the chunk. */
     int tee = k0 < F->clip0 || k1 > F->clip1;
-    if (k0 < F->clip0) h = mix(mix(h, 0xc1f), F->E.h[0]);
-    if (k1 > F->clip1) h = mix(mix(h, 0xc1f), F->E.h[1]);
     return stretch(b, F, mix(F->core, h), mix(F->rim, h), x[k0], y[k0], x[k1], y[k1], dev, th, tee);
 }
 
@@ -305,10 +309,6 @@ static rs_result split_long(builder *b, const rs__road_local *rl, size_t k, cons
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[k + 1]), y[k + 1]);
         h = mixd(mixd(h, ua), ub);
         if (F->s_matters) h = mixd(h, rl->s[k]);
-        if (k == 0) h = mix(h, F->E.h[0]);
-        if (k + 2 == rl->n) h = mix(h, F->E.h[1]);
-        if (k < F->clip0) h = mix(mix(h, 0xc1f), F->E.h[0]);
-        if (k >= F->clip1) h = mix(mix(h, 0xc1f), F->E.h[1]);
         r = stretch(b, F, mix(F->core, h), mix(F->rim, h), o[0] + ua * d[0], o[1] + ua * d[1], o[0] + ub * d[0],
                     o[1] + ub * d[1], 0, 0, k < F->clip0 || k >= F->clip1);
     }
@@ -320,8 +320,6 @@ static rs_result joint(builder *b, const rs__road_local *rl, size_t k, const roa
 {
     uint64_t h = mix(F->rim, 0x7015);
     for (size_t j = k ? k - 1 : k; j <= k + 1 && j < rl->n; j++) h = mixd(mixd(h, rl->x[j]), rl->y[j]);
-    if (k == 0) h = mix(h, F->E.h[0]);
-    if (k + 1 == rl->n) h = mix(h, F->E.h[1]);
     return push(b, h, rl->x[k], rl->y[k], rl->x[k], rl->y[k], F->reach);
 }
 
@@ -406,14 +404,36 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
             double mg = 0.7072 * b->pix + 1e-9 * (1 + fabs(x[k]) + fabs(y[k]) + R + ub - ua);
             r = push(b, mix(h, 0xb0c5), bx0 - mg, by0 - mg, bx1 + mg, by1 + mg, -1);
         }
-        /* and the segments a field may clip (tee_run, counted above) */
+        /* and the segments a field may clip (tee_run, counted above): of
+         * each, the part whose capsule may reach the end's normal line
+         * (centre line at n.p >= n.E - reach, a pixel diagonal and rounding
+         * less). A field's trimmed shape differs from the capsule only past
+         * its clip line, which lies beyond E, and past E along the end
+         * segment (lib/scene/roadfield.c tee_box); the rest of the segment
+         * draws alike with or without the T, so a T made or lost by an
+         * edit elsewhere dirties only the mouth. */
         size_t run = e ? n - 1 - F->clip1 : F->clip0;
+        double tn = F->E.tnx[e], tm = F->E.tny[e], cE = tn * x[k] + tm * y[k];
+        double L = cE - F->reach - 0.7072 * b->pix - 1e-6 * (1 + fabs(cE) + F->reach);
         for (size_t i = 0; i < run && !r; i++) {
             size_t j = e ? n - 1 - i : i, i2 = e ? j - 1 : j + 1;
             double o[2], d[2], t0, t1;
-            if (clip_near(b, x[j], y[j], x[i2], y[i2], F->reach, o, d, &t0, &t1))
-                r = push(b, mix(h, 0xbac + (uint64_t)i), o[0] + t0 * d[0], o[1] + t0 * d[1], o[0] + t1 * d[0],
-                         o[1] + t1 * d[1], F->reach);
+            if (!clip_near(b, x[j], y[j], x[i2], y[i2], F->reach, o, d, &t0, &t1)) continue;
+            double no = tn * o[0] + tm * o[1], nd = tn * d[0] + tm * d[1];
+            if (nd > 0) t0 = fmax(t0, (L - no) / nd);
+            else if (nd < 0) t1 = fmin(t1, (L - no) / nd);
+            else if (no < L) t0 = 2; /* (none of it) */
+            uint64_t hi = mix(h, 0xbac + (uint64_t)i);
+            if (t0 <= t1) {
+                r = push(b, hi, o[0] + t0 * d[0], o[1] + t0 * d[1], o[0] + t1 * d[0], o[1] + t1 * d[1], F->reach);
+                continue;
+            }
+            /* (not reaching the line: a field still takes the box around its
+             * point nearest the line, r and a margin a side, as a T box) */
+            size_t po = o[0] == x[j] && o[1] == y[j] ? j : i2, pf = nd >= 0 ? j + i2 - po : po;
+            double px = x[pf], py = y[pf];
+            double R = F->reach + 0.7072 * b->pix + 1e-9 * (1 + fabs(px) + fabs(py) + F->reach);
+            r = push(b, mix(hi, 0xb0c5), px - R, py - R, px + R, py + R, -1);
         }
     }
     /* chunks: runs of short segments up to a chunk of arc staying near
@@ -476,8 +496,10 @@ static rs_result slab_pieces(builder *b, const rs__linesym_piece_view *V, int al
             if (!all && lo >= hp[3] + eps) continue; /* cuts no pixel centre here */
             h = mixd(mixd(mixd(mixd(h, hp[0]), hp[1]), hp[2]), hp[3]);
         }
+        b->kind = RS__EI_PAINT_AT;
         r = push(b, h, V->ox + ua * V->ux + vm * nx, V->oy + ua * V->uy + vm * ny, V->ox + ub * V->ux + vm * nx,
                  V->oy + ub * V->uy + vm * ny, rad);
+        b->kind = RS__EI_PAINT;
     }
     return r;
 }
@@ -675,7 +697,7 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
         }
         road_fp F;
         road_prints(roads, i, st, net, core_in, &F);
-        end_info(roads, i, net, tees, tee_of, &F.E);
+        end_info(roads, i, tees, tee_of, &F.E);
         r = road_pieces(&b, &rl, &F);
         rs__road_local_free(ctx, &rl);
     }
@@ -885,6 +907,22 @@ static int core_spans(rs_ctx *ctx, spans *S, const rs__edit_item *it, double pix
     return 1;
 }
 
+/* The pixels whose centre lies in item `it`'s region grown by pad (an
+ * RS__EI_PAINT_AT piece). */
+static int centre_spans(rs_ctx *ctx, spans *S, const rs__edit_item *it, double pad, double pix, uint32_t W, uint32_t H)
+{
+    double x0, y0, x1, y1;
+    item_box(it, pad, &x0, &y0, &x1, &y1);
+    uint32_t r0 = to_px(ceil(y0 / pix - 0.5), H), r1 = to_px(floor(y1 / pix - 0.5) + 1, H);
+    for (uint32_t y = r0; y < r1; y++) {
+        double lo = x0, hi = x1;
+        if (it->r >= 0 && !capsule_slice(it->ax, it->ay, it->bx, it->by, it->r + pad, (y + 0.5) * pix, &lo, &hi)) continue;
+        uint32_t a = to_px(ceil(lo / pix - 0.5), W), b = to_px(floor(hi / pix - 0.5) + 1, W);
+        if (a < b && !span_push(ctx, S, y, a, b)) return 0;
+    }
+    return 1;
+}
+
 /* Spans to rectangles: a row's overlapping or touching spans merged, a
  * rectangle grown down while the next row has the same span. */
 static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size_t *nout)
@@ -997,7 +1035,9 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     size_t i = 0, j = 0;
     while (!r && ok && (i < ea->n || j < eb->n)) {
         if (i < ea->n && j < eb->n && ka[i].h == kb[j].h) {
-            kept[kb[j].i] = 1;
+            /* (a core only where it was one: a chunk clipped at a T in one grid is the same piece
+             * but not wholly road there) */
+            kept[kb[j].i] = ea->it[ka[i].i].kind == eb->it[kb[j].i].kind ? 1 : 3;
             i++, j++;
             continue;
         }
@@ -1005,7 +1045,10 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
         double pad;
         if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) q = &ea->it[ka[i++].i], pad = pa;
         else q = &eb->it[kb[j++].i], pad = pb;
-        ok = item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
+        if (q->kind == RS__EI_PAINT_AT) /* (a line's paint: the road field's pad is not its business) */
+            ok = centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
+                              pix, W, H);
+        else ok = item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
     }
     /* where an unchanged road's core lies under a changed surface, the
      * pixels stay wholly road of the same colour (no fills: which road is
@@ -1013,7 +1056,7 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     if (!r && ok && Ssf.n && !ea->fills && !eb->fills) {
         for (size_t k = 0; ok && k < ea->n + eb->n; k++) {
             const rs__edit_item *q = k < ea->n ? &ea->it[k] : &eb->it[k - ea->n];
-            if (q->kind == RS__EI_PAINT || (k >= ea->n && kept[k - ea->n])) continue;
+            if (q->kind >= RS__EI_PAINT || (k >= ea->n && kept[k - ea->n])) continue;
             if (k < ea->n && !item_changed(kb, eb->n, q->h)) continue;
             double x0, y0, x1, y1;
             item_box(q, k < ea->n ? pa : pb, &x0, &y0, &x1, &y1);
@@ -1047,6 +1090,84 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     rs__free(ctx, Ssf.v);
     rs__free(ctx, C.v);
     return r;
+}
+
+/* The candidate rectangles of b (diff) narrowed to the pixels that change:
+ * each rendered under both grids (unlit: the colour and weight the
+ * rectangles promise, docs/embedding.md) and compared byte for byte. The
+ * pieces find where a pixel may change, not whether it does: at 1.25 m
+ * pixels a new casing 0.15 m wider changes one pixel of the three its rim
+ * meets. Up to rs_limits.max_dirty_compare candidate pixels (2^20: ~0.25 s
+ * on the styled city); beyond, and when a splatter cannot be made on a grid (another
+ * DEM or options given), the candidates stand. */
+#define EXACT_WINDOW 16384u /* pixels of one window */
+
+static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, const rs_road_grid *a,
+                             rs_road_grid *b)
+{
+    rs__grid_edit *e = b->edit;
+    uint64_t total = 0;
+    for (size_t k = 0; k < e->ndirty; k++)
+        total += (uint64_t)(e->dirty[k].x1 - e->dirty[k].x0) * (e->dirty[k].y1 - e->dirty[k].y0);
+    if (!total || total > ctx->limits.max_dirty_compare) return RS_OK;
+    rs_splat_options o = *opts;
+    o.lighting.enable = 0;
+    o.progress = NULL; /* (the context's, as the build's; reported as 2 units a pixel) */
+    o.progress_user = NULL;
+    rs__progress pg;
+    rs__progress_begin(ctx, &pg, NULL, NULL, 2 * total, 4096);
+    rs_splatter *sa = NULL, *sb = NULL;
+    uint8_t *ca = rs__alloc_array(ctx, EXACT_WINDOW, 8);
+    uint16_t *wa = rs__alloc_array(ctx, EXACT_WINDOW, 2 * sizeof *wa);
+    spans S;
+    memset(&S, 0, sizeof S);
+    rs_result r = ca && wa ? RS_OK : RS_ERR_NOMEM;
+    if (!r) r = rs__splatter_create_lean(ctx, dem, a, &o, &sa);
+    if (!r) r = rs__splatter_create_lean(ctx, dem, b, &o, &sb);
+    int ok = 1;
+    for (size_t k = 0; !r && ok && k < e->ndirty; k++) {
+        const rs_pixel_rect R = e->dirty[k];
+        for (uint32_t x = R.x0; !r && ok && x < R.x1;) {
+            uint32_t cw = R.x1 - x < EXACT_WINDOW ? R.x1 - x : EXACT_WINDOW, rows = EXACT_WINDOW / cw;
+            for (uint32_t y = R.y0; !r && ok && y < R.y1; y += rows) {
+                uint32_t h = R.y1 - y < rows ? R.y1 - y : rows;
+                uint8_t *cb = ca + 4 * (size_t)EXACT_WINDOW;
+                uint16_t *wb = wa + EXACT_WINDOW;
+                r = rs_splat_window(ctx, sa, x, y, cw, h, ca, 4 * (size_t)cw, wa, cw, NULL);
+                if (!r) r = rs_splat_window(ctx, sb, x, y, cw, h, cb, 4 * (size_t)cw, wb, cw, NULL);
+                for (uint32_t j = 0; !r && ok && j < h; j++) {
+                    const size_t row = (size_t)j * cw;
+                    for (uint32_t i = 0; ok && i < cw;) {
+                        while (i < cw && !memcmp(ca + 4 * (row + i), cb + 4 * (row + i), 4) && wa[row + i] == wb[row + i]) i++;
+                        uint32_t i0 = i;
+                        while (i < cw && (memcmp(ca + 4 * (row + i), cb + 4 * (row + i), 4) || wa[row + i] != wb[row + i])) i++;
+                        if (i > i0) ok = span_push(ctx, &S, y + j, x + i0, x + i);
+                    }
+                }
+                if (!r && rs__tick(ctx, 2 * (uint64_t)cw * h)) r = RS_ERR_CANCELLED;
+            }
+            x += cw;
+        }
+    }
+    rs_splatter_free(ctx, sa);
+    rs_splatter_free(ctx, sb);
+    rs__free(ctx, ca);
+    rs__free(ctx, wa);
+    if (!r && !ok) r = RS_ERR_NOMEM;
+    if (!r && !S.over) {
+        rs_pixel_rect *nr = NULL;
+        size_t nn = 0;
+        r = spans_to_rects(ctx, &S, &nr, &nn);
+        if (!r) {
+            rs__free(ctx, e->dirty);
+            e->dirty = nr;
+            e->ndirty = nn;
+        }
+    }
+    rs__free(ctx, S.v);
+    /* (anything but a cancel leaves the candidates: a superset) */
+    if (r && r != RS_ERR_CANCELLED) r = RS_OK;
+    return rs__progress_end(ctx, &pg, r);
 }
 
 rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
@@ -1087,6 +1208,7 @@ rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     r = rs_road_grid_build(ctx, dem, roads, &o, &g);
     if (r) return r;
     r = diff(ctx, old, g, &g->edit->dirty, &g->edit->ndirty);
+    if (!r) r = exact_dirty(ctx, dem, &o, old, g);
     if (r) {
         rs_road_grid_free(ctx, g);
         return r;

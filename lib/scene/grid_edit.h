@@ -43,7 +43,10 @@ static inline uint64_t rs__fp_mixd(uint64_t h, double d)
 enum {
     RS__EI_CORE,    /* a road's core: its pixels are wholly road */
     RS__EI_SURFACE, /* the rest of a road's surface and casing */
-    RS__EI_PAINT    /* line symbols and markings, painted over the surfaces */
+    RS__EI_PAINT,   /* line symbols and markings, painted over the surfaces */
+    RS__EI_PAINT_AT /* paint whose region holds the pixel centres it reaches, not the pixel squares
+                       (the line symbols' straight pieces: their u and v ranges are grown by the
+                       square's extent already) */
 };
 typedef struct rs__edit_item {
     uint64_t h;

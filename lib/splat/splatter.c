@@ -73,8 +73,23 @@ void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
     rs__free(ctx, s);
 }
 
+static rs_result splatter_make(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
+                               const rs_splat_options *opts, int lean, rs_splatter **out);
+
 rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
                              const rs_splat_options *opts, rs_splatter **out)
+{
+    return splatter_make(ctx, dem, roads, grid, opts, 0, out);
+}
+
+rs_result rs__splatter_create_lean(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid,
+                                   const rs_splat_options *opts, rs_splatter **out)
+{
+    return splatter_make(ctx, dem, NULL, grid, opts, 1, out);
+}
+
+static rs_result splatter_make(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_road_grid *grid,
+                               const rs_splat_options *opts, int lean, rs_splatter **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_splatter_create: out is NULL");
@@ -154,7 +169,7 @@ rs_result rs_splatter_create(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
         s->specular = o.lighting.specular;
     }
     /* per-sample terrain colours where they would dominate the splat */
-    if (!r) r = rs__surface_colours(ctx, s);
+    if (!r && !lean) r = rs__surface_colours(ctx, s);
     if (r == RS_ERR_NOMEM) r = rs__fail(ctx, r, "out of memory for the terrain colours");
     r = rs__progress_end(ctx, &pg, r);
     if (r) {

@@ -109,6 +109,12 @@ void rs__surface(const rs_splatter *s, rs__piece *p);
 #define RS__TCOL_TEXELS 2u
 #define RS__TCOL_SAMPLES ((uint64_t)1 << 22)
 rs_result rs__surface_colours(rs_ctx *ctx, rs_splatter *s);
+/* rs_splatter_create on a grid for a few small windows (rs_road_grid_update
+ * compares the pixels of its candidate rectangles): without the per-sample
+ * terrain colours, an O(DEM) table that windows do without (the same
+ * bytes: they compute their own samples' colours). */
+rs_result rs__splatter_create_lean(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid,
+                                   const rs_splat_options *opts, rs_splatter **out);
 void rs__overlays(const rs_splatter *s, rs__piece *p);
 /* rs__overlays in its three parts: casings (onto T, or p->cas for the
  * composite, or p->lcas), the styles' surfaces (onto S), then the paint of
