@@ -1073,15 +1073,15 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
 
     /* Index cell: about one segment per cell over the map (short lists, few
      * cells per segment), at least the DEM cell and half the mean road
-     * width, at most the mean width (wider cells are rarely whole inside a
-     * road: their pixels lose the full-cell path); doubled until the grid
-     * is small. A pixel's coverage does not depend on the cell (the lists
-     * only narrow the candidates): the city's 1000 roads take 7.7 m cells,
-     * build and coverage 17 % faster than the 5 m DEM cell (docs/roadfield.md
-     * "Index"). Twice the mean width built faster still, but with it
-     * fuzz/edits found an added road that changed the colour of another
-     * road's edge pixel outside the dirty rectangles (docs/speed.md
-     * "Session 24"). */
+     * width, at most twice the mean width (wider cells are rarely whole
+     * inside a road: their pixels lose the full-cell path; the lists'
+     * savings outweigh it up to about twice); doubled until the grid is
+     * small. A pixel's value does not depend on the cell (the lists only
+     * narrow the candidates): the city's 1000 roads take 15.3 m cells
+     * (docs/roadfield.md "Index"). (Until 3 December 2026 at most the mean
+     * width: a repeated end point clipped at a T took every point short of
+     * its clip line as on its surface, so a fill lookup depended on which
+     * cells listed it; fixed in tee_sd.) */
     double c = p->index_cell, cap = GRID_MAX_CELLS;
     if (c == 0) {
         double wsum = 0, nseg = 0;
@@ -1092,7 +1092,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             wsum += lm_min(w, 1e12) / (double)nroads;
             nseg += np > 1 ? (double)(np - 1) : 0;
         }
-        double lo = lm_max(p->cell_size, 0.5 * wsum), hi = lm_max(lo, wsum);
+        double lo = lm_max(p->cell_size, 0.5 * wsum), hi = lm_max(lo, 2 * wsum);
         double even = nseg > 0 ? sqrt(p->width_m * p->height_m / nseg) : hi;
         c = even < lo || !(even == even) ? lo : even > hi ? hi : even;
         cap = GRID_AUTO_CELLS;
@@ -1402,7 +1402,11 @@ static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y
     size_t i0, i1;
     tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
     double wx = x - s->ax, wy = y - s->ay, u = wx * s->ux + wy * s->uy, t = wx * s->uy - wy * s->ux;
-    double sd = fabs(t) - s->r, disc = INFINITY, hmax = -INFINITY;
+    /* a zero-length segment (a repeated end point the T clips) has no
+     * strip, as shape_of says: its t is 0 everywhere, which made every
+     * point short of the clip line "on" it (fuzz/edits: a road's fill
+     * taken by a repeated point's T 7 m away, in the cells that listed it) */
+    double sd = s->len > 0 ? fabs(t) - s->r : INFINITY, disc = INFINITY, hmax = -INFINITY;
     int cut[2] = { 0, 0 };
     for (size_t k = i0; k < i1; k++) {
         const rf_tee *T = &f->tee[k];
