@@ -709,6 +709,60 @@ static void test_alloc_failures(void)
     rs_ctx_free(ctx);
 }
 
+/* Cancel at every progress call of an update, the comparison's last ones
+ * included: RS_ERR_CANCELLED and no grid, or (past the last) the grid and
+ * its exact rectangles. */
+typedef struct cancel_at {
+    long calls, at;
+} cancel_at;
+
+static int cancel_cb(void *user, uint64_t done, uint64_t total)
+{
+    cancel_at *c = user;
+    (void)done, (void)total;
+    return ++c->calls == c->at;
+}
+
+static void test_update_cancel(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = flat_dem(ctx, 31, 21, 4);
+    rs_roads *R = NULL;
+    CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    o.grid.edits = 1;
+    rs_road_grid *g0 = NULL;
+    CHECK(rs_road_grid_build(ctx, dem, R, &o, &g0) == RS_OK);
+    const double pts[] = { 0, 3, 40, 8, 80, 3 };
+    CHECK(rs_roads_replace(ctx, R, 1, NULL, 5, pts, 3) == RS_OK);
+    cancel_at c = { 0, 0 };
+    rs_ctx_set_progress(ctx, cancel_cb, &c);
+    rs_road_grid *g1 = NULL;
+    CHECK(rs_road_grid_update(ctx, dem, R, &o, g0, &g1) == RS_OK && g1);
+    size_t nr = g1 ? rs_road_grid_dirty(g1, NULL, 0) : 0;
+    rs_road_grid_free(ctx, g1);
+    long total = c.calls;
+    CHECK(total > 2 && nr > 0);
+    for (long at = 1; at <= total + 1; at++) {
+        c.calls = 0, c.at = at;
+        g1 = (rs_road_grid *)1;
+        rs_result r = rs_road_grid_update(ctx, dem, R, &o, g0, &g1);
+        if (at <= total)
+            CHECKF(r == RS_ERR_CANCELLED && g1 == NULL, "cancel at call %ld of %ld: %s", at, total, rs_strerror(r));
+        else
+            CHECKF(r == RS_OK && g1 && rs_road_grid_dirty(g1, NULL, 0) == nr, "no cancel: %s", rs_strerror(r));
+        if (r == RS_OK) rs_road_grid_free(ctx, g1);
+    }
+    rs_ctx_set_progress(ctx, NULL, NULL);
+    rs_road_grid_free(ctx, g0);
+    rs_roads_free(ctx, R);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
     test_remove();
@@ -718,6 +772,7 @@ int main(void)
     test_style_edit_grid();
     test_update_errors();
     test_alloc_failures();
+    test_update_cancel();
     test_random_edits();
     return th_finish("test_edits");
 }
