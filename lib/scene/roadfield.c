@@ -2024,7 +2024,7 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
 /* The nearest query; out NULL: whether any segment passes its tests (the
  * first one ends the scan). */
 static int nearest_scan(const rs__roadfield *f, double x, double y, double reach, const int *prio,
-                        rs__road_point *out, uint32_t *hit)
+                        const double *only, rs__road_point *out, uint32_t *hit)
 {
     if (!f || !(reach >= 0)) return 0;
     int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
@@ -2039,6 +2039,7 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
             size_t cell = (size_t)j * f->gw + i;
             for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
                 const rf_seg *s = &f->seg[f->ids[k]];
+                if (only && !(only[s->road] > 0)) continue;
                 double pr, side, d = seg_point(s, x, y, &pr, &side);
                 int tn = s->tee ? tee_near(f, s, x, y, reach) : 1;
                 if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
@@ -2058,6 +2059,7 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
         const rf_tee *T = &f->tee[f->tids[m]];
         if (x < T->box[0] || x > T->box[1] || y < T->box[2] || y > T->box[3]) continue;
         const rf_seg *s = &f->seg[T->seg];
+        if (only && !(only[s->road] > 0)) continue;
         double pr, side, d = seg_point(s, x, y, &pr, &side);
         int tn = tee_near(f, s, x, y, reach);
         if (!tn || (tn == 1 && !(d - s->r <= reach))) continue;
@@ -2081,12 +2083,18 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
 int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
                                  rs__road_point *out)
 {
-    return out ? nearest_scan(f, x, y, reach, prio, out, NULL) : 0;
+    return out ? nearest_scan(f, x, y, reach, prio, NULL, out, NULL) : 0;
+}
+
+int rs__roadfield_nearest_of(const rs__roadfield *f, double x, double y, double reach, const double *only,
+                             rs__road_point *out)
+{
+    return out ? nearest_scan(f, x, y, reach, NULL, only, out, NULL) : 0;
 }
 
 int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach)
 {
-    return nearest_scan(f, x, y, reach, NULL, NULL, NULL);
+    return nearest_scan(f, x, y, reach, NULL, NULL, NULL, NULL);
 }
 
 int rs__roadfield_any_near_hint(const rs__roadfield *f, double x, double y, double reach, uint32_t *hint)
@@ -2098,7 +2106,7 @@ int rs__roadfield_any_near_hint(const rs__roadfield *f, double x, double y, doub
      * answer is the same whichever one is found first. */
     const rf_seg *s = *hint < f->nseg ? &f->seg[*hint] : NULL;
     if (s && !s->tee && seg_dist(s, x, y) - s->r <= reach) return 1; /* seg_point's distance: the scan's test */
-    return nearest_scan(f, x, y, reach, NULL, NULL, hint);
+    return nearest_scan(f, x, y, reach, NULL, NULL, NULL, hint);
 }
 
 /* Fraction of a square of side `side` centred at the origin where

@@ -28,12 +28,16 @@ static void casing_pixel(const rs__styling *st, double pix, const rs__piece *p, 
      * T' takes (C - R) / (1 - R) of casing colour. */
     double share = ((c > 1 ? 1 : c) - R) / (1 - R);
     if (!(share > 0)) return;
-    /* the colour of the nearest road's casing (none: a road without one
-     * is nearest; with alpha-map edges the field holds the cased roads
-     * alone) */
+    /* the colour of the nearest road with a casing: C - R > 0 is its band
+     * (with alpha-map edges the field holds the cased roads alone). Until
+     * 3 December 2026 the nearest road of any kind: where an uncased road's
+     * end met a cased one, the pixel lost the casing the one-colour blend
+     * gives it (fuzz/edits) */
     rs__road_point rp;
     double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
-    if (!rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)) return;
+    if (!(st->casing_road ? rs__roadfield_nearest(st->casing, x, y, pix * HALF_SQRT2, &rp)
+                          : rs__roadfield_nearest_of(st->casing, x, y, pix * HALF_SQRT2, st->casing_width, &rp)))
+        return;
     const float *col = st->colour + 16 * (size_t)(st->casing_road ? st->casing_road[rp.road] : rp.road) + 12;
     float a = (float)(share > 1 ? 1 : share) * col[3], *tc = p->tc + (size_t)r * p->w * 3;
     if (p->lcas) {
