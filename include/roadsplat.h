@@ -1017,7 +1017,7 @@ typedef struct rs_pixel_rect {
  * other DEM dimensions, frame, texels, edge or buffer mode than `opts`
  * give is RS_ERR_INVALID_ARG naming the value; when the edit changes the
  * alpha-map road cell (the narrowest road decides it) the whole image is
- * one dirty rectangle. Cost: a full rs_road_grid_build plus the
+ * the candidate. Cost: a full rs_road_grid_build plus the
  * comparison (about a tenth of a build) and the candidates' renders;
  * progress and cancel: rs_road_grid_build's, then the renders' (2 units a
  * candidate pixel). Errors leave *out NULL. */
