@@ -199,6 +199,16 @@ typedef struct config {
     int hermite; /* the seed's Hermite line anti-aliasing */
 } config;
 
+/* Splat options at `texels` that keep the edit pieces (all else default). */
+static rs_splat_options edit_opts(uint32_t texels)
+{
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = texels;
+    o.grid.edits = 1;
+    return o;
+}
+
 static const char fill_styles[] = "style red\nfill #b04030\ncasing 0.4 #303030\nline 0 0.2 #ffffff dash 3 3\nend\n"
                                   "style grad\ngradient #202020 #707070\nend\n";
 static const char *const fill_names[] = { "red", "grad" };
@@ -229,10 +239,7 @@ static void run_config(const config *cf, tally *T, tally *Tc)
     for (size_t i = 0; ok && cf->fills && i < sc.nroads; i += 3)
         ok = rs_roads_set_attr(ctx, roads, i, "style", fill_names[(i / 3) % 2]) == RS_OK;
     CHECK(ok);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = cf->texels;
-    o.grid.edits = 1;
+    rs_splat_options o = edit_opts(cf->texels);
     o.coverage.edges = cf->edges;
     o.style.styles = S;
     if (cf->hermite) o.style.aa = RS_LINE_AA_HERMITE;
@@ -524,10 +531,7 @@ static void test_style_edit_grid(void)
     memset(&po, 0, sizeof po);
     po.styles = S;
     CHECK(rs_roads_parse_ex(ctx, text, sizeof text - 1, &po, &R) == RS_OK);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 8;
-    o.grid.edits = 1;
+    rs_splat_options o = edit_opts(8);
     o.style.styles = S;
     rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
     image a, b, c;
@@ -576,10 +580,7 @@ static void test_update_errors(void)
     rs_dem *dem = flat_dem(ctx, 21, 21, 2), *other = flat_dem(ctx, 23, 21, 2);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 4;
-    o.grid.edits = 1;
+    rs_splat_options o = edit_opts(4);
     rs_road_grid *g0 = NULL, *g1 = (rs_road_grid *)1;
     CHECK(rs_road_grid_build(ctx, dem, R, &o, &g0) == RS_OK);
     CHECK(rs_road_grid_update(ctx, dem, R, &o, NULL, &g1) == RS_ERR_INVALID_ARG && g1 == NULL && has_msg(ctx, "old"));
@@ -668,10 +669,7 @@ static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
     if (r) return r;
     const double pts[] = { 0, 3, 40, 8, 80, 3, 100, 9, 110, 20 };
     if (in->what == 0) {
-        rs_splat_options o;
-        memset(&o, 0, sizeof o);
-        o.texels = 4;
-        o.grid.edits = 1;
+        rs_splat_options o = edit_opts(4);
         rs_road_grid *g0 = NULL, *g1 = (rs_road_grid *)1;
         r = rs_road_grid_build(c, in->dem, R, &o, &g0);
         if (!r) r = rs_roads_replace(c, R, 1, NULL, 5, pts, 3);
@@ -730,10 +728,7 @@ static void test_update_cancel(void)
     rs_dem *dem = flat_dem(ctx, 31, 21, 4);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.texels = 4;
-    o.grid.edits = 1;
+    rs_splat_options o = edit_opts(4);
     rs_road_grid *g0 = NULL;
     CHECK(rs_road_grid_build(ctx, dem, R, &o, &g0) == RS_OK);
     const double pts[] = { 0, 3, 40, 8, 80, 3 };

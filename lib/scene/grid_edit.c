@@ -34,7 +34,6 @@
 
 #define CHUNK_M 10.0   /* metres of road per chunk ... */
 #define CHUNK_PX 16.0  /* ... and at least this many pixels */
-#define NO_LINK UINT32_MAX
 #define MAX_BIN_ENTRIES (1u << 26)
 #define MAX_BINS (1u << 22)
 #define MAX_SPLIT 4096          /* pieces of one long segment */
@@ -1102,6 +1101,12 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
  * DEM or options given), the candidates stand. */
 #define EXACT_WINDOW 16384u /* pixels of one window */
 
+/* Whether pixel k differs in colour or weight between renders a and b. */
+static int px_differs(const uint8_t *ca, const uint16_t *wa, const uint8_t *cb, const uint16_t *wb, size_t k)
+{
+    return memcmp(ca + 4 * k, cb + 4 * k, 4) != 0 || wa[k] != wb[k];
+}
+
 static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, const rs_road_grid *a,
                              rs_road_grid *b)
 {
@@ -1117,8 +1122,8 @@ static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_opti
     rs__progress pg;
     rs__progress_begin(ctx, &pg, NULL, NULL, 2 * total, 4096);
     rs_splatter *sa = NULL, *sb = NULL;
-    uint8_t *ca = rs__alloc_array(ctx, EXACT_WINDOW, 8);
-    uint16_t *wa = rs__alloc_array(ctx, EXACT_WINDOW, 2 * sizeof *wa);
+    uint8_t *ca = rs__alloc_array(ctx, EXACT_WINDOW, 8), *cb = ca ? ca + 4 * (size_t)EXACT_WINDOW : NULL;
+    uint16_t *wa = rs__alloc_array(ctx, EXACT_WINDOW, 2 * sizeof *wa), *wb = wa ? wa + EXACT_WINDOW : NULL;
     spans S;
     memset(&S, 0, sizeof S);
     rs_result r = ca && wa ? RS_OK : RS_ERR_NOMEM;
@@ -1131,16 +1136,14 @@ static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_opti
             uint32_t cw = R.x1 - x < EXACT_WINDOW ? R.x1 - x : EXACT_WINDOW, rows = EXACT_WINDOW / cw;
             for (uint32_t y = R.y0; !r && ok && y < R.y1; y += rows) {
                 uint32_t h = R.y1 - y < rows ? R.y1 - y : rows;
-                uint8_t *cb = ca + 4 * (size_t)EXACT_WINDOW;
-                uint16_t *wb = wa + EXACT_WINDOW;
                 r = rs_splat_window(ctx, sa, x, y, cw, h, ca, 4 * (size_t)cw, wa, cw, NULL);
                 if (!r) r = rs_splat_window(ctx, sb, x, y, cw, h, cb, 4 * (size_t)cw, wb, cw, NULL);
                 for (uint32_t j = 0; !r && ok && j < h; j++) {
                     const size_t row = (size_t)j * cw;
                     for (uint32_t i = 0; ok && i < cw;) {
-                        while (i < cw && !memcmp(ca + 4 * (row + i), cb + 4 * (row + i), 4) && wa[row + i] == wb[row + i]) i++;
+                        while (i < cw && !px_differs(ca, wa, cb, wb, row + i)) i++;
                         uint32_t i0 = i;
-                        while (i < cw && (memcmp(ca + 4 * (row + i), cb + 4 * (row + i), 4) || wa[row + i] != wb[row + i])) i++;
+                        while (i < cw && px_differs(ca, wa, cb, wb, row + i)) i++;
                         if (i > i0) ok = span_push(ctx, &S, y + j, x + i0, x + i);
                     }
                 }

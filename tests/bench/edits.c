@@ -194,9 +194,13 @@ int main(int argc, char **argv)
                 rs_roads_count(roads), PER_KIND, RUNS, uncovered, g0->edit->n, g0->edit->bytes / 1e6,
                 st.bytes / 1e6, piece_med);
         fprintf(csv, "edit,update_ms,build_ms,dirty_px,changed_px,rects\n");
+        double worst_area = 0, worst_cost = 0;
         for (int k = 0; k < KINDS; k++) {
             double u = tm_median(upd[k], PER_KIND * RUNS), f = tm_median(full[k], PER_KIND * RUNS);
             double cm = tm_median(cand_ms[k], PER_KIND);
+            double ra = changed[k] > 0 ? dirty[k] / changed[k] : (dirty[k] > 0 ? INFINITY : 1);
+            worst_area = ra > worst_area ? ra : worst_area;
+            worst_cost = u / f > worst_cost ? u / f : worst_cost;
             fprintf(md, "| %s | %.1f | %.1f | %.3f | %.1f | %.0f | %.0f | %.2f | %.0f | %.2f | %zu |\n", kind_name[k], u, f,
                     u / f, cm, dirty[k], changed[k], changed[k] > 0 ? dirty[k] / changed[k] : 0, cand[k],
                     changed[k] > 0 ? cand[k] / changed[k] : 0, rects[k]);
@@ -205,13 +209,6 @@ int main(int argc, char **argv)
                    "%.2f\n",
                    kind_name[k], u, f, u / f, changed[k] > 0 ? dirty[k] / changed[k] : 0, dirty[k], changed[k],
                    changed[k] > 0 ? cand[k] / changed[k] : 0);
-        }
-        double worst_area = 0, worst_cost = 0;
-        for (int k = 0; k < KINDS; k++) {
-            double u = tm_median(upd[k], PER_KIND * RUNS), f = tm_median(full[k], PER_KIND * RUNS);
-            double ra = changed[k] > 0 ? dirty[k] / changed[k] : (dirty[k] > 0 ? INFINITY : 1);
-            worst_area = ra > worst_area ? ra : worst_area;
-            worst_cost = u / f > worst_cost ? u / f : worst_cost;
         }
         fprintf(md, "\nThe update builds the grid anew, compares the pieces and renders the candidates.\n\n"
                     "| target (issue 30, 3) | measured | |\n|---|---|---|\n"
