@@ -73,6 +73,10 @@ int rs__report(rs_ctx *ctx, uint64_t units);
  * move only after the last poll that stops); RS_ERR_LIMIT for n >= 2^32.
  * No message set. */
 rs_result rs__sort(rs_ctx *ctx, void *base, size_t n, size_t size, int (*cmp)(const void *, const void *));
+/* The same, ordered by key[i] for element i (ascending; equal keys keep
+ * their order): for large elements whose order is a number. key is read
+ * only. */
+rs_result rs__sort_keyed(rs_ctx *ctx, void *base, size_t n, size_t size, const uint64_t *key);
 
 struct rs_dem {
     uint32_t width, height;

@@ -538,7 +538,16 @@ static void test_sort(rs_ctx *ctx)
                 v[i].pad[i % 32] = (unsigned char)i;
                 u[i] = (v[i].key << 8) | (uint32_t)(i & 255);
             }
+            /* the keyed sort (keys from a copy, in the elements' order) must give the same order */
+            sort_item *w = malloc((n ? n : 1) * sizeof *w);
+            uint64_t *key = malloc((n ? n : 1) * sizeof *key);
+            memcpy(w, v, n * sizeof *v);
+            for (size_t i = 0; i < n; i++) key[i] = (uint64_t)w[i].key << 31; /* (high bits too) */
             CHECK(rs__sort(ctx, v, n, sizeof *v, sort_item_cmp) == RS_OK);
+            CHECK(rs__sort_keyed(ctx, w, n, sizeof *w, key) == RS_OK);
+            bad += n && memcmp(v, w, n * sizeof *v) != 0;
+            free(w);
+            free(key);
             for (size_t i = 1; i < n; i++)
                 bad += v[i - 1].key > v[i].key || (v[i - 1].key == v[i].key && v[i - 1].at >= v[i].at);
             for (size_t i = 0; i < n; i++) bad += v[i].pad[v[i].at % 32] != (unsigned char)v[i].at;

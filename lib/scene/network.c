@@ -1325,16 +1325,21 @@ static size_t surf_cell(double v, double v0, double ic, size_t n)
     return (size_t)t;
 }
 
-/* Candidate end f against segment k (points pa, pb = pa + 2) of record q
- * of stroke sq, half width hw: its nearest point first (most candidates
- * lie beyond the reach: a multiply-add test before anything is read) */
-static void surf_test(const build *B, const rs_network *N, surf_end *f, uint32_t q, uint32_t sq, uint32_t k,
-                      const double *pa, double dx, double dy, double dd, double reach2, int *q_non_car)
+/* Candidate end f (at xy, a copy of f->x, f->y in the cells' order)
+ * against segment k (points pa, pb = pa + 2) of record q of stroke sq:
+ * its nearest point first, from the copy (most candidates lie beyond the
+ * reach: f is read only within it; at 10^5 roads the ends are megabytes,
+ * read out of order) */
+static void surf_test(const build *B, const rs_network *N, surf_end *fe, const uint32_t *id, const double *xy,
+                      uint32_t q, uint32_t sq, uint32_t k, const double *pa, double dx, double dy, double dd,
+                      double reach2, int *q_non_car)
 {
-    double u = ((f->x - pa[0]) * dx + (f->y - pa[1]) * dy) / dd;
+    double u = ((xy[0] - pa[0]) * dx + (xy[1] - pa[1]) * dy) / dd;
     u = u > 0 ? (u < 1 ? u : 1) : 0;
-    double ex = f->x - (pa[0] + u * dx), ey = f->y - (pa[1] + u * dy), d2 = ex * ex + ey * ey;
-    if (!(d2 <= reach2) || !(d2 < f->d)) return; /* (the first of equals: the lowest record and segment) */
+    double ex = xy[0] - (pa[0] + u * dx), ey = xy[1] - (pa[1] + u * dy), d2 = ex * ex + ey * ey;
+    if (!(d2 <= reach2)) return;
+    surf_end *f = &fe[*id];
+    if (!(d2 < f->d)) return; /* (the first of equals: the lowest record and segment) */
     if (f->stroke == sq) return;
     if (!f->non_car) { /* (read only here: a record's info is tens of ns of attribute lookups) */
         if (*q_non_car < 0) *q_non_car = rs__road_non_car(B->roads, q);
@@ -1406,12 +1411,14 @@ static rs_result surface_tees(build *B, rs_network *N)
         c *= 2;
     }
     uint32_t *start = rs__calloc(ctx, nx * ny + 2, sizeof *start), *ids = rs__alloc_array(ctx, m ? m : 1, sizeof *ids);
-    rs_result res = start && ids ? RS_OK : RS_ERR_NOMEM;
+    double *cxy = rs__alloc_array(ctx, m ? m : 1, 2 * sizeof *cxy); /* the ends' points in ids' order */
+    rs_result res = start && ids && cxy ? RS_OK : RS_ERR_NOMEM;
     const double ic = 1 / c;
     for (size_t i = 0; i < m && !res; i++) start[surf_cell(fe[i].y, by0, ic, ny) * nx + surf_cell(fe[i].x, bx0, ic, nx) + 2]++;
     for (size_t i = 0; i < nx * ny && !res; i++) start[i + 2] += start[i + 1];
     for (size_t i = 0; i < m && !res; i++)
         ids[start[surf_cell(fe[i].y, by0, ic, ny) * nx + surf_cell(fe[i].x, bx0, ic, nx) + 1]++] = (uint32_t)i;
+    for (size_t i = 0; i < m && !res; i++) cxy[2 * i] = fe[ids[i]].x, cxy[2 * i + 1] = fe[ids[i]].y;
     /* every segment of every record with a surface, over the cells its
      * capsule reaches, row by row */
     for (size_t q = 0; q < B->nroads && !res && m; q++) {
@@ -1442,7 +1449,7 @@ static rs_result surface_tees(build *B, rs_network *N)
             if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 4) { /* (a box of at most 2 x 2 cells: all of it) */
                 for (size_t cy = r0; cy <= r1; cy++)
                     for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)
-                        surf_test(B, N, &fe[ids[i]], (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+                        surf_test(B, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
                 continue;
             }
             for (size_t cy = r0; cy <= r1; cy++) {
@@ -1458,7 +1465,7 @@ static rs_result surface_tees(build *B, rs_network *N)
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 size_t c0 = surf_cell(rs__fmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(rs__fmax(xa, xb) + rq, bx0, ic, nx);
                 for (uint32_t i = start[cy * nx + c0], ie = start[cy * nx + c1 + 1]; i < ie; i++)
-                    surf_test(B, N, &fe[ids[i]], (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+                    surf_test(B, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
             }
         }
     }
@@ -1513,6 +1520,7 @@ static rs_result surface_tees(build *B, rs_network *N)
     }
     rs__free(ctx, start);
     rs__free(ctx, ids);
+    rs__free(ctx, cxy);
     rs__free(ctx, fe);
     return res;
 }

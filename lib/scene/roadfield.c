@@ -1829,19 +1829,17 @@ static void tee_box(const rs__roadfield *f, rf_tee *T)
     T->box[0] = b[0] - m, T->box[1] = b[1] + m, T->box[2] = b[2] - m, T->box[3] = b[3] + m;
 }
 
-static int tee_cmp(const void *a, const void *b)
-{
-    const rf_tee *p = a, *q = b;
-    if (p->seg != q->seg) return p->seg < q->seg ? -1 : 1;
-    return p->end - q->end;
-}
-
 /* f->tee holds ntee entries (seg, end, n, cE, R): sorts them, drops a
  * second clip of one segment end (and repeated clip-only entries), flags
  * the segments and builds the boxes and row lists. */
 static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
 {
-    rs_result sr = rs__sort(ctx, f->tee, f->ntee, sizeof *f->tee, tee_cmp);
+    /* by segment, then end (0, 1, 2); keyed: the entries are 100 bytes */
+    uint64_t *key = rs__alloc_array(ctx, f->ntee ? f->ntee : 1, sizeof *key);
+    if (!key) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < f->ntee; i++) key[i] = (uint64_t)f->tee[i].seg << 2 | (uint64_t)f->tee[i].end;
+    rs_result sr = rs__sort_keyed(ctx, f->tee, f->ntee, sizeof *f->tee, key);
+    rs__free(ctx, key);
     if (sr) return sr;
     size_t m = 0;
     for (size_t i = 0; i < f->ntee; i++) {
