@@ -1834,7 +1834,7 @@ static void tee_box(const rs__roadfield *f, rf_tee *T)
  * the segments and builds the boxes and row lists. */
 static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
 {
-    /* by segment, then end (0, 1, 2); keyed: the entries are 100 bytes */
+    /* by segment, then end (0, 1, 2); keyed: the entries are 104 bytes */
     uint64_t *key = rs__alloc_array(ctx, f->ntee ? f->ntee : 1, sizeof *key);
     if (!key) return RS_ERR_NOMEM;
     for (size_t i = 0; i < f->ntee; i++) key[i] = (uint64_t)f->tee[i].seg << 2 | (uint64_t)f->tee[i].end;
