@@ -22,7 +22,7 @@
 #define POLL_STEPS 16384
 
 typedef struct order {
-    const unsigned char *b;
+    unsigned char *b;
     size_t size;
     int (*cmp)(const void *, const void *);
     const uint64_t *key;
@@ -35,11 +35,12 @@ static int after(const order *o, uint32_t i, uint32_t j)
     return o->cmp(o->b + (size_t)i * o->size, o->b + (size_t)j * o->size) > 0;
 }
 
-static rs_result sort_by(rs_ctx *ctx, void *base, size_t n, size_t size, const order *o)
+static rs_result sort_by(rs_ctx *ctx, size_t n, const order *o)
 {
+    const size_t size = o->size;
     if (n < 2) return RS_OK;
     if (n > UINT32_MAX || size == 0) return RS_ERR_LIMIT;
-    unsigned char *b = base;
+    unsigned char *b = o->b;
     uint32_t *ix = rs__alloc_array(ctx, n, 2 * sizeof *ix);
     if (!ix) return RS_ERR_NOMEM;
     uint32_t *a = ix, *t = ix + n;
@@ -123,11 +124,11 @@ static rs_result sort_by(rs_ctx *ctx, void *base, size_t n, size_t size, const o
 rs_result rs__sort(rs_ctx *ctx, void *base, size_t n, size_t size, int (*cmp)(const void *, const void *))
 {
     order o = { base, size, cmp, NULL };
-    return sort_by(ctx, base, n, size, &o);
+    return sort_by(ctx, n, &o);
 }
 
 rs_result rs__sort_keyed(rs_ctx *ctx, void *base, size_t n, size_t size, const uint64_t *key)
 {
     order o = { base, size, NULL, key };
-    return sort_by(ctx, base, n, size, &o);
+    return sort_by(ctx, n, &o);
 }

@@ -110,12 +110,12 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
  * among the segments whose surface holds (x, y) the highest priority
  * wins, then the nearest; a point on no surface takes the nearest. The
  * fill of a crossing is the higher road's (issue 27 problem 6). */
+int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
+                                 rs__road_point *out);
 /* rs__roadfield_nearest among the roads with only[road] > 0 (the casing
  * colour's road: one with a casing, never an uncased road beside it). */
 int rs__roadfield_nearest_of(const rs__roadfield *f, double x, double y, double reach, const double *only,
                              rs__road_point *out);
-int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
-                                 rs__road_point *out);
 /* 1 when rs__roadfield_nearest(f, x, y, reach) would find a road, else 0
  * (stops at the first: for fills that are the same on every road). */
 int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach);
