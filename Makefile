@@ -412,10 +412,11 @@ fuzz:
 # Targets the smoke leaves out (none: split's open findings were worked
 # through on 2 December 2026, docs/ROBUSTNESS.md).
 FUZZ_SMOKE_SKIP :=
+# The targets run one per core (xargs -P; each is one process).
 fuzz-smoke: fuzz
-	@fail=0; for t in $(filter-out $(FUZZ_SMOKE_SKIP),$(FUZZ_TARGETS)); do \
-	  BUILD=$(BUILD) FUZZ_LOG=$(BUILD)/fuzz-runs/smoke-$$t.log sh fuzz/run.sh $$t $(FUZZ_SECONDS) || fail=1; \
-	done; [ $$fail = 0 ] || { echo "fuzz-smoke: FINDINGS (see $(BUILD)/fuzz-artifacts/)"; exit 1; }
+	@printf '%s\n' $(filter-out $(FUZZ_SMOKE_SKIP),$(FUZZ_TARGETS)) | \
+	  xargs -P $(JOBS) -I{} env BUILD=$(BUILD) FUZZ_LOG=$(BUILD)/fuzz-runs/smoke-{}.log sh fuzz/run.sh {} $(FUZZ_SECONDS) \
+	  || { echo "fuzz-smoke: FINDINGS (see $(BUILD)/fuzz-artifacts/)"; exit 1; }
 
 sanitize-test:
 	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 $(MAKE) --no-print-directory test BUILD=build/asan OPT="-O1 -g" \
