@@ -185,7 +185,7 @@ help:
 	@echo "  make install-lib   install only the library, header and roadsplat.pc (no OpenImageIO needed)"
 	@echo "  make uninstall     remove what install put there"
 	@echo "  make clean         remove $(BUILD)/"
-	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 WITH_MESHOPT=0|1 WITH_EXPAT=0|1 FUZZ_SECONDS"
+	@echo "Variables: CC CXX OPT CPPFLAGS CFLAGS CXXFLAGS LDFLAGS PREFIX DESTDIR LIBDIR BUILD WITH_OSMESA=0|1 WITH_GDAL=0|1 WITH_SQLITE=0|1 WITH_MESHOPT=0|1 WITH_EXPAT=0|1 FUZZ_SECONDS JOBS (build and fuzz-smoke jobs; default: cores) TEST_JOBS (tests/run.sh)"
 
 # --- dependencies -----------------------------------------------------------
 # Installs only what is missing; without root, stops with the exact command.
