@@ -390,6 +390,33 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
     double *hx = p->hx;
     const __m512d one = _mm512_set1_pd(1);
     uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
+    if (T == 1 && p->rows == 1) {
+        /* a texel a cell (a row a piece): the loop below without its lane
+         * tables, its permutes or its stack copy of the six interpolants
+         * (they stay in registers); the same products and sums */
+        const double fy = (p->y0 - p->crow * T + 0.5) / T;
+        const __m512d vf = _mm512_set1_pd(fxt[0]), vg = _mm512_sub_pd(one, vf);
+        const __m512d vfy = _mm512_set1_pd(fy), vgy = _mm512_set1_pd(1 - fy);
+        const size_t base0 = ccol - wc0;
+        for (uint32_t k = 0; k < w; k += 8) {
+            const uint32_t m = w - k < 8 ? w - k : 8;
+            const size_t base = base0 + k;
+            const uint32_t na = tplane - base >= 8 ? 8 : (uint32_t)(tplane - base);
+            const uint32_t nb = tplane - base - 1 >= 8 ? 8 : (uint32_t)(tplane - base - 1);
+            const __mmask8 ma = (__mmask8)((1u << na) - 1), mb = (__mmask8)((1u << nb) - 1);
+            const __mmask8 ms = (__mmask8)((1u << m) - 1);
+            for (int ch = 0; ch < 3; ch++) {
+                const float *a = r0 + base + (size_t)ch * tplane, *c = r1 + base + (size_t)ch * tplane;
+                __m512d h0 = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(ma, a)), vg),
+                                           _mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(mb, a + 1)), vf));
+                __m512d h1 = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(ma, c)), vg),
+                                           _mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(mb, c + 1)), vf));
+                __m256 v = _mm512_cvtpd_ps(_mm512_add_pd(_mm512_mul_pd(h0, vgy), _mm512_mul_pd(h1, vfy)));
+                _mm256_mask_storeu_ps(p->tc + (size_t)ch * w + k, ms, v);
+            }
+        }
+        return;
+    }
     for (uint32_t k = 0; k < w; k += 8) {
         const uint32_t m = w - k < 8 ? w - k : 8;
         const size_t base = ccol - wc0;
