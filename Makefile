@@ -25,7 +25,7 @@ BUILD   ?= build
 # The sub-makes of test, demo, bench and fuzz build with one job per core
 # unless the caller gave -j (then its jobserver is used).
 JOBS      ?= $(shell nproc 2>/dev/null || echo 1)
-JOBS_FLAG := $(if $(filter -j%,$(MAKEFLAGS)),,-j$(JOBS))
+JOBS_FLAG = $(if $(filter -j%,$(MAKEFLAGS)),,-j$(JOBS))
 CC      ?= cc
 CXX     ?= c++
 OPT     ?= -O2 -g
