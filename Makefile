@@ -379,7 +379,6 @@ FUZZ_FLAGS  := -g -O1 -fsanitize=fuzzer,address,undefined,float-cast-overflow,fl
 # with compare tracing. These three skip it; pgm and roads keep it.
 FUZZ_NOCMP  := roam splat demimage options
 NOCMP_FLAG  := -fno-sanitize-coverage=trace-cmp
-fuzz_cmp     = $(if $(filter $(1),$(FUZZ_NOCMP)),$(NOCMP_FLAG))
 FUZZ_SECONDS ?= 30
 FUZZ_OBJ    := $(BUILD)/fuzz-obj
 # The library is compiled once per instrumentation (cmp/, nocmp/) and every

@@ -3,14 +3,17 @@
 # prints one closing "N passed, N failed" line over all of them.
 B=${BUILD:-build}
 # Jobs run TEST_JOBS at a time (default: one per core) through xargs; their
-# results are read back and printed in the order they were listed, slowest
-# first so the last job to start is a short one.
+# results are read back and printed in the order they were listed. The
+# slow ones (seconds on 2 cores, December 2026) start first, so the last
+# job to start is a short one.
 J=${TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
+slow="cli_render_test cli_gdal_test cli_odr_test cli_tiles_test test_linesym cli_badinput_test cli_surface_paths_test"
 total_p=0; total_f=0; out=$(mktemp -d); trap 'rm -rf "$out"' EXIT
-n=0; : >"$out/jobs"
+n=0; queue=; : >"$out/first"; : >"$out/rest"; : >"$out/last"
 job() { # name, command... (no spaces or quotes inside the words)
     n=$((n + 1)); echo "$n" >>"$out/order"; echo "$1" >"$out/$n.name"
-    echo "$out $n $*" >>"$out/jobs"
+    q=${queue:-rest}; case " $slow " in *" $1 "*) q=${queue:-first} ;; esac
+    shift; echo "$out $n $*" >>"$out/$q"
 }
 count() { # index
     name=$(cat "$out/$1.name"); log=$out/$1.log
@@ -33,12 +36,9 @@ if [ ! -f "$loc/de_DE.UTF-8/LC_NUMERIC" ] && command -v localedef >/dev/null 2>&
     mkdir -p "$loc" && localedef -i de_DE -f UTF-8 "$loc/de_DE.UTF-8" >/dev/null 2>&1
 fi
 if [ -f "$loc/de_DE.UTF-8/LC_NUMERIC" ]; then LOCPATH=$(cd "$loc" && pwd); export LOCPATH; fi
-# The slow ones first (seconds on 2 cores, December 2026).
-for s in render gdal odr tiles; do job cli_${s}_test sh tests/cli_${s}_test.sh "$B/roadsplat"; done
-job test_linesym "$B/tests/test_linesym"
-for s in badinput surface_paths; do job cli_${s}_test sh tests/cli_${s}_test.sh "$B/roadsplat"; done
 for t in "$B"/tests/test_*; do
-    [ -x "$t" ] && [ "$(basename "$t")" != test_linesym ] && job "$(basename "$t")" "$t"
+    [ -x "$t" ] || continue
+    job "$(basename "$t")" "$t"
 done
 # Large crasher inputs are generated (tests/gen_crashers.sh), not stored.
 gen=$B/crashers-gen
@@ -51,19 +51,18 @@ for r in "$B"/fuzz/*-replay; do
 done
 for s in tests/cli*_test.sh; do
     [ -f "$s" ] || continue
-    case $s in */cli_render_test.sh|*/cli_gdal_test.sh|*/cli_odr_test.sh|*/cli_tiles_test.sh|*/cli_badinput_test.sh|*/cli_surface_paths_test.sh) continue ;; esac
     job "$(basename "$s" .sh)" sh "$s" "$B/roadsplat"
 done
-xargs -L 1 -P "$J" sh tests/run_one.sh <"$out/jobs"
 # make install into a temporary prefix, consumers built through pkg-config;
 # alone, after the rest: its PREFIX rewrites the build's config and so
 # relinks $B/roadsplat, which the other jobs run.
-: >"$out/jobs"
+queue=last
 for s in tests/install*_test.sh; do
     [ -f "$s" ] || continue
     job "$(basename "$s" .sh)" sh "$s" "$B"
 done
-xargs -L 1 -P 1 sh tests/run_one.sh <"$out/jobs"
+cat "$out/first" "$out/rest" | xargs -L 1 -P "$J" sh tests/run_one.sh
+xargs -L 1 -P 1 sh tests/run_one.sh <"$out/last"
 for i in $(cat "$out/order"); do count "$i"; done
 total_f=$((total_f + gen_f))
 echo "$total_p passed, $total_f failed"
