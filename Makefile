@@ -330,13 +330,16 @@ $(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 
-# splat_dump twice: as the library is, and with lib/splat/surface.c built
-# without its AVX-512 paths (tests/cli_surface_paths_test.sh compares them).
-$(BUILD)/tests/surface_portable.o: lib/splat/surface.c
+# splat_dump twice: as the library is, and with lib/splat/surface.c and
+# composite.c built without their AVX-512 paths
+# (tests/cli_surface_paths_test.sh compares them).
+$(BUILD)/tests/%_portable.o: lib/splat/%.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -DRS_NO_AVX512 -c $< -o $@
 
-$(BUILD)/tools/splat_dump_portable: tests/tools/splat_dump.c $(TESTLIB_OBJ) $(filter-out $(BUILD)/lib/splat/surface.o,$(LIB_OBJ)) $(BUILD)/tests/surface_portable.o
+$(BUILD)/tools/splat_dump_portable: tests/tools/splat_dump.c $(TESTLIB_OBJ) \
+  $(filter-out $(BUILD)/lib/splat/surface.o $(BUILD)/lib/splat/composite.o,$(LIB_OBJ)) \
+  $(BUILD)/tests/surface_portable.o $(BUILD)/tests/composite_portable.o
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 

@@ -1,8 +1,8 @@
 #!/bin/sh
 # The AVX-512 paths of lib/splat/surface.c (tints, shades, bilinear step)
-# give the bytes of the portable ones: build/tools/splat_dump (the library
-# as built) against splat_dump_portable (surface.c built with
-# -DRS_NO_AVX512), every output of tests/tools/splat_dump.c (city, nodata,
+# and lib/splat/composite.c give the bytes of the portable ones:
+# build/tools/splat_dump (the library as built) against splat_dump_portable
+# (those two files built with -DRS_NO_AVX512), every output of tests/tools/splat_dump.c (city, nodata,
 # synthetic and fractal DEMs at 1 to 5 texels, every option group and tint
 # mode). Usage: cli_surface_paths_test.sh BUILD/roadsplat (as tests/run.sh
 # calls the CLI tests; the tools are found beside it).

@@ -3,6 +3,7 @@
  * colour S (procedural asphalt or a tiled texture) where it has road. */
 #include "splatter.h"
 #include "dem.h"
+#include "styling.h"
 
 #include <math.h>
 #include <string.h>
@@ -701,7 +702,8 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
  * a 4-texel lattice; keyed to texel indices, so deterministic. One row of
  * n pixels from column px0 (wrapping as uint32), those with road (q > 0)
  * or all; the lattice's four hashes once per lattice column. */
-static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, uint32_t n, float *rgb, size_t plane)
+static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, int skip_whole, uint32_t n, float *rgb,
+                        size_t plane)
 {
     const uint32_t ly = py >> 2;
     const double fy = (py & 3) / 4.0;
@@ -709,7 +711,7 @@ static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, u
     double n00 = 0, n01 = 0, n10 = 0, n11 = 0;
     int have = 0;
     for (uint32_t k = 0; k < n; k++) {
-        if (!all && q[k] == 0) continue;
+        if (!all && (q[k] == 0 || (skip_whole && q[k] == 65535u))) continue;
         const uint32_t px = px0 + k, lx = px >> 2;
         if (!have || lx != at) {
             n00 = (hash2(lx, ly + 7919u) & 0xFF) / 255.0;
@@ -853,7 +855,12 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     }
     /* the grain keyed to the map's pixel grid: (uint32) wraps the same in every tile */
     const uint32_t ox = (uint32_t)(uint64_t)f->texel_offset_x, oy = (uint32_t)(uint64_t)f->texel_offset_y;
+    /* every road filled with one opaque colour: the overlays stage sets a
+     * whole road pixel to it whatever lies under it (rs__overlays_surfaces),
+     * so its asphalt is not made (layers, p->all, show the surface bare) */
+    const rs__styling *st = s->grid ? s->grid->styling : NULL;
+    const int skip_whole = st && st->fill_uniform && st->fill_rgba[3] == 1.0f;
     for (uint32_t r = 0; r < p->rows; r++)
-        asphalt_row(p->x0 + ox, p->y0 + r + oy, p->q + (size_t)r * p->w, p->all, p->w, p->sc + (size_t)r * p->w * 3,
-                    p->w);
+        asphalt_row(p->x0 + ox, p->y0 + r + oy, p->q + (size_t)r * p->w, p->all, skip_whole, p->w,
+                    p->sc + (size_t)r * p->w * 3, p->w);
 }

@@ -6,8 +6,9 @@
  * (rs_road_grid_build, which contains it), thread CPU time, fastest of
  * RUNS, the builds of a count interleaved.
  * Usage: index OUTDIR (writes OUTDIR/index.md);
- *        index --one N [REPS [grid]] (N roads, REPS road-field builds, or
- *        whole grid builds: for profilers);
+ *        index --one N [REPS [grid|CELL]] (N roads, REPS road-field builds
+ *        (index cell CELL m, default automatic), or whole grid builds: for
+ *        profilers);
  *        index --dump N FILE [CELL] (N roads, index cell CELL m (0: automatic): the road field's stats, whole-image
  *        coverage doubles and a nearest query per 7th pixel into FILE, to
  *        compare two builds byte for byte with cmp).
@@ -38,10 +39,13 @@
 #define CELL 5.0
 #define T 4
 
+static double one_cell; /* index --one N REPS CELL: the index cell (0: automatic) */
+
 static rs__roadfield_params field_params(void)
 {
     rs__roadfield_params p;
     memset(&p, 0, sizeof p);
+    p.index_cell = one_cell;
     p.cell_size = CELL;
     p.width_m = (DEM_W - 1) * CELL;
     p.height_m = (DEM_H - 1) * CELL;
@@ -214,6 +218,7 @@ int main(int argc, char **argv)
         memset(&o, 0, sizeof o);
         o.texels = T;
         int grid = argc > 4 && strcmp(argv[4], "grid") == 0;
+        if (argc > 4 && !grid) one_cell = atof(argv[4]);
         if (grid) {
             rs_dem_frame fr = { CELL, 1, 0, 0 };
             if (rs_dem_create(ctx, s.w, s.h, s.z, &d) || rs_dem_set_frame(ctx, d, &fr)) return 1;

@@ -8,7 +8,9 @@
  *     marking widths at two pixel sizes) and the overlays time on the city.
  * Times: fastest of RUNS whole-image rs_splat_window calls on a prepared
  * splatter, the cases interleaved run by run.
- * Usage: styles OUTDIR   (writes OUTDIR/styles.md and styles.csv) */
+ * Usage: styles OUTDIR   (writes OUTDIR/styles.md and styles.csv)
+ *        styles --t1 REPS  (issue 29 target 1 alone, REPS style builds each
+ *                           with 3 splats, no Cairo: for profiling) */
 #include "roadsplat.h"
 #include "bandref.h"
 #include "linesym.h"
@@ -127,6 +129,8 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
 typedef struct t1_result {
     double build_ms, splat_ms, cairo_ms;
     size_t nstyles;
+    rs_splat_profile prof; /* the fastest splat's stages (styles --t1 only) */
+    uint64_t hash;         /* FNV-1a of the last splat's bytes: two builds' outputs compared */
 } t1_result;
 
 /* The fastest of N Cairo drawings (the script prints it), or < 0 when
@@ -139,7 +143,7 @@ static double t1_cairo_ms(const char *roads_path)
 }
 
 static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem *dem, const rs_splat_options *base,
-                  t1_result *out)
+                  int reps, t1_result *out)
 {
     size_t cap = 1 << 16, len = 0, nst = 0;
     char *text = malloc(cap);
@@ -179,7 +183,7 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
     out->nstyles = nst;
     uint32_t w = 0, h = 0;
     uint8_t *rgba = NULL;
-    for (int run = 0; run < 5; run++) {
+    for (int run = 0; run < reps; run++) {
         rs_splatter *s = NULL;
         double t0 = tm_now_ms();
         if (rs_splatter_create(ctx, dem, roads, NULL, &o, &s)) goto done;
@@ -191,22 +195,31 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
             goto done;
         }
         for (int k = 0; k < 3; k++) {
+            rs_splat_profile pf;
+            memset(&pf, 0, sizeof pf);
+            pf.clock_ms = clock_ms;
             t0 = tm_now_ms();
-            if (rs_splat_window(ctx, s, 0, 0, w, h, rgba, (size_t)w * 4, NULL, 0, NULL)) {
+            if (rs_splat_window(ctx, s, 0, 0, w, h, rgba, (size_t)w * 4, NULL, 0, dir ? NULL : &pf)) {
                 rs_splatter_free(ctx, s);
                 free(rgba);
                 goto done;
             }
             double t = tm_now_ms() - t0;
+            if (t < out->splat_ms) out->prof = pf;
             out->splat_ms = t < out->splat_ms ? t : out->splat_ms;
         }
         rs_splatter_free(ctx, s);
     }
+    out->hash = 1469598103934665603ull;
+    for (size_t i = 0; rgba && i < (size_t)w * h * 4; i++) out->hash = (out->hash ^ rgba[i]) * 1099511628211ull;
     free(rgba);
-    char path[1024];
-    snprintf(path, sizeof path, "%s/styles_roads.txt", dir);
-    if (sc_write_plain(path, sc)) goto done;
-    out->cairo_ms = t1_cairo_ms(path);
+    out->cairo_ms = -1;
+    if (dir) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/styles_roads.txt", dir);
+        if (sc_write_plain(path, sc)) goto done;
+        out->cairo_ms = t1_cairo_ms(path);
+    }
     rc = 0;
 done:
     if (rc) fprintf(stderr, "styles: target 1: %s\n", rs_ctx_message(ctx));
@@ -222,6 +235,8 @@ done:
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
+    int t1_only = argc == 3 && strcmp(argv[1], "--t1") == 0, t1_reps = t1_only ? atoi(argv[2]) : 0;
+    if (t1_only && t1_reps < 1) { fprintf(stderr, "usage: styles --t1 REPS (REPS >= 1)\n"); return 2; }
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
     sc_scene sc;
@@ -260,6 +275,15 @@ int main(int argc, char **argv)
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
+    if (t1_only) {
+        t1_result t;
+        if (t1_run(ctx, NULL, &sc, dem, &o, t1_reps, &t)) return 1;
+        printf("target 1: style build %.2f ms, splat %.2f ms (fastest; its coverage %.2f, surface %.2f, overlays %.2f, "
+               "composite %.2f ms); bytes %016llx\n",
+               t.build_ms, t.splat_ms, t.prof.coverage_ms, t.prof.surface_ms, t.prof.overlays_ms, t.prof.composite_ms,
+               (unsigned long long)t.hash);
+        return 0;
+    }
     enum { C_PLAIN, C_CLASSED, C_HERMITE, C_MARKED, C_SOLID, C_DASHED, NC };
     scase k[NC] = { { "unstyled", NULL, 1e300, 1e300 },
                     { "default class styles (RMS), exact lines", NULL, 1e300, 1e300 },
@@ -301,7 +325,7 @@ int main(int argc, char **argv)
         if (accuracy(ctx, RS__AA_EXACT, pixes[i], &ex[i]) || accuracy(ctx, RS__AA_HERMITE, pixes[i], &he[i])) return 1;
 
     t1_result t1;
-    if (t1_run(ctx, dir, &sc, dem, &o, &t1)) return 1;
+    if (t1_run(ctx, dir, &sc, dem, &o, 5, &t1)) return 1;
 
     FILE *md, *csv;
     if (tm_open_section(dir, "styles", &md, &csv)) return 1;

@@ -103,6 +103,27 @@ static rs_roads *scene_roads(const sc_scene *sc)
     return r;
 }
 
+/* The city styled: every road's `style` attribute STYLE, the styles from
+ * TEXT (casings of one colour go through the composite, an opaque fill of
+ * one colour through the overlays' whole-road shortcut); and the classes
+ * (the default class styles: casings of several colours). */
+static int styled(const char *name, const rs_dem *dem, const sc_scene *sc, const char *text, unsigned T)
+{
+    rs_roads *r = scene_roads(sc);
+    rs_styles *st = NULL;
+    if (!r) return -1;
+    for (size_t i = 0; i < sc->nroads; i++)
+        if (text ? rs_roads_set_attr(ctx, r, i, "style", "s") : rs_roads_set_attr(ctx, r, i, "class", sc_city_class(sc->roads[i].width)))
+            return -1;
+    if (text && rs_styles_parse(ctx, text, strlen(text), &st)) return -1;
+    rs_splat_options o = { .texels = T };
+    o.style.styles = st;
+    int rc = dump(name, dem, r, &o);
+    rs_styles_free(ctx, st);
+    rs_roads_free(ctx, r);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 2) { fprintf(stderr, "usage: splat_dump OUTDIR\n"); return 2; }
@@ -123,6 +144,12 @@ int main(int argc, char **argv)
         char name[32];
         snprintf(name, sizeof name, "city%d", i);
         if (i == 0 ? groups(name, dem, roads, 4) : dump(name, dem, roads, &(rs_splat_options){ .texels = 4 })) return 1;
+        if (i == 0 &&
+            (styled("city_casing", dem, &sc,
+                    "style s\n fill #383838\n casing 0.5 #A0A0A0\n line 0 0.15 #FFFFFF dash 6 12\nend\n", 4) ||
+             styled("city_casing_T3", dem, &sc, "style s\n fill #38383880\n casing 0.7 #A0A0A0C0\nend\n", 3) ||
+             styled("city_classes", dem, &sc, NULL, 4)))
+            return 1;
         rs_dem_free(ctx, dem);
     }
     /* nodata holes in the city DEM */
