@@ -711,6 +711,19 @@ static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, i
     double n00 = 0, n01 = 0, n10 = 0, n11 = 0;
     int have = 0;
     for (uint32_t k = 0; k < n; k++) {
+#if defined(__SSE2__)
+        /* eight pixels that need no asphalt (terrain, or whole road under
+         * an opaque fill) in one test: most of a row is one or the other */
+        if (!all && (k & 7) == 0 && k + 8 <= n) {
+            const __m128i v = _mm_loadu_si128((const __m128i *)(const void *)(q + k));
+            __m128i none = _mm_cmpeq_epi16(v, _mm_setzero_si128());
+            if (skip_whole) none = _mm_or_si128(none, _mm_cmpeq_epi16(v, _mm_set1_epi16(-1)));
+            if (_mm_movemask_epi8(none) == 0xFFFF) {
+                k += 7;
+                continue;
+            }
+        }
+#endif
         if (!all && (q[k] == 0 || (skip_whole && q[k] == 65535u))) continue;
         const uint32_t px = px0 + k, lx = px >> 2;
         if (!have || lx != at) {
