@@ -1,0 +1,152 @@
+/* edit_locality [D [STROKES]]: how local is a grid's picture? (issue 30
+ * target 3, docs/embedding.md "Toward an update in proportion to the
+ * edit"). On the 10k-road city of tests/bench/edits.c (classes by width:
+ * casings, lines, dashes, automatic markings; T = 4), for three boxes of
+ * the map: builds a grid from only the roads within D metres of the box
+ * (default 30) and, with STROKES = 1, also every road of a stroke that one
+ * of them is in (docs/network.md) and the roads within 30 m of those
+ * roads' end points; splats the box's pixels from it and from the grid of
+ * all roads, and counts the pixels that differ. Also the two builds'
+ * thread CPU time. */
+#include "roadsplat.h"
+#include "network.h"
+#include "scene_splat.h"
+#include "scenes.h"
+#include "timing.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Distance from the box to the nearest of the points (enough for a box
+ * test here: the roads' points are a few metres apart). */
+static double points_box_dist(const double *xy, size_t n, double x0, double y0, double x1, double y1)
+{
+    double best = INFINITY;
+    for (size_t k = 0; k < n; k++) {
+        double x = xy[2 * k], y = xy[2 * k + 1];
+        double dx = x < x0 ? x0 - x : x > x1 ? x - x1 : 0, dy = y < y0 ? y0 - y : y > y1 ? y - y1 : 0;
+        double d = sqrt(dx * dx + dy * dy);
+        if (d < best) best = d;
+    }
+    return best;
+}
+
+int main(int argc, char **argv)
+{
+    double D = argc > 1 ? atof(argv[1]) : 30;
+    int strokes = argc > 2 && atoi(argv[2]) != 0;
+    rs_ctx *ctx = NULL;
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
+    if (rs_ctx_create(NULL, NULL, &ctx) || sc_city(&sc, 400, 350, 5.0, 10000, 1) ||
+        rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || rs_dem_set_frame(ctx, dem, &fr) || !(roads = ss_roads(ctx, &sc)))
+        return 1;
+    for (size_t i = 0; i < sc.nroads; i++)
+        if (rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width))) return 1;
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.texels = 4;
+    rs_road_grid *g = NULL;
+    rs_splatter *s = NULL;
+    rs_network *net = NULL;
+    double t0 = tm_thread_cpu_ms();
+    if (rs_road_grid_build(ctx, dem, roads, &o, &g)) goto fail;
+    double full_ms = tm_thread_cpu_ms() - t0;
+    if (rs_splatter_create(ctx, dem, NULL, g, &o, &s) || rs_network_build(ctx, roads, NULL, &net)) goto fail;
+    unsigned char *in = calloc(sc.nroads, 1);
+    if (!in) return 1;
+    const double pix = 5.0 / 4, boxes[][4] = { { 800, 700, 1000, 900 }, { 300, 300, 400, 420 }, { 1500, 1000, 1700, 1300 } };
+    printf("roads within %.0f m of the box%s; full grid build %.1f ms\n", D,
+           strokes ? ", their strokes and the roads near those roads' ends" : "", full_ms);
+    for (int b = 0; b < 3; b++) {
+        const double *B = boxes[b];
+        memset(in, 0, sc.nroads);
+        for (size_t i = 0; i < sc.nroads; i++) {
+            const double *xy;
+            size_t n;
+            rs_roads_get(roads, i, NULL, NULL, &xy, &n);
+            if (points_box_dist(xy, n, B[0], B[1], B[2], B[3]) <= D) in[i] = 1;
+        }
+        for (size_t i = 0; strokes && i < sc.nroads; i++)
+            if (in[i] == 1)
+                for (uint32_t e = net->stroke_start[net->stroke_of[i]]; e < net->stroke_start[net->stroke_of[i] + 1]; e++)
+                    if (!in[net->stroke_roads[e]]) in[net->stroke_roads[e]] = 2;
+        for (size_t i = 0; strokes && i < sc.nroads; i++) {
+            if (in[i] != 2) continue;
+            const double *xy;
+            size_t n;
+            rs_roads_get(roads, i, NULL, NULL, &xy, &n);
+            for (int q = 0; q < 2; q++) {
+                double ex = xy[q ? 2 * n - 2 : 0], ey = xy[q ? 2 * n - 1 : 1];
+                for (size_t j = 0; j < sc.nroads; j++) {
+                    const double *xj;
+                    size_t nj;
+                    rs_roads_get(roads, j, NULL, NULL, &xj, &nj);
+                    if (!in[j] && points_box_dist(xj, nj, ex - 30, ey - 30, ex + 30, ey + 30) == 0) in[j] = 3;
+                }
+            }
+        }
+        rs_roads *sub = NULL;
+        size_t nsub = 0;
+        if (rs_roads_create(ctx, &sub)) goto fail;
+        for (size_t i = 0; i < sc.nroads; i++) {
+            const double *xy;
+            size_t n;
+            double w;
+            const char *name;
+            if (!in[i]) continue;
+            rs_roads_get(roads, i, &name, &w, &xy, &n);
+            if (rs_roads_add(ctx, sub, name, w, xy, n) ||
+                rs_roads_set_attr(ctx, sub, nsub++, "class", rs_roads_get_attr(roads, i, "class")))
+                goto fail;
+        }
+        rs_road_grid *gs = NULL;
+        rs_splatter *ss = NULL;
+        t0 = tm_thread_cpu_ms();
+        if (rs_road_grid_build(ctx, dem, sub, &o, &gs)) goto fail;
+        double sub_ms = tm_thread_cpu_ms() - t0;
+        if (rs_splatter_create(ctx, dem, NULL, gs, &o, &ss)) goto fail;
+        uint32_t x0 = (uint32_t)(B[0] / pix), y0 = (uint32_t)(B[1] / pix), w = (uint32_t)((B[2] - B[0]) / pix),
+                 h = (uint32_t)((B[3] - B[1]) / pix);
+        uint8_t *a = malloc((size_t)w * h * 4), *c = malloc((size_t)w * h * 4);
+        if (!a || !c || rs_splat_window(ctx, s, x0, y0, w, h, a, (size_t)w * 4, NULL, 0, NULL) ||
+            rs_splat_window(ctx, ss, x0, y0, w, h, c, (size_t)w * 4, NULL, 0, NULL))
+            goto fail;
+        size_t diff = 0;
+        int maxd = 0;
+        for (size_t i = 0; i < (size_t)w * h; i++) {
+            int d = 0;
+            for (int ch = 0; ch < 4; ch++) {
+                int e = abs(a[4 * i + ch] - c[4 * i + ch]);
+                d = e > d ? e : d;
+            }
+            diff += d != 0;
+            maxd = d > maxd ? d : maxd;
+        }
+        printf("box %d (%.0f x %.0f m): %zu of %zu roads, grid built in %.1f ms (%.1f %% of the full build); "
+               "%zu of %u pixels differ (by up to %d)\n",
+               b, B[2] - B[0], B[3] - B[1], nsub, sc.nroads, sub_ms, 100 * sub_ms / full_ms, diff, w * h, maxd);
+        free(a);
+        free(c);
+        rs_splatter_free(ctx, ss);
+        rs_road_grid_free(ctx, gs);
+        rs_roads_free(ctx, sub);
+    }
+    free(in);
+    rs_network_free(ctx, net);
+    rs_splatter_free(ctx, s);
+    rs_road_grid_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+    return 0;
+fail:
+    fprintf(stderr, "edit_locality: %s\n", rs_ctx_message(ctx));
+    return 1;
+}
