@@ -406,14 +406,24 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
             const uint32_t nb = tplane - base - 1 >= 8 ? 8 : (uint32_t)(tplane - base - 1);
             const __mmask8 ma = (__mmask8)((1u << na) - 1), mb = (__mmask8)((1u << nb) - 1);
             const __mmask8 ms = (__mmask8)((1u << m) - 1);
+            /* (whole groups by plain loads and stores: masked ones cost
+             * more on some CPUs, e.g. AMD Zen 4's stores) */
+            const int whole = m == 8 && nb == 8;
             for (int ch = 0; ch < 3; ch++) {
                 const float *a = r0 + base + (size_t)ch * tplane, *c = r1 + base + (size_t)ch * tplane;
-                __m512d h0 = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(ma, a)), vg),
-                                           _mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(mb, a + 1)), vf));
-                __m512d h1 = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(ma, c)), vg),
-                                           _mm512_mul_pd(_mm512_cvtps_pd(_mm256_maskz_loadu_ps(mb, c + 1)), vf));
+                __m256 a0, a1, c0, c1;
+                if (whole) {
+                    a0 = _mm256_loadu_ps(a), a1 = _mm256_loadu_ps(a + 1);
+                    c0 = _mm256_loadu_ps(c), c1 = _mm256_loadu_ps(c + 1);
+                } else {
+                    a0 = _mm256_maskz_loadu_ps(ma, a), a1 = _mm256_maskz_loadu_ps(mb, a + 1);
+                    c0 = _mm256_maskz_loadu_ps(ma, c), c1 = _mm256_maskz_loadu_ps(mb, c + 1);
+                }
+                __m512d h0 = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(a0), vg), _mm512_mul_pd(_mm512_cvtps_pd(a1), vf));
+                __m512d h1 = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(c0), vg), _mm512_mul_pd(_mm512_cvtps_pd(c1), vf));
                 __m256 v = _mm512_cvtpd_ps(_mm512_add_pd(_mm512_mul_pd(h0, vgy), _mm512_mul_pd(h1, vfy)));
-                _mm256_mask_storeu_ps(p->tc + (size_t)ch * w + k, ms, v);
+                if (whole) _mm256_storeu_ps(p->tc + (size_t)ch * w + k, v);
+                else _mm256_mask_storeu_ps(p->tc + (size_t)ch * w + k, ms, v);
             }
         }
         return;
@@ -428,14 +438,19 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
         const __m256i vrel = _mm256_loadu_si256((const __m256i *)(const void *)rel[off]);
         const __m512d vfx = _mm512_loadu_pd(fxg[off]), vgx = _mm512_sub_pd(one, vfx);
         __m512d h[2][3];
+        /* (plain loads and stores for a whole group: see above) */
+        const int whole_in = nb == 8, whole_out = m == 8;
         for (int row = 0; row < 2; row++) {
             const float *src = (row ? r1 : r0) + base;
             for (int ch = 0; ch < 3; ch++) {
                 const float *pl = src + (size_t)ch * tplane;
-                __m256 A = _mm256_maskz_loadu_ps(ma, pl), B = _mm256_maskz_loadu_ps(mb, pl + 1);
+                __m256 A = whole_in ? _mm256_loadu_ps(pl) : _mm256_maskz_loadu_ps(ma, pl);
+                __m256 B = whole_in ? _mm256_loadu_ps(pl + 1) : _mm256_maskz_loadu_ps(mb, pl + 1);
                 if (T > 1) A = _mm256_permutexvar_ps(vrel, A), B = _mm256_permutexvar_ps(vrel, B);
                 h[row][ch] = _mm512_add_pd(_mm512_mul_pd(_mm512_cvtps_pd(A), vgx), _mm512_mul_pd(_mm512_cvtps_pd(B), vfx));
-                if (!fused) _mm512_mask_storeu_pd(hx + (size_t)(3 * row + ch) * w + k, ms, h[row][ch]);
+                if (fused) continue;
+                if (whole_out) _mm512_storeu_pd(hx + (size_t)(3 * row + ch) * w + k, h[row][ch]);
+                else _mm512_mask_storeu_pd(hx + (size_t)(3 * row + ch) * w + k, ms, h[row][ch]);
             }
         }
         if (fused)
@@ -445,7 +460,8 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
                 const __m512d vg = _mm512_set1_pd(gy), vf = _mm512_set1_pd(fy);
                 for (int ch = 0; ch < 3; ch++) {
                     __m256 v = _mm512_cvtpd_ps(_mm512_add_pd(_mm512_mul_pd(h[0][ch], vg), _mm512_mul_pd(h[1][ch], vf)));
-                    _mm256_mask_storeu_ps(p->tc + (size_t)r * w * 3 + (size_t)ch * w + k, ms, v);
+                    if (whole_out) _mm256_storeu_ps(p->tc + (size_t)r * w * 3 + (size_t)ch * w + k, v);
+                    else _mm256_mask_storeu_ps(p->tc + (size_t)r * w * 3 + (size_t)ch * w + k, ms, v);
                 }
             }
         ccol += step[off];
@@ -459,9 +475,14 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
         for (int ch = 0; ch < 3; ch++) {
             const double *h0 = hx + (size_t)ch * w, *h1 = hx + (size_t)(3 + ch) * w;
             float *tc = p->tc + (size_t)r * w * 3 + (size_t)ch * w;
-            for (uint32_t k = 0; k < w; k += 8) {
-                const uint32_t m = w - k < 8 ? w - k : 8;
-                const __mmask8 ms = (__mmask8)((1u << m) - 1);
+            uint32_t k = 0;
+            for (; k + 8 <= w; k += 8) { /* (plain loads and stores: see above) */
+                __m512d v = _mm512_add_pd(_mm512_mul_pd(_mm512_loadu_pd(h0 + k), vg),
+                                          _mm512_mul_pd(_mm512_loadu_pd(h1 + k), vf));
+                _mm256_storeu_ps(tc + k, _mm512_cvtpd_ps(v));
+            }
+            if (k < w) {
+                const __mmask8 ms = (__mmask8)((1u << (w - k)) - 1);
                 __m512d v = _mm512_add_pd(_mm512_mul_pd(_mm512_maskz_loadu_pd(ms, h0 + k), vg),
                                           _mm512_mul_pd(_mm512_maskz_loadu_pd(ms, h1 + k), vf));
                 _mm256_mask_storeu_ps(tc + k, ms, _mm512_cvtpd_ps(v));
