@@ -10,7 +10,9 @@
  * splatter, the cases interleaved run by run.
  * Usage: styles OUTDIR   (writes OUTDIR/styles.md and styles.csv)
  *        styles --t1 REPS  (issue 29 target 1 alone, REPS style builds each
- *                           with 3 splats, no Cairo: for profiling) */
+ *                           with 3 splats, no Cairo: for profiling)
+ *        styles --cases [I] (the cases' splats alone, with the fastest run's
+ *                           stages; case I alone 4 times as often: for profiling) */
 #include "roadsplat.h"
 #include "bandref.h"
 #include "linesym.h"
@@ -35,6 +37,7 @@ typedef struct scase {
     const char *name;
     rs_splatter *s;
     double ms, ov_ms;
+    rs_splat_profile prof; /* the fastest run's (styles --cases) */
 } scase;
 
 static int run_once(rs_ctx *ctx, scase *k, uint8_t *rgba, uint32_t w, uint32_t h)
@@ -45,7 +48,7 @@ static int run_once(rs_ctx *ctx, scase *k, uint8_t *rgba, uint32_t w, uint32_t h
     double t0 = tm_now_ms();
     if (rs_splat_window(ctx, k->s, 0, 0, w, h, rgba, (size_t)w * 4, NULL, 0, &pf)) return -1;
     double t = tm_now_ms() - t0;
-    if (t < k->ms) k->ms = t;
+    if (t < k->ms) k->ms = t, k->prof = pf;
     if (pf.overlays_ms < k->ov_ms) k->ov_ms = pf.overlays_ms;
     return 0;
 }
@@ -236,6 +239,7 @@ int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
     int t1_only = argc == 3 && strcmp(argv[1], "--t1") == 0, t1_reps = t1_only ? atoi(argv[2]) : 0;
+    int cases_only = argc >= 2 && strcmp(argv[1], "--cases") == 0, only = argc == 3 ? atoi(argv[2]) : -1;
     if (t1_only && t1_reps < 1) { fprintf(stderr, "usage: styles --t1 REPS (REPS >= 1)\n"); return 2; }
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
@@ -285,12 +289,12 @@ int main(int argc, char **argv)
         return 0;
     }
     enum { C_PLAIN, C_CLASSED, C_HERMITE, C_MARKED, C_SOLID, C_DASHED, NC };
-    scase k[NC] = { { "unstyled", NULL, 1e300, 1e300 },
-                    { "default class styles (RMS), exact lines", NULL, 1e300, 1e300 },
-                    { "default class styles (RMS), Hermite lines", NULL, 1e300, 1e300 },
-                    { "default class styles (RMS), exact lines, and automatic markings", NULL, 1e300, 1e300 },
-                    { "three solid lines on every road", NULL, 1e300, 1e300 },
-                    { "the same lines dashed 6/12 m", NULL, 1e300, 1e300 } };
+    scase k[NC] = { { "unstyled", NULL, 1e300, 1e300, { 0 } },
+                    { "default class styles (RMS), exact lines", NULL, 1e300, 1e300, { 0 } },
+                    { "default class styles (RMS), Hermite lines", NULL, 1e300, 1e300, { 0 } },
+                    { "default class styles (RMS), exact lines, and automatic markings", NULL, 1e300, 1e300, { 0 } },
+                    { "three solid lines on every road", NULL, 1e300, 1e300, { 0 } },
+                    { "the same lines dashed 6/12 m", NULL, 1e300, 1e300, { 0 } } };
     rs_splat_options oc[NC];
     for (int i = 0; i < NC; i++) oc[i] = o;
     oc[C_HERMITE].style.aa = RS_LINE_AA_HERMITE;
@@ -315,9 +319,16 @@ int main(int argc, char **argv)
     rs_splatter_size(k[0].s, &w, &h);
     uint8_t *rgba = malloc((size_t)w * h * 4);
     if (!rgba) return 1;
-    for (int run = 0; run < RUNS; run++)
+    for (int run = 0; run < (only >= 0 && only < NC ? 4 * RUNS : RUNS); run++)
         for (int i = 0; i < NC; i++)
-            if (run_once(ctx, &k[i], rgba, w, h)) return 1;
+            if ((only < 0 || only >= NC || i == only) && run_once(ctx, &k[i], rgba, w, h)) return 1;
+    if (cases_only) {
+        for (int i = 0; i < NC; i++)
+            printf("%-70s %6.2f ms (coverage %.2f, surface %.2f, overlays %.2f, composite %.2f) / unstyled %.3f\n",
+                   k[i].name, k[i].ms, k[i].prof.coverage_ms, k[i].prof.surface_ms, k[i].prof.overlays_ms,
+                   k[i].prof.composite_ms, k[i].ms / k[0].ms);
+        return 0;
+    }
 
     acc ex[2], he[2];
     const double pixes[2] = { 1.25, 0.1 };
