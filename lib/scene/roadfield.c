@@ -1396,11 +1396,9 @@ static void tees_of(const rs__roadfield *f, uint32_t id, size_t *i0, size_t *i1)
 
 /* The trimmed shape of segment s as a lower bound of its signed distance
  * (exact depth inside): the strip cut by its clip lines, an end normal at
- * an untrimmed end, and the end disc there. */
-static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y)
+ * an untrimmed end, and the end disc there. Its tees: f->tee[i0, i1). */
+static double tee_sd_at(const rs__roadfield *f, const rf_seg *s, size_t i0, size_t i1, double x, double y)
 {
-    size_t i0, i1;
-    tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
     double wx = x - s->ax, wy = y - s->ay, u = wx * s->ux + wy * s->uy, t = wx * s->uy - wy * s->ux;
     /* a zero-length segment (a repeated end point the T clips) has no
      * strip, as shape_of says: its t is 0 everywhere, which made every
@@ -1423,6 +1421,15 @@ static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y
         disc = lm_min(disc, len2(x - s->bx, y - s->by) - s->r);
     }
     return lm_min(sd, lm_max(disc, hmax));
+}
+
+/* tee_sd with s's tees found here (tee_sd_at: a caller that asks about
+ * one segment many times finds them once) */
+static double tee_sd(const rs__roadfield *f, const rf_seg *s, double x, double y)
+{
+    size_t i0, i1;
+    tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
+    return tee_sd_at(f, s, i0, i1, x, y);
 }
 
 /* A segment's shape for the rows, as bounds linear in the row's y: the
@@ -1456,14 +1463,13 @@ static int shape_bound(rf_shape *sh, int k, double gx, double gy, double ox, dou
     return 1;
 }
 
-static void shape_of(const rs__roadfield *f, const rf_seg *s, rf_shape *sh)
+/* s's shape; its tees f->tee[i0, i1) (none read when s->tee is 0) */
+static void shape_of_at(const rs__roadfield *f, const rf_seg *s, size_t i0, size_t i1, rf_shape *sh)
 {
     int cut[2] = { 0, 0 };
     double cl[2][3];
     int nh = 0;
     if (s->tee) {
-        size_t i0, i1;
-        tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
         for (size_t k = i0; k < i1 && nh < 2; k++) {
             cl[nh][0] = f->tee[k].nx, cl[nh][1] = f->tee[k].ny, cl[nh][2] = f->tee[k].c;
             if (f->tee[k].end < 2) cut[f->tee[k].end] = 1;
@@ -1495,6 +1501,13 @@ static void shape_of(const rs__roadfield *f, const rf_seg *s, rf_shape *sh)
         double *d = sh->disc[sh->ndisc++];
         d[0] = e ? s->bx : s->ax, d[1] = e ? s->by : s->ay, d[2] = s->r;
     }
+}
+
+static void shape_of(const rs__roadfield *f, const rf_seg *s, rf_shape *sh)
+{
+    size_t i0 = 0, i1 = 0;
+    if (s->tee) tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
+    shape_of_at(f, s, i0, i1, sh);
 }
 
 /* The shape on the row y, x relative to x0, clipped to [0, pix], appended
@@ -1571,6 +1584,75 @@ static size_t union_compact(double *iv, size_t n)
     return m;
 }
 
+#if defined(__SSE2__)
+/* A shape on all TEE_ROWS sub-rows of a pixel at once, two rows a register:
+ * per piece p (its discs, then its strip: shape_row's order) the interval
+ * lo[p][k], hi[p][k] on row k and ok[p][k] = 1 where shape_row emits it,
+ * with shape_row's operations lane by lane (so the same doubles). */
+typedef struct rf_rows {
+    double lo[3][TEE_ROWS], hi[3][TEE_ROWS];
+    uint8_t ok[3][TEE_ROWS];
+    int np;
+} rf_rows;
+
+/* lm_max and lm_min lane by lane */
+static inline __m128d rows_max(__m128d x, __m128d y)
+{
+    __m128d m = _mm_or_pd(_mm_cmpge_pd(x, y), _mm_cmpunord_pd(y, y));
+    return _mm_or_pd(_mm_and_pd(m, x), _mm_andnot_pd(m, y));
+}
+static inline __m128d rows_min(__m128d x, __m128d y)
+{
+    __m128d m = _mm_or_pd(_mm_cmple_pd(x, y), _mm_cmpunord_pd(y, y));
+    return _mm_or_pd(_mm_and_pd(m, x), _mm_andnot_pd(m, y));
+}
+
+static void shape_rows(const rf_shape *sh, double y0, double x0, double pix, rf_rows *R)
+{
+    const __m128d zero = _mm_setzero_pd(), vpix = _mm_set1_pd(pix), vx0 = _mm_set1_pd(x0);
+    const int np = sh->ndisc + (sh->strip ? 1 : 0);
+    R->np = np;
+    for (int k = 0; k < TEE_ROWS; k += 2) {
+        const __m128d y = _mm_set_pd(y0 + ((double)(k + 1) + 0.5) * (pix / TEE_ROWS), y0 + ((double)k + 0.5) * (pix / TEE_ROWS));
+        const __m128d rowok = _mm_and_pd(_mm_cmpge_pd(y, _mm_set1_pd(sh->cyl)), _mm_cmple_pd(y, _mm_set1_pd(sh->cyh)));
+        for (int p = 0; p < np; p++) {
+            __m128d l, h, ok;
+            if (p < sh->ndisc) {
+                const double *d = sh->disc[p];
+                __m128d dy = _mm_sub_pd(y, _mm_set1_pd(d[1]));
+                __m128d q = _mm_sub_pd(_mm_set1_pd(d[2] * d[2]), _mm_mul_pd(dy, dy));
+                ok = _mm_and_pd(rowok, _mm_cmpge_pd(q, zero));
+                q = _mm_sqrt_pd(_mm_and_pd(ok, q)); /* (0 where the row misses the disc) */
+                l = _mm_sub_pd(_mm_set1_pd(d[0]), q);
+                h = _mm_add_pd(_mm_set1_pd(d[0]), q);
+            } else {
+                ok = _mm_and_pd(rowok, _mm_and_pd(_mm_cmpge_pd(y, _mm_set1_pd(sh->ylo)), _mm_cmple_pd(y, _mm_set1_pd(sh->yhi))));
+                l = _mm_set1_pd(-INFINITY);
+                h = _mm_set1_pd(INFINITY);
+                for (int j = 0; j < sh->nstrip; j++) {
+                    __m128d x = _mm_add_pd(_mm_set1_pd(sh->sa[j]), _mm_mul_pd(_mm_set1_pd(sh->sb[j]), y));
+                    if (sh->shi[j]) h = rows_min(h, x);
+                    else l = rows_max(l, x);
+                }
+            }
+            for (int j = sh->nstrip; j < sh->nstrip + sh->nclip; j++) {
+                __m128d x = _mm_add_pd(_mm_set1_pd(sh->sa[j]), _mm_mul_pd(_mm_set1_pd(sh->sb[j]), y));
+                if (sh->shi[j]) h = rows_min(h, x);
+                else l = rows_max(l, x);
+            }
+            l = rows_max(_mm_sub_pd(l, vx0), zero);
+            h = rows_min(_mm_sub_pd(h, vx0), vpix);
+            ok = _mm_and_pd(ok, _mm_cmpgt_pd(h, l));
+            _mm_storeu_pd(&R->lo[p][k], l);
+            _mm_storeu_pd(&R->hi[p][k], h);
+            const int m = _mm_movemask_pd(ok);
+            R->ok[p][k] = (uint8_t)(m & 1);
+            R->ok[p][k + 1] = (uint8_t)(m >> 1);
+        }
+    }
+}
+#endif
+
 static size_t shape_add(const rf_shape *sh, double y, double x0, double pix, double *iv, size_t n)
 {
     if (n + 3 > TEE_IV_MAX) n = union_compact(iv, n);
@@ -1590,53 +1672,47 @@ static size_t seg_add(const rs__roadfield *f, const rf_seg *s, double y, double 
  * meets, those within the pixel's half diagonal of it (a T segment by the
  * lower bound tee_sd) kept; one certainly holding the pixel gives 1. */
 #define TEE_NEAR_MAX 64
-/* tee_pixel's candidates: NULL (ncand 0): the lists of the cells and T
- * boxes the pixel meets; else a superset of the segments near it (the
- * same near set, so the same doubles) */
-static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double pix, const rf_seg *const *cand,
-                        size_t ncand)
+#define TEE_ROWS_NEAR 8 /* tee_rows takes up to this many shapes all rows at once (rf_rows: 6.5 KB) */
+
+/* A candidate of tee_pixel with what every pixel asks of it, found once
+ * per T box: its tees and its shape. */
+typedef struct rf_tcand {
+    const rf_seg *s;
+    size_t i0, i1; /* f->tee[i0, i1): its tees (none when s->tee is 0) */
+    rf_shape sh;   /* shape_of */
+} rf_tcand;
+
+/* The union of the near shapes over the pixel's TEE_ROWS sub-rows,
+ * averaged: near[nn] (all = 0), or every segment the lists give. */
+static double tee_rows(const rs__roadfield *f, double x0, double y0, double pix, const rf_shape *const *near, size_t nn,
+                       int all)
 {
-    double x0 = (double)px * pix, y0 = (double)py * pix, x1 = x0 + pix, y1 = y0 + pix;
-    double cx = x0 + 0.5 * pix, cy = y0 + 0.5 * pix, e = pix * HALF_SQRT2, slack = 1e-9 * (1 + fabs(cx) + fabs(cy));
+    double x1 = x0 + pix, y1 = y0 + pix;
     uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
     uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
-    rf_shape near[TEE_NEAR_MAX];
-    size_t nn = 0;
-    int all = 0; /* more than TEE_NEAR_MAX near: every listed segment takes part */
-    for (size_t k = 0; k < ncand; k++) {
-        const rf_seg *s = cand[k];
-        double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
-        if (sd <= -e - slack) return 1;
-        if (sd < e + slack) shape_of(f, s, &near[nn++]); /* ncand <= TEE_NEAR_MAX */
-    }
-    for (int pass = 0; pass < 2 && !cand; pass++)
-        for (uint32_t j = j0; j <= j1; j++) {
-            uint32_t a = pass ? f->tstart[j] : 0, b = pass ? f->tstart[j + 1] : 0;
-            for (uint32_t i = pass ? i1 : i0; i <= i1; i++) {
-                size_t cell = (size_t)j * f->gw + i;
-                if (!pass) a = f->start[cell], b = f->start[cell + 1];
-                for (uint32_t k = a; k < b; k++) {
-                    const rf_seg *s;
-                    if (pass) {
-                        const rf_tee *T = &f->tee[f->tids[k]];
-                        if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
-                        s = &f->seg[T->seg];
-                    } else
-                        s = &f->seg[f->ids[k]];
-                    double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
-                    if (sd <= -e - slack) return 1;
-                    if (!(sd < e + slack)) continue;
-                    if (nn < TEE_NEAR_MAX) shape_of(f, s, &near[nn++]);
-                    else all = 1;
-                }
-            }
-        }
     double iv[2 * TEE_IV_MAX], acc = 0;
+#if defined(__SSE2__)
+    if (!all && nn <= TEE_ROWS_NEAR) {
+        /* every shape on all the rows first (nn shapes give at most 3 nn
+         * intervals a row: shape_add never compacts), then each row's
+         * intervals in shape_row's order */
+        rf_rows R[TEE_ROWS_NEAR];
+        for (size_t q = 0; q < nn; q++) shape_rows(near[q], y0, x0, pix, &R[q]);
+        for (int k = 0; k < TEE_ROWS; k++) {
+            size_t n = 0;
+            for (size_t q = 0; q < nn; q++)
+                for (int p = 0; p < R[q].np; p++)
+                    if (R[q].ok[p][k]) iv[2 * n] = R[q].lo[p][k], iv[2 * n + 1] = R[q].hi[p][k], n++;
+            acc += union_len(iv, n) / pix;
+        }
+        return acc / TEE_ROWS;
+    }
+#endif
     for (int k = 0; k < TEE_ROWS; k++) {
         double y = y0 + ((double)k + 0.5) * (pix / TEE_ROWS);
         size_t n = 0;
         if (!all)
-            for (size_t q = 0; q < nn; q++) n = shape_add(&near[q], y, x0, pix, iv, n);
+            for (size_t q = 0; q < nn; q++) n = shape_add(near[q], y, x0, pix, iv, n);
         else {
             for (uint32_t j = j0; j <= j1; j++)
                 for (uint32_t i = i0; i <= i1; i++) {
@@ -1656,12 +1732,71 @@ static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double
     return acc / TEE_ROWS;
 }
 
+/* tee_pixel from the lists of the cells and T boxes the pixel meets. */
+static double tee_pixel_lists(const rs__roadfield *f, uint32_t px, uint32_t py, double pix)
+{
+    double x0 = (double)px * pix, y0 = (double)py * pix, x1 = x0 + pix, y1 = y0 + pix;
+    double cx = x0 + 0.5 * pix, cy = y0 + 0.5 * pix, e = pix * HALF_SQRT2, slack = 1e-9 * (1 + fabs(cx) + fabs(cy));
+    uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
+    uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
+    rf_shape own[TEE_NEAR_MAX];
+    const rf_shape *near[TEE_NEAR_MAX];
+    size_t nn = 0;
+    int all = 0; /* more than TEE_NEAR_MAX near: every listed segment takes part */
+    for (int pass = 0; pass < 2; pass++)
+        for (uint32_t j = j0; j <= j1; j++) {
+            uint32_t a = pass ? f->tstart[j] : 0, b = pass ? f->tstart[j + 1] : 0;
+            for (uint32_t i = pass ? i1 : i0; i <= i1; i++) {
+                size_t cell = (size_t)j * f->gw + i;
+                if (!pass) a = f->start[cell], b = f->start[cell + 1];
+                for (uint32_t k = a; k < b; k++) {
+                    const rf_seg *s;
+                    if (pass) {
+                        const rf_tee *T = &f->tee[f->tids[k]];
+                        if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
+                        s = &f->seg[T->seg];
+                    } else
+                        s = &f->seg[f->ids[k]];
+                    double sd = s->tee ? tee_sd(f, s, cx, cy) : seg_dist(s, cx, cy) - s->r;
+                    if (sd <= -e - slack) return 1;
+                    if (!(sd < e + slack)) continue;
+                    if (nn < TEE_NEAR_MAX) {
+                        shape_of(f, s, &own[nn]);
+                        near[nn] = &own[nn];
+                        nn++;
+                    } else
+                        all = 1;
+                }
+            }
+        }
+    return tee_rows(f, x0, y0, pix, near, nn, all);
+}
+
+/* The same from cand[ncand], a superset of the segments near the pixel
+ * (tee_candidates: the near set tee_pixel_lists finds, in the same order,
+ * so the same doubles). */
+static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double pix, const rf_tcand *cand,
+                        size_t ncand)
+{
+    double x0 = (double)px * pix, y0 = (double)py * pix;
+    double cx = x0 + 0.5 * pix, cy = y0 + 0.5 * pix, e = pix * HALF_SQRT2, slack = 1e-9 * (1 + fabs(cx) + fabs(cy));
+    const rf_shape *near[TEE_NEAR_MAX];
+    size_t nn = 0;
+    for (size_t k = 0; k < ncand; k++) {
+        const rf_seg *s = cand[k].s;
+        double sd = s->tee ? tee_sd_at(f, s, cand[k].i0, cand[k].i1, cx, cy) : seg_dist(s, cx, cy) - s->r;
+        if (sd <= -e - slack) return 1;
+        if (sd < e + slack) near[nn++] = &cand[k].sh; /* ncand <= TEE_NEAR_MAX */
+    }
+    return tee_rows(f, x0, y0, pix, near, nn, 0);
+}
+
 /* The segments whose shape may come within e of the box [x0, x1] x [y0,
  * y1] (by their centreline boxes grown by r + e, a T segment's by its T
- * box), each once, into cand; 0 when more than TEE_NEAR_MAX (the pixels
- * then read the lists themselves). */
+ * box), each once, into cand with their tees and shapes; 0 when more than
+ * TEE_NEAR_MAX (the pixels then read the lists themselves). */
 static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, double x1, double y1, double e,
-                             const rf_seg **cand)
+                             rf_tcand *cand)
 {
     uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
     uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
@@ -1674,10 +1809,10 @@ static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, doubl
                 double g = s->r + e + s->tol;
                 if (!s->tee && (SEG_XMAX(s) + g < x0 || SEG_XMIN(s) - g > x1 || SEG_YMAX(s) + g < y0 || SEG_YMIN(s) - g > y1)) continue;
                 size_t q = 0;
-                while (q < n && cand[q] != s) q++;
+                while (q < n && cand[q].s != s) q++;
                 if (q < n) continue;
                 if (n == TEE_NEAR_MAX) return 0;
-                cand[n++] = s;
+                cand[n++].s = s;
             }
         }
         for (uint32_t k = f->tstart[j]; k < f->tstart[j + 1]; k++) {
@@ -1685,11 +1820,17 @@ static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, doubl
             if (x1 < T->box[0] || x0 > T->box[1] || y1 < T->box[2] || y0 > T->box[3]) continue;
             const rf_seg *s = &f->seg[T->seg];
             size_t q = 0;
-            while (q < n && cand[q] != s) q++;
+            while (q < n && cand[q].s != s) q++;
             if (q < n) continue;
             if (n == TEE_NEAR_MAX) return 0;
-            cand[n++] = s;
+            cand[n++].s = s;
         }
+    }
+    for (size_t q = 0; q < n; q++) { /* what each pixel asks of them, once */
+        rf_tcand *c = &cand[q];
+        c->i0 = c->i1 = 0;
+        if (c->s->tee) tees_of(f, (uint32_t)(c->s - f->seg), &c->i0, &c->i1);
+        shape_of_at(f, c->s, c->i0, c->i1, &c->sh);
     }
     return n;
 }
@@ -1707,10 +1848,10 @@ static int tee_end_unchanged(const rf_tee *T, const rf_seg *s, double e)
 
 /* Is the pixel centred at (cx, cy) (half diagonal e) within e of the edge
  * of s's capsule or of its trimmed shape (certainly inside or outside both
- * otherwise)? */
-static int tee_near_edge(const rs__roadfield *f, const rf_seg *s, double cx, double cy, double e)
+ * otherwise)? Its tees: f->tee[i0, i1). */
+static int tee_near_edge(const rs__roadfield *f, const rf_seg *s, size_t i0, size_t i1, double cx, double cy, double e)
 {
-    double dc = seg_dist(s, cx, cy) - s->r, dt = tee_sd(f, s, cx, cy);
+    double dc = seg_dist(s, cx, cy) - s->r, dt = tee_sd_at(f, s, i0, i1, cx, cy);
     return !((dc >= e && dt >= e) || (dc <= -e && dt <= -e));
 }
 
@@ -1744,7 +1885,7 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
 {
     if (!f || !f->ntee) return;
     const rs__roadfield *lists = g ? g : f; /* g's boxes hold f's */
-    const rf_seg *cand[TEE_NEAR_MAX], *candg[TEE_NEAR_MAX];
+    rf_tcand cand[TEE_NEAR_MAX], candg[TEE_NEAR_MAX]; /* 2 x 14 KB */
     double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
     double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
     uint32_t j0 = clamp_index(floor(by0 * lists->inv_c) + 1, lists->gh);
@@ -1767,6 +1908,9 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
             const rf_seg *sf = &f->seg[Tf->seg], *sg = Tg ? &g->seg[Tg->seg] : NULL;
             int need_f = !tee_end_unchanged(Tf, sf, e), need_g = Tg && !tee_end_unchanged(Tg, sg, e);
             if (!need_f && !need_g) continue;
+            size_t fi0, fi1, gi0 = 0, gi1 = 0;
+            tees_of(f, Tf->seg, &fi0, &fi1);
+            if (Tg) tees_of(g, Tg->seg, &gi0, &gi1);
             double qx0 = lm_max(box[0], bx0) - pix, qx1 = lm_min(box[1], bx1) + pix;
             double qy0 = lm_max(box[2], by0) - pix, qy1 = lm_min(box[3], by1) + pix;
             size_t nc = 0, ncg = 0;
@@ -1778,15 +1922,19 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
                      * tee_pixel's value for the exact one, so R was not
                      * the same with and without a casing field: fuzz/edits) */
                     if (!tee_may_differ(Tf, sf, cx, cy, e)) continue;
-                    if (!(need_f && tee_near_edge(f, sf, cx, cy, e)) && !(need_g && tee_near_edge(g, sg, cx, cy, e)))
+                    if (!(need_f && tee_near_edge(f, sf, fi0, fi1, cx, cy, e)) &&
+                        !(need_g && tee_near_edge(g, sg, gi0, gi1, cx, cy, e)))
                         continue;
                     if (!have) { /* the segments that can come near a pixel of the box here, once */
                         nc = tee_candidates(f, qx0, qy0, qx1, qy1, e, cand);
                         if (g) ncg = tee_candidates(g, qx0, qy0, qx1, qy1, e, candg);
                         have = 1;
                     }
-                    out[(size_t)r * stride + k] = tee_pixel(f, px0 + k, py0 + r, pix, nc ? cand : NULL, nc);
-                    if (g) outg[(size_t)r * stride + k] = tee_pixel(g, px0 + k, py0 + r, pix, ncg ? candg : NULL, ncg);
+                    out[(size_t)r * stride + k] =
+                        nc ? tee_pixel(f, px0 + k, py0 + r, pix, cand, nc) : tee_pixel_lists(f, px0 + k, py0 + r, pix);
+                    if (g)
+                        outg[(size_t)r * stride + k] = ncg ? tee_pixel(g, px0 + k, py0 + r, pix, candg, ncg)
+                                                           : tee_pixel_lists(g, px0 + k, py0 + r, pix);
                 }
         }
 }

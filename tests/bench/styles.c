@@ -324,6 +324,7 @@ int main(int argc, char **argv)
             if ((only < 0 || only >= NC || i == only) && run_once(ctx, &k[i], rgba, w, h)) return 1;
     if (cases_only) {
         for (int i = 0; i < NC; i++)
+            if (only < 0 || only >= NC || i == only)
             printf("%-70s %6.2f ms (coverage %.2f, surface %.2f, overlays %.2f, composite %.2f) / unstyled %.3f\n",
                    k[i].name, k[i].ms, k[i].prof.coverage_ms, k[i].prof.surface_ms, k[i].prof.overlays_ms,
                    k[i].prof.composite_ms, k[i].ms / k[0].ms);
