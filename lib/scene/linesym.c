@@ -2135,13 +2135,21 @@ static void cover_cols(const rs__linesym *L, const ls_ppc *P, uint32_t y, double
     if (qa >= qb) return;
     uint32_t r = y - R->y0;
     double *row = R->scratch + r * R->cs; /* column x at row[x - x0] */
+    /* only the touched columns are zeroed (a thin line touches one or
+     * two of the cell's 32 on a row) */
     if (R->rhi[r] == 0) {
-        for (size_t x = 0; x < R->cs; x++) row[x] = 0;
+        for (uint32_t x = qa - x0; x < qb - x0; x++) row[x] = 0;
         R->rlo[r] = qa - x0;
         R->rhi[r] = qb - x0;
     } else {
-        if (qa - x0 < R->rlo[r]) R->rlo[r] = qa - x0;
-        if (qb - x0 > R->rhi[r]) R->rhi[r] = qb - x0;
+        if (qa - x0 < R->rlo[r]) {
+            for (uint32_t x = qa - x0; x < R->rlo[r]; x++) row[x] = 0;
+            R->rlo[r] = qa - x0;
+        }
+        if (qb - x0 > R->rhi[r]) {
+            for (uint32_t x = R->rhi[r]; x < qb - x0; x++) row[x] = 0;
+            R->rhi[r] = qb - x0;
+        }
     }
     if (L->aa == RS__AA_HERMITE) {
         for (uint32_t x = qa; x < qb; x++) row[x - x0] += piece_hermite(L, P, x, y);
