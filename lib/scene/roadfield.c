@@ -1672,6 +1672,8 @@ static size_t seg_add(const rs__roadfield *f, const rf_seg *s, double y, double 
  * meets, those within the pixel's half diagonal of it (a T segment by the
  * lower bound tee_sd) kept; one certainly holding the pixel gives 1. */
 #define TEE_NEAR_MAX 64
+#define TEE_CAND_MAX 24 /* a T box's candidates held with their shapes (rf_tcand: 224 bytes each, twice on
+                           tee_pass's stack); more: the pixels read the lists */
 #define TEE_ROWS_NEAR 8 /* tee_rows takes up to this many shapes all rows at once (rf_rows: 6.5 KB) */
 
 /* A candidate of tee_pixel with what every pixel asks of it, found once
@@ -1786,7 +1788,7 @@ static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double
         const rf_seg *s = cand[k].s;
         double sd = s->tee ? tee_sd_at(f, s, cand[k].i0, cand[k].i1, cx, cy) : seg_dist(s, cx, cy) - s->r;
         if (sd <= -e - slack) return 1;
-        if (sd < e + slack) near[nn++] = &cand[k].sh; /* ncand <= TEE_NEAR_MAX */
+        if (sd < e + slack) near[nn++] = &cand[k].sh; /* ncand <= TEE_CAND_MAX <= TEE_NEAR_MAX */
     }
     return tee_rows(f, x0, y0, pix, near, nn, 0);
 }
@@ -1794,7 +1796,7 @@ static double tee_pixel(const rs__roadfield *f, uint32_t px, uint32_t py, double
 /* The segments whose shape may come within e of the box [x0, x1] x [y0,
  * y1] (by their centreline boxes grown by r + e, a T segment's by its T
  * box), each once, into cand with their tees and shapes; 0 when more than
- * TEE_NEAR_MAX (the pixels then read the lists themselves). */
+ * TEE_CAND_MAX (the pixels then read the lists themselves). */
 static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, double x1, double y1, double e,
                              rf_tcand *cand)
 {
@@ -1811,7 +1813,7 @@ static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, doubl
                 size_t q = 0;
                 while (q < n && cand[q].s != s) q++;
                 if (q < n) continue;
-                if (n == TEE_NEAR_MAX) return 0;
+                if (n == TEE_CAND_MAX) return 0;
                 cand[n++].s = s;
             }
         }
@@ -1822,7 +1824,7 @@ static size_t tee_candidates(const rs__roadfield *f, double x0, double y0, doubl
             size_t q = 0;
             while (q < n && cand[q].s != s) q++;
             if (q < n) continue;
-            if (n == TEE_NEAR_MAX) return 0;
+            if (n == TEE_CAND_MAX) return 0;
             cand[n++].s = s;
         }
     }
@@ -1885,7 +1887,7 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
 {
     if (!f || !f->ntee) return;
     const rs__roadfield *lists = g ? g : f; /* g's boxes hold f's */
-    rf_tcand cand[TEE_NEAR_MAX], candg[TEE_NEAR_MAX]; /* 2 x 14 KB */
+    rf_tcand cand[TEE_CAND_MAX], candg[TEE_CAND_MAX];
     double e = pix * HALF_SQRT2, by0 = (double)py0 * pix, by1 = ((double)py0 + h) * pix;
     double bx0 = (double)px0 * pix, bx1 = ((double)px0 + w) * pix;
     uint32_t j0 = clamp_index(floor(by0 * lists->inv_c) + 1, lists->gh);
