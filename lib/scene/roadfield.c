@@ -1689,9 +1689,6 @@ typedef struct rf_tcand {
 static double tee_rows(const rs__roadfield *f, double x0, double y0, double pix, const rf_shape *const *near, size_t nn,
                        int all)
 {
-    double x1 = x0 + pix, y1 = y0 + pix;
-    uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
-    uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
     double iv[2 * TEE_IV_MAX], acc = 0;
 #if defined(__SSE2__)
     if (!all && nn <= TEE_ROWS_NEAR) {
@@ -1710,6 +1707,9 @@ static double tee_rows(const rs__roadfield *f, double x0, double y0, double pix,
         return acc / TEE_ROWS;
     }
 #endif
+    double x1 = x0 + pix, y1 = y0 + pix;
+    uint32_t i0 = clamp_index(floor(x0 * f->inv_c) + 1, f->gw), i1 = clamp_index(floor(x1 * f->inv_c) + 1, f->gw);
+    uint32_t j0 = clamp_index(floor(y0 * f->inv_c) + 1, f->gh), j1 = clamp_index(floor(y1 * f->inv_c) + 1, f->gh);
     for (int k = 0; k < TEE_ROWS; k++) {
         double y = y0 + ((double)k + 0.5) * (pix / TEE_ROWS);
         size_t n = 0;
