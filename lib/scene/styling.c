@@ -205,6 +205,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                   sty->surface_image[0];
     }
     band_start[n] = (uint32_t)nbands;
+    st->fill_opaque = st->fill_uniform && st->fill_rgba[3] == 1.0f;
     if (!styled) {
         rs__free(ctx, sty);
         rs__free(ctx, band_start);

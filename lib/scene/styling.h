@@ -32,6 +32,8 @@ typedef struct rs__styling {
     int fill_uniform;                 /* every road has a fill, all of one colour (fill_rgba), and no road a
                                          surface image: a whole road pixel needs no lookup */
     float fill_rgba[4];
+    int fill_opaque;                  /* fill_uniform with alpha 1: the overlays set a whole road pixel to it
+                                         whatever lies under it, so the surface stage makes no asphalt there */
     /* Surface images (`surface IMG`, lib/scene/surfimg.h): per road the image
      * (index into imgs, -1: none), its metres per image height, width and
      * level of detail; NULL when no road has one. */

@@ -18,15 +18,6 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-/* An AVX-512 path (eight pixels at a time, the same double arithmetic lane
- * by lane, so the same bytes), chosen per call by the CPU; a build with
- * -DRS_NO_AVX512 has only the SSE2 and scalar ones (tests/cli_surface_paths_test.sh
- * compares the two builds). */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
-#include <immintrin.h>
-#define RS_AVX512_DISPATCH 1
-#define RS_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx512bw,avx2")))
-#endif
 
 static uint8_t to_byte(double v)
 {
@@ -69,12 +60,6 @@ static void row_bytes(const float *src, size_t w, uint8_t *out)
 }
 
 #ifdef RS_AVX512_DISPATCH
-static int avx512_ok(void)
-{
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-           __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
-}
-
 /* pack4 for eight pixels */
 RS_AVX512 static __m256i pack8(const float *src, size_t w)
 {
@@ -89,9 +74,10 @@ RS_AVX512 static __m256i pack8(const float *src, size_t w)
     return px;
 }
 
-/* The composite of one row's pixels [0, k) eight at a time, as the SSE2
- * loop does them four at a time (the same operations on each pixel, so
- * the same bytes); returns k, a multiple of 8. */
+/* The composite of one row's pixels [0, k) eight at a time where the CPU
+ * has AVX-512 (splatter.h), as the SSE2 loop does them four at a time (the
+ * same operations on each pixel, so the same bytes); returns k, a multiple
+ * of 8. */
 RS_AVX512 static size_t composite_row8(const rs__piece *p, const uint16_t *q, const float *tc, const float *sc,
                                        const double *cas, const double *cov, uint8_t *out)
 {
@@ -152,7 +138,7 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
 {
     const size_t w = p->w;
 #ifdef RS_AVX512_DISPATCH
-    const int wide = avx512_ok();
+    const int wide = rs__avx512_ok();
 #endif
     for (uint32_t r = 0; r < p->rows; r++) {
         const uint16_t *q = p->q + (size_t)r * w;

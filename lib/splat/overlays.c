@@ -89,16 +89,15 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
 {
     const size_t w = p->w;
     uint32_t hint = UINT32_MAX; /* the segment the last lookup found */
-    /* one opaque fill: a whole road pixel takes its colour (what the blend
-     * below gives for any finite colour under it), and rs__surface made no
-     * asphalt there (but for the layers, p->all) */
-    const int opaque = st->fill_uniform && st->fill_rgba[3] == 1.0f;
     for (uint32_t r = 0; r < p->rows; r++) {
         float *sc = p->sc + (size_t)r * w * 3;
         for (size_t k = 0; k < w; k++) {
             uint16_t q = p->q[(size_t)r * w + k];
             if (q == 0) continue;
-            if (q == 65535 && opaque) {
+            if (q == 65535 && st->fill_opaque) {
+                /* its colour (what the blend below gives over any finite
+                 * colour): rs__surface made no asphalt there (but for the
+                 * layers, p->all) */
                 for (int ch = 0; ch < 3; ch++) sc[(size_t)ch * w + k] = st->fill_rgba[ch];
                 continue;
             }

@@ -10,13 +10,6 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-/* AVX-512 paths, chosen per call by the CPU (__builtin_cpu_supports); a
- * build with -DRS_NO_AVX512 has only the portable ones (the test that
- * compares the two: tests/cli_surface_paths_test.sh). */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
-#include <immintrin.h>
-#define RS_AVX512_DISPATCH 1
-#endif
 
 static uint32_t hash2(uint32_t x, uint32_t y)
 {
@@ -227,7 +220,6 @@ static void tint_ramp_init(const rs_splatter *s, tint_ramp *t)
 #endif
 
 #ifdef RS_AVX512_DISPATCH
-#define RS_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2")))
 
 /* Eight floats at p as doubles. */
 RS_AVX512 static inline __m512d load8f(const float *p)
@@ -490,12 +482,6 @@ RS_AVX512 static void terrain_bilinear8(const rs__piece *p, uint32_t T, const fl
         }
     }
 }
-
-static int avx512_ok(void)
-{
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-           __builtin_cpu_supports("avx512vl");
-}
 #endif
 
 /* Terrain colour of DEM sample row i, columns [c0, c0 + n): tint times a
@@ -529,7 +515,7 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
     const rs_surface_options *sf = &s->o.surface;
     const size_t plane = n;
 #ifdef RS_AVX512_DISPATCH
-    const int wide = avx512_ok();
+    const int wide = rs__avx512_ok();
     tint_ramp tr;
     if (wide) tint_ramp_init(s, &tr);
     if (wide && tr.n) tint_row8(s, &tr, z + (size_t)i * W + c0, n, rgb, plane);
@@ -877,7 +863,7 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
         const uint32_t nt = T < 64 ? T : 64;
         for (uint32_t t = 0; t < nt; t++) fxt[t] = (t + 0.5) / T;
 #ifdef RS_AVX512_DISPATCH
-        if (T <= 64 && avx512_ok()) terrain_bilinear8(p, T, r0, r1, wc0, tplane, fxt);
+        if (T <= 64 && rs__avx512_ok()) terrain_bilinear8(p, T, r0, r1, wc0, tplane, fxt);
         else
 #endif
             terrain_bilinear(p, T, r0, r1, wc0, tplane, fxt, nt);
@@ -889,11 +875,10 @@ void rs__surface(const rs_splatter *s, rs__piece *p)
     }
     /* the grain keyed to the map's pixel grid: (uint32) wraps the same in every tile */
     const uint32_t ox = (uint32_t)(uint64_t)f->texel_offset_x, oy = (uint32_t)(uint64_t)f->texel_offset_y;
-    /* every road filled with one opaque colour: the overlays stage sets a
-     * whole road pixel to it whatever lies under it (rs__overlays_surfaces),
-     * so its asphalt is not made (layers, p->all, show the surface bare) */
+    /* no asphalt under one opaque fill (rs__styling.fill_opaque; layers,
+     * p->all, show the surface bare) */
     const rs__styling *st = s->grid ? s->grid->styling : NULL;
-    const int skip_whole = st && st->fill_uniform && st->fill_rgba[3] == 1.0f;
+    const int skip_whole = st && st->fill_opaque;
     for (uint32_t r = 0; r < p->rows; r++)
         asphalt_row(p->x0 + ox, p->y0 + r + oy, p->q + (size_t)r * p->w, p->all, skip_whole, p->w,
                     p->sc + (size_t)r * p->w * 3, p->w);
