@@ -239,7 +239,8 @@ int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : "build/bench";
     int t1_only = argc == 3 && strcmp(argv[1], "--t1") == 0, t1_reps = t1_only ? atoi(argv[2]) : 0;
-    int cases_only = argc >= 2 && strcmp(argv[1], "--cases") == 0, only = argc == 3 ? atoi(argv[2]) : -1;
+    int cases_only = argc >= 2 && strcmp(argv[1], "--cases") == 0;
+    int only = cases_only && argc == 3 ? atoi(argv[2]) : -1; /* styles --cases I: that case alone (0 .. NC - 1) */
     if (t1_only && t1_reps < 1) { fprintf(stderr, "usage: styles --t1 REPS (REPS >= 1)\n"); return 2; }
     rs_ctx *ctx;
     if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
@@ -319,15 +320,18 @@ int main(int argc, char **argv)
     rs_splatter_size(k[0].s, &w, &h);
     uint8_t *rgba = malloc((size_t)w * h * 4);
     if (!rgba) return 1;
-    for (int run = 0; run < (only >= 0 && only < NC ? 4 * RUNS : RUNS); run++)
+    if (only >= NC) only = -1;
+    for (int run = 0; run < (only >= 0 ? 4 * RUNS : RUNS); run++)
         for (int i = 0; i < NC; i++)
-            if ((only < 0 || only >= NC || i == only) && run_once(ctx, &k[i], rgba, w, h)) return 1;
+            if ((only < 0 || i == only) && run_once(ctx, &k[i], rgba, w, h)) return 1;
     if (cases_only) {
-        for (int i = 0; i < NC; i++)
-            if (only < 0 || only >= NC || i == only)
-            printf("%-70s %6.2f ms (coverage %.2f, surface %.2f, overlays %.2f, composite %.2f) / unstyled %.3f\n",
-                   k[i].name, k[i].ms, k[i].prof.coverage_ms, k[i].prof.surface_ms, k[i].prof.overlays_ms,
-                   k[i].prof.composite_ms, k[i].ms / k[0].ms);
+        for (int i = 0; i < NC; i++) {
+            if (only >= 0 && i != only) continue;
+            printf("%-70s %6.2f ms (coverage %.2f, surface %.2f, overlays %.2f, composite %.2f)", k[i].name, k[i].ms,
+                   k[i].prof.coverage_ms, k[i].prof.surface_ms, k[i].prof.overlays_ms, k[i].prof.composite_ms);
+            if (only < 0) printf(" / unstyled %.3f", k[i].ms / k[0].ms);
+            printf("\n");
+        }
         return 0;
     }
 
