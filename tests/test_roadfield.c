@@ -6,7 +6,9 @@
 #include "fail_alloc.h"
 #include "groundtruth.h"
 #include "roadfield.h"
+#include "roadgrid.h"
 #include "scenes.h"
+#include "styling.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -317,6 +319,95 @@ static void test_coverage_city(void)
     rs__roadfield_free(ctx, f2);
     free(cov);
     rs__roadfield_free(ctx, f);
+    rs_roads_free(ctx, roads);
+    sc_scene_free(&sc);
+}
+
+/* Pixels with a weight (R rounded to 16 bits above 0) have a road surface
+ * within their half diagonal: the overlays fill a pixel with q > 0
+ * without asking the field again when R is its analytic coverage
+ * (lib/splat/overlays.c surfaces). Random scenes, and the city's grid with
+ * class styles (T ends trimmed, a casing field beside the road field:
+ * rs__roadfield_coverage2), at two pixel sizes. */
+static size_t count_far(const rs__roadfield *f, const double *cov, uint32_t w, uint32_t h, double pix, size_t *nroad)
+{
+    size_t bad = 0;
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) {
+            double v = cov[(size_t)y * w + x];
+            if (!(v * 65535.0 + 0.5 >= 1)) continue; /* q = 0 (rs__coverage_quantise) */
+            ++*nroad;
+            bad += !rs__roadfield_any_near(f, (x + 0.5) * pix, (y + 0.5) * pix, pix * 0.70710678118654752440);
+        }
+    return bad;
+}
+
+static void test_weight_implies_near(void)
+{
+    sc_rng g;
+    sc_rng_seed(&g, 29);
+    size_t bad = 0, nroad = 0;
+    for (int scene = 0; scene < 6; scene++) {
+        sc_scene sc;
+        unsigned T = scene % 2 ? 4 : 1;
+        CHECK(sc_scene_init(&sc, 61, 46, 2.0) == 0);
+        double W = sc_extent_x(&sc), H = sc_extent_y(&sc);
+        rs_roads *roads = random_roads(&g, W, H, 12, 0, 0, NULL);
+        rs__roadfield_params p = params(0, 0, 2.0, W, H, 0, 2.0 / T);
+        rs__roadfield *f = NULL;
+        CHECK(roads && rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
+        uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
+        double *cov = f ? coverage_image(f, w, h, 2.0 / T) : NULL;
+        CHECK(cov != NULL);
+        if (cov) bad += count_far(f, cov, w, h, 2.0 / T, &nroad);
+        free(cov);
+        rs__roadfield_free(ctx, f);
+        rs_roads_free(ctx, roads);
+        sc_scene_free(&sc);
+    }
+    /* the city with class styles: T ends and casings */
+    sc_scene sc;
+    CHECK(sc_city_default(&sc, 1) == 0);
+    rs_roads *roads = NULL;
+    rs_dem *dem = NULL;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK);
+    rs_dem_frame fr = { sc.cell_size, 0.01, 0, 0 };
+    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    int added = roads != NULL;
+    for (size_t i = 0; added && i < sc.nroads; i++)
+        added = rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n) == RS_OK &&
+                rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    CHECK(added);
+    size_t tees = 0;
+    for (unsigned T = 2; T <= 4; T += 2) {
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = T;
+        rs_road_grid *grid = NULL;
+        CHECK(dem && roads && rs_road_grid_build(ctx, dem, roads, &o, &grid) == RS_OK);
+        const rs__roadfield *f = grid ? grid->field : NULL, *cg = grid && grid->styling ? grid->styling->casing : NULL;
+        CHECK(f != NULL && cg != NULL);
+        double pix = sc.cell_size / T;
+        uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
+        double *cov = malloc((size_t)w * h * sizeof *cov), *covg = malloc((size_t)w * h * sizeof *covg);
+        CHECK(cov && covg);
+        if (f && cg && cov && covg) {
+            rs__roadfield_stats st;
+            rs__roadfield_get_stats(f, &st);
+            rs__roadfield_coverage2(f, cg, 0, 0, w, h, pix, cov, covg, w);
+            bad += count_far(f, cov, w, h, pix, &nroad);
+            bad += count_far(cg, covg, w, h, pix, &nroad);
+            tees += st.tees;
+        }
+        free(cov);
+        free(covg);
+        rs_road_grid_free(ctx, grid);
+    }
+    printf("weight implies a road within the half diagonal: %zu of %zu road pixels without (%zu T ends)\n", bad, nroad,
+           tees);
+    CHECK(nroad > 100000 && tees > 0);
+    CHECK(bad == 0);
+    rs_dem_free(ctx, dem);
     rs_roads_free(ctx, roads);
     sc_scene_free(&sc);
 }
@@ -791,6 +882,7 @@ int main(void)
     test_translation();
     test_coverage_random();
     test_coverage_city();
+    test_weight_implies_near();
     test_coverage_redundant();
     test_widen();
     test_extreme();

@@ -752,33 +752,36 @@ static uint32_t piece_poly(const ls_piece *P, double *x, double *y)
     return n;
 }
 
-/* Does piece A (its box cut by its half-planes) keep any area, given the
- * polygon (x, y)[n] of its first k0 half-planes (the piece it was made
- * from)? The same clips in the same order as piece_poly(A), so the same
- * doubles, without redoing the first k0. A's polygon goes to g. */
-static int nonempty_from(const double *x, const double *y, uint32_t n, const ls_piece *A, uint32_t k0, ls_poly *g)
+/* Does the piece with polygon (x, y)[n] keep any area once clipped by
+ * the nh further half-planes hp (in that order: the clips piece_poly would
+ * make of them after its first ones, so the same doubles)? The clipped
+ * polygon goes to g. */
+static int nonempty_hp(const double *x, const double *y, uint32_t n, const double (*hp)[3], uint32_t nh, ls_poly *g)
 {
-    double bx[POLY_MAX], by[POLY_MAX];
-    memcpy(g->x, x, n * sizeof *x);
-    memcpy(g->y, y, n * sizeof *y);
-    for (uint32_t k = k0; k < A->nhp && n; k++) {
-        n = clip_poly(g->x, g->y, n, A->hp[k][0], A->hp[k][1], A->hp[k][2], bx, by);
-        memcpy(g->x, bx, n * sizeof *bx);
-        memcpy(g->y, by, n * sizeof *by);
+    double bx[2][POLY_MAX], by[2][POLY_MAX];
+    const double *sx = x, *sy = y;
+    for (uint32_t k = 0; k < nh && n; k++) {
+        double *dx = k + 1 == nh ? g->x : bx[k & 1], *dy = k + 1 == nh ? g->y : by[k & 1];
+        n = clip_poly(sx, sy, n, hp[k][0], hp[k][1], hp[k][2], dx, dy);
+        sx = dx;
+        sy = dy;
     }
     g->n = n;
     return n >= 3 && poly_area(g->x, g->y, n) > 1e-12;
 }
 
-static int add_hp(ls_piece *P, double c0, double cu, double cv)
+/* out = P with the nh half-planes hp appended (the caller checked that
+ * P->nlim + nh <= HP_MAX). */
+static void piece_with(ls_piece *out, const ls_piece *P, const double (*hp)[3], uint32_t nh)
 {
-    if (P->nlim >= HP_MAX) return 0;
-    P->nlim++;
-    P->hp[P->nhp][0] = c0;
-    P->hp[P->nhp][1] = cu;
-    P->hp[P->nhp][2] = cv;
-    P->nhp++;
-    return 1;
+    *out = *P;
+    for (uint32_t k = 0; k < nh; k++) {
+        out->hp[out->nhp][0] = hp[k][0];
+        out->hp[out->nhp][1] = hp[k][1];
+        out->hp[out->nhp][2] = hp[k][2];
+        out->nhp++;
+        out->nlim++;
+    }
 }
 
 /* P minus surface rectangle Q (cut by its clip lines): up to 6 disjoint
@@ -813,36 +816,42 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
         out_clip2 &= dn0 + x[k] * gnu + y[k] * gnv >= dq;
     }
     if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip || out_clip2) return -1;
+    /* the most half-planes a piece takes: 3 beside Q, 5 beyond its clip
+     * line, 5 or 6 beyond the second (P stays whole when they pass HP_MAX) */
+    uint32_t need = Q->clip2 ? 5u + (Q->clip ? 1u : 0u) : Q->clip ? 5u : 3u;
+    if (P->nlim + need > HP_MAX) return -1;
     int m = 0;
-    ls_piece A = *P;
-    if (!add_hp(&A, cv0 - r, fvu, fvv)) return -1;                      /* v' >= r */
-    if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
-    A = *P;
-    if (!add_hp(&A, -cv0 - r, -fvu, -fvv)) return -1;                   /* v' <= -r */
-    if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
-    for (int side = 0; side < 2; side++) {
-        A = *P;
-        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv)) return -1;
-        int ok = side == 0 ? add_hp(&A, lo - cu0, -fuu, -fuv)            /* u' <= u0 */
-                           : add_hp(&A, cu0 - hi, fuu, fuv);             /* u' >= u1 */
-        if (!ok) return -1;
-        if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
+    double h[6][3];
+    /* each candidate piece's half-planes, clipped from P's polygon, kept when
+     * it keeps area */
+#define LS_HP(j, a0, a1, a2) (h[j][0] = (a0), h[j][1] = (a1), h[j][2] = (a2))
+#define LS_TRY(nh) do { if (nonempty_hp(x, y, n, (const double(*)[3])h, (nh), &outg[m])) piece_with(&out[m++], P, (const double(*)[3])h, (nh)); } while (0)
+    LS_HP(0, cv0 - r, fvu, fvv); /* v' >= r */
+    LS_TRY(1);
+    LS_HP(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
+    LS_TRY(1);
+    LS_HP(0, cv0 + r, fvu, fvv);
+    LS_HP(1, r - cv0, -fvu, -fvv);
+    LS_HP(2, lo - cu0, -fuu, -fuv); /* u' <= u0 */
+    LS_TRY(3);
+    LS_HP(2, cu0 - hi, fuu, fuv); /* u' >= u1 */
+    LS_TRY(3);
+    if (Q->clip || Q->clip2) {
+        LS_HP(2, cu0 - lo, fuu, fuv);
+        LS_HP(3, hi - cu0, -fuu, -fuv);
     }
     if (Q->clip) { /* the rectangle's part beyond the clip line stays */
-        A = *P;
-        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
-            !add_hp(&A, hi - cu0, -fuu, -fuv) || !add_hp(&A, cn0 - cq, fnu, fnv))
-            return -1;
-        if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
+        LS_HP(4, cn0 - cq, fnu, fnv);
+        LS_TRY(5);
     }
     if (Q->clip2) { /* and its part within the first clip line beyond the second */
-        A = *P;
-        if (!add_hp(&A, cv0 + r, fvu, fvv) || !add_hp(&A, r - cv0, -fvu, -fvv) || !add_hp(&A, cu0 - lo, fuu, fuv) ||
-            !add_hp(&A, hi - cu0, -fuu, -fuv) || (Q->clip && !add_hp(&A, cq - cn0, -fnu, -fnv)) ||
-            !add_hp(&A, dn0 - dq, gnu, gnv))
-            return -1;
-        if (nonempty_from(x, y, n, &A, P->nhp, &outg[m])) out[m++] = A;
+        uint32_t k = 4;
+        if (Q->clip) LS_HP(k, cq - cn0, -fnu, -fnv), k++;
+        LS_HP(k, dn0 - dq, gnu, gnv);
+        LS_TRY(k + 1);
     }
+#undef LS_TRY
+#undef LS_HP
     return m;
 }
 
@@ -907,7 +916,10 @@ static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
     int full = 0, moved = 0; /* (pieces are copied to the other buffer once Q cuts one: mostly it cuts none) */
     for (uint32_t a = 0; a < S->n; a++) {
         if (work) *work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
-        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, tmp, tg);
+        /* the pieces go straight to their place in the other buffer when
+         * there is room for the most a cut makes */
+        int direct = nn + 6 <= QMAX;
+        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, direct ? &S->p[o][nn] : tmp, direct ? &S->g[o][nn] : tg);
         if (m < 0) {
             if (!moved) {
                 nn++;
@@ -925,6 +937,10 @@ static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
                 S->g[o][b] = S->g[c][b];
             }
             moved = 1;
+        }
+        if (direct) {
+            nn += (uint32_t)m;
+            continue;
         }
         if (nn + (uint32_t)m > QMAX) { full = 1; break; }
         for (int b = 0; b < m; b++) {

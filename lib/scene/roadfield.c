@@ -1329,6 +1329,7 @@ void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out)
     out->max_list = f->maxlist;
     out->redundant = f->nredundant;
     out->relation_work = f->relwork;
+    out->tees = f->ntee;
 }
 
 /* ------------------------------------------------------------------------

@@ -152,6 +152,7 @@ typedef struct rs__roadfield_stats {
     uint64_t relation_work; /* work units of the segment relations (list entries scanned, holder-tree
                                nodes and items visited): near-linear in the segments, capped by
                                rs_limits.max_field_work */
+    size_t tees;           /* T entries (road ends trimmed at a T, rs__roadfield_set_tees) */
 } rs__roadfield_stats;
 void rs__roadfield_get_stats(const rs__roadfield *f, rs__roadfield_stats *out);
 #endif

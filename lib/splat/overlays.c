@@ -85,7 +85,10 @@ static void casings(const rs_splatter *s, const rs__styling *st, double pix, rs_
     }
 }
 
-static void surfaces(const rs__styling *st, double pix, rs__piece *p)
+/* q_means_near: R comes from the analytic coverage of st->near's own
+ * roads (the grid's field, or the same field indexed for these pixels),
+ * so a pixel with q > 0 has a road surface within its half diagonal. */
+static void surfaces(const rs__styling *st, double pix, rs__piece *p, int q_means_near)
 {
     const size_t w = p->w;
     uint32_t hint = UINT32_MAX; /* the segment the last lookup found */
@@ -105,9 +108,16 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p)
             float c[4];
             if (st->fill_uniform) {
                 /* every road has this fill: which road the lookup below
-                 * finds does not matter, only whether it finds one (it
-                 * does on a whole road pixel) */
-                if (q != 65535 && !rs__roadfield_any_near_hint(st->near, x, y, pix * HALF_SQRT2, &hint)) continue;
+                 * finds does not matter, only whether it finds one. It
+                 * does on a whole road pixel, and on every road pixel
+                 * (q > 0) whose R is the analytic coverage of the same
+                 * roads: a pixel takes 0.5 / 65535 of its area or more
+                 * from a road shape only if that shape reaches into its
+                 * square, within the half diagonal of its centre (by far
+                 * more than the roundings; docs/linesym.md) */
+                if (q != 65535 && !q_means_near &&
+                    !rs__roadfield_any_near_hint(st->near, x, y, pix * HALF_SQRT2, &hint))
+                    continue;
                 memcpy(c, st->fill_rgba, sizeof c);
             } else {
                 rs__road_point rp;
@@ -150,7 +160,8 @@ void rs__overlays_casings(const rs_splatter *s, rs__piece *p)
 void rs__overlays_surfaces(const rs_splatter *s, rs__piece *p)
 {
     const rs__styling *st = s->grid->styling;
-    if (st && st->any_surface && p->road_pixels && p->w && p->rows) surfaces(st, s->texel_m, p);
+    if (st && st->any_surface && p->road_pixels && p->w && p->rows)
+        surfaces(st, s->texel_m, p, s->o.coverage.edges == RS_EDGES_ANALYTIC && st->near == s->grid->field);
 }
 
 void rs__overlays_paint(const rs_splatter *s, rs__piece *p, float *rgb)
