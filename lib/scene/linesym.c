@@ -109,8 +109,8 @@ struct rs__linesym {
     uint32_t cpx, cpy;     /* pixels per index cell: columns, rows */
     ls_grid grid;          /* the same in metres */
     uint32_t gw, gh;
-    uint32_t *start, *ids; /* CSR: pieces per cell, ascending (ids while building) */
-    ls_pbox *ent;          /* the entries of ids */
+    uint32_t *start;       /* CSR: the pieces per cell in ent, ascending */
+    ls_pbox *ent;
     ls_pbuild *pb;         /* while building */
     ls_ppc *pp;            /* painting: the pieces, their boxes, their half-planes */
     double *hpp;
@@ -1215,7 +1215,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
  * start[], pass 1 fills ids[] from the ends, item k. */
 static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double uy, double u0, double u1,
                        double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
-                       uint32_t *ids, uint32_t k, int fill)
+                       uint32_t *ids, uint32_t k, ls_pbox *ent, const ls_pbox *val, int fill)
 {
     double cm = G->cmx, cmy = G->cmy;
     double fy0 = floor(y0 / cmy), fy1 = floor(y1 / cmy);
@@ -1248,23 +1248,27 @@ static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double
         }
         for (uint32_t i = a; i <= b; i++) {
             size_t c = (size_t)j * G->gw + i;
-            if (fill) ids[--start[c]] = k;
-            else start[c]++;
+            if (!fill) start[c]++;
+            else if (ent) ent[--start[c]] = *val;
+            else ids[--start[c]] = k;
         }
     }
 }
 
+/* Counts piece k in the cells it covers (fill 0), or lists it there (fill
+ * 1: its index entry, the painter's first read, written in place). */
 static void piece_cells(rs__linesym *L, uint32_t k, int fill)
 {
     const ls_ppc *P = &L->pp[k];
     const ls_pbuild *B = &L->pb[k];
     double m = L->margin;
+    ls_pbox v = { B->gx0, B->gx1, B->gy0, B->gy1, k, P->band };
     if (P->kind == PIECE_SLAB)
         rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, B->len + m, P->a - m, P->b + m, B->x0, B->y0, B->x1, B->y1,
-                   L->start, L->ids, k, fill);
+                   L->start, NULL, k, L->ent, &v, fill);
     else /* the sector's box grown by the margin, as an axis-aligned rectangle */
         rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
-                   P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, L->ids, k, fill);
+                   P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, NULL, k, L->ent, &v, fill);
 }
 
 /* Counts to CSR end offsets (a list is then filled from its end). */
@@ -1731,7 +1735,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 x0 = rs__fmin(x0, x), x1 = rs__fmax(x1, x), y0 = rs__fmin(y0, y), y1 = rs__fmax(y1, y);
             }
             rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
-                       J->ids, (uint32_t)k, pass);
+                       J->ids, (uint32_t)k, NULL, NULL, pass);
         }
     }
     return RS_OK;
@@ -1741,7 +1745,6 @@ void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
 {
     if (!L) return;
     rs__free(ctx, L->start);
-    rs__free(ctx, L->ids);
     rs__free(ctx, L->pb);
     rs__free(ctx, L->pp);
     rs__free(ctx, L->ent);
@@ -2007,33 +2010,22 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
     if (!csr_close(L->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; goto fail; }
     /* the index entries count too: a piece is listed in every cell it covers */
-    if (L->budget && (uint64_t)total * (sizeof *L->ids + sizeof *L->ent) >
+    if (L->budget && (uint64_t)total * (sizeof(uint32_t) + sizeof *L->ent) >
                          L->budget - ((uint64_t)L->npc * PIECE_BYTES + (uint64_t)nhpp * HP_BYTES)) {
         L->over_budget = 1;
         res = RS_ERR_LIMIT;
         goto fail;
     }
-    L->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ids);
-    if (!L->ids) { res = RS_ERR_NOMEM; goto fail; }
+    L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
+    if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
     for (size_t k = L->npc; k-- > 0;) {
         if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
         piece_cells(L, (uint32_t)k, 1);
     }
-    L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
-    if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
-    for (size_t e = 0; e < total; e++) {
-        const ls_pbuild *P = &L->pb[L->ids[e]];
-        ls_pbox *B = &L->ent[e];
-        B->gx0 = P->gx0, B->gx1 = P->gx1, B->gy0 = P->gy0, B->gy1 = P->gy1;
-        B->id = L->ids[e];
-        B->band = L->pp[L->ids[e]].band;
-    }
     rs__free(ctx, L->pb); /* built */
-    rs__free(ctx, L->ids);
     rs__free(ctx, L->cut_start);
     rs__free(ctx, L->cut_ord);
     L->pb = NULL;
-    L->ids = NULL;
     L->cut_start = L->cut_ord = NULL;
     L->cuts = NULL;
     L->cut_stroke = NULL;
