@@ -453,7 +453,8 @@ typedef struct ls_poly {
     double x[POLY_MAX], y[POLY_MAX];
 } ls_poly;
 
-static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly);
+static void piece_finish(const rs__linesym *L, const ls_piece *Q, const ls_poly *poly, ls_ppc *C, ls_pbuild *B,
+                         double *hpp);
 
 /* Append piece P, finished (piece_finish), as the painter's record (pp,
  * its half-planes in hpp) and the index build's (pb). */
@@ -503,41 +504,45 @@ static rs_result push_piece(rs_ctx *ctx, rs__linesym *L, const ls_piece *P, cons
         L->hpp = nh;
         L->hcap = nc;
     }
-    ls_piece Q = *P;
-    piece_finish(L, &Q, poly);
     ls_ppc *C = &L->pp[L->npc];
     ls_pbuild *B = &L->pb[L->npc++];
-    C->ox = Q.ox, C->oy = Q.oy, C->ux = Q.ux, C->uy = Q.uy, C->a = Q.a, C->b = Q.b, C->su = Q.su;
-    C->uin0 = Q.uin0, C->uin1 = Q.uin1, C->st_lo = Q.st_lo, C->st_e = Q.st_e, C->st_q = Q.st_q;
-    C->st_h = Q.st_h, C->s0 = Q.s0, C->ru0 = Q.ru0, C->ru1 = Q.ru1, C->rv0 = Q.rv0, C->rv1 = Q.rv1;
-    C->r0 = Q.r0, C->r1 = Q.r1, C->wx0 = Q.wx0, C->wy0 = Q.wy0, C->wx1 = Q.wx1, C->wy1 = Q.wy1;
-    C->warea = Q.warea, C->nhp = Q.nhp, C->kind = Q.kind, C->band = Q.band, C->dashed = Q.dashed;
+    /* the piece's own values, then what piece_finish derives over them */
+    C->ox = P->ox, C->oy = P->oy, C->ux = P->ux, C->uy = P->uy, C->a = P->a, C->b = P->b, C->su = P->su;
+    C->uin0 = P->uin0, C->uin1 = P->uin1, C->st_lo = P->st_lo, C->st_e = P->st_e, C->st_q = P->st_q;
+    C->st_h = P->st_h, C->s0 = P->s0, C->ru0 = P->ru0, C->ru1 = P->ru1, C->rv0 = P->rv0, C->rv1 = P->rv1;
+    C->r0 = P->r0, C->r1 = P->r1, C->wx0 = P->wx0, C->wy0 = P->wy0, C->wx1 = P->wx1, C->wy1 = P->wy1;
+    C->warea = P->warea, C->nhp = P->nhp, C->kind = P->kind, C->band = P->band, C->dashed = P->dashed;
     C->hp0 = (uint32_t)L->nhpp;
-    double du = Q.ux * L->pixel, dv = Q.uy * L->pixel; /* 0 for a subnormal pixel */
-    C->iku = fabs(Q.ux) < 1e-12 || du == 0 ? 0 : 1 / du;
-    C->ikv = fabs(Q.uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
-    C->cbase = Q.ox / L->pixel - 0.5;
-    for (uint32_t j = 0; j < Q.nhp; j++, L->nhpp++) {
-        memcpy(L->hpp + 4 * L->nhpp, Q.hp[j], 3 * sizeof *L->hpp);
-        L->hpp[4 * L->nhpp + 3] = Q.sup[j];
-    }
-    B->len = Q.len, B->x0 = Q.x0, B->y0 = Q.y0, B->x1 = Q.x1, B->y1 = Q.y1;
-    B->gx0 = Q.gx0, B->gx1 = Q.gx1, B->gy0 = Q.gy0, B->gy1 = Q.gy1;
+    double du = P->ux * L->pixel, dv = P->uy * L->pixel; /* 0 for a subnormal pixel */
+    C->iku = fabs(P->ux) < 1e-12 || du == 0 ? 0 : 1 / du;
+    C->ikv = fabs(P->uy) < 1e-12 || dv == 0 ? 0 : 1 / dv;
+    C->cbase = P->ox / L->pixel - 0.5;
+    B->len = P->len, B->x0 = P->x0, B->y0 = P->y0, B->x1 = P->x1, B->y1 = P->y1;
+    B->gx0 = P->gx0, B->gx1 = P->gx1, B->gy0 = P->gy0, B->gy1 = P->gy1;
+    piece_finish(L, P, poly, C, B, L->hpp + 4 * L->nhpp);
+    L->nhpp += P->nhp;
     return RS_OK;
 }
 
 /* The painter's constants of a piece: half-plane extents, box, pixel
  * rows and columns, the slab's safe u range. poly: Q's polygon if known
  * (the cuts made it: the same clips in the same order as piece_poly). */
-static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
+static void piece_finish(const rs__linesym *L, const ls_piece *Q, const ls_poly *poly, ls_ppc *C, ls_pbuild *B,
+                         double *hpp)
 {
     double pix = L->pixel, hp = 0.5 * pix, ax = fabs(Q->ux), ay = fabs(Q->uy);
     /* half-plane c0 + cu u + cv v in local (x, y): normal (cu ux + cv uy, cu uy - cv ux) */
+    double sup[HP_MAX];
     for (uint32_t k = 0; k < Q->nhp; k++) {
         double cu = Q->hp[k][1], cv = Q->hp[k][2];
-        Q->sup[k] = hp * (fabs(cu * Q->ux + cv * Q->uy) + fabs(cu * Q->uy - cv * Q->ux));
+        sup[k] = hp * (fabs(cu * Q->ux + cv * Q->uy) + fabs(cu * Q->uy - cv * Q->ux));
+        hpp[4 * k] = Q->hp[k][0];
+        hpp[4 * k + 1] = cu;
+        hpp[4 * k + 2] = cv;
+        hpp[4 * k + 3] = sup[k];
     }
-    Q->su = hp * (ax + ay);
+    const double su = hp * (ax + ay);
+    C->su = su;
     /* the piece's polygon (a wedge's: its box cut by the two radii):
      * its box and ranges, a little wider against rounding */
     double px[POLY_MAX], py[POLY_MAX], bx0 = DBL_MAX, bx1 = -DBL_MAX, by0 = DBL_MAX, by1 = -DBL_MAX;
@@ -564,10 +569,10 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
         pu0 = rs__fmin(pu0, px[k]), pu1 = rs__fmax(pu1, px[k]), pv0 = rs__fmin(pv0, py[k]), pv1 = rs__fmax(pv1, py[k]);
     }
     if (n < 3) { /* nothing left of it (the inner side of a sharp bend): never visited */
-        Q->gx0 = Q->gy0 = 1;
-        Q->gx1 = Q->gy1 = 0;
-        Q->ru0 = Q->rv0 = 1;
-        Q->ru1 = Q->rv1 = 0;
+        B->gx0 = B->gy0 = 1;
+        B->gx1 = B->gy1 = 0;
+        C->ru0 = C->rv0 = 1;
+        C->ru1 = C->rv1 = 0;
         return;
     }
     double eb = 1e-9 * (1 + rs__fmax(fabs(Q->ox), fabs(Q->oy)) + Q->len + fabs(Q->a) + fabs(Q->b) + Q->r1);
@@ -579,35 +584,35 @@ static void piece_finish(const rs__linesym *L, ls_piece *Q, const ls_poly *poly)
         by0 = rs__fmax(by0, Q->oy + Q->wy0), by1 = rs__fmin(by1, Q->oy + Q->wy1);
     }
     /* pixels that overlap the box */
-    Q->gx0 = ceil((bx0 - eb) / pix - 1);
-    Q->gx1 = floor((bx1 + eb) / pix);
-    Q->gy0 = ceil((by0 - eb) / pix - 1);
-    Q->gy1 = floor((by1 + eb) / pix);
+    B->gx0 = ceil((bx0 - eb) / pix - 1);
+    B->gx1 = floor((bx1 + eb) / pix);
+    B->gy0 = ceil((by0 - eb) / pix - 1);
+    B->gy1 = floor((by1 + eb) / pix);
     if (Q->kind == PIECE_SLAB) {
         double p1 = pix * ax, p2 = pix * ay, lo = p1 < p2 ? p1 : p2, hi = p1 < p2 ? p2 : p1;
-        Q->st_lo = lo;
-        Q->st_e = 0.5 * (lo + hi);
+        C->st_lo = lo;
+        C->st_e = 0.5 * (lo + hi);
         /* a subnormal pixel (fuzzed options) may make hi or hi lo 0: e is
          * then 0 or the ramp below lo too thin to matter */
-        Q->st_h = hi > 0 ? 1 / hi : 0;
-        Q->st_q = hi * lo > 0 ? 0.5 / (hi * lo) : 0;
-        Q->ru0 = pu0 - Q->su - eb;
-        Q->ru1 = pu1 + Q->su + eb;
-        Q->rv0 = pv0 - Q->su - eb;
-        Q->rv1 = pv1 + Q->su + eb;
+        C->st_h = hi > 0 ? 1 / hi : 0;
+        C->st_q = hi * lo > 0 ? 0.5 / (hi * lo) : 0;
+        C->ru0 = pu0 - su - eb;
+        C->ru1 = pu1 + su + eb;
+        C->rv0 = pv0 - su - eb;
+        C->rv1 = pv1 + su + eb;
         /* A centre that passes the v limits has v in (a - su, b + su);
          * there half-plane k >= 2 holds with the square's extent to spare
          * where cu u >= sup - c0 - min over v of cv v (by a margin). */
-        double ulo = -DBL_MAX, uhi = DBL_MAX, va = Q->a - Q->su, vb = Q->b + Q->su;
+        double ulo = -DBL_MAX, uhi = DBL_MAX, va = Q->a - su, vb = Q->b + su;
         for (uint32_t k = 2; k < Q->nhp; k++) {
             double c0 = Q->hp[k][0], cu = Q->hp[k][1], cv = Q->hp[k][2];
-            double need = Q->sup[k] - c0 - rs__fmin(cv * va, cv * vb) + eb * (1 + fabs(cu) + fabs(cv));
+            double need = sup[k] - c0 - rs__fmin(cv * va, cv * vb) + eb * (1 + fabs(cu) + fabs(cv));
             if (cu > 0) ulo = rs__fmax(ulo, need / cu);
             else if (cu < 0) uhi = rs__fmin(uhi, need / cu);
             else if (need > 0) uhi = -DBL_MAX; /* never safe */
         }
-        Q->uin0 = ulo;
-        Q->uin1 = uhi;
+        C->uin0 = ulo;
+        C->uin1 = uhi;
     }
 }
 
