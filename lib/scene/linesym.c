@@ -1218,9 +1218,36 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
  * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
  * row, the x extent of the rectangle cut to that row); pass 0 counts into
  * start[], pass 1 fills ids[] from the ends, item k. */
+/* Cell spans kept between the index's counting and filling passes: span
+ * m is cells [a[m], b[m]] of cell row j[m]. */
+typedef struct ls_spans {
+    uint32_t *j, *a, *b;
+    size_t n, cap;
+    int failed; /* an allocation failed: the fill pass recomputes */
+} ls_spans;
+
+static void spans_push(rs_ctx *ctx, ls_spans *S, uint32_t j, uint32_t a, uint32_t b)
+{
+    if (S->failed) return;
+    if (S->n == S->cap) {
+        size_t nc = S->cap ? 2 * S->cap : 4096;
+        void *nj = S->j, *na = S->a, *nb = S->b;
+        if (rs__resize(ctx, &nj, S->cap * sizeof *S->j, nc * sizeof *S->j) ||
+            (S->j = nj, rs__resize(ctx, &na, S->cap * sizeof *S->a, nc * sizeof *S->a)) ||
+            (S->a = na, rs__resize(ctx, &nb, S->cap * sizeof *S->b, nc * sizeof *S->b))) {
+            S->failed = 1;
+            return;
+        }
+        S->b = nb;
+        S->cap = nc;
+    }
+    S->j[S->n] = j, S->a[S->n] = a, S->b[S->n] = b, S->n++;
+}
+
 static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double uy, double u0, double u1,
                        double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
-                       uint32_t *ids, uint32_t k, ls_pbox *ent, const ls_pbox *val, int fill)
+                       uint32_t *ids, uint32_t k, ls_pbox *ent, const ls_pbox *val, int fill, rs_ctx *ctx,
+                       ls_spans *S)
 {
     double cm = G->cmx, cmy = G->cmy;
     double fy0 = floor(y0 / cmy), fy1 = floor(y1 / cmy);
@@ -1251,6 +1278,7 @@ static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double
             a = ga > (double)i0 ? (uint32_t)ga : i0;
             b = gb < (double)i1 ? (uint32_t)gb : i1;
         }
+        if (S) spans_push(ctx, S, j, a, b);
         for (uint32_t i = a; i <= b; i++) {
             size_t c = (size_t)j * G->gw + i;
             if (!fill) start[c]++;
@@ -1262,7 +1290,7 @@ static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double
 
 /* Counts piece k in the cells it covers (fill 0), or lists it there (fill
  * 1: its index entry, the painter's first read, written in place). */
-static void piece_cells(rs__linesym *L, uint32_t k, int fill)
+static void piece_cells(rs__linesym *L, uint32_t k, int fill, rs_ctx *ctx, ls_spans *S)
 {
     const ls_ppc *P = &L->pp[k];
     const ls_pbuild *B = &L->pb[k];
@@ -1270,10 +1298,11 @@ static void piece_cells(rs__linesym *L, uint32_t k, int fill)
     ls_pbox v = { B->gx0, B->gx1, B->gy0, B->gy1, k, P->band };
     if (P->kind == PIECE_SLAB)
         rect_cells(&L->grid, P->ox, P->oy, P->ux, P->uy, -m, B->len + m, P->a - m, P->b + m, B->x0, B->y0, B->x1, B->y1,
-                   L->start, NULL, k, L->ent, &v, fill);
+                   L->start, NULL, k, L->ent, &v, fill, ctx, S);
     else /* the sector's box grown by the margin, as an axis-aligned rectangle */
         rect_cells(&L->grid, P->ox, P->oy, 1, 0, P->wx0 - m, P->wx1 + m, -P->wy1 - m, -P->wy0 + m, P->ox + P->wx0 - m,
-                   P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, NULL, k, L->ent, &v, fill);
+                   P->oy + P->wy0 - m, P->ox + P->wx1 + m, P->oy + P->wy1 + m, L->start, NULL, k, L->ent, &v, fill,
+                   ctx, S);
 }
 
 /* Counts to CSR end offsets (a list is then filled from its end). */
@@ -1722,28 +1751,45 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     J->start = rs__calloc(ctx, ncell + 1, sizeof *J->start);
     J->stamp = rs__calloc(ctx, J->nsf ? J->nsf : 1, sizeof *J->stamp);
     if (!J->start || !J->stamp) return RS_ERR_NOMEM;
-    for (int pass = 0; pass < 2; pass++) {
+    /* the cells of each surface counted and kept as spans, then listed
+     * from them (as the pieces' index: no second clipping) */
+    ls_spans S;
+    memset(&S, 0, sizeof S);
+    uint32_t *sp0 = rs__alloc_array(ctx, J->nsf + 1, sizeof *sp0);
+    S.failed = sp0 == NULL;
+    rs_result res = RS_OK;
+    for (int pass = 0; pass < 2 && !res; pass++) {
         if (pass == 1) {
             uint64_t lim = UINT32_MAX - 1u;
             if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
-            if (!csr_close(J->start, ncell, lim, &total)) return RS_ERR_LIMIT;
+            if (sp0) sp0[J->nsf] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
+            if (S.n >= UINT32_MAX) S.failed = 1;
+            if (!csr_close(J->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; break; }
             J->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *J->ids);
-            if (!J->ids) return RS_ERR_NOMEM;
+            if (!J->ids) { res = RS_ERR_NOMEM; break; }
         }
         for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
+            if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; break; }
+            if (pass && !S.failed) {
+                for (uint32_t m = sp0[k]; m < sp0[k + 1]; m++)
+                    for (uint32_t i = S.a[m]; i <= S.b[m]; i++) J->ids[--J->start[(size_t)S.j[m] * J->grid.gw + i]] = (uint32_t)k;
+                continue;
+            }
             const ls_surf *Q = &J->sf[k];
-            if (rs__tick(ctx, 0)) return RS_ERR_CANCELLED;
             double x0 = DBL_MAX, y0 = DBL_MAX, x1 = -DBL_MAX, y1 = -DBL_MAX;
             const double U[4] = { Q->u0, Q->u1, Q->u1, Q->u0 }, V[4] = { -Q->r, -Q->r, Q->r, Q->r };
             for (int c = 0; c < 4; c++) {
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
                 x0 = rs__fmin(x0, x), x1 = rs__fmax(x1, x), y0 = rs__fmin(y0, y), y1 = rs__fmax(y1, y);
             }
+            if (!pass && sp0) sp0[k] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
             rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
-                       J->ids, (uint32_t)k, NULL, NULL, pass);
+                       J->ids, (uint32_t)k, NULL, NULL, pass, ctx, pass ? NULL : &S);
         }
     }
-    return RS_OK;
+    rs__free(ctx, sp0);
+    rs__free(ctx, S.j), rs__free(ctx, S.a), rs__free(ctx, S.b);
+    return res;
 }
 
 void rs__linesym_free(rs_ctx *ctx, rs__linesym *L)
@@ -2007,26 +2053,48 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         double *nh = rs__realloc(ctx, L->hpp, 4 * nhpp * sizeof *L->hpp);
         if (nh) L->hpp = nh;
     }
+    /* the cells each piece covers, counted and kept as spans (the fill
+     * pass below lists the pieces there without clipping again) */
+    ls_spans S;
+    memset(&S, 0, sizeof S);
+    uint32_t *sp0 = rs__alloc_array(ctx, L->npc + 1, sizeof *sp0);
+    S.failed = sp0 == NULL;
     for (size_t k = 0; k < L->npc; k++) {
-        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
-        piece_cells(L, (uint32_t)k, 0);
+        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; break; }
+        if (sp0) sp0[k] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
+        piece_cells(L, (uint32_t)k, 0, ctx, &S);
+    }
+    if (sp0) sp0[L->npc] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
+    if (S.n >= UINT32_MAX) S.failed = 1;
+    if (res) {
+        rs__free(ctx, sp0);
+        rs__free(ctx, S.j), rs__free(ctx, S.a), rs__free(ctx, S.b);
+        goto fail;
     }
     uint64_t lim = UINT32_MAX - 1u;
     if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
-    if (!csr_close(L->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; goto fail; }
+    if (!csr_close(L->start, ncell, lim, &total)) res = RS_ERR_LIMIT;
     /* the index entries count too: a piece is listed in every cell it covers */
-    if (L->budget && (uint64_t)total * (sizeof(uint32_t) + sizeof *L->ent) >
-                         L->budget - ((uint64_t)L->npc * PIECE_BYTES + (uint64_t)nhpp * HP_BYTES)) {
+    if (!res && L->budget && (uint64_t)total * (sizeof(uint32_t) + sizeof *L->ent) >
+                                 L->budget - ((uint64_t)L->npc * PIECE_BYTES + (uint64_t)nhpp * HP_BYTES)) {
         L->over_budget = 1;
         res = RS_ERR_LIMIT;
-        goto fail;
     }
-    L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent);
-    if (!L->ent) { res = RS_ERR_NOMEM; goto fail; }
-    for (size_t k = L->npc; k-- > 0;) {
-        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
-        piece_cells(L, (uint32_t)k, 1);
+    if (!res && !(L->ent = rs__alloc_array(ctx, total ? total : 1, sizeof *L->ent))) res = RS_ERR_NOMEM;
+    for (size_t k = L->npc; !res && k-- > 0;) {
+        if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; break; }
+        if (S.failed) {
+            piece_cells(L, (uint32_t)k, 1, ctx, NULL);
+            continue;
+        }
+        const ls_pbuild *PB = &L->pb[k];
+        ls_pbox v = { PB->gx0, PB->gx1, PB->gy0, PB->gy1, (uint32_t)k, L->pp[k].band };
+        for (uint32_t m = sp0[k]; m < sp0[k + 1]; m++)
+            for (uint32_t i = S.a[m]; i <= S.b[m]; i++) L->ent[--L->start[(size_t)S.j[m] * L->grid.gw + i]] = v;
     }
+    rs__free(ctx, sp0);
+    rs__free(ctx, S.j), rs__free(ctx, S.a), rs__free(ctx, S.b);
+    if (res) goto fail;
     rs__free(ctx, L->pb); /* built */
     rs__free(ctx, L->cut_start);
     rs__free(ctx, L->cut_ord);
