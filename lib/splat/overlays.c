@@ -88,9 +88,53 @@ static void casings(const rs_splatter *s, const rs__styling *st, double pix, rs_
 /* q_means_near: R comes from the analytic coverage of st->near's own
  * roads (the grid's field, or the same field indexed for these pixels),
  * so a pixel with q > 0 has a road surface within its half diagonal. */
+/* surfaces() for one fill on every road where q > 0 means a road is near
+ * (q_means_near): every road pixel takes the fill, the same floats as the
+ * pixel loop below (the blend, or the fill itself on a whole road pixel
+ * when it is opaque), four pixels a step with SSE2. */
+static void fill_uniform_rows(const rs__styling *st, rs__piece *p)
+{
+    const size_t w = p->w;
+    const float *c = st->fill_rgba;
+    const float a = c[3], ka = 1.0f - a;
+    for (uint32_t r = 0; r < p->rows; r++) {
+        float *sc = p->sc + (size_t)r * w * 3;
+        const uint16_t *q = p->q + (size_t)r * w;
+        size_t k = 0;
+#if defined(__SSE2__)
+        const __m128i zero = _mm_setzero_si128(), all = _mm_set1_epi32(65535);
+        const __m128 va = _mm_set1_ps(a), vka = _mm_set1_ps(ka);
+        for (; k + 4 <= w; k += 4) {
+            __m128i q4 = _mm_unpacklo_epi16(_mm_loadl_epi64((const __m128i *)(const void *)(q + k)), zero);
+            __m128 road = _mm_castsi128_ps(_mm_cmpgt_epi32(q4, zero)); /* q > 0 */
+            if (!_mm_movemask_ps(road)) continue;
+            __m128 whole = st->fill_opaque ? _mm_castsi128_ps(_mm_cmpeq_epi32(q4, all)) : _mm_setzero_ps();
+            for (int ch = 0; ch < 3; ch++) {
+                float *v = sc + (size_t)ch * w + k;
+                __m128 old = _mm_loadu_ps(v), col = _mm_set1_ps(c[ch]);
+                __m128 blend = _mm_add_ps(_mm_mul_ps(old, vka), _mm_mul_ps(col, va));
+                __m128 nv = _mm_or_ps(_mm_and_ps(whole, col), _mm_andnot_ps(whole, blend));
+                _mm_storeu_ps(v, _mm_or_ps(_mm_and_ps(road, nv), _mm_andnot_ps(road, old)));
+            }
+        }
+#endif
+        for (; k < w; k++) {
+            if (q[k] == 0) continue;
+            for (int ch = 0; ch < 3; ch++) {
+                float *v = sc + (size_t)ch * w + k;
+                *v = q[k] == 65535 && st->fill_opaque ? c[ch] : *v * ka + c[ch] * a;
+            }
+        }
+    }
+}
+
 static void surfaces(const rs__styling *st, double pix, rs__piece *p, int q_means_near)
 {
     const size_t w = p->w;
+    if (st->fill_uniform && q_means_near) {
+        fill_uniform_rows(st, p);
+        return;
+    }
     uint32_t hint = UINT32_MAX; /* the segment the last lookup found */
     for (uint32_t r = 0; r < p->rows; r++) {
         float *sc = p->sc + (size_t)r * w * 3;
