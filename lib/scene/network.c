@@ -1334,6 +1334,11 @@ static void surf_test(const build *B, const rs_network *N, surf_end *fe, const u
                       uint32_t q, uint32_t sq, uint32_t k, const double *pa, double dx, double dy, double dd,
                       double reach2, int *q_non_car)
 {
+    /* farther than the reach from the segment's line, by a margin far
+     * above the roundings: farther from the segment too (most ends
+     * tested; no division) */
+    double cr = (xy[0] - pa[0]) * dy - (xy[1] - pa[1]) * dx;
+    if (cr * cr > reach2 * dd * (1 + 1e-9)) return;
     double u = ((xy[0] - pa[0]) * dx + (xy[1] - pa[1]) * dy) / dd;
     u = u > 0 ? (u < 1 ? u : 1) : 0;
     double ex = xy[0] - (pa[0] + u * dx), ey = xy[1] - (pa[1] + u * dy), d2 = ex * ex + ey * ey;
@@ -1402,6 +1407,23 @@ static rs_result surface_tees(build *B, rs_network *N)
     double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (4.0 * (double)(m ? m : 1)));
     if (!(c > 0)) c = fmax(wx, wy) / (double)(m ? m : 1);
     if (!(c > 0) || !isfinite(c) || !isfinite(wx) || !isfinite(wy)) c = INFINITY;
+    if (isfinite(c)) {
+        /* cells no smaller than the records' mean reach: dense ends would
+         * otherwise make a segment walk more rows and cells the more ends
+         * there are (10^5 city roads: 7 rows a segment). The tests made,
+         * and so the result, do not depend on the cells. */
+        double rsum = 0, cap = 16 * c;
+        size_t rn = 0;
+        for (size_t q = 0; q < B->nroads; q++) {
+            double w = 0;
+            rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
+            double hw = 0.5 * w;
+            if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
+            rsum += hw + tol < cap ? hw + tol : cap;
+            rn++;
+        }
+        if (rn && rsum / (double)rn > c) c = rsum / (double)rn;
+    }
     while (isfinite(c)) {
         double fx = floor(wx / c) + 1, fy = floor(wy / c) + 1;
         if (fx * fy <= 4.0 * 4 * (double)m + 4) {
