@@ -545,7 +545,8 @@ static void piece_finish(const rs__linesym *L, const ls_piece *Q, const ls_poly 
     C->su = su;
     /* the piece's polygon (a wedge's: its box cut by the two radii):
      * its box and ranges, a little wider against rounding */
-    double px[POLY_MAX], py[POLY_MAX], bx0 = DBL_MAX, bx1 = -DBL_MAX, by0 = DBL_MAX, by1 = -DBL_MAX;
+    double qx[POLY_MAX], qy[POLY_MAX], bx0 = DBL_MAX, bx1 = -DBL_MAX, by0 = DBL_MAX, by1 = -DBL_MAX;
+    const double *px = qx, *py = qy;
     double pu0 = DBL_MAX, pu1 = -DBL_MAX, pv0 = DBL_MAX, pv1 = -DBL_MAX;
     int herm = L->aa == RS__AA_HERMITE;
     uint32_t n;
@@ -555,13 +556,13 @@ static void piece_finish(const rs__linesym *L, const ls_piece *Q, const ls_poly 
         ls_piece G = *Q;
         G.hp[0][0] += hp;
         G.hp[1][0] += hp;
-        n = piece_poly(&G, px, py);
+        n = piece_poly(&G, qx, qy);
     } else if (poly) {
         n = poly->n;
-        memcpy(px, poly->x, n * sizeof *px);
-        memcpy(py, poly->y, n * sizeof *py);
+        px = poly->x;
+        py = poly->y;
     } else {
-        n = piece_poly(Q, px, py);
+        n = piece_poly(Q, qx, qy);
     }
     for (uint32_t k = 0; k < n; k++) {
         double x = Q->ox + px[k] * Q->ux + py[k] * Q->uy, y = Q->oy + px[k] * Q->uy - py[k] * Q->ux;
