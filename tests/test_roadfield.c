@@ -233,11 +233,32 @@ static int compare_gt(const sc_scene *sc, unsigned T, const double *cov, double 
     return rc;
 }
 
+/* Pixels with a weight (R rounded to 16 bits above 0) have a road surface
+ * within their half diagonal: the overlays fill a pixel with q > 0
+ * without asking the field again when R is its analytic coverage
+ * (lib/splat/overlays.c surfaces): count_far counts those without one.
+ * test_coverage_random checks random scenes, test_weight_implies_near the
+ * city's grid with class styles (T ends trimmed, a casing field beside
+ * the road field: rs__roadfield_coverage2), at two pixel sizes. */
+static size_t count_far(const rs__roadfield *f, const double *cov, uint32_t w, uint32_t h, double pix, size_t *nroad)
+{
+    size_t bad = 0;
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) {
+            double v = cov[(size_t)y * w + x];
+            if (!(v * 65535.0 + 0.5 >= 1)) continue; /* q = 0 (rs__coverage_quantise) */
+            ++*nroad;
+            bad += !rs__roadfield_any_near(f, (x + 0.5) * pix, (y + 0.5) * pix, pix * 0.70710678118654752440);
+        }
+    return bad;
+}
+
 static void test_coverage_random(void)
 {
     sc_rng g;
     sc_rng_seed(&g, 11);
     double worst_max = 0, worst_edge = 0;
+    size_t far = 0, nroad = 0;
     for (int scene = 0; scene < 6; scene++) {
         sc_scene sc;
         unsigned T = scene % 2 ? 4 : 2;
@@ -251,6 +272,7 @@ static void test_coverage_random(void)
         double *cov = f ? coverage_image(f, (sc.w - 1) * T, (sc.h - 1) * T, 2.0 / T) : NULL;
         double mx = 1, edge = 1;
         CHECK(cov && compare_gt(&sc, T, cov, &mx, &edge) == 0);
+        if (cov) far += count_far(f, cov, (sc.w - 1) * T, (sc.h - 1) * T, 2.0 / T, &nroad);
         if (mx > worst_max) worst_max = mx;
         if (edge > worst_edge) worst_edge = edge;
         free(cov);
@@ -258,7 +280,9 @@ static void test_coverage_random(void)
         rs_roads_free(ctx, roads);
         sc_scene_free(&sc);
     }
-    printf("coverage, random scenes: max pixel error %.4f, worst edge error %.5f m\n", worst_max, worst_edge);
+    printf("coverage, random scenes: max pixel error %.4f, worst edge error %.5f m; %zu of %zu road pixels with "
+           "no road within the half diagonal\n", worst_max, worst_edge, far, nroad);
+    CHECK(nroad > 10000 && far == 0);
     /* Sub-squares at corners and crossings: a few percent of a pixel at
      * most (docs/roadfield.md); the straight edges are exact. */
     CHECK(worst_max < 0.2);
@@ -323,48 +347,9 @@ static void test_coverage_city(void)
     sc_scene_free(&sc);
 }
 
-/* Pixels with a weight (R rounded to 16 bits above 0) have a road surface
- * within their half diagonal: the overlays fill a pixel with q > 0
- * without asking the field again when R is its analytic coverage
- * (lib/splat/overlays.c surfaces). Random scenes, and the city's grid with
- * class styles (T ends trimmed, a casing field beside the road field:
- * rs__roadfield_coverage2), at two pixel sizes. */
-static size_t count_far(const rs__roadfield *f, const double *cov, uint32_t w, uint32_t h, double pix, size_t *nroad)
-{
-    size_t bad = 0;
-    for (uint32_t y = 0; y < h; y++)
-        for (uint32_t x = 0; x < w; x++) {
-            double v = cov[(size_t)y * w + x];
-            if (!(v * 65535.0 + 0.5 >= 1)) continue; /* q = 0 (rs__coverage_quantise) */
-            ++*nroad;
-            bad += !rs__roadfield_any_near(f, (x + 0.5) * pix, (y + 0.5) * pix, pix * 0.70710678118654752440);
-        }
-    return bad;
-}
-
 static void test_weight_implies_near(void)
 {
-    sc_rng g;
-    sc_rng_seed(&g, 29);
     size_t bad = 0, nroad = 0;
-    for (int scene = 0; scene < 6; scene++) {
-        sc_scene sc;
-        unsigned T = scene % 2 ? 4 : 1;
-        CHECK(sc_scene_init(&sc, 61, 46, 2.0) == 0);
-        double W = sc_extent_x(&sc), H = sc_extent_y(&sc);
-        rs_roads *roads = random_roads(&g, W, H, 12, 0, 0, NULL);
-        rs__roadfield_params p = params(0, 0, 2.0, W, H, 0, 2.0 / T);
-        rs__roadfield *f = NULL;
-        CHECK(roads && rs__roadfield_build(ctx, roads, &p, &f) == RS_OK);
-        uint32_t w = (sc.w - 1) * T, h = (sc.h - 1) * T;
-        double *cov = f ? coverage_image(f, w, h, 2.0 / T) : NULL;
-        CHECK(cov != NULL);
-        if (cov) bad += count_far(f, cov, w, h, 2.0 / T, &nroad);
-        free(cov);
-        rs__roadfield_free(ctx, f);
-        rs_roads_free(ctx, roads);
-        sc_scene_free(&sc);
-    }
     /* the city with class styles: T ends and casings */
     sc_scene sc;
     CHECK(sc_city_default(&sc, 1) == 0);
