@@ -831,7 +831,11 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     /* each candidate piece's half-planes, clipped from P's polygon, kept when
      * it keeps area */
 #define LS_HP(j, a0, a1, a2) (h[j][0] = (a0), h[j][1] = (a1), h[j][2] = (a2))
-#define LS_TRY(nh) do { if (nonempty_hp(x, y, n, (const double(*)[3])h, (nh), &outg[m])) piece_with(&out[m++], P, (const double(*)[3])h, (nh)); } while (0)
+#define LS_TRY(nh)                                                                                               \
+    do {                                                                                                         \
+        if (nonempty_hp(x, y, n, (const double(*)[3])h, (nh), &outg[m]))                                          \
+            piece_with(&out[m++], P, (const double(*)[3])h, (nh));                                               \
+    } while (0)
     LS_HP(0, cv0 - r, fvu, fvv); /* v' >= r */
     LS_TRY(1);
     LS_HP(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
@@ -1215,10 +1219,6 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
     return RS_OK;
 }
 
-/* Index cells reached by the rectangle u in [u0, u1], v in [v0, v1] of the
- * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
- * row, the x extent of the rectangle cut to that row); pass 0 counts into
- * start[], pass 1 fills ids[] from the ends, item k. */
 /* Cell spans kept between the index's counting and filling passes: span
  * m is cells [a[m], b[m]] of cell row j[m]. */
 typedef struct ls_spans {
@@ -1245,6 +1245,12 @@ static void spans_push(rs_ctx *ctx, ls_spans *S, uint32_t j, uint32_t a, uint32_
     S->j[S->n] = j, S->a[S->n] = a, S->b[S->n] = b, S->n++;
 }
 
+/* Index cells reached by the rectangle u in [u0, u1], v in [v0, v1] of the
+ * frame (ox, oy, ux, uy) inside the local box [x0, x1] x [y0, y1] (per cell
+ * row, the x extent of the rectangle cut to that row); fill 0 counts into
+ * start[] (and keeps the spans in S when given), fill 1 fills the lists
+ * from their ends: with *val in ent when ent is given, else with item k in
+ * ids. */
 static void rect_cells(const ls_grid *G, double ox, double oy, double ux, double uy, double u0, double u1,
                        double v0, double v1, double x0, double y0, double x1, double y1, uint32_t *start,
                        uint32_t *ids, uint32_t k, ls_pbox *ent, const ls_pbox *val, int fill, rs_ctx *ctx,
@@ -1773,7 +1779,8 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; break; }
             if (pass && !S.failed) {
                 for (uint32_t m = sp0[k]; m < sp0[k + 1]; m++)
-                    for (uint32_t i = S.a[m]; i <= S.b[m]; i++) J->ids[--J->start[(size_t)S.j[m] * J->grid.gw + i]] = (uint32_t)k;
+                    for (uint32_t i = S.a[m]; i <= S.b[m]; i++)
+                        J->ids[--J->start[(size_t)S.j[m] * J->grid.gw + i]] = (uint32_t)k;
                 continue;
             }
             const ls_surf *Q = &J->sf[k];

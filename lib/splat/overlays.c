@@ -85,9 +85,6 @@ static void casings(const rs_splatter *s, const rs__styling *st, double pix, rs_
     }
 }
 
-/* q_means_near: R comes from the analytic coverage of st->near's own
- * roads (the grid's field, or the same field indexed for these pixels),
- * so a pixel with q > 0 has a road surface within its half diagonal. */
 /* surfaces() for one fill on every road where q > 0 means a road is near
  * (q_means_near): every road pixel takes the fill, the same floats as the
  * pixel loop below (the blend, or the fill itself on a whole road pixel
@@ -128,6 +125,12 @@ static void fill_uniform_rows(const rs__styling *st, rs__piece *p)
     }
 }
 
+/* q_means_near: R is the analytic coverage of st->near's own roads (the
+ * grid's field, or the same field indexed for these pixels), so a pixel
+ * with q > 0 has a road surface within its half diagonal: it takes 0.5 /
+ * 65535 of its area or more from a road shape only if that shape reaches
+ * into its square (by far more than the roundings; docs/linesym.md,
+ * tests/test_roadfield.c test_weight_implies_near). */
 static void surfaces(const rs__styling *st, double pix, rs__piece *p, int q_means_near)
 {
     const size_t w = p->w;
@@ -152,16 +155,10 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p, int q_mean
             float c[4];
             if (st->fill_uniform) {
                 /* every road has this fill: which road the lookup below
-                 * finds does not matter, only whether it finds one. It
-                 * does on a whole road pixel, and on every road pixel
-                 * (q > 0) whose R is the analytic coverage of the same
-                 * roads: a pixel takes 0.5 / 65535 of its area or more
-                 * from a road shape only if that shape reaches into its
-                 * square, within the half diagonal of its centre (by far
-                 * more than the roundings; docs/linesym.md) */
-                if (q != 65535 && !q_means_near &&
-                    !rs__roadfield_any_near_hint(st->near, x, y, pix * HALF_SQRT2, &hint))
-                    continue;
+                 * finds does not matter, only whether it finds one (it
+                 * does on a whole road pixel; with q_means_near on every
+                 * road pixel: fill_uniform_rows) */
+                if (q != 65535 && !rs__roadfield_any_near_hint(st->near, x, y, pix * HALF_SQRT2, &hint)) continue;
                 memcpy(c, st->fill_rgba, sizeof c);
             } else {
                 rs__road_point rp;
