@@ -1220,12 +1220,33 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
 }
 
 /* Cell spans kept between the index's counting and filling passes: span
- * m is cells [a[m], b[m]] of cell row j[m]. */
+ * m is cells [a[m], b[m]] of cell row j[m]; item k's spans are [first[k],
+ * first[k + 1]). */
 typedef struct ls_spans {
-    uint32_t *j, *a, *b;
+    uint32_t *j, *a, *b, *first;
     size_t n, cap;
-    int failed; /* an allocation failed: the fill pass recomputes */
+    int failed; /* an allocation failed or the spans passed 2^32: the fill pass recomputes */
 } ls_spans;
+
+static void spans_init(rs_ctx *ctx, ls_spans *S, size_t items)
+{
+    memset(S, 0, sizeof *S);
+    S->first = rs__alloc_array(ctx, items + 1, sizeof *S->first);
+    S->failed = S->first == NULL;
+}
+
+/* Item k's spans start here (k = items: the end of the last one). */
+static void spans_mark(ls_spans *S, size_t k)
+{
+    if (S->n >= UINT32_MAX) S->failed = 1;
+    if (!S->failed) S->first[k] = (uint32_t)S->n;
+}
+
+static void spans_free(rs_ctx *ctx, ls_spans *S)
+{
+    rs__free(ctx, S->first);
+    rs__free(ctx, S->j), rs__free(ctx, S->a), rs__free(ctx, S->b);
+}
 
 static void spans_push(rs_ctx *ctx, ls_spans *S, uint32_t j, uint32_t a, uint32_t b)
 {
@@ -1761,16 +1782,13 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     /* the cells of each surface counted and kept as spans, then listed
      * from them (as the pieces' index: no second clipping) */
     ls_spans S;
-    memset(&S, 0, sizeof S);
-    uint32_t *sp0 = rs__alloc_array(ctx, J->nsf + 1, sizeof *sp0);
-    S.failed = sp0 == NULL;
+    spans_init(ctx, &S, J->nsf);
     rs_result res = RS_OK;
     for (int pass = 0; pass < 2 && !res; pass++) {
         if (pass == 1) {
             uint64_t lim = UINT32_MAX - 1u;
             if (ctx->limits.max_road_cells && ctx->limits.max_road_cells < lim) lim = ctx->limits.max_road_cells;
-            if (sp0) sp0[J->nsf] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
-            if (S.n >= UINT32_MAX) S.failed = 1;
+            spans_mark(&S, J->nsf);
             if (!csr_close(J->start, ncell, lim, &total)) { res = RS_ERR_LIMIT; break; }
             J->ids = rs__alloc_array(ctx, total ? total : 1, sizeof *J->ids);
             if (!J->ids) { res = RS_ERR_NOMEM; break; }
@@ -1778,7 +1796,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         for (size_t k = pass ? J->nsf : 0; pass ? k-- > 0 : k < J->nsf; k += pass ? 0 : 1) {
             if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; break; }
             if (pass && !S.failed) {
-                for (uint32_t m = sp0[k]; m < sp0[k + 1]; m++)
+                for (uint32_t m = S.first[k]; m < S.first[k + 1]; m++)
                     for (uint32_t i = S.a[m]; i <= S.b[m]; i++)
                         J->ids[--J->start[(size_t)S.j[m] * J->grid.gw + i]] = (uint32_t)k;
                 continue;
@@ -1790,13 +1808,12 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 double x = Q->ax + U[c] * Q->ux + V[c] * Q->uy, y = Q->ay + U[c] * Q->uy - V[c] * Q->ux;
                 x0 = rs__fmin(x0, x), x1 = rs__fmax(x1, x), y0 = rs__fmin(y0, y), y1 = rs__fmax(y1, y);
             }
-            if (!pass && sp0) sp0[k] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
+            if (!pass) spans_mark(&S, k);
             rect_cells(&J->grid, Q->ax, Q->ay, Q->ux, Q->uy, Q->u0, Q->u1, -Q->r, Q->r, x0, y0, x1, y1, J->start,
                        J->ids, (uint32_t)k, NULL, NULL, pass, ctx, pass ? NULL : &S);
         }
     }
-    rs__free(ctx, sp0);
-    rs__free(ctx, S.j), rs__free(ctx, S.a), rs__free(ctx, S.b);
+    spans_free(ctx, &S);
     return res;
 }
 
@@ -2064,19 +2081,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     /* the cells each piece covers, counted and kept as spans (the fill
      * pass below lists the pieces there without clipping again) */
     ls_spans S;
-    memset(&S, 0, sizeof S);
-    uint32_t *sp0 = rs__alloc_array(ctx, L->npc + 1, sizeof *sp0);
-    S.failed = sp0 == NULL;
+    spans_init(ctx, &S, L->npc);
     for (size_t k = 0; k < L->npc; k++) {
         if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; break; }
-        if (sp0) sp0[k] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
+        spans_mark(&S, k);
         piece_cells(L, (uint32_t)k, 0, ctx, &S);
     }
-    if (sp0) sp0[L->npc] = (uint32_t)(S.n <= UINT32_MAX ? S.n : UINT32_MAX);
-    if (S.n >= UINT32_MAX) S.failed = 1;
+    spans_mark(&S, L->npc);
     if (res) {
-        rs__free(ctx, sp0);
-        rs__free(ctx, S.j), rs__free(ctx, S.a), rs__free(ctx, S.b);
+        spans_free(ctx, &S);
         goto fail;
     }
     uint64_t lim = UINT32_MAX - 1u;
@@ -2097,11 +2110,10 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         }
         const ls_pbuild *PB = &L->pb[k];
         ls_pbox v = { PB->gx0, PB->gx1, PB->gy0, PB->gy1, (uint32_t)k, L->pp[k].band };
-        for (uint32_t m = sp0[k]; m < sp0[k + 1]; m++)
+        for (uint32_t m = S.first[k]; m < S.first[k + 1]; m++)
             for (uint32_t i = S.a[m]; i <= S.b[m]; i++) L->ent[--L->start[(size_t)S.j[m] * L->grid.gw + i]] = v;
     }
-    rs__free(ctx, sp0);
-    rs__free(ctx, S.j), rs__free(ctx, S.a), rs__free(ctx, S.b);
+    spans_free(ctx, &S);
     if (res) goto fail;
     rs__free(ctx, L->pb); /* built */
     rs__free(ctx, L->cut_start);

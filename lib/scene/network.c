@@ -1375,6 +1375,18 @@ static double surf_angle(const build *B, uint32_t q, uint32_t k, int step, int r
     return 0;
 }
 
+/* The reach of record q's surface for surface_tees: its half width plus
+ * the tolerance; 0 for a record with no surface to hold an end (no longer
+ * than two tolerances, no wider, or of no finite width). */
+static double surf_reach(const build *B, const rs_network *N, size_t q, double tol)
+{
+    double w = 0;
+    rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
+    double hw = 0.5 * w;
+    if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) return 0;
+    return hw + tol;
+}
+
 static rs_result surface_tees(build *B, rs_network *N)
 {
     rs_ctx *ctx = B->ctx;
@@ -1415,11 +1427,9 @@ static rs_result surface_tees(build *B, rs_network *N)
         double rsum = 0, cap = 16 * c;
         size_t rn = 0;
         for (size_t q = 0; q < B->nroads; q++) {
-            double w = 0;
-            rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
-            double hw = 0.5 * w;
-            if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
-            rsum += hw + tol < cap ? hw + tol : cap;
+            double rq = surf_reach(B, N, q, tol);
+            if (!(rq > 0)) continue;
+            rsum += rq < cap ? rq : cap;
             rn++;
         }
         if (rn && rsum / (double)rn > c) c = rsum / (double)rn;
@@ -1448,13 +1458,11 @@ static rs_result surface_tees(build *B, rs_network *N)
             res = RS_ERR_CANCELLED;
             break;
         }
-        double w = 0;
-        rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
-        double hw = 0.5 * w;
-        if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
+        double rq = surf_reach(B, N, q, tol);
+        if (!(rq > 0)) continue;
         int qnc = -1; /* (not read yet) */
         uint32_t sq = N->stroke_of[q];
-        double rq = hw + tol, reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
+        double reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
         size_t nseg = B->voff[q + 1] - B->voff[q] - 1;
         for (size_t k = 0; k < nseg; k++) {
             const double *pa = B->xy + 2 * (B->voff[q] + k), *pb = pa + 2;
