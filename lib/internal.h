@@ -149,4 +149,17 @@ void rs__opts_out(const void *src, void *out, size_t full);
 
 /* Validate splat options and fill in defaults (lib/options.c). */
 rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out);
+/* The roads ids[0..n) of a road set (ascending indices) as a road set of
+ * their own, in that order: geometry, names, attributes, their markings
+ * and point attributes (renumbered), the frame line (lib/input/roads_edit.c).
+ * *out is the caller's (rs_roads_free). RS_ERR_INVALID_ARG, RS_ERR_NOMEM. */
+rs_result rs__roads_subset(rs_ctx *ctx, const rs_roads *roads, const uint32_t *ids, size_t n, rs_roads **out);
+/* rs_road_grid_build of the roads ids[0..n) of `roads` (ascending) with the
+ * strokes and nodes of `net`, the network of all of `roads` (rs__network_subset),
+ * instead of a network of their own: inside a region no farther than the
+ * stated reach from every road it leaves out, the grid splats as the whole
+ * road set's does (lib/scene/roadgrid.c; docs/embedding.md). */
+rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                     const rs_splat_options *opts, const rs_network *net,
+                                     const uint32_t *ids, size_t n, rs_road_grid **out);
 #endif

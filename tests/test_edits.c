@@ -18,13 +18,17 @@
  * style redefined (only its roads dirty), no edit (nothing dirty), a
  * removal (the renumbered roads dirty nothing), errors naming the value,
  * and allocation failures (every allocation failed in turn: no leak, no
- * object on failure) of the update and the three road edits.
+ * object on failure) of the update, the three road edits and the local
+ * build. test_subset_build: the local build a proportional update needs
+ * (rs__road_grid_build_subset) splats a region as the whole grid does.
  * EDITS_DEBUG=1 prints the first pixels a rectangle misses. */
 #include "harness.h"
 #include "fail_alloc.h"
 #include "scene_splat.h"
 #include "scenes.h"
+#include "internal.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -658,7 +662,7 @@ static void test_update_errors(void)
 typedef struct sweep_in {
     const rs_dem *dem;
     const char *text;
-    int what; /* 0: update, 1: remove, 2: replace, 3: point attribute */
+    int what; /* 0: update, 1: remove, 2: replace, 3: point attribute, 4: subset build */
 } sweep_in;
 
 static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
@@ -685,8 +689,22 @@ static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
         size_t before = rs_roads_point_attr_count(R);
         r = rs_roads_replace(c, R, 0, "longer name for the pool", 5, pts, 5);
         if (r && rs_roads_point_attr_count(R) != before) *wrong = 1;
-    } else {
+    } else if (in->what == 3) {
         for (int k = 0; k < 40 && !r; k++) r = rs_roads_set_point_attr(c, R, 0, (size_t)(k % 3), k & 1 ? "x" : "y", "v");
+    } else {
+        /* the local build of roads a and c (their markings and zebra
+         * points renumbered) with the network of all three */
+        rs_splat_options o = edit_opts(4);
+        rs_network *net = NULL;
+        rs_road_grid *g = (rs_road_grid *)1;
+        const uint32_t ac[2] = { 0, 2 };
+        r = rs_network_build(c, R, NULL, &net);
+        if (!r) {
+            r = rs__road_grid_build_subset(c, in->dem, R, &o, net, ac, 2, &g);
+            if (r != RS_OK && g != NULL) *wrong = 1;
+            if (r == RS_OK) rs_road_grid_free(c, g);
+        }
+        rs_network_free(c, net);
     }
     rs_roads_free(c, R);
     return r;
@@ -697,7 +715,7 @@ static void test_alloc_failures(void)
     rs_ctx *ctx;
     rs_ctx_create(NULL, NULL, &ctx);
     rs_dem *dem = flat_dem(ctx, 31, 21, 4);
-    for (int what = 0; what < 4; what++) {
+    for (int what = 0; what < 5; what++) {
         sweep_in in = { dem, two_roads, what };
         fail_sweep fs = fail_alloc_sweep(20000, try_edit, &in);
         CHECKF(fs.succeeded && fs.wrong == 0 && fs.leaks == 0, "sweep %d: tries %ld wrong %ld leaks %ld", what,
@@ -758,8 +776,132 @@ static void test_update_cancel(void)
     rs_ctx_free(ctx);
 }
 
+/* Distance from the box [x0, x1] x [y0, y1] to road i's polyline, from
+ * points 0.25 m apart on each segment (a test of tens of metres). */
+static double road_box_dist(const rs_roads *roads, size_t i, double x0, double y0, double x1, double y1)
+{
+    const double *xy;
+    size_t n;
+    double best = INFINITY;
+    rs_roads_get(roads, i, NULL, NULL, &xy, &n);
+    for (size_t k = 0; k < n; k++) {
+        const double *a = xy + 2 * k, *b = xy + 2 * (k + 1 < n ? k + 1 : k);
+        int steps = (int)(hypot(b[0] - a[0], b[1] - a[1]) / 0.25) + 1;
+        for (int j = 0; j <= steps; j++) {
+            double t = (double)j / steps, x = a[0] + t * (b[0] - a[0]), y = a[1] + t * (b[1] - a[1]);
+            double dx = x < x0 ? x0 - x : x > x1 ? x - x1 : 0, dy = y < y0 ? y0 - y : y > y1 ? y - y1 : 0;
+            best = fmin(best, sqrt(dx * dx + dy * dy));
+        }
+    }
+    return best;
+}
+
+/* The local build a proportional update needs (docs/embedding.md "Toward
+ * an update in proportion to the edit"): rs__road_grid_build_subset of the
+ * roads within 60 m of each of ten boxes, with the whole map's network (its strokes'
+ * arc lengths, so the dashes keep their phase), splats the box's pixels as
+ * the grid of all roads does, on a class-styled city of 1000 roads
+ * (casings, edge and dashed centre lines, automatic markings) at 1.25 m
+ * pixels; with every road it is the whole build's image. Ids out of order
+ * are refused. */
+static void test_subset_build(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_network *net = NULL;
+    int ok = sc_city(&sc, 161, 141, 5.0, 1000, 5) == 0;
+    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
+    ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
+    ok = ok && (roads = ss_roads(ctx, &sc)) != NULL;
+    for (size_t i = 0; ok && i < sc.nroads; i++)
+        ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    rs_splat_options o = edit_opts(4);
+    rs_road_grid *g = NULL, *gs = NULL;
+    image a, b;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK && render(ctx, dem, g, &o, &a) == 0 &&
+         rs_network_build(ctx, roads, NULL, &net) == RS_OK;
+    CHECK(ok);
+    size_t n = rs_roads_count(roads);
+    uint32_t *ids = malloc((n ? n : 1) * sizeof *ids);
+    CHECK(ids != NULL);
+    if (!ok || !ids) goto done;
+    for (size_t i = 0; i < n; i++) ids[i] = (uint32_t)i;
+    ok = rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, n, &gs) == RS_OK && render(ctx, dem, gs, &o, &b) == 0;
+    CHECKF(ok && same_image(&a, &b), "every road: not the whole build's image");
+    image_free(&b);
+    rs_road_grid_free(ctx, gs);
+    gs = NULL;
+    ids[0] = 1, ids[1] = 0;
+    CHECK_EQ_INT(rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, 2, &gs), RS_ERR_INVALID_ARG);
+    CHECK(gs == NULL);
+    {
+        /* roads a and c of three: their markings and zebra points follow them */
+        rs_roads *R = NULL, *sub = NULL;
+        const uint32_t ac[2] = { 0, 2 };
+        CHECK(rs_roads_parse(ctx, two_roads, strlen(two_roads), &R) == RS_OK &&
+              rs__roads_subset(ctx, R, ac, 2, &sub) == RS_OK);
+        if (sub) {
+            const char *name = NULL;
+            rs_mark mk;
+            size_t road = 9, point = 9;
+            CHECK_EQ_INT((int)rs_roads_count(sub), 2);
+            CHECK(rs_roads_get(sub, 1, &name, NULL, NULL, NULL) == RS_OK && strcmp(name, "c") == 0);
+            CHECK(rs_roads_get_attr(sub, 0, "class") && strcmp(rs_roads_get_attr(sub, 0, "class"), "residential") == 0);
+            CHECK_EQ_INT((int)rs_roads_mark_count(sub), 2);
+            CHECK(rs_roads_get_mark(sub, 1, &mk) == RS_OK && mk.road == 1 && mk.s == 30);
+            CHECK_EQ_INT((int)rs_roads_point_attr_count(sub), 2);
+            CHECK(rs_roads_point_attr_at(sub, 1, &road, &point, NULL, NULL) == RS_OK && road == 1 && point == 1);
+        }
+        rs_roads_free(ctx, sub);
+        rs_roads_free(ctx, R);
+    }
+    sc_rng rng;
+    sc_rng_seed(&rng, 77);
+    double W = sc_extent_x(&sc), H = sc_extent_y(&sc), pix = 5.0 / 4;
+    size_t differ = 0, pixels = 0, kept = 0;
+    for (int box = 0; box < 10 && ok; box++) {
+        double bw = 60 + 140 * sc_rng_unit(&rng), bh = 60 + 140 * sc_rng_unit(&rng);
+        double x0 = sc_rng_unit(&rng) * (W - bw), y0 = sc_rng_unit(&rng) * (H - bh);
+        size_t m = 0;
+        for (size_t i = 0; i < n; i++)
+            if (road_box_dist(roads, i, x0, y0, x0 + bw, y0 + bh) <= 60) ids[m++] = (uint32_t)i;
+        kept += m;
+        ok = rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, m, &gs) == RS_OK &&
+             render(ctx, dem, gs, &o, &b) == 0;
+        CHECKF(ok, "box %d: %s", box, rs_ctx_message(ctx));
+        for (uint32_t y = (uint32_t)(y0 / pix); ok && y < (uint32_t)((y0 + bh) / pix) && y < a.h; y++)
+            for (uint32_t x = (uint32_t)(x0 / pix); x < (uint32_t)((x0 + bw) / pix) && x < a.w; x++) {
+                differ += pixel_differs(&a, &b, (size_t)y * a.w + x);
+                pixels++;
+            }
+        image_free(&b);
+        rs_road_grid_free(ctx, gs);
+        gs = NULL;
+    }
+    printf("  subset builds: %zu of %zu box pixels differ (%zu roads kept of 10 x %zu)\n", differ, pixels, kept, n);
+    CHECK(pixels > 80000);
+    CHECK(kept < 10 * n / 2);
+    CHECK_EQ_INT((int)differ, 0);
+done:
+    free(ids);
+    image_free(&a);
+    rs_road_grid_free(ctx, g);
+    rs_network_free(ctx, net);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
+    test_subset_build();
     test_remove();
     test_replace();
     test_point_attr();

@@ -164,3 +164,68 @@ rs_result rs_roads_set_point_attr(rs_ctx *ctx, rs_roads *roads, size_t i, size_t
     rs__ok(ctx);
     return RS_OK;
 }
+
+rs_result rs__roads_subset(rs_ctx *ctx, const rs_roads *roads, const uint32_t *ids, size_t n, rs_roads **out)
+{
+    *out = NULL;
+    rs_roads *S = rs__calloc(ctx, 1, sizeof *S);
+    size_t *map = rs__alloc_array(ctx, roads->count ? roads->count : 1, sizeof *map);
+    size_t np = 0, na = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (ids[i] >= roads->count || (i && ids[i] <= ids[i - 1])) {
+            rs__free(ctx, S);
+            rs__free(ctx, map);
+            return rs__fail(ctx, RS_ERR_INVALID_ARG, "road subset: road ids not ascending or out of range");
+        }
+        np += roads->roads[ids[i]].n;
+        na += roads->roads[ids[i]].attr_count;
+    }
+    if (S) {
+        /* (the string pool whole: every offset stays valid) */
+        S->roads = rs__alloc_array(ctx, n ? n : 1, sizeof *S->roads);
+        S->xy = rs__alloc_array(ctx, np ? np : 1, 2 * sizeof *S->xy);
+        S->names = rs__alloc_array(ctx, roads->names_len ? roads->names_len : 1, 1);
+        S->attrs = rs__alloc_array(ctx, na ? na : 1, sizeof *S->attrs);
+        S->marks = rs__alloc_array(ctx, roads->marks_len ? roads->marks_len : 1, sizeof *S->marks);
+        S->pattrs = rs__alloc_array(ctx, roads->pattrs_len ? roads->pattrs_len : 1, sizeof *S->pattrs);
+    }
+    if (!S || !map || !S->roads || !S->xy || !S->names || !S->attrs || !S->marks || !S->pattrs) {
+        rs__free(ctx, map);
+        if (S) rs_roads_free(ctx, S);
+        return rs__fail(ctx, RS_ERR_NOMEM, "road subset: out of memory");
+    }
+    S->cap = n ? n : 1, S->points_cap = np ? np : 1, S->names_cap = roads->names_len ? roads->names_len : 1;
+    S->attrs_cap = na ? na : 1, S->marks_cap = roads->marks_len ? roads->marks_len : 1;
+    S->pattrs_cap = roads->pattrs_len ? roads->pattrs_len : 1;
+    if (roads->names_len) memcpy(S->names, roads->names, roads->names_len);
+    S->names_len = roads->names_len;
+    S->frame = roads->frame;
+    S->frame_crs = roads->frame_crs;
+    for (size_t r = 0; r < roads->count; r++) map[r] = SIZE_MAX;
+    for (size_t i = 0; i < n; i++) {
+        rs_road_rec rec = roads->roads[ids[i]];
+        map[ids[i]] = i;
+        memcpy(S->xy + 2 * S->points, roads->xy + 2 * rec.first, rec.n * 2 * sizeof *S->xy);
+        if (rec.attr_count) memcpy(S->attrs + S->attrs_len, roads->attrs + rec.attr_first, rec.attr_count * sizeof *S->attrs);
+        rec.first = S->points;
+        rec.attr_first = S->attrs_len;
+        S->points += rec.n;
+        S->attrs_len += rec.attr_count;
+        S->roads[S->count++] = rec;
+    }
+    for (size_t k = 0; k < roads->marks_len; k++) {
+        rs_mark_rec m = roads->marks[k];
+        if (m.road >= roads->count || map[m.road] == SIZE_MAX) continue;
+        m.road = map[m.road];
+        S->marks[S->marks_len++] = m;
+    }
+    for (size_t k = 0; k < roads->pattrs_len; k++) {
+        rs_point_attr a = roads->pattrs[k];
+        if (a.road >= roads->count || map[a.road] == SIZE_MAX) continue;
+        a.road = map[a.road];
+        S->pattrs[S->pattrs_len++] = a;
+    }
+    rs__free(ctx, map);
+    *out = S;
+    return RS_OK;
+}

@@ -2046,6 +2046,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                 }
             }
             if (m < 2) continue;
+            /* the stroke's arc length where the run starts: 0 at a stroke's
+             * head, further on where a part of the network starts inside
+             * a stroke (rs__network_subset), so the dashes keep their phase */
+            if (net && !alone) {
+                uint32_t h0 = recs[q0];
+                double s0 = net->rev[h0] ? net->s_off[h0] - net->length[h0] : net->s_off[h0];
+                if (s0 != 0)
+                    for (size_t i = 0; i < m; i++) sv[i] += s0;
+            }
             for (size_t u = 0; u < nrun; u++) {
                 size_t i0 = runs[u].at, i1 = u + 1 < nrun ? runs[u + 1].at : m - 1;
                 uint32_t first = runs[u].rec;

@@ -1602,6 +1602,141 @@ void rs_network_free(rs_ctx *ctx, rs_network *net)
     rs__free(ctx, net);
 }
 
+/* The per-record stroke arrays of N for m records (at least 1) and
+ * `starts` stroke starts: 1, or 0 when one could not be allocated (those
+ * that were are N's: rs_network_free). */
+static int stroke_arrays(rs_ctx *ctx, rs_network *N, size_t m, size_t starts)
+{
+    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
+    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
+    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
+    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
+    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
+    N->stroke_start = rs__alloc_array(ctx, starts, sizeof *N->stroke_start);
+    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
+    N->closed = rs__calloc(ctx, m, 1);
+    N->rev = rs__calloc(ctx, m, 1);
+    return N->stroke_of && N->s_off && N->length && N->prev && N->next && N->stroke_start && N->stroke_roads &&
+           N->closed && N->rev;
+}
+
+/* The memory N holds. */
+static size_t bytes_of(const rs_network *N)
+{
+    return sizeof *N + N->nnodes * sizeof *N->node + (N->nnodes + 1) * sizeof *N->leg_start +
+           N->nlegs * sizeof *N->leg +
+           N->nroads * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev +
+                        sizeof *N->next + sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);
+}
+
+/* ---- a part of the network ---- */
+
+rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const uint32_t *ids, size_t n, rs_network **out)
+{
+    *out = NULL;
+    rs_network *S = rs__calloc(ctx, 1, sizeof *S);
+    uint32_t *map = rs__alloc_array(ctx, N->nroads ? N->nroads : 1, sizeof *map);
+    size_t m = n ? n : 1;
+    rs_result res = RS_ERR_NOMEM;
+    if (!S || !map) goto fail;
+    for (size_t r = 0; r < N->nroads; r++) map[r] = NONE;
+    for (size_t i = 0; i < n; i++) {
+        if (ids[i] >= N->nroads || (i && ids[i] <= ids[i - 1])) {
+            res = RS_ERR_INVALID_ARG;
+            goto fail;
+        }
+        map[ids[i]] = (uint32_t)i;
+    }
+    S->nroads = n;
+    S->tol = N->tol;
+    /* nodes with a kept leg, in their order; their kept legs in theirs */
+    size_t nn = 0, nl = 0;
+    for (size_t d = 0; d < N->nnodes; d++) {
+        size_t k = 0;
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) k += map[N->leg[l].road] != NONE;
+        nn += k > 0, nl += k;
+    }
+    S->node = rs__alloc_array(ctx, nn ? nn : 1, sizeof *S->node);
+    S->leg_start = rs__alloc_array(ctx, nn + 1, sizeof *S->leg_start);
+    S->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *S->leg);
+    S->link = rs__alloc_array(ctx, 2 * m, sizeof *S->link);
+    if (!S->node || !S->leg_start || !S->leg || !S->link || !stroke_arrays(ctx, S, m, m + 1)) goto fail;
+    size_t at = 0;
+    nn = 0;
+    for (size_t d = 0; d < N->nnodes; d++) {
+        size_t a = at;
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) {
+            if (map[N->leg[l].road] == NONE) continue;
+            S->leg[at] = N->leg[l];
+            S->leg[at++].road = map[N->leg[l].road];
+        }
+        if (at == a) continue;
+        S->leg_start[nn] = (uint32_t)a;
+        S->node[nn] = N->node[d];
+        uint32_t deg = (uint32_t)(at - a);
+        if (deg != N->leg_start[d + 1] - N->leg_start[d]) {
+            /* a node whose other roads are not kept: what the network of the kept roads says there */
+            S->node[nn].degree = deg;
+            S->node[nn].kind = deg <= 1 ? RS_NODE_END : deg == 2 ? RS_NODE_CONTINUATION : RS_NODE_JUNCTION;
+            mark_major(S->leg + a, deg);
+        }
+        nn++;
+    }
+    S->leg_start[nn] = (uint32_t)at;
+    S->nnodes = nn;
+    S->nlegs = at;
+    /* per record; links to records not kept end the stroke there */
+    for (size_t i = 0; i < n; i++) {
+        uint32_t r = ids[i];
+        S->s_off[i] = N->s_off[r];
+        S->length[i] = N->length[r];
+        S->rev[i] = N->rev[r];
+        S->prev[i] = N->prev[r] == NONE ? NONE : map[N->prev[r]];
+        S->next[i] = N->next[r] == NONE ? NONE : map[N->next[r]];
+        for (int e = 0; e < 2; e++) {
+            uint32_t t = N->link[2 * r + e];
+            S->link[2 * i + e] = t == NONE || map[t / 2] == NONE ? NONE : 2 * map[t / 2] + t % 2;
+        }
+    }
+    /* the strokes in their order, each cut into its runs of kept records;
+     * only a ring kept whole stays closed */
+    size_t k = 0;
+    at = 0;
+    for (size_t st = 0; st < N->nstrokes; st++) {
+        uint32_t a = N->stroke_start[st], b = N->stroke_start[st + 1];
+        int whole = 1;
+        for (uint32_t e = a; e < b; e++) whole &= map[N->stroke_roads[e]] != NONE;
+        int open = 0;
+        for (uint32_t e = a; e < b; e++) {
+            uint32_t i = map[N->stroke_roads[e]];
+            if (i == NONE) {
+                if (open) k++;
+                open = 0;
+                continue;
+            }
+            if (!open) {
+                S->stroke_start[k] = (uint32_t)at;
+                S->closed[k] = (uint8_t)(whole && N->closed[st]);
+                open = 1;
+            }
+            S->stroke_of[i] = (uint32_t)k;
+            S->stroke_roads[at++] = i;
+        }
+        if (open) k++;
+    }
+    S->stroke_start[k] = (uint32_t)at;
+    S->nstrokes = k;
+    S->bytes = bytes_of(S);
+    rs__free(ctx, map);
+    *out = S;
+    return RS_OK;
+fail:
+    rs__free(ctx, map);
+    rs_network_free(ctx, S);
+    return res == RS_ERR_INVALID_ARG ? rs__fail(ctx, res, "network subset: record ids not ascending or out of range")
+                                     : rs__fail(ctx, res, "network subset: out of memory");
+}
+
 /* Points, arc lengths, runs of repeated points, live roads. */
 static rs_result load_points(build *B)
 {
@@ -2177,17 +2312,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     rs__free(ctx, B.pids), rs__free(ctx, B.pstart), rs__free(ctx, B.tstart), rs__free(ctx, B.ps);
     rs__free(ctx, B.buf), rs__free(ctx, B.look), rs__free(ctx, B.vroad);
     B.pids = B.pstart = B.tstart = B.vroad = NULL, B.ps = B.buf = NULL, B.look = NULL;
-    N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
-    N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
-    N->length = rs__alloc_array(ctx, m, sizeof *N->length);
-    N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
-    N->next = rs__alloc_array(ctx, m, sizeof *N->next);
-    N->stroke_start = rs__alloc_array(ctx, n + 1, sizeof *N->stroke_start);
-    N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
-    N->closed = rs__calloc(ctx, m, 1);
-    N->rev = rs__calloc(ctx, m, 1);
-    if (!N->stroke_of || !N->s_off || !N->length || !N->prev || !N->next || !N->stroke_start || !N->stroke_roads ||
-        !N->closed || !N->rev) {
+    if (!stroke_arrays(ctx, N, m, n + 1)) {
         res = RS_ERR_NOMEM;
         goto fail;
     }
@@ -2198,9 +2323,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     }
     number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
     if ((res = surface_tees(&B, N)) != RS_OK) goto fail;
-    N->bytes = sizeof *N + nn * sizeof *N->node + (nn + 1) * sizeof *N->leg_start + N->nlegs * sizeof *N->leg +
-               n * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev + sizeof *N->next +
-                    sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);
+    N->bytes = bytes_of(N);
     build_free(&B);
     *out = N;
     rs__ok(ctx);

@@ -11,6 +11,7 @@
 #include "styling.h"
 #include "markings.h"
 #include "grid_edit.h"
+#include "network.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -648,8 +649,9 @@ static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     return r;
 }
 
-rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
-                             rs_road_grid **out)
+/* rs_road_grid_build, with the network `given` (NULL: built here from roads) */
+static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                            const rs_network *given, rs_road_grid **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_build");
@@ -687,8 +689,12 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     /* the network (docs/network.md): strokes carry dashes and surface
      * images across the records a road is split into; read while building
      * the styles and the markings only */
-    rs_network *net = NULL;
-    if (!r && !o.style.disable && nroads > 0) r = rs_network_build(ctx, roads, NULL, &net);
+    rs_network *own = NULL;
+    const rs_network *net = NULL;
+    if (!r && !o.style.disable && nroads > 0) {
+        if (given) net = given;
+        else if (!(r = rs_network_build(ctx, roads, NULL, &own))) net = own;
+    }
     if (!r && rs__tick(ctx, nroads)) r = RS_ERR_CANCELLED;
     /* record ends at a T lose their round caps (docs/network.md "Ends at a T") */
     if (!r && net && g->field) {
@@ -706,7 +712,7 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
     if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
     rs__auto_plan_free(ctx, &plan);
-    rs_network_free(ctx, net);
+    rs_network_free(ctx, own);
     r = rs__progress_end(ctx, &pg, r);
     if (r) {
         rs_road_grid_free(ctx, g);
@@ -795,4 +801,28 @@ rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     *out = g;
     rs__ok(ctx);
     return RS_OK;
+}
+
+rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
+                             rs_road_grid **out)
+{
+    return grid_build(ctx, dem, roads, opts, NULL, out);
+}
+
+rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
+                                     const rs_splat_options *opts, const rs_network *net, const uint32_t *ids,
+                                     size_t n, rs_road_grid **out)
+{
+    rs_roads *sub = NULL;
+    rs_network *part = NULL;
+    *out = NULL;
+    if (net->nroads != rs_roads_count(roads))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "subset build: a network of %zu records for %zu roads", net->nroads,
+                        rs_roads_count(roads));
+    rs_result r = rs__roads_subset(ctx, roads, ids, n, &sub);
+    if (!r) r = rs__network_subset(ctx, net, ids, n, &part);
+    if (!r) r = grid_build(ctx, dem, sub, opts, part, out);
+    rs_network_free(ctx, part);
+    rs_roads_free(ctx, sub);
+    return r;
 }

@@ -1,13 +1,15 @@
-/* edit_locality [D [STROKES]]: how local is a grid's picture? (issue 30
+/* edit_locality [D [MODE]]: how local is a grid's picture? (issue 30
  * target 3, docs/embedding.md "Toward an update in proportion to the
  * edit"). On the 10k-road city of tests/bench/edits.c (classes by width:
  * casings, lines, dashes, automatic markings; T = 4), for three boxes of
  * the map: builds a grid from only the roads within D metres of the box
- * (default 30) and, with STROKES = 1, also every road of a stroke that one
+ * (default 30) and, with MODE 1, also every road of a stroke that one
  * of them is in (docs/network.md) and the roads within 30 m of those
- * roads' end points; splats the box's pixels from it and from the grid of
- * all roads, and counts the pixels that differ. Also the two builds'
- * thread CPU time. */
+ * roads' end points; with MODE 2, the roads within D alone with the whole
+ * map's network (rs__road_grid_build_subset: the strokes' arc lengths and
+ * order). Splats the box's pixels from it and from the grid of all roads,
+ * and counts the pixels that differ. Also the two builds' thread CPU
+ * time. */
 #include "roadsplat.h"
 #include "network.h"
 #include "scene_splat.h"
@@ -19,15 +21,27 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Distance from the box to the nearest of the points (enough for a box
- * test here: the roads' points are a few metres apart). */
-static double points_box_dist(const double *xy, size_t n, double x0, double y0, double x1, double y1)
+/* Distance from the box to segment a-b, from points 0.25 m apart on it
+ * (enough for a test of metres; a segment crossing the box has one inside). */
+static double seg_box_dist(double ax, double ay, double bx, double by, double x0, double y0, double x1, double y1)
 {
-    double best = INFINITY;
-    for (size_t k = 0; k < n; k++) {
-        double x = xy[2 * k], y = xy[2 * k + 1];
+    double len = hypot(bx - ax, by - ay), best = INFINITY;
+    int n = (int)(len / 0.25) + 1;
+    for (int i = 0; i <= n; i++) {
+        double t = (double)i / n, x = ax + t * (bx - ax), y = ay + t * (by - ay);
         double dx = x < x0 ? x0 - x : x > x1 ? x - x1 : 0, dy = y < y0 ? y0 - y : y > y1 ? y - y1 : 0;
         double d = sqrt(dx * dx + dy * dy);
+        if (d < best) best = d;
+    }
+    return best;
+}
+
+/* Distance from the box to the polyline of n points. */
+static double road_box_dist(const double *xy, size_t n, double x0, double y0, double x1, double y1)
+{
+    double best = n == 1 ? seg_box_dist(xy[0], xy[1], xy[0], xy[1], x0, y0, x1, y1) : INFINITY;
+    for (size_t k = 0; k + 1 < n; k++) {
+        double d = seg_box_dist(xy[2 * k], xy[2 * k + 1], xy[2 * k + 2], xy[2 * k + 3], x0, y0, x1, y1);
         if (d < best) best = d;
     }
     return best;
@@ -36,7 +50,7 @@ static double points_box_dist(const double *xy, size_t n, double x0, double y0, 
 int main(int argc, char **argv)
 {
     double D = argc > 1 ? atof(argv[1]) : 30;
-    int strokes = argc > 2 && atoi(argv[2]) != 0;
+    int mode = argc > 2 ? atoi(argv[2]) : 0, strokes = mode == 1, whole_net = mode == 2;
     rs_ctx *ctx = NULL;
     sc_scene sc;
     memset(&sc, 0, sizeof sc);
@@ -70,7 +84,7 @@ int main(int argc, char **argv)
             const double *xy;
             size_t n;
             rs_roads_get(roads, i, NULL, NULL, &xy, &n);
-            if (points_box_dist(xy, n, B[0], B[1], B[2], B[3]) <= D) in[i] = 1;
+            if (road_box_dist(xy, n, B[0], B[1], B[2], B[3]) <= D) in[i] = 1;
         }
         for (size_t i = 0; strokes && i < sc.nroads; i++)
             if (in[i] == 1)
@@ -87,7 +101,7 @@ int main(int argc, char **argv)
                     const double *xj;
                     size_t nj;
                     rs_roads_get(roads, j, NULL, NULL, &xj, &nj);
-                    if (!in[j] && points_box_dist(xj, nj, ex - 30, ey - 30, ex + 30, ey + 30) == 0) in[j] = 3;
+                    if (!in[j] && road_box_dist(xj, nj, ex - 30, ey - 30, ex + 30, ey + 30) == 0) in[j] = 3;
                 }
             }
         }
@@ -107,8 +121,16 @@ int main(int argc, char **argv)
         }
         rs_road_grid *gs = NULL;
         rs_splatter *ss = NULL;
+        uint32_t *ids = malloc((nsub ? nsub : 1) * sizeof *ids);
+        size_t ni = 0;
+        if (!ids) return 1;
+        for (size_t i = 0; i < sc.nroads; i++)
+            if (in[i]) ids[ni++] = (uint32_t)i;
         t0 = tm_thread_cpu_ms();
-        if (rs_road_grid_build(ctx, dem, sub, &o, &gs)) goto fail;
+        if (whole_net ? rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, ni, &gs)
+                      : rs_road_grid_build(ctx, dem, sub, &o, &gs))
+            goto fail;
+        free(ids);
         double sub_ms = tm_thread_cpu_ms() - t0;
         if (rs_splatter_create(ctx, dem, NULL, gs, &o, &ss)) goto fail;
         uint32_t x0 = (uint32_t)(B[0] / pix), y0 = (uint32_t)(B[1] / pix), w = (uint32_t)((B[2] - B[0]) / pix),
