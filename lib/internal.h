@@ -154,12 +154,28 @@ rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_o
  * and point attributes (renumbered), the frame line (lib/input/roads_edit.c).
  * *out is the caller's (rs_roads_free). RS_ERR_INVALID_ARG, RS_ERR_NOMEM. */
 rs_result rs__roads_subset(rs_ctx *ctx, const rs_roads *roads, const uint32_t *ids, size_t n, rs_roads **out);
+/* What a whole map's roads decide for every pixel, beyond the roads near
+ * it: a local build of some of them takes these from the whole map
+ * (rs__road_grid_build_subset). */
+typedef struct rs__grid_facts {
+    double index_cell;            /* the road field's index cell, metres (0: none) */
+    int styled;                   /* some road is styled */
+    int any_surface, fill_uniform; /* rs__styling's switches of those names, and their colours */
+    float fill_rgba[4];
+    int casing_uniform;
+    float casing_rgba[4];
+    double widest_casing;         /* the widest casing, metres (0: none) */
+} rs__grid_facts;
+/* The facts of grid g (a whole build: rs_road_grid_build) into *out. */
+void rs__grid_facts_of(const rs_road_grid *g, rs__grid_facts *out);
 /* rs_road_grid_build of the roads ids[0..n) of `roads` (ascending) with the
  * strokes and nodes of `net`, the network of all of `roads` (rs__network_subset),
- * instead of a network of their own: inside a region no farther than the
- * stated reach from every road it leaves out, the grid splats as the whole
- * road set's does (lib/scene/roadgrid.c; docs/embedding.md). */
+ * instead of a network of their own, and the whole map's `facts`: inside a
+ * region no farther than the stated reach from every road it leaves out,
+ * the grid splats as the whole road set's does (lib/scene/roadgrid.c;
+ * docs/embedding.md). */
 rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_network *net,
-                                     const uint32_t *ids, size_t n, rs_road_grid **out);
+                                     const rs__grid_facts *facts, const uint32_t *ids, size_t n,
+                                     rs_road_grid **out);
 #endif

@@ -27,6 +27,7 @@
 #include "scene_splat.h"
 #include "scenes.h"
 #include "internal.h"
+#include "network.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -700,7 +701,7 @@ static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
         const uint32_t ac[2] = { 0, 2 };
         r = rs_network_build(c, R, NULL, &net);
         if (!r) {
-            r = rs__road_grid_build_subset(c, in->dem, R, &o, net, ac, 2, &g);
+            r = rs__road_grid_build_subset(c, in->dem, R, &o, net, NULL, ac, 2, &g);
             if (r != RS_OK && g != NULL) *wrong = 1;
             if (r == RS_OK) rs_road_grid_free(c, g);
         }
@@ -796,15 +797,17 @@ static double road_box_dist(const rs_roads *roads, size_t i, double x0, double y
     return best;
 }
 
-/* The local build a proportional update needs (docs/embedding.md "Toward
- * an update in proportion to the edit"): rs__road_grid_build_subset of the
- * roads within 60 m of each of ten boxes, with the whole map's network (its strokes'
- * arc lengths, so the dashes keep their phase), splats the box's pixels as
- * the grid of all roads does, on a class-styled city of 1000 roads
- * (casings, edge and dashed centre lines, automatic markings) at 1.25 m
- * pixels; with every road it is the whole build's image. Ids out of order
- * are refused. */
-static void test_subset_build(void)
+/* Styles for the local builds' second city: casings of two colours on some
+ * roads only, a fill and a gradient, dashed lines. */
+static const char subset_styles[] = "style red\nfill #b04030\ncasing 0.4 #303030\nline 0 0.2 #ffffff dash 3 3\nend\n"
+                                    "style grad\ngradient #202020 #707070\ncasing 0.6 #a0a0a0\nend\n"
+                                    "style kerb\ncasing 0.3 #303030\nline 1 0.15 #ffff00\nend\n";
+
+/* One city for test_subset_build: `styled` 1 by class, 2 by the styles
+ * above on a third of the roads (in runs of 40, so that boxes see some
+ * and not others). Returns the pixels compared; *differ counts those that
+ * differ, *kept the roads the boxes took. */
+static size_t subset_case(int styled, int use_arcs, size_t *differ, size_t *kept)
 {
     rs_ctx *ctx;
     rs_ctx_create(NULL, NULL, &ctx);
@@ -813,89 +816,129 @@ static void test_subset_build(void)
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
     rs_network *net = NULL;
+    rs_styles *S = NULL;
+    size_t pixels = 0;
+    *differ = *kept = 0;
     int ok = sc_city(&sc, 161, 141, 5.0, 1000, 5) == 0;
     rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
     ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
     ok = ok && (roads = ss_roads(ctx, &sc)) != NULL;
+    static const char *const names[] = { "red", "grad", "kerb" };
     for (size_t i = 0; ok && i < sc.nroads; i++)
-        ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+        ok = styled == 1 ? rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK
+             : (i / 40) % 3 == 0 ? rs_roads_set_attr(ctx, roads, i, "style", names[(i / 120) % 3]) == RS_OK
+                                 : 1;
+    if (ok && styled == 2) ok = rs_styles_parse(ctx, subset_styles, sizeof subset_styles - 1, &S) == RS_OK;
     rs_splat_options o = edit_opts(4);
+    o.style.styles = S;
     rs_road_grid *g = NULL, *gs = NULL;
     image a, b;
     memset(&a, 0, sizeof a);
     memset(&b, 0, sizeof b);
     ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK && render(ctx, dem, g, &o, &a) == 0 &&
          rs_network_build(ctx, roads, NULL, &net) == RS_OK;
-    CHECK(ok);
+    CHECKF(ok, "city %d: %s", styled, rs_ctx_message(ctx));
     size_t n = rs_roads_count(roads);
     uint32_t *ids = malloc((n ? n : 1) * sizeof *ids);
     CHECK(ids != NULL);
-    if (!ok || !ids) goto done;
-    for (size_t i = 0; i < n; i++) ids[i] = (uint32_t)i;
-    ok = rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, n, &gs) == RS_OK && render(ctx, dem, gs, &o, &b) == 0;
-    CHECKF(ok && same_image(&a, &b), "every road: not the whole build's image");
-    image_free(&b);
-    rs_road_grid_free(ctx, gs);
-    gs = NULL;
-    ids[0] = 1, ids[1] = 0;
-    CHECK_EQ_INT(rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, 2, &gs), RS_ERR_INVALID_ARG);
-    CHECK(gs == NULL);
-    {
-        /* roads a and c of three: their markings and zebra points follow them */
-        rs_roads *R = NULL, *sub = NULL;
-        const uint32_t ac[2] = { 0, 2 };
-        CHECK(rs_roads_parse(ctx, two_roads, strlen(two_roads), &R) == RS_OK &&
-              rs__roads_subset(ctx, R, ac, 2, &sub) == RS_OK);
-        if (sub) {
-            const char *name = NULL;
-            rs_mark mk;
-            size_t road = 9, point = 9;
-            CHECK_EQ_INT((int)rs_roads_count(sub), 2);
-            CHECK(rs_roads_get(sub, 1, &name, NULL, NULL, NULL) == RS_OK && strcmp(name, "c") == 0);
-            CHECK(rs_roads_get_attr(sub, 0, "class") && strcmp(rs_roads_get_attr(sub, 0, "class"), "residential") == 0);
-            CHECK_EQ_INT((int)rs_roads_mark_count(sub), 2);
-            CHECK(rs_roads_get_mark(sub, 1, &mk) == RS_OK && mk.road == 1 && mk.s == 30);
-            CHECK_EQ_INT((int)rs_roads_point_attr_count(sub), 2);
-            CHECK(rs_roads_point_attr_at(sub, 1, &road, &point, NULL, NULL) == RS_OK && road == 1 && point == 1);
-        }
-        rs_roads_free(ctx, sub);
-        rs_roads_free(ctx, R);
+    rs__grid_facts facts;
+    if (ok && ids) rs__grid_facts_of(g, &facts);
+    if (ok && ids && !use_arcs) {
+        /* the same but the strokes' arc lengths: every stroke from 0 */
+        for (size_t r = 0; r < n; r++) net->s_off[r] = net->rev[r] ? net->length[r] : 0;
+    }
+    if (ok && ids && styled == 1 && use_arcs) {
+        for (size_t i = 0; i < n; i++) ids[i] = (uint32_t)i;
+        ok = rs__road_grid_build_subset(ctx, dem, roads, &o, net, &facts, ids, n, &gs) == RS_OK &&
+             render(ctx, dem, gs, &o, &b) == 0;
+        CHECKF(ok && same_image(&a, &b), "every road: not the whole build's image");
+        image_free(&b);
+        rs_road_grid_free(ctx, gs);
+        gs = NULL;
+        ids[0] = 1, ids[1] = 0;
+        CHECK_EQ_INT(rs__road_grid_build_subset(ctx, dem, roads, &o, net, &facts, ids, 2, &gs), RS_ERR_INVALID_ARG);
+        CHECK(gs == NULL);
     }
     sc_rng rng;
     sc_rng_seed(&rng, 77);
     double W = sc_extent_x(&sc), H = sc_extent_y(&sc), pix = 5.0 / 4;
-    size_t differ = 0, pixels = 0, kept = 0;
-    for (int box = 0; box < 10 && ok; box++) {
+    for (int box = 0; box < 20 && ok && ids; box++) {
         double bw = 60 + 140 * sc_rng_unit(&rng), bh = 60 + 140 * sc_rng_unit(&rng);
         double x0 = sc_rng_unit(&rng) * (W - bw), y0 = sc_rng_unit(&rng) * (H - bh);
         size_t m = 0;
         for (size_t i = 0; i < n; i++)
             if (road_box_dist(roads, i, x0, y0, x0 + bw, y0 + bh) <= 60) ids[m++] = (uint32_t)i;
-        kept += m;
-        ok = rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, m, &gs) == RS_OK &&
+        *kept += m;
+        ok = rs__road_grid_build_subset(ctx, dem, roads, &o, net, &facts, ids, m, &gs) == RS_OK &&
              render(ctx, dem, gs, &o, &b) == 0;
         CHECKF(ok, "box %d: %s", box, rs_ctx_message(ctx));
         for (uint32_t y = (uint32_t)(y0 / pix); ok && y < (uint32_t)((y0 + bh) / pix) && y < a.h; y++)
             for (uint32_t x = (uint32_t)(x0 / pix); x < (uint32_t)((x0 + bw) / pix) && x < a.w; x++) {
-                differ += pixel_differs(&a, &b, (size_t)y * a.w + x);
+                *differ += pixel_differs(&a, &b, (size_t)y * a.w + x);
                 pixels++;
             }
         image_free(&b);
         rs_road_grid_free(ctx, gs);
         gs = NULL;
     }
-    printf("  subset builds: %zu of %zu box pixels differ (%zu roads kept of 10 x %zu)\n", differ, pixels, kept, n);
-    CHECK(pixels > 80000);
-    CHECK(kept < 10 * n / 2);
-    CHECK_EQ_INT((int)differ, 0);
-done:
     free(ids);
     image_free(&a);
     rs_road_grid_free(ctx, g);
     rs_network_free(ctx, net);
     rs_roads_free(ctx, roads);
+    rs_styles_free(ctx, S);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+    return pixels;
+}
+
+/* The local build a proportional update needs (docs/embedding.md "Toward
+ * an update in proportion to the edit"): rs__road_grid_build_subset of the
+ * roads within 60 m of each of twenty boxes, with the whole map's network (its
+ * strokes' arc lengths, so the dashes keep their phase) and facts (the
+ * styles' switches, the index cell), splats the boxes' pixels as the grid
+ * of all roads does. On two cities of 1000 roads at 1.25 m pixels:
+ * class-styled (casings, edge and dashed centre lines, automatic
+ * markings), and named styles on some roads (casings of two colours, a
+ * fill, a gradient, dashed lines). With every road it is the whole build's
+ * image; without the arc lengths pixels differ. Ids out of order are
+ * refused; rs__roads_subset renumbers markings and point attributes. */
+static void test_subset_build(void)
+{
+    size_t differ, kept;
+    for (int styled = 1; styled <= 2; styled++) {
+        size_t px = subset_case(styled, 1, &differ, &kept);
+        printf("  subset builds, city %d: %zu of %zu box pixels differ (%zu roads kept of 20 x 1000)\n", styled,
+               differ, px, kept);
+        CHECK(px > 160000);
+        CHECK(kept < 20 * 1000 / 2);
+        CHECKF(differ == 0, "city %d: %zu pixels differ", styled, differ);
+    }
+    size_t px = subset_case(1, 0, &differ, &kept);
+    printf("  without the strokes' arc lengths: %zu of %zu differ\n", differ, px);
+    CHECK(differ > 0);
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    /* roads a and c of three: their markings and zebra points follow them */
+    rs_roads *R = NULL, *sub = NULL;
+    const uint32_t ac[2] = { 0, 2 };
+    CHECK(rs_roads_parse(ctx, two_roads, strlen(two_roads), &R) == RS_OK &&
+          rs__roads_subset(ctx, R, ac, 2, &sub) == RS_OK);
+    if (sub) {
+        const char *name = NULL;
+        rs_mark mk;
+        size_t road = 9, point = 9;
+        CHECK_EQ_INT((int)rs_roads_count(sub), 2);
+        CHECK(rs_roads_get(sub, 1, &name, NULL, NULL, NULL) == RS_OK && strcmp(name, "c") == 0);
+        CHECK(rs_roads_get_attr(sub, 0, "class") && strcmp(rs_roads_get_attr(sub, 0, "class"), "residential") == 0);
+        CHECK_EQ_INT((int)rs_roads_mark_count(sub), 2);
+        CHECK(rs_roads_get_mark(sub, 1, &mk) == RS_OK && mk.road == 1 && mk.s == 30);
+        CHECK_EQ_INT((int)rs_roads_point_attr_count(sub), 2);
+        CHECK(rs_roads_point_attr_at(sub, 1, &road, &point, NULL, NULL) == RS_OK && road == 1 && point == 1);
+    }
+    rs_roads_free(ctx, sub);
+    rs_roads_free(ctx, R);
     rs_ctx_free(ctx);
 }
 

@@ -634,9 +634,10 @@ int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reac
 
 /* Analytic edges: the road field over the map. */
 static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, uint32_t texels,
-                             rs_road_grid *g)
+                             const rs__grid_facts *facts, rs_road_grid *g)
 {
     rs__roadfield_params p = rs__roadfield_params_for_dem(dem, texels);
+    if (facts) p.index_cell = facts->index_cell; /* (a part of a map: the whole map's cells) */
     rs_result r = rs__roadfield_build(ctx, roads, &p, &g->field);
     if (r == RS_OK) {
         for (size_t i = 0; i < rs_roads_count(roads); i++) {
@@ -649,9 +650,11 @@ static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
     return r;
 }
 
-/* rs_road_grid_build, with the network `given` (NULL: built here from roads) */
+/* rs_road_grid_build, with the network `given` (NULL: built here from
+ * roads) and the whole map's facts when roads are a part of it (NULL: these
+ * roads are the map) */
 static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
-                            const rs_network *given, rs_road_grid **out)
+                            const rs_network *given, const rs__grid_facts *facts, rs_road_grid **out)
 {
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_build");
@@ -683,7 +686,7 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     pg.nested = 1; /* alpha-map edges: their sweep below reports itself (the options' callback) */
     if (o.coverage.edges == RS_EDGES_ANALYTIC) {
         rs__progress_begin(ctx, &pg, o.progress, o.progress_user, 5 * (uint64_t)nroads + 1, PROGRESS_STEP);
-        r = build_field(ctx, dem, roads, o.texels, g);
+        r = build_field(ctx, dem, roads, o.texels, facts, g);
     }
     /* the styles look pixels' roads up in the grid's field when it has one */
     /* the network (docs/network.md): strokes carry dashes and surface
@@ -708,7 +711,7 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     rs__auto_plan plan;
     memset(&plan, 0, sizeof plan);
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
-    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, &g->styling);
+    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, facts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
     if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
     rs__auto_plan_free(ctx, &plan);
@@ -806,12 +809,27 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
 rs_result rs_road_grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
                              rs_road_grid **out)
 {
-    return grid_build(ctx, dem, roads, opts, NULL, out);
+    return grid_build(ctx, dem, roads, opts, NULL, NULL, out);
+}
+
+void rs__grid_facts_of(const rs_road_grid *g, rs__grid_facts *out)
+{
+    const rs__styling *st = g->styling;
+    memset(out, 0, sizeof *out);
+    out->index_cell = rs__roadfield_cell(g->field);
+    if (!st) return;
+    out->styled = 1;
+    out->any_surface = st->any_surface;
+    out->fill_uniform = st->fill_uniform;
+    memcpy(out->fill_rgba, st->fill_rgba, sizeof out->fill_rgba);
+    out->casing_uniform = st->casing_uniform;
+    memcpy(out->casing_rgba, st->casing_rgba, sizeof out->casing_rgba);
+    out->widest_casing = st->widest_casing;
 }
 
 rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
-                                     const rs_splat_options *opts, const rs_network *net, const uint32_t *ids,
-                                     size_t n, rs_road_grid **out)
+                                     const rs_splat_options *opts, const rs_network *net,
+                                     const rs__grid_facts *facts, const uint32_t *ids, size_t n, rs_road_grid **out)
 {
     rs_roads *sub = NULL;
     rs_network *part = NULL;
@@ -821,7 +839,7 @@ rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_ro
                         rs_roads_count(roads));
     rs_result r = rs__roads_subset(ctx, roads, ids, n, &sub);
     if (!r) r = rs__network_subset(ctx, net, ids, n, &part);
-    if (!r) r = grid_build(ctx, dem, sub, opts, part, out);
+    if (!r) r = grid_build(ctx, dem, sub, opts, part, facts, out);
     rs_network_free(ctx, part);
     rs_roads_free(ctx, sub);
     return r;

@@ -151,7 +151,7 @@ static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network
 
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                             const rs__roadfield *field, const rs_network *net, const rs__line_cut *cuts,
-                            size_t ncuts, rs__styling **out)
+                            size_t ncuts, const rs__grid_facts *facts, rs__styling **out)
 {
     *out = NULL;
     if (o->style.disable) return RS_OK;
@@ -205,6 +205,12 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                   sty->surface_image[0];
     }
     band_start[n] = (uint32_t)nbands;
+    if (facts) { /* a part of a map: its switches are the whole map's */
+        st->any_surface = facts->any_surface;
+        st->fill_uniform = facts->fill_uniform;
+        memcpy(st->fill_rgba, facts->fill_rgba, sizeof st->fill_rgba);
+        styled = facts->styled;
+    }
     st->fill_opaque = st->fill_uniform && st->fill_rgba[3] == 1.0f;
     if (!styled) {
         rs__free(ctx, sty);
@@ -237,7 +243,9 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         dash = rs__alloc_array(ctx, nbands, RS_STYLE_MAX_DASH * sizeof *dash);
         if (!dash) { r = RS_ERR_NOMEM; goto fail; }
     }
-    if (ncasing) {
+    /* (a part of a map with casings has the casing field even when none of its roads has one) */
+    int casings = ncasing || (facts && facts->widest_casing > 0);
+    if (casings) {
         extra = rs__calloc(ctx, n, sizeof *extra);
         if (!extra) { r = RS_ERR_NOMEM; goto fail_dash; }
     }
@@ -267,6 +275,10 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             }
             cr++;
         }
+    }
+    if (facts) {
+        st->casing_uniform = facts->casing_uniform;
+        memcpy(st->casing_rgba, facts->casing_rgba, sizeof st->casing_rgba);
     }
     /* the roads' priorities (NULL: all equal): the line symbols' crossings
      * read them, and the fill lookups keep them (below) */
@@ -300,13 +312,15 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         if (r != RS_OK) goto fail_dash;
         st->bytes += rs__linesym_bytes(st->lines);
     }
-    if (ncasing) {
+    if (casings) {
         /* The casing field: every road, those with a casing widened by it
          * (C holds R). From the grid's field when the casings are at most
          * an index cell wide: the same segments, so the coverage stage
          * computes C beside R in one pass (docs/linesym.md). */
         double widest = 0;
         for (size_t i = 0; i < n; i++) widest = fmax(widest, extra[i]);
+        if (facts) widest = facts->widest_casing;
+        st->widest_casing = widest;
         if (field && widest <= rs__roadfield_cell(field)) {
             if ((r = rs__roadfield_widen(ctx, field, extra, n, &st->casing)) != RS_OK) goto fail_dash;
             st->casing_merged = 1;
@@ -319,7 +333,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             uint32_t *sub = NULL;
             if (o->coverage.edges == RS_EDGES_ALPHAMAP) {
                 sub = rs__alloc_array(ctx, n, sizeof *sub);
-                st->casing_road = rs__alloc_array(ctx, ncasing, sizeof *st->casing_road);
+                st->casing_road = rs__alloc_array(ctx, ncasing ? ncasing : 1, sizeof *st->casing_road);
                 if (!sub || !st->casing_road) {
                     rs__free(ctx, sub);
                     r = RS_ERR_NOMEM;

@@ -20,6 +20,7 @@ typedef struct rs__styling {
                                          coverage stage computes its coverage into rs__piece.ov */
     int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */
     float casing_rgba[4];
+    double widest_casing;             /* the widest casing (0: none) */
     const struct rs__roadfield *near; /* field for fill / gradient lookups: the grid's, else near_own */
     struct rs__roadfield *near_own;
     int *prio;                        /* per road: rs__road_priority, for the fill lookups (the higher road's fill
@@ -69,12 +70,14 @@ typedef struct rs__styling {
  * roads' network, read during the build only: a stroke's records share
  * one arc length for dashes and surface images (docs/network.md). `cuts`
  * (ncuts, borrowed for the call): where the automatic markings stop lane
- * and centre lines (rs__auto_plan). *out stays NULL when no road is styled
- * (or o->style.disable): the splat is then the unstyled one. */
+ * and centre lines (rs__auto_plan). `facts` (NULL: from these roads): the
+ * whole map's switches, when these roads are part of it (a local build).
+ * *out stays NULL when no road is styled (or o->style.disable): the splat is
+ * then the unstyled one. */
 struct rs__line_cut;
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                             const struct rs__roadfield *field, const rs_network *net, const struct rs__line_cut *cuts,
-                            size_t ncuts, rs__styling **out);
+                            size_t ncuts, const rs__grid_facts *facts, rs__styling **out);
 void rs__styling_free(rs_ctx *ctx, rs__styling *st);
 
 /* The surface image colour of road `road` at (s, t) (s of the road, as

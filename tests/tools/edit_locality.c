@@ -11,6 +11,7 @@
  * and counts the pixels that differ. Also the two builds' thread CPU
  * time. */
 #include "roadsplat.h"
+#include "internal.h"
 #include "network.h"
 #include "scene_splat.h"
 #include "scenes.h"
@@ -72,6 +73,8 @@ int main(int argc, char **argv)
     if (rs_road_grid_build(ctx, dem, roads, &o, &g)) goto fail;
     double full_ms = tm_thread_cpu_ms() - t0;
     if (rs_splatter_create(ctx, dem, NULL, g, &o, &s) || rs_network_build(ctx, roads, NULL, &net)) goto fail;
+    rs__grid_facts facts;
+    rs__grid_facts_of(g, &facts);
     unsigned char *in = calloc(sc.nroads, 1);
     if (!in) return 1;
     const double pix = 5.0 / 4, boxes[][4] = { { 800, 700, 1000, 900 }, { 300, 300, 400, 420 }, { 1500, 1000, 1700, 1300 } };
@@ -127,7 +130,7 @@ int main(int argc, char **argv)
         for (size_t i = 0; i < sc.nroads; i++)
             if (in[i]) ids[ni++] = (uint32_t)i;
         t0 = tm_thread_cpu_ms();
-        if (whole_net ? rs__road_grid_build_subset(ctx, dem, roads, &o, net, ids, ni, &gs)
+        if (whole_net ? rs__road_grid_build_subset(ctx, dem, roads, &o, net, &facts, ids, ni, &gs)
                       : rs_road_grid_build(ctx, dem, sub, &o, &gs))
             goto fail;
         free(ids);
