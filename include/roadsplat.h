@@ -1017,10 +1017,17 @@ typedef struct rs_pixel_rect {
  * other DEM dimensions, frame, texels, edge or buffer mode than `opts`
  * give is RS_ERR_INVALID_ARG naming the value; when the edit changes the
  * alpha-map road cell (the narrowest road decides it) the whole image is
- * the candidate. Cost: a full rs_road_grid_build plus the
- * comparison (about a tenth of a build) and the candidates' renders;
- * progress and cancel: rs_road_grid_build's, then the renders' (2 units a
- * candidate pixel). Errors leave *out NULL. */
+ * the candidate. Cost (docs/embedding.md "Patches"): with analytic edges
+ * and the whole map's style switches unchanged (one casing colour, one
+ * fill), the roads near the edit are built alone and *out shares old's
+ * structures, drawing the new part in a patch rectangle (on the 10k-road
+ * city about an eighth of a build: the network of the edited roads is
+ * built whole); when old already holds 16 patches, or the edit changes a
+ * quarter of the image or a style switch, or with alpha-map edges, a full
+ * rs_road_grid_build plus the comparison. Grids sharing structures count
+ * their holders atomically: any of them may be freed, from any thread,
+ * while the others are in use. Progress and cancel: rs_road_grid_build's,
+ * then the renders' (2 units a candidate pixel). Errors leave *out NULL. */
 RS_API rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_road_grid *old, rs_road_grid **out);
 /* The grid's dirty rectangles (none for a grid from rs_road_grid_build):

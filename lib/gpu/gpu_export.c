@@ -11,6 +11,7 @@
 #include "roadfield.h"
 #include "network.h"
 #include "roadgrid.h"
+#include "grid_edit.h"
 #include "styling.h"
 
 #include <float.h>
@@ -954,8 +955,9 @@ rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built for another DEM");
     /* the grid's per-road tables must be of these roads */
     const size_t n = rs_roads_count(roads);
-    int other = grid->styling && grid->styling->nroads != n;
-    for (size_t k = 0; grid->markings && k < grid->markings->npl && !other; k++) other = grid->markings->pl[k].road >= n;
+    int other = grid->npatch ? grid->track && grid->track->n != n : grid->styling && grid->styling->nroads != n;
+    for (size_t k = 0; !grid->npatch && grid->markings && k < grid->markings->npl && !other; k++)
+        other = grid->markings->pl[k].road >= n;
     if (other)
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_gpu_scene_from_grid: the grid was built from other roads");
     /* the options the grid was built with, as far as the export reads them */
@@ -964,7 +966,9 @@ rs_result rs_gpu_scene_from_grid(rs_ctx *ctx, const rs_dem *dem, const rs_roads 
     o.texels = grid->texels;
     o.style = grid->style;
     o.markings = grid->marks;
-    ge_src src = { grid };
+    /* a patched grid (rs_road_grid_update) holds its styles in pieces:
+     * the export works them out from the roads, as rs_gpu_scene_create */
+    ge_src src = { grid->npatch ? NULL : grid };
     rs__progress pg;
     rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
     return rs__progress_end(ctx, &pg, ge_export(ctx, src, dem, roads, &o, gopts, out));

@@ -1011,7 +1011,17 @@ static rs_result whole_image(rs_ctx *ctx, uint32_t W, uint32_t H, rs_pixel_rect 
 }
 
 /* The dirty rectangles between grids a (old) and b (new). */
-static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b, rs_pixel_rect **out, size_t *nout)
+/* (clip: pieces outside these pixels are passed over; NULL: none) */
+static int outside(const rs__edit_item *q, double pad, const rs_pixel_rect *clip, double pix)
+{
+    if (!clip) return 0;
+    double x0, y0, x1, y1;
+    item_box(q, pad, &x0, &y0, &x1, &y1);
+    return x1 < clip->x0 * pix || x0 > clip->x1 * pix || y1 < clip->y0 * pix || y0 > clip->y1 * pix;
+}
+
+static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b, const rs_pixel_rect *clip,
+                      rs_pixel_rect **out, size_t *nout)
 {
     double pix = b->frame.cell_size / b->texels;
     uint64_t W64 = (uint64_t)(b->dem_w - 1) * b->texels, H64 = (uint64_t)(b->dem_h - 1) * b->texels;
@@ -1044,6 +1054,7 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
         double pad;
         if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) q = &ea->it[ka[i++].i], pad = pa;
         else q = &eb->it[kb[j++].i], pad = pb;
+        if (outside(q, pad, clip, pix)) continue;
         if (q->kind == RS__EI_PAINT_AT) /* (a line's paint: the road field's pad is not its business) */
             ok = centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
                               pix, W, H);
@@ -1056,6 +1067,7 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
         for (size_t k = 0; ok && k < ea->n + eb->n; k++) {
             const rs__edit_item *q = k < ea->n ? &ea->it[k] : &eb->it[k - ea->n];
             if (q->kind >= RS__EI_PAINT || (k >= ea->n && kept[k - ea->n])) continue;
+            if (outside(q, k < ea->n ? pa : pb, clip, pix)) continue;
             if (k < ea->n && !item_changed(kb, eb->n, q->h)) continue;
             double x0, y0, x1, y1;
             item_box(q, k < ea->n ? pa : pb, &x0, &y0, &x1, &y1);
@@ -1091,7 +1103,7 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     return r;
 }
 
-/* The candidate rectangles of b (diff) narrowed to the pixels that change:
+/* Candidate rectangles (diff's, or a patch's) narrowed to the pixels that change:
  * each rendered under both grids (unlit: the colour and weight the
  * rectangles promise, docs/embedding.md) and compared byte for byte. The
  * pieces find where a pixel may change, not whether it does: at 1.25 m
@@ -1107,13 +1119,13 @@ static int px_differs(const uint8_t *ca, const uint16_t *wa, const uint8_t *cb, 
     return memcmp(ca + 4 * k, cb + 4 * k, 4) != 0 || wa[k] != wb[k];
 }
 
-static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, const rs_road_grid *a,
-                             rs_road_grid *b)
+rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, const rs_road_grid *a,
+                           const rs_road_grid *b, rs_pixel_rect **rects, size_t *nrects)
 {
-    rs__grid_edit *e = b->edit;
+    const rs_pixel_rect *cand = *rects;
+    const size_t ncand = *nrects;
     uint64_t total = 0;
-    for (size_t k = 0; k < e->ndirty; k++)
-        total += (uint64_t)(e->dirty[k].x1 - e->dirty[k].x0) * (e->dirty[k].y1 - e->dirty[k].y0);
+    for (size_t k = 0; k < ncand; k++) total += (uint64_t)(cand[k].x1 - cand[k].x0) * (cand[k].y1 - cand[k].y0);
     if (!total || total > ctx->limits.max_dirty_compare) return RS_OK;
     rs_splat_options o = *opts;
     o.lighting.enable = 0;
@@ -1130,8 +1142,8 @@ static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_opti
     if (!r) r = rs__splatter_create_lean(ctx, dem, a, &o, &sa);
     if (!r) r = rs__splatter_create_lean(ctx, dem, b, &o, &sb);
     int ok = 1;
-    for (size_t k = 0; !r && ok && k < e->ndirty; k++) {
-        const rs_pixel_rect R = e->dirty[k];
+    for (size_t k = 0; !r && ok && k < ncand; k++) {
+        const rs_pixel_rect R = cand[k];
         for (uint32_t x = R.x0; !r && ok && x < R.x1;) {
             uint32_t cw = R.x1 - x < EXACT_WINDOW ? R.x1 - x : EXACT_WINDOW, rows = EXACT_WINDOW / cw;
             for (uint32_t y = R.y0; !r && ok && y < R.y1; y += rows) {
@@ -1162,15 +1174,117 @@ static rs_result exact_dirty(rs_ctx *ctx, const rs_dem *dem, const rs_splat_opti
         size_t nn = 0;
         r = spans_to_rects(ctx, &S, &nr, &nn);
         if (!r) {
-            rs__free(ctx, e->dirty);
-            e->dirty = nr;
-            e->ndirty = nn;
+            rs__free(ctx, *rects);
+            *rects = nr;
+            *nrects = nn;
         }
     }
     rs__free(ctx, S.v);
     /* (anything but a cancel leaves the candidates: a superset) */
     if (r && r != RS_ERR_CANCELLED) r = RS_OK;
     return rs__progress_end(ctx, &pg, r);
+}
+
+/* A piece's region meets rectangle R (pixels)? */
+static int meets(const rs__edit_item *q, double pad, const rs_pixel_rect *R, double pix)
+{
+    double x0, y0, x1, y1;
+    item_box(q, pad, &x0, &y0, &x1, &y1);
+    return !(x1 < R->x0 * pix || x0 > R->x1 * pix || y1 < R->y0 * pix || y0 > R->y1 * pix);
+}
+
+rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_road_grid *local, rs_pixel_rect rect,
+                               rs_pixel_rect **out, size_t *nout)
+{
+    /* What old drew: its base, and inside each patch's rectangle that
+     * patch's grid (later over earlier). A piece of local is new when no
+     * grid of old that draws where it lies has it; a piece of such a grid
+     * is gone when local lacks it and no later patch it meets replaced it
+     * (a patch's edit left the pixels outside its rectangle as they were:
+     * the base's stale pieces there draw them still). */
+    const size_t ns = old->npatch + 1;
+    const rs_road_grid **src = rs__alloc_array(ctx, ns, sizeof *src);
+    keyed **ks = rs__calloc(ctx, ns, sizeof *ks);
+    const rs__grid_edit *el = local->edit;
+    keyed *kl = el ? sorted_keys(ctx, el) : NULL;
+    spans S;
+    memset(&S, 0, sizeof S);
+    rs_result r = src && ks && kl ? RS_OK : RS_ERR_NOMEM;
+    *out = NULL;
+    *nout = 0;
+    const double pix = local->frame.cell_size / local->texels;
+    const uint32_t W = (local->dem_w - 1) * local->texels, H = (local->dem_h - 1) * local->texels;
+    for (size_t k = 0; !r && k < ns; k++) {
+        src[k] = k == 0 ? (old->base ? old->base : old) : old->patch[k - 1].grid;
+        if (!src[k]->edit || src[k]->edit->over || !(ks[k] = sorted_keys(ctx, src[k]->edit))) r = RS_ERR_NOMEM;
+    }
+    if (!r && (!el || el->over)) r = RS_ERR_LIMIT;
+    int ok = 1;
+    /* (the rectangle a source draws in: the base everywhere) */
+    #define SRC_RECT(k) ((k) == 0 ? &rect : &old->patch[(k) - 1].rect)
+    for (size_t i = 0; !r && ok && i < el->n; i++) {
+        const rs__edit_item *q = &el->it[i];
+        double pad = grid_pad(local);
+        if (!meets(q, pad, &rect, pix)) continue;
+        int known = 0;
+        for (size_t k = 0; !known && k < ns; k++)
+            known = meets(q, pad, SRC_RECT(k), pix) && !item_changed(ks[k], src[k]->edit->n, q->h);
+        if (known) continue;
+        ok = q->kind == RS__EI_PAINT_AT
+                 ? centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
+                                pix, W, H)
+                 : item_spans(ctx, &S, q, pad, pix, W, H);
+    }
+    for (size_t k = 0; !r && ok && k < ns; k++) {
+        const rs__grid_edit *e = src[k]->edit;
+        double pad = grid_pad(src[k]);
+        for (size_t i = 0; ok && i < e->n; i++) {
+            const rs__edit_item *q = &e->it[i];
+            if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) || !item_changed(kl, el->n, q->h))
+                continue;
+            int replaced = 0;
+            for (size_t j = k + 1; !replaced && j < ns; j++)
+                replaced = meets(q, pad, SRC_RECT(j), pix) && item_changed(ks[j], src[j]->edit->n, q->h);
+            if (replaced) continue;
+            ok = q->kind == RS__EI_PAINT_AT
+                     ? centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
+                                    pix, W, H)
+                     : item_spans(ctx, &S, q, pad, pix, W, H);
+        }
+    }
+    #undef SRC_RECT
+    if (!r && !ok) r = RS_ERR_NOMEM;
+    /* within the rectangle (pieces reach out of it; nothing changed there) */
+    spans C, in;
+    memset(&C, 0, sizeof C);
+    memset(&in, 0, sizeof in);
+    if (!r && !S.over) {
+        spans out_of;
+        memset(&out_of, 0, sizeof out_of);
+        spans_norm(&S);
+        for (uint32_t y = rect.y0; ok && y < rect.y1; y++) ok = span_push(ctx, &C, y, rect.x0, rect.x1);
+        /* S within C: S less (S less C) */
+        if (ok) ok = spans_minus(ctx, &S, &C, &out_of);
+        spans_norm(&out_of);
+        if (ok) ok = spans_minus(ctx, &S, &out_of, &in);
+        rs__free(ctx, out_of.v);
+        if (!ok) r = RS_ERR_NOMEM;
+    }
+    if (r == RS_ERR_LIMIT || (!r && (S.over || in.over))) {
+        /* (no pieces, or too many runs: the rectangle itself) */
+        r = RS_OK;
+        *out = rs__alloc_array(ctx, 1, sizeof **out);
+        if (!*out) r = RS_ERR_NOMEM;
+        else (*out)[0] = rect, *nout = 1;
+    } else if (!r) r = spans_to_rects(ctx, &in, out, nout);
+    for (size_t k = 0; ks && k < ns; k++) rs__free(ctx, ks[k]);
+    rs__free(ctx, ks);
+    rs__free(ctx, src);
+    rs__free(ctx, kl);
+    rs__free(ctx, S.v);
+    rs__free(ctx, C.v);
+    rs__free(ctx, in.v);
+    return r;
 }
 
 rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *opts,
@@ -1208,10 +1322,24 @@ rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                         "rs_road_grid_update: the old grid keeps no edit pieces (build it with opts->grid.edits = 1)");
     rs_road_grid *g = NULL;
     o.grid.edits = 1;
+    /* the edited part alone when the edit allows (lib/scene/grid_patch.c) */
+    r = rs__grid_update_patched(ctx, dem, roads, &o, old, &g);
+    if (r || g) {
+        if (!r) rs__ok(ctx);
+        *out = g;
+        return r;
+    }
     r = rs_road_grid_build(ctx, dem, roads, &o, &g);
     if (r) return r;
-    r = diff(ctx, old, g, &g->edit->dirty, &g->edit->ndirty);
-    if (!r) r = exact_dirty(ctx, dem, &o, old, g);
+    /* a patched old grid: its pieces are its base's, and its patches
+     * draw otherwise inside their rectangles */
+    if (!old->npatch) r = diff(ctx, old, g, NULL, &g->edit->dirty, &g->edit->ndirty);
+    else {
+        /* a patched old grid: its base's pieces, and inside each patch that patch's */
+        rs_pixel_rect all = { 0, 0, (old->dem_w - 1) * old->texels, (old->dem_h - 1) * old->texels };
+        r = rs__patch_candidates(ctx, old, g, all, &g->edit->dirty, &g->edit->ndirty);
+    }
+    if (!r) r = rs__dirty_render(ctx, dem, &o, old, g, &g->edit->dirty, &g->edit->ndirty);
     if (r) {
         rs_road_grid_free(ctx, g);
         return r;
@@ -1227,10 +1355,11 @@ rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
 size_t rs_road_grid_dirty(const rs_road_grid *grid, rs_pixel_rect *rects, size_t cap)
 {
     if (!grid || !grid->edit) return 0;
-    const rs__grid_edit *e = grid->edit;
+    const rs_pixel_rect *d = grid->base ? grid->dirty : grid->edit->dirty;
+    size_t n = grid->base ? grid->ndirty : grid->edit->ndirty;
     if (rects)
-        for (size_t k = 0; k < e->ndirty && k < cap; k++) rects[k] = e->dirty[k];
-    return e->ndirty;
+        for (size_t k = 0; k < n && k < cap; k++) rects[k] = d[k];
+    return n;
 }
 
 /* Distance from point (px, py) to the box. */
@@ -1270,6 +1399,15 @@ int rs_road_grid_rect_has_roads(const rs_road_grid *grid, uint32_t x0, uint32_t 
 {
     if (!grid) return 0;
     if (x0 >= x1 || y0 >= y1) return 0;
+    /* a patched grid: each patch's grid inside its rectangle (later over
+     * earlier), the base's pieces for the whole rectangle (they may still
+     * hold a road the patches took away: a 1 may find no road pixel) */
+    for (size_t k = 0; k < grid->npatch; k++) {
+        const rs_pixel_rect *R = &grid->patch[k].rect;
+        uint32_t a0 = x0 > R->x0 ? x0 : R->x0, b0 = y0 > R->y0 ? y0 : R->y0;
+        uint32_t a1 = x1 < R->x1 ? x1 : R->x1, b1 = y1 < R->y1 ? y1 : R->y1;
+        if (a0 < a1 && b0 < b1 && rs_road_grid_rect_has_roads(grid->patch[k].grid, a0, b0, a1, b1)) return 1;
+    }
     const rs__grid_edit *e = grid->edit;
     if (!e || e->over || !e->bstart) return 1;
     double pix = grid->frame.cell_size / grid->texels, pad = grid_pad(grid);

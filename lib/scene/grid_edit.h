@@ -79,4 +79,46 @@ struct rs_road_grid;
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                               const rs_network *net, struct rs_road_grid *g);
 void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e);
+
+/* What a proportional update reads from the grid it updates (lib/scene/grid_patch.c):
+ * per road of the grid's road set a fingerprint of everything about it
+ * that can change a pixel (geometry, width, name, attributes, resolved
+ * style, point attributes, markings; never its index) and its box in
+ * world metres (x0, y0, x1, y1), the network of the whole set, and the
+ * whole map's facts. */
+typedef struct rs__grid_track {
+    size_t n;
+    uint64_t *print;
+    double *box;
+    rs_network *net;
+    rs__grid_facts facts;
+    size_t bytes;
+} rs__grid_track;
+/* The prints and boxes of every road of `roads` into fresh arrays (*print,
+ * *box: the caller's, rs__free). RS_ERR_NOMEM, or a style error. */
+rs_result rs__grid_prints(rs_ctx *ctx, const rs_roads *roads, const rs_style_options *so, uint64_t **print,
+                          double **box);
+/* The track of whole grid g built from `roads` with options o; takes `net`
+ * (the grid's network: freed with the track, also on failure). */
+rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,
+                               struct rs_road_grid *g);
+void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t);
+/* The candidate rectangles *rects (*nrects of them, the caller's:
+ * rs__free) rendered under grids a and b (splatters on them for dem and
+ * opts, lighting off) and replaced by the exact rectangles of the pixels
+ * whose colour or weight differ, when the candidates hold at most
+ * rs_limits.max_dirty_compare pixels; else, or on a failure other than a
+ * cancel, left as they are (a superset). Ticks 2 units a pixel. */
+rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, const struct rs_road_grid *a,
+                           const struct rs_road_grid *b, rs_pixel_rect **rects, size_t *nrects);
+/* The pieces that differ between what grid old draws inside `rect` (its
+ * base, and inside its patches their grids) and what `local` draws there:
+ * candidate rectangles within rect (*out the caller's: rs__free). */
+rs_result rs__patch_candidates(rs_ctx *ctx, const struct rs_road_grid *old, const struct rs_road_grid *local,
+                               rs_pixel_rect rect, rs_pixel_rect **out, size_t *nout);
+/* The proportional update (docs/embedding.md "Patches"): *out a patched
+ * grid on old's base, or NULL with RS_OK when this edit needs the whole
+ * build (the caller then builds). */
+rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                  const struct rs_road_grid *old, struct rs_road_grid **out);
 #endif

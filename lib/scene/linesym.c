@@ -1418,6 +1418,31 @@ static rs_result road_local_append(rs_ctx *ctx, const rs_roads *roads, size_t ri
     return RS_OK;
 }
 
+/* A stroke's arc lengths at record q's points (appended at [m0, m), its
+ * first point at m0 - 1 when it was the last one's end): the record's
+ * base (rs__stroke_bases) plus its own
+ * sums, so a part of a map's roads draws its dashes as the whole map does
+ * (rs__network_subset), and the whole map alike from any record on. */
+static void stroke_arcs(double base, const rs_roads *roads, uint32_t q, int rev, const rs__linesym_params *p,
+                        double per_unit, ls_vtx *pts, double *sv, size_t m0, size_t m)
+{
+    const double *xy = NULL;
+    size_t n = 0;
+    rs_roads_get(roads, q, NULL, NULL, &xy, &n);
+    if (!n) return;
+    rs__local_frame F = { p->origin_x, p->origin_y, per_unit };
+    double fx, fy;
+    rs__local_point(&F, xy, rev ? n - 1 : 0, &fx, &fy);
+    size_t j0 = m0 > 0 && pts[m0 - 1].x == fx && pts[m0 - 1].y == fy ? m0 - 1 : m0;
+    if (j0 >= m) return;
+    double acc = 0;
+    sv[j0] = base;
+    for (size_t i = j0 + 1; i < m; i++) {
+        acc = rs__arc_add(acc, rs__arc_len(pts[i - 1].x, pts[i - 1].y, pts[i].x, pts[i].y));
+        sv[i] = rs__arc_add(base, acc);
+    }
+}
+
 /* Records split a road anywhere, also inside a straight stretch: the
  * joint point j of two records (points j-1, j, j+1 of the stroke) is left
  * out when it lies on the segment j-1 .. j+1 within eps (a few local
@@ -1938,7 +1963,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     size_t ncell = (size_t)L->gw * L->gh;
     L->start = rs__calloc(ctx, ncell + 1, sizeof *L->start);
     ls_vtx *pts = NULL;
-    double *sv = NULL;
+    double *sv = NULL, *own_bases = NULL;
     uint32_t *sr = NULL; /* the record of each segment of pts */
     size_t srcap = 0;
     ls_run *runs = NULL; /* a stroke's runs of records that look alike */
@@ -1988,6 +2013,17 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         for (size_t k = 0; k < p->ncuts; k++)
             if (p->cuts[k].road < nroads) L->cut_ord[L->cut_start[cut_key(L, p->cuts[k].road) + 1]++] = (uint32_t)k;
     }
+    /* each record's stroke arc length where it starts: the network's (a
+     * part of a map) or summed here, record by record (stroke_arcs) */
+    const double *bases = net ? net->s_base : NULL;
+    if (net && !bases && net->nroads == nroads) {
+        if (!(own_bases = rs__alloc_array(ctx, nroads ? nroads : 1, sizeof *own_bases))) {
+            res = RS_ERR_NOMEM;
+            goto fail;
+        }
+        rs__stroke_bases(net, roads, p->origin_x, p->origin_y, p->cell_size, own_bases);
+        bases = own_bases;
+    }
     size_t nstroke = net ? net->nstrokes : nroads;
     for (size_t k = 0; k < nstroke; k++) {
         uint32_t one = (uint32_t)k;
@@ -2020,6 +2056,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                 if ((res = road_local_append(ctx, roads, recs[q], rev, p, per_unit, &pts, &sv, &cap, &m, &gap)) !=
                     RS_OK)
                     goto fail;
+                if (bases && !alone) stroke_arcs(bases[recs[q]], roads, recs[q], rev, p, per_unit, pts, sv, m0, m);
                 /* across a bridged short record both ends of the gap are
                  * joints: either left standing in a straight line would stop
                  * the mitre of a nearby bend (fuzz/split) */
@@ -2046,15 +2083,6 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                 }
             }
             if (m < 2) continue;
-            /* the stroke's arc length where the run starts: 0 at a stroke's
-             * head, further on where a part of the network starts inside
-             * a stroke (rs__network_subset), so the dashes keep their phase */
-            if (net && !alone) {
-                uint32_t h0 = recs[q0];
-                double s0 = net->rev[h0] ? net->s_off[h0] - net->length[h0] : net->s_off[h0];
-                if (s0 != 0)
-                    for (size_t i = 0; i < m; i++) sv[i] += s0;
-            }
             for (size_t u = 0; u < nrun; u++) {
                 size_t i0 = runs[u].at, i1 = u + 1 < nrun ? runs[u + 1].at : m - 1;
                 uint32_t first = runs[u].rec;
@@ -2070,6 +2098,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     rs__free(ctx, sv);
     rs__free(ctx, sr);
     rs__free(ctx, runs);
+    rs__free(ctx, own_bases);
+    own_bases = NULL;
     rs__free(ctx, L->cs);
     L->cs = NULL;
     sr = NULL;
@@ -2145,6 +2175,7 @@ fail:
     rs__free(ctx, sv);
     rs__free(ctx, sr);
     rs__free(ctx, runs);
+    rs__free(ctx, own_bases);
     junc_free(ctx, &J);
     rs__linesym_free(ctx, L);
     if (res == RS_ERR_NOMEM) return rs__fail(ctx, res, "line symbols: out of memory");

@@ -1599,6 +1599,7 @@ void rs_network_free(rs_ctx *ctx, rs_network *net)
     rs__free(ctx, net->closed);
     rs__free(ctx, net->rev);
     rs__free(ctx, net->link);
+    rs__free(ctx, net->s_base);
     rs__free(ctx, net);
 }
 
@@ -1629,9 +1630,37 @@ static size_t bytes_of(const rs_network *N)
                         sizeof *N->next + sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);
 }
 
+/* ---- the strokes' arc lengths in a map's frame ---- */
+
+void rs__stroke_bases(const rs_network *N, const rs_roads *roads, double origin_x, double origin_y, double cell_size,
+                      double *out)
+{
+    rs__local_frame F = rs__local_frame_of(origin_x, origin_y, cell_size);
+    for (size_t k = 0; k < N->nstrokes; k++) {
+        double acc = 0;
+        for (uint32_t e = N->stroke_start[k]; e < N->stroke_start[k + 1]; e++) {
+            uint32_t r = N->stroke_roads[e];
+            const double *xy = NULL;
+            size_t np = 0;
+            rs_roads_get(roads, r, NULL, NULL, &xy, &np);
+            out[r] = acc;
+            /* (as rs__road_local_walk sums a record: equal points once) */
+            double len = 0, qx = 0, qy = 0;
+            for (size_t i = 0; i < np; i++) {
+                double px, py;
+                rs__local_point(&F, xy, i, &px, &py);
+                if (i > 0 && !(px == qx && py == qy)) len = rs__arc_add(len, rs__arc_len(qx, qy, px, py));
+                qx = px, qy = py;
+            }
+            acc = rs__arc_add(acc, len);
+        }
+    }
+}
+
 /* ---- a part of the network ---- */
 
-rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const uint32_t *ids, size_t n, rs_network **out)
+rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bases, const uint32_t *ids, size_t n,
+                             rs_network **out)
 {
     *out = NULL;
     rs_network *S = rs__calloc(ctx, 1, sizeof *S);
@@ -1685,9 +1714,12 @@ rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const uint32_t *i
     S->leg_start[nn] = (uint32_t)at;
     S->nnodes = nn;
     S->nlegs = at;
+    if (!bases) bases = N->s_base;
+    if (bases && !(S->s_base = rs__alloc_array(ctx, m, sizeof *S->s_base))) goto fail;
     /* per record; links to records not kept end the stroke there */
     for (size_t i = 0; i < n; i++) {
         uint32_t r = ids[i];
+        if (S->s_base) S->s_base[i] = bases[r];
         S->s_off[i] = N->s_off[r];
         S->length[i] = N->length[r];
         S->rev[i] = N->rev[r];

@@ -27,6 +27,9 @@ struct rs_network {
     uint8_t *rev;           /* per road: drawn against its points (a two-way record pointing the other way) */
     uint32_t *link;         /* per road end (2 r: start, 2 r + 1: end): the road end it continues into
                                (2 q + f), NONE: none (a ring's seam is cut) */
+    double *s_base;         /* per road, or NULL: the whole map's rs__stroke_bases, when this is a part
+                               of its network (rs__network_subset; the line symbols otherwise sum
+                               their own) */
     size_t bytes;
 };
 
@@ -52,17 +55,24 @@ int rs__class_non_car(rs_road_class c);
 int rs__road_non_car(const rs_roads *roads, size_t r);
 
 size_t rs__network_bytes(const rs_network *net);
+/* Per record of N (the roads of `roads`), into out: the stroke's arc
+ * length where the record's travel starts, the records' lengths summed in
+ * travel order in the local frame of a map with this origin and DEM cell
+ * (lib/scene/road_local.h), as the line symbols sum a record's points. */
+void rs__stroke_bases(const rs_network *N, const rs_roads *roads, double origin_x, double origin_y, double cell_size,
+                      double *out);
 /* The part of network N that the records ids[0..n) take part in (ascending
  * record ids of N), as the drawing code of a road set holding only those
  * records, in that order, reads it: their nodes (in N's order) with their
  * legs among them, their stroke arc lengths and directions from N, and
  * N's strokes cut into runs of kept records (a ring stays closed only when
- * kept whole). At a node where N has other legs, the degree, kind and
+ * kept whole), and s_base from `bases` (per record of N; NULL: N's own). At a node where N has other legs, the degree, kind and
  * major flags are of the kept legs. For a local build that takes the
  * whole map's strokes (docs/embedding.md). *out is the caller's
  * (rs_network_free). RS_ERR_INVALID_ARG when ids are not ascending or out of
  * range, RS_ERR_NOMEM. */
-rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const uint32_t *ids, size_t n, rs_network **out);
+rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bases, const uint32_t *ids, size_t n,
+                             rs_network **out);
 /* Two record ends at a node going on within 30 degrees of straight (the
  * cosine of their angle below -cos 30 degrees) that do not make a stroke
  * (they do not draw alike) are the through road of a T when no stroke

@@ -584,9 +584,49 @@ static rs_result choose_k(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
     return RS_OK;
 }
 
+/* (holders of one grid may free it from several threads) */
+static long refs_add(long *refs, long d)
+{
+#if defined(__GNUC__)
+    return __atomic_add_fetch(refs, d, __ATOMIC_ACQ_REL);
+#else
+    return *refs += d;
+#endif
+}
+
+void rs__grid_hold(rs_road_grid *g) { refs_add(&g->refs, 1); }
+
+uint64_t rs__grid_bytes(const rs_road_grid *g) { return g->stats.bytes; }
+
+const rs_road_grid *rs__grid_at(const rs_road_grid *g, uint32_t x, uint32_t y, const rs__grid_patch **patch)
+{
+    for (size_t k = g->npatch; k-- > 0;) {
+        const rs__grid_patch *p = &g->patch[k];
+        if (x >= p->rect.x0 && x < p->rect.x1 && y >= p->rect.y0 && y < p->rect.y1) {
+            if (patch) *patch = p;
+            return p->grid;
+        }
+    }
+    if (patch) *patch = NULL;
+    return g;
+}
+
 void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
 {
     if (!ctx || !grid) return;
+    if (refs_add(&grid->refs, -1) > 0) return; /* (a patched grid still draws with it) */
+    rs__grid_track_free(ctx, grid->track);
+    if (grid->base) { /* a patched grid: its own parts only */
+        for (size_t k = 0; k < grid->npatch; k++) {
+            rs_road_grid_free(ctx, grid->patch[k].grid);
+            rs__free(ctx, grid->patch[k].ids);
+        }
+        rs__free(ctx, grid->patch);
+        rs__free(ctx, grid->dirty);
+        rs_road_grid_free(ctx, grid->base);
+        rs__free(ctx, grid);
+        return;
+    }
     rs__roadfield_free(ctx, grid->field);
     rs__styling_free(ctx, grid->styling);
     rs__markings_free(ctx, grid->markings);
@@ -622,9 +662,18 @@ int rs__grid_cell(const rs_road_grid *g, uint32_t x, uint32_t y, unsigned *patte
 int rs_road_grid_query(const rs_road_grid *grid, double x, double y, double reach, rs_road_point *out)
 {
     rs__road_point p;
+    const rs__grid_patch *patch = NULL;
+    if (grid && grid->npatch) {
+        /* the grid that draws the point's pixel */
+        double px = (x - grid->frame.origin_x) / (grid->frame.cell_size / grid->texels);
+        double py = (y - grid->frame.origin_y) / (grid->frame.cell_size / grid->texels);
+        if (px >= 0 && py >= 0 && px < 4294967295.0 && py < 4294967295.0)
+            grid = rs__grid_at(grid, (uint32_t)px, (uint32_t)py, &patch);
+    }
     if (!grid || !grid->field || !out || !(reach >= 0) || !rs__roadfield_nearest(grid->field, x, y, reach, &p))
         return 0;
-    out->road = p.road;
+    if (patch && (p.road >= patch->n || patch->ids[p.road] == UINT32_MAX)) return 0;
+    out->road = patch ? patch->ids[p.road] : p.road;
     out->segment = p.seg;
     out->s = p.s;
     out->t = p.t;
@@ -665,6 +714,7 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     if (r) return r;
     rs_road_grid *g = rs__calloc(ctx, 1, sizeof *g);
     if (!g) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the road grid");
+    g->refs = 1;
     g->dem_w = dem->width;
     g->dem_h = dem->height;
     g->frame = dem->frame;
@@ -715,6 +765,11 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
     if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
     rs__auto_plan_free(ctx, &plan);
+    /* a whole grid kept for edits keeps what a proportional update reads (its network too) */
+    if (!r && o.grid.edits && !facts && o.coverage.edges == RS_EDGES_ANALYTIC) {
+        r = rs__grid_track_build(ctx, roads, &o, own, g);
+        own = NULL;
+    }
     rs_network_free(ctx, own);
     r = rs__progress_end(ctx, &pg, r);
     if (r) {
@@ -723,6 +778,7 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     }
     if (g->styling) g->stats.bytes += g->styling->bytes;
     if (g->edit) g->stats.bytes += g->edit->bytes;
+    if (g->track) g->stats.bytes += g->track->bytes;
     if (g->markings) {
         g->stats.bytes += g->markings->bytes;
         g->stats.marks_explicit = g->markings->n_explicit;
@@ -834,11 +890,23 @@ rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_ro
     rs_roads *sub = NULL;
     rs_network *part = NULL;
     *out = NULL;
+    if (!net) { /* (styles off: no network is built) */
+        rs_result r = rs__roads_subset(ctx, roads, ids, n, &sub);
+        if (!r) r = grid_build(ctx, dem, sub, opts, NULL, facts, out);
+        rs_roads_free(ctx, sub);
+        return r;
+    }
     if (net->nroads != rs_roads_count(roads))
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "subset build: a network of %zu records for %zu roads", net->nroads,
                         rs_roads_count(roads));
+    /* the strokes' arc lengths record by record, as the whole map's line symbols sum them */
+    double *bases = net->s_base ? NULL : rs__alloc_array(ctx, net->nroads ? net->nroads : 1, sizeof *bases);
+    if (!net->s_base && !bases) return rs__fail(ctx, RS_ERR_NOMEM, "subset build: out of memory");
+    if (bases)
+        rs__stroke_bases(net, roads, dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size, bases);
     rs_result r = rs__roads_subset(ctx, roads, ids, n, &sub);
-    if (!r) r = rs__network_subset(ctx, net, ids, n, &part);
+    if (!r) r = rs__network_subset(ctx, net, bases, ids, n, &part);
+    rs__free(ctx, bases);
     if (!r) r = grid_build(ctx, dem, sub, opts, part, facts, out);
     rs_network_free(ctx, part);
     rs_roads_free(ctx, sub);

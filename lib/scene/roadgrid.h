@@ -37,7 +37,39 @@ struct rs_road_grid {
     /* What rs_road_grid_update compares (lib/scene/grid_edit.h). */
     struct rs__grid_edit *edit;
     rs_road_grid_stats stats;
+    /* Sharing (rs_road_grid_update, docs/embedding.md "Patches"): a whole
+     * grid's structures above stay while `refs` holders have it (itself
+     * and the patched grids made on it). A patched grid borrows every
+     * structure above from `base` (a whole grid) and draws its patches'
+     * grids inside their rectangles, the later over the earlier. */
+    long refs;
+    struct rs_road_grid *base;
+    size_t npatch;
+    struct rs__grid_patch *patch;
+    rs_pixel_rect *dirty;       /* a patched grid's dirty rectangles (a whole grid's are in edit) */
+    size_t ndirty;
+    struct rs__grid_track *track; /* what the next proportional update reads (NULL: none) */
 };
+
+/* A patch: the grid of some roads (a whole grid of its own, shared) that
+ * decides the output pixels of `rect`; ids[i] is its road i's index in the
+ * patched grid's road set. */
+typedef struct rs__grid_patch {
+    rs_pixel_rect rect;
+    struct rs_road_grid *grid;
+    uint32_t *ids;
+    size_t n;
+} rs__grid_patch;
+
+/* Hold / release a whole grid's structures (a patched grid releases its
+ * base and its patches' grids). */
+void rs__grid_hold(struct rs_road_grid *g);
+/* Memory held by grid g (its stats' bytes). */
+uint64_t rs__grid_bytes(const struct rs_road_grid *g);
+/* The grid deciding output pixel (x, y) of g: a patch's, else g itself;
+ * *patch the patch (NULL: none). */
+const struct rs_road_grid *rs__grid_at(const struct rs_road_grid *g, uint32_t x, uint32_t y,
+                                       const rs__grid_patch **patch);
 
 static inline const uint8_t *rs__grid_tile(const rs_road_grid *g, uint32_t tx, uint32_t ty)
 {

@@ -115,7 +115,7 @@ static rs_result road_image(rs_ctx *ctx, rs__styling *st, const rs_style *sty, s
     return RS_OK;
 }
 
-static void put_colour(float *dst, rs_colour c)
+void rs__put_colour(float *dst, rs_colour c)
 {
     dst[0] = c.r;
     dst[1] = c.g;
@@ -182,10 +182,10 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->half_width[i] = 0.5 * w;
         st->surface[i] = (uint8_t)sty->surface;
         float *c = st->colour + 16 * i;
-        put_colour(c, sty->surface == RS_SURFACE_GRADIENT ? sty->gradient_centre : sty->fill);
-        put_colour(c + 4, sty->gradient_centre);
-        put_colour(c + 8, sty->gradient_edge);
-        put_colour(c + 12, sty->casing);
+        rs__put_colour(c, sty->surface == RS_SURFACE_GRADIENT ? sty->gradient_centre : sty->fill);
+        rs__put_colour(c + 4, sty->gradient_centre);
+        rs__put_colour(c + 8, sty->gradient_edge);
+        rs__put_colour(c + 12, sty->casing);
         if (sty->surface != RS_SURFACE_DEFAULT) st->any_surface = 1;
         if (i == 0) {
             st->fill_uniform = sty->surface == RS_SURFACE_FILL;
@@ -257,7 +257,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             rs__band *b = &bands[k];
             b->t = ln->offset;
             b->w = ln->width;
-            put_colour(b->rgba, ln->colour);
+            rs__put_colour(b->rgba, ln->colour);
             b->ndash = ln->dash_count;
             b->dash = dash + ndash;
             memcpy(dash + ndash, ln->dash, ln->dash_count * sizeof *dash);

@@ -230,7 +230,7 @@ rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint3
                         (size_t)w * 3);
     rs__progress pg;
     rs__progress_begin(ctx, &pg, NULL, NULL, h, 1);
-    res = rs__progress_end(ctx, &pg, rs__normals_run(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride, NULL, 0, NULL));
+    res = rs__progress_end(ctx, &pg, rs__normals_window(ctx, s, x0, y0, w, h, &o, rgb, rgb_stride));
     if (!res) rs__ok(ctx);
     return res;
 }

@@ -64,6 +64,9 @@ static rs_result check_grid(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *
 void rs_splatter_free(rs_ctx *ctx, rs_splatter *s)
 {
     if (!ctx || !s) return;
+    for (uint32_t k = 0; s->view && k < s->nview; k++) rs__roadfield_free(ctx, s->view[k].field_own);
+    rs__free(ctx, s->view);
+    rs__free(ctx, s->view_rect);
     rs__alphamap_tables_free(ctx, s);
     rs__free(ctx, s->z_own);
     rs__free(ctx, s->tcol);
@@ -170,6 +173,25 @@ static rs_result splatter_make(rs_ctx *ctx, const rs_dem *dem, const rs_roads *r
     }
     /* per-sample terrain colours where they would dominate the splat */
     if (!r && !lean) r = rs__surface_colours(ctx, s);
+    /* a patched grid: a view of this splatter per patch, on its grid */
+    if (!r && s->grid->npatch) {
+        uint32_t n = (uint32_t)s->grid->npatch;
+        s->view = rs__calloc(ctx, n, sizeof *s->view);
+        s->view_rect = rs__alloc_array(ctx, n, sizeof *s->view_rect);
+        if (!s->view || !s->view_rect) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the splatter");
+        for (uint32_t k = 0; !r && k < n; k++) {
+            rs_splatter *v = &s->view[k];
+            *v = *s;
+            v->grid_own = NULL, v->field_own = NULL, v->z_own = NULL, v->ramp_own = NULL;
+            v->view = NULL, v->view_rect = NULL, v->nview = 0;
+            v->grid = s->grid->patch[k].grid;
+            s->view_rect[k] = s->grid->patch[k].rect;
+            s->nview = k + 1;
+            if (v->grid->field && s->texel_m > rs__roadfield_pixel(v->grid->field))
+                r = rs__roadfield_repixel(ctx, v->grid->field, s->texel_m, &v->field_own);
+            v->field = v->field_own ? v->field_own : v->grid->field;
+        }
+    }
     if (r == RS_ERR_NOMEM) r = rs__fail(ctx, r, "out of memory for the terrain colours");
     r = rs__progress_end(ctx, &pg, r);
     if (r) {
@@ -326,6 +348,77 @@ static void layers_piece(const rs_splatter *s, const scratch *b, rs__piece *p, c
 /* The window through the stages with scratch b, which holds at least
  * scratch_size_of(s, w, h) of everything: the colour into rgba (and
  * weight), or the layers L (rgba NULL). */
+uint32_t rs__segments(const rs_splatter *s, uint32_t x0, uint32_t x1, uint32_t y, rs__seg *seg)
+{
+    if (!s->nview) {
+        seg[0].x0 = x0, seg[0].w = x1 - x0, seg[0].s = s;
+        return 1;
+    }
+    /* the cuts: x0, x1 and the edges of the rectangles on row y between */
+    uint32_t cut[RS__MAX_SEGS + 1], nc = 0;
+    cut[nc++] = x0;
+    for (uint32_t k = 0; k < s->nview && nc + 2 < RS__MAX_SEGS; k++) {
+        const rs_pixel_rect *R = &s->view_rect[k];
+        if (y < R->y0 || y >= R->y1) continue;
+        if (R->x0 > x0 && R->x0 < x1) cut[nc++] = R->x0;
+        if (R->x1 > x0 && R->x1 < x1) cut[nc++] = R->x1;
+    }
+    cut[nc++] = x1;
+    for (uint32_t i = 1; i < nc; i++) /* (a few: insertion sort) */
+        for (uint32_t j = i; j > 0 && cut[j - 1] > cut[j]; j--) {
+            uint32_t t = cut[j];
+            cut[j] = cut[j - 1];
+            cut[j - 1] = t;
+        }
+    uint32_t n = 0;
+    for (uint32_t i = 0; i + 1 < nc; i++) {
+        if (cut[i] == cut[i + 1]) continue;
+        const rs_splatter *by = s;
+        for (uint32_t k = s->nview; k-- > 0;) {
+            const rs_pixel_rect *R = &s->view_rect[k];
+            if (y >= R->y0 && y < R->y1 && cut[i] >= R->x0 && cut[i] < R->x1) {
+                by = &s->view[k];
+                break;
+            }
+        }
+        if (n && seg[n - 1].s == by) seg[n - 1].w += cut[i + 1] - cut[i];
+        else seg[n].x0 = cut[i], seg[n].w = cut[i + 1] - cut[i], seg[n].s = by, n++;
+    }
+    return n;
+}
+
+/* rs__normals_run of rows [y, y + h) of one DEM-cell row, by the
+ * splatters that draw their columns (rgb or rgba at column x0) */
+static rs_result normals_by_segment(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y, uint32_t w, uint32_t h,
+                                    const rs_normal_options *no, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
+                                    size_t rgba_stride, rs__nm_scratch *nm)
+{
+    rs__seg seg[RS__MAX_SEGS];
+    uint32_t n = rs__segments(s, x0, x0 + w, y, seg);
+    rs_result r = RS_OK;
+    for (uint32_t k = 0; k < n && !r; k++) {
+        size_t dx = seg[k].x0 - x0;
+        r = rs__normals_run(ctx, seg[k].s, seg[k].x0, y, seg[k].w, h, no, rgb ? rgb + 3 * dx : NULL, rgb_stride,
+                            rgba ? rgba + 4 * dx : NULL, rgba_stride, nm);
+    }
+    return r;
+}
+
+rs_result rs__normals_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                             const rs_normal_options *no, uint8_t *rgb, size_t rgb_stride)
+{
+    if (!s->nview) return rs__normals_run(ctx, s, x0, y0, w, h, no, rgb, rgb_stride, NULL, 0, NULL);
+    rs_result r = RS_OK;
+    for (uint32_t y = y0; y < y0 + h && !r;) {
+        uint32_t end = (y / s->o.texels + 1) * s->o.texels;
+        if (end > y0 + h) end = y0 + h;
+        r = normals_by_segment(ctx, s, x0, y, w, end - y, no, rgb + (size_t)(y - y0) * rgb_stride, rgb_stride, NULL, 0,
+                               NULL);
+        y = end;
+    }
+    return r;
+}
+
 static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint32_t x0, uint32_t y0, uint32_t w,
                            uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
                            const rs_splat_layers *L, rs__nm_scratch *nm, rs_splat_profile *profile)
@@ -378,8 +471,13 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
         p.y0 = y;
         p.rows = row_end - y < max_rows ? row_end - y : max_rows;
         for (uint32_t x = x0; x < x0 + w; x += cols) {
-            p.x0 = x;
-            p.w = x0 + w - x < cols ? x0 + w - x : cols;
+          rs__seg seg[RS__MAX_SEGS];
+          uint32_t nseg = rs__segments(s, x, x + (x0 + w - x < cols ? x0 + w - x : cols), y, seg);
+          for (uint32_t sg = 0; sg < nseg; sg++) {
+            const rs_splatter *s_in = s;
+            s = seg[sg].s; /* (this run's grid: a patch's, or the base's) */
+            p.x0 = seg[sg].x0;
+            p.w = seg[sg].w;
             double t0 = now(profile);
             if (analytic) rs__coverage_analytic(s, &p);
             else rs__coverage_alphamap(s, &p);
@@ -416,19 +514,22 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
                 }
                 p.mark_tests = p.mark_pixels = 0;
             }
+            s = s_in;
+          }
             if (x + cols < x0 + w && rs__poll(ctx)) {
                 r = RS_ERR_CANCELLED;
                 break;
             }
         }
         if (!r && L && L->normal)
-            r = rs__normals_run(ctx, s, x0, y, w, p.rows, L->normal_options ? L->normal_options : &s->o.lighting.normal,
-                                L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0, nm);
+            r = normals_by_segment(ctx, s, x0, y, w, p.rows,
+                                   L->normal_options ? L->normal_options : &s->o.lighting.normal,
+                                   L->normal + (size_t)(y - y0) * L->normal_stride, L->normal_stride, NULL, 0, nm);
         if (!r && !L && s->o.lighting.enable)
             /* these rows of the window, lit by their normals (the normals of
              * a pixel do not depend on the window: same bytes for any cut) */
-            r = rs__normals_run(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
-                                rgba + (size_t)(y - y0) * rgba_stride, rgba_stride, nm);
+            r = normals_by_segment(ctx, s, x0, y, w, p.rows, &s->o.lighting.normal, NULL, 0,
+                                   rgba + (size_t)(y - y0) * rgba_stride, rgba_stride, nm);
         y += p.rows;
         if (!r && rs__tick(ctx, p.rows)) r = RS_ERR_CANCELLED;
     }

@@ -61,7 +61,24 @@ struct rs_splatter {
      * per sample row three planes of `width` floats; NULL: computed per
      * window */
     float *tcol;
+    /* A patched grid (rs_road_grid_update): a view per patch, this
+     * splatter with the patch's grid (and field), drawing the output
+     * pixels of view_rect[k], the later over the earlier. */
+    uint32_t nview;
+    struct rs_splatter *view;
+    rs_pixel_rect *view_rect;
 };
+
+/* A run of output columns [x0, x0 + w) of one row and the splatter (s
+ * or a view of it) that draws it. */
+typedef struct rs__seg {
+    uint32_t x0, w;
+    const struct rs_splatter *s;
+} rs__seg;
+#define RS__MAX_SEGS 40 /* >= 2 * views + 1 (at most 16 patches a grid: lib/scene/grid_patch.c MAX_PATCHES) */
+/* The runs of columns [x0, x1) of row y by the splatter that draws them
+ * (one run, s itself, when s has no views): their count, into seg. */
+uint32_t rs__segments(const struct rs_splatter *s, uint32_t x0, uint32_t x1, uint32_t y, rs__seg *seg);
 
 /* Terrain colours (3 floats per sample) of the window's sample columns
  * [c0, c0 + ncol), for the two DEM sample rows last needed: computed once
@@ -157,6 +174,10 @@ void rs__nm_scratch_free(rs_ctx *ctx, rs__nm_scratch *b);
 rs_result rs__normals_run(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
                           const rs_normal_options *opts, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
                           size_t rgba_stride, rs__nm_scratch *keep);
+/* rs__normals_run of a window into rgb, by the splatters that draw its
+ * pixels (a patched grid's views). */
+rs_result rs__normals_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                             const rs_normal_options *no, uint8_t *rgb, size_t rgb_stride);
 rs_result rs__lighting_check(rs_ctx *ctx, const rs_lighting_options *l);
 rs_result rs__normal_check(rs_ctx *ctx, const rs_normal_options *o);
 void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride);

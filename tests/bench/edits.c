@@ -158,19 +158,27 @@ int main(int argc, char **argv)
         a = b;
         b = t;
     }
-    /* what building the pieces adds to a grid build with opts.grid.edits: again on the last grid, with the network it reads */
+    /* what building the pieces adds to a grid build with opts.grid.edits:
+     * again on a whole grid of the last roads, with the network it reads */
     double piece_ms[RUNS], piece_med = 0;
     rs_network *net = NULL;
-    if (!bad) bad = rs_network_build(ctx, roads, NULL, &net) != RS_OK;
+    rs_road_grid *gw = NULL;
+    if (!bad) bad = rs_network_build(ctx, roads, NULL, &net) != RS_OK || rs_road_grid_build(ctx, dem, roads, &o, &gw);
     for (int k = 0; !bad && k < RUNS; k++) {
-        rs__grid_edit *keep = g0->edit;
-        g0->edit = NULL;
+        rs__grid_edit *keep = gw->edit;
+        gw->edit = NULL;
         double t0 = tm_thread_cpu_ms();
-        bad = rs__grid_edit_build(ctx, dem, roads, &o, net, g0) != RS_OK;
+        bad = rs__grid_edit_build(ctx, dem, roads, &o, net, gw) != RS_OK;
         piece_ms[k] = tm_thread_cpu_ms() - t0;
-        rs__grid_edit_free(ctx, g0->edit);
-        g0->edit = keep;
+        rs__grid_edit_free(ctx, gw->edit);
+        gw->edit = keep;
     }
+    rs_road_grid_stats wst;
+    memset(&wst, 0, sizeof wst);
+    if (gw) rs_road_grid_get_stats(gw, &wst);
+    size_t wpieces = gw && gw->edit ? gw->edit->n : 0;
+    double wpiece_mb = gw && gw->edit ? gw->edit->bytes / 1e6 : 0;
+    rs_road_grid_free(ctx, gw);
     rs_network_free(ctx, net);
     if (!bad) piece_med = tm_median(piece_ms, RUNS);
     if (bad) fprintf(stderr, "edits: %s\n", rs_ctx_message(ctx));
@@ -181,18 +189,19 @@ int main(int argc, char **argv)
         fprintf(md, "## Road edits with dirty rectangles (issue 30)\n\n"
                     "tests/bench/edits.c: the city with %zu roads (400 x 350 DEM of 5 m cells, classes by width:\n"
                     "casings, lines, automatic markings), T = 4 (1596 x 1396 pixels); %d edits of each kind, each\n"
-                    "timed %d times; this thread's CPU time, medians, `rs_road_grid_update` and a full\n"
-                    "`rs_road_grid_build` of the edited roads interleaved. Dirty: the rectangles' pixels; changed:\n"
-                    "pixels whose colour or weight differ between the whole images before and after (%ld changed\n"
-                    "pixels outside the rectangles). The grid holds %zu edit pieces, %.2f of its %.2f MB; making\n"
-                    "them takes %.1f ms of a grid build that keeps them (opts.grid.edits; a plain build makes none).\n"
-                    "Candidates: the pixels of the pieces that differ (the rectangles of an update with\n"
-                    "rs_limits.max_dirty_compare = 1, once per edit, beside its CPU time); the update renders them\n"
-                    "under both grids and keeps those whose colour or weight differ.\n\n"
+                    "timed %d times; the edits chained (each update's grid the next one's old grid); this\n"
+                    "thread's CPU time, medians, `rs_road_grid_update` and a full `rs_road_grid_build` of the\n"
+                    "edited roads interleaved. Dirty: the rectangles' pixels; changed: pixels whose colour or\n"
+                    "weight differ between the whole images before and after (%ld changed pixels outside the\n"
+                    "rectangles). A whole grid of the last roads holds %zu edit pieces, %.2f of its %.2f MB; making\n"
+                    "them takes %.1f ms of a grid build that keeps them (opts.grid.edits; a plain build makes\n"
+                    "none). The last updated grid holds %zu patches in %.2f MB with its base. Candidates: the\n"
+                    "pixels of the pieces that differ (the rectangles of an update with\n"
+                    "rs_limits.max_dirty_compare = 1, once per edit, beside its CPU time).\n\n"
                     "| edit | update ms | full build ms | update / build | candidates only ms | dirty px | changed px | dirty / changed | candidate px | candidates / changed | rectangles |\n"
                     "|---|---|---|---|---|---|---|---|---|---|---|\n",
-                rs_roads_count(roads), PER_KIND, RUNS, uncovered, g0->edit->n, g0->edit->bytes / 1e6,
-                st.bytes / 1e6, piece_med);
+                rs_roads_count(roads), PER_KIND, RUNS, uncovered, wpieces, wpiece_mb, wst.bytes / 1e6, piece_med,
+                g0->npatch, st.bytes / 1e6);
         fprintf(csv, "edit,update_ms,build_ms,dirty_px,changed_px,rects\n");
         double worst_area = 0, worst_cost = 0;
         for (int k = 0; k < KINDS; k++) {
@@ -210,15 +219,33 @@ int main(int argc, char **argv)
                    kind_name[k], u, f, u / f, changed[k] > 0 ? dirty[k] / changed[k] : 0, dirty[k], changed[k],
                    changed[k] > 0 ? cand[k] / changed[k] : 0);
         }
-        fprintf(md, "\nThe update builds the grid anew, compares the pieces and renders the candidates.\n\n"
-                    "| target (issue 30, 3) | measured | |\n|---|---|---|\n"
-                    "| an edit of one road costs <= 5 %% of a full rebuild | update / build up to %.3f | %s |\n"
+        /* every update timed, flattening ones included (a whole build once the grid holds 16 patches) */
+        double sum = 0, most = 0, fsum = 0;
+        for (int k = 0; k < KINDS; k++)
+            for (int i = 0; i < PER_KIND * RUNS; i++) {
+                sum += upd[k][i];
+                fsum += full[k][i];
+                most = upd[k][i] > most ? upd[k][i] : most;
+            }
+        fprintf(md, "\nThe update (docs/embedding.md \"Patches\"): the roads' fingerprints find the edited ones, a\n"
+                    "new network finds the records whose strokes changed, the roads near them are built alone\n"
+                    "with the whole map's network and facts, and the new grid shares the old one's structures\n"
+                    "and draws the new part in a patch rectangle; the rectangle's pixels rendered under both\n"
+                    "grids give the dirty rectangles. A grid holding 16 patches is built whole by the next\n"
+                    "update. Every update timed (%d): mean %.1f ms = %.3f of the mean full build (%.1f ms), the\n"
+                    "whole builds included; the slowest %.1f ms.\n\n",
+                KINDS * PER_KIND * RUNS, sum / (KINDS * PER_KIND * RUNS), sum / fsum, fsum / (KINDS * PER_KIND * RUNS),
+                most);
+        fprintf(md, "| target (issue 30, 3) | measured | |\n|---|---|---|\n"
+                    "| an edit of one road costs <= 5 %% of a full rebuild | update / build up to %.3f (medians per "
+                    "kind); %.3f mean of all | %s |\n"
                     "| the dirty rectangles cover every changed pixel and <= 2x the changed area | %ld uncovered; "
                     "dirty / changed up to %.2f | %s |\n",
-                worst_cost, worst_cost <= 0.05 ? "met" : "**missed**", uncovered, worst_area,
+                worst_cost, sum / fsum, worst_cost <= 0.05 && sum / fsum <= 0.05 ? "met" : "**missed**", uncovered, worst_area,
                 !uncovered && worst_area <= 2 ? "met" : "**missed**");
-        printf("edits: %ld changed pixels outside the rectangles; pieces %zu, %.2f MB, %.1f ms to make\n", uncovered,
-               g0->edit->n, g0->edit->bytes / 1e6, piece_med);
+        printf("edits: %ld changed pixels outside the rectangles; pieces %zu, %.2f MB, %.1f ms to make; mean update "
+               "%.3f of a build, slowest %.1f ms\n",
+               uncovered, wpieces, wpiece_mb, piece_med, sum / fsum, most);
         bad = fclose(md) != 0;
         bad |= fclose(csv) != 0;
     }

@@ -1,0 +1,511 @@
+/* Road edits in proportion to the edit (issue 30 target 3, docs/embedding.md
+ * "Patches"): a grid keeps a fingerprint and a box per road, its network
+ * and the whole map's facts (rs__grid_track); an update finds the roads
+ * that changed by their fingerprints, the records whose strokes changed by
+ * the new network, builds the roads around them alone with the whole
+ * map's network and facts (rs__road_grid_build_subset), and makes a grid
+ * that shares the old one's structures and draws the new part inside one
+ * rectangle (a patch). */
+#include "roadgrid.h"
+#include "grid_edit.h"
+#include "network.h"
+#include "styling.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#define mix rs__fp_mix
+#define mixd rs__fp_mixd
+
+/* The most patches a grid takes before an update builds it whole. */
+#define MAX_PATCHES 16
+/* Metres beyond twice the widest paint reach that an edit may change
+ * pixels at (a give-way line's setback, a junction's surface) and, beyond
+ * the changed area, the roads a local build takes (35 m sufficed on the
+ * 10k-road city: tests/tools/edit_locality.c). */
+#define CHANGE_PAD 15.0
+#define CONTEXT_PAD 60.0
+
+static uint64_t mixs(uint64_t h, const char *s)
+{
+    uint64_t f = 1469598103934665603ull;
+    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
+    return mix(h, f);
+}
+
+static uint64_t mix_colour(uint64_t h, rs_colour c)
+{
+    return mix(h, (uint64_t)c.r | (uint64_t)c.g << 8 | (uint64_t)c.b << 16 | (uint64_t)c.a << 24);
+}
+
+static uint64_t style_print(uint64_t h, const rs_style *y)
+{
+    h = mixs(mix(h, (uint64_t)y->surface), y->surface_image);
+    h = mix_colour(mix_colour(mix_colour(h, y->fill), y->gradient_centre), y->gradient_edge);
+    h = mix_colour(mixd(h, y->casing_width), y->casing);
+    h = mixd(h, y->surface_length);
+    h = mix(h, y->line_count);
+    for (uint32_t k = 0; k < y->line_count && k < RS_STYLE_MAX_LINES; k++) {
+        const rs_style_line *l = &y->line[k];
+        h = mix_colour(mixd(mixd(h, l->offset), l->width), l->colour);
+        h = mixd(mix(h, l->dash_count), l->phase);
+        for (uint32_t d = 0; d < l->dash_count && d < RS_STYLE_MAX_DASH; d++) h = mixd(h, l->dash[d]);
+    }
+    return h;
+}
+
+/* The prints, boxes, whole-map facts (index cell left 0) and widest paint
+ * reach of every road. */
+static rs_result prints_facts(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, uint64_t **print,
+                              double **box, rs__grid_facts *facts, double *reach)
+{
+    size_t n = rs_roads_count(roads);
+    uint64_t *P = rs__alloc_array(ctx, n ? n : 1, sizeof *P);
+    double *B = rs__alloc_array(ctx, n ? n : 1, 4 * sizeof *B);
+    rs_style *y = rs__malloc(ctx, sizeof *y);
+    rs_result r = P && B && y ? RS_OK : RS_ERR_NOMEM;
+    memset(facts, 0, sizeof *facts);
+    *reach = 0;
+    int casings = 0;
+    for (size_t i = 0; i < n && !r; i++) {
+        const char *name = NULL;
+        const double *xy = NULL;
+        size_t np = 0;
+        double w = 0;
+        rs_roads_get(roads, i, &name, &w, &xy, &np);
+        uint64_t h = mixs(mixd(0x7e57, w), name);
+        double *b = B + 4 * i;
+        b[0] = b[1] = INFINITY, b[2] = b[3] = -INFINITY;
+        for (size_t k = 0; k < np; k++) {
+            h = mixd(mixd(h, xy[2 * k]), xy[2 * k + 1]);
+            b[0] = fmin(b[0], xy[2 * k]), b[1] = fmin(b[1], xy[2 * k + 1]);
+            b[2] = fmax(b[2], xy[2 * k]), b[3] = fmax(b[3], xy[2 * k + 1]);
+        }
+        for (size_t k = 0; k < rs_roads_attr_count(roads, i); k++) {
+            const char *key = NULL, *val = NULL;
+            rs_roads_attr_at(roads, i, k, &key, &val);
+            h = mixs(mixs(h, key), val);
+        }
+        double rch = 0.5 * w;
+        if (!o->style.disable) {
+            if ((r = rs_road_style_ex(ctx, roads, i, &o->style, y)) != RS_OK) break;
+            h = style_print(h, y);
+            float c[4];
+            rs__put_colour(c, y->surface == RS_SURFACE_GRADIENT ? y->gradient_centre : y->fill);
+            if (y->surface != RS_SURFACE_DEFAULT || y->surface_image[0]) facts->any_surface = 1;
+            if (i == 0) {
+                facts->fill_uniform = y->surface == RS_SURFACE_FILL;
+                memcpy(facts->fill_rgba, c, sizeof c);
+            } else if (y->surface != RS_SURFACE_FILL || memcmp(facts->fill_rgba, c, sizeof c)) {
+                facts->fill_uniform = 0;
+            }
+            if (y->surface_image[0]) facts->fill_uniform = 0;
+            facts->styled |= y->surface != RS_SURFACE_DEFAULT || y->line_count || y->casing_width > 0 ||
+                             y->surface_image[0];
+            if (y->casing_width > 0) {
+                float cc[4];
+                rs__put_colour(cc, y->casing);
+                if (!casings++) {
+                    memcpy(facts->casing_rgba, cc, sizeof cc);
+                    facts->casing_uniform = 1;
+                } else if (memcmp(facts->casing_rgba, cc, sizeof cc)) {
+                    facts->casing_uniform = 0;
+                }
+                facts->widest_casing = fmax(facts->widest_casing, y->casing_width);
+                rch += y->casing_width;
+            }
+            for (uint32_t k = 0; k < y->line_count && k < RS_STYLE_MAX_LINES; k++)
+                rch = fmax(rch, fabs(y->line[k].offset) + 0.5 * y->line[k].width);
+        }
+        *reach = fmax(*reach, rch);
+        P[i] = h;
+    }
+    if (!facts->styled) { /* (no styling: the whole build keeps no switches) */
+        memset(facts, 0, sizeof *facts);
+    }
+    /* point attributes and markings, in their order, into their roads' prints */
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !r; k++) {
+        size_t road = 0, point = 0;
+        const char *key = NULL, *val = NULL;
+        rs_roads_point_attr_at(roads, k, &road, &point, &key, &val);
+        if (road < n) P[road] = mixs(mixs(mix(P[road], point), key), val);
+    }
+    for (size_t k = 0; k < rs_roads_mark_count(roads) && !r; k++) {
+        rs_mark m;
+        if (rs_roads_get_mark(roads, k, &m) != RS_OK || m.road >= n) continue;
+        uint64_t h = mixd(mixd(mixd(mixd(mixs(P[m.road], m.type), m.s), m.t), m.length), m.width);
+        P[m.road] = mix(h, (uint64_t)(m.flip != 0));
+    }
+    rs__free(ctx, y);
+    if (r) {
+        rs__free(ctx, P);
+        rs__free(ctx, B);
+        return r;
+    }
+    for (size_t i = 0; i < n; i++) P[i] = rs__fp_final(P[i]);
+    *print = P;
+    *box = B;
+    return RS_OK;
+}
+
+rs_result rs__grid_prints(rs_ctx *ctx, const rs_roads *roads, const rs_style_options *so, uint64_t **print,
+                          double **box)
+{
+    rs_splat_options o;
+    memset(&o, 0, sizeof o);
+    o.style = *so;
+    rs__grid_facts f;
+    double reach;
+    return prints_facts(ctx, roads, &o, print, box, &f, &reach);
+}
+
+void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
+{
+    if (!t) return;
+    rs__free(ctx, t->print);
+    rs__free(ctx, t->box);
+    rs_network_free(ctx, t->net);
+    rs__free(ctx, t);
+}
+
+rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,
+                               rs_road_grid *g)
+{
+    rs__grid_track *t = rs__calloc(ctx, 1, sizeof *t);
+    if (!t) {
+        rs_network_free(ctx, net);
+        return RS_ERR_NOMEM;
+    }
+    t->net = net;
+    double reach;
+    rs__grid_facts f;
+    rs_result r = prints_facts(ctx, roads, o, &t->print, &t->box, &f, &reach);
+    if (r) {
+        rs__grid_track_free(ctx, t);
+        return r;
+    }
+    t->n = rs_roads_count(roads);
+    rs__grid_facts_of(g, &t->facts);
+    t->bytes = sizeof *t + t->n * (sizeof *t->print + 4 * sizeof *t->box) + (net ? rs__network_bytes(net) : 0);
+    g->track = t;
+    return RS_OK;
+}
+
+/* ---- matching the roads by their prints ---------------------------------- */
+
+typedef struct keyed {
+    uint64_t h;
+    uint32_t i;
+} keyed;
+
+static int cmp_keyed(const void *pa, const void *pb)
+{
+    const keyed *a = pa, *b = pb;
+    if (a->h != b->h) return a->h < b->h ? -1 : 1;
+    return a->i < b->i ? -1 : a->i > b->i;
+}
+
+/* new road j's old road (UINT32_MAX: none) in *m_new, old i's new one in
+ * *m_old: equal prints, in order (a road whose print also changed order is
+ * no match). */
+static rs_result match_roads(rs_ctx *ctx, const uint64_t *po, size_t no, const uint64_t *pn, size_t nn,
+                             uint32_t *m_old, uint32_t *m_new)
+{
+    keyed *K = rs__alloc_array(ctx, no ? no : 1, sizeof *K);
+    if (!K) return RS_ERR_NOMEM;
+    for (size_t i = 0; i < no; i++) K[i].h = po[i], K[i].i = (uint32_t)i, m_old[i] = UINT32_MAX;
+    qsort(K, no, sizeof *K, cmp_keyed);
+    int64_t last = -1;
+    for (size_t j = 0; j < nn; j++) {
+        m_new[j] = UINT32_MAX;
+        size_t lo = 0, hi = no;
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (K[mid].h < pn[j] || (K[mid].h == pn[j] && (int64_t)K[mid].i <= last)) lo = mid + 1;
+            else hi = mid;
+        }
+        if (lo < no && K[lo].h == pn[j] && m_old[K[lo].i] == UINT32_MAX) {
+            m_new[j] = K[lo].i;
+            m_old[K[lo].i] = (uint32_t)j;
+            last = K[lo].i;
+        }
+    }
+    rs__free(ctx, K);
+    return RS_OK;
+}
+
+/* Whether old record i and new record j (a match) sit alike in their
+ * strokes: arc length, direction, closed, and neighbours that match. */
+static int same_place(const rs_network *A, const rs_network *B, uint32_t i, uint32_t j, const uint32_t *m_old)
+{
+    if (A->s_off[i] != B->s_off[j] || A->rev[i] != B->rev[j] || A->length[i] != B->length[j] ||
+        A->closed[A->stroke_of[i]] != B->closed[B->stroke_of[j]])
+        return 0;
+    /* (a neighbour gone is a change: m_old of a removed record is UINT32_MAX, as no neighbour is) */
+    const uint32_t pa = A->prev[i], na = A->next[i];
+    if (pa == UINT32_MAX ? B->prev[j] != UINT32_MAX : m_old[pa] == UINT32_MAX || m_old[pa] != B->prev[j]) return 0;
+    if (na == UINT32_MAX ? B->next[j] != UINT32_MAX : m_old[na] == UINT32_MAX || m_old[na] != B->next[j]) return 0;
+    for (int e = 0; e < 2; e++) {
+        uint32_t la = A->link[2 * i + e], lb = B->link[2 * j + e];
+        if (la == UINT32_MAX ? lb != UINT32_MAX : m_old[la / 2] == UINT32_MAX || 2 * m_old[la / 2] + la % 2 != lb)
+            return 0;
+    }
+    return 1;
+}
+
+/* ---- the patched grid ------------------------------------------------------ */
+
+static void box_add(double *acc, const double *b, double grow)
+{
+    acc[0] = fmin(acc[0], b[0] - grow), acc[1] = fmin(acc[1], b[1] - grow);
+    acc[2] = fmax(acc[2], b[2] + grow), acc[3] = fmax(acc[3], b[3] + grow);
+}
+
+/* Distance from the box to segment a-b (0 when they meet). */
+static double seg_box(const double *a, const double *b, const double *bx)
+{
+    /* (the segment clipped to the box: a Liang-Barsky test, else the
+     * nearest of the box's corners and the segment's ends) */
+    double t0 = 0, t1 = 1, d[2] = { b[0] - a[0], b[1] - a[1] };
+    int inside = 1;
+    for (int k = 0; k < 2 && inside; k++) {
+        double lo = bx[k] - a[k], hi = bx[k + 2] - a[k];
+        if (d[k] == 0) {
+            if (lo > 0 || hi < 0) inside = 0;
+        } else {
+            double u = lo / d[k], v = hi / d[k];
+            if (u > v) { double t = u; u = v; v = t; }
+            t0 = fmax(t0, u), t1 = fmin(t1, v);
+            if (t0 > t1) inside = 0;
+        }
+    }
+    if (inside) return 0;
+    double best = INFINITY;
+    for (int c = 0; c < 4; c++) {
+        double px = c & 1 ? bx[2] : bx[0], py = c & 2 ? bx[3] : bx[1];
+        double dd = d[0] * d[0] + d[1] * d[1], u = dd > 0 ? ((px - a[0]) * d[0] + (py - a[1]) * d[1]) / dd : 0;
+        u = u < 0 ? 0 : u > 1 ? 1 : u;
+        best = fmin(best, hypot(a[0] + u * d[0] - px, a[1] + u * d[1] - py));
+    }
+    for (int e = 0; e < 2; e++) {
+        const double *p = e ? b : a;
+        double dx = p[0] < bx[0] ? bx[0] - p[0] : p[0] > bx[2] ? p[0] - bx[2] : 0;
+        double dy = p[1] < bx[1] ? bx[1] - p[1] : p[1] > bx[3] ? p[1] - bx[3] : 0;
+        best = fmin(best, hypot(dx, dy));
+    }
+    return best;
+}
+
+static int road_near(const rs_roads *roads, size_t i, const double *rb, const double *bx, double d)
+{
+    if (rb[0] > bx[2] + d || rb[2] < bx[0] - d || rb[1] > bx[3] + d || rb[3] < bx[1] - d) return 0;
+    const double *xy;
+    size_t np;
+    rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+    for (size_t k = 0; k + 1 < np || (np == 1 && k == 0); k++)
+        if (seg_box(xy + 2 * k, xy + 2 * (np == 1 ? k : k + 1), bx) <= d) return 1;
+    return 0;
+}
+
+rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
+                                  const rs_road_grid *old, rs_road_grid **out)
+{
+    *out = NULL;
+    const rs_road_grid *base = old->base ? old->base : old;
+    const rs__grid_track *T = old->track;
+    if (!T || o->coverage.edges != RS_EDGES_ANALYTIC || !base->field) return RS_OK;
+    size_t nn = rs_roads_count(roads), no = T->n;
+    uint64_t *pn = NULL;
+    double *bn = NULL, reach = 0;
+    rs__grid_facts facts;
+    rs_network *net = NULL;
+    uint32_t *m_old = rs__alloc_array(ctx, no ? no : 1, sizeof *m_old);
+    uint32_t *m_new = rs__alloc_array(ctx, nn ? nn : 1, sizeof *m_new), *ids = NULL;
+    rs_road_grid *local = NULL, *g = NULL;
+    rs_pixel_rect *dirty = NULL;
+    size_t ndirty = 0, ids_n = 0;
+    rs__grid_track *nt = NULL;
+    rs_result r = m_old && m_new ? RS_OK : RS_ERR_NOMEM;
+    if (!r) r = prints_facts(ctx, roads, o, &pn, &bn, &facts, &reach);
+    if (!r) r = match_roads(ctx, T->print, no, pn, nn, m_old, m_new);
+    if (r) goto done;
+    /* the whole map's switches must stand (a casing colour, a fill: the
+     * whole map draws otherwise); the index cell stays the base's */
+    facts.index_cell = T->facts.index_cell;
+    {
+        rs__grid_facts a = T->facts, b = facts;
+        int merged_a = a.widest_casing <= a.index_cell, merged_b = b.widest_casing <= b.index_cell;
+        if (a.styled != b.styled || a.any_surface != b.any_surface || a.fill_uniform != b.fill_uniform ||
+            (a.fill_uniform && memcmp(a.fill_rgba, b.fill_rgba, sizeof a.fill_rgba)) ||
+            a.casing_uniform != b.casing_uniform ||
+            (a.casing_uniform && memcmp(a.casing_rgba, b.casing_rgba, sizeof a.casing_rgba)) ||
+            (a.widest_casing > 0) != (b.widest_casing > 0) || merged_a != merged_b ||
+            (a.widest_casing != b.widest_casing && !merged_a))
+            goto done;
+    }
+    if (!o->style.disable && nn > 0 && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto done;
+    /* the changed area: roads gone or new, and records whose place in
+     * their stroke changed (their dashes move) */
+    double chg[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+    const double grow = 2 * reach + CHANGE_PAD;
+    size_t changed = 0;
+    for (size_t i = 0; i < no; i++)
+        if (m_old[i] == UINT32_MAX) box_add(chg, T->box + 4 * i, grow), changed++;
+    for (size_t j = 0; j < nn; j++) {
+        uint32_t i = m_new[j];
+        if (i == UINT32_MAX || (net && T->net && !same_place(T->net, net, i, (uint32_t)j, m_old)) ||
+            (!net) != (!T->net))
+            box_add(chg, bn + 4 * j, grow), changed++;
+    }
+    /* the pixels of the changed area, whole DEM cells (pieces never
+     * straddle a patch's rows), within the image */
+    const double pix = dem->frame.cell_size / o->texels;
+    const uint32_t W = (dem->width - 1) * o->texels, H = (dem->height - 1) * o->texels, Tx = o->texels;
+    rs_pixel_rect rect = { 0, 0, 0, 0 };
+    if (changed) {
+        double fx0 = floor((chg[0] - dem->frame.origin_x) / pix), fy0 = floor((chg[1] - dem->frame.origin_y) / pix);
+        double fx1 = ceil((chg[2] - dem->frame.origin_x) / pix), fy1 = ceil((chg[3] - dem->frame.origin_y) / pix);
+        if (!(fx0 == fx0 && fy0 == fy0 && fx1 == fx1 && fy1 == fy1)) goto done;
+        fx0 = fmax(fx0, 0), fy0 = fmax(fy0, 0), fx1 = fmin(fx1, W), fy1 = fmin(fy1, H);
+        if (fx0 < fx1 && fy0 < fy1) {
+            rect.x0 = (uint32_t)fx0 / Tx * Tx, rect.y0 = (uint32_t)fy0 / Tx * Tx;
+            rect.x1 = ((uint32_t)fx1 + Tx - 1) / Tx * Tx, rect.y1 = ((uint32_t)fy1 + Tx - 1) / Tx * Tx;
+            rect.x1 = rect.x1 < W ? rect.x1 : W, rect.y1 = rect.y1 < H ? rect.y1 : H;
+        }
+        /* a large part of the map: the whole build is as cheap */
+        if ((uint64_t)(rect.x1 - rect.x0) * (rect.y1 - rect.y0) * 4 > (uint64_t)W * H) goto done;
+    }
+    if (getenv("GP_DEBUG")) {
+        fprintf(stderr, "patched: changed %zu chg %.1f %.1f %.1f %.1f rect %u %u %u %u reach %.2f\n", changed, chg[0], chg[1], chg[2], chg[3], rect.x0, rect.y0, rect.x1, rect.y1, reach);
+        for (size_t i = 0; i < no; i++) if (m_old[i] == UINT32_MAX) fprintf(stderr, "  old %zu box %.1f %.1f %.1f %.1f\n", i, T->box[4*i], T->box[4*i+1], T->box[4*i+2], T->box[4*i+3]);
+        for (size_t j = 0; j < nn; j++) if (m_new[j] == UINT32_MAX) fprintf(stderr, "  new %zu box %.1f %.1f %.1f %.1f\n", j, bn[4*j], bn[4*j+1], bn[4*j+2], bn[4*j+3]);
+        for (size_t j = 0; j < nn; j++) if (m_new[j] != UINT32_MAX && net && T->net && !same_place(T->net, net, m_new[j], (uint32_t)j, m_old)) fprintf(stderr, "  moved %zu\n", j);
+    }
+    if (rect.x1 > rect.x0) {
+        /* the roads that can reach a pixel of the rectangle */
+        double bx[4] = { dem->frame.origin_x + rect.x0 * pix, dem->frame.origin_y + rect.y0 * pix,
+                         dem->frame.origin_x + rect.x1 * pix, dem->frame.origin_y + rect.y1 * pix };
+        double ctx_d = CONTEXT_PAD + 2 * reach;
+        size_t m = 0;
+        ids = rs__alloc_array(ctx, nn ? nn : 1, sizeof *ids);
+        if (!ids) { r = RS_ERR_NOMEM; goto done; }
+        for (size_t j = 0; j < nn; j++)
+            if (road_near(roads, j, bn + 4 * j, bx, ctx_d)) ids[m++] = (uint32_t)j;
+        rs_splat_options lo = *o;
+        lo.grid.edits = 1;
+        lo.progress = NULL;
+        lo.progress_user = NULL;
+        if ((r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &local)) != RS_OK) goto done;
+        ids_n = m;
+    }
+    /* the grid: the base's structures, the old patches (their roads
+     * renumbered), the new one over them */
+    g = rs__calloc(ctx, 1, sizeof *g);
+    nt = rs__calloc(ctx, 1, sizeof *nt);
+    size_t np = old->npatch + (local != NULL);
+    rs__grid_patch *P = rs__calloc(ctx, np ? np : 1, sizeof *P);
+    if (!g || !nt || !P) {
+        rs__free(ctx, P);
+        r = RS_ERR_NOMEM;
+        goto done;
+    }
+    *g = *base;
+    g->refs = 1;
+    g->base = (rs_road_grid *)base;
+    g->patch = P;
+    g->npatch = 0;
+    g->dirty = NULL;
+    g->ndirty = 0;
+    g->track = NULL;
+    rs__grid_hold(g->base);
+    for (size_t k = 0; k < old->npatch; k++) {
+        const rs__grid_patch *q = &old->patch[k];
+        rs__grid_patch *d = &P[g->npatch];
+        d->ids = rs__alloc_array(ctx, q->n ? q->n : 1, sizeof *d->ids);
+        if (!d->ids) { r = RS_ERR_NOMEM; goto done; }
+        for (size_t i = 0; i < q->n; i++) d->ids[i] = q->ids[i] < no ? m_old[q->ids[i]] : UINT32_MAX;
+        d->n = q->n;
+        d->rect = q->rect;
+        d->grid = q->grid;
+        rs__grid_hold(d->grid);
+        g->npatch++;
+        g->stats.bytes += rs__grid_bytes(d->grid) + q->n * sizeof *d->ids;
+    }
+    if (local) {
+        rs__grid_patch *d = &P[g->npatch++];
+        d->rect = rect;
+        d->grid = local;
+        d->ids = ids;
+        d->n = ids_n;
+        local = NULL;
+        ids = NULL;
+        g->stats.bytes += rs__grid_bytes(d->grid) + d->n * sizeof *d->ids;
+    }
+    /* for the next update */
+    nt->n = nn;
+    nt->print = pn;
+    nt->box = bn;
+    nt->net = net;
+    nt->facts = facts;
+    nt->bytes = sizeof *nt + nn * (sizeof *pn + 4 * sizeof *bn) + (net ? rs__network_bytes(net) : 0);
+    pn = NULL, bn = NULL, net = NULL;
+    g->track = nt;
+    nt = NULL;
+    g->stats.bytes += g->track->bytes - (base->track ? base->track->bytes : 0);
+    /* the rectangle's pixels that change (the old grid drew them, the new
+     * one draws them; nothing changes outside it) */
+    if (rect.x1 > rect.x0) {
+        /* the whole rectangle compared when it is small enough, else the
+         * pieces that differ (a superset) */
+        if ((uint64_t)(rect.x1 - rect.x0) * (rect.y1 - rect.y0) <= ctx->limits.max_dirty_compare) {
+            dirty = rs__alloc_array(ctx, 1, sizeof *dirty);
+            if (!dirty) { r = RS_ERR_NOMEM; goto done; }
+            dirty[0] = rect;
+            ndirty = 1;
+        } else if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - 1].grid, rect, &dirty, &ndirty)) != RS_OK)
+            goto done;
+        if (getenv("GP_DEBUG")) {
+            uint64_t a = 0;
+            for (size_t k = 0; k < ndirty; k++) a += (uint64_t)(dirty[k].x1 - dirty[k].x0) * (dirty[k].y1 - dirty[k].y0);
+            fprintf(stderr, "  rect %u %u %u %u (%llu px) candidates %zu rects %llu px; old patches %zu\n", rect.x0, rect.y0, rect.x1, rect.y1, (unsigned long long)(rect.x1 - rect.x0) * (rect.y1 - rect.y0), ndirty, (unsigned long long)a, old->npatch);
+        }
+        if ((r = rs__dirty_render(ctx, dem, o, old, g, &dirty, &ndirty)) != RS_OK) goto done;
+    }
+    if (g->npatch > MAX_PATCHES) {
+        /* too many patches: the whole grid, with this edit's exact
+         * rectangles (the patched grid drew the same pixels) */
+        rs_road_grid *w = NULL;
+        rs_splat_options wo = *o;
+        wo.grid.edits = 1;
+        if ((r = rs_road_grid_build(ctx, dem, roads, &wo, &w)) != RS_OK) goto done;
+        rs__free(ctx, w->edit->dirty);
+        w->edit->dirty = dirty;
+        w->edit->ndirty = ndirty;
+        w->edit->bytes += ndirty * sizeof *dirty;
+        w->stats.bytes += ndirty * sizeof *dirty;
+        dirty = NULL;
+        *out = w;
+        goto done;
+    }
+    g->dirty = dirty;
+    g->ndirty = ndirty;
+    g->stats.bytes += ndirty * sizeof *dirty;
+    dirty = NULL;
+    *out = g;
+    g = NULL;
+done:
+    rs__free(ctx, m_old);
+    rs__free(ctx, m_new);
+    rs__free(ctx, pn);
+    rs__free(ctx, bn);
+    rs__free(ctx, ids);
+    rs_network_free(ctx, net);
+    rs_road_grid_free(ctx, local);
+    rs__free(ctx, dirty);
+    rs__grid_track_free(ctx, nt);
+    rs_road_grid_free(ctx, g);
+    return r;
+}
