@@ -1185,6 +1185,23 @@ rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_option
     return rs__progress_end(ctx, &pg, r);
 }
 
+/* The kind of e's piece of fingerprint h (keys k: sorted_keys of e), or -1
+ * when e has none (of several, the first: their kinds may differ). */
+static int kind_of(const keyed *k, const rs__grid_edit *e, uint64_t h)
+{
+    size_t lo = 0, hi = e->n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (k[mid].h < h) lo = mid + 1;
+        else hi = mid;
+    }
+    if (!(lo < e->n && k[lo].h == h)) return -1;
+    int kind = (int)e->it[k[lo].i].kind;
+    for (size_t j = lo + 1; j < e->n && k[j].h == h; j++)
+        if ((int)e->it[k[j].i].kind != kind) return RS__EI_SURFACE; /* (mixed: no core) */
+    return kind;
+}
+
 /* A piece's region meets rectangle R (pixels)? */
 static int meets(const rs__edit_item *q, double pad, const rs_pixel_rect *R, double pix)
 {
@@ -1207,9 +1224,12 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     keyed **ks = rs__calloc(ctx, ns, sizeof *ks);
     const rs__grid_edit *el = local->edit;
     keyed *kl = el ? sorted_keys(ctx, el) : NULL;
-    spans S;
+    spans S, Ssf, C;
     memset(&S, 0, sizeof S);
+    memset(&Ssf, 0, sizeof Ssf);
+    memset(&C, 0, sizeof C);
     rs_result r = src && ks && kl ? RS_OK : RS_ERR_NOMEM;
+    int fills = 0;
     *out = NULL;
     *nout = 0;
     const double pix = local->frame.cell_size / local->texels;
@@ -1217,7 +1237,9 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     for (size_t k = 0; !r && k < ns; k++) {
         src[k] = k == 0 ? (old->base ? old->base : old) : old->patch[k - 1].grid;
         if (!src[k]->edit || src[k]->edit->over || !(ks[k] = sorted_keys(ctx, src[k]->edit))) r = RS_ERR_NOMEM;
+        else fills |= src[k]->edit->fills;
     }
+    if (!r && el) fills |= el->fills;
     if (!r && (!el || el->over)) r = RS_ERR_LIMIT;
     int ok = 1;
     /* (the rectangle a source draws in: the base everywhere) */
@@ -1226,14 +1248,22 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         const rs__edit_item *q = &el->it[i];
         double pad = grid_pad(local);
         if (!meets(q, pad, &rect, pix)) continue;
-        int known = 0;
-        for (size_t k = 0; !known && k < ns; k++)
-            known = meets(q, pad, SRC_RECT(k), pix) && !item_changed(ks[k], src[k]->edit->n, q->h);
-        if (known) continue;
-        ok = q->kind == RS__EI_PAINT_AT
-                 ? centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
-                                pix, W, H)
-                 : item_spans(ctx, &S, q, pad, pix, W, H);
+        int known = 0, core = q->kind == RS__EI_CORE;
+        for (size_t k = 0; k < ns; k++) {
+            if (!meets(q, pad, SRC_RECT(k), pix)) continue;
+            int kind = kind_of(ks[k], src[k]->edit, q->h);
+            known |= kind >= 0;
+            core &= kind == RS__EI_CORE || kind < 0;
+        }
+        /* (an unchanged road's core stays wholly road of one colour under
+         * changed surfaces where no road has a fill: diff's rule, a core
+         * only where it was one in every grid that drew it) */
+        if (known) ok = !core || core_spans(ctx, &C, q, pix, W, H);
+        else ok = q->kind == RS__EI_PAINT_AT
+                      ? centre_spans(ctx, &S, q,
+                                     1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)), pix,
+                                     W, H)
+                      : item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
     }
     for (size_t k = 0; !r && ok && k < ns; k++) {
         const rs__grid_edit *e = src[k]->edit;
@@ -1249,22 +1279,29 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
             ok = q->kind == RS__EI_PAINT_AT
                      ? centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
                                     pix, W, H)
-                     : item_spans(ctx, &S, q, pad, pix, W, H);
+                     : item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
         }
     }
     #undef SRC_RECT
+    if (!r && ok && !fills) {
+        spans_norm(&Ssf);
+        spans_norm(&C);
+        ok = spans_minus(ctx, &Ssf, &C, &S);
+    } else
+        for (size_t k = 0; !r && ok && k < Ssf.n; k++) ok = span_push(ctx, &S, Ssf.v[k].y, Ssf.v[k].x0, Ssf.v[k].x1);
     if (!r && !ok) r = RS_ERR_NOMEM;
+    if (Ssf.over) S.over = 1;
     /* within the rectangle (pieces reach out of it; nothing changed there) */
-    spans C, in;
-    memset(&C, 0, sizeof C);
+    spans R, in;
+    memset(&R, 0, sizeof R);
     memset(&in, 0, sizeof in);
     if (!r && !S.over) {
         spans out_of;
         memset(&out_of, 0, sizeof out_of);
         spans_norm(&S);
-        for (uint32_t y = rect.y0; ok && y < rect.y1; y++) ok = span_push(ctx, &C, y, rect.x0, rect.x1);
-        /* S within C: S less (S less C) */
-        if (ok) ok = spans_minus(ctx, &S, &C, &out_of);
+        for (uint32_t y = rect.y0; ok && y < rect.y1; y++) ok = span_push(ctx, &R, y, rect.x0, rect.x1);
+        /* S within R: S less (S less R) */
+        if (ok) ok = spans_minus(ctx, &S, &R, &out_of);
         spans_norm(&out_of);
         if (ok) ok = spans_minus(ctx, &S, &out_of, &in);
         rs__free(ctx, out_of.v);
@@ -1282,7 +1319,9 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     rs__free(ctx, src);
     rs__free(ctx, kl);
     rs__free(ctx, S.v);
+    rs__free(ctx, Ssf.v);
     rs__free(ctx, C.v);
+    rs__free(ctx, R.v);
     rs__free(ctx, in.v);
     return r;
 }

@@ -10,12 +10,11 @@
 #include "grid_edit.h"
 #include "network.h"
 #include "styling.h"
+#include "roadfield.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <stdio.h>
-#include <stdlib.h>
 
 #define mix rs__fp_mix
 #define mixd rs__fp_mixd
@@ -333,17 +332,22 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     if (!r) r = match_roads(ctx, T->print, no, pn, nn, m_old, m_new);
     if (r) goto done;
     /* the whole map's switches must stand (a casing colour, a fill: the
-     * whole map draws otherwise); the index cell stays the base's */
+     * whole map draws otherwise). The index cell stays the base's (a
+     * pixel does not depend on it), but the casing field's form does: the
+     * casings within a cell of the base's field, and of the field a whole
+     * build of these roads would index. */
     facts.index_cell = T->facts.index_cell;
     {
         rs__grid_facts a = T->facts, b = facts;
-        int merged_a = a.widest_casing <= a.index_cell, merged_b = b.widest_casing <= b.index_cell;
+        rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
+        double cell_new = rs__roadfield_cell_for(roads, &fp);
+        int merged = a.widest_casing <= a.index_cell;
         if (a.styled != b.styled || a.any_surface != b.any_surface || a.fill_uniform != b.fill_uniform ||
             (a.fill_uniform && memcmp(a.fill_rgba, b.fill_rgba, sizeof a.fill_rgba)) ||
             a.casing_uniform != b.casing_uniform ||
             (a.casing_uniform && memcmp(a.casing_rgba, b.casing_rgba, sizeof a.casing_rgba)) ||
-            (a.widest_casing > 0) != (b.widest_casing > 0) || merged_a != merged_b ||
-            (a.widest_casing != b.widest_casing && !merged_a))
+            (a.widest_casing > 0) != (b.widest_casing > 0) || merged != (b.widest_casing <= a.index_cell) ||
+            merged != (b.widest_casing <= cell_new))
             goto done;
     }
     if (!o->style.disable && nn > 0 && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto done;
@@ -378,12 +382,6 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         /* a large part of the map: the whole build is as cheap */
         if ((uint64_t)(rect.x1 - rect.x0) * (rect.y1 - rect.y0) * 4 > (uint64_t)W * H) goto done;
     }
-    if (getenv("GP_DEBUG")) {
-        fprintf(stderr, "patched: changed %zu chg %.1f %.1f %.1f %.1f rect %u %u %u %u reach %.2f\n", changed, chg[0], chg[1], chg[2], chg[3], rect.x0, rect.y0, rect.x1, rect.y1, reach);
-        for (size_t i = 0; i < no; i++) if (m_old[i] == UINT32_MAX) fprintf(stderr, "  old %zu box %.1f %.1f %.1f %.1f\n", i, T->box[4*i], T->box[4*i+1], T->box[4*i+2], T->box[4*i+3]);
-        for (size_t j = 0; j < nn; j++) if (m_new[j] == UINT32_MAX) fprintf(stderr, "  new %zu box %.1f %.1f %.1f %.1f\n", j, bn[4*j], bn[4*j+1], bn[4*j+2], bn[4*j+3]);
-        for (size_t j = 0; j < nn; j++) if (m_new[j] != UINT32_MAX && net && T->net && !same_place(T->net, net, m_new[j], (uint32_t)j, m_old)) fprintf(stderr, "  moved %zu\n", j);
-    }
     if (rect.x1 > rect.x0) {
         /* the roads that can reach a pixel of the rectangle */
         double bx[4] = { dem->frame.origin_x + rect.x0 * pix, dem->frame.origin_y + rect.y0 * pix,
@@ -392,8 +390,24 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         size_t m = 0;
         ids = rs__alloc_array(ctx, nn ? nn : 1, sizeof *ids);
         if (!ids) { r = RS_ERR_NOMEM; goto done; }
+        uint8_t *in = rs__calloc(ctx, nn ? nn : 1, 1);
+        if (!in) { r = RS_ERR_NOMEM; goto done; }
+        for (size_t j = 0; j < nn; j++) in[j] = (uint8_t)road_near(roads, j, bn + 4 * j, bx, ctx_d);
+        /* a stroke drawn both ways may be drawn record by record, which
+         * its records decide together: such a stroke is taken whole */
+        for (size_t k = 0; net && k < net->nstrokes; k++) {
+            uint32_t a = net->stroke_start[k], b = net->stroke_start[k + 1];
+            int mixed = 0, any = 0;
+            for (uint32_t e = a; e < b; e++) {
+                mixed |= net->rev[net->stroke_roads[e]] != net->rev[net->stroke_roads[a]];
+                any |= in[net->stroke_roads[e]];
+            }
+            if (mixed && any)
+                for (uint32_t e = a; e < b; e++) in[net->stroke_roads[e]] = 1;
+        }
         for (size_t j = 0; j < nn; j++)
-            if (road_near(roads, j, bn + 4 * j, bx, ctx_d)) ids[m++] = (uint32_t)j;
+            if (in[j]) ids[m++] = (uint32_t)j;
+        rs__free(ctx, in);
         rs_splat_options lo = *o;
         lo.grid.edits = 1;
         lo.progress = NULL;
@@ -467,11 +481,6 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             ndirty = 1;
         } else if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - 1].grid, rect, &dirty, &ndirty)) != RS_OK)
             goto done;
-        if (getenv("GP_DEBUG")) {
-            uint64_t a = 0;
-            for (size_t k = 0; k < ndirty; k++) a += (uint64_t)(dirty[k].x1 - dirty[k].x0) * (dirty[k].y1 - dirty[k].y0);
-            fprintf(stderr, "  rect %u %u %u %u (%llu px) candidates %zu rects %llu px; old patches %zu\n", rect.x0, rect.y0, rect.x1, rect.y1, (unsigned long long)(rect.x1 - rect.x0) * (rect.y1 - rect.y0), ndirty, (unsigned long long)a, old->npatch);
-        }
         if ((r = rs__dirty_render(ctx, dem, o, old, g, &dirty, &ndirty)) != RS_OK) goto done;
     }
     if (g->npatch > MAX_PATCHES) {

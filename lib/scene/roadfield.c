@@ -1058,19 +1058,9 @@ static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_res
                     (unsigned long long)b->limit);
 }
 
-rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
-                              rs__roadfield **out)
+double rs__roadfield_cell_for(const rs_roads *roads, const rs__roadfield_params *p)
 {
-    if (!ctx) return RS_ERR_INVALID_ARG;
-    if (!out || !roads || !p) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
-    *out = NULL;
-    if (!isfinite(p->origin_x) || !isfinite(p->origin_y) || !(p->cell_size > 0) || !isfinite(p->cell_size) ||
-        !finite_nonneg(p->width_m) || !finite_nonneg(p->height_m) || !finite_nonneg(p->reach_extra) ||
-        !finite_nonneg(p->index_cell) || !finite_nonneg(p->pixel))
-        return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: bad parameters");
     size_t nroads = rs_roads_count(roads);
-    if (nroads > UINT32_MAX) return rs__fail(ctx, RS_ERR_LIMIT, "roadfield: too many roads");
-
     /* Index cell: about one segment per cell over the map (short lists, few
      * cells per segment), at least the DEM cell and half the mean road
      * width, at most twice the mean width (wider cells are rarely whole
@@ -1098,6 +1088,23 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
         cap = GRID_AUTO_CELLS;
     }
     while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
+    return c;
+}
+
+rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
+                              rs__roadfield **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (!out || !roads || !p) return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: NULL argument");
+    *out = NULL;
+    if (!isfinite(p->origin_x) || !isfinite(p->origin_y) || !(p->cell_size > 0) || !isfinite(p->cell_size) ||
+        !finite_nonneg(p->width_m) || !finite_nonneg(p->height_m) || !finite_nonneg(p->reach_extra) ||
+        !finite_nonneg(p->index_cell) || !finite_nonneg(p->pixel))
+        return rs__fail(ctx, RS_ERR_INVALID_ARG, "roadfield: bad parameters");
+    size_t nroads = rs_roads_count(roads);
+    if (nroads > UINT32_MAX) return rs__fail(ctx, RS_ERR_LIMIT, "roadfield: too many roads");
+
+    double c = rs__roadfield_cell_for(roads, p);
 
     rs__roadfield *f = rs__calloc(ctx, 1, sizeof *f);
     if (!f) return rs__fail(ctx, RS_ERR_NOMEM, "roadfield: out of memory");

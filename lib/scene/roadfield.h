@@ -28,6 +28,9 @@ rs__roadfield_params rs__roadfield_params_for_dem(const rs_dem *dem, uint32_t te
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
                               rs__roadfield **out);
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);
+/* The index cell rs__roadfield_build takes for these roads and p (p's, or
+ * the automatic one). */
+double rs__roadfield_cell_for(const rs_roads *roads, const rs__roadfield_params *p);
 
 /* Cut segment A-B, if it reaches beyond `far` from the w x h map, to the
  * disc around the map that a capsule of reach `pad` can touch from it
