@@ -59,7 +59,7 @@ static const char *const kind_name[E_KINDS] = { "move", "add", "remove", "reclas
 typedef struct tally {
     double dirty[E_KINDS], changed[E_KINDS];
     int edits[E_KINDS];
-    long uncovered, not_identical, bad_free, overlaps;
+    long uncovered, not_identical, bad_free, overlaps, outputs_differ;
 } tally;
 
 static const char *const classes[] = { "primary", "secondary", "residential", "service", "tertiary" };
@@ -194,6 +194,48 @@ static void check_update(const rs_road_grid *g1, const image *a, const image *b,
     free(mask);
 }
 
+/* Grids a and b draw alike in every output, not only the colour: the
+ * layers (rs_splat_layers_window, all planes with normals), the normal map
+ * (rs_normal_window) and the lit colour; on splatters of their own, whole
+ * image. 1: the same bytes. */
+static int same_outputs(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *a, const rs_road_grid *b,
+                        const rs_splat_options *o)
+{
+    const rs_road_grid *g[2] = { a, b };
+    rs_splat_options lit = *o;
+    lit.lighting.enable = 1;
+    rs_splatter *s[2] = { NULL, NULL }, *sl[2] = { NULL, NULL };
+    uint32_t W = 0, H = 0;
+    int same = rs_splat_size(ctx, dem, o, &W, &H) == RS_OK;
+    size_t n = (size_t)W * H, per = 4 + 4 + 4 + 4 + 3 + 2 + 3 + 4; /* layers, normal map, lit colour */
+    uint8_t *buf[2] = { calloc(n, per), calloc(n, per) };
+    same = same && buf[0] && buf[1];
+    for (int i = 0; i < 2 && same; i++) {
+        uint8_t *q = buf[i];
+        rs_splat_layers L;
+        memset(&L, 0, sizeof L);
+        L.terrain = q, L.terrain_stride = 4 * (size_t)W, q += 4 * n;
+        L.casing = q, L.casing_stride = 4 * (size_t)W, q += 4 * n;
+        L.surface = q, L.surface_stride = 4 * (size_t)W, q += 4 * n;
+        L.paint = q, L.paint_stride = 4 * (size_t)W, q += 4 * n;
+        L.normal = q, L.normal_stride = 3 * (size_t)W, q += 3 * n;
+        L.coverage = (uint16_t *)(void *)q, L.coverage_stride = W, q += 2 * n;
+        uint8_t *nm = q, *rgba = q + 3 * n;
+        same = rs_splatter_create(ctx, dem, NULL, g[i], o, &s[i]) == RS_OK &&
+               rs_splatter_create(ctx, dem, NULL, g[i], &lit, &sl[i]) == RS_OK &&
+               rs_splat_layers_window(ctx, s[i], NULL, 0, 0, W, H, &L, NULL) == RS_OK &&
+               rs_normal_window(ctx, s[i], 0, 0, W, H, nm, 3 * (size_t)W, NULL) == RS_OK &&
+               rs_splat_window(ctx, sl[i], 0, 0, W, H, rgba, 4 * (size_t)W, NULL, 0, NULL) == RS_OK;
+    }
+    same = same && memcmp(buf[0], buf[1], n * per) == 0;
+    for (int i = 0; i < 2; i++) {
+        rs_splatter_free(ctx, s[i]);
+        rs_splatter_free(ctx, sl[i]);
+        free(buf[i]);
+    }
+    return same;
+}
+
 typedef struct config {
     const char *name;
     uint32_t w, h, roads, texels, edits;
@@ -282,6 +324,9 @@ static void run_config(const config *cf, tally *T, tally *Tc)
         dbg_pix = 5.0 / cf->texels;
         if (getenv("EDITS_DEBUG")) fprintf(stderr, "  edit %u %s\n", e, kind_name[kind]);
         if (ok) check_update(g1, &a, &b, &c, &t, kind, T);
+        /* (class styles and fills: every output of the updated grid, lit and layered too) */
+        if (ok && (strcmp(cf->name, "styled") == 0 || strcmp(cf->name, "fills") == 0))
+            T->outputs_differ += !same_outputs(ctx, dem, g1, gf, &o);
         if (ok) check_update(gc, &a, &b, &c, &t, kind, Tc);
         rs_road_grid_free(cctx, gc);
         rs_road_grid_free(ctx, gf);
@@ -317,6 +362,8 @@ static void report(const char *name, const tally *T, int check_ratio)
     }
     CHECKF(T->uncovered == 0, "%s: %ld changed pixels not covered", name, T->uncovered);
     CHECKF(T->not_identical == 0, "%s: %ld updated grids not the fresh build's bytes", name, T->not_identical);
+    CHECKF(T->outputs_differ == 0, "%s: %ld updated grids whose layers, normals or lit colour differ from a fresh "
+           "build's", name, T->outputs_differ);
     CHECKF(T->bad_free == 0, "%s: %ld road pixels in tiles called road-free", name, T->bad_free);
     CHECKF(T->overlaps == 0, "%s: %ld pixels in two dirty rectangles", name, T->overlaps);
     /* moves, additions and removals: the dirty area within 2.5x of the

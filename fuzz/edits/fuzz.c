@@ -12,8 +12,10 @@
  *    road-free render;
  *  - windows (odd offsets, a one-pixel row, the last rows) equal the crops
  *    of the whole image.
- * A small DEM (16 x 12 samples of 5 m) at 1 to 4 texels, analytic or
- * alpha-map edges, class styles with automatic markings. Findings (abort):
+ * A small DEM (16 x 12 samples of 5 m) at 1 to 4 texels, or (flags bit 6)
+ * 64 x 48 samples at 1 or 2 texels, where an edit changes a small part of
+ * the map and the update patches it; analytic or alpha-map edges, class
+ * styles with automatic markings. Findings (abort):
  * any of those broken, an unknown result code, or a sanitizer report. */
 #include "roadsplat.h"
 
@@ -27,6 +29,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 #define REQUIRE(c) do { if (!(c)) abort(); } while (0)
 #define DW 16
 #define DH 12
+#define BIG_W 64 /* flags bit 6: a map of 315 x 235 m, where an edit's area is a small part (patches) */
+#define BIG_H 48
 #define MAX_EDITS 6
 
 typedef struct image {
@@ -194,15 +198,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     lim.max_field_work = 1 << 22;
     lim.max_line_length = 4096;
     REQUIRE(rs_ctx_create(NULL, &lim, &ctx) == RS_OK);
-    float z[DW * DH];
-    for (int k = 0; k < DW * DH; k++) z[k] = (float)((k * 37 % 23) + (k / DW) * 2);
+    float z[BIG_W * BIG_H];
+    const int big = (flags & 64) != 0, dw = big ? BIG_W : DW, dh = big ? BIG_H : DH;
+    for (int k = 0; k < dw * dh; k++) z[k] = (float)((k * 37 % 23) + (k / dw) * 2);
     rs_dem *dem = NULL;
     rs_dem_frame fr = { 5, 0.05, 0, 0 };
     rs_roads *roads = NULL, *none = NULL;
     rs_styles *styles = NULL;
     rs_road_grid *g0 = NULL, *gt = NULL;
     image a = { 0 }, t = { 0 };
-    REQUIRE(rs_dem_create(ctx, DW, DH, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    REQUIRE(rs_dem_create(ctx, (uint32_t)dw, (uint32_t)dh, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
     static const char base_style[] = "style s\nfill #a04030\nend\n";
     REQUIRE(rs_styles_parse(ctx, base_style, sizeof base_style - 1, &styles) == RS_OK);
     REQUIRE(rs_roads_create(ctx, &none) == RS_OK);
@@ -210,7 +215,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     rs_splat_options o;
     memset(&o, 0, sizeof o);
-    o.texels = 1 + (flags & 3);
+    o.texels = big ? 1 + (flags & 1) : 1 + (flags & 3);
     o.coverage.edges = flags & 4 ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
     o.grid.edits = 1;
     o.style.styles = styles;

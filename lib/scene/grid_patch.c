@@ -255,13 +255,47 @@ static int same_place(const rs_network *A, const rs_network *B, uint32_t i, uint
     return 1;
 }
 
-/* ---- the patched grid ------------------------------------------------------ */
-
 static void box_add(double *acc, const double *b, double grow)
 {
     acc[0] = fmin(acc[0], b[0] - grow), acc[1] = fmin(acc[1], b[1] - grow);
     acc[2] = fmax(acc[2], b[2] + grow), acc[3] = fmax(acc[3], b[3] + grow);
 }
+
+/* At every node of N where a road marked in m has a leg, the other legs'
+ * segments there (the leg's segment or point and the segments on either
+ * side: a T or a junction on a segment changes how that capsule is drawn
+ * all along it) into box acc, grown by `grow`; map: N's road to a road of
+ * `roads` (UINT32_MAX: none, then the road is marked itself). */
+static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint32_t *map, const rs_roads *roads,
+                               double *acc, double grow, size_t *changed)
+{
+    for (size_t d = 0; N && d < N->nnodes; d++) {
+        int any = 0;
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1] && !any; l++) any = m[N->leg[l].road];
+        if (!any) continue;
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &N->leg[l];
+            uint32_t q = map ? map[L->road] : L->road;
+            if (m[L->road] || q == UINT32_MAX) continue;
+            const double *xy;
+            size_t np;
+            rs_roads_get(roads, q, NULL, NULL, &xy, &np);
+            if (!np) continue;
+            size_t a = L->segment > 0 ? L->segment - 1 : 0, b = L->segment + 2 < np ? L->segment + 2 : np - 1;
+            if (L->kind == RS_LEG_END) a = np >= 2 ? np - 2 : 0, b = np - 1;
+            double bx[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+            for (size_t i = a; i <= b && i < np; i++) {
+                bx[0] = fmin(bx[0], xy[2 * i]), bx[1] = fmin(bx[1], xy[2 * i + 1]);
+                bx[2] = fmax(bx[2], xy[2 * i]), bx[3] = fmax(bx[3], xy[2 * i + 1]);
+            }
+            box_add(acc, bx, grow);
+            (*changed)++;
+        }
+    }
+}
+
+/* ---- the patched grid ------------------------------------------------------ */
+
 
 /* Distance from the box to segment a-b (0 when they meet). */
 static double seg_box(const double *a, const double *b, const double *bx)
@@ -356,14 +390,29 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     double chg[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
     const double grow = 2 * reach + CHANGE_PAD;
     size_t changed = 0;
-    for (size_t i = 0; i < no; i++)
-        if (m_old[i] == UINT32_MAX) box_add(chg, T->box + 4 * i, grow), changed++;
+    uint8_t *cn = rs__calloc(ctx, nn ? nn : 1, 1), *co = rs__calloc(ctx, no ? no : 1, 1);
+    if (!cn || !co) {
+        rs__free(ctx, cn);
+        rs__free(ctx, co);
+        r = RS_ERR_NOMEM;
+        goto done;
+    }
+    for (size_t i = 0; i < no; i++) co[i] = m_old[i] == UINT32_MAX;
     for (size_t j = 0; j < nn; j++) {
         uint32_t i = m_new[j];
-        if (i == UINT32_MAX || (net && T->net && !same_place(T->net, net, i, (uint32_t)j, m_old)) ||
-            (!net) != (!T->net))
-            box_add(chg, bn + 4 * j, grow), changed++;
+        cn[j] = i == UINT32_MAX || (net && T->net && !same_place(T->net, net, i, (uint32_t)j, m_old)) ||
+                (!net) != (!T->net);
     }
+    for (size_t i = 0; i < no; i++)
+        if (co[i]) box_add(chg, T->box + 4 * i, grow), changed++;
+    for (size_t j = 0; j < nn; j++)
+        if (cn[j]) box_add(chg, bn + 4 * j, grow), changed++;
+    /* the segments of the roads meeting a changed one, in the new network
+     * and the old (old roads by their new index: the unmatched are changed) */
+    neighbour_segments(net, cn, NULL, roads, chg, grow, &changed);
+    neighbour_segments(T->net, co, m_old, roads, chg, grow, &changed);
+    rs__free(ctx, cn);
+    rs__free(ctx, co);
     /* the pixels of the changed area, whole DEM cells (pieces never
      * straddle a patch's rows), within the image */
     const double pix = dem->frame.cell_size / o->texels;

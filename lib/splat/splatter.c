@@ -345,9 +345,6 @@ static void layers_piece(const rs_splatter *s, const scratch *b, rs__piece *p, c
     }
 }
 
-/* The window through the stages with scratch b, which holds at least
- * scratch_size_of(s, w, h) of everything: the colour into rgba (and
- * weight), or the layers L (rgba NULL). */
 uint32_t rs__segments(const rs_splatter *s, uint32_t x0, uint32_t x1, uint32_t y, rs__seg *seg)
 {
     if (!s->nview) {
@@ -419,6 +416,9 @@ rs_result rs__normals_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0, uin
     return r;
 }
 
+/* The window through the stages with scratch b, which holds at least
+ * scratch_size_of(s, w, h) of everything: the colour into rgba (and
+ * weight), or the layers L (rgba NULL). */
 static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint32_t x0, uint32_t y0, uint32_t w,
                            uint32_t h, uint8_t *rgba, size_t rgba_stride, uint16_t *weight, size_t weight_stride,
                            const rs_splat_layers *L, rs__nm_scratch *nm, rs_splat_profile *profile)
@@ -471,51 +471,50 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
         p.y0 = y;
         p.rows = row_end - y < max_rows ? row_end - y : max_rows;
         for (uint32_t x = x0; x < x0 + w; x += cols) {
-          rs__seg seg[RS__MAX_SEGS];
-          uint32_t nseg = rs__segments(s, x, x + (x0 + w - x < cols ? x0 + w - x : cols), y, seg);
-          for (uint32_t sg = 0; sg < nseg; sg++) {
-            const rs_splatter *s_in = s;
-            s = seg[sg].s; /* (this run's grid: a patch's, or the base's) */
-            p.x0 = seg[sg].x0;
-            p.w = seg[sg].w;
-            double t0 = now(profile);
-            if (analytic) rs__coverage_analytic(s, &p);
-            else rs__coverage_alphamap(s, &p);
-            rs__coverage_quantise(&p);
-            double t1 = now(profile);
-            if (L) {
-                layers_piece(s, &b, &p, L, p.x0 - x0, p.y0 - y0);
-                if (profile) {
-                    profile->composite_ms += now(profile) - t1;
-                    profile->pixels += (uint64_t)p.rows * p.w;
-                    profile->road_pixels += p.road_pixels;
-                    profile->mark_tests += p.mark_tests;
-                    profile->mark_pixels += p.mark_pixels;
+            /* the piece's runs by the grid that draws them: a patch's, or the base's */
+            rs__seg seg[RS__MAX_SEGS];
+            uint32_t nseg = rs__segments(s, x, x + (x0 + w - x < cols ? x0 + w - x : cols), y, seg);
+            for (uint32_t sg = 0; sg < nseg; sg++) {
+                const rs_splatter *ps = seg[sg].s;
+                p.x0 = seg[sg].x0;
+                p.w = seg[sg].w;
+                double t0 = now(profile);
+                if (analytic) rs__coverage_analytic(ps, &p);
+                else rs__coverage_alphamap(ps, &p);
+                rs__coverage_quantise(&p);
+                double t1 = now(profile);
+                if (L) {
+                    layers_piece(ps, &b, &p, L, p.x0 - x0, p.y0 - y0);
+                    if (profile) {
+                        profile->composite_ms += now(profile) - t1;
+                        profile->pixels += (uint64_t)p.rows * p.w;
+                        profile->road_pixels += p.road_pixels;
+                        profile->mark_tests += p.mark_tests;
+                        profile->mark_pixels += p.mark_pixels;
+                    }
+                    p.mark_tests = p.mark_pixels = 0;
+                } else {
+                    rs__surface(ps, &p);
+                    double t2 = now(profile);
+                    rs__overlays(ps, &p);
+                    double t3 = now(profile);
+                    rs__composite(&p, rgba + (size_t)(p.y0 - y0) * rgba_stride + (size_t)(p.x0 - x0) * 4, rgba_stride,
+                                  weight ? weight + (size_t)(p.y0 - y0) * weight_stride + (p.x0 - x0) : NULL,
+                                  weight_stride);
+                    if (profile) {
+                        double t4 = now(profile);
+                        profile->coverage_ms += t1 - t0;
+                        profile->surface_ms += t2 - t1;
+                        profile->overlays_ms += t3 - t2;
+                        profile->composite_ms += t4 - t3;
+                        profile->pixels += (uint64_t)p.rows * p.w;
+                        profile->road_pixels += p.road_pixels;
+                        profile->mark_tests += p.mark_tests;
+                        profile->mark_pixels += p.mark_pixels;
+                    }
+                    p.mark_tests = p.mark_pixels = 0;
                 }
-                p.mark_tests = p.mark_pixels = 0;
-            } else {
-                rs__surface(s, &p);
-                double t2 = now(profile);
-                rs__overlays(s, &p);
-                double t3 = now(profile);
-                rs__composite(&p, rgba + (size_t)(p.y0 - y0) * rgba_stride + (size_t)(p.x0 - x0) * 4, rgba_stride,
-                              weight ? weight + (size_t)(p.y0 - y0) * weight_stride + (p.x0 - x0) : NULL,
-                              weight_stride);
-                if (profile) {
-                    double t4 = now(profile);
-                    profile->coverage_ms += t1 - t0;
-                    profile->surface_ms += t2 - t1;
-                    profile->overlays_ms += t3 - t2;
-                    profile->composite_ms += t4 - t3;
-                    profile->pixels += (uint64_t)p.rows * p.w;
-                    profile->road_pixels += p.road_pixels;
-                    profile->mark_tests += p.mark_tests;
-                    profile->mark_pixels += p.mark_pixels;
-                }
-                p.mark_tests = p.mark_pixels = 0;
             }
-            s = s_in;
-          }
             if (x + cols < x0 + w && rs__poll(ctx)) {
                 r = RS_ERR_CANCELLED;
                 break;
