@@ -46,12 +46,7 @@
 #define mix rs__fp_mix
 #define mixd rs__fp_mixd
 
-static uint64_t mixs(uint64_t h, const char *s)
-{
-    uint64_t f = 1469598103934665603ull;
-    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
-    return mix(h, f);
-}
+#define mixs rs__fp_mixs
 
 /* A through road as a T end sees it: width, first and last points (its
  * attributes act through what they resolve to: the T's edge lines). */
@@ -967,12 +962,10 @@ static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size
 
 /* ---- the public calls ------------------------------------------------------------ */
 
-typedef struct keyed {
-    uint64_t h;
-    uint32_t i;
-} keyed;
+typedef rs__keyed keyed;
+#define cmp_keyed rs__cmp_keyed
 
-static int cmp_keyed(const void *pa, const void *pb)
+int rs__cmp_keyed(const void *pa, const void *pb)
 {
     const keyed *a = pa, *b = pb;
     if (a->h != b->h) return a->h < b->h ? -1 : 1;

@@ -25,6 +25,14 @@ static inline uint64_t rs__fp_final(uint64_t h)
     return h ^ (h >> 32);
 }
 
+/* A string (NULL: none) into a running hash, by its FNV-1a. */
+static inline uint64_t rs__fp_mixs(uint64_t h, const char *s)
+{
+    uint64_t f = 1469598103934665603ull;
+    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
+    return rs__fp_mix(h, f);
+}
+
 static inline uint64_t rs__fp_mixd(uint64_t h, double d)
 {
     uint64_t v;
@@ -54,6 +62,14 @@ typedef struct rs__edit_item {
     float dev;     /* a core: the centre line strays this far from the segment (rounded up) */
     uint32_t kind; /* RS__EI_* */
 } rs__edit_item;
+
+/* A fingerprint and its index, sorted by rs__cmp_keyed (fingerprint, then
+ * index): the pieces' multisets, the roads' prints. */
+typedef struct rs__keyed {
+    uint64_t h;
+    uint32_t i;
+} rs__keyed;
+int rs__cmp_keyed(const void *a, const void *b);
 
 typedef struct rs__grid_edit {
     rs__edit_item *it;
@@ -94,10 +110,6 @@ typedef struct rs__grid_track {
     rs__grid_facts facts;
     size_t bytes;
 } rs__grid_track;
-/* The prints and boxes of every road of `roads` into fresh arrays (*print,
- * *box: the caller's, rs__free). RS_ERR_NOMEM, or a style error. */
-rs_result rs__grid_prints(rs_ctx *ctx, const rs_roads *roads, const rs_style_options *so, uint64_t **print,
-                          double **box);
 /* The track of whole grid g built from `roads` with options o; takes `net`
  * (the grid's network: freed with the track, also on failure). */
 rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,

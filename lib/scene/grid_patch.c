@@ -18,6 +18,7 @@
 
 #define mix rs__fp_mix
 #define mixd rs__fp_mixd
+#define mixs rs__fp_mixs
 
 /* The most patches a grid takes before an update builds it whole. */
 #define MAX_PATCHES 16
@@ -27,13 +28,6 @@
  * 10k-road city: tests/tools/edit_locality.c). */
 #define CHANGE_PAD 15.0
 #define CONTEXT_PAD 60.0
-
-static uint64_t mixs(uint64_t h, const char *s)
-{
-    uint64_t f = 1469598103934665603ull;
-    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
-    return mix(h, f);
-}
 
 static uint64_t mix_colour(uint64_t h, rs_colour c)
 {
@@ -150,17 +144,6 @@ static rs_result prints_facts(rs_ctx *ctx, const rs_roads *roads, const rs_splat
     return RS_OK;
 }
 
-rs_result rs__grid_prints(rs_ctx *ctx, const rs_roads *roads, const rs_style_options *so, uint64_t **print,
-                          double **box)
-{
-    rs_splat_options o;
-    memset(&o, 0, sizeof o);
-    o.style = *so;
-    rs__grid_facts f;
-    double reach;
-    return prints_facts(ctx, roads, &o, print, box, &f, &reach);
-}
-
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 {
     if (!t) return;
@@ -195,17 +178,7 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
 
 /* ---- matching the roads by their prints ---------------------------------- */
 
-typedef struct keyed {
-    uint64_t h;
-    uint32_t i;
-} keyed;
-
-static int cmp_keyed(const void *pa, const void *pb)
-{
-    const keyed *a = pa, *b = pb;
-    if (a->h != b->h) return a->h < b->h ? -1 : 1;
-    return a->i < b->i ? -1 : a->i > b->i;
-}
+typedef rs__keyed keyed;
 
 /* new road j's old road (UINT32_MAX: none) in *m_new, old i's new one in
  * *m_old: equal prints, in order (a road whose print also changed order is
@@ -216,7 +189,7 @@ static rs_result match_roads(rs_ctx *ctx, const uint64_t *po, size_t no, const u
     keyed *K = rs__alloc_array(ctx, no ? no : 1, sizeof *K);
     if (!K) return RS_ERR_NOMEM;
     for (size_t i = 0; i < no; i++) K[i].h = po[i], K[i].i = (uint32_t)i, m_old[i] = UINT32_MAX;
-    qsort(K, no, sizeof *K, cmp_keyed);
+    qsort(K, no, sizeof *K, rs__cmp_keyed);
     int64_t last = -1;
     for (size_t j = 0; j < nn; j++) {
         m_new[j] = UINT32_MAX;
