@@ -472,12 +472,14 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
         p.rows = row_end - y < max_rows ? row_end - y : max_rows;
         for (uint32_t x = x0; x < x0 + w; x += cols) {
             /* the piece's runs by the grid that draws them: a patch's, or the base's */
-            rs__seg seg[RS__MAX_SEGS];
-            uint32_t nseg = rs__segments(s, x, x + (x0 + w - x < cols ? x0 + w - x : cols), y, seg);
+            uint32_t pw = x0 + w - x < cols ? x0 + w - x : cols, nseg = 1;
+            rs__seg one = { x, pw, s }, seg[RS__MAX_SEGS];
+            const rs__seg *run = &one;
+            if (s->nview) nseg = rs__segments(s, x, x + pw, y, seg), run = seg;
             for (uint32_t sg = 0; sg < nseg; sg++) {
-                const rs_splatter *ps = seg[sg].s;
-                p.x0 = seg[sg].x0;
-                p.w = seg[sg].w;
+                const rs_splatter *ps = run[sg].s;
+                p.x0 = run[sg].x0;
+                p.w = run[sg].w;
                 double t0 = now(profile);
                 if (analytic) rs__coverage_analytic(ps, &p);
                 else rs__coverage_alphamap(ps, &p);
