@@ -30,6 +30,7 @@
 #include "network.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -990,8 +991,79 @@ static void test_subset_build(void)
     rs_ctx_free(ctx);
 }
 
+/* Shared structures between threads (docs/embedding.md "Patches"): a
+ * patched grid renders in one thread while the grid it was updated from,
+ * whose structures it shares, is freed in another; its image is the fresh
+ * build's. Then the patched grid itself is freed (the base goes with it:
+ * ASan's leak check in make sanitize-test). */
+typedef struct render_job {
+    const rs_dem *dem;
+    const rs_road_grid *g;
+    const rs_splat_options *o;
+    image im;
+    int ok;
+} render_job;
+
+static void *render_thread(void *arg)
+{
+    render_job *j = arg;
+    rs_ctx *c = NULL;
+    j->ok = rs_ctx_create(NULL, NULL, &c) == RS_OK && render(c, j->dem, j->g, j->o, &j->im) == 0;
+    rs_ctx_free(c);
+    return NULL;
+}
+
+static void test_shared_free(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    int ok = sc_city(&sc, 121, 101, 5.0, 200, 21) == 0;
+    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
+    ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
+    ok = ok && (roads = ss_roads(ctx, &sc)) != NULL;
+    for (size_t i = 0; ok && i < sc.nroads; i++)
+        ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    rs_splat_options o = edit_opts(4);
+    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
+    const double xy[] = { 200, 200, 260, 230, 300, 290 };
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK &&
+         rs_roads_add(ctx, roads, "new", 7, xy, 3) == RS_OK && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK &&
+         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK;
+    CHECK(ok);
+    if (ok) {
+        rs_road_grid_stats a, b;
+        rs_road_grid_get_stats(g1, &a);
+        rs_road_grid_get_stats(gf, &b);
+        CHECKF(a.bytes > b.bytes, "a patched grid counts its base and patch: %llu bytes, a whole one %llu",
+               (unsigned long long)a.bytes, (unsigned long long)b.bytes);
+        render_job j = { dem, g1, &o, { 0 }, 0 };
+        pthread_t th;
+        CHECK(pthread_create(&th, NULL, render_thread, &j) == 0);
+        rs_road_grid_free(ctx, g0); /* (while g1 renders) */
+        g0 = NULL;
+        pthread_join(th, NULL);
+        image c;
+        memset(&c, 0, sizeof c);
+        CHECK(j.ok && render(ctx, dem, gf, &o, &c) == 0 && same_image(&j.im, &c));
+        image_free(&j.im);
+        image_free(&c);
+    }
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, gf);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
+    test_shared_free();
     test_subset_build();
     test_remove();
     test_replace();
