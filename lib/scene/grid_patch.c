@@ -131,6 +131,9 @@ static rs_result prints_facts(rs_ctx *ctx, const rs_roads *roads, const rs_splat
         if (rs_roads_get_mark(roads, k, &m) != RS_OK || m.road >= n) continue;
         uint64_t h = mixd(mixd(mixd(mixd(mixs(P[m.road], m.type), m.s), m.t), m.length), m.width);
         P[m.road] = mix(h, (uint64_t)(m.flip != 0));
+        /* (a marking lies |t| across, up to its extent; 0 takes its type's: 10 m is more than any) */
+        double ext = fmax(m.length > 0 ? m.length : 10, m.width > 0 ? m.width : 10);
+        if (fabs(m.t) + ext > *reach) *reach = fabs(m.t) + ext;
     }
     rs__free(ctx, y);
     if (r) {
