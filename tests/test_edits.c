@@ -1051,6 +1051,20 @@ static void test_shared_free(void)
         CHECK(j.ok && render(ctx, dem, gf, &o, &c) == 0 && same_image(&j.im, &c));
         image_free(&j.im);
         image_free(&c);
+        /* queries: the same road, point and distance (inside the patch too) */
+        sc_rng rng;
+        sc_rng_seed(&rng, 5);
+        int same = 1, hits = 0;
+        for (int k = 0; k < 400; k++) {
+            double x = k < 200 ? sc_rng_range(&rng, 150, 350) : sc_rng_range(&rng, 0, sc_extent_x(&sc));
+            double y = k < 200 ? sc_rng_range(&rng, 150, 340) : sc_rng_range(&rng, 0, sc_extent_y(&sc));
+            rs_road_point p1, pf;
+            int h1 = rs_road_grid_query(g1, x, y, 15, &p1), hf = rs_road_grid_query(gf, x, y, 15, &pf);
+            hits += hf;
+            same &= h1 == hf && (!hf || (p1.road == pf.road && p1.segment == pf.segment && p1.s == pf.s &&
+                                         p1.t == pf.t && p1.distance == pf.distance));
+        }
+        CHECKF(same && hits > 100, "queries of the patched grid: same %d, %d hits", same, hits);
     }
     rs_road_grid_free(ctx, g0);
     rs_road_grid_free(ctx, g1);
