@@ -917,6 +917,19 @@ static int centre_spans(rs_ctx *ctx, spans *S, const rs__edit_item *it, double p
     return 1;
 }
 
+/* The runs of piece q that changed: a line's paint (PAINT_AT) by the pixel
+ * centres it reaches into S (the road field's pad is not its business),
+ * other paint by its region grown by pad into S, surfaces into Ssf. 0: no
+ * memory. */
+static int piece_spans(rs_ctx *ctx, spans *S, spans *Ssf, const rs__edit_item *q, double pad, double pix, uint32_t W,
+                       uint32_t H)
+{
+    if (q->kind == RS__EI_PAINT_AT)
+        return centre_spans(ctx, S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
+                            pix, W, H);
+    return item_spans(ctx, q->kind == RS__EI_PAINT ? S : Ssf, q, pad, pix, W, H);
+}
+
 /* Spans to rectangles: a row's overlapping or touching spans merged, a
  * rectangle grown down while the next row has the same span. */
 static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size_t *nout)
@@ -1048,10 +1061,7 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
         if (j >= eb->n || (i < ea->n && ka[i].h < kb[j].h)) q = &ea->it[ka[i++].i], pad = pa;
         else q = &eb->it[kb[j++].i], pad = pb;
         if (outside(q, pad, clip, pix)) continue;
-        if (q->kind == RS__EI_PAINT_AT) /* (a line's paint: the road field's pad is not its business) */
-            ok = centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
-                              pix, W, H);
-        else ok = item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
+        ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
     }
     /* where an unchanged road's core lies under a changed surface, the
      * pixels stay wholly road of the same colour (no fills: which road is
@@ -1237,13 +1247,13 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     int ok = 1;
     /* (the rectangle a source draws in: the base everywhere) */
     #define SRC_RECT(k) ((k) == 0 ? &rect : &old->patch[(k) - 1].rect)
+    const double pad_l = grid_pad(local);
     for (size_t i = 0; !r && ok && i < el->n; i++) {
         const rs__edit_item *q = &el->it[i];
-        double pad = grid_pad(local);
-        if (!meets(q, pad, &rect, pix)) continue;
+        if (!meets(q, pad_l, &rect, pix)) continue;
         int known = 0, core = q->kind == RS__EI_CORE;
         for (size_t k = 0; k < ns; k++) {
-            if (!meets(q, pad, SRC_RECT(k), pix)) continue;
+            if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
             int kind = kind_of(ks[k], src[k]->edit, q->h);
             known |= kind >= 0;
             core &= kind == RS__EI_CORE || kind < 0;
@@ -1252,11 +1262,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
          * changed surfaces where no road has a fill: diff's rule, a core
          * only where it was one in every grid that drew it) */
         if (known) ok = !core || core_spans(ctx, &C, q, pix, W, H);
-        else ok = q->kind == RS__EI_PAINT_AT
-                      ? centre_spans(ctx, &S, q,
-                                     1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)), pix,
-                                     W, H)
-                      : item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
+        else ok = piece_spans(ctx, &S, &Ssf, q, pad_l, pix, W, H);
     }
     for (size_t k = 0; !r && ok && k < ns; k++) {
         const rs__grid_edit *e = src[k]->edit;
@@ -1269,10 +1275,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
             for (size_t j = k + 1; !replaced && j < ns; j++)
                 replaced = meets(q, pad, SRC_RECT(j), pix) && item_changed(ks[j], src[j]->edit->n, q->h);
             if (replaced) continue;
-            ok = q->kind == RS__EI_PAINT_AT
-                     ? centre_spans(ctx, &S, q, 1e-3 * pix + 1e-9 * (1 + fabs(q->ax) + fabs(q->ay) + fabs(q->bx) + fabs(q->by)),
-                                    pix, W, H)
-                     : item_spans(ctx, q->kind == RS__EI_PAINT ? &S : &Ssf, q, pad, pix, W, H);
+            ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
         }
     }
     #undef SRC_RECT
@@ -1408,23 +1411,31 @@ static double seg_dist(double px, double py, double ax, double ay, double bx, do
     return hypot(px - (ax + t * dx), py - (ay + t * dy));
 }
 
-/* Whether the item's region meets the box [x0, x1] x [y0, y1]. */
-static int item_meets(const rs__edit_item *it, double x0, double y0, double x1, double y1)
+int rs__capsule_meets_box(double ax, double ay, double bx, double by, double r, double x0, double y0, double x1,
+                          double y1)
 {
-    double bx0, by0, bx1, by1;
-    item_box(it, 0, &bx0, &by0, &bx1, &by1);
-    if (bx1 < x0 || bx0 > x1 || by1 < y0 || by0 > y1) return 0;
-    if (it->r < 0) return 1;
+    if (fmin(ax, bx) - r > x1 || fmax(ax, bx) + r < x0 || fmin(ay, by) - r > y1 || fmax(ay, by) + r < y0) return 0;
     /* the segment crosses the box, or one of them comes within r */
     double t0, t1;
     builder b;
     memset(&b, 0, sizeof b);
     b.mx0 = x0, b.my0 = y0, b.mx1 = x1, b.my1 = y1;
-    if (clip_box(&b, it->ax, it->ay, it->bx, it->by, 0, &t0, &t1)) return 1;
-    double d = fmin(box_dist(it->ax, it->ay, x0, y0, x1, y1), box_dist(it->bx, it->by, x0, y0, x1, y1));
+    if (clip_box(&b, ax, ay, bx, by, 0, &t0, &t1)) return 1;
+    double d = fmin(box_dist(ax, ay, x0, y0, x1, y1), box_dist(bx, by, x0, y0, x1, y1));
     const double cx[4] = { x0, x1, x1, x0 }, cy[4] = { y0, y0, y1, y1 };
-    for (int k = 0; k < 4; k++) d = fmin(d, seg_dist(cx[k], cy[k], it->ax, it->ay, it->bx, it->by));
-    return d <= it->r;
+    for (int k = 0; k < 4; k++) d = fmin(d, seg_dist(cx[k], cy[k], ax, ay, bx, by));
+    return d <= r;
+}
+
+/* Whether the item's region meets the box [x0, x1] x [y0, y1]. */
+static int item_meets(const rs__edit_item *it, double x0, double y0, double x1, double y1)
+{
+    if (it->r < 0) {
+        double bx0, by0, bx1, by1;
+        item_box(it, 0, &bx0, &by0, &bx1, &by1);
+        return !(bx1 < x0 || bx0 > x1 || by1 < y0 || by0 > y1);
+    }
+    return rs__capsule_meets_box(it->ax, it->ay, it->bx, it->by, it->r, x0, y0, x1, y1);
 }
 
 int rs_road_grid_rect_has_roads(const rs_road_grid *grid, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1)

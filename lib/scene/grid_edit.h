@@ -123,6 +123,10 @@ void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t);
  * cancel, left as they are (a superset). Ticks 2 units a pixel. */
 rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_options *opts, const struct rs_road_grid *a,
                            const struct rs_road_grid *b, rs_pixel_rect **rects, size_t *nrects);
+/* Whether the capsule of segment (ax, ay)-(bx, by) with radius r >= 0
+ * meets the box [x0, x1] x [y0, y1] (closed). */
+int rs__capsule_meets_box(double ax, double ay, double bx, double by, double r, double x0, double y0, double x1,
+                          double y1);
 /* The pieces that differ between what grid old draws inside `rect` (its
  * base, and inside its patches their grids) and what `local` draws there:
  * candidate rectangles within rect (*out the caller's: rs__free). */

@@ -273,49 +273,16 @@ static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint
 /* ---- the patched grid ------------------------------------------------------ */
 
 
-/* Distance from the box to segment a-b (0 when they meet). */
-static double seg_box(const double *a, const double *b, const double *bx)
-{
-    /* (the segment clipped to the box: a Liang-Barsky test, else the
-     * nearest of the box's corners and the segment's ends) */
-    double t0 = 0, t1 = 1, d[2] = { b[0] - a[0], b[1] - a[1] };
-    int inside = 1;
-    for (int k = 0; k < 2 && inside; k++) {
-        double lo = bx[k] - a[k], hi = bx[k + 2] - a[k];
-        if (d[k] == 0) {
-            if (lo > 0 || hi < 0) inside = 0;
-        } else {
-            double u = lo / d[k], v = hi / d[k];
-            if (u > v) { double t = u; u = v; v = t; }
-            t0 = fmax(t0, u), t1 = fmin(t1, v);
-            if (t0 > t1) inside = 0;
-        }
-    }
-    if (inside) return 0;
-    double best = INFINITY;
-    for (int c = 0; c < 4; c++) {
-        double px = c & 1 ? bx[2] : bx[0], py = c & 2 ? bx[3] : bx[1];
-        double dd = d[0] * d[0] + d[1] * d[1], u = dd > 0 ? ((px - a[0]) * d[0] + (py - a[1]) * d[1]) / dd : 0;
-        u = u < 0 ? 0 : u > 1 ? 1 : u;
-        best = fmin(best, hypot(a[0] + u * d[0] - px, a[1] + u * d[1] - py));
-    }
-    for (int e = 0; e < 2; e++) {
-        const double *p = e ? b : a;
-        double dx = p[0] < bx[0] ? bx[0] - p[0] : p[0] > bx[2] ? p[0] - bx[2] : 0;
-        double dy = p[1] < bx[1] ? bx[1] - p[1] : p[1] > bx[3] ? p[1] - bx[3] : 0;
-        best = fmin(best, hypot(dx, dy));
-    }
-    return best;
-}
-
 static int road_near(const rs_roads *roads, size_t i, const double *rb, const double *bx, double d)
 {
     if (rb[0] > bx[2] + d || rb[2] < bx[0] - d || rb[1] > bx[3] + d || rb[3] < bx[1] - d) return 0;
     const double *xy;
     size_t np;
     rs_roads_get(roads, i, NULL, NULL, &xy, &np);
-    for (size_t k = 0; k + 1 < np || (np == 1 && k == 0); k++)
-        if (seg_box(xy + 2 * k, xy + 2 * (np == 1 ? k : k + 1), bx) <= d) return 1;
+    for (size_t k = 0; k + 1 < np || (np == 1 && k == 0); k++) {
+        const double *a = xy + 2 * k, *b = xy + 2 * (np == 1 ? k : k + 1);
+        if (rs__capsule_meets_box(a[0], a[1], b[0], b[1], d, bx[0], bx[1], bx[2], bx[3])) return 1;
+    }
     return 0;
 }
 
@@ -471,7 +438,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         d->grid = q->grid;
         rs__grid_hold(d->grid);
         g->npatch++;
-        g->stats.bytes += rs__grid_bytes(d->grid) + q->n * sizeof *d->ids;
+        g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
     }
     if (local) {
         rs__grid_patch *d = &P[g->npatch++];
@@ -481,7 +448,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         d->n = ids_n;
         local = NULL;
         ids = NULL;
-        g->stats.bytes += rs__grid_bytes(d->grid) + d->n * sizeof *d->ids;
+        g->stats.bytes += d->grid->stats.bytes + d->n * sizeof *d->ids;
     }
     /* for the next update */
     nt->n = nn;

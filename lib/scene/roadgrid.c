@@ -596,8 +596,6 @@ static long refs_add(long *refs, long d)
 
 void rs__grid_hold(rs_road_grid *g) { refs_add(&g->refs, 1); }
 
-uint64_t rs__grid_bytes(const rs_road_grid *g) { return g->stats.bytes; }
-
 const rs_road_grid *rs__grid_at(const rs_road_grid *g, uint32_t x, uint32_t y, const rs__grid_patch **patch)
 {
     for (size_t k = g->npatch; k-- > 0;) {

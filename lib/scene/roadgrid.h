@@ -64,8 +64,6 @@ typedef struct rs__grid_patch {
 /* Hold / release a whole grid's structures (a patched grid releases its
  * base and its patches' grids). */
 void rs__grid_hold(struct rs_road_grid *g);
-/* Memory held by grid g (its stats' bytes). */
-uint64_t rs__grid_bytes(const struct rs_road_grid *g);
 /* The grid deciding output pixel (x, y) of g: a patch's, else g itself;
  * *patch the patch (NULL: none). */
 const struct rs_road_grid *rs__grid_at(const struct rs_road_grid *g, uint32_t x, uint32_t y,
