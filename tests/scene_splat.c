@@ -16,15 +16,30 @@ rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s)
     return roads;
 }
 
+/* sc (made) as a DEM of z-scale 0.01 and its roads, classed when asked */
+static int city_rs(rs_ctx *ctx, const sc_scene *sc, int classes, rs_dem **dem, rs_roads **roads)
+{
+    rs_dem_frame fr = { sc->cell_size, 0.01, 0, 0 };
+    *roads = ss_roads(ctx, sc);
+    if (!*roads || rs_dem_create(ctx, sc->w, sc->h, sc->z, dem) || rs_dem_set_frame(ctx, *dem, &fr)) return -1;
+    for (size_t i = 0; classes && i < sc->nroads; i++)
+        if (rs_roads_set_attr(ctx, *roads, i, "class", sc_city_class(sc->roads[i].width))) return -1;
+    return 0;
+}
+
 int ss_city(rs_ctx *ctx, sc_scene *sc, rs_dem **dem, rs_roads **roads)
 {
     *dem = NULL;
     *roads = NULL;
-    if (sc_city_default(sc, 1)) return -1;
-    rs_dem_frame fr = { sc->cell_size, 0.01, 0, 0 };
-    *roads = ss_roads(ctx, sc);
-    if (!*roads || rs_dem_create(ctx, sc->w, sc->h, sc->z, dem) || rs_dem_set_frame(ctx, *dem, &fr)) return -1;
-    return 0;
+    return sc_city_default(sc, 1) ? -1 : city_rs(ctx, sc, 0, dem, roads);
+}
+
+int ss_city_of(rs_ctx *ctx, uint32_t w, uint32_t h, size_t n, uint64_t seed, int classes, sc_scene *sc, rs_dem **dem,
+               rs_roads **roads)
+{
+    *dem = NULL;
+    *roads = NULL;
+    return sc_city(sc, w, h, 5.0, n, seed) ? -1 : city_rs(ctx, sc, classes, dem, roads);
 }
 
 rs_roads *ss_crowded_road(rs_ctx *ctx, size_t n, double length, const char *cls)

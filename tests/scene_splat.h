@@ -12,6 +12,10 @@ rs_roads *ss_roads(rs_ctx *ctx, const sc_scene *s);
  * are centimetres) and its roads: 0, or -1 when a step fails (the caller
  * frees what is not NULL, and sc with sc_scene_free). */
 int ss_city(rs_ctx *ctx, sc_scene *sc, rs_dem **dem, rs_roads **roads);
+/* The same for sc_city(sc, w, h, 5 m cells, n roads, seed), its roads
+ * classed by width (sc_city_class) when `classes`: the edits' cities. */
+int ss_city_of(rs_ctx *ctx, uint32_t w, uint32_t h, size_t n, uint64_t seed, int classes, sc_scene *sc, rs_dem **dem,
+               rs_roads **roads);
 /* One crowded road (sc_road_crowded): n points from (10, 16) over `length`
  * metres along x, 6 m wide, of class `cls` (NULL: unstyled); NULL when the
  * library refuses it. */

@@ -276,12 +276,8 @@ static void run_config(const config *cf, tally *T, tally *Tc)
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
     rs_roads *roads = NULL, *none = NULL;
-    int ok = sc_city(&sc, cf->w, cf->h, 5.0, cf->roads, cf->seed) == 0;
-    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
-    ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
-    ok = ok && (roads = ss_roads(ctx, &sc)) != NULL && rs_roads_create(ctx, &none) == RS_OK;
-    for (size_t i = 0; ok && cf->styled && i < sc.nroads; i++)
-        ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    int ok = ss_city_of(ctx, cf->w, cf->h, cf->roads, cf->seed, cf->styled, &sc, &dem, &roads) == 0 &&
+             rs_roads_create(ctx, &none) == RS_OK;
     rs_styles *S = NULL;
     if (ok && cf->fills) ok = rs_styles_parse(ctx, fill_styles, sizeof fill_styles - 1, &S) == RS_OK;
     for (size_t i = 0; ok && cf->fills && i < sc.nroads; i += 3)
@@ -867,15 +863,10 @@ static size_t subset_case(int styled, int use_net, size_t *differ, size_t *kept)
     rs_styles *S = NULL;
     size_t pixels = 0;
     *differ = *kept = 0;
-    int ok = sc_city(&sc, 161, 141, 5.0, 1000, 5) == 0;
-    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
-    ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
-    ok = ok && (roads = ss_roads(ctx, &sc)) != NULL;
+    int ok = ss_city_of(ctx, 161, 141, 1000, 5, styled == 1, &sc, &dem, &roads) == 0;
     static const char *const names[] = { "red", "grad", "kerb" };
-    for (size_t i = 0; ok && i < sc.nroads; i++)
-        ok = styled == 1 ? rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK
-             : (i / 40) % 3 == 0 ? rs_roads_set_attr(ctx, roads, i, "style", names[(i / 120) % 3]) == RS_OK
-                                 : 1;
+    for (size_t i = 0; ok && styled == 2 && i < sc.nroads; i++)
+        if ((i / 40) % 3 == 0) ok = rs_roads_set_attr(ctx, roads, i, "style", names[(i / 120) % 3]) == RS_OK;
     if (ok && styled == 2) ok = rs_styles_parse(ctx, subset_styles, sizeof subset_styles - 1, &S) == RS_OK;
     rs_splat_options o = edit_opts(4);
     o.style.styles = S;
@@ -1021,12 +1012,7 @@ static void test_shared_free(void)
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
-    int ok = sc_city(&sc, 121, 101, 5.0, 200, 21) == 0;
-    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
-    ok = ok && rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK;
-    ok = ok && (roads = ss_roads(ctx, &sc)) != NULL;
-    for (size_t i = 0; ok && i < sc.nroads; i++)
-        ok = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) == RS_OK;
+    int ok = ss_city_of(ctx, 121, 101, 200, 21, 1, &sc, &dem, &roads) == 0;
     rs_splat_options o = edit_opts(4);
     rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
     const double xy[] = { 200, 200, 260, 230, 300, 290 };

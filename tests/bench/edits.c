@@ -69,11 +69,7 @@ int main(int argc, char **argv)
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
-    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
-    int bad = sc_city(&sc, 400, 350, 5.0, ROADS, 1) || rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) ||
-              rs_dem_set_frame(ctx, dem, &fr) || !(roads = ss_roads(ctx, &sc));
-    for (size_t i = 0; !bad && i < sc.nroads; i++)
-        bad = rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width)) != RS_OK;
+    int bad = ss_city_of(ctx, 400, 350, ROADS, 1, 1, &sc, &dem, &roads) != 0;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;

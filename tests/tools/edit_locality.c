@@ -57,12 +57,7 @@ int main(int argc, char **argv)
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
     rs_roads *roads = NULL;
-    rs_dem_frame fr = { 5.0, 0.01, 0, 0 };
-    if (rs_ctx_create(NULL, NULL, &ctx) || sc_city(&sc, 400, 350, 5.0, 10000, 1) ||
-        rs_dem_create(ctx, sc.w, sc.h, sc.z, &dem) || rs_dem_set_frame(ctx, dem, &fr) || !(roads = ss_roads(ctx, &sc)))
-        return 1;
-    for (size_t i = 0; i < sc.nroads; i++)
-        if (rs_roads_set_attr(ctx, roads, i, "class", sc_city_class(sc.roads[i].width))) return 1;
+    if (rs_ctx_create(NULL, NULL, &ctx) || ss_city_of(ctx, 400, 350, 10000, 1, 1, &sc, &dem, &roads)) return 1;
     rs_splat_options o;
     memset(&o, 0, sizeof o);
     o.texels = 4;
@@ -75,6 +70,9 @@ int main(int argc, char **argv)
     if (rs_splatter_create(ctx, dem, NULL, g, &o, &s) || rs_network_build(ctx, roads, NULL, &net)) goto fail;
     rs__grid_facts facts;
     rs__grid_facts_of(g, &facts);
+    /* (the strokes' bases once, as an update's network has them: not in each box's build time) */
+    if (!(net->s_base = malloc(sc.nroads * sizeof *net->s_base))) return 1;
+    rs__stroke_bases(net, roads, dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size, net->s_base);
     unsigned char *in = calloc(sc.nroads, 1);
     if (!in) return 1;
     const double pix = 5.0 / 4, boxes[][4] = { { 800, 700, 1000, 900 }, { 300, 300, 400, 420 }, { 1500, 1000, 1700, 1300 } };
@@ -109,28 +107,16 @@ int main(int argc, char **argv)
             }
         }
         rs_roads *sub = NULL;
-        size_t nsub = 0;
-        if (rs_roads_create(ctx, &sub)) goto fail;
-        for (size_t i = 0; i < sc.nroads; i++) {
-            const double *xy;
-            size_t n;
-            double w;
-            const char *name;
-            if (!in[i]) continue;
-            rs_roads_get(roads, i, &name, &w, &xy, &n);
-            if (rs_roads_add(ctx, sub, name, w, xy, n) ||
-                rs_roads_set_attr(ctx, sub, nsub++, "class", rs_roads_get_attr(roads, i, "class")))
-                goto fail;
-        }
         rs_road_grid *gs = NULL;
         rs_splatter *ss = NULL;
-        uint32_t *ids = malloc((nsub ? nsub : 1) * sizeof *ids);
-        size_t ni = 0;
+        uint32_t *ids = malloc(sc.nroads * sizeof *ids);
+        size_t nsub = 0;
         if (!ids) return 1;
         for (size_t i = 0; i < sc.nroads; i++)
-            if (in[i]) ids[ni++] = (uint32_t)i;
+            if (in[i]) ids[nsub++] = (uint32_t)i;
+        if (rs__roads_subset(ctx, roads, ids, nsub, &sub)) goto fail;
         t0 = tm_thread_cpu_ms();
-        if (whole_net ? rs__road_grid_build_subset(ctx, dem, roads, &o, net, &facts, ids, ni, &gs)
+        if (whole_net ? rs__road_grid_build_subset(ctx, dem, roads, &o, net, &facts, ids, nsub, &gs)
                       : rs_road_grid_build(ctx, dem, sub, &o, &gs))
             goto fail;
         free(ids);
