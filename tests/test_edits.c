@@ -28,6 +28,7 @@
 #include "scenes.h"
 #include "internal.h"
 #include "network.h"
+#include "grid_edit.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -60,7 +61,7 @@ static const char *const kind_name[E_KINDS] = { "move", "add", "remove", "reclas
 typedef struct tally {
     double dirty[E_KINDS], changed[E_KINDS];
     int edits[E_KINDS];
-    long uncovered, not_identical, bad_free, overlaps, outputs_differ;
+    long uncovered, not_identical, bad_free, overlaps, outputs_differ, net_differ;
 } tally;
 
 static const char *const classes[] = { "primary", "secondary", "residential", "service", "tertiary" };
@@ -321,6 +322,8 @@ static void run_config(const config *cf, tally *T, tally *Tc)
         dbg_pix = 5.0 / cf->texels;
         if (getenv("EDITS_DEBUG")) fprintf(stderr, "  edit %u %s\n", e, kind_name[kind]);
         if (ok) check_update(g1, &a, &b, &c, &t, kind, T);
+        /* (the network it keeps for the next update, updated in place: a whole build's) */
+        if (ok) T->net_differ += rs__grid_track_net_check(ctx, g1, roads) != 1;
         /* (class styles and fills: every output of the updated grid, lit and layered too) */
         if (ok && (strcmp(cf->name, "styled") == 0 || strcmp(cf->name, "fills") == 0))
             T->outputs_differ += !same_outputs(ctx, dem, g1, gf, &o);
@@ -362,6 +365,8 @@ static void report(const char *name, const tally *T, int check_ratio)
     CHECKF(T->outputs_differ == 0, "%s: %ld updated grids whose layers, normals or lit colour differ from a fresh "
            "build's", name, T->outputs_differ);
     CHECKF(T->bad_free == 0, "%s: %ld road pixels in tiles called road-free", name, T->bad_free);
+    CHECKF(T->net_differ == 0, "%s: %ld updated grids whose kept network differs from a whole build's", name,
+           T->net_differ);
     CHECKF(T->overlaps == 0, "%s: %ld pixels in two dirty rectangles", name, T->overlaps);
     /* moves, additions and removals: the dirty area within 2.5x of the
      * pixels that change (at 1.25 m pixels a road's edge pixels weigh

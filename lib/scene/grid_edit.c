@@ -1188,21 +1188,74 @@ rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_option
     return rs__progress_end(ctx, &pg, r);
 }
 
-/* The kind of e's piece of fingerprint h (keys k: sorted_keys of e), or -1
- * when e has none (of several, the first: their kinds may differ). */
-static int kind_of(const keyed *k, const rs__grid_edit *e, uint64_t h)
+/* The kind of e's piece of fingerprint h (keys k[0..n): some of e's,
+ * sorted), or -1 when none of them has it (of several, the first: their
+ * kinds may differ). */
+static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h)
 {
-    size_t lo = 0, hi = e->n;
+    size_t lo = 0, hi = n;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
         if (k[mid].h < h) lo = mid + 1;
         else hi = mid;
     }
-    if (!(lo < e->n && k[lo].h == h)) return -1;
+    if (!(lo < n && k[lo].h == h)) return -1;
     int kind = (int)e->it[k[lo].i].kind;
-    for (size_t j = lo + 1; j < e->n && k[j].h == h; j++)
+    for (size_t j = lo + 1; j < n && k[j].h == h; j++)
         if ((int)e->it[k[j].i].kind != kind) return RS__EI_SURFACE; /* (mixed: no core) */
     return kind;
+}
+
+static int cmp_u32(const void *pa, const void *pb)
+{
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}
+
+/* The pieces of e whose regions (no pad) meet box [x0, x1] x [y0, y1]
+ * (metres), ascending, from its bins: *ids (the caller's: rs__free), *n;
+ * their keys sorted in *keys. NULL on no memory. */
+static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, double y0, double x1, double y1, size_t *n,
+                            keyed **keys)
+{
+    size_t m = 0;
+    uint32_t *ids = NULL;
+    int all = !e->bstart || (bin_of(x0, e->bin, e->bw) == 0 && bin_of(y0, e->bin, e->bh) == 0 &&
+                             bin_of(x1, e->bin, e->bw) == e->bw - 1 && bin_of(y1, e->bin, e->bh) == e->bh - 1);
+    if (all) {
+        if (!(ids = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *ids))) return NULL;
+        for (size_t i = 0; i < e->n; i++) ids[i] = (uint32_t)i;
+        m = e->n;
+    } else {
+        uint32_t i0 = bin_of(x0, e->bin, e->bw), i1 = bin_of(x1, e->bin, e->bw);
+        uint32_t j0 = bin_of(y0, e->bin, e->bh), j1 = bin_of(y1, e->bin, e->bh);
+        size_t total = 0;
+        for (uint32_t j = j0; j <= j1; j++) total += e->bstart[(size_t)j * e->bw + i1 + 1] - e->bstart[(size_t)j * e->bw + i0];
+        if (!(ids = rs__alloc_array(ctx, total ? total : 1, sizeof *ids))) return NULL;
+        for (uint32_t j = j0; j <= j1; j++)
+            for (uint32_t b = e->bstart[(size_t)j * e->bw + i0]; b < e->bstart[(size_t)j * e->bw + i1 + 1]; b++)
+                ids[m++] = e->bitem[b];
+        if (m > 1) qsort(ids, m, sizeof *ids, cmp_u32);
+        size_t u = 0;
+        for (size_t i = 0; i < m; i++) {
+            if (u && ids[u - 1] == ids[i]) continue;
+            double a0, b0, a1, b1;
+            item_box(&e->it[ids[i]], 0, &a0, &b0, &a1, &b1);
+            if (a1 < x0 || a0 > x1 || b1 < y0 || b0 > y1) continue;
+            ids[u++] = ids[i];
+        }
+        m = u;
+    }
+    keyed *k = rs__alloc_array(ctx, m ? m : 1, sizeof *k);
+    if (!k) {
+        rs__free(ctx, ids);
+        return NULL;
+    }
+    for (size_t i = 0; i < m; i++) k[i].h = e->it[ids[i]].h, k[i].i = ids[i];
+    if (m > 1) qsort(k, m, sizeof *k, cmp_keyed);
+    *n = m;
+    *keys = k;
+    return ids;
 }
 
 /* A piece's region meets rectangle R (pixels)? */
@@ -1225,21 +1278,34 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     const size_t ns = old->npatch + 1;
     const rs_road_grid **src = rs__alloc_array(ctx, ns, sizeof *src);
     keyed **ks = rs__calloc(ctx, ns, sizeof *ks);
+    uint32_t **near = rs__calloc(ctx, ns, sizeof *near);
+    size_t *nk = rs__calloc(ctx, ns, sizeof *nk);
     const rs__grid_edit *el = local->edit;
     keyed *kl = el ? sorted_keys(ctx, el) : NULL;
     spans S, Ssf, C;
     memset(&S, 0, sizeof S);
     memset(&Ssf, 0, sizeof Ssf);
     memset(&C, 0, sizeof C);
-    rs_result r = src && ks && kl ? RS_OK : RS_ERR_NOMEM;
+    rs_result r = src && ks && near && nk && kl ? RS_OK : RS_ERR_NOMEM;
     int fills = 0;
     *out = NULL;
     *nout = 0;
     const double pix = local->frame.cell_size / local->texels;
     const uint32_t W = (local->dem_w - 1) * local->texels, H = (local->dem_h - 1) * local->texels;
+    /* each source's pieces near the rectangle (within every grid's pad and
+     * a metre: a piece that meets it, and one of equal fingerprint, lies
+     * there), from its bins */
+    double grow = grid_pad(local);
     for (size_t k = 0; !r && k < ns; k++) {
         src[k] = k == 0 ? (old->base ? old->base : old) : old->patch[k - 1].grid;
-        if (!src[k]->edit || src[k]->edit->over || !(ks[k] = sorted_keys(ctx, src[k]->edit))) r = RS_ERR_NOMEM;
+        grow = fmax(grow, grid_pad(src[k]));
+    }
+    grow += 1.0;
+    for (size_t k = 0; !r && k < ns; k++) {
+        if (!src[k]->edit || src[k]->edit->over ||
+            !(near[k] = near_items(ctx, src[k]->edit, rect.x0 * pix - grow, rect.y0 * pix - grow, rect.x1 * pix + grow,
+                                   rect.y1 * pix + grow, &nk[k], &ks[k])))
+            r = RS_ERR_NOMEM;
         else fills |= src[k]->edit->fills;
     }
     if (!r && el) fills |= el->fills;
@@ -1254,7 +1320,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         int known = 0, core = q->kind == RS__EI_CORE;
         for (size_t k = 0; k < ns; k++) {
             if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
-            int kind = kind_of(ks[k], src[k]->edit, q->h);
+            int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h);
             known |= kind >= 0;
             core &= kind == RS__EI_CORE || kind < 0;
         }
@@ -1267,13 +1333,13 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     for (size_t k = 0; !r && ok && k < ns; k++) {
         const rs__grid_edit *e = src[k]->edit;
         double pad = grid_pad(src[k]);
-        for (size_t i = 0; ok && i < e->n; i++) {
-            const rs__edit_item *q = &e->it[i];
+        for (size_t ii = 0; ok && ii < nk[k]; ii++) {
+            const rs__edit_item *q = &e->it[near[k][ii]];
             if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) || !item_changed(kl, el->n, q->h))
                 continue;
             int replaced = 0;
             for (size_t j = k + 1; !replaced && j < ns; j++)
-                replaced = meets(q, pad, SRC_RECT(j), pix) && item_changed(ks[j], src[j]->edit->n, q->h);
+                replaced = meets(q, pad, SRC_RECT(j), pix) && item_changed(ks[j], nk[j], q->h);
             if (replaced) continue;
             ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
         }
@@ -1311,7 +1377,10 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         else (*out)[0] = rect, *nout = 1;
     } else if (!r) r = spans_to_rects(ctx, &in, out, nout);
     for (size_t k = 0; ks && k < ns; k++) rs__free(ctx, ks[k]);
+    for (size_t k = 0; near && k < ns; k++) rs__free(ctx, near[k]);
     rs__free(ctx, ks);
+    rs__free(ctx, near);
+    rs__free(ctx, nk);
     rs__free(ctx, src);
     rs__free(ctx, kl);
     rs__free(ctx, S.v);

@@ -102,12 +102,24 @@ void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e);
  * style, point attributes, markings; never its index) and its box in
  * world metres (x0, y0, x1, y1), the network of the whole set, and the
  * whole map's facts. */
+/* What the whole map's facts read of one road's resolved style. */
+typedef struct rs__road_sum {
+    float fill[4], casing[4]; /* its fill (a gradient's centre) and casing colour */
+    double casing_width;
+    double reach;             /* its paint's reach from the centre line */
+    uint8_t fill_surface, image, any_surface, styled;
+} rs__road_sum;
+
 typedef struct rs__grid_track {
     size_t n;
-    uint64_t *print;
+    uint64_t *print;  /* per road: its own (raw_prints in lib/scene/grid_patch.c) */
+    uint64_t *sprint; /* per road: its resolved style's */
+    rs__road_sum *sum;
+    uint64_t sctx;    /* the named styles, profile and side the styles were resolved with */
     double *box;
     rs_network *net;
     rs__grid_facts facts;
+    double max_width; /* the widest road's width (NaN: one is not finite) */
     size_t bytes;
 } rs__grid_track;
 /* The track of whole grid g built from `roads` with options o; takes `net`
@@ -115,6 +127,10 @@ typedef struct rs__grid_track {
 rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,
                                struct rs_road_grid *g);
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t);
+/* Tests: 1 when the network grid g keeps for its next update equals one
+ * rs_network_build makes of `roads` (or it keeps none), 0 when not, -1
+ * when that build failed. */
+int rs__grid_track_net_check(rs_ctx *ctx, const struct rs_road_grid *g, const rs_roads *roads);
 /* The candidate rectangles *rects (*nrects of them, the caller's:
  * rs__free) rendered under grids a and b (splatters on them for dem and
  * opts, lighting off) and replaced by the exact rectangles of the pixels

@@ -50,96 +50,60 @@ static uint64_t style_print(uint64_t h, const rs_style *y)
     return h;
 }
 
-/* The prints, boxes, whole-map facts (index cell left 0) and widest paint
- * reach of every road. */
-static rs_result prints_facts(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, uint64_t **print,
-                              double **box, rs__grid_facts *facts, double *reach)
+/* The raw prints (geometry, width, name, attributes, point attributes,
+ * markings), boxes and widest road of every road, and the reach of the
+ * widest marking. */
+static rs_result raw_prints(rs_ctx *ctx, const rs_roads *roads, uint64_t **print, double **box, double *max_width,
+                            double *mark_reach)
 {
     size_t n = rs_roads_count(roads);
     uint64_t *P = rs__alloc_array(ctx, n ? n : 1, sizeof *P);
     double *B = rs__alloc_array(ctx, n ? n : 1, 4 * sizeof *B);
-    rs_style *y = rs__malloc(ctx, sizeof *y);
-    rs_result r = P && B && y ? RS_OK : RS_ERR_NOMEM;
-    memset(facts, 0, sizeof *facts);
-    *reach = 0;
-    int casings = 0;
-    for (size_t i = 0; i < n && !r; i++) {
+    if (!P || !B) {
+        rs__free(ctx, P);
+        rs__free(ctx, B);
+        return RS_ERR_NOMEM;
+    }
+    *max_width = 0;
+    *mark_reach = 0;
+    for (size_t i = 0; i < n; i++) {
         const char *name = NULL;
         const double *xy = NULL;
         size_t np = 0;
         double w = 0;
         rs_roads_get(roads, i, &name, &w, &xy, &np);
         uint64_t h = mixs(mixd(0x7e57, w), name);
-        double *b = B + 4 * i;
-        b[0] = b[1] = INFINITY, b[2] = b[3] = -INFINITY;
+        *max_width = w > *max_width || w != w ? w : *max_width; /* (a NaN stays) */
+        double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
         for (size_t k = 0; k < np; k++) {
-            h = mixd(mixd(h, xy[2 * k]), xy[2 * k + 1]);
-            b[0] = fmin(b[0], xy[2 * k]), b[1] = fmin(b[1], xy[2 * k + 1]);
-            b[2] = fmax(b[2], xy[2 * k]), b[3] = fmax(b[3], xy[2 * k + 1]);
+            double x = xy[2 * k], y = xy[2 * k + 1];
+            h = mixd(mixd(h, x), y);
+            x0 = x < x0 ? x : x0, y0 = y < y0 ? y : y0, x1 = x > x1 ? x : x1, y1 = y > y1 ? y : y1;
         }
+        double *b = B + 4 * i;
+        b[0] = x0, b[1] = y0, b[2] = x1, b[3] = y1;
         for (size_t k = 0; k < rs_roads_attr_count(roads, i); k++) {
             const char *key = NULL, *val = NULL;
             rs_roads_attr_at(roads, i, k, &key, &val);
             h = mixs(mixs(h, key), val);
         }
-        double rch = 0.5 * w;
-        if (!o->style.disable) {
-            if ((r = rs_road_style_ex(ctx, roads, i, &o->style, y)) != RS_OK) break;
-            h = style_print(h, y);
-            float c[4];
-            rs__put_colour(c, y->surface == RS_SURFACE_GRADIENT ? y->gradient_centre : y->fill);
-            if (y->surface != RS_SURFACE_DEFAULT || y->surface_image[0]) facts->any_surface = 1;
-            if (i == 0) {
-                facts->fill_uniform = y->surface == RS_SURFACE_FILL;
-                memcpy(facts->fill_rgba, c, sizeof c);
-            } else if (y->surface != RS_SURFACE_FILL || memcmp(facts->fill_rgba, c, sizeof c)) {
-                facts->fill_uniform = 0;
-            }
-            if (y->surface_image[0]) facts->fill_uniform = 0;
-            facts->styled |= y->surface != RS_SURFACE_DEFAULT || y->line_count || y->casing_width > 0 ||
-                             y->surface_image[0];
-            if (y->casing_width > 0) {
-                float cc[4];
-                rs__put_colour(cc, y->casing);
-                if (!casings++) {
-                    memcpy(facts->casing_rgba, cc, sizeof cc);
-                    facts->casing_uniform = 1;
-                } else if (memcmp(facts->casing_rgba, cc, sizeof cc)) {
-                    facts->casing_uniform = 0;
-                }
-                facts->widest_casing = fmax(facts->widest_casing, y->casing_width);
-                rch += y->casing_width;
-            }
-            for (uint32_t k = 0; k < y->line_count && k < RS_STYLE_MAX_LINES; k++)
-                rch = fmax(rch, fabs(y->line[k].offset) + 0.5 * y->line[k].width);
-        }
-        *reach = fmax(*reach, rch);
         P[i] = h;
     }
-    if (!facts->styled) { /* (no styling: the whole build keeps no switches) */
-        memset(facts, 0, sizeof *facts);
-    }
     /* point attributes and markings, in their order, into their roads' prints */
-    for (size_t k = 0; k < rs_roads_point_attr_count(roads) && !r; k++) {
+    for (size_t k = 0; k < rs_roads_point_attr_count(roads); k++) {
         size_t road = 0, point = 0;
         const char *key = NULL, *val = NULL;
         rs_roads_point_attr_at(roads, k, &road, &point, &key, &val);
         if (road < n) P[road] = mixs(mixs(mix(P[road], point), key), val);
     }
-    for (size_t k = 0; k < rs_roads_mark_count(roads) && !r; k++) {
+    for (size_t k = 0; k < rs_roads_mark_count(roads); k++) {
         rs_mark m;
         if (rs_roads_get_mark(roads, k, &m) != RS_OK || m.road >= n) continue;
         uint64_t h = mixd(mixd(mixd(mixd(mixs(P[m.road], m.type), m.s), m.t), m.length), m.width);
         P[m.road] = mix(h, (uint64_t)(m.flip != 0));
         /* (a marking lies |t| across, up to its extent; 0 takes its type's: 10 m is more than any) */
         double ext = fmax(m.length > 0 ? m.length : 10, m.width > 0 ? m.width : 10);
-        if (fabs(m.t) + ext > *reach) *reach = fabs(m.t) + ext;
-    }
-    rs__free(ctx, y);
-    if (r) {
-        rs__free(ctx, P);
-        rs__free(ctx, B);
-        return r;
+        if (fabs(m.t) + ext > *mark_reach) *mark_reach = fabs(m.t) + ext;
     }
     for (size_t i = 0; i < n; i++) P[i] = rs__fp_final(P[i]);
     *print = P;
@@ -147,10 +111,92 @@ static rs_result prints_facts(rs_ctx *ctx, const rs_roads *roads, const rs_splat
     return RS_OK;
 }
 
+/* What the styles the roads resolve to depend on besides the roads: the
+ * named styles, the profile and the driving side. */
+static uint64_t styles_print(const rs_splat_options *o)
+{
+    uint64_t h = mix(mix(mix(0x5717e5, (uint64_t)o->style.disable), (uint64_t)o->style.profile),
+                     (uint64_t)o->style.driving_side);
+    size_t n = rs_styles_count(o->style.styles);
+    h = mix(h, n);
+    for (size_t k = 0; k < n; k++) {
+        const rs_style *y = rs_styles_get(o->style.styles, k);
+        h = style_print(mixs(h, y->name), y);
+    }
+    return rs__fp_final(h);
+}
+
+/* Road i's resolved style: its print and what the whole map's facts read
+ * of it (with the styles off: its half width alone). */
+static rs_result road_sum(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs_splat_options *o, rs_style *y,
+                          uint64_t *sprint, rs__road_sum *S)
+{
+    double w = 0;
+    rs_roads_get(roads, i, NULL, &w, NULL, NULL);
+    memset(S, 0, sizeof *S);
+    S->reach = 0.5 * w;
+    *sprint = 0;
+    if (o->style.disable) return RS_OK;
+    rs_result r = rs_road_style_ex(ctx, roads, i, &o->style, y);
+    if (r) return r;
+    *sprint = rs__fp_final(style_print(0x5717e, y));
+    rs__put_colour(S->fill, y->surface == RS_SURFACE_GRADIENT ? y->gradient_centre : y->fill);
+    S->fill_surface = y->surface == RS_SURFACE_FILL;
+    S->image = y->surface_image[0] != 0;
+    S->any_surface = y->surface != RS_SURFACE_DEFAULT || S->image;
+    S->styled = y->surface != RS_SURFACE_DEFAULT || y->line_count || y->casing_width > 0 || S->image;
+    if (y->casing_width > 0) {
+        rs__put_colour(S->casing, y->casing);
+        S->casing_width = y->casing_width;
+        S->reach += y->casing_width;
+    }
+    for (uint32_t k = 0; k < y->line_count && k < RS_STYLE_MAX_LINES; k++)
+        S->reach = fmax(S->reach, fabs(y->line[k].offset) + 0.5 * y->line[k].width);
+    return RS_OK;
+}
+
+/* The whole map's facts (index cell left 0) and widest paint reach from
+ * the roads' sums, in road order. */
+static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_reach, rs__grid_facts *facts,
+                     double *reach)
+{
+    memset(facts, 0, sizeof *facts);
+    *reach = 0;
+    int casings = 0;
+    for (size_t i = 0; i < n; i++) {
+        const rs__road_sum *y = &S[i];
+        if (!disable) {
+            if (y->any_surface) facts->any_surface = 1;
+            if (i == 0) {
+                facts->fill_uniform = y->fill_surface;
+                memcpy(facts->fill_rgba, y->fill, sizeof y->fill);
+            } else if (!y->fill_surface || memcmp(facts->fill_rgba, y->fill, sizeof y->fill)) {
+                facts->fill_uniform = 0;
+            }
+            if (y->image) facts->fill_uniform = 0;
+            facts->styled |= y->styled;
+            if (y->casing_width > 0) {
+                if (!casings++) {
+                    memcpy(facts->casing_rgba, y->casing, sizeof y->casing);
+                    facts->casing_uniform = 1;
+                } else if (memcmp(facts->casing_rgba, y->casing, sizeof y->casing)) {
+                    facts->casing_uniform = 0;
+                }
+                facts->widest_casing = fmax(facts->widest_casing, y->casing_width);
+            }
+        }
+        *reach = fmax(*reach, y->reach);
+    }
+    if (!facts->styled) memset(facts, 0, sizeof *facts); /* (no styling: the whole build keeps no switches) */
+    if (mark_reach > *reach) *reach = mark_reach;
+}
+
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 {
     if (!t) return;
     rs__free(ctx, t->print);
+    rs__free(ctx, t->sprint);
+    rs__free(ctx, t->sum);
     rs__free(ctx, t->box);
     rs_network_free(ctx, t->net);
     rs__free(ctx, t);
@@ -165,50 +211,83 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
         return RS_ERR_NOMEM;
     }
     t->net = net;
-    double reach;
-    rs__grid_facts f;
-    rs_result r = prints_facts(ctx, roads, o, &t->print, &t->box, &f, &reach);
+    t->n = rs_roads_count(roads);
+    double mark_reach;
+    rs_style *y = rs__malloc(ctx, sizeof *y);
+    t->sprint = rs__alloc_array(ctx, t->n ? t->n : 1, sizeof *t->sprint);
+    t->sum = rs__alloc_array(ctx, t->n ? t->n : 1, sizeof *t->sum);
+    rs_result r = y && t->sprint && t->sum ? RS_OK : RS_ERR_NOMEM;
+    if (!r) r = raw_prints(ctx, roads, &t->print, &t->box, &t->max_width, &mark_reach);
+    for (size_t i = 0; i < t->n && !r; i++) r = road_sum(ctx, roads, i, o, y, &t->sprint[i], &t->sum[i]);
+    rs__free(ctx, y);
     if (r) {
         rs__grid_track_free(ctx, t);
         return r;
     }
-    t->n = rs_roads_count(roads);
+    t->sctx = styles_print(o);
     rs__grid_facts_of(g, &t->facts);
-    t->bytes = sizeof *t + t->n * (sizeof *t->print + 4 * sizeof *t->box) + (net ? rs__network_bytes(net) : 0);
+    t->bytes = sizeof *t + t->n * (sizeof *t->print + sizeof *t->sprint + sizeof *t->sum + 4 * sizeof *t->box) +
+               (net ? rs__network_bytes(net) : 0);
     g->track = t;
     return RS_OK;
 }
 
 /* ---- matching the roads by their prints ---------------------------------- */
 
-typedef rs__keyed keyed;
 
 /* new road j's old road (UINT32_MAX: none) in *m_new, old i's new one in
- * *m_old: equal prints, in order (a road whose print also changed order is
- * no match). */
+ * *m_old: for each new road in order, the first old road after the last
+ * match with an equal print (a road whose print also changed order is no
+ * match). Mostly the next old road; else from a table of the old prints,
+ * each print's roads ascending (made at the first miss). */
 static rs_result match_roads(rs_ctx *ctx, const uint64_t *po, size_t no, const uint64_t *pn, size_t nn,
                              uint32_t *m_old, uint32_t *m_new)
 {
-    keyed *K = rs__alloc_array(ctx, no ? no : 1, sizeof *K);
-    if (!K) return RS_ERR_NOMEM;
-    for (size_t i = 0; i < no; i++) K[i].h = po[i], K[i].i = (uint32_t)i, m_old[i] = UINT32_MAX;
-    qsort(K, no, sizeof *K, rs__cmp_keyed);
+    typedef struct slot { uint64_t h; uint32_t head; } slot;
+    slot *tab = NULL;
+    uint32_t *next = NULL;
+    size_t mask = 0;
     int64_t last = -1;
+    for (size_t i = 0; i < no; i++) m_old[i] = UINT32_MAX;
     for (size_t j = 0; j < nn; j++) {
         m_new[j] = UINT32_MAX;
-        size_t lo = 0, hi = no;
-        while (lo < hi) {
-            size_t mid = lo + (hi - lo) / 2;
-            if (K[mid].h < pn[j] || (K[mid].h == pn[j] && (int64_t)K[mid].i <= last)) lo = mid + 1;
-            else hi = mid;
+        size_t i = (size_t)(last + 1);
+        if (!(i < no && po[i] == pn[j])) {
+            if (!tab) {
+                size_t cap = 16;
+                while (cap < 2 * no) cap *= 2;
+                tab = rs__alloc_array(ctx, cap, sizeof *tab);
+                next = rs__alloc_array(ctx, no ? no : 1, sizeof *next);
+                if (!tab || !next) {
+                    rs__free(ctx, tab);
+                    rs__free(ctx, next);
+                    return RS_ERR_NOMEM;
+                }
+                mask = cap - 1;
+                for (size_t k = 0; k < cap; k++) tab[k].head = UINT32_MAX;
+                for (size_t k = no; k-- > 0;) { /* (from the last: each list ascends) */
+                    size_t at = (size_t)rs__fp_final(po[k]) & mask;
+                    while (tab[at].head != UINT32_MAX && tab[at].h != po[k]) at = (at + 1) & mask;
+                    next[k] = tab[at].head;
+                    tab[at].h = po[k];
+                    tab[at].head = (uint32_t)k;
+                }
+            }
+            size_t at = (size_t)rs__fp_final(pn[j]) & mask;
+            while (tab[at].head != UINT32_MAX && tab[at].h != pn[j]) at = (at + 1) & mask;
+            /* (roads up to the last match are no match again: dropped) */
+            uint32_t k = tab[at].head;
+            while (k != UINT32_MAX && (int64_t)k <= last) k = next[k];
+            if (tab[at].head != UINT32_MAX) tab[at].head = k;
+            if (k == UINT32_MAX) continue;
+            i = k;
         }
-        if (lo < no && K[lo].h == pn[j] && m_old[K[lo].i] == UINT32_MAX) {
-            m_new[j] = K[lo].i;
-            m_old[K[lo].i] = (uint32_t)j;
-            last = K[lo].i;
-        }
+        m_new[j] = (uint32_t)i;
+        m_old[i] = (uint32_t)j;
+        last = (int64_t)i;
     }
-    rs__free(ctx, K);
+    rs__free(ctx, tab);
+    rs__free(ctx, next);
     return RS_OK;
 }
 
@@ -294,8 +373,10 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     const rs__grid_track *T = old->track;
     if (!T || o->coverage.edges != RS_EDGES_ANALYTIC || !base->field) return RS_OK;
     size_t nn = rs_roads_count(roads), no = T->n;
-    uint64_t *pn = NULL;
-    double *bn = NULL, reach = 0;
+    uint64_t *pn = NULL, *sp = NULL;
+    rs__road_sum *sm = NULL;
+    rs_style *ys = NULL;
+    double *bn = NULL, reach = 0, max_width = 0;
     rs__grid_facts facts;
     rs_network *net = NULL;
     uint32_t *m_old = rs__alloc_array(ctx, no ? no : 1, sizeof *m_old);
@@ -305,8 +386,26 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     size_t ndirty = 0, ids_n = 0;
     rs__grid_track *nt = NULL;
     rs_result r = m_old && m_new ? RS_OK : RS_ERR_NOMEM;
-    if (!r) r = prints_facts(ctx, roads, o, &pn, &bn, &facts, &reach);
+    double mark_reach = 0;
+    if (!r) r = raw_prints(ctx, roads, &pn, &bn, &max_width, &mark_reach);
     if (!r) r = match_roads(ctx, T->print, no, pn, nn, m_old, m_new);
+    /* the roads' styles: an unchanged road's kept while the named styles,
+     * profile and side are the same; else resolved again, and a road whose
+     * style changed no match */
+    if (!r && (!(sp = rs__alloc_array(ctx, nn ? nn : 1, sizeof *sp)) || !(sm = rs__alloc_array(ctx, nn ? nn : 1, sizeof *sm)) ||
+               !(ys = rs__malloc(ctx, sizeof *ys))))
+        r = RS_ERR_NOMEM;
+    const uint64_t sctx = styles_print(o);
+    for (size_t j = 0; j < nn && !r; j++) {
+        uint32_t i = m_new[j];
+        if (i != UINT32_MAX && sctx == T->sctx) {
+            sp[j] = T->sprint[i], sm[j] = T->sum[i];
+            continue;
+        }
+        if ((r = road_sum(ctx, roads, j, o, ys, &sp[j], &sm[j])) != RS_OK) break;
+        if (i != UINT32_MAX && sp[j] != T->sprint[i]) m_new[j] = UINT32_MAX, m_old[i] = UINT32_MAX;
+    }
+    if (!r) facts_of(sm, nn, o->style.disable, mark_reach, &facts, &reach);
     if (r) goto done;
     /* the whole map's switches must stand (a casing colour, a fill: the
      * whole map draws otherwise). The index cell stays the base's (a
@@ -327,7 +426,19 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             merged != (b.widest_casing <= cell_new))
             goto done;
     }
-    if (!o->style.disable && nn > 0 && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto done;
+    if (!o->style.disable && nn > 0) {
+        /* the old network where the edit left it, else built whole */
+        double zone[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        for (size_t i = 0; i < no; i++)
+            if (m_old[i] == UINT32_MAX) box_add(zone, T->box + 4 * i, 0);
+        for (size_t j = 0; j < nn; j++)
+            if (m_new[j] == UINT32_MAX) box_add(zone, bn + 4 * j, 0);
+        if (T->net && T->net->node_key &&
+            (r = rs__network_update(ctx, roads, T->net, m_old, m_new, bn, zone, 0.5 * (T->max_width != T->max_width || max_width != max_width ? NAN : fmax(T->max_width, max_width)),
+                                    &net)) != RS_OK)
+            goto done;
+        if (!net && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto done;
+    }
     /* the changed area: roads gone or new, and records whose place in
      * their stroke changed (their dashes move) */
     double chg[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
@@ -453,10 +564,16 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     /* for the next update */
     nt->n = nn;
     nt->print = pn;
+    nt->sprint = sp;
+    nt->sum = sm;
+    nt->sctx = sctx;
+    sp = NULL, sm = NULL;
     nt->box = bn;
     nt->net = net;
     nt->facts = facts;
-    nt->bytes = sizeof *nt + nn * (sizeof *pn + 4 * sizeof *bn) + (net ? rs__network_bytes(net) : 0);
+    nt->max_width = max_width;
+    nt->bytes = sizeof *nt + nn * (sizeof *nt->print + sizeof *nt->sprint + sizeof *nt->sum + 4 * sizeof *nt->box) +
+                (net ? rs__network_bytes(net) : 0);
     pn = NULL, bn = NULL, net = NULL;
     g->track = nt;
     nt = NULL;
@@ -464,14 +581,10 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     /* the rectangle's pixels that change (the old grid drew them, the new
      * one draws them; nothing changes outside it) */
     if (rect.x1 > rect.x0) {
-        /* the whole rectangle compared when it is small enough, else the
-         * pieces that differ (a superset) */
-        if ((uint64_t)(rect.x1 - rect.x0) * (rect.y1 - rect.y0) <= ctx->limits.max_dirty_compare) {
-            dirty = rs__alloc_array(ctx, 1, sizeof *dirty);
-            if (!dirty) { r = RS_ERR_NOMEM; goto done; }
-            dirty[0] = rect;
-            ndirty = 1;
-        } else if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - 1].grid, rect, &dirty, &ndirty)) != RS_OK)
+        /* the pieces that differ (a superset, mostly 2 to 6 times the
+         * changed pixels), then those pixels rendered under both grids and
+         * compared (when they are few enough) */
+        if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - 1].grid, rect, &dirty, &ndirty)) != RS_OK)
             goto done;
         if ((r = rs__dirty_render(ctx, dem, o, old, g, &dirty, &ndirty)) != RS_OK) goto done;
     }
@@ -501,6 +614,9 @@ done:
     rs__free(ctx, m_old);
     rs__free(ctx, m_new);
     rs__free(ctx, pn);
+    rs__free(ctx, sp);
+    rs__free(ctx, sm);
+    rs__free(ctx, ys);
     rs__free(ctx, bn);
     rs__free(ctx, ids);
     rs_network_free(ctx, net);
@@ -509,4 +625,15 @@ done:
     rs__grid_track_free(ctx, nt);
     rs_road_grid_free(ctx, g);
     return r;
+}
+
+int rs__grid_track_net_check(rs_ctx *ctx, const rs_road_grid *g, const rs_roads *roads)
+{
+    const rs__grid_track *t = g->track ? g->track : g->base ? g->base->track : NULL;
+    if (!t || !t->net) return 1;
+    rs_network *n = NULL;
+    if (rs_network_build(ctx, roads, NULL, &n) != RS_OK) return -1;
+    int eq = rs__network_equal(t->net, n);
+    rs_network_free(ctx, n);
+    return eq;
 }

@@ -19,6 +19,7 @@
  * depend on the cells or on memory addresses. */
 #include "network.h"
 #include "road_local.h"
+#include "grid_edit.h"
 
 #include <float.h>
 #include <math.h>
@@ -1326,13 +1327,13 @@ static size_t surf_cell(double v, double v0, double ic, size_t n)
 }
 
 /* Candidate end f (at xy, a copy of f->x, f->y in the cells' order)
- * against segment k (points pa, pb = pa + 2) of record q of stroke sq:
- * its nearest point first, from the copy (most candidates lie beyond the
- * reach: f is read only within it; at 10^5 roads the ends are megabytes,
- * read out of order) */
-static void surf_test(const build *B, const rs_network *N, surf_end *fe, const uint32_t *id, const double *xy,
-                      uint32_t q, uint32_t sq, uint32_t k, const double *pa, double dx, double dy, double dd,
-                      double reach2, int *q_non_car)
+ * against segment k (points pa, pb = pa + 2) of record q of stroke sq
+ * (its points qxy, qnp of them): its nearest point first, from the copy
+ * (most candidates lie beyond the reach: f is read only within it; at
+ * 10^5 roads the ends are megabytes, read out of order) */
+static void surf_test(const rs_roads *roads, const rs_network *N, surf_end *fe, const uint32_t *id, const double *xy,
+                      uint32_t q, uint32_t sq, const double *qxy, size_t qnp, uint32_t k, const double *pa, double dx,
+                      double dy, double dd, double reach2, int *q_non_car)
 {
     /* farther than the reach from the segment's line, by a margin far
      * above the roundings: farther from the segment too (most ends
@@ -1347,32 +1348,62 @@ static void surf_test(const build *B, const rs_network *N, surf_end *fe, const u
     if (!(d2 < f->d)) return; /* (the first of equals: the lowest record and segment) */
     if (f->stroke == sq) return;
     if (!f->non_car) { /* (read only here: a record's info is tens of ns of attribute lookups) */
-        if (*q_non_car < 0) *q_non_car = rs__road_non_car(B->roads, q);
+        if (*q_non_car < 0) *q_non_car = rs__road_non_car(roads, q);
         if (*q_non_car) return;
     }
     /* (the record's own end, where its street does not go on: the end
      * lies beyond the street, two ends near each other, no T; a ring's
      * seam is no end) */
-    const double *first = B->xy + 2 * B->voff[q], *last = B->xy + 2 * (B->voff[q + 1] - 1), *pb = pa + 2;
+    const double *first = qxy, *last = qxy + 2 * (qnp - 1), *pb = pa + 2;
     int ring = N->closed[sq];
     if (u == 0 && pa[0] == first[0] && pa[1] == first[1] && N->link[2 * q] == NONE && !ring) return;
     if (u == 1 && pb[0] == last[0] && pb[1] == last[1] && N->link[2 * q + 1] == NONE && !ring) return;
     f->q = q, f->k = k, f->u = u, f->d = d2;
 }
 
-/* Direction of road q's segment k, or of its nearest non-empty one
- * towards `step` (+1, -1) when that side is asked for and exists. */
-static double surf_angle(const build *B, uint32_t q, uint32_t k, int step, int reverse)
+/* Direction of the segment k of a record (its points xy, np of them), or
+ * of its nearest non-empty one towards `step` (+1, -1) when that side is
+ * asked for and exists. */
+static double surf_angle(const double *xy, size_t np, uint32_t k, int step, int reverse)
 {
-    size_t a0 = B->voff[q], nseg = B->voff[q + 1] - a0 - 1;
+    size_t nseg = np - 1;
     for (size_t j = k;;) {
-        const double *pa = B->xy + 2 * (a0 + j), *pb = pa + 2;
+        const double *pa = xy + 2 * j, *pb = pa + 2;
         double dx = pb[0] - pa[0], dy = pb[1] - pa[1];
         if (dx != 0 || dy != 0) return reverse ? atan2(-dy, -dx) : atan2(dy, dx);
         if (step > 0 ? j + 1 >= nseg : j == 0) break;
         j = step > 0 ? j + 1 : j - 1;
     }
     return 0;
+}
+
+/* The two legs of street q (its points qxy, qnp of them; the arc lengths
+ * s0, s1 at the ends of its segment k) at end f, which lies inside it. */
+static void surf_legs(const rs_roads *roads, const surf_end *f, const double *qxy, size_t qnp, double s0, double s1,
+                      rs_network_leg T[2])
+{
+    memset(T, 0, 2 * sizeof *T);
+    T[0].road = f->q;
+    T[0].segment = f->k;
+    T[0].s = s0 + f->u * (s1 - s0);
+    T[0].priority = rs__road_priority(roads, f->q);
+    T[1] = T[0];
+    T[0].kind = RS_LEG_FORWARD;
+    T[0].angle = surf_angle(qxy, qnp, f->u == 1 && f->k + 1 < qnp - 1 ? f->k + 1 : f->k, 1, 0);
+    T[1].kind = RS_LEG_BACKWARD;
+    T[1].angle = surf_angle(qxy, qnp, f->u == 0 && f->k > 0 ? f->k - 1 : f->k, -1, 1);
+}
+
+/* A node whose d legs L now hold street q's two: sorted, its major legs,
+ * degree and kind, a roundabout's control. */
+static void surf_node(const rs_roads *roads, uint32_t q, rs_network_node *node, rs_network_leg *L, uint32_t d)
+{
+    sort_legs(L, d);
+    mark_major(L, d);
+    node->degree = d;
+    node->kind = RS_NODE_JUNCTION;
+    const char *jc = rs_roads_get_attr(roads, q, "junction");
+    if (jc && strcmp(jc, "roundabout") == 0) node->control |= RS_NODE_ROUNDABOUT;
 }
 
 /* The reach of record q's surface for surface_tees: its half width plus
@@ -1463,9 +1494,10 @@ static rs_result surface_tees(build *B, rs_network *N)
         int qnc = -1; /* (not read yet) */
         uint32_t sq = N->stroke_of[q];
         double reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
-        size_t nseg = B->voff[q + 1] - B->voff[q] - 1;
+        size_t qnp = B->voff[q + 1] - B->voff[q], nseg = qnp - 1;
+        const double *qxy = B->xy + 2 * B->voff[q];
         for (size_t k = 0; k < nseg; k++) {
-            const double *pa = B->xy + 2 * (B->voff[q] + k), *pb = pa + 2;
+            const double *pa = qxy + 2 * k, *pb = pa + 2;
             /* (ternaries, not fmin / fmax: library calls, most of a
              * segment's cost; a NaN fails the box test) */
             double xmin = pa[0] < pb[0] ? pa[0] : pb[0], xmax = pa[0] < pb[0] ? pb[0] : pa[0];
@@ -1479,7 +1511,8 @@ static rs_result surface_tees(build *B, rs_network *N)
             if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 4) { /* (a box of at most 2 x 2 cells: all of it) */
                 for (size_t cy = r0; cy <= r1; cy++)
                     for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)
-                        surf_test(B, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+                        surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy, dd,
+                                  reach2, &qnc);
                 continue;
             }
             for (size_t cy = r0; cy <= r1; cy++) {
@@ -1495,7 +1528,8 @@ static rs_result surface_tees(build *B, rs_network *N)
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 size_t c0 = surf_cell(rs__fmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(rs__fmax(xa, xb) + rq, bx0, ic, nx);
                 for (uint32_t i = start[cy * nx + c0], ie = start[cy * nx + c1 + 1]; i < ie; i++)
-                    surf_test(B, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+                    surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy, dd,
+                                  reach2, &qnc);
             }
         }
     }
@@ -1520,26 +1554,11 @@ static rs_result surface_tees(build *B, rs_network *N)
             if (j == m || fe[j].node != nd || fe[j].q == NONE) continue;
             const surf_end *f = &fe[j];
             size_t pa = B->voff[f->q] + f->k;
-            rs_network_leg T;
-            memset(&T, 0, sizeof T);
-            T.road = f->q;
-            T.segment = f->k;
-            T.s = B->s[pa] + f->u * (B->s[pa + 1] - B->s[pa]);
-            T.priority = rs__road_priority(B->roads, f->q);
-            T.kind = RS_LEG_FORWARD;
-            T.angle = surf_angle(B, f->q, f->u == 1 && f->k + 1 < B->voff[f->q + 1] - B->voff[f->q] - 1 ? f->k + 1 : f->k, 1, 0);
-            leg[nl++] = T;
-            T.kind = RS_LEG_BACKWARD;
-            T.angle = surf_angle(B, f->q, f->u == 0 && f->k > 0 ? f->k - 1 : f->k, -1, 1);
-            leg[nl++] = T;
-            rs_network_leg *L = leg + N->leg_start[nd];
-            uint32_t d = (uint32_t)(nl - N->leg_start[nd]);
-            sort_legs(L, d);
-            mark_major(L, d);
-            N->node[nd].degree = d;
-            N->node[nd].kind = RS_NODE_JUNCTION;
-            const char *jc = rs_roads_get_attr(B->roads, f->q, "junction");
-            if (jc && strcmp(jc, "roundabout") == 0) N->node[nd].control |= RS_NODE_ROUNDABOUT;
+            surf_legs(B->roads, f, B->xy + 2 * B->voff[f->q], B->voff[f->q + 1] - B->voff[f->q], B->s[pa], B->s[pa + 1],
+                      leg + nl);
+            nl += 2;
+            surf_node(B->roads, f->q, &N->node[nd], leg + N->leg_start[nd], (uint32_t)(nl - N->leg_start[nd]));
+            N->node_surf[nd] = 1;
         }
         if (!res) {
             N->leg_start[N->nnodes] = (uint32_t)nl;
@@ -1600,6 +1619,9 @@ void rs_network_free(rs_ctx *ctx, rs_network *net)
     rs__free(ctx, net->rev);
     rs__free(ctx, net->link);
     rs__free(ctx, net->s_base);
+    rs__free(ctx, net->node_key);
+    rs__free(ctx, net->node_rad);
+    rs__free(ctx, net->node_surf);
     rs__free(ctx, net);
 }
 
@@ -1627,34 +1649,46 @@ static size_t bytes_of(const rs_network *N)
     return sizeof *N + N->nnodes * sizeof *N->node + (N->nnodes + 1) * sizeof *N->leg_start +
            N->nlegs * sizeof *N->leg +
            N->nroads * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev +
-                        sizeof *N->next + sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link);
+                        sizeof *N->next + sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link) +
+           (N->node_key ? N->nnodes * (sizeof *N->node_key + sizeof *N->node_rad + sizeof *N->node_surf) : 0);
 }
 
 /* ---- the strokes' arc lengths in a map's frame ---- */
 
+/* Stroke k's records' bases into out. */
+static void stroke_base(const rs_network *N, const rs_roads *roads, const rs__local_frame *F, size_t k, double *out)
+{
+    double acc = 0;
+    for (uint32_t e = N->stroke_start[k]; e < N->stroke_start[k + 1]; e++) {
+        uint32_t r = N->stroke_roads[e];
+        const double *xy = NULL;
+        size_t np = 0;
+        rs_roads_get(roads, r, NULL, NULL, &xy, &np);
+        out[r] = acc;
+        /* (as rs__road_local_walk sums a record: equal points once) */
+        double len = 0, qx = 0, qy = 0;
+        for (size_t i = 0; i < np; i++) {
+            double px, py;
+            rs__local_point(F, xy, i, &px, &py);
+            if (i > 0 && !(px == qx && py == qy)) len = rs__arc_add(len, rs__arc_len(qx, qy, px, py));
+            qx = px, qy = py;
+        }
+        acc = rs__arc_add(acc, len);
+    }
+}
+
 void rs__stroke_bases(const rs_network *N, const rs_roads *roads, double origin_x, double origin_y, double cell_size,
-                      double *out)
+                      const uint32_t *ids, size_t n, double *out)
 {
     rs__local_frame F = rs__local_frame_of(origin_x, origin_y, cell_size);
-    for (size_t k = 0; k < N->nstrokes; k++) {
-        double acc = 0;
-        for (uint32_t e = N->stroke_start[k]; e < N->stroke_start[k + 1]; e++) {
-            uint32_t r = N->stroke_roads[e];
-            const double *xy = NULL;
-            size_t np = 0;
-            rs_roads_get(roads, r, NULL, NULL, &xy, &np);
-            out[r] = acc;
-            /* (as rs__road_local_walk sums a record: equal points once) */
-            double len = 0, qx = 0, qy = 0;
-            for (size_t i = 0; i < np; i++) {
-                double px, py;
-                rs__local_point(&F, xy, i, &px, &py);
-                if (i > 0 && !(px == qx && py == qy)) len = rs__arc_add(len, rs__arc_len(qx, qy, px, py));
-                qx = px, qy = py;
-            }
-            acc = rs__arc_add(acc, len);
-        }
+    if (!ids) {
+        for (size_t k = 0; k < N->nstrokes; k++) stroke_base(N, roads, &F, k, out);
+        return;
     }
+    /* (the strokes of ids once each: out is NaN where not made yet) */
+    for (size_t r = 0; r < N->nroads; r++) out[r] = NAN;
+    for (size_t i = 0; i < n; i++)
+        if (ids[i] < N->nroads && out[ids[i]] != out[ids[i]]) stroke_base(N, roads, &F, N->stroke_of[ids[i]], out);
 }
 
 /* ---- a part of the network ---- */
@@ -1918,7 +1952,13 @@ static rs_result cluster_points(build *B)
     return RS_OK;
 }
 
-static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out);
+/* network_build's flags: no ends inside surfaces (rs__network_update finds
+ * them with the whole map's strokes); no network (*out NULL, RS_OK) when a
+ * record is short (its chains reach as far as they run). */
+#define NB_NO_SURF 1u
+#define NB_NO_SHORT 2u
+static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, unsigned flags,
+                               rs_network **out);
 
 /* Record r is short (no legs: bridge_short joins its two ends), of two
  * places. */
@@ -2118,13 +2158,14 @@ static rs_result bridge_short(build *B)
 /* Progress: the stages poll (rs__poll); done is 0 of 1 until the end. */
 rs_result rs_network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out)
 {
-    if (!ctx) return network_build(ctx, roads, opts, out);
+    if (!ctx) return network_build(ctx, roads, opts, 0, out);
     rs__progress pg;
     rs__progress_begin(ctx, &pg, NULL, NULL, 1, 1);
-    return rs__progress_end(ctx, &pg, network_build(ctx, roads, opts, out));
+    return rs__progress_end(ctx, &pg, network_build(ctx, roads, opts, 0, out));
 }
 
-static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, rs_network **out)
+static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *opts, unsigned flags,
+                               rs_network **out)
 {
     if (!out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "network: out is NULL");
     *out = NULL;
@@ -2148,8 +2189,15 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     N->nroads = B.nroads;
     N->tol = tol;
     size_t n = B.nroads, m = n ? n : 1;
-    if ((res = load_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK ||
-        (res = chain_short_runs(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK ||
+    if ((res = load_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
+        goto fail;
+    for (size_t r = 0; (flags & NB_NO_SHORT) && r < n; r++)
+        if (short_record(&B, r)) {
+            build_free(&B);
+            rs_network_free(ctx, N);
+            return RS_OK;
+        }
+    if ((res = chain_short_runs(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK ||
         (res = bridge_short(&B)) != RS_OK ||
         (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
         goto fail;
@@ -2248,7 +2296,10 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     N->node = rs__alloc_array(ctx, nn ? nn : 1, sizeof *N->node);
     N->leg_start = rs__alloc_array(ctx, nn + 1, sizeof *N->leg_start);
     N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
-    if (!N->leg || !N->node || !N->leg_start || !N->link) {
+    N->node_key = rs__alloc_array(ctx, nn ? nn : 1, sizeof *N->node_key);
+    N->node_rad = rs__alloc_array(ctx, nn ? nn : 1, sizeof *N->node_rad);
+    N->node_surf = rs__calloc(ctx, nn ? nn : 1, 1);
+    if (!N->leg || !N->node || !N->leg_start || !N->link || !N->node_key || !N->node_rad || !N->node_surf) {
         res = RS_ERR_NOMEM;
         goto fail;
     }
@@ -2280,6 +2331,11 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         ndo.x = B.xy[2 * (size_t)v];
         ndo.y = B.xy[2 * (size_t)v + 1];
         const double *c = &ndo.x;
+        N->node_key[nd] = (uint64_t)B.vroad[v] << 32 | (uint64_t)(v - B.voff[B.vroad[v]]);
+        double rad = 0;
+        for (uint32_t q = B.pstart[nd] + 1; q < B.pstart[nd + 1]; q++)
+            rad = fmax(rad, hypot(B.xy[2 * (size_t)B.pids[q]] - c[0], B.xy[2 * (size_t)B.pids[q] + 1] - c[1]));
+        N->node_rad[nd] = (float)rad < rad ? nextafterf((float)rad, INFINITY) : (float)rad;
         N->leg_start[nd] = (uint32_t)nl;
         for (size_t j = 0; j < np; j++) {
             const pass *p = &B.buf[j];
@@ -2354,7 +2410,7 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         N->length[r] = B.voff[r + 1] > B.voff[r] ? B.s[B.voff[r + 1] - 1] : 0;
     }
     number_strokes(N, N->link, B.live); /* (live is no longer needed: scratch) */
-    if ((res = surface_tees(&B, N)) != RS_OK) goto fail;
+    if (!(flags & NB_NO_SURF) && (res = surface_tees(&B, N)) != RS_OK) goto fail;
     N->bytes = bytes_of(N);
     build_free(&B);
     *out = N;
@@ -2477,4 +2533,437 @@ size_t rs_network_junction_area(const rs_network *net, const rs_roads *roads, si
         }
     }
     return n;
+}
+
+/* ---- the network after an edit ---- */
+
+static int in_box(const double *b, double x, double y) { return x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3]; }
+
+static void grown(double *o, const double *b, double g)
+{
+    o[0] = b[0] - g, o[1] = b[1] - g, o[2] = b[2] + g, o[3] = b[3] + g;
+}
+
+/* The square of half side r around (x, y) meets box b / lies inside it. */
+static int square_meets(const double *b, double x, double y, double r)
+{
+    return x + r >= b[0] && x - r <= b[2] && y + r >= b[1] && y - r <= b[3];
+}
+
+static int square_inside(const double *b, double x, double y, double r)
+{
+    return x - r >= b[0] && x + r <= b[2] && y - r >= b[1] && y + r <= b[3];
+}
+
+/* N's links with the seams of its rings joined again (number_strokes cut
+ * each ring before its first record), into link (2 nroads). */
+static void uncut_links(const rs_network *N, uint32_t *link)
+{
+    memcpy(link, N->link, 2 * N->nroads * sizeof *link);
+    for (size_t k = 0; k < N->nstrokes; k++) {
+        if (!N->closed[k]) continue;
+        uint32_t h = N->stroke_roads[N->stroke_start[k]], t = N->stroke_roads[N->stroke_start[k + 1] - 1];
+        uint32_t x = 2 * t + 1 - N->rev[t];
+        link[2 * h] = x;
+        link[x] = 2 * h;
+    }
+}
+
+static int leg_eq(const rs_network_leg *a, const rs_network_leg *b)
+{
+    return a->road == b->road && a->kind == b->kind && a->segment == b->segment && a->s == b->s &&
+           a->angle == b->angle && a->priority == b->priority && a->major == b->major;
+}
+
+/* A node's legs after the edit, where its end inside a surface changed. */
+typedef struct re_node {
+    uint32_t node, degree, control;
+    uint8_t surf;
+    rs_network_leg leg[3];
+} re_node;
+
+/* The free end of node nd of N (the network of `roads`; its one leg L, an
+ * end leg of a record longer than two tolerances) inside the surface of
+ * the nearest street: into *o (its legs, control and surface flag), from
+ * the roads cand[0..nc) (NULL: all, ascending; `box`: per road, its
+ * points' box). `control`: the node's control without the street's. */
+static void free_end(const rs_roads *roads, const rs_network *N, const double *box, const uint32_t *cand, size_t nc,
+                     uint32_t nd, const rs_network_leg *L, uint32_t control, re_node *o)
+{
+    const double tol = N->tol;
+    const double *exy;
+    size_t enp;
+    rs_roads_get(roads, L->road, NULL, NULL, &exy, &enp);
+    surf_end f;
+    memset(&f, 0, sizeof f);
+    const double *p = exy + 2 * (L->kind == RS_LEG_START ? 0 : enp - 1);
+    f.node = nd, f.road = L->road, f.stroke = N->stroke_of[L->road];
+    f.non_car = rs__road_non_car(roads, L->road);
+    f.x = p[0], f.y = p[1], f.q = f.k = NONE, f.u = 0, f.d = INFINITY;
+    double pt[2] = { p[0], p[1] };
+    uint32_t zero = 0;
+    for (size_t c = 0; c < nc && isfinite(pt[0]) && isfinite(pt[1]); c++) {
+        uint32_t q = cand ? cand[c] : (uint32_t)c;
+        double w = 0, hw;
+        const double *qxy;
+        size_t qnp;
+        rs_roads_get(roads, q, NULL, &w, &qxy, &qnp);
+        hw = 0.5 * w;
+        if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
+        double rq = hw + tol, reach2 = rq * rq;
+        if (!square_meets(box + 4 * (size_t)q, pt[0], pt[1], rq)) continue;
+        int qnc = -1;
+        for (size_t k = 0; k + 1 < qnp; k++) {
+            const double *pa = qxy + 2 * k, *pb = pa + 2;
+            double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
+            if (!(dd > 0) || !(dd <= DBL_MAX)) continue;
+            surf_test(roads, N, &f, &zero, pt, q, N->stroke_of[q], qxy, qnp, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+        }
+    }
+    o->node = nd;
+    o->leg[0] = *L;
+    o->leg[0].major = 1;
+    o->degree = 1;
+    o->control = control;
+    o->surf = 0;
+    if (f.q == NONE) return;
+    const double *qxy;
+    size_t qnp;
+    rs_roads_get(roads, f.q, NULL, NULL, &qxy, &qnp);
+    double s = 0, s0 = 0, s1 = 0; /* (summed as load_points sums them) */
+    for (size_t k = 1; k <= f.k + 1; k++) {
+        s = rs__arc_add(s, rs__arc_len(qxy[2 * k - 2], qxy[2 * k - 1], qxy[2 * k], qxy[2 * k + 1]));
+        if (k == f.k) s0 = s;
+        if (k == f.k + 1) s1 = s;
+    }
+    surf_legs(roads, &f, qxy, qnp, s0, s1, o->leg + 1);
+    rs_network_node node;
+    memset(&node, 0, sizeof node);
+    node.control = control;
+    surf_node(roads, f.q, &node, o->leg, 3);
+    o->degree = 3;
+    o->control = node.control;
+    o->surf = 1;
+}
+
+/* Node nd of N holds a free end for surface_tees (base: its legs without
+ * a street's it ends inside): its end leg, else NULL. */
+static const rs_network_leg *free_end_leg(const rs_network *N, const rs_network_leg *L, uint32_t d, int surf)
+{
+    if (d != (surf ? 3u : 1u)) return NULL;
+    for (uint32_t k = 0; k < d; k++)
+        if (rs__is_end_leg(&L[k])) return N->length[L[k].road] > 2 * N->tol ? &L[k] : NULL;
+    return NULL;
+}
+
+rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_network *N0, const uint32_t *m_old,
+                             const uint32_t *m_new, const double *box, const double *zone, double reach,
+                             rs_network **out)
+{
+    *out = NULL;
+    const size_t nn = rs_roads_count(roads), no = N0->nroads, m = nn ? nn : 1;
+    const double tol = N0->tol, G = reach + tol + 1.0;
+    if (!N0->node_key || nn >= UINT32_MAX / 2 || !(G >= 0 && G <= 1e12)) return RS_OK;
+    /* Zt: the nodes there are made anew from the roads in Za; a node
+     * elsewhere with a point near the changed roads (Zn) is none the
+     * network can keep or take: the whole build */
+    double Zt[4], Za[4], Zn[4], Zc[4];
+    grown(Zt, zone, G);
+    grown(Za, zone, 3 * G);
+    grown(Zn, zone, tol + 0.5);
+    grown(Zc, Zt, G);
+    rs_result res = RS_OK;
+    int ok = 0;
+    rs_roads *sub = NULL;
+    rs_network *NA = NULL, *N = NULL;
+    uint32_t *ids = rs__alloc_array(ctx, m, sizeof *ids), *amap = rs__alloc_array(ctx, m, sizeof *amap);
+    uint32_t *l0 = rs__alloc_array(ctx, 2 * (no ? no : 1), sizeof *l0), *la = NULL;
+    uint8_t *ends = rs__calloc(ctx, 2 * m, 1), *scratch = rs__calloc(ctx, m, 1);
+    re_node *rep = NULL;
+    size_t nrep = 0, crep = 0;
+    if (!ids || !amap || !l0 || !ends || !scratch) goto nomem;
+    size_t na = 0;
+    for (size_t j = 0; j < nn; j++) {
+        amap[j] = NONE;
+        const double *b = box + 4 * j;
+        if (m_new[j] != NONE && (b[0] > Za[2] || b[2] < Za[0] || b[1] > Za[3] || b[3] < Za[1])) continue;
+        const double *xy;
+        size_t np;
+        rs_roads_get(roads, j, NULL, NULL, &xy, &np);
+        int in = m_new[j] == NONE;
+        for (size_t k = 0; !in && k < np; k++) {
+            const double *a = xy + 2 * k, *c = xy + 2 * (k + 1 < np ? k + 1 : k);
+            in = rs__capsule_meets_box(a[0], a[1], c[0], c[1], 0, Za[0], Za[1], Za[2], Za[3]);
+        }
+        if (in) amap[j] = (uint32_t)na, ids[na++] = (uint32_t)j;
+    }
+    if (na > nn / 2 + 16) goto done; /* (most of the map: the whole build) */
+    if (na) {
+        rs_network_options opt;
+        memset(&opt, 0, sizeof opt);
+        opt.tolerance = tol;
+        if ((res = rs__roads_subset(ctx, roads, ids, na, &sub)) != RS_OK ||
+            (res = network_build(ctx, sub, &opt, NB_NO_SURF | NB_NO_SHORT, &NA)) != RS_OK)
+            goto done;
+        if (!NA) goto done; /* (a short record near the edit) */
+    }
+    /* the nodes kept and taken, and their legs */
+    size_t nodes = 0, legs = 0;
+    for (size_t d = 0; d < N0->nnodes; d++) {
+        const rs_network_node *v = &N0->node[d];
+        if (!isfinite(v->x) || !isfinite(v->y)) goto done;
+        if (in_box(Zt, v->x, v->y)) continue;
+        if (!(N0->node_rad[d] >= 0) || square_meets(Zn, v->x, v->y, N0->node_rad[d])) goto done;
+        for (uint32_t l = N0->leg_start[d]; l < N0->leg_start[d + 1]; l++)
+            if (m_old[N0->leg[l].road] == NONE) goto done;
+        nodes++, legs += N0->leg_start[d + 1] - N0->leg_start[d];
+    }
+    for (size_t d = 0; NA && d < NA->nnodes; d++) {
+        const rs_network_node *v = &NA->node[d];
+        if (!isfinite(v->x) || !isfinite(v->y) || !(NA->node_rad[d] >= 0)) goto done;
+        if (!in_box(Zt, v->x, v->y)) {
+            if (square_meets(Zn, v->x, v->y, NA->node_rad[d])) goto done;
+            continue;
+        }
+        if (!square_inside(Zc, v->x, v->y, NA->node_rad[d])) goto done;
+        nodes++, legs += NA->leg_start[d + 1] - NA->leg_start[d];
+    }
+    if (nodes >= UINT32_MAX || legs + 4 >= UINT32_MAX) goto done;
+    if (!(N = rs__calloc(ctx, 1, sizeof *N))) goto nomem;
+    N->nroads = nn;
+    N->tol = tol;
+    N->node = rs__alloc_array(ctx, nodes ? nodes : 1, sizeof *N->node);
+    N->leg_start = rs__alloc_array(ctx, nodes + 1, sizeof *N->leg_start);
+    N->leg = rs__alloc_array(ctx, legs ? legs : 1, sizeof *N->leg);
+    N->link = rs__alloc_array(ctx, 2 * m, sizeof *N->link);
+    N->node_key = rs__alloc_array(ctx, nodes ? nodes : 1, sizeof *N->node_key);
+    N->node_rad = rs__alloc_array(ctx, nodes ? nodes : 1, sizeof *N->node_rad);
+    N->node_surf = rs__calloc(ctx, nodes ? nodes : 1, 1);
+    if (!N->node || !N->leg_start || !N->leg || !N->link || !N->node_key || !N->node_rad || !N->node_surf ||
+        !stroke_arrays(ctx, N, m, nn + 1))
+        goto nomem;
+    /* merged in the order of their lowest points (the road order is kept:
+     * the numbering a build of the new roads gives) */
+    {
+        size_t d0 = 0, da = 0, nd = 0, nl = 0, nA = NA ? NA->nnodes : 0;
+        for (;;) {
+            while (d0 < N0->nnodes && in_box(Zt, N0->node[d0].x, N0->node[d0].y)) d0++;
+            while (da < nA && !in_box(Zt, NA->node[da].x, NA->node[da].y)) da++;
+            if (d0 == N0->nnodes && da == nA) break;
+            uint64_t k0 = UINT64_MAX, ka = UINT64_MAX;
+            if (d0 < N0->nnodes) {
+                uint32_t r = m_old[N0->node_key[d0] >> 32];
+                if (r == NONE) goto done;
+                k0 = (uint64_t)r << 32 | (N0->node_key[d0] & 0xffffffffu);
+            }
+            if (da < nA) ka = (uint64_t)ids[NA->node_key[da] >> 32] << 32 | (NA->node_key[da] & 0xffffffffu);
+            if (k0 == ka) goto done;
+            const rs_network *S = k0 < ka ? N0 : NA;
+            size_t d = k0 < ka ? d0++ : da++;
+            const uint32_t *map = S == N0 ? m_old : ids;
+            N->node[nd] = S->node[d];
+            N->node_key[nd] = k0 < ka ? k0 : ka;
+            N->node_rad[nd] = S->node_rad[d];
+            N->node_surf[nd] = S->node_surf[d];
+            N->leg_start[nd] = (uint32_t)nl;
+            for (uint32_t l = S->leg_start[d]; l < S->leg_start[d + 1]; l++) {
+                rs_network_leg *L = &N->leg[nl++];
+                *L = S->leg[l];
+                L->road = map[L->road];
+                if (!rs__is_end_leg(L)) continue;
+                uint32_t e = rs__leg_end(L);
+                if (ends[e]) goto done; /* (an end at two nodes) */
+                ends[e] = 1;
+            }
+            nd++;
+        }
+        N->leg_start[nd] = (uint32_t)nl;
+        N->nnodes = nd;
+        N->nlegs = nl;
+    }
+    /* every end that has a leg in the old network or the local one has one */
+    for (size_t d = 0; d < N0->nnodes; d++)
+        for (uint32_t l = N0->leg_start[d]; l < N0->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &N0->leg[l];
+            if (rs__is_end_leg(L) && m_old[L->road] != NONE && !ends[2 * m_old[L->road] + (L->kind == RS_LEG_END)])
+                goto done;
+        }
+    for (size_t d = 0; NA && d < NA->nnodes; d++)
+        for (uint32_t l = NA->leg_start[d]; l < NA->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &NA->leg[l];
+            if (rs__is_end_leg(L) && !ends[2 * ids[L->road] + (L->kind == RS_LEG_END)]) goto done;
+        }
+    /* the links: the old ones, those at the nodes made anew from the local
+     * network's; then the strokes as a build numbers them */
+    uncut_links(N0, l0);
+    if (NA) {
+        if (!(la = rs__alloc_array(ctx, 2 * NA->nroads, sizeof *la))) goto nomem;
+        uncut_links(NA, la);
+    }
+    for (size_t j = 0; j < nn; j++) {
+        uint32_t i = m_new[j];
+        N->prev[j] = N->next[j] = NONE;
+        N->length[j] = i != NONE ? N0->length[i] : NA->length[amap[j]];
+        for (int e = 0; e < 2; e++) {
+            uint32_t x = i == NONE ? NONE : l0[2 * i + e];
+            N->link[2 * j + e] = x == NONE ? NONE : m_old[x / 2] == NONE ? NONE - 1 : 2 * m_old[x / 2] + x % 2;
+        }
+    }
+    for (size_t d = 0; NA && d < NA->nnodes; d++) {
+        if (!in_box(Zt, NA->node[d].x, NA->node[d].y)) continue;
+        for (uint32_t l = NA->leg_start[d]; l < NA->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &NA->leg[l];
+            if (!rs__is_end_leg(L)) continue;
+            uint32_t x = la[rs__leg_end(L)];
+            N->link[2 * ids[L->road] + (L->kind == RS_LEG_END)] = x == NONE ? NONE : 2 * ids[x / 2] + x % 2;
+        }
+    }
+    for (size_t e = 0; e < 2 * nn; e++) {
+        uint32_t x = N->link[e];
+        if (x != NONE && (x >= 2 * nn || N->link[x] != e)) goto done; /* (a removed road's, or one-sided) */
+    }
+    number_strokes(N, N->link, scratch);
+    /* the free ends inside a street's surface: at the nodes made anew; at
+     * the kept nodes whose end or a street near it changed strokes (the
+     * rule reads the strokes, rings and free ends of both) */
+    {
+        uint8_t *dq = scratch; /* per road: in a stroke that changed */
+        memset(dq, 0, nn);
+        double db[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        size_t nd_q = 0;
+        for (size_t k = 0; k < N->nstrokes; k++) {
+            uint32_t a = N->stroke_start[k], b = N->stroke_start[k + 1];
+            uint32_t i0 = m_new[N->stroke_roads[a]];
+            int ch = i0 == NONE;
+            uint32_t s0 = ch ? 0 : N0->stroke_of[i0];
+            ch = ch || N0->stroke_start[s0 + 1] - N0->stroke_start[s0] != b - a || N0->closed[s0] != N->closed[k];
+            for (uint32_t e = a; e < b && !ch; e++) {
+                uint32_t j = N->stroke_roads[e], i = m_new[j];
+                ch = i == NONE || N0->stroke_of[i] != s0;
+                for (int f = 0; f < 2 && !ch; f++) {
+                    uint32_t x = N0->link[2 * i + f];
+                    ch = (x == NONE ? NONE : 2 * m_old[x / 2] + x % 2) != N->link[2 * j + f];
+                }
+            }
+            for (uint32_t e = a; e < b && ch; e++) {
+                uint32_t j = N->stroke_roads[e];
+                dq[j] = 1, nd_q++;
+                db[0] = fmin(db[0], box[4 * j]), db[1] = fmin(db[1], box[4 * j + 1]);
+                db[2] = fmax(db[2], box[4 * j + 2]), db[3] = fmax(db[3], box[4 * j + 3]);
+            }
+        }
+        uint32_t *dl = nd_q ? rs__alloc_array(ctx, nd_q, sizeof *dl) : NULL;
+        if (nd_q && !dl) goto nomem;
+        for (size_t j = 0, k = 0; j < nn && nd_q; j++)
+            if (dq[j]) dl[k++] = (uint32_t)j;
+        double dg[4];
+        grown(dg, db, G);
+        for (uint32_t d = 0; d < N->nnodes && !res; d++) {
+            const rs_network_leg *L = N->leg + N->leg_start[d];
+            uint32_t deg = N->leg_start[d + 1] - N->leg_start[d];
+            const rs_network_node *v = &N->node[d];
+            int fresh = in_box(Zt, v->x, v->y);
+            const rs_network_leg *E = free_end_leg(N, L, deg, N->node_surf[d]);
+            if (!E) continue;
+            if (!fresh) {
+                /* kept: the same unless its stroke or a street's near it changed */
+                int near = dq[E->road];
+                for (size_t k = 0; !near && k < nd_q && in_box(dg, v->x, v->y); k++)
+                    near = square_meets(box + 4 * (size_t)dl[k], v->x, v->y, G);
+                if (!near) continue;
+            }
+            if (nrep == crep) {
+                size_t nc = crep ? 2 * crep : 16;
+                re_node *nr = rs__realloc(ctx, rep, nc * sizeof *nr);
+                if (!nr) {
+                    rs__free(ctx, dl);
+                    goto nomem;
+                }
+                rep = nr, crep = nc;
+            }
+            re_node *o = &rep[nrep];
+            uint32_t ctl = (v->control & ~(uint32_t)RS_NODE_ROUNDABOUT);
+            const char *jc = rs_roads_get_attr(roads, E->road, "junction");
+            if (jc && strcmp(jc, "roundabout") == 0) ctl |= RS_NODE_ROUNDABOUT;
+            free_end(roads, N, box, fresh ? ids : NULL, fresh ? na : nn, d, E, ctl, o);
+            int same = o->degree == deg && o->control == v->control && o->surf == N->node_surf[d];
+            for (uint32_t k = 0; k < deg && same; k++) same = leg_eq(&o->leg[k], &L[k]);
+            nrep += !same;
+        }
+        rs__free(ctx, dl);
+    }
+    if (nrep) { /* the changed nodes' legs in place (rep is in node order) */
+        size_t nl = N->nlegs;
+        for (size_t k = 0; k < nrep; k++)
+            nl += rep[k].degree - (N->leg_start[rep[k].node + 1] - N->leg_start[rep[k].node]);
+        rs_network_leg *leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *leg);
+        if (!leg) goto nomem;
+        size_t at = 0, k = 0;
+        for (uint32_t d = 0; d < N->nnodes; d++) {
+            uint32_t a = N->leg_start[d], b = N->leg_start[d + 1];
+            N->leg_start[d] = (uint32_t)at;
+            if (k < nrep && rep[k].node == d) {
+                memcpy(leg + at, rep[k].leg, rep[k].degree * sizeof *leg);
+                at += rep[k].degree;
+                N->node[d].degree = rep[k].degree;
+                N->node[d].kind = rep[k].degree <= 1 ? RS_NODE_END : RS_NODE_JUNCTION;
+                N->node[d].control = rep[k].control;
+                N->node_surf[d] = rep[k].surf;
+                k++;
+                continue;
+            }
+            memcpy(leg + at, N->leg + a, (b - a) * sizeof *leg);
+            at += b - a;
+        }
+        N->leg_start[N->nnodes] = (uint32_t)at;
+        rs__free(ctx, N->leg);
+        N->leg = leg;
+        N->nlegs = at;
+    }
+    N->bytes = bytes_of(N);
+    ok = 1;
+    goto done;
+nomem:
+    res = RS_ERR_NOMEM;
+done:
+    if (ok && !res) *out = N;
+    else rs_network_free(ctx, N);
+    rs_network_free(ctx, NA);
+    rs_roads_free(ctx, sub);
+    rs__free(ctx, ids);
+    rs__free(ctx, amap);
+    rs__free(ctx, l0);
+    rs__free(ctx, la);
+    rs__free(ctx, ends);
+    rs__free(ctx, scratch);
+    rs__free(ctx, rep);
+    return res ? rs__fail(ctx, res, res == RS_ERR_CANCELLED ? "cancelled" : "network update: out of memory") : RS_OK;
+}
+
+int rs__network_equal(const rs_network *a, const rs_network *b)
+{
+    if (a->nroads != b->nroads || a->nnodes != b->nnodes || a->nlegs != b->nlegs || a->nstrokes != b->nstrokes ||
+        a->tol != b->tol || (!a->node_key) != (!b->node_key))
+        return 0;
+    for (size_t d = 0; d < a->nnodes; d++) {
+        const rs_network_node *p = &a->node[d], *q = &b->node[d];
+        if (p->x != q->x || p->y != q->y || p->degree != q->degree || p->kind != q->kind || p->control != q->control ||
+            a->leg_start[d] != b->leg_start[d])
+            return 0;
+        if (a->node_key && (a->node_key[d] != b->node_key[d] || a->node_rad[d] != b->node_rad[d] ||
+                            a->node_surf[d] != b->node_surf[d]))
+            return 0;
+    }
+    if (a->leg_start[a->nnodes] != b->leg_start[b->nnodes]) return 0;
+    for (size_t l = 0; l < a->nlegs; l++)
+        if (!leg_eq(&a->leg[l], &b->leg[l])) return 0;
+    size_t n = a->nroads;
+    if (memcmp(a->stroke_start, b->stroke_start, (a->nstrokes + 1) * sizeof *a->stroke_start) ||
+        memcmp(a->closed, b->closed, a->nstrokes) || memcmp(a->stroke_of, b->stroke_of, n * sizeof *a->stroke_of) ||
+        memcmp(a->s_off, b->s_off, n * sizeof *a->s_off) || memcmp(a->length, b->length, n * sizeof *a->length) ||
+        memcmp(a->prev, b->prev, n * sizeof *a->prev) || memcmp(a->next, b->next, n * sizeof *a->next) ||
+        memcmp(a->stroke_roads, b->stroke_roads, n * sizeof *a->stroke_roads) || memcmp(a->rev, b->rev, n) ||
+        memcmp(a->link, b->link, 2 * n * sizeof *a->link))
+        return 0;
+    return 1;
 }

@@ -27,6 +27,11 @@ struct rs_network {
     uint8_t *rev;           /* per road: drawn against its points (a two-way record pointing the other way) */
     uint32_t *link;         /* per road end (2 r: start, 2 r + 1: end): the road end it continues into
                                (2 q + f), NONE: none (a ring's seam is cut) */
+    /* per node, for rs__network_update (NULL in a part: rs__network_subset) */
+    uint64_t *node_key;     /* its lowest point, by which the nodes are numbered: record << 32 | point index */
+    float *node_rad;        /* its points' greatest distance from its position, rounded up */
+    uint8_t *node_surf;     /* 1: it holds a road's free end inside a street's surface (surface_tees) and
+                               the street's two legs there */
     double *s_base;         /* per road, or NULL: the whole map's rs__stroke_bases, when this is a part
                                of its network (rs__network_subset; the line symbols otherwise sum
                                their own) */
@@ -58,9 +63,11 @@ size_t rs__network_bytes(const rs_network *net);
 /* Per record of N (the roads of `roads`), into out: the stroke's arc
  * length where the record's travel starts, the records' lengths summed in
  * travel order in the local frame of a map with this origin and DEM cell
- * (lib/scene/road_local.h), as the line symbols sum a record's points. */
+ * (lib/scene/road_local.h), as the line symbols sum a record's points.
+ * With ids (n records of N), only the records of their strokes (the others
+ * NaN). */
 void rs__stroke_bases(const rs_network *N, const rs_roads *roads, double origin_x, double origin_y, double cell_size,
-                      double *out);
+                      const uint32_t *ids, size_t n, double *out);
 /* The part of network N that the records ids[0..n) take part in (ascending
  * record ids of N), as the drawing code of a road set holding only those
  * records, in that order, reads it: their nodes (in N's order) with their
@@ -73,6 +80,26 @@ void rs__stroke_bases(const rs_network *N, const rs_roads *roads, double origin_
  * range, RS_ERR_NOMEM. */
 rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bases, const uint32_t *ids, size_t n,
                              rs_network **out);
+/* The network of `roads` after an edit, as rs_network_build (default
+ * options but N0's tolerance) would make it, from N0, the network of the
+ * road set before: m_old[i] is old record i's record in `roads`
+ * (UINT32_MAX: removed), m_new[j] new record j's old one (UINT32_MAX: new),
+ * each record matched alike in everything the network reads; box: per
+ * record of `roads`, its points' box; zone: the box of the removed and the
+ * new records (empty: min above max); reach: half the widest record of
+ * both sets. The nodes within reach of the zone are made anew from a
+ * network of the roads near it (docs/network.md "After an edit"), the
+ * others kept; the strokes are numbered anew, the free ends inside a
+ * surface found again where a stroke changed. *out NULL (RS_OK) when it
+ * cannot (a short record near the edit, a node of points spread across
+ * the zone's edge, most of the map near the edit): build it whole. N0 must
+ * be a whole network (rs_network_build or this: node_key set).
+ * RS_ERR_NOMEM, RS_ERR_CANCELLED. */
+rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_network *N0, const uint32_t *m_old,
+                             const uint32_t *m_new, const double *box, const double *zone, double reach,
+                             rs_network **out);
+/* 1 when networks a and b are equal in every array (tests). */
+int rs__network_equal(const rs_network *a, const rs_network *b);
 /* Two record ends at a node going on within 30 degrees of straight (the
  * cosine of their angle below -cos 30 degrees) that do not make a stroke
  * (they do not draw alike) are the through road of a T when no stroke

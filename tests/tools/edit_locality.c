@@ -72,7 +72,8 @@ int main(int argc, char **argv)
     rs__grid_facts_of(g, &facts);
     /* (the strokes' bases once, as an update's network has them: not in each box's build time) */
     if (!(net->s_base = malloc(sc.nroads * sizeof *net->s_base))) return 1;
-    rs__stroke_bases(net, roads, dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size, net->s_base);
+    rs__stroke_bases(net, roads, dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size, NULL, 0,
+                     net->s_base);
     unsigned char *in = calloc(sc.nroads, 1);
     if (!in) return 1;
     const double pix = 5.0 / 4, boxes[][4] = { { 800, 700, 1000, 900 }, { 300, 300, 400, 420 }, { 1500, 1000, 1700, 1300 } };
