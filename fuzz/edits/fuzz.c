@@ -11,13 +11,16 @@
  *  - where rs_road_grid_rect_has_roads says 0, the pixels equal the
  *    road-free render;
  *  - windows (odd offsets, a one-pixel row, the last rows) equal the crops
- *    of the whole image.
+ *    of the whole image;
+ *  - the network the updated grid keeps for the next update (updated in
+ *    place, lib/scene/network.c) equals one built anew.
  * A small DEM (16 x 12 samples of 5 m) at 1 to 4 texels, or (flags bit 6)
  * 64 x 48 samples at 1 or 2 texels, where an edit changes a small part of
  * the map and the update patches it; analytic or alpha-map edges, class
  * styles with automatic markings. Findings (abort):
  * any of those broken, an unknown result code, or a sanitizer report. */
 #include "roadsplat.h"
+#include "grid_edit.h" /* (rs__grid_track_net_check: the network an update keeps, against a build) */
 
 #include <stdint.h>
 #include <stdio.h>
@@ -233,6 +236,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         int ok = r == RS_OK && render(ctx, dem, g1, &o, &b) == 0 && rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK &&
                  render(ctx, dem, gf, &o, &c) == 0;
         if (ok) check(g1, &a, &b, &c, &t);
+        if (ok) REQUIRE(rs__grid_track_net_check(ctx, g1, roads) == 1);
         rs_road_grid_free(ctx, gf);
         image_free(&b);
         if (!ok) {

@@ -5,8 +5,12 @@
  * consistent prev/next links and s offsets that add up the records'
  * lengths, a second build gives the same network (determinism), and
  * every junction area has at most two corners a leg, none NaN, its trims
- * within the legs' lengths, the same count with and without a buffer. */
+ * within the legs' lengths, the same count with and without a buffer.
+ * And the network after an edit (rs__network_update, lib/scene/network.c):
+ * one road (chosen by the last byte) removed, and added back, the network
+ * updated in place from the one before equals one built anew. */
 #include "roadsplat.h"
+#include "network.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -115,6 +119,63 @@ static int same(const rs_network *a, const rs_network *b)
     return 1;
 }
 
+/* Per road of R: its points' box; the widest road. */
+static double *boxes(const rs_roads *R, double *wmax)
+{
+    size_t n = rs_roads_count(R);
+    double *b = malloc((n ? n : 1) * 4 * sizeof *b);
+    if (!b) abort();
+    *wmax = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double *xy;
+        size_t np;
+        double w;
+        rs_roads_get(R, i, NULL, &w, &xy, &np);
+        *wmax = w > *wmax || w != w ? w : *wmax;
+        b[4 * i] = b[4 * i + 1] = INFINITY, b[4 * i + 2] = b[4 * i + 3] = -INFINITY;
+        for (size_t k = 0; k < np; k++) {
+            b[4 * i] = fmin(b[4 * i], xy[2 * k]), b[4 * i + 1] = fmin(b[4 * i + 1], xy[2 * k + 1]);
+            b[4 * i + 2] = fmax(b[4 * i + 2], xy[2 * k]), b[4 * i + 3] = fmax(b[4 * i + 3], xy[2 * k + 1]);
+        }
+    }
+    return b;
+}
+
+/* Network a of `roads` updated to the roads without road r, and the
+ * network of those updated to `roads`: each what a build makes (when the
+ * update can; it may decline). */
+static void check_update(rs_ctx *ctx, const rs_roads *roads, const rs_network_options *o, const rs_network *a, size_t r)
+{
+    size_t n = rs_roads_count(roads);
+    uint32_t *ids = malloc(n * sizeof *ids), *m_big = malloc(n * sizeof *m_big), *m_less = malloc(n * sizeof *m_less);
+    if (!ids || !m_big || !m_less) abort();
+    for (size_t i = 0, j = 0; i < n; i++) {
+        m_big[i] = i == r ? UINT32_MAX : (uint32_t)j;
+        if (i != r) m_less[j] = (uint32_t)i, ids[j++] = (uint32_t)i;
+    }
+    rs_roads *less = NULL;
+    rs_network *b = NULL, *u = NULL;
+    double wa, wb, *ba = boxes(roads, &wa), *bb = NULL;
+    if (rs__roads_subset(ctx, roads, ids, n - 1, &less) != RS_OK || rs_network_build(ctx, less, o, &b) != RS_OK) abort();
+    bb = boxes(less, &wb);
+    double w = wa != wa || wb != wb ? NAN : fmax(wa, wb), zone[4];
+    memcpy(zone, ba + 4 * r, sizeof zone);
+    if (rs__network_update(ctx, less, a, m_big, m_less, bb, zone, 0.5 * w, &u) != RS_OK) abort();
+    if (u && !rs__network_equal(u, b)) abort();
+    rs_network_free(ctx, u);
+    u = NULL;
+    if (rs__network_update(ctx, roads, b, m_less, m_big, ba, zone, 0.5 * w, &u) != RS_OK) abort();
+    if (u && !rs__network_equal(u, a)) abort();
+    rs_network_free(ctx, u);
+    rs_network_free(ctx, b);
+    rs_roads_free(ctx, less);
+    free(ba);
+    free(bb);
+    free(ids);
+    free(m_big);
+    free(m_less);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     rs_limits lim = { 0 };
@@ -133,6 +194,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             check(a, rs_roads_count(roads));
             check_areas(a, roads);
             if (!same(a, b)) abort();
+            size_t n = rs_roads_count(roads);
+            if (n) check_update(ctx, roads, &o, a, data[size - 1] % n);
             rs_network_free(ctx, a);
             rs_network_free(ctx, b);
         }

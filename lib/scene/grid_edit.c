@@ -1258,6 +1258,24 @@ static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, doub
     return ids;
 }
 
+/* Whether what source k of a patched grid draws of piece q (its region
+ * grown by pad, within rectangle R and the source's rectangle A, pixels)
+ * lies wholly inside one later patch's rectangle (patches[k ..), the
+ * sources after k): a later patch draws it instead. */
+static int hidden(const rs__edit_item *q, double pad, const rs_pixel_rect *R, const rs_pixel_rect *A,
+                  const rs__grid_patch *later, size_t n, double pix)
+{
+    double x0, y0, x1, y1;
+    item_box(q, pad, &x0, &y0, &x1, &y1);
+    x0 = fmax(x0, fmax(R->x0, A->x0) * pix), y0 = fmax(y0, fmax(R->y0, A->y0) * pix);
+    x1 = fmin(x1, fmin(R->x1, A->x1) * pix), y1 = fmin(y1, fmin(R->y1, A->y1) * pix);
+    for (size_t j = 0; j < n; j++) {
+        const rs_pixel_rect *L = &later[j].rect;
+        if (L->x0 * pix <= x0 && x1 <= L->x1 * pix && L->y0 * pix <= y0 && y1 <= L->y1 * pix) return 1;
+    }
+    return 0;
+}
+
 /* A piece's region meets rectangle R (pixels)? */
 static int meets(const rs__edit_item *q, double pad, const rs_pixel_rect *R, double pix)
 {
@@ -1270,11 +1288,13 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
                                rs_pixel_rect **out, size_t *nout)
 {
     /* What old drew: its base, and inside each patch's rectangle that
-     * patch's grid (later over earlier). A piece of local is new when no
-     * grid of old that draws where it lies has it; a piece of such a grid
-     * is gone when local lacks it and no later patch it meets replaced it
-     * (a patch's edit left the pixels outside its rectangle as they were:
-     * the base's stale pieces there draw them still). */
+     * patch's grid (later over earlier). A piece of local is new unless
+     * every grid of old that draws some of it (not hidden there by one
+     * later patch's rectangle) has it; a piece of such a grid is gone when
+     * local lacks it, unless one later patch's rectangle hides what that
+     * grid draws of it (a patch's edit left the pixels outside its
+     * rectangle as they were: the base's stale pieces there draw them
+     * still). */
     const size_t ns = old->npatch + 1;
     const rs_road_grid **src = rs__alloc_array(ctx, ns, sizeof *src);
     keyed **ks = rs__calloc(ctx, ns, sizeof *ks);
@@ -1317,13 +1337,17 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     for (size_t i = 0; !r && ok && i < el->n; i++) {
         const rs__edit_item *q = &el->it[i];
         if (!meets(q, pad_l, &rect, pix)) continue;
-        int known = 0, core = q->kind == RS__EI_CORE;
+        /* (known: every source that draws some of it has it; one that
+         * lacks it is hidden there by a later patch) */
+        int known = 1, any = 0, core = q->kind == RS__EI_CORE;
         for (size_t k = 0; k < ns; k++) {
             if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
             int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h);
-            known |= kind >= 0;
+            if (kind >= 0) any = 1;
+            else if (!hidden(q, pad_l, &rect, SRC_RECT(k), old->patch + k, ns - 1 - k, pix)) known = 0;
             core &= kind == RS__EI_CORE || kind < 0;
         }
+        known &= any;
         /* (an unchanged road's core stays wholly road of one colour under
          * changed surfaces where no road has a fill: diff's rule, a core
          * only where it was one in every grid that drew it) */
@@ -1337,10 +1361,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
             const rs__edit_item *q = &e->it[near[k][ii]];
             if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) || !item_changed(kl, el->n, q->h))
                 continue;
-            int replaced = 0;
-            for (size_t j = k + 1; !replaced && j < ns; j++)
-                replaced = meets(q, pad, SRC_RECT(j), pix) && item_changed(ks[j], nk[j], q->h);
-            if (replaced) continue;
+            if (hidden(q, pad, &rect, SRC_RECT(k), old->patch + k, ns - 1 - k, pix)) continue;
             ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
         }
     }

@@ -2191,12 +2191,12 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
     size_t n = B.nroads, m = n ? n : 1;
     if ((res = load_points(&B)) != RS_OK || (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
         goto fail;
-    for (size_t r = 0; (flags & NB_NO_SHORT) && r < n; r++)
-        if (short_record(&B, r)) {
-            build_free(&B);
-            rs_network_free(ctx, N);
-            return RS_OK;
-        }
+    for (size_t r = 0; r < n && !N->any_short; r++) N->any_short = short_record(&B, r);
+    if ((flags & NB_NO_SHORT) && N->any_short) {
+        build_free(&B);
+        rs_network_free(ctx, N);
+        return RS_OK;
+    }
     if ((res = chain_short_runs(&B)) != RS_OK || (res = cluster_points(&B)) != RS_OK ||
         (res = bridge_short(&B)) != RS_OK ||
         (res = rs__poll(ctx) ? RS_ERR_CANCELLED : RS_OK) != RS_OK)
@@ -2663,7 +2663,10 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
     *out = NULL;
     const size_t nn = rs_roads_count(roads), no = N0->nroads, m = nn ? nn : 1;
     const double tol = N0->tol, G = reach + tol + 1.0;
-    if (!N0->node_key || nn >= UINT32_MAX / 2 || !(G >= 0 && G <= 1e12)) return RS_OK;
+    /* (a short record anywhere: a build with one joins places and chains
+     * records across the map, bridge_short and chain_short_runs, and found
+     * other T's away from it: fuzz/network) */
+    if (!N0->node_key || N0->any_short || nn >= UINT32_MAX / 2 || !(G >= 0 && G <= 1e12)) return RS_OK;
     /* Zt: the nodes there are made anew from the roads in Za; a node
      * elsewhere with a point near the changed roads (Zn) is none the
      * network can keep or take: the whole build */
@@ -2894,8 +2897,10 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
     }
     if (nrep) { /* the changed nodes' legs in place (rep is in node order) */
         size_t nl = N->nlegs;
-        for (size_t k = 0; k < nrep; k++)
-            nl += rep[k].degree - (N->leg_start[rep[k].node + 1] - N->leg_start[rep[k].node]);
+        for (size_t k = 0; k < nrep; k++) {
+            nl += rep[k].degree;
+            nl -= N->leg_start[rep[k].node + 1] - N->leg_start[rep[k].node];
+        }
         rs_network_leg *leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *leg);
         if (!leg) goto nomem;
         size_t at = 0, k = 0;

@@ -27,6 +27,7 @@ struct rs_network {
     uint8_t *rev;           /* per road: drawn against its points (a two-way record pointing the other way) */
     uint32_t *link;         /* per road end (2 r: start, 2 r + 1: end): the road end it continues into
                                (2 q + f), NONE: none (a ring's seam is cut) */
+    int any_short;          /* a record is short (two places at most twice the tolerance apart) */
     /* per node, for rs__network_update (NULL in a part: rs__network_subset) */
     uint64_t *node_key;     /* its lowest point, by which the nodes are numbered: record << 32 | point index */
     float *node_rad;        /* its points' greatest distance from its position, rounded up */
@@ -91,7 +92,7 @@ rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bas
  * network of the roads near it (docs/network.md "After an edit"), the
  * others kept; the strokes are numbered anew, the free ends inside a
  * surface found again where a stroke changed. *out NULL (RS_OK) when it
- * cannot (a short record near the edit, a node of points spread across
+ * cannot (a short record in either set, a node of points spread across
  * the zone's edge, most of the map near the edit): build it whole. N0 must
  * be a whole network (rs_network_build or this: node_key set).
  * RS_ERR_NOMEM, RS_ERR_CANCELLED. */
