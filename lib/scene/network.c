@@ -2685,10 +2685,18 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
     re_node *rep = NULL;
     size_t nrep = 0, crep = 0;
     if (!ids || !amap || !l0 || !ends || !scratch) goto nomem;
+    /* (coordinates beyond 10^12 m: a build's rounding there finds ends
+     * inside surfaces no box around the roads holds, fuzz/network) */
+    const double big = 1e12;
+    if (zone[0] <= zone[2] && !(fabs(zone[0]) <= big && fabs(zone[1]) <= big && fabs(zone[2]) <= big &&
+                                fabs(zone[3]) <= big))
+        goto done;
     size_t na = 0;
     for (size_t j = 0; j < nn; j++) {
         amap[j] = NONE;
         const double *b = box + 4 * j;
+        if (b[0] <= b[2] && !(fabs(b[0]) <= big && fabs(b[1]) <= big && fabs(b[2]) <= big && fabs(b[3]) <= big))
+            goto done;
         if (m_new[j] != NONE && (b[0] > Za[2] || b[2] < Za[0] || b[1] > Za[3] || b[3] < Za[1])) continue;
         const double *xy;
         size_t np;
