@@ -1344,7 +1344,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
             if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
             int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h);
             if (kind >= 0) any = 1;
-            else if (!hidden(q, pad_l, &rect, SRC_RECT(k), old->patch + k, ns - 1 - k, pix)) known = 0;
+            else if (!hidden(q, pad_l, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) known = 0;
             core &= kind == RS__EI_CORE || kind < 0;
         }
         known &= any;
@@ -1361,7 +1361,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
             const rs__edit_item *q = &e->it[near[k][ii]];
             if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) || !item_changed(kl, el->n, q->h))
                 continue;
-            if (hidden(q, pad, &rect, SRC_RECT(k), old->patch + k, ns - 1 - k, pix)) continue;
+            if (hidden(q, pad, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) continue;
             ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
         }
     }
