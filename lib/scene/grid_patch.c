@@ -11,6 +11,7 @@
 #include "network.h"
 #include "styling.h"
 #include "roadfield.h"
+#include "markings.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -513,9 +514,17 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         rs__free(ctx, in);
         rs_splat_options lo = *o;
         lo.grid.edits = 1;
+        /* (the base's built-in atlas, not one decoded again: the patch's
+         * markings point into it, and every grid holding the patch holds
+         * the base) */
+        if (!lo.markings.atlas && base->markings && base->markings->atlas_own) lo.markings.atlas = base->markings->atlas_own;
         lo.progress = NULL;
         lo.progress_user = NULL;
-        if ((r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &local)) != RS_OK) goto done;
+        rs__grid_facts lf = facts;
+        lf.keep = 1;
+        lf.keep_box[0] = rect.x0 * pix, lf.keep_box[1] = rect.y0 * pix;
+        lf.keep_box[2] = rect.x1 * pix, lf.keep_box[3] = rect.y1 * pix;
+        if ((r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &lf, ids, m, &local)) != RS_OK) goto done;
         ids_n = m;
     }
     /* the grid: the base's structures, the old patches (their roads
