@@ -165,11 +165,6 @@ typedef struct rs__grid_facts {
     int casing_uniform;
     float casing_rgba[4];
     double widest_casing;         /* the widest casing, metres (0: none) */
-    /* a part's build for a patch (rs_road_grid_update): no edit pieces of
-     * roads whose paint cannot reach this box (local metres, x0 y0 x1 y1),
-     * when keep; nothing reads a patch's pieces outside its rectangle */
-    int keep;
-    double keep_box[4];
 } rs__grid_facts;
 /* The facts of grid g (a whole build: rs_road_grid_build) into *out. */
 void rs__grid_facts_of(const rs_road_grid *g, rs__grid_facts *out);

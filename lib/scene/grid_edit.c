@@ -629,7 +629,7 @@ void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e)
 }
 
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                              const rs_network *net, const rs__grid_facts *facts, rs_road_grid *g)
+                              const rs_network *net, rs_road_grid *g)
 {
     size_t nr = rs_roads_count(roads);
     const rs__styling *st = g->styling;
@@ -683,26 +683,14 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             r = RS_ERR_CANCELLED;
             break;
         }
-        road_fp F;
-        road_prints(roads, i, st, net, core_in, &F);
-        if (facts && facts->keep) { /* (a patch's part: a road that cannot reach its box makes none) */
-            const double *xy;
-            size_t np;
-            rs_roads_get(roads, i, NULL, NULL, &xy, &np);
-            double m = 2 * F.reach + 4 * pix + 20, x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-            for (size_t k = 0; k < np; k++) {
-                double x = xy[2 * k] - dem->frame.origin_x, y = xy[2 * k + 1] - dem->frame.origin_y;
-                x0 = x < x0 ? x : x0, y0 = y < y0 ? y : y0, x1 = x > x1 ? x : x1, y1 = y > y1 ? y : y1;
-            }
-            const double *kb = facts->keep_box;
-            if (np && (x1 + m < kb[0] || x0 - m > kb[2] || y1 + m < kb[1] || y0 - m > kb[3])) continue;
-        }
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) {
             r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
             break;
         }
+        road_fp F;
+        road_prints(roads, i, st, net, core_in, &F);
         end_info(roads, i, tees, tee_of, &F.E);
         r = road_pieces(&b, &rl, &F);
         rs__road_local_free(ctx, &rl);

@@ -91,10 +91,9 @@ typedef struct rs__grid_edit {
 struct rs_road_grid;
 /* The pieces of grid g, built by rs_road_grid_build from `roads` with
  * options o (when o->grid.edits is set), after its styles and markings and while `net` (the grid's
- * network, NULL when it built none) is at hand; facts: a part's (NULL: a whole build), whose keep
- * box leaves out the pieces of roads far from it. Sets g->edit. */
+ * network, NULL when it built none) is at hand. Sets g->edit. */
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                              const rs_network *net, const rs__grid_facts *facts, struct rs_road_grid *g);
+                              const rs_network *net, struct rs_road_grid *g);
 void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e);
 
 /* What a proportional update reads from the grid it updates (lib/scene/grid_patch.c):

@@ -520,11 +520,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         if (!lo.markings.atlas && base->markings && base->markings->atlas_own) lo.markings.atlas = base->markings->atlas_own;
         lo.progress = NULL;
         lo.progress_user = NULL;
-        rs__grid_facts lf = facts;
-        lf.keep = 1;
-        lf.keep_box[0] = rect.x0 * pix, lf.keep_box[1] = rect.y0 * pix;
-        lf.keep_box[2] = rect.x1 * pix, lf.keep_box[3] = rect.y1 * pix;
-        if ((r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &lf, ids, m, &local)) != RS_OK) goto done;
+        if ((r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &local)) != RS_OK) goto done;
         ids_n = m;
     }
     /* the grid: the base's structures, the old patches (their roads

@@ -761,7 +761,7 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, facts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
-    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, facts, g);
+    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
     rs__auto_plan_free(ctx, &plan);
     /* a whole grid kept for edits keeps what a proportional update reads (its network too) */
     if (!r && o.grid.edits && !facts && o.coverage.edges == RS_EDGES_ANALYTIC) {
