@@ -59,18 +59,17 @@ typedef struct tally {
     int updates, spliced, differ;
 } tally;
 
-/* *net (the network of the roads before; old_box their boxes, old_w the
- * widest) updated to `roads` (m_old, m_new; zone: the changed roads'
- * box), against a build: the build replaces *net. Returns whether the
- * update was made (not declined). */
-static int step(const rs_roads *roads, rs_network **net, const double *old_box, double old_w, const uint32_t *m_old,
-                const uint32_t *m_new, const double *zone, tally *T)
+/* *net (the network of the roads before; old_w their widest) updated to
+ * `roads` (m_old, m_new; zone: the changed roads' box), against a build:
+ * the build replaces *net. Returns whether the update was made (not
+ * declined). */
+static int step(const rs_roads *roads, rs_network **net, double old_w, const uint32_t *m_old, const uint32_t *m_new,
+                const double *zone, tally *T)
 {
     double w = old_w;
     double *b = boxes(roads, &w);
     rs_network *u = NULL, *fresh = NULL;
     int made = 0;
-    (void)old_box;
     CHECK(b != NULL);
     rs_result r = b ? rs__network_update(ctx, roads, *net, m_old, m_new, b, zone, 0.5 * w, &u) : RS_ERR_NOMEM;
     CHECKF(r == RS_OK, "update: %s", rs_ctx_message(ctx));
@@ -185,7 +184,7 @@ static void test_city_edits(void)
             grow_box(zone, ob + 4 * r);
         }
         CHECKF(ok, "edit %d: %s", e, rs_ctx_message(ctx));
-        if (ok) kinds[kind] += step(roads, &net, ob, ow, m_old, m_new, zone, &T);
+        if (ok) kinds[kind] += step(roads, &net, ow, m_old, m_new, zone, &T);
         free(ob);
         free(m_old);
         free(m_new);
@@ -239,7 +238,7 @@ static void test_ring_seam(void)
     for (size_t j = 0; j + 1 < n; j++) m_new[j] = j < 8 ? (uint32_t)j : (uint32_t)(j + 1);
     grow_box(zone, ob + 4 * 8);
     CHECK(rs_roads_remove(ctx, roads, 8) == RS_OK);
-    int made = step(roads, &net, ob, ow, m_old, m_new, zone, &T);
+    int made = step(roads, &net, ow, m_old, m_new, zone, &T);
     CHECK(made);
     CHECK(net && !net->closed[net->stroke_of[0]]);
     free(ob);
@@ -248,7 +247,7 @@ static void test_ring_seam(void)
     for (size_t i = 0; i + 1 < n; i++) m_old[i] = (uint32_t)i, m_new[i] = (uint32_t)i;
     m_new[n - 1] = NONE;
     CHECK(rs_roads_add(ctx, roads, "ring", 10, keep, 4) == RS_OK);
-    made = step(roads, &net, ob, ow, m_old, m_new, zone, &T);
+    made = step(roads, &net, ow, m_old, m_new, zone, &T);
     CHECK(made);
     free(ob);
     printf("  ring seam: %d edits, %d updated in place, %d differ from a build\n", T.updates, T.spliced, T.differ);
@@ -275,7 +274,7 @@ static void test_short_record(void)
         uint32_t m_old[4] = { 0, 1, 2, 3 }, m_new[4] = { 0, 1, 2, NONE };
         CHECK(rs_roads_add(ctx, roads, "c", 6, c, 2) == RS_OK);
         tally T = { 0, 0, 0 };
-        int made = step(roads, &net, ob, ow, m_old, m_new, zone, &T);
+        int made = step(roads, &net, ow, m_old, m_new, zone, &T);
         CHECKF(!made, "short record %s the edit: updated", near ? "near" : "far from");
         CHECK(T.differ == 0);
         free(ob);

@@ -96,12 +96,6 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
                               const rs_network *net, struct rs_road_grid *g);
 void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e);
 
-/* What a proportional update reads from the grid it updates (lib/scene/grid_patch.c):
- * per road of the grid's road set a fingerprint of everything about it
- * that can change a pixel (geometry, width, name, attributes, resolved
- * style, point attributes, markings; never its index) and its box in
- * world metres (x0, y0, x1, y1), the network of the whole set, and the
- * whole map's facts. */
 /* What the whole map's facts read of one road's resolved style. */
 typedef struct rs__road_sum {
     float fill[4], casing[4]; /* its fill (a gradient's centre) and casing colour */
@@ -110,6 +104,12 @@ typedef struct rs__road_sum {
     uint8_t fill_surface, image, any_surface, styled;
 } rs__road_sum;
 
+/* What a proportional update reads from the grid it updates (lib/scene/grid_patch.c):
+ * per road of the grid's road set a fingerprint of everything about it
+ * that can change a pixel (geometry, width, name, attributes, point
+ * attributes, markings; never its index), its resolved style's
+ * fingerprint and sum, and its box in world metres (x0, y0, x1, y1); the
+ * network of the whole set, and the whole map's facts. */
 typedef struct rs__grid_track {
     size_t n;
     uint64_t *print;  /* per road: its own (raw_prints in lib/scene/grid_patch.c) */

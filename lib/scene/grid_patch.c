@@ -51,6 +51,13 @@ static uint64_t style_print(uint64_t h, const rs_style *y)
     return h;
 }
 
+/* The larger of two widths, NaN when either is (a width that is not a
+ * number makes the widest one unknown). */
+static double widest(double a, double b)
+{
+    return a != a || b != b ? NAN : a > b ? a : b;
+}
+
 /* The raw prints (geometry, width, name, attributes, point attributes,
  * markings), boxes and widest road of every road, and the reach of the
  * widest marking. */
@@ -74,7 +81,7 @@ static rs_result raw_prints(rs_ctx *ctx, const rs_roads *roads, uint64_t **print
         double w = 0;
         rs_roads_get(roads, i, &name, &w, &xy, &np);
         uint64_t h = mixs(mixd(0x7e57, w), name);
-        *max_width = w > *max_width || w != w ? w : *max_width; /* (a NaN stays) */
+        *max_width = widest(*max_width, w);
         double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
         for (size_t k = 0; k < np; k++) {
             double x = xy[2 * k], y = xy[2 * k + 1];
@@ -192,6 +199,13 @@ static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_r
     if (mark_reach > *reach) *reach = mark_reach;
 }
 
+/* The memory track t holds (its network included). */
+static size_t track_bytes(const rs__grid_track *t)
+{
+    return sizeof *t + t->n * (sizeof *t->print + sizeof *t->sprint + sizeof *t->sum + 4 * sizeof *t->box) +
+           (t->net ? rs__network_bytes(t->net) : 0);
+}
+
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 {
     if (!t) return;
@@ -227,14 +241,12 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
     }
     t->sctx = styles_print(o);
     rs__grid_facts_of(g, &t->facts);
-    t->bytes = sizeof *t + t->n * (sizeof *t->print + sizeof *t->sprint + sizeof *t->sum + 4 * sizeof *t->box) +
-               (net ? rs__network_bytes(net) : 0);
+    t->bytes = track_bytes(t);
     g->track = t;
     return RS_OK;
 }
 
 /* ---- matching the roads by their prints ---------------------------------- */
-
 
 /* new road j's old road (UINT32_MAX: none) in *m_new, old i's new one in
  * *m_old: for each new road in order, the first old road after the last
@@ -352,7 +364,6 @@ static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint
 
 /* ---- the patched grid ------------------------------------------------------ */
 
-
 static int road_near(const rs_roads *roads, size_t i, const double *rb, const double *bx, double d)
 {
     if (rb[0] > bx[2] + d || rb[2] < bx[0] - d || rb[1] > bx[3] + d || rb[3] < bx[1] - d) return 0;
@@ -435,7 +446,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         for (size_t j = 0; j < nn; j++)
             if (m_new[j] == UINT32_MAX) box_add(zone, bn + 4 * j, 0);
         if (T->net && T->net->node_key &&
-            (r = rs__network_update(ctx, roads, T->net, m_old, m_new, bn, zone, 0.5 * (T->max_width != T->max_width || max_width != max_width ? NAN : fmax(T->max_width, max_width)),
+            (r = rs__network_update(ctx, roads, T->net, m_old, m_new, bn, zone, 0.5 * widest(T->max_width, max_width),
                                     &net)) != RS_OK)
             goto done;
         if (!net && (r = rs_network_build(ctx, roads, NULL, &net)) != RS_OK) goto done;
@@ -577,8 +588,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     nt->net = net;
     nt->facts = facts;
     nt->max_width = max_width;
-    nt->bytes = sizeof *nt + nn * (sizeof *nt->print + sizeof *nt->sprint + sizeof *nt->sum + 4 * sizeof *nt->box) +
-                (net ? rs__network_bytes(net) : 0);
+    nt->bytes = track_bytes(nt);
     pn = NULL, bn = NULL, net = NULL;
     g->track = nt;
     nt = NULL;

@@ -1409,10 +1409,10 @@ static void surf_node(const rs_roads *roads, uint32_t q, rs_network_node *node, 
 /* The reach of record q's surface for surface_tees: its half width plus
  * the tolerance; 0 for a record with no surface to hold an end (no longer
  * than two tolerances, no wider, or of no finite width). */
-static double surf_reach(const build *B, const rs_network *N, size_t q, double tol)
+static double surf_reach(const rs_roads *roads, const rs_network *N, size_t q, double tol)
 {
     double w = 0;
-    rs_roads_get(B->roads, q, NULL, &w, NULL, NULL);
+    rs_roads_get(roads, q, NULL, &w, NULL, NULL);
     double hw = 0.5 * w;
     if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) return 0;
     return hw + tol;
@@ -1458,7 +1458,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         double rsum = 0, cap = 16 * c;
         size_t rn = 0;
         for (size_t q = 0; q < B->nroads; q++) {
-            double rq = surf_reach(B, N, q, tol);
+            double rq = surf_reach(B->roads, N, q, tol);
             if (!(rq > 0)) continue;
             rsum += rq < cap ? rq : cap;
             rn++;
@@ -1489,7 +1489,7 @@ static rs_result surface_tees(build *B, rs_network *N)
             res = RS_ERR_CANCELLED;
             break;
         }
-        double rq = surf_reach(B, N, q, tol);
+        double rq = surf_reach(B->roads, N, q, tol);
         if (!(rq > 0)) continue;
         int qnc = -1; /* (not read yet) */
         uint32_t sq = N->stroke_of[q];
@@ -2604,14 +2604,11 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
     uint32_t zero = 0;
     for (size_t c = 0; c < nc && isfinite(pt[0]) && isfinite(pt[1]); c++) {
         uint32_t q = cand ? cand[c] : (uint32_t)c;
-        double w = 0, hw;
+        double rq = surf_reach(roads, N, q, tol), reach2 = rq * rq;
+        if (!(rq > 0) || !square_meets(box + 4 * (size_t)q, pt[0], pt[1], rq)) continue;
         const double *qxy;
         size_t qnp;
-        rs_roads_get(roads, q, NULL, &w, &qxy, &qnp);
-        hw = 0.5 * w;
-        if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) continue;
-        double rq = hw + tol, reach2 = rq * rq;
-        if (!square_meets(box + 4 * (size_t)q, pt[0], pt[1], rq)) continue;
+        rs_roads_get(roads, q, NULL, NULL, &qxy, &qnp);
         int qnc = -1;
         for (size_t k = 0; k + 1 < qnp; k++) {
             const double *pa = qxy + 2 * k, *pb = pa + 2;
