@@ -165,6 +165,12 @@ typedef struct rs__grid_facts {
     int casing_uniform;
     float casing_rgba[4];
     double widest_casing;         /* the widest casing, metres (0: none) */
+    /* window_on: only the pixels inside window (local metres x0, y0, x1,
+     * y1), and queries there up to window_reach metres, will be asked of
+     * this part (a patch): its road fields list only the segments that can
+     * reach them (rs__roadfield_params) */
+    int window_on;
+    double window[4], window_reach;
 } rs__grid_facts;
 /* The facts of grid g (a whole build: rs_road_grid_build) into *out. */
 void rs__grid_facts_of(const rs_road_grid *g, rs__grid_facts *out);

@@ -154,11 +154,22 @@ typedef struct builder {
     double mx0, my0, mx1, my1; /* the map, grown by what any pad can add */
     double cell;               /* the largest index cell of the fields that trim ends at T's */
     uint32_t kind;             /* RS__EI_* of the pieces pushed */
+    int win_on;                /* 1: only pieces whose box meets win are kept (a patch's) */
+    double win[4];
 } builder;
+
+static void item_box(const rs__edit_item *it, double pad, double *x0, double *y0, double *x1, double *y1);
 
 static rs_result push(builder *b, uint64_t h, double ax, double ay, double bx, double by, double r)
 {
     rs__grid_edit *e = b->e;
+    if (b->win_on) { /* (NaN: kept) */
+        rs__edit_item q;
+        double x0, y0, x1, y1;
+        q.ax = ax, q.ay = ay, q.bx = bx, q.by = by, q.r = r;
+        item_box(&q, 0, &x0, &y0, &x1, &y1);
+        if (x1 < b->win[0] || x0 > b->win[2] || y1 < b->win[1] || y0 > b->win[3]) return RS_OK;
+    }
     if (e->n >= MAX_PIECES) {
         e->over = 1;
         return RS_OK;
@@ -245,8 +256,9 @@ static rs_result stretch(builder *b, const road_fp *F, uint64_t hc, uint64_t hr,
     rs_result r = RS_OK;
     if (F->rc > 0) {
         b->kind = tee ? RS__EI_SURFACE : RS__EI_CORE;
+        size_t n0 = b->e->n;
         r = push(b, hc, ax, ay, bx, by, F->rc + dev);
-        if (!r) b->e->it[b->e->n - 1].dev = nextafterf((float)dev, INFINITY);
+        if (!r && b->e->n > n0) b->e->it[b->e->n - 1].dev = nextafterf((float)dev, INFINITY);
         b->kind = RS__EI_SURFACE;
     }
     double lo = F->rc > 0 ? F->rc : 0, mid = 0.5 * (lo + F->reach), half = 0.5 * (F->reach - lo);
@@ -628,8 +640,10 @@ void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e)
     rs__free(ctx, e);
 }
 
+static double grid_pad(const rs_road_grid *g);
+
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                              const rs_network *net, rs_road_grid *g)
+                              const rs_network *net, const double *window, rs_road_grid *g)
 {
     size_t nr = rs_roads_count(roads);
     const rs__styling *st = g->styling;
@@ -678,6 +692,14 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
      * alpha-map road cell is at most a DEM cell) */
     double grow = 4 * cs + 4 * pix + 1;
     b.mx0 = -grow, b.my0 = -grow, b.mx1 = wm + grow, b.my1 = hm + grow;
+    if (window) {
+        /* a patch's pieces: those an update reads (rs__patch_candidates:
+         * the pieces meeting the patch's rectangle grown by a grid's pad;
+         * an equal piece of another grid lies there too), with room */
+        double wp = grid_pad(g) + 4 * pix + 4;
+        b.win_on = 1;
+        b.win[0] = window[0] - wp, b.win[1] = window[1] - wp, b.win[2] = window[2] + wp, b.win[3] = window[3] + wp;
+    }
     for (size_t i = 0; !r && i < nr; i++) {
         if (rs__tick(ctx, 0)) { /* a poll every RS__TICK_POLLS roads: the build's cancel */
             r = RS_ERR_CANCELLED;

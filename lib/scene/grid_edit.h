@@ -91,9 +91,11 @@ typedef struct rs__grid_edit {
 struct rs_road_grid;
 /* The pieces of grid g, built by rs_road_grid_build from `roads` with
  * options o (when o->grid.edits is set), after its styles and markings and while `net` (the grid's
- * network, NULL when it built none) is at hand. Sets g->edit. */
+ * network, NULL when it built none) is at hand. Sets g->edit. window
+ * (local metres x0, y0, x1, y1; NULL: the map): a patch's rectangle, the
+ * pieces far from it left out (no update reads them). */
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                              const rs_network *net, struct rs_road_grid *g);
+                              const rs_network *net, const double *window, struct rs_road_grid *g);
 void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e);
 
 /* What the whole map's facts read of one road's resolved style. */

@@ -29,6 +29,10 @@
  * 10k-road city: tests/tools/edit_locality.c). */
 #define CHANGE_PAD 15.0
 #define CONTEXT_PAD 60.0
+/* A patch's roads are indexed for its rectangle's pixels and for queries
+ * there (rs_road_grid_query) up to this reach: beyond it a query may miss
+ * a road the whole build finds. */
+#define PATCH_QUERY_REACH 20.0
 
 static uint64_t mix_colour(uint64_t h, rs_colour c)
 {
@@ -531,7 +535,14 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         if (!lo.markings.atlas && base->markings && base->markings->atlas_own) lo.markings.atlas = base->markings->atlas_own;
         lo.progress = NULL;
         lo.progress_user = NULL;
-        if ((r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &local)) != RS_OK) goto done;
+        /* (its fields list only what its pixels and queries can read) */
+        facts.window_on = 1;
+        facts.window[0] = rect.x0 * pix, facts.window[1] = rect.y0 * pix;
+        facts.window[2] = rect.x1 * pix, facts.window[3] = rect.y1 * pix;
+        facts.window_reach = PATCH_QUERY_REACH;
+        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &local);
+        facts.window_on = 0; /* (the track keeps the whole map's facts) */
+        if (r != RS_OK) goto done;
         ids_n = m;
     }
     /* the grid: the base's structures, the old patches (their roads

@@ -2774,9 +2774,12 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             N->node_rad[nd] = S->node_rad[d];
             N->node_surf[nd] = S->node_surf[d];
             N->leg_start[nd] = (uint32_t)nl;
-            for (uint32_t l = S->leg_start[d]; l < S->leg_start[d + 1]; l++) {
+            /* (the node's legs in one copy: a struct copy a leg was a
+             * string move, most of the merge) */
+            uint32_t g0 = S->leg_start[d], g1 = S->leg_start[d + 1];
+            if (g1 > g0) memcpy(&N->leg[nl], &S->leg[g0], (size_t)(g1 - g0) * sizeof *N->leg);
+            for (uint32_t l = g0; l < g1; l++) {
                 rs_network_leg *L = &N->leg[nl++];
-                *L = S->leg[l];
                 L->road = map[L->road];
                 if (!rs__is_end_leg(L)) continue;
                 uint32_t e = rs__leg_end(L);

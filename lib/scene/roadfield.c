@@ -55,6 +55,7 @@ typedef struct rf_seg {
     uint8_t jnext, redundant;
     uint8_t tee; /* bit 0: its start a is a trimmed T end, bit 1: its end b, bit 2: clipped by its
                     record's T end's line (rs__roadfield_set_tees) */
+    uint8_t unlisted; /* 1: in no cell list, too far from the field's window (seg_unlisted) */
 } rf_seg;
 
 struct rs__roadfield {
@@ -85,6 +86,12 @@ struct rs__roadfield {
     struct rf_tee *tee;
     size_t ntee;
     uint32_t *tstart, *tids; /* per grid row (gh + 1 offsets): the tees whose box meets the row */
+    /* the window (rs__roadfield_params.window): the segments too far from
+     * it are kept in seg (every id, joint and T as without it) but listed
+     * in no cell */
+    int window_on;
+    double window[4], window_reach;
+    size_t nunlisted;
 };
 
 /* fmax and fmin with glibc's values (x on a tie, the other one when one
@@ -280,7 +287,8 @@ static void rec_end(rf_builder *b, size_t k)
 
 /* Visit every cell whose rectangle comes within s->r + f->reach of the
  * segment. fill = 0: count (and flag full cells); fill = 1: write `id` into
- * the lists (cursors count down). Returns the cells visited, or -1 when the
+ * the lists (cursors count down); fill = 2: only whether there is one (1 at
+ * the first, nothing written). Returns the cells visited, or -1 when the
  * entry limit is passed. */
 static double seg_mag(const rf_seg *s);
 
@@ -338,6 +346,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
             }
             size_t cell = (size_t)j * f->gw + i;
             visited++;
+            if (fill == 2) return 1;
             if (fill) {
                 f->ids[--b->cnt[cell]] = id;
                 b->cell1[id] = (uint32_t)cell;
@@ -384,6 +393,22 @@ static void seg_set(rf_seg *s, double ax, double ay, double bx, double by, doubl
     s->redundant = 0;
     s->jpart = 0;
     s->tee = 0;
+    s->unlisted = 0;
+}
+
+/* Is segment s too far from f's window to be listed? A pixel of the
+ * window reads the lists of its cell, which lies within a cell of the
+ * window, and a nearest query within window_reach of it reads the cells
+ * that far: a segment listed there comes within its r + reach + cell
+ * diagonal (+ the query's reach) of the window. Its centreline's box grown
+ * by more than that must miss the window (a NaN or infinite width: listed). */
+static int seg_unlisted(const rs__roadfield *f, const rf_seg *s)
+{
+    if (!f->window_on) return 0;
+    double d = s->r + f->reach + 2 * f->c + f->window_reach + 1;
+    if (!(d <= 1e300)) return 0;
+    return SEG_XMIN(s) - d > f->window[2] || SEG_XMAX(s) + d < f->window[0] || SEG_YMIN(s) - d > f->window[3] ||
+           SEG_YMAX(s) + d < f->window[1];
 }
 
 void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
@@ -450,6 +475,7 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
         double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
                         lm_max(lm_max(s->len, s->r), ext));
         s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
+        if (s->unlisted) continue; /* (in no row list) */
         sok[k] = s->tol > 0;
         double g = s->r + s->tol + f->margin;
         sbox[4 * k] = float_down(SEG_XMIN(s) - g);
@@ -844,8 +870,10 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
     uint32_t *order = ob ? (uint32_t *)(void *)(ob + 2 * ns) : NULL;
     float *gb = rs__alloc_array(ctx, cap, 4 * sizeof *gb);
     /* (few segments on many cells, a local build's: the segments sorted by
-     * cell, the cells with none passed over; the same order and flags) */
-    const int sparse = (uint64_t)f->nseg * 16 < ncell;
+     * cell, the cells with none passed over; the same order and flags.
+     * Unlisted segments are in no list: not redundant, not asked) */
+    const size_t nlisted = f->nseg - f->nunlisted;
+    const int sparse = (uint64_t)nlisted * 16 < ncell;
     uint32_t *first = sparse ? NULL : rs__calloc(ctx, ncell + 1, sizeof *first);
     uint64_t *key = sparse ? rs__alloc_array(ctx, ns, sizeof *key) : NULL;
     if (!ob || !gb || (!sparse && !first) || (sparse && !key)) {
@@ -856,9 +884,10 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
         return RS_ERR_NOMEM;
     }
     if (sparse) {
-        for (size_t k = 0; k < f->nseg; k++) key[k] = (uint64_t)cell1[k] << 32 | k;
-        if (f->nseg > 1) qsort(key, f->nseg, sizeof *key, cmp_u64);
-        for (size_t k = 0; k < f->nseg; k++) order[k] = (uint32_t)key[k];
+        for (size_t k = 0, i = 0; k < f->nseg; k++)
+            if (!f->seg[k].unlisted) key[i++] = (uint64_t)cell1[k] << 32 | k;
+        if (nlisted > 1) qsort(key, nlisted, sizeof *key, cmp_u64);
+        for (size_t k = 0; k < nlisted; k++) order[k] = (uint32_t)key[k];
     } else {
         for (size_t k = 0; k < f->nseg; k++) first[cell1[k] + 1]++;
         for (size_t c = 0; c < ncell; c++) first[c + 1] += first[c];
@@ -870,15 +899,19 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
     rs_result res = RS_OK;
     for (size_t k = 0; k < f->nseg; k++) {
         if ((k & 16383) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; break; }
+        if (f->seg[k].unlisted) { /* (its boxes never read) */
+            redundant[k] = 0;
+            continue;
+        }
         ob[2 * k] = fbox_outer(&f->seg[k]);
         ob[2 * k + 1] = fbox_inner(&f->seg[k]);
     }
     for (size_t c = 0, at = 0; c < ncell && res == RS_OK; c++) {
         uint32_t i0, i1;
         if (sparse) { /* (the next cell that is some segment's first) */
-            if (at == f->nseg) break;
+            if (at == nlisted) break;
             c = (size_t)(key[at] >> 32);
-            for (i1 = (uint32_t)at; i1 < f->nseg && (size_t)(key[i1] >> 32) == c; i1++) {}
+            for (i1 = (uint32_t)at; i1 < nlisted && (size_t)(key[i1] >> 32) == c; i1++) {}
             i0 = (uint32_t)at, at = i1;
         } else
             i0 = first[c], i1 = first[c + 1];
@@ -888,6 +921,7 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
         for (uint32_t i = i0; i < i1; i++) {
             uint32_t k = order[i];
             int red = 0;
+            if (f->seg[k].unlisted) continue; /* (in no list: near no pixel of the window) */
             if (n > f->relscan && h->node) {
                 red = redundant_of(f, h, k, c);
             } else {
@@ -983,13 +1017,20 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     /* Counts to end offsets; pass 2 fills each list from its end, visiting
      * segments last to first, so every list comes out ascending. */
     uint64_t run = 0;
-    for (size_t i = 0; i < ncell; i++) {
-        if ((i & 1048575) == 1048575 && rs__poll(ctx)) return RS_ERR_CANCELLED; /* (10^7 cells at 10^5 roads) */
-        if (f->start[i]) f->nonempty++;
-        if (f->start[i] > f->maxlist) f->maxlist = f->start[i];
-        if (f->full[i]) f->nfull++;
-        run += f->start[i];
-        f->start[i] = (uint32_t)run;
+    for (uint32_t j = 0; j < f->gh; j++) {
+        size_t i0 = (size_t)j * f->gw, i1 = i0 + f->gw;
+        if ((j & 255) == 255 && rs__poll(ctx)) return RS_ERR_CANCELLED; /* (10^7 cells at 10^5 roads) */
+        if (!f->rstart[j]) { /* (a row no segment reaches: its cells are empty) */
+            for (size_t i = i0; i < i1; i++) f->start[i] = (uint32_t)run;
+            continue;
+        }
+        for (size_t i = i0; i < i1; i++) {
+            if (f->start[i]) f->nonempty++;
+            if (f->start[i] > f->maxlist) f->maxlist = f->start[i];
+            if (f->full[i]) f->nfull++;
+            run += f->start[i];
+            f->start[i] = (uint32_t)run;
+        }
     }
     f->start[ncell] = (uint32_t)run;
     f->nent = (size_t)run;
@@ -1018,7 +1059,8 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     } else {
         for (size_t k = f->nseg; k-- > 0;) {
             if ((k & 2047) == 0 && rs__poll(ctx)) return RS_ERR_CANCELLED;
-            seg_cells(b, &f->seg[k], 1, (uint32_t)k);
+            b->cell1[k] = 0;
+            if (!f->seg[k].unlisted) seg_cells(b, &f->seg[k], 1, (uint32_t)k);
         }
     }
     /* the record is read: its memory serves the relations and the row lists */
@@ -1143,6 +1185,11 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     f->reach_extra = p->reach_extra;
     f->reach = p->reach_extra + f->margin;
     f->relscan = p->relation_scan ? p->relation_scan : RELATION_SCAN_AUTO;
+    if (p->window_on) {
+        f->window_on = 1;
+        memcpy(f->window, p->window, sizeof f->window);
+        f->window_reach = p->window_reach;
+    }
     size_t ncell = (size_t)f->gw * f->gh;
     rf_builder b;
     builder_init(&b, ctx, f);
@@ -1215,7 +1262,11 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             ax = bx;
             ay = by;
             if (!keep) continue;
-            int64_t v = seg_cells(&b, &sg, 0, 0);
+            /* (an unlisted segment is kept where a whole field keeps it:
+             * when it reaches a cell) */
+            sg.unlisted = (uint8_t)seg_unlisted(f, &sg);
+            int64_t v = seg_cells(&b, &sg, sg.unlisted ? 2 : 0, 0);
+            f->nunlisted += sg.unlisted && v > 0;
             if (v < 0) { res = RS_ERR_LIMIT; goto fail; }
             if (v == 0) continue;
             if (f->nseg == cap_seg) {
@@ -1266,6 +1317,9 @@ static rs_result derive(rs_ctx *ctx, const rs__roadfield *src, const double *ext
     f->reach_extra = src->reach_extra;
     f->reach = pixel > 0 ? f->reach_extra + f->margin : src->reach;
     f->relscan = src->relscan;
+    f->window_on = src->window_on;
+    memcpy(f->window, src->window, sizeof f->window);
+    f->window_reach = src->window_reach;
     size_t ncell = (size_t)f->gw * f->gh;
     rf_builder b;
     builder_init(&b, ctx, f);
@@ -1289,7 +1343,10 @@ static rs_result derive(rs_ctx *ctx, const rs__roadfield *src, const double *ext
         sg->jnext = 0;
         sg->jpart = 0;
         sg->redundant = 0;
-        if (seg_cells(&b, sg, 0, 0) < 0) { res = RS_ERR_LIMIT; goto fail; }
+        sg->unlisted = (uint8_t)seg_unlisted(f, sg); /* (by its own width and reach) */
+        f->nunlisted += sg->unlisted;
+        if (sg->unlisted) b.pcell = UINT32_MAX;
+        else if (seg_cells(&b, sg, 0, 0) < 0) { res = RS_ERR_LIMIT; goto fail; }
         rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;

@@ -19,6 +19,13 @@ typedef struct rs__roadfield_params {
     uint32_t relation_scan;    /* holder search (docs/roadfield.md): cell lists up to this long are
                                   scanned, longer ones use the box tree; 0 -> 64. Same result either
                                   way (tests force each: 1 = always the tree, UINT32_MAX = never) */
+    /* window_on: only the pixels inside window (local metres x0, y0, x1,
+     * y1) and nearest queries there within window_reach metres will be
+     * asked (a patch's local build). The segments that cannot reach them
+     * stay in the field, with their ids, joints and T's, but are listed in
+     * no cell: those pixels and queries come out as without the window. */
+    int window_on;
+    double window[4], window_reach;
 } rs__roadfield_params;
 
 /* Parameters of a road field over the whole map of `dem` for output pixels

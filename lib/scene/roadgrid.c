@@ -684,7 +684,12 @@ static rs_result build_field(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                              const rs__grid_facts *facts, rs_road_grid *g)
 {
     rs__roadfield_params p = rs__roadfield_params_for_dem(dem, texels);
-    if (facts) p.index_cell = facts->index_cell; /* (a part of a map: the whole map's cells) */
+    if (facts) { /* (a part of a map: the whole map's cells, and the part's window) */
+        p.index_cell = facts->index_cell;
+        p.window_on = facts->window_on;
+        memcpy(p.window, facts->window, sizeof p.window);
+        p.window_reach = facts->window_reach;
+    }
     rs_result r = rs__roadfield_build(ctx, roads, &p, &g->field);
     if (r == RS_OK) {
         for (size_t i = 0; i < rs_roads_count(roads); i++) {
@@ -761,7 +766,8 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, facts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
-    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, g);
+    if (!r && o.grid.edits)
+        r = rs__grid_edit_build(ctx, dem, roads, &o, net, facts && facts->window_on ? facts->window : NULL, g);
     rs__auto_plan_free(ctx, &plan);
     /* a whole grid kept for edits keeps what a proportional update reads (its network too) */
     if (!r && o.grid.edits && !facts && o.coverage.edges == RS_EDGES_ANALYTIC) {

@@ -220,6 +220,11 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         return RS_OK;
     }
     rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
+    if (facts && facts->window_on) { /* (a patch: its window) */
+        fp.window_on = 1;
+        memcpy(fp.window, facts->window, sizeof fp.window);
+        fp.window_reach = facts->window_reach;
+    }
     /* pass 2: bands and casing roads (styles resolved again: each is small) */
     /* every road's lines with room for their dashes: part of the line
      * symbols' total (rs_limits.max_linesym_bytes; the pieces add to it) */
