@@ -1242,7 +1242,10 @@ RS_API rs_result rs_normal_window(rs_ctx *ctx, const rs_splatter *s, uint32_t x0
  * road's edge. Returns 1 and fills the fields, 0 when no road is that near
  * (or the grid has no road field). s = arc length from the road's first
  * point (metres), t = signed lateral offset, + to the left of the direction
- * of travel (SPEC "Road field"). */
+ * of travel (SPEC "Road field"). On a grid from rs_road_grid_update that
+ * holds patches, a point drawn by a patch gets the whole build's answer for
+ * reach up to 20 m; beyond that a road more than 20 m away may be missed
+ * (the patch indexes its roads for its own pixels: docs/embedding.md). */
 typedef struct rs_road_point {
     uint32_t road;     /* index in the rs_roads the grid was built from */
     uint32_t segment;  /* segment (points segment, segment+1) */

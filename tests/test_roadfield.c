@@ -647,6 +647,93 @@ static void test_widen(void)
     rs_roads_free(ctx, roads);
 }
 
+/* A field with a window (a patch's local build) against the whole field:
+ * the same coverage (plain, widened, coarser pixels) on every pixel of the
+ * window and the same nearest answers there up to the window's reach, with
+ * T ends; fewer cell entries. */
+static void test_window(void)
+{
+    sc_rng g;
+    sc_rng_seed(&g, 41);
+    size_t px = 0, bad_cov = 0, bad_wide = 0, bad_coarse = 0, queries = 0, found = 0, bad_query = 0;
+    size_t entries_whole = 0, entries_window = 0, tees = 0;
+    for (int scene = 0; scene < 24; scene++) {
+        const double W = 160, H = 120, pix = scene % 3 == 0 ? 0.5 : scene % 3 == 1 ? 1.0 : 0.25;
+        rs_roads *roads = random_roads(&g, W, H, 24, 0, 0, NULL);
+        rs_network *net = NULL;
+        rs__tee_end *te = NULL;
+        size_t nte = 0, n = roads ? rs_roads_count(roads) : 0;
+        CHECK(roads && rs_network_build(ctx, roads, NULL, &net) == RS_OK && rs__tee_ends(ctx, roads, net, &te, &nte) == RS_OK);
+        if (!roads || !net) return;
+        tees += nte;
+        /* the window: whole pixels somewhere on the map, 4 to 60 m a side */
+        uint32_t w = (uint32_t)(W / pix), h = (uint32_t)(H / pix);
+        uint32_t ww = (uint32_t)sc_rng_range(&g, 4 / pix, 60 / pix), wh = (uint32_t)sc_rng_range(&g, 4 / pix, 60 / pix);
+        uint32_t x0 = (uint32_t)sc_rng_range(&g, 0, w - ww), y0 = (uint32_t)sc_rng_range(&g, 0, h - wh);
+        rs__roadfield_params p = params(0, 0, 2.0, W, H, 0, pix), pw = p;
+        pw.window_on = 1;
+        pw.window[0] = x0 * pix, pw.window[1] = y0 * pix, pw.window[2] = (x0 + ww) * pix, pw.window[3] = (y0 + wh) * pix;
+        pw.window_reach = scene % 2 ? 20 : 3;
+        rs__roadfield *f = NULL, *fw = NULL, *gf = NULL, *gw = NULL, *cf = NULL, *cw = NULL;
+        CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK && rs__roadfield_build(ctx, roads, &pw, &fw) == RS_OK);
+        if (!f || !fw) return;
+        CHECK(rs__roadfield_set_tees(ctx, f, roads, te, nte) == RS_OK && rs__roadfield_set_tees(ctx, fw, roads, te, nte) == RS_OK);
+        double extra[32];
+        for (size_t i = 0; i < n && i < 32; i++) extra[i] = i % 3 ? 0.3 : rs__roadfield_cell(f);
+        CHECK(rs__roadfield_widen(ctx, f, extra, n, &gf) == RS_OK && rs__roadfield_widen(ctx, fw, extra, n, &gw) == RS_OK);
+        CHECK(rs__roadfield_repixel(ctx, f, 2 * pix, &cf) == RS_OK && rs__roadfield_repixel(ctx, fw, 2 * pix, &cw) == RS_OK);
+        rs__roadfield_stats sa, sb;
+        rs__roadfield_get_stats(f, &sa);
+        rs__roadfield_get_stats(fw, &sb);
+        entries_whole += sa.entries, entries_window += sb.entries;
+        CHECK_EQ_INT(sa.segments, sb.segments); /* (every segment kept, some unlisted) */
+        size_t m = (size_t)ww * wh;
+        double *a = calloc(m, sizeof *a), *b = calloc(m, sizeof *b), *ag = calloc(m, sizeof *ag), *bg = calloc(m, sizeof *bg);
+        CHECK(a && b && ag && bg);
+        if (a && b && ag && bg && gf && gw && cf && cw) {
+            rs__roadfield_coverage(f, x0, y0, ww, wh, pix, a, ww);
+            rs__roadfield_coverage(fw, x0, y0, ww, wh, pix, b, ww);
+            for (size_t i = 0; i < m; i++) bad_cov += a[i] != b[i];
+            rs__roadfield_coverage2(f, gf, x0, y0, ww, wh, pix, a, ag, ww);
+            rs__roadfield_coverage2(fw, gw, x0, y0, ww, wh, pix, b, bg, ww);
+            for (size_t i = 0; i < m; i++) bad_wide += a[i] != b[i] || ag[i] != bg[i];
+            /* the coarser pixels whose centre lies in the window */
+            uint32_t cx0 = (x0 + 1) / 2, cy0 = (y0 + 1) / 2, cx1 = (x0 + ww) / 2, cy1 = (y0 + wh) / 2;
+            if (cx1 > cx0 && cy1 > cy0) {
+                uint32_t cwid = cx1 - cx0, chei = cy1 - cy0;
+                rs__roadfield_coverage(cf, cx0, cy0, cwid, chei, 2 * pix, a, cwid);
+                rs__roadfield_coverage(cw, cx0, cy0, cwid, chei, 2 * pix, b, cwid);
+                for (size_t i = 0; i < (size_t)cwid * chei; i++) bad_coarse += a[i] != b[i];
+            }
+            px += m;
+        }
+        free(a), free(b), free(ag), free(bg);
+        for (int k = 0; k < 400; k++) {
+            double x = pw.window[0] + sc_rng_unit(&g) * (pw.window[2] - pw.window[0]);
+            double y = pw.window[1] + sc_rng_unit(&g) * (pw.window[3] - pw.window[1]);
+            double reach = sc_rng_range(&g, 0, pw.window_reach);
+            rs__road_point ra, rb;
+            memset(&ra, 0, sizeof ra), memset(&rb, 0, sizeof rb);
+            int ha = rs__roadfield_nearest(f, x, y, reach, &ra), hb = rs__roadfield_nearest(fw, x, y, reach, &rb);
+            queries++, found += ha;
+            bad_query += ha != hb || memcmp(&ra, &rb, sizeof ra) != 0;
+        }
+        rs__roadfield_free(ctx, f), rs__roadfield_free(ctx, fw), rs__roadfield_free(ctx, gf);
+        rs__roadfield_free(ctx, gw), rs__roadfield_free(ctx, cf), rs__roadfield_free(ctx, cw);
+        rs__free(ctx, te);
+        rs_network_free(ctx, net);
+        rs_roads_free(ctx, roads);
+    }
+    printf("window: %zu pixels, %zu queries (%zu found), %zu T ends; entries %zu of the whole field's %zu\n", px, queries,
+           found, tees, entries_window, entries_whole);
+    CHECK(px > 10000 && found > queries / 4 && tees > 0);
+    CHECK(entries_window < entries_whole * 3 / 4);
+    CHECK_EQ_INT(bad_cov, 0);
+    CHECK_EQ_INT(bad_wide, 0);
+    CHECK_EQ_INT(bad_coarse, 0);
+    CHECK_EQ_INT(bad_query, 0);
+}
+
 /* --- allocation failures ----------------------------------------------------------- */
 
 static rs_result alloc_try(rs_ctx *c, void *user, int *wrong)
@@ -870,6 +957,7 @@ int main(void)
     test_weight_implies_near();
     test_coverage_redundant();
     test_widen();
+    test_window();
     test_extreme();
     test_alloc_failures();
     test_record_fallback();

@@ -122,6 +122,8 @@ typedef struct rs__grid_track {
     rs_network *net;
     rs__grid_facts facts;
     double max_width; /* the widest road's width (NaN: one is not finite) */
+    double *tfar;     /* per road end (2 i + end): its T line's rs__tee_end.far, NaN when it is no T end
+                       * (NULL: no network) */
     size_t bytes;
 } rs__grid_track;
 /* The track of whole grid g built from `roads` with options o; takes `net`

@@ -207,7 +207,13 @@ static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_r
 static size_t track_bytes(const rs__grid_track *t)
 {
     return sizeof *t + t->n * (sizeof *t->print + sizeof *t->sprint + sizeof *t->sum + 4 * sizeof *t->box) +
-           (t->net ? rs__network_bytes(t->net) : 0);
+           (t->tfar ? 2 * t->n * sizeof *t->tfar : 0) + (t->net ? rs__network_bytes(t->net) : 0);
+}
+
+/* far of the T ends te[0..n) into tfar (per road end, the rest left) */
+static void tee_fars(double *tfar, const rs__tee_end *te, size_t n)
+{
+    for (size_t k = 0; k < n; k++) tfar[2 * (size_t)te[k].road + (te[k].end ? 1 : 0)] = te[k].far;
 }
 
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
@@ -217,6 +223,7 @@ void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
     rs__free(ctx, t->sprint);
     rs__free(ctx, t->sum);
     rs__free(ctx, t->box);
+    rs__free(ctx, t->tfar);
     rs_network_free(ctx, t->net);
     rs__free(ctx, t);
 }
@@ -242,6 +249,19 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
     if (r) {
         rs__grid_track_free(ctx, t);
         return r;
+    }
+    if (net) { /* (every end's T line, for the next update's clip walks) */
+        rs__tee_end *te = NULL;
+        size_t nte = 0;
+        t->tfar = rs__alloc_array(ctx, 2 * (t->n ? t->n : 1), sizeof *t->tfar);
+        r = t->tfar ? rs__tee_ends(ctx, roads, net, &te, &nte) : RS_ERR_NOMEM;
+        for (size_t k = 0; !r && k < 2 * t->n; k++) t->tfar[k] = NAN;
+        if (!r) tee_fars(t->tfar, te, nte);
+        rs__free(ctx, te);
+        if (r) {
+            rs__grid_track_free(ctx, t);
+            return r;
+        }
     }
     t->sctx = styles_print(o);
     rs__grid_facts_of(g, &t->facts);
@@ -366,6 +386,76 @@ static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint
     }
 }
 
+/* The T ends at the nodes of N where a road marked in m has a leg, of
+ * records not marked (map: N's road to a road of `roads`, UINT32_MAX:
+ * gone): the segments inward from the end segment that its T line clips
+ * (rs__roadfield_set_tees: each while it reaches past the line; a record
+ * that turns back across the through road loses all of itself beyond the
+ * line there, however far from the T) into box acc, grown by `grow`. The
+ * new network's ends (map NULL) with their lines from the roads, written
+ * into tfar (the ends at those nodes: NaN when no T); an old one's from
+ * the network alone (its roads are gone), their lines' far from tfar (the
+ * track's). The capsules are taken wider by `extra` (a casing and a
+ * field's index cell at most): a superset of what a build clips. *known =
+ * 0 when an old end's line is not in tfar. */
+static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *m, const uint32_t *map,
+                           const rs_roads *roads, double *acc, double grow, double extra, double *tfar,
+                           int *known)
+{
+    if (!N || !N->nnodes) return RS_OK;
+    uint8_t *on = rs__calloc(ctx, N->nnodes, 1);
+    if (!on) return RS_ERR_NOMEM;
+    size_t non = 0;
+    for (size_t d = 0; d < N->nnodes; d++) {
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1] && !on[d]; l++) on[d] = m[N->leg[l].road];
+        non += on[d];
+    }
+    rs__tee_end *te = NULL;
+    size_t nte = 0;
+    rs_result r = non ? rs__tee_ends_at(ctx, map ? NULL : roads, N, on, &te, &nte) : RS_OK;
+    if (!r && !map && tfar) {
+        for (size_t d = 0; d < N->nnodes; d++)
+            for (uint32_t l = N->leg_start[d]; on[d] && l < N->leg_start[d + 1]; l++)
+                if (rs__is_end_leg(&N->leg[l])) tfar[rs__leg_end(&N->leg[l])] = NAN;
+        tee_fars(tfar, te, nte);
+    }
+    rs__free(ctx, on);
+    for (size_t k = 0; !r && k < nte; k++) {
+        const rs__tee_end *t = &te[k];
+        uint32_t q = map ? map[t->road] : t->road;
+        if (m[t->road] || q == UINT32_MAX) continue; /* (a marked road's whole box is in) */
+        const double *xy;
+        size_t np;
+        double w = 0;
+        rs_roads_get(roads, q, NULL, &w, &xy, &np);
+        if (np < 3) continue; /* (the end segment's box is in: neighbour_segments) */
+        double margin = 0.5 * w + extra, far = !map ? t->far : tfar ? tfar[2 * (size_t)t->road + (t->end ? 1 : 0)] : NAN;
+        if (!(margin < INFINITY && far > -INFINITY && far < INFINITY)) { /* (NaN: an old end not known as a T) */
+            *known = 0;
+            continue;
+        }
+        size_t ke = t->end ? np - 2 : 0; /* the end segment, past repeated points */
+        while (xy[2 * ke] == xy[2 * ke + 2] && xy[2 * ke + 1] == xy[2 * ke + 3] && (t->end ? ke > 0 : ke + 2 < np - 1))
+            ke = t->end ? ke - 1 : ke + 1;
+        const double *E = xy + 2 * (t->end ? np - 1 : 0);
+        double line = t->nx * E[0] + t->ny * E[1] + far - margin;
+        double bx[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        for (size_t step = 1;; step++) {
+            if (t->end ? ke < step : ke + step + 1 >= np) break;
+            size_t i = t->end ? ke - step : ke + step;
+            const double *a = xy + 2 * i, *b = a + 2;
+            if (!(fmax(t->nx * a[0] + t->ny * a[1], t->nx * b[0] + t->ny * b[1]) > line)) break;
+            bx[0] = fmin(bx[0], fmin(a[0], b[0])), bx[1] = fmin(bx[1], fmin(a[1], b[1]));
+            bx[2] = fmax(bx[2], fmax(a[0], b[0])), bx[3] = fmax(bx[3], fmax(a[1], b[1]));
+        }
+        if (bx[0] <= bx[2]) {
+            box_add(acc, bx, grow);
+        }
+    }
+    rs__free(ctx, te);
+    return r;
+}
+
 /* ---- the patched grid ------------------------------------------------------ */
 
 static int road_near(const rs_roads *roads, size_t i, const double *rb, const double *bx, double d)
@@ -392,7 +482,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     uint64_t *pn = NULL, *sp = NULL;
     rs__road_sum *sm = NULL;
     rs_style *ys = NULL;
-    double *bn = NULL, reach = 0, max_width = 0;
+    double *bn = NULL, reach = 0, max_width = 0, *tf = NULL;
     rs__grid_facts facts;
     rs_network *net = NULL;
     uint32_t *m_old = rs__alloc_array(ctx, no ? no : 1, sizeof *m_old);
@@ -481,8 +571,42 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
      * and the old (old roads by their new index: the unmatched are changed) */
     neighbour_segments(net, cn, NULL, roads, chg, grow, &changed);
     neighbour_segments(T->net, co, m_old, roads, chg, grow, &changed);
+    {
+        /* the T lines of the ends at those nodes, before and after (a record
+         * that turns back across the road it ends on is clipped far along:
+         * fuzz/edits) */
+        double wmax = widest(T->max_width, max_width), cas = fmax(T->facts.widest_casing, facts.widest_casing);
+        double cell = T->facts.index_cell;
+        if (!(cas <= cell)) { /* (casings in a field of their own: its cell at most) */
+            double cw = (double)(dem->width - 1) * dem->frame.cell_size, chh = (double)(dem->height - 1) * dem->frame.cell_size;
+            cell = fmax(fmax(cell, dem->frame.cell_size), 2 * (wmax + 2 * cas));
+            while (cell > 0 && (ceil(cw / cell) + 2) * (ceil(chh / cell) + 2) > (double)(1u << 22)) cell *= 2;
+        } else cas = 0; /* (the casing field widens the road field's: its T's are those) */
+        /* the capsule beyond the half width: a casing and an index cell, and
+         * a slack above the roundings */
+        double extra = cas + cell + 0.01;
+        /* the new track's T lines: the old ones' where the nodes stand */
+        if (net && T->tfar && (tf = rs__alloc_array(ctx, 2 * (nn ? nn : 1), sizeof *tf)))
+            for (size_t j = 0; j < nn; j++)
+                for (int e = 0; e < 2; e++)
+                    tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[2 * (size_t)m_new[j] + e];
+        if (!(extra < INFINITY) || (net && !tf)) {
+            rs__free(ctx, cn);
+            rs__free(ctx, co);
+            goto done; /* (the whole build) */
+        }
+        int known = 1;
+        if (!r) r = tee_clips(ctx, net, cn, NULL, roads, chg, grow, extra, tf, &known);
+        if (!r) r = tee_clips(ctx, T->net, co, m_old, roads, chg, grow, extra, T->tfar, &known);
+        if (!r && !known) { /* (the whole build) */
+            rs__free(ctx, cn);
+            rs__free(ctx, co);
+            goto done;
+        }
+    }
     rs__free(ctx, cn);
     rs__free(ctx, co);
+    if (r) goto done;
     /* the pixels of the changed area, whole DEM cells (pieces never
      * straddle a patch's rows), within the image */
     const double pix = dem->frame.cell_size / o->texels;
@@ -599,6 +723,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     nt->net = net;
     nt->facts = facts;
     nt->max_width = max_width;
+    nt->tfar = tf;
+    tf = NULL;
     nt->bytes = track_bytes(nt);
     pn = NULL, bn = NULL, net = NULL;
     g->track = nt;
@@ -644,6 +770,7 @@ done:
     rs__free(ctx, sm);
     rs__free(ctx, ys);
     rs__free(ctx, bn);
+    rs__free(ctx, tf);
     rs__free(ctx, ids);
     rs_network_free(ctx, net);
     rs_road_grid_free(ctx, local);

@@ -171,8 +171,11 @@ static rs_result add_jn(ctxa *A, size_t road, double s, double half)
 }
 
 /* Nearest point of road r to (x, y): distance and arc length. */
-/* nearest, and the nearest point itself (*fx, *fy) */
-static double nearest_foot(const rs__road_local *r, double x, double y, double *s_out, double *fx, double *fy)
+/* nearest, and the nearest point itself (*fx, *fy); only segments that
+ * may come within `cap` are measured (INFINITY: all; when none is that
+ * near, INFINITY and *s_out, *fx, *fy untouched or of a farther one) */
+static double nearest_foot_within(const rs__road_local *r, double x, double y, double cap, double *s_out, double *fx,
+                                  double *fy)
 {
     double best = INFINITY;
     *fx = x, *fy = y;
@@ -182,7 +185,12 @@ static double nearest_foot(const rs__road_local *r, double x, double y, double *
         double u = ((x - r->x[k]) * dx + (y - r->y[k]) * dy) / len;
         if (u < 0) u = 0;
         if (u > len) u = len;
-        double ex = x - r->x[k] - u * dx / len, ey = y - r->y[k] - u * dy / len, d = hypot(ex, ey);
+        double ex = x - r->x[k] - u * dx / len, ey = y - r->y[k] - u * dy / len;
+        /* (hypot is no less than either leg: a segment that cannot win is
+         * not measured) */
+        double lb = fmax(fabs(ex), fabs(ey));
+        if (lb >= best || lb > cap) continue;
+        double d = hypot(ex, ey);
         if (d < best) {
             best = d;
             *s_out = r->s[k] + u;
@@ -192,10 +200,22 @@ static double nearest_foot(const rs__road_local *r, double x, double y, double *
     return best;
 }
 
+static double nearest_foot(const rs__road_local *r, double x, double y, double *s_out, double *fx, double *fy)
+{
+    return nearest_foot_within(r, x, y, INFINITY, s_out, fx, fy);
+}
+
 static double nearest(const rs__road_local *r, double x, double y, double *s_out)
 {
     double fx, fy;
     return nearest_foot(r, x, y, s_out, &fx, &fy);
+}
+
+/* nearest when it is no farther than cap (else a value above cap) */
+static double nearest_within(const rs__road_local *r, double x, double y, double cap, double *s_out)
+{
+    double fx, fy;
+    return nearest_foot_within(r, x, y, cap, s_out, &fx, &fy);
 }
 
 /* Unit direction of road r at arc length s (its segment there, else the
@@ -861,7 +881,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 rs_roads_get(roads, j, NULL, &wb, NULL, NULL);
                 const double *b = A.box + 4 * j, reach = wb / 2 + JUNCTION_TOL;
                 if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
-                double d = nearest(&A.rl[j], x, y, &s);
+                double d = nearest_within(&A.rl[j], x, y, reach, &s);
                 if (d > reach) continue;
                 if (linked) {
                     int joined = 0;
@@ -870,7 +890,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     const double *fe = sends + 4 * si;
                     double unused_s;
                     for (int side = 0; side < 2 && !joined; side++)
-                        joined = !isnan(fe[2 * side]) && nearest(&A.rl[j], fe[2 * side], fe[2 * side + 1], &unused_s) <= reach;
+                        joined = !isnan(fe[2 * side]) &&
+                                 nearest_within(&A.rl[j], fe[2 * side], fe[2 * side + 1], reach, &unused_s) <= reach;
                     if (joined) continue;
                 }
                 void *arr = mt;

@@ -2715,27 +2715,9 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             goto done;
         if (!NA) goto done; /* (a short record near the edit) */
     }
-    /* the nodes kept and taken, and their legs */
-    size_t nodes = 0, legs = 0;
-    for (size_t d = 0; d < N0->nnodes; d++) {
-        const rs_network_node *v = &N0->node[d];
-        if (!isfinite(v->x) || !isfinite(v->y)) goto done;
-        if (in_box(Zt, v->x, v->y)) continue;
-        if (!(N0->node_rad[d] >= 0) || square_meets(Zn, v->x, v->y, N0->node_rad[d])) goto done;
-        for (uint32_t l = N0->leg_start[d]; l < N0->leg_start[d + 1]; l++)
-            if (m_old[N0->leg[l].road] == NONE) goto done;
-        nodes++, legs += N0->leg_start[d + 1] - N0->leg_start[d];
-    }
-    for (size_t d = 0; NA && d < NA->nnodes; d++) {
-        const rs_network_node *v = &NA->node[d];
-        if (!isfinite(v->x) || !isfinite(v->y) || !(NA->node_rad[d] >= 0)) goto done;
-        if (!in_box(Zt, v->x, v->y)) {
-            if (square_meets(Zn, v->x, v->y, NA->node_rad[d])) goto done;
-            continue;
-        }
-        if (!square_inside(Zc, v->x, v->y, NA->node_rad[d])) goto done;
-        nodes++, legs += NA->leg_start[d + 1] - NA->leg_start[d];
-    }
+    /* the nodes kept and taken, and their legs: room for all of both (each
+     * node is checked as the merge below comes to it) */
+    size_t nodes = N0->nnodes + (NA ? NA->nnodes : 0), legs = N0->nlegs + (NA ? NA->nlegs : 0);
     if (nodes >= UINT32_MAX || legs + 4 >= UINT32_MAX) goto done;
     if (!(N = rs__calloc(ctx, 1, sizeof *N))) goto nomem;
     N->nroads = nn;
@@ -2755,8 +2737,24 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
     {
         size_t d0 = 0, da = 0, nd = 0, nl = 0, nA = NA ? NA->nnodes : 0;
         for (;;) {
-            while (d0 < N0->nnodes && in_box(Zt, N0->node[d0].x, N0->node[d0].y)) d0++;
-            while (da < nA && !in_box(Zt, NA->node[da].x, NA->node[da].y)) da++;
+            /* an old node is made anew inside Zt; kept outside it, where
+             * it must be finite and clear of Zn, its roads all still there
+             * (below). A local node is taken inside Zt, whole inside Zc;
+             * outside Zt it must be clear of Zn. */
+            for (; d0 < N0->nnodes; d0++) {
+                const rs_network_node *v = &N0->node[d0];
+                if (!isfinite(v->x) || !isfinite(v->y)) goto done;
+                if (!in_box(Zt, v->x, v->y)) break;
+            }
+            if (d0 < N0->nnodes && (!(N0->node_rad[d0] >= 0) || square_meets(Zn, N0->node[d0].x, N0->node[d0].y, N0->node_rad[d0])))
+                goto done;
+            for (; da < nA; da++) {
+                const rs_network_node *v = &NA->node[da];
+                if (!isfinite(v->x) || !isfinite(v->y) || !(NA->node_rad[da] >= 0)) goto done;
+                if (in_box(Zt, v->x, v->y)) break;
+                if (square_meets(Zn, v->x, v->y, NA->node_rad[da])) goto done;
+            }
+            if (da < nA && !square_inside(Zc, NA->node[da].x, NA->node[da].y, NA->node_rad[da])) goto done;
             if (d0 == N0->nnodes && da == nA) break;
             uint64_t k0 = UINT64_MAX, ka = UINT64_MAX;
             if (d0 < N0->nnodes) {
@@ -2780,7 +2778,7 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             if (g1 > g0) memcpy(&N->leg[nl], &S->leg[g0], (size_t)(g1 - g0) * sizeof *N->leg);
             for (uint32_t l = g0; l < g1; l++) {
                 rs_network_leg *L = &N->leg[nl++];
-                L->road = map[L->road];
+                if ((L->road = map[L->road]) == NONE) goto done; /* (a kept node of a road gone) */
                 if (!rs__is_end_leg(L)) continue;
                 uint32_t e = rs__leg_end(L);
                 if (ends[e]) goto done; /* (an end at two nodes) */
@@ -2792,13 +2790,16 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
         N->nnodes = nd;
         N->nlegs = nl;
     }
-    /* every end that has a leg in the old network or the local one has one */
-    for (size_t d = 0; d < N0->nnodes; d++)
+    /* every end that has a leg in the old network or the local one has one
+     * (the kept nodes' ends are marked above) */
+    for (size_t d = 0; d < N0->nnodes; d++) {
+        if (!in_box(Zt, N0->node[d].x, N0->node[d].y)) continue;
         for (uint32_t l = N0->leg_start[d]; l < N0->leg_start[d + 1]; l++) {
             const rs_network_leg *L = &N0->leg[l];
             if (rs__is_end_leg(L) && m_old[L->road] != NONE && !ends[2 * m_old[L->road] + (L->kind == RS_LEG_END)])
                 goto done;
         }
+    }
     for (size_t d = 0; NA && d < NA->nnodes; d++)
         for (uint32_t l = NA->leg_start[d]; l < NA->leg_start[d + 1]; l++) {
             const rs_network_leg *L = &NA->leg[l];

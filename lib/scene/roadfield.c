@@ -163,6 +163,19 @@ static inline double seg_near(const rf_seg *s, double x, double y, double *qxo, 
     return len2(x - qx, y - qy);
 }
 
+/* seg_near's squared distance (len2 takes its root, or hypot from 1e300) */
+static inline double seg_near2(const rf_seg *s, double x, double y, double *qxo, double *qyo)
+{
+    double wx = x - s->ax, wy = y - s->ay, p = wx * s->ux + wy * s->uy, qx, qy;
+    if (!(p > 0)) { qx = s->ax; qy = s->ay; }
+    else if (p >= s->len) { qx = s->bx; qy = s->by; }
+    else { qx = s->ax + p * s->ux; qy = s->ay + p * s->uy; }
+    *qxo = qx;
+    *qyo = qy;
+    double dx = x - qx, dy = y - qy;
+    return dx * dx + dy * dy;
+}
+
 static inline double seg_dist(const rf_seg *s, double x, double y)
 {
     double qx, qy;
@@ -315,6 +328,10 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
     uint32_t j0 = clamp_index(ylo * f->inv_c + 1, f->gh), j1 = clamp_index(yhi * f->inv_c + 1, f->gh);
     int64_t visited = 0;
     b->pcell = UINT32_MAX;
+    /* most cells are settled by the squared distance, far from both
+     * bounds (a relative 1e-12 is far above the roundings: the root would
+     * say the same); the rest take the root as before */
+    const double out2 = (R + hd) * (R + hd) * (1 + 1e-12), in2 = R * R * (1 - 1e-12);
     for (uint32_t j = j0; j <= j1; j++) {
         double y0 = ((double)j - 1) * c, y1 = (double)j * c;
         /* x extent of the segment within the strip grown by R, then grown by R */
@@ -337,12 +354,17 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
              * test; of the rest, a cell whose box comes within R - slack of
              * the centre's nearest point certainly touches (the exact test
              * would say so: slack is far above its rounding) */
-            double qx, qy, cx = x0 + 0.5 * c, cy = y0 + 0.5 * c, dc = seg_near(s, cx, cy, &qx, &qy);
-            if (dc > R + hd) continue;
-            if (dc > R) {
-                double ex = fabs(cx - qx) - 0.5 * c, ey = fabs(cy - qy) - 0.5 * c;
-                if (!(len2(ex > 0 ? ex : 0, ey > 0 ? ey : 0) <= Rsure) && !seg_touches_rect(s, x0, y0, x1, y1, R))
-                    continue;
+            double qx, qy, cx = x0 + 0.5 * c, cy = y0 + 0.5 * c, d2 = seg_near2(s, cx, cy, &qx, &qy), dc = -1;
+            int sure = d2 < 1e300;
+            if (sure && d2 > out2) continue;
+            if (!(sure && d2 < in2)) {
+                dc = len2(cx - qx, cy - qy);
+                if (dc > R + hd) continue;
+                if (dc > R) {
+                    double ex = fabs(cx - qx) - 0.5 * c, ey = fabs(cy - qy) - 0.5 * c;
+                    if (!(len2(ex > 0 ? ex : 0, ey > 0 ? ey : 0) <= Rsure) && !seg_touches_rect(s, x0, y0, x1, y1, R))
+                        continue;
+                }
             }
             size_t cell = (size_t)j * f->gw + i;
             visited++;
@@ -356,6 +378,7 @@ static int64_t seg_cells(rf_builder *b, const rf_seg *s, int fill, uint32_t id)
                 rec_cell(b, cell);
                 if (b->pcell == UINT32_MAX || (b->pcell & 0x80000000u)) /* none even yet */
                     b->pcell = (uint32_t)cell | (((i | j) & 1) ? 0x80000000u : 0);
+                if (rin > 0 && !f->full[cell] && dc < 0) dc = sqrt(d2); /* (sure: len2's root) */
                 if (rin > 0 && !f->full[cell] &&
                     (dc + hd <= rin || (dc <= rfull && dc <= rin && seg_dist(s, x0, y0) <= rin && seg_dist(s, x1, y0) <= rin &&
                                         seg_dist(s, x0, y1) <= rin && seg_dist(s, x1, y1) <= rin)))

@@ -79,6 +79,11 @@ typedef struct rs__tee_end {
  * free (not continued by its stroke) at a sine above 0.2 with it. *out is
  * the caller's (rs__free), NULL with *n = 0 when there are none. */
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *n);
+/* rs__tee_ends at the nodes d with nodes[d] != 0 only (NULL: all). roads
+ * NULL: from the network alone (a network whose roads are gone: an old
+ * one after an edit), far then -INFINITY (unknown), the rest as with them. */
+rs_result rs__tee_ends_at(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const uint8_t *nodes,
+                          rs__tee_end **out, size_t *n);
 /* How far road r's end (end 0: its first point, 1: its last) lies past
  * the centre line of the road of through leg tl along the unit normal
  * (nx, ny) (negative: short of it), metres: the end point against the

@@ -45,9 +45,15 @@ double rs__tee_offset(const rs_roads *roads, uint32_t r, int end, const rs_netwo
 
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *nout)
 {
+    return rs__tee_ends_at(ctx, roads, net, NULL, out, nout);
+}
+
+rs_result rs__tee_ends_at(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const uint8_t *nodes,
+                          rs__tee_end **out, size_t *nout)
+{
     *out = NULL;
     *nout = 0;
-    size_t n = rs_roads_count(roads);
+    size_t n = roads ? rs_roads_count(roads) : net ? rs_network_road_count(net) : 0;
     if (!net || rs_network_road_count(net) != n || n < 2) return RS_OK;
     size_t cap = 0, cnt = 0;
     rs__tee_end *T = NULL;
@@ -58,7 +64,7 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
         }
         const rs_network_leg *L = net->leg + net->leg_start[nd];
         uint32_t d = net->leg_start[nd + 1] - net->leg_start[nd];
-        if (d < 3) continue;
+        if (d < 3 || (nodes && !nodes[nd])) continue;
         /* the strokes passing through the node (a road through a shared
          * point or a T, or a record end its stroke continues), each with
          * its two legs: at most MAX_THROUGH of them, each passing once */
@@ -98,8 +104,10 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             if (!th[j].live) continue;
             live++;
             double R = 0, R2 = 0;
-            rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
-            rs_roads_get(roads, tl[1]->road, NULL, &R2, NULL, NULL);
+            if (roads) {
+                rs_roads_get(roads, tl[0]->road, NULL, &R, NULL, NULL);
+                rs_roads_get(roads, tl[1]->road, NULL, &R2, NULL, NULL);
+            }
             th[j].R = R2 < R ? R2 : R;
         }
         if (!live) continue;
@@ -138,7 +146,8 @@ rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net
             t->through = th[bj].leg[0]->road;
             t->nx = nx;
             t->ny = ny;
-            t->far = 0.5 * th[bj].R - rs__tee_offset(roads, r, L[k].kind == RS_LEG_END, th[bj].leg[0], nx, ny, net->tol);
+            t->far = roads ? 0.5 * th[bj].R - rs__tee_offset(roads, r, L[k].kind == RS_LEG_END, th[bj].leg[0], nx, ny, net->tol)
+                           : -INFINITY;
             t->grow = 0;
         }
     }
