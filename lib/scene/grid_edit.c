@@ -642,6 +642,28 @@ void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e)
 
 static double grid_pad(const rs_road_grid *g);
 
+/* Does every piece of road i lie outside b's window? Its pieces lie
+ * within its points' box grown by: a chunk's capsule (the reach, its
+ * deviation, a stretch's reach again), a T end's strip and box (the far
+ * edge past the end and the reach, over a sine of at least 0.2), a pixel,
+ * and a metre for the local frame's rounding. NaN or infinite: no. */
+static int far_from(const builder *b, const rs_roads *roads, size_t i, const road_fp *F, const rs_dem *dem)
+{
+    const double *xy;
+    size_t np;
+    rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (size_t k = 0; k < np; k++) {
+        x0 = fmin(x0, xy[2 * k]), x1 = fmax(x1, xy[2 * k]);
+        y0 = fmin(y0, xy[2 * k + 1]), y1 = fmax(y1, xy[2 * k + 1]);
+    }
+    double tee = fmax(fmax(F->E.tee[0], F->E.tee[1]), 0);
+    double g = 3 * F->reach + b->devmax + 5 * (tee + F->reach) + 2 * b->pix + 1;
+    double ox = dem->frame.origin_x, oy = dem->frame.origin_y;
+    if (!(g < 1e300) || !(x0 <= x1 && y0 <= y1)) return 0;
+    return x0 - ox - g > b->win[2] || x1 - ox + g < b->win[0] || y0 - oy - g > b->win[3] || y1 - oy + g < b->win[1];
+}
+
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                               const rs_network *net, const double *window, rs_road_grid *g)
 {
@@ -705,15 +727,16 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
             r = RS_ERR_CANCELLED;
             break;
         }
+        road_fp F;
+        road_prints(roads, i, st, net, core_in, &F);
+        end_info(roads, i, tees, tee_of, &F.E);
+        if (b.win_on && far_from(&b, roads, i, &F, dem)) continue; /* (a patch's: none of its pieces is kept) */
         rs__road_local rl;
         memset(&rl, 0, sizeof rl);
         if (rs__road_local_get(ctx, roads, i, dem, &rl)) {
             r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
             break;
         }
-        road_fp F;
-        road_prints(roads, i, st, net, core_in, &F);
-        end_info(roads, i, tees, tee_of, &F.E);
         r = road_pieces(&b, &rl, &F);
         rs__road_local_free(ctx, &rl);
     }
