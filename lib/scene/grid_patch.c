@@ -275,21 +275,27 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
 /* new road j's old road (UINT32_MAX: none) in *m_new, old i's new one in
  * *m_old: for each new road in order, the first old road after the last
  * match with an equal print (a road whose print also changed order is no
- * match). Mostly the next old road; else from a table of the old prints,
- * each print's roads ascending (made at the first miss). */
+ * match). Mostly the next old road; else the old ones after it are read
+ * in order (a few misses: a move, an added road), and past a budget of
+ * reads a table of the old prints, each print's roads ascending, made
+ * once, answers (the same first later one). */
 static rs_result match_roads(rs_ctx *ctx, const uint64_t *po, size_t no, const uint64_t *pn, size_t nn,
                              uint32_t *m_old, uint32_t *m_new)
 {
     typedef struct slot { uint64_t h; uint32_t head; } slot;
     slot *tab = NULL;
     uint32_t *next = NULL;
-    size_t mask = 0;
+    size_t mask = 0, read = 0;
     int64_t last = -1;
     for (size_t i = 0; i < no; i++) m_old[i] = UINT32_MAX;
     for (size_t j = 0; j < nn; j++) {
         m_new[j] = UINT32_MAX;
         size_t i = (size_t)(last + 1);
-        if (!(i < no && po[i] == pn[j])) {
+        if (!(i < no && po[i] == pn[j]) && !tab && read + (no - i) <= 4 * (uint64_t)no + 64) {
+            read += no - i;
+            while (i < no && po[i] != pn[j]) i++;
+            if (i == no) continue;
+        } else if (!(i < no && po[i] == pn[j])) {
             if (!tab) {
                 size_t cap = 16;
                 while (cap < 2 * no) cap *= 2;
@@ -505,7 +511,13 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     for (size_t j = 0; j < nn && !r; j++) {
         uint32_t i = m_new[j];
         if (i != UINT32_MAX && sctx == T->sctx) {
-            sp[j] = T->sprint[i], sm[j] = T->sum[i];
+            /* (a run of roads matched in order in one copy: a sum's struct
+             * copy was a string move) */
+            size_t e = j + 1;
+            while (e < nn && m_new[e] == i + (e - j)) e++;
+            memcpy(sp + j, T->sprint + i, (e - j) * sizeof *sp);
+            memcpy(sm + j, T->sum + i, (e - j) * sizeof *sm);
+            j = e - 1;
             continue;
         }
         if ((r = road_sum(ctx, roads, j, o, ys, &sp[j], &sm[j])) != RS_OK) break;
