@@ -912,9 +912,13 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
         if (nlisted > 1) qsort(key, nlisted, sizeof *key, cmp_u64);
         for (size_t k = 0; k < nlisted; k++) order[k] = (uint32_t)key[k];
     } else {
-        for (size_t k = 0; k < f->nseg; k++) first[cell1[k] + 1]++;
+        /* (the unlisted ones left out: `order` holds the listed, by cell;
+         * reading a flag is no cost when there are none) */
+        for (size_t k = 0; k < f->nseg; k++)
+            if (!f->nunlisted || !f->seg[k].unlisted) first[cell1[k] + 1]++;
         for (size_t c = 0; c < ncell; c++) first[c + 1] += first[c];
-        for (size_t k = 0; k < f->nseg; k++) order[first[cell1[k]]++] = (uint32_t)k;
+        for (size_t k = 0; k < f->nseg; k++)
+            if (!f->nunlisted || !f->seg[k].unlisted) order[first[cell1[k]]++] = (uint32_t)k;
         for (size_t c = ncell; c > 0; c--) first[c] = first[c - 1];
         first[0] = 0;
     }
@@ -922,7 +926,7 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
     rs_result res = RS_OK;
     for (size_t k = 0; k < f->nseg; k++) {
         if ((k & 16383) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; break; }
-        if (f->seg[k].unlisted) { /* (its boxes never read) */
+        if (f->nunlisted && f->seg[k].unlisted) { /* (its boxes never read) */
             redundant[k] = 0;
             continue;
         }
@@ -944,7 +948,6 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
         for (uint32_t i = i0; i < i1; i++) {
             uint32_t k = order[i];
             int red = 0;
-            if (f->seg[k].unlisted) continue; /* (in no list: near no pixel of the window) */
             if (n > f->relscan && h->node) {
                 red = redundant_of(f, h, k, c);
             } else {
