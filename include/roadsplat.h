@@ -1021,7 +1021,7 @@ typedef struct rs_pixel_rect {
  * and the whole map's style switches unchanged (one casing colour, one
  * fill), the roads near the edit are built alone and *out shares old's
  * structures, drawing the new part in a patch rectangle, its network
- * updated in place (on the 10k-road city 0.041 to 0.057 of a build); when
+ * updated in place (on the 10k-road city 0.032 to 0.052 of a build); when
  * old already holds 16 patches, or the edit changes a
  * quarter of the image or a style switch, or with alpha-map edges, a full
  * rs_road_grid_build plus the comparison. Grids sharing structures count
