@@ -359,18 +359,32 @@ static void box_add(double *acc, const double *b, double grow)
     acc[2] = fmax(acc[2], b[2] + grow), acc[3] = fmax(acc[3], b[3] + grow);
 }
 
-/* At every node of N where a road marked in m has a leg, the other legs'
+/* The nodes of N where a road marked in m has a leg: *on (the caller's,
+ * rs__free; NULL with no nodes), their count returned. SIZE_MAX when out
+ * of memory. */
+static size_t marked_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, uint8_t **on)
+{
+    *on = NULL;
+    if (!N || !N->nnodes) return 0;
+    if (!(*on = rs__calloc(ctx, N->nnodes, 1))) return SIZE_MAX;
+    size_t n = 0;
+    for (size_t d = 0; d < N->nnodes; d++) {
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1] && !(*on)[d]; l++) (*on)[d] = m[N->leg[l].road];
+        n += (*on)[d];
+    }
+    return n;
+}
+
+/* At every node of N in `on` (marked_nodes of m), the other legs'
  * segments there (the leg's segment or point and the segments on either
  * side: a T or a junction on a segment changes how that capsule is drawn
  * all along it) into box acc, grown by `grow`; map: N's road to a road of
  * `roads` (UINT32_MAX: none, then the road is marked itself). */
-static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint32_t *map, const rs_roads *roads,
-                               double *acc, double grow, size_t *changed)
+static void neighbour_segments(const rs_network *N, const uint8_t *on, const uint8_t *m, const uint32_t *map,
+                               const rs_roads *roads, double *acc, double grow, size_t *changed)
 {
-    for (size_t d = 0; N && d < N->nnodes; d++) {
-        int any = 0;
-        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1] && !any; l++) any = m[N->leg[l].road];
-        if (!any) continue;
+    for (size_t d = 0; on && d < N->nnodes; d++) {
+        if (!on[d]) continue;
         for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) {
             const rs_network_leg *L = &N->leg[l];
             uint32_t q = map ? map[L->road] : L->road;
@@ -392,8 +406,8 @@ static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint
     }
 }
 
-/* The T ends at the nodes of N where a road marked in m has a leg, of
- * records not marked (map: N's road to a road of `roads`, UINT32_MAX:
+/* The T ends at the nodes of N in `on` (marked_nodes of m: non of
+ * them), of records not marked (map: N's road to a road of `roads`, UINT32_MAX:
  * gone): the segments inward from the end segment that its T line clips
  * (rs__roadfield_set_tees: each while it reaches past the line; a record
  * that turns back across the through road loses all of itself beyond the
@@ -404,18 +418,10 @@ static void neighbour_segments(const rs_network *N, const uint8_t *m, const uint
  * track's). The capsules are taken wider by `extra` (a casing and a
  * field's index cell at most): a superset of what a build clips. *known =
  * 0 when an old end's line is not in tfar. */
-static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *m, const uint32_t *map,
-                           const rs_roads *roads, double *acc, double grow, double extra, double *tfar,
-                           int *known)
+static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, size_t non, const uint8_t *m,
+                           const uint32_t *map, const rs_roads *roads, double *acc, double grow, double extra,
+                           double *tfar, int *known)
 {
-    if (!N || !N->nnodes) return RS_OK;
-    uint8_t *on = rs__calloc(ctx, N->nnodes, 1);
-    if (!on) return RS_ERR_NOMEM;
-    size_t non = 0;
-    for (size_t d = 0; d < N->nnodes; d++) {
-        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1] && !on[d]; l++) on[d] = m[N->leg[l].road];
-        non += on[d];
-    }
     rs__tee_end *te = NULL;
     size_t nte = 0;
     rs_result r = non ? rs__tee_ends_at(ctx, map ? NULL : roads, N, on, &te, &nte) : RS_OK;
@@ -425,7 +431,6 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *m, c
                 if (rs__is_end_leg(&N->leg[l])) tfar[rs__leg_end(&N->leg[l])] = NAN;
         tee_fars(tfar, te, nte);
     }
-    rs__free(ctx, on);
     for (size_t k = 0; !r && k < nte; k++) {
         const rs__tee_end *t = &te[k];
         uint32_t q = map ? map[t->road] : t->road;
@@ -434,15 +439,13 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *m, c
         size_t np;
         double w = 0;
         rs_roads_get(roads, q, NULL, &w, &xy, &np);
-        if (np < 3) continue; /* (the end segment's box is in: neighbour_segments) */
+        size_t ke = rs__end_segment(xy, np, t->end); /* (none: a build has no T there) */
+        if (np < 3 || ke == SIZE_MAX) continue; /* (the end segment's box is in: neighbour_segments) */
         double margin = 0.5 * w + extra, far = !map ? t->far : tfar ? tfar[2 * (size_t)t->road + (t->end ? 1 : 0)] : NAN;
         if (!(margin < INFINITY && far > -INFINITY && far < INFINITY)) { /* (NaN: an old end not known as a T) */
             *known = 0;
             continue;
         }
-        size_t ke = t->end ? np - 2 : 0; /* the end segment, past repeated points */
-        while (xy[2 * ke] == xy[2 * ke + 2] && xy[2 * ke + 1] == xy[2 * ke + 3] && (t->end ? ke > 0 : ke + 2 < np - 1))
-            ke = t->end ? ke - 1 : ke + 1;
         const double *E = xy + 2 * (t->end ? np - 1 : 0);
         double line = t->nx * E[0] + t->ny * E[1] + far - margin;
         double bx[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
@@ -581,18 +584,22 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         if (cn[j]) box_add(chg, bn + 4 * j, grow), changed++;
     /* the segments of the roads meeting a changed one, in the new network
      * and the old (old roads by their new index: the unmatched are changed) */
-    neighbour_segments(net, cn, NULL, roads, chg, grow, &changed);
-    neighbour_segments(T->net, co, m_old, roads, chg, grow, &changed);
-    {
+    /* (the nodes of both networks where a changed road has a leg) */
+    uint8_t *on_n = NULL, *on_o = NULL;
+    size_t non_n = marked_nodes(ctx, net, cn, &on_n), non_o = marked_nodes(ctx, T->net, co, &on_o);
+    int known = non_n != SIZE_MAX && non_o != SIZE_MAX; /* (0: the whole build) */
+    if (!known) r = RS_ERR_NOMEM;
+    if (known) {
+        neighbour_segments(net, on_n, cn, NULL, roads, chg, grow, &changed);
+        neighbour_segments(T->net, on_o, co, m_old, roads, chg, grow, &changed);
         /* the T lines of the ends at those nodes, before and after (a record
          * that turns back across the road it ends on is clipped far along:
          * fuzz/edits) */
         double wmax = widest(T->max_width, max_width), cas = fmax(T->facts.widest_casing, facts.widest_casing);
         double cell = T->facts.index_cell;
         if (!(cas <= cell)) { /* (casings in a field of their own: its cell at most) */
-            double cw = (double)(dem->width - 1) * dem->frame.cell_size, chh = (double)(dem->height - 1) * dem->frame.cell_size;
-            cell = fmax(fmax(cell, dem->frame.cell_size), 2 * (wmax + 2 * cas));
-            while (cell > 0 && (ceil(cw / cell) + 2) * (ceil(chh / cell) + 2) > (double)(1u << 22)) cell *= 2;
+            rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
+            cell = fmax(cell, rs__roadfield_cell_most(&fp, wmax + 2 * cas));
         } else cas = 0; /* (the casing field widens the road field's: its T's are those) */
         /* the capsule beyond the half width: a casing and an index cell, and
          * a slack above the roundings */
@@ -602,23 +609,15 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             for (size_t j = 0; j < nn; j++)
                 for (int e = 0; e < 2; e++)
                     tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[2 * (size_t)m_new[j] + e];
-        if (!(extra < INFINITY) || (net && !tf)) {
-            rs__free(ctx, cn);
-            rs__free(ctx, co);
-            goto done; /* (the whole build) */
-        }
-        int known = 1;
-        if (!r) r = tee_clips(ctx, net, cn, NULL, roads, chg, grow, extra, tf, &known);
-        if (!r) r = tee_clips(ctx, T->net, co, m_old, roads, chg, grow, extra, T->tfar, &known);
-        if (!r && !known) { /* (the whole build) */
-            rs__free(ctx, cn);
-            rs__free(ctx, co);
-            goto done;
-        }
+        known = extra < INFINITY && (!net || tf);
+        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, chg, grow, extra, tf, &known);
+        if (known && !r) r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, chg, grow, extra, T->tfar, &known);
     }
+    rs__free(ctx, on_n);
+    rs__free(ctx, on_o);
     rs__free(ctx, cn);
     rs__free(ctx, co);
-    if (r) goto done;
+    if (r || !known) goto done;
     /* the pixels of the changed area, whole DEM cells (pieces never
      * straddle a patch's rows), within the image */
     const double pix = dem->frame.cell_size / o->texels;

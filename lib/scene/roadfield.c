@@ -1152,6 +1152,13 @@ static rs_result build_fail(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, rs_res
                     (unsigned long long)b->limit);
 }
 
+/* c doubled until the grid over p's map has at most cap cells */
+static double grown_cell(double c, const rs__roadfield_params *p, double cap)
+{
+    while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
+    return c;
+}
+
 double rs__roadfield_cell_for(const rs_roads *roads, const rs__roadfield_params *p)
 {
     size_t nroads = rs_roads_count(roads);
@@ -1181,8 +1188,17 @@ double rs__roadfield_cell_for(const rs_roads *roads, const rs__roadfield_params 
         c = even < lo || !(even == even) ? lo : even > hi ? hi : even;
         cap = GRID_AUTO_CELLS;
     }
-    while ((ceil(p->width_m / c) + 2) * (ceil(p->height_m / c) + 2) > cap) c *= 2;
-    return c;
+    return grown_cell(c, p, cap);
+}
+
+double rs__roadfield_cell_most(const rs__roadfield_params *p, double widest)
+{
+    /* cell_for's automatic cell starts at most at hi for roads no wider
+     * than `widest`. Doubled from there, it stops below twice grown(hi):
+     * the cell before its last doubling left too many cells, so it was
+     * below grown(hi), which leaves few enough */
+    double hi = lm_max(lm_max(p->cell_size, 0.5 * widest), 2 * widest);
+    return 2 * grown_cell(hi, p, GRID_AUTO_CELLS);
 }
 
 rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield_params *p,
@@ -2153,18 +2169,25 @@ static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
 
 /* The field segment of road `road` at its first (end 0) or last (end 1)
  * segment of positive length; NULL when that one is not in the field. */
+size_t rs__end_segment(const double *xy, size_t np, int end)
+{
+    if (np < 2) return SIZE_MAX;
+    size_t k = end ? np - 2 : 0;
+    /* past repeated points (a zero-length segment at the end) */
+    while (xy[2 * k] == xy[2 * k + 2] && xy[2 * k + 1] == xy[2 * k + 3]) {
+        if (end ? k == 0 : k + 2 >= np) return SIZE_MAX;
+        k = end ? k - 1 : k + 1;
+    }
+    return k;
+}
+
 static const rf_seg *road_end_seg(const rs__roadfield *f, const rs_roads *roads, uint32_t road, int end)
 {
     const double *xy = NULL;
     size_t np = 0;
     rs_roads_get(roads, road, NULL, NULL, &xy, &np);
-    if (np < 2) return NULL;
-    size_t k = end ? np - 2 : 0;
-    /* past repeated points (a zero-length segment at the end) */
-    while (xy[2 * k] == xy[2 * k + 2] && xy[2 * k + 1] == xy[2 * k + 3]) {
-        if (end ? k == 0 : k + 2 >= np) return NULL;
-        k = end ? k - 1 : k + 1;
-    }
+    size_t k = rs__end_segment(xy, np, end);
+    if (k == SIZE_MAX) return NULL;
     size_t lo = 0, hi = f->nseg;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;

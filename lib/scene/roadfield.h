@@ -38,6 +38,13 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f);
 /* The index cell rs__roadfield_build takes for these roads and p (p's, or
  * the automatic one). */
 double rs__roadfield_cell_for(const rs_roads *roads, const rs__roadfield_params *p);
+/* The largest automatic index cell (p->index_cell 0) of any roads no wider
+ * than `widest` metres over p's map. */
+double rs__roadfield_cell_most(const rs__roadfield_params *p, double widest);
+/* A record's end segment (end 0: its first, 1: its last) of points xy[0..np):
+ * past repeated points at that end; SIZE_MAX when it has none (the T
+ * trimming's rule, rs__roadfield_set_tees). */
+size_t rs__end_segment(const double *xy, size_t np, int end);
 
 /* Cut segment A-B, if it reaches beyond `far` from the w x h map, to the
  * disc around the map that a capsule of reach `pad` can touch from it
