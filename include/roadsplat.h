@@ -158,6 +158,14 @@ typedef struct rs_limits {
                                   report only those that change (~0.25 s at
                                   most); beyond, it reports the candidates,
                                   a superset (docs/embedding.md) */
+    uint32_t max_patches;      /* 16: patches a grid made by rs_road_grid_update
+                                  holds (one per edit, fewer where a patch
+                                  covers earlier ones); the update that would
+                                  pass it builds the grid whole instead, at a
+                                  build's cost. A host that flattens on a
+                                  worker (docs/embedding.md "Long chains")
+                                  raises it; each patch adds its memory and a
+                                  little to every window */
 } rs_limits;
 
 typedef struct rs_ctx rs_ctx;
@@ -289,6 +297,14 @@ RS_API rs_result rs_roads_negate_y(rs_ctx *ctx, rs_roads *roads);
  * next rs_roads_add() on this set or rs_roads_free(). */
 RS_API rs_result rs_roads_get(const rs_roads *roads, size_t i, const char **name, double *width,
                               const double **xy, size_t *n);
+
+/* A copy of the whole set (roads, names, attributes, markings, point
+ * attributes, the frame line), *out the caller's (rs_roads_free): a
+ * snapshot a worker thread can build from while the host goes on editing
+ * the original (docs/embedding.md "Long chains"). RS_ERR_INVALID_ARG for
+ * NULL, RS_ERR_NOMEM; *out NULL on error. Cost: one copy of the set's
+ * memory. */
+RS_API rs_result rs_roads_copy(rs_ctx *ctx, const rs_roads *roads, rs_roads **out);
 
 /* Edits (issue 30; docs/embedding.md "Edits and dirty rectangles"). Each
  * invalidates the pointers from rs_roads_get* (like rs_roads_add) and
@@ -1022,7 +1038,7 @@ typedef struct rs_pixel_rect {
  * fill), the roads near the edit are built alone and *out shares old's
  * structures, drawing the new part in a patch rectangle, its network
  * updated in place (on the 10k-road city 0.032 to 0.052 of a build); when
- * old already holds 16 patches, or the edit changes a
+ * it would pass rs_limits.max_patches (16), or the edit changes a
  * quarter of the image or a style switch, or with alpha-map edges, a full
  * rs_road_grid_build plus the comparison. Grids sharing structures count
  * their holders atomically: any of them may be freed, from any thread,
@@ -1030,6 +1046,32 @@ typedef struct rs_pixel_rect {
  * then the renders' (2 units a candidate pixel). Errors leave *out NULL. */
 RS_API rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_road_grid *old, rs_road_grid **out);
+/* Patches the grid holds (0 for a grid from rs_road_grid_build): each
+ * rs_road_grid_update adds at most one, and builds the grid whole instead
+ * of passing rs_limits.max_patches. A host that keeps edits off its frame
+ * thread's budget flattens the grid on a worker before that
+ * (docs/embedding.md "Long chains"). Read-only: any thread. */
+RS_API size_t rs_road_grid_patch_count(const rs_road_grid *grid);
+/* Long chains of edits without a whole build on the caller's thread
+ * (docs/embedding.md "Long chains"). `flat` is a whole grid a worker built
+ * (rs_road_grid_build, opts.grid.edits, analytic edges) from a copy of the
+ * roads (rs_roads_copy) taken while `since` was the chain's latest grid;
+ * `current` is a later grid of the same chain (rs_road_grid_update from
+ * since, any number of times). *out draws exactly what current draws (no
+ * dirty rectangles) with flat's structures and only the patches current
+ * made after since, so the chain goes on from it with room for
+ * rs_limits.max_patches more. When a whole build came between since and
+ * current, or the edits since changed a map-wide switch (a casing colour,
+ * one fill everywhere), *out is current's patches on current's base (the
+ * same pixels; patch count unchanged). All three are only read and stay
+ * the caller's; *out is the caller's (rs_road_grid_free) and shares their
+ * structures. RS_ERR_INVALID_ARG naming what does not fit: a grid not made
+ * for edits, flat patched or for another DEM, frame, texels or edge mode,
+ * or built from other roads or styles than since (their fingerprints);
+ * RS_ERR_NOMEM. Cost: a copy of current's patch list (no build, no
+ * render). */
+RS_API rs_result rs_road_grid_rebase(rs_ctx *ctx, const rs_road_grid *current, const rs_road_grid *since,
+                                     const rs_road_grid *flat, rs_road_grid **out);
 /* The grid's dirty rectangles (none for a grid from rs_road_grid_build):
  * returns their count and copies the first min(count, cap) into rects
  * (NULL with cap 0: the count alone). Read-only: any thread. */

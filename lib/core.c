@@ -53,6 +53,7 @@ static void fill_limits(rs_limits *l)
     if (!l->max_atlas_bytes) l->max_atlas_bytes = (uint64_t)1 << 28;
     if (!l->max_linesym_bytes) l->max_linesym_bytes = (uint64_t)1 << 32;
     if (!l->max_dirty_compare) l->max_dirty_compare = (uint64_t)1 << 20;
+    if (!l->max_patches) l->max_patches = 16;
 }
 
 rs_result rs_ctx_create(const rs_allocator *alloc, const rs_limits *limits, rs_ctx **out)

@@ -238,6 +238,7 @@ static void test_limits(void)
     CHECK_EQ_INT(got.max_dem_side, 100);
     CHECK(got.max_linesym_bytes == (uint64_t)1 << 32);
     CHECK(got.max_dirty_compare == (uint64_t)1 << 20);
+    CHECK_EQ_INT(got.max_patches, 16);
     /* the getter writes only what an older host's struct holds */
     memset(&got, 0xAB, sizeof got);
     got.size = offsetof(rs_limits, max_atlas_bytes);

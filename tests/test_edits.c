@@ -29,6 +29,7 @@
 #include "internal.h"
 #include "network.h"
 #include "grid_edit.h"
+#include "roadgrid.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -741,6 +742,30 @@ static rs_result try_edit(rs_ctx *c, void *user, int *wrong)
         if (r && rs_roads_point_attr_count(R) != before) *wrong = 1;
     } else if (in->what == 3) {
         for (int k = 0; k < 40 && !r; k++) r = rs_roads_set_point_attr(c, R, 0, (size_t)(k % 3), k & 1 ? "x" : "y", "v");
+    } else if (in->what == 6) {
+        /* a chain moved onto a grid of a copy of its roads */
+        rs_splat_options o = edit_opts(4);
+        rs_road_grid *g0 = NULL, *g1 = NULL, *f = NULL, *b = (rs_road_grid *)1;
+        rs_roads *C = NULL;
+        r = rs_road_grid_build(c, in->dem, R, &o, &g0);
+        if (!r) r = rs_roads_copy(c, R, &C);
+        if (!r) r = rs_roads_replace(c, R, 1, NULL, 5, pts, 3);
+        if (!r) r = rs_road_grid_update(c, in->dem, R, &o, g0, &g1);
+        if (!r) r = rs_road_grid_build(c, in->dem, C, &o, &f);
+        if (!r) {
+            r = rs_road_grid_rebase(c, g1, g0, f, &b);
+            if (r != RS_OK && b != NULL) *wrong = 1;
+            if (r == RS_OK) rs_road_grid_free(c, b);
+        }
+        rs_road_grid_free(c, g0);
+        rs_road_grid_free(c, g1);
+        rs_road_grid_free(c, f);
+        rs_roads_free(c, C);
+    } else if (in->what == 5) {
+        rs_roads *C = (rs_roads *)1;
+        r = rs_roads_copy(c, R, &C);
+        if (r != RS_OK && C != NULL) *wrong = 1;
+        if (r == RS_OK) rs_roads_free(c, C);
     } else {
         /* the local build of roads a and c (their markings and zebra
          * points renumbered) with the network of all three */
@@ -765,7 +790,7 @@ static void test_alloc_failures(void)
     rs_ctx *ctx;
     rs_ctx_create(NULL, NULL, &ctx);
     rs_dem *dem = flat_dem(ctx, 31, 21, 4);
-    for (int what = 0; what < 5; what++) {
+    for (int what = 0; what < 7; what++) {
         sweep_in in = { dem, two_roads, what };
         fail_sweep fs = fail_alloc_sweep(20000, try_edit, &in);
         CHECKF(fs.succeeded && fs.wrong == 0 && fs.leaks == 0, "sweep %d: tries %ld wrong %ld leaks %ld", what,
@@ -1066,6 +1091,431 @@ static void test_shared_free(void)
     rs_ctx_free(ctx);
 }
 
+
+/* A road dragged: forty moves of one road by about a metre, chained. Each
+ * patch covers the last one's rectangle, which then goes, until that would
+ * more than double the new rectangle (docs/embedding.md "Patches"): the
+ * grid holds 1 to 3 patches (16 without), so a drag comes nowhere near the
+ * whole build at the 17th patch; every step splats to a fresh build's
+ * bytes and its rectangles cover every changed pixel. */
+static void test_drag(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    int ok = ss_city_of(ctx, 241, 201, 800, 21, 1, &sc, &dem, &roads) == 0;
+    CHECK(ok);
+    rs_splat_options o = edit_opts(4);
+    rs_road_grid *g0 = NULL;
+    image a;
+    memset(&a, 0, sizeof a);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
+    CHECK(ok);
+    /* the road nearest the map's middle */
+    double W = sc_extent_x(&sc), H = sc_extent_y(&sc), best = INFINITY;
+    size_t pick = 0;
+    for (size_t i = 0; ok && i < rs_roads_count(roads); i++) {
+        const double *xy;
+        size_t np;
+        rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+        double d = hypot(xy[0] - 0.5 * W, xy[1] - 0.5 * H);
+        if (d < best) best = d, pick = i;
+    }
+    size_t most = 0;
+    long uncovered = 0, differ = 0;
+    for (int step = 0; ok && step < 40; step++) {
+        const double *p;
+        size_t np;
+        double w;
+        rs_roads_get(roads, pick, NULL, &w, &p, &np);
+        double *q = malloc(2 * np * sizeof *q);
+        ok = q != NULL;
+        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] + 1.0, q[2 * k + 1] = p[2 * k + 1] + 0.4;
+        ok = ok && rs_roads_replace(ctx, roads, pick, NULL, w, q, np) == RS_OK;
+        free(q);
+        rs_road_grid *g1 = NULL, *gf = NULL;
+        image b, c;
+        memset(&b, 0, sizeof b);
+        memset(&c, 0, sizeof c);
+        ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
+             rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
+        CHECKF(ok, "drag step %d: %s", step, rs_ctx_message(ctx));
+        if (ok) {
+            most = g1->npatch > most ? g1->npatch : most;
+            differ += !same_image(&b, &c);
+            size_t nr = rs_road_grid_dirty(g1, NULL, 0);
+            rs_pixel_rect *R = malloc((nr ? nr : 1) * sizeof *R);
+            ok = R != NULL;
+            if (ok) rs_road_grid_dirty(g1, R, nr);
+            for (size_t px = 0; ok && px < (size_t)a.w * a.h; px++) {
+                if (!pixel_differs(&a, &b, px)) continue;
+                uint32_t x = (uint32_t)(px % a.w), y = (uint32_t)(px / a.w);
+                int in = 0;
+                for (size_t k = 0; k < nr && !in; k++) in = x >= R[k].x0 && x < R[k].x1 && y >= R[k].y0 && y < R[k].y1;
+                uncovered += !in;
+            }
+            free(R);
+        }
+        rs_road_grid_free(ctx, gf);
+        rs_road_grid_free(ctx, g0);
+        g0 = g1;
+        image_free(&a);
+        image_free(&c);
+        a = b;
+    }
+    CHECKF(most >= 1 && most <= 3, "drag: the grid held up to %zu patches (1 to 3 expected)", most);
+    CHECKF(differ == 0, "drag: %ld steps not a fresh build's bytes", differ);
+    CHECKF(uncovered == 0, "drag: %ld changed pixels outside the rectangles", uncovered);
+    image_free(&a);
+    rs_road_grid_free(ctx, g0);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
+/* rs_roads_copy: the same roads, names, attributes, markings, point
+ * attributes and frame as the original; an edit of either leaves the other
+ * as it was; NULL is refused. */
+static void test_roads_copy(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_roads *R = NULL, *C = NULL;
+    CHECK_EQ_INT(rs_roads_parse(ctx, two_roads, strlen(two_roads), &R), RS_OK);
+    CHECK_EQ_INT(rs_roads_copy(ctx, R, &C), RS_OK);
+    int same = R && C && rs_roads_count(R) == rs_roads_count(C) && rs_roads_mark_count(R) == rs_roads_mark_count(C) &&
+               rs_roads_point_attr_count(R) == rs_roads_point_attr_count(C) && rs_roads_frame(R, NULL) == rs_roads_frame(C, NULL);
+    for (size_t i = 0; same && i < rs_roads_count(R); i++) {
+        const char *na, *nb;
+        double wa, wb;
+        const double *pa, *pb;
+        size_t ca, cb;
+        rs_roads_get(R, i, &na, &wa, &pa, &ca);
+        rs_roads_get(C, i, &nb, &wb, &pb, &cb);
+        same = strcmp(na, nb) == 0 && wa == wb && ca == cb && memcmp(pa, pb, 2 * ca * sizeof *pa) == 0 &&
+               rs_roads_attr_count(R, i) == rs_roads_attr_count(C, i);
+        for (size_t k = 0; same && k < rs_roads_attr_count(R, i); k++) {
+            const char *ka, *va, *kb, *vb;
+            rs_roads_attr_at(R, i, k, &ka, &va);
+            rs_roads_attr_at(C, i, k, &kb, &vb);
+            same = strcmp(ka, kb) == 0 && strcmp(va, vb) == 0;
+        }
+    }
+    CHECK(same);
+    CHECK(R && rs_roads_mark_count(R) > 0 && rs_roads_point_attr_count(R) > 0); /* (the copy had them to copy) */
+    /* edits of the copy leave the original, and the other way round */
+    const double pts[] = { 1, 2, 3, 4 };
+    size_t n0 = rs_roads_count(R);
+    CHECK_EQ_INT(rs_roads_remove(ctx, C, 0), RS_OK);
+    CHECK_EQ_INT(rs_roads_add(ctx, C, "new", 3, pts, 2), RS_OK);
+    CHECK_EQ_INT(rs_roads_count(R), n0);
+    CHECK_EQ_INT(rs_roads_replace(ctx, R, 0, "renamed", 2, pts, 2), RS_OK);
+    const char *name = NULL;
+    rs_roads_get(C, rs_roads_count(C) - 1, &name, NULL, NULL, NULL);
+    CHECK(name && strcmp(name, "new") == 0);
+    rs_roads *N = (rs_roads *)1;
+    CHECK_EQ_INT(rs_roads_copy(ctx, NULL, &N), RS_ERR_INVALID_ARG);
+    CHECK(N == NULL);
+    CHECK(has_msg(ctx, "rs_roads_copy"));
+    CHECK_EQ_INT(rs_roads_copy(ctx, R, NULL), RS_ERR_INVALID_ARG);
+    rs_roads_free(ctx, R);
+    rs_roads_free(ctx, C);
+    rs_ctx_free(ctx);
+}
+
+typedef struct flatten_job {
+    const rs_dem *dem;
+    const rs_roads *roads;
+    const rs_splat_options *o;
+    rs_road_grid *g;
+    int ok;
+} flatten_job;
+
+static void *flatten_thread(void *arg)
+{
+    flatten_job *j = arg;
+    rs_ctx *c = NULL;
+    j->ok = rs_ctx_create(NULL, NULL, &c) == RS_OK && rs_road_grid_build(c, j->dem, j->roads, j->o, &j->g) == RS_OK;
+    rs_ctx_free(c);
+    return NULL;
+}
+
+/* A long chain (docs/embedding.md "Long chains"): rs_limits.max_patches
+ * 40, thirty-six moves of roads spread over the map, chained; every grid
+ * splats to a fresh build's bytes (more than 16 patches: the windows cut
+ * at every patch's edges) and holds at most 40 patches. At the 20th edit
+ * a worker thread builds the grid whole from a copy of the roads
+ * (rs_roads_copy) while the edits go on; rs_road_grid_rebase then moves the
+ * chain onto it: the same bytes, no dirty rectangle, only the patches made
+ * after the copy, and four more edits from it splat as fresh builds do.
+ * Rebase refuses a flat grid of other roads, a patched one, NULL. Then
+ * with max_patches 3 the update past it builds whole, and a rebase across
+ * that build keeps the current grid's pixels. */
+static void test_long_chain(void)
+{
+    rs_limits lim;
+    memset(&lim, 0, sizeof lim);
+    lim.max_patches = 40;
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, &lim, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL, *snap = NULL;
+    int ok = ss_city_of(ctx, 241, 201, 800, 23, 1, &sc, &dem, &roads) == 0;
+    CHECK(ok);
+    rs_splat_options o = edit_opts(4);
+    rs_road_grid *g0 = NULL;
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK;
+    sc_rng rng;
+    sc_rng_seed(&rng, 4242);
+    size_t most = 0;
+    long differ = 0;
+    flatten_job job;
+    memset(&job, 0, sizeof job);
+    pthread_t th;
+    int started = 0;
+    rs_road_grid *since = NULL;
+    for (int e = 0; ok && e < 36; e++) {
+        if (e == 20) {
+            since = g0; /* (kept: the grid the copy was taken at) */
+            ok = rs_roads_copy(ctx, roads, &snap) == RS_OK;
+            job.dem = dem, job.roads = snap, job.o = &o;
+            started = ok && pthread_create(&th, NULL, flatten_thread, &job) == 0;
+            CHECK(started);
+        }
+        size_t i = (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads));
+        const double *p;
+        size_t np;
+        double w;
+        rs_roads_get(roads, i, NULL, &w, &p, &np);
+        double *q = malloc(2 * np * sizeof *q);
+        ok = q != NULL;
+        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] + 3.0, q[2 * k + 1] = p[2 * k + 1] - 2.0;
+        ok = ok && rs_roads_replace(ctx, roads, i, NULL, w, q, np) == RS_OK;
+        free(q);
+        rs_road_grid *g1 = NULL, *gf = NULL;
+        image b, c;
+        memset(&b, 0, sizeof b);
+        memset(&c, 0, sizeof c);
+        ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
+             rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
+        CHECKF(ok, "long chain edit %d: %s", e, rs_ctx_message(ctx));
+        if (ok) {
+            size_t np2 = rs_road_grid_patch_count(g1);
+            most = np2 > most ? np2 : most;
+            differ += !same_image(&b, &c);
+        }
+        image_free(&b);
+        image_free(&c);
+        rs_road_grid_free(ctx, gf);
+        if (g0 != since) rs_road_grid_free(ctx, g0);
+        g0 = g1;
+    }
+    CHECKF(most > 16 && most <= 40, "long chain: the grid held up to %zu patches (17 to 40 expected)", most);
+    CHECKF(differ == 0, "long chain: %ld grids not a fresh build's bytes", differ);
+    /* the worker's whole grid, with the patches made since the copy */
+    if (started) pthread_join(th, NULL);
+    CHECK(job.ok);
+    if (ok && job.ok) {
+        rs_road_grid *rb = NULL, *bad = (rs_road_grid *)1, *other = NULL;
+        ok = rs_road_grid_rebase(ctx, g0, since, job.g, &rb) == RS_OK;
+        CHECKF(ok, "rebase: %s", rs_ctx_message(ctx));
+        size_t before = rs_road_grid_patch_count(g0), after = rb ? rs_road_grid_patch_count(rb) : 0;
+        CHECKF(ok && after <= 16 && after < before && rs_road_grid_dirty(rb, NULL, 0) == 0,
+               "rebase: %zu patches (had %zu, 16 edits since the copy), %zu dirty", after, before,
+               rb ? rs_road_grid_dirty(rb, NULL, 0) : 0);
+        /* the chain goes on from it */
+        for (int e = 0; ok && e < 5; e++) {
+            rs_road_grid *g1 = NULL, *gf = NULL;
+            image b, c;
+            memset(&b, 0, sizeof b);
+            memset(&c, 0, sizeof c);
+            if (e) {
+                size_t i = (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads));
+                const double *p;
+                size_t np;
+                double w;
+                rs_roads_get(roads, i, NULL, &w, &p, &np);
+                double *q = malloc(2 * np * sizeof *q);
+                ok = q != NULL;
+                for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] - 2.5, q[2 * k + 1] = p[2 * k + 1] + 1.0;
+                ok = ok && rs_roads_replace(ctx, roads, i, NULL, w, q, np) == RS_OK;
+                free(q);
+                ok = ok && rs_road_grid_update(ctx, dem, roads, &o, rb, &g1) == RS_OK;
+            }
+            const rs_road_grid *show = e ? g1 : rb;
+            ok = ok && render(ctx, dem, show, &o, &b) == 0 && rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK &&
+                 render(ctx, dem, gf, &o, &c) == 0;
+            CHECKF(ok && same_image(&b, &c), "rebased chain, edit %d: not a fresh build's bytes", e);
+            image_free(&b);
+            image_free(&c);
+            rs_road_grid_free(ctx, gf);
+            if (g1) {
+                rs_road_grid_free(ctx, rb);
+                rb = g1;
+            }
+        }
+        /* what it refuses */
+        CHECK_EQ_INT(rs_road_grid_rebase(ctx, g0, since, g0, &bad), RS_ERR_INVALID_ARG);
+        CHECK(bad == NULL && has_msg(ctx, "flat is not a whole grid"));
+        ok = rs_road_grid_build(ctx, dem, roads, &o, &other) == RS_OK; /* (the roads now, not the copy's) */
+        CHECK_EQ_INT(rs_road_grid_rebase(ctx, g0, since, other, &bad), RS_ERR_INVALID_ARG);
+        CHECK(has_msg(ctx, "flat was not built from the roads"));
+        CHECK_EQ_INT(rs_road_grid_rebase(ctx, g0, NULL, job.g, &bad), RS_ERR_INVALID_ARG);
+        rs_road_grid_free(ctx, other);
+        rs_road_grid_free(ctx, rb);
+    }
+    rs_road_grid_free(ctx, since);
+    rs_road_grid_free(ctx, job.g);
+    /* max_patches 3: the update that would hold a fourth builds whole */
+    rs_limits l3;
+    memset(&l3, 0, sizeof l3);
+    l3.max_patches = 3;
+    rs_ctx *c3;
+    rs_ctx_create(NULL, &l3, &c3);
+    rs_road_grid *h = NULL;
+    ok = ok && rs_road_grid_build(c3, dem, roads, &o, &h) == RS_OK;
+    size_t seen[6] = { 0 };
+    rs_road_grid *h0 = NULL, *f0 = NULL; /* the first grid, and a whole build of its roads */
+    for (int e = 0; ok && e < 6; e++) {
+        if (e == 0) {
+            h0 = h;
+            ok = rs_road_grid_build(c3, dem, roads, &o, &f0) == RS_OK;
+        }
+        const double *p;
+        size_t np;
+        double w;
+        size_t i = (size_t)e * 131 % rs_roads_count(roads);
+        rs_roads_get(roads, i, NULL, &w, &p, &np);
+        double *q = malloc(2 * np * sizeof *q);
+        ok = q != NULL;
+        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] - 2.0, q[2 * k + 1] = p[2 * k + 1] + 1.0;
+        ok = ok && rs_roads_replace(c3, roads, i, NULL, w, q, np) == RS_OK;
+        free(q);
+        rs_road_grid *h1 = NULL;
+        ok = ok && rs_road_grid_update(c3, dem, roads, &o, h, &h1) == RS_OK;
+        if (ok) seen[e] = rs_road_grid_patch_count(h1);
+        if (h != h0) rs_road_grid_free(c3, h);
+        h = h1;
+    }
+    int capped = 1, reset = 0;
+    for (int e = 0; e < 6; e++) capped &= seen[e] <= 3, reset |= e > 0 && seen[e] == 0 && seen[e - 1] == 3;
+    CHECKF(capped && reset, "max_patches 3: patches %zu %zu %zu %zu %zu %zu", seen[0], seen[1], seen[2], seen[3], seen[4],
+           seen[5]);
+    /* across that whole build: current's pixels on current's base */
+    if (ok && h0) {
+        rs_road_grid *rb = NULL, *gf = NULL;
+        image b, c;
+        memset(&b, 0, sizeof b);
+        memset(&c, 0, sizeof c);
+        ok = rs_road_grid_rebase(c3, h, h0, f0, &rb) == RS_OK && render(c3, dem, rb, &o, &b) == 0 &&
+             rs_road_grid_build(c3, dem, roads, &o, &gf) == RS_OK && render(c3, dem, gf, &o, &c) == 0;
+        CHECKF(ok && same_image(&b, &c) && rs_road_grid_patch_count(rb) == rs_road_grid_patch_count(h),
+               "rebase across a whole build: %s", rs_ctx_message(c3));
+        image_free(&b);
+        image_free(&c);
+        rs_road_grid_free(c3, gf);
+        rs_road_grid_free(c3, rb);
+    }
+    rs_road_grid_free(c3, h0);
+    rs_road_grid_free(c3, f0);
+    rs_road_grid_free(c3, h);
+    rs_ctx_free(c3);
+    rs_road_grid_free(ctx, g0);
+    rs_roads_free(ctx, roads);
+    rs_roads_free(ctx, snap);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
+/* Two roads moved in one update, at opposite corners of the map: two
+ * patches, one at each (not one rectangle over the map between them); the
+ * grid splats to a fresh build's bytes, every changed pixel lies in a
+ * rectangle, the rectangles do not overlap and come in rows, then
+ * columns. */
+static void test_two_places(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    int ok = ss_city_of(ctx, 241, 201, 800, 31, 1, &sc, &dem, &roads) == 0;
+    CHECK(ok);
+    rs_splat_options o = edit_opts(4);
+    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
+    image a, b, c;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    memset(&c, 0, sizeof c);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
+    double W = sc_extent_x(&sc), H = sc_extent_y(&sc);
+    for (int corner = 0; ok && corner < 2; corner++) {
+        double tx = corner ? 0.85 * W : 0.15 * W, ty = corner ? 0.85 * H : 0.15 * H, best = INFINITY;
+        size_t pick = 0;
+        for (size_t i = 0; i < rs_roads_count(roads); i++) {
+            const double *xy;
+            size_t np;
+            double len = 0;
+            rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+            for (size_t k = 0; k + 1 < np; k++) len += hypot(xy[2 * k + 2] - xy[2 * k], xy[2 * k + 3] - xy[2 * k + 1]);
+            double d = hypot(xy[0] - tx, xy[1] - ty);
+            if (len < 60 && d < best) best = d, pick = i; /* (a short road: it stays in its corner) */
+        }
+        const double *p;
+        size_t np;
+        double w;
+        rs_roads_get(roads, pick, NULL, &w, &p, &np);
+        double *q = malloc(2 * np * sizeof *q);
+        ok = q != NULL;
+        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] + 2.0, q[2 * k + 1] = p[2 * k + 1] + 1.5;
+        ok = ok && rs_roads_replace(ctx, roads, pick, NULL, w, q, np) == RS_OK;
+        free(q);
+    }
+    ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
+         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
+    CHECKF(ok, "two places: %s", rs_ctx_message(ctx));
+    if (ok) {
+        CHECKF(rs_road_grid_patch_count(g1) == 2, "two places: %zu patches (2 expected)", rs_road_grid_patch_count(g1));
+        CHECK(same_image(&b, &c));
+        size_t nr = rs_road_grid_dirty(g1, NULL, 0);
+        rs_pixel_rect *R = malloc((nr ? nr : 1) * sizeof *R);
+        CHECK(R != NULL);
+        if (R) rs_road_grid_dirty(g1, R, nr);
+        long uncovered = 0, twice = 0, order = 0, changed = 0;
+        for (size_t k = 0; R && k + 1 < nr; k++)
+            order += R[k].y0 > R[k + 1].y0 || (R[k].y0 == R[k + 1].y0 && R[k].x0 >= R[k + 1].x0);
+        for (size_t px = 0; R && px < (size_t)a.w * a.h; px++) {
+            uint32_t x = (uint32_t)(px % a.w), y = (uint32_t)(px / a.w);
+            int in = 0;
+            for (size_t k = 0; k < nr; k++) in += x >= R[k].x0 && x < R[k].x1 && y >= R[k].y0 && y < R[k].y1;
+            twice += in > 1;
+            if (pixel_differs(&a, &b, px)) changed++, uncovered += !in;
+        }
+        CHECKF(changed > 0 && uncovered == 0 && twice == 0 && order == 0,
+               "two places: %ld changed, %ld uncovered, %ld in two rectangles, %ld out of order", changed, uncovered,
+               twice, order);
+        free(R);
+    }
+    image_free(&a);
+    image_free(&b);
+    image_free(&c);
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, gf);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
     test_shared_free();
@@ -1079,5 +1529,9 @@ int main(void)
     test_alloc_failures();
     test_update_cancel();
     test_random_edits();
+    test_drag();
+    test_roads_copy();
+    test_long_chain();
+    test_two_places();
     return th_finish("test_edits");
 }

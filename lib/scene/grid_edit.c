@@ -1522,6 +1522,8 @@ rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     return RS_OK;
 }
 
+size_t rs_road_grid_patch_count(const rs_road_grid *grid) { return grid ? grid->npatch : 0; }
+
 size_t rs_road_grid_dirty(const rs_road_grid *grid, rs_pixel_rect *rects, size_t cap)
 {
     if (!grid || !grid->edit) return 0;

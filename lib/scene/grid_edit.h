@@ -113,6 +113,7 @@ typedef struct rs__road_sum {
  * fingerprint and sum, and its box in world metres (x0, y0, x1, y1); the
  * network of the whole set, and the whole map's facts. */
 typedef struct rs__grid_track {
+    long refs;        /* grids holding it (a rebased grid shares its chain's: rs_road_grid_rebase) */
     size_t n;
     uint64_t *print;  /* per road: its own (raw_prints in lib/scene/grid_patch.c) */
     uint64_t *sprint; /* per road: its resolved style's */
@@ -130,6 +131,7 @@ typedef struct rs__grid_track {
  * (the grid's network: freed with the track, also on failure). */
 rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,
                                struct rs_road_grid *g);
+/* Release a holder of t (freed with the last). */
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t);
 /* Tests: 1 when the network grid g keeps for its next update equals one
  * rs_network_build makes of `roads` (or it keeps none), 0 when not, -1

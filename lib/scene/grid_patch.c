@@ -21,8 +21,6 @@
 #define mixd rs__fp_mixd
 #define mixs rs__fp_mixs
 
-/* The most patches a grid takes before an update builds it whole. */
-#define MAX_PATCHES 16
 /* Metres beyond twice the widest paint reach that an edit may change
  * pixels at (a give-way line's setback, a junction's surface) and, beyond
  * the changed area, the roads a local build takes (35 m sufficed on the
@@ -216,9 +214,19 @@ static void tee_fars(double *tfar, const rs__tee_end *te, size_t n)
     for (size_t k = 0; k < n; k++) tfar[2 * (size_t)te[k].road + (te[k].end ? 1 : 0)] = te[k].far;
 }
 
+/* (holders of one track may free it from several threads) */
+static long track_refs_add(long *refs, long d)
+{
+#if defined(__GNUC__)
+    return __atomic_add_fetch(refs, d, __ATOMIC_ACQ_REL);
+#else
+    return *refs += d;
+#endif
+}
+
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 {
-    if (!t) return;
+    if (!t || track_refs_add(&t->refs, -1) > 0) return;
     rs__free(ctx, t->print);
     rs__free(ctx, t->sprint);
     rs__free(ctx, t->sum);
@@ -236,6 +244,7 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
         rs_network_free(ctx, net);
         return RS_ERR_NOMEM;
     }
+    t->refs = 1;
     t->net = net;
     t->n = rs_roads_count(roads);
     double mark_reach;
@@ -359,6 +368,117 @@ static void box_add(double *acc, const double *b, double grow)
     acc[2] = fmax(acc[2], b[2] + grow), acc[3] = fmax(acc[3], b[3] + grow);
 }
 
+/* The changed area as boxes (each grown as it is added): edits far apart
+ * become patches of their own instead of one rectangle over the map
+ * between them. */
+typedef struct boxes {
+    rs_ctx *ctx;
+    double *v; /* 4 a box */
+    size_t n, cap;
+    int nomem;
+} boxes;
+
+static void boxes_add(boxes *B, const double *b, double grow)
+{
+    if (B->n == B->cap) {
+        size_t nc = B->cap ? 2 * B->cap : 16;
+        double *v = B->nomem ? NULL : rs__realloc(B->ctx, B->v, nc * 4 * sizeof *v);
+        if (!v) {
+            B->nomem = 1;
+            return;
+        }
+        B->v = v, B->cap = nc;
+    }
+    double *d = B->v + 4 * B->n++;
+    d[0] = b[0] - grow, d[1] = b[1] - grow, d[2] = b[2] + grow, d[3] = b[3] + grow;
+}
+
+static uint64_t rect_area(rs_pixel_rect r) { return (uint64_t)(r.x1 - r.x0) * (r.y1 - r.y0); }
+
+static int rects_meet(rs_pixel_rect a, rs_pixel_rect b)
+{
+    return a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1;
+}
+
+static rs_pixel_rect rect_union(rs_pixel_rect a, rs_pixel_rect b)
+{
+    rs_pixel_rect u = { a.x0 < b.x0 ? a.x0 : b.x0, a.y0 < b.y0 ? a.y0 : b.y0, a.x1 > b.x1 ? a.x1 : b.x1,
+                        a.y1 > b.y1 ? a.y1 : b.y1 };
+    return u;
+}
+
+/* What a local build of rectangle r costs, about: the area of its roads,
+ * the rectangle grown by the context (m pixels) */
+static double rect_cost(rs_pixel_rect r, double m)
+{
+    return ((double)(r.x1 - r.x0) + 2 * m) * ((double)(r.y1 - r.y0) + 2 * m);
+}
+
+/* The patch rectangles of the changed boxes: each box's pixels in whole
+ * DEM cells (pieces never straddle a patch's rows) within the W x H image;
+ * two that overlap, or whose local builds would cost more apart than
+ * together (m: the context in pixels), made one; an older patch of `old`
+ * that one overlaps taken into it (gone[k] = 1) while that takes no more
+ * pixels than the two and at most doubles it (a road dragged, or edits
+ * near each other, keep one patch instead of a patch each: the whole build
+ * at max_patches comes later). *out the caller's; -1 when a box is not a
+ * number, -2 out of memory. */
+static int change_rects(rs_ctx *ctx, const boxes *B, const rs_dem *dem, double pix, uint32_t W, uint32_t H,
+                        uint32_t Tx, double m, const rs_road_grid *old, uint8_t *gone, rs_pixel_rect **out,
+                        size_t *nout)
+{
+    *out = NULL;
+    *nout = 0;
+    rs_pixel_rect *R = rs__alloc_array(ctx, B->n ? B->n : 1, sizeof *R);
+    if (!R) return -2;
+    size_t n = 0;
+    for (size_t k = 0; k < B->n; k++) {
+        const double *b = B->v + 4 * k;
+        double fx0 = floor((b[0] - dem->frame.origin_x) / pix), fy0 = floor((b[1] - dem->frame.origin_y) / pix);
+        double fx1 = ceil((b[2] - dem->frame.origin_x) / pix), fy1 = ceil((b[3] - dem->frame.origin_y) / pix);
+        if (!(fx0 == fx0 && fy0 == fy0 && fx1 == fx1 && fy1 == fy1)) {
+            rs__free(ctx, R);
+            return -1;
+        }
+        fx0 = fmax(fx0, 0), fy0 = fmax(fy0, 0), fx1 = fmin(fx1, W), fy1 = fmin(fy1, H);
+        if (!(fx0 < fx1 && fy0 < fy1)) continue;
+        rs_pixel_rect r;
+        r.x0 = (uint32_t)fx0 / Tx * Tx, r.y0 = (uint32_t)fy0 / Tx * Tx;
+        r.x1 = ((uint32_t)fx1 + Tx - 1) / Tx * Tx, r.y1 = ((uint32_t)fy1 + Tx - 1) / Tx * Tx;
+        r.x1 = r.x1 < W ? r.x1 : W, r.y1 = r.y1 < H ? r.y1 : H;
+        R[n++] = r;
+    }
+    for (int again = 1; again;) {
+        again = 0;
+        for (size_t i = 0; i < n; i++)
+            for (size_t j = i + 1; j < n; j++) {
+                rs_pixel_rect u = rect_union(R[i], R[j]);
+                if (!rects_meet(R[i], R[j]) && rect_cost(u, m) > rect_cost(R[i], m) + rect_cost(R[j], m)) continue;
+                R[i] = u;
+                R[j--] = R[--n];
+                again = 1;
+            }
+        for (size_t i = 0; i < n; i++)
+            for (size_t k = 0; k < old->npatch; k++) {
+                rs_pixel_rect q = old->patch[k].rect, u = rect_union(R[i], q);
+                if (gone[k] || !rects_meet(R[i], q)) continue;
+                uint64_t au = rect_area(u), an = rect_area(R[i]);
+                if (au > an + rect_area(q) || au > 2 * an || au * 4 > (uint64_t)W * H) continue;
+                R[i] = u, gone[k] = 1, again = 1;
+            }
+    }
+    /* (in rows, then columns: the dirty rectangles come out so) */
+    for (size_t i = 1; i < n; i++)
+        for (size_t j = i; j > 0 && (R[j - 1].y0 > R[j].y0 || (R[j - 1].y0 == R[j].y0 && R[j - 1].x0 > R[j].x0)); j--) {
+            rs_pixel_rect t = R[j];
+            R[j] = R[j - 1];
+            R[j - 1] = t;
+        }
+    *out = R;
+    *nout = n;
+    return 0;
+}
+
 /* The nodes of N where a road marked in m has a leg: *on (the caller's,
  * rs__free; NULL with no nodes), their count returned. SIZE_MAX when out
  * of memory. */
@@ -378,10 +498,10 @@ static size_t marked_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, u
 /* At every node of N in `on` (marked_nodes of m), the other legs'
  * segments there (the leg's segment or point and the segments on either
  * side: a T or a junction on a segment changes how that capsule is drawn
- * all along it) into box acc, grown by `grow`; map: N's road to a road of
+ * all along it) into the boxes acc, grown by `grow`; map: N's road to a road of
  * `roads` (UINT32_MAX: none, then the road is marked itself). */
 static void neighbour_segments(const rs_network *N, const uint8_t *on, const uint8_t *m, const uint32_t *map,
-                               const rs_roads *roads, double *acc, double grow, size_t *changed)
+                               const rs_roads *roads, boxes *acc, double grow, size_t *changed)
 {
     for (size_t d = 0; on && d < N->nnodes; d++) {
         if (!on[d]) continue;
@@ -400,7 +520,7 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
                 bx[0] = fmin(bx[0], xy[2 * i]), bx[1] = fmin(bx[1], xy[2 * i + 1]);
                 bx[2] = fmax(bx[2], xy[2 * i]), bx[3] = fmax(bx[3], xy[2 * i + 1]);
             }
-            box_add(acc, bx, grow);
+            boxes_add(acc, bx, grow);
             (*changed)++;
         }
     }
@@ -411,7 +531,7 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
  * gone): the segments inward from the end segment that its T line clips
  * (rs__roadfield_set_tees: each while it reaches past the line; a record
  * that turns back across the through road loses all of itself beyond the
- * line there, however far from the T) into box acc, grown by `grow`. The
+ * line there, however far from the T) into the boxes acc, grown by `grow`. The
  * new network's ends (map NULL) with their lines from the roads, written
  * into tfar (the ends at those nodes: NaN when no T); an old one's from
  * the network alone (its roads are gone), their lines' far from tfar (the
@@ -419,7 +539,7 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
  * field's index cell at most): a superset of what a build clips. *known =
  * 0 when an old end's line is not in tfar. */
 static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, size_t non, const uint8_t *m,
-                           const uint32_t *map, const rs_roads *roads, double *acc, double grow, double extra,
+                           const uint32_t *map, const rs_roads *roads, boxes *acc, double grow, double extra,
                            double *tfar, int *known)
 {
     rs__tee_end *te = NULL;
@@ -457,12 +577,23 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
             bx[0] = fmin(bx[0], fmin(a[0], b[0])), bx[1] = fmin(bx[1], fmin(a[1], b[1]));
             bx[2] = fmax(bx[2], fmax(a[0], b[0])), bx[3] = fmax(bx[3], fmax(a[1], b[1]));
         }
-        if (bx[0] <= bx[2]) {
-            box_add(acc, bx, grow);
-        }
+        if (bx[0] <= bx[2]) boxes_add(acc, bx, grow);
     }
     rs__free(ctx, te);
     return r;
+}
+
+/* Rectangles in rows, then columns (a few lists, each in that order) */
+static int cmp_rect(const void *pa, const void *pb)
+{
+    const rs_pixel_rect *a = pa, *b = pb;
+    if (a->y0 != b->y0) return a->y0 < b->y0 ? -1 : 1;
+    return (a->x0 > b->x0) - (a->x0 < b->x0);
+}
+
+static void sort_rects(rs_pixel_rect *r, size_t n)
+{
+    if (n > 1) qsort(r, n, sizeof *r, cmp_rect);
 }
 
 /* ---- the patched grid ------------------------------------------------------ */
@@ -495,10 +626,14 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     rs__grid_facts facts;
     rs_network *net = NULL;
     uint32_t *m_old = rs__alloc_array(ctx, no ? no : 1, sizeof *m_old);
-    uint32_t *m_new = rs__alloc_array(ctx, nn ? nn : 1, sizeof *m_new), *ids = NULL;
-    rs_road_grid *local = NULL, *g = NULL;
-    rs_pixel_rect *dirty = NULL;
-    size_t ndirty = 0, ids_n = 0;
+    uint32_t *m_new = rs__alloc_array(ctx, nn ? nn : 1, sizeof *m_new);
+    rs_road_grid *g = NULL;
+    rs_pixel_rect *dirty = NULL, *nrect_v = NULL; /* the new patches' rectangles */
+    size_t ndirty = 0, nrect = 0;
+    rs_road_grid **loc = NULL; /* their local grids, */
+    uint32_t **lids = NULL;    /* roads, */
+    size_t *lidn = NULL;       /* and road counts */
+    uint8_t *gone = NULL; /* old patches inside a new one */
     rs__grid_track *nt = NULL;
     rs_result r = m_old && m_new ? RS_OK : RS_ERR_NOMEM;
     double mark_reach = 0;
@@ -533,9 +668,13 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
      * pixel does not depend on it), but the casing field's form does: the
      * casings within a cell of the base's field, and of the field a whole
      * build of these roads would index. */
-    facts.index_cell = T->facts.index_cell;
+    /* (the base's: a rebased grid's base was built from other roads than
+     * its track's, rs_road_grid_rebase) */
+    const double base_cell = rs__roadfield_cell(base->field);
+    facts.index_cell = base_cell;
     {
         rs__grid_facts a = T->facts, b = facts;
+        a.index_cell = base_cell;
         rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
         double cell_new = rs__roadfield_cell_for(roads, &fp);
         int merged = a.widest_casing <= a.index_cell;
@@ -562,7 +701,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     }
     /* the changed area: roads gone or new, and records whose place in
      * their stroke changed (their dashes move) */
-    double chg[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+    boxes chg;
+    memset(&chg, 0, sizeof chg);
+    chg.ctx = ctx;
     const double grow = 2 * reach + CHANGE_PAD;
     size_t changed = 0;
     uint8_t *cn = rs__calloc(ctx, nn ? nn : 1, 1), *co = rs__calloc(ctx, no ? no : 1, 1);
@@ -579,9 +720,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 (!net) != (!T->net);
     }
     for (size_t i = 0; i < no; i++)
-        if (co[i]) box_add(chg, T->box + 4 * i, grow), changed++;
+        if (co[i]) boxes_add(&chg, T->box + 4 * i, grow), changed++;
     for (size_t j = 0; j < nn; j++)
-        if (cn[j]) box_add(chg, bn + 4 * j, grow), changed++;
+        if (cn[j]) boxes_add(&chg, bn + 4 * j, grow), changed++;
     /* the segments of the roads meeting a changed one, in the new network
      * and the old (old roads by their new index: the unmatched are changed) */
     /* (the nodes of both networks where a changed road has a leg) */
@@ -590,13 +731,13 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     int known = non_n != SIZE_MAX && non_o != SIZE_MAX; /* (0: the whole build) */
     if (!known) r = RS_ERR_NOMEM;
     if (known) {
-        neighbour_segments(net, on_n, cn, NULL, roads, chg, grow, &changed);
-        neighbour_segments(T->net, on_o, co, m_old, roads, chg, grow, &changed);
+        neighbour_segments(net, on_n, cn, NULL, roads, &chg, grow, &changed);
+        neighbour_segments(T->net, on_o, co, m_old, roads, &chg, grow, &changed);
         /* the T lines of the ends at those nodes, before and after (a record
          * that turns back across the road it ends on is clipped far along:
          * fuzz/edits) */
         double wmax = widest(T->max_width, max_width), cas = fmax(T->facts.widest_casing, facts.widest_casing);
-        double cell = T->facts.index_cell;
+        double cell = base_cell;
         if (!(cas <= cell)) { /* (casings in a field of their own: its cell at most) */
             rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
             cell = fmax(cell, rs__roadfield_cell_most(&fp, wmax + 2 * cas));
@@ -610,40 +751,48 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 for (int e = 0; e < 2; e++)
                     tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[2 * (size_t)m_new[j] + e];
         known = extra < INFINITY && (!net || tf);
-        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, chg, grow, extra, tf, &known);
-        if (known && !r) r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, chg, grow, extra, T->tfar, &known);
+        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, &chg, grow, extra, tf, &known);
+        if (known && !r) r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, &chg, grow, extra, T->tfar, &known);
     }
     rs__free(ctx, on_n);
     rs__free(ctx, on_o);
     rs__free(ctx, cn);
     rs__free(ctx, co);
-    if (r || !known) goto done;
-    /* the pixels of the changed area, whole DEM cells (pieces never
-     * straddle a patch's rows), within the image */
+    if (!r && chg.nomem) r = RS_ERR_NOMEM;
+    if (r || !known) {
+        rs__free(ctx, chg.v);
+        goto done;
+    }
+    /* the patch rectangles: the changed boxes' pixels, those near each
+     * other made one, the older patches they mostly cover taken in */
     const double pix = dem->frame.cell_size / o->texels;
     const uint32_t W = (dem->width - 1) * o->texels, H = (dem->height - 1) * o->texels, Tx = o->texels;
-    rs_pixel_rect rect = { 0, 0, 0, 0 };
-    if (changed) {
-        double fx0 = floor((chg[0] - dem->frame.origin_x) / pix), fy0 = floor((chg[1] - dem->frame.origin_y) / pix);
-        double fx1 = ceil((chg[2] - dem->frame.origin_x) / pix), fy1 = ceil((chg[3] - dem->frame.origin_y) / pix);
-        if (!(fx0 == fx0 && fy0 == fy0 && fx1 == fx1 && fy1 == fy1)) goto done;
-        fx0 = fmax(fx0, 0), fy0 = fmax(fy0, 0), fx1 = fmin(fx1, W), fy1 = fmin(fy1, H);
-        if (fx0 < fx1 && fy0 < fy1) {
-            rect.x0 = (uint32_t)fx0 / Tx * Tx, rect.y0 = (uint32_t)fy0 / Tx * Tx;
-            rect.x1 = ((uint32_t)fx1 + Tx - 1) / Tx * Tx, rect.y1 = ((uint32_t)fy1 + Tx - 1) / Tx * Tx;
-            rect.x1 = rect.x1 < W ? rect.x1 : W, rect.y1 = rect.y1 < H ? rect.y1 : H;
-        }
+    const double ctx_d = CONTEXT_PAD + 2 * reach;
+    if (!(gone = rs__calloc(ctx, old->npatch ? old->npatch : 1, 1))) r = RS_ERR_NOMEM;
+    int cr = r ? 0 : change_rects(ctx, &chg, dem, pix, W, H, Tx, ctx_d / pix, old, gone, &nrect_v, &nrect);
+    rs__free(ctx, chg.v);
+    if (cr == -2) r = RS_ERR_NOMEM;
+    if (r || cr) goto done;
+    {
         /* a large part of the map: the whole build is as cheap */
-        if ((uint64_t)(rect.x1 - rect.x0) * (rect.y1 - rect.y0) * 4 > (uint64_t)W * H) goto done;
+        uint64_t area = 0;
+        for (size_t k = 0; k < nrect; k++) area += rect_area(nrect_v[k]);
+        if (area * 4 > (uint64_t)W * H) goto done;
     }
-    if (rect.x1 > rect.x0) {
+    if (nrect && (!(loc = rs__calloc(ctx, nrect, sizeof *loc)) || !(lids = rs__calloc(ctx, nrect, sizeof *lids)) ||
+                  !(lidn = rs__calloc(ctx, nrect, sizeof *lidn)))) {
+        r = RS_ERR_NOMEM;
+        goto done;
+    }
+    for (size_t pk = 0; pk < nrect; pk++) {
+        const rs_pixel_rect rect = nrect_v[pk];
         /* the roads that can reach a pixel of the rectangle */
         double bx[4] = { dem->frame.origin_x + rect.x0 * pix, dem->frame.origin_y + rect.y0 * pix,
                          dem->frame.origin_x + rect.x1 * pix, dem->frame.origin_y + rect.y1 * pix };
-        double ctx_d = CONTEXT_PAD + 2 * reach;
         size_t m = 0;
-        ids = rs__alloc_array(ctx, nn ? nn : 1, sizeof *ids);
+        uint32_t *ids = rs__alloc_array(ctx, nn ? nn : 1, sizeof *ids);
         if (!ids) { r = RS_ERR_NOMEM; goto done; }
+        lids[pk] = ids;
         uint8_t *in = rs__calloc(ctx, nn ? nn : 1, 1);
         if (!in) { r = RS_ERR_NOMEM; goto done; }
         for (size_t j = 0; j < nn; j++) in[j] = (uint8_t)road_near(roads, j, bn + 4 * j, bx, ctx_d);
@@ -675,16 +824,20 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         facts.window[0] = rect.x0 * pix, facts.window[1] = rect.y0 * pix;
         facts.window[2] = rect.x1 * pix, facts.window[3] = rect.y1 * pix;
         facts.window_reach = PATCH_QUERY_REACH;
-        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &local);
+        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &loc[pk]);
         facts.window_on = 0; /* (the track keeps the whole map's facts) */
         if (r != RS_OK) goto done;
-        ids_n = m;
+        if (lo.markings.atlas && !o->markings.atlas) { /* (the base's atlas: held while the patch lives) */
+            loc[pk]->atlas_hold = (rs_road_grid *)base;
+            rs__grid_hold(loc[pk]->atlas_hold);
+        }
+        lidn[pk] = m;
     }
     /* the grid: the base's structures, the old patches (their roads
-     * renumbered), the new one over them */
+     * renumbered) but those taken into a new one, the new ones over them */
     g = rs__calloc(ctx, 1, sizeof *g);
     nt = rs__calloc(ctx, 1, sizeof *nt);
-    size_t np = old->npatch + (local != NULL);
+    size_t np = old->npatch + nrect;
     rs__grid_patch *P = rs__calloc(ctx, np ? np : 1, sizeof *P);
     if (!g || !nt || !P) {
         rs__free(ctx, P);
@@ -703,6 +856,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     for (size_t k = 0; k < old->npatch; k++) {
         const rs__grid_patch *q = &old->patch[k];
         rs__grid_patch *d = &P[g->npatch];
+        if (gone[k]) continue; /* (inside a new patch) */
         d->ids = rs__alloc_array(ctx, q->n ? q->n : 1, sizeof *d->ids);
         if (!d->ids) { r = RS_ERR_NOMEM; goto done; }
         for (size_t i = 0; i < q->n; i++) d->ids[i] = q->ids[i] < no ? m_old[q->ids[i]] : UINT32_MAX;
@@ -713,17 +867,18 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         g->npatch++;
         g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
     }
-    if (local) {
+    for (size_t pk = 0; pk < nrect; pk++) {
         rs__grid_patch *d = &P[g->npatch++];
-        d->rect = rect;
-        d->grid = local;
-        d->ids = ids;
-        d->n = ids_n;
-        local = NULL;
-        ids = NULL;
+        d->rect = nrect_v[pk];
+        d->grid = loc[pk];
+        d->ids = lids[pk];
+        d->n = lidn[pk];
+        loc[pk] = NULL;
+        lids[pk] = NULL;
         g->stats.bytes += d->grid->stats.bytes + d->n * sizeof *d->ids;
     }
     /* for the next update */
+    nt->refs = 1;
     nt->n = nn;
     nt->print = pn;
     nt->sprint = sp;
@@ -741,17 +896,31 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     g->track = nt;
     nt = NULL;
     g->stats.bytes += g->track->bytes - (base->track ? base->track->bytes : 0);
-    /* the rectangle's pixels that change (the old grid drew them, the new
-     * one draws them; nothing changes outside it) */
-    if (rect.x1 > rect.x0) {
-        /* the pieces that differ (a superset, mostly 2 to 6 times the
-         * changed pixels), then those pixels rendered under both grids and
-         * compared (when they are few enough) */
-        if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - 1].grid, rect, &dirty, &ndirty)) != RS_OK)
+    /* the rectangles' pixels that change (the old grid drew them, the new
+     * one draws them; nothing changes outside them): the pieces that
+     * differ in each (a superset, mostly 2 to 6 times the changed pixels;
+     * the rectangles are apart and in row order, so are their candidates),
+     * then those pixels rendered under both grids and compared (when they
+     * are few enough) */
+    for (size_t pk = 0; pk < nrect; pk++) {
+        rs_pixel_rect *c = NULL;
+        size_t nc = 0;
+        if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - nrect + pk].grid, nrect_v[pk], &c, &nc)) != RS_OK)
             goto done;
-        if ((r = rs__dirty_render(ctx, dem, o, old, g, &dirty, &ndirty)) != RS_OK) goto done;
+        rs_pixel_rect *all = nc ? rs__realloc(ctx, dirty, (ndirty + nc) * sizeof *all) : dirty;
+        if (nc && !all) {
+            rs__free(ctx, c);
+            r = RS_ERR_NOMEM;
+            goto done;
+        }
+        if (nc) memcpy(all + ndirty, c, nc * sizeof *c);
+        dirty = all;
+        ndirty += nc;
+        rs__free(ctx, c);
     }
-    if (g->npatch > MAX_PATCHES) {
+    if (nrect > 1) sort_rects(dirty, ndirty);
+    if (nrect && (r = rs__dirty_render(ctx, dem, o, old, g, &dirty, &ndirty)) != RS_OK) goto done;
+    if (g->npatch > ctx->limits.max_patches) {
         /* too many patches: the whole grid, with this edit's exact
          * rectangles (the patched grid drew the same pixels) */
         rs_road_grid *w = NULL;
@@ -782,9 +951,16 @@ done:
     rs__free(ctx, ys);
     rs__free(ctx, bn);
     rs__free(ctx, tf);
-    rs__free(ctx, ids);
+    for (size_t k = 0; k < nrect; k++) {
+        if (loc) rs_road_grid_free(ctx, loc[k]);
+        if (lids) rs__free(ctx, lids[k]);
+    }
+    rs__free(ctx, loc);
+    rs__free(ctx, lids);
+    rs__free(ctx, lidn);
+    rs__free(ctx, nrect_v);
+    rs__free(ctx, gone);
     rs_network_free(ctx, net);
-    rs_road_grid_free(ctx, local);
     rs__free(ctx, dirty);
     rs__grid_track_free(ctx, nt);
     rs_road_grid_free(ctx, g);
@@ -800,4 +976,102 @@ int rs__grid_track_net_check(rs_ctx *ctx, const rs_road_grid *g, const rs_roads 
     int eq = rs__network_equal(t->net, n);
     rs_network_free(ctx, n);
     return eq;
+}
+
+/* ---- a chain moved onto a grid built whole on a worker --------------------- */
+
+rs_result rs_road_grid_rebase(rs_ctx *ctx, const rs_road_grid *current, const rs_road_grid *since,
+                              const rs_road_grid *flat, rs_road_grid **out)
+{
+    if (!ctx) return RS_ERR_INVALID_ARG;
+    if (out) *out = NULL;
+    if (!current || !since || !flat || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_road_grid_rebase");
+    const rs_road_grid *cb = current->base ? current->base : current, *sb = since->base ? since->base : since;
+    if (!current->track || !since->track)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_rebase: %s was not made for edits (opts.grid.edits, analytic edges)",
+                        current->track ? "since" : "current");
+    if (flat->base || !flat->track)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_rebase: flat is not a whole grid made for edits (rs_road_grid_build with "
+                        "opts.grid.edits, analytic edges)");
+    if (flat->dem_w != cb->dem_w || flat->dem_h != cb->dem_h || memcmp(&flat->frame, &cb->frame, sizeof flat->frame) ||
+        flat->texels != cb->texels || flat->edges != cb->edges)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_rebase: flat was built for another DEM, frame, texels or edge mode than current");
+    /* flat must hold the roads `since` was made for: the same prints */
+    const rs__grid_track *F = flat->track, *S = since->track, *C = current->track;
+    if (F->n != S->n || (F->n && (memcmp(F->print, S->print, F->n * sizeof *F->print) ||
+                                  memcmp(F->sprint, S->sprint, F->n * sizeof *F->sprint))) ||
+        F->sctx != S->sctx)
+        return rs__fail(ctx, RS_ERR_INVALID_ARG,
+                        "rs_road_grid_rebase: flat was not built from the roads and styles `since` was made for "
+                        "(%zu roads against %zu, or other points, attributes or styles)",
+                        F->n, S->n);
+    /* the patches made after `since`, on flat; when a whole build came
+     * between (current is on another base) or flat's map-wide switches
+     * are not the chain's, on current's base as they are */
+    const rs_road_grid *nb = flat;
+    const double fc = rs__roadfield_cell(flat->field);
+    const rs__grid_facts *a = &F->facts, *b = &C->facts;
+    if (cb != sb || a->styled != b->styled || a->any_surface != b->any_surface || a->fill_uniform != b->fill_uniform ||
+        (a->fill_uniform && memcmp(a->fill_rgba, b->fill_rgba, sizeof a->fill_rgba)) ||
+        a->casing_uniform != b->casing_uniform ||
+        (a->casing_uniform && memcmp(a->casing_rgba, b->casing_rgba, sizeof a->casing_rgba)) ||
+        (a->widest_casing > 0) != (b->widest_casing > 0) || (a->widest_casing <= fc) != (b->widest_casing <= fc))
+        nb = cb;
+    size_t keep = 0;
+    uint8_t *carry = rs__calloc(ctx, current->npatch ? current->npatch : 1, 1);
+    if (!carry) return rs__fail(ctx, RS_ERR_NOMEM, "rs_road_grid_rebase: out of memory");
+    for (size_t k = 0; k < current->npatch; k++) {
+        int before = 0; /* (the patch is since's: flat draws its roads) */
+        for (size_t j = 0; nb == flat && j < since->npatch && !before; j++) before = since->patch[j].grid == current->patch[k].grid;
+        carry[k] = !before;
+        keep += carry[k];
+    }
+    rs_road_grid *g = rs__calloc(ctx, 1, sizeof *g);
+    rs__grid_patch *P = rs__calloc(ctx, keep ? keep : 1, sizeof *P);
+    if (!g || !P) {
+        rs__free(ctx, g);
+        rs__free(ctx, P);
+        rs__free(ctx, carry);
+        return rs__fail(ctx, RS_ERR_NOMEM, "rs_road_grid_rebase: out of memory");
+    }
+    *g = *nb;
+    g->refs = 1;
+    g->base = (rs_road_grid *)nb;
+    rs__grid_hold(g->base);
+    g->patch = P;
+    g->npatch = 0;
+    g->dirty = NULL;
+    g->ndirty = 0;
+    g->atlas_hold = NULL;
+    g->track = (rs__grid_track *)C; /* (shared: tracks are read only) */
+    track_refs_add(&g->track->refs, 1);
+    g->stats.bytes += C->bytes - (nb->track ? nb->track->bytes : 0);
+    rs_result r = RS_OK;
+    for (size_t k = 0; k < current->npatch && !r; k++) {
+        if (!carry[k]) continue;
+        const rs__grid_patch *q = &current->patch[k];
+        rs__grid_patch *d = &P[g->npatch];
+        if (!(d->ids = rs__alloc_array(ctx, q->n ? q->n : 1, sizeof *d->ids))) {
+            r = RS_ERR_NOMEM;
+            break;
+        }
+        if (q->n) memcpy(d->ids, q->ids, q->n * sizeof *d->ids);
+        d->n = q->n;
+        d->rect = q->rect;
+        d->grid = q->grid;
+        rs__grid_hold(d->grid);
+        g->npatch++;
+        g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
+    }
+    rs__free(ctx, carry);
+    if (r) {
+        rs_road_grid_free(ctx, g);
+        return rs__fail(ctx, r, "rs_road_grid_rebase: out of memory");
+    }
+    *out = g;
+    rs__ok(ctx);
+    return RS_OK;
 }

@@ -629,6 +629,7 @@ void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
     rs__styling_free(ctx, grid->styling);
     rs__markings_free(ctx, grid->markings);
     rs__grid_edit_free(ctx, grid->edit);
+    rs_road_grid_free(ctx, grid->atlas_hold); /* (after the markings that point into its atlas) */
     if (grid->tiles) {
         for (size_t i = 0; i < (size_t)grid->tw * grid->th; i++) rs__free(ctx, grid->tiles[i]);
         rs__free(ctx, grid->tiles);

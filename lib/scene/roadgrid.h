@@ -49,6 +49,8 @@ struct rs_road_grid {
     rs_pixel_rect *dirty;       /* a patched grid's dirty rectangles (a whole grid's are in edit) */
     size_t ndirty;
     struct rs__grid_track *track; /* what the next proportional update reads (NULL: none) */
+    struct rs_road_grid *atlas_hold; /* a patch's grid: the base whose built-in marking atlas its
+                                        markings point into, held (NULL: none) */
 };
 
 /* A patch: the grid of some roads (a whole grid of its own, shared) that

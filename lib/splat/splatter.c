@@ -345,43 +345,35 @@ static void layers_piece(const rs_splatter *s, const scratch *b, rs__piece *p, c
     }
 }
 
-uint32_t rs__segments(const rs_splatter *s, uint32_t x0, uint32_t x1, uint32_t y, rs__seg *seg)
+/* The splatter drawing column x of row y: the latest view whose rectangle
+ * holds it, else s */
+static const rs_splatter *drawn_by(const rs_splatter *s, uint32_t x, uint32_t y)
 {
-    if (!s->nview) {
-        seg[0].x0 = x0, seg[0].w = x1 - x0, seg[0].s = s;
-        return 1;
-    }
-    /* the cuts: x0, x1 and the edges of the rectangles on row y between */
-    uint32_t cut[RS__MAX_SEGS + 1], nc = 0;
-    cut[nc++] = x0;
-    for (uint32_t k = 0; k < s->nview && nc + 2 < RS__MAX_SEGS; k++) {
+    for (uint32_t k = s->nview; k-- > 0;) {
         const rs_pixel_rect *R = &s->view_rect[k];
-        if (y < R->y0 || y >= R->y1) continue;
-        if (R->x0 > x0 && R->x0 < x1) cut[nc++] = R->x0;
-        if (R->x1 > x0 && R->x1 < x1) cut[nc++] = R->x1;
+        if (y >= R->y0 && y < R->y1 && x >= R->x0 && x < R->x1) return &s->view[k];
     }
-    cut[nc++] = x1;
-    for (uint32_t i = 1; i < nc; i++) /* (a few: insertion sort) */
-        for (uint32_t j = i; j > 0 && cut[j - 1] > cut[j]; j--) {
-            uint32_t t = cut[j];
-            cut[j] = cut[j - 1];
-            cut[j - 1] = t;
-        }
-    uint32_t n = 0;
-    for (uint32_t i = 0; i + 1 < nc; i++) {
-        if (cut[i] == cut[i + 1]) continue;
-        const rs_splatter *by = s;
-        for (uint32_t k = s->nview; k-- > 0;) {
+    return s;
+}
+
+uint32_t rs__segment_next(const rs_splatter *s, uint32_t x, uint32_t x1, uint32_t y, const rs_splatter **by)
+{
+    *by = s;
+    if (!s->nview) return x1;
+    *by = drawn_by(s, x, y);
+    for (;;) {
+        /* the next rectangle edge on row y after x: the drawing splatter
+         * may change only there */
+        uint32_t end = x1;
+        for (uint32_t k = 0; k < s->nview; k++) {
             const rs_pixel_rect *R = &s->view_rect[k];
-            if (y >= R->y0 && y < R->y1 && cut[i] >= R->x0 && cut[i] < R->x1) {
-                by = &s->view[k];
-                break;
-            }
+            if (y < R->y0 || y >= R->y1) continue;
+            if (R->x0 > x && R->x0 < end) end = R->x0;
+            if (R->x1 > x && R->x1 < end) end = R->x1;
         }
-        if (n && seg[n - 1].s == by) seg[n - 1].w += cut[i + 1] - cut[i];
-        else seg[n].x0 = cut[i], seg[n].w = cut[i + 1] - cut[i], seg[n].s = by, n++;
+        if (end >= x1 || drawn_by(s, end, y) != *by) return end;
+        x = end;
     }
-    return n;
 }
 
 /* rs__normals_run of rows [y, y + h) of one DEM-cell row, by the
@@ -390,13 +382,14 @@ static rs_result normals_by_segment(rs_ctx *ctx, const rs_splatter *s, uint32_t 
                                     const rs_normal_options *no, uint8_t *rgb, size_t rgb_stride, uint8_t *rgba,
                                     size_t rgba_stride, rs__nm_scratch *nm)
 {
-    rs__seg seg[RS__MAX_SEGS];
-    uint32_t n = rs__segments(s, x0, x0 + w, y, seg);
     rs_result r = RS_OK;
-    for (uint32_t k = 0; k < n && !r; k++) {
-        size_t dx = seg[k].x0 - x0;
-        r = rs__normals_run(ctx, seg[k].s, seg[k].x0, y, seg[k].w, h, no, rgb ? rgb + 3 * dx : NULL, rgb_stride,
+    for (uint32_t x = x0; x < x0 + w && !r;) {
+        const rs_splatter *by;
+        uint32_t end = rs__segment_next(s, x, x0 + w, y, &by);
+        size_t dx = x - x0;
+        r = rs__normals_run(ctx, by, x, y, end - x, h, no, rgb ? rgb + 3 * dx : NULL, rgb_stride,
                             rgba ? rgba + 4 * dx : NULL, rgba_stride, nm);
+        x = end;
     }
     return r;
 }
@@ -472,14 +465,13 @@ static rs_result splat_run(rs_ctx *ctx, const rs_splatter *s, scratch *bp, uint3
         p.rows = row_end - y < max_rows ? row_end - y : max_rows;
         for (uint32_t x = x0; x < x0 + w; x += cols) {
             /* the piece's runs by the grid that draws them: a patch's, or the base's */
-            uint32_t pw = x0 + w - x < cols ? x0 + w - x : cols, nseg = 1;
-            rs__seg one = { x, pw, s }, seg[RS__MAX_SEGS];
-            const rs__seg *run = &one;
-            if (s->nview) nseg = rs__segments(s, x, x + pw, y, seg), run = seg;
-            for (uint32_t sg = 0; sg < nseg; sg++) {
-                const rs_splatter *ps = run[sg].s;
-                p.x0 = run[sg].x0;
-                p.w = run[sg].w;
+            uint32_t pw = x0 + w - x < cols ? x0 + w - x : cols;
+            for (uint32_t sx = x; sx < x + pw;) {
+                const rs_splatter *ps;
+                uint32_t send = rs__segment_next(s, sx, x + pw, y, &ps);
+                p.x0 = sx;
+                p.w = send - sx;
+                sx = send;
                 double t0 = now(profile);
                 if (analytic) rs__coverage_analytic(ps, &p);
                 else rs__coverage_alphamap(ps, &p);

@@ -69,16 +69,13 @@ struct rs_splatter {
     rs_pixel_rect *view_rect;
 };
 
-/* A run of output columns [x0, x0 + w) of one row and the splatter (s
- * or a view of it) that draws it. */
-typedef struct rs__seg {
-    uint32_t x0, w;
-    const struct rs_splatter *s;
-} rs__seg;
-#define RS__MAX_SEGS 40 /* >= 2 * views + 1 (at most 16 patches a grid: lib/scene/grid_patch.c MAX_PATCHES) */
-/* The runs of columns [x0, x1) of row y by the splatter that draws them
- * (one run, s itself, when s has no views): their count, into seg. */
-uint32_t rs__segments(const struct rs_splatter *s, uint32_t x0, uint32_t x1, uint32_t y, rs__seg *seg);
+/* The run of row y's output columns from x (x < x1) that one splatter
+ * draws: *by is s, or the view of the latest patch whose rectangle holds
+ * the run (the later over the earlier); returns the run's end, at most x1.
+ * The runs from x0 on, each taken up to where the drawing splatter
+ * changes, cut [x0, x1) at the patches' edges (any number of patches). */
+uint32_t rs__segment_next(const struct rs_splatter *s, uint32_t x, uint32_t x1, uint32_t y,
+                          const struct rs_splatter **by);
 
 /* Terrain colours (3 floats per sample) of the window's sample columns
  * [c0, c0 + ncol), for the two DEM sample rows last needed: computed once

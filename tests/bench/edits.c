@@ -16,6 +16,7 @@
 #include "grid_edit.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,6 +24,10 @@
 #define RUNS 3
 #define PER_KIND 6
 #define ROADS 10000
+#define DRAG_STEPS 24
+#define LONG 72     /* edits of the long chain */
+#define FLAT_AT 24  /* patches at which a worker starts a whole build */
+#define FLAT_JOIN 4 /* edits later the chain is rebased onto it */
 
 enum { MOVE, ADD, REMOVE, RECLASS, KINDS };
 static const char *const kind_name[KINDS] = { "move 15 m", "add", "remove", "reclass" };
@@ -54,6 +59,60 @@ static int apply(rs_ctx *ctx, rs_roads *roads, int kind, sc_rng *rng, double W, 
     int r = rs_roads_replace(ctx, roads, i, NULL, w, q, np);
     free(q);
     return r;
+}
+
+/* the long chain's worker: a whole grid of a copy of the roads, its
+ * thread's CPU time */
+typedef struct worker {
+    const rs_dem *dem;
+    const rs_roads *roads;
+    const rs_splat_options *o;
+    rs_road_grid *g;
+    double ms;
+    int ok;
+} worker;
+
+static void *worker_run(void *arg)
+{
+    worker *w = arg;
+    rs_ctx *c = NULL;
+    double t0 = tm_thread_cpu_ms();
+    w->ok = rs_ctx_create(NULL, NULL, &c) == RS_OK && rs_road_grid_build(c, w->dem, w->roads, w->o, &w->g) == RS_OK;
+    w->ms = tm_thread_cpu_ms() - t0;
+    rs_ctx_free(c);
+    return NULL;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The first road of median length among the first half by index: a
+ * typical road to drag */
+static size_t median_road(const rs_roads *roads)
+{
+    size_t n = rs_roads_count(roads), m = n / 2 ? n / 2 : n;
+    double *len = malloc((m ? m : 1) * sizeof *len);
+    if (!len) return 0;
+    for (size_t i = 0; i < m; i++) {
+        const double *p;
+        size_t np;
+        rs_roads_get(roads, i, NULL, NULL, &p, &np);
+        len[i] = 0;
+        for (size_t k = 0; k + 1 < np; k++) len[i] += hypot(p[2 * k + 2] - p[2 * k], p[2 * k + 3] - p[2 * k + 1]);
+    }
+    double *sorted = malloc((m ? m : 1) * sizeof *sorted);
+    size_t pick = 0;
+    if (sorted) {
+        memcpy(sorted, len, m * sizeof *len);
+        qsort(sorted, m, sizeof *sorted, cmp_double);
+        while (pick + 1 < m && len[pick] != sorted[m / 2]) pick++;
+    }
+    free(sorted);
+    free(len);
+    return pick;
 }
 
 int main(int argc, char **argv)
@@ -103,6 +162,7 @@ int main(int argc, char **argv)
             bad = bad || rs_road_grid_build(ctx, dem, roads, &o, &f) != RS_OK;
             double t2 = tm_thread_cpu_ms();
             upd[kind][j * RUNS + k] = t1 - t0;
+            if (getenv("PERDIT")) fprintf(stderr, "E %d %d %d %.2f %zu\n", e, kind, k, t1 - t0, u->npatch);
             full[kind][j * RUNS + k] = t2 - t1;
             if (!gf) gf = f;
             else rs_road_grid_free(ctx, f);
@@ -189,6 +249,149 @@ int main(int argc, char **argv)
     rs_road_grid_free(ctx, gw);
     rs_network_free(ctx, net);
     if (!bad) piece_med = tm_median(piece_ms, RUNS);
+    /* a road dragged: DRAG_STEPS moves of one road by about a metre,
+     * chained from a whole build, each timed RUNS times against a full
+     * build; a patch that covers the last one's rectangle replaces it */
+    double dupd[DRAG_STEPS * RUNS], dfull[DRAG_STEPS * RUNS];
+    size_t dmost = 0;
+    long dmismatch = 0;
+    rs_road_grid *d0 = NULL;
+    size_t pick = median_road(roads);
+    if (!bad) bad = rs_road_grid_build(ctx, dem, roads, &o, &d0) != RS_OK;
+    for (int step = 0; !bad && step < DRAG_STEPS; step++) {
+        const double *p;
+        size_t np;
+        double w;
+        rs_roads_get(roads, pick, NULL, &w, &p, &np);
+        double *q = malloc(2 * np * sizeof *q);
+        if (!q) { bad = 1; break; }
+        for (size_t k = 0; k < np; k++) q[2 * k] = p[2 * k] + 1.0, q[2 * k + 1] = p[2 * k + 1] + 0.4;
+        bad = rs_roads_replace(ctx, roads, pick, NULL, w, q, np) != RS_OK;
+        free(q);
+        rs_road_grid *d1 = NULL, *df = NULL;
+        for (int k = 0; k < RUNS && !bad; k++) {
+            rs_road_grid *u = NULL, *f = NULL;
+            double t0 = tm_thread_cpu_ms();
+            bad = rs_road_grid_update(ctx, dem, roads, &o, d0, &u) != RS_OK;
+            double t1 = tm_thread_cpu_ms();
+            bad = bad || rs_road_grid_build(ctx, dem, roads, &o, &f) != RS_OK;
+            double t2 = tm_thread_cpu_ms();
+            dupd[step * RUNS + k] = t1 - t0, dfull[step * RUNS + k] = t2 - t1;
+            if (!df) df = f;
+            else rs_road_grid_free(ctx, f);
+            if (!d1) d1 = u;
+            else rs_road_grid_free(ctx, u);
+        }
+        ss_image x, y;
+        memset(&x, 0, sizeof x);
+        memset(&y, 0, sizeof y);
+        if (!bad && (ss_grid_image(ctx, dem, d1, &o, &x) || ss_grid_image(ctx, dem, df, &o, &y))) bad = 1;
+        for (size_t px = 0; !bad && px < (size_t)x.w * x.h; px++)
+            dmismatch += memcmp(x.rgba + 4 * px, y.rgba + 4 * px, 4) != 0 || x.wt[px] != y.wt[px];
+        ss_image_free(&x);
+        ss_image_free(&y);
+        if (d1 && d1->npatch > dmost) dmost = d1->npatch;
+        rs_road_grid_free(ctx, df);
+        rs_road_grid_free(ctx, d0);
+        d0 = d1;
+    }
+    rs_road_grid_free(ctx, d0);
+    double dsum = 0, dfsum = 0, dmax = 0;
+    for (int i = 0; i < DRAG_STEPS * RUNS; i++) dsum += dupd[i], dfsum += dfull[i], dmax = dupd[i] > dmax ? dupd[i] : dmax;
+    double dmed = bad ? 0 : tm_median(dupd, DRAG_STEPS * RUNS), dfmed = bad ? 1 : tm_median(dfull, DRAG_STEPS * RUNS);
+    mismatch += dmismatch;
+    /* a long chain with its whole builds on a worker (docs/embedding.md
+     * "Long chains"): LONG edits of the four kinds in turn, chained, with
+     * rs_limits.max_patches 64; at FLAT_AT patches the roads are copied
+     * and a worker builds them whole, FLAT_JOIN edits later the chain is
+     * rebased onto that grid. The caller's thread: each edit's calls
+     * (update, and the copy or the rebase when they fall on it); the
+     * worker's builds apart */
+    double lmain[LONG], lwork = 0, lcopy = 0, lrebase = 0;
+    size_t lmost = 0;
+    int nflat = 0;
+    double lbytes = 0;
+    long lmismatch = 0;
+    {
+        rs_limits ll;
+        memset(&ll, 0, sizeof ll);
+        ll.max_patches = 64;
+        rs_ctx *lc = NULL;
+        rs_road_grid *c0 = NULL, *since = NULL;
+        rs_roads *snap = NULL;
+        worker wk;
+        memset(&wk, 0, sizeof wk);
+        pthread_t th;
+        int running = 0, started_at = 0;
+        if (!bad) bad = rs_ctx_create(NULL, &ll, &lc) != RS_OK || rs_road_grid_build(lc, dem, roads, &o, &c0) != RS_OK;
+        for (int e = 0; !bad && e < LONG; e++) {
+            double t0 = tm_thread_cpu_ms(), extra = 0;
+            if (running && e - started_at >= FLAT_JOIN) {
+                pthread_join(th, NULL);
+                running = 0;
+                rs_road_grid *rb = NULL;
+                double r0 = tm_thread_cpu_ms();
+                bad = !wk.ok || rs_road_grid_rebase(lc, c0, since, wk.g, &rb) != RS_OK;
+                lrebase += tm_thread_cpu_ms() - r0;
+                lwork += wk.ms;
+                rs_road_grid_free(lc, wk.g);
+                rs_road_grid_free(lc, since);
+                rs_roads_free(lc, snap);
+                wk.g = NULL, since = NULL, snap = NULL;
+                if (bad) break;
+                rs_road_grid_free(lc, c0);
+                c0 = rb;
+                nflat++;
+            }
+            extra = tm_thread_cpu_ms() - t0;
+            if ((bad = apply(lc, roads, e % KINDS, &rng, W, H) != 0)) break;
+            rs_road_grid *c1 = NULL;
+            double u0 = tm_thread_cpu_ms();
+            bad = rs_road_grid_update(lc, dem, roads, &o, c0, &c1) != RS_OK;
+            double u1 = tm_thread_cpu_ms();
+            if (bad) break;
+            if (rs_road_grid_patch_count(c1) > lmost) lmost = rs_road_grid_patch_count(c1);
+            rs_road_grid_stats cs;
+            rs_road_grid_get_stats(c1, &cs);
+            if (cs.bytes / 1e6 > lbytes) lbytes = cs.bytes / 1e6;
+            if (!running && rs_road_grid_patch_count(c1) >= FLAT_AT) {
+                double k0 = tm_thread_cpu_ms();
+                bad = rs_roads_copy(lc, roads, &snap) != RS_OK;
+                lcopy += tm_thread_cpu_ms() - k0;
+                extra += tm_thread_cpu_ms() - k0;
+                since = c1; /* (kept until the rebase) */
+                memset(&wk, 0, sizeof wk);
+                wk.dem = dem, wk.roads = snap, wk.o = &o;
+                if (!bad) bad = pthread_create(&th, NULL, worker_run, &wk) != 0;
+                running = !bad, started_at = e;
+            }
+            lmain[e] = u1 - u0 + extra;
+            if (c0 != since) rs_road_grid_free(lc, c0);
+            c0 = c1;
+        }
+        if (running) {
+            pthread_join(th, NULL);
+            rs_road_grid_free(lc, wk.g);
+        }
+        /* the last grid against a fresh build */
+        rs_road_grid *lf = NULL;
+        ss_image x, y;
+        memset(&x, 0, sizeof x);
+        memset(&y, 0, sizeof y);
+        if (!bad && (rs_road_grid_build(lc, dem, roads, &o, &lf) || ss_grid_image(lc, dem, c0, &o, &x) ||
+                     ss_grid_image(lc, dem, lf, &o, &y)))
+            bad = 1;
+        for (size_t px = 0; !bad && px < (size_t)x.w * x.h; px++)
+            lmismatch += memcmp(x.rgba + 4 * px, y.rgba + 4 * px, 4) != 0 || x.wt[px] != y.wt[px];
+        ss_image_free(&x);
+        ss_image_free(&y);
+        rs_road_grid_free(lc, lf);
+        if (since != c0) rs_road_grid_free(lc, since);
+        rs_road_grid_free(lc, c0);
+        rs_roads_free(lc, snap);
+        rs_ctx_free(lc);
+    }
+    mismatch += lmismatch;
     if (bad) fprintf(stderr, "edits: %s\n", rs_ctx_message(ctx));
     FILE *md = NULL, *csv = NULL;
     if (!bad && !(bad = tm_open_section(argv[1], "edits", &md, &csv))) {
@@ -246,6 +449,38 @@ int main(int argc, char **argv)
                     "included; the slowest %.1f ms.\n\n",
                 KINDS * PER_KIND * RUNS, sum / (KINDS * PER_KIND * RUNS), sum / fsum, fsum / (KINDS * PER_KIND * RUNS),
                 most);
+        fprintf(md, "A road dragged: %d moves of one road by 1.1 m, chained from a whole build, each timed %d\n"
+                    "times against a full build (interleaved); the grid held at most %zu patch(es) (a patch that\n"
+                    "covers the last one's rectangle replaces it), %ld pixels differ from fresh builds.\n\n"
+                    "| edit | update ms | full build ms | update / build | mean update / mean build | slowest update ms |\n"
+                    "|---|---|---|---|---|---|\n"
+                    "| drag a road 1.1 m | %.1f | %.1f | %.3f | %.3f | %.1f |\n\n",
+                DRAG_STEPS, RUNS, dmost, dmismatch, dmed, dfmed, dmed / dfmed, dsum / dfsum, dmax);
+        fprintf(csv, "drag,%.3f,%.3f,0,0,0\n", dmed, dfmed);
+        printf("edits: drag       update %.1f ms, build %.1f ms (%.3f); mean %.3f, at most %zu patch(es)\n", dmed, dfmed,
+               dmed / dfmed, dsum / dfsum, dmost);
+        double fall[KINDS * PER_KIND * RUNS];
+        for (int k = 0; k < KINDS; k++)
+            for (int i = 0; i < PER_KIND * RUNS; i++) fall[k * PER_KIND * RUNS + i] = full[k][i];
+        double fm = tm_median(fall, KINDS * PER_KIND * RUNS), lsum = 0, lmax = 0, lsorted[LONG];
+        for (int i = 0; i < LONG; i++) lsum += lmain[i], lmax = lmain[i] > lmax ? lmain[i] : lmax, lsorted[i] = lmain[i];
+        double lmed = tm_median(lsorted, LONG);
+        fprintf(md, "A long chain with its whole builds on a worker (docs/embedding.md \"Long chains\"): %d edits (the\n"
+                    "four kinds in turn), chained, rs_limits.max_patches 64; when the grid holds %d patches the\n"
+                    "roads are copied (rs_roads_copy) and a worker thread builds them whole, %d edits later the\n"
+                    "chain is rebased onto that grid (rs_road_grid_rebase; %d times; here the edits come back to\n"
+                    "back, so the join waits for the build). The caller's thread per edit: the\n"
+                    "update, with the copy or the rebase when they fall on it (the copies %.1f ms, the rebases\n"
+                    "%.2f ms in all); the worker's builds %.1f ms in all. Against the median full build of the\n"
+                    "chain above (%.1f ms); at most %zu patches, %.1f MB with the base; the last grid differs\n"
+                    "from a fresh build in %ld pixels.\n\n"
+                    "| long chain | caller's thread per edit, median | slowest | mean | mean with the worker's builds |\n"
+                    "|---|---|---|---|---|\n"
+                    "| %d edits | %.3f | %.3f | %.3f | %.3f |\n\n",
+                LONG, FLAT_AT, FLAT_JOIN, nflat, lcopy, lrebase, lwork, fm, lmost, lbytes, lmismatch, LONG, lmed / fm,
+                lmax / fm, lsum / LONG / fm, (lsum + lwork) / LONG / fm);
+        printf("edits: long chain caller per edit median %.3f, slowest %.3f, mean %.3f; with the worker %.3f (%d rebases)\n",
+               lmed / fm, lmax / fm, lsum / LONG / fm, (lsum + lwork) / LONG / fm, nflat);
         char met_kinds[128] = "";
         for (int k = 0; k < KINDS; k++) {
             double u = tm_median(upd[k], PER_KIND * RUNS), f = tm_median(full[k], PER_KIND * RUNS);
