@@ -1036,7 +1036,7 @@ typedef struct rs_pixel_rect {
  * the candidate. Cost (docs/embedding.md "Patches"): with analytic edges
  * and the whole map's style switches unchanged (one casing colour, one
  * fill), the roads near the edit are built alone and *out shares old's
- * structures, drawing the new part in a patch rectangle, its network
+ * structures, drawing the new parts in patch rectangles, its network
  * updated in place (on the 10k-road city 0.032 to 0.052 of a build); when
  * it would pass rs_limits.max_patches (16), or the edit changes a
  * quarter of the image or a style switch, or with alpha-map edges, a full
@@ -1059,8 +1059,8 @@ RS_API size_t rs_road_grid_patch_count(const rs_road_grid *grid);
  * `current` is a later grid of the same chain (rs_road_grid_update from
  * since, any number of times). *out draws exactly what current draws (no
  * dirty rectangles) with flat's structures and only the patches current
- * made after since, so the chain goes on from it with room for
- * rs_limits.max_patches more. When a whole build came between since and
+ * made after since, so the chain goes on from it far from
+ * rs_limits.max_patches. When a whole build came between since and
  * current, or the edits since changed a map-wide switch (a casing colour,
  * one fill everywhere), *out is current's patches on current's base (the
  * same pixels; patch count unchanged). All three are only read and stay

@@ -82,6 +82,22 @@ static void random_road(sc_rng *rng, double W, double H, double *xy, size_t *n, 
 }
 
 /* One edit of `roads` of the given kind; 0, or -1 when the library refused it. */
+/* Road i moved by (dx, dy); 0, or -1 when that failed */
+static int move_road(rs_ctx *ctx, rs_roads *roads, size_t i, double dx, double dy)
+{
+    const double *p;
+    size_t np;
+    double w;
+    if (rs_roads_get(roads, i, NULL, &w, &p, &np)) return -1;
+    double *q = malloc(2 * np * sizeof *q);
+    if (!q) return -1;
+    for (size_t k = 0; k < np; k++) q[2 * k] = p[2 * k] + dx, q[2 * k + 1] = p[2 * k + 1] + dy;
+    int r = rs_roads_replace(ctx, roads, i, NULL, w, q, np) == RS_OK ? 0 : -1;
+    free(q);
+    return r;
+}
+
+
 static int edit(rs_ctx *ctx, rs_roads *roads, int kind, int styled, sc_rng *rng, double W, double H)
 {
     size_t n = rs_roads_count(roads), i = n ? (size_t)(sc_rng_unit(rng) * (double)n) : 0;
@@ -103,12 +119,7 @@ static int edit(rs_ctx *ctx, rs_roads *roads, int kind, int styled, sc_rng *rng,
             for (size_t k = 0; k < np; k++) fprintf(stderr, " %g,%g", p[2 * k], p[2 * k + 1]);
             fprintf(stderr, " class %s\n", rs_roads_get_attr(roads, i, "class"));
         }
-        double *q = malloc(2 * np * sizeof *q);
-        if (!q) return -1;
-        for (size_t k = 0; k < np; k++) q[2 * k] = p[2 * k] + dx, q[2 * k + 1] = p[2 * k + 1] + dy;
-        int r = rs_roads_replace(ctx, roads, i, NULL, w, q, np) ? -1 : 0;
-        free(q);
-        return r;
+        return move_road(ctx, roads, i, dx, dy);
     }
     if (kind == E_RECLASS) {
         if (styled) {
@@ -1127,15 +1138,7 @@ static void test_drag(void)
     size_t most = 0;
     long uncovered = 0, differ = 0;
     for (int step = 0; ok && step < 40; step++) {
-        const double *p;
-        size_t np;
-        double w;
-        rs_roads_get(roads, pick, NULL, &w, &p, &np);
-        double *q = malloc(2 * np * sizeof *q);
-        ok = q != NULL;
-        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] + 1.0, q[2 * k + 1] = p[2 * k + 1] + 0.4;
-        ok = ok && rs_roads_replace(ctx, roads, pick, NULL, w, q, np) == RS_OK;
-        free(q);
+        ok = move_road(ctx, roads, pick, 1.0, 0.4) == 0;
         rs_road_grid *g1 = NULL, *gf = NULL;
         image b, c;
         memset(&b, 0, sizeof b);
@@ -1289,15 +1292,7 @@ static void test_long_chain(void)
             CHECK(started);
         }
         size_t i = (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads));
-        const double *p;
-        size_t np;
-        double w;
-        rs_roads_get(roads, i, NULL, &w, &p, &np);
-        double *q = malloc(2 * np * sizeof *q);
-        ok = q != NULL;
-        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] + 3.0, q[2 * k + 1] = p[2 * k + 1] - 2.0;
-        ok = ok && rs_roads_replace(ctx, roads, i, NULL, w, q, np) == RS_OK;
-        free(q);
+        ok = move_road(ctx, roads, i, 3.0, -2.0) == 0;
         rs_road_grid *g1 = NULL, *gf = NULL;
         image b, c;
         memset(&b, 0, sizeof b);
@@ -1337,16 +1332,7 @@ static void test_long_chain(void)
             memset(&c, 0, sizeof c);
             if (e) {
                 size_t i = (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads));
-                const double *p;
-                size_t np;
-                double w;
-                rs_roads_get(roads, i, NULL, &w, &p, &np);
-                double *q = malloc(2 * np * sizeof *q);
-                ok = q != NULL;
-                for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] - 2.5, q[2 * k + 1] = p[2 * k + 1] + 1.0;
-                ok = ok && rs_roads_replace(ctx, roads, i, NULL, w, q, np) == RS_OK;
-                free(q);
-                ok = ok && rs_road_grid_update(ctx, dem, roads, &o, rb, &g1) == RS_OK;
+                ok = move_road(ctx, roads, i, -2.5, 1.0) == 0 && rs_road_grid_update(ctx, dem, roads, &o, rb, &g1) == RS_OK;
             }
             const rs_road_grid *show = e ? g1 : rb;
             ok = ok && render(ctx, dem, show, &o, &b) == 0 && rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK &&
@@ -1387,16 +1373,7 @@ static void test_long_chain(void)
             h0 = h;
             ok = rs_road_grid_build(c3, dem, roads, &o, &f0) == RS_OK;
         }
-        const double *p;
-        size_t np;
-        double w;
-        size_t i = (size_t)e * 131 % rs_roads_count(roads);
-        rs_roads_get(roads, i, NULL, &w, &p, &np);
-        double *q = malloc(2 * np * sizeof *q);
-        ok = q != NULL;
-        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] - 2.0, q[2 * k + 1] = p[2 * k + 1] + 1.0;
-        ok = ok && rs_roads_replace(c3, roads, i, NULL, w, q, np) == RS_OK;
-        free(q);
+        ok = move_road(c3, roads, (size_t)e * 131 % rs_roads_count(roads), -2.0, 1.0) == 0;
         rs_road_grid *h1 = NULL;
         ok = ok && rs_road_grid_update(c3, dem, roads, &o, h, &h1) == RS_OK;
         if (ok) seen[e] = rs_road_grid_patch_count(h1);
@@ -1469,15 +1446,7 @@ static void test_two_places(void)
             double d = hypot(xy[0] - tx, xy[1] - ty);
             if (len < 60 && d < best) best = d, pick = i; /* (a short road: it stays in its corner) */
         }
-        const double *p;
-        size_t np;
-        double w;
-        rs_roads_get(roads, pick, NULL, &w, &p, &np);
-        double *q = malloc(2 * np * sizeof *q);
-        ok = q != NULL;
-        for (size_t k = 0; ok && k < np; k++) q[2 * k] = p[2 * k] + 2.0, q[2 * k + 1] = p[2 * k + 1] + 1.5;
-        ok = ok && rs_roads_replace(ctx, roads, pick, NULL, w, q, np) == RS_OK;
-        free(q);
+        ok = move_road(ctx, roads, pick, 2.0, 1.5) == 0;
     }
     ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
          rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;

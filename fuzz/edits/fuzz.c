@@ -14,6 +14,11 @@
  *    of the whole image;
  *  - the network the updated grid keeps for the next update (updated in
  *    place, lib/scene/network.c) equals one built anew.
+ * Flags bit 7: the edits two at a time (one update for both: patches of
+ * their own when far apart); bit 5: the roads copied at the first update
+ * (rs_roads_copy), built whole from the copy, and the last grid rebased
+ * onto that (rs_road_grid_rebase: the same bytes as a fresh build, no
+ * dirty rectangle); bit 3: rs_limits.max_patches 2 (whole builds between).
  * A small DEM (16 x 12 samples of 5 m) at 1 to 4 texels, or (flags bit 6)
  * 64 x 48 samples at 1 or 2 texels, where an edit changes a small part of
  * the map and the update patches it; analytic or alpha-map edges, class
@@ -200,6 +205,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     lim.max_points = 4096;        /* small and quick: a limit is not a finding */
     lim.max_field_work = 1 << 22;
     lim.max_line_length = 4096;
+    if (flags & 8) lim.max_patches = 2;
     REQUIRE(rs_ctx_create(NULL, &lim, &ctx) == RS_OK);
     float z[BIG_W * BIG_H];
     const int big = (flags & 64) != 0, dw = big ? BIG_W : DW, dh = big ? BIG_H : DH;
@@ -208,7 +214,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_dem_frame fr = { 5, 0.05, 0, 0 };
     rs_roads *roads = NULL, *none = NULL;
     rs_styles *styles = NULL;
-    rs_road_grid *g0 = NULL, *gt = NULL;
+    rs_road_grid *g0 = NULL, *gt = NULL, *since = NULL;
+    rs_roads *snap = NULL;
+    int restyled = 0;
     image a = { 0 }, t = { 0 };
     REQUIRE(rs_dem_create(ctx, (uint32_t)dw, (uint32_t)dh, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
     static const char base_style[] = "style s\nfill #a04030\nend\n";
@@ -229,6 +237,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         rs_result r = edit(ctx, roads, styles, ops + 6 * k);
         REQUIRE(rs_strerror(r) != NULL);
         if (r) continue;
+        restyled |= since && ops[6 * k] % 6 == 5; /* (flat's styles are then not the copy's: refused) */
+        if ((flags & 128) && k % 2 == 0 && k + 1 < nops) continue; /* (the next edit's update takes both) */
         rs_road_grid *g1 = NULL, *gf = NULL;
         image b = { 0 }, c = { 0 };
         r = rs_road_grid_update(ctx, dem, roads, &o, g0, &g1);
@@ -237,6 +247,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                  render(ctx, dem, gf, &o, &c) == 0;
         if (ok) check(g1, &a, &b, &c, &t);
         if (ok) REQUIRE(rs__grid_track_net_check(ctx, g1, roads) == 1);
+        if (ok && (flags & 32) && !since) { /* (the copy at this grid, kept) */
+            r = rs_roads_copy(ctx, roads, &snap);
+            REQUIRE(r == RS_OK || r == RS_ERR_NOMEM);
+            if (r == RS_OK) since = g1;
+        }
         rs_road_grid_free(ctx, gf);
         image_free(&b);
         if (!ok) {
@@ -244,12 +259,32 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             image_free(&c);
             break;
         }
-        rs_road_grid_free(ctx, g0);
+        if (g0 != since) rs_road_grid_free(ctx, g0);
         g0 = g1;
         image_free(&a);
         a = c;
     }
+    if (since && g0 && a.rgba) { /* the chain moved onto a whole build of the copy */
+        rs_road_grid *flat = NULL, *rb = NULL;
+        if (rs_road_grid_build(ctx, dem, snap, &o, &flat) == RS_OK) {
+            rs_result r = rs_road_grid_rebase(ctx, g0, since, flat, &rb);
+            REQUIRE(o.coverage.edges == RS_EDGES_ANALYTIC && !restyled ? r == RS_OK || r == RS_ERR_NOMEM
+                                                                       : r == RS_OK || r == RS_ERR_INVALID_ARG);
+            image b = { 0 };
+            if (r == RS_OK && render(ctx, dem, rb, &o, &b) == 0) {
+                REQUIRE(b.w == a.w && b.h == a.h && memcmp(b.rgba, a.rgba, (size_t)a.w * a.h * 4) == 0 &&
+                        memcmp(b.wt, a.wt, (size_t)a.w * a.h * 2) == 0);
+                REQUIRE(rs_road_grid_dirty(rb, NULL, 0) == 0);
+                REQUIRE(rs__grid_track_net_check(ctx, rb, roads) == 1);
+            }
+            image_free(&b);
+        }
+        rs_road_grid_free(ctx, rb);
+        rs_road_grid_free(ctx, flat);
+    }
 done:
+    if (since != g0) rs_road_grid_free(ctx, since);
+    rs_roads_free(ctx, snap);
     image_free(&a);
     image_free(&t);
     rs_road_grid_free(ctx, g0);

@@ -596,6 +596,23 @@ static void sort_rects(rs_pixel_rect *r, size_t n)
     if (n > 1) qsort(r, n, sizeof *r, cmp_rect);
 }
 
+/* Patch q of another grid, shared (its grid held), appended to g's
+ * patches (room made by the caller); map: q's road ids to g's (NULL: the
+ * same, nmap unused). 0, or -1 out of memory. */
+static int patch_take(rs_ctx *ctx, rs_road_grid *g, const rs__grid_patch *q, const uint32_t *map, size_t nmap)
+{
+    rs__grid_patch *d = &g->patch[g->npatch];
+    if (!(d->ids = rs__alloc_array(ctx, q->n ? q->n : 1, sizeof *d->ids))) return -1;
+    for (size_t i = 0; i < q->n; i++) d->ids[i] = !map ? q->ids[i] : q->ids[i] < nmap ? map[q->ids[i]] : UINT32_MAX;
+    d->n = q->n;
+    d->rect = q->rect;
+    d->grid = q->grid;
+    rs__grid_hold(d->grid);
+    g->npatch++;
+    g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
+    return 0;
+}
+
 /* ---- the patched grid ------------------------------------------------------ */
 
 static int road_near(const rs_roads *roads, size_t i, const double *rb, const double *bx, double d)
@@ -853,20 +870,11 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     g->ndirty = 0;
     g->track = NULL;
     rs__grid_hold(g->base);
-    for (size_t k = 0; k < old->npatch; k++) {
-        const rs__grid_patch *q = &old->patch[k];
-        rs__grid_patch *d = &P[g->npatch];
-        if (gone[k]) continue; /* (inside a new patch) */
-        d->ids = rs__alloc_array(ctx, q->n ? q->n : 1, sizeof *d->ids);
-        if (!d->ids) { r = RS_ERR_NOMEM; goto done; }
-        for (size_t i = 0; i < q->n; i++) d->ids[i] = q->ids[i] < no ? m_old[q->ids[i]] : UINT32_MAX;
-        d->n = q->n;
-        d->rect = q->rect;
-        d->grid = q->grid;
-        rs__grid_hold(d->grid);
-        g->npatch++;
-        g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
-    }
+    for (size_t k = 0; k < old->npatch; k++)
+        if (!gone[k] && patch_take(ctx, g, &old->patch[k], m_old, no)) { /* (but those inside a new patch) */
+            r = RS_ERR_NOMEM;
+            goto done;
+        }
     for (size_t pk = 0; pk < nrect; pk++) {
         rs__grid_patch *d = &P[g->npatch++];
         d->rect = nrect_v[pk];
@@ -1050,22 +1058,8 @@ rs_result rs_road_grid_rebase(rs_ctx *ctx, const rs_road_grid *current, const rs
     track_refs_add(&g->track->refs, 1);
     g->stats.bytes += C->bytes - (nb->track ? nb->track->bytes : 0);
     rs_result r = RS_OK;
-    for (size_t k = 0; k < current->npatch && !r; k++) {
-        if (!carry[k]) continue;
-        const rs__grid_patch *q = &current->patch[k];
-        rs__grid_patch *d = &P[g->npatch];
-        if (!(d->ids = rs__alloc_array(ctx, q->n ? q->n : 1, sizeof *d->ids))) {
-            r = RS_ERR_NOMEM;
-            break;
-        }
-        if (q->n) memcpy(d->ids, q->ids, q->n * sizeof *d->ids);
-        d->n = q->n;
-        d->rect = q->rect;
-        d->grid = q->grid;
-        rs__grid_hold(d->grid);
-        g->npatch++;
-        g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
-    }
+    for (size_t k = 0; k < current->npatch && !r; k++)
+        if (carry[k] && patch_take(ctx, g, &current->patch[k], NULL, 0)) r = RS_ERR_NOMEM;
     rs__free(ctx, carry);
     if (r) {
         rs_road_grid_free(ctx, g);

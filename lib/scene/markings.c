@@ -513,23 +513,41 @@ static rs_result build_parts(rs_ctx *ctx, rs__markings *mk, rs__mk *m, size_t *n
     return RS_OK;
 }
 
-/* Index cell of coordinate v (metres), clamped to [0, n - 1]; the build
- * and the paint use the same function on the same (float) boxes. */
-static uint32_t cell_of(double v, double cell, uint32_t n)
+/* Index cell of coordinate v (metres): the map's cell less the index's
+ * first (off), clamped to [0, n - 1]; the build and the paint use the same
+ * function on the same (float) boxes, so a box beyond the index is listed
+ * in, and found from, its nearest cells (the paint tests every box). */
+static uint32_t cell_of(double v, double cell, uint32_t off, uint32_t n)
 {
-    double c = floor(v / cell);
+    double c = floor(v / cell) - off;
     if (!(c > 0)) return 0;
     return c >= n ? n - 1 : (uint32_t)c;
 }
 
-static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double map_h)
+/* Cells [lo, hi] of the map's n along one axis that hold [a, b] (metres)
+ * and one cell more each side */
+static void window_cells(double a, double b, double cell, uint32_t n, uint32_t *lo, uint32_t *cnt)
+{
+    double c0 = floor(a / cell) - 1, c1 = floor(b / cell) + 1;
+    c0 = c0 > 0 ? c0 : 0, c1 = c1 < (double)n - 1 ? c1 : (double)n - 1;
+    if (!(c0 <= c1)) c0 = 0, c1 = (double)n - 1; /* (not a number, or outside: the map) */
+    *lo = (uint32_t)c0;
+    *cnt = (uint32_t)(c1 - c0) + 1;
+}
+
+static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double map_h, const double *window)
 {
     double cell = 2.0;
     if (cell < 4 * mk->pix) cell = 4 * mk->pix;
     while ((map_w / cell + 1) * (map_h / cell + 1) > MAX_INDEX_CELLS) cell *= 2;
     mk->cell = cell;
+    mk->ox = mk->oy = 0;
     mk->gw = (uint32_t)(map_w / cell) + 1;
     mk->gh = (uint32_t)(map_h / cell) + 1;
+    if (window) { /* (a patch's grid: its rectangle's cells, the rest in the nearest) */
+        window_cells(window[0], window[2], cell, mk->gw, &mk->ox, &mk->gw);
+        window_cells(window[1], window[3], cell, mk->gh, &mk->oy, &mk->gh);
+    }
     size_t ncell = (size_t)mk->gw * mk->gh;
     mk->start = rs__calloc(ctx, ncell + 1, sizeof *mk->start);
     if (!mk->start) return RS_ERR_NOMEM;
@@ -544,8 +562,8 @@ static rs_result build_index(rs_ctx *ctx, rs__markings *mk, double map_w, double
             e.y1 = nextafterf((float)m->by1, INFINITY);
             e.i = m->rec;
             if (!(e.x1 >= 0 && e.y1 >= 0 && e.x0 < map_w + cell && e.y0 < map_h + cell)) continue;
-            uint32_t x0 = cell_of(e.x0, cell, mk->gw), y0 = cell_of(e.y0, cell, mk->gh);
-            uint32_t x1 = cell_of(e.x1, cell, mk->gw), y1 = cell_of(e.y1, cell, mk->gh);
+            uint32_t x0 = cell_of(e.x0, cell, mk->ox, mk->gw), y0 = cell_of(e.y0, cell, mk->oy, mk->gh);
+            uint32_t x1 = cell_of(e.x1, cell, mk->ox, mk->gw), y1 = cell_of(e.y1, cell, mk->oy, mk->gh);
             e.cx = x0;
             e.cy = y0;
             if (pass == 0) {
@@ -724,12 +742,12 @@ static rs_result road_local_extended(rs_ctx *ctx, const rs_roads *roads, const r
 rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
                              const rs_network *net_in, rs__markings **out)
 {
-    return rs__markings_build_planned(ctx, dem, roads, o, net_in, NULL, out);
+    return rs__markings_build_planned(ctx, dem, roads, o, net_in, NULL, NULL, out);
 }
 
 rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *o, const rs_network *net_in, rs__auto_plan *plan,
-                                     rs__markings **out)
+                                     const double *window, rs__markings **out)
 {
     *out = NULL;
     if (o->markings.disable) return RS_OK;
@@ -893,7 +911,7 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
         if (!r && mk->n) {
             double map_w = (double)(dem->width - 1) * dem->frame.cell_size;
             double map_h = (double)(dem->height - 1) * dem->frame.cell_size;
-            r = build_index(ctx, mk, map_w, map_h);
+            r = build_index(ctx, mk, map_w, map_h, window);
             if (r == RS_ERR_NOMEM) rs__fail(ctx, r, "out of memory for the markings index");
         }
         if (!r && mk->n) {
@@ -1587,8 +1605,8 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
     const double ya = ((double)p->y0 + 0.5) * pix, yb = ((double)p->y0 + (double)p->rows - 0.5) * pix;
     /* a box meeting [xa, xb] has cell_of(x1) >= cell_of(xa), and so on
      * (division and floor are monotonic) */
-    const uint32_t cx0 = cell_of(xa, cell, mk->gw), cx1 = cell_of(xb, cell, mk->gw);
-    const uint32_t cy0 = cell_of(ya, cell, mk->gh), cy1 = cell_of(yb, cell, mk->gh);
+    const uint32_t cx0 = cell_of(xa, cell, mk->ox, mk->gw), cx1 = cell_of(xb, cell, mk->ox, mk->gw);
+    const uint32_t cy0 = cell_of(ya, cell, mk->oy, mk->gh), cy1 = cell_of(yb, cell, mk->oy, mk->gh);
     uint32_t cand[CAND_CAP], tmp[CAND_CAP];
     uint64_t tests = 0, painted = 0;
     /* the markings whose box meets the piece, each once (from the first of

@@ -139,7 +139,8 @@ typedef struct rs__markings {
     uint32_t img_w, img_h;     /* the whole image, pixels */
     double pix;                /* output pixel, metres */
     double cell;               /* index cell, metres */
-    uint32_t gw, gh;
+    uint32_t ox, oy;           /* the index's first cell in the map's cells (a window's: a patch's grid) */
+    uint32_t gw, gh;           /* its cells; a box or point beyond them is in the nearest (cell_of) */
     uint32_t *start;           /* gw*gh + 1 offsets into list */
     struct rs__mk_ref *list;   /* per cell, ascending marking index: the index and its box */
     uint64_t n_explicit, n_auto;
@@ -160,11 +161,14 @@ rs_result rs__markings_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roa
                              const rs_network *net, rs__markings **out);
 /* The same with the automatic placements already made (rs__auto_plan_make
  * with the same roads and options; NULL: made here). Takes the plan's
- * atlas; the plan is left for rs__auto_plan_free. */
+ * atlas; the plan is left for rs__auto_plan_free. `window` (x0, y0, x1, y1
+ * in local metres, or NULL: the map): the pixels that will be painted (a
+ * patch's rectangle); the index covers its cells only, every marking in
+ * the nearest (a paint anywhere is still right, slower away from it). */
 struct rs__auto_plan;
 rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *o, const rs_network *net, struct rs__auto_plan *plan,
-                                     rs__markings **out);
+                                     const double *window, rs__markings **out);
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
 
 /* Whether the automatic rules can place anything on these roads (a road

@@ -766,7 +766,9 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     memset(&plan, 0, sizeof plan);
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, facts, &g->styling);
-    if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, &g->markings);
+    if (!r)
+        r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, facts && facts->window_on ? facts->window : NULL,
+                                       &g->markings);
     if (!r && o.grid.edits)
         r = rs__grid_edit_build(ctx, dem, roads, &o, net, facts && facts->window_on ? facts->window : NULL, g);
     rs__auto_plan_free(ctx, &plan);
