@@ -457,9 +457,10 @@ int main(int argc, char **argv)
         fprintf(md, "\nThe update (docs/embedding.md \"Patches\"): the roads' fingerprints find the edited ones, the\n"
                     "network updated in place (docs/network.md \"After an edit\") finds the records whose strokes\n"
                     "changed, the roads near them are built alone with the whole map's network and facts, and\n"
-                    "the new grid shares the old one's structures and draws the new part in a patch rectangle;\n"
+                    "the new grid shares the old one's structures and draws the new parts in patch rectangles;\n"
                     "the candidate pixels (the pieces that differ) rendered under both grids give the dirty\n"
-                    "rectangles. A grid holding 16 patches is built whole by the next update. Every update\n"
+                    "rectangles. An update that would leave more than rs_limits.max_patches (16) patches builds
+the grid whole. Every update\n"
                     "timed (%d): mean %.1f ms = %.3f of the mean full build (%.1f ms), the whole builds\n"
                     "included; the slowest %.1f ms.\n\n",
                 KINDS * PER_KIND * RUNS, sum / (KINDS * PER_KIND * RUNS), sum / fsum, fsum / (KINDS * PER_KIND * RUNS),
