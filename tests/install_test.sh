@@ -80,6 +80,18 @@ if $CC $SAN -std=c99 -o "$T/app_static" "$T/app.c" $(pkg-config --cflags roadspl
     check "C consumer (static) runs" [ "$("$T/app_static")" = "$ver 4" ]
 else cat "$T/st.log"; bad "C consumer builds against libroadsplat.a"; fi
 
+# The editing host (docs/examples/edits_host.c; docs/embedding.md "Long
+# chains"): edits on its thread, whole builds on a worker, rebases; its last
+# grid must splat as a fresh build does. The library alone (no OSMesa).
+EXE=$(cd "$(dirname "$0")/../docs/examples" && pwd)
+# shellcheck disable=SC2046
+if $CC $SAN -std=c99 -pedantic -Wall -Wextra -Werror -o "$T/edits_host" "$EXE/edits_host.c" $(pkg-config --cflags --libs roadsplat) \
+    -lpthread -Wl,-rpath,"$P/lib" 2>"$T/edits_host.log"; then
+    check "example editing host: 40 edits, a rebase, the grid splats as a fresh build" \
+        sh -c "'$T/edits_host' '$EXE/dem.pgm' '$EXE/roads.txt' 5 4 40 >'$T/edits_host.out' && grep -q '1 rebases' '$T/edits_host.out'"
+    sed 's/^/     /' "$T/edits_host.out"
+else cat "$T/edits_host.log"; bad "example editing host builds from the installed library"; fi
+
 # The example hosts (docs/examples/host.c, host.cpp; docs/embedding.md "An
 # example host"): built from the installed library through pkg-config, each
 # draws on its own OSMesa context and compares its frame with the CPU splat
