@@ -216,7 +216,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rs_styles *styles = NULL;
     rs_road_grid *g0 = NULL, *gt = NULL, *since = NULL;
     rs_roads *snap = NULL;
-    int restyled = 0;
+    int restyled = 0, lag = 0;
     image a = { 0 }, t = { 0 };
     REQUIRE(rs_dem_create(ctx, (uint32_t)dw, (uint32_t)dh, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
     static const char base_style[] = "style s\nfill #a04030\nend\n";
@@ -238,6 +238,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         REQUIRE(rs_strerror(r) != NULL);
         if (r) continue;
         restyled |= since && ops[6 * k] % 6 == 5; /* (flat's styles are then not the copy's: refused) */
+        lag = 1; /* (the roads are ahead of g0 until an update) */
         if ((flags & 128) && k % 2 == 0 && k + 1 < nops) continue; /* (the next edit's update takes both) */
         rs_road_grid *g1 = NULL, *gf = NULL;
         image b = { 0 }, c = { 0 };
@@ -261,6 +262,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         if (g0 != since) rs_road_grid_free(ctx, g0);
         g0 = g1;
+        lag = 0;
         image_free(&a);
         a = c;
     }
@@ -275,7 +277,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 REQUIRE(b.w == a.w && b.h == a.h && memcmp(b.rgba, a.rgba, (size_t)a.w * a.h * 4) == 0 &&
                         memcmp(b.wt, a.wt, (size_t)a.w * a.h * 2) == 0);
                 REQUIRE(rs_road_grid_dirty(rb, NULL, 0) == 0);
-                REQUIRE(rs__grid_track_net_check(ctx, rb, roads) == 1);
+                if (!lag) REQUIRE(rs__grid_track_net_check(ctx, rb, roads) == 1); /* (else g0 is of earlier roads) */
             }
             image_free(&b);
         }

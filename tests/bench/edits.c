@@ -459,8 +459,8 @@ int main(int argc, char **argv)
                     "changed, the roads near them are built alone with the whole map's network and facts, and\n"
                     "the new grid shares the old one's structures and draws the new parts in patch rectangles;\n"
                     "the candidate pixels (the pieces that differ) rendered under both grids give the dirty\n"
-                    "rectangles. An update that would leave more than rs_limits.max_patches (16) patches builds
-the grid whole. Every update\n"
+                    "rectangles. An update that would leave more than rs_limits.max_patches (16) patches builds\n"
+                    "the grid whole. Every update\n"
                     "timed (%d): mean %.1f ms = %.3f of the mean full build (%.1f ms), the whole builds\n"
                     "included; the slowest %.1f ms.\n\n",
                 KINDS * PER_KIND * RUNS, sum / (KINDS * PER_KIND * RUNS), sum / fsum, fsum / (KINDS * PER_KIND * RUNS),
