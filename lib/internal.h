@@ -149,8 +149,8 @@ void rs__opts_out(const void *src, void *out, size_t full);
 
 /* Validate splat options and fill in defaults (lib/options.c). */
 rs_result rs__splat_defaults(rs_ctx *ctx, const rs_splat_options *in, rs_splat_options *out);
-/* The roads ids[0..n) of a road set (ascending indices) as a road set of
- * their own, in that order: geometry, names, attributes, their markings
+/* The roads ids[0..n) of a road set (ascending indices; ids NULL: the
+ * first n, n at most the count) as a road set of their own, in that order: geometry, names, attributes, their markings
  * and point attributes (renumbered), the frame line (lib/input/roads_edit.c).
  * *out is the caller's (rs_roads_free). RS_ERR_INVALID_ARG, RS_ERR_NOMEM. */
 rs_result rs__roads_subset(rs_ctx *ctx, const rs_roads *roads, const uint32_t *ids, size_t n, rs_roads **out);

@@ -171,14 +171,16 @@ rs_result rs__roads_subset(rs_ctx *ctx, const rs_roads *roads, const uint32_t *i
     rs_roads *S = rs__calloc(ctx, 1, sizeof *S);
     size_t *map = rs__alloc_array(ctx, roads->count ? roads->count : 1, sizeof *map);
     size_t np = 0, na = 0;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; ids && i < n; i++) {
         if (ids[i] >= roads->count || (i && ids[i] <= ids[i - 1])) {
             rs__free(ctx, S);
             rs__free(ctx, map);
             return rs__fail(ctx, RS_ERR_INVALID_ARG, "road subset: road ids not ascending or out of range");
         }
-        np += roads->roads[ids[i]].n;
-        na += roads->roads[ids[i]].attr_count;
+    }
+    for (size_t i = 0; i < n && i < roads->count; i++) {
+        np += roads->roads[ids ? ids[i] : i].n;
+        na += roads->roads[ids ? ids[i] : i].attr_count;
     }
     if (S) {
         /* (the string pool whole: every offset stays valid) */
@@ -203,8 +205,8 @@ rs_result rs__roads_subset(rs_ctx *ctx, const rs_roads *roads, const uint32_t *i
     S->frame_crs = roads->frame_crs;
     for (size_t r = 0; r < roads->count; r++) map[r] = SIZE_MAX;
     for (size_t i = 0; i < n; i++) {
-        rs_road_rec rec = roads->roads[ids[i]];
-        map[ids[i]] = i;
+        rs_road_rec rec = roads->roads[ids ? ids[i] : i];
+        map[ids ? ids[i] : i] = i;
         memcpy(S->xy + 2 * S->points, roads->xy + 2 * rec.first, rec.n * 2 * sizeof *S->xy);
         if (rec.attr_count) memcpy(S->attrs + S->attrs_len, roads->attrs + rec.attr_first, rec.attr_count * sizeof *S->attrs);
         rec.first = S->points;
@@ -235,35 +237,8 @@ rs_result rs_roads_copy(rs_ctx *ctx, const rs_roads *roads, rs_roads **out)
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (out) *out = NULL;
     if (!roads || !out) return rs__fail(ctx, RS_ERR_INVALID_ARG, "NULL argument to rs_roads_copy");
-    rs_roads *S = rs__calloc(ctx, 1, sizeof *S);
-    if (S) {
-        S->roads = rs__alloc_array(ctx, roads->count ? roads->count : 1, sizeof *S->roads);
-        S->xy = rs__alloc_array(ctx, roads->points ? roads->points : 1, 2 * sizeof *S->xy);
-        S->names = rs__alloc_array(ctx, roads->names_len ? roads->names_len : 1, 1);
-        S->attrs = rs__alloc_array(ctx, roads->attrs_len ? roads->attrs_len : 1, sizeof *S->attrs);
-        S->marks = rs__alloc_array(ctx, roads->marks_len ? roads->marks_len : 1, sizeof *S->marks);
-        S->pattrs = rs__alloc_array(ctx, roads->pattrs_len ? roads->pattrs_len : 1, sizeof *S->pattrs);
-    }
-    if (!S || !S->roads || !S->xy || !S->names || !S->attrs || !S->marks || !S->pattrs) {
-        if (S) rs_roads_free(ctx, S);
-        return rs__fail(ctx, RS_ERR_NOMEM, "rs_roads_copy: out of memory");
-    }
-    /* (every array at its length, at least 1: the sizes the edits grow from) */
-    if (roads->count) memcpy(S->roads, roads->roads, roads->count * sizeof *S->roads);
-    if (roads->points) memcpy(S->xy, roads->xy, roads->points * 2 * sizeof *S->xy);
-    if (roads->names_len) memcpy(S->names, roads->names, roads->names_len);
-    if (roads->attrs_len) memcpy(S->attrs, roads->attrs, roads->attrs_len * sizeof *S->attrs);
-    if (roads->marks_len) memcpy(S->marks, roads->marks, roads->marks_len * sizeof *S->marks);
-    if (roads->pattrs_len) memcpy(S->pattrs, roads->pattrs, roads->pattrs_len * sizeof *S->pattrs);
-    S->count = roads->count, S->cap = roads->count ? roads->count : 1;
-    S->points = roads->points, S->points_cap = roads->points ? roads->points : 1;
-    S->names_len = roads->names_len, S->names_cap = roads->names_len ? roads->names_len : 1;
-    S->attrs_len = roads->attrs_len, S->attrs_cap = roads->attrs_len ? roads->attrs_len : 1;
-    S->marks_len = roads->marks_len, S->marks_cap = roads->marks_len ? roads->marks_len : 1;
-    S->pattrs_len = roads->pattrs_len, S->pattrs_cap = roads->pattrs_len ? roads->pattrs_len : 1;
-    S->frame = roads->frame;
-    S->frame_crs = roads->frame_crs;
-    *out = S;
+    rs_result r = rs__roads_subset(ctx, roads, NULL, roads->count, out);
+    if (r) return rs__fail(ctx, r, "rs_roads_copy: out of memory");
     rs__ok(ctx);
     return RS_OK;
 }

@@ -214,19 +214,9 @@ static void tee_fars(double *tfar, const rs__tee_end *te, size_t n)
     for (size_t k = 0; k < n; k++) tfar[2 * (size_t)te[k].road + (te[k].end ? 1 : 0)] = te[k].far;
 }
 
-/* (holders of one track may free it from several threads) */
-static long track_refs_add(long *refs, long d)
-{
-#if defined(__GNUC__)
-    return __atomic_add_fetch(refs, d, __ATOMIC_ACQ_REL);
-#else
-    return *refs += d;
-#endif
-}
-
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 {
-    if (!t || track_refs_add(&t->refs, -1) > 0) return;
+    if (!t || rs__refs_add(&t->refs, -1) > 0) return;
     rs__free(ctx, t->print);
     rs__free(ctx, t->sprint);
     rs__free(ctx, t->sum);
@@ -407,6 +397,19 @@ static rs_pixel_rect rect_union(rs_pixel_rect a, rs_pixel_rect b)
     return u;
 }
 
+/* Rectangles in rows, then columns (the patch rectangles; their candidates) */
+static int cmp_rect(const void *pa, const void *pb)
+{
+    const rs_pixel_rect *a = pa, *b = pb;
+    if (a->y0 != b->y0) return a->y0 < b->y0 ? -1 : 1;
+    return (a->x0 > b->x0) - (a->x0 < b->x0);
+}
+
+static void sort_rects(rs_pixel_rect *r, size_t n)
+{
+    if (n > 1) qsort(r, n, sizeof *r, cmp_rect);
+}
+
 /* What a local build of rectangle r costs, about: the area of its roads,
  * the rectangle grown by the context (m pixels) */
 static double rect_cost(rs_pixel_rect r, double m)
@@ -467,13 +470,7 @@ static int change_rects(rs_ctx *ctx, const boxes *B, const rs_dem *dem, double p
                 R[i] = u, gone[k] = 1, again = 1;
             }
     }
-    /* (in rows, then columns: the dirty rectangles come out so) */
-    for (size_t i = 1; i < n; i++)
-        for (size_t j = i; j > 0 && (R[j - 1].y0 > R[j].y0 || (R[j - 1].y0 == R[j].y0 && R[j - 1].x0 > R[j].x0)); j--) {
-            rs_pixel_rect t = R[j];
-            R[j] = R[j - 1];
-            R[j - 1] = t;
-        }
+    sort_rects(R, n); /* (the dirty rectangles come out in that order) */
     *out = R;
     *nout = n;
     return 0;
@@ -501,7 +498,7 @@ static size_t marked_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, u
  * all along it) into the boxes acc, grown by `grow`; map: N's road to a road of
  * `roads` (UINT32_MAX: none, then the road is marked itself). */
 static void neighbour_segments(const rs_network *N, const uint8_t *on, const uint8_t *m, const uint32_t *map,
-                               const rs_roads *roads, boxes *acc, double grow, size_t *changed)
+                               const rs_roads *roads, boxes *acc, double grow)
 {
     for (size_t d = 0; on && d < N->nnodes; d++) {
         if (!on[d]) continue;
@@ -521,12 +518,11 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
                 bx[2] = fmax(bx[2], xy[2 * i]), bx[3] = fmax(bx[3], xy[2 * i + 1]);
             }
             boxes_add(acc, bx, grow);
-            (*changed)++;
         }
     }
 }
 
-/* The T ends at the nodes of N in `on` (marked_nodes of m: non of
+/* The T ends at the nodes of N in `on` (marked_nodes of m: `non` of
  * them), of records not marked (map: N's road to a road of `roads`, UINT32_MAX:
  * gone): the segments inward from the end segment that its T line clips
  * (rs__roadfield_set_tees: each while it reaches past the line; a record
@@ -583,19 +579,6 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
     return r;
 }
 
-/* Rectangles in rows, then columns (a few lists, each in that order) */
-static int cmp_rect(const void *pa, const void *pb)
-{
-    const rs_pixel_rect *a = pa, *b = pb;
-    if (a->y0 != b->y0) return a->y0 < b->y0 ? -1 : 1;
-    return (a->x0 > b->x0) - (a->x0 < b->x0);
-}
-
-static void sort_rects(rs_pixel_rect *r, size_t n)
-{
-    if (n > 1) qsort(r, n, sizeof *r, cmp_rect);
-}
-
 /* Patch q of another grid, shared (its grid held), appended to g's
  * patches (room made by the caller); map: q's road ids to g's (NULL: the
  * same, nmap unused). 0, or -1 out of memory. */
@@ -611,6 +594,20 @@ static int patch_take(rs_ctx *ctx, rs_road_grid *g, const rs__grid_patch *q, con
     g->npatch++;
     g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
     return 0;
+}
+
+/* Whether two sets of map-wide facts draw alike: the same style
+ * switches (styled, a surface image, one fill everywhere and its colour,
+ * one casing colour and it, any casing at all) and the same casing field
+ * form in a road field of this index cell (the casings within a cell:
+ * merged into the road field's, else a field of their own). */
+static int same_switches(const rs__grid_facts *a, const rs__grid_facts *b, double cell)
+{
+    return a->styled == b->styled && a->any_surface == b->any_surface && a->fill_uniform == b->fill_uniform &&
+           (!a->fill_uniform || !memcmp(a->fill_rgba, b->fill_rgba, sizeof a->fill_rgba)) &&
+           a->casing_uniform == b->casing_uniform &&
+           (!a->casing_uniform || !memcmp(a->casing_rgba, b->casing_rgba, sizeof a->casing_rgba)) &&
+           (a->widest_casing > 0) == (b->widest_casing > 0) && (a->widest_casing <= cell) == (b->widest_casing <= cell);
 }
 
 /* ---- the patched grid ------------------------------------------------------ */
@@ -645,11 +642,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     uint32_t *m_old = rs__alloc_array(ctx, no ? no : 1, sizeof *m_old);
     uint32_t *m_new = rs__alloc_array(ctx, nn ? nn : 1, sizeof *m_new);
     rs_road_grid *g = NULL;
-    rs_pixel_rect *dirty = NULL, *nrect_v = NULL; /* the new patches' rectangles */
+    rs_pixel_rect *dirty = NULL;
     size_t ndirty = 0, nrect = 0;
-    rs_road_grid **loc = NULL; /* their local grids, */
-    uint32_t **lids = NULL;    /* roads, */
-    size_t *lidn = NULL;       /* and road counts */
+    rs__grid_patch *fresh = NULL; /* the new patches (nrect), theirs until the grid takes them */
     uint8_t *gone = NULL; /* old patches inside a new one */
     rs__grid_track *nt = NULL;
     rs_result r = m_old && m_new ? RS_OK : RS_ERR_NOMEM;
@@ -690,17 +685,10 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     const double base_cell = rs__roadfield_cell(base->field);
     facts.index_cell = base_cell;
     {
-        rs__grid_facts a = T->facts, b = facts;
-        a.index_cell = base_cell;
         rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, o->texels);
         double cell_new = rs__roadfield_cell_for(roads, &fp);
-        int merged = a.widest_casing <= a.index_cell;
-        if (a.styled != b.styled || a.any_surface != b.any_surface || a.fill_uniform != b.fill_uniform ||
-            (a.fill_uniform && memcmp(a.fill_rgba, b.fill_rgba, sizeof a.fill_rgba)) ||
-            a.casing_uniform != b.casing_uniform ||
-            (a.casing_uniform && memcmp(a.casing_rgba, b.casing_rgba, sizeof a.casing_rgba)) ||
-            (a.widest_casing > 0) != (b.widest_casing > 0) || merged != (b.widest_casing <= a.index_cell) ||
-            merged != (b.widest_casing <= cell_new))
+        if (!same_switches(&T->facts, &facts, base_cell) ||
+            (facts.widest_casing <= base_cell) != (facts.widest_casing <= cell_new))
             goto done;
     }
     if (!o->style.disable && nn > 0) {
@@ -722,7 +710,6 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     memset(&chg, 0, sizeof chg);
     chg.ctx = ctx;
     const double grow = 2 * reach + CHANGE_PAD;
-    size_t changed = 0;
     uint8_t *cn = rs__calloc(ctx, nn ? nn : 1, 1), *co = rs__calloc(ctx, no ? no : 1, 1);
     if (!cn || !co) {
         rs__free(ctx, cn);
@@ -737,9 +724,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 (!net) != (!T->net);
     }
     for (size_t i = 0; i < no; i++)
-        if (co[i]) boxes_add(&chg, T->box + 4 * i, grow), changed++;
+        if (co[i]) boxes_add(&chg, T->box + 4 * i, grow);
     for (size_t j = 0; j < nn; j++)
-        if (cn[j]) boxes_add(&chg, bn + 4 * j, grow), changed++;
+        if (cn[j]) boxes_add(&chg, bn + 4 * j, grow);
     /* the segments of the roads meeting a changed one, in the new network
      * and the old (old roads by their new index: the unmatched are changed) */
     /* (the nodes of both networks where a changed road has a leg) */
@@ -748,8 +735,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     int known = non_n != SIZE_MAX && non_o != SIZE_MAX; /* (0: the whole build) */
     if (!known) r = RS_ERR_NOMEM;
     if (known) {
-        neighbour_segments(net, on_n, cn, NULL, roads, &chg, grow, &changed);
-        neighbour_segments(T->net, on_o, co, m_old, roads, &chg, grow, &changed);
+        neighbour_segments(net, on_n, cn, NULL, roads, &chg, grow);
+        neighbour_segments(T->net, on_o, co, m_old, roads, &chg, grow);
         /* the T lines of the ends at those nodes, before and after (a record
          * that turns back across the road it ends on is clipped far along:
          * fuzz/edits) */
@@ -786,30 +773,30 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     const uint32_t W = (dem->width - 1) * o->texels, H = (dem->height - 1) * o->texels, Tx = o->texels;
     const double ctx_d = CONTEXT_PAD + 2 * reach;
     if (!(gone = rs__calloc(ctx, old->npatch ? old->npatch : 1, 1))) r = RS_ERR_NOMEM;
-    int cr = r ? 0 : change_rects(ctx, &chg, dem, pix, W, H, Tx, ctx_d / pix, old, gone, &nrect_v, &nrect);
-    rs__free(ctx, chg.v);
-    if (cr == -2) r = RS_ERR_NOMEM;
-    if (r || cr) goto done;
     {
-        /* a large part of the map: the whole build is as cheap */
+        rs_pixel_rect *rv = NULL;
+        size_t nr = 0;
+        int cr = r ? 0 : change_rects(ctx, &chg, dem, pix, W, H, Tx, ctx_d / pix, old, gone, &rv, &nr);
+        rs__free(ctx, chg.v);
+        if (cr == -2) r = RS_ERR_NOMEM;
         uint64_t area = 0;
-        for (size_t k = 0; k < nrect; k++) area += rect_area(nrect_v[k]);
-        if (area * 4 > (uint64_t)W * H) goto done;
-    }
-    if (nrect && (!(loc = rs__calloc(ctx, nrect, sizeof *loc)) || !(lids = rs__calloc(ctx, nrect, sizeof *lids)) ||
-                  !(lidn = rs__calloc(ctx, nrect, sizeof *lidn)))) {
-        r = RS_ERR_NOMEM;
-        goto done;
+        for (size_t k = 0; k < nr; k++) area += rect_area(rv[k]);
+        int whole = r || cr || area * 4 > (uint64_t)W * H; /* (a large part of the map: the whole build is as cheap) */
+        if (!whole && nr && !(fresh = rs__calloc(ctx, nr, sizeof *fresh))) r = RS_ERR_NOMEM, whole = 1;
+        for (size_t k = 0; !whole && k < nr; k++) fresh[k].rect = rv[k];
+        nrect = whole ? 0 : nr;
+        rs__free(ctx, rv);
+        if (whole) goto done;
     }
     for (size_t pk = 0; pk < nrect; pk++) {
-        const rs_pixel_rect rect = nrect_v[pk];
+        const rs_pixel_rect rect = fresh[pk].rect;
         /* the roads that can reach a pixel of the rectangle */
         double bx[4] = { dem->frame.origin_x + rect.x0 * pix, dem->frame.origin_y + rect.y0 * pix,
                          dem->frame.origin_x + rect.x1 * pix, dem->frame.origin_y + rect.y1 * pix };
         size_t m = 0;
         uint32_t *ids = rs__alloc_array(ctx, nn ? nn : 1, sizeof *ids);
         if (!ids) { r = RS_ERR_NOMEM; goto done; }
-        lids[pk] = ids;
+        fresh[pk].ids = ids;
         uint8_t *in = rs__calloc(ctx, nn ? nn : 1, 1);
         if (!in) { r = RS_ERR_NOMEM; goto done; }
         for (size_t j = 0; j < nn; j++) in[j] = (uint8_t)road_near(roads, j, bn + 4 * j, bx, ctx_d);
@@ -841,14 +828,14 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         facts.window[0] = rect.x0 * pix, facts.window[1] = rect.y0 * pix;
         facts.window[2] = rect.x1 * pix, facts.window[3] = rect.y1 * pix;
         facts.window_reach = PATCH_QUERY_REACH;
-        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &loc[pk]);
+        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &fresh[pk].grid);
         facts.window_on = 0; /* (the track keeps the whole map's facts) */
         if (r != RS_OK) goto done;
         if (lo.markings.atlas && !o->markings.atlas) { /* (the base's atlas: held while the patch lives) */
-            loc[pk]->atlas_hold = (rs_road_grid *)base;
-            rs__grid_hold(loc[pk]->atlas_hold);
+            fresh[pk].grid->atlas_hold = (rs_road_grid *)base;
+            rs__grid_hold(fresh[pk].grid->atlas_hold);
         }
-        lidn[pk] = m;
+        fresh[pk].n = m;
     }
     /* the grid: the base's structures, the old patches (their roads
      * renumbered) but those taken into a new one, the new ones over them */
@@ -877,12 +864,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         }
     for (size_t pk = 0; pk < nrect; pk++) {
         rs__grid_patch *d = &P[g->npatch++];
-        d->rect = nrect_v[pk];
-        d->grid = loc[pk];
-        d->ids = lids[pk];
-        d->n = lidn[pk];
-        loc[pk] = NULL;
-        lids[pk] = NULL;
+        *d = fresh[pk];
+        memset(&fresh[pk], 0, sizeof fresh[pk]);
         g->stats.bytes += d->grid->stats.bytes + d->n * sizeof *d->ids;
     }
     /* for the next update */
@@ -913,7 +896,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     for (size_t pk = 0; pk < nrect; pk++) {
         rs_pixel_rect *c = NULL;
         size_t nc = 0;
-        if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - nrect + pk].grid, nrect_v[pk], &c, &nc)) != RS_OK)
+        if ((r = rs__patch_candidates(ctx, old, g->patch[g->npatch - nrect + pk].grid, g->patch[g->npatch - nrect + pk].rect, &c,
+                                         &nc)) != RS_OK)
             goto done;
         rs_pixel_rect *all = nc ? rs__realloc(ctx, dirty, (ndirty + nc) * sizeof *all) : dirty;
         if (nc && !all) {
@@ -960,13 +944,10 @@ done:
     rs__free(ctx, bn);
     rs__free(ctx, tf);
     for (size_t k = 0; k < nrect; k++) {
-        if (loc) rs_road_grid_free(ctx, loc[k]);
-        if (lids) rs__free(ctx, lids[k]);
+        rs_road_grid_free(ctx, fresh[k].grid);
+        rs__free(ctx, fresh[k].ids);
     }
-    rs__free(ctx, loc);
-    rs__free(ctx, lids);
-    rs__free(ctx, lidn);
-    rs__free(ctx, nrect_v);
+    rs__free(ctx, fresh);
     rs__free(ctx, gone);
     rs_network_free(ctx, net);
     rs__free(ctx, dirty);
@@ -1019,15 +1000,7 @@ rs_result rs_road_grid_rebase(rs_ctx *ctx, const rs_road_grid *current, const rs
     /* the patches made after `since`, on flat; when a whole build came
      * between (current is on another base) or flat's map-wide switches
      * are not the chain's, on current's base as they are */
-    const rs_road_grid *nb = flat;
-    const double fc = rs__roadfield_cell(flat->field);
-    const rs__grid_facts *a = &F->facts, *b = &C->facts;
-    if (cb != sb || a->styled != b->styled || a->any_surface != b->any_surface || a->fill_uniform != b->fill_uniform ||
-        (a->fill_uniform && memcmp(a->fill_rgba, b->fill_rgba, sizeof a->fill_rgba)) ||
-        a->casing_uniform != b->casing_uniform ||
-        (a->casing_uniform && memcmp(a->casing_rgba, b->casing_rgba, sizeof a->casing_rgba)) ||
-        (a->widest_casing > 0) != (b->widest_casing > 0) || (a->widest_casing <= fc) != (b->widest_casing <= fc))
-        nb = cb;
+    const rs_road_grid *nb = cb != sb || !same_switches(&F->facts, &C->facts, rs__roadfield_cell(flat->field)) ? cb : flat;
     size_t keep = 0;
     uint8_t *carry = rs__calloc(ctx, current->npatch ? current->npatch : 1, 1);
     if (!carry) return rs__fail(ctx, RS_ERR_NOMEM, "rs_road_grid_rebase: out of memory");
@@ -1055,7 +1028,7 @@ rs_result rs_road_grid_rebase(rs_ctx *ctx, const rs_road_grid *current, const rs
     g->ndirty = 0;
     g->atlas_hold = NULL;
     g->track = (rs__grid_track *)C; /* (shared: tracks are read only) */
-    track_refs_add(&g->track->refs, 1);
+    rs__refs_add(&g->track->refs, 1);
     g->stats.bytes += C->bytes - (nb->track ? nb->track->bytes : 0);
     rs_result r = RS_OK;
     for (size_t k = 0; k < current->npatch && !r; k++)

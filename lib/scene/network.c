@@ -2736,11 +2736,6 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
      * the numbering a build of the new roads gives) */
     {
         size_t d0 = 0, da = 0, nd = 0, nl = 0, nA = NA ? NA->nnodes : 0;
-        /* a run of nodes taken one after another from one network: their
-         * records and legs copied at once when the run ends (a copy per
-         * node was most of the merge) */
-        const rs_network *RS = NULL;
-        size_t r0 = 0, rn = 0, rnd = 0;
         for (;;) {
             /* an old node is made anew inside Zt; kept outside it, where
              * it must be finite and clear of Zn, its roads all still there
@@ -2760,43 +2755,35 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
                 if (square_meets(Zn, v->x, v->y, NA->node_rad[da])) goto done;
             }
             if (da < nA && !square_inside(Zc, NA->node[da].x, NA->node[da].y, NA->node_rad[da])) goto done;
-            int end = d0 == N0->nnodes && da == nA;
+            if (d0 == N0->nnodes && da == nA) break;
             uint64_t k0 = UINT64_MAX, ka = UINT64_MAX;
-            if (!end && d0 < N0->nnodes) {
+            if (d0 < N0->nnodes) {
                 uint32_t r = m_old[N0->node_key[d0] >> 32];
                 if (r == NONE) goto done;
                 k0 = (uint64_t)r << 32 | (N0->node_key[d0] & 0xffffffffu);
             }
-            if (!end && da < nA) ka = (uint64_t)ids[NA->node_key[da] >> 32] << 32 | (NA->node_key[da] & 0xffffffffu);
-            if (!end && k0 == ka) goto done;
-            const rs_network *S = end ? NULL : k0 < ka ? N0 : NA;
-            size_t d = end ? 0 : k0 < ka ? d0 : da;
-            if (RS && (S != RS || d != r0 + rn)) { /* the run ends: copy it */
-                const uint32_t *map = RS == N0 ? m_old : ids;
-                memcpy(&N->node[rnd], &RS->node[r0], rn * sizeof *N->node);
-                memcpy(&N->node_rad[rnd], &RS->node_rad[r0], rn * sizeof *N->node_rad);
-                memcpy(&N->node_surf[rnd], &RS->node_surf[r0], rn * sizeof *N->node_surf);
-                uint32_t g0 = RS->leg_start[r0], g1 = RS->leg_start[r0 + rn];
-                size_t at = N->leg_start[rnd];
-                if (g1 > g0) memcpy(&N->leg[at], &RS->leg[g0], (size_t)(g1 - g0) * sizeof *N->leg);
-                for (size_t l = at; l < at + (g1 - g0); l++) {
-                    rs_network_leg *L = &N->leg[l];
-                    if ((L->road = map[L->road]) == NONE) goto done; /* (a kept node of a road gone) */
-                    if (!rs__is_end_leg(L)) continue;
-                    uint32_t e = rs__leg_end(L);
-                    if (ends[e]) goto done; /* (an end at two nodes) */
-                    ends[e] = 1;
-                }
-                RS = NULL;
-            }
-            if (end) break;
-            if (!RS) RS = S, r0 = d, rn = 0, rnd = nd;
-            rn++;
-            if (S == N0) d0++;
-            else da++;
+            if (da < nA) ka = (uint64_t)ids[NA->node_key[da] >> 32] << 32 | (NA->node_key[da] & 0xffffffffu);
+            if (k0 == ka) goto done;
+            const rs_network *S = k0 < ka ? N0 : NA;
+            size_t d = k0 < ka ? d0++ : da++;
+            const uint32_t *map = S == N0 ? m_old : ids;
+            N->node[nd] = S->node[d];
             N->node_key[nd] = k0 < ka ? k0 : ka;
+            N->node_rad[nd] = S->node_rad[d];
+            N->node_surf[nd] = S->node_surf[d];
             N->leg_start[nd] = (uint32_t)nl;
-            nl += S->leg_start[d + 1] - S->leg_start[d];
+            /* (the node's legs in one copy: a struct copy a leg was a
+             * string move, most of the merge) */
+            uint32_t g0 = S->leg_start[d], g1 = S->leg_start[d + 1];
+            if (g1 > g0) memcpy(&N->leg[nl], &S->leg[g0], (size_t)(g1 - g0) * sizeof *N->leg);
+            for (uint32_t l = g0; l < g1; l++) {
+                rs_network_leg *L = &N->leg[nl++];
+                if ((L->road = map[L->road]) == NONE) goto done; /* (a kept node of a road gone) */
+                if (!rs__is_end_leg(L)) continue;
+                uint32_t e = rs__leg_end(L);
+                if (ends[e]) goto done; /* (an end at two nodes) */
+                ends[e] = 1;
+            }
             nd++;
         }
         N->leg_start[nd] = (uint32_t)nl;
@@ -2926,22 +2913,21 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
         rs_network_leg *leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *leg);
         if (!leg) goto nomem;
         size_t at = 0, k = 0;
-        for (uint32_t d = 0; d < N->nnodes;) {
-            /* the nodes up to the next changed one in one copy */
-            uint32_t e = k < nrep ? rep[k].node : (uint32_t)N->nnodes;
-            uint32_t a = N->leg_start[d], b = N->leg_start[e];
-            memcpy(leg + at, N->leg + a, (size_t)(b - a) * sizeof *leg);
-            for (uint32_t x = d; x < e; x++) N->leg_start[x] = N->leg_start[x] - a + (uint32_t)at;
-            at += b - a;
-            if ((d = e) == N->nnodes) break;
+        for (uint32_t d = 0; d < N->nnodes; d++) {
+            uint32_t a = N->leg_start[d], b = N->leg_start[d + 1];
             N->leg_start[d] = (uint32_t)at;
-            memcpy(leg + at, rep[k].leg, rep[k].degree * sizeof *leg);
-            at += rep[k].degree;
-            N->node[d].degree = rep[k].degree;
-            N->node[d].kind = rep[k].degree <= 1 ? RS_NODE_END : RS_NODE_JUNCTION;
-            N->node[d].control = rep[k].control;
-            N->node_surf[d] = rep[k].surf;
-            k++, d++;
+            if (k < nrep && rep[k].node == d) {
+                memcpy(leg + at, rep[k].leg, rep[k].degree * sizeof *leg);
+                at += rep[k].degree;
+                N->node[d].degree = rep[k].degree;
+                N->node[d].kind = rep[k].degree <= 1 ? RS_NODE_END : RS_NODE_JUNCTION;
+                N->node[d].control = rep[k].control;
+                N->node_surf[d] = rep[k].surf;
+                k++;
+                continue;
+            }
+            memcpy(leg + at, N->leg + a, (b - a) * sizeof *leg);
+            at += b - a;
         }
         N->leg_start[N->nnodes] = (uint32_t)at;
         rs__free(ctx, N->leg);

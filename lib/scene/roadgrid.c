@@ -584,17 +584,7 @@ static rs_result choose_k(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
     return RS_OK;
 }
 
-/* (holders of one grid may free it from several threads) */
-static long refs_add(long *refs, long d)
-{
-#if defined(__GNUC__)
-    return __atomic_add_fetch(refs, d, __ATOMIC_ACQ_REL);
-#else
-    return *refs += d;
-#endif
-}
-
-void rs__grid_hold(rs_road_grid *g) { refs_add(&g->refs, 1); }
+void rs__grid_hold(rs_road_grid *g) { rs__refs_add(&g->refs, 1); }
 
 const rs_road_grid *rs__grid_at(const rs_road_grid *g, uint32_t x, uint32_t y, const rs__grid_patch **patch)
 {
@@ -612,7 +602,7 @@ const rs_road_grid *rs__grid_at(const rs_road_grid *g, uint32_t x, uint32_t y, c
 void rs_road_grid_free(rs_ctx *ctx, rs_road_grid *grid)
 {
     if (!ctx || !grid) return;
-    if (refs_add(&grid->refs, -1) > 0) return; /* (a patched grid still draws with it) */
+    if (rs__refs_add(&grid->refs, -1) > 0) return; /* (a patched grid still draws with it) */
     rs__grid_track_free(ctx, grid->track);
     if (grid->base) { /* a patched grid: its own parts only */
         for (size_t k = 0; k < grid->npatch; k++) {
@@ -764,13 +754,12 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     /* the automatic markings, placed once: the styles' lines stop at them */
     rs__auto_plan plan;
     memset(&plan, 0, sizeof plan);
+    /* (a patch: the pixels it draws, which its markings index and edit pieces serve) */
+    const double *window = facts && facts->window_on ? facts->window : NULL;
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, facts, &g->styling);
-    if (!r)
-        r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, facts && facts->window_on ? facts->window : NULL,
-                                       &g->markings);
-    if (!r && o.grid.edits)
-        r = rs__grid_edit_build(ctx, dem, roads, &o, net, facts && facts->window_on ? facts->window : NULL, g);
+    if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, window, &g->markings);
+    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, window, g);
     rs__auto_plan_free(ctx, &plan);
     /* a whole grid kept for edits keeps what a proportional update reads (its network too) */
     if (!r && o.grid.edits && !facts && o.coverage.edges == RS_EDGES_ANALYTIC) {

@@ -63,6 +63,16 @@ typedef struct rs__grid_patch {
     size_t n;
 } rs__grid_patch;
 
+/* Add d to a holder count, atomically (holders of one grid or track may
+ * free it from several threads); the count after. */
+static inline long rs__refs_add(long *refs, long d)
+{
+#if defined(__GNUC__)
+    return __atomic_add_fetch(refs, d, __ATOMIC_ACQ_REL);
+#else
+    return *refs += d;
+#endif
+}
 /* Hold / release a whole grid's structures (a patched grid releases its
  * base and its patches' grids). */
 void rs__grid_hold(struct rs_road_grid *g);
