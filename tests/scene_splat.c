@@ -1,5 +1,6 @@
 #include "scene_splat.h"
 #include "seams.h"
+#include "timing.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -158,4 +159,15 @@ rs_dem *ss_fractal_dem(rs_ctx *ctx, uint32_t w, uint32_t h, uint64_t seed, doubl
     }
     free(z);
     return dem;
+}
+
+void *ss_build_run(void *job)
+{
+    ss_build_job *j = job;
+    rs_ctx *c = NULL;
+    double t0 = tm_thread_cpu_ms();
+    j->ok = rs_ctx_create(NULL, NULL, &c) == RS_OK && rs_road_grid_build(c, j->dem, j->roads, j->o, &j->g) == RS_OK;
+    j->ms = tm_thread_cpu_ms() - t0;
+    rs_ctx_free(c);
+    return NULL;
 }

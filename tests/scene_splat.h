@@ -53,4 +53,17 @@ rs_result ss_splat_window(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
  * splatter (one window); on failure *out is zeroed. */
 rs_result ss_grid_image(rs_ctx *ctx, const rs_dem *dem, const rs_road_grid *grid, const rs_splat_options *opts,
                         ss_image *out);
+/* A whole grid built on a thread of its own (docs/embedding.md "Long
+ * chains": a worker's build from a copy of the roads). Give dem, roads and
+ * o; ss_build_run (a pthread start routine) makes g on a context of its
+ * own (the caller's to free), ok 1 when it did, ms its thread's CPU time. */
+typedef struct ss_build_job {
+    const rs_dem *dem;
+    const rs_roads *roads;
+    const rs_splat_options *o;
+    rs_road_grid *g;
+    double ms;
+    int ok;
+} ss_build_job;
+void *ss_build_run(void *job);
 #endif

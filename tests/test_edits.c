@@ -1230,23 +1230,6 @@ static void test_roads_copy(void)
     rs_ctx_free(ctx);
 }
 
-typedef struct flatten_job {
-    const rs_dem *dem;
-    const rs_roads *roads;
-    const rs_splat_options *o;
-    rs_road_grid *g;
-    int ok;
-} flatten_job;
-
-static void *flatten_thread(void *arg)
-{
-    flatten_job *j = arg;
-    rs_ctx *c = NULL;
-    j->ok = rs_ctx_create(NULL, NULL, &c) == RS_OK && rs_road_grid_build(c, j->dem, j->roads, j->o, &j->g) == RS_OK;
-    rs_ctx_free(c);
-    return NULL;
-}
-
 /* A long chain (docs/embedding.md "Long chains"): rs_limits.max_patches
  * 40, thirty-six moves of roads spread over the map, chained; every grid
  * splats to a fresh build's bytes (more than 16 patches: the windows cut
@@ -1278,7 +1261,7 @@ static void test_long_chain(void)
     sc_rng_seed(&rng, 4242);
     size_t most = 0;
     long differ = 0;
-    flatten_job job;
+    ss_build_job job;
     memset(&job, 0, sizeof job);
     pthread_t th;
     int started = 0;
@@ -1288,7 +1271,7 @@ static void test_long_chain(void)
             since = g0; /* (kept: the grid the copy was taken at) */
             ok = rs_roads_copy(ctx, roads, &snap) == RS_OK;
             job.dem = dem, job.roads = snap, job.o = &o;
-            started = ok && pthread_create(&th, NULL, flatten_thread, &job) == 0;
+            started = ok && pthread_create(&th, NULL, ss_build_run, &job) == 0;
             CHECK(started);
         }
         size_t i = (size_t)(sc_rng_unit(&rng) * (double)rs_roads_count(roads));

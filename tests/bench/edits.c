@@ -61,28 +61,6 @@ static int apply(rs_ctx *ctx, rs_roads *roads, int kind, sc_rng *rng, double W, 
     return r;
 }
 
-/* the long chain's worker: a whole grid of a copy of the roads, its
- * thread's CPU time */
-typedef struct worker {
-    const rs_dem *dem;
-    const rs_roads *roads;
-    const rs_splat_options *o;
-    rs_road_grid *g;
-    double ms;
-    int ok;
-} worker;
-
-static void *worker_run(void *arg)
-{
-    worker *w = arg;
-    rs_ctx *c = NULL;
-    double t0 = tm_thread_cpu_ms();
-    w->ok = rs_ctx_create(NULL, NULL, &c) == RS_OK && rs_road_grid_build(c, w->dem, w->roads, w->o, &w->g) == RS_OK;
-    w->ms = tm_thread_cpu_ms() - t0;
-    rs_ctx_free(c);
-    return NULL;
-}
-
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -320,7 +298,7 @@ int main(int argc, char **argv)
         rs_ctx *lc = NULL;
         rs_road_grid *c0 = NULL, *since = NULL;
         rs_roads *snap = NULL;
-        worker wk;
+        ss_build_job wk;
         memset(&wk, 0, sizeof wk);
         pthread_t th;
         int running = 0, started_at = 0;
@@ -363,7 +341,7 @@ int main(int argc, char **argv)
                 since = c1; /* (kept until the rebase) */
                 memset(&wk, 0, sizeof wk);
                 wk.dem = dem, wk.roads = snap, wk.o = &o;
-                if (!bad) bad = pthread_create(&th, NULL, worker_run, &wk) != 0;
+                if (!bad) bad = pthread_create(&th, NULL, ss_build_run, &wk) != 0;
                 running = !bad, started_at = e;
             }
             lmain[e] = u1 - u0 + extra;
