@@ -12,6 +12,7 @@
 #include "scenes.h"
 #include "timing.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -395,12 +396,60 @@ static void test_stress(void)
            (tm_now_ms() / 1000.0) - t0, worst_seam, worst_mesh_ratio);
 }
 
+/* A road from 10^31 m away ending on the map: both edge modes draw it up
+ * to its end point and no further (the cut to the map put the end at the
+ * map's centre: its place along the line was the difference of two
+ * numbers of 10^31, every digit lost; fuzz/edits, 5 December 2026). */
+static void test_far_end(void)
+{
+    float z[16 * 12];
+    memset(z, 0, sizeof z);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    const double xy[4] = { 1.4444444444444444e31, 125.9, 52.6, 15.9 };
+    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK &&
+          rs_roads_add(ctx, roads, NULL, 6.2, xy, 2) == RS_OK);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    for (int mode = 0; dem && roads && mode < 2; mode++) {
+        rs_splat_options o;
+        memset(&o, 0, sizeof o);
+        o.texels = 3;
+        o.coverage.edges = mode ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
+        rs_splatter *sp = NULL;
+        uint32_t w = 0, h = 0;
+        CHECK(rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
+        rs_splatter_size(sp, &w, &h);
+        uint8_t *rgba = malloc((size_t)w * h * 4);
+        uint16_t *wt = malloc((size_t)w * h * 2);
+        CHECK(rgba && wt && rs_splat_window(ctx, sp, 0, 0, w, h, rgba, (size_t)w * 4, wt, w, NULL) == RS_OK);
+        /* (west of the end cap by more than a road cell and a pixel: no road;
+         * on the road 10 m east of the end: road) */
+        double pix = 5.0 / 3;
+        size_t west = 0, on = 0;
+        for (uint32_t y = 0; wt && y < h; y++)
+            for (uint32_t x = 0; x < w; x++) {
+                double cx = (x + 0.5) * pix, cy = (y + 0.5) * pix;
+                if (cx < 52.6 - 3.1 - 2 * pix - 2.5) west += wt[(size_t)y * w + x] != 0;
+                if (fabs(cx - 62.6) < pix && fabs(cy - 15.9) < pix) on += wt[(size_t)y * w + x] == 65535;
+            }
+        CHECKF(west == 0 && on > 0, "%s edges: %zu road pixels west of the end, %zu on the road",
+               mode ? "alpha-map" : "analytic", west, on);
+        free(rgba);
+        free(wt);
+        rs_splatter_free(ctx, sp);
+    }
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+}
+
 int main(void)
 {
     rs_allocator al = { cnt_malloc, cnt_realloc, cnt_free, &mem };
     if (rs_ctx_create(&al, NULL, &ctx) != RS_OK) return 1;
     test_extreme_dems();
     test_stress();
+    test_far_end();
     if (!getenv("RS_DEBUG")) test_huge_dem();
     CHECK(mem.live > 0); /* the context itself */
     rs_ctx_free(ctx);

@@ -939,6 +939,83 @@ static void test_tee_repeated_point(void)
     rs_roads_free(ctx, roads);
 }
 
+/* T clips do not depend on the index cell: a record's segments are
+ * clipped by its T lines where their trimmed shapes reach past, strips
+ * included. A hairpin whose two ends sit on one road: its second T's strip
+ * runs back past the first T's line, which clipped it only at coarse
+ * cells (pixels 2.5 m from the first T differed: fuzz/edits, 5 December
+ * 2026); and the city at T = 1, where one pixel at a T differed at 2 m
+ * cells. The whole coverage is the same doubles at every cell. */
+static double *tee_coverage(const rs_roads *roads, const rs__tee_end *te, size_t nte, double cs, double W, double H,
+                            double pix, double cell, uint32_t w, uint32_t h)
+{
+    rs__roadfield_params p = params(0, 0, cs, W, H, 0, pix);
+    p.index_cell = cell;
+    rs__roadfield *f = NULL;
+    double *cov = NULL;
+    if (rs__roadfield_build(ctx, roads, &p, &f) == RS_OK && rs__roadfield_set_tees(ctx, f, roads, te, nte) == RS_OK)
+        cov = coverage_image(f, w, h, pix);
+    rs__roadfield_free(ctx, f);
+    return cov;
+}
+
+static void test_tee_cells(void)
+{
+    static const char text[] = "road a width 3\n28.5 1\n75.5 59\nend\n"
+                               "road b width 4\n-2.5 10\n12.5 25\n59.5 13\nend\n"
+                               "road hairpin width 11\n11.5 25\n70.5 24\n27.5 21\nend\n";
+    rs_roads *roads = NULL;
+    rs_network *net = NULL;
+    rs__tee_end *te = NULL;
+    size_t nte = 0;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK && rs_network_build(ctx, roads, NULL, &net) == RS_OK &&
+          rs__tee_ends(ctx, roads, net, &te, &nte) == RS_OK);
+    CHECK(nte == 2); /* (both hairpin ends on road b) */
+    const double cells[] = { 0, 5, 6, 8, 10, 12 };
+    double *ref = tee_coverage(roads, te, nte, 5, 315, 235, 2.5, cells[0], 126, 94);
+    CHECK(ref != NULL);
+    for (size_t k = 1; ref && k < sizeof cells / sizeof cells[0]; k++) {
+        double *cov = tee_coverage(roads, te, nte, 5, 315, 235, 2.5, cells[k], 126, 94);
+        CHECKF(cov && memcmp(cov, ref, 126 * 94 * sizeof *cov) == 0, "hairpin: cell %g draws otherwise", cells[k]);
+        free(cov);
+    }
+    /* (the first T's mouth: road b's sliver alone beyond its far edge) */
+    CHECKF(ref && ref[9 * 126 + 1] == 0 && ref[9 * 126 + 2] < 0.01, "hairpin: %g %g beyond the first T's line",
+           ref ? ref[9 * 126 + 1] : -1, ref ? ref[9 * 126 + 2] : -1);
+    free(ref);
+    rs__free(ctx, te);
+    rs_network_free(ctx, net);
+    rs_roads_free(ctx, roads);
+
+    sc_scene sc;
+    CHECK(sc_city_default(&sc, 1) == 0);
+    roads = NULL, net = NULL, te = NULL, nte = 0;
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    for (size_t i = 0; i < sc.nroads; i++)
+        CHECK(rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n) == RS_OK);
+    CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK && rs__tee_ends(ctx, roads, net, &te, &nte) == RS_OK);
+    uint32_t w = sc.w - 1, h = sc.h - 1;
+    const double ccells[] = { 0, 2, 3, 8 };
+    ref = tee_coverage(roads, te, nte, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), sc.cell_size, 0, w, h);
+    CHECK(ref != NULL);
+    for (size_t k = 1; ref && k < sizeof ccells / sizeof ccells[0]; k++) {
+        double *cov = tee_coverage(roads, te, nte, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), sc.cell_size,
+                                   ccells[k], w, h);
+        size_t diff = 0;
+        size_t at = 0;
+        for (size_t i = 0; cov && i < (size_t)w * h; i++)
+            if (cov[i] != ref[i]) at = diff++ ? at : i;
+        CHECKF(cov && diff == 0, "city T=1: cell %g: %zu pixels differ, the first (%zu, %zu)", ccells[k], diff, at % w,
+               at / w);
+        free(cov);
+    }
+    free(ref);
+    rs__free(ctx, te);
+    rs_network_free(ctx, net);
+    rs_roads_free(ctx, roads);
+    sc_scene_free(&sc);
+}
+
 static void test_auto_cell(void)
 {
     CHECK_NEAR(auto_cell(4, 1, 400), 16, 1e-12);                      /* sparse: twice the mean width */
@@ -963,6 +1040,7 @@ int main(void)
     test_record_fallback();
     test_auto_cell();
     test_tee_repeated_point();
+    test_tee_cells();
     rs_ctx_free(ctx);
     return th_finish("test_roadfield");
 }

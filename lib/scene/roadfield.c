@@ -602,7 +602,9 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
     double dist = -uy * ex + ux * ey; /* signed distance of the centre from the line */
     if (!(fabs(dist) <= rad)) return 0;
     double px = cx + uy * dist, py = cy - ux * dist; /* foot of the perpendicular */
-    double sc = ex * ux + ey * uy, t0 = -sc, t1 = 2 * lh - sc;
+    /* (each end's place along the line from its own coordinates: 2 lh - sc
+     * lost every digit when A was far and B near) */
+    double sc = ex * ux + ey * uy, t0 = -sc, t1 = (*bx - cx) * ux + (*by - cy) * uy;
     if (t0 < -rad) t0 = -rad;
     if (t1 > rad) t1 = rad;
     if (!(t0 <= t1)) return 0;
@@ -1382,6 +1384,7 @@ static rs_result derive(rs_ctx *ctx, const rs__roadfield *src, const double *ext
         if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
         *sg = src->seg[k];
         if (extra) sg->r += extra[sg->road];
+        sg->tee = 0; /* (tees_widen marks them by this field's shapes) */
         sg->jnext = 0;
         sg->jpart = 0;
         sg->redundant = 0;
@@ -1511,6 +1514,8 @@ typedef struct rf_tee {
                               (a widened field: its casing's width; else 0) */
     double box[4];         /* x0, x1, y0, y1 (local metres): where the trimmed shape and the capsule differ */
     uint32_t row0;         /* the first grid row of box */
+    uint8_t live;          /* 0: an end-2 clip line the segment's shape (its strips included) does not
+                              reach past: it changes nothing and is left out everywhere (tees_finish) */
 } rf_tee;
 
 /* The tees of segment s (those of f->tee with seg == id): [*i0, *i1). */
@@ -1541,6 +1546,7 @@ static double tee_sd_at(const rs__roadfield *f, const rf_seg *s, size_t i0, size
     int cut[2] = { 0, 0 };
     for (size_t k = i0; k < i1; k++) {
         const rf_tee *T = &f->tee[k];
+        if (!T->live) continue;
         hmax = lm_max(hmax, x * T->nx + y * T->ny - T->c);
         if (T->end < 2) cut[T->end] = 1;
     }
@@ -1604,6 +1610,7 @@ static void shape_of_at(const rs__roadfield *f, const rf_seg *s, size_t i0, size
     int nh = 0;
     if (s->tee) {
         for (size_t k = i0; k < i1 && nh < 2; k++) {
+            if (!f->tee[k].live) continue;
             cl[nh][0] = f->tee[k].nx, cl[nh][1] = f->tee[k].ny, cl[nh][2] = f->tee[k].c;
             if (f->tee[k].end < 2) cut[f->tee[k].end] = 1;
             nh++;
@@ -2041,7 +2048,7 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
             if (!(xa <= xb && ya <= yb)) continue;
             uint32_t ka = (uint32_t)xa, kb = (uint32_t)xb, ra = (uint32_t)ya, rb = (uint32_t)yb;
             const rf_seg *sf = &f->seg[Tf->seg], *sg = Tg ? &g->seg[Tg->seg] : NULL;
-            int need_f = !tee_end_unchanged(Tf, sf, e), need_g = Tg && !tee_end_unchanged(Tg, sg, e);
+            int need_f = Tf->live && !tee_end_unchanged(Tf, sf, e), need_g = Tg && Tg->live && !tee_end_unchanged(Tg, sg, e);
             if (!need_f && !need_g) continue;
             size_t fi0, fi1, gi0 = 0, gi1 = 0;
             tees_of(f, Tf->seg, &fi0, &fi1);
@@ -2136,11 +2143,31 @@ static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
     f->tstart = rs__calloc(ctx, (size_t)f->gh + 1, sizeof *f->tstart);
     if (!f->tstart) return RS_ERR_NOMEM;
     for (size_t i = 0; i < m; i++) {
-        if ((i & 16383) == 16383 && rs__poll(ctx)) return RS_ERR_CANCELLED;
         rf_tee *T = &f->tee[i];
         T->c = T->cE + T->R;
-        f->seg[T->seg].tee |= (uint8_t)(T->end == 2 ? 4 : T->end ? 2 : 1);
         tee_box(f, T);
+    }
+    /* an end-2 line is live where the segment's shape reaches past it:
+     * its capsule, or a strip of its own T ends (before it: by end) */
+    for (size_t i = 0, g0 = 0; i < m; i++) {
+        rf_tee *T = &f->tee[i];
+        if (i == 0 || T->seg != f->tee[i - 1].seg) g0 = i;
+        T->live = 1;
+        if (T->end == 2) {
+            const rf_seg *q = &f->seg[T->seg];
+            double far = lm_max(T->nx * q->ax + T->ny * q->ay, T->nx * q->bx + T->ny * q->by) + q->r;
+            for (size_t k = g0; k < i; k++)
+                if (f->tee[k].end < 2) {
+                    const double *b = f->tee[k].box;
+                    far = lm_max(far, T->nx * (T->nx > 0 ? b[1] : b[0]) + T->ny * (T->ny > 0 ? b[3] : b[2]));
+                }
+            T->live = !(far - T->c <= 0); /* (NaN: live) */
+        }
+        if (T->live) f->seg[T->seg].tee |= (uint8_t)(T->end == 2 ? 4 : T->end ? 2 : 1);
+    }
+    for (size_t i = 0; i < m; i++) {
+        if ((i & 16383) == 16383 && rs__poll(ctx)) return RS_ERR_CANCELLED;
+        rf_tee *T = &f->tee[i];
         uint32_t r0 = clamp_index(floor(T->box[2] * f->inv_c) + 1, f->gh), r1 = clamp_index(floor(T->box[3] * f->inv_c) + 1, f->gh);
         T->row0 = r0;
         for (uint32_t r = r0; r <= r1; r++) f->tstart[r + 1]++;
@@ -2199,13 +2226,73 @@ static const rf_seg *road_end_seg(const rs__roadfield *f, const rs_roads *roads,
     return &f->seg[lo];
 }
 
+/* A T end's strip: where its end segment's trimmed shape runs past the
+ * end point (the strip goes on to the clip line: at a slant, one edge
+ * reaches far), as tee_box's box. */
+typedef struct rf_strip {
+    uint32_t seg;
+    double box[4]; /* x0, x1, y0, y1 */
+} rf_strip;
+
+static int cmp_strip(const void *pa, const void *pb)
+{
+    const rf_strip *a = pa, *b = pb;
+    return (a->seg > b->seg) - (a->seg < b->seg);
+}
+
+/* How far past the line n.p = c the segment's trimmed shape comes: its
+ * capsule, and the strips of its own T ends (st[0..ns), by segment) */
+static double past_line(const rf_seg *q, uint32_t k, const rf_strip *st, size_t ns, double nx, double ny, double c)
+{
+    double far = lm_max(nx * q->ax + ny * q->ay, nx * q->bx + ny * q->by) + q->r;
+    size_t lo = 0, hi = ns;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (st[mid].seg < k) lo = mid + 1;
+        else hi = mid;
+    }
+    for (; lo < ns && st[lo].seg == k; lo++) {
+        const double *b = st[lo].box;
+        far = lm_max(far, nx * (nx > 0 ? b[1] : b[0]) + ny * (ny > 0 ? b[3] : b[2]));
+    }
+    return far - c;
+}
+
 rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
                                  size_t n)
 {
     if (!f || !n || f->ntee) return RS_OK;
-    size_t m = 0, cap = 0;
+    size_t m = 0, cap = 0, ns = 0;
+    /* every T end's strip first: a record's other segments are clipped
+     * by its T lines where their shapes, strips included, reach past
+     * (a hairpin's second T strip reached back past the first T's line:
+     * without it, whether that clip was made depended on the index cell,
+     * and so did the pixels there: fuzz/edits) */
+    rf_strip *st = rs__alloc_array(ctx, n, sizeof *st);
+    if (!st) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++) {
-        if ((i & 511) == 0 && rs__poll(ctx)) return RS_ERR_CANCELLED; /* (a T's clips: ~5 us) */
+        const rs__tee_end *t = &tees[i];
+        const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
+        if (!s || !(s->r > 0)) continue;
+        double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
+        if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
+        rf_tee T;
+        memset(&T, 0, sizeof T);
+        T.seg = (uint32_t)(s - f->seg);
+        T.end = t->end;
+        T.nx = t->nx, T.ny = t->ny;
+        T.c = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay) + t->far;
+        tee_box(f, &T);
+        st[ns].seg = T.seg;
+        memcpy(st[ns].box, T.box, sizeof T.box);
+        ns++;
+    }
+    if (ns > 1) qsort(st, ns, sizeof *st, cmp_strip);
+    for (size_t i = 0; i < n; i++) {
+        if ((i & 511) == 0 && rs__poll(ctx)) {
+            rs__free(ctx, st);
+            return RS_ERR_CANCELLED; /* (a T's clips: ~5 us) */
+        }
         const rs__tee_end *t = &tees[i];
         const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
         if (!s || !(s->r > 0)) continue;
@@ -2214,12 +2301,15 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
         if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
         double cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
         /* the record's segments: its end segment trimmed, and clipped
-         * those whose capsule (grown by up to an index cell: a casing,
-         * widen) reaches past the line: the zero-length ones at the end,
-         * and from the end along the record up to the first that does not
-         * reach it. (Every such segment of the record once: a record that
-         * left the T and crossed the through road again further on lost
-         * all of itself beyond the line there; fuzz/edits.) */
+         * those whose trimmed shape reaches past the line: the
+         * zero-length ones at the end, and from the end along the record
+         * up to the first that does not reach it. (Every such segment of
+         * the record once: a record that left the T and crossed the
+         * through road again further on lost all of itself beyond the
+         * line there; fuzz/edits.) The walk goes by the shapes alone; a
+         * segment it reaches within an index cell of the line is clipped
+         * too (a no-op for its shape, and the lines of a field widened by
+         * up to a cell: a casing, widen), so no pixel depends on the cell. */
         const size_t ks = (size_t)(s - f->seg);
         size_t k0 = ks, k1 = ks + 1;
         while (k0 > 0 && f->seg[k0 - 1].road == t->road) k0--;
@@ -2232,16 +2322,24 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
                                    : (t->end ? ks - (step - nout) : ks + (step - nout));
             const rf_seg *q = &f->seg[k];
             int end = q == s ? t->end : 2;
-            if (end == 2 && !(lm_max(t->nx * q->ax + t->ny * q->ay, t->nx * q->bx + t->ny * q->by) + q->r + f->c >
-                              cE + t->far)) {
-                if (step < nout) continue;
-                break;
+            if (end == 2) {
+                double past = past_line(q, (uint32_t)k, st, ns, t->nx, t->ny, cE + t->far);
+                if (!(past > 0)) { /* (NaN: the walk ends, as before) */
+                    if (!(past + f->c > 0)) {
+                        if (step < nout) continue;
+                        break;
+                    }
+                    if (step >= nout) { /* (clipped, then the walk ends here) */
+                        step = nout + nin - 1;
+                    }
+                }
             }
             if (m == cap) {
                 size_t nc = cap ? 2 * cap : n + 8, bytes;
                 rf_tee *nt = rs__mul_size(nc, sizeof *f->tee, &bytes) ? rs__realloc(ctx, f->tee, bytes) : NULL;
                 if (!nt) {
                     rs__free(ctx, f->tee);
+                    rs__free(ctx, st);
                     f->tee = NULL;
                     return RS_ERR_NOMEM;
                 }
@@ -2258,6 +2356,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
             T->G = t->grow >= 0 && t->grow <= 1e300 ? t->grow : 0; /* NaN, inf: 0 */
         }
     }
+    rs__free(ctx, st);
     if (!m) {
         rs__free(ctx, f->tee);
         f->tee = NULL;

@@ -376,7 +376,10 @@ static int clip_segment(const rs_road_grid *g, double pad, double *ax, double *a
     /* Foot of the perpendicular from the centre: built from the centre, so it
      * keeps full precision however far away A and B are. */
     double px = cx + ty * dist, py = cy - tx * dist;
-    double sc = ex * tx + ey * ty, s0 = -sc, s1 = len - sc;
+    /* each end's place along the line from its own coordinates: len - sc
+     * lost every digit when A was far and B near (a road from 10^31 m
+     * ended at the map's centre: fuzz/edits) */
+    double sc = ex * tx + ey * ty, s0 = -sc, s1 = (*bx - cx) * tx + (*by - cy) * ty;
     if (s0 < -rad) s0 = -rad;
     if (s1 > rad) s1 = rad;
     if (s0 > s1) return 0;
