@@ -158,9 +158,11 @@ typedef struct rs_limits {
                                   report only those that change (~0.25 s at
                                   most); beyond, it reports the candidates,
                                   a superset (docs/embedding.md) */
-    uint32_t max_patches;      /* 16: patches a grid made by rs_road_grid_update
-                                  holds (one per edit, fewer where a patch
-                                  covers earlier ones); the update that would
+    uint32_t max_patches;      /* 16: patches (local builds, each drawing in
+                                  one or more rectangles) a grid made by
+                                  rs_road_grid_update holds (one per edit,
+                                  fewer where a patch covers earlier ones);
+                                  the update that would
                                   pass it builds the grid whole instead, at a
                                   build's cost. A host that flattens on a
                                   worker (docs/embedding.md "Long chains")
@@ -1048,8 +1050,9 @@ typedef struct rs_pixel_rect {
 RS_API rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,
                                      const rs_splat_options *opts, const rs_road_grid *old, rs_road_grid **out);
 /* Patches the grid holds (0 for a grid from rs_road_grid_build): each
- * rs_road_grid_update adds at most one, and builds the grid whole instead
- * of passing rs_limits.max_patches. A host that keeps edits off its frame
+ * rs_road_grid_update adds at most one (a local build of the roads near
+ * the edit, drawing in the rectangles along the changed area), and builds
+ * the grid whole instead of passing rs_limits.max_patches. A host that keeps edits off its frame
  * thread's budget flattens the grid on a worker before that
  * (docs/embedding.md "Long chains"). Read-only: any thread. */
 RS_API size_t rs_road_grid_patch_count(const rs_road_grid *grid);

@@ -1394,9 +1394,42 @@ static void test_long_chain(void)
     rs_ctx_free(ctx);
 }
 
-/* Two roads moved in one update, at opposite corners of the map: two
- * patches, one at each (not one rectangle over the map between them); the
- * grid splats to a fresh build's bytes, every changed pixel lies in a
+/* An update's grid g1 against the images before (a), from g1 (b) and
+ * from a fresh build (c): the same bytes as the fresh build, every changed
+ * pixel in a dirty rectangle, none in two, in rows then columns; g1's
+ * patch rectangles do not overlap. */
+static void check_rects(const char *what, const rs_road_grid *g1, const image *a, const image *b, const image *c)
+{
+    CHECKF(same_image(b, c), "%s: the updated grid draws otherwise than a fresh build", what);
+    size_t nr = rs_road_grid_dirty(g1, NULL, 0);
+    rs_pixel_rect *R = malloc((nr ? nr : 1) * sizeof *R);
+    CHECK(R != NULL);
+    if (R) rs_road_grid_dirty(g1, R, nr);
+    long uncovered = 0, twice = 0, order = 0, changed = 0, overlap = 0;
+    for (size_t k = 0; R && k + 1 < nr; k++)
+        order += R[k].y0 > R[k + 1].y0 || (R[k].y0 == R[k + 1].y0 && R[k].x0 >= R[k + 1].x0);
+    for (size_t px = 0; R && px < (size_t)a->w * a->h; px++) {
+        uint32_t x = (uint32_t)(px % a->w), y = (uint32_t)(px / a->w);
+        int in = 0, inp = 0;
+        for (size_t k = 0; k < nr; k++) in += x >= R[k].x0 && x < R[k].x1 && y >= R[k].y0 && y < R[k].y1;
+        for (size_t k = 0; k < g1->npatch; k++) {
+            const rs_pixel_rect *P = &g1->patch[k].rect;
+            inp += x >= P->x0 && x < P->x1 && y >= P->y0 && y < P->y1 && g1->patch[k].grid == g1->patch[g1->npatch - 1].grid;
+        }
+        twice += in > 1;
+        overlap += inp > 1;
+        if (pixel_differs(a, b, px)) changed++, uncovered += !in;
+    }
+    CHECKF(changed > 0 && uncovered == 0 && twice == 0 && order == 0 && overlap == 0,
+           "%s: %ld changed, %ld uncovered, %ld in two rectangles, %ld out of order, %ld in two of the last "
+           "update's patch rectangles",
+           what, changed, uncovered, twice, order, overlap);
+    free(R);
+}
+
+/* Two roads moved in one update, at opposite corners of the map: one
+ * patch (a local build) drawing in two rectangles, one at each (not one
+ * rectangle over the map between them); the grid splats to a fresh build's bytes, every changed pixel lies in a
  * rectangle, the rectangles do not overlap and come in rows, then
  * columns. */
 static void test_two_places(void)
@@ -1435,26 +1468,90 @@ static void test_two_places(void)
          rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
     CHECKF(ok, "two places: %s", rs_ctx_message(ctx));
     if (ok) {
-        CHECKF(rs_road_grid_patch_count(g1) == 2, "two places: %zu patches (2 expected)", rs_road_grid_patch_count(g1));
-        CHECK(same_image(&b, &c));
-        size_t nr = rs_road_grid_dirty(g1, NULL, 0);
-        rs_pixel_rect *R = malloc((nr ? nr : 1) * sizeof *R);
-        CHECK(R != NULL);
-        if (R) rs_road_grid_dirty(g1, R, nr);
-        long uncovered = 0, twice = 0, order = 0, changed = 0;
-        for (size_t k = 0; R && k + 1 < nr; k++)
-            order += R[k].y0 > R[k + 1].y0 || (R[k].y0 == R[k + 1].y0 && R[k].x0 >= R[k + 1].x0);
-        for (size_t px = 0; R && px < (size_t)a.w * a.h; px++) {
-            uint32_t x = (uint32_t)(px % a.w), y = (uint32_t)(px / a.w);
-            int in = 0;
-            for (size_t k = 0; k < nr; k++) in += x >= R[k].x0 && x < R[k].x1 && y >= R[k].y0 && y < R[k].y1;
-            twice += in > 1;
-            if (pixel_differs(&a, &b, px)) changed++, uncovered += !in;
+        /* (one local build draws in every rectangle; none spans the map
+         * between the corners) */
+        int small = g1->npatch >= 2;
+        for (size_t k = 0; k < g1->npatch; k++)
+            small &= g1->patch[k].grid == g1->patch[0].grid &&
+                     8 * (uint64_t)(g1->patch[k].rect.x1 - g1->patch[k].rect.x0) * (g1->patch[k].rect.y1 - g1->patch[k].rect.y0) <
+                         (uint64_t)a.w * a.h;
+        CHECKF(rs_road_grid_patch_count(g1) == 1 && small,
+               "two places: %zu patches in %zu rectangles (1 in small ones expected)", rs_road_grid_patch_count(g1),
+               g1->npatch);
+        check_rects("two places", g1, &a, &b, &c);
+    }
+    image_free(&a);
+    image_free(&b);
+    image_free(&c);
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, gf);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    sc_scene_free(&sc);
+    rs_ctx_free(ctx);
+}
+
+/* A long diagonal road moved: its changed area is the strip along it (boxes
+ * along the road, their union in disjoint rectangles), not its bounding
+ * box: the patch's rectangles cover well under the box, one local build
+ * draws in all of them, and the grid is a fresh build's bytes with every
+ * changed pixel in a dirty rectangle. */
+static void test_long_road(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    sc_scene sc;
+    memset(&sc, 0, sizeof sc);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    int ok = ss_city_of(ctx, 241, 201, 800, 31, 1, &sc, &dem, &roads) == 0;
+    CHECK(ok);
+    rs_splat_options o = edit_opts(4);
+    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
+    image a, b, c;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    memset(&c, 0, sizeof c);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
+    /* the road whose box is widest both ways */
+    size_t pick = 0;
+    double best = -1, box[4] = { 0, 0, 0, 0 };
+    for (size_t i = 0; ok && i < rs_roads_count(roads); i++) {
+        const double *xy;
+        size_t np;
+        rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+        double b4[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        for (size_t k = 0; k < np; k++) {
+            b4[0] = fmin(b4[0], xy[2 * k]), b4[1] = fmin(b4[1], xy[2 * k + 1]);
+            b4[2] = fmax(b4[2], xy[2 * k]), b4[3] = fmax(b4[3], xy[2 * k + 1]);
         }
-        CHECKF(changed > 0 && uncovered == 0 && twice == 0 && order == 0,
-               "two places: %ld changed, %ld uncovered, %ld in two rectangles, %ld out of order", changed, uncovered,
-               twice, order);
-        free(R);
+        double m = fmin(b4[2] - b4[0], b4[3] - b4[1]);
+        if (m > best) best = m, pick = i, memcpy(box, b4, sizeof box);
+    }
+    ok = ok && move_road(ctx, roads, pick, 2.0, 1.5) == 0;
+    ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
+         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
+    CHECKF(ok, "long road: %s", rs_ctx_message(ctx));
+    if (ok) {
+        /* (the rectangles against their bounding box: one rectangle over
+         * the changed boxes took that) */
+        double area = 0;
+        rs_pixel_rect hull = g1->patch[0].rect;
+        for (size_t k = 0; k < g1->npatch; k++) {
+            const rs_pixel_rect *P = &g1->patch[k].rect;
+            area += (double)(P->x1 - P->x0) * (P->y1 - P->y0);
+            hull.x0 = P->x0 < hull.x0 ? P->x0 : hull.x0, hull.y0 = P->y0 < hull.y0 ? P->y0 : hull.y0;
+            hull.x1 = P->x1 > hull.x1 ? P->x1 : hull.x1, hull.y1 = P->y1 > hull.y1 ? P->y1 : hull.y1;
+        }
+        double hull_px = (double)(hull.x1 - hull.x0) * (hull.y1 - hull.y0);
+        CHECKF(rs_road_grid_patch_count(g1) == 1 && g1->npatch > 1 && area < 0.75 * hull_px,
+               "long road (%.0f x %.0f m): %zu patches in %zu rectangles of %.0f px, their bounding box %.0f",
+               box[2] - box[0], box[3] - box[1], rs_road_grid_patch_count(g1), g1->npatch, area, hull_px);
+        if (getenv("EDITS_DEBUG"))
+            fprintf(stderr, "  long road %zu (%.0f x %.0f m): %zu rectangles, %.0f px, bounding box %.0f px\n", pick,
+                    box[2] - box[0], box[3] - box[1], g1->npatch, area, hull_px);
+        check_rects("long road", g1, &a, &b, &c);
     }
     image_free(&a);
     image_free(&b);
@@ -1485,5 +1582,6 @@ int main(void)
     test_roads_copy();
     test_long_chain();
     test_two_places();
+    test_long_road();
     return th_finish("test_edits");
 }

@@ -1522,7 +1522,17 @@ rs_result rs_road_grid_update(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     return RS_OK;
 }
 
-size_t rs_road_grid_patch_count(const rs_road_grid *grid) { return grid ? grid->npatch : 0; }
+size_t rs_road_grid_patch_count(const rs_road_grid *grid)
+{
+    /* (the local grids: one update's rectangles share one) */
+    size_t n = 0;
+    for (size_t k = 0; grid && k < grid->npatch; k++) {
+        size_t i = 0;
+        while (i < k && grid->patch[i].grid != grid->patch[k].grid) i++;
+        n += i == k;
+    }
+    return n;
+}
 
 size_t rs_road_grid_dirty(const rs_road_grid *grid, rs_pixel_rect *rects, size_t cap)
 {

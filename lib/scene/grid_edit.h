@@ -112,6 +112,15 @@ typedef struct rs__road_sum {
  * attributes, markings; never its index), its resolved style's
  * fingerprint and sum, and its box in world metres (x0, y0, x1, y1); the
  * network of the whole set, and the whole map's facts. */
+/* Boxes along each road (lib/scene/grid_patch.c path_boxes, not grown):
+ * road i's are v[4 start[i]] .. v[4 start[i + 1]], none when its box is
+ * at most the chunk's width across (its box is then its one). */
+typedef struct rs__road_chunks {
+    uint32_t *start; /* n + 1 */
+    double *v;
+    size_t bytes;
+} rs__road_chunks;
+
 typedef struct rs__grid_track {
     long refs;        /* grids holding it (a rebased grid shares its chain's: rs_road_grid_rebase) */
     size_t n;
@@ -120,6 +129,7 @@ typedef struct rs__grid_track {
     rs__road_sum *sum;
     uint64_t sctx;    /* the named styles, profile and side the styles were resolved with */
     double *box;
+    rs__road_chunks chunks; /* boxes along the wider roads (an edit's changed area) */
     rs_network *net;
     rs__grid_facts facts;
     double max_width; /* the widest road's width (NaN: one is not finite) */

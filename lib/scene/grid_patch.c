@@ -60,6 +60,131 @@ static double widest(double a, double b)
     return a != a || b != b ? NAN : a > b ? a : b;
 }
 
+static void box_add(double *acc, const double *b, double grow)
+{
+    acc[0] = fmin(acc[0], b[0] - grow), acc[1] = fmin(acc[1], b[1] - grow);
+    acc[2] = fmax(acc[2], b[2] + grow), acc[3] = fmax(acc[3], b[3] + grow);
+}
+
+/* The changed area as boxes (each grown as it is added): along a road,
+ * and for edits far apart, rectangles of their own instead of one over the
+ * map between them. */
+typedef struct boxes {
+    rs_ctx *ctx;
+    double *v; /* 4 a box */
+    size_t n, cap;
+    int nomem;
+} boxes;
+
+static void boxes_add(boxes *B, const double *b, double grow)
+{
+    if (B->n == B->cap) {
+        size_t nc = B->cap ? 2 * B->cap : 16;
+        double *v = B->nomem ? NULL : rs__realloc(B->ctx, B->v, nc * 4 * sizeof *v);
+        if (!v) {
+            B->nomem = 1;
+            return;
+        }
+        B->v = v, B->cap = nc;
+    }
+    double *d = B->v + 4 * B->n++;
+    d[0] = b[0] - grow, d[1] = b[1] - grow, d[2] = b[2] + grow, d[3] = b[3] + grow;
+}
+
+/* Metres of road one changed box covers at most across: a box per run of
+ * a road's points this wide (a longer segment in pieces), so a long or
+ * winding road's change is the strip along it, not its whole bounding box
+ * (a diagonal avenue's box is most of the map). */
+#define CHUNK_M 32.0
+
+static void box_point(double *b, double x, double y)
+{
+    b[0] = fmin(b[0], x), b[1] = fmin(b[1], y), b[2] = fmax(b[2], x), b[3] = fmax(b[3], y);
+}
+
+/* Boxes of the polyline's points a..b, each at most CHUNK_M across (the
+ * last point of one is the first of the next: every piece of the line lies
+ * in a box), grown by grow, into B. A segment too long or not finite stays
+ * one box (a NaN box makes the update build whole). */
+static void path_boxes(boxes *B, const double *xy, size_t a, size_t b, double grow)
+{
+    double bx[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+    double px = xy[2 * a], py = xy[2 * a + 1];
+    int pts = 1; /* (in bx) */
+    box_point(bx, px, py);
+    for (size_t i = a; i < b; i++) {
+        const double *q = xy + 2 * i + 2;
+        double dx = q[0] - xy[2 * i], dy = q[1] - xy[2 * i + 1], ext = fmax(fabs(dx), fabs(dy));
+        size_t np = ext > CHUNK_M && ext < 1e6 * CHUNK_M ? (size_t)ceil(ext / CHUNK_M) : 1;
+        for (size_t k = 1; k <= np; k++) {
+            double x = k == np ? q[0] : xy[2 * i] + dx * ((double)k / (double)np);
+            double y = k == np ? q[1] : xy[2 * i + 1] + dy * ((double)k / (double)np);
+            if (pts > 1 && fmax(fmax(bx[2], x) - fmin(bx[0], x), fmax(bx[3], y) - fmin(bx[1], y)) > CHUNK_M) {
+                boxes_add(B, bx, grow);
+                bx[0] = bx[2] = px, bx[1] = bx[3] = py;
+                pts = 1;
+            }
+            box_point(bx, x, y);
+            pts++;
+            px = x, py = y;
+        }
+    }
+    boxes_add(B, bx, grow);
+}
+
+static void chunks_free(rs_ctx *ctx, rs__road_chunks *c)
+{
+    rs__free(ctx, c->start);
+    rs__free(ctx, c->v);
+    memset(c, 0, sizeof *c);
+}
+
+/* Road i's changed area: its boxes along it (or its box) grown by grow. */
+static void road_boxes(boxes *B, const double *box, const rs__road_chunks *c, size_t i, double grow)
+{
+    if (c->start && c->start[i + 1] > c->start[i])
+        for (uint32_t k = c->start[i]; k < c->start[i + 1]; k++) boxes_add(B, c->v + 4 * (size_t)k, grow);
+    else
+        boxes_add(B, box + 4 * i, grow);
+}
+
+/* The boxes along every road of `roads` (boxes B) wider than CHUNK_M:
+ * a new road's (m_new[j] UINT32_MAX, or no old ones) from its points, a
+ * kept one's copied from old's (its points are the same). */
+static rs_result chunks_make(rs_ctx *ctx, const rs_roads *roads, const double *B, const uint32_t *m_new,
+                             const rs__road_chunks *old, rs__road_chunks *ch)
+{
+    size_t n = rs_roads_count(roads);
+    boxes acc;
+    memset(&acc, 0, sizeof acc);
+    acc.ctx = ctx;
+    memset(ch, 0, sizeof *ch);
+    if (n >= UINT32_MAX || !(ch->start = rs__alloc_array(ctx, n + 1, sizeof *ch->start))) return RS_ERR_NOMEM;
+    ch->start[0] = 0;
+    for (size_t j = 0; j < n && !acc.nomem; j++) {
+        const double *b = B + 4 * j;
+        uint32_t i = m_new && old->start ? m_new[j] : UINT32_MAX;
+        if (i != UINT32_MAX) {
+            for (uint32_t k = old->start[i]; k < old->start[i + 1]; k++) boxes_add(&acc, old->v + 4 * (size_t)k, 0);
+        } else if (b[2] - b[0] > CHUNK_M || b[3] - b[1] > CHUNK_M) {
+            const double *xy = NULL;
+            size_t np = 0;
+            rs_roads_get(roads, j, NULL, NULL, &xy, &np);
+            if (np) path_boxes(&acc, xy, 0, np - 1, 0);
+        }
+        if (acc.n >= UINT32_MAX) acc.nomem = 1;
+        ch->start[j + 1] = (uint32_t)acc.n;
+    }
+    if (acc.nomem) {
+        rs__free(ctx, acc.v);
+        chunks_free(ctx, ch);
+        return RS_ERR_NOMEM;
+    }
+    ch->v = acc.v;
+    ch->bytes = (n + 1) * sizeof *ch->start + acc.n * 4 * sizeof *acc.v;
+    return RS_OK;
+}
+
 /* The raw prints (geometry, width, name, attributes, point attributes,
  * markings), boxes and widest road of every road, and the reach of the
  * widest marking. */
@@ -205,7 +330,7 @@ static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_r
 static size_t track_bytes(const rs__grid_track *t)
 {
     return sizeof *t + t->n * (sizeof *t->print + sizeof *t->sprint + sizeof *t->sum + 4 * sizeof *t->box) +
-           (t->tfar ? 2 * t->n * sizeof *t->tfar : 0) + (t->net ? rs__network_bytes(t->net) : 0);
+           (t->tfar ? 2 * t->n * sizeof *t->tfar : 0) + (t->net ? rs__network_bytes(t->net) : 0) + t->chunks.bytes;
 }
 
 /* far of the T ends te[0..n) into tfar (per road end, the rest left) */
@@ -221,6 +346,7 @@ void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
     rs__free(ctx, t->sprint);
     rs__free(ctx, t->sum);
     rs__free(ctx, t->box);
+    chunks_free(ctx, &t->chunks);
     rs__free(ctx, t->tfar);
     rs_network_free(ctx, t->net);
     rs__free(ctx, t);
@@ -243,6 +369,7 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
     t->sum = rs__alloc_array(ctx, t->n ? t->n : 1, sizeof *t->sum);
     rs_result r = y && t->sprint && t->sum ? RS_OK : RS_ERR_NOMEM;
     if (!r) r = raw_prints(ctx, roads, &t->print, &t->box, &t->max_width, &mark_reach);
+    if (!r) r = chunks_make(ctx, roads, t->box, NULL, NULL, &t->chunks);
     for (size_t i = 0; i < t->n && !r; i++) r = road_sum(ctx, roads, i, o, y, &t->sprint[i], &t->sum[i]);
     rs__free(ctx, y);
     if (r) {
@@ -352,37 +479,6 @@ static int same_place(const rs_network *A, const rs_network *B, uint32_t i, uint
     return 1;
 }
 
-static void box_add(double *acc, const double *b, double grow)
-{
-    acc[0] = fmin(acc[0], b[0] - grow), acc[1] = fmin(acc[1], b[1] - grow);
-    acc[2] = fmax(acc[2], b[2] + grow), acc[3] = fmax(acc[3], b[3] + grow);
-}
-
-/* The changed area as boxes (each grown as it is added): edits far apart
- * become patches of their own instead of one rectangle over the map
- * between them. */
-typedef struct boxes {
-    rs_ctx *ctx;
-    double *v; /* 4 a box */
-    size_t n, cap;
-    int nomem;
-} boxes;
-
-static void boxes_add(boxes *B, const double *b, double grow)
-{
-    if (B->n == B->cap) {
-        size_t nc = B->cap ? 2 * B->cap : 16;
-        double *v = B->nomem ? NULL : rs__realloc(B->ctx, B->v, nc * 4 * sizeof *v);
-        if (!v) {
-            B->nomem = 1;
-            return;
-        }
-        B->v = v, B->cap = nc;
-    }
-    double *d = B->v + 4 * B->n++;
-    d[0] = b[0] - grow, d[1] = b[1] - grow, d[2] = b[2] + grow, d[3] = b[3] + grow;
-}
-
 static uint64_t rect_area(rs_pixel_rect r) { return (uint64_t)(r.x1 - r.x0) * (r.y1 - r.y0); }
 
 static int rects_meet(rs_pixel_rect a, rs_pixel_rect b)
@@ -410,25 +506,93 @@ static void sort_rects(rs_pixel_rect *r, size_t n)
     if (n > 1) qsort(r, n, sizeof *r, cmp_rect);
 }
 
-/* What a local build of rectangle r costs, about: the area of its roads,
- * the rectangle grown by the context (m pixels) */
-static double rect_cost(rs_pixel_rect r, double m)
+/* Most rectangles one update draws in (its local build serves them all):
+ * the changed area's disjoint rectangles, the pairs whose union adds least
+ * merged down to this many */
+#define MAX_RECTS 8
+/* Two rectangles whose union adds at most this much are made one: each
+ * rectangle costs its own candidates pass (80 m x 80 m; a small edit's
+ * boxes then give one rectangle) */
+#define RECT_WASTE_M2 6400.0
+/* More boxes or disjoint rectangles than these (an edit all over the
+ * map): their bounding box */
+#define MAX_BOXES 4096
+#define MAX_PIECES 256
+
+static int cmp_u32(const void *pa, const void *pb)
 {
-    return ((double)(r.x1 - r.x0) + 2 * m) * ((double)(r.y1 - r.y0) + 2 * m);
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}
+
+static int cmp_x0(const void *pa, const void *pb)
+{
+    const rs_pixel_rect *a = pa, *b = pb;
+    return (a->x0 > b->x0) - (a->x0 < b->x0);
+}
+
+/* The union of R[0..n) as disjoint rectangles into *out (the caller's):
+ * between each two consecutive y edges, the x runs the rectangles cover;
+ * a run the same as one of the slab above extends that one. Their count,
+ * or SIZE_MAX out of memory or past MAX_PIECES. */
+static size_t disjoint_rects(rs_ctx *ctx, const rs_pixel_rect *R, size_t n, rs_pixel_rect **out)
+{
+    uint32_t *ys = rs__alloc_array(ctx, 2 * n, sizeof *ys);
+    rs_pixel_rect *iv = rs__alloc_array(ctx, n, sizeof *iv), *D = rs__alloc_array(ctx, MAX_PIECES, sizeof *D);
+    size_t *above = rs__alloc_array(ctx, 2 * MAX_PIECES, sizeof *above), *here = above ? above + MAX_PIECES : NULL;
+    size_t nd = SIZE_MAX, na = 0;
+    if (!ys || !iv || !D || !above) goto done;
+    for (size_t i = 0; i < n; i++) ys[2 * i] = R[i].y0, ys[2 * i + 1] = R[i].y1;
+    qsort(ys, 2 * n, sizeof *ys, cmp_u32);
+    size_t ny = 0;
+    for (size_t i = 0; i < 2 * n; i++)
+        if (!ny || ys[i] != ys[ny - 1]) ys[ny++] = ys[i];
+    nd = 0;
+    for (size_t k = 0; k + 1 < ny; k++) {
+        uint32_t y0 = ys[k], y1 = ys[k + 1];
+        size_t m = 0, nh = 0;
+        for (size_t i = 0; i < n; i++)
+            if (R[i].y0 <= y0 && R[i].y1 >= y1) iv[m++] = R[i];
+        if (m > 1) qsort(iv, m, sizeof *iv, cmp_x0);
+        for (size_t i = 0; i < m;) {
+            uint32_t x0 = iv[i].x0, x1 = iv[i].x1;
+            for (i++; i < m && iv[i].x0 <= x1; i++) x1 = iv[i].x1 > x1 ? iv[i].x1 : x1;
+            size_t j = 0;
+            while (j < na && !(D[above[j]].x0 == x0 && D[above[j]].x1 == x1)) j++;
+            if (j < na) {
+                D[above[j]].y1 = y1;
+                here[nh++] = above[j];
+                continue;
+            }
+            if (nd == MAX_PIECES) { nd = SIZE_MAX; goto done; }
+            rs_pixel_rect e = { x0, y0, x1, y1 };
+            here[nh++] = nd;
+            D[nd++] = e;
+        }
+        memcpy(above, here, nh * sizeof *above);
+        na = nh;
+    }
+done:
+    rs__free(ctx, ys);
+    rs__free(ctx, iv);
+    rs__free(ctx, above);
+    if (nd == SIZE_MAX) rs__free(ctx, D);
+    else *out = D;
+    return nd;
 }
 
 /* The patch rectangles of the changed boxes: each box's pixels in whole
- * DEM cells (pieces never straddle a patch's rows) within the W x H image;
- * two that overlap, or whose local builds would cost more apart than
- * together (m: the context in pixels), made one; an older patch of `old`
- * that one overlaps taken into it (gone[k] = 1) while that takes no more
- * pixels than the two and at most doubles it (a road dragged, or edits
- * near each other, keep one patch instead of a patch each: the whole build
- * at max_patches comes later). *out the caller's; -1 when a box is not a
- * number, -2 out of memory. */
+ * DEM cells (pieces never straddle a patch's rows) within the W x H image,
+ * their union as disjoint rectangles (a long or winding road's strip, not
+ * its bounding box), the pair whose union adds least merged while there
+ * are more than MAX_RECTS, and an older patch of `old` that one overlaps
+ * taken into it (gone[k] = 1) while that takes no more pixels than the two
+ * and at most doubles it (a road dragged, or edits near each other, keep
+ * one patch instead of a patch each: the whole build at max_patches comes
+ * later). The rectangles end disjoint and in row order. *out the
+ * caller's; -1 when a box is not a number, -2 out of memory. */
 static int change_rects(rs_ctx *ctx, const boxes *B, const rs_dem *dem, double pix, uint32_t W, uint32_t H,
-                        uint32_t Tx, double m, const rs_road_grid *old, uint8_t *gone, rs_pixel_rect **out,
-                        size_t *nout)
+                        uint32_t Tx, const rs_road_grid *old, uint8_t *gone, rs_pixel_rect **out, size_t *nout)
 {
     *out = NULL;
     *nout = 0;
@@ -451,16 +615,43 @@ static int change_rects(rs_ctx *ctx, const boxes *B, const rs_dem *dem, double p
         r.x1 = r.x1 < W ? r.x1 : W, r.y1 = r.y1 < H ? r.y1 : H;
         R[n++] = r;
     }
+    const double wf = RECT_WASTE_M2 / (pix * pix);
+    const uint64_t rect_waste = wf < 1e15 ? (uint64_t)wf : (uint64_t)1e15;
+    rs_pixel_rect *D = NULL;
+    size_t nd = n > 1 && n <= MAX_BOXES ? disjoint_rects(ctx, R, n, &D) : SIZE_MAX;
+    if (nd != SIZE_MAX) {
+        rs__free(ctx, R);
+        R = D;
+        n = nd;
+    } else if (n > 1) { /* (one box, or too many: their bounding box) */
+        for (size_t k = 1; k < n; k++) R[0] = rect_union(R[0], R[k]);
+        n = 1;
+    }
     for (int again = 1; again;) {
         again = 0;
-        for (size_t i = 0; i < n; i++)
-            for (size_t j = i + 1; j < n; j++) {
-                rs_pixel_rect u = rect_union(R[i], R[j]);
-                if (!rects_meet(R[i], R[j]) && rect_cost(u, m) > rect_cost(R[i], m) + rect_cost(R[j], m)) continue;
-                R[i] = u;
-                R[j--] = R[--n];
+        for (size_t i = 0; i < n; i++) /* (a union below may meet a third) */
+            for (size_t j = i + 1; j < n; j++)
+                if (rects_meet(R[i], R[j])) {
+                    R[i] = rect_union(R[i], R[j]);
+                    R[j] = R[--n];
+                    j = i; /* (R[i] grew: from its next again) */
+                    again = 1;
+                }
+        if (n > 1) {
+            size_t bi = 0, bj = 1;
+            uint64_t best = UINT64_MAX;
+            for (size_t i = 0; i < n; i++)
+                for (size_t j = i + 1; j < n; j++) {
+                    uint64_t add = rect_area(rect_union(R[i], R[j])) - rect_area(R[i]) - rect_area(R[j]);
+                    if (add < best) best = add, bi = i, bj = j;
+                }
+            if (n > MAX_RECTS || best <= rect_waste) {
+                R[bi] = rect_union(R[bi], R[bj]);
+                R[bj] = R[--n];
                 again = 1;
+                continue;
             }
+        }
         for (size_t i = 0; i < n; i++)
             for (size_t k = 0; k < old->npatch; k++) {
                 rs_pixel_rect q = old->patch[k].rect, u = rect_union(R[i], q);
@@ -512,12 +703,8 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
             if (!np) continue;
             size_t a = L->segment > 0 ? L->segment - 1 : 0, b = L->segment + 2 < np ? L->segment + 2 : np - 1;
             if (L->kind == RS_LEG_END) a = np >= 2 ? np - 2 : 0, b = np - 1;
-            double bx[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
-            for (size_t i = a; i <= b && i < np; i++) {
-                bx[0] = fmin(bx[0], xy[2 * i]), bx[1] = fmin(bx[1], xy[2 * i + 1]);
-                bx[2] = fmax(bx[2], xy[2 * i]), bx[3] = fmax(bx[3], xy[2 * i + 1]);
-            }
-            boxes_add(acc, bx, grow);
+            if (a > b) a = b;
+            path_boxes(acc, xy, a, b, grow);
         }
     }
 }
@@ -564,19 +751,27 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
         }
         const double *E = xy + 2 * (t->end ? np - 1 : 0);
         double line = t->nx * E[0] + t->ny * E[1] + far - margin;
-        double bx[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        size_t lo = SIZE_MAX, hi = 0; /* (the segments clipped: points lo..hi) */
         for (size_t step = 1;; step++) {
             if (t->end ? ke < step : ke + step + 1 >= np) break;
             size_t i = t->end ? ke - step : ke + step;
             const double *a = xy + 2 * i, *b = a + 2;
             if (!(fmax(t->nx * a[0] + t->ny * a[1], t->nx * b[0] + t->ny * b[1]) > line)) break;
-            bx[0] = fmin(bx[0], fmin(a[0], b[0])), bx[1] = fmin(bx[1], fmin(a[1], b[1]));
-            bx[2] = fmax(bx[2], fmax(a[0], b[0])), bx[3] = fmax(bx[3], fmax(a[1], b[1]));
+            lo = i < lo ? i : lo, hi = i + 1 > hi ? i + 1 : hi;
         }
-        if (bx[0] <= bx[2]) boxes_add(acc, bx, grow);
+        if (lo < hi) path_boxes(acc, xy, lo, hi, grow);
     }
     rs__free(ctx, te);
     return r;
+}
+
+/* Whether local grid q draws in one of g's patches already (one update's
+ * rectangles share one: its memory is counted once). */
+static int grid_held(const rs_road_grid *g, const rs_road_grid *q)
+{
+    for (size_t k = 0; k < g->npatch; k++)
+        if (g->patch[k].grid == q) return 1;
+    return 0;
 }
 
 /* Patch q of another grid, shared (its grid held), appended to g's
@@ -591,8 +786,8 @@ static int patch_take(rs_ctx *ctx, rs_road_grid *g, const rs__grid_patch *q, con
     d->rect = q->rect;
     d->grid = q->grid;
     rs__grid_hold(d->grid);
+    g->stats.bytes += (grid_held(g, d->grid) ? 0 : d->grid->stats.bytes) + q->n * sizeof *d->ids;
     g->npatch++;
-    g->stats.bytes += d->grid->stats.bytes + q->n * sizeof *d->ids;
     return 0;
 }
 
@@ -647,10 +842,13 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     rs__grid_patch *fresh = NULL; /* the new patches (nrect), theirs until the grid takes them */
     uint8_t *gone = NULL; /* old patches inside a new one */
     rs__grid_track *nt = NULL;
+    rs__road_chunks ch; /* the new roads' boxes along them */
+    memset(&ch, 0, sizeof ch);
     rs_result r = m_old && m_new ? RS_OK : RS_ERR_NOMEM;
     double mark_reach = 0;
     if (!r) r = raw_prints(ctx, roads, &pn, &bn, &max_width, &mark_reach);
     if (!r) r = match_roads(ctx, T->print, no, pn, nn, m_old, m_new);
+    if (!r) r = chunks_make(ctx, roads, bn, m_new, &T->chunks, &ch);
     /* the roads' styles: an unchanged road's kept while the named styles,
      * profile and side are the same; else resolved again, and a road whose
      * style changed no match */
@@ -724,9 +922,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 (!net) != (!T->net);
     }
     for (size_t i = 0; i < no; i++)
-        if (co[i]) boxes_add(&chg, T->box + 4 * i, grow);
+        if (co[i]) road_boxes(&chg, T->box, &T->chunks, i, grow);
     for (size_t j = 0; j < nn; j++)
-        if (cn[j]) boxes_add(&chg, bn + 4 * j, grow);
+        if (cn[j]) road_boxes(&chg, bn, &ch, j, grow);
     /* the segments of the roads meeting a changed one, in the new network
      * and the old (old roads by their new index: the unmatched are changed) */
     /* (the nodes of both networks where a changed road has a leg) */
@@ -776,7 +974,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     {
         rs_pixel_rect *rv = NULL;
         size_t nr = 0;
-        int cr = r ? 0 : change_rects(ctx, &chg, dem, pix, W, H, Tx, ctx_d / pix, old, gone, &rv, &nr);
+        int cr = r ? 0 : change_rects(ctx, &chg, dem, pix, W, H, Tx, old, gone, &rv, &nr);
         rs__free(ctx, chg.v);
         if (cr == -2) r = RS_ERR_NOMEM;
         uint64_t area = 0;
@@ -788,18 +986,24 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         rs__free(ctx, rv);
         if (whole) goto done;
     }
-    for (size_t pk = 0; pk < nrect; pk++) {
-        const rs_pixel_rect rect = fresh[pk].rect;
-        /* the roads that can reach a pixel of the rectangle */
-        double bx[4] = { dem->frame.origin_x + rect.x0 * pix, dem->frame.origin_y + rect.y0 * pix,
-                         dem->frame.origin_x + rect.x1 * pix, dem->frame.origin_y + rect.y1 * pix };
+    /* one local build serves every rectangle: the roads that can reach a
+     * pixel of one, indexed over their bounding box */
+    if (nrect) {
+        rs_pixel_rect hull = fresh[0].rect;
+        for (size_t pk = 1; pk < nrect; pk++) hull = rect_union(hull, fresh[pk].rect);
         size_t m = 0;
         uint32_t *ids = rs__alloc_array(ctx, nn ? nn : 1, sizeof *ids);
         if (!ids) { r = RS_ERR_NOMEM; goto done; }
-        fresh[pk].ids = ids;
+        fresh[0].ids = ids;
         uint8_t *in = rs__calloc(ctx, nn ? nn : 1, 1);
         if (!in) { r = RS_ERR_NOMEM; goto done; }
-        for (size_t j = 0; j < nn; j++) in[j] = (uint8_t)road_near(roads, j, bn + 4 * j, bx, ctx_d);
+        for (size_t pk = 0; pk < nrect; pk++) {
+            const rs_pixel_rect rect = fresh[pk].rect;
+            double bx[4] = { dem->frame.origin_x + rect.x0 * pix, dem->frame.origin_y + rect.y0 * pix,
+                             dem->frame.origin_x + rect.x1 * pix, dem->frame.origin_y + rect.y1 * pix };
+            for (size_t j = 0; j < nn; j++)
+                if (!in[j]) in[j] = (uint8_t)road_near(roads, j, bn + 4 * j, bx, ctx_d);
+        }
         /* a stroke drawn both ways may be drawn record by record, which
          * its records decide together: such a stroke is taken whole */
         for (size_t k = 0; net && k < net->nstrokes; k++) {
@@ -825,17 +1029,24 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         lo.progress_user = NULL;
         /* (its fields list only what its pixels and queries can read) */
         facts.window_on = 1;
-        facts.window[0] = rect.x0 * pix, facts.window[1] = rect.y0 * pix;
-        facts.window[2] = rect.x1 * pix, facts.window[3] = rect.y1 * pix;
+        facts.window[0] = hull.x0 * pix, facts.window[1] = hull.y0 * pix;
+        facts.window[2] = hull.x1 * pix, facts.window[3] = hull.y1 * pix;
         facts.window_reach = PATCH_QUERY_REACH;
-        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &fresh[pk].grid);
+        r = rs__road_grid_build_subset(ctx, dem, roads, &lo, net, &facts, ids, m, &fresh[0].grid);
         facts.window_on = 0; /* (the track keeps the whole map's facts) */
         if (r != RS_OK) goto done;
         if (lo.markings.atlas && !o->markings.atlas) { /* (the base's atlas: held while the patch lives) */
-            fresh[pk].grid->atlas_hold = (rs_road_grid *)base;
-            rs__grid_hold(fresh[pk].grid->atlas_hold);
+            fresh[0].grid->atlas_hold = (rs_road_grid *)base;
+            rs__grid_hold(fresh[0].grid->atlas_hold);
         }
-        fresh[pk].n = m;
+        fresh[0].n = m;
+        for (size_t pk = 1; pk < nrect; pk++) { /* (each rectangle a patch of its own on the one grid) */
+            if (!(fresh[pk].ids = rs__alloc_array(ctx, m ? m : 1, sizeof *ids))) { r = RS_ERR_NOMEM; goto done; }
+            memcpy(fresh[pk].ids, ids, m * sizeof *ids);
+            fresh[pk].n = m;
+            fresh[pk].grid = fresh[0].grid;
+            rs__grid_hold(fresh[pk].grid);
+        }
     }
     /* the grid: the base's structures, the old patches (their roads
      * renumbered) but those taken into a new one, the new ones over them */
@@ -863,10 +1074,11 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             goto done;
         }
     for (size_t pk = 0; pk < nrect; pk++) {
-        rs__grid_patch *d = &P[g->npatch++];
+        rs__grid_patch *d = &P[g->npatch];
         *d = fresh[pk];
         memset(&fresh[pk], 0, sizeof fresh[pk]);
-        g->stats.bytes += d->grid->stats.bytes + d->n * sizeof *d->ids;
+        g->stats.bytes += (grid_held(g, d->grid) ? 0 : d->grid->stats.bytes) + d->n * sizeof *d->ids;
+        g->npatch++;
     }
     /* for the next update */
     nt->refs = 1;
@@ -877,6 +1089,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     nt->sctx = sctx;
     sp = NULL, sm = NULL;
     nt->box = bn;
+    nt->chunks = ch;
+    memset(&ch, 0, sizeof ch);
     nt->net = net;
     nt->facts = facts;
     nt->max_width = max_width;
@@ -912,7 +1126,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     }
     if (nrect > 1) sort_rects(dirty, ndirty);
     if (nrect && (r = rs__dirty_render(ctx, dem, o, old, g, &dirty, &ndirty)) != RS_OK) goto done;
-    if (g->npatch > ctx->limits.max_patches) {
+    if (rs_road_grid_patch_count(g) > ctx->limits.max_patches) {
         /* too many patches: the whole grid, with this edit's exact
          * rectangles (the patched grid drew the same pixels) */
         rs_road_grid *w = NULL;
@@ -942,6 +1156,7 @@ done:
     rs__free(ctx, sm);
     rs__free(ctx, ys);
     rs__free(ctx, bn);
+    chunks_free(ctx, &ch);
     rs__free(ctx, tf);
     for (size_t k = 0; k < nrect; k++) {
         rs_road_grid_free(ctx, fresh[k].grid);

@@ -187,9 +187,14 @@ static rs_result splatter_make(rs_ctx *ctx, const rs_dem *dem, const rs_roads *r
             v->grid = s->grid->patch[k].grid;
             s->view_rect[k] = s->grid->patch[k].rect;
             s->nview = k + 1;
-            if (v->grid->field && s->texel_m > rs__roadfield_pixel(v->grid->field))
-                r = rs__roadfield_repixel(ctx, v->grid->field, s->texel_m, &v->field_own);
-            v->field = v->field_own ? v->field_own : v->grid->field;
+            uint32_t same = 0; /* (one update's rectangles share a grid: its field once) */
+            while (same < k && s->view[same].grid != v->grid) same++;
+            if (same < k) v->field = s->view[same].field;
+            else {
+                if (v->grid->field && s->texel_m > rs__roadfield_pixel(v->grid->field))
+                    r = rs__roadfield_repixel(ctx, v->grid->field, s->texel_m, &v->field_own);
+                v->field = v->field_own ? v->field_own : v->grid->field;
+            }
         }
     }
     if (r == RS_ERR_NOMEM) r = rs__fail(ctx, r, "out of memory for the terrain colours");

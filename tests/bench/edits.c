@@ -28,6 +28,7 @@
 #define LONG 72     /* edits of the long chain */
 #define FLAT_AT 24  /* patches at which a worker starts a whole build */
 #define FLAT_JOIN 4 /* edits later the chain is rebased onto it */
+#define SPREAD_STEP 50 /* every 50th road moved alone: the spread over roads */
 
 enum { MOVE, ADD, REMOVE, RECLASS, KINDS };
 static const char *const kind_name[KINDS] = { "move 15 m", "add", "remove", "reclass" };
@@ -268,7 +269,7 @@ int main(int argc, char **argv)
             dmismatch += memcmp(x.rgba + 4 * px, y.rgba + 4 * px, 4) != 0 || x.wt[px] != y.wt[px];
         ss_image_free(&x);
         ss_image_free(&y);
-        if (d1 && d1->npatch > dmost) dmost = d1->npatch;
+        if (d1 && rs_road_grid_patch_count(d1) > dmost) dmost = rs_road_grid_patch_count(d1);
         rs_road_grid_free(ctx, df);
         rs_road_grid_free(ctx, d0);
         d0 = d1;
@@ -385,6 +386,57 @@ int main(int argc, char **argv)
         rs_ctx_free(lc);
     }
     mismatch += lmismatch;
+    /* the spread over roads: every SPREAD_STEP-th road moved 15 m alone
+     * from a whole grid of the last roads (and put back), the faster of
+     * two updates against the median full build above; long roads and
+     * records of long strokes make the tail */
+    size_t nspread = 0, swhole = 0, sover = 0;
+    double *spread = NULL, ssum = 0;
+    {
+        rs_road_grid *gs = NULL;
+        size_t n = rs_roads_count(roads);
+        spread = malloc((n / SPREAD_STEP + 1) * sizeof *spread);
+        if (!bad) bad = !spread || rs_road_grid_build(ctx, dem, roads, &o, &gs) != RS_OK;
+        double fs[KINDS * PER_KIND * RUNS];
+        for (int k = 0; k < KINDS; k++)
+            for (int i = 0; i < PER_KIND * RUNS; i++) fs[k * PER_KIND * RUNS + i] = full[k][i];
+        double fmed = bad ? 1 : tm_median(fs, KINDS * PER_KIND * RUNS);
+        for (size_t i = 0; !bad && i < n; i += SPREAD_STEP) {
+            const double *p;
+            size_t np;
+            double w;
+            rs_roads_get(roads, i, NULL, &w, &p, &np);
+            double *keep = malloc(2 * np * sizeof *keep), *q = malloc(2 * np * sizeof *q);
+            if (!keep || !q) {
+                free(keep);
+                free(q);
+                bad = 1;
+                break;
+            }
+            memcpy(keep, p, 2 * np * sizeof *keep);
+            for (size_t k = 0; k < np; k++) q[2 * k] = keep[2 * k] + 15 * 0.6, q[2 * k + 1] = keep[2 * k + 1] + 15 * 0.8;
+            bad = rs_roads_replace(ctx, roads, i, NULL, w, q, np) != RS_OK;
+            double fastest = INFINITY;
+            for (int k = 0; !bad && k < 2; k++) {
+                rs_road_grid *u = NULL;
+                double t0 = tm_thread_cpu_ms();
+                bad = rs_road_grid_update(ctx, dem, roads, &o, gs, &u) != RS_OK;
+                double t = tm_thread_cpu_ms() - t0;
+                fastest = t < fastest ? t : fastest;
+                if (!bad && k == 0 && rs_road_grid_patch_count(u) == 0) swhole++;
+                rs_road_grid_free(ctx, u);
+            }
+            bad = bad || rs_roads_replace(ctx, roads, i, NULL, w, keep, np) != RS_OK;
+            free(keep);
+            free(q);
+            if (bad) break;
+            spread[nspread] = fastest / fmed;
+            ssum += spread[nspread];
+            sover += spread[nspread] > 0.05;
+            nspread++;
+        }
+        rs_road_grid_free(ctx, gs);
+    }
     if (bad) fprintf(stderr, "edits: %s\n", rs_ctx_message(ctx));
     FILE *md = NULL, *csv = NULL;
     if (!bad && !(bad = tm_open_section(argv[1], "edits", &md, &csv))) {
@@ -406,7 +458,7 @@ int main(int argc, char **argv)
                     "| edit | update ms | full build ms | update / build | candidates only ms | dirty px | changed px | dirty / changed | candidate px | candidates / changed | rectangles |\n"
                     "|---|---|---|---|---|---|---|---|---|---|---|\n",
                 rs_roads_count(roads), PER_KIND, RUNS, uncovered, mismatch, wpieces, wpiece_mb, wst.bytes / 1e6, piece_med,
-                g0->npatch, st.bytes / 1e6);
+                rs_road_grid_patch_count(g0), st.bytes / 1e6);
         fprintf(csv, "edit,update_ms,build_ms,dirty_px,changed_px,rects\n");
         double worst_area = 0, worst_cost = 0;
         for (int k = 0; k < KINDS; k++) {
@@ -477,6 +529,24 @@ int main(int argc, char **argv)
                 lmax / fm, lsum / LONG / fm, (lsum + lwork) / LONG / fm);
         printf("edits: long chain caller per edit median %.3f, slowest %.3f, mean %.3f; with the worker %.3f (%d rebases)\n",
                lmed / fm, lmax / fm, lsum / LONG / fm, (lsum + lwork) / LONG / fm, nflat);
+        double sm = 0, s90 = 0, s99 = 0, smax = 0;
+        if (nspread) {
+            qsort(spread, nspread, sizeof *spread, cmp_double);
+            sm = spread[nspread / 2], s90 = spread[nspread * 9 / 10], s99 = spread[nspread * 99 / 100];
+            smax = spread[nspread - 1];
+        }
+        fprintf(md, "The spread over roads: every %dth road (%zu) moved 15 m alone from a whole grid of the last\n"
+                    "roads and put back, the faster of two updates against the median full build above; %zu of\n"
+                    "them built whole (the changed area passed a quarter of the image). Long roads and records of\n"
+                    "long strokes (a stroke split or joined moves the dashes of all its records) make the tail.\n\n"
+                    "| one road moved | median | 90th percentile | 99th percentile | slowest | mean | over 5 %% |\n"
+                    "|---|---|---|---|---|---|---|\n"
+                    "| %zu roads | %.3f | %.3f | %.3f | %.3f | %.3f | %zu (%.1f %%) |\n\n",
+                SPREAD_STEP, nspread, swhole, nspread, sm, s90, s99, smax, nspread ? ssum / nspread : 0, sover,
+                nspread ? 100.0 * sover / nspread : 0);
+        printf("edits: spread of %zu one-road moves: median %.3f, p90 %.3f, p99 %.3f, slowest %.3f, %zu over 5 %%, %zu "
+               "whole\n",
+               nspread, sm, s90, s99, smax, sover, swhole);
         char met_kinds[128] = "";
         for (int k = 0; k < KINDS; k++) {
             double u = tm_median(upd[k], PER_KIND * RUNS), f = tm_median(full[k], PER_KIND * RUNS);
@@ -485,16 +555,18 @@ int main(int argc, char **argv)
                          met_kinds[0] ? ", " : "", kind_name[k]);
         }
         char verdict[192];
-        if (worst_cost <= 0.05 && sum / fsum <= 0.05) snprintf(verdict, sizeof verdict, "met");
+        if (worst_cost <= 0.05 && sum / fsum <= 0.05 && !sover) snprintf(verdict, sizeof verdict, "met");
         else snprintf(verdict, sizeof verdict, "**missed**%s%s%s", met_kinds[0] ? " (met by the medians of: " : "",
                       met_kinds, met_kinds[0] ? ")" : "");
         fprintf(md, "| target (issue 30, 3) | measured | |\n|---|---|---|\n"
                     "| an edit of one road costs <= 5 %% of a full rebuild | update / build up to %.3f (medians per "
                     "kind); %.3f mean of all, the whole build every 17th included; with it on a worker (long "
-                    "chain) the caller's thread %.3f mean, %.3f slowest, %.3f with the worker's builds | %s |\n"
+                    "chain) the caller's thread %.3f mean, %.3f slowest, %.3f with the worker's builds; one "
+                    "road moved: %.1f %% of %zu roads over 5 %%, the slowest %.3f | %s |\n"
                     "| the dirty rectangles cover every changed pixel and <= 2x the changed area | %ld uncovered; "
                     "dirty / changed up to %.2f; updated grids = fresh builds but for %ld pixels | %s |\n",
-                worst_cost, sum / fsum, lsum / LONG / fm, lmax / fm, (lsum + lwork) / LONG / fm, verdict, uncovered,
+                worst_cost, sum / fsum, lsum / LONG / fm, lmax / fm, (lsum + lwork) / LONG / fm,
+                nspread ? 100.0 * sover / nspread : 0, nspread, smax, verdict, uncovered,
                 worst_area, mismatch,
                 !uncovered && !mismatch && worst_area <= 2 ? "met" : "**missed**");
         printf("edits: %ld changed pixels outside the rectangles, %ld where an updated grid differs from a fresh "
@@ -504,6 +576,7 @@ int main(int argc, char **argv)
         bad |= fclose(csv) != 0;
     }
     free(mask);
+    free(spread);
     ss_image_free(&a);
     ss_image_free(&b);
     rs_road_grid_free(ctx, g0);
