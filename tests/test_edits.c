@@ -1565,6 +1565,55 @@ static void test_long_road(void)
     rs_ctx_free(ctx);
 }
 
+/* A road given a second time (the same points, width and attributes):
+ * its pieces have the same fingerprints, but its lines are painted twice,
+ * so their partly covered pixels change; the dirty rectangles hold them
+ * (a patch's candidates compared which pieces each grid has, not how many
+ * times: fuzz/edits, 5 December 2026). */
+static void test_duplicate_road(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    static float z[64 * 48];
+    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    int ok = rs_dem_create(ctx, 64, 48, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK &&
+             rs_roads_create(ctx, &roads) == RS_OK;
+    /* (the fuzz input's roads: a service road, a secondary road given
+     * twice, a 1 m road without a class) */
+    const double A[6] = { 28.5, 21, 22.5, 21, 11.5, 30 }, B[6] = { 17.5, 9, 14.5, 9, -2.5, 3 }, C[4] = { -2.5, 0, 68.5, 9 };
+    ok = ok && rs_roads_add(ctx, roads, NULL, 4, A, 3) == RS_OK && rs_roads_set_attr(ctx, roads, 0, "class", "service") == RS_OK &&
+         rs_roads_add(ctx, roads, NULL, 8, B, 3) == RS_OK && rs_roads_set_attr(ctx, roads, 1, "class", "secondary") == RS_OK &&
+         rs_roads_add(ctx, roads, NULL, 1, C, 2) == RS_OK && rs_roads_add(ctx, roads, NULL, 8, B, 3) == RS_OK &&
+         rs_roads_set_attr(ctx, roads, 3, "class", "secondary") == RS_OK;
+    rs_splat_options o = edit_opts(2);
+    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
+    image a, b, c;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    memset(&c, 0, sizeof c);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
+    ok = ok && rs_roads_add(ctx, roads, NULL, 1, C, 2) == RS_OK; /* (road 2 again) */
+    ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
+         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
+    CHECKF(ok, "duplicate road: %s", rs_ctx_message(ctx));
+    if (ok) {
+        CHECK(rs_road_grid_patch_count(g1) == 1);
+        check_rects("duplicate road", g1, &a, &b, &c);
+    }
+    image_free(&a);
+    image_free(&b);
+    image_free(&c);
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, gf);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
 int main(void)
 {
     test_shared_free();
@@ -1583,5 +1632,6 @@ int main(void)
     test_long_chain();
     test_two_places();
     test_long_road();
+    test_duplicate_road();
     return th_finish("test_edits");
 }

@@ -1251,6 +1251,22 @@ static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h)
     return kind;
 }
 
+/* How many of the sorted keys are fingerprint h: a piece drawn twice (a
+ * road given twice: its partly covered line pixels take the paint twice)
+ * draws otherwise than once. */
+static size_t count_of(const keyed *k, size_t n, uint64_t h)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (k[mid].h < h) lo = mid + 1;
+        else hi = mid;
+    }
+    size_t c = 0;
+    while (lo + c < n && k[lo + c].h == h) c++;
+    return c;
+}
+
 static int cmp_u32(const void *pa, const void *pb)
 {
     uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
@@ -1388,8 +1404,10 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         for (size_t k = 0; k < ns; k++) {
             if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
             int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h);
-            if (kind >= 0) any = 1;
-            else if (!hidden(q, pad_l, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) known = 0;
+            if (kind >= 0) {
+                any = 1;
+                if (count_of(ks[k], nk[k], q->h) != count_of(kl, el->n, q->h)) known = 0; /* (drawn more or fewer times) */
+            } else if (!hidden(q, pad_l, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) known = 0;
             core &= kind == RS__EI_CORE || kind < 0;
         }
         known &= any;
@@ -1404,7 +1422,8 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         double pad = grid_pad(src[k]);
         for (size_t ii = 0; ok && ii < nk[k]; ii++) {
             const rs__edit_item *q = &e->it[near[k][ii]];
-            if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) || !item_changed(kl, el->n, q->h))
+            if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) ||
+                count_of(kl, el->n, q->h) == count_of(ks[k], nk[k], q->h))
                 continue;
             if (hidden(q, pad, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) continue;
             ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
