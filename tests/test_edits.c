@@ -1394,6 +1394,60 @@ static void test_long_chain(void)
     rs_ctx_free(ctx);
 }
 
+/* One update checked against a fresh build: the roads (a city, or the
+ * test's own), the grid before and its image (a), the updated grid and its
+ * image (b), a fresh build and its image (c). */
+typedef struct one_edit {
+    rs_ctx *ctx;
+    sc_scene sc;
+    rs_dem *dem;
+    rs_roads *roads;
+    rs_splat_options o;
+    rs_road_grid *g0, *g1, *gf;
+    image a, b, c;
+    int ok;
+} one_edit;
+
+/* E's context and, with n roads, the 241 x 201 city of n roads (seed). */
+static void edit_begin(one_edit *E, size_t n, uint64_t seed)
+{
+    memset(E, 0, sizeof *E);
+    E->ok = rs_ctx_create(NULL, NULL, &E->ctx) == RS_OK;
+    if (n) E->ok = E->ok && ss_city_of(E->ctx, 241, 201, n, seed, 1, &E->sc, &E->dem, &E->roads) == 0;
+}
+
+/* The whole grid of E's roads and its image (a). */
+static void edit_base(one_edit *E, uint32_t texels)
+{
+    E->o = edit_opts(texels);
+    E->ok = E->ok && rs_road_grid_build(E->ctx, E->dem, E->roads, &E->o, &E->g0) == RS_OK &&
+            render(E->ctx, E->dem, E->g0, &E->o, &E->a) == 0;
+}
+
+/* The update of E's roads since the base, a fresh build, their images. */
+static void edit_update(one_edit *E, const char *what)
+{
+    E->ok = E->ok && rs_road_grid_update(E->ctx, E->dem, E->roads, &E->o, E->g0, &E->g1) == RS_OK &&
+            render(E->ctx, E->dem, E->g1, &E->o, &E->b) == 0 &&
+            rs_road_grid_build(E->ctx, E->dem, E->roads, &E->o, &E->gf) == RS_OK &&
+            render(E->ctx, E->dem, E->gf, &E->o, &E->c) == 0;
+    CHECKF(E->ok, "%s: %s", what, rs_ctx_message(E->ctx));
+}
+
+static void edit_end(one_edit *E)
+{
+    image_free(&E->a);
+    image_free(&E->b);
+    image_free(&E->c);
+    rs_road_grid_free(E->ctx, E->g0);
+    rs_road_grid_free(E->ctx, E->g1);
+    rs_road_grid_free(E->ctx, E->gf);
+    rs_roads_free(E->ctx, E->roads);
+    rs_dem_free(E->ctx, E->dem);
+    sc_scene_free(&E->sc);
+    rs_ctx_free(E->ctx);
+}
+
 /* An update's grid g1 against the images before (a), from g1 (b) and
  * from a fresh build (c): the same bytes as the fresh build, every changed
  * pixel in a dirty rectangle, none in two, in rows then columns; g1's
@@ -1434,62 +1488,40 @@ static void check_rects(const char *what, const rs_road_grid *g1, const image *a
  * columns. */
 static void test_two_places(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
-    sc_scene sc;
-    memset(&sc, 0, sizeof sc);
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
-    int ok = ss_city_of(ctx, 241, 201, 800, 31, 1, &sc, &dem, &roads) == 0;
-    CHECK(ok);
-    rs_splat_options o = edit_opts(4);
-    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
-    image a, b, c;
-    memset(&a, 0, sizeof a);
-    memset(&b, 0, sizeof b);
-    memset(&c, 0, sizeof c);
-    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
-    double W = sc_extent_x(&sc), H = sc_extent_y(&sc);
-    for (int corner = 0; ok && corner < 2; corner++) {
+    one_edit E;
+    edit_begin(&E, 800, 31);
+    edit_base(&E, 4);
+    double W = sc_extent_x(&E.sc), H = sc_extent_y(&E.sc);
+    for (int corner = 0; E.ok && corner < 2; corner++) {
         double tx = corner ? 0.85 * W : 0.15 * W, ty = corner ? 0.85 * H : 0.15 * H, best = INFINITY;
         size_t pick = 0;
-        for (size_t i = 0; i < rs_roads_count(roads); i++) {
+        for (size_t i = 0; i < rs_roads_count(E.roads); i++) {
             const double *xy;
             size_t np;
             double len = 0;
-            rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+            rs_roads_get(E.roads, i, NULL, NULL, &xy, &np);
             for (size_t k = 0; k + 1 < np; k++) len += hypot(xy[2 * k + 2] - xy[2 * k], xy[2 * k + 3] - xy[2 * k + 1]);
             double d = hypot(xy[0] - tx, xy[1] - ty);
             if (len < 60 && d < best) best = d, pick = i; /* (a short road: it stays in its corner) */
         }
-        ok = move_road(ctx, roads, pick, 2.0, 1.5) == 0;
+        E.ok = move_road(E.ctx, E.roads, pick, 2.0, 1.5) == 0;
     }
-    ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
-         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
-    CHECKF(ok, "two places: %s", rs_ctx_message(ctx));
-    if (ok) {
+    edit_update(&E, "two places");
+    if (E.ok) {
         /* (one local build draws in every rectangle; none spans the map
          * between the corners) */
+        const rs_road_grid *g1 = E.g1;
         int small = g1->npatch >= 2;
         for (size_t k = 0; k < g1->npatch; k++)
             small &= g1->patch[k].grid == g1->patch[0].grid &&
                      8 * (uint64_t)(g1->patch[k].rect.x1 - g1->patch[k].rect.x0) * (g1->patch[k].rect.y1 - g1->patch[k].rect.y0) <
-                         (uint64_t)a.w * a.h;
+                         (uint64_t)E.a.w * E.a.h;
         CHECKF(rs_road_grid_patch_count(g1) == 1 && small,
                "two places: %zu patches in %zu rectangles (1 in small ones expected)", rs_road_grid_patch_count(g1),
                g1->npatch);
-        check_rects("two places", g1, &a, &b, &c);
+        check_rects("two places", g1, &E.a, &E.b, &E.c);
     }
-    image_free(&a);
-    image_free(&b);
-    image_free(&c);
-    rs_road_grid_free(ctx, g0);
-    rs_road_grid_free(ctx, g1);
-    rs_road_grid_free(ctx, gf);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
-    sc_scene_free(&sc);
-    rs_ctx_free(ctx);
+    edit_end(&E);
 }
 
 /* A long diagonal road moved: its changed area is the strip along it (boxes
@@ -1499,28 +1531,16 @@ static void test_two_places(void)
  * changed pixel in a dirty rectangle. */
 static void test_long_road(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
-    sc_scene sc;
-    memset(&sc, 0, sizeof sc);
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
-    int ok = ss_city_of(ctx, 241, 201, 800, 31, 1, &sc, &dem, &roads) == 0;
-    CHECK(ok);
-    rs_splat_options o = edit_opts(4);
-    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
-    image a, b, c;
-    memset(&a, 0, sizeof a);
-    memset(&b, 0, sizeof b);
-    memset(&c, 0, sizeof c);
-    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
+    one_edit E;
+    edit_begin(&E, 800, 31);
+    edit_base(&E, 4);
     /* the road whose box is widest both ways */
     size_t pick = 0;
     double best = -1, box[4] = { 0, 0, 0, 0 };
-    for (size_t i = 0; ok && i < rs_roads_count(roads); i++) {
+    for (size_t i = 0; E.ok && i < rs_roads_count(E.roads); i++) {
         const double *xy;
         size_t np;
-        rs_roads_get(roads, i, NULL, NULL, &xy, &np);
+        rs_roads_get(E.roads, i, NULL, NULL, &xy, &np);
         double b4[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
         for (size_t k = 0; k < np; k++) {
             b4[0] = fmin(b4[0], xy[2 * k]), b4[1] = fmin(b4[1], xy[2 * k + 1]);
@@ -1529,13 +1549,12 @@ static void test_long_road(void)
         double m = fmin(b4[2] - b4[0], b4[3] - b4[1]);
         if (m > best) best = m, pick = i, memcpy(box, b4, sizeof box);
     }
-    ok = ok && move_road(ctx, roads, pick, 2.0, 1.5) == 0;
-    ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
-         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
-    CHECKF(ok, "long road: %s", rs_ctx_message(ctx));
-    if (ok) {
+    E.ok = E.ok && move_road(E.ctx, E.roads, pick, 2.0, 1.5) == 0;
+    edit_update(&E, "long road");
+    if (E.ok) {
         /* (the rectangles against their bounding box: one rectangle over
          * the changed boxes took that) */
+        const rs_road_grid *g1 = E.g1;
         double area = 0;
         rs_pixel_rect hull = g1->patch[0].rect;
         for (size_t k = 0; k < g1->npatch; k++) {
@@ -1548,21 +1567,9 @@ static void test_long_road(void)
         CHECKF(rs_road_grid_patch_count(g1) == 1 && g1->npatch > 1 && area < 0.75 * hull_px,
                "long road (%.0f x %.0f m): %zu patches in %zu rectangles of %.0f px, their bounding box %.0f",
                box[2] - box[0], box[3] - box[1], rs_road_grid_patch_count(g1), g1->npatch, area, hull_px);
-        if (getenv("EDITS_DEBUG"))
-            fprintf(stderr, "  long road %zu (%.0f x %.0f m): %zu rectangles, %.0f px, bounding box %.0f px\n", pick,
-                    box[2] - box[0], box[3] - box[1], g1->npatch, area, hull_px);
-        check_rects("long road", g1, &a, &b, &c);
+        check_rects("long road", g1, &E.a, &E.b, &E.c);
     }
-    image_free(&a);
-    image_free(&b);
-    image_free(&c);
-    rs_road_grid_free(ctx, g0);
-    rs_road_grid_free(ctx, g1);
-    rs_road_grid_free(ctx, gf);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
-    sc_scene_free(&sc);
-    rs_ctx_free(ctx);
+    edit_end(&E);
 }
 
 /* A road given a second time (the same points, width and attributes):
@@ -1572,46 +1579,29 @@ static void test_long_road(void)
  * times: fuzz/edits, 5 December 2026). */
 static void test_duplicate_road(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    one_edit E;
+    edit_begin(&E, 0, 0);
     static float z[64 * 48];
     for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
-    rs_dem *dem = NULL;
-    rs_roads *roads = NULL;
     rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    int ok = rs_dem_create(ctx, 64, 48, z, &dem) == RS_OK && rs_dem_set_frame(ctx, dem, &fr) == RS_OK &&
-             rs_roads_create(ctx, &roads) == RS_OK;
+    E.ok = E.ok && rs_dem_create(E.ctx, 64, 48, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
+           rs_roads_create(E.ctx, &E.roads) == RS_OK;
     /* (the fuzz input's roads: a service road, a secondary road given
      * twice, a 1 m road without a class) */
     const double A[6] = { 28.5, 21, 22.5, 21, 11.5, 30 }, B[6] = { 17.5, 9, 14.5, 9, -2.5, 3 }, C[4] = { -2.5, 0, 68.5, 9 };
-    ok = ok && rs_roads_add(ctx, roads, NULL, 4, A, 3) == RS_OK && rs_roads_set_attr(ctx, roads, 0, "class", "service") == RS_OK &&
-         rs_roads_add(ctx, roads, NULL, 8, B, 3) == RS_OK && rs_roads_set_attr(ctx, roads, 1, "class", "secondary") == RS_OK &&
-         rs_roads_add(ctx, roads, NULL, 1, C, 2) == RS_OK && rs_roads_add(ctx, roads, NULL, 8, B, 3) == RS_OK &&
-         rs_roads_set_attr(ctx, roads, 3, "class", "secondary") == RS_OK;
-    rs_splat_options o = edit_opts(2);
-    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
-    image a, b, c;
-    memset(&a, 0, sizeof a);
-    memset(&b, 0, sizeof b);
-    memset(&c, 0, sizeof c);
-    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK && render(ctx, dem, g0, &o, &a) == 0;
-    ok = ok && rs_roads_add(ctx, roads, NULL, 1, C, 2) == RS_OK; /* (road 2 again) */
-    ok = ok && rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && render(ctx, dem, g1, &o, &b) == 0 &&
-         rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK && render(ctx, dem, gf, &o, &c) == 0;
-    CHECKF(ok, "duplicate road: %s", rs_ctx_message(ctx));
-    if (ok) {
-        CHECK(rs_road_grid_patch_count(g1) == 1);
-        check_rects("duplicate road", g1, &a, &b, &c);
+    rs_roads *R = E.roads;
+    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 4, A, 3) == RS_OK && rs_roads_set_attr(E.ctx, R, 0, "class", "service") == RS_OK &&
+           rs_roads_add(E.ctx, R, NULL, 8, B, 3) == RS_OK && rs_roads_set_attr(E.ctx, R, 1, "class", "secondary") == RS_OK &&
+           rs_roads_add(E.ctx, R, NULL, 1, C, 2) == RS_OK && rs_roads_add(E.ctx, R, NULL, 8, B, 3) == RS_OK &&
+           rs_roads_set_attr(E.ctx, R, 3, "class", "secondary") == RS_OK;
+    edit_base(&E, 2);
+    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 1, C, 2) == RS_OK; /* (road 2 again) */
+    edit_update(&E, "duplicate road");
+    if (E.ok) {
+        CHECK(rs_road_grid_patch_count(E.g1) == 1);
+        check_rects("duplicate road", E.g1, &E.a, &E.b, &E.c);
     }
-    image_free(&a);
-    image_free(&b);
-    image_free(&c);
-    rs_road_grid_free(ctx, g0);
-    rs_road_grid_free(ctx, g1);
-    rs_road_grid_free(ctx, gf);
-    rs_roads_free(ctx, roads);
-    rs_dem_free(ctx, dem);
-    rs_ctx_free(ctx);
+    edit_end(&E);
 }
 
 int main(void)

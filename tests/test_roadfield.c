@@ -904,6 +904,30 @@ static double auto_cell(int n, int per, double W)
     return c;
 }
 
+/* Roads with their network and T ends (rs__tee_ends), for the T tests. */
+typedef struct tee_scene {
+    rs_roads *roads;
+    rs_network *net;
+    rs__tee_end *te;
+    size_t nte;
+} tee_scene;
+
+/* t->roads given (text NULL), or parsed from text: the network and T ends. 1 on success. */
+static int tee_scene_of(tee_scene *t, const char *text)
+{
+    if (text && rs_roads_parse(ctx, text, strlen(text), &t->roads) != RS_OK) return 0;
+    return t->roads && rs_network_build(ctx, t->roads, NULL, &t->net) == RS_OK &&
+           rs__tee_ends(ctx, t->roads, t->net, &t->te, &t->nte) == RS_OK;
+}
+
+static void tee_scene_free(tee_scene *t)
+{
+    rs__free(ctx, t->te);
+    rs_network_free(ctx, t->net);
+    rs_roads_free(ctx, t->roads);
+    memset(t, 0, sizeof *t);
+}
+
 /* A road ending on another with its end point repeated (a zero-length
  * last segment the T clips, as OSM exports have) claims no point beside
  * it: a fill lookup 7 m away finds the filled road under it at every
@@ -912,15 +936,12 @@ static double auto_cell(int n, int per, double W)
  * fuzz/edits, 3 December 2026). */
 static void test_tee_repeated_point(void)
 {
-    static const char text[] = "road a width 6\n5 5\n570 0\nend\n"
-                               "road b width 5\n-2.5 52\n9.5 2\n9.5 2\nend\n";
-    rs_roads *roads = NULL;
-    rs_network *net = NULL;
-    rs__tee_end *te = NULL;
-    size_t nte = 0;
-    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK && rs_network_build(ctx, roads, NULL, &net) == RS_OK &&
-          rs__tee_ends(ctx, roads, net, &te, &nte) == RS_OK);
-    CHECK(nte >= 1);
+    tee_scene t;
+    memset(&t, 0, sizeof t);
+    CHECK(tee_scene_of(&t, "road a width 6\n5 5\n570 0\nend\n"
+                           "road b width 5\n-2.5 52\n9.5 2\n9.5 2\nend\n"));
+    CHECK(t.nte >= 1);
+    rs_roads *roads = t.roads;
     const int prio[2] = { 1, 0 };
     const double cells[] = { 2.5, 5, 10.4, 10.5, 16, 40 };
     for (size_t k = 0; k < sizeof cells / sizeof cells[0]; k++) {
@@ -929,14 +950,12 @@ static void test_tee_repeated_point(void)
         rs__roadfield *f = NULL;
         rs__road_point q;
         memset(&q, 0, sizeof q);
-        CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK && rs__roadfield_set_tees(ctx, f, roads, te, nte) == RS_OK);
+        CHECK(rs__roadfield_build(ctx, roads, &p, &f) == RS_OK && rs__roadfield_set_tees(ctx, f, roads, t.te, t.nte) == RS_OK);
         CHECKF(rs__roadfield_nearest_ranked(f, 2.5, 2.5, 5.0 / 3 * 0.7071, prio, &q) == 1 && q.road == 0,
                "cell %g: road %u", cells[k], q.road);
         rs__roadfield_free(ctx, f);
     }
-    rs__free(ctx, te);
-    rs_network_free(ctx, net);
-    rs_roads_free(ctx, roads);
+    tee_scene_free(&t);
 }
 
 /* T clips do not depend on the index cell: a record's segments are
@@ -961,21 +980,17 @@ static double *tee_coverage(const rs_roads *roads, const rs__tee_end *te, size_t
 
 static void test_tee_cells(void)
 {
-    static const char text[] = "road a width 3\n28.5 1\n75.5 59\nend\n"
-                               "road b width 4\n-2.5 10\n12.5 25\n59.5 13\nend\n"
-                               "road hairpin width 11\n11.5 25\n70.5 24\n27.5 21\nend\n";
-    rs_roads *roads = NULL;
-    rs_network *net = NULL;
-    rs__tee_end *te = NULL;
-    size_t nte = 0;
-    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &roads) == RS_OK && rs_network_build(ctx, roads, NULL, &net) == RS_OK &&
-          rs__tee_ends(ctx, roads, net, &te, &nte) == RS_OK);
-    CHECK(nte == 2); /* (both hairpin ends on road b) */
+    tee_scene t;
+    memset(&t, 0, sizeof t);
+    CHECK(tee_scene_of(&t, "road a width 3\n28.5 1\n75.5 59\nend\n"
+                           "road b width 4\n-2.5 10\n12.5 25\n59.5 13\nend\n"
+                           "road hairpin width 11\n11.5 25\n70.5 24\n27.5 21\nend\n"));
+    CHECK(t.nte == 2); /* (both hairpin ends on road b) */
     const double cells[] = { 0, 5, 6, 8, 10, 12 };
-    double *ref = tee_coverage(roads, te, nte, 5, 315, 235, 2.5, cells[0], 126, 94);
+    double *ref = tee_coverage(t.roads, t.te, t.nte, 5, 315, 235, 2.5, cells[0], 126, 94);
     CHECK(ref != NULL);
     for (size_t k = 1; ref && k < sizeof cells / sizeof cells[0]; k++) {
-        double *cov = tee_coverage(roads, te, nte, 5, 315, 235, 2.5, cells[k], 126, 94);
+        double *cov = tee_coverage(t.roads, t.te, t.nte, 5, 315, 235, 2.5, cells[k], 126, 94);
         CHECKF(cov && memcmp(cov, ref, 126 * 94 * sizeof *cov) == 0, "hairpin: cell %g draws otherwise", cells[k]);
         free(cov);
     }
@@ -983,26 +998,22 @@ static void test_tee_cells(void)
     CHECKF(ref && ref[9 * 126 + 1] == 0 && ref[9 * 126 + 2] < 0.01, "hairpin: %g %g beyond the first T's line",
            ref ? ref[9 * 126 + 1] : -1, ref ? ref[9 * 126 + 2] : -1);
     free(ref);
-    rs__free(ctx, te);
-    rs_network_free(ctx, net);
-    rs_roads_free(ctx, roads);
+    tee_scene_free(&t);
 
     sc_scene sc;
     CHECK(sc_city_default(&sc, 1) == 0);
-    roads = NULL, net = NULL, te = NULL, nte = 0;
-    CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+    CHECK(rs_roads_create(ctx, &t.roads) == RS_OK);
     for (size_t i = 0; i < sc.nroads; i++)
-        CHECK(rs_roads_add(ctx, roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n) == RS_OK);
-    CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK && rs__tee_ends(ctx, roads, net, &te, &nte) == RS_OK);
+        CHECK(rs_roads_add(ctx, t.roads, NULL, sc.roads[i].width, sc.roads[i].xy, sc.roads[i].n) == RS_OK);
+    CHECK(tee_scene_of(&t, NULL));
     uint32_t w = sc.w - 1, h = sc.h - 1;
     const double ccells[] = { 0, 2, 3, 8 };
-    ref = tee_coverage(roads, te, nte, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), sc.cell_size, 0, w, h);
+    ref = tee_coverage(t.roads, t.te, t.nte, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), sc.cell_size, 0, w, h);
     CHECK(ref != NULL);
     for (size_t k = 1; ref && k < sizeof ccells / sizeof ccells[0]; k++) {
-        double *cov = tee_coverage(roads, te, nte, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), sc.cell_size,
+        double *cov = tee_coverage(t.roads, t.te, t.nte, sc.cell_size, sc_extent_x(&sc), sc_extent_y(&sc), sc.cell_size,
                                    ccells[k], w, h);
-        size_t diff = 0;
-        size_t at = 0;
+        size_t diff = 0, at = 0;
         for (size_t i = 0; cov && i < (size_t)w * h; i++)
             if (cov[i] != ref[i]) at = diff++ ? at : i;
         CHECKF(cov && diff == 0, "city T=1: cell %g: %zu pixels differ, the first (%zu, %zu)", ccells[k], diff, at % w,
@@ -1010,9 +1021,7 @@ static void test_tee_cells(void)
         free(cov);
     }
     free(ref);
-    rs__free(ctx, te);
-    rs_network_free(ctx, net);
-    rs_roads_free(ctx, roads);
+    tee_scene_free(&t);
     sc_scene_free(&sc);
 }
 

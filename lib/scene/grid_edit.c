@@ -1039,8 +1039,8 @@ static keyed *sorted_keys(rs_ctx *ctx, const rs__grid_edit *e)
     return k;
 }
 
-/* Whether fingerprint h is missing from the sorted keys (binary search). */
-static int item_changed(const keyed *k, size_t n, uint64_t h)
+/* The first of the sorted keys whose fingerprint is at least h (binary search). */
+static size_t first_key(const keyed *k, size_t n, uint64_t h)
 {
     size_t lo = 0, hi = n;
     while (lo < hi) {
@@ -1048,6 +1048,13 @@ static int item_changed(const keyed *k, size_t n, uint64_t h)
         if (k[mid].h < h) lo = mid + 1;
         else hi = mid;
     }
+    return lo;
+}
+
+/* Whether fingerprint h is missing from the sorted keys. */
+static int item_changed(const keyed *k, size_t n, uint64_t h)
+{
+    size_t lo = first_key(k, n, h);
     return !(lo < n && k[lo].h == h);
 }
 
@@ -1238,12 +1245,7 @@ rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_option
  * kinds may differ). */
 static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h)
 {
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (k[mid].h < h) lo = mid + 1;
-        else hi = mid;
-    }
+    size_t lo = first_key(k, n, h);
     if (!(lo < n && k[lo].h == h)) return -1;
     int kind = (int)e->it[k[lo].i].kind;
     for (size_t j = lo + 1; j < n && k[j].h == h; j++)
@@ -1256,13 +1258,7 @@ static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h)
  * draws otherwise than once. */
 static size_t count_of(const keyed *k, size_t n, uint64_t h)
 {
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (k[mid].h < h) lo = mid + 1;
-        else hi = mid;
-    }
-    size_t c = 0;
+    size_t lo = first_key(k, n, h), c = 0;
     while (lo + c < n && k[lo + c].h == h) c++;
     return c;
 }
