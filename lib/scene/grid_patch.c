@@ -709,6 +709,23 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
     }
 }
 
+/* A T end's strip (rs__roadfield_set_tees: its end segment a..a+2 runs on
+ * to the clip line n.p = n.E + far; at a slant one edge reaches (far + r
+ * cos) / sin past E, 40 m on the edits fuzz target's hairpin) into acc,
+ * grown by grow; nothing when the strip is not made (sin <= 0.1). */
+static void strip_box(boxes *acc, const double *a, const double *E, int end, double nx, double ny, double far, double r,
+                      double grow)
+{
+    double dx = a[2] - a[0], dy = a[3] - a[1], len = hypot(dx, dy);
+    if (!(len > 0)) return;
+    double ux = end ? dx / len : -dx / len, uy = end ? dy / len : -dy / len; /* (towards the end) */
+    double sn = nx * ux + ny * uy, cs = fabs(nx * uy - ny * ux);
+    if (!(sn > 0.1)) return;
+    double ub = fmax((far + r * cs) / sn, 0), fx = E[0] + ub * ux, fy = E[1] + ub * uy;
+    double bx[4] = { fmin(E[0], fx) - r, fmin(E[1], fy) - r, fmax(E[0], fx) + r, fmax(E[1], fy) + r };
+    boxes_add(acc, bx, grow); /* (not finite: the update builds whole) */
+}
+
 /* The T ends at the nodes of N in `on` (marked_nodes of m: `non` of
  * them), of records not marked (map: N's road to a road of `roads`, UINT32_MAX:
  * gone): the segments inward from the end segment that its T line clips
@@ -719,11 +736,12 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
  * into tfar (the ends at those nodes: NaN when no T); an old one's from
  * the network alone (its roads are gone), their lines' far from tfar (the
  * track's). The capsules are taken wider by `extra` (a casing and a
- * field's index cell at most): a superset of what a build clips. *known =
- * 0 when an old end's line is not in tfar. */
+ * field's index cell at most): a superset of what a build clips. Each T
+ * end's strip too (strip_box; its half width wider by `wider`, the casing
+ * at most), a marked road's included where its points are known. *known = 0 when an old end's line is not in tfar. */
 static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, size_t non, const uint8_t *m,
                            const uint32_t *map, const rs_roads *roads, boxes *acc, double grow, double extra,
-                           double *tfar, int *known)
+                           double wider, double *tfar, int *known)
 {
     rs__tee_end *te = NULL;
     size_t nte = 0;
@@ -737,19 +755,23 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
     for (size_t k = 0; !r && k < nte; k++) {
         const rs__tee_end *t = &te[k];
         uint32_t q = map ? map[t->road] : t->road;
-        if (m[t->road] || q == UINT32_MAX) continue; /* (a marked road's whole box is in) */
+        if (q == UINT32_MAX) continue; /* (a road gone: its boxes are in) */
         const double *xy;
         size_t np;
         double w = 0;
         rs_roads_get(roads, q, NULL, &w, &xy, &np);
         size_t ke = rs__end_segment(xy, np, t->end); /* (none: a build has no T there) */
-        if (np < 3 || ke == SIZE_MAX) continue; /* (the end segment's box is in: neighbour_segments) */
+        if (ke == SIZE_MAX) continue;
         double margin = 0.5 * w + extra, far = !map ? t->far : tfar ? tfar[2 * (size_t)t->road + (t->end ? 1 : 0)] : NAN;
         if (!(margin < INFINITY && far > -INFINITY && far < INFINITY)) { /* (NaN: an old end not known as a T) */
-            *known = 0;
+            if (!m[t->road]) *known = 0;
             continue;
         }
         const double *E = xy + 2 * (t->end ? np - 1 : 0);
+        strip_box(acc, xy + 2 * ke, E, t->end, t->nx, t->ny, far, 0.5 * w + wider, grow);
+        /* (a marked road's boxes are in; a road of two points has no
+         * segment inward: neighbour_segments took its end segment) */
+        if (m[t->road] || np < 3) continue;
         double line = t->nx * E[0] + t->ny * E[1] + far - margin;
         size_t lo = SIZE_MAX, hi = 0; /* (the segments clipped: points lo..hi) */
         for (size_t step = 1;; step++) {
@@ -953,8 +975,10 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 for (int e = 0; e < 2; e++)
                     tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[2 * (size_t)m_new[j] + e];
         known = extra < INFINITY && (!net || tf);
-        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, &chg, grow, extra, tf, &known);
-        if (known && !r) r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, &chg, grow, extra, T->tfar, &known);
+        const double wider = fmax(T->facts.widest_casing, facts.widest_casing) + 0.01; /* (the strip's: a casing) */
+        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, &chg, grow, extra, wider, tf, &known);
+        if (known && !r)
+            r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, &chg, grow, extra, wider, T->tfar, &known);
     }
     rs__free(ctx, on_n);
     rs__free(ctx, on_o);

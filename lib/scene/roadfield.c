@@ -2399,7 +2399,7 @@ static int tee_near(const rs__roadfield *f, const rf_seg *s, double x, double y,
     size_t i0, i1;
     tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
     for (size_t k = i0; k < i1; k++)
-        if (!(x * f->tee[k].nx + y * f->tee[k].ny - f->tee[k].c <= reach)) return 0;
+        if (f->tee[k].live && !(x * f->tee[k].nx + y * f->tee[k].ny - f->tee[k].c <= reach)) return 0;
     return tee_sd(f, s, x, y) <= reach ? 2 : 1;
 }
 
