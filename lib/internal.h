@@ -77,6 +77,8 @@ rs_result rs__sort(rs_ctx *ctx, void *base, size_t n, size_t size, int (*cmp)(co
  * their order): for large elements whose order is a number. key is read
  * only. */
 rs_result rs__sort_keyed(rs_ctx *ctx, void *base, size_t n, size_t size, const uint64_t *key);
+/* qsort's comparison of two uint32_t, ascending. */
+int rs__cmp_u32(const void *pa, const void *pb);
 
 struct rs_dem {
     uint32_t width, height;

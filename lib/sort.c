@@ -132,3 +132,9 @@ rs_result rs__sort_keyed(rs_ctx *ctx, void *base, size_t n, size_t size, const u
     order o = { base, size, NULL, key };
     return sort_by(ctx, n, &o);
 }
+
+int rs__cmp_u32(const void *pa, const void *pb)
+{
+    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
+    return (a > b) - (a < b);
+}

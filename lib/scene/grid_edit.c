@@ -1263,12 +1263,6 @@ static size_t count_of(const keyed *k, size_t n, uint64_t h)
     return c;
 }
 
-static int cmp_u32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
-
 /* The pieces of e whose regions (no pad) meet box [x0, x1] x [y0, y1]
  * (metres), ascending, from its bins: *ids (the caller's: rs__free), *n;
  * their keys sorted in *keys. NULL on no memory. */
@@ -1292,7 +1286,7 @@ static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, doub
         for (uint32_t j = j0; j <= j1; j++)
             for (uint32_t b = e->bstart[(size_t)j * e->bw + i0]; b < e->bstart[(size_t)j * e->bw + i1 + 1]; b++)
                 ids[m++] = e->bitem[b];
-        if (m > 1) qsort(ids, m, sizeof *ids, cmp_u32);
+        if (m > 1) qsort(ids, m, sizeof *ids, rs__cmp_u32);
         size_t u = 0;
         for (size_t i = 0; i < m; i++) {
             if (u && ids[u - 1] == ids[i]) continue;

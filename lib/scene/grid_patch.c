@@ -519,12 +519,6 @@ static void sort_rects(rs_pixel_rect *r, size_t n)
 #define MAX_BOXES 4096
 #define MAX_PIECES 256
 
-static int cmp_u32(const void *pa, const void *pb)
-{
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    return (a > b) - (a < b);
-}
-
 static int cmp_x0(const void *pa, const void *pb)
 {
     const rs_pixel_rect *a = pa, *b = pb;
@@ -543,7 +537,7 @@ static size_t disjoint_rects(rs_ctx *ctx, const rs_pixel_rect *R, size_t n, rs_p
     size_t nd = SIZE_MAX, na = 0;
     if (!ys || !iv || !D || !above) goto done;
     for (size_t i = 0; i < n; i++) ys[2 * i] = R[i].y0, ys[2 * i + 1] = R[i].y1;
-    qsort(ys, 2 * n, sizeof *ys, cmp_u32);
+    qsort(ys, 2 * n, sizeof *ys, rs__cmp_u32);
     size_t ny = 0;
     for (size_t i = 0; i < 2 * n; i++)
         if (!ny || ys[i] != ys[ny - 1]) ys[ny++] = ys[i];
@@ -796,6 +790,15 @@ static int grid_held(const rs_road_grid *g, const rs_road_grid *q)
     return 0;
 }
 
+/* g's next patch (its entry filled) counted in: its grid's memory once
+ * (one update's rectangles share one), its roads' ids each. */
+static void patch_counted(rs_road_grid *g)
+{
+    const rs__grid_patch *d = &g->patch[g->npatch];
+    g->stats.bytes += (grid_held(g, d->grid) ? 0 : d->grid->stats.bytes) + d->n * sizeof *d->ids;
+    g->npatch++;
+}
+
 /* Patch q of another grid, shared (its grid held), appended to g's
  * patches (room made by the caller); map: q's road ids to g's (NULL: the
  * same, nmap unused). 0, or -1 out of memory. */
@@ -808,8 +811,7 @@ static int patch_take(rs_ctx *ctx, rs_road_grid *g, const rs__grid_patch *q, con
     d->rect = q->rect;
     d->grid = q->grid;
     rs__grid_hold(d->grid);
-    g->stats.bytes += (grid_held(g, d->grid) ? 0 : d->grid->stats.bytes) + q->n * sizeof *d->ids;
-    g->npatch++;
+    patch_counted(g);
     return 0;
 }
 
@@ -1098,11 +1100,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             goto done;
         }
     for (size_t pk = 0; pk < nrect; pk++) {
-        rs__grid_patch *d = &P[g->npatch];
-        *d = fresh[pk];
+        P[g->npatch] = fresh[pk];
         memset(&fresh[pk], 0, sizeof fresh[pk]);
-        g->stats.bytes += (grid_held(g, d->grid) ? 0 : d->grid->stats.bytes) + d->n * sizeof *d->ids;
-        g->npatch++;
+        patch_counted(g);
     }
     /* for the next update */
     nt->refs = 1;

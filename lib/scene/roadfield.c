@@ -2085,6 +2085,19 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
  * end disc and the strip from where the clip line cuts its near side to
  * where it cuts its far side (u along the segment towards the end,
  * measured from the end point). */
+/* How far along normal (nx, ny) a capsule comes, and a box (x0, x1, y0, y1):
+ * how far a segment's trimmed shape reaches past a T line is the larger of
+ * its capsule's and its own T strips' boxes' (set_tees, tees_finish). */
+static double capsule_far(const rf_seg *q, double nx, double ny)
+{
+    return lm_max(nx * q->ax + ny * q->ay, nx * q->bx + ny * q->by) + q->r;
+}
+
+static double box_far(const double *b, double nx, double ny)
+{
+    return nx * (nx > 0 ? b[1] : b[0]) + ny * (ny > 0 ? b[3] : b[2]);
+}
+
 static void tee_box(const rs__roadfield *f, rf_tee *T)
 {
     const rf_seg *s = &f->seg[T->seg];
@@ -2154,13 +2167,9 @@ static rs_result tees_finish(rs_ctx *ctx, rs__roadfield *f)
         if (i == 0 || T->seg != f->tee[i - 1].seg) g0 = i;
         T->live = 1;
         if (T->end == 2) {
-            const rf_seg *q = &f->seg[T->seg];
-            double far = lm_max(T->nx * q->ax + T->ny * q->ay, T->nx * q->bx + T->ny * q->by) + q->r;
+            double far = capsule_far(&f->seg[T->seg], T->nx, T->ny);
             for (size_t k = g0; k < i; k++)
-                if (f->tee[k].end < 2) {
-                    const double *b = f->tee[k].box;
-                    far = lm_max(far, T->nx * (T->nx > 0 ? b[1] : b[0]) + T->ny * (T->ny > 0 ? b[3] : b[2]));
-                }
+                if (f->tee[k].end < 2) far = lm_max(far, box_far(f->tee[k].box, T->nx, T->ny));
             T->live = !(far - T->c <= 0); /* (NaN: live) */
         }
         if (T->live) f->seg[T->seg].tee |= (uint8_t)(T->end == 2 ? 4 : T->end ? 2 : 1);
@@ -2244,18 +2253,27 @@ static int cmp_strip(const void *pa, const void *pb)
  * capsule, and the strips of its own T ends (st[0..ns), by segment) */
 static double past_line(const rf_seg *q, uint32_t k, const rf_strip *st, size_t ns, double nx, double ny, double c)
 {
-    double far = lm_max(nx * q->ax + ny * q->ay, nx * q->bx + ny * q->by) + q->r;
+    double far = capsule_far(q, nx, ny);
     size_t lo = 0, hi = ns;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
         if (st[mid].seg < k) lo = mid + 1;
         else hi = mid;
     }
-    for (; lo < ns && st[lo].seg == k; lo++) {
-        const double *b = st[lo].box;
-        far = lm_max(far, nx * (nx > 0 ? b[1] : b[0]) + ny * (ny > 0 ? b[3] : b[2]));
-    }
+    for (; lo < ns && st[lo].seg == k; lo++) far = lm_max(far, box_far(st[lo].box, nx, ny));
     return far - c;
+}
+
+/* The end segment of T end t whose strip reaches its clip line going
+ * along it (NULL: no T is made there), and n.E into *cE. */
+static const rf_seg *tee_end_of(const rs__roadfield *f, const rs_roads *roads, const rs__tee_end *t, double *cE)
+{
+    const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
+    if (!s || !(s->r > 0)) return NULL;
+    double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
+    if (!(t->nx * dx + t->ny * dy > 0.1)) return NULL;
+    *cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
+    return s;
 }
 
 rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *roads, const rs__tee_end *tees,
@@ -2272,16 +2290,15 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
     if (!st) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++) {
         const rs__tee_end *t = &tees[i];
-        const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
-        if (!s || !(s->r > 0)) continue;
-        double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
-        if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
+        double cE;
+        const rf_seg *s = tee_end_of(f, roads, t, &cE);
+        if (!s) continue;
         rf_tee T;
         memset(&T, 0, sizeof T);
         T.seg = (uint32_t)(s - f->seg);
         T.end = t->end;
         T.nx = t->nx, T.ny = t->ny;
-        T.c = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay) + t->far;
+        T.c = cE + t->far;
         tee_box(f, &T);
         st[ns].seg = T.seg;
         memcpy(st[ns].box, T.box, sizeof T.box);
@@ -2294,12 +2311,9 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
             return RS_ERR_CANCELLED; /* (a T's clips: ~5 us) */
         }
         const rs__tee_end *t = &tees[i];
-        const rf_seg *s = road_end_seg(f, roads, t->road, t->end);
-        if (!s || !(s->r > 0)) continue;
-        /* the strip must reach the clip line going along the segment */
-        double dx = t->end ? s->ux : -s->ux, dy = t->end ? s->uy : -s->uy;
-        if (!(t->nx * dx + t->ny * dy > 0.1)) continue;
-        double cE = t->nx * (t->end ? s->bx : s->ax) + t->ny * (t->end ? s->by : s->ay);
+        double cE;
+        const rf_seg *s = tee_end_of(f, roads, t, &cE); /* (the strip must reach the clip line) */
+        if (!s) continue;
         /* the record's segments: its end segment trimmed, and clipped
          * those whose trimmed shape reaches past the line: the
          * zero-length ones at the end, and from the end along the record
