@@ -1604,6 +1604,38 @@ static void test_duplicate_road(void)
     edit_end(&E);
 }
 
+/* A removed road's T strip (fuzz/edits seed 2f282ac0): a 3 m record of
+ * an 11 m road ended on another record's surface at a slant, and the T
+ * strip of that end (its end segment run on to the clip line) reached
+ * 30 m past the road's own boxes. Removing it must clear the strip's
+ * pixels: the update takes the strip where it was from the grid's track. */
+static void test_removed_tee_strip(void)
+{
+    one_edit E;
+    edit_begin(&E, 0, 0);
+    static float z[64 * 48];
+    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    E.ok = E.ok && rs_dem_create(E.ctx, 64, 48, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
+           rs_roads_create(E.ctx, &E.roads) == RS_OK;
+    const double A[6] = { 30.5, 22, 27.5, 21, 27.5, 21 }, B[6] = { 27.5, 59, 75.5, 57, 27.5, 59 },
+                 C[6] = { 27.5, 21, 27.5, 21, 37.5, 22 }, D[4] = { 27.5, 11, -2.5, 0 };
+    rs_roads *R = E.roads;
+    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 11, A, 3) == RS_OK && rs_roads_add(E.ctx, R, NULL, 11, B, 3) == RS_OK &&
+           rs_roads_add(E.ctx, R, NULL, 11, C, 3) == RS_OK && rs_roads_add(E.ctx, R, NULL, 1, D, 2) == RS_OK;
+    edit_base(&E, 2);
+    E.ok = E.ok && rs_roads_remove(E.ctx, R, 0) == RS_OK;
+    edit_update(&E, "removed T strip");
+    if (E.ok) {
+        long changed = 0;
+        for (size_t p = 0; p < (size_t)E.a.w * E.a.h; p++) changed += E.a.wt[p] != E.c.wt[p];
+        CHECKF(changed > 0, "removed T strip: the removal changes %ld pixels", changed);
+        CHECK(rs_road_grid_patch_count(E.g1) >= 1);
+        check_rects("removed T strip", E.g1, &E.a, &E.b, &E.c);
+    }
+    edit_end(&E);
+}
+
 int main(void)
 {
     test_shared_free();
@@ -1623,5 +1655,6 @@ int main(void)
     test_two_places();
     test_long_road();
     test_duplicate_road();
+    test_removed_tee_strip();
     return th_finish("test_edits");
 }

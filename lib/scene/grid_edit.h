@@ -64,10 +64,11 @@ typedef struct rs__edit_item {
 } rs__edit_item;
 
 /* A fingerprint and its index, sorted by rs__cmp_keyed (fingerprint, then
- * index): the pieces' multisets, the roads' prints. */
+ * index): the pieces' multisets, the roads' prints. pos: where a list of
+ * some pieces had it before the sort (rs__patch_candidates' counts). */
 typedef struct rs__keyed {
     uint64_t h;
-    uint32_t i;
+    uint32_t i, pos;
 } rs__keyed;
 int rs__cmp_keyed(const void *a, const void *b);
 
@@ -135,6 +136,9 @@ typedef struct rs__grid_track {
     double max_width; /* the widest road's width (NaN: one is not finite) */
     double *tfar;     /* per road end (2 i + end): its T line's rs__tee_end.far, NaN when it is no T end
                        * (NULL: no network) */
+    double *tstrip;   /* per road end: the box of its T strip at its half width (4 doubles: x0, y0, x1,
+                       * y1; NaN: none), so that an update knows where a changed or removed road's
+                       * strip was (NULL: no network) */
     size_t bytes;
 } rs__grid_track;
 /* The track of whole grid g built from `roads` with options o; takes `net`

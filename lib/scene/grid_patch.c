@@ -31,6 +31,8 @@
  * there (rs_road_grid_query) up to this reach: beyond it a query may miss
  * a road the whole build finds. */
 #define PATCH_QUERY_REACH 20.0
+/* doubles per road end of a track's T strips (strip_params) */
+#define TS 7
 
 static uint64_t mix_colour(uint64_t h, rs_colour c)
 {
@@ -330,7 +332,54 @@ static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_r
 static size_t track_bytes(const rs__grid_track *t)
 {
     return sizeof *t + t->n * (sizeof *t->print + sizeof *t->sprint + sizeof *t->sum + 4 * sizeof *t->box) +
-           (t->tfar ? 2 * t->n * sizeof *t->tfar : 0) + (t->net ? rs__network_bytes(t->net) : 0) + t->chunks.bytes;
+           (t->tfar ? 2 * t->n * sizeof *t->tfar : 0) + (t->tstrip ? 2 * TS * t->n * sizeof *t->tstrip : 0) +
+           (t->net ? rs__network_bytes(t->net) : 0) + t->chunks.bytes;
+}
+
+/* A T end's strip (rs__roadfield_set_tees: its end segment a..a+2 runs on
+ * to the clip line n.p = n.E + far; at a slant one edge of a strip of half
+ * width R reaches (far + R cos) / sin past E, 40 m on the edits fuzz
+ * target's hairpin), kept as TS doubles: E, the unit direction u towards
+ * the end, far / sin, cos / sin and the road's half width r; NaN when the
+ * strip is not made (sin <= 0.1). */
+static void strip_params(const double *a, const double *E, int end, double nx, double ny, double far, double r,
+                         double *p)
+{
+    double dx = a[2] - a[0], dy = a[3] - a[1], len = hypot(dx, dy);
+    for (int c = 0; c < TS; c++) p[c] = NAN;
+    if (!(len > 0)) return;
+    double ux = end ? dx / len : -dx / len, uy = end ? dy / len : -dy / len;
+    double sn = nx * ux + ny * uy, cs = fabs(nx * uy - ny * ux);
+    if (!(sn > 0.1)) return;
+    p[0] = E[0], p[1] = E[1], p[2] = ux, p[3] = uy, p[4] = far / sn, p[5] = cs / sn, p[6] = r;
+}
+
+/* The box of strip p (strip_params) at half width r + wider, into acc
+ * grown by grow (nothing when there is no strip). */
+static void strip_add(boxes *acc, const double *p, double wider, double grow)
+{
+    if (isnan(p[0])) return;
+    double R = p[6] + wider, ub = fmax(p[4] + R * p[5], 0), fx = p[0] + ub * p[2], fy = p[1] + ub * p[3];
+    double bx[4] = { fmin(p[0], fx) - R, fmin(p[1], fy) - R, fmax(p[0], fx) + R, fmax(p[1], fy) + R };
+    boxes_add(acc, bx, grow); /* (not finite: the update builds whole) */
+}
+
+/* The strips of the T ends te[0..n) of `roads` into ts (TS per road end;
+ * the other ends left). */
+static void tee_strips(double *ts, const rs__tee_end *te, size_t n, const rs_roads *roads)
+{
+    for (size_t k = 0; k < n; k++) {
+        const double *xy;
+        size_t np;
+        double w = 0;
+        double *p = ts + TS * (2 * (size_t)te[k].road + (te[k].end ? 1 : 0));
+        for (int c = 0; c < TS; c++) p[c] = NAN;
+        if (rs_roads_get(roads, te[k].road, NULL, &w, &xy, &np) || !np) continue;
+        size_t ke = rs__end_segment(xy, np, te[k].end);
+        if (ke != SIZE_MAX)
+            strip_params(xy + 2 * ke, xy + 2 * (te[k].end ? np - 1 : 0), te[k].end, te[k].nx, te[k].ny, te[k].far,
+                         0.5 * w, p);
+    }
 }
 
 /* far of the T ends te[0..n) into tfar (per road end, the rest left) */
@@ -348,6 +397,7 @@ void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
     rs__free(ctx, t->box);
     chunks_free(ctx, &t->chunks);
     rs__free(ctx, t->tfar);
+    rs__free(ctx, t->tstrip);
     rs_network_free(ctx, t->net);
     rs__free(ctx, t);
 }
@@ -380,9 +430,11 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
         rs__tee_end *te = NULL;
         size_t nte = 0;
         t->tfar = rs__alloc_array(ctx, 2 * (t->n ? t->n : 1), sizeof *t->tfar);
-        r = t->tfar ? rs__tee_ends(ctx, roads, net, &te, &nte) : RS_ERR_NOMEM;
+        t->tstrip = rs__alloc_array(ctx, 2 * TS * (t->n ? t->n : 1), sizeof *t->tstrip);
+        r = t->tfar && t->tstrip ? rs__tee_ends(ctx, roads, net, &te, &nte) : RS_ERR_NOMEM;
         for (size_t k = 0; !r && k < 2 * t->n; k++) t->tfar[k] = NAN;
-        if (!r) tee_fars(t->tfar, te, nte);
+        for (size_t k = 0; !r && k < 2 * TS * t->n; k++) t->tstrip[k] = NAN;
+        if (!r) tee_fars(t->tfar, te, nte), tee_strips(t->tstrip, te, nte, roads);
         rs__free(ctx, te);
         if (r) {
             rs__grid_track_free(ctx, t);
@@ -703,23 +755,6 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
     }
 }
 
-/* A T end's strip (rs__roadfield_set_tees: its end segment a..a+2 runs on
- * to the clip line n.p = n.E + far; at a slant one edge reaches (far + r
- * cos) / sin past E, 40 m on the edits fuzz target's hairpin) into acc,
- * grown by grow; nothing when the strip is not made (sin <= 0.1). */
-static void strip_box(boxes *acc, const double *a, const double *E, int end, double nx, double ny, double far, double r,
-                      double grow)
-{
-    double dx = a[2] - a[0], dy = a[3] - a[1], len = hypot(dx, dy);
-    if (!(len > 0)) return;
-    double ux = end ? dx / len : -dx / len, uy = end ? dy / len : -dy / len; /* (towards the end) */
-    double sn = nx * ux + ny * uy, cs = fabs(nx * uy - ny * ux);
-    if (!(sn > 0.1)) return;
-    double ub = fmax((far + r * cs) / sn, 0), fx = E[0] + ub * ux, fy = E[1] + ub * uy;
-    double bx[4] = { fmin(E[0], fx) - r, fmin(E[1], fy) - r, fmax(E[0], fx) + r, fmax(E[1], fy) + r };
-    boxes_add(acc, bx, grow); /* (not finite: the update builds whole) */
-}
-
 /* The T ends at the nodes of N in `on` (marked_nodes of m: `non` of
  * them), of records not marked (map: N's road to a road of `roads`, UINT32_MAX:
  * gone): the segments inward from the end segment that its T line clips
@@ -727,28 +762,48 @@ static void strip_box(boxes *acc, const double *a, const double *E, int end, dou
  * that turns back across the through road loses all of itself beyond the
  * line there, however far from the T) into the boxes acc, grown by `grow`. The
  * new network's ends (map NULL) with their lines from the roads, written
- * into tfar (the ends at those nodes: NaN when no T); an old one's from
- * the network alone (its roads are gone), their lines' far from tfar (the
- * track's). The capsules are taken wider by `extra` (a casing and a
- * field's index cell at most): a superset of what a build clips. Each T
- * end's strip too (strip_box; its half width wider by `wider`, the casing
- * at most), a marked road's included where its points are known. *known = 0 when an old end's line is not in tfar. */
+ * into tfar and their strips into tstrip (the ends at those nodes: NaN
+ * when no T); an old one's from the network alone (its roads are gone),
+ * their lines' far from tfar and their strips from tstrip (the track's:
+ * a changed or removed road's strip where it was). The capsules are taken
+ * wider by `extra` (a casing and a field's index cell at most): a superset
+ * of what a build clips. Each T end's strip too (strip_params; its half
+ * width wider by `wider`, the casing at most). *known = 0 when an old
+ * end's line or strip is not in tfar and tstrip. */
 static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, size_t non, const uint8_t *m,
                            const uint32_t *map, const rs_roads *roads, boxes *acc, double grow, double extra,
-                           double wider, double *tfar, int *known)
+                           double wider, double *tfar, double *tstrip, int *known)
 {
     rs__tee_end *te = NULL;
     size_t nte = 0;
     rs_result r = non ? rs__tee_ends_at(ctx, map ? NULL : roads, N, on, &te, &nte) : RS_OK;
-    if (!r && !map && tfar) {
+    if (!r && !map && tfar && tstrip) {
         for (size_t d = 0; d < N->nnodes; d++)
             for (uint32_t l = N->leg_start[d]; on[d] && l < N->leg_start[d + 1]; l++)
-                if (rs__is_end_leg(&N->leg[l])) tfar[rs__leg_end(&N->leg[l])] = NAN;
+                if (rs__is_end_leg(&N->leg[l])) {
+                    size_t e = rs__leg_end(&N->leg[l]);
+                    tfar[e] = NAN;
+                    for (int c = 0; c < TS; c++) tstrip[TS * e + c] = NAN;
+                }
         tee_fars(tfar, te, nte);
+        tee_strips(tstrip, te, nte, roads);
     }
     for (size_t k = 0; !r && k < nte; k++) {
         const rs__tee_end *t = &te[k];
         uint32_t q = map ? map[t->road] : t->road;
+        size_t e = 2 * (size_t)t->road + (t->end ? 1 : 0);
+        if (map) { /* (an old end: its strip where it was, its road changed or gone) */
+            double far_o = tfar ? tfar[e] : NAN;
+            if (!(far_o > -INFINITY && far_o < INFINITY)) { /* (NaN: an old end not known as a T) */
+                if (!m[t->road]) *known = 0;
+                continue;
+            }
+            if (!tstrip) {
+                *known = 0;
+                continue;
+            }
+            strip_add(acc, tstrip + TS * e, wider, grow);
+        }
         if (q == UINT32_MAX) continue; /* (a road gone: its boxes are in) */
         const double *xy;
         size_t np;
@@ -762,7 +817,11 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
             continue;
         }
         const double *E = xy + 2 * (t->end ? np - 1 : 0);
-        strip_box(acc, xy + 2 * ke, E, t->end, t->nx, t->ny, far, 0.5 * w + wider, grow);
+        if (!map) {
+            double sp[TS];
+            strip_params(xy + 2 * ke, E, t->end, t->nx, t->ny, far, 0.5 * w, sp);
+            strip_add(acc, sp, wider, grow);
+        }
         /* (a marked road's boxes are in; a road of two points has no
          * segment inward: neighbour_segments took its end segment) */
         if (m[t->road] || np < 3) continue;
@@ -855,7 +914,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     uint64_t *pn = NULL, *sp = NULL;
     rs__road_sum *sm = NULL;
     rs_style *ys = NULL;
-    double *bn = NULL, reach = 0, max_width = 0, *tf = NULL;
+    double *bn = NULL, reach = 0, max_width = 0, *tf = NULL, *ts = NULL;
     rs__grid_facts facts;
     rs_network *net = NULL;
     uint32_t *m_old = rs__alloc_array(ctx, no ? no : 1, sizeof *m_old);
@@ -971,16 +1030,22 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         /* the capsule beyond the half width: a casing and an index cell, and
          * a slack above the roundings */
         double extra = cas + cell + 0.01;
-        /* the new track's T lines: the old ones' where the nodes stand */
-        if (net && T->tfar && (tf = rs__alloc_array(ctx, 2 * (nn ? nn : 1), sizeof *tf)))
+        /* the new track's T lines and strips: the old ones' where the
+         * nodes stand (a kept road's points are the same) */
+        if (net && T->tfar && T->tstrip && (tf = rs__alloc_array(ctx, 2 * (nn ? nn : 1), sizeof *tf)) &&
+            (ts = rs__alloc_array(ctx, 2 * TS * (nn ? nn : 1), sizeof *ts)))
             for (size_t j = 0; j < nn; j++)
-                for (int e = 0; e < 2; e++)
-                    tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[2 * (size_t)m_new[j] + e];
-        known = extra < INFINITY && (!net || tf);
+                for (int e = 0; e < 2; e++) {
+                    size_t i = 2 * (size_t)m_new[j] + (size_t)e;
+                    tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[i];
+                    for (int c = 0; c < TS; c++) ts[TS * (2 * j + e) + c] = m_new[j] == UINT32_MAX ? NAN : T->tstrip[TS * i + c];
+                }
+        known = extra < INFINITY && (!net || (tf && ts));
         const double wider = fmax(T->facts.widest_casing, facts.widest_casing) + 0.01; /* (the strip's: a casing) */
-        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, &chg, grow, extra, wider, tf, &known);
+        if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, &chg, grow, extra, wider, tf, ts, &known);
         if (known && !r)
-            r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, &chg, grow, extra, wider, T->tfar, &known);
+            r = tee_clips(ctx, T->net, on_o, non_o, co, m_old, roads, &chg, grow, extra, wider, T->tfar, T->tstrip,
+                          &known);
     }
     rs__free(ctx, on_n);
     rs__free(ctx, on_o);
@@ -1119,7 +1184,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     nt->facts = facts;
     nt->max_width = max_width;
     nt->tfar = tf;
-    tf = NULL;
+    nt->tstrip = ts;
+    tf = NULL, ts = NULL;
     nt->bytes = track_bytes(nt);
     pn = NULL, bn = NULL, net = NULL;
     g->track = nt;
@@ -1182,6 +1248,7 @@ done:
     rs__free(ctx, bn);
     chunks_free(ctx, &ch);
     rs__free(ctx, tf);
+    rs__free(ctx, ts);
     for (size_t k = 0; k < nrect; k++) {
         rs_road_grid_free(ctx, fresh[k].grid);
         rs__free(ctx, fresh[k].ids);
