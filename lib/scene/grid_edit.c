@@ -1034,7 +1034,7 @@ static keyed *sorted_keys(rs_ctx *ctx, const rs__grid_edit *e)
 {
     keyed *k = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *k);
     if (!k) return NULL;
-    for (size_t i = 0; i < e->n; i++) k[i].h = e->it[i].h, k[i].i = (uint32_t)i;
+    for (size_t i = 0; i < e->n; i++) k[i].h = e->it[i].h, k[i].i = k[i].pos = (uint32_t)i;
     if (e->n > 1) qsort(k, e->n, sizeof *k, cmp_keyed);
     return k;
 }
@@ -1240,26 +1240,41 @@ rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_option
     return rs__progress_end(ctx, &pg, r);
 }
 
-/* The kind of e's piece of fingerprint h (keys k[0..n): some of e's,
- * sorted), or -1 when none of them has it (of several, the first: their
- * kinds may differ). */
-static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h)
+/* The kind of e's pieces of fingerprint h (keys k[0..n): some of e's,
+ * sorted; RS__EI_SURFACE when their kinds differ), or -1 when none of them
+ * has it; *count: how many have it. */
+static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h, size_t *count)
 {
-    size_t lo = first_key(k, n, h);
-    if (!(lo < n && k[lo].h == h)) return -1;
-    int kind = (int)e->it[k[lo].i].kind;
-    for (size_t j = lo + 1; j < n && k[j].h == h; j++)
-        if ((int)e->it[k[j].i].kind != kind) return RS__EI_SURFACE; /* (mixed: no core) */
+    size_t lo = first_key(k, n, h), c = 0;
+    int kind = -1;
+    for (; lo + c < n && k[lo + c].h == h; c++) {
+        int q = (int)e->it[k[lo + c].i].kind;
+        kind = c == 0 || q == kind ? q : RS__EI_SURFACE; /* (mixed: no core) */
+    }
+    *count = c;
     return kind;
 }
 
-/* How many of the sorted keys are fingerprint h: a piece drawn twice (a
- * road given twice: its partly covered line pixels take the paint twice)
- * draws otherwise than once. */
+/* How many of the sorted keys are fingerprint h. */
 static size_t count_of(const keyed *k, size_t n, uint64_t h)
 {
     size_t lo = first_key(k, n, h), c = 0;
     while (lo + c < n && k[lo + c].h == h) c++;
+    return c;
+}
+
+/* Per key of the sorted keys, at its place before the sort (pos): how many
+ * keys have its fingerprint. A piece drawn twice (a road given twice: its
+ * partly covered line pixels take the paint twice) draws otherwise than
+ * once. NULL on no memory. */
+static uint32_t *run_counts(rs_ctx *ctx, const keyed *k, size_t n)
+{
+    uint32_t *c = rs__alloc_array(ctx, n ? n : 1, sizeof *c);
+    if (!c) return NULL;
+    for (size_t a = 0, b; a < n; a = b) {
+        for (b = a + 1; b < n && k[b].h == k[a].h; b++) {}
+        for (size_t j = a; j < b; j++) c[k[j].pos] = (uint32_t)(b - a);
+    }
     return c;
 }
 
@@ -1302,7 +1317,7 @@ static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, doub
         rs__free(ctx, ids);
         return NULL;
     }
-    for (size_t i = 0; i < m; i++) k[i].h = e->it[ids[i]].h, k[i].i = ids[i];
+    for (size_t i = 0; i < m; i++) k[i].h = e->it[ids[i]].h, k[i].i = ids[i], k[i].pos = (uint32_t)i;
     if (m > 1) qsort(k, m, sizeof *k, cmp_keyed);
     *n = m;
     *keys = k;
@@ -1353,11 +1368,12 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     size_t *nk = rs__calloc(ctx, ns, sizeof *nk);
     const rs__grid_edit *el = local->edit;
     keyed *kl = el ? sorted_keys(ctx, el) : NULL;
+    uint32_t *cl = kl ? run_counts(ctx, kl, el->n) : NULL, **cs = rs__calloc(ctx, ns, sizeof *cs);
     spans S, Ssf, C;
     memset(&S, 0, sizeof S);
     memset(&Ssf, 0, sizeof Ssf);
     memset(&C, 0, sizeof C);
-    rs_result r = src && ks && near && nk && kl ? RS_OK : RS_ERR_NOMEM;
+    rs_result r = src && ks && near && nk && kl && cl && cs ? RS_OK : RS_ERR_NOMEM;
     int fills = 0;
     *out = NULL;
     *nout = 0;
@@ -1375,7 +1391,8 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     for (size_t k = 0; !r && k < ns; k++) {
         if (!src[k]->edit || src[k]->edit->over ||
             !(near[k] = near_items(ctx, src[k]->edit, rect.x0 * pix - grow, rect.y0 * pix - grow, rect.x1 * pix + grow,
-                                   rect.y1 * pix + grow, &nk[k], &ks[k])))
+                                   rect.y1 * pix + grow, &nk[k], &ks[k])) ||
+            !(cs[k] = run_counts(ctx, ks[k], nk[k])))
             r = RS_ERR_NOMEM;
         else fills |= src[k]->edit->fills;
     }
@@ -1393,10 +1410,11 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         int known = 1, any = 0, core = q->kind == RS__EI_CORE;
         for (size_t k = 0; k < ns; k++) {
             if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
-            int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h);
+            size_t cnt;
+            int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h, &cnt);
             if (kind >= 0) {
                 any = 1;
-                if (count_of(ks[k], nk[k], q->h) != count_of(kl, el->n, q->h)) known = 0; /* (drawn more or fewer times) */
+                if (cnt != cl[i]) known = 0; /* (drawn more or fewer times) */
             } else if (!hidden(q, pad_l, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) known = 0;
             core &= kind == RS__EI_CORE || kind < 0;
         }
@@ -1413,7 +1431,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         for (size_t ii = 0; ok && ii < nk[k]; ii++) {
             const rs__edit_item *q = &e->it[near[k][ii]];
             if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) ||
-                count_of(kl, el->n, q->h) == count_of(ks[k], nk[k], q->h))
+                count_of(kl, el->n, q->h) == cs[k][ii])
                 continue;
             if (hidden(q, pad, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) continue;
             ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
@@ -1453,6 +1471,9 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     } else if (!r) r = spans_to_rects(ctx, &in, out, nout);
     for (size_t k = 0; ks && k < ns; k++) rs__free(ctx, ks[k]);
     for (size_t k = 0; near && k < ns; k++) rs__free(ctx, near[k]);
+    for (size_t k = 0; cs && k < ns; k++) rs__free(ctx, cs[k]);
+    rs__free(ctx, cs);
+    rs__free(ctx, cl);
     rs__free(ctx, ks);
     rs__free(ctx, near);
     rs__free(ctx, nk);

@@ -131,7 +131,7 @@ static double yield_at(const approach *q, double ha, double t)
  * over all roads). Segments, not whole roads: a long road's box would put
  * it in the lists of many cells far from it. */
 typedef struct road_cells {
-    double x0, y0, cw, ch;
+    double x0, y0, cw, ch, icw, ich; /* origin, cell size and its inverse */
     size_t gx, gy;
     uint32_t *start, *ids; /* start: gx * gy + 1 */
 } road_cells;
@@ -341,10 +341,13 @@ static rs_result index_junctions(ctxa *A, size_t nr)
     return RS_OK;
 }
 
-/* The grid cell range of [a, b] along one axis (clamped to the grid). */
-static void cell_range(double a, double b, double o, double c, size_t g, size_t *lo, size_t *hi)
+/* The grid cell range of [a, b] along one axis (clamped to the grid; ic:
+ * the inverse cell size. The cells only narrow the candidates, and a
+ * monotone map keeps a point's cell within the range of every interval
+ * holding it). */
+static void cell_range(double a, double b, double o, double ic, size_t g, size_t *lo, size_t *hi)
 {
-    double qa = (a - o) / c, qb = (b - o) / c;
+    double qa = (a - o) * ic, qb = (b - o) * ic;
     *lo = qa > 0 ? (qa < (double)g ? (size_t)qa : g - 1) : 0;
     *hi = qb > 0 ? (qb < (double)g ? (size_t)qb : g - 1) : 0;
 }
@@ -387,6 +390,7 @@ static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
     G->x0 = x0, G->y0 = y0;
     G->cw = (x1 - x0) / (double)g, G->ch = (y1 - y0) / (double)g;
     if (!(G->cw > 0) || !(G->ch > 0) || !isfinite(G->cw) || !isfinite(G->ch)) return 0;
+    G->icw = 1 / G->cw, G->ich = 1 / G->ch;
     G->start = rs__calloc(A->ctx, g * g + 1, sizeof *G->start);
     uint32_t *last = rs__alloc_array(A->ctx, g * g, sizeof *last); /* the last road listed per cell */
     size_t total = 0;
@@ -405,9 +409,9 @@ static int road_cells_build(const ctxa *A, size_t nr, road_cells *G)
             double reach = (w / 2 + JUNCTION_TOL) * (1 + 1e-9) + 1e-6;
             for (size_t k = 0; k + 1 < rl->n && ok; k++) {
                 size_t cx0, cx1, cy0, cy1;
-                cell_range(fmin(rl->x[k], rl->x[k + 1]) - reach, fmax(rl->x[k], rl->x[k + 1]) + reach, G->x0, G->cw, g,
+                cell_range(fmin(rl->x[k], rl->x[k + 1]) - reach, fmax(rl->x[k], rl->x[k + 1]) + reach, G->x0, G->icw, g,
                            &cx0, &cx1);
-                cell_range(fmin(rl->y[k], rl->y[k + 1]) - reach, fmax(rl->y[k], rl->y[k + 1]) + reach, G->y0, G->ch, g,
+                cell_range(fmin(rl->y[k], rl->y[k + 1]) - reach, fmax(rl->y[k], rl->y[k + 1]) + reach, G->y0, G->ich, g,
                            &cy0, &cy1);
                 for (size_t cy = cy0; cy <= cy1 && ok; cy++)
                     for (size_t cx = cx0; cx <= cx1; cx++) {
@@ -867,8 +871,8 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
             size_t ncand = nr;
             if (grid && isfinite(x) && isfinite(y)) { /* (x, y) is inside every box it could meet: its cell lists them */
                 size_t cx, cy, unused;
-                cell_range(x, x, G.x0, G.cw, G.gx, &cx, &unused);
-                cell_range(y, y, G.y0, G.ch, G.gy, &cy, &unused);
+                cell_range(x, x, G.x0, G.icw, G.gx, &cx, &unused);
+                cell_range(y, y, G.y0, G.ich, G.gy, &cy, &unused);
                 cand = G.ids + G.start[cy * G.gx + cx];
                 ncand = G.start[cy * G.gx + cx + 1] - G.start[cy * G.gx + cx];
             }

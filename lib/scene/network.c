@@ -2582,6 +2582,15 @@ typedef struct re_node {
     rs_network_leg leg[3];
 } re_node;
 
+/* The point of the road's end at leg L (a start or an end leg). */
+static const double *leg_point(const rs_roads *roads, const rs_network_leg *L)
+{
+    const double *exy;
+    size_t enp;
+    rs_roads_get(roads, L->road, NULL, NULL, &exy, &enp);
+    return exy + 2 * (L->kind == RS_LEG_START ? 0 : enp - 1);
+}
+
 /* The free end of node nd of N (the network of `roads`; its one leg L, an
  * end leg of a record longer than two tolerances) inside the surface of
  * the nearest street: into *o (its legs, control and surface flag), from
@@ -2591,12 +2600,9 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
                      uint32_t nd, const rs_network_leg *L, uint32_t control, re_node *o)
 {
     const double tol = N->tol;
-    const double *exy;
-    size_t enp;
-    rs_roads_get(roads, L->road, NULL, NULL, &exy, &enp);
     surf_end f;
     memset(&f, 0, sizeof f);
-    const double *p = exy + 2 * (L->kind == RS_LEG_START ? 0 : enp - 1);
+    const double *p = leg_point(roads, L);
     f.node = nd, f.road = L->road, f.stroke = N->stroke_of[L->road];
     f.non_car = rs__road_non_car(roads, L->road);
     f.x = p[0], f.y = p[1], f.q = f.k = NONE, f.u = 0, f.d = INFINITY;
@@ -2870,7 +2876,15 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             if (dq[j]) dl[k++] = (uint32_t)j;
         double dg[4];
         grown(dg, db, G);
-        for (uint32_t d = 0; d < N->nnodes && !res; d++) {
+        /* the nodes whose free end is tested again, in node order (bit 31:
+         * made anew); the kept ones test only the roads whose reach meets
+         * the box of their end points (the same roads pass, in the same
+         * order: a 21 m road's move tested every road of the map from each
+         * kept end near its stroke) */
+        uint32_t *todo = NULL, *kc = NULL;
+        size_t ntodo = 0, ctodo = 0, nkc = 0;
+        double pb[4] = { INFINITY, INFINITY, -INFINITY, -INFINITY };
+        for (uint32_t d = 0; d < N->nnodes; d++) {
             const rs_network_leg *L = N->leg + N->leg_start[d];
             uint32_t deg = N->leg_start[d + 1] - N->leg_start[d];
             const rs_network_node *v = &N->node[d];
@@ -2883,11 +2897,51 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
                 for (size_t k = 0; !near && k < nd_q && in_box(dg, v->x, v->y); k++)
                     near = square_meets(box + 4 * (size_t)dl[k], v->x, v->y, G);
                 if (!near) continue;
+                const double *p = leg_point(roads, E);
+                if (isfinite(p[0]) && isfinite(p[1])) {
+                    pb[0] = fmin(pb[0], p[0]), pb[1] = fmin(pb[1], p[1]);
+                    pb[2] = fmax(pb[2], p[0]), pb[3] = fmax(pb[3], p[1]);
+                }
             }
+            if (ntodo == ctodo) {
+                size_t nc = ctodo ? 2 * ctodo : 16;
+                uint32_t *nt = rs__realloc(ctx, todo, nc * sizeof *nt);
+                if (!nt) {
+                    rs__free(ctx, todo);
+                    rs__free(ctx, dl);
+                    goto nomem;
+                }
+                todo = nt, ctodo = nc;
+            }
+            todo[ntodo++] = d | (fresh ? 0x80000000u : 0);
+        }
+        if (pb[0] <= pb[2]) {
+            if (!(kc = rs__alloc_array(ctx, m, sizeof *kc))) {
+                rs__free(ctx, todo);
+                rs__free(ctx, dl);
+                goto nomem;
+            }
+            for (size_t q = 0; q < nn; q++) {
+                /* (square_meets of an end point in pb: rounding is monotone) */
+                double rq = surf_reach(roads, N, q, tol);
+                const double *b = box + 4 * q;
+                if (rq > 0 && pb[2] + rq >= b[0] && pb[0] - rq <= b[2] && pb[3] + rq >= b[1] && pb[1] - rq <= b[3])
+                    kc[nkc++] = (uint32_t)q;
+            }
+        }
+        for (size_t t = 0; t < ntodo; t++) {
+            uint32_t d = todo[t] & 0x7FFFFFFFu;
+            int fresh = (todo[t] >> 31) != 0;
+            const rs_network_leg *L = N->leg + N->leg_start[d];
+            uint32_t deg = N->leg_start[d + 1] - N->leg_start[d];
+            const rs_network_node *v = &N->node[d];
+            const rs_network_leg *E = free_end_leg(N, L, deg, N->node_surf[d]);
             if (nrep == crep) {
                 size_t nc = crep ? 2 * crep : 16;
                 re_node *nr = rs__realloc(ctx, rep, nc * sizeof *nr);
                 if (!nr) {
+                    rs__free(ctx, todo);
+                    rs__free(ctx, kc);
                     rs__free(ctx, dl);
                     goto nomem;
                 }
@@ -2897,11 +2951,13 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             uint32_t ctl = (v->control & ~(uint32_t)RS_NODE_ROUNDABOUT);
             const char *jc = rs_roads_get_attr(roads, E->road, "junction");
             if (jc && strcmp(jc, "roundabout") == 0) ctl |= RS_NODE_ROUNDABOUT;
-            free_end(roads, N, box, fresh ? ids : NULL, fresh ? na : nn, d, E, ctl, o);
+            free_end(roads, N, box, fresh ? ids : kc, fresh ? na : nkc, d, E, ctl, o);
             int same = o->degree == deg && o->control == v->control && o->surf == N->node_surf[d];
             for (uint32_t k = 0; k < deg && same; k++) same = leg_eq(&o->leg[k], &L[k]);
             nrep += !same;
         }
+        rs__free(ctx, todo);
+        rs__free(ctx, kc);
         rs__free(ctx, dl);
     }
     if (nrep) { /* the changed nodes' legs in place (rep is in node order) */
