@@ -1636,6 +1636,40 @@ static void test_removed_tee_strip(void)
     edit_end(&E);
 }
 
+/* A T that clips a record's far end strip and all (fuzz/edits seed
+ * b0e8f047): a hairpin (4.5, 46) -> (63.5, 0) -> (21.5, 52) whose last
+ * point is a T on a narrow road, with a slanted strip reaching 30 m
+ * north-west. A new road across its start makes that start a T whose
+ * line takes the hairpin's whole second leg, strip included: the change
+ * area and the dirty rectangles must reach the strip's far end. */
+static void test_far_strip_clipped(void)
+{
+    one_edit E;
+    edit_begin(&E, 0, 0);
+    static float z[64 * 48];
+    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    E.ok = E.ok && rs_dem_create(E.ctx, 64, 48, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
+           rs_roads_create(E.ctx, &E.roads) == RS_OK;
+    const double A[6] = { 24.75, 15.25, 11.75, 60.25, 75.75, 14.25 }, B[6] = { 63.5, 0, 29.5, 48, 63.5, 0 },
+                 C[6] = { 4.5, 46, 63.5, 0, 21.5, 52 }, D[6] = { -0.5, 46, 16.5, 47, 63.5, 0 };
+    rs_roads *R = E.roads;
+    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 3.875, A, 3) == RS_OK && rs_roads_add(E.ctx, R, NULL, 12, B, 3) == RS_OK &&
+           rs_roads_add(E.ctx, R, NULL, 11, C, 3) == RS_OK;
+    edit_base(&E, 2);
+    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 11, D, 3) == RS_OK;
+    edit_update(&E, "far strip clipped");
+    if (E.ok) {
+        /* (the strip's far pixels, 20 m from the new road's T, lose their paint) */
+        long lost = 0;
+        for (uint32_t y = 23; y < 29 && y < E.a.h; y++)
+            for (uint32_t x = 0; x < 7 && x < E.a.w; x++) lost += E.a.wt[(size_t)y * E.a.w + x] > 0 && E.c.wt[(size_t)y * E.a.w + x] == 0;
+        CHECKF(lost > 0, "far strip clipped: %ld pixels of the strip lose their paint", lost);
+        check_rects("far strip clipped", E.g1, &E.a, &E.b, &E.c);
+    }
+    edit_end(&E);
+}
+
 int main(void)
 {
     test_shared_free();
@@ -1656,5 +1690,6 @@ int main(void)
     test_long_road();
     test_duplicate_road();
     test_removed_tee_strip();
+    test_far_strip_clipped();
     return th_finish("test_edits");
 }

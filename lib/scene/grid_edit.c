@@ -441,6 +441,23 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
             double R = F->reach + 0.7072 * b->pix + 1e-9 * (1 + fabs(px) + fabs(py) + F->reach);
             r = push(b, mix(hi, 0xb0c5), px - R, py - R, px + R, py + R, -1);
         }
+        /* a run over the whole record reaches the other end's segment,
+         * whose trimmed shape, at a T there, runs on in its strip: the
+         * clip may take the strip too, however far along it reaches
+         * (fuzz/edits b0e8f047: a hairpin's start became a T whose line
+         * took its far end's strip, 28 m long). That strip's region again,
+         * as a piece of this T's. */
+        int oe = !e;
+        if (!r && run >= n - 1 && F->E.tee[oe] > 0) {
+            size_t ko = oe ? n - 1 : 0, qo = oe ? n - 2 : 1;
+            double ox = x[ko] - x[qo], oy = y[ko] - y[qo], ol = hypot(ox, oy);
+            if (ol > 0) {
+                ox /= ol, oy /= ol;
+                double osn = fmax(0.2, fabs(ox * F->E.tnx[oe] + oy * F->E.tny[oe]));
+                double ofar = (F->E.tee[oe] + F->reach * sqrt(fmax(0, 1 - osn * osn))) / osn;
+                r = push(b, mix(mix(h, F->E.h[oe]), 0x0e5), x[ko], y[ko], x[ko] + ofar * ox, y[ko] + ofar * oy, F->reach);
+            }
+        }
     }
     /* chunks: runs of short segments up to a chunk of arc staying near
      * their chord; long segments cut to the map and split; a joint where

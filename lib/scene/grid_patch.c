@@ -212,11 +212,15 @@ static rs_result raw_prints(rs_ctx *ctx, const rs_roads *roads, uint64_t **print
         uint64_t h = mixs(mixd(0x7e57, w), name);
         *max_width = widest(*max_width, w);
         double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+        /* (the x and the y in two chains, joined at the end: half the
+         * dependent multiplies of one chain) */
+        uint64_t hy = mix(h, 0x79);
         for (size_t k = 0; k < np; k++) {
             double x = xy[2 * k], y = xy[2 * k + 1];
-            h = mixd(mixd(h, x), y);
+            h = mixd(h, x), hy = mixd(hy, y);
             x0 = x < x0 ? x : x0, y0 = y < y0 ? y : y0, x1 = x > x1 ? x : x1, y1 = y > y1 ? y : y1;
         }
+        h = mix(mix(h, hy), np);
         double *b = B + 4 * i;
         b[0] = x0, b[1] = y0, b[2] = x1, b[3] = y1;
         for (size_t k = 0; k < rs_roads_attr_count(roads, i); k++) {
@@ -354,14 +358,21 @@ static void strip_params(const double *a, const double *E, int end, double nx, d
     p[0] = E[0], p[1] = E[1], p[2] = ux, p[3] = uy, p[4] = far / sn, p[5] = cs / sn, p[6] = r;
 }
 
-/* The box of strip p (strip_params) at half width r + wider, into acc
- * grown by grow (nothing when there is no strip). */
+/* The box of strip p (strip_params) at half width r + wider into bx; 0
+ * when there is no strip. */
+static int strip_box(const double *p, double wider, double *bx)
+{
+    if (isnan(p[0])) return 0;
+    double R = p[6] + wider, ub = fmax(p[4] + R * p[5], 0), fx = p[0] + ub * p[2], fy = p[1] + ub * p[3];
+    bx[0] = fmin(p[0], fx) - R, bx[1] = fmin(p[1], fy) - R, bx[2] = fmax(p[0], fx) + R, bx[3] = fmax(p[1], fy) + R;
+    return 1;
+}
+
+/* Strip p's box at half width r + wider into acc, grown by grow. */
 static void strip_add(boxes *acc, const double *p, double wider, double grow)
 {
-    if (isnan(p[0])) return;
-    double R = p[6] + wider, ub = fmax(p[4] + R * p[5], 0), fx = p[0] + ub * p[2], fy = p[1] + ub * p[3];
-    double bx[4] = { fmin(p[0], fx) - R, fmin(p[1], fy) - R, fmax(p[0], fx) + R, fmax(p[1], fy) + R };
-    boxes_add(acc, bx, grow); /* (not finite: the update builds whole) */
+    double bx[4];
+    if (strip_box(p, wider, bx)) boxes_add(acc, bx, grow); /* (not finite: the update builds whole) */
 }
 
 /* The strips of the T ends te[0..n) of `roads` into ts (TS per road end;
@@ -826,13 +837,26 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
          * segment inward: neighbour_segments took its end segment) */
         if (m[t->road] || np < 3) continue;
         double line = t->nx * E[0] + t->ny * E[1] + far - margin;
+        /* (the other end's segment, and its strip when that end is a T:
+         * the segment's trimmed shape there reaches as far as the strip,
+         * and a clip takes the strip with it; the seed 2f282ac0's
+         * neighbour b0e8f047: a hairpin's start became a T whose line
+         * clipped its far end, strip and all, 28 m away) */
+        size_t ko = rs__end_segment(xy, np, !t->end);
+        const double *so = tstrip && ko != SIZE_MAX ? tstrip + TS * (2 * (size_t)t->road + (t->end ? 0 : 1)) : NULL;
+        double ob[4];
+        int has_o = so && strip_box(so, wider, ob);
         size_t lo = SIZE_MAX, hi = 0; /* (the segments clipped: points lo..hi) */
         for (size_t step = 1;; step++) {
             if (t->end ? ke < step : ke + step + 1 >= np) break;
             size_t i = t->end ? ke - step : ke + step;
             const double *a = xy + 2 * i, *b = a + 2;
-            if (!(fmax(t->nx * a[0] + t->ny * a[1], t->nx * b[0] + t->ny * b[1]) > line)) break;
+            double reach = fmax(t->nx * a[0] + t->ny * a[1], t->nx * b[0] + t->ny * b[1]);
+            if (i == ko && has_o) /* (the strip box's far corner along n) */
+                reach = fmax(reach, t->nx * (t->nx > 0 ? ob[2] : ob[0]) + t->ny * (t->ny > 0 ? ob[3] : ob[1]));
+            if (!(reach > line)) break;
             lo = i < lo ? i : lo, hi = i + 1 > hi ? i + 1 : hi;
+            if (i == ko && has_o) boxes_add(acc, ob, grow);
         }
         if (lo < hi) path_boxes(acc, xy, lo, hi, grow);
     }
