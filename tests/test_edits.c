@@ -1572,6 +1572,30 @@ static void test_long_road(void)
     edit_end(&E);
 }
 
+/* E on the edits fuzz target's 64 x 48 map of 5 m cells (its heights),
+ * with no roads yet. */
+static void edit_fuzz_map(one_edit *E)
+{
+    static float z[64 * 48];
+    edit_begin(E, 0, 0);
+    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    E->ok = E->ok && rs_dem_create(E->ctx, 64, 48, z, &E->dem) == RS_OK && rs_dem_set_frame(E->ctx, E->dem, &fr) == RS_OK &&
+            rs_roads_create(E->ctx, &E->roads) == RS_OK;
+}
+
+/* A road of a fuzz input: width, point count, points. */
+typedef struct fuzz_road {
+    double w;
+    size_t n;
+    double xy[6];
+} fuzz_road;
+
+static void add_fuzz_roads(one_edit *E, const fuzz_road *r, size_t n)
+{
+    for (size_t k = 0; k < n; k++) E->ok = E->ok && rs_roads_add(E->ctx, E->roads, NULL, r[k].w, r[k].xy, r[k].n) == RS_OK;
+}
+
 /* A road given a second time (the same points, width and attributes):
  * its pieces have the same fingerprints, but its lines are painted twice,
  * so their partly covered pixels change; the dirty rectangles hold them
@@ -1580,12 +1604,7 @@ static void test_long_road(void)
 static void test_duplicate_road(void)
 {
     one_edit E;
-    edit_begin(&E, 0, 0);
-    static float z[64 * 48];
-    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
-    rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    E.ok = E.ok && rs_dem_create(E.ctx, 64, 48, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
-           rs_roads_create(E.ctx, &E.roads) == RS_OK;
+    edit_fuzz_map(&E);
     /* (the fuzz input's roads: a service road, a secondary road given
      * twice, a 1 m road without a class) */
     const double A[6] = { 28.5, 21, 22.5, 21, 11.5, 30 }, B[6] = { 17.5, 9, 14.5, 9, -2.5, 3 }, C[4] = { -2.5, 0, 68.5, 9 };
@@ -1612,19 +1631,14 @@ static void test_duplicate_road(void)
 static void test_removed_tee_strip(void)
 {
     one_edit E;
-    edit_begin(&E, 0, 0);
-    static float z[64 * 48];
-    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
-    rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    E.ok = E.ok && rs_dem_create(E.ctx, 64, 48, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
-           rs_roads_create(E.ctx, &E.roads) == RS_OK;
-    const double A[6] = { 30.5, 22, 27.5, 21, 27.5, 21 }, B[6] = { 27.5, 59, 75.5, 57, 27.5, 59 },
-                 C[6] = { 27.5, 21, 27.5, 21, 37.5, 22 }, D[4] = { 27.5, 11, -2.5, 0 };
-    rs_roads *R = E.roads;
-    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 11, A, 3) == RS_OK && rs_roads_add(E.ctx, R, NULL, 11, B, 3) == RS_OK &&
-           rs_roads_add(E.ctx, R, NULL, 11, C, 3) == RS_OK && rs_roads_add(E.ctx, R, NULL, 1, D, 2) == RS_OK;
+    edit_fuzz_map(&E);
+    static const fuzz_road roads[4] = { { 11, 3, { 30.5, 22, 27.5, 21, 27.5, 21 } },
+                                        { 11, 3, { 27.5, 59, 75.5, 57, 27.5, 59 } },
+                                        { 11, 3, { 27.5, 21, 27.5, 21, 37.5, 22 } },
+                                        { 1, 2, { 27.5, 11, -2.5, 0 } } };
+    add_fuzz_roads(&E, roads, 4);
     edit_base(&E, 2);
-    E.ok = E.ok && rs_roads_remove(E.ctx, R, 0) == RS_OK;
+    E.ok = E.ok && rs_roads_remove(E.ctx, E.roads, 0) == RS_OK;
     edit_update(&E, "removed T strip");
     if (E.ok) {
         long changed = 0;
@@ -1645,19 +1659,14 @@ static void test_removed_tee_strip(void)
 static void test_far_strip_clipped(void)
 {
     one_edit E;
-    edit_begin(&E, 0, 0);
-    static float z[64 * 48];
-    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
-    rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    E.ok = E.ok && rs_dem_create(E.ctx, 64, 48, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
-           rs_roads_create(E.ctx, &E.roads) == RS_OK;
-    const double A[6] = { 24.75, 15.25, 11.75, 60.25, 75.75, 14.25 }, B[6] = { 63.5, 0, 29.5, 48, 63.5, 0 },
-                 C[6] = { 4.5, 46, 63.5, 0, 21.5, 52 }, D[6] = { -0.5, 46, 16.5, 47, 63.5, 0 };
-    rs_roads *R = E.roads;
-    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 3.875, A, 3) == RS_OK && rs_roads_add(E.ctx, R, NULL, 12, B, 3) == RS_OK &&
-           rs_roads_add(E.ctx, R, NULL, 11, C, 3) == RS_OK;
+    edit_fuzz_map(&E);
+    static const fuzz_road roads[4] = { { 3.875, 3, { 24.75, 15.25, 11.75, 60.25, 75.75, 14.25 } },
+                                        { 12, 3, { 63.5, 0, 29.5, 48, 63.5, 0 } },
+                                        { 11, 3, { 4.5, 46, 63.5, 0, 21.5, 52 } },
+                                        { 11, 3, { -0.5, 46, 16.5, 47, 63.5, 0 } } };
+    add_fuzz_roads(&E, roads, 3);
     edit_base(&E, 2);
-    E.ok = E.ok && rs_roads_add(E.ctx, R, NULL, 11, D, 3) == RS_OK;
+    add_fuzz_roads(&E, roads + 3, 1);
     edit_update(&E, "far strip clipped");
     if (E.ok) {
         /* (the strip's far pixels, 20 m from the new road's T, lose their paint) */

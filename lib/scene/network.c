@@ -2903,16 +2903,13 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
                     pb[2] = fmax(pb[2], p[0]), pb[3] = fmax(pb[3], p[1]);
                 }
             }
-            if (ntodo == ctodo) {
-                size_t nc = ctodo ? 2 * ctodo : 16;
-                uint32_t *nt = rs__realloc(ctx, todo, nc * sizeof *nt);
-                if (!nt) {
-                    rs__free(ctx, todo);
-                    rs__free(ctx, dl);
-                    goto nomem;
-                }
-                todo = nt, ctodo = nc;
+            void *arr = todo;
+            if ((res = rs__grow(ctx, &arr, ntodo, &ctodo, sizeof *todo, 16, SIZE_MAX / sizeof *todo)) != RS_OK) {
+                rs__free(ctx, todo);
+                rs__free(ctx, dl);
+                goto done;
             }
+            todo = arr;
             todo[ntodo++] = d | (fresh ? 0x80000000u : 0);
         }
         if (pb[0] <= pb[2]) {
@@ -2936,17 +2933,14 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             uint32_t deg = N->leg_start[d + 1] - N->leg_start[d];
             const rs_network_node *v = &N->node[d];
             const rs_network_leg *E = free_end_leg(N, L, deg, N->node_surf[d]);
-            if (nrep == crep) {
-                size_t nc = crep ? 2 * crep : 16;
-                re_node *nr = rs__realloc(ctx, rep, nc * sizeof *nr);
-                if (!nr) {
-                    rs__free(ctx, todo);
-                    rs__free(ctx, kc);
-                    rs__free(ctx, dl);
-                    goto nomem;
-                }
-                rep = nr, crep = nc;
+            void *arr = rep;
+            if ((res = rs__grow(ctx, &arr, nrep, &crep, sizeof *rep, 16, SIZE_MAX / sizeof *rep)) != RS_OK) {
+                rs__free(ctx, todo);
+                rs__free(ctx, kc);
+                rs__free(ctx, dl);
+                goto done;
             }
+            rep = arr;
             re_node *o = &rep[nrep];
             uint32_t ctl = (v->control & ~(uint32_t)RS_NODE_ROUNDABOUT);
             const char *jc = rs_roads_get_attr(roads, E->road, "junction");
