@@ -363,6 +363,23 @@ static size_t tee_run(const rs__road_local *rl, const road_fp *F, double cell, i
     return run;
 }
 
+/* The strip of end e when it is a trimmed end at a T: the unit direction
+ * (*dx, *dy) of its end segment towards the end, *sn = its sine against
+ * the T line (at least 0.2) and how far the strip runs on past the end
+ * point, the widest shape's (a casing strip's corner reaches further
+ * along). 0: no T there, or a zero-length end segment. */
+static int tee_strip(const rs__road_local *rl, const road_fp *F, int e, double *dx, double *dy, double *sn, double *far)
+{
+    size_t n = rl->n, k = e ? n - 1 : 0, q = e ? n - 2 : 1;
+    if (n < 2 || !(F->E.tee[e] > 0)) return 0;
+    double ux = rl->x[k] - rl->x[q], uy = rl->y[k] - rl->y[q], l = hypot(ux, uy);
+    if (!(l > 0)) return 0;
+    *dx = ux / l, *dy = uy / l;
+    *sn = fmax(0.2, fabs(*dx * F->E.tnx[e] + *dy * F->E.tny[e]));
+    *far = (F->E.tee[e] + F->reach * sqrt(fmax(0, 1 - *sn * *sn))) / *sn;
+    return 1;
+}
+
 static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp *F)
 {
     size_t n = rl->n;
@@ -379,14 +396,9 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
     /* a trimmed end at a T: the strip runs on to the through road's far
      * edge line (its corners included) */
     for (int e = 0; e < 2 && !r; e++) {
-        if (!(F->E.tee[e] > 0)) continue;
         size_t k = e ? n - 1 : 0, q = e ? n - 2 : 1;
-        double dx = x[k] - x[q], dy = y[k] - y[q], l = hypot(dx, dy);
-        if (!(l > 0)) continue;
-        dx /= l, dy /= l;
-        double sn = fmax(0.2, fabs(dx * F->E.tnx[e] + dy * F->E.tny[e]));
-        /* (the widest shape: a casing strip's corner reaches further along) */
-        double far = (F->E.tee[e] + F->reach * sqrt(fmax(0, 1 - sn * sn))) / sn;
+        double dx, dy, sn, far;
+        if (!tee_strip(rl, F, e, &dx, &dy, &sn, &far)) continue;
         uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
         r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
@@ -448,15 +460,10 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
          * took its far end's strip, 28 m long). That strip's region again,
          * as a piece of this T's. */
         int oe = !e;
-        if (!r && run >= n - 1 && F->E.tee[oe] > 0) {
-            size_t ko = oe ? n - 1 : 0, qo = oe ? n - 2 : 1;
-            double ox = x[ko] - x[qo], oy = y[ko] - y[qo], ol = hypot(ox, oy);
-            if (ol > 0) {
-                ox /= ol, oy /= ol;
-                double osn = fmax(0.2, fabs(ox * F->E.tnx[oe] + oy * F->E.tny[oe]));
-                double ofar = (F->E.tee[oe] + F->reach * sqrt(fmax(0, 1 - osn * osn))) / osn;
-                r = push(b, mix(mix(h, F->E.h[oe]), 0x0e5), x[ko], y[ko], x[ko] + ofar * ox, y[ko] + ofar * oy, F->reach);
-            }
+        double ox, oy, osn, ofar;
+        if (!r && run >= n - 1 && tee_strip(rl, F, oe, &ox, &oy, &osn, &ofar)) {
+            size_t ko = oe ? n - 1 : 0;
+            r = push(b, mix(mix(h, F->E.h[oe]), 0x0e5), x[ko], y[ko], x[ko] + ofar * ox, y[ko] + ofar * oy, F->reach);
         }
     }
     /* chunks: runs of short segments up to a chunk of arc staying near

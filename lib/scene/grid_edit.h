@@ -136,9 +136,9 @@ typedef struct rs__grid_track {
     double max_width; /* the widest road's width (NaN: one is not finite) */
     double *tfar;     /* per road end (2 i + end): its T line's rs__tee_end.far, NaN when it is no T end
                        * (NULL: no network) */
-    double *tstrip;   /* per road end: the box of its T strip at its half width (4 doubles: x0, y0, x1,
-                       * y1; NaN: none), so that an update knows where a changed or removed road's
-                       * strip was (NULL: no network) */
+    double *tstrip;   /* per road end: its T strip, 7 doubles (lib/scene/grid_patch.c strip_params: end
+                       * point, direction, far / sin, cos / sin, half width; NaN: none), so that an update
+                       * knows where a changed or removed road's strip was (NULL: no network) */
     size_t bytes;
 } rs__grid_track;
 /* The track of whole grid g built from `roads` with options o; takes `net`

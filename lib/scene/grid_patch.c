@@ -346,11 +346,16 @@ static size_t track_bytes(const rs__grid_track *t)
  * target's hairpin), kept as TS doubles: E, the unit direction u towards
  * the end, far / sin, cos / sin and the road's half width r; NaN when the
  * strip is not made (sin <= 0.1). */
+static void strip_none(double *p)
+{
+    for (int c = 0; c < TS; c++) p[c] = NAN;
+}
+
 static void strip_params(const double *a, const double *E, int end, double nx, double ny, double far, double r,
                          double *p)
 {
     double dx = a[2] - a[0], dy = a[3] - a[1], len = hypot(dx, dy);
-    for (int c = 0; c < TS; c++) p[c] = NAN;
+    strip_none(p);
     if (!(len > 0)) return;
     double ux = end ? dx / len : -dx / len, uy = end ? dy / len : -dy / len;
     double sn = nx * ux + ny * uy, cs = fabs(nx * uy - ny * ux);
@@ -384,7 +389,7 @@ static void tee_strips(double *ts, const rs__tee_end *te, size_t n, const rs_roa
         size_t np;
         double w = 0;
         double *p = ts + TS * (2 * (size_t)te[k].road + (te[k].end ? 1 : 0));
-        for (int c = 0; c < TS; c++) p[c] = NAN;
+        strip_none(p);
         if (rs_roads_get(roads, te[k].road, NULL, &w, &xy, &np) || !np) continue;
         size_t ke = rs__end_segment(xy, np, te[k].end);
         if (ke != SIZE_MAX)
@@ -794,7 +799,7 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
                 if (rs__is_end_leg(&N->leg[l])) {
                     size_t e = rs__leg_end(&N->leg[l]);
                     tfar[e] = NAN;
-                    for (int c = 0; c < TS; c++) tstrip[TS * e + c] = NAN;
+                    strip_none(tstrip + TS * e);
                 }
         tee_fars(tfar, te, nte);
         tee_strips(tstrip, te, nte, roads);
@@ -803,9 +808,9 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
         const rs__tee_end *t = &te[k];
         uint32_t q = map ? map[t->road] : t->road;
         size_t e = 2 * (size_t)t->road + (t->end ? 1 : 0);
+        double far = !map ? t->far : tfar ? tfar[e] : NAN;
         if (map) { /* (an old end: its strip where it was, its road changed or gone) */
-            double far_o = tfar ? tfar[e] : NAN;
-            if (!(far_o > -INFINITY && far_o < INFINITY)) { /* (NaN: an old end not known as a T) */
+            if (!(far > -INFINITY && far < INFINITY)) { /* (NaN: an old end not known as a T) */
                 if (!m[t->road]) *known = 0;
                 continue;
             }
@@ -822,17 +827,13 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
         rs_roads_get(roads, q, NULL, &w, &xy, &np);
         size_t ke = rs__end_segment(xy, np, t->end); /* (none: a build has no T there) */
         if (ke == SIZE_MAX) continue;
-        double margin = 0.5 * w + extra, far = !map ? t->far : tfar ? tfar[2 * (size_t)t->road + (t->end ? 1 : 0)] : NAN;
+        double margin = 0.5 * w + extra;
         if (!(margin < INFINITY && far > -INFINITY && far < INFINITY)) { /* (NaN: an old end not known as a T) */
             if (!m[t->road]) *known = 0;
             continue;
         }
         const double *E = xy + 2 * (t->end ? np - 1 : 0);
-        if (!map) {
-            double sp[TS];
-            strip_params(xy + 2 * ke, E, t->end, t->nx, t->ny, far, 0.5 * w, sp);
-            strip_add(acc, sp, wider, grow);
-        }
+        if (!map && tstrip) strip_add(acc, tstrip + TS * e, wider, grow); /* (tee_strips' above) */
         /* (a marked road's boxes are in; a road of two points has no
          * segment inward: neighbour_segments took its end segment) */
         if (m[t->road] || np < 3) continue;
@@ -1061,8 +1062,10 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             for (size_t j = 0; j < nn; j++)
                 for (int e = 0; e < 2; e++) {
                     size_t i = 2 * (size_t)m_new[j] + (size_t)e;
+                    double *p = ts + TS * (2 * j + (size_t)e);
                     tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[i];
-                    for (int c = 0; c < TS; c++) ts[TS * (2 * j + e) + c] = m_new[j] == UINT32_MAX ? NAN : T->tstrip[TS * i + c];
+                    if (m_new[j] == UINT32_MAX) strip_none(p);
+                    else memcpy(p, T->tstrip + TS * i, TS * sizeof *p);
                 }
         known = extra < INFINITY && (!net || (tf && ts));
         const double wider = fmax(T->facts.widest_casing, facts.widest_casing) + 0.01; /* (the strip's: a casing) */

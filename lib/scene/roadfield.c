@@ -2081,10 +2081,6 @@ static void tee_pass(const rs__roadfield *f, const rs__roadfield *g, uint32_t px
         }
 }
 
-/* Box where the trimmed shape of T's segment and its capsule differ: the
- * end disc and the strip from where the clip line cuts its near side to
- * where it cuts its far side (u along the segment towards the end,
- * measured from the end point). */
 /* How far along normal (nx, ny) a capsule comes, and a box (x0, x1, y0, y1):
  * how far a segment's trimmed shape reaches past a T line is the larger of
  * its capsule's and its own T strips' boxes' (set_tees, tees_finish). */
@@ -2098,6 +2094,10 @@ static double box_far(const double *b, double nx, double ny)
     return nx * (nx > 0 ? b[1] : b[0]) + ny * (ny > 0 ? b[3] : b[2]);
 }
 
+/* Box where the trimmed shape of T's segment and its capsule differ: the
+ * end disc and the strip from where the clip line cuts its near side to
+ * where it cuts its far side (u along the segment towards the end,
+ * measured from the end point). */
 static void tee_box(const rs__roadfield *f, rf_tee *T)
 {
     const rf_seg *s = &f->seg[T->seg];
