@@ -167,6 +167,8 @@ typedef struct rs__grid_facts {
     int casing_uniform;
     float casing_rgba[4];
     double widest_casing;         /* the widest casing, metres (0: none) */
+    int ranked;                   /* the roads' priorities differ and some road has a surface: a fill
+                                     lookup prefers the surfaces that hold a pixel (rs__styling's prio) */
     /* window_on: only the pixels inside window (local metres x0, y0, x1,
      * y1), and queries there up to window_reach metres, will be asked of
      * this part (a patch): its road fields list only the segments that can

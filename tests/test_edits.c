@@ -1679,6 +1679,54 @@ static void test_far_strip_clipped(void)
     edit_end(&E);
 }
 
+/* Fills where roads of equal priority overlap (fuzz/edits seed 224dbe0b):
+ * while every road ranks alike a pixel takes the nearest centre line;
+ * once the priorities differ anywhere on the map, a surface that holds
+ * the pixel wins over a nearer centre line (issue 27). A road of a higher
+ * class added far away flips that for the whole map, so the update builds
+ * whole; and a patch among roads that rank alike, on a map where they do
+ * not, looks its fills up as the whole map does. */
+static void test_ranked_fills(void)
+{
+    static const char sty[] = "style s\nfill #a04030\nend\n";
+    static const fuzz_road roads[3] = { { 6, 2, { 5, 5, 70, 50 } },
+                                        { 5, 3, { -2.5, 52, 9.5, 2, 9.5, 2 } },
+                                        { 4, 3, { 9.5, 10, 21.5, 1, -2.5, 0 } } };
+    const double far[4] = { 250, 200, 262, 205 };
+    for (int flip = 0; flip < 2; flip++) {
+        one_edit E;
+        rs_styles *styles = NULL;
+        rs_ctx *sc = NULL; /* (the styles outlive E's grids) */
+        edit_fuzz_map(&E);
+        E.ok = E.ok && rs_ctx_create(NULL, NULL, &sc) == RS_OK && rs_styles_parse(sc, sty, sizeof sty - 1, &styles) == RS_OK;
+        add_fuzz_roads(&E, roads, 3);
+        E.ok = E.ok && rs_roads_set_attr(E.ctx, E.roads, 0, "style", "s") == RS_OK;
+        if (!flip) /* (the map ranks its roads: a secondary road far away) */
+            E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 8, far, 2) == RS_OK &&
+                   rs_roads_set_attr(E.ctx, E.roads, 3, "class", "secondary") == RS_OK;
+        E.o = edit_opts(3);
+        E.o.style.styles = styles;
+        E.ok = E.ok && rs_road_grid_build(E.ctx, E.dem, E.roads, &E.o, &E.g0) == RS_OK &&
+               render(E.ctx, E.dem, E.g0, &E.o, &E.a) == 0;
+        if (flip) /* the secondary road added: the whole map ranks */
+            E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 8, far, 2) == RS_OK &&
+                   rs_roads_set_attr(E.ctx, E.roads, 3, "class", "secondary") == RS_OK;
+        else { /* road 2 moved a metre: a patch among roads that rank alike */
+            double q[6];
+            for (int k = 0; k < 6; k++) q[k] = roads[2].xy[k] + (k % 2 ? 0 : 1);
+            E.ok = E.ok && rs_roads_replace(E.ctx, E.roads, 2, NULL, 4, q, 3) == RS_OK;
+        }
+        edit_update(&E, flip ? "ranked fills: a class added" : "ranked fills: a patch");
+        if (E.ok) {
+            if (!flip) CHECK(rs_road_grid_patch_count(E.g1) == 1);
+            check_rects(flip ? "ranked fills: a class added" : "ranked fills: a patch", E.g1, &E.a, &E.b, &E.c);
+        }
+        edit_end(&E);
+        rs_styles_free(sc, styles);
+        rs_ctx_free(sc);
+    }
+}
+
 int main(void)
 {
     test_shared_free();
@@ -1700,5 +1748,6 @@ int main(void)
     test_duplicate_road();
     test_removed_tee_strip();
     test_far_strip_clipped();
+    test_ranked_fills();
     return th_finish("test_edits");
 }

@@ -105,6 +105,7 @@ typedef struct rs__road_sum {
     double casing_width;
     double reach;             /* its paint's reach from the centre line */
     uint8_t fill_surface, image, any_surface, styled;
+    int prio;                 /* rs__road_priority */
 } rs__road_sum;
 
 /* What a proportional update reads from the grid it updates (lib/scene/grid_patch.c):

@@ -277,6 +277,7 @@ static rs_result road_sum(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs
     memset(S, 0, sizeof *S);
     S->reach = 0.5 * w;
     *sprint = 0;
+    S->prio = rs__road_priority(roads, i);
     if (o->style.disable) return RS_OK;
     rs_result r = rs_road_style_ex(ctx, roads, i, &o->style, y);
     if (r) return r;
@@ -328,6 +329,8 @@ static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_r
         }
         *reach = fmax(*reach, y->reach);
     }
+    /* (as rs__styling keeps its priorities: they differ, and a fill looks them up) */
+    for (size_t i = 1; i < n && !disable && facts->any_surface && !facts->ranked; i++) facts->ranked = S[i].prio != S[0].prio;
     if (!facts->styled) memset(facts, 0, sizeof *facts); /* (no styling: the whole build keeps no switches) */
     if (mark_reach > *reach) *reach = mark_reach;
 }
@@ -910,7 +913,8 @@ static int same_switches(const rs__grid_facts *a, const rs__grid_facts *b, doubl
            (!a->fill_uniform || !memcmp(a->fill_rgba, b->fill_rgba, sizeof a->fill_rgba)) &&
            a->casing_uniform == b->casing_uniform &&
            (!a->casing_uniform || !memcmp(a->casing_rgba, b->casing_rgba, sizeof a->casing_rgba)) &&
-           (a->widest_casing > 0) == (b->widest_casing > 0) && (a->widest_casing <= cell) == (b->widest_casing <= cell);
+           (a->widest_casing > 0) == (b->widest_casing > 0) && (a->widest_casing <= cell) == (b->widest_casing <= cell) &&
+           a->ranked == b->ranked;
 }
 
 /* ---- the patched grid ------------------------------------------------------ */

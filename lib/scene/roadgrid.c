@@ -880,6 +880,7 @@ void rs__grid_facts_of(const rs_road_grid *g, rs__grid_facts *out)
     out->casing_uniform = st->casing_uniform;
     memcpy(out->casing_rgba, st->casing_rgba, sizeof out->casing_rgba);
     out->widest_casing = st->widest_casing;
+    out->ranked = st->prio != NULL;
 }
 
 rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads,

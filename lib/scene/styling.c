@@ -289,6 +289,13 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
      * read them, and the fill lookups keep them (below) */
     if ((nbands || st->any_surface || st->img_of) && (r = rs__road_priorities(ctx, roads, &st->prio)) != RS_OK)
         goto fail_dash;
+    if (facts && facts->ranked && !st->prio && (st->any_surface || st->img_of)) {
+        /* a part of a map whose roads all rank alike where the map's do
+         * not: its fills are looked up as the whole map's are (a pixel
+         * takes a surface that holds it before a nearer centre line) */
+        if (!(st->prio = rs__alloc_array(ctx, n ? n : 1, sizeof *st->prio))) { r = RS_ERR_NOMEM; goto fail_dash; }
+        for (size_t i = 0; i < n; i++) st->prio[i] = rs__road_priority(roads, i);
+    }
     if (nbands) {
         rs__linesym_params lp;
         memset(&lp, 0, sizeof lp);
