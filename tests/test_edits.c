@@ -1727,6 +1727,57 @@ static void test_ranked_fills(void)
     }
 }
 
+/* A record that only moved along its stroke (docs/embedding.md "Records
+ * moved along their stroke"): a residential street of five 50 m records
+ * on the fuzz map, a service road giving way on its last record. Moving
+ * the second record up splits the street: the last two records keep
+ * their neighbours, only their arc lengths change, and they draw no
+ * lines, so the patch stays near the split and the far records' give-way
+ * line is not rebuilt; the bytes are a fresh build's. With lines on the
+ * street (dashes laid along it) the far records are changed whole. */
+static void test_moved_along_stroke(void)
+{
+    static const char sty[] = "style dashed\nfill #505050\nline 0 0.15 #ffffff dash 3 3\nend\n";
+    for (int lines = 0; lines < 2; lines++) {
+        one_edit E;
+        rs_styles *styles = NULL;
+        rs_ctx *sc = NULL;
+        edit_fuzz_map(&E);
+        E.ok = E.ok && rs_ctx_create(NULL, NULL, &sc) == RS_OK && rs_styles_parse(sc, sty, sizeof sty - 1, &styles) == RS_OK;
+        for (int k = 0; k < 5; k++) {
+            const double xy[4] = { 20 + 50 * k, 100, 70 + 50 * k, 100 };
+            E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 6, xy, 2) == RS_OK &&
+                   rs_roads_set_attr(E.ctx, E.roads, (size_t)k, "class", "residential") == RS_OK &&
+                   (!lines || rs_roads_set_attr(E.ctx, E.roads, (size_t)k, "style", "dashed") == RS_OK);
+        }
+        const double side[4] = { 245, 130, 245, 100 };
+        E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, side, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 5, "class", "service") == RS_OK;
+        E.o = edit_opts(2);
+        E.o.style.styles = styles;
+        E.ok = E.ok && rs_road_grid_build(E.ctx, E.dem, E.roads, &E.o, &E.g0) == RS_OK &&
+               render(E.ctx, E.dem, E.g0, &E.o, &E.a) == 0;
+        const double up[4] = { 70, 115, 120, 115 };
+        E.ok = E.ok && rs_roads_replace(E.ctx, E.roads, 1, NULL, 6, up, 2) == RS_OK;
+        edit_update(&E, lines ? "moved along its stroke, lines" : "moved along its stroke");
+        if (E.ok) {
+            /* the patch's reach along the street (2.5 m pixels): the third
+             * record, a neighbour at a changed node, is drawn again all
+             * along (its capsule's ends changed); the last one's end
+             * (x 270 m) only with lines (else the whole build) */
+            uint32_t x1 = 0;
+            for (size_t k = 0; k < E.g1->npatch; k++) x1 = E.g1->patch[k].rect.x1 > x1 ? E.g1->patch[k].rect.x1 : x1;
+            if (lines) CHECKF(!E.g1->npatch || x1 >= 270 / 2.5, "moved along its stroke, lines: the patch reaches x = %u px", x1);
+            else CHECKF(E.g1->npatch && x1 < 270 / 2.5, "moved along its stroke: %zu patches reaching x = %u px",
+                        E.g1->npatch, x1);
+            check_rects(lines ? "moved along its stroke, lines" : "moved along its stroke", E.g1, &E.a, &E.b, &E.c);
+        }
+        edit_end(&E);
+        rs_styles_free(sc, styles);
+        rs_ctx_free(sc);
+    }
+}
+
 int main(void)
 {
     test_shared_free();
@@ -1749,5 +1800,6 @@ int main(void)
     test_removed_tee_strip();
     test_far_strip_clipped();
     test_ranked_fills();
+    test_moved_along_stroke();
     return th_finish("test_edits");
 }

@@ -105,6 +105,7 @@ typedef struct rs__road_sum {
     double casing_width;
     double reach;             /* its paint's reach from the centre line */
     uint8_t fill_surface, image, any_surface, styled;
+    uint8_t lines;            /* it draws lines (their dashes are laid along its stroke) */
     int prio;                 /* rs__road_priority */
 } rs__road_sum;
 

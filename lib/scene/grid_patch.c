@@ -287,6 +287,7 @@ static rs_result road_sum(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs
     S->image = y->surface_image[0] != 0;
     S->any_surface = y->surface != RS_SURFACE_DEFAULT || S->image;
     S->styled = y->surface != RS_SURFACE_DEFAULT || y->line_count || y->casing_width > 0 || S->image;
+    S->lines = y->line_count > 0;
     if (y->casing_width > 0) {
         rs__put_colour(S->casing, y->casing);
         S->casing_width = y->casing_width;
@@ -531,23 +532,193 @@ static rs_result match_roads(rs_ctx *ctx, const uint64_t *po, size_t no, const u
     return RS_OK;
 }
 
-/* Whether old record i and new record j (a match) sit alike in their
- * strokes: arc length, direction, closed, and neighbours that match. */
-static int same_place(const rs_network *A, const rs_network *B, uint32_t i, uint32_t j, const uint32_t *m_old)
+/* How old record i and new record j (a match) sit in their strokes: 0
+ * alike; 1 only their arc length along the stroke or their direction in
+ * it differ (the stroke changed beyond their neighbours: its start moved,
+ * a record gone further along); 2 their neighbours, length or ring
+ * differ. */
+static int place_change(const rs_network *A, const rs_network *B, uint32_t i, uint32_t j, const uint32_t *m_old)
 {
-    if (A->s_off[i] != B->s_off[j] || A->rev[i] != B->rev[j] || A->length[i] != B->length[j] ||
-        A->closed[A->stroke_of[i]] != B->closed[B->stroke_of[j]])
-        return 0;
+    if (A->length[i] != B->length[j] || A->closed[A->stroke_of[i]] != B->closed[B->stroke_of[j]]) return 2;
     /* (a neighbour gone is a change: m_old of a removed record is UINT32_MAX, as no neighbour is) */
     const uint32_t pa = A->prev[i], na = A->next[i];
-    if (pa == UINT32_MAX ? B->prev[j] != UINT32_MAX : m_old[pa] == UINT32_MAX || m_old[pa] != B->prev[j]) return 0;
-    if (na == UINT32_MAX ? B->next[j] != UINT32_MAX : m_old[na] == UINT32_MAX || m_old[na] != B->next[j]) return 0;
+    if (pa == UINT32_MAX ? B->prev[j] != UINT32_MAX : m_old[pa] == UINT32_MAX || m_old[pa] != B->prev[j]) return 2;
+    if (na == UINT32_MAX ? B->next[j] != UINT32_MAX : m_old[na] == UINT32_MAX || m_old[na] != B->next[j]) return 2;
     for (int e = 0; e < 2; e++) {
         uint32_t la = A->link[2 * i + e], lb = B->link[2 * j + e];
         if (la == UINT32_MAX ? lb != UINT32_MAX : m_old[la / 2] == UINT32_MAX || 2 * m_old[la / 2] + la % 2 != lb)
-            return 0;
+            return 2;
     }
+    return A->s_off[i] != B->s_off[j] || A->rev[i] != B->rev[j];
+}
+
+/* ---- records whose stroke changed far away ----------------------------------
+ * A record that only moved along its stroke (place_change 1) draws the
+ * same when it has no lines (dashes take their phase from the stroke) and
+ * no image (laid along s), and its stroke is no ring: its surface and
+ * casing never read the stroke, and the automatic markings read it only
+ * near junctions (lib/scene/markings_auto.c measures along the street from
+ * the record, and its areas from the record's own start). What can still
+ * change there is where the markings compare streets: a street that
+ * passes close to itself (two of its records near one point: a junction
+ * with itself, one street met twice), the stroke's ends near a changed
+ * record, and a free end of the street that another road joins (the
+ * junctions at the street's linked ends on that road). Those places get a
+ * zone each; the rest of such a record stays out of the changed area.
+ * docs/embedding.md "Records moved along their stroke". */
+
+/* Squared distance between segments (a0, a1) and (b0, b1). */
+static double seg_seg_d2(const double *a0, const double *a1, const double *b0, const double *b1)
+{
+    const double *P[4] = { a0, a1, b0, b1 }, *S0[4] = { b0, b0, a0, a0 }, *S1[4] = { b1, b1, a1, a1 };
+    /* proper crossing: 0 */
+    double d1 = (a1[0] - a0[0]) * (b0[1] - a0[1]) - (a1[1] - a0[1]) * (b0[0] - a0[0]);
+    double d2 = (a1[0] - a0[0]) * (b1[1] - a0[1]) - (a1[1] - a0[1]) * (b1[0] - a0[0]);
+    double d3 = (b1[0] - b0[0]) * (a0[1] - b0[1]) - (b1[1] - b0[1]) * (a0[0] - b0[0]);
+    double d4 = (b1[0] - b0[0]) * (a1[1] - b0[1]) - (b1[1] - b0[1]) * (a1[0] - b0[0]);
+    if (((d1 < 0 && d2 > 0) || (d1 > 0 && d2 < 0)) && ((d3 < 0 && d4 > 0) || (d3 > 0 && d4 < 0))) return 0;
+    double best = INFINITY;
+    for (int k = 0; k < 4; k++) {
+        double ux = S1[k][0] - S0[k][0], uy = S1[k][1] - S0[k][1], l2 = ux * ux + uy * uy;
+        double t = l2 > 0 ? ((P[k][0] - S0[k][0]) * ux + (P[k][1] - S0[k][1]) * uy) / l2 : 0;
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        double dx = P[k][0] - (S0[k][0] + t * ux), dy = P[k][1] - (S0[k][1] + t * uy), d = dx * dx + dy * dy;
+        if (d < best) best = d;
+    }
+    return best;
+}
+
+/* Do roads a and b (points of `roads`) come within d of each other? NaN: yes. */
+static int roads_within(const rs_roads *roads, size_t a, size_t b, double d)
+{
+    const double *pa, *pb;
+    size_t na, nb;
+    rs_roads_get(roads, a, NULL, NULL, &pa, &na);
+    rs_roads_get(roads, b, NULL, NULL, &pb, &nb);
+    double d2 = d * d;
+    for (size_t u = 0; u < na; u++) {
+        const double *a0 = pa + 2 * u, *a1 = pa + 2 * (u + 1 < na ? u + 1 : u);
+        for (size_t v = 0; v < nb; v++) {
+            const double *b0 = pb + 2 * v, *b1 = pb + 2 * (v + 1 < nb ? v + 1 : v);
+            double e = seg_seg_d2(a0, a1, b0, b1);
+            if (!(e > d2)) return 1;
+        }
+    }
+    return 0;
+}
+
+/* Does point (x, y) lie within d of road j's centre line? NaN: yes. */
+static int point_near_road(const rs_roads *roads, size_t j, double x, double y, double d)
+{
+    const double *p;
+    size_t n;
+    rs_roads_get(roads, j, NULL, NULL, &p, &n);
+    const double q[2] = { x, y };
+    for (size_t u = 0; u < n; u++) {
+        const double *a0 = p + 2 * u, *a1 = p + 2 * (u + 1 < n ? u + 1 : u);
+        if (!(seg_seg_d2(q, q, a0, a1) > d * d)) return 1;
+    }
+    return 0;
+}
+
+static void point_zone(boxes *B, double x, double y, double z)
+{
+    const double b[4] = { x, y, x, y };
+    boxes_add(B, b, z);
+}
+
+/* Road j's end e's point (0: first, 1: last), 0 when it has none. */
+static int road_end(const rs_roads *roads, size_t j, int e, double *x, double *y)
+{
+    const double *p;
+    size_t n;
+    rs_roads_get(roads, j, NULL, NULL, &p, &n);
+    if (!n) return 0;
+    *x = p[e ? 2 * (n - 1) : 0], *y = p[e ? 2 * (n - 1) + 1 : 1];
     return 1;
+}
+
+/* Strokes bigger than this are not searched for places where they pass
+ * close to themselves: their records that moved along them stay changed
+ * whole. */
+#define SELF_MAX 256
+
+/* The zones of stroke k of network N (the old or the new one; M the
+ * other, toM: N's record to M's, UINT32_MAX where it has none): where two
+ * of its records come within d of each other with a link between them
+ * that M does not have (before and after the edit they are one street in
+ * one network only: a junction of the street with itself, a street met
+ * twice), and the linked ends of its records near a road that one of its
+ * free ends lies on (that road joins the street there, which decides the
+ * junctions at those ends). toRoad: N's record to a road of `roads`
+ * (UINT32_MAX: none, then its box in ob, N's records' boxes; NULL: the
+ * same); bn: the roads' boxes. Returns 0, or 1 when the stroke has more
+ * than SELF_MAX records (its moved records are then taken whole). */
+static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_network *M, const uint32_t *toM,
+                        const uint32_t *toRoad, const double *ob, const rs_roads *roads, const double *bn, size_t nn,
+                        double d, double z, uint32_t *recs, uint32_t *nbrk)
+{
+    uint32_t m = N->stroke_start[k + 1] - N->stroke_start[k];
+    if (m > SELF_MAX) return 1;
+    const uint32_t *sr = N->stroke_roads + N->stroke_start[k];
+    for (uint32_t a = 0; a < m; a++) recs[a] = toRoad ? toRoad[sr[a]] : sr[a];
+    /* nbrk[a]: links before position a along the stroke that M lacks */
+    nbrk[0] = 0;
+    for (uint32_t a = 0; a + 1 < m; a++) {
+        uint32_t x = toM[sr[a]], y = toM[sr[a + 1]];
+        int kept = x != UINT32_MAX && y != UINT32_MAX && (M->next[x] == y || M->next[y] == x);
+        nbrk[a + 1] = nbrk[a] + !kept;
+    }
+    for (uint32_t a = 0; a < m; a++)
+        for (uint32_t b = a + 1; b < m; b++) {
+            if (nbrk[b] == nbrk[a]) continue; /* (one street in both: they compare alike) */
+            const double *ba = recs[a] != UINT32_MAX ? bn + 4 * (size_t)recs[a] : ob + 4 * (size_t)sr[a];
+            const double *bb = recs[b] != UINT32_MAX ? bn + 4 * (size_t)recs[b] : ob + 4 * (size_t)sr[b];
+            if (ba[0] - d > bb[2] || bb[0] - d > ba[2] || ba[1] - d > bb[3] || bb[1] - d > ba[3]) continue;
+            if (recs[a] != UINT32_MAX && recs[b] != UINT32_MAX && !roads_within(roads, recs[a], recs[b], d)) continue;
+            const double zb[4] = { fmax(ba[0], bb[0]) - d, fmax(ba[1], bb[1]) - d, fmin(ba[2], bb[2]) + d,
+                                   fmin(ba[3], bb[3]) + d };
+            boxes_add(B, zb, z);
+        }
+    if (N->closed[k] || !m) return 0;
+    /* the free ends: the first record's start and the last's end, along the stroke */
+    for (int side = 0; side < 2; side++) {
+        uint32_t rr = sr[side ? m - 1 : 0], road = recs[side ? m - 1 : 0];
+        double fb[4];
+        if (road == UINT32_MAX) {
+            memcpy(fb, ob + 4 * (size_t)rr, sizeof fb);
+        } else {
+            double x, y;
+            if (!road_end(roads, road, (side != 0) != (N->rev[rr] != 0), &x, &y)) continue;
+            fb[0] = fb[2] = x, fb[1] = fb[3] = y;
+        }
+        for (size_t j = 0; j < nn; j++) {
+            double w = 0;
+            rs_roads_get(roads, j, NULL, &w, NULL, NULL);
+            double reach = 0.5 * w + 1.0; /* (the markings' 0.5 m, and as much again for the frames' rounding) */
+            const double *bj = bn + 4 * j;
+            if (!(reach < 1e300)) reach = INFINITY;
+            if (bj[0] - reach > fb[2] || fb[0] - reach > bj[2] || bj[1] - reach > fb[3] || fb[1] - reach > bj[3])
+                continue;
+            int own = 0; /* (the street's own records: no junction) */
+            for (uint32_t a = 0; a < m && !own; a++) own = recs[a] == j;
+            if (own || (fb[0] == fb[2] && fb[1] == fb[3] && !point_near_road(roads, j, fb[0], fb[1], reach)))
+                continue;
+            /* road j holds a free end of the street: the street's linked ends on j */
+            for (uint32_t a = 0; a < m; a++)
+                for (int e = 0; e < 2; e++) {
+                    if (N->link[2 * (size_t)sr[a] + (size_t)e] == UINT32_MAX) continue;
+                    if (recs[a] == UINT32_MAX) {
+                        boxes_add(B, ob + 4 * (size_t)sr[a], z);
+                        continue;
+                    }
+                    double x, y;
+                    if (road_end(roads, recs[a], e, &x, &y) && point_near_road(roads, j, x, y, reach))
+                        point_zone(B, x, y, z);
+                }
+        }
+    }
+    return 0;
 }
 
 static uint64_t rect_area(rs_pixel_rect r) { return (uint64_t)(r.x1 - r.x0) * (r.y1 - r.y0); }
@@ -1028,13 +1199,77 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         goto done;
     }
     for (size_t i = 0; i < no; i++) co[i] = m_old[i] == UINT32_MAX;
+    /* arc: records that only moved along their stroke and draw the same
+     * there (lines, image, ring: changed whole) */
+    uint8_t *arc = NULL;
+    size_t narc = 0;
     for (size_t j = 0; j < nn; j++) {
         uint32_t i = m_new[j];
-        cn[j] = i == UINT32_MAX || (net && T->net && !same_place(T->net, net, i, (uint32_t)j, m_old)) ||
-                (!net) != (!T->net);
+        int pc = i == UINT32_MAX || (!net) != (!T->net) ? 2 : net && T->net ? place_change(T->net, net, i, (uint32_t)j, m_old) : 0;
+        if (pc == 1 && !sm[j].lines && !sm[j].image && (arc || (arc = rs__calloc(ctx, nn, 1)))) {
+            arc[j] = 1;
+            narc++;
+            continue;
+        }
+        cn[j] = pc != 0;
     }
     for (size_t i = 0; i < no; i++)
         if (co[i]) road_boxes(&chg, T->box, &T->chunks, i, grow);
+    if (narc) {
+        /* their zones (place_change's comment); a zone's reach: a junction's
+         * area on both streets (half the widest road and 0.5 m each), the
+         * give-way line or arrow before it (6 m and the arrow) and a road's
+         * half width across, beyond the changed boxes' own growth */
+        const double wmax = widest(T->max_width, max_width), d = wmax + 2;
+        const double zone = fmax(grow, 1.5 * wmax + 13 + mark_reach);
+        int whole = !(zone < 1e300);
+        /* a moved record whose end lies within a street's junction reach
+         * (half the widest road and 0.5 m) of a changed one along the
+         * stroke: the street's end may have come or gone there, which
+         * decides whether it passes a junction that near (markings_auto's
+         * street_passes); a zone at that end, as far again */
+        const double hb = 0.5 * wmax + 1.5;
+        for (size_t j = 0; j < nn && !whole; j++) {
+            if (!arc[j]) continue;
+            for (int e = 0; e < 2; e++) {
+                /* along the stroke from end e: before j at its start unless reversed */
+                int back = (e == 0) != (net->rev[j] != 0), near = 0;
+                uint32_t lk = net->link[2 * j + (size_t)e];
+                near = lk != UINT32_MAX && cn[lk / 2];
+                double run = 0;
+                size_t steps = 0;
+                for (uint32_t q = back ? net->prev[j] : net->next[j]; !near && q != UINT32_MAX && run <= hb && steps <= nn;
+                     q = back ? net->prev[q] : net->next[q], steps++) {
+                    near = cn[q];
+                    run += net->length[q];
+                }
+                double x, y;
+                if (near && road_end(roads, j, e, &x, &y)) point_zone(&chg, x, y, zone + hb);
+            }
+        }
+        /* the strokes holding one, before and after */
+        uint8_t *sn = rs__calloc(ctx, net->nstrokes ? net->nstrokes : 1, 1);
+        uint8_t *so = rs__calloc(ctx, T->net->nstrokes ? T->net->nstrokes : 1, 1);
+        uint32_t *recs = rs__alloc_array(ctx, 2 * SELF_MAX, sizeof *recs);
+        if (!sn || !so || !recs) whole = 1, chg.nomem = 1;
+        size_t nst = 0;
+        for (size_t j = 0; j < nn && !whole; j++)
+            if (arc[j]) {
+                nst += !sn[net->stroke_of[j]] + !so[T->net->stroke_of[m_new[j]]];
+                sn[net->stroke_of[j]] = so[T->net->stroke_of[m_new[j]]] = 1;
+            }
+        whole |= nst > 2 * SELF_MAX / 8; /* (each stroke's free ends scan every road) */
+        for (size_t k = 0; k < net->nstrokes && !whole; k++)
+            if (sn[k]) whole |= stroke_zones(&chg, net, k, T->net, m_new, NULL, bn, roads, bn, nn, d, zone, recs, recs + SELF_MAX);
+        for (size_t k = 0; k < T->net->nstrokes && !whole; k++)
+            if (so[k]) whole |= stroke_zones(&chg, T->net, k, net, m_old, m_old, T->box, roads, bn, nn, d, zone, recs, recs + SELF_MAX);
+        rs__free(ctx, sn);
+        rs__free(ctx, so);
+        rs__free(ctx, recs);
+        if (whole) /* (too many, or too big: taken whole) */
+            for (size_t j = 0; j < nn; j++) cn[j] |= arc[j];
+    }
+    rs__free(ctx, arc);
     for (size_t j = 0; j < nn; j++)
         if (cn[j]) road_boxes(&chg, bn, &ch, j, grow);
     /* the segments of the roads meeting a changed one, in the new network

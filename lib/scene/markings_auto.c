@@ -275,24 +275,80 @@ static double stroke_s(const ctxa *A, size_t r, double s)
     return N->rev[r] ? N->s_off[r] - s : N->s_off[r] + s;
 }
 
+/* Does road r's street run on more than hb both ways from its arc length
+ * s (a ring always does)? Measured from r along its neighbours, not from
+ * the stroke's start, so that a change of the street far away (its start
+ * moved, a record gone) leaves the answer as it was: a proportional
+ * update takes a record whose place in its stroke changed as unchanged
+ * when it draws no lines (lib/scene/grid_patch.c place_change). */
+static int street_passes(const ctxa *A, size_t r, double s, double hb)
+{
+    if (ring_street(A, r)) return 1;
+    const rs_network *N = A->net;
+    double len = N->length[r], x = N->rev[r] ? len - s : s; /* (along the stroke from r's start in it) */
+    double d = x;
+    size_t steps = 0;
+    for (uint32_t q = N->prev[r]; d <= hb && q != UINT32_MAX && steps <= N->nroads; q = N->prev[q], steps++)
+        d += N->length[q];
+    if (!(d > hb)) return 0;
+    d = len - x;
+    steps = 0;
+    for (uint32_t q = N->next[r]; d <= hb && q != UINT32_MAX && steps <= N->nroads; q = N->next[q], steps++)
+        d += N->length[q];
+    return d > hb;
+}
+
 static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half);
+
+static rs_result on_record(ctxa *A, uint32_t q, double u0, double u1, int op, double half)
+{
+    return op ? add_cut(A, q, u0, u1, half) : add_jn(A, q, (u0 + u1) / 2, (u1 - u0) / 2);
+}
 
 /* A junction area (op 0: centre (s0 + s1) / 2, half extent (s1 - s0) / 2)
  * or a cut of the lines (op 1, `half` across) over [s0, s1] of road's arc
  * length, on every record of its street that the span reaches, in each
  * one's own arc length (a street split near a junction has its area and
  * cuts on both records: they stopped at the split). A ring's span wraps
- * round its seam. */
+ * round its seam. Off a ring the records are placed from road's own
+ * start along the stroke (road's span exactly its own), so that where
+ * the street starts does not move them. */
 static rs_result on_stroke(ctxa *A, size_t road, double s0, double s1, int op, double half)
 {
     const rs_network *N = A->net;
-    double a = stroke_s(A, road, s0), b = stroke_s(A, road, s1);
-    if (a > b) { double t = a; a = b; b = t; }
     uint32_t k = N->stroke_of[road];
     double L = A->slen[k];
     int wraps = ring_street(A, road) && L > 0;
+    if (!wraps) {
+        double len = N->length[road], xa = N->rev[road] ? len - s0 : s0, xb = N->rev[road] ? len - s1 : s1;
+        double lo = xa < xb ? xa : xb, hi = xa < xb ? xb : xa;
+        /* back from road (road itself first), then on from its next;
+         * q0: where record q starts along the stroke, from road's start */
+        for (int way = 0; way < 2; way++) {
+            double q0 = way ? len : 0;
+            size_t steps = 0;
+            for (uint32_t q = way ? N->next[road] : (uint32_t)road; q != UINT32_MAX && steps <= N->nroads;
+                 steps++) {
+                double ql = N->length[q];
+                if (!way && q != road) q0 -= ql;
+                double q1 = q0 + ql;
+                if (way ? q0 > hi : q1 < lo) break;
+                if (!(hi < q0 || lo > q1)) {
+                    double u0, u1;
+                    if (q == road) u0 = s0 < s1 ? s0 : s1, u1 = s0 < s1 ? s1 : s0;
+                    else u0 = N->rev[q] ? q1 - hi : lo - q0, u1 = N->rev[q] ? q1 - lo : hi - q0;
+                    rs_result r = on_record(A, q, u0, u1, op, half);
+                    if (r) return r;
+                }
+                if (way) q0 = q1;
+                q = way ? N->next[q] : N->prev[q];
+            }
+        }
+        return RS_OK;
+    }
+    double a = stroke_s(A, road, s0), b = stroke_s(A, road, s1);
+    if (a > b) { double t = a; a = b; b = t; }
     for (int turn = -1; turn <= 1; turn++) {
-        if (turn && !wraps) continue;
         double lo = a + turn * L, hi = b + turn * L;
         if (turn && (hi < 0 || lo > L)) continue;
         /* from the road (a wrapped span: from the stroke's last or first
@@ -308,7 +364,7 @@ static rs_result on_stroke(ctxa *A, size_t road, double s0, double s1, int op, d
                 if (hi < q0 || lo > q1) continue;
                 double u0 = N->rev[q] ? N->s_off[q] - hi : lo - N->s_off[q];
                 double u1 = N->rev[q] ? N->s_off[q] - lo : hi - N->s_off[q];
-                rs_result r = op ? add_cut(A, q, u0, u1, half) : add_jn(A, q, (u0 + u1) / 2, (u1 - u0) / 2);
+                rs_result r = on_record(A, q, u0, u1, op, half);
                 if (r) return r;
             }
     }
@@ -918,8 +974,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                     mt[c].out = 1;
                     continue;
                 }
-                double sg = stroke_s(&A, mt[c].road, mt[c].s);
-                int passes = ring_street(&A, mt[c].road) || (sg > hb && sg < A.slen[k] - hb);
+                int passes = street_passes(&A, mt[c].road, mt[c].s, hb);
                 if (linked && !passes) {
                     mt[c].out = 1; /* (a street ending here: its own end's business) */
                     continue;
