@@ -650,7 +650,8 @@ static int road_end(const rs_roads *roads, size_t j, int e, double *x, double *y
  * one network only: a junction of the street with itself, a street met
  * twice), and the linked ends of its records near a road that one of its
  * free ends lies on (that road joins the street there, which decides the
- * junctions at those ends). toRoad: N's record to a road of `roads`
+ * junctions at those ends), but where that end is free in M too and the
+ * linked end is one street with it in both. toRoad: N's record to a road of `roads`
  * (UINT32_MAX: none, then its box in ob, N's records' boxes; NULL: the
  * same); bn: the roads' boxes. Returns 0, or 1 when the stroke has more
  * than SELF_MAX records (its moved records are then taken whole). */
@@ -683,13 +684,18 @@ static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_networ
     if (N->closed[k] || !m) return 0;
     /* the free ends: the first record's start and the last's end, along the stroke */
     for (int side = 0; side < 2; side++) {
-        uint32_t rr = sr[side ? m - 1 : 0], road = recs[side ? m - 1 : 0];
+        uint32_t pe = side ? m - 1 : 0, rr = sr[pe], road = recs[pe];
+        int ee = (side != 0) != (N->rev[rr] != 0); /* (rr's end there: 0 its first point) */
+        /* an end free in M too: a linked end one street with it in both
+         * networks has it among its street's free ends in both */
+        uint32_t xm = toM[rr];
+        int free_m = xm != UINT32_MAX && M->link[2 * (size_t)xm + (size_t)ee] == UINT32_MAX && !M->closed[M->stroke_of[xm]];
         double fb[4];
         if (road == UINT32_MAX) {
             memcpy(fb, ob + 4 * (size_t)rr, sizeof fb);
         } else {
             double x, y;
-            if (!road_end(roads, road, (side != 0) != (N->rev[rr] != 0), &x, &y)) continue;
+            if (!road_end(roads, road, ee, &x, &y)) continue;
             fb[0] = fb[2] = x, fb[1] = fb[3] = y;
         }
         for (size_t j = 0; j < nn; j++) {
@@ -708,6 +714,7 @@ static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_networ
             for (uint32_t a = 0; a < m; a++)
                 for (int e = 0; e < 2; e++) {
                     if (N->link[2 * (size_t)sr[a] + (size_t)e] == UINT32_MAX) continue;
+                    if (free_m && nbrk[a] == nbrk[pe]) continue; /* (the same in both) */
                     if (recs[a] == UINT32_MAX) {
                         boxes_add(B, ob + 4 * (size_t)sr[a], z);
                         continue;
