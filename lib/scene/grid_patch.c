@@ -331,7 +331,8 @@ static void facts_of(const rs__road_sum *S, size_t n, int disable, double mark_r
         *reach = fmax(*reach, y->reach);
     }
     /* (as rs__styling keeps its priorities: they differ, and a fill looks them up) */
-    for (size_t i = 1; i < n && !disable && facts->any_surface && !facts->ranked; i++) facts->ranked = S[i].prio != S[0].prio;
+    for (size_t i = 1; i < n && !disable && facts->any_surface && !facts->ranked; i++)
+        facts->ranked = S[i].prio != S[0].prio;
     if (!facts->styled) memset(facts, 0, sizeof *facts); /* (no styling: the whole build keeps no switches) */
     if (mark_reach > *reach) *reach = mark_reach;
 }
@@ -642,6 +643,9 @@ static int road_end(const rs_roads *roads, size_t j, int e, double *x, double *y
  * close to themselves: their records that moved along them stay changed
  * whole. */
 #define SELF_MAX 256
+/* Updates moving records of more strokes along them than this take those
+ * records whole (each stroke's free ends scan every road). */
+#define ZONE_STROKES 64
 
 /* The zones of stroke k of network N (the old or the new one; M the
  * other, toM: N's record to M's, UINT32_MAX where it has none): where two
@@ -689,7 +693,8 @@ static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_networ
         /* an end free in M too: a linked end one street with it in both
          * networks has it among its street's free ends in both */
         uint32_t xm = toM[rr];
-        int free_m = xm != UINT32_MAX && M->link[2 * (size_t)xm + (size_t)ee] == UINT32_MAX && !M->closed[M->stroke_of[xm]];
+        int free_m = xm != UINT32_MAX && M->link[2 * (size_t)xm + (size_t)ee] == UINT32_MAX &&
+                     !M->closed[M->stroke_of[xm]];
         double fb[4];
         if (road == UINT32_MAX) {
             memcpy(fb, ob + 4 * (size_t)rr, sizeof fb);
@@ -1212,7 +1217,9 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     size_t narc = 0;
     for (size_t j = 0; j < nn; j++) {
         uint32_t i = m_new[j];
-        int pc = i == UINT32_MAX || (!net) != (!T->net) ? 2 : net && T->net ? place_change(T->net, net, i, (uint32_t)j, m_old) : 0;
+        int pc = i == UINT32_MAX || (!net) != (!T->net) ? 2
+                 : net && T->net                          ? place_change(T->net, net, i, (uint32_t)j, m_old)
+                                                          : 0;
         if (pc == 1 && !sm[j].lines && !sm[j].image && (arc || (arc = rs__calloc(ctx, nn, 1)))) {
             arc[j] = 1;
             narc++;
@@ -1245,8 +1252,8 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 near = lk != UINT32_MAX && cn[lk / 2];
                 double run = 0;
                 size_t steps = 0;
-                for (uint32_t q = back ? net->prev[j] : net->next[j]; !near && q != UINT32_MAX && run <= hb && steps <= nn;
-                     q = back ? net->prev[q] : net->next[q], steps++) {
+                for (uint32_t q = back ? net->prev[j] : net->next[j];
+                     !near && q != UINT32_MAX && run <= hb && steps <= nn; q = back ? net->prev[q] : net->next[q], steps++) {
                     near = cn[q];
                     run += net->length[q];
                 }
@@ -1265,11 +1272,13 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 nst += !sn[net->stroke_of[j]] + !so[T->net->stroke_of[m_new[j]]];
                 sn[net->stroke_of[j]] = so[T->net->stroke_of[m_new[j]]] = 1;
             }
-        whole |= nst > 2 * SELF_MAX / 8; /* (each stroke's free ends scan every road) */
+        whole |= nst > ZONE_STROKES; /* (each stroke's free ends scan every road) */
+        uint32_t *nbrk = recs ? recs + SELF_MAX : NULL;
         for (size_t k = 0; k < net->nstrokes && !whole; k++)
-            if (sn[k]) whole |= stroke_zones(&chg, net, k, T->net, m_new, NULL, bn, roads, bn, nn, d, zone, recs, recs + SELF_MAX);
+            if (sn[k]) whole |= stroke_zones(&chg, net, k, T->net, m_new, NULL, bn, roads, bn, nn, d, zone, recs, nbrk);
         for (size_t k = 0; k < T->net->nstrokes && !whole; k++)
-            if (so[k]) whole |= stroke_zones(&chg, T->net, k, net, m_old, m_old, T->box, roads, bn, nn, d, zone, recs, recs + SELF_MAX);
+            if (so[k])
+                whole |= stroke_zones(&chg, T->net, k, net, m_old, m_old, T->box, roads, bn, nn, d, zone, recs, nbrk);
         rs__free(ctx, sn);
         rs__free(ctx, so);
         rs__free(ctx, recs);
