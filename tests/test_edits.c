@@ -1424,6 +1424,16 @@ static void edit_base(one_edit *E, uint32_t texels)
             render(E->ctx, E->dem, E->g0, &E->o, &E->a) == 0;
 }
 
+/* The same with named styles (the caller's, outliving E's grids). */
+static void edit_base_styled(one_edit *E, uint32_t texels, const rs_styles *styles)
+{
+    E->o = edit_opts(texels);
+    E->o.style.styles = styles;
+    E->ok = E->ok && rs_road_grid_build(E->ctx, E->dem, E->roads, &E->o, &E->g0) == RS_OK &&
+            render(E->ctx, E->dem, E->g0, &E->o, &E->a) == 0;
+}
+
+
 /* The update of E's roads since the base, a fresh build, their images. */
 static void edit_update(one_edit *E, const char *what)
 {
@@ -1584,6 +1594,24 @@ static void edit_fuzz_map(one_edit *E)
             rs_roads_create(E->ctx, &E->roads) == RS_OK;
 }
 
+/* The fuzz map and named styles parsed in a context of their own (*sc),
+ * which outlive E's grids (edit_end_styled frees them). */
+static rs_styles *edit_fuzz_map_styled(one_edit *E, const char *text, size_t len, rs_ctx **sc)
+{
+    rs_styles *st = NULL;
+    edit_fuzz_map(E);
+    *sc = NULL;
+    E->ok = E->ok && rs_ctx_create(NULL, NULL, sc) == RS_OK && rs_styles_parse(*sc, text, len, &st) == RS_OK;
+    return st;
+}
+
+static void edit_end_styled(one_edit *E, rs_ctx *sc, rs_styles *st)
+{
+    edit_end(E);
+    rs_styles_free(sc, st);
+    rs_ctx_free(sc);
+}
+
 /* A road of a fuzz input: width, point count, points. */
 typedef struct fuzz_road {
     double w;
@@ -1695,19 +1723,14 @@ static void test_ranked_fills(void)
     const double far[4] = { 250, 200, 262, 205 };
     for (int flip = 0; flip < 2; flip++) {
         one_edit E;
-        rs_styles *styles = NULL;
-        rs_ctx *sc = NULL; /* (the styles outlive E's grids) */
-        edit_fuzz_map(&E);
-        E.ok = E.ok && rs_ctx_create(NULL, NULL, &sc) == RS_OK && rs_styles_parse(sc, sty, sizeof sty - 1, &styles) == RS_OK;
+        rs_ctx *sc;
+        rs_styles *styles = edit_fuzz_map_styled(&E, sty, sizeof sty - 1, &sc);
         add_fuzz_roads(&E, roads, 3);
         E.ok = E.ok && rs_roads_set_attr(E.ctx, E.roads, 0, "style", "s") == RS_OK;
         if (!flip) /* (the map ranks its roads: a secondary road far away) */
             E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 8, far, 2) == RS_OK &&
                    rs_roads_set_attr(E.ctx, E.roads, 3, "class", "secondary") == RS_OK;
-        E.o = edit_opts(3);
-        E.o.style.styles = styles;
-        E.ok = E.ok && rs_road_grid_build(E.ctx, E.dem, E.roads, &E.o, &E.g0) == RS_OK &&
-               render(E.ctx, E.dem, E.g0, &E.o, &E.a) == 0;
+        edit_base_styled(&E, 3, styles);
         if (flip) /* the secondary road added: the whole map ranks */
             E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 8, far, 2) == RS_OK &&
                    rs_roads_set_attr(E.ctx, E.roads, 3, "class", "secondary") == RS_OK;
@@ -1721,9 +1744,7 @@ static void test_ranked_fills(void)
             if (!flip) CHECK(rs_road_grid_patch_count(E.g1) == 1);
             check_rects(flip ? "ranked fills: a class added" : "ranked fills: a patch", E.g1, &E.a, &E.b, &E.c);
         }
-        edit_end(&E);
-        rs_styles_free(sc, styles);
-        rs_ctx_free(sc);
+        edit_end_styled(&E, sc, styles);
     }
 }
 
@@ -1740,10 +1761,8 @@ static void test_moved_along_stroke(void)
     static const char sty[] = "style dashed\nfill #505050\nline 0 0.15 #ffffff dash 3 3\nend\n";
     for (int lines = 0; lines < 2; lines++) {
         one_edit E;
-        rs_styles *styles = NULL;
-        rs_ctx *sc = NULL;
-        edit_fuzz_map(&E);
-        E.ok = E.ok && rs_ctx_create(NULL, NULL, &sc) == RS_OK && rs_styles_parse(sc, sty, sizeof sty - 1, &styles) == RS_OK;
+        rs_ctx *sc;
+        rs_styles *styles = edit_fuzz_map_styled(&E, sty, sizeof sty - 1, &sc);
         for (int k = 0; k < 5; k++) {
             const double xy[4] = { 20 + 50 * k, 100, 70 + 50 * k, 100 };
             E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 6, xy, 2) == RS_OK &&
@@ -1753,10 +1772,7 @@ static void test_moved_along_stroke(void)
         const double side[4] = { 245, 130, 245, 100 };
         E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, side, 2) == RS_OK &&
                rs_roads_set_attr(E.ctx, E.roads, 5, "class", "service") == RS_OK;
-        E.o = edit_opts(2);
-        E.o.style.styles = styles;
-        E.ok = E.ok && rs_road_grid_build(E.ctx, E.dem, E.roads, &E.o, &E.g0) == RS_OK &&
-               render(E.ctx, E.dem, E.g0, &E.o, &E.a) == 0;
+        edit_base_styled(&E, 2, styles);
         const double up[4] = { 70, 115, 120, 115 };
         E.ok = E.ok && rs_roads_replace(E.ctx, E.roads, 1, NULL, 6, up, 2) == RS_OK;
         edit_update(&E, lines ? "moved along its stroke, lines" : "moved along its stroke");
@@ -1772,9 +1788,7 @@ static void test_moved_along_stroke(void)
                         E.g1->npatch, x1);
             check_rects(lines ? "moved along its stroke, lines" : "moved along its stroke", E.g1, &E.a, &E.b, &E.c);
         }
-        edit_end(&E);
-        rs_styles_free(sc, styles);
-        rs_ctx_free(sc);
+        edit_end_styled(&E, sc, styles);
     }
 }
 
