@@ -1416,15 +1416,8 @@ static void edit_begin(one_edit *E, size_t n, uint64_t seed)
     if (n) E->ok = E->ok && ss_city_of(E->ctx, 241, 201, n, seed, 1, &E->sc, &E->dem, &E->roads) == 0;
 }
 
-/* The whole grid of E's roads and its image (a). */
-static void edit_base(one_edit *E, uint32_t texels)
-{
-    E->o = edit_opts(texels);
-    E->ok = E->ok && rs_road_grid_build(E->ctx, E->dem, E->roads, &E->o, &E->g0) == RS_OK &&
-            render(E->ctx, E->dem, E->g0, &E->o, &E->a) == 0;
-}
-
-/* The same with named styles (the caller's, outliving E's grids). */
+/* The whole grid of E's roads and its image (a), with named styles
+ * (NULL: none; the caller's, outliving E's grids). */
 static void edit_base_styled(one_edit *E, uint32_t texels, const rs_styles *styles)
 {
     E->o = edit_opts(texels);
@@ -1433,6 +1426,10 @@ static void edit_base_styled(one_edit *E, uint32_t texels, const rs_styles *styl
             render(E->ctx, E->dem, E->g0, &E->o, &E->a) == 0;
 }
 
+static void edit_base(one_edit *E, uint32_t texels)
+{
+    edit_base_styled(E, texels, NULL);
+}
 
 /* The update of E's roads since the base, a fresh build, their images. */
 static void edit_update(one_edit *E, const char *what)

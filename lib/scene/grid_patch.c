@@ -608,20 +608,6 @@ static int roads_within(const rs_roads *roads, size_t a, size_t b, double d)
     return 0;
 }
 
-/* Does point (x, y) lie within d of road j's centre line? NaN: yes. */
-static int point_near_road(const rs_roads *roads, size_t j, double x, double y, double d)
-{
-    const double *p;
-    size_t n;
-    rs_roads_get(roads, j, NULL, NULL, &p, &n);
-    const double q[2] = { x, y };
-    for (size_t u = 0; u < n; u++) {
-        const double *a0 = p + 2 * u, *a1 = p + 2 * (u + 1 < n ? u + 1 : u);
-        if (!(seg_seg_d2(q, q, a0, a1) > d * d)) return 1;
-    }
-    return 0;
-}
-
 static void point_zone(boxes *B, double x, double y, double z)
 {
     const double b[4] = { x, y, x, y };
@@ -638,6 +624,8 @@ static int road_end(const rs_roads *roads, size_t j, int e, double *x, double *y
     *x = p[e ? 2 * (n - 1) : 0], *y = p[e ? 2 * (n - 1) + 1 : 1];
     return 1;
 }
+
+static int road_near(const rs_roads *roads, size_t i, const double *rb, const double *bx, double d);
 
 /* Strokes bigger than this are not searched for places where they pass
  * close to themselves: their records that moved along them stay changed
@@ -713,8 +701,7 @@ static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_networ
                 continue;
             int own = 0; /* (the street's own records: no junction) */
             for (uint32_t a = 0; a < m && !own; a++) own = recs[a] == j;
-            if (own || (fb[0] == fb[2] && fb[1] == fb[3] && !point_near_road(roads, j, fb[0], fb[1], reach)))
-                continue;
+            if (own || (fb[0] == fb[2] && fb[1] == fb[3] && !road_near(roads, j, bj, fb, reach))) continue;
             /* road j holds a free end of the street: the street's linked ends on j */
             for (uint32_t a = 0; a < m; a++)
                 for (int e = 0; e < 2; e++) {
@@ -725,8 +712,9 @@ static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_networ
                         continue;
                     }
                     double x, y;
-                    if (road_end(roads, recs[a], e, &x, &y) && point_near_road(roads, j, x, y, reach))
-                        point_zone(B, x, y, z);
+                    if (!road_end(roads, recs[a], e, &x, &y)) continue;
+                    const double pt[4] = { x, y, x, y };
+                    if (road_near(roads, j, bj, pt, reach)) point_zone(B, x, y, z);
                 }
         }
     }
