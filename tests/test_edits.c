@@ -1677,29 +1677,114 @@ static void test_removed_tee_strip(void)
 
 /* A T that clips a record's far end strip and all (fuzz/edits seed
  * b0e8f047): a hairpin (4.5, 46) -> (63.5, 0) -> (21.5, 52) whose last
- * point is a T on a narrow road, with a slanted strip reaching 30 m
- * north-west. A new road across its start makes that start a T whose
- * line takes the hairpin's whole second leg, strip included: the change
- * area and the dirty rectangles must reach the strip's far end. */
+ * point is a T on a narrow straight road, its slanted strip running 30 m
+ * along it to the south-west. A new road across its start (running on 39
+ * m west of it, so that the start's strip stays on it: tee_ends.c
+ * strip_on_street) makes that start a T whose line takes the hairpin's
+ * whole second leg, strip included: the change area and the dirty
+ * rectangles must reach the strip's far end, 25 m from the new T. */
 static void test_far_strip_clipped(void)
 {
     one_edit E;
     edit_fuzz_map(&E);
-    static const fuzz_road roads[4] = { { 3.875, 3, { 24.75, 15.25, 11.75, 60.25, 75.75, 14.25 } },
+    static const fuzz_road roads[4] = { { 3.875, 3, { -12.6, 77.8, 11.75, 60.25, 75.75, 14.25 } },
                                         { 12, 3, { 63.5, 0, 29.5, 48, 63.5, 0 } },
                                         { 11, 3, { 4.5, 46, 63.5, 0, 21.5, 52 } },
-                                        { 11, 3, { -0.5, 46, 16.5, 47, 63.5, 0 } } };
+                                        { 11, 3, { -34.5, 44, 16.5, 47, 63.5, 0 } } };
     add_fuzz_roads(&E, roads, 3);
     edit_base(&E, 2);
     add_fuzz_roads(&E, roads + 3, 1);
     edit_update(&E, "far strip clipped");
     if (E.ok) {
-        /* (the strip's far pixels, 20 m from the new road's T, lose their paint) */
-        long lost = 0;
+        /* (the strip's far pixels, over 20 m from the new road's T, change) */
+        long far = 0;
         for (uint32_t y = 23; y < 29 && y < E.a.h; y++)
-            for (uint32_t x = 0; x < 7 && x < E.a.w; x++) lost += E.a.wt[(size_t)y * E.a.w + x] > 0 && E.c.wt[(size_t)y * E.a.w + x] == 0;
-        CHECKF(lost > 0, "far strip clipped: %ld pixels of the strip lose their paint", lost);
+            for (uint32_t x = 0; x < 7 && x < E.a.w; x++) far += E.a.wt[(size_t)y * E.a.w + x] != E.c.wt[(size_t)y * E.a.w + x];
+        CHECKF(far > 0, "far strip clipped: %ld pixels of the strip change", far);
         check_rects("far strip clipped", E.g1, &E.a, &E.b, &E.c);
+    }
+    edit_end(&E);
+}
+
+/* A T that goes with no changed road at its node (fuzz/edits, 6 December
+ * 2026): an 11 m primary ends at a slant inside a 4 m residential
+ * street's surface, a free end that meets the street in a T, its flat
+ * strip running 29 m along it (the primary's fill over the street's).
+ * A new road starting at that end point makes the end no longer free: the
+ * T and its strip go. The new road's node in the new network is not the
+ * old node, where no changed road has a leg; the update takes the old
+ * node's T ends too (grid_patch.c mark_across), so the strip's far end,
+ * beyond the new road's own change area, is in the patch. */
+static void test_tee_gone_at_node(void)
+{
+    one_edit E;
+    edit_fuzz_map(&E);
+    double street[60]; /* (points 10 m apart: a T changes how the segments beside it are drawn) */
+    for (int k = 0; k < 30; k++) street[2 * k] = 10 + 10 * k, street[2 * k + 1] = 100;
+    const double side[4] = { 91.9, 84.5, 150, 99.5 }, spur[4] = { 150, 99.5, 120, 140 };
+    E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, street, 30) == RS_OK &&
+           rs_roads_set_attr(E.ctx, E.roads, 0, "class", "residential") == RS_OK &&
+           rs_roads_add(E.ctx, E.roads, NULL, 11, side, 2) == RS_OK &&
+           rs_roads_set_attr(E.ctx, E.roads, 1, "class", "primary") == RS_OK;
+    for (int k = 0; k < 12; k++) { /* (short streets far off: most of the map is not near the edit) */
+        const double xy[4] = { 10 + 25 * k, 200, 25 + 25 * k, 215 };
+        E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, xy, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, (size_t)k + 2, "class", "residential") == RS_OK;
+    }
+    edit_base(&E, 2);
+    E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, spur, 2) == RS_OK &&
+           rs_roads_set_attr(E.ctx, E.roads, 14, "class", "residential") == RS_OK;
+    edit_update(&E, "T gone at its node");
+    if (E.ok) {
+        /* (pixels more than 20 m east of the end change: the strip's) */
+        long far = 0;
+        for (uint32_t y = 0; y < E.a.h; y++)
+            for (uint32_t x = (uint32_t)((150 + 20) / 2.5); x < E.a.w; x++) {
+                size_t p = (size_t)y * E.a.w + x;
+                far += memcmp(E.a.rgba + 4 * p, E.c.rgba + 4 * p, 4) != 0;
+            }
+        CHECKF(far > 0, "T gone at its node: %ld pixels beyond 20 m change", far);
+        CHECK(rs_road_grid_patch_count(E.g1) >= 1);
+        check_rects("T gone at its node", E.g1, &E.a, &E.b, &E.c);
+    }
+    edit_end(&E);
+}
+
+/* A T that goes where its street stops short (tee_ends.c strip_on_street):
+ * an 11 m primary ends at a slant on a street of three records, its flat
+ * strip running 29 m east along the first two. Removing the third record,
+ * 20 m east of the T, leaves the street too short for the strip: the end
+ * keeps its cap. No record at the T's node changed (the street's first
+ * record keeps its neighbours and arc lengths; only its stroke's length
+ * changed): the update finds the T gone there (grid_patch.c run_flips),
+ * and the T lines it keeps for the next update are a build's. */
+static void test_tee_street_shortened(void)
+{
+    one_edit E;
+    edit_fuzz_map(&E);
+    double a[32], c[10];
+    for (int k = 0; k < 15; k++) a[2 * k] = 10 + 10 * k, a[2 * k + 1] = 100;
+    a[30] = 150, a[31] = 100; /* (its last point repeated, as OSM exports have) */
+    for (int k = 0; k < 5; k++) c[2 * k] = 160 + 10 * k, c[2 * k + 1] = 100;
+    const double b[4] = { 150, 100, 160, 100 }, side[4] = { 81.9, 84.5, 140, 99.5 };
+    E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, a, 16) == RS_OK &&
+           rs_roads_add(E.ctx, E.roads, NULL, 4, b, 2) == RS_OK && rs_roads_add(E.ctx, E.roads, NULL, 4, c, 5) == RS_OK &&
+           rs_roads_add(E.ctx, E.roads, NULL, 11, side, 2) == RS_OK;
+    for (size_t k = 0; k < 4; k++)
+        E.ok = E.ok && rs_roads_set_attr(E.ctx, E.roads, k, "class", k == 3 ? "primary" : "residential") == RS_OK;
+    for (int k = 0; k < 12; k++) { /* (short streets far off: most of the map is not near the edit) */
+        const double xy[4] = { 10 + 25 * k, 200, 25 + 25 * k, 215 };
+        E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, xy, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, (size_t)k + 4, "class", "residential") == RS_OK;
+    }
+    edit_base(&E, 2);
+    E.ok = E.ok && rs_roads_remove(E.ctx, E.roads, 2) == RS_OK;
+    edit_update(&E, "street shortened past a T");
+    if (E.ok) {
+        CHECK(rs_road_grid_patch_count(E.g1) >= 1);
+        check_rects("street shortened past a T", E.g1, &E.a, &E.b, &E.c);
+        CHECKF(rs__grid_track_net_check(E.ctx, E.g1, E.roads) == 1,
+               "street shortened past a T: the T lines kept are not a build's");
     }
     edit_end(&E);
 }
@@ -1810,6 +1895,8 @@ int main(void)
     test_duplicate_road();
     test_removed_tee_strip();
     test_far_strip_clipped();
+    test_tee_gone_at_node();
+    test_tee_street_shortened();
     test_ranked_fills();
     test_moved_along_stroke();
     return th_finish("test_edits");

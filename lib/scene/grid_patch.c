@@ -919,6 +919,87 @@ static size_t marked_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, u
     return n;
 }
 
+/* The nodes of B that hold the same end of a road as a node of A in
+ * onA (map: A's road to B's, UINT32_MAX: none) marked in onB too, *nb
+ * counting them. A node can change without a changed road of its own
+ * there: a new road ending on an old T end's point makes that end no
+ * longer free, and its T (and the strip running from it) goes (fuzz/edits);
+ * every node holds a road end or two roads' points, and where only
+ * passing roads meet there is no T. 0, or SIZE_MAX: out of memory. */
+static size_t mark_across(rs_ctx *ctx, const rs_network *A, const uint8_t *onA, const rs_network *B, uint8_t *onB,
+                          const uint32_t *map, size_t *nb)
+{
+    if (!A || !B || !onA || !onB || !A->nnodes || !B->nnodes) return 0;
+    size_t nr = rs_network_road_count(A);
+    uint8_t *at = rs__calloc(ctx, 2 * (nr ? nr : 1), 1); /* (A's road ends at a marked node) */
+    if (!at) return SIZE_MAX;
+    for (size_t d = 0; d < A->nnodes; d++)
+        for (uint32_t l = A->leg_start[d]; onA[d] && l < A->leg_start[d + 1]; l++)
+            if (rs__is_end_leg(&A->leg[l])) at[rs__leg_end(&A->leg[l])] = 1;
+    size_t nbr = rs_network_road_count(B);
+    uint32_t *back = rs__alloc_array(ctx, nbr ? nbr : 1, sizeof *back); /* (B's road to A's) */
+    if (!back) {
+        rs__free(ctx, at);
+        return SIZE_MAX;
+    }
+    for (size_t i = 0; i < nbr; i++) back[i] = UINT32_MAX;
+    for (size_t i = 0; i < nr; i++)
+        if (map[i] != UINT32_MAX && map[i] < nbr) back[map[i]] = (uint32_t)i;
+    for (size_t d = 0; d < B->nnodes; d++)
+        for (uint32_t l = B->leg_start[d]; !onB[d] && l < B->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &B->leg[l];
+            uint32_t i = back[L->road];
+            if (rs__is_end_leg(L) && i != UINT32_MAX && at[2 * (size_t)i + (L->kind == RS_LEG_END)]) onB[d] = 1, (*nb)++;
+        }
+    rs__free(ctx, at);
+    rs__free(ctx, back);
+    return 0;
+}
+
+/* The nodes of N, the new network (O the old one, m_new: N's record to
+ * O's), that no changed record marks in `on` but where a kept record's
+ * end became a T or stopped being one: a street passing there whose
+ * stroke's length or arc lengths changed elsewhere (a record of it moved,
+ * split or joined), so that it now runs on past the T far enough for the
+ * end's strip, or no longer does (tee_ends.c strip_on_street). Marked in
+ * `on`, *non counting them; tfar: O's ends' T lines (NaN: no T). 0, or
+ * -1: out of memory. */
+static int run_flips(rs_ctx *ctx, const rs_network *N, const rs_network *O, const rs_roads *roads,
+                     const uint32_t *m_new, const double *tfar, uint8_t *on, size_t *non)
+{
+    if (!N || !O || !on || !tfar || !N->nnodes) return 0;
+    uint8_t *rn = NULL, *isT = NULL;
+    size_t cnt = 0;
+    for (size_t d = 0; d < N->nnodes; d++)
+        for (uint32_t l = N->leg_start[d]; !on[d] && l < N->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &N->leg[l];
+            uint32_t j = L->road, i = m_new[j];
+            if (i == UINT32_MAX || !rs__leg_passes(N, L)) continue;
+            if (N->s_len[j] == O->s_len[i] && N->s_off[j] == O->s_off[i] && N->rev[j] == O->rev[i]) continue;
+            if (!rn && !(rn = rs__calloc(ctx, N->nnodes, 1))) return -1;
+            rn[d] = 1, cnt++;
+            break;
+        }
+    if (!cnt) return 0;
+    rs__tee_end *te = NULL;
+    size_t nte = 0, nr = rs_network_road_count(N);
+    rs_result r = rs__tee_ends_at(ctx, roads, N, rn, &te, &nte);
+    if (!r && !(isT = rs__calloc(ctx, 2 * (nr ? nr : 1), 1))) r = RS_ERR_NOMEM;
+    for (size_t k = 0; !r && k < nte; k++) isT[2 * (size_t)te[k].road + (te[k].end ? 1 : 0)] = 1;
+    for (size_t d = 0; !r && d < N->nnodes; d++)
+        for (uint32_t l = N->leg_start[d]; rn[d] && !on[d] && l < N->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &N->leg[l];
+            if (!rs__is_end_leg(L)) continue;
+            uint32_t i = m_new[L->road];
+            int e = L->kind == RS_LEG_END, was = i != UINT32_MAX && !isnan(tfar[2 * (size_t)i + (size_t)e]);
+            if (was != isT[rs__leg_end(L)]) on[d] = 1, (*non)++;
+        }
+    rs__free(ctx, te);
+    rs__free(ctx, isT);
+    rs__free(ctx, rn);
+    return r ? -1 : 0;
+}
+
 /* At every node of N in `on` (marked_nodes of m), the other legs'
  * segments there (the leg's segment or point and the segments on either
  * side: a T or a junction on a segment changes how that capsule is drawn
@@ -984,10 +1065,9 @@ static rs_result tee_clips(rs_ctx *ctx, const rs_network *N, const uint8_t *on, 
         size_t e = 2 * (size_t)t->road + (t->end ? 1 : 0);
         double far = !map ? t->far : tfar ? tfar[e] : NAN;
         if (map) { /* (an old end: its strip where it was, its road changed or gone) */
-            if (!(far > -INFINITY && far < INFINITY)) { /* (NaN: an old end not known as a T) */
-                if (!m[t->road]) *known = 0;
-                continue;
-            }
+            /* (NaN: the build made no T there, its street running on too
+             * short a way: tee_ends.c strip_on_street) */
+            if (!(far > -INFINITY && far < INFINITY)) continue;
             if (!tstrip) {
                 *known = 0;
                 continue;
@@ -1282,6 +1362,16 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     uint8_t *on_n = NULL, *on_o = NULL;
     size_t non_n = marked_nodes(ctx, net, cn, &on_n), non_o = marked_nodes(ctx, T->net, co, &on_o);
     int known = non_n != SIZE_MAX && non_o != SIZE_MAX; /* (0: the whole build) */
+    /* (a street's run past a T changed: its strip came or went) */
+    if (known && run_flips(ctx, net, T->net, roads, m_new, T->tfar, on_n, &non_n)) known = 0, r = RS_ERR_NOMEM;
+    if (known) { /* (each network's nodes where the other's changed: their T ends) */
+        uint8_t *was = non_o ? rs__malloc(ctx, T->net->nnodes) : NULL;
+        if (was) memcpy(was, on_o, T->net->nnodes);
+        known = (!non_o || was) && mark_across(ctx, net, on_n, T->net, on_o, m_new, &non_o) == 0 &&
+                mark_across(ctx, T->net, was, net, on_n, m_old, &non_n) == 0;
+        rs__free(ctx, was);
+        if (!known) r = RS_ERR_NOMEM;
+    }
     if (!known) r = RS_ERR_NOMEM;
     if (known) {
         neighbour_segments(net, on_n, cn, NULL, roads, &chg, grow);
@@ -1539,6 +1629,24 @@ int rs__grid_track_net_check(rs_ctx *ctx, const rs_road_grid *g, const rs_roads 
     rs_network *n = NULL;
     if (rs_network_build(ctx, roads, NULL, &n) != RS_OK) return -1;
     int eq = rs__network_equal(t->net, n);
+    /* and its T lines and strips, as a build of `roads` finds them */
+    size_t nr = rs_roads_count(roads);
+    if (eq && t->tfar && t->tstrip && t->n == nr) {
+        rs__tee_end *te = NULL;
+        size_t nte = 0;
+        double *tf = rs__alloc_array(ctx, 2 * (nr ? nr : 1), sizeof *tf);
+        double *ts = rs__alloc_array(ctx, 2 * TS * (nr ? nr : 1), sizeof *ts);
+        if (!tf || !ts || rs__tee_ends(ctx, roads, n, &te, &nte) != RS_OK) eq = -1;
+        for (size_t k = 0; eq == 1 && k < 2 * nr; k++) tf[k] = NAN;
+        for (size_t k = 0; eq == 1 && k < 2 * TS * nr; k++) ts[k] = NAN;
+        if (eq == 1) tee_fars(tf, te, nte), tee_strips(ts, te, nte, roads);
+        for (size_t k = 0; eq == 1 && k < 2 * nr; k++) eq = isnan(tf[k]) ? isnan(t->tfar[k]) : tf[k] == t->tfar[k];
+        for (size_t k = 0; eq == 1 && k < 2 * TS * nr; k++)
+            eq = isnan(ts[k]) ? isnan(t->tstrip[k]) : ts[k] == t->tstrip[k];
+        rs__free(ctx, te);
+        rs__free(ctx, tf);
+        rs__free(ctx, ts);
+    }
     rs_network_free(ctx, n);
     return eq;
 }

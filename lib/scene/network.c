@@ -1289,6 +1289,7 @@ static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
                 r = nx / 2;
                 e = nx % 2;
             }
+            for (size_t q = N->stroke_start[k]; q < at; q++) N->s_len[N->stroke_roads[q]] = rings ? INFINITY : s;
             k++;
         }
     N->stroke_start[k] = (uint32_t)at;
@@ -1611,6 +1612,7 @@ void rs_network_free(rs_ctx *ctx, rs_network *net)
     rs__free(ctx, net->stroke_of);
     rs__free(ctx, net->s_off);
     rs__free(ctx, net->length);
+    rs__free(ctx, net->s_len);
     rs__free(ctx, net->prev);
     rs__free(ctx, net->next);
     rs__free(ctx, net->stroke_start);
@@ -1633,13 +1635,14 @@ static int stroke_arrays(rs_ctx *ctx, rs_network *N, size_t m, size_t starts)
     N->stroke_of = rs__alloc_array(ctx, m, sizeof *N->stroke_of);
     N->s_off = rs__alloc_array(ctx, m, sizeof *N->s_off);
     N->length = rs__alloc_array(ctx, m, sizeof *N->length);
+    N->s_len = rs__alloc_array(ctx, m, sizeof *N->s_len);
     N->prev = rs__alloc_array(ctx, m, sizeof *N->prev);
     N->next = rs__alloc_array(ctx, m, sizeof *N->next);
     N->stroke_start = rs__alloc_array(ctx, starts, sizeof *N->stroke_start);
     N->stroke_roads = rs__alloc_array(ctx, m, sizeof *N->stroke_roads);
     N->closed = rs__calloc(ctx, m, 1);
     N->rev = rs__calloc(ctx, m, 1);
-    return N->stroke_of && N->s_off && N->length && N->prev && N->next && N->stroke_start && N->stroke_roads &&
+    return N->stroke_of && N->s_off && N->length && N->s_len && N->prev && N->next && N->stroke_start && N->stroke_roads &&
            N->closed && N->rev;
 }
 
@@ -1648,7 +1651,7 @@ static size_t bytes_of(const rs_network *N)
 {
     return sizeof *N + N->nnodes * sizeof *N->node + (N->nnodes + 1) * sizeof *N->leg_start +
            N->nlegs * sizeof *N->leg +
-           N->nroads * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->prev +
+           N->nroads * (sizeof *N->stroke_of + sizeof *N->s_off + sizeof *N->length + sizeof *N->s_len + sizeof *N->prev +
                         sizeof *N->next + sizeof *N->stroke_start + sizeof *N->stroke_roads + 2 + 2 * sizeof *N->link) +
            (N->node_key ? N->nnodes * (sizeof *N->node_key + sizeof *N->node_rad + sizeof *N->node_surf) : 0);
 }
@@ -1756,6 +1759,7 @@ rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bas
         if (S->s_base) S->s_base[i] = bases[r];
         S->s_off[i] = N->s_off[r];
         S->length[i] = N->length[r];
+        S->s_len[i] = N->s_len[r];
         S->rev[i] = N->rev[r];
         S->prev[i] = N->prev[r] == NONE ? NONE : map[N->prev[r]];
         S->next[i] = N->next[r] == NONE ? NONE : map[N->next[r]];
@@ -3025,6 +3029,7 @@ int rs__network_equal(const rs_network *a, const rs_network *b)
     if (memcmp(a->stroke_start, b->stroke_start, (a->nstrokes + 1) * sizeof *a->stroke_start) ||
         memcmp(a->closed, b->closed, a->nstrokes) || memcmp(a->stroke_of, b->stroke_of, n * sizeof *a->stroke_of) ||
         memcmp(a->s_off, b->s_off, n * sizeof *a->s_off) || memcmp(a->length, b->length, n * sizeof *a->length) ||
+        memcmp(a->s_len, b->s_len, n * sizeof *a->s_len) ||
         memcmp(a->prev, b->prev, n * sizeof *a->prev) || memcmp(a->next, b->next, n * sizeof *a->next) ||
         memcmp(a->stroke_roads, b->stroke_roads, n * sizeof *a->stroke_roads) || memcmp(a->rev, b->rev, n) ||
         memcmp(a->link, b->link, 2 * n * sizeof *a->link))

@@ -20,6 +20,8 @@ struct rs_network {
     double *s_off;          /* per road: stroke arc length at its first point (reversed: the stroke's s
                                falls along the record: s_off - s) */
     double *length;         /* per road */
+    double *s_len;          /* per road: its stroke's whole length (INFINITY: a ring), kept in a part
+                               (rs__network_subset): how far a street runs on past a T (tee_ends.c) */
     uint32_t *prev, *next;  /* per road, UINT32_MAX: none (a ring's seam has none) */
     uint32_t *stroke_start; /* nstrokes + 1 */
     uint32_t *stroke_roads; /* nroads: the records of each stroke in order */
