@@ -903,85 +903,77 @@ static int change_rects(rs_ctx *ctx, const boxes *B, const rs_dem *dem, double p
     return 0;
 }
 
-/* The nodes of N where a road marked in m has a leg: *on (the caller's,
- * rs__free; NULL with no nodes), their count returned. SIZE_MAX when out
- * of memory. */
-static size_t marked_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, uint8_t **on)
+/* One pass over the nodes of N: those where a road marked in m has a leg
+ * into *on (the caller's, rs__free; NULL with no nodes), their count
+ * returned; per road end the node holding it into *at (2 per road,
+ * UINT32_MAX: none, a short record's); with moved (per road, or NULL),
+ * the nodes not in *on where a moved road passes (its stroke's length or
+ * arc lengths changed: a T end there may come or go, run_flips) into *rn
+ * (NULL when none). SIZE_MAX when out of memory. */
+static size_t scan_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, const uint8_t *moved, uint8_t **on,
+                         uint32_t **at, uint8_t **rn)
 {
-    *on = NULL;
+    *on = NULL, *at = NULL, *rn = NULL;
     if (!N || !N->nnodes) return 0;
-    if (!(*on = rs__calloc(ctx, N->nnodes, 1))) return SIZE_MAX;
+    size_t nr = rs_network_road_count(N);
+    *on = rs__calloc(ctx, N->nnodes, 1);
+    *at = rs__alloc_array(ctx, 2 * (nr ? nr : 1), sizeof **at);
+    if (!*on || !*at) return SIZE_MAX;
+    for (size_t k = 0; k < 2 * nr; k++) (*at)[k] = UINT32_MAX;
     size_t n = 0;
     for (size_t d = 0; d < N->nnodes; d++) {
-        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1] && !(*on)[d]; l++) (*on)[d] = m[N->leg[l].road];
-        n += (*on)[d];
+        int mk = 0, mv = 0;
+        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &N->leg[l];
+            mk |= m[L->road];
+            if (rs__is_end_leg(L)) (*at)[rs__leg_end(L)] = (uint32_t)d;
+            if (moved && moved[L->road] && rs__leg_passes(N, L)) mv = 1;
+        }
+        (*on)[d] = (uint8_t)mk;
+        n += mk != 0;
+        if (mv && !mk) {
+            if (!*rn && !(*rn = rs__calloc(ctx, N->nnodes, 1))) return SIZE_MAX;
+            (*rn)[d] = 1;
+        }
     }
     return n;
 }
 
-/* The nodes of B that hold the same end of a road as a node of A in
- * onA (map: A's road to B's, UINT32_MAX: none) marked in onB too, *nb
- * counting them. A node can change without a changed road of its own
- * there: a new road ending on an old T end's point makes that end no
- * longer free, and its T (and the strip running from it) goes (fuzz/edits);
- * every node holds a road end or two roads' points, and where only
- * passing roads meet there is no T. 0, or SIZE_MAX: out of memory. */
-static size_t mark_across(rs_ctx *ctx, const rs_network *A, const uint8_t *onA, const rs_network *B, uint8_t *onB,
-                          const uint32_t *map, size_t *nb)
+/* The nodes of B that hold the same end of a road as a node of A in onA
+ * (1: marked there; map: A's road to B's, UINT32_MAX: none; atB: B's
+ * road ends' nodes, scan_nodes) marked in onB too (2), *nb counting them. A node can change
+ * without a changed road of its own there: a new road ending on an old T
+ * end's point makes that end no longer free, and its T (and the strip
+ * running from it) goes (fuzz/edits); every node holds a road end or two
+ * roads' points, and where only passing roads meet there is no T end. */
+static void mark_across(const rs_network *A, const uint8_t *onA, const uint32_t *atB, uint8_t *onB, const uint32_t *map,
+                        size_t *nb)
 {
-    if (!A || !B || !onA || !onB || !A->nnodes || !B->nnodes) return 0;
-    size_t nr = rs_network_road_count(A);
-    uint8_t *at = rs__calloc(ctx, 2 * (nr ? nr : 1), 1); /* (A's road ends at a marked node) */
-    if (!at) return SIZE_MAX;
-    for (size_t d = 0; d < A->nnodes; d++)
-        for (uint32_t l = A->leg_start[d]; onA[d] && l < A->leg_start[d + 1]; l++)
-            if (rs__is_end_leg(&A->leg[l])) at[rs__leg_end(&A->leg[l])] = 1;
-    size_t nbr = rs_network_road_count(B);
-    uint32_t *back = rs__alloc_array(ctx, nbr ? nbr : 1, sizeof *back); /* (B's road to A's) */
-    if (!back) {
-        rs__free(ctx, at);
-        return SIZE_MAX;
-    }
-    for (size_t i = 0; i < nbr; i++) back[i] = UINT32_MAX;
-    for (size_t i = 0; i < nr; i++)
-        if (map[i] != UINT32_MAX && map[i] < nbr) back[map[i]] = (uint32_t)i;
-    for (size_t d = 0; d < B->nnodes; d++)
-        for (uint32_t l = B->leg_start[d]; !onB[d] && l < B->leg_start[d + 1]; l++) {
-            const rs_network_leg *L = &B->leg[l];
-            uint32_t i = back[L->road];
-            if (rs__is_end_leg(L) && i != UINT32_MAX && at[2 * (size_t)i + (L->kind == RS_LEG_END)]) onB[d] = 1, (*nb)++;
+    if (!A || !onA || !onB || !atB) return;
+    for (size_t d = 0; d < A->nnodes; d++) {
+        if (onA[d] != 1) continue; /* (2: marked from the other network) */
+        for (uint32_t l = A->leg_start[d]; l < A->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &A->leg[l];
+            uint32_t i = rs__is_end_leg(L) ? map[L->road] : UINT32_MAX;
+            uint32_t db = i == UINT32_MAX ? UINT32_MAX : atB[2 * (size_t)i + (L->kind == RS_LEG_END)];
+            if (db != UINT32_MAX && !onB[db]) onB[db] = 2, (*nb)++;
         }
-    rs__free(ctx, at);
-    rs__free(ctx, back);
-    return 0;
+    }
 }
 
-/* The nodes of N, the new network (O the old one, m_new: N's record to
- * O's), that no changed record marks in `on` but where a kept record's
- * end became a T or stopped being one: a street passing there whose
- * stroke's length or arc lengths changed elsewhere (a record of it moved,
- * split or joined), so that it now runs on past the T far enough for the
- * end's strip, or no longer does (tee_ends.c strip_on_street). Marked in
- * `on`, *non counting them; tfar: O's ends' T lines (NaN: no T). 0, or
- * -1: out of memory. */
-static int run_flips(rs_ctx *ctx, const rs_network *N, const rs_network *O, const rs_roads *roads,
-                     const uint32_t *m_new, const double *tfar, uint8_t *on, size_t *non)
+/* The nodes rn of N, the new network (scan_nodes: where a kept road
+ * passes whose stroke's length or arc lengths changed elsewhere, a record
+ * of it moved, split or joined), where a kept road's end became a T or
+ * stopped being one: the street now runs on past the T far enough for
+ * the end's strip, or no longer does (tee_ends.c strip_on_street). Marked
+ * in `on`, *non counting them; m_new: N's road to the old one's; tfar:
+ * the old ends' T lines (NaN: no T). 0, or -1: out of memory. */
+static int run_flips(rs_ctx *ctx, const rs_network *N, const rs_roads *roads, const uint8_t *rn, const uint32_t *m_new,
+                     const double *tfar, uint8_t *on, size_t *non)
 {
-    if (!N || !O || !on || !tfar || !N->nnodes) return 0;
-    uint8_t *rn = NULL, *isT = NULL;
-    size_t cnt = 0;
-    for (size_t d = 0; d < N->nnodes; d++)
-        for (uint32_t l = N->leg_start[d]; !on[d] && l < N->leg_start[d + 1]; l++) {
-            const rs_network_leg *L = &N->leg[l];
-            uint32_t j = L->road, i = m_new[j];
-            if (i == UINT32_MAX || !rs__leg_passes(N, L)) continue;
-            if (N->s_len[j] == O->s_len[i] && N->s_off[j] == O->s_off[i] && N->rev[j] == O->rev[i]) continue;
-            if (!rn && !(rn = rs__calloc(ctx, N->nnodes, 1))) return -1;
-            rn[d] = 1, cnt++;
-            break;
-        }
-    if (!cnt) return 0;
+    if (!rn || !tfar) return 0;
     rs__tee_end *te = NULL;
+    uint8_t *isT = NULL;
     size_t nte = 0, nr = rs_network_road_count(N);
     rs_result r = rs__tee_ends_at(ctx, roads, N, rn, &te, &nte);
     if (!r && !(isT = rs__calloc(ctx, 2 * (nr ? nr : 1), 1))) r = RS_ERR_NOMEM;
@@ -996,11 +988,10 @@ static int run_flips(rs_ctx *ctx, const rs_network *N, const rs_network *O, cons
         }
     rs__free(ctx, te);
     rs__free(ctx, isT);
-    rs__free(ctx, rn);
     return r ? -1 : 0;
 }
 
-/* At every node of N in `on` (marked_nodes of m), the other legs'
+/* At every node of N in `on` (scan_nodes of m), the other legs'
  * segments there (the leg's segment or point and the segments on either
  * side: a T or a junction on a segment changes how that capsule is drawn
  * all along it) into the boxes acc, grown by `grow`; map: N's road to a road of
@@ -1026,7 +1017,7 @@ static void neighbour_segments(const rs_network *N, const uint8_t *on, const uin
     }
 }
 
-/* The T ends at the nodes of N in `on` (marked_nodes of m: `non` of
+/* The T ends at the nodes of N in `on` (scan_nodes of m: `non` of
  * them), of records not marked (map: N's road to a road of `roads`, UINT32_MAX:
  * gone): the segments inward from the end segment that its T line clips
  * (rs__roadfield_set_tees: each while it reaches past the line; a record
@@ -1359,19 +1350,30 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     /* the segments of the roads meeting a changed one, in the new network
      * and the old (old roads by their new index: the unmatched are changed) */
     /* (the nodes of both networks where a changed road has a leg) */
-    uint8_t *on_n = NULL, *on_o = NULL;
-    size_t non_n = marked_nodes(ctx, net, cn, &on_n), non_o = marked_nodes(ctx, T->net, co, &on_o);
-    int known = non_n != SIZE_MAX && non_o != SIZE_MAX; /* (0: the whole build) */
+    uint8_t *on_n = NULL, *on_o = NULL, *rn = NULL, *rn_o = NULL, *moved = NULL;
+    uint32_t *at_n = NULL, *at_o = NULL;
+    /* (kept roads whose stroke's length or arc lengths changed: run_flips) */
+    int look = net && T->net && T->tfar && nn;
+    if (look && (moved = rs__calloc(ctx, nn, 1)))
+        for (size_t j = 0; j < nn; j++) {
+            uint32_t i = m_new[j];
+            moved[j] = i != UINT32_MAX && (net->s_len[j] != T->net->s_len[i] || net->s_off[j] != T->net->s_off[i] ||
+                                           net->rev[j] != T->net->rev[i]);
+        }
+    size_t non_n = scan_nodes(ctx, net, cn, moved, &on_n, &at_n, &rn);
+    size_t non_o = scan_nodes(ctx, T->net, co, NULL, &on_o, &at_o, &rn_o);
+    int known = non_n != SIZE_MAX && non_o != SIZE_MAX && (moved || !look); /* (0: the whole build) */
     /* (a street's run past a T changed: its strip came or went) */
-    if (known && run_flips(ctx, net, T->net, roads, m_new, T->tfar, on_n, &non_n)) known = 0, r = RS_ERR_NOMEM;
+    if (known && run_flips(ctx, net, roads, rn, m_new, T->tfar, on_n, &non_n)) known = 0;
     if (known) { /* (each network's nodes where the other's changed: their T ends) */
-        uint8_t *was = non_o ? rs__malloc(ctx, T->net->nnodes) : NULL;
-        if (was) memcpy(was, on_o, T->net->nnodes);
-        known = (!non_o || was) && mark_across(ctx, net, on_n, T->net, on_o, m_new, &non_o) == 0 &&
-                mark_across(ctx, T->net, was, net, on_n, m_old, &non_n) == 0;
-        rs__free(ctx, was);
-        if (!known) r = RS_ERR_NOMEM;
+        mark_across(net, on_n, at_o, on_o, m_new, &non_o);
+        mark_across(T->net, on_o, at_n, on_n, m_old, &non_n);
     }
+    rs__free(ctx, moved);
+    rs__free(ctx, rn);
+    rs__free(ctx, rn_o);
+    rs__free(ctx, at_n);
+    rs__free(ctx, at_o);
     if (!known) r = RS_ERR_NOMEM;
     if (known) {
         neighbour_segments(net, on_n, cn, NULL, roads, &chg, grow);

@@ -66,28 +66,47 @@ static double segment_distance(const double *a, const double *b, double px, doub
 }
 
 /* How far (px, py) lies beyond the surface of the street of leg L (half
- * width R), metres (negative: inside): against the leg's record, and
- * where the stroke goes on past the record's end (run: leg_run), against
- * its last segment carried on straight as far as the stroke runs (the
- * next record is not looked at: a part need not hold it). */
+ * width R), metres (negative: inside): against the leg's record from the
+ * foot (fx, fy) on along the leg, as far as a straight street would
+ * matter (the distance to the foot and 2 R of arc: a long record is not
+ * walked whole for each T end), and where the stroke goes on past the
+ * record's end within that (run: leg_run), against its last segment
+ * carried on straight (the next record is not looked at: a part need not
+ * hold it). */
 static double past_street(const rs_roads *roads, const rs_network *net, const rs_network_leg *L, double run, double R,
-                          double px, double py)
+                          double fx, double fy, double px, double py)
 {
     const double *xy;
     size_t np;
     rs_roads_get(roads, L->road, NULL, NULL, &xy, &np);
-    double best = INFINITY;
-    for (size_t k = 0; k < np; k++) best = fmin(best, segment_distance(xy + 2 * k, xy + 2 * (k + 1 < np ? k + 1 : k), px, py));
+    if (!np) return INFINITY;
     int fwd = L->kind == RS_LEG_START || L->kind == RS_LEG_FORWARD;
-    double rest = fwd ? net->length[L->road] - L->s : L->s, on = run - rest;
-    size_t ke = np >= 2 ? rs__end_segment(xy, np, fwd) : SIZE_MAX; /* (past repeated points) */
-    if (on > net->tol && ke != SIZE_MAX) {
-        const double *p = xy + 2 * (fwd ? np - 1 : 0), *q = xy + 2 * (fwd ? ke : ke + 1);
-        double dx = p[0] - q[0], dy = p[1] - q[1], len = hypot(dx, dy);
-        if (len > 0) {
-            on = fmin(on, 1e9);
-            double e[2] = { p[0] + on * dx / len, p[1] + on * dy / len };
-            best = fmin(best, segment_distance(p, e, px, py));
+    double reach = hypot(px - fx, py - fy) + 2 * R, arc = 0, best = INFINITY;
+    if (np == 1) return hypot(px - xy[0], py - xy[1]) - R;
+    /* (a T on a segment: that segment; a point: the segments after it or before) */
+    size_t k = L->segment < np - 1 ? L->segment : np - 2;
+    for (int first = 1;; first = 0) {
+        const double *a = xy + 2 * k, *b = a + 2;
+        double dx = b[0] - a[0], dy = b[1] - a[1], len = hypot(dx, dy);
+        best = fmin(best, segment_distance(a, b, px, py));
+        if (first && len > 0) { /* (the arc from the foot only) */
+            double t = ((fx - a[0]) * dx + (fy - a[1]) * dy) / (len * len);
+            t = t > 0 ? (t < 1 ? t : 1) : 0;
+            arc += (fwd ? 1 - t : t) * len;
+        } else arc += len;
+        if (arc > reach || (fwd ? k + 2 >= np : k == 0)) break;
+        k = fwd ? k + 1 : k - 1;
+    }
+    if (!(arc > reach)) { /* (the record ends within reach: the stroke on past it) */
+        double rest = fwd ? net->length[L->road] - L->s : L->s, on = fmin(run - rest, reach);
+        size_t ke = rs__end_segment(xy, np, fwd); /* (past repeated points) */
+        if (on > net->tol && ke != SIZE_MAX) {
+            const double *p = xy + 2 * (fwd ? np - 1 : 0), *q = xy + 2 * (fwd ? ke : ke + 1);
+            double dx = p[0] - q[0], dy = p[1] - q[1], len = hypot(dx, dy);
+            if (len > 0) {
+                double e[2] = { p[0] + on * dx / len, p[1] + on * dy / len };
+                best = fmin(best, segment_distance(p, e, px, py));
+            }
         }
     }
     return best - R;
@@ -99,12 +118,12 @@ static double past_street(const rs_roads *roads, const rs_network *net, const rs
  * the end's round cap would (r - far past the far edge, r the road's half
  * width), or than a tenth of r (a bent street's sagitta under a corner:
  * the cap's notch on the near side at a slant is as deep); else the end
- * keeps its cap. At a slant one edge of the strip
- * reaches (far + r cos) / sin along the street (30 m for an 11 m road
- * meeting another at 17 degrees): a street that stops or turns before
- * that left a spike of the side road's surface off both roads (found by
- * the edits fuzzer). The strip's two far corners are measured against
- * the street (past_street), each on its side of the foot. */
+ * keeps its cap. At a slant one edge of the strip reaches (far + r cos) /
+ * sin along the street (30 m for an 11 m road meeting another at 17
+ * degrees): a street that stops or turns before that left a spike of the
+ * side road's surface off both roads (found by the edits fuzzer). The
+ * strip's two far corners are measured against the street (past_street),
+ * each on its side of the foot. */
 static int strip_on_street(const rs_roads *roads, const rs_network *net, size_t nd, uint32_t r, int end,
                            const rs_network_leg *const *tl, double tx, double ty, double nx, double ny, double far,
                            double R)
@@ -142,7 +161,7 @@ static int strip_on_street(const rs_roads *roads, const rs_network *net, size_t 
         if (!(d > 0)) continue;
         double cx = E[0] + vx + d * ux, cy = E[1] + vy + d * uy;
         const rs_network_leg *L = tx * (cx - fx) + ty * (cy - fy) >= 0 ? tl[0] : tl[1];
-        if (!(past_street(roads, net, L, leg_run(net, L), R, cx, cy) <= cap)) return 0;
+        if (!(past_street(roads, net, L, leg_run(net, L), R, fx, fy, cx, cy) <= cap)) return 0;
     }
     return 1;
 }
