@@ -62,7 +62,8 @@ static double segment_distance(const double *a, const double *b, double px, doub
     double dx = b[0] - a[0], dy = b[1] - a[1], dd = dx * dx + dy * dy;
     double v = dd > 0 ? ((px - a[0]) * dx + (py - a[1]) * dy) / dd : 0;
     v = v > 0 ? (v < 1 ? v : 1) : 0;
-    return hypot(px - (a[0] + v * dx), py - (a[1] + v * dy));
+    double ex = px - (a[0] + v * dx), ey = py - (a[1] + v * dy);
+    return sqrt(ex * ex + ey * ey); /* (not hypot: a T end asks it for each segment near it) */
 }
 
 /* How far (px, py) lies beyond the surface of the street of leg L (half
@@ -72,23 +73,25 @@ static double segment_distance(const double *a, const double *b, double px, doub
  * walked whole for each T end), and where the stroke goes on past the
  * record's end within that (run: leg_run), against its last segment
  * carried on straight (the next record is not looked at: a part need not
- * hold it). */
+ * hold it). Returns as soon as it is no more than `enough` (the caller's
+ * test). */
 static double past_street(const rs_roads *roads, const rs_network *net, const rs_network_leg *L, double run, double R,
-                          double fx, double fy, double px, double py)
+                          double fx, double fy, double px, double py, double enough)
 {
     const double *xy;
     size_t np;
     rs_roads_get(roads, L->road, NULL, NULL, &xy, &np);
     if (!np) return INFINITY;
     int fwd = L->kind == RS_LEG_START || L->kind == RS_LEG_FORWARD;
-    double reach = hypot(px - fx, py - fy) + 2 * R, arc = 0, best = INFINITY;
-    if (np == 1) return hypot(px - xy[0], py - xy[1]) - R;
+    double reach = sqrt((px - fx) * (px - fx) + (py - fy) * (py - fy)) + 2 * R, arc = 0, best = INFINITY;
+    if (np == 1) return segment_distance(xy, xy, px, py) - R;
     /* (a T on a segment: that segment; a point: the segments after it or before) */
     size_t k = L->segment < np - 1 ? L->segment : np - 2;
     for (int first = 1;; first = 0) {
         const double *a = xy + 2 * k, *b = a + 2;
-        double dx = b[0] - a[0], dy = b[1] - a[1], len = hypot(dx, dy);
+        double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy);
         best = fmin(best, segment_distance(a, b, px, py));
+        if (best - R <= enough) return best - R; /* (on the street: no need to look further) */
         if (first && len > 0) { /* (the arc from the foot only) */
             double t = ((fx - a[0]) * dx + (fy - a[1]) * dy) / (len * len);
             t = t > 0 ? (t < 1 ? t : 1) : 0;
@@ -161,7 +164,7 @@ static int strip_on_street(const rs_roads *roads, const rs_network *net, size_t 
         if (!(d > 0)) continue;
         double cx = E[0] + vx + d * ux, cy = E[1] + vy + d * uy;
         const rs_network_leg *L = tx * (cx - fx) + ty * (cy - fy) >= 0 ? tl[0] : tl[1];
-        if (!(past_street(roads, net, L, leg_run(net, L), R, fx, fy, cx, cy) <= cap)) return 0;
+        if (!(past_street(roads, net, L, leg_run(net, L), R, fx, fy, cx, cy, cap) <= cap)) return 0;
     }
     return 1;
 }
