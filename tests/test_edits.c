@@ -1706,6 +1706,18 @@ static void test_far_strip_clipped(void)
     edit_end(&E);
 }
 
+/* Twelve short residential streets along the fuzz map's far side: most of
+ * the map is not near an edit at y = 100, so an update patches. */
+static void add_far_streets(one_edit *E)
+{
+    for (int k = 0; k < 12; k++) {
+        const double xy[4] = { 10 + 25 * k, 200, 25 + 25 * k, 215 };
+        size_t n = rs_roads_count(E->roads);
+        E->ok = E->ok && rs_roads_add(E->ctx, E->roads, NULL, 4, xy, 2) == RS_OK &&
+                rs_roads_set_attr(E->ctx, E->roads, n, "class", "residential") == RS_OK;
+    }
+}
+
 /* A T that goes with no changed road at its node (fuzz/edits, 6 December
  * 2026): an 11 m primary ends at a slant inside a 4 m residential
  * street's surface, a free end that meets the street in a T, its flat
@@ -1726,11 +1738,7 @@ static void test_tee_gone_at_node(void)
            rs_roads_set_attr(E.ctx, E.roads, 0, "class", "residential") == RS_OK &&
            rs_roads_add(E.ctx, E.roads, NULL, 11, side, 2) == RS_OK &&
            rs_roads_set_attr(E.ctx, E.roads, 1, "class", "primary") == RS_OK;
-    for (int k = 0; k < 12; k++) { /* (short streets far off: most of the map is not near the edit) */
-        const double xy[4] = { 10 + 25 * k, 200, 25 + 25 * k, 215 };
-        E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, xy, 2) == RS_OK &&
-               rs_roads_set_attr(E.ctx, E.roads, (size_t)k + 2, "class", "residential") == RS_OK;
-    }
+    add_far_streets(&E);
     edit_base(&E, 2);
     E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, spur, 2) == RS_OK &&
            rs_roads_set_attr(E.ctx, E.roads, 14, "class", "residential") == RS_OK;
@@ -1772,11 +1780,7 @@ static void test_tee_street_shortened(void)
            rs_roads_add(E.ctx, E.roads, NULL, 11, side, 2) == RS_OK;
     for (size_t k = 0; k < 4; k++)
         E.ok = E.ok && rs_roads_set_attr(E.ctx, E.roads, k, "class", k == 3 ? "primary" : "residential") == RS_OK;
-    for (int k = 0; k < 12; k++) { /* (short streets far off: most of the map is not near the edit) */
-        const double xy[4] = { 10 + 25 * k, 200, 25 + 25 * k, 215 };
-        E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 4, xy, 2) == RS_OK &&
-               rs_roads_set_attr(E.ctx, E.roads, (size_t)k + 4, "class", "residential") == RS_OK;
-    }
+    add_far_streets(&E);
     edit_base(&E, 2);
     E.ok = E.ok && rs_roads_remove(E.ctx, E.roads, 2) == RS_OK;
     edit_update(&E, "street shortened past a T");
