@@ -941,11 +941,12 @@ static size_t scan_nodes(rs_ctx *ctx, const rs_network *N, const uint8_t *m, con
 
 /* The nodes of B that hold the same end of a road as a node of A in onA
  * (1: marked there; map: A's road to B's, UINT32_MAX: none; atB: B's
- * road ends' nodes, scan_nodes) marked in onB too (2), *nb counting them. A node can change
- * without a changed road of its own there: a new road ending on an old T
- * end's point makes that end no longer free, and its T (and the strip
- * running from it) goes (fuzz/edits); every node holds a road end or two
- * roads' points, and where only passing roads meet there is no T end. */
+ * road ends' nodes, scan_nodes) marked in onB too (2), *nb counting
+ * them. A node can change without a changed road of its own there: a new
+ * road ending on an old T end's point makes that end no longer free, and
+ * its T (and the strip running from it) goes (fuzz/edits); every node
+ * holds a road end or two roads' points, and where only passing roads
+ * meet there is no T end. */
 static void mark_across(const rs_network *A, const uint8_t *onA, const uint32_t *atB, uint8_t *onB, const uint32_t *map,
                         size_t *nb)
 {
@@ -967,11 +968,12 @@ static void mark_across(const rs_network *A, const uint8_t *onA, const uint32_t 
  * stopped being one: the street now runs on past the T far enough for
  * the end's strip, or no longer does (tee_ends.c strip_on_street). Marked
  * in `on`, *non counting them; m_new: N's road to the old one's; tfar:
- * the old ends' T lines (NaN: no T). 0, or -1: out of memory. */
-static int run_flips(rs_ctx *ctx, const rs_network *N, const rs_roads *roads, const uint8_t *rn, const uint32_t *m_new,
+ * the old ends' T lines (NaN: no T). RS_OK, RS_ERR_NOMEM or
+ * RS_ERR_CANCELLED. */
+static rs_result run_flips(rs_ctx *ctx, const rs_network *N, const rs_roads *roads, const uint8_t *rn, const uint32_t *m_new,
                      const double *tfar, uint8_t *on, size_t *non)
 {
-    if (!rn || !tfar) return 0;
+    if (!rn || !tfar) return RS_OK;
     rs__tee_end *te = NULL;
     uint8_t *isT = NULL;
     size_t nte = 0, nr = rs_network_road_count(N);
@@ -988,7 +990,7 @@ static int run_flips(rs_ctx *ctx, const rs_network *N, const rs_roads *roads, co
         }
     rs__free(ctx, te);
     rs__free(ctx, isT);
-    return r ? -1 : 0;
+    return r;
 }
 
 /* At every node of N in `on` (scan_nodes of m), the other legs'
@@ -1364,7 +1366,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     size_t non_o = scan_nodes(ctx, T->net, co, NULL, &on_o, &at_o, &rn_o);
     int known = non_n != SIZE_MAX && non_o != SIZE_MAX && (moved || !look); /* (0: the whole build) */
     /* (a street's run past a T changed: its strip came or went) */
-    if (known && run_flips(ctx, net, roads, rn, m_new, T->tfar, on_n, &non_n)) known = 0;
+    if (known && (r = run_flips(ctx, net, roads, rn, m_new, T->tfar, on_n, &non_n)) != RS_OK) known = 0;
     if (known) { /* (each network's nodes where the other's changed: their T ends) */
         mark_across(net, on_n, at_o, on_o, m_new, &non_o);
         mark_across(T->net, on_o, at_n, on_n, m_old, &non_n);
@@ -1374,7 +1376,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     rs__free(ctx, rn_o);
     rs__free(ctx, at_n);
     rs__free(ctx, at_o);
-    if (!known) r = RS_ERR_NOMEM;
+    if (!known && !r) r = RS_ERR_NOMEM;
     if (known) {
         neighbour_segments(net, on_n, cn, NULL, roads, &chg, grow);
         neighbour_segments(T->net, on_o, co, m_old, roads, &chg, grow);
