@@ -409,6 +409,24 @@ static void tee_fars(double *tfar, const rs__tee_end *te, size_t n)
     for (size_t k = 0; k < n; k++) tfar[2 * (size_t)te[k].road + (te[k].end ? 1 : 0)] = te[k].far;
 }
 
+/* Every road end's T line and strip (NaN where it is no T end) of the n
+ * roads of `roads` with network net into *tfar (2 n) and *tstrip (2 TS
+ * n), the caller's (rs__free, also on failure). */
+static rs_result tee_lines(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, size_t n, double **tfar,
+                           double **tstrip)
+{
+    rs__tee_end *te = NULL;
+    size_t nte = 0;
+    *tfar = rs__alloc_array(ctx, 2 * (n ? n : 1), sizeof **tfar);
+    *tstrip = rs__alloc_array(ctx, 2 * TS * (n ? n : 1), sizeof **tstrip);
+    rs_result r = *tfar && *tstrip ? rs__tee_ends(ctx, roads, net, &te, &nte) : RS_ERR_NOMEM;
+    for (size_t k = 0; !r && k < 2 * n; k++) (*tfar)[k] = NAN;
+    for (size_t k = 0; !r && k < 2 * TS * n; k++) (*tstrip)[k] = NAN;
+    if (!r) tee_fars(*tfar, te, nte), tee_strips(*tstrip, te, nte, roads);
+    rs__free(ctx, te);
+    return r;
+}
+
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 {
     if (!t || rs__refs_add(&t->refs, -1) > 0) return;
@@ -448,15 +466,7 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
         return r;
     }
     if (net) { /* (every end's T line, for the next update's clip walks) */
-        rs__tee_end *te = NULL;
-        size_t nte = 0;
-        t->tfar = rs__alloc_array(ctx, 2 * (t->n ? t->n : 1), sizeof *t->tfar);
-        t->tstrip = rs__alloc_array(ctx, 2 * TS * (t->n ? t->n : 1), sizeof *t->tstrip);
-        r = t->tfar && t->tstrip ? rs__tee_ends(ctx, roads, net, &te, &nte) : RS_ERR_NOMEM;
-        for (size_t k = 0; !r && k < 2 * t->n; k++) t->tfar[k] = NAN;
-        for (size_t k = 0; !r && k < 2 * TS * t->n; k++) t->tstrip[k] = NAN;
-        if (!r) tee_fars(t->tfar, te, nte), tee_strips(t->tstrip, te, nte, roads);
-        rs__free(ctx, te);
+        r = tee_lines(ctx, roads, net, t->n, &t->tfar, &t->tstrip);
         if (r) {
             rs__grid_track_free(ctx, t);
             return r;
@@ -1636,18 +1646,11 @@ int rs__grid_track_net_check(rs_ctx *ctx, const rs_road_grid *g, const rs_roads 
     /* and its T lines and strips, as a build of `roads` finds them */
     size_t nr = rs_roads_count(roads);
     if (eq && t->tfar && t->tstrip && t->n == nr) {
-        rs__tee_end *te = NULL;
-        size_t nte = 0;
-        double *tf = rs__alloc_array(ctx, 2 * (nr ? nr : 1), sizeof *tf);
-        double *ts = rs__alloc_array(ctx, 2 * TS * (nr ? nr : 1), sizeof *ts);
-        if (!tf || !ts || rs__tee_ends(ctx, roads, n, &te, &nte) != RS_OK) eq = -1;
-        for (size_t k = 0; eq == 1 && k < 2 * nr; k++) tf[k] = NAN;
-        for (size_t k = 0; eq == 1 && k < 2 * TS * nr; k++) ts[k] = NAN;
-        if (eq == 1) tee_fars(tf, te, nte), tee_strips(ts, te, nte, roads);
+        double *tf = NULL, *ts = NULL;
+        if (tee_lines(ctx, roads, n, nr, &tf, &ts) != RS_OK) eq = -1;
         for (size_t k = 0; eq == 1 && k < 2 * nr; k++) eq = isnan(tf[k]) ? isnan(t->tfar[k]) : tf[k] == t->tfar[k];
         for (size_t k = 0; eq == 1 && k < 2 * TS * nr; k++)
             eq = isnan(ts[k]) ? isnan(t->tstrip[k]) : ts[k] == t->tstrip[k];
-        rs__free(ctx, te);
         rs__free(ctx, tf);
         rs__free(ctx, ts);
     }

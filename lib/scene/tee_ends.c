@@ -24,6 +24,15 @@ typedef struct tee_through {
     double tx, ty, R;
 } tee_through;
 
+/* The point of segment a-b nearest (px, py) into f (a when a = b). */
+static void segment_foot(const double *a, const double *b, double px, double py, double *f)
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], dd = dx * dx + dy * dy;
+    double v = dd > 0 ? ((px - a[0]) * dx + (py - a[1]) * dy) / dd : 0;
+    v = v > 0 ? (v < 1 ? v : 1) : 0;
+    f[0] = a[0] + v * dx, f[1] = a[1] + v * dy;
+}
+
 double rs__tee_offset(const rs_roads *roads, uint32_t r, int end, const rs_network_leg *tl, double nx, double ny,
                       double tol)
 {
@@ -33,11 +42,10 @@ double rs__tee_offset(const rs_roads *roads, uint32_t r, int end, const rs_netwo
     rs_roads_get(roads, r, NULL, NULL, &xy, &np);
     rs_roads_get(roads, tl->road, NULL, NULL, &txy, &tn);
     if (np < 1 || (size_t)tl->segment + 1 >= tn) return 0;
-    const double *e = xy + 2 * (end ? np - 1 : 0), *a = txy + 2 * (size_t)tl->segment, *b = a + 2;
-    double dx = b[0] - a[0], dy = b[1] - a[1], dd = dx * dx + dy * dy;
-    double u = dd > 0 ? ((e[0] - a[0]) * dx + (e[1] - a[1]) * dy) / dd : 0;
-    u = u > 0 ? (u < 1 ? u : 1) : 0;
-    double fx = e[0] - (a[0] + u * dx), fy = e[1] - (a[1] + u * dy);
+    const double *e = xy + 2 * (end ? np - 1 : 0), *a = txy + 2 * (size_t)tl->segment;
+    double f[2];
+    segment_foot(a, a + 2, e[0], e[1], f);
+    double fx = e[0] - f[0], fy = e[1] - f[1];
     if (!(hypot(fx, fy) > tol)) return 0;
     double off = nx * fx + ny * fy;
     return isfinite(off) ? off : 0;
@@ -59,10 +67,9 @@ static double leg_run(const rs_network *net, const rs_network_leg *tl)
 /* The distance from (px, py) to segment a-b. */
 static double segment_distance(const double *a, const double *b, double px, double py)
 {
-    double dx = b[0] - a[0], dy = b[1] - a[1], dd = dx * dx + dy * dy;
-    double v = dd > 0 ? ((px - a[0]) * dx + (py - a[1]) * dy) / dd : 0;
-    v = v > 0 ? (v < 1 ? v : 1) : 0;
-    double ex = px - (a[0] + v * dx), ey = py - (a[1] + v * dy);
+    double f[2];
+    segment_foot(a, b, px, py, f);
+    double ex = px - f[0], ey = py - f[1];
     return sqrt(ex * ex + ey * ey); /* (not hypot: a T end asks it for each segment near it) */
 }
 
@@ -148,15 +155,13 @@ static int strip_on_street(const rs_roads *roads, const rs_network *net, size_t 
      * (the node where the street passes by its records' ends) */
     const double *txy;
     size_t tn;
-    double fx = net->node[nd].x, fy = net->node[nd].y;
+    double F[2] = { net->node[nd].x, net->node[nd].y };
     rs_roads_get(roads, tl[0]->road, NULL, NULL, &txy, &tn);
     if (!rs__is_end_leg(tl[0]) && (size_t)tl[0]->segment + 1 < tn) {
-        const double *p = txy + 2 * (size_t)tl[0]->segment, *q = p + 2;
-        double dx = q[0] - p[0], dy = q[1] - p[1], dd = dx * dx + dy * dy;
-        double v = dd > 0 ? ((E[0] - p[0]) * dx + (E[1] - p[1]) * dy) / dd : 0;
-        v = v > 0 ? (v < 1 ? v : 1) : 0;
-        fx = p[0] + v * dx, fy = p[1] + v * dy;
+        const double *p = txy + 2 * (size_t)tl[0]->segment;
+        segment_foot(p, p + 2, E[0], E[1], F);
     }
+    const double fx = F[0], fy = F[1];
     const double cap = fmax(0.5 * w - far, fmax(0.05 * w, net->tol));
     for (int sg = -1; sg <= 1; sg += 2) {
         double vx = -sg * 0.5 * w * uy, vy = sg * 0.5 * w * ux;
