@@ -443,6 +443,129 @@ static void test_far_end(void)
     rs_dem_free(ctx, dem);
 }
 
+/* Distance from (x, y) to segment a-b. */
+static double seg_dist2d(double x, double y, const double *a, const double *b)
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((x - a[0]) * dx + (y - a[1]) * dy) / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return hypot(x - a[0] - t * dx, y - a[1] - t * dy);
+}
+
+/* A slanted road from 10^20 m away, bent on the map: its surface and edge
+ * lines as the same road from 1 km away along the same line (the cut of a
+ * far segment was built from the map's centre and missed the road's own
+ * point by metres). The centre line's dashes are measured along a road
+ * 10^20 m long and are left out of the comparison. */
+static void test_far_slant(void)
+{
+    float z[16 * 12];
+    memset(z, 0, sizeof z);
+    rs_dem *dem = NULL;
+    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    const double B[2] = { 40, 20 }, C[2] = { 40, -50 };
+    const double ux = 1e20 / hypot(1e20, 3e19), uy = 3e19 / hypot(1e20, 3e19);
+    for (int mode = 0; dem && mode < 2; mode++) {
+        uint8_t *rgba[2] = { NULL, NULL };
+        uint16_t *wt[2] = { NULL, NULL };
+        uint32_t w = 0, h = 0;
+        for (int v = 0; v < 2; v++) {
+            double d = v ? 1e3 : 1e20;
+            const double xy[6] = { v ? B[0] + d * ux : 1e20, v ? B[1] + d * uy : 3e19, B[0], B[1], C[0], C[1] };
+            rs_roads *roads = NULL;
+            CHECK(rs_roads_create(ctx, &roads) == RS_OK && rs_roads_add(ctx, roads, NULL, 8, xy, 3) == RS_OK &&
+                  rs_roads_set_attr(ctx, roads, 0, "class", "secondary") == RS_OK);
+            rs_splat_options o;
+            memset(&o, 0, sizeof o);
+            o.texels = 16;
+            o.coverage.edges = mode ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
+            rs_splatter *sp = NULL;
+            CHECK(roads && rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
+            rs_splatter_size(sp, &w, &h);
+            rgba[v] = malloc((size_t)w * h * 4);
+            wt[v] = malloc((size_t)w * h * 2);
+            CHECK(sp && rgba[v] && wt[v] &&
+                  rs_splat_window(ctx, sp, 0, 0, w, h, rgba[v], (size_t)w * 4, wt[v], w, NULL) == RS_OK);
+            rs_splatter_free(ctx, sp);
+            rs_roads_free(ctx, roads);
+        }
+        double pix = 5.0 / 16, far[2] = { B[0] + 1e3 * ux, B[1] + 1e3 * uy };
+        size_t road = 0, differ = 0, worst = 0;
+        for (uint32_t y = 0; rgba[0] && rgba[1] && wt[0] && wt[1] && y < h; y++)
+            for (uint32_t x = 0; x < w; x++) {
+                double cx = (x + 0.5) * pix, cy = (y + 0.5) * pix;
+                double dc = fmin(seg_dist2d(cx, cy, far, B), seg_dist2d(cx, cy, B, C));
+                size_t p = (size_t)y * w + x;
+                road += wt[1][p] != 0;
+                if (dc < 1.0) continue; /* (the dashes) */
+                int dw = abs((int)wt[0][p] - (int)wt[1][p]);
+                for (int c = 0; c < 4; c++) {
+                    int dd = abs((int)rgba[0][4 * p + c] - (int)rgba[1][4 * p + c]);
+                    if (dd > dw) dw = dd;
+                }
+                differ += dw > 1;
+                if ((size_t)dw > worst) worst = (size_t)dw;
+            }
+        CHECKF(road > 1000 && differ == 0, "%s edges: %zu of %zu road pixels off the centre line differ (by up to %zu)",
+               mode ? "alpha-map" : "analytic", differ, road, worst);
+        for (int v = 0; v < 2; v++) free(rgba[v]), free(wt[v]);
+    }
+    rs_dem_free(ctx, dem);
+}
+
+/* A zebra on a road from 10^33 m: its place along the road is an arc
+ * length of 10^33 with no metres left, so it is not placed (it was painted
+ * all along the road); on the same road the other way round its arc length
+ * is 35 m and it is. */
+static void test_far_zebra(void)
+{
+    float z[16 * 12];
+    memset(z, 0, sizeof z);
+    rs_dem *dem = NULL;
+    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    for (int rev = 0; dem && rev < 2; rev++) {
+        uint8_t *rgba[2] = { NULL, NULL };
+        uint32_t w = 0, h = 0;
+        for (int zebra = 0; zebra < 2; zebra++) {
+            const double fwd[6] = { 1.1e33, 20, 40, 20, 75, 20 }, back[6] = { 75, 20, 40, 20, 1.1e33, 20 };
+            rs_roads *roads = NULL;
+            CHECK(rs_roads_create(ctx, &roads) == RS_OK &&
+                  rs_roads_add(ctx, roads, NULL, 6, rev ? back : fwd, 3) == RS_OK);
+            if (zebra) CHECK(rs_roads_set_point_attr(ctx, roads, 0, 1, "crossing", "zebra") == RS_OK);
+            rs_splat_options o;
+            memset(&o, 0, sizeof o);
+            o.texels = 16;
+            rs_splatter *sp = NULL;
+            CHECK(roads && rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
+            rs_splatter_size(sp, &w, &h);
+            rgba[zebra] = malloc((size_t)w * h * 4);
+            CHECK(sp && rgba[zebra] &&
+                  rs_splat_window(ctx, sp, 0, 0, w, h, rgba[zebra], (size_t)w * 4, NULL, 0, NULL) == RS_OK);
+            rs_splatter_free(ctx, sp);
+            rs_roads_free(ctx, roads);
+        }
+        /* pixels the zebra changed, near its point and elsewhere */
+        size_t near = 0, away = 0;
+        for (uint32_t y = 0; rgba[0] && rgba[1] && y < h; y++)
+            for (uint32_t x = 0; x < w; x++) {
+                size_t p = (size_t)y * w + x;
+                if (!memcmp(rgba[0] + 4 * p, rgba[1] + 4 * p, 4)) continue;
+                double cx = (x + 0.5) * 5.0 / 16;
+                if (fabs(cx - 40) < 3) near++;
+                else away++;
+            }
+        CHECKF(away == 0 && (rev ? near > 100 : near == 0),
+               "road %s: the zebra changed %zu pixels within 3 m of its point and %zu further off",
+               rev ? "to the far point" : "from the far point", near, away);
+        for (int v = 0; v < 2; v++) free(rgba[v]);
+    }
+    rs_dem_free(ctx, dem);
+}
+
 int main(void)
 {
     rs_allocator al = { cnt_malloc, cnt_realloc, cnt_free, &mem };
@@ -450,6 +573,8 @@ int main(void)
     test_extreme_dems();
     test_stress();
     test_far_end();
+    test_far_slant();
+    test_far_zebra();
     if (!getenv("RS_DEBUG")) test_huge_dem();
     CHECK(mem.live > 0); /* the context itself */
     rs_ctx_free(ctx);

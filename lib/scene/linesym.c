@@ -675,6 +675,45 @@ static int cut_to_map(double ox, double oy, double ux, double uy, double len, do
     return *lo <= *hi;
 }
 
+/* cut_to_map for the segment from (ox, oy) to (bx, by) (unit u, length
+ * len), with the cut start's point (*cx, *cy) and *rest, the cut start's
+ * distance to B, *span = hi - lo. An end past a million map sizes carries rounding of
+ * metres (a road from 10^20 m): the cut is then measured from the near end
+ * (rs__cut_from_near's reason), or from the disc's centre when both are
+ * far, as the road field cuts the surface (rs__clip_far), so the lines lie
+ * on it. *far_cut: the second way was taken (*rest is exact there). */
+static int cut_segment(double ox, double oy, double bx, double by, double ux, double uy, double len, double ext,
+                       double wmap, double hmap, double *lo, double *hi, double *span, double *rest, double *cx,
+                       double *cy, int *far_cut)
+{
+    double huge = 1e6 * (wmap + hmap + 2 * ext), mx = 0.5 * wmap, my = 0.5 * hmap;
+    int a_near = fabs(ox - mx) <= huge && fabs(oy - my) <= huge, b_near = fabs(bx - mx) <= huge && fabs(by - my) <= huge;
+    *far_cut = 0;
+    if (a_near) {
+        if (!cut_to_map(ox, oy, ux, uy, len, ext, wmap, hmap, lo, hi)) return 0;
+        *rest = len - *lo;
+        *span = *hi - *lo;
+        *cx = *lo > 0 ? ox + *lo * ux : ox;
+        *cy = *lo > 0 ? oy + *lo * uy : oy;
+        return 1;
+    }
+    *far_cut = 1;
+    double lb, hb;
+    if (b_near) { /* from B backwards */
+        if (!cut_to_map(bx, by, -ux, -uy, len, ext, wmap, hmap, &lb, &hb)) return 0;
+        *lo = len - hb, *hi = len - lb, *rest = hb, *span = hb - lb;
+        *cx = bx - hb * ux, *cy = by - hb * uy;
+        return 1;
+    }
+    double ax2 = ox, ay2 = oy, bx2 = bx, by2 = by, along = 0;
+    if (!rs__clip_far(&ax2, &ay2, &bx2, &by2, wmap, hmap, ext, huge, &along)) return 0;
+    double l2 = rs__arc_len(ax2, ay2, bx2, by2);
+    if (!cut_to_map(ax2, ay2, ux, uy, l2, ext, wmap, hmap, &lb, &hb)) return 0;
+    *lo = along + lb, *hi = along + hb, *rest = len - *lo, *span = hb - lb;
+    *cx = ax2 + lb * ux, *cy = ay2 + lb * uy;
+    return 1;
+}
+
 /* ------------------------------------------------------------------------
  * Junctions: a road's lines stop at the edge of every other road's surface
  * (docs/linesym.md "Junctions").
@@ -1100,8 +1139,11 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         P.dashed = B->ndash > 0;
         /* Far segments: cut the centreline to the map grown by the band's
          * reach, so the box and s stay finite and small. */
-        double lo, hi;
-        if (!cut_to_map(P.ox, P.oy, ux, uy, len, ext, wmap, hmap, &lo, &hi)) continue;
+        double lo, hi, span, rest, cx, cy;
+        int far_cut;
+        if (!cut_segment(P.ox, P.oy, pts[i + 1].x, pts[i + 1].y, ux, uy, len, ext, wmap, hmap, &lo, &hi, &span, &rest,
+                         &cx, &cy, &far_cut))
+            continue;
         P.hp[P.nhp][0] = -a, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = 1;         /* v >= a */
         P.hp[P.nhp][0] = b, P.hp[P.nhp][1] = 0, P.hp[P.nhp++][2] = -1;         /* v <= b */
         /* Each end: the end perpendicular and the bisector with the
@@ -1149,7 +1191,15 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
             }
         }
         P.nlim += 2;
-        if (lo > 0) {
+        if (far_cut) {
+            /* (the same from the cut's own point: the end's limits at rest,
+             * s on from B's, dashes run on across B as from a near A) */
+            P.ox = cx;
+            P.oy = cy;
+            P.s0 = s[i + 1] - rest;
+            for (uint32_t k = 0; k < P.nhp; k++)
+                P.hp[k][0] = P.hp[k][1] < 0 ? -P.hp[k][1] * rest : P.hp[k][0] + P.hp[k][1] * lo;
+        } else if (lo > 0) {
             /* Re-anchor at the cut start (only u shifts; the half-planes
              * keep the exact piece). The cut-off parts lie more than a
              * pixel margin outside the map, so the box may leave them out. */
@@ -1158,7 +1208,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
             P.s0 += lo;
             for (uint32_t k = 0; k < P.nhp; k++) P.hp[k][0] += P.hp[k][1] * lo;
         }
-        P.len = hi - lo;
+        P.len = span;
         piece_box(L, &P, P.len, a, b);
         rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
@@ -1709,11 +1759,14 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         for (size_t i = 0; i + 1 < m; i++) {
             ls_surf Q;
             unit_dir(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, &Q.ux, &Q.uy);
-            double len = rs__arc_len(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y), lo, hi;
-            if (!cut_to_map(v[i].x, v[i].y, Q.ux, Q.uy, len, 2 * hw + L->margin, wmap, hmap, &lo, &hi)) continue;
-            Q.ax = v[i].x + lo * Q.ux;
-            Q.ay = v[i].y + lo * Q.uy;
-            Q.len = hi - lo;
+            double len = rs__arc_len(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y), lo, hi, span, rest, cx, cy;
+            int far_cut;
+            if (!cut_segment(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, Q.ux, Q.uy, len, 2 * hw + L->margin, wmap, hmap,
+                             &lo, &hi, &span, &rest, &cx, &cy, &far_cut))
+                continue;
+            Q.ax = far_cut ? cx : v[i].x + lo * Q.ux;
+            Q.ay = far_cut ? cy : v[i].y + lo * Q.uy;
+            Q.len = span;
             Q.r = hw;
             Q.u0 = -hw;
             Q.u1 = Q.len + hw;

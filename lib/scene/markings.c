@@ -303,6 +303,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
     double total = r->s[r->n - 1];
     double lo = m->slo, hi = m->shi;
     if (hi < r->s[0] || lo > total) return 0; /* (s[0] < 0 on a stretch extended before the record) */
+    if (!(fabs(lo) <= RS__ARC_MEASURED && fabs(hi) <= RS__ARC_MEASURED)) return 0;
     /* segments [a, b] overlapping [lo, hi] */
     size_t a = 0, b = r->n - 2;
     {
@@ -321,6 +322,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
         b = h > 0 ? h - 1 : 0;
         if (b < a) b = a;
     }
+    if (!(fabs(r->s[a]) <= RS__ARC_MEASURED)) return 0; /* (the stretch is measured from its first point) */
     size_t np = b - a + 2;
     /* the stretches of all marks together: a budget, as the points of all roads */
     if (np > ctx->limits.max_points - *npts) {

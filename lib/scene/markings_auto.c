@@ -531,7 +531,11 @@ static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size
         const rs__road_local *r = &A->rl[q.road];
         if (r->n < 2) return RS_OK;
         double total = r->s[r->n - 1];
-        if (q.s >= 0 && q.s <= total) break;
+        if (q.s >= 0 && q.s <= total) {
+            /* (measured: rs__markings place drops the others) */
+            if (!(q.s + q.length <= RS__ARC_MEASURED)) return RS_OK;
+            break;
+        }
         int e = q.s > total;
         size_t c = A->cont[2 * q.road + e];
         if (!c || hop == 16) return RS_OK;
@@ -564,10 +568,12 @@ static rs_result offer(const ctxa *A, rs__placement *p, rs__placement **pl, size
 static rs_result add_cut(ctxa *A, size_t road, double s0, double s1, double half)
 {
     if (!A->want_cuts || !(half > 0)) return RS_OK;
+    /* (no cut where no mark can be placed: rs__markings place) */
+    if (!(fabs(s0) <= RS__ARC_MEASURED && fabs(s1) <= RS__ARC_MEASURED)) return RS_OK;
     const rs__road_local *r = &A->rl[road];
     for (size_t k = 0; k + 1 < r->n; k++) {
         double len = r->s[k + 1] - r->s[k], u0 = s0 - r->s[k], u1 = s1 - r->s[k];
-        if (!(len > 0)) continue;
+        if (!(len > 0) || !(r->s[k] <= RS__ARC_MEASURED)) continue;
         if (u0 < 0) u0 = 0;
         if (u1 > len) u1 = len;
         if (!(u1 > u0)) continue;

@@ -44,6 +44,30 @@ static inline double rs__arc_len(double ax, double ay, double bx, double by)
     return 2 * hypot(0.5 * bx - 0.5 * ax, 0.5 * by - 0.5 * ay);
 }
 
+/* Arc lengths up to 2^32 m keep a micrometre in a double; past that a
+ * mark placed by one (a zebra on a road from 10^33 m) would land anywhere
+ * along its stretch, so marks are placed only where the arc lengths they
+ * use stay below this (docs/roadfield.md "Far roads"). */
+#define RS__ARC_MEASURED 4294967296.0
+
+/* A segment from a near end N to a far one (10^20 m away, say), cut to the
+ * disc of radius rad around (cx, cy), measured from N along the unit
+ * direction (ux, uy) to the far end, len = |far - N| (huge, possibly
+ * DBL_MAX): the kept part is t in [t0, t1] from N. The line from N keeps
+ * its digits where it meets the map; the line from the disc's centre
+ * (rs__clip_far for two far ends) would carry the far end's rounding,
+ * metres at 10^20 m, and miss N. N itself is untouched when inside
+ * (t0 = 0). Returns 0 when nothing of the segment reaches the disc. */
+static inline int rs__cut_from_near(double nx, double ny, double ux, double uy, double len, double cx, double cy,
+                                    double rad, double *t0, double *t1)
+{
+    double ex = cx - nx, ey = cy - ny, tc = ex * ux + ey * uy, dist = -uy * ex + ux * ey;
+    if (!(fabs(dist) <= rad)) return 0;
+    *t0 = tc - rad > 0 ? tc - rad : 0;
+    *t1 = tc + rad < len ? tc + rad : len;
+    return *t0 <= *t1;
+}
+
 /* s + len, at most DBL_MAX (a road over 1.8e308 m long has no finite arc
  * length: s saturates instead of becoming inf). */
 static inline double rs__arc_add(double s, double len)
