@@ -74,9 +74,22 @@ int rs__report(rs_ctx *ctx, uint64_t units);
  * No message set. */
 rs_result rs__sort(rs_ctx *ctx, void *base, size_t n, size_t size, int (*cmp)(const void *, const void *));
 /* The same, ordered by key[i] for element i (ascending; equal keys keep
- * their order): for large elements whose order is a number. key is read
- * only. */
+ * their order): for large elements whose order is a number (rs__sort_recs
+ * on (key, index) records, then each element moved once). key is read
+ * only. Scratch: 32 n bytes plus one element. */
 rs_result rs__sort_keyed(rs_ctx *ctx, void *base, size_t n, size_t size, const uint64_t *key);
+/* A 64-bit key and 8 bytes of the caller's (indices): what rs__sort_recs
+ * sorts (the pieces' fingerprints of an edit, the elements of
+ * rs__sort_keyed). */
+typedef struct rs__keyed {
+    uint64_t h;
+    uint32_t i, pos;
+} rs__keyed;
+/* r[0..n) by h ascending, equal ones in their order (LSD radix, a byte a
+ * pass; insertion below 64), polling for cancel between passes. Scratch:
+ * 16 n bytes. RS_OK; RS_ERR_NOMEM (r unchanged); RS_ERR_CANCELLED (r holds
+ * its records in some order). No message set. */
+rs_result rs__sort_recs(rs_ctx *ctx, rs__keyed *r, size_t n);
 /* qsort's comparison of two uint32_t, ascending. */
 int rs__cmp_u32(const void *pa, const void *pb);
 

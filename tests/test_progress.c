@@ -585,11 +585,47 @@ static void test_sort(rs_ctx *ctx)
     CHECK(rs__progress_end(c2, &pg, RS_ERR_CANCELLED) == RS_ERR_CANCELLED);
     CHECK(calls == 2 && memcmp(u, keep, n * sizeof *u) == 0);
     rs_ctx_free(c2);
+    /* the keyed sort (a radix over (key, index) records) stopped the same way */
+    uint64_t *key = malloc(n * sizeof *key);
+    for (size_t i = 0; key && i < n; i++) key[i] = (uint64_t)u[i] * 0x9E3779B97F4A7C15ull;
+    calls = 0;
+    CHECK(key && rs_ctx_create(NULL, NULL, &c2) == RS_OK);
+    rs_ctx_set_progress(c2, stop_second, &calls);
+    rs__progress_begin(c2, &pg, NULL, NULL, 1, 1);
+    CHECK(key && rs__sort_keyed(c2, u, n, sizeof *u, key) == RS_ERR_CANCELLED);
+    CHECK(rs__progress_end(c2, &pg, RS_ERR_CANCELLED) == RS_ERR_CANCELLED);
+    CHECK(calls == 2 && memcmp(u, keep, n * sizeof *u) == 0);
+    rs_ctx_free(c2);
+    /* records with keys over all 64 bits and many ties: by key, ties in
+     * their order (against the merge sort's order of the same keys) */
+    rs__keyed *rec = malloc(n * sizeof *rec);
+    uint32_t *idx = malloc(n * sizeof *idx);
+    int badr = 0;
+    for (size_t i = 0; rec && idx && i < n; i++) {
+        rec[i].h = key[i] >> (i % 3 ? 0 : 40); /* (a third share their high bytes' zeros) */
+        rec[i].i = (uint32_t)i, rec[i].pos = 0;
+        key[i] = rec[i].h;
+        idx[i] = (uint32_t)i;
+    }
+    CHECK(rec && idx && rs__sort_recs(ctx, rec, n) == RS_OK && rs__sort_keyed(ctx, idx, n, sizeof *idx, key) == RS_OK);
+    for (size_t i = 0; rec && idx && i < n; i++) {
+        badr += rec[i].i != idx[i];
+        if (i) badr += rec[i - 1].h > rec[i].h || (rec[i - 1].h == rec[i].h && rec[i - 1].i >= rec[i].i);
+    }
+    CHECKF(badr == 0, "rs__sort_recs: %d records out of order, unstable or not the keyed sort's", badr);
+    free(rec);
+    free(idx);
+    free(key);
     /* no memory for the indices: RS_ERR_NOMEM, untouched */
     rs_allocator al = { small_malloc, small_realloc, small_free, NULL };
     CHECK(rs_ctx_create(&al, NULL, &c2) == RS_OK);
     CHECK(rs__sort(c2, u, n, sizeof *u, sort_u32_cmp) == RS_ERR_NOMEM);
     CHECK(memcmp(u, keep, n * sizeof *u) == 0);
+    uint64_t *k2 = malloc(n * sizeof *k2);
+    for (size_t i = 0; k2 && i < n; i++) k2[i] = n - i;
+    CHECK(k2 && rs__sort_keyed(c2, u, n, sizeof *u, k2) == RS_ERR_NOMEM);
+    CHECK(memcmp(u, keep, n * sizeof *u) == 0);
+    free(k2);
     rs_ctx_free(c2);
     free(u);
     free(keep);

@@ -1045,53 +1045,19 @@ static rs_result spans_to_rects(rs_ctx *ctx, spans *S, rs_pixel_rect **out, size
 /* ---- the public calls ------------------------------------------------------------ */
 
 typedef rs__keyed keyed;
-#define cmp_keyed rs__cmp_keyed
 
-int rs__cmp_keyed(const void *pa, const void *pb)
-{
-    const keyed *a = pa, *b = pb;
-    if (a->h != b->h) return a->h < b->h ? -1 : 1;
-    return (a->i > b->i) - (a->i < b->i);
-}
-
-/* k[0..n) sorted by fingerprint, keeping the order of equal ones (LSD
- * radix, a byte a pass: an update sorts its local build's ten thousand
- * pieces, where qsort's calls took 2 % of it); the keys given in index
- * order come out in rs__cmp_keyed's. 0, or -1 when out of memory (k as it
- * was). */
-static int sort_keys(rs_ctx *ctx, keyed *k, size_t n)
-{
-    if (n < 2) return 0;
-    if (n < 64) {
-        qsort(k, n, sizeof *k, cmp_keyed);
-        return 0;
-    }
-    keyed *t = rs__alloc_array(ctx, n, sizeof *t), *a = k, *b = t;
-    if (!t) return -1;
-    for (int shift = 0; shift < 64; shift += 8) {
-        size_t cnt[257] = { 0 };
-        for (size_t i = 0; i < n; i++) cnt[((a[i].h >> shift) & 255) + 1]++;
-        if (cnt[((a[0].h >> shift) & 255) + 1] == n) continue; /* (one value: nothing moves) */
-        for (int d = 0; d < 256; d++) cnt[d + 1] += cnt[d];
-        for (size_t i = 0; i < n; i++) b[cnt[(a[i].h >> shift) & 255]++] = a[i];
-        keyed *x = a;
-        a = b, b = x;
-    }
-    if (a != k) memcpy(k, a, n * sizeof *k);
-    rs__free(ctx, t);
-    return 0;
-}
-
-static keyed *sorted_keys(rs_ctx *ctx, const rs__grid_edit *e)
+/* e's pieces' fingerprints and indices, sorted (fingerprint, then index)
+ * into *out (the caller's: rs__free). */
+static rs_result sorted_keys(rs_ctx *ctx, const rs__grid_edit *e, keyed **out)
 {
     keyed *k = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *k);
-    if (!k) return NULL;
+    *out = NULL;
+    if (!k) return RS_ERR_NOMEM;
     for (size_t i = 0; i < e->n; i++) k[i].h = e->it[i].h, k[i].i = k[i].pos = (uint32_t)i;
-    if (sort_keys(ctx, k, e->n)) {
-        rs__free(ctx, k);
-        return NULL;
-    }
-    return k;
+    rs_result r = rs__sort_recs(ctx, k, e->n);
+    if (r) rs__free(ctx, k);
+    else *out = k;
+    return r;
 }
 
 /* The first of the sorted keys whose fingerprint is at least h (binary search). */
@@ -1145,13 +1111,16 @@ static rs_result diff(rs_ctx *ctx, const rs_road_grid *a, const rs_road_grid *b,
     if (!a->edit || !b->edit || a->edit->over || b->edit->over || a->k != b->k || a->c != b->c)
         return whole_image(ctx, W, H, out, nout);
     const rs__grid_edit *ea = a->edit, *eb = b->edit;
-    keyed *ka = sorted_keys(ctx, ea), *kb = sorted_keys(ctx, eb);
+    keyed *ka = NULL, *kb = NULL;
+    rs_result r = sorted_keys(ctx, ea, &ka);
+    if (!r) r = sorted_keys(ctx, eb, &kb);
     uint8_t *kept = rs__calloc(ctx, eb->n ? eb->n : 1, 1); /* b's pieces found in a too (1), and seen (2) */
     spans S, Ssf, C;
     memset(&S, 0, sizeof S);
     memset(&Ssf, 0, sizeof Ssf);
     memset(&C, 0, sizeof C);
-    rs_result r = ka && kb && kept ? RS_OK : rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the dirty rectangles");
+    if (!r && !kept) r = RS_ERR_NOMEM;
+    if (r == RS_ERR_NOMEM) r = rs__fail(ctx, r, "out of memory for the dirty rectangles");
     double pa = grid_pad(a), pb = grid_pad(b);
     int ok = 1;
     size_t i = 0, j = 0;
@@ -1334,17 +1303,17 @@ static uint32_t *run_counts(rs_ctx *ctx, const keyed *k, size_t n)
 }
 
 /* The pieces of e whose regions (no pad) meet box [x0, x1] x [y0, y1]
- * (metres), ascending, from its bins: *ids (the caller's: rs__free), *n;
- * their keys sorted in *keys. NULL on no memory. */
-static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, double y0, double x1, double y1, size_t *n,
-                            keyed **keys)
+ * (metres), ascending, from its bins: *ids_out (the caller's: rs__free),
+ * *n; their keys sorted in *keys (also the caller's). */
+static rs_result near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, double y0, double x1, double y1,
+                            uint32_t **ids_out, size_t *n, keyed **keys)
 {
     size_t m = 0;
     uint32_t *ids = NULL;
     int all = !e->bstart || (bin_of(x0, e->bin, e->bw) == 0 && bin_of(y0, e->bin, e->bh) == 0 &&
                              bin_of(x1, e->bin, e->bw) == e->bw - 1 && bin_of(y1, e->bin, e->bh) == e->bh - 1);
     if (all) {
-        if (!(ids = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *ids))) return NULL;
+        if (!(ids = rs__alloc_array(ctx, e->n ? e->n : 1, sizeof *ids))) return RS_ERR_NOMEM;
         for (size_t i = 0; i < e->n; i++) ids[i] = (uint32_t)i;
         m = e->n;
     } else {
@@ -1356,7 +1325,7 @@ static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, doub
         uint64_t *seen = rs__calloc(ctx, e->n / 64 + 1, sizeof *seen);
         if (!seen || !(ids = rs__alloc_array(ctx, total ? total : 1, sizeof *ids))) {
             rs__free(ctx, seen);
-            return NULL;
+            return RS_ERR_NOMEM;
         }
         for (uint32_t j = j0; j <= j1; j++)
             for (uint32_t b = e->bstart[(size_t)j * e->bw + i0]; b < e->bstart[(size_t)j * e->bw + i1 + 1]; b++)
@@ -1376,17 +1345,19 @@ static uint32_t *near_items(rs_ctx *ctx, const rs__grid_edit *e, double x0, doub
     keyed *k = rs__alloc_array(ctx, m ? m : 1, sizeof *k);
     if (!k) {
         rs__free(ctx, ids);
-        return NULL;
+        return RS_ERR_NOMEM;
     }
     for (size_t i = 0; i < m; i++) k[i].h = e->it[ids[i]].h, k[i].i = ids[i], k[i].pos = (uint32_t)i;
-    if (sort_keys(ctx, k, m)) { /* (ids ascending: the ties in index order) */
+    rs_result r = rs__sort_recs(ctx, k, m); /* (ids ascending: the ties in index order) */
+    if (r) {
         rs__free(ctx, k);
         rs__free(ctx, ids);
-        return NULL;
+        return r;
     }
+    *ids_out = ids;
     *n = m;
     *keys = k;
-    return ids;
+    return RS_OK;
 }
 
 /* Whether what source k of a patched grid draws of piece q (its region
@@ -1432,13 +1403,14 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     uint32_t **near = rs__calloc(ctx, ns, sizeof *near);
     size_t *nk = rs__calloc(ctx, ns, sizeof *nk);
     const rs__grid_edit *el = local->edit;
-    keyed *kl = el ? sorted_keys(ctx, el) : NULL;
+    keyed *kl = NULL;
+    rs_result r = el ? sorted_keys(ctx, el, &kl) : RS_ERR_NOMEM;
     uint32_t *cl = kl ? run_counts(ctx, kl, el->n) : NULL, **cs = rs__calloc(ctx, ns, sizeof *cs);
     spans S, Ssf, C;
     memset(&S, 0, sizeof S);
     memset(&Ssf, 0, sizeof Ssf);
     memset(&C, 0, sizeof C);
-    rs_result r = src && ks && near && nk && kl && cl && cs ? RS_OK : RS_ERR_NOMEM;
+    if (!r && !(src && ks && near && nk && cl && cs)) r = RS_ERR_NOMEM;
     int fills = 0;
     *out = NULL;
     *nout = 0;
@@ -1454,12 +1426,11 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     }
     grow += 1.0;
     for (size_t k = 0; !r && k < ns; k++) {
-        if (!src[k]->edit || src[k]->edit->over ||
-            !(near[k] = near_items(ctx, src[k]->edit, rect.x0 * pix - grow, rect.y0 * pix - grow, rect.x1 * pix + grow,
-                                   rect.y1 * pix + grow, &nk[k], &ks[k])) ||
-            !(cs[k] = run_counts(ctx, ks[k], nk[k])))
-            r = RS_ERR_NOMEM;
-        else fills |= src[k]->edit->fills;
+        if (!src[k]->edit || src[k]->edit->over) r = RS_ERR_NOMEM;
+        else r = near_items(ctx, src[k]->edit, rect.x0 * pix - grow, rect.y0 * pix - grow, rect.x1 * pix + grow,
+                            rect.y1 * pix + grow, &near[k], &nk[k], &ks[k]);
+        if (!r && !(cs[k] = run_counts(ctx, ks[k], nk[k]))) r = RS_ERR_NOMEM;
+        if (!r) fills |= src[k]->edit->fills;
     }
     if (!r && el) fills |= el->fills;
     if (!r && (!el || el->over)) r = RS_ERR_LIMIT;

@@ -63,14 +63,10 @@ typedef struct rs__edit_item {
     uint32_t kind; /* RS__EI_* */
 } rs__edit_item;
 
-/* A fingerprint and its index, sorted by rs__cmp_keyed (fingerprint, then
- * index): the pieces' multisets, the roads' prints. pos: where a list of
- * some pieces had it before the sort (rs__patch_candidates' counts). */
-typedef struct rs__keyed {
-    uint64_t h;
-    uint32_t i, pos;
-} rs__keyed;
-int rs__cmp_keyed(const void *a, const void *b);
+/* The pieces' multisets are rs__keyed records (lib/internal.h): a
+ * fingerprint and its index, sorted by fingerprint, then index (given in
+ * index order to the stable rs__sort_recs). pos: where a list of some
+ * pieces had it before the sort (rs__patch_candidates' counts). */
 
 typedef struct rs__grid_edit {
     rs__edit_item *it;
