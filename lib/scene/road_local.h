@@ -50,22 +50,33 @@ static inline double rs__arc_len(double ax, double ay, double bx, double by)
  * use stay below this (docs/roadfield.md "Far roads"). */
 #define RS__ARC_MEASURED 4294967296.0
 
-/* A segment from a near end N to a far one (10^20 m away, say), cut to the
- * disc of radius rad around (cx, cy), measured from N along the unit
- * direction (ux, uy) to the far end, len = |far - N| (huge, possibly
- * DBL_MAX): the kept part is t in [t0, t1] from N. The line from N keeps
- * its digits where it meets the map; the line from the disc's centre
- * (rs__clip_far for two far ends) would carry the far end's rounding,
- * metres at 10^20 m, and miss N. N itself is untouched when inside
- * (t0 = 0). Returns 0 when nothing of the segment reaches the disc. */
-static inline int rs__cut_from_near(double nx, double ny, double ux, double uy, double len, double cx, double cy,
-                                    double rad, double *t0, double *t1)
+/* Segment A-B with one end near the map (a_near: A; else B) and the other
+ * far (10^20 m away, say), cut to the disc of radius rad around (cx, cy)
+ * along the line from the near end (unit direction (ux, uy) from A to B,
+ * len = |B - A|, huge, possibly DBL_MAX): the line from the near end
+ * keeps its digits where it meets the map, while the line from the
+ * disc's centre (rs__clip_far for two far ends) carries the far end's
+ * rounding, metres at 10^20 m, and misses the near end. The near end
+ * stays exactly where it is when inside the disc. *along: the new A's
+ * distance from the old one. Returns 0 when nothing reaches the disc. */
+static inline int rs__cut_far_end(double *ax, double *ay, double *bx, double *by, int a_near, double ux, double uy,
+                                  double len, double cx, double cy, double rad, double *along)
 {
-    double ex = cx - nx, ey = cy - ny, tc = ex * ux + ey * uy, dist = -uy * ex + ux * ey;
+    double sg = a_near ? 1 : -1, nx = a_near ? *ax : *bx, ny = a_near ? *ay : *by, dx = sg * ux, dy = sg * uy;
+    double ex = cx - nx, ey = cy - ny, tc = ex * dx + ey * dy, dist = -dy * ex + dx * ey;
     if (!(fabs(dist) <= rad)) return 0;
-    *t0 = tc - rad > 0 ? tc - rad : 0;
-    *t1 = tc + rad < len ? tc + rad : len;
-    return *t0 <= *t1;
+    double t0 = tc - rad > 0 ? tc - rad : 0, t1 = tc + rad < len ? tc + rad : len;
+    if (!(t0 <= t1)) return 0;
+    double px = nx + t1 * dx, py = ny + t1 * dy; /* the far end's cut */
+    if (t0 > 0) nx += t0 * dx, ny += t0 * dy;
+    if (a_near) {
+        *along = t0;
+        *ax = nx, *ay = ny, *bx = px, *by = py;
+    } else {
+        *along = len - t1;
+        *ax = px, *ay = py, *bx = nx, *by = ny;
+    }
+    return 1;
 }
 
 /* s + len, at most DBL_MAX (a road over 1.8e308 m long has no finite arc

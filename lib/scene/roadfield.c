@@ -603,21 +603,8 @@ int rs__clip_far(double *ax, double *ay, double *bx, double *by, double w, doubl
     double rad = 0.5 * hypot(w, h) + pad, huge = 1e6 * (w + h + 2 * pad);
     /* one end near, the other past a million map sizes: cut from the near
      * end (a slanted road from 10^20 m missed its own end by metres) */
-    if (a_in != b_in && !(fabs(a_in ? *bx - cx : *ax - cx) <= huge && fabs(a_in ? *by - cy : *ay - cy) <= huge)) {
-        double t0, t1, len = lm_min(2 * lh, DBL_MAX), sg = a_in ? 1 : -1;
-        double nx = a_in ? *ax : *bx, ny = a_in ? *ay : *by;
-        if (!rs__cut_from_near(nx, ny, sg * ux, sg * uy, len, cx, cy, rad, &t0, &t1)) return 0;
-        double px = nx + sg * t1 * ux, py = ny + sg * t1 * uy; /* the far end's cut */
-        if (t0 > 0) nx += sg * t0 * ux, ny += sg * t0 * uy;
-        if (a_in) {
-            *along = t0;
-            *ax = nx, *ay = ny, *bx = px, *by = py;
-        } else {
-            *along = len - t1;
-            *ax = px, *ay = py, *bx = nx, *by = ny;
-        }
-        return 1;
-    }
+    if (a_in != b_in && !(fabs(a_in ? *bx - cx : *ax - cx) <= huge && fabs(a_in ? *by - cy : *ay - cy) <= huge))
+        return rs__cut_far_end(ax, ay, bx, by, a_in, ux, uy, lm_min(2 * lh, DBL_MAX), cx, cy, rad, along);
     double ex = cx - *ax, ey = cy - *ay;
     double dist = -uy * ex + ux * ey; /* signed distance of the centre from the line */
     if (!(fabs(dist) <= rad)) return 0;

@@ -375,13 +375,8 @@ static int clip_segment(const rs_road_grid *g, double pad, double *ax, double *a
     int a_in = *ax >= lo_x && *ax <= hi_x && *ay >= lo_y && *ay <= hi_y;
     int b_in = *bx >= lo_x && *bx <= hi_x && *by >= lo_y && *by <= hi_y;
     if (a_in != b_in && !(fabs(a_in ? *bx - cx : *ax - cx) <= huge && fabs(a_in ? *by - cy : *ay - cy) <= huge)) {
-        double t0, t1, sg = a_in ? 1 : -1, nx = a_in ? *ax : *bx, ny = a_in ? *ay : *by;
-        if (!rs__cut_from_near(nx, ny, sg * tx, sg * ty, len, cx, cy, rad, &t0, &t1)) return 0;
-        double px = nx + sg * t1 * tx, py = ny + sg * t1 * ty;
-        if (t0 > 0) nx += sg * t0 * tx, ny += sg * t0 * ty;
-        if (a_in) *ax = nx, *ay = ny, *bx = px, *by = py;
-        else *ax = px, *ay = py, *bx = nx, *by = ny;
-        return 1;
+        double along;
+        return rs__cut_far_end(ax, ay, bx, by, a_in, tx, ty, len, cx, cy, rad, &along);
     }
     double ex = cx - *ax, ey = cy - *ay;
     double dist = -ty * ex + tx * ey; /* signed distance of the centre from the line */
