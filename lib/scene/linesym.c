@@ -676,12 +676,13 @@ static int cut_to_map(double ox, double oy, double ux, double uy, double len, do
 }
 
 /* cut_to_map for the segment from (ox, oy) to (bx, by) (unit u, length
- * len), with the cut start's point (*cx, *cy) and *rest, the cut start's
- * distance to B, *span = hi - lo. An end past a million map sizes carries rounding of
- * metres (a road from 10^20 m): the cut is then measured from the near end
- * (rs__cut_far_end's reason), or from the disc's centre when both are
- * far, as the road field cuts the surface (rs__clip_far), so the lines lie
- * on it. *far_cut: the second way was taken (*rest is exact there). */
+ * len), with the cut start's point (*cx, *cy), *rest (the cut start's
+ * distance to B) and *span (hi - lo). An end past a million map sizes
+ * carries rounding of metres (a road from 10^20 m): the cut is then
+ * measured from the near end (rs__cut_far_end's reason), or from the
+ * disc's centre when both are far, as the road field cuts the surface
+ * (rs__clip_far), so the lines lie on it. *far_cut: one of those two ways
+ * was taken (*cx, *cy, *rest and *span exact from the near end). */
 static int cut_segment(double ox, double oy, double bx, double by, double ux, double uy, double len, double ext,
                        double wmap, double hmap, double *lo, double *hi, double *span, double *rest, double *cx,
                        double *cy, int *far_cut)
