@@ -90,6 +90,14 @@ typedef struct rs__keyed {
  * 16 n bytes. RS_OK; RS_ERR_NOMEM (r unchanged); RS_ERR_CANCELLED (r holds
  * its records in some order). No message set. */
 rs_result rs__sort_recs(rs_ctx *ctx, rs__keyed *r, size_t n);
+/* A grid build's T ends (lib/scene/tee_ends.c), worked out once and read
+ * by its parts (the road field, the styles' fields and lines, the edit
+ * pieces, the track): rs__tee_ends_from copies them. */
+struct rs__tee_end;
+typedef struct rs__tees {
+    const struct rs__tee_end *t;
+    size_t n;
+} rs__tees;
 /* qsort's comparison of two uint32_t, ascending. */
 int rs__cmp_u32(const void *pa, const void *pb);
 

@@ -689,7 +689,7 @@ static int far_from(const builder *b, const rs_roads *roads, size_t i, const roa
 }
 
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                              const rs_network *net, const double *window, rs_road_grid *g)
+                              const rs_network *net, const rs__tees *T, const double *window, rs_road_grid *g)
 {
     size_t nr = rs_roads_count(roads);
     const rs__styling *st = g->styling;
@@ -702,7 +702,7 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     rs_result r = RS_OK;
     if (!e) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");
     if (!r && net && nr) {
-        r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+        r = rs__tee_ends_from(ctx, T, roads, net, &tees, &ntees);
         if (!r && ntees) {
             tee_of = rs__alloc_array(ctx, 2 * nr, sizeof *tee_of);
             if (!tee_of) r = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for the grid's edit pieces");

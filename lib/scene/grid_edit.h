@@ -90,9 +90,11 @@ struct rs_road_grid;
  * options o (when o->grid.edits is set), after its styles and markings and while `net` (the grid's
  * network, NULL when it built none) is at hand. Sets g->edit. window
  * (local metres x0, y0, x1, y1; NULL: the map): a patch's rectangle, the
- * pieces far from it left out (no update reads them). */
+ * pieces far from it left out (no update reads them). T: net's T ends,
+ * worked out by the build (NULL: here). */
 rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                              const rs_network *net, const double *window, struct rs_road_grid *g);
+                              const rs_network *net, const rs__tees *T, const double *window,
+                              struct rs_road_grid *g);
 void rs__grid_edit_free(rs_ctx *ctx, rs__grid_edit *e);
 
 /* What the whole map's facts read of one road's resolved style. */
@@ -140,9 +142,10 @@ typedef struct rs__grid_track {
     size_t bytes;
 } rs__grid_track;
 /* The track of whole grid g built from `roads` with options o; takes `net`
- * (the grid's network: freed with the track, also on failure). */
+ * (the grid's network: freed with the track, also on failure). T: net's T
+ * ends, worked out by the build (NULL: here). */
 rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,
-                               struct rs_road_grid *g);
+                               const rs__tees *T, struct rs_road_grid *g);
 /* Release a holder of t (freed with the last). */
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t);
 /* Tests: 1 when the network grid g keeps for its next update equals one

@@ -411,15 +411,16 @@ static void tee_fars(double *tfar, const rs__tee_end *te, size_t n)
 
 /* Every road end's T line and strip (NaN where it is no T end) of the n
  * roads of `roads` with network net into *tfar (2 n) and *tstrip (2 TS
- * n), the caller's (rs__free, also on failure). */
-static rs_result tee_lines(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, size_t n, double **tfar,
-                           double **tstrip)
+ * n), the caller's (rs__free, also on failure). T: net's T ends given (NULL:
+ * worked out here). */
+static rs_result tee_lines(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs__tees *T, size_t n,
+                           double **tfar, double **tstrip)
 {
     rs__tee_end *te = NULL;
     size_t nte = 0;
     *tfar = rs__alloc_array(ctx, 2 * (n ? n : 1), sizeof **tfar);
     *tstrip = rs__alloc_array(ctx, 2 * TS * (n ? n : 1), sizeof **tstrip);
-    rs_result r = *tfar && *tstrip ? rs__tee_ends(ctx, roads, net, &te, &nte) : RS_ERR_NOMEM;
+    rs_result r = *tfar && *tstrip ? rs__tee_ends_from(ctx, T, roads, net, &te, &nte) : RS_ERR_NOMEM;
     for (size_t k = 0; !r && k < 2 * n; k++) (*tfar)[k] = NAN;
     for (size_t k = 0; !r && k < 2 * TS * n; k++) (*tstrip)[k] = NAN;
     if (!r) tee_fars(*tfar, te, nte), tee_strips(*tstrip, te, nte, roads);
@@ -442,7 +443,7 @@ void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t)
 }
 
 rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_splat_options *o, rs_network *net,
-                               rs_road_grid *g)
+                               const rs__tees *T, rs_road_grid *g)
 {
     rs__grid_track *t = rs__calloc(ctx, 1, sizeof *t);
     if (!t) {
@@ -466,7 +467,7 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
         return r;
     }
     if (net) { /* (every end's T line, for the next update's clip walks) */
-        r = tee_lines(ctx, roads, net, t->n, &t->tfar, &t->tstrip);
+        r = tee_lines(ctx, roads, net, T, t->n, &t->tfar, &t->tstrip);
         if (r) {
             rs__grid_track_free(ctx, t);
             return r;
@@ -1647,7 +1648,7 @@ int rs__grid_track_net_check(rs_ctx *ctx, const rs_road_grid *g, const rs_roads 
     size_t nr = rs_roads_count(roads);
     if (eq && t->tfar && t->tstrip && t->n == nr) {
         double *tf = NULL, *ts = NULL;
-        if (tee_lines(ctx, roads, n, nr, &tf, &ts) != RS_OK) eq = -1;
+        if (tee_lines(ctx, roads, n, NULL, nr, &tf, &ts) != RS_OK) eq = -1;
         for (size_t k = 0; eq == 1 && k < 2 * nr; k++) eq = isnan(tf[k]) ? isnan(t->tfar[k]) : tf[k] == t->tfar[k];
         for (size_t k = 0; eq == 1 && k < 2 * TS * nr; k++)
             eq = isnan(ts[k]) ? isnan(t->tstrip[k]) : ts[k] == t->tstrip[k];

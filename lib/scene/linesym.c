@@ -1729,7 +1729,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
     /* trimmed ends (lib/scene/tee_ends.c): per road end the index of its T end */
     rs__tee_end *tend = NULL;
     size_t ntend = 0, *tend_of = NULL;
-    if ((rt = rs__tee_ends(ctx, roads, p->net, &tend, &ntend)) != RS_OK ||
+    if ((rt = rs__tee_ends_from(ctx, p->tees, roads, p->net, &tend, &ntend)) != RS_OK ||
         (ntend && !(tend_of = rs__alloc_array(ctx, 2 * nroads, sizeof *tend_of)))) {
         rs__free(ctx, tees);
         rs__free(ctx, tend);

@@ -64,6 +64,7 @@ typedef struct rs__linesym_params {
     int prio_given;            /* 1: prio holds the roads' priorities (rs__road_priorities; NULL: all
                                   equal), read while building; 0: worked out here */
     const int *prio;
+    const rs__tees *tees;      /* the T ends of roads and net, worked out once by the caller (NULL: here) */
 } rs__linesym_params;
 
 typedef struct rs__linesym rs__linesym; /* immutable after build; safe to read from many threads */

@@ -86,6 +86,10 @@ typedef struct rs__tee_end {
  * free (not continued by its stroke) at a sine above 0.2 with it. *out is
  * the caller's (rs__free), NULL with *n = 0 when there are none. */
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *n);
+/* rs__tee_ends, or a copy of T's when T is given (the same network and
+ * roads: a grid build works them out once). */
+rs_result rs__tee_ends_from(rs_ctx *ctx, const rs__tees *T, const rs_roads *roads, const rs_network *net,
+                            rs__tee_end **out, size_t *n);
 /* rs__tee_ends at the nodes d with nodes[d] != 0 only (NULL: all). roads
  * NULL: from the network alone (a network whose roads are gone: an old
  * one after an edit), far then -INFINITY (unknown), the rest as with them. */

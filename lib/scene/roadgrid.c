@@ -754,29 +754,29 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         else if (!(r = rs_network_build(ctx, roads, NULL, &own))) net = own;
     }
     if (!r && rs__tick(ctx, nroads)) r = RS_ERR_CANCELLED;
-    /* record ends at a T lose their round caps (docs/network.md "Ends at a T") */
-    if (!r && net && g->field) {
-        rs__tee_end *tees = NULL;
-        size_t ntees = 0;
-        r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
-        if (!r) r = rs__roadfield_set_tees(ctx, g->field, roads, tees, ntees);
-        rs__free(ctx, tees);
-    }
+    /* record ends at a T lose their round caps (docs/network.md "Ends at a T");
+     * worked out once, the styles, the edit pieces and the track read them */
+    rs__tee_end *tees = NULL;
+    size_t ntees = 0;
+    if (!r && net) r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+    const rs__tees T = { tees, ntees }, *Tp = net ? &T : NULL;
+    if (!r && net && g->field) r = rs__roadfield_set_tees(ctx, g->field, roads, tees, ntees);
     /* the automatic markings, placed once: the styles' lines stop at them */
     rs__auto_plan plan;
     memset(&plan, 0, sizeof plan);
     /* (a patch: the pixels it draws, which its markings index and edit pieces serve) */
     const double *window = facts && facts->window_on ? facts->window : NULL;
     if (!r) r = rs__auto_plan_make(ctx, dem, roads, &o, net, &plan);
-    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, plan.cuts, plan.ncuts, facts, &g->styling);
+    if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, Tp, plan.cuts, plan.ncuts, facts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, window, &g->markings);
-    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, window, g);
+    if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, Tp, window, g);
     rs__auto_plan_free(ctx, &plan);
     /* a whole grid kept for edits keeps what a proportional update reads (its network too) */
     if (!r && o.grid.edits && !facts && o.coverage.edges == RS_EDGES_ANALYTIC) {
-        r = rs__grid_track_build(ctx, roads, &o, own, g);
+        r = rs__grid_track_build(ctx, roads, &o, own, own == net ? Tp : NULL, g);
         own = NULL;
     }
+    rs__free(ctx, tees);
     rs_network_free(ctx, own);
     r = rs__progress_end(ctx, &pg, r);
     if (r) {

@@ -126,12 +126,12 @@ void rs__put_colour(float *dst, rs_colour c)
 /* A field of the styles gets the road grid's T ends (docs/network.md
  * "Ends at a T"); extra: the roads' widening in f (a casing field), or
  * NULL. */
-static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__roadfield *f,
-                            const double *extra, const rs_roads *froads, const uint32_t *sub)
+static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs__tees *T,
+                            rs__roadfield *f, const double *extra, const rs_roads *froads, const uint32_t *sub)
 {
     rs__tee_end *tees = NULL;
     size_t ntees = 0, m = 0;
-    rs_result r = rs__tee_ends(ctx, roads, net, &tees, &ntees);
+    rs_result r = rs__tee_ends_from(ctx, T, roads, net, &tees, &ntees);
     for (size_t i = 0; !r && extra && i < ntees; i++) tees[i].grow = extra[tees[i].through];
     /* a field of some of the roads (sub: an id there or UINT32_MAX): the
      * ends of its roads, by its ids */
@@ -150,8 +150,8 @@ static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network
 }
 
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const rs__roadfield *field, const rs_network *net, const rs__line_cut *cuts,
-                            size_t ncuts, const rs__grid_facts *facts, rs__styling **out)
+                            const rs__roadfield *field, const rs_network *net, const rs__tees *tees,
+                            const rs__line_cut *cuts, size_t ncuts, const rs__grid_facts *facts, rs__styling **out)
 {
     *out = NULL;
     if (o->style.disable) return RS_OK;
@@ -307,6 +307,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.pixel = fp.pixel;
         lp.aa = o->style.aa == RS_LINE_AA_HERMITE ? RS__AA_HERMITE : RS__AA_EXACT;
         lp.net = net;
+        lp.tees = tees;
         /* lane and centre lines stop at the automatic stop lines and zebras */
         lp.cuts = cuts;
         lp.ncuts = ncuts;
@@ -371,7 +372,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
                 r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np);
             }
             if (!r) r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing);
-            if (!r) r = field_tees(ctx, roads, net, st->casing, extra, casing_roads, sub);
+            if (!r) r = field_tees(ctx, roads, net, tees, st->casing, extra, casing_roads, sub);
             rs__free(ctx, sub);
             if (r != RS_OK) goto fail_dash;
         }
@@ -397,7 +398,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         st->near = field;
         if (!field) {
             if ((r = rs__roadfield_build(ctx, roads, &fp, &st->near_own)) != RS_OK) goto fail_dash;
-            if ((r = field_tees(ctx, roads, net, st->near_own, NULL, roads, NULL)) != RS_OK) goto fail_dash;
+            if ((r = field_tees(ctx, roads, net, tees, st->near_own, NULL, roads, NULL)) != RS_OK) goto fail_dash;
             st->near = st->near_own;
             st->bytes += rs__roadfield_bytes(st->near_own);
         }

@@ -76,8 +76,9 @@ typedef struct rs__styling {
  * then the unstyled one. */
 struct rs__line_cut;
 rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o,
-                            const struct rs__roadfield *field, const rs_network *net, const struct rs__line_cut *cuts,
-                            size_t ncuts, const rs__grid_facts *facts, rs__styling **out);
+                            const struct rs__roadfield *field, const rs_network *net, const rs__tees *tees,
+                            const struct rs__line_cut *cuts, size_t ncuts, const rs__grid_facts *facts,
+                            rs__styling **out);
 void rs__styling_free(rs_ctx *ctx, rs__styling *st);
 /* A style colour as the styling keeps it: r, g, b 0..255, alpha 0..1. */
 void rs__put_colour(float *dst, rs_colour c);

@@ -6,6 +6,7 @@
 #include "network.h"
 
 #include <math.h>
+#include <string.h>
 
 /* An end with the strip this close to the through road's direction keeps
  * its round cap (the flat end would reach 1 / sine half widths along it) */
@@ -177,6 +178,19 @@ static int strip_on_street(const rs_roads *roads, const rs_network *net, size_t 
 rs_result rs__tee_ends(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, rs__tee_end **out, size_t *nout)
 {
     return rs__tee_ends_at(ctx, roads, net, NULL, out, nout);
+}
+
+rs_result rs__tee_ends_from(rs_ctx *ctx, const rs__tees *T, const rs_roads *roads, const rs_network *net,
+                            rs__tee_end **out, size_t *n)
+{
+    if (!T) return rs__tee_ends(ctx, roads, net, out, n);
+    *out = NULL;
+    *n = 0;
+    if (!T->n) return RS_OK;
+    if (!(*out = rs__alloc_array(ctx, T->n, sizeof **out))) return RS_ERR_NOMEM;
+    memcpy(*out, T->t, T->n * sizeof **out);
+    *n = T->n;
+    return RS_OK;
 }
 
 rs_result rs__tee_ends_at(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const uint8_t *nodes,

@@ -215,7 +215,7 @@ int main(int argc, char **argv)
         rs__grid_edit *keep = gw->edit;
         gw->edit = NULL;
         double t0 = tm_thread_cpu_ms();
-        bad = rs__grid_edit_build(ctx, dem, roads, &o, net, NULL, gw) != RS_OK;
+        bad = rs__grid_edit_build(ctx, dem, roads, &o, net, NULL, NULL, gw) != RS_OK;
         piece_ms[k] = tm_thread_cpu_ms() - t0;
         rs__grid_edit_free(ctx, gw->edit);
         gw->edit = keep;
