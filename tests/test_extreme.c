@@ -396,33 +396,55 @@ static void test_stress(void)
            (tm_now_ms() / 1000.0) - t0, worst_seam, worst_mesh_ratio);
 }
 
+/* The far-road tests' map: 16 x 12 flat samples of 5 m (75 x 55 m). */
+static rs_dem *far_map(void)
+{
+    float z[16 * 12];
+    memset(z, 0, sizeof z);
+    rs_dem *dem = NULL;
+    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    return dem;
+}
+
+/* The whole image of roads on dem with options o into *rgba and *wt
+ * (malloc'd, the caller's; NULL on failure), *w x *h pixels. */
+static void splat_whole(const rs_dem *dem, const rs_roads *roads, const rs_splat_options *o, uint8_t **rgba,
+                        uint16_t **wt, uint32_t *w, uint32_t *h)
+{
+    rs_splatter *sp = NULL;
+    *w = *h = 0;
+    *rgba = NULL;
+    *wt = NULL;
+    CHECK(dem && roads && rs_splatter_create(ctx, dem, roads, NULL, o, &sp) == RS_OK);
+    if (!sp) return;
+    rs_splatter_size(sp, w, h);
+    *rgba = malloc((size_t)*w * *h * 4);
+    *wt = malloc((size_t)*w * *h * 2);
+    CHECK(*rgba && *wt && rs_splat_window(ctx, sp, 0, 0, *w, *h, *rgba, (size_t)*w * 4, *wt, *w, NULL) == RS_OK);
+    rs_splatter_free(ctx, sp);
+}
+
 /* A road from 10^31 m away ending on the map: both edge modes draw it up
  * to its end point and no further (the cut to the map put the end at the
  * map's centre: its place along the line was the difference of two
  * numbers of 10^31, every digit lost; fuzz/edits, 5 December 2026). */
 static void test_far_end(void)
 {
-    float z[16 * 12];
-    memset(z, 0, sizeof z);
-    rs_dem *dem = NULL;
+    rs_dem *dem = far_map();
     rs_roads *roads = NULL;
     const double xy[4] = { 1.4444444444444444e31, 125.9, 52.6, 15.9 };
-    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK &&
-          rs_roads_add(ctx, roads, NULL, 6.2, xy, 2) == RS_OK);
-    rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    CHECK(rs_roads_create(ctx, &roads) == RS_OK && rs_roads_add(ctx, roads, NULL, 6.2, xy, 2) == RS_OK);
     for (int mode = 0; dem && roads && mode < 2; mode++) {
         rs_splat_options o;
         memset(&o, 0, sizeof o);
         o.texels = 3;
         o.coverage.edges = mode ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
-        rs_splatter *sp = NULL;
-        uint32_t w = 0, h = 0;
-        CHECK(rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
-        rs_splatter_size(sp, &w, &h);
-        uint8_t *rgba = malloc((size_t)w * h * 4);
-        uint16_t *wt = malloc((size_t)w * h * 2);
-        CHECK(rgba && wt && rs_splat_window(ctx, sp, 0, 0, w, h, rgba, (size_t)w * 4, wt, w, NULL) == RS_OK);
+        uint8_t *rgba;
+        uint16_t *wt;
+        uint32_t w, h;
+        splat_whole(dem, roads, &o, &rgba, &wt, &w, &h);
         /* (west of the end cap by more than a road cell and a pixel: no road;
          * on the road 10 m east of the end: road) */
         double pix = 5.0 / 3;
@@ -437,7 +459,6 @@ static void test_far_end(void)
                mode ? "alpha-map" : "analytic", west, on);
         free(rgba);
         free(wt);
-        rs_splatter_free(ctx, sp);
     }
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
@@ -459,12 +480,7 @@ static double seg_dist2d(double x, double y, const double *a, const double *b)
  * 10^20 m long and are left out of the comparison. */
 static void test_far_slant(void)
 {
-    float z[16 * 12];
-    memset(z, 0, sizeof z);
-    rs_dem *dem = NULL;
-    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK);
-    rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_dem *dem = far_map();
     const double B[2] = { 40, 20 }, C[2] = { 40, -50 };
     const double ux = 1e20 / hypot(1e20, 3e19), uy = 3e19 / hypot(1e20, 3e19);
     for (int mode = 0; dem && mode < 2; mode++) {
@@ -481,14 +497,7 @@ static void test_far_slant(void)
             memset(&o, 0, sizeof o);
             o.texels = 16;
             o.coverage.edges = mode ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
-            rs_splatter *sp = NULL;
-            CHECK(roads && rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
-            rs_splatter_size(sp, &w, &h);
-            rgba[v] = malloc((size_t)w * h * 4);
-            wt[v] = malloc((size_t)w * h * 2);
-            CHECK(sp && rgba[v] && wt[v] &&
-                  rs_splat_window(ctx, sp, 0, 0, w, h, rgba[v], (size_t)w * 4, wt[v], w, NULL) == RS_OK);
-            rs_splatter_free(ctx, sp);
+            splat_whole(dem, roads, &o, &rgba[v], &wt[v], &w, &h);
             rs_roads_free(ctx, roads);
         }
         double pix = 5.0 / 16, far[2] = { B[0] + 1e3 * ux, B[1] + 1e3 * uy };
@@ -521,14 +530,10 @@ static void test_far_slant(void)
  * is 35 m and it is. */
 static void test_far_zebra(void)
 {
-    float z[16 * 12];
-    memset(z, 0, sizeof z);
-    rs_dem *dem = NULL;
-    CHECK(rs_dem_create(ctx, 16, 12, z, &dem) == RS_OK);
-    rs_dem_frame fr = { 5, 0.05, 0, 0 };
-    CHECK(dem && rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
+    rs_dem *dem = far_map();
     for (int rev = 0; dem && rev < 2; rev++) {
         uint8_t *rgba[2] = { NULL, NULL };
+        uint16_t *wt[2] = { NULL, NULL };
         uint32_t w = 0, h = 0;
         for (int zebra = 0; zebra < 2; zebra++) {
             const double fwd[6] = { 1.1e33, 20, 40, 20, 75, 20 }, back[6] = { 75, 20, 40, 20, 1.1e33, 20 };
@@ -539,13 +544,7 @@ static void test_far_zebra(void)
             rs_splat_options o;
             memset(&o, 0, sizeof o);
             o.texels = 16;
-            rs_splatter *sp = NULL;
-            CHECK(roads && rs_splatter_create(ctx, dem, roads, NULL, &o, &sp) == RS_OK);
-            rs_splatter_size(sp, &w, &h);
-            rgba[zebra] = malloc((size_t)w * h * 4);
-            CHECK(sp && rgba[zebra] &&
-                  rs_splat_window(ctx, sp, 0, 0, w, h, rgba[zebra], (size_t)w * 4, NULL, 0, NULL) == RS_OK);
-            rs_splatter_free(ctx, sp);
+            splat_whole(dem, roads, &o, &rgba[zebra], &wt[zebra], &w, &h);
             rs_roads_free(ctx, roads);
         }
         /* pixels the zebra changed, near its point and elsewhere */
@@ -561,7 +560,7 @@ static void test_far_zebra(void)
         CHECKF(away == 0 && (rev ? near > 100 : near == 0),
                "road %s: the zebra changed %zu pixels within 3 m of its point and %zu further off",
                rev ? "to the far point" : "from the far point", near, away);
-        for (int v = 0; v < 2; v++) free(rgba[v]);
+        for (int v = 0; v < 2; v++) free(rgba[v]), free(wt[v]);
     }
     rs_dem_free(ctx, dem);
 }
