@@ -1793,6 +1793,34 @@ static void test_tee_street_shortened(void)
     edit_end(&E);
 }
 
+/* A T inside a street's surface whose street gets a record joined to its
+ * stroke (fuzz/edits, 6 December 2026): an 11 m road starts 1 m before
+ * the end of an 11 m hairpin, inside its surface, a T end with the
+ * hairpin's two legs at its node. A road added at the hairpin's end point
+ * joins its stroke, and the start is no T any more: the new network holds
+ * it alone, where no road passes, so only the old node, where the
+ * hairpin passed, shows that the street's run changed there. */
+static void test_tee_surface_street_joined(void)
+{
+    static const fuzz_road roads[2] = { { 11, 3, { 63.5, 0, 68.5, 0, 63.5, 0 } },
+                                        { 11, 3, { 62.5, 0, 59.5, 49, -2.5, 46 } } };
+    const double xy[6] = { 63.5, 0, 63.5, 0, 74.5, 50 };
+    one_edit E;
+    edit_fuzz_map(&E);
+    add_fuzz_roads(&E, roads, 2);
+    add_far_streets(&E);
+    edit_base(&E, 2);
+    E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 11, xy, 3) == RS_OK;
+    edit_update(&E, "a street's stroke joined past a T inside it");
+    if (E.ok) {
+        CHECK(rs_road_grid_patch_count(E.g1) >= 1);
+        check_rects("a street's stroke joined past a T inside it", E.g1, &E.a, &E.b, &E.c);
+        CHECKF(rs__grid_track_net_check(E.ctx, E.g1, E.roads) == 1,
+               "a street's stroke joined past a T inside it: the T lines kept are not a build's");
+    }
+    edit_end(&E);
+}
+
 /* Fills where roads of equal priority overlap (fuzz/edits seed 224dbe0b):
  * while every road ranks alike a pixel takes the nearest centre line;
  * once the priorities differ anywhere on the map, a surface that holds
@@ -1901,6 +1929,7 @@ int main(void)
     test_far_strip_clipped();
     test_tee_gone_at_node();
     test_tee_street_shortened();
+    test_tee_surface_street_joined();
     test_ranked_fills();
     test_moved_along_stroke();
     return th_finish("test_edits");

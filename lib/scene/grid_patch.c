@@ -973,9 +973,35 @@ static void mark_across(const rs_network *A, const uint8_t *onA, const uint32_t 
     }
 }
 
+/* The new network's nodes holding the road ends that stand, in the old
+ * network O, at a node where a moved road passes (rn_o, scan_nodes of
+ * moved_o) into *rn (allocated when NULL; nn_new: the new network's node
+ * count, at_n its road ends' nodes, m_old: O's road to the new one's).
+ * An end inside a street's surface has the street's legs at its node
+ * only while it is a T there: when the street's run changes (a record
+ * joined to its stroke), the new network may hold that end alone, where
+ * no moved road passes (fuzz/edits). 0, or -1 when out of memory. */
+static int old_runs(rs_ctx *ctx, const rs_network *O, const uint8_t *rn_o, const uint32_t *m_old, const uint32_t *at_n,
+                    size_t nn_new, uint8_t **rn)
+{
+    for (size_t d = 0; rn_o && at_n && d < O->nnodes; d++) {
+        if (!rn_o[d]) continue;
+        for (uint32_t l = O->leg_start[d]; l < O->leg_start[d + 1]; l++) {
+            const rs_network_leg *L = &O->leg[l];
+            uint32_t j = rs__is_end_leg(L) ? m_old[L->road] : UINT32_MAX;
+            uint32_t dn = j == UINT32_MAX ? UINT32_MAX : at_n[2 * (size_t)j + (L->kind == RS_LEG_END)];
+            if (dn == UINT32_MAX) continue;
+            if (!*rn && !(*rn = rs__calloc(ctx, nn_new, 1))) return -1;
+            (*rn)[dn] = 1;
+        }
+    }
+    return 0;
+}
+
 /* The nodes rn of N, the new network (scan_nodes: where a kept road
  * passes whose stroke's length or arc lengths changed elsewhere, a record
- * of it moved, split or joined), where a kept road's end became a T or
+ * of it moved, split or joined; old_runs: the ends that stood where it
+ * passed in the old network), where a kept road's end became a T or
  * stopped being one: the street now runs on past the T far enough for
  * the end's strip, or no longer does (tee_ends.c strip_on_street). Marked
  * in `on`, *non counting them; m_new: N's road to the old one's; tfar:
@@ -1373,9 +1399,16 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
             moved[j] = i != UINT32_MAX && (net->s_len[j] != T->net->s_len[i] || net->s_off[j] != T->net->s_off[i] ||
                                            net->rev[j] != T->net->rev[i]);
         }
+    /* (the same roads by their old index: the old network's nodes where they pass) */
+    uint8_t *moved_o = moved ? rs__calloc(ctx, rs_network_road_count(T->net) ? rs_network_road_count(T->net) : 1, 1)
+                             : NULL;
+    for (size_t j = 0; moved_o && j < nn; j++)
+        if (moved[j]) moved_o[m_new[j]] = 1;
     size_t non_n = scan_nodes(ctx, net, cn, moved, &on_n, &at_n, &rn);
-    size_t non_o = scan_nodes(ctx, T->net, co, NULL, &on_o, &at_o, &rn_o);
-    int known = non_n != SIZE_MAX && non_o != SIZE_MAX && (moved || !look); /* (0: the whole build) */
+    size_t non_o = scan_nodes(ctx, T->net, co, moved_o, &on_o, &at_o, &rn_o);
+    int known = non_n != SIZE_MAX && non_o != SIZE_MAX && (moved_o || !look); /* (0: the whole build) */
+    if (known && rn_o && old_runs(ctx, T->net, rn_o, m_old, at_n, net->nnodes, &rn)) known = 0;
+    rs__free(ctx, moved_o);
     /* (a street's run past a T changed: its strip came or went) */
     if (known && (r = run_flips(ctx, net, roads, rn, m_new, T->tfar, on_n, &non_n)) != RS_OK) known = 0;
     if (known) { /* (each network's nodes where the other's changed: their T ends) */
