@@ -1708,6 +1708,17 @@ static void test_far_strip_clipped(void)
 
 /* Twelve short residential streets along the fuzz map's far side: most of
  * the map is not near an edit at y = 100, so an update patches. */
+/* E's update patched the grid, its dirty rectangles hold every changed
+ * pixel, and the T lines and strips it keeps for the next update are a
+ * build's. */
+static void check_patched_tees(one_edit *E, const char *what)
+{
+    if (!E->ok) return;
+    CHECK(rs_road_grid_patch_count(E->g1) >= 1);
+    check_rects(what, E->g1, &E->a, &E->b, &E->c);
+    CHECKF(rs__grid_track_net_check(E->ctx, E->g1, E->roads) == 1, "%s: the T lines kept are not a build's", what);
+}
+
 static void add_far_streets(one_edit *E)
 {
     for (int k = 0; k < 12; k++) {
@@ -1784,12 +1795,7 @@ static void test_tee_street_shortened(void)
     edit_base(&E, 2);
     E.ok = E.ok && rs_roads_remove(E.ctx, E.roads, 2) == RS_OK;
     edit_update(&E, "street shortened past a T");
-    if (E.ok) {
-        CHECK(rs_road_grid_patch_count(E.g1) >= 1);
-        check_rects("street shortened past a T", E.g1, &E.a, &E.b, &E.c);
-        CHECKF(rs__grid_track_net_check(E.ctx, E.g1, E.roads) == 1,
-               "street shortened past a T: the T lines kept are not a build's");
-    }
+    check_patched_tees(&E, "street shortened past a T");
     edit_end(&E);
 }
 
@@ -1812,12 +1818,7 @@ static void test_tee_surface_street_joined(void)
     edit_base(&E, 2);
     E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 11, xy, 3) == RS_OK;
     edit_update(&E, "a street's stroke joined past a T inside it");
-    if (E.ok) {
-        CHECK(rs_road_grid_patch_count(E.g1) >= 1);
-        check_rects("a street's stroke joined past a T inside it", E.g1, &E.a, &E.b, &E.c);
-        CHECKF(rs__grid_track_net_check(E.ctx, E.g1, E.roads) == 1,
-               "a street's stroke joined past a T inside it: the T lines kept are not a build's");
-    }
+    check_patched_tees(&E, "a street's stroke joined past a T inside it");
     edit_end(&E);
 }
 
