@@ -973,35 +973,10 @@ static void mark_across(const rs_network *A, const uint8_t *onA, const uint32_t 
     }
 }
 
-/* The new network's nodes holding the road ends that stand, in the old
- * network O, at a node where a moved road passes (rn_o, scan_nodes of
- * moved_o) into *rn (allocated when NULL; nn_new: the new network's node
- * count, at_n its road ends' nodes, m_old: O's road to the new one's).
- * An end inside a street's surface has the street's legs at its node
- * only while it is a T there: when the street's run changes (a record
- * joined to its stroke), the new network may hold that end alone, where
- * no moved road passes (fuzz/edits). 0, or -1 when out of memory. */
-static int old_runs(rs_ctx *ctx, const rs_network *O, const uint8_t *rn_o, const uint32_t *m_old, const uint32_t *at_n,
-                    size_t nn_new, uint8_t **rn)
-{
-    for (size_t d = 0; rn_o && at_n && d < O->nnodes; d++) {
-        if (!rn_o[d]) continue;
-        for (uint32_t l = O->leg_start[d]; l < O->leg_start[d + 1]; l++) {
-            const rs_network_leg *L = &O->leg[l];
-            uint32_t j = rs__is_end_leg(L) ? m_old[L->road] : UINT32_MAX;
-            uint32_t dn = j == UINT32_MAX ? UINT32_MAX : at_n[2 * (size_t)j + (L->kind == RS_LEG_END)];
-            if (dn == UINT32_MAX) continue;
-            if (!*rn && !(*rn = rs__calloc(ctx, nn_new, 1))) return -1;
-            (*rn)[dn] = 1;
-        }
-    }
-    return 0;
-}
-
 /* The nodes rn of N, the new network (scan_nodes: where a kept road
  * passes whose stroke's length or arc lengths changed elsewhere, a record
- * of it moved, split or joined; old_runs: the ends that stood where it
- * passed in the old network), where a kept road's end became a T or
+ * of it moved, split or joined; mark_across: the ends that stood where
+ * it passed in the old network), where a kept road's end became a T or
  * stopped being one: the street now runs on past the T far enough for
  * the end's strip, or no longer does (tee_ends.c strip_on_street). Marked
  * in `on`, *non counting them; m_new: N's road to the old one's; tfar:
@@ -1407,7 +1382,15 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
     size_t non_n = scan_nodes(ctx, net, cn, moved, &on_n, &at_n, &rn);
     size_t non_o = scan_nodes(ctx, T->net, co, moved_o, &on_o, &at_o, &rn_o);
     int known = non_n != SIZE_MAX && non_o != SIZE_MAX && (moved_o || !look); /* (0: the whole build) */
-    if (known && rn_o && old_runs(ctx, T->net, rn_o, m_old, at_n, net->nnodes, &rn)) known = 0;
+    /* (and the ends that stood where one passed in the old network: an end
+     * inside a street's surface has the street's legs at its node only
+     * while it is a T there, so when the street's run changes, the new
+     * network may hold it alone, where no moved road passes: fuzz/edits) */
+    if (known && rn_o) {
+        size_t nf = 0;
+        if (!rn && !(rn = rs__calloc(ctx, net->nnodes ? net->nnodes : 1, 1))) known = 0;
+        else mark_across(T->net, rn_o, at_n, rn, m_old, &nf);
+    }
     rs__free(ctx, moved_o);
     /* (a street's run past a T changed: its strip came or went) */
     if (known && (r = run_flips(ctx, net, roads, rn, m_new, T->tfar, on_n, &non_n)) != RS_OK) known = 0;
