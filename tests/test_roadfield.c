@@ -958,6 +958,53 @@ static void test_tee_repeated_point(void)
     tee_scene_free(&t);
 }
 
+/* The ranked lookup at a T does not depend on the index cell: past the
+ * corner of a strip cut by an oblique clip line the lower bound of the
+ * distance is within reach of points outside the strip's box, which only
+ * the cells listing the segment offered. A 4 m road ending inside an 11 m
+ * footway at 45 degrees: the pixel (36, 16) at 1.25 m took the service
+ * road's (absent) fill, or the footway's, by the automatic cell
+ * (fuzz/edits, 6 December 2026). Every pixel of the map, at six cells. */
+static void test_tee_corner(void)
+{
+    tee_scene t;
+    memset(&t, 0, sizeof t);
+    const char *text = "road a width 11\n12.5 1\n-0.5 46\n55.5 49\nend\n"
+                       "road footway width 11\n63.5 35\n35.5 23\n4.5 21\nend\n"
+                       "road service width 4\n41.5 22\n-2.5 15\nend\n"
+                       "road b width 1\n63.5 4\n12.5 15\nend\n"
+                       "road c width 11\n63.5 0\n-0.5 46\n16.5 47\nend\n";
+    CHECK(rs_roads_parse(ctx, text, strlen(text), &t.roads) == RS_OK);
+    CHECK(rs_roads_set_attr(ctx, t.roads, 1, "class", "footway") == RS_OK);
+    CHECK(rs_roads_set_attr(ctx, t.roads, 2, "class", "service") == RS_OK);
+    CHECK(tee_scene_of(&t, NULL));
+    CHECK(t.nte == 3);
+    const int prio[5] = { 0, 1, 3, 0, 0 };
+    const double pix = 1.25, cells[] = { 0, 5, 8, 13, 15.2, 16.3333 };
+    enum { W = 60, H = 44 };
+    static int ref[W * H];
+    int bad = 0, first = -1;
+    for (size_t c = 0; c < sizeof cells / sizeof cells[0]; c++) {
+        rs__roadfield_params p = params(0, 0, 5, 75, 55, 0, pix);
+        p.index_cell = cells[c];
+        rs__roadfield *f = NULL;
+        CHECK(rs__roadfield_build(ctx, t.roads, &p, &f) == RS_OK && rs__roadfield_set_tees(ctx, f, t.roads, t.te, t.nte) == RS_OK);
+        for (int k = 0; f && k < W * H; k++) {
+            rs__road_point q;
+            memset(&q, 0, sizeof q);
+            int got = rs__roadfield_nearest_ranked(f, (k % W + 0.5) * pix, (k / W + 0.5) * pix, pix * 0.70710678118654752,
+                                                   prio, &q) ? (int)q.road : -1;
+            if (c == 0) ref[k] = got;
+            else if (got != ref[k] && bad++ == 0) first = k;
+        }
+        rs__roadfield_free(ctx, f);
+    }
+    CHECKF(bad == 0, "%d pixel lookups differ between index cells, first (%d, %d)", bad, first % W, first / W);
+    /* (the service road's strip corner is 1.16 m from that pixel's centre) */
+    CHECKF(ref[16 * W + 36] == 1, "pixel (36, 16) takes road %d", ref[16 * W + 36]);
+    tee_scene_free(&t);
+}
+
 /* T clips do not depend on the index cell: a record's segments are
  * clipped by its T lines where their trimmed shapes reach past, strips
  * included. A hairpin whose two ends sit on one road: its second T's strip
@@ -1050,6 +1097,7 @@ int main(void)
     test_auto_cell();
     test_tee_repeated_point();
     test_tee_cells();
+    test_tee_corner();
     rs_ctx_free(ctx);
     return th_finish("test_roadfield");
 }

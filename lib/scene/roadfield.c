@@ -2413,15 +2413,27 @@ static rs_result tees_widen(rs_ctx *ctx, rs__roadfield *f, const rs__roadfield *
 
 /* The nearest query at a T segment: 0 when (x, y) lies beyond its clip
  * line by more than reach (skip it), 2 when it lies within reach of the
- * trimmed shape (take it even beyond the capsule: the strip's corners),
- * else 1. Distances stay those to the centreline (the ranking as before). */
+ * trimmed shape and inside one of its strips' boxes (take it even beyond
+ * the capsule: the strip's corners), else 1. Distances stay those to the
+ * centreline (the ranking as before). tee_sd is a lower bound of the
+ * distance: past a strip's corner it is within reach of points up to
+ * reach / sin(half the corner's angle) away, outside the box (the strip
+ * grown by the margin), where only the cells listing the segment found
+ * them. Whether a pixel took that road's fill then depended on the index
+ * cell (fuzz/edits: an acute T on a footway); outside the box the shape
+ * is further than the margin, the pixel's half diagonal. */
 static int tee_near(const rs__roadfield *f, const rf_seg *s, double x, double y, double reach)
 {
     size_t i0, i1;
     tees_of(f, (uint32_t)(s - f->seg), &i0, &i1);
     for (size_t k = i0; k < i1; k++)
         if (f->tee[k].live && !(x * f->tee[k].nx + y * f->tee[k].ny - f->tee[k].c <= reach)) return 0;
-    return tee_sd(f, s, x, y) <= reach ? 2 : 1;
+    if (!(tee_sd_at(f, s, i0, i1, x, y) <= reach)) return 1;
+    for (size_t k = i0; k < i1; k++) {
+        const double *b = f->tee[k].box;
+        if (f->tee[k].end < 2 && x >= b[0] && x <= b[1] && y >= b[2] && y <= b[3]) return 2;
+    }
+    return 1;
 }
 
 int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double reach, rs__road_point *out)
