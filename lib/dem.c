@@ -51,6 +51,7 @@ rs_result rs_dem_create(rs_ctx *ctx, uint32_t width, uint32_t height, const floa
     rs_result rc = rs__dem_alloc(ctx, width, height, &dem);
     if (rc != RS_OK) return rc;
     memcpy(dem->z, samples, n * sizeof(float));
+    rs__dem_seal(dem);
     *out = dem;
     rs__ok(ctx);
     return RS_OK;
@@ -110,10 +111,11 @@ void rs_dem_height_range(const rs_dem *dem, double *zmin, double *zmax, int *has
 {
     float lo = INFINITY, hi = -INFINITY;
     int nd = 0;
-    if (dem) {
+    if (dem && dem->sealed) {
+        lo = dem->zlo, hi = dem->zhi, nd = dem->nodata;
+    } else if (dem) {
         /* four lanes without a branch (a NaN compares false: the bound
-         * stays), so the compiler can vectorise it; every update's dirty
-         * render makes two splatters */
+         * stays), so the compiler can vectorise it */
         size_t n = (size_t)dem->width * dem->height, i = 0;
         float l4[4] = { INFINITY, INFINITY, INFINITY, INFINITY }, h4[4] = { -INFINITY, -INFINITY, -INFINITY, -INFINITY };
         int n4[4] = { 0, 0, 0, 0 };
@@ -140,6 +142,16 @@ void rs_dem_height_range(const rs_dem *dem, double *zmin, double *zmax, int *has
     if (zmin) *zmin = lo;
     if (zmax) *zmax = hi;
     if (has_nodata) *has_nodata = nd;
+}
+
+void rs__dem_seal(rs_dem *dem)
+{
+    double lo, hi;
+    int nd;
+    dem->sealed = 0;
+    rs_dem_height_range(dem, &lo, &hi, &nd);
+    dem->zlo = (float)lo, dem->zhi = (float)hi, dem->nodata = nd;
+    dem->sealed = 1;
 }
 
 #define NIL 0xFFFFFFFFu

@@ -3,8 +3,11 @@
 #define RS_DEM_H
 #include "internal.h"
 
-/* A DEM with the default frame and width*height uninitialised samples. */
+/* A DEM with the default frame and width*height uninitialised samples;
+ * the caller fills them, then calls rs__dem_seal. */
 rs_result rs__dem_alloc(rs_ctx *ctx, uint32_t w, uint32_t h, rs_dem **out);
+/* The samples are in: their range worked out and kept (rs_dem_height_range). */
+void rs__dem_seal(rs_dem *dem);
 
 /* The nodata policy: a copy of the samples where every NaN (or infinite)
  * sample takes the lowest valid 8-neighbour height, layer by layer inwards

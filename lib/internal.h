@@ -105,6 +105,11 @@ struct rs_dem {
     uint32_t width, height;
     float *z;           /* width*height, row-major, NaN = nodata */
     rs_dem_frame frame; /* defaults filled in (lib/dem.c) */
+    /* the samples' range, worked out once they are in (rs__dem_seal): the
+     * samples never change after, and every update's dirty render made
+     * two splatters that scanned them all */
+    int sealed, nodata;
+    float zlo, zhi;
 };
 
 /* Allocation through the context's allocator. rs__alloc_array checks
@@ -209,4 +214,47 @@ rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_ro
                                      const rs_splat_options *opts, const rs_network *net,
                                      const rs__grid_facts *facts, const uint32_t *ids, size_t n,
                                      rs_road_grid **out);
+
+/* Fingerprint mixing (64 bits): a value into a running hash (one multiply
+ * and a rotation; rs__fp_final mixes a finished fingerprint well). Shared
+ * by the road set's per-road prints (lib/input/roads.c) and the edits'
+ * pieces (lib/scene/grid_edit.h). */
+#include <string.h>
+static inline uint64_t rs__fp_mix(uint64_t h, uint64_t v)
+{
+    h = (h ^ v) * 0x9e3779b97f4a7c15ull;
+    return (h << 27) | (h >> 37);
+}
+
+static inline uint64_t rs__fp_final(uint64_t h)
+{
+    h ^= h >> 31;
+    h *= 0xbf58476d1ce4e5b9ull;
+    h ^= h >> 29;
+    h *= 0x94d049bb133111ebull;
+    return h ^ (h >> 32);
+}
+
+/* A string (NULL: none) into a running hash, by its FNV-1a. */
+static inline uint64_t rs__fp_mixs(uint64_t h, const char *s)
+{
+    uint64_t f = 1469598103934665603ull;
+    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
+    return rs__fp_mix(h, f);
+}
+
+static inline uint64_t rs__fp_mixd(uint64_t h, double d)
+{
+    uint64_t v;
+    if (d == 0) d = 0; /* -0 draws as 0 */
+    memcpy(&v, &d, sizeof v);
+    return rs__fp_mix(h, v);
+}
+
+/* Road i's print (name, width, points and attributes, not yet
+ * rs__fp_final-mixed; point attributes and markings not in it), its width
+ * and its points' box (x0, y0, x1, y1): kept by the road set as edits
+ * make them (lib/input/roads.c), so an update does not hash every road. */
+void rs__roads_road_print(const rs_roads *roads, size_t i, uint64_t *print, double *width, const double **box);
+
 #endif

@@ -469,6 +469,60 @@ static void test_remove(void)
     rs_ctx_free(ctx);
 }
 
+/* The road set keeps each road's print and box as its edits make them
+ * (rs__roads_road_print: an update reads them instead of hashing every
+ * road). The same road gives the same print however it came there
+ * (parsed, added and given its attributes, copied, replaced back, moved
+ * up by a removal, its y negated twice), and a change of its name, width,
+ * a point or an attribute changes it. */
+static int same_print(const rs_roads *a, size_t i, const rs_roads *b, size_t j)
+{
+    uint64_t pa, pb;
+    double wa, wb;
+    const double *ba, *bb;
+    rs__roads_road_print(a, i, &pa, &wa, &ba);
+    rs__roads_road_print(b, j, &pb, &wb, &bb);
+    return pa == pb && wa == wb && memcmp(ba, bb, 4 * sizeof *ba) == 0;
+}
+
+static void test_road_prints(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    const char text[] = "road a width 6 class=residential lanes=2\n0 0\n40 3\n80 -2\nend\n"
+                        "road b width 4\n10 -20\n10 30\nend\n";
+    rs_roads *P = NULL, *A = NULL, *C = NULL;
+    CHECK(rs_roads_parse(ctx, text, sizeof text - 1, &P) == RS_OK);
+    const double a_xy[] = { 0, 0, 40, 3, 80, -2 }, b_xy[] = { 10, -20, 10, 30 };
+    CHECK(rs_roads_create(ctx, &A) == RS_OK && rs_roads_add(ctx, A, "a", 6, a_xy, 3) == RS_OK &&
+          rs_roads_set_attr(ctx, A, 0, "class", "residential") == RS_OK &&
+          rs_roads_set_attr(ctx, A, 0, "lanes", "2") == RS_OK && rs_roads_add(ctx, A, "b", 4, b_xy, 2) == RS_OK);
+    CHECK(same_print(P, 0, A, 0) && same_print(P, 1, A, 1));
+    const double *box;
+    uint64_t h;
+    double w;
+    rs__roads_road_print(P, 0, &h, &w, &box);
+    CHECK(w == 6 && box[0] == 0 && box[1] == -2 && box[2] == 80 && box[3] == 3);
+    CHECK(rs_roads_copy(ctx, P, &C) == RS_OK && same_print(P, 0, C, 0) && same_print(P, 1, C, 1));
+    /* each change changes the print; putting it back restores it */
+    const double moved[] = { 0, 0, 40, 3.5, 80, -2 };
+    CHECK(rs_roads_replace(ctx, C, 0, NULL, 6, moved, 3) == RS_OK && !same_print(P, 0, C, 0));
+    CHECK(rs_roads_replace(ctx, C, 0, NULL, 6, a_xy, 3) == RS_OK && same_print(P, 0, C, 0));
+    CHECK(rs_roads_replace(ctx, C, 0, NULL, 6.5, a_xy, 3) == RS_OK && !same_print(P, 0, C, 0));
+    CHECK(rs_roads_replace(ctx, C, 0, NULL, 6, a_xy, 3) == RS_OK && same_print(P, 0, C, 0));
+    CHECK(rs_roads_replace(ctx, C, 0, "z", 6, a_xy, 3) == RS_OK && !same_print(P, 0, C, 0));
+    CHECK(rs_roads_replace(ctx, C, 0, "a", 6, a_xy, 3) == RS_OK && same_print(P, 0, C, 0));
+    CHECK(rs_roads_set_attr(ctx, C, 0, "class", "primary") == RS_OK && !same_print(P, 0, C, 0));
+    CHECK(rs_roads_set_attr(ctx, C, 0, "class", "residential") == RS_OK && same_print(P, 0, C, 0));
+    CHECK(rs_roads_negate_y(ctx, C) == RS_OK && !same_print(P, 1, C, 1));
+    CHECK(rs_roads_negate_y(ctx, C) == RS_OK && same_print(P, 1, C, 1) && same_print(P, 0, C, 0));
+    CHECK(rs_roads_remove(ctx, C, 0) == RS_OK && same_print(P, 1, C, 0));
+    rs_roads_free(ctx, P);
+    rs_roads_free(ctx, A);
+    rs_roads_free(ctx, C);
+    rs_ctx_free(ctx);
+}
+
 static void test_replace(void)
 {
     rs_ctx *ctx;
@@ -1912,6 +1966,7 @@ int main(void)
     test_shared_free();
     test_subset_build();
     test_remove();
+    test_road_prints();
     test_replace();
     test_point_attr();
     test_styles_replace();

@@ -197,6 +197,7 @@ static rs_result pgm_parse(rs_ctx *ctx, const void *data, size_t size, rs_dem **
             }
             dem->z[i] = (float)(bps == 2 ? ((unsigned)s[2 * i] << 8) | s[2 * i + 1] : s[i]);
         }
+        rs__dem_seal(dem);
         *out = dem;
         rs__ok(ctx);
         return RS_OK;
@@ -256,6 +257,7 @@ static rs_result pgm_parse(rs_ctx *ctx, const void *data, size_t size, rs_dem **
                       (unsigned long long)r.line, pgm_what(&r, what, sizeof what), n);
         goto fail;
     }
+    rs__dem_seal(dem);
     *out = dem;
     rs__ok(ctx);
     return RS_OK;

@@ -74,6 +74,7 @@ rs_result rs_roads_negate_y(rs_ctx *ctx, rs_roads *roads)
     if (!ctx) return RS_ERR_INVALID_ARG;
     if (!roads) return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_roads_negate_y: roads is NULL");
     for (size_t k = 0; k < roads->points; k++) roads->xy[2 * k + 1] = -roads->xy[2 * k + 1];
+    for (size_t i = 0; i < roads->count; i++) rs__roads_reprint(roads, i);
     rs__ok(ctx);
     return RS_OK;
 }
@@ -179,6 +180,37 @@ static size_t pool_add(rs_ctx *ctx, rs_roads *roads, const char *s, size_t n)
     return pool_commit(roads, n);
 }
 
+void rs__roads_reprint(rs_roads *roads, size_t i)
+{
+    rs_road_rec *rec = &roads->roads[i];
+    const double *xy = roads->xy + 2 * rec->first;
+    uint64_t h = rs__fp_mixs(rs__fp_mixd(0x7e57, rec->width), roads->names + rec->name);
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    /* (the x and the y in two chains, joined at the end: half the
+     * dependent multiplies of one chain) */
+    uint64_t hy = rs__fp_mix(h, 0x79);
+    for (size_t k = 0; k < rec->n; k++) {
+        double x = xy[2 * k], y = xy[2 * k + 1];
+        h = rs__fp_mixd(h, x), hy = rs__fp_mixd(hy, y);
+        x0 = x < x0 ? x : x0, y0 = y < y0 ? y : y0, x1 = x > x1 ? x : x1, y1 = y > y1 ? y : y1;
+    }
+    h = rs__fp_mix(rs__fp_mix(h, hy), rec->n);
+    for (uint32_t k = 0; k < rec->attr_count; k++) {
+        const rs_attr *a = &roads->attrs[rec->attr_first + k];
+        h = rs__fp_mixs(rs__fp_mixs(h, roads->names + a->key), roads->names + a->value);
+    }
+    rec->print = h;
+    rec->box[0] = x0, rec->box[1] = y0, rec->box[2] = x1, rec->box[3] = y1;
+}
+
+void rs__roads_road_print(const rs_roads *roads, size_t i, uint64_t *print, double *width, const double **box)
+{
+    const rs_road_rec *rec = &roads->roads[i];
+    *print = rec->print;
+    *width = rec->width;
+    *box = rec->box;
+}
+
 /* Record a road whose points are already the last `n` of roads->xy;
  * `rec` holds everything else. */
 static int commit_road(rs_ctx *ctx, rs_roads *roads, const rs_road_rec *rec, size_t n)
@@ -239,6 +271,7 @@ rs_result rs_roads_add(rs_ctx *ctx, rs_roads *roads, const char *name, double wi
         roads->names_len = names_len;
         return rs__fail(ctx, RS_ERR_NOMEM, "rs_roads_add: out of memory");
     }
+    rs__roads_reprint(roads, roads->count - 1);
     rs__ok(ctx);
     return RS_OK;
 }
@@ -519,6 +552,7 @@ rs_result rs_roads_set_attr(rs_ctx *ctx, rs_roads *roads, size_t i, const char *
         next.attr_count++;
     }
     *rec = next;
+    rs__roads_reprint(roads, i);
     rs__ok(ctx);
     return RS_OK;
 }
@@ -1074,6 +1108,7 @@ static rs_result road_line(text_parser *P, const rs__tok *t, size_t nt, rs__lex 
                             n == 1 ? "" : "s");
         if (!commit_road(ctx, P->roads, &P->rec, n))
             return rs__fail(ctx, RS_ERR_NOMEM, "line %llu: out of memory", P->line);
+        if (P->keep_points) rs__roads_reprint(P->roads, P->roads->count - 1);
         P->in_road = 0;
         return RS_OK;
     }

@@ -94,6 +94,7 @@ rs_result rs_roads_replace(rs_ctx *ctx, rs_roads *roads, size_t i, const char *n
     rec->width = width;
     rec->width_given = 1;
     rec->name = name_off;
+    rs__roads_reprint(roads, i);
     /* point attributes past the new last point go */
     size_t w = 0;
     for (size_t k = 0; k < roads->pattrs_len; k++)

@@ -19,6 +19,8 @@ typedef struct rs_road_rec {
     size_t style;        /* offset into names of the style= value; SIZE_MAX: none */
     uint8_t road_class;  /* rs_road_class */
     uint8_t link, oneway, area, width_given;
+    uint64_t print;      /* rs__roads_road_print: set by rs__roads_reprint whenever the above change */
+    double box[4];
 } rs_road_rec;
 
 typedef struct rs_attr {
@@ -58,6 +60,9 @@ struct rs_roads {
     size_t frame_crs; /* offset into names of its CRS; SIZE_MAX: none */
 };
 
+/* Road i's print and box (rs__roads_road_print) from its name, width,
+ * points and attributes: after every change of those. */
+void rs__roads_reprint(rs_roads *roads, size_t i);
 /* roads.c's helpers for roads_edit.c: grow an array to `need` elements
  * (NULL: no memory, buf still valid), copy a string into the pool
  * (SIZE_MAX: no memory), check an attribute key. */

@@ -8,38 +8,7 @@
 
 #include <string.h>
 
-/* Fingerprint mixing (64 bits): a value into a running hash (one multiply
- * and a rotation; rs__fp_final mixes a finished fingerprint well). */
-static inline uint64_t rs__fp_mix(uint64_t h, uint64_t v)
-{
-    h = (h ^ v) * 0x9e3779b97f4a7c15ull;
-    return (h << 27) | (h >> 37);
-}
-
-static inline uint64_t rs__fp_final(uint64_t h)
-{
-    h ^= h >> 31;
-    h *= 0xbf58476d1ce4e5b9ull;
-    h ^= h >> 29;
-    h *= 0x94d049bb133111ebull;
-    return h ^ (h >> 32);
-}
-
-/* A string (NULL: none) into a running hash, by its FNV-1a. */
-static inline uint64_t rs__fp_mixs(uint64_t h, const char *s)
-{
-    uint64_t f = 1469598103934665603ull;
-    for (; s && *s; s++) f = (f ^ (unsigned char)*s) * 1099511628211ull;
-    return rs__fp_mix(h, f);
-}
-
-static inline uint64_t rs__fp_mixd(uint64_t h, double d)
-{
-    uint64_t v;
-    if (d == 0) d = 0; /* -0 draws as 0 */
-    memcpy(&v, &d, sizeof v);
-    return rs__fp_mix(h, v);
-}
+/* (the fingerprint mixing, rs__fp_*: lib/internal.h) */
 
 /* One piece: a chunk of a road (about 10 m of it, or the disc around one
  * of its vertices), a line cut, a marking. Its region holds every pixel

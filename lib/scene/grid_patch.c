@@ -203,32 +203,13 @@ static rs_result raw_prints(rs_ctx *ctx, const rs_roads *roads, uint64_t **print
     }
     *max_width = 0;
     *mark_reach = 0;
+    /* (each road's print and box kept by the road set: rs__roads_road_print) */
     for (size_t i = 0; i < n; i++) {
-        const char *name = NULL;
-        const double *xy = NULL;
-        size_t np = 0;
         double w = 0;
-        rs_roads_get(roads, i, &name, &w, &xy, &np);
-        uint64_t h = mixs(mixd(0x7e57, w), name);
+        const double *b = NULL;
+        rs__roads_road_print(roads, i, &P[i], &w, &b);
         *max_width = widest(*max_width, w);
-        double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-        /* (the x and the y in two chains, joined at the end: half the
-         * dependent multiplies of one chain) */
-        uint64_t hy = mix(h, 0x79);
-        for (size_t k = 0; k < np; k++) {
-            double x = xy[2 * k], y = xy[2 * k + 1];
-            h = mixd(h, x), hy = mixd(hy, y);
-            x0 = x < x0 ? x : x0, y0 = y < y0 ? y : y0, x1 = x > x1 ? x : x1, y1 = y > y1 ? y : y1;
-        }
-        h = mix(mix(h, hy), np);
-        double *b = B + 4 * i;
-        b[0] = x0, b[1] = y0, b[2] = x1, b[3] = y1;
-        for (size_t k = 0; k < rs_roads_attr_count(roads, i); k++) {
-            const char *key = NULL, *val = NULL;
-            rs_roads_attr_at(roads, i, k, &key, &val);
-            h = mixs(mixs(h, key), val);
-        }
-        P[i] = h;
+        memcpy(B + 4 * i, b, 4 * sizeof *B);
     }
     /* point attributes and markings, in their order, into their roads' prints */
     for (size_t k = 0; k < rs_roads_point_attr_count(roads); k++) {

@@ -3293,7 +3293,7 @@ typedef struct rf_rowbuf {
     /* per grid row (cached while consecutive pixel rows share it): runs
      * needing per-pixel work, full runs, their pixel range [k0, k1], and the
      * row-list entries whose box meets that range in x (nact = UINT32_MAX:
-     * more than ACT_MAX, check them all) */
+     * more than ACT_MAX meet it, check them all) */
     uint32_t crow, ntodo, nfull, nfullg, k0, k1, nact;
     uint16_t todo[CHUNK], fullr[CHUNK], fullg[CHUNK];
     uint32_t act[ACT_MAX], sel[ACT_MAX];
@@ -3494,12 +3494,19 @@ static void cover_row(const rs__roadfield *f, const rs__roadfield *g, rf_rowbuf 
         rb->k0 = k0;
         rb->k1 = k1;
         rb->nact = UINT32_MAX;
-        if (ntodo && L->rspan[row] && f->rspan[row] && L->rstart[row + 1] - L->rstart[row] <= ACT_MAX) {
+        if (ntodo && L->rspan[row] && f->rspan[row]) {
+            /* (a long row list, as a whole map's is, still has few entries
+             * in a narrow window: a dirty render's, a tile's) */
             double xlo = (a + (double)k0) * pix, xhi = (a + (double)k1) * pix;
             uint32_t n = 0;
             for (uint32_t m = L->rstart[row]; m < L->rstart[row + 1]; m++) {
                 const float *bx = L->rbox + 4 * (size_t)m;
-                if (!(xhi < bx[0] || xlo > bx[1])) rb->act[n++] = m;
+                if (xhi < bx[0] || xlo > bx[1]) continue;
+                if (n == ACT_MAX) {
+                    n = UINT32_MAX;
+                    break;
+                }
+                rb->act[n++] = m;
             }
             rb->nact = n;
         }
