@@ -1072,6 +1072,40 @@ static size_t first_key(const keyed *k, size_t n, uint64_t h)
     return lo;
 }
 
+/* Sorted keys with a directory by their top bits (a key of fingerprint h
+ * lies at or after start[h >> shift]): the fingerprints are uniform, so a
+ * lookup reads a bucket of about one key, where first_key's binary search
+ * missed the cache at every step (a patch's candidates look up every piece
+ * near its rectangle). */
+typedef struct keydir {
+    const keyed *k;
+    size_t n;
+    uint32_t *start; /* 2^bits + 1 */
+    unsigned shift;
+} keydir;
+
+static int keydir_make(rs_ctx *ctx, keydir *d, const keyed *k, size_t n)
+{
+    unsigned bits = 1;
+    while (bits < 20 && ((size_t)1 << bits) < n) bits++;
+    d->k = k, d->n = n, d->shift = 64 - bits;
+    size_t nb = (size_t)1 << bits;
+    if (!(d->start = rs__alloc_array(ctx, nb + 1, sizeof *d->start))) return 0;
+    for (size_t b = 0, i = 0; b <= nb; b++) {
+        while (i < n && (b == nb || (k[i].h >> d->shift) < b)) i++;
+        d->start[b] = (uint32_t)i;
+    }
+    return 1;
+}
+
+/* first_key through the directory: the same index. */
+static size_t dir_first(const keydir *d, uint64_t h)
+{
+    size_t b = (size_t)(h >> d->shift), lo = d->start[b], hi = d->start[b + 1];
+    while (lo < hi && d->k[lo].h < h) lo++;
+    return lo;
+}
+
 /* Whether fingerprint h is missing from the sorted keys. */
 static int item_changed(const keyed *k, size_t n, uint64_t h)
 {
@@ -1267,9 +1301,11 @@ rs_result rs__dirty_render(rs_ctx *ctx, const rs_dem *dem, const rs_splat_option
 /* The kind of e's pieces of fingerprint h (keys k[0..n): some of e's,
  * sorted; RS__EI_SURFACE when their kinds differ), or -1 when none of them
  * has it; *count: how many have it. */
-static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h, size_t *count)
+static int kind_of(const keydir *d, const rs__grid_edit *e, uint64_t h, size_t *count)
 {
-    size_t lo = first_key(k, n, h), c = 0;
+    const keyed *k = d->k;
+    const size_t n = d->n;
+    size_t lo = dir_first(d, h), c = 0;
     int kind = -1;
     for (; lo + c < n && k[lo + c].h == h; c++) {
         int q = (int)e->it[k[lo + c].i].kind;
@@ -1280,9 +1316,11 @@ static int kind_of(const keyed *k, size_t n, const rs__grid_edit *e, uint64_t h,
 }
 
 /* How many of the sorted keys are fingerprint h. */
-static size_t count_of(const keyed *k, size_t n, uint64_t h)
+static size_t count_of(const keydir *d, uint64_t h)
 {
-    size_t lo = first_key(k, n, h), c = 0;
+    const keyed *k = d->k;
+    const size_t n = d->n;
+    size_t lo = dir_first(d, h), c = 0;
     while (lo + c < n && k[lo + c].h == h) c++;
     return c;
 }
@@ -1434,6 +1472,12 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
     }
     if (!r && el) fills |= el->fills;
     if (!r && (!el || el->over)) r = RS_ERR_LIMIT;
+    keydir dl, *ds = rs__calloc(ctx, ns, sizeof *ds);
+    memset(&dl, 0, sizeof dl);
+    if (!r && !ds) r = RS_ERR_NOMEM;
+    if (!r && !keydir_make(ctx, &dl, kl, el->n)) r = RS_ERR_NOMEM;
+    for (size_t k = 0; !r && k < ns; k++)
+        if (!keydir_make(ctx, &ds[k], ks[k], nk[k])) r = RS_ERR_NOMEM;
     int ok = 1;
     /* (the rectangle a source draws in: the base everywhere) */
     #define SRC_RECT(k) ((k) == 0 ? &rect : &old->patch[(k) - 1].rect)
@@ -1447,7 +1491,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         for (size_t k = 0; k < ns; k++) {
             if (!meets(q, pad_l, SRC_RECT(k), pix)) continue;
             size_t cnt;
-            int kind = kind_of(ks[k], nk[k], src[k]->edit, q->h, &cnt);
+            int kind = kind_of(&ds[k], src[k]->edit, q->h, &cnt);
             if (kind >= 0) {
                 any = 1;
                 if (cnt != cl[i]) known = 0; /* (drawn more or fewer times) */
@@ -1467,7 +1511,7 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         for (size_t ii = 0; ok && ii < nk[k]; ii++) {
             const rs__edit_item *q = &e->it[near[k][ii]];
             if (!meets(q, pad, &rect, pix) || !meets(q, pad, SRC_RECT(k), pix) ||
-                count_of(kl, el->n, q->h) == cs[k][ii])
+                count_of(&dl, q->h) == cs[k][ii])
                 continue;
             if (hidden(q, pad, &rect, SRC_RECT(k), k + 1 < ns ? old->patch + k : NULL, ns - 1 - k, pix)) continue;
             ok = piece_spans(ctx, &S, &Ssf, q, pad, pix, W, H);
@@ -1505,6 +1549,9 @@ rs_result rs__patch_candidates(rs_ctx *ctx, const rs_road_grid *old, const rs_ro
         if (!*out) r = RS_ERR_NOMEM;
         else (*out)[0] = rect, *nout = 1;
     } else if (!r) r = spans_to_rects(ctx, &in, out, nout);
+    for (size_t k = 0; ds && k < ns; k++) rs__free(ctx, ds[k].start);
+    rs__free(ctx, ds);
+    rs__free(ctx, dl.start);
     for (size_t k = 0; ks && k < ns; k++) rs__free(ctx, ks[k]);
     for (size_t k = 0; near && k < ns; k++) rs__free(ctx, near[k]);
     for (size_t k = 0; cs && k < ns; k++) rs__free(ctx, cs[k]);

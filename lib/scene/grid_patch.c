@@ -684,10 +684,12 @@ static int stroke_zones(boxes *B, const rs_network *N, size_t k, const rs_networ
             fb[0] = fb[2] = x, fb[1] = fb[3] = y;
         }
         for (size_t j = 0; j < nn; j++) {
+            const double *bj = bn + 4 * j;
+            /* (reach below is at most d: most roads fail this first) */
+            if (bj[0] - d > fb[2] || fb[0] - d > bj[2] || bj[1] - d > fb[3] || fb[1] - d > bj[3]) continue;
             double w = 0;
             rs_roads_get(roads, j, NULL, &w, NULL, NULL);
             double reach = 0.5 * w + 1.0; /* (the markings' 0.5 m, and as much again for the frames' rounding) */
-            const double *bj = bn + 4 * j;
             if (!(reach < 1e300)) reach = INFINITY;
             if (bj[0] - reach > fb[2] || fb[0] - reach > bj[2] || bj[1] - reach > fb[3] || fb[1] - reach > bj[3])
                 continue;
@@ -1404,14 +1406,21 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
          * nodes stand (a kept road's points are the same) */
         if (net && T->tfar && T->tstrip && (tf = rs__alloc_array(ctx, 2 * (nn ? nn : 1), sizeof *tf)) &&
             (ts = rs__alloc_array(ctx, 2 * TS * (nn ? nn : 1), sizeof *ts)))
-            for (size_t j = 0; j < nn; j++)
-                for (int e = 0; e < 2; e++) {
-                    size_t i = 2 * (size_t)m_new[j] + (size_t)e;
-                    double *p = ts + TS * (2 * j + (size_t)e);
-                    tf[2 * j + e] = m_new[j] == UINT32_MAX ? NAN : T->tfar[i];
-                    if (m_new[j] == UINT32_MAX) strip_none(p);
-                    else memcpy(p, T->tstrip + TS * i, TS * sizeof *p);
+            for (size_t j = 0; j < nn; j++) {
+                if (m_new[j] == UINT32_MAX) {
+                    for (int e = 0; e < 2; e++) {
+                        tf[2 * j + e] = NAN;
+                        strip_none(ts + TS * (2 * j + (size_t)e));
+                    }
+                    continue;
                 }
+                /* (a run of roads matched in order in one copy) */
+                size_t i = m_new[j], q = j + 1;
+                while (q < nn && m_new[q] == i + (q - j)) q++;
+                memcpy(tf + 2 * j, T->tfar + 2 * i, 2 * (q - j) * sizeof *tf);
+                memcpy(ts + TS * 2 * j, T->tstrip + TS * 2 * i, TS * 2 * (q - j) * sizeof *ts);
+                j = q - 1;
+            }
         known = extra < INFINITY && (!net || (tf && ts));
         const double wider = fmax(T->facts.widest_casing, facts.widest_casing) + 0.01; /* (the strip's: a casing) */
         if (known && !r) r = tee_clips(ctx, net, on_n, non_n, cn, NULL, roads, &chg, grow, extra, wider, tf, ts, &known);

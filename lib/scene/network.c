@@ -2787,10 +2787,14 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             uint32_t g0 = S->leg_start[d], g1 = S->leg_start[d + 1];
             if (g1 > g0) memcpy(&N->leg[nl], &S->leg[g0], (size_t)(g1 - g0) * sizeof *N->leg);
             for (uint32_t l = g0; l < g1; l++) {
-                rs_network_leg *L = &N->leg[nl++];
-                if ((L->road = map[L->road]) == NONE) goto done; /* (a kept node of a road gone) */
+                /* (read from the source: a field just stored by the copy's
+                 * wide stores is read back past store forwarding) */
+                const rs_network_leg *L = &S->leg[l];
+                uint32_t rd = map[L->road];
+                if (rd == NONE) goto done; /* (a kept node of a road gone) */
+                N->leg[nl++].road = rd;
                 if (!rs__is_end_leg(L)) continue;
-                uint32_t e = rs__leg_end(L);
+                uint32_t e = 2 * rd + (L->kind == RS_LEG_END); /* (rs__leg_end of the new leg) */
                 if (ends[e]) goto done; /* (an end at two nodes) */
                 ends[e] = 1;
             }
@@ -2966,22 +2970,27 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
         }
         rs_network_leg *leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *leg);
         if (!leg) goto nomem;
-        size_t at = 0, k = 0;
-        for (uint32_t d = 0; d < N->nnodes; d++) {
-            uint32_t a = N->leg_start[d], b = N->leg_start[d + 1];
-            N->leg_start[d] = (uint32_t)at;
-            if (k < nrep && rep[k].node == d) {
-                memcpy(leg + at, rep[k].leg, rep[k].degree * sizeof *leg);
-                at += rep[k].degree;
-                N->node[d].degree = rep[k].degree;
-                N->node[d].kind = rep[k].degree <= 1 ? RS_NODE_END : RS_NODE_JUNCTION;
-                N->node[d].control = rep[k].control;
-                N->node_surf[d] = rep[k].surf;
-                k++;
-                continue;
-            }
-            memcpy(leg + at, N->leg + a, (b - a) * sizeof *leg);
+        /* (the nodes between two changed ones in one copy, their starts
+         * moved by the legs the changed ones before them gained or lost) */
+        size_t at = 0;
+        uint32_t d0 = 0;
+        for (size_t k = 0; k <= nrep; k++) {
+            uint32_t d1 = k < nrep ? rep[k].node : (uint32_t)N->nnodes;
+            uint32_t a = N->leg_start[d0], b = N->leg_start[d1];
+            if (b > a) memcpy(leg + at, N->leg + a, (size_t)(b - a) * sizeof *leg);
+            const uint32_t delta = (uint32_t)at - a; /* (mod 2^32: the starts stay below nl) */
+            for (uint32_t d = d0; d < d1; d++) N->leg_start[d] += delta;
             at += b - a;
+            if (k == nrep) break;
+            uint32_t d = d1; /* (its old legs skipped; the next run reads the old starts after it) */
+            N->leg_start[d] = (uint32_t)at;
+            memcpy(leg + at, rep[k].leg, rep[k].degree * sizeof *leg);
+            at += rep[k].degree;
+            N->node[d].degree = rep[k].degree;
+            N->node[d].kind = rep[k].degree <= 1 ? RS_NODE_END : RS_NODE_JUNCTION;
+            N->node[d].control = rep[k].control;
+            N->node_surf[d] = rep[k].surf;
+            d0 = d + 1;
         }
         N->leg_start[N->nnodes] = (uint32_t)at;
         rs__free(ctx, N->leg);
