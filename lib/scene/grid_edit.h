@@ -119,8 +119,8 @@ rs_result rs__grid_track_build(rs_ctx *ctx, const rs_roads *roads, const rs_spla
 void rs__grid_track_free(rs_ctx *ctx, rs__grid_track *t);
 /* Tests: 1 when the network grid g keeps for its next update equals one
  * rs_network_build makes of `roads` (or it keeps none), and so do the T
- * lines and strips it keeps per road end; 0 when not, -1 when that build
- * failed. */
+ * lines and strips it keeps per road end and the prints, boxes and chunks
+ * per road; 0 when not, -1 when that build failed. */
 int rs__grid_track_net_check(rs_ctx *ctx, const struct rs_road_grid *g, const rs_roads *roads);
 /* The candidate rectangles *rects (*nrects of them, the caller's:
  * rs__free) rendered under grids a and b (splatters on them for dem and

@@ -163,11 +163,32 @@ static rs_result chunks_make(rs_ctx *ctx, const rs_roads *roads, const double *B
     memset(ch, 0, sizeof *ch);
     if (n >= UINT32_MAX || !(ch->start = rs__alloc_array(ctx, n + 1, sizeof *ch->start))) return RS_ERR_NOMEM;
     ch->start[0] = 0;
+    /* (the old chunks of a run of roads matched in order, as many as the
+     * old set has: room made once, one copy) */
+    if (m_new && old->start && old->v && n) {
+        size_t cap = 16;
+        for (size_t j = 0; j < n; j++)
+            if (m_new[j] != UINT32_MAX) cap += old->start[m_new[j] + 1] - old->start[m_new[j]];
+        if (!(acc.v = rs__alloc_array(ctx, cap, 4 * sizeof *acc.v))) acc.nomem = 1;
+        else acc.cap = cap;
+    }
     for (size_t j = 0; j < n && !acc.nomem; j++) {
         const double *b = B + 4 * j;
         uint32_t i = m_new && old->start ? m_new[j] : UINT32_MAX;
         if (i != UINT32_MAX) {
-            for (uint32_t k = old->start[i]; k < old->start[i + 1]; k++) boxes_add(&acc, old->v + 4 * (size_t)k, 0);
+            size_t q = j + 1;
+            while (q < n && m_new[q] == i + (q - j)) q++;
+            size_t k0 = old->start[i], k1 = old->start[i + (q - j)];
+            if (acc.cap - acc.n < k1 - k0) { /* (room was made above; a guard) */
+                for (size_t k = k0; k < k1; k++) boxes_add(&acc, old->v + 4 * k, 0);
+            } else {
+                memcpy(acc.v + 4 * acc.n, old->v + 4 * k0, (k1 - k0) * 4 * sizeof *acc.v);
+                acc.n += k1 - k0;
+            }
+            for (size_t t = j; t < q; t++) ch->start[t + 1] = (uint32_t)(acc.n - (k1 - old->start[i + (t - j) + 1]));
+            if (acc.n >= UINT32_MAX) acc.nomem = 1;
+            j = q - 1;
+            continue;
         } else if (b[2] - b[0] > CHUNK_M || b[3] - b[1] > CHUNK_M) {
             const double *xy = NULL;
             size_t np = 0;
@@ -1660,6 +1681,23 @@ int rs__grid_track_net_check(rs_ctx *ctx, const rs_road_grid *g, const rs_roads 
             eq = isnan(ts[k]) ? isnan(t->tstrip[k]) : ts[k] == t->tstrip[k];
         rs__free(ctx, tf);
         rs__free(ctx, ts);
+    }
+    /* and the prints, boxes and chunks it keeps per road, as a track of
+     * `roads` makes them (an update copies the kept roads' in runs) */
+    if (eq == 1 && t->print && t->box && t->n == nr) {
+        uint64_t *p = NULL;
+        double *b = NULL, mw = 0, mr = 0;
+        rs__road_chunks c;
+        memset(&c, 0, sizeof c);
+        if (raw_prints(ctx, roads, &p, &b, &mw, &mr) != RS_OK || chunks_make(ctx, roads, b, NULL, NULL, &c) != RS_OK)
+            eq = -1;
+        else
+            eq = !memcmp(p, t->print, nr * sizeof *p) && !memcmp(b, t->box, 4 * nr * sizeof *b) && t->chunks.start &&
+                 !memcmp(c.start, t->chunks.start, (nr + 1) * sizeof *c.start) &&
+                 (!c.start[nr] || !memcmp(c.v, t->chunks.v, 4 * (size_t)c.start[nr] * sizeof *c.v));
+        rs__free(ctx, p);
+        rs__free(ctx, b);
+        chunks_free(ctx, &c);
     }
     rs_network_free(ctx, n);
     return eq;
