@@ -1715,28 +1715,29 @@ rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bas
     }
     S->nroads = n;
     S->tol = N->tol;
-    /* nodes with a kept leg, in their order; their kept legs in theirs */
-    size_t nn = 0, nl = 0;
-    for (size_t d = 0; d < N->nnodes; d++) {
-        size_t k = 0;
-        for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) k += map[N->leg[l].road] != NONE;
-        nn += k > 0, nl += k;
-    }
-    S->node = rs__alloc_array(ctx, nn ? nn : 1, sizeof *S->node);
-    S->leg_start = rs__alloc_array(ctx, nn + 1, sizeof *S->leg_start);
-    S->leg = rs__alloc_array(ctx, nl ? nl : 1, sizeof *S->leg);
+    /* nodes with a kept leg, in their order; their kept legs in theirs (in
+     * one pass over the whole network's legs: the arrays grow) */
+    size_t nn = 0, cnode = 0, cstart = 0, cleg = 0;
     S->link = rs__alloc_array(ctx, 2 * m, sizeof *S->link);
-    if (!S->node || !S->leg_start || !S->leg || !S->link || !stroke_arrays(ctx, S, m, m + 1)) goto fail;
+    if (!S->link || !stroke_arrays(ctx, S, m, m + 1)) goto fail;
     size_t at = 0;
-    nn = 0;
     for (size_t d = 0; d < N->nnodes; d++) {
         size_t a = at;
         for (uint32_t l = N->leg_start[d]; l < N->leg_start[d + 1]; l++) {
-            if (map[N->leg[l].road] == NONE) continue;
+            uint32_t rd = map[N->leg[l].road];
+            if (rd == NONE) continue;
+            void *arr = S->leg;
+            if ((res = rs__grow(ctx, &arr, at, &cleg, sizeof *S->leg, 64, UINT32_MAX)) != RS_OK) goto fail;
+            S->leg = arr;
             S->leg[at] = N->leg[l];
-            S->leg[at++].road = map[N->leg[l].road];
+            S->leg[at++].road = rd;
         }
         if (at == a) continue;
+        void *an = S->node, *as = S->leg_start;
+        if ((res = rs__grow(ctx, &an, nn, &cnode, sizeof *S->node, 32, UINT32_MAX)) != RS_OK) goto fail;
+        S->node = an;
+        if ((res = rs__grow(ctx, &as, nn + 1, &cstart, sizeof *S->leg_start, 33, UINT32_MAX)) != RS_OK) goto fail;
+        S->leg_start = as;
         S->leg_start[nn] = (uint32_t)a;
         S->node[nn] = N->node[d];
         uint32_t deg = (uint32_t)(at - a);
@@ -1748,6 +1749,14 @@ rs_result rs__network_subset(rs_ctx *ctx, const rs_network *N, const double *bas
         }
         nn++;
     }
+    {
+        void *as = S->leg_start;
+        if ((res = rs__grow(ctx, &as, nn, &cstart, sizeof *S->leg_start, 1, UINT32_MAX)) != RS_OK) goto fail;
+        S->leg_start = as;
+    }
+    res = RS_ERR_NOMEM; /* (the failures below) */
+    if (!S->node && !(S->node = rs__alloc_array(ctx, 1, sizeof *S->node))) goto fail;
+    if (!S->leg && !(S->leg = rs__alloc_array(ctx, 1, sizeof *S->leg))) goto fail;
     S->leg_start[nn] = (uint32_t)at;
     S->nnodes = nn;
     S->nlegs = at;
@@ -1804,6 +1813,7 @@ fail:
     rs__free(ctx, map);
     rs_network_free(ctx, S);
     return res == RS_ERR_INVALID_ARG ? rs__fail(ctx, res, "network subset: record ids not ascending or out of range")
+           : res == RS_ERR_CANCELLED ? rs__fail(ctx, res, "cancelled")
                                      : rs__fail(ctx, res, "network subset: out of memory");
 }
 
