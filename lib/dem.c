@@ -144,6 +144,13 @@ void rs_dem_height_range(const rs_dem *dem, double *zmin, double *zmax, int *has
     if (has_nodata) *has_nodata = nd;
 }
 
+void rs__dem_seal_range(rs_dem *dem, float lo, float hi, int nodata)
+{
+    if (!(lo <= hi)) lo = hi = 0; /* (as rs_dem_height_range: no valid sample) */
+    dem->zlo = lo, dem->zhi = hi, dem->nodata = nodata;
+    dem->sealed = 1;
+}
+
 void rs__dem_seal(rs_dem *dem)
 {
     double lo, hi;

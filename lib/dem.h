@@ -6,8 +6,11 @@
 /* A DEM with the default frame and width*height uninitialised samples;
  * the caller fills them, then calls rs__dem_seal. */
 rs_result rs__dem_alloc(rs_ctx *ctx, uint32_t w, uint32_t h, rs_dem **out);
-/* The samples are in: their range worked out and kept (rs_dem_height_range). */
+/* The samples are in: their range worked out and kept (rs_dem_height_range).
+ * rs__dem_seal_range: the range as the caller found it while filling them
+ * (lo, hi: their least and greatest; nodata: some sample is NaN). */
 void rs__dem_seal(rs_dem *dem);
+void rs__dem_seal_range(rs_dem *dem, float lo, float hi, int nodata);
 
 /* The nodata policy: a copy of the samples where every NaN (or infinite)
  * sample takes the lowest valid 8-neighbour height, layer by layer inwards

@@ -9,6 +9,7 @@
 #include <locale.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 /* ---- counting, failure-injecting allocator ------------------------------ */
@@ -194,9 +195,37 @@ static void test_pgm(void)
         int ok = 1;
         for (int i = 0; i < 6; i++) ok &= z[i] == (float)(i + 1);
         CHECK(ok);
+        /* the range the parser keeps (rs__dem_seal_range) */
+        double lo = -1, hi = -1;
+        int nd = -1;
+        rs_dem_height_range(d, &lo, &hi, &nd);
+        CHECKF(lo == 1 && hi == 6 && nd == 0, "P2 range %g %g %d", lo, hi, nd);
         rs_dem_free(ctx, d);
     }
     CHECK(rs_ctx_message(ctx)[0] == '\0');
+    /* P5, 16 bits: the range from the samples as they come; and a DEM
+     * made from floats keeps its range and nodata (NaN) */
+    {
+        const unsigned char p5[] = { 'P', '5', ' ', '2', ' ', '2', ' ', '6', '5', '5', '3', '5', '\n',
+                                     0x01, 0x02, 0xff, 0x00, 0x00, 0x07, 0x12, 0x34 };
+        CHECK(pgm(ctx, p5, sizeof p5, &d) == RS_OK);
+        if (d) {
+            double lo = -1, hi = -1;
+            int nd = -1;
+            rs_dem_height_range(d, &lo, &hi, &nd);
+            CHECKF(lo == 7 && hi == 0xff00 && nd == 0, "P5 range %g %g %d", lo, hi, nd);
+            rs_dem_free(ctx, d);
+        }
+        const float zf[] = { 3.5f, NAN, -2.25f, 8 };
+        CHECK(rs_dem_create(ctx, 2, 2, zf, &d) == RS_OK);
+        if (d) {
+            double lo = -1, hi = -1;
+            int nd = -1;
+            rs_dem_height_range(d, &lo, &hi, &nd);
+            CHECKF(lo == -2.25 && hi == 8 && nd == 1, "float range %g %g %d", lo, hi, nd);
+            rs_dem_free(ctx, d);
+        }
+    }
 
     /* P5 8-bit, and a comment right after maxval ending the header */
     {

@@ -179,7 +179,8 @@ static rs_result chunks_make(rs_ctx *ctx, const rs_roads *roads, const double *B
             size_t q = j + 1;
             while (q < n && m_new[q] == i + (q - j)) q++;
             size_t k0 = old->start[i], k1 = old->start[i + (q - j)];
-            if (acc.cap - acc.n < k1 - k0) { /* (room was made above; a guard) */
+            if (k1 == k0) {
+            } else if (acc.cap - acc.n < k1 - k0) { /* (room was made above; a guard) */
                 for (size_t k = k0; k < k1; k++) boxes_add(&acc, old->v + 4 * k, 0);
             } else {
                 memcpy(acc.v + 4 * acc.n, old->v + 4 * k0, (k1 - k0) * 4 * sizeof *acc.v);
