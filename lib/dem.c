@@ -43,15 +43,23 @@ rs_result rs_dem_create(rs_ctx *ctx, uint32_t width, uint32_t height, const floa
     size_t n;
     if (!rs__mul_size(width, height, &n))
         return rs__fail(ctx, RS_ERR_LIMIT, "rs_dem_create: %ux%u is too large", width, height);
-    for (size_t i = 0; i < n; i++)
-        if (isinf(samples[i]))
+    /* (the height range in the same pass: a NaN compares false, the bounds stay) */
+    float lo = INFINITY, hi = -INFINITY;
+    int nodata = 0;
+    for (size_t i = 0; i < n; i++) {
+        float z = samples[i];
+        if (isinf(z))
             return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_dem_create: sample %zu (row %zu, column %zu) is infinite",
                             i, i / width, i % width);
+        nodata |= z != z;
+        lo = z < lo ? z : lo;
+        hi = z > hi ? z : hi;
+    }
     rs_dem *dem;
     rs_result rc = rs__dem_alloc(ctx, width, height, &dem);
     if (rc != RS_OK) return rc;
     memcpy(dem->z, samples, n * sizeof(float));
-    rs__dem_seal(dem);
+    rs__dem_seal_range(dem, lo, hi, nodata);
     *out = dem;
     rs__ok(ctx);
     return RS_OK;
@@ -109,56 +117,16 @@ void rs_dem_get_frame(const rs_dem *dem, rs_dem_frame *out)
 
 void rs_dem_height_range(const rs_dem *dem, double *zmin, double *zmax, int *has_nodata)
 {
-    float lo = INFINITY, hi = -INFINITY;
-    int nd = 0;
-    if (dem && dem->sealed) {
-        lo = dem->zlo, hi = dem->zhi, nd = dem->nodata;
-    } else if (dem) {
-        /* four lanes without a branch (a NaN compares false: the bound
-         * stays), so the compiler can vectorise it */
-        size_t n = (size_t)dem->width * dem->height, i = 0;
-        float l4[4] = { INFINITY, INFINITY, INFINITY, INFINITY }, h4[4] = { -INFINITY, -INFINITY, -INFINITY, -INFINITY };
-        int n4[4] = { 0, 0, 0, 0 };
-        for (; i + 4 <= n; i += 4)
-            for (int k = 0; k < 4; k++) {
-                float z = dem->z[i + k];
-                n4[k] |= z != z;
-                l4[k] = z < l4[k] ? z : l4[k];
-                h4[k] = z > h4[k] ? z : h4[k];
-            }
-        for (; i < n; i++) {
-            float z = dem->z[i];
-            nd |= z != z;
-            lo = z < lo ? z : lo;
-            hi = z > hi ? z : hi;
-        }
-        for (int k = 0; k < 4; k++) {
-            nd |= n4[k];
-            lo = l4[k] < lo ? l4[k] : lo;
-            hi = h4[k] > hi ? h4[k] : hi;
-        }
-    }
-    if (!(lo <= hi)) lo = hi = 0;
-    if (zmin) *zmin = lo;
-    if (zmax) *zmax = hi;
-    if (has_nodata) *has_nodata = nd;
+    /* (kept when the samples went in: rs__dem_seal_range) */
+    if (zmin) *zmin = dem ? dem->zlo : 0;
+    if (zmax) *zmax = dem ? dem->zhi : 0;
+    if (has_nodata) *has_nodata = dem ? dem->nodata : 0;
 }
 
 void rs__dem_seal_range(rs_dem *dem, float lo, float hi, int nodata)
 {
-    if (!(lo <= hi)) lo = hi = 0; /* (as rs_dem_height_range: no valid sample) */
+    if (!(lo <= hi)) lo = hi = 0; /* (no valid sample) */
     dem->zlo = lo, dem->zhi = hi, dem->nodata = nodata;
-    dem->sealed = 1;
-}
-
-void rs__dem_seal(rs_dem *dem)
-{
-    double lo, hi;
-    int nd;
-    dem->sealed = 0;
-    rs_dem_height_range(dem, &lo, &hi, &nd);
-    dem->zlo = (float)lo, dem->zhi = (float)hi, dem->nodata = nd;
-    dem->sealed = 1;
 }
 
 #define NIL 0xFFFFFFFFu

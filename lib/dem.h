@@ -4,12 +4,11 @@
 #include "internal.h"
 
 /* A DEM with the default frame and width*height uninitialised samples;
- * the caller fills them, then calls rs__dem_seal. */
+ * the caller fills them, then calls rs__dem_seal_range. */
 rs_result rs__dem_alloc(rs_ctx *ctx, uint32_t w, uint32_t h, rs_dem **out);
-/* The samples are in: their range worked out and kept (rs_dem_height_range).
- * rs__dem_seal_range: the range as the caller found it while filling them
- * (lo, hi: their least and greatest; nodata: some sample is NaN). */
-void rs__dem_seal(rs_dem *dem);
+/* The samples are in: their range as the caller found it while filling
+ * them (lo, hi: the least and greatest valid sample; nodata: some sample
+ * is NaN), kept for rs_dem_height_range. */
 void rs__dem_seal_range(rs_dem *dem, float lo, float hi, int nodata);
 
 /* The nodata policy: a copy of the samples where every NaN (or infinite)

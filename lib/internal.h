@@ -105,10 +105,10 @@ struct rs_dem {
     uint32_t width, height;
     float *z;           /* width*height, row-major, NaN = nodata */
     rs_dem_frame frame; /* defaults filled in (lib/dem.c) */
-    /* the samples' range, worked out once they are in (rs__dem_seal): the
+    /* the samples' range, kept as they go in (rs__dem_seal_range): the
      * samples never change after, and every update's dirty render made
      * two splatters that scanned them all */
-    int sealed, nodata;
+    int nodata;
     float zlo, zhi;
 };
 
