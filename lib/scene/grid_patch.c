@@ -150,6 +150,16 @@ static void road_boxes(boxes *B, const double *box, const rs__road_chunks *c, si
         boxes_add(B, box + 4 * i, grow);
 }
 
+/* The end of the run of roads from j matched in order to the old ones
+ * (m_new[j .. end) = m_new[j], m_new[j] + 1, ...; m_new[j] matched): their
+ * per-road data is copied in one piece. */
+static size_t matched_run(const uint32_t *m_new, size_t n, size_t j)
+{
+    size_t e = j + 1;
+    while (e < n && m_new[e] == m_new[j] + (e - j)) e++;
+    return e;
+}
+
 /* The boxes along every road of `roads` (boxes B) wider than CHUNK_M:
  * a new road's (m_new[j] UINT32_MAX, or no old ones) from its points, a
  * kept one's copied from old's (its points are the same). */
@@ -176,13 +186,9 @@ static rs_result chunks_make(rs_ctx *ctx, const rs_roads *roads, const double *B
         const double *b = B + 4 * j;
         uint32_t i = m_new && old->start ? m_new[j] : UINT32_MAX;
         if (i != UINT32_MAX) {
-            size_t q = j + 1;
-            while (q < n && m_new[q] == i + (q - j)) q++;
+            size_t q = matched_run(m_new, n, j);
             size_t k0 = old->start[i], k1 = old->start[i + (q - j)];
-            if (k1 == k0) {
-            } else if (acc.cap - acc.n < k1 - k0) { /* (room was made above; a guard) */
-                for (size_t k = k0; k < k1; k++) boxes_add(&acc, old->v + 4 * k, 0);
-            } else {
+            if (k1 > k0) { /* (room made above: old->v has them) */
                 memcpy(acc.v + 4 * acc.n, old->v + 4 * k0, (k1 - k0) * 4 * sizeof *acc.v);
                 acc.n += k1 - k0;
             }
@@ -1234,8 +1240,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
         if (i != UINT32_MAX && sctx == T->sctx) {
             /* (a run of roads matched in order in one copy: a sum's struct
              * copy was a string move) */
-            size_t e = j + 1;
-            while (e < nn && m_new[e] == i + (e - j)) e++;
+            size_t e = matched_run(m_new, nn, j);
             memcpy(sp + j, T->sprint + i, (e - j) * sizeof *sp);
             memcpy(sm + j, T->sum + i, (e - j) * sizeof *sm);
             j = e - 1;
@@ -1437,8 +1442,7 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                     continue;
                 }
                 /* (a run of roads matched in order in one copy) */
-                size_t i = m_new[j], q = j + 1;
-                while (q < nn && m_new[q] == i + (q - j)) q++;
+                size_t i = m_new[j], q = matched_run(m_new, nn, j);
                 memcpy(tf + 2 * j, T->tfar + 2 * i, 2 * (q - j) * sizeof *tf);
                 memcpy(ts + TS * 2 * j, T->tstrip + TS * 2 * i, TS * 2 * (q - j) * sizeof *ts);
                 j = q - 1;
