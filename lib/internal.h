@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h> /* (memcpy: rs__fp_mixd) */
 
 #if defined(__GNUC__)
 #define RS__PRINTF(a, b) __attribute__((format(printf, a, b)))
@@ -219,7 +220,6 @@ rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_ro
  * and a rotation; rs__fp_final mixes a finished fingerprint well). Shared
  * by the road set's per-road prints (lib/input/roads.c) and the edits'
  * pieces (lib/scene/grid_edit.h). */
-#include <string.h>
 static inline uint64_t rs__fp_mix(uint64_t h, uint64_t v)
 {
     h = (h ^ v) * 0x9e3779b97f4a7c15ull;
