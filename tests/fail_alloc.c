@@ -1,6 +1,8 @@
 #include "fail_alloc.h"
 
+#include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 static void *fa_malloc(void *u, size_t n)
 {
@@ -56,6 +58,69 @@ static void ca_free(void *u, void *p)
 rs_allocator count_alloc_hook(size_t *calls)
 {
     rs_allocator a = { ca_malloc, ca_realloc, ca_free, calls };
+    return a;
+}
+
+/* A guarded block: its size in a 16-byte header, the caller's bytes, then
+ * GUARD_BYTES of GUARD_FILL. */
+#define GUARD_HEAD 16
+#define GUARD_BYTES 256
+#define GUARD_FILL 0xA5
+
+static void guard_set(unsigned char *h, size_t n)
+{
+    memcpy(h, &n, sizeof n);
+    memset(h + GUARD_HEAD + n, GUARD_FILL, GUARD_BYTES);
+}
+
+static void guard_test(guard_alloc *g, unsigned char *h)
+{
+    size_t n;
+    memcpy(&n, h, sizeof n);
+    for (size_t i = 0; i < GUARD_BYTES; i++)
+        if (h[GUARD_HEAD + n + i] != GUARD_FILL) {
+            g->broken++;
+            return;
+        }
+}
+
+static void *ga_malloc(void *u, size_t n)
+{
+    guard_alloc *g = u;
+    if (n > SIZE_MAX - GUARD_HEAD - GUARD_BYTES) return NULL;
+    unsigned char *h = malloc(GUARD_HEAD + n + GUARD_BYTES);
+    if (!h) return NULL;
+    guard_set(h, n);
+    g->live++;
+    return h + GUARD_HEAD;
+}
+
+static void *ga_realloc(void *u, void *p, size_t n)
+{
+    guard_alloc *g = u;
+    if (!p) return ga_malloc(u, n);
+    if (n > SIZE_MAX - GUARD_HEAD - GUARD_BYTES) return NULL;
+    unsigned char *h = (unsigned char *)p - GUARD_HEAD;
+    guard_test(g, h);
+    unsigned char *q = realloc(h, GUARD_HEAD + n + GUARD_BYTES);
+    if (!q) return NULL;
+    guard_set(q, n);
+    return q + GUARD_HEAD;
+}
+
+static void ga_free(void *u, void *p)
+{
+    guard_alloc *g = u;
+    if (!p) return;
+    unsigned char *h = (unsigned char *)p - GUARD_HEAD;
+    guard_test(g, h);
+    g->live--;
+    free(h);
+}
+
+rs_allocator guard_alloc_hook(guard_alloc *g)
+{
+    rs_allocator a = { ga_malloc, ga_realloc, ga_free, g };
     return a;
 }
 

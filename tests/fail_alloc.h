@@ -16,6 +16,16 @@ rs_allocator fail_alloc_hook(fail_alloc *f);
  * and realloc) to *calls: a test of allocation-free calls. */
 rs_allocator count_alloc_hook(size_t *calls);
 
+/* An allocator that keeps 256 bytes of a known pattern after every
+ * block and checks them when the block is freed or moved (and at
+ * guard_alloc_check): a write past the end of a block shows in a plain
+ * build, not only under AddressSanitizer. Blocks are 16-byte aligned. */
+typedef struct guard_alloc {
+    long live;   /* blocks allocated and not freed */
+    long broken; /* blocks found with their guard overwritten */
+} guard_alloc;
+rs_allocator guard_alloc_hook(guard_alloc *g);
+
 /* One try of a failure sweep: make what is tested on context c, free it,
  * return the result; set *wrong when a failure left an object behind. */
 typedef rs_result (*fail_try_fn)(rs_ctx *c, void *user, int *wrong);

@@ -1675,6 +1675,62 @@ static void add_fuzz_roads(one_edit *E, const fuzz_road *r, size_t n)
     for (size_t k = 0; k < n; k++) E->ok = E->ok && rs_roads_add(E->ctx, E->roads, NULL, r[k].w, r[k].xy, r[k].n) == RS_OK;
 }
 
+/* A long road moved before another long one (fuzz/edits, 6 December
+ * 2026): the update copies the kept roads' boxes along them (chunks) a
+ * run at a time into room made once for all the kept ones, while a moved
+ * road's boxes, made anew from its points, go in between; with more than
+ * the slack of them the next run's copy wrote past the room (a heap
+ * overflow AddressSanitizer found in the fuzz target). A guarded
+ * allocator sees such a write in a plain build; the updated grid must
+ * also draw as a fresh build. */
+static void test_chunk_room(void)
+{
+    guard_alloc ga = { 0, 0 };
+    rs_allocator al = guard_alloc_hook(&ga);
+    rs_ctx *ctx = NULL;
+    static float z[64 * 48];
+    for (int k = 0; k < 64 * 48; k++) z[k] = (float)((k * 37 % 23) + (k / 64) * 2);
+    rs_dem_frame fr = { 5, 0.05, 0, 0 };
+    rs_dem *dem = NULL;
+    rs_roads *roads = NULL;
+    int ok = rs_ctx_create(&al, NULL, &ctx) == RS_OK && rs_dem_create(ctx, 64, 48, z, &dem) == RS_OK &&
+             rs_dem_set_frame(ctx, dem, &fr) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK;
+    /* a road of two legs (about 20 boxes of CHUNK_M, 32 m, along it: a
+     * few more than the room's slack of 16, so that the overflow stays
+     * within the allocator's guard) and a zigzag of 2.4 km after it (some
+     * 80 boxes) */
+    double xy[2][20];
+    for (int k = 0; k < 10; k++) xy[0][2 * k] = k % 2 ? 300 : 10, xy[0][2 * k + 1] = 15 + 22 * k + 10;
+    xy[1][0] = 10, xy[1][1] = 15, xy[1][2] = 300, xy[1][3] = 15, xy[1][4] = 40, xy[1][5] = 40;
+    ok = ok && rs_roads_add(ctx, roads, NULL, 4, xy[1], 3) == RS_OK && rs_roads_add(ctx, roads, NULL, 4, xy[0], 10) == RS_OK;
+    rs_splat_options o = edit_opts(1);
+    rs_road_grid *g0 = NULL, *g1 = NULL, *gf = NULL;
+    image a, b;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    ok = ok && rs_road_grid_build(ctx, dem, roads, &o, &g0) == RS_OK;
+    /* road 0 moved 1 m east: its boxes made anew, road 1's copied after them */
+    for (int k = 0; k < 3; k++) xy[1][2 * k] += 1;
+    ok = ok && rs_roads_replace(ctx, roads, 0, NULL, 4, xy[1], 3) == RS_OK &&
+         rs_road_grid_update(ctx, dem, roads, &o, g0, &g1) == RS_OK && rs_road_grid_build(ctx, dem, roads, &o, &gf) == RS_OK &&
+         render(ctx, dem, g1, &o, &a) == 0 && render(ctx, dem, gf, &o, &b) == 0;
+    CHECKF(ok, "chunk room: %s", ctx ? rs_ctx_message(ctx) : "no context");
+    if (ok) {
+        CHECK(same_image(&a, &b));
+        CHECK_EQ_INT(rs__grid_track_net_check(ctx, g1, roads), 1);
+    }
+    image_free(&a);
+    image_free(&b);
+    rs_road_grid_free(ctx, g0);
+    rs_road_grid_free(ctx, g1);
+    rs_road_grid_free(ctx, gf);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+    CHECKF(ga.broken == 0, "chunk room: %ld blocks written past their end", ga.broken);
+    CHECK_EQ_INT(ga.live, 0);
+}
+
 /* A road given a second time (the same points, width and attributes):
  * its pieces have the same fingerprints, but its lines are painted twice,
  * so their partly covered pixels change; the dirty rectangles hold them
@@ -1980,6 +2036,7 @@ int main(void)
     test_long_chain();
     test_two_places();
     test_long_road();
+    test_chunk_room();
     test_duplicate_road();
     test_removed_tee_strip();
     test_far_strip_clipped();

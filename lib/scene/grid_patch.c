@@ -78,6 +78,20 @@ typedef struct boxes {
     int nomem;
 } boxes;
 
+/* Room for `more` boxes past B's n (B->nomem when there is none). */
+static void boxes_room(boxes *B, size_t more)
+{
+    if (B->nomem || B->cap - B->n >= more) return;
+    size_t nc = B->cap ? 2 * B->cap : 16;
+    if (nc - B->n < more) nc = B->n + more;
+    double *v = nc <= SIZE_MAX / (4 * sizeof *v) ? rs__realloc(B->ctx, B->v, nc * 4 * sizeof *v) : NULL;
+    if (!v) {
+        B->nomem = 1;
+        return;
+    }
+    B->v = v, B->cap = nc;
+}
+
 static void boxes_add(boxes *B, const double *b, double grow)
 {
     if (B->n == B->cap) {
@@ -174,7 +188,9 @@ static rs_result chunks_make(rs_ctx *ctx, const rs_roads *roads, const double *B
     if (n >= UINT32_MAX || !(ch->start = rs__alloc_array(ctx, n + 1, sizeof *ch->start))) return RS_ERR_NOMEM;
     ch->start[0] = 0;
     /* (the old chunks of a run of roads matched in order, as many as the
-     * old set has: room made once, one copy) */
+     * old set has: room made once for all of them, one copy a run; a new
+     * road's boxes between two runs take room of their own, so each copy
+     * makes sure of its room: fuzz/edits) */
     if (m_new && old->start && old->v && n) {
         size_t cap = 16;
         for (size_t j = 0; j < n; j++)
@@ -188,7 +204,8 @@ static rs_result chunks_make(rs_ctx *ctx, const rs_roads *roads, const double *B
         if (i != UINT32_MAX) {
             size_t q = matched_run(m_new, n, j);
             size_t k0 = old->start[i], k1 = old->start[i + (q - j)];
-            if (k1 > k0) { /* (room made above: old->v has them) */
+            if (k1 > k0) boxes_room(&acc, k1 - k0);
+            if (k1 > k0 && !acc.nomem) {
                 memcpy(acc.v + 4 * acc.n, old->v + 4 * k0, (k1 - k0) * 4 * sizeof *acc.v);
                 acc.n += k1 - k0;
             }
