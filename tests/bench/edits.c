@@ -424,6 +424,15 @@ int main(int argc, char **argv)
                 double t = tm_thread_cpu_ms() - t0;
                 fastest = t < fastest ? t : fastest;
                 if (!bad && k == 0 && rs_road_grid_patch_count(u) == 0) swhole++;
+                if (!bad && k == 1 && getenv("PERDIT")) { /* (what the tail's updates drew) */
+                    unsigned long long area = 0;
+                    size_t local = u->npatch ? u->patch[u->npatch - 1].n : 0;
+                    for (size_t pk = 0; pk < u->npatch; pk++)
+                        area += (unsigned long long)(u->patch[pk].rect.x1 - u->patch[pk].rect.x0) *
+                                (u->patch[pk].rect.y1 - u->patch[pk].rect.y0);
+                    fprintf(stderr, "S %zu %.3f np %zu rects %zu area %llu local %zu\n", i, fastest / fmed, np, u->npatch,
+                            area, local);
+                }
                 rs_road_grid_free(ctx, u);
             }
             bad = bad || rs_roads_replace(ctx, roads, i, NULL, w, keep, np) != RS_OK;
