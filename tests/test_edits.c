@@ -274,17 +274,36 @@ static const char fill_styles[] = "style red\nfill #b04030\ncasing 0.4 #303030\n
                                   "style grad\ngradient #202020 #707070\nend\n";
 static const char *const fill_names[] = { "red", "grad" };
 
+/* A context whose allocator keeps a guard after every block (tests/
+ * fail_alloc.h), so that a write past a block's end fails these tests in
+ * a plain build too; guarded_free checks the guards. g must outlive the
+ * context, and everything made through it is freed through it. */
+static rs_ctx *guarded_ctx(guard_alloc *g, const rs_limits *lim)
+{
+    g->live = g->broken = 0;
+    rs_allocator al = guard_alloc_hook(g);
+    rs_ctx *c = NULL;
+    return rs_ctx_create(&al, lim, &c) == RS_OK ? c : NULL;
+}
+
+static void guarded_free(rs_ctx *c, guard_alloc *g, const char *what)
+{
+    rs_ctx_free(c);
+    CHECKF(g->broken == 0, "%s: %ld blocks written past their end", what, g->broken);
+}
+
 /* T: the updates as a host gets them (the candidate pixels compared: the
  * changed ones exactly); Tc: the same updates with the comparison off
  * (rs_limits.max_dirty_compare 1), the pieces' candidates alone. */
 static void run_config(const config *cf, tally *T, tally *Tc)
 {
-    rs_ctx *ctx, *cctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard, guard_c;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL), *cctx;
     rs_limits lim;
     memset(&lim, 0, sizeof lim);
     lim.max_dirty_compare = 1;
-    rs_ctx_create(NULL, &lim, &cctx);
+    cctx = guarded_ctx(&guard_c, &lim);
+    CHECK(ctx && cctx);
     sc_scene sc;
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
@@ -357,8 +376,8 @@ static void run_config(const config *cf, tally *T, tally *Tc)
     rs_styles_free(ctx, S);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
-    rs_ctx_free(ctx);
-    rs_ctx_free(cctx);
+    guarded_free(ctx, &guard, cf->name);
+    guarded_free(cctx, &guard_c, cf->name);
 }
 
 /* check_ratio 1: moves, additions, removals within 2.5x; 2: every kind
@@ -1452,6 +1471,7 @@ static void test_long_chain(void)
  * test's own), the grid before and its image (a), the updated grid and its
  * image (b), a fresh build and its image (c). */
 typedef struct one_edit {
+    guard_alloc ga; /* E's context's allocator's (guarded_ctx) */
     rs_ctx *ctx;
     sc_scene sc;
     rs_dem *dem;
@@ -1466,7 +1486,7 @@ typedef struct one_edit {
 static void edit_begin(one_edit *E, size_t n, uint64_t seed)
 {
     memset(E, 0, sizeof *E);
-    E->ok = rs_ctx_create(NULL, NULL, &E->ctx) == RS_OK;
+    E->ok = (E->ctx = guarded_ctx(&E->ga, NULL)) != NULL;
     if (n) E->ok = E->ok && ss_city_of(E->ctx, 241, 201, n, seed, 1, &E->sc, &E->dem, &E->roads) == 0;
 }
 
@@ -1506,7 +1526,7 @@ static void edit_end(one_edit *E)
     rs_roads_free(E->ctx, E->roads);
     rs_dem_free(E->ctx, E->dem);
     sc_scene_free(&E->sc);
-    rs_ctx_free(E->ctx);
+    guarded_free(E->ctx, &E->ga, "one edit");
 }
 
 /* An update's grid g1 against the images before (a), from g1 (b) and
