@@ -450,8 +450,8 @@ static int has_msg(rs_ctx *ctx, const char *what)
 
 static void test_remove(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
     CHECK_EQ_INT(rs_roads_count(R), 3);
@@ -485,7 +485,7 @@ static void test_remove(void)
     CHECK_EQ_INT(rs_roads_mark_count(R), 0);
     CHECK_EQ_INT(rs_roads_point_attr_count(R), 0);
     rs_roads_free(ctx, R);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "remove");
 }
 
 /* The road set keeps each road's print and box as its edits make them
@@ -506,8 +506,8 @@ static int same_print(const rs_roads *a, size_t i, const rs_roads *b, size_t j)
 
 static void test_road_prints(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     const char text[] = "road a width 6 class=residential lanes=2\n0 0\n40 3\n80 -2\nend\n"
                         "road b width 4\n10 -20\n10 30\nend\n";
     rs_roads *P = NULL, *A = NULL, *C = NULL;
@@ -539,13 +539,13 @@ static void test_road_prints(void)
     rs_roads_free(ctx, P);
     rs_roads_free(ctx, A);
     rs_roads_free(ctx, C);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "road_prints");
 }
 
 static void test_replace(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
     const double pts[] = { 0, 5, 30, 5, 60, 10, 90, 5 };
@@ -578,13 +578,13 @@ static void test_replace(void)
     const double bad[] = { 0, 0, NAN, 1 };
     CHECK(rs_roads_replace(ctx, R, 0, NULL, 2, bad, 2) == RS_ERR_INVALID_ARG && has_msg(ctx, "point 1"));
     rs_roads_free(ctx, R);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "replace");
 }
 
 static void test_point_attr(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
     CHECK(rs_roads_set_point_attr(ctx, R, 1, 1, "crossing", "zebra") == RS_OK);
@@ -611,13 +611,13 @@ static void test_point_attr(void)
     CHECK(rs_roads_set_point_attr(ctx, R, 0, 0, NULL, "zebra") == RS_ERR_INVALID_ARG);
     CHECK_EQ_INT(rs_roads_point_attr_count(R), 2);
     rs_roads_free(ctx, R);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "point_attr");
 }
 
 static void test_styles_replace(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_styles *S = NULL;
     static const char text[] = "style red\nfill #ff0000\nend\nstyle blue\nfill #0000ff\nend\n";
     CHECK(rs_styles_parse(ctx, text, sizeof text - 1, &S) == RS_OK);
@@ -638,7 +638,7 @@ static void test_styles_replace(void)
     CHECK(rs_styles_find(S, "green")->casing_width == st.casing_width);
     CHECK(rs_styles_replace(ctx, NULL, &nw) == RS_ERR_INVALID_ARG);
     rs_styles_free(ctx, S);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "styles_replace");
 }
 
 static rs_dem *flat_dem(rs_ctx *ctx, uint32_t w, uint32_t h, double cs)
@@ -657,8 +657,8 @@ static rs_dem *flat_dem(rs_ctx *ctx, uint32_t w, uint32_t h, double cs)
 /* A named style redefined: the roads naming it change, the others not. */
 static void test_style_edit_grid(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_dem *dem = flat_dem(ctx, 41, 31, 2);
     rs_styles *S = NULL;
     static const char text[] = "style red\nfill #ff0000\ncasing 0.5 #202020\nend\n"
@@ -709,13 +709,13 @@ static void test_style_edit_grid(void)
     rs_roads_free(ctx, R);
     rs_styles_free(ctx, S);
     rs_dem_free(ctx, dem);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "style_edit_grid");
 }
 
 static void test_update_errors(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_dem *dem = flat_dem(ctx, 21, 21, 2), *other = flat_dem(ctx, 23, 21, 2);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
@@ -791,7 +791,7 @@ static void test_update_errors(void)
     rs_roads_free(ctx, R);
     rs_dem_free(ctx, dem);
     rs_dem_free(ctx, other);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "update_errors");
 }
 
 typedef struct sweep_in {
@@ -900,8 +900,8 @@ static int cancel_cb(void *user, uint64_t done, uint64_t total)
 
 static void test_update_cancel(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_dem *dem = flat_dem(ctx, 31, 21, 4);
     rs_roads *R = NULL;
     CHECK(rs_roads_parse(ctx, two_roads, sizeof two_roads - 1, &R) == RS_OK);
@@ -932,7 +932,7 @@ static void test_update_cancel(void)
     rs_road_grid_free(ctx, g0);
     rs_roads_free(ctx, R);
     rs_dem_free(ctx, dem);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "update_cancel");
 }
 
 /* Distance from the box [x0, x1] x [y0, y1] to road i's polyline, from
@@ -967,8 +967,8 @@ static const char subset_styles[] = "style red\nfill #b04030\ncasing 0.4 #303030
  * differ, *kept the roads the boxes took. */
 static size_t subset_case(int styled, int use_net, size_t *differ, size_t *kept)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     sc_scene sc;
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
@@ -1043,7 +1043,7 @@ static size_t subset_case(int styled, int use_net, size_t *differ, size_t *kept)
     rs_styles_free(ctx, S);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "subset");
     return pixels;
 }
 
@@ -1072,8 +1072,8 @@ static void test_subset_build(void)
     size_t px = subset_case(1, 0, &differ, &kept);
     printf("  the same roads with a network of their own: %zu of %zu differ\n", differ, px);
     CHECK(differ > 0);
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     /* roads a and c of three: their markings and zebra points follow them */
     rs_roads *R = NULL, *sub = NULL;
     const uint32_t ac[2] = { 0, 2 };
@@ -1093,7 +1093,7 @@ static void test_subset_build(void)
     }
     rs_roads_free(ctx, sub);
     rs_roads_free(ctx, R);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "subset_build");
 }
 
 /* Shared structures between threads (docs/embedding.md "Patches"): a
@@ -1120,8 +1120,8 @@ static void *render_thread(void *arg)
 
 static void test_shared_free(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     sc_scene sc;
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
@@ -1172,7 +1172,7 @@ static void test_shared_free(void)
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "shared_free");
 }
 
 
@@ -1184,8 +1184,8 @@ static void test_shared_free(void)
  * bytes and its rectangles cover every changed pixel. */
 static void test_drag(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     sc_scene sc;
     memset(&sc, 0, sizeof sc);
     rs_dem *dem = NULL;
@@ -1250,7 +1250,7 @@ static void test_drag(void)
     rs_roads_free(ctx, roads);
     rs_dem_free(ctx, dem);
     sc_scene_free(&sc);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "drag");
 }
 
 /* rs_roads_copy: the same roads, names, attributes, markings, point
@@ -1258,8 +1258,8 @@ static void test_drag(void)
  * as it was; NULL is refused. */
 static void test_roads_copy(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
+    guard_alloc guard;
+    rs_ctx *ctx = guarded_ctx(&guard, NULL);
     rs_roads *R = NULL, *C = NULL;
     CHECK_EQ_INT(rs_roads_parse(ctx, two_roads, strlen(two_roads), &R), RS_OK);
     CHECK_EQ_INT(rs_roads_copy(ctx, R, &C), RS_OK);
@@ -1300,7 +1300,7 @@ static void test_roads_copy(void)
     CHECK_EQ_INT(rs_roads_copy(ctx, R, NULL), RS_ERR_INVALID_ARG);
     rs_roads_free(ctx, R);
     rs_roads_free(ctx, C);
-    rs_ctx_free(ctx);
+    guarded_free(ctx, &guard, "roads_copy");
 }
 
 /* A long chain (docs/embedding.md "Long chains"): rs_limits.max_patches
