@@ -17,9 +17,9 @@ rs_allocator fail_alloc_hook(fail_alloc *f);
 rs_allocator count_alloc_hook(size_t *calls);
 
 /* An allocator that keeps 256 bytes of a known pattern after every
- * block and checks them when the block is freed or moved (and at
- * guard_alloc_check): a write past the end of a block shows in a plain
- * build, not only under AddressSanitizer. Blocks are 16-byte aligned. */
+ * block and checks them when the block is freed or moved: a write past
+ * the end of a block shows in a plain build (as `broken`), not only under
+ * AddressSanitizer. Blocks keep malloc's 16-byte alignment. */
 typedef struct guard_alloc {
     long live;   /* blocks allocated and not freed */
     long broken; /* blocks found with their guard overwritten */
