@@ -1717,7 +1717,7 @@ static void test_chunk_room(void)
              rs_dem_set_frame(ctx, dem, &fr) == RS_OK && rs_roads_create(ctx, &roads) == RS_OK;
     /* a road of two legs (about 20 boxes of CHUNK_M, 32 m, along it: a
      * few more than the room's slack of 16, so that the overflow stays
-     * within the allocator's guard) and a zigzag of 2.4 km after it (some
+     * within the allocator's guard) and a zigzag of 2.6 km after it (some
      * 80 boxes) */
     double xy[2][20];
     for (int k = 0; k < 10; k++) xy[0][2 * k] = k % 2 ? 300 : 10, xy[0][2 * k + 1] = 15 + 22 * k + 10;
