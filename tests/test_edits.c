@@ -277,7 +277,9 @@ static const char *const fill_names[] = { "red", "grad" };
 /* A context whose allocator keeps a guard after every block (tests/
  * fail_alloc.h), so that a write past a block's end fails these tests in
  * a plain build too; guarded_free checks the guards. g must outlive the
- * context, and everything made through it is freed through it. */
+ * context. A block may be freed through another guarded context (a
+ * patched grid made on one drops its share of a base made on the other):
+ * the layout is the same, only the live counts move between them. */
 static rs_ctx *guarded_ctx(guard_alloc *g, const rs_limits *lim)
 {
     g->live = g->broken = 0;
