@@ -4,11 +4,7 @@
  * rs_road_grid_rect_has_roads which pixels no road reaches. */
 #ifndef RS_GRID_EDIT_H
 #define RS_GRID_EDIT_H
-#include "internal.h"
-
-#include <string.h>
-
-/* (the fingerprint mixing, rs__fp_*: lib/internal.h) */
+#include "internal.h" /* (the fingerprint mixing, rs__fp_*, with its string.h) */
 
 /* One piece: a chunk of a road (about 10 m of it, or the disc around one
  * of its vertices), a line cut, a marking. Its region holds every pixel
