@@ -8,7 +8,7 @@
  * Usage: index OUTDIR (writes OUTDIR/index.md);
  *        index --one N [REPS [grid|CELL]] (N roads, REPS road-field builds
  *        (index cell CELL m, default automatic), or whole grid builds: for
- *        profilers);
+ *        profilers; INDEX_ALLOC=kept or fresh runs them on that allocator);
  *        index --dump N FILE [CELL] (N roads, index cell CELL m (0: automatic): the road field's stats, whole-image
  *        coverage doubles and a nearest query per 7th pixel into FILE, to
  *        compare two builds byte for byte with cmp).
@@ -204,7 +204,13 @@ static double grid_once(rs_ctx *ctx, const rs_dem *d, const rs_roads *R, const r
 int main(int argc, char **argv)
 {
     rs_ctx *ctx = NULL;
-    if (rs_ctx_create(NULL, NULL, &ctx)) return 1;
+    /* (--one on a chosen allocator: INDEX_ALLOC=kept or fresh, as in the table's columns) */
+    static kept_pool one_pool;
+    const char *one_alloc = getenv("INDEX_ALLOC");
+    rs_allocator kept_a = { kept_malloc, kept_realloc, kept_free, &one_pool };
+    rs_allocator fresh_a = { fresh_malloc, fresh_realloc, fresh_free, NULL };
+    const rs_allocator *one_a = !one_alloc ? NULL : !strcmp(one_alloc, "kept") ? &kept_a : !strcmp(one_alloc, "fresh") ? &fresh_a : NULL;
+    if (rs_ctx_create(argc > 2 && strcmp(argv[1], "--one") == 0 ? one_a : NULL, NULL, &ctx)) return 1;
     if (argc > 2 && strcmp(argv[1], "--one") == 0) {
         sc_scene s;
         if (sc_city(&s, DEM_W, DEM_H, CELL, (size_t)atol(argv[2]), 1)) return 1;
@@ -237,6 +243,7 @@ int main(int argc, char **argv)
         rs_roads_free(ctx, R);
         sc_scene_free(&s);
         rs_ctx_free(ctx);
+        kept_release(&one_pool);
         return 0;
     }
     if (argc > 3 && strcmp(argv[1], "--dump") == 0) {
