@@ -595,6 +595,138 @@ static void test_class_crossing(void)
     free(A.rgba);
 }
 
+/* A side road of one segment (two points) ending on a through road at a
+ * T draws the through road's far half the same whichever way its points
+ * run, and as the through road drawn alone (its far edge line, centre
+ * line). Until 6 December 2026 a two-point side road drawn from the T
+ * outwards cut the through road's far edge line across its mouth (and,
+ * of equal rank, its centre line): the T was looked up at the segment's
+ * end only. Secondary through roads with a secondary and a residential
+ * side road, rural (edge lines). */
+static void test_tee_side_direction(void)
+{
+    static const char alone[] = "road main width 7 class=secondary area=rural\n0 20\n60 20\nend\n";
+    static const char *const side[2] = { "secondary", "residential" };
+    img A;
+    CHECK(render(alone, 61, 41, RS_PROFILE_RMS, 1, 1, &A));
+    for (int k = 0; k < 2 && A.rgba; k++) {
+        char text[2][512];
+        img B[2];
+        for (int dir = 0; dir < 2; dir++) {
+            snprintf(text[dir], sizeof text[dir],
+                     "road main width 7 class=secondary area=rural\n0 20\n60 20\nend\n"
+                     "road side width 8 class=%s area=rural\n%s\nend\n",
+                     side[k], dir ? "30 20\n30 0" : "30 0\n30 20");
+            CHECK(render(text[dir], 61, 41, RS_PROFILE_RMS, 1, 1, &B[dir]));
+        }
+        if (B[0].rgba && B[1].rgba) {
+            /* the far half: y 20 .. 24 m (the side road comes from y < 16.5) */
+            int both = max_diff(&B[0], &B[1], 0, 600, 200, 240), far0 = max_diff(&A, &B[0], 0, 600, 200, 240),
+                far1 = max_diff(&A, &B[1], 0, 600, 200, 240);
+            CHECKF(both == 0, "%s side road: the through road's far half differs by %d/255 between the two directions",
+                   side[k], both);
+            CHECKF(far0 <= 8 && far1 <= 8, "%s side road: the far half differs from the road alone by %d and %d/255",
+                   side[k], far0, far1);
+            printf("T with a one-segment %s side road: far half, the two directions %d/255 apart, from alone %d and %d\n",
+                   side[k], both, far0, far1);
+        }
+        free(B[0].rgba);
+        free(B[1].rgba);
+    }
+    free(A.rgba);
+}
+
+/* A ring (one closed record, a 24-gon of 18 m radius round (30, 30) m)
+ * draws its edge lines across its seam (its first point) as across any
+ * other vertex: the lines near the seam equal those near the vertex a
+ * quarter turn on, turned back (the ring is symmetric under it, up to the
+ * road file's millimetres). Until 6 December 2026 both ends stopped
+ * square at the seam and the outer edge line had a 0.9 m gap there. The
+ * same ring in three records (an OSM roundabout is often split) too. */
+static void test_ring_seam(void)
+{
+    char text[4096];
+    for (int split = 0; split < 2; split++) {
+        size_t at = 0;
+        int nrec = split ? 3 : 1, per = 24 / nrec;
+        for (int q = 0; q < nrec; q++) {
+            at += (size_t)snprintf(text + at, sizeof text - at, "road r%d width 7 class=secondary area=rural\n", q);
+            for (int k = q * per; k <= (q + 1) * per; k++) {
+                double a = 2 * 3.14159265358979323846 * (k % 24) / 24;
+                at += (size_t)snprintf(text + at, sizeof text - at, "%.4f %.4f\n", 30 + 18 * cos(a), 30 + 18 * sin(a));
+            }
+            at += (size_t)snprintf(text + at, sizeof text - at, "end\n");
+        }
+        double *al = NULL;
+        uint32_t w = 0, h = 0;
+        CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
+        if (!al || w != 600 || h != 600) {
+            free(al);
+            continue;
+        }
+        /* the edge lines (more than 2 m off the ring's centre line) within
+         * 5 m of the seam (48, 30) m, against the quarter turn: pixel (x, y)
+         * goes to (599 - y, x) */
+        double worst = 0, painted = 0;
+        for (uint32_t y = 250; y < 350; y++)
+            for (uint32_t x = 430; x < 530; x++) {
+                double dx = (x + 0.5) / 10 - 30, dy = (y + 0.5) / 10 - 30;
+                if (fabs(hypot(dx, dy) - 18) < 2) continue;
+                double a = al[(size_t)y * w + x], b = al[(size_t)x * w + (599 - y)];
+                painted += a;
+                if (fabs(a - b) > worst) worst = fabs(a - b);
+            }
+        CHECKF(painted > 50, "ring %d: the edge lines near the seam paint %.1f pixels", split, painted);
+        CHECKF(worst <= 0.05, "ring %d: the edge lines at the seam differ by %.3f from a quarter turn on", split, worst);
+        printf("ring seam (%s): edge lines %.1f pixels near the seam, max %.3f from the quarter turn\n",
+               split ? "three records" : "one record", painted, worst);
+        free(al);
+    }
+}
+
+/* A roundabout drawn as one closed way with a side road at its first point
+ * (OSM's roundabouts often start where an arm joins): the way is still a
+ * ring (a closed stroke: its own two ends pair at the junction), the side
+ * road ends on it at a T, and the ring's lines are those of the same ring
+ * whose first point lies three vertices on (no automatic markings: the
+ * give-way line is not the point here). Until 6 December 2026 a record's
+ * own ends paired only at a node of two legs: with the arm there the ring
+ * had free ends at its first point, the arm was no T, and the ring's far
+ * (inner) edge line was cut across the mouth. */
+static void test_ring_arm_at_seam(void)
+{
+    char text[2][4096];
+    for (int v = 0; v < 2; v++) {
+        size_t at = (size_t)snprintf(text[v], sizeof text[v],
+                                     "road ring width 7 class=secondary junction=roundabout oneway=yes lanes=1\n");
+        for (int k = 0; k <= 24; k++) {
+            double a = 2 * 3.14159265358979323846 * ((k + 3 * v) % 24) / 24;
+            at += (size_t)snprintf(text[v] + at, sizeof text[v] - at, "%.4f %.4f\n", 30 + 18 * cos(a), 30 + 18 * sin(a));
+        }
+        snprintf(text[v] + at, sizeof text[v] - at, "end\nroad east width 7 class=secondary lanes=2\n48 30\n60 30\nend\n");
+    }
+    rs_roads *R = NULL;
+    rs_network *N = NULL;
+    rs_road_stroke st;
+    memset(&st, 0, sizeof st);
+    CHECK(rs_roads_parse(ctx, text[0], strlen(text[0]), &R) == RS_OK && rs_network_build(ctx, R, NULL, &N) == RS_OK &&
+          rs_network_road_stroke(N, 0, &st) == RS_OK);
+    CHECKF(st.closed == 1, "the ring with an arm at its first point: closed %d", st.closed);
+    rs_network_free(ctx, N);
+    rs_roads_free(ctx, R);
+    img A, B;
+    CHECK(render(text[0], 61, 61, RS_PROFILE_RMS, 1, 1, &A));
+    CHECK(render(text[1], 61, 61, RS_PROFILE_RMS, 1, 1, &B));
+    if (A.rgba && B.rgba) {
+        int worst = max_diff(&A, &B, 0, A.w, 0, A.h);
+        CHECKF(worst <= 8, "the ring with the arm at its first point differs by %d/255 from the ring started elsewhere", worst);
+        printf("ring with an arm at its first point: closed %d, %d/255 from the ring started three vertices on\n",
+               st.closed, worst);
+    }
+    free(A.rgba);
+    free(B.rgba);
+}
+
 /* One `turn:lanes` list mirrored: lanes in the other order, left <-> right. */
 static void mirror_turns(const char *in, char *out, size_t cap)
 {
@@ -915,6 +1047,9 @@ int main(void)
     test_lanes_change();
     test_footway_crossing();
     test_class_crossing();
+    test_ring_seam();
+    test_tee_side_direction();
+    test_ring_arm_at_seam();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
 #ifdef RS_LANES_MAX

@@ -729,6 +729,7 @@ typedef struct ls_surf {
     uint32_t road;
     uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
     uint32_t only2, skip2; /* and a second one (a through road of two strokes, rs__network_tees) */
+    uint32_t skip3, skip4; /* the same for a one-segment record's other end at a T (junc_build) */
     int clip;             /* 1: only its part with cx x + cy y <= cc (a trimmed end at a T,
                              docs/network.md "Ends at a T": the surface stops at the far edge line) */
     double cx, cy, cc;
@@ -1053,7 +1054,8 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                     const ls_surf *Q = &J->sf[k];
                     uint32_t sr = J->stroke_of ? J->stroke_of[road] : road;
                     if (Q->road == road || (J->stroke_of && J->stroke_of[Q->road] == sr) ||
-                        (Q->only != NO_STROKE && Q->only != sr && Q->only2 != sr) || Q->skip == sr || Q->skip2 == sr)
+                        (Q->only != NO_STROKE && Q->only != sr && Q->only2 != sr) || Q->skip == sr || Q->skip2 == sr ||
+                        Q->skip3 == sr || Q->skip4 == sr)
                         continue;
                     /* a path, footway or cycleway crossing or meeting a car
                      * road cuts none of its lines (issue 27: the road's lines
@@ -1112,11 +1114,16 @@ static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_pie
 
 /* Pieces of one band along one road or stroke. pts: n distinct
  * consecutive local points, s: arc length at each, seg_road: the record
- * of each segment (for the junction cuts). */
+ * of each segment (for the junction cuts). closed: the polyline is a
+ * ring (pts[n - 1] == pts[0]): its first and last segments meet at the
+ * seam as any two segments meet at a vertex (bisectors, a round join),
+ * where until 6 December 2026 both ended square and left a wedge out of
+ * the outer lines (0.9 m of a roundabout's edge line). */
 static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const uint32_t *seg_road,
                                   const ls_vtx *pts, const double *s, size_t n, const rs__band *bd, uint32_t band,
-                                  double wmap, double hmap)
+                                  double wmap, double hmap, int closed)
 {
+    closed = closed && n >= 4 && pts[0].x == pts[n - 1].x && pts[0].y == pts[n - 1].y;
     double a = bd->t - 0.5 * bd->w, b = bd->t + 0.5 * bd->w, ext = rs__fmax(fabs(a), fabs(b)) + L->margin;
     const ls_band *B = &L->band[band];
     for (size_t i = 0; i + 1 < n; i++) {
@@ -1154,16 +1161,18 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
          * on the outer): that one cuts nothing and is left out. */
         double bm[2][2];
         int has_bis[2] = { 0, 0 };
-        if (i > 0) { /* bisector with the previous segment: m.(p - A) >= 0 */
-            double pdx = 0.5 * pts[i].x - 0.5 * pts[i - 1].x, pdy = 0.5 * pts[i].y - 0.5 * pts[i - 1].y, pl = hypot(pdx, pdy);
+        if (i > 0 || closed) { /* bisector with the previous segment: m.(p - A) >= 0 */
+            size_t ip = i > 0 ? i - 1 : n - 2, ia = i > 0 ? i : n - 1; /* (a ring's first: its last) */
+            double pdx = 0.5 * pts[ia].x - 0.5 * pts[ip].x, pdy = 0.5 * pts[ia].y - 0.5 * pts[ip].y, pl = hypot(pdx, pdy);
             double mx = pdx / pl + ux, my = pdy / pl + uy, ml = hypot(mx, my);
             if (ml > 1e-9) {
                 in_frame(mx / ml, my / ml, ux, uy, &bm[0][0], &bm[0][1]);
                 has_bis[0] = 1;
             }
         }
-        if (i + 2 < n) { /* with the next: m.(p - B) <= 0 */
-            double ndx = 0.5 * pts[i + 2].x - 0.5 * pts[i + 1].x, ndy = 0.5 * pts[i + 2].y - 0.5 * pts[i + 1].y,
+        if (i + 2 < n || closed) { /* with the next: m.(p - B) <= 0 */
+            size_t ib = i + 2 < n ? i + 1 : 0, in = i + 2 < n ? i + 2 : 1; /* (a ring's last: its first) */
+            double ndx = 0.5 * pts[in].x - 0.5 * pts[ib].x, ndy = 0.5 * pts[in].y - 0.5 * pts[ib].y,
                    nl = hypot(ndx, ndy);
             double mx = ndx / nl + ux, my = ndy / nl + uy, ml = hypot(mx, my);
             if (ml > 1e-9) {
@@ -1214,10 +1223,12 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
         if (r) return r;
     }
-    /* Round joins: the outer side of each interior vertex. */
-    for (size_t i = 1; i + 1 < n; i++) {
+    /* Round joins: the outer side of each interior vertex (a ring's seam
+     * too, last: vertex n - 1, between segments n - 2 and 0). */
+    for (size_t i = 1; i + 1 < n || (closed && i + 1 == n); i++) {
+        size_t in = i + 1 < n ? i + 1 : 1; /* (the seam's next: the ring's second point) */
         double pdx = 0.5 * pts[i].x - 0.5 * pts[i - 1].x, pdy = 0.5 * pts[i].y - 0.5 * pts[i - 1].y, pl = hypot(pdx, pdy);
-        double ndx = 0.5 * pts[i + 1].x - 0.5 * pts[i].x, ndy = 0.5 * pts[i + 1].y - 0.5 * pts[i].y, nl = hypot(ndx, ndy);
+        double ndx = 0.5 * pts[in].x - 0.5 * pts[i].x, ndy = 0.5 * pts[in].y - 0.5 * pts[i].y, nl = hypot(ndx, ndy);
         double px = pdx / pl, py = pdy / pl, nx = ndx / nl, ny = ndy / nl;
         /* turn: next direction against the previous left normal (py, -px) */
         double turn = nx * py - ny * px;
@@ -1225,7 +1236,8 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         double out = turn > 0 ? -1.0 : 1.0; /* left turn: outer side is the right (t < 0) */
         double r0 = out > 0 ? rs__fmax(a, 0) : rs__fmax(-b, 0), r1 = out > 0 ? b : -a;
         if (!(r1 > r0)) continue;
-        if (B->ndash && !dash_on(L, B, s[i])) continue;
+        /* (the seam: where the pattern is on at the ring's end and again at its start) */
+        if (B->ndash && !(dash_on(L, B, s[i]) && (i + 1 < n || dash_on(L, B, s[0])))) continue;
         double vx = pts[i].x, vy = pts[i].y;
         if (vx < -r1 - L->margin || vx > wmap + r1 + L->margin || vy < -r1 - L->margin || vy > hmap + r1 + L->margin)
             continue;
@@ -1264,7 +1276,7 @@ static rs_result road_band_pieces(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const
         double pp = L->pixel * L->pixel; /* 0 only for a subnormal pixel: no shortcut then */
         P.warea = pp > 0 ? 0.5 * atan2(fabs(turn), px * nx + py * ny) * (r1 * r1 - r0 * r0) / pp : 0;
         piece_box(L, &P, 0, 0, 0);
-        rs_result r = push_trim(ctx, L, J, &P, seg_road[i]);
+        rs_result r = push_trim(ctx, L, J, &P, seg_road[i + 1 < n ? i : 0]);
         if (r) return r;
     }
     return RS_OK;
@@ -1772,7 +1784,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.u0 = -hw;
             Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
-            Q.only = Q.skip = Q.only2 = Q.skip2 = NO_STROKE;
+            Q.only = Q.skip = Q.only2 = Q.skip2 = Q.skip3 = Q.skip4 = NO_STROKE;
             Q.clip = Q.clip2 = 0;
             Q.cx = Q.cy = Q.cc = Q.cx2 = Q.cy2 = Q.cc2 = 0;
             /* a trimmed end at a T: the rectangle reaches as far as the
@@ -1803,27 +1815,35 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 Q.cx = te->nx, Q.cy = te->ny, Q.cc = te->nx * ex + te->ny * ey + te->far;
             }
             /* an end segment at a T: the through stroke gets a copy that
-             * stops `keep` short of its centre line (no extension) */
+             * stops `keep` short of its centre line (no extension); a
+             * record of one segment may have a T at either end or both
+             * (until 6 December 2026 only its end's was looked up, so a
+             * two-point side road drawn from the T cut the through road's
+             * far lines across its mouth) */
             int at_end = i + 2 == m && hi == len, at_start = i == 0 && lo == 0;
-            const ls_tee *T = tees ? &tees[2 * ri + (at_end ? 1 : 0)] : NULL;
-            ls_surf Qt = Q;
+            ls_surf Qt[2];
             int tee = 0;
-            if (T && (at_end || at_start) && T->stroke != NO_STROKE) {
+            for (int e = 1; tees && e >= 0; e--) { /* (the end's first: the order until then) */
+                const ls_tee *T = &tees[2 * ri + (size_t)e];
+                if (!(e ? at_end : at_start) || T->stroke == NO_STROKE) continue;
                 double sn = fabs(Q.ux * T->dy - Q.uy * T->dx); /* sine of the angle between the roads */
-                if (sn > 0.2) {
-                    /* the copy keeps to the side road's side of the line
-                     * `keep` from the through road's centre line, parallel
-                     * to it (docs/network.md "The through road at a T"):
-                     * until 3 December 2026 it stopped (keep + off) / sine
-                     * back along the side road, square to it, so at an
-                     * oblique T its acute corner cut the centre line */
-                    double wx = at_end ? -Q.ux : Q.ux, wy = at_end ? -Q.uy : Q.uy; /* the side road, from the node */
-                    double ex = at_end ? v[m - 1].x : v[0].x, ey = at_end ? v[m - 1].y : v[0].y;
-                    tee_keep_lines(T, wx, wy, ex, ey, &Qt);
-                    Qt.only = Q.skip = T->stroke;
-                    Qt.only2 = Q.skip2 = T->stroke2;
-                    tee = 1;
-                }
+                if (!(sn > 0.2)) continue;
+                /* the copy keeps to the side road's side of the line
+                 * `keep` from the through road's centre line, parallel
+                 * to it (docs/network.md "The through road at a T"):
+                 * until 3 December 2026 it stopped (keep + off) / sine
+                 * back along the side road, square to it, so at an
+                 * oblique T its acute corner cut the centre line */
+                double wx = e ? -Q.ux : Q.ux, wy = e ? -Q.uy : Q.uy; /* the side road, from the node */
+                double ex = e ? v[m - 1].x : v[0].x, ey = e ? v[m - 1].y : v[0].y;
+                Qt[tee] = Q;
+                Qt[tee].skip = Qt[tee].skip2 = Qt[tee].skip3 = Qt[tee].skip4 = NO_STROKE;
+                tee_keep_lines(T, wx, wy, ex, ey, &Qt[tee]);
+                Qt[tee].only = T->stroke;
+                Qt[tee].only2 = T->stroke2;
+                if (tee == 0) Q.skip = T->stroke, Q.skip2 = T->stroke2;
+                else Q.skip3 = T->stroke, Q.skip4 = T->stroke2;
+                tee++;
             }
             for (int c = 0; c <= tee; c++) {
                 void *arr = J->sf;
@@ -1835,7 +1855,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                     return g;
                 }
                 J->sf = arr;
-                J->sf[J->nsf++] = c ? Qt : Q;
+                J->sf[J->nsf++] = c ? Qt[c - 1] : Q;
             }
         }
     }
@@ -2137,13 +2157,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                 }
             }
             if (m < 2) continue;
+            /* a ring drawn as one run: its seam joins (road_band_pieces) */
+            const int ring = net && net->closed && net->closed[k] && !alone && nrun == 1;
             for (size_t u = 0; u < nrun; u++) {
                 size_t i0 = runs[u].at, i1 = u + 1 < nrun ? runs[u + 1].at : m - 1;
                 uint32_t first = runs[u].rec;
                 if (i1 <= i0) continue;
                 for (uint32_t b = band_start[first]; b < band_start[first + 1]; b++)
                     if ((res = road_band_pieces(ctx, L, &J, sr + i0, pts + i0, sv + i0, i1 - i0 + 1, &bands[b], b, wmap,
-                                                hmap)) != RS_OK)
+                                                hmap, ring)) != RS_OK)
                         goto fail;
             }
         }
