@@ -1753,6 +1753,52 @@ static void test_chunk_room(void)
     CHECK_EQ_INT(ga.live, 0);
 }
 
+/* A large ring of six records (a ring road, a roundabout split in OSM)
+ * with a short road near its seam moved: the local build takes only the
+ * ring's nearby records unless it takes the ring whole, and its lines join
+ * at the seam only when the whole ring is there (a ring's seam draws as
+ * any vertex since 6 December 2026: tests/test_lanes.c test_ring_seam).
+ * The updated grid must draw as a fresh build. */
+static void test_ring_edit(void)
+{
+    one_edit E;
+    edit_begin(&E, 0, 0);
+    static float z[81 * 81];
+    rs_dem_frame fr = { 5, 0.01, 0, 0 };
+    E.ok = E.ok && rs_dem_create(E.ctx, 81, 81, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
+           rs_roads_create(E.ctx, &E.roads) == RS_OK;
+    /* a 24-gon of 130 m round (200, 200), records of four segments from the seam at (330, 200) */
+    for (int q = 0; q < 6 && E.ok; q++) {
+        double xy[10];
+        for (int k = 0; k < 5; k++) {
+            double a = 2 * 3.14159265358979323846 * ((q * 4 + k) % 24) / 24;
+            xy[2 * k] = 200 + 130 * cos(a), xy[2 * k + 1] = 200 + 130 * sin(a);
+        }
+        E.ok = rs_roads_add(E.ctx, E.roads, NULL, 7, xy, 5) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, (size_t)q, "class", "secondary") == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, (size_t)q, "area", "rural") == RS_OK;
+    }
+    const double side[4] = { 340, 212, 372, 218 };
+    E.ok = E.ok && rs_roads_add(E.ctx, E.roads, NULL, 5, side, 2) == RS_OK &&
+           rs_roads_set_attr(E.ctx, E.roads, 6, "class", "residential") == RS_OK;
+    edit_base(&E, 5); /* (1 m pixels) */
+    E.ok = E.ok && move_road(E.ctx, E.roads, 6, 0, 3) == 0;
+    edit_update(&E, "ring edit");
+    if (E.ok) {
+        check_rects("ring edit", E.g1, &E.a, &E.b, &E.c);
+        /* the seam's outer edge line, (333.4, 200) m, is drawn by the
+         * update's patch (the case the test is for), and the ring's far
+         * side, 260 m away, lies outside the local build's reach */
+        size_t in = 0;
+        for (size_t k = 0; k < E.g1->npatch; k++) {
+            const rs_pixel_rect *P = &E.g1->patch[k].rect;
+            in += P->x0 <= 333 && P->x1 > 333 && P->y0 <= 200 && P->y1 > 200;
+        }
+        CHECKF(in == 1, "ring edit: the seam lies in %zu of %zu patch rectangles", in, E.g1->npatch);
+    }
+    edit_end(&E);
+}
+
 /* A road given a second time (the same points, width and attributes):
  * its pieces have the same fingerprints, but its lines are painted twice,
  * so their partly covered pixels change; the dirty rectangles hold them
@@ -2059,6 +2105,7 @@ int main(void)
     test_two_places();
     test_long_road();
     test_chunk_room();
+    test_ring_edit();
     test_duplicate_road();
     test_removed_tee_strip();
     test_far_strip_clipped();

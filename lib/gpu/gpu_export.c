@@ -644,6 +644,21 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
         double pad = 2 * (hw + sty->casing_width + lines_reach + g->reach) + g->cell;
         size_t seg0 = g->nseg;
         r = road_segments(ctx, g, &rl, i, hw, sty->casing_width, pad, &segcap);
+        /* a ring of one record (its stroke closed, its last point its
+         * first): its lines do not end at its seam, as the CPU's line
+         * symbols join it there (lib/scene/linesym.c road_band_pieces);
+         * the shader's nearest segment of the road then joins it as at any
+         * vertex (round outside, mitred inside). Rings of several records
+         * keep their square ends at the seam and at their joints here. */
+        if (!r && net && rs_network_road_count(net) == n && rl.n >= 4 && rl.x[0] == rl.x[rl.n - 1] &&
+            rl.y[0] == rl.y[rl.n - 1]) {
+            rs_road_stroke q;
+            if (rs_network_road_stroke(net, i, &q) == RS_OK && q.closed && rs_network_stroke_roads(net, q.stroke, NULL, 0) == 1)
+                for (size_t k = seg0; k < g->nseg; k++) {
+                    float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
+                    sg[7] = (float)((uint32_t)sg[7] & ~(RS_GPU_SEG_FIRST | RS_GPU_SEG_LAST));
+                }
+        }
         /* a segment reaching past a trimmed end's line is clipped by it (the road field's rule) */
         for (size_t k = seg0; !r && k < g->nseg; k++)
             for (int e = 0; e < 2; e++) {

@@ -1520,10 +1520,12 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
                 if (!in[j]) in[j] = (uint8_t)road_near(roads, j, bn + 4 * j, bx, ctx_d);
         }
         /* a stroke drawn both ways may be drawn record by record, which
-         * its records decide together: such a stroke is taken whole */
+         * its records decide together, and a ring's lines join at its seam
+         * only when it is kept whole (rs__network_subset; the line symbols'
+         * road_band_pieces): such a stroke is taken whole */
         for (size_t k = 0; net && k < net->nstrokes; k++) {
             uint32_t a = net->stroke_start[k], b = net->stroke_start[k + 1];
-            int mixed = 0, any = 0;
+            int mixed = net->closed && net->closed[k] && b - a > 1, any = 0;
             for (uint32_t e = a; e < b; e++) {
                 mixed |= net->rev[net->stroke_roads[e]] != net->rev[net->stroke_roads[a]];
                 any |= in[net->stroke_roads[e]];

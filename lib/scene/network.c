@@ -1090,19 +1090,24 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
         }
         return;
     }
-    /* a junction: pairs that deflect little, taken when neither end has another */
+    /* a junction: pairs that deflect little, taken when neither end has
+     * another; a record's own two ends too (a ring drawn as one closed way
+     * with a side road at its first point: until 6 December 2026 it was no
+     * ring there, its ends free, so the side road was no T and cut the
+     * ring's far edge line, and its lines ended square at the seam) */
     for (uint32_t a = 0; a < d; a++) {
         if (!rs__is_end_leg(&L[a])) continue;
         uint32_t match = NONE, count = 0;
         for (uint32_t b = 0; b < d; b++)
             if (b != a && rs__is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
-                ends_fit(B, &L[a], &L[b]))
+                (L[a].road == L[b].road ? L[a].kind != L[b].kind : ends_fit(B, &L[a], &L[b])))
                 match = b, count++;
         if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
         uint32_t back = 0;
         for (uint32_t c = 0; c < d; c++)
             if (c != match && rs__is_end_leg(&L[c]) &&
-                fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION && ends_fit(B, &L[c], &L[match]))
+                fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION &&
+                (L[c].road == L[match].road ? L[c].kind != L[match].kind : ends_fit(B, &L[c], &L[match])))
                 back++;
         if (back != 1) continue;
         uint32_t ea = rs__leg_end(&L[a]), eb = rs__leg_end(&L[match]);

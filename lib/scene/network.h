@@ -147,10 +147,15 @@ static inline uint32_t rs__leg_end(const rs_network_leg *L)
 }
 
 /* Leg L's street passes through its node: the road goes through it, or
- * the road ends there and its stroke goes on. */
+ * the road ends there and its stroke goes on, or it is at a ring's seam
+ * (the only record ends of a closed stroke without a link: number_strokes
+ * opens the ring there, but the street goes on through it; until 6
+ * December 2026 a side road ending on a roundabout's first point was no T,
+ * and its surface cut the ring's far edge line). */
 static inline int rs__leg_passes(const rs_network *net, const rs_network_leg *L)
 {
-    return !rs__is_end_leg(L) || net->link[rs__leg_end(L)] != UINT32_MAX;
+    return !rs__is_end_leg(L) || net->link[rs__leg_end(L)] != UINT32_MAX ||
+           (net->closed && net->closed[net->stroke_of[L->road]]);
 }
 
 #endif
