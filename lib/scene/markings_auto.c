@@ -233,6 +233,27 @@ static int dir_at(const rs__road_local *r, double s, double *dx, double *dy)
     double ex = r->x[best + 1] - r->x[best], ey = r->y[best + 1] - r->y[best], l = hypot(ex, ey);
     if (!(l > 0)) return 0;
     *dx = ex / l, *dy = ey / l;
+    /* at a vertex the street's direction there: the mean of the two
+     * segments' (a closed record's first point: its last segment and its
+     * first), not the first segment found, which gave an arm at a
+     * roundabout's first point its give-way line 0.5 m nearer the ring
+     * than an arm at another vertex (until 6 December 2026) */
+    size_t nx = SIZE_MAX;
+    int closed = r->n > 3 && r->x[0] == r->x[r->n - 1] && r->y[0] == r->y[r->n - 1];
+    if (s == r->s[best + 1])
+        for (size_t k = best + 1; k + 1 < r->n && nx == SIZE_MAX; k++)
+            if (r->s[k + 1] > r->s[k]) nx = k;
+    if (s == r->s[best] && best == 0 && closed)
+        for (size_t k = r->n - 1; k-- > 0 && nx == SIZE_MAX;)
+            if (r->s[k + 1] > r->s[k]) nx = k;
+    if (nx == SIZE_MAX && s == r->s[best + 1] && best + 2 == r->n && closed)
+        for (size_t k = 0; k + 1 < r->n && nx == SIZE_MAX; k++)
+            if (r->s[k + 1] > r->s[k]) nx = k;
+    if (nx != SIZE_MAX && nx != best) {
+        double fx = r->x[nx + 1] - r->x[nx], fy = r->y[nx + 1] - r->y[nx], fl = hypot(fx, fy);
+        double mx = *dx + fx / fl, my = *dy + fy / fl, ml = hypot(mx, my);
+        if (fl > 0 && ml > 1e-9) *dx = mx / ml, *dy = my / ml;
+    }
     return 1;
 }
 
