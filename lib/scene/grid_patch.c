@@ -94,15 +94,8 @@ static void boxes_room(boxes *B, size_t more)
 
 static void boxes_add(boxes *B, const double *b, double grow)
 {
-    if (B->n == B->cap) {
-        size_t nc = B->cap ? 2 * B->cap : 16;
-        double *v = B->nomem ? NULL : rs__realloc(B->ctx, B->v, nc * 4 * sizeof *v);
-        if (!v) {
-            B->nomem = 1;
-            return;
-        }
-        B->v = v, B->cap = nc;
-    }
+    boxes_room(B, 1);
+    if (B->n == B->cap) return; /* (B->nomem) */
     double *d = B->v + 4 * B->n++;
     d[0] = b[0] - grow, d[1] = b[1] - grow, d[2] = b[2] + grow, d[3] = b[3] + grow;
 }
@@ -1525,12 +1518,12 @@ rs_result rs__grid_update_patched(rs_ctx *ctx, const rs_dem *dem, const rs_roads
          * road_band_pieces): such a stroke is taken whole */
         for (size_t k = 0; net && k < net->nstrokes; k++) {
             uint32_t a = net->stroke_start[k], b = net->stroke_start[k + 1];
-            int mixed = net->closed && net->closed[k] && b - a > 1, any = 0;
+            int whole = net->closed && net->closed[k] && b - a > 1, any = 0; /* (a ring, or mixed below) */
             for (uint32_t e = a; e < b; e++) {
-                mixed |= net->rev[net->stroke_roads[e]] != net->rev[net->stroke_roads[a]];
+                whole |= net->rev[net->stroke_roads[e]] != net->rev[net->stroke_roads[a]];
                 any |= in[net->stroke_roads[e]];
             }
-            if (mixed && any)
+            if (whole && any)
                 for (uint32_t e = a; e < b; e++) in[net->stroke_roads[e]] = 1;
         }
         for (size_t j = 0; j < nn; j++)
