@@ -238,16 +238,16 @@ static int dir_at(const rs__road_local *r, double s, double *dx, double *dy)
      * first), not the first segment found, which gave an arm at a
      * roundabout's first point its give-way line 0.5 m nearer the ring
      * than an arm at another vertex (until 6 December 2026) */
-    size_t nx = SIZE_MAX;
-    int closed = r->n > 3 && r->x[0] == r->x[r->n - 1] && r->y[0] == r->y[r->n - 1];
-    if (s == r->s[best + 1])
-        for (size_t k = best + 1; k + 1 < r->n && nx == SIZE_MAX; k++)
+    size_t nx = SIZE_MAX, m = r->n - 1; /* the other segment there; m segments */
+    int closed = r->n > 3 && r->x[0] == r->x[m] && r->y[0] == r->y[m];
+    if (s == r->s[best + 1]) /* at its end: the next one (past a closed record's last, its first) */
+        for (size_t q = 1; q < m && nx == SIZE_MAX; q++) {
+            size_t k = best + q < m ? best + q : closed && best + 1 == m ? best + q - m : SIZE_MAX;
+            if (k == SIZE_MAX) break;
             if (r->s[k + 1] > r->s[k]) nx = k;
-    if (s == r->s[best] && best == 0 && closed)
-        for (size_t k = r->n - 1; k-- > 0 && nx == SIZE_MAX;)
-            if (r->s[k + 1] > r->s[k]) nx = k;
-    if (nx == SIZE_MAX && s == r->s[best + 1] && best + 2 == r->n && closed)
-        for (size_t k = 0; k + 1 < r->n && nx == SIZE_MAX; k++)
+        }
+    else if (s == r->s[best] && best == 0 && closed) /* at the record's first point: its last one */
+        for (size_t k = m; k-- > 1 && nx == SIZE_MAX;)
             if (r->s[k + 1] > r->s[k]) nx = k;
     if (nx != SIZE_MAX && nx != best) {
         double fx = r->x[nx + 1] - r->x[nx], fy = r->y[nx + 1] - r->y[nx], fl = hypot(fx, fy);
