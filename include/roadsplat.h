@@ -1317,7 +1317,8 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   points last to first, its t and markings mirrored to match), road
  *   index, flags (RS_GPU_SEG_FIRST: the road's first segment, its start is
  *   a flat road end; RS_GPU_SEG_LAST: its last; RS_GPU_SEG_CLIP: it reaches past
- *   a line of its road's trimmed ends at a T, which clip it); the road's casing width,
+ *   a line of its road's trimmed ends at a T, which clip it; RS_GPU_SEG_JOIN_FIRST,
+ *   RS_GPU_SEG_JOIN_LAST: that end is a joint, below); the road's casing width,
  *   the segment's length and unit direction (1, 0 for length 0), so a
  *   shader needs neither a division nor a second lookup. A road of one
  *   point is one segment of length 0. Ascending segment index = ascending
@@ -1354,7 +1355,20 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   (0, 0, 0: a round cap, also where every capsule of the road, casing
  *   included, stays short of the line, as in the CPU splat), and how far
  *   such a strip reaches beyond the
- *   road's capsule (the index lists the road that much further), 0.
+ *   road's capsule (the index lists the road that much further), the
+ *   index of the road's first segment (the segments of the roads before
+ *   it; exact below 2^24 segments).
+ * - joints: where the CPU draws two records of a stroke as one line (their
+ *   lines alike, docs/linesym.md), the first record's LAST segment gets
+ *   RS_GPU_SEG_JOIN_LAST and the next one's FIRST segment
+ *   RS_GPU_SEG_JOIN_FIRST; each is the other's continuing road (road floats
+ *   5, 6), and the partner's segment there is its last (the next road's
+ *   first segment index - 1) or its first. Their lines do not end there:
+ *   each record paints the side of the joint's bisector it lies on
+ *   (normal: the sum of the two segments' directions, through the shared
+ *   point), beyond its end as around a vertex (t the distance to the
+ *   point), as the CPU mitres and round-joins a bend. Not set from 2^24
+ *   segments on, where the lines then end square at the joint.
  * - band: RS_GPU_BAND_FLOATS per line of a style (paint order): offset T,
  *   width W, phase, period (0: solid); r, g, b (0..255), a (0..1); dash
  *   count, 0, 0, 0; dash[0..7] (on, off, ... metres).
@@ -1382,6 +1396,8 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
 #define RS_GPU_SEG_FIRST 1u
 #define RS_GPU_SEG_LAST 2u
 #define RS_GPU_SEG_CLIP 4u /* clipped by its road's trimmed T end lines (road floats 32..37) */
+#define RS_GPU_SEG_JOIN_FIRST 8u /* its FIRST end joins the road continuing it: see "joints" above */
+#define RS_GPU_SEG_JOIN_LAST 16u /* its LAST end joins the road continuing it */
 #define RS_GPU_ROAD_FLOATS 40
 #define RS_GPU_BAND_FLOATS 20
 #define RS_GPU_MARK_FLOATS 12

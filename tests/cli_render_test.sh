@@ -149,6 +149,18 @@ check "shader: crossings of different classes equal the CPU splat (max <= 8/255)
 # whole picture matches (mean <= 1/255, p99 <= 8/255)
 check "shader: a roundabout's inner edge line at its arms equals the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$EX/junction-dem.pgm' '$EX/network_ring.txt' '$T/rc.png' && '$BIN' render $N --quiet --ortho --lighting off '$EX/junction-dem.pgm' '$EX/network_ring.txt' '$T/rs.png' && python3 '$DIFF' '$T/rs.png' '$T/rc.png' 400,448,240,400 | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }' && python3 '$DIFF' '$T/rs.png' '$T/rc.png' 192,240,240,400 | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
 check "shader: a roundabout drawn as one closed way equals the CPU splat" xcheck ring "$T/rs.png" "$T/rc.png"
+# joints (RS_GPU_SEG_JOIN_*): a street split into two records at a 20-degree
+# bend (the second record's points once each way; the free ends off the map)
+# and the roundabout above in three records; the shader mitres and
+# round-joins the lines there as the CPU does (each record ended them square until 6 December 2026: 181/255 at
+# the bend, 184/255 at the ring's joints)
+printf '%s\n' 'road a width 7 class=secondary' '-10 40' '40 40' 'end' 'road a width 7 class=secondary' '40 40' '90 21.8' 'end' \
+    'road b width 7 class=secondary' '-10 60' '40 60' 'end' 'road b width 7 class=secondary' '90 78.2' '40 60' 'end' > "$T/bend.txt"
+awk '/^road ring/ { f = 1; next } f && /^end/ { exit } f { p[++n] = $0 } END { split("1 9 17 " n, b, " "); for (k = 1; k <= 3; k++) { print "road ring width 7 class=secondary junction=roundabout oneway=yes lanes=1"; for (i = b[k]; i <= b[k + 1]; i++) print p[i]; print "end" } }' "$EX/network_ring.txt" > "$T/ring3.txt"
+N="--cell-size 2 --z-scale 0.01 --texels 20"
+for JT in bend ring3; do
+    check "shader: the lines through the joints of $JT equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$EX/junction-dem.pgm' '$T/$JT.txt' '$T/${JT}c.png' && '$BIN' render $N --quiet --ortho --lighting off '$EX/junction-dem.pgm' '$T/$JT.txt' '$T/${JT}s.png' && python3 '$DIFF' '$T/${JT}s.png' '$T/${JT}c.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
+done
 # the junction example close up (0.1 m: lanes, stop and give-way lines, the
 # zebra's line cuts, strokes through the crossing): max 149/255 before the
 # cut table's stride and the cuts' reach were fixed

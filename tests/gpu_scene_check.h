@@ -49,11 +49,38 @@ static const char *gpu_scene_check(const rs_gpu_scene *scene)
         const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
         if (!gsc_finite(s, RS_GPU_SEG_FLOATS)) return "segment float not finite";
         if (!gsc_index(s[6], 0, (double)g->nroads)) return "segment road index";
-        if (!gsc_index(s[7], 0, 8)) return "segment flags";
+        if (!gsc_index(s[7], 0, 32)) return "segment flags";
         if (k > 0 && s[6] < s[6 - RS_GPU_SEG_FLOATS]) return "segments not in road order";
         if (!(s[4] >= 0 && s[8] >= 0 && s[9] >= 0)) return "segment width or length negative";
     }
     if (!gsc_lists(g->cell_start, g->cell_seg, ncell, g->nseg_entries, g->nseg)) return "segment index";
+    /* each road's first segment (float 39), exact below 2^24 segments */
+    for (size_t i = 0, k = 0; i < g->nroads && g->nseg < ((size_t)1 << 24); i++) {
+        while (k < g->nseg && g->seg[RS_GPU_SEG_FLOATS * k + 6] < (float)i) k++;
+        if (g->road[RS_GPU_ROAD_FLOATS * i + 39] != (float)k) return "road first segment";
+    }
+    /* joints: both sides flagged, each the other's continuation, meeting at one point */
+    for (size_t k = 0; k < g->nseg; k++) {
+        const float *s = g->seg + RS_GPU_SEG_FLOATS * k;
+        uint32_t f = (uint32_t)s[7];
+        if (!(f & (RS_GPU_SEG_JOIN_FIRST | RS_GPU_SEG_JOIN_LAST))) continue;
+        size_t i = (size_t)s[6];
+        const float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
+        for (int e = 0; e < 2; e++) {
+            if (!(f & (e ? RS_GPU_SEG_JOIN_LAST : RS_GPU_SEG_JOIN_FIRST))) continue;
+            if (!(f & (e ? RS_GPU_SEG_LAST : RS_GPU_SEG_FIRST)) || rd[5 + e] < 0) return "joint without its end";
+            size_t b = (size_t)rd[5 + e], kb;
+            const float *rb = g->road + RS_GPU_ROAD_FLOATS * b;
+            if (rb[6 - e] != (float)i) return "joint partner";
+            if (e) kb = (size_t)rb[39];
+            else kb = (b + 1 < g->nroads ? (size_t)rb[RS_GPU_ROAD_FLOATS + 39] : g->nseg) - 1;
+            if (kb >= g->nseg) return "joint partner segment";
+            const float *sb = g->seg + RS_GPU_SEG_FLOATS * kb;
+            uint32_t fb = (uint32_t)sb[7];
+            if (sb[6] != (float)b || !(fb & (e ? RS_GPU_SEG_JOIN_FIRST : RS_GPU_SEG_JOIN_LAST))) return "joint partner flags";
+            if (e ? (s[2] != sb[0] || s[3] != sb[1]) : (s[0] != sb[2] || s[1] != sb[3])) return "joint point";
+        }
+    }
     for (size_t i = 0; i < g->nroads; i++) {
         const float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
         if (!gsc_finite(rd, RS_GPU_ROAD_FLOATS)) return "road float not finite";

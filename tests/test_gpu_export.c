@@ -356,6 +356,42 @@ static void test_repeated_points(void)
     rs_ctx_free(ctx);
 }
 
+/* Joints (RS_GPU_SEG_JOIN_*): two records the CPU draws as one line are
+ * flagged at the point they share, whichever way the second one's points
+ * run; records whose lines differ (the lanes change there) are not, nor a
+ * record end that meets no continuation. */
+static void test_joints(void)
+{
+    rs_ctx *ctx;
+    rs_ctx_create(NULL, NULL, &ctx);
+    rs_dem *dem = make_dem(ctx);
+    const char *t = "road a width 7 class=secondary\n10 20\n40 20\nend\n"
+                    "road a width 7 class=secondary\n40 20\n55 15\n68 10\nend\n"
+                    "road b width 7 class=secondary\n10 45\n40 45\nend\n"
+                    "road b width 7 class=secondary\n68 55\n40 45\nend\n"
+                    "road c width 9 class=secondary lanes=1\n10 70\n40 70\nend\n"
+                    "road c width 9 class=secondary lanes=2\n40 70\n68 75\nend\n";
+    rs_roads *roads = NULL;
+    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    if (g) {
+        const gsv v = gsv_of(g);
+        CHECK_EQ_INT(v.nseg, 7);
+        uint32_t f[7];
+        for (int k = 0; k < 7; k++) f[k] = (uint32_t)v.seg[RS_GPU_SEG_FLOATS * k + 7];
+        const uint32_t F = RS_GPU_SEG_FIRST, L = RS_GPU_SEG_LAST, JF = RS_GPU_SEG_JOIN_FIRST, JL = RS_GPU_SEG_JOIN_LAST;
+        CHECKF(f[0] == (F | L | JL) && f[1] == (F | JF) && f[2] == L, "a: %u %u %u", f[0], f[1], f[2]);
+        /* b's second record runs against its stroke: exported last to first */
+        CHECKF(f[3] == (F | L | JL) && f[4] == (F | L | JF), "b: %u %u", f[3], f[4]);
+        CHECK(v.seg[RS_GPU_SEG_FLOATS * 4] == 40 && v.seg[RS_GPU_SEG_FLOATS * 4 + 1] == 45);
+        CHECKF(f[5] == (F | L) && f[6] == (F | L), "c: %u %u", f[5], f[6]);
+        for (int i = 0; i < 6; i++) CHECK(v.road[RS_GPU_ROAD_FLOATS * i + 39] == (float)(i < 2 ? i : i + 1));
+    }
+    rs_gpu_scene_free(ctx, g);
+    rs_roads_free(ctx, roads);
+    rs_dem_free(ctx, dem);
+    rs_ctx_free(ctx);
+}
+
 /* The library's GLSL (rs_gpu_glsl): every shader of version 330 in parts a
  * C99 compiler takes, the fragment shader reading every buffer the GPU
  * export fills; other versions none. (The CLI's shader render compiles and
@@ -649,6 +685,7 @@ int main(void)
     test_glsl();
     test_far_points();
     test_repeated_points();
+    test_joints();
     test_tee_fields();
     test_scene();
     test_alloc_failures();

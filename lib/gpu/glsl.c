@@ -95,7 +95,7 @@ static const char *const rsh_fs_src[] = {
     "    vec2 w = p - s.a;\n"
     "    float u = dot(w, s.dir), side = w.x * s.dir.y - w.y * s.dir.x;\n"
     "    bool lo = u < 0.0, hi = u > s.len;\n"
-    "    bool endlo = lo && (s.flags & 1) != 0, endhi = hi && (s.flags & 2) != 0;\n"
+    "    bool endlo = lo && (s.flags & 9) == 1, endhi = hi && (s.flags & 18) == 2;\n"
     "    tg = s.dir; rs = s.s0 + u; rt = side; nt = vec2(s.dir.y, -s.dir.x);\n"
     "    if ((lo || hi) && !endlo && !endhi) {\n"
     "        vec2 q = lo ? s.a : s.a + s.len * s.dir; vec2 pq = p - q; float d = length(pq);\n"
@@ -104,8 +104,24 @@ static const char *const rsh_fs_src[] = {
     "        if (d > 0.0) nt = pq / d;\n"
     "    }\n"
     "    ef = 1.0;\n"
-    "    if ((s.flags & 1) != 0) ef *= cdf(u, s.dir);\n"
-    "    if ((s.flags & 2) != 0) ef *= cdf(s.len - u, s.dir);\n"
+    "    if ((s.flags & 9) == 1) ef *= cdf(u, s.dir);\n"
+    "    if ((s.flags & 18) == 2) ef *= cdf(s.len - u, s.dir);\n"
+    /* a joint with the record continuing this one (RS_GPU_SEG_JOIN_*):
+     * its lines run on as through a vertex of one road, each record
+     * painting its side of the bisector (the sum of the two directions:
+     * the same floats on both sides, so every pixel is painted by one) */
+    "    if ((s.flags & 24) != 0) {\n"
+    "        vec4 r1 = texelFetch(u_roadt, 10 * s.road + 1);\n"
+    "        int nr = textureSize(u_roadt) / 10;\n"
+    "        if ((s.flags & 8) != 0) {\n"
+    "            int b = int(r1.y), kb = (b + 1 < nr ? int(texelFetch(u_roadt, 10 * b + 19).w) : textureSize(u_seg) / 3) - 1;\n"
+    "            if (dot(texelFetch(u_seg, 3 * kb + 2).zw + s.dir, p - s.a) < 0.0) ef = 0.0;\n"
+    "        }\n"
+    "        if ((s.flags & 16) != 0) {\n"
+    "            int kb = int(texelFetch(u_roadt, 10 * int(r1.z) + 9).w);\n"
+    "            if (dot(s.dir + texelFetch(u_seg, 3 * kb + 2).zw, p - texelFetch(u_seg, 3 * k).zw) >= 0.0) ef = 0.0;\n"
+    "        }\n"
+    "    }\n"
     "}\n"
     /* a road end at a T (lib/scene/roadfield.c, docs/network.md "Ends at a T"):
      * the segment's strip, grown by `grow`, runs on flat to the clip line

@@ -189,6 +189,44 @@ static rs_result ge_strokes(rs_ctx *ctx, const ge_src *src, const rs_roads *road
     return r;
 }
 
+/* Joints the CPU draws as one line (lib/scene/linesym.c: a stroke's run of
+ * records whose lines are alike is one polyline): record A's end meets
+ * record C's start (both in their stroke's terms) at the same point, each
+ * the other's continuation (road floats 5, 6), with equal bands. Their
+ * segments there get RS_GPU_SEG_JOIN_LAST and RS_GPU_SEG_JOIN_FIRST: the
+ * shader then cuts the lines at the joint's bisector and joins them round
+ * outside, as at a vertex of one road, where it ended both square (a
+ * wedge out of the outer lines, a spur of the inner ones past the mitre).
+ * The partner's end segment is found through road float 39 (each road's
+ * first segment), exact below 2^24 segments (the caller's condition). */
+static void ge_joints(rs_gpu_scene *g, const ge_end *ends, size_t nends, const double *soff)
+{
+    for (size_t a = 0; a < nends; a++)
+        for (size_t c = a + 1; c < nends && ends[c].x == ends[a].x && ends[c].y == ends[a].y; c++) {
+            if (ends[a].end == ends[c].end || ends[a].road == ends[c].road) continue;
+            const ge_end *A = ends[a].end ? &ends[a] : &ends[c], *C = ends[a].end ? &ends[c] : &ends[a];
+            const float *ra = g->road + RS_GPU_ROAD_FLOATS * A->road, *rc = g->road + RS_GPU_ROAD_FLOATS * C->road;
+            if (soff[A->road] < 0 || soff[C->road] < 0 || ra[6] != (float)C->road || rc[5] != (float)A->road ||
+                ra[24] != rc[24] || ra[4] != rc[4] ||
+                memcmp(g->band + RS_GPU_BAND_FLOATS * (size_t)ra[3], g->band + RS_GPU_BAND_FLOATS * (size_t)rc[3],
+                       (size_t)ra[4] * RS_GPU_BAND_FLOATS * sizeof(float)))
+                continue;
+            size_t ka = (A->road + 1 < g->nroads ? (size_t)ra[RS_GPU_ROAD_FLOATS + 39] : g->nseg), kc = (size_t)rc[39];
+            size_t kc_end = C->road + 1 < g->nroads ? (size_t)rc[RS_GPU_ROAD_FLOATS + 39] : g->nseg;
+            if (ka == (size_t)ra[39] || kc == kc_end) continue; /* no segment on the map */
+            float *sa = g->seg + RS_GPU_SEG_FLOATS * (ka - 1), *sc = g->seg + RS_GPU_SEG_FLOATS * kc;
+            /* both ends where the records meet (not cut off far from the map) */
+            if (!((uint32_t)sa[7] & RS_GPU_SEG_LAST) || !((uint32_t)sc[7] & RS_GPU_SEG_FIRST) || sa[2] != sc[0] ||
+                sa[3] != sc[1])
+                continue;
+            /* the bisector's normal (the shader's sum): none at a reversal */
+            float mx = sa[10] + sc[10], my = sa[11] + sc[11];
+            if (!(mx * mx + my * my > 1e-6f)) continue;
+            sa[7] = (float)((uint32_t)sa[7] | RS_GPU_SEG_JOIN_LAST);
+            sc[7] = (float)((uint32_t)sc[7] | RS_GPU_SEG_JOIN_FIRST);
+        }
+}
+
 /* The T rule of lib/scene/linesym.c for the shader (docs/render.md): per road its
  * stroke, the through stroke each end meets at a T and how deep its end
  * keeps cutting there, and whether some road end meets its own stroke so. */
@@ -643,6 +681,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
         if (soff[i] >= 0) ge_local_to_stroke(&rl, soff[i], srev[i]);
         double pad = 2 * (hw + sty->casing_width + lines_reach + g->reach) + g->cell;
         size_t seg0 = g->nseg;
+        rd[39] = (float)seg0; /* exact below 2^24 segments (the joints below need it) */
         r = road_segments(ctx, g, &rl, i, hw, sty->casing_width, pad, &segcap);
         /* a ring of one record (its stroke closed, its last point its
          * first): its lines do not end at its seam, as the CPU's line
@@ -707,6 +746,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
             if (*ra < 0) *ra = (float)C->road;
             if (*rc < 0) *rc = (float)A->road;
         }
+    if (nseg < ((size_t)1 << 24)) ge_joints(g, ends, nends, soff);
 
     /* the segment index */
     {
