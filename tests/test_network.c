@@ -1282,6 +1282,33 @@ static void test_crumbs_road(void)
     render_profile = RS_PROFILE_RMS;
 }
 
+/* A road no longer than twice the tolerance draws no lines, and cut into
+ * more records than a bridged run takes (16) neither: the run became a
+ * chain and its stroke drew the lines of a 0.086 m road (fuzz/split
+ * corpus short-road-in-crumbs: a 17.8 m wide trunk in 57 records, 82/255).
+ * Cut into 10 or 30 records, as unsplit. */
+static void test_crumbs_short_road(void)
+{
+    static const char *const wide[] = { "class", "primary", "lanes", "4", NULL };
+    poly road;
+    road.n = 2;
+    road.xy[0] = 30, road.xy[1] = 40, road.xy[2] = 30.06, road.xy[3] = 40.06;
+    double len = poly_len(&road), cuts[40];
+    for (int k = 0; k < 2; k++) {
+        size_t nc = k ? 29 : 9;
+        for (size_t i = 0; i < nc; i++) cuts[i] = len * (double)(i + 1) / (double)(nc + 1);
+        rs_roads *whole = NULL, *split = NULL;
+        CHECK(rs_roads_create(ctx, &whole) == RS_OK && rs_roads_create(ctx, &split) == RS_OK);
+        add_split(whole, "r", 14, &road, NULL, 0, wide);
+        CHECK_EQ_INT(add_split(split, "r", 14, &road, cuts, nc, wide), nc + 1);
+        uint32_t wx = 0, wy = 0;
+        int dd = draw_diff(whole, split, &wx, &wy);
+        CHECKF(dd <= 8, "a %.3f m road in %zu records: a pixel off by %d/255 at (%u, %u)", len, nc + 1, dd, wx, wy);
+        rs_roads_free(ctx, whole);
+        rs_roads_free(ctx, split);
+    }
+}
+
 /* A T drawn with its roads split near it (the through road 2 m from the
  * side road's end, the side road 4 m before the through road's centre
  * line, or both cut into many records, 0.03 m crumbs included, also
@@ -1604,6 +1631,7 @@ int main(void)
     test_cut_near_corner();
     test_short_record_between();
     test_short_record_at_end();
+    test_crumbs_short_road();
     test_crumbs_road();
     test_tee_splits();
     test_junction_area();

@@ -1707,6 +1707,20 @@ static int short_record(const rs_network *net, size_t nroads, size_t r)
     return net && rs_network_road_count(net) == nroads && net->length[r] <= 2 * net->tol;
 }
 
+/* A stroke of short records no longer than 2 tol in all: the road unsplit
+ * would be one short record, which draws no lines (docs/network.md
+ * "Degenerate records"). A run of more than 16 such records is a chain of
+ * its own (lib/scene/network.c), so it reaches here as a stroke. */
+static int short_stroke(const rs_network *net, size_t nroads, const uint32_t *recs, size_t nrec)
+{
+    double len = 0;
+    for (size_t q = 0; q < nrec; q++) {
+        if (!short_record(net, nroads, recs[q])) return 0;
+        len += net->length[recs[q]];
+    }
+    return len <= 2 * net->tol;
+}
+
 static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
                             ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
 {
@@ -2105,7 +2119,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
         size_t nrec = net ? net->stroke_start[k + 1] - net->stroke_start[k] : 1;
         uint32_t head = recs[0];
         if (rs__tick(ctx, nrec)) { res = RS_ERR_CANCELLED; goto fail; }
-        if (band_start[head + 1] == band_start[head] || (nrec == 1 && short_record(net, nroads, head))) continue;
+        if (band_start[head + 1] == band_start[head] || short_stroke(net, nroads, recs, nrec)) continue;
         /* records drawn both ways need lines that look the same both ways;
          * else each record is drawn alone */
         int alone = 0;
