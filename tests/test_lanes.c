@@ -595,6 +595,44 @@ static void test_class_crossing(void)
     free(A.rgba);
 }
 
+/* Another road's lines stop at the outside of a bend where its surface
+ * does: the surface rectangles run past a vertex only as far as the
+ * round join needs (hw tan(turn / 2)), not the half width (which stopped
+ * them up to (sqrt 2 - 1) half widths early: here 0.68 m). A 10 m road
+ * bends 20 degrees at (30, 30); a 6 m road of equal rank crosses it at
+ * the vertex: its east edge line, beside the vertex on the outside, meets
+ * the bend's second segment 4.32 m from the vertex's line. */
+static void test_bend_outside_cut(void)
+{
+    static const char text[] = "road a width 10 class=secondary area=rural\n0 30\n30 30\n60 19.0809\nend\n"
+                               "road b width 6 class=secondary area=rural\n30 60\n30 0\nend\n";
+    double *al = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
+    if (!al || w != 600 || h != 600) {
+        free(al);
+        return;
+    }
+    /* the east edge line's column: the most paint at y 40..50 m, x 31..34 m */
+    uint32_t col = 0;
+    double best = 0;
+    for (uint32_t x = 310; x < 340; x++) {
+        double sum = 0;
+        for (uint32_t y = 400; y < 500; y++) sum += al[(size_t)y * w + x];
+        if (sum > best) best = sum, col = x;
+    }
+    /* its paint from y = 40 m towards road a, against the exact edge of a's
+     * second segment at the column's centre (n = (sin 20, cos 20)) */
+    double xc = (col + 0.5) * PIX, len = 0;
+    for (uint32_t y = 330; y < 400; y++) len += al[(size_t)y * w + col] * PIX;
+    double edge = 30 + (5 - 0.34202014 * (xc - 30)) / 0.93969262;
+    CHECKF(best > 5 && fabs(len - (40 - edge)) <= 0.1,
+           "the crossing road's edge line (x %.2f m) runs %.2f m from y = 40 m, to the bend's edge %.2f m", xc, len,
+           40 - edge);
+    printf("bend outside: the crossing's edge line at x %.2f m stops %.3f m from a's edge\n", xc, len - (40 - edge));
+    free(al);
+}
+
 /* A side road of one segment (two points) ending on a through road at a
  * T draws the through road's far half the same whichever way its points
  * run, and as the through road drawn alone (its far edge line, centre
@@ -1057,6 +1095,7 @@ int main(void)
     test_class_crossing();
     test_ring_seam();
     test_tee_side_direction();
+    test_bend_outside_cut();
     test_ring_arm_at_seam();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);

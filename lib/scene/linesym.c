@@ -1721,6 +1721,18 @@ static int short_stroke(const rs_network *net, size_t nroads, const uint32_t *re
     return len <= 2 * net->tol;
 }
 
+/* How far a road's surface rectangle must run past a vertex of the road
+ * for the round join there: hw tan(turn / 2), at most hw. (ux, uy): the
+ * rectangle's segment's unit direction; segment k (v[k] .. v[k + 1]) the
+ * one on the vertex's other side. */
+static double join_reach(const ls_vtx *v, size_t k, double ux, double uy, double hw)
+{
+    double nx, ny;
+    unit_dir(v[k].x, v[k].y, v[k + 1].x, v[k + 1].y, &nx, &ny);
+    double c = ux * nx + uy * ny, sn = fabs(ux * ny - uy * nx);
+    return 1 + c > sn ? hw * sn / (1 + c) : hw;
+}
+
 static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
                             ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
 {
@@ -1795,8 +1807,17 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.ay = far_cut ? cy : v[i].y + lo * Q.uy;
             Q.len = span;
             Q.r = hw;
-            Q.u0 = -hw;
-            Q.u1 = Q.len + hw;
+            /* past an end, hw (a superset of the round cap); past a vertex
+             * of the road (a closed record's seam too), only as far as the
+             * round join needs: hw tan(turn / 2) covers its sector, so a
+             * line meeting the outside of a gentle bend stops at most
+             * hw (1 / cos(turn / 2) - 1) early (up to (sqrt 2 - 1) hw until
+             * 6 December 2026, 0.46 m at an arm of a 24-point ring) */
+            int closed = m >= 4 && v[0].x == v[m - 1].x && v[0].y == v[m - 1].y;
+            Q.u0 = i > 0 || closed ? -join_reach(v, i > 0 ? i - 1 : m - 2, Q.ux, Q.uy, hw) : -hw;
+            Q.u1 = Q.len + (i + 2 < m || closed ? join_reach(v, i + 2 < m ? i + 1 : 0, Q.ux, Q.uy, hw) : hw);
+            if (lo > 0) Q.u0 = -hw;
+            if (hi < len) Q.u1 = Q.len + hw;
             Q.road = (uint32_t)ri;
             Q.only = Q.skip = Q.only2 = Q.skip2 = Q.skip3 = Q.skip4 = NO_STROKE;
             Q.clip = Q.clip2 = 0;
