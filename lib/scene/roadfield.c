@@ -18,6 +18,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
+#include <immintrin.h>
+#endif
 
 #define HALF_SQRT2 0.70710678118654752440
 /* Sub-squares per pixel side where a pixel's coverage is not one straight
@@ -882,6 +885,41 @@ static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, cons
 #endif
 }
 
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
+/* fbox_next sixteen boxes a step where the CPU has AVX-512 (the same
+ * answer: the first index from `from` on whose four lanes all compare <=).
+ * On a dense map every segment walks a list of ~60 boxes to its end (its
+ * own box passes, a real holder is rare), so the walk is what grows with
+ * the density (docs/speed.md). The gathered arrays are padded with
+ * FBOX_PAD infinities past n. */
+#define RF_AVX512 1
+__attribute__((target("avx512f"))) static uint32_t fbox_next16(const float *const *g, uint32_t from, uint32_t n,
+                                                               const rf_fbox *q)
+{
+    __m512 q0 = _mm512_set1_ps(q->v[0]), q1 = _mm512_set1_ps(q->v[1]), q2 = _mm512_set1_ps(q->v[2]),
+           q3 = _mm512_set1_ps(q->v[3]);
+    for (uint32_t e = from & ~15u; e < n; e += 16) {
+        __mmask16 m = _mm512_cmp_ps_mask(_mm512_loadu_ps(g[0] + e), q0, _CMP_LE_OQ);
+        m = _mm512_mask_cmp_ps_mask(m, _mm512_loadu_ps(g[1] + e), q1, _CMP_LE_OQ);
+        m = _mm512_mask_cmp_ps_mask(m, _mm512_loadu_ps(g[2] + e), q2, _CMP_LE_OQ);
+        m = _mm512_mask_cmp_ps_mask(m, _mm512_loadu_ps(g[3] + e), q3, _CMP_LE_OQ);
+        uint32_t bits = (uint32_t)m;
+        if (e < from) bits &= ~0u << (from - e);
+        if (bits) {
+            uint32_t t = e + (uint32_t)__builtin_ctz(bits);
+            return t < n ? t : n;
+        }
+    }
+    return n;
+}
+
+static int rf_avx512_ok(void)
+{
+    return __builtin_cpu_supports("avx512f");
+}
+#endif
+#define FBOX_PAD 16
+
 /* Redundancy of every segment (seg_relations): the segments are taken
  * cell by cell (those whose cell1 is the cell), so a short list's float
  * boxes are gathered once and scanned, four at a time, by every segment
@@ -892,7 +930,10 @@ static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, cons
 __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h, uint8_t *redundant,
                                                       const rf_scratch *sc)
 {
-    size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + 4;
+    size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + FBOX_PAD;
+#ifdef RF_AVX512
+    const int wide = rf_avx512_ok();
+#endif
     size_t ns = f->nseg ? f->nseg : 1;
     /* outer and inner boxes of every segment (ob[2k], ob[2k+1]): 32 bytes
      * read where each segment's 152 were; then the segments by cell1
@@ -967,13 +1008,19 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
                         if (e + PREFETCH_AHEAD < n) rs__prefetch(&ob[2 * (size_t)f->ids[a + e + PREFETCH_AHEAD]]);
                         for (int l = 0; l < 4; l++) gb[l * cap + e] = ob[2 * (size_t)f->ids[a + e]].v[l];
                     }
-                    for (uint32_t e = n; e < n + 4; e++)
+                    for (uint32_t e = n; e < n + FBOX_PAD; e++)
                         for (int l = 0; l < 4; l++) gb[l * cap + e] = INFINITY;
                     gathered = 1;
                 }
                 const rf_fbox *q = &ob[2 * (size_t)k + 1];
-                for (uint32_t e = fbox_next(g, 0, n, q); e < n && !red; e = fbox_next(g, e + 1, n, q))
-                    red = holds(f, k, f->ids[a + e]);
+#ifdef RF_AVX512
+                if (wide)
+                    for (uint32_t e = fbox_next16(g, 0, n, q); e < n && !red; e = fbox_next16(g, e + 1, n, q))
+                        red = holds(f, k, f->ids[a + e]);
+                else
+#endif
+                    for (uint32_t e = fbox_next(g, 0, n, q); e < n && !red; e = fbox_next(g, e + 1, n, q))
+                        red = holds(f, k, f->ids[a + e]);
             }
             if (red < 0) { res = RS_ERR_LIMIT; break; }
             redundant[k] = (uint8_t)red;
