@@ -1733,6 +1733,51 @@ static double join_reach(const ls_vtx *v, size_t k, double ux, double uy, double
     return 1 + c > sn ? hw * sn / (1 + c) : hw;
 }
 
+/* Where two records of a stroke meet at a bend (an OSM way split there,
+ * a roundabout split at its arms), the union of their capsules has the
+ * round join of one road: their end rectangles need run past the joint
+ * only hw tan(turn / 2) each (join_reach), not the half width, when the
+ * two are as wide and cut the same lines. end_rect: per record end, its
+ * end rectangle in J->sf (SIZE_MAX: none, or a T's, left as it is). */
+static void joints_reach(ls_junc *J, const ls_ends *ends, const rs_network *net, const rs_roads *roads,
+                         const size_t *end_rect, size_t nroads)
+{
+    if (!net || rs_network_road_count(net) != nroads || !net->prev || !net->next) return;
+    for (size_t ri = 0; ri < nroads; ri++)
+        for (int e = 0; e < 2; e++) {
+            size_t ka = end_rect[2 * ri + (size_t)e];
+            if (ka == SIZE_MAX) continue;
+            uint32_t cand[4] = { net->prev[ri], net->next[ri], UINT32_MAX, UINT32_MAX };
+            uint32_t k = net->stroke_of[ri];
+            if (net->closed && net->closed[k]) { /* the seam of a ring of records */
+                cand[2] = net->stroke_roads[net->stroke_start[k]];
+                cand[3] = net->stroke_roads[net->stroke_start[k + 1] - 1];
+            }
+            double wa = 0;
+            rs_roads_get(roads, ri, NULL, &wa, NULL, NULL);
+            for (int c = 0; c < 4; c++) {
+                uint32_t q = cand[c];
+                if (q == UINT32_MAX || q == ri || q >= nroads || !ends[q].valid) continue;
+                double wq = 0;
+                rs_roads_get(roads, q, NULL, &wq, NULL, NULL);
+                if (wq != wa || J->nocut[q] != J->nocut[ri] || J->car[q] != J->car[ri] ||
+                    (J->prio && J->prio[q] != J->prio[ri]))
+                    continue;
+                int f = ends[q].x[0] == ends[ri].x[e] && ends[q].y[0] == ends[ri].y[e] ? 0
+                        : ends[q].x[1] == ends[ri].x[e] && ends[q].y[1] == ends[ri].y[e] ? 1 : -1;
+                if (f < 0 || end_rect[2 * (size_t)q + (size_t)f] == SIZE_MAX) continue;
+                /* both directions point away from the joint: straight on is -1 */
+                double ax = ends[ri].dx[e], ay = ends[ri].dy[e], bx = ends[q].dx[f], by = ends[q].dy[f];
+                double c1 = -(ax * bx + ay * by), sn = fabs(ax * by - ay * bx);
+                ls_surf *Q = &J->sf[ka];
+                double ext = 1 + c1 > sn ? Q->r * sn / (1 + c1) : Q->r;
+                if (e) Q->u1 = rs__fmin(Q->u1, Q->len + ext);
+                else Q->u0 = rs__fmax(Q->u0, -ext);
+                break;
+            }
+        }
+}
+
 static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, const rs__linesym_params *p,
                             ls_junc *J, ls_vtx **pts, double **sv, size_t *cap)
 {
@@ -1774,6 +1819,16 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         return rt ? rt : RS_ERR_NOMEM;
     }
     for (size_t i = 0; tend_of && i < 2 * nroads; i++) tend_of[i] = SIZE_MAX;
+    /* per record end: its end segment's surface rectangle in J->sf, to run
+     * on into a record continuing it (joints_reach, below) */
+    size_t *end_rect = rs__alloc_array(ctx, 2 * (nroads ? nroads : 1), sizeof *end_rect);
+    if (!end_rect) {
+        rs__free(ctx, tees);
+        rs__free(ctx, tend);
+        rs__free(ctx, tend_of);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < 2 * nroads; i++) end_rect[i] = SIZE_MAX;
     for (size_t i = 0; i < ntend; i++) tend_of[2 * (size_t)tend[i].road + (tend[i].end != 0)] = i;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
@@ -1784,6 +1839,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             rs__free(ctx, tees);
             rs__free(ctx, tend);
             rs__free(ctx, tend_of);
+            rs__free(ctx, end_rect);
             return r;
         }
         if (m < 2 || short_record(p->net, nroads, ri)) continue;
@@ -1887,16 +1943,23 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                     rs__free(ctx, tees);
                     rs__free(ctx, tend);
                     rs__free(ctx, tend_of);
+                    rs__free(ctx, end_rect);
                     return g;
                 }
                 J->sf = arr;
                 J->sf[J->nsf++] = c ? Qt[c - 1] : Q;
             }
+            /* a record end that is no T's: its rectangle may run on into
+             * a record continuing it */
+            if (!tee && !Q.clip && i == 0 && lo == 0) end_rect[2 * ri] = J->nsf - 1;
+            if (!tee && !Q.clip && i + 2 == m && hi == len) end_rect[2 * ri + 1] = J->nsf - 1;
         }
     }
+    joints_reach(J, ends, p->net, roads, end_rect, nroads);
     rs__free(ctx, tees);
     rs__free(ctx, tend);
     rs__free(ctx, tend_of);
+    rs__free(ctx, end_rect);
     /* surfaces in square cells of CELL_PX pixels (doubled until at most MAX_CELLS) */
     uint32_t jpx = CELL_PX;
     for (;;) {
