@@ -853,12 +853,15 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     double dn0 = ox * Q->cx2 + oy * Q->cy2, gnu = P->ux * Q->cx2 + P->uy * Q->cy2, gnv = npx * Q->cx2 + npy * Q->cy2;
     double dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
     int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip, out_clip2 = Q->clip2;
+    int in_v = 1, in_u = 1; /* P wholly within Q's sides / within its ends */
     for (uint32_t k = 0; k < n; k++) {
         double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
         out_v_hi &= v >= r;
         out_v_lo &= v <= -r;
         out_u_lo &= u <= lo;
         out_u_hi &= u >= hi;
+        in_v &= v > -r && v < r;
+        in_u &= u > lo && u < hi;
         out_clip &= cn0 + x[k] * fnu + y[k] * fnv >= cq;
         out_clip2 &= dn0 + x[k] * gnu + y[k] * gnv >= dq;
     }
@@ -866,6 +869,14 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     /* the most half-planes a piece takes: 3 beside Q, 5 beyond its clip
      * line, 5 or 6 beyond the second (P stays whole when they pass HP_MAX) */
     uint32_t need = Q->clip2 ? 5u + (Q->clip ? 1u : 0u) : Q->clip ? 5u : 3u;
+    /* P within Q's sides (a line under a road running along it, or crossing
+     * it): its parts beyond Q's ends need one half-plane each, not three;
+     * P within Q's ends: its parts beside Q need one each. So a line under
+     * several surfaces in a row (a service road along a primary's edge, a
+     * street crossing many) is cut by each, where the third cut overflowed
+     * and left the line whole until 6 December 2026 */
+    int slim = !Q->clip && !Q->clip2 && (in_v || in_u);
+    if (slim) need = 1;
     if (P->nlim + need > HP_MAX) return -1;
     int m = 0;
     double h[6][3];
@@ -877,6 +888,20 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
         if (nonempty_hp(x, y, n, (const double(*)[3])h, (nh), &outg[m]))                                          \
             piece_with(&out[m++], P, (const double(*)[3])h, (nh));                                               \
     } while (0)
+    if (slim) {
+        if (in_v) {
+            LS_HP(0, lo - cu0, -fuu, -fuv); /* u' <= u0 */
+            LS_TRY(1);
+            LS_HP(0, cu0 - hi, fuu, fuv); /* u' >= u1 */
+            LS_TRY(1);
+        } else {
+            LS_HP(0, cv0 - r, fvu, fvv); /* v' >= r */
+            LS_TRY(1);
+            LS_HP(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
+            LS_TRY(1);
+        }
+        return m;
+    }
     LS_HP(0, cv0 - r, fvu, fvv); /* v' >= r */
     LS_TRY(1);
     LS_HP(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
