@@ -643,6 +643,36 @@ static void test_bend_outside_cut(void)
     }
 }
 
+/* A line under several surfaces in a row is cut by each: a service road
+ * of five segments runs along a primary's edge over its edge line, which
+ * stops under it (a lower road cuts a higher one's edge lines, issue 27).
+ * Until 6 December 2026 each cut cost a piece three half-planes and the
+ * third left it whole: the edge line showed as dashes under the service
+ * road (docs/examples/roads.txt, 181/255 against the shader). */
+static void test_line_under_road(void)
+{
+    static const char text[] = "road main width 13 class=primary area=rural\n0 30\n60 30\nend\n"
+                               "road lane width 5 class=service\n6 37.4\n14 37.5\n22 37.3\n30 37.5\n38 37.4\n46 37.5\nend\n";
+    static const char alone[] = "road main width 13 class=primary area=rural\n0 30\n60 30\nend\n";
+    double *al = NULL, *al0 = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
+    CHECK(scene_paint(alone, 61, 61, RS_PROFILE_RMS, NULL, &al0, &w, &h));
+    if (al && al0 && w == 600 && h == 600) {
+        /* the main road's lower edge line (rows 360..363: 6.0..6.4 m off
+         * its centre line), x 12..40 m, under the lane (2.5 m each side of
+         * 37.3..37.5 m) */
+        double under = 0, alone_paint = 0;
+        for (uint32_t y = 356; y < 368; y++)
+            for (uint32_t x = 120; x < 400; x++) under += al[(size_t)y * w + x], alone_paint += al0[(size_t)y * w + x];
+        CHECKF(alone_paint > 100 && under < 1, "the edge line under the lane paints %.1f pixels (alone %.1f)", under,
+               alone_paint);
+        printf("line under a road: the edge line paints %.1f pixels under the lane (%.1f alone)\n", under, alone_paint);
+    }
+    free(al);
+    free(al0);
+}
+
 /* A side road of one segment (two points) ending on a through road at a
  * T draws the through road's far half the same whichever way its points
  * run, and as the through road drawn alone (its far edge line, centre
@@ -1106,6 +1136,7 @@ int main(void)
     test_ring_seam();
     test_tee_side_direction();
     test_bend_outside_cut();
+    test_line_under_road();
     test_ring_arm_at_seam();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);
