@@ -360,19 +360,20 @@ static void test_repeated_points(void)
  * flagged at the point they share, whichever way the second one's points
  * run; records whose lines differ (the lanes change there) are not, nor a
  * record end that meets no continuation. */
+static const char joints_text[] = "road a width 7 class=secondary\n10 20\n40 20\nend\n"
+                                  "road a width 7 class=secondary\n40 20\n55 15\n68 10\nend\n"
+                                  "road b width 7 class=secondary\n10 45\n40 45\nend\n"
+                                  "road b width 7 class=secondary\n68 55\n40 45\nend\n"
+                                  "road c width 9 class=secondary lanes=1\n10 70\n40 70\nend\n"
+                                  "road c width 9 class=secondary lanes=2\n40 70\n68 75\nend\n";
+
 static void test_joints(void)
 {
-    rs_ctx *ctx;
-    rs_ctx_create(NULL, NULL, &ctx);
-    rs_dem *dem = make_dem(ctx);
-    const char *t = "road a width 7 class=secondary\n10 20\n40 20\nend\n"
-                    "road a width 7 class=secondary\n40 20\n55 15\n68 10\nend\n"
-                    "road b width 7 class=secondary\n10 45\n40 45\nend\n"
-                    "road b width 7 class=secondary\n68 55\n40 45\nend\n"
-                    "road c width 9 class=secondary lanes=1\n10 70\n40 70\nend\n"
-                    "road c width 9 class=secondary lanes=2\n40 70\n68 75\nend\n";
+    rs_ctx *ctx = NULL;
     rs_roads *roads = NULL;
-    rs_gpu_scene *g = export_text(ctx, dem, t, &roads);
+    CHECK(rs_ctx_create(NULL, NULL, &ctx) == RS_OK);
+    rs_dem *dem = make_dem(ctx);
+    rs_gpu_scene *g = export_text(ctx, dem, joints_text, &roads);
     if (g) {
         const gsv v = gsv_of(g);
         CHECK_EQ_INT(v.nseg, 7);

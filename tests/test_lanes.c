@@ -154,6 +154,22 @@ static int runs(const double *a, uint32_t w, int along_row, uint32_t fixed, uint
 /* A secondary road of 3 lanes (2 towards the junction) meeting a primary
  * road at a T; its lines, arrows and stop line. DEM 61 x 41: the side road
  * runs north from (30, 40) to the main road's centre line at y = 20. */
+/* The row (by_row) or column of `a` (w wide) in [i0, i1) with the most
+ * paint over columns (rows) [j0, j1), and that paint (*sum). */
+static uint32_t most_paint(const double *a, uint32_t w, int by_row, uint32_t i0, uint32_t i1, uint32_t j0, uint32_t j1,
+                           double *sum)
+{
+    uint32_t best = i0;
+    double bs = 0;
+    for (uint32_t i = i0; i < i1; i++) {
+        double t = 0;
+        for (uint32_t j = j0; j < j1; j++) t += by_row ? a[(size_t)i * w + j] : a[(size_t)j * w + i];
+        if (t > bs) bs = t, best = i;
+    }
+    if (sum) *sum = bs;
+    return best;
+}
+
 static const char lanes_scene[] =
     "road main width 8 class=primary area=rural\n0 20\n60 20\nend\n"
     "road side width 10.5 class=secondary area=rural lanes=3 lanes:forward=2 turn:lanes=through|through "
@@ -196,13 +212,7 @@ static void test_arrows_and_stop_line(void)
     CHECK_EQ_INT(arrows, 2);
     CHECK(bare == 0 || bare == 2); /* the lane without an arrow is the outer one of the other direction */
     /* the stop line: the marking row with the most paint between y = 20 and 28 m */
-    uint32_t best = 0;
-    double bestsum = 0;
-    for (uint32_t y = 200; y < 280; y++) {
-        double sum = 0;
-        for (uint32_t x = 240; x < 360; x++) sum += mk[(size_t)y * w + x];
-        if (sum > bestsum) bestsum = sum, best = y;
-    }
+    uint32_t best = most_paint(mk, w, 1, 200, 280, 240, 360, NULL);
     /* all paint on that row: the stop line with the lines it crosses, one
      * run (a stop line short of the centre line leaves a gap); the widest */
     run S[8];
@@ -240,16 +250,10 @@ static void test_standard_sizes(void)
         uint32_t w = 0, h = 0;
         CHECK(scene_paint(text, 61, 41, RS_PROFILE_RMS, &all, &lines, &w, &h));
         if (!all || !lines) continue;
-        /* the block row: the row with the most marking paint (y 25 .. 35 m) */
-        uint32_t best = 0;
-        double bestsum = 0;
-        for (uint32_t y = 250; y < 350; y++) {
-            double sum = 0;
-            for (uint32_t x = 200; x < 400; x++) sum += all[(size_t)y * w + x] - lines[(size_t)y * w + x];
-            if (sum > bestsum) bestsum = sum, best = y;
-        }
-        /* the markings alone (the kerbs are lines' business) */
+        /* the markings alone (the kerbs are lines' business); the block row:
+         * the row with the most marking paint (y 25 .. 35 m) */
         for (size_t i = 0; i < (size_t)w * h; i++) all[i] = all[i] - lines[i] > 0.01 ? all[i] - lines[i] : 0;
+        uint32_t best = most_paint(all, w, 1, 250, 350, 200, 400, NULL);
         run B[32];
         int nb = runs(all, w, 1, best, 200, 400, B, 32);
         CHECKF(nb >= 2 && nb <= 32, "width %g: %d blocks", widths[k], nb);
@@ -622,13 +626,8 @@ static void test_bend_outside_cut(void)
         continue;
     }
     /* the east edge line's column: the most paint at y 40..50 m, x 31..34 m */
-    uint32_t col = 0;
     double best = 0;
-    for (uint32_t x = 310; x < 340; x++) {
-        double sum = 0;
-        for (uint32_t y = 400; y < 500; y++) sum += al[(size_t)y * w + x];
-        if (sum > best) best = sum, col = x;
-    }
+    uint32_t col = most_paint(al, w, 0, 310, 340, 400, 500, &best);
     /* its paint from y = 40 m towards road a, against the exact edge of a's
      * second segment at the column's centre (n = (sin 20, cos 20)) */
     double xc = (col + 0.5) * PIX, len = 0;
