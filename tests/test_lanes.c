@@ -672,6 +672,49 @@ static void test_line_under_road(void)
     free(al0);
 }
 
+/* A line crossed by many roads in a row is cut at every crossing: a rural
+ * primary of one 118 m segment crossed by eleven secondaries; its edge
+ * lines stop at all twenty-two mouths (the far piece took a half-plane per
+ * crossing and stayed whole from about the sixth crossing on until 6
+ * December 2026; docs/render.md, the dense scene with one segment per
+ * street). */
+static void test_many_crossings(void)
+{
+    char text[2048];
+    size_t at = (size_t)snprintf(text, sizeof text, "road main width 8 class=primary area=rural\n1 30\n119 30\nend\n");
+    for (int k = 0; k < 11; k++)
+        at += (size_t)snprintf(text + at, sizeof text - at, "road x%d width 6 class=secondary\n%d 2\n%d 58\nend\n", k,
+                               10 + 10 * k, 10 + 10 * k);
+    double *al = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(text, 121, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
+    if (al && w == 1200 && h == 600) {
+        /* the edge lines (3.3..3.9 m off the centre line) inside each
+         * crossing's surface, 0.2 m clear of its edges */
+        int worst = -1;
+        double worst_paint = 0, between = 0;
+        for (int k = 0; k < 11; k++) {
+            double paint = 0;
+            for (uint32_t y = 0; y < h; y++) {
+                double dy = fabs(((double)y + 0.5) * PIX - 30);
+                if (dy < 3.3 || dy > 3.9) continue;
+                for (uint32_t x = (uint32_t)(10 * (10 + 10 * k) - 28); x < (uint32_t)(10 * (10 + 10 * k) + 28); x++)
+                    paint += al[(size_t)y * w + x];
+                /* and between this crossing and the next, where they run */
+                if (k < 10)
+                    for (uint32_t x = (uint32_t)(10 * (10 + 10 * k) + 40); x < (uint32_t)(10 * (20 + 10 * k) - 40); x++)
+                        between += al[(size_t)y * w + x];
+            }
+            if (paint > worst_paint) worst_paint = paint, worst = k;
+        }
+        CHECKF(worst_paint < 1 && between > 500, "edge-line paint %.1f pixels inside crossing %d; %.1f between them",
+               worst_paint, worst, between);
+        printf("many crossings: the edge lines paint at most %.1f pixels inside a crossing, %.1f between them\n",
+               worst_paint, between);
+    }
+    free(al);
+}
+
 /* A side road of one segment (two points) ending on a through road at a
  * T draws the through road's far half the same whichever way its points
  * run, and as the through road drawn alone (its far edge line, centre
@@ -1136,6 +1179,7 @@ int main(void)
     test_tee_side_direction();
     test_bend_outside_cut();
     test_line_under_road();
+    test_many_crossings();
     test_ring_arm_at_seam();
     test_mirror(RS_PROFILE_RMS);
     test_mirror(RS_PROFILE_MUTCD);

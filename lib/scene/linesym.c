@@ -818,8 +818,15 @@ static int nonempty_hp(const double *x, const double *y, uint32_t n, const doubl
 }
 
 /* out = P with the nh half-planes hp appended (the caller checked that
- * P->nlim + nh <= HP_MAX). */
-static void piece_with(ls_piece *out, const ls_piece *P, const double (*hp)[3], uint32_t nh)
+ * P->nlim + nh <= HP_MAX); g: out's polygon. A slab's half-plane past its
+ * v limits that holds every corner of g by `drop` or more is left out and
+ * no longer counted: it cuts no pixel the piece touches (drop: the pixel's
+ * diagonal; 0 keeps all). So the pieces of a line crossed by many roads in
+ * a row keep only the cuts next to them, and every crossing can cut (the
+ * far piece took one more half-plane per crossing and stayed whole from
+ * about the sixth on until 6 December 2026). */
+static void piece_with(ls_piece *out, const ls_piece *P, const double (*hp)[3], uint32_t nh, const ls_poly *g,
+                       double drop)
 {
     *out = *P;
     for (uint32_t k = 0; k < nh; k++) {
@@ -829,13 +836,27 @@ static void piece_with(ls_piece *out, const ls_piece *P, const double (*hp)[3], 
         out->nhp++;
         out->nlim++;
     }
+    if (!(drop > 0) || out->kind != PIECE_SLAB) return;
+    uint32_t m = 2;
+    for (uint32_t k = 2; k < out->nhp; k++) {
+        const double *h = out->hp[k];
+        uint32_t i = 0;
+        while (i < g->n && h[0] + h[1] * g->x[i] + h[2] * g->y[i] >= drop) i++;
+        if (i == g->n && g->n >= 3) {
+            out->nlim--;
+            continue;
+        }
+        if (m != k) out->hp[m][0] = h[0], out->hp[m][1] = h[1], out->hp[m][2] = h[2];
+        m++;
+    }
+    out->nhp = m;
 }
 
 /* P minus surface rectangle Q (cut by its clip lines): up to 6 disjoint
  * pieces into out; returns their count, or -1 when Q misses P (P stays
  * whole) or a piece would need more half-planes than it holds (P is then
  * kept whole: lines run on). */
-static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg)
+static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg, double drop)
 {
     double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
     double nqx = Q->uy, nqy = -Q->ux;      /* Q's left normal */
@@ -886,7 +907,7 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
 #define LS_TRY(nh)                                                                                               \
     do {                                                                                                         \
         if (nonempty_hp(x, y, n, (const double(*)[3])h, (nh), &outg[m]))                                          \
-            piece_with(&out[m++], P, (const double(*)[3])h, (nh));                                               \
+            piece_with(&out[m], P, (const double(*)[3])h, (nh), &outg[m], drop), m++;                            \
     } while (0)
     if (slim) {
         if (in_v) {
@@ -969,12 +990,15 @@ static int surf_misses_box(const ls_surf *Q, double x0, double y0, double x1, do
 enum { QMAX = 16 };
 typedef struct ls_cutset {
     uint32_t n, cur;
+    double drop; /* piece_with's */
     ls_piece p[2][QMAX];
     ls_poly g[2][QMAX];
 } ls_cutset;
 
-static void cutset_init(ls_cutset *S, const ls_piece *P)
+static void cutset_init(ls_cutset *S, const ls_piece *P, const rs__linesym *L)
 {
+    /* (exact edges only: the Hermite ramps reach past a half-plane) */
+    S->drop = L->aa == RS__AA_EXACT ? 2 * L->margin * (1 + 1e-9) : 0;
     S->n = 1;
     S->cur = 0;
     S->p[0][0] = *P;
@@ -995,7 +1019,8 @@ static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
         /* the pieces go straight to their place in the other buffer when
          * there is room for the most a cut makes */
         int direct = nn + 6 <= QMAX;
-        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, direct ? &S->p[o][nn] : tmp, direct ? &S->g[o][nn] : tg);
+        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, direct ? &S->p[o][nn] : tmp, direct ? &S->g[o][nn] : tg,
+                          S->drop);
         if (m < 0) {
             if (!moved) {
                 nn++;
@@ -1095,7 +1120,7 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                         continue;
                     /* (the box test before the end points': it passes over most surfaces) */
                     if (surf_misses_box(Q, P->x0, P->y0, P->x1, P->y1) || continues(J, road, Q->road)) continue;
-                    if (!cut) cutset_init(S, P), cut = 1;
+                    if (!cut) cutset_init(S, P, L), cut = 1;
                     cutset_cut(S, Q, &J->work);
                 }
             }
@@ -1122,7 +1147,7 @@ static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_pie
     uint32_t key = L->cut_start ? cut_key(L, road) : 0;
     if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road);
     ls_cutset *S = &L->cs[0];
-    cutset_init(S, P);
+    cutset_init(S, P, L);
     for (uint32_t e = L->cut_start[key]; e < L->cut_start[key + 1]; e++) {
         const rs__line_cut *c = &L->cuts[L->cut_ord[e]];
         ls_surf Q;
