@@ -18,9 +18,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
-#include <immintrin.h>
-#endif
+#include "avx512.h"
 
 #define HALF_SQRT2 0.70710678118654752440
 /* Sub-squares per pixel side where a pixel's coverage is not one straight
@@ -885,16 +883,14 @@ static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, cons
 #endif
 }
 
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
+#ifdef RS_AVX512_DISPATCH
 /* fbox_next sixteen boxes a step where the CPU has AVX-512 (the same
  * answer: the first index from `from` on whose four lanes all compare <=).
  * On a dense map every segment walks a list of ~60 boxes to its end (its
  * own box passes, a real holder is rare), so the walk is what grows with
  * the density (docs/speed.md). The gathered arrays are padded with
  * FBOX_PAD infinities past n. */
-#define RF_AVX512 1
-__attribute__((target("avx512f"))) static uint32_t fbox_next16(const float *const *g, uint32_t from, uint32_t n,
-                                                               const rf_fbox *q)
+RS_AVX512 static uint32_t fbox_next16(const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
 {
     __m512 q0 = _mm512_set1_ps(q->v[0]), q1 = _mm512_set1_ps(q->v[1]), q2 = _mm512_set1_ps(q->v[2]),
            q3 = _mm512_set1_ps(q->v[3]);
@@ -912,13 +908,19 @@ __attribute__((target("avx512f"))) static uint32_t fbox_next16(const float *cons
     }
     return n;
 }
-
-static int rf_avx512_ok(void)
-{
-    return __builtin_cpu_supports("avx512f");
-}
 #endif
 #define FBOX_PAD 16
+
+/* The next box holding q from `from` on (fbox_next16 when `wide`). */
+static uint32_t fbox_find(int wide, const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
+{
+#ifdef RS_AVX512_DISPATCH
+    if (wide) return fbox_next16(g, from, n, q);
+#else
+    (void)wide;
+#endif
+    return fbox_next(g, from, n, q);
+}
 
 /* Redundancy of every segment (seg_relations): the segments are taken
  * cell by cell (those whose cell1 is the cell), so a short list's float
@@ -931,8 +933,10 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
                                                       const rf_scratch *sc)
 {
     size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + FBOX_PAD;
-#ifdef RF_AVX512
-    const int wide = rf_avx512_ok();
+#ifdef RS_AVX512_DISPATCH
+    const int wide = rs__avx512_ok();
+#else
+    const int wide = 0;
 #endif
     size_t ns = f->nseg ? f->nseg : 1;
     /* outer and inner boxes of every segment (ob[2k], ob[2k+1]): 32 bytes
@@ -1013,14 +1017,8 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
                     gathered = 1;
                 }
                 const rf_fbox *q = &ob[2 * (size_t)k + 1];
-#ifdef RF_AVX512
-                if (wide)
-                    for (uint32_t e = fbox_next16(g, 0, n, q); e < n && !red; e = fbox_next16(g, e + 1, n, q))
-                        red = holds(f, k, f->ids[a + e]);
-                else
-#endif
-                    for (uint32_t e = fbox_next(g, 0, n, q); e < n && !red; e = fbox_next(g, e + 1, n, q))
-                        red = holds(f, k, f->ids[a + e]);
+                for (uint32_t e = fbox_find(wide, g, 0, n, q); e < n && !red; e = fbox_find(wide, g, e + 1, n, q))
+                    red = holds(f, k, f->ids[a + e]);
             }
             if (red < 0) { res = RS_ERR_LIMIT; break; }
             redundant[k] = (uint8_t)red;

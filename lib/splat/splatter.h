@@ -10,21 +10,7 @@
 #include "internal.h"
 #include "mask.h"
 #include "roadgrid.h"
-
-/* AVX-512 paths of the stages (lib/splat/surface.c, composite.c), chosen
- * per call by the CPU: F, DQ and VL. A file built with -DRS_NO_AVX512 has
- * only its portable paths (tests/cli_surface_paths_test.sh compares the
- * two builds). */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(RS_NO_AVX512)
-#include <immintrin.h>
-#define RS_AVX512_DISPATCH 1
-#define RS_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2")))
-static inline int rs__avx512_ok(void)
-{
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-           __builtin_cpu_supports("avx512vl");
-}
-#endif
+#include "avx512.h"
 
 /* Integral tables of one alpha-map (lib/splat/coverage_alphamap.c). */
 typedef struct rs__alpha_table {
