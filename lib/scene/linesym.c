@@ -1772,25 +1772,31 @@ static int short_stroke(const rs_network *net, size_t nroads, const uint32_t *re
 }
 
 /* How far a road's surface rectangle must run past a vertex of the road
- * for the round join there: hw tan(turn / 2), at most hw. (ux, uy): the
- * rectangle's segment's unit direction; segment k (v[k] .. v[k + 1]) the
- * one on the vertex's other side. */
+ * for the round join there: hw tan(turn / 2), at most hw; (ax, ay), (bx,
+ * by): the unit directions of travel into and out of the vertex. */
+static double join_ext(double ax, double ay, double bx, double by, double hw)
+{
+    double c = ax * bx + ay * by, sn = fabs(ax * by - ay * bx);
+    return 1 + c > sn ? hw * sn / (1 + c) : hw;
+}
+
+/* join_ext at a vertex of v: (ux, uy) the rectangle's segment's unit
+ * direction, segment k (v[k] .. v[k + 1]) the one on the vertex's other side. */
 static double join_reach(const ls_vtx *v, size_t k, double ux, double uy, double hw)
 {
     double nx, ny;
     unit_dir(v[k].x, v[k].y, v[k + 1].x, v[k + 1].y, &nx, &ny);
-    double c = ux * nx + uy * ny, sn = fabs(ux * ny - uy * nx);
-    return 1 + c > sn ? hw * sn / (1 + c) : hw;
+    return join_ext(ux, uy, nx, ny, hw);
 }
 
 /* Where two records of a stroke meet at a bend (an OSM way split there,
  * a roundabout split at its arms), the union of their capsules has the
  * round join of one road: their end rectangles need run past the joint
- * only hw tan(turn / 2) each (join_reach), not the half width, when the
+ * only hw tan(turn / 2) each (join_ext), not the half width, when the
  * two are as wide and cut the same lines. end_rect: per record end, its
  * end rectangle in J->sf (SIZE_MAX: none, or a T's, left as it is). */
-static void joints_reach(ls_junc *J, const ls_ends *ends, const rs_network *net, const rs_roads *roads,
-                         const size_t *end_rect, size_t nroads)
+static void joints_reach(ls_junc *J, const ls_ends *ends, const rs_network *net, const size_t *end_rect,
+                         size_t nroads)
 {
     if (!net || rs_network_road_count(net) != nroads || !net->prev || !net->next) return;
     for (size_t ri = 0; ri < nroads; ri++)
@@ -1803,24 +1809,20 @@ static void joints_reach(ls_junc *J, const ls_ends *ends, const rs_network *net,
                 cand[2] = net->stroke_roads[net->stroke_start[k]];
                 cand[3] = net->stroke_roads[net->stroke_start[k + 1] - 1];
             }
-            double wa = 0;
-            rs_roads_get(roads, ri, NULL, &wa, NULL, NULL);
+            ls_surf *Q = &J->sf[ka];
             for (int c = 0; c < 4; c++) {
                 uint32_t q = cand[c];
-                if (q == UINT32_MAX || q == ri || q >= nroads || !ends[q].valid) continue;
-                double wq = 0;
-                rs_roads_get(roads, q, NULL, &wq, NULL, NULL);
-                if (wq != wa || J->nocut[q] != J->nocut[ri] || J->car[q] != J->car[ri] ||
-                    (J->prio && J->prio[q] != J->prio[ri]))
+                if (q == UINT32_MAX || q == ri || q >= nroads || !ends[q].valid || J->nocut[q] != J->nocut[ri] ||
+                    J->car[q] != J->car[ri] || (J->prio && J->prio[q] != J->prio[ri]))
                     continue;
                 int f = ends[q].x[0] == ends[ri].x[e] && ends[q].y[0] == ends[ri].y[e] ? 0
                         : ends[q].x[1] == ends[ri].x[e] && ends[q].y[1] == ends[ri].y[e] ? 1 : -1;
-                if (f < 0 || end_rect[2 * (size_t)q + (size_t)f] == SIZE_MAX) continue;
-                /* both directions point away from the joint: straight on is -1 */
-                double ax = ends[ri].dx[e], ay = ends[ri].dy[e], bx = ends[q].dx[f], by = ends[q].dy[f];
-                double c1 = -(ax * bx + ay * by), sn = fabs(ax * by - ay * bx);
-                ls_surf *Q = &J->sf[ka];
-                double ext = 1 + c1 > sn ? Q->r * sn / (1 + c1) : Q->r;
+                /* (the rectangles' half widths: the roads' widths) */
+                if (f < 0 || end_rect[2 * (size_t)q + (size_t)f] == SIZE_MAX ||
+                    J->sf[end_rect[2 * (size_t)q + (size_t)f]].r != Q->r)
+                    continue;
+                /* both directions point away from the joint: into it is the reverse of one */
+                double ext = join_ext(-ends[ri].dx[e], -ends[ri].dy[e], ends[q].dx[f], ends[q].dy[f], Q->r);
                 if (e) Q->u1 = rs__fmin(Q->u1, Q->len + ext);
                 else Q->u0 = rs__fmax(Q->u0, -ext);
                 break;
@@ -1901,6 +1903,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
         unit_dir(v[m - 1].x, v[m - 1].y, v[m - 2].x, v[m - 2].y, &ends[ri].dx[1], &ends[ri].dy[1]);
         double hw = 0.5 * w;
         if (!(hw > 0) || !(hw <= BAND_MAX_EXTENT) || J->nocut[ri]) continue; /* no surface to stop at */
+        const int closed = m >= 4 && v[0].x == v[m - 1].x && v[0].y == v[m - 1].y;
         for (size_t i = 0; i + 1 < m; i++) {
             ls_surf Q;
             unit_dir(v[i].x, v[i].y, v[i + 1].x, v[i + 1].y, &Q.ux, &Q.uy);
@@ -1919,11 +1922,9 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
              * line meeting the outside of a gentle bend stops at most
              * hw (1 / cos(turn / 2) - 1) early (up to (sqrt 2 - 1) hw until
              * 6 December 2026, 0.46 m at an arm of a 24-point ring) */
-            int closed = m >= 4 && v[0].x == v[m - 1].x && v[0].y == v[m - 1].y;
-            Q.u0 = i > 0 || closed ? -join_reach(v, i > 0 ? i - 1 : m - 2, Q.ux, Q.uy, hw) : -hw;
-            Q.u1 = Q.len + (i + 2 < m || closed ? join_reach(v, i + 2 < m ? i + 1 : 0, Q.ux, Q.uy, hw) : hw);
-            if (lo > 0) Q.u0 = -hw;
-            if (hi < len) Q.u1 = Q.len + hw;
+            Q.u0 = (i > 0 || closed) && !(lo > 0) ? -join_reach(v, i > 0 ? i - 1 : m - 2, Q.ux, Q.uy, hw) : -hw;
+            Q.u1 = Q.len + ((i + 2 < m || closed) && !(hi < len) ? join_reach(v, i + 2 < m ? i + 1 : 0, Q.ux, Q.uy, hw)
+                                                                : hw);
             Q.road = (uint32_t)ri;
             Q.only = Q.skip = Q.only2 = Q.skip2 = Q.skip3 = Q.skip4 = NO_STROKE;
             Q.clip = Q.clip2 = 0;
@@ -2005,7 +2006,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             if (!tee && !Q.clip && i + 2 == m && hi == len) end_rect[2 * ri + 1] = J->nsf - 1;
         }
     }
-    joints_reach(J, ends, p->net, roads, end_rect, nroads);
+    joints_reach(J, ends, p->net, end_rect, nroads);
     rs__free(ctx, tees);
     rs__free(ctx, tend);
     rs__free(ctx, tend_of);
