@@ -1065,6 +1065,15 @@ static double end_angle(const build *B, const rs_network_leg *L)
     return end_dir(B, rs__leg_end(L), &a) ? a : L->angle;
 }
 
+/* Two end legs at a junction that may continue each other: y leaves
+ * within MAX_DEFLECTION of straight on from x, and they are a record's own
+ * two ends or ends that fit (ends_fit). */
+static int junction_pair(const build *B, const rs_network_leg *x, const rs_network_leg *y)
+{
+    return rs__is_end_leg(x) && rs__is_end_leg(y) && fabs(wrap_angle(y->angle - x->angle - RS__PI)) < MAX_DEFLECTION &&
+           (x->road == y->road ? x->kind != y->kind : ends_fit(B, x, y));
+}
+
 /* Pair the road ends at a node (its d legs L, sorted) into strokes:
  * link[2 r + e] is the road end (2 q + f; e, f: 0 start, 1 end) that road
  * r's end e continues into. */
@@ -1099,16 +1108,11 @@ static void link_node(const build *B, const rs_network_leg *L, uint32_t d, uint3
         if (!rs__is_end_leg(&L[a])) continue;
         uint32_t match = NONE, count = 0;
         for (uint32_t b = 0; b < d; b++)
-            if (b != a && rs__is_end_leg(&L[b]) && fabs(wrap_angle(L[b].angle - L[a].angle - RS__PI)) < MAX_DEFLECTION &&
-                (L[a].road == L[b].road ? L[a].kind != L[b].kind : ends_fit(B, &L[a], &L[b])))
-                match = b, count++;
+            if (b != a && junction_pair(B, &L[a], &L[b])) match = b, count++;
         if (count != 1 || match < a) continue; /* (each pair once, from its first leg) */
         uint32_t back = 0;
         for (uint32_t c = 0; c < d; c++)
-            if (c != match && rs__is_end_leg(&L[c]) &&
-                fabs(wrap_angle(L[match].angle - L[c].angle - RS__PI)) < MAX_DEFLECTION &&
-                (L[c].road == L[match].road ? L[c].kind != L[match].kind : ends_fit(B, &L[c], &L[match])))
-                back++;
+            if (c != match && junction_pair(B, &L[c], &L[match])) back++;
         if (back != 1) continue;
         uint32_t ea = rs__leg_end(&L[a]), eb = rs__leg_end(&L[match]);
         link[ea] = eb;
