@@ -690,14 +690,12 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
          * vertex (round outside, mitred inside). Rings of several records
          * keep their square ends at the seam and at their joints here. */
         if (!r && net && rs_network_road_count(net) == n && rl.n >= 4 && rl.x[0] == rl.x[rl.n - 1] &&
-            rl.y[0] == rl.y[rl.n - 1]) {
-            rs_road_stroke q;
-            if (rs_network_road_stroke(net, i, &q) == RS_OK && q.closed && rs_network_stroke_roads(net, q.stroke, NULL, 0) == 1)
-                for (size_t k = seg0; k < g->nseg; k++) {
-                    float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
-                    sg[7] = (float)((uint32_t)sg[7] & ~(RS_GPU_SEG_FIRST | RS_GPU_SEG_LAST));
-                }
-        }
+            rl.y[0] == rl.y[rl.n - 1] && net->closed[net->stroke_of[i]] &&
+            net->stroke_start[net->stroke_of[i] + 1] - net->stroke_start[net->stroke_of[i]] == 1)
+            for (size_t k = seg0; k < g->nseg; k++) {
+                float *sg = g->seg + RS_GPU_SEG_FLOATS * k;
+                sg[7] = (float)((uint32_t)sg[7] & ~(RS_GPU_SEG_FIRST | RS_GPU_SEG_LAST));
+            }
         /* a segment reaching past a trimmed end's line is clipped by it (the road field's rule) */
         for (size_t k = seg0; !r && k < g->nseg; k++)
             for (int e = 0; e < 2; e++) {
