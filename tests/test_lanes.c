@@ -642,6 +642,44 @@ static void test_bend_outside_cut(void)
     }
 }
 
+/* A free road end's round cap cuts another road's line only where the
+ * cap lies over it: a street ending 2 m short of a primary's edge reaches
+ * over the primary's edge line with its cap (r = 3 m), whose chord there is
+ * about 3.3 m wide. Until 6 December 2026 the cut ran to the square end's
+ * corners (6 m: the line stopped up to (sqrt 2 - 1) r short of the cap,
+ * 184/255 against the shader on docs/examples/network_spike.txt). */
+static void test_cap_cut(void)
+{
+    static const char text[] = "road main width 10 class=primary area=rural\n0 30\n60 30\nend\n"
+                               "road stub width 6 class=secondary area=rural\n30 55\n30 37\nend\n";
+    static const char alone[] = "road main width 10 class=primary area=rural\n0 30\n60 30\nend\n";
+    double *al = NULL, *al0 = NULL;
+    uint32_t w = 0, h = 0;
+    CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
+    CHECK(scene_paint(alone, 61, 61, RS_PROFILE_RMS, NULL, &al0, &w, &h));
+    if (al && al0 && w == 600 && h == 600) {
+        /* the rows of the primary's upper edge line alone (whole at x = 10 m) */
+        int rows = 0, bad = 0, cut = 0, kept = 0;
+        for (uint32_t y = 300; y < 350; y++) {
+            if (!(al0[(size_t)y * w + 100] > 0.99)) continue;
+            rows++;
+            double dy = 37 - (y + 0.5) * PIX, half = sqrt(9 - dy * dy);
+            for (uint32_t x = 150; x < 450; x++) {
+                double d = fabs((x + 0.5) * PIX - 30), a = al[(size_t)y * w + x], a0 = al0[(size_t)y * w + x];
+                if (d < half - PIX) bad += !(a < 0.01), cut++;
+                else if (d > half + PIX) bad += !(fabs(a - a0) < 0.01), kept++;
+            }
+        }
+        CHECKF(rows >= 1 && cut > 0 && kept > 0 && bad == 0,
+               "%d edge-line rows: %d of %d pixels under the cap and %d beside it differ from the cap's cut", rows, bad,
+               cut + kept, kept);
+        printf("round cap cut: %d rows, %d pixels under the cap cut, %d beside it kept, %d wrong\n", rows, cut, kept,
+               bad);
+    }
+    free(al);
+    free(al0);
+}
+
 /* A line under several surfaces in a row is cut by each: a service road
  * of five segments runs along a primary's edge over its edge line, which
  * stops under it (a lower road cuts a higher one's edge lines, issue 27).
@@ -1178,6 +1216,7 @@ int main(void)
     test_ring_seam();
     test_tee_side_direction();
     test_bend_outside_cut();
+    test_cap_cut();
     test_line_under_road();
     test_many_crossings();
     test_ring_arm_at_seam();

@@ -727,6 +727,8 @@ typedef struct ls_surf {
     double ax, ay, ux, uy, len, r;
     double u0, u1;        /* the rectangle along u: -r .. len + r, or shorter at a T (below) */
     uint32_t road;
+    uint32_t cap;         /* bit 0: a free road end with a round cap at u = 0, bit 1: at u = len (the
+                             rectangle's square end stands for the cap's half disc: cap_tangents) */
     uint32_t only, skip;  /* cuts only the stroke `only` / every stroke but `skip` (NO_STROKE: any) */
     uint32_t only2, skip2; /* and a second one (a through road of two strokes, rs__network_tees) */
     uint32_t skip3, skip4; /* the same for a one-segment record's other end at a T (junc_build) */
@@ -852,11 +854,160 @@ static void piece_with(ls_piece *out, const ls_piece *P, const double (*hp)[3], 
     out->nhp = m;
 }
 
-/* P minus surface rectangle Q (cut by its clip lines): up to 6 disjoint
- * pieces into out; returns their count, or -1 when Q misses P (P stays
+/* Round caps. Past a free road end the surface is a half disc, which the
+ * rectangle's square end holds with its two corners: a line crossing a
+ * corner stopped up to (sqrt 2 - 1) r short of the surface (0.6 m on
+ * docs/examples/network_spike.txt, where the shader, cutting with the
+ * capsules, drew it on). For the piece at hand the cap is the square's
+ * part within a few tangents of the disc: starting from P's part past
+ * the end (within the band), each tangent is taken at the angle of that
+ * part's vertex farthest from the end point and clips it, until no
+ * vertex is more than tol beyond the circle. So the cut holds the cap
+ * and stands off it by at most tol where it meets the piece; a piece the
+ * tangents do not settle within CAP_TAN_MAX also keeps the square end
+ * (never more cut than by the square). */
+#define CAP_TAN_MAX 4
+/* the most parts of one cut: two beside, the end parts (tangents and
+ * square ends), two beyond the clip lines */
+#define CUT_PARTS (2 + 2 * (CAP_TAN_MAX + 1) + 2)
+
+/* The tangents of the cap at end e (centre u = ce, outward sign se) for
+ * the piece with (u, v) vertices qu, qv[n] in Q's frame, as (cos, sin) of
+ * their angles from the outward direction into t; returns their count,
+ * or CAP_TAN_MAX + 1 when the square end must be kept as well (not
+ * settled). 0: nothing of P lies more than tol outside the cap. */
+static uint32_t cap_tangents(const double *qu, const double *qv, uint32_t n, double ce, double se, double r, double tol,
+                             double (*t)[2])
+{
+    double ax[POLY_MAX], ay[POLY_MAX], bx[POLY_MAX], by[POLY_MAX];
+    int past = 0;
+    for (uint32_t k = 0; k < n; k++) ax[k] = se * (qu[k] - ce), ay[k] = qv[k], past |= ax[k] > 0;
+    if (!past) return 0; /* (most pieces a cap's rectangle cuts stop short of it) */
+    uint32_t m = clip_poly(ax, ay, n, 0, 1, 0, bx, by); /* past the end */
+    m = clip_poly(bx, by, m, r, 0, -1, ax, ay);          /* within the band */
+    m = clip_poly(ax, ay, m, r, 0, 1, bx, by);
+    const double far2 = (r + tol) * (r + tol);
+    for (uint32_t k = 0; k < CAP_TAN_MAX; k++) {
+        if (m < 3) return k;
+        uint32_t f = 0;
+        double best = -1;
+        for (uint32_t i = 0; i < m; i++) {
+            double d2 = bx[i] * bx[i] + by[i] * by[i];
+            if (d2 > best) best = d2, f = i;
+        }
+        if (!(best > far2)) return k;
+        double rho = sqrt(best);
+        t[k][0] = bx[f] / rho;
+        t[k][1] = by[f] / rho;
+        m = clip_poly(bx, by, m, r, -t[k][0], -t[k][1], ax, ay);
+        memcpy(bx, ax, m * sizeof *bx);
+        memcpy(by, ay, m * sizeof *by);
+    }
+    for (uint32_t i = 0; m >= 3 && i < m; i++)
+        if (bx[i] * bx[i] + by[i] * by[i] > far2) return CAP_TAN_MAX + 1;
+    return CAP_TAN_MAX;
+}
+
+/* cut_piece where a round cap of Q meets P more than tol outside its
+ * disc: the parts beside Q (one half-plane each), past each end (a cap's
+ * tangents, in turn, or the square end), and past the clip lines, each
+ * within the half-planes before it. -1 when no cap needs a tangent or a
+ * part would pass HP_MAX (cut_piece then cuts with the square ends). */
+static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, const double *qu, const double *qv,
+                      int in_v, ls_piece *out, ls_poly *outg, double drop, double tol)
+{
+    double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
+    double nqx = Q->uy, nqy = -Q->ux, npx = P->uy, npy = -P->ux;
+    double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
+    double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
+    double r = Q->r;
+    uint32_t n = G->n;
+    double tan_[2][CAP_TAN_MAX][2];
+    uint32_t nt[2] = { 0, 0 }, any = 0;
+    for (int e = 0; e < 2; e++)
+        if (Q->cap >> e & 1) {
+            nt[e] = cap_tangents(qu, qv, n, e ? Q->len : 0, e ? 1 : -1, r, tol, tan_[e]);
+            any |= nt[e];
+        }
+    if (!any) return -1;
+    /* each end's half-planes, the "inside" form (c0 + cu x + cv y >= 0 in P's frame) */
+    double end[2][CAP_TAN_MAX + 1][3];
+    uint32_t ne[2];
+    for (int e = 0; e < 2; e++) {
+        uint32_t k = 0;
+        if (Q->cap >> e & 1) {
+            double ce = e ? Q->len : 0, se = e ? 1 : -1;
+            for (; k < nt[e] && k < CAP_TAN_MAX; k++) {
+                /* r - se (u' - ce) cos - v' sin >= 0 */
+                double cs = tan_[e][k][0], sn = tan_[e][k][1];
+                double a0 = r + se * ce * cs, au = -se * cs, av = -sn;
+                end[e][k][0] = a0 + au * cu0 + av * cv0;
+                end[e][k][1] = au * fuu + av * fvu;
+                end[e][k][2] = au * fuv + av * fvv;
+            }
+        }
+        if (!(Q->cap >> e & 1) || nt[e] > CAP_TAN_MAX) { /* the rectangle's end */
+            if (e) end[e][k][0] = Q->u1 - cu0, end[e][k][1] = -fuu, end[e][k][2] = -fuv;
+            else end[e][k][0] = cu0 - Q->u0, end[e][k][1] = fuu, end[e][k][2] = fuv;
+            k++;
+        }
+        ne[e] = k;
+    }
+    double h[HP_MAX][3];
+    uint32_t nb = in_v ? 0 : 2, need = nb + ne[0] + ne[1] + (Q->clip ? 1u : 0u) + (Q->clip2 ? 1u : 0u);
+    if (P->nlim + need > HP_MAX) return -1;
+    int m = 0;
+#define LS_SET(j, a0, a1, a2) (h[j][0] = (a0), h[j][1] = (a1), h[j][2] = (a2))
+#define LS_PART(nh)                                                                                              \
+    do {                                                                                                         \
+        if (nonempty_hp(G->x, G->y, n, (const double(*)[3])h, (nh), &outg[m]))                                  \
+            piece_with(&out[m], P, (const double(*)[3])h, (nh), &outg[m], drop), m++;                            \
+    } while (0)
+    if (!in_v) {
+        LS_SET(0, cv0 - r, fvu, fvv); /* v' >= r */
+        LS_PART(1);
+        LS_SET(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
+        LS_PART(1);
+        LS_SET(0, cv0 + r, fvu, fvv);
+        LS_SET(1, r - cv0, -fvu, -fvv);
+    }
+    /* past each end: beyond its k-th half-plane, within those before it */
+    for (int e = 0; e < 2; e++)
+        for (uint32_t k = 0; k < ne[e]; k++) {
+            for (uint32_t j = 0; j < k; j++) LS_SET(nb + j, end[e][j][0], end[e][j][1], end[e][j][2]);
+            LS_SET(nb + k, -end[e][k][0], -end[e][k][1], -end[e][k][2]);
+            LS_PART(nb + k + 1);
+        }
+    if (Q->clip || Q->clip2) {
+        uint32_t k = nb;
+        for (int e = 0; e < 2; e++)
+            for (uint32_t j = 0; j < ne[e]; j++, k++) LS_SET(k, end[e][j][0], end[e][j][1], end[e][j][2]);
+        double fnx = P->ux * Q->cx + P->uy * Q->cy, fny = npx * Q->cx + npy * Q->cy;
+        double cn0 = ox * Q->cx + oy * Q->cy, cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
+        double gnx = P->ux * Q->cx2 + P->uy * Q->cy2, gny = npx * Q->cx2 + npy * Q->cy2;
+        double dn0 = ox * Q->cx2 + oy * Q->cy2, dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
+        if (Q->clip) { /* within the rest, beyond the clip line */
+            LS_SET(k, cn0 - cq, fnx, fny);
+            LS_PART(k + 1);
+        }
+        if (Q->clip2) {
+            if (Q->clip) LS_SET(k, cq - cn0, -fnx, -fny), k++;
+            LS_SET(k, dn0 - dq, gnx, gny);
+            LS_PART(k + 1);
+        }
+    }
+#undef LS_PART
+#undef LS_SET
+    return m;
+}
+
+/* P minus surface rectangle Q (cut by its clip lines, its square ends
+ * taken in at round caps): up to CUT_PARTS disjoint pieces into out
+ * (6 without caps); returns their count, or -1 when Q misses P (P stays
  * whole) or a piece would need more half-planes than it holds (P is then
- * kept whole: lines run on). */
-static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg, double drop)
+ * kept whole: lines run on). tol: the caps' (cap_tangents). */
+static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg, double drop,
+                     double tol)
 {
     double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
     double nqx = Q->uy, nqy = -Q->ux;      /* Q's left normal */
@@ -875,8 +1026,10 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     double dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
     int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip, out_clip2 = Q->clip2;
     int in_v = 1, in_u = 1; /* P wholly within Q's sides / within its ends */
+    double qu[POLY_MAX], qv[POLY_MAX]; /* P's polygon in Q's frame */
     for (uint32_t k = 0; k < n; k++) {
         double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
+        qu[k] = u, qv[k] = v;
         out_v_hi &= v >= r;
         out_v_lo &= v <= -r;
         out_u_lo &= u <= lo;
@@ -887,6 +1040,10 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
         out_clip2 &= dn0 + x[k] * gnu + y[k] * gnv >= dq;
     }
     if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip || out_clip2) return -1;
+    if (Q->cap && tol > 0) {
+        int m = cut_capped(P, G, Q, qu, qv, in_v, out, outg, drop, tol);
+        if (m >= 0) return m;
+    }
     /* the most half-planes a piece takes: 3 beside Q, 5 beyond its clip
      * line, 5 or 6 beyond the second (P stays whole when they pass HP_MAX) */
     uint32_t need = Q->clip2 ? 5u + (Q->clip ? 1u : 0u) : Q->clip ? 5u : 3u;
@@ -991,14 +1148,16 @@ enum { QMAX = 16 };
 typedef struct ls_cutset {
     uint32_t n, cur;
     double drop; /* piece_with's */
-    ls_piece p[2][QMAX];
-    ls_poly g[2][QMAX];
+    double tol;  /* cut_piece's at round caps: a sixteenth of a pixel */
+    ls_piece p[2][QMAX + CUT_PARTS]; /* (room for one more cut's parts past QMAX) */
+    ls_poly g[2][QMAX + CUT_PARTS];
 } ls_cutset;
 
 static void cutset_init(ls_cutset *S, const ls_piece *P, const rs__linesym *L)
 {
     /* (exact edges only: the Hermite ramps reach past a half-plane) */
     S->drop = L->aa == RS__AA_EXACT ? 2 * L->margin * (1 + 1e-9) : 0;
+    S->tol = L->pixel / 16;
     S->n = 1;
     S->cur = 0;
     S->p[0][0] = *P;
@@ -1010,17 +1169,13 @@ static void cutset_init(ls_cutset *S, const ls_piece *P, const rs__linesym *L)
  * (or NULL) counts CUT_WORK per piece tried. */
 static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
 {
-    ls_piece tmp[6];
-    ls_poly tg[6];
     uint32_t c = S->cur, o = 1 - c, nn = 0;
     int full = 0, moved = 0; /* (pieces are copied to the other buffer once Q cuts one: mostly it cuts none) */
     for (uint32_t a = 0; a < S->n; a++) {
         if (work) *work += CUT_WORK; /* a polygon clip costs as much as ~32 list steps */
-        /* the pieces go straight to their place in the other buffer when
-         * there is room for the most a cut makes */
-        int direct = nn + 6 <= QMAX;
-        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, direct ? &S->p[o][nn] : tmp, direct ? &S->g[o][nn] : tg,
-                          S->drop);
+        /* the parts go straight to their place in the other buffer (nn <=
+         * QMAX here, and it has room for CUT_PARTS more) */
+        int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, &S->p[o][nn], &S->g[o][nn], S->drop, S->tol);
         if (m < 0) {
             if (!moved) {
                 nn++;
@@ -1039,15 +1194,8 @@ static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
             }
             moved = 1;
         }
-        if (direct) {
-            nn += (uint32_t)m;
-            continue;
-        }
-        if (nn + (uint32_t)m > QMAX) { full = 1; break; }
-        for (int b = 0; b < m; b++) {
-            S->p[o][nn] = tmp[b];
-            S->g[o][nn++] = tg[b];
-        }
+        nn += (uint32_t)m;
+        if (nn > QMAX) { full = 1; break; }
     }
     if (full || !moved) return; /* too many pieces: this surface does not cut; or it cut none */
     S->cur = o;
@@ -1825,6 +1973,7 @@ static void joints_reach(ls_junc *J, const ls_ends *ends, const rs_network *net,
                 double ext = join_ext(-ends[ri].dx[e], -ends[ri].dy[e], ends[q].dx[f], ends[q].dy[f], Q->r);
                 if (e) Q->u1 = rs__fmin(Q->u1, Q->len + ext);
                 else Q->u0 = rs__fmax(Q->u0, -ext);
+                Q->cap &= e ? ~2u : ~1u; /* a joint: the next record's surface goes on */
                 break;
             }
         }
@@ -1926,6 +2075,9 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
             Q.u1 = Q.len + ((i + 2 < m || closed) && !(hi < len) ? join_reach(v, i + 2 < m ? i + 1 : 0, Q.ux, Q.uy, hw)
                                                                 : hw);
             Q.road = (uint32_t)ri;
+            /* a free end: its round cap (cut_capped) */
+            Q.cap = (!closed && !far_cut && i == 0 && !(lo > 0) ? 1u : 0u) |
+                    (!closed && !far_cut && i + 2 == m && !(hi < len) ? 2u : 0u);
             Q.only = Q.skip = Q.only2 = Q.skip2 = Q.skip3 = Q.skip4 = NO_STROKE;
             Q.clip = Q.clip2 = 0;
             Q.cx = Q.cy = Q.cc = Q.cx2 = Q.cy2 = Q.cc2 = 0;
@@ -1953,6 +2105,7 @@ static rs_result junc_build(rs_ctx *ctx, rs__linesym *L, const rs_roads *roads, 
                 double reach = rs__fmax((te->far + hw * cs) / sn, hw);
                 if (e) Q.u1 = Q.len + reach;
                 else Q.u0 = -reach;
+                Q.cap &= e ? ~2u : ~1u; /* trimmed: no cap */
                 Q.clip = 1;
                 Q.cx = te->nx, Q.cy = te->ny, Q.cc = te->nx * ex + te->ny * ey + te->far;
             }
