@@ -254,6 +254,7 @@ typedef struct cli_geo {
 typedef struct cli_gdal_road_counts {
     size_t features, roads, no_highway, not_roads, not_lines, not_reprojected;
     size_t zebra_nodes, zebra_points, signal_nodes, unmarked_nodes;
+    size_t tunnels; /* highway ways with tunnel=* (but no, building_passage): under the ground, skipped */
     int set;
 } cli_gdal_road_counts;
 

@@ -775,6 +775,15 @@ static int lanes_ok(const char *v)
     return k >= 1 && k <= 16;
 }
 
+/* OSM layer= values: whole numbers -5..5 (the wiki's range), else dropped. */
+static int layer_ok(const char *v)
+{
+    char *end;
+    errno = 0;
+    long n = strtol(v, &end, 10);
+    return end != v && *end == '\0' && errno == 0 && n >= -5 && n <= 5 && (v[0] == '-' || (v[0] >= '0' && v[0] <= '9'));
+}
+
 /* OSM width values: "7", "7.5", "7,5", with a unit "7.5 m", "7.5m",
  * "7 metres", "12 ft", "3.5 feet", "12'" and feet and inches "12'6\"":
  * metres, or 0 when unreadable or outside 0.1..200 m. */
@@ -1116,7 +1125,7 @@ static int roads_text(const gdal_source *s, const cli_gdal_roads_opts *o, char *
     }
     if (R.ncx) qsort(R.cx, R.ncx, sizeof *R.cx, cmp_crossing);
 
-    size_t feats = 0, not_lines = 0, not_roads = 0, no_highway = 0;
+    size_t feats = 0, not_lines = 0, not_roads = 0, no_highway = 0, tunnels = 0;
     /* OSM data (the OSM driver, or a layer with highway-like fields: an
      * ogr2ogr export): only highway=* ways are roads unless --where says
      * which features are; a plain line layer's features all are */
@@ -1153,6 +1162,16 @@ static int roads_text(const gdal_source *s, const cli_gdal_roads_opts *o, char *
             OGR_F_Destroy(f);
             continue;
         }
+        /* a tunnel runs under the ground, which is what the texture shows
+         * (an aerial view has no road there): skipped and counted, unless
+         * --where chose the features (docs/gis.md) */
+        char t5[64], t6[64], t7[64], t8[64], t9[64];
+        const char *tun = tag(f, tags, "tunnel", t5, sizeof t5);
+        if (tun && strcmp(tun, "no") && strcmp(tun, "building_passage") && !o->where) {
+            tunnels++;
+            OGR_F_Destroy(f);
+            continue;
+        }
         const char *name = field(f, "name");
         char fid[40];
         if (!name) {
@@ -1177,6 +1196,14 @@ static int roads_text(const gdal_source *s, const cli_gdal_roads_opts *o, char *
         if (lanes) put(&h, " lanes=%s", lanes);
         if (ow && oneway_of(ow)) put(&h, " oneway=%s", oneway_of(ow));
         if (tl) put(&h, " turn:lanes="), put_quoted(&h, tl);
+        /* roundabouts and priority roads (the network's ranks), bridges and
+         * layers (which surface lies on top where roads cross) */
+        const char *jn = tag(f, tags, "junction", t6, sizeof t6), *pr = tag(f, tags, "priority_road", t7, sizeof t7);
+        const char *br = tag(f, tags, "bridge", t8, sizeof t8), *ly = tag(f, tags, "layer", t9, sizeof t9);
+        if (jn) put(&h, " junction="), put_quoted(&h, jn);
+        if (pr) put(&h, " priority_road="), put_quoted(&h, pr);
+        if (br && strcmp(br, "no")) put(&h, " bridge="), put_quoted(&h, br);
+        if (ly && layer_ok(ly)) put(&h, " layer=%s", ly);
         if (h.oom) {
             free(h.s);
             OGR_F_Destroy(f);
@@ -1209,8 +1236,8 @@ static int roads_text(const gdal_source *s, const cli_gdal_roads_opts *o, char *
         goto out;
     }
     put(&b, "# %zu roads, %zu points from %zu features (skipped: %zu not lines, %zu not roads, %zu without "
-            "highway, %d not reprojectable)\n", R.roads, R.points, feats, not_lines, not_roads, no_highway,
-        R.failed_transform);
+            "highway, %zu tunnels, %d not reprojectable)\n", R.roads, R.points, feats, not_lines, not_roads, no_highway,
+        tunnels, R.failed_transform);
     if (R.signal_nodes || R.unmarked_nodes)
         put(&b, "# crossing nodes not drawn: %zu traffic_signals, %zu unmarked\n", R.signal_nodes,
             R.unmarked_nodes);
@@ -1219,6 +1246,7 @@ static int roads_text(const gdal_source *s, const cli_gdal_roads_opts *o, char *
         c->features = feats;
         c->roads = R.roads;
         c->no_highway = no_highway;
+        c->tunnels = tunnels;
         c->not_roads = not_roads;
         c->not_lines = not_lines;
         c->not_reprojected = (size_t)R.failed_transform;

@@ -154,10 +154,13 @@ int cli_geo_roads_text(const char *roads_path, const cli_splat_args *s, const cl
 
 void cli_geo_source_note(const cli_gdal_road_counts *c, const char *roads_path)
 {
-    if (c->set && (c->no_highway || c->not_roads))
+    if (c->set && (c->no_highway || c->not_roads || c->tunnels)) {
+        char tun[96] = "";
+        if (c->tunnels) snprintf(tun, sizeof tun, ", and %zu in tunnels (under the ground)", c->tunnels);
         fprintf(stderr, "roadsplat: note: %s: %zu roads from %zu features; skipped %zu ways without highway=* "
-                "(fences, rivers, railways, ...; --where selects features) and %zu whose highway= is not a road\n",
-                roads_path, c->roads, c->features, c->no_highway, c->not_roads);
+                "(fences, rivers, railways, ...; --where selects features) and %zu whose highway= is not a road%s\n",
+                roads_path, c->roads, c->features, c->no_highway, c->not_roads, tun);
+    }
 }
 
 /* ---- the frame --------------------------------------------------------------------- */

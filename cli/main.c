@@ -357,15 +357,16 @@ static int stats_to_temp(cli_out *o, const run_stats *rs)
     const double *t = rs->t;
     const rs_road_grid_stats *gs = rs->gs;
     const rs_splat_profile *pf = &rs->job->profile;
-    char src[400] = "";
+    char src[768] = "";
     if (rs->src && rs->src->set) {
         const cli_gdal_road_counts *c = rs->src;
         snprintf(src, sizeof src,
                  "  \"roads_source\": {\"features\": %zu, \"roads\": %zu, \"skipped_no_highway\": %zu, "
-                 "\"skipped_not_road\": %zu, \"skipped_not_lines\": %zu, \"skipped_not_reprojected\": %zu, "
+                 "\"skipped_not_road\": %zu, \"skipped_tunnel\": %zu, \"skipped_not_lines\": %zu, "
+                 "\"skipped_not_reprojected\": %zu, "
                  "\"crossings\": {\"zebra_nodes\": %zu, \"zebra_points\": %zu, \"traffic_signals\": %zu, "
                  "\"unmarked\": %zu}},\n",
-                 c->features, c->roads, c->no_highway, c->not_roads, c->not_lines, c->not_reprojected,
+                 c->features, c->roads, c->no_highway, c->not_roads, c->tunnels, c->not_lines, c->not_reprojected,
                  c->zebra_nodes, c->zebra_points, c->signal_nodes, c->unmarked_nodes);
     }
     if (fprintf(o->f, "{\n%s  \"pixel_size_m\": %.9g,\n", src, rs->pixel_m) < 0) {

@@ -1345,9 +1345,11 @@ RS_API int rs_road_grid_query(const rs_road_grid *grid, double x, double y, doub
  *   stroke its start and its end meet at a T (-1: none), how far from
  *   that stroke's centre line each of those ends keeps cutting its lines
  *   (metres), 1 when some road end meets this road's stroke at a T, the
- *   road's priority for the fill (docs/network.md "Crossings": among the
+ *   road's rank for the fill (docs/network.md "Crossings": among the
  *   surfaces holding a pixel the highest wins, then the nearest; -1e9 for
- *   every road when all are equal), 1 for a car road (0: path, footway,
+ *   every road when all are equal): 64 x its level (layer=, bridge=:
+ *   docs/network.md "Bridges and layers"; floor(rank / 64) gives it back)
+ *   + its priority, 1 for a car road (0: path, footway,
  *   cycleway: its surface cuts no car road's lines);
  *   its trimmed ends at a T (docs/network.md "Ends at a T": no round cap,
  *   the strip runs on to the through road's far edge line n.p = c and

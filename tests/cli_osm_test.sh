@@ -131,6 +131,44 @@ J
 "$BIN" convert esc.geojson esc.txt 2>e && grep -q '^road "feature0" width 3.5 class=service oneway=-1$' esc.txt && ok ||
     bad "other_tags with escapes: $(cat e; grep '^road' esc.txt)"
 
+# tunnels, roundabouts, priority roads, bridges and layers: a tunnel is
+# under the ground (not on the texture: skipped and counted), a building
+# passage is not; junction=, priority_road=, bridge= and layer= (-5..5)
+# come through for the network and the line cuts (docs/gis.md)
+cat >lay.osm <<O
+<?xml version="1.0" encoding="UTF-8"?>
+<osm version="0.6" generator="roadsplat test">
+  <node id="1" version="1" $(ll 501000 5001000)/>
+  <node id="2" version="1" $(ll 501100 5001000)/>
+  <node id="3" version="1" $(ll 501100 5001100)/>
+  <node id="4" version="1" $(ll 501000 5001100)/>
+  <node id="5" version="1" $(ll 501200 5001000)/>
+  <node id="6" version="1" $(ll 501200 5001100)/>
+  <way id="30" version="1"><nd ref="1"/><nd ref="2"/><nd ref="3"/><nd ref="4"/><nd ref="1"/>
+    <tag k="highway" v="tertiary"/><tag k="junction" v="roundabout"/></way>
+  <way id="31" version="1"><nd ref="2"/><nd ref="5"/><tag k="highway" v="primary"/><tag k="tunnel" v="yes"/></way>
+  <way id="32" version="1"><nd ref="5"/><nd ref="6"/><tag k="highway" v="secondary"/><tag k="bridge" v="yes"/>
+    <tag k="layer" v="1"/><tag k="priority_road" v="designated"/></way>
+  <way id="33" version="1"><nd ref="3"/><nd ref="6"/><tag k="highway" v="residential"/><tag k="layer" v="-1"/></way>
+  <way id="34" version="1"><nd ref="4"/><nd ref="6"/><tag k="highway" v="service"/><tag k="tunnel" v="building_passage"/>
+    <tag k="layer" v="12"/></way>
+  <way id="35" version="1"><nd ref="1"/><nd ref="5"/><tag k="highway" v="track"/><tag k="tunnel" v="culvert"/></way>
+</osm>
+O
+ogr2ogr -q -f GeoJSON lay.geojson lay.osm lines 2>e || bad "ogr2ogr lay.osm: $(cat e)"
+"$BIN" convert --dem dem.tif lay.geojson lay.txt 2>e && ok || bad "convert lay.geojson: $(cat e)"
+grep -q '^road "way30" class=tertiary junction="roundabout"$' lay.txt && ok || bad "junction=roundabout: $(grep way30 lay.txt)"
+grep -q '^road "way32" class=secondary priority_road="designated" bridge="yes" layer=1$' lay.txt && ok ||
+    bad "bridge, layer, priority_road: $(grep way32 lay.txt)"
+grep -q '^road "way33" class=residential layer=-1$' lay.txt && ok || bad "layer=-1: $(grep way33 lay.txt)"
+grep -q '^road "way34" class=service$' lay.txt && ok || bad "a building passage is drawn, layer=12 dropped: $(grep way34 lay.txt)"
+grep -Eq 'way31|way35' lay.txt && bad "a tunnel became a road: $(grep -E 'way31|way35' lay.txt)" || ok
+grep -q "from 6 features (skipped: 0 not lines, 0 not roads, 0 without highway, 2 tunnels, " lay.txt && ok ||
+    bad "convert's tunnel count: $(grep '^# ' lay.txt)"
+"$BIN" --pixel-size 2 --stats s1b.json dem.tif lay.geojson o1c.png 2>e1c &&
+    grep -q "^roadsplat: note: lay.geojson: 4 roads from 6 features; .*, and 2 in tunnels (under the ground)$" e1c &&
+    json s1b.json "j['roads_source']['skipped_tunnel'] == 2" && ok || bad "the tunnel note and --stats: $(cat e1c)"
+
 # ---- 2. pixel size -----------------------------------------------------------
 "$BIN" --pixel-size 0.1 --window-world 501480,5001380,501520,5001420 --stats s2.json dem.tif ext.geojson o2.png 2>e &&
     json s2.json "j['pixel_size_m'] == 0.1 and j['window']['width'] == 400 and j['window']['height'] == 400 and j['texels'] == 900" &&

@@ -181,6 +181,13 @@ check "shader: trimmed T ends at 0.1 m equal the CPU splat (max <= 8/255)" sh -c
 # short, until 6 December 2026: 184/255 in these columns)
 check "shader: a round cap cuts another road's edge line where the cap lies, as in the CPU splat (max <= 24/255)" sh -c "'$BIN' $N --quiet '$T/caps-dem.pgm' '$EX/network_spike.txt' '$T/pc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/caps-dem.pgm' '$EX/network_spike.txt' '$T/ps.png' && python3 '$DIFF' '$T/ps.png' '$T/pc.png' 280,420,0,80 | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 24) }'"
 check "shader: network_spike equals the CPU splat" xcheck spike "$T/ps.png" "$T/pc.png"
+# a bridge over a primary (docs/examples/network_bridge.txt, docs/network.md
+# "Bridges and layers"): the shader lays the bridge's surface and lines on
+# top and stops the primary's lines under it as the CPU does (both cut the
+# bridge's edge lines at the primary on one level until 6 December 2026)
+awk 'BEGIN { print "P2"; print 51, 31; print 100; for (i = 0; i < 31; i++) { l = ""; for (j = 0; j < 51; j++) l = l " 50"; print l } }' > "$T/bridge-dem.pgm"
+check "shader: a bridge's lines over the road below equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$T/bridge-dem.pgm' '$EX/network_bridge.txt' '$T/brc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/bridge-dem.pgm' '$EX/network_bridge.txt' '$T/brs.png' && python3 '$DIFF' '$T/brs.png' '$T/brc.png' 440,560,200,400 | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
+check "shader: network_bridge equals the CPU splat" xcheck bridge "$T/brs.png" "$T/brc.png"
 # side roads ending on a primary at 30 and 45 degrees (docs/network.md "The
 # through road at a T"): the primary's centre line and the band within
 # keep of it (rows 138..161 of 300 at 0.1 m) are those of the primary

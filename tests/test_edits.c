@@ -1799,6 +1799,44 @@ static void test_ring_edit(void)
     edit_end(&E);
 }
 
+/* A road's level edited (layer= set, then bridge=no over a layer): the
+ * primary's lines under the secondary, the secondary's over it and the
+ * street ending under it (a T with it on one level, none with the bridge)
+ * change; each update draws as a fresh build and its rectangles hold
+ * every changed pixel (docs/network.md "Bridges and layers"). */
+static void test_level_edit(void)
+{
+    static const char *const step[3][2] = { { "layer", "1" }, { "layer", "-1" }, { "layer", "0" } };
+    static float z[51 * 31];
+    rs_dem_frame fr = { 2, 0.01, 0, 0 };
+    const double p[4] = { 2, 30, 98, 30 }, b[4] = { 50, 2, 50, 58 }, u[4] = { 75, 45, 52, 45 };
+    for (int k = 0; k < 3; k++) {
+        one_edit E;
+        edit_begin(&E, 0, 0);
+        E.ok = E.ok && rs_dem_create(E.ctx, 51, 31, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
+               rs_roads_create(E.ctx, &E.roads) == RS_OK && rs_roads_add(E.ctx, E.roads, NULL, 9, p, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 0, "class", "primary") == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 0, "area", "rural") == RS_OK &&
+               rs_roads_add(E.ctx, E.roads, NULL, 7, b, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 1, "class", "secondary") == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 1, "area", "rural") == RS_OK &&
+               rs_roads_add(E.ctx, E.roads, NULL, 6, u, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 2, "class", "residential") == RS_OK;
+        /* the base on the step before (none for the first) */
+        for (int j = 0; j < k && E.ok; j++) E.ok = rs_roads_set_attr(E.ctx, E.roads, 1, step[j][0], step[j][1]) == RS_OK;
+        edit_base(&E, 5);
+        E.ok = E.ok && rs_roads_set_attr(E.ctx, E.roads, 1, step[k][0], step[k][1]) == RS_OK;
+        char what[64];
+        snprintf(what, sizeof what, "level edit %s=%s", step[k][0], step[k][1]);
+        edit_update(&E, what);
+        if (E.ok) {
+            check_rects(what, E.g1, &E.a, &E.b, &E.c);
+            CHECKF(!same_image(&E.a, &E.b), "%s: nothing changed", what);
+        }
+        edit_end(&E);
+    }
+}
+
 /* A road given a second time (the same points, width and attributes):
  * its pieces have the same fingerprints, but its lines are painted twice,
  * so their partly covered pixels change; the dirty rectangles hold them
@@ -2106,6 +2144,7 @@ int main(void)
     test_long_road();
     test_chunk_room();
     test_ring_edit();
+    test_level_edit();
     test_duplicate_road();
     test_removed_tee_strip();
     test_far_strip_clipped();

@@ -680,6 +680,65 @@ static void test_cap_cut(void)
     free(al0);
 }
 
+/* A bridge over a road (docs/network.md "Bridges and layers"): the upper
+ * road's lines run on over the lower one, whatever their classes, and
+ * the lower road's lines stop under the upper surface; a street ending
+ * under the bridge gets no give-way line. On one level the crossing cuts
+ * as before (the secondary's edge lines stop at the primary). */
+static void test_bridge_lines(void)
+{
+    /* one level; a secondary bridge; a tertiary one (of lower rank than
+     * the primary: on one level the primary cuts its lines and its own
+     * centre line runs on over it) */
+    static const char *const lvl[3] = { "secondary", "secondary layer=1", "tertiary bridge=yes" };
+    static const char prim[] = "road p width 9 class=primary area=rural\n0 30\n60 30\nend\n";
+    char bridge[160], text[512];
+    for (int v = 0; v < 3; v++) {
+        snprintf(bridge, sizeof bridge, "road b width 7 class=%s area=rural\n39 2\n39 58\nend\n", lvl[v]);
+        snprintf(text, sizeof text, "%s%sroad u width 6 class=residential\n58 45\n41 45\nend\n", prim, bridge);
+        double *al = NULL, *ln = NULL, *ab = NULL, *ap = NULL;
+        uint32_t w = 0, h = 0;
+        CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, &al, &ln, &w, &h));
+        CHECK(scene_paint(bridge, 61, 61, RS_PROFILE_RMS, NULL, &ab, &w, &h));
+        CHECK(scene_paint(prim, 61, 61, RS_PROFILE_RMS, NULL, &ap, &w, &h));
+        if (al && ln && ab && ap && w == 600 && h == 600) {
+            /* the bridge's lines over the primary (x 35.5..42.5 m, y 26..34 m) */
+            double diff_b = 0, alone_b = 0, under_p = 0, alone_p = 0, giveway = 0;
+            for (uint32_t y = 260; y < 340; y++)
+                for (uint32_t x = 355; x < 425; x++) diff_b += fabs(ln[(size_t)y * w + x] - ab[(size_t)y * w + x]),
+                                                   alone_b += ab[(size_t)y * w + x];
+            /* the primary's lines under the bridge (the paint beyond the
+             * bridge's own; its centre line has a dash at 36..42 m), and
+             * alone there */
+            for (uint32_t y = 255; y < 345; y++)
+                for (uint32_t x = 358; x < 422; x++)
+                    under_p += fmax(ln[(size_t)y * w + x] - ab[(size_t)y * w + x], 0), alone_p += ap[(size_t)y * w + x];
+            /* markings near the street's end under the bridge (x 42..45 m, y 42..48 m) */
+            for (uint32_t y = 420; y < 480; y++)
+                for (uint32_t x = 420; x < 450; x++) giveway += al[(size_t)y * w + x] - ln[(size_t)y * w + x];
+            if (v) {
+                /* (a rural tertiary has no lines of its own) */
+                CHECKF((v == 2 || alone_b > 50) && diff_b < 1 && under_p < 1 && alone_p > 300 && giveway < 1,
+                       "%s: its lines over the primary differ from alone by %.1f px (%.1f alone), the primary's "
+                       "under it paint %.1f px (%.1f alone), markings at the end under it %.1f px",
+                       lvl[v], diff_b, alone_b, under_p, alone_p, giveway);
+            } else {
+                /* one level: the primary cuts the secondary's lines, and the
+                 * street meets the secondary at a T */
+                CHECKF(diff_b > 20 && giveway > 5, "one level: the secondary's lines differ from alone by %.1f px, "
+                       "markings at the street's end %.1f px", diff_b, giveway);
+            }
+            printf("bridge lines (%s): %.1f px of the bridge's lines differ over the primary, %.1f of the primary's "
+                   "under it (%.1f alone), markings at the end under it %.1f px\n", lvl[v], diff_b, under_p, alone_p,
+                   giveway);
+        }
+        free(al);
+        free(ln);
+        free(ab);
+        free(ap);
+    }
+}
+
 /* A line under several surfaces in a row is cut by each: a service road
  * of five segments runs along a primary's edge over its edge line, which
  * stops under it (a lower road cuts a higher one's edge lines, issue 27).
@@ -1217,6 +1276,7 @@ int main(void)
     test_tee_side_direction();
     test_bend_outside_cut();
     test_cap_cut();
+    test_bridge_lines();
     test_line_under_road();
     test_many_crossings();
     test_ring_arm_at_seam();

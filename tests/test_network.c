@@ -1612,6 +1612,41 @@ static void test_bent_tee_lines(void)
     CHECKF(worst_all <= 8, "T on a bent street: the through road's inner lines differ by %d/255", worst_all);
 }
 
+/* Bridges and layers (docs/network.md "Bridges and layers"): a street
+ * ending under a bridge (layer=1, or bridge=yes alone) or over a tunnel's
+ * level (layer=-1) meets nothing there, an end on its centre line within
+ * the tolerance neither; on one level both are T's. layer= that is not a
+ * whole number -100..100 counts as none, bridge=no as no bridge. */
+static void test_levels(void)
+{
+    static const char *const over[] = { " layer=1", " bridge=yes", " layer=-1", " layer=2 bridge=no", "",
+                                        " layer=abc", " bridge=no", " layer=1e3" };
+    for (size_t v = 0; v < sizeof over / sizeof over[0]; v++) {
+        int apart = v < 4;
+        for (int on_line = 0; on_line < 2; on_line++) {
+            char text[512];
+            /* the street ends 2 m inside the 7 m road, or on its centre line */
+            snprintf(text, sizeof text,
+                     "road b width 7 class=secondary%s\n50 2\n50 58\nend\n"
+                     "road s width 6 class=residential\n75 45\n%s 45\nend\n", over[v], on_line ? "50" : "52");
+            rs_roads *roads = NULL;
+            rs_network *net = NULL;
+            CHECK(rs_roads_parse(ctx, text, strlen(text), &roads) == RS_OK);
+            CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK && net_consistent(net, roads));
+            size_t tees = 0;
+            for (size_t i = 0; net && i < rs_network_node_count(net); i++) {
+                rs_network_node nd;
+                rs_network_get_node(net, i, &nd);
+                tees += nd.degree == 3;
+            }
+            CHECKF(tees == (apart ? 0u : 1u), "'%s', the end %s: %zu T nodes, want %d", over[v],
+                   on_line ? "on the centre line" : "inside the surface", tees, apart ? 0 : 1);
+            rs_network_free(ctx, net);
+            rs_roads_free(ctx, roads);
+        }
+    }
+}
+
 int main(void)
 {
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) return 1;
@@ -1636,6 +1671,7 @@ int main(void)
     test_tee_splits();
     test_junction_area();
     test_bent_tee_lines();
+    test_levels();
     rs_ctx_free(ctx);
     return th_finish("test_network");
 }

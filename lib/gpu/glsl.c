@@ -268,7 +268,11 @@ static const char *const rsh_fs_src[] = {
     "    vec4 r7 = texelFetch(u_roadt, 10 * road + 7);\n"
     "    bool car = r7.w > 0.0;\n"
     "    float prodL = 1.0, keep = max(r0.y - 2.0, 0.0); int zerosL = 0;\n"
-    "    if (car) {\n"
+    /* roads on other levels (bridges, layer=; the level is the fill
+     * priority's multiple of 64, all alike at -1e9): a lower one cuts none
+     * of this road's lines, a higher one all of them */
+    "    float lv = r7.z > -1e8 ? floor(r7.z / 64.0) : 0.0;\n"
+    "    {\n"
     "        int lr = -1; float st = texelFetch(u_roadt, 10 * road + 6).x;\n"
     "        for (int e = e0; e < e1; e++) {\n"
     "            int b = int(texelFetch(u_seg, 3 * int(texelFetch(u_cseg, e).r) + 1).z);\n"
@@ -276,6 +280,9 @@ static const char *const rsh_fs_src[] = {
     "            lr = b;\n"
     "            if (float(b) == r1.y || float(b) == r1.z) continue;\n"
     "            vec4 b7 = texelFetch(u_roadt, 10 * b + 7);\n"
+    "            float lb = b7.z > -1e8 ? floor(b7.z / 64.0) : 0.0;\n"
+    "            if (lb < lv) { cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0); continue; }\n"
+    "            if (lb > lv || !car) continue;\n"
     "            if (!(b7.w > 0.0)) { cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0); continue; }\n"
     "            if (!(b7.z < r7.z)) continue;\n"
     "            if (r7.y > 0.0) { vec4 b6 = texelFetch(u_roadt, 10 * b + 6); if (b6.y == st || b6.z == st) continue; }\n"

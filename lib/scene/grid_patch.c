@@ -296,7 +296,7 @@ static rs_result road_sum(rs_ctx *ctx, const rs_roads *roads, size_t i, const rs
     memset(S, 0, sizeof *S);
     S->reach = 0.5 * w;
     *sprint = 0;
-    S->prio = rs__road_priority(roads, i);
+    S->prio = rs__road_rank(roads, i);
     if (o->style.disable) return RS_OK;
     rs_result r = rs_road_style_ex(ctx, roads, i, &o->style, y);
     if (r) return r;

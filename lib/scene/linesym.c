@@ -1255,6 +1255,18 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                         (Q->only != NO_STROKE && Q->only != sr && Q->only2 != sr) || Q->skip == sr || Q->skip2 == sr ||
                         Q->skip3 == sr || Q->skip4 == sr)
                         continue;
+                    /* roads on different levels (a bridge, layer=): the
+                     * lower surface cuts none of the upper road's lines, the
+                     * upper one all of the lower road's (they lie under its
+                     * deck), whatever their classes (docs/network.md
+                     * "Bridges and layers") */
+                    if (J->prio && rs__rank_level(J->prio[Q->road]) != rs__rank_level(J->prio[road])) {
+                        if (rs__rank_level(J->prio[Q->road]) < rs__rank_level(J->prio[road])) continue;
+                        if (surf_misses_box(Q, P->x0, P->y0, P->x1, P->y1) || continues(J, road, Q->road)) continue;
+                        if (!cut) cutset_init(S, P, L), cut = 1;
+                        cutset_cut(S, Q, &J->work);
+                        continue;
+                    }
                     /* a path, footway or cycleway crossing or meeting a car
                      * road cuts none of its lines (issue 27: the road's lines
                      * run on over a footway crossing, as over a zebra's) */

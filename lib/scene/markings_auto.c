@@ -37,6 +37,7 @@
 #include "lanes.h"
 #include "atlas.h"
 
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -941,6 +942,7 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
         rs_roads_get_info(roads, i, &ia);
         if (rs__class_non_car(ia.road_class)) continue; /* no car markings (docs/road-format.md) */
         uint32_t si = net->stroke_of[i];
+        int lvi = INT_MIN; /* (its level: read when a street is near) */
         for (int e = 0; e < 2 && !r; e++) {
             /* a record end its street goes on from: only streets crossing
              * it there that the network did not join (no shared point,
@@ -970,6 +972,9 @@ static rs_result auto_core(rs_ctx *ctx, const rs_dem *dem, const rs_roads *roads
                 if (x < b[0] - reach || x > b[2] + reach || y < b[1] - reach || y > b[3] + reach) continue;
                 double d = nearest_within(&A.rl[j], x, y, reach, &s);
                 if (d > reach) continue;
+                /* (a street on another level, a bridge over the end: no junction) */
+                if (lvi == INT_MIN) lvi = rs__road_level(roads, i);
+                if (rs__road_level(roads, j) != lvi) continue;
                 if (linked) {
                     int joined = 0;
                     for (uint32_t k = nd == UINT32_MAX ? 0 : net->leg_start[nd]; nd != UINT32_MAX && k < net->leg_start[nd + 1]; k++)

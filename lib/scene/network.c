@@ -22,6 +22,7 @@
 #include "grid_edit.h"
 
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -62,6 +63,28 @@ int rs__road_priority(const rs_roads *roads, size_t r)
     return pr;
 }
 
+int rs__road_level(const rs_roads *roads, size_t r)
+{
+    const char *v = rs_roads_get_attr(roads, r, "layer");
+    if (v) {
+        char *end;
+        long n = strtol(v, &end, 10);
+        /* (strtol's range: within -100 .. 100, errno need not be read) */
+        return end != v && *end == '\0' && n >= -100 && n <= 100 ? (int)n : 0;
+    }
+    return attr_is(roads, r, "bridge", "no", NULL) || !rs_roads_get_attr(roads, r, "bridge") ? 0 : 1;
+}
+
+int rs__road_rank(const rs_roads *roads, size_t r)
+{
+    return RS__LEVEL_RANK * rs__road_level(roads, r) + rs__road_priority(roads, r);
+}
+
+int rs__rank_level(int rank)
+{
+    return rank >= 0 ? rank / RS__LEVEL_RANK : -((RS__LEVEL_RANK - 1 - rank) / RS__LEVEL_RANK);
+}
+
 rs_result rs__road_priorities(rs_ctx *ctx, const rs_roads *roads, int **out)
 {
     size_t n = rs_roads_count(roads);
@@ -73,7 +96,7 @@ rs_result rs__road_priorities(rs_ctx *ctx, const rs_roads *roads, int **out)
             rs__free(ctx, p);
             return RS_ERR_CANCELLED;
         }
-        p[i] = rs__road_priority(roads, i);
+        p[i] = rs__road_rank(roads, i);
         differ |= p[i] != p[0];
     }
     if (differ) *out = p;
@@ -749,6 +772,9 @@ static rs_result find_tees(build *B)
                         double s = B->s[a] + u * (B->s[k1] - B->s[a]);
                         if ((B->cid || B->vroad[e] == r) && one_place(B, (uint32_t)r, s, B->vroad[e], B->s[e], 0))
                             continue;
+                        /* (an end on a road of another level, a bridge's
+                         * line over it: they do not meet) */
+                        if (rs__road_level(B->roads, r) != rs__road_level(B->roads, B->vroad[e])) continue;
                         pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), nd, 0, 0, s, dist };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
@@ -1323,6 +1349,7 @@ static void number_strokes(rs_network *N, uint32_t *link, uint8_t *seen)
 typedef struct surf_end {
     uint32_t node, road, stroke;
     int non_car;
+    int level; /* rs__road_level of its road (INT_MIN: not read yet): it meets a street of its level only */
     double x, y;   /* the end point */
     uint32_t q, k; /* the nearest: record q's segment k (NONE: none) */
     double u, d;   /* the point's parameter on it (0 .. 1) and squared distance */
@@ -1343,7 +1370,7 @@ static size_t surf_cell(double v, double v0, double ic, size_t n)
  * 10^5 roads the ends are megabytes, read out of order) */
 static void surf_test(const rs_roads *roads, const rs_network *N, surf_end *fe, const uint32_t *id, const double *xy,
                       uint32_t q, uint32_t sq, const double *qxy, size_t qnp, uint32_t k, const double *pa, double dx,
-                      double dy, double dd, double reach2, int *q_non_car)
+                      double dy, double dd, double reach2, int *q_non_car, int *q_level)
 {
     /* farther than the reach from the segment's line, by a margin far
      * above the roundings: farther from the segment too (most ends
@@ -1357,6 +1384,10 @@ static void surf_test(const rs_roads *roads, const rs_network *N, surf_end *fe, 
     surf_end *f = &fe[*id];
     if (!(d2 < f->d)) return; /* (the first of equals: the lowest record and segment) */
     if (f->stroke == sq) return;
+    /* (a street ending under a bridge is not at a T with it) */
+    if (*q_level == INT_MIN) *q_level = rs__road_level(roads, q);
+    if (f->level == INT_MIN) f->level = rs__road_level(roads, f->road);
+    if (*q_level != f->level) return;
     if (!f->non_car) { /* (read only here: a record's info is tens of ns of attribute lookups) */
         if (*q_non_car < 0) *q_non_car = rs__road_non_car(roads, q);
         if (*q_non_car) return;
@@ -1452,6 +1483,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         surf_end *f = &fe[m++];
         f->node = (uint32_t)nd, f->road = L->road, f->stroke = N->stroke_of[L->road];
         f->non_car = rs__road_non_car(B->roads, L->road);
+        f->level = INT_MIN; /* (read when a street is near: surf_test) */
         f->x = p[0], f->y = p[1], f->q = f->k = NONE, f->u = 0, f->d = INFINITY;
         bx0 = fmin(bx0, p[0]), by0 = fmin(by0, p[1]), bx1 = fmax(bx1, p[0]), by1 = fmax(by1, p[1]);
     }
@@ -1501,7 +1533,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         }
         double rq = surf_reach(B->roads, N, q, tol);
         if (!(rq > 0)) continue;
-        int qnc = -1; /* (not read yet) */
+        int qnc = -1, qlv = INT_MIN; /* (not read yet) */
         uint32_t sq = N->stroke_of[q];
         double reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
         size_t qnp = B->voff[q + 1] - B->voff[q], nseg = qnp - 1;
@@ -1522,7 +1554,7 @@ static rs_result surface_tees(build *B, rs_network *N)
                 for (size_t cy = r0; cy <= r1; cy++)
                     for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)
                         surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy, dd,
-                                  reach2, &qnc);
+                                  reach2, &qnc, &qlv);
                 continue;
             }
             for (size_t cy = r0; cy <= r1; cy++) {
@@ -1539,7 +1571,7 @@ static rs_result surface_tees(build *B, rs_network *N)
                 size_t c0 = surf_cell(rs__fmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(rs__fmax(xa, xb) + rq, bx0, ic, nx);
                 for (uint32_t i = start[cy * nx + c0], ie = start[cy * nx + c1 + 1]; i < ie; i++)
                     surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy, dd,
-                                  reach2, &qnc);
+                                  reach2, &qnc, &qlv);
             }
         }
     }
@@ -2628,6 +2660,7 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
     const double *p = leg_point(roads, L);
     f.node = nd, f.road = L->road, f.stroke = N->stroke_of[L->road];
     f.non_car = rs__road_non_car(roads, L->road);
+    f.level = INT_MIN;
     f.x = p[0], f.y = p[1], f.q = f.k = NONE, f.u = 0, f.d = INFINITY;
     double pt[2] = { p[0], p[1] };
     uint32_t zero = 0;
@@ -2638,12 +2671,12 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
         const double *qxy;
         size_t qnp;
         rs_roads_get(roads, q, NULL, NULL, &qxy, &qnp);
-        int qnc = -1;
+        int qnc = -1, qlv = INT_MIN;
         for (size_t k = 0; k + 1 < qnp; k++) {
             const double *pa = qxy + 2 * k, *pb = pa + 2;
             double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
             if (!(dd > 0) || !(dd <= DBL_MAX)) continue;
-            surf_test(roads, N, &f, &zero, pt, q, N->stroke_of[q], qxy, qnp, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc);
+            surf_test(roads, N, &f, &zero, pt, q, N->stroke_of[q], qxy, qnp, (uint32_t)k, pa, dx, dy, dd, reach2, &qnc, &qlv);
         }
     }
     o->node = nd;

@@ -51,9 +51,20 @@ int rs__class_rank(rs_road_class c);
  * priority_road=designated|yes_unposted, + 20 for junction=roundabout
  * (docs/network.md "Priorities"); shared with the automatic markings. */
 int rs__road_priority(const rs_roads *roads, size_t r);
-/* rs__road_priority of every road into *out (the caller's: rs__free), or
- * *out = NULL when all are equal (nothing to rank). RS_ERR_NOMEM,
- * RS_ERR_CANCELLED (ticks per road). */
+/* A road's level where roads cross (docs/network.md "Bridges and
+ * layers"): its layer= (a whole number -100..100; others count as none),
+ * else 1 for bridge= (any value but no), else 0. */
+int rs__road_level(const rs_roads *roads, size_t r);
+/* Where roads cross, which surface lies on top: RS__LEVEL_RANK * the
+ * level + rs__road_priority (the level first, then the priority); the
+ * level back from a rank (rs__rank_level, floor division). */
+#define RS__LEVEL_RANK 64
+int rs__road_rank(const rs_roads *roads, size_t r);
+int rs__rank_level(int rank);
+/* rs__road_rank of every road into *out (the caller's: rs__free), or
+ * *out = NULL when all are equal (nothing to rank): the fills and the
+ * line symbols' crossings read them. RS_ERR_NOMEM, RS_ERR_CANCELLED
+ * (ticks per road). */
 rs_result rs__road_priorities(rs_ctx *ctx, const rs_roads *roads, int **out);
 /* Classes for feet and bikes (path, footway, cycleway): no car markings,
  * and their surfaces cut no car road's lines; shared with the automatic

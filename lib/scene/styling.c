@@ -294,7 +294,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
          * not: its fills are looked up as the whole map's are (a pixel
          * takes a surface that holds it before a nearer centre line) */
         if (!(st->prio = rs__alloc_array(ctx, n ? n : 1, sizeof *st->prio))) { r = RS_ERR_NOMEM; goto fail_dash; }
-        for (size_t i = 0; i < n; i++) st->prio[i] = rs__road_priority(roads, i);
+        for (size_t i = 0; i < n; i++) st->prio[i] = rs__road_rank(roads, i);
     }
     if (nbands) {
         rs__linesym_params lp;
