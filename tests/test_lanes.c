@@ -642,6 +642,16 @@ static void test_bend_outside_cut(void)
     }
 }
 
+/* The lines of a 61 x 61 m scene and of its one road alone (each w = 600
+ * pixels of 0.1 m a side); 0 when either failed (checked). */
+static int paint_and_alone(const char *text, const char *alone, double **al, double **al0)
+{
+    uint32_t w = 0, h = 0, w0 = 0, h0 = 0;
+    CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, al, &w, &h));
+    CHECK(scene_paint(alone, 61, 61, RS_PROFILE_RMS, NULL, al0, &w0, &h0));
+    return *al && *al0 && w == 600 && h == 600 && w0 == 600 && h0 == 600;
+}
+
 /* A free road end's round cap cuts another road's line only where the
  * cap lies over it: a street ending 2 m short of a primary's edge reaches
  * over the primary's edge line with its cap (r = 3 m), whose chord there is
@@ -654,10 +664,8 @@ static void test_cap_cut(void)
                                "road stub width 6 class=secondary area=rural\n30 55\n30 37\nend\n";
     static const char alone[] = "road main width 10 class=primary area=rural\n0 30\n60 30\nend\n";
     double *al = NULL, *al0 = NULL;
-    uint32_t w = 0, h = 0;
-    CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
-    CHECK(scene_paint(alone, 61, 61, RS_PROFILE_RMS, NULL, &al0, &w, &h));
-    if (al && al0 && w == 600 && h == 600) {
+    const uint32_t w = 600;
+    if (paint_and_alone(text, alone, &al, &al0)) {
         /* the rows of the primary's upper edge line alone (whole at x = 10 m) */
         int rows = 0, bad = 0, cut = 0, kept = 0;
         for (uint32_t y = 300; y < 350; y++) {
@@ -751,10 +759,8 @@ static void test_line_under_road(void)
                                "road lane width 5 class=service\n6 37.4\n14 37.5\n22 37.3\n30 37.5\n38 37.4\n46 37.5\nend\n";
     static const char alone[] = "road main width 13 class=primary area=rural\n0 30\n60 30\nend\n";
     double *al = NULL, *al0 = NULL;
-    uint32_t w = 0, h = 0;
-    CHECK(scene_paint(text, 61, 61, RS_PROFILE_RMS, NULL, &al, &w, &h));
-    CHECK(scene_paint(alone, 61, 61, RS_PROFILE_RMS, NULL, &al0, &w, &h));
-    if (al && al0 && w == 600 && h == 600) {
+    const uint32_t w = 600;
+    if (paint_and_alone(text, alone, &al, &al0)) {
         /* the main road's lower edge line (rows 360..363: 6.0..6.4 m off
          * its centre line), x 12..40 m, under the lane (2.5 m each side of
          * 37.3..37.5 m) */

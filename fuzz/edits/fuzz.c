@@ -1,7 +1,7 @@
 /* libFuzzer target: road edits and rs_road_grid_update, checked against a
  * fresh build (issue 30). Input: one flags byte, road text up to the first
  * NUL byte, then edits of 6 bytes each (at most 6): remove, replace (moved,
- * new width), set_attr (class, lanes, oneway), set_point_attr (a zebra on
+ * new width), set_attr (class, lanes, oneway, layer), set_point_attr (a zebra on
  * or off), add a road, rs_styles_replace. After every edit that succeeds:
  *  - the updated grid splats to the same bytes (colour and weight) as a
  *    grid built anew from the edited roads;
@@ -160,6 +160,10 @@ static rs_result edit(rs_ctx *ctx, rs_roads *roads, rs_styles *styles, const uin
         if (e[2] % 3 == 1) {
             snprintf(v, sizeof v, "%d", 1 + e[3] % 5);
             return rs_roads_set_attr(ctx, roads, i, "lanes", v);
+        }
+        if (e[3] & 2) { /* a level: layer -1, 0 or 1 (docs/network.md "Bridges and layers") */
+            snprintf(v, sizeof v, "%d", (e[3] >> 2) % 3 - 1);
+            return rs_roads_set_attr(ctx, roads, i, "layer", v);
         }
         return rs_roads_set_attr(ctx, roads, i, "oneway", e[3] & 1 ? "yes" : "no");
     }

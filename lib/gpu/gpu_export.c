@@ -671,7 +671,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
             for (uint32_t d = 0; d < ln->dash_count && d < 8; d++) bd[12 + d] = (float)ln->dash[d];
         }
         rd[7] = ge_float(lines_reach);
-        /* the fill's priority (lib/scene/styling.c: -1e9 for all when all are equal) */
+        /* the fill's rank, level then priority (lib/scene/styling.c: -1e9 for all when all are equal) */
         rd[30] = (float)rs__road_rank(roads, i);
         /* a car road: a path, footway or cycleway cuts none of its lines (lib/scene/linesym.c) */
         rd[31] = rs__road_non_car(roads, i) ? 0.0f : 1.0f;

@@ -908,25 +908,70 @@ static uint32_t cap_tangents(const double *qu, const double *qv, uint32_t n, dou
     return CAP_TAN_MAX;
 }
 
+/* Q's frame and clip lines in P's frame: v' = cv0 + u fvu + v fvv and
+ * u' = cu0 + u fuu + v fuv (Q's left normal and direction), and
+ * n.(p - Q.a) = cn0 + u fnu + v fnv against cq for the clip line (dn0,
+ * gnu, gnv against dq for the second). */
+typedef struct ls_qframe {
+    double cv0, fvu, fvv, cu0, fuu, fuv;
+    double cn0, fnu, fnv, cq, dn0, gnu, gnv, dq;
+} ls_qframe;
+
+static void q_frame(const ls_piece *P, const ls_surf *Q, ls_qframe *F)
+{
+    double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
+    double nqx = Q->uy, nqy = -Q->ux; /* Q's left normal */
+    double npx = P->uy, npy = -P->ux; /* P's left normal */
+    F->cv0 = ox * nqx + oy * nqy, F->fvu = P->ux * nqx + P->uy * nqy, F->fvv = npx * nqx + npy * nqy;
+    F->cu0 = ox * Q->ux + oy * Q->uy, F->fuu = P->ux * Q->ux + P->uy * Q->uy, F->fuv = npx * Q->ux + npy * Q->uy;
+    F->cn0 = ox * Q->cx + oy * Q->cy, F->fnu = P->ux * Q->cx + P->uy * Q->cy, F->fnv = npx * Q->cx + npy * Q->cy;
+    F->cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
+    F->dn0 = ox * Q->cx2 + oy * Q->cy2, F->gnu = P->ux * Q->cx2 + P->uy * Q->cy2, F->gnv = npx * Q->cx2 + npy * Q->cy2;
+    F->dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
+}
+
+/* The part of P within the nh half-planes h, when it keeps area, as the
+ * next piece of out (and its polygon). */
+static void try_part(const ls_piece *P, const ls_poly *G, const double (*h)[3], uint32_t nh, ls_piece *out,
+                     ls_poly *outg, int *m, double drop)
+{
+    if (nonempty_hp(G->x, G->y, G->n, h, nh, &outg[*m])) {
+        piece_with(&out[*m], P, h, nh, &outg[*m], drop);
+        (*m)++;
+    }
+}
+
+/* The parts beyond Q's clip lines, within the k half-planes h[0 .. k)
+ * (the rest of Q: its band and its ends) and, for the second line, within
+ * the first. */
+static void clip_parts(const ls_piece *P, const ls_poly *G, const ls_surf *Q, const ls_qframe *F, double (*h)[3],
+                       uint32_t k, ls_piece *out, ls_poly *outg, int *m, double drop)
+{
+    if (Q->clip) { /* the rectangle's part beyond the clip line stays */
+        h[k][0] = F->cn0 - F->cq, h[k][1] = F->fnu, h[k][2] = F->fnv;
+        try_part(P, G, (const double(*)[3])h, k + 1, out, outg, m, drop);
+    }
+    if (Q->clip2) { /* and its part within the first clip line beyond the second */
+        if (Q->clip) h[k][0] = F->cq - F->cn0, h[k][1] = -F->fnu, h[k][2] = -F->fnv, k++;
+        h[k][0] = F->dn0 - F->dq, h[k][1] = F->gnu, h[k][2] = F->gnv;
+        try_part(P, G, (const double(*)[3])h, k + 1, out, outg, m, drop);
+    }
+}
+
 /* cut_piece where a round cap of Q meets P more than tol outside its
  * disc: the parts beside Q (one half-plane each), past each end (a cap's
  * tangents, in turn, or the square end), and past the clip lines, each
  * within the half-planes before it. -1 when no cap needs a tangent or a
  * part would pass HP_MAX (cut_piece then cuts with the square ends). */
-static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, const double *qu, const double *qv,
-                      int in_v, ls_piece *out, ls_poly *outg, double drop, double tol)
+static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, const ls_qframe *F, const double *qu,
+                      const double *qv, int in_v, ls_piece *out, ls_poly *outg, double drop, double tol)
 {
-    double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
-    double nqx = Q->uy, nqy = -Q->ux, npx = P->uy, npy = -P->ux;
-    double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
-    double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
     double r = Q->r;
-    uint32_t n = G->n;
     double tan_[2][CAP_TAN_MAX][2];
     uint32_t nt[2] = { 0, 0 }, any = 0;
     for (int e = 0; e < 2; e++)
         if (Q->cap >> e & 1) {
-            nt[e] = cap_tangents(qu, qv, n, e ? Q->len : 0, e ? 1 : -1, r, tol, tan_[e]);
+            nt[e] = cap_tangents(qu, qv, G->n, e ? Q->len : 0, e ? 1 : -1, r, tol, tan_[e]);
             any |= nt[e];
         }
     if (!any) return -1;
@@ -941,14 +986,14 @@ static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, con
                 /* r - se (u' - ce) cos - v' sin >= 0 */
                 double cs = tan_[e][k][0], sn = tan_[e][k][1];
                 double a0 = r + se * ce * cs, au = -se * cs, av = -sn;
-                end[e][k][0] = a0 + au * cu0 + av * cv0;
-                end[e][k][1] = au * fuu + av * fvu;
-                end[e][k][2] = au * fuv + av * fvv;
+                end[e][k][0] = a0 + au * F->cu0 + av * F->cv0;
+                end[e][k][1] = au * F->fuu + av * F->fvu;
+                end[e][k][2] = au * F->fuv + av * F->fvv;
             }
         }
         if (!(Q->cap >> e & 1) || nt[e] > CAP_TAN_MAX) { /* the rectangle's end */
-            if (e) end[e][k][0] = Q->u1 - cu0, end[e][k][1] = -fuu, end[e][k][2] = -fuv;
-            else end[e][k][0] = cu0 - Q->u0, end[e][k][1] = fuu, end[e][k][2] = fuv;
+            if (e) end[e][k][0] = Q->u1 - F->cu0, end[e][k][1] = -F->fuu, end[e][k][2] = -F->fuv;
+            else end[e][k][0] = F->cu0 - Q->u0, end[e][k][1] = F->fuu, end[e][k][2] = F->fuv;
             k++;
         }
         ne[e] = k;
@@ -958,46 +1003,26 @@ static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, con
     if (P->nlim + need > HP_MAX) return -1;
     int m = 0;
 #define LS_SET(j, a0, a1, a2) (h[j][0] = (a0), h[j][1] = (a1), h[j][2] = (a2))
-#define LS_PART(nh)                                                                                              \
-    do {                                                                                                         \
-        if (nonempty_hp(G->x, G->y, n, (const double(*)[3])h, (nh), &outg[m]))                                  \
-            piece_with(&out[m], P, (const double(*)[3])h, (nh), &outg[m], drop), m++;                            \
-    } while (0)
     if (!in_v) {
-        LS_SET(0, cv0 - r, fvu, fvv); /* v' >= r */
-        LS_PART(1);
-        LS_SET(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
-        LS_PART(1);
-        LS_SET(0, cv0 + r, fvu, fvv);
-        LS_SET(1, r - cv0, -fvu, -fvv);
+        LS_SET(0, F->cv0 - r, F->fvu, F->fvv); /* v' >= r */
+        try_part(P, G, (const double(*)[3])h, 1, out, outg, &m, drop);
+        LS_SET(0, -F->cv0 - r, -F->fvu, -F->fvv); /* v' <= -r */
+        try_part(P, G, (const double(*)[3])h, 1, out, outg, &m, drop);
+        LS_SET(0, F->cv0 + r, F->fvu, F->fvv);
+        LS_SET(1, r - F->cv0, -F->fvu, -F->fvv);
     }
     /* past each end: beyond its k-th half-plane, within those before it */
     for (int e = 0; e < 2; e++)
         for (uint32_t k = 0; k < ne[e]; k++) {
             for (uint32_t j = 0; j < k; j++) LS_SET(nb + j, end[e][j][0], end[e][j][1], end[e][j][2]);
             LS_SET(nb + k, -end[e][k][0], -end[e][k][1], -end[e][k][2]);
-            LS_PART(nb + k + 1);
+            try_part(P, G, (const double(*)[3])h, nb + k + 1, out, outg, &m, drop);
         }
-    if (Q->clip || Q->clip2) {
-        uint32_t k = nb;
-        for (int e = 0; e < 2; e++)
-            for (uint32_t j = 0; j < ne[e]; j++, k++) LS_SET(k, end[e][j][0], end[e][j][1], end[e][j][2]);
-        double fnx = P->ux * Q->cx + P->uy * Q->cy, fny = npx * Q->cx + npy * Q->cy;
-        double cn0 = ox * Q->cx + oy * Q->cy, cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
-        double gnx = P->ux * Q->cx2 + P->uy * Q->cy2, gny = npx * Q->cx2 + npy * Q->cy2;
-        double dn0 = ox * Q->cx2 + oy * Q->cy2, dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
-        if (Q->clip) { /* within the rest, beyond the clip line */
-            LS_SET(k, cn0 - cq, fnx, fny);
-            LS_PART(k + 1);
-        }
-        if (Q->clip2) {
-            if (Q->clip) LS_SET(k, cq - cn0, -fnx, -fny), k++;
-            LS_SET(k, dn0 - dq, gnx, gny);
-            LS_PART(k + 1);
-        }
-    }
-#undef LS_PART
+    uint32_t k = nb;
+    for (int e = 0; e < 2; e++)
+        for (uint32_t j = 0; j < ne[e]; j++, k++) LS_SET(k, end[e][j][0], end[e][j][1], end[e][j][2]);
 #undef LS_SET
+    clip_parts(P, G, Q, F, h, k, out, outg, &m, drop);
     return m;
 }
 
@@ -1009,26 +1034,17 @@ static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, con
 static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg, double drop,
                      double tol)
 {
-    double ox = P->ox - Q->ax, oy = P->oy - Q->ay;
-    double nqx = Q->uy, nqy = -Q->ux;      /* Q's left normal */
-    double npx = P->uy, npy = -P->ux;      /* P's left normal */
-    /* v' = cv0 + u fvu + v fvv, u' = cu0 + u fuu + v fuv in P's frame */
-    double cv0 = ox * nqx + oy * nqy, fvu = P->ux * nqx + P->uy * nqy, fvv = npx * nqx + npy * nqy;
-    double cu0 = ox * Q->ux + oy * Q->uy, fuu = P->ux * Q->ux + P->uy * Q->uy, fuv = npx * Q->ux + npy * Q->uy;
+    ls_qframe F;
+    q_frame(P, Q, &F);
     double r = Q->r, lo = Q->u0, hi = Q->u1;
     const double *x = G->x, *y = G->y;
     uint32_t n = G->n;
     if (n < 3) return -1;
-    /* the clip line in P's frame: n.(p - Q.a) = cn0 + u fnu + v fnv <= cq */
-    double cn0 = ox * Q->cx + oy * Q->cy, fnu = P->ux * Q->cx + P->uy * Q->cy, fnv = npx * Q->cx + npy * Q->cy;
-    double cq = Q->cc - (Q->ax * Q->cx + Q->ay * Q->cy);
-    double dn0 = ox * Q->cx2 + oy * Q->cy2, gnu = P->ux * Q->cx2 + P->uy * Q->cy2, gnv = npx * Q->cx2 + npy * Q->cy2;
-    double dq = Q->cc2 - (Q->ax * Q->cx2 + Q->ay * Q->cy2);
     int out_v_hi = 1, out_v_lo = 1, out_u_lo = 1, out_u_hi = 1, out_clip = Q->clip, out_clip2 = Q->clip2;
     int in_v = 1, in_u = 1; /* P wholly within Q's sides / within its ends */
     double qu[POLY_MAX], qv[POLY_MAX]; /* P's polygon in Q's frame */
     for (uint32_t k = 0; k < n; k++) {
-        double v = cv0 + x[k] * fvu + y[k] * fvv, u = cu0 + x[k] * fuu + y[k] * fuv;
+        double v = F.cv0 + x[k] * F.fvu + y[k] * F.fvv, u = F.cu0 + x[k] * F.fuu + y[k] * F.fuv;
         qu[k] = u, qv[k] = v;
         out_v_hi &= v >= r;
         out_v_lo &= v <= -r;
@@ -1036,12 +1052,12 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
         out_u_hi &= u >= hi;
         in_v &= v > -r && v < r;
         in_u &= u > lo && u < hi;
-        out_clip &= cn0 + x[k] * fnu + y[k] * fnv >= cq;
-        out_clip2 &= dn0 + x[k] * gnu + y[k] * gnv >= dq;
+        out_clip &= F.cn0 + x[k] * F.fnu + y[k] * F.fnv >= F.cq;
+        out_clip2 &= F.dn0 + x[k] * F.gnu + y[k] * F.gnv >= F.dq;
     }
     if (out_v_hi || out_v_lo || out_u_lo || out_u_hi || out_clip || out_clip2) return -1;
     if (Q->cap && tol > 0) {
-        int m = cut_capped(P, G, Q, qu, qv, in_v, out, outg, drop, tol);
+        int m = cut_capped(P, G, Q, &F, qu, qv, in_v, out, outg, drop, tol);
         if (m >= 0) return m;
     }
     /* the most half-planes a piece takes: 3 beside Q, 5 beyond its clip
@@ -1057,55 +1073,40 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
     if (slim) need = 1;
     if (P->nlim + need > HP_MAX) return -1;
     int m = 0;
-    double h[6][3];
+    double h[HP_MAX][3];
     /* each candidate piece's half-planes, clipped from P's polygon, kept when
      * it keeps area */
 #define LS_HP(j, a0, a1, a2) (h[j][0] = (a0), h[j][1] = (a1), h[j][2] = (a2))
-#define LS_TRY(nh)                                                                                               \
-    do {                                                                                                         \
-        if (nonempty_hp(x, y, n, (const double(*)[3])h, (nh), &outg[m]))                                          \
-            piece_with(&out[m], P, (const double(*)[3])h, (nh), &outg[m], drop), m++;                            \
-    } while (0)
+#define LS_TRY(nh) try_part(P, G, (const double(*)[3])h, (nh), out, outg, &m, drop)
     if (slim) {
         if (in_v) {
-            LS_HP(0, lo - cu0, -fuu, -fuv); /* u' <= u0 */
+            LS_HP(0, lo - F.cu0, -F.fuu, -F.fuv); /* u' <= u0 */
             LS_TRY(1);
-            LS_HP(0, cu0 - hi, fuu, fuv); /* u' >= u1 */
+            LS_HP(0, F.cu0 - hi, F.fuu, F.fuv); /* u' >= u1 */
             LS_TRY(1);
         } else {
-            LS_HP(0, cv0 - r, fvu, fvv); /* v' >= r */
+            LS_HP(0, F.cv0 - r, F.fvu, F.fvv); /* v' >= r */
             LS_TRY(1);
-            LS_HP(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
+            LS_HP(0, -F.cv0 - r, -F.fvu, -F.fvv); /* v' <= -r */
             LS_TRY(1);
         }
         return m;
     }
-    LS_HP(0, cv0 - r, fvu, fvv); /* v' >= r */
+    LS_HP(0, F.cv0 - r, F.fvu, F.fvv); /* v' >= r */
     LS_TRY(1);
-    LS_HP(0, -cv0 - r, -fvu, -fvv); /* v' <= -r */
+    LS_HP(0, -F.cv0 - r, -F.fvu, -F.fvv); /* v' <= -r */
     LS_TRY(1);
-    LS_HP(0, cv0 + r, fvu, fvv);
-    LS_HP(1, r - cv0, -fvu, -fvv);
-    LS_HP(2, lo - cu0, -fuu, -fuv); /* u' <= u0 */
+    LS_HP(0, F.cv0 + r, F.fvu, F.fvv);
+    LS_HP(1, r - F.cv0, -F.fvu, -F.fvv);
+    LS_HP(2, lo - F.cu0, -F.fuu, -F.fuv); /* u' <= u0 */
     LS_TRY(3);
-    LS_HP(2, cu0 - hi, fuu, fuv); /* u' >= u1 */
+    LS_HP(2, F.cu0 - hi, F.fuu, F.fuv); /* u' >= u1 */
     LS_TRY(3);
-    if (Q->clip || Q->clip2) {
-        LS_HP(2, cu0 - lo, fuu, fuv);
-        LS_HP(3, hi - cu0, -fuu, -fuv);
-    }
-    if (Q->clip) { /* the rectangle's part beyond the clip line stays */
-        LS_HP(4, cn0 - cq, fnu, fnv);
-        LS_TRY(5);
-    }
-    if (Q->clip2) { /* and its part within the first clip line beyond the second */
-        uint32_t k = 4;
-        if (Q->clip) LS_HP(k, cq - cn0, -fnu, -fnv), k++;
-        LS_HP(k, dn0 - dq, gnu, gnv);
-        LS_TRY(k + 1);
-    }
+    LS_HP(2, F.cu0 - lo, F.fuu, F.fuv);
+    LS_HP(3, hi - F.cu0, -F.fuu, -F.fuv);
 #undef LS_TRY
 #undef LS_HP
+    clip_parts(P, G, Q, &F, h, 4, out, outg, &m, drop);
     return m;
 }
 
