@@ -747,6 +747,39 @@ static void test_bridge_lines(void)
     }
 }
 
+/* A roundabout is one-way along its points (OSM: junction=roundabout and
+ * circular imply oneway=yes): drawn as with oneway=yes written, without
+ * the centre line of a two-way road it drew until 6 December 2026 (the
+ * OSM reader passes junction= since then, and real roundabouts rarely
+ * say oneway=yes); oneway=no still makes it two-way. */
+static void test_roundabout_oneway(void)
+{
+    static const char *const tags[4] = { " junction=roundabout oneway=yes", " junction=roundabout",
+                                         " junction=circular", " junction=roundabout oneway=no" };
+    img im[4];
+    int ok = 1;
+    for (int v = 0; v < 4; v++) {
+        char text[2048];
+        size_t at = (size_t)snprintf(text, sizeof text, "road ring width 7 class=secondary area=rural%s\n", tags[v]);
+        for (int k = 0; k <= 24; k++)
+            at += (size_t)snprintf(text + at, sizeof text - at, "%.6f %.6f\n", 30 + 18 * cos(k % 24 * 0.26179938779914943),
+                                   30 + 18 * sin(k % 24 * 0.26179938779914943));
+        snprintf(text + at, sizeof text - at, "end\n");
+        /* (US rules: a yellow centre line between the directions, white lane lines) */
+        memset(&im[v], 0, sizeof im[v]);
+        ok &= render(text, 61, 61, RS_PROFILE_MUTCD, 1, 0, &im[v]);
+    }
+    CHECK(ok);
+    if (ok) {
+        int d1 = max_diff(&im[1], &im[0], 0, im[0].w, 0, im[0].h), d2 = max_diff(&im[2], &im[0], 0, im[0].w, 0, im[0].h);
+        int d3 = max_diff(&im[3], &im[0], 0, im[0].w, 0, im[0].h);
+        CHECKF(d1 == 0 && d2 == 0 && d3 > 100, "roundabout against oneway=yes: max %d/255 (roundabout), %d/255 "
+               "(circular), %d/255 (oneway=no: a centre line)", d1, d2, d3);
+        printf("roundabout one-way: max %d/255 and %d/255 from oneway=yes; oneway=no %d/255\n", d1, d2, d3);
+    }
+    for (int v = 0; v < 4; v++) free(im[v].rgba);
+}
+
 /* A line under several surfaces in a row is cut by each: a service road
  * of five segments runs along a primary's edge over its edge line, which
  * stops under it (a lower road cuts a higher one's edge lines, issue 27).
@@ -1283,6 +1316,7 @@ int main(void)
     test_bend_outside_cut();
     test_cap_cut();
     test_bridge_lines();
+    test_roundabout_oneway();
     test_line_under_road();
     test_many_crossings();
     test_ring_arm_at_seam();

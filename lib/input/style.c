@@ -7,6 +7,7 @@
  * reads lines handed over by the text parser in lib/input/roads.c. */
 #include "style.h"
 #include "lanes.h"
+#include "network.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -833,7 +834,7 @@ static rs_result road_style(rs_ctx *ctx, const rs_roads *roads, size_t i, const 
         return rs__fail(ctx, RS_ERR_INVALID_ARG, "rs_road_style: unknown profile %d", (int)profile);
     req.road_class = info.road_class;
     req.lanes = info.lanes;
-    req.oneway = info.oneway;
+    req.oneway = rs__road_oneway(roads, i, &info);
     req.area = info.area;
     req.profile = profile;
     /* line offsets are bounded (MAX_OFFSET): a road wider than 2 km gets

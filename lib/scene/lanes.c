@@ -107,7 +107,7 @@ void rs__lanes_input(const rs_roads *roads, size_t i, rs_profile profile, rs_dri
     rs_roads_get(roads, i, NULL, &in->width, NULL, NULL);
     in->road_class = info.road_class;
     in->profile = profile;
-    in->oneway = info.oneway;
+    in->oneway = rs__road_oneway(roads, i, &info);
     in->side = rs__driving_side(roads, i, side_default);
     in->lanes = info.lanes;
     in->forward = count_attr(rs_roads_get_attr(roads, i, "lanes:forward"));

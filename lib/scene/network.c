@@ -63,6 +63,14 @@ int rs__road_priority(const rs_roads *roads, size_t r)
     return pr;
 }
 
+rs_oneway rs__road_oneway(const rs_roads *roads, size_t r, const rs_road_info *in)
+{
+    if (in->oneway != RS_ONEWAY_NONE) return in->oneway;
+    if (in->road_class == RS_CLASS_MOTORWAY || attr_is(roads, r, "junction", "roundabout", "circular"))
+        return RS_ONEWAY_YES;
+    return RS_ONEWAY_NONE;
+}
+
 int rs__road_level(const rs_roads *roads, size_t r)
 {
     const char *v = rs_roads_get_attr(roads, r, "layer");
@@ -1026,7 +1034,7 @@ static void look_of(const rs_roads *roads, size_t r, road_look *L)
     L->link = (uint8_t)in.link;
     L->oneway = (uint8_t)in.oneway;
     L->area = (uint8_t)in.area;
-    L->two_way = in.oneway == RS_ONEWAY_NO || (in.oneway == RS_ONEWAY_NONE && in.road_class != RS_CLASS_MOTORWAY);
+    L->two_way = rs__road_oneway(roads, r, &in) == RS_ONEWAY_NO || rs__road_oneway(roads, r, &in) == RS_ONEWAY_NONE;
     /* rs__road_priority from what is read above (it reads the record's
      * info and attributes again: a tenth of a small build's loading) */
     L->roundabout = L->junction && strcmp(L->junction, "roundabout") == 0;
