@@ -1260,23 +1260,18 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
                      * lower surface cuts none of the upper road's lines, the
                      * upper one all of the lower road's (they lie under its
                      * deck), whatever their classes (docs/network.md
-                     * "Bridges and layers") */
-                    if (J->prio && rs__rank_level(J->prio[Q->road]) != rs__rank_level(J->prio[road])) {
-                        if (rs__rank_level(J->prio[Q->road]) < rs__rank_level(J->prio[road])) continue;
-                        if (surf_misses_box(Q, P->x0, P->y0, P->x1, P->y1) || continues(J, road, Q->road)) continue;
-                        if (!cut) cutset_init(S, P, L), cut = 1;
-                        cutset_cut(S, Q, &J->work);
-                        continue;
-                    }
+                     * "Bridges and layers"); the rules below are for one level */
+                    int lq = J->prio ? rs__rank_level(J->prio[Q->road]) : 0, lr = J->prio ? rs__rank_level(J->prio[road]) : 0;
+                    if (lq < lr) continue;
                     /* a path, footway or cycleway crossing or meeting a car
                      * road cuts none of its lines (issue 27: the road's lines
                      * run on over a footway crossing, as over a zebra's) */
-                    if (J->car[road] && !J->car[Q->road]) continue;
+                    if (lq == lr && J->car[road] && !J->car[Q->road]) continue;
                     /* a car road of lower rank crossing this one (not a
                      * side road at a T: its cut-back copy does that) cuts
                      * only its lines near its edges, its mouths; the
                      * centre and lane lines run on (issue 27) */
-                    if (J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
+                    if (lq == lr && J->prio && Q->only == NO_STROKE && J->car[road] && J->car[Q->road] &&
                         J->prio[Q->road] < J->prio[road] && fabs(L->band[P->band].t) <= J->keep[road])
                         continue;
                     /* (the box test before the end points': it passes over most surfaces) */

@@ -20,6 +20,7 @@
 #include "network.h"
 #include "road_local.h"
 #include "grid_edit.h"
+#include "lanes.h"
 
 #include <float.h>
 #include <limits.h>
@@ -65,10 +66,8 @@ int rs__road_priority(const rs_roads *roads, size_t r)
 
 rs_oneway rs__road_oneway(const rs_roads *roads, size_t r, const rs_road_info *in)
 {
-    if (in->oneway != RS_ONEWAY_NONE) return in->oneway;
-    if (in->road_class == RS_CLASS_MOTORWAY || attr_is(roads, r, "junction", "roundabout", "circular"))
-        return RS_ONEWAY_YES;
-    return RS_ONEWAY_NONE;
+    if (in->oneway == RS_ONEWAY_NONE && attr_is(roads, r, "junction", "roundabout", "circular")) return RS_ONEWAY_YES;
+    return in->oneway;
 }
 
 int rs__road_level(const rs_roads *roads, size_t r)
@@ -80,7 +79,8 @@ int rs__road_level(const rs_roads *roads, size_t r)
         /* (strtol's range: within -100 .. 100, errno need not be read) */
         return end != v && *end == '\0' && n >= -100 && n <= 100 ? (int)n : 0;
     }
-    return attr_is(roads, r, "bridge", "no", NULL) || !rs_roads_get_attr(roads, r, "bridge") ? 0 : 1;
+    const char *b = rs_roads_get_attr(roads, r, "bridge");
+    return b && strcmp(b, "no") ? 1 : 0;
 }
 
 int rs__road_rank(const rs_roads *roads, size_t r)
@@ -1034,7 +1034,7 @@ static void look_of(const rs_roads *roads, size_t r, road_look *L)
     L->link = (uint8_t)in.link;
     L->oneway = (uint8_t)in.oneway;
     L->area = (uint8_t)in.area;
-    L->two_way = rs__road_oneway(roads, r, &in) == RS_ONEWAY_NO || rs__road_oneway(roads, r, &in) == RS_ONEWAY_NONE;
+    L->two_way = rs__lanes_oneway(in.road_class, rs__road_oneway(roads, r, &in)) == 0;
     /* rs__road_priority from what is read above (it reads the record's
      * info and attributes again: a tenth of a small build's loading) */
     L->roundabout = L->junction && strcmp(L->junction, "roundabout") == 0;

@@ -51,10 +51,11 @@ int rs__class_rank(rs_road_class c);
  * priority_road=designated|yes_unposted, + 20 for junction=roundabout
  * (docs/network.md "Priorities"); shared with the automatic markings. */
 int rs__road_priority(const rs_roads *roads, size_t r);
-/* Road r's direction of travel as the lanes and the network take it:
- * its oneway=, and where that is not given, one-way along the points for
- * junction=roundabout or circular (OSM: implied) and for a motorway;
- * in: its info (rs_roads_get_info). */
+/* Road r's oneway= as the lanes, the default styles and the network take
+ * it: where it is not given, one-way along the points for
+ * junction=roundabout or circular (OSM: implied); still NONE otherwise,
+ * which rs__lanes_oneway reads as two-way but for a motorway. in: its
+ * info (rs_roads_get_info). */
 rs_oneway rs__road_oneway(const rs_roads *roads, size_t r, const rs_road_info *in);
 /* A road's level where roads cross (docs/network.md "Bridges and
  * layers"): its layer= (a whole number -100..100; others count as none),
