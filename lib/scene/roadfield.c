@@ -457,12 +457,25 @@ static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
 
 /* A float <= v (NaN: -inf) and a float >= v (NaN: +inf); conversions
  * only of values within the float range. */
+/* the float next to finite r towards +inf (up = 1) or -inf: nextafterf's
+ * answer by the bits (a libm call in the index build's hot loops) */
+static float float_step(float r, int up)
+{
+    uint32_t u;
+    memcpy(&u, &r, sizeof u);
+    if ((u & 0x7FFFFFFFu) == 0) u = up ? 1u : 0x80000001u; /* +-0: the smallest subnormal */
+    else if ((u >> 31) == (uint32_t)!up) u++;               /* away from zero */
+    else u--;                                                /* towards zero */
+    memcpy(&r, &u, sizeof r);
+    return r;
+}
+
 static float float_down(double v)
 {
     if (!(v > -1e38)) return -INFINITY;
     if (v > 1e38) return 1e38f;
     float r = (float)v;
-    return (double)r > v ? nextafterf(r, -INFINITY) : r;
+    return (double)r > v ? float_step(r, 0) : r;
 }
 
 static float float_up(double v)
@@ -470,7 +483,7 @@ static float float_up(double v)
     if (!(v < 1e38)) return INFINITY;
     if (v < -1e38) return -1e38f;
     float r = (float)v;
-    return (double)r < v ? nextafterf(r, INFINITY) : r;
+    return (double)r < v ? float_step(r, 1) : r;
 }
 
 /* Row lists for the coverage: per grid row, every segment of the row's cell
@@ -479,7 +492,8 @@ static float float_up(double v)
  * rounding errors stay far below the slack `tol` (docs/roadfield.md).
  * Pass 1 counted each row's segments; one pass over the lists fills them,
  * each entry's box copied from the segment's. */
-__attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f, const rf_scratch *sc)
+__attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f, const rf_scratch *sc,
+                                                     const uint8_t *redundant)
 {
     size_t ns = f->nseg ? f->nseg : 1;
     /* per segment: its box (16 bytes), stamp (4) and tol > 0 (1), beside
@@ -493,9 +507,26 @@ __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield
     if (!sbox || !f->rspan) goto done;
     memset(stamp, 0, ns * sizeof *stamp);
     double ext = lm_max((double)f->gw, (double)f->gh) * f->c, lim = 1e8 * f->c;
-    for (size_t k = 0; k < f->nseg; k++) {
+    size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
+    for (size_t k = f->nseg; k-- > 0;) {
         if ((k & 16383) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; goto done; }
         rf_seg *s = &f->seg[k];
+        /* seg_relations' flags and joint partners (last to first, so that a
+         * run of zero-length segments is skipped in one step) */
+        size_t mp = k + 1;
+        s->redundant = redundant[k];
+        f->nredundant += redundant[k];
+        if (mp < f->nseg && !(f->seg[mp].len > 0) && f->seg[mp].ax == s->bx && f->seg[mp].ay == s->by) mp = after;
+        if (mp < f->nseg && mp <= UINT32_MAX) {
+            const rf_seg *sb = &f->seg[mp];
+            s->jnext = s->bx == sb->ax && s->by == sb->ay && s->r == sb->r && s->len > 0 && sb->len > 0 &&
+                       s->ux * sb->ux + s->uy * sb->uy >= JOINT_COS;
+            s->jpart = (uint32_t)mp;
+        }
+        if (s->len > 0) after = k;
+        else if (!(k + 1 < f->nseg && !(f->seg[k + 1].len > 0) && f->seg[k + 1].ax == s->ax &&
+                   f->seg[k + 1].ay == s->ay))
+            after = k + 1;
         double m = lm_max(lm_max(lm_max(fabs(s->ax), fabs(s->ay)), lm_max(fabs(s->bx), fabs(s->by))),
                         lm_max(lm_max(s->len, s->r), ext));
         s->tol = m <= lim ? 1e-6 * (1 + m) : -1; /* NaN or too big: -1 */
@@ -860,6 +891,15 @@ static int redundant_of(const rs__roadfield *f, rf_holders *h, size_t k, size_t 
     return 0;
 }
 
+/* holder_scan's ring of candidate pairs waiting for their segments */
+#define PAIR_RING 16
+
+/* k's flag, ORed with whether j holds it (nothing to ask once it is set) */
+static void pair_settle(const rs__roadfield *f, uint8_t *redundant, uint32_t k, uint32_t j)
+{
+    if (!redundant[k] && holds(f, k, j)) redundant[k] = 1;
+}
+
 /* Index of the first of the n gathered boxes (four float arrays, padded
  * to a multiple of 4) from `from` on that holds q, or n when none. */
 static uint32_t fbox_next(const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
@@ -977,6 +1017,14 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
         first[0] = 0;
     }
     const float *g[4] = { gb, gb + cap, gb + 2 * cap, gb + 3 * cap };
+    /* A box that passes is a real holder candidate; its capsule test reads
+     * two segments far apart in memory (a dense map's segments fill
+     * hundreds of MB), so it waits in a ring while both are fetched and a
+     * segment's flag is the OR of its candidates' answers: the same flags,
+     * since holds() depends on the pair alone. The scan no longer stops at
+     * a segment's first holder; its work units never did. */
+    uint32_t pk[PAIR_RING], pj[PAIR_RING];
+    size_t np = 0;
     rs_result res = RS_OK;
     for (size_t k = 0; k < f->nseg; k++) {
         if ((k & 16383) == 0 && rs__poll(ctx)) { res = RS_ERR_CANCELLED; break; }
@@ -1002,6 +1050,7 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
         for (uint32_t i = i0; i < i1; i++) {
             uint32_t k = order[i];
             int red = 0;
+            redundant[k] = 0;
             if (n > f->relscan && h->node) {
                 red = redundant_of(f, h, k, c);
             } else {
@@ -1017,13 +1066,27 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
                     gathered = 1;
                 }
                 const rf_fbox *q = &ob[2 * (size_t)k + 1];
-                for (uint32_t e = fbox_find(wide, g, 0, n, q); e < n && !red; e = fbox_find(wide, g, e + 1, n, q))
-                    red = holds(f, k, f->ids[a + e]);
+                for (uint32_t e = fbox_find(wide, g, 0, n, q); e < n; e = fbox_find(wide, g, e + 1, n, q)) {
+                    uint32_t j = f->ids[a + e];
+                    if (j == k) continue;
+                    if (redundant[k]) break; /* (a holder settled already: at most a ring's worth asked in vain) */
+                    size_t slot = np++ % PAIR_RING;
+                    if (np > PAIR_RING) pair_settle(f, redundant, pk[slot], pj[slot]);
+                    rs__prefetch(&f->seg[j]);
+                    rs__prefetch((const char *)&f->seg[j] + 63);
+                    rs__prefetch(&f->seg[k]);
+                    rs__prefetch((const char *)&f->seg[k] + 63);
+                    pk[slot] = (uint32_t)k, pj[slot] = j;
+                }
+                continue;
             }
             if (red < 0) { res = RS_ERR_LIMIT; break; }
             redundant[k] = (uint8_t)red;
         }
     }
+    /* the candidates still waiting */
+    for (size_t t = np > PAIR_RING ? np - PAIR_RING : 0; res == RS_OK && t < np; t++)
+        pair_settle(f, redundant, pk[t % PAIR_RING], pj[t % PAIR_RING]);
     if (own) rs__free(ctx, ob);
     rs__free(ctx, gb);
     rs__free(ctx, first);
@@ -1045,9 +1108,13 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
  * segments are visited last to first so that a run of zero-length
  * segments is skipped in one step (a million repeated points cost a
  * million steps). RS_ERR_LIMIT when the holder search passes the work
- * limit (h->limit). */
-static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h, const rf_scratch *sc)
+ * limit (h->limit). Here the holders, into *red_out (a flag per segment,
+ * the caller's to free); build_rows' pass over the segments sets both
+ * (one pass over a dense map's hundreds of MB of segments, not two). */
+static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h, const rf_scratch *sc,
+                               uint8_t **red_out)
 {
+    *red_out = NULL;
     if (f->maxlist > f->relscan) {
         rs_result r = holders_build(ctx, f, h);
         if (r != RS_OK) return r;
@@ -1061,30 +1128,8 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
         rs__free(ctx, redundant);
         return r;
     }
-    size_t after = f->nseg; /* first index past the run of zero-length segments at k + 1 */
-    for (size_t k = f->nseg; k-- > 0;) {
-        if ((k & 16383) == 0 && rs__poll(ctx)) {
-            rs__free(ctx, redundant);
-            return RS_ERR_CANCELLED;
-        }
-        rf_seg *sa = &f->seg[k];
-        size_t m = k + 1;
-        h->work++; /* the joint partner: one step */
-        sa->redundant = redundant[k];
-        f->nredundant += redundant[k];
-        if (m < f->nseg && !(f->seg[m].len > 0) && f->seg[m].ax == sa->bx && f->seg[m].ay == sa->by) m = after;
-        if (m < f->nseg && m <= UINT32_MAX) {
-            const rf_seg *sb = &f->seg[m];
-            sa->jnext = sa->bx == sb->ax && sa->by == sb->ay && sa->r == sb->r && sa->len > 0 && sb->len > 0 &&
-                        sa->ux * sb->ux + sa->uy * sb->uy >= JOINT_COS;
-            sa->jpart = (uint32_t)m;
-        }
-        if (sa->len > 0) after = k;
-        else if (!(k + 1 < f->nseg && !(f->seg[k + 1].len > 0) && f->seg[k + 1].ax == sa->ax &&
-                   f->seg[k + 1].ay == sa->ay))
-            after = k + 1;
-    }
-    rs__free(ctx, redundant);
+    h->work += f->nseg; /* the joint partners (set by build_rows): one step each */
+    *red_out = redundant;
     return RS_OK;
 }
 
@@ -1154,15 +1199,21 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     rf_holders h;
     memset(&h, 0, sizeof h);
     h.limit = b->work_limit;
-    res = seg_relations(ctx, f, b->cell1, &h, &b->scratch);
+    uint8_t *redundant = NULL;
+    res = seg_relations(ctx, f, b->cell1, &h, &b->scratch, &redundant);
     holders_free(ctx, &h);
     f->relwork = h.work;
     rs__free(ctx, b->cell1);
     b->cell1 = NULL;
     if (res == RS_ERR_LIMIT) b->work_over = 1;
+    if (res == RS_OK && rs__poll(ctx)) res = RS_ERR_CANCELLED;
+    if (res != RS_OK) {
+        rs__free(ctx, redundant);
+        return res;
+    }
+    res = build_rows(ctx, f, &b->scratch, redundant);
+    rs__free(ctx, redundant);
     if (res != RS_OK) return res;
-    if (rs__poll(ctx)) return RS_ERR_CANCELLED;
-    if ((res = build_rows(ctx, f, &b->scratch)) != RS_OK) return res;
     rs__free(ctx, b->scratch.p);
     b->scratch.p = NULL;
     b->scratch.bytes = 0;
