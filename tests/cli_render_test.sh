@@ -188,6 +188,14 @@ check "shader: network_spike equals the CPU splat" xcheck spike "$T/ps.png" "$T/
 awk 'BEGIN { print "P2"; print 51, 31; print 100; for (i = 0; i < 31; i++) { l = ""; for (j = 0; j < 51; j++) l = l " 50"; print l } }' > "$T/bridge-dem.pgm"
 check "shader: a bridge's lines over the road below equal the CPU splat (max <= 8/255)" sh -c "'$BIN' $N --quiet '$T/bridge-dem.pgm' '$EX/network_bridge.txt' '$T/brc.png' && '$BIN' render $N --quiet --ortho --lighting off '$T/bridge-dem.pgm' '$EX/network_bridge.txt' '$T/brs.png' && python3 '$DIFF' '$T/brs.png' '$T/brc.png' 440,560,200,400 | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
 check "shader: network_bridge equals the CPU splat" xcheck bridge "$T/brs.png" "$T/brc.png"
+# a primary of one 396 m segment crossed by 24 secondaries (docs/linesym.md
+# "Junctions"): its edge lines stop at every mouth in both renders (the CPU
+# drew them on across the mouths past about the eighth until session 44:
+# max 92/255 against the shader)
+awk 'BEGIN { print "P2"; print 201, 51; print 100; for (i = 0; i < 51; i++) { l = ""; for (j = 0; j < 201; j++) l = l " 50"; print l } }' > "$T/many-dem.pgm"
+awk 'BEGIN { print "road main width 9 class=primary area=rural"; print "2 50"; print "398 50"; print "end"; for (i = 0; i < 24; i++) { x = 10 + 16 * i; print "road s" i " width 6 class=secondary area=rural"; print x, 2; print x, 98; print "end" } }' > "$T/many.txt"
+N5="--cell-size 2 --z-scale 0.01 --texels 5"
+check "shader: a segment crossed by 24 roads has its edge lines cut at every mouth, as in the CPU splat (max <= 8/255)" sh -c "'$BIN' $N5 --quiet '$T/many-dem.pgm' '$T/many.txt' '$T/mc.png' && '$BIN' render $N5 --quiet --ortho --lighting off '$T/many-dem.pgm' '$T/many.txt' '$T/ms.png' && python3 '$DIFF' '$T/ms.png' '$T/mc.png' | awk '{ split(\$3, m, \"=\"); exit !(m[2] <= 8) }'"
 # side roads ending on a primary at 30 and 45 degrees (docs/network.md "The
 # through road at a T"): the primary's centre line and the band within
 # keep of it (rows 138..161 of 300 at 0.1 m) are those of the primary

@@ -1837,6 +1837,41 @@ static void test_level_edit(void)
     }
 }
 
+/* A street moved beside a rural primary of one 308 m segment that thirty
+ * streets cross: the primary's edge-line pieces are more than a cutset
+ * holds and are halved along their length (docs/linesym.md "Junctions"),
+ * in the whole build and in the update's local build, which sees only the
+ * streets near the edit. The update draws as a fresh build. */
+static void test_crossings_edit(void)
+{
+    static float z[156 * 31];
+    rs_dem_frame fr = { 2, 0.01, 0, 0 };
+    const int moved[3] = { 2, 15, 27 };
+    for (int t = 0; t < 3; t++) {
+        one_edit E;
+        edit_begin(&E, 0, 0);
+        const double p[4] = { 1, 30, 309, 30 };
+        E.ok = E.ok && rs_dem_create(E.ctx, 156, 31, z, &E.dem) == RS_OK && rs_dem_set_frame(E.ctx, E.dem, &fr) == RS_OK &&
+               rs_roads_create(E.ctx, &E.roads) == RS_OK && rs_roads_add(E.ctx, E.roads, NULL, 8, p, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 0, "class", "primary") == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, 0, "area", "rural") == RS_OK;
+        for (int k = 0; k < 30 && E.ok; k++) {
+            const double q[4] = { 10 + 10 * k, 2, 10 + 10 * k, 58 };
+            E.ok = rs_roads_add(E.ctx, E.roads, NULL, 6, q, 2) == RS_OK &&
+                   rs_roads_set_attr(E.ctx, E.roads, (size_t)k + 1, "class", "secondary") == RS_OK;
+        }
+        edit_base(&E, 4);
+        const double q[4] = { 12 + 10 * moved[t], 2, 12 + 10 * moved[t], 58 };
+        E.ok = E.ok && rs_roads_replace(E.ctx, E.roads, (size_t)moved[t] + 1, NULL, 6, q, 2) == RS_OK &&
+               rs_roads_set_attr(E.ctx, E.roads, (size_t)moved[t] + 1, "class", "secondary") == RS_OK;
+        char what[64];
+        snprintf(what, sizeof what, "thirty crossings, street %d moved", moved[t]);
+        edit_update(&E, what);
+        if (E.ok) check_rects(what, E.g1, &E.a, &E.b, &E.c);
+        edit_end(&E);
+    }
+}
+
 /* A road given a second time (the same points, width and attributes):
  * its pieces have the same fingerprints, but its lines are painted twice,
  * so their partly covered pixels change; the dirty rectangles hold them
@@ -2145,6 +2180,7 @@ int main(void)
     test_chunk_room();
     test_ring_edit();
     test_level_edit();
+    test_crossings_edit();
     test_duplicate_road();
     test_removed_tee_strip();
     test_far_strip_clipped();

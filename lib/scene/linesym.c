@@ -1148,6 +1148,7 @@ static int surf_misses_box(const ls_surf *Q, double x0, double y0, double x1, do
 enum { QMAX = 16 };
 typedef struct ls_cutset {
     uint32_t n, cur;
+    int full; /* a cut was left out: it would have made more than QMAX pieces */
     double drop; /* piece_with's */
     double tol;  /* cut_piece's at round caps: a sixteenth of a pixel */
     ls_piece p[2][QMAX + CUT_PARTS]; /* (room for one more cut's parts past QMAX) */
@@ -1161,6 +1162,7 @@ static void cutset_init(ls_cutset *S, const ls_piece *P, const rs__linesym *L)
     S->tol = L->pixel / 16;
     S->n = 1;
     S->cur = 0;
+    S->full = 0;
     S->p[0][0] = *P;
     S->g[0][0].n = piece_poly(P, S->g[0][0].x, S->g[0][0].y);
 }
@@ -1198,6 +1200,7 @@ static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
         nn += (uint32_t)m;
         if (nn > QMAX) { full = 1; break; }
     }
+    S->full |= full;
     if (full || !moved) return; /* too many pieces: this surface does not cut; or it cut none */
     S->cur = o;
     S->n = nn;
@@ -1219,7 +1222,10 @@ static uint32_t first_at_least(const uint32_t *ids, uint32_t lo, uint32_t hi, ui
  * (a road of 10^6 tiny segments would otherwise test each piece against
  * every surface of its own road in the cell). RS_ERR_LIMIT when the work
  * (list entries visited) passes J->limit. */
-static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
+static int push_halves(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road, uint32_t depth,
+                       rs_result *res);
+
+static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road, uint32_t depth)
 {
     if (!J || !J->nsf || J->nocut[road]) return push_piece(ctx, L, P, NULL);
     /* the end of road's surfaces: the first with a larger road */
@@ -1282,11 +1288,58 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
             }
     }
     if (!cut) return push_piece(ctx, L, P, NULL);
+    rs_result hr;
+    if (S->full && push_halves(ctx, L, J, P, road, depth, &hr)) return hr;
     for (uint32_t a = 0; a < S->n; a++) {
         rs_result r = push_piece(ctx, L, &S->p[S->cur][a], &S->g[S->cur][a]);
         if (r) return r;
     }
     return RS_OK;
+}
+
+/* A line piece more roads cross than its pieces can be cut for (QMAX: a
+ * long straight segment crossed by many streets, say a road given by its
+ * two end points) kept its line over the crossings past that number: an
+ * edge line drawn across a street's mouth. Such a slab is halved along its
+ * length instead (one more half-plane each; the halves' areas sum to its
+ * own) and each half is cut alone, meeting fewer roads, down to SPLIT_MAX
+ * halvings or halves of SPLIT_MIN_PX pixels. Returns 0 (nothing pushed)
+ * when P cannot be halved; else 1 with *res the result. */
+#define SPLIT_MAX 12
+#define SPLIT_MIN_PX 4
+
+static int push_halves(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road, uint32_t depth,
+                       rs_result *res)
+{
+    if (depth >= SPLIT_MAX || P->kind != PIECE_SLAB || P->nlim + 1 > HP_MAX) return 0;
+    ls_poly G;
+    G.n = piece_poly(P, G.x, G.y);
+    if (G.n < 3) return 0;
+    double u0 = DBL_MAX, u1 = -DBL_MAX;
+    for (uint32_t k = 0; k < G.n; k++) u0 = rs__fmin(u0, G.x[k]), u1 = rs__fmax(u1, G.x[k]);
+    if (!(u1 - u0 >= 2 * SPLIT_MIN_PX * L->pixel)) return 0;
+    const double m = 0.5 * (u0 + u1);
+    const double h[2][1][3] = { { { m, -1, 0 } }, { { -m, 1, 0 } } }; /* u <= m, u >= m */
+    *res = RS_OK;
+    for (int e = 0; e < 2 && *res == RS_OK; e++) {
+        ls_poly g;
+        ls_piece H;
+        if (!nonempty_hp(G.x, G.y, G.n, h[e], 1, &g)) continue;
+        /* (every half-plane kept: the box below bounds the half's
+         * polygon only with all of them) */
+        piece_with(&H, P, h[e], 1, &g, 0);
+        /* its box: its polygon's, grown by the pixel margin as piece_box
+         * grows a slab's, within P's (so its polygon stays the same) */
+        double x0 = DBL_MAX, x1 = -DBL_MAX, y0 = DBL_MAX, y1 = -DBL_MAX, mg = L->margin;
+        for (uint32_t k = 0; k < g.n; k++) {
+            double x = P->ox + g.x[k] * P->ux + g.y[k] * P->uy, y = P->oy + g.x[k] * P->uy - g.y[k] * P->ux;
+            x0 = rs__fmin(x0, x), x1 = rs__fmax(x1, x), y0 = rs__fmin(y0, y), y1 = rs__fmax(y1, y);
+        }
+        H.x0 = rs__fmax(P->x0, x0 - mg), H.x1 = rs__fmin(P->x1, x1 + mg);
+        H.y0 = rs__fmax(P->y0, y0 - mg), H.y1 = rs__fmin(P->y1, y1 + mg);
+        *res = push_cut(ctx, L, J, &H, road, depth + 1);
+    }
+    return 1;
 }
 
 /* Push P less the cuts of its road (lib/scene/lanes.h: its lane and centre
@@ -1301,7 +1354,7 @@ static uint32_t cut_key(const rs__linesym *L, uint32_t road)
 static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
     uint32_t key = L->cut_start ? cut_key(L, road) : 0;
-    if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road);
+    if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road, 0);
     ls_cutset *S = &L->cs[0];
     cutset_init(S, P, L);
     for (uint32_t e = L->cut_start[key]; e < L->cut_start[key + 1]; e++) {
@@ -1312,7 +1365,7 @@ static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_pie
         cutset_cut(S, &Q, NULL);
     }
     for (uint32_t a = 0; a < S->n; a++) {
-        rs_result r = push_cut(ctx, L, J, &S->p[S->cur][a], road);
+        rs_result r = push_cut(ctx, L, J, &S->p[S->cur][a], road, 0);
         if (r) return r;
     }
     return RS_OK;

@@ -1021,8 +1021,9 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
      * two segments far apart in memory (a dense map's segments fill
      * hundreds of MB), so it waits in a ring while both are fetched and a
      * segment's flag is the OR of its candidates' answers: the same flags,
-     * since holds() depends on the pair alone. The scan no longer stops at
-     * a segment's first holder; its work units never did. */
+     * since holds() depends on the pair alone. A segment's walk stops once
+     * an answer says it is held (a ring's worth of pairs after its holder
+     * at most; the work units count its whole list either way). */
     uint32_t pk[PAIR_RING], pj[PAIR_RING];
     size_t np = 0;
     rs_result res = RS_OK;
@@ -1120,7 +1121,7 @@ static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *ce
         if (r != RS_OK) return r;
     }
     /* the holder is listed wherever this one is (its grown capsule is larger);
-     * the flags land in the segments in the sequential pass below */
+     * the flags land in the segments in build_rows' pass */
     uint8_t *redundant = rs__alloc_array(ctx, f->nseg ? f->nseg : 1, 1);
     if (!redundant) return RS_ERR_NOMEM;
     rs_result r = rs__poll(ctx) ? RS_ERR_CANCELLED : holder_scan(ctx, f, cell1, h, redundant, sc);
