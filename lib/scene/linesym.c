@@ -1071,7 +1071,7 @@ static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_p
      * and left the line whole until 6 December 2026 */
     int slim = !Q->clip && !Q->clip2 && (in_v || in_u);
     if (slim) need = 1;
-    if (P->nlim + need > HP_MAX) return -1;
+    if (P->nlim + need > HP_MAX) return -2; /* (Q would cut P: the caller may halve P) */
     int m = 0;
     double h[HP_MAX][3];
     /* each candidate piece's half-planes, clipped from P's polygon, kept when
@@ -1148,7 +1148,8 @@ static int surf_misses_box(const ls_surf *Q, double x0, double y0, double x1, do
 enum { QMAX = 16 };
 typedef struct ls_cutset {
     uint32_t n, cur;
-    int full; /* a cut was left out: it would have made more than QMAX pieces */
+    int full; /* a cut was left out: it would have made more than QMAX pieces, or a piece more than HP_MAX half-planes */
+    uint32_t nlim0; /* the first piece's half-planes */
     double drop; /* piece_with's */
     double tol;  /* cut_piece's at round caps: a sixteenth of a pixel */
     ls_piece p[2][QMAX + CUT_PARTS]; /* (room for one more cut's parts past QMAX) */
@@ -1163,6 +1164,7 @@ static void cutset_init(ls_cutset *S, const ls_piece *P, const rs__linesym *L)
     S->n = 1;
     S->cur = 0;
     S->full = 0;
+    S->nlim0 = P->nlim;
     S->p[0][0] = *P;
     S->g[0][0].n = piece_poly(P, S->g[0][0].x, S->g[0][0].y);
 }
@@ -1179,6 +1181,14 @@ static void cutset_cut(ls_cutset *S, const ls_surf *Q, uint64_t *work)
         /* the parts go straight to their place in the other buffer (nn <=
          * QMAX here, and it has room for CUT_PARTS more) */
         int m = cut_piece(&S->p[c][a], &S->g[c][a], Q, &S->p[o][nn], &S->g[o][nn], S->drop, S->tol);
+        /* a cut left out for want of half-planes: the piece stays. Hermite
+         * lines keep every cut's half-planes (drop 0), so a line crossed
+         * by many roads in a row runs out of them after a few crossings:
+         * when earlier cuts took two or more, its halves meet fewer of
+         * them and may be cut. (Exact lines drop the far ones; there the
+         * rare overflow is a crowded junction, which halving does not
+         * help.) */
+        if (m == -2 && S->drop == 0 && S->p[c][a].nlim >= S->nlim0 + 2) S->full = 1;
         if (m < 0) {
             if (!moved) {
                 nn++;
