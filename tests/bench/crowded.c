@@ -4,7 +4,7 @@
  * stay near-linear (target: 10^6 points <= 2 s); the segment relations'
  * holder search by list scan (before) against the box tree (now), same
  * run; the work counter per segment; a whole-image splat of the result.
- * Usage: crowded OUTDIR (writes OUTDIR/crowded.md). */
+ * Usage: crowded [OUTDIR] (writes OUTDIR/crowded.md; build/bench by default). */
 #include "roadfield.h"
 #include "roadsplat.h"
 #include "scene_splat.h"
@@ -72,7 +72,7 @@ static double field_ms(rs_ctx *ctx, const rs_roads *R, uint32_t scan, rs__roadfi
 
 int main(int argc, char **argv)
 {
-    const char *dir = argc > 1 ? argv[1] : ".";
+    const char *dir = argc > 1 ? argv[1] : "build/bench";
     char path[4096];
     snprintf(path, sizeof path, "%s/crowded.md", dir);
     FILE *md = fopen(path, "w");

@@ -5,7 +5,7 @@
  * analytic edges' index) and the whole unstyled road grid build
  * (rs_road_grid_build, which contains it), thread CPU time, fastest of
  * RUNS, the builds of a count interleaved.
- * Usage: index OUTDIR (writes OUTDIR/index.md);
+ * Usage: index [OUTDIR] (writes OUTDIR/index.md; OUTDIR build/bench by default);
  *        index --one N [REPS [grid|CELL]] (N roads, REPS road-field builds
  *        (index cell CELL m, default automatic), or whole grid builds: for
  *        profilers; INDEX_ALLOC=kept or fresh runs them on that allocator);
@@ -279,7 +279,7 @@ int main(int argc, char **argv)
         rs_ctx_free(ctx);
         return 0;
     }
-    const char *dir = argc > 1 ? argv[1] : ".";
+    const char *dir = argc > 1 ? argv[1] : "build/bench";
     char path[4096];
     snprintf(path, sizeof path, "%s/index.md", dir);
     FILE *md = fopen(path, "w");

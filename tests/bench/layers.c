@@ -8,7 +8,7 @@
  *  - for comparison, the plain window plus rs_normal_window.
  * Times: this thread's CPU time, median of RUNS rounds over the same four
  * windows, the cases interleaved round by round.
- * Usage: layers OUTDIR   (writes OUTDIR/layers.md and layers.csv) */
+ * Usage: layers [OUTDIR]   (writes OUTDIR/layers.md and layers.csv; build/bench by default) */
 #include "roadsplat.h"
 #include "scene_splat.h"
 #include "scenes.h"
@@ -31,7 +31,7 @@ static const char *const case_name[NCASE] = {
 
 int main(int argc, char **argv)
 {
-    const char *dir = argc > 1 ? argv[1] : ".";
+    const char *dir = argc > 1 ? argv[1] : "build/bench";
     rs_ctx *ctx = NULL;
     sc_scene sc;
     memset(&sc, 0, sizeof sc);

@@ -6,7 +6,7 @@
  * then the whole 4096^2 image at 4 texels on 1 and 2 threads (one context
  * each, the two halves of the rows) against a plain RGBA fill of the same
  * buffer on as many threads, in the same run.
- * Usage: texels OUTDIR (writes OUTDIR/texels.md);
+ * Usage: texels [OUTDIR] (writes OUTDIR/texels.md; build/bench by default);
  *        texels --one T [REPS] (T texels, REPS windows: for profilers). */
 #include "roadsplat.h"
 #include "scene_splat.h"
@@ -123,7 +123,7 @@ int main(int argc, char **argv)
                best * 1e6 / ((double)ww[i] * wh[i]), reps);
         return 0;
     }
-    const char *dir = argc > 1 ? argv[1] : ".";
+    const char *dir = argc > 1 ? argv[1] : "build/bench";
     /* the splatter's own preparation (at 1 and 2 texels it computes the
      * terrain colour of every sample: lib/splat/surface.c), fastest of 3 */
     double make[5];
