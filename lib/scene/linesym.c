@@ -1028,9 +1028,10 @@ static int cut_capped(const ls_piece *P, const ls_poly *G, const ls_surf *Q, con
 
 /* P minus surface rectangle Q (cut by its clip lines, its square ends
  * taken in at round caps): up to CUT_PARTS disjoint pieces into out
- * (6 without caps); returns their count, or -1 when Q misses P (P stays
- * whole) or a piece would need more half-planes than it holds (P is then
- * kept whole: lines run on). tol: the caps' (cap_tangents). */
+ * (6 without caps); returns their count, -1 when Q misses P (P stays
+ * whole), or -2 when a piece would need more half-planes than it holds (P
+ * is then kept whole, its lines run on; cutset_cut may have it halved).
+ * tol: the caps' (cap_tangents). */
 static int cut_piece(const ls_piece *P, const ls_poly *G, const ls_surf *Q, ls_piece *out, ls_poly *outg, double drop,
                      double tol)
 {

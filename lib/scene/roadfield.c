@@ -455,8 +455,6 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
 
 static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
 
-/* A float <= v (NaN: -inf) and a float >= v (NaN: +inf); conversions
- * only of values within the float range. */
 /* the float next to finite r towards +inf (up = 1) or -inf: nextafterf's
  * answer by the bits (a libm call in the index build's hot loops) */
 static float float_step(float r, int up)
@@ -470,6 +468,8 @@ static float float_step(float r, int up)
     return r;
 }
 
+/* A float <= v (NaN: -inf) and a float >= v (NaN: +inf); conversions
+ * only of values within the float range. */
 static float float_down(double v)
 {
     if (!(v > -1e38)) return -INFINITY;
@@ -491,7 +491,9 @@ static float float_up(double v)
  * has coordinates, length and half width within 1e8 cells, so the spans'
  * rounding errors stay far below the slack `tol` (docs/roadfield.md).
  * Pass 1 counted each row's segments; one pass over the lists fills them,
- * each entry's box copied from the segment's. */
+ * each entry's box copied from the segment's. The pass over the segments
+ * before it also sets seg_relations' flags (from `redundant`, a flag per
+ * segment) and joint partners. */
 __attribute__((noinline)) static rs_result build_rows(rs_ctx *ctx, rs__roadfield *f, const rf_scratch *sc,
                                                      const uint8_t *redundant)
 {
@@ -1105,13 +1107,13 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
  * same as without it (the exact one-capsule covers would otherwise give
  * way to the approximations for several). The capsule that holds it is in
  * the same cell lists (its reach is at least as large) and is near or
- * deep wherever the redundant one is near (docs/roadfield.md). The
- * segments are visited last to first so that a run of zero-length
- * segments is skipped in one step (a million repeated points cost a
- * million steps). RS_ERR_LIMIT when the holder search passes the work
- * limit (h->limit). Here the holders, into *red_out (a flag per segment,
- * the caller's to free); build_rows' pass over the segments sets both
- * (one pass over a dense map's hundreds of MB of segments, not two). */
+ * deep wherever the redundant one is near (docs/roadfield.md). Here the
+ * holders, into *red_out (a flag per segment, the caller's to free);
+ * build_rows' pass over the segments writes the flags and finds the
+ * partners (one pass over a dense map's hundreds of MB of segments, not
+ * two), last to first so that a run of zero-length segments is skipped in
+ * one step (a million repeated points cost a million steps). RS_ERR_LIMIT
+ * when the holder search passes the work limit (h->limit). */
 static rs_result seg_relations(rs_ctx *ctx, rs__roadfield *f, const uint32_t *cell1, rf_holders *h, const rf_scratch *sc,
                                uint8_t **red_out)
 {
