@@ -1371,6 +1371,15 @@ static size_t surf_cell(double v, double v0, double ic, size_t n)
     return (size_t)t;
 }
 
+/* surf_test's first test, inline where the segments walk the ends' cells
+ * (most ends in a cell lie beyond the reach: a call with fifteen
+ * arguments each was most of the walk) */
+static inline int surf_line_near(const double *xy, const double *pa, double dx, double dy, double dd, double reach2)
+{
+    double cr = (xy[0] - pa[0]) * dy - (xy[1] - pa[1]) * dx;
+    return !(cr * cr > reach2 * dd * (1 + 1e-9));
+}
+
 /* Candidate end f (at xy, a copy of f->x, f->y in the cells' order)
  * against segment k (points pa, pb = pa + 2) of record q of stroke sq
  * (its points qxy, qnp of them): its nearest point first, from the copy
@@ -1561,8 +1570,9 @@ static rs_result surface_tees(build *B, rs_network *N)
             if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 4) { /* (a box of at most 2 x 2 cells: all of it) */
                 for (size_t cy = r0; cy <= r1; cy++)
                     for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)
-                        surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy, dd,
-                                  reach2, &qnc, &qlv);
+                        if (surf_line_near(cxy + 2 * i, pa, dx, dy, dd, reach2))
+                            surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx,
+                                      dy, dd, reach2, &qnc, &qlv);
                 continue;
             }
             for (size_t cy = r0; cy <= r1; cy++) {
@@ -1578,8 +1588,9 @@ static rs_result surface_tees(build *B, rs_network *N)
                 double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
                 size_t c0 = surf_cell(rs__fmin(xa, xb) - rq, bx0, ic, nx), c1 = surf_cell(rs__fmax(xa, xb) + rq, bx0, ic, nx);
                 for (uint32_t i = start[cy * nx + c0], ie = start[cy * nx + c1 + 1]; i < ie; i++)
-                    surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy, dd,
-                                  reach2, &qnc, &qlv);
+                    if (surf_line_near(cxy + 2 * i, pa, dx, dy, dd, reach2))
+                        surf_test(B->roads, N, fe, ids + i, cxy + 2 * i, (uint32_t)q, sq, qxy, qnp, (uint32_t)k, pa, dx, dy,
+                                  dd, reach2, &qnc, &qlv);
             }
         }
     }
