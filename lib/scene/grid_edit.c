@@ -380,6 +380,31 @@ static int tee_strip(const rs__road_local *rl, const road_fp *F, int e, double *
     return 1;
 }
 
+/* The box of end e's T (its strip's direction dx, dy and sine sn, from
+ * tee_strip) that the road field computes again whatever road its pixels
+ * lie on (lib/scene/roadfield.c tee_box, tee_pass): a neighbour's edge
+ * there comes from 16 sub-rows and may round otherwise (found by
+ * fuzz/edits: a through road's edge pixel 5 m from a new T end, 3/65535 in
+ * weight). The box: the flat strip's corners (u from where the clip line
+ * crosses the far side to where it crosses the near side, t = +-reach)
+ * and the end disc, grown by the field's margin of half a pixel diagonal. */
+static rs_result tee_box_piece(builder *b, const rs__road_local *rl, const road_fp *F, int e, double dx, double dy,
+                               double sn, uint64_t h)
+{
+    size_t k = e ? rl->n - 1 : 0;
+    const double *x = rl->x, *y = rl->y;
+    double cs = fabs(F->E.tnx[e] * dy - F->E.tny[e] * dx), R = F->reach;
+    double ua = fmin((F->E.tee[e] - R * cs) / sn, 0), ub = fmax((F->E.tee[e] + R * cs) / sn, 0);
+    double bx0 = x[k] - R, bx1 = x[k] + R, by0 = y[k] - R, by1 = y[k] + R;
+    for (int c = 0; c < 4; c++) {
+        double u = c & 1 ? ub : ua, t = c & 2 ? R : -R;
+        double px = x[k] + u * dx + t * dy, py = y[k] + u * dy - t * dx;
+        bx0 = fmin(bx0, px), bx1 = fmax(bx1, px), by0 = fmin(by0, py), by1 = fmax(by1, py);
+    }
+    double mg = 0.7072 * b->pix + 1e-9 * (1 + fabs(x[k]) + fabs(y[k]) + R + ub - ua);
+    return push(b, h, bx0 - mg, by0 - mg, bx1 + mg, by1 + mg, -1);
+}
+
 static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp *F)
 {
     size_t n = rl->n;
@@ -402,26 +427,8 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         uint64_t h = mix(mix(mix(F->rim, 0x7ee), F->E.h[e]), (uint64_t)e);
         h = mixd(mixd(mixd(mixd(h, x[k]), y[k]), x[q]), y[q]);
         r = push(b, h, x[k], y[k], x[k] + far * dx, y[k] + far * dy, F->reach);
-        /* the road field computes the pixels of the T's box again
-         * (lib/scene/roadfield.c tee_box, tee_pass), whatever road they
-         * lie on: a neighbour's edge there comes from 16 sub-rows and may
-         * round otherwise (found by fuzz/edits: a through road's edge
-         * pixel 5 m from a new T end, 3/65535 in weight). The box: the
-         * flat strip's corners (u from where the clip line crosses the far
-         * side to where it crosses the near side, t = +-reach) and the end
-         * disc, grown by the field's margin of half a pixel diagonal. */
-        if (!r) {
-            double cs = fabs(F->E.tnx[e] * dy - F->E.tny[e] * dx), R = F->reach;
-            double ua = fmin((F->E.tee[e] - R * cs) / sn, 0), ub = fmax((F->E.tee[e] + R * cs) / sn, 0);
-            double bx0 = x[k] - R, bx1 = x[k] + R, by0 = y[k] - R, by1 = y[k] + R;
-            for (int c = 0; c < 4; c++) {
-                double u = c & 1 ? ub : ua, t = c & 2 ? R : -R;
-                double px = x[k] + u * dx + t * dy, py = y[k] + u * dy - t * dx;
-                bx0 = fmin(bx0, px), bx1 = fmax(bx1, px), by0 = fmin(by0, py), by1 = fmax(by1, py);
-            }
-            double mg = 0.7072 * b->pix + 1e-9 * (1 + fabs(x[k]) + fabs(y[k]) + R + ub - ua);
-            r = push(b, mix(h, 0xb0c5), bx0 - mg, by0 - mg, bx1 + mg, by1 + mg, -1);
-        }
+        /* the road field computes the pixels of the T's box again (tee_box_piece) */
+        if (!r) r = tee_box_piece(b, rl, F, e, dx, dy, sn, mix(h, 0xb0c5));
         /* and the segments a field may clip (tee_run, counted above): of
          * each, the part whose capsule may reach the end's normal line
          * (centre line at n.p >= n.E - reach, a pixel diagonal and rounding
@@ -463,7 +470,14 @@ static rs_result road_pieces(builder *b, const rs__road_local *rl, const road_fp
         double ox, oy, osn, ofar;
         if (!r && run >= n - 1 && tee_strip(rl, F, oe, &ox, &oy, &osn, &ofar)) {
             size_t ko = oe ? n - 1 : 0;
-            r = push(b, mix(mix(h, F->E.h[oe]), 0x0e5), x[ko], y[ko], x[ko] + ofar * ox, y[ko] + ofar * oy, F->reach);
+            uint64_t ho = mix(mix(h, F->E.h[oe]), 0x0e5);
+            r = push(b, ho, x[ko], y[ko], x[ko] + ofar * ox, y[ko] + ofar * oy, F->reach);
+            /* and its box, which the road field computes again (the strip's
+             * far corners and a pixel's margin: fuzz/edits, 6 December
+             * 2026: a road starting inside one street and ending inside it
+             * had its start's T moved to a road added there; the pixels at
+             * the tip of its end's 23 m strip changed, outside the capsule) */
+            if (!r) r = tee_box_piece(b, rl, F, oe, ox, oy, osn, mix(ho, 0xb0c5));
         }
     }
     /* chunks: runs of short segments up to a chunk of arc staying near
@@ -561,6 +575,8 @@ static rs_result line_and_mark_pieces(builder *b, const rs_road_grid *g)
                              m->slo, m->shi, m->tlo, m->thi, m->bx0, m->by0, m->bx1, m->by1 };
         for (size_t j = 0; j < sizeof f / sizeof f[0]; j++) h = mixd(h, f[j]);
         h = mix(h, (uint64_t)m->flip);
+        /* under a bridge's deck: the roads over it leave out its pixels there */
+        if (m->under) h = mix(mix(h, 0x7d3e), m->deck);
         for (size_t j = 0; j < m->npt * RS__MK_PT; j++) h = mixd(h, mk->pts[RS__MK_PT * m->first + j]);
         if (m->npt == 2) { /* one segment: the support is a rectangle in (s, t); its capsule along its longer side */
             const double *A = mk->pts + RS__MK_PT * m->first;
