@@ -1802,8 +1802,10 @@ static void test_ring_edit(void)
 /* A road's level edited (layer= set, then bridge=no over a layer): the
  * primary's lines under the secondary, the secondary's over it and the
  * street ending under it (a T with it on one level, none with the bridge)
- * change; each update draws as a fresh build and its rectangles hold
- * every changed pixel (docs/network.md "Bridges and layers"). */
+ * change, and so do the primary's two words under the secondary's deck
+ * (left out there on another level); each update draws as a fresh build
+ * and its rectangles hold every changed pixel (docs/network.md "Bridges
+ * and layers"). */
 static void test_level_edit(void)
 {
     static const char *const step[3][2] = { { "layer", "1" }, { "layer", "-1" }, { "layer", "0" } };
@@ -1822,6 +1824,8 @@ static void test_level_edit(void)
                rs_roads_set_attr(E.ctx, E.roads, 1, "area", "rural") == RS_OK &&
                rs_roads_add(E.ctx, E.roads, NULL, 6, u, 2) == RS_OK &&
                rs_roads_set_attr(E.ctx, E.roads, 2, "class", "residential") == RS_OK;
+        rs_mark mk1 = { "word_bus", 0, 48, -2.2, 6, 2, 0, 0 }, mk2 = { "word_slow", 0, 43, 2.2, 6, 2, 1, 0 };
+        E.ok = E.ok && rs_roads_add_mark(E.ctx, E.roads, &mk1) == RS_OK && rs_roads_add_mark(E.ctx, E.roads, &mk2) == RS_OK;
         /* the base on the step before (none for the first) */
         for (int j = 0; j < k && E.ok; j++) E.ok = rs_roads_set_attr(E.ctx, E.roads, 1, step[j][0], step[j][1]) == RS_OK;
         edit_base(&E, 5);

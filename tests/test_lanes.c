@@ -751,6 +751,65 @@ static void test_bridge_lines(void)
     }
 }
 
+/* A lower road's markings under a bridge's deck (docs/network.md "Bridges
+ * and layers"): left out where the deck's surface holds the pixel, painted
+ * where they come out from under it; a marking running on from a record to
+ * the bridge record of its own stroke stays whole. Until 6 December 2026
+ * the primary's words were painted on the bridge's deck. */
+static void test_marks_under_bridge(void)
+{
+    static const char prim[] = "road p width 9 class=primary area=rural\n0 30\n60 30\nend\n";
+    static const char bridge[] = "road b width 7 class=secondary area=rural layer=1\n39 2\n39 58\nend\n";
+    /* BUS wholly under the deck (x 36..42 m, the deck 35.5..42.5), SLOW at x 29..35 (out from under it) */
+    static const char marks[] = "mark word_bus road=p s=39 t=-2.2 length=6 width=2\n"
+                                "mark word_slow road=p s=32 t=2.2 length=6 width=2 flip\n";
+    char a_txt[1024], b_txt[1024], c_txt[1024];
+    snprintf(a_txt, sizeof a_txt, "%s%s%s", prim, bridge, marks);
+    snprintf(b_txt, sizeof b_txt, "%s%s", prim, bridge);
+    snprintf(c_txt, sizeof c_txt, "%s%s", prim, marks);
+    img A, B, C;
+    int ok = render(a_txt, 61, 61, RS_PROFILE_RMS, 1, 1, &A) & render(b_txt, 61, 61, RS_PROFILE_RMS, 1, 1, &B) &
+             render(c_txt, 61, 61, RS_PROFILE_RMS, 1, 1, &C);
+    CHECK(ok && A.w == 600 && A.h == 600 && B.w == 600 && C.w == 600);
+    if (ok && A.w == 600 && B.w == 600 && C.w == 600) {
+        /* on the deck over the primary: as without the marks */
+        int deck = max_diff(&A, &B, 360, 420, 255, 345);
+        /* the part of SLOW out from under the deck (x 29.5..34.5 m): as
+         * without the bridge, and painted */
+        int out_c = max_diff(&A, &C, 295, 345, 255, 345), out_b = max_diff(&A, &B, 295, 345, 255, 345);
+        /* and without the bridge BUS is there */
+        int bus = max_diff(&C, &B, 360, 420, 255, 300);
+        CHECKF(deck == 0 && out_c == 0 && out_b > 100 && bus > 100,
+               "marks under a deck: %d/255 on the deck from the marks, %d out from under it against no bridge, "
+               "%d against no marks, %d where BUS lies without the bridge", deck, out_c, out_b, bus);
+        printf("marks under a bridge: deck %d/255, out from under it %d (no bridge) and %d (no marks), BUS alone %d\n",
+               deck, out_c, out_b, bus);
+    }
+    free(A.rgba);
+    free(B.rgba);
+    free(C.rgba);
+    /* the same stroke: a primary whose second record is a bridge (over
+     * nothing); a word across the joint draws as on one level */
+    static const char *const lay[2] = { "", " layer=1" };
+    img S[2];
+    for (int v = 0; v < 2; v++) {
+        char t[1024];
+        snprintf(t, sizeof t,
+                 "road p1 width 9 class=primary area=rural\n0 30\n30 30\nend\n"
+                 "road p2 width 9 class=primary area=rural%s\n30 30\n60 30\nend\n"
+                 "mark word_bus road=p1 s=29 t=-2.2 length=6 width=2\n",
+                 lay[v]);
+        ok = render(t, 61, 61, RS_PROFILE_RMS, 1, 1, &S[v]);
+        CHECK(ok);
+    }
+    if (S[0].rgba && S[1].rgba && S[0].w == S[1].w && S[0].h == S[1].h) {
+        int d = max_diff(&S[0], &S[1], 0, S[0].w, 0, S[0].h);
+        CHECKF(d == 0, "a word across a record's joint with its bridge record: %d/255 from one level", d);
+    }
+    free(S[0].rgba);
+    free(S[1].rgba);
+}
+
 /* A roundabout is one-way along its points (OSM: junction=roundabout and
  * circular imply oneway=yes): drawn as with oneway=yes written, without
  * the centre line of a two-way road it drew until 6 December 2026 (the
@@ -1336,6 +1395,7 @@ int main(void)
     test_bend_outside_cut();
     test_cap_cut();
     test_bridge_lines();
+    test_marks_under_bridge();
     test_roundabout_oneway();
     test_line_under_road();
     test_many_crossings();

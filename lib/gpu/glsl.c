@@ -417,6 +417,11 @@ static const char *const rsh_fs_src[] = {
     "        float sdR = 1e30, sdC = 1e30, dS = 1e30, dC = 1e30;\n"
     "        vec2 nR = vec2(1.0, 0.0), nC = vec2(1.0, 0.0);\n"
     "        int roadS = -1, roadC = -1; float tS = 0.0, pS = -3e9;\n"
+    /* levels (a bridge over a road): the highest level among the surfaces
+     * holding p and its stroke, and the highest among those of the other
+     * strokes; a lower road's markings are left out under a deck
+     * (lib/scene/markings.c rs__markings_set_levels) */
+    "        float lv1 = -3e9, lv2 = -3e9, st1 = -9.0;\n"
     /* the cell's list (ascending: grouped by road): R, casings, the
      * nearest surface, and each road's surface coverage as a factor of the
      * junction cuts (a product and a count of zero factors, so any number
@@ -450,6 +455,12 @@ static const char *const rsh_fs_src[] = {
      * when equal) */
     "            if (sd <= near_reach) {\n"
     "                float kp = sd <= 0.0 ? texelFetch(u_roadt, 10 * s.road + 7).z : -2e9;\n"
+    "                if (sd <= 0.0) {\n"
+    "                    float lv = kp < -1e8 ? 0.0 : floor(kp / 64.0), sq = texelFetch(u_roadt, 10 * s.road + 6).x;\n"
+    "                    if (sq == st1) lv1 = max(lv1, lv);\n"
+    "                    else if (lv > lv1) { lv2 = lv1; lv1 = lv; st1 = sq; }\n"
+    "                    else lv2 = max(lv2, lv);\n"
+    "                }\n"
     "                if (kp < -1e8) kp = -2e9;\n"
     "                if (kp > pS || (kp == pS && d < dS)) { pS = kp; dS = d; roadS = s.road; tS = u >= 0.0 && u <= s.len ? side : sign(side) * d; }\n"
     "            }\n"
@@ -502,6 +513,9 @@ static const char *const rsh_fs_src[] = {
     "            for (int e = m0; e < m1; e++) {\n"
     "                int mi = int(texelFetch(u_mids, e).r);\n"
     "                vec4 M0 = texelFetch(u_mark, 3 * mi), M1 = texelFetch(u_mark, 3 * mi + 1), M2 = texelFetch(u_mark, 3 * mi + 2);\n",
+    "                float mrk = texelFetch(u_roadt, 10 * int(M0.x) + 7).z, mlv = mrk < -1e8 ? 0.0 : floor(mrk / 64.0);\n"
+    "                float mst = texelFetch(u_roadt, 10 * int(M0.x) + 6).x;\n"
+    "                if ((st1 != mst && lv1 > mlv) || lv2 > mlv) continue;\n"
     "                int mk = M2.y >= 0.0 ? stroke_nearest(p, M2.y, e0, e1) : road_nearest(p, int(M0.x), e0, e1);\n"
     "                if (mk < 0) continue;\n"
     "                float sgn = M1.z != 0.0 ? -1.0 : 1.0;\n"

@@ -8,6 +8,7 @@
 #include "lanes.h"
 #include "splatter.h"
 #include "network.h"
+#include "roadfield.h"
 
 #include <float.h>
 #include <limits.h>
@@ -85,6 +86,8 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->start);
     rs__free(ctx, mk->list);
     rs__free(ctx, mk->pl);
+    rs__free(ctx, mk->lv);
+    rs__free(ctx, mk->lv_stroke);
     rs__free(ctx, mk);
 }
 
@@ -261,6 +264,7 @@ static int place(const rs__placement *pl, const rs__road_local *r, const rs__atl
                  double pix, rs__mk *m, double **pts, size_t *npts, size_t *cap, rs_ctx *ctx, rs_result *err)
 {
     memset(m, 0, sizeof *m);
+    m->road = (uint32_t)pl->road;
     m->ty = ty;
     m->flip = pl->flip;
     m->s0 = pl->s;
@@ -1340,6 +1344,8 @@ static inline void each_straight(const rs__markings *mk, const rs__mk *m, rs__pi
             double gx = gx0 + (double)k + 0.5;
             double u = ur + bu * gx, v = vr + bv * gx;
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
+            if (m->under && rs__roadfield_held_above(mk->lv_field, gx * pix, y, mk->lv, mk->lv_stroke, m->level, m->stroke))
+                continue;
             if (rc) rec_put(rc, &kn, u, v, (long)p->x0 + k, (long)p->y0 + r);
             else kern_put(&kn, u, v, sc + k, w, painted);
         }
@@ -1448,6 +1454,8 @@ static inline void each_curved(const rs__markings *mk, const rs__mk *m, rs__piec
              * direction): outside it the sample is 0 */
             const rs__mk_fp *fp = fps + seg;
             if (!(u >= ax0 - fp->hu && u < ax1 + fp->hu && v >= ay0 - fp->hv && v < ay1 + fp->hv)) continue;
+            if (m->under && rs__roadfield_held_above(mk->lv_field, gx * pix, y, mk->lv, mk->lv_stroke, m->level, m->stroke))
+                continue;
             if (seg != fp_seg) {
                 kern_init(&kn, m, fp);
                 fp_seg = seg;
@@ -1654,4 +1662,137 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
     }
     p->mark_tests += tests;
     p->mark_pixels += painted;
+}
+
+/* Road r's box in local metres, grown by its half width and a slack far
+ * above the roundings (the T trims only take away); 0 when it has no
+ * finite one. */
+static int road_box(const rs_roads *roads, size_t r, const rs__local_frame *F, double b[4])
+{
+    double w = 0;
+    const double *xy = NULL;
+    size_t np = 0;
+    rs_roads_get(roads, r, NULL, &w, &xy, &np);
+    if (np == 0) return 0;
+    b[0] = b[1] = INFINITY;
+    b[2] = b[3] = -INFINITY;
+    for (size_t k = 0; k < np; k++) {
+        double x, y;
+        rs__local_point(F, xy, k, &x, &y);
+        b[0] = x < b[0] ? x : b[0], b[2] = x > b[2] ? x : b[2];
+        b[1] = y < b[1] ? y : b[1], b[3] = y > b[3] ? y : b[3];
+    }
+    double g = 0.5 * w;
+    g += 1e-9 * (1 + g + fabs(b[0]) + fabs(b[1]) + fabs(b[2]) + fabs(b[3]));
+    b[0] -= g, b[1] -= g, b[2] += g, b[3] += g;
+    return b[0] <= b[2] && b[1] <= b[3] && isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]);
+}
+
+/* Road q over a marking into its deck print: its level, width and points
+ * (not its index, which an edit elsewhere may change). */
+static uint64_t deck_mix(uint64_t h, const rs_roads *roads, size_t q, int32_t level)
+{
+    double w = 0;
+    const double *xy = NULL;
+    size_t np = 0;
+    rs_roads_get(roads, q, NULL, &w, &xy, &np);
+    h = rs__fp_mix(rs__fp_mixd(h, w), (uint64_t)(int64_t)level);
+    for (size_t k = 0; k < 2 * np; k++) h = rs__fp_mixd(h, xy[k]);
+    return rs__fp_mix(h, (uint64_t)np);
+}
+
+rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *dem, const rs_roads *roads,
+                                  const rs_network *net, const struct rs__roadfield *field)
+{
+    if (!mk || !field || !mk->n) return RS_OK;
+    size_t n = rs_roads_count(roads);
+    if (!net || rs_network_road_count(net) != n) return RS_OK; /* (no strokes: a bridge record would hide its own road's) */
+    int32_t lo = INT32_MAX, hi = INT32_MIN;
+    int32_t *lv = rs__alloc_array(ctx, n ? n : 1, sizeof *lv);
+    if (!lv) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+    for (size_t i = 0; i < n; i++) {
+        if ((i & 4095) == 4095 && rs__poll(ctx)) {
+            rs__free(ctx, lv);
+            return RS_ERR_CANCELLED;
+        }
+        lv[i] = rs__road_level(roads, i);
+        lo = lv[i] < lo ? lv[i] : lo;
+        hi = lv[i] > hi ? lv[i] : hi;
+    }
+    if (!(lo < hi)) { /* one level: nothing lies under anything */
+        rs__free(ctx, lv);
+        return RS_OK;
+    }
+    uint32_t *st = rs__alloc_array(ctx, n, sizeof *st);
+    /* the raised roads (above the lowest level) and their boxes */
+    size_t nr = 0;
+    for (size_t i = 0; i < n; i++) nr += lv[i] > lo;
+    size_t *ri = rs__alloc_array(ctx, nr ? nr : 1, sizeof *ri);
+    double *rb = rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof *rb);
+    if (!st || !ri || !rb) {
+        rs__free(ctx, lv);
+        rs__free(ctx, st);
+        rs__free(ctx, ri);
+        rs__free(ctx, rb);
+        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+    }
+    for (size_t i = 0; i < n; i++) st[i] = net->stroke_of[i];
+    nr = 0;
+    const rs__local_frame F = rs__local_frame_of(dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size);
+    for (size_t i = 0; i < n; i++)
+        if (lv[i] > lo && road_box(roads, i, &F, rb + 4 * nr)) ri[nr++] = i;
+    /* a marking is under a deck where a higher road of another stroke meets
+     * its box; many of both: every marking below the top level is asked
+     * per pixel (the same pixels, slower), and its print is of every raised
+     * road. The print lets an edit of a road over a marking (moved, its
+     * level changed, removed) change the marking's edit piece
+     * (lib/scene/grid_edit.c): the marking's own print does not. */
+    int all = (double)nr * (double)mk->n > 1e7;
+    uint64_t all_print = 0x6b1d;
+    for (size_t j = 0; all && j < nr; j++) all_print = deck_mix(all_print, roads, ri[j], lv[ri[j]]);
+    size_t nunder = 0;
+    for (size_t k = 0; k < mk->n; k++) {
+        if ((k & 1023) == 1023 && rs__poll(ctx)) {
+            rs__free(ctx, lv);
+            rs__free(ctx, st);
+            rs__free(ctx, ri);
+            rs__free(ctx, rb);
+            return RS_ERR_CANCELLED;
+        }
+        rs__mk *m = &mk->m[k];
+        m->level = lv[m->road];
+        m->stroke = st[m->road];
+        m->under = 0;
+        m->deck = 0;
+        if (m->level >= hi) continue;
+        if (all) {
+            m->under = 1;
+            m->deck = all_print;
+        }
+        for (size_t j = 0; j < nr && !all; j++) {
+            size_t q = ri[j];
+            if (!(lv[q] > m->level) || st[q] == m->stroke) continue;
+            const double *b = rb + 4 * j;
+            if (b[2] < m->bx0 || b[0] > m->bx1 || b[3] < m->by0 || b[1] > m->by1) continue;
+            m->deck = deck_mix(m->under ? m->deck : 0x6b1d, roads, q, lv[q]);
+            m->under = 1;
+        }
+        if (m->under) {
+            m->pre0 = SIZE_MAX; /* (its blends from the build knew no decks: painted per piece) */
+            m->npre = 0;
+            nunder++;
+        }
+    }
+    rs__free(ctx, ri);
+    rs__free(ctx, rb);
+    if (!nunder) {
+        rs__free(ctx, lv);
+        rs__free(ctx, st);
+        return RS_OK;
+    }
+    mk->lv_field = field;
+    mk->lv = lv;
+    mk->lv_stroke = st;
+    mk->bytes += n * (sizeof *lv + sizeof *st);
+    return RS_OK;
 }

@@ -88,6 +88,14 @@ typedef struct rs__mk {
     double kx, ky;             /* level-0 texels per metre across (x) and along (y) */
     double bx0, bx1;           /* columns of the box (metres) */
     uint32_t rec;              /* its place in record order (mk->at[rec] is this record) */
+    uint32_t road;             /* its placement's road */
+    /* under a higher road's deck in places (rs__markings_set_levels): its
+     * road's level and stroke; the paint leaves out the pixels whose
+     * centre a surface of a higher level and another stroke holds */
+    int32_t level;
+    uint32_t stroke;
+    int under;
+    uint64_t deck;             /* under: a print of the roads over it (level, width, points), for the edits' pieces */
 } rs__mk;
 
 /* One pixel of a small marking, as the paint blends it (o = o (1 - a) +
@@ -150,6 +158,12 @@ typedef struct rs__markings {
     rs__placement *pl;
     size_t npl;
     size_t bytes;
+    /* Levels (rs__markings_set_levels; NULL when every road is on one
+     * level): the grid's road field (borrowed) and per road its level and
+     * stroke (owned). */
+    const struct rs__roadfield *lv_field;
+    int32_t *lv;
+    uint32_t *lv_stroke;
 } rs__markings;
 
 /* Place the road set's `mark` records and (unless o->markings.no_auto) the
@@ -170,6 +184,16 @@ rs_result rs__markings_build_planned(rs_ctx *ctx, const rs_dem *dem, const rs_ro
                                      const rs_splat_options *o, const rs_network *net, struct rs__auto_plan *plan,
                                      const double *window, rs__markings **out);
 void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
+/* Roads on different levels (a bridge, layer=; docs/network.md "Bridges
+ * and layers"): a marking is not painted where the surface of a road of a
+ * higher level and another stroke holds the pixel's centre, the rule the
+ * fill and the shader follow. Marks the markings whose box meets such a
+ * road's (they are then painted per piece, not from the build's blends)
+ * and keeps `field` (the grid's, which must outlive mk) to ask. Nothing
+ * when every road is on one level or field is NULL. */
+struct rs__roadfield;
+rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *dem, const rs_roads *roads,
+                                  const rs_network *net, const struct rs__roadfield *field);
 
 /* Whether the automatic rules can place anything on these roads (a road
  * with a class, turn:lanes or a crossing=zebra point). */

@@ -2599,6 +2599,32 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
     return 1;
 }
 
+int rs__roadfield_held_above(const rs__roadfield *f, double x, double y, const int32_t *lv, const uint32_t *stroke,
+                             int32_t level, uint32_t st)
+{
+    if (!f) return 0;
+    int64_t ci = cell_of(f, x, f->gw), cj = cell_of(f, y, f->gh);
+    if (ci < 0 || cj < 0) return 0;
+    /* (a surface holding the point is in its cell's list: the lists reach
+     * past every capsule; nearest_scan's key, reach 0) */
+    size_t cell = (size_t)cj * f->gw + (size_t)ci;
+    for (uint32_t k = f->start[cell]; k < f->start[cell + 1]; k++) {
+        const rf_seg *s = &f->seg[f->ids[k]];
+        if (!(lv[s->road] > level) || stroke[s->road] == st) continue;
+        double pr, side, d = seg_point(s, x, y, &pr, &side);
+        if (s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r) return 1;
+    }
+    /* a trimmed strip reaches past its capsule, so past its cells' lists */
+    for (uint32_t m = f->ntee ? f->tstart[cj] : 0; f->ntee && m < f->tstart[cj + 1]; m++) {
+        const rf_tee *T = &f->tee[f->tids[m]];
+        if (x < T->box[0] || x > T->box[1] || y < T->box[2] || y > T->box[3]) continue;
+        const rf_seg *s = &f->seg[T->seg];
+        if (!(lv[s->road] > level) || stroke[s->road] == st) continue;
+        if (tee_sd(f, s, x, y) <= 0) return 1;
+    }
+    return 0;
+}
+
 int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, double reach, const int *prio,
                                  rs__road_point *out)
 {
