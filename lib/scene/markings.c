@@ -1707,35 +1707,28 @@ rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *d
     if (!mk || !field || !mk->n) return RS_OK;
     size_t n = rs_roads_count(roads);
     if (!net || rs_network_road_count(net) != n) return RS_OK; /* (no strokes: a bridge record would hide its own road's) */
-    int32_t lo = INT32_MAX, hi = INT32_MIN;
-    int32_t *lv = rs__alloc_array(ctx, n ? n : 1, sizeof *lv);
-    if (!lv) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+    rs_result res = RS_OK;
+    int32_t lo = INT32_MAX, hi = INT32_MIN, *lv = rs__alloc_array(ctx, n ? n : 1, sizeof *lv);
+    uint32_t *st = NULL;
+    size_t *ri = NULL, nr = 0, nunder = 0;
+    double *rb = NULL;
+    if (!lv) goto nomem;
     for (size_t i = 0; i < n; i++) {
         if ((i & 4095) == 4095 && rs__poll(ctx)) {
-            rs__free(ctx, lv);
-            return RS_ERR_CANCELLED;
+            res = RS_ERR_CANCELLED;
+            goto done;
         }
         lv[i] = rs__road_level(roads, i);
         lo = lv[i] < lo ? lv[i] : lo;
         hi = lv[i] > hi ? lv[i] : hi;
     }
-    if (!(lo < hi)) { /* one level: nothing lies under anything */
-        rs__free(ctx, lv);
-        return RS_OK;
-    }
-    uint32_t *st = rs__alloc_array(ctx, n, sizeof *st);
+    if (!(lo < hi)) goto done; /* one level: nothing lies under anything */
     /* the raised roads (above the lowest level) and their boxes */
-    size_t nr = 0;
     for (size_t i = 0; i < n; i++) nr += lv[i] > lo;
-    size_t *ri = rs__alloc_array(ctx, nr ? nr : 1, sizeof *ri);
-    double *rb = rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof *rb);
-    if (!st || !ri || !rb) {
-        rs__free(ctx, lv);
-        rs__free(ctx, st);
-        rs__free(ctx, ri);
-        rs__free(ctx, rb);
-        return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
-    }
+    st = rs__alloc_array(ctx, n, sizeof *st);
+    ri = rs__alloc_array(ctx, nr ? nr : 1, sizeof *ri);
+    rb = rs__alloc_array(ctx, nr ? nr : 1, 4 * sizeof *rb);
+    if (!st || !ri || !rb) goto nomem;
     for (size_t i = 0; i < n; i++) st[i] = net->stroke_of[i];
     nr = 0;
     const rs__local_frame F = rs__local_frame_of(dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size);
@@ -1750,14 +1743,10 @@ rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *d
     int all = (double)nr * (double)mk->n > 1e7;
     uint64_t all_print = 0x6b1d;
     for (size_t j = 0; all && j < nr; j++) all_print = deck_mix(all_print, roads, ri[j], lv[ri[j]]);
-    size_t nunder = 0;
     for (size_t k = 0; k < mk->n; k++) {
         if ((k & 1023) == 1023 && rs__poll(ctx)) {
-            rs__free(ctx, lv);
-            rs__free(ctx, st);
-            rs__free(ctx, ri);
-            rs__free(ctx, rb);
-            return RS_ERR_CANCELLED;
+            res = RS_ERR_CANCELLED;
+            goto done;
         }
         rs__mk *m = &mk->m[k];
         m->level = lv[m->road];
@@ -1783,16 +1772,21 @@ rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *d
             nunder++;
         }
     }
+    if (nunder) { /* kept for the paint */
+        mk->lv_field = field;
+        mk->lv = lv;
+        mk->lv_stroke = st;
+        mk->bytes += n * (sizeof *lv + sizeof *st);
+        lv = NULL;
+        st = NULL;
+    }
+    goto done;
+nomem:
+    res = rs__fail(ctx, RS_ERR_NOMEM, "out of memory for markings");
+done:
+    rs__free(ctx, lv);
+    rs__free(ctx, st);
     rs__free(ctx, ri);
     rs__free(ctx, rb);
-    if (!nunder) {
-        rs__free(ctx, lv);
-        rs__free(ctx, st);
-        return RS_OK;
-    }
-    mk->lv_field = field;
-    mk->lv = lv;
-    mk->lv_stroke = st;
-    mk->bytes += n * (sizeof *lv + sizeof *st);
-    return RS_OK;
+    return res;
 }
