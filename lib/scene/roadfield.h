@@ -140,6 +140,8 @@ int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, dou
                                  rs__road_point *out);
 /* rs__roadfield_nearest among the roads with only[road] > 0 (the casing
  * colour's road: one with a casing, never an uncased road beside it). */
+int rs__roadfield_nearest_of(const rs__roadfield *f, double x, double y, double reach, const double *only,
+                             rs__road_point *out);
 /* 1 when some segment whose surface holds (x, y) (the fill lookups'
  * test: the capsule, or a trimmed T end's strip) belongs to a road q with
  * lv[q] > level and stroke[q] != st, else 0: a lower road's marking under
@@ -147,8 +149,6 @@ int rs__roadfield_nearest_ranked(const rs__roadfield *f, double x, double y, dou
  * layers"). */
 int rs__roadfield_held_above(const rs__roadfield *f, double x, double y, const int32_t *lv, const uint32_t *stroke,
                              int32_t level, uint32_t st);
-int rs__roadfield_nearest_of(const rs__roadfield *f, double x, double y, double reach, const double *only,
-                             rs__road_point *out);
 /* 1 when rs__roadfield_nearest(f, x, y, reach) would find a road, else 0
  * (stops at the first: for fills that are the same on every road). */
 int rs__roadfield_any_near(const rs__roadfield *f, double x, double y, double reach);
