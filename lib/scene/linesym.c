@@ -453,6 +453,14 @@ typedef struct ls_poly {
     double x[POLY_MAX], y[POLY_MAX];
 } ls_poly;
 
+/* Local point (x, y) of piece coordinates (u, v): the inverse of (u, v) =
+ * (d.u, d.(uy, -ux)) for d = (x - ox, y - oy). */
+static inline void piece_point(const ls_piece *P, double u, double v, double *x, double *y)
+{
+    *x = P->ox + u * P->ux + v * P->uy;
+    *y = P->oy + u * P->uy - v * P->ux;
+}
+
 static void piece_finish(const rs__linesym *L, const ls_piece *Q, const ls_poly *poly, ls_ppc *C, ls_pbuild *B,
                          double *hpp);
 
@@ -565,7 +573,8 @@ static void piece_finish(const rs__linesym *L, const ls_piece *Q, const ls_poly 
         n = piece_poly(Q, qx, qy);
     }
     for (uint32_t k = 0; k < n; k++) {
-        double x = Q->ox + px[k] * Q->ux + py[k] * Q->uy, y = Q->oy + px[k] * Q->uy - py[k] * Q->ux;
+        double x, y;
+        piece_point(Q, px[k], py[k], &x, &y);
         bx0 = rs__fmin(bx0, x), bx1 = rs__fmax(bx1, x), by0 = rs__fmin(by0, y), by1 = rs__fmax(by1, y);
         pu0 = rs__fmin(pu0, px[k]), pu1 = rs__fmax(pu1, px[k]), pv0 = rs__fmin(pv0, py[k]), pv1 = rs__fmax(pv1, py[k]);
     }
@@ -632,8 +641,8 @@ static void piece_box(const rs__linesym *L, ls_piece *P, double len, double a, d
     P->x0 = P->y0 = DBL_MAX;
     P->x1 = P->y1 = -DBL_MAX;
     for (int k = 0; k < 4; k++) {
-        /* inverse of (u, v) = (d.u, d.(uy, -ux)) */
-        double x = P->ox + U[k] * P->ux + V[k] * P->uy, y = P->oy + U[k] * P->uy - V[k] * P->ux;
+        double x, y;
+        piece_point(P, U[k], V[k], &x, &y);
         P->x0 = rs__fmin(P->x0, x);
         P->x1 = rs__fmax(P->x1, x);
         P->y0 = rs__fmin(P->y0, y);
@@ -1343,7 +1352,8 @@ static int push_halves(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *
          * grows a slab's, within P's (so its polygon stays the same) */
         double x0 = DBL_MAX, x1 = -DBL_MAX, y0 = DBL_MAX, y1 = -DBL_MAX, mg = L->margin;
         for (uint32_t k = 0; k < g.n; k++) {
-            double x = P->ox + g.x[k] * P->ux + g.y[k] * P->uy, y = P->oy + g.x[k] * P->uy - g.y[k] * P->ux;
+            double x, y;
+            piece_point(P, g.x[k], g.y[k], &x, &y);
             x0 = rs__fmin(x0, x), x1 = rs__fmax(x1, x), y0 = rs__fmin(y0, y), y1 = rs__fmax(y1, y);
         }
         H.x0 = rs__fmax(P->x0, x0 - mg), H.x1 = rs__fmin(P->x1, x1 + mg);

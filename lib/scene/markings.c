@@ -1224,6 +1224,13 @@ static inline void kern_put(const mk_kern *kn, double U, double V, float *o, siz
     if (kern_sample(kn, U, V, c4)) blend(c4, o, w, painted);
 }
 
+/* Under a deck: a pixel centre (x, y) that a higher road of another
+ * stroke holds (rs__markings_set_levels). */
+static int held_above(const rs__markings *mk, const rs__mk *m, double x, double y)
+{
+    return rs__roadfield_held_above(mk->lv_field, x, y, mk->lv, mk->lv_stroke, mk->lv[m->road], mk->lv_stroke[m->road]);
+}
+
 /* Row spans are widened by this many pixels: far above the rounding of
  * the per-pixel test (about 1e-12 of a pixel), so every pixel it passes
  * is in the span, whichever piece holds it. */
@@ -1344,8 +1351,7 @@ static inline void each_straight(const rs__markings *mk, const rs__mk *m, rs__pi
             double gx = gx0 + (double)k + 0.5;
             double u = ur + bu * gx, v = vr + bv * gx;
             if (!(u >= ulo && u < uhi && v >= vlo && v < vhi)) continue;
-            if (m->under && rs__roadfield_held_above(mk->lv_field, gx * pix, y, mk->lv, mk->lv_stroke, m->level, m->stroke))
-                continue;
+            if (m->under && held_above(mk, m, gx * pix, y)) continue;
             if (rc) rec_put(rc, &kn, u, v, (long)p->x0 + k, (long)p->y0 + r);
             else kern_put(&kn, u, v, sc + k, w, painted);
         }
@@ -1454,8 +1460,7 @@ static inline void each_curved(const rs__markings *mk, const rs__mk *m, rs__piec
              * direction): outside it the sample is 0 */
             const rs__mk_fp *fp = fps + seg;
             if (!(u >= ax0 - fp->hu && u < ax1 + fp->hu && v >= ay0 - fp->hv && v < ay1 + fp->hv)) continue;
-            if (m->under && rs__roadfield_held_above(mk->lv_field, gx * pix, y, mk->lv, mk->lv_stroke, m->level, m->stroke))
-                continue;
+            if (m->under && held_above(mk, m, gx * pix, y)) continue;
             if (seg != fp_seg) {
                 kern_init(&kn, m, fp);
                 fp_seg = seg;
@@ -1664,41 +1669,34 @@ void rs__markings_paint(const rs__markings *mk, rs__piece *p)
     p->mark_pixels += painted;
 }
 
-/* Road r's box in local metres, grown by its half width and a slack far
- * above the roundings (the T trims only take away); 0 when it has no
- * finite one. */
+/* Road r's box in local metres (the road set's box of its points, kept
+ * with its print), grown by its half width and a slack far above the
+ * roundings (the T trims only take away); 0 when it has no finite one. */
 static int road_box(const rs_roads *roads, size_t r, const rs__local_frame *F, double b[4])
 {
-    double w = 0;
-    const double *xy = NULL;
-    size_t np = 0;
-    rs_roads_get(roads, r, NULL, &w, &xy, &np);
-    if (np == 0) return 0;
-    b[0] = b[1] = INFINITY;
-    b[2] = b[3] = -INFINITY;
-    for (size_t k = 0; k < np; k++) {
-        double x, y;
-        rs__local_point(F, xy, k, &x, &y);
-        b[0] = x < b[0] ? x : b[0], b[2] = x > b[2] ? x : b[2];
-        b[1] = y < b[1] ? y : b[1], b[3] = y > b[3] ? y : b[3];
-    }
+    uint64_t print;
+    double w;
+    const double *wb;
+    rs__roads_road_print(roads, r, &print, &w, &wb);
+    /* (rs__local_coord is monotone: the corners' images bound the points') */
+    b[0] = rs__local_coord(wb[0], F->ox, F->per_unit), b[1] = rs__local_coord(wb[1], F->oy, F->per_unit);
+    b[2] = rs__local_coord(wb[2], F->ox, F->per_unit), b[3] = rs__local_coord(wb[3], F->oy, F->per_unit);
     double g = 0.5 * w;
     g += 1e-9 * (1 + g + fabs(b[0]) + fabs(b[1]) + fabs(b[2]) + fabs(b[3]));
     b[0] -= g, b[1] -= g, b[2] += g, b[3] += g;
     return b[0] <= b[2] && b[1] <= b[3] && isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && isfinite(b[3]);
 }
 
-/* Road q over a marking into its deck print: its level, width and points
- * (not its index, which an edit elsewhere may change). */
-static uint64_t deck_mix(uint64_t h, const rs_roads *roads, size_t q, int32_t level)
+/* Road q over a marking into its deck print: the road set's print of it
+ * (width, points and attributes, so its level; not its index, which an
+ * edit elsewhere may change). */
+static uint64_t deck_mix(uint64_t h, const rs_roads *roads, size_t q)
 {
-    double w = 0;
-    const double *xy = NULL;
-    size_t np = 0;
-    rs_roads_get(roads, q, NULL, &w, &xy, &np);
-    h = rs__fp_mix(rs__fp_mixd(h, w), (uint64_t)(int64_t)level);
-    for (size_t k = 0; k < 2 * np; k++) h = rs__fp_mixd(h, xy[k]);
-    return rs__fp_mix(h, (uint64_t)np);
+    uint64_t print;
+    double w;
+    const double *wb;
+    rs__roads_road_print(roads, q, &print, &w, &wb);
+    return rs__fp_mix(h, print);
 }
 
 rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *dem, const rs_roads *roads,
@@ -1742,28 +1740,28 @@ rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *d
      * (lib/scene/grid_edit.c): the marking's own print does not. */
     int all = (double)nr * (double)mk->n > 1e7;
     uint64_t all_print = 0x6b1d;
-    for (size_t j = 0; all && j < nr; j++) all_print = deck_mix(all_print, roads, ri[j], lv[ri[j]]);
+    for (size_t j = 0; all && j < nr; j++) all_print = deck_mix(all_print, roads, ri[j]);
     for (size_t k = 0; k < mk->n; k++) {
         if ((k & 1023) == 1023 && rs__poll(ctx)) {
             res = RS_ERR_CANCELLED;
             goto done;
         }
         rs__mk *m = &mk->m[k];
-        m->level = lv[m->road];
-        m->stroke = st[m->road];
+        const int32_t level = lv[m->road];
+        const uint32_t stroke = st[m->road];
         m->under = 0;
         m->deck = 0;
-        if (m->level >= hi) continue;
+        if (level >= hi) continue;
         if (all) {
             m->under = 1;
             m->deck = all_print;
         }
         for (size_t j = 0; j < nr && !all; j++) {
             size_t q = ri[j];
-            if (!(lv[q] > m->level) || st[q] == m->stroke) continue;
+            if (!(lv[q] > level) || st[q] == stroke) continue;
             const double *b = rb + 4 * j;
             if (b[2] < m->bx0 || b[0] > m->bx1 || b[3] < m->by0 || b[1] > m->by1) continue;
-            m->deck = deck_mix(m->under ? m->deck : 0x6b1d, roads, q, lv[q]);
+            m->deck = deck_mix(m->under ? m->deck : 0x6b1d, roads, q);
             m->under = 1;
         }
         if (m->under) {

@@ -89,13 +89,11 @@ typedef struct rs__mk {
     double bx0, bx1;           /* columns of the box (metres) */
     uint32_t rec;              /* its place in record order (mk->at[rec] is this record) */
     uint32_t road;             /* its placement's road */
-    /* under a higher road's deck in places (rs__markings_set_levels): its
-     * road's level and stroke; the paint leaves out the pixels whose
-     * centre a surface of a higher level and another stroke holds */
-    int32_t level;
-    uint32_t stroke;
+    /* under a higher road's deck in places (rs__markings_set_levels): the
+     * paint leaves out the pixels whose centre a surface of a higher level
+     * and another stroke holds */
     int under;
-    uint64_t deck;             /* under: a print of the roads over it (level, width, points), for the edits' pieces */
+    uint64_t deck;             /* under: a print of the roads over it (the road set's prints), for the edits' pieces */
 } rs__mk;
 
 /* One pixel of a small marking, as the paint blends it (o = o (1 - a) +

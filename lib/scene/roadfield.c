@@ -2542,6 +2542,14 @@ int rs__roadfield_nearest(const rs__roadfield *f, double x, double y, double rea
 
 /* The nearest query; out NULL: whether any segment passes its tests (the
  * first one ends the scan). */
+/* Does segment s's surface (its capsule, or a trimmed T end's strip) hold
+ * (x, y), at distance d from its centre line (seg_point's)? The fill
+ * lookups' test. */
+static int surface_holds(const rs__roadfield *f, const rf_seg *s, double x, double y, double d)
+{
+    return s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r;
+}
+
 static int nearest_scan(const rs__roadfield *f, double x, double y, double reach, const int *prio,
                         const double *only, rs__road_point *out, uint32_t *hit)
 {
@@ -2566,7 +2574,7 @@ static int nearest_scan(const rs__roadfield *f, double x, double y, double reach
                     if (hit) *hit = f->ids[k];
                     return 1;
                 }
-                int key = !prio ? INT_MIN : (s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r) ? prio[s->road] : INT_MIN;
+                int key = !prio ? INT_MIN : surface_holds(f, s, x, y, d) ? prio[s->road] : INT_MIN;
                 /* segments are numbered in (road, seg) order */
                 if (!best || key > bk || (key == bk && (d < bd || (d == bd && s < best)))) {
                     best = s; bd = d; bpr = pr; bside = side; bk = key;
@@ -2612,7 +2620,7 @@ int rs__roadfield_held_above(const rs__roadfield *f, double x, double y, const i
         const rf_seg *s = &f->seg[f->ids[k]];
         if (!(lv[s->road] > level) || stroke[s->road] == st) continue;
         double pr, side, d = seg_point(s, x, y, &pr, &side);
-        if (s->tee ? tee_sd(f, s, x, y) <= 0 : d <= s->r) return 1;
+        if (surface_holds(f, s, x, y, d)) return 1;
     }
     /* a trimmed strip reaches past its capsule, so past its cells' lists */
     for (uint32_t m = f->ntee ? f->tstart[cj] : 0; f->ntee && m < f->tstart[cj + 1]; m++) {
