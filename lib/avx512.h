@@ -1,7 +1,9 @@
 /* Private: the AVX-512 paths' dispatch, shared by the splat stages
  * (lib/splat/surface.c, composite.c) and the road field's holder scan
  * (lib/scene/roadfield.c). A path is chosen per call by the CPU: F, DQ and
- * VL. A file built with -DRS_NO_AVX512 has only its portable paths
+ * VL; where those are missing and AVX2 is there (AMD before Zen 4, most
+ * Intel client CPUs), the composite takes a four-lane AVX2 path. A file
+ * built with -DRS_NO_AVX512 has only its portable paths
  * (tests/cli_surface_paths_test.sh compares the two builds). */
 #ifndef RS_AVX512_H
 #define RS_AVX512_H
@@ -13,6 +15,11 @@ static inline int rs__avx512_ok(void)
 {
     return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
            __builtin_cpu_supports("avx512vl");
+}
+#define RS_AVX2 __attribute__((target("avx2")))
+static inline int rs__avx2_ok(void)
+{
+    return __builtin_cpu_supports("avx2");
 }
 #endif
 #endif

@@ -950,14 +950,37 @@ RS_AVX512 static uint32_t fbox_next16(const float *const *g, uint32_t from, uint
     }
     return n;
 }
+
+/* fbox_next16's eight-lane form where the CPU has AVX2 but not AVX-512
+ * (the same answer; the padding covers its reads too). */
+RS_AVX2 static uint32_t fbox_next8(const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
+{
+    __m256 q0 = _mm256_set1_ps(q->v[0]), q1 = _mm256_set1_ps(q->v[1]), q2 = _mm256_set1_ps(q->v[2]),
+           q3 = _mm256_set1_ps(q->v[3]);
+    for (uint32_t e = from & ~7u; e < n; e += 8) {
+        __m256 m = _mm256_and_ps(_mm256_cmp_ps(_mm256_loadu_ps(g[0] + e), q0, _CMP_LE_OQ),
+                                 _mm256_cmp_ps(_mm256_loadu_ps(g[1] + e), q1, _CMP_LE_OQ));
+        m = _mm256_and_ps(m, _mm256_and_ps(_mm256_cmp_ps(_mm256_loadu_ps(g[2] + e), q2, _CMP_LE_OQ),
+                                           _mm256_cmp_ps(_mm256_loadu_ps(g[3] + e), q3, _CMP_LE_OQ)));
+        uint32_t bits = (uint32_t)_mm256_movemask_ps(m);
+        if (e < from) bits &= ~0u << (from - e);
+        if (bits) {
+            uint32_t t = e + (uint32_t)__builtin_ctz(bits);
+            return t < n ? t : n;
+        }
+    }
+    return n;
+}
 #endif
 #define FBOX_PAD 16
 
-/* The next box holding q from `from` on (fbox_next16 when `wide`). */
+/* The next box holding q from `from` on (fbox_next16 when `wide` is 1,
+ * fbox_next8 when 2). */
 static uint32_t fbox_find(int wide, const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
 {
 #ifdef RS_AVX512_DISPATCH
-    if (wide) return fbox_next16(g, from, n, q);
+    if (wide == 1) return fbox_next16(g, from, n, q);
+    if (wide == 2) return fbox_next8(g, from, n, q);
 #else
     (void)wide;
 #endif
@@ -976,7 +999,7 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
 {
     size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + FBOX_PAD;
 #ifdef RS_AVX512_DISPATCH
-    const int wide = rs__avx512_ok();
+    const int wide = rs__avx512_ok() ? 1 : rs__avx2_ok() ? 2 : 0;
 #else
     const int wide = 0;
 #endif

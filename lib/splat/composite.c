@@ -124,6 +124,57 @@ RS_AVX512 static size_t composite_row8(const rs__piece *p, const uint16_t *q, co
     }
     return k;
 }
+
+/* composite_row8's four-lane form where the CPU has AVX2 but not AVX-512
+ * (the SSE2 loop's operations on each pixel, so the same bytes; pure
+ * groups by pack4, as there); returns k, a multiple of 4. */
+RS_AVX2 static size_t composite_row4(const rs__piece *p, const uint16_t *q, const float *tc, const float *sc,
+                                     const double *cas, const double *cov, uint8_t *out)
+{
+    const size_t w = p->w;
+    const __m256d one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5), zero = _mm256_setzero_pd(),
+                  top = _mm256_set1_pd(255.0), full = _mm256_set1_pd(65535.0), ka = _mm256_set1_pd(p->cas_rgba[3]);
+    size_t k = 0;
+    for (; k + 4 <= w; k += 4) {
+        uint64_t q4;
+        memcpy(&q4, q + k, sizeof q4);
+        /* casing shares b (zero without casings and where C <= R or R = 1) */
+        __m256d cb = zero;
+        int mc = 0;
+        if (cas && q4 != UINT64_MAX) {
+            __m256d c = _mm256_loadu_pd(cas + k), rw = _mm256_loadu_pd(cov + k);
+            __m256d m = _mm256_and_pd(_mm256_cmp_pd(c, rw, _CMP_GT_OS), _mm256_cmp_pd(rw, one, _CMP_LT_OS));
+            mc = _mm256_movemask_pd(m);
+            if (mc) {
+                /* lanes outside m may divide by zero: masked off */
+                __m256d b = _mm256_div_pd(_mm256_sub_pd(_mm256_min_pd(c, one), rw), _mm256_sub_pd(one, rw));
+                cb = _mm256_and_pd(m, _mm256_mul_pd(_mm256_min_pd(b, one), ka));
+            }
+        }
+        if (!mc && (q4 == 0 || q4 == UINT64_MAX)) {
+            /* four pure terrain or four pure road pixels: one colour */
+            _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), pack4((q4 ? sc : tc) + k, w));
+            continue;
+        }
+        __m256d qv = _mm256_cvtepi32_pd(_mm_cvtepu16_epi32(_mm_loadl_epi64((const __m128i *)(const void *)(q + k))));
+        __m256d rr = _mm256_div_pd(qv, full), ir = _mm256_sub_pd(one, rr);
+        __m256d m0 = _mm256_cmp_pd(qv, zero, _CMP_EQ_OQ), m1 = _mm256_cmp_pd(qv, full, _CMP_EQ_OQ);
+        __m128i px = _mm_set1_epi32((int)0xFF000000u);
+        for (int ch = 0; ch < 3; ch++) {
+            __m256d t = _mm256_cvtps_pd(_mm_loadu_ps(tc + ch * w + k));
+            __m256d s = _mm256_cvtps_pd(_mm_loadu_ps(sc + ch * w + k));
+            if (mc) t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_sub_pd(_mm256_set1_pd(p->cas_rgba[ch]), t), cb));
+            __m256d v = _mm256_add_pd(_mm256_mul_pd(ir, t), _mm256_mul_pd(rr, s));
+            v = _mm256_blendv_pd(v, t, m0);
+            v = _mm256_blendv_pd(v, s, m1);
+            /* to_byte: max returns its second operand (0) for NaN */
+            v = _mm256_min_pd(_mm256_max_pd(_mm256_add_pd(v, half), zero), top);
+            px = _mm_or_si128(px, _mm_slli_epi32(_mm256_cvttpd_epi32(v), 8 * ch));
+        }
+        _mm_storeu_si128((__m128i *)(void *)(out + 4 * k), px);
+    }
+    return k;
+}
 #endif
 
 /* The casing share b of one pixel (scalar; see above). */
@@ -138,7 +189,7 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
 {
     const size_t w = p->w;
 #ifdef RS_AVX512_DISPATCH
-    const int wide = rs__avx512_ok();
+    const int wide = rs__avx512_ok(), wide4 = !wide && rs__avx2_ok();
 #endif
     for (uint32_t r = 0; r < p->rows; r++) {
         const uint16_t *q = p->q + (size_t)r * w;
@@ -148,6 +199,7 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
         size_t k = 0;
 #ifdef RS_AVX512_DISPATCH
         if (wide) k = composite_row8(p, q, tc, sc, cas, cov, out);
+        else if (wide4) k = composite_row4(p, q, tc, sc, cas, cov, out);
 #endif
 #if defined(__SSE2__)
         const __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(),

@@ -756,9 +756,44 @@ static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, i
  * row of the piece (all pixels: a plain loop). The column and its offset
  * in the cell are counted along (no integer division per column); fxt
  * holds the weights of the first nt offsets. */
+#ifdef RS_AVX512_DISPATCH
+/* terrain_bilinear's vertical step four pixels a register where the CPU
+ * has AVX2 but not AVX-512 (the same products and sum); returns the pixels
+ * done, a multiple of 4. */
+RS_AVX2 static size_t lerp_row4(const double *h0, const double *h1, double gy, double fy, float *tc, size_t w)
+{
+    const __m256d vg = _mm256_set1_pd(gy), vf = _mm256_set1_pd(fy);
+    size_t j = 0;
+    for (; j + 4 <= w; j += 4)
+        _mm_storeu_ps(tc + j, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(h0 + j), vg),
+                                                            _mm256_mul_pd(_mm256_loadu_pd(h1 + j), vf))));
+    return j;
+}
+
+/* terrain_bilinear's whole cells of T >= 4 texels with four offsets a
+ * register where the CPU has AVX2 but not AVX-512 (the same products and
+ * sums as the two-offset loop there); a: the cell's first sample of the
+ * plane, h: its first interpolant. */
+RS_AVX2 static void cells4(const float *a, double *h, uint32_t ncell, uint32_t T, const double *fxt)
+{
+    for (uint32_t cc = 0; cc < ncell; cc++, a++, h += T) {
+        const __m256d v0 = _mm256_set1_pd(a[0]), v1 = _mm256_set1_pd(a[1]);
+        uint32_t o = 0;
+        for (; o + 4 <= T; o += 4) {
+            const __m256d f = _mm256_loadu_pd(fxt + o), g = _mm256_sub_pd(_mm256_set1_pd(1), f);
+            _mm256_storeu_pd(h + o, _mm256_add_pd(_mm256_mul_pd(v0, g), _mm256_mul_pd(v1, f)));
+        }
+        for (; o < T; o++) h[o] = (double)a[0] * (1 - fxt[o]) + (double)a[1] * fxt[o];
+    }
+}
+#endif
+
 static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, const float *r1, uint32_t wc0,
                              size_t tplane, const double *fxt, uint32_t nt)
 {
+#ifdef RS_AVX512_DISPATCH
+    const int avx2 = rs__avx2_ok();
+#endif
     double *hx = p->hx;
     const size_t w = p->w;
     uint32_t ccol = p->x0 / T, off = p->x0 - ccol * T;
@@ -807,6 +842,48 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
                 k = kk;
             }
         ccol += k / 2;
+    } else if (T >= 3 && T <= nt) {
+        /* whole cells from the first cell boundary on: a cell's two samples
+         * loaded once per plane, its offsets two a register (the same
+         * products and sums as the loop below, whose per-pixel column and
+         * weight steps were most of the stage at 4 texels without AVX-512);
+         * the part before the boundary and after the last whole cell go
+         * pixel by pixel below, then the cells, then the rest */
+        uint32_t k0 = off ? T - off : 0;
+        if (k0 > w) k0 = (uint32_t)w;
+        uint32_t ncell = (uint32_t)((w - k0) / T), c0 = ccol + (off ? 1 : 0);
+        for (uint32_t kk = 0; kk < k0; kk++) {
+            double fx = fxt[off + kk];
+            const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
+            for (int ch = 0; ch < 3; ch++) {
+                hx[ch * w + kk] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
+                hx[(3 + ch) * w + kk] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
+            }
+        }
+        for (int rw = 0; rw < 2; rw++)
+            for (int ch = 0; ch < 3; ch++) {
+                const float *a = (rw ? r1 : r0) + (size_t)ch * tplane + (c0 - wc0);
+                double *h = hx + (size_t)(3 * rw + ch) * w + k0;
+#ifdef RS_AVX512_DISPATCH
+                if (avx2 && T >= 4) {
+                    cells4(a, h, ncell, T, fxt);
+                    continue;
+                }
+#endif
+                for (uint32_t cc = 0; cc < ncell; cc++, a++, h += T) {
+                    const __m128d v0 = _mm_set1_pd(a[0]), v1 = _mm_set1_pd(a[1]);
+                    uint32_t o = 0;
+                    for (; o + 2 <= T; o += 2) {
+                        const __m128d f = _mm_loadu_pd(fxt + o);
+                        const __m128d g = _mm_sub_pd(_mm_set1_pd(1), f);
+                        _mm_storeu_pd(h + o, _mm_add_pd(_mm_mul_pd(v0, g), _mm_mul_pd(v1, f)));
+                    }
+                    if (o < T) h[o] = (double)a[0] * (1 - fxt[o]) + (double)a[1] * fxt[o];
+                }
+            }
+        k = k0 + ncell * T;
+        ccol = c0 + ncell;
+        off = 0;
     }
 #endif
     for (; k < p->w; k++, off++) {
@@ -825,6 +902,9 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
             const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
             float *tc = p->tc + (size_t)r * w * 3 + ch * w;
             size_t j = 0;
+#ifdef RS_AVX512_DISPATCH
+            if (avx2) j = lerp_row4(h0, h1, gy, fy, tc, w);
+#endif
 #if defined(__SSE2__)
             const __m128d vg = _mm_set1_pd(gy), vf = _mm_set1_pd(fy);
             for (; j + 2 <= w; j += 2) {
