@@ -169,6 +169,65 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
 #endif
 
 #ifdef RS_AVX512_DISPATCH
+/* shade_pair for four interior samples (i, j .. j + 3) where the CPU has
+ * AVX2 but not AVX-512: the same operations in the same order in each
+ * lane (the divided gradient and the square root, so the same doubles);
+ * a lane where the trigonometric formula must decide takes the scalar
+ * path, as there. */
+RS_AVX2 static void shade_quad(const rs_splatter *s, const double light[2], const float *zrow, size_t W, double eight_cs,
+                               float *out, size_t plane)
+{
+    const double zs = s->dem->frame.z_scale;
+    const double lx = light[0], ly = light[1], cz = s->cos_zen;
+    const float *up = zrow - W, *mid = zrow, *dn = zrow + W;
+    const __m256d vzs = _mm256_set1_pd(zs), two = _mm256_set1_pd(2), v8 = _mm256_set1_pd(eight_cs);
+#define LOAD4F(p) _mm256_cvtps_pd(_mm_loadu_ps(p))
+    __m256d a = _mm256_mul_pd(LOAD4F(up - 1), vzs), b = _mm256_mul_pd(LOAD4F(up), vzs),
+            c = _mm256_mul_pd(LOAD4F(up + 1), vzs);
+    __m256d d = _mm256_mul_pd(LOAD4F(mid - 1), vzs), f = _mm256_mul_pd(LOAD4F(mid + 1), vzs);
+    __m256d g = _mm256_mul_pd(LOAD4F(dn - 1), vzs), h = _mm256_mul_pd(LOAD4F(dn), vzs),
+            k = _mm256_mul_pd(LOAD4F(dn + 1), vzs);
+    __m256d dzdx = _mm256_div_pd(_mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(c, _mm256_mul_pd(two, f)), k),
+                                               _mm256_add_pd(_mm256_add_pd(a, _mm256_mul_pd(two, d)), g)), v8);
+    __m256d dzdy = _mm256_div_pd(_mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(g, _mm256_mul_pd(two, h)), k),
+                                               _mm256_add_pd(_mm256_add_pd(a, _mm256_mul_pd(two, b)), c)), v8);
+    __m256d g2 = _mm256_add_pd(_mm256_mul_pd(dzdx, dzdx), _mm256_mul_pd(dzdy, dzdy));
+    __m256d hs = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(_mm256_set1_pd(cz), _mm256_mul_pd(_mm256_set1_pd(lx), dzdx)),
+                                             _mm256_mul_pd(_mm256_set1_pd(ly), dzdy)),
+                               _mm256_sqrt_pd(_mm256_add_pd(_mm256_set1_pd(1), g2)));
+    hs = _mm256_and_pd(_mm256_cmp_pd(hs, _mm256_setzero_pd(), _CMP_GT_OS), hs);
+    __m256d shade =
+        _mm256_add_pd(_mm256_set1_pd(0.3), _mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(0.7), hs), _mm256_set1_pd(cz)));
+    int tiebits = _mm256_movemask_pd(_mm256_cmp_pd(g2, _mm256_set1_pd(1e200), _CMP_NLT_US));
+    const __m256d lo = _mm256_set1_pd(1 - 1e-12), hi = _mm256_set1_pd(1 + 1e-12), cap = _mm256_set1_pd(255);
+    __m128 res[3];
+    for (int ch = 0; ch < 3; ch++) {
+        __m256d v = _mm256_mul_pd(LOAD4F(out + (size_t)ch * plane), shade);
+        v = _mm256_blendv_pd(v, cap, _mm256_cmp_pd(v, cap, _CMP_GT_OS));
+        res[ch] = _mm256_cvtpd_ps(v);
+        tiebits |= _mm_movemask_ps(
+            _mm_cmpneq_ps(_mm256_cvtpd_ps(_mm256_mul_pd(v, lo)), _mm256_cvtpd_ps(_mm256_mul_pd(v, hi))));
+    }
+#undef LOAD4F
+    if (!tiebits) {
+        for (int ch = 0; ch < 3; ch++) _mm_storeu_ps(out + (size_t)ch * plane, res[ch]);
+        return;
+    }
+    float r[3][4];
+    for (int ch = 0; ch < 3; ch++) _mm_storeu_ps(r[ch], res[ch]);
+    double dx[4], dy[4];
+    _mm256_storeu_pd(dx, dzdx);
+    _mm256_storeu_pd(dy, dzdy);
+    for (int l = 0; l < 4; l++) {
+        float *o = out + l;
+        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o, plane);
+        else
+            for (int ch = 0; ch < 3; ch++) o[(size_t)ch * plane] = r[ch][l];
+    }
+}
+#endif
+
+#ifdef RS_AVX512_DISPATCH
 /* The tint of a sample as a piecewise linear ramp of x (the height, or
  * its fraction of the range): x clamped to [H[0], H[n-1]] (NaN to H[0]),
  * stop i = the number of H[1..n-2] below x, u = (x - H[i]) / (H[i+1] -
@@ -546,6 +605,9 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
         }
 #ifdef RS_AVX512_DISPATCH
         if (wide) j = shade_row8(s, light, i, j, c0, n, rgb, plane);
+        else if (rs__avx2_ok())
+            for (; j + 4 <= c0 + n && j + 4 < W; j += 4)
+                shade_quad(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + (j - c0), plane);
 #endif
         for (; j + 2 <= c0 + n; j++) {
             if (j >= 1 && j + 2 < W) {
@@ -770,6 +832,24 @@ RS_AVX2 static size_t lerp_row4(const double *h0, const double *h1, double gy, d
     return j;
 }
 
+/* terrain_bilinear's one-texel row (T = 1, one pixel row) four pixels a
+ * register where the CPU has AVX2 but not AVX-512 (the SSE2 loop's
+ * products and sums); returns the pixels done, a multiple of 4. */
+RS_AVX2 static size_t row1_4(const float *a, const float *c, double fx, double gy, double fy, float *tc, size_t w)
+{
+    const __m256d g = _mm256_set1_pd(1 - fx), f = _mm256_set1_pd(fx), vg = _mm256_set1_pd(gy),
+                  vf = _mm256_set1_pd(fy);
+    size_t j = 0;
+    for (; j + 4 <= w; j += 4) {
+        __m256d a0 = _mm256_cvtps_pd(_mm_loadu_ps(a + j)), a1 = _mm256_cvtps_pd(_mm_loadu_ps(a + j + 1));
+        __m256d c0 = _mm256_cvtps_pd(_mm_loadu_ps(c + j)), c1 = _mm256_cvtps_pd(_mm_loadu_ps(c + j + 1));
+        __m256d h0 = _mm256_add_pd(_mm256_mul_pd(a0, g), _mm256_mul_pd(a1, f));
+        __m256d h1 = _mm256_add_pd(_mm256_mul_pd(c0, g), _mm256_mul_pd(c1, f));
+        _mm_storeu_ps(tc + j, _mm256_cvtpd_ps(_mm256_add_pd(_mm256_mul_pd(h0, vg), _mm256_mul_pd(h1, vf))));
+    }
+    return j;
+}
+
 /* terrain_bilinear's whole cells of T >= 4 texels with four offsets a
  * register where the CPU has AVX2 but not AVX-512 (the same products and
  * sums as the two-offset loop there); a: the cell's first sample of the
@@ -810,6 +890,9 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
             const float *a = r0 + (size_t)ch * tplane + (ccol - wc0), *c = r1 + (size_t)ch * tplane + (ccol - wc0);
             float *tc = p->tc + (size_t)ch * w;
             size_t j = 0;
+#ifdef RS_AVX512_DISPATCH
+            if (avx2) j = row1_4(a, c, fxt[0], gy, fy, tc, w);
+#endif
             for (; j + 2 <= w; j += 2) {
                 __m128d a0 = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(a + j))));
                 __m128d a1 = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(a + j + 1))));
