@@ -113,6 +113,20 @@ static void shade_one(const rs_splatter *s, const double light[2], double dzdx, 
 }
 
 #if defined(__SSE2__)
+/* The lanes of a vector shade (shade_pair, shade_quad) into out: the
+ * vector's colours r, or shade_one where bit l of tiebits says the
+ * trigonometric formula must decide (dx, dy: the lane's gradient). */
+static void shade_lanes(const rs_splatter *s, const double light[2], float (*r)[4], const double *dx,
+                        const double *dy, int tiebits, int lanes, float *out, size_t plane)
+{
+    for (int l = 0; l < lanes; l++) {
+        float *o = out + l;
+        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o, plane);
+        else
+            for (int ch = 0; ch < 3; ch++) o[(size_t)ch * plane] = r[ch][l];
+    }
+}
+
 /* Two floats at p as doubles. */
 static __m128d load2f(const float *p)
 {
@@ -159,12 +173,7 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
     double dx[2], dy[2];
     _mm_storeu_pd(dx, dzdx);
     _mm_storeu_pd(dy, dzdy);
-    for (int l = 0; l < 2; l++) {
-        float *o = out + l;
-        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o, plane);
-        else
-            for (int ch = 0; ch < 3; ch++) o[(size_t)ch * plane] = r[ch][l];
-    }
+    shade_lanes(s, light, r, dx, dy, tiebits, 2, out, plane);
 }
 #endif
 
@@ -174,8 +183,8 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
  * lane (the divided gradient and the square root, so the same doubles);
  * a lane where the trigonometric formula must decide takes the scalar
  * path, as there. */
-RS_AVX2 static void shade_quad(const rs_splatter *s, const double light[2], const float *zrow, size_t W, double eight_cs,
-                               float *out, size_t plane)
+RS_AVX2 static void shade_quad(const rs_splatter *s, const double light[2], const float *zrow, size_t W,
+                               double eight_cs, float *out, size_t plane)
 {
     const double zs = s->dem->frame.z_scale;
     const double lx = light[0], ly = light[1], cz = s->cos_zen;
@@ -218,12 +227,7 @@ RS_AVX2 static void shade_quad(const rs_splatter *s, const double light[2], cons
     double dx[4], dy[4];
     _mm256_storeu_pd(dx, dzdx);
     _mm256_storeu_pd(dy, dzdy);
-    for (int l = 0; l < 4; l++) {
-        float *o = out + l;
-        if (tiebits >> l & 1) shade_one(s, light, dx[l], dy[l], o, plane);
-        else
-            for (int ch = 0; ch < 3; ch++) o[(size_t)ch * plane] = r[ch][l];
-    }
+    shade_lanes(s, light, r, dx, dy, tiebits, 4, out, plane);
 }
 #endif
 

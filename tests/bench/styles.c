@@ -129,8 +129,14 @@ static int accuracy(rs_ctx *ctx, rs__band_aa aa, double pix, acc *out)
 #define T1_EDGE_IN 0.25
 #define T1_EDGE_W 0.12
 
+/* Rounds of ours then Cairo's, alternating (make bench): a burst of load
+ * on this shared machine then slows one round of both, not one side. */
+#define T1_ROUNDS 5
+
 typedef struct t1_result {
     double build_ms, splat_ms, cairo_ms;
+    int nround;                  /* rounds run (0 without Cairo) */
+    double round_ratio[T1_ROUNDS]; /* per round: (its fastest build + splat) / its Cairo */
     size_t nstyles;
     rs_splat_profile prof; /* the fastest splat's stages (styles --t1 only) */
     uint64_t hash;         /* FNV-1a of the last splat's bytes: two builds' outputs compared */
@@ -186,12 +192,25 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
     out->nstyles = nst;
     uint32_t w = 0, h = 0;
     uint8_t *rgba = NULL;
+    char path[1024];
+    out->cairo_ms = -1;
+    out->nround = 0;
+    if (dir) {
+        snprintf(path, sizeof path, "%s/styles_roads.txt", dir);
+        if (sc_write_plain(path, sc)) goto done;
+    }
+    for (int round = 0; round < (dir ? T1_ROUNDS : 1); round++) {
+    double rb = 1e300, rs = 1e300; /* this round's fastest build and splat */
     for (int run = 0; run < reps; run++) {
         rs_splatter *s = NULL;
         double t0 = tm_now_ms();
-        if (rs_splatter_create(ctx, dem, roads, NULL, &o, &s)) goto done;
+        if (rs_splatter_create(ctx, dem, roads, NULL, &o, &s)) {
+            free(rgba);
+            goto done;
+        }
         double b = tm_now_ms() - t0;
         out->build_ms = b < out->build_ms ? b : out->build_ms;
+        rb = b < rb ? b : rb;
         rs_splatter_size(s, &w, &h);
         if (!rgba && !(rgba = malloc((size_t)w * h * 4))) {
             rs_splatter_free(ctx, s);
@@ -210,19 +229,21 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
             double t = tm_now_ms() - t0;
             if (t < out->splat_ms) out->prof = pf;
             out->splat_ms = t < out->splat_ms ? t : out->splat_ms;
+            rs = t < rs ? t : rs;
         }
         rs_splatter_free(ctx, s);
+    }
+    if (dir) {
+        double c = t1_cairo_ms(path);
+        if (c > 0) {
+            out->cairo_ms = out->cairo_ms > 0 && out->cairo_ms < c ? out->cairo_ms : c;
+            out->round_ratio[out->nround++] = (rb + rs) / c;
+        }
+    }
     }
     out->hash = 1469598103934665603ull;
     for (size_t i = 0; rgba && i < (size_t)w * h * 4; i++) out->hash = (out->hash ^ rgba[i]) * 1099511628211ull;
     free(rgba);
-    out->cairo_ms = -1;
-    if (dir) {
-        char path[1024];
-        snprintf(path, sizeof path, "%s/styles_roads.txt", dir);
-        if (sc_write_plain(path, sc)) goto done;
-        out->cairo_ms = t1_cairo_ms(path);
-    }
     rc = 0;
 done:
     if (rc) fprintf(stderr, "styles: target 1: %s\n", rs_ctx_message(ctx));
@@ -390,28 +411,47 @@ int main(int argc, char **argv)
                 ? "met"
                 : "**missed**");
     double t1_ours = t1.build_ms + t1.splat_ms, t1_ratio = t1.cairo_ms > 0 ? t1_ours / t1.cairo_ms : -1;
-    char cairo_cell[64], measured[96];
+    char cairo_cell[64], measured[160], rounds[160];
+    double rmed = -1, rlo = 1e300, rhi = 0;
+    size_t rl = 0;
+    rounds[0] = 0;
+    for (int i = 0; i < t1.nround; i++) {
+        rlo = fmin(rlo, t1.round_ratio[i]), rhi = fmax(rhi, t1.round_ratio[i]);
+        rl += (size_t)snprintf(rounds + rl, sizeof rounds - rl, "%s%.2f", i ? ", " : "", t1.round_ratio[i]);
+        if (rl >= sizeof rounds) rl = sizeof rounds - 1;
+    }
+    if (t1.nround) {
+        double tmp[T1_ROUNDS];
+        memcpy(tmp, t1.round_ratio, sizeof tmp);
+        rmed = tm_median(tmp, t1.nround);
+    }
     if (t1_ratio < 0) {
         snprintf(cairo_cell, sizeof cairo_cell, "not run (no python3-cairo)");
         snprintf(measured, sizeof measured, "-");
     } else {
         snprintf(cairo_cell, sizeof cairo_cell, "%.1f", t1.cairo_ms);
-        snprintf(measured, sizeof measured, "%.1f / %.1f ms = %.2fx", t1_ours, t1.cairo_ms, t1_ratio);
+        snprintf(measured, sizeof measured, "%.1f / %.1f ms = %.2fx; rounds' median %.2fx (%.2f-%.2f)", t1_ours,
+                 t1.cairo_ms, t1_ratio, rmed, rlo, rhi);
     }
     fprintf(md,
             "\nIssue 29 target 1, the styled city against Cairo: every road gets a %.2g m casing, solid edge lines "
             "%.2g m wide %.2g m inside its edges, a dashed centre line (0.15 m, 6/12 m) and a flat fill (%zu styles, "
-            "one per road width). roadsplat: style build (`rs_splatter_create`, fastest of 5) + `rs_splat_window` "
-            "of the whole texture, terrain included (fastest of 15), one thread. Cairo (python3-cairo, "
-            "tests/bench/styles_cairo.py): the same roads and styling into an ARGB32 image of the same pixels, "
-            "strokes only (casings, surfaces, edge lines as a white and an asphalt stroke, dashed centre lines; "
-            "layer by layer over all roads), fastest of 10, same run.\n\n"
+            "one per road width). roadsplat: style build (`rs_splatter_create`, fastest of 5 a round) + "
+            "`rs_splat_window` of the whole texture, terrain included (fastest of 15 a round), one thread. "
+            "Cairo (python3-cairo, tests/bench/styles_cairo.py): the same roads and styling into an ARGB32 "
+            "image of the same pixels, strokes only (casings, surfaces, edge lines as a white and an asphalt "
+            "stroke, dashed centre lines; layer by layer over all roads), fastest of 10 a round. The two "
+            "alternate in %d rounds (ours, then Cairo's); "
+            "the times are the fastest over all rounds, and each round's own ratio is given too (%s): one "
+            "Cairo reading during a burst of load read up to 1.3x slower than the others here, so the target is "
+            "met only when both the fastest times and the rounds' median are within it.\n\n"
             "| | ms |\n|---|---|\n| roadsplat style build | %.1f |\n| roadsplat splat | %.1f |\n"
             "| roadsplat build + splat | %.1f |\n| Cairo | %s |\n\n"
             "| target (issue 29) | measured | |\n|---|---|---|\n"
             "| 1. styled city, style build + splat, 1 thread <= 1.0x Cairo | %s | %s |\n",
-            T1_CASING, T1_EDGE_W, T1_EDGE_IN, t1.nstyles, t1.build_ms, t1.splat_ms, t1_ours, cairo_cell, measured,
-            t1_ratio < 0 ? "not measured" : t1_ratio <= 1.0 ? "met" : "**missed**");
+            T1_CASING, T1_EDGE_W, T1_EDGE_IN, t1.nstyles, T1_ROUNDS, t1.nround ? rounds : "none", t1.build_ms,
+            t1.splat_ms, t1_ours, cairo_cell, measured,
+            t1_ratio < 0 ? "not measured" : t1_ratio <= 1.0 && rmed <= 1.0 ? "met" : "**missed**");
     fclose(md);
     fclose(csv);
     for (int i = 0; i < NC; i++) rs_splatter_free(ctx, k[i].s);
