@@ -2,8 +2,9 @@
  * (lib/splat/surface.c, composite.c) and the road field's holder scan
  * (lib/scene/roadfield.c). A path is chosen per call by the CPU: F, DQ and
  * VL; where those are missing and AVX2 is there (AMD before Zen 4, most
- * Intel client CPUs), the composite takes a four-lane AVX2 path. A file
- * built with -DRS_NO_AVX512 has only its portable paths
+ * Intel client CPUs), the composite, the bilinear terrain, the shades and
+ * the holder scan take AVX2 paths (RS_AVX2_DISPATCH). A file built with
+ * -DRS_NO_AVX512 has only its portable paths
  * (tests/cli_surface_paths_test.sh compares the two builds). */
 #ifndef RS_AVX512_H
 #define RS_AVX512_H
@@ -16,10 +17,13 @@ static inline int rs__avx512_ok(void)
     return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
            __builtin_cpu_supports("avx512vl");
 }
+#if defined(__SSE2__) /* (the AVX2 paths share the SSE2 paths' helpers) */
+#define RS_AVX2_DISPATCH 1
 #define RS_AVX2 __attribute__((target("avx2")))
 static inline int rs__avx2_ok(void)
 {
     return __builtin_cpu_supports("avx2");
 }
+#endif
 #endif
 #endif

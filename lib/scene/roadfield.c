@@ -950,7 +950,9 @@ RS_AVX512 static uint32_t fbox_next16(const float *const *g, uint32_t from, uint
     }
     return n;
 }
+#endif
 
+#ifdef RS_AVX2_DISPATCH
 /* fbox_next16's eight-lane form where the CPU has AVX2 but not AVX-512
  * (the same answer; the padding covers its reads too). */
 RS_AVX2 static uint32_t fbox_next8(const float *const *g, uint32_t from, uint32_t n, const rf_fbox *q)
@@ -980,10 +982,11 @@ static uint32_t fbox_find(int wide, const float *const *g, uint32_t from, uint32
 {
 #ifdef RS_AVX512_DISPATCH
     if (wide == 1) return fbox_next16(g, from, n, q);
-    if (wide == 2) return fbox_next8(g, from, n, q);
-#else
-    (void)wide;
 #endif
+#ifdef RS_AVX2_DISPATCH
+    if (wide == 2) return fbox_next8(g, from, n, q);
+#endif
+    (void)wide;
     return fbox_next(g, from, n, q);
 }
 
@@ -998,8 +1001,10 @@ __attribute__((noinline)) static rs_result holder_scan(rs_ctx *ctx, rs__roadfiel
                                                       const rf_scratch *sc)
 {
     size_t ncell = (size_t)f->gw * f->gh, cap = (f->maxlist < f->relscan ? f->maxlist : f->relscan) + FBOX_PAD;
-#ifdef RS_AVX512_DISPATCH
+#if defined(RS_AVX2_DISPATCH)
     const int wide = rs__avx512_ok() ? 1 : rs__avx2_ok() ? 2 : 0;
+#elif defined(RS_AVX512_DISPATCH)
+    const int wide = rs__avx512_ok();
 #else
     const int wide = 0;
 #endif

@@ -125,6 +125,9 @@ RS_AVX512 static size_t composite_row8(const rs__piece *p, const uint16_t *q, co
     return k;
 }
 
+#endif
+
+#ifdef RS_AVX2_DISPATCH
 /* composite_row8's four-lane form where the CPU has AVX2 but not AVX-512
  * (the SSE2 loop's operations on each pixel, so the same bytes; pure
  * groups by pack4, as there); returns k, a multiple of 4. */
@@ -189,7 +192,10 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
 {
     const size_t w = p->w;
 #ifdef RS_AVX512_DISPATCH
-    const int wide = rs__avx512_ok(), wide4 = !wide && rs__avx2_ok();
+    const int wide = rs__avx512_ok();
+#endif
+#ifdef RS_AVX2_DISPATCH
+    const int wide4 = !wide && rs__avx2_ok();
 #endif
     for (uint32_t r = 0; r < p->rows; r++) {
         const uint16_t *q = p->q + (size_t)r * w;
@@ -199,7 +205,9 @@ void rs__composite(const rs__piece *p, uint8_t *rgba, size_t rgba_stride, uint16
         size_t k = 0;
 #ifdef RS_AVX512_DISPATCH
         if (wide) k = composite_row8(p, q, tc, sc, cas, cov, out);
-        else if (wide4) k = composite_row4(p, q, tc, sc, cas, cov, out);
+#endif
+#ifdef RS_AVX2_DISPATCH
+        if (wide4) k = composite_row4(p, q, tc, sc, cas, cov, out);
 #endif
 #if defined(__SSE2__)
         const __m128d one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(),

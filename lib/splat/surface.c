@@ -177,7 +177,7 @@ static void shade_pair(const rs_splatter *s, const double light[2], const float 
 }
 #endif
 
-#ifdef RS_AVX512_DISPATCH
+#ifdef RS_AVX2_DISPATCH
 /* shade_pair for four interior samples (i, j .. j + 3) where the CPU has
  * AVX2 but not AVX-512: the same operations in the same order in each
  * lane (the divided gradient and the square root, so the same doubles);
@@ -609,7 +609,9 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
         }
 #ifdef RS_AVX512_DISPATCH
         if (wide) j = shade_row8(s, light, i, j, c0, n, rgb, plane);
-        else if (rs__avx2_ok())
+#endif
+#ifdef RS_AVX2_DISPATCH
+        if (!wide && rs__avx2_ok())
             for (; j + 4 <= c0 + n && j + 4 < W; j += 4)
                 shade_quad(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + (j - c0), plane);
 #endif
@@ -817,12 +819,7 @@ static void asphalt_row(uint32_t px0, uint32_t py, const uint16_t *q, int all, i
     }
 }
 
-/* rs__surface's bilinear terrain colours of piece p (every row): the two
- * horizontal interpolants per column once per piece (p->hx), then every
- * row of the piece (all pixels: a plain loop). The column and its offset
- * in the cell are counted along (no integer division per column); fxt
- * holds the weights of the first nt offsets. */
-#ifdef RS_AVX512_DISPATCH
+#ifdef RS_AVX2_DISPATCH
 /* terrain_bilinear's vertical step four pixels a register where the CPU
  * has AVX2 but not AVX-512 (the same products and sum); returns the pixels
  * done, a multiple of 4. */
@@ -872,10 +869,15 @@ RS_AVX2 static void cells4(const float *a, double *h, uint32_t ncell, uint32_t T
 }
 #endif
 
+/* rs__surface's bilinear terrain colours of piece p (every row): the two
+ * horizontal interpolants per column once per piece (p->hx), then every
+ * row of the piece (all pixels: a plain loop). The column and its offset
+ * in the cell are counted along (no integer division per column); fxt
+ * holds the weights of the first nt offsets. */
 static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, const float *r1, uint32_t wc0,
                              size_t tplane, const double *fxt, uint32_t nt)
 {
-#ifdef RS_AVX512_DISPATCH
+#ifdef RS_AVX2_DISPATCH
     const int avx2 = rs__avx2_ok();
 #endif
     double *hx = p->hx;
@@ -894,7 +896,7 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
             const float *a = r0 + (size_t)ch * tplane + (ccol - wc0), *c = r1 + (size_t)ch * tplane + (ccol - wc0);
             float *tc = p->tc + (size_t)ch * w;
             size_t j = 0;
-#ifdef RS_AVX512_DISPATCH
+#ifdef RS_AVX2_DISPATCH
             if (avx2) j = row1_4(a, c, fxt[0], gy, fy, tc, w);
 #endif
             for (; j + 2 <= w; j += 2) {
@@ -951,7 +953,7 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
             for (int ch = 0; ch < 3; ch++) {
                 const float *a = (rw ? r1 : r0) + (size_t)ch * tplane + (c0 - wc0);
                 double *h = hx + (size_t)(3 * rw + ch) * w + k0;
-#ifdef RS_AVX512_DISPATCH
+#ifdef RS_AVX2_DISPATCH
                 if (avx2 && T >= 4) {
                     cells4(a, h, ncell, T, fxt);
                     continue;
@@ -989,7 +991,7 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
             const double *h0 = hx + ch * w, *h1 = hx + (3 + ch) * w;
             float *tc = p->tc + (size_t)r * w * 3 + ch * w;
             size_t j = 0;
-#ifdef RS_AVX512_DISPATCH
+#ifdef RS_AVX2_DISPATCH
             if (avx2) j = lerp_row4(h0, h1, gy, fy, tc, w);
 #endif
 #if defined(__SSE2__)
