@@ -124,7 +124,6 @@ RS_AVX512 static size_t composite_row8(const rs__piece *p, const uint16_t *q, co
     }
     return k;
 }
-
 #endif
 
 #ifdef RS_AVX2_DISPATCH

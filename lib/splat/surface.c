@@ -869,6 +869,25 @@ RS_AVX2 static void cells4(const float *a, double *h, uint32_t ncell, uint32_t T
 }
 #endif
 
+/* terrain_bilinear's two horizontal interpolants of pixels [k, k1) of
+ * piece p (p->hx), pixel by pixel from column ccol at offset off in its
+ * cell (off = T: the next cell's first). */
+static void hx_pixels(const rs__piece *p, uint32_t T, const float *r0, const float *r1, uint32_t wc0, size_t tplane,
+                      const double *fxt, uint32_t nt, uint32_t k, uint32_t k1, uint32_t ccol, uint32_t off)
+{
+    double *hx = p->hx;
+    const size_t w = p->w;
+    for (; k < k1; k++, off++) {
+        if (off == T) { off = 0; ccol++; }
+        double fx = off < nt ? fxt[off] : (off + 0.5) / T;
+        const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
+        for (int ch = 0; ch < 3; ch++) {
+            hx[ch * w + k] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
+            hx[(3 + ch) * w + k] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
+        }
+    }
+}
+
 /* rs__surface's bilinear terrain colours of piece p (every row): the two
  * horizontal interpolants per column once per piece (p->hx), then every
  * row of the piece (all pixels: a plain loop). The column and its offset
@@ -917,7 +936,7 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
         return;
     } else if (T == 2 && off == 0) {
         /* a pair of pixels in one cell: offsets 0 and 1 (a piece starting
-         * at an odd column, a window's choice, takes the loop below) */
+         * at an odd column, a window's choice, takes hx_pixels) */
         const __m128d g = _mm_set_pd(1 - fxt[1], 1 - fxt[0]), f = _mm_set_pd(fxt[1], fxt[0]);
         for (int rw = 0; rw < 2; rw++)
             for (int ch = 0; ch < 3; ch++) {
@@ -934,21 +953,14 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
     } else if (T >= 3 && T <= nt) {
         /* whole cells from the first cell boundary on: a cell's two samples
          * loaded once per plane, its offsets two a register (the same
-         * products and sums as the loop below, whose per-pixel column and
+         * products and sums as hx_pixels, whose per-pixel column and
          * weight steps were most of the stage at 4 texels without AVX-512);
          * the part before the boundary and after the last whole cell go
-         * pixel by pixel below, then the cells, then the rest */
+         * pixel by pixel */
         uint32_t k0 = off ? T - off : 0;
         if (k0 > w) k0 = (uint32_t)w;
         uint32_t ncell = (uint32_t)((w - k0) / T), c0 = ccol + (off ? 1 : 0);
-        for (uint32_t kk = 0; kk < k0; kk++) {
-            double fx = fxt[off + kk];
-            const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
-            for (int ch = 0; ch < 3; ch++) {
-                hx[ch * w + kk] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
-                hx[(3 + ch) * w + kk] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
-            }
-        }
+        hx_pixels(p, T, r0, r1, wc0, tplane, fxt, nt, 0, k0, ccol, off);
         for (int rw = 0; rw < 2; rw++)
             for (int ch = 0; ch < 3; ch++) {
                 const float *a = (rw ? r1 : r0) + (size_t)ch * tplane + (c0 - wc0);
@@ -975,15 +987,7 @@ static void terrain_bilinear(const rs__piece *p, uint32_t T, const float *r0, co
         off = 0;
     }
 #endif
-    for (; k < p->w; k++, off++) {
-        if (off == T) { off = 0; ccol++; }
-        double fx = off < nt ? fxt[off] : (off + 0.5) / T;
-        const float *a = r0 + (ccol - wc0), *c = r1 + (ccol - wc0);
-        for (int ch = 0; ch < 3; ch++) {
-            hx[ch * w + k] = a[ch * tplane] * (1 - fx) + a[ch * tplane + 1] * fx;
-            hx[(3 + ch) * w + k] = c[ch * tplane] * (1 - fx) + c[ch * tplane + 1] * fx;
-        }
-    }
+    hx_pixels(p, T, r0, r1, wc0, tplane, fxt, nt, k, p->w, ccol, off);
     for (uint32_t r = 0; r < p->rows; r++) {
         uint32_t ty = p->y0 + r - p->crow * T;
         double fy = (ty + 0.5) / T, gy = 1 - fy;
