@@ -1,7 +1,8 @@
 /* Surface stage: tiled textures against a plain per-pixel reference.
  *
- * The textured surface path works two pixels at a time and keeps the
- * texture's column coordinates for the whole window (lib/splat/surface.c); this
+ * The textured surface path works two pixels at a time (four with AVX2,
+ * where a group of four with a wrap takes its texels by gathers) and keeps
+ * the texture's column coordinates for the whole window (lib/splat/surface.c); this
  * test recomputes the pixels one at a time from the documented sampler -
  * wrapped bilinear, doubles in the order below, rounded to float, blended
  * by the road weight, rounded to a byte -
@@ -120,10 +121,11 @@ static void test_textures_reference(void)
     rs_roads *roads = NULL;
     double xy[4] = { -10, 3, 610, 9 };
     CHECK(rs_roads_create(ctx, &roads) == RS_OK && rs_roads_add(ctx, roads, "r", 2.5, xy, 2) == RS_OK);
-    static uint8_t ta[37 * 23 * 4], tb[16 * 8 * 4];
+    static uint8_t ta[37 * 23 * 4], tb[16 * 8 * 4], tc[1 * 5 * 4];
     fill_texture(ta, sizeof ta, 1);
     fill_texture(tb, sizeof tb, 2);
-    rs_image ia = { 37, 23, ta }, ib = { 16, 8, tb };
+    fill_texture(tc, sizeof tc, 3);
+    rs_image ia = { 37, 23, ta }, ib = { 16, 8, tb }, ic = { 1, 5, tc };
     const struct {
         const rs_image *terrain, *road;
         double scale;
@@ -132,6 +134,7 @@ static void test_textures_reference(void)
         { &ia, &ib, 40 },    /* magnified */
         { &ib, &ia, 3.7 },
         { NULL, &ib, 0.9 },  /* road texture only, procedural terrain */
+        { &ic, &ib, 2.1 },   /* one texel wide: every pixel's texel pair wraps */
     };
     static const uint32_t win[][4] = { { 0, 0, 2392, 48 }, { 333, 5, 2049, 17 }, { 1, 9, 2391, 3 },
                                        { 2047, 40, 3, 8 }, { 2391, 0, 1, 48 } };

@@ -715,6 +715,69 @@ static void texel_pair(const uint8_t *a, const uint8_t *b, __m128i *lo, __m128i 
         _mm_mul_pd(_mm_add_pd(_mm_mul_pd(_mm_cvtepi32_pd(i10), vbu), _mm_mul_pd(_mm_cvtepi32_pd(i11), vau)), vav)))
 #endif
 
+#ifdef RS_AVX2_DISPATCH
+/* Channel c (0, 1, 2: the texel's byte) of four texels as doubles. */
+#define TEX_BYTE4(t, c) _mm256_cvtepi32_pd(_mm_and_si128(_mm_srli_epi32((t), 8 * (c)), ff))
+/* One channel of four pixels, as TEX_CHANNEL: the scalar loop's doubles in
+ * its order, rounded to float. */
+#define TEX_CHANNEL4(c)                                                                                            \
+    _mm256_cvtpd_ps(_mm256_add_pd(                                                                                 \
+        _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(TEX_BYTE4(t00, c), vbu), _mm256_mul_pd(TEX_BYTE4(t01, c), vau)), \
+                      vbv),                                                                                        \
+        _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(TEX_BYTE4(t10, c), vbu), _mm256_mul_pd(TEX_BYTE4(t11, c), vau)), \
+                      vav)))
+
+/* Texels x and x + 1 of row r for four pixels (their x at cx[0..3]), as
+ * t0 = the four texels x, t1 = the four texels x + 1: one 8-byte load a
+ * pixel. */
+RS_AVX2 static void texel_pairs4(const uint8_t *r, const uint32_t *cx, __m128i *t0, __m128i *t1)
+{
+    __m128 a = _mm_loadh_pi(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(r + 4 * (size_t)cx[0]))),
+                            (const __m64 *)(const void *)(r + 4 * (size_t)cx[1]));
+    __m128 b = _mm_loadh_pi(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(const void *)(r + 4 * (size_t)cx[2]))),
+                            (const __m64 *)(const void *)(r + 4 * (size_t)cx[3]));
+    *t0 = _mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)));
+    *t1 = _mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1)));
+}
+
+/* texture_piece's row four pixels a register where the CPU has AVX2. A
+ * pixel's two texels of a row are next to each other but where the
+ * texture wraps (x + 1 = 0): one 8-byte load gives both; a group of four
+ * with a wrap takes its texels by gathers (the columns are below 2^31:
+ * the caller checks the width). Four pixels of no interest are skipped
+ * together (a group with one such pixel gives it a colour the composite
+ * never reads). Returns the pixels done, a multiple of 4. */
+RS_AVX2 static size_t texture_row4(const uint8_t *ra, const uint8_t *rb, const uint32_t *cx, const uint32_t *cx1,
+                                   const double *bu, const double *au, double bv, double av, const uint16_t *q,
+                                   int32_t skip, size_t w, float *out)
+{
+    const __m128i ff = _mm_set1_epi32(0xFF), one = _mm_set1_epi32(1);
+    const __m256d vbv = _mm256_set1_pd(bv), vav = _mm256_set1_pd(av);
+    const int *a = (const int *)(const void *)ra, *b = (const int *)(const void *)rb;
+    size_t k = 0;
+    for (; k + 4 <= w; k += 4) {
+        if ((q[k] == skip) & (q[k + 1] == skip) & (q[k + 2] == skip) & (q[k + 3] == skip)) continue;
+        const __m128i i0 = _mm_loadu_si128((const __m128i *)(const void *)(cx + k));
+        const __m128i i1 = _mm_loadu_si128((const __m128i *)(const void *)(cx1 + k));
+        __m128i t00, t01, t10, t11;
+        if (_mm_movemask_epi8(_mm_cmpeq_epi32(_mm_sub_epi32(i1, i0), one)) == 0xFFFF) {
+            texel_pairs4(ra, cx + k, &t00, &t01);
+            texel_pairs4(rb, cx + k, &t10, &t11);
+        } else {
+            t00 = _mm_i32gather_epi32(a, i0, 4), t01 = _mm_i32gather_epi32(a, i1, 4);
+            t10 = _mm_i32gather_epi32(b, i0, 4), t11 = _mm_i32gather_epi32(b, i1, 4);
+        }
+        const __m256d vbu = _mm256_loadu_pd(bu + k), vau = _mm256_loadu_pd(au + k);
+        _mm_storeu_ps(out + k, TEX_CHANNEL4(0));
+        _mm_storeu_ps(out + w + k, TEX_CHANNEL4(1));
+        _mm_storeu_ps(out + 2 * w + k, TEX_CHANNEL4(2));
+    }
+    return k;
+}
+#undef TEX_CHANNEL4
+#undef TEX_BYTE4
+#endif
+
 /* A tiled texture into dst over the piece's pixels with terrain (road = 0)
  * or with road (road = 1); the other pixels may get colours too, which the
  * composite never reads. Column coordinates once per run of pieces with
@@ -737,12 +800,18 @@ static void texture_piece(const rs_splatter *s, rs__piece *p, const rs_image *im
      * the road; skipped two at a time (none for the layers: p->all) */
     const int32_t skip = p->all ? -1 : (road ? 0 : 65535);
     const size_t W4 = 4 * (size_t)img->width;
+#ifdef RS_AVX2_DISPATCH
+    const int avx2 = img->width <= (uint32_t)INT32_MAX && rs__avx2_ok();
+#endif
     for (uint32_t r = 0; r < p->rows; r++) {
         const uint16_t *q = p->q + (size_t)r * w;
         float *out = dst + (size_t)r * w * 3;
         const uint8_t *ra = img->rgba + ry[r] * W4, *rb = img->rgba + ry[p->rows + r] * W4;
         const double bv = wy[r], av = wy[p->rows + r];
         size_t k = 0;
+#ifdef RS_AVX2_DISPATCH
+        if (avx2) k = texture_row4(ra, rb, cx, cx1, bu, au, bv, av, q, skip, w, out);
+#endif
 #if defined(__SSE2__)
         /* two pixels per channel in a register, the scalar arithmetic */
         const __m128d vbv = _mm_set1_pd(bv), vav = _mm_set1_pd(av);
