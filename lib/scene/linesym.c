@@ -128,6 +128,8 @@ struct rs__linesym {
     const uint32_t *cut_stroke; /* per road its stroke (NULL: every road its own) */
     struct ls_cutset *cs;       /* while building: the piece sets of push_trim [0] and push_cut [1] */
     uint32_t *cut_start, *cut_ord;
+    int win_on;                 /* while building: only pieces meeting win are made (rs__linesym_params.window) */
+    double win[4];
 };
 
 /* ------------------------------------------------------------------------
@@ -1374,6 +1376,10 @@ static uint32_t cut_key(const rs__linesym *L, uint32_t road)
 
 static rs_result push_trim(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piece *P, uint32_t road)
 {
+    /* a patch's grid: a piece wholly outside its window is not made (its
+     * cuts lie within its box; a NaN box is kept) */
+    if (L->win_on && (P->x1 < L->win[0] || P->x0 > L->win[2] || P->y1 < L->win[1] || P->y0 > L->win[3]))
+        return RS_OK;
     uint32_t key = L->cut_start ? cut_key(L, road) : 0;
     if (!L->cut_start || L->cut_start[key] == L->cut_start[key + 1]) return push_cut(ctx, L, J, P, road, 0);
     ls_cutset *S = &L->cs[0];
@@ -2382,6 +2388,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     rs_result res = RS_OK;
     L->pixel = p->pixel;
     L->budget = ctx->limits.max_linesym_bytes;
+    L->win_on = p->window_on;
+    memcpy(L->win, p->window, sizeof L->win);
     /* A slab per band and segment and a wedge per joint, about, as the
      * first capacity: growing by doubling from a small one wrote (and
      * faulted in) the arrays twice over and copied them (15 % of the styled

@@ -65,6 +65,9 @@ typedef struct rs__linesym_params {
                                   equal), read while building; 0: worked out here */
     const int *prio;
     const rs__tees *tees;      /* the T ends of roads and net, worked out once by the caller (NULL: here) */
+    int window_on;             /* 1: only the pieces whose box meets window (local metres: x0, y0, x1,
+                                  y1) are made (a patch's grid: its pixels and edit pieces lie there) */
+    double window[4];
 } rs__linesym_params;
 
 typedef struct rs__linesym rs__linesym; /* immutable after build; safe to read from many threads */

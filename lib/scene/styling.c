@@ -313,6 +313,15 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         lp.ncuts = ncuts;
         lp.prio_given = 1;
         lp.prio = st->prio;
+        if (facts && facts->window_on) {
+            /* a patch: its pixels, and its edit pieces (lib/scene/grid_edit.c:
+             * those meeting its window grown by a grid's pad, 4 pixels and 4
+             * m), lie within this */
+            double m = 4.5 * fp.pixel + 8 + (o->coverage.edges == RS_EDGES_ANALYTIC ? 0 : 4 * dem->frame.cell_size);
+            lp.window_on = 1;
+            lp.window[0] = facts->window[0] - m, lp.window[1] = facts->window[1] - m;
+            lp.window[2] = facts->window[2] + m, lp.window[3] = facts->window[3] + m;
+        }
         r = rs__linesym_build(ctx, roads, &lp, band_start, bands, &st->lines);
         if (r == RS_OK && ncuts) { /* kept for the GPU export (the plan's are freed after the build) */
             st->cuts = rs__alloc_array(ctx, ncuts, sizeof *st->cuts);
