@@ -2,8 +2,9 @@
  * (lib/splat/surface.c, composite.c) and the road field's holder scan
  * (lib/scene/roadfield.c). A path is chosen per call by the CPU: F, DQ and
  * VL; where those are missing and AVX2 is there (AMD before Zen 4, most
- * Intel client CPUs), the composite, the bilinear terrain, the shades and
- * the holder scan take AVX2 paths (RS_AVX2_DISPATCH). A file built with
+ * Intel client CPUs), the composite, the bilinear terrain, the tints, the
+ * shades and the holder scan take AVX2 paths (RS_AVX2_DISPATCH); the
+ * texture sampler takes its AVX2 path on any AVX2 CPU. A file built with
  * -DRS_NO_AVX512 has only its portable paths
  * (tests/cli_surface_paths_test.sh compares the two builds). */
 #ifndef RS_AVX512_H

@@ -1,7 +1,8 @@
 #!/bin/sh
 # The AVX-512 paths of lib/splat/surface.c (tints, shades, bilinear step)
-# and lib/splat/composite.c, and the AVX2 composite where the CPU has AVX2
-# but not AVX-512, give the bytes of the portable ones:
+# and lib/splat/composite.c, and the AVX2 paths (composite, bilinear
+# terrain, tints, shades where the CPU has AVX2 but not AVX-512; the
+# texture sampler on any AVX2 CPU), give the bytes of the portable ones:
 # build/tools/splat_dump (the library as built) against splat_dump_portable
 # (those two files built with -DRS_NO_AVX512), every output of tests/tools/splat_dump.c (city, nodata,
 # synthetic and fractal DEMs at 1 to 5 texels, every option group and tint
@@ -14,7 +15,7 @@ for t in splat_dump splat_dump_portable; do
 done
 if ! grep -qw avx512f /proc/cpuinfo 2>/dev/null || ! grep -qw avx512dq /proc/cpuinfo || ! grep -qw avx512vl /proc/cpuinfo; then
     if grep -qw avx2 /proc/cpuinfo 2>/dev/null; then
-        echo "note: this CPU has AVX2 but no AVX-512 (F, DQ, VL): the AVX2 composite against the portable paths"
+        echo "note: this CPU has AVX2 but no AVX-512 (F, DQ, VL): the AVX2 paths against the portable ones"
     else
         echo "SKIP: this CPU has neither AVX-512 (F, DQ, VL) nor AVX2: both builds take the portable paths"
     fi

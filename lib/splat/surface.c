@@ -337,6 +337,59 @@ RS_AVX512 static void tint_row8(const rs_splatter *s, const tint_ramp *t, const 
     }
 }
 
+#ifdef RS_AVX2_DISPATCH
+/* tint_row8 four samples a register where the CPU has AVX2 but not
+ * AVX-512: the same operations lane by lane (the same doubles). A lane's
+ * stop is the last k with x > H[k], taken by blends (the stops rise:
+ * rs_surface_options' check), which is tint_row8's count of them. */
+RS_AVX2 static void tint_row4(const rs_splatter *s, const tint_ramp *t, const float *zrow, uint32_t n, float *out,
+                              size_t plane)
+{
+    const rs_surface_options *sf = &s->o.surface;
+    const double zs = s->dem->frame.z_scale;
+    const __m256d vzs = _mm256_set1_pd(zs), lo = _mm256_set1_pd(t->H[0]), hi = _mm256_set1_pd(t->H[t->n - 1]);
+    const __m256d hmin = _mm256_set1_pd(sf->height_min), hrange = _mm256_set1_pd(sf->height_max - sf->height_min);
+    const __m256d zmin = _mm256_set1_pd(s->zmin), zrange = _mm256_set1_pd(s->zrange);
+    for (uint32_t j = 0; j < n; j += 4) {
+        float zb[4];
+        const float *zp = zrow + j;
+        uint32_t m = n - j < 4 ? n - j : 4;
+        if (m < 4) {
+            for (uint32_t l = 0; l < 4; l++) zb[l] = zrow[j + (l < m ? l : m - 1)];
+            zp = zb;
+        }
+        __m256d x = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(zp)), vzs);
+        if (t->mode == 1) x = _mm256_div_pd(_mm256_sub_pd(x, hmin), hrange);
+        else if (t->mode == 2) x = _mm256_div_pd(_mm256_sub_pd(_mm256_div_pd(x, vzs), zmin), zrange);
+        else if (t->mode == 3) x = _mm256_set1_pd(0.5);
+        x = _mm256_blendv_pd(lo, x, _mm256_cmp_pd(x, lo, _CMP_GT_OQ)); /* (NaN: lo) */
+        x = _mm256_blendv_pd(x, hi, _mm256_cmp_pd(x, hi, _CMP_GT_OQ));
+        __m256d h = _mm256_set1_pd(t->H[0]), hd = _mm256_set1_pd(t->HD[0]), c[3], cd[3];
+        for (int q = 0; q < 3; q++) c[q] = _mm256_set1_pd(t->C[q][0]), cd[q] = _mm256_set1_pd(t->CD[q][0]);
+        for (int k = 1; k + 1 < t->n; k++) {
+            const __m256d above = _mm256_cmp_pd(x, _mm256_set1_pd(t->H[k]), _CMP_GT_OQ);
+            h = _mm256_blendv_pd(h, _mm256_set1_pd(t->H[k]), above);
+            hd = _mm256_blendv_pd(hd, _mm256_set1_pd(t->HD[k]), above);
+            for (int q = 0; q < 3; q++) {
+                c[q] = _mm256_blendv_pd(c[q], _mm256_set1_pd(t->C[q][k]), above);
+                cd[q] = _mm256_blendv_pd(cd[q], _mm256_set1_pd(t->CD[q][k]), above);
+            }
+        }
+        const __m256d u = _mm256_div_pd(_mm256_sub_pd(x, h), hd);
+        for (int q = 0; q < 3; q++) {
+            __m128 f = _mm256_cvtpd_ps(_mm256_add_pd(c[q], _mm256_mul_pd(u, cd[q])));
+            float *o = out + (size_t)q * plane + j;
+            if (m == 4) _mm_storeu_ps(o, f);
+            else {
+                float fb[4];
+                _mm_storeu_ps(fb, f);
+                memcpy(o, fb, m * sizeof *o);
+            }
+        }
+    }
+}
+#endif
+
 /* shade_pair for the eight interior samples (i, j .. j + 7), without a
  * division: the gradient times 1 / (8 cs), 1 / sqrt(1 + g^2) from the
  * 14-bit estimate and two Newton steps, the shade's 0.7 / cos_zen as one
@@ -579,9 +632,18 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
     const size_t plane = n;
 #ifdef RS_AVX512_DISPATCH
     const int wide = rs__avx512_ok();
+#ifdef RS_AVX2_DISPATCH
+    const int avx2 = !wide && rs__avx2_ok();
+#else
+    const int avx2 = 0;
+#endif
     tint_ramp tr;
-    if (wide) tint_ramp_init(s, &tr);
+    tr.n = 0;
+    if (wide || avx2) tint_ramp_init(s, &tr);
     if (wide && tr.n) tint_row8(s, &tr, z + (size_t)i * W + c0, n, rgb, plane);
+#ifdef RS_AVX2_DISPATCH
+    else if (avx2 && tr.n) tint_row4(s, &tr, z + (size_t)i * W + c0, n, rgb, plane);
+#endif
     else
 #endif
     for (uint32_t j = c0; j < c0 + n; j++) {
