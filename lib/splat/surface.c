@@ -243,6 +243,17 @@ typedef struct tint_ramp {
     double H[8], HD[8], C[3][8], CD[3][8];
 } tint_ramp;
 
+/* Samples j .. j + lanes - 1 of a row of n for the vector tints: the row
+ * itself, or past its end a copy with the last sample repeated (in buf);
+ * *m = the real ones. */
+static const float *lane_samples(const float *zrow, uint32_t j, uint32_t n, uint32_t lanes, float *buf, uint32_t *m)
+{
+    *m = n - j < lanes ? n - j : lanes;
+    if (*m == lanes) return zrow + j;
+    for (uint32_t l = 0; l < lanes; l++) buf[l] = zrow[j + (l < *m ? l : *m - 1)];
+    return buf;
+}
+
 static void tint_ramp_init(const rs_splatter *s, tint_ramp *t)
 {
     const rs_surface_options *sf = &s->o.surface;
@@ -307,12 +318,8 @@ RS_AVX512 static void tint_row8(const rs_splatter *s, const tint_ramp *t, const 
     const __m512d zmin = _mm512_set1_pd(s->zmin), zrange = _mm512_set1_pd(s->zrange);
     for (uint32_t j = 0; j < n; j += 8) {
         float zb[8];
-        const float *zp = zrow + j;
-        uint32_t m = n - j < 8 ? n - j : 8;
-        if (m < 8) {
-            for (uint32_t l = 0; l < 8; l++) zb[l] = zrow[j + (l < m ? l : m - 1)];
-            zp = zb;
-        }
+        uint32_t m;
+        const float *zp = lane_samples(zrow, j, n, 8, zb, &m);
         __m512d x = _mm512_mul_pd(load8f(zp), vzs);
         if (t->mode == 1) x = _mm512_div_pd(_mm512_sub_pd(x, hmin), hrange);
         else if (t->mode == 2) x = _mm512_div_pd(_mm512_sub_pd(_mm512_div_pd(x, vzs), zmin), zrange);
@@ -352,12 +359,8 @@ RS_AVX2 static void tint_row4(const rs_splatter *s, const tint_ramp *t, const fl
     const __m256d zmin = _mm256_set1_pd(s->zmin), zrange = _mm256_set1_pd(s->zrange);
     for (uint32_t j = 0; j < n; j += 4) {
         float zb[4];
-        const float *zp = zrow + j;
-        uint32_t m = n - j < 4 ? n - j : 4;
-        if (m < 4) {
-            for (uint32_t l = 0; l < 4; l++) zb[l] = zrow[j + (l < m ? l : m - 1)];
-            zp = zb;
-        }
+        uint32_t m;
+        const float *zp = lane_samples(zrow, j, n, 4, zb, &m);
         __m256d x = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(zp)), vzs);
         if (t->mode == 1) x = _mm256_div_pd(_mm256_sub_pd(x, hmin), hrange);
         else if (t->mode == 2) x = _mm256_div_pd(_mm256_sub_pd(_mm256_div_pd(x, vzs), zmin), zrange);
