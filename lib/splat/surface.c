@@ -676,7 +676,7 @@ static void terrain_row(const rs_splatter *s, uint32_t i, uint32_t c0, uint32_t 
         if (wide) j = shade_row8(s, light, i, j, c0, n, rgb, plane);
 #endif
 #ifdef RS_AVX2_DISPATCH
-        if (!wide && rs__avx2_ok())
+        if (avx2)
             for (; j + 4 <= c0 + n && j + 4 < W; j += 4)
                 shade_quad(s, light, z + (size_t)i * W + j, W, eight_cs, rgb + (j - c0), plane);
 #endif

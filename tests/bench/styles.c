@@ -159,6 +159,7 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
     double *wid = malloc(sc->nroads * sizeof *wid);
     rs_roads *roads = NULL;
     rs_styles *styles = NULL;
+    uint8_t *rgba = NULL;
     int rc = -1;
     if (!text || !wid || rs_roads_create(ctx, &roads)) goto done;
     for (size_t i = 0; i < sc->nroads; i++) {
@@ -191,7 +192,6 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
     out->build_ms = out->splat_ms = 1e300;
     out->nstyles = nst;
     uint32_t w = 0, h = 0;
-    uint8_t *rgba = NULL;
     char path[1024];
     out->cairo_ms = -1;
     out->nround = 0;
@@ -200,53 +200,49 @@ static int t1_run(rs_ctx *ctx, const char *dir, const sc_scene *sc, const rs_dem
         if (sc_write_plain(path, sc)) goto done;
     }
     for (int round = 0; round < (dir ? T1_ROUNDS : 1); round++) {
-    double rb = 1e300, rs = 1e300; /* this round's fastest build and splat */
-    for (int run = 0; run < reps; run++) {
-        rs_splatter *s = NULL;
-        double t0 = tm_now_ms();
-        if (rs_splatter_create(ctx, dem, roads, NULL, &o, &s)) {
-            free(rgba);
-            goto done;
-        }
-        double b = tm_now_ms() - t0;
-        out->build_ms = b < out->build_ms ? b : out->build_ms;
-        rb = b < rb ? b : rb;
-        rs_splatter_size(s, &w, &h);
-        if (!rgba && !(rgba = malloc((size_t)w * h * 4))) {
-            rs_splatter_free(ctx, s);
-            goto done;
-        }
-        for (int k = 0; k < 3; k++) {
-            rs_splat_profile pf;
-            memset(&pf, 0, sizeof pf);
-            pf.clock_ms = clock_ms;
-            t0 = tm_now_ms();
-            if (rs_splat_window(ctx, s, 0, 0, w, h, rgba, (size_t)w * 4, NULL, 0, dir ? NULL : &pf)) {
+        double rb = 1e300, rs = 1e300; /* this round's fastest build and splat */
+        for (int run = 0; run < reps; run++) {
+            rs_splatter *s = NULL;
+            double t0 = tm_now_ms();
+            if (rs_splatter_create(ctx, dem, roads, NULL, &o, &s)) goto done;
+            double b = tm_now_ms() - t0;
+            out->build_ms = b < out->build_ms ? b : out->build_ms;
+            rb = b < rb ? b : rb;
+            rs_splatter_size(s, &w, &h);
+            if (!rgba && !(rgba = malloc((size_t)w * h * 4))) {
                 rs_splatter_free(ctx, s);
-                free(rgba);
                 goto done;
             }
-            double t = tm_now_ms() - t0;
-            if (t < out->splat_ms) out->prof = pf;
-            out->splat_ms = t < out->splat_ms ? t : out->splat_ms;
-            rs = t < rs ? t : rs;
+            for (int k = 0; k < 3; k++) {
+                rs_splat_profile pf;
+                memset(&pf, 0, sizeof pf);
+                pf.clock_ms = clock_ms;
+                t0 = tm_now_ms();
+                if (rs_splat_window(ctx, s, 0, 0, w, h, rgba, (size_t)w * 4, NULL, 0, dir ? NULL : &pf)) {
+                    rs_splatter_free(ctx, s);
+                    goto done;
+                }
+                double t = tm_now_ms() - t0;
+                if (t < out->splat_ms) out->prof = pf;
+                out->splat_ms = t < out->splat_ms ? t : out->splat_ms;
+                rs = t < rs ? t : rs;
+            }
+            rs_splatter_free(ctx, s);
         }
-        rs_splatter_free(ctx, s);
-    }
-    if (dir) {
-        double c = t1_cairo_ms(path);
-        if (c > 0) {
-            out->cairo_ms = out->cairo_ms > 0 && out->cairo_ms < c ? out->cairo_ms : c;
-            out->round_ratio[out->nround++] = (rb + rs) / c;
+        if (dir) {
+            double c = t1_cairo_ms(path);
+            if (c > 0) {
+                out->cairo_ms = out->cairo_ms > 0 && out->cairo_ms < c ? out->cairo_ms : c;
+                out->round_ratio[out->nround++] = (rb + rs) / c;
+            }
         }
-    }
     }
     out->hash = 1469598103934665603ull;
     for (size_t i = 0; rgba && i < (size_t)w * h * 4; i++) out->hash = (out->hash ^ rgba[i]) * 1099511628211ull;
-    free(rgba);
     rc = 0;
 done:
     if (rc) fprintf(stderr, "styles: target 1: %s\n", rs_ctx_message(ctx));
+    free(rgba);
     rs_styles_free(ctx, styles);
     rs_roads_free(ctx, roads);
     free(wid);
