@@ -756,6 +756,26 @@ static void test_parse(void)
     rs_road_grid_get_stats(g, &st);
     CHECK_EQ_INT(st.marks_explicit, 2);
     rs_road_grid_free(ctx, g);
+    /* the grid's bytes count its markings in both edge modes (alpha-map
+     * grids counted only their tiles and edit pieces until 7 December 2026) */
+    for (int e = 0; e < 2; e++) {
+        rs_road_grid_stats with, without;
+        memset(&with, 0, sizeof with);
+        memset(&without, 0, sizeof without);
+        o.coverage.edges = e ? RS_EDGES_ALPHAMAP : RS_EDGES_ANALYTIC;
+        o.markings.disable = 0;
+        if (rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK) rs_road_grid_get_stats(g, &with);
+        rs_road_grid_free(ctx, g);
+        g = NULL;
+        o.markings.disable = 1;
+        if (rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK) rs_road_grid_get_stats(g, &without);
+        rs_road_grid_free(ctx, g);
+        g = NULL;
+        CHECKF(with.bytes > without.bytes && without.bytes > 0,
+               "%s edges: a grid with markings counts %llu bytes, without %llu", e ? "alpha-map" : "analytic",
+               (unsigned long long)with.bytes, (unsigned long long)without.bytes);
+    }
+    o.coverage.edges = RS_EDGES_ANALYTIC;
     o.markings.disable = 1;
     CHECK(rs_road_grid_build(ctx, dem, roads, &o, &g) == RS_OK);
     rs_road_grid_get_stats(g, &st);

@@ -88,6 +88,7 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk)
     rs__free(ctx, mk->pl);
     rs__free(ctx, mk->lv);
     rs__free(ctx, mk->lv_stroke);
+    rs__roadfield_free(ctx, mk->lv_own);
     rs__free(ctx, mk);
 }
 
@@ -1700,9 +1701,10 @@ static uint64_t deck_mix(uint64_t h, const rs_roads *roads, size_t q)
 }
 
 rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *dem, const rs_roads *roads,
-                                  const rs_network *net, const struct rs__roadfield *field)
+                                  const rs_network *net, const struct rs__roadfield *field, const rs__tees *tees,
+                                  uint32_t texels)
 {
-    if (!mk || !field || !mk->n) return RS_OK;
+    if (!mk || !mk->n) return RS_OK;
     size_t n = rs_roads_count(roads);
     if (!net || rs_network_road_count(net) != n) return RS_OK; /* (no strokes: a bridge record would hide its own road's) */
     rs_result res = RS_OK;
@@ -1769,6 +1771,22 @@ rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *d
             m->npre = 0;
             nunder++;
         }
+    }
+    if (nunder && !field) {
+        /* alpha-map edges: the grid has no road field; the same question
+         * on a field of these roads with the build's T ends, as the
+         * analytic grid's (only the surfaces and strips are asked, which
+         * no index cell changes) */
+        rs__roadfield_params fp = rs__roadfield_params_for_dem(dem, texels);
+        if ((res = rs__roadfield_build(ctx, roads, &fp, &mk->lv_own)) == RS_OK && tees && tees->n)
+            res = rs__roadfield_set_tees(ctx, mk->lv_own, roads, tees->t, tees->n);
+        if (res != RS_OK) {
+            rs__roadfield_free(ctx, mk->lv_own);
+            mk->lv_own = NULL;
+            goto done;
+        }
+        mk->bytes += rs__roadfield_bytes(mk->lv_own);
+        field = mk->lv_own;
     }
     if (nunder) { /* kept for the paint */
         mk->lv_field = field;

@@ -157,9 +157,10 @@ typedef struct rs__markings {
     size_t npl;
     size_t bytes;
     /* Levels (rs__markings_set_levels; NULL when every road is on one
-     * level): the grid's road field (borrowed) and per road its level and
-     * stroke (owned). */
+     * level): the grid's road field (borrowed; lv_own when the markings
+     * made it, alpha-map edges) and per road its level and stroke (owned). */
     const struct rs__roadfield *lv_field;
+    struct rs__roadfield *lv_own;
     int32_t *lv;
     uint32_t *lv_stroke;
 } rs__markings;
@@ -187,11 +188,15 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
  * higher level and another stroke holds the pixel's centre, the rule the
  * fill and the shader follow. Marks the markings whose box meets such a
  * road's (they are then painted per piece, not from the build's blends)
- * and keeps `field` (the grid's, which must outlive mk) to ask. Nothing
- * when every road is on one level or field is NULL. */
+ * and keeps `field` (the grid's, which must outlive mk) to ask. field
+ * NULL (alpha-map edges: the grid has no road field): when a marking lies
+ * under a deck, a road field of the roads over the map at `texels` with
+ * the T ends `tees` is made for the question and kept in mk. Nothing when
+ * every road is on one level. */
 struct rs__roadfield;
 rs_result rs__markings_set_levels(rs_ctx *ctx, rs__markings *mk, const rs_dem *dem, const rs_roads *roads,
-                                  const rs_network *net, const struct rs__roadfield *field);
+                                  const rs_network *net, const struct rs__roadfield *field, const rs__tees *tees,
+                                  uint32_t texels);
 
 /* Whether the automatic rules can place anything on these roads (a road
  * with a class, turn:lanes or a crossing=zebra point). */
