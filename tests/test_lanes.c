@@ -44,6 +44,7 @@ static const rs_atlas *render_atlas; /* NULL: the built-in one */
 /* the line anti-aliasing of render() (test_many_crossings sets Hermite for a while) */
 static rs_line_aa render_aa = RS_LINE_AA_EXACT;
 static rs_edge_mode render_edges = RS_EDGES_ANALYTIC;
+static const rs_styles *render_styles; /* NULL: none but the classes' */
 
 static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile, int paint, int no_auto, img *im)
 {
@@ -60,6 +61,7 @@ static int render(const char *text, uint32_t dw, uint32_t dh, rs_profile profile
     o.style.profile = profile;
     o.style.aa = render_aa;
     o.coverage.edges = render_edges;
+    o.style.styles = render_styles;
     o.style.disable = !paint;
     o.markings.disable = !paint;
     o.markings.no_auto = no_auto;
@@ -704,11 +706,21 @@ static void test_bridge_lines(void)
     /* one level; a secondary bridge; a tertiary one (of lower rank than
      * the primary: on one level the primary cuts its lines and its own
      * centre line runs on over it) */
-    static const char *const lvl[3] = { "secondary", "secondary layer=1", "tertiary bridge=yes" };
+    /* and (v 3) a bridge record joined to ground records at both ends, as
+     * OSM maps a bridge: until 7 December 2026 the stroke's polyline left
+     * out the straight joints, the merged segment took the last record's
+     * level and the primary cut the bridge's lines (the shader drew them) */
+    static const char *const lvl[4] = { "secondary", "secondary layer=1", "tertiary bridge=yes", "secondary, ramps" };
     static const char prim[] = "road p width 9 class=primary area=rural\n0 30\n60 30\nend\n";
-    char bridge[160], text[512];
-    for (int v = 0; v < 3; v++) {
-        snprintf(bridge, sizeof bridge, "road b width 7 class=%s area=rural\n39 2\n39 58\nend\n", lvl[v]);
+    char bridge[512], text[1024];
+    for (int v = 0; v < 4; v++) {
+        if (v < 3)
+            snprintf(bridge, sizeof bridge, "road b width 7 class=%s area=rural\n39 2\n39 58\nend\n", lvl[v]);
+        else
+            snprintf(bridge, sizeof bridge,
+                     "road r1 width 7 class=secondary area=rural\n39 2\n39 15\nend\n"
+                     "road b width 7 class=secondary area=rural bridge=yes layer=1\n39 15\n39 50\nend\n"
+                     "road r2 width 7 class=secondary area=rural\n39 50\n39 58\nend\n");
         snprintf(text, sizeof text, "%s%sroad u width 6 class=residential\n58 45\n41 45\nend\n", prim, bridge);
         double *al = NULL, *ln = NULL, *ab = NULL, *ap = NULL;
         uint32_t w = 0, h = 0;
@@ -751,6 +763,70 @@ static void test_bridge_lines(void)
         free(ab);
         free(ap);
     }
+}
+
+/* A bridge's casing over the road below it (docs/network.md "Bridges and
+ * layers"): a secondary whose middle record is a bridge over a primary,
+ * both with casings of their own colours. The bridge's casing runs on over
+ * the primary (until 7 December 2026 the primary's asphalt showed there, as
+ * the casing lay under every road surface); it is drawn neither across the
+ * ground records the bridge continues (its casing's round caps at the
+ * joints) nor with every road on one level. Both edge modes. */
+static void test_deck_casing(void)
+{
+    static const char styles[] = "style deck\n  casing 0.5 #C03030\nend\nstyle main\n  casing 0.5 #3030C0\nend\n";
+    static const char *const layer[2] = { " bridge=yes layer=1", "" };
+    static const rs_edge_mode modes[2] = { RS_EDGES_ANALYTIC, RS_EDGES_ALPHAMAP };
+    rs_styles *S = NULL;
+    CHECK(rs_styles_parse(ctx, styles, sizeof styles - 1, &S) == RS_OK);
+    for (int e = 0; e < 2 && S; e++)
+        for (int v = 0; v < 2; v++) {
+            char text[1024];
+            snprintf(text, sizeof text,
+                     "road p width 9 style=main\n0 30\n60 30\nend\n"
+                     "road r1 width 7 style=deck\n39 2\n39 15\nend\n"
+                     "road b width 7 style=deck%s\n39 15\n39 50\nend\n"
+                     "road r2 width 7 style=deck\n39 50\n39 58\nend\n",
+                     layer[v]);
+            img A;
+            render_edges = modes[e];
+            render_styles = S;
+            int ok = render(text, 61, 61, RS_PROFILE_RMS, 1, 1, &A);
+            render_edges = RS_EDGES_ANALYTIC;
+            render_styles = NULL;
+            CHECK(ok && A.w == 600 && A.h == 600);
+            if (!(ok && A.w == 600 && A.h == 600)) {
+                free(A.rgba);
+                continue;
+            }
+            /* casing colour: within 24 of #C03030 on every channel */
+#define RED_AT(x, y)                                                                                               \
+    (abs((int)A.rgba[((size_t)(y) * A.w + (x)) * 4] - 0xC0) <= 24 &&                                             \
+     abs((int)A.rgba[((size_t)(y) * A.w + (x)) * 4 + 1] - 0x30) <= 24 &&                                         \
+     abs((int)A.rgba[((size_t)(y) * A.w + (x)) * 4 + 2] - 0x30) <= 24)
+            /* the band's middle (x 35.25 and 42.75 m) over the primary (y 26..34 m) */
+            int band = 0, joints = 0;
+            for (uint32_t y = 260; y < 340; y++) band += RED_AT(352, y) + RED_AT(427, y);
+            /* the ramps' surfaces (x 36..42 m) where the bridge record's
+             * casing cap would lie on them: 3.5 to 4 m from each joint
+             * (y 15 and 50 m), within 11 m..joint and joint..54 m */
+            for (uint32_t y = 105; y < 150; y++)
+                for (uint32_t x = 360; x < 420; x++) joints += RED_AT(x, y) + RED_AT(x, y + 395);
+#undef RED_AT
+            if (v == 0)
+                CHECKF(band == 160 && joints == 0,
+                       "%s edges: a bridge's casing over the primary: %d of 160 band pixels in its colour, %d casing "
+                       "pixels on the ramps at the joints", modes[e] == RS_EDGES_ALPHAMAP ? "alpha-map" : "analytic", band,
+                       joints);
+            else
+                CHECKF(band == 0 && joints == 0, "one level: %d casing pixels over the primary, %d at the joints", band,
+                       joints);
+            printf("deck casing (%s edges, %s): %d of 160 band pixels over the primary in its colour, %d at the "
+                   "joints\n", modes[e] == RS_EDGES_ALPHAMAP ? "alpha-map" : "analytic", v ? "one level" : "bridge",
+                   band, joints);
+            free(A.rgba);
+        }
+    rs_styles_free(ctx, S);
 }
 
 /* A lower road's markings under a bridge's deck (docs/network.md "Bridges
@@ -1407,6 +1483,7 @@ int main(void)
     test_cap_cut();
     test_bridge_lines();
     test_marks_under_bridge();
+    test_deck_casing();
     test_roundabout_oneway();
     test_line_under_road();
     test_many_crossings();

@@ -43,6 +43,17 @@ static const char styled_many[] =
     "mark arrow_left road=a s=12 t=-1.7\n"
     "mark word_bus road=b s=9 t=1.5 length=3 width=2\n";
 
+/* a bridge record between two ground records over a road, both cased:
+ * the bridge's casing lies over the road below (docs/network.md "Bridges
+ * and layers"), in the paint with the lines */
+static const char styled_deck[] =
+    "style p\n casing 0.6 #B8B4AC\n line 2.4 0.15 #FFFFFF\n line -2.4 0.15 #FFFFFF\nend\n"
+    "style m\n casing 0.4 #6060F0C0\n line 0 0.2 #FFFFFF dash 2 5\nend\n"
+    "road a width 8 style=m\n0.5 20.3\n39.1 19.8\nend\n"
+    "road r1 width 6 style=p\n20 0.5\n20.4 12\nend\n"
+    "road b width 6 style=p bridge=yes layer=1\n20.4 12\n20.6 28\nend\n"
+    "road r2 width 6 style=p\n20.6 28\n21 39.5\nend\n";
+
 static uint8_t checker_px[32 * 32 * 4], road_px[16 * 16 * 4], terrain_px[8 * 8 * 4];
 
 static void images(void)
@@ -366,6 +377,8 @@ int main(void)
         { "alpha-map edges, styled", styled_many, RS_EDGES_ALPHAMAP, 0, 0, 0 },
         { "lit, styled", styled_many, RS_EDGES_ANALYTIC, 0, 1, 1 },
         { "lit, alpha-map edges", styled_one, RS_EDGES_ALPHAMAP, 0, 0, 1 },
+        { "a bridge's casing over the road below", styled_deck, RS_EDGES_ANALYTIC, 0, 0, 0 },
+        { "a bridge's casing over the road below, alpha-map edges", styled_deck, RS_EDGES_ALPHAMAP, 0, 0, 0 },
     };
     for (size_t k = 0; dem && k < sizeof scenes / sizeof *scenes; k++) run_scene(dem, &scenes[k]);
     rs_dem_free(ctx, dem);

@@ -3,8 +3,9 @@
  * side"). The fragment shader evaluates the roads per screen pixel from the
  * buffer textures of rs_gpu_scene (include/roadsplat.h "GPU export"), in the
  * CPU's layer order (lib/splat/overlays.c, lib/splat/composite.c): casings
- * onto the terrain colour T, fill / gradient surfaces, lines, markings onto
- * the road colour S, then C = (1 - R) T + R S. Coverage is the box filter of
+ * onto the terrain colour T, fill / gradient surfaces, lines, markings and a
+ * bridge's casing over the roads below onto the road colour S, then
+ * C = (1 - R) T + R S. Coverage is the box filter of
  * the pixel's footprint (the parallelogram of dFdx, dFdy of the map
  * position) across each edge: exact for a straight edge, as the CPU's
  * analytic mode. Constant data only. */
@@ -428,6 +429,10 @@ static const char *const rsh_fs_src[] = {
      * of roads per cell takes part) */
     "        float prod = 1.0; int zeros = 0, cr = -1;\n"
     "        float csd = 1e30, ccd = 1e30, UR = 0.0, UC = 0.0; vec2 cn = vec2(1.0, 0.0), ccn = cn, NR = cn, NC = cn;\n"
+    /* bridges' casings over the roads below (the pass after the
+     * markings): the highest level among the cased roads whose casing
+     * reaches p and its stroke, the lowest among the surfaces there */
+    "        float lvlo = 3e9, lvc = -3e9, stc = -9.0, ccw = 0.0;\n"
     "        for (int e = e0; e <= e1; e++) {\n"
     "            float d = 0.0, sd = 1e30, u = 0.0, side = 0.0; vec2 n = vec2(1.0, 0.0);\n"
     "            Seg s; s.road = -2; s.cw = 0.0; s.len = 0.0;\n"
@@ -440,8 +445,11 @@ static const char *const rsh_fs_src[] = {
     "                    cut_add(1.0 - c, prod, zeros, 1.0);\n"
     "                    union_add(UR, NR, c, cn);\n"
     "                    union_add(UC, NC, cdf(-ccd, ccn), ccn);\n"
+    "                    float rk = texelFetch(u_roadt, 10 * cr + 7).z, rl = rk < -1e8 ? 0.0 : floor(rk / 64.0);\n"
+    "                    if (c > 0.0) lvlo = min(lvlo, rl);\n"
+    "                    if (ccw > 0.0 && rl > lvc && cdf(-ccd, ccn) > 0.0) { lvc = rl; stc = texelFetch(u_roadt, 10 * cr + 6).x; }\n"
     "                }\n"
-    "                cr = s.road; csd = sd; cn = n; ccd = sdc; ccn = nc;\n"
+    "                cr = s.road; csd = sd; cn = n; ccd = sdc; ccn = nc; ccw = s.cw;\n"
     "            } else {\n"
     "                if (sd < csd) { csd = sd; cn = n; }\n"
     "                if (sdc < ccd) { ccd = sdc; ccn = nc; }\n"
@@ -529,6 +537,43 @@ static const char *const rsh_fs_src[] = {
     "                if (xy.x < -reach.x || xy.y < -reach.y || xy.x > 2.0 * M1.y * M1.w + reach.x || xy.y > 2.0 * M1.x * M2.x + reach.y) continue;\n"
     "                vec4 c = atlas_box(int(M0.y), xy, e1, e2);\n"
     "                if (c.a > 0.0) S = S * (1.0 - c.a) + c.rgb;\n"
+    "            }\n"
+    "        }\n",
+    /* a bridge's casing over the roads below it (lib/splat/overlays.c
+     * decks): the casing band of the cased roads of level lvc, less the
+     * surfaces that hide it (level lvc or higher, or its stroke), over the
+     * part of R the roads below hold; onto S after the lines and markings */
+    "        if (lvc > lvlo) {\n"
+    "            float UD = 0.0, UH = 0.0, dX = 1e30, dsd = 1e30, dcd = 1e30, dw = 0.0;\n"
+    "            vec2 ND = vec2(1.0, 0.0), NH = ND, dn = ND, dcn = ND; int roadX = -1, dr = -1;\n"
+    "            for (int e = e0; e <= e1; e++) {\n"
+    "                float d = 0.0, sd = 1e30, u = 0.0, side = 0.0; vec2 n = vec2(1.0, 0.0);\n"
+    "                Seg s; s.road = -2; s.cw = 0.0; s.len = 0.0;\n"
+    "                if (e < e1) s = seg_at(p, int(texelFetch(u_cseg, e).r), d, sd, n, u, side);\n"
+    "                float sdc = sd - s.cw; vec2 nc = n;\n"
+    "                if (e < e1 && (s.flags & 7) != 0) sdc = tee_trim(s, p, u, side, s.cw, nc, d - s.r - s.cw);\n"
+    "                if (s.road != dr) {\n"
+    "                    if (dr >= 0) {\n"
+    "                        float rk = texelFetch(u_roadt, 10 * dr + 7).z, rl = rk < -1e8 ? 0.0 : floor(rk / 64.0);\n"
+    "                        if (dw > 0.0 && rl == lvc) union_add(UD, ND, cdf(-dcd, dcn), dcn);\n"
+    "                        if (rl >= lvc || texelFetch(u_roadt, 10 * dr + 6).x == stc) union_add(UH, NH, cdf(-dsd, dn), dn);\n"
+    "                    }\n"
+    "                    dr = s.road; dsd = sd; dn = n; dcd = sdc; dcn = nc; dw = s.cw;\n"
+    "                } else {\n"
+    "                    if (sd < dsd) { dsd = sd; dn = n; }\n"
+    "                    if (sdc < dcd) { dcd = sdc; dcn = nc; }\n"
+    "                }\n"
+    "                if (e == e1) break;\n"
+    "                if (s.cw > 0.0 && sdc <= near_reach && d < dX) {\n"
+    "                    float rk = texelFetch(u_roadt, 10 * s.road + 7).z;\n"
+    "                    if ((rk < -1e8 ? 0.0 : floor(rk / 64.0)) == lvc) { dX = d; roadX = s.road; }\n"
+    "                }\n"
+    "            }\n"
+    "            float H = min(UH, 1.0), over = min(min(UD, 1.0) - H, R - H);\n"
+    "            if (over > 0.0 && roadX >= 0) {\n"
+    "                vec4 cc = texelFetch(u_roadt, 10 * roadX + 5);\n"
+    "                float a = clamp(over / R, 0.0, 1.0) * cc.a;\n"
+    "                S = S * (1.0 - a) + cc.rgb * a;\n"
     "            }\n"
     "        }\n"
     "        }\n"

@@ -134,6 +134,12 @@ static void road_prints(const rs_roads *roads, size_t i, const rs__styling *st, 
             if (st->img_rev) c = mix(c, st->img_rev[i]);
         }
     }
+    /* a road's level decides where a bridge's casing lies over it (its
+     * surface, core and rim) and where its own casing lies over the roads
+     * below (lib/splat/overlays.c decks); level 0 leaves the prints as
+     * they were */
+    const int level = rs__road_level(roads, i);
+    if (level) c = mix(mix(c, 0x1e7e), (uint64_t)(int64_t)level), m = mix(mix(m, 0x1e7e), (uint64_t)(int64_t)level);
     if (image && net && i < net->nroads) c = mix(mixd(c, net->s_off[i]), net->rev[i]);
     if (image || shade) c = mixd(c, hw); /* mapped across the width */
     F->hw = hw;
@@ -749,7 +755,8 @@ rs_result rs__grid_edit_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *ro
     b.kind = RS__EI_SURFACE;
     if (g->field) b.cell = rs__roadfield_cell(g->field);
     if (st && st->casing) b.cell = fmax(b.cell, rs__roadfield_cell(st->casing));
-    if (e) e->fills = st && (st->any_surface || st->img_of);
+    /* (a bridge's casing over the roads below shows which is on top too) */
+    if (e) e->fills = st && (st->any_surface || st->img_of || st->ndeck);
     /* long segments are cut to the map grown by the largest pad (an
      * alpha-map road cell is at most a DEM cell) */
     double grow = 4 * cs + 4 * pix + 1;

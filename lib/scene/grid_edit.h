@@ -36,7 +36,8 @@ typedef struct rs__edit_item {
 typedef struct rs__grid_edit {
     rs__edit_item *it;
     size_t n, cap;
-    int fills; /* some road has a fill, gradient or surface image: which road is on top shows */
+    int fills; /* some road has a fill, gradient or surface image, or a bridge's casing lies over
+                  roads below: which road is on top shows */
     int over;  /* more pieces than the budget: none kept (updates dirty the whole image) */
     /* the items by bins of `bin` metres over the map (bw x bh; an item
      * listed in every bin its box meets), for rect_has_roads */

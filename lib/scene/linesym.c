@@ -2526,8 +2526,15 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
                 /* across a bridged short record both ends of the gap are
                  * joints: either left standing in a straight line would stop
                  * the mitre of a nearby bend (fuzz/split) */
-                if (!starts && gap && m0 >= 1 && m > m0 + 1 && drop_straight_joint(pts, sv, m0, m, 4 / per_unit)) m--;
-                if (!starts && m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit)) m--, m0--;
+                /* (not where the level changes, a bridge's record and the
+                 * road it continues: a merged segment would be one record's,
+                 * and the level of a piece's record decides which surfaces
+                 * cut it; docs/network.md "Bridges and layers") */
+                const int level_kept = q > q0 && rs__road_level(roads, recs[q]) != rs__road_level(roads, recs[q - 1]);
+                if (!starts && !level_kept && gap && m0 >= 1 && m > m0 + 1 && drop_straight_joint(pts, sv, m0, m, 4 / per_unit))
+                    m--;
+                if (!starts && !level_kept && m0 >= 2 && m > m0 && drop_straight_joint(pts, sv, m0 - 1, m, 4 / per_unit))
+                    m--, m0--;
                 if (cap > srcap) {
                     uint32_t *ns = rs__realloc(ctx, sr, cap * sizeof *sr);
                     if (!ns) { res = RS_ERR_NOMEM; goto fail; }

@@ -1566,6 +1566,7 @@ rs_result rs__roadfield_repixel(rs_ctx *ctx, const rs__roadfield *src, double pi
 
 size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
 
+
 double rs__roadfield_cell(const rs__roadfield *f) { return f ? f->c : 0; }
 
 double rs__roadfield_pixel(const rs__roadfield *f) { return f ? f->pixel : 0; }
@@ -1651,6 +1652,23 @@ typedef struct rf_tee {
     uint8_t live;          /* 0: an end-2 clip line the segment's shape (its strips included) does not
                               reach past: it changes nothing and is left out everywhere (tees_finish) */
 } rf_tee;
+
+void rs__roadfield_bounds(const rs__roadfield *f, double box[4])
+{
+    box[0] = box[2] = INFINITY;
+    box[1] = box[3] = -INFINITY;
+    for (size_t k = 0; f && k < f->nseg; k++) {
+        const rf_seg *s = &f->seg[k];
+        box[0] = lm_min(box[0], lm_min(s->ax, s->bx) - s->r), box[1] = lm_max(box[1], lm_max(s->ax, s->bx) + s->r);
+        box[2] = lm_min(box[2], lm_min(s->ay, s->by) - s->r), box[3] = lm_max(box[3], lm_max(s->ay, s->by) + s->r);
+    }
+    /* a trimmed end's strip reaches past its capsule */
+    for (size_t k = 0; f && k < f->ntee; k++) {
+        const double *b = f->tee[k].box;
+        box[0] = lm_min(box[0], b[0]), box[1] = lm_max(box[1], b[1]);
+        box[2] = lm_min(box[2], b[2]), box[3] = lm_max(box[3], b[3]);
+    }
+}
 
 /* The tees of segment s (those of f->tee with seg == id): [*i0, *i1). */
 static void tees_of(const rs__roadfield *f, uint32_t id, size_t *i0, size_t *i1)

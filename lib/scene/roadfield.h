@@ -116,6 +116,9 @@ double rs__roadfield_cell(const rs__roadfield *f);
 /* The largest pixel its one-cell coverage paths hold for, metres. */
 double rs__roadfield_pixel(const rs__roadfield *f);
 size_t rs__roadfield_bytes(const rs__roadfield *f);
+/* The bounds (x0, x1, y0, y1, local metres) of every shape of f, T strips
+ * included; x0 = +inf when f holds none. */
+void rs__roadfield_bounds(const rs__roadfield *f, double box[4]);
 
 typedef struct rs__road_point {
     uint32_t road;     /* index in rs_roads */

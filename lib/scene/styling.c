@@ -17,6 +17,15 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
     rs__linesym_free(ctx, st->lines);
     rs__roadfield_free(ctx, st->casing);
     rs__roadfield_free(ctx, st->near_own);
+    for (size_t k = 0; k < st->ndeck; k++) {
+        rs__roadfield_free(ctx, st->deck[k].casing);
+        rs__roadfield_free(ctx, st->deck[k].hide);
+        rs__roadfield_free(ctx, st->deck[k].below);
+        rs__free(ctx, st->deck[k].road);
+        rs__free(ctx, st->deck[k].cstroke);
+        rs__free(ctx, st->deck[k].bstroke);
+    }
+    rs__free(ctx, st->deck);
     rs__free(ctx, st->prio);
     rs__free(ctx, st->surface);
     rs__free(ctx, st->colour);
@@ -146,6 +155,101 @@ static rs_result field_tees(rs_ctx *ctx, const rs_roads *roads, const rs_network
     }
     if (!r) r = rs__roadfield_set_tees(ctx, f, froads, tees, m);
     rs__free(ctx, tees);
+    return r;
+}
+
+/* The field of the roads i with pick[i] (widened by 2 extra[i] when extra
+ * is not NULL), their T ends as the styles' fields have them; *ids the
+ * rs_roads id of each of its roads (the caller's). */
+static rs_result subset_field(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs__tees *tees,
+                              const double *extra, const uint8_t *pick, const rs__roadfield_params *fp,
+                              rs__roadfield **out, uint32_t **ids)
+{
+    size_t n = rs_roads_count(roads), m = 0;
+    rs_roads *sub_roads = NULL;
+    uint32_t *sub = rs__alloc_array(ctx, n, sizeof *sub), *id = NULL;
+    for (size_t i = 0; sub && i < n; i++) m += pick[i] != 0;
+    if (sub) id = rs__alloc_array(ctx, m ? m : 1, sizeof *id);
+    rs_result r = sub && id ? rs_roads_create(ctx, &sub_roads) : RS_ERR_NOMEM;
+    m = 0;
+    for (size_t i = 0; i < n && !r; i++) {
+        sub[i] = UINT32_MAX;
+        if (!pick[i]) continue;
+        const char *name = NULL;
+        const double *xy = NULL;
+        size_t np = 0;
+        double w = 0;
+        rs_roads_get(roads, i, &name, &w, &xy, &np);
+        sub[i] = (uint32_t)m;
+        id[m++] = (uint32_t)i;
+        r = rs_roads_add(ctx, sub_roads, name, w + (extra ? 2 * extra[i] : 0), xy, np);
+    }
+    if (!r) r = rs__roadfield_build(ctx, sub_roads, fp, out);
+    if (!r) r = field_tees(ctx, roads, net, tees, *out, extra, sub_roads, sub);
+    rs_roads_free(ctx, sub_roads);
+    rs__free(ctx, sub);
+    if (r == RS_OK && ids) *ids = id;
+    else rs__free(ctx, id);
+    return r;
+}
+
+/* Road ids of a subset field (ids[k]: its road k) to their strokes (each
+ * road alone without a network); *out the caller's. */
+static rs_result stroke_ids(rs_ctx *ctx, const rs_network *net, size_t n, const uint32_t *ids, size_t m, uint32_t **out)
+{
+    uint32_t *o = rs__alloc_array(ctx, m ? m : 1, sizeof *o);
+    if (!o) return RS_ERR_NOMEM;
+    const int strokes = net && rs_network_road_count(net) == n;
+    for (size_t k = 0; k < m; k++) o[k] = strokes ? net->stroke_of[ids[k]] : ids[k];
+    *out = o;
+    return RS_OK;
+}
+
+/* st->deck: per level above the lowest that has cased roads, the fields
+ * the overlays draw those casings over the roads below with (rs__deck). */
+static rs_result decks_build(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs__tees *tees,
+                             const double *extra, const rs__roadfield_params *fp, rs__styling *st)
+{
+    size_t n = rs_roads_count(roads);
+    int32_t lo = INT32_MAX, *lv = rs__alloc_array(ctx, n, sizeof *lv);
+    uint8_t *pick = rs__alloc_array(ctx, n, 1);
+    uint32_t *bids = NULL;
+    rs_result r = lv && pick ? RS_OK : RS_ERR_NOMEM;
+    for (size_t i = 0; i < n && !r; i++) {
+        lv[i] = rs__road_level(roads, i);
+        lo = lv[i] < lo ? lv[i] : lo;
+    }
+    for (int32_t L = lo; !r;) {
+        /* the next level above L with a cased road */
+        int32_t next = INT32_MAX;
+        for (size_t i = 0; i < n; i++)
+            if (extra[i] > 0 && lv[i] > L && lv[i] < next) next = lv[i];
+        if (next == INT32_MAX) break;
+        L = next;
+        rs__deck *d = rs__realloc(ctx, st->deck, (st->ndeck + 1) * sizeof *st->deck);
+        if (!d) { r = RS_ERR_NOMEM; break; }
+        st->deck = d;
+        d = &st->deck[st->ndeck++];
+        memset(d, 0, sizeof *d);
+        d->level = L;
+        size_t nc = 0, nb = 0;
+        for (size_t i = 0; i < n; i++) nc += pick[i] = extra[i] > 0 && lv[i] == L;
+        r = subset_field(ctx, roads, net, tees, extra, pick, fp, &d->casing, &d->road);
+        if (!r) r = stroke_ids(ctx, net, n, d->road, nc, &d->cstroke);
+        for (size_t i = 0; i < n; i++) pick[i] = lv[i] >= L;
+        if (!r) r = subset_field(ctx, roads, net, tees, NULL, pick, fp, &d->hide, NULL);
+        for (size_t i = 0; i < n; i++) nb += pick[i] = lv[i] < L;
+        if (!r) r = subset_field(ctx, roads, net, tees, NULL, pick, fp, &d->below, &bids);
+        if (!r) r = stroke_ids(ctx, net, n, bids, nb, &d->bstroke);
+        rs__free(ctx, bids);
+        bids = NULL;
+        if (!r) rs__roadfield_bounds(d->casing, d->box);
+        if (!r)
+            st->bytes += rs__roadfield_bytes(d->casing) + rs__roadfield_bytes(d->hide) + rs__roadfield_bytes(d->below) +
+                         (2 * nc + nb) * sizeof(uint32_t);
+    }
+    rs__free(ctx, lv);
+    rs__free(ctx, pick);
     return r;
 }
 
@@ -386,6 +490,8 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
             if (r != RS_OK) goto fail_dash;
         }
         st->bytes += rs__roadfield_bytes(st->casing);
+        /* bridges' casings over the roads below them */
+        if ((r = decks_build(ctx, roads, net, tees, extra, &fp, st)) != RS_OK) goto fail_dash;
     }
     if (st->img_of && net && rs_network_road_count(net) == n) {
         st->img_s0 = rs__alloc_array(ctx, n, sizeof *st->img_s0);

@@ -10,6 +10,22 @@ struct rs__linesym;
 struct rs__band;
 struct rs__line_cut;
 
+/* A bridge deck's casing over the roads below it (docs/network.md
+ * "Bridges and layers"), for one level L that has cased roads and roads
+ * below it: `casing` holds the cased roads of level L, widened by their
+ * casings; `hide` the roads of level L or higher, whose surfaces hide that
+ * casing; `below` the roads under level L. Per road of casing: its
+ * rs_roads id (road) and stroke (cstroke); per road of below: its stroke
+ * (bstroke): a casing is not drawn over a road of its own stroke (a bridge
+ * record's casing never crosses the record it continues). box: the bounds
+ * of casing's shapes (local metres). */
+typedef struct rs__deck {
+    int32_t level;
+    struct rs__roadfield *casing, *hide, *below;
+    uint32_t *road, *cstroke, *bstroke;
+    double box[4];
+} rs__deck;
+
 typedef struct rs__styling {
     struct rs__linesym *lines;        /* NULL: no road has lines */
     struct rs__roadfield *casing;     /* every road, those with a casing widened by it on both sides (road
@@ -21,6 +37,8 @@ typedef struct rs__styling {
     int casing_uniform;               /* every casing has one colour: casing_rgba (no lookups) */
     float casing_rgba[4];
     double widest_casing;             /* the widest casing (0: none) */
+    rs__deck *deck;                   /* ndeck, by rising level (NULL: every cased road on the lowest level) */
+    size_t ndeck;
     const struct rs__roadfield *near; /* field for fill / gradient lookups: the grid's, else near_own */
     struct rs__roadfield *near_own;
     int *prio;                        /* per road: rs__road_priority, for the fill lookups (the higher road's fill

@@ -190,6 +190,60 @@ static void surfaces(const rs__styling *st, double pix, rs__piece *p, int q_mean
     }
 }
 
+/* Bridges' casings over the roads below them (rs__deck; docs/network.md
+ * "Bridges and layers"). In a pixel the deck's casing band is C - H (its
+ * widened shapes less the surfaces of its level and above) and the roads
+ * below hold R - H. The band's part over them, min(C - H, R - H), goes
+ * onto the road colour S, which the composite shows over R of the pixel,
+ * where a road below is near and the nearest is not of the casing's
+ * stroke; after the lines and markings (they lie under the deck's edge).
+ * Over terrain the casing is casings()'s, as for any road. Rows and
+ * columns near each deck's shapes only; C and H into the line symbols'
+ * scratch (free once they are painted). */
+static void decks(const rs__styling *st, double pix, const rs__piece *p, float *rgb)
+{
+    const size_t w = p->w;
+    double *C = p->ls, *H = p->ls + w; /* (rs__linesym_scratch_len(w) >= 2 w) */
+    for (size_t d = 0; d < st->ndeck; d++) {
+        const rs__deck *D = &st->deck[d];
+        /* the piece's pixels whose squares can meet the deck's shapes */
+        double ka = floor(D->box[0] / pix) - 1 - (double)p->x0, kb = floor(D->box[1] / pix) + 2 - (double)p->x0;
+        double ra = floor(D->box[2] / pix) - 1 - (double)p->y0, rb = floor(D->box[3] / pix) + 2 - (double)p->y0;
+        ka = ka > 0 ? ka : 0, ra = ra > 0 ? ra : 0;
+        kb = kb < (double)w ? kb : (double)w, rb = rb < (double)p->rows ? rb : (double)p->rows;
+        if (!(ka < kb && ra < rb)) continue; /* (NaN: no shapes) */
+        const uint32_t k0 = (uint32_t)ka, k1 = (uint32_t)kb, n = k1 - k0;
+        for (uint32_t r = (uint32_t)ra; r < (uint32_t)rb; r++) {
+            const double *R = p->cov + (size_t)r * w;
+            float *r0 = rgb + (size_t)r * w * 3, *r1 = r0 + w, *r2 = r1 + w;
+            uint32_t k = k0;
+            while (k < k1 && !(R[k] > 0)) k++;
+            if (k == k1) continue; /* no road on this row here */
+            rs__roadfield_coverage(D->casing, p->x0 + k0, p->y0 + r, n, 1, pix, C, n);
+            rs__roadfield_coverage(D->hide, p->x0 + k0, p->y0 + r, n, 1, pix, H, n);
+            for (; k < k1; k++) {
+                double c = C[k - k0] < 1 ? C[k - k0] : 1, h = H[k - k0] < 1 ? H[k - k0] : 1, band = c - h,
+                       below = R[k] - h, over = band < below ? band : below;
+                if (!(over > 0 && R[k] > 0)) continue;
+                rs__road_point rp, under;
+                double x = ((double)p->x0 + (double)k + 0.5) * pix, y = ((double)p->y0 + (double)r + 0.5) * pix;
+                if (!rs__roadfield_nearest(D->casing, x, y, pix * HALF_SQRT2, &rp)) continue;
+                /* only over a road below, and not one of its own stroke
+                 * (its casing's cap over the record it continues) */
+                if (!rs__roadfield_nearest(D->below, x, y, pix * HALF_SQRT2, &under) ||
+                    D->bstroke[under.road] == D->cstroke[rp.road])
+                    continue;
+                const float *col = st->colour + 16 * (size_t)D->road[rp.road] + 12;
+                double share = over / R[k];
+                float a = (float)(share < 1 ? share : 1) * col[3], ka1 = 1.0f - a;
+                r0[k] = r0[k] * ka1 + col[0] * a;
+                r1[k] = r1[k] * ka1 + col[1] * a;
+                r2[k] = r2[k] * ka1 + col[2] * a;
+            }
+        }
+    }
+}
+
 void rs__overlays_casings(const rs_splatter *s, rs__piece *p)
 {
     const rs__styling *st = s->grid->styling;
@@ -217,6 +271,7 @@ void rs__overlays_paint(const rs_splatter *s, rs__piece *p, float *rgb)
         rs__markings_paint(s->grid->markings, p);
         p->sc = sc;
     }
+    if (st && st->ndeck) decks(st, s->texel_m, p, rgb);
 }
 
 void rs__overlays(const rs_splatter *s, rs__piece *p)
