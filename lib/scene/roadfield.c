@@ -1653,6 +1653,19 @@ typedef struct rf_tee {
                               reach past: it changes nothing and is left out everywhere (tees_finish) */
 } rf_tee;
 
+int rs__roadfield_rows_have(const rs__roadfield *f, double y0, double y1)
+{
+    if (!f || !(y0 <= y1)) return 0;
+    /* the index rows the band meets, clamped to the grid (a point beyond it
+     * is in the nearest row's lists) */
+    double a = floor(y0 * f->inv_c) + 1.0, b = floor(y1 * f->inv_c) + 1.0, top = (double)f->gh - 1;
+    a = a > 0 ? (a < top ? a : top) : 0;
+    b = b > 0 ? (b < top ? b : top) : 0;
+    for (uint32_t j = (uint32_t)a; j <= (uint32_t)b; j++)
+        if (f->rstart[j] != f->rstart[j + 1] || (f->ntee && f->tstart[j] != f->tstart[j + 1])) return 1;
+    return 0;
+}
+
 void rs__roadfield_bounds(const rs__roadfield *f, double box[4])
 {
     box[0] = box[2] = INFINITY;

@@ -119,6 +119,10 @@ size_t rs__roadfield_bytes(const rs__roadfield *f);
 /* The bounds (x0, x1, y0, y1, local metres) of every shape of f, T strips
  * included; x0 = +inf when f holds none. */
 void rs__roadfield_bounds(const rs__roadfield *f, double box[4]);
+/* 0 when no shape of f can reach the rows of local y in [y0, y1] (no
+ * segment and no T strip listed in the index rows they meet): their
+ * coverage is 0 there. */
+int rs__roadfield_rows_have(const rs__roadfield *f, double y0, double y1);
 
 typedef struct rs__road_point {
     uint32_t road;     /* index in rs_roads */

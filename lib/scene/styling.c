@@ -21,9 +21,10 @@ void rs__styling_free(rs_ctx *ctx, rs__styling *st)
         rs__roadfield_free(ctx, st->deck[k].casing);
         rs__roadfield_free(ctx, st->deck[k].hide);
         rs__roadfield_free(ctx, st->deck[k].below);
+        rs__free(ctx, st->deck[k].below_of);
         rs__free(ctx, st->deck[k].road);
         rs__free(ctx, st->deck[k].cstroke);
-        rs__free(ctx, st->deck[k].bstroke);
+        rs__free(ctx, st->deck[k].lstroke);
     }
     rs__free(ctx, st->deck);
     rs__free(ctx, st->prio);
@@ -207,18 +208,41 @@ static rs_result stroke_ids(rs_ctx *ctx, const rs_network *net, size_t n, const 
 
 /* st->deck: per level above the lowest that has cased roads, the fields
  * the overlays draw those casings over the roads below with (rs__deck). */
-static rs_result decks_build(rs_ctx *ctx, const rs_roads *roads, const rs_network *net, const rs__tees *tees,
-                             const double *extra, const rs__roadfield_params *fp, rs__styling *st)
+static rs_result decks_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadfield *field, const rs_network *net,
+                             const rs__tees *tees, const double *extra, const rs__roadfield_params *fp,
+                             rs__styling *st)
 {
     size_t n = rs_roads_count(roads);
     int32_t lo = INT32_MAX, *lv = rs__alloc_array(ctx, n, sizeof *lv);
     uint8_t *pick = rs__alloc_array(ctx, n, 1);
-    uint32_t *bids = NULL;
+    uint32_t *bids = NULL, *cl = NULL;
+    double *box = NULL, widest = 0, widest_casing = 0;
     rs_result r = lv && pick ? RS_OK : RS_ERR_NOMEM;
     for (size_t i = 0; i < n && !r; i++) {
         lv[i] = rs__road_level(roads, i);
         lo = lv[i] < lo ? lv[i] : lo;
     }
+    /* without the grid's field: per road its points' box grown by its
+     * half width (map metres), for the roads below that can lie near a
+     * deck's casing */
+    if (!r && !field && !(box = rs__alloc_array(ctx, n, 4 * sizeof *box))) r = RS_ERR_NOMEM;
+    for (size_t i = 0; i < n && !r && !field; i++) {
+        const double *xy = NULL;
+        size_t np = 0;
+        double w = 0, *b = box + 4 * i;
+        rs_roads_get(roads, i, NULL, &w, &xy, &np);
+        b[0] = b[2] = INFINITY, b[1] = b[3] = -INFINITY;
+        for (size_t k = 0; k < np; k++) {
+            b[0] = fmin(b[0], xy[2 * k]), b[1] = fmax(b[1], xy[2 * k]);
+            b[2] = fmin(b[2], xy[2 * k + 1]), b[3] = fmax(b[3], xy[2 * k + 1]);
+        }
+        b[0] -= 0.5 * w, b[1] += 0.5 * w, b[2] -= 0.5 * w, b[3] += 0.5 * w;
+        widest = fmax(widest, w), widest_casing = fmax(widest_casing, extra[i]);
+    }
+    /* a road below matters where a pixel in a casing band has it within
+     * the lookup's reach; its T strips may reach a through road's width
+     * past its box: twice the widest road, the casing and two pixels */
+    const double near_m = 2 * widest + widest_casing + 2 * fp->pixel + 1;
     for (int32_t L = lo; !r;) {
         /* the next level above L with a cased road */
         int32_t next = INT32_MAX;
@@ -238,18 +262,50 @@ static rs_result decks_build(rs_ctx *ctx, const rs_roads *roads, const rs_networ
         if (!r) r = stroke_ids(ctx, net, n, d->road, nc, &d->cstroke);
         for (size_t i = 0; i < n; i++) pick[i] = lv[i] >= L;
         if (!r) r = subset_field(ctx, roads, net, tees, NULL, pick, fp, &d->hide, NULL);
-        for (size_t i = 0; i < n; i++) nb += pick[i] = lv[i] < L;
-        if (!r) r = subset_field(ctx, roads, net, tees, NULL, pick, fp, &d->below, &bids);
-        if (!r) r = stroke_ids(ctx, net, n, bids, nb, &d->bstroke);
+        if (field) {
+            /* the roads below in the grid's field */
+            d->look = field;
+            if (!r && !(d->below_of = rs__alloc_array(ctx, n, sizeof *d->below_of))) r = RS_ERR_NOMEM;
+            for (size_t i = 0; !r && i < n; i++) d->below_of[i] = lv[i] < L;
+            if (!r && !(bids = rs__alloc_array(ctx, n, sizeof *bids))) r = RS_ERR_NOMEM;
+            for (size_t i = 0; !r && i < n; i++) bids[i] = (uint32_t)i;
+            if (!r) r = stroke_ids(ctx, net, n, bids, n, &d->lstroke);
+            nb = n;
+        } else {
+            /* else a field of the roads below whose box comes near a cased
+             * road's of this level (all of them when that would take long) */
+            if (!r && !(cl = rs__realloc(ctx, cl, (nc ? nc : 1) * sizeof *cl))) r = RS_ERR_NOMEM;
+            for (size_t i = 0, m = 0; !r && i < n; i++)
+                if (extra[i] > 0 && lv[i] == L) cl[m++] = (uint32_t)i;
+            const int prune = (double)nc * (double)n <= 2e7;
+            for (size_t i = 0; !r && i < n; i++) {
+                pick[i] = lv[i] < L;
+                if (!pick[i] || !prune) continue;
+                const double *a = box + 4 * i;
+                int near = 0;
+                for (size_t m = 0; m < nc && !near; m++) {
+                    const double *c = box + 4 * cl[m], g = extra[cl[m]] + near_m;
+                    /* (NaN and infinite boxes count as near) */
+                    near = !(a[1] < c[0] - g || a[0] > c[1] + g || a[3] < c[2] - g || a[2] > c[3] + g);
+                }
+                pick[i] = (uint8_t)near;
+            }
+            for (size_t i = 0; i < n; i++) nb += pick[i];
+            if (!r) r = subset_field(ctx, roads, net, tees, NULL, pick, fp, &d->below, &bids);
+            d->look = d->below;
+            if (!r) r = stroke_ids(ctx, net, n, bids, nb, &d->lstroke);
+        }
         rs__free(ctx, bids);
         bids = NULL;
         if (!r) rs__roadfield_bounds(d->casing, d->box);
         if (!r)
             st->bytes += rs__roadfield_bytes(d->casing) + rs__roadfield_bytes(d->hide) + rs__roadfield_bytes(d->below) +
-                         (2 * nc + nb) * sizeof(uint32_t);
+                         (2 * nc + nb) * sizeof(uint32_t) + (d->below_of ? n * sizeof(double) : 0);
     }
     rs__free(ctx, lv);
     rs__free(ctx, pick);
+    rs__free(ctx, box);
+    rs__free(ctx, cl);
     return r;
 }
 
@@ -491,7 +547,7 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
         }
         st->bytes += rs__roadfield_bytes(st->casing);
         /* bridges' casings over the roads below them */
-        if ((r = decks_build(ctx, roads, net, tees, extra, &fp, st)) != RS_OK) goto fail_dash;
+        if ((r = decks_build(ctx, roads, field, net, tees, extra, &fp, st)) != RS_OK) goto fail_dash;
     }
     if (st->img_of && net && rs_network_road_count(net) == n) {
         st->img_s0 = rs__alloc_array(ctx, n, sizeof *st->img_s0);

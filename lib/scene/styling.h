@@ -13,16 +13,20 @@ struct rs__line_cut;
 /* A bridge deck's casing over the roads below it (docs/network.md
  * "Bridges and layers"), for one level L that has cased roads and roads
  * below it: `casing` holds the cased roads of level L, widened by their
- * casings; `hide` the roads of level L or higher, whose surfaces hide that
- * casing; `below` the roads under level L. Per road of casing: its
- * rs_roads id (road) and stroke (cstroke); per road of below: its stroke
- * (bstroke): a casing is not drawn over a road of its own stroke (a bridge
- * record's casing never crosses the record it continues). box: the bounds
- * of casing's shapes (local metres). */
+ * casings (road[k]: the rs_roads id of its road k, cstroke[k] its
+ * stroke); `hide` the roads of level L or higher, whose surfaces hide that
+ * casing. The roads below are looked up in `look`: the grid's field with
+ * below_of[i] = 1 for a road under L (analytic edges), else `below`, a
+ * field of the roads under L whose boxes come near a cased one's (below_of
+ * NULL); lstroke: the stroke of each road of look. A casing is not drawn
+ * over a road of its own stroke (a bridge record's casing never crosses the
+ * record it continues). box: the bounds of casing's shapes (local metres). */
 typedef struct rs__deck {
     int32_t level;
     struct rs__roadfield *casing, *hide, *below;
-    uint32_t *road, *cstroke, *bstroke;
+    const struct rs__roadfield *look;
+    double *below_of;
+    uint32_t *road, *cstroke, *lstroke;
     double box[4];
 } rs__deck;
 

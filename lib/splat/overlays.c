@@ -219,6 +219,10 @@ static void decks(const rs__styling *st, double pix, const rs__piece *p, float *
             uint32_t k = k0;
             while (k < k1 && !(R[k] > 0)) k++;
             if (k == k1) continue; /* no road on this row here */
+            /* (no casing of the deck's reaches this row: bridges scattered
+             * over a map make its box the map's) */
+            const double yr = ((double)p->y0 + (double)r) * pix;
+            if (!rs__roadfield_rows_have(D->casing, yr - pix, yr + 2 * pix)) continue;
             rs__roadfield_coverage(D->casing, p->x0 + k0, p->y0 + r, n, 1, pix, C, n);
             rs__roadfield_coverage(D->hide, p->x0 + k0, p->y0 + r, n, 1, pix, H, n);
             for (; k < k1; k++) {
@@ -230,9 +234,9 @@ static void decks(const rs__styling *st, double pix, const rs__piece *p, float *
                 if (!rs__roadfield_nearest(D->casing, x, y, pix * HALF_SQRT2, &rp)) continue;
                 /* only over a road below, and not one of its own stroke
                  * (its casing's cap over the record it continues) */
-                if (!rs__roadfield_nearest(D->below, x, y, pix * HALF_SQRT2, &under) ||
-                    D->bstroke[under.road] == D->cstroke[rp.road])
-                    continue;
+                int found = D->below_of ? rs__roadfield_nearest_of(D->look, x, y, pix * HALF_SQRT2, D->below_of, &under)
+                                        : rs__roadfield_nearest(D->look, x, y, pix * HALF_SQRT2, &under);
+                if (!found || D->lstroke[under.road] == D->cstroke[rp.road]) continue;
                 const float *col = st->colour + 16 * (size_t)D->road[rp.road] + 12;
                 double share = over / R[k];
                 float a = (float)(share < 1 ? share : 1) * col[3], ka1 = 1.0f - a;
