@@ -188,8 +188,9 @@ void rs__markings_free(rs_ctx *ctx, rs__markings *mk);
  * higher level and another stroke holds the pixel's centre, the rule the
  * fill and the shader follow. Marks the markings whose box meets such a
  * road's (they are then painted per piece, not from the build's blends)
- * and keeps `field` (the grid's, which must outlive mk) to ask. field
- * NULL (alpha-map edges: the grid has no road field): when a marking lies
+ * and keeps `field` (a field of these roads with the build's T ends: the
+ * grid's, or its styles' fill lookup field; it must outlive mk) to ask.
+ * field NULL (alpha-map edges without fills: no such field): when a marking lies
  * under a deck, a road field of the roads over the map at `texels` with
  * the T ends `tees` is made for the question and kept in mk. Nothing when
  * every road is on one level. */

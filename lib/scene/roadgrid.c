@@ -770,7 +770,10 @@ static rs_result grid_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     if (!r) r = rs__styling_build(ctx, dem, roads, &o, g->field, net, Tp, plan.cuts, plan.ncuts, facts, &g->styling);
     if (!r) r = rs__markings_build_planned(ctx, dem, roads, &o, net, &plan, window, &g->markings);
     /* a lower road's markings under a bridge's deck (docs/network.md "Bridges and layers") */
-    if (!r && g->markings) r = rs__markings_set_levels(ctx, g->markings, dem, roads, net, g->field, Tp, o.texels);
+    /* (alpha-map edges: the styles' field of the roads when they keep one) */
+    if (!r && g->markings)
+        r = rs__markings_set_levels(ctx, g->markings, dem, roads, net,
+                                    g->field ? g->field : g->styling ? g->styling->near : NULL, Tp, o.texels);
     if (!r && o.grid.edits) r = rs__grid_edit_build(ctx, dem, roads, &o, net, Tp, window, g);
     rs__auto_plan_free(ctx, &plan);
     /* a whole grid kept for edits keeps what a proportional update reads (its network too) */

@@ -194,14 +194,18 @@ static rs_result subset_field(rs_ctx *ctx, const rs_roads *roads, const rs_netwo
     return r;
 }
 
-/* Road ids of a subset field (ids[k]: its road k) to their strokes (each
- * road alone without a network); *out the caller's. */
+/* Road ids of a subset field (ids[k]: its road k; NULL: every road, k
+ * itself) to their strokes (each road alone without a network); *out the
+ * caller's. */
 static rs_result stroke_ids(rs_ctx *ctx, const rs_network *net, size_t n, const uint32_t *ids, size_t m, uint32_t **out)
 {
     uint32_t *o = rs__alloc_array(ctx, m ? m : 1, sizeof *o);
     if (!o) return RS_ERR_NOMEM;
     const int strokes = net && rs_network_road_count(net) == n;
-    for (size_t k = 0; k < m; k++) o[k] = strokes ? net->stroke_of[ids[k]] : ids[k];
+    for (size_t k = 0; k < m; k++) {
+        uint32_t i = ids ? ids[k] : (uint32_t)k;
+        o[k] = strokes ? net->stroke_of[i] : i;
+    }
     *out = o;
     return RS_OK;
 }
@@ -267,9 +271,7 @@ static rs_result decks_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadf
             d->look = field;
             if (!r && !(d->below_of = rs__alloc_array(ctx, n, sizeof *d->below_of))) r = RS_ERR_NOMEM;
             for (size_t i = 0; !r && i < n; i++) d->below_of[i] = lv[i] < L;
-            if (!r && !(bids = rs__alloc_array(ctx, n, sizeof *bids))) r = RS_ERR_NOMEM;
-            for (size_t i = 0; !r && i < n; i++) bids[i] = (uint32_t)i;
-            if (!r) r = stroke_ids(ctx, net, n, bids, n, &d->lstroke);
+            if (!r) r = stroke_ids(ctx, net, n, NULL, n, &d->lstroke);
             nb = n;
         } else {
             /* else a field of the roads below whose box comes near a cased
@@ -322,7 +324,6 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     rs_style *sty = NULL;
     uint32_t *band_start = NULL;
     rs__band *bands = NULL;
-    rs_roads *casing_roads = NULL;
     double *extra = NULL;
     if (!st) return rs__fail(ctx, RS_ERR_NOMEM, "out of memory for road styles");
     st->surface = rs__calloc(ctx, n, 1);
@@ -512,37 +513,12 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
              * two differ (its edge pixels) C > R gave every road without a
              * casing a tint of casing colour (up to 11/255) once any road
              * had one. There C holds the cased roads alone. */
-            uint32_t *sub = NULL;
-            if (o->coverage.edges == RS_EDGES_ALPHAMAP) {
-                sub = rs__alloc_array(ctx, n, sizeof *sub);
-                st->casing_road = rs__alloc_array(ctx, ncasing ? ncasing : 1, sizeof *st->casing_road);
-                if (!sub || !st->casing_road) {
-                    rs__free(ctx, sub);
-                    r = RS_ERR_NOMEM;
-                    goto fail_dash;
-                }
-            }
-            if ((r = rs_roads_create(ctx, &casing_roads)) != RS_OK) {
-                rs__free(ctx, sub);
-                goto fail_dash;
-            }
-            uint32_t m = 0;
-            for (size_t i = 0; i < n && !r; i++) {
-                const char *name = NULL;
-                const double *xy = NULL;
-                size_t np = 0;
-                double w = 0;
-                if (sub && (!(extra[i] > 0) || m == ncasing)) { /* (pass 1 counted them) */
-                    sub[i] = UINT32_MAX;
-                    continue;
-                }
-                if (sub) sub[i] = m, st->casing_road[m++] = (uint32_t)i;
-                rs_roads_get(roads, i, &name, &w, &xy, &np);
-                r = rs_roads_add(ctx, casing_roads, name, w + 2 * extra[i], xy, np);
-            }
-            if (!r) r = rs__roadfield_build(ctx, casing_roads, &fp, &st->casing);
-            if (!r) r = field_tees(ctx, roads, net, tees, st->casing, extra, casing_roads, sub);
-            rs__free(ctx, sub);
+            const int alone = o->coverage.edges == RS_EDGES_ALPHAMAP;
+            uint8_t *pick = rs__alloc_array(ctx, n, 1);
+            if (!pick) { r = RS_ERR_NOMEM; goto fail_dash; }
+            for (size_t i = 0; i < n; i++) pick[i] = !alone || extra[i] > 0;
+            r = subset_field(ctx, roads, net, tees, extra, pick, &fp, &st->casing, alone ? &st->casing_road : NULL);
+            rs__free(ctx, pick);
             if (r != RS_OK) goto fail_dash;
         }
         st->bytes += rs__roadfield_bytes(st->casing);
@@ -586,7 +562,6 @@ rs_result rs__styling_build(rs_ctx *ctx, const rs_dem *dem, const rs_roads *road
     st->bytes += (n + 1) * sizeof *band_start + nbands * (sizeof *bands + RS_STYLE_MAX_DASH * sizeof *dash) +
                  (extra ? n * sizeof *extra : 0) + st->ncuts * sizeof *st->cuts;
     rs__free(ctx, sty);
-    rs_roads_free(ctx, casing_roads);
     *out = st;
     rs__ok(ctx);
     return RS_OK;
@@ -599,7 +574,6 @@ fail_msg:
     rs__free(ctx, bands);
     rs__free(ctx, band_start);
     rs__free(ctx, sty);
-    rs_roads_free(ctx, casing_roads);
     rs__styling_free(ctx, st);
     return r;
 }
