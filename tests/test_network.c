@@ -896,6 +896,36 @@ static void test_end_inside_surface(void)
         rs_network_free(ctx, net);
         rs_roads_free(ctx, roads);
     }
+    /* an end as near two streets' centre lines: the lower record holds it,
+     * whichever way round the records run (the walk takes them by place:
+     * record 0 starts where record 1 ends) */
+    for (int flip = 0; flip < 2; flip++) {
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        const double a[4] = { 100, 8, 0, 8 }, ar[4] = { 0, 8, 100, 8 }, b[4] = { 0, 0, 100, 0 }, side[4] = { 130, 4, 50, 4 };
+        add_cls(roads, 12, "primary", flip ? ar : a, 2);
+        add_cls(roads, 12, "primary", b, 2);
+        add_cls(roads, 6, "residential", side, 2);
+        rs_network *net = NULL;
+        CHECK(rs_network_build(ctx, roads, NULL, &net) == RS_OK);
+        size_t held = 0;
+        for (size_t i = 0; net && i < rs_network_node_count(net); i++) {
+            rs_network_node nd;
+            rs_network_get_node(net, i, &nd);
+            if (nd.kind != RS_NODE_JUNCTION) continue;
+            for (size_t k = 0; k < nd.degree; k++) {
+                rs_network_leg L;
+                rs_network_get_leg(net, i, k, &L);
+                if (L.kind != RS_LEG_FORWARD && L.kind != RS_LEG_BACKWARD) continue;
+                CHECKF(L.road == 0, "an end between two streets (flip %d): held by record %u, not the lower", flip,
+                       (unsigned)L.road);
+                held++;
+            }
+        }
+        CHECKF(held == 2, "an end between two streets (flip %d): %zu through legs", flip, held);
+        rs_network_free(ctx, net);
+        rs_roads_free(ctx, roads);
+    }
     /* its own street: a road folding back into its own surface, whole
      * and split where it goes straight on */
     for (int split = 0; split < 2; split++) {

@@ -562,6 +562,7 @@ typedef struct build {
     uint32_t *parent;  /* union-find over points */
     uint8_t *live;     /* per road: longer than twice the tolerance */
     road_look *look;   /* per road */
+    int8_t *level;     /* per road: rs__road_level (-100 .. 100), read once, not per candidate T */
     uint8_t *inhash;   /* per point: a live road's point that starts its run */
     uint32_t *nodeof;  /* per point: its group's node, or NONE (set for the roots, then for every
                           point from its root: the passes after read it once, not parent and
@@ -737,18 +738,25 @@ static rs_result find_tees(build *B)
             if (!(dd > 0) || !isfinite(dd)) continue;
             double ymin = rs__fmin(pa[1], pb[1]) - tol, ymax = rs__fmax(pa[1], pb[1]) + tol;
             int64_t r0 = cell_of(ymin, g), r1 = cell_of(ymax, g);
+            /* a box of at most 3 x 3 dense cells: all of it (most segments;
+             * clipping each row cost more than the ends it skips) */
+            int64_t bc0 = cell_of(rs__fmin(pa[0], pb[0]) - tol, g), bc1 = cell_of(rs__fmax(pa[0], pb[0]) + tol, g);
+            int whole = H.dense && r1 - r0 < 3 && bc1 - bc0 < 3 && (r1 - r0 + 1) * (bc1 - bc0 + 1) <= 9;
             for (int64_t cy = r0; cy <= r1 && !res; cy++) {
-                double y0 = rs__fmax((double)cy * g, ymin) - tol, y1 = rs__fmin((double)(cy + 1) * g, ymax) + tol;
-                double t0 = 0, t1 = 1;
-                if (dy != 0) {
-                    t0 = (y0 - pa[1]) / dy;
-                    t1 = (y1 - pa[1]) / dy;
-                    if (t0 > t1) { double q = t0; t0 = t1; t1 = q; }
-                    t0 = rs__fmax(t0, 0), t1 = rs__fmin(t1, 1);
-                    if (t0 > t1) continue;
+                int64_t c0 = bc0, c1 = bc1;
+                if (!whole) {
+                    double y0 = rs__fmax((double)cy * g, ymin) - tol, y1 = rs__fmin((double)(cy + 1) * g, ymax) + tol;
+                    double t0 = 0, t1 = 1;
+                    if (dy != 0) {
+                        t0 = (y0 - pa[1]) / dy;
+                        t1 = (y1 - pa[1]) / dy;
+                        if (t0 > t1) { double q = t0; t0 = t1; t1 = q; }
+                        t0 = rs__fmax(t0, 0), t1 = rs__fmin(t1, 1);
+                        if (t0 > t1) continue;
+                    }
+                    double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
+                    c0 = cell_of(rs__fmin(xa, xb) - tol, g), c1 = cell_of(rs__fmax(xa, xb) + tol, g);
                 }
-                double xa = pa[0] + t0 * dx, xb = pa[0] + t1 * dx;
-                int64_t c0 = cell_of(rs__fmin(xa, xb) - tol, g), c1 = cell_of(rs__fmax(xa, xb) + tol, g);
                 uint64_t kx0, kx1, ky, ky1;
                 if (!key_range(&H, 1, cy, cy, &ky, &ky1) || !key_range(&H, 0, c0, c1, &kx0, &kx1)) continue;
                 for (uint64_t kx = kx0; kx <= kx1 && !res; kx++) {
@@ -782,7 +790,7 @@ static rs_result find_tees(build *B)
                             continue;
                         /* (an end on a road of another level, a bridge's
                          * line over it: they do not meet) */
-                        if (rs__road_level(B->roads, r) != rs__road_level(B->roads, B->vroad[e])) continue;
+                        if (B->level[r] != B->level[B->vroad[e]]) continue;
                         pass p = { (uint32_t)r, a, (uint32_t)k1, (uint32_t)(k - B->voff[r]), nd, 0, 0, s, dist };
                         if ((res = push_pass(B, &p)) != RS_OK) break;
                     }
@@ -1399,7 +1407,8 @@ static void surf_test(const rs_roads *roads, const rs_network *N, surf_end *fe, 
     double ex = xy[0] - (pa[0] + u * dx), ey = xy[1] - (pa[1] + u * dy), d2 = ex * ex + ey * ey;
     if (!(d2 <= reach2)) return;
     surf_end *f = &fe[*id];
-    if (!(d2 < f->d)) return; /* (the first of equals: the lowest record and segment) */
+    /* (of equals the lowest record and segment, whatever the walk's order) */
+    if (!(d2 < f->d || (d2 == f->d && (q < f->q || (q == f->q && k < f->k))))) return;
     if (f->stroke == sq) return;
     /* (a street ending under a bridge is not at a T with it) */
     if (*q_level == INT_MIN) *q_level = rs__road_level(roads, q);
@@ -1500,10 +1509,17 @@ static rs_result surface_tees(build *B, rs_network *N)
         surf_end *f = &fe[m++];
         f->node = (uint32_t)nd, f->road = L->road, f->stroke = N->stroke_of[L->road];
         f->non_car = rs__road_non_car(B->roads, L->road);
-        f->level = INT_MIN; /* (read when a street is near: surf_test) */
+        f->level = B->level[L->road];
         f->x = p[0], f->y = p[1], f->q = f->k = NONE, f->u = 0, f->d = INFINITY;
         bx0 = fmin(bx0, p[0]), by0 = fmin(by0, p[1]), bx1 = fmax(bx1, p[0]), by1 = fmax(by1, p[1]);
     }
+    /* the records' reaches, read once (the mean below and the walk) */
+    double *reach = rs__alloc_array(ctx, B->nroads ? B->nroads : 1, sizeof *reach);
+    if (!reach) {
+        rs__free(ctx, fe);
+        return RS_ERR_NOMEM;
+    }
+    for (size_t q = 0; q < B->nroads; q++) reach[q] = surf_reach(B->roads, N, q, tol);
     /* the ends in a grid of about one a cell (at most 4 a cell more cells), counting sorted */
     size_t nx = 1, ny = 1;
     double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (4.0 * (double)(m ? m : 1)));
@@ -1517,7 +1533,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         double rsum = 0, cap = 16 * c;
         size_t rn = 0;
         for (size_t q = 0; q < B->nroads; q++) {
-            double rq = surf_reach(B->roads, N, q, tol);
+            double rq = reach[q];
             if (!(rq > 0)) continue;
             rsum += rq < cap ? rq : cap;
             rn++;
@@ -1548,9 +1564,9 @@ static rs_result surface_tees(build *B, rs_network *N)
             res = RS_ERR_CANCELLED;
             break;
         }
-        double rq = surf_reach(B->roads, N, q, tol);
+        double rq = reach[q];
         if (!(rq > 0)) continue;
-        int qnc = -1, qlv = INT_MIN; /* (not read yet) */
+        int qnc = -1, qlv = B->level[q]; /* (qnc: not read yet) */
         uint32_t sq = N->stroke_of[q];
         double reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
         size_t qnp = B->voff[q + 1] - B->voff[q], nseg = qnp - 1;
@@ -1567,7 +1583,9 @@ static rs_result surface_tees(build *B, rs_network *N)
             size_t b0 = surf_cell(xmin, bx0, ic, nx), b1 = surf_cell(xmax, bx0, ic, nx);
             double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
             if (!(dd > 0) || !(dd <= DBL_MAX)) continue;
-            if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 4) { /* (a box of at most 2 x 2 cells: all of it) */
+            /* a box of at most 3 x 3 cells: all of it (most segments at 10^5
+             * city roads; clipping each row cost more than the ends it skips) */
+            if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 9) {
                 for (size_t cy = r0; cy <= r1; cy++)
                     for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)
                         if (surf_line_near(cxy + 2 * i, pa, dx, dy, dd, reach2))
@@ -1596,38 +1614,45 @@ static rs_result surface_tees(build *B, rs_network *N)
     }
     size_t add = 0;
     for (size_t i = 0; i < m; i++) add += fe[i].q != NONE;
-    rs_network_leg *leg = NULL;
-    if (!res && add && !(leg = rs__alloc_array(ctx, N->nlegs + 2 * add, sizeof *leg))) res = RS_ERR_NOMEM;
+    /* the nodes' legs moved up in place, from the last node down, the two
+     * through legs added at theirs (fe is in node order): a second leg
+     * array was megabytes of fresh pages at 10^5 roads */
     if (!res && add) {
-        /* the nodes' legs again, the two through legs added at theirs (fe is in node order) */
-        size_t nl = 0, j = 0;
-        for (size_t nd = 0; nd < N->nnodes; nd++) {
+        size_t bytes;
+        rs_network_leg *leg = NULL;
+        if (!rs__mul_size(N->nlegs + 2 * add, sizeof *leg, &bytes) || !(leg = rs__realloc(ctx, N->leg, bytes)))
+            res = RS_ERR_NOMEM;
+        else
+            N->leg = leg;
+        size_t nl = N->nlegs + 2 * add, j = m;
+        uint32_t b = (uint32_t)N->nlegs; /* (the old end of node nd's legs) */
+        if (!res) N->leg_start[N->nnodes] = (uint32_t)nl;
+        for (size_t nd = N->nnodes; nd-- > 0 && !res;) {
             if ((nd & 4095) == 0 && rs__poll(ctx)) { /* (the network is dropped: leg_start half made is no matter) */
-                rs__free(ctx, leg);
                 res = RS_ERR_CANCELLED;
                 break;
             }
-            uint32_t a = N->leg_start[nd], b = N->leg_start[nd + 1];
+            uint32_t a = N->leg_start[nd];
+            while (j > 0 && fe[j - 1].node > nd) j--;
+            const surf_end *f = j > 0 && fe[j - 1].node == nd && fe[j - 1].q != NONE ? &fe[j - 1] : NULL;
+            if (f) {
+                nl -= 2;
+                size_t pa = B->voff[f->q] + f->k;
+                surf_legs(B->roads, f, B->xy + 2 * B->voff[f->q], B->voff[f->q + 1] - B->voff[f->q], B->s[pa],
+                          B->s[pa + 1], leg + nl);
+            }
+            nl -= b - a;
+            if (nl != a) memmove(leg + nl, leg + a, (b - a) * sizeof *leg);
             N->leg_start[nd] = (uint32_t)nl;
-            memcpy(leg + nl, N->leg + a, (b - a) * sizeof *leg);
-            nl += b - a;
-            while (j < m && fe[j].node < nd) j++;
-            if (j == m || fe[j].node != nd || fe[j].q == NONE) continue;
-            const surf_end *f = &fe[j];
-            size_t pa = B->voff[f->q] + f->k;
-            surf_legs(B->roads, f, B->xy + 2 * B->voff[f->q], B->voff[f->q + 1] - B->voff[f->q], B->s[pa], B->s[pa + 1],
-                      leg + nl);
-            nl += 2;
-            surf_node(B->roads, f->q, &N->node[nd], leg + N->leg_start[nd], (uint32_t)(nl - N->leg_start[nd]));
-            N->node_surf[nd] = 1;
+            if (f) {
+                surf_node(B->roads, f->q, &N->node[nd], leg + nl, (uint32_t)(b - a + 2));
+                N->node_surf[nd] = 1;
+            }
+            b = a;
         }
-        if (!res) {
-            N->leg_start[N->nnodes] = (uint32_t)nl;
-            rs__free(ctx, N->leg);
-            N->leg = leg;
-            N->nlegs = nl;
-        }
+        if (!res) N->nlegs += 2 * add;
     }
+    rs__free(ctx, reach);
     rs__free(ctx, start);
     rs__free(ctx, ids);
     rs__free(ctx, cxy);
@@ -1646,6 +1671,7 @@ static void build_free(build *B)
     rs__free(ctx, B->parent);
     rs__free(ctx, B->live);
     rs__free(ctx, B->look);
+    rs__free(ctx, B->level);
     rs__free(ctx, B->inhash);
     rs__free(ctx, B->nodeof);
     rs__free(ctx, B->ps);
@@ -1884,12 +1910,14 @@ static rs_result load_points(build *B)
     B->voff = rs__alloc_array(B->ctx, n + 1, sizeof *B->voff);
     B->live = rs__calloc(B->ctx, n ? n : 1, 1);
     B->look = rs__alloc_array(B->ctx, n ? n : 1, sizeof *B->look);
-    if (!B->voff || !B->live || !B->look) return RS_ERR_NOMEM;
+    B->level = rs__alloc_array(B->ctx, n ? n : 1, sizeof *B->level);
+    if (!B->voff || !B->live || !B->look || !B->level) return RS_ERR_NOMEM;
     for (size_t r = 0; r < n; r++) {
         if (rs__tick(B->ctx, 0)) return RS_ERR_CANCELLED; /* (10^5 roads' looks: ~20 ms) */
         size_t np = 0;
         rs_roads_get(B->roads, r, NULL, NULL, NULL, &np);
         look_of(B->roads, r, &B->look[r]);
+        B->level[r] = (int8_t)rs__road_level(B->roads, r);
         B->voff[r] = nv;
         nv += np;
     }
