@@ -243,6 +243,9 @@ static const char *const rsh_fs_src[] = {
     "    if (c > U) N = n;\n"
     "    U = U > 0.0 ? v : c;\n"
     "}\n"
+    /* a road's level from its fill rank (.z of its row 7): the rank's
+     * multiple of 64, 0 for the ranks all alike at -1e9 (bridges, layer=) */
+    "float rank_level(float rk) { return rk < -1e8 ? 0.0 : floor(rk / 64.0); }\n"
     /* a factor of the junction cut: zero-ish ones are counted, not multiplied */
     "void cut_add(float f, inout float prod, inout int zeros, float sgn) {\n"
     "    if (f < 1e-6) zeros += int(sgn); else prod = sgn > 0.0 ? prod * f : prod / f;\n"
@@ -272,7 +275,7 @@ static const char *const rsh_fs_src[] = {
     /* roads on other levels (bridges, layer=; the level is the fill
      * priority's multiple of 64, all alike at -1e9): a lower one cuts none
      * of this road's lines, a higher one all of them */
-    "    float lv = r7.z > -1e8 ? floor(r7.z / 64.0) : 0.0;\n"
+    "    float lv = rank_level(r7.z);\n"
     "    {\n"
     "        int lr = -1; float st = texelFetch(u_roadt, 10 * road + 6).x;\n"
     "        for (int e = e0; e < e1; e++) {\n"
@@ -281,7 +284,7 @@ static const char *const rsh_fs_src[] = {
     "            lr = b;\n"
     "            if (float(b) == r1.y || float(b) == r1.z) continue;\n"
     "            vec4 b7 = texelFetch(u_roadt, 10 * b + 7);\n"
-    "            float lb = b7.z > -1e8 ? floor(b7.z / 64.0) : 0.0;\n"
+    "            float lb = rank_level(b7.z);\n"
     "            if (lb < lv) { cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0); continue; }\n"
     "            if (lb > lv || !car) continue;\n"
     "            if (!(b7.w > 0.0)) { cut_add(road_free(p, b, e0, e1), prod, zeros, -1.0); continue; }\n"
@@ -445,7 +448,7 @@ static const char *const rsh_fs_src[] = {
     "                    cut_add(1.0 - c, prod, zeros, 1.0);\n"
     "                    union_add(UR, NR, c, cn);\n"
     "                    union_add(UC, NC, cdf(-ccd, ccn), ccn);\n"
-    "                    float rk = texelFetch(u_roadt, 10 * cr + 7).z, rl = rk < -1e8 ? 0.0 : floor(rk / 64.0);\n"
+    "                    float rl = rank_level(texelFetch(u_roadt, 10 * cr + 7).z);\n"
     "                    if (c > 0.0) lvlo = min(lvlo, rl);\n"
     "                    if (ccw > 0.0 && rl > lvc && cdf(-ccd, ccn) > 0.0) { lvc = rl; stc = texelFetch(u_roadt, 10 * cr + 6).x; }\n"
     "                }\n"
@@ -464,7 +467,7 @@ static const char *const rsh_fs_src[] = {
     "            if (sd <= near_reach) {\n"
     "                float kp = sd <= 0.0 ? texelFetch(u_roadt, 10 * s.road + 7).z : -2e9;\n"
     "                if (sd <= 0.0) {\n"
-    "                    float lv = kp < -1e8 ? 0.0 : floor(kp / 64.0), sq = texelFetch(u_roadt, 10 * s.road + 6).x;\n"
+    "                    float lv = rank_level(kp), sq = texelFetch(u_roadt, 10 * s.road + 6).x;\n"
     "                    if (sq == st1) lv1 = max(lv1, lv);\n"
     "                    else if (lv > lv1) { lv2 = lv1; lv1 = lv; st1 = sq; }\n"
     "                    else lv2 = max(lv2, lv);\n"
@@ -521,7 +524,7 @@ static const char *const rsh_fs_src[] = {
     "            for (int e = m0; e < m1; e++) {\n"
     "                int mi = int(texelFetch(u_mids, e).r);\n"
     "                vec4 M0 = texelFetch(u_mark, 3 * mi), M1 = texelFetch(u_mark, 3 * mi + 1), M2 = texelFetch(u_mark, 3 * mi + 2);\n",
-    "                float mrk = texelFetch(u_roadt, 10 * int(M0.x) + 7).z, mlv = mrk < -1e8 ? 0.0 : floor(mrk / 64.0);\n"
+    "                float mlv = rank_level(texelFetch(u_roadt, 10 * int(M0.x) + 7).z);\n"
     "                float mst = texelFetch(u_roadt, 10 * int(M0.x) + 6).x;\n"
     "                if ((st1 != mst && lv1 > mlv) || lv2 > mlv) continue;\n"
     "                int mk = M2.y >= 0.0 ? stroke_nearest(p, M2.y, e0, e1) : road_nearest(p, int(M0.x), e0, e1);\n"
@@ -554,7 +557,7 @@ static const char *const rsh_fs_src[] = {
     "                if (e < e1 && (s.flags & 7) != 0) sdc = tee_trim(s, p, u, side, s.cw, nc, d - s.r - s.cw);\n"
     "                if (s.road != dr) {\n"
     "                    if (dr >= 0) {\n"
-    "                        float rk = texelFetch(u_roadt, 10 * dr + 7).z, rl = rk < -1e8 ? 0.0 : floor(rk / 64.0);\n"
+    "                        float rl = rank_level(texelFetch(u_roadt, 10 * dr + 7).z);\n"
     "                        if (dw > 0.0 && rl == lvc) union_add(UD, ND, cdf(-dcd, dcn), dcn);\n"
     "                        if (rl >= lvc || texelFetch(u_roadt, 10 * dr + 6).x == stc) union_add(UH, NH, cdf(-dsd, dn), dn);\n"
     "                    }\n"
@@ -565,8 +568,7 @@ static const char *const rsh_fs_src[] = {
     "                }\n"
     "                if (e == e1) break;\n"
     "                if (s.cw > 0.0 && sdc <= near_reach && d < dX) {\n"
-    "                    float rk = texelFetch(u_roadt, 10 * s.road + 7).z;\n"
-    "                    if ((rk < -1e8 ? 0.0 : floor(rk / 64.0)) == lvc) { dX = d; roadX = s.road; }\n"
+    "                    if (rank_level(texelFetch(u_roadt, 10 * s.road + 7).z) == lvc) { dX = d; roadX = s.road; }\n"
     "                }\n"
     "            }\n"
     "            float H = min(UH, 1.0), over = min(min(UD, 1.0) - H, R - H);\n"

@@ -1566,7 +1566,6 @@ rs_result rs__roadfield_repixel(rs_ctx *ctx, const rs__roadfield *src, double pi
 
 size_t rs__roadfield_bytes(const rs__roadfield *f) { return f ? f->bytes : 0; }
 
-
 double rs__roadfield_cell(const rs__roadfield *f) { return f ? f->c : 0; }
 
 double rs__roadfield_pixel(const rs__roadfield *f) { return f ? f->pixel : 0; }

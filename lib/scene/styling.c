@@ -231,16 +231,11 @@ static rs_result decks_build(rs_ctx *ctx, const rs_roads *roads, const rs__roadf
      * deck's casing */
     if (!r && !field && !(box = rs__alloc_array(ctx, n, 4 * sizeof *box))) r = RS_ERR_NOMEM;
     for (size_t i = 0; i < n && !r && !field; i++) {
-        const double *xy = NULL;
-        size_t np = 0;
+        uint64_t print;
         double w = 0, *b = box + 4 * i;
-        rs_roads_get(roads, i, NULL, &w, &xy, &np);
-        b[0] = b[2] = INFINITY, b[1] = b[3] = -INFINITY;
-        for (size_t k = 0; k < np; k++) {
-            b[0] = fmin(b[0], xy[2 * k]), b[1] = fmax(b[1], xy[2 * k]);
-            b[2] = fmin(b[2], xy[2 * k + 1]), b[3] = fmax(b[3], xy[2 * k + 1]);
-        }
-        b[0] -= 0.5 * w, b[1] += 0.5 * w, b[2] -= 0.5 * w, b[3] += 0.5 * w;
+        const double *pb; /* (the road set's box of its points: x0, y0, x1, y1) */
+        rs__roads_road_print(roads, i, &print, &w, &pb);
+        b[0] = pb[0] - 0.5 * w, b[1] = pb[2] + 0.5 * w, b[2] = pb[1] - 0.5 * w, b[3] = pb[3] + 0.5 * w;
         widest = fmax(widest, w), widest_casing = fmax(widest_casing, extra[i]);
     }
     /* a road below matters where a pixel in a casing band has it within
