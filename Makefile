@@ -59,8 +59,10 @@ DEFLATE_LIBS   = $(or $(shell $(PKG_CONFIG) --libs libdeflate 2>/dev/null),-ldef
                  $(or $(shell $(PKG_CONFIG) --libs zlib 2>/dev/null),-lz)
 # SHA-256 of the tiles and the manifest (cli/sha256.c): Nettle.
 NETTLE_LIBS    = $(or $(shell $(PKG_CONFIG) --libs nettle 2>/dev/null),-lnettle)
-# The default PNG level 1 by ISA-L's igzip (libisal-dev), 2.5x faster than
-# libdeflate's level 1 here: auto-detected, or forced with WITH_ISAL=1/0.
+# The default PNG level 1 by ISA-L's igzip (libisal-dev; its level 0, whose
+# bytes are the same in every process: docs/packaging.md "Deterministic bytes"),
+# 2.5x faster than libdeflate's level 1 here: auto-detected, or forced with
+# WITH_ISAL=1/0.
 WITH_ISAL ?= $(shell [ -f /usr/include/isa-l/igzip_lib.h ] && echo 1 || echo 0)
 ifeq ($(WITH_ISAL),1)
 DEFLATE_CFLAGS += -DRS_WITH_ISAL
@@ -325,6 +327,11 @@ $(BUILD)/tests/test_png: tests/png/test_png.cpp $(TEST_PNG_OBJ) $(STATIC_LIB)
 	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) $(DEFLATE_CFLAGS) -o $@ $< $(TEST_PNG_OBJ) $(LDFLAGS) $(STATIC_LIB) $(OIIO_LIBS) -lpng \
 	  $(DEFLATE_LIBS) $(LDLIBS_CORE)
 
+# The PNG writer's bytes in one process (tests/cli_png_test.sh runs it many times).
+$(BUILD)/tools/png_repeat: tests/tools/png_repeat.c $(BUILD)/cli/png.o
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Icli $(LDFLAGS) -o $@ $^ $(DEFLATE_LIBS) $(LDLIBS_CORE) -lpthread
+
 # Helper programs of the tests and benchmarks (not run by themselves).
 $(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
@@ -345,7 +352,7 @@ $(BUILD)/tools/splat_dump_portable: tests/tools/splat_dump.c $(TESTLIB_OBJ) \
 
 # (the benchmarks are built too, not run: one that no longer compiles fails here, not at `make bench`)
 test: deps
-	@$(MAKE) --no-print-directory $(JOBS_FLAG) all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/atlasgen $(BUILD)/tools/grid_compare \
+	@$(MAKE) --no-print-directory $(JOBS_FLAG) all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/tools/png_repeat $(BUILD)/atlasgen $(BUILD)/tools/grid_compare \
 	  $(BUILD)/tools/splat_dump $(BUILD)/tools/splat_dump_portable $(BENCH_BIN)
 	@BUILD=$(BUILD) SAN="$(SAN)" OPT="$(OPT)" sh tests/run.sh
 

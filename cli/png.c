@@ -272,7 +272,9 @@ struct cli_png_coder {
     uint32_t row16_of[2]; /* which rows they hold */
     uint8_t *walk;       /* inflate's output in walk_blocks */
     uint64_t joins[4];   /* pieces joined as stored, by end-of-block code, by inflate; ISA-L bands */
-    uint8_t *isal_buf;   /* ISA-L's level 1 hash table and token buffer */
+#ifdef RS_WITH_ISAL
+    struct isal_zstream *isal; /* ISA-L's stream: its state, window and hash table */
+#endif
 };
 
 #define WALK_SCRATCH ((size_t)64 << 10)
@@ -384,7 +386,7 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
     c->piece = (l->level <= 1 || l->isal) && PIECE_FAST < filtered ? PIECE_FAST : filtered;
     if (c->piece > PIECE_MAX) c->piece = PIECE_MAX;
 #ifdef RS_WITH_ISAL
-    if (l->isal && !(c->isal_buf = malloc(ISAL_DEF_LVL1_DEFAULT))) {
+    if (l->isal && !(c->isal = malloc(sizeof *c->isal))) {
         cli_png_coder_free(c);
         return NULL;
     }
@@ -398,8 +400,11 @@ cli_png_coder *cli_png_coder_new(const cli_png_layout *l)
     }
     int ok = c->filt && (l->bits == 8 || (c->rows16[0] && c->rows16[1]));
     if (c->l.isal) {
-        /* ISA-L's stream over the whole band, at worst stored blocks; and the zlib header */
-        c->out_cap = filtered + filtered / 8 + 4096;
+        /* ISA-L's level-0 stream over the whole band: its fixed code has
+         * literals of up to 15 bits and matches of up to 48 bits for 3
+         * bytes, so at most 2 bytes a byte (noise: about 1.23), and block
+         * headers; the zlib header */
+        c->out_cap = 2 * filtered + 65536;
     } else if ((c->c = libdeflate_alloc_compressor(l->level)) && (c->walk = malloc(WALK_SCRATCH))) {
         /* every piece of a band at its bound, its ending, the zlib header */
         size_t np = pieces_of(filtered, c->piece), each = (filtered + np - 1) / np;
@@ -429,7 +434,9 @@ void cli_png_coder_free(cli_png_coder *c)
     free(c->walk);
     free(c->rows16[0]);
     free(c->rows16[1]);
-    free(c->isal_buf);
+#ifdef RS_WITH_ISAL
+    free(c->isal);
+#endif
     free(c);
 }
 
@@ -452,28 +459,46 @@ int cli_png_coder_band(cli_png_coder *c, uint32_t band, const void *rows_in, siz
     uint32_t adler = 1;
 #ifdef RS_WITH_ISAL
     if (l->isal) { /* one ISA-L stream over the band's pieces, ended by a full flush */
-        struct isal_zstream z;
-        isal_deflate_init(&z);
-        z.level = 1;
-        z.level_buf = c->isal_buf;
-        z.level_buf_size = ISAL_DEF_LVL1_DEFAULT;
-        z.gzip_flag = IGZIP_DEFLATE;
-        z.next_out = c->out + n;
-        z.avail_out = (uint32_t)(c->out_cap - n);
+        /* ISA-L's level 0: its level 1 chose between equal matches
+         * differently in about one process in a thousand on the same
+         * bytes (docs/packaging.md "Deterministic bytes"); level 0 never
+         * did. The state is zeroed first so that nothing of an earlier
+         * band can reach this one. */
+        struct isal_zstream *zs = c->isal;
+        memset(zs, 0, sizeof *zs);
+        isal_deflate_init(zs);
+        zs->level = 0;
+        zs->gzip_flag = IGZIP_DEFLATE;
+        zs->next_out = c->out + n;
+        zs->avail_out = (uint32_t)(c->out_cap - n);
         for (size_t off = 0; off < filtered; off += each) {
             size_t m = filtered - off < each ? filtered - off : each;
             const int last = off + m == filtered;
             filter_range(c, rows, stride, off, m, c->filt);
             adler = libdeflate_adler32(adler, c->filt, m);
-            z.next_in = c->filt;
-            z.avail_in = (uint32_t)m;
-            z.flush = last ? FULL_FLUSH : NO_FLUSH;
-            z.end_of_stream = (uint16_t)(last && last_band);
-            if (isal_deflate(&z) != COMP_OK || z.avail_in || !z.avail_out) return 1;
+            zs->next_in = c->filt;
+            zs->avail_in = (uint32_t)m;
+            zs->flush = last ? FULL_FLUSH : NO_FLUSH;
+            zs->end_of_stream = (uint16_t)(last && last_band);
+            if (isal_deflate(zs) != COMP_OK || zs->avail_in || !zs->avail_out) return 1;
         }
         /* every byte out: at a new block (full flush) or at the stream's end */
-        if (z.internal_state.state != (last_band ? ZSTATE_END : ZSTATE_NEW_HDR)) return 1;
-        n += z.total_out;
+        if (zs->internal_state.state != (last_band ? ZSTATE_END : ZSTATE_NEW_HDR)) return 1;
+        const size_t stored = filtered + 5 * ((filtered + 65534) / 65535);
+        if (zs->total_out <= stored) {
+            n += zs->total_out;
+        } else { /* a band that does not compress (noise): stored blocks, smaller than the fixed code's */
+            for (size_t off = 0; off < filtered;) {
+                size_t m = filtered - off < 65535 ? filtered - off : 65535;
+                uint8_t *h = c->out + n;
+                h[0] = (uint8_t)(last_band && off + m == filtered); /* BFINAL, BTYPE 00; the band starts on a byte */
+                h[1] = (uint8_t)(m & 0xFF), h[2] = (uint8_t)(m >> 8);
+                h[3] = (uint8_t)(~m & 0xFF), h[4] = (uint8_t)((~m >> 8) & 0xFF);
+                filter_range(c, rows, stride, off, m, h + 5);
+                n += 5 + m;
+                off += m;
+            }
+        }
         c->joins[3]++;
         goto done;
     }

@@ -22,7 +22,7 @@ typedef struct cli_png_layout {
     int channels, bits, level; /* level: 0..CLI_PNG_LEVEL_MAX */
     size_t row_bytes;          /* unfiltered bytes per row */
     uint32_t band_rows, nbands;
-    int isal; /* level 1 by ISA-L's igzip (builds with RS_WITH_ISAL), else libdeflate */
+    int isal; /* level 1 by ISA-L's igzip at its level 0 (builds with RS_WITH_ISAL), else libdeflate */
 } cli_png_layout;
 
 /* 0, or 1 after a message naming `shown` (a layout PNG cannot hold, a bad

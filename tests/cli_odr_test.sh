@@ -34,6 +34,21 @@ R="--cell-size 2 --origin 0,100 --texels 20 --z-scale 0.01"
     bad "render junction.xodr: not the same bytes with --threads 1"
 "$BIN" --quiet $R "$T/dem.pgm" "$T/junction.txt" "$T/c.png" && cmp -s "$T/a.png" "$T/c.png" && ok ||
     bad "render of junction.xodr differs from its converted road text"
+# the same pixels give the same PNG bytes in every process (docs/packaging.md
+# "Deterministic bytes"): with ISA-L's level 1 this render's default PNG
+# differed in about one process in a thousand (the check above failed once
+# in session 45's make test); 1000 processes of png_repeat found that in
+# about six runs of this test in ten
+PR="$B/tools/png_repeat"
+if [ -x "$PR" ]; then
+    "$BIN" --quiet $R --png-level 0 "$T/dem.pgm" "$T/junction.txt" "$T/j0.png" && ok || bad "render junction.txt at level 0"
+    seq 1 1000 | xargs -P 2 -I{} "$PR" "$T/j0.png" >"$T/rep.txt" 2>&1
+    nh=$(sort -u "$T/rep.txt" | wc -l)
+    [ "$(wc -l <"$T/rep.txt")" -eq 1000 ] && [ "$nh" -eq 1 ] && ok ||
+        bad "the PNG writer's bytes differ between processes ($nh kinds in 1000): $(sort "$T/rep.txt" | uniq -c | head -3)"
+else
+    bad "$PR not built (make test builds it)"
+fi
 # the world frame: without --origin the message says what to give
 "$BIN" --quiet --cell-size 2 "$T/dem.pgm" "$D/junction.xodr" "$T/x.png" 2>"$T/e" && bad "no --origin accepted" ||
     { grep -q "origin" "$T/e" && ok || bad "no --origin: $(cat "$T/e")"; }
