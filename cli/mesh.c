@@ -18,7 +18,7 @@
 static const char *mesh_usage =
     "usage: roadsplat mesh [--cell-size M] [--z-scale S] [--max-error E | --triangles N]\n"
     "                      [--pool N] [--normals] [--skirt DEPTH] [--stats FILE.json]\n"
-    "                      [--texture IMG] [--gdal-trust]\n"
+    "                      [--texture IMG] [--gdal-trust] [--quiet]\n"
     "                      DEM OUT.obj|OUT.ply|OUT.glb\n"
     "  --max-error E   max vertical error in metres over every DEM sample (default 1)\n"
     "  --triangles N   finest mesh with at most N triangles (instead of --max-error)\n"
@@ -27,6 +27,7 @@ static const char *mesh_usage =
     "                  OUT.glb: embed IMG (PNG or JPEG) as the base colour texture\n"
     "OUT.glb is binary glTF 2.0 with normals, texture coordinates and the vertex\n"
     "order optimised by meshoptimizer (docs/gltf.md).\n"
+    "  --quiet         no progress bar (on a terminal, for a refinement over a second)\n"
     "  --gdal-trust    open the DEM with every GDAL driver and network access (a VRT\n"
     "                  naming any file, URLs); default: local files, an allow-list\n"
     "                  of formats (docs/ROBUSTNESS.md)\n"
@@ -112,12 +113,20 @@ static void put_u32(unsigned char *b, uint32_t u)
     b[0] = (unsigned char)u; b[1] = (unsigned char)(u >> 8); b[2] = (unsigned char)(u >> 16); b[3] = (unsigned char)(u >> 24);
 }
 
+/* The bar every 65536 lines or records of the file (a fine OBJ is
+ * hundreds of MB of text: most of a mesh run). */
+static void wrote(cli_progress *prog, size_t k, size_t base, size_t total)
+{
+    if ((k & 0xFFFF) == 0) cli_progress_cb(prog, base + k, total);
+}
+
 /* `world`: comment lines on the world frame (or ""); mtl: the .mtl's file
- * name for OBJ (or NULL). */
+ * name for OBJ (or NULL); prog: the write's progress bar. */
 static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *v, const uint32_t *smp,
                       const float *n, size_t nv, const uint32_t *idx, size_t ni, size_t ntop, const char *world,
-                      const char *mtl)
+                      const char *mtl, cli_progress *prog)
 {
+    const size_t nt = ni / 3, total = ply ? nv + nt : (n ? 3 : 2) * nv + nt;
     if (!ply) {
         fprintf(f, "# roadsplat mesh: y up, v = (column*cs, height, row*cs) metres\n%s", world);
         if (mtl) fprintf(f, "mtllib %s\nusemtl roadsplat\n", mtl);
@@ -125,12 +134,19 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
             const float *p = v + 5 * k;
             double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
             fprintf(f, "v %.9g %.10g %.9g\n", (double)p[0], h, (double)p[1]);
+            wrote(prog, k, 0, total);
         }
-        for (size_t k = 0; k < nv; k++) fprintf(f, "vt %.9g %.9g\n", (double)v[5 * k + 3], 1.0 - (double)v[5 * k + 4]);
+        for (size_t k = 0; k < nv; k++) {
+            fprintf(f, "vt %.9g %.9g\n", (double)v[5 * k + 3], 1.0 - (double)v[5 * k + 4]);
+            wrote(prog, k, nv, total);
+        }
         if (n)
-            for (size_t k = 0; k < nv; k++)
+            for (size_t k = 0; k < nv; k++) {
                 fprintf(f, "vn %.7g %.7g %.7g\n", (double)n[3 * k], (double)n[3 * k + 2], (double)n[3 * k + 1]);
+                wrote(prog, k, 2 * nv, total);
+            }
         for (size_t t = 0; t < ni; t += 3) {
+            wrote(prog, t / 3, total - nt, total);
             unsigned long a = idx[t] + 1ul, b = idx[t + 1] + 1ul, c = idx[t + 2] + 1ul;
             if (n) fprintf(f, "f %lu/%lu/%lu %lu/%lu/%lu %lu/%lu/%lu\n", a, a, a, b, b, b, c, c, c);
             else fprintf(f, "f %lu/%lu %lu/%lu %lu/%lu\n", a, a, b, b, c, c);
@@ -157,8 +173,10 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
             size_t len = 20;
             if (n) { put_f32(b + 20, n[3 * k]); put_f32(b + 24, n[3 * k + 2]); put_f32(b + 28, n[3 * k + 1]); len = 32; }
             if (fwrite(b, 1, len, f) != len) return -1;
+            wrote(prog, k, 0, total);
         }
         for (size_t t = 0; t < ni; t += 3) {
+            wrote(prog, t / 3, nv, total);
             b[0] = 3;
             put_u32(b + 1, idx[t]); put_u32(b + 5, idx[t + 1]); put_u32(b + 9, idx[t + 2]);
             if (fwrite(b, 1, 13, f) != 13) return -1;
@@ -264,7 +282,7 @@ int cli_mesh_main(int argc, char **argv)
     double t_start = cli_now_ms();
     double cs = 1.0, zs = 1.0, max_error = 1.0, skirt = 0.0;
     uint32_t tris = 0, pool = 0;
-    int have_err = 0, normals = 0;
+    int have_err = 0, normals = 0, quiet = 0;
     const char *stats_path = NULL, *in = NULL, *outp = NULL, *texture = NULL;
     int cs_given = 0;
     for (int a = 1; a < argc; a++) {
@@ -272,6 +290,7 @@ int cli_mesh_main(int argc, char **argv)
         int more = a + 1 < argc;
         if (!strcmp(s, "--help") || !strcmp(s, "-h")) { fputs(mesh_usage, stdout); return 0; }
         else if (!strcmp(s, "--normals")) normals = 1;
+        else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) quiet = 1;
         else if (!strcmp(s, "--gdal-trust")) cli_gdal_set_trust(1);
         else if (s[0] == '-' && s[1] == '-' && !more) { cli_error("%s needs a value", s); return 1; }
         else if (!strcmp(s, "--cell-size")) { if (cli_parse_double(s, argv[++a], &cs)) return 1; cs_given = 1; }
@@ -426,7 +445,12 @@ int cli_mesh_main(int argc, char **argv)
     rs_result r = rs_roam_create(ctx, dem, &o, &L);
     if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
     double t_refine = cli_now_ms();
+    cli_progress prog;
+    cli_progress_init(&prog, "mesh", quiet);
+    rs_ctx_set_progress(ctx, cli_progress_cb, &prog);
     r = tris ? rs_roam_refine_count(ctx, L, tris) : rs_roam_refine_error(ctx, L, max_error);
+    rs_ctx_set_progress(ctx, NULL, NULL);
+    cli_progress_done(&prog);
     if (r == RS_ERR_POOL_EXHAUSTED) fprintf(stderr, "roadsplat: warning: %s\n", rs_ctx_message(ctx));
     else if (r != RS_OK) { cli_error("%s: %s", in, rs_ctx_message(ctx)); goto done; }
     double t_extract = cli_now_ms();
@@ -464,9 +488,15 @@ int cli_mesh_main(int argc, char **argv)
     if (glb) {
         if (write_glb(out.f, outp, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, &geo, texture, &gs))
             goto done;
-    } else if (write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, world, mtl_name) != 0) {
-        cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
-        goto done;
+    } else {
+        cli_progress wprog;
+        cli_progress_init(&wprog, "write", quiet);
+        int bad = write_mesh(out.f, ply, rs_dem_samples(dem), zs, v, smp, nrm, nv, idx, ni, ntop, world, mtl_name, &wprog);
+        cli_progress_done(&wprog);
+        if (bad) {
+            cli_error("%s: write failed: %s", outp, strerror(errno ? errno : EIO));
+            goto done;
+        }
     }
     double write_ms = cli_now_ms() - t_mesh_end;
     if (stats_path) {
