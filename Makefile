@@ -327,7 +327,7 @@ $(BUILD)/tests/test_png: tests/png/test_png.cpp $(TEST_PNG_OBJ) $(STATIC_LIB)
 	$(CXX) $(ALL_CXXFLAGS) $(OIIO_CFLAGS) $(DEFLATE_CFLAGS) -o $@ $< $(TEST_PNG_OBJ) $(LDFLAGS) $(STATIC_LIB) $(OIIO_LIBS) -lpng \
 	  $(DEFLATE_LIBS) $(LDLIBS_CORE)
 
-# The PNG writer's bytes in one process (tests/cli_png_test.sh runs it many times).
+# The PNG writer's bytes in one process (tests/cli_odr_test.sh runs it in many).
 $(BUILD)/tools/png_repeat: tests/tools/png_repeat.c $(BUILD)/cli/png.o
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Icli $(LDFLAGS) -o $@ $^ $(DEFLATE_LIBS) $(LDLIBS_CORE) -lpthread

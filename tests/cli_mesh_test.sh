@@ -36,10 +36,11 @@ check "triangle budget respected" sh -c "'$BIN' mesh --triangles 40 --stats '$T/
 check "tiny pool still writes a complete mesh" sh -c "'$BIN' mesh --pool 3 --max-error 0 --stats '$T/p.json' '$T/dem.pgm' '$T/p.obj' 2>'$T/p.err' && grep -q '\"exhausted\": true' '$T/p.json' && grep -q warning '$T/p.err'"
 check "skirt adds faces" sh -c "'$BIN' mesh --max-error 1 --cell-size 2 --z-scale 0.5 --skirt 10 '$T/dem.pgm' '$T/k.obj' && test \$(grep -c '^f ' '$T/k.obj') -gt $tris"
 
-# errors: exit 1, one message, nothing written
 # --quiet / -q as in the other commands (the bar itself needs a terminal):
 # the same bytes, nothing on stderr
 check "--quiet and -q accepted, same bytes, silent" sh -c "'$BIN' mesh --quiet --max-error 1 '$T/dem.pgm' '$T/q.obj' 2>'$T/q.err' && '$BIN' mesh -q --max-error 1 '$T/dem.pgm' '$T/q2.obj' 2>>'$T/q.err' && '$BIN' mesh --max-error 1 '$T/dem.pgm' '$T/q3.obj' && cmp -s '$T/q.obj' '$T/q3.obj' && cmp -s '$T/q2.obj' '$T/q3.obj' && test ! -s '$T/q.err'"
+
+# errors: exit 1, one message, nothing written
 check "bad number rejected" sh -c "! '$BIN' mesh --max-error abc '$T/dem.pgm' '$T/e.obj' 2>/dev/null && test ! -e '$T/e.obj'"
 check "exclusive options rejected" sh -c "! '$BIN' mesh --max-error 1 --triangles 5 '$T/dem.pgm' '$T/e.obj' 2>/dev/null && test ! -e '$T/e.obj'"
 check "triangles 0 rejected, not read as unset" sh -c "! '$BIN' mesh --triangles 0 '$T/dem.pgm' '$T/e.obj' 2>'$T/e.err' && grep -q \"^roadsplat: --triangles: '0' must be >= 1\$\" '$T/e.err' && test ! -e '$T/e.obj'"

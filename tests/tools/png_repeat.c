@@ -5,7 +5,7 @@
  * 64-bit FNV-1a hash of the bytes is printed. The same pixels must give the
  * same bytes in every process: ISA-L's level 1 did not, about once in a
  * thousand processes, depending on where the process was loaded, which no
- * single process shows. tests/cli_png_test.sh runs this many times. */
+ * single process shows. tests/cli_odr_test.sh runs it in 1000. */
 #include "png.h"
 
 #include <stdarg.h>
