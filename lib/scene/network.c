@@ -741,7 +741,7 @@ static rs_result find_tees(build *B)
             /* a box of at most 3 x 3 dense cells: all of it (most segments;
              * clipping each row cost more than the ends it skips) */
             int64_t bc0 = cell_of(rs__fmin(pa[0], pb[0]) - tol, g), bc1 = cell_of(rs__fmax(pa[0], pb[0]) + tol, g);
-            int whole = H.dense && r1 - r0 < 3 && bc1 - bc0 < 3 && (r1 - r0 + 1) * (bc1 - bc0 + 1) <= 9;
+            int whole = H.dense && r1 - r0 < 3 && bc1 - bc0 < 3;
             for (int64_t cy = r0; cy <= r1 && !res; cy++) {
                 int64_t c0 = bc0, c1 = bc1;
                 if (!whole) {
@@ -1583,8 +1583,8 @@ static rs_result surface_tees(build *B, rs_network *N)
             size_t b0 = surf_cell(xmin, bx0, ic, nx), b1 = surf_cell(xmax, bx0, ic, nx);
             double dx = pb[0] - pa[0], dy = pb[1] - pa[1], dd = dx * dx + dy * dy;
             if (!(dd > 0) || !(dd <= DBL_MAX)) continue;
-            /* a box of at most 3 x 3 cells: all of it (most segments at 10^5
-             * city roads; clipping each row cost more than the ends it skips) */
+            /* a box of at most 9 cells: all of it (most segments at 10^5 city
+             * roads; clipping each row cost more than the ends it skips) */
             if ((r1 - r0 + 1) * (b1 - b0 + 1) <= 9) {
                 for (size_t cy = r0; cy <= r1; cy++)
                     for (uint32_t i = start[cy * nx + b0], ie = start[cy * nx + b1 + 1]; i < ie; i++)

@@ -172,8 +172,7 @@ static void kept_release(kept_pool *P)
     memset(P, 0, sizeof *P);
 }
 
-/* The fastest of RUNS road-field builds of R in a context on allocator a
- * (< 0: failed). */
+/* One whole road grid build of R: thread CPU ms (< 0: failed). */
 static double grid_once(rs_ctx *ctx, const rs_dem *d, const rs_roads *R, const rs_splat_options *o)
 {
     rs_road_grid *g = NULL;
