@@ -332,6 +332,11 @@ $(BUILD)/tools/png_repeat: tests/tools/png_repeat.c $(BUILD)/cli/png.o
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Icli $(LDFLAGS) -o $@ $^ $(DEFLATE_LIBS) $(LDLIBS_CORE) -lpthread
 
+# cli/numfmt.c against printf (tests/cli_mesh_test.sh runs it).
+$(BUILD)/tools/numfmt_check: tests/tools/numfmt_check.c $(BUILD)/cli/numfmt.o
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Icli $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE)
+
 # Helper programs of the tests and benchmarks (not run by themselves).
 $(BUILD)/tools/%: tests/tools/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	@mkdir -p $(dir $@)
@@ -352,7 +357,7 @@ $(BUILD)/tools/splat_dump_portable: tests/tools/splat_dump.c $(TESTLIB_OBJ) \
 
 # (the benchmarks are built too, not run: one that no longer compiles fails here, not at `make bench`)
 test: deps
-	@$(MAKE) --no-print-directory $(JOBS_FLAG) all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/tools/png_repeat $(BUILD)/atlasgen $(BUILD)/tools/grid_compare \
+	@$(MAKE) --no-print-directory $(JOBS_FLAG) all $(TEST_BIN) $(FUZZ_REPLAY) $(BUILD)/tests/test_png $(BUILD)/tools/png_repeat $(BUILD)/tools/numfmt_check $(BUILD)/atlasgen $(BUILD)/tools/grid_compare \
 	  $(BUILD)/tools/splat_dump $(BUILD)/tools/splat_dump_portable $(BENCH_BIN)
 	@BUILD=$(BUILD) SAN="$(SAN)" OPT="$(OPT)" sh tests/run.sh
 

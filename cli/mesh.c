@@ -6,6 +6,7 @@
 #include "bigalloc.h"
 #include "gis.h"
 #include "gltf.h"
+#include "numfmt.h"
 
 #include <errno.h>
 #include <float.h>
@@ -121,6 +122,28 @@ static void wrote(cli_progress *prog, size_t k, size_t base, size_t total)
     if ((k & 0xFFFF) == 0) cli_progress_cb(prog, base + k, total);
 }
 
+/* OBJ text a buffer at a time, its numbers by cli/numfmt.c (printf's
+ * bytes: most of a fine mesh's run was printf). A line fits in the
+ * OBJ_LINE_MAX bytes obj_room leaves. */
+#define OBJ_LINE_MAX 256
+typedef struct obj_text {
+    FILE *f;
+    size_t n;
+    char b[1 << 16];
+} obj_text;
+
+static void obj_flush(obj_text *o)
+{
+    if (o->n) fwrite(o->b, 1, o->n, o->f); /* (a short write sets the stream's error, checked at the end) */
+    o->n = 0;
+}
+
+static char *obj_room(obj_text *o)
+{
+    if (o->n > sizeof o->b - OBJ_LINE_MAX) obj_flush(o);
+    return o->b + o->n;
+}
+
 /* `world`: comment lines on the world frame (or ""); mtl: the .mtl's file
  * name for OBJ (or NULL); prog: the write's progress bar. */
 static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *v, const uint32_t *smp,
@@ -131,27 +154,67 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
     if (!ply) {
         fprintf(f, "# roadsplat mesh: y up, v = (column*cs, height, row*cs) metres\n%s", world);
         if (mtl) fprintf(f, "mtllib %s\nusemtl roadsplat\n", mtl);
+        obj_text o;
+        o.f = f, o.n = 0;
         for (size_t k = 0; k < nv; k++) {
             const float *p = v + 5 * k;
             double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
-            fprintf(f, "v %.9g %.10g %.9g\n", (double)p[0], h, (double)p[1]);
+            char *c = obj_room(&o), *c0 = c;
+            *c++ = 'v';
+            *c++ = ' ';
+            c += cli_fmt_g(c, (double)p[0], 9);
+            *c++ = ' ';
+            c += cli_fmt_g(c, h, 10);
+            *c++ = ' ';
+            c += cli_fmt_g(c, (double)p[1], 9);
+            *c++ = '\n';
+            o.n += (size_t)(c - c0);
             wrote(prog, k, 0, total);
         }
         for (size_t k = 0; k < nv; k++) {
-            fprintf(f, "vt %.9g %.9g\n", (double)v[5 * k + 3], 1.0 - (double)v[5 * k + 4]);
+            char *c = obj_room(&o), *c0 = c;
+            *c++ = 'v';
+            *c++ = 't';
+            *c++ = ' ';
+            c += cli_fmt_g(c, (double)v[5 * k + 3], 9);
+            *c++ = ' ';
+            c += cli_fmt_g(c, 1.0 - (double)v[5 * k + 4], 9);
+            *c++ = '\n';
+            o.n += (size_t)(c - c0);
             wrote(prog, k, nv, total);
         }
         if (n)
             for (size_t k = 0; k < nv; k++) {
-                fprintf(f, "vn %.7g %.7g %.7g\n", (double)n[3 * k], (double)n[3 * k + 2], (double)n[3 * k + 1]);
+                char *c = obj_room(&o), *c0 = c;
+                *c++ = 'v';
+                *c++ = 'n';
+                for (int i = 0; i < 3; i++) {
+                    *c++ = ' ';
+                    c += cli_fmt_g(c, (double)n[3 * k + (size_t)(i == 0 ? 0 : 3 - i)], 7);
+                }
+                *c++ = '\n';
+                o.n += (size_t)(c - c0);
                 wrote(prog, k, 2 * nv, total);
             }
         for (size_t t = 0; t < ni; t += 3) {
             wrote(prog, t / 3, total - nt, total);
-            unsigned long a = idx[t] + 1ul, b = idx[t + 1] + 1ul, c = idx[t + 2] + 1ul;
-            if (n) fprintf(f, "f %lu/%lu/%lu %lu/%lu/%lu %lu/%lu/%lu\n", a, a, a, b, b, b, c, c, c);
-            else fprintf(f, "f %lu/%lu %lu/%lu %lu/%lu\n", a, a, b, b, c, c);
+            char *c = obj_room(&o), *c0 = c;
+            *c++ = 'f';
+            for (int i = 0; i < 3; i++) { /* (a/a/a with normals, else a/a) */
+                unsigned long a = idx[t + (size_t)i] + 1ul;
+                *c++ = ' ';
+                size_t k = cli_fmt_u(c, a);
+                c += k;
+                for (int r = n ? 2 : 1; r > 0; r--) {
+                    *c++ = '/';
+                    memmove(c, c - k - 1, k);
+                    c += k;
+                }
+            }
+            *c++ = '\n';
+            o.n += (size_t)(c - c0);
         }
+        obj_flush(&o);
     } else {
         fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment roadsplat mesh: y up, (column*cs, height, row*cs) metres\n");
         for (const char *l = world; *l;) { /* the world lines as PLY comments */

@@ -36,6 +36,22 @@ check "triangle budget respected" sh -c "'$BIN' mesh --triangles 40 --stats '$T/
 check "tiny pool still writes a complete mesh" sh -c "'$BIN' mesh --pool 3 --max-error 0 --stats '$T/p.json' '$T/dem.pgm' '$T/p.obj' 2>'$T/p.err' && grep -q '\"exhausted\": true' '$T/p.json' && grep -q warning '$T/p.err'"
 check "skirt adds faces" sh -c "'$BIN' mesh --max-error 1 --cell-size 2 --z-scale 0.5 --skirt 10 '$T/dem.pgm' '$T/k.obj' && test \$(grep -c '^f ' '$T/k.obj') -gt $tris"
 
+# the OBJ's numbers (cli/numfmt.c, not printf): printf's text. numfmt_check
+# compares the two on five million values (rounding ties, every style and
+# precision); here the OBJ's lines must come back unchanged from printf
+# with the formats the writer used before (v %.9g %.10g %.9g, vt %.9g,
+# vn %.7g, f integers)
+NF="$(dirname "$BIN")/tools/numfmt_check"
+if [ -x "$NF" ]; then
+    "$NF" >"$T/nf.txt" 2>&1 && ok || bad "numfmt_check: $(grep -m 3 FAIL "$T/nf.txt") $(tail -n 1 "$T/nf.txt")"
+else
+    bad "$NF not built (make test builds it)"
+fi
+check "OBJ with normals: its numbers as printf writes them" sh -c "'$BIN' mesh -q --normals --max-error 0.2 --cell-size 0.7 --z-scale 0.013 '$T/dem.pgm' '$T/n.obj' &&
+  awk '/^v /{ printf \"v %.9g %.10g %.9g\\n\", \$2, \$3, \$4; next } /^vt /{ printf \"vt %.9g %.9g\\n\", \$2, \$3; next }
+    /^vn /{ printf \"vn %.7g %.7g %.7g\\n\", \$2, \$3, \$4; next } { print }' '$T/n.obj' >'$T/n2.obj' &&
+  cmp -s '$T/n.obj' '$T/n2.obj' && grep -q '^vn ' '$T/n.obj' && grep -q '^f [0-9]*/[0-9]*/[0-9]* ' '$T/n.obj'"
+
 # --quiet / -q as in the other commands (the bar itself needs a terminal):
 # the same bytes, nothing on stderr
 check "--quiet and -q accepted, same bytes, silent" sh -c "'$BIN' mesh --quiet --max-error 1 '$T/dem.pgm' '$T/q.obj' 2>'$T/q.err' && '$BIN' mesh -q --max-error 1 '$T/dem.pgm' '$T/q2.obj' 2>>'$T/q.err' && '$BIN' mesh --max-error 1 '$T/dem.pgm' '$T/q3.obj' && cmp -s '$T/q.obj' '$T/q3.obj' && cmp -s '$T/q2.obj' '$T/q3.obj' && test ! -s '$T/q.err'"
