@@ -379,7 +379,8 @@ $(BUILD)/bench/%: tests/bench/%.c $(TESTLIB_OBJ) $(STATIC_LIB)
 	$(CC) $(ALL_CFLAGS) -D_POSIX_C_SOURCE=200809L -Ilib -Itests $(LDFLAGS) -o $@ $^ $(LDLIBS_CORE) -lpthread
 
 bench: deps
-	@$(MAKE) --no-print-directory $(JOBS_FLAG) all $(BENCH_BIN) $(BUILD)/tests/test_png $(BUILD)/tools/demgen $(BUILD)/tools/citygen
+	@$(MAKE) --no-print-directory $(JOBS_FLAG) all $(BENCH_BIN) $(BUILD)/tests/test_png $(BUILD)/tools/demgen $(BUILD)/tools/citygen \
+	  $(BUILD)/tools/numfmt_check
 	@BUILD=$(BUILD) sh tests/bench/run.sh
 
 # --- fuzzing and sanitizers -------------------------------------------------------
