@@ -1449,6 +1449,49 @@ static void test_reference(rs_ctx *ctx)
     CHECKF(same, "error mode equals an all-explicit reference ROAM with brute-force bounds (%d cases)", cases);
 }
 
+/* A triangle target whose 1 % band is narrower than one split or merge
+ * (96 on a 10 x 24 DEM: the band holds 96 alone, the steps go 95 <-> 97):
+ * the update ends at one side, not after the op limit (524,464 split and
+ * merge operations of a 65,300-node pool, 0.4 s, update_done 0: the roam
+ * fuzzer's tests/crashers/roam/target_band_jump.bin). */
+static void test_update_narrow_band(rs_ctx *ctx)
+{
+    const uint32_t W = 10, H = 24;
+    static const uint8_t body[5] = { 0, 0, 255, 213, 92 };
+    float z[10 * 24];
+    for (uint32_t k = 0; k < W * H; k++) z[k] = body[k % 5] == 255 ? NAN : (float)body[k % 5];
+    rs_roam_options o;
+    memset(&o, 0, sizeof o);
+    o.pool_nodes = 65300;
+    o.unit_size = 64;
+    rs_dem *d = NULL;
+    rs_roam *r = make_f(ctx, z, W, H, 3.0, 0, &o, &d);
+    CHECK(r != NULL);
+    if (!r) return;
+    CHECK(rs_roam_refine_error(ctx, r, 31.875) == RS_OK);
+    rs_roam_view v;
+    memset(&v, 0, sizeof v);
+    v.eye[0] = 13, v.eye[1] = -10, v.eye[2] = 129.5;
+    v.dir[0] = -0.5, v.dir[1] = 22, v.dir[2] = -4;
+    v.pixel_error = 0.25;
+    v.target_triangles = 96;
+    v.width = 64, v.height = 303;
+    int ok = 1;
+    for (int k = 0; k < 3; k++) {
+        rs_result rr = rs_roam_update(ctx, r, &v, 0);
+        rs_roam_stats st;
+        rs_roam_get_stats(r, &st);
+        if (rr != RS_OK || !st.update_done || st.update_ops > 1000 || st.triangles < 94 || st.triangles > 98) {
+            ok = 0;
+            fprintf(stderr, "    update %d: rc %d, done %d, %u ops, %u triangles\n", k, rr, st.update_done,
+                    st.update_ops, st.triangles);
+        }
+    }
+    CHECKF(ok, "a target band narrower than one step: the update ends beside it, done, in under 1000 ops");
+    rs_roam_free(ctx, r);
+    rs_dem_free(ctx, d);
+}
+
 int main(void)
 {
     rs_ctx *ctx = NULL;
@@ -1475,6 +1518,7 @@ int main(void)
     test_update_shuttle(ctx, 16);
     test_update_strafe(ctx, 0);
     test_update_strafe(ctx, 16);
+    test_update_narrow_band(ctx);
     test_patches(ctx);
     test_units(ctx, 257, 201, 0, 0, 8);    /* automatic 64-cell patches, the default units */
     test_units(ctx, 257, 201, 64, 16, 16);

@@ -812,7 +812,8 @@ static int tolerance_pass(upd *u, uint64_t limit, uint64_t *ops)
  * target, split while below (to the target itself, so the next update's
  * tolerance pass lands inside the band), then trade the highest split for
  * the lowest merge while the split's priority is the larger and the count
- * stays within 1 %. 1 when complete. */
+ * stays within 1 %; a step back into the band that lands beyond its other
+ * side ends the pass there. 1 when complete. */
 static int target_pass(upd *u, double target, uint64_t limit, uint64_t *ops)
 {
     rs_roam *L = u->L;
@@ -833,9 +834,15 @@ static int target_pass(upd *u, double target, uint64_t limit, uint64_t *ops)
         } else if (L->tris > hi) {
             if (!m) return 1;
             do_merge(u);
+            /* over the band to below it: a split back would undo this
+             * merge, and the next merge that split (a band narrower than
+             * one step: 95 <-> 97 around a target of 96 until the op
+             * limit, 0.4 s an update, found by the roam fuzzer) */
+            if (L->tris < lo) { ++*ops; return 1; }
         } else if (L->tris < lo) {
             if (!s || !(s->p > 0.0) || L->exhausted) return 1;
             if (!do_split(u)) continue;
+            if (L->tris > hi) { ++*ops; return 1; } /* (over the band to above it: the same) */
         } else if (s && m && s->p > m->p && !L->exhausted) {
             reached = 1;
             if (L->tris <= target) { if (!do_split(u)) continue; }
