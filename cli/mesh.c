@@ -188,9 +188,10 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
                 char *c = obj_room(&o), *c0 = c;
                 *c++ = 'v';
                 *c++ = 'n';
+                static const size_t yup[3] = { 0, 2, 1 }; /* (nx, nz, ny: y up) */
                 for (int i = 0; i < 3; i++) {
                     *c++ = ' ';
-                    c += cli_fmt_g(c, (double)n[3 * k + (size_t)(i == 0 ? 0 : 3 - i)], 7);
+                    c += cli_fmt_g(c, (double)n[3 * k + yup[i]], 7);
                 }
                 *c++ = '\n';
                 o.n += (size_t)(c - c0);
