@@ -1449,47 +1449,101 @@ static void test_reference(rs_ctx *ctx)
     CHECKF(same, "error mode equals an all-explicit reference ROAM with brute-force bounds (%d cases)", cases);
 }
 
-/* A triangle target whose 1 % band is narrower than one split or merge
- * (96 on a 10 x 24 DEM: the band holds 96 alone, the steps go 95 <-> 97):
- * the update ends at one side, not after the op limit (524,464 split and
- * merge operations of a 65,300-node pool, 0.4 s, update_done 0: the roam
- * fuzzer's tests/crashers/roam/target_band_jump.bin). */
-static void test_update_narrow_band(rs_ctx *ctx)
+/* The roam fuzz target's setup and update sequence on one input
+ * (fuzz/roam/fuzz.c, without its mesh checks): the largest operation count
+ * of its updates, whether each was done, and the last update with a
+ * triangle target's count and target. */
+static void fuzz_updates(rs_ctx *ctx, const uint8_t *data, size_t size, uint32_t *max_ops, int *all_done,
+                         uint32_t *tris, uint32_t *target)
 {
-    const uint32_t W = 10, H = 24;
-    static const uint8_t body[5] = { 0, 0, 255, 213, 92 };
-    float z[10 * 24];
-    for (uint32_t k = 0; k < W * H; k++) z[k] = body[k % 5] == 255 ? NAN : (float)body[k % 5];
+    *max_ops = 0, *all_done = 1, *tris = *target = 0;
+    uint32_t W = 2 + data[0] % 33, H = 2 + data[1] % 33;
+    const uint8_t *tail = data + size - 4;
+    size_t nbody = size - 6;
+    float *z = malloc((size_t)W * H * sizeof *z);
+    if (!z) {
+        *all_done = 0;
+        return;
+    }
+    for (size_t k = 0; k < (size_t)W * H; k++) {
+        uint8_t b = data[2 + k % nbody];
+        z[k] = b == 255 ? NAN : (float)b * (tail[3] & 4 ? 257.0f : 1.0f);
+    }
     rs_roam_options o;
     memset(&o, 0, sizeof o);
-    o.pool_nodes = 65300;
-    o.unit_size = 64;
+    o.pool_nodes = (uint32_t)tail[0] | (uint32_t)tail[1] << 8;
+    o.unit_size = (tail[1] & 0xC0) ? 1u << (2 * (tail[1] >> 6)) : 0u;
     rs_dem *d = NULL;
-    rs_roam *r = make_f(ctx, z, W, H, 3.0, 0, &o, &d);
-    CHECK(r != NULL);
-    if (!r) return;
-    CHECK(rs_roam_refine_error(ctx, r, 31.875) == RS_OK);
-    rs_roam_view v;
-    memset(&v, 0, sizeof v);
-    v.eye[0] = 13, v.eye[1] = -10, v.eye[2] = 129.5;
-    v.dir[0] = -0.5, v.dir[1] = 22, v.dir[2] = -4;
-    v.pixel_error = 0.25;
-    v.target_triangles = 96;
-    v.width = 64, v.height = 303;
-    int ok = 1;
-    for (int k = 0; k < 3; k++) {
-        rs_result rr = rs_roam_update(ctx, r, &v, 0);
+    rs_roam *r = make_f(ctx, z, W, H, 1.0 + (tail[3] >> 4), 0, &o, &d);
+    if (!r) {
+        *all_done = 0;
+        free(z);
+        return;
+    }
+    int mode = tail[3] % 4;
+    if (mode == 0) rs_roam_refine_error(ctx, r, tail[2] / 8.0);
+    else if (mode == 1) rs_roam_refine_count(ctx, r, 2 + tail[2] * 4u);
+    else {
+        rs_roam_view v;
+        memset(&v, 0, sizeof v);
+        v.eye[0] = (double)tail[0] - 20; v.eye[1] = (double)tail[1] - 20; v.eye[2] = 30 + tail[2];
+        v.dir[0] = W / 2.0 - v.eye[0]; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -10;
+        v.pixel_error = 0.5 + tail[2] / 16.0;
+        v.target_triangles = mode == 3 ? 20u + tail[2] : 0u;
+        rs_roam_frame(ctx, r, &v);
+    }
+    for (int k = 0; k < 6 && (tail[3] & 8); k++) {
+        const uint8_t *q = data + 2 + (nbody - 1 - (size_t)(k * 5) % nbody);
+        uint8_t q0 = q[0], q1 = data[2 + (size_t)(k * 5 + 1) % nbody], q2 = data[2 + (size_t)(k * 5 + 2) % nbody];
+        rs_roam_view v;
+        memset(&v, 0, sizeof v);
+        v.eye[0] = (double)q0 / 4.0 - 10; v.eye[1] = (double)q1 / 4.0 - 10; v.eye[2] = 2 + q2 / 2.0;
+        v.dir[0] = W / 2.0 - v.eye[0] + (q2 & 15) - 7.5; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -(double)(q0 & 7);
+        if (v.dir[0] == 0 && v.dir[1] == 0 && v.dir[2] == 0) v.dir[2] = -1;
+        v.pixel_error = 0.25 + (q1 & 31) / 8.0;
+        v.target_triangles = (q2 & 64) ? 4u + q0 : 0u;
+        v.width = 64 + q1; v.height = 48 + q2;
+        uint32_t budget = (q0 & 128) ? q1 % 9 : 0;
+        rs_result ru = rs_roam_update(ctx, r, &v, budget);
         rs_roam_stats st;
         rs_roam_get_stats(r, &st);
-        if (rr != RS_OK || !st.update_done || st.update_ops > 1000 || st.triangles < 94 || st.triangles > 98) {
-            ok = 0;
-            fprintf(stderr, "    update %d: rc %d, done %d, %u ops, %u triangles\n", k, rr, st.update_done,
-                    st.update_ops, st.triangles);
-        }
+        if (st.update_ops > *max_ops) *max_ops = st.update_ops;
+        if (!budget && (ru != RS_OK || !st.update_done)) *all_done = 0;
+        if (v.target_triangles) *tris = st.triangles, *target = v.target_triangles;
     }
-    CHECKF(ok, "a target band narrower than one step: the update ends beside it, done, in under 1000 ops");
     rs_roam_free(ctx, r);
     rs_dem_free(ctx, d);
+    free(z);
+}
+
+/* Triangle targets on tiny meshes, found by the roam fuzzer
+ * (tests/crashers/roam/target_*.bin): each update ran to the op limit of
+ * its pool (over 520,000 split and merge operations, 0.4 s, update_done
+ * 0). band: a target of 96 whose 1 % band holds 96 alone, the steps
+ * going 95 <-> 97; cycle: a target of 100 whose trades cycled through
+ * forced splits (99 -> 105 -> 103 -> 102 -> 100 -> ...). Now each update
+ * is done within about TARGET_FINE_OPS operations past the target, at a
+ * count within the band or beside it. */
+static void test_update_target_cycles(rs_ctx *ctx)
+{
+    static const uint8_t band[] = { 0xef, 0xdc, 0x00, 0x00, 0xff, 0xd5, 0x5c, 0x14, 0xff, 0xff, 0x28 };
+    static const uint8_t head[8] = { 0x28, 0xa4, 0xff, 0x01, 0x01, 0x00, 0x1d, 0x01 };
+    static const uint8_t end[6] = { 0xa4, 0x1a, 0x1f, 0xff, 0x87, 0x1a };
+    uint8_t cycle[134];
+    memset(cycle, 0x60, sizeof cycle);
+    memcpy(cycle, head, sizeof head);
+    memcpy(cycle + sizeof cycle - sizeof end, end, sizeof end);
+    cycle[0x4c] = 0x70;
+    uint32_t ops, tris, target;
+    int done;
+    fuzz_updates(ctx, band, sizeof band, &ops, &done, &tris, &target);
+    CHECKF(done && ops < 200 && target == 96 && (tris == 95 || tris == 97),
+           "a target band narrower than one step: done %d, %u operations, %u triangles (target %u)", done, ops, tris,
+           target);
+    fuzz_updates(ctx, cycle, sizeof cycle, &ops, &done, &tris, &target);
+    CHECKF(done && ops <= 2200 && target == 100 && tris >= 99 && tris <= 101,
+           "trades cycling through forced splits: done %d, %u operations, %u triangles (target %u)", done, ops, tris,
+           target);
 }
 
 int main(void)
@@ -1518,7 +1572,7 @@ int main(void)
     test_update_shuttle(ctx, 16);
     test_update_strafe(ctx, 0);
     test_update_strafe(ctx, 16);
-    test_update_narrow_band(ctx);
+    test_update_target_cycles(ctx);
     test_patches(ctx);
     test_units(ctx, 257, 201, 0, 0, 8);    /* automatic 64-cell patches, the default units */
     test_units(ctx, 257, 201, 64, 16, 16);

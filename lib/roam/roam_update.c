@@ -782,6 +782,17 @@ void rs__roam_update_free(rs_ctx *ctx, rs_roam *L)
  * down the tree). */
 #define UNBOUNDED_OPS_PER_NODE 8u
 
+/* Operations of a triangle target's loop once it has reached the target
+ * (trades and moves back into the band): at most this many, or a
+ * sixteenth of the triangles when more. A split forces its neighbours'
+ * splits, whose diamonds may merge at lower priorities than the split's,
+ * so the trades can cycle (the roam fuzzer: 99 -> 105 -> ... -> 100 -> 99
+ * on a 100-triangle target, eleven operations a turn, until the op limit
+ * of the pool: 0.4 s an update). Past the cap the loop goes on to the
+ * next count within the band (a cycle passes through it), at most as many
+ * operations again. The drives' updates take at most 83. */
+#define TARGET_FINE_OPS 1024u
+
 /* Every leaf above the tolerance splits, then every diamond whose two
  * parents are within it merges (docs/roam.md: the rebuild's mesh, but for
  * a split node whose own bound exceeds the tolerance under an ancestor
@@ -813,15 +824,22 @@ static int tolerance_pass(upd *u, uint64_t limit, uint64_t *ops)
  * tolerance pass lands inside the band), then trade the highest split for
  * the lowest merge while the split's priority is the larger and the count
  * stays within 1 %; a step back into the band that lands beyond its other
- * side ends the pass there. 1 when complete. */
+ * side ends the pass there, and so do TARGET_FINE_OPS operations after the
+ * target was reached. 1 when complete. */
 static int target_pass(upd *u, double target, uint64_t limit, uint64_t *ops)
 {
     rs_roam *L = u->L;
     double lo = target - target / 100.0, hi = target + target / 100.0;
     int reached = 0;
     uint32_t steps = 0;
+    uint64_t fine = 0; /* operations since the target was reached */
     for (;;) {
         if (u->nomem || *ops >= limit || stop_now(L, &steps)) return 0;
+        if (reached) { /* (past the cap: at the next count within the band, or at twice the cap) */
+            uint64_t cap = TARGET_FINE_OPS > L->tris / 16u ? TARGET_FINE_OPS : L->tris / 16u;
+            if (fine >= cap && ((L->tris >= lo && L->tris <= hi) || fine >= 2 * cap)) return 1;
+            fine++;
+        }
         const qent *s = top_split(L), *m = top_merge(L);
         if (!reached && L->tris > target) {
             if (!m) return 1;
