@@ -1659,7 +1659,11 @@ RS_API rs_result rs_roam_frame(rs_ctx *ctx, rs_roam *roam, const rs_roam_view *v
  * seed's loop over all leaves and diamonds (merge while above, split while
  * below, trade the highest split for the lowest merge): one update lands
  * within 1.5 % of the target whenever the pool and budget allow
- * (stats.threshold: the tolerance reached). `budget` caps the split and
+ * (stats.threshold: the tolerance reached), or beside that band when one
+ * split or merge (with its forced splits) changes the count by more than
+ * the band, as on a mesh of a hundred triangles. Past the target the loop
+ * makes at most 1024 operations or a sixteenth of the triangles, then
+ * stops at the next count within 1 % (at most as many again). `budget` caps the split and
  * merge operations of this call (a split counts once with its forced
  * splits; 0: no cap); when it runs out the mesh is valid and crack-free but
  * not yet at the tolerance (stats.update_done = 0), and the next update
