@@ -5,6 +5,7 @@
 #include "harness.h"
 #include "roadsplat.h"
 #include "roam_check.h"
+#include "roam_fuzz_input.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -1450,60 +1451,28 @@ static void test_reference(rs_ctx *ctx)
 }
 
 /* The roam fuzz target's setup and update sequence on one input
- * (fuzz/roam/fuzz.c, without its mesh checks): the largest operation count
- * of its updates, whether each was done, and the last update with a
- * triangle target's count and target. */
+ * (tests/roam_fuzz_input.h, without the target's mesh checks): the largest
+ * operation count of its updates, whether each was done, and the last
+ * update with a triangle target's count and target. */
 static void fuzz_updates(rs_ctx *ctx, const uint8_t *data, size_t size, uint32_t *max_ops, int *all_done,
                          uint32_t *tris, uint32_t *target)
 {
-    *max_ops = 0, *all_done = 1, *tris = *target = 0;
-    uint32_t W = 2 + data[0] % 33, H = 2 + data[1] % 33;
-    const uint8_t *tail = data + size - 4;
-    size_t nbody = size - 6;
-    float *z = malloc((size_t)W * H * sizeof *z);
-    if (!z) {
-        *all_done = 0;
-        return;
-    }
-    for (size_t k = 0; k < (size_t)W * H; k++) {
-        uint8_t b = data[2 + k % nbody];
-        z[k] = b == 255 ? NAN : (float)b * (tail[3] & 4 ? 257.0f : 1.0f);
-    }
-    rs_roam_options o;
-    memset(&o, 0, sizeof o);
-    o.pool_nodes = (uint32_t)tail[0] | (uint32_t)tail[1] << 8;
-    o.unit_size = (tail[1] & 0xC0) ? 1u << (2 * (tail[1] >> 6)) : 0u;
+    *max_ops = 0, *all_done = 0, *tris = *target = 0;
+    rf_input in;
+    float *z = rf_read(data, size, &in) ? rf_samples(&in) : NULL;
     rs_dem *d = NULL;
-    rs_roam *r = make_f(ctx, z, W, H, 1.0 + (tail[3] >> 4), 0, &o, &d);
+    rs_roam *r = z ? make_f(ctx, z, in.W, in.H, in.cs, 0, &in.o, &d) : NULL;
     if (!r) {
-        *all_done = 0;
         free(z);
         return;
     }
-    int mode = tail[3] % 4;
-    if (mode == 0) rs_roam_refine_error(ctx, r, tail[2] / 8.0);
-    else if (mode == 1) rs_roam_refine_count(ctx, r, 2 + tail[2] * 4u);
-    else {
+    *all_done = 1;
+    rf_first_mesh(ctx, r, &in);
+    for (int k = 0; k < 6 && in.updates; k++) {
         rs_roam_view v;
-        memset(&v, 0, sizeof v);
-        v.eye[0] = (double)tail[0] - 20; v.eye[1] = (double)tail[1] - 20; v.eye[2] = 30 + tail[2];
-        v.dir[0] = W / 2.0 - v.eye[0]; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -10;
-        v.pixel_error = 0.5 + tail[2] / 16.0;
-        v.target_triangles = mode == 3 ? 20u + tail[2] : 0u;
-        rs_roam_frame(ctx, r, &v);
-    }
-    for (int k = 0; k < 6 && (tail[3] & 8); k++) {
-        const uint8_t *q = data + 2 + (nbody - 1 - (size_t)(k * 5) % nbody);
-        uint8_t q0 = q[0], q1 = data[2 + (size_t)(k * 5 + 1) % nbody], q2 = data[2 + (size_t)(k * 5 + 2) % nbody];
-        rs_roam_view v;
-        memset(&v, 0, sizeof v);
-        v.eye[0] = (double)q0 / 4.0 - 10; v.eye[1] = (double)q1 / 4.0 - 10; v.eye[2] = 2 + q2 / 2.0;
-        v.dir[0] = W / 2.0 - v.eye[0] + (q2 & 15) - 7.5; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -(double)(q0 & 7);
-        if (v.dir[0] == 0 && v.dir[1] == 0 && v.dir[2] == 0) v.dir[2] = -1;
-        v.pixel_error = 0.25 + (q1 & 31) / 8.0;
-        v.target_triangles = (q2 & 64) ? 4u + q0 : 0u;
-        v.width = 64 + q1; v.height = 48 + q2;
-        uint32_t budget = (q0 & 128) ? q1 % 9 : 0;
+        uint32_t budget;
+        uint8_t opt;
+        rf_update_view(&in, k, &v, &budget, &opt);
         rs_result ru = rs_roam_update(ctx, r, &v, budget);
         rs_roam_stats st;
         rs_roam_get_stats(r, &st);

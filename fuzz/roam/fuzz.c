@@ -1,10 +1,7 @@
-/* Fuzz target for the ROAM mesher. Input: byte 0 = width-2, byte 1 =
- * height-2 (each taken mod 33), then one byte per sample (255 = nodata,
- * samples repeat when the input is short); the last 4 bytes choose the pool
- * size (2 bytes), the error threshold and the mode. With bit 3 of the last
- * byte, a sequence of rs_roam_update calls follows (views, budgets,
- * tolerance or triangle target and patch size from the body's bytes, in
- * reverse). Checks invariants after each mesh and traps on a violation (no
+/* Fuzz target for the ROAM mesher. Input (tests/roam_fuzz_input.h): a
+ * small DEM, the pool size, error threshold and mode from the last bytes,
+ * and with bit 3 of the last byte six rs_roam_update calls (views,
+ * budgets, tolerance or triangle target from the body's bytes). Checks invariants after each mesh and traps on a violation (no
  * NaN vertex, indices in range, count == stats, the triangles tile the
  * map, no T-junction, the patches' triangles add up to the mesh's and the
  * upload units' are exactly its (unit_size from the top bits of the pool's
@@ -16,6 +13,7 @@
 #include <string.h>
 #include "roadsplat.h"
 #include "../../tests/roam_check.h"
+#include "../../tests/roam_fuzz_input.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -119,63 +117,34 @@ static unsigned char *vertex_set(rs_ctx *ctx, rs_roam *r, uint32_t W, uint32_t H
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (size < 7) return 0;
-    uint32_t W = 2 + data[0] % 33, H = 2 + data[1] % 33;
-    const uint8_t *tail = data + size - 4;
-    uint32_t pool = (uint32_t)tail[0] | (uint32_t)tail[1] << 8;
-    double E = tail[2] / 8.0;
-    int mode = tail[3] % 4;
-    size_t nbody = size - 6;
-    float *z = malloc((size_t)W * H * sizeof *z);
+    rf_input in;
+    if (!rf_read(data, size, &in)) return 0;
+    const uint32_t W = in.W, H = in.H;
+    const double cs = in.cs;
+    float *z = rf_samples(&in);
     if (!z) return 0;
-    for (size_t k = 0; k < (size_t)W * H; k++) {
-        uint8_t b = data[2 + k % nbody];
-        z[k] = b == 255 ? NAN : (float)b * (tail[3] & 4 ? 257.0f : 1.0f);
-    }
     rs_ctx *ctx = NULL;
     rs_dem *dem = NULL;
     rs_roam *r = NULL, *rb = NULL;
     if (rs_ctx_create(NULL, NULL, &ctx) != RS_OK) { free(z); return 0; }
     if (rs_dem_create(ctx, W, H, z, &dem) != RS_OK) goto out;
-    const double cs = 1.0 + (tail[3] >> 4);
     rs_dem_frame fr = { cs, 0, 0, 0 };
     REQUIRE(rs_dem_set_frame(ctx, dem, &fr) == RS_OK);
-    rs_roam_options o;
-    memset(&o, 0, sizeof o);
-    o.pool_nodes = pool;
-    o.unit_size = (tail[1] & 0xC0) ? 1u << (2 * (tail[1] >> 6)) : 0u; /* 4, 16, 64 or the default */
+    rs_roam_options o = in.o;
     if (rs_roam_create(ctx, dem, &o, &r) != RS_OK) goto out;
-    rs_result rr;
-    if (mode == 0) rr = rs_roam_refine_error(ctx, r, E);
-    else if (mode == 1) rr = rs_roam_refine_count(ctx, r, 2 + tail[2] * 4u);
-    else {
-        rs_roam_view v;
-        memset(&v, 0, sizeof v);
-        v.eye[0] = (double)tail[0] - 20; v.eye[1] = (double)tail[1] - 20; v.eye[2] = 30 + tail[2];
-        v.dir[0] = W / 2.0 - v.eye[0]; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -10;
-        v.pixel_error = 0.5 + tail[2] / 16.0;
-        v.target_triangles = mode == 3 ? 20u + tail[2] : 0u;
-        rr = rs_roam_frame(ctx, r, &v);
-    }
+    rs_result rr = rf_first_mesh(ctx, r, &in);
     REQUIRE(rr == RS_OK || rr == RS_ERR_POOL_EXHAUSTED || rr == RS_ERR_LIMIT);
-    check_mesh(ctx, r, W, H, cs, tail[2]);
-    if (tail[3] & 8) {
+    check_mesh(ctx, r, W, H, cs, in.tail[2]);
+    if (in.updates) {
         /* an update sequence from the current mesh */
         for (int k = 0; k < 6; k++) {
-            const uint8_t *q = data + 2 + (nbody - 1 - (size_t)(k * 5) % nbody); /* reading backwards */
-            uint8_t q0 = q[0], q1 = data[2 + (size_t)(k * 5 + 1) % nbody], q2 = data[2 + (size_t)(k * 5 + 2) % nbody];
             rs_roam_view v;
-            memset(&v, 0, sizeof v);
-            v.eye[0] = (double)q0 / 4.0 - 10; v.eye[1] = (double)q1 / 4.0 - 10; v.eye[2] = 2 + q2 / 2.0;
-            v.dir[0] = W / 2.0 - v.eye[0] + (q2 & 15) - 7.5; v.dir[1] = H / 2.0 - v.eye[1]; v.dir[2] = -(double)(q0 & 7);
-            if (v.dir[0] == 0 && v.dir[1] == 0 && v.dir[2] == 0) v.dir[2] = -1;
-            v.pixel_error = 0.25 + (q1 & 31) / 8.0;
-            v.target_triangles = (q2 & 64) ? 4u + q0 : 0u;
-            v.width = 64 + q1; v.height = 48 + q2;
-            uint32_t budget = (q0 & 128) ? q1 % 9 : 0;
+            uint32_t budget;
+            uint8_t opt;
+            rf_update_view(&in, k, &v, &budget, &opt);
             rs_result ru = rs_roam_update(ctx, r, &v, budget);
             REQUIRE(ru == RS_OK || ru == RS_ERR_POOL_EXHAUSTED);
-            check_mesh(ctx, r, W, H, cs, (uint8_t)(tail[2] ^ q0));
+            check_mesh(ctx, r, W, H, cs, opt);
             /* a completed update at a tolerance leaves no leaf above it:
              * its mesh refines the rebuild's (the coarsest such mesh),
              * so every rebuild vertex is one of its vertices */
