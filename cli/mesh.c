@@ -138,10 +138,25 @@ static void obj_flush(obj_text *o)
     o->n = 0;
 }
 
+/* Where the next line goes (room for OBJ_LINE_MAX bytes); obj_end takes
+ * the line, written up to c. */
 static char *obj_room(obj_text *o)
 {
     if (o->n > sizeof o->b - OBJ_LINE_MAX) obj_flush(o);
     return o->b + o->n;
+}
+
+static void obj_end(obj_text *o, char *c)
+{
+    *c++ = '\n';
+    o->n = (size_t)(c - o->b);
+}
+
+/* " " and printf's "%.*g" of v at c; past it. */
+static char *obj_num(char *c, double v, int prec)
+{
+    *c++ = ' ';
+    return c + cli_fmt_g(c, v, prec);
 }
 
 /* `world`: comment lines on the world frame (or ""); mtl: the .mtl's file
@@ -159,52 +174,38 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
         for (size_t k = 0; k < nv; k++) {
             const float *p = v + 5 * k;
             double h = k < ntop ? vertex_height(z, zs, v, smp, k) : (double)p[2];
-            char *c = obj_room(&o), *c0 = c;
+            char *c = obj_room(&o);
             *c++ = 'v';
-            *c++ = ' ';
-            c += cli_fmt_g(c, (double)p[0], 9);
-            *c++ = ' ';
-            c += cli_fmt_g(c, h, 10);
-            *c++ = ' ';
-            c += cli_fmt_g(c, (double)p[1], 9);
-            *c++ = '\n';
-            o.n += (size_t)(c - c0);
+            c = obj_num(c, (double)p[0], 9);
+            c = obj_num(c, h, 10);
+            obj_end(&o, obj_num(c, (double)p[1], 9));
             wrote(prog, k, 0, total);
         }
         for (size_t k = 0; k < nv; k++) {
-            char *c = obj_room(&o), *c0 = c;
+            char *c = obj_room(&o);
             *c++ = 'v';
             *c++ = 't';
-            *c++ = ' ';
-            c += cli_fmt_g(c, (double)v[5 * k + 3], 9);
-            *c++ = ' ';
-            c += cli_fmt_g(c, 1.0 - (double)v[5 * k + 4], 9);
-            *c++ = '\n';
-            o.n += (size_t)(c - c0);
+            c = obj_num(c, (double)v[5 * k + 3], 9);
+            obj_end(&o, obj_num(c, 1.0 - (double)v[5 * k + 4], 9));
             wrote(prog, k, nv, total);
         }
         if (n)
             for (size_t k = 0; k < nv; k++) {
-                char *c = obj_room(&o), *c0 = c;
+                char *c = obj_room(&o);
                 *c++ = 'v';
                 *c++ = 'n';
-                static const size_t yup[3] = { 0, 2, 1 }; /* (nx, nz, ny: y up) */
-                for (int i = 0; i < 3; i++) {
-                    *c++ = ' ';
-                    c += cli_fmt_g(c, (double)n[3 * k + yup[i]], 7);
-                }
-                *c++ = '\n';
-                o.n += (size_t)(c - c0);
+                c = obj_num(c, (double)n[3 * k], 7); /* (nx, nz, ny: y up) */
+                c = obj_num(c, (double)n[3 * k + 2], 7);
+                obj_end(&o, obj_num(c, (double)n[3 * k + 1], 7));
                 wrote(prog, k, 2 * nv, total);
             }
         for (size_t t = 0; t < ni; t += 3) {
             wrote(prog, t / 3, total - nt, total);
-            char *c = obj_room(&o), *c0 = c;
+            char *c = obj_room(&o);
             *c++ = 'f';
             for (int i = 0; i < 3; i++) { /* (a/a/a with normals, else a/a) */
-                unsigned long a = idx[t + (size_t)i] + 1ul;
                 *c++ = ' ';
-                size_t k = cli_fmt_u(c, a);
+                size_t k = cli_fmt_u(c, idx[t + (size_t)i] + 1ul);
                 c += k;
                 for (int r = n ? 2 : 1; r > 0; r--) {
                     *c++ = '/';
@@ -212,8 +213,7 @@ static int write_mesh(FILE *f, int ply, const float *z, double zs, const float *
                     c += k;
                 }
             }
-            *c++ = '\n';
-            o.n += (size_t)(c - c0);
+            obj_end(&o, c);
         }
         obj_flush(&o);
     } else {
