@@ -13,8 +13,7 @@ RUNS=${OBJ_BENCH_RUNS:-3}
 mkdir -p "$OUT"
 MD="$OUT/obj.md"; CSV="$OUT/obj.csv"
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
-fastest() { sort -n | head -n 1; }
-field() { sed -n "s/.*\"$1\": \\([0-9.]*\\).*/\\1/p" "$2" | head -n 1; }
+. "$(dirname "$0")/lib.sh" # fastest, field
 
 nf=$("$B/tools/numfmt_check" --bench)
 count=$(echo "$nf" | sed -n 's/^numbers \([0-9]*\),.*/\1/p')

@@ -1,9 +1,9 @@
 #!/bin/sh
 # `make bench`: runs every benchmark binary (build/bench/*) and script
-# (tests/bench/*.sh). Each writes a Markdown section to build/bench/<name>.md
-# and CSV next to it; the gnuplot scripts tests/bench/*.gp turn the CSV into
-# docs/bench/*.png; this script joins the sections into docs/BENCHMARKS.md
-# with the machine and the command.
+# (tests/bench/*.sh but lib.sh, their helpers). Each writes a Markdown
+# section to build/bench/<name>.md and CSV next to it; the gnuplot scripts
+# tests/bench/*.gp turn the CSV into docs/bench/*.png; this script joins the
+# sections into docs/BENCHMARKS.md with the machine and the command.
 # BENCH_ONLY="tests/bench/x.sh ...": run only those scripts, keep the other
 # sections of the last full run, and join them again.
 set -e
@@ -18,7 +18,7 @@ for b in "$B"/bench/*; do
     "$b" "$B/bench" || { echo "bench: $(basename "$b") failed"; exit 1; }
 done
 for s in ${BENCH_ONLY:-tests/bench/*.sh}; do
-    [ "$s" = tests/bench/run.sh ] && continue
+    case "$s" in tests/bench/run.sh|tests/bench/lib.sh) continue ;; esac
     [ -f "$s" ] || continue
     echo "bench: $s"
     BUILD="$B" sh "$s" "$B/bench" || { echo "bench: $s failed"; exit 1; }

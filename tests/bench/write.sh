@@ -20,8 +20,7 @@ mkdir -p "$OUT"
 MD="$OUT/write.md"; CSV="$OUT/write.csv"
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 
-fastest() { sort -n | head -n 1; }
-field() { sed -n "s/.*\"$1\": \\([0-9.]*\\).*/\\1/p" "$2" | head -n 1; }
+. "$(dirname "$0")/lib.sh" # fastest, field
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
 
 "$B/tools/demgen" 1025 "$T/dem.pgm"
