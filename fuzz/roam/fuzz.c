@@ -1,12 +1,13 @@
 /* Fuzz target for the ROAM mesher. Input (tests/roam_fuzz_input.h): a
  * small DEM, the pool size, error threshold and mode from the last bytes,
  * and with bit 3 of the last byte six rs_roam_update calls (views,
- * budgets, tolerance or triangle target from the body's bytes). Checks invariants after each mesh and traps on a violation (no
- * NaN vertex, indices in range, count == stats, the triangles tile the
- * map, no T-junction, the patches' triangles add up to the mesh's and the
- * upload units' are exactly its (unit_size from the top bits of the pool's
- * high byte); after an
- * update at a tolerance, every vertex of a rebuild at that view). */
+ * budgets, tolerance or triangle target from the body's bytes). Checks
+ * invariants after each mesh and traps on a violation (no NaN vertex,
+ * indices in range, count == stats, the triangles tile the map, no
+ * T-junction, the patches' triangles add up to the mesh's and the upload
+ * units' are exactly its (unit_size from the top bits of the pool's high
+ * byte); after an update at a tolerance, every vertex of a rebuild at that
+ * view). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
