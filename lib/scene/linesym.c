@@ -2487,7 +2487,8 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
             res = RS_ERR_NOMEM;
             goto fail;
         }
-        rs__stroke_bases(net, roads, p->origin_x, p->origin_y, p->cell_size, NULL, 0, own_bases);
+        if ((res = rs__stroke_bases(ctx, net, roads, p->origin_x, p->origin_y, p->cell_size, NULL, 0, own_bases)))
+            goto fail;
         bases = own_bases;
     }
     size_t nstroke = net ? net->nstrokes : nroads;

@@ -85,9 +85,9 @@ size_t rs__network_bytes(const rs_network *net);
  * travel order in the local frame of a map with this origin and DEM cell
  * (lib/scene/road_local.h), as the line symbols sum a record's points.
  * With ids (n records of N), only the records of their strokes (the others
- * NaN). */
-void rs__stroke_bases(const rs_network *N, const rs_roads *roads, double origin_x, double origin_y, double cell_size,
-                      const uint32_t *ids, size_t n, double *out);
+ * NaN). Polls ctx (may be NULL): RS_ERR_CANCELLED leaves out half made. */
+rs_result rs__stroke_bases(rs_ctx *ctx, const rs_network *N, const rs_roads *roads, double origin_x, double origin_y,
+                           double cell_size, const uint32_t *ids, size_t n, double *out);
 /* The part of network N that the records ids[0..n) take part in (ascending
  * record ids of N), as the drawing code of a road set holding only those
  * records, in that order, reads it: their nodes (in N's order) with their

@@ -2453,6 +2453,10 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
     rf_strip *st = rs__alloc_array(ctx, n, sizeof *st);
     if (!st) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++) {
+        if ((i & 4095) == 0 && rs__poll(ctx)) { /* (10^5 roads: ~20 ms in all, then the sort) */
+            rs__free(ctx, st);
+            return RS_ERR_CANCELLED;
+        }
         const rs__tee_end *t = &tees[i];
         double cE;
         const rf_seg *s = tee_end_of(f, roads, t, &cE);

@@ -915,10 +915,10 @@ rs_result rs__road_grid_build_subset(rs_ctx *ctx, const rs_dem *dem, const rs_ro
     /* the strokes' arc lengths record by record, as the whole map's line symbols sum them */
     double *bases = net->s_base ? NULL : rs__alloc_array(ctx, net->nroads ? net->nroads : 1, sizeof *bases);
     if (!net->s_base && !bases) return rs__fail(ctx, RS_ERR_NOMEM, "subset build: out of memory");
-    if (bases)
-        rs__stroke_bases(net, roads, dem->frame.origin_x, dem->frame.origin_y, dem->frame.cell_size, ids, n,
-                         bases);
-    rs_result r = rs__roads_subset(ctx, roads, ids, n, &sub);
+    rs_result r = bases ? rs__stroke_bases(ctx, net, roads, dem->frame.origin_x, dem->frame.origin_y,
+                                           dem->frame.cell_size, ids, n, bases)
+                        : RS_OK;
+    if (!r) r = rs__roads_subset(ctx, roads, ids, n, &sub);
     if (!r) r = rs__network_subset(ctx, net, bases, ids, n, &part);
     rs__free(ctx, bases);
     if (!r) r = grid_build(ctx, dem, sub, opts, part, facts, out);
