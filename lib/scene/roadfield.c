@@ -2453,7 +2453,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
     rf_strip *st = rs__alloc_array(ctx, n, sizeof *st);
     if (!st) return RS_ERR_NOMEM;
     for (size_t i = 0; i < n; i++) {
-        if ((i & 4095) == 0 && rs__poll(ctx)) { /* (10^5 roads: ~20 ms in all, then the sort) */
+        if ((i & 4095) == 0 && rs__poll(ctx)) { /* (10^5 roads: ~20 ms in all) */
             rs__free(ctx, st);
             return RS_ERR_CANCELLED;
         }
@@ -2472,7 +2472,12 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
         memcpy(st[ns].box, T.box, sizeof T.box);
         ns++;
     }
-    if (ns > 1) qsort(st, ns, sizeof *st, cmp_strip);
+    /* (rs__sort: it polls, where a qsort of 10^5 strips could not be stopped) */
+    rs_result sr = ns > 1 ? rs__sort(ctx, st, ns, sizeof *st, cmp_strip) : RS_OK;
+    if (sr) {
+        rs__free(ctx, st);
+        return sr;
+    }
     for (size_t i = 0; i < n; i++) {
         if ((i & 511) == 0 && rs__poll(ctx)) {
             rs__free(ctx, st);
