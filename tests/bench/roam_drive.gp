@@ -30,9 +30,12 @@ set ylabel "triangles"
 set y2label "operations"
 set y2tics
 set ytics nomirror
-set key bottom left
-set yrange [0:*]
-set y2range [0:*]
+# (headroom over the curves for the key: at the bottom it hid the city's operations)
+set key top right
+stats src("fractal") using 6 name "TRI" nooutput
+stats src("fractal") using ($2 > 0 ? $7 : 1/0) name "OPS" nooutput
+set yrange [0:TRI_max * 1.45]
+set y2range [0:OPS_max * 1.45]
 # frame 0 builds the mesh from the base mesh (tens of thousands of splits): left out
 plot src("fractal") using 2:6 with lines lc rgb "#d62728" title "fractal triangles, rebuild", \
      src("fractal") using 2:5 with lines lc rgb "#1f77b4" dt 2 title "fractal triangles, update", \
