@@ -1445,15 +1445,16 @@ static double surf_angle(const double *xy, size_t np, uint32_t k, int step, int 
 }
 
 /* The two legs of street q (its points qxy, qnp of them; the arc lengths
- * s0, s1 at the ends of its segment k) at end f, which lies inside it. */
-static void surf_legs(const rs_roads *roads, const surf_end *f, const double *qxy, size_t qnp, double s0, double s1,
+ * s0, s1 at the ends of its segment k; rs__road_priority of it) at end f,
+ * which lies inside it. */
+static void surf_legs(const surf_end *f, const double *qxy, size_t qnp, double s0, double s1, int priority,
                       rs_network_leg T[2])
 {
     memset(T, 0, 2 * sizeof *T);
     T[0].road = f->q;
     T[0].segment = f->k;
     T[0].s = s0 + f->u * (s1 - s0);
-    T[0].priority = rs__road_priority(roads, f->q);
+    T[0].priority = priority;
     T[1] = T[0];
     T[0].kind = RS_LEG_FORWARD;
     T[0].angle = surf_angle(qxy, qnp, f->u == 1 && f->k + 1 < qnp - 1 ? f->k + 1 : f->k, 1, 0);
@@ -1461,28 +1462,40 @@ static void surf_legs(const rs_roads *roads, const surf_end *f, const double *qx
     T[1].angle = surf_angle(qxy, qnp, f->u == 0 && f->k > 0 ? f->k - 1 : f->k, -1, 1);
 }
 
-/* A node whose d legs L now hold street q's two: sorted, its major legs,
- * degree and kind, a roundabout's control. */
-static void surf_node(const rs_roads *roads, uint32_t q, rs_network_node *node, rs_network_leg *L, uint32_t d)
+/* A node whose d legs L now hold a street's two (roundabout: its
+ * junction=roundabout): sorted, its major legs, degree and kind, a
+ * roundabout's control. */
+static void surf_node(int roundabout, rs_network_node *node, rs_network_leg *L, uint32_t d)
 {
     sort_legs(L, d);
     mark_major(L, d);
     node->degree = d;
     node->kind = RS_NODE_JUNCTION;
-    const char *jc = rs_roads_get_attr(roads, q, "junction");
-    if (jc && strcmp(jc, "roundabout") == 0) node->control |= RS_NODE_ROUNDABOUT;
+    if (roundabout) node->control |= RS_NODE_ROUNDABOUT;
 }
 
-/* The reach of record q's surface for surface_tees: its half width plus
+static int road_roundabout(const rs_roads *roads, size_t q)
+{
+    const char *jc = rs_roads_get_attr(roads, q, "junction");
+    return jc && strcmp(jc, "roundabout") == 0;
+}
+
+/* The reach of record q (of width w) for surface_tees: its half width plus
  * the tolerance; 0 for a record with no surface to hold an end (no longer
  * than two tolerances, no wider, or of no finite width). */
-static double surf_reach(const rs_roads *roads, const rs_network *N, size_t q, double tol)
+static double surf_reach(const rs_network *N, size_t q, double w, double tol)
 {
-    double w = 0;
-    rs_roads_get(roads, q, NULL, &w, NULL, NULL);
     double hw = 0.5 * w;
     if (!(N->length[q] > 2 * tol) || !(hw > tol) || !(hw <= 1e300)) return 0;
     return hw + tol;
+}
+
+/* surf_reach of record q of `roads` (an update: no build's looks) */
+static double road_reach(const rs_roads *roads, const rs_network *N, size_t q, double tol)
+{
+    double w = 0;
+    rs_roads_get(roads, q, NULL, &w, NULL, NULL);
+    return surf_reach(N, q, w, tol);
 }
 
 static rs_result surface_tees(build *B, rs_network *N)
@@ -1508,7 +1521,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         if (!isfinite(p[0]) || !isfinite(p[1])) continue;
         surf_end *f = &fe[m++];
         f->node = (uint32_t)nd, f->road = L->road, f->stroke = N->stroke_of[L->road];
-        f->non_car = rs__road_non_car(B->roads, L->road);
+        f->non_car = rs__class_non_car((rs_road_class)B->look[L->road].road_class); /* (rs__road_non_car, read once) */
         f->level = B->level[L->road];
         f->x = p[0], f->y = p[1], f->q = f->k = NONE, f->u = 0, f->d = INFINITY;
         bx0 = fmin(bx0, p[0]), by0 = fmin(by0, p[1]), bx1 = fmax(bx1, p[0]), by1 = fmax(by1, p[1]);
@@ -1519,7 +1532,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         rs__free(ctx, fe);
         return RS_ERR_NOMEM;
     }
-    for (size_t q = 0; q < B->nroads; q++) reach[q] = surf_reach(B->roads, N, q, tol);
+    for (size_t q = 0; q < B->nroads; q++) reach[q] = surf_reach(N, q, B->look[q].width, tol);
     /* the ends in a grid of about one a cell (at most 4 a cell more cells), counting sorted */
     size_t nx = 1, ny = 1;
     double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (4.0 * (double)(m ? m : 1)));
@@ -1566,7 +1579,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         }
         double rq = reach[q];
         if (!(rq > 0)) continue;
-        int qnc = -1, qlv = B->level[q]; /* (qnc: not read yet) */
+        int qnc = rs__class_non_car((rs_road_class)B->look[q].road_class), qlv = B->level[q];
         uint32_t sq = N->stroke_of[q];
         double reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
         size_t qnp = B->voff[q + 1] - B->voff[q], nseg = qnp - 1;
@@ -1638,14 +1651,14 @@ static rs_result surface_tees(build *B, rs_network *N)
             if (f) {
                 nl -= 2;
                 size_t pa = B->voff[f->q] + f->k;
-                surf_legs(B->roads, f, B->xy + 2 * B->voff[f->q], B->voff[f->q + 1] - B->voff[f->q], B->s[pa],
-                          B->s[pa + 1], leg + nl);
+                surf_legs(f, B->xy + 2 * B->voff[f->q], B->voff[f->q + 1] - B->voff[f->q], B->s[pa], B->s[pa + 1],
+                          B->look[f->q].priority, leg + nl);
             }
             nl -= b - a;
             if (nl != a) memmove(leg + nl, leg + a, (b - a) * sizeof *leg);
             N->leg_start[nd] = (uint32_t)nl;
             if (f) {
-                surf_node(B->roads, f->q, &N->node[nd], leg + nl, (uint32_t)(b - a + 2));
+                surf_node(B->look[f->q].roundabout, &N->node[nd], leg + nl, (uint32_t)(b - a + 2));
                 N->node_surf[nd] = 1;
             }
             b = a;
@@ -2506,8 +2519,10 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         if (lg) N->leg = lg;
     }
     rs__free(ctx, B.pids), rs__free(ctx, B.pstart), rs__free(ctx, B.tstart), rs__free(ctx, B.ps);
-    rs__free(ctx, B.buf), rs__free(ctx, B.look), rs__free(ctx, B.vroad);
-    B.pids = B.pstart = B.tstart = B.vroad = NULL, B.ps = B.buf = NULL, B.look = NULL;
+    /* (the looks stay for surface_tees: the records' widths, classes and
+     * priorities, which it read from the road set at each end, 10^5 times) */
+    rs__free(ctx, B.buf), rs__free(ctx, B.vroad);
+    B.pids = B.pstart = B.tstart = B.vroad = NULL, B.ps = B.buf = NULL;
     if (!stroke_arrays(ctx, N, m, n + 1)) {
         res = RS_ERR_NOMEM;
         goto fail;
@@ -2719,7 +2734,7 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
     uint32_t zero = 0;
     for (size_t c = 0; c < nc && isfinite(pt[0]) && isfinite(pt[1]); c++) {
         uint32_t q = cand ? cand[c] : (uint32_t)c;
-        double rq = surf_reach(roads, N, q, tol), reach2 = rq * rq;
+        double rq = road_reach(roads, N, q, tol), reach2 = rq * rq;
         if (!(rq > 0) || !square_meets(box + 4 * (size_t)q, pt[0], pt[1], rq)) continue;
         const double *qxy;
         size_t qnp;
@@ -2748,11 +2763,11 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
         if (k == f.k) s0 = s;
         if (k == f.k + 1) s1 = s;
     }
-    surf_legs(roads, &f, qxy, qnp, s0, s1, o->leg + 1);
+    surf_legs(&f, qxy, qnp, s0, s1, rs__road_priority(roads, f.q), o->leg + 1);
     rs_network_node node;
     memset(&node, 0, sizeof node);
     node.control = control;
-    surf_node(roads, f.q, &node, o->leg, 3);
+    surf_node(road_roundabout(roads, f.q), &node, o->leg, 3);
     o->degree = 3;
     o->control = node.control;
     o->surf = 1;
@@ -3033,7 +3048,7 @@ rs_result rs__network_update(rs_ctx *ctx, const rs_roads *roads, const rs_networ
             }
             for (size_t q = 0; q < nn; q++) {
                 /* (square_meets of an end point in pb: rounding is monotone) */
-                double rq = surf_reach(roads, N, q, tol);
+                double rq = road_reach(roads, N, q, tol);
                 const double *b = box + 4 * q;
                 if (rq > 0 && pb[2] + rq >= b[0] && pb[0] - rq <= b[2] && pb[3] + rq >= b[1] && pb[1] - rq <= b[3])
                     kc[nkc++] = (uint32_t)q;
