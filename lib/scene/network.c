@@ -562,6 +562,7 @@ typedef struct build {
     uint32_t *parent;  /* union-find over points */
     uint8_t *live;     /* per road: longer than twice the tolerance */
     road_look *look;   /* per road */
+    struct surf_rd *srd; /* per road: what surface_tees reads of it (copied from look, which is freed first) */
     int8_t *level;     /* per road: rs__road_level (-100 .. 100), read once, not per candidate T */
     uint8_t *inhash;   /* per point: a live road's point that starts its run */
     uint32_t *nodeof;  /* per point: its group's node, or NONE (set for the roots, then for every
@@ -1371,6 +1372,18 @@ typedef struct surf_end {
     double u, d;   /* the point's parameter on it (0 .. 1) and squared distance */
 } surf_end;
 
+/* What surface_tees reads of a record, copied from its look before the
+ * looks are freed (they are most of the build's memory that the stroke
+ * arrays reuse: kept whole, a 10^5-record lattice's builds faulted 9,000
+ * more pages each): its width, rs__road_priority, rs__road_non_car and
+ * junction=roundabout. Read here, not from the road set at random records
+ * (10^5 cache misses). */
+typedef struct surf_rd {
+    double width;
+    int16_t priority;
+    uint8_t non_car, roundabout;
+} surf_rd;
+
 static size_t surf_cell(double v, double v0, double ic, size_t n)
 {
     double t = (v - v0) * ic; /* (ic = 1 / the cell: any monotone map finds the same candidates) */
@@ -1521,7 +1534,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         if (!isfinite(p[0]) || !isfinite(p[1])) continue;
         surf_end *f = &fe[m++];
         f->node = (uint32_t)nd, f->road = L->road, f->stroke = N->stroke_of[L->road];
-        f->non_car = rs__class_non_car((rs_road_class)B->look[L->road].road_class); /* (rs__road_non_car, read once) */
+        f->non_car = B->srd[L->road].non_car;
         f->level = B->level[L->road];
         f->x = p[0], f->y = p[1], f->q = f->k = NONE, f->u = 0, f->d = INFINITY;
         bx0 = fmin(bx0, p[0]), by0 = fmin(by0, p[1]), bx1 = fmax(bx1, p[0]), by1 = fmax(by1, p[1]);
@@ -1532,7 +1545,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         rs__free(ctx, fe);
         return RS_ERR_NOMEM;
     }
-    for (size_t q = 0; q < B->nroads; q++) reach[q] = surf_reach(N, q, B->look[q].width, tol);
+    for (size_t q = 0; q < B->nroads; q++) reach[q] = surf_reach(N, q, B->srd[q].width, tol);
     /* the ends in a grid of about one a cell (at most 4 a cell more cells), counting sorted */
     size_t nx = 1, ny = 1;
     double wx = bx1 - bx0, wy = by1 - by0, c = sqrt(wx * wy / (4.0 * (double)(m ? m : 1)));
@@ -1579,7 +1592,7 @@ static rs_result surface_tees(build *B, rs_network *N)
         }
         double rq = reach[q];
         if (!(rq > 0)) continue;
-        int qnc = rs__class_non_car((rs_road_class)B->look[q].road_class), qlv = B->level[q];
+        int qnc = B->srd[q].non_car, qlv = B->level[q];
         uint32_t sq = N->stroke_of[q];
         double reach2 = rq * rq; /* (the cells within the reach, not the half width alone) */
         size_t qnp = B->voff[q + 1] - B->voff[q], nseg = qnp - 1;
@@ -1652,13 +1665,13 @@ static rs_result surface_tees(build *B, rs_network *N)
                 nl -= 2;
                 size_t pa = B->voff[f->q] + f->k;
                 surf_legs(f, B->xy + 2 * B->voff[f->q], B->voff[f->q + 1] - B->voff[f->q], B->s[pa], B->s[pa + 1],
-                          B->look[f->q].priority, leg + nl);
+                          B->srd[f->q].priority, leg + nl);
             }
             nl -= b - a;
             if (nl != a) memmove(leg + nl, leg + a, (b - a) * sizeof *leg);
             N->leg_start[nd] = (uint32_t)nl;
             if (f) {
-                surf_node(B->look[f->q].roundabout, &N->node[nd], leg + nl, (uint32_t)(b - a + 2));
+                surf_node(B->srd[f->q].roundabout, &N->node[nd], leg + nl, (uint32_t)(b - a + 2));
                 N->node_surf[nd] = 1;
             }
             b = a;
@@ -1684,6 +1697,7 @@ static void build_free(build *B)
     rs__free(ctx, B->parent);
     rs__free(ctx, B->live);
     rs__free(ctx, B->look);
+    rs__free(ctx, B->srd);
     rs__free(ctx, B->level);
     rs__free(ctx, B->inhash);
     rs__free(ctx, B->nodeof);
@@ -2518,11 +2532,21 @@ static rs_result network_build(rs_ctx *ctx, const rs_roads *roads, const rs_netw
         rs_network_leg *lg = rs__realloc(ctx, N->leg, nl * sizeof *lg);
         if (lg) N->leg = lg;
     }
+    if (!(flags & NB_NO_SURF)) {
+        if (!(B.srd = rs__alloc_array(ctx, n ? n : 1, sizeof *B.srd))) {
+            res = RS_ERR_NOMEM;
+            goto fail;
+        }
+        for (size_t r = 0; r < n; r++) {
+            const road_look *lk = &B.look[r];
+            B.srd[r].width = lk->width, B.srd[r].priority = lk->priority;
+            B.srd[r].non_car = (uint8_t)rs__class_non_car((rs_road_class)lk->road_class);
+            B.srd[r].roundabout = lk->roundabout;
+        }
+    }
     rs__free(ctx, B.pids), rs__free(ctx, B.pstart), rs__free(ctx, B.tstart), rs__free(ctx, B.ps);
-    /* (the looks stay for surface_tees: the records' widths, classes and
-     * priorities, which it read from the road set at each end, 10^5 times) */
-    rs__free(ctx, B.buf), rs__free(ctx, B.vroad);
-    B.pids = B.pstart = B.tstart = B.vroad = NULL, B.ps = B.buf = NULL;
+    rs__free(ctx, B.buf), rs__free(ctx, B.look), rs__free(ctx, B.vroad);
+    B.pids = B.pstart = B.tstart = B.vroad = NULL, B.ps = B.buf = NULL, B.look = NULL;
     if (!stroke_arrays(ctx, N, m, n + 1)) {
         res = RS_ERR_NOMEM;
         goto fail;
