@@ -1487,12 +1487,6 @@ static void surf_node(int roundabout, rs_network_node *node, rs_network_leg *L, 
     if (roundabout) node->control |= RS_NODE_ROUNDABOUT;
 }
 
-static int road_roundabout(const rs_roads *roads, size_t q)
-{
-    const char *jc = rs_roads_get_attr(roads, q, "junction");
-    return jc && strcmp(jc, "roundabout") == 0;
-}
-
 /* The reach of record q (of width w) for surface_tees: its half width plus
  * the tolerance; 0 for a record with no surface to hold an end (no longer
  * than two tolerances, no wider, or of no finite width). */
@@ -2791,7 +2785,7 @@ static void free_end(const rs_roads *roads, const rs_network *N, const double *b
     rs_network_node node;
     memset(&node, 0, sizeof node);
     node.control = control;
-    surf_node(road_roundabout(roads, f.q), &node, o->leg, 3);
+    surf_node(attr_is(roads, f.q, "junction", "roundabout", NULL), &node, o->leg, 3);
     o->degree = 3;
     o->control = node.control;
     o->surf = 1;
