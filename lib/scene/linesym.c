@@ -778,6 +778,8 @@ typedef struct ls_junc {
     int *prio_own;         /* prio when worked out here */
     double *keep;          /* per road: its lines within this of its centre line run on over
                               the surface of a lower-ranked car road crossing it */
+    uint32_t own_road;     /* push_cut's last road (UINT32_MAX: none) and the end of its */
+    size_t own_end;        /* surfaces in sf: a road's pieces come one after another */
 } ls_junc;
 
 /* Roads r and q continue each other: they share an end point and leave it
@@ -1251,12 +1253,16 @@ static rs_result push_cut(rs_ctx *ctx, rs__linesym *L, ls_junc *J, const ls_piec
 {
     if (!J || !J->nsf || J->nocut[road]) return push_piece(ctx, L, P, NULL);
     /* the end of road's surfaces: the first with a larger road */
-    size_t own_end = 0, hi_s = J->nsf;
-    while (own_end < hi_s) {
-        size_t mid = own_end + (hi_s - own_end) / 2;
-        if (J->sf[mid].road <= road) own_end = mid + 1;
-        else hi_s = mid;
+    if (J->own_road != road) {
+        size_t lo = 0, hi_s = J->nsf;
+        while (lo < hi_s) {
+            size_t mid = lo + (hi_s - lo) / 2;
+            if (J->sf[mid].road <= road) lo = mid + 1;
+            else hi_s = mid;
+        }
+        J->own_road = road, J->own_end = lo;
     }
+    const size_t own_end = J->own_end;
     /* candidate surfaces: those listed in the cells of P's box */
     const ls_grid *G = &J->grid;
     double fx0 = floor(P->x0 / G->cmx), fx1 = floor(P->x1 / G->cmx), fy0 = floor(P->y0 / G->cmy), fy1 = floor(P->y1 / G->cmy);
@@ -2436,6 +2442,7 @@ rs_result rs__linesym_build(rs_ctx *ctx, const rs_roads *roads, const rs__linesy
     size_t runcap = 0;
     ls_junc J;
     memset(&J, 0, sizeof J);
+    J.own_road = UINT32_MAX;
     int over = 0; /* push_cut passed the work limit */
     if (!L->band || !L->dash || !L->start) { res = RS_ERR_NOMEM; goto fail; }
     L->nband = nband;

@@ -79,6 +79,11 @@ struct rs__roadfield {
                         * grid), for pixels of exactly `pixel` */
     rf_seg *seg;
     size_t nseg, nent, bytes;
+    /* per road + 1 (or NULL): its first segment in seg, the next road's
+     * first ending its run (rs__roadfield_build; a T end's segment is
+     * found in its road's run, not by a search of the whole array) */
+    uint32_t *rfirst;
+    size_t nrfirst;
     size_t nonempty, nfull, maxlist;
     size_t nredundant; /* segments with redundant = 1 */
     uint64_t relwork;  /* seg_relations' work units */
@@ -447,6 +452,7 @@ void rs__roadfield_free(rs_ctx *ctx, rs__roadfield *f)
     rs__free(ctx, f->colpix);
     rs__free(ctx, f->rspan);
     rs__free(ctx, f->seg);
+    rs__free(ctx, f->rfirst);
     rs__free(ctx, f->tee);
     rs__free(ctx, f->tstart);
     rs__free(ctx, f->tids);
@@ -1253,7 +1259,7 @@ static rs_result index_finish(rs_ctx *ctx, rs__roadfield *f, rf_builder *b, size
     f->bytes = sizeof *f + (ncell + 1) * sizeof *f->start + ncell + f->nent * sizeof *f->ids +
                cap_seg * sizeof(rf_seg) + ((size_t)f->gh + 1) * sizeof *f->rstart + f->gh +
                (size_t)f->rstart[f->gh] * (sizeof *f->rids + 4 * sizeof *f->rbox) +
-               (f->colpix ? ((size_t)f->gw + 1) * sizeof *f->colpix : 0);
+               (f->colpix ? ((size_t)f->gw + 1) * sizeof *f->colpix : 0) + f->nrfirst * sizeof *f->rfirst;
     return RS_OK;
 }
 
@@ -1406,10 +1412,13 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     /* Pass 1: local coordinates, arc lengths, counts; keep the segments
      * that reach the grid. */
     rs__local_frame F = rs__local_frame_of(p->origin_x, p->origin_y, p->cell_size);
+    /* (without it, road_end_seg searches the whole array: the same segments) */
+    if ((f->rfirst = rs__alloc_array(ctx, nroads + 1, sizeof *f->rfirst))) f->nrfirst = nroads + 1;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         const double *xy = NULL;
         size_t n = 0;
+        if (f->rfirst) f->rfirst[ri] = (uint32_t)f->nseg;
         rs_roads_get(roads, ri, NULL, &w, &xy, &n);
         if (rs__tick(ctx, 1)) { res = RS_ERR_CANCELLED; goto fail; }
         if (n == 0) continue;
@@ -1459,6 +1468,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             rec_end(&b, f->nseg - 1);
         }
     }
+    if (f->rfirst) f->rfirst[nroads] = (uint32_t)f->nseg;
     if (f->nseg < cap_seg / 2) {
         /* most segments lay off the map: give the rest back */
         rf_seg *ns = rs__realloc(ctx, f->seg, (f->nseg ? f->nseg : 1) * sizeof(rf_seg));
@@ -2389,13 +2399,15 @@ static const rf_seg *road_end_seg(const rs__roadfield *f, const rs_roads *roads,
     size_t k = rs__end_segment(xy, np, end);
     if (k == SIZE_MAX) return NULL;
     size_t lo = 0, hi = f->nseg;
+    if (f->rfirst && road + 1 < f->nrfirst) lo = f->rfirst[road], hi = f->rfirst[road + 1];
+    const size_t run_end = hi;
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2;
         const rf_seg *s = &f->seg[mid];
         if (s->road < road || (s->road == road && s->seg < k)) lo = mid + 1;
         else hi = mid;
     }
-    if (lo == f->nseg || f->seg[lo].road != road || f->seg[lo].seg != k || !(f->seg[lo].len > 0)) return NULL;
+    if (lo == run_end || f->seg[lo].road != road || f->seg[lo].seg != k || !(f->seg[lo].len > 0)) return NULL;
     return &f->seg[lo];
 }
 
@@ -2428,6 +2440,12 @@ static double past_line(const rf_seg *q, uint32_t k, const rf_strip *st, size_t 
     return far - c;
 }
 
+/* A T end's segment (UINT32_MAX: none, tee_end_of) and n.E there */
+typedef struct rf_tee_at {
+    uint32_t seg;
+    double cE;
+} rf_tee_at;
+
 /* The end segment of T end t whose strip reaches its clip line going
  * along it (NULL: no T is made there), and n.E into *cE. */
 static const rf_seg *tee_end_of(const rs__roadfield *f, const rs_roads *roads, const rs__tee_end *t, double *cE)
@@ -2451,15 +2469,26 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
      * without it, whether that clip was made depended on the index cell,
      * and so did the pixels there: fuzz/edits) */
     rf_strip *st = rs__alloc_array(ctx, n, sizeof *st);
-    if (!st) return RS_ERR_NOMEM;
+    /* each end's segment and n.E, found once for both passes (the search
+     * reads the road set and the segments at random places: at 10^5 roads
+     * a miss each) */
+    rf_tee_at *at = rs__alloc_array(ctx, n, sizeof *at);
+    if (!st || !at) {
+        rs__free(ctx, st);
+        rs__free(ctx, at);
+        return RS_ERR_NOMEM;
+    }
     for (size_t i = 0; i < n; i++) {
         if ((i & 4095) == 0 && rs__poll(ctx)) { /* (10^5 roads: ~20 ms in all) */
             rs__free(ctx, st);
+            rs__free(ctx, at);
             return RS_ERR_CANCELLED;
         }
         const rs__tee_end *t = &tees[i];
-        double cE;
+        double cE = 0;
         const rf_seg *s = tee_end_of(f, roads, t, &cE);
+        at[i].seg = s ? (uint32_t)(s - f->seg) : UINT32_MAX;
+        at[i].cE = cE;
         if (!s) continue;
         rf_tee T;
         memset(&T, 0, sizeof T);
@@ -2476,17 +2505,19 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
     rs_result sr = ns > 1 ? rs__sort(ctx, st, ns, sizeof *st, cmp_strip) : RS_OK;
     if (sr) {
         rs__free(ctx, st);
+        rs__free(ctx, at);
         return sr;
     }
     for (size_t i = 0; i < n; i++) {
         if ((i & 511) == 0 && rs__poll(ctx)) {
             rs__free(ctx, st);
+            rs__free(ctx, at);
             return RS_ERR_CANCELLED; /* (a T's clips: ~5 us) */
         }
         const rs__tee_end *t = &tees[i];
-        double cE;
-        const rf_seg *s = tee_end_of(f, roads, t, &cE); /* (the strip must reach the clip line) */
-        if (!s) continue;
+        const double cE = at[i].cE;
+        if (at[i].seg == UINT32_MAX) continue; /* (the strip must reach the clip line: tee_end_of) */
+        const rf_seg *s = &f->seg[at[i].seg];
         /* the record's segments: its end segment trimmed, and clipped
          * those whose trimmed shape reaches past the line: the
          * zero-length ones at the end, and from the end along the record
@@ -2527,6 +2558,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
                 if (!nt) {
                     rs__free(ctx, f->tee);
                     rs__free(ctx, st);
+                    rs__free(ctx, at);
                     f->tee = NULL;
                     return RS_ERR_NOMEM;
                 }
@@ -2544,6 +2576,7 @@ rs_result rs__roadfield_set_tees(rs_ctx *ctx, rs__roadfield *f, const rs_roads *
         }
     }
     rs__free(ctx, st);
+    rs__free(ctx, at);
     if (!m) {
         rs__free(ctx, f->tee);
         f->tee = NULL;
