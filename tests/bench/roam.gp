@@ -16,12 +16,18 @@ set multiplot layout 1,3 title "1025^2 DEMs: roadsplat ROAM vs \\@mapbox/martini
 set title "time against requested max error"
 set xlabel "requested max error E, m"
 set ylabel "build + mesh time, ms"
+# (headroom over the slowest times for the key: without it the key hid
+# martini's times; the other panels' keys sit bottom left)
+set yrange [1:30000]
+set ytics ("1" 1, "10" 10, "100" 100, "1000" 1000)
 plot src("fractal", "roadsplat") using 3:9 with linespoints pt 7 lc rgb "#1f77b4" title "roadsplat, fractal", \
      src("realistic", "roadsplat") using 3:9 with linespoints pt 5 lc rgb "#1f77b4" dt 2 title "roadsplat, realistic", \
-     src("fractal", "roadsplat_reused") using 3:9 with linespoints pt 7 lc rgb "#2ca02c" title "roadsplat reused (set\\_dem), fractal", \
-     src("realistic", "roadsplat_reused") using 3:9 with linespoints pt 5 lc rgb "#2ca02c" dt 2 title "roadsplat reused (set\\_dem), realistic", \
+     src("fractal", "roadsplat_reused") using 3:9 with linespoints pt 7 lc rgb "#2ca02c" title "reused (set\\_dem), fractal", \
+     src("realistic", "roadsplat_reused") using 3:9 with linespoints pt 5 lc rgb "#2ca02c" dt 2 title "reused (set\\_dem), realistic", \
      src("fractal", "martini") using 3:9 with linespoints pt 6 lc rgb "#d62728" title "martini, fractal", \
      src("realistic", "martini") using 3:9 with linespoints pt 4 lc rgb "#d62728" dt 2 title "martini, realistic"
+set yrange [*:*]
+set ytics auto
 set title "triangles against measured max error"
 set xlabel "true max vertical error over all samples, m"
 set ylabel "triangles"
