@@ -1412,13 +1412,17 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
     /* Pass 1: local coordinates, arc lengths, counts; keep the segments
      * that reach the grid. */
     rs__local_frame F = rs__local_frame_of(p->origin_x, p->origin_y, p->cell_size);
-    /* (without it, road_end_seg searches the whole array: the same segments) */
-    if ((f->rfirst = rs__alloc_array(ctx, nroads + 1, sizeof *f->rfirst))) f->nrfirst = nroads + 1;
+    /* (a derived field has none: road_end_seg then searches the whole array) */
+    if (!(f->rfirst = rs__alloc_array(ctx, nroads + 1, sizeof *f->rfirst))) {
+        res = RS_ERR_NOMEM;
+        goto fail;
+    }
+    f->nrfirst = nroads + 1;
     for (size_t ri = 0; ri < nroads; ri++) {
         double w = 0;
         const double *xy = NULL;
         size_t n = 0;
-        if (f->rfirst) f->rfirst[ri] = (uint32_t)f->nseg;
+        f->rfirst[ri] = (uint32_t)f->nseg;
         rs_roads_get(roads, ri, NULL, &w, &xy, &n);
         if (rs__tick(ctx, 1)) { res = RS_ERR_CANCELLED; goto fail; }
         if (n == 0) continue;
@@ -1468,7 +1472,7 @@ rs_result rs__roadfield_build(rs_ctx *ctx, const rs_roads *roads, const rs__road
             rec_end(&b, f->nseg - 1);
         }
     }
-    if (f->rfirst) f->rfirst[nroads] = (uint32_t)f->nseg;
+    f->rfirst[nroads] = (uint32_t)f->nseg;
     if (f->nseg < cap_seg / 2) {
         /* most segments lay off the map: give the rest back */
         rf_seg *ns = rs__realloc(ctx, f->seg, (f->nseg ? f->nseg : 1) * sizeof(rf_seg));
