@@ -1005,6 +1005,107 @@ static void test_tee_corner(void)
     tee_scene_free(&t);
 }
 
+/* An allocator that keeps each block's size in front of it: the bytes a
+ * growing realloc had to keep (its old size, the most it copies), and
+ * every realloc refused when `no_realloc`. */
+typedef struct size_alloc { size_t kept, live; int no_realloc; } size_alloc;
+#define SA_HDR 16 /* (the size, the block aligned as malloc's) */
+static void *sa_malloc(void *u, size_t n)
+{
+    size_alloc *a = u;
+    size_t *q = malloc(n + SA_HDR);
+    if (!q) return NULL;
+    *q = n;
+    a->live++;
+    return (char *)q + SA_HDR;
+}
+static void *sa_realloc(void *u, void *p, size_t n)
+{
+    size_alloc *a = u;
+    if (a->no_realloc) return NULL;
+    if (!p) return sa_malloc(u, n);
+    size_t *q = (size_t *)((char *)p - SA_HDR), old = *q;
+    size_t *r = realloc(q, n + SA_HDR);
+    if (!r) return NULL;
+    if (n > old) a->kept += old;
+    *r = n;
+    return (char *)r + SA_HDR;
+}
+static void sa_free(void *u, void *p)
+{
+    size_alloc *a = u;
+    if (!p) return;
+    a->live--;
+    free((char *)p - SA_HDR);
+}
+
+/* The count pass's record of visited cells grows to what its first
+ * segments foretell for all of them (lib/scene/roadfield.c rec_cell), not
+ * by doubling alone, whose copies (most of the record's size in all, one
+ * of 16 MB at 10^5 roads) run with no progress call (issue 30 target 4).
+ * On 3000 even roads the blocks the builds grow keep at most an eighth of
+ * the record's bytes (doubling alone: half to all of them); where the
+ * first segments foretell too little (tiny ones, then wide roads) or too
+ * much (the other way round), the field is the one the fill makes without
+ * a record (every realloc refused). */
+static void test_record_foretold(void)
+{
+    for (int scene = 0; scene < 3; scene++) {
+        rs_roads *roads = NULL;
+        CHECK(rs_roads_create(ctx, &roads) == RS_OK);
+        if (!roads) return;
+        sc_rng g;
+        sc_rng_seed(&g, 77 + scene);
+        double xy[2 * 1201];
+        int added = 1;
+        for (int part = 0; part < 2; part++) {
+            int tiny = scene == 0 ? 0 : (part == 0) == (scene == 1);
+            if (tiny) { /* 1200 segments of 0.2 m, 0.5 m wide, in a corner */
+                for (int k = 0; k <= 1200; k++) xy[2 * k] = 5 + 0.2 * (k % 40), xy[2 * k + 1] = 5 + 0.5 * (k / 40);
+                added &= rs_roads_add(ctx, roads, NULL, 0.5, xy, 1201) == RS_OK;
+                continue;
+            }
+            for (int r = 0; r < (scene == 0 ? 3000 : 40); r++) { /* wide roads of 3 segments over the map */
+                double x = sc_rng_range(&g, 0, 400), y = sc_rng_range(&g, 0, 400), a = sc_rng_range(&g, 0, 6.28);
+                for (int k = 0; k < 4; k++) xy[2 * k] = x + 25 * k * cos(a + 0.3 * k), xy[2 * k + 1] = y + 25 * k * sin(a + 0.3 * k);
+                added &= rs_roads_add(ctx, roads, NULL, scene == 0 ? 8 : 30, xy, 4) == RS_OK;
+            }
+            if (scene == 0) break;
+        }
+        CHECK(added);
+        rs__roadfield_params p = params(0, 0, 1, 400, 400, 0, 1);
+        size_alloc a = { 0, 0, 0 }, b = { 0, 0, 1 };
+        rs_allocator al = { sa_malloc, sa_realloc, sa_free, &a }, bl = { sa_malloc, sa_realloc, sa_free, &b };
+        rs_ctx *ca = NULL, *cb = NULL;
+        CHECK(rs_ctx_create(&al, NULL, &ca) == RS_OK && rs_ctx_create(&bl, NULL, &cb) == RS_OK);
+        rs__roadfield *fa = NULL, *fb = NULL;
+        CHECK(ca && rs__roadfield_build(ca, roads, &p, &fa) == RS_OK);
+        CHECK(cb && rs__roadfield_build(cb, roads, &p, &fb) == RS_OK);
+        if (fa && fb) {
+            rs__roadfield_stats sa, sb;
+            rs__roadfield_get_stats(fa, &sa);
+            rs__roadfield_get_stats(fb, &sb);
+            CHECK(sa.segments > 1100);
+            CHECK(sa.entries == sb.entries && sa.redundant == sb.redundant && sa.full_cells == sb.full_cells);
+            double *ia = coverage_image(fa, 400, 400, 1), *ib = coverage_image(fb, 400, 400, 1);
+            CHECK(ia && ib && memcmp(ia, ib, (size_t)400 * 400 * sizeof *ia) == 0);
+            free(ia);
+            free(ib);
+            if (scene == 0) {
+                printf("record: %zu entries (%zu bytes), growing blocks kept %zu bytes\n", sa.entries, 4 * sa.entries,
+                       a.kept);
+                CHECK(2 * a.kept <= sa.entries); /* (an eighth of 4 bytes an entry) */
+            }
+        }
+        rs__roadfield_free(ca, fa);
+        rs__roadfield_free(cb, fb);
+        rs_ctx_free(ca);
+        rs_ctx_free(cb);
+        CHECK(a.live == 0 && b.live == 0);
+        rs_roads_free(ctx, roads);
+    }
+}
+
 /* T clips do not depend on the index cell: a record's segments are
  * clipped by its T lines where their trimmed shapes reach past, strips
  * included. A hairpin whose two ends sit on one road: its second T's strip
@@ -1094,6 +1195,7 @@ int main(void)
     test_extreme();
     test_alloc_failures();
     test_record_fallback();
+    test_record_foretold();
     test_auto_cell();
     test_tee_repeated_point();
     test_tee_cells();

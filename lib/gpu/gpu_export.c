@@ -618,7 +618,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     size_t nbands = 0, segcap = 0, nseg = 0;
     for (size_t i = 0; i < n; i++) {
         if (o.style.disable) continue;
-        if ((i & 255) == 255 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
+        if ((i & 63) == 63 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         if ((r = ge_style(ctx, &src, roads, i, &o.style, sty)) != RS_OK) goto fail_msg;
         nbands += sty->line_count;
     }
@@ -636,7 +636,7 @@ static rs_result ge_export(rs_ctx *ctx, ge_src src, const rs_dem *dem, const rs_
     for (size_t i = 0; i < ntees; i++) tee_of[2 * (size_t)tees[i].road + (tees[i].end != 0)] = i;
     size_t nends = 0;
     for (size_t i = 0, b = 0; i < n; i++) {
-        if ((i & 255) == 255 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
+        if ((i & 63) == 63 && rs__poll(ctx)) { r = RS_ERR_CANCELLED; goto fail_msg; }
         float *rd = g->road + RS_GPU_ROAD_FLOATS * i;
         double w = 0;
         rs_roads_get(roads, i, NULL, &w, NULL, NULL);

@@ -70,8 +70,9 @@ typedef struct extract_state {
     int cancelled;      /* a poll said stop (overflow is set too: the passes stop) */
 } extract_state;
 
-/* Items (nodes, vertex words, indices) between two polls of a pass. */
-#define EXTRACT_POLL 65536u
+/* Items (nodes, vertex words, indices) between two polls of a pass (65536
+ * left 21 ms between two of them on the refine_count(10^6) mesh) */
+#define EXTRACT_POLL 16384u
 
 /* A poll: 1 (and the state stopped) when the host's callback said stop. */
 static int extract_stop(extract_state *s)

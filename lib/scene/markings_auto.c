@@ -824,7 +824,9 @@ static rs_result sort_approaches(rs_ctx *ctx, approach **ap, size_t n, size_t nr
     for (size_t k = 0; k < n; k++) start[in[k].road + 2]++;
     for (size_t i = 0; i < nr; i++) start[i + 2] += start[i + 1];
     for (size_t k = 0; k < n && !r; k++) {
-        if ((k & 65535) == 65535 && rs__poll(ctx)) r = RS_ERR_CANCELLED;
+        /* (every 4096: the writes land at random places in fresh pages,
+         * 65536 of them took up to 53 ms at 10^5 roads) */
+        if ((k & 4095) == 4095 && rs__poll(ctx)) r = RS_ERR_CANCELLED;
         out[start[in[k].road + 1]++] = in[k];
     }
     for (size_t i = 0; i < nr && !r; i++) {
