@@ -181,8 +181,12 @@ static void emit_leaves(extract_state *s)
 {
     rs_roam *L = s->L;
     const roam_node *nodes = L->nodes;
+    size_t at = 0; /* (the indices at the last poll: a block node writes up to 2^ncut leaves) */
     for (uint32_t t = 0; t < L->used; t++) {
-        if ((t & (EXTRACT_POLL - 1)) == EXTRACT_POLL - 1 && extract_stop(s)) return;
+        if ((t & (EXTRACT_POLL - 1)) == EXTRACT_POLL - 1 || s->ni - at >= 3 * (size_t)EXTRACT_POLL) {
+            at = s->ni;
+            if (extract_stop(s)) return;
+        }
         uint32_t lc = nodes[t].lc;
         if (lc != NIL && lc != IMPL) continue; /* inner node or free */
         if (emit_node(s, &nodes[t])) return;
