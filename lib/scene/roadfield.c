@@ -285,6 +285,11 @@ static double rec_foretold(const rf_builder *b)
     /* (by the segments gone through, kept or not: a map over a part of
      * the roads keeps a part of them, and that part is foretold) */
     double want = (double)b->nrec / (double)b->seg_pass * (double)b->seg_all * 1.25 + 4096;
+    /* (at most 64 times the record's room so far: first segments far
+     * denser than the rest would ask the allocator for far more than the
+     * field needs; past that, the record grows by steps of 64) */
+    double room = 64.0 * (double)(b->caprec ? b->caprec : b->rec0);
+    if (want > room) want = room;
     return want > (double)b->limit + 1 ? (double)b->limit + 1 : want;
 }
 
