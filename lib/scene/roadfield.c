@@ -313,8 +313,8 @@ static int rec_grow(rf_builder *b, size_t nc)
  * a doubling copies the record so far, and one of 16 MB at 10^5 roads
  * took up to 54 ms into fresh pages under glibc's realloc, with no
  * progress call in it (issue 30 target 4); foretold early, the copies are
- * small (at 10^5 roads 16 kB and 1 MB), and one of 2 to 32 MB is polled
- * (rec_grow). */
+ * small (16 kB, 32 kB and 2 MB on the index bench's 10^5 roads), and one
+ * of 2 to 32 MB is polled (rec_grow). */
 static void rec_cell(rf_builder *b, size_t cell)
 {
     if (b->norec) return;
