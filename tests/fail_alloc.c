@@ -61,6 +61,57 @@ rs_allocator count_alloc_hook(size_t *calls)
     return a;
 }
 
+#define SIZE_HEAD 16 /* (the block's size; keeps malloc's alignment) */
+
+static void *sa_malloc(void *u, size_t n)
+{
+    size_alloc *s = u;
+    if (n > SIZE_MAX - SIZE_HEAD) return NULL;
+    unsigned char *h = malloc(SIZE_HEAD + n);
+    if (!h) return NULL;
+    memcpy(h, &n, sizeof n);
+    s->live += n;
+    if (s->live > s->peak) s->peak = s->live;
+    s->blocks++;
+    return h + SIZE_HEAD;
+}
+
+static void *sa_realloc(void *u, void *p, size_t n)
+{
+    size_alloc *s = u;
+    if (s->no_realloc) return NULL;
+    if (!p) return sa_malloc(u, n);
+    if (n > SIZE_MAX - SIZE_HEAD) return NULL;
+    unsigned char *h = (unsigned char *)p - SIZE_HEAD;
+    size_t old;
+    memcpy(&old, h, sizeof old);
+    unsigned char *q = realloc(h, SIZE_HEAD + n);
+    if (!q) return NULL;
+    memcpy(q, &n, sizeof n);
+    if (n > old) s->kept += old;
+    s->live = s->live - old + n;
+    if (s->live > s->peak) s->peak = s->live;
+    return q + SIZE_HEAD;
+}
+
+static void sa_free(void *u, void *p)
+{
+    size_alloc *s = u;
+    if (!p) return;
+    unsigned char *h = (unsigned char *)p - SIZE_HEAD;
+    size_t old;
+    memcpy(&old, h, sizeof old);
+    s->live -= old;
+    s->blocks--;
+    free(h);
+}
+
+rs_allocator size_alloc_hook(size_alloc *s)
+{
+    rs_allocator a = { sa_malloc, sa_realloc, sa_free, s };
+    return a;
+}
+
 /* A guarded block: its size in a 16-byte header, the caller's bytes, then
  * GUARD_BYTES of GUARD_FILL. */
 #define GUARD_HEAD 16

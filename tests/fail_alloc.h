@@ -26,6 +26,18 @@ typedef struct guard_alloc {
 } guard_alloc;
 rs_allocator guard_alloc_hook(guard_alloc *g);
 
+/* An allocator that keeps each block's size in a 16-byte header (malloc's
+ * alignment kept): the live and peak bytes, the live blocks, the bytes
+ * growing reallocs had to keep (their old sizes: the most they copy),
+ * and, when `no_realloc` is set, every realloc refused. */
+typedef struct size_alloc {
+    size_t live, peak; /* bytes */
+    long blocks;       /* blocks allocated and not freed */
+    size_t kept;       /* old sizes of the reallocs that grew a block */
+    int no_realloc;
+} size_alloc;
+rs_allocator size_alloc_hook(size_alloc *s);
+
 /* One try of a failure sweep: make what is tested on context c, free it,
  * return the result; set *wrong when a failure left an object behind. */
 typedef rs_result (*fail_try_fn)(rs_ctx *c, void *user, int *wrong);

@@ -5,6 +5,7 @@
  * and within their error bound; library memory stays within a stated bound
  * of the output size (counted through the allocator hook). */
 #include "harness.h"
+#include "fail_alloc.h"
 #include "roadsplat.h"
 #include "internal.h"
 #include "roam_check.h"
@@ -17,49 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* --- counting allocator: live and peak bytes through the ctx hook ---------------- */
-typedef struct counter {
-    size_t live, peak;
-} counter;
-
-#define HDR 16 /* keeps malloc's alignment */
-static void *cnt_malloc(void *u, size_t n)
-{
-    counter *c = u;
-    if (n > SIZE_MAX - HDR) return NULL;
-    unsigned char *p = malloc(n + HDR);
-    if (!p) return NULL;
-    memcpy(p, &n, sizeof n);
-    c->live += n;
-    if (c->live > c->peak) c->peak = c->live;
-    return p + HDR;
-}
-static void *cnt_realloc(void *u, void *q, size_t n)
-{
-    counter *c = u;
-    if (!q) return cnt_malloc(u, n);
-    if (n > SIZE_MAX - HDR) return NULL;
-    unsigned char *p = (unsigned char *)q - HDR;
-    size_t old;
-    memcpy(&old, p, sizeof old);
-    unsigned char *r = realloc(p, n + HDR);
-    if (!r) return NULL;
-    memcpy(r, &n, sizeof n);
-    c->live = c->live - old + n;
-    if (c->live > c->peak) c->peak = c->live;
-    return r + HDR;
-}
-static void cnt_free(void *u, void *q)
-{
-    counter *c = u;
-    unsigned char *p = (unsigned char *)q - HDR;
-    size_t old;
-    memcpy(&old, p, sizeof old);
-    c->live -= old;
-    free(p);
-}
-
-static counter mem;
+static size_alloc mem; /* (live and peak bytes through the ctx hook) */
 static rs_ctx *ctx;
 
 /* --- helpers ------------------------------------------------------------------ */
@@ -567,7 +526,7 @@ static void test_far_zebra(void)
 
 int main(void)
 {
-    rs_allocator al = { cnt_malloc, cnt_realloc, cnt_free, &mem };
+    rs_allocator al = size_alloc_hook(&mem);
     if (rs_ctx_create(&al, NULL, &ctx) != RS_OK) return 1;
     test_extreme_dems();
     test_stress();

@@ -1005,40 +1005,6 @@ static void test_tee_corner(void)
     tee_scene_free(&t);
 }
 
-/* An allocator that keeps each block's size in front of it: the bytes a
- * growing realloc had to keep (its old size, the most it copies), and
- * every realloc refused when `no_realloc`. */
-typedef struct size_alloc { size_t kept, live; int no_realloc; } size_alloc;
-#define SA_HDR 16 /* (the size, the block aligned as malloc's) */
-static void *sa_malloc(void *u, size_t n)
-{
-    size_alloc *a = u;
-    size_t *q = malloc(n + SA_HDR);
-    if (!q) return NULL;
-    *q = n;
-    a->live++;
-    return (char *)q + SA_HDR;
-}
-static void *sa_realloc(void *u, void *p, size_t n)
-{
-    size_alloc *a = u;
-    if (a->no_realloc) return NULL;
-    if (!p) return sa_malloc(u, n);
-    size_t *q = (size_t *)((char *)p - SA_HDR), old = *q;
-    size_t *r = realloc(q, n + SA_HDR);
-    if (!r) return NULL;
-    if (n > old) a->kept += old;
-    *r = n;
-    return (char *)r + SA_HDR;
-}
-static void sa_free(void *u, void *p)
-{
-    size_alloc *a = u;
-    if (!p) return;
-    a->live--;
-    free((char *)p - SA_HDR);
-}
-
 /* The count pass's record of visited cells grows to what its first
  * segments foretell for all of them (lib/scene/roadfield.c rec_cell), not
  * by doubling alone, whose copies (most of the record's size in all, one
@@ -1074,8 +1040,11 @@ static void test_record_foretold(void)
         }
         CHECK(added);
         rs__roadfield_params p = params(0, 0, 1, 400, 400, 0, 1);
-        size_alloc a = { 0, 0, 0 }, b = { 0, 0, 1 };
-        rs_allocator al = { sa_malloc, sa_realloc, sa_free, &a }, bl = { sa_malloc, sa_realloc, sa_free, &b };
+        size_alloc a, b;
+        memset(&a, 0, sizeof a);
+        memset(&b, 0, sizeof b);
+        b.no_realloc = 1;
+        rs_allocator al = size_alloc_hook(&a), bl = size_alloc_hook(&b);
         rs_ctx *ca = NULL, *cb = NULL;
         CHECK(rs_ctx_create(&al, NULL, &ca) == RS_OK && rs_ctx_create(&bl, NULL, &cb) == RS_OK);
         rs__roadfield *fa = NULL, *fb = NULL;
@@ -1101,7 +1070,7 @@ static void test_record_foretold(void)
         rs__roadfield_free(cb, fb);
         rs_ctx_free(ca);
         rs_ctx_free(cb);
-        CHECK(a.live == 0 && b.live == 0);
+        CHECK(a.blocks == 0 && b.blocks == 0);
         rs_roads_free(ctx, roads);
     }
 }
