@@ -249,9 +249,9 @@ typedef struct rf_builder {
     uint32_t *pref, pcell;
     rf_scratch scratch; /* the record's memory after the fill, freed with the builder */
     size_t seg0, rec0; /* first capacities of recend/pref and of the record (grown by doubling) */
-    /* pass 1's segments in all (kept or not; 0: unknown), those it has
-     * gone through, and those it has recorded (kept) */
-    size_t seg_all, seg_pass, seg_seen;
+    /* pass 1's segments in all (kept or not; 0: unknown), and those it has
+     * gone through, the one at hand included */
+    size_t seg_all, seg_pass;
     int norec;
 } rf_builder;
 
@@ -281,7 +281,7 @@ static void rec_drop(rf_builder *b)
 static double rec_foretold(const rf_builder *b)
 {
     /* (a field of fewer than 1024 segments grows by doubling: its copies are small) */
-    if (b->seg_seen < 256 || b->seg_all < 1024 || b->seg_all <= b->seg_pass) return 0;
+    if (b->seg_pass < 256 || b->seg_all < 1024 || b->seg_all <= b->seg_pass) return 0;
     /* (by the segments gone through, kept or not: a map over a part of
      * the roads keeps a part of them, and that part is foretold) */
     double want = (double)b->nrec / (double)b->seg_pass * (double)b->seg_all * 1.25 + 4096;
@@ -345,8 +345,7 @@ static void rec_end(rf_builder *b, size_t k)
     }
     b->recend[k] = (uint32_t)b->nrec;
     b->pref[k] = b->pcell;
-    b->seg_seen = k + 1;
-    if ((b->seg_seen & (b->seg_seen - 1)) == 0) {
+    if (((k + 1) & k) == 0) { /* (k + 1 recorded segments, a power of two) */
         /* (only when the last foretelling fell short by its quarter: each
          * growth copies the block) */
         double want = rec_foretold(b);
@@ -1582,6 +1581,7 @@ static rs_result derive(rs_ctx *ctx, const rs__roadfield *src, const double *ext
      * each grown by its road's extra half width; the index anew */
     for (size_t k = 0; k < f->nseg; k++) {
         rf_seg *sg = &f->seg[k];
+        b.seg_pass = k + 1;
         if (rs__tick(ctx, 0)) { res = RS_ERR_CANCELLED; goto fail; }
         *sg = src->seg[k];
         if (extra) sg->r += extra[sg->road];
@@ -1593,7 +1593,6 @@ static rs_result derive(rs_ctx *ctx, const rs__roadfield *src, const double *ext
         f->nunlisted += sg->unlisted;
         if (sg->unlisted) b.pcell = UINT32_MAX;
         else if (seg_cells(&b, sg, 0, 0) < 0) { res = RS_ERR_LIMIT; goto fail; }
-        b.seg_pass = k + 1;
         rec_end(&b, k);
     }
     if ((res = index_finish(ctx, f, &b, f->nseg)) != RS_OK) goto fail;
